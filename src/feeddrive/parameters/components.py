@@ -1,0 +1,267 @@
+"""Frozen, validated parameter dataclasses, one per component.  SI units throughout.
+
+Ranges are plausibility bounds for machine-tool feed drives; they exist to catch wrong units
+(a lead of 5 instead of 0.005 m) and impossible values, not to restrict design studies.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Self
+
+import numpy as np
+
+from .validation import ParameterError, choice, flag, quantity, validate
+
+_MM_HINT = "looks like millimetres; give metres"
+
+
+class _Component:
+    """Mixin: validate on construction, ``replace`` with re-validation."""
+
+    _label = "component"
+
+    def __post_init__(self) -> None:
+        validate(self, self._label)
+        self._check()
+
+    def _check(self) -> None:
+        """Cross-field checks; override where needed."""
+
+    def with_values(self, **changes: Any) -> Self:
+        return replace(self, **changes)  # type: ignore[type-var]
+
+
+@dataclass(frozen=True)
+class FrictionBranch(_Component):
+    """One direction of a LuGre/Stribeck friction law, as magnitudes.  Wang2021 Table 1.
+
+    Table 1 prints the negative branch with minus signs on F_c, F_s and v_s; here every branch
+    is stored as magnitudes and the sign comes from the direction of motion.
+    """
+
+    coulomb_force: float = quantity(
+        "N", low=0, high=1e5, hint="give the magnitude; the sign comes from the branch"
+    )
+    static_force: float = quantity(
+        "N", low=0, high=1e5, hint="give the magnitude; the sign comes from the branch"
+    )
+    stribeck_velocity: float = quantity(
+        "m/s", low=1e-7, high=0.1, hint="give the magnitude in m/s (1 mm/s = 0.001 m/s)"
+    )
+    viscous_coefficient: float = quantity("N s/m", low=0, high=1e7, low_inclusive=True)
+    _label = "friction_branch"
+
+    def _check(self) -> None:
+        if self.static_force < self.coulomb_force:
+            raise ParameterError(
+                f"{self._label}.static_force",
+                self.static_force,
+                f"F_s must be ≥ F_c = {self.coulomb_force} [N] (breakaway exceeds sliding friction)",
+            )
+
+
+@dataclass(frozen=True)
+class LuGreParameters(_Component):
+    """LuGre friction at one site, linear (force) form.  Wang2021 Eqs. (9)–(11), Table 1.
+
+    Rotary sites (screw and hollow shafts) are stored as the paper does: torques divided by
+    H = p_h/2π, angles multiplied by H, so forces in N and speeds in m/s of the equivalent
+    nut/table motion.  σ0 and σ1 are shared by both branches, as in Table 1.
+    """
+
+    positive: FrictionBranch
+    negative: FrictionBranch
+    bristle_stiffness: float = quantity("N/m", low=0, high=1e12)
+    bristle_damping: float = quantity("N s/m", low=0, high=1e8, low_inclusive=True)
+    _label = "friction"
+
+    def as_array(self) -> np.ndarray:
+        """Pack as float64[10]: (F_c, F_s, v_s, σ2) for +, then −, then σ0, σ1."""
+        p, n = self.positive, self.negative
+        return np.array(
+            [
+                p.coulomb_force, p.static_force, p.stribeck_velocity, p.viscous_coefficient,
+                n.coulomb_force, n.static_force, n.stribeck_velocity, n.viscous_coefficient,
+                self.bristle_stiffness, self.bristle_damping,
+            ],
+            dtype=np.float64,
+        )
+
+    def branch(self, name: str) -> FrictionBranch:
+        if name not in ("positive", "negative"):
+            raise ParameterError("branch", name, "expected positive or negative")
+        return self.positive if name == "positive" else self.negative
+
+
+@dataclass(frozen=True)
+class FrictionSites(_Component):
+    """LuGre parameters of the three friction sites of Wang2021 Sect. 4."""
+
+    screw: LuGreParameters
+    nut: LuGreParameters
+    guide: LuGreParameters
+    _label = "friction"
+
+
+@dataclass(frozen=True)
+class BallScrew(_Component):
+    """Ball screw, its supports and nut.  Wang2021 Table 2 and Eqs. (2)–(5)."""
+
+    length: float = quantity("m", low=0.01, high=20, hint=_MM_HINT)
+    diameter: float = quantity("m", low=1e-3, high=0.5, hint=_MM_HINT)
+    lead: float = quantity("m", low=1e-4, high=0.1, hint=_MM_HINT)
+    youngs_modulus: float = quantity("Pa", low=1e9, high=1e12, hint="206 GPa = 2.06e11 Pa")
+    torsional_stiffness: float = quantity("N m/rad", low=1, high=1e9)
+    nut_axial_stiffness: float = quantity(
+        "N/m", low=1e5, high=1e11, hint="1 N/µm = 1e6 N/m"
+    )
+    nut_bearing_axial_stiffness: float = quantity(
+        "N/m", low=1e5, high=1e11, hint="1 N/µm = 1e6 N/m"
+    )
+    support_bearing_axial_stiffness: float = quantity(
+        "N/m", low=1e5, high=1e11, hint="1 N/µm = 1e6 N/m"
+    )
+    efficiency: float = quantity("-", low=0, high=1.0, hint="transmission efficiency η is a fraction")
+    shaft_inertia: float = quantity("kg m^2", low=0, high=10, low_inclusive=True)
+    nut_inertia: float = quantity("kg m^2", low=0, high=10, low_inclusive=True)
+    _label = "screw"
+
+    @property
+    def transmission_ratio(self) -> float:
+        """H = p_h / 2π [m/rad].  Wang2021 Eq. (8)."""
+        return self.lead / (2.0 * math.pi)
+
+
+@dataclass(frozen=True)
+class Coupling(_Component):
+    torsional_stiffness: float = quantity("N m/rad", low=1, high=1e9)
+    _label = "coupling"
+
+
+@dataclass(frozen=True)
+class Motor(_Component):
+    """Permanent-magnet servo motor as an R-L armature with back-EMF.  Wang2021 Table 2."""
+
+    torque_constant: float = quantity("N m/A", low=1e-3, high=100)
+    back_emf_constant: float = quantity("V s/rad", low=1e-3, high=100)
+    inductance: float = quantity("H", low=1e-6, high=1.0, hint="5.9 mH = 0.0059 H")
+    resistance: float = quantity("ohm", low=1e-3, high=1e3)
+    inertia: float = quantity(
+        "kg m^2",
+        low=1e-7,
+        high=10,
+        hint="Wang2021 Table 2 prints 1.38×10³; a servo motor of this size has 1.38×10⁻³",
+    )
+    _label = "motor"
+
+
+@dataclass(frozen=True)
+class Table(_Component):
+    mass: float = quantity("kg", low=0.01, high=1e5)
+    _label = "table"
+
+
+@dataclass(frozen=True)
+class StiffnessModel(_Component):
+    """How Eqs. (2)–(5) are read, and the structural damping the paper does not give.
+
+    ``equivalent_stiffness`` set to a positive value overrides the chain (e.g. the paper's
+    stated 2.16e7 N/m); 0 means "compute from Eqs. (2)–(5) at the table position".
+    """
+
+    screw_support: str = choice(("fixed-fixed", "fixed-free"), default="fixed-fixed")
+    support_bearing_count: float = quantity("-", low=0, high=8, default=2.0)
+    include_torsion: bool = flag(default=True)
+    equivalent_stiffness: float = quantity(
+        "N/m", low=0, high=1e11, low_inclusive=True, default=0.0, hint="1 N/µm = 1e6 N/m"
+    )
+    axial_damping: float = quantity("N s/m", low=0, high=1e8, low_inclusive=True, default=0.0)
+    position_dependent: bool = flag(default=True)
+    _label = "stiffness"
+
+
+@dataclass(frozen=True)
+class Controller(_Component):
+    """Cascade servo (position → velocity → current) shared by both motors.  Wang2021 Sect. 2.1.
+
+    The block diagram (Fig. 5) is an image; the structure is an explicit choice, see
+    docs/model.md.  Gains are in the units stated; a period of 0 means a continuous loop.
+    """
+
+    position_gain: float = quantity("1/s", low=0, high=1e5)
+    velocity_gain: float = quantity("A s/rad", low=0, high=1e5)
+    current_gain: float = quantity("V/A", low=0, high=1e5)
+    velocity_command_gain: float = quantity("rad/(V s)", low=0, high=1e6)
+    velocity_integral_gain: float = quantity(
+        "A/rad", low=0, high=1e9, low_inclusive=True, default=0.0
+    )
+    current_integral_gain: float = quantity(
+        "V/(A s)", low=0, high=1e9, low_inclusive=True, default=0.0
+    )
+    kv_placement: str = choice(("none", "position_output", "velocity_error"), default="none")
+    velocity_gain_basis: str = choice(("motor", "table"), default="motor")
+    velocity_feedback: str = choice(("motor", "table"), default="motor")
+    velocity_feedforward: bool = flag(default=True)
+    current_limit: float = quantity("A", low=0, high=1e4, default=1e4)
+    voltage_limit: float = quantity("V", low=0, high=1e5, default=1e5)
+    position_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)
+    velocity_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)
+    current_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)
+    encoder_counts: float = quantity(
+        "counts/rev", low=0, high=1e10, low_inclusive=True, default=0.0
+    )
+    grating_resolution: float = quantity(
+        "m", low=0, high=1e-3, low_inclusive=True, default=0.0, hint="1 µm = 1e-6 m"
+    )
+    _label = "controller"
+
+    def _check(self) -> None:
+        periods = [p for p in (self.position_period, self.velocity_period, self.current_period)]
+        nonzero = [p for p in periods if p > 0]
+        if nonzero:
+            base = min(nonzero)
+            for name, p in zip(("position", "velocity", "current"), periods, strict=True):
+                if p > 0 and abs(p / base - round(p / base)) > 1e-9:
+                    raise ParameterError(
+                        f"controller.{name}_period",
+                        p,
+                        f"must be an integer multiple of the fastest period {base:g} [s]",
+                    )
+
+
+@dataclass(frozen=True)
+class DriveParameters(_Component):
+    """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control."""
+
+    name: str
+    description: str
+    screw: BallScrew
+    coupling: Coupling
+    screw_motor: Motor
+    hollow_motor: Motor
+    table: Table
+    friction: FrictionSites
+    stiffness: StiffnessModel = field(default_factory=StiffnessModel)
+    controller: Controller = field(default_factory=lambda: _default_controller())
+    _label = "parameters"
+
+    def replace_path(self, path: str, value: Any) -> DriveParameters:
+        """Return a copy with the dotted ``path`` (e.g. ``controller.velocity_gain``) set."""
+        return _replace_path(self, path.split("."), value, path)
+
+
+def _default_controller() -> Controller:
+    return Controller(position_gain=8.0, velocity_gain=45.0, current_gain=2.0,
+                      velocity_command_gain=250.0)
+
+
+def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
+    names = {f.name for f in fields(obj)}
+    head = parts[0]
+    if head not in names:
+        raise ParameterError(full, value, f"unknown field {head!r}")
+    if len(parts) == 1:
+        return replace(obj, **{head: value})
+    return replace(obj, **{head: _replace_path(getattr(obj, head), parts[1:], value, full)})

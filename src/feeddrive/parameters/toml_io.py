@@ -1,0 +1,126 @@
+"""Parameter sets to and from TOML.  Lossless: floats are written with ``repr``.
+
+The writer is ours (not tomli-w) because it annotates every value with its unit, which is
+what a user editing the file needs; the reader is the standard library's ``tomllib``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+from typing import Any, get_type_hints
+
+from .components import DriveParameters
+from .validation import ParameterError
+
+
+def _is_component(tp: Any) -> bool:
+    return isinstance(tp, type) and dataclasses.is_dataclass(tp)
+
+
+def to_dict(obj: Any) -> dict[str, Any]:
+    """Nested plain dict of a parameter dataclass."""
+    out: dict[str, Any] = {}
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        out[f.name] = to_dict(value) if dataclasses.is_dataclass(value) else value
+    return out
+
+
+def _format_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, int):
+        return repr(float(value))
+    if isinstance(value, str):
+        escaped = value.replace("\\", "\\\\").replace('"', '\\"')
+        return f'"{escaped}"'
+    raise TypeError(f"cannot write {value!r} to TOML")
+
+
+def _emit(obj: Any, path: str, lines: list[str]) -> None:
+    scalars = []
+    nested = []
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        if dataclasses.is_dataclass(value):
+            nested.append((f.name, value))
+        else:
+            scalars.append((f, value))
+    if scalars:
+        if path:
+            lines.append(f"\n[{path}]")
+        for f, value in scalars:
+            unit = f.metadata.get("unit")
+            options = f.metadata.get("options")
+            comment = f"  # [{unit}]" if unit else (f"  # one of {', '.join(options)}" if options else "")
+            lines.append(f"{f.name} = {_format_value(value)}{comment}")
+    for name, value in nested:
+        _emit(value, f"{path}.{name}" if path else name, lines)
+
+
+def dumps(params: DriveParameters) -> str:
+    """TOML text of a parameter set, SI units noted beside each value."""
+    lines = [
+        "# feeddrive parameter set. SI units throughout (m, s, N, kg, A, V, rad).",
+        "# Friction forces at the screw and hollow shafts are torques divided by H = lead/2π.",
+    ]
+    _emit(params, "", lines)
+    return "\n".join(lines) + "\n"
+
+
+def save(params: DriveParameters, path: str | Path) -> None:
+    Path(path).write_text(dumps(params), encoding="utf-8")
+
+
+def _build(cls: type, data: Any, path: str) -> Any:
+    if not isinstance(data, dict):
+        raise ParameterError(path, data, "expected a table of values")
+    hints = get_type_hints(cls)
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - names)
+    if unknown:
+        key = unknown[0]
+        raise ParameterError(f"{path}.{key}" if path else key, data[key], "unknown key")
+    kwargs: dict[str, Any] = {}
+    for f in dataclasses.fields(cls):
+        sub = f"{path}.{f.name}" if path else f.name
+        if f.name not in data:
+            has_default = (
+                f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
+            )
+            if has_default:
+                continue
+            raise ParameterError(sub, None, "missing field")
+        tp = hints[f.name]
+        kwargs[f.name] = _build(tp, data[f.name], sub) if _is_component(tp) else data[f.name]
+    try:
+        return cls(**kwargs)
+    except ParameterError as err:
+        # component labels are local ("motor.inertia"); name the full path instead
+        local = err.field.split(".", 1)[-1]
+        raise ParameterError(f"{path}.{local}" if path else local, err.value,
+                             str(err).split(": ", 1)[-1]) from None
+
+
+def from_dict(data: dict[str, Any]) -> DriveParameters:
+    result: DriveParameters = _build(DriveParameters, data, "")
+    return result
+
+
+def loads(text: str) -> DriveParameters:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ParameterError("file", "<toml>", f"not valid TOML: {err}") from None
+    return from_dict(data)
+
+
+def load(path: str | Path) -> DriveParameters:
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterError("file", str(p), "no such file")
+    return loads(p.read_text(encoding="utf-8"))

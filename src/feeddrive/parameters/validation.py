@@ -1,0 +1,99 @@
+"""Field declarations with units and plausible ranges, and the one validation routine.
+
+Every numeric parameter is declared with :func:`quantity`, which records its SI unit, the
+range a physically sensible value lies in, and (optionally) the unit a user most likely typed
+by mistake.  :func:`validate` checks a frozen dataclass against those declarations and raises
+:class:`ParameterError` naming the field, the value and the expected unit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+
+class ParameterError(ValueError):
+    """A parameter value was refused.  The message names field, value and expected unit."""
+
+    def __init__(self, field: str, value: object, message: str) -> None:
+        self.field = field
+        self.value = value
+        super().__init__(f"{field} = {value!r}: {message}")
+
+
+def quantity(
+    unit: str,
+    *,
+    low: float,
+    high: float,
+    low_inclusive: bool = False,
+    hint: str = "",
+    default: Any = dataclasses.MISSING,
+) -> Any:
+    """Declare a float field in SI ``unit`` whose sensible values lie in [low, high].
+
+    ``hint`` is appended to the message when a value falls outside the range, e.g.
+    "a lead of 5 looks like millimetres; give metres".
+    """
+    meta = {"unit": unit, "low": low, "high": high, "low_inclusive": low_inclusive, "hint": hint}
+    if default is dataclasses.MISSING:
+        return dataclasses.field(metadata=meta)
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def choice(options: tuple[str, ...], *, default: str) -> Any:
+    """Declare a string field restricted to ``options``."""
+    return dataclasses.field(default=default, metadata={"options": options})
+
+
+def flag(*, default: bool) -> Any:
+    """Declare a boolean field."""
+    return dataclasses.field(default=default, metadata={"flag": True})
+
+
+def _format_range(meta: dict[str, Any]) -> str:
+    lo, hi, unit = meta["low"], meta["high"], meta["unit"]
+    lo_txt = f"{lo:g}" if lo != 0 else "0"
+    op = "≥" if meta["low_inclusive"] else ">"
+    if math.isinf(hi):
+        return f"expected a value {op} {lo_txt} [{unit}]"
+    return f"expected {lo_txt} … {hi:g} [{unit}]"
+
+
+def check_quantity(path: str, value: object, meta: dict[str, Any]) -> float:
+    """Return ``value`` as float or raise :class:`ParameterError` for ``path``."""
+    unit = meta["unit"]
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ParameterError(path, value, f"expected a number [{unit}]")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ParameterError(path, value, f"not finite; {_format_range(meta)}")
+    lo, hi = meta["low"], meta["high"]
+    below = v < lo if meta["low_inclusive"] else v <= lo
+    if below or v > hi:
+        msg = _format_range(meta)
+        if meta["hint"]:
+            msg += f" ({meta['hint']})"
+        raise ParameterError(path, value, msg)
+    return v
+
+
+def validate(obj: object, prefix: str) -> None:
+    """Check every declared field of the dataclass ``obj``; ``prefix`` names it in messages."""
+    for f in dataclasses.fields(obj):  # type: ignore[arg-type]
+        value = getattr(obj, f.name)
+        path = f"{prefix}.{f.name}"
+        meta = f.metadata
+        if "unit" in meta:
+            if value is None and f.default is None:
+                continue
+            coerced = check_quantity(path, value, dict(meta))
+            if coerced is not value:
+                object.__setattr__(obj, f.name, coerced)
+        elif "options" in meta:
+            if value not in meta["options"]:
+                raise ParameterError(path, value, f"expected one of {', '.join(meta['options'])}")
+        elif "flag" in meta:
+            if not isinstance(value, bool):
+                raise ParameterError(path, value, "expected true or false")
