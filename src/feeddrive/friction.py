@@ -131,7 +131,8 @@ def bristle_step(bristle: float, velocity: float, step: float, params: LuGrePara
 
 def bristle_bound(params: LuGreParameters) -> float:
     """max(F_s)/σ0 [m]: |z| never leaves this bound once inside (Canudas de Wit 1995)."""
-    return max(params.positive.static_force, params.negative.static_force) / params.bristle_stiffness
+    static = max(params.positive.static_force, params.negative.static_force)
+    return static / params.bristle_stiffness
 
 
 # ---------------------------------------------------------------- rotary <-> linear (÷ H)

@@ -46,7 +46,8 @@ def torsional_stiffness(coupling: Coupling, screw: BallScrew) -> float:
     return 1.0 / (1.0 / coupling.torsional_stiffness + 1.0 / screw.torsional_stiffness)
 
 
-def axial_stiffness(screw_axial: object, screw: BallScrew, bearing_count: float = 2.0) -> np.ndarray:
+def axial_stiffness(screw_axial: object, screw: BallScrew,
+                    bearing_count: float = 2.0) -> np.ndarray:
     """K_a = (n/K_ba + 1/K_sa + 1/K_na + 1/K_nba)⁻¹ [N/m], n = 2 in Wang2021 Eq. (3)."""
     k_sa = np.asarray(screw_axial, dtype=float)
     return 1.0 / (bearing_count / screw.support_bearing_axial_stiffness + 1.0 / k_sa

@@ -29,7 +29,9 @@ PRESETS: dict[str, Callable[[], DriveParameters]] = {
 def preset(name: str) -> DriveParameters:
     """The named parameter set, e.g. ``preset("wang2021")``."""
     if name not in PRESETS:
-        raise ParameterError("preset", name, f"unknown preset; expected one of {', '.join(PRESETS)}")
+        raise ParameterError(
+            "preset", name, f"unknown preset; expected one of {', '.join(PRESETS)}"
+        )
     return PRESETS[name]()
 
 

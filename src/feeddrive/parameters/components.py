@@ -58,7 +58,8 @@ class FrictionBranch(_Component):
             raise ParameterError(
                 f"{self._label}.static_force",
                 self.static_force,
-                f"F_s must be ≥ F_c = {self.coulomb_force} [N] (breakaway exceeds sliding friction)",
+                f"F_s must be ≥ F_c = {self.coulomb_force} [N] "
+                "(breakaway exceeds sliding friction)",
             )
 
 
@@ -123,7 +124,9 @@ class BallScrew(_Component):
     support_bearing_axial_stiffness: float = quantity(
         "N/m", low=1e5, high=1e11, hint="1 N/µm = 1e6 N/m"
     )
-    efficiency: float = quantity("-", low=0, high=1.0, hint="transmission efficiency η is a fraction")
+    efficiency: float = quantity(
+        "-", low=0, high=1.0, hint="transmission efficiency η is a fraction"
+    )
     shaft_inertia: float = quantity("kg m^2", low=0, high=10, low_inclusive=True)
     nut_inertia: float = quantity("kg m^2", low=0, high=10, low_inclusive=True)
     _label = "screw"

@@ -56,7 +56,12 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
         for f, value in scalars:
             unit = f.metadata.get("unit")
             options = f.metadata.get("options")
-            comment = f"  # [{unit}]" if unit else (f"  # one of {', '.join(options)}" if options else "")
+            if unit:
+                comment = f"  # [{unit}]"
+            elif options:
+                comment = f"  # one of {', '.join(options)}"
+            else:
+                comment = ""
             lines.append(f"{f.name} = {_format_value(value)}{comment}")
     for name, value in nested:
         _emit(value, f"{path}.{name}" if path else name, lines)
