@@ -1,0 +1,1 @@
+"""Analyses of table-speed traces and friction measurements (simulated or measured)."""
