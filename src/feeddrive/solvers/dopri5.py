@@ -1,0 +1,202 @@
+"""Compiled Dormand–Prince 5(4) integrator for the closed-loop drive, with declared breakpoints.
+
+Breakpoints are the controller sample instants (the zero-order-hold outputs jump there) and the
+output instants; the integrator lands on each exactly, applies the discrete controller update,
+and restarts the step from there, so no step straddles a jump in the right-hand side
+(the "declare your discontinuities" lesson of diffrax; python-control issue #933).
+
+Error control: mixed absolute/relative weights per state; states whose absolute size carries no
+meaning (shaft angles, positions) use absolute tolerance only.  Step-size control is Hairer's
+PI controller (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.4).  With ``adaptive = 0`` the
+same tableau runs at a fixed step (used to verify the order).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .. import layout as ix
+from ..control import sample_update
+from ..drives import rhs
+
+# Dormand–Prince coefficients
+C2, C3, C4, C5 = 1 / 5, 3 / 10, 4 / 5, 8 / 9
+A21 = 1 / 5
+A31, A32 = 3 / 40, 9 / 40
+A41, A42, A43 = 44 / 45, -56 / 15, 32 / 9
+A51, A52, A53, A54 = 19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729
+A61, A62, A63, A64, A65 = 9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656
+B1, B3, B4, B5, B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
+E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525,
+                          -1 / 40)
+
+ORDER = 5
+
+STATUS_OK = 0
+STATUS_MAX_STEPS = 1
+STATUS_STEP_UNDERFLOW = 2
+STATUS_NON_FINITE = 3
+STATUS_MESSAGES = {
+    STATUS_OK: "success",
+    STATUS_MAX_STEPS: "maximum number of steps reached",
+    STATUS_STEP_UNDERFLOW: "step size fell below its minimum",
+    STATUS_NON_FINITE: "state became non-finite (NaN or Inf)",
+}
+
+
+@njit(cache=True)
+def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: int, n_vel: int,
+              n_cur: int, P: np.ndarray, fr_s: np.ndarray, fr_n: np.ndarray, fr_g: np.ndarray,
+              ref_table: np.ndarray, rtol: float, atol: np.ndarray, rel_mask: np.ndarray,
+              h_init: float, h_max: float, adaptive: int, max_steps: int,
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Integrate from t = 0 to ``t_end`` over a grid of breakpoints spaced ``base`` [s].
+
+    Output is recorded every ``out_every`` breakpoints.  Returns (t_out, y_out, aux_out,
+    stats, held) with stats = [status, steps, rejected, rhs_evaluations, t_reached].
+    """
+    n = y0.size
+    n_break = int(round(t_end / base))
+    n_out = n_break // out_every + 1
+    t_out = np.empty(n_out)
+    y_out = np.empty((n_out, n))
+    aux_out = np.empty((n_out, ix.N_AUX))
+    held = np.zeros(ix.N_HELD)
+    y = y0.copy()
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    k5 = np.empty(n)
+    k6 = np.empty(n)
+    k7 = np.empty(n)
+    yt = np.empty(n)
+    y_new = np.empty(n)
+    aux = np.empty(ix.N_AUX)
+    steps = 0
+    rejected = 0
+    n_rhs = 0
+    status = STATUS_OK
+    h = h_init
+    err_old = 1e-4
+    beta = 0.04
+    alpha = 0.2 - 0.75 * beta
+    t = 0.0
+    i_out = 0
+    h_min = 1e-14
+    for kb in range(n_break + 1):
+        t_break = kb * base
+        # discrete controller update and output at this breakpoint
+        sample_update(kb, t_break, y, held, P, ref_table, n_pos, n_vel, n_cur, base)
+        rhs(t_break, y, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel, n_cur, k1, aux)
+        n_rhs += 1
+        if kb % out_every == 0 and i_out < n_out:
+            t_out[i_out] = t_break
+            y_out[i_out, :] = y
+            aux_out[i_out, :] = aux
+            i_out += 1
+        if kb == n_break:
+            break
+        t = t_break
+        t_next = (kb + 1) * base
+        fresh = True
+        while t < t_next - 1e-15 * t_next:
+            if not fresh:
+                rhs(t, y, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel, n_cur, k1, aux)
+                n_rhs += 1
+            fresh = False
+            last = False
+            if h >= t_next - t:
+                h_try = t_next - t
+                last = True
+            else:
+                h_try = h
+            while True:
+                for i in range(n):
+                    yt[i] = y[i] + h_try * A21 * k1[i]
+                rhs(t + C2 * h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
+                    n_cur, k2, aux)
+                for i in range(n):
+                    yt[i] = y[i] + h_try * (A31 * k1[i] + A32 * k2[i])
+                rhs(t + C3 * h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
+                    n_cur, k3, aux)
+                for i in range(n):
+                    yt[i] = y[i] + h_try * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
+                rhs(t + C4 * h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
+                    n_cur, k4, aux)
+                for i in range(n):
+                    yt[i] = y[i] + h_try * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i]
+                                            + A54 * k4[i])
+                rhs(t + C5 * h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
+                    n_cur, k5, aux)
+                for i in range(n):
+                    yt[i] = y[i] + h_try * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i]
+                                            + A64 * k4[i] + A65 * k5[i])
+                rhs(t + h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel, n_cur,
+                    k6, aux)
+                for i in range(n):
+                    y_new[i] = y[i] + h_try * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i]
+                                               + B5 * k5[i] + B6 * k6[i])
+                rhs(t + h_try, y_new, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
+                    n_cur, k7, aux)
+                n_rhs += 6
+                steps += 1
+                if adaptive == 0:
+                    err = 0.0
+                    break
+                err = 0.0
+                for i in range(n):
+                    e = h_try * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i]
+                                 + E6 * k6[i] + E7 * k7[i])
+                    scale = atol[i] + rtol * rel_mask[i] * max(abs(y[i]), abs(y_new[i]))
+                    r = e / scale
+                    err += r * r
+                err = math.sqrt(err / n)
+                if not math.isfinite(err):
+                    err = 1e10
+                if err <= 1.0:
+                    break
+                rejected += 1
+                fac = max(0.2, 0.9 * err ** (-0.2))
+                h_try *= fac
+                last = False
+                if h_try < h_min:
+                    status = STATUS_STEP_UNDERFLOW
+                    break
+                if steps > max_steps:
+                    status = STATUS_MAX_STEPS
+                    break
+            if status != STATUS_OK:
+                break
+            for i in range(n):
+                y[i] = y_new[i]
+                k1[i] = k7[i]
+            fresh = True
+            t = t_next if last else t + h_try
+            if adaptive == 1:
+                if err == 0.0:
+                    fac = 5.0
+                else:
+                    fac = 0.9 * err ** (-alpha) * err_old ** beta
+                    fac = min(5.0, max(0.2, fac))
+                err_old = max(err, 1e-4)
+                h_new = h_try * fac
+                if not last or h_new < h:
+                    h = min(h_new, h_max)
+            if steps > max_steps:
+                status = STATUS_MAX_STEPS
+                break
+            finite = True
+            for i in range(n):
+                if not math.isfinite(y[i]):
+                    finite = False
+            if not finite:
+                status = STATUS_NON_FINITE
+                break
+        if status != STATUS_OK:
+            break
+    stats = np.array([float(status), float(steps), float(rejected), float(n_rhs), t])
+    return t_out[:i_out], y_out[:i_out], aux_out[:i_out], stats, held
