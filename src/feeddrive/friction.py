@@ -165,6 +165,10 @@ def linear_speed(rotary: object, lead: float) -> np.ndarray:
 
 # ---------------------------------------------------------------- analytic indicators
 
+# Wang2021 Sect. 5.2, Fig. 6: in simulation the CDFS table creeps at 1.55 mm/s and runs
+# smoothly at 1.56 mm/s, the critical creeping speed the zero-slope speed is compared with.
+PAPER_CDFS_CRITICAL_SPEED = 1.56e-3  # m/s
+
 
 @dataclass(frozen=True)
 class NegativeSlopeBand:

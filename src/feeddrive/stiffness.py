@@ -97,6 +97,16 @@ def equivalent_stiffness(params: DriveParameters, position: float) -> float:
 # The value Wang2021 Sect. 5.2 states for K_eq at mid-screw.
 PAPER_MID_SCREW_K_EQ = 2.16e7  # N/m
 
+# Wang2021 Table 3: the five measurement points (table position x_t, taken as a in Eq. 4) and
+# the screw-shaft axial stiffness k_sa the paper prints for them.
+TABLE3_POSITIONS = (0.2, 0.3, 0.4, 0.5, 0.6)  # m
+TABLE3_SCREW_AXIAL_STIFFNESS = (276.13e6, 220.9e6, 207.1e6, 220.9e6, 276.13e6)  # N/m
+
+
+def mid_screw_position(screw: BallScrew) -> float:
+    """a = l/2 [m], the table position at which Wang2021 Sect. 5.2 quotes K_eq."""
+    return screw.length / 2.0
+
 
 @dataclass(frozen=True)
 class Reading:
@@ -121,10 +131,11 @@ def mid_screw_readings(params: DriveParameters) -> list[Reading]:
 
     Varies: the screw support (fixed–fixed Eq. 4, or fixed–free with the load at a, or over the
     whole span l), the number of support bearings in series (1, 2, 4), η (0.9, 0.95, 1) and
-    whether the torsion term is kept.
+    whether the torsion term is kept.  With the torsion term dropped η plays no part, so those
+    readings are listed once, with the parameter set's η.
     """
     screw = params.screw
-    mid = screw.length / 2.0
+    mid = mid_screw_position(screw)
     k_t1 = torsional_stiffness(params.coupling, screw)
     spans = {
         "fixed-fixed, a = l/2 (Eq. 4)": ("fixed-fixed", mid),
@@ -136,13 +147,13 @@ def mid_screw_readings(params: DriveParameters) -> list[Reading]:
         k_sa = float(screw_axial_stiffness(a, screw, support))
         for n in (1.0, 2.0, 4.0):
             k_a = float(axial_stiffness(k_sa, screw, n))
-            for eta in (0.9, 0.95, 1.0):
-                s = BallScrew(**{**screw.__dict__, "efficiency": eta})
-                for tors in (True, False):
+            for tors in (True, False):
+                for eta in (0.9, 0.95, 1.0) if tors else (screw.efficiency,):
+                    s = screw.with_values(efficiency=eta)
                     k = float(equivalent_stiffness_chain(k_a, k_t1, s, tors))
+                    detail = f"η = {eta:g}; torsion kept" if tors else "torsion dropped"
                     out.append(Reading(
-                        description=f"{span_name}; {n:g} support bearing(s); η = {eta:g}; "
-                                    f"torsion {'kept' if tors else 'dropped'}",
+                        description=f"{span_name}; {n:g} support bearing(s); {detail}",
                         screw_support=support, screw_span=span_name, bearing_count=n,
                         efficiency=eta, include_torsion=tors, equivalent_stiffness=k))
     out.sort(key=lambda r: abs(r.deviation))
