@@ -1,0 +1,37 @@
+"""`feeddrive params show|check`."""
+
+from __future__ import annotations
+
+import json
+
+import typer
+
+from ..parameters import dumps, load, preset, to_dict
+from ._common import app, console, user_errors
+
+params_app = typer.Typer(no_args_is_help=True, help="Show and check parameter sets.")
+app.add_typer(params_app, name="params")
+
+
+@params_app.command("show")
+@user_errors
+def show(
+    preset_name: str = typer.Option("wang2021", "--preset", help="Named parameter set."),
+    fmt: str = typer.Option("toml", "--format", help="toml or json"),
+) -> None:
+    """Print a parameter set (SI units) as TOML or JSON."""
+    params = preset(preset_name)
+    if fmt == "toml":
+        typer.echo(dumps(params), nl=False)
+    elif fmt == "json":
+        typer.echo(json.dumps(to_dict(params), indent=2))
+    else:
+        raise ValueError(f"--format = {fmt!r}: expected toml or json")
+
+
+@params_app.command("check")
+@user_errors
+def check(file: str = typer.Argument(..., help="Parameter file (TOML).")) -> None:
+    """Validate a parameter file; exit non-zero with the offending field if it is refused."""
+    params = load(file)
+    console.print(f"ok: {file} is a valid parameter set ({params.name})")
