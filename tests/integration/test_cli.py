@@ -1,0 +1,228 @@
+"""The command line: `feeddrive stiffness`, `feeddrive friction`, `feeddrive params`."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from feeddrive.cli import app
+
+runner = CliRunner()
+
+TABLE3_KSA_N_PER_UM = [276.13, 220.9, 207.1, 220.9, 276.13]  # Wang2021 Table 3
+
+
+def run(*args: str) -> Any:
+    return runner.invoke(app, list(args))
+
+
+def one_line_error(result: Any) -> str:
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("error: ")
+    return str(lines[0])
+
+
+# ------------------------------------------------------------------ stiffness
+
+
+def test_stiffness_json_reproduces_table3_row() -> None:
+    """Acceptance: Wang2021 Table 3 k_sa row within 0.1 %."""
+    result = run("stiffness", "--positions", "200,300,400,500,600", "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    rows = data["positions"]
+    assert [r["position_mm"] for r in rows] == [200.0, 300.0, 400.0, 500.0, 600.0]
+    k_sa = [r["screw_axial_stiffness_N_per_um"] for r in rows]
+    np.testing.assert_allclose(k_sa, TABLE3_KSA_N_PER_UM, rtol=1e-3)
+    for r in rows:
+        assert r["axial_stiffness_N_per_um"] < r["screw_axial_stiffness_N_per_um"]
+        assert r["equivalent_stiffness_N_per_um"] < r["axial_stiffness_N_per_um"]
+    mid = data["mid_screw"]
+    assert mid["position_mm"] == 400.0
+    assert mid["paper_equivalent_stiffness_N_per_um"] == pytest.approx(21.6)
+    assert mid["equivalent_stiffness_N_per_um"] == pytest.approx(32.3, rel=2e-3)
+    assert mid["deviation"] == pytest.approx(0.495, abs=0.002)
+    best = data["closest_readings"][0]
+    assert best["equivalent_stiffness_N_per_um"] == pytest.approx(22.0, rel=2e-3)
+    assert "fixed-free" in best["description"]
+
+
+def test_stiffness_table_output() -> None:
+    result = run("stiffness")
+    assert result.exit_code == 0, result.output
+    for text in ("276.13", "207.09", "207.10", "32.29", "21.6", "+49.5%", "x_t [mm]"):
+        assert text in result.stdout
+
+
+def test_stiffness_honours_an_imposed_k_eq(tmp_path: Path) -> None:
+    path = tmp_path / "paper_keq.toml"
+    text = run("params", "show", "--format", "toml").stdout
+    text = text.replace("equivalent_stiffness = 0.0", "equivalent_stiffness = 21600000.0")
+    path.write_text(text, encoding="utf-8")
+    result = run("stiffness", "--positions", "250", "--params", str(path), "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["equivalent_stiffness_override"] is True
+    assert data["positions"][0]["equivalent_stiffness_N_per_um"] == pytest.approx(21.6)
+    assert data["positions"][0]["equivalent_stiffness_chain_N_per_um"] > 30.0
+    assert data["mid_screw"]["deviation"] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("positions", ["200,900", "0", "-5", "800", "abc", "200,,300", "nan",
+                                       "inf"])
+def test_stiffness_refuses_bad_positions(positions: str) -> None:
+    line = one_line_error(run("stiffness", f"--positions={positions}"))
+    assert "--positions" in line
+    assert "[mm]" in line
+    bad = [t for t in positions.split(",") if t not in ("200", "300")][0]
+    assert repr(bad) in line
+
+
+def test_preset_and_params_together_are_refused(tmp_path: Path) -> None:
+    line = one_line_error(run("stiffness", "--preset", "wang2021", "--params", "x.toml"))
+    assert "--params" in line
+
+
+def test_unknown_preset_is_refused() -> None:
+    line = one_line_error(run("stiffness", "--preset", "nope"))
+    assert "preset" in line
+
+
+# ------------------------------------------------------------------ friction
+
+
+def test_friction_screw_json() -> None:
+    result = run("friction", "--site", "screw", "--json")
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["site"] == "screw"
+    pos, neg = data["branches"]["positive"], data["branches"]["negative"]
+    assert round(pos["zero_slope_speed_mm_s"], 2) == 1.60
+    assert pos["zero_slope_speed_mm_s"] == pos["negative_slope_band_mm_s"][1]
+    assert neg["zero_slope_speed_mm_s"] == pytest.approx(1.733, abs=1e-3)
+    assert pos["stribeck_velocity_mm_s"] == pytest.approx(0.864)
+    assert pos["coulomb_force_N"] == 73.4 and neg["static_force_N"] == 94.6
+    assert pos["passive"] is True and neg["passive"] is True
+    assert data["paper_cdfs_critical_speed_mm_s"] == pytest.approx(1.56)
+    scan = data["stability_scan"]
+    assert scan["mass_kg"] == 20.0
+    assert scan["stiffness_N_per_um"] == pytest.approx(32.29, rel=1e-3)
+    assert scan["damping_N_s_per_m"] == 0.0
+    assert "servo" in scan["limitation"]
+    # every unstable speed of the scan lies inside the negative-slope band
+    for b in (pos, neg):
+        lo, hi = b["unstable_band_mm_s"]
+        assert b["negative_slope_band_mm_s"][0] <= lo <= hi <= b["negative_slope_band_mm_s"][1]
+
+
+def test_friction_guide_fails_passivity_and_damping_removes_the_unstable_band() -> None:
+    data = json.loads(run("friction", "--site", "guide", "--json").stdout)
+    assert data["branches"]["positive"]["passive"] is False
+    assert data["branches"]["negative"]["passive"] is False
+    assert data["branches"]["positive"]["unstable_band_mm_s"] is not None
+    damped = run("friction", "--site", "guide", "--json", "--damping", "1e4")
+    assert damped.exit_code == 0, damped.output
+    for b in json.loads(damped.stdout)["branches"].values():
+        assert b["unstable_band_mm_s"] is None
+        assert b["unstable_points"] == 0
+
+
+def test_friction_scan_options_are_used() -> None:
+    data = json.loads(run("friction", "--json", "--mass", "5", "--stiffness", "0.01",
+                          "--speed-min", "0.1", "--speed-max", "3", "--points", "50").stdout)
+    scan = data["stability_scan"]
+    assert (scan["mass_kg"], scan["stiffness_N_per_um"], scan["points"]) == (5.0, 0.01, 50)
+    lo, hi = data["branches"]["positive"]["unstable_band_mm_s"]
+    assert lo >= 0.1 and hi <= 3.0
+
+
+def test_friction_table_output() -> None:
+    result = run("friction", "--site", "screw")
+    assert result.exit_code == 0, result.output
+    for text in ("1.605", "1.56 mm/s", "pass", "v_s [mm/s]", "Åström"):
+        assert text in result.stdout
+    guide = run("friction", "--site", "guide")
+    assert "FAIL" in guide.stdout
+
+
+def test_friction_plot_writes_a_png(tmp_path: Path) -> None:
+    path = tmp_path / "stribeck.png"
+    result = run("friction", "--site", "nut", "--plot", str(path))
+    assert result.exit_code == 0, result.output
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert len(data) > 10_000
+
+
+@pytest.mark.parametrize(("args", "field"), [
+    (["--site", "table"], "--site"),
+    (["--mass", "-1"], "--mass"),
+    (["--stiffness", "0"], "--stiffness"),
+    (["--damping", "-3"], "--damping"),
+    (["--speed-min", "0"], "--speed-min"),
+    (["--speed-max", "0.01"], "--speed-max"),
+    (["--points", "1"], "--points"),
+])
+def test_friction_refuses_bad_options(args: list[str], field: str) -> None:
+    line = one_line_error(run("friction", *args))
+    assert field in line
+
+
+# ------------------------------------------------------------------ params
+
+
+def test_params_show_then_check(tmp_path: Path) -> None:
+    path = tmp_path / "p.toml"
+    show = run("params", "show", "--format", "toml")
+    assert show.exit_code == 0
+    path.write_text(show.stdout, encoding="utf-8")
+    check = run("params", "check", str(path))
+    assert check.exit_code == 0, check.output
+    assert "ok" in check.stdout
+
+
+@pytest.mark.parametrize(("old", "new", "field"), [
+    ("mass = 20.0", "mass = nan", "table.mass"),
+    ("mass = 20.0", "mass = -1", "table.mass"),
+    ("lead = 0.005", "lead = 5.0", "screw.lead"),
+    ("mass = 20.0", "mass = 20.0\ncolour = 1.0", "table.colour"),
+])
+def test_params_check_refuses_edited_files(tmp_path: Path, old: str, new: str,
+                                           field: str) -> None:
+    text = run("params", "show", "--format", "toml").stdout
+    assert text.count(old) == 1
+    path = tmp_path / "edited.toml"
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    line = one_line_error(run("params", "check", str(path)))
+    assert line.startswith(f"error: {field} = ")
+
+
+def test_params_check_missing_file() -> None:
+    line = one_line_error(run("params", "check", "/nonexistent/p.toml"))
+    assert "no such file" in line
+
+
+def test_console_script_entry_point() -> None:
+    """The installed `feeddrive` script runs (exit code and stderr through a real process)."""
+    exe = Path(sys.executable).with_name("feeddrive")
+    if not exe.exists():
+        pytest.skip("console script not installed next to the interpreter")
+    ok = subprocess.run([str(exe), "stiffness", "--positions", "400", "--json"],
+                        capture_output=True, text=True, timeout=120, check=False)
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads(ok.stdout)["positions"][0]["screw_axial_stiffness_N_per_um"] == \
+        pytest.approx(207.1, rel=1e-3)
+    bad = subprocess.run([str(exe), "stiffness", "--positions", "900"],
+                         capture_output=True, text=True, timeout=120, check=False)
+    assert bad.returncode == 2
+    assert bad.stderr.strip().count("\n") == 0
+    assert "--positions = '900'" in bad.stderr and "[mm]" in bad.stderr

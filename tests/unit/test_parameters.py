@@ -1,0 +1,191 @@
+"""Parameter sets: validation names the offending field; TOML io is lossless."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from typing import Any
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from feeddrive.parameters import (
+    PRESETS,
+    DriveParameters,
+    ParameterError,
+    dumps,
+    from_dict,
+    load,
+    loads,
+    preset,
+    save,
+    to_dict,
+)
+
+
+def numeric_leaves(obj: Any, prefix: str = "") -> list[tuple[str, dict[str, Any]]]:
+    """(dotted path, field metadata) of every declared quantity in a parameter tree."""
+    out = []
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        path = f"{prefix}.{f.name}" if prefix else f.name
+        if dataclasses.is_dataclass(value):
+            out.extend(numeric_leaves(value, path))
+        elif "unit" in f.metadata:
+            out.append((path, dict(f.metadata)))
+    return out
+
+
+LEAVES = numeric_leaves(preset("wang2021"))
+
+
+def edited(path: str, value: Any) -> dict[str, Any]:
+    data = copy.deepcopy(to_dict(preset("wang2021")))
+    node = data
+    *parents, last = path.split(".")
+    for part in parents:
+        node = node[part]
+    node[last] = value
+    return data
+
+
+def removed(path: str) -> dict[str, Any]:
+    data = copy.deepcopy(to_dict(preset("wang2021")))
+    node = data
+    *parents, last = path.split(".")
+    for part in parents:
+        node = node[part]
+    del node[last]
+    return data
+
+
+# ------------------------------------------------------------------ TOML round trip
+
+
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_toml_round_trip_is_lossless(name: str, tmp_path: Any) -> None:
+    params = preset(name)
+    text = dumps(params)
+    again = loads(text)
+    assert again == params
+    assert to_dict(again) == to_dict(params)
+    assert dumps(again) == text
+    path = tmp_path / f"{name}.toml"
+    save(params, path)
+    assert load(path) == params
+
+
+@settings(max_examples=60, deadline=None)
+@given(mass=st.floats(min_value=0.011, max_value=9.9e4, allow_nan=False),
+       sigma2=st.floats(min_value=0.0, max_value=9.9e6, allow_nan=False))
+def test_toml_round_trip_keeps_every_bit(mass: float, sigma2: float) -> None:
+    params = (preset("wang2021")
+              .replace_path("table.mass", mass)
+              .replace_path("friction.guide.positive.viscous_coefficient", sigma2))
+    again = loads(dumps(params))
+    assert again.table.mass == mass
+    assert again.friction.guide.positive.viscous_coefficient == sigma2
+    assert again == params
+
+
+def test_toml_names_units_beside_values() -> None:
+    text = dumps(preset("wang2021"))
+    assert "lead = 0.005  # [m]" in text
+    assert "screw_support = \"fixed-fixed\"  # one of fixed-fixed, fixed-free" in text
+
+
+# ------------------------------------------------------------------ refused inputs
+
+
+BAD_INPUTS = [
+    # (description, data, field named in the error, text the message must contain)
+    ("unknown top-level key", {**to_dict(preset("wang2021")), "colour": "red"}, "colour",
+     "unknown key"),
+    ("unknown nested key", edited("screw.pitch", 0.005), "screw.pitch", "unknown key"),
+    ("missing field", removed("table.mass"), "table.mass", "missing field"),
+    ("missing component", removed("coupling"), "coupling", "missing field"),
+    ("nan", edited("table.mass", math.nan), "table.mass", "not finite"),
+    ("inf", edited("screw.nut_axial_stiffness", math.inf), "screw.nut_axial_stiffness",
+     "not finite"),
+    ("negative", edited("friction.nut.bristle_damping", -1.0), "friction.nut.bristle_damping",
+     "[N s/m]"),
+    ("zero", edited("friction.screw.bristle_stiffness", 0.0),
+     "friction.screw.bristle_stiffness", "[N/m]"),
+    ("zero Stribeck speed", edited("friction.guide.negative.stribeck_velocity", 0.0),
+     "friction.guide.negative.stribeck_velocity", "[m/s]"),
+    ("F_s < F_c", edited("friction.screw.positive.static_force", 50.0),
+     "friction.screw.positive.static_force", "F_s must be ≥ F_c"),
+    ("lead in mm", edited("screw.lead", 5.0), "screw.lead", "millimetres"),
+    ("inductance in mH", edited("screw_motor.inductance", 5.9), "screw_motor.inductance",
+     "0.0059 H"),
+    ("inertia typo of Table 2", edited("hollow_motor.inertia", 1380.0), "hollow_motor.inertia",
+     "1.38×10⁻³"),
+    ("string for a number", edited("table.mass", "20 kg"), "table.mass", "expected a number"),
+    ("bool for a number", edited("table.mass", True), "table.mass", "expected a number"),
+    ("bad choice", edited("stiffness.screw_support", "pinned"), "stiffness.screw_support",
+     "fixed-fixed"),
+    ("efficiency above 1", edited("screw.efficiency", 95.0), "screw.efficiency", "fraction"),
+]
+
+
+@pytest.mark.parametrize(("data", "field", "text"), [case[1:] for case in BAD_INPUTS],
+                         ids=[case[0] for case in BAD_INPUTS])
+def test_bad_input_raises_parameter_error_naming_the_field(data: dict[str, Any], field: str,
+                                                           text: str) -> None:
+    with pytest.raises(ParameterError) as info:
+        from_dict(data)
+    assert info.value.field == field
+    message = str(info.value)
+    assert message.startswith(f"{field} = ")
+    assert text in message
+    assert "\n" not in message
+
+
+@settings(max_examples=120, deadline=None)
+@given(leaf=st.sampled_from(LEAVES),
+       bad=st.sampled_from(["nan", "inf", "-inf", "negative", "zero", "huge"]))
+def test_any_out_of_range_quantity_is_refused_by_name(leaf: tuple[str, dict[str, Any]],
+                                                      bad: str) -> None:
+    path, meta = leaf
+    value = {"nan": math.nan, "inf": math.inf, "-inf": -math.inf, "negative": -1.0,
+             "zero": 0.0, "huge": meta["high"] * 10.0 + 1.0}[bad]
+    refused = not (bad == "zero" and meta["low_inclusive"]) and not (
+        bad == "huge" and math.isinf(meta["high"]))
+    if not refused:
+        from_dict(edited(path, value))
+        return
+    with pytest.raises(ParameterError) as info:
+        from_dict(edited(path, value))
+    assert info.value.field == path
+    assert f"[{meta['unit']}]" in str(info.value)
+
+
+def test_toml_syntax_error_is_a_parameter_error() -> None:
+    with pytest.raises(ParameterError, match="not valid TOML"):
+        loads("[screw\nlead = ")
+
+
+def test_replace_path_validates_and_names_unknown_fields() -> None:
+    params = preset("wang2021")
+    assert params.replace_path("stiffness.equivalent_stiffness", 2.16e7) \
+        .stiffness.equivalent_stiffness == 2.16e7
+    with pytest.raises(ParameterError) as info:
+        params.replace_path("screw.pitch", 1.0)
+    assert info.value.field == "screw.pitch"
+    with pytest.raises(ParameterError):
+        params.replace_path("screw.lead", 5.0)
+
+
+def test_unknown_preset_is_refused() -> None:
+    with pytest.raises(ParameterError) as info:
+        preset("wang2020")
+    assert info.value.field == "preset"
+
+
+def test_presets_are_drive_parameters() -> None:
+    for name in PRESETS:
+        params = preset(name)
+        assert isinstance(params, DriveParameters)
+        assert params.name == name
