@@ -189,3 +189,22 @@ def test_presets_are_drive_parameters() -> None:
         params = preset(name)
         assert isinstance(params, DriveParameters)
         assert params.name == name
+
+
+@settings(max_examples=60, deadline=None)
+@given(leaf=st.sampled_from(LEAVES), bad=st.sampled_from([math.nan, -1.0, math.inf]))
+def test_replace_path_names_the_full_path_of_a_refused_value(leaf: tuple[str, dict[str, Any]],
+                                                             bad: float) -> None:
+    """Guards a fixed bug: replace_path named the component label ("motor.inductance",
+    "friction_branch.static_force") instead of the path the caller gave."""
+    path, _ = leaf
+    with pytest.raises(ParameterError) as info:
+        preset("wang2021").replace_path(path, bad)
+    assert info.value.field == path
+
+
+def test_replace_path_names_the_full_path_for_cross_field_checks() -> None:
+    with pytest.raises(ParameterError) as info:
+        preset("wang2021").replace_path("friction.nut.negative.static_force", 1.0)
+    assert info.value.field == "friction.nut.negative.static_force"
+    assert "F_s must be ≥ F_c" in str(info.value)

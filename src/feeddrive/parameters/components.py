@@ -266,5 +266,12 @@ def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
     if head not in names:
         raise ParameterError(full, value, f"unknown field {head!r}")
     if len(parts) == 1:
-        return replace(obj, **{head: value})
+        try:
+            return replace(obj, **{head: value})
+        except ParameterError as err:
+            # component labels are local ("motor.inertia"); name the full path instead
+            prefix = full.rsplit(".", 1)[0] if "." in full else ""
+            local = err.field.split(".", 1)[-1]
+            raise ParameterError(f"{prefix}.{local}" if prefix else local, err.value,
+                                 str(err).split(": ", 1)[-1]) from None
     return replace(obj, **{head: _replace_path(getattr(obj, head), parts[1:], value, full)})
