@@ -1,0 +1,748 @@
+"""LuGre friction identification from measurements: static (Stribeck) and dynamic (σ0, σ1).
+
+Wang2021 Sect. 4 takes its Table 1 values from earlier identifications (Liu et al. 2015,
+Du et al. 2018) and does not describe the procedure.  Here the standard two-step procedure
+for the LuGre model is used (Canudas de Wit et al., IEEE TAC 40(3), 1995; Åström & Canudas
+de Wit, IEEE CSM 28(6), 2008):
+
+1. **Static**: at constant sliding speed v the LuGre force is the steady curve
+   F(v) = sign(v)·[F_c + (F_s − F_c)·exp(−(v/v_s)²)] + σ2·v  (Wang2021 Eqs. 9–11),
+   fitted per direction by nonlinear least squares to constant-speed tests.
+2. **Dynamic**: below breakaway the bristles deflect with the body (pre-sliding, z ≈ x), so a
+   mass m under a measured force F(t) obeys m ẍ + σ0 z + σ1 ż + σ2 ẋ = F.  σ0 and σ1 are
+   fitted to the measured displacement by simulating that model (output error), either the
+   full LuGre bristle equation with the static branches known (``model="lugre"``) or its
+   linearisation m ẍ + (σ1 + σ2) ẋ + σ0 x = F (``model="linear"``, valid for |F| ≪ F_s).
+
+Confidence intervals come from the Jacobian at the optimum, s²(JᵀJ)⁻¹ with the Student t
+quantile for n − p degrees of freedom.  σ1 is often poorly determined (it only shows in fast
+transients); the dynamic fit reports a profile-likelihood interval and says so plainly.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from numba import njit
+from scipy import stats
+from scipy.optimize import least_squares
+
+from ..friction import bristle_rate_kernel
+from ..parameters import DriveParameters, FrictionBranch, LuGreParameters, ParameterError
+
+__all__ = [
+    "MIN_SPEEDS_PER_DIRECTION",
+    "SITES",
+    "BranchFit",
+    "DynamicFit",
+    "Estimate",
+    "StaticFit",
+    "fit_branch",
+    "fit_presliding",
+    "fit_static",
+    "simulate_presliding",
+    "site_mass",
+]
+
+Weighting = Literal["relative", "absolute"]
+
+#: distinct test speeds needed per direction (4 parameters + at least one degree of freedom)
+MIN_SPEEDS_PER_DIRECTION = 5
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A fitted value with its standard error and two-sided confidence interval (SI unit)."""
+
+    value: float
+    stderr: float
+    low: float
+    high: float
+    unit: str
+    confidence: float
+
+    @property
+    def relative_stderr(self) -> float:
+        return abs(self.stderr / self.value) if self.value != 0 else math.inf
+
+    def to_dict(self, scale: float = 1.0, unit: str | None = None) -> dict[str, Any]:
+        return {
+            "value": self.value * scale,
+            "stderr": _finite_or_none(self.stderr * scale),
+            "ci_low": _finite_or_none(self.low * scale),
+            "ci_high": _finite_or_none(self.high * scale),
+            "unit": unit or self.unit,
+            "confidence": self.confidence,
+        }
+
+
+def _finite_or_none(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _t_quantile(confidence: float, dof: int) -> float:
+    return float(stats.t.ppf(0.5 + confidence / 2.0, dof)) if dof > 0 else math.inf
+
+
+def _covariance(jac: np.ndarray, ssr: float, dof: int) -> np.ndarray:
+    """s²(JᵀJ)⁻¹; infinite variances where JᵀJ is singular (parameter not determined)."""
+    s2 = ssr / dof if dof > 0 else math.inf
+    jtj = jac.T @ jac
+    try:
+        cov = np.linalg.inv(jtj) * s2
+    except np.linalg.LinAlgError:
+        cov = np.full(jtj.shape, math.inf)
+    if not np.all(np.isfinite(cov)) or np.any(np.diag(cov) < 0):
+        cov = np.linalg.pinv(jtj) * s2
+        singular = np.linalg.matrix_rank(jtj) < jtj.shape[0]
+        if singular:
+            cov[np.diag_indices_from(cov)] = math.inf
+    return np.asarray(cov)
+
+
+def _estimate(value: float, var: float, tq: float, unit: str, confidence: float) -> Estimate:
+    se = math.sqrt(var) if var >= 0 and math.isfinite(var) else math.inf
+    return Estimate(value=float(value), stderr=se, low=value - tq * se, high=value + tq * se,
+                    unit=unit, confidence=confidence)
+
+
+# ================================================================ static identification
+
+
+@dataclass(frozen=True)
+class BranchFit:
+    """Fit of one direction's steady friction curve.  Speeds and forces as magnitudes."""
+
+    direction: str
+    branch: FrictionBranch
+    coulomb_force: Estimate
+    static_force: Estimate
+    stribeck_velocity: Estimate
+    viscous_coefficient: Estimate
+    speed: np.ndarray  # [m/s], magnitudes
+    force: np.ndarray  # [N], magnitudes
+    fitted: np.ndarray  # [N]
+    lines: np.ndarray | None
+    rmse: float  # [N], root mean square of force − fitted
+    dof: int
+    correlation: np.ndarray  # of (F_c, F_s − F_c, v_s, σ2)
+
+    @property
+    def residual(self) -> np.ndarray:
+        return self.force - self.fitted
+
+    def estimates(self) -> dict[str, Estimate]:
+        return {
+            "coulomb_force": self.coulomb_force,
+            "static_force": self.static_force,
+            "stribeck_velocity": self.stribeck_velocity,
+            "viscous_coefficient": self.viscous_coefficient,
+        }
+
+
+@dataclass(frozen=True)
+class StaticFit:
+    """Both directions of a static identification."""
+
+    positive: BranchFit
+    negative: BranchFit
+    source: str | None = None
+
+    def branches(self) -> dict[str, BranchFit]:
+        return {"positive": self.positive, "negative": self.negative}
+
+    def lugre(self, bristle_stiffness: float, bristle_damping: float) -> LuGreParameters:
+        """The LuGre parameters the simulation takes, with σ0 [N/m] and σ1 [N s/m] given
+        (e.g. from a base parameter set or :func:`fit_presliding`)."""
+        return LuGreParameters(positive=self.positive.branch, negative=self.negative.branch,
+                               bristle_stiffness=bristle_stiffness,
+                               bristle_damping=bristle_damping)
+
+    def to_dict(self, units: Literal["SI", "mm"] = "SI") -> dict[str, Any]:
+        out: dict[str, Any] = {"source": self.source}
+        for name, b in self.branches().items():
+            vs_scale, vs_unit = (1.0, "m/s") if units == "SI" else (1e3, "mm/s")
+            out[name] = {
+                "coulomb_force": b.coulomb_force.to_dict(),
+                "static_force": b.static_force.to_dict(),
+                "stribeck_velocity": b.stribeck_velocity.to_dict(vs_scale, vs_unit),
+                "viscous_coefficient": b.viscous_coefficient.to_dict(),
+                "rmse": b.rmse,
+                "points": int(b.speed.size),
+                "dof": b.dof,
+            }
+        return out
+
+
+def _stribeck_model(theta: np.ndarray, v: np.ndarray) -> np.ndarray:
+    fc, dF, vs, s2 = theta
+    return np.asarray(fc + dF * np.exp(-((v / vs) ** 2)) + s2 * v)
+
+
+def _stribeck_jac(theta: np.ndarray, v: np.ndarray) -> np.ndarray:
+    _, dF, vs, _ = theta
+    e = np.exp(-((v / vs) ** 2))
+    return np.column_stack([np.ones_like(v), e, dF * e * 2.0 * v**2 / vs**3, v])
+
+
+def fit_branch(speed: object, force: object, *, direction: str = "positive",
+               confidence: float = 0.95, weighting: Weighting = "relative",
+               lines: np.ndarray | None = None) -> BranchFit:
+    """Fit F = F_c + (F_s − F_c)·exp(−(v/v_s)²) + σ2·v to one direction's tests.
+
+    ``speed`` [m/s] and ``force`` [N] are magnitudes.  Nonlinear least squares
+    (scipy.optimize.least_squares, trust-region reflective, bounds F_c ≥ 0, F_s ≥ F_c,
+    v_s > 0, σ2 ≥ 0), started from several Stribeck velocities spread over the tested speeds;
+    the lowest residual wins.  ``weighting="relative"`` minimises log-residuals
+    ln F_model − ln F (noise proportional to the force); ``"absolute"`` plain residuals
+    (noise of constant size).  The confidence intervals assume the chosen noise model:
+    with the wrong one they are too narrow where the noise is underestimated.
+    """
+    if weighting not in ("relative", "absolute"):
+        raise ValueError(f"weighting = {weighting!r}: expected 'relative' or 'absolute'")
+    v = np.abs(np.asarray(speed, dtype=float))
+    f = np.abs(np.asarray(force, dtype=float))
+    n = v.size
+    order = np.argsort(v)
+    # initial guesses: viscous line through the faster half, breakaway from the slowest tests
+    fast = order[n // 2:]
+    if np.ptp(v[fast]) > 0:
+        s2_0, fc_0 = np.polyfit(v[fast], f[fast], 1)
+    else:
+        s2_0, fc_0 = 0.0, float(np.min(f))
+    s2_0 = max(float(s2_0), 0.0)
+    fc_0 = float(np.clip(fc_0, 1e-9, np.max(f)))
+    slow = order[: max(2, n // 5)]
+    dF_0 = max(float(np.mean(f[slow] - s2_0 * v[slow])) - fc_0, 1e-3 * fc_0 + 1e-9)
+    f_scale = max(float(np.max(f)), 1e-12)
+    v_scale = float(np.max(v))
+    x_scale = np.array([f_scale, f_scale, v_scale, f_scale / v_scale])
+    lower = np.array([0.0, 0.0, 1e-7, 0.0])
+    upper = np.array([np.inf, np.inf, 0.1, np.inf])
+    relative = weighting == "relative"
+
+    def resid(th: np.ndarray) -> np.ndarray:
+        m = _stribeck_model(th, v)
+        return np.log(np.maximum(m, 1e-300)) - np.log(f) if relative else m - f
+
+    def jac(th: np.ndarray) -> np.ndarray:
+        j = _stribeck_jac(th, v)
+        return j / _stribeck_model(th, v)[:, None] if relative else j
+
+    best = None
+    for vs_0 in np.geomspace(max(float(np.min(v)), 1.1e-7), min(v_scale, 0.099), 8):
+        x0 = np.array([fc_0, dF_0, vs_0, s2_0])
+        res = least_squares(resid, x0, jac=jac, bounds=(lower, upper), x_scale=x_scale,
+                            method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12)
+        if best is None or res.cost < best.cost:
+            best = res
+    assert best is not None
+    theta = best.x
+    fitted = _stribeck_model(theta, v)
+    ssr = float(np.sum(resid(theta) ** 2))
+    dof = n - 4
+    cov = _covariance(jac(theta), ssr, dof)
+    tq = _t_quantile(confidence, dof)
+    fc, dF, vs, s2 = (float(x) for x in theta)
+    var_fs = cov[0, 0] + cov[1, 1] + 2.0 * cov[0, 1]
+    sd = np.sqrt(np.where(np.isfinite(np.diag(cov)), np.diag(cov), np.nan))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(sd, sd)
+    branch = FrictionBranch(coulomb_force=fc, static_force=fc + dF, stribeck_velocity=vs,
+                            viscous_coefficient=s2)
+    return BranchFit(
+        direction=direction,
+        branch=branch,
+        coulomb_force=_estimate(fc, cov[0, 0], tq, "N", confidence),
+        static_force=_estimate(fc + dF, var_fs, tq, "N", confidence),
+        stribeck_velocity=_estimate(vs, cov[2, 2], tq, "m/s", confidence),
+        viscous_coefficient=_estimate(s2, cov[3, 3], tq, "N s/m", confidence),
+        speed=v,
+        force=f,
+        fitted=fitted,
+        lines=lines,
+        rmse=float(np.sqrt(np.mean((f - fitted) ** 2))),
+        dof=dof,
+        correlation=corr,
+    )
+
+
+def _locate(lines: np.ndarray | None, i: int) -> str:
+    return f"line {int(lines[i])}" if lines is not None else f"index {i}"
+
+
+def fit_static(
+    speed: object,
+    force: object,
+    *,
+    confidence: float = 0.95,
+    weighting: Weighting = "relative",
+    lines: np.ndarray | None = None,
+    source: str | None = None,
+) -> StaticFit:
+    """Identify both friction branches from constant-speed tests.
+
+    Parameters
+    ----------
+    speed:
+        Sliding speed of each test [m/s], signed: positive tests give the + branch, negative
+        tests the − branch (Wang2021 Table 1's direction convention).
+    force:
+        Friction force of each test [N]: signed (friction has the sign of the speed) or as
+        magnitudes; within one direction the sign must not change.
+    confidence:
+        Level of the reported confidence intervals (default 0.95).
+    weighting:
+        ``"relative"`` (noise proportional to the force, the default) or ``"absolute"``;
+        see :func:`fit_branch`.
+    lines, source:
+        File line numbers of the tests and the file name, used in error messages.
+
+    Each direction needs at least :data:`MIN_SPEEDS_PER_DIRECTION` distinct speeds, spread
+    over the Stribeck region (around v_s) and the viscous region (well above it).
+    """
+    v = np.asarray(speed, dtype=float)
+    f = np.asarray(force, dtype=float)
+    prefix = f"{source}: " if source else ""
+    if v.ndim != 1 or f.ndim != 1 or v.size != f.size:
+        raise ValueError(f"{prefix}force: expected one value per speed (got {f.shape} forces "
+                         f"for {v.shape} speeds)")
+    if not (0.5 <= confidence < 1.0):
+        raise ValueError(f"confidence = {confidence!r}: expected a level in [0.5, 1)")
+    if lines is not None and np.asarray(lines).size != v.size:
+        raise ValueError("lines: expected one line number per test")
+    for name, arr in (("speed", v), ("force", f)):
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            raise ValueError(f"{prefix}{_locate(lines, int(bad[0]))}: {name} is not finite")
+    zero = np.flatnonzero(v == 0.0)
+    if zero.size:
+        raise ValueError(f"{prefix}{_locate(lines, int(zero[0]))}: speed 0 is not a sliding "
+                         "test; the static fit needs constant non-zero speeds")
+    fits = {}
+    for direction, mask in (("positive", v > 0), ("negative", v < 0)):
+        idx = np.flatnonzero(mask)
+        distinct = np.unique(np.abs(v[idx])).size
+        if distinct < MIN_SPEEDS_PER_DIRECTION:
+            other = "negative" if direction == "positive" else "positive"
+            hint = (f"; the file has tests in the {other} direction only"
+                    if idx.size == 0 else "")
+            raise ValueError(f"{prefix}{distinct} distinct {direction} speed(s); the static fit "
+                             f"needs at least {MIN_SPEEDS_PER_DIRECTION} per direction{hint}")
+        signs = np.sign(f[idx])
+        if np.any(signs == 0):
+            k = int(idx[np.flatnonzero(signs == 0)[0]])
+            raise ValueError(f"{prefix}{_locate(lines, k)}: friction force 0 while sliding")
+        if np.any(signs != signs[0]):
+            k = int(idx[np.flatnonzero(signs != signs[0])[0]])
+            raise ValueError(f"{prefix}{_locate(lines, k)}: the force changes sign within the "
+                             f"{direction}-speed tests (give signed forces or magnitudes)")
+        sub_lines = None if lines is None else np.asarray(lines)[idx]
+        fits[direction] = fit_branch(v[idx], f[idx], direction=direction,
+                                     confidence=confidence, weighting=weighting,
+                                     lines=sub_lines)
+    return StaticFit(positive=fits["positive"], negative=fits["negative"], source=source)
+
+
+# ================================================================ dynamic identification
+
+
+@njit(cache=True)
+def _presliding_kernel(t: np.ndarray, force: np.ndarray, mass: float, p: np.ndarray,
+                       linear: bool, substeps: int) -> np.ndarray:
+    """Displacement [m] of a mass on a LuGre contact under ``force``, classical RK4.
+
+    Starts at rest in equilibrium (v = 0, z = x = F(0)/σ0); the force is linear between
+    samples; ``substeps`` RK4 steps per sample interval.
+    """
+    n = t.size
+    out = np.empty(n)
+    s0 = p[8]
+    s1 = p[9]
+    x = force[0] / s0
+    z = x
+    v = 0.0
+    out[0] = x
+    for i in range(n - 1):
+        h = (t[i + 1] - t[i]) / substeps
+        df = (force[i + 1] - force[i]) / substeps
+        for k in range(substeps):
+            fa = force[i] + df * k
+            fm = fa + 0.5 * df
+            fb = fa + df
+            # stage 1
+            zr1 = v if linear else bristle_rate_kernel(v, z, p)
+            s2 = p[3] if v >= 0.0 else p[7]
+            a1 = (fa - s0 * z - s1 * zr1 - s2 * v) / mass
+            x1 = v
+            # stage 2
+            v2 = v + 0.5 * h * a1
+            z2 = z + 0.5 * h * zr1
+            zr2 = v2 if linear else bristle_rate_kernel(v2, z2, p)
+            s2 = p[3] if v2 >= 0.0 else p[7]
+            a2 = (fm - s0 * z2 - s1 * zr2 - s2 * v2) / mass
+            x2 = v2
+            # stage 3
+            v3 = v + 0.5 * h * a2
+            z3 = z + 0.5 * h * zr2
+            zr3 = v3 if linear else bristle_rate_kernel(v3, z3, p)
+            s2 = p[3] if v3 >= 0.0 else p[7]
+            a3 = (fm - s0 * z3 - s1 * zr3 - s2 * v3) / mass
+            x3 = v3
+            # stage 4
+            v4 = v + h * a3
+            z4 = z + h * zr3
+            zr4 = v4 if linear else bristle_rate_kernel(v4, z4, p)
+            s2 = p[3] if v4 >= 0.0 else p[7]
+            a4 = (fb - s0 * z4 - s1 * zr4 - s2 * v4) / mass
+            x4 = v4
+            x += h / 6.0 * (x1 + 2.0 * x2 + 2.0 * x3 + x4)
+            v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            z += h / 6.0 * (zr1 + 2.0 * zr2 + 2.0 * zr3 + zr4)
+        out[i + 1] = x
+    return out
+
+
+def _substeps(t: np.ndarray, mass: float, sigma0: float, damping: float) -> int:
+    """RK4 steps per sample so that h·max(√(σ0/m), c/m) ≤ 0.25 (error ≪ measurement noise)."""
+    rate = max(math.sqrt(sigma0 / mass), damping / mass)
+    h_max = 0.25 / rate
+    return max(1, math.ceil(float(np.max(np.diff(t))) / h_max))
+
+
+def simulate_presliding(time: object, force: object, mass: float, friction: LuGreParameters,
+                        *, model: Literal["lugre", "linear"] = "lugre") -> np.ndarray:
+    """Displacement [m] of a mass ``mass`` [kg] on a LuGre contact under ``force`` [N].
+
+    ``model="lugre"``: m ẍ = F − (σ0 z + σ1 ż + σ2 ẋ), ż from Wang2021 Eq. (11);
+    ``model="linear"``: z = x, i.e. m ẍ + (σ1 + σ2) ẋ + σ0 x = F with σ2 the mean of the two
+    branches.  Starts at rest in equilibrium with the initial force; the force is linear
+    between the samples at ``time`` [s].
+    """
+    t = np.asarray(time, dtype=float)
+    f = np.asarray(force, dtype=float)
+    p = friction.as_array()
+    if model == "linear":
+        p[3] = p[7] = 0.5 * (p[3] + p[7])
+    elif model != "lugre":
+        raise ValueError(f"model = {model!r}: expected 'lugre' or 'linear'")
+    damping = p[9] + max(p[3], p[7])
+    n_sub = _substeps(t, mass, p[8], damping)
+    return np.asarray(_presliding_kernel(t, f, float(mass), p, model == "linear", n_sub))
+
+
+@dataclass(frozen=True)
+class DynamicFit:
+    """Pre-sliding identification of σ0 [N/m] and σ1 [N s/m].
+
+    ``sigma1_determined`` is False when the data do not pin σ1 down (relative standard
+    error above ``SIGMA1_MAX_RELATIVE_STDERR`` or an unbounded profile interval); then
+    report ``sigma1_interval`` rather than ``bristle_damping.value``.
+    """
+
+    model: str
+    mass: float
+    bristle_stiffness: Estimate
+    bristle_damping: Estimate
+    viscous_coefficient: float  # σ2 [N s/m] held fixed (from the static fit / parameter set)
+    sigma1_determined: bool
+    sigma1_interval: tuple[float, float]  # profile interval [N s/m]; high may be inf
+    note: str
+    time: np.ndarray
+    force: np.ndarray
+    position: np.ndarray  # measured [m]
+    fitted: np.ndarray  # model [m], offset included
+    position_offset: float  # [m], the measurement's zero relative to the rest position
+    rmse: float  # [m]
+    dof: int
+    profile_sigma1: np.ndarray
+    profile_ssr: np.ndarray
+    ssr_threshold: float
+    force_ratio: float | None  # max|F| / F_s (None when F_s unknown)
+    correlation: float  # between σ0 and σ1 estimates
+    source: str | None = None
+    lines: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def residual(self) -> np.ndarray:
+        return self.position - self.fitted
+
+    def lugre(self, static: LuGreParameters | StaticFit) -> LuGreParameters:
+        """Combine with static branches into the parameters the simulation takes.
+
+        σ1 is taken as fitted even when it is poorly determined (a value is needed to
+        simulate); check ``sigma1_determined`` and ``note``.
+        """
+        if isinstance(static, StaticFit):
+            pos, neg = static.positive.branch, static.negative.branch
+        else:
+            pos, neg = static.positive, static.negative
+        return LuGreParameters(positive=pos, negative=neg,
+                               bristle_stiffness=self.bristle_stiffness.value,
+                               bristle_damping=self.bristle_damping.value)
+
+    def to_dict(self) -> dict[str, Any]:
+        low, high = self.sigma1_interval
+        return {
+            "source": self.source,
+            "model": self.model,
+            "mass": self.mass,
+            "bristle_stiffness": self.bristle_stiffness.to_dict(),
+            "bristle_damping": self.bristle_damping.to_dict(),
+            "bristle_damping_determined": self.sigma1_determined,
+            "bristle_damping_profile_interval": [low, _finite_or_none(high)],
+            "viscous_coefficient_fixed": self.viscous_coefficient,
+            "correlation_sigma0_sigma1": _finite_or_none(self.correlation),
+            "position_offset": self.position_offset,
+            "rmse": self.rmse,
+            "points": int(self.time.size),
+            "force_ratio": self.force_ratio,
+            "note": self.note,
+        }
+
+
+#: above this max|F|/F_s the linear pre-sliding model is flagged as biased
+LINEAR_MAX_FORCE_RATIO = 0.02
+
+#: σ1 counts as determined when its standard error is at most this fraction of its value
+SIGMA1_MAX_RELATIVE_STDERR = 0.25
+
+
+def _check_presliding(t: np.ndarray, f: np.ndarray, x: np.ndarray, mass: float,
+                      lines: np.ndarray | None, prefix: str) -> None:
+    for name, arr in (("time", t), ("force", f), ("position", x)):
+        if arr.ndim != 1:
+            raise ValueError(f"{prefix}{name}: expected a 1-D array")
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            raise ValueError(f"{prefix}{_locate(lines, int(bad[0]))}: {name} is not finite")
+    if not (t.size == f.size == x.size):
+        raise ValueError(f"{prefix}force, position: expected one value per time sample")
+    if t.size < 20:
+        raise ValueError(f"{prefix}time: {t.size} samples; the pre-sliding fit needs at least 20")
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        raise ValueError(f"{prefix}{_locate(lines, int(bad[0]) + 1)}: time does not increase")
+    if not (isinstance(mass, int | float) and math.isfinite(mass) and mass > 0):
+        raise ValueError(f"mass = {mass!r}: expected a positive mass [kg]")
+    if np.ptp(x) == 0.0:
+        raise ValueError(f"{prefix}position: constant; the test shows no displacement")
+    if np.ptp(f) == 0.0:
+        raise ValueError(f"{prefix}force: constant; the test needs a varying force")
+
+
+def fit_presliding(
+    time: object,
+    force: object,
+    position: object,
+    *,
+    mass: float,
+    friction: LuGreParameters | None = None,
+    model: Literal["lugre", "linear"] = "lugre",
+    confidence: float = 0.95,
+    lines: np.ndarray | None = None,
+    source: str | None = None,
+) -> DynamicFit:
+    """Fit σ0 and σ1 to a pre-sliding test (force below breakaway).
+
+    Parameters
+    ----------
+    time, force, position:
+        Samples [s], applied force [N] and displacement [m] (any zero: an offset is fitted).
+        The test must start at rest; the force must stay below breakaway (|F| < F_s).
+    mass:
+        The moving mass [kg] the force acts on (for a rotary site, the inertia referred to
+        the table: J/H²).
+    friction:
+        Static branches and σ2 of the site (e.g. from :func:`fit_static` via
+        :meth:`StaticFit.lugre`, or a parameter set); its σ0, σ1 only seed the fit.  Required
+        for ``model="lugre"``; for ``model="linear"`` σ2 is taken from it (mean of the
+        branches) or 0 without it, in which case the fitted σ1 is σ1 + σ2.
+    model:
+        ``"lugre"`` simulates the full bristle equation; ``"linear"`` the linearised
+        pre-sliding dynamics m ẍ + (σ1 + σ2) ẋ + σ0 x = F.  The LuGre bristle equation
+        softens with load, so the linear fit underestimates σ0 by up to about 2·max|F|/F_s
+        after force steps (less under symmetric sines): keep |F| ≤ 0.02 F_s with it.
+
+    σ1 is profiled: for each σ1 on a grid, σ0 is refitted; the interval where the residual
+    stays within the F-test bound for ``confidence`` is ``sigma1_interval``.
+    """
+    t = np.asarray(time, dtype=float)
+    f = np.asarray(force, dtype=float)
+    x = np.asarray(position, dtype=float)
+    prefix = f"{source}: " if source else ""
+    _check_presliding(t, f, x, mass, lines, prefix)
+    if model not in ("lugre", "linear"):
+        raise ValueError(f"model = {model!r}: expected 'lugre' or 'linear'")
+    if model == "lugre" and friction is None:
+        raise ValueError("friction: model 'lugre' needs the static branches and σ2 of the site "
+                         "(fit them first, or take them from a parameter set)")
+    force_ratio: float | None = None
+    if friction is not None:
+        fs = min(friction.positive.static_force, friction.negative.static_force)
+        force_ratio = float(np.max(np.abs(f)) / fs)
+        if force_ratio >= 1.0:
+            k = int(np.flatnonzero(np.abs(f) >= fs)[0])
+            raise ValueError(f"{prefix}{_locate(lines, k)}: |force| = {abs(f[k]):.4g} N reaches "
+                             f"the breakaway force F_s = {fs:.4g} N; a pre-sliding test must "
+                             "stay below it")
+        base = friction
+        sigma2 = 0.5 * (friction.positive.viscous_coefficient
+                        + friction.negative.viscous_coefficient)
+    else:
+        huge = FrictionBranch(coulomb_force=1e5, static_force=1e5, stribeck_velocity=0.1,
+                              viscous_coefficient=0.0)
+        base = LuGreParameters(positive=huge, negative=huge, bristle_stiffness=1.0,
+                               bristle_damping=0.0)
+        sigma2 = 0.0
+
+    # quasi-static stiffness: slope of force against displacement seeds σ0
+    slope = float(np.polyfit(x, f, 1)[0])
+    s0_init = slope if slope > 0 else float(np.ptp(f) / np.ptp(x))
+    s0_init = float(np.clip(s0_init, 1.0, 1e12))
+    crit = 2.0 * math.sqrt(s0_init * mass)  # critical damping: the scale of σ1
+
+    def simulate(s0: float, s1: float) -> np.ndarray:
+        try:
+            params = base.with_values(bristle_stiffness=s0, bristle_damping=s1)
+        except ParameterError:
+            return np.full(t.size, np.nan)
+        return simulate_presliding(t, f, mass, params, model=model)
+
+    def residual(s0: float, s1: float) -> np.ndarray:
+        r = x - simulate(s0, s1)
+        if not np.all(np.isfinite(r)):
+            return np.full(t.size, 1e3 * float(np.ptp(x)))
+        return np.asarray(r - np.mean(r))  # the measurement's zero is free
+
+    scale = float(np.ptp(x))
+
+    def fit(s1_fixed: float | None, start: tuple[float, float]) -> Any:
+        """Fit (σ0, σ1) scaled by (s0_init, crit), or σ0 alone with σ1 fixed."""
+
+        def fun(th: np.ndarray) -> np.ndarray:
+            s1 = th[1] * crit if s1_fixed is None else s1_fixed
+            return residual(th[0] * s0_init, s1) / scale
+
+        if s1_fixed is None:
+            x0 = np.array([start[0] / s0_init, start[1] / crit])
+            bounds = (np.array([1e-3, 0.0]), np.array([1e3, 1e3]))
+        else:
+            x0 = np.array([start[0] / s0_init])
+            bounds = (np.array([1e-3]), np.array([1e3]))
+        return least_squares(fun, x0, bounds=bounds, method="trf", x_scale="jac",
+                             diff_step=1e-6, xtol=1e-10, ftol=1e-12)
+
+    best = None
+    for s1_start in (0.02 * crit, 0.2 * crit, 1.0 * crit):
+        res = fit(None, (s0_init, s1_start))
+        if best is None or res.cost < best.cost:
+            best = res
+    assert best is not None
+    s0_hat, s1_hat = float(best.x[0] * s0_init), float(best.x[1] * crit)
+    r_hat = residual(s0_hat, s1_hat)
+    ssr = float(np.sum(r_hat**2))
+    n_par = 3  # σ0, σ1 and the offset
+    dof = t.size - n_par
+    jac = best.jac * scale / np.array([s0_init, crit])  # d residual / d (σ0, σ1) in SI
+    cov = _covariance(jac, ssr, dof)
+    tq = _t_quantile(confidence, dof)
+    sd = np.sqrt(np.abs(np.diag(cov)))
+    corr = float(cov[0, 1] / (sd[0] * sd[1])) if np.all(sd > 0) and np.all(np.isfinite(sd)) \
+        else math.nan
+
+    # profile of σ1: refit σ0 at each σ1 of a grid spanning 0 … 10× critical damping
+    s1_max = 10.0 * 2.0 * math.sqrt(s0_hat * mass)
+    grid = np.unique(np.concatenate([
+        [0.0], np.geomspace(1e-3, 1.0, 13) * s1_max,
+        s1_hat + sd[1] * np.array([-3.0, -2.0, -1.0, 1.0, 2.0, 3.0]) if np.isfinite(sd[1])
+        else np.array([]),
+        [s1_hat],
+    ]))
+    grid = grid[(grid >= 0.0) & (grid <= s1_max)]
+    prof = np.empty(grid.size)
+    for i, s1 in enumerate(grid):
+        if s1 == s1_hat:
+            prof[i] = ssr
+            continue
+        res = fit(float(s1), (s0_hat, s1))
+        prof[i] = 2.0 * res.cost * scale**2
+    prof = np.minimum(prof, np.inf)
+    threshold = ssr * (1.0 + float(stats.f.ppf(confidence, 1, dof)) / dof)
+    low, high = _profile_interval(grid, prof, threshold, s1_hat, s1_max)
+
+    s0_est = _estimate(s0_hat, cov[0, 0], tq, "N/m", confidence)
+    s1_est = _estimate(s1_hat, cov[1, 1], tq, "N s/m", confidence)
+    determined = (s1_est.relative_stderr <= SIGMA1_MAX_RELATIVE_STDERR and math.isfinite(high))
+    if determined:
+        note = (f"σ1 determined: {s1_hat:.4g} N s/m, ±{100 * s1_est.relative_stderr:.0f} % "
+                f"(1 s.e.); σ2 = {sigma2:.4g} N s/m held fixed.")
+    else:
+        upper = f"{high:.3g}" if math.isfinite(high) else f"more than {s1_max:.3g}"
+        note = (f"σ1 poorly determined: the data are consistent with σ1 from {low:.3g} to "
+                f"{upper} N s/m ({100 * confidence:.0f} % profile); the test does not excite "
+                "the pre-sliding resonance √(σ0/m) enough. Use a faster force transient, or "
+                "keep σ1 from another source.")
+    if model == "linear" and friction is None:
+        note += " No σ2 given: the fitted σ1 is σ1 + σ2."
+    if force_ratio is not None and model == "linear" and force_ratio > LINEAR_MAX_FORCE_RATIO:
+        note += (f" max|F| = {100 * force_ratio:.0f} % of F_s: the linear model may "
+                 f"underestimate σ0 by up to ~{200 * force_ratio:.0f} % (use model 'lugre').")
+    fitted = x - r_hat
+    return DynamicFit(
+        model=model, mass=float(mass), bristle_stiffness=s0_est, bristle_damping=s1_est,
+        viscous_coefficient=sigma2, sigma1_determined=determined, sigma1_interval=(low, high),
+        note=note, time=t, force=f, position=x, fitted=fitted,
+        position_offset=float(np.mean(x - simulate(s0_hat, s1_hat))),
+        rmse=math.sqrt(ssr / dof), dof=dof, profile_sigma1=grid, profile_ssr=prof,
+        ssr_threshold=threshold, force_ratio=force_ratio, correlation=corr, source=source,
+        lines=lines,
+    )
+
+
+def _profile_interval(grid: np.ndarray, prof: np.ndarray, threshold: float, s1_hat: float,
+                      s1_max: float) -> tuple[float, float]:
+    """Where the profiled SSR crosses ``threshold`` on each side of the optimum."""
+    inside = prof <= threshold
+    i_hat = int(np.argmin(np.abs(grid - s1_hat)))
+    lo_i = i_hat
+    while lo_i > 0 and inside[lo_i - 1]:
+        lo_i -= 1
+    if lo_i == 0 and inside[0]:
+        low = float(grid[0])
+    else:
+        a, b = lo_i - 1, lo_i
+        low = float(np.interp(threshold, [prof[b], prof[a]], [grid[b], grid[a]]))
+    hi_i = i_hat
+    while hi_i < grid.size - 1 and inside[hi_i + 1]:
+        hi_i += 1
+    if hi_i == grid.size - 1 and inside[-1]:
+        high = math.inf
+    else:
+        a, b = hi_i, hi_i + 1
+        high = float(np.interp(threshold, [prof[a], prof[b]], [grid[a], grid[b]]))
+    return low, high
+
+
+
+SITES = ("screw", "nut", "guide")
+
+
+def site_mass(params: DriveParameters, site: str) -> float:
+    """Moving mass [kg] of a pre-sliding test at a friction site, referred to the table.
+
+    screw: (J_screw-motor + J_screw-shaft)/H²; nut: (J_hollow-motor + J_nut)/H²;
+    guide: the table mass (Wang2021 Table 2; H = lead/2π, Eq. 8).  The rotary sites are
+    stored in force form (Table 1 divides torques by H), so their inertia is divided by H².
+    """
+    h = params.screw.transmission_ratio
+    if site == "screw":
+        return (params.screw_motor.inertia + params.screw.shaft_inertia) / h**2
+    if site == "nut":
+        return (params.hollow_motor.inertia + params.screw.nut_inertia) / h**2
+    if site == "guide":
+        return params.table.mass
+    raise ParameterError("site", site, f"expected one of {', '.join(SITES)}")

@@ -1,0 +1,411 @@
+"""Readers for measured data: friction tests and interferometer position traces (CSV).
+
+The file formats are documented in docs/measured-data.md.  In short: a delimited text file
+with one header row; ``#`` lines and blank lines are ignored anywhere; a header may carry its
+unit in brackets (``time [s]``, ``table_position [mm]``), which is honoured.  Column names
+are matched case-insensitively without their unit.  Every value is converted to SI on
+reading; every row keeps its file line number so that errors can name it.
+
+Errors are :class:`MeasuredDataError` (a ``ValueError``) whose message names the file, the
+line and the problem, e.g. ``static.csv, line 7: column 'force': 'abc' is not a number``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "CURRENT_UNITS",
+    "FORCE_UNITS",
+    "LENGTH_UNITS",
+    "SPEED_UNITS",
+    "TIME_UNITS",
+    "CsvTable",
+    "MeasuredDataError",
+    "PositionTrace",
+    "PreslidingTest",
+    "StaticTest",
+    "read_csv_table",
+    "read_position_trace",
+    "read_presliding_test",
+    "read_static_test",
+    "split_unit",
+]
+
+# SI factor of every accepted unit spelling, per dimension (µ: micro sign or Greek mu, or u)
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9}
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+SPEED_UNITS = {"m/s": 1.0, "mm/s": 1e-3, "um/s": 1e-6, "µm/s": 1e-6, "μm/s": 1e-6,
+               "mm/min": 1e-3 / 60.0, "m/min": 1.0 / 60.0}
+FORCE_UNITS = {"N": 1.0, "kN": 1e3}
+CURRENT_UNITS = {"A": 1.0, "mA": 1e-3}
+
+_DIMENSIONS = {
+    "length": LENGTH_UNITS,
+    "time": TIME_UNITS,
+    "speed": SPEED_UNITS,
+    "force": FORCE_UNITS,
+    "current": CURRENT_UNITS,
+}
+
+_UNIT_RE = re.compile(r"^(?P<name>.*?)\s*\[(?P<unit>[^\]]*)\]\s*$")
+
+
+class MeasuredDataError(ValueError):
+    """A measured-data file was refused; the message names file, line and problem."""
+
+    def __init__(self, source: str, line: int | None, message: str) -> None:
+        self.source = source
+        self.line = line
+        where = f"{source}, line {line}" if line is not None else source
+        super().__init__(f"{where}: {message}")
+
+
+def split_unit(header: str) -> tuple[str, str | None]:
+    """``"time [s]"`` → ``("time", "s")``; ``"time"`` → ``("time", None)``."""
+    text = header.strip().strip('"').strip()
+    m = _UNIT_RE.match(text)
+    if m:
+        return m.group("name").strip(), m.group("unit").strip()
+    return text, None
+
+
+def unit_factor(unit: str, dimension: str, *, what: str) -> float:
+    """SI factor of ``unit`` for ``dimension`` (length, time, speed, force, current)."""
+    table = _DIMENSIONS[dimension]
+    if unit in table:
+        return table[unit]
+    lowered = {k.lower(): v for k, v in table.items()}
+    if unit.lower() in lowered:
+        return lowered[unit.lower()]
+    raise ValueError(f"{what}: unit {unit!r} is not a {dimension} unit; expected one of "
+                     f"{', '.join(table)}")
+
+
+@dataclass(frozen=True)
+class CsvTable:
+    """A parsed delimited text file: header names (unit stripped), units, raw cells."""
+
+    source: str
+    names: tuple[str, ...]
+    units: tuple[str | None, ...]
+    cells: tuple[tuple[str, ...], ...]  # one tuple of cells per column
+    lines: np.ndarray  # file line number (1-based) of every data row
+    header_line: int
+    decimal: str = "."
+
+    def __len__(self) -> int:
+        return int(self.lines.size)
+
+    def find(self, name: str) -> int | None:
+        """Index of the column called ``name`` (case-insensitive, unit ignored), or None."""
+        key = name.strip().lower()
+        for i, n in enumerate(self.names):
+            if n.lower() == key:
+                return i
+        return None
+
+    def has(self, name: str) -> bool:
+        return self.find(name) is not None
+
+    def _missing(self, names: Sequence[str]) -> MeasuredDataError:
+        shown = ", ".join(repr(n) for n in self.names)
+        wanted = " or ".join(repr(n) for n in names)
+        return MeasuredDataError(self.source, self.header_line,
+                                 f"no column {wanted} in the header (columns: {shown})")
+
+    def numbers(self, name: str) -> np.ndarray:
+        """Column ``name`` as float64, refusing empty, non-numeric and non-finite cells."""
+        i = self.find(name)
+        if i is None:
+            raise self._missing([name])
+        raw = self.cells[i]
+        if self.decimal != ".":
+            raw = tuple(c.replace(self.decimal, ".") for c in raw)
+        try:
+            values = np.array(raw, dtype=float)
+        except ValueError:
+            values = np.empty(len(raw))
+            for k, cell in enumerate(raw):
+                try:
+                    values[k] = float(cell)
+                except ValueError:
+                    text = self.cells[i][k]
+                    problem = "empty cell" if not text.strip() else f"{text!r} is not a number"
+                    raise MeasuredDataError(self.source, int(self.lines[k]),
+                                            f"column {self.names[i]!r}: {problem}") from None
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            k = int(bad[0])
+            raise MeasuredDataError(self.source, int(self.lines[k]),
+                                    f"column {self.names[i]!r}: {self.cells[i][k]!r} is not a "
+                                    "finite number")
+        return values
+
+    def quantity(self, names: Sequence[str], dimension: str, *, unit: str | None,
+                 default_unit: str) -> tuple[np.ndarray, str, str]:
+        """The first present column of ``names`` in SI, with its name and the unit used.
+
+        The unit is ``unit`` if given (an option), else the header's bracketed unit, else
+        ``default_unit``.  An option that contradicts the header's unit is refused.
+        """
+        for name in names:
+            i = self.find(name)
+            if i is None:
+                continue
+            header_unit = self.units[i]
+            what = f"{self.source}: column {self.names[i]!r}"
+            if unit is not None and header_unit is not None:
+                given = unit_factor(unit, dimension, what=what)
+                if not math.isclose(given, unit_factor(header_unit, dimension, what=what)):
+                    raise MeasuredDataError(
+                        self.source, self.header_line,
+                        f"column {self.names[i]!r} is in [{header_unit}] by its header but the "
+                        f"unit option says {unit!r}; drop one of them")
+            used = unit if unit is not None else header_unit or default_unit
+            factor = unit_factor(used, dimension, what=what)
+            return self.numbers(name) * factor, self.names[i], used
+        raise self._missing(names)
+
+
+def _detect_separator(header: str) -> str | None:
+    for sep in (",", ";", "\t"):
+        if sep in header:
+            return sep
+    return None  # whitespace
+
+
+def _split(line: str, sep: str | None) -> list[str]:
+    return line.split() if sep is None else [c.strip() for c in line.split(sep)]
+
+
+def read_csv_table(path: str | Path, *, sep: str | None = None,
+                   decimal: str = ".") -> CsvTable:
+    """Parse a delimited text file with one header row.
+
+    ``sep`` is the column separator; None detects it from the header (comma, semicolon,
+    tab, else whitespace).  ``decimal`` is the decimal mark (``","`` for files written with
+    a European locale; then the separator must not be a comma).
+    """
+    p = Path(path)
+    source = p.name
+    if not p.is_file():
+        raise FileNotFoundError(f"{path}: no such file")
+    if decimal not in (".", ","):
+        raise ValueError(f"decimal = {decimal!r}: expected '.' or ','")
+    if sep is not None:
+        sep = {"\\t": "\t", "tab": "\t", "space": None, "whitespace": None}.get(sep, sep)
+    text = p.read_text(encoding="utf-8-sig", errors="replace")
+    header: list[str] | None = None
+    header_line = 0
+    rows: list[list[str]] = []
+    lines: list[int] = []
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        if header is None:
+            if sep is None:
+                sep = _detect_separator(line)
+            if sep == decimal:
+                raise MeasuredDataError(source, number, f"separator and decimal mark are both "
+                                        f"{decimal!r}")
+            header = _split(line, sep)
+            header_line = number
+            continue
+        cells = _split(line, sep)
+        if len(cells) != len(header):
+            raise MeasuredDataError(source, number, f"{len(cells)} cells, but the header (line "
+                                    f"{header_line}) has {len(header)} columns")
+        rows.append(cells)
+        lines.append(number)
+    if header is None:
+        raise MeasuredDataError(source, None, "no header row (the file is empty)")
+    parsed = [split_unit(h) for h in header]
+    names = tuple(n for n, _ in parsed)
+    seen: set[str] = set()
+    for n in names:
+        if not n:
+            raise MeasuredDataError(source, header_line, "a column has no name")
+        if n.lower() in seen:
+            raise MeasuredDataError(source, header_line, f"column {n!r} appears twice")
+        seen.add(n.lower())
+    columns = tuple(tuple(r[i] for r in rows) for i in range(len(names)))
+    return CsvTable(source=source, names=names, units=tuple(u for _, u in parsed),
+                    cells=columns, lines=np.array(lines, dtype=int), header_line=header_line,
+                    decimal=decimal)
+
+
+def _need_rows(table: CsvTable, minimum: int, what: str) -> None:
+    if len(table) < minimum:
+        raise MeasuredDataError(table.source, None, f"{len(table)} data rows; a {what} needs at "
+                                f"least {minimum}")
+
+
+def check_increasing(table: CsvTable, time: np.ndarray, column: str) -> None:
+    """Refuse a time column that does not strictly increase, naming the line."""
+    bad = np.flatnonzero(np.diff(time) <= 0.0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        cells = table.cells[table.find(column) or 0]
+        raise MeasuredDataError(
+            table.source, int(table.lines[k]),
+            f"column {column!r} does not increase ({cells[k - 1]} on line "
+            f"{int(table.lines[k - 1])}, then {cells[k]})")
+
+
+# ---------------------------------------------------------------- static friction tests
+
+
+@dataclass(frozen=True)
+class StaticTest:
+    """Constant-speed friction tests: one row per test.  SI units."""
+
+    speed: np.ndarray  # [m/s], signed
+    force: np.ndarray  # [N], friction force (signed or magnitudes)
+    lines: np.ndarray  # file line of every row
+    source: str
+    force_from: str  # "force" or "current × K_t / H"
+
+
+def read_static_test(
+    path: str | Path,
+    *,
+    speed_column: str = "speed",
+    force_column: str = "force",
+    current_column: str = "current",
+    speed_unit: str | None = None,
+    force_unit: str | None = None,
+    current_unit: str | None = None,
+    torque_constant: float | None = None,
+    lead: float | None = None,
+    sep: str | None = None,
+    decimal: str = ".",
+) -> StaticTest:
+    """Read constant-speed friction tests (speed and friction force per row).
+
+    Default columns: ``speed`` [mm/s] and ``force`` [N].  Without a force column, a
+    ``current`` column [A] is converted as F = K_t·i/H with H = ``lead``/2π (Wang2021 Eq. 8
+    and Table 1's force convention); ``torque_constant`` [N m/A] and ``lead`` [m] are then
+    required.
+    """
+    table = read_csv_table(path, sep=sep, decimal=decimal)
+    speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit, default_unit="mm/s")
+    if table.has(force_column) or not table.has(current_column):
+        if not table.has(force_column):
+            raise table._missing([force_column, current_column])
+        force, _, _ = table.quantity([force_column], "force", unit=force_unit, default_unit="N")
+        origin = "force"
+    else:
+        if torque_constant is None or lead is None:
+            raise MeasuredDataError(table.source, table.header_line,
+                                    f"column {current_column!r} needs the motor torque constant "
+                                    "and the screw lead (from a parameter set or options) to "
+                                    "become a force")
+        if not (torque_constant > 0 and lead > 0):
+            raise ValueError(f"torque_constant = {torque_constant!r}, lead = {lead!r}: expected "
+                             "positive values [N m/A], [m]")
+        current, _, _ = table.quantity([current_column], "current", unit=current_unit,
+                                       default_unit="A")
+        force = current * torque_constant / (lead / (2.0 * math.pi))
+        origin = "current × K_t / H"
+    return StaticTest(speed=speed, force=force, lines=table.lines, source=table.source,
+                      force_from=origin)
+
+
+# ---------------------------------------------------------------- pre-sliding tests
+
+
+@dataclass(frozen=True)
+class PreslidingTest:
+    """A pre-sliding (below breakaway) test: applied force and displacement.  SI units."""
+
+    time: np.ndarray  # [s]
+    force: np.ndarray  # [N]
+    position: np.ndarray  # [m]
+    lines: np.ndarray
+    source: str
+
+
+def read_presliding_test(
+    path: str | Path,
+    *,
+    time_column: str = "time",
+    force_column: str = "force",
+    position_column: str = "position",
+    time_unit: str | None = None,
+    force_unit: str | None = None,
+    position_unit: str | None = None,
+    sep: str | None = None,
+    decimal: str = ".",
+) -> PreslidingTest:
+    """Read a pre-sliding test: ``time`` [s], ``force`` [N], ``position`` [µm] by default."""
+    table = read_csv_table(path, sep=sep, decimal=decimal)
+    _need_rows(table, 20, "pre-sliding test")
+    time, tname, _ = table.quantity([time_column], "time", unit=time_unit, default_unit="s")
+    check_increasing(table, time, tname)
+    force, _, _ = table.quantity([force_column], "force", unit=force_unit, default_unit="N")
+    position, _, _ = table.quantity([position_column], "length", unit=position_unit,
+                                    default_unit="um")
+    return PreslidingTest(time=time, force=force, position=position, lines=table.lines,
+                          source=table.source)
+
+
+# ---------------------------------------------------------------- position traces
+
+
+@dataclass(frozen=True)
+class PositionTrace:
+    """A table position trace (interferometer export or simulator CSV).  SI units."""
+
+    time: np.ndarray  # [s]
+    position: np.ndarray  # [m]
+    lines: np.ndarray
+    source: str
+    position_column: str
+    command_speed: np.ndarray | None = None  # [m/s], when the file has a command column
+    speed: np.ndarray | None = None  # [m/s], when a speed column was asked for
+
+
+def read_position_trace(
+    path: str | Path,
+    *,
+    time_column: str = "time",
+    position_column: str | None = None,
+    command_column: str = "command_speed",
+    speed_column: str | None = None,
+    time_unit: str | None = None,
+    position_unit: str | None = None,
+    speed_unit: str | None = None,
+    sep: str | None = None,
+    decimal: str = ".",
+) -> PositionTrace:
+    """Read time and table position; default columns ``time`` [s] and ``position`` [mm].
+
+    Without ``position_column``, a ``position`` column is used, else ``table_position`` (the
+    simulator's export).  A ``command_speed`` column [mm/s] is read when present (it marks
+    the segments of a step-down run); ``speed_column`` names a speed column [mm/s] to use
+    instead of differentiating the position.
+    """
+    table = read_csv_table(path, sep=sep, decimal=decimal)
+    _need_rows(table, 16, "position trace")
+    time, tname, _ = table.quantity([time_column], "time", unit=time_unit, default_unit="s")
+    check_increasing(table, time, tname)
+    names = [position_column] if position_column else ["position", "table_position"]
+    position, pname, _ = table.quantity(names, "length", unit=position_unit, default_unit="mm")
+    command = None
+    if table.has(command_column):
+        command, _, _ = table.quantity([command_column], "speed", unit=None,
+                                       default_unit="mm/s")
+    speed = None
+    if speed_column is not None:
+        speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit,
+                                     default_unit="mm/s")
+    return PositionTrace(time=time, position=position, lines=table.lines, source=table.source,
+                         position_column=pname, command_speed=command, speed=speed)
