@@ -208,3 +208,14 @@ def test_replace_path_names_the_full_path_for_cross_field_checks() -> None:
         preset("wang2021").replace_path("friction.nut.negative.static_force", 1.0)
     assert info.value.field == "friction.nut.negative.static_force"
     assert "F_s must be ≥ F_c" in str(info.value)
+
+
+def test_refusal_message_survives_a_value_containing_colon_space() -> None:
+    """Guards a fixed bug: the path rewrite split the message at the first ": ", which
+    garbled it when the refused value's repr contained ": "."""
+    with pytest.raises(ParameterError) as info:
+        from_dict(edited("table.mass", "20: kg"))
+    assert str(info.value) == "table.mass = '20: kg': expected a number [kg]"
+    with pytest.raises(ParameterError) as info:
+        preset("wang2021").replace_path("table.mass", "20: kg")
+    assert str(info.value) == "table.mass = '20: kg': expected a number [kg]"

@@ -11,7 +11,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from .. import friction, stiffness
-from ..parameters import DriveParameters, ParameterError
+from ..parameters import DriveParameters, LuGreParameters, ParameterError
 from ._common import (
     MM_PER_S,
     N_PER_UM,
@@ -95,7 +95,7 @@ def friction_command(
     if site not in SITES:
         raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
     params = resolve_parameters(preset_name, params_file)
-    lugre: Any = getattr(params.friction, site)
+    lugre: LuGreParameters = getattr(params.friction, site)
     m, k, c = _scan_setup(params, mass, stiffness_n_per_um, damping)
     _positive("--speed-min", speed_min, "mm/s")
     if not (math.isfinite(speed_max) and speed_max > speed_min):

@@ -273,5 +273,5 @@ def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
             prefix = full.rsplit(".", 1)[0] if "." in full else ""
             local = err.field.split(".", 1)[-1]
             raise ParameterError(f"{prefix}.{local}" if prefix else local, err.value,
-                                 str(err).split(": ", 1)[-1]) from None
+                                 err.message) from None
     return replace(obj, **{head: _replace_path(getattr(obj, head), parts[1:], value, full)})

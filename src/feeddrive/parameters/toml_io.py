@@ -108,7 +108,7 @@ def _build(cls: type, data: Any, path: str) -> Any:
         # component labels are local ("motor.inertia"); name the full path instead
         local = err.field.split(".", 1)[-1]
         raise ParameterError(f"{path}.{local}" if path else local, err.value,
-                             str(err).split(": ", 1)[-1]) from None
+                             err.message) from None
 
 
 def from_dict(data: dict[str, Any]) -> DriveParameters:

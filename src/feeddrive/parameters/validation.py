@@ -19,6 +19,7 @@ class ParameterError(ValueError):
     def __init__(self, field: str, value: object, message: str) -> None:
         self.field = field
         self.value = value
+        self.message = message
         super().__init__(f"{field} = {value!r}: {message}")
 
 
