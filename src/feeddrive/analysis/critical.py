@@ -1,0 +1,231 @@
+"""Critical creeping velocity: the lowest table speed without stick-slip.  SI units.
+
+Two protocols, because the answer can depend on how the table got to its speed (a friction
+limit cycle can persist above the speed where steady sliding turns stable):
+
+* **from rest** (``start="rest"``): every trial starts the table from rest with a short ramp;
+  a coarse scan finds the highest creeping speed on a grid, then bisection refines the
+  boundary to ``resolution`` (0.01 mm/s by default).  The scan guards against non-monotone
+  behaviour (a creeping *band*), which plain bisection would miss.
+* **step-down from a running table** (``start="running"``), the paper's experimental protocol
+  (Wang2021 Sect. 6): one continuous run that starts higher and steps the command down by
+  0.01 mm/s, dwelling at each speed, until the table crawls.  A coarse staircase first
+  locates the region, a fine one then walks down 0.01 mm/s at a time.
+
+The critical speed reported is the lowest tested speed that was smooth with every creeping
+speed below it, i.e. the smooth end of the boundary.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..control import ConstantSpeed, SampledSpeed
+from ..simulate import DriveSystem, SolverOptions, simulate
+from .metrics import CreepMetrics, CreepThresholds, creep_metrics
+
+MM_S = 1e-3
+
+
+@dataclass(frozen=True)
+class CreepTrial:
+    """One tested speed [m/s] and what the metrics said."""
+
+    speed: float
+    creeping: bool
+    ripple_ratio: float
+    stick_fraction: float
+    stick_slip_frequency: float | None
+
+    @classmethod
+    def from_metrics(cls, speed: float, m: CreepMetrics) -> CreepTrial:
+        return cls(speed=speed, creeping=m.verdict == "creeping", ripple_ratio=m.ripple_ratio,
+                   stick_fraction=m.stick_fraction, stick_slip_frequency=m.stick_slip_frequency)
+
+
+@dataclass(frozen=True)
+class CriticalSpeed:
+    """Result of a critical-speed search.
+
+    ``status``: ``"found"``; ``"below-range"`` (smooth at every tested speed: the critical
+    speed is below ``speed_range[0]``); ``"above-range"`` (creeps at every tested speed).
+    """
+
+    drive: str
+    table_position: float
+    nut_speed: float
+    start: str
+    critical_speed: float | None
+    status: str
+    resolution: float
+    speed_range: tuple[float, float]
+    trials: tuple[CreepTrial, ...] = field(default_factory=tuple)
+    simulated_time: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """Engineering units (mm, mm/s) for printing and JSON."""
+        return {
+            "drive": self.drive,
+            "table_position_mm": self.table_position * 1e3,
+            "nut_speed_mm_s": self.nut_speed / MM_S,
+            "start": self.start,
+            "critical_speed_mm_s": (None if self.critical_speed is None
+                                    else round(self.critical_speed / MM_S, 6)),
+            "status": self.status,
+            "resolution_mm_s": self.resolution / MM_S,
+            "speed_range_mm_s": [s / MM_S for s in self.speed_range],
+            "trials": [{**asdict(t), "speed": t.speed / MM_S} for t in self.trials],
+            "simulated_time_s": self.simulated_time,
+        }
+
+
+def _check_speed(name: str, value: float) -> float:
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} = {value!r}: expected a finite speed > 0 [m/s]")
+    return float(value)
+
+
+def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
+                duration: float = 10.0, thresholds: CreepThresholds | None = None,
+                options: SolverOptions | None = None) -> CreepTrial:
+    """Start the table from rest at ``speed`` [m/s] (nut at ``nut_speed``) and judge creep."""
+    result = simulate(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), duration,
+                      options=options)
+    return CreepTrial.from_metrics(speed, result.creep_metrics(thresholds=thresholds))
+
+
+def _grid(lo: float, hi: float, step: float) -> np.ndarray:
+    n = int(math.floor((hi - lo) / step + 1e-9))
+    return np.round(lo + step * np.arange(n + 1), 12)
+
+
+def critical_speed_from_rest(
+    system: DriveSystem, *, nut_speed: float = 0.0,
+    speed_range: tuple[float, float] = (0.05 * MM_S, 3.0 * MM_S),
+    coarse_step: float = 0.1 * MM_S, resolution: float = 0.01 * MM_S, duration: float = 10.0,
+    thresholds: CreepThresholds | None = None, options: SolverOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> CriticalSpeed:
+    """Coarse scan plus bisection, every trial from rest (see module docstring)."""
+    lo, hi = (_check_speed("speed_range[0]", speed_range[0]),
+              _check_speed("speed_range[1]", speed_range[1]))
+    if hi <= lo:
+        raise ValueError(f"speed_range = {speed_range!r}: expected low < high [m/s]")
+    _check_speed("resolution", resolution)
+    _check_speed("coarse_step", coarse_step)
+    trials: dict[float, CreepTrial] = {}
+
+    def judge(v: float) -> bool:
+        v = round(v, 12)
+        if v not in trials:
+            trials[v] = creep_trial(system, v, nut_speed=nut_speed, duration=duration,
+                                    thresholds=thresholds, options=options)
+            if progress:
+                progress(len(trials), 0)
+        return trials[v].creeping
+
+    grid = _grid(lo, hi, coarse_step)
+    flags = [judge(v) for v in grid]
+    creeping = [v for v, f in zip(grid, flags, strict=True) if f]
+    if not creeping:
+        status, crit = "below-range", None
+    elif flags[-1]:
+        status, crit = "above-range", None
+    else:
+        a = max(creeping)  # highest creeping grid speed
+        b = float(grid[np.searchsorted(grid, a) + 1])  # smooth neighbour above
+        while b - a > resolution * (1 + 1e-9):
+            mid = round((a + b) / 2.0 / resolution) * resolution
+            if mid <= a or mid >= b:
+                mid = (a + b) / 2.0
+            if judge(mid):
+                a = mid
+            else:
+                b = mid
+        status, crit = "found", b
+    ordered = tuple(trials[k] for k in sorted(trials))
+    return CriticalSpeed(drive=system.drive, table_position=system.table_position,
+                         nut_speed=nut_speed, start="rest", critical_speed=crit, status=status,
+                         resolution=resolution, speed_range=(lo, hi), trials=ordered,
+                         simulated_time=duration * len(trials))
+
+
+def _staircase(speeds: np.ndarray, dwell: float, lead_in: float, nut_speed: float,
+               interval: float = 1e-3) -> tuple[SampledSpeed, np.ndarray]:
+    """Speed staircase: a ramp to speeds[0] over ``lead_in`` [s] … then ``dwell`` per step."""
+    starts = lead_in + dwell * np.arange(len(speeds))
+    t_end = starts[-1] + dwell
+    t = np.arange(int(round(t_end / interval)) + 1) * interval
+    idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(speeds) - 1)
+    vt = speeds[idx].astype(float)
+    ramp = min(0.1, lead_in)
+    vt = np.where(t < ramp, speeds[0] * t / ramp, vt)
+    vn = np.where(t < ramp, nut_speed * t / ramp, nut_speed)
+    return SampledSpeed(time=t, table_speed=vt, nut_speed=vn), starts
+
+
+def _run_staircase(system: DriveSystem, speeds: np.ndarray, dwell: float, lead_in: float,
+                   nut_speed: float, thresholds: CreepThresholds | None,
+                   options: SolverOptions | None) -> tuple[list[CreepTrial], float]:
+    profile, starts = _staircase(speeds, dwell, lead_in, nut_speed)
+    duration = float(profile.time[-1])
+    result = simulate(system, profile, duration, options=options)
+    time, speed = result.time, result["table_speed"]
+    out = []
+    for v, t0 in zip(speeds, starts, strict=True):
+        # judge each step on its second half: the step's own transient is over by then
+        window = (t0 + 0.5 * dwell, t0 + dwell)
+        m = creep_metrics(time, speed, float(v), thresholds=thresholds, window=window)
+        out.append(CreepTrial.from_metrics(float(v), m))
+        if out[-1].creeping:
+            break
+    return out, duration
+
+
+def critical_speed_stepdown(
+    system: DriveSystem, *, nut_speed: float = 0.0, start_speed: float = 3.0 * MM_S,
+    lowest_speed: float = 0.05 * MM_S, step: float = 0.01 * MM_S,
+    coarse_step: float = 0.1 * MM_S, dwell: float = 4.0, lead_in: float = 6.0,
+    thresholds: CreepThresholds | None = None, options: SolverOptions | None = None,
+) -> CriticalSpeed:
+    """The paper's protocol (Sect. 6) on a running table: step the command down until it crawls."""
+    hi = _check_speed("start_speed", start_speed)
+    lo = _check_speed("lowest_speed", lowest_speed)
+    _check_speed("step", step)
+    if hi <= lo:
+        raise ValueError(f"start_speed = {hi!r}: expected above lowest_speed = {lo!r} [m/s]")
+    coarse = _grid(lo, hi, coarse_step)[::-1]
+    coarse_trials, t1 = _run_staircase(system, coarse, dwell, lead_in, nut_speed, thresholds,
+                                       options)
+    trials = list(coarse_trials)
+    simulated = t1
+    if not coarse_trials[-1].creeping:
+        status, crit = "below-range", None
+    elif len(coarse_trials) == 1:
+        status, crit = "above-range", None
+    else:
+        last_smooth = coarse_trials[-2].speed
+        fine = np.round(np.arange(last_smooth, coarse_trials[-1].speed - step / 2, -step), 12)
+        approach = np.array([t.speed for t in coarse_trials[:-2]] + list(fine))
+        fine_trials, t2 = _run_staircase(system, approach, dwell, lead_in, nut_speed,
+                                         thresholds, options)
+        simulated += t2
+        trials += fine_trials
+        if not fine_trials[-1].creeping:
+            # the fine staircase stayed smooth down to the coarse creeping speed
+            status, crit = "found", float(fine_trials[-1].speed)
+        elif len(fine_trials) >= 2:
+            status, crit = "found", float(fine_trials[-2].speed)
+        else:
+            status, crit = "above-range", None
+    unique = {round(t.speed, 12): t for t in trials}
+    ordered = tuple(unique[k] for k in sorted(unique))
+    return CriticalSpeed(drive=system.drive, table_position=system.table_position,
+                         nut_speed=nut_speed, start="running", critical_speed=crit,
+                         status=status, resolution=step, speed_range=(lo, hi), trials=ordered,
+                         simulated_time=simulated)
