@@ -150,7 +150,7 @@ def friction_command(
         },
     }
     if plot:
-        from ..plotting import save_figure, stribeck_figure
+        from ..stribeck_plot import save_figure, stribeck_figure
 
         fig = stribeck_figure(lugre, title=f"Steady friction, {site} ({params.name}), "
                                            "Wang2021 Table 1")

@@ -1,0 +1,60 @@
+"""Stribeck-curve figure for `feeddrive friction --plot`.  matplotlib object API on the Agg
+canvas: no pyplot, no global backend switch."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from .friction import negative_slope_band, steady_friction
+from .parameters import LuGreParameters
+
+_MM_PER_S = 1e-3
+
+
+def stribeck_figure(params: LuGreParameters, title: str = "",
+                    speed_max: float | None = None) -> Figure:
+    """Steady friction force [N] against sliding speed [mm/s] for both branches.
+
+    The curve is Wang2021 Eq. (11) at steady state (Stribeck + Coulomb + viscous, Table 1);
+    the negative branch is drawn as magnitudes so the two can be compared.  Each branch's
+    negative-slope band is shaded and its zero-slope speed marked.  ``speed_max`` [m/s]
+    defaults to three times the larger zero-slope speed (or 5 v_s without a band).
+    """
+    bands = {name: negative_slope_band(params.branch(name)) for name in ("positive", "negative")}
+    if speed_max is None:
+        edges = [b.upper for b in bands.values() if b is not None]
+        vs = max(params.positive.stribeck_velocity, params.negative.stribeck_velocity)
+        speed_max = 3.0 * max(edges) if edges else 5.0 * vs
+    speed = np.linspace(0.0, speed_max, 801)[1:]
+
+    fig = Figure(figsize=(7.0, 4.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    styles = {"positive": ("C0", 1.0), "negative": ("C3", -1.0)}
+    for name, (colour, sign) in styles.items():
+        force = np.abs(steady_friction(sign * speed, params))
+        ax.plot(speed / _MM_PER_S, force, color=colour, label=f"{name} branch")
+        band = bands[name]
+        if band is not None:
+            ax.axvspan(band.lower / _MM_PER_S, band.upper / _MM_PER_S, color=colour, alpha=0.08)
+            v0 = band.zero_slope_speed
+            f0 = float(np.abs(steady_friction(sign * v0, params)))
+            ax.axvline(v0 / _MM_PER_S, color=colour, linestyle="--", linewidth=0.8)
+            ax.plot([v0 / _MM_PER_S], [f0], "o", color=colour,
+                    label=f"zero slope, {name}: {v0 / _MM_PER_S:.2f} mm/s")
+    ax.set_xlabel("sliding speed [mm/s]")
+    ax.set_ylabel("steady friction force [N]")
+    ax.set_xlim(0.0, speed_max / _MM_PER_S)
+    ax.set_title(title or "Steady LuGre friction (Wang2021 Eq. 11, Table 1)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize="small")
+    return fig
+
+
+def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> None:
+    """Write ``fig`` to ``path``; the format follows the file extension (e.g. .png)."""
+    fig.savefig(path, dpi=dpi)
