@@ -1,0 +1,1 @@
+"""Independent reference implementations and the scripts that produce stored references."""
