@@ -1,0 +1,99 @@
+"""Fit named unknown parameters to target critical creeping speeds.
+
+The paper leaves parts of the model unstated (see ``wang2021.ASSUMPTIONS``).  Calibration fits
+only those unknowns, to critical speeds the paper reports, and everything else is then a
+prediction.  One unknown and one target: bisection on a log scale for the parameter value at
+which the creep verdict *at the target speed* switches (the critical speed is assumed to move
+monotonically with the parameter inside the bracket; the bracket ends are checked first), then
+a full critical-speed search at the fitted value reports what was achieved.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from ..parameters import DriveParameters
+from ..simulate import DriveSystem
+from .critical import CriticalSpeed, creep_trial, critical_speed_from_rest
+
+
+@dataclass(frozen=True)
+class Target:
+    """A critical speed [m/s] to reproduce, with the drive, position [m] and nut speed [m/s]."""
+
+    drive: str
+    critical_speed: float
+    table_position: float = 0.4
+    nut_speed: float = 0.0
+    source: str = ""
+
+
+@dataclass(frozen=True)
+class Unknown:
+    """A parameter path (e.g. ``controller.velocity_integral_gain``) and its search bracket."""
+
+    path: str
+    low: float
+    high: float
+
+
+@dataclass(frozen=True)
+class Calibration:
+    parameters: DriveParameters
+    unknown: Unknown
+    value: float
+    target: Target
+    achieved: CriticalSpeed
+    evaluations: int
+
+    @property
+    def deviation(self) -> float | None:
+        c = self.achieved.critical_speed
+        return None if c is None else c / self.target.critical_speed - 1.0
+
+
+def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
+              relative_tolerance: float = 0.02, duration: float = 12.0,
+              progress: Callable[[str], None] | None = None) -> Calibration:
+    """Fit ``unknown`` so that ``target.drive`` creeps below and not above the target speed."""
+    if not (0 < unknown.low < unknown.high and math.isfinite(unknown.high)):
+        raise ValueError(f"unknown {unknown.path}: expected 0 < low < high, got "
+                         f"{unknown.low!r}, {unknown.high!r}")
+    evaluations = 0
+
+    def creeps_at_target(value: float) -> bool:
+        nonlocal evaluations
+        evaluations += 1
+        p = params.replace_path(unknown.path, float(value))
+        system = DriveSystem(p, drive=target.drive, table_position=target.table_position)
+        # just below the target speed the drive must creep
+        trial = creep_trial(system, target.critical_speed - 0.01e-3, nut_speed=target.nut_speed,
+                            duration=duration)
+        if progress:
+            progress(f"{unknown.path} = {value:.6g}: "
+                     f"{'creeps' if trial.creeping else 'smooth'} at target")
+        return trial.creeping
+
+    lo, hi = unknown.low, unknown.high
+    f_lo, f_hi = creeps_at_target(lo), creeps_at_target(hi)
+    if f_lo == f_hi:
+        raise ValueError(
+            f"{unknown.path}: the creep verdict at {target.critical_speed * 1e3:.2f} mm/s is "
+            f"the same ({'creeping' if f_lo else 'smooth'}) at both ends of [{lo:g}, {hi:g}]; "
+            "widen the bracket or choose another unknown")
+    while hi / lo > 1.0 + relative_tolerance:
+        mid = math.sqrt(lo * hi)
+        if creeps_at_target(mid) == f_lo:
+            lo = mid
+        else:
+            hi = mid
+    # the value on the creeping side of the switch reproduces "creeps just below the target"
+    value = lo if f_lo else hi
+    fitted = params.replace_path(unknown.path, float(value))
+    achieved = critical_speed_from_rest(
+        DriveSystem(fitted, drive=target.drive, table_position=target.table_position),
+        nut_speed=target.nut_speed, duration=duration)
+    return Calibration(parameters=fitted, unknown=unknown, value=float(value), target=target,
+                       achieved=achieved, evaluations=evaluations)
