@@ -1,0 +1,136 @@
+"""Parameter fragments: a partial parameter set (TOML) merged into a full one.
+
+An identification writes only what it measured, e.g. ::
+
+    [friction.screw.positive]
+    coulomb_force = 73.2  # [N] 95 % CI 72.1 … 74.3
+    ...
+
+and :func:`merge_fragment` puts it into a base set (``preset("wang2021")`` or a parameter
+file), re-validating the result.  Keys follow the parameter file layout of
+:mod:`feeddrive.parameters.toml_io`; all values are SI.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ..parameters import DriveParameters, ParameterError, from_dict, to_dict
+from .identification import SITES, DynamicFit, Estimate, StaticFit
+
+__all__ = ["friction_fragment", "load_fragment", "merge_fragment"]
+
+_BRANCH_FIELDS = (
+    ("coulomb_force", "N"),
+    ("static_force", "N"),
+    ("stribeck_velocity", "m/s"),
+    ("viscous_coefficient", "N s/m"),
+)
+
+
+def _ci(est: Estimate) -> str:
+    level = f"{100 * est.confidence:.0f} %"
+    if not (math.isfinite(est.low) and math.isfinite(est.high)):
+        return f"{level} CI not determined"
+    return f"{level} CI {est.low:.6g} … {est.high:.6g}"
+
+
+def friction_fragment(
+    site: str,
+    *,
+    static: StaticFit | None = None,
+    dynamic: DynamicFit | None = None,
+    source: str | None = None,
+    include_undetermined: bool = False,
+) -> str:
+    """TOML fragment ``[friction.<site>]`` with what was identified, CIs as comments.
+
+    A σ1 the dynamic fit could not determine is left out (the base set's value stays on
+    merging) unless ``include_undetermined``; the fragment says why in a comment.
+    """
+    if site not in SITES:
+        raise ParameterError("site", site, f"expected one of {', '.join(SITES)}")
+    if static is None and dynamic is None:
+        raise ValueError("friction_fragment: give a static fit, a dynamic fit or both")
+    origin = f" from {source}" if source else ""
+    lines = [
+        f"# feeddrive friction fragment for the {site} site, identified{origin}.",
+        "# SI units. Merge into a parameter set: feeddrive identify merge THIS_FILE --out FILE",
+        "# (or feeddrive.analysis.fragments.merge_fragment(base, fragment)).",
+    ]
+    if dynamic is not None:
+        lines.append(f"\n[friction.{site}]")
+        lines.append(f"# pre-sliding fit, model {dynamic.model!r}, mass {dynamic.mass:.6g} kg, "
+                     f"σ2 = {dynamic.viscous_coefficient:.6g} N s/m held fixed")
+        s0 = dynamic.bristle_stiffness
+        lines.append(f"bristle_stiffness = {s0.value!r}  # [N/m] {_ci(s0)}")
+        s1 = dynamic.bristle_damping
+        if dynamic.sigma1_determined or include_undetermined:
+            lines.append(f"bristle_damping = {s1.value!r}  # [N s/m] {_ci(s1)}")
+        if not dynamic.sigma1_determined:
+            low, high = dynamic.sigma1_interval
+            upper = f"{high:.3g}" if math.isfinite(high) else "unbounded"
+            lines.append(f"# σ1 poorly determined: {low:.3g} … {upper} N s/m "
+                         f"({100 * s1.confidence:.0f} % profile)"
+                         + ("" if include_undetermined else "; left out, the base value stays"))
+    if static is not None:
+        for direction, fit in static.branches().items():
+            lines.append(f"\n[friction.{site}.{direction}]")
+            lines.append(f"# {fit.speed.size} tests, rms residual {fit.rmse:.4g} N")
+            for name, unit in _BRANCH_FIELDS:
+                est = getattr(fit, name)
+                lines.append(f"{name} = {getattr(fit.branch, name)!r}  # [{unit}] {_ci(est)}")
+    return "\n".join(lines) + "\n"
+
+
+def load_fragment(path: str | Path) -> dict[str, Any]:
+    """Read a TOML fragment file as a nested dict."""
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterError("fragment", str(p), "no such file")
+    try:
+        return tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as err:
+        raise ParameterError("fragment", str(p), f"not valid TOML: {err}") from None
+
+
+def _deep_merge(base: dict[str, Any], update: Mapping[str, Any], path: str) -> dict[str, Any]:
+    out = dict(base)
+    for key, value in update.items():
+        where = f"{path}.{key}" if path else key
+        if key not in out:
+            raise ParameterError(where, value, "unknown key (not in the parameter set)")
+        if isinstance(value, Mapping):
+            if not isinstance(out[key], dict):
+                raise ParameterError(where, value, "expected a value, not a table")
+            out[key] = _deep_merge(out[key], value, where)
+        else:
+            if isinstance(out[key], dict):
+                raise ParameterError(where, value, "expected a table of values")
+            out[key] = value
+    return out
+
+
+def merge_fragment(base: DriveParameters,
+                   fragment: str | Path | Mapping[str, Any]) -> DriveParameters:
+    """A new, validated parameter set: ``base`` with the values of ``fragment`` replaced.
+
+    ``fragment`` is a nested mapping, TOML text (``str``) or a TOML file (``Path``).  Keys
+    must exist in the parameter set; a refused value raises :class:`ParameterError` naming
+    its full path (e.g. ``friction.screw.positive.static_force``).
+    """
+    if isinstance(fragment, Path):
+        data: Mapping[str, Any] = load_fragment(fragment)
+    elif isinstance(fragment, str):
+        try:
+            data = tomllib.loads(fragment)
+        except tomllib.TOMLDecodeError as err:
+            raise ParameterError("fragment", "<toml>", f"not valid TOML: {err}") from None
+    else:
+        data = fragment
+    merged = _deep_merge(to_dict(base), data, "")
+    return from_dict(merged)

@@ -1,0 +1,514 @@
+"""Creep analysis of a measured (or exported) table position trace.  SI units.
+
+Pipeline: position [m] → speed by a Savitzky–Golay differentiator → segments (one per
+commanded speed) → :func:`feeddrive.analysis.metrics.creep_metrics` per segment → critical
+speed of a step-down run (Wang2021 Sect. 6: the speed is lowered in 0.01 mm/s steps until
+the table crawls).
+
+Speed estimate
+    ``scipy.signal.savgol_filter(position, window, polyorder=2, deriv=1)``.  The default
+    window spans ``smoothing_time`` = 20 ms (at least 5 samples, odd): about a −3 dB cut-off
+    of 1/(3.2·window) ≈ 15 Hz, which keeps stick-slip cycles (periods of 0.1 s and more at
+    the speeds of Wang2021) and suppresses interferometer quantisation noise.  Override with
+    ``smoothing_time`` or ``window``.  Unevenly sampled traces (jitter > 1 % of the median
+    step) are first interpolated onto a uniform grid.
+
+Segments
+    From a command-speed column when the file has one (runs of equal command), else
+    detected in two stages, starting ``min_segment_time`` after the table has first reached
+    90 % of its overall mean speed (the run-up and its settling are not a segment):
+
+    1. *regimes*: each sample is labelled rest (local mean speed below 1 % of the fastest),
+       creeping (over a sliding window of ``min_segment_time`` the stick fraction or the
+       ripple ratio exceeds its :class:`CreepThresholds` limit, against the local mean
+       speed) or smooth; runs shorter than ``min_segment_time`` join a neighbour;
+    2. *speed steps* within each smooth or creeping run: binary segmentation of the position
+       into straight lines (constant mean speed).  A split is kept when the two sides' mean
+       speeds differ by more than ``min_step`` *and* by more than their worst-case error
+       3·d/L per side (d the largest deviation of the position from that side's line, L its
+       duration: the least-squares slope through data within ±d of a line is off by at most
+       3d/L).  So stick-slip ripple never splits a segment, and neighbouring creeping
+       segments whose speeds differ by less than their ripple allows are reported as one.
+
+    Rests are skipped; no segment is shorter than ``min_segment_time``.  A detected segment
+    ends one smoothing window plus 5 % of ``min_segment_time`` before the detected edge.
+
+Command speed
+    A segment's command speed is the given one, the file's column, or, when neither exists,
+    *estimated* as the mean speed (least-squares slope of the position) over the segment's
+    steady window.  The mean and not the median: a position-controlled axis that creeps
+    still advances at the commanded mean speed, whereas the median of a stick-slip speed is
+    near zero.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from scipy.ndimage import maximum_filter1d, minimum_filter1d, uniform_filter1d
+from scipy.signal import savgol_filter
+
+from .metrics import CreepMetrics, CreepThresholds, creep_metrics, steady_window
+
+__all__ = [
+    "CriticalSpeed",
+    "SpeedEstimate",
+    "TraceAnalysis",
+    "TraceSegment",
+    "analyze_trace",
+    "estimate_speed",
+    "find_segments",
+    "savgol_window",
+]
+
+DEFAULT_SMOOTHING_TIME = 0.02  # [s]
+DEFAULT_MIN_STEP = 5e-6  # [m/s], half the 0.01 mm/s step of Wang2021 Sect. 6
+DEFAULT_MIN_SEGMENT_TIME = 1.0  # [s]
+_REST_FRACTION = 0.01
+_MAX_SEGMENTATION_POINTS = 20000
+
+
+def savgol_window(sample_time: float, *, smoothing_time: float = DEFAULT_SMOOTHING_TIME,
+                  polyorder: int = 2) -> int:
+    """Odd Savitzky–Golay window [samples] spanning ``smoothing_time`` [s], at least
+    ``polyorder`` + 3 samples."""
+    if not (sample_time > 0 and math.isfinite(sample_time)):
+        raise ValueError(f"sample_time = {sample_time!r}: expected a positive step [s]")
+    if not (smoothing_time > 0 and math.isfinite(smoothing_time)):
+        raise ValueError(f"smoothing_time = {smoothing_time!r}: expected a positive time [s]")
+    n = int(round(smoothing_time / sample_time))
+    n = max(n, polyorder + 3)
+    return n if n % 2 else n + 1
+
+
+@dataclass(frozen=True)
+class SpeedEstimate:
+    time: np.ndarray  # [s], uniform
+    position: np.ndarray  # [m] on that grid
+    speed: np.ndarray  # [m/s]
+    window: int  # samples
+    window_time: float  # [s]
+    resampled: bool
+
+
+def estimate_speed(time: object, position: object, *, smoothing_time: float | None = None,
+                   window: int | None = None, polyorder: int = 2) -> SpeedEstimate:
+    """Table speed [m/s] from position [m] by a Savitzky–Golay differentiator (see module)."""
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(position, dtype=float)
+    if t.ndim != 1 or x.shape != t.shape:
+        raise ValueError(f"position: expected one value per time sample ({x.shape} vs "
+                         f"{t.shape})")
+    if t.size < 16:
+        raise ValueError(f"time: {t.size} samples; need at least 16")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise ValueError("time, position: must be finite")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        i = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise ValueError(f"time: not strictly increasing at index {i}")
+    dt = float(np.median(steps))
+    resampled = bool(np.max(np.abs(steps - dt)) > 0.01 * dt)
+    if resampled:
+        n = int(math.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
+        grid = t[0] + dt * np.arange(n)
+        x = np.interp(grid, t, x)
+        t = grid
+    if window is None:
+        window = savgol_window(dt, smoothing_time=smoothing_time or DEFAULT_SMOOTHING_TIME,
+                               polyorder=polyorder)
+    if window % 2 == 0 or window <= polyorder:
+        raise ValueError(f"window = {window}: expected an odd number of samples > polyorder "
+                         f"= {polyorder}")
+    if window > t.size:
+        raise ValueError(f"window = {window} samples: longer than the trace ({t.size} samples)")
+    speed = savgol_filter(x, window, polyorder, deriv=1, delta=dt, mode="interp")
+    return SpeedEstimate(time=t, position=x, speed=np.asarray(speed), window=window,
+                         window_time=window * dt, resampled=resampled)
+
+
+# ---------------------------------------------------------------- segmentation
+
+
+class _LineCost:
+    """O(1) least-squares line fits of x(t) over index ranges, from cumulative sums."""
+
+    def __init__(self, t: np.ndarray, x: np.ndarray) -> None:
+        self.t, self.x = t, x
+        zero = np.zeros(1)
+        self.c1 = np.arange(t.size + 1, dtype=float)
+        self.ct = np.concatenate([zero, np.cumsum(t)])
+        self.ctt = np.concatenate([zero, np.cumsum(t * t)])
+        self.cx = np.concatenate([zero, np.cumsum(x)])
+        self.ctx = np.concatenate([zero, np.cumsum(t * x)])
+        self.cxx = np.concatenate([zero, np.cumsum(x * x)])
+
+    def sse(self, a: np.ndarray | int, b: np.ndarray | int) -> np.ndarray:
+        n = self.c1[b] - self.c1[a]
+        st = self.ct[b] - self.ct[a]
+        stt = self.ctt[b] - self.ctt[a]
+        sx = self.cx[b] - self.cx[a]
+        stx = self.ctx[b] - self.ctx[a]
+        sxx = self.cxx[b] - self.cxx[a]
+        vt = stt - st * st / n
+        cov = stx - st * sx / n
+        vx = sxx - sx * sx / n
+        return np.asarray(np.maximum(vx - cov * cov / np.where(vt > 0, vt, np.inf), 0.0))
+
+    def line(self, a: int, b: int) -> tuple[float, float]:
+        """(slope, worst-case slope error 3·max|deviation|/duration) over [a, b)."""
+        tt, xx = self.t[a:b], self.x[a:b]
+        slope, icpt = np.polyfit(tt, xx, 1)
+        dev = float(np.max(np.abs(xx - (slope * tt + icpt))))
+        return float(slope), 3.0 * dev / float(tt[-1] - tt[0])
+
+
+def _split_ok(cost: _LineCost, a: int, k: int, b: int, min_step: float) -> bool:
+    s1, e1 = cost.line(a, k)
+    s2, e2 = cost.line(k, b)
+    return abs(s1 - s2) > max(min_step, e1 + e2)
+
+
+def _regimes(t: np.ndarray, x: np.ndarray, v: np.ndarray, width: int,
+             th: CreepThresholds) -> np.ndarray:
+    """Per-sample regime: 0 rest, 1 smooth, 2 creeping, judged over a sliding window."""
+    half = 0.5 * (t[min(width, t.size - 1)] - t[0])
+    lo = np.interp(t - half, t, x)
+    hi = np.interp(t + half, t, x)
+    span = np.minimum(t + half, t[-1]) - np.maximum(t - half, t[0])
+    local = (hi - lo) / span  # mean speed over the window around each sample
+    ref = np.abs(local)
+    along = v * np.sign(local)
+    stick = uniform_filter1d((along < th.stick_level * ref).astype(float), width,
+                             mode="nearest")
+    ripple = (maximum_filter1d(along, width, mode="nearest")
+              - minimum_filter1d(along, width, mode="nearest")) / np.maximum(ref, 1e-300)
+    label = np.where((stick > th.max_stick_fraction) | (ripple > th.max_ripple_ratio), 2, 1)
+    return np.where(ref < _REST_FRACTION * float(np.max(ref)), 0, label)
+
+
+def _runs(label: np.ndarray, min_n: int) -> list[list[int]]:
+    """[start, end, label] runs, runs shorter than ``min_n`` merged into a neighbour."""
+    change = np.flatnonzero(np.diff(label)) + 1
+    starts = np.r_[0, change]
+    ends = np.r_[change, label.size]
+    runs = [[int(a), int(b), int(label[a])] for a, b in zip(starts, ends, strict=True)]
+    while len(runs) > 1:
+        lengths = [r[1] - r[0] for r in runs]
+        i = int(np.argmin(lengths))
+        if lengths[i] >= min_n:
+            break
+        # absorb into the longer neighbour
+        j = i - 1 if i == len(runs) - 1 or (i > 0 and lengths[i - 1] >= lengths[i + 1]) else i + 1
+        lo, hi = min(i, j), max(i, j)
+        keep = runs[j][2]
+        runs[lo:hi + 1] = [[runs[lo][0], runs[hi][1], keep]]
+        # join equal neighbours
+        k = 0
+        while k < len(runs) - 1:
+            if runs[k][2] == runs[k + 1][2]:
+                runs[k:k + 2] = [[runs[k][0], runs[k + 1][1], runs[k][2]]]
+            else:
+                k += 1
+    return runs
+
+
+def _line_segments(cost: _LineCost, a0: int, b0: int, min_n: int,
+                   min_step: float) -> list[int]:
+    """Interior split indices of [a0, b0) by binary segmentation into straight lines."""
+    bounds = [a0, b0]
+    queue = [(a0, b0)]
+    while queue and len(bounds) < 400:
+        a, b = queue.pop()
+        if b - a < 2 * min_n:
+            continue
+        ks = np.arange(a + min_n, b - min_n + 1)
+        total = cost.sse(np.full(ks.size, a), ks) + cost.sse(ks, np.full(ks.size, b))
+        k = int(ks[int(np.argmin(total))])
+        if _split_ok(cost, a, k, b, min_step):
+            bounds.append(k)
+            queue.extend([(a, k), (k, b)])
+    bounds.sort()
+    merged = True
+    while merged and len(bounds) > 2:
+        merged = False
+        for i in range(1, len(bounds) - 1):
+            if not _split_ok(cost, bounds[i - 1], bounds[i], bounds[i + 1], min_step):
+                del bounds[i]
+                merged = True
+                break
+    return bounds[1:-1]
+
+
+def find_segments(time: object, position: object, speed: object, *,
+                  thresholds: CreepThresholds | None = None,
+                  min_step: float = DEFAULT_MIN_STEP,
+                  min_segment_time: float = DEFAULT_MIN_SEGMENT_TIME,
+                  start: float | None = None) -> list[tuple[float, float]]:
+    """(start, end) [s] of the moving, constant-command segments of a trace (see module).
+
+    ``time`` [s], ``position`` [m], ``speed`` [m/s] on a common grid; ``start`` [s] is where
+    segmentation begins (default: ``min_segment_time`` after the speed first reaches 90 % of
+    the overall mean speed).  Rests are left out.
+    """
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(position, dtype=float)
+    v = np.asarray(speed, dtype=float)
+    th = thresholds or CreepThresholds()
+    if not (min_step > 0 and min_segment_time > 0):
+        raise ValueError("min_step and min_segment_time must be positive")
+    if start is None:
+        mean_speed = (x[-1] - x[0]) / (t[-1] - t[0])
+        moved = np.abs(v) >= 0.9 * abs(mean_speed)
+        start = float(t[np.flatnonzero(moved)[0]]) if np.any(moved) else float(t[0])
+        start = min(start + min_segment_time, float(t[-1] - 2.0 * min_segment_time))
+    sel = t >= start
+    t, x, v = t[sel], x[sel], v[sel]
+    if t.size < 16:
+        return []
+    # decimate long records by block means (segmentation needs no more resolution)
+    block = max(1, t.size // _MAX_SEGMENTATION_POINTS)
+    if block > 1:
+        m = (t.size // block) * block
+        t, x, v = (arr[:m].reshape(-1, block).mean(axis=1) for arr in (t, x, v))
+    dt = float(np.median(np.diff(t)))
+    min_n = max(4, int(math.ceil(min_segment_time / dt)))
+    if t.size < 2 * min_n:
+        return [(float(t[0]), float(t[-1]))]
+    regimes = _runs(_regimes(t, x, v, min_n, th), min_n)
+    # the sliding window flags creeping half a window early: move those edges back
+    for left, right in zip(regimes[:-1], regimes[1:], strict=True):
+        if {left[2], right[2]} == {1, 2}:
+            shift = min_n // 2 if left[2] == 1 else -(min_n // 2)
+            edge = int(np.clip(left[1] + shift, left[0] + 1, right[1] - 1))
+            left[1] = right[0] = edge
+    # remove the overall line so the cumulative sums hold small numbers
+    tc = t - t[0]
+    slope, icpt = np.polyfit(tc, x, 1)
+    cost = _LineCost(tc, x - (slope * tc + icpt))
+    spans = []
+    for a, b, label in regimes:
+        if label == 0:
+            continue
+        cuts = [a, *_line_segments(cost, a, b, min_n, min_step), b]
+        for i, j in zip(cuts[:-1], cuts[1:], strict=True):
+            lo = float(t[i]) if i == 0 else float(0.5 * (t[i - 1] + t[i]))
+            hi = float(t[j - 1]) if j == t.size else float(0.5 * (t[j - 1] + t[j]))
+            spans.append((lo, hi))
+    return spans
+
+
+def _command_runs(time: np.ndarray, command: np.ndarray) -> list[tuple[float, float, float]]:
+    """(start, end, command) of runs of equal command speed."""
+    change = np.flatnonzero(np.abs(np.diff(command)) > 1e-9 + 1e-6 * np.abs(command[1:]))
+    starts = np.r_[0, change + 1]
+    ends = np.r_[change + 1, command.size]
+    return [(float(time[a]), float(time[b - 1]), float(command[a]))
+            for a, b in zip(starts, ends, strict=True)]
+
+
+# ---------------------------------------------------------------- analysis
+
+
+@dataclass(frozen=True)
+class TraceSegment:
+    start: float  # [s]
+    end: float  # [s]
+    command_speed: float  # [m/s]
+    command_from: str  # "given", "column" or "estimated"
+    metrics: CreepMetrics
+
+    def to_dict(self, units: Literal["SI", "mm"] = "mm") -> dict[str, Any]:
+        return {"start": self.start, "end": self.end, "command_from": self.command_from,
+                "metrics": self.metrics.to_dict(units)}
+
+
+@dataclass(frozen=True)
+class CriticalSpeed:
+    """Critical creeping speed of a step-down run, one direction (speeds as magnitudes).
+
+    ``lowest_smooth``: the lowest command speed at and above which every segment is smooth
+    (the paper's critical creeping speed, Wang2021 Sect. 5.2: creeps at 1.55, stable at
+    1.56 mm/s → 1.56 mm/s).  ``first_creeping``: the highest creeping command speed.
+    ``monotonic`` is False when a smooth segment lies below a creeping one.
+    """
+
+    direction: str
+    lowest_smooth: float | None
+    first_creeping: float | None
+    monotonic: bool
+
+
+@dataclass(frozen=True)
+class TraceAnalysis:
+    source: str | None
+    time: np.ndarray
+    position: np.ndarray
+    speed: np.ndarray
+    window: int
+    window_time: float
+    segments: tuple[TraceSegment, ...]
+    critical: tuple[CriticalSpeed, ...]
+    notes: tuple[str, ...] = field(default=())
+
+    def to_dict(self, units: Literal["SI", "mm"] = "mm") -> dict[str, Any]:
+        k = 1.0 if units == "SI" else 1e3
+        return {
+            "source": self.source,
+            "samples": int(self.time.size),
+            "duration": float(self.time[-1] - self.time[0]),
+            "savgol_window_samples": self.window,
+            "savgol_window_time": self.window_time,
+            "segments": [s.to_dict(units) for s in self.segments],
+            "critical_speed": [
+                {"direction": c.direction,
+                 "lowest_smooth": None if c.lowest_smooth is None else c.lowest_smooth * k,
+                 "first_creeping": None if c.first_creeping is None else c.first_creeping * k,
+                 "monotonic": c.monotonic}
+                for c in self.critical
+            ],
+            "speed_unit": "m/s" if units == "SI" else "mm/s",
+            "notes": list(self.notes),
+        }
+
+
+def _slope(t: np.ndarray, x: np.ndarray) -> float:
+    return float(np.polyfit(t - t[0], x, 1)[0])
+
+
+def _critical(segments: list[TraceSegment]) -> list[CriticalSpeed]:
+    out = []
+    for direction, sign in (("positive", 1.0), ("negative", -1.0)):
+        segs = [s for s in segments if s.command_speed * sign > 0]
+        if len(segs) < 2:
+            continue
+        segs.sort(key=lambda s: abs(s.command_speed), reverse=True)
+        lowest_smooth = None
+        for s in segs:
+            if s.metrics.creeping:
+                break
+            lowest_smooth = abs(s.command_speed)
+        creeping = [abs(s.command_speed) for s in segs if s.metrics.creeping]
+        first_creeping = max(creeping) if creeping else None
+        smooth_below = any(not s.metrics.creeping and first_creeping is not None
+                           and abs(s.command_speed) < first_creeping for s in segs)
+        out.append(CriticalSpeed(direction=direction, lowest_smooth=lowest_smooth,
+                                 first_creeping=first_creeping, monotonic=not smooth_below))
+    return out
+
+
+def analyze_trace(
+    time: object,
+    position: object,
+    *,
+    command_speed: float | None = None,
+    command: object | None = None,
+    speed: object | None = None,
+    thresholds: CreepThresholds | None = None,
+    smoothing_time: float | None = None,
+    window: int | None = None,
+    segment: bool = True,
+    min_step: float = DEFAULT_MIN_STEP,
+    min_segment_time: float = DEFAULT_MIN_SEGMENT_TIME,
+    source: str | None = None,
+) -> TraceAnalysis:
+    """Creep metrics of a position trace, per commanded-speed segment.
+
+    Parameters
+    ----------
+    time, position:
+        Samples [s] and table position [m].
+    command_speed:
+        The commanded speed [m/s] of the whole trace (one segment).  Else ``command`` (a
+        per-sample command speed [m/s], e.g. a file column) defines the segments; else they
+        are detected (``segment=True``) and each command speed is estimated.
+    speed:
+        Table speed [m/s] per sample, to use instead of differentiating the position.
+    thresholds:
+        Verdict limits (:class:`CreepThresholds`).
+    smoothing_time, window:
+        Savitzky–Golay window as a time [s] or in samples (see :func:`estimate_speed`).
+    """
+    notes: list[str] = []
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(position, dtype=float)
+    if speed is None:
+        est = estimate_speed(t, x, smoothing_time=smoothing_time, window=window)
+        tt, xx, vv = est.time, est.position, est.speed
+        win, win_t = est.window, est.window_time
+        notes.append(f"speed: Savitzky–Golay derivative, window {win} samples "
+                     f"({1e3 * win_t:.3g} ms), polyorder 2")
+        if est.resampled:
+            notes.append("uneven sampling: the trace was interpolated onto a uniform grid")
+    else:
+        tt, xx, vv = t, x, np.asarray(speed, dtype=float)
+        if vv.shape != tt.shape:
+            raise ValueError("speed: expected one value per time sample")
+        win, win_t = 1, 0.0
+        notes.append("speed: taken from the file's speed column")
+
+    runs: list[tuple[float, float, float | None, str]] = []
+    if command_speed is not None:
+        if not (math.isfinite(command_speed) and command_speed != 0):
+            raise ValueError(f"command_speed = {command_speed!r}: expected a finite, non-zero "
+                             "speed [m/s]")
+        runs.append((float(tt[0]), float(tt[-1]), float(command_speed), "given"))
+    elif command is not None:
+        cmd = np.asarray(command, dtype=float)
+        if cmd.shape != t.shape:
+            raise ValueError("command: expected one value per time sample")
+        cmd_on_grid = np.interp(tt, t, cmd) if cmd.shape != tt.shape else cmd
+        for a, b, c in _command_runs(tt, cmd_on_grid):
+            if c == 0.0:
+                continue
+            runs.append((a, b, c, "column"))
+        notes.append(f"segments: {len(runs)} runs of the command_speed column")
+    else:
+        spans = (find_segments(tt, xx, vv, thresholds=thresholds, min_step=min_step,
+                               min_segment_time=min_segment_time)
+                 if segment else [(float(tt[0]), float(tt[-1]))])
+        # a detected edge is uncertain by a few samples of smoothing: keep clear of it
+        guard = win_t + 0.05 * min_segment_time
+        for a, b in spans:
+            runs.append((a, b - guard if b < tt[-1] - win_t else b, None, "estimated"))
+        if segment:
+            notes.append(f"segments: {len(spans)} detected from the position (binary "
+                         f"segmentation, min step {1e3 * min_step:.3g} mm/s, min "
+                         f"{min_segment_time:g} s)")
+        notes.append("command speed not given: estimated as the mean speed (slope of the "
+                     "position) over each segment's steady window")
+
+    segments: list[TraceSegment] = []
+    for a, b, given, origin in runs:
+        sel = (tt >= a) & (tt <= b)
+        if np.count_nonzero(sel) < 16:
+            notes.append(f"segment {a:.3f}–{b:.3f} s skipped: fewer than 16 samples")
+            continue
+        ts, xs, vs = tt[sel], xx[sel], vv[sel]
+        if given is None:
+            half = ts >= ts[0] + 0.5 * (ts[-1] - ts[0])
+            guess = _slope(ts[half], xs[half])
+            if guess == 0.0:
+                notes.append(f"segment {a:.3f}–{b:.3f} s skipped: the table is at rest")
+                continue
+            start, _ = steady_window(ts, vs, guess)
+            c = _slope(ts[ts >= start], xs[ts >= start])
+        else:
+            c = given
+        m = creep_metrics(ts, vs, c, thresholds=thresholds)
+        segments.append(TraceSegment(start=float(ts[0]), end=float(ts[-1]), command_speed=c,
+                                     command_from=origin, metrics=m))
+    if not segments:
+        raise ValueError(f"{source + ': ' if source else ''}no moving segment to analyse "
+                         "(the table does not move)")
+    critical = _critical(segments)
+    for c_ in critical:
+        if not c_.monotonic:
+            notes.append(f"{c_.direction} direction: a smooth segment lies below a creeping "
+                         "one; the critical speed is not sharp")
+    return TraceAnalysis(source=source, time=tt, position=xx, speed=vv, window=win,
+                         window_time=win_t, segments=tuple(segments),
+                         critical=tuple(critical), notes=tuple(notes))
