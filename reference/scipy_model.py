@@ -312,6 +312,26 @@ class ReferenceModel:
 
     __call__ = rhs
 
+    def jacobian(self, t: float, y: np.ndarray) -> np.ndarray:
+        """∂f/∂y by central differences, for implicit solvers.
+
+        Steps are 1e-7 of each state's typical size (1 mm, 1 mm/s, 1 µm of bristle, 1 A, …),
+        or of the state itself when larger.  scipy's own difference Jacobian fails here: its
+        step factor overflows on states with no influence (the held nut of the CDFS).
+        """
+        H = self.H
+        typical = np.array([1e-3 / H, 1e-3 / H, 1e-3 / H, 1e-3 / H, 1e-3, 1e-3, 1e-6, 1e-6,
+                            1e-6, 1.0, 1.0, 1e-3 / H, 1e-3 / H, 1e-3, 1e-3])
+        steps = 1e-7 * np.maximum(np.abs(y), typical)
+        jac = np.empty((N_STATE, N_STATE))
+        for j in range(N_STATE):
+            yp = np.array(y, dtype=float)
+            ym = yp.copy()
+            yp[j] += steps[j]
+            ym[j] -= steps[j]
+            jac[:, j] = (self.rhs(t, yp) - self.rhs(t, ym)) / (2.0 * steps[j])
+        return jac
+
 
 def tolerances(H: float, position: float = 1e-10, speed: float = 1e-8,
                current: float = 1e-6) -> np.ndarray:
