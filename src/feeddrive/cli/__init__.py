@@ -9,6 +9,6 @@ from . import params_cmd  # noqa: F401  (registers commands)
 from ._common import app
 from .friction_cmd import friction_command  # noqa: F401  (registers commands)
 from .stiffness_cmd import stiffness_command  # noqa: F401  (registers commands)
-from . import calibrate_cmd, creep_cmd, simulate_cmd  # noqa: F401,E402  (registers commands)
+from . import calibrate_cmd, creep_cmd, reproduce_cmd, simulate_cmd  # noqa: F401,E402  (registers commands)
 
 __all__ = ["app"]

@@ -1,0 +1,37 @@
+"""`feeddrive reproduce`: the paper's whole study, every number beside the paper's."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from ..reproduce import run
+from ._common import app, console, resolve_parameters, user_errors
+
+
+@app.command("reproduce")
+@user_errors
+def reproduce_command(
+    out: Path = typer.Option(Path("reproduce-out"), "--out", help="Output folder."),
+    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
+                                           "(default wang2021)."),
+    params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    workers: int = typer.Option(2, "--workers", help="Processes for the critical-speed searches."),
+) -> None:
+    """Regenerate Wang2021's figures (PNG) and tables (CSV) and write report.html/report.md.
+    Finished studies are kept in OUT/data and reused on a rerun."""
+    params = resolve_parameters(preset_name, params_file)
+    with Progress(TextColumn("{task.description}"), BarColumn(),
+                  TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
+                  console=console) as bar:
+        task = bar.add_task("starting", total=None)
+
+        def progress(label: str, done: int, total: int) -> None:
+            bar.update(task, description=label, completed=done, total=total)
+
+        results = run(params, out, workers=workers, progress=progress)
+    console.print(f"wrote {out / 'report.html'}, {out / 'report.md'}, "
+                  f"{len(results['figures'])} figures, tables in {out} "
+                  f"({results['wall_time_s']:.0f} s)")

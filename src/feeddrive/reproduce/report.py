@@ -1,0 +1,266 @@
+"""The reproduction report (Markdown and HTML): every paper number beside ours."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import html
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from .. import __version__
+from ..friction import negative_slope_band, passivity_margin, sliding_stability
+from ..parameters import DriveParameters
+from ..parameters.sets import wang2021
+from ..stiffness import equivalent_stiffness, mid_screw_readings
+from .studies import MID, PAPER, StudySettings
+
+
+def _fmt(v: float | None, digits: int = 2) -> str:
+    return "—" if v is None else f"{v:.{digits}f}"
+
+
+def _dev(ours: float | None, paper: float | None) -> str:
+    if ours is None or paper is None or paper == 0:
+        return "—"
+    return f"{100 * (ours / paper - 1):+.1f} %"
+
+
+def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[dict[str, str]]:
+    crit = results["critical"]
+
+    def c(key: str) -> float | None:
+        v: float | None = crit[key]["critical_speed_mm_s"]
+        return v
+
+    fitted_note = ("fitted (controller.velocity_integral_gain)" if params.name == "wang2021"
+                   else "predicted")
+    rows = []
+
+    def add(item: str, source: str, paper: float | None, ours: float | None, unit: str,
+            kind: str, digits: int = 2) -> None:
+        rows.append({"quantity": item, "source": source, "paper": _fmt(paper, digits),
+                     "feeddrive": _fmt(ours, digits), "unit": unit,
+                     "deviation": _dev(ours, paper), "fitted_or_predicted": kind})
+
+    cdfs_mid = c(f"crit-cdfs-{MID}")
+    ddfs16 = c("crit-ddfs-fig8")
+    add("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56, cdfs_mid, "mm/s",
+        fitted_note)
+    add("CDFS critical speed, mid-screw, step-down from running", "Sect. 6 protocol", 1.56,
+        c("crit-cdfs-running"), "mm/s", "predicted")
+    add("DDFS critical speed, v_n = 16 mm/s", "Fig. 8", 0.5, ddfs16, "mm/s", "predicted")
+    add("DDFS critical speed, v_n = 16 mm/s, step-down from running", "Sect. 6 protocol", 0.5,
+        c("crit-ddfs-running"), "mm/s", "predicted")
+    ratio = None if (cdfs_mid is None or ddfs16 is None or ddfs16 == 0) else cdfs_mid / ddfs16
+    add("ratio CDFS / DDFS critical speed", "Sect. 5.2, Fig. 8", 1.56 / 0.5, ratio, "-",
+        "predicted")
+    for i, a in enumerate(PAPER["positions"]):
+        add(f"CDFS critical speed at x_t = {1e3 * a:.0f} mm (measured)", "Table 3",
+            1e3 * PAPER["cdfs_table3"][i], c(f"crit-cdfs-{a}"), "mm/s",
+            fitted_note if a == MID else "predicted")
+    for i, a in enumerate(PAPER["positions"]):
+        add(f"DDFS critical speed at x_t = {1e3 * a:.0f} mm, v_n = 20 mm/s (measured)",
+            "Table 3", 1e3 * PAPER["ddfs_table3"][i], c(f"crit-ddfs-{a}"), "mm/s", "predicted")
+    for r in results["table3"]:
+        add(f"k_sa at x_t = {1e3 * r['position']:.0f} mm", "Table 3, Eq. (4)",
+            1e-6 * r["k_sa_paper"], 1e-6 * r["k_sa"], "N/µm", "predicted (E assumed)")
+    add("K_eq at mid-screw", "Sect. 5.2, Eqs. (2)–(5)", 1e-6 * PAPER["k_eq_mid"],
+        1e-6 * equivalent_stiffness(params, MID), "N/µm", "predicted")
+    band = negative_slope_band(params.friction.screw.positive)
+    add("screw-shaft zero-slope speed (+ branch) vs CDFS critical speed", "Sect. 5.2 (1.56)",
+        1.56, None if band is None else 1e3 * band.upper, "mm/s", "analytic indicator")
+    f6 = results["fig6"]
+    rows.append({"quantity": "CDFS at 1.55 mm/s crawls (Fig. 6a)", "source": "Fig. 6a",
+                 "paper": "crawls", "feeddrive": f6["1.55"]["verdict"], "unit": "",
+                 "deviation": "agrees" if f6["1.55"]["verdict"] == "creeping" else "differs",
+                 "fitted_or_predicted": "predicted"})
+    s156 = f6["1.56"]["settling_time"]
+    rows.append({"quantity": "CDFS at 1.56 mm/s stable after ~7 s (Fig. 6b)", "source": "Fig. 6b",
+                 "paper": "stable, ~7 s",
+                 "feeddrive": f"{f6['1.56']['verdict']}, settles at "
+                              f"{'never' if s156 is None else f'{s156:.1f} s'}",
+                 "unit": "", "deviation": "agrees" if f6["1.56"]["verdict"] == "smooth"
+                 else "differs", "fitted_or_predicted": "predicted"})
+    f7 = [r for r in results["fig7"]["rows"] if r["multiple"] > 0]
+    rule = _fig7_rule(f7)
+    rows.append({"quantity": "Fig. 7: overshoot/settling stop improving beyond v_n ≈ 10× "
+                             "CDFS critical speed", "source": "Sect. 5.2, Fig. 7",
+                 "paper": "yes", "feeddrive": rule, "unit": "", "deviation": "—",
+                 "fitted_or_predicted": "predicted"})
+    f9 = results["figs9_10"]["rows"]
+    trend = _sine_trend(f9)
+    rows.append({"quantity": "Figs. 9–10: reversal overshoot falls as v_np grows",
+                 "source": "Sect. 5.3", "paper": "yes", "feeddrive": trend, "unit": "",
+                 "deviation": "—", "fitted_or_predicted": "predicted"})
+    trend3 = _position_trend(results["table3"])
+    rows.append({"quantity": "Table 3: critical speed falls as k_sa rises (both drives)",
+                 "source": "Table 3, Fig. 14", "paper": "yes", "feeddrive": trend3, "unit": "",
+                 "deviation": "—", "fitted_or_predicted": "predicted"})
+    return rows
+
+
+def _fig7_rule(rows: list[dict[str, Any]]) -> str:
+    ov = {r["multiple"]: r["overshoot"] for r in rows}
+    below = [ov[k] for k in ov if k < PAPER["fig7_rule_multiple"]]
+    above = [ov[k] for k in ov if k >= PAPER["fig7_rule_multiple"]]
+    if not below or not above:
+        return "not tested"
+    spread_above = max(above) - min(above)
+    gain_below = max(below) - min(above)
+    verdict = "yes" if gain_below > 2 * spread_above else "no"
+    return (f"{verdict}: overshoot {100 * max(below):.1f}→{100 * min(below):.1f} % below 10×, "
+            f"{100 * min(above):.1f}–{100 * max(above):.1f} % at ≥ 10×")
+
+
+def _sine_trend(rows: list[dict[str, Any]]) -> str:
+    parts = []
+    for amp in sorted({r["table_amplitude"] for r in rows}):
+        sel = sorted((r for r in rows if r["table_amplitude"] == amp),
+                     key=lambda r: r["nut_amplitude"])
+        vals = [100 * r["reversal_overshoot"] for r in sel]
+        mono = all(b <= a + 1e-9 for a, b in zip(vals, vals[1:], strict=False))
+        parts.append(f"{1e3 * amp:g} mm/s: {'falls' if mono else 'not monotone'} "
+                     f"({' → '.join(f'{v:.0f}' for v in vals)} %)")
+    return "; ".join(parts)
+
+
+def _position_trend(rows: list[dict[str, Any]]) -> str:
+    parts = []
+    for drive in ("cdfs", "ddfs"):
+        vals = [r[drive] for r in rows]
+        if any(v is None for v in vals):
+            parts.append(f"{drive.upper()}: search out of range at some positions")
+            continue
+        ends = (vals[0] + vals[-1]) / 2
+        mid = vals[2]
+        ok = mid > ends
+        parts.append(f"{drive.upper()}: {'yes' if ok else 'no'} (ends {1e3 * ends:.2f}, "
+                     f"mid {1e3 * mid:.2f} mm/s)")
+    return "; ".join(parts)
+
+
+def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
+    rows = []
+    for site in ("screw", "nut", "guide"):
+        lg = getattr(params.friction, site)
+        for bname in ("positive", "negative"):
+            b = lg.branch(bname)
+            band = negative_slope_band(b)
+            rows.append({"site": site, "branch": bname,
+                         "negative-slope band [mm/s]": "none" if band is None
+                         else f"{1e3 * band.lower:.3f} … {1e3 * band.upper:.3f}",
+                         "zero-slope speed [mm/s]": "—" if band is None
+                         else f"{1e3 * band.upper:.3f}",
+                         "passivity margin σ2 − σ1(F_s−F_c)/F_c [N s/m]":
+                             f"{passivity_margin(b, lg):.0f}"})
+    return rows
+
+
+def rigid_body_band(params: DriveParameters) -> str:
+    """Unstable band of steady sliding of the CDFS treated as one rigid mass (screw + guide
+    friction) held by the velocity loop's damping and the position loop's stiffness."""
+    H = params.screw.transmission_ratio
+    mass = (params.screw_motor.inertia + params.screw.shaft_inertia) / H**2 + params.table.mass
+    c = params.controller
+    damping = c.velocity_gain * params.screw_motor.torque_constant / (
+        H if c.velocity_gain_basis == "table" else H**2)
+    integral = c.velocity_integral_gain * params.screw_motor.torque_constant / (
+        H if c.velocity_gain_basis == "table" else H**2)
+    speeds = np.linspace(0.02e-3, 4e-3, 400)
+    # F = c·(K_pp·e + v_ref − v) + c_i·∫(K_pp·e + v_ref − v) dt, linearised: a spring
+    # c·K_pp + c_i, a damper c and an integral term c_i·K_pp (current loop ideal at these
+    # frequencies: PI, or P with its back-EMF damping neglected)
+    stiffness = c.position_gain * damping + integral
+    st = sliding_stability(speeds, [params.friction.screw, params.friction.guide], mass,
+                           stiffness, damping, integral=c.position_gain * integral)
+    bad = speeds[~st.stable]
+    text = (f"rigid CDFS (m = {mass:.0f} kg, loop damping {damping:.3g} N s/m, stiffness "
+            f"{stiffness:.3g} N/m, integral {c.position_gain * integral:.3g} N/(m s))")
+    if bad.size == 0:
+        return text + ": steady sliding linearly stable at every speed 0.02–4 mm/s"
+    return text + f": linearly unstable from {1e3 * bad.min():.2f} to {1e3 * bad.max():.2f} mm/s"
+
+
+def _table_md(rows: list[dict[str, str]]) -> str:
+    if not rows:
+        return ""
+    keys = list(rows[0])
+    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+    lines += ["| " + " | ".join(str(r[k]) for k in keys) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _table_html(rows: list[dict[str, str]]) -> str:
+    if not rows:
+        return ""
+    keys = list(rows[0])
+    head = "".join(f"<th>{html.escape(k)}</th>" for k in keys)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(r[k]))}</td>" for k in keys)
+                   + "</tr>" for r in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def write(params: DriveParameters, settings: StudySettings, results: dict[str, Any],
+          out: Path) -> tuple[Path, Path]:
+    comparison = comparison_rows(params, results)
+    pd.DataFrame(comparison).to_csv(out / "paper_comparison.csv", index=False)
+    assumptions = [{"id": a.id, "fields": ", ".join(a.fields), "value": a.value,
+                    "fitted": "fitted" if a.fitted else "assumed", "why": a.rationale}
+                   for a in wang2021.ASSUMPTIONS]
+    indicators = indicator_rows(params)
+    readings = [{"reading": r.description, "K_eq [N/µm]": f"{1e-6 * r.equivalent_stiffness:.2f}",
+                 "vs 21.6": f"{100 * r.deviation:+.1f} %"} for r in mid_screw_readings(params)[:5]]
+    fig7 = [{"v_n / v_crit,CDFS": f"{r['multiple']:g}", "v_n [mm/s]": f"{1e3 * r['nut_speed']:.2f}",
+             "overshoot [%]": f"{100 * r['overshoot']:.1f}",
+             "settling [s]": _fmt(r["settling_time"], 2), "verdict": r["verdict"]}
+            for r in results["fig7"]["rows"]]
+    sine = [{"v_tp [mm/s]": f"{1e3 * r['table_amplitude']:g}",
+             "v_np [mm/s]": f"{1e3 * r['nut_amplitude']:g}",
+             "v_sp [mm/s]": f"{1e3 * r['screw_amplitude']:g}",
+             "reversal overshoot [%]": f"{100 * r['reversal_overshoot']:.1f}"}
+            for r in results["figs9_10"]["rows"]]
+    when = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    sections: list[tuple[str, str, Any]] = [
+        ("Paper numbers beside ours", "Every number of Wang2021 the study touches. "
+         "'fitted' means the number was used to fit an unknown; everything else is predicted. "
+         "Critical speeds are from rest (scan + bisection to 0.01 mm/s) unless the row says "
+         "step-down.", comparison),
+        ("Modelling assumptions", "What the paper does not give, and what we chose "
+         "(parameters/sets/wang2021.py; change any of them in a parameter file).", assumptions),
+        ("Analytic indicators", "Steady friction curves (Table 1): negative-slope bands, "
+         "zero-slope speeds and LuGre passivity per site. " + rigid_body_band(params) + ".",
+         indicators),
+        ("Stiffness chain readings", "K_eq at mid-screw under readings of Eqs. (2)–(5); the "
+         "paper states 21.6 N/µm.", readings),
+        ("Fig. 7: DDFS at 1.55 mm/s against hollow-motor speed", "", fig7),
+        ("Figs. 9–10: sinusoidal speed", f"Frequency {results['figs9_10']['frequency']} Hz "
+         "(not stated in the paper; assumed).", sine),
+    ]
+    md = [f"# feeddrive reproduction of Wang2021 — parameter set `{params.name}`", "",
+          f"feeddrive {__version__}, {when}, wall time {results['wall_time_s']:.0f} s. "
+          f"{wang2021.CITATION}.", "",
+          "Figures: " + ", ".join(f"[{f}]({f})" for f in results["figures"]), ""]
+    for title, text, rows in sections:
+        md += [f"## {title}", "", text, "", _table_md(rows), ""]
+    md += ["## Settings", "", "```", repr(settings), "```", ""]
+    md_path = out / "report.md"
+    md_path.write_text("\n".join(md), encoding="utf-8")
+    body = [f"<h1>feeddrive reproduction of Wang2021 — <code>{html.escape(params.name)}</code></h1>",
+            f"<p>feeddrive {__version__}, {when}, wall time {results['wall_time_s']:.0f} s. "
+            f"{html.escape(wang2021.CITATION)}.</p>"]
+    for title, text, rows in sections:
+        body += [f"<h2>{html.escape(title)}</h2>", f"<p>{html.escape(text)}</p>",
+                 _table_html(rows)]
+    body += ["<h2>Figures</h2>"] + [f'<figure><img src="{f}" alt="{f}"><figcaption>{f}'
+                                    "</figcaption></figure>" for f in results["figures"]]
+    style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto}"
+             "table{border-collapse:collapse;font-size:0.9em}td,th{border:1px solid #ccc;"
+             "padding:3px 6px}img{max-width:100%}")
+    html_path = out / "report.html"
+    html_path.write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>feeddrive "
+                         f"report</title><style>{style}</style></head><body>{''.join(body)}"
+                         "</body></html>", encoding="utf-8")
+    return md_path, html_path

@@ -1,0 +1,165 @@
+"""`feeddrive reproduce`: run every study, write figures, tables and the report.
+
+Each finished study is stored at once as JSON under ``DIR/data/`` keyed by a hash of the
+parameter set and the settings, so an interrupted run loses nothing and a rerun skips what is
+done.  Critical-speed searches run in a process pool (2 workers by default).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..control import ConstantSpeed
+from ..parameters import DriveParameters, dumps
+from ..simulate import DriveSystem, simulate
+from . import figures, report, studies
+from .studies import MID, PAPER, StudySettings
+
+
+class _Store:
+    """JSON results keyed by study name + parameter/settings hash."""
+
+    def __init__(self, root: Path, params: DriveParameters, settings: StudySettings) -> None:
+        self.root = root / "data"
+        self.root.mkdir(parents=True, exist_ok=True)
+        blob = dumps(params) + json.dumps(asdict(settings), sort_keys=True)
+        self.key = hashlib.sha256(blob.encode()).hexdigest()[:12]
+
+    def path(self, name: str) -> Path:
+        return self.root / f"{name}-{self.key}.json"
+
+    def get(self, name: str) -> Any | None:
+        p = self.path(name)
+        return json.loads(p.read_text()) if p.exists() else None
+
+    def put(self, name: str, value: Any) -> Any:
+        tmp = self.path(name).with_suffix(".tmp")
+        tmp.write_text(json.dumps(value))
+        tmp.replace(self.path(name))
+        return value
+
+
+def _critical_job(args: tuple[DriveParameters, str, float, float, StudySettings, str]
+                  ) -> dict[str, Any]:
+    params, drive, position, nut_speed, settings, start = args
+    if start == "rest":
+        return studies.critical_speed(params, drive, position, nut_speed, settings)
+    return studies.critical_speed_running(params, drive, position, nut_speed, settings)
+
+
+def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = None,
+        workers: int = 2, progress: Callable[[str, int, int], None] | None = None
+        ) -> dict[str, Any]:
+    """Run the whole study into ``out``; returns the collected results."""
+    settings = settings or StudySettings()
+    out.mkdir(parents=True, exist_ok=True)
+    store = _Store(out, params, settings)
+    started = time.perf_counter()
+    results: dict[str, Any] = {}
+
+    # --- critical speeds: Table 3 (both drives, five positions) + Fig. 8 + running starts
+    jobs: dict[str, tuple[DriveParameters, str, float, float, StudySettings, str]] = {}
+    for a in PAPER["positions"]:
+        jobs[f"crit-cdfs-{a}"] = (params, "cdfs", a, 0.0, settings, "rest")
+        jobs[f"crit-ddfs-{a}"] = (params, "ddfs", a, PAPER["experiment_nut_speed"], settings,
+                                  "rest")
+    jobs["crit-ddfs-fig8"] = (params, "ddfs", MID, PAPER["ddfs_sim_nut_speed"], settings, "rest")
+    jobs["crit-cdfs-running"] = (params, "cdfs", MID, 0.0, settings, "running")
+    jobs["crit-ddfs-running"] = (params, "ddfs", MID, PAPER["ddfs_sim_nut_speed"], settings,
+                                 "running")
+    todo = {k: v for k, v in jobs.items() if store.get(k) is None}
+    total = len(jobs) + 4
+    done = len(jobs) - len(todo)
+    if progress:
+        progress("critical speeds", done, total)
+    if todo:
+        with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
+            futures = {k: pool.submit(_critical_job, v) for k, v in todo.items()}
+            for k, fut in futures.items():
+                store.put(k, fut.result())
+                done += 1
+                if progress:
+                    progress(f"critical speed {k}", done, total)
+    crit = {k: store.get(k) for k in jobs}
+    results["critical"] = crit
+
+    def speed(key: str) -> float | None:
+        v = crit[key]["critical_speed_mm_s"]
+        return None if v is None else v * 1e-3
+
+    # --- the figure studies
+    cdfs_mid = speed(f"crit-cdfs-{MID}") or PAPER["cdfs_critical_sim"]
+    for name, fn in (("fig6", lambda: studies.fig6(params, settings)),
+                     ("fig7", lambda: studies.fig7(params, cdfs_mid, settings)),
+                     ("figs9_10", lambda: studies.figs9_10(params, settings)),
+                     ("fig8_trace", lambda: _fig8_trace(params, speed("crit-ddfs-fig8")))):
+        value = store.get(name)
+        if value is None:
+            value = store.put(name, fn())
+        results[name] = value
+        done += 1
+        if progress:
+            progress(name, done, total)
+
+    # --- tables and figures
+    table3 = []
+    for i, (a, row) in enumerate(zip(PAPER["positions"], studies.stiffness_rows(params),
+                                     strict=True)):
+        table3.append({**row, "cdfs": speed(f"crit-cdfs-{a}"),
+                       "cdfs_paper": PAPER["cdfs_table3"][i], "ddfs": speed(f"crit-ddfs-{a}"),
+                       "ddfs_paper": PAPER["ddfs_table3"][i]})
+    results["table3"] = table3
+    _write_tables(out, results)
+    pngs = [figures.fig6(results["fig6"], out), figures.fig7(results["fig7"], out),
+            figures.fig8(results["fig8_trace"], crit["crit-ddfs-fig8"], out),
+            *figures.figs9_10(results["figs9_10"], out), figures.fig14(table3, out)]
+    results["figures"] = [p.name for p in pngs]
+    results["wall_time_s"] = time.perf_counter() - started
+    report.write(params, settings, results, out)
+    return results
+
+
+def _fig8_trace(params: DriveParameters, critical: float | None) -> dict[str, Any]:
+    v = critical if critical is not None else PAPER["ddfs_critical_sim"]
+    r = simulate(DriveSystem(params, "ddfs", MID), ConstantSpeed(v, PAPER["ddfs_sim_nut_speed"]),
+                 12.0)
+    return studies._trace(r)
+
+
+def _mm(v: float | None) -> float | None:
+    return None if v is None else 1e3 * v
+
+
+def _write_tables(out: Path, results: dict[str, Any]) -> None:
+    pd.DataFrame([{
+        "position_mm": 1e3 * r["position"], "k_sa_N_per_um": 1e-6 * r["k_sa"],
+        "k_sa_paper_N_per_um": 1e-6 * r["k_sa_paper"], "k_eq_N_per_um": 1e-6 * r["k_eq"],
+        "cdfs_critical_mm_s": _mm(r["cdfs"]), "cdfs_paper_mm_s": _mm(r["cdfs_paper"]),
+        "ddfs_critical_mm_s": _mm(r["ddfs"]), "ddfs_paper_mm_s": _mm(r["ddfs_paper"]),
+    } for r in results["table3"]]).to_csv(out / "table3_position.csv", index=False)
+    pd.DataFrame([{
+        "multiple_of_cdfs_critical": r["multiple"], "nut_speed_mm_s": _mm(r["nut_speed"]),
+        "overshoot_percent": 100 * r["overshoot"], "settling_time_s": r["settling_time"],
+        "verdict": r["verdict"],
+    } for r in results["fig7"]["rows"]]).to_csv(out / "fig7_nut_speed.csv", index=False)
+    pd.DataFrame([{
+        "table_amplitude_mm_s": _mm(r["table_amplitude"]),
+        "nut_amplitude_mm_s": _mm(r["nut_amplitude"]),
+        "screw_amplitude_mm_s": _mm(r["screw_amplitude"]),
+        "reversal_overshoot_percent": 100 * r["reversal_overshoot"],
+    } for r in results["figs9_10"]["rows"]]).to_csv(out / "figs9_10_reversal.csv", index=False)
+    pd.DataFrame([{
+        "search": k, "drive": v["drive"], "position_mm": v["table_position_mm"],
+        "nut_speed_mm_s": v["nut_speed_mm_s"], "start": v["start"],
+        "critical_speed_mm_s": v["critical_speed_mm_s"], "status": v["status"],
+        "trials": len(v["trials"]),
+    } for k, v in results["critical"].items()]).to_csv(out / "critical_speeds.csv", index=False)

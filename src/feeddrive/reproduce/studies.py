@@ -1,0 +1,172 @@
+"""The paper's studies (Wang2021 Sects. 5–6), each a pure function of a parameter set.
+
+Every function returns plain data (dicts of floats, SI units) so the results can be cached as
+JSON, tabulated and plotted; the traces needed for figures are returned as arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..analysis.critical import (
+    critical_speed_from_rest,
+    critical_speed_stepdown,
+)
+from ..analysis.metrics import creep_metrics
+from ..control import ConstantSpeed, SineSpeed
+from ..parameters import DriveParameters
+from ..simulate import DriveSystem, simulate
+from ..stiffness import stiffness_chain
+
+MM_S = 1e-3
+MID = 0.4  # [m] mid-screw, Wang2021 Table 3 measurement point 3
+
+# Wang2021 numbers the report sets beside ours
+PAPER = {
+    "cdfs_critical_sim": 1.56e-3,  # Sect. 5.2, Fig. 6
+    "ddfs_critical_sim": 0.5e-3,  # Fig. 8 (v_s = 16.5, v_n = 16 mm/s)
+    "ddfs_sim_nut_speed": 16e-3,
+    "cdfs_critical_measured_mid": 1.66e-3,  # Sect. 6, Fig. 13
+    "ddfs_critical_measured_mid": 0.52e-3,  # Sect. 6, Fig. 13 (v_n = 20 mm/s)
+    "experiment_nut_speed": 20e-3,
+    "positions": (0.2, 0.3, 0.4, 0.5, 0.6),  # Table 3
+    "k_sa": (276.13e6, 220.9e6, 207.1e6, 220.9e6, 276.13e6),  # Table 3 [N/m]
+    "cdfs_table3": (1.21e-3, 1.58e-3, 1.66e-3, 1.59e-3, 1.23e-3),
+    "ddfs_table3": (0.35e-3, 0.47e-3, 0.52e-3, 0.46e-3, 0.36e-3),
+    "k_eq_mid": 2.16e7,  # Sect. 5.2
+    "fig7_rule_multiple": 10.0,  # Sect. 5.2: v_n ≥ 10× the CDFS critical speed
+}
+
+
+@dataclass(frozen=True)
+class StudySettings:
+    """Search settings shared by the studies (speeds in m/s, times in s)."""
+
+    trial_duration: float = 12.0
+    speed_range: tuple[float, float] = (0.1e-3, 3.1e-3)
+    coarse_step: float = 0.2e-3
+    resolution: float = 0.01e-3
+    fig7_multiples: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 15.0, 20.0)
+    fig7_duration: float = 10.0
+    sine_frequency: float = 0.2
+    sine_periods: float = 2.0
+    sine_nut_amplitudes: tuple[float, ...] = (0.0, 2e-3, 10e-3, 16e-3)
+
+
+def critical_speed(params: DriveParameters, drive: str, position: float, nut_speed: float,
+                   settings: StudySettings) -> dict[str, Any]:
+    """Critical speed from rest (scan + bisection) at one position."""
+    res = critical_speed_from_rest(
+        DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
+        speed_range=settings.speed_range, coarse_step=settings.coarse_step,
+        resolution=settings.resolution, duration=settings.trial_duration)
+    return res.to_dict()
+
+
+def critical_speed_running(params: DriveParameters, drive: str, position: float,
+                           nut_speed: float, settings: StudySettings) -> dict[str, Any]:
+    """Critical speed by the paper's step-down protocol on a running table (Sect. 6)."""
+    res = critical_speed_stepdown(
+        DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
+        start_speed=settings.speed_range[1], lowest_speed=settings.speed_range[0])
+    return res.to_dict()
+
+
+def _trace(result: Any, stride: int = 5) -> dict[str, list[float]]:
+    return {"time": result.time[::stride].tolist(),
+            "table_speed": result["table_speed"][::stride].tolist(),
+            "table_speed_reference": result["table_speed_reference"][::stride].tolist()}
+
+
+def fig6(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
+    """CDFS at 1.55 and 1.56 mm/s, mid-screw (Wang2021 Fig. 6)."""
+    out: dict[str, Any] = {}
+    for v in (1.55e-3, 1.56e-3):
+        r = simulate(DriveSystem(params, "cdfs", MID), ConstantSpeed(v), 12.0)
+        m = creep_metrics(r.time, r["table_speed"], v, window=(6.0, 12.0))
+        out[f"{v / MM_S:.2f}"] = {"verdict": m.verdict, "ripple_ratio": m.ripple_ratio,
+                                  "stick_fraction": m.stick_fraction,
+                                  "settling_time": settling_time(r.time, r["table_speed"], v),
+                                  "trace": _trace(r)}
+    return out
+
+
+def settling_time(time: np.ndarray, speed: np.ndarray, command: float,
+                  band: float = 0.05) -> float | None:
+    """Time [s] after which |speed − command| stays within ``band``·|command|; None if never."""
+    outside = np.abs(speed - command) > band * abs(command)
+    if not outside.any():
+        return 0.0
+    last = int(np.nonzero(outside)[0][-1])
+    if last >= len(time) - 1:
+        return None
+    return float(time[last + 1])
+
+
+def overshoot(speed: np.ndarray, command: float) -> float:
+    """Peak overshoot (max − command)/command, ≥ 0."""
+    return max(0.0, float(np.max(speed) - command) / abs(command))
+
+
+def fig7(params: DriveParameters, cdfs_critical: float, settings: StudySettings
+         ) -> dict[str, Any]:
+    """DDFS at 1.55 mm/s for hollow-motor speeds v_n = k × the CDFS critical speed (Fig. 7)."""
+    v = 1.55e-3
+    rows = []
+    traces = {}
+    for k in (0.0, *settings.fig7_multiples):
+        vn = k * cdfs_critical
+        drive = "ddfs" if vn > 0 else "cdfs"
+        r = simulate(DriveSystem(params, drive, MID), ConstantSpeed(v, vn), settings.fig7_duration)
+        s = r["table_speed"]
+        m = creep_metrics(r.time, s, v, window=(0.5 * settings.fig7_duration,
+                                                settings.fig7_duration))
+        rows.append({"multiple": k, "nut_speed": vn, "overshoot": overshoot(s, v),
+                     "settling_time": settling_time(r.time, s, v), "verdict": m.verdict,
+                     "ripple_ratio": m.ripple_ratio})
+        traces[f"{k:g}"] = _trace(r)
+    return {"rows": rows, "traces": traces, "table_speed": v}
+
+
+def reversal_overshoot(time: np.ndarray, speed: np.ndarray, reference: np.ndarray,
+                       amplitude: float, frequency: float) -> float:
+    """Largest |v − v_ref| / amplitude within ±10 % of a period around each reference zero
+    crossing after the first period (Wang2021 Figs. 9–10: overshoot at speed reversal)."""
+    period = 1.0 / frequency
+    crossings = np.arange(1, int(time[-1] * 2 * frequency) + 1) * period / 2.0
+    crossings = crossings[(crossings >= period) & (crossings <= time[-1] - 0.1 * period)]
+    worst = 0.0
+    for tc in crossings:
+        sel = np.abs(time - tc) <= 0.1 * period
+        if sel.any():
+            worst = max(worst, float(np.max(np.abs(speed[sel] - reference[sel]))))
+    return worst / amplitude
+
+
+def figs9_10(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
+    """Sinusoidal table speed, amplitudes 1.56 and 2 mm/s, several nut amplitudes."""
+    rows = []
+    traces = {}
+    duration = settings.sine_periods / settings.sine_frequency + 1.0 / settings.sine_frequency
+    for amp in (1.56e-3, 2e-3):
+        for vn in settings.sine_nut_amplitudes:
+            drive = "ddfs" if vn > 0 else "cdfs"
+            r = simulate(DriveSystem(params, drive, MID),
+                         SineSpeed(amp, vn, settings.sine_frequency), duration)
+            ro = reversal_overshoot(r.time, r["table_speed"], r["table_speed_reference"], amp,
+                                    settings.sine_frequency)
+            rows.append({"table_amplitude": amp, "nut_amplitude": vn,
+                         "screw_amplitude": amp + vn, "reversal_overshoot": ro})
+            traces[f"{amp / MM_S:g}/{vn / MM_S:g}"] = _trace(r)
+    return {"rows": rows, "traces": traces, "frequency": settings.sine_frequency}
+
+
+def stiffness_rows(params: DriveParameters) -> list[dict[str, float]]:
+    chain = stiffness_chain(params, np.array(PAPER["positions"]))
+    return [{"position": float(a), "k_sa": float(k), "k_sa_paper": float(kp),
+             "k_eq": float(ke)}
+            for a, k, kp, ke in zip(chain.position, chain.screw_axial, PAPER["k_sa"],
+                                    chain.equivalent, strict=True)]
