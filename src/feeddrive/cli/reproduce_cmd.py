@@ -14,7 +14,7 @@ from ._common import app, console, resolve_parameters, user_errors
 @app.command("reproduce")
 @user_errors
 def reproduce_command(
-    out: Path = typer.Option(Path("reproduce-out"), "--out", help="Output folder."),
+    out: Path = typer.Option("reproduce-out", "--out", help="Output folder."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
                                            "(default wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),

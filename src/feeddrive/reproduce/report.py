@@ -248,7 +248,8 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
     md += ["## Settings", "", "```", repr(settings), "```", ""]
     md_path = out / "report.md"
     md_path.write_text("\n".join(md), encoding="utf-8")
-    body = [f"<h1>feeddrive reproduction of Wang2021 — <code>{html.escape(params.name)}</code></h1>",
+    name = html.escape(params.name)
+    body = [f"<h1>feeddrive reproduction of Wang2021 — <code>{name}</code></h1>",
             f"<p>feeddrive {__version__}, {when}, wall time {results['wall_time_s']:.0f} s. "
             f"{html.escape(wang2021.CITATION)}.</p>"]
     for title, text, rows in sections:

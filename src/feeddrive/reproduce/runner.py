@@ -89,7 +89,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
                 done += 1
                 if progress:
                     progress(f"critical speed {k}", done, total)
-    crit = {k: store.get(k) for k in jobs}
+    crit: dict[str, Any] = {k: store.get(k) for k in jobs}
     results["critical"] = crit
 
     def speed(key: str) -> float | None:

@@ -25,7 +25,7 @@ MM_S = 1e-3
 MID = 0.4  # [m] mid-screw, Wang2021 Table 3 measurement point 3
 
 # Wang2021 numbers the report sets beside ours
-PAPER = {
+PAPER: dict[str, Any] = {
     "cdfs_critical_sim": 1.56e-3,  # Sect. 5.2, Fig. 6
     "ddfs_critical_sim": 0.5e-3,  # Fig. 8 (v_s = 16.5, v_n = 16 mm/s)
     "ddfs_sim_nut_speed": 16e-3,

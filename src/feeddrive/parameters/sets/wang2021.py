@@ -242,7 +242,8 @@ def literal() -> DriveParameters:
 # `feeddrive calibrate` to the paper's simulated CDFS critical speed at mid-screw (1.56 mm/s,
 # Sect. 5.2 / Fig. 6); every other number is a prediction.
 AXIAL_DAMPING_RATIO = 0.05
-VELOCITY_INTEGRAL_GAIN = 3743.82  # [A/m] on table-equivalent position error; fitted (calibrate, 9 evaluations)
+# [A/m] on the table-equivalent position error; fitted by `feeddrive calibrate` (9 evaluations)
+VELOCITY_INTEGRAL_GAIN = 3743.82
 
 
 def _axial_damping(params: DriveParameters) -> float:
