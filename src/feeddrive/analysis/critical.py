@@ -128,38 +128,55 @@ def critical_speed_from_rest(
     trials: dict[float, CreepTrial] = {}
 
     def judge(v: float) -> bool:
-        v = round(v, 12)
-        if v not in trials:
-            trials[v] = creep_trial(system, v, nut_speed=nut_speed, duration=duration,
-                                    thresholds=thresholds, options=options)
-            if progress:
-                progress(len(trials), 0)
+        trials[v] = creep_trial(system, v, nut_speed=nut_speed, duration=duration,
+                                thresholds=thresholds, options=options)
+        if progress:
+            progress(len(trials), 0)
         return trials[v].creeping
 
-    grid = _grid(lo, hi, coarse_step)
-    flags = [judge(v) for v in grid]
-    creeping = [v for v, f in zip(grid, flags, strict=True) if f]
-    if not creeping:
-        status, crit = "below-range", None
-    elif flags[-1]:
-        status, crit = "above-range", None
-    else:
-        a = max(creeping)  # highest creeping grid speed
-        b = float(grid[np.searchsorted(grid, a) + 1])  # smooth neighbour above
-        while b - a > resolution * (1 + 1e-9):
-            mid = round((a + b) / 2.0 / resolution) * resolution
-            if mid <= a or mid >= b:
-                mid = (a + b) / 2.0
-            if judge(mid):
-                a = mid
-            else:
-                b = mid
-        status, crit = "found", b
+    status, crit = search_boundary(judge, lo, hi, coarse_step, resolution)
     ordered = tuple(trials[k] for k in sorted(trials))
     return CriticalSpeed(drive=system.drive, table_position=system.table_position,
                          nut_speed=nut_speed, start="rest", critical_speed=crit, status=status,
                          resolution=resolution, speed_range=(lo, hi), trials=ordered,
                          simulated_time=duration * len(trials))
+
+
+def search_boundary(creeps: Callable[[float], bool], low: float, high: float,
+                    coarse_step: float, resolution: float) -> tuple[str, float | None]:
+    """Smooth end of the highest creep boundary in [low, high] [m/s].
+
+    ``creeps(v)`` is evaluated on a coarse grid from ``low`` (so a creeping *band* is not
+    missed), then bisection between the highest creeping grid speed and its smooth neighbour
+    narrows the boundary to ``resolution``.  Each speed is evaluated at most once.
+    Returns (status, critical speed) with status found / below-range / above-range.
+    """
+    cache: dict[float, bool] = {}
+
+    def judge(v: float) -> bool:
+        v = round(v, 12)
+        if v not in cache:
+            cache[v] = creeps(v)
+        return cache[v]
+
+    grid = _grid(low, high, coarse_step)
+    flags = [judge(float(v)) for v in grid]
+    creeping = [float(v) for v, f in zip(grid, flags, strict=True) if f]
+    if not creeping:
+        return "below-range", None
+    if flags[-1]:
+        return "above-range", None
+    a = max(creeping)
+    b = float(grid[int(np.searchsorted(grid, a)) + 1])
+    while b - a > resolution * (1 + 1e-9):
+        mid = round((a + b) / 2.0 / resolution) * resolution
+        if mid <= a or mid >= b:
+            mid = (a + b) / 2.0
+        if judge(mid):
+            a = mid
+        else:
+            b = mid
+    return "found", b
 
 
 def _staircase(speeds: np.ndarray, dwell: float, lead_in: float, nut_speed: float,
@@ -182,16 +199,24 @@ def _run_staircase(system: DriveSystem, speeds: np.ndarray, dwell: float, lead_i
     profile, starts = _staircase(speeds, dwell, lead_in, nut_speed)
     duration = float(profile.time[-1])
     result = simulate(system, profile, duration, options=options)
-    time, speed = result.time, result["table_speed"]
+    return judge_staircase(result.time, result["table_speed"], speeds, starts, dwell,
+                           thresholds), duration
+
+
+def judge_staircase(time: np.ndarray, speed: np.ndarray, speeds: np.ndarray,
+                    starts: np.ndarray, dwell: float,
+                    thresholds: CreepThresholds | None = None) -> list[CreepTrial]:
+    """Judge each step of a step-down trace on its second half (the step's own transient is
+    over by then), stopping at the first creeping step."""
     out = []
     for v, t0 in zip(speeds, starts, strict=True):
-        # judge each step on its second half: the step's own transient is over by then
-        window = (t0 + 0.5 * dwell, t0 + dwell)
+        # end just before the next step starts (its first sample belongs to the next step)
+        window = (t0 + 0.5 * dwell, t0 + dwell * (1.0 - 1e-6))
         m = creep_metrics(time, speed, float(v), thresholds=thresholds, window=window)
         out.append(CreepTrial.from_metrics(float(v), m))
         if out[-1].creeping:
             break
-    return out, duration
+    return out
 
 
 def critical_speed_stepdown(

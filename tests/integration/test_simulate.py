@@ -1,0 +1,145 @@
+"""simulate(): API, acceptance of the engine issue, writers and refused inputs."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+import scipy.io
+import xarray as xr
+from typer.testing import CliRunner
+
+import feeddrive as fd
+from feeddrive.cli import app
+from feeddrive.control import ConstantSpeed, SampledSpeed, SineSpeed
+from feeddrive.parameters import ParameterError
+from feeddrive.simulate import DriveSystem, SolverOptions, simulate
+
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def params() -> fd.DriveParameters:
+    return fd.preset("wang2021")
+
+
+def test_cdfs_tracks_5_mm_s(params: fd.DriveParameters) -> None:
+    r = simulate(DriveSystem(params, "cdfs", 0.4), ConstantSpeed(5e-3), 3.0)
+    s = r.summary()
+    assert s["mean_table_speed_mm_s"] == pytest.approx(5.0, rel=0.01)
+    assert s["verdict"] == "smooth"
+    ds = r.dataset
+    assert ds["table_speed"].attrs["units"] == "m/s"
+    assert ds["screw_current"].attrs["units"] == "A"
+    assert "parameters_toml" in ds.attrs and json.loads(ds.attrs["solver"])["steps"] > 0
+    assert np.all(np.isfinite(ds["table_speed"].values))
+
+
+def test_ddfs_motor_speeds(params: fd.DriveParameters) -> None:
+    # Fig. 8 operating point: v_s = 16.5, v_n = 16, v_t = 0.5 mm/s
+    s = simulate(DriveSystem(params, "ddfs", 0.4), ConstantSpeed(0.5e-3, 16e-3), 5.0).summary()
+    assert s["mean_screw_speed_mm_s"] == pytest.approx(16.5, rel=0.01)
+    assert s["mean_nut_speed_mm_s"] == pytest.approx(16.0, rel=0.01)
+    assert s["mean_table_speed_mm_s"] == pytest.approx(0.5, rel=0.05)
+
+
+def test_sine_and_sampled_profiles_follow_the_command(params: fd.DriveParameters) -> None:
+    r = simulate(DriveSystem(params, "ddfs", 0.4), SineSpeed(5e-3, 10e-3, 0.5), 4.0)
+    err = r["table_speed"] - r["table_speed_reference"]
+    assert np.sqrt(np.mean(err[r.time > 1.0] ** 2)) < 0.2 * 5e-3
+    prof = SampledSpeed.from_function(lambda t: 5e-3 * np.ones_like(t), 2.0)
+    r2 = simulate(DriveSystem(params, "cdfs", 0.4), prof, 2.0)
+    assert r2["table_speed"][-500:].mean() == pytest.approx(5e-3, rel=0.01)
+
+
+def test_sampled_quantised_control_runs(params: fd.DriveParameters) -> None:
+    p = params.replace_path("controller.position_period", 1e-3)
+    p = p.replace_path("controller.velocity_period", 1e-3)
+    p = p.replace_path("controller.encoder_counts", 10000.0)
+    p = p.replace_path("controller.grating_resolution", 1e-7)
+    r = simulate(DriveSystem(p, "cdfs", 0.4), ConstantSpeed(5e-3), 2.0)
+    assert r["table_speed"][-500:].mean() == pytest.approx(5e-3, rel=0.02)
+
+
+def test_quantisation_needs_sampled_loops(params: fd.DriveParameters) -> None:
+    p = params.replace_path("controller.encoder_counts", 10000.0)
+    with pytest.raises(ParameterError, match="controller.encoder_counts"):
+        simulate(DriveSystem(p, "cdfs", 0.4), ConstantSpeed(5e-3), 1.0)
+
+
+@pytest.mark.parametrize(("kwargs", "field"), [
+    ({"duration": -1.0}, "duration"),
+    ({"duration": float("nan")}, "duration"),
+])
+def test_bad_duration(params: fd.DriveParameters, kwargs: dict, field: str) -> None:
+    with pytest.raises(ParameterError, match=field):
+        simulate(DriveSystem(params, "cdfs", 0.4), ConstantSpeed(1e-3), **kwargs)
+
+
+def test_bad_inputs(params: fd.DriveParameters) -> None:
+    with pytest.raises(ParameterError, match="table_position"):
+        DriveSystem(params, "cdfs", 0.9)
+    with pytest.raises(ParameterError, match="drive"):
+        DriveSystem(params, "xdfs", 0.4)
+    with pytest.raises(ParameterError, match="nut_speed"):
+        simulate(DriveSystem(params, "cdfs", 0.4), ConstantSpeed(1e-3, 5e-3), 1.0)
+    with pytest.raises(ValueError, match="table_speed"):
+        simulate(DriveSystem(params, "cdfs", 0.4), ConstantSpeed(float("nan")), 1.0)
+    with pytest.raises(ParameterError, match="rtol"):
+        SolverOptions(rtol=0.0)
+
+
+def test_solver_failure_is_reported_not_nan(params: fd.DriveParameters) -> None:
+    from feeddrive.simulate import SimulationError
+    with pytest.raises(SimulationError, match="maximum number of steps"):
+        simulate(DriveSystem(params, "cdfs", 0.4), ConstantSpeed(1e-3), 1.0,
+                 options=SolverOptions(max_steps=10))
+
+
+@pytest.mark.parametrize("ext", [".csv", ".parquet", ".nc", ".mat"])
+def test_writers(params: fd.DriveParameters, tmp_path, ext: str) -> None:
+    r = simulate(DriveSystem(params, "cdfs", 0.4), ConstantSpeed(2e-3), 0.5)
+    path = r.save(tmp_path / f"run{ext}")
+    n = r.time.size
+    if ext == ".csv":
+        df = pd.read_csv(path)
+        assert df["table_speed [mm/s]"].to_numpy() == pytest.approx(1e3 * r["table_speed"])
+        assert len(df) == n
+    elif ext == ".parquet":
+        df = pd.read_parquet(path)
+        assert df["table_position [mm]"].to_numpy() == pytest.approx(1e3 * r["table_position"])
+    elif ext == ".nc":
+        ds = xr.open_dataset(path, engine="scipy")
+        assert ds["table_speed"].attrs["units"] == "m/s"
+        assert ds["table_speed"].values == pytest.approx(r["table_speed"])
+        ds.close()
+    else:
+        m = scipy.io.loadmat(path, simplify_cells=True)["feeddrive"]
+        assert m["table_speed"] == pytest.approx(r["table_speed"])
+        assert m["units"]["table_speed"] == "m/s"
+
+
+def test_cli_simulate_acceptance(tmp_path) -> None:
+    # engine issue acceptance: writes both files, mean within 1 % of 5 mm/s
+    nc, png = tmp_path / "run.nc", tmp_path / "run.png"
+    res = runner.invoke(app, ["simulate", "--drive", "cdfs", "--table-speed", "5", "--duration",
+                              "3", "--output", str(nc), "--plot", str(png), "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["mean_table_speed_mm_s"] == pytest.approx(5.0, rel=0.01)
+    assert nc.exists() and png.exists()
+    res = runner.invoke(app, ["simulate", "--drive", "ddfs", "--table-speed", "0.5",
+                              "--nut-speed", "16", "--duration", "5", "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["mean_screw_speed_mm_s"] == pytest.approx(16.5, rel=0.01)
+    assert out["mean_nut_speed_mm_s"] == pytest.approx(16.0, rel=0.01)
+
+
+def test_cli_simulate_bad_input() -> None:
+    res = runner.invoke(app, ["simulate", "--drive", "cdfs", "--table-speed", "5",
+                              "--position", "900"])
+    assert res.exit_code == 2
+    assert "table_position" in res.output
