@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = [
+    "COMMAND_COLUMNS",
     "CURRENT_UNITS",
     "FORCE_UNITS",
     "LENGTH_UNITS",
@@ -53,6 +54,9 @@ _DIMENSIONS = {
     "force": FORCE_UNITS,
     "current": CURRENT_UNITS,
 }
+
+#: command-speed columns looked for in a position trace, in this order
+COMMAND_COLUMNS = ("command_speed", "table_speed_reference")
 
 _UNIT_RE = re.compile(r"^(?P<name>.*?)\s*\[(?P<unit>[^\]]*)\]\s*$")
 
@@ -378,7 +382,7 @@ def read_position_trace(
     *,
     time_column: str = "time",
     position_column: str | None = None,
-    command_column: str = "command_speed",
+    command_column: str | None = None,
     speed_column: str | None = None,
     time_unit: str | None = None,
     position_unit: str | None = None,
@@ -389,9 +393,10 @@ def read_position_trace(
     """Read time and table position; default columns ``time`` [s] and ``position`` [mm].
 
     Without ``position_column``, a ``position`` column is used, else ``table_position`` (the
-    simulator's export).  A ``command_speed`` column [mm/s] is read when present (it marks
-    the segments of a step-down run); ``speed_column`` names a speed column [mm/s] to use
-    instead of differentiating the position.
+    simulator's export).  The command speed [mm/s] is read from ``command_column``, or
+    without it from a ``command_speed`` or ``table_speed_reference`` (simulator) column when
+    present; it marks the segments of a step-down run.  ``speed_column`` names a speed
+    column [mm/s] to use instead of differentiating the position.
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
     _need_rows(table, 16, "position trace")
@@ -400,9 +405,9 @@ def read_position_trace(
     names = [position_column] if position_column else ["position", "table_position"]
     position, pname, _ = table.quantity(names, "length", unit=position_unit, default_unit="mm")
     command = None
-    if table.has(command_column):
-        command, _, _ = table.quantity([command_column], "speed", unit=None,
-                                       default_unit="mm/s")
+    candidates = [command_column] if command_column else list(COMMAND_COLUMNS)
+    if any(table.has(c) for c in candidates) or command_column:
+        command, _, _ = table.quantity(candidates, "speed", unit=None, default_unit="mm/s")
     speed = None
     if speed_column is not None:
         speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit,

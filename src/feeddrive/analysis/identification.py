@@ -88,18 +88,18 @@ def _t_quantile(confidence: float, dof: int) -> float:
 
 
 def _covariance(jac: np.ndarray, ssr: float, dof: int) -> np.ndarray:
-    """s²(JᵀJ)⁻¹; infinite variances where JᵀJ is singular (parameter not determined)."""
+    """s²(JᵀJ)⁻¹ by SVD.  Parameters that move along a (numerically) null direction of J
+    get infinite variance; the others keep the pseudo-inverse variance."""
     s2 = ssr / dof if dof > 0 else math.inf
-    jtj = jac.T @ jac
-    try:
-        cov = np.linalg.inv(jtj) * s2
-    except np.linalg.LinAlgError:
-        cov = np.full(jtj.shape, math.inf)
-    if not np.all(np.isfinite(cov)) or np.any(np.diag(cov) < 0):
-        cov = np.linalg.pinv(jtj) * s2
-        singular = np.linalg.matrix_rank(jtj) < jtj.shape[0]
-        if singular:
-            cov[np.diag_indices_from(cov)] = math.inf
+    _, sv, vt = np.linalg.svd(jac, full_matrices=False)
+    tol = float(sv.max(initial=0.0)) * max(jac.shape) * np.finfo(float).eps
+    keep = sv > tol
+    cov = (vt[keep].T / sv[keep] ** 2) @ vt[keep] * s2
+    null = vt[~keep]
+    if null.size:
+        loose = np.any(np.abs(null) > 1e-8, axis=0)
+        cov[loose, :] = math.inf
+        cov[:, loose] = math.inf
     return np.asarray(cov)
 
 
@@ -664,13 +664,15 @@ def fit_presliding(
     ]))
     grid = grid[(grid >= 0.0) & (grid <= s1_max)]
     prof = np.empty(grid.size)
-    for i, s1 in enumerate(grid):
-        if s1 == s1_hat:
-            prof[i] = ssr
-            continue
-        res = fit(float(s1), (s0_hat, s1))
-        prof[i] = 2.0 * res.cost * scale**2
-    prof = np.minimum(prof, np.inf)
+    i_hat = int(np.argmin(np.abs(grid - s1_hat)))
+    prof[i_hat] = ssr
+    # continuation: walk away from the optimum, each refit starting from its neighbour's σ0
+    for order in (range(i_hat + 1, grid.size), range(i_hat - 1, -1, -1)):
+        s0_prev = s0_hat
+        for i in order:
+            res = fit(float(grid[i]), (s0_prev, float(grid[i])))
+            prof[i] = 2.0 * res.cost * scale**2
+            s0_prev = float(res.x[0] * s0_init)
     threshold = ssr * (1.0 + float(stats.f.ppf(confidence, 1, dof)) / dof)
     low, high = _profile_interval(grid, prof, threshold, s1_hat, s1_max)
 

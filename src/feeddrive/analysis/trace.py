@@ -21,7 +21,8 @@ Segments
     1. *regimes*: each sample is labelled rest (local mean speed below 1 % of the fastest),
        creeping (over a sliding window of ``min_segment_time`` the stick fraction or the
        ripple ratio exceeds its :class:`CreepThresholds` limit, against the local mean
-       speed) or smooth; runs shorter than ``min_segment_time`` join a neighbour;
+       speed) or smooth; runs shorter than ``min_segment_time`` join a neighbour, and moving
+       runs shorter than twice that next to a rest are taken as its stop or start;
     2. *speed steps* within each smooth or creeping run: binary segmentation of the position
        into straight lines (constant mean speed).  A split is kept when the two sides' mean
        speeds differ by more than ``min_step`` *and* by more than their worst-case error
@@ -206,14 +207,39 @@ def _runs(label: np.ndarray, min_n: int) -> list[list[int]]:
         lo, hi = min(i, j), max(i, j)
         keep = runs[j][2]
         runs[lo:hi + 1] = [[runs[lo][0], runs[hi][1], keep]]
-        # join equal neighbours
-        k = 0
-        while k < len(runs) - 1:
-            if runs[k][2] == runs[k + 1][2]:
-                runs[k:k + 2] = [[runs[k][0], runs[k + 1][1], runs[k][2]]]
-            else:
-                k += 1
+        _join(runs)
+    # a short moving run beside a rest is the stop or the start, not a segment
+    changed = True
+    while changed:
+        changed = False
+        for i, r in enumerate(runs):
+            beside_rest = ((i > 0 and runs[i - 1][2] == 0)
+                           or (i < len(runs) - 1 and runs[i + 1][2] == 0))
+            if r[2] != 0 and beside_rest and r[1] - r[0] < 2 * min_n:
+                r[2] = 0
+                changed = True
+        _join(runs)
+    # the sliding window sees a rest half a window late and early: move the edges
+    half = min_n // 2
+    for left, right in zip(runs[:-1], runs[1:], strict=True):
+        if left[2] == 0 and right[2] != 0:
+            edge = min(right[0] + half, right[1] - 1)
+        elif right[2] == 0 and left[2] != 0:
+            edge = max(left[1] - half, left[0] + 1)
+        else:
+            continue
+        left[1] = right[0] = edge
     return runs
+
+
+def _join(runs: list[list[int]]) -> None:
+    """Join neighbouring runs with the same label, in place."""
+    k = 0
+    while k < len(runs) - 1:
+        if runs[k][2] == runs[k + 1][2]:
+            runs[k:k + 2] = [[runs[k][0], runs[k + 1][1], runs[k][2]]]
+        else:
+            k += 1
 
 
 def _line_segments(cost: _LineCost, a0: int, b0: int, min_n: int,
@@ -461,11 +487,17 @@ def analyze_trace(
         if cmd.shape != t.shape:
             raise ValueError("command: expected one value per time sample")
         cmd_on_grid = np.interp(tt, t, cmd) if cmd.shape != tt.shape else cmd
+        short = 0
         for a, b, c in _command_runs(tt, cmd_on_grid):
             if c == 0.0:
                 continue
+            if b - a < min_segment_time:
+                short += 1  # ramps between command levels
+                continue
             runs.append((a, b, c, "column"))
-        notes.append(f"segments: {len(runs)} runs of the command_speed column")
+        notes.append(f"segments: {len(runs)} runs of constant command speed"
+                     + (f" ({short} shorter than {min_segment_time:g} s skipped)"
+                        if short else ""))
     else:
         spans = (find_segments(tt, xx, vv, thresholds=thresholds, min_step=min_step,
                                min_segment_time=min_segment_time)
