@@ -1,0 +1,106 @@
+"""`feeddrive analyze`: creep analysis of a measured (or exported) position trace.
+
+File format: docs/measured-data.md.  The logic lives in feeddrive.analysis.trace and
+feeddrive.measured_io.
+"""
+
+from __future__ import annotations
+
+import typer
+
+from ..analysis.metrics import CreepThresholds
+from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, analyze_trace
+from ..measured_io import read_position_trace
+from ._common import MM_PER_S, app, console, print_json, user_errors
+
+
+def _say(text: str) -> None:
+    console.print(text, highlight=False, markup=False, soft_wrap=True)
+
+
+_DEFAULTS = CreepThresholds()
+
+
+@app.command("analyze")
+@user_errors
+def analyze_command(
+    file: str = typer.Argument(..., help="CSV with time and table position."),
+    command_speed: float | None = typer.Option(
+        None, "--command-speed", help="Commanded speed (mm/s) of the whole trace (else from a "
+        "command column, else estimated per segment)."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    plot: str | None = typer.Option(None, "--plot", help="Write the trace plot here."),
+    time_column: str = typer.Option("time", "--time-column"),
+    position_column: str | None = typer.Option(
+        None, "--position-column", help="Default: position, else table_position."),
+    command_column: str | None = typer.Option(
+        None, "--command-column", help="Default: command_speed or table_speed_reference, if "
+        "present."),
+    speed_column: str | None = typer.Option(
+        None, "--speed-column", help="Use this speed column (mm/s) instead of "
+        "differentiating the position."),
+    time_unit: str | None = typer.Option(None, "--time-unit", help="s (default) or ms."),
+    position_unit: str | None = typer.Option(None, "--position-unit",
+                                             help="mm (default), um, nm, m."),
+    sep: str | None = typer.Option(None, "--sep", help="Column separator (default: detected)."),
+    decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
+    smoothing: float | None = typer.Option(
+        None, "--smoothing", help="Savitzky–Golay window (ms) (default 20 ms)."),
+    segments: bool = typer.Option(True, "--segments/--no-segments",
+                                  help="Detect step-down segments (without a command column)."),
+    min_step: float = typer.Option(0.005, "--min-step",
+                                   help="Smallest speed step between segments (mm/s)."),
+    min_segment: float = typer.Option(DEFAULT_MIN_SEGMENT_TIME, "--min-segment",
+                                      help="Shortest segment (s)."),
+    stick_level: float = typer.Option(_DEFAULTS.stick_level, "--stick-level",
+                                      help="Sticking below this fraction of the command."),
+    max_stick_fraction: float = typer.Option(_DEFAULTS.max_stick_fraction,
+                                             "--max-stick-fraction"),
+    max_ripple_ratio: float = typer.Option(_DEFAULTS.max_ripple_ratio, "--max-ripple-ratio"),
+) -> None:
+    """Creep metrics of a position trace (per segment of a step-down run) and the critical
+    creeping speed."""
+    thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,
+                                 max_ripple_ratio=max_ripple_ratio)
+    trace = read_position_trace(file, time_column=time_column, position_column=position_column,
+                                command_column=command_column, speed_column=speed_column,
+                                time_unit=time_unit, position_unit=position_unit, sep=sep,
+                                decimal=decimal)
+    result = analyze_trace(
+        trace.time, trace.position,
+        command_speed=None if command_speed is None else command_speed * MM_PER_S,
+        command=trace.command_speed, speed=trace.speed, thresholds=thresholds,
+        smoothing_time=None if smoothing is None else smoothing * 1e-3,
+        segment=segments, min_step=min_step * MM_PER_S, min_segment_time=min_segment,
+        source=trace.source)
+    if plot:
+        from ..analysis.plots import plot_trace
+
+        plot_trace(result, plot)
+    if as_json:
+        print_json({**result.to_dict("mm"), "position_column": trace.position_column,
+                    "plot": plot})
+        return
+    _say(f"{trace.source}: {result.time.size} samples, "
+                  f"{result.time[-1] - result.time[0]:.4g} s, position from "
+                  f"{trace.position_column!r}")
+    for note in result.notes:
+        _say(f"  {note}")
+    for i, seg in enumerate(result.segments, start=1):
+        m = seg.metrics
+        freq = (f"{m.stick_slip_frequency:.3g} Hz" if m.stick_slip_frequency is not None
+                else "none")
+        _say(
+            f"  segment {i}: {seg.start:.2f}–{seg.end:.2f} s (window from "
+            f"{m.window_start:.2f} s), command {seg.command_speed / MM_PER_S:.4g} mm/s "
+            f"({seg.command_from}): {m.verdict.upper()}  ripple {m.ripple_ratio:.3g}, "
+            f"min {m.min_ratio:.3g}, stick {m.stick_fraction:.3g}, stick-slip {freq}")
+    for c in result.critical:
+        smooth = (f"{c.lowest_smooth / MM_PER_S:.4g} mm/s" if c.lowest_smooth is not None
+                  else "none (every segment creeps)")
+        creep = (f"{c.first_creeping / MM_PER_S:.4g} mm/s" if c.first_creeping is not None
+                 else "none (no segment creeps)")
+        _say(f"  critical speed ({c.direction}): lowest smooth {smooth}; first "
+                      f"creeping {creep}")
+    if plot:
+        _say(f"wrote plot {plot}")

@@ -1,0 +1,232 @@
+"""`feeddrive identify static|dynamic|merge`: LuGre friction from measurements.
+
+File formats: docs/measured-data.md.  The logic lives in feeddrive.analysis.identification,
+feeddrive.analysis.fragments and feeddrive.measured_io.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..analysis.fragments import friction_fragment, merge_fragment
+from ..analysis.identification import (
+    SITES,
+    DynamicFit,
+    Estimate,
+    StaticFit,
+    fit_presliding,
+    fit_static,
+    site_mass,
+)
+from ..measured_io import read_presliding_test, read_static_test
+from ..parameters import DriveParameters, ParameterError, save
+from ._common import MM_PER_S, N_PER_UM, app, console, print_json, resolve_parameters, user_errors
+
+
+def _say(text: str) -> None:
+    console.print(text, highlight=False, markup=False, soft_wrap=True)
+
+
+identify_app = typer.Typer(no_args_is_help=True,
+                           help="Identify LuGre friction parameters from measured tests.")
+app.add_typer(identify_app, name="identify")
+
+_SITE_HELP = "Friction site: screw, nut or guide (Wang2021 Sect. 4)."
+_SEP_HELP = "Column separator (default: detected; 'tab', 'space' accepted)."
+
+
+def _site(site: str) -> str:
+    if site not in SITES:
+        raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
+    return site
+
+
+def _base(preset_name: str | None, params_file: str | None,
+          fragments: list[str] | None = None) -> DriveParameters:
+    params = resolve_parameters(preset_name, params_file)
+    for frag in fragments or []:
+        params = merge_fragment(params, Path(frag))
+    return params
+
+
+def _fmt(est: Estimate, scale: float = 1.0, digits: int = 4) -> str:
+    v = est.value * scale
+    if not (math.isfinite(est.low) and math.isfinite(est.high)):
+        return f"{v:.{digits}g} (interval not determined)"
+    return (f"{v:.{digits}g}  [{est.low * scale:.{digits}g} … {est.high * scale:.{digits}g}]")
+
+
+def _print_static(fit: StaticFit, confidence: float) -> None:
+    _say(f"static friction fit of {fit.source} ({100 * confidence:.0f} % intervals)")
+    rows = (("F_c", "coulomb_force", 1.0, "N"), ("F_s", "static_force", 1.0, "N"),
+            ("v_s", "stribeck_velocity", 1.0 / MM_PER_S, "mm/s"),
+            ("σ2", "viscous_coefficient", 1.0, "N s/m"))
+    for name, b in fit.branches().items():
+        _say(f"  {name} direction: {b.speed.size} tests, rms residual {b.rmse:.3g} N")
+        for label, attr, scale, unit in rows:
+            _say(f"    {label:4s} = {_fmt(getattr(b, attr), scale)} {unit}")
+
+
+def _print_dynamic(fit: DynamicFit) -> None:
+    s0, s1 = fit.bristle_stiffness, fit.bristle_damping
+    level = f"{100 * s0.confidence:.0f} %"
+    _say(f"pre-sliding fit of {fit.source}: model {fit.model}, mass {fit.mass:.4g} kg, "
+                  f"rms residual {fit.rmse * 1e9:.3g} nm")
+    _say(f"  σ0 = {_fmt(s0, 1.0 / N_PER_UM)} N/µm ({level})")
+    if fit.sigma1_determined:
+        _say(f"  σ1 = {_fmt(s1)} N s/m ({level})")
+    else:
+        low, high = fit.sigma1_interval
+        upper = f"{high:.3g}" if math.isfinite(high) else "unbounded"
+        _say(f"  σ1 poorly determined: consistent with {low:.3g} … {upper} N s/m "
+                      f"({level} profile)")
+    _say(f"  σ2 = {fit.viscous_coefficient:.4g} N s/m held fixed")
+    if fit.force_ratio is not None:
+        _say(f"  max|F| = {100 * fit.force_ratio:.0f} % of F_s")
+    _say(f"  {fit.note}")
+
+
+@identify_app.command("static")
+@user_errors
+def static_command(
+    file: str = typer.Argument(..., help="CSV of constant-speed tests (speed, force)."),
+    site: str = typer.Option("screw", "--site", help=_SITE_HELP),
+    out: str | None = typer.Option(None, "--out", help="Write a TOML fragment here."),
+    plot: str | None = typer.Option(None, "--plot", help="Write the fit/residual plot here."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    speed_column: str = typer.Option("speed", "--speed-column"),
+    force_column: str = typer.Option("force", "--force-column"),
+    current_column: str = typer.Option("current", "--current-column",
+                                       help="Used when there is no force column."),
+    speed_unit: str | None = typer.Option(None, "--speed-unit",
+                                          help="mm/s (default), m/s, um/s, mm/min."),
+    force_unit: str | None = typer.Option(None, "--force-unit", help="N (default) or kN."),
+    current_unit: str | None = typer.Option(None, "--current-unit", help="A (default) or mA."),
+    torque_constant: float | None = typer.Option(
+        None, "--torque-constant", help="K_t (N m/A) for a current column (default: the "
+        "parameter set's motor of the site)."),
+    lead: float | None = typer.Option(None, "--lead", help="Screw lead (mm) for a current "
+                                      "column (default: the parameter set's)."),
+    weighting: str = typer.Option("relative", "--weighting",
+                                  help="relative (noise ∝ force) or absolute."),
+    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level."),
+    sep: str | None = typer.Option(None, "--sep", help=_SEP_HELP),
+    decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
+    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
+    params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+) -> None:
+    """Fit F_c, F_s, v_s and σ2 per direction to constant-speed friction tests."""
+    site = _site(site)
+    params = _base(preset_name, params_file)
+    motor = params.hollow_motor if site == "nut" else params.screw_motor
+    kt = torque_constant if torque_constant is not None else motor.torque_constant
+    lead_m = lead * 1e-3 if lead is not None else params.screw.lead
+    if weighting not in ("relative", "absolute"):
+        raise ValueError(f"--weighting = {weighting!r}: expected relative or absolute")
+    data = read_static_test(file, speed_column=speed_column, force_column=force_column,
+                            current_column=current_column, speed_unit=speed_unit,
+                            force_unit=force_unit, current_unit=current_unit,
+                            torque_constant=kt, lead=lead_m, sep=sep, decimal=decimal)
+    fit = fit_static(data.speed, data.force, confidence=confidence,
+                     weighting=weighting,  # type: ignore[arg-type]
+                     lines=data.lines, source=data.source)
+    if out:
+        Path(out).write_text(friction_fragment(site, static=fit, source=data.source),
+                             encoding="utf-8")
+    if plot:
+        from ..analysis.plots import plot_static_fit
+
+        plot_static_fit(fit, plot)
+    if as_json:
+        print_json({"site": site, "force_from": data.force_from, **fit.to_dict("mm"),
+                    "fragment": out, "plot": plot})
+        return
+    _print_static(fit, confidence)
+    if data.force_from != "force":
+        _say(f"  force from current: K_t = {kt:g} N m/A, lead = {lead_m * 1e3:g} mm")
+    for path, what in ((out, "fragment"), (plot, "plot")):
+        if path:
+            _say(f"wrote {what} {path}")
+
+
+@identify_app.command("dynamic")
+@user_errors
+def dynamic_command(
+    file: str = typer.Argument(..., help="CSV of a pre-sliding test (time, force, position)."),
+    site: str = typer.Option("screw", "--site", help=_SITE_HELP),
+    mass: float | None = typer.Option(
+        None, "--mass", help="Moving mass (kg) (default: the site's inertia referred to the "
+        "table, J/H² for screw and nut, the table mass for the guide)."),
+    model: str = typer.Option("lugre", "--model", help="lugre (full bristle model) or linear "
+                              "(m x'' + (σ1+σ2) x' + σ0 x = F, for |F| ≪ F_s)."),
+    static: Annotated[list[str] | None, typer.Option(
+        "--static", help="Static-fit fragment(s) merged into the parameter set first "
+        "(their branches and σ2 are used).")] = None,
+    out: str | None = typer.Option(None, "--out", help="Write a TOML fragment here."),
+    plot: str | None = typer.Option(None, "--plot", help="Write the fit/profile plot here."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    time_column: str = typer.Option("time", "--time-column"),
+    force_column: str = typer.Option("force", "--force-column"),
+    position_column: str = typer.Option("position", "--position-column"),
+    time_unit: str | None = typer.Option(None, "--time-unit", help="s (default) or ms."),
+    force_unit: str | None = typer.Option(None, "--force-unit", help="N (default) or kN."),
+    position_unit: str | None = typer.Option(None, "--position-unit",
+                                             help="um (default), nm, mm, m."),
+    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level."),
+    sep: str | None = typer.Option(None, "--sep", help=_SEP_HELP),
+    decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
+    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
+    params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+) -> None:
+    """Fit σ0 and σ1 to a pre-sliding test; says so when σ1 is poorly determined."""
+    site = _site(site)
+    if model not in ("lugre", "linear"):
+        raise ValueError(f"--model = {model!r}: expected lugre or linear")
+    if not (0.5 <= confidence < 1.0):
+        raise ValueError(f"--confidence = {confidence!r}: expected a level in [0.5, 1)")
+    params = _base(preset_name, params_file, static)
+    m = mass if mass is not None else site_mass(params, site)
+    data = read_presliding_test(file, time_column=time_column, force_column=force_column,
+                                position_column=position_column, time_unit=time_unit,
+                                force_unit=force_unit, position_unit=position_unit, sep=sep,
+                                decimal=decimal)
+    fit = fit_presliding(data.time, data.force, data.position, mass=m,
+                         friction=getattr(params.friction, site),
+                         model=model,  # type: ignore[arg-type]
+                         confidence=confidence, lines=data.lines, source=data.source)
+    if out:
+        Path(out).write_text(friction_fragment(site, dynamic=fit, source=data.source),
+                             encoding="utf-8")
+    if plot:
+        from ..analysis.plots import plot_dynamic_fit
+
+        plot_dynamic_fit(fit, plot)
+    if as_json:
+        print_json({"site": site, "mass_from": "option" if mass is not None else "parameters",
+                    **fit.to_dict(), "fragment": out, "plot": plot})
+        return
+    _print_dynamic(fit)
+    for path, what in ((out, "fragment"), (plot, "plot")):
+        if path:
+            _say(f"wrote {what} {path}")
+
+
+@identify_app.command("merge")
+@user_errors
+def merge_command(
+    fragments: Annotated[list[str], typer.Argument(help="TOML fragment(s), merged in order.")],
+    out: str = typer.Option(..., "--out", help="Write the merged parameter set here."),
+    preset_name: str | None = typer.Option(None, "--preset", help="Base parameter set."),
+    params_file: str | None = typer.Option(None, "--params", help="Base parameter file."),
+) -> None:
+    """Merge identified fragments into a parameter set and validate the result."""
+    params = _base(preset_name, params_file, fragments)
+    names = ", ".join(Path(f).name for f in fragments)
+    params = params.with_values(name=f"{params.name}-identified",
+                                description=f"{params.description} Merged: {names}.")
+    save(params, out)
+    _say(f"wrote {out}: {params.name} with {', '.join(fragments)} merged")
