@@ -97,3 +97,30 @@ def test_exact_response_is_not_trivial() -> None:
     y = exact(params, "cdfs", profile, times)
     assert y[-1, ix.X_T] == pytest.approx(1.5e-3 * DURATION, rel=0.05)
     assert np.ptp(np.diff(y[:, ix.V_T])) > 0.0
+
+
+def test_continuous_control_reuses_the_last_stage_at_breakpoints() -> None:
+    """With continuous loops the integrator skips the derivative at each breakpoint and reuses
+    the step's last stage, evaluated at exactly the breakpoint.  The recorded auxiliary signals
+    must then equal a fresh evaluation at the recorded (t, y), bit for bit, and a fixed-step
+    run costs 6 evaluations per step plus one at t = 0."""
+    from reference.cases import creeping_parameters
+
+    from feeddrive.drives import rhs
+
+    params = creeping_parameters()
+    profile = ConstantSpeed(table_speed=1e-3)
+    options = SolverOptions()
+    packed = pack(DriveSystem(params, "cdfs", 0.4), profile, options)
+    atol, rel = tolerances(packed.P[ix.H], options)
+    t, y, aux, stats, held = dopri5.integrate(
+        np.zeros(ix.N_STATE), 0.5, packed.out_every, packed.base, 0, 0, 0, packed.P,
+        packed.fr_s, packed.fr_n, packed.fr_g, packed.ref_table, options.rtol, atol, rel, 1e-6,
+        packed.base, 1, options.max_steps)
+    assert int(stats[3]) == 6 * int(stats[1]) + 1
+    fresh = np.empty(ix.N_AUX)
+    dy = np.empty(ix.N_STATE)
+    for k in range(0, t.size, 7):
+        rhs(t[k], y[k], held, packed.P, packed.fr_s, packed.fr_n, packed.fr_g,
+            packed.ref_table, 0, 0, 0, dy, fresh)
+        np.testing.assert_array_equal(aux[k], fresh)

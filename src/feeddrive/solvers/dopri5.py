@@ -87,12 +87,16 @@ def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: 
     t = 0.0
     i_out = 0
     h_min = 1e-14
+    # With every loop continuous nothing jumps at a breakpoint: the last stage of the step that
+    # ended there, evaluated at exactly t_break, is the derivative there (first same as last).
+    continuous = n_pos == 0 and n_vel == 0 and n_cur == 0
     for kb in range(n_break + 1):
         t_break = kb * base
         # discrete controller update and output at this breakpoint
         sample_update(kb, t_break, y, held, P, ref_table, n_pos, n_vel, n_cur, base)
-        rhs(t_break, y, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel, n_cur, k1, aux)
-        n_rhs += 1
+        if kb == 0 or not continuous:
+            rhs(t_break, y, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel, n_cur, k1, aux)
+            n_rhs += 1
         if kb % out_every == 0 and i_out < n_out:
             t_out[i_out] = t_break
             y_out[i_out, :] = y
@@ -140,7 +144,8 @@ def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: 
                 for i in range(n):
                     y_new[i] = y[i] + h_try * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i]
                                                + B5 * k5[i] + B6 * k6[i])
-                rhs(t + h_try, y_new, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
+                t_new = t_next if last else t + h_try
+                rhs(t_new, y_new, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
                     n_cur, k7, aux)
                 n_rhs += 6
                 steps += 1
