@@ -210,7 +210,7 @@ def main() -> None:
 
     compile_info = {} if args.no_compile else compile_times()
     median_ratio = float(np.median([r["ratio"] for r in rows]))
-    report = {
+    report: dict[str, Any] = {
         "machine": machine(),
         "scenarios": rows,
         "median_ratio": median_ratio,

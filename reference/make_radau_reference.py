@@ -28,6 +28,7 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -114,11 +115,11 @@ def make(case: Case) -> Path:
     DATA.mkdir(parents=True, exist_ok=True)
     path = DATA / f"radau_{case.name}.npz"
     model = ReferenceModel(case.parameters(), case.drive, 0.4, case.profile())
-    np.savez_compressed(
-        path, time=t, table_speed=y[V_T], window=np.array([case.window_start, case.duration]),
-        rtol=RTOL, atol=tolerances(model.H) * ATOL_SCALE,
-        parameters_toml=dumps(case.parameters()),
-        case=repr(case), **figures, **stats)
+    arrays: dict[str, Any] = {
+        "time": t, "table_speed": y[V_T], "window": np.array([case.window_start, case.duration]),
+        "rtol": RTOL, "atol": tolerances(model.H) * ATOL_SCALE,
+        "parameters_toml": dumps(case.parameters()), "case": repr(case), **figures, **stats}
+    np.savez_compressed(path, **arrays)
     print(f"{case.name}: {stats['wall_time_s']:.1f} s wall, nfev {stats['nfev']:.0f}, "
           f"ripple {figures['ripple'] * 1e3:.5f} mm/s, period {figures['period'] * 1e3:.4f} ms, "
           f"mean {figures['mean_speed'] * 1e3:.5f} mm/s ({figures['cycles']:.0f} cycles) "
