@@ -101,7 +101,8 @@ def test_unknown_preset_is_refused() -> None:
 
 
 def test_friction_screw_json() -> None:
-    result = run("friction", "--site", "screw", "--json")
+    # the literal set has no axial damping: the scan is the bare table–spring–LuGre system
+    result = run("friction", "--site", "screw", "--json", "--preset", "wang2021-literal")
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     assert data["site"] == "screw"
@@ -125,7 +126,8 @@ def test_friction_screw_json() -> None:
 
 
 def test_friction_guide_fails_passivity_and_damping_removes_the_unstable_band() -> None:
-    data = json.loads(run("friction", "--site", "guide", "--json").stdout)
+    data = json.loads(run("friction", "--site", "guide", "--json", "--preset",
+                          "wang2021-literal").stdout)
     assert data["branches"]["positive"]["passive"] is False
     assert data["branches"]["negative"]["passive"] is False
     assert data["branches"]["positive"]["unstable_band_mm_s"] is not None
