@@ -26,14 +26,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from . import layout as ix
+from ._jit import kernel
 
 # ---------------------------------------------------------------- reference profiles
 
 
-@njit(cache=True)
+@kernel
 def reference_kernel(t: float, P: np.ndarray, table: np.ndarray, out: np.ndarray) -> None:
     """Commanded table position/speed and nut position/speed at time t [s] → out[0:4]."""
     kind = int(P[ix.REF_KIND])
@@ -175,7 +175,7 @@ def _finite(name: str, value: float, unit: str) -> None:
 # ---------------------------------------------------------------- controller laws
 
 
-@njit(cache=True)
+@kernel
 def quantise(value: float, step: float) -> float:
     """Floor quantisation to ``step`` (an incremental encoder or grating count); 0 = ideal."""
     if step <= 0.0:
@@ -183,7 +183,7 @@ def quantise(value: float, step: float) -> float:
     return step * math.floor(value / step)
 
 
-@njit(cache=True)
+@kernel
 def position_law(error: float, speed_ff: float, P: np.ndarray) -> float:
     """Speed command [rad/s] from position error [m] and feed-forward speed [m/s]."""
     k = P[ix.KPP]
@@ -192,7 +192,7 @@ def position_law(error: float, speed_ff: float, P: np.ndarray) -> float:
     return (k * error + P[ix.FF] * speed_ff) / P[ix.H]
 
 
-@njit(cache=True)
+@kernel
 def velocity_error(speed_cmd: float, speed_meas: float, P: np.ndarray) -> float:
     """Velocity-loop error in the units the gains act on (see module docstring)."""
     e = speed_cmd - speed_meas
@@ -203,7 +203,7 @@ def velocity_error(speed_cmd: float, speed_meas: float, P: np.ndarray) -> float:
     return e
 
 
-@njit(cache=True)
+@kernel
 def saturate(value: float, limit: float) -> float:
     if value > limit:
         return limit
@@ -212,7 +212,7 @@ def saturate(value: float, limit: float) -> float:
     return value
 
 
-@njit(cache=True)
+@kernel
 def integrator_rate(error: float, unsaturated: float, limit: float) -> float:
     """Conditional integration (anti-windup): stop integrating into a saturated output."""
     if (unsaturated > limit and error > 0.0) or (unsaturated < -limit and error < 0.0):
@@ -220,17 +220,17 @@ def integrator_rate(error: float, unsaturated: float, limit: float) -> float:
     return error
 
 
-@njit(cache=True)
+@kernel
 def current_command(error: float, integral: float, P: np.ndarray) -> float:
     return P[ix.KVP] * error + P[ix.KVI] * integral
 
 
-@njit(cache=True)
+@kernel
 def voltage_command(error: float, integral: float, P: np.ndarray) -> float:
     return P[ix.KIP] * error + P[ix.KII] * integral
 
 
-@njit(cache=True)
+@kernel
 def sample_update(k: int, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray,
                   ref_table: np.ndarray, n_pos: int, n_vel: int, n_cur: int,
                   base: float) -> None:
@@ -300,7 +300,7 @@ def sample_update(k: int, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarr
             held[ix.HU_S + m] = saturate(u_raw, P[ix.U_MAX])
 
 
-@njit(cache=True)
+@kernel
 def commands(t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, ref: np.ndarray,
              n_pos: int, n_vel: int, aux: np.ndarray) -> None:
     """Speed and current commands of both motors (continuous loops evaluated here)."""

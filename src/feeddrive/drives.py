@@ -16,9 +16,9 @@ follows Eqs. (2)–(5) at the table's current position a = x0 + x_t (or a fixed 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from . import layout as ix
+from ._jit import kernel
 from .control import (
     commands,
     integrator_rate,
@@ -30,7 +30,7 @@ from .control import (
 from .friction import bristle_rate_kernel
 
 
-@njit(cache=True)
+@kernel
 def equivalent_stiffness_kernel(x_t: float, P: np.ndarray) -> float:
     """K_eq [N/m] at table displacement x_t [m] from the start position.  Eqs. (4)–(5)."""
     if P[ix.K_FIXED] > 0.0:
@@ -50,7 +50,7 @@ def equivalent_stiffness_kernel(x_t: float, P: np.ndarray) -> float:
     return 1.0 / (P[ix.C0] + c_screw)
 
 
-@njit(cache=True)
+@kernel
 def _site(v: float, z: float, p: np.ndarray) -> tuple[float, float]:
     """(friction force [N], bristle rate [m/s]) of one LuGre site."""
     dz = bristle_rate_kernel(v, z, p)
@@ -58,7 +58,7 @@ def _site(v: float, z: float, p: np.ndarray) -> tuple[float, float]:
     return p[8] * z + p[9] * dz + p[o + 3] * v, dz
 
 
-@njit(cache=True)
+@kernel
 def rhs(t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, fr_s: np.ndarray,
         fr_n: np.ndarray, fr_g: np.ndarray, ref_table: np.ndarray, n_pos: int, n_vel: int,
         n_cur: int, dy: np.ndarray, aux: np.ndarray) -> None:

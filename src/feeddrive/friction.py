@@ -19,20 +19,20 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from scipy.optimize import brentq
 
+from ._jit import inline_kernel, kernel
 from .parameters import FrictionBranch, LuGreParameters
 
 # ---------------------------------------------------------------- compiled scalar kernels
 
 
-@njit(cache=True, inline="always")
+@inline_kernel
 def _offset(v: float) -> int:
     return 0 if v >= 0.0 else 4
 
 
-@njit(cache=True)
+@kernel
 def stribeck_magnitude_kernel(v: float, p: np.ndarray) -> float:
     """σ0·g(v) = F_c + (F_s − F_c)·exp(−(v/v_s)²) [N] (Eq. 11, third line), branch by sign."""
     o = _offset(v)
@@ -40,7 +40,7 @@ def stribeck_magnitude_kernel(v: float, p: np.ndarray) -> float:
     return p[o] + (p[o + 1] - p[o]) * math.exp(-u * u)
 
 
-@njit(cache=True)
+@kernel
 def steady_force_kernel(v: float, p: np.ndarray) -> float:
     """Steady-state friction: sign(v)·σ0·g(v) + σ2·v [N]; zero at v = 0."""
     if v == 0.0:
@@ -50,19 +50,19 @@ def steady_force_kernel(v: float, p: np.ndarray) -> float:
     return s * stribeck_magnitude_kernel(v, p) + p[o + 3] * v
 
 
-@njit(cache=True)
+@kernel
 def bristle_rate_kernel(v: float, z: float, p: np.ndarray) -> float:
     """dz/dt = v − σ0·|v|·z / (σ0·g(v)) [m/s].  Safe at v = 0 (g ≥ F_c > 0)."""
     return v - p[8] * abs(v) * z / stribeck_magnitude_kernel(v, p)
 
 
-@njit(cache=True)
+@kernel
 def force_kernel(v: float, z: float, p: np.ndarray) -> float:
     """F = σ0·z + σ1·dz/dt + σ2·v [N]."""
     return p[8] * z + p[9] * bristle_rate_kernel(v, z, p) + p[_offset(v) + 3] * v
 
 
-@njit(cache=True)
+@kernel
 def bristle_step_kernel(z: float, v: float, h: float, p: np.ndarray) -> float:
     """Exact bristle update over a step h with v held: z relaxes exponentially.
 
@@ -77,7 +77,7 @@ def bristle_step_kernel(z: float, v: float, h: float, p: np.ndarray) -> float:
     return z_ss + (z - z_ss) * math.exp(-lam * h)
 
 
-@njit(cache=True)
+@kernel
 def _map1(fn_id: int, v: np.ndarray, z: np.ndarray, p: np.ndarray) -> np.ndarray:
     out = np.empty(v.size)
     for i in range(v.size):

@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from .. import layout as ix
+from .._jit import kernel
 from ..control import sample_update
 from ..drives import rhs
 
@@ -50,7 +50,7 @@ STATUS_MESSAGES = {
 # error_model="numpy": a division by zero gives inf/NaN (caught below as a rejected step or
 # STATUS_NON_FINITE) instead of Python's ZeroDivisionError check on every division of the
 # inlined right-hand side; bit-identical results, about 25 % less time per step.
-@njit(cache=True, error_model="numpy")
+@kernel
 def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: int, n_vel: int,
               n_cur: int, P: np.ndarray, fr_s: np.ndarray, fr_n: np.ndarray, fr_g: np.ndarray,
               ref_table: np.ndarray, rtol: float, atol: np.ndarray, rel_mask: np.ndarray,
