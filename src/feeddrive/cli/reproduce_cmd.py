@@ -19,6 +19,8 @@ def reproduce_command(
                                            "(default wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     workers: int = typer.Option(2, "--workers", help="Processes for the critical-speed searches."),
+    study: bool = typer.Option(True, "--study/--no-study", help="Also run the model-reading "
+                               "study (variants of the wang2021 presets)."),
 ) -> None:
     """Regenerate Wang2021's figures (PNG) and tables (CSV) and write report.html/report.md.
     Finished studies are kept in OUT/data and reused on a rerun."""
@@ -31,7 +33,7 @@ def reproduce_command(
         def progress(label: str, done: int, total: int) -> None:
             bar.update(task, description=label, completed=done, total=total)
 
-        results = run(params, out, workers=workers, progress=progress)
+        results = run(params, out, workers=workers, study=study, progress=progress)
     console.print(f"wrote {out / 'report.html'}, {out / 'report.md'}, "
                   f"{len(results['figures'])} figures, tables in {out} "
                   f"({results['wall_time_s']:.0f} s)")

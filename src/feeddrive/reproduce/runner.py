@@ -21,7 +21,7 @@ import pandas as pd
 from ..control import ConstantSpeed
 from ..parameters import DriveParameters, dumps
 from ..simulate import DriveSystem, simulate
-from . import figures, report, studies
+from . import figures, reading_study, report, studies
 from .studies import MID, PAPER, StudySettings
 
 
@@ -57,9 +57,12 @@ def _critical_job(args: tuple[DriveParameters, str, float, float, StudySettings,
 
 
 def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = None,
-        workers: int = 2, progress: Callable[[str, int, int], None] | None = None
-        ) -> dict[str, Any]:
-    """Run the whole study into ``out``; returns the collected results."""
+        workers: int = 2, study: bool = True,
+        progress: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
+    """Run the whole study into ``out``; returns the collected results.
+
+    ``study``: also run the model-reading study (variants of the Wang2021 presets).
+    """
     settings = settings or StudySettings()
     out.mkdir(parents=True, exist_ok=True)
     store = _Store(out, params, settings)
@@ -76,21 +79,25 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     jobs["crit-cdfs-running"] = (params, "cdfs", MID, 0.0, settings, "running")
     jobs["crit-ddfs-running"] = (params, "ddfs", MID, PAPER["ddfs_sim_nut_speed"], settings,
                                  "running")
-    todo = {k: v for k, v in jobs.items() if store.get(k) is None}
-    total = len(jobs) + 4
-    done = len(jobs) - len(todo)
+    study_jobs = {f"study-{i}": job for i, job in enumerate(reading_study.jobs())} if study \
+        else {}
+    total = len(jobs) + len(study_jobs) + 4
+    done = sum(store.get(k) is not None for k in [*jobs, *study_jobs])
     if progress:
         progress("critical speeds", done, total)
-    if todo:
-        with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
-            futures = {k: pool.submit(_critical_job, v) for k, v in todo.items()}
-            for k, fut in futures.items():
-                store.put(k, fut.result())
-                done += 1
-                if progress:
-                    progress(f"critical speed {k}", done, total)
+    with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
+        futures = {k: pool.submit(_critical_job, v) for k, v in jobs.items()
+                   if store.get(k) is None}
+        futures.update({k: pool.submit(reading_study.run_variant, v, settings)
+                        for k, v in study_jobs.items() if store.get(k) is None})
+        for k, fut in futures.items():
+            store.put(k, fut.result())  # each finished search is on disk at once
+            done += 1
+            if progress:
+                progress(f"critical speed {k}", done, total)
     crit: dict[str, Any] = {k: store.get(k) for k in jobs}
     results["critical"] = crit
+    results["reading_study"] = [store.get(k) for k in study_jobs]
 
     def speed(key: str) -> float | None:
         v = crit[key]["critical_speed_mm_s"]

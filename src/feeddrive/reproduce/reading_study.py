@@ -1,0 +1,70 @@
+"""Model-reading study: how each unstated choice moves the CDFS and DDFS critical speeds.
+
+Every variant is the ``wang2021-literal`` or ``wang2021`` preset with a few named fields
+changed; each gets a critical-speed search from rest at mid-screw for the CDFS and for the
+DDFS at v_n = 16 mm/s (Wang2021 Fig. 8).  docs/model-reading.md discusses the results.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .. import parameters
+from ..simulate import SimulationError
+from .studies import MID, PAPER, StudySettings, critical_speed
+
+LIT = "wang2021-literal"
+SHIP = "wang2021"
+
+Variant = tuple[str, str, dict[str, Any]]
+
+
+def variants() -> list[Variant]:
+    ship = parameters.preset(SHIP)
+    damp = ship.stiffness.axial_damping
+    kvi = ship.controller.velocity_integral_gain
+    kii = ship.controller.current_integral_gain
+    return [
+        ("literal (Table 2 in SI, no damping)", LIT, {}),
+        ("literal + 5 % table-mode damping", LIT, {"stiffness.axial_damping": damp}),
+        ("+ K_vp on table speed (A per m/s)", LIT, {"stiffness.axial_damping": damp,
+                                                    "controller.velocity_gain_basis": "table"}),
+        ("+ PI current loop (K_ii = K_ip R/L)", LIT, {
+            "stiffness.axial_damping": damp, "controller.velocity_gain_basis": "table",
+            "controller.current_integral_gain": kii}),
+        ("wang2021 (+ fitted velocity integral)", SHIP, {}),
+        *[(f"wang2021, velocity integral × {f:g}", SHIP,
+           {"controller.velocity_integral_gain": f * kvi}) for f in (0.5, 0.6, 0.7, 0.8, 0.9,
+                                                                       1.5)],
+        ("wang2021, P current loop", SHIP, {"controller.current_integral_gain": 0.0}),
+        ("wang2021, K_eq = 2.16e7 N/m (paper)", SHIP, {"stiffness.equivalent_stiffness": 2.16e7}),
+        ("wang2021, axial damping × 4", SHIP, {"stiffness.axial_damping": 4 * damp}),
+        ("wang2021, velocity feedback from the table", SHIP,
+         {"controller.velocity_feedback": "table"}),
+        ("wang2021, sampled 1 kHz pos/vel loops, 10000 counts/rev, 0.1 µm grating", SHIP, {
+            "controller.position_period": 1e-3, "controller.velocity_period": 1e-3,
+            "controller.encoder_counts": 10000.0, "controller.grating_resolution": 1e-7}),
+    ]
+
+
+def jobs() -> list[tuple[str, str, dict[str, Any], str, float]]:
+    return [(name, preset, changes, drive, nut) for name, preset, changes in variants()
+            for drive, nut in (("cdfs", 0.0), ("ddfs", PAPER["ddfs_sim_nut_speed"]))]
+
+
+def run_variant(job: tuple[str, str, dict[str, Any], str, float],
+                settings: StudySettings | None = None) -> dict[str, Any]:
+    """One row: the variant's critical speed [mm/s] for one drive (failures are rows too)."""
+    name, preset, changes, drive, nut = job
+    p = parameters.preset(preset)
+    for path, value in changes.items():
+        p = p.replace_path(path, value)
+    row: dict[str, Any] = {"variant": name, "drive": drive, "nut_speed_mm_s": nut * 1e3,
+                           "changes": changes}
+    try:
+        res = critical_speed(p, drive, MID, nut, settings or StudySettings())
+        row.update(critical_speed_mm_s=res["critical_speed_mm_s"], status=res["status"])
+    except SimulationError as err:
+        # a variant the solver cannot finish is a finding, not a reason to lose the others
+        row.update(critical_speed_mm_s=None, status=f"solver failed: {err}")
+    return row
