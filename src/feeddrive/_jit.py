@@ -1,13 +1,56 @@
 """The one compilation setting for every numba kernel of the package.
 
 ``cache=True``: compiled code is stored on disk, so a second process does not recompile.
+numba invalidates a cached function only when *its own* source file changes, not when a
+kernel it calls (in another module) or a constant in ``layout.py`` changes; a stale cache
+would then run old physics silently.  So the cache lives in a folder named after a hash of
+all kernel sources: any change to any of them starts a fresh cache.
+
 ``error_model="numpy"``: float division follows IEEE (no Python ZeroDivisionError checks),
 about 25 % faster per right-hand-side evaluation; non-finite states are caught by the solver.
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from numba import config as _numba_config
 from numba import njit
 
-kernel = njit(cache=True, error_model="numpy")
-inline_kernel = njit(cache=True, error_model="numpy", inline="always")
+config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
+
+_HERE = Path(__file__).resolve().parent
+_KERNEL_SOURCES = ("_jit.py", "layout.py", "friction.py", "control.py", "drives.py",
+                   "solvers/dopri5.py")
+
+
+def _cache_dir() -> str:
+    digest = hashlib.sha256()
+    for name in _KERNEL_SOURCES:
+        digest.update((_HERE / name).read_bytes())
+    root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache"), "feeddrive")
+    return os.path.join(root, f"numba-{digest.hexdigest()[:16]}")
+
+
+_CACHE_DIR = _cache_dir()
+
+
+def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
+    def decorate(fn: Callable[..., Any]) -> Any:
+        previous = config.CACHE_DIR
+        config.CACHE_DIR = _CACHE_DIR  # read once, when the dispatcher sets up its cache
+        try:
+            return njit(cache=True, error_model="numpy", **options)(fn)
+        finally:
+            config.CACHE_DIR = previous
+
+    return decorate
+
+
+kernel = _compiled()
+inline_kernel = _compiled(inline="always")

@@ -4,7 +4,8 @@ Structure (an explicit choice; Fig. 5 of the paper is an image, see docs/model.m
 
 * screw motor: position loop on the *table* position x' from the grating ruler,
   Δx = x − x', x = x_s − x_n, with velocity feed-forward of the screw's ideal speed;
-* hollow motor: its own position loop on its encoder at the commanded nut motion;
+* hollow motor: its own position loop on its encoder at the commanded nut motion, or
+  (``nut_loop = "speed"``) a speed loop at the commanded nut speed with no position loop;
 * each motor: position (P, K_pp) → velocity (P or PI, K_vp, K_vi) → current (P or PI,
   K_ip, K_ii) → R-L armature with back-EMF, torque K_t·i;
 * K_v (Table 2's "velocity-adjusting gain") enters where ``kv_placement`` says:
@@ -193,6 +194,15 @@ def position_law(error: float, speed_ff: float, P: np.ndarray) -> float:
 
 
 @kernel
+def nut_speed_command(error: float, speed_ref: float, P: np.ndarray) -> float:
+    """Hollow-motor speed command [rad/s]: its position loop, or (``nut_loop = "speed"``)
+    the commanded nut speed itself, with no position feedback."""
+    if P[ix.NUT_SPEED_MODE] > 0.5:
+        return speed_ref / P[ix.H]
+    return position_law(error, speed_ref, P)
+
+
+@kernel
 def velocity_error(speed_cmd: float, speed_meas: float, P: np.ndarray) -> float:
     """Velocity-loop error in the units the gains act on (see module docstring)."""
     e = speed_cmd - speed_meas
@@ -248,12 +258,12 @@ def sample_update(k: int, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarr
         held[ix.HW_CMD_S] = position_law(ref[0] - x_meas, ref[1] + ref[3], P)
         if active_nut:
             th_n = quantise(y[ix.TH_N], P[ix.ENC_Q])
-            held[ix.HW_CMD_N] = position_law(ref[2] - H * th_n, ref[3], P)
+            held[ix.HW_CMD_N] = nut_speed_command(ref[2] - H * th_n, ref[3], P)
     if n_vel > 0 and k % n_vel == 0:
         tv = n_vel * base
         w_cmd_s = held[ix.HW_CMD_S] if n_pos > 0 else position_law(
             ref[0] - y[ix.X_T], ref[1] + ref[3], P)
-        w_cmd_n = held[ix.HW_CMD_N] if n_pos > 0 else position_law(
+        w_cmd_n = held[ix.HW_CMD_N] if n_pos > 0 else nut_speed_command(
             ref[2] - H * y[ix.TH_N], ref[3], P)
         # speed measurement: difference of quantised positions over the period
         th_s_q = quantise(y[ix.TH_S], P[ix.ENC_Q])
@@ -310,7 +320,7 @@ def commands(t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, ref: np.n
         aux[ix.A_W_CMD_N] = held[ix.HW_CMD_N]
     else:
         aux[ix.A_W_CMD_S] = position_law(ref[0] - y[ix.X_T], ref[1] + ref[3], P)
-        aux[ix.A_W_CMD_N] = position_law(ref[2] - H * y[ix.TH_N], ref[3], P)
+        aux[ix.A_W_CMD_N] = nut_speed_command(ref[2] - H * y[ix.TH_N], ref[3], P)
     if n_vel > 0:
         aux[ix.A_I_CMD_S] = held[ix.HI_CMD_S]
         aux[ix.A_I_CMD_N] = held[ix.HI_CMD_N]

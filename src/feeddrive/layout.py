@@ -25,8 +25,9 @@ STATE_NAMES = (
     T_POS, T_VEL, T_CUR, ENC_Q, GRAT_Q,
     NUT_ACTIVE,
     REF_KIND, REF_VT, REF_VN, REF_TRAMP, REF_FREQ,
-) = range(42)
-N_PARAM = 42
+    NUT_SPEED_MODE,
+) = range(43)
+N_PARAM = 43
 
 # ---- held (sampled-controller) vector
 (

@@ -154,6 +154,7 @@ def pack(system: DriveSystem, profile: Profile, options: SolverOptions) -> _Pack
     P[ix.V_BASIS] = ("motor", "table").index(c.velocity_gain_basis)
     P[ix.V_FEEDBACK] = ("motor", "table").index(c.velocity_feedback)
     P[ix.FF] = 1.0 if c.velocity_feedforward else 0.0
+    P[ix.NUT_SPEED_MODE] = 1.0 if c.nut_loop == "speed" else 0.0
     P[ix.I_MAX] = c.current_limit
     P[ix.U_MAX] = c.voltage_limit
     P[ix.T_POS] = c.position_period

@@ -143,3 +143,15 @@ def test_cli_simulate_bad_input() -> None:
                               "--position", "900"])
     assert res.exit_code == 2
     assert "table_position" in res.output
+
+
+def test_nut_speed_loop_runs_at_commanded_speed(params: fd.DriveParameters) -> None:
+    # controller.nut_loop = "speed": the hollow motor holds its commanded speed with no
+    # position loop, so its position error is free to drift (it is not corrected)
+    p = params.replace_path("controller.nut_loop", "speed")
+    r = simulate(DriveSystem(p, "ddfs", 0.4), ConstantSpeed(2.5e-3, 16e-3), 4.0)
+    s = r.summary()
+    assert s["mean_nut_speed_mm_s"] == pytest.approx(16.0, rel=0.005)
+    assert s["mean_table_speed_mm_s"] == pytest.approx(2.5, rel=0.01)
+    assert np.allclose(r["nut_speed_command"], r["nut_speed_reference"] / p.screw
+                       .transmission_ratio)

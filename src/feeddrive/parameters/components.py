@@ -207,6 +207,7 @@ class Controller(_Component):
     velocity_gain_basis: str = choice(("motor", "table"), default="motor")
     velocity_feedback: str = choice(("motor", "table"), default="motor")
     velocity_feedforward: bool = flag(default=True)
+    nut_loop: str = choice(("position", "speed"), default="position")
     current_limit: float = quantity("A", low=0, high=1e4, default=1e4)
     voltage_limit: float = quantity("V", low=0, high=1e5, default=1e5)
     position_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)

@@ -41,6 +41,8 @@ def variants() -> list[Variant]:
         ("wang2021, axial damping × 4", SHIP, {"stiffness.axial_damping": 4 * damp}),
         ("wang2021, velocity feedback from the table", SHIP,
          {"controller.velocity_feedback": "table"}),
+        ("wang2021, hollow motor speed loop only (no position loop)", SHIP,
+         {"controller.nut_loop": "speed"}),
         ("wang2021, sampled 1 kHz pos/vel loops, 10000 counts/rev, 0.1 µm grating", SHIP, {
             "controller.position_period": 1e-3, "controller.velocity_period": 1e-3,
             "controller.encoder_counts": 10000.0, "controller.grating_resolution": 1e-7}),
