@@ -62,3 +62,27 @@ def test_stepdown_judged_on_a_synthetic_trace() -> None:
     trials = judge_staircase(t, v, speeds, starts, dwell=4.0)
     assert [tr.creeping for tr in trials] == [False, False, True]
     assert trials[-1].stick_fraction == pytest.approx(0.5, abs=0.01)
+
+
+def _trace(kind: str) -> tuple[np.ndarray, np.ndarray]:
+    t = np.arange(0, 12.0, 1e-3)
+    v0 = 1.5 * MM
+    if kind == "decaying":  # weakly damped start-up oscillation, still large at the end
+        return t, v0 * (1 + 2.0 * np.exp(-t / 6.0) * np.sin(2 * np.pi * 5 * t))
+    if kind == "stick-slip":  # persistent 2-Hz stick-slip: stuck half the time
+        return t, np.where((t % 0.5) < 0.25, 0.0, 2 * v0)
+    return t, np.zeros_like(t)  # never breaks away
+
+
+@pytest.mark.parametrize(("kind", "creeping"), [("decaying", False), ("stick-slip", True),
+                                                ("stuck", True)])
+def test_judge_trial_separates_transients_from_limit_cycles(kind: str, creeping: bool) -> None:
+    from feeddrive.analysis.critical import judge_trial
+    t, v = _trace(kind)
+    trial = judge_trial(t, v, 1.5 * MM)
+    assert trial.creeping is creeping
+    if kind == "decaying":
+        # the metrics alone call the last quarter creeping (ripple ≈ 0.9 > 0.5) ...
+        assert trial.ripple_ratio > 0.5
+        # ... but it decays: exp(-3/6) of the quarter before
+        assert trial.decay_ratio == pytest.approx(np.exp(-0.5), rel=0.05)

@@ -19,7 +19,7 @@ def creep_command(
                                "paper's protocol on a running table) or both"),
     low: float = typer.Option(0.05, "--low", help="Lowest speed tested [mm/s]."),
     high: float = typer.Option(3.0, "--high", help="Highest speed tested [mm/s]."),
-    duration: float = typer.Option(10.0, "--duration", help="Simulated time per trial [s]."),
+    duration: float = typer.Option(12.0, "--duration", help="Simulated time per trial [s]."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),

@@ -41,8 +41,10 @@ def variants() -> list[Variant]:
         ("wang2021, axial damping × 4", SHIP, {"stiffness.axial_damping": 4 * damp}),
         ("wang2021, velocity feedback from the table", SHIP,
          {"controller.velocity_feedback": "table"}),
-        ("wang2021, hollow motor speed loop only (no position loop)", SHIP,
-         {"controller.nut_loop": "speed"}),
+        ("wang2021, hollow motor with its own position loop too", SHIP,
+         {"controller.nut_loop": "position"}),
+        ("wang2021, hollow motor with its own position loop, integral × 0.5", SHIP,
+         {"controller.nut_loop": "position", "controller.velocity_integral_gain": 0.5 * kvi}),
         ("wang2021, sampled 1 kHz pos/vel loops, 10000 counts/rev, 0.1 µm grating", SHIP, {
             "controller.position_period": 1e-3, "controller.velocity_period": 1e-3,
             "controller.encoder_counts": 10000.0, "controller.grating_resolution": 1e-7}),

@@ -28,6 +28,25 @@ def _dev(ours: float | None, paper: float | None) -> str:
     return f"{100 * (ours / paper - 1):+.1f} %"
 
 
+def _crit_text(search: dict[str, Any]) -> str:
+    """A search's critical speed [mm/s], or the bound an out-of-range search gives."""
+    v = search["critical_speed_mm_s"]
+    lo, hi = search["speed_range_mm_s"]
+    if v is not None:
+        return f"{v:.2f}"
+    return f"< {lo:.2f}" if search["status"] == "below-range" else f"> {hi:.2f}"
+
+
+def critical_ratio(cdfs: dict[str, Any], ddfs: dict[str, Any]) -> tuple[float | None, str]:
+    """CDFS/DDFS critical-speed ratio, or the bound when the DDFS search was below range."""
+    a, b = cdfs["critical_speed_mm_s"], ddfs["critical_speed_mm_s"]
+    if a is not None and b:
+        return a / b, f"{a / b:.2f}"
+    if a is not None and ddfs["status"] == "below-range":
+        return None, f"> {a / ddfs['speed_range_mm_s'][0]:.1f}"
+    return None, "—"
+
+
 def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[dict[str, str]]:
     crit = results["critical"]
 
@@ -40,30 +59,32 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
     rows = []
 
     def add(item: str, source: str, paper: float | None, ours: float | None, unit: str,
-            kind: str, digits: int = 2) -> None:
+            kind: str, digits: int = 2, shown: str | None = None) -> None:
         rows.append({"quantity": item, "source": source, "paper": _fmt(paper, digits),
-                     "feeddrive": _fmt(ours, digits), "unit": unit,
-                     "deviation": _dev(ours, paper), "fitted_or_predicted": kind})
+                     "feeddrive": shown if shown is not None else _fmt(ours, digits),
+                     "unit": unit, "deviation": _dev(ours, paper), "fitted_or_predicted": kind})
 
-    cdfs_mid = c(f"crit-cdfs-{MID}")
-    ddfs16 = c("crit-ddfs-fig8")
-    add("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56, cdfs_mid, "mm/s",
-        fitted_note)
-    add("CDFS critical speed, mid-screw, step-down from running", "Sect. 6 protocol", 1.56,
-        c("crit-cdfs-running"), "mm/s", "predicted")
-    add("DDFS critical speed, v_n = 16 mm/s", "Fig. 8", 0.5, ddfs16, "mm/s", "predicted")
-    add("DDFS critical speed, v_n = 16 mm/s, step-down from running", "Sect. 6 protocol", 0.5,
-        c("crit-ddfs-running"), "mm/s", "predicted")
-    ratio = None if (cdfs_mid is None or ddfs16 is None or ddfs16 == 0) else cdfs_mid / ddfs16
+    def add_critical(item: str, source: str, paper: float, key: str, kind: str) -> None:
+        add(item, source, paper, c(key), "mm/s", kind, shown=_crit_text(crit[key]))
+
+    add_critical("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56,
+                 f"crit-cdfs-{MID}", fitted_note)
+    add_critical("CDFS critical speed, mid-screw, step-down from running", "Sect. 6 protocol",
+                 1.56, "crit-cdfs-running", "predicted")
+    add_critical("DDFS critical speed, v_n = 16 mm/s", "Fig. 8", 0.5, "crit-ddfs-fig8",
+                 "predicted")
+    add_critical("DDFS critical speed, v_n = 16 mm/s, step-down from running",
+                 "Sect. 6 protocol", 0.5, "crit-ddfs-running", "predicted")
+    ratio, ratio_text = critical_ratio(crit[f"crit-cdfs-{MID}"], crit["crit-ddfs-fig8"])
     add("ratio CDFS / DDFS critical speed", "Sect. 5.2, Fig. 8", 1.56 / 0.5, ratio, "-",
-        "predicted")
+        "predicted", shown=ratio_text)
     for i, a in enumerate(PAPER["positions"]):
-        add(f"CDFS critical speed at x_t = {1e3 * a:.0f} mm (measured)", "Table 3",
-            1e3 * PAPER["cdfs_table3"][i], c(f"crit-cdfs-{a}"), "mm/s",
-            fitted_note if a == MID else "predicted")
+        add_critical(f"CDFS critical speed at x_t = {1e3 * a:.0f} mm (measured)", "Table 3",
+                     1e3 * PAPER["cdfs_table3"][i], f"crit-cdfs-{a}",
+                     fitted_note if a == MID else "predicted")
     for i, a in enumerate(PAPER["positions"]):
-        add(f"DDFS critical speed at x_t = {1e3 * a:.0f} mm, v_n = 20 mm/s (measured)",
-            "Table 3", 1e3 * PAPER["ddfs_table3"][i], c(f"crit-ddfs-{a}"), "mm/s", "predicted")
+        add_critical(f"DDFS critical speed at x_t = {1e3 * a:.0f} mm, v_n = 20 mm/s (measured)",
+                     "Table 3", 1e3 * PAPER["ddfs_table3"][i], f"crit-ddfs-{a}", "predicted")
     for r in results["table3"]:
         add(f"k_sa at x_t = {1e3 * r['position']:.0f} mm", "Table 3, Eq. (4)",
             1e-6 * r["k_sa_paper"], 1e-6 * r["k_sa"], "N/µm", "predicted (E assumed)")
@@ -199,19 +220,31 @@ def target_rows(results: dict[str, Any]) -> list[dict[str, str]]:
         v: float | None = crit[key]["critical_speed_mm_s"]
         return v
 
+    cdfs_s, ddfs_s = crit[f"crit-cdfs-{MID}"], crit["crit-ddfs-fig8"]
     cdfs, ddfs = c(f"crit-cdfs-{MID}"), c("crit-ddfs-fig8")
     rows = []
 
-    def add(name: str, target: str, value: float | None, ok: bool | None) -> None:
-        rows.append({"target": name, "required": target, "feeddrive": _fmt(value),
+    def add(name: str, target: str, shown: str, ok: bool | None) -> None:
+        rows.append({"target": name, "required": target, "feeddrive": shown,
                      "met": "—" if ok is None else ("yes" if ok else "no")})
 
-    add("CDFS critical speed, mid-screw [mm/s]", "1.40 – 1.72", cdfs,
-        None if cdfs is None else 1.40 <= cdfs <= 1.72)
-    add("DDFS critical speed, v_n = 16 mm/s [mm/s]", "0.40 – 0.60", ddfs,
-        None if ddfs is None else 0.40 <= ddfs <= 0.60)
-    ratio = None if (cdfs is None or not ddfs) else cdfs / ddfs
-    add("ratio CDFS / DDFS", "≥ 2.5", ratio, None if ratio is None else ratio >= 2.5)
+    def inside(search: dict[str, Any], value: float | None, lo: float, hi: float) -> bool:
+        if value is not None:
+            return lo <= value <= hi
+        bound_lo, bound_hi = search["speed_range_mm_s"]
+        # an out-of-range result is inside only if the target interval covers the range end
+        return False if search["status"] == "below-range" and bound_lo <= lo else \
+            not (search["status"] == "above-range" and bound_hi >= hi)
+
+    add("CDFS critical speed, mid-screw [mm/s]", "1.40 – 1.72", _crit_text(cdfs_s),
+        inside(cdfs_s, cdfs, 1.40, 1.72))
+    add("DDFS critical speed, v_n = 16 mm/s [mm/s]", "0.40 – 0.60", _crit_text(ddfs_s),
+        inside(ddfs_s, ddfs, 0.40, 0.60))
+    ratio, ratio_text = critical_ratio(cdfs_s, ddfs_s)
+    ratio_ok = ratio >= 2.5 if ratio is not None else (
+        cdfs is not None and ddfs_s["status"] == "below-range"
+        and cdfs / ddfs_s["speed_range_mm_s"][0] >= 2.5)
+    add("ratio CDFS / DDFS", "≥ 2.5", ratio_text, ratio_ok)
     t3 = results["table3"]
     for drive in ("cdfs", "ddfs"):
         vals = [r[drive] for r in t3]
