@@ -47,7 +47,8 @@ Cascade, per motor (Wang2021 Sect. 2.1, Fig. 2; the choices are the engine's opt
 
     screw:  Δx = x_ref − x_t                (table position, grating ruler)
             ω_cmd = (k_p·Δx + FF·(v_ref + v_n,ref)) / H
-    nut:    Δx = x_n,ref − H θ_n            (hollow-motor encoder)
+    nut:    Δx = x_n,ref − H θ_n            (hollow-motor encoder); with
+            controller.nut_loop = "speed" there is no nut position loop: ω_cmd = v_n,ref/H
             ω_cmd = (k_p·Δx + FF·v_n,ref) / H
             k_p = K_pp, or K_v·K_pp with kv_placement = "position_output"
     e_ω   = (ω_cmd − ω_meas) · [H if velocity_gain_basis = "table"] / [K_v if kv_placement =
@@ -298,7 +299,10 @@ class ReferenceModel:
 
         if self.nut_active:
             # hollow motor: its own position loop on its encoder
-            w_cmd_n = (self.k_position * (xn_ref - H * th_n) + ff * vn_ref) / H
+            if self.params.controller.nut_loop == "speed":
+                w_cmd_n = vn_ref / H  # speed loop only: no position feedback on the nut
+            else:
+                w_cmd_n = (self.k_position * (xn_ref - H * th_n) + ff * vn_ref) / H
             u_n, div_n, dic_n = self._motor(w_cmd_n, w_n, i_n, iv_n, ic_n)
             F_n, dz_n = self.nut_friction.force_and_rate(H * w_n, z_n)
             mn = self.motors[1]

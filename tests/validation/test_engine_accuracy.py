@@ -163,6 +163,8 @@ RHS_VARIANTS: dict[str, dict[str, object]] = {
                                     "stiffness.support_bearing_count": 1.0},
     "fixed-stiffness-override": {"stiffness.equivalent_stiffness": 2.16e7},
     "frozen-stiffness": {"stiffness.position_dependent": False},
+    "nut-speed-loop": {"controller.nut_loop": "speed",
+                       "controller.velocity_gain_basis": "table"},
 }
 
 
