@@ -121,7 +121,7 @@ ASSUMPTIONS: tuple[Assumption, ...] = (
         "Sect. 2.1 closes the table position on the screw motor only; the hollow motor runs "
         "at the commanded nut speed. wang2021 gives it a speed loop without a position loop. "
         "With a position loop of its own as well, the two integrating loops fight through the "
-        "table and the DDFS oscillates below 2.17 mm/s (worse than the CDFS); see "
+        "table and the DDFS oscillates below 2.05 mm/s (worse than the CDFS); see "
         "docs/model-reading.md.",
     ),
     Assumption(
