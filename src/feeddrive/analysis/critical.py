@@ -68,6 +68,15 @@ class CriticalSpeed:
     trials: tuple[CreepTrial, ...] = field(default_factory=tuple)
     simulated_time: float = 0.0
 
+    def display(self) -> str:
+        """The result in mm/s as a user reads it, with the bound when out of range."""
+        lo, hi = (v / MM_S for v in self.speed_range)
+        if self.critical_speed is not None:
+            return f"{self.critical_speed / MM_S:.2f} mm/s"
+        if self.status == "below-range":
+            return f"< {lo:.2f} mm/s (smooth at every tested speed)"
+        return f"> {hi:.2f} mm/s (creeps at every tested speed)"
+
     def to_dict(self) -> dict[str, Any]:
         """Engineering units (mm, mm/s) for printing and JSON."""
         return {
@@ -78,6 +87,7 @@ class CriticalSpeed:
             "critical_speed_mm_s": (None if self.critical_speed is None
                                     else round(self.critical_speed / MM_S, 6)),
             "status": self.status,
+            "display": self.display(),
             "resolution_mm_s": self.resolution / MM_S,
             "speed_range_mm_s": [s / MM_S for s in self.speed_range],
             "trials": [{**asdict(t), "speed": t.speed / MM_S} for t in self.trials],

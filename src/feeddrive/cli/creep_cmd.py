@@ -50,8 +50,5 @@ def creep_command(
         print_json(out)
         return
     for r in results:
-        d = r.to_dict()
-        value = d["critical_speed_mm_s"]
-        shown = f"{value:.2f} mm/s" if value is not None else d["status"]
-        console.print(f"{drive.upper()} at {position:g} mm, start from {d['start']}: critical "
-                      f"creeping speed {shown} ({len(r.trials)} trials)")
+        console.print(f"{drive.upper()} at {position:g} mm, start from {r.start}: critical "
+                      f"creeping speed {r.display()} ({len(r.trials)} trials)")
