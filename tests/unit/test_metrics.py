@@ -186,3 +186,19 @@ def test_bad_window_and_thresholds() -> None:
         creep_metrics(t, v, 1.0, window=(0.5, 0.52))
     with pytest.raises(ValueError, match="stick_level"):
         CreepThresholds(stick_level=1.5)
+
+
+def test_steady_window_skips_a_decaying_start_up_oscillation() -> None:
+    # a weakly damped servo transient (5 Hz, time constant 0.6 s) is not creep: the window
+    # moves past it and the verdict is smooth; constant-amplitude stick-slip keeps the
+    # window of the base rule and stays creeping
+    from feeddrive.analysis.metrics import creep_metrics, steady_window
+    t = np.arange(0.0, 5.0, 1e-3)
+    v0 = 0.5e-3
+    decaying = v0 * (1 + 2.0 * np.exp(-t / 0.6) * np.sin(2 * np.pi * 5 * t))
+    start, end = steady_window(t, decaying, v0)
+    assert start >= 2.5 and end == pytest.approx(t[-1])
+    assert creep_metrics(t, decaying, v0).verdict == "smooth"
+    stick_slip = np.where((t % 0.5) < 0.25, 0.0, 2 * v0)
+    assert steady_window(t, stick_slip, v0) == steady_window(t, stick_slip, v0, persistence=0.0)
+    assert creep_metrics(t, stick_slip, v0).verdict == "creeping"

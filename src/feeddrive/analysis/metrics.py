@@ -193,6 +193,8 @@ def steady_window(
     min_fraction: float = 0.2,
     max_fraction: float = 0.5,
     reach_level: float = 0.9,
+    persistence: float = 0.8,
+    min_window_fraction: float = 0.25,
 ) -> tuple[float, float]:
     """(start, end) [s] of the steady part of a speed trace, after the start transient.
 
@@ -205,7 +207,13 @@ def steady_window(
        later than t₀ + ``max_fraction``·D (default 50 %);
     3. if the speed never reaches the command (a table that stays stuck, or a record of the
        run-up only), start = t₀ + ``max_fraction``·D;
-    4. end = t₁.
+    4. end = t₁;
+    5. a decaying start-up oscillation is skipped: while the ripple of the window's second
+       half is below ``persistence`` (default 0.8) × the ripple of its first half (and the
+       first half's ripple is above 2 % of the command, i.e. not noise), the window starts
+       at its midpoint instead, as long as it stays at least ``min_window_fraction`` of the
+       record (default 25 %).  Stick-slip keeps its amplitude, so its window is unchanged;
+       a weakly damped servo transient is not mistaken for creep.
 
     So the window is always the last 50 %–80 % of the record: a stick-slip trace that never
     settles still gets the second half of the record, where the stick-slip cycle is
@@ -232,6 +240,22 @@ def steady_window(
         start = latest
     else:
         start = min(max(float(t[reached[0]]) + settle_fraction * span, earliest), latest)
+
+    def ripple(a: float, b: float) -> float:
+        sel = (t >= a) & (t <= b)
+        if np.count_nonzero(sel) < 2:
+            return 0.0
+        return float(np.ptp(along[sel])) / abs(vc)
+
+    while True:
+        mid = 0.5 * (start + t1)
+        if t1 - mid < min_window_fraction * span:
+            break
+        first, second = ripple(start, mid), ripple(mid, t1)
+        if first > 0.02 and second < persistence * first:
+            start = mid
+        else:
+            break
     return start, t1
 
 
