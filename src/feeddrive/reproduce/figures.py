@@ -98,15 +98,23 @@ def fig14(rows: list[dict[str, Any]], out: Path) -> Path:
     def mm(v: float | None) -> float:
         return float("nan") if v is None else 1e3 * v
 
-    ax.plot(pos, [mm(r["cdfs"]) for r in rows], "o-", label="CDFS (feeddrive)")
-    ax.plot(pos, [mm(r["cdfs_paper"]) for r in rows], "o--", label="CDFS (Table 3, measured)")
-    ax.plot(pos, [mm(r["ddfs"]) for r in rows], "s-", label="DDFS (feeddrive)")
-    ax.plot(pos, [mm(r["ddfs_paper"]) for r in rows], "s--", label="DDFS (Table 3, measured)")
+    for drive, marker, color in (("cdfs", "o", "C0"), ("ddfs", "s", "C2")):
+        name = drive.upper()
+        ax.plot(pos, [mm(r[drive]) for r in rows], marker + "-", color=color,
+                label=f"{name} (feeddrive)")
+        ax.plot(pos, [mm(r[f"{drive}_paper"]) for r in rows], marker + "--", color=color,
+                alpha=0.6, label=f"{name} (Table 3, measured)")
+        # out-of-range searches: a triangle at the bound they give
+        below = [(p, mm(r["speed_range"][0])) for p, r in zip(pos, rows, strict=True)
+                 if r[drive] is None and r[f"{drive}_status"] == "below-range"]
+        if below:
+            ax.plot(*zip(*below, strict=True), "v", color=color, ms=9,
+                    label=f"{name} (feeddrive): smooth down to {below[0][1]:.2f} mm/s")
     ax.set_xlabel("table position x_t [mm]")
     ax.set_ylabel("critical creeping speed [mm/s]")
     ax2 = ax.twinx()
     ax2.plot(pos, [1e-6 * r["k_sa"] for r in rows], "k:", label="k_sa")
     ax2.set_ylabel("k_sa [N/µm]")
-    ax.legend(fontsize=7, loc="lower center")
+    ax.legend(fontsize=7, loc="center")
     ax.set_title("critical speed against table position (Table 3, Fig. 14)")
     return _save(fig, out / "fig14_position.png")

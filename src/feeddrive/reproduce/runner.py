@@ -123,7 +123,11 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
                                      strict=True)):
         table3.append({**row, "cdfs": speed(f"crit-cdfs-{a}"),
                        "cdfs_paper": PAPER["cdfs_table3"][i], "ddfs": speed(f"crit-ddfs-{a}"),
-                       "ddfs_paper": PAPER["ddfs_table3"][i]})
+                       "ddfs_paper": PAPER["ddfs_table3"][i],
+                       "cdfs_status": crit[f"crit-cdfs-{a}"]["status"],
+                       "ddfs_status": crit[f"crit-ddfs-{a}"]["status"],
+                       "speed_range": [1e-3 * v for v in
+                                       crit[f"crit-cdfs-{a}"]["speed_range_mm_s"]]})
     results["table3"] = table3
     _write_tables(out, results)
     pngs = [figures.fig6(results["fig6"], out), figures.fig7(results["fig7"], out),
