@@ -25,6 +25,7 @@ config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
 
 _HERE = Path(__file__).resolve().parent
 _KERNEL_SOURCES = ("_jit.py", "layout.py", "friction.py", "control.py", "drives.py",
+                   "analysis/identification.py",
                    "solvers/dopri5.py")
 
 

@@ -21,8 +21,8 @@ def test_every_kernel_module_is_in_the_cache_hash() -> None:
 
 def test_cache_folder_follows_the_sources(monkeypatch, tmp_path) -> None:
     fake = tmp_path / "pkg"
-    (fake / "solvers").mkdir(parents=True)
     for name in _jit._KERNEL_SOURCES:
+        (fake / name).parent.mkdir(parents=True, exist_ok=True)
         (fake / name).write_text((PKG / name).read_text())
     monkeypatch.setattr(_jit, "_HERE", fake)
     before = _jit._cache_dir()

@@ -26,10 +26,10 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
-from numba import njit
 from scipy import stats
 from scipy.optimize import least_squares
 
+from .._jit import kernel
 from ..friction import bristle_rate_kernel
 from ..parameters import DriveParameters, FrictionBranch, LuGreParameters, ParameterError
 
@@ -350,7 +350,19 @@ def fit_static(
 # ================================================================ dynamic identification
 
 
-@njit(cache=True)
+@kernel
+def _presliding_rates(f: float, v: float, z: float, mass: float, p: np.ndarray,
+                      linear: bool) -> tuple[float, float]:
+    """(acceleration [m/s²], bristle rate [m/s]) of the mass under force f.
+
+    ``linear``: pre-sliding as a linear spring–damper (ż = v); otherwise the LuGre rate.
+    """
+    zr = v if linear else bristle_rate_kernel(v, z, p)
+    s2 = p[3] if v >= 0.0 else p[7]
+    return (f - p[8] * z - p[9] * zr - s2 * v) / mass, zr
+
+
+@kernel
 def _presliding_kernel(t: np.ndarray, force: np.ndarray, mass: float, p: np.ndarray,
                        linear: bool, substeps: int) -> np.ndarray:
     """Displacement [m] of a mass on a LuGre contact under ``force``, classical RK4.
@@ -360,9 +372,7 @@ def _presliding_kernel(t: np.ndarray, force: np.ndarray, mass: float, p: np.ndar
     """
     n = t.size
     out = np.empty(n)
-    s0 = p[8]
-    s1 = p[9]
-    x = force[0] / s0
+    x = force[0] / p[8]
     z = x
     v = 0.0
     out[0] = x
@@ -372,34 +382,14 @@ def _presliding_kernel(t: np.ndarray, force: np.ndarray, mass: float, p: np.ndar
         for k in range(substeps):
             fa = force[i] + df * k
             fm = fa + 0.5 * df
-            fb = fa + df
-            # stage 1
-            zr1 = v if linear else bristle_rate_kernel(v, z, p)
-            s2 = p[3] if v >= 0.0 else p[7]
-            a1 = (fa - s0 * z - s1 * zr1 - s2 * v) / mass
-            x1 = v
-            # stage 2
-            v2 = v + 0.5 * h * a1
-            z2 = z + 0.5 * h * zr1
-            zr2 = v2 if linear else bristle_rate_kernel(v2, z2, p)
-            s2 = p[3] if v2 >= 0.0 else p[7]
-            a2 = (fm - s0 * z2 - s1 * zr2 - s2 * v2) / mass
-            x2 = v2
-            # stage 3
-            v3 = v + 0.5 * h * a2
-            z3 = z + 0.5 * h * zr2
-            zr3 = v3 if linear else bristle_rate_kernel(v3, z3, p)
-            s2 = p[3] if v3 >= 0.0 else p[7]
-            a3 = (fm - s0 * z3 - s1 * zr3 - s2 * v3) / mass
-            x3 = v3
-            # stage 4
-            v4 = v + h * a3
-            z4 = z + h * zr3
-            zr4 = v4 if linear else bristle_rate_kernel(v4, z4, p)
-            s2 = p[3] if v4 >= 0.0 else p[7]
-            a4 = (fb - s0 * z4 - s1 * zr4 - s2 * v4) / mass
-            x4 = v4
-            x += h / 6.0 * (x1 + 2.0 * x2 + 2.0 * x3 + x4)
+            a1, zr1 = _presliding_rates(fa, v, z, mass, p, linear)
+            v2, z2 = v + 0.5 * h * a1, z + 0.5 * h * zr1
+            a2, zr2 = _presliding_rates(fm, v2, z2, mass, p, linear)
+            v3, z3 = v + 0.5 * h * a2, z + 0.5 * h * zr2
+            a3, zr3 = _presliding_rates(fm, v3, z3, mass, p, linear)
+            v4, z4 = v + h * a3, z + h * zr3
+            a4, zr4 = _presliding_rates(fa + df, v4, z4, mass, p, linear)
+            x += h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
             v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
             z += h / 6.0 * (zr1 + 2.0 * zr2 + 2.0 * zr3 + zr4)
         out[i + 1] = x
