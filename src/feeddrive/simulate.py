@@ -168,7 +168,7 @@ def pack(system: DriveSystem, profile: Profile, options: SolverOptions) -> _Pack
     for k, v in values.items():
         P[k] = v
     if system.drive == "cdfs" and (P[ix.REF_VN] != 0.0 or np.any(table[3] != 0.0)):
-        raise ParameterError("nut_speed", P[ix.REF_VN],
+        raise ParameterError("nut_speed", float(P[ix.REF_VN]),
                              "the CDFS holds the hollow motor; expected 0 [m/s]")
     base, n_pos, n_vel, n_cur, out_every = _periods(p, options.output_interval)
     return _Packed(P=P, fr_s=p.friction.screw.as_array(), fr_n=p.friction.nut.as_array(),
