@@ -146,7 +146,7 @@ def _grid(lo: float, hi: float, step: float) -> np.ndarray:
 def critical_speed_from_rest(
     system: DriveSystem, *, nut_speed: float = 0.0,
     speed_range: tuple[float, float] = (0.05 * MM_S, 3.0 * MM_S),
-    coarse_step: float = 0.1 * MM_S, resolution: float = 0.01 * MM_S, duration: float = 10.0,
+    coarse_step: float = 0.1 * MM_S, resolution: float = 0.01 * MM_S, duration: float = 12.0,
     thresholds: CreepThresholds | None = None, options: SolverOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> CriticalSpeed:
