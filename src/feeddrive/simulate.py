@@ -13,7 +13,7 @@ from .control import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from .parameters import DriveParameters, ParameterError
 from .result import Result, build_dataset
 from .solvers import dopri5
-from .stiffness import axial_stiffness, torsional_stiffness
+from .stiffness import axial_stiffness, equivalent_stiffness, torsional_stiffness
 
 DRIVES = ("cdfs", "ddfs")
 
@@ -136,7 +136,6 @@ def pack(system: DriveSystem, profile: Profile, options: SolverOptions) -> _Pack
     if m.equivalent_stiffness > 0:
         P[ix.K_FIXED] = m.equivalent_stiffness
     elif not m.position_dependent:
-        from .stiffness import equivalent_stiffness
         P[ix.K_FIXED] = equivalent_stiffness(p, system.table_position)
     for motor, (kt, ke, ll, rr) in ((p.screw_motor, (ix.KT_S, ix.KE_S, ix.L_S, ix.R_S)),
                                     (p.hollow_motor, (ix.KT_N, ix.KE_N, ix.L_N, ix.R_N))):

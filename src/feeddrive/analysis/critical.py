@@ -70,12 +70,16 @@ class CriticalSpeed:
 
     def display(self) -> str:
         """The result in mm/s as a user reads it, with the bound when out of range."""
-        lo, hi = (v / MM_S for v in self.speed_range)
-        if self.critical_speed is not None:
-            return f"{self.critical_speed / MM_S:.2f} mm/s"
+        text = format_critical_speed({
+            "critical_speed_mm_s": None if self.critical_speed is None
+            else self.critical_speed / MM_S,
+            "speed_range_mm_s": [v / MM_S for v in self.speed_range],
+            "status": self.status})
         if self.status == "below-range":
-            return f"< {lo:.2f} mm/s (smooth at every tested speed)"
-        return f"> {hi:.2f} mm/s (creeps at every tested speed)"
+            return f"{text} mm/s (smooth at every tested speed)"
+        if self.status == "above-range":
+            return f"{text} mm/s (creeps at every tested speed)"
+        return f"{text} mm/s"
 
     def to_dict(self) -> dict[str, Any]:
         """Engineering units (mm, mm/s) for printing and JSON."""
@@ -93,6 +97,17 @@ class CriticalSpeed:
             "trials": [{**asdict(t), "speed": t.speed / MM_S} for t in self.trials],
             "simulated_time_s": self.simulated_time,
         }
+
+
+def format_critical_speed(search: dict[str, Any]) -> str:
+    """Critical speed [mm/s] of a search (as :meth:`CriticalSpeed.to_dict` gives it), or the
+    bound an out-of-range search gives: "< low" (smooth everywhere), "> high" (creeps
+    everywhere)."""
+    value = search["critical_speed_mm_s"]
+    low, high = search["speed_range_mm_s"]
+    if value is not None:
+        return f"{value:.2f}"
+    return f"< {low:.2f}" if search["status"] == "below-range" else f"> {high:.2f}"
 
 
 def _check_speed(name: str, value: float) -> float:

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 from .. import __version__
+from ..analysis.critical import format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
 from ..parameters.sets import wang2021
@@ -26,15 +27,6 @@ def _dev(ours: float | None, paper: float | None) -> str:
     if ours is None or paper is None or paper == 0:
         return "—"
     return f"{100 * (ours / paper - 1):+.1f} %"
-
-
-def _crit_text(search: dict[str, Any]) -> str:
-    """A search's critical speed [mm/s], or the bound an out-of-range search gives."""
-    v = search["critical_speed_mm_s"]
-    lo, hi = search["speed_range_mm_s"]
-    if v is not None:
-        return f"{v:.2f}"
-    return f"< {lo:.2f}" if search["status"] == "below-range" else f"> {hi:.2f}"
 
 
 def critical_ratio(cdfs: dict[str, Any], ddfs: dict[str, Any]) -> tuple[float | None, str]:
@@ -65,7 +57,7 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
                      "unit": unit, "deviation": _dev(ours, paper), "fitted_or_predicted": kind})
 
     def add_critical(item: str, source: str, paper: float, key: str, kind: str) -> None:
-        add(item, source, paper, c(key), "mm/s", kind, shown=_crit_text(crit[key]))
+        add(item, source, paper, c(key), "mm/s", kind, shown=format_critical_speed(crit[key]))
 
     add_critical("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56,
                  f"crit-cdfs-{MID}", fitted_note)
@@ -228,22 +220,24 @@ def target_rows(results: dict[str, Any]) -> list[dict[str, str]]:
         rows.append({"target": name, "required": target, "feeddrive": shown,
                      "met": "—" if ok is None else ("yes" if ok else "no")})
 
-    def inside(search: dict[str, Any], value: float | None, lo: float, hi: float) -> bool:
+    def inside(search: dict[str, Any], value: float | None, lo: float, hi: float
+               ) -> bool | None:
+        """Whether the critical speed lies in [lo, hi]; None when a bound cannot tell."""
         if value is not None:
             return lo <= value <= hi
         bound_lo, bound_hi = search["speed_range_mm_s"]
-        # an out-of-range result is inside only if the target interval covers the range end
-        return False if search["status"] == "below-range" and bound_lo <= lo else \
-            not (search["status"] == "above-range" and bound_hi >= hi)
+        if search["status"] == "below-range":
+            return False if bound_lo <= lo else None
+        return False if bound_hi >= hi else None
 
-    add("CDFS critical speed, mid-screw [mm/s]", "1.40 – 1.72", _crit_text(cdfs_s),
+    add("CDFS critical speed, mid-screw [mm/s]", "1.40 – 1.72", format_critical_speed(cdfs_s),
         inside(cdfs_s, cdfs, 1.40, 1.72))
-    add("DDFS critical speed, v_n = 16 mm/s [mm/s]", "0.40 – 0.60", _crit_text(ddfs_s),
+    add("DDFS critical speed, v_n = 16 mm/s [mm/s]", "0.40 – 0.60", format_critical_speed(ddfs_s),
         inside(ddfs_s, ddfs, 0.40, 0.60))
     ratio, ratio_text = critical_ratio(cdfs_s, ddfs_s)
-    ratio_ok = ratio >= 2.5 if ratio is not None else (
-        cdfs is not None and ddfs_s["status"] == "below-range"
-        and cdfs / ddfs_s["speed_range_mm_s"][0] >= 2.5)
+    ratio_ok: bool | None = ratio >= 2.5 if ratio is not None else None
+    if ratio is None and cdfs is not None and ddfs_s["status"] == "below-range":
+        ratio_ok = True if cdfs / ddfs_s["speed_range_mm_s"][0] >= 2.5 else None
     add("ratio CDFS / DDFS", "≥ 2.5", ratio_text, ratio_ok)
     t3 = results["table3"]
     for drive in ("cdfs", "ddfs"):

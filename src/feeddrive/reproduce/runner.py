@@ -143,7 +143,7 @@ def _fig8_trace(params: DriveParameters, critical: float | None) -> dict[str, An
     v = critical if critical is not None else PAPER["ddfs_critical_sim"]
     r = simulate(DriveSystem(params, "ddfs", MID), ConstantSpeed(v, PAPER["ddfs_sim_nut_speed"]),
                  12.0)
-    return studies._trace(r)
+    return studies.speed_trace(r)
 
 
 def _mm(v: float | None) -> float | None:

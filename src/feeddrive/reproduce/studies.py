@@ -75,7 +75,7 @@ def critical_speed_running(params: DriveParameters, drive: str, position: float,
     return res.to_dict()
 
 
-def _trace(result: Any, stride: int = 5) -> dict[str, list[float]]:
+def speed_trace(result: Any, stride: int = 5) -> dict[str, list[float]]:
     return {"time": result.time[::stride].tolist(),
             "table_speed": result["table_speed"][::stride].tolist(),
             "table_speed_reference": result["table_speed_reference"][::stride].tolist()}
@@ -92,7 +92,7 @@ def fig6(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
                                   "ripple_ratio": m.ripple_ratio,
                                   "stick_fraction": m.stick_fraction,
                                   "settling_time": settling_time(r.time, r["table_speed"], v),
-                                  "trace": _trace(r)}
+                                  "trace": speed_trace(r)}
     return out
 
 
@@ -129,7 +129,7 @@ def fig7(params: DriveParameters, cdfs_critical: float, settings: StudySettings
                      "settling_time": settling_time(r.time, s, v),
                      "verdict": "creeping" if m.creeping else "smooth",
                      "ripple_ratio": m.ripple_ratio})
-        traces[f"{k:g}"] = _trace(r)
+        traces[f"{k:g}"] = speed_trace(r)
     return {"rows": rows, "traces": traces, "table_speed": v}
 
 
@@ -162,7 +162,7 @@ def figs9_10(params: DriveParameters, settings: StudySettings) -> dict[str, Any]
                                     settings.sine_frequency)
             rows.append({"table_amplitude": amp, "nut_amplitude": vn,
                          "screw_amplitude": amp + vn, "reversal_overshoot": ro})
-            traces[f"{amp / MM_S:g}/{vn / MM_S:g}"] = _trace(r)
+            traces[f"{amp / MM_S:g}/{vn / MM_S:g}"] = speed_trace(r)
     return {"rows": rows, "traces": traces, "frequency": settings.sine_frequency}
 
 
