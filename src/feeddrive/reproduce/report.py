@@ -14,7 +14,7 @@ from .. import __version__
 from ..analysis.critical import format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
-from ..parameters.sets import wang2021
+from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
 from .studies import MID, PAPER, StudySettings
 
@@ -300,7 +300,7 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
          "Critical speeds are from rest (scan + bisection to 0.01 mm/s) unless the row says "
          "step-down.", comparison),
         ("Modelling assumptions", "What the paper does not give, and what we chose "
-         "(parameters/sets/wang2021.py; change any of them in a parameter file).", assumptions),
+         "(presets/wang2021.py; change any of them in a parameter file).", assumptions),
         ("Analytic indicators", "Steady friction curves (Table 1): negative-slope bands, "
          "zero-slope speeds and LuGre passivity per site. " + rigid_body_band(params) + ".",
          indicators),

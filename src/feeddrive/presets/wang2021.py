@@ -17,7 +17,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..components import (
+from ..stiffness import equivalent_stiffness
+from ..parameters.components import (
     BallScrew,
     Controller,
     Coupling,
@@ -256,8 +257,6 @@ VELOCITY_INTEGRAL_GAIN = 3872.12
 
 def _axial_damping(params: DriveParameters) -> float:
     """c_ax = 2ζ·sqrt(K_eq·m_t) at mid-screw [N s/m]: ζ = 5 % structural damping."""
-    from ...stiffness import equivalent_stiffness  # local: stiffness imports parameters
-
     k_eq = equivalent_stiffness(params, params.screw.length / 2.0)
     return 2.0 * AXIAL_DAMPING_RATIO * math.sqrt(k_eq * params.table.mass)
 
