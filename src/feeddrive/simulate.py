@@ -12,19 +12,20 @@ import numpy as np
 from .control import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from .model.assemble import Model, assemble
 from .model.disturbances import LoadProfile
+from .model.mechanisms import drive_names, mechanism
 from .parameters import DriveParameters, ParameterError
 from .result import Result, build_dataset
 from .solvers import dopri5
 
-DRIVES = ("cdfs", "ddfs", "linear-motor")
+DRIVES = drive_names()
 
 
 @dataclass(frozen=True)
 class DriveSystem:
     """A drive to simulate: parameters, topology, where the table starts, and how.
 
-    ``drive``: ``"cdfs"``, ``"ddfs"`` (Wang2021's ball-screw drives) or ``"linear-motor"`` (a
-    direct-drive table; needs ``parameters.linear_motor``).  ``table_position`` [m] is the
+    ``drive``: a registered topology — ``"cdfs"``, ``"ddfs"`` (Wang2021's ball-screw drives)
+    or ``"linear-motor"`` (a direct-drive table; needs ``parameters.linear_motor``).  ``table_position`` [m] is the
     distance a of the nut from the motor-side screw support (Wang2021 Table 3: 0.2 … 0.6 m;
     mid-screw 0.4 m).  For the CDFS the hollow motor is held: ``nut_hold = "locked"`` freezes
     the nut's states (the default), ``"servo"`` keeps the hollow motor's loop at zero command.
@@ -40,15 +41,9 @@ class DriveSystem:
     load: LoadProfile | None = None
 
     def __post_init__(self) -> None:
-        if self.drive not in DRIVES:
-            raise ParameterError("drive", self.drive, f"expected one of {', '.join(DRIVES)}")
         if self.nut_hold not in ("locked", "servo"):
             raise ParameterError("nut_hold", self.nut_hold, "expected locked or servo")
-        length = self.parameters.screw.length
-        a = self.table_position
-        if self.drive != "linear-motor" and not (math.isfinite(a) and 0.0 < a < length):
-            raise ParameterError("table_position", a,
-                                 f"expected 0 < a < {length:g} [m] (between the supports)")
+        mechanism(self.drive).check(self.parameters, self.drive, self.table_position)
         for name, value in self.initial_state.items():
             if not (isinstance(value, int | float) and math.isfinite(value)):
                 raise ParameterError(f"initial_state.{name}", value, "expected a finite number "

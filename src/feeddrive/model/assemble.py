@@ -21,7 +21,7 @@ from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops
 from .disturbances import LoadProfile, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
-from .mechanisms import BallScrewDrive, LinearMotorDrive, Site
+from .mechanisms import Mechanics, Site, mechanism
 
 if TYPE_CHECKING:
     from ..control import Profile
@@ -75,15 +75,12 @@ class Model:
         return atol, rel
 
 
-def _profile(b: codegen.Builder, profile: Profile, drive: str) -> None:
+def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     values, table = profile.encode()
     block = np.zeros(len(PROFILE_PARAMS))
     for k, v in values.items():
         block[k] = v
-    if drive != "ddfs" and (block[2] != 0.0 or np.any(table[3] != 0.0)):
-        what = "the CDFS holds the hollow motor" if drive == "cdfs" else \
-            "a linear-motor drive has no nut"
-        raise ParameterError("nut_speed", float(block[2]), f"{what}; expected 0 [m/s]")
+    mech.check_profile(float(block[2]), table[3])
     table = np.ascontiguousarray(table, dtype=float)
     block[5] = b.table(table)
     block[6] = table.shape[1]
@@ -105,11 +102,7 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
     """Build (or fetch from the cache) the compiled model of one drive and profile."""
     b = codegen.Builder()
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
-    mech: BallScrewDrive | LinearMotorDrive
-    if drive == "linear-motor":
-        mech = LinearMotorDrive(parameters)
-    else:
-        mech = BallScrewDrive(parameters, drive, table_position, nut_hold)
+    mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
     mech.declare(b)
     mech.parameters(b)
     sites = mech.sites(b)
@@ -125,24 +118,20 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
         laws.append((site, law, first))
     mech.motors(b)
     axes, channels = mech.axes(b)
-    H_axes = [float(b.param_values[ax.param_offset + loops.H_AX]) for ax in axes]
     loops.declare_states(b, axes)
-    for ax, H in zip(axes, H_axes, strict=True):
-        b.tol_scale[f"{ax.name}_velocity_integral"] = H
+    for ax in axes:
+        b.tol_scale[f"{ax.name}_velocity_integral"] = b.param_values[ax.param_offset
+                                                                     + loops.H_AX]
     loops.declare_signals(b, axes)
     for site, law, _ in laws:
         b.add_aux(f"{site.name}_friction", "N",
                   f"{site.name.replace('_', '–')} friction ({law.name}"
                   f"{', torque ÷ H' if site.name != 'guide' else ''})")
     b.add_aux("drive_force", "N", "force driving the table (screw–nut force F_d, or motor)")
-    if drive != "linear-motor":
-        b.add_aux("equivalent_stiffness", "N/m", "K_eq at the table position")
     b.add_aux("table_position_reference", "m", "commanded table position")
     b.add_aux("table_speed_reference", "m/s", "commanded table speed")
-    if drive != "linear-motor":
-        b.add_aux("nut_position_reference", "m", "commanded nut position (linear)")
-        b.add_aux("nut_speed_reference", "m/s", "commanded nut speed (linear)")
-    _profile(b, profile, drive)
+    mech.signals(b)
+    _profile(b, profile, mech)
     for ch in channels:
         b.add_held(f"prev.{ch.name}")
 
@@ -150,62 +139,48 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
     load_code = emit_load(b, dist.load_force, dist.load_start, load)
     ripple: dict[str, str] = {}
     ripple_lines: list[str] = []
-    if drive == "linear-motor":
-        for name, r in (("screw_motor_ripple", dist.screw_motor_ripple),
-                        ("hollow_motor_ripple", dist.hollow_motor_ripple),
-                        ("lead_error", dist.lead_error)):
-            if any(a != 0.0 for a in r.amplitudes):
-                raise ParameterError(f"disturbances.{name}", r.amplitudes,
-                                     "not available on the linear-motor drive")
-        lead = None
-    else:
-        for key, r in (("screw", dist.screw_motor_ripple), ("nut", dist.hollow_motor_ripple)):
-            block = emit_harmonics(b, f"{key}_motor_ripple", r)
-            if block is not None:
-                b.add_aux(f"{key}_ripple_torque", "N m", f"{key} motor torque ripple")
-                ripple[key] = f"rip_{key}"
-                ripple_lines.append(f"rip_{key} = {b.use(harmonics)}({b.y(key + '_angle')}, P, "
-                                    f"{block[0]}, {block[1]})[0]")
-                ripple_lines.append(f"{b.a(key + '_ripple_torque')} = rip_{key}")
-        lead = emit_harmonics(b, "lead_error", dist.lead_error)
-    torque_off = parameters.controller.mode == "torque_off"
+    for key, r in (("screw", dist.screw_motor_ripple), ("nut", dist.hollow_motor_ripple)):
+        field = f"{'screw' if key == 'screw' else 'hollow'}_motor_ripple"
+        block = emit_harmonics(b, field, r)
+        if block is None:
+            continue
+        if key not in mech.ripple_motors:
+            raise ParameterError(f"disturbances.{field}", r.amplitudes,
+                                 f"the {drive} drive has no such motor")
+        b.add_aux(f"{key}_ripple_torque", "N m", f"{key} motor torque ripple")
+        ripple[key] = f"rip_{key}"
+        ripple_lines.append(f"rip_{key} = {b.use(harmonics)}({b.y(key + '_angle')}, P, "
+                            f"{block[0]}, {block[1]})[0]")
+        ripple_lines.append(f"{b.a(key + '_ripple_torque')} = rip_{key}")
+    lead = emit_harmonics(b, "lead_error", dist.lead_error)
+    if lead is not None and not mech.has_lead_screw:
+        raise ParameterError("disturbances.lead_error", dist.lead_error.amplitudes,
+                             f"the {drive} drive has no lead screw")
 
     # ---- right-hand side
     b.emit(f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}")
     b.emit(f"{b.a('table_position_reference')} = ref_x")
     b.emit(f"{b.a('table_speed_reference')} = ref_v")
-    if drive != "linear-motor":
-        b.emit(f"{b.a('nut_position_reference')} = ref_xn")
-        b.emit(f"{b.a('nut_speed_reference')} = ref_vn")
     loops.emit_cascade(b, axes, channels, parameters.controller.mode)
     for ln in ripple_lines:
         b.emit(ln)
-    forces: dict[str, list[str]] = {}
-    always: list[str] = []
-    gated: list[str] = []
-    frozen: list[str] = []
+    m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
+                  load=load_code, torque_off=parameters.controller.mode == "torque_off")
     for site, law, first in laws:
         code = _site_code(b, site, law, getattr(parameters.friction, site.parameters_key), first)
         for body, factor in site.bodies:
             term = f"- f_{site.name}" if factor == "1.0" else f"- {factor} * f_{site.name}"
-            forces.setdefault(body, []).append(term)
+            m.forces.setdefault(body, []).append(term)
         if site.active:
-            gated.append(code)
-            frozen.append(f"f_{site.name} = 0.0")
-            frozen += [f"{b.dy(f'{site.name}_{s}')} = 0.0" for s in law.state_names]
+            m.gated.append(code)
+            m.frozen.append(f"f_{site.name} = 0.0")
+            m.frozen += [f"{b.dy(f'{site.name}_{s}')} = 0.0" for s in law.state_names]
         else:
-            always.append(code)
-    if isinstance(mech, BallScrewDrive):
-        mech.emit(b, forces, always, ripple, lead, load_code, torque_off)
-        lever = b.p("screw.H") if lead is None else f"({b.p('screw.H')} + lead_slope)"
-        mech.emit_nut(b, forces, gated, frozen, ripple, lever, torque_off)
-    else:
-        mech.emit(b, forces, always, ripple, lead, load_code, torque_off)
+            m.always.append(code)
+    mech.emit(b, m)
     for site, _, _ in laws:
         b.emit(f"{b.a(site.name + '_friction')} = f_{site.name}")
     b.emit(f"{b.a('drive_force')} = f_d")
-    if drive != "linear-motor":
-        b.emit(f"{b.a('equivalent_stiffness')} = k_eq")
     if load_code is not None:
         b.emit(f"{b.a('load_force')} = {load_code}")
 

@@ -114,7 +114,8 @@ class Axis:
     quantised channels as ``q_<channel>``); ``feedforward``: speed [m/s]; ``reference``:
     commanded position [m]; ``speed``: the measured motor speed, continuous; ``speed_q``: the
     same from sampled channel speeds (``s_<channel>``); ``active``: code of a condition under
-    which the axis runs ("" = always); ``speed_unit``: unit of its speed command.
+    which the axis runs ("" = always); ``speed_unit``: unit of its speed command;
+    ``speed_law = "speed"``: the axis may run a speed loop only (its block's speed-mode slot).
     """
 
     name: str
@@ -128,6 +129,7 @@ class Axis:
     current_state: str
     active: str = ""
     speed_unit: str = "rad/s"
+    speed_law: str = "position"  # "speed": may run as a speed loop (controller.nut_loop)
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
@@ -189,7 +191,7 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
         out.append(f"    {s} = {b.h(ax.name + '.speed_command')}")
     out.append("else:")
     for ax, s in zip(axes, sc, strict=True):
-        law = pos_law if ax.name != "nut" else spd_cmd
+        law = pos_law if ax.speed_law == "position" else spd_cmd
         out.append(f"    {s} = {law}({ax.reference} - {ax.position}, {ax.feedforward}, "
                    f"{P}, {ax.param_offset})")
     out.append("if n_vel > 0:")
@@ -264,13 +266,13 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: st
         for ch in channels:
             if f"q_{ch.name}" in ax.position_q:
                 s.append(f"{ind}q_{ch.name} = {quant}({ch.state}, {ch.quantum})")
-        law = pos_law if ax.name != "nut" else spd_cmd
+        law = pos_law if ax.speed_law == "position" else spd_cmd
         s.append(f"{ind}{b.h(ax.name + '.speed_command')} = {law}({ax.reference} - "
                  f"{ax.position_q}, {ax.feedforward}, P, {ax.param_offset})")
     s.append("if n_vel > 0 and k % n_vel == 0:")
     s.append("    tv = n_vel * base")
     for ax in axes:
-        law = pos_law if ax.name != "nut" else spd_cmd
+        law = pos_law if ax.speed_law == "position" else spd_cmd
         s.append(f"    w_cmd_{ax.name} = {b.h(ax.name + '.speed_command')} if n_pos > 0 else "
                  f"{law}({ax.reference} - {ax.position}, {ax.feedforward}, P, "
                  f"{ax.param_offset})")

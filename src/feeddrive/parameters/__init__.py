@@ -13,7 +13,6 @@ from .components import (
     FrictionBranch,
     FrictionSites,
     LeadError,
-    LinearMotor,
     LuGreParameters,
     Motor,
     StiffnessModel,
@@ -57,7 +56,7 @@ def preset(name: str) -> DriveParameters:
 
 __all__ = [
     "BallScrew", "Controller", "Coupling", "Disturbances", "DriveParameters", "FrictionBranch",
-    "FrictionSites", "LeadError", "LinearMotor", "LuGreParameters", "Motor", "ParameterError",
+    "FrictionSites", "LeadError", "LuGreParameters", "Motor", "ParameterError",
     "PRESETS", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict", "load", "loads",
     "preset", "save", "to_dict",
 ]

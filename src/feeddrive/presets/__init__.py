@@ -7,16 +7,16 @@ chain, say) without an import cycle.  Add a set with :func:`register_preset`.
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 from collections.abc import Callable
 
 from ..parameters.components import DriveParameters
-from . import linear_motor, wang2021
 
-PRESETS: dict[str, Callable[[], DriveParameters]] = {
-    "wang2021": wang2021.shipped,
-    "wang2021-literal": wang2021.literal,
-    "linear-motor-example": linear_motor.example,
-}
+PRESETS: dict[str, Callable[[], DriveParameters]] = {}
+# every module of this package lists its sets in a module-level ``PRESETS`` dict
+for _info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
+    PRESETS.update(getattr(importlib.import_module(f"{__name__}.{_info.name}"), "PRESETS", {}))
 
 
 def register_preset(name: str, factory: Callable[[], DriveParameters]) -> None:

@@ -285,3 +285,6 @@ def shipped() -> DriveParameters:
         stiffness=stiffness,
         controller=controller,
     )
+
+
+PRESETS = {"wang2021": shipped, "wang2021-literal": literal}
