@@ -13,6 +13,7 @@ from .components import (
     FrictionBranch,
     FrictionSites,
     LeadError,
+    LinearMotor,
     LuGreParameters,
     Motor,
     StiffnessModel,
@@ -56,7 +57,7 @@ def preset(name: str) -> DriveParameters:
 
 __all__ = [
     "BallScrew", "Controller", "Coupling", "Disturbances", "DriveParameters", "FrictionBranch",
-    "FrictionSites", "LeadError", "LuGreParameters", "Motor", "ParameterError",
+    "FrictionSites", "LeadError", "LinearMotor", "LuGreParameters", "Motor", "ParameterError",
     "PRESETS", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict", "load", "loads",
     "preset", "save", "to_dict",
 ]

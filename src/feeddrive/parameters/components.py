@@ -323,6 +323,18 @@ class Disturbances(_Component):
 
 
 @dataclass(frozen=True)
+class LinearMotor(_Component):
+    """Linear motor of a direct-drive table: force constant, back-EMF, R-L winding, forcer."""
+
+    force_constant: float = quantity("N/A", low=1e-2, high=1e4)
+    back_emf_constant: float = quantity("V s/m", low=1e-2, high=1e4)
+    inductance: float = quantity("H", low=1e-6, high=1.0, hint="20 mH = 0.02 H")
+    resistance: float = quantity("ohm", low=1e-3, high=1e3)
+    forcer_mass: float = quantity("kg", low=0, high=1e4, low_inclusive=True)
+    _label = "linear_motor"
+
+
+@dataclass(frozen=True)
 class DriveParameters(_Component):
     """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control."""
 
@@ -337,6 +349,7 @@ class DriveParameters(_Component):
     stiffness: StiffnessModel = field(default_factory=StiffnessModel)
     controller: Controller = field(default_factory=lambda: _default_controller())
     disturbances: Disturbances = field(default_factory=lambda: Disturbances())
+    linear_motor: LinearMotor | None = None
     _label = "parameters"
 
     def replace_path(self, path: str, value: Any) -> DriveParameters:
