@@ -13,7 +13,8 @@ from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters,
 @app.command("simulate")
 @user_errors
 def simulate_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
+    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor (a "
+                              "direct-drive table; default preset linear-motor-example)"),
     table_speed: float = typer.Option(..., "--table-speed", help="Table speed [mm/s] "
                                       "(the amplitude for --profile sine)."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut (hollow-motor) speed [mm/s], "
@@ -23,7 +24,7 @@ def simulate_command(
     profile: str = typer.Option("constant", "--profile", help="constant or sine"),
     frequency: float = typer.Option(0.2, "--frequency", help="Sine frequency [Hz]."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
-                                           "(default wang2021)."),
+                                           "(default wang2021; linear-motor-example for --drive linear-motor)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     output: str | None = typer.Option(None, "--output", help="Write signals to "
                                       "FILE.csv|.parquet|.nc|.mat"),
@@ -32,7 +33,7 @@ def simulate_command(
 ) -> None:
     """Simulate a drive and print a summary: mean and ripple of table speed after the
     transient, stick fraction, motor speeds."""
-    params = resolve_parameters(preset_name, params_file)
+    params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive, table_position=position * MM)
     if profile == "constant":
         prof: ConstantSpeed | SineSpeed = ConstantSpeed(table_speed * MM_PER_S,

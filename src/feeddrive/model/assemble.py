@@ -93,7 +93,7 @@ def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
     packed = law.pack(params.scaled(site.scale) if site.scale != 1.0 else params)
     o = b.params(f"friction.{site.name}", packed)
     alias = b.use_dynamic(f"_law_{law.name.replace('-', '_')}",
-                          f"_friction_law({law.name!r}).kernel", law.kernel)
+                          f"_friction_law({law.name!r}).compiled", law.compiled)
     return f"f_{site.name} = {alias}({site.speed}, y, {y_offset}, P, {o}, dy)"
 
 

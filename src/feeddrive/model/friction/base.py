@@ -50,6 +50,16 @@ class FrictionLaw:
     citation: str = ""
     kernel: Any = None
 
+    @property
+    def compiled(self) -> Any:
+        """The kernel as declared on the class (a numba dispatcher is a descriptor: reading
+        ``self.kernel`` would bind it to the law instance)."""
+        for cls in type(self).__mro__:
+            if "kernel" in cls.__dict__:
+                k = cls.__dict__["kernel"]
+                return getattr(k, "__func__", k)
+        return None
+
     def pack(self, site: LuGreParameters) -> np.ndarray:
         return site.as_array()
 
@@ -65,7 +75,7 @@ class FrictionLaw:
         y[:n] = states
         dy = np.zeros(max(n, 1))
         P = self.pack(site) if packed is None else packed
-        force = float(self.kernel(float(v), y, 0, P, 0, dy))
+        force = float(self.compiled(float(v), y, 0, P, 0, dy))
         return force, dy[:n].copy()
 
     def steady_force(self, v: object, site: LuGreParameters) -> np.ndarray:
@@ -106,7 +116,7 @@ def register_friction_law(law: FrictionLaw) -> FrictionLaw:
     """Make ``law`` available by ``law.name`` in parameter files and the API."""
     if not law.name or not law.name.replace("-", "_").isidentifier():
         raise ValueError(f"friction law name {law.name!r}: expected a short identifier")
-    if law.kernel is None:
+    if law.compiled is None:
         raise ValueError(f"friction law {law.name!r}: no kernel")
     _REGISTRY[law.name] = law
     return law
