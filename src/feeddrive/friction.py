@@ -1,7 +1,8 @@
 """LuGre friction with Stribeck effect.  Wang2021 Eqs. (9)–(11), Table 1.
 
 The LuGre force itself is :mod:`feeddrive.model.friction.lugre` (the engine's); this module
-is its array API and the analytic indicators.  All functions use the linear (force) form of Table 1: force in N, speed in m/s, bristle
+is its array API and the analytic indicators.  All functions use the linear (force) form of
+Table 1: force in N, speed in m/s, bristle
 deflection z in m.  The screw and hollow shafts are rotary sites; the paper divides their
 torques by H = p_h/2π, and :func:`torque_from_force` / :func:`rotary_speed` undo that.
 
@@ -24,6 +25,7 @@ from scipy.optimize import brentq
 
 from ._jit import kernel
 from .model.friction import lugre
+from .paper import CDFS_CRITICAL_SPEED
 from .parameters import FrictionBranch, LuGreParameters
 
 # ---------------------------------------------------------------- compiled scalar kernels
@@ -159,9 +161,9 @@ def linear_speed(rotary: object, lead: float) -> np.ndarray:
 
 # ---------------------------------------------------------------- analytic indicators
 
-# Wang2021 Sect. 5.2, Fig. 6: in simulation the CDFS table creeps at 1.55 mm/s and runs
-# smoothly at 1.56 mm/s, the critical creeping speed the zero-slope speed is compared with.
-PAPER_CDFS_CRITICAL_SPEED = 1.56e-3  # m/s
+# Wang2021 Sect. 5.2, Fig. 6: the simulated CDFS critical speed the zero-slope speed is
+# compared with (the number lives in feeddrive.paper)
+PAPER_CDFS_CRITICAL_SPEED = CDFS_CRITICAL_SPEED
 
 
 @dataclass(frozen=True)

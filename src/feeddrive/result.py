@@ -9,7 +9,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
+from .io import save_result
 from .parameters import dumps
+from .units import ENGINEERING as _ENGINEERING
 
 if TYPE_CHECKING:
     from .analysis.metrics import CreepMetrics, CreepThresholds
@@ -18,7 +20,7 @@ if TYPE_CHECKING:
     from .simulate import DriveSystem
 
 # SI → engineering units at the edges (CSV, Parquet, CLI)
-ENGINEERING = {"m": ("mm", 1e3), "m/s": ("mm/s", 1e3), "N/m": ("N/µm", 1e-6)}
+ENGINEERING = _ENGINEERING
 
 
 def build_dataset(t: np.ndarray, y: np.ndarray, aux: np.ndarray, model: Model,
@@ -113,5 +115,4 @@ class Result:
         return 1e3 * float(np.mean(self[name][sel]))
 
     def save(self, path: str | Path) -> Path:
-        from .io import save_result
         return save_result(self.dataset, path)

@@ -25,7 +25,8 @@ class DriveSystem:
     """A drive to simulate: parameters, topology, where the table starts, and how.
 
     ``drive``: a registered topology — ``"cdfs"``, ``"ddfs"`` (Wang2021's ball-screw drives)
-    or ``"linear-motor"`` (a direct-drive table; needs ``parameters.linear_motor``).  ``table_position`` [m] is the
+    or ``"linear-motor"`` (a direct-drive table; needs ``parameters.linear_motor``).
+    ``table_position`` [m] is the
     distance a of the nut from the motor-side screw support (Wang2021 Table 3: 0.2 … 0.6 m;
     mid-screw 0.4 m).  For the CDFS the hollow motor is held: ``nut_hold = "locked"`` freezes
     the nut's states (the default), ``"servo"`` keeps the hollow motor's loop at zero command.

@@ -11,6 +11,7 @@ from typing import Any, TypeVar
 import typer
 from rich.console import Console
 
+from .. import units
 from ..parameters import DriveParameters, ParameterError, load, preset
 
 app = typer.Typer(
@@ -24,9 +25,7 @@ err_console = Console(stderr=True)
 F = TypeVar("F", bound=Callable[..., Any])
 
 # unit conversion at the edge: the CLI speaks mm, mm/s and N/µm
-MM = 1e-3
-MM_PER_S = 1e-3
-N_PER_UM = 1e6
+MM, MM_PER_S, N_PER_UM = units.MM, units.MM_PER_S, units.N_PER_UM
 
 
 def user_errors(fn: F) -> F:

@@ -10,7 +10,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from .. import friction, stiffness
+from .. import friction, stiffness, units
 from ..parameters import DriveParameters, LuGreParameters, ParameterError
 from ._common import (
     MM_PER_S,
@@ -22,7 +22,7 @@ from ._common import (
     user_errors,
 )
 
-SITES = ("screw", "nut", "guide")
+SITES = units.SITES
 BRANCHES = ("positive", "negative")
 
 SCAN_LIMITATION = (

@@ -24,7 +24,8 @@ def simulate_command(
     profile: str = typer.Option("constant", "--profile", help="constant or sine"),
     frequency: float = typer.Option(0.2, "--frequency", help="Sine frequency [Hz]."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
-                                           "(default wang2021; linear-motor-example for --drive linear-motor)."),
+                                           "(default wang2021; linear-motor-example for "
+                                           "--drive linear-motor)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     output: str | None = typer.Option(None, "--output", help="Write signals to "
                                       "FILE.csv|.parquet|.nc|.mat"),

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._jit import kernel
+from ..parameters import LeadError, TorqueRipple
 from .codegen import Builder
 
 
@@ -83,11 +84,12 @@ def emit_load(b: Builder, force: float, start: float, record: LoadProfile | None
     return f"{b.use(load_force)}(t, P, {o}, T)"
 
 
-def emit_harmonics(b: Builder, name: str, ripple: object) -> tuple[int, int] | None:
+def emit_harmonics(b: Builder, name: str,
+                   ripple: TorqueRipple | LeadError) -> tuple[int, int] | None:
     """Register a harmonic series (TorqueRipple or LeadError); (offset, count) or None."""
-    orders = tuple(getattr(ripple, "orders"))
-    amps = tuple(getattr(ripple, "amplitudes"))
-    phases = tuple(getattr(ripple, "phases"))
+    orders = tuple(ripple.orders)
+    amps = tuple(ripple.amplitudes)
+    phases = tuple(ripple.phases)
     if not any(a != 0.0 for a in amps):
         return None
     o = b.params(f"disturbances.{name}", np.array(orders + amps + phases))

@@ -24,7 +24,6 @@ from .toml_io import dumps, from_dict, load, loads, save, to_dict
 from .validation import ParameterError
 
 
-
 class _Presets(Mapping[str, Callable[[], DriveParameters]]):
     """The registered presets (``feeddrive.presets``), imported on first use."""
 
@@ -36,7 +35,7 @@ class _Presets(Mapping[str, Callable[[], DriveParameters]]):
     def __getitem__(self, name: str) -> Callable[[], DriveParameters]:
         return self._table()[name]
 
-    def __iter__(self):  # type: ignore[no-untyped-def]
+    def __iter__(self):
         return iter(self._table())
 
     def __len__(self) -> int:

@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..stiffness import equivalent_stiffness
 from ..parameters.components import (
     BallScrew,
     Controller,
@@ -30,6 +29,7 @@ from ..parameters.components import (
     StiffnessModel,
     Table,
 )
+from ..stiffness import equivalent_stiffness
 
 CITATION = (
     "Z. Wang, X. Feng, H. Yang, H. Jin, 'Research on low-speed characteristics of differential "

@@ -16,6 +16,7 @@ from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
 from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
+from ..units import SITES
 from .studies import MID, PAPER, StudySettings
 
 
@@ -157,7 +158,7 @@ def _position_trend(rows: list[dict[str, Any]]) -> str:
 
 def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
     rows = []
-    for site in ("screw", "nut", "guide"):
+    for site in SITES:
         lg = getattr(params.friction, site)
         for bname in ("positive", "negative"):
             b = lg.branch(bname)

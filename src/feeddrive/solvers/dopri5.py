@@ -13,12 +13,11 @@ same tableau runs at a fixed step (used to verify the order).
 
 from __future__ import annotations
 
+import inspect
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-
-import inspect
-from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from ..model.assemble import Model

@@ -36,7 +36,7 @@ class Dahl(FrictionLaw):
     citation = "Dahl 1968; Olsson et al., Eur. J. Control 4 (1998) 176-195, Eq. (9)"
     kernel = dahl_kernel
 
-    def steady_state(self, v: float, site):  # type: ignore[no-untyped-def]
+    def steady_state(self, v: float, site):
         if v == 0.0:
             return np.zeros(1)
         b = site.positive if v > 0 else site.negative

@@ -58,13 +58,13 @@ class LuGre(FrictionLaw):
                 "Wang2021 Eqs. (9)-(11)")
     kernel = lugre_kernel
 
-    def steady_state(self, v: float, site):  # type: ignore[no-untyped-def]
+    def steady_state(self, v: float, site):
         if v == 0.0:
             return np.zeros(1)
         G = float(stribeck_magnitude(v, site.as_array(), 0))
         return np.array([math.copysign(G, v) / site.bristle_stiffness])
 
-    def linearise(self, v: float, site) -> LinearFriction:  # type: ignore[no-untyped-def]
+    def linearise(self, v: float, site) -> LinearFriction:
         """Analytic: δż = −λ δz + a δv, λ = σ0|v|/G, a = v·G'(v)/G (Åström & Canudas de Wit,
         IEEE CSM 28 (2008) 101–114); δF = σ0 δz + σ1 δż + σ2 δv."""
         if v == 0.0:

@@ -38,7 +38,7 @@ class Stribeck(FrictionLaw):
     citation = "Armstrong-Hélouvry, Dupont, Canudas de Wit, Automatica 30 (1994) 1083-1138"
     kernel = stribeck_kernel
 
-    def pack(self, site):  # type: ignore[no-untyped-def]
+    def pack(self, site):
         return np.append(site.as_array(), site.smoothing_velocity)
 
 
