@@ -474,10 +474,12 @@ class ReferenceModel:
         self.quanta = {"screw_angle": encoder, "nut_angle": encoder,
                        "table": c.grating_resolution}
         self._kind = _profile_kind(profile)
-        # which loops are sampled: set by reference.sampled; 0 = continuous
-        self.n_pos = self.n_vel = self.n_cur = 0
-        self.sampled = (c.position_period > 0.0, c.velocity_period > 0.0,
-                        c.current_period > 0.0)
+        # which loops are sampled (their period in base periods; 0 = continuous): rhs takes
+        # their outputs from self.held, which reference.sampled updates
+        fastest = min((p for p in (c.position_period, c.velocity_period, c.current_period)
+                       if p > 0.0), default=0.0)
+        grid = sampling_grid(params, fastest) if fastest > 0.0 else Grid(0.0, 0, 0, 0, 1)
+        self.n_pos, self.n_vel, self.n_cur = grid.n_pos, grid.n_vel, grid.n_cur
         self.held = Held.zeros(len(self.axes))
 
     # ------------------------------------------------------------ topologies

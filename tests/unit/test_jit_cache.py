@@ -56,3 +56,25 @@ def test_generated_module_file_is_named_after_its_text(tmp_path) -> None:
     assert again is first
     other = codegen.compile_module(source + "OTHER = 1\n", [])
     assert other is not first and Path(other.__file__).name != Path(first.__file__).name
+
+
+def test_a_second_process_loads_the_assembled_model_from_disk(tmp_path) -> None:
+    """The claim of docs/extending.md: per assembled model, numba's disk cache is hit in a new
+    process (no recompilation)."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import feeddrive as fd\n"
+            "from feeddrive.control import ConstantSpeed\n"
+            "s = fd.DriveSystem(fd.preset('linear-motor-example'), 'linear-motor')\n"
+            "fd.simulate(s, ConstantSpeed(1e-3), 0.01)\n"
+            "st = s.model(ConstantSpeed(1e-3)).module.integrate.stats\n"
+            "print(sum(st.cache_hits.values()), sum(st.cache_misses.values()))\n")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                           text=True, check=True, timeout=300).stdout.split()
+            for _ in range(2)]
+    assert runs[0] == ["0", "1"]  # first process: compiled and stored
+    assert runs[1] == ["1", "0"]  # second process: loaded from disk
+    assert list(tmp_path.rglob("model_*.py"))

@@ -85,6 +85,7 @@ def _load_record() -> Any:
 
 
 DDFS_SINE = SineSpeed(1e-3, 5e-3, frequency=0.4)
+LINEAR = ConstantSpeed(1e-3, ramp_time=0.3)
 CDFS = ConstantSpeed(1.5e-3, ramp_time=0.3)
 
 CASES: dict[str, Case] = {
@@ -143,7 +144,7 @@ CASES: dict[str, Case] = {
                                    profile=CDFS, affects=("screw_speed", "screw_current")),
     # linear-motor direct drive
     "linear-motor": Case({}, drive="linear-motor", preset="linear-motor-example",
-                         profile=ConstantSpeed(1e-3, ramp_time=0.3)),
+                         profile=LINEAR),
     "linear-motor-sine-saturating": Case({"controller.current_limit": 2.0,
                                           "controller.voltage_limit": 40.0},
                                          drive="linear-motor", preset="linear-motor-example",
@@ -152,16 +153,17 @@ CASES: dict[str, Case] = {
     "linear-motor-kv-position-output": Case({"controller.kv_placement": "position_output",
                                              "controller.velocity_command_gain": 1.5},
                                             drive="linear-motor", preset="linear-motor-example",
-                                            affects=("motor_current",)),
+                                            profile=LINEAR, affects=("motor_current",)),
     "linear-motor-stribeck-load": Case({"friction.guide.law": "stribeck",
                                         "disturbances.load_force": 30.0,
                                         "disturbances.load_start": 0.2},
                                        drive="linear-motor", preset="linear-motor-example",
-                                       load=_load_record, affects=("table_speed",)),
+                                       profile=LINEAR, load=_load_record,
+                                       affects=("table_speed",)),
     "linear-motor-dahl-torque-off": Case({"friction.guide.law": "dahl",
                                           "controller.mode": "torque_off"},
                                          drive="linear-motor", preset="linear-motor-example",
-                                         affects=("table_speed", "motor_current")),
+                                         profile=LINEAR, affects=("table_speed", "motor_current")),
 }
 
 
