@@ -93,18 +93,27 @@ def sample_update(model: ReferenceModel, k: int, t: float, y: Any, grid: Grid) -
 def simulate_sampled(model: ReferenceModel, duration: float, *, output_interval: float = 1e-3,
                      y0: np.ndarray | None = None, rtol: float = 1e-10,
                      atol: np.ndarray | None = None, method: str = "DOP853",
-                     ) -> tuple[np.ndarray, np.ndarray]:
-    """(times [s], states) of ``model`` from ``y0`` (rest) over ``duration`` [s], sampled
-    loops held between their instants; output every ``output_interval`` [s] (a multiple of
-    the fastest loop period), the state recorded just after that instant's update (as the
-    engine records it).  The model's ``held`` values start at 0 and are left at their
-    final values."""
+                     ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Run ``model`` from ``y0`` (rest) over ``duration`` [s] with its sampled loops held
+    between their instants.
+
+    Returns (times [s], states, outputs): every ``output_interval`` [s] (a multiple of the
+    fastest loop period) the state just after that instant's update (as the engine records
+    it), and the held outputs of the sampled loops, named as the engine's signals
+    (``<axis>_speed_command`` [rad/s], ``<axis>_current_command`` [A], ``<axis>_voltage``
+    [V]).  The model's ``held`` values start at 0 and are left at their final values.
+    """
     grid = sampling_grid(model.params, output_interval)
     model.n_pos, model.n_vel, model.n_cur = grid.n_pos, grid.n_vel, grid.n_cur
     model.held = Held.zeros(len(model.axes))
     if atol is None:
         atol = model.tolerances(position=1e-15, speed=1e-13, current=1e-11)
     y = np.zeros(model.n_state) if y0 is None else np.array(y0, dtype=float)
+    loops = [(n, field) for n, field in ((grid.n_pos, "speed_command"),
+                                         (grid.n_vel, "current_command"),
+                                         (grid.n_cur, "voltage")) if n > 0]
+    outputs: dict[str, list[float]] = {f"{ax.name}_{name}": []
+                                       for ax in model.axes for _, name in loops}
     n_break = round(duration / grid.base)
     times, states = [], []
     for k in range(n_break + 1):
@@ -113,6 +122,9 @@ def simulate_sampled(model: ReferenceModel, duration: float, *, output_interval:
         if k % grid.out_every == 0:
             times.append(t)
             states.append(y.copy())
+            for a, ax in enumerate(model.axes):
+                for _, name in loops:
+                    outputs[f"{ax.name}_{name}"].append(getattr(model.held, name)[a])
         if k == n_break:
             break
         sol = solve_ivp(model.rhs, (t, (k + 1) * grid.base), y, method=method, rtol=rtol,
@@ -120,4 +132,5 @@ def simulate_sampled(model: ReferenceModel, duration: float, *, output_interval:
         if not sol.success:
             raise RuntimeError(f"reference integration failed at t = {t:g} s: {sol.message}")
         y = sol.y[:, -1]
-    return np.array(times), np.array(states)
+    return (np.array(times), np.array(states),
+            {name: np.array(v) for name, v in outputs.items()})

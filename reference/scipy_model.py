@@ -377,7 +377,8 @@ class Held:
 
     @classmethod
     def zeros(cls, n_axes: int) -> Held:
-        return cls(*([0.0] * n_axes for _ in range(5)))
+        return cls([0.0] * n_axes, [0.0] * n_axes, [0.0] * n_axes, [0.0] * n_axes,
+                   [0.0] * n_axes)
 
 
 @dataclass(frozen=True)
@@ -427,8 +428,10 @@ class ReferenceModel:
     load:
         Optional load-force record (``time``, ``force``), added to ``disturbances.load_force``.
 
-    Sampled loops (``controller.*_period > 0``) take their outputs from ``self.held`` in
-    ``rhs``; ``reference.sampled`` performs the sample updates.
+    Sampled loops (``controller.*_period > 0``; ``n_pos``, ``n_vel``, ``n_cur`` > 0 in base
+    periods) take their outputs from ``self.held`` in ``rhs`` (zero until updated), as the
+    engine's ``rhs`` takes its held vector; ``reference.sampled.simulate_sampled`` performs
+    the sample updates and the integration between them.
     """
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
@@ -675,12 +678,12 @@ class ReferenceModel:
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
         """dy/dt [SI] of the closed loop at time t [s] and state y (order ``state_names``)."""
         dy = np.zeros(self.n_state)
-        y = y.tolist() if isinstance(y, np.ndarray) else list(y)
-        u = self._controller(t, y, dy)
+        values: list[float] = y.tolist() if isinstance(y, np.ndarray) else list(y)
+        u = self._controller(t, values, dy)
         if self.linear:
-            self._linear_motor_rhs(t, y, u, dy)
+            self._linear_motor_rhs(t, values, u, dy)
         else:
-            self._ball_screw_rhs(t, y, u, dy)
+            self._ball_screw_rhs(t, values, u, dy)
         return dy
 
     __call__ = rhs

@@ -10,6 +10,7 @@ from . import (  # noqa: F401,E402  (registers commands)
     calibrate_cmd,
     creep_cmd,
     identify_cmd,  # noqa: F401,E402  (registers commands)
+    linear_cmd,
     params_cmd,  # noqa: F401  (registers commands)
     reproduce_cmd,
     simulate_cmd,

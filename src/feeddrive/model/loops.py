@@ -26,10 +26,13 @@ from .._jit import kernel
 from .codegen import Builder
 
 # parameter block of one axis (offsets from the axis' first slot)
+# ``inj_speed`` [rad/s] and ``inj_current`` [A] are zero inputs added to the continuous speed
+# and current commands: loop-breaking points for the linearisation (feeddrive.linear).
 AXIS_PARAMS = ("kpp", "kvp", "kvi", "kip", "kii", "kv", "kv_place", "v_basis", "v_feedback",
-               "ff", "i_max", "u_max", "enc_q", "grat_q", "speed_mode", "H")
+               "ff", "i_max", "u_max", "enc_q", "grat_q", "speed_mode", "H", "inj_speed",
+               "inj_current")
 KPP, KVP, KVI, KIP, KII, KV, KV_PLACE, V_BASIS, V_FEEDBACK, FF, I_MAX, U_MAX, ENC_Q, GRAT_Q, \
-    SPEED_MODE, H_AX = range(len(AXIS_PARAMS))
+    SPEED_MODE, H_AX, INJ_SPEED, INJ_CURRENT = range(len(AXIS_PARAMS))
 
 
 @kernel
@@ -147,7 +150,8 @@ def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: b
         "i_max": c.current_limit, "u_max": c.voltage_limit,
         "enc_q": 2.0 * math.pi / c.encoder_counts if c.encoder_counts > 0 else 0.0,
         "grat_q": c.grating_resolution,
-        "speed_mode": 1.0 if speed_mode else 0.0, "H": H,
+        "speed_mode": 1.0 if speed_mode else 0.0, "H": H, "inj_speed": 0.0,
+        "inj_current": 0.0,
     }
     first = -1
     for name in AXIS_PARAMS:
@@ -193,7 +197,7 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
     for ax, s in zip(axes, sc, strict=True):
         law = pos_law if ax.speed_law == "position" else spd_cmd
         out.append(f"    {s} = {law}({ax.reference} - {ax.position}, {ax.feedforward}, "
-                   f"{P}, {ax.param_offset})")
+                   f"{P}, {ax.param_offset}) + {P}[{ax.param_offset + INJ_SPEED}]")
     out.append("if n_vel > 0:")
     for ax, c in zip(axes, ic, strict=True):
         out.append(f"    {c} = {b.h(ax.name + '.current_command')}")
@@ -204,7 +208,7 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
     for ax, c in zip(axes, ic, strict=True):
         o = ax.param_offset
         out.append(f"    {c} = {sat}({ccmd}(e_{ax.name}, {b.y(ax.name + '_velocity_integral')}, "
-                   f"{P}, {o}), {P}[{o + I_MAX}])")
+                   f"{P}, {o}) + {P}[{o + INJ_CURRENT}], {P}[{o + I_MAX}])")
 
 
 def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: str) -> None:

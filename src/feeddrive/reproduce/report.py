@@ -17,6 +17,7 @@ from ..parameters import DriveParameters
 from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
 from ..units import SITES
+from .linear_section import linear_rows
 from .studies import MID, PAPER, StudySettings
 
 
@@ -292,6 +293,7 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
              "reversal overshoot [%]": f"{100 * r['reversal_overshoot']:.1f}"}
             for r in results["figs9_10"]["rows"]]
     when = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    linear_text, linear = linear_rows(params, results)
     sections: list[tuple[str, str, Any]] = [
         ("Targets for the shipped reading", "Where a target is missed, the model-reading "
          "study below is the evidence; docs/model-reading.md discusses it.",
@@ -305,6 +307,7 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         ("Analytic indicators", "Steady friction curves (Table 1): negative-slope bands, "
          "zero-slope speeds and LuGre passivity per site. " + rigid_body_band(params) + ".",
          indicators),
+        ("Linear analysis", linear_text, linear),
         ("Stiffness chain readings", "K_eq at mid-screw under readings of Eqs. (2)–(5); the "
          "paper states 21.6 N/µm.", readings),
         ("Fig. 7: DDFS at 1.55 mm/s against hollow-motor speed", "", fig7),
