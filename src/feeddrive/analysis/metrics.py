@@ -28,7 +28,6 @@ from dataclasses import asdict, dataclass
 from typing import Any, Literal
 
 import numpy as np
-from scipy.signal import periodogram
 
 __all__ = [
     "CreepMetrics",
@@ -297,6 +296,8 @@ def _dominant_frequency(t: np.ndarray, s: np.ndarray, ripple_ratio: float,
     n = x.size
     pad = 8
     nfft = 1 << int(math.ceil(math.log2(pad * n)))
+    from scipy.signal import periodogram  # imported here: keeps `feeddrive --help` fast
+
     freq, power = periodogram(x, fs=1.0 / dt, window="hann", detrend="linear", nfft=nfft)
     span = n * dt
     usable = freq >= 2.0 / span  # a period must fit at least twice into the window

@@ -9,8 +9,7 @@ from __future__ import annotations
 import typer
 
 from ..analysis.metrics import CreepThresholds
-from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, analyze_trace
-from ..measured_io import read_position_trace
+from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME
 from ._common import MM_PER_S, app, console, print_json, user_errors
 
 
@@ -60,6 +59,9 @@ def analyze_command(
 ) -> None:
     """Creep metrics of a position trace (per segment of a step-down run) and the critical
     creeping speed."""
+    from ..analysis.trace import analyze_trace
+    from ..measured_io import read_position_trace
+
     thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,
                                  max_ripple_ratio=max_ripple_ratio)
     trace = read_position_trace(file, time_column=time_column, position_column=position_column,

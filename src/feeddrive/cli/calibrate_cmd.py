@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import typer
 
-from ..analysis.calibrate import Target, Unknown, calibrate
-from ..parameters import save
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
 
@@ -27,6 +25,9 @@ def calibrate_command(
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Fit one unknown so the drive's critical creeping speed matches a target."""
+    from ..analysis.calibrate import Target, Unknown, calibrate
+    from ..parameters import save
+
     params = resolve_parameters(preset_name, params_file)
     result = calibrate(
         params, Target(drive=drive, critical_speed=target * MM_PER_S,

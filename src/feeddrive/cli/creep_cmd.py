@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import typer
 
-from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
-from ..simulate import DriveSystem
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
 
@@ -26,6 +24,9 @@ def creep_command(
 ) -> None:
     """Critical creeping speed [mm/s] (lowest table speed without stick-slip), resolution
     0.01 mm/s.  With --method both, the answers from rest and from a running table are shown."""
+    from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
+    from ..simulate import DriveSystem
+
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")
     params = resolve_parameters(preset_name, params_file)

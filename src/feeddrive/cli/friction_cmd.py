@@ -5,12 +5,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
 import typer
 from rich.markup import escape
 from rich.table import Table
 
-from .. import friction, stiffness
 from ..parameters import DriveParameters, LuGreParameters, ParameterError
 from ._common import (
     MM_PER_S,
@@ -45,6 +43,8 @@ def _positive(option: str, value: float, unit: str, allow_zero: bool = False) ->
 def _scan_setup(params: DriveParameters, mass: float | None, stiffness_n_per_um: float | None,
                 damping: float | None) -> tuple[float, float, float]:
     """(m [kg], k [N/m], c [N s/m]) of the scan; defaults come from the parameter set."""
+    from .. import stiffness
+
     m = params.table.mass if mass is None else _positive("--mass", mass, "kg")
     if stiffness_n_per_um is None:
         k = stiffness.equivalent_stiffness(params, stiffness.mid_screw_position(params.screw))
@@ -92,6 +92,10 @@ def friction_command(
     The scan is an indicator for a generic oscillator, not the drive: it leaves out the servo
     loops, the drive inertias and the other sites.
     """
+    import numpy as np
+
+    from .. import friction
+
     if site not in SITES:
         raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
     params = resolve_parameters(preset_name, params_file)

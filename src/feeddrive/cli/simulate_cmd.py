@@ -4,9 +4,6 @@ from __future__ import annotations
 
 import typer
 
-from ..control import ConstantSpeed, SineSpeed
-from ..plotting import plot_result
-from ..simulate import DriveSystem, simulate
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
 
@@ -32,6 +29,10 @@ def simulate_command(
 ) -> None:
     """Simulate a drive and print a summary: mean and ripple of table speed after the
     transient, stick fraction, motor speeds."""
+    from ..control import ConstantSpeed, SineSpeed
+    from ..plotting import plot_result
+    from ..simulate import DriveSystem, simulate
+
     params = resolve_parameters(preset_name, params_file)
     system = DriveSystem(params, drive=drive, table_position=position * MM)
     if profile == "constant":
