@@ -5,9 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ._common import app, console, resolve_parameters, user_errors
+from ..__main__ import INTERRUPTED
+from ._common import app, console, err_console, resolve_parameters, user_errors
 
 
 @app.command("reproduce")
@@ -26,15 +27,21 @@ def reproduce_command(
     from ..reproduce import run
 
     params = resolve_parameters(preset_name, params_file)
-    with Progress(TextColumn("{task.description}"), BarColumn(),
-                  TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-                  console=console) as bar:
-        task = bar.add_task("starting", total=None)
+    try:
+        with Progress(TextColumn("{task.description}"), BarColumn(),
+                      MofNCompleteColumn(), TimeElapsedColumn(),
+                      console=console) as bar:
+            task = bar.add_task("starting", total=None)
 
-        def progress(label: str, done: int, total: int) -> None:
-            bar.update(task, description=label, completed=done, total=total)
+            def progress(label: str, done: int, total: int) -> None:
+                bar.update(task, description=label, completed=done, total=total)
 
-        results = run(params, out, workers=workers, study=study, progress=progress)
+            results = run(params, out, workers=workers, study=study, progress=progress)
+    except KeyboardInterrupt:
+        err_console.print(f"interrupted: the studies finished so far are kept in "
+                          f"{out / 'data'} and reused by a rerun", markup=False,
+                          highlight=False, soft_wrap=True)
+        raise typer.Exit(code=INTERRUPTED) from None
     console.print(f"wrote {out / 'report.html'}, {out / 'report.md'}, "
                   f"{len(results['figures'])} figures, tables in {out} "
                   f"({results['wall_time_s']:.0f} s)")

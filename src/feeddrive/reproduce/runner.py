@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import hashlib
 import json
+import multiprocessing
+import signal
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -46,6 +47,10 @@ class _Store:
         tmp.write_text(json.dumps(value))
         tmp.replace(self.path(name))
         return value
+
+
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _critical_job(args: tuple[DriveParameters, str, float, float, StudySettings, str]
@@ -85,16 +90,27 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     done = sum(store.get(k) is not None for k in [*jobs, *study_jobs])
     if progress:
         progress("critical speeds", done, total)
-    with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
-        futures = {k: pool.submit(_critical_job, v) for k, v in jobs.items()
-                   if store.get(k) is None}
-        futures.update({k: pool.submit(reading_study.run_variant, v, settings)
-                        for k, v in study_jobs.items() if store.get(k) is None})
-        for k, fut in futures.items():
-            store.put(k, fut.result())  # each finished search is on disk at once
-            done += 1
-            if progress:
-                progress(f"critical speed {k}", done, total)
+    tasks: dict[str, tuple[Callable[..., dict[str, Any]], tuple[Any, ...]]] = {
+        k: (_critical_job, (v,)) for k, v in jobs.items() if store.get(k) is None}
+    tasks.update({k: (reading_study.run_variant, (v, settings))
+                  for k, v in study_jobs.items() if store.get(k) is None})
+    if tasks:
+        # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
+        # waits for its running searches took ~53 s to stop, issue 12 item 7)
+        pool = multiprocessing.Pool(max(1, workers), initializer=_ignore_sigint)
+        try:
+            pending = {k: pool.apply_async(fn, args) for k, (fn, args) in tasks.items()}
+            for k, handle in pending.items():
+                store.put(k, handle.get())  # each finished search is on disk at once
+                done += 1
+                if progress:
+                    progress(f"critical speed {k}", done, total)
+            pool.close()
+        except BaseException:
+            pool.terminate()
+            raise
+        finally:
+            pool.join()
     crit: dict[str, Any] = {k: store.get(k) for k in jobs}
     results["critical"] = crit
     results["reading_study"] = [store.get(k) for k in study_jobs]
