@@ -12,8 +12,10 @@ from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters,
 def calibrate_command(
     unknown: str = typer.Option("controller.velocity_integral_gain", "--unknown",
                                 help="Dotted parameter path to fit."),
-    low: float = typer.Option(500.0, "--low", help="Lower end of the search bracket (SI)."),
-    high: float = typer.Option(20000.0, "--high", help="Upper end of the search bracket (SI)."),
+    low: float = typer.Option(500.0, "--low", help="Lower end of the search bracket "
+                              "[SI unit of --unknown]."),
+    high: float = typer.Option(20000.0, "--high", help="Upper end of the search bracket "
+                               "[SI unit of --unknown]."),
     drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
     target: float = typer.Option(1.56, "--target", help="Target critical speed [mm/s] "
                                  "(default: Wang2021 Sect. 5.2, CDFS simulated)."),

@@ -79,10 +79,11 @@ def friction_command(
     damping: float | None = typer.Option(
         None, "--damping", metavar="N_S_PER_M",
         help="Scan: damper parallel to the spring [N s/m]. Default: stiffness.axial_damping "
-             "(0 for wang2021; the paper gives no structural damping)."),
+             "of the parameter set (2541 N s/m for wang2021, an assumed 5 % damping ratio; "
+             "0 for wang2021-literal: the paper gives no structural damping)."),
     speed_min: float = typer.Option(0.05, "--speed-min", help="Scan: lowest speed [mm/s]."),
     speed_max: float = typer.Option(5.0, "--speed-max", help="Scan: highest speed [mm/s]."),
-    points: int = typer.Option(400, "--points", help="Scan: speeds, log-spaced."),
+    points: int = typer.Option(400, "--points", help="Scan: number of speeds, log-spaced [-]."),
 ) -> None:
     """LuGre parameters of one friction site (Wang2021 Table 1) and analytic indicators.
 

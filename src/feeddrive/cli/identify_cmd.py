@@ -103,13 +103,13 @@ def static_command(
     force_unit: str | None = typer.Option(None, "--force-unit", help="N (default) or kN."),
     current_unit: str | None = typer.Option(None, "--current-unit", help="A (default) or mA."),
     torque_constant: float | None = typer.Option(
-        None, "--torque-constant", help="K_t (N m/A) for a current column (default: the "
+        None, "--torque-constant", help="K_t [N m/A] for a current column (default: the "
         "parameter set's motor of the site)."),
-    lead: float | None = typer.Option(None, "--lead", help="Screw lead (mm) for a current "
+    lead: float | None = typer.Option(None, "--lead", help="Screw lead [mm] for a current "
                                       "column (default: the parameter set's)."),
     weighting: str = typer.Option("relative", "--weighting",
                                   help="relative (noise ∝ force) or absolute."),
-    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level."),
+    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level [-]."),
     sep: str | None = typer.Option(None, "--sep", help=_SEP_HELP),
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
@@ -159,7 +159,7 @@ def dynamic_command(
     file: str = typer.Argument(..., help="CSV of a pre-sliding test (time, force, position)."),
     site: str = typer.Option("screw", "--site", help=_SITE_HELP),
     mass: float | None = typer.Option(
-        None, "--mass", help="Moving mass (kg) (default: the site's inertia referred to the "
+        None, "--mass", help="Moving mass [kg] (default: the site's inertia referred to the "
         "table, J/H² for screw and nut, the table mass for the guide)."),
     model: str = typer.Option("lugre", "--model", help="lugre (full bristle model) or linear "
                               "(m x'' + (σ1+σ2) x' + σ0 x = F, for |F| ≪ F_s)."),
@@ -176,7 +176,7 @@ def dynamic_command(
     force_unit: str | None = typer.Option(None, "--force-unit", help="N (default) or kN."),
     position_unit: str | None = typer.Option(None, "--position-unit",
                                              help="um (default), nm, mm, m."),
-    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level."),
+    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level [-]."),
     sep: str | None = typer.Option(None, "--sep", help=_SEP_HELP),
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),

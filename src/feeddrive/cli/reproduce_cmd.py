@@ -18,7 +18,8 @@ def reproduce_command(
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
                                            "(default wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    workers: int = typer.Option(2, "--workers", help="Processes for the critical-speed searches."),
+    workers: int = typer.Option(2, "--workers",
+                                help="Processes for the critical-speed searches [-]."),
     study: bool = typer.Option(True, "--study/--no-study", help="Also run the model-reading "
                                "study (variants of the wang2021 presets)."),
 ) -> None:
