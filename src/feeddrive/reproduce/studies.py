@@ -16,6 +16,7 @@ from ..analysis.critical import (
     critical_speed_stepdown,
     judge_trial,
 )
+from ..analysis.metrics import reversal_overshoot
 from ..control import ConstantSpeed, SineSpeed
 from ..parameters import DriveParameters
 from ..simulate import DriveSystem, simulate
@@ -131,21 +132,6 @@ def fig7(params: DriveParameters, cdfs_critical: float, settings: StudySettings
                      "ripple_ratio": m.ripple_ratio})
         traces[f"{k:g}"] = speed_trace(r)
     return {"rows": rows, "traces": traces, "table_speed": v}
-
-
-def reversal_overshoot(time: np.ndarray, speed: np.ndarray, reference: np.ndarray,
-                       amplitude: float, frequency: float) -> float:
-    """Largest |v − v_ref| / amplitude within ±10 % of a period around each reference zero
-    crossing after the first period (Wang2021 Figs. 9–10: overshoot at speed reversal)."""
-    period = 1.0 / frequency
-    crossings = np.arange(1, int(time[-1] * 2 * frequency) + 1) * period / 2.0
-    crossings = crossings[(crossings >= period) & (crossings <= time[-1] - 0.1 * period)]
-    worst = 0.0
-    for tc in crossings:
-        sel = np.abs(time - tc) <= 0.1 * period
-        if sel.any():
-            worst = max(worst, float(np.max(np.abs(speed[sel] - reference[sel]))))
-    return worst / amplitude
 
 
 def figs9_10(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
