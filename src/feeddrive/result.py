@@ -136,11 +136,11 @@ class Result:
                 "reversals": s.reversals,
             })
         else:
-            m = self.creep_metrics()
+            constant = self.dataset.attrs.get("profile", "").startswith("ConstantSpeed")
+            m = self.creep_metrics(window=None if constant else self._hold_window())
             window = (m.window_start, m.window_end)
             out.update({
-                "profile": "constant" if self.dataset.attrs.get("profile", "").startswith(
-                    "ConstantSpeed") else "sampled",
+                "profile": "constant" if constant else "sampled",
                 "command_speed_mm_s": 1e3 * self.command_speed,
                 "mean_table_speed_mm_s": 1e3 * m.mean_speed,
                 "ripple_ratio": m.ripple_ratio,
@@ -158,6 +158,21 @@ class Result:
             "solver": self.solver_stats,
         })
         return out
+
+    def _hold_window(self) -> tuple[float, float]:
+        """The steady window (:func:`steady_window`) of the first stretch where a sampled
+        command holds its largest speed (the top of a trapezoid, the first step of a
+        staircase), so that ramps are not judged as creep."""
+        from .analysis.metrics import steady_window
+
+        ref, c = self["table_speed_reference"], self.command_speed
+        hold = np.abs(ref - c) <= 1e-6 * abs(c)
+        first = int(np.argmax(hold))
+        after = np.flatnonzero(~hold[first:])
+        last = first + int(after[0]) - 1 if after.size else ref.size - 1
+        if last - first < 16:
+            return float(self.time[0]), float(self.time[-1])
+        return steady_window(self.time[first:last + 1], self["table_speed"][first:last + 1], c)
 
     def save(self, path: str | Path) -> Path:
         from .io import save_result

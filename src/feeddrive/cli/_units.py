@@ -61,3 +61,13 @@ def position(option: str, value: float, params: DriveParameters) -> float:
         warn(f"{option} = {value:g} mm looks like a value in metres "
              f"({value * 1e3:g} mm?); the CLI takes mm")
     return value * MM
+
+
+def number(value: object, digits: int = 4) -> str:
+    """A value as printed by the CLI: ``digits`` significant digits, "none" for None
+    (a summary used to print 17 digits, issue 12 item 13)."""
+    if value is None:
+        return "none"
+    if isinstance(value, float):
+        return f"{value:.{digits}g}"
+    return str(value)

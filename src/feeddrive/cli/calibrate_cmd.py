@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import typer
 
-from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from . import _units
+from ._common import app, console, print_json, resolve_parameters, user_errors
 
 
 @app.command("calibrate")
@@ -32,8 +33,9 @@ def calibrate_command(
 
     params = resolve_parameters(preset_name, params_file)
     result = calibrate(
-        params, Target(drive=drive, critical_speed=target * MM_PER_S,
-                       table_position=position * MM, nut_speed=nut_speed * MM_PER_S),
+        params, Target(drive=drive, critical_speed=_units.speed("--target", target, positive=True),
+                       table_position=_units.position("--position", position, params),
+                       nut_speed=_units.speed("--nut-speed", nut_speed)),
         Unknown(path=unknown, low=low, high=high),
         progress=None if as_json else (lambda msg: console.print(f"  {msg}")))
     if out:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import typer
 
-from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from . import _units
+from ._common import app, console, print_json, resolve_parameters, user_errors
 
 
 @app.command("creep")
@@ -30,16 +31,17 @@ def creep_command(
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")
     params = resolve_parameters(preset_name, params_file)
-    system = DriveSystem(params, drive=drive, table_position=position * MM)
+    system = DriveSystem(params, drive=drive,
+                         table_position=_units.position("--position", position, params))
+    v_n = _units.speed("--nut-speed", nut_speed)
+    lo, hi = _units.speed_range("--low", low, "--high", high)
     results = []
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
-            system, nut_speed=nut_speed * MM_PER_S, speed_range=(low * MM_PER_S, high * MM_PER_S),
-            duration=duration))
+            system, nut_speed=v_n, speed_range=(lo, hi), duration=duration))
     if method in ("stepdown", "both"):
         results.append(critical_speed_stepdown(
-            system, nut_speed=nut_speed * MM_PER_S, start_speed=high * MM_PER_S,
-            lowest_speed=low * MM_PER_S))
+            system, nut_speed=v_n, start_speed=hi, lowest_speed=lo))
     out = {"drive": drive, "table_position_mm": position, "nut_speed_mm_s": nut_speed,
            "parameter_set": params.name,
            "critical_speed_mm_s": results[0].to_dict()["critical_speed_mm_s"],
