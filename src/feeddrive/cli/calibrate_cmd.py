@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from . import _units
-from ._common import app, console, print_json, resolve_parameters, user_errors
+from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
 
 
 @app.command("calibrate")
@@ -38,13 +38,24 @@ def calibrate_command(
                        nut_speed=_units.speed("--nut-speed", nut_speed)),
         Unknown(path=unknown, low=low, high=high),
         progress=None if as_json else (lambda msg: console.print(f"  {msg}")))
-    if out:
-        save(result.parameters, out)
-    achieved = result.achieved.to_dict()["critical_speed_mm_s"]
+    written = out if out and result.reached else None
+    if written:
+        save(result.parameters, written)
+    achieved = result.achieved.to_dict()
     data = {"unknown": unknown, "value": result.value, "target_mm_s": target,
-            "achieved_mm_s": achieved, "evaluations": result.evaluations, "written": out}
+            "achieved_mm_s": achieved["critical_speed_mm_s"], "achieved": achieved["display"],
+            "reached": result.reached, "reason": result.reason() or None,
+            "evaluations": result.evaluations, "written": written}
     if as_json:
         print_json(data)
-        return
-    console.print(f"{unknown} = {result.value:.6g} → {drive.upper()} critical speed "
-                  f"{achieved} mm/s (target {target} mm/s), {result.evaluations} evaluations")
+    else:
+        console.print(f"{unknown} = {result.value:.6g} → {drive.upper()} critical speed "
+                      f"{achieved['display']} (target {target:g} mm/s), {result.evaluations} "
+                      "evaluations", markup=False, highlight=False)
+        if written:
+            console.print(f"wrote {written}", markup=False, highlight=False)
+    if not result.reached:
+        err_console.print(f"error: target {target:g} mm/s not reached: {result.reason()}"
+                          + (f"; {out} not written" if out else ""),
+                          markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1)
