@@ -315,3 +315,143 @@ def test_a_run_that_needs_much_memory_is_announced() -> None:
     # measured on main: 12.2 GB when the solver gave up at 5e7 samples, before the copies
     assert 12.2e9 < run_budget(50000.0, max_step=1e-3, output_interval=1e-3,
                                max_steps=10**9).memory_bytes < 30e9
+
+
+# ------------------------------------------------------------------ item 10: profiles
+
+
+def test_stepdown_profile_can_be_simulated_and_then_analysed(tmp_path: Path) -> None:
+    """Issue 12 item 10: the CLI offered only constant and sine; the paper's step-down
+    staircase (Wang2021 Sect. 6) can now be simulated and fed to `analyze`.  The wang2021
+    CDFS creeps at 1 mm/s and is smooth at 2 mm/s (critical 1.56 mm/s, Sect. 5.2)."""
+    import json
+
+    out = tmp_path / "stepdown.csv"
+    result = run("simulate", "--profile", "stepdown", "--table-speed", "3", "--lowest-speed",
+                 "1", "--step", "1", "--dwell", "3", "--output", str(out), "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["profile"] == "stepdown" and summary["command_speed_mm_s"] == 3.0
+    analysed = run("analyze", str(out), "--json")
+    assert analysed.exit_code == 0, analysed.output
+    data = json.loads(analysed.stdout)
+    commands = [round(s["metrics"]["command_speed"], 6) for s in data["segments"]]
+    assert commands == [3.0, 2.0, 1.0]
+    crit = data["critical_speed"][0]
+    assert crit["lowest_smooth"] == pytest.approx(2.0)
+    assert crit["first_creeping"] == pytest.approx(1.0)
+
+
+def test_trapezoid_profile_ramps_up_holds_and_stops(tmp_path: Path) -> None:
+    import json
+
+    import pandas as pd
+
+    out = tmp_path / "trap.csv"
+    result = run("simulate", "--profile", "trapezoid", "--table-speed", "2", "--duration", "3",
+                 "--ramp-time", "0.5", "--output", str(out), "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["profile"] == "trapezoid" and summary["verdict"] == "smooth"
+    lo, hi = summary["window_s"]
+    assert 0.5 <= lo and hi <= 2.5  # judged on the hold, not on the ramps
+    ref = pd.read_csv(out)["table_speed_reference [mm/s]"].to_numpy()
+    assert ref.max() == pytest.approx(2.0)
+    assert ref[0] == 0.0 and abs(ref[-1]) < 1e-9
+
+
+def test_csv_profile_follows_the_file(tmp_path: Path) -> None:
+    import json
+
+    path = tmp_path / "profile.csv"
+    path.write_text("# a ramp and a hold\ntime [s],table_speed [mm/s]\n0,0\n0.2,1.5\n1.5,1.5\n",
+                    encoding="utf-8")
+    result = run("simulate", "--profile", "csv", "--profile-file", str(path), "--json")
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["command_speed_mm_s"] == pytest.approx(1.5)
+    assert summary["window_s"][1] == pytest.approx(1.5)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,v\n0,1\n1,1\n", encoding="utf-8")
+    line = one_line_error(run("simulate", "--profile", "csv", "--profile-file", str(bad)))
+    assert "bad.csv" in line and "'time'" in line
+
+
+# ------------------------------------------------------------------ items 11, 12: metrics
+
+
+def test_sine_runs_are_summarised_with_sine_metrics() -> None:
+    """Issue 12 item 11: a 2 mm/s sine was summarised as "mean −0.36 mm/s, creeping"."""
+    import json
+
+    result = run("simulate", "--profile", "sine", "--table-speed", "2", "--frequency", "0.5",
+                 "--duration", "5", "--json")
+    assert result.exit_code == 0, result.output
+    s = json.loads(result.stdout)
+    assert "verdict" not in s and "mean_table_speed_mm_s" not in s
+    assert s["reversals"] >= 3
+    assert 0.0 < s["reversal_overshoot"] < 1.0
+    assert 0.0 < s["tracking_error_rms_mm_s"] <= s["tracking_error_max_mm_s"] < 2.0
+    assert s["stick_time_at_reversals_s"] >= s["reference_dwell_at_reversals_s"] > 0.0
+    text = run("simulate", "--profile", "sine", "--table-speed", "2", "--frequency", "0.5",
+               "--duration", "5").stdout
+    assert "reversal overshoot" in text and "verdict" not in text
+
+
+def test_sine_metrics_of_a_perfect_follower() -> None:
+    import numpy as np
+
+    from feeddrive.analysis.metrics import sine_metrics
+
+    t = np.arange(0.0, 10.0, 1e-3)
+    ref = 2e-3 * np.sin(2 * np.pi * 0.5 * t)
+    m = sine_metrics(t, ref, ref, frequency=0.5)
+    assert m.tracking_error_max == 0.0 and m.reversal_overshoot == 0.0
+    # a follower that spends exactly the command's own time near zero speed
+    assert m.stick_time_at_reversals == pytest.approx(m.reference_dwell, rel=1e-3)
+    assert m.reference_dwell == pytest.approx(2 * np.arcsin(0.1) / (2 * np.pi * 0.5))
+
+
+def test_following_error_and_position_deviation_in_micrometres() -> None:
+    """Issue 12 item 12: the figures a machine-tool engineer reads first, in the summary and
+    the JSON.  A 1 mm/s CDFS run creeps (critical 1.56 mm/s): its following error saws."""
+    import json
+
+    s = json.loads(run("simulate", "--table-speed", "1", "--duration", "6", "--json").stdout)
+    assert s["verdict"] == "creeping"
+    assert 1.0 < s["position_deviation_um"] < 1000.0
+    assert s["following_error_rms_um"] <= s["following_error_max_um"]
+    smooth = json.loads(run("simulate", "--table-speed", "3", "--duration", "6",
+                            "--json").stdout)
+    assert smooth["position_deviation_um"] < 0.1 * s["position_deviation_um"]
+    text = run("simulate", "--table-speed", "1", "--duration", "6").stdout
+    assert "following error" in text and "µm" in text
+
+
+# ------------------------------------------------------------------ item 13: precision
+
+
+def test_version_option() -> None:
+    """Issue 12 item 13: there was no `--version`."""
+    from importlib.metadata import version
+
+    result = run("--version")
+    assert result.exit_code == 0
+    assert result.stdout.strip() == f"feeddrive {version('feeddrive')}"
+
+
+def test_summary_printed_with_sensible_precision() -> None:
+    """Issue 12 item 13: the summary printed 17 digits."""
+    import re
+
+    text = run("simulate", "--table-speed", "1", "--duration", "2").stdout
+    assert not re.search(r"\d\.\d{6,}", text), text
+
+
+def test_csv_tables_without_float_noise(tmp_path: Path) -> None:
+    """Issue 12 item 13: `220.89999999999998` in the paper columns of the CSV tables."""
+    from feeddrive.reproduce.studies import write_csv
+
+    path = tmp_path / "t.csv"
+    write_csv([{"k_sa_paper_N_per_um": 1e-6 * 220.9e6, "x": 0.1 + 0.2}], path)
+    assert path.read_text(encoding="utf-8").splitlines()[1] == "220.9,0.3"

@@ -119,6 +119,7 @@ def simulate_command(
         err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
     summary = result.summary()
+    summary["profile"] = profile
     if output:
         summary["output"] = str(result.save(output))
     if plot:

@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from .. import __version__
 from ..analysis.critical import format_critical_speed
@@ -16,7 +15,7 @@ from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
 from ..parameters.sets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
-from .studies import MID, PAPER, StudySettings
+from .studies import MID, PAPER, StudySettings, write_csv
 
 
 def _fmt(v: float | None, digits: int = 2) -> str:
@@ -274,7 +273,7 @@ def _table_html(rows: list[dict[str, str]]) -> str:
 def write(params: DriveParameters, settings: StudySettings, results: dict[str, Any],
           out: Path) -> tuple[Path, Path]:
     comparison = comparison_rows(params, results)
-    pd.DataFrame(comparison).to_csv(out / "paper_comparison.csv", index=False)
+    write_csv(comparison, out / "paper_comparison.csv")
     assumptions = [{"id": a.id, "fields": ", ".join(a.fields), "value": a.value,
                     "fitted": "fitted" if a.fitted else "assumed", "why": a.rationale}
                    for a in wang2021.ASSUMPTIONS]

@@ -17,13 +17,11 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-
 from ..control import ConstantSpeed
 from ..parameters import DriveParameters, dumps
 from ..simulate import DriveSystem, simulate
 from . import figures, reading_study, report, studies
-from .studies import MID, PAPER, StudySettings
+from .studies import MID, PAPER, StudySettings, write_csv
 
 
 class _Store:
@@ -167,26 +165,26 @@ def _mm(v: float | None) -> float | None:
 
 
 def _write_tables(out: Path, results: dict[str, Any]) -> None:
-    pd.DataFrame([{
+    write_csv([{
         "position_mm": 1e3 * r["position"], "k_sa_N_per_um": 1e-6 * r["k_sa"],
         "k_sa_paper_N_per_um": 1e-6 * r["k_sa_paper"], "k_eq_N_per_um": 1e-6 * r["k_eq"],
         "cdfs_critical_mm_s": _mm(r["cdfs"]), "cdfs_paper_mm_s": _mm(r["cdfs_paper"]),
         "ddfs_critical_mm_s": _mm(r["ddfs"]), "ddfs_paper_mm_s": _mm(r["ddfs_paper"]),
-    } for r in results["table3"]]).to_csv(out / "table3_position.csv", index=False)
-    pd.DataFrame([{
+    } for r in results["table3"]], out / "table3_position.csv")
+    write_csv([{
         "multiple_of_cdfs_critical": r["multiple"], "nut_speed_mm_s": _mm(r["nut_speed"]),
         "overshoot_percent": 100 * r["overshoot"], "settling_time_s": r["settling_time"],
         "verdict": r["verdict"],
-    } for r in results["fig7"]["rows"]]).to_csv(out / "fig7_nut_speed.csv", index=False)
-    pd.DataFrame([{
+    } for r in results["fig7"]["rows"]], out / "fig7_nut_speed.csv")
+    write_csv([{
         "table_amplitude_mm_s": _mm(r["table_amplitude"]),
         "nut_amplitude_mm_s": _mm(r["nut_amplitude"]),
         "screw_amplitude_mm_s": _mm(r["screw_amplitude"]),
         "reversal_overshoot_percent": 100 * r["reversal_overshoot"],
-    } for r in results["figs9_10"]["rows"]]).to_csv(out / "figs9_10_reversal.csv", index=False)
-    pd.DataFrame([{
+    } for r in results["figs9_10"]["rows"]], out / "figs9_10_reversal.csv")
+    write_csv([{
         "search": k, "drive": v["drive"], "position_mm": v["table_position_mm"],
         "nut_speed_mm_s": v["nut_speed_mm_s"], "start": v["start"],
         "critical_speed_mm_s": v["critical_speed_mm_s"], "status": v["status"],
         "trials": len(v["trials"]),
-    } for k, v in results["critical"].items()]).to_csv(out / "critical_speeds.csv", index=False)
+    } for k, v in results["critical"].items()], out / "critical_speeds.csv")

@@ -7,6 +7,7 @@ JSON, tabulated and plotted; the traces needed for figures are returned as array
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -41,6 +42,17 @@ PAPER: dict[str, Any] = {
     "fig7_rule_multiple": 10.0,  # Sect. 5.2: v_n ≥ 10× the CDFS critical speed
 }
 
+
+# CSV tables: 10 significant digits, so 1e-6 × 220.9e6 is written 220.9 and not
+# 220.89999999999998 (issue 12 item 13); as feeddrive.io writes signals
+CSV_FLOAT = "%.10g"
+
+
+def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
+    """A table of rows as CSV, floats without binary noise."""
+    import pandas as pd
+
+    pd.DataFrame(rows).to_csv(path, index=False, float_format=CSV_FLOAT)
 
 @dataclass(frozen=True)
 class StudySettings:
