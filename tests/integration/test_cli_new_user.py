@@ -455,3 +455,23 @@ def test_csv_tables_without_float_noise(tmp_path: Path) -> None:
     path = tmp_path / "t.csv"
     write_csv([{"k_sa_paper_N_per_um": 1e-6 * 220.9e6, "x": 0.1 + 0.2}], path)
     assert path.read_text(encoding="utf-8").splitlines()[1] == "220.9,0.3"
+
+
+# ------------------------------------------------------------------ item 5: identify dynamic
+
+
+def test_identify_dynamic_refuses_a_sliding_record(tmp_path: Path) -> None:
+    """Issue 12 item 5: a 10-mm sliding record was accepted as a pre-sliding test (rc 0,
+    σ0 = 4.5e-5 N/µm against 36.4)."""
+    import numpy as np
+
+    t = np.linspace(0.0, 1.0, 201)
+    force = 80.0 + 2.0 * np.sin(2 * np.pi * 5 * t)  # below F_s = 94.6 N: sliding at F_c
+    position_um = 10_000.0 * t  # 10 mm at 10 mm/s
+    path = tmp_path / "sliding.csv"
+    path.write_text("time,force,position\n" + "".join(
+        f"{a:.6g},{b:.6g},{c:.6g}\n" for a, b, c in zip(t, force, position_um, strict=True)),
+        encoding="utf-8")
+    line = one_line_error(run("identify", "dynamic", str(path)))
+    assert "sliding.csv" in line and "spans 10 mm" in line
+    assert "not a pre-sliding test" in line and "identify static" in line
