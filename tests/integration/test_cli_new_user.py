@@ -475,3 +475,22 @@ def test_identify_dynamic_refuses_a_sliding_record(tmp_path: Path) -> None:
     line = one_line_error(run("identify", "dynamic", str(path)))
     assert "sliding.csv" in line and "spans 10 mm" in line
     assert "not a pre-sliding test" in line and "identify static" in line
+
+
+# ------------------------------------------------------------------ item 14: odd files
+
+
+def test_analyze_says_what_an_odd_file_is(tmp_path: Path) -> None:
+    """Issue 12 item 14: a binary or Parquet file gave "line 2: 1 cells, but the header
+    (line 1) has 4 columns"; a directory gave "no such file"."""
+    parquet = tmp_path / "run.parquet"
+    assert run("simulate", "--table-speed", "1", "--duration", "0.3", "--output",
+               str(parquet)).exit_code == 0
+    binary = tmp_path / "trace.dat"
+    binary.write_bytes(b"time,position\n\x00\x01\x02\x03" * 8)
+    cases = {str(parquet): "run.parquet: is a Parquet file, not CSV text",
+             str(binary): "trace.dat: is a binary file",
+             str(tmp_path): "is a directory; expected a CSV file",
+             str(tmp_path / "missing.csv"): "missing.csv: no such file"}
+    for path, expected in cases.items():
+        assert expected in one_line_error(run("analyze", path)), path
