@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
+from .. import __version__, protocol
 from ..analysis.critical import format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
@@ -296,8 +296,9 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
          target_rows(results)),
         ("Paper numbers beside ours", "Every number of Wang2021 the study touches. "
          "'fitted' means the number was used to fit an unknown; everything else is predicted. "
-         "Critical speeds are from rest (scan + bisection to 0.01 mm/s) unless the row says "
-         "step-down.", comparison),
+         f"Critical speeds are {protocol.describe('rest')}, unless the row says step-down: "
+         f"{protocol.describe('running')}.  `feeddrive creep` runs the same protocol by "
+         "default and gives the same numbers.", comparison),
         ("Modelling assumptions", "What the paper does not give, and what we chose "
          "(parameters/sets/wang2021.py; change any of them in a parameter file).", assumptions),
         ("Analytic indicators", "Steady friction curves (Table 1): negative-slope bands, "

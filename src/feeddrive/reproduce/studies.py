@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import protocol
 from ..analysis.critical import (
     critical_speed_from_rest,
     critical_speed_stepdown,
@@ -54,14 +55,15 @@ def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
 
     pd.DataFrame(rows).to_csv(path, index=False, float_format=CSV_FLOAT)
 
+
 @dataclass(frozen=True)
 class StudySettings:
     """Search settings shared by the studies (speeds in m/s, times in s)."""
 
-    trial_duration: float = 12.0
-    speed_range: tuple[float, float] = (0.02e-3, 3.02e-3)
-    coarse_step: float = 0.2e-3
-    resolution: float = 0.01e-3
+    trial_duration: float = protocol.TRIAL_DURATION
+    speed_range: tuple[float, float] = protocol.SPEED_RANGE
+    coarse_step: float = protocol.COARSE_STEP
+    resolution: float = protocol.RESOLUTION
     fig7_multiples: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 15.0, 20.0)
     fig7_duration: float = 12.0
     sine_frequency: float = 0.2
@@ -84,7 +86,8 @@ def critical_speed_running(params: DriveParameters, drive: str, position: float,
     """Critical speed by the paper's step-down protocol on a running table (Sect. 6)."""
     res = critical_speed_stepdown(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
-        start_speed=settings.speed_range[1], lowest_speed=settings.speed_range[0])
+        start_speed=settings.speed_range[1], lowest_speed=settings.speed_range[0],
+        step=settings.resolution, coarse_step=protocol.STAIRCASE_COARSE_STEP)
     return res.to_dict()
 
 
