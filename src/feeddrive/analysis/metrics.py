@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass
 from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = [
     "CreepMetrics",
@@ -400,15 +401,26 @@ def reversal_overshoot(time: np.ndarray, speed: np.ndarray, reference: np.ndarra
                        amplitude: float, frequency: float) -> float:
     """Largest |v − v_ref| / amplitude within ±10 % of a period around each reference zero
     crossing after the first period (Wang2021 Figs. 9–10: overshoot at speed reversal)."""
+    return reversal_overshoot_at(time, speed, reference, amplitude, frequency)[0]
+
+
+def reversal_overshoot_at(time: ArrayLike, speed: ArrayLike, reference: ArrayLike,
+                          amplitude: float, frequency: float) -> tuple[float, float | None]:
+    """:func:`reversal_overshoot` and the time [s] where it occurs (None: no reversal)."""
+    t = np.asarray(time, dtype=float)
+    v = np.asarray(speed, dtype=float)
+    ref = np.asarray(reference, dtype=float)
     period = 1.0 / frequency
-    crossings = np.arange(1, int(time[-1] * 2 * frequency) + 1) * period / 2.0
-    crossings = crossings[(crossings >= period) & (crossings <= time[-1] - 0.1 * period)]
-    worst = 0.0
+    crossings = np.arange(1, int(t[-1] * 2 * frequency) + 1) * period / 2.0
+    crossings = crossings[(crossings >= period) & (crossings <= t[-1] - 0.1 * period)]
+    worst, at = 0.0, None
     for tc in crossings:
-        sel = np.abs(time - tc) <= 0.1 * period
-        if sel.any():
-            worst = max(worst, float(np.max(np.abs(speed[sel] - reference[sel]))))
-    return worst / amplitude
+        sel = np.flatnonzero(np.abs(t - tc) <= 0.1 * period)
+        if sel.size:
+            k = sel[int(np.argmax(np.abs(v[sel] - ref[sel])))]
+            if at is None or abs(v[k] - ref[k]) > worst:
+                worst, at = float(abs(v[k] - ref[k])), float(t[k])
+    return worst / amplitude, at
 
 
 @dataclass(frozen=True)
