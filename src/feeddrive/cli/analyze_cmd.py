@@ -6,10 +6,13 @@ feeddrive.measured_io.
 
 from __future__ import annotations
 
+import math
+
 import typer
 
 from ..analysis.metrics import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME
+from ..parameters import ParameterError
 from ._common import MM_PER_S, app, console, print_json, user_errors
 
 
@@ -65,6 +68,12 @@ def analyze_command(
     from ..analysis.trace import analyze_trace
     from ..measured_io import read_position_trace
 
+    if smoothing is not None and not (math.isfinite(smoothing) and smoothing > 0):
+        raise ParameterError("--smoothing", smoothing, "expected a window > 0 [ms]")
+    for option, value, unit in (("--min-step", min_step, "mm/s"),
+                                ("--min-segment", min_segment, "s")):
+        if not (math.isfinite(value) and value > 0):
+            raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
     thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,
                                  max_ripple_ratio=max_ripple_ratio)
     trace = read_position_trace(file, time_column=time_column, position_column=position_column,

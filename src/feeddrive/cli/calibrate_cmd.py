@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import math
+
 import typer
 
+from ..parameters import ParameterError
 from . import _units
 from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
 
@@ -31,6 +34,11 @@ def calibrate_command(
     from ..analysis.calibrate import Target, Unknown, calibrate
     from ..parameters import save
 
+    if not (math.isfinite(low) and low > 0):
+        raise ParameterError("--low", low, f"expected 0 < --low < --high [SI unit of {unknown}]")
+    if not (math.isfinite(high) and high > low):
+        raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
+                                             f"{unknown}]")
     params = resolve_parameters(preset_name, params_file)
     result = calibrate(
         params, Target(drive=drive, critical_speed=_units.speed("--target", target, positive=True),

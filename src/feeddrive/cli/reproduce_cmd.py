@@ -8,6 +8,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ..__main__ import INTERRUPTED
+from ..parameters import ParameterError
 from ._common import app, console, err_console, resolve_parameters, user_errors
 
 
@@ -27,6 +28,8 @@ def reproduce_command(
     Finished studies are kept in OUT/data and reused on a rerun."""
     from ..reproduce import run
 
+    if workers < 1:
+        raise ParameterError("--workers", workers, "expected a whole number ≥ 1")
     params = resolve_parameters(preset_name, params_file)
     try:
         with Progress(TextColumn("{task.description}"), BarColumn(),
