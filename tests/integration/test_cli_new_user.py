@@ -494,3 +494,55 @@ def test_analyze_says_what_an_odd_file_is(tmp_path: Path) -> None:
              str(tmp_path / "missing.csv"): "missing.csv: no such file"}
     for path, expected in cases.items():
         assert expected in one_line_error(run("analyze", path)), path
+
+
+# ------------------------------------------------------------------ acceptance: no traceback
+
+
+@pytest.fixture()
+def binary_file(tmp_path: Path) -> str:
+    path = tmp_path / "bad.bin"
+    path.write_bytes(b"\x00\x01\x02 not text")
+    return str(path)
+
+
+README_COMMANDS_BAD_FILE = [
+    ["reproduce", "--no-study", "--params", "{bad}"],
+    ["simulate", "--table-speed", "1", "--params", "{bad}"],
+    ["simulate", "--table-speed", "1", "--profile", "csv", "--profile-file", "{bad}"],
+    ["creep", "--params", "{bad}"],
+    ["calibrate", "--params", "{bad}"],
+    ["params", "check", "{bad}"],
+    ["stiffness", "--params", "{bad}"],
+    ["friction", "--params", "{bad}"],
+    ["identify", "static", "{bad}"],
+    ["identify", "dynamic", "{bad}"],
+    ["analyze", "{bad}"],
+]
+README_COMMANDS_BAD_VALUE = [
+    ["reproduce", "--workers", "0"],
+    ["simulate", "--table-speed", "1", "--drive", "xdfs"],
+    ["simulate", "--table-speed", "1", "--duration", "-1"],
+    ["simulate", "--table-speed", "1", "--profile", "square"],
+    ["creep", "--duration", "-1"],
+    ["creep", "--method", "guess"],
+    ["calibrate", "--low", "-1"],
+    ["params", "show", "--format", "yaml"],
+    ["stiffness", "--positions", "abc"],
+    ["friction", "--site", "wheel"],
+    ["identify", "static", "x.csv", "--site", "wheel"],
+    ["identify", "dynamic", "x.csv", "--confidence", "2"],
+    ["analyze", "x.csv", "--smoothing", "-5"],
+]
+
+
+@pytest.mark.parametrize("args", README_COMMANDS_BAD_FILE + README_COMMANDS_BAD_VALUE,
+                         ids=lambda a: " ".join(a[:3]))
+def test_no_readme_command_prints_a_traceback(args: list[str], binary_file: str) -> None:
+    """Issue 12 acceptance: each command of the README table, given a bad file or a bad
+    value, answers with one line naming what is wrong (unwritable outputs: issue 13)."""
+    result = run(*[binary_file if a == "{bad}" else a for a in args])
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output
+    lines = [s for s in result.stderr.strip().splitlines() if s.startswith("error: ")]
+    assert len(lines) == 1, result.stderr
