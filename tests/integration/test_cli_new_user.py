@@ -546,3 +546,21 @@ def test_no_readme_command_prints_a_traceback(args: list[str], binary_file: str)
     assert "Traceback" not in result.output
     lines = [s for s in result.stderr.strip().splitlines() if s.startswith("error: ")]
     assert len(lines) == 1, result.stderr
+
+
+def test_readme_command_table_matches_the_cli() -> None:
+    """Docs are tested against the code: every option the README table names exists in that
+    command's `--help`, and the profile list is the CLI's."""
+    import re
+
+    from feeddrive.cli.simulate_cmd import PROFILES
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    rows = re.findall(r"^\| `feeddrive ([a-z]+)([^`]*)`", readme, flags=re.M)
+    assert {cmd for cmd, _ in rows} >= {"reproduce", "simulate", "creep", "calibrate",
+                                        "stiffness", "friction", "identify"}
+    for cmd, rest in rows:
+        shown = run(cmd, "--help").stdout
+        for option in re.findall(r"--[a-z][a-z-]*", rest):
+            assert option in shown, (cmd, option)
+    assert "--profile " + "\\|".join(PROFILES) in readme
