@@ -14,7 +14,7 @@ import scipy.io
 import xarray as xr
 
 from .parameters import ParameterError
-from .result import ENGINEERING
+from .units import ENGINEERING
 
 FORMATS = (".csv", ".parquet", ".nc", ".mat")
 

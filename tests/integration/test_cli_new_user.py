@@ -41,8 +41,10 @@ def test_cli_import_leaves_heavy_modules_alone() -> None:
 
 def test_public_api_still_resolves_lazily() -> None:
     import feeddrive as fd
+    import feeddrive.simulate  # noqa: F401  (the submodule must not shadow the function)
 
     assert fd.simulate.__module__ == "feeddrive.simulate"
+    assert callable(fd.simulate) and fd.simulate.__name__ == "simulate"
     assert set(fd.__all__) <= set(dir(fd))
     with pytest.raises(AttributeError):
         _ = fd.no_such_name  # type: ignore[attr-defined]

@@ -29,6 +29,7 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import least_squares
 
+from .. import units
 from .._jit import kernel
 from ..friction import bristle_rate_kernel
 from ..parameters import DriveParameters, FrictionBranch, LuGreParameters, ParameterError
@@ -732,7 +733,7 @@ def _profile_interval(grid: np.ndarray, prof: np.ndarray, threshold: float, s1_h
 
 
 
-SITES = ("screw", "nut", "guide")
+SITES = units.SITES
 
 
 def site_mass(params: DriveParameters, site: str) -> float:

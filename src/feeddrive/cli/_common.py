@@ -11,6 +11,7 @@ from typing import Any, TypeVar
 import typer
 from rich.console import Console
 
+from .. import units
 from ..parameters import DriveParameters, ParameterError, load, preset
 
 app = typer.Typer(
@@ -25,9 +26,7 @@ err_console = Console(stderr=True)
 F = TypeVar("F", bound=Callable[..., Any])
 
 # unit conversion at the edge: the CLI speaks mm, mm/s and N/µm
-MM = 1e-3
-MM_PER_S = 1e-3
-N_PER_UM = 1e6
+MM, MM_PER_S, N_PER_UM = units.MM, units.MM_PER_S, units.N_PER_UM
 
 
 def user_errors(fn: F) -> F:
@@ -44,13 +43,18 @@ def user_errors(fn: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
-def resolve_parameters(preset_name: str | None, params_file: str | None) -> DriveParameters:
-    """The parameter set named by ``--preset`` or loaded from ``--params`` (not both)."""
+DEFAULT_PRESETS = {"linear-motor": "linear-motor-example"}
+
+
+def resolve_parameters(preset_name: str | None, params_file: str | None,
+                       drive: str | None = None) -> DriveParameters:
+    """The parameter set named by ``--preset`` or loaded from ``--params`` (not both); by
+    default ``wang2021``, or the drive's example set (``linear-motor-example``)."""
     if preset_name and params_file:
         raise ParameterError("--params", params_file, "give either --preset or --params, not both")
     if params_file:
         return load(params_file)
-    return preset(preset_name or "wang2021")
+    return preset(preset_name or DEFAULT_PRESETS.get(drive or "", "wang2021"))
 
 
 def print_json(data: Any) -> None:

@@ -50,14 +50,16 @@ def speed_range(low_option: str, low: float, high_option: str, high: float
     return lo, hi
 
 
-def position(option: str, value: float, params: DriveParameters) -> float:
-    """Table position ``value`` [mm] → [m], strictly between the screw supports."""
+def position(option: str, value: float, params: DriveParameters,
+             drive: str = "cdfs") -> float:
+    """Table position ``value`` [mm] → [m]; on a ball-screw drive strictly between the screw
+    supports (a linear motor has no screw to bound it)."""
     length_mm = params.screw.length / MM
     _finite(option, value, "mm")
-    if not 0.0 < value < length_mm:
+    if drive in ("cdfs", "ddfs") and not 0.0 < value < length_mm:
         raise ParameterError(option, value, f"expected 0 < position < {length_mm:g} [mm] "
                                             "(strictly between the screw supports)")
-    if value < SMALLEST_PLAUSIBLE_POSITION_MM:
+    if 0.0 < value < SMALLEST_PLAUSIBLE_POSITION_MM:
         warn(f"{option} = {value:g} mm looks like a value in metres "
              f"({value * 1e3:g} mm?); the CLI takes mm")
     return value * MM

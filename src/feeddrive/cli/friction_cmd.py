@@ -9,6 +9,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from .. import units
 from ..parameters import DriveParameters, LuGreParameters, ParameterError
 from ._common import (
     MM_PER_S,
@@ -20,7 +21,7 @@ from ._common import (
     user_errors,
 )
 
-SITES = ("screw", "nut", "guide")
+SITES = units.SITES
 BRANCHES = ("positive", "negative")
 
 SCAN_LIMITATION = (

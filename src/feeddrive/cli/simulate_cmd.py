@@ -20,7 +20,8 @@ def _say(text: str) -> None:
 @app.command("simulate")
 @user_errors
 def simulate_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
+    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor (a "
+                              "direct-drive table; default preset linear-motor-example)"),
     table_speed: float | None = typer.Option(
         None, "--table-speed", help="Table speed [mm/s]: the command (constant), the "
         "amplitude (sine), the top speed (trapezoid), the first step (stepdown). Required "
@@ -49,7 +50,8 @@ def simulate_command(
                                   help="Solver step limit [-]; a run that needs more is "
                                   "refused before it starts."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
-                                           "(default wang2021)."),
+                                           "(default wang2021; linear-motor-example for "
+                                           "--drive linear-motor)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     output: str | None = typer.Option(None, "--output", help="Write signals to "
                                       "FILE.csv|.parquet|.nc|.mat"),
@@ -74,9 +76,9 @@ def simulate_command(
         raise ParameterError("--profile-file", None, "required for --profile csv")
     if max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
-    params = resolve_parameters(preset_name, params_file)
+    params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive,
-                         table_position=_units.position("--position", position, params))
+                         table_position=_units.position("--position", position, params, drive))
     v_n = _units.speed("--nut-speed", nut_speed)
     v_t = 0.0 if table_speed is None else _units.speed("--table-speed", table_speed)
     prof: ConstantSpeed | SineSpeed | SampledSpeed

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import dataclasses
 import tomllib
+import types
 from pathlib import Path
-from typing import Any, get_type_hints
+from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .components import DriveParameters
 from .validation import ParameterError
@@ -19,11 +20,24 @@ def _is_component(tp: Any) -> bool:
     return isinstance(tp, type) and dataclasses.is_dataclass(tp)
 
 
+def _component_type(tp: Any) -> Any:
+    """The dataclass of a field typed ``Component`` or ``Component | None``, else None."""
+    if _is_component(tp):
+        return tp
+    if get_origin(tp) in (Union, types.UnionType):
+        inner = [a for a in get_args(tp) if a is not type(None)]
+        if len(inner) == 1 and _is_component(inner[0]):
+            return inner[0]
+    return None
+
+
 def to_dict(obj: Any) -> dict[str, Any]:
     """Nested plain dict of a parameter dataclass."""
     out: dict[str, Any] = {}
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
+        if value is None:
+            continue
         out[f.name] = to_dict(value) if dataclasses.is_dataclass(value) else value
     return out
 
@@ -38,6 +52,8 @@ def _format_value(value: Any) -> str:
     if isinstance(value, str):
         escaped = value.replace("\\", "\\\\").replace('"', '\\"')
         return f'"{escaped}"'
+    if isinstance(value, tuple | list):
+        return "[" + ", ".join(_format_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {value!r} to TOML")
 
 
@@ -61,6 +77,8 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
     nested = []
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
+        if value is None:
+            continue
         if dataclasses.is_dataclass(value):
             nested.append((f.name, value))
         else:
@@ -114,9 +132,11 @@ def _build(cls: type, data: Any, path: str) -> Any:
             )
             if has_default:
                 continue
-            raise ParameterError(sub, None, "missing field")
-        tp = hints[f.name]
-        kwargs[f.name] = _build(tp, data[f.name], sub) if _is_component(tp) else data[f.name]
+            hint = (' (a partial file starts with extends = "wang2021" or another preset)'
+                    if not path or "." not in path else "")
+            raise ParameterError(sub, None, "missing field" + hint)
+        comp = _component_type(hints[f.name])
+        kwargs[f.name] = _build(comp, data[f.name], sub) if comp else data[f.name]
     try:
         return cls(**kwargs)
     except ParameterError as err:
@@ -126,21 +146,50 @@ def _build(cls: type, data: Any, path: str) -> Any:
                              err.message) from None
 
 
-def from_dict(data: dict[str, Any]) -> DriveParameters:
+def _merge(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for key, value in changes.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DriveParameters:
+    """Build a parameter set.  ``extends = "NAME"`` (a preset) or ``"FILE.toml"`` (relative to
+    ``base_dir``) starts from that set; the other values replace its values."""
+    if "extends" in data:
+        parent_name = data["extends"]
+        if not isinstance(parent_name, str):
+            raise ParameterError("extends", parent_name, "expected a preset name or a file path")
+        from . import PRESETS, preset
+
+        if parent_name in PRESETS:
+            parent = preset(parent_name)
+        elif parent_name.endswith(".toml"):
+            parent_path = (base_dir or Path.cwd()) / parent_name
+            parent = load(parent_path)
+        else:
+            raise ParameterError("extends", parent_name,
+                                 f"expected one of {', '.join(PRESETS)} or a .toml file")
+        changes = {k: v for k, v in data.items() if k != "extends"}
+        changes.setdefault("name", f"{parent.name}+changes")
+        data = _merge(to_dict(parent), changes)
     result: DriveParameters = _build(DriveParameters, data, "")
     return result
 
 
-def loads(text: str) -> DriveParameters:
+def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ParameterError("file", "<toml>", f"not valid TOML: {err}") from None
-    return from_dict(data)
+    return from_dict(data, base_dir=base_dir)
 
 
 def load(path: str | Path) -> DriveParameters:
     p = Path(path)
     if not p.is_file():
         raise ParameterError("file", str(p), "no such file")
-    return loads(p.read_text(encoding="utf-8"))
+    return loads(p.read_text(encoding="utf-8"), base_dir=p.parent)

@@ -13,8 +13,9 @@ from .. import __version__, protocol
 from ..analysis.critical import format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
-from ..parameters.sets import wang2021
+from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
+from ..units import SITES
 from . import figures as figures_mod
 from .studies import MID, PAPER, StudySettings, write_csv
 
@@ -175,7 +176,7 @@ def _position_trend(rows: list[dict[str, Any]]) -> str:
 
 def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
     rows = []
-    for site in ("screw", "nut", "guide"):
+    for site in SITES:
         lg = getattr(params.friction, site)
         for bname in ("positive", "negative"):
             b = lg.branch(bname)
@@ -340,7 +341,7 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         ("table3", "Table 3 and Fig. 14: critical speed against table position", "v_n = "
          "20 mm/s for the DDFS, as in the experiment (Sect. 6).", table3),
         ("assumptions", "Modelling assumptions", "What the paper does not give, and what we "
-         "chose (parameters/sets/wang2021.py; change any of them in a parameter file).",
+         "chose (presets/wang2021.py; change any of them in a parameter file).",
          assumptions),
         ("indicators", "Analytic indicators", "Steady friction curves (Table 1): "
          "negative-slope bands, zero-slope speeds and LuGre passivity per site. "
