@@ -180,10 +180,11 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
                             f"{n(s['following_error_rms_um'], 3)} µm"),
         ("position deviation", f"{n(s['position_deviation_um'], 3)} µm (peak-to-peak of the "
                                "following error)"),
-        ("mean motor speeds", f"screw {n(s['mean_screw_speed_mm_s'])} mm/s, nut "
-                              f"{n(s['mean_nut_speed_mm_s'])} mm/s (× H)"),
-        ("window", f"{n(a)}–{n(b)} s"),
     ]
+    if s["mean_screw_speed_mm_s"] is not None:  # a linear motor has no screw and no nut
+        rows.append(("mean motor speeds", f"screw {n(s['mean_screw_speed_mm_s'])} mm/s, nut "
+                                          f"{n(s['mean_nut_speed_mm_s'])} mm/s (× H)"))
+    rows.append(("window", f"{n(a)}–{n(b)} s"))
     return rows
 
 
