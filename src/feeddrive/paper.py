@@ -22,4 +22,5 @@ PAPER: dict[str, Any] = {
     "ddfs_table3": (0.35e-3, 0.47e-3, 0.52e-3, 0.46e-3, 0.36e-3),
     "k_eq_mid": 2.16e7,  # Sect. 5.2
     "fig7_rule_multiple": 10.0,  # Sect. 5.2: v_n ≥ 10× the CDFS critical speed
+    "fig6b_settling": 7.0,  # [s] Sect. 5.2, Fig. 6b: stable at 1.56 mm/s after about 7 s
 }

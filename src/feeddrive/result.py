@@ -90,24 +90,69 @@ class Result:
                              thresholds=thresholds, window=window)
 
     def summary(self) -> dict[str, Any]:
-        """Mean and ripple of table speed after the transient, stick fraction, motor speeds —
-        in engineering units (mm/s), for printing."""
-        m = self.creep_metrics()
-        sel = (self.time >= m.window_start) & (self.time <= m.window_end)
-        return {
-            "drive": self.dataset.attrs["drive"],
-            "command_speed_mm_s": 1e3 * self.command_speed,
-            "mean_table_speed_mm_s": 1e3 * m.mean_speed,
-            "ripple_ratio": m.ripple_ratio,
-            "min_ratio": m.min_ratio,
-            "stick_fraction": m.stick_fraction,
-            "stick_slip_frequency_hz": m.stick_slip_frequency,
-            "verdict": m.verdict,
-            "window_s": [m.window_start, m.window_end],
+        """What a run did, in engineering units (mm/s, µm), for printing.
+
+        Constant and sampled profiles: mean and ripple of table speed after the transient,
+        stick fraction, verdict, motor speeds.  Sine profiles: tracking error, reversal
+        overshoot and stick time at reversals (constant-speed metrics mean nothing there).
+        Both: following error and position deviation [µm] over the same window.
+        """
+        from .analysis.metrics import position_metrics, sine_metrics
+
+        frequency = _sine_frequency(self.dataset.attrs.get("profile", ""))
+        out: dict[str, Any] = {"drive": self.dataset.attrs["drive"]}
+        if frequency is not None:
+            s = sine_metrics(self.time, self["table_speed"], self["table_speed_reference"],
+                             frequency=frequency)
+            window = (s.window_start, s.window_end)
+            out.update({
+                "profile": "sine", "amplitude_mm_s": 1e3 * s.amplitude,
+                "frequency_hz": s.frequency,
+                "tracking_error_rms_mm_s": 1e3 * s.tracking_error_rms,
+                "tracking_error_max_mm_s": 1e3 * s.tracking_error_max,
+                "reversal_overshoot": s.reversal_overshoot,
+                "stick_time_at_reversals_s": s.stick_time_at_reversals,
+                "reference_dwell_at_reversals_s": s.reference_dwell,
+                "reversals": s.reversals,
+            })
+        else:
+            constant = self.dataset.attrs.get("profile", "").startswith("ConstantSpeed")
+            m = self.creep_metrics(window=None if constant else self._hold_window())
+            window = (m.window_start, m.window_end)
+            out.update({
+                "profile": "constant" if constant else "sampled",
+                "command_speed_mm_s": 1e3 * self.command_speed,
+                "mean_table_speed_mm_s": 1e3 * m.mean_speed,
+                "ripple_ratio": m.ripple_ratio,
+                "min_ratio": m.min_ratio,
+                "stick_fraction": m.stick_fraction,
+                "stick_slip_frequency_hz": m.stick_slip_frequency,
+                "verdict": m.verdict,
+            })
+        sel = (self.time >= window[0]) & (self.time <= window[1])
+        out.update(position_metrics(self.time, self["following_error"], window))
+        out.update({
+            "window_s": list(window),
             "mean_screw_speed_mm_s": self._mean_mm_s("screw_linear_speed", sel),
             "mean_nut_speed_mm_s": self._mean_mm_s("nut_linear_speed", sel),
             "solver": self.solver_stats,
-        }
+        })
+        return out
+
+    def _hold_window(self) -> tuple[float, float]:
+        """The steady window (:func:`steady_window`) of the first stretch where a sampled
+        command holds its largest speed (the top of a trapezoid, the first step of a
+        staircase), so that ramps are not judged as creep."""
+        from .analysis.metrics import steady_window
+
+        ref, c = self["table_speed_reference"], self.command_speed
+        hold = np.abs(ref - c) <= 1e-6 * abs(c)
+        first = int(np.argmax(hold))
+        after = np.flatnonzero(~hold[first:])
+        last = first + int(after[0]) - 1 if after.size else ref.size - 1
+        if last - first < 16:
+            return float(self.time[0]), float(self.time[-1])
+        return steady_window(self.time[first:last + 1], self["table_speed"][first:last + 1], c)
 
     def _mean_mm_s(self, name: str, sel: np.ndarray) -> float | None:
         if name not in self.dataset:
@@ -116,3 +161,11 @@ class Result:
 
     def save(self, path: str | Path) -> Path:
         return save_result(self.dataset, path)
+
+
+def _sine_frequency(profile: str) -> float | None:
+    """The frequency [Hz] of a ``SineSpeed`` profile from its repr in the attrs, else None."""
+    import re
+
+    found = re.match(r"SineSpeed\(.*frequency=([0-9.eE+-]+)", profile)
+    return float(found.group(1)) if found else None

@@ -57,6 +57,21 @@ def _format_value(value: Any) -> str:
     raise TypeError(f"cannot write {value!r} to TOML")
 
 
+def _unit_label(obj: Any, name: str, unit: str) -> str:
+    """The unit a value is read in; a gain on the table-speed basis is per m/s, not per rad/s
+    (issue 12 item 16)."""
+    if name == "velocity_gain" and getattr(obj, "velocity_gain_basis", None) == "table":
+        return "A s/m, per table speed (velocity_gain_basis = table)"
+    return unit
+
+
+def _limit_note(f: dataclasses.Field[Any], value: Any) -> str:
+    """Says so when a limit sits at the top of its range: the value means "no limit"."""
+    if f.name.endswith("_limit") and isinstance(value, float) and value >= f.metadata["high"]:
+        return " (no limit in effect: the top of the allowed range)"
+    return ""
+
+
 def _emit(obj: Any, path: str, lines: list[str]) -> None:
     scalars = []
     nested = []
@@ -75,7 +90,7 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
             unit = f.metadata.get("unit")
             options = f.metadata.get("options")
             if unit:
-                comment = f"  # [{unit}]"
+                comment = f"  # [{_unit_label(obj, f.name, unit)}]{_limit_note(f, value)}"
             elif options:
                 comment = f"  # one of {', '.join(options)}"
             else:
