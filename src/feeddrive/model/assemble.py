@@ -9,6 +9,7 @@ go into the parameter vector, so one compiled model serves many parameter values
 
 from __future__ import annotations
 
+import functools
 import inspect
 from dataclasses import dataclass
 from types import ModuleType
@@ -100,6 +101,21 @@ def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
 def assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
              profile: Profile, load: LoadProfile | None = None) -> Model:
     """Build (or fetch from the cache) the compiled model of one drive and profile."""
+    key = (parameters, drive, table_position, nut_hold, profile, load)
+    try:
+        return _assemble_cached(*key)
+    except TypeError:  # unhashable inputs (array profiles, load records): build anew
+        return _assemble(*key)
+
+
+@functools.lru_cache(maxsize=64)
+def _assemble_cached(parameters: DriveParameters, drive: str, table_position: float,
+                     nut_hold: str, profile: Profile, load: LoadProfile | None) -> Model:
+    return _assemble(parameters, drive, table_position, nut_hold, profile, load)
+
+
+def _assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
+              profile: Profile, load: LoadProfile | None) -> Model:
     b = codegen.Builder()
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
     mech = mechanism(drive)(parameters, drive, table_position, nut_hold)

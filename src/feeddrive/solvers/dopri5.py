@@ -13,6 +13,7 @@ same tableau runs at a fixed step (used to verify the order).
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 from typing import TYPE_CHECKING, Any
@@ -67,6 +68,7 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
     raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
 
 
+@functools.lru_cache(maxsize=1)
 def template_sources() -> list[str]:
     """Text placed in each generated model module: tableau import and the integrator."""
     names = ", ".join(TABLEAU)
