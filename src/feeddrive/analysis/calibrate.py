@@ -3,9 +3,12 @@
 The paper leaves parts of the model unstated (see ``wang2021.ASSUMPTIONS``).  Calibration fits
 only those unknowns, to critical speeds the paper reports, and everything else is then a
 prediction.  One unknown and one target: bisection on a log scale for the parameter value at
-which the creep verdict *at the target speed* switches (the critical speed is assumed to move
-monotonically with the parameter inside the bracket; the bracket ends are checked first), then
-a full critical-speed search at the fitted value reports what was achieved.
+which the creep verdict 0.01 mm/s *below the target speed* switches between creeping
+(stick-slip or oscillation) and not (the critical speed is assumed to move monotonically with
+the parameter inside the bracket; the bracket ends are checked first), then a full
+critical-speed search at the fitted value reports what was achieved.  Every trial runs until
+decided (:class:`~feeddrive.analysis.metrics.VerdictRule`); an undecided trial stops the fit
+with an error rather than being counted on either side.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from dataclasses import dataclass
 from ..parameters import DriveParameters
 from ..simulate import DriveSystem
 from .critical import CriticalSpeed, creep_trial, critical_speed_from_rest
+from .metrics import VerdictRule
 
 
 @dataclass(frozen=True)
@@ -55,7 +59,8 @@ class Calibration:
 
 
 def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
-              relative_tolerance: float = 0.02, duration: float = 12.0,
+              relative_tolerance: float = 0.02, rule: VerdictRule | None = None,
+              speed_range: tuple[float, float] = (0.05e-3, 3.0e-3),
               progress: Callable[[str], None] | None = None) -> Calibration:
     """Fit ``unknown`` so that ``target.drive`` creeps below and not above the target speed."""
     if not (0 < unknown.low < unknown.high and math.isfinite(unknown.high)):
@@ -69,11 +74,13 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
         p = params.replace_path(unknown.path, float(value))
         system = DriveSystem(p, drive=target.drive, table_position=target.table_position)
         # just below the target speed the drive must creep
-        trial = creep_trial(system, target.critical_speed - 0.01e-3, nut_speed=target.nut_speed,
-                            duration=duration)
+        speed = target.critical_speed - 0.01e-3
+        trial = creep_trial(system, speed, nut_speed=target.nut_speed, rule=rule)
         if progress:
-            progress(f"{unknown.path} = {value:.6g}: "
-                     f"{'creeps' if trial.creeping else 'smooth'} at target")
+            progress(f"{unknown.path} = {value:.6g}: {trial.kind} at {speed * 1e3:.2f} mm/s")
+        if trial.kind == "undecided":
+            raise ValueError(f"{unknown.path} = {value:.6g}: the trial at {speed * 1e3:.2f} mm/s "
+                             "is undecided; raise the rule's max_duration")
         return trial.creeping
 
     lo, hi = unknown.low, unknown.high
@@ -94,6 +101,6 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     fitted = params.replace_path(unknown.path, float(value))
     achieved = critical_speed_from_rest(
         DriveSystem(fitted, drive=target.drive, table_position=target.table_position),
-        nut_speed=target.nut_speed, duration=duration)
+        nut_speed=target.nut_speed, speed_range=speed_range, rule=rule)
     return Calibration(parameters=fitted, unknown=unknown, value=float(value), target=target,
                        achieved=achieved, evaluations=evaluations)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import typer
 
 from ..analysis.calibrate import Target, Unknown, calibrate
+from ..analysis.metrics import VerdictRule
 from ..parameters import save
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
@@ -21,25 +22,36 @@ def calibrate_command(
                                  "(default: Wang2021 Sect. 5.2, CDFS simulated)."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Hollow-motor speed [mm/s]."),
+    tolerance: float = typer.Option(0.02, "--tolerance",
+                                    help="Relative width of the final bracket of the fit."),
+    max_duration: float = typer.Option(60.0, "--max-duration",
+                                       help="Longest creep trial [s] (see `feeddrive creep`)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Starting parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Starting parameters (TOML)."),
     out: str | None = typer.Option(None, "--out", help="Write the fitted set to FILE.toml."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Fit one unknown so the drive's critical creeping speed matches a target."""
+    """Fit one unknown so the drive's critical creeping speed matches a target: the drive
+    creeps (stick-slip or sustained oscillation) 0.01 mm/s below the target."""
+    if not (0 < tolerance < 1):
+        raise ValueError(f"--tolerance = {tolerance!r}: expected a fraction in (0, 1)")
     params = resolve_parameters(preset_name, params_file)
+    rule = VerdictRule(max_duration=max_duration)
     result = calibrate(
         params, Target(drive=drive, critical_speed=target * MM_PER_S,
                        table_position=position * MM, nut_speed=nut_speed * MM_PER_S),
-        Unknown(path=unknown, low=low, high=high),
+        Unknown(path=unknown, low=low, high=high), relative_tolerance=tolerance, rule=rule,
         progress=None if as_json else (lambda msg: console.print(f"  {msg}")))
     if out:
         save(result.parameters, out)
-    achieved = result.achieved.to_dict()["critical_speed_mm_s"]
-    data = {"unknown": unknown, "value": result.value, "target_mm_s": target,
-            "achieved_mm_s": achieved, "evaluations": result.evaluations, "written": out}
+    achieved = result.achieved.to_dict()
+    data = {"unknown": unknown, "value": result.value, "tolerance": tolerance,
+            "target_mm_s": target, "achieved_mm_s": achieved["critical_speed_mm_s"],
+            "achieved_kind": achieved["kind"], "bands": achieved["bands"],
+            "evaluations": result.evaluations, "verdict_rule": rule.to_dict(), "written": out}
     if as_json:
         print_json(data)
         return
     console.print(f"{unknown} = {result.value:.6g} → {drive.upper()} critical speed "
-                  f"{achieved} mm/s (target {target} mm/s), {result.evaluations} evaluations")
+                  f"{achieved['critical_speed_mm_s']} mm/s ({achieved['kind']} below it; target "
+                  f"{target} mm/s), {result.evaluations} evaluations")

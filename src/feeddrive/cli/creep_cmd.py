@@ -1,10 +1,15 @@
-"""`feeddrive creep`: critical creeping speed."""
+"""`feeddrive creep`: critical creeping speed and creeping bands."""
 
 from __future__ import annotations
 
 import typer
 
-from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
+from ..analysis.critical import (
+    critical_speed_from_rest,
+    critical_speed_stepdown,
+    format_bands,
+)
+from ..analysis.metrics import VerdictRule
 from ..simulate import DriveSystem
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
@@ -19,36 +24,50 @@ def creep_command(
                                "paper's protocol on a running table) or both"),
     low: float = typer.Option(0.05, "--low", help="Lowest speed tested [mm/s]."),
     high: float = typer.Option(3.0, "--high", help="Highest speed tested [mm/s]."),
-    duration: float = typer.Option(12.0, "--duration", help="Simulated time per trial [s]."),
+    initial_duration: float = typer.Option(12.0, "--initial-duration",
+                                           help="First trial length [s]; doubled until the "
+                                           "verdict is decided."),
+    max_duration: float = typer.Option(60.0, "--max-duration",
+                                       help="Longest trial [s]; still undecided then: "
+                                       "'undecided'."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Critical creeping speed [mm/s] (lowest table speed without stick-slip), resolution
-    0.01 mm/s.  With --method both, the answers from rest and from a running table are shown."""
+    """Critical creeping speed [mm/s]: the upper edge of the highest creeping band (the lowest
+    tested speed above every stick-slip or sustained oscillation), resolution 0.01 mm/s, with
+    every creeping band found and its kind.  Each trial runs until decided (smooth, stick-slip,
+    oscillation) or answers 'undecided'.  With --method both, the answers from rest and from a
+    running table are shown."""
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")
+    rule = VerdictRule(initial_duration=initial_duration, max_duration=max_duration)
     params = resolve_parameters(preset_name, params_file)
     system = DriveSystem(params, drive=drive, table_position=position * MM)
     results = []
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
             system, nut_speed=nut_speed * MM_PER_S, speed_range=(low * MM_PER_S, high * MM_PER_S),
-            duration=duration))
+            rule=rule))
     if method in ("stepdown", "both"):
         results.append(critical_speed_stepdown(
             system, nut_speed=nut_speed * MM_PER_S, start_speed=high * MM_PER_S,
-            lowest_speed=low * MM_PER_S))
+            lowest_speed=low * MM_PER_S, rule=rule))
+    searches = [r.to_dict() for r in results]
     out = {"drive": drive, "table_position_mm": position, "nut_speed_mm_s": nut_speed,
            "parameter_set": params.name,
-           "critical_speed_mm_s": results[0].to_dict()["critical_speed_mm_s"],
-           "searches": [r.to_dict() for r in results]}
+           "critical_speed_mm_s": searches[0]["critical_speed_mm_s"],
+           "status": searches[0]["status"], "kind": searches[0]["kind"],
+           "bands": searches[0]["bands"], "verdict_rule": rule.to_dict(),
+           "searches": searches}
     if len(results) == 2:
         a, b = (r.critical_speed for r in results)
         out["start_condition_matters"] = a != b
     if as_json:
         print_json(out)
         return
-    for r in results:
+    for r, d in zip(results, searches, strict=True):
         console.print(f"{drive.upper()} at {position:g} mm, start from {r.start}: critical "
-                      f"creeping speed {r.display()} ({len(r.trials)} trials)")
+                      f"creeping speed {r.display()} ({len(r.trials)} trials); creeping bands "
+                      f"[mm/s]: {format_bands(d)}")
+    console.print(f"Verdict rule: {rule.describe()}")

@@ -252,7 +252,7 @@ def literal() -> DriveParameters:
 # Sect. 5.2 / Fig. 6); every other number is a prediction.
 AXIAL_DAMPING_RATIO = 0.05
 # [A/m] on the table-equivalent position error; fitted by `feeddrive calibrate` (9 evaluations)
-VELOCITY_INTEGRAL_GAIN = 3872.12
+VELOCITY_INTEGRAL_GAIN = 3897.10
 
 
 def _axial_damping(params: DriveParameters) -> float:
