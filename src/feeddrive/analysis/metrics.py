@@ -423,11 +423,14 @@ class VerdictRule:
         within this fraction of the ripple and of the mean period (default 0.02).  A cycle
         runs from one upward crossing of the command to the next.
     min_cycles:
-        At least this many repetitions are compared (default 3), after the first cycle
-        (which starts from rest or from the previous state) …
+        At least this many repetitions are compared (default 3); the compared cycles are those
+        of the last half of the trace (never the first cycle, which starts from rest or from
+        the previous state) …
     min_compare_time:
-        … spanning at least this time (default 2 s), so a slowly decaying envelope is not
-        mistaken for a limit cycle.
+        … or of the last ``min_compare_time`` if longer (default 2 s), so a slowly decaying
+        envelope is not mistaken for a limit cycle.  The drift between the quarters of the
+        compared stretch must also not speed up (a trajectory lingering by a limit cycle that
+        has just vanished drifts ever faster), unless below a tenth of ``cycle_tolerance``.
     max_multiplicity:
         Period-doubled cycles repeat after p cycles; p up to this (default 8) is tried.
     envelope_tolerance, envelope_blocks:
@@ -471,9 +474,10 @@ class VerdictRule:
                     name == "max_multiplicity"):
                 raise ValueError(f"rule.{name} = {value!r}: expected an integer ≥ "
                                  f"{2 - (name == 'max_multiplicity')}")
-        if self.smooth_band >= 1.0 or self.stick_level >= 1.0:
-            raise ValueError("rule: smooth_band and stick_level must be < 1 (fractions of the "
-                             "command speed)")
+        for name in ("smooth_band", "stick_level"):
+            if getattr(self, name) >= 1.0:
+                raise ValueError(f"rule.{name} = {getattr(self, name)!r}: expected < 1 (a "
+                                 "fraction of the command speed)")
         if self.max_duration < self.initial_duration:
             raise ValueError(f"rule.max_duration = {self.max_duration!r}: must not be below "
                              f"initial_duration = {self.initial_duration!r} [s]")
@@ -491,10 +495,11 @@ class VerdictRule:
             f"A trial runs {self.initial_duration:g} s, doubling up to {self.max_duration:g} s "
             f"until decided. smooth: the speed stays within ±{100 * self.smooth_band:g} % of "
             f"the command for the last max({self.settle_time:g} s, 2 longest periods). "
-            f"Limit cycle: the last ≥ {self.min_cycles} repetitions of 1 to "
-            f"{self.max_multiplicity} cycles (≥ {self.min_compare_time:g} s, the first cycle "
-            f"excluded) agree in highest speed, lowest speed and period within "
-            f"{100 * self.cycle_tolerance:g} %, or (irregular) the envelope of the last "
+            f"Limit cycle: over the last half of the trial (≥ {self.min_compare_time:g} s, the "
+            f"first cycle excluded) ≥ {self.min_cycles} repetitions of 1 to "
+            f"{self.max_multiplicity} cycles agree in highest speed, lowest speed and period "
+            f"within {100 * self.cycle_tolerance:g} % and their drift is not speeding up, or "
+            f"(irregular) the envelope of the last "
             f"{self.envelope_blocks} blocks of ≥ 8 cycles agrees within "
             f"{100 * self.envelope_tolerance:g} % and does not shrink; it is stick-slip if "
             f"the speed falls below {100 * self.stick_level:g} % of the command, oscillation "
@@ -555,11 +560,25 @@ def _up_crossings(t: np.ndarray, u: np.ndarray, hysteresis: float) -> np.ndarray
     return np.asarray(out, dtype=float)
 
 
-def _converging(block: np.ndarray, scale: float, mean_period: float) -> bool:
+def _extremum(x: np.ndarray, i0: int, i1: int, sign: float) -> float:
+    """Largest (sign 1) or smallest (−1) value of x[i0:i1], refined by a parabola through the
+    extreme sample and its neighbours (so the cycle-to-cycle drift is not sampling noise)."""
+    if i1 - i0 < 1:
+        return float(x[min(i0, x.size - 1)])
+    k = i0 + int(np.argmax(sign * x[i0:i1]))
+    if 0 < k < x.size - 1:
+        ym, y0, yp = x[k - 1], x[k], x[k + 1]
+        denom = ym - 2.0 * y0 + yp
+        if denom * sign < 0:
+            return float(y0 - 0.125 * (ym - yp) ** 2 / denom)
+    return float(x[k])
+
+
+def _converging(block: np.ndarray, scale: float, mean_period: float, floor: float) -> bool:
     """Whether the drift of a repeating pattern (rows: repetitions; columns: phases; last
     axis: highest speed, lowest speed, period) slows down: the change between the means of the
-    last two quarters of the repetitions is at most the change between the first two (or
-    below 0.1 % of the ripple and period: converged to sampling noise).  A trajectory passing
+    last two quarters of the repetitions is at most the change between the first two, or
+    below ``floor`` (a fraction of the ripple and period).  A trajectory passing
     slowly by a vanished limit cycle drifts ever faster; an attracting cycle ever slower."""
     reps = block.shape[0]
     q = max(reps // 4, 1)
@@ -567,7 +586,7 @@ def _converging(block: np.ndarray, scale: float, mean_period: float) -> bool:
     first = np.abs(block[q:2 * q].mean(axis=0) - block[:q].mean(axis=0)) / norm
     last = np.abs(block[reps - q:].mean(axis=0) - block[reps - 2 * q:reps - q].mean(axis=0)) \
         / norm
-    return bool(np.all((last <= first) | (last <= 1e-3)))
+    return bool(np.all((last <= first) | (last <= floor)))
 
 
 def _repeating(cycles: np.ndarray, rule: VerdictRule) -> tuple[int, int] | None:
@@ -576,7 +595,8 @@ def _repeating(cycles: np.ndarray, rule: VerdictRule) -> tuple[int, int] | None:
     ``cycles``: rows (highest speed, lowest speed, period) per complete cycle, those of the
     compared stretch.  Periodic with multiplicity p ≤ ``rule.max_multiplicity``: ≥
     ``min_cycles`` repetitions of p cycles agree, phase by phase, within
-    ``cycle_tolerance``, and their drift slows down (:func:`_converging`).  Otherwise an
+    ``cycle_tolerance``, and their drift slows down or is below a tenth of the tolerance
+    between quarters of the compared stretch (:func:`_converging`).  Otherwise an
     irregular (e.g. chaotic) oscillation counts as sustained when the envelope (highest and
     lowest speed) of ``envelope_blocks`` blocks of ≥ 8 cycles agrees within
     ``envelope_tolerance`` and the ripple does not shrink block after block; multiplicity 0.
@@ -593,7 +613,7 @@ def _repeating(cycles: np.ndarray, rule: VerdictRule) -> tuple[int, int] | None:
         mean_period = float(np.mean(block[:, :, 2]))
         if (scale > 0.0 and np.all(spread[:, :2] <= tol * scale)
                 and np.all(spread[:, 2] <= tol * mean_period)
-                and _converging(block, scale, mean_period)):
+                and _converging(block, scale, mean_period, 0.1 * tol)):
             return reps * p, p
     k = rule.envelope_blocks
     size = n // k
@@ -650,9 +670,9 @@ def trace_verdict(time: object, speed: object, command_speed: float,
     if ups.size - 1 - first >= rule.min_cycles:
         stats = []
         for a, b in zip(ups[first:-1], ups[first + 1:], strict=True):
-            seg = along[(t >= a) & (t <= b)]
-            stats.append((float(np.max(seg)) if seg.size else 1.0,
-                          float(np.min(seg)) if seg.size else 1.0, float(b - a)))
+            i0, i1 = np.searchsorted(t, [a, b])
+            stats.append((_extremum(along, int(i0), int(i1), 1.0),
+                          _extremum(along, int(i0), int(i1), -1.0), float(b - a)))
         arr = np.asarray(stats)
         found = _repeating(arr, rule)
         if found is not None:

@@ -32,7 +32,8 @@ def calibrate_command(
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Fit one unknown so the drive's critical creeping speed matches a target: the drive
-    creeps (stick-slip or sustained oscillation) 0.01 mm/s below the target."""
+    creeps (stick-slip or sustained oscillation) 0.01 mm/s below the target and not at it.
+    The fit is the geometric mean of the two values where those verdicts switch."""
     if not (0 < tolerance < 1):
         raise ValueError(f"--tolerance = {tolerance!r}: expected a fraction in (0, 1)")
     params = resolve_parameters(preset_name, params_file)
@@ -46,6 +47,7 @@ def calibrate_command(
         save(result.parameters, out)
     achieved = result.achieved.to_dict()
     data = {"unknown": unknown, "value": result.value, "tolerance": tolerance,
+            "interval": list(result.interval),
             "target_mm_s": target, "achieved_mm_s": achieved["critical_speed_mm_s"],
             "achieved_kind": achieved["kind"], "bands": achieved["bands"],
             "evaluations": result.evaluations, "verdict_rule": rule.to_dict(), "written": out}
@@ -54,4 +56,5 @@ def calibrate_command(
         return
     console.print(f"{unknown} = {result.value:.6g} → {drive.upper()} critical speed "
                   f"{achieved['critical_speed_mm_s']} mm/s ({achieved['kind']} below it; target "
-                  f"{target} mm/s), {result.evaluations} evaluations")
+                  f"{target} mm/s), {result.evaluations} evaluations; values "
+                  f"{result.interval[0]:.6g}–{result.interval[1]:.6g} give the target")
