@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from .. import __version__
-from ..analysis.critical import format_critical_speed
+from ..analysis.critical import format_bands, format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
 from ..presets import wang2021
@@ -58,7 +58,10 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
                      "unit": unit, "deviation": _dev(ours, paper), "fitted_or_predicted": kind})
 
     def add_critical(item: str, source: str, paper: float, key: str, kind: str) -> None:
-        add(item, source, paper, c(key), "mm/s", kind, shown=format_critical_speed(crit[key]))
+        shown = format_critical_speed(crit[key])
+        if crit[key].get("kind"):
+            shown += f" ({crit[key]['kind']} below; creeping bands {format_bands(crit[key])})"
+        add(item, source, paper, c(key), "mm/s", kind, shown=shown)
 
     add_critical("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56,
                  f"crit-cdfs-{MID}", fitted_note)
@@ -202,7 +205,8 @@ def study_rows(rows: list[dict[str, Any]]) -> list[dict[str, str]]:
     return [{"variant": str(r["variant"]), "drive": str(r["drive"]).upper(),
              "v_n [mm/s]": f"{r['nut_speed_mm_s']:g}",
              "critical speed [mm/s]": _fmt(r["critical_speed_mm_s"]),
-             "status": str(r["status"])[:80]} for r in rows]
+             "status": str(r["status"])[:80], "kind": str(r.get("kind") or "—"),
+             "creeping bands [mm/s]": format_bands(r)} for r in rows]
 
 
 def target_rows(results: dict[str, Any]) -> list[dict[str, str]]:
@@ -298,8 +302,10 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
          target_rows(results)),
         ("Paper numbers beside ours", "Every number of Wang2021 the study touches. "
          "'fitted' means the number was used to fit an unknown; everything else is predicted. "
-         "Critical speeds are from rest (scan + bisection to 0.01 mm/s) unless the row says "
-         "step-down.", comparison),
+         "Critical speeds are from rest (scan + bisection of every change of kind to "
+         "0.01 mm/s) unless the row says step-down; the critical speed is the upper edge of "
+         "the highest creeping band. Verdict rule: " + settings.rule().describe(),
+         comparison),
         ("Modelling assumptions", "What the paper does not give, and what we chose "
          "(presets/wang2021.py; change any of them in a parameter file).", assumptions),
         ("Analytic indicators", "Steady friction curves (Table 1): negative-slope bands, "

@@ -40,7 +40,7 @@ class StudySettings:
     """
 
     trial_initial_duration: float = 12.0
-    trial_max_duration: float = 60.0
+    trial_max_duration: float = 240.0
     speed_range: tuple[float, float] = (0.02e-3, 3.02e-3)
     coarse_step: float = 0.2e-3
     resolution: float = 0.01e-3
