@@ -11,10 +11,7 @@ import math
 from functools import lru_cache
 from typing import Any
 
-import numpy as np
-
 from .. import parameters
-from ..control import ConstantSpeed
 from ..parameters import DriveParameters
 from ..simulate import DriveSystem, SimulationError
 from .studies import MID, PAPER, StudySettings, critical_speed
@@ -31,33 +28,11 @@ SERVO_DAMPING = 0.3
 def dominant_mode(params: DriveParameters, drive: str = "cdfs",
                   position: float = MID) -> tuple[float, float]:
     """(frequency [Hz], damping ratio) of the least-damped oscillatory mode of the drive with
-    friction off (every site's law "none"), continuous loops, at rest.
+    friction off, continuous loops, at rest (:func:`feeddrive.linear.loop_analysis`)."""
+    from ..linear import loop_analysis
 
-    Eigenvalues of a central-difference Jacobian of the assembled model's right-hand side
-    (the model is linear without friction, so the step size does not matter).  A stand-in
-    for the linearisation of issue 15 item 1.
-    """
-    for site in ("screw", "nut", "guide"):
-        params = params.replace_path(f"friction.{site}.law", "none")
-    model = DriveSystem(params, drive, position).model(ConstantSpeed(0.0))
-    n = len(model.state_names)
-    held = np.zeros(max(model.n_held, 1))
-    aux = np.zeros(len(model.aux) + 1)
-
-    def rate(y: np.ndarray) -> np.ndarray:
-        dy = np.zeros(n)
-        model.module.rhs(0.0, y, held, model.P, model.T, 0, 0, 0, dy, aux)
-        return dy
-
-    jac = np.empty((n, n))
-    for i in range(n):
-        step = np.zeros(n)
-        step[i] = 1e-7
-        jac[:, i] = (rate(step) - rate(-step)) / 2e-7
-    eig = np.linalg.eigvals(jac)
-    osc = eig[(eig.imag > 1e-6 * np.abs(eig))]
-    lam = osc[np.argmax(osc.real)]
-    return float(lam.imag / (2.0 * math.pi)), float(-lam.real / abs(lam))
+    d = loop_analysis(DriveSystem(params, drive, position), 0.0, frictionless=True).dominant()
+    return d.frequency_hz, d.damping_ratio
 
 
 @lru_cache(maxsize=4)
