@@ -184,9 +184,9 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
     if load_code is not None:
         b.emit(f"{b.a('load_force')} = {load_code}")
 
-    from ..solvers import dopri5
+    from ..solvers import dopri5, switching
 
-    source = codegen.module_source(b, dopri5.template_sources())
+    source = codegen.module_source(b, dopri5.template_sources() + switching.template_sources())
     module = codegen.compile_module(source, b.dynamic_sources)
     return Model(
         state_names=tuple(s.name for s in b.states), states=tuple(b.states), aux=tuple(b.aux),
