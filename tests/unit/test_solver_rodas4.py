@@ -22,11 +22,6 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from reference.scipy_model import STATE_NAMES  # noqa: E402
-
-from feeddrive.control import ConstantSpeed  # noqa: E402
-from feeddrive.simulate import DriveSystem, SolverOptions, simulate  # noqa: E402
-from feeddrive.solvers import rodas4  # noqa: E402
-
 from test_solver_order import (  # noqa: E402
     BREAK,
     DURATION,
@@ -36,6 +31,10 @@ from test_solver_order import (  # noqa: E402
     run_engine,
     scaled_error,
 )
+
+from feeddrive.control import ConstantSpeed  # noqa: E402
+from feeddrive.simulate import DriveSystem, SolverOptions, simulate  # noqa: E402
+from feeddrive.solvers import rodas4  # noqa: E402
 
 IX = {name: k for k, name in enumerate(STATE_NAMES)}
 

@@ -36,8 +36,38 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import rodas4
-from .dopri5 import (A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65,
-                     B1, B3, B4, B5, B6, C2, C3, C4, C5, E1, E3, E4, E5, E6, E7)
+from .dopri5 import (
+    A21,
+    A31,
+    A32,
+    A41,
+    A42,
+    A43,
+    A51,
+    A52,
+    A53,
+    A54,
+    A61,
+    A62,
+    A63,
+    A64,
+    A65,
+    B1,
+    B3,
+    B4,
+    B5,
+    B6,
+    C2,
+    C3,
+    C4,
+    C5,
+    E1,
+    E3,
+    E4,
+    E5,
+    E6,
+    E7,
+)
 
 if TYPE_CHECKING:
     from ..model.assemble import Model
@@ -75,6 +105,8 @@ _r4_frozen_states: Any = None
 _r4_rodas4_step: Any = None
 _r4_rodas4_dense: Any = None
 _r4_spectral_radius: Any = None
+_dp5_step: Any = None
+_error_norm: Any = None
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
@@ -161,7 +193,6 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     n_break = int(round(t_end / base))
     t_end = n_break * base
     n_out = n_break // out_every + 1
-    out_dt = out_every * base
     sampled = n_pos > 0 or n_vel > 0 or n_cur > 0
     t_out = np.empty(n_out)
     y_out = np.empty((n_out, n))
