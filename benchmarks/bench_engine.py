@@ -15,7 +15,8 @@ Scenarios: the shipped ``wang2021`` preset, table at mid-screw, from rest with t
 
 Contestants, each recording the 15 states on the same 1-ms grid:
 
-* **engine**: ``switching.integrate`` (``SolverOptions(method="auto")``, DOPRI5 ⇄ RODAS4 with
+* **engine**: on the model assembled once (as the baselines' ``ReferenceModel``),
+  ``switching.integrate`` (``SolverOptions(method="auto")``, DOPRI5 ⇄ RODAS4 with
   dense output) with the auxiliary signals not evaluated (``want_aux=False``), which is what
   the baselines deliver too; and, for information, the whole ``simulate()`` call (aux signals
   at every sample, xarray Dataset: issue 9 items 2–3 make those lazy);
@@ -64,6 +65,7 @@ from scipy.integrate import odeint, solve_ivp  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.control import ConstantSpeed  # noqa: E402
+from feeddrive.model.assemble import Model  # noqa: E402
 from feeddrive.simulate import (  # noqa: E402
     _DENSE_MODES,
     DriveSystem,
@@ -98,10 +100,10 @@ def tighter(options: SolverOptions, factor: float) -> SolverOptions:
                          current_tolerance=options.current_tolerance / factor)
 
 
-def engine_states(system: DriveSystem, profile: ConstantSpeed, duration: float,
+def engine_states(system: DriveSystem, model: Model, profile: ConstantSpeed, duration: float,
                   options: SolverOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """What ``simulate`` does up to the integrator, without aux signals or the Dataset."""
-    model = system.model(profile)
+    """What ``simulate`` does with an assembled ``model``, without aux signals or the
+    Dataset (the model is built once, as the baselines' ``ReferenceModel``)."""
     grid = sampling(system.parameters, options.output_interval)
     t_end = int(round(duration / grid.base)) * grid.base
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
@@ -131,6 +133,7 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
     grid = np.arange(int(round(duration / OUTPUT)) + 1) * OUTPUT
     truth = simulate(system, profile, duration, options=TIGHT)["table_position"]
     ref = ReferenceModel(params, drive, 0.4, profile)
+    model = system.model(profile)
     atol = ref.tolerances()
     y0 = np.zeros(ref.n_state)
 
@@ -156,7 +159,7 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
     target = min(err_lsoda, err_odeint)
     options = SolverOptions(method="auto")
     for _ in range(4):
-        t, y, stats = engine_states(system, profile, duration, options)
+        t, y, stats = engine_states(system, model, profile, duration, options)
         err_engine = float(np.max(np.abs(y[:, X_T] - truth)))
         if err_engine <= target:
             break
@@ -164,7 +167,7 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
     simulate(system, profile, duration, options=options)  # warm-up of the simulate path
     times: dict[str, list[float]] = {"engine": [], "simulate": [], "lsoda": [], "odeint": []}
     for _ in range(runs):
-        times["engine"].append(cpu(lambda: engine_states(system, profile, duration,
+        times["engine"].append(cpu(lambda: engine_states(system, model, profile, duration,
                                                          options))[0])
         times["lsoda"].append(cpu(lsoda)[0])
         times["odeint"].append(cpu(ode)[0])
