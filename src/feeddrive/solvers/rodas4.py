@@ -20,8 +20,9 @@ so u_6 is the error estimate.  Dense output on θ = (t* − t)/h ∈ [0, 1]::
 The Jacobian is taken by finite differences of the model's compiled right-hand side, one column
 per state (:func:`fd_jacobian_template`); the linear systems are solved by a small LU
 factorisation with partial pivoting written for the 10–20 states of a feed drive
-(:func:`lu_factor`, :func:`lu_solve`), which for those sizes is cheaper than LAPACK through
-``numpy.linalg`` (its call and copy overhead dominates; measured in ``benchmarks/README.md``).
+(:func:`lu_factor`, :func:`lu_solve`): numba's ``numpy.linalg`` has no separate factor and
+solve, so each stage would refactor — about 4× slower per step at 15 states (measured in
+``benchmarks/README.md``).
 
 The step templates are compiled into each generated model module (see
 :mod:`feeddrive.solvers.switching`); this file only holds the tableau and the model-free
