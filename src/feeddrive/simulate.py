@@ -15,7 +15,7 @@ from .model.disturbances import LoadProfile
 from .model.mechanisms import drive_names, mechanism
 from .parameters import DriveParameters, ParameterError
 from .result import Result, Run
-from .solvers import dopri5
+from .solvers import dopri5, switching
 
 DRIVES = drive_names()
 
@@ -62,13 +62,32 @@ class DriveSystem:
         return y0
 
 
+METHODS = ("dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed", "rodas4-fixed")
+# method -> (driver mode, adaptive) of feeddrive.solvers.switching
+_DENSE_MODES = {"auto": (switching.MODE_AUTO, 1), "rodas4": (switching.MODE_RODAS4, 1),
+                "dopri5-dense": (switching.MODE_DOPRI5, 1),
+                "rodas4-fixed": (switching.MODE_RODAS4, 0)}
+
+
 @dataclass(frozen=True)
 class SolverOptions:
     """Integrator settings, echoed in the result.
 
-    ``method``: ``"dopri5"`` (adaptive) or ``"dopri5-fixed"`` (fixed step ``fixed_step``).
-    ``output_interval`` [s] is the spacing of the recorded samples; it is also the breakpoint
-    spacing for continuous control.  ``position_tolerance`` [m] and ``speed_tolerance`` [m/s]
+    ``method``:
+
+    * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps at
+      most ``max_step``, default 1 ms, and the output interval); the engine v1 behaviour,
+      kept bit for bit;
+    * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
+      automatically; dense output (steps not capped by the output interval);
+    * ``"rodas4"``: the Rosenbrock method RODAS4 throughout, dense output;
+    * ``"dopri5-dense"``: DOPRI5 throughout with dense output;
+    * ``"dopri5-fixed"``, ``"rodas4-fixed"``: fixed step ``fixed_step`` (order checks).
+
+    See :mod:`feeddrive.solvers.switching`.  ``output_interval`` [s] is the spacing of the
+    recorded samples (for ``dopri5`` also the breakpoint spacing under continuous control).
+    ``max_step`` [s]: largest step (``None``: 1 ms for ``dopri5``, unlimited for the
+    dense-output methods).  ``position_tolerance`` [m] and ``speed_tolerance`` [m/s]
     are absolute error targets (angles scaled by H), combined with ``rtol`` on speeds.
     """
 
@@ -78,16 +97,19 @@ class SolverOptions:
     speed_tolerance: float = 1e-8
     current_tolerance: float = 1e-6
     output_interval: float = 1e-3
-    max_step: float = 1e-3
+    max_step: float | None = None
     fixed_step: float = 1e-5
     max_steps: int = 50_000_000
 
     def __post_init__(self) -> None:
-        if self.method not in ("dopri5", "dopri5-fixed"):
-            raise ParameterError("options.method", self.method, "expected dopri5 or dopri5-fixed")
+        if self.method not in METHODS:
+            raise ParameterError("options.method", self.method,
+                                 f"expected one of {', '.join(METHODS)}")
         for name in ("rtol", "position_tolerance", "speed_tolerance", "current_tolerance",
                      "output_interval", "max_step", "fixed_step"):
             v = getattr(self, name)
+            if name == "max_step" and v is None:
+                continue
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"options.{name}", v, "expected a finite value > 0")
 
@@ -126,6 +148,21 @@ def sampling(params: DriveParameters, output_interval: float) -> Sampling:
     return Sampling(base, n[0], n[1], n[2], out_every)
 
 
+def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarray:
+    """Instants in (0, t_end) [s] where the command has a kink, declared to the dense-output
+    integrator as step ends: the end of a constant-speed start ramp; the grid of a sampled
+    profile (piecewise-linear speed) when it is no finer than ``base``, the breakpoint unit —
+    a finer grid is left to the error control, as the fixed-breakpoint integrator does."""
+    if isinstance(profile, ConstantSpeed):
+        stops = [profile.ramp_time] if 0.0 < profile.ramp_time < t_end else []
+        return np.array(stops, dtype=float)
+    if isinstance(profile, SampledSpeed):
+        times = np.asarray(profile.time, dtype=float)
+        if times.size > 1 and float(np.mean(np.diff(times))) >= base * (1 - 1e-9):
+            return times[(times > 0.0) & (times < t_end)]
+    return np.zeros(0)
+
+
 def simulate(system: DriveSystem, profile: Profile, duration: float, *,
              options: SolverOptions | None = None) -> Result:
     """Simulate ``system`` following ``profile`` for ``duration`` [s] from rest.
@@ -145,14 +182,25 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     t_end = n_break * grid.base
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
                                  options.current_tolerance)
-    adaptive = 1 if options.method == "dopri5" else 0
-    h_init = 1e-6 if adaptive else options.fixed_step
-    h_max = min(options.max_step, grid.base) if adaptive else options.fixed_step
     y0 = system.initial_vector(model)
     started = _time.perf_counter()
-    t, y, aux, stats, _ = dopri5.integrate(
-        model, y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
-        options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps)
+    if options.method in _DENSE_MODES:
+        mode, adaptive = _DENSE_MODES[options.method]
+        h_init = 1e-6 if adaptive else options.fixed_step
+        h_max = (math.inf if options.max_step is None else options.max_step) if adaptive \
+            else options.fixed_step
+        t, y, aux, stats, _ = switching.integrate(
+            model, y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
+            options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps, mode,
+            profile_breakpoints(profile, t_end, grid.base))
+    else:
+        adaptive = 1 if options.method == "dopri5" else 0
+        h_init = 1e-6 if adaptive else options.fixed_step
+        max_step = 1e-3 if options.max_step is None else options.max_step
+        h_max = min(max_step, grid.base) if adaptive else options.fixed_step
+        t, y, aux, stats, _ = dopri5.integrate(
+            model, y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
+            options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps)
     wall = _time.perf_counter() - started
     status = int(stats[0])
     if status != dopri5.STATUS_OK:
@@ -168,4 +216,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
         "breakpoint_interval_s": grid.base,
     }
+    if options.method in _DENSE_MODES:
+        solver_stats.update({
+            "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
+            "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
     return Result.from_run(Run(t, y, aux, model, system, profile, solver_stats))

@@ -103,13 +103,14 @@ def simulate_command(
     if not duration > 0:
         raise ParameterError("--duration", duration, "expected a time > 0 [s]")
     options = SolverOptions(max_steps=max_steps)
-    budget = run_budget(duration, max_step=options.max_step,
+    max_step = 1e-3 if options.max_step is None else options.max_step  # dopri5's default cap
+    budget = run_budget(duration, max_step=max_step,
                         output_interval=options.output_interval, max_steps=max_steps)
     if budget.steps_exceeded:
         raise ParameterError(
             "--duration", duration,
             f"needs at least {budget.min_steps:.3g} solver steps (step ≤ "
-            f"{options.max_step * 1e3:g} ms), more than --max-steps = {max_steps:.3g}; "
+            f"{max_step * 1e3:g} ms), more than --max-steps = {max_steps:.3g}; "
             f"expected ≤ {budget.longest_duration:g} [s], or raise --max-steps")
     if budget.memory_bytes > MEMORY_WARNING_BYTES:
         _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
