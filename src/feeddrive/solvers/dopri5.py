@@ -114,7 +114,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     updated, so that consecutive calls continue one integration bit for bit (with continuous
     control the first stage of a step is the previous step's last one, evaluated where that
     step ended — a hair off the breakpoint when the step was not cut to it).  Returns
-    (t_out, y_out, aux_out, stats, held) with stats = [status, steps, rejected, rhs_evaluations, t_reached].
+    (t_out, y_out, aux_out, stats, held) with stats = [status, steps, rejected,
+    rhs_evaluations, t_reached].
     """
     n = y0.size
     n_break = int(round(t_end / base))
