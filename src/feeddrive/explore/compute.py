@@ -2,7 +2,7 @@
 plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is SI inside.
 
 * :func:`run_simulation` — one constant-speed run: traces (table speed and its command, motor
-  speeds, following error), the summary, the creep verdict with its kind, and the steady
+  speeds), the summary (following error among it), the creep verdict with its kind, and the steady
   friction curves of the sites the drive uses with their negative-slope bands and operating
   points;
 * :func:`run_linear` — the linear stability band over table speed and the loop poles at the
@@ -149,8 +149,6 @@ def run_simulation(checked: Checked, report: Report) -> dict[str, Any]:
         "time_s": _list(t[idx]),
         "table_speed_mm_s": _list(speed[idx], 1e3),
         "table_speed_reference_mm_s": _list(result["table_speed_reference"][idx], 1e3),
-        "following_error_um": _list(result["following_error"][idx], 1e6),
-        "table_position_mm": _list(result["table_position"][idx], 1e3),
     }
     for name in ("screw_linear_speed", "nut_linear_speed"):
         if name in result.dataset:

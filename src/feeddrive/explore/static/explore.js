@@ -347,10 +347,10 @@ function setVerdict(verdict, text) {
 function layout(title, xTitle, yTitle, extra = {}) {
   return {
     title: { text: title, font: { size: 13 } },
-    margin: { l: 62, r: 15, t: 38, b: 46 },
+    margin: { l: 62, r: 15, t: 38, b: 58 },
     xaxis: { title: { text: xTitle }, zeroline: false, ...(extra.xaxis || {}) },
     yaxis: { title: { text: yTitle }, ...(extra.yaxis || {}) },
-    legend: { orientation: "h", y: -0.22, font: { size: 11 } },
+    legend: { orientation: "h", y: -0.28, font: { size: 11 } },
     hovermode: "closest", shapes: extra.shapes || [], annotations: extra.annotations || [],
     uirevision: extra.uirevision,
   };
@@ -386,15 +386,8 @@ function renderRun(res) {
                   type: "scatter", mode: "lines", visible: "legendonly",
                   line: { color: COLORS.nut, width: 1 }, hovertemplate: hover("hollow") });
   }
-  traces.push({ x: t.time_s, y: t.following_error_um, name: "following error [µm]",
-                type: "scatter", mode: "lines", visible: "legendonly", yaxis: "y2",
-                line: { color: "#9a6700", width: 1 },
-                hovertemplate: "t = %{x:.4f} s<br>e = %{y:.4g} µm<extra></extra>" });
   const l = layout(`table speed: ${what}`, "time [s]", "speed [mm/s]",
                    { uirevision: "speed" });
-  l.yaxis2 = { title: { text: "following error [µm]" }, overlaying: "y", side: "right",
-               showgrid: false };
-  l.margin.r = 55;
   Plotly.react($("plot-speed"), traces, l, PLOT_CONFIG);
   renderFriction(res.friction);
 }
