@@ -257,20 +257,14 @@ def test_critical_speed_reports_progress_and_can_be_cancelled(server: ExplorerSe
     status, job = request(server, "POST", "/api/jobs",
                           {"kind": "critical", "settings": {"drive": "ddfs"}})
     assert status == 202
-    end = time.monotonic() + 120
-    while time.monotonic() < end:
-        _, job = request(server, "GET", f"/api/jobs/{job['id']}")
-        if job["progress"]["done"] >= 1:
-            break
-        time.sleep(0.02)
-    assert job["state"] == "running" and "trial" in job["progress"]["text"]
-    assert job["progress"]["total"] >= job["progress"]["done"] + 1
-    cancelled_at = time.monotonic()
+    assert job["progress"]["text"].startswith("trial 1 of about")
     request(server, "POST", f"/api/jobs/{job['id']}/cancel", {})
+    cancelled_at = time.monotonic()
     while job["state"] == "running":
         time.sleep(0.02)
         _, job = request(server, "GET", f"/api/jobs/{job['id']}")
     assert job["state"] == "cancelled"
+    assert job["progress"]["done"] < 3
     assert time.monotonic() - cancelled_at < 5.0  # one trial at most
 
 

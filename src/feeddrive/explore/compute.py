@@ -116,8 +116,8 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
                 lo, hi = sorted((sign * band.lower, sign * band.upper))
                 bands[site].append([1e3 * lo, 1e3 * hi])
                 top = max(top, 2.0 * band.upper)
-    for v in (operating or {}).values():
-        top = max(top, 1.25 * abs(v) * 1e-3)
+    for speed in (operating or {}).values():
+        top = max(top, 1.25 * abs(speed) * 1e-3)
     v = np.linspace(-top, top, 801)
     curves = []
     for site in sites:
@@ -138,7 +138,7 @@ def run_simulation(checked: Checked, report: Report) -> dict[str, Any]:
     from ..simulate import simulate
 
     report(0.0, checked.duration, f"simulating {checked.duration:g} s of the "
-           f"{checked.drive.upper()}")
+           f"{checked.drive.upper()}")  # raises if the page cancelled before the start
     result = simulate(checked.system, ConstantSpeed(checked.table_speed, checked.nut_speed),
                       checked.duration)
     summary = result.summary()
@@ -251,7 +251,7 @@ def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
     from ..analysis.critical import critical_speed_from_rest
 
     total = estimated_trials()
-    report(0, total, f"trial 1 of about {total}")
+    report(0, total, f"trial 1 of about {total}")  # raises if cancelled before the start
 
     def progress(done: int, _: int) -> None:
         report(done, max(total, done + 1), f"trial {done + 1} of about {max(total, done + 1)}")

@@ -85,11 +85,14 @@ class Jobs:
             return sum(j.state == "running" for j in self._jobs.values())
 
     def start(self, kind: str, work: Work, error_field: ErrorField | None = None,
-              expected_s: float | None = None) -> Job:
+              expected_s: float | None = None, text: str = "", total: float = 0.0) -> Job:
+        """Run ``work(job)`` in a thread; ``text`` and ``total`` are its progress until it
+        reports its own."""
         with self._lock:
             if sum(j.state == "running" for j in self._jobs.values()) >= MAX_RUNNING:
                 raise Busy(f"{MAX_RUNNING} runs are going on; cancel one or wait")
-            job = Job(id=f"{kind}-{next(self._ids)}", kind=kind, expected_s=expected_s)
+            job = Job(id=f"{kind}-{next(self._ids)}", kind=kind, expected_s=expected_s,
+                      text=text, total=total)
             self._jobs[job.id] = job
             while len(self._jobs) > KEEP:
                 oldest = next(iter(self._jobs.values()))

@@ -111,8 +111,12 @@ class Explorer:
             self.ready.set()
 
         job = self.jobs.start("warmup", work)
-        threading.Thread(target=lambda: (self.jobs.wait(job.id, 600), self.ready.set()),
-                         daemon=True).start()
+
+        def ready_anyway() -> None:  # a warm-up that failed must not keep the page waiting
+            self.jobs.wait(job.id, 600)
+            self.ready.set()
+
+        threading.Thread(target=ready_anyway, daemon=True).start()
         return job
 
     def start(self, kind: str, settings: dict[str, Any]) -> tuple[Job | None, dict[str, Any]]:
@@ -131,13 +135,17 @@ class Explorer:
                 return out
 
             job = self.jobs.start(kind, simulate_work, _error_field,
-                                  expected_s=None if rate is None else rate * checked.duration)
+                                  expected_s=None if rate is None else rate * checked.duration,
+                                  text=f"simulating {checked.duration:g} s of the "
+                                       f"{checked.drive.upper()}")
         elif kind == "linear":
             job = self.jobs.start(kind, lambda j: compute.run_linear(checked, j.report),
                                   _error_field)
         elif kind == "critical":
+            total = compute.estimated_trials()
             job = self.jobs.start(kind, lambda j: compute.run_critical(checked, j.report),
-                                  _error_field)
+                                  _error_field, text=f"trial 1 of about {total}",
+                                  total=total)
         else:
             raise ParameterError("kind", kind, "expected simulate, linear or critical")
         return job, checked.as_dict()
@@ -308,13 +316,13 @@ class Handler(BaseHTTPRequestHandler):
                 raise _HttpError(HTTPStatus.NOT_FOUND, "no such run")
             self._json(200, job.as_dict())
         elif path == "/api/export":
-            checked = check(body.get("settings"))
-            if not checked.ok:
-                self._json(HTTPStatus.UNPROCESSABLE_ENTITY, checked.as_dict())
+            done = check(body.get("settings"))
+            if not done.ok:
+                self._json(HTTPStatus.UNPROCESSABLE_ENTITY, done.as_dict())
                 return
-            name = checked.params.name if checked.params else "feeddrive"
-            self._json(200, {"filename": f"{_safe(name)}-{checked.drive}.toml",
-                             "toml": export_toml(checked)})
+            name = done.params.name if done.params else "feeddrive"
+            self._json(200, {"filename": f"{_safe(name)}-{done.drive}.toml",
+                             "toml": export_toml(done)})
         elif path == "/api/import":
             text = body.get("toml")
             if not isinstance(text, str):

@@ -108,9 +108,8 @@ DEFAULTS: dict[str, str] = {
 def compensation_modes() -> tuple[str, ...]:
     """The friction-compensation modes of this feeddrive, () when it has none (issue 14)."""
     for f in dataclasses.fields(Controller):
-        if f.name == "compensation":
-            comp = f.default_factory() if f.default_factory is not dataclasses.MISSING \
-                else f.default  # type: ignore[misc]
+        if f.name == "compensation" and callable(f.default_factory):
+            comp: Any = f.default_factory()
             for g in dataclasses.fields(comp):
                 if g.name == "mode":
                     return tuple(g.metadata.get("options", ()))

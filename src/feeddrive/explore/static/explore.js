@@ -47,9 +47,10 @@ const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
 function status(text) { $("status").textContent = text; }
 
-function fmt(value, digits = 4) {
+function fmt(value, digits = 4, unit = "") {
   if (value === null || value === undefined) return "—";
-  return Number(value).toPrecision(digits).replace(/\.?0+(e|$)/, "$1");
+  const text = String(parseFloat(Number(value).toPrecision(digits)));
+  return unit ? `${text} ${unit}` : text;
 }
 
 // ------------------------------------------------------------------ the form
@@ -221,7 +222,9 @@ async function check(withKnobs = true) {
 // ------------------------------------------------------------------ runs
 
 function showProgress(box, job) {
-  if (!job || job.state !== "running" || job.elapsed_s < 0.3) {
+  // a bar for work longer than 0.3 s; a critical-speed search shows its Cancel at once
+  const after = job && job.kind === "critical" ? 0 : 0.3;
+  if (!job || job.state !== "running" || job.elapsed_s < after) {
     box.hidden = true;
     return;
   }
@@ -277,7 +280,7 @@ async function run() {
   if (seq !== state.runSeq) return;
   if (r.status === 422) {
     showMessages(r.data);
-    setVerdict(null, "fix the marked fields to run");
+    $("msg-run").textContent = "fix the marked fields to run (the plots show the last run)";
     return;
   }
   if (r.status !== 202) {
@@ -468,8 +471,9 @@ function renderLinear(res) {
                shapes: [{ type: "line", xref: "x", yref: "paper", x0: 0, x1: 0, y0: 0, y1: 1,
                           line: { color: "#888", width: 1 } }] }), PLOT_CONFIG);
   const d = res.least_damped_mode;
-  const loops = res.loops.map((lp) => `${lp.loop}: phase margin ${fmt(lp.phase_margin_deg, 3)}°,` +
-    ` gain margin ${fmt(lp.gain_margin_db, 3)} dB`).join(" · ");
+  const loops = res.loops.map((lp) => `${lp.loop}: phase margin ` +
+    `${fmt(lp.phase_margin_deg, 3, "°")}, gain margin ${fmt(lp.gain_margin_db, 3, "dB")}`)
+    .join(" · ");
   $("linear-facts").textContent =
     `Steady sliding at ${fmt(res.table_speed_mm_s)} mm/s is linearly ` +
     `${res.inside_band ? "UNSTABLE (inside the band)" : "stable"}; least-damped mode ` +
@@ -490,6 +494,7 @@ async function critical() {
     return;
   }
   state.critJob = r.data.id;
+  showProgress($("critical-progress"), r.data);
   $("critical").disabled = true;
   $("critical-result").textContent = "";
   $("critical-result").dataset.state = "running";
