@@ -14,7 +14,7 @@ from .model.assemble import Model, assemble
 from .model.disturbances import LoadProfile
 from .model.mechanisms import drive_names, mechanism
 from .parameters import DriveParameters, ParameterError
-from .result import Result, build_dataset
+from .result import Result, Run
 from .solvers import dopri5
 
 DRIVES = drive_names()
@@ -168,5 +168,4 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
         "breakpoint_interval_s": grid.base,
     }
-    dataset = build_dataset(t, y, aux, model, system, profile, solver_stats)
-    return Result(dataset)
+    return Result.from_run(Run(t, y, aux, model, system, profile, solver_stats))

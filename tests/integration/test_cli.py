@@ -252,3 +252,20 @@ def test_loops_and_stability_commands_report_the_creep_mode_and_band() -> None:
     bad = runner.invoke(app, ["loops", "--drive", "cdfs", "--table-speed", "0",
                                "--with-friction"])
     assert bad.exit_code == 2 and "table_speed" in bad.output
+
+
+def test_compensate_command_gives_the_study_table() -> None:
+    """`feeddrive compensate --drive cdfs --json` (issue 14), fast mode without searches."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    res = CliRunner().invoke(app, ["compensate", "--drive", "cdfs", "--no-search", "--json"])
+    assert res.exit_code == 0, res.output
+    rows = json.loads(res.stdout)["rows"]
+    assert [r["compensation"] for r in rows] == ["none"] + ["feedforward"] * 3 + \
+        ["observer"] * 3 + ["none"]
+    assert rows[0]["linear_unstable_bands_mm_s"] and rows[4]["linear_unstable_bands_mm_s"] == []
+    assert rows[-1]["drive"] == "ddfs"
+    bad = CliRunner().invoke(app, ["compensate", "--mismatch", "150"])
+    assert bad.exit_code == 2 and "--mismatch" in bad.output

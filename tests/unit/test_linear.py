@@ -158,3 +158,20 @@ def test_single_mass_band_edge_matches_a_finite_difference_jacobian() -> None:
     for v in speeds[::20]:
         fd_unstable = _fd_rightmost(float(v), site, mass, k, c) > 0
         assert fd_unstable == (v in bad)
+
+
+def test_docs_linear_numbers_are_the_codes() -> None:
+    """docs/linear.md's table of wang2021 figures, recomputed."""
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "linear.md").read_text()
+    la = loop_analysis(CDFS, 1.5e-3)
+    d = la.dominant()
+    assert f"{d.frequency_hz:.2f} Hz, ζ = {d.damping_ratio:.3f}" in doc
+    loops = {lp.name: lp for lp in la.loops}
+    for name in ("screw position loop", "screw velocity loop"):
+        lp = loops[name]
+        assert f"crossover {lp.crossover_hz:.2f} Hz, phase margin {lp.phase_margin_deg:.1f}°" in doc
+    band = stability_band(CDFS, points=40)
+    (lo, hi), = band.intervals
+    assert f"{1e3 * lo:.3f} – {1e3 * hi:.3f} mm/s, mode {band.mode_frequency_hz[0]:.2f} Hz" in doc

@@ -9,6 +9,7 @@ go into the parameter vector, so one compiled model serves many parameter values
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import inspect
 from dataclasses import dataclass
@@ -20,6 +21,7 @@ import numpy as np
 from ..control import PROFILE_PARAMS, reference_kernel
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops
+from .compensation import emit_compensation
 from .disturbances import LoadProfile, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
@@ -177,6 +179,9 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     b.emit(f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}")
     b.emit(f"{b.a('table_position_reference')} = ref_x")
     b.emit(f"{b.a('table_speed_reference')} = ref_v")
+    comp = emit_compensation(b, parameters, mech)
+    if comp is not None:
+        axes[0] = dataclasses.replace(axes[0], extra_current=comp)
     loops.emit_cascade(b, axes, channels, parameters.controller.mode)
     for ln in ripple_lines:
         b.emit(ln)
