@@ -132,6 +132,7 @@ def test_a_bad_run_field_gets_the_message_the_cli_prints(
                                "amplitudes = [-1.0]\nphases = [0.0]"),
     ("ripple_order", "1e9", "[disturbances.screw_motor_ripple]\norders = [1e9]\n"
                             "amplitudes = [0.0]\nphases = [0.0]"),
+    ("compensation", "magic", '[controller.compensation]\nmode = "magic"'),
 ])
 def test_a_bad_parameter_gets_the_message_params_check_prints(
         server: ExplorerServer, tmp_path: Path, field: str, value: str, toml: str) -> None:
@@ -239,6 +240,16 @@ def test_the_linear_job_gives_the_stability_band_and_the_poles(server: ExplorerS
     poles = loop_analysis(system, 1e-3, 0.0, frictionless=False).as_dict()
     assert res["least_damped_mode"] == pytest.approx(poles["least_damped_mode"])
     assert res["least_damped_mode"]["damping_ratio"] < 0
+
+
+def test_the_compensation_knob_switches_the_observer_on(server: ExplorerServer) -> None:
+    """Issue 14's result on the page: a LuGre observer removes the CDFS's creep at 1 mm/s."""
+    plain = run_job(server, "simulate", {"drive": "cdfs", "table_speed": "1"})
+    observed = run_job(server, "simulate", {"drive": "cdfs", "table_speed": "1",
+                                            "compensation": "observer"})
+    assert plain["result"]["verdict"]["verdict"] == "creeping"
+    assert observed["result"]["verdict"]["verdict"] == "smooth"
+    assert "compensation=observer" in check(server, compensation="observer")["query"]
 
 
 # ------------------------------------------------------------------ critical speed

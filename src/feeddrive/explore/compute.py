@@ -151,7 +151,7 @@ def run_simulation(checked: Checked, report: Report) -> dict[str, Any]:
         "table_speed_reference_mm_s": _list(result["table_speed_reference"][idx], 1e3),
     }
     for name in ("screw_linear_speed", "nut_linear_speed"):
-        if name in result.dataset:
+        if name in result:  # without building the xarray Dataset
             traces[f"{name}_mm_s"] = _list(result[name][idx], 1e3)
     operating = {"guide": summary["mean_table_speed_mm_s"],
                  "screw": summary["mean_screw_speed_mm_s"],

@@ -35,7 +35,7 @@ from urllib.parse import parse_qsl, urlencode
 
 from ..parameters import (
     PRESETS,
-    Controller,
+    Compensation,
     DriveParameters,
     ParameterError,
     dumps,
@@ -94,7 +94,9 @@ FIELDS: tuple[Field, ...] = (
           path=f"{_RIPPLE}.amplitudes[0]", help="amplitude of one harmonic of the shaft angle"),
     Field("ripple_order", "ripple order", "per rev", "knob", path=f"{_RIPPLE}.orders[0]"),
     Field("compensation", "friction compensation", "", "knob",
-          path="controller.compensation.mode"),
+          path="controller.compensation.mode",
+          help="feedforward: the static friction curve at the commanded speed; observer: a "
+               "LuGre observer at the measured speeds (docs/linear.md)"),
 )
 FIELD = {f.name: f for f in FIELDS}
 KNOBS = tuple(f.name for f in FIELDS if f.group == "knob")
@@ -106,14 +108,11 @@ DEFAULTS: dict[str, str] = {
 
 
 def compensation_modes() -> tuple[str, ...]:
-    """The friction-compensation modes of this feeddrive, () when it has none (issue 14)."""
-    for f in dataclasses.fields(Controller):
-        if f.name == "compensation" and callable(f.default_factory):
-            comp: Any = f.default_factory()
-            for g in dataclasses.fields(comp):
-                if g.name == "mode":
-                    return tuple(g.metadata.get("options", ()))
-    return ()
+    """The friction-compensation modes (``controller.compensation.mode``)."""
+    for f in dataclasses.fields(Compensation):
+        if f.name == "mode":
+            return tuple(f.metadata["options"])
+    raise AssertionError("Compensation has no mode")  # pragma: no cover
 
 
 def knob_values(params: DriveParameters) -> dict[str, str]:
@@ -127,11 +126,8 @@ def knob_values(params: DriveParameters) -> dict[str, str]:
         "friction_scale": "1",
         "ripple_amplitude": _text(ripple.amplitudes[0] if ripple.amplitudes else 0.0),
         "ripple_order": _text(ripple.orders[0] if ripple.orders else DEFAULT_RIPPLE_ORDER),
-        "compensation": "none",
+        "compensation": c.compensation.mode,
     }
-    comp = getattr(c, "compensation", None)
-    if comp is not None:
-        out["compensation"] = str(comp.mode)
     return out
 
 
@@ -301,8 +297,6 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
         out.disabled.append("nut_speed")
     if not mechanism(drive).ripple_motors:
         out.disabled += ["ripple_amplitude", "ripple_order"]
-    if not compensation_modes():
-        out.disabled.append("compensation")
     from ..cli import _units
 
     def run_field(name: str, convert: Any) -> float | None:
@@ -334,12 +328,11 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
     except ParameterError as err:
         out.errors["duration"] = str(err)
 
-    modes = compensation_modes()
     own = knob_values(base)
     for name in KNOBS:
         s.setdefault(name, own[name])  # a knob the page or the address leaves out
     for name in KNOBS:
-        if name in out.disabled or (name == "compensation" and not modes):
+        if name in out.disabled:
             continue
         if not _same(s[name], own[name]):
             out.overrides[name] = s[name]
@@ -376,7 +369,7 @@ def _apply(data: dict[str, Any], name: str, s: Mapping[str, str], own: Mapping[s
             "orders": [_value(s["ripple_order"])], "amplitudes": [_value(s["ripple_amplitude"])],
             "phases": [ripple.phases[0] if ripple.phases else 0.0]}
     elif name == "compensation":
-        data["controller"].setdefault("compensation", {})["mode"] = s[name]
+        data["controller"]["compensation"]["mode"] = s[name]
     else:
         section, key = FIELD[name].path.split(".")
         data[section][key] = _value(s[name])

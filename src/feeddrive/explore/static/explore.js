@@ -91,14 +91,9 @@ function fieldRow(f, info) {
   let input;
   if (f.name === "preset" || f.name === "drive" || f.name === "compensation") {
     input = document.createElement("select");
-    let options = f.name === "preset" ? info.presets : f.name === "drive" ? info.drives
+    const options = f.name === "preset" ? info.presets : f.name === "drive" ? info.drives
       : info.compensation_modes;
-    if (f.name === "compensation" && options.length === 0) options = ["none"];
     for (const value of options) input.add(new Option(value, value));
-    if (f.name === "compensation" && info.compensation_modes.length === 0) {
-      input.disabled = true;
-      input.dataset.always = "disabled";
-    }
   } else {
     input = document.createElement("input");
     input.type = "text";
@@ -116,12 +111,6 @@ function fieldRow(f, info) {
   warn.className = "msg warning";
   warn.id = `warn-${f.name}`;
   row.append(label, input, msg, warn);
-  if (f.name === "compensation" && info.compensation_modes.length === 0) {
-    const note = document.createElement("div");
-    note.className = "help";
-    note.textContent = "not in this feeddrive yet (friction compensation: issue 14)";
-    row.appendChild(note);
-  }
   return row;
 }
 
@@ -183,7 +172,7 @@ function showMessages(result) {
       $(`own-${name}`).textContent = own === undefined ? "" : `set: ${own}`;
       input.classList.toggle("changed", (result.overrides || []).includes(name));
     }
-    if (!input.dataset.always) input.disabled = (result.disabled || []).includes(name);
+    input.disabled = (result.disabled || []).includes(name);
   }
   $("msg-params").textContent = errors.params || "";
   $("msg-import").textContent = errors.import || "";
