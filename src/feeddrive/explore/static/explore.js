@@ -204,6 +204,7 @@ async function check(withKnobs = true) {
   if (!withKnobs) fill(r.data.settings);
   showMessages(r.data);
   const ok = Object.keys(r.data.errors).length === 0;
+  if (ok && $("msg-run").textContent.startsWith("fix")) $("msg-run").textContent = "";
   if (ok && $("auto").checked) run();
   return ok;
 }
