@@ -18,7 +18,8 @@ from ..control import ConstantSpeed
 from ..linear import stability_band
 from ..parameters import Compensation, DriveParameters
 from ..simulate import DriveSystem, simulate
-from .critical import critical_speed_from_rest, format_critical_speed
+from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
+from .metrics import VerdictRule
 
 
 @dataclass(frozen=True)
@@ -51,10 +52,12 @@ def _with(params: DriveParameters, case: Case) -> DriveParameters:
 
 def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4,
              tracking_speed: float = 1.0e-3, duration: float = 12.0,
-             search: bool = True) -> dict[str, Any]:
-    """One row of the study (SI inside, mm and µm in the keys' units)."""
+             search: bool = True, rule: VerdictRule | None = None) -> dict[str, Any]:
+    """One row of the study (SI inside, mm and µm in the keys' units).  The tracking run
+    lasts ``duration`` [s]; its verdict and every critical-speed trial follow ``rule``."""
     system = DriveSystem(_with(params, case), case.drive, table_position)
     band = stability_band(system, case.nut_speed, points=25)
+    trial = creep_trial(system, tracking_speed, nut_speed=case.nut_speed, rule=rule)
     run = simulate(system, ConstantSpeed(tracking_speed, case.nut_speed), duration)
     m = run.creep_metrics()
     sel = (run.time >= m.window_start) & (run.time <= m.window_end)
@@ -63,13 +66,13 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         "case": case.label, "drive": case.drive, "compensation": case.compensation.mode,
         "linear_unstable_bands_mm_s": [[1e3 * lo, 1e3 * hi] for lo, hi in band.intervals],
         "tracking_speed_mm_s": 1e3 * tracking_speed,
-        "verdict_at_tracking_speed": m.verdict,
+        "verdict_at_tracking_speed": trial.kind,
         "speed_ripple_ratio": m.ripple_ratio,
         "following_error_rms_um": 1e6 * float(np.sqrt(np.mean(err**2))),
         "following_error_peak_um": 1e6 * float(np.max(np.abs(err))),
     }
     if search:
-        crit = critical_speed_from_rest(system, nut_speed=case.nut_speed, duration=duration)
+        crit = critical_speed_from_rest(system, nut_speed=case.nut_speed, rule=rule)
         row["critical_speed_mm_s"] = format_critical_speed(crit.to_dict())
     return row
 

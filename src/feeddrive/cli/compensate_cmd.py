@@ -54,5 +54,5 @@ def compensate_command(
         bands = ", ".join(f"{lo:.3f}–{hi:.3f}" for lo, hi in r["linear_unstable_bands_mm_s"])
         crit = r.get("critical_speed_mm_s", "—")
         console.print(f"  {r['case']:34s} critical {crit:>8s} mm/s  linear band "
-                      f"{bands or 'none':>13s} mm/s  {r['verdict_at_tracking_speed']:9s} "
+                      f"{bands or 'none':>13s} mm/s  {r['verdict_at_tracking_speed']:11s} "
                       f"error rms {r['following_error_rms_um']:.2f} µm", markup=False)
