@@ -2,7 +2,8 @@
 plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is SI inside.
 
 * :func:`run_simulation` — one constant-speed run: traces (table speed and its command, motor
-  speeds), the summary (following error among it), the creep verdict with its kind, and the steady
+  speeds), the summary (following error among it), the creep verdict with its kind
+  (:func:`verdict_of`), and the steady
   friction curves of the sites the drive uses with their negative-slope bands and operating
   points;
 * :func:`run_linear` — the linear stability band over table speed and the loop poles at the
@@ -58,33 +59,28 @@ def decimate(n: int, key: np.ndarray, max_points: int = MAX_POINTS) -> np.ndarra
     return np.asarray(out, dtype=int)
 
 
-def verdict_kind(summary: dict[str, Any], thresholds: Any = None) -> dict[str, str]:
-    """The creep verdict and its kind, in words.
+def verdict_of(time: np.ndarray, speed: np.ndarray, command_speed: float) -> dict[str, Any]:
+    """The creep verdict and its kind, from the window-independent rule `feeddrive creep`
+    judges every trial by (:func:`feeddrive.analysis.metrics.trace_verdict`): a limit cycle
+    is *stick-slip* (the table stops) or *oscillation* (it does not); a decayed trace is
+    *smooth*; a trace that has done neither yet is *undecided* (a longer run decides)."""
+    from ..analysis.metrics import trace_verdict
 
-    Creeping is *stick-slip* when the table sticks for longer than the thresholds allow
-    (:class:`feeddrive.CreepThresholds`), else a *speed ripple* larger than they allow
-    without sticking; smooth runs say how small their ripple is.
-    """
-    from ..analysis.metrics import CreepThresholds
-
-    th = thresholds or CreepThresholds()
-    ripple = summary["ripple_ratio"]
-    stick = summary["stick_fraction"]
-    freq = summary["stick_slip_frequency_hz"]
-    at = f" at {freq:.3g} Hz" if freq else ""
-    if summary["verdict"] == "creeping":
-        if stick > th.max_stick_fraction:
-            kind = "stick-slip"
-            text = (f"the table sticks {100 * stick:.3g} % of the time{at}; speed ripple "
-                    f"{100 * ripple:.3g} % of the command")
-        else:
-            kind = "speed ripple"
-            text = (f"ripple {100 * ripple:.3g} % of the command{at} (limit "
-                    f"{100 * th.max_ripple_ratio:.3g} %), without sticking")
+    v = trace_verdict(time, speed, command_speed)
+    ripple = f"ripple {100 * v.ripple_ratio:.3g} % of the command"
+    at = f" at {v.frequency:.3g} Hz" if v.frequency else ""
+    if v.kind == "stick-slip":
+        text = f"the table stops and slips{at}, {ripple}; {v.reason}"
+    elif v.kind == "oscillation":
+        text = f"a sustained oscillation{at} without stopping, {ripple}; {v.reason}"
+    elif v.kind == "smooth":
+        text = f"settled by {v.decided_at:.3g} s: {v.reason}"
     else:
-        kind = "smooth"
-        text = f"ripple {100 * ripple:.3g} % of the command, no sticking"
-    return {"verdict": summary["verdict"], "kind": kind, "text": text}
+        text = (f"{v.reason} after {float(time[-1]):g} s ({ripple}{at}); a longer simulated "
+                "time decides")
+    return {"verdict": "creeping" if v.creeping else v.kind, "kind": v.kind, "text": text,
+            "reason": v.reason, "frequency_hz": _f(v.frequency),
+            "decided_at_s": _f(v.decided_at), "ripple_ratio": _f(v.ripple_ratio)}
 
 
 def _sites(drive: str) -> tuple[str, ...]:
@@ -164,7 +160,8 @@ def run_simulation(checked: Checked, report: Report) -> dict[str, Any]:
         "table_speed_mm_s": 1e3 * checked.table_speed,
         "nut_speed_mm_s": 1e3 * checked.nut_speed, "duration_s": checked.duration,
         "samples": int(t.size), "samples_sent": int(idx.size),
-        "summary": _json(clean), "verdict": verdict_kind(summary), "traces": traces,
+        "summary": _json(clean), "verdict": verdict_of(t, speed, checked.table_speed),
+        "traces": traces,
         "friction": friction_curves(checked, {k: v for k, v in operating.items()
                                               if v is not None}),
     }
@@ -246,9 +243,10 @@ def estimated_trials() -> int:
 
 
 def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
-    """Critical speed from rest (the protocol of `feeddrive creep`), a trial at a time."""
+    """Critical speed from rest, as `feeddrive creep` searches it (its grid, resolution and
+    verdict rule), reporting every trial."""
     from .. import protocol
-    from ..analysis.critical import critical_speed_from_rest
+    from ..analysis.critical import critical_speed_from_rest, format_bands
 
     total = estimated_trials()
     report(0, total, f"trial 1 of about {total}")  # raises if cancelled before the start
@@ -258,8 +256,8 @@ def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
 
     found = critical_speed_from_rest(
         checked.system, nut_speed=checked.nut_speed, speed_range=protocol.SPEED_RANGE,
-        coarse_step=protocol.COARSE_STEP, resolution=protocol.RESOLUTION,
-        duration=protocol.TRIAL_DURATION, progress=progress)
+        coarse_step=protocol.COARSE_STEP, resolution=protocol.RESOLUTION, progress=progress)
     out = found.to_dict()
     out["protocol"] = protocol.describe("rest")
+    out["bands_text"] = format_bands(out)
     return _json(out)

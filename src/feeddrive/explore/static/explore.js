@@ -359,7 +359,8 @@ function renderRun(res) {
     `${what}, ${fmt(res.duration_s)} s simulated (${res.parameter_set}) · mean table speed ` +
     `${fmt(s.mean_table_speed_mm_s)} mm/s · following error max ` +
     `${fmt(s.following_error_max_um, 3)} µm · judged on ${fmt(s.window_s[0], 3)}–` +
-    `${fmt(s.window_s[1], 3)} s · solver ${s.solver.steps} steps`;
+    `${fmt(s.window_s[1], 3)} s (window verdict of feeddrive simulate: ${s.verdict}) · ` +
+    `solver ${s.solver.steps} steps`;
   const t = res.traces;
   const hover = (name) => `t = %{x:.4f} s<br>${name} = %{y:.4g} mm/s<extra></extra>`;
   const traces = [
@@ -496,7 +497,8 @@ async function critical() {
   if (job.state === "done") {
     const c = job.result;
     box.textContent = `critical speed ${c.display} (${c.drive.toUpperCase()}, ` +
-      `${c.trials.length} trials from rest, ${fmt(c.simulated_time_s, 3)} s simulated)`;
+      `${c.trials.length} trials from rest, ${fmt(c.simulated_time_s, 3)} s simulated); ` +
+      `creeping bands [mm/s]: ${c.bands_text}`;
     box.title = c.protocol;
   } else if (job.state === "cancelled") {
     box.textContent = "cancelled";
