@@ -205,9 +205,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     if load_code is not None:
         b.emit(f"{b.a('load_force')} = {load_code}")
 
-    from ..solvers import dopri5
-
-    source = codegen.module_source(b, dopri5.template_sources())
+    source = codegen.module_source(b, solver_sources())
     module = codegen.compile_module(source, b.dynamic_sources)
     return Model(
         state_names=tuple(s.name for s in b.states), states=tuple(b.states), aux=tuple(b.aux),
@@ -216,6 +214,17 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         tolerance_scales=tuple(b.tol_scale.get(s.name, 1.0) for s in b.states),
         module=module, source=source, drive=drive,
         sites=tuple((site.name, law.name) for site, law, _ in laws))
+
+
+@functools.cache
+def solver_sources() -> list[str]:
+    """The integrator templates placed in every generated module (DOPRI5 as in engine v1, and
+    the dense-output DOPRI5 ⇄ RODAS4 driver).  numba compiles each at its first call, so a
+    model only ever run with one method never compiles the other.  Cached: reading template
+    sources with ``inspect`` costs ~15 ms, more than a short simulation."""
+    from ..solvers import dopri5, switching
+
+    return dopri5.template_sources() + switching.template_sources()
 
 
 def kernel_source(fn: Any) -> str:
