@@ -328,7 +328,8 @@ function setVerdict(verdict, text) {
   }
   const head = document.createElement("span");
   head.className = "head";
-  head.textContent = `${verdict.verdict.toUpperCase()} — ${verdict.kind}`;
+  head.textContent = verdict.verdict.toUpperCase() +
+    (verdict.kind !== verdict.verdict ? ` — ${verdict.kind}` : "");
   const detail = document.createElement("span");
   detail.className = "detail";
   detail.textContent = `: ${verdict.text}`;
@@ -572,7 +573,8 @@ async function start() {
   state.info = info;
   buildForm(info);
   $("critical-note").textContent =
-    `Searches from rest as feeddrive creep does (about ${info.critical_trials} trials of 12 s).`;
+    `Searches from rest as feeddrive creep does: about ${info.critical_trials} trials, ` +
+    "each 12 s or longer until decided.";
   let first;
   if (location.search.length > 1) {
     first = await api("GET", `/api/state${location.search}`);
