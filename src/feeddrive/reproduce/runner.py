@@ -20,7 +20,7 @@ from typing import Any
 from ..control import ConstantSpeed
 from ..parameters import DriveParameters, dumps
 from ..simulate import DriveSystem, simulate
-from . import figures, reading_study, report, studies
+from . import figures, forced_study, reading_study, report, studies
 from .studies import MID, PAPER, StudySettings, write_csv
 
 
@@ -59,6 +59,12 @@ def _critical_job(args: tuple[DriveParameters, str, float, float, StudySettings,
     return studies.critical_speed_running(params, drive, position, nut_speed, settings)
 
 
+def _compensation_job(params: DriveParameters) -> dict[str, Any]:
+    from ..analysis.compensation import compensation_study
+
+    return {"rows": compensation_study(params)}
+
+
 def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = None,
         workers: int = 2, study: bool = True,
         progress: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
@@ -84,14 +90,20 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
                                  "running")
     study_jobs = {f"study-{i}": job for i, job in enumerate(reading_study.jobs())} if study \
         else {}
-    total = len(jobs) + len(study_jobs) + 4
-    done = sum(store.get(k) is not None for k in [*jobs, *study_jobs])
+    forced_jobs = {f"forced-{i}": job for i, job in enumerate(forced_study.jobs())} if study \
+        else {}
+    total = len(jobs) + len(study_jobs) + len(forced_jobs) + 5
+    done = sum(store.get(k) is not None for k in [*jobs, *study_jobs, *forced_jobs])
     if progress:
         progress("critical speeds", done, total)
     tasks: dict[str, tuple[Callable[..., dict[str, Any]], tuple[Any, ...]]] = {
         k: (_critical_job, (v,)) for k, v in jobs.items() if store.get(k) is None}
     tasks.update({k: (reading_study.run_variant, (v, settings))
                   for k, v in study_jobs.items() if store.get(k) is None})
+    tasks.update({k: (forced_study.run, (v,))
+                  for k, v in forced_jobs.items() if store.get(k) is None})
+    if study and store.get("compensation") is None:
+        tasks["compensation"] = (_compensation_job, (params,))
     if tasks:
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
         # waits for its running searches took ~53 s to stop, issue 12 item 7)
@@ -112,6 +124,8 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     crit: dict[str, Any] = {k: store.get(k) for k in jobs}
     results["critical"] = crit
     results["reading_study"] = [store.get(k) for k in study_jobs]
+    results["forced_study"] = [store.get(k) for k in forced_jobs]
+    results["compensation"] = store.get("compensation") if study else None
 
     def speed(key: str) -> float | None:
         v = crit[key]["critical_speed_mm_s"]
