@@ -28,6 +28,12 @@ def test_ripple_reading_meets_the_ddfs_targets_by_the_half_threshold() -> None:
     assert d16["kind"] == "oscillation"  # forced: the table never stops
     c = threshold_critical_speed(fd.DriveSystem(RIPPLE, "cdfs", 0.4), 0.0)
     assert 1.40 <= c["critical_speed_mm_s"] <= 1.72
+    # the README's first screen states this number
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    assert (f"{d16['critical_speed_mm_s']:.2f} mm/s only with motor torque ripple added "
+            "(`wang2021-ripple`)") in " ".join(readme.split())
 
 
 def test_threshold_sensitivity_is_monotonic_and_stated() -> None:
