@@ -7,20 +7,39 @@ as attributes (.mat: a ``units`` struct beside the signals).
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
-
-import pandas as pd
-import scipy.io
-import xarray as xr
+from typing import TYPE_CHECKING
 
 from .parameters import ParameterError
 from .result import ENGINEERING
 
+if TYPE_CHECKING:
+    import pandas as pd
+    import xarray as xr
+
 FORMATS = (".csv", ".parquet", ".nc", ".mat")
+
+#: how to get Parquet support (pyarrow is an optional dependency: docs/outputs.md)
+PARQUET_HINT = "Parquet output needs pyarrow: pip install 'feeddrive[parquet]'"
+
+
+def check_format(path: str | Path) -> str:
+    """The output format of ``path`` (its extension), refused before any work when unknown
+    or when its writer is not installed (Parquet without pyarrow)."""
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in FORMATS:
+        raise ParameterError("output", str(p), f"unknown extension; expected one of {FORMATS}")
+    if ext == ".parquet" and importlib.util.find_spec("pyarrow") is None:
+        raise ParameterError("output", str(p), PARQUET_HINT)
+    return ext
 
 
 def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
     """All time signals as a DataFrame in engineering units, units in the column names."""
+    import pandas as pd
+
     cols = {"time [s]": dataset["time"].values}
     for name, var in dataset.data_vars.items():
         unit = var.attrs.get("units", "")
@@ -32,9 +51,7 @@ def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
 def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     """Write ``dataset`` to ``path``; the format follows the extension."""
     p = Path(path)
-    ext = p.suffix.lower()
-    if ext not in FORMATS:
-        raise ParameterError("output", str(p), f"unknown extension; expected one of {FORMATS}")
+    ext = check_format(p)
     p.parent.mkdir(parents=True, exist_ok=True)
     if ext == ".csv":
         to_engineering_frame(dataset).to_csv(p, index=False, float_format="%.10g")
@@ -43,6 +60,8 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     elif ext == ".nc":
         dataset.to_netcdf(p, engine="scipy")
     else:
+        import scipy.io
+
         signals = {name: var.values for name, var in dataset.data_vars.items()}
         signals["time"] = dataset["time"].values
         units = {name: var.attrs.get("units", "") for name, var in dataset.data_vars.items()}

@@ -497,6 +497,9 @@ class DynamicFit:
 #: above this max|F|/F_s the linear pre-sliding model is flagged as biased
 LINEAR_MAX_FORCE_RATIO = 0.02
 
+#: largest sample interval of a pre-sliding test, as a multiple of the median interval
+MAX_STEP_RATIO = 100.0
+
 #: σ1 counts as determined when its standard error is at most this fraction of its value
 SIGMA1_MAX_RELATIVE_STDERR = 0.25
 
@@ -513,9 +516,18 @@ def _check_presliding(t: np.ndarray, f: np.ndarray, x: np.ndarray, mass: float,
         raise ValueError(f"{prefix}force, position: expected one value per time sample")
     if t.size < 20:
         raise ValueError(f"{prefix}time: {t.size} samples; the pre-sliding fit needs at least 20")
-    bad = np.flatnonzero(np.diff(t) <= 0)
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
     if bad.size:
         raise ValueError(f"{prefix}{_locate(lines, int(bad[0]) + 1)}: time does not increase")
+    # the model is integrated with a fixed number of steps per sample interval, set by the
+    # longest one: a gap would multiply the work of every interval
+    k = int(np.argmax(steps))
+    median = float(np.median(steps))
+    if steps[k] > MAX_STEP_RATIO * median:
+        raise ValueError(f"{prefix}{_locate(lines, k + 1)}: time jumps by {steps[k]:.6g} s, "
+                         f"more than {MAX_STEP_RATIO:g}× the median step {median:.3g} s; a "
+                         "pre-sliding test must be sampled evenly (split the record at the gap)")
     if not (isinstance(mass, int | float) and math.isfinite(mass) and mass > 0):
         raise ValueError(f"mass = {mass!r}: expected a positive mass [kg]")
     if np.ptp(x) == 0.0:

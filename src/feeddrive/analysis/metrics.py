@@ -35,6 +35,7 @@ __all__ = [
     "CreepThresholds",
     "MIN_SAMPLES",
     "creep_metrics",
+    "resample_size",
     "steady_window",
 ]
 
@@ -277,13 +278,38 @@ def _time_below(t: np.ndarray, s: np.ndarray, level: float) -> float:
     return total
 
 
+#: a uniform resampling grid holds at most this many times the samples it is made from
+MAX_RESAMPLE_FACTOR = 4
+
+
+def resample_size(t: np.ndarray, dt: float, *, lines: np.ndarray | None = None,
+                  source: str | None = None) -> int:
+    """Points of a uniform grid of step ``dt`` [s] over ``t``, refused with a message when
+    it would exceed :data:`MAX_RESAMPLE_FACTOR` × the samples (a gap in the record: a
+    31-row file whose last time is 10⁶ s would otherwise ask for 10⁹ points)."""
+    n = int(math.floor((float(t[-1]) - float(t[0])) / dt + 1e-9)) + 1
+    limit = MAX_RESAMPLE_FACTOR * int(t.size)
+    if n > limit:
+        steps = np.diff(t)
+        k = int(np.argmax(steps))
+        where = (f"line {int(lines[k + 1])}" if lines is not None and lines.size == t.size
+                 else f"sample {k + 1}")
+        prefix = f"{source}: " if source else ""
+        raise ValueError(
+            f"{prefix}time: a gap of {float(steps[k]):.6g} s before {where} (median step "
+            f"{dt:.3g} s); a uniform grid would need {n} points, more than "
+            f"{MAX_RESAMPLE_FACTOR}× the {t.size} samples; refused — split the record at the "
+            "gap")
+    return n
+
+
 def _uniform(t: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, float]:
     """Samples of s on a uniform grid (resampled linearly when the sampling jitters > 1 %)."""
     steps = np.diff(t)
     dt = float(np.median(steps))
     if float(np.max(np.abs(steps - dt))) <= 0.01 * dt:
         return s, dt
-    n = int(math.floor((t[-1] - t[0]) / dt)) + 1
+    n = resample_size(t, dt)
     grid = t[0] + dt * np.arange(n)
     return np.interp(grid, t, s), dt
 

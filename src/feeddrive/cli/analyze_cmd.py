@@ -11,6 +11,7 @@ import typer
 from ..analysis.metrics import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, analyze_trace
 from ..measured_io import read_position_trace
+from ..outputs import check_output_file
 from ._common import MM_PER_S, app, console, print_json, user_errors
 
 
@@ -57,9 +58,12 @@ def analyze_command(
     max_stick_fraction: float = typer.Option(_DEFAULTS.max_stick_fraction,
                                              "--max-stick-fraction"),
     max_ripple_ratio: float = typer.Option(_DEFAULTS.max_ripple_ratio, "--max-ripple-ratio"),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
 ) -> None:
     """Creep metrics of a position trace (per segment of a step-down run) and the critical
     creeping speed."""
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[file], force=force)
     thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,
                                  max_ripple_ratio=max_ripple_ratio)
     trace = read_position_trace(file, time_column=time_column, position_column=position_column,
@@ -72,7 +76,7 @@ def analyze_command(
         command=trace.command_speed, speed=trace.speed, thresholds=thresholds,
         smoothing_time=None if smoothing is None else smoothing * 1e-3,
         segment=segments, min_step=min_step * MM_PER_S, min_segment_time=min_segment,
-        source=trace.source)
+        source=trace.source, lines=trace.lines)
     if plot:
         from ..analysis.plots import plot_trace
 

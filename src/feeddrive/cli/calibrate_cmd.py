@@ -5,6 +5,7 @@ from __future__ import annotations
 import typer
 
 from ..analysis.calibrate import Target, Unknown, calibrate
+from ..outputs import check_output_file
 from ..parameters import save
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
@@ -25,8 +26,11 @@ def calibrate_command(
     params_file: str | None = typer.Option(None, "--params", help="Starting parameters (TOML)."),
     out: str | None = typer.Option(None, "--out", help="Write the fitted set to FILE.toml."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
 ) -> None:
     """Fit one unknown so the drive's critical creeping speed matches a target."""
+    if out:
+        check_output_file(out, option="--out", inputs=[params_file], force=force)
     params = resolve_parameters(preset_name, params_file)
     result = calibrate(
         params, Target(drive=drive, critical_speed=target * MM_PER_S,

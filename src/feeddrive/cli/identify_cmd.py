@@ -23,6 +23,7 @@ from ..analysis.identification import (
     site_mass,
 )
 from ..measured_io import read_presliding_test, read_static_test
+from ..outputs import check_output_file
 from ..parameters import DriveParameters, ParameterError, save
 from ._common import MM_PER_S, N_PER_UM, app, console, print_json, resolve_parameters, user_errors
 
@@ -51,6 +52,14 @@ def _base(preset_name: str | None, params_file: str | None,
     for frag in fragments or []:
         params = merge_fragment(params, Path(frag))
     return params
+
+
+def _check_outputs(out: str | None, plot: str | None, inputs: list[str | None],
+                   force: bool) -> None:
+    if out:
+        check_output_file(out, option="--out", inputs=inputs, force=force)
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force)
 
 
 def _fmt(est: Estimate, scale: float = 1.0, digits: int = 4) -> str:
@@ -118,9 +127,11 @@ def static_command(
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
 ) -> None:
     """Fit F_c, F_s, v_s and σ2 per direction to constant-speed friction tests."""
     site = _site(site)
+    _check_outputs(out, plot, [file, params_file], force)
     params = _base(preset_name, params_file)
     motor = params.hollow_motor if site == "nut" else params.screw_motor
     kt = torque_constant if torque_constant is not None else motor.torque_constant
@@ -181,6 +192,7 @@ def dynamic_command(
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
 ) -> None:
     """Fit σ0 and σ1 to a pre-sliding test; says so when σ1 is poorly determined."""
     site = _site(site)
@@ -188,6 +200,7 @@ def dynamic_command(
         raise ValueError(f"--model = {model!r}: expected lugre or linear")
     if not (0.5 <= confidence < 1.0):
         raise ValueError(f"--confidence = {confidence!r}: expected a level in [0.5, 1)")
+    _check_outputs(out, plot, [file, params_file, *(static or [])], force)
     params = _base(preset_name, params_file, static)
     m = mass if mass is not None else site_mass(params, site)
     data = read_presliding_test(file, time_column=time_column, force_column=force_column,
@@ -222,8 +235,10 @@ def merge_command(
     out: str = typer.Option(..., "--out", help="Write the merged parameter set here."),
     preset_name: str | None = typer.Option(None, "--preset", help="Base parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Base parameter file."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
 ) -> None:
     """Merge identified fragments into a parameter set and validate the result."""
+    check_output_file(out, option="--out", inputs=[*fragments, params_file], force=force)
     params = _base(preset_name, params_file, fragments)
     names = ", ".join(Path(f).name for f in fragments)
     params = params.with_values(name=f"{params.name}-identified",

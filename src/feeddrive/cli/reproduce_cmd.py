@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from ..outputs import check_output_dir
 from ..reproduce import run
 from ._common import app, console, resolve_parameters, user_errors
 
@@ -24,6 +25,7 @@ def reproduce_command(
 ) -> None:
     """Regenerate Wang2021's figures (PNG) and tables (CSV) and write report.html/report.md.
     Finished studies are kept in OUT/data and reused on a rerun."""
+    check_output_dir(out, option="--out")
     params = resolve_parameters(preset_name, params_file)
     with Progress(TextColumn("{task.description}"), BarColumn(),
                   TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),

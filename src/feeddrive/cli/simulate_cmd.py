@@ -5,6 +5,8 @@ from __future__ import annotations
 import typer
 
 from ..control import ConstantSpeed, SineSpeed
+from ..io import check_format
+from ..outputs import check_output_file
 from ..plotting import plot_result
 from ..simulate import DriveSystem, simulate
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
@@ -29,9 +31,16 @@ def simulate_command(
                                       "FILE.csv|.parquet|.nc|.mat"),
     plot: str | None = typer.Option(None, "--plot", help="Write a PNG of the run."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
 ) -> None:
     """Simulate a drive and print a summary: mean and ripple of table speed after the
     transient, stick fraction, motor speeds."""
+    inputs = [params_file]
+    if output:
+        check_format(output)
+        check_output_file(output, option="--output", inputs=inputs, force=force)
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[*inputs, output], force=force)
     params = resolve_parameters(preset_name, params_file)
     system = DriveSystem(params, drive=drive, table_position=position * MM)
     if profile == "constant":
