@@ -29,13 +29,21 @@ _KERNEL_SOURCES = ("_jit.py", "layout.py", "friction.py", "control.py", "drives.
                    "solvers/dopri5.py")
 
 
-def _cache_dir() -> str:
+def _kernel_hash() -> str:
     digest = hashlib.sha256()
     for name in _KERNEL_SOURCES:
         digest.update((_HERE / name).read_bytes())
+    return digest.hexdigest()
+
+
+#: SHA-256 of every kernel source: names the compile cache and keys stored results
+KERNEL_HASH = _kernel_hash()
+
+
+def _cache_dir() -> str:
     root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache"), "feeddrive")
-    return os.path.join(root, f"numba-{digest.hexdigest()[:16]}")
+    return os.path.join(root, f"numba-{KERNEL_HASH[:16]}")
 
 
 _CACHE_DIR = _cache_dir()

@@ -247,6 +247,10 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
 
 
 def _need_rows(table: CsvTable, minimum: int, what: str) -> None:
+    if len(table) == 0:
+        raise MeasuredDataError(table.source, None, f"empty: a header (line "
+                                f"{table.header_line}) and no data rows; a {what} needs at "
+                                f"least {minimum}")
     if len(table) < minimum:
         raise MeasuredDataError(table.source, None, f"{len(table)} data rows; a {what} needs at "
                                 f"least {minimum}")
@@ -300,6 +304,7 @@ def read_static_test(
     required.
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
+    _need_rows(table, 1, "static friction test")
     speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit, default_unit="mm/s")
     if table.has(force_column) or not table.has(current_column):
         if not table.has(force_column):

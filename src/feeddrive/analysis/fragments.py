@@ -34,9 +34,10 @@ _BRANCH_FIELDS = (
 
 def _ci(est: Estimate) -> str:
     level = f"{100 * est.confidence:.0f} %"
+    flag = "" if est.identifiable else f"; NOT IDENTIFIABLE: {est.identifiability_issue}"
     if not (math.isfinite(est.low) and math.isfinite(est.high)):
-        return f"{level} CI not determined"
-    return f"{level} CI {est.low:.6g} … {est.high:.6g}"
+        return f"{level} CI not determined{flag}"
+    return f"{level} CI {est.low:.6g} … {est.high:.6g}{flag}"
 
 
 def friction_fragment(

@@ -25,7 +25,16 @@ from ..analysis.identification import (
 from ..measured_io import read_presliding_test, read_static_test
 from ..outputs import check_output_file
 from ..parameters import DriveParameters, ParameterError, save
-from ._common import MM_PER_S, N_PER_UM, app, console, print_json, resolve_parameters, user_errors
+from ._common import (
+    MM_PER_S,
+    N_PER_UM,
+    app,
+    console,
+    err_console,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 
 
 def _say(text: str) -> None:
@@ -77,7 +86,31 @@ def _print_static(fit: StaticFit, confidence: float) -> None:
     for name, b in fit.branches().items():
         _say(f"  {name} direction: {b.speed.size} tests, rms residual {b.rmse:.3g} N")
         for label, attr, scale, unit in rows:
-            _say(f"    {label:4s} = {_fmt(getattr(b, attr), scale)} {unit}")
+            est = getattr(b, attr)
+            flag = "" if est.identifiable else "  (not identifiable)"
+            _say(f"    {label:4s} = {_fmt(est, scale)} {unit}{flag}")
+    _warn_unidentifiable(fit)
+
+
+def _warnings(fit: StaticFit | DynamicFit) -> list[str]:
+    """One line per fitted value the data do not determine."""
+    if isinstance(fit, StaticFit):
+        labels = {"coulomb_force": "F_c", "static_force": "F_s", "stribeck_velocity": "v_s",
+                  "viscous_coefficient": "σ2"}
+        return [f"{labels[name]} ({direction}) is not identifiable from these data: {why}"
+                for direction, b in fit.branches().items()
+                for name, why in b.unidentifiable().items()]
+    out = []
+    for label, est in (("σ0", fit.bristle_stiffness), ("σ1", fit.bristle_damping)):
+        if not est.identifiable:
+            out.append(f"{label} is not identifiable from these data: "
+                       f"{est.identifiability_issue}")
+    return out
+
+
+def _warn_unidentifiable(fit: StaticFit | DynamicFit) -> None:
+    for text in _warnings(fit):
+        err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
 
 
 def _print_dynamic(fit: DynamicFit) -> None:
@@ -85,7 +118,8 @@ def _print_dynamic(fit: DynamicFit) -> None:
     level = f"{100 * s0.confidence:.0f} %"
     _say(f"pre-sliding fit of {fit.source}: model {fit.model}, mass {fit.mass:.4g} kg, "
                   f"rms residual {fit.rmse * 1e9:.3g} nm")
-    _say(f"  σ0 = {_fmt(s0, 1.0 / N_PER_UM)} N/µm ({level})")
+    _say(f"  σ0 = {_fmt(s0, 1.0 / N_PER_UM)} N/µm ({level})"
+         + ("" if s0.identifiable else "  (not identifiable)"))
     if fit.sigma1_determined:
         _say(f"  σ1 = {_fmt(s1)} N s/m ({level})")
     else:
@@ -97,6 +131,7 @@ def _print_dynamic(fit: DynamicFit) -> None:
     if fit.force_ratio is not None:
         _say(f"  max|F| = {100 * fit.force_ratio:.0f} % of F_s")
     _say(f"  {fit.note}")
+    _warn_unidentifiable(fit)
 
 
 @identify_app.command("static")
@@ -154,7 +189,7 @@ def static_command(
         plot_static_fit(fit, plot)
     if as_json:
         print_json({"site": site, "force_from": data.force_from, **fit.to_dict("mm"),
-                    "fragment": out, "plot": plot})
+                    "warnings": _warnings(fit), "fragment": out, "plot": plot})
         return
     _print_static(fit, confidence)
     if data.force_from != "force":
@@ -220,7 +255,8 @@ def dynamic_command(
         plot_dynamic_fit(fit, plot)
     if as_json:
         print_json({"site": site, "mass_from": "option" if mass is not None else "parameters",
-                    **fit.to_dict(), "fragment": out, "plot": plot})
+                    **fit.to_dict(), "warnings": _warnings(fit), "fragment": out,
+                    "plot": plot})
         return
     _print_dynamic(fit)
     for path, what in ((out, "fragment"), (plot, "plot")):

@@ -7,9 +7,9 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..outputs import check_output_dir
+from ..outputs import check_output_dir, shown
 from ..reproduce import run
-from ._common import app, console, resolve_parameters, user_errors
+from ._common import app, console, err_console, resolve_parameters, user_errors
 
 
 @app.command("reproduce")
@@ -35,7 +35,12 @@ def reproduce_command(
         def progress(label: str, done: int, total: int) -> None:
             bar.update(task, description=label, completed=done, total=total)
 
-        results = run(params, out, workers=workers, study=study, progress=progress)
+        def notice(text: str) -> None:
+            err_console.print(f"notice: {shown(text)}", markup=False, highlight=False,
+                              soft_wrap=True)
+
+        results = run(params, out, workers=workers, study=study, progress=progress,
+                      notice=notice)
     console.print(f"wrote {out / 'report.html'}, {out / 'report.md'}, "
                   f"{len(results['figures'])} figures, tables in {out} "
                   f"({results['wall_time_s']:.0f} s)")
