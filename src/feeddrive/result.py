@@ -112,8 +112,22 @@ class Result:
     def summary(self) -> dict[str, Any]:
         """Mean and ripple of table speed after the transient, stick fraction, motor speeds —
         in engineering units (mm/s), for printing."""
+        import tomllib
+
+        from .analysis.metrics import travel_warning
+
         m = self.creep_metrics()
         sel = (self.time >= m.window_start) & (self.time <= m.window_end)
+        warnings = []
+        if m.unstable:
+            warnings.append(f"unstable: the loop diverges (table speed peaks at "
+                            f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, limit "
+                            f"{m.thresholds.max_speed_ratio:g}×)")
+        length = tomllib.loads(self.dataset.attrs["parameters_toml"])["screw"]["length"]
+        travel = travel_warning(self.dataset.attrs["table_start_position_m"],
+                                self["table_position"], length)
+        if travel:
+            warnings.append(travel)
         return {
             "drive": self.dataset.attrs["drive"],
             "command_speed_mm_s": 1e3 * self.command_speed,
@@ -127,6 +141,7 @@ class Result:
             "mean_screw_speed_mm_s": 1e3 * float(np.mean(self["screw_linear_speed"][sel])),
             "mean_nut_speed_mm_s": 1e3 * float(np.mean(self["nut_linear_speed"][sel])),
             "solver": self.solver_stats,
+            "warnings": warnings,
         }
 
     def save(self, path: str | Path) -> Path:

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import budget
 from . import layout as ix
 from .control import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from .parameters import DriveParameters, ParameterError
@@ -192,6 +193,28 @@ def tolerances(H: float, options: SolverOptions) -> tuple[np.ndarray, np.ndarray
     return atol, rel
 
 
+def _check_budget(system: DriveSystem, packed: _Packed, options: SolverOptions, t_end: float,
+                  n_break: int, adaptive: int, atol: np.ndarray, rel: np.ndarray,
+                  h_init: float, h_max: float) -> None:
+    """Refuse, before integrating, a run whose output would not fit in memory or whose
+    steps (projected from a short probe) exceed ``max_steps`` (feeddrive.budget)."""
+    budget.check_output_memory(t_end, options.output_interval, n_break, options.max_steps)
+    t_probe = budget.probe_time(t_end, packed.base) if adaptive else 0.0
+    if not t_probe:
+        return
+    allowed = int(options.max_steps * t_probe / t_end) + 1000
+    _, _, _, stats, _ = dopri5.integrate(
+        np.zeros(ix.N_STATE), t_probe, packed.out_every, packed.base, packed.n_pos,
+        packed.n_vel, packed.n_cur, packed.P, packed.fr_s, packed.fr_n, packed.fr_g,
+        packed.ref_table, options.rtol, atol, rel, h_init, h_max, adaptive, allowed)
+    if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
+        speed = float(packed.P[ix.REF_VT]) or float(np.max(np.abs(packed.ref_table[1]),
+                                                           initial=1e-3))
+        budget.check_step_rate(steps=int(stats[1]), probe_time=float(stats[4]),
+                               duration=t_end, max_steps=options.max_steps,
+                               params=system.parameters, drive=system.drive, speed=speed)
+
+
 def simulate(system: DriveSystem, profile: Profile, duration: float, *,
              options: SolverOptions | None = None) -> Result:
     """Simulate ``system`` following ``profile`` for ``duration`` [s] from rest.
@@ -214,6 +237,7 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     h_init = 1e-6 if adaptive else options.fixed_step
     h_max = min(options.max_step, packed.base) if adaptive else options.fixed_step
     y0 = np.zeros(ix.N_STATE)
+    _check_budget(system, packed, options, t_end, n_break, adaptive, atol, rel, h_init, h_max)
     started = _time.perf_counter()
     t, y, aux, stats, _ = dopri5.integrate(
         y0, t_end, packed.out_every, packed.base, packed.n_pos, packed.n_vel, packed.n_cur,
@@ -225,7 +249,7 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         raise SimulationError(
             f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
             f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
-            f"{int(stats[2])}); try a larger options.max_steps or check the parameters")
+            f"{int(stats[2])}); raise max_steps (--max-steps) or check the parameters")
     solver_stats = {
         "method": options.method, "rtol": options.rtol,
         "position_tolerance": options.position_tolerance,

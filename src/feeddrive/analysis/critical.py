@@ -45,7 +45,7 @@ class CreepTrial:
 
     @classmethod
     def from_metrics(cls, speed: float, m: CreepMetrics) -> CreepTrial:
-        return cls(speed=speed, creeping=m.verdict == "creeping", ripple_ratio=m.ripple_ratio,
+        return cls(speed=speed, creeping=m.creeping, ripple_ratio=m.ripple_ratio,
                    stick_fraction=m.stick_fraction, stick_slip_frequency=m.stick_slip_frequency)
 
 

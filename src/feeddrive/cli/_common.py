@@ -35,6 +35,9 @@ N_PER_UM = 1e6
 EXIT_REFUSED = 2
 #: exit status of work that could not finish: simulation failure, out of memory, I/O error
 EXIT_FAILED = 1
+#: exit status of a simulation that finished but diverged (verdict "unstable"); its summary
+#: and outputs are still written
+EXIT_UNSTABLE = 3
 
 # the arguments that name files, in the order they are named in a message
 _FILE_ARGUMENTS = ("file", "fragments", "params_file", "static", "out", "output", "plot")

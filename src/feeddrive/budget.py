@@ -1,0 +1,122 @@
+"""What a simulation will cost, judged before it runs: output memory and solver steps.
+
+Two failures used to surface only at the end of a long run: an output array larger than the
+machine's memory (``--duration 1e9``), and a parameter set so stiff for the explicit
+Dormand–Prince integrator that it runs to ``max_steps`` after minutes (near-zero friction:
+the LuGre bristle relaxes in F_c/(σ0·|v|) ≈ 30 ns; a current loop of microseconds).  Here:
+
+* :func:`check_output_memory`: refuse a run whose recorded samples would need more than
+  half the available memory;
+* :func:`check_step_rate`: from a short probe integration (the first ~0.1 s), project the
+  steps of the whole run and refuse when they exceed ``max_steps``, naming the fastest time
+  constant of the parameters (:func:`time_constants`), the one that forces small steps.
+  An explicit method is stable for steps up to about 3.3 × the fastest time constant
+  (Hairer & Wanner, Solving ODEs II, Sect. IV.2, stability region of DOPRI5).
+"""
+
+from __future__ import annotations
+
+import os
+
+from .parameters import DriveParameters, ParameterError
+
+__all__ = ["PROBE_TIME", "available_memory", "check_output_memory", "check_step_rate",
+           "probe_time", "time_constants"]
+
+#: simulated time [s] of the probe that measures the step rate
+PROBE_TIME = 0.1
+#: refuse when the projected steps exceed max_steps / this margin (the rate may still grow)
+STEP_MARGIN = 1.5
+#: recorded arrays per output sample (time, states, auxiliaries, the Dataset's copies of the
+#: named signals), in float64, and a factor for the copies made on writing a file
+_ARRAYS_PER_SAMPLE = 1 + 15 + 15 + 28
+_COPY_FACTOR = 2.0
+
+
+def available_memory() -> int:
+    """Bytes of memory available to a new allocation (Linux ``MemAvailable``; 4 GiB if
+    unknown)."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return 4 << 30
+
+
+def check_output_memory(duration: float, output_interval: float, breakpoints: int,
+                        max_steps: int) -> None:
+    """Refuse a run whose output would not fit in memory or that needs more steps than
+    ``max_steps`` just to visit its ``breakpoints`` (one step at least each)."""
+    samples = int(duration / output_interval) + 1
+    need = samples * _ARRAYS_PER_SAMPLE * 8 * _COPY_FACTOR
+    free = available_memory()
+    if need > 0.5 * free:
+        raise ParameterError(
+            "duration", duration,
+            f"{samples:.3g} output samples (one per {output_interval:g} s) would need about "
+            f"{need / 2**30:.3g} GiB, more than half the {free / 2**30:.3g} GiB available; "
+            "shorten the duration [s] (or, from Python, raise options.output_interval)")
+    if breakpoints > max_steps:
+        raise ParameterError(
+            "max_steps", max_steps,
+            f"a run of {duration:g} s needs at least {breakpoints:.3g} solver steps (one per "
+            "controller/output instant); shorten the duration [s] or raise max_steps "
+            "(--max-steps)")
+
+
+def time_constants(params: DriveParameters, drive: str, speed: float) -> dict[str, float]:
+    """The parameter set's fast time constants [s], by name, at table speed ``speed``
+    [m/s] (for the bristle relaxation F_c/(σ0·|v|), Wang2021 Eqs. 9–11)."""
+    v = max(abs(speed), 1e-6)
+    out: dict[str, float] = {}
+    sites = ("screw", "nut", "guide") if drive == "ddfs" else ("screw", "guide")
+    for site in sites:
+        lugre = getattr(params.friction, site)
+        fc = min(lugre.positive.coulomb_force, lugre.negative.coulomb_force)
+        out[f"{site} bristle relaxation F_c/(σ0·|v|)"] = fc / (lugre.bristle_stiffness * v)
+    c = params.controller
+    motors = (("screw motor", params.screw_motor),) if drive == "cdfs" else (
+        ("screw motor", params.screw_motor), ("hollow motor", params.hollow_motor))
+    for name, motor in motors:
+        out[f"{name} current loop L/(R + K_ip)"] = motor.inductance / (
+            motor.resistance + c.current_gain)
+    return out
+
+
+def check_step_rate(*, steps: int, probe_time: float, duration: float, max_steps: int,
+                    params: DriveParameters, drive: str, speed: float) -> None:
+    """Refuse a run whose probe of ``probe_time`` [s] took ``steps`` steps when the whole
+    ``duration`` [s] would need more than ``max_steps`` (see the module)."""
+    rate = steps / probe_time
+    projected = rate * duration
+    if projected * STEP_MARGIN <= max_steps:
+        return
+    h = probe_time / max(steps, 1)
+    taus = time_constants(params, drive, speed)
+    name, tau = min(taus.items(), key=lambda kv: kv[1])
+    if tau < 10.0 * h:
+        cause = (f"the fastest time constant, {name} = {tau:.3g} s, forces steps of "
+                 f"{h:.3g} s")
+    else:
+        cause = (f"steps of {h:.3g} s, far below every parameter time constant (the fastest "
+                 f"is {name} = {tau:.3g} s): the solution chatters")
+    raise ParameterError(
+        "max_steps", max_steps,
+        f"the solver needs about {rate:.3g} steps per simulated second here, {projected:.3g} "
+        f"for {duration:g} s (measured over the first {probe_time:.3g} s): {cause}; change "
+        "that parameter, shorten the duration [s], or raise max_steps (--max-steps)")
+
+
+def probe_time(duration: float, base: float) -> float:
+    """The probe's simulated time [s]: ``PROBE_TIME``, a multiple of ``base`` [s]; 0 when
+    the run itself is not much longer."""
+    if duration <= 4.0 * PROBE_TIME:
+        return 0.0
+    return max(1, round(PROBE_TIME / base)) * base
+
