@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -618,6 +619,7 @@ def fit_presliding(
     confidence: float = 0.95,
     lines: np.ndarray | None = None,
     source: str | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> DynamicFit:
     """Fit σ0 and σ1 to a pre-sliding test (force below breakaway).
 
@@ -642,7 +644,11 @@ def fit_presliding(
 
     σ1 is profiled: for each σ1 on a grid, σ0 is refitted; the interval where the residual
     stays within the F-test bound for ``confidence`` is ``sigma1_interval``.
+
+    ``progress`` receives a short line at each stage of a long fit (start k of 3, profile
+    point i of n).
     """
+    say = progress or (lambda _text: None)
     t = np.asarray(time, dtype=float)
     f = np.asarray(force, dtype=float)
     x = np.asarray(position, dtype=float)
@@ -710,7 +716,8 @@ def fit_presliding(
                              diff_step=1e-6, xtol=1e-10, ftol=1e-12)
 
     best = None
-    for s1_start in (0.02 * crit, 0.2 * crit, 1.0 * crit):
+    for k, s1_start in enumerate((0.02 * crit, 0.2 * crit, 1.0 * crit), start=1):
+        say(f"fitting σ0 and σ1: start {k} of 3")
         res = fit(None, (s0_init, s1_start))
         if best is None or res.cost < best.cost:
             best = res
@@ -740,9 +747,12 @@ def fit_presliding(
     i_hat = int(np.argmin(np.abs(grid - s1_hat)))
     prof[i_hat] = ssr
     # continuation: walk away from the optimum, each refit starting from its neighbour's σ0
+    done = 0
     for order in (range(i_hat + 1, grid.size), range(i_hat - 1, -1, -1)):
         s0_prev = s0_hat
         for i in order:
+            done += 1
+            say(f"profiling σ1: point {done} of {grid.size - 1}")
             res = fit(float(grid[i]), (s0_prev, float(grid[i])))
             prof[i] = 2.0 * res.cost * scale**2
             s0_prev = float(res.x[0] * s0_init)

@@ -23,7 +23,7 @@ from ..analysis.identification import (
     site_mass,
 )
 from ..measured_io import read_presliding_test, read_static_test
-from ..outputs import check_output_file
+from ..outputs import check_output_file, shown
 from ..parameters import DriveParameters, ParameterError, save
 from ._common import (
     MM_PER_S,
@@ -242,10 +242,13 @@ def dynamic_command(
                                 position_column=position_column, time_unit=time_unit,
                                 force_unit=force_unit, position_unit=position_unit, sep=sep,
                                 decimal=decimal)
-    fit = fit_presliding(data.time, data.force, data.position, mass=m,
-                         friction=getattr(params.friction, site),
-                         model=model,  # type: ignore[arg-type]
-                         confidence=confidence, lines=data.lines, source=data.source)
+    with err_console.status(f"fitting {shown(data.source)}") as status:
+        fit = fit_presliding(data.time, data.force, data.position, mass=m,
+                             friction=getattr(params.friction, site),
+                             model=model,  # type: ignore[arg-type]
+                             confidence=confidence, lines=data.lines, source=data.source,
+                             progress=lambda text: status.update(
+                                 f"fitting {shown(data.source)}: {text}"))
     if out:
         Path(out).write_text(friction_fragment(site, dynamic=fit, source=data.source),
                              encoding="utf-8")
