@@ -90,7 +90,10 @@ def friction_fragment(
 
 def load_fragment(path: str | Path) -> dict[str, Any]:
     """Read a TOML fragment file as a nested dict."""
-    return read_toml_file(path, field="fragment")
+    data = read_toml_file(path, field="fragment")
+    if not data:
+        raise ParameterError("fragment", str(path), "empty: no values to merge")
+    return data
 
 
 def _deep_merge(base: dict[str, Any], update: Mapping[str, Any], path: str) -> dict[str, Any]:
@@ -124,5 +127,9 @@ def merge_fragment(base: DriveParameters,
         data = parse_toml(fragment, field="fragment")
     else:
         data = fragment
-    merged = _deep_merge(to_dict(base), data, "")
-    return from_dict(merged)
+    try:
+        return from_dict(_deep_merge(to_dict(base), data, ""))
+    except ParameterError as err:
+        if isinstance(fragment, Path) and err.source is None:
+            raise err.in_file(str(fragment)) from None
+        raise

@@ -199,4 +199,8 @@ def loads(text: str) -> DriveParameters:
 
 
 def load(path: str | Path) -> DriveParameters:
-    return from_dict(read_toml_file(path))
+    data = read_toml_file(path)
+    try:
+        return from_dict(data)
+    except ParameterError as err:
+        raise err.in_file(str(path)) from None
