@@ -43,7 +43,7 @@ KERNEL_HASH = _kernel_hash()
 def _cache_dir() -> str:
     root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache"), "feeddrive")
-    return os.path.join(root, f"numba-{KERNEL_HASH[:16]}")
+    return os.path.join(root, f"numba-{_kernel_hash()[:16]}")
 
 
 _CACHE_DIR = _cache_dir()

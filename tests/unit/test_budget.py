@@ -40,6 +40,7 @@ def fast_current_loop() -> fd.DriveParameters:
 ])
 def test_stiff_valid_sets_are_refused_early_naming_the_time_constant(make, named) -> None:
     system = fd.DriveSystem(make(), "cdfs", 0.4)
+    fd.simulate(system, fd.ConstantSpeed(1e-3), 0.01)  # compile first: time the refusal only
     started = time.perf_counter()
     with pytest.raises(ParameterError, match="max_steps") as err:
         fd.simulate(system, fd.ConstantSpeed(1e-3), 10.0)

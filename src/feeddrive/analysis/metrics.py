@@ -43,6 +43,10 @@ __all__ = [
     "steady_window",
 ]
 
+# numpy ≥ 2.0 calls it trapezoid; 1.26, the declared minimum, only has trapz
+# (found by .ci/min-versions)
+_trapezoid: Any = getattr(np, "trapezoid", None) or getattr(np, "trapz")  # noqa: B009
+
 #: fewest samples accepted in a trace, and in its steady window
 MIN_SAMPLES = 16
 _MIN_WINDOW_SAMPLES = 8
@@ -428,7 +432,7 @@ def creep_metrics(
     along = vw * direction
     ref = abs(vc)
     duration = float(tw[-1] - tw[0])
-    mean_speed = float(np.trapezoid(vw, tw) / duration)
+    mean_speed = float(_trapezoid(vw, tw) / duration)
     ripple = float((np.max(along) - np.min(along)) / ref)
     min_ratio = float(np.min(along) / ref)
     max_ratio = float(np.max(along) / ref)
