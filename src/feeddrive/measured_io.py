@@ -219,7 +219,7 @@ def _split(line: str, sep: str | None) -> list[str]:
     return line.split() if sep is None else [c.strip() for c in line.split(sep)]
 
 
-_CHUNK = 1 << 24  # bytes scanned at a time
+_CHUNK = 1 << 22  # bytes scanned at a time (index arrays: 8 bytes per byte scanned)
 # exact (round-trip) float parsing: the default from pandas 3, an option before
 _PRECISION: dict[str, Any] = {}
 

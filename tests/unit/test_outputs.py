@@ -85,3 +85,56 @@ def test_names_with_control_characters_are_shown_on_one_line(tmp_path: Path) -> 
     with pytest.raises(OutputError) as err:
         check_output_file(tmp_path / "x\ny" / "out.csv", option="--out")
     assert "\n" not in str(err.value) and "x\\ny" in str(err.value)
+
+
+def test_parquet_without_pyarrow_is_refused_before_simulating(monkeypatch,
+                                                              tmp_path: Path) -> None:
+    """pyarrow is the optional extra [parquet] (issue 13, item 11)."""
+    import importlib.util
+
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+    from feeddrive.io import PARQUET_HINT, check_format
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "pyarrow" else real(name, *a))
+    with pytest.raises(ValueError, match=r"pip install 'feeddrive\[parquet\]'"):
+        check_format("run.parquet")
+    r = CliRunner().invoke(app, ["simulate", "--table-speed", "1", "--output",
+                                 str(tmp_path / "run.parquet")])
+    assert r.exit_code == 2 and PARQUET_HINT in r.stderr
+    assert "solver" not in r.stdout  # refused before the run
+
+
+def test_pyarrow_is_an_extra_that_the_test_extra_includes() -> None:
+    import tomllib
+
+    project = tomllib.loads((Path(__file__).parents[2] / "pyproject.toml").read_text())[
+        "project"]
+    assert not any(d.startswith("pyarrow") for d in project["dependencies"])
+    assert any(d.startswith("pyarrow") for d in project["optional-dependencies"]["parquet"])
+    assert any(d.startswith("pyarrow") for d in project["optional-dependencies"]["test"])
+
+
+def test_every_documented_writer_has_force_in_its_help() -> None:
+    """docs/outputs.md names the options that write; each command offers --force."""
+    import re
+
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    doc = (Path(__file__).parents[2] / "docs" / "outputs.md").read_text(encoding="utf-8")
+    listed = re.search(r"Options that write: (.*?); each has", doc, re.S)
+    assert listed is not None
+    commands = {re.sub(r"\s+", " ", c).split(" --")[0]
+                for c in re.findall(r"`([^`]+)`", listed.group(1))}
+    assert {"simulate", "analyze", "identify static|dynamic", "identify merge", "calibrate",
+            "friction"} <= commands
+    for command in commands:
+        for variant in command.split(" ")[-1].split("|"):
+            args = [*command.split(" ")[:-1], variant] if "|" in command else command.split()
+            r = CliRunner().invoke(app, [*args, "--help"], env={"COLUMNS": "200"})
+            assert r.exit_code == 0 and "--force" in r.stdout, (args, r.stdout[-500:])
