@@ -57,15 +57,17 @@ def _check_folder(option: str, p: Path, folder: Path) -> None:
                       "first")
 
 
-def _probe_writable(option: str, p: Path) -> None:
+def _probe_writable(option: str, p: Path, probe: Path | None = None) -> None:
+    """Open ``p`` for update (it exists) or create and remove ``probe`` (default ``p``)."""
     try:
-        if p.exists():
+        if probe is None and p.exists():
             with open(p, "r+b"):
                 pass
         else:
-            fd = os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+            target = probe or p
+            fd = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
             os.close(fd)
-            os.unlink(p)
+            os.unlink(target)
     except OSError as err:
         raise OutputError(f"{option} {shown(p)}: cannot write here "
                           f"({err.strerror or err})") from None
@@ -110,13 +112,6 @@ def check_output_dir(path: str | os.PathLike[str], *, option: str) -> Path:
         raise OutputError(f"{option} {shown(p)}: is a file; expected a folder")
     if not p.exists():
         _check_folder(option, p, p.parent)
-    target = p if p.exists() else p.parent
-    probe = target / f".feeddrive-write-probe-{os.getpid()}"
-    try:
-        fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as err:
-        raise OutputError(f"{option} {shown(p)}: cannot write here "
-                          f"({err.strerror or err})") from None
+    folder = p if p.exists() else p.parent
+    _probe_writable(option, p, folder / f".feeddrive-write-probe-{os.getpid()}")
     return p
