@@ -1,31 +1,94 @@
 """feeddrive: low-speed simulation and analysis of machine-tool feed drives (Wang2021).
 
-Pipeline: parameters → drive system → simulate → Result → analyses → report::
+Pipeline: parameters → drive system (assembled from parts, :mod:`feeddrive.model`) →
+simulate → Result → analyses → report::
 
     import feeddrive as fd
     params = fd.preset("wang2021")
     result = fd.simulate(fd.DriveSystem(params, "ddfs", 0.4),
                          fd.ConstantSpeed(0.5e-3, 16e-3), 10.0)
     fd.critical_speed_from_rest(fd.DriveSystem(params, "cdfs", 0.4))
+
+The public names are imported on first use (PEP 562), so that ``import feeddrive`` and
+``feeddrive --help`` do not pay for scipy, numba and xarray (issue 12 item 6).
 """
 
-from .analysis.calibrate import Target, Unknown, calibrate
-from .analysis.critical import (
-    CriticalSpeed,
-    critical_speed_from_rest,
-    critical_speed_stepdown,
-)
-from .analysis.metrics import CreepMetrics, CreepThresholds, creep_metrics
-from .control import ConstantSpeed, SampledSpeed, SineSpeed
-from .parameters import DriveParameters, ParameterError, load, preset, save
-from .result import Result
-from .simulate import DriveSystem, SimulationError, SolverOptions, simulate
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
+# public name → module that defines it ("" : the name is a submodule)
+_PUBLIC: dict[str, str] = {
+    "Target": "analysis.calibrate", "Unknown": "analysis.calibrate",
+    "calibrate": "analysis.calibrate",
+    "CriticalSpeed": "analysis.critical", "critical_speed_from_rest": "analysis.critical",
+    "critical_speed_stepdown": "analysis.critical",
+    "CreepMetrics": "analysis.metrics", "CreepThresholds": "analysis.metrics",
+    "creep_metrics": "analysis.metrics",
+    "ConstantSpeed": "control", "SampledSpeed": "control", "SineSpeed": "control",
+    "LoadProfile": "model", "register_friction_law": "model", "register_mechanism": "model",
+    "DriveParameters": "parameters", "ParameterError": "parameters", "load": "parameters",
+    "preset": "parameters", "save": "parameters",
+    "Result": "result",
+    "DriveSystem": "simulate", "SimulationError": "simulate", "SolverOptions": "simulate",
+    "simulate": "simulate",
+    "friction": "", "model": "",
+}
+
+if TYPE_CHECKING:
+    from . import friction, model
+    from .analysis.calibrate import Target, Unknown, calibrate
+    from .analysis.critical import (
+        CriticalSpeed,
+        critical_speed_from_rest,
+        critical_speed_stepdown,
+    )
+    from .analysis.metrics import CreepMetrics, CreepThresholds, creep_metrics
+    from .control import ConstantSpeed, SampledSpeed, SineSpeed
+    from .model import LoadProfile, register_friction_law, register_mechanism
+    from .parameters import DriveParameters, ParameterError, load, preset, save
+    from .result import Result
+    from .simulate import DriveSystem, SimulationError, SolverOptions, simulate
+
+
+def __getattr__(name: str) -> Any:
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'feeddrive' has no attribute {name!r}")
+    if module == "":
+        value = importlib.import_module(f".{name}", __name__)
+    else:
+        value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_PUBLIC])
+
+
+class _Package(types.ModuleType):
+    """Importing a submodule sets it as an attribute of its package; ``feeddrive.simulate``
+    must stay the function (as with eager imports), not become the module of that name."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if isinstance(value, types.ModuleType) and _PUBLIC.get(name) not in (None, ""):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
 __all__ = [
     "ConstantSpeed", "CreepMetrics", "CreepThresholds", "CriticalSpeed", "DriveParameters",
-    "DriveSystem", "ParameterError", "Result", "SampledSpeed", "SimulationError", "SineSpeed",
-    "SolverOptions", "Target", "Unknown", "__version__", "calibrate", "creep_metrics",
-    "critical_speed_from_rest", "critical_speed_stepdown", "load", "preset", "save", "simulate",
+    "DriveSystem", "LoadProfile", "ParameterError", "Result", "SampledSpeed", "SimulationError",
+    "SineSpeed", "SolverOptions", "Target", "Unknown", "__version__", "calibrate",
+    "creep_metrics", "critical_speed_from_rest", "critical_speed_stepdown", "friction", "load",
+    "model", "preset", "register_friction_law", "register_mechanism", "save", "simulate",
 ]

@@ -2,7 +2,7 @@
 
 ``cache=True``: compiled code is stored on disk, so a second process does not recompile.
 numba invalidates a cached function only when *its own* source file changes, not when a
-kernel it calls (in another module) or a constant in ``layout.py`` changes; a stale cache
+kernel it calls (in another module) changes; a stale cache
 would then run old physics silently.  So the cache lives in a folder named after a hash of
 all kernel sources: any change to any of them starts a fresh cache.
 
@@ -24,29 +24,38 @@ from numba import njit
 config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
 
 _HERE = Path(__file__).resolve().parent
-_KERNEL_SOURCES = ("_jit.py", "layout.py", "friction.py", "control.py", "drives.py",
-                   "analysis/identification.py",
-                   "solvers/dopri5.py")
+_KERNEL_SOURCES = ("_jit.py", "friction.py", "control.py", "analysis/identification.py")
+_KERNEL_FOLDERS = ("model", "solvers")
 
 
-def _kernel_hash() -> str:
+def _kernel_files() -> list[Path]:
+    files = [_HERE / name for name in _KERNEL_SOURCES]
+    for folder in _KERNEL_FOLDERS:
+        files += sorted((_HERE / folder).rglob("*.py"))
+    return files
+
+
+def _source_digest() -> str:
     digest = hashlib.sha256()
-    for name in _KERNEL_SOURCES:
-        digest.update((_HERE / name).read_bytes())
-    return digest.hexdigest()
+    for path in _kernel_files():
+        digest.update(path.relative_to(_HERE).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
 
 
-#: SHA-256 of every kernel source: names the compile cache and keys stored results
-KERNEL_HASH = _kernel_hash()
+SOURCE_DIGEST = _source_digest()
+#: the kernels' source hash: names the compile cache and keys stored results (feeddrive.store)
+KERNEL_HASH = SOURCE_DIGEST
 
 
 def _cache_dir() -> str:
     root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache"), "feeddrive")
-    return os.path.join(root, f"numba-{_kernel_hash()[:16]}")
+    return os.path.join(root, f"numba-{SOURCE_DIGEST}")
 
 
-_CACHE_DIR = _cache_dir()
+CACHE_DIR = _cache_dir()
+_CACHE_DIR = CACHE_DIR
 
 
 def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:

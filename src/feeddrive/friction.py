@@ -1,6 +1,8 @@
 """LuGre friction with Stribeck effect.  Wang2021 Eqs. (9)–(11), Table 1.
 
-All functions use the linear (force) form of Table 1: force in N, speed in m/s, bristle
+The LuGre force itself is :mod:`feeddrive.model.friction.lugre` (the engine's); this module
+is its array API and the analytic indicators.  All functions use the linear (force) form of
+Table 1: force in N, speed in m/s, bristle
 deflection z in m.  The screw and hollow shafts are rotary sites; the paper divides their
 torques by H = p_h/2π, and :func:`torque_from_force` / :func:`rotary_speed` undo that.
 
@@ -21,23 +23,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ._jit import inline_kernel, kernel
+from ._jit import kernel
+from .model.friction import lugre
+from .paper import CDFS_CRITICAL_SPEED
 from .parameters import FrictionBranch, LuGreParameters
 
 # ---------------------------------------------------------------- compiled scalar kernels
 
 
-@inline_kernel
-def _offset(v: float) -> int:
-    return 0 if v >= 0.0 else 4
-
-
 @kernel
 def stribeck_magnitude_kernel(v: float, p: np.ndarray) -> float:
     """σ0·g(v) = F_c + (F_s − F_c)·exp(−(v/v_s)²) [N] (Eq. 11, third line), branch by sign."""
-    o = _offset(v)
-    u = v / p[o + 2]
-    return p[o] + (p[o + 1] - p[o]) * math.exp(-u * u)
+    return lugre.stribeck_magnitude(v, p, 0)
 
 
 @kernel
@@ -45,21 +42,20 @@ def steady_force_kernel(v: float, p: np.ndarray) -> float:
     """Steady-state friction: sign(v)·σ0·g(v) + σ2·v [N]; zero at v = 0."""
     if v == 0.0:
         return 0.0
-    o = _offset(v)
     s = 1.0 if v > 0.0 else -1.0
-    return s * stribeck_magnitude_kernel(v, p) + p[o + 3] * v
+    return s * lugre.stribeck_magnitude(v, p, 0) + p[lugre.branch(v, 0) + 3] * v
 
 
 @kernel
 def bristle_rate_kernel(v: float, z: float, p: np.ndarray) -> float:
     """dz/dt = v − σ0·|v|·z / (σ0·g(v)) [m/s].  Safe at v = 0 (g ≥ F_c > 0)."""
-    return v - p[8] * abs(v) * z / stribeck_magnitude_kernel(v, p)
+    return lugre.bristle_rate(v, z, p, 0)
 
 
 @kernel
 def force_kernel(v: float, z: float, p: np.ndarray) -> float:
     """F = σ0·z + σ1·dz/dt + σ2·v [N]."""
-    return p[8] * z + p[9] * bristle_rate_kernel(v, z, p) + p[_offset(v) + 3] * v
+    return lugre.force(v, z, lugre.bristle_rate(v, z, p, 0), p, 0)
 
 
 @kernel
@@ -165,9 +161,9 @@ def linear_speed(rotary: object, lead: float) -> np.ndarray:
 
 # ---------------------------------------------------------------- analytic indicators
 
-# Wang2021 Sect. 5.2, Fig. 6: in simulation the CDFS table creeps at 1.55 mm/s and runs
-# smoothly at 1.56 mm/s, the critical creeping speed the zero-slope speed is compared with.
-PAPER_CDFS_CRITICAL_SPEED = 1.56e-3  # m/s
+# Wang2021 Sect. 5.2, Fig. 6: the simulated CDFS critical speed the zero-slope speed is
+# compared with (the number lives in feeddrive.paper)
+PAPER_CDFS_CRITICAL_SPEED = CDFS_CRITICAL_SPEED
 
 
 @dataclass(frozen=True)

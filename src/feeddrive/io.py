@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .parameters import ParameterError
-from .result import ENGINEERING
+from .units import ENGINEERING
 
 if TYPE_CHECKING:
     import pandas as pd

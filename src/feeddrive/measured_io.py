@@ -33,6 +33,7 @@ __all__ = [
     "PositionTrace",
     "PreslidingTest",
     "StaticTest",
+    "check_text_file",
     "read_csv_table",
     "read_position_trace",
     "read_presliding_test",
@@ -219,6 +220,33 @@ def _split(line: str, sep: str | None) -> list[str]:
     return line.split() if sep is None else [c.strip() for c in line.split(sep)]
 
 
+# leading bytes of binary formats a user may hand over instead of CSV text
+_BINARY_SIGNATURES = ((b"PAR1", "a Parquet file"), (b"\x89HDF", "an HDF5/NetCDF-4 file"),
+                      (b"CDF\x01", "a NetCDF file"), (b"CDF\x02", "a NetCDF file"),
+                      (b"MATLAB", "a MATLAB .mat file"), (b"PK\x03\x04", "a zip archive "
+                      "(an .xlsx workbook?)"), (b"\x89PNG", "a PNG image"))
+
+
+def check_text_file(path: str | Path) -> None:
+    """Refuse, saying what it is, a path that is not a text file: a directory, a Parquet,
+    NetCDF, .mat or other binary file (issue 12 item 14: they were reported as "line 2: 1
+    cells, but the header has 4 columns" or "no such file")."""
+    p = Path(path)
+    if p.is_dir():
+        raise MeasuredDataError(p.name, None, "is a directory; expected a CSV file")
+    if not p.is_file():
+        raise FileNotFoundError(f"{path}: no such file")
+    with p.open("rb") as stream:
+        head = stream.read(4096)
+    for signature, what in _BINARY_SIGNATURES:
+        if head.startswith(signature):
+            raise MeasuredDataError(p.name, None, f"is {what}, not CSV text; export it as "
+                                    "CSV (docs/measured-data.md)")
+    if b"\x00" in head:
+        raise MeasuredDataError(p.name, None, "is a binary file (it holds NUL bytes), not CSV "
+                                "text; export it as CSV (docs/measured-data.md)")
+
+
 _CHUNK = 1 << 22  # bytes scanned at a time (index arrays: 8 bytes per byte scanned)
 # exact (round-trip) float parsing: the default from pandas 3, an option before
 _PRECISION: dict[str, Any] = {}
@@ -229,6 +257,7 @@ def _pandas_precision() -> None:
 
     if int(pd.__version__.split(".")[0]) < 3:
         _PRECISION["float_precision"] = "round_trip"
+
 
 _SPACE = np.zeros(256, dtype=bool)
 _SPACE[[9, 10, 11, 12, 13, 32]] = True
@@ -278,10 +307,7 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
     """
     p = Path(path)
     source = p.name
-    if p.is_dir():
-        raise MeasuredDataError(source, None, "is a folder, not a data file")
-    if not p.is_file():
-        raise FileNotFoundError(f"{path}: no such file")
+    check_text_file(p)
     if decimal not in (".", ","):
         raise ValueError(f"decimal = {decimal!r}: expected '.' or ','")
     if sep is not None:

@@ -24,13 +24,17 @@ def plot_result(result: Result, path: str | Path) -> Path:
     ax.set_ylabel("table speed [mm/s]")
     ax.legend(loc="best")
     ax = axes[1]
-    ax.plot(t, 1e3 * result["screw_linear_speed"], lw=0.8, label="screw × H")
-    ax.plot(t, 1e3 * result["nut_linear_speed"], lw=0.8, label="nut × H")
-    ax.set_ylabel("motor speed [mm/s]")
+    if "screw_linear_speed" in result.dataset:
+        ax.plot(t, 1e3 * result["screw_linear_speed"], lw=0.8, label="screw × H")
+        ax.plot(t, 1e3 * result["nut_linear_speed"], lw=0.8, label="nut × H")
+        ax.set_ylabel("motor speed [mm/s]")
+    else:
+        ax.plot(t, result["motor_current"], lw=0.8, label="motor current")
+        ax.set_ylabel("current [A]")
     ax.legend(loc="best")
     ax = axes[2]
-    for name in ("screw_friction", "nut_friction", "guide_friction"):
-        ax.plot(t, result[name], lw=0.8, label=name.replace("_", " "))
+    for name in [n for n in result.dataset.data_vars if str(n).endswith("_friction")]:
+        ax.plot(t, result[str(name)], lw=0.8, label=str(name).replace("_", " "))
     ax.set_ylabel("friction [N]")
     ax.set_xlabel("time [s]")
     ax.legend(loc="best")

@@ -9,66 +9,46 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
-from . import layout as ix
+from .io import save_result
 from .parameters import dumps
+from .units import ENGINEERING as _ENGINEERING
 
 if TYPE_CHECKING:
     from .analysis.metrics import CreepMetrics, CreepThresholds
     from .control import Profile
+    from .model.assemble import Model
     from .simulate import DriveSystem
 
-# name: (source, unit, description)
-_SIGNALS: dict[str, tuple[str, str, str]] = {
-    "table_position": ("y:table_position", "m", "table displacement from its start x_t"),
-    "table_speed": ("y:table_speed", "m/s", "table speed"),
-    "screw_angle": ("y:screw_angle", "rad", "screw motor / shaft angle θ_s"),
-    "nut_angle": ("y:nut_angle", "rad", "hollow motor / nut angle θ_n"),
-    "screw_speed": ("y:screw_speed", "rad/s", "screw motor speed"),
-    "nut_speed": ("y:nut_speed", "rad/s", "hollow motor speed"),
-    "screw_current": ("y:screw_current", "A", "screw motor current"),
-    "nut_current": ("y:nut_current", "A", "hollow motor current"),
-    "screw_bristle": ("y:screw_bristle", "m", "LuGre bristle state, screw shaft (÷H form)"),
-    "nut_bristle": ("y:nut_bristle", "m", "LuGre bristle state, hollow shaft (÷H form)"),
-    "guide_bristle": ("y:guide_bristle", "m", "LuGre bristle state, linear guide"),
-    "screw_voltage": ("a:screw_voltage", "V", "screw motor armature voltage"),
-    "nut_voltage": ("a:nut_voltage", "V", "hollow motor armature voltage"),
-    "screw_current_command": ("a:screw_current_command", "A", "screw current command"),
-    "nut_current_command": ("a:nut_current_command", "A", "hollow current command"),
-    "screw_speed_command": ("a:screw_speed_command", "rad/s", "screw speed command"),
-    "nut_speed_command": ("a:nut_speed_command", "rad/s", "hollow speed command"),
-    "screw_friction": ("a:screw_friction", "N", "screw-shaft friction (torque ÷ H)"),
-    "nut_friction": ("a:nut_friction", "N", "hollow-shaft friction (torque ÷ H)"),
-    "guide_friction": ("a:guide_friction", "N", "linear-guide friction"),
-    "drive_force": ("a:drive_force", "N", "screw–nut force on the table F_d"),
-    "equivalent_stiffness": ("a:equivalent_stiffness", "N/m", "K_eq at the table position"),
-    "table_position_reference": ("a:table_position_reference", "m", "commanded table position"),
-    "table_speed_reference": ("a:table_speed_reference", "m/s", "commanded table speed"),
-    "nut_speed_reference": ("a:nut_speed_reference", "m/s", "commanded nut speed (linear)"),
-}
-
 # SI → engineering units at the edges (CSV, Parquet, CLI)
-ENGINEERING = {"m": ("mm", 1e3), "m/s": ("mm/s", 1e3), "N/m": ("N/µm", 1e-6)}
+ENGINEERING = _ENGINEERING
 
 
-def build_dataset(t: np.ndarray, y: np.ndarray, aux: np.ndarray, system: DriveSystem,
-                  profile: Profile, solver_stats: dict[str, Any]) -> xr.Dataset:
-    H = system.parameters.screw.transmission_ratio
+def build_dataset(t: np.ndarray, y: np.ndarray, aux: np.ndarray, model: Model,
+                  system: DriveSystem, profile: Profile,
+                  solver_stats: dict[str, Any]) -> xr.Dataset:
+    """Named signals of a run: every state and auxiliary output of the assembled model, SI
+    units and descriptions from its parts, plus derived linear speeds and following error."""
     data_vars: dict[str, Any] = {}
-    for name, (src, unit, desc) in _SIGNALS.items():
-        kind, key = src.split(":")
-        values = (y[:, ix.STATE_NAMES.index(key)] if kind == "y"
-                  else aux[:, ix.AUX_NAMES.index(key)])
-        data_vars[name] = ("time", np.array(values), {"units": unit, "long_name": desc})
-    data_vars["screw_linear_speed"] = ("time", H * y[:, ix.W_S],
-                                       {"units": "m/s", "long_name": "screw speed × H"})
-    data_vars["nut_linear_speed"] = ("time", H * y[:, ix.W_N],
-                                     {"units": "m/s", "long_name": "nut speed × H"})
-    data_vars["following_error"] = ("time", aux[:, ix.A_X_REF] - y[:, ix.X_T],
+    for k, sig in enumerate(model.states):
+        data_vars[sig.name] = ("time", np.array(y[:, k]),
+                               {"units": sig.unit, "long_name": sig.description})
+    for k, sig in enumerate(model.aux):
+        data_vars[sig.name] = ("time", np.array(aux[:, k]),
+                               {"units": sig.unit, "long_name": sig.description})
+    if "screw_speed" in model.state_names:
+        H = system.parameters.screw.transmission_ratio
+        data_vars["screw_linear_speed"] = ("time", H * data_vars["screw_speed"][1],
+                                           {"units": "m/s", "long_name": "screw speed × H"})
+        data_vars["nut_linear_speed"] = ("time", H * data_vars["nut_speed"][1],
+                                         {"units": "m/s", "long_name": "nut speed × H"})
+    data_vars["following_error"] = ("time", data_vars["table_position_reference"][1]
+                                    - data_vars["table_position"][1],
                                     {"units": "m", "long_name": "commanded − table position"})
     attrs: dict[str, Any] = {
         "drive": system.drive,
         "table_start_position_m": system.table_position,
         "nut_hold": system.nut_hold,
+        "friction_laws": json.dumps(dict(model.sites)),
         "profile": repr(profile) if not hasattr(profile, "time") else type(profile).__name__,
         "parameters_toml": dumps(system.parameters),
         "parameter_set": system.parameters.name,
@@ -110,40 +90,103 @@ class Result:
                              thresholds=thresholds, window=window)
 
     def summary(self) -> dict[str, Any]:
-        """Mean and ripple of table speed after the transient, stick fraction, motor speeds —
-        in engineering units (mm/s), for printing."""
+        """What a run did, in engineering units (mm/s, µm), for printing.
+
+        Constant and sampled profiles: mean and ripple of table speed after the transient,
+        stick fraction, verdict, motor speeds.  Sine profiles: tracking error, reversal
+        overshoot and stick time at reversals (constant-speed metrics mean nothing there).
+        Both: following error and position deviation [µm] over the same window.
+        """
+        from .analysis.metrics import position_metrics, sine_metrics
+
+        warnings: list[str] = []
+        frequency = _sine_frequency(self.dataset.attrs.get("profile", ""))
+        out: dict[str, Any] = {"drive": self.dataset.attrs["drive"]}
+        if frequency is not None:
+            s = sine_metrics(self.time, self["table_speed"], self["table_speed_reference"],
+                             frequency=frequency)
+            window = (s.window_start, s.window_end)
+            out.update({
+                "profile": "sine", "amplitude_mm_s": 1e3 * s.amplitude,
+                "frequency_hz": s.frequency,
+                "tracking_error_rms_mm_s": 1e3 * s.tracking_error_rms,
+                "tracking_error_max_mm_s": 1e3 * s.tracking_error_max,
+                "reversal_overshoot": s.reversal_overshoot,
+                "stick_time_at_reversals_s": s.stick_time_at_reversals,
+                "reference_dwell_at_reversals_s": s.reference_dwell,
+                "reversals": s.reversals,
+            })
+        else:
+            constant = self.dataset.attrs.get("profile", "").startswith("ConstantSpeed")
+            m = self.creep_metrics(window=None if constant else self._hold_window())
+            window = (m.window_start, m.window_end)
+            out.update({
+                "profile": "constant" if constant else "sampled",
+                "command_speed_mm_s": 1e3 * self.command_speed,
+                "mean_table_speed_mm_s": 1e3 * m.mean_speed,
+                "ripple_ratio": m.ripple_ratio,
+                "min_ratio": m.min_ratio,
+                "stick_fraction": m.stick_fraction,
+                "stick_slip_frequency_hz": m.stick_slip_frequency,
+                "verdict": m.verdict,
+            })
+            if m.unstable:
+                warnings.append(f"unstable: the loop diverges (table speed peaks at "
+                                f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, "
+                                f"limit {m.thresholds.max_speed_ratio:g}×)")
+        travel = self._travel_warning()
+        if travel:
+            warnings.append(travel)
+        sel = (self.time >= window[0]) & (self.time <= window[1])
+        out.update(position_metrics(self.time, self["following_error"], window))
+        out.update({
+            "window_s": list(window),
+            "mean_screw_speed_mm_s": self._mean_mm_s("screw_linear_speed", sel),
+            "mean_nut_speed_mm_s": self._mean_mm_s("nut_linear_speed", sel),
+            "solver": self.solver_stats,
+            "warnings": warnings,
+        })
+        return out
+
+    def _travel_warning(self) -> str | None:
+        """Whether the table left the screw's travel (feeddrive.analysis.metrics)."""
         import tomllib
 
         from .analysis.metrics import travel_warning
 
-        m = self.creep_metrics()
-        sel = (self.time >= m.window_start) & (self.time <= m.window_end)
-        warnings = []
-        if m.unstable:
-            warnings.append(f"unstable: the loop diverges (table speed peaks at "
-                            f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, limit "
-                            f"{m.thresholds.max_speed_ratio:g}×)")
-        length = tomllib.loads(self.dataset.attrs["parameters_toml"])["screw"]["length"]
-        travel = travel_warning(self.dataset.attrs["table_start_position_m"],
-                                self["table_position"], length)
-        if travel:
-            warnings.append(travel)
-        return {
-            "drive": self.dataset.attrs["drive"],
-            "command_speed_mm_s": 1e3 * self.command_speed,
-            "mean_table_speed_mm_s": 1e3 * m.mean_speed,
-            "ripple_ratio": m.ripple_ratio,
-            "min_ratio": m.min_ratio,
-            "stick_fraction": m.stick_fraction,
-            "stick_slip_frequency_hz": m.stick_slip_frequency,
-            "verdict": m.verdict,
-            "window_s": [m.window_start, m.window_end],
-            "mean_screw_speed_mm_s": 1e3 * float(np.mean(self["screw_linear_speed"][sel])),
-            "mean_nut_speed_mm_s": 1e3 * float(np.mean(self["nut_linear_speed"][sel])),
-            "solver": self.solver_stats,
-            "warnings": warnings,
-        }
+        screw = tomllib.loads(self.dataset.attrs["parameters_toml"]).get("screw", {})
+        if "length" not in screw or "table_start_position_m" not in self.dataset.attrs:
+            return None
+        return travel_warning(self.dataset.attrs["table_start_position_m"],
+                              self["table_position"], screw["length"])
+
+    def _hold_window(self) -> tuple[float, float]:
+        """The steady window (:func:`steady_window`) of the first stretch where a sampled
+        command holds its largest speed (the top of a trapezoid, the first step of a
+        staircase), so that ramps are not judged as creep."""
+        from .analysis.metrics import steady_window
+
+        ref, c = self["table_speed_reference"], self.command_speed
+        hold = np.abs(ref - c) <= 1e-6 * abs(c)
+        first = int(np.argmax(hold))
+        after = np.flatnonzero(~hold[first:])
+        last = first + int(after[0]) - 1 if after.size else ref.size - 1
+        if last - first < 16:
+            return float(self.time[0]), float(self.time[-1])
+        return steady_window(self.time[first:last + 1], self["table_speed"][first:last + 1], c)
+
+    def _mean_mm_s(self, name: str, sel: np.ndarray) -> float | None:
+        if name not in self.dataset:
+            return None
+        return 1e3 * float(np.mean(self[name][sel]))
 
     def save(self, path: str | Path) -> Path:
-        from .io import save_result
         return save_result(self.dataset, path)
+
+
+def _sine_frequency(profile: str) -> float | None:
+    """The frequency [Hz] of a ``SineSpeed`` profile from its repr in the attrs, else None."""
+    import re
+
+    found = re.match(r"SineSpeed\(.*frequency=([0-9.eE+-]+)", profile)
+    return float(found.group(1)) if found else None

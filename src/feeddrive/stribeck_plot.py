@@ -9,10 +9,11 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from . import units
 from .friction import negative_slope_band, steady_friction
 from .parameters import LuGreParameters
 
-_MM_PER_S = 1e-3
+_MM_PER_S = units.MM_PER_S
 
 
 def stribeck_figure(params: LuGreParameters, title: str = "",

@@ -228,3 +228,27 @@ def test_console_script_entry_point() -> None:
     assert bad.returncode == 2
     assert bad.stderr.strip().count("\n") == 0
     assert "--positions = '900'" in bad.stderr and "[mm]" in bad.stderr
+
+
+def test_loops_and_stability_commands_report_the_creep_mode_and_band() -> None:
+    """`feeddrive loops` / `stability` (issue 15): the least-damped mode and the band."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    runner = CliRunner()
+    res = runner.invoke(app, ["loops", "--drive", "cdfs", "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    assert data["least_damped_mode"]["frequency_hz"] == pytest.approx(5.43, abs=0.01)
+    assert {lp["loop"] for lp in data["loops"]} == {"screw velocity loop", "screw position loop"}
+    res = runner.invoke(app, ["stability", "--drive", "cdfs", "--points", "15", "--json"])
+    assert res.exit_code == 0, res.output
+    band = json.loads(res.stdout)
+    assert len(band["unstable_bands_mm_s"]) == 1
+    lo, hi = band["unstable_bands_mm_s"][0]
+    assert 0.1 < lo < 0.3 and 1.3 < hi < 1.5
+    assert "positive real part" in band["rule"]
+    bad = runner.invoke(app, ["loops", "--drive", "cdfs", "--table-speed", "0",
+                               "--with-friction"])
+    assert bad.exit_code == 2 and "table_speed" in bad.output

@@ -146,7 +146,8 @@ def test_cli_simulate_bad_input() -> None:
     res = runner.invoke(app, ["simulate", "--drive", "cdfs", "--table-speed", "5",
                               "--position", "900"])
     assert res.exit_code == 2
-    assert "table_position" in res.output
+    # the CLI names its own option in its own unit (issue 12 item 3), not table_position [m]
+    assert "--position = 900.0: expected 0 < position < 800 [mm]" in res.output
 
 
 def test_nut_speed_loop_runs_at_commanded_speed(params: fd.DriveParameters) -> None:

@@ -26,14 +26,15 @@ from feeddrive.parameters import (
 
 
 def numeric_leaves(obj: Any, prefix: str = "") -> list[tuple[str, dict[str, Any]]]:
-    """(dotted path, field metadata) of every declared quantity in a parameter tree."""
+    """(dotted path, field metadata) of every declared scalar quantity in a parameter tree
+    (vector quantities, e.g. harmonic amplitudes, are tested in test_model_parts.py)."""
     out = []
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
         path = f"{prefix}.{f.name}" if prefix else f.name
         if dataclasses.is_dataclass(value):
             out.extend(numeric_leaves(value, path))
-        elif "unit" in f.metadata:
+        elif "unit" in f.metadata and not f.metadata.get("vector"):
             out.append((path, dict(f.metadata)))
     return out
 
@@ -151,8 +152,10 @@ def test_any_out_of_range_quantity_is_refused_by_name(leaf: tuple[str, dict[str,
     path, meta = leaf
     value = {"nan": math.nan, "inf": math.inf, "-inf": -math.inf, "negative": -1.0,
              "zero": 0.0, "huge": meta["high"] * 10.0 + 1.0}[bad]
-    refused = not (bad == "zero" and meta["low_inclusive"]) and not (
-        bad == "huge" and math.isinf(meta["high"]))
+    lo = meta["low"]
+    in_range = {"zero": 0.0 > lo or (0.0 == lo and meta["low_inclusive"]),
+                "negative": -1.0 > lo, "huge": math.isinf(meta["high"])}
+    refused = not in_range.get(bad, False)
     if not refused:
         from_dict(edited(path, value))
         return

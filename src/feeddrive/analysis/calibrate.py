@@ -53,6 +53,39 @@ class Calibration:
         c = self.achieved.critical_speed
         return None if c is None else c / self.target.critical_speed - 1.0
 
+    @property
+    def tolerance(self) -> float:
+        """How close [m/s] the achieved critical speed must come to the target: 5 % of it,
+        but never finer than twice the search resolution."""
+        return max(0.05 * self.target.critical_speed, 2.0 * self.achieved.resolution)
+
+    @property
+    def reached(self) -> bool:
+        """True if the fitted set's critical speed matches the target within
+        :attr:`tolerance` (a bracket can switch the verdict at the target speed without the
+        critical speed landing there: issue 12 item 4)."""
+        c = self.achieved.critical_speed
+        return c is not None and abs(c - self.target.critical_speed) <= self.tolerance
+
+    def reason(self) -> str:
+        """What was reached, and why it misses the target, in mm/s ("" if reached)."""
+        if self.reached:
+            return ""
+        a = self.achieved
+        low, high = (v * 1e3 for v in a.speed_range)
+        what = (f"{self.unknown.path} = {self.value:.6g} switches the verdict just below "
+                f"{self.target.critical_speed * 1e3:.2f} mm/s")
+        if a.status == "above-range":
+            return (f"{what}, but the drive then creeps at every speed up to {high:.2f} mm/s "
+                    "(the critical speed is not monotonic in this parameter, or the target "
+                    "is below what the drive reaches by it)")
+        if a.status == "below-range":
+            return f"{what}, but the drive is then smooth down to {low:.2f} mm/s"
+        return (f"{what}, but the critical speed from rest is "
+                f"{a.critical_speed * 1e3:.2f} mm/s"  # type: ignore[operator]
+                f", {100 * (self.deviation or 0.0):+.0f} % from the target (tolerance "
+                f"{self.tolerance * 1e3:.2f} mm/s)")
+
 
 def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
               relative_tolerance: float = 0.02, duration: float = 12.0,

@@ -25,11 +25,12 @@ from typing import Any
 
 import numpy as np
 
+from .. import units
 from ..control import ConstantSpeed, SampledSpeed
 from ..simulate import DriveSystem, SolverOptions, simulate
 from .metrics import CreepMetrics, CreepThresholds, creep_metrics
 
-MM_S = 1e-3
+MM_S = units.MM_PER_S
 
 
 @dataclass(frozen=True)

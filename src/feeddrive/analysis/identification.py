@@ -31,6 +31,7 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import least_squares
 
+from .. import units
 from .._jit import kernel
 from ..friction import bristle_rate_kernel
 from ..parameters import DriveParameters, FrictionBranch, LuGreParameters, ParameterError
@@ -576,6 +577,12 @@ MAX_STEP_RATIO = 100.0
 SIGMA1_MAX_RELATIVE_STDERR = 0.25
 
 
+# Pre-sliding is the micrometre regime below breakaway (Wang2021 Sect. 4; Al-Bender et al.
+# 2004: a few µm to tens of µm).  A record that spans more has slid; a fit to it returns a
+# meaningless σ0 (a 10-mm sliding record gave 4.5e-5 N/µm against 36.4, issue 12 item 5).
+MAX_PRESLIDING_DISPLACEMENT = 100e-6  # [m]
+
+
 def _check_presliding(t: np.ndarray, f: np.ndarray, x: np.ndarray, mass: float,
                       lines: np.ndarray | None, prefix: str) -> None:
     for name, arr in (("time", t), ("force", f), ("position", x)):
@@ -604,6 +611,12 @@ def _check_presliding(t: np.ndarray, f: np.ndarray, x: np.ndarray, mass: float,
         raise ValueError(f"mass = {mass!r}: expected a positive mass [kg]")
     if np.ptp(x) == 0.0:
         raise ValueError(f"{prefix}position: constant; the test shows no displacement")
+    if np.ptp(x) > MAX_PRESLIDING_DISPLACEMENT:
+        raise ValueError(
+            f"{prefix}position: spans {np.ptp(x) * 1e3:.4g} mm, not a pre-sliding test; "
+            f"pre-sliding moves at most {MAX_PRESLIDING_DISPLACEMENT * 1e6:.0f} µm (the bristle "
+            "deflection F_s/σ0 is 2.6 µm at wang2021's screw site); the table slid: fit "
+            "constant-speed sliding tests with `identify static`, or check --position-unit")
     if np.ptp(f) == 0.0:
         raise ValueError(f"{prefix}force: constant; the test needs a varying force")
 
@@ -816,7 +829,7 @@ def _profile_interval(grid: np.ndarray, prof: np.ndarray, threshold: float, s1_h
 
 
 
-SITES = ("screw", "nut", "guide")
+SITES = units.SITES
 
 
 def site_mass(params: DriveParameters, site: str) -> float:

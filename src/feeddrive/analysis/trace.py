@@ -49,8 +49,6 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d, minimum_filter1d, uniform_filter1d
-from scipy.signal import savgol_filter
 
 from .metrics import CreepMetrics, CreepThresholds, creep_metrics, resample_size, steady_window
 
@@ -133,6 +131,8 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
                          f"= {polyorder}")
     if window > t.size:
         raise ValueError(f"window = {window} samples: longer than the trace ({t.size} samples)")
+    from scipy.signal import savgol_filter  # here: keeps `feeddrive --help` fast
+
     speed = savgol_filter(x, window, polyorder, deriv=1, delta=dt, mode="interp")
     return SpeedEstimate(time=t, position=x, speed=np.asarray(speed), window=window,
                          window_time=window * dt, resampled=resampled)
@@ -190,6 +190,8 @@ def _regimes(t: np.ndarray, x: np.ndarray, v: np.ndarray, width: int,
     local = (hi - lo) / span  # mean speed over the window around each sample
     ref = np.abs(local)
     along = v * np.sign(local)
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d, uniform_filter1d
+
     stick = uniform_filter1d((along < th.stick_level * ref).astype(float), width,
                              mode="nearest")
     ripple = (maximum_filter1d(along, width, mode="nearest")

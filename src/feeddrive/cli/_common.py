@@ -12,12 +12,14 @@ from typing import Any, TypeVar
 import typer
 from rich.console import Console
 
+from .. import units
 from ..outputs import shown
 from ..parameters import DriveParameters, ParameterError, load, preset
 
 app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
+    rich_markup_mode=None,  # Rich markup would eat the units: "[mm/s]" (issue 12 item 1)
     help="feeddrive: low-speed simulation and analysis of ball-screw feed drives (Wang2021).",
 )
 console = Console()
@@ -26,9 +28,7 @@ err_console = Console(stderr=True)
 F = TypeVar("F", bound=Callable[..., Any])
 
 # unit conversion at the edge: the CLI speaks mm, mm/s and N/µm
-MM = 1e-3
-MM_PER_S = 1e-3
-N_PER_UM = 1e6
+MM, MM_PER_S, N_PER_UM = units.MM, units.MM_PER_S, units.N_PER_UM
 
 
 #: exit status of a refused input or output destination (checked before any work)
@@ -102,13 +102,18 @@ def user_errors(fn: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
-def resolve_parameters(preset_name: str | None, params_file: str | None) -> DriveParameters:
-    """The parameter set named by ``--preset`` or loaded from ``--params`` (not both)."""
+DEFAULT_PRESETS = {"linear-motor": "linear-motor-example"}
+
+
+def resolve_parameters(preset_name: str | None, params_file: str | None,
+                       drive: str | None = None) -> DriveParameters:
+    """The parameter set named by ``--preset`` or loaded from ``--params`` (not both); by
+    default ``wang2021``, or the drive's example set (``linear-motor-example``)."""
     if preset_name and params_file:
         raise ParameterError("--params", params_file, "give either --preset or --params, not both")
     if params_file:
         return load(params_file)
-    return preset(preset_name or "wang2021")
+    return preset(preset_name or DEFAULT_PRESETS.get(drive or "", "wang2021"))
 
 
 def print_json(data: Any) -> None:

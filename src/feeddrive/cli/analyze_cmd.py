@@ -6,12 +6,14 @@ feeddrive.measured_io.
 
 from __future__ import annotations
 
+import math
+
 import typer
 
 from ..analysis.metrics import CreepThresholds
-from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, analyze_trace
-from ..measured_io import read_position_trace
+from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME
 from ..outputs import check_output_file
+from ..parameters import ParameterError
 from ._common import MM_PER_S, app, console, print_json, user_errors
 
 
@@ -27,7 +29,7 @@ _DEFAULTS = CreepThresholds()
 def analyze_command(
     file: str = typer.Argument(..., help="CSV with time and table position."),
     command_speed: float | None = typer.Option(
-        None, "--command-speed", help="Commanded speed (mm/s) of the whole trace (else from a "
+        None, "--command-speed", help="Commanded speed [mm/s] of the whole trace (else from a "
         "command column, else estimated per segment)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
     plot: str | None = typer.Option(None, "--plot", help="Write the trace plot here."),
@@ -38,7 +40,7 @@ def analyze_command(
         None, "--command-column", help="Default: command_speed or table_speed_reference, if "
         "present."),
     speed_column: str | None = typer.Option(
-        None, "--speed-column", help="Use this speed column (mm/s) instead of "
+        None, "--speed-column", help="Use this speed column [mm/s] instead of "
         "differentiating the position."),
     time_unit: str | None = typer.Option(None, "--time-unit", help="s (default) or ms."),
     position_unit: str | None = typer.Option(None, "--position-unit",
@@ -46,22 +48,34 @@ def analyze_command(
     sep: str | None = typer.Option(None, "--sep", help="Column separator (default: detected)."),
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     smoothing: float | None = typer.Option(
-        None, "--smoothing", help="Savitzky–Golay window (ms) (default 20 ms)."),
+        None, "--smoothing", help="Savitzky–Golay window [ms] (default 20 ms)."),
     segments: bool = typer.Option(True, "--segments/--no-segments",
                                   help="Detect step-down segments (without a command column)."),
     min_step: float = typer.Option(0.005, "--min-step",
-                                   help="Smallest speed step between segments (mm/s)."),
+                                   help="Smallest speed step between segments [mm/s]."),
     min_segment: float = typer.Option(DEFAULT_MIN_SEGMENT_TIME, "--min-segment",
-                                      help="Shortest segment (s)."),
+                                      help="Shortest segment [s]."),
     stick_level: float = typer.Option(_DEFAULTS.stick_level, "--stick-level",
-                                      help="Sticking below this fraction of the command."),
+                                      help="Sticking below this fraction of the command [-]."),
     max_stick_fraction: float = typer.Option(_DEFAULTS.max_stick_fraction,
-                                             "--max-stick-fraction"),
-    max_ripple_ratio: float = typer.Option(_DEFAULTS.max_ripple_ratio, "--max-ripple-ratio"),
+                                             "--max-stick-fraction",
+                                             help="Creeping above this stick fraction [-]."),
+    max_ripple_ratio: float = typer.Option(_DEFAULTS.max_ripple_ratio, "--max-ripple-ratio",
+                                           help="Creeping above this peak-to-peak ripple / "
+                                           "command [-]."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
 ) -> None:
     """Creep metrics of a position trace (per segment of a step-down run) and the critical
     creeping speed."""
+    from ..analysis.trace import analyze_trace
+    from ..measured_io import read_position_trace
+
+    if smoothing is not None and not (math.isfinite(smoothing) and smoothing > 0):
+        raise ParameterError("--smoothing", smoothing, "expected a window > 0 [ms]")
+    for option, value, unit in (("--min-step", min_step, "mm/s"),
+                                ("--min-segment", min_segment, "s")):
+        if not (math.isfinite(value) and value > 0):
+            raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
     if plot:
         check_output_file(plot, option="--plot", inputs=[file], force=force)
     thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import math
+
 import typer
 
-from ..analysis.calibrate import Target, Unknown, calibrate
 from ..outputs import check_output_file
-from ..parameters import save
-from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from ..parameters import ParameterError
+from . import _units
+from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
 
 
 @app.command("calibrate")
@@ -15,8 +17,10 @@ from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters,
 def calibrate_command(
     unknown: str = typer.Option("controller.velocity_integral_gain", "--unknown",
                                 help="Dotted parameter path to fit."),
-    low: float = typer.Option(500.0, "--low", help="Lower end of the search bracket (SI)."),
-    high: float = typer.Option(20000.0, "--high", help="Upper end of the search bracket (SI)."),
+    low: float = typer.Option(500.0, "--low", help="Lower end of the search bracket "
+                              "[SI unit of --unknown]."),
+    high: float = typer.Option(20000.0, "--high", help="Upper end of the search bracket "
+                               "[SI unit of --unknown]."),
     drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
     target: float = typer.Option(1.56, "--target", help="Target critical speed [mm/s] "
                                  "(default: Wang2021 Sect. 5.2, CDFS simulated)."),
@@ -29,21 +33,41 @@ def calibrate_command(
     force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
 ) -> None:
     """Fit one unknown so the drive's critical creeping speed matches a target."""
+    from ..analysis.calibrate import Target, Unknown, calibrate
+    from ..parameters import save
+
+    if not (math.isfinite(low) and low > 0):
+        raise ParameterError("--low", low, f"expected 0 < --low < --high [SI unit of {unknown}]")
+    if not (math.isfinite(high) and high > low):
+        raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
+                                             f"{unknown}]")
     if out:
         check_output_file(out, option="--out", inputs=[params_file], force=force)
     params = resolve_parameters(preset_name, params_file)
     result = calibrate(
-        params, Target(drive=drive, critical_speed=target * MM_PER_S,
-                       table_position=position * MM, nut_speed=nut_speed * MM_PER_S),
+        params, Target(drive=drive, critical_speed=_units.speed("--target", target, positive=True),
+                       table_position=_units.position("--position", position, params),
+                       nut_speed=_units.speed("--nut-speed", nut_speed)),
         Unknown(path=unknown, low=low, high=high),
         progress=None if as_json else (lambda msg: console.print(f"  {msg}")))
-    if out:
-        save(result.parameters, out)
-    achieved = result.achieved.to_dict()["critical_speed_mm_s"]
+    written = out if out and result.reached else None
+    if written:
+        save(result.parameters, written)
+    achieved = result.achieved.to_dict()
     data = {"unknown": unknown, "value": result.value, "target_mm_s": target,
-            "achieved_mm_s": achieved, "evaluations": result.evaluations, "written": out}
+            "achieved_mm_s": achieved["critical_speed_mm_s"], "achieved": achieved["display"],
+            "reached": result.reached, "reason": result.reason() or None,
+            "evaluations": result.evaluations, "written": written}
     if as_json:
         print_json(data)
-        return
-    console.print(f"{unknown} = {result.value:.6g} → {drive.upper()} critical speed "
-                  f"{achieved} mm/s (target {target} mm/s), {result.evaluations} evaluations")
+    else:
+        console.print(f"{unknown} = {result.value:.6g} → {drive.upper()} critical speed "
+                      f"{achieved['display']} (target {target:g} mm/s), {result.evaluations} "
+                      "evaluations", markup=False, highlight=False)
+        if written:
+            console.print(f"wrote {written}", markup=False, highlight=False)
+    if not result.reached:
+        err_console.print(f"error: target {target:g} mm/s not reached: {result.reason()}"
+                          + (f"; {out} not written" if out else ""),
+                          markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1)

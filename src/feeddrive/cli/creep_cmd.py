@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import typer
 
-from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
-from ..simulate import DriveSystem
-from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from .. import protocol
+from . import _units
+from ._common import MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+
+_LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
 
 
 @app.command("creep")
@@ -17,28 +19,38 @@ def creep_command(
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Hollow-motor speed [mm/s] (DDFS)."),
     method: str = typer.Option("both", "--method", help="bisect (from rest), stepdown (the "
                                "paper's protocol on a running table) or both"),
-    low: float = typer.Option(0.05, "--low", help="Lowest speed tested [mm/s]."),
-    high: float = typer.Option(3.0, "--high", help="Highest speed tested [mm/s]."),
-    duration: float = typer.Option(12.0, "--duration", help="Simulated time per trial [s]."),
+    low: float = typer.Option(_LOW, "--low", help="Lowest speed tested [mm/s] (as "
+                              "`reproduce`)."),
+    high: float = typer.Option(_HIGH, "--high", help="Highest speed tested, where the "
+                               "step-down starts [mm/s] (as `reproduce`)."),
+    duration: float = typer.Option(protocol.TRIAL_DURATION, "--duration",
+                                   help="Simulated time per trial from rest [s]."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Critical creeping speed [mm/s] (lowest table speed without stick-slip), resolution
-    0.01 mm/s.  With --method both, the answers from rest and from a running table are shown."""
+    0.01 mm/s.  With --method both, the answers from rest and from a running table are shown.
+    The protocol (speed grid, steps) is the one `reproduce` uses, so both give one number."""
+    from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
+    from ..simulate import DriveSystem
+
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")
     params = resolve_parameters(preset_name, params_file)
-    system = DriveSystem(params, drive=drive, table_position=position * MM)
+    system = DriveSystem(params, drive=drive,
+                         table_position=_units.position("--position", position, params))
+    v_n = _units.speed("--nut-speed", nut_speed)
+    lo, hi = _units.speed_range("--low", low, "--high", high)
     results = []
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
-            system, nut_speed=nut_speed * MM_PER_S, speed_range=(low * MM_PER_S, high * MM_PER_S),
-            duration=duration))
+            system, nut_speed=v_n, speed_range=(lo, hi), coarse_step=protocol.COARSE_STEP,
+            resolution=protocol.RESOLUTION, duration=duration))
     if method in ("stepdown", "both"):
         results.append(critical_speed_stepdown(
-            system, nut_speed=nut_speed * MM_PER_S, start_speed=high * MM_PER_S,
-            lowest_speed=low * MM_PER_S))
+            system, nut_speed=v_n, start_speed=hi, lowest_speed=lo, step=protocol.RESOLUTION,
+            coarse_step=protocol.STAIRCASE_COARSE_STEP))
     out = {"drive": drive, "table_position_mm": position, "nut_speed_mm_s": nut_speed,
            "parameter_set": params.name,
            "critical_speed_mm_s": results[0].to_dict()["critical_speed_mm_s"],
@@ -49,6 +61,11 @@ def creep_command(
     if as_json:
         print_json(out)
         return
+    default_grid = (low, high) == (_LOW, _HIGH)
     for r in results:
         console.print(f"{drive.upper()} at {position:g} mm, start from {r.start}: critical "
-                      f"creeping speed {r.display()} ({len(r.trials)} trials)")
+                      f"creeping speed {r.display()} ({len(r.trials)} trials)",
+                      markup=False, highlight=False)
+        if default_grid:
+            console.print(f"  protocol {protocol.describe(r.start)}", markup=False,
+                          highlight=False)

@@ -5,12 +5,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
 import typer
 from rich.markup import escape
 from rich.table import Table
 
-from .. import friction, stiffness
+from .. import units
 from ..outputs import check_output_file
 from ..parameters import DriveParameters, LuGreParameters, ParameterError
 from ._common import (
@@ -23,7 +22,7 @@ from ._common import (
     user_errors,
 )
 
-SITES = ("screw", "nut", "guide")
+SITES = units.SITES
 BRANCHES = ("positive", "negative")
 
 SCAN_LIMITATION = (
@@ -46,6 +45,8 @@ def _positive(option: str, value: float, unit: str, allow_zero: bool = False) ->
 def _scan_setup(params: DriveParameters, mass: float | None, stiffness_n_per_um: float | None,
                 damping: float | None) -> tuple[float, float, float]:
     """(m [kg], k [N/m], c [N s/m]) of the scan; defaults come from the parameter set."""
+    from .. import stiffness
+
     m = params.table.mass if mass is None else _positive("--mass", mass, "kg")
     if stiffness_n_per_um is None:
         k = stiffness.equivalent_stiffness(params, stiffness.mid_screw_position(params.screw))
@@ -80,10 +81,11 @@ def friction_command(
     damping: float | None = typer.Option(
         None, "--damping", metavar="N_S_PER_M",
         help="Scan: damper parallel to the spring [N s/m]. Default: stiffness.axial_damping "
-             "(0 for wang2021; the paper gives no structural damping)."),
+             "of the parameter set (2541 N s/m for wang2021, an assumed 5 % damping ratio; "
+             "0 for wang2021-literal: the paper gives no structural damping)."),
     speed_min: float = typer.Option(0.05, "--speed-min", help="Scan: lowest speed [mm/s]."),
     speed_max: float = typer.Option(5.0, "--speed-max", help="Scan: highest speed [mm/s]."),
-    points: int = typer.Option(400, "--points", help="Scan: speeds, log-spaced."),
+    points: int = typer.Option(400, "--points", help="Scan: number of speeds, log-spaced [-]."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
 ) -> None:
     """LuGre parameters of one friction site (Wang2021 Table 1) and analytic indicators.
@@ -94,6 +96,10 @@ def friction_command(
     The scan is an indicator for a generic oscillator, not the drive: it leaves out the servo
     loops, the drive inertias and the other sites.
     """
+    import numpy as np
+
+    from .. import friction
+
     if site not in SITES:
         raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
     if plot:

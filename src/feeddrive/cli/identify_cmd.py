@@ -8,23 +8,16 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..analysis.fragments import friction_fragment, merge_fragment
-from ..analysis.identification import (
-    SITES,
-    DynamicFit,
-    Estimate,
-    StaticFit,
-    fit_presliding,
-    fit_static,
-    site_mass,
-)
-from ..measured_io import read_presliding_test, read_static_test
 from ..outputs import check_output_file, shown
 from ..parameters import DriveParameters, ParameterError, save
+
+if TYPE_CHECKING:
+    from ..analysis.identification import DynamicFit, Estimate, StaticFit
+
 from ._common import (
     MM_PER_S,
     N_PER_UM,
@@ -45,6 +38,7 @@ identify_app = typer.Typer(no_args_is_help=True,
                            help="Identify LuGre friction parameters from measured tests.")
 app.add_typer(identify_app, name="identify")
 
+SITES = ("screw", "nut", "guide")  # as feeddrive.analysis.identification.SITES
 _SITE_HELP = "Friction site: screw, nut or guide (Wang2021 Sect. 4)."
 _SEP_HELP = "Column separator (default: detected; 'tab', 'space' accepted)."
 
@@ -57,6 +51,8 @@ def _site(site: str) -> str:
 
 def _base(preset_name: str | None, params_file: str | None,
           fragments: list[str] | None = None) -> DriveParameters:
+    from ..analysis.fragments import merge_fragment
+
     params = resolve_parameters(preset_name, params_file)
     for frag in fragments or []:
         params = merge_fragment(params, Path(frag))
@@ -94,6 +90,8 @@ def _print_static(fit: StaticFit, confidence: float) -> None:
 
 def _warnings(fit: StaticFit | DynamicFit) -> list[str]:
     """One line per fitted value the data do not determine."""
+    from ..analysis.identification import StaticFit
+
     if isinstance(fit, StaticFit):
         labels = {"coulomb_force": "F_c", "static_force": "F_s", "stribeck_velocity": "v_s",
                   "viscous_coefficient": "σ2"}
@@ -151,13 +149,13 @@ def static_command(
     force_unit: str | None = typer.Option(None, "--force-unit", help="N (default) or kN."),
     current_unit: str | None = typer.Option(None, "--current-unit", help="A (default) or mA."),
     torque_constant: float | None = typer.Option(
-        None, "--torque-constant", help="K_t (N m/A) for a current column (default: the "
+        None, "--torque-constant", help="K_t [N m/A] for a current column (default: the "
         "parameter set's motor of the site)."),
-    lead: float | None = typer.Option(None, "--lead", help="Screw lead (mm) for a current "
+    lead: float | None = typer.Option(None, "--lead", help="Screw lead [mm] for a current "
                                       "column (default: the parameter set's)."),
     weighting: str = typer.Option("relative", "--weighting",
                                   help="relative (noise ∝ force) or absolute."),
-    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level."),
+    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level [-]."),
     sep: str | None = typer.Option(None, "--sep", help=_SEP_HELP),
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
@@ -165,6 +163,10 @@ def static_command(
     force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
 ) -> None:
     """Fit F_c, F_s, v_s and σ2 per direction to constant-speed friction tests."""
+    from ..analysis.fragments import friction_fragment
+    from ..analysis.identification import fit_static
+    from ..measured_io import read_static_test
+
     site = _site(site)
     _check_outputs(out, plot, [file, params_file], force)
     params = _base(preset_name, params_file)
@@ -205,7 +207,7 @@ def dynamic_command(
     file: str = typer.Argument(..., help="CSV of a pre-sliding test (time, force, position)."),
     site: str = typer.Option("screw", "--site", help=_SITE_HELP),
     mass: float | None = typer.Option(
-        None, "--mass", help="Moving mass (kg) (default: the site's inertia referred to the "
+        None, "--mass", help="Moving mass [kg] (default: the site's inertia referred to the "
         "table, J/H² for screw and nut, the table mass for the guide)."),
     model: str = typer.Option("lugre", "--model", help="lugre (full bristle model) or linear "
                               "(m x'' + (σ1+σ2) x' + σ0 x = F, for |F| ≪ F_s)."),
@@ -222,7 +224,7 @@ def dynamic_command(
     force_unit: str | None = typer.Option(None, "--force-unit", help="N (default) or kN."),
     position_unit: str | None = typer.Option(None, "--position-unit",
                                              help="um (default), nm, mm, m."),
-    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level."),
+    confidence: float = typer.Option(0.95, "--confidence", help="Confidence level [-]."),
     sep: str | None = typer.Option(None, "--sep", help=_SEP_HELP),
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
@@ -230,6 +232,10 @@ def dynamic_command(
     force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
 ) -> None:
     """Fit σ0 and σ1 to a pre-sliding test; says so when σ1 is poorly determined."""
+    from ..analysis.fragments import friction_fragment
+    from ..analysis.identification import fit_presliding, site_mass
+    from ..measured_io import read_presliding_test
+
     site = _site(site)
     if model not in ("lugre", "linear"):
         raise ValueError(f"--model = {model!r}: expected lugre or linear")

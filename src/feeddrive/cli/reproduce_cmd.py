@@ -5,10 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from ..__main__ import INTERRUPTED
 from ..outputs import check_output_dir, shown
-from ..reproduce import run
+from ..parameters import ParameterError
 from ._common import app, console, err_console, resolve_parameters, user_errors
 
 
@@ -19,28 +20,39 @@ def reproduce_command(
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
                                            "(default wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    workers: int = typer.Option(2, "--workers", help="Processes for the critical-speed searches."),
+    workers: int = typer.Option(2, "--workers",
+                                help="Processes for the critical-speed searches [-]."),
     study: bool = typer.Option(True, "--study/--no-study", help="Also run the model-reading "
                                "study (variants of the wang2021 presets)."),
 ) -> None:
     """Regenerate Wang2021's figures (PNG) and tables (CSV) and write report.html/report.md.
     Finished studies are kept in OUT/data and reused on a rerun."""
+    from ..reproduce import run
+
+    if workers < 1:
+        raise ParameterError("--workers", workers, "expected a whole number ≥ 1")
     check_output_dir(out, option="--out")
     params = resolve_parameters(preset_name, params_file)
-    with Progress(TextColumn("{task.description}"), BarColumn(),
-                  TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-                  console=console) as bar:
-        task = bar.add_task("starting", total=None)
+    try:
+        with Progress(TextColumn("{task.description}"), BarColumn(),
+                      MofNCompleteColumn(), TimeElapsedColumn(),
+                      console=console) as bar:
+            task = bar.add_task("starting", total=None)
 
-        def progress(label: str, done: int, total: int) -> None:
-            bar.update(task, description=label, completed=done, total=total)
+            def progress(label: str, done: int, total: int) -> None:
+                bar.update(task, description=label, completed=done, total=total)
 
-        def notice(text: str) -> None:
-            err_console.print(f"notice: {shown(text)}", markup=False, highlight=False,
-                              soft_wrap=True)
+            def notice(text: str) -> None:
+                err_console.print(f"notice: {shown(text)}", markup=False, highlight=False,
+                                  soft_wrap=True)
 
-        results = run(params, out, workers=workers, study=study, progress=progress,
-                      notice=notice)
+            results = run(params, out, workers=workers, study=study, progress=progress,
+                          notice=notice)
+    except KeyboardInterrupt:
+        err_console.print(f"interrupted: the studies finished so far are kept in "
+                          f"{out / 'data'} and reused by a rerun", markup=False,
+                          highlight=False, soft_wrap=True)
+        raise typer.Exit(code=INTERRUPTED) from None
     console.print(f"wrote {out / 'report.html'}, {out / 'report.md'}, "
                   f"{len(results['figures'])} figures, tables in {out} "
                   f"({results['wall_time_s']:.0f} s)")

@@ -6,16 +6,11 @@ from typing import Any
 
 import typer
 
-from ..control import ConstantSpeed, SineSpeed
 from ..io import check_format
 from ..outputs import check_output_file
-from ..parameters import ParameterError
-from ..plotting import plot_result
-from ..simulate import DriveSystem, SolverOptions, simulate
+from . import _units
 from ._common import (
     EXIT_UNSTABLE,
-    MM,
-    MM_PER_S,
     app,
     console,
     err_console,
@@ -24,77 +19,199 @@ from ._common import (
     user_errors,
 )
 
+PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
+DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.simulate.SolverOptions.max_steps
+
+
+def _say(text: str) -> None:
+    console.print(text, markup=False, highlight=False, soft_wrap=True)
+
 
 @app.command("simulate")
 @user_errors
 def simulate_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
-    table_speed: float = typer.Option(..., "--table-speed", help="Table speed [mm/s] "
-                                      "(the amplitude for --profile sine)."),
-    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut (hollow-motor) speed [mm/s], "
-                                    "DDFS only (the amplitude for --profile sine)."),
-    position: float = typer.Option(400.0, "--position", help="Table position on the screw [mm]."),
-    duration: float = typer.Option(10.0, "--duration", help="Simulated time [s]."),
-    profile: str = typer.Option("constant", "--profile", help="constant or sine"),
+    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor (a "
+                              "direct-drive table; default preset linear-motor-example)"),
+    table_speed: float | None = typer.Option(
+        None, "--table-speed", help="Table speed [mm/s]: the command (constant), the "
+        "amplitude (sine), the top speed (trapezoid), the first step (stepdown). Required "
+        "except for --profile csv."),
+    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut (hollow-motor) speed "
+                                    "[mm/s], DDFS only (the amplitude for --profile sine)."),
+    position: float = typer.Option(400.0, "--position", help="Table position on the screw "
+                                   "[mm]."),
+    duration: float | None = typer.Option(
+        None, "--duration", help="Simulated time [s] (default 10 s; stepdown: as long as "
+        "the staircase; csv: as long as the file)."),
+    profile: str = typer.Option("constant", "--profile",
+                                help="constant, sine, trapezoid, stepdown or csv"),
     frequency: float = typer.Option(0.2, "--frequency", help="Sine frequency [Hz]."),
+    ramp_time: float = typer.Option(0.5, "--ramp-time", help="Trapezoid: ramp up and ramp "
+                                    "down time [s]."),
+    lowest_speed: float = typer.Option(0.05, "--lowest-speed", help="Stepdown: last step "
+                                       "[mm/s]."),
+    step: float = typer.Option(0.01, "--step", help="Stepdown: speed step [mm/s] "
+                               "(Wang2021 Sect. 6: 0.01 mm/s)."),
+    dwell: float = typer.Option(4.0, "--dwell", help="Stepdown: time per step [s]."),
+    profile_file: str | None = typer.Option(
+        None, "--profile-file", help="csv: a CSV with columns time [s] and table_speed "
+        "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
+    max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
+                                  help="Solver step limit [-]; a run that needs more is "
+                                  "refused before it starts."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
-                                           "(default wang2021)."),
+                                           "(default wang2021; linear-motor-example for "
+                                           "--drive linear-motor)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     output: str | None = typer.Option(None, "--output", help="Write signals to "
                                       "FILE.csv|.parquet|.nc|.mat"),
     plot: str | None = typer.Option(None, "--plot", help="Write a PNG of the run."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
-    max_steps: int = typer.Option(SolverOptions.max_steps, "--max-steps",
-                                  help="Most solver steps; a run projected to need more is "
-                                  "refused at once, naming the time constant that forces it."),
 ) -> None:
-    """Simulate a drive and print a summary: mean and ripple of table speed after the
-    transient, stick fraction, motor speeds."""
+    """Simulate a drive and print a summary: for constant, trapezoid and step-down commands
+    the mean and ripple of table speed after the transient, stick fraction and verdict; for a
+    sine the tracking error, reversal overshoot and stick time at reversals; always the
+    following error and position deviation [µm]."""
+    from .. import profiles
+    from ..budget import MEMORY_WARNING_BYTES, run_budget
+    from ..control import ConstantSpeed, SampledSpeed, SineSpeed
+    from ..parameters import ParameterError
+    from ..simulate import DriveSystem, SimulationError, SolverOptions, simulate
+
+    if profile not in PROFILES:
+        raise ParameterError("--profile", profile, f"expected one of {', '.join(PROFILES)}")
+    if profile != "csv" and table_speed is None:
+        raise ParameterError("--table-speed", None, f"required for --profile {profile} [mm/s]")
+    if profile == "csv" and profile_file is None:
+        raise ParameterError("--profile-file", None, "required for --profile csv")
     if max_steps < 1:
-        raise ParameterError("--max-steps", max_steps, "expected a positive number of steps")
-    inputs = [params_file]
+        raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
+    inputs = [params_file, profile_file]
     if output:
         check_format(output)
         check_output_file(output, option="--output", inputs=inputs, force=force)
     if plot:
         check_output_file(plot, option="--plot", inputs=[*inputs, output], force=force)
-    params = resolve_parameters(preset_name, params_file)
-    system = DriveSystem(params, drive=drive, table_position=position * MM)
+    params = resolve_parameters(preset_name, params_file, drive)
+    system = DriveSystem(params, drive=drive,
+                         table_position=_units.position("--position", position, params, drive))
+    v_n = _units.speed("--nut-speed", nut_speed)
+    v_t = 0.0 if table_speed is None else _units.speed("--table-speed", table_speed)
+    prof: ConstantSpeed | SineSpeed | SampledSpeed
     if profile == "constant":
-        prof: ConstantSpeed | SineSpeed = ConstantSpeed(table_speed * MM_PER_S,
-                                                        nut_speed * MM_PER_S)
+        prof = ConstantSpeed(v_t, v_n)
     elif profile == "sine":
-        prof = SineSpeed(table_speed * MM_PER_S, nut_speed * MM_PER_S, frequency)
+        prof = SineSpeed(v_t, v_n, frequency)
+    elif profile == "trapezoid":
+        prof = profiles.trapezoid(v_t, duration or 10.0, ramp_time=ramp_time, nut_speed=v_n)
+    elif profile == "stepdown":
+        low = _units.speed("--lowest-speed", lowest_speed, positive=True)
+        if not lowest_speed < table_speed:  # type: ignore[operator]
+            raise ParameterError("--lowest-speed", lowest_speed,
+                                 f"expected < --table-speed = {table_speed:g} [mm/s]")
+        prof, _ = profiles.stepdown(v_t, low, step=_units.speed("--step", step, positive=True),
+                                    dwell=dwell, nut_speed=v_n)
     else:
-        raise ValueError(f"--profile = {profile!r}: expected constant or sine")
-    result = simulate(system, prof, duration, options=SolverOptions(max_steps=max_steps))
+        prof = profiles.from_csv(str(profile_file))
+    if isinstance(prof, SampledSpeed) and duration is None:
+        duration = float(prof.time[-1])
+    duration = 10.0 if duration is None else duration
+    if not duration > 0:
+        raise ParameterError("--duration", duration, "expected a time > 0 [s]")
+    options = SolverOptions(max_steps=max_steps)
+    budget = run_budget(duration, max_step=options.max_step,
+                        output_interval=options.output_interval, max_steps=max_steps)
+    if budget.steps_exceeded:
+        raise ParameterError(
+            "--duration", duration,
+            f"needs at least {budget.min_steps:.3g} solver steps (step ≤ "
+            f"{options.max_step * 1e3:g} ms), more than --max-steps = {max_steps:.3g}; "
+            f"expected ≤ {budget.longest_duration:g} [s], or raise --max-steps")
+    if budget.memory_bytes > MEMORY_WARNING_BYTES:
+        _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
+                    f"{budget.memory_bytes / 1e9:.1f} GB of memory")
+    try:
+        result = simulate(system, prof, duration, options=options)
+    except SimulationError as err:
+        message = str(err).replace("options.max_steps", "--max-steps")
+        err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
     summary = result.summary()
+    summary["profile"] = profile
     if output:
         summary["output"] = str(result.save(output))
     if plot:
+        from ..plotting import plot_result
+
         summary["plot"] = str(plot_result(result, plot))
-    for text in summary["warnings"]:
+    for text in summary.get("warnings", []):
         err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
     if as_json:
         print_json(summary)
     else:
-        _print_summary(summary, drive, table_speed, position, duration, params.name)
-    if summary["verdict"] == "unstable":
+        _print_summary(summary, drive, profile, profile_file, table_speed, frequency,
+                       position, duration, params.name, output)
+    if summary.get("verdict") == "unstable":
         raise typer.Exit(code=EXIT_UNSTABLE)
 
 
-def _print_summary(summary: dict[str, Any], drive: str, table_speed: float, position: float,
-                   duration: float, name: str) -> None:
-    console.print(f"[bold]{drive.upper()}[/] at {table_speed:g} mm/s, position {position:g} mm, "
-                  f"{duration:g} s ({name})")
-    for key in ("mean_table_speed_mm_s", "ripple_ratio", "min_ratio", "stick_fraction",
-                "stick_slip_frequency_hz", "verdict", "mean_screw_speed_mm_s",
-                "mean_nut_speed_mm_s", "window_s"):
-        console.print(f"  {key:26s} {summary[key]}")
+def _print_summary(summary: dict[str, Any], drive: str, profile: str,
+                   profile_file: str | None, table_speed: float | None, frequency: float,
+                   position: float, duration: float, name: str, output: str | None) -> None:
+    what = (f"{profile_file}" if profile == "csv" else
+            f"{profile} {table_speed:g} mm/s" + (f" at {frequency:g} Hz" if profile == "sine"
+                                                 else ""))
+    _say(f"{drive.upper()}, {what}, position {position:g} mm, {duration:g} s ({name})")
+    for label, text in _lines(summary):
+        _say(f"  {label:24s} {text}")
     s = summary["solver"]
-    console.print(f"  solver: {s['method']}, {s['steps']} steps, {s['rejected_steps']} rejected, "
-                  f"{1e3 * s['wall_time_s']:.1f} ms")
+    _say(f"  solver: {s['method']}, {s['steps']} steps, {s['rejected_steps']} rejected, "
+         f"{1e3 * s['wall_time_s']:.1f} ms")
     for key in ("output", "plot"):
         if key in summary:
-            console.print(f"  wrote {summary[key]}")
+            _say(f"  wrote {summary[key]}")
+    if profile == "stepdown" and output:
+        _say(f"  analyse the steps with: feeddrive analyze {summary['output']}")
+
+
+def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
+    n = _units.number
+    rows: list[tuple[str, str]] = []
+    if s["profile"] == "sine":
+        rows += [
+            ("amplitude", f"{n(s['amplitude_mm_s'])} mm/s at {n(s['frequency_hz'])} Hz"),
+            ("tracking error", f"rms {n(s['tracking_error_rms_mm_s'])} mm/s, max "
+                               f"{n(s['tracking_error_max_mm_s'])} mm/s"),
+            ("reversal overshoot", f"{n(100 * s['reversal_overshoot'], 3)} % of the "
+                                   "amplitude"),
+            ("stick time at reversal", f"{n(s['stick_time_at_reversals_s'], 3)} s below 10 % "
+                                       f"of the amplitude (the command: "
+                                       f"{n(s['reference_dwell_at_reversals_s'], 3)} s), mean "
+                                       f"of {s['reversals']} reversals"),
+        ]
+    else:
+        freq = s["stick_slip_frequency_hz"]
+        rows += [
+            ("command speed", f"{n(s['command_speed_mm_s'])} mm/s"),
+            ("mean table speed", f"{n(s['mean_table_speed_mm_s'])} mm/s"),
+            ("ripple ratio", n(s["ripple_ratio"], 3)),
+            ("min ratio", n(s["min_ratio"], 3)),
+            ("stick fraction", n(s["stick_fraction"], 3)),
+            ("stick-slip frequency", "none" if freq is None else f"{n(freq, 3)} Hz"),
+            ("verdict", s["verdict"]),
+        ]
+    a, b = s["window_s"]
+    rows += [
+        ("following error", f"max {n(s['following_error_max_um'], 3)} µm, rms "
+                            f"{n(s['following_error_rms_um'], 3)} µm"),
+        ("position deviation", f"{n(s['position_deviation_um'], 3)} µm (peak-to-peak of the "
+                               "following error)"),
+    ]
+    if s["mean_screw_speed_mm_s"] is not None:  # a linear motor has no screw and no nut
+        rows.append(("mean motor speeds", f"screw {n(s['mean_screw_speed_mm_s'])} mm/s, nut "
+                                          f"{n(s['mean_nut_speed_mm_s'])} mm/s (× H)"))
+    rows.append(("window", f"{n(a)}–{n(b)} s"))
+    return rows
+
+

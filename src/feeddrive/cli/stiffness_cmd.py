@@ -11,6 +11,7 @@ from rich.table import Table
 
 from .. import stiffness
 from ..parameters import ParameterError
+from . import _units
 from ._common import MM, N_PER_UM, app, console, print_json, resolve_parameters, user_errors
 
 _TABLE3 = dict(zip(stiffness.TABLE3_POSITIONS, stiffness.TABLE3_SCREW_AXIAL_STIFFNESS,
@@ -35,6 +36,9 @@ def parse_positions_mm(text: str, screw_length: float) -> list[float]:
                 "--positions", token,
                 f"expected 0 < position < {length_mm:g} [mm] (strictly between the screw supports)",
             )
+        if value < _units.SMALLEST_PLAUSIBLE_POSITION_MM:
+            _units.warn(f"--positions: {token} mm looks like a value in metres "
+                        f"({value * 1e3:g} mm?); the CLI takes mm")
         out.append(value * MM)
     return out
 

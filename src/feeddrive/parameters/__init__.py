@@ -2,28 +2,47 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 from .components import (
     BallScrew,
     Controller,
     Coupling,
+    Disturbances,
     DriveParameters,
     FrictionBranch,
     FrictionSites,
+    LeadError,
+    LinearMotor,
     LuGreParameters,
     Motor,
     StiffnessModel,
     Table,
+    TorqueRipple,
 )
-from .sets import wang2021
 from .toml_io import dumps, from_dict, load, loads, save, to_dict
 from .validation import ParameterError
 
-PRESETS: dict[str, Callable[[], DriveParameters]] = {
-    "wang2021": wang2021.shipped,
-    "wang2021-literal": wang2021.literal,
-}
+
+class _Presets(Mapping[str, Callable[[], DriveParameters]]):
+    """The registered presets (``feeddrive.presets``), imported on first use."""
+
+    def _table(self) -> dict[str, Callable[[], DriveParameters]]:
+        from ..presets import PRESETS as table
+
+        return table
+
+    def __getitem__(self, name: str) -> Callable[[], DriveParameters]:
+        return self._table()[name]
+
+    def __iter__(self):
+        return iter(self._table())
+
+    def __len__(self) -> int:
+        return len(self._table())
+
+
+PRESETS = _Presets()
 
 
 def preset(name: str) -> DriveParameters:
@@ -36,7 +55,8 @@ def preset(name: str) -> DriveParameters:
 
 
 __all__ = [
-    "BallScrew", "Controller", "Coupling", "DriveParameters", "FrictionBranch", "FrictionSites",
-    "LuGreParameters", "Motor", "ParameterError", "PRESETS", "StiffnessModel", "Table",
-    "dumps", "from_dict", "load", "loads", "preset", "save", "to_dict", "wang2021",
+    "BallScrew", "Controller", "Coupling", "Disturbances", "DriveParameters", "FrictionBranch",
+    "FrictionSites", "LeadError", "LinearMotor", "LuGreParameters", "Motor", "ParameterError",
+    "PRESETS", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict", "load", "loads",
+    "preset", "save", "to_dict",
 ]

@@ -12,7 +12,7 @@ from typing import Any, Self
 
 import numpy as np
 
-from .validation import ParameterError, choice, flag, quantity, validate
+from .validation import ParameterError, choice, flag, quantities, quantity, validate
 
 _MM_HINT = "looks like millimetres; give metres"
 
@@ -76,7 +76,31 @@ class LuGreParameters(_Component):
     negative: FrictionBranch
     bristle_stiffness: float = quantity("N/m", low=0, high=1e12)
     bristle_damping: float = quantity("N s/m", low=0, high=1e8, low_inclusive=True)
+    law: str = "lugre"
+    smoothing_velocity: float = quantity(
+        "m/s", low=0, high=0.1, default=1e-6,
+        hint="sign-function smoothing of the static law only; 1 µm/s = 1e-6 m/s")
     _label = "friction"
+
+    def _check(self) -> None:
+        if not isinstance(self.law, str):
+            raise ParameterError(f"{self._label}.law", self.law, "expected a law name")
+        from ..model.friction import law_names  # registry; imports no parameter module
+
+        if self.law not in law_names():
+            raise ParameterError(f"{self._label}.law", self.law,
+                                 f"unknown friction law; expected one of {', '.join(law_names())}")
+
+    def scaled(self, factor: float) -> LuGreParameters:
+        """This site with every force and coefficient times ``factor`` (0 < factor ≤ 1); the
+        Stribeck velocities and the bristle dynamics (z, ż) are unchanged, the force scales."""
+        def br(b: FrictionBranch) -> FrictionBranch:
+            return replace(b, coulomb_force=b.coulomb_force * factor,
+                           static_force=b.static_force * factor,
+                           viscous_coefficient=b.viscous_coefficient * factor)
+        return replace(self, positive=br(self.positive), negative=br(self.negative),
+                       bristle_stiffness=self.bristle_stiffness * factor,
+                       bristle_damping=self.bristle_damping * factor)
 
     def as_array(self) -> np.ndarray:
         """Pack as float64[10]: (F_c, F_s, v_s, σ2) for +, then −, then σ0, σ1."""
@@ -98,11 +122,20 @@ class LuGreParameters(_Component):
 
 @dataclass(frozen=True)
 class FrictionSites(_Component):
-    """LuGre parameters of the three friction sites of Wang2021 Sect. 4."""
+    """Friction at the three sites of Wang2021 Sect. 4, each with its law.
+
+    ``ball_nut_share`` f: the fraction of the screw-shaft friction (Table 1, identified on the
+    CDFS with the nut fixed) that acts at the ball–nut contact, i.e. at the *relative* speed
+    H(ω_s − ω_n) between screw and nut, with its reaction on the nut; the rest (1 − f) acts
+    between screw shaft and ground (support bearings) at the screw speed.  f = 0 is the paper's
+    reading (every friction at its own shaft's speed); with the nut held (CDFS) f has no effect.
+    """
 
     screw: LuGreParameters
     nut: LuGreParameters
     guide: LuGreParameters
+    ball_nut_share: float = quantity("-", low=0, high=1, low_inclusive=True, default=0.0,
+                                     hint="a fraction between 0 and 1")
     _label = "friction"
 
 
@@ -193,9 +226,9 @@ class Controller(_Component):
     docs/model.md.  Gains are in the units stated; a period of 0 means a continuous loop.
     """
 
-    position_gain: float = quantity("1/s", low=0, high=1e5)
-    velocity_gain: float = quantity("A s/rad", low=0, high=1e5)
-    current_gain: float = quantity("V/A", low=0, high=1e5)
+    position_gain: float = quantity("1/s", low=0, high=1e5, low_inclusive=True)
+    velocity_gain: float = quantity("A s/rad", low=0, high=1e5, low_inclusive=True)
+    current_gain: float = quantity("V/A", low=0, high=1e5, low_inclusive=True)
     velocity_command_gain: float = quantity("rad/(V s)", low=0, high=1e6)
     velocity_integral_gain: float = quantity(
         "A/rad", low=0, high=1e9, low_inclusive=True, default=0.0
@@ -208,6 +241,7 @@ class Controller(_Component):
     velocity_feedback: str = choice(("motor", "table"), default="motor")
     velocity_feedforward: bool = flag(default=True)
     nut_loop: str = choice(("position", "speed"), default="position")
+    mode: str = choice(("cascade", "torque_off"), default="cascade")
     current_limit: float = quantity("A", low=0, high=1e4, default=1e4)
     voltage_limit: float = quantity("V", low=0, high=1e5, default=1e5)
     position_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)
@@ -236,6 +270,71 @@ class Controller(_Component):
 
 
 @dataclass(frozen=True)
+class TorqueRipple(_Component):
+    """Motor torque ripple and cogging: T_r(θ) = Σ_k A_k·sin(n_k·θ + φ_k), θ the motor shaft
+    angle [rad].  ``orders`` n_k per revolution, ``amplitudes`` A_k [N m], ``phases`` φ_k [rad]."""
+
+    orders: tuple[float, ...] = quantities("-", low=0, high=1e4)
+    amplitudes: tuple[float, ...] = quantities("N m", low=0, high=1e3)
+    phases: tuple[float, ...] = quantities("rad", low=-1e3, high=1e3)
+    _label = "ripple"
+
+    def _check(self) -> None:
+        _same_length(self, ("orders", "amplitudes", "phases"))
+
+
+@dataclass(frozen=True)
+class LeadError(_Component):
+    """Screw lead error: the nut advances H·θ + Σ_k a_k·sin(n_k·θ + φ_k) [m] for a relative
+    screw–nut angle θ [rad]; ``amplitudes`` a_k [m] (typically a few µm)."""
+
+    orders: tuple[float, ...] = quantities("-", low=0, high=1e4)
+    amplitudes: tuple[float, ...] = quantities("m", low=0, high=1e-3, hint="1 µm = 1e-6 m")
+    phases: tuple[float, ...] = quantities("rad", low=-1e3, high=1e3)
+    _label = "lead_error"
+
+    def _check(self) -> None:
+        _same_length(self, ("orders", "amplitudes", "phases"))
+
+
+def _same_length(obj: Any, names: tuple[str, ...]) -> None:
+    lengths = {len(getattr(obj, n)) for n in names}
+    if len(lengths) > 1:
+        raise ParameterError(f"{obj._label}.{names[1]}", getattr(obj, names[1]),
+                             f"expected as many entries as {names[0]} "
+                             f"({len(getattr(obj, names[0]))})")
+
+
+@dataclass(frozen=True)
+class Disturbances(_Component):
+    """Forces and errors acting on the drive besides friction (all zero by default).
+
+    ``load_force`` [N] acts on the table against positive motion (a cutting force resisting
+    the feed is positive), from ``load_start`` [s]; a time profile is given through the API
+    (:class:`feeddrive.LoadProfile`).
+    """
+
+    load_force: float = quantity("N", low=-1e6, high=1e6, default=0.0)
+    load_start: float = quantity("s", low=0, high=1e9, low_inclusive=True, default=0.0)
+    screw_motor_ripple: TorqueRipple = field(default_factory=lambda: TorqueRipple())
+    hollow_motor_ripple: TorqueRipple = field(default_factory=lambda: TorqueRipple())
+    lead_error: LeadError = field(default_factory=lambda: LeadError())
+    _label = "disturbances"
+
+
+@dataclass(frozen=True)
+class LinearMotor(_Component):
+    """Linear motor of a direct-drive table: force constant, back-EMF, R-L winding, forcer."""
+
+    force_constant: float = quantity("N/A", low=1e-2, high=1e4)
+    back_emf_constant: float = quantity("V s/m", low=1e-2, high=1e4)
+    inductance: float = quantity("H", low=1e-6, high=1.0, hint="20 mH = 0.02 H")
+    resistance: float = quantity("ohm", low=1e-3, high=1e3)
+    forcer_mass: float = quantity("kg", low=0, high=1e4, low_inclusive=True)
+    _label = "linear_motor"
+
+
+@dataclass(frozen=True)
 class DriveParameters(_Component):
     """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control."""
 
@@ -249,6 +348,8 @@ class DriveParameters(_Component):
     friction: FrictionSites
     stiffness: StiffnessModel = field(default_factory=StiffnessModel)
     controller: Controller = field(default_factory=lambda: _default_controller())
+    disturbances: Disturbances = field(default_factory=lambda: Disturbances())
+    linear_motor: LinearMotor | None = None
     _label = "parameters"
 
     def replace_path(self, path: str, value: Any) -> DriveParameters:

@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import dataclasses
 import tomllib
+import types
 from pathlib import Path
-from typing import Any, get_type_hints
+from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .components import DriveParameters
 from .validation import ParameterError
@@ -25,11 +26,24 @@ def _is_component(tp: Any) -> bool:
     return isinstance(tp, type) and dataclasses.is_dataclass(tp)
 
 
+def _component_type(tp: Any) -> Any:
+    """The dataclass of a field typed ``Component`` or ``Component | None``, else None."""
+    if _is_component(tp):
+        return tp
+    if get_origin(tp) in (Union, types.UnionType):
+        inner = [a for a in get_args(tp) if a is not type(None)]
+        if len(inner) == 1 and _is_component(inner[0]):
+            return inner[0]
+    return None
+
+
 def to_dict(obj: Any) -> dict[str, Any]:
     """Nested plain dict of a parameter dataclass."""
     out: dict[str, Any] = {}
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
+        if value is None:
+            continue
         out[f.name] = to_dict(value) if dataclasses.is_dataclass(value) else value
     return out
 
@@ -116,7 +130,24 @@ def _format_value(value: Any) -> str:
         return repr(float(value))
     if isinstance(value, str):
         return toml_string(value)
+    if isinstance(value, tuple | list):
+        return "[" + ", ".join(_format_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {value!r} to TOML")
+
+
+def _unit_label(obj: Any, name: str, unit: str) -> str:
+    """The unit a value is read in; a gain on the table-speed basis is per m/s, not per rad/s
+    (issue 12 item 16)."""
+    if name == "velocity_gain" and getattr(obj, "velocity_gain_basis", None) == "table":
+        return "A s/m, per table speed (velocity_gain_basis = table)"
+    return unit
+
+
+def _limit_note(f: dataclasses.Field[Any], value: Any) -> str:
+    """Says so when a limit sits at the top of its range: the value means "no limit"."""
+    if f.name.endswith("_limit") and isinstance(value, float) and value >= f.metadata["high"]:
+        return " (no limit in effect: the top of the allowed range)"
+    return ""
 
 
 def _emit(obj: Any, path: str, lines: list[str]) -> None:
@@ -124,6 +155,8 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
     nested = []
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
+        if value is None:
+            continue
         if dataclasses.is_dataclass(value):
             nested.append((f.name, value))
         else:
@@ -135,7 +168,7 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
             unit = f.metadata.get("unit")
             options = f.metadata.get("options")
             if unit:
-                comment = f"  # [{unit}]"
+                comment = f"  # [{_unit_label(obj, f.name, unit)}]{_limit_note(f, value)}"
             elif options:
                 comment = f"  # one of {', '.join(options)}"
             else:
@@ -177,9 +210,11 @@ def _build(cls: type, data: Any, path: str) -> Any:
             )
             if has_default:
                 continue
-            raise ParameterError(sub, None, "missing field")
-        tp = hints[f.name]
-        kwargs[f.name] = _build(tp, data[f.name], sub) if _is_component(tp) else data[f.name]
+            hint = (' (a partial file starts with extends = "wang2021" or another preset)'
+                    if not path or "." not in path else "")
+            raise ParameterError(sub, None, "missing field" + hint)
+        comp = _component_type(hints[f.name])
+        kwargs[f.name] = _build(comp, data[f.name], sub) if comp else data[f.name]
     try:
         return cls(**kwargs)
     except ParameterError as err:
@@ -189,18 +224,47 @@ def _build(cls: type, data: Any, path: str) -> Any:
                              err.message) from None
 
 
-def from_dict(data: dict[str, Any]) -> DriveParameters:
+def _merge(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for key, value in changes.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DriveParameters:
+    """Build a parameter set.  ``extends = "NAME"`` (a preset) or ``"FILE.toml"`` (relative to
+    ``base_dir``) starts from that set; the other values replace its values."""
+    if "extends" in data:
+        parent_name = data["extends"]
+        if not isinstance(parent_name, str):
+            raise ParameterError("extends", parent_name, "expected a preset name or a file path")
+        from . import PRESETS, preset
+
+        if parent_name in PRESETS:
+            parent = preset(parent_name)
+        elif parent_name.endswith(".toml"):
+            parent_path = (base_dir or Path.cwd()) / parent_name
+            parent = load(parent_path)
+        else:
+            raise ParameterError("extends", parent_name,
+                                 f"expected one of {', '.join(PRESETS)} or a .toml file")
+        changes = {k: v for k, v in data.items() if k != "extends"}
+        changes.setdefault("name", f"{parent.name}+changes")
+        data = _merge(to_dict(parent), changes)
     result: DriveParameters = _build(DriveParameters, data, "")
     return result
 
 
-def loads(text: str) -> DriveParameters:
-    return from_dict(parse_toml(text))
+def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
+    return from_dict(parse_toml(text), base_dir=base_dir)
 
 
 def load(path: str | Path) -> DriveParameters:
     data = read_toml_file(path)
     try:
-        return from_dict(data)
+        return from_dict(data, base_dir=Path(path).parent)
     except ParameterError as err:
         raise err.in_file(str(path)) from None

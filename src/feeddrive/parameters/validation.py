@@ -27,7 +27,10 @@ class ParameterError(ValueError):
         super().__init__(f"{where}{field} = {value!r}: {message}")
 
     def in_file(self, source: str) -> ParameterError:
-        """The same refusal, naming the file it came from."""
+        """The same refusal, naming the file it came from (an error already naming its file,
+        e.g. from a file it extends, is kept)."""
+        if self.source is not None:
+            return self
         return ParameterError(self.field, self.value, self.message, source=source)
 
 
@@ -49,6 +52,14 @@ def quantity(
     if default is dataclasses.MISSING:
         return dataclasses.field(metadata=meta)
     return dataclasses.field(default=default, metadata=meta)
+
+
+def quantities(unit: str, *, low: float, high: float, low_inclusive: bool = True,
+               hint: str = "") -> Any:
+    """Declare a tuple of floats in SI ``unit`` (e.g. harmonic amplitudes), default empty."""
+    meta = {"unit": unit, "low": low, "high": high, "low_inclusive": low_inclusive,
+            "hint": hint, "vector": True}
+    return dataclasses.field(default=(), metadata=meta)
 
 
 def choice(options: tuple[str, ...], *, default: str) -> Any:
@@ -94,7 +105,13 @@ def validate(obj: object, prefix: str) -> None:
         value = getattr(obj, f.name)
         path = f"{prefix}.{f.name}"
         meta = f.metadata
-        if "unit" in meta:
+        if meta.get("vector"):
+            if isinstance(value, str) or not isinstance(value, list | tuple):
+                raise ParameterError(path, value, f"expected a list of numbers [{meta['unit']}]")
+            coerced_all = tuple(check_quantity(f"{path}[{i}]", v, dict(meta))
+                                for i, v in enumerate(value))
+            object.__setattr__(obj, f.name, coerced_all)
+        elif "unit" in meta:
             if value is None and f.default is None:
                 continue
             coerced = check_quantity(path, value, dict(meta))

@@ -1,4 +1,8 @@
-"""Figures of the reproduction, one PNG per paper figure (engineering units)."""
+"""Figures of the reproduction, one PNG per paper figure (engineering units).
+
+``build_*`` return the matplotlib Figure (tested); the ``fig*`` functions save it.  CAPTIONS
+says, per file, which report section shows it, what it shows and what the paper shows.
+"""
 
 from __future__ import annotations
 
@@ -10,89 +14,167 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from ..analysis.metrics import reversal_overshoot_at  # noqa: E402
+
+# file → (report section, caption: what it shows; what the paper shows)
+CAPTIONS: dict[str, tuple[str, str]] = {
+    "fig6_cdfs_1p55_1p56.png": (
+        "fig6", "Table speed of the CDFS at mid-screw commanded at 1.55 and 1.56 mm/s "
+        "(dashed: command). Wang2021 Fig. 6: the table crawls at 1.55 mm/s and runs stably "
+        "at 1.56 mm/s after about 7 s."),
+    "fig7_ddfs_nut_speed.png": (
+        "fig7", "DDFS at 1.55 mm/s for hollow-motor speeds v_n in multiples of the CDFS "
+        "critical speed (left) and the overshoot and settling time against v_n (right). "
+        "Wang2021 Fig. 7: overshoot and settling shrink as v_n grows, with no further gain "
+        "beyond about 10× the CDFS critical speed."),
+    "fig8_ddfs_critical.png": (
+        "fig8", "DDFS (v_n = 16 mm/s) at the critical speed feeddrive finds (dashed: "
+        "command). Wang2021 Fig. 8: smooth motion at 0.5 mm/s (v_s = 16.5 mm/s)."),
+    "fig9_sine_1p56.png": (
+        "sine", "Sinusoidal table speed of amplitude 1.56 mm/s, one panel per hollow-motor "
+        "amplitude v_np; the largest reversal overshoot is marked. Wang2021 Fig. 9: the "
+        "overshoot at speed reversal falls as v_np grows."),
+    "fig10_sine_2.png": (
+        "sine", "As Fig. 9 at 2 mm/s amplitude. Wang2021 Fig. 10: the same trend at 2 mm/s."),
+    "fig14_position.png": (
+        "table3", "Critical creeping speed against table position, feeddrive (solid) and "
+        "Table 3's measurements (dashed), with k_sa (dotted, right axis). Wang2021 Fig. 14 "
+        "and Table 3: the critical speed is highest at mid-screw, where k_sa is lowest."),
+}
+
 
 def _save(fig: Any, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
 
 
-def _speed_axes(ax: Any, trace: dict[str, list[float]], label: str) -> None:
-    t = trace["time"]
-    ax.plot(t, [1e3 * v for v in trace["table_speed"]], lw=0.8, label=label)
+def _mm_s(values: list[float]) -> list[float]:
+    return [1e3 * v for v in values]
 
 
-def fig6(data: dict[str, Any], out: Path) -> Path:
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+def _speed_axes(ax: Any, trace: dict[str, list[float]], label: str, **style: Any) -> None:
+    ax.plot(trace["time"], _mm_s(trace["table_speed"]), lw=0.8, label=label, **style)
+
+
+def _command(ax: Any, trace: dict[str, list[float]]) -> None:
+    ax.plot(trace["time"], _mm_s(trace["table_speed_reference"]), "k--", lw=0.8,
+            label="command")
+
+
+def build_fig6(data: dict[str, Any]) -> Any:
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True, layout="constrained")
     for ax, (key, d) in zip(axes, data.items(), strict=True):
         _speed_axes(ax, d["trace"], "table")
-        ax.plot(d["trace"]["time"], [1e3 * v for v in d["trace"]["table_speed_reference"]],
-                "k--", lw=0.8, label="command")
+        _command(ax, d["trace"])
         ax.set_title(f"CDFS, v = {key} mm/s: {d['verdict']}")
         ax.set_xlabel("time [s]")
     axes[0].set_ylabel("table speed [mm/s]")
     axes[0].legend()
-    return _save(fig, out / "fig6_cdfs_1p55_1p56.png")
+    return fig
 
 
-def fig7(data: dict[str, Any], out: Path) -> Path:
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-    for key, trace in data["traces"].items():
-        _speed_axes(axes[0], trace, f"v_n = {key}× v_crit,CDFS")
+def fig6(data: dict[str, Any], out: Path) -> Path:
+    return _save(build_fig6(data), out / "fig6_cdfs_1p55_1p56.png")
+
+
+def build_fig7(data: dict[str, Any]) -> Any:
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8), layout="constrained")
+    colors = plt.get_cmap("viridis")
+    traces = list(data["traces"].items())
+    for i, (key, trace) in enumerate(traces):
+        _speed_axes(axes[0], trace, f"{key}×", color=colors(i / max(len(traces) - 1, 1)))
     axes[0].set_xlabel("time [s]")
     axes[0].set_ylabel("table speed [mm/s]")
     axes[0].set_title("DDFS at 1.55 mm/s")
-    axes[0].legend(fontsize=7)
+    # outside the axes: seven traces and their legend used to cover the data
+    axes[0].legend(title="v_n / v_crit,CDFS", fontsize=7, title_fontsize=7,
+                   loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     rows = [r for r in data["rows"] if r["multiple"] > 0]
     vn = [1e3 * r["nut_speed"] for r in rows]
-    axes[1].plot(vn, [100 * r["overshoot"] for r in rows], "o-", label="overshoot [%]")
+    left = axes[1].plot(vn, [100 * r["overshoot"] for r in rows], "o-", color="C0",
+                        label="overshoot [%] (left axis)")
     st = [r["settling_time"] if r["settling_time"] is not None else float("nan") for r in rows]
     ax2 = axes[1].twinx()
-    ax2.plot(vn, st, "s--", color="C1", label="settling time [s]")
+    right = ax2.plot(vn, st, "s--", color="C1", label="settling time [s] (right axis)")
     axes[1].set_xlabel("hollow-motor speed v_n [mm/s]")
-    axes[1].set_ylabel("overshoot [%]")
-    ax2.set_ylabel("settling time (±5 %) [s]")
+    axes[1].set_ylabel("overshoot [%]  (circles)", color="C0")
+    axes[1].tick_params(axis="y", colors="C0")
+    ax2.set_ylabel("settling time (±5 %) [s]  (squares)", color="C1")
+    ax2.tick_params(axis="y", colors="C1")
+    axes[1].legend(handles=[*left, *right], fontsize=7, loc="upper center", ncol=2,
+                   bbox_to_anchor=(0.5, -0.16))
     axes[1].set_title("overshoot and settling against v_n")
-    return _save(fig, out / "fig7_ddfs_nut_speed.png")
+    return fig
 
 
-def fig8(trace: dict[str, Any], critical: dict[str, Any], out: Path) -> Path:
-    fig, ax = plt.subplots(figsize=(7, 3.6))
-    _speed_axes(ax, trace, "table")
-    ax.plot(trace["time"], [1e3 * v for v in trace["table_speed_reference"]], "k--", lw=0.8,
-            label="command")
+def fig7(data: dict[str, Any], out: Path) -> Path:
+    return _save(build_fig7(data), out / "fig7_ddfs_nut_speed.png")
+
+
+def fig8_title(critical: dict[str, Any]) -> str:
+    """Title of Fig. 8; an out-of-range search says its bound, never "None" (issue 12 item 17)."""
+    from ..analysis.critical import format_critical_speed
+
     c = critical["critical_speed_mm_s"]
-    ax.set_title(f"DDFS, v_n = {critical['nut_speed_mm_s']:g} mm/s, at its critical speed "
-                 f"{c if c is None else f'{c:.2f}'} mm/s (Fig. 8: 0.5 mm/s)")
+    where = (f"at its critical speed {c:.2f} mm/s" if c is not None else
+             f"critical speed {format_critical_speed(critical)} mm/s ({critical['status']}), "
+             "shown at the paper's 0.5 mm/s")
+    return f"DDFS, v_n = {critical['nut_speed_mm_s']:g} mm/s, {where} (Fig. 8: 0.5 mm/s)"
+
+
+def build_fig8(trace: dict[str, Any], critical: dict[str, Any]) -> Any:
+    fig, ax = plt.subplots(figsize=(7, 3.6), layout="constrained")
+    _speed_axes(ax, trace, "table")
+    _command(ax, trace)
+    ax.set_title(fig8_title(critical), fontsize=9)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("table speed [mm/s]")
     ax.legend()
-    return _save(fig, out / "fig8_ddfs_critical.png")
+    return fig
+
+
+def fig8(trace: dict[str, Any], critical: dict[str, Any], out: Path) -> Path:
+    return _save(build_fig8(trace, critical), out / "fig8_ddfs_critical.png")
+
+
+def build_sine(data: dict[str, Any], amplitude_mm_s: float, figure: str) -> Any:
+    """Small multiples: one panel per hollow-motor amplitude (overlaid, the 10 mm/s trace was
+    hidden), the largest reversal overshoot marked and written in each panel."""
+    traces = [(k, t) for k, t in data["traces"].items()
+              if abs(float(k.split("/")[0]) - amplitude_mm_s) < 1e-9]
+    fig, axes = plt.subplots(len(traces), 1, figsize=(8, 1.9 * len(traces) + 0.6),
+                             sharex=True, sharey=True, layout="constrained", squeeze=False)
+    for ax, (key, trace) in zip(axes[:, 0], traces, strict=True):
+        vn = key.split("/")[1]
+        _speed_axes(ax, trace, "table")
+        _command(ax, trace)
+        value, at = reversal_overshoot_at(trace["time"], _mm_s(trace["table_speed"]),
+                                          _mm_s(trace["table_speed_reference"]),
+                                          amplitude_mm_s, data["frequency"])
+        if at is not None:
+            k = min(range(len(trace["time"])), key=lambda i: abs(trace["time"][i] - at))
+            ax.plot(at, 1e3 * trace["table_speed"][k], "o", color="C3", ms=6,
+                    label="largest reversal overshoot")
+        ax.text(0.01, 0.95, f"v_np = {vn} mm/s: reversal overshoot {100 * value:.0f} %",
+                transform=ax.transAxes, va="top", fontsize=8,
+                bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"})
+        ax.set_ylabel("[mm/s]")
+    axes[0, 0].legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(f"{figure}: sinusoidal table speed, amplitude {amplitude_mm_s:g} mm/s, "
+                 f"{data['frequency']:g} Hz")
+    return fig
 
 
 def figs9_10(data: dict[str, Any], out: Path) -> list[Path]:
-    paths = []
-    for amp, name in ((1.56, "fig9_sine_1p56"), (2.0, "fig10_sine_2")):
-        fig, ax = plt.subplots(figsize=(8, 3.8))
-        for key, trace in data["traces"].items():
-            a, vn = key.split("/")
-            if abs(float(a) - amp) < 1e-9:
-                _speed_axes(ax, trace, f"v_np = {vn} mm/s")
-        first = next(t for k, t in data["traces"].items() if abs(float(k.split("/")[0]) - amp)
-                     < 1e-9)
-        ax.plot(first["time"], [1e3 * v for v in first["table_speed_reference"]], "k--", lw=0.8,
-                label="command")
-        ax.set_title(f"sinusoidal table speed, amplitude {amp:g} mm/s")
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("table speed [mm/s]")
-        ax.legend(fontsize=7)
-        paths.append(_save(fig, out / f"{name}.png"))
-    return paths
+    return [_save(build_sine(data, amp, figure), out / name)
+            for amp, figure, name in ((1.56, "Fig. 9", "fig9_sine_1p56.png"),
+                                      (2.0, "Fig. 10", "fig10_sine_2.png"))]
 
 
-def fig14(rows: list[dict[str, Any]], out: Path) -> Path:
-    fig, ax = plt.subplots(figsize=(7, 4))
+def build_fig14(rows: list[dict[str, Any]]) -> Any:
+    fig, ax = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
     pos = [1e3 * r["position"] for r in rows]
 
     def mm(v: float | None) -> float:
@@ -100,8 +182,9 @@ def fig14(rows: list[dict[str, Any]], out: Path) -> Path:
 
     for drive, marker, color in (("cdfs", "o", "C0"), ("ddfs", "s", "C2")):
         name = drive.upper()
-        ax.plot(pos, [mm(r[drive]) for r in rows], marker + "-", color=color,
-                label=f"{name} (feeddrive)")
+        ours = [mm(r[drive]) for r in rows]
+        if any(v == v for v in ours):  # a legend entry only for a line with data
+            ax.plot(pos, ours, marker + "-", color=color, label=f"{name} (feeddrive)")
         ax.plot(pos, [mm(r[f"{drive}_paper"]) for r in rows], marker + "--", color=color,
                 alpha=0.6, label=f"{name} (Table 3, measured)")
         # out-of-range searches: a triangle at the bound they give
@@ -113,8 +196,14 @@ def fig14(rows: list[dict[str, Any]], out: Path) -> Path:
     ax.set_xlabel("table position x_t [mm]")
     ax.set_ylabel("critical creeping speed [mm/s]")
     ax2 = ax.twinx()
-    ax2.plot(pos, [1e-6 * r["k_sa"] for r in rows], "k:", label="k_sa")
+    ax2.plot(pos, [1e-6 * r["k_sa"] for r in rows], "k:", label="k_sa (right axis)")
     ax2.set_ylabel("k_sa [N/µm]")
-    ax.legend(fontsize=7, loc="center")
+    handles = ax.get_legend_handles_labels()[0] + ax2.get_legend_handles_labels()[0]
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.12, 1.0),
+              borderaxespad=0.0)
     ax.set_title("critical speed against table position (Table 3, Fig. 14)")
-    return _save(fig, out / "fig14_position.png")
+    return fig
+
+
+def fig14(rows: list[dict[str, Any]], out: Path) -> Path:
+    return _save(build_fig14(rows), out / "fig14_position.png")

@@ -8,15 +8,17 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
-from .. import __version__
+from .. import __version__, protocol
 from ..analysis.critical import format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
-from ..parameters.sets import wang2021
+from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
-from .studies import MID, PAPER, StudySettings
+from ..units import SITES
+from . import figures as figures_mod
+from .linear_section import linear_rows
+from .studies import MID, PAPER, StudySettings, write_csv
 
 
 def _fmt(v: float | None, digits: int = 2) -> str:
@@ -92,11 +94,11 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
                  "fitted_or_predicted": "predicted"})
     s156 = f6["1.56"]["settling_time"]
     rows.append({"quantity": "CDFS at 1.56 mm/s stable after ~7 s (Fig. 6b)", "source": "Fig. 6b",
-                 "paper": "stable, ~7 s",
+                 "paper": f"stable, ~{PAPER['fig6b_settling']:g} s",
                  "feeddrive": f"{f6['1.56']['verdict']}, settles at "
                               f"{'never' if s156 is None else f'{s156:.1f} s'}",
-                 "unit": "", "deviation": "agrees" if f6["1.56"]["verdict"] == "smooth"
-                 else "differs", "fitted_or_predicted": "predicted"})
+                 "unit": "", "deviation": fig6b_agreement(f6["1.56"]["verdict"], s156),
+                 "fitted_or_predicted": "predicted"})
     f7 = [r for r in results["fig7"]["rows"] if r["multiple"] > 0]
     rule = _fig7_rule(f7)
     rows.append({"quantity": "Fig. 7: overshoot/settling stop improving beyond v_n ≈ 10× "
@@ -113,6 +115,24 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
                  "source": "Table 3, Fig. 14", "paper": "yes", "feeddrive": trend3, "unit": "",
                  "deviation": "—", "fitted_or_predicted": "predicted"})
     return rows
+
+
+def fig6b_agreement(verdict: str, settling_time: float | None) -> str:
+    """Whether the 1.56-mm/s CDFS run agrees with Fig. 6b: stable, *and* settled at about the
+    paper's ~7 s.  "About" is read as ±30 %, the precision of a time read off a plot; a run
+    that is stable but settles at 11.7 s does not agree (issue 12 item 21)."""
+    paper = PAPER["fig6b_settling"]
+    if verdict != "smooth":
+        return "differs: not stable"
+    if settling_time is None:
+        return "differs: never settles"
+    if abs(settling_time / paper - 1.0) <= FIG6B_SETTLING_TOLERANCE:
+        return f"agrees ({_dev(settling_time, paper)} on the settling time)"
+    when = "later" if settling_time > paper else "earlier"
+    return f"differs: stable, but settles at {settling_time:.1f} s, {when} than ~{paper:g} s"
+
+
+FIG6B_SETTLING_TOLERANCE = 0.3
 
 
 def _fig7_rule(rows: list[dict[str, Any]]) -> str:
@@ -157,7 +177,7 @@ def _position_trend(rows: list[dict[str, Any]]) -> str:
 
 def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
     rows = []
-    for site in ("screw", "nut", "guide"):
+    for site in SITES:
         lg = getattr(params.friction, site)
         for bname in ("positive", "negative"):
             b = lg.branch(bname)
@@ -274,7 +294,7 @@ def _table_html(rows: list[dict[str, str]]) -> str:
 def write(params: DriveParameters, settings: StudySettings, results: dict[str, Any],
           out: Path) -> tuple[Path, Path]:
     comparison = comparison_rows(params, results)
-    pd.DataFrame(comparison).to_csv(out / "paper_comparison.csv", index=False)
+    write_csv(comparison, out / "paper_comparison.csv")
     assumptions = [{"id": a.id, "fields": ", ".join(a.fields), "value": a.value,
                     "fitted": "fitted" if a.fitted else "assumed", "why": a.rationale}
                    for a in wang2021.ASSUMPTIONS]
@@ -291,51 +311,92 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
              "reversal overshoot [%]": f"{100 * r['reversal_overshoot']:.1f}"}
             for r in results["figs9_10"]["rows"]]
     when = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    sections: list[tuple[str, str, Any]] = [
-        ("Targets for the shipped reading", "Where a target is missed, the model-reading "
-         "study below is the evidence; docs/model-reading.md discusses it.",
+    f6 = results["fig6"]
+    fig6 = [{"v [mm/s]": k, "verdict": d["verdict"],
+             "settling [s]": _fmt(d.get("settling_time"), 1)} for k, d in f6.items()]
+    table3 = [{"x_t [mm]": f"{1e3 * r['position']:.0f}",
+               "k_sa [N/µm]": f"{1e-6 * r['k_sa']:.2f}",
+               "k_sa Table 3": f"{1e-6 * r['k_sa_paper']:.2f}",
+               "CDFS [mm/s]": _fmt(None if r["cdfs"] is None else 1e3 * r["cdfs"]),
+               "CDFS Table 3": _fmt(1e3 * r["cdfs_paper"]),
+               "DDFS [mm/s]": _fmt(None if r["ddfs"] is None else 1e3 * r["ddfs"]),
+               "DDFS Table 3": _fmt(1e3 * r["ddfs_paper"])} for r in results["table3"]]
+    fig8_search = results["critical"]["crit-ddfs-fig8"]
+    linear_text, linear = linear_rows(params, results)
+    # (key, title, text, rows); figures go into the section CAPTIONS names (issue 12 item 20)
+    sections: list[tuple[str, str, str, Any]] = [
+        ("targets", "Targets for the shipped reading", "Where a target is missed, the "
+         "model-reading study below is the evidence; docs/model-reading.md discusses it.",
          target_rows(results)),
-        ("Paper numbers beside ours", "Every number of Wang2021 the study touches. "
-         "'fitted' means the number was used to fit an unknown; everything else is predicted. "
-         "Critical speeds are from rest (scan + bisection to 0.01 mm/s) unless the row says "
-         "step-down.", comparison),
-        ("Modelling assumptions", "What the paper does not give, and what we chose "
-         "(parameters/sets/wang2021.py; change any of them in a parameter file).", assumptions),
-        ("Analytic indicators", "Steady friction curves (Table 1): negative-slope bands, "
-         "zero-slope speeds and LuGre passivity per site. " + rigid_body_band(params) + ".",
-         indicators),
-        ("Stiffness chain readings", "K_eq at mid-screw under readings of Eqs. (2)–(5); the "
-         "paper states 21.6 N/µm.", readings),
-        ("Fig. 7: DDFS at 1.55 mm/s against hollow-motor speed", "", fig7),
-        ("Figs. 9–10: sinusoidal speed", f"Frequency {results['figs9_10']['frequency']} Hz "
-         "(not stated in the paper; assumed).", sine),
-        ("Model-reading study", "How each unstated choice moves the critical speeds at "
-         "mid-screw, from rest (variants of the wang2021 presets; 'below-range': smooth at "
+        ("comparison", "Paper numbers beside ours", "Every number of Wang2021 the study "
+         "touches. 'fitted' means the number was used to fit an unknown; everything else is "
+         f"predicted. Critical speeds are {protocol.describe('rest')}, unless the row says "
+         f"step-down: {protocol.describe('running')}.  `feeddrive creep` runs the same "
+         "protocol by default and gives the same numbers.", comparison),
+        ("fig6", "Fig. 6: CDFS at 1.55 and 1.56 mm/s", "Settling: the time after which the "
+         "table speed stays within ±5 % of the command.", fig6),
+        ("fig7", "Fig. 7: DDFS at 1.55 mm/s against hollow-motor speed", "", fig7),
+        ("fig8", "Fig. 8: DDFS at its critical speed", "Critical speed, v_n = 16 mm/s: "
+         f"{format_critical_speed(fig8_search)} mm/s (Wang2021: 0.5 mm/s).", []),
+        ("sine", "Figs. 9–10: sinusoidal speed", f"Frequency "
+         f"{results['figs9_10']['frequency']} Hz (not stated in the paper; assumed).", sine),
+        ("table3", "Table 3 and Fig. 14: critical speed against table position", "v_n = "
+         "20 mm/s for the DDFS, as in the experiment (Sect. 6).", table3),
+        ("assumptions", "Modelling assumptions", "What the paper does not give, and what we "
+         "chose (presets/wang2021.py; change any of them in a parameter file).",
+         assumptions),
+        ("indicators", "Analytic indicators", "Steady friction curves (Table 1): "
+         "negative-slope bands, zero-slope speeds and LuGre passivity per site. "
+         + rigid_body_band(params) + ".", indicators),
+        ("linear", "Linear analysis", linear_text, linear),
+        ("readings", "Stiffness chain readings", "K_eq at mid-screw under readings of "
+         "Eqs. (2)–(5); the paper states 21.6 N/µm.", readings),
+        ("study", "Model-reading study", "How each unstated choice moves the critical speeds "
+         "at mid-screw, from rest (variants of the wang2021 presets; 'below-range': smooth at "
          "every tested speed, 'above-range': creeps or oscillates at every tested speed). "
          "Evidence for the targets above; docs/model-reading.md discusses it.",
          study_rows(results.get("reading_study", []))),
     ]
+    placed = {key for key, *_ in sections}
+    figures = {key: [f for f in results["figures"] if figures_mod.CAPTIONS.get(f, ("",))[0]
+                     == key] for key in placed}
+    unplaced = [f for f in results["figures"] if figures_mod.CAPTIONS.get(f, ("",))[0]
+                not in placed]
+    settings_text = repr(settings)
+
+    def caption(name: str) -> str:
+        return figures_mod.CAPTIONS.get(name, ("", name))[1]
+
     md = [f"# feeddrive reproduction of Wang2021 — parameter set `{params.name}`", "",
           f"feeddrive {__version__}, {when}, wall time {results['wall_time_s']:.0f} s. "
-          f"{wang2021.CITATION}.", "",
-          "Figures: " + ", ".join(f"[{f}]({f})" for f in results["figures"]), ""]
-    for title, text, rows in sections:
+          f"{wang2021.CITATION}.", ""]
+    for key, title, text, rows in sections:
         md += [f"## {title}", "", text, "", _table_md(rows), ""]
-    md += ["## Settings", "", "```", repr(settings), "```", ""]
+        for name in figures[key]:
+            md += [f"![{name}]({name})", "", f"*{caption(name)}*", ""]
+    for name in unplaced:
+        md += [f"![{name}]({name})", "", f"*{caption(name)}*", ""]
+    md += ["## Settings", "", "```", settings_text, "```", ""]
     md_path = out / "report.md"
     md_path.write_text("\n".join(md), encoding="utf-8")
     name = html.escape(params.name)
     body = [f"<h1>feeddrive reproduction of Wang2021 — <code>{name}</code></h1>",
             f"<p>feeddrive {__version__}, {when}, wall time {results['wall_time_s']:.0f} s. "
             f"{html.escape(wang2021.CITATION)}.</p>"]
-    for title, text, rows in sections:
+
+    def figure_html(name: str) -> str:
+        return (f'<figure><img src="{html.escape(name)}" alt="{html.escape(caption(name))}">'
+                f"<figcaption>{html.escape(caption(name))}</figcaption></figure>")
+
+    for key, title, text, rows in sections:
         body += [f"<h2>{html.escape(title)}</h2>", f"<p>{html.escape(text)}</p>",
                  _table_html(rows)]
-    body += ["<h2>Figures</h2>"] + [f'<figure><img src="{f}" alt="{f}"><figcaption>{f}'
-                                    "</figcaption></figure>" for f in results["figures"]]
+        body += [figure_html(f) for f in figures[key]]
+    body += [figure_html(f) for f in unplaced]
+    body += ["<h2>Settings</h2>", f"<pre>{html.escape(settings_text)}</pre>"]
     style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto}"
              "table{border-collapse:collapse;font-size:0.9em}td,th{border:1px solid #ccc;"
-             "padding:3px 6px}img{max-width:100%}")
+             "padding:3px 6px}img{max-width:100%}figcaption{font-size:0.9em;color:#333}")
     html_path = out / "report.html"
     html_path.write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>feeddrive "
                          f"report</title><style>{style}</style></head><body>{''.join(body)}"

@@ -9,14 +9,13 @@ Critical-speed searches run in a process pool (2 workers by default).
 
 from __future__ import annotations
 
+import multiprocessing
+import signal
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
-
-import pandas as pd
 
 from .._jit import KERNEL_HASH
 from ..control import ConstantSpeed
@@ -24,7 +23,7 @@ from ..parameters import DriveParameters, dumps
 from ..simulate import DriveSystem, simulate
 from ..store import ResultStore, code_hash, store_key
 from . import figures, reading_study, report, studies
-from .studies import MID, PAPER, StudySettings
+from .studies import MID, PAPER, StudySettings, write_csv
 
 _HERE = Path(__file__).resolve().parent
 # the code that computes the stored studies (beyond the compiled kernels)
@@ -43,6 +42,10 @@ def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
                      "code": code_hash(_STUDY_SOURCES), "parameters": dumps(params),
                      "settings": asdict(settings)})
     return ResultStore(out / "data", key, notice=notice)
+
+
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _critical_job(args: tuple[DriveParameters, str, float, float, StudySettings, str]
@@ -86,16 +89,27 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     done = sum(v is not None for v in found.values())
     if progress:
         progress("critical speeds", done, total)
-    with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
-        futures = {k: pool.submit(_critical_job, v) for k, v in jobs.items()
-                   if found[k] is None}
-        futures.update({k: pool.submit(reading_study.run_variant, v, settings)
-                        for k, v in study_jobs.items() if found[k] is None})
-        for k, fut in futures.items():
-            found[k] = store.put(k, fut.result())  # each finished search is on disk at once
-            done += 1
-            if progress:
-                progress(f"critical speed {k}", done, total)
+    tasks: dict[str, tuple[Callable[..., dict[str, Any]], tuple[Any, ...]]] = {
+        k: (_critical_job, (v,)) for k, v in jobs.items() if found[k] is None}
+    tasks.update({k: (reading_study.run_variant, (v, settings))
+                  for k, v in study_jobs.items() if found[k] is None})
+    if tasks:
+        # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
+        # waits for its running searches took ~53 s to stop, issue 12 item 7)
+        pool = multiprocessing.Pool(max(1, workers), initializer=_ignore_sigint)
+        try:
+            pending = {k: pool.apply_async(fn, args) for k, (fn, args) in tasks.items()}
+            for k, handle in pending.items():
+                found[k] = store.put(k, handle.get())  # each finished search is on disk at once
+                done += 1
+                if progress:
+                    progress(f"critical speed {k}", done, total)
+            pool.close()
+        except BaseException:
+            pool.terminate()
+            raise
+        finally:
+            pool.join()
     crit: dict[str, Any] = {k: found[k] for k in jobs}
     results["critical"] = crit
     results["reading_study"] = [found[k] for k in study_jobs]
@@ -149,26 +163,26 @@ def _mm(v: float | None) -> float | None:
 
 
 def _write_tables(out: Path, results: dict[str, Any]) -> None:
-    pd.DataFrame([{
+    write_csv([{
         "position_mm": 1e3 * r["position"], "k_sa_N_per_um": 1e-6 * r["k_sa"],
         "k_sa_paper_N_per_um": 1e-6 * r["k_sa_paper"], "k_eq_N_per_um": 1e-6 * r["k_eq"],
         "cdfs_critical_mm_s": _mm(r["cdfs"]), "cdfs_paper_mm_s": _mm(r["cdfs_paper"]),
         "ddfs_critical_mm_s": _mm(r["ddfs"]), "ddfs_paper_mm_s": _mm(r["ddfs_paper"]),
-    } for r in results["table3"]]).to_csv(out / "table3_position.csv", index=False)
-    pd.DataFrame([{
+    } for r in results["table3"]], out / "table3_position.csv")
+    write_csv([{
         "multiple_of_cdfs_critical": r["multiple"], "nut_speed_mm_s": _mm(r["nut_speed"]),
         "overshoot_percent": 100 * r["overshoot"], "settling_time_s": r["settling_time"],
         "verdict": r["verdict"],
-    } for r in results["fig7"]["rows"]]).to_csv(out / "fig7_nut_speed.csv", index=False)
-    pd.DataFrame([{
+    } for r in results["fig7"]["rows"]], out / "fig7_nut_speed.csv")
+    write_csv([{
         "table_amplitude_mm_s": _mm(r["table_amplitude"]),
         "nut_amplitude_mm_s": _mm(r["nut_amplitude"]),
         "screw_amplitude_mm_s": _mm(r["screw_amplitude"]),
         "reversal_overshoot_percent": 100 * r["reversal_overshoot"],
-    } for r in results["figs9_10"]["rows"]]).to_csv(out / "figs9_10_reversal.csv", index=False)
-    pd.DataFrame([{
+    } for r in results["figs9_10"]["rows"]], out / "figs9_10_reversal.csv")
+    write_csv([{
         "search": k, "drive": v["drive"], "position_mm": v["table_position_mm"],
         "nut_speed_mm_s": v["nut_speed_mm_s"], "start": v["start"],
         "critical_speed_mm_s": v["critical_speed_mm_s"], "status": v["status"],
         "trials": len(v["trials"]),
-    } for k, v in results["critical"].items()]).to_csv(out / "critical_speeds.csv", index=False)
+    } for k, v in results["critical"].items()], out / "critical_speeds.csv")

@@ -7,48 +7,50 @@ JSON, tabulated and plotted; the traces needed for figures are returned as array
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .. import protocol
 from ..analysis.critical import (
     critical_speed_from_rest,
     critical_speed_stepdown,
     judge_trial,
 )
+from ..analysis.metrics import reversal_overshoot
 from ..control import ConstantSpeed, SineSpeed
+from ..paper import PAPER
 from ..parameters import DriveParameters
 from ..simulate import DriveSystem, simulate
 from ..stiffness import stiffness_chain
+from ..units import MM_PER_S
 
-MM_S = 1e-3
+MM_S = MM_PER_S
 MID = 0.4  # [m] mid-screw, Wang2021 Table 3 measurement point 3
 
-# Wang2021 numbers the report sets beside ours
-PAPER: dict[str, Any] = {
-    "cdfs_critical_sim": 1.56e-3,  # Sect. 5.2, Fig. 6
-    "ddfs_critical_sim": 0.5e-3,  # Fig. 8 (v_s = 16.5, v_n = 16 mm/s)
-    "ddfs_sim_nut_speed": 16e-3,
-    "cdfs_critical_measured_mid": 1.66e-3,  # Sect. 6, Fig. 13
-    "ddfs_critical_measured_mid": 0.52e-3,  # Sect. 6, Fig. 13 (v_n = 20 mm/s)
-    "experiment_nut_speed": 20e-3,
-    "positions": (0.2, 0.3, 0.4, 0.5, 0.6),  # Table 3
-    "k_sa": (276.13e6, 220.9e6, 207.1e6, 220.9e6, 276.13e6),  # Table 3 [N/m]
-    "cdfs_table3": (1.21e-3, 1.58e-3, 1.66e-3, 1.59e-3, 1.23e-3),
-    "ddfs_table3": (0.35e-3, 0.47e-3, 0.52e-3, 0.46e-3, 0.36e-3),
-    "k_eq_mid": 2.16e7,  # Sect. 5.2
-    "fig7_rule_multiple": 10.0,  # Sect. 5.2: v_n ≥ 10× the CDFS critical speed
-}
+
+
+# CSV tables: 10 significant digits, so 1e-6 × 220.9e6 is written 220.9 and not
+# 220.89999999999998 (issue 12 item 13); as feeddrive.io writes signals
+CSV_FLOAT = "%.10g"
+
+
+def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
+    """A table of rows as CSV, floats without binary noise."""
+    import pandas as pd
+
+    pd.DataFrame(rows).to_csv(path, index=False, float_format=CSV_FLOAT)
 
 
 @dataclass(frozen=True)
 class StudySettings:
     """Search settings shared by the studies (speeds in m/s, times in s)."""
 
-    trial_duration: float = 12.0
-    speed_range: tuple[float, float] = (0.02e-3, 3.02e-3)
-    coarse_step: float = 0.2e-3
-    resolution: float = 0.01e-3
+    trial_duration: float = protocol.TRIAL_DURATION
+    speed_range: tuple[float, float] = protocol.SPEED_RANGE
+    coarse_step: float = protocol.COARSE_STEP
+    resolution: float = protocol.RESOLUTION
     fig7_multiples: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 15.0, 20.0)
     fig7_duration: float = 12.0
     sine_frequency: float = 0.2
@@ -71,7 +73,8 @@ def critical_speed_running(params: DriveParameters, drive: str, position: float,
     """Critical speed by the paper's step-down protocol on a running table (Sect. 6)."""
     res = critical_speed_stepdown(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
-        start_speed=settings.speed_range[1], lowest_speed=settings.speed_range[0])
+        start_speed=settings.speed_range[1], lowest_speed=settings.speed_range[0],
+        step=settings.resolution, coarse_step=protocol.STAIRCASE_COARSE_STEP)
     return res.to_dict()
 
 
@@ -131,21 +134,6 @@ def fig7(params: DriveParameters, cdfs_critical: float, settings: StudySettings
                      "ripple_ratio": m.ripple_ratio})
         traces[f"{k:g}"] = speed_trace(r)
     return {"rows": rows, "traces": traces, "table_speed": v}
-
-
-def reversal_overshoot(time: np.ndarray, speed: np.ndarray, reference: np.ndarray,
-                       amplitude: float, frequency: float) -> float:
-    """Largest |v − v_ref| / amplitude within ±10 % of a period around each reference zero
-    crossing after the first period (Wang2021 Figs. 9–10: overshoot at speed reversal)."""
-    period = 1.0 / frequency
-    crossings = np.arange(1, int(time[-1] * 2 * frequency) + 1) * period / 2.0
-    crossings = crossings[(crossings >= period) & (crossings <= time[-1] - 0.1 * period)]
-    worst = 0.0
-    for tc in crossings:
-        sel = np.abs(time - tc) <= 0.1 * period
-        if sel.any():
-            worst = max(worst, float(np.max(np.abs(speed[sel] - reference[sel]))))
-    return worst / amplitude
 
 
 def figs9_10(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:

@@ -13,14 +13,14 @@ same tableau runs at a fixed step (used to verify the order).
 
 from __future__ import annotations
 
+import inspect
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .. import layout as ix
-from .._jit import kernel
-from ..control import sample_update
-from ..drives import rhs
+if TYPE_CHECKING:
+    from ..model.assemble import Model
 
 # Dormand–Prince coefficients
 C2, C3, C4, C5 = 1 / 5, 3 / 10, 4 / 5, 8 / 9
@@ -34,6 +34,10 @@ E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 2
                           -1 / 40)
 
 ORDER = 5
+TABLEAU = ("C2", "C3", "C4", "C5", "A21", "A31", "A32", "A41", "A42", "A43", "A51", "A52", "A53",
+           "A54", "A61", "A62", "A63", "A64", "A65", "B1", "B3", "B4", "B5", "B6", "E1", "E3",
+           "E4", "E5", "E6", "E7", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
+           "STATUS_NON_FINITE")
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1
@@ -47,15 +51,51 @@ STATUS_MESSAGES = {
 }
 
 
-# error_model="numpy": a division by zero gives inf/NaN (caught below as a rejected step or
-# STATUS_NON_FINITE) instead of Python's ZeroDivisionError check on every division of the
-# inlined right-hand side; bit-identical results, about 25 % less time per step.
-@kernel
-def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: int, n_vel: int,
-              n_cur: int, P: np.ndarray, fr_s: np.ndarray, fr_n: np.ndarray, fr_g: np.ndarray,
-              ref_table: np.ndarray, rtol: float, atol: np.ndarray, rel_mask: np.ndarray,
-              h_init: float, h_max: float, adaptive: int, max_steps: int,
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+# The solver never imports a model.  ``integrate_template`` is compiled once per assembled
+# model: its text is placed in the model's generated module (feeddrive.model.codegen), where
+# ``rhs``, ``sample_update``, ``N_AUX`` and ``N_HELD`` are that model's.  These placeholders
+# only make this file importable and checkable on its own.
+N_AUX = 0
+N_HELD = 1
+
+
+def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    raise NotImplementedError("placeholder: the assembled model's right-hand side")
+
+
+def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
+
+
+def template_sources() -> list[str]:
+    """Text placed in each generated model module: tableau import and the integrator."""
+    names = ", ".join(TABLEAU)
+    src = inspect.getsource(integrate_template).replace("def integrate_template(",
+                                                        "def integrate(", 1)
+    return [f"from feeddrive.solvers.dopri5 import ({names})", "@kernel\n" + src]
+
+
+def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
+              n_pos: int, n_vel: int, n_cur: int, rtol: float, atol: np.ndarray,
+              rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
+              max_steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                       np.ndarray]:
+    """Integrate ``model`` from t = 0 to ``t_end`` (see :func:`integrate_template`)."""
+    result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
+        model.module.integrate(y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P,
+                               model.T, rtol, atol, rel_mask, h_init, h_max, adaptive,
+                               max_steps))
+    return result
+
+
+# error_model="numpy" (feeddrive._jit): a division by zero gives inf/NaN (caught below as a
+# rejected step or STATUS_NON_FINITE) instead of Python's ZeroDivisionError check on every
+# division of the inlined right-hand side; bit-identical results, about 25 % less time.
+def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: int,
+                       n_vel: int, n_cur: int, P: np.ndarray, T: np.ndarray, rtol: float,
+                       atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
+                       adaptive: int, max_steps: int,
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from t = 0 to ``t_end`` over a grid of breakpoints spaced ``base`` [s].
 
     Output is recorded every ``out_every`` breakpoints.  Returns (t_out, y_out, aux_out,
@@ -66,8 +106,8 @@ def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: 
     n_out = n_break // out_every + 1
     t_out = np.empty(n_out)
     y_out = np.empty((n_out, n))
-    aux_out = np.empty((n_out, ix.N_AUX))
-    held = np.zeros(ix.N_HELD)
+    aux_out = np.empty((n_out, N_AUX))
+    held = np.zeros(N_HELD)
     y = y0.copy()
     k1 = np.empty(n)
     k2 = np.empty(n)
@@ -78,7 +118,7 @@ def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: 
     k7 = np.empty(n)
     yt = np.empty(n)
     y_new = np.empty(n)
-    aux = np.empty(ix.N_AUX)
+    aux = np.empty(N_AUX)
     steps = 0
     rejected = 0
     n_rhs = 0
@@ -96,9 +136,9 @@ def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: 
     for kb in range(n_break + 1):
         t_break = kb * base
         # discrete controller update and output at this breakpoint
-        sample_update(kb, t_break, y, held, P, ref_table, n_pos, n_vel, n_cur, base)
+        sample_update(kb, t_break, y, held, P, T, n_pos, n_vel, n_cur, base)
         if kb == 0 or not continuous:
-            rhs(t_break, y, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel, n_cur, k1, aux)
+            rhs(t_break, y, held, P, T, n_pos, n_vel, n_cur, k1, aux)
             n_rhs += 1
         if kb % out_every == 0 and i_out < n_out:
             t_out[i_out] = t_break
@@ -112,7 +152,7 @@ def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: 
         fresh = True
         while t < t_next - 1e-15 * t_next:
             if not fresh:
-                rhs(t, y, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel, n_cur, k1, aux)
+                rhs(t, y, held, P, T, n_pos, n_vel, n_cur, k1, aux)
                 n_rhs += 1
             fresh = False
             last = False
@@ -124,32 +164,26 @@ def integrate(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: 
             while True:
                 for i in range(n):
                     yt[i] = y[i] + h_try * A21 * k1[i]
-                rhs(t + C2 * h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
-                    n_cur, k2, aux)
+                rhs(t + C2 * h_try, yt, held, P, T, n_pos, n_vel, n_cur, k2, aux)
                 for i in range(n):
                     yt[i] = y[i] + h_try * (A31 * k1[i] + A32 * k2[i])
-                rhs(t + C3 * h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
-                    n_cur, k3, aux)
+                rhs(t + C3 * h_try, yt, held, P, T, n_pos, n_vel, n_cur, k3, aux)
                 for i in range(n):
                     yt[i] = y[i] + h_try * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-                rhs(t + C4 * h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
-                    n_cur, k4, aux)
+                rhs(t + C4 * h_try, yt, held, P, T, n_pos, n_vel, n_cur, k4, aux)
                 for i in range(n):
                     yt[i] = y[i] + h_try * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i]
                                             + A54 * k4[i])
-                rhs(t + C5 * h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
-                    n_cur, k5, aux)
+                rhs(t + C5 * h_try, yt, held, P, T, n_pos, n_vel, n_cur, k5, aux)
                 for i in range(n):
                     yt[i] = y[i] + h_try * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i]
                                             + A64 * k4[i] + A65 * k5[i])
-                rhs(t + h_try, yt, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel, n_cur,
-                    k6, aux)
+                rhs(t + h_try, yt, held, P, T, n_pos, n_vel, n_cur, k6, aux)
                 for i in range(n):
                     y_new[i] = y[i] + h_try * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i]
                                                + B5 * k5[i] + B6 * k6[i])
                 t_new = t_next if last else t + h_try
-                rhs(t_new, y_new, held, P, fr_s, fr_n, fr_g, ref_table, n_pos, n_vel,
-                    n_cur, k7, aux)
+                rhs(t_new, y_new, held, P, T, n_pos, n_vel, n_cur, k7, aux)
                 n_rhs += 6
                 steps += 1
                 if adaptive == 0:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..components import (
+from ..parameters.components import (
     BallScrew,
     Controller,
     Coupling,
@@ -29,6 +29,7 @@ from ..components import (
     StiffnessModel,
     Table,
 )
+from ..stiffness import equivalent_stiffness
 
 CITATION = (
     "Z. Wang, X. Feng, H. Yang, H. Jin, 'Research on low-speed characteristics of differential "
@@ -256,8 +257,6 @@ VELOCITY_INTEGRAL_GAIN = 3872.12
 
 def _axial_damping(params: DriveParameters) -> float:
     """c_ax = 2ζ·sqrt(K_eq·m_t) at mid-screw [N s/m]: ζ = 5 % structural damping."""
-    from ...stiffness import equivalent_stiffness  # local: stiffness imports parameters
-
     k_eq = equivalent_stiffness(params, params.screw.length / 2.0)
     return 2.0 * AXIAL_DAMPING_RATIO * math.sqrt(k_eq * params.table.mass)
 
@@ -286,3 +285,6 @@ def shipped() -> DriveParameters:
         stiffness=stiffness,
         controller=controller,
     )
+
+
+PRESETS = {"wang2021": shipped, "wang2021-literal": literal}

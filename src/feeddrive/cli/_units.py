@@ -1,0 +1,75 @@
+"""CLI values in mm, mm/s and s, checked and converted to SI at the edge.
+
+Messages name the option and speak the CLI's units (issue 12 item 3); a value that looks as
+if it was given in SI to an mm option draws a warning (item 2), as ``params check`` does for a
+lead of 5.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..parameters import DriveParameters, ParameterError
+from ._common import MM, MM_PER_S, err_console
+
+# A table speed below 0.01 mm/s (the CLI's resolution for critical speeds) or a table
+# position below 1 mm (the nut itself is longer) is what an SI value typed into an mm
+# option looks like: 0.0005 meant 0.5 mm/s, 0.4 meant 400 mm.
+SMALLEST_PLAUSIBLE_SPEED_MM_S = 0.01
+SMALLEST_PLAUSIBLE_POSITION_MM = 1.0
+
+
+def warn(text: str) -> None:
+    err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
+
+
+def _finite(option: str, value: float, unit: str) -> float:
+    if not math.isfinite(value):
+        raise ParameterError(option, value, f"expected a finite value [{unit}]")
+    return value
+
+
+def speed(option: str, value: float, *, positive: bool = False) -> float:
+    """``value`` [mm/s] → [m/s]; a non-zero magnitude below 0.01 mm/s draws a warning."""
+    _finite(option, value, "mm/s")
+    if positive and value <= 0.0:
+        raise ParameterError(option, value, "expected a speed > 0 [mm/s]")
+    if 0.0 < abs(value) < SMALLEST_PLAUSIBLE_SPEED_MM_S:
+        warn(f"{option} = {value:g} mm/s looks like a value in m/s "
+             f"({value * 1e3:g} mm/s?); the CLI takes mm/s")
+    return value * MM_PER_S
+
+
+def speed_range(low_option: str, low: float, high_option: str, high: float
+                ) -> tuple[float, float]:
+    """(low, high) [mm/s] → [m/s], both > 0 and low < high."""
+    lo = speed(low_option, low, positive=True)
+    hi = speed(high_option, high, positive=True)
+    if not low < high:
+        raise ParameterError(high_option, high, f"expected > {low_option} = {low:g} [mm/s]")
+    return lo, hi
+
+
+def position(option: str, value: float, params: DriveParameters,
+             drive: str = "cdfs") -> float:
+    """Table position ``value`` [mm] → [m]; on a ball-screw drive strictly between the screw
+    supports (a linear motor has no screw to bound it)."""
+    length_mm = params.screw.length / MM
+    _finite(option, value, "mm")
+    if drive in ("cdfs", "ddfs") and not 0.0 < value < length_mm:
+        raise ParameterError(option, value, f"expected 0 < position < {length_mm:g} [mm] "
+                                            "(strictly between the screw supports)")
+    if 0.0 < value < SMALLEST_PLAUSIBLE_POSITION_MM:
+        warn(f"{option} = {value:g} mm looks like a value in metres "
+             f"({value * 1e3:g} mm?); the CLI takes mm")
+    return value * MM
+
+
+def number(value: object, digits: int = 4) -> str:
+    """A value as printed by the CLI: ``digits`` significant digits, "none" for None
+    (a summary used to print 17 digits, issue 12 item 13)."""
+    if value is None:
+        return "none"
+    if isinstance(value, float):
+        return f"{value:.{digits}g}"
+    return str(value)

@@ -1,0 +1,99 @@
+"""`feeddrive loops` and `feeddrive stability`: the linearised closed loop."""
+
+from __future__ import annotations
+
+import typer
+
+from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+
+
+@app.command("loops")
+@user_errors
+def loops_command(
+    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    table_speed: float = typer.Option(1.5, "--table-speed", help="Operating point: steady "
+                                      "table speed \\[mm/s]."),
+    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed \\[mm/s], DDFS."),
+    position: float = typer.Option(400.0, "--position", help="Table position \\[mm]."),
+    with_friction: bool = typer.Option(False, "--with-friction", help="Linearise with the "
+                                       "friction laws at steady sliding (default: "
+                                       "frictionless loops)."),
+    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
+    params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    plot: str | None = typer.Option(None, "--plot", help="Write a Bode plot (PNG)."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Poles (frequency, damping ratio) and the velocity- and position-loop margins and
+    bandwidths of every motor axis, from the closed loop linearised at steady sliding."""
+    from ..linear import loop_analysis
+    from ..simulate import DriveSystem
+
+    params = resolve_parameters(preset_name, params_file, drive)
+    system = DriveSystem(params, drive, position * MM)
+    result = loop_analysis(system, table_speed * MM_PER_S, nut_speed * MM_PER_S,
+                           frictionless=not with_friction)
+    data = result.as_dict()
+    if plot:
+        from ..linear_plots import plot_loops
+
+        data["plot"] = str(plot_loops(result, plot))
+    if as_json:
+        print_json(data)
+        return
+    d = data["least_damped_mode"]
+    console.print(f"[bold]{drive.upper()}[/] ({params.name}), "
+                  f"{'frictionless' if not with_friction else 'with friction'}, "
+                  f"{table_speed:g} mm/s: least-damped mode {d['frequency_hz']:.3f} Hz, "
+                  f"ζ = {d['damping_ratio']:.4f}")
+    for lp in data["loops"]:
+        def fmt(v: float | None, unit: str) -> str:
+            return "—" if v is None else f"{v:.2f} {unit}"
+        console.print(f"  {lp['loop']:22s} crossover {fmt(lp['crossover_hz'], 'Hz'):>10s}  "
+                      f"phase margin {fmt(lp['phase_margin_deg'], '°'):>9s}  gain margin "
+                      f"{fmt(lp['gain_margin_db'], 'dB'):>9s}  bandwidth "
+                      f"{fmt(lp['closed_loop_bandwidth_hz'], 'Hz')}")
+    if plot:
+        console.print(f"  wrote {data['plot']}")
+
+
+@app.command("stability")
+@user_errors
+def stability_command(
+    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed \\[mm/s], DDFS."),
+    position: float = typer.Option(400.0, "--position", help="Table position \\[mm]."),
+    low: float = typer.Option(0.01, "--low", help="Lowest table speed scanned \\[mm/s]."),
+    high: float = typer.Option(5.0, "--high", help="Highest table speed scanned \\[mm/s]."),
+    points: int = typer.Option(40, "--points", help="Log-spaced scan points (edges are then "
+                               "bisected to 0.001 mm/s)."),
+    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
+    params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    plot: str | None = typer.Option(None, "--plot", help="Write the scan (PNG)."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Table speeds at which steady sliding is linearly unstable (full model, every friction
+    site and bristle state), with the unstable mode's frequency."""
+    from ..linear import stability_band
+    from ..simulate import DriveSystem
+
+    params = resolve_parameters(preset_name, params_file, drive)
+    system = DriveSystem(params, drive, position * MM)
+    band = stability_band(system, nut_speed * MM_PER_S, low=low * MM_PER_S,
+                          high=high * MM_PER_S, points=points)
+    data = band.as_dict()
+    if plot:
+        from ..linear_plots import plot_band
+
+        data["plot"] = str(plot_band(band, plot))
+    if as_json:
+        print_json(data)
+        return
+    console.print(f"[bold]{drive.upper()}[/] ({params.name}), v_n = {nut_speed:g} mm/s, "
+                  f"scan {low:g}–{high:g} mm/s:")
+    if not band.intervals:
+        console.print("  steady sliding is linearly stable at every speed scanned")
+    for (lo, hi), f in zip(data["unstable_bands_mm_s"], band.mode_frequency_hz, strict=True):
+        console.print(f"  unstable from {lo:.3f} to {hi:.3f} mm/s (mode {f:.2f} Hz)")
+    console.print(f"  rule: {data['rule']}", markup=False)
+    if plot:
+        console.print(f"  wrote {data['plot']}")

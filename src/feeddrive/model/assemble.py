@@ -1,0 +1,204 @@
+"""Parts → one compiled model: ``assemble(system, profile) -> Model``.
+
+The order is fixed and short: mechanism states, friction-site states, motor currents, loop
+integrators; then the right-hand side is written as reference → controller → mechanics.
+Structural choices (topology, friction laws, ball–nut split, disturbances present, motors on
+or off) select code; numbers (gains, masses, friction values, CDFS vs DDFS, sample periods)
+go into the parameter vector, so one compiled model serves many parameter values.
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..control import PROFILE_PARAMS, reference_kernel
+from ..parameters import DriveParameters, ParameterError
+from . import codegen, loops
+from .disturbances import LoadProfile, emit_harmonics, emit_load, harmonics
+from .friction import FrictionLaw, friction_law
+from .mechanisms import Mechanics, Site, mechanism
+
+if TYPE_CHECKING:
+    from ..control import Profile
+
+
+@dataclass(frozen=True)
+class Model:
+    """An assembled drive model: names, packed numbers and its compiled module."""
+
+    state_names: tuple[str, ...]
+    states: tuple[codegen.Signal, ...]
+    aux: tuple[codegen.Signal, ...]
+    parameter_names: tuple[str, ...]
+    P: np.ndarray
+    T: np.ndarray
+    tolerance_kinds: tuple[str, ...]
+    tolerance_scales: tuple[float, ...]
+    module: ModuleType
+    source: str
+    drive: str
+    sites: tuple[tuple[str, str], ...]  # (site name, law name)
+
+    @property
+    def n_held(self) -> int:
+        return int(self.module.N_HELD)
+
+    def index(self, name: str) -> int:
+        """Position of state ``name`` in the state vector."""
+        try:
+            return self.state_names.index(name)
+        except ValueError:
+            raise ParameterError("initial_state", name,
+                                 f"unknown state; expected one of {', '.join(self.state_names)}"
+                                 ) from None
+
+    def parameter(self, name: str) -> float:
+        return float(self.P[self.parameter_names.index(name)])
+
+    def tolerances(self, position: float, speed: float, current: float
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """(absolute tolerance, relative-tolerance mask) per state."""
+        atol = np.empty(len(self.states))
+        rel = np.zeros(len(self.states))
+        for i, (kind, scale) in enumerate(zip(self.tolerance_kinds, self.tolerance_scales,
+                                              strict=True)):
+            atol[i] = {"position": position, "speed": speed, "angle": position / scale,
+                       "rotary_speed": speed / scale, "current": current,
+                       "current_integral": current * 1e-3,
+                       "velocity_integral": position / scale, "none": position}[kind]
+            rel[i] = 1.0 if kind in codegen.RELATIVE_KINDS else 0.0
+        return atol, rel
+
+
+def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
+    values, table = profile.encode()
+    block = np.zeros(len(PROFILE_PARAMS))
+    for k, v in values.items():
+        block[k] = v
+    mech.check_profile(float(block[2]), table[3])
+    table = np.ascontiguousarray(table, dtype=float)
+    block[5] = b.table(table)
+    block[6] = table.shape[1]
+    o = b.params("profile", block)
+    b.reference_call = f"{b.use(reference_kernel)}(t, P, {o}, T)"
+
+
+def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
+               y_offset: int) -> str:
+    packed = law.pack(params.scaled(site.scale) if site.scale != 1.0 else params)
+    o = b.params(f"friction.{site.name}", packed)
+    alias = b.use_dynamic(f"_law_{law.name.replace('-', '_')}",
+                          f"_friction_law({law.name!r}).compiled", law.compiled)
+    return f"f_{site.name} = {alias}({site.speed}, y, {y_offset}, P, {o}, dy)"
+
+
+def assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
+             profile: Profile, load: LoadProfile | None = None) -> Model:
+    """Build (or fetch from the cache) the compiled model of one drive and profile."""
+    b = codegen.Builder()
+    b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
+    mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
+    mech.declare(b)
+    mech.parameters(b)
+    sites = mech.sites(b)
+    laws: list[tuple[Site, FrictionLaw, int]] = []
+    for site in sites:
+        site_params = getattr(parameters.friction, site.parameters_key)
+        law = friction_law(site_params.law)
+        first = len(b.states)
+        for state in law.state_names:
+            b.state(f"{site.name}_{state}", law.state_unit,
+                    f"{law.name} {state} state, {site.name.replace('_', '–')} friction",
+                    "position")
+        laws.append((site, law, first))
+    mech.motors(b)
+    axes, channels = mech.axes(b)
+    loops.declare_states(b, axes)
+    for ax in axes:
+        b.tol_scale[f"{ax.name}_velocity_integral"] = b.param_values[ax.param_offset
+                                                                     + loops.H_AX]
+    loops.declare_signals(b, axes)
+    for site, law, _ in laws:
+        b.add_aux(f"{site.name}_friction", "N",
+                  f"{site.name.replace('_', '–')} friction ({law.name}"
+                  f"{', torque ÷ H' if site.name != 'guide' else ''})")
+    b.add_aux("drive_force", "N", "force driving the table (screw–nut force F_d, or motor)")
+    b.add_aux("table_position_reference", "m", "commanded table position")
+    b.add_aux("table_speed_reference", "m/s", "commanded table speed")
+    mech.signals(b)
+    _profile(b, profile, mech)
+    for ch in channels:
+        b.add_held(f"prev.{ch.name}")
+
+    dist = parameters.disturbances
+    load_code = emit_load(b, dist.load_force, dist.load_start, load)
+    ripple: dict[str, str] = {}
+    ripple_lines: list[str] = []
+    for key, r in (("screw", dist.screw_motor_ripple), ("nut", dist.hollow_motor_ripple)):
+        field = f"{'screw' if key == 'screw' else 'hollow'}_motor_ripple"
+        block = emit_harmonics(b, field, r)
+        if block is None:
+            continue
+        if key not in mech.ripple_motors:
+            raise ParameterError(f"disturbances.{field}", r.amplitudes,
+                                 f"the {drive} drive has no such motor")
+        b.add_aux(f"{key}_ripple_torque", "N m", f"{key} motor torque ripple")
+        ripple[key] = f"rip_{key}"
+        ripple_lines.append(f"rip_{key} = {b.use(harmonics)}({b.y(key + '_angle')}, P, "
+                            f"{block[0]}, {block[1]})[0]")
+        ripple_lines.append(f"{b.a(key + '_ripple_torque')} = rip_{key}")
+    lead = emit_harmonics(b, "lead_error", dist.lead_error)
+    if lead is not None and not mech.has_lead_screw:
+        raise ParameterError("disturbances.lead_error", dist.lead_error.amplitudes,
+                             f"the {drive} drive has no lead screw")
+
+    # ---- right-hand side
+    b.emit(f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}")
+    b.emit(f"{b.a('table_position_reference')} = ref_x")
+    b.emit(f"{b.a('table_speed_reference')} = ref_v")
+    loops.emit_cascade(b, axes, channels, parameters.controller.mode)
+    for ln in ripple_lines:
+        b.emit(ln)
+    m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
+                  load=load_code, torque_off=parameters.controller.mode == "torque_off")
+    for site, law, first in laws:
+        code = _site_code(b, site, law, getattr(parameters.friction, site.parameters_key), first)
+        for body, factor in site.bodies:
+            term = f"- f_{site.name}" if factor == "1.0" else f"- {factor} * f_{site.name}"
+            m.forces.setdefault(body, []).append(term)
+        if site.active:
+            m.gated.append(code)
+            m.frozen.append(f"f_{site.name} = 0.0")
+            m.frozen += [f"{b.dy(f'{site.name}_{s}')} = 0.0" for s in law.state_names]
+        else:
+            m.always.append(code)
+    mech.emit(b, m)
+    for site, _, _ in laws:
+        b.emit(f"{b.a(site.name + '_friction')} = f_{site.name}")
+    b.emit(f"{b.a('drive_force')} = f_d")
+    if load_code is not None:
+        b.emit(f"{b.a('load_force')} = {load_code}")
+
+    from ..solvers import dopri5
+
+    source = codegen.module_source(b, dopri5.template_sources())
+    module = codegen.compile_module(source, b.dynamic_sources)
+    return Model(
+        state_names=tuple(s.name for s in b.states), states=tuple(b.states), aux=tuple(b.aux),
+        parameter_names=tuple(b.param_names), P=b.packed_parameters(), T=b.packed_tables(),
+        tolerance_kinds=tuple(s.kind for s in b.states),
+        tolerance_scales=tuple(b.tol_scale.get(s.name, 1.0) for s in b.states),
+        module=module, source=source, drive=drive,
+        sites=tuple((site.name, law.name) for site, law, _ in laws))
+
+
+def kernel_source(fn: Any) -> str:
+    """Source text of a (possibly compiled) function."""
+    return inspect.getsource(getattr(fn, "py_func", fn))
+
+

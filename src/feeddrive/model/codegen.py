@@ -1,0 +1,235 @@
+"""Turn a list of parts into one compiled module: names, packed vectors, generated kernels.
+
+Every part (mechanism, friction site, motor, controller axis, disturbance, profile) asks a
+:class:`Builder` for the slots it needs — states, parameters, auxiliary signals, held
+(sampled-controller) values, data tables — by *name*, and receives the index expression to
+write into the code it emits (``y[4]``, ``P[17]``).  Nothing keeps indices by hand.
+
+The emitted right-hand side, sampled-controller update and the solver template (see
+:mod:`feeddrive.solvers.dopri5`) are written to a Python file named after a hash of its text
+and of every kernel source it calls, in the package's numba cache folder, and imported.  numba's
+on-disk cache is per source file, so each assembled model gets its own cache entry, a second
+process loads it without compiling, and a change in any part's kernel gives a new file name
+(numba itself only notices changes to the cached function's *own* file).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import inspect
+import os
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from .._jit import CACHE_DIR, SOURCE_DIGEST
+
+# Tolerance classes of a state: how its absolute tolerance follows from the solver options.
+TOLERANCE_KINDS = ("position", "speed", "angle", "rotary_speed", "current", "current_integral",
+                   "velocity_integral", "none")
+# Kinds whose error is also weighed relative to the state's size.
+RELATIVE_KINDS = ("speed", "rotary_speed", "current")
+
+
+@dataclass(frozen=True)
+class Signal:
+    """A named slot: state, auxiliary output or parameter."""
+
+    name: str
+    unit: str
+    description: str
+    kind: str = ""  # tolerance kind (states only)
+
+
+@dataclass
+class Builder:
+    """Collects the slots and code lines of all parts of one model."""
+
+    states: list[Signal] = field(default_factory=list)
+    aux: list[Signal] = field(default_factory=list)
+    held: list[str] = field(default_factory=list)
+    param_names: list[str] = field(default_factory=list)
+    param_values: list[float] = field(default_factory=list)
+    tables: list[np.ndarray] = field(default_factory=list)
+    rhs_lines: list[str] = field(default_factory=list)
+    sample_lines: list[str] = field(default_factory=list)
+    imports: dict[str, str] = field(default_factory=dict)  # alias -> "module:attr"
+    dynamic: dict[str, str] = field(default_factory=dict)  # alias -> registry expression
+    dynamic_sources: list[str] = field(default_factory=list)
+    locals_: dict[str, str] = field(default_factory=dict)  # scalar name -> expression
+    table_size: int = 0
+    reference_call: str = "(0.0, 0.0, 0.0, 0.0)"
+    tol_scale: dict[str, float] = field(default_factory=dict)
+    state_index: dict[str, int] = field(default_factory=dict)
+    aux_index: dict[str, int] = field(default_factory=dict)
+    param_index: dict[str, int] = field(default_factory=dict)
+
+    # ---- slots
+    def state(self, name: str, unit: str, description: str, kind: str,
+              scale: float = 1.0) -> int:
+        """Declare a state; ``scale`` [m per state unit] converts the solver's position and
+        speed tolerances for angles (the transmission ratio H)."""
+        self.tol_scale[name] = scale
+        if name in self.state_index:
+            raise ValueError(f"state {name!r} declared twice")
+        if kind not in TOLERANCE_KINDS:
+            raise ValueError(f"state {name!r}: unknown tolerance kind {kind!r}")
+        self.state_index[name] = len(self.states)
+        self.states.append(Signal(name, unit, description, kind))
+        return self.state_index[name]
+
+    def y(self, name: str) -> str:
+        return f"y[{self.state_index[name]}]"
+
+    def dy(self, name: str) -> str:
+        return f"dy[{self.state_index[name]}]"
+
+    def param(self, name: str, value: float) -> int:
+        """Register parameter ``name`` (SI) and return its index in P."""
+        if name in self.param_index:
+            raise ValueError(f"parameter {name!r} declared twice")
+        self.param_index[name] = len(self.param_values)
+        self.param_names.append(name)
+        self.param_values.append(float(value))
+        return self.param_index[name]
+
+    def params(self, prefix: str, values: np.ndarray) -> int:
+        """Register a block of parameters ``prefix[0..n)``; return the offset of the first."""
+        first = len(self.param_values)
+        for i, v in enumerate(np.asarray(values, dtype=float)):
+            self.param(f"{prefix}[{i}]", float(v))
+        return first
+
+    def p(self, name: str) -> str:
+        return f"P[{self.param_index[name]}]"
+
+    def add_aux(self, name: str, unit: str, description: str) -> int:
+        if name in self.aux_index:
+            raise ValueError(f"auxiliary signal {name!r} declared twice")
+        self.aux_index[name] = len(self.aux)
+        self.aux.append(Signal(name, unit, description))
+        return self.aux_index[name]
+
+    def a(self, name: str) -> str:
+        return f"aux[{self.aux_index[name]}]"
+
+    def add_held(self, name: str) -> str:
+        self.held.append(name)
+        return f"held[{len(self.held) - 1}]"
+
+    def h(self, name: str) -> str:
+        return f"held[{self.held.index(name)}]"
+
+    def table(self, values: np.ndarray) -> int:
+        """Append a flat data table (profiles, load records); return its offset in T."""
+        flat = np.ascontiguousarray(values, dtype=float).ravel()
+        offset = self.table_size
+        self.tables.append(flat)
+        self.table_size += flat.size
+        return offset
+
+    # ---- code
+    def use(self, fn: Any) -> str:
+        """Import a package kernel into the generated module; return its local alias."""
+        alias = f"_{fn.__name__}"
+        target = f"{fn.__module__}:{fn.__name__}"
+        if self.imports.get(alias, target) != target:
+            alias = f"_{fn.__module__.rsplit('.', 1)[-1]}_{fn.__name__}"
+        self.imports[alias] = target
+        return alias
+
+    def use_dynamic(self, alias: str, expression: str, kernel: Any) -> str:
+        """A kernel found at import time by ``expression`` (e.g. a registered friction law
+        defined outside the package); its source enters the module's hash."""
+        self.dynamic[alias] = expression
+        py = getattr(kernel, "py_func", kernel)
+        try:
+            self.dynamic_sources.append(inspect.getsource(py))
+        except (OSError, TypeError):
+            self.dynamic_sources.append(repr(py))
+        return alias
+
+    def emit(self, line: str, *, sampled: bool = False) -> None:
+        (self.sample_lines if sampled else self.rhs_lines).append(line)
+
+    # ---- packing
+    def packed_parameters(self) -> np.ndarray:
+        return np.array(self.param_values, dtype=float)
+
+    def packed_tables(self) -> np.ndarray:
+        if not self.tables:
+            return np.zeros(1)
+        return np.concatenate(self.tables)
+
+
+def _indent(lines: list[str], level: int = 1) -> str:
+    pad = "    " * level
+    return "\n".join(pad + ln if ln else "" for ln in lines)
+
+
+def module_source(builder: Builder, solver_sources: list[str]) -> str:
+    """The full text of the generated module."""
+    head = [
+        '"""Generated by feeddrive.model.codegen: one assembled drive model.  Do not edit."""',
+        "import math",
+        "import numpy as np",
+        "from feeddrive._jit import kernel",
+    ]
+    for alias, target in sorted(builder.imports.items()):
+        mod, attr = target.split(":")
+        head.append(f"from {mod} import {attr} as {alias}")
+    for alias, expression in sorted(builder.dynamic.items()):
+        head.append(f"{alias} = {expression}")
+    head += [
+        f"N_STATE = {len(builder.states)}",
+        f"N_AUX = {len(builder.aux)}",
+        f"N_HELD = {max(1, len(builder.held))}",
+        "",
+        "",
+        "@kernel",
+        "def rhs(t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux):",
+        _indent(builder.rhs_lines or ["pass"]),
+        "",
+        "",
+        "@kernel",
+        "def sample_update(k, t, y, held, P, T, n_pos, n_vel, n_cur, base):",
+        _indent(builder.sample_lines or ["pass"]),
+        "",
+    ]
+    return "\n".join(head) + "\n\n" + "\n\n".join(solver_sources) + "\n"
+
+
+_LOADED: dict[str, ModuleType] = {}
+
+
+def compile_module(source: str, extra_sources: list[str]) -> ModuleType:
+    """Write ``source`` to the cache folder under a hash name and import it (once per process)."""
+    digest = hashlib.sha256(source.encode())
+    digest.update(SOURCE_DIGEST.encode())
+    for s in extra_sources:
+        digest.update(s.encode())
+    key = digest.hexdigest()[:20]
+    if key in _LOADED:
+        return _LOADED[key]
+    folder = Path(CACHE_DIR) / "models"
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"model_{key}.py"
+    if not path.is_file() or path.read_text(encoding="utf-8") != source:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".model_{key}.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(source)
+        os.replace(tmp, path)  # atomic: concurrent processes never import a half file
+    name = f"feeddrive_model_{key}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    _LOADED[key] = module
+    return module

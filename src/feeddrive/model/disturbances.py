@@ -1,0 +1,96 @@
+"""Disturbances: table load force, motor torque ripple and cogging, screw lead error.
+
+Each is a kernel plus an ``emit_*`` helper that registers its parameters and returns the code
+of the term the mechanism adds to a body's equation.  None of them is emitted when its
+amplitudes are all zero, so the default model is exactly the undisturbed one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._jit import kernel
+from ..parameters import LeadError, TorqueRipple
+from .codegen import Builder
+
+
+@kernel
+def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float]:
+    """(Σ A_k sin(n_k θ + φ_k), its derivative in θ); block P[o:o+3n] = orders, amplitudes,
+    phases."""
+    value = 0.0
+    slope = 0.0
+    for k in range(n):
+        arg = P[o + k] * theta + P[o + 2 * n + k]
+        value += P[o + n + k] * math.sin(arg)
+        slope += P[o + n + k] * P[o + k] * math.cos(arg)
+    return value, slope
+
+
+@kernel
+def load_force(t: float, P: np.ndarray, o: int, T: np.ndarray) -> float:
+    """Table load force [N] at t [s]: the constant ``P[o]`` from ``P[o+1]`` on, plus a sampled
+    record (``P[o+4]`` points at ``T[P[o+3]:]``, uniform step ``P[o+2]``, linear
+    interpolation, the last value held)."""
+    f = P[o] if t >= P[o + 1] else 0.0
+    to = int(P[o + 3])
+    n = int(P[o + 4])
+    if n > 1:
+        u = t / P[o + 2]
+        k = int(math.floor(u))
+        if k >= n - 1:
+            f += T[to + n - 1]
+        elif k >= 0:
+            w = u - k
+            f += T[to + k] * (1.0 - w) + T[to + k + 1] * w
+    return f
+
+
+@dataclass(frozen=True)
+class LoadProfile:
+    """A table load force record: ``force`` [N] on a uniform ``time`` grid from 0 [s]
+    (linear interpolation, the last value held), acting against positive table motion."""
+
+    time: np.ndarray
+    force: np.ndarray
+
+    def encode(self) -> tuple[float, np.ndarray]:
+        t = np.asarray(self.time, dtype=float)
+        f = np.asarray(self.force, dtype=float)
+        if t.ndim != 1 or t.size < 2 or f.shape != t.shape:
+            raise ValueError("load.time/force: expected 1-D arrays of one length ≥ 2")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))):
+            raise ValueError("load.force: contains non-finite values [N]")
+        dt = np.diff(t)
+        if abs(t[0]) > 1e-12 or np.any(dt <= 0) or np.ptp(dt) > 1e-9 * dt.mean():
+            raise ValueError("load.time: expected a uniform, increasing grid starting at 0 [s]")
+        return float(dt.mean()), f
+
+
+def emit_load(b: Builder, force: float, start: float, record: LoadProfile | None) -> str | None:
+    """Register the load block; return the code of the load force, or None if there is none."""
+    if force == 0.0 and record is None:
+        return None
+    step, values = record.encode() if record is not None else (1.0, np.zeros(1))
+    o = b.param("disturbances.load_force", force)
+    b.param("disturbances.load_start", start)
+    b.param("disturbances.load_step", step)
+    b.param("disturbances.load_offset", b.table(values) if record is not None else 0)
+    b.param("disturbances.load_points", values.size if record is not None else 0)
+    b.add_aux("load_force", "N", "load force on the table (against positive motion)")
+    return f"{b.use(load_force)}(t, P, {o}, T)"
+
+
+def emit_harmonics(b: Builder, name: str,
+                   ripple: TorqueRipple | LeadError) -> tuple[int, int] | None:
+    """Register a harmonic series (TorqueRipple or LeadError); (offset, count) or None."""
+    orders = tuple(ripple.orders)
+    amps = tuple(ripple.amplitudes)
+    phases = tuple(ripple.phases)
+    if not any(a != 0.0 for a in amps):
+        return None
+    o = b.params(f"disturbances.{name}", np.array(orders + amps + phases))
+    return o, len(orders)

@@ -1,0 +1,140 @@
+"""The friction-law interface and its registry.
+
+A friction law is a small object (the python-control ``descfcn`` idea: a nonlinearity that
+carries its own analytic description):
+
+* ``kernel(v, y, k, P, o, dy) -> force`` — numba-compiled.  ``v`` [m/s] is the sliding speed
+  (linear-equivalent; rotary sites are in Table 1's ÷H form), the law's internal states are
+  ``y[k : k + len(state_names)]`` and it writes their rates to ``dy`` at the same places; its
+  parameters are ``P[o : o + n]`` as packed by :meth:`FrictionLaw.pack`.  Returns the friction
+  force [N] with the sign of the sliding speed.
+* ``pack(site)`` — the parameter vector from a site's :class:`~feeddrive.parameters.LuGreParameters`
+  (every law reads the same cited fields: F_c, F_s, v_s, σ2 per direction, σ0, σ1).
+* ``steady_force(v, site)`` — the steady curve [N] (constant sliding at ``v``);
+* ``steady_state(v, site)`` — the internal states at steady sliding;
+* ``linearise(v, site)`` — (A, B, C, D) of δẋ = A δx + B δv, δF = C δx + D δv at steady
+  sliding; the default uses central differences of ``kernel``; laws may override it with an
+  analytic form (checked against the default in the tests).
+
+Laws are found by name (``[friction.screw] law = "lugre"``) in a registry; a user registers a
+new one with :func:`register_friction_law` without editing the package.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from ...parameters import LuGreParameters
+
+
+@dataclass(frozen=True)
+class LinearFriction:
+    """Friction linearised at steady sliding: δẋ = A δx + B δv, δF = C δx + D δv."""
+
+    A: np.ndarray  # (n, n) [1/s]
+    B: np.ndarray  # (n,)  [1/m] per state unit
+    C: np.ndarray  # (n,)  [N per state unit]
+    D: float  # [N s/m]
+
+
+class FrictionLaw:
+    """Base class of friction laws; subclasses set ``name``, ``kernel``, ``state_names``."""
+
+    name: str = ""
+    state_names: tuple[str, ...] = ()
+    state_unit: str = "m"
+    citation: str = ""
+    kernel: Any = None
+
+    @property
+    def compiled(self) -> Any:
+        """The kernel as declared on the class (a numba dispatcher is a descriptor: reading
+        ``self.kernel`` would bind it to the law instance)."""
+        for cls in type(self).__mro__:
+            if "kernel" in cls.__dict__:
+                k = cls.__dict__["kernel"]
+                return getattr(k, "__func__", k)
+        return None
+
+    def pack(self, site: LuGreParameters) -> np.ndarray:
+        return site.as_array()
+
+    def steady_state(self, v: float, site: LuGreParameters) -> np.ndarray:
+        return np.zeros(len(self.state_names))
+
+    def evaluate(self, v: float, states: np.ndarray, site: LuGreParameters,
+                 packed: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+        """(force [N], state rates) at speed ``v`` [m/s] and internal ``states`` (Python call
+        of the compiled kernel)."""
+        n = len(self.state_names)
+        y = np.zeros(max(n, 1))
+        y[:n] = states
+        dy = np.zeros(max(n, 1))
+        P = self.pack(site) if packed is None else packed
+        force = float(self.compiled(float(v), y, 0, P, 0, dy))
+        return force, dy[:n].copy()
+
+    def steady_force(self, v: object, site: LuGreParameters) -> np.ndarray:
+        speeds = np.asarray(v, dtype=float)
+        P = self.pack(site)
+        out = np.empty(speeds.size)
+        for i, s in enumerate(speeds.ravel()):
+            out[i] = self.evaluate(s, self.steady_state(s, site), site, P)[0]
+        return out.reshape(speeds.shape)
+
+    def linearise(self, v: float, site: LuGreParameters) -> LinearFriction:
+        """Central-difference linearisation of ``kernel`` at steady sliding speed ``v``."""
+        n = len(self.state_names)
+        P = self.pack(site)
+        x0 = self.steady_state(v, site)
+        dv = 1e-6 * max(abs(v), 1e-9)
+        f_p, r_p = self.evaluate(v + dv, x0, site, P)
+        f_m, r_m = self.evaluate(v - dv, x0, site, P)
+        B = (r_p - r_m) / (2 * dv)
+        D = (f_p - f_m) / (2 * dv)
+        A = np.zeros((n, n))
+        C = np.zeros(n)
+        for j in range(n):
+            dx = 1e-6 * max(abs(x0[j]), 1e-12)
+            e = np.zeros(n)
+            e[j] = dx
+            f_p, r_p = self.evaluate(v, x0 + e, site, P)
+            f_m, r_m = self.evaluate(v, x0 - e, site, P)
+            A[:, j] = (r_p - r_m) / (2 * dx)
+            C[j] = (f_p - f_m) / (2 * dx)
+        return LinearFriction(A=A, B=B, C=C, D=float(D))
+
+
+_REGISTRY: dict[str, FrictionLaw] = {}
+
+
+def register_friction_law(law: FrictionLaw) -> FrictionLaw:
+    """Make ``law`` available by ``law.name`` in parameter files and the API."""
+    if not law.name or not law.name.replace("-", "_").isidentifier():
+        raise ValueError(f"friction law name {law.name!r}: expected a short identifier")
+    if law.compiled is None:
+        raise ValueError(f"friction law {law.name!r}: no kernel")
+    _REGISTRY[law.name] = law
+    return law
+
+
+def friction_law(name: str) -> FrictionLaw:
+    """The registered law called ``name``."""
+    from . import builtin  # noqa: F401  (registers the package's laws)
+
+    if name not in _REGISTRY:
+        from ...parameters import ParameterError
+
+        raise ParameterError("law", name,
+                             f"unknown friction law; expected one of {', '.join(law_names())}")
+    return _REGISTRY[name]
+
+
+def law_names() -> tuple[str, ...]:
+    from . import builtin  # noqa: F401
+
+    return tuple(_REGISTRY)

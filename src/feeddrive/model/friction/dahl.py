@@ -1,0 +1,43 @@
+"""The Dahl friction law (P. R. Dahl, "A solid friction model", Aerospace Corp. report
+TOR-0158(3107-18)-1, 1968; in the form of Olsson, Åström, Canudas de Wit, Gäfvert,
+Lischinsky, "Friction models and friction compensation", Eur. J. Control 4 (1998) 176–195,
+Eq. (9) with exponent i = 1):
+
+    dz/dt = v − σ0·|v|·z / F_c,     F = σ0·z + σ2·v
+
+Pre-sliding elasticity (σ0) and Coulomb friction F_c per direction, no Stribeck effect and no
+micro-damping; the site's F_s, v_s and σ1 are not used.  With no Stribeck drop it cannot
+produce stick-slip by itself: a useful contrast to LuGre.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..._jit import kernel
+from .base import FrictionLaw
+from .lugre import branch
+
+
+@kernel
+def dahl_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
+                dy: np.ndarray) -> float:
+    b = branch(v, o)
+    z = y[k]
+    dy[k] = v - P[o + 8] * abs(v) * z / P[b]
+    return P[o + 8] * z + P[b + 3] * v
+
+
+class Dahl(FrictionLaw):
+    name = "dahl"
+    state_names = ("bristle",)
+    citation = "Dahl 1968; Olsson et al., Eur. J. Control 4 (1998) 176-195, Eq. (9)"
+    kernel = dahl_kernel
+
+    def steady_state(self, v: float, site):
+        if v == 0.0:
+            return np.zeros(1)
+        b = site.positive if v > 0 else site.negative
+        return np.array([math.copysign(b.coulomb_force, v) / site.bristle_stiffness])

@@ -1,0 +1,49 @@
+"""Static friction laws: smoothed Stribeck + Coulomb + viscous, and no friction.
+
+The static law is the steady curve of the LuGre law without its bristle state,
+F = tanh(v/v_ε)·(F_c + (F_s − F_c)·exp(−(v/v_s)²)) + σ2·v, with the sign function smoothed
+over ``smoothing_velocity`` v_ε [m/s] (a site parameter, default 1 µm/s) so the right-hand
+side stays continuous (Armstrong-Hélouvry, Dupont, Canudas de Wit, Automatica 30 (1994)
+1083–1138, for the curve; the tanh smoothing is the usual choice for ODE solvers).  Cheap:
+no stiff bristle state; for fast studies and for comparison with LuGre.  It has no
+pre-sliding elasticity, so it cannot stick exactly — it creeps at |v| ≲ v_ε.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..._jit import kernel
+from .base import FrictionLaw
+from .lugre import branch, stribeck_magnitude
+
+
+@kernel
+def stribeck_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
+                    dy: np.ndarray) -> float:
+    return (math.tanh(v / P[o + 10]) * stribeck_magnitude(v, P, o)
+            + P[branch(v, o) + 3] * v)
+
+
+@kernel
+def no_friction_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
+                       dy: np.ndarray) -> float:
+    return 0.0
+
+
+class Stribeck(FrictionLaw):
+    name = "stribeck"
+    citation = "Armstrong-Hélouvry, Dupont, Canudas de Wit, Automatica 30 (1994) 1083-1138"
+    kernel = stribeck_kernel
+
+    def pack(self, site):
+        return np.append(site.as_array(), site.smoothing_velocity)
+
+
+class NoFriction(FrictionLaw):
+    """No friction at this site: a law with no states and zero force."""
+
+    name = "none"
+    kernel = no_friction_kernel

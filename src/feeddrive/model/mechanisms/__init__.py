@@ -1,0 +1,8 @@
+"""Drive topologies behind one interface (:class:`Mechanism`), registered by drive name."""
+
+from __future__ import annotations
+
+from .base import Body, Mechanics, Mechanism, Site, drive_names, mechanism, register_mechanism
+
+__all__ = ["Body", "Mechanics", "Mechanism", "Site", "drive_names", "mechanism",
+           "register_mechanism"]

@@ -1,0 +1,237 @@
+"""The ball-screw drives of Wang2021: CDFS and DDFS.  Eqs. (2)–(8).
+
+Screw (θ_s, ω_s), nut (θ_n, ω_n) and table (x_t, v_t), with the screw–nut–table axial
+stiffness K_eq(a) of Eqs. (2)–(5) and damping c_ax:
+
+    F_d     = K_eq(a)·[H(θ_s − θ_n) − x_t] + c_ax·[H(ω_s − ω_n) − v_t]
+    J_s ω̇_s = K_t i_s − H·F_screw − H·F_d
+    J_n ω̇_n = K_t i_n − H·F_nut + H·F_d
+    m_t v̇_t = F_d − F_guide
+    L i̇     = u − R i − K_e ω
+
+The CDFS is this mechanism with the hollow motor held (Sect. 2.1): the nut's states are frozen
+(``nut_hold = "locked"``) or kept on its servo at zero command (``"servo"``).  With a lead
+error δ(θ) the stretch is H·θ_rel + δ(θ_rel) − x_t and the lever (H + δ').  With a ball–nut
+share f the screw-shaft friction is split between ground (1 − f) and the ball–nut contact at
+the relative speed (f), whose reaction acts on the nut.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..._jit import kernel
+from ...parameters import DriveParameters, ParameterError
+from ...stiffness import axial_stiffness, equivalent_stiffness, torsional_stiffness
+from ..codegen import Builder
+from ..loops import ENC_Q, GRAT_Q, H_AX, V_FEEDBACK, Axis, Channel, axis_parameters
+from .base import Body, Mechanics, Mechanism, Site, register_mechanism
+
+# stiffness block: fixed K_eq (0 = from the chain), c0, EA, length, support, x0
+_STIFF = ("k_fixed", "c0", "ea", "length", "support", "x0")
+
+
+@kernel
+def equivalent_stiffness_kernel(x_t: float, P: np.ndarray, o: int) -> float:
+    """K_eq [N/m] at table displacement x_t [m] from the start position.  Eqs. (4)–(5)."""
+    if P[o] > 0.0:
+        return P[o]
+    a = P[o + 5] + x_t
+    length = P[o + 3]
+    # keep the nut strictly between the supports (Eq. 4 diverges at the supports)
+    lo = 1e-3 * length
+    if a < lo:
+        a = lo
+    elif a > length - lo:
+        a = length - lo
+    if P[o + 4] < 0.5:
+        c_screw = a * (length - a) / (P[o + 2] * length)
+    else:
+        c_screw = a / P[o + 2]
+    return 1.0 / (P[o + 1] + c_screw)
+
+
+@register_mechanism
+class BallScrewDrive(Mechanism):
+    """CDFS / DDFS ball-screw mechanism (see module docstring)."""
+
+    drives = ("cdfs", "ddfs")
+    ripple_motors = ("screw", "nut")
+    has_lead_screw = True
+
+    def __init__(self, params: DriveParameters, drive: str, table_position: float,
+                 nut_hold: str) -> None:
+        super().__init__(params, drive, table_position, nut_hold)
+        self.nut_active = drive == "ddfs" or nut_hold == "servo"
+
+    @classmethod
+    def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
+        length = params.screw.length
+        a = table_position
+        if not (math.isfinite(a) and 0.0 < a < length):
+            raise ParameterError("table_position", a,
+                                 f"expected 0 < a < {length:g} [m] (between the supports)")
+
+    def check_profile(self, nut_speed: float, nut_table: Any) -> None:
+        if self.drive == "cdfs" and (nut_speed != 0.0 or np.any(nut_table != 0.0)):
+            raise ParameterError("nut_speed", nut_speed,
+                                 "the CDFS holds the hollow motor; expected 0 [m/s]")
+
+    def declare(self, b: Builder) -> None:
+        H = self.params.screw.transmission_ratio
+        b.state("screw_angle", "rad", "screw motor / shaft angle θ_s", "angle", H)
+        b.state("screw_speed", "rad/s", "screw motor speed", "rotary_speed", H)
+        b.state("nut_angle", "rad", "hollow motor / nut angle θ_n", "angle", H)
+        b.state("nut_speed", "rad/s", "hollow motor speed", "rotary_speed", H)
+        b.state("table_position", "m", "table displacement from its start x_t", "position")
+        b.state("table_speed", "m/s", "table speed", "speed")
+
+    def parameters(self, b: Builder) -> None:
+        p = self.params
+        s, m = p.screw, p.stiffness
+        H = s.transmission_ratio
+        b.param("screw.H", H)
+        b.param("screw.J", p.screw_motor.inertia + s.shaft_inertia)
+        b.param("nut.J", p.hollow_motor.inertia + s.nut_inertia)
+        b.param("table.mass", p.table.mass)
+        b.param("stiffness.axial_damping", m.axial_damping)
+        c0 = float(1.0 / axial_stiffness(np.inf, s, m.support_bearing_count))
+        if m.include_torsion:
+            c0 += H**2 / s.efficiency / torsional_stiffness(p.coupling, s)
+        k_fixed = 0.0
+        if m.equivalent_stiffness > 0:
+            k_fixed = m.equivalent_stiffness
+        elif not m.position_dependent:
+            k_fixed = equivalent_stiffness(p, self.table_position)
+        values = (k_fixed, c0, math.pi * s.diameter**2 / 4.0 * s.youngs_modulus, s.length,
+                  0.0 if m.screw_support == "fixed-fixed" else 1.0, self.table_position)
+        for name, v in zip(_STIFF, values, strict=True):
+            b.param(f"stiffness.{name}", v)
+        b.param("nut.active", 1.0 if self.nut_active else 0.0)
+        for key, motor in (("screw", p.screw_motor), ("nut", p.hollow_motor)):
+            b.param(f"{key}_motor.torque_constant", motor.torque_constant)
+            b.param(f"{key}_motor.back_emf_constant", motor.back_emf_constant)
+            b.param(f"{key}_motor.inductance", motor.inductance)
+            b.param(f"{key}_motor.resistance", motor.resistance)
+
+    def motors(self, b: Builder) -> None:
+        b.state("screw_current", "A", "screw motor current", "current")
+        b.state("nut_current", "A", "hollow motor current", "current")
+
+    def sites(self, b: Builder) -> list[Site]:
+        H = b.p("screw.H")
+        nut_on = f"{b.p('nut.active')} > 0.5"
+        share = self.params.friction.ball_nut_share
+        out = []
+        if share < 1.0:
+            out.append(Site("screw", "screw", f"{H} * w_s", (("screw", H),), 1.0 - share))
+        out.append(Site("nut", "nut", f"{H} * w_n", (("nut", H),), 1.0, nut_on))
+        out.append(Site("guide", "guide", "v_t", (("table", "1.0"),)))
+        if share > 0.0:
+            out.append(Site("ball_nut", "screw", f"{H} * (w_s - w_n)",
+                            (("screw", H), ("nut", f"(-{H})")), share))
+        return out
+
+    def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
+        c = self.params.controller
+        H = self.params.screw.transmission_ratio
+        o_s = axis_parameters(b, "screw", c, H, speed_mode=False)
+        o_n = axis_parameters(b, "nut", c, H, speed_mode=c.nut_loop == "speed")
+        Hp = f"P[{o_s + H_AX}]"
+        channels = [
+            Channel("screw_angle", b.y("screw_angle"), b.y("screw_speed"), f"P[{o_s + ENC_Q}]"),
+            Channel("nut_angle", b.y("nut_angle"), b.y("nut_speed"), f"P[{o_s + ENC_Q}]"),
+            Channel("table", b.y("table_position"), b.y("table_speed"), f"P[{o_s + GRAT_Q}]"),
+        ]
+        fb = f"int(P[{o_s + V_FEEDBACK}]) == 1"
+        screw = Axis(
+            name="screw", param_offset=o_s, reference="ref_x", feedforward="(ref_v + ref_vn)",
+            position=b.y("table_position"), position_q="q_table",
+            speed=(f"(({b.y('table_speed')} + {Hp} * {b.y('nut_speed')}) / {Hp} if {fb} "
+                   f"else {b.y('screw_speed')})"),
+            speed_q=f"((s_table + {Hp} * s_nut_angle) / {Hp} if {fb} else s_screw_angle)",
+            current_state=b.y("screw_current"))
+        nut = Axis(
+            name="nut", param_offset=o_n, reference="ref_xn", feedforward="ref_vn",
+            position=f"{Hp} * {b.y('nut_angle')}", position_q=f"{Hp} * q_nut_angle",
+            speed=b.y("nut_speed"), speed_q="s_nut_angle", current_state=b.y("nut_current"),
+            active=f"{b.p('nut.active')} > 0.5", speed_law="speed")
+        return [screw, nut], channels
+
+    def signals(self, b: Builder) -> None:
+        b.add_aux("equivalent_stiffness", "N/m", "K_eq at the table position")
+        b.add_aux("nut_position_reference", "m", "commanded nut position (linear)")
+        b.add_aux("nut_speed_reference", "m/s", "commanded nut speed (linear)")
+
+    def emit(self, b: Builder, m: Mechanics) -> None:
+        from ..disturbances import harmonics
+
+        H = b.p("screw.H")
+        b.emit(f"{b.a('nut_position_reference')} = ref_xn")
+        b.emit(f"{b.a('nut_speed_reference')} = ref_vn")
+        b.emit(f"w_s = {b.y('screw_speed')}")
+        b.emit(f"w_n = {b.y('nut_speed')}")
+        b.emit(f"v_t = {b.y('table_speed')}")
+        for ln in m.always:
+            b.emit(ln)
+        k_eq = b.use(equivalent_stiffness_kernel)
+        b.emit(f"k_eq = {k_eq}({b.y('table_position')}, P, "
+               f"{b.param_index['stiffness.k_fixed']})")
+        c_ax = b.p("stiffness.axial_damping")
+        th_rel = f"({b.y('screw_angle')} - {b.y('nut_angle')})"
+        if m.lead is None:
+            b.emit(f"f_d = (k_eq * ({H} * {th_rel} - {b.y('table_position')}) "
+                   f"+ {c_ax} * ({H} * (w_s - w_n) - v_t))")
+            lever = H
+        else:
+            hh = b.use(harmonics)
+            b.emit(f"lead_dev, lead_slope = {hh}({th_rel}, P, {m.lead[0]}, {m.lead[1]})")
+            b.emit(f"f_d = (k_eq * ({H} * {th_rel} + lead_dev - {b.y('table_position')}) "
+                   f"+ {c_ax} * (({H} + lead_slope) * (w_s - w_n) - v_t))")
+            lever = f"({H} + lead_slope)"
+        screw = self._shaft(b, "screw", m, f"- {lever} * f_d")
+        table = Body(drive=["f_d"], external=list(m.forces.get("table", [])))
+        if m.load is not None:
+            table.external.append(f"- {m.load}")
+        b.emit(f"{b.dy('screw_angle')} = w_s")
+        b.emit(f"{b.dy('screw_speed')} = ({screw.expression()}) / {b.p('screw.J')}")
+        b.emit(f"{b.dy('table_position')} = v_t")
+        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}")
+        self._current(b, "screw", "w_s", m.torque_off)
+        # the hollow motor and nut: live in the DDFS (or with the CDFS nut on its servo)
+        b.emit(f"if {b.p('nut.active')} > 0.5:")
+        for ln in m.gated:
+            b.emit("    " + ln)
+        nut = self._shaft(b, "nut", m, f"+ {lever} * f_d")
+        b.emit(f"    {b.dy('nut_angle')} = w_n")
+        b.emit(f"    {b.dy('nut_speed')} = ({nut.expression()}) / {b.p('nut.J')}")
+        self._current(b, "nut", "w_n", m.torque_off, indent="    ")
+        b.emit("else:")
+        for ln in m.frozen:
+            b.emit("    " + ln)
+        for name in ("nut_angle", "nut_speed", "nut_current"):
+            b.emit(f"    {b.dy(name)} = 0.0")
+        b.emit(f"{b.a('equivalent_stiffness')} = k_eq")
+
+    def _shaft(self, b: Builder, key: str, m: Mechanics, reaction: str) -> Body:
+        shaft = Body(drive=[] if m.torque_off else
+                     [f"{b.p(key + '_motor.torque_constant')} * {b.y(key + '_current')}"])
+        if key in m.ripple:
+            shaft.drive.append(f"+ {m.ripple[key]}")
+        shaft.external = list(m.forces.get(key, []))
+        shaft.reaction = [reaction]
+        return shaft
+
+    def _current(self, b: Builder, key: str, speed: str, torque_off: bool,
+                 indent: str = "") -> None:
+        i = f"{key}_current"
+        if torque_off:
+            b.emit(f"{indent}{b.dy(i)} = 0.0")
+            return
+        mot = f"{key}_motor"
+        b.emit(f"{indent}{b.dy(i)} = ({b.a(key + '_voltage')} - {b.p(mot + '.resistance')} * "
+               f"{b.y(i)} - {b.p(mot + '.back_emf_constant')} * {speed}) / "
+               f"{b.p(mot + '.inductance')}")

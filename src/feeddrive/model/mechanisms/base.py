@@ -1,0 +1,143 @@
+"""Mechanisms: bodies, compliant couplings and where motors, friction and disturbances act.
+
+A mechanism is registered by drive name (``"cdfs"``, ``"ddfs"``, ``"linear-motor"``).  It
+declares its states, parameters, friction sites, motors and controller axes to a
+:class:`~feeddrive.model.codegen.Builder`, and writes its equations with the friction and
+disturbance terms the assembler hands it per body.  The interface is :class:`Mechanism`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ...parameters import DriveParameters
+    from ..codegen import Builder
+    from ..loops import Axis, Channel
+
+
+@dataclass
+class Body:
+    """Terms of one body's equation, in the order they are summed."""
+
+    drive: list[str] = field(default_factory=list)  # motor torque / coupling force first
+    external: list[str] = field(default_factory=list)  # friction, disturbances
+    reaction: list[str] = field(default_factory=list)  # coupling reactions last
+
+    def expression(self) -> str:
+        terms = self.drive + self.external + self.reaction
+        if not terms:
+            return "0.0"
+        text = terms[0].removeprefix("+ ")
+        for t in terms[1:]:
+            text += f" {t}"
+        return text
+
+
+@dataclass(frozen=True)
+class Site:
+    """A friction site placed by the mechanism: on one body, or between two (relative)."""
+
+    name: str  # e.g. "screw", "ball_nut"
+    parameters_key: str  # friction.<key> in the parameter set
+    speed: str  # code of the sliding speed [m/s]
+    bodies: tuple[tuple[str, str], ...]  # (body, factor code) pairs: term = − factor·F
+    scale: float = 1.0  # share of the site's friction (ball–nut split)
+    active: str = ""  # condition under which the site acts ("" = always)
+
+
+@dataclass
+class Mechanics:
+    """What the assembler hands a mechanism to write its equations: per-body external force
+    terms, the friction-site code lines (always-on and gated by a site's condition), the lines
+    that freeze gated sites' states, and the disturbance terms."""
+
+    forces: dict[str, list[str]]
+    always: list[str]
+    gated: list[str]
+    frozen: list[str]
+    ripple: dict[str, str]
+    lead: tuple[int, int] | None
+    load: str | None
+    torque_off: bool
+
+
+class Mechanism:
+    """Interface of a topology; see :class:`~feeddrive.model.mechanisms.ball_screw.BallScrewDrive`
+    and :class:`~feeddrive.model.mechanisms.linear_motor.LinearMotorDrive`."""
+
+    drives: tuple[str, ...] = ()
+    ripple_motors: tuple[str, ...] = ()  # motors whose torque ripple this topology models
+    has_lead_screw = False
+
+    def __init__(self, params: DriveParameters, drive: str, table_position: float,
+                 nut_hold: str) -> None:
+        self.params = params
+        self.drive = drive
+        self.table_position = table_position
+        self.nut_hold = nut_hold
+
+    @classmethod
+    def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
+        """Refuse a system this topology cannot represent (one-line ParameterError)."""
+
+    def declare(self, b: Builder) -> None:
+        raise NotImplementedError
+
+    def parameters(self, b: Builder) -> None:
+        raise NotImplementedError
+
+    def sites(self, b: Builder) -> list[Site]:
+        raise NotImplementedError
+
+    def motors(self, b: Builder) -> None:
+        raise NotImplementedError
+
+    def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
+        raise NotImplementedError
+
+    def signals(self, b: Builder) -> None:
+        """Auxiliary outputs of the mechanism itself (after the controller's)."""
+
+    def check_profile(self, nut_speed: float, nut_table: Any) -> None:
+        """Refuse a reference this topology cannot follow."""
+
+    def emit(self, b: Builder, m: Mechanics) -> None:
+        raise NotImplementedError
+
+
+_REGISTRY: dict[str, type[Mechanism]] = {}
+
+
+def register_mechanism(cls: type[Mechanism]) -> type[Mechanism]:
+    for drive in cls.drives:
+        _REGISTRY[drive] = cls
+    return cls
+
+
+def _discover() -> None:
+    """Import every module of this package once: each registers its topologies."""
+    import importlib
+    import pkgutil
+
+    from .. import mechanisms
+
+    for info in pkgutil.iter_modules(mechanisms.__path__):
+        importlib.import_module(f"{mechanisms.__name__}.{info.name}")
+
+
+def mechanism(drive: str) -> type[Mechanism]:
+    if not _REGISTRY:
+        _discover()
+    if drive not in _REGISTRY:
+        from ...parameters import ParameterError
+
+        raise ParameterError("drive", drive, f"expected one of {', '.join(drive_names())}")
+    return _REGISTRY[drive]
+
+
+def drive_names() -> tuple[str, ...]:
+    if not _REGISTRY:
+        _discover()
+    return tuple(_REGISTRY)

@@ -1,0 +1,83 @@
+"""A direct-drive table: a linear motor's forcer on the table, guide friction only.
+
+    (m_t + m_f) v̇_t = K_f i − F_guide − F_load,     L i̇ = u − R i − K_e v_t
+
+One controller axis ("motor") with the table's grating as position and speed feedback; its
+gains act on m/s (transmission 1).  Needs the ``[linear_motor]`` parameter section.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...parameters import DriveParameters, ParameterError
+from ..codegen import Builder
+from ..loops import GRAT_Q, Axis, Channel, axis_parameters
+from .base import Body, Mechanics, Mechanism, Site, register_mechanism
+
+
+@register_mechanism
+class LinearMotorDrive(Mechanism):
+    drives = ("linear-motor",)
+
+    @classmethod
+    def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
+        if params.linear_motor is None:
+            raise ParameterError("linear_motor", None,
+                                 "the linear-motor drive needs a [linear_motor] section "
+                                 "(e.g. --preset linear-motor-example)")
+
+    def check_profile(self, nut_speed: float, nut_table: Any) -> None:
+        if nut_speed != 0.0 or np.any(nut_table != 0.0):
+            raise ParameterError("nut_speed", nut_speed,
+                                 "a linear-motor drive has no nut; expected 0 [m/s]")
+
+    def declare(self, b: Builder) -> None:
+        b.state("table_position", "m", "table displacement from its start x_t", "position")
+        b.state("table_speed", "m/s", "table speed", "speed")
+
+    def parameters(self, b: Builder) -> None:
+        lm = self.params.linear_motor
+        assert lm is not None
+        b.param("table.mass", self.params.table.mass + lm.forcer_mass)
+        b.param("motor.force_constant", lm.force_constant)
+        b.param("motor.back_emf_constant", lm.back_emf_constant)
+        b.param("motor.inductance", lm.inductance)
+        b.param("motor.resistance", lm.resistance)
+
+    def motors(self, b: Builder) -> None:
+        b.state("motor_current", "A", "linear motor current", "current")
+
+    def sites(self, b: Builder) -> list[Site]:
+        return [Site("guide", "guide", "v_t", (("table", "1.0"),))]
+
+    def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
+        o = axis_parameters(b, "motor", self.params.controller, 1.0, speed_mode=False)
+        channels = [Channel("table", b.y("table_position"), b.y("table_speed"),
+                            f"P[{o + GRAT_Q}]")]
+        motor = Axis(name="motor", param_offset=o, reference="ref_x", feedforward="ref_v",
+                     position=b.y("table_position"), position_q="q_table",
+                     speed=b.y("table_speed"), speed_q="s_table",
+                     current_state=b.y("motor_current"), speed_unit="m/s")
+        return [motor], channels
+
+    def emit(self, b: Builder, m: Mechanics) -> None:
+        b.emit(f"v_t = {b.y('table_speed')}")
+        for ln in m.always:
+            b.emit(ln)
+        drive = "0.0" if m.torque_off else (
+            f"{b.p('motor.force_constant')} * {b.y('motor_current')}")
+        b.emit(f"f_d = {drive}")
+        table = Body(drive=["f_d"], external=list(m.forces.get("table", [])))
+        if m.load is not None:
+            table.external.append(f"- {m.load}")
+        b.emit(f"{b.dy('table_position')} = v_t")
+        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}")
+        if m.torque_off:
+            b.emit(f"{b.dy('motor_current')} = 0.0")
+        else:
+            b.emit(f"{b.dy('motor_current')} = ({b.a('motor_voltage')} - "
+                   f"{b.p('motor.resistance')} * {b.y('motor_current')} - "
+                   f"{b.p('motor.back_emf_constant')} * v_t) / {b.p('motor.inductance')}")

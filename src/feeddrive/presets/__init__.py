@@ -1,0 +1,24 @@
+"""Published parameter sets, one module per paper, registered by name.
+
+The core never imports this package at module level: :func:`feeddrive.parameters.preset`
+looks names up here when asked, so a preset may use any part of the package (the stiffness
+chain, say) without an import cycle.  Add a set with :func:`register_preset`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from collections.abc import Callable
+
+from ..parameters.components import DriveParameters
+
+PRESETS: dict[str, Callable[[], DriveParameters]] = {}
+# every module of this package lists its sets in a module-level ``PRESETS`` dict
+for _info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
+    PRESETS.update(getattr(importlib.import_module(f"{__name__}.{_info.name}"), "PRESETS", {}))
+
+
+def register_preset(name: str, factory: Callable[[], DriveParameters]) -> None:
+    """Make ``factory()`` available as ``preset(name)`` and ``extends = "name"``."""
+    PRESETS[name] = factory

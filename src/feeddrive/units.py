@@ -1,0 +1,15 @@
+"""The one unit table: SI inside the package, mm, mm/s and N/µm at the edges (CLI, CSV,
+Parquet, report), and the names of the friction sites."""
+
+from __future__ import annotations
+
+MM = 1e-3  # m per mm
+MM_PER_S = 1e-3  # m/s per mm/s
+UM = 1e-6  # m per µm
+N_PER_UM = 1e6  # N/m per N/µm
+
+# SI unit → (engineering unit, factor) for exports and printing
+ENGINEERING = {"m": ("mm", 1e3), "m/s": ("mm/s", 1e3), "N/m": ("N/µm", 1e-6)}
+
+# the friction sites of Wang2021 Sect. 4 (Table 1), in the parameter file's order
+SITES = ("screw", "nut", "guide")

@@ -1,0 +1,48 @@
+"""docs/extending.md describes the code it names: files, classes, kernels, laws, topologies."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import feeddrive
+from feeddrive.model import drive_names, law_names
+from feeddrive.model.loops import AXIS_PARAMS
+
+ROOT = Path(__file__).resolve().parents[2]
+DOC = (ROOT / "docs" / "extending.md").read_text(encoding="utf-8")
+
+
+def test_every_source_path_in_the_doc_exists() -> None:
+    paths = set(re.findall(r"(?:src/feeddrive/|model/|solvers/|presets/|parameters/)"
+                           r"[\w/]+\.py", DOC))
+    assert paths
+    pkg = ROOT / "src" / "feeddrive"
+    for p in paths:
+        rel = p.removeprefix("src/feeddrive/")
+        assert (pkg / rel).is_file(), p
+
+
+def test_names_in_the_doc_exist_in_the_code() -> None:
+    from feeddrive.model import codegen, disturbances, loops
+    from feeddrive.model.friction import dahl
+    from feeddrive.model.mechanisms import base
+    from feeddrive.solvers import dopri5
+
+    assert hasattr(dahl, "dahl_kernel") and hasattr(dahl, "Dahl")
+    assert hasattr(codegen, "Builder") and hasattr(base, "Mechanism")
+    assert hasattr(loops, "emit_cascade") and hasattr(loops, "speed_command")
+    assert hasattr(disturbances, "harmonics") and hasattr(dopri5, "integrate_template")
+    assert "SPEED_MODE" in dir(loops) and "speed_mode" in AXIS_PARAMS
+    assert callable(feeddrive.register_friction_law)
+    for law in ("dahl", "toy_viscous"):
+        assert f'"{law}"' in DOC or f"`{law}`" in DOC or law in DOC
+    assert {"lugre", "stribeck", "dahl", "none"} <= set(law_names())
+    assert "linear-motor" in drive_names() and '"linear-motor"' in DOC
+
+
+def test_the_quoted_linear_motor_diff_touches_four_package_files() -> None:
+    block = DOC.split("git show 88c60ba --stat")[1].split("```")[1]
+    files = re.findall(r"src/feeddrive/\S+\.py", block)
+    assert len(files) == 4
+    assert "4 files changed" in block
