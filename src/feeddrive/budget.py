@@ -12,10 +12,11 @@ the LuGre bristle relaxes in F_c/(σ0·|v|) ≈ 30 ns; a current loop of microse
 
 * :func:`check_output_memory`: a run whose recorded samples would need more than half the
   available memory;
-* :func:`check_step_rate`: from a short probe integration (the first ~0.1 s), the steps of
-  the whole run are projected; above ``max_steps`` the run is refused, naming the fastest
-  time constant of the parameters (:func:`time_constants`), the one that forces small
-  steps.  An explicit method is stable for steps up to about 3.3 × the fastest time
+* :func:`step_rate_problem`: from a short probe integration (the first ~0.1 s), the steps
+  of the whole run are projected; above ``max_steps`` the run is refused (a
+  ``SimulationError`` raised by :func:`feeddrive.simulate` before integrating), naming the
+  fastest time constant of the parameters (:func:`time_constants`), the one that forces
+  small steps.  An explicit method is stable for steps up to about 3.3 × the fastest time
   constant (Hairer & Wanner, Solving ODEs II, Sect. IV.2, stability region of DOPRI5).
 """
 
@@ -91,10 +92,8 @@ def available_memory() -> int:
         return 4 << 30
 
 
-def check_output_memory(duration: float, output_interval: float, breakpoints: int,
-                        max_steps: int) -> None:
-    """Refuse a run whose output would not fit in memory or that needs more steps than
-    ``max_steps`` just to visit its ``breakpoints`` (one step at least each)."""
+def check_output_memory(duration: float, output_interval: float) -> None:
+    """Refuse a run whose recorded output would not fit in memory."""
     samples = int(duration / output_interval) + 1
     need = samples * BYTES_PER_SAMPLE * _COPY_FACTOR
     free = available_memory()
@@ -104,12 +103,6 @@ def check_output_memory(duration: float, output_interval: float, breakpoints: in
             f"{samples:.3g} output samples (one per {output_interval:g} s) would need about "
             f"{need / 2**30:.3g} GiB, more than half the {free / 2**30:.3g} GiB available; "
             "shorten the duration [s] (or, from Python, raise options.output_interval)")
-    if breakpoints > max_steps:
-        raise ParameterError(
-            "max_steps", max_steps,
-            f"a run of {duration:g} s needs at least {breakpoints:.3g} solver steps (one per "
-            "controller/output instant); shorten the duration [s] or raise max_steps "
-            "(--max-steps)")
 
 
 def time_constants(params: DriveParameters, drive: str, speed: float) -> dict[str, float]:
@@ -147,14 +140,14 @@ def profile_speed(profile: Any) -> float:
     return 1e-3
 
 
-def check_step_rate(*, steps: int, probe_time: float, duration: float, max_steps: int,
-                    params: DriveParameters, drive: str, speed: float) -> None:
-    """Refuse a run whose probe of ``probe_time`` [s] took ``steps`` steps when the whole
-    ``duration`` [s] would need more than ``max_steps`` (see the module)."""
+def step_rate_problem(*, steps: int, probe_time: float, duration: float, max_steps: int,
+                      params: DriveParameters, drive: str, speed: float) -> str | None:
+    """Why a run whose probe of ``probe_time`` [s] took ``steps`` steps cannot finish within
+    ``max_steps`` over ``duration`` [s] (see the module), or None when it can."""
     rate = steps / probe_time
     projected = rate * duration
     if projected * STEP_MARGIN <= max_steps:
-        return
+        return None
     h = probe_time / max(steps, 1)
     taus = time_constants(params, drive, speed)
     name, tau = min(taus.items(), key=lambda kv: kv[1])
@@ -164,11 +157,11 @@ def check_step_rate(*, steps: int, probe_time: float, duration: float, max_steps
     else:
         cause = (f"steps of {h:.3g} s, far below every parameter time constant (the fastest "
                  f"is {name} = {tau:.3g} s): the solution chatters")
-    raise ParameterError(
-        "max_steps", max_steps,
-        f"the solver needs about {rate:.3g} steps per simulated second here, {projected:.3g} "
-        f"for {duration:g} s (measured over the first {probe_time:.3g} s): {cause}; change "
-        "that parameter, shorten the duration [s], or raise max_steps (--max-steps)")
+    return (f"refused before integrating: the run would exceed the maximum number of steps, "
+            f"max_steps = {max_steps}: the solver needs about {rate:.3g} steps per simulated "
+            f"second here, {projected:.3g} for {duration:g} s (measured over the first "
+            f"{probe_time:.3g} s); {cause}; change that parameter, shorten the duration [s], "
+            "or raise max_steps (--max-steps)")
 
 
 def probe_time(duration: float, base: float) -> float:

@@ -128,12 +128,12 @@ def sampling(params: DriveParameters, output_interval: float) -> Sampling:
 
 
 def _check_budget(system: DriveSystem, profile: Profile, model: Model, grid: Sampling,
-                  options: SolverOptions, y0: np.ndarray, t_end: float, n_break: int,
+                  options: SolverOptions, y0: np.ndarray, t_end: float,
                   adaptive: int, atol: np.ndarray, rel: np.ndarray, h_init: float,
                   h_max: float) -> None:
     """Refuse, before integrating, a run whose output would not fit in memory or whose
     steps (projected from a short probe) exceed ``max_steps`` (feeddrive.budget)."""
-    budget.check_output_memory(t_end, options.output_interval, n_break, options.max_steps)
+    budget.check_output_memory(t_end, options.output_interval)
     t_probe = budget.probe_time(t_end, grid.base) if adaptive else 0.0
     if not t_probe:
         return
@@ -142,10 +142,12 @@ def _check_budget(system: DriveSystem, profile: Profile, model: Model, grid: Sam
         model, y0.copy(), t_probe, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
         grid.n_cur, options.rtol, atol, rel, h_init, h_max, adaptive, allowed)
     if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
-        budget.check_step_rate(steps=int(stats[1]), probe_time=float(stats[4]),
-                               duration=t_end, max_steps=options.max_steps,
-                               params=system.parameters, drive=system.drive,
-                               speed=budget.profile_speed(profile))
+        problem = budget.step_rate_problem(
+            steps=int(stats[1]), probe_time=float(stats[4]), duration=t_end,
+            max_steps=options.max_steps, params=system.parameters, drive=system.drive,
+            speed=budget.profile_speed(profile))
+        if problem:
+            raise SimulationError(problem)
 
 
 def simulate(system: DriveSystem, profile: Profile, duration: float, *,
@@ -171,7 +173,7 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     h_init = 1e-6 if adaptive else options.fixed_step
     h_max = min(options.max_step, grid.base) if adaptive else options.fixed_step
     y0 = system.initial_vector(model)
-    _check_budget(system, profile, model, grid, options, y0, t_end, n_break, adaptive, atol,
+    _check_budget(system, profile, model, grid, options, y0, t_end, adaptive, atol,
                   rel, h_init, h_max)
     started = _time.perf_counter()
     t, y, aux, stats, _ = dopri5.integrate(
