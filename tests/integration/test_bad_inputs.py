@@ -92,6 +92,8 @@ def _one_line_error(result: Any, *names: str) -> str:
 COMMANDS: dict[str, Callable[[str, Path], list[str]]] = {
     "params check": lambda f, out: ["params", "check", f],
     "simulate --params": lambda f, out: ["simulate", "--table-speed", "1", "--params", f],
+    "simulate --profile-file": lambda f, out: ["simulate", "--profile", "csv",
+                                               "--profile-file", f],
     "creep --params": lambda f, out: ["creep", "--params", f],
     "calibrate --params": lambda f, out: ["calibrate", "--params", f],
     "reproduce --params": lambda f, out: ["reproduce", "--params", f, "--out", str(out / "r")],
