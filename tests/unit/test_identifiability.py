@@ -11,11 +11,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 import feeddrive
 from feeddrive.analysis.identification import MAX_CORRELATION, Estimate, fit_static
-from feeddrive.cli import app
 from feeddrive.friction import steady_friction
 from feeddrive.measured_io import MeasuredDataError, read_static_test
 
@@ -58,16 +56,6 @@ def test_flag_reasons() -> None:
                        correlated_with="F_s")
     assert "correlation +0.9999 with F_s" in (coupled.identifiability_issue or "")
 
-
-def test_cli_warns_about_unidentifiable_values(tmp_path: Path) -> None:
-    v, f = static_data(np.geomspace(0.05, 50.0, 5) * 1e-3, 0.05)
-    path = tmp_path / "five.csv"
-    path.write_text("speed [mm/s],force [N]\n" + "\n".join(
-        f"{a * 1e3:.9g},{b:.9g}" for a, b in zip(v, f, strict=True)) + "\n", encoding="utf-8")
-    r = CliRunner().invoke(app, ["identify", "static", str(path)])
-    assert r.exit_code == 0, r.output
-    assert "not identifiable from these data" in r.stderr
-    assert "(not identifiable)" in r.stdout
 
 
 def test_header_only_static_file_says_empty(tmp_path: Path) -> None:

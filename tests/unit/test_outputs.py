@@ -87,26 +87,6 @@ def test_names_with_control_characters_are_shown_on_one_line(tmp_path: Path) -> 
     assert "\n" not in str(err.value) and "x\\ny" in str(err.value)
 
 
-def test_parquet_without_pyarrow_is_refused_before_simulating(monkeypatch,
-                                                              tmp_path: Path) -> None:
-    """pyarrow is the optional extra [parquet] (issue 13, item 11)."""
-    import importlib.util
-
-    from typer.testing import CliRunner
-
-    from feeddrive.cli import app
-    from feeddrive.io import PARQUET_HINT, check_format
-
-    real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec",
-                        lambda name, *a: None if name == "pyarrow" else real(name, *a))
-    with pytest.raises(ValueError, match=r"pip install 'feeddrive\[parquet\]'"):
-        check_format("run.parquet")
-    r = CliRunner().invoke(app, ["simulate", "--table-speed", "1", "--output",
-                                 str(tmp_path / "run.parquet")])
-    assert r.exit_code == 2 and PARQUET_HINT in r.stderr
-    assert "solver" not in r.stdout  # refused before the run
-
 
 def test_pyarrow_is_an_extra_that_the_test_extra_includes() -> None:
     import tomllib
