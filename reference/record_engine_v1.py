@@ -19,7 +19,9 @@ OUT = Path(__file__).resolve().parents[1] / "tests" / "data" / "engine_v1_regres
 
 
 def cases() -> dict[str, tuple[fd.DriveSystem, object, float]]:
-    w = fd.preset("wang2021")
+    # the shipped reading as recorded (commit 1f1fc75): its fitted velocity integral was
+    # 3872.12 then (re-fitted to 3925.28 under issue 15's creep verdict)
+    w = fd.preset("wang2021").replace_path("controller.velocity_integral_gain", 3872.12)
     lit = fd.preset("wang2021-literal").replace_path("stiffness.axial_damping", 2000.0)
     sampled = (w.replace_path("controller.position_period", 1e-3)
                .replace_path("controller.velocity_period", 5e-4)

@@ -161,7 +161,8 @@ def step_rate_problem(*, steps: int, probe_time: float, duration: float, max_ste
             f"max_steps = {max_steps}: the solver needs about {rate:.3g} steps per simulated "
             f"second here, {projected:.3g} for {duration:g} s (measured over the first "
             f"{probe_time:.3g} s); {cause}; change that parameter, shorten the duration [s], "
-            "or raise max_steps (--max-steps)")
+            "raise max_steps (--max-steps), or use the stiff solver (options.method = "
+            "'auto': RODAS4 where the problem is stiff)")
 
 
 def probe_time(duration: float, base: float) -> float:

@@ -9,14 +9,15 @@ from __future__ import annotations
 
 import importlib.util
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import scipy.io
+import xarray as xr
 
 from .parameters import ParameterError
 from .units import ENGINEERING
-
-if TYPE_CHECKING:
-    import pandas as pd
-    import xarray as xr
 
 FORMATS = (".csv", ".parquet", ".nc", ".mat")
 
@@ -38,8 +39,6 @@ def check_format(path: str | Path) -> str:
 
 def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
     """All time signals as a DataFrame in engineering units, units in the column names."""
-    import pandas as pd
-
     cols = {"time [s]": dataset["time"].values}
     for name, var in dataset.data_vars.items():
         unit = var.attrs.get("units", "")
@@ -60,8 +59,6 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     elif ext == ".nc":
         dataset.to_netcdf(p, engine="scipy")
     else:
-        import scipy.io
-
         signals = {name: var.values for name, var in dataset.data_vars.items()}
         signals["time"] = dataset["time"].values
         units = {name: var.attrs.get("units", "") for name, var in dataset.data_vars.items()}
@@ -71,3 +68,51 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
                                                       dataset.attrs.items()}}},
                          long_field_names=True, do_compression=True)
     return p
+
+
+class ChunkWriter:
+    """Appends a run's samples to ``.parquet`` or ``.csv`` chunk by chunk (engineering units,
+    the columns of :func:`to_engineering_frame`), so a long run never holds all of them."""
+
+    def __init__(self, path: str | Path, model: Any, system: Any) -> None:
+        self.path = Path(path)
+        ext = self.path.suffix.lower()
+        if ext not in (".parquet", ".csv"):
+            raise ParameterError("output", str(self.path), "a streamed run is written as "
+                                 ".parquet or .csv (.nc and .mat hold the whole run)")
+        self.ext, self.model, self.system = ext, model, system
+        self._writer: Any = None
+        self._first = True
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+
+    def _frame(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> pd.DataFrame:
+        from .result import Run
+
+        run = Run(t, y, aux, self.model, self.system, None, {})  # type: ignore[arg-type]
+        cols = {"time [s]": t}
+        for name, (unit, _) in run.meta.items():
+            eng_unit, factor = ENGINEERING.get(unit, (unit, 1.0))
+            cols[f"{name} [{eng_unit}]"] = run.signal(name) * factor
+        return pd.DataFrame(cols)
+
+    def write(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> None:
+        if t.size == 0:
+            return
+        frame = self._frame(t, y, aux)
+        if self.ext == ".csv":
+            frame.to_csv(self.path, mode="w" if self._first else "a", header=self._first,
+                         index=False, float_format="%.10g")
+        else:
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            table = pa.Table.from_pandas(frame, preserve_index=False)
+            if self._writer is None:
+                self._writer = pq.ParquetWriter(self.path, table.schema)
+            self._writer.write_table(table)
+        self._first = False
+
+    def close(self) -> None:
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None

@@ -1,4 +1,10 @@
-"""Simulation results: an xarray Dataset with named signals, SI units in attrs."""
+"""Simulation results: named signals, SI units; the xarray Dataset is built when asked.
+
+A :class:`Result` from :func:`feeddrive.simulate` keeps the solver's arrays and the model's
+signal names; ``result["table_speed"]``, the creep metrics and the summary read them directly.
+``result.dataset`` (named variables with units and descriptions, the parameter set as TOML in
+its attributes) is built on first use only — it costs more than a short stiff solve.
+"""
 
 from __future__ import annotations
 
@@ -23,56 +29,120 @@ if TYPE_CHECKING:
 ENGINEERING = _ENGINEERING
 
 
+class Run:
+    """The raw output of one simulation and what names it (no copies)."""
+
+    def __init__(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray, model: Model,
+                 system: DriveSystem, profile: Profile, solver_stats: dict[str, Any]) -> None:
+        self.t, self.y, self.aux, self.model = t, y, aux, model
+        self.system, self.profile, self.solver_stats = system, profile, solver_stats
+        self.columns: dict[str, tuple[np.ndarray, int]] = {}
+        for k, sig in enumerate(model.states):
+            self.columns[sig.name] = (y, k)
+        for k, sig in enumerate(model.aux):
+            self.columns[sig.name] = (aux, k)
+        self.meta = {sig.name: (sig.unit, sig.description) for sig in (*model.states,
+                                                                        *model.aux)}
+        if "screw_speed" in model.state_names:
+            self.meta["screw_linear_speed"] = ("m/s", "screw speed × H")
+            self.meta["nut_linear_speed"] = ("m/s", "nut speed × H")
+        self.meta["following_error"] = ("m", "commanded − table position")
+
+    def signal(self, name: str) -> np.ndarray:
+        if name in self.columns:
+            arr, k = self.columns[name]
+            return arr[:, k]
+        if name in ("screw_linear_speed", "nut_linear_speed") and name in self.meta:
+            H = self.system.parameters.screw.transmission_ratio
+            return H * self.signal(name.replace("_linear", ""))
+        if name == "following_error":
+            return self.signal("table_position_reference") - self.signal("table_position")
+        raise KeyError(name)
+
+    def attrs(self, *, full: bool) -> dict[str, Any]:
+        system, profile = self.system, self.profile
+        attrs: dict[str, Any] = {
+            "drive": system.drive,
+            "table_start_position_m": system.table_position,
+            "nut_hold": system.nut_hold,
+            "friction_laws": json.dumps(dict(self.model.sites)),
+            "profile": (repr(profile) if not hasattr(profile, "time")
+                        else type(profile).__name__),
+            "parameter_set": system.parameters.name,
+            "solver": json.dumps(self.solver_stats),
+            "conventions": "SI units; friction at the shafts as torque ÷ H (Wang2021 Table 1)",
+        }
+        if full:
+            attrs["parameters_toml"] = dumps(system.parameters)
+        return attrs
+
+    def dataset(self) -> xr.Dataset:
+        data_vars = {name: ("time", np.array(self.signal(name)),
+                            {"units": unit, "long_name": desc})
+                     for name, (unit, desc) in self.meta.items()}
+        return xr.Dataset(data_vars, coords={"time": ("time", self.t, {"units": "s"})},
+                          attrs=self.attrs(full=True))
+
+
 def build_dataset(t: np.ndarray, y: np.ndarray, aux: np.ndarray, model: Model,
                   system: DriveSystem, profile: Profile,
                   solver_stats: dict[str, Any]) -> xr.Dataset:
     """Named signals of a run: every state and auxiliary output of the assembled model, SI
     units and descriptions from its parts, plus derived linear speeds and following error."""
-    data_vars: dict[str, Any] = {}
-    for k, sig in enumerate(model.states):
-        data_vars[sig.name] = ("time", np.array(y[:, k]),
-                               {"units": sig.unit, "long_name": sig.description})
-    for k, sig in enumerate(model.aux):
-        data_vars[sig.name] = ("time", np.array(aux[:, k]),
-                               {"units": sig.unit, "long_name": sig.description})
-    if "screw_speed" in model.state_names:
-        H = system.parameters.screw.transmission_ratio
-        data_vars["screw_linear_speed"] = ("time", H * data_vars["screw_speed"][1],
-                                           {"units": "m/s", "long_name": "screw speed × H"})
-        data_vars["nut_linear_speed"] = ("time", H * data_vars["nut_speed"][1],
-                                         {"units": "m/s", "long_name": "nut speed × H"})
-    data_vars["following_error"] = ("time", data_vars["table_position_reference"][1]
-                                    - data_vars["table_position"][1],
-                                    {"units": "m", "long_name": "commanded − table position"})
-    attrs: dict[str, Any] = {
-        "drive": system.drive,
-        "table_start_position_m": system.table_position,
-        "nut_hold": system.nut_hold,
-        "friction_laws": json.dumps(dict(model.sites)),
-        "profile": repr(profile) if not hasattr(profile, "time") else type(profile).__name__,
-        "parameters_toml": dumps(system.parameters),
-        "parameter_set": system.parameters.name,
-        "solver": json.dumps(solver_stats),
-        "conventions": "SI units; friction at the shafts as torque ÷ H (Wang2021 Table 1)",
-    }
-    return xr.Dataset(data_vars, coords={"time": ("time", t, {"units": "s"})}, attrs=attrs)
+    return Run(t, y, aux, model, system, profile, solver_stats).dataset()
 
 
 class Result:
-    """A simulation's signals (``.dataset``), its solver statistics and summaries."""
+    """A simulation's signals, its solver statistics and summaries.
 
-    def __init__(self, dataset: xr.Dataset) -> None:
-        self.dataset = dataset
+    ``Result(dataset)`` wraps a Dataset; :meth:`from_run` (what :func:`simulate` returns)
+    keeps the raw arrays and builds ``.dataset`` only when it is read.
+    """
+
+    def __init__(self, dataset: xr.Dataset | None = None, *, run: Run | None = None) -> None:
+        if (dataset is None) == (run is None):
+            raise ValueError("Result: give a dataset or a run")
+        self._dataset = dataset
+        self._run = run
+
+    @classmethod
+    def from_run(cls, run: Run) -> Result:
+        return cls(run=run)
+
+    @property
+    def dataset(self) -> xr.Dataset:
+        if self._dataset is None:
+            assert self._run is not None
+            self._dataset = self._run.dataset()
+        return self._dataset
+
+    @property
+    def attrs(self) -> dict[str, Any]:
+        """The run's attributes (without the parameter TOML unless the dataset exists)."""
+        if self._dataset is not None or self._run is None:
+            return dict(self.dataset.attrs)
+        return self._run.attrs(full=False)
+
+    def __contains__(self, name: str) -> bool:
+        if self._run is not None:
+            return name in self._run.meta
+        return name in self.dataset
 
     def __getitem__(self, name: str) -> np.ndarray:
+        if self._run is not None:
+            return self._run.signal(name)
         return np.asarray(self.dataset[name].values)
 
     @property
     def time(self) -> np.ndarray:
+        if self._run is not None:
+            return self._run.t
         return np.asarray(self.dataset["time"].values)
 
     @property
     def solver_stats(self) -> dict[str, Any]:
+        if self._run is not None:
+            return dict(self._run.solver_stats)
         stats: dict[str, Any] = json.loads(self.dataset.attrs["solver"])
         return stats
 
@@ -100,8 +170,9 @@ class Result:
         from .analysis.metrics import position_metrics, sine_metrics
 
         warnings: list[str] = []
-        frequency = _sine_frequency(self.dataset.attrs.get("profile", ""))
-        out: dict[str, Any] = {"drive": self.dataset.attrs["drive"]}
+        attrs = self.attrs
+        frequency = _sine_frequency(attrs.get("profile", ""))
+        out: dict[str, Any] = {"drive": attrs["drive"]}
         if frequency is not None:
             s = sine_metrics(self.time, self["table_speed"], self["table_speed_reference"],
                              frequency=frequency)
@@ -117,7 +188,7 @@ class Result:
                 "reversals": s.reversals,
             })
         else:
-            constant = self.dataset.attrs.get("profile", "").startswith("ConstantSpeed")
+            constant = attrs.get("profile", "").startswith("ConstantSpeed")
             m = self.creep_metrics(window=None if constant else self._hold_window())
             window = (m.window_start, m.window_end)
             out.update({
@@ -154,11 +225,16 @@ class Result:
 
         from .analysis.metrics import travel_warning
 
-        screw = tomllib.loads(self.dataset.attrs["parameters_toml"]).get("screw", {})
-        if "length" not in screw or "table_start_position_m" not in self.dataset.attrs:
-            return None
-        return travel_warning(self.dataset.attrs["table_start_position_m"],
-                              self["table_position"], screw["length"])
+        if self._run is not None:
+            length = self._run.system.parameters.screw.length
+            start = self._run.system.table_position
+        else:
+            attrs = self.dataset.attrs
+            screw = tomllib.loads(attrs.get("parameters_toml", "")).get("screw", {})
+            if "length" not in screw or "table_start_position_m" not in attrs:
+                return None
+            length, start = screw["length"], attrs["table_start_position_m"]
+        return travel_warning(start, self["table_position"], length)
 
     def _hold_window(self) -> tuple[float, float]:
         """The steady window (:func:`steady_window`) of the first stretch where a sampled
@@ -176,7 +252,7 @@ class Result:
         return steady_window(self.time[first:last + 1], self["table_speed"][first:last + 1], c)
 
     def _mean_mm_s(self, name: str, sel: np.ndarray) -> float | None:
-        if name not in self.dataset:
+        if name not in self:
             return None
         return 1e3 * float(np.mean(self[name][sel]))
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import math
 import time as _time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -15,8 +16,8 @@ from .model.assemble import Model, assemble
 from .model.disturbances import LoadProfile
 from .model.mechanisms import drive_names, mechanism
 from .parameters import DriveParameters, ParameterError
-from .result import Result, build_dataset
-from .solvers import dopri5
+from .result import Result, Run
+from .solvers import dopri5, switching
 
 DRIVES = drive_names()
 
@@ -63,13 +64,32 @@ class DriveSystem:
         return y0
 
 
+METHODS = ("dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed", "rodas4-fixed")
+# method -> (driver mode, adaptive) of feeddrive.solvers.switching
+_DENSE_MODES = {"auto": (switching.MODE_AUTO, 1), "rodas4": (switching.MODE_RODAS4, 1),
+                "dopri5-dense": (switching.MODE_DOPRI5, 1),
+                "rodas4-fixed": (switching.MODE_RODAS4, 0)}
+
+
 @dataclass(frozen=True)
 class SolverOptions:
     """Integrator settings, echoed in the result.
 
-    ``method``: ``"dopri5"`` (adaptive) or ``"dopri5-fixed"`` (fixed step ``fixed_step``).
-    ``output_interval`` [s] is the spacing of the recorded samples; it is also the breakpoint
-    spacing for continuous control.  ``position_tolerance`` [m] and ``speed_tolerance`` [m/s]
+    ``method``:
+
+    * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps at
+      most ``max_step``, default 1 ms, and the output interval); the engine v1 behaviour,
+      kept bit for bit;
+    * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
+      automatically; dense output (steps not capped by the output interval);
+    * ``"rodas4"``: the Rosenbrock method RODAS4 throughout, dense output;
+    * ``"dopri5-dense"``: DOPRI5 throughout with dense output;
+    * ``"dopri5-fixed"``, ``"rodas4-fixed"``: fixed step ``fixed_step`` (order checks).
+
+    See :mod:`feeddrive.solvers.switching`.  ``output_interval`` [s] is the spacing of the
+    recorded samples (for ``dopri5`` also the breakpoint spacing under continuous control).
+    ``max_step`` [s]: largest step (``None``: 1 ms for ``dopri5``, unlimited for the
+    dense-output methods).  ``position_tolerance`` [m] and ``speed_tolerance`` [m/s]
     are absolute error targets (angles scaled by H), combined with ``rtol`` on speeds.
     """
 
@@ -79,16 +99,19 @@ class SolverOptions:
     speed_tolerance: float = 1e-8
     current_tolerance: float = 1e-6
     output_interval: float = 1e-3
-    max_step: float = 1e-3
+    max_step: float | None = None
     fixed_step: float = 1e-5
     max_steps: int = 50_000_000
 
     def __post_init__(self) -> None:
-        if self.method not in ("dopri5", "dopri5-fixed"):
-            raise ParameterError("options.method", self.method, "expected dopri5 or dopri5-fixed")
+        if self.method not in METHODS:
+            raise ParameterError("options.method", self.method,
+                                 f"expected one of {', '.join(METHODS)}")
         for name in ("rtol", "position_tolerance", "speed_tolerance", "current_tolerance",
                      "output_interval", "max_step", "fixed_step"):
             v = getattr(self, name)
+            if name == "max_step" and v is None:
+                continue
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"options.{name}", v, "expected a finite value > 0")
 
@@ -127,13 +150,12 @@ def sampling(params: DriveParameters, output_interval: float) -> Sampling:
     return Sampling(base, n[0], n[1], n[2], out_every)
 
 
-def _check_budget(system: DriveSystem, profile: Profile, model: Model, grid: Sampling,
-                  options: SolverOptions, y0: np.ndarray, t_end: float,
-                  adaptive: int, atol: np.ndarray, rel: np.ndarray, h_init: float,
-                  h_max: float) -> None:
-    """Refuse, before integrating, a run whose output would not fit in memory or whose
-    steps (projected from a short probe) exceed ``max_steps`` (feeddrive.budget)."""
-    budget.check_output_memory(t_end, options.output_interval)
+def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: Sampling,
+                     options: SolverOptions, y0: np.ndarray, t_end: float,
+                     adaptive: int, atol: np.ndarray, rel: np.ndarray, h_init: float,
+                     h_max: float) -> None:
+    """Refuse, before integrating with ``dopri5``, a run whose steps (projected from a short
+    probe) exceed ``max_steps`` (feeddrive.budget)."""
     t_probe = budget.probe_time(t_end, grid.base) if adaptive else 0.0
     if not t_probe:
         return
@@ -150,12 +172,55 @@ def _check_budget(system: DriveSystem, profile: Profile, model: Model, grid: Sam
             raise SimulationError(problem)
 
 
+def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarray:
+    """Instants in (0, t_end) [s] where the command has a kink, declared to the dense-output
+    integrator as step ends: the end of a constant-speed start ramp; the grid of a sampled
+    profile (piecewise-linear speed) when it is no finer than ``base``, the breakpoint unit —
+    a finer grid is left to the error control, as the fixed-breakpoint integrator does."""
+    if isinstance(profile, ConstantSpeed):
+        stops = [profile.ramp_time] if 0.0 < profile.ramp_time < t_end else []
+        return np.array(stops, dtype=float)
+    if isinstance(profile, SampledSpeed):
+        times = np.asarray(profile.time, dtype=float)
+        if times.size > 1 and float(np.mean(np.diff(times))) >= base * (1 - 1e-9):
+            return times[(times > 0.0) & (times < t_end)]
+    return np.zeros(0)
+
+
+class SimulationInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a long run: the integration stopped between two chunks; what was
+    computed up to ``t_reached`` [s] is in ``result`` (and written to ``output``)."""
+
+    def __init__(self, t_reached: float, result: Result | None, output: str | None) -> None:
+        self.t_reached = t_reached
+        self.result = result
+        self.output = output
+        where = f"; {output} holds 0 … {t_reached:g} s" if output else ""
+        super().__init__(f"simulation interrupted at t = {t_reached:g} s{where}")
+
+
+# A run is integrated in chunks of about this much wall time [s] once it is longer than the
+# first chunk: Ctrl-C acts between chunks, progress is reported after each, and with an
+# output file each chunk is written and dropped (memory does not grow with the duration).
+CHUNK_WALL_TIME = 0.25
+FIRST_CHUNK = 2.0  # [s] simulated
+MAX_CHUNK_SAMPLES = 100_000
+KEEP_STREAMED = 120.0  # [s] of a streamed run kept in memory (its end) for the summary
+
+
 def simulate(system: DriveSystem, profile: Profile, duration: float, *,
-             options: SolverOptions | None = None) -> Result:
+             options: SolverOptions | None = None, output: str | Path | None = None,
+             progress: Callable[[float, float], None] | None = None) -> Result:
     """Simulate ``system`` following ``profile`` for ``duration`` [s] from rest.
 
-    Returns a :class:`Result` (xarray Dataset with named signals and units).  Raises
-    :class:`SimulationError` if the integrator fails (never returns NaN silently).
+    Returns a :class:`Result` (named signals, SI units; the xarray Dataset is built when
+    read).  Raises :class:`SimulationError` if the integrator fails (never returns NaN
+    silently) and :class:`SimulationInterrupted` on Ctrl-C.
+
+    ``output`` (``.parquet`` or ``.csv``): every sample is written to that file as it is
+    computed, in chunks, and the Result keeps only the last :data:`KEEP_STREAMED` seconds, so
+    memory does not grow with the duration (method ``dopri5``).  ``progress(t, t_end)`` is
+    called after each chunk of a long run.
     """
     options = options or SolverOptions()
     if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
@@ -169,16 +234,39 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     t_end = n_break * grid.base
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
                                  options.current_tolerance)
-    adaptive = 1 if options.method == "dopri5" else 0
-    h_init = 1e-6 if adaptive else options.fixed_step
-    h_max = min(options.max_step, grid.base) if adaptive else options.fixed_step
     y0 = system.initial_vector(model)
-    _check_budget(system, profile, model, grid, options, y0, t_end, adaptive, atol,
-                  rel, h_init, h_max)
+    if output is None:  # a streamed run keeps only its last KEEP_STREAMED seconds
+        budget.check_output_memory(t_end, options.output_interval)
     started = _time.perf_counter()
-    t, y, aux, stats, _ = dopri5.integrate(
-        model, y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
-        options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps)
+    if options.method in _DENSE_MODES:
+        if output is not None:
+            raise ParameterError("output", str(output), "streaming a run to a file needs "
+                                 "options.method = dopri5")
+        mode, adaptive = _DENSE_MODES[options.method]
+        h_init = 1e-6 if adaptive else options.fixed_step
+        h_max = (math.inf if options.max_step is None else options.max_step) if adaptive \
+            else options.fixed_step
+        t, y, aux, stats, _ = switching.integrate(
+            model, y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
+            options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps, mode,
+            profile_breakpoints(profile, t_end, grid.base))
+    else:
+        adaptive = 1 if options.method == "dopri5" else 0
+        h_init = 1e-6 if adaptive else options.fixed_step
+        max_step = 1e-3 if options.max_step is None else options.max_step
+        h_max = min(max_step, grid.base) if adaptive else options.fixed_step
+        _check_step_rate(system, profile, model, grid, options, y0, t_end, adaptive, atol,
+                         rel, h_init, h_max)
+        try:
+            t, y, aux, stats = _chunked_dopri5(
+                model, system, profile, y0, n_break, grid, options, atol, rel, h_init,
+                h_max, adaptive, output, progress)
+        except _Stopped as stop:
+            partial = Result.from_run(Run(stop.t, stop.y, stop.aux, model, system, profile,
+                                          {"method": options.method, "interrupted": True,
+                                           "t_reached_s": stop.t_reached}))
+            raise SimulationInterrupted(stop.t_reached, partial,
+                                        None if output is None else str(output)) from None
     wall = _time.perf_counter() - started
     status = int(stats[0])
     if status != dopri5.STATUS_OK:
@@ -194,5 +282,87 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
         "breakpoint_interval_s": grid.base,
     }
-    dataset = build_dataset(t, y, aux, model, system, profile, solver_stats)
-    return Result(dataset)
+    if options.method in _DENSE_MODES:
+        solver_stats.update({
+            "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
+            "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
+    return Result.from_run(Run(t, y, aux, model, system, profile, solver_stats))
+
+
+def _chunked_dopri5(model: Model, system: DriveSystem, profile: Profile, y0: np.ndarray,
+                    n_break: int, grid: Sampling, options: SolverOptions, atol: np.ndarray,
+                    rel: np.ndarray, h_init: float, h_max: float, adaptive: int,
+                    output: str | Path | None,
+                    progress: Callable[[float, float], None] | None,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """DOPRI5 over the breakpoints in chunks (one call when the run fits the first chunk);
+    the result is bit-identical to one call (the integrator's state is carried over)."""
+    from .io import ChunkWriter
+
+    every = grid.out_every
+    first = max(every, int(round(FIRST_CHUNK / grid.base)) // every * every)
+    t_end = n_break * grid.base
+    if n_break <= first and output is None:
+        t, y, aux, stats, _ = dopri5.integrate(
+            model, y0, t_end, every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
+            options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps)
+        return t, y, aux, stats
+    writer = ChunkWriter(output, model, system) if output is not None else None
+    held = np.zeros(model.n_held)
+    memory = np.zeros(2 + len(model.states))
+    memory[:2] = (h_init, 1e-4)
+    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    kept = 0
+    keep = int(KEEP_STREAMED / (every * grid.base)) + 1
+    totals = np.zeros(4)
+    start, size, y = 0, first, y0
+    stats = np.zeros(5)
+    try:
+        while start < n_break:
+            stop = min(n_break, start + size)
+            began = _time.perf_counter()
+            t, yy, aa, stats, _ = dopri5.integrate(
+                model, y, stop * grid.base, every, grid.base, grid.n_pos, grid.n_vel,
+                grid.n_cur, options.rtol, atol, rel, h_init, h_max, adaptive,
+                options.max_steps - int(totals[1]), start=start, held=held, memory=memory)
+            wall = _time.perf_counter() - began
+            totals[1:4] += stats[1:4]
+            if start > 0 and t.size and t[0] <= start * grid.base:
+                t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
+            if int(stats[0]) != dopri5.STATUS_OK:
+                break
+            if writer is not None:
+                writer.write(t, yy, aa)
+            parts.append((t, yy, aa))
+            kept += t.size
+            while writer is not None and len(parts) > 1 and kept - parts[0][0].size >= keep:
+                kept -= parts.pop(0)[0].size
+            y = yy[-1].copy() if yy.shape[0] else y
+            start = stop
+            if progress is not None:
+                progress(start * grid.base, t_end)
+            scale = CHUNK_WALL_TIME / max(wall, 1e-4)
+            size = max(every, min(int(size * min(scale, 4.0)) // every * every,
+                                  MAX_CHUNK_SAMPLES * every))
+    except KeyboardInterrupt:
+        raise _Stopped(start * grid.base, *_concat(parts, model)) from None
+    finally:
+        if writer is not None:
+            writer.close()
+    t, y_all, aux_all = _concat(parts, model)
+    stats = np.array([stats[0], totals[1], totals[2], totals[3], stats[4]])
+    return t, y_all, aux_all, stats
+
+
+class _Stopped(Exception):
+    def __init__(self, t_reached: float, t: np.ndarray, y: np.ndarray, aux: np.ndarray):
+        super().__init__(t_reached)
+        self.t_reached, self.t, self.y, self.aux = t_reached, t, y, aux
+
+
+def _concat(parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+            model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if not parts:
+        return np.zeros(0), np.zeros((0, len(model.states))), np.zeros((0, len(model.aux)))
+    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+            np.concatenate([p[2] for p in parts]))

@@ -240,7 +240,7 @@ def test_loops_and_stability_commands_report_the_creep_mode_and_band() -> None:
     res = runner.invoke(app, ["loops", "--drive", "cdfs", "--json"])
     assert res.exit_code == 0, res.output
     data = json.loads(res.stdout)
-    assert data["least_damped_mode"]["frequency_hz"] == pytest.approx(5.43, abs=0.01)
+    assert data["least_damped_mode"]["frequency_hz"] == pytest.approx(5.47, abs=0.01)
     assert {lp["loop"] for lp in data["loops"]} == {"screw velocity loop", "screw position loop"}
     res = runner.invoke(app, ["stability", "--drive", "cdfs", "--points", "15", "--json"])
     assert res.exit_code == 0, res.output
@@ -252,3 +252,47 @@ def test_loops_and_stability_commands_report_the_creep_mode_and_band() -> None:
     bad = runner.invoke(app, ["loops", "--drive", "cdfs", "--table-speed", "0",
                                "--with-friction"])
     assert bad.exit_code == 2 and "table_speed" in bad.output
+
+
+def test_compensate_command_gives_the_study_table() -> None:
+    """`feeddrive compensate --drive cdfs --json` (issue 14), fast mode without searches."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    res = CliRunner().invoke(app, ["compensate", "--drive", "cdfs", "--no-search", "--json"])
+    assert res.exit_code == 0, res.output
+    rows = json.loads(res.stdout)["rows"]
+    assert [r["compensation"] for r in rows] == ["none"] + ["feedforward"] * 3 + \
+        ["observer"] * 3 + ["none"]
+    assert rows[0]["linear_unstable_bands_mm_s"] and rows[4]["linear_unstable_bands_mm_s"] == []
+    assert rows[-1]["drive"] == "ddfs"
+    bad = CliRunner().invoke(app, ["compensate", "--mismatch", "150"])
+    assert bad.exit_code == 2 and "--mismatch" in bad.output
+def test_creep_json_states_bands_kind_and_rule() -> None:
+    # a narrow range around Wang2021 Fig. 6's pair keeps this fast
+    res = runner.invoke(app, ["creep", "--drive", "cdfs", "--method", "both", "--low", "1.50",
+                              "--high", "1.60", "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["critical_speed_mm_s"] == pytest.approx(1.56)
+    assert out["status"] == "found" and out["kind"] == "oscillation"
+    assert [b["kind"] for b in out["bands"]] == ["oscillation"]
+    assert out["bands"][0]["above_kind"] == "smooth"
+    assert "stick-slip" in out["verdict_rule"]["description"]
+    assert {s["start"] for s in out["searches"]} == {"rest", "running"}
+    for s in out["searches"]:
+        assert {"bands", "kind", "verdict_rule", "status"} <= set(s)
+
+
+def test_creep_text_names_the_bands_and_the_rule() -> None:
+    res = runner.invoke(app, ["creep", "--drive", "cdfs", "--method", "bisect", "--low", "1.50",
+                              "--high", "1.60"])
+    assert res.exit_code == 0, res.output
+    assert "creeping bands" in res.output and "Verdict rule:" in res.output
+
+
+def test_creep_rejects_a_maximum_below_the_first_trial() -> None:
+    res = runner.invoke(app, ["creep", "--max-duration", "5"])
+    assert res.exit_code == 2
+    assert "max_duration" in res.output and len(res.output.strip().splitlines()) == 1

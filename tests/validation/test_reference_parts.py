@@ -332,12 +332,10 @@ def test_share_one_matches_share_zero_on_the_locked_cdfs_from_equal_bristles() -
             assert de[j] == pytest.approx(d1[j], rel=1e-9, abs=1e-9 * max(1.0, abs(d1[j])))
 
 
-@pytest.mark.xfail(strict=True, reason="engine: with the CDFS nut locked the nut's "
-                   "current-loop integral still integrates (rhs not gated on nut.active)")
 def test_locked_nut_freezes_every_nut_state_including_its_current_integral() -> None:
     """ball_screw.py: 'the nut's states are frozen (nut_hold = "locked")'.  A nonzero start
-    state of the held nut (``initial_state``) must stay put; the engine's continuous current
-    loop of the hollow motor is not gated by ``nut.active`` (the sampled one is)."""
+    state of the held nut (``initial_state``) must stay put.  Guards the bug found by this
+    test: the continuous current loop of the held hollow motor kept integrating."""
     params = feeddrive.preset("wang2021")
     engine = DriveSystem(params, "cdfs", TABLE_POSITION).model(CDFS)
     y = np.zeros(len(engine.state_names))

@@ -36,7 +36,7 @@ import feeddrive  # noqa: E402
 from feeddrive.control import ConstantSpeed  # noqa: E402
 from feeddrive.simulate import DriveSystem, SolverOptions, sampling, simulate  # noqa: E402
 
-TOL = 1e-7  # of each trace's largest value; achieved: ~1e-10 (see the report in the PR)
+TOL = 1e-7  # of each trace's largest value; the agreement achieved is ≤ 3e-10
 DURATION = 0.05
 TIGHT = SolverOptions(rtol=1e-10, position_tolerance=1e-15, speed_tolerance=1e-13,
                       current_tolerance=1e-11)
@@ -120,7 +120,9 @@ def test_engine_sampled_loops_follow_the_zero_order_hold_reference(name: str) ->
     worst = _worst(result, model, y, outputs)
     bad = {k: v for k, v in worst.items() if v > TOL}
     assert not bad, bad
-    # the run moves, and sampling (and quantisation) change it by far more than TOL
+    # the run moves, and sampling (and quantisation) change it by far more than TOL (the
+    # continuous and unquantised runs by the engine: the loops' saturation with stick makes a
+    # tight continuous scipy run slow)
     table_speed = y[:, model.state_names.index("table_speed")]
     assert np.max(np.abs(table_speed)) > 1e-4
     continuous = case.parameters(**{"controller.position_period": 0.0,
@@ -132,9 +134,8 @@ def test_engine_sampled_loops_follow_the_zero_order_hold_reference(name: str) ->
                                                  "controller.grating_resolution": 0.0})):
         if other == params:
             continue
-        _, _, y_other, _ = _reference(case, other)
-        j = model.state_names.index("table_speed")
-        assert np.max(np.abs(y_other[:, j] - table_speed)) > 1e3 * TOL * np.max(
+        other_speed = np.asarray(_engine(case, other)["table_speed"])
+        assert np.max(np.abs(other_speed - table_speed)) > 1e3 * TOL * np.max(
             np.abs(table_speed))
 
 

@@ -20,10 +20,10 @@ def test_cdfs_critical_speed_mid_screw_is_the_fitted_value() -> None:
     # wang2021's velocity integral gain is fitted to Wang2021 Sect. 5.2 / Fig. 6: 1.56 mm/s.
     # A regression guard on the calibration (fitted, not predicted).
     res = critical_speed_from_rest(DriveSystem(fd.preset("wang2021"), "cdfs", 0.4),
-                                   speed_range=(1.0e-3, 2.0e-3), coarse_step=0.2e-3,
-                                   duration=12.0)
+                                   speed_range=(1.0e-3, 2.0e-3), coarse_step=0.2e-3)
     assert res.status == "found"
     assert res.critical_speed == pytest.approx(1.56e-3, abs=0.011e-3)
+    assert res.kind == "oscillation"  # the 5.4-Hz loop mode, not stick-slip (issue 15)
 
 
 @pytest.mark.slow
@@ -32,7 +32,7 @@ def test_literal_reading_does_not_creep_at_paper_speed() -> None:
     # 1.5 mm/s once the table mode has some axial damping.
     from feeddrive.analysis.critical import creep_trial
     p = fd.preset("wang2021-literal").replace_path("stiffness.axial_damping", 2500.0)
-    assert not creep_trial(DriveSystem(p, "cdfs", 0.4), 1.5e-3).creeping
+    assert creep_trial(DriveSystem(p, "cdfs", 0.4), 1.5e-3).kind == "smooth"
 
 
 @pytest.mark.slow
@@ -42,6 +42,14 @@ def test_creep_cli_prints_critical_speed() -> None:
     assert res.exit_code == 0, res.output
     out = json.loads(res.output)
     assert out["critical_speed_mm_s"] == pytest.approx(1.56, abs=0.011)
+    # issue 15: the band(s), the kind and the verdict rule are stated
+    assert out["kind"] == "oscillation"
+    top = out["bands"][-1]
+    assert (top["kind"], top["above_mm_s"], top["above_kind"]) == ("oscillation",
+                                                                   pytest.approx(1.56), "smooth")
+    assert top["upper_mm_s"] == pytest.approx(1.55)
+    rule = out["verdict_rule"]
+    assert rule["max_duration"] == 60.0 and "undecided" in rule["description"]
 
 
 @pytest.mark.slow

@@ -3,9 +3,13 @@
 The paper leaves parts of the model unstated (see ``wang2021.ASSUMPTIONS``).  Calibration fits
 only those unknowns, to critical speeds the paper reports, and everything else is then a
 prediction.  One unknown and one target: bisection on a log scale for the parameter value at
-which the creep verdict *at the target speed* switches (the critical speed is assumed to move
-monotonically with the parameter inside the bracket; the bracket ends are checked first), then
-a full critical-speed search at the fitted value reports what was achieved.
+which the creep verdict 0.01 mm/s *below the target speed* switches between creeping
+(stick-slip or oscillation) and not, and another for the switch *at* the target (the critical
+speed is assumed to move monotonically with the parameter inside the bracket; the bracket ends
+are checked first); the fit is the geometric mean of the two, and a full critical-speed search
+at the fitted value reports what was achieved.  Every trial runs until
+decided (:class:`~feeddrive.analysis.metrics.VerdictRule`); an undecided trial stops the fit
+with an error rather than being counted on either side.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from dataclasses import dataclass
 from ..parameters import DriveParameters
 from ..simulate import DriveSystem
 from .critical import CriticalSpeed, creep_trial, critical_speed_from_rest
+from .metrics import VerdictRule
 
 
 @dataclass(frozen=True)
@@ -47,6 +52,7 @@ class Calibration:
     target: Target
     achieved: CriticalSpeed
     evaluations: int
+    interval: tuple[float, float] = (math.nan, math.nan)
 
     @property
     def deviation(self) -> float | None:
@@ -88,45 +94,60 @@ class Calibration:
 
 
 def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
-              relative_tolerance: float = 0.02, duration: float = 12.0,
+              relative_tolerance: float = 0.02, rule: VerdictRule | None = None,
+              speed_range: tuple[float, float] = (0.05e-3, 3.0e-3),
+              resolution: float = 0.01e-3,
               progress: Callable[[str], None] | None = None) -> Calibration:
-    """Fit ``unknown`` so that ``target.drive`` creeps below and not above the target speed."""
+    """Fit ``unknown`` so that ``target.drive`` creeps ``resolution`` below the target speed
+    and not at it.
+
+    Two bisections (to ``relative_tolerance``, on a log scale) find the value s₁ at which the
+    verdict at target − resolution switches and the value s₂ at which the verdict at the
+    target switches; every value between them gives the target critical speed.  The fit is
+    their geometric mean √(s₁s₂): as far as possible from both switches, where a trial can
+    linger for minutes by a limit cycle that has just vanished (so the Fig. 6 verdicts do not
+    hang on the trial length).  ``interval`` holds (s₁, s₂).
+    """
     if not (0 < unknown.low < unknown.high and math.isfinite(unknown.high)):
         raise ValueError(f"unknown {unknown.path}: expected 0 < low < high, got "
                          f"{unknown.low!r}, {unknown.high!r}")
     evaluations = 0
 
-    def creeps_at_target(value: float) -> bool:
+    def creeps_at(value: float, speed: float) -> bool:
         nonlocal evaluations
         evaluations += 1
         p = params.replace_path(unknown.path, float(value))
         system = DriveSystem(p, drive=target.drive, table_position=target.table_position)
-        # just below the target speed the drive must creep
-        trial = creep_trial(system, target.critical_speed - 0.01e-3, nut_speed=target.nut_speed,
-                            duration=duration)
+        trial = creep_trial(system, speed, nut_speed=target.nut_speed, rule=rule)
         if progress:
-            progress(f"{unknown.path} = {value:.6g}: "
-                     f"{'creeps' if trial.creeping else 'smooth'} at target")
+            progress(f"{unknown.path} = {value:.6g}: {trial.kind} at {speed * 1e3:.2f} mm/s")
+        if trial.kind == "undecided":
+            raise ValueError(f"{unknown.path} = {value:.6g}: the trial at {speed * 1e3:.2f} mm/s "
+                             "is undecided; raise the rule's max_duration")
         return trial.creeping
 
-    lo, hi = unknown.low, unknown.high
-    f_lo, f_hi = creeps_at_target(lo), creeps_at_target(hi)
-    if f_lo == f_hi:
-        raise ValueError(
-            f"{unknown.path}: the creep verdict at {target.critical_speed * 1e3:.2f} mm/s is "
-            f"the same ({'creeping' if f_lo else 'smooth'}) at both ends of [{lo:g}, {hi:g}]; "
-            "widen the bracket or choose another unknown")
-    while hi / lo > 1.0 + relative_tolerance:
-        mid = math.sqrt(lo * hi)
-        if creeps_at_target(mid) == f_lo:
-            lo = mid
-        else:
-            hi = mid
-    # the value on the creeping side of the switch reproduces "creeps just below the target"
-    value = lo if f_lo else hi
+    def switch(speed: float) -> float:
+        lo, hi = unknown.low, unknown.high
+        f_lo, f_hi = creeps_at(lo, speed), creeps_at(hi, speed)
+        if f_lo == f_hi:
+            raise ValueError(
+                f"{unknown.path}: the creep verdict at {speed * 1e3:.2f} mm/s is the same "
+                f"({'creeping' if f_lo else 'smooth'}) at both ends of [{lo:g}, {hi:g}]; "
+                "widen the bracket or choose another unknown")
+        while hi / lo > 1.0 + relative_tolerance:
+            mid = math.sqrt(lo * hi)
+            if creeps_at(mid, speed) == f_lo:
+                lo = mid
+            else:
+                hi = mid
+        return math.sqrt(lo * hi)
+
+    s1 = switch(target.critical_speed - resolution)
+    s2 = switch(target.critical_speed)
+    value = math.sqrt(s1 * s2)
     fitted = params.replace_path(unknown.path, float(value))
     achieved = critical_speed_from_rest(
         DriveSystem(fitted, drive=target.drive, table_position=target.table_position),
-        nut_speed=target.nut_speed, duration=duration)
+        nut_speed=target.nut_speed, speed_range=speed_range, resolution=resolution, rule=rule)
     return Calibration(parameters=fitted, unknown=unknown, value=float(value), target=target,
-                       achieved=achieved, evaluations=evaluations)
+                       achieved=achieved, evaluations=evaluations, interval=(s1, s2))

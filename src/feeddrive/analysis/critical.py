@@ -1,25 +1,33 @@
-"""Critical creeping velocity: the lowest table speed without stick-slip.  SI units.
+"""Critical creeping speed and creeping bands.  SI units.
+
+Every trial is judged by :func:`feeddrive.analysis.metrics.trace_verdict` and runs until its
+outcome is decided (:class:`~feeddrive.analysis.metrics.VerdictRule`): the speed settles
+within a band around the command (``smooth``), or the oscillation repeats as a limit cycle
+(``stick-slip`` when the table stops, ``oscillation`` when it never does).  A trial still
+undecided at the rule's maximum duration answers ``undecided``; it is never guessed.
 
 Two protocols, because the answer can depend on how the table got to its speed (a friction
 limit cycle can persist above the speed where steady sliding turns stable):
 
-* **from rest** (``start="rest"``): every trial starts the table from rest with a short ramp;
-  a coarse scan finds the highest creeping speed on a grid, then bisection refines the
-  boundary to ``resolution`` (0.01 mm/s by default).  The scan guards against non-monotone
-  behaviour (a creeping *band*), which plain bisection would miss.
+* **from rest** (``start="rest"``): every trial starts the table from rest with a short ramp.
+  A coarse scan classifies a grid of speeds; wherever neighbouring speeds differ in kind
+  (smooth, stick-slip, oscillation) the boundary is bisected to ``resolution``
+  (0.01 mm/s by default).  Every creeping interval found is reported as a band.
 * **step-down from a running table** (``start="running"``), the paper's experimental protocol
-  (Wang2021 Sect. 6): one continuous run that starts higher and steps the command down by
-  0.01 mm/s, dwelling at each speed, until the table crawls.  A coarse staircase first
-  locates the region, a fine one then walks down 0.01 mm/s at a time.
+  (Wang2021 Sect. 6): one continuous run that starts at the top speed and steps the command
+  down, dwelling at each speed until the step is decided.  A coarse staircase walks the whole
+  range; at each change of kind a fine staircase repeats the same history down to the coarse
+  step above it and then walks down 0.01 mm/s at a time.
 
-The critical speed reported is the lowest tested speed that was smooth with every creeping
-speed below it, i.e. the smooth end of the boundary.
+The critical speed reported is the upper edge of the highest creeping band: the lowest tested
+speed above it, which is smooth (status ``found``).  If a trial above that band is undecided,
+so is the critical speed (status ``undecided``).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -28,26 +36,105 @@ import numpy as np
 from .. import units
 from ..control import ConstantSpeed, SampledSpeed
 from ..simulate import DriveSystem, SolverOptions, simulate
-from .metrics import CreepMetrics, CreepThresholds, creep_metrics
+from .metrics import CREEPING_KINDS, TraceVerdict, VerdictRule, trace_verdict
 
 MM_S = units.MM_PER_S
+
+#: a trace runner for :func:`decide`: duration [s] → (time [s], speed [m/s])
+Runner = Callable[[float], tuple[np.ndarray, np.ndarray]]
 
 
 @dataclass(frozen=True)
 class CreepTrial:
-    """One tested speed [m/s] and what the metrics said."""
+    """One tested speed [m/s] and its verdict (:class:`~.metrics.TraceVerdict`).
+
+    ``duration`` [s]: the simulated length that decided it (the maximum when undecided);
+    ``decided_at`` [s]: when, within it, the outcome was first decided.
+    """
 
     speed: float
-    creeping: bool
+    kind: str
     ripple_ratio: float
     stick_fraction: float
     stick_slip_frequency: float | None
-    decay_ratio: float | None = None  # late/early ripple of a trial from rest (judge_trial)
+    min_ratio: float = math.nan
+    duration: float = 0.0
+    decided_at: float | None = None
+
+    @property
+    def creeping(self) -> bool:
+        return self.kind in CREEPING_KINDS
 
     @classmethod
-    def from_metrics(cls, speed: float, m: CreepMetrics) -> CreepTrial:
-        return cls(speed=speed, creeping=m.creeping, ripple_ratio=m.ripple_ratio,
-                   stick_fraction=m.stick_fraction, stick_slip_frequency=m.stick_slip_frequency)
+    def from_verdict(cls, speed: float, v: TraceVerdict, duration: float) -> CreepTrial:
+        return cls(speed=speed, kind=v.kind, ripple_ratio=v.ripple_ratio,
+                   stick_fraction=v.stick_fraction, stick_slip_frequency=v.frequency,
+                   min_ratio=v.min_ratio, duration=duration, decided_at=v.decided_at)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Speed in mm/s, the rest as stored."""
+        return {**asdict(self), "speed": self.speed / MM_S, "creeping": self.creeping}
+
+
+@dataclass(frozen=True)
+class CreepBand:
+    """A run of tested speeds [m/s] with one kind: ``lower``…``upper`` are its lowest and
+    highest tested speeds; ``below``/``above`` the nearest tested speeds outside it (None at
+    the end of the range) and their kinds."""
+
+    kind: str
+    lower: float
+    upper: float
+    below: float | None
+    below_kind: str | None
+    above: float | None
+    above_kind: str | None
+
+    def to_dict(self) -> dict[str, Any]:
+        def mm(v: float | None) -> float | None:
+            return None if v is None else round(v / MM_S, 6)
+        return {"kind": self.kind, "lower_mm_s": mm(self.lower), "upper_mm_s": mm(self.upper),
+                "below_mm_s": mm(self.below), "below_kind": self.below_kind,
+                "above_mm_s": mm(self.above), "above_kind": self.above_kind}
+
+
+def bands_of(trials: Sequence[CreepTrial], *, smooth_too: bool = False) -> tuple[CreepBand, ...]:
+    """Maximal runs of one kind among ``trials`` sorted by speed (smooth runs only if
+    ``smooth_too``)."""
+    ordered = sorted(trials, key=lambda tr: tr.speed)
+    runs: list[list[CreepTrial]] = []
+    for tr in ordered:
+        if runs and runs[-1][-1].kind == tr.kind:
+            runs[-1].append(tr)
+        else:
+            runs.append([tr])
+    out = []
+    for i, run in enumerate(runs):
+        if run[0].kind == "smooth" and not smooth_too:
+            continue
+        below = runs[i - 1][-1] if i > 0 else None
+        above = runs[i + 1][0] if i + 1 < len(runs) else None
+        out.append(CreepBand(kind=run[0].kind, lower=run[0].speed, upper=run[-1].speed,
+                             below=None if below is None else below.speed,
+                             below_kind=None if below is None else below.kind,
+                             above=None if above is None else above.speed,
+                             above_kind=None if above is None else above.kind))
+    return tuple(out)
+
+
+def critical_of(trials: Sequence[CreepTrial]) -> tuple[str, float | None, str | None]:
+    """(status, critical speed [m/s], kind of the highest creeping band) of a set of trials."""
+    ordered = sorted(trials, key=lambda tr: tr.speed)
+    creeping = [tr for tr in ordered if tr.creeping]
+    top = creeping[-1] if creeping else None
+    above = [tr for tr in ordered if top is None or tr.speed > top.speed]
+    if any(tr.kind == "undecided" for tr in above):
+        return "undecided", None, None if top is None else top.kind
+    if top is None:
+        return "below-range", None, None
+    if not above:
+        return "above-range", None, top.kind
+    return "found", above[0].speed, top.kind
 
 
 @dataclass(frozen=True)
@@ -55,7 +142,10 @@ class CriticalSpeed:
     """Result of a critical-speed search.
 
     ``status``: ``"found"``; ``"below-range"`` (smooth at every tested speed: the critical
-    speed is below ``speed_range[0]``); ``"above-range"`` (creeps at every tested speed).
+    speed is below ``speed_range[0]``); ``"above-range"`` (creeps at the top tested speed);
+    ``"undecided"`` (a trial above the highest creeping band stayed undecided).  ``bands``:
+    every non-smooth run of tested speeds, with its kind; ``kind``: the kind of the highest
+    creeping band.
     """
 
     drive: str
@@ -68,6 +158,9 @@ class CriticalSpeed:
     speed_range: tuple[float, float]
     trials: tuple[CreepTrial, ...] = field(default_factory=tuple)
     simulated_time: float = 0.0
+    kind: str | None = None
+    bands: tuple[CreepBand, ...] = field(default_factory=tuple)
+    rule: VerdictRule = field(default_factory=VerdictRule)
 
     def display(self) -> str:
         """The result in mm/s as a user reads it, with the bound when out of range."""
@@ -76,11 +169,14 @@ class CriticalSpeed:
             else self.critical_speed / MM_S,
             "speed_range_mm_s": [v / MM_S for v in self.speed_range],
             "status": self.status})
+        kind = f", {self.kind} below it" if self.kind else ""
         if self.status == "below-range":
             return f"{text} mm/s (smooth at every tested speed)"
         if self.status == "above-range":
-            return f"{text} mm/s (creeps at every tested speed)"
-        return f"{text} mm/s"
+            return f"{text} mm/s (creeps at every tested speed{kind})"
+        if self.status == "undecided":
+            return f"{text} (a trial above the highest creeping band is undecided)"
+        return f"{text} mm/s{kind}"
 
     def to_dict(self) -> dict[str, Any]:
         """Engineering units (mm, mm/s) for printing and JSON."""
@@ -92,10 +188,13 @@ class CriticalSpeed:
             "critical_speed_mm_s": (None if self.critical_speed is None
                                     else round(self.critical_speed / MM_S, 6)),
             "status": self.status,
+            "kind": self.kind,
             "display": self.display(),
+            "bands": [b.to_dict() for b in self.bands],
             "resolution_mm_s": self.resolution / MM_S,
             "speed_range_mm_s": [s / MM_S for s in self.speed_range],
-            "trials": [{**asdict(t), "speed": t.speed / MM_S} for t in self.trials],
+            "verdict_rule": self.rule.to_dict(),
+            "trials": [t.to_dict() for t in self.trials],
             "simulated_time_s": self.simulated_time,
         }
 
@@ -103,12 +202,22 @@ class CriticalSpeed:
 def format_critical_speed(search: dict[str, Any]) -> str:
     """Critical speed [mm/s] of a search (as :meth:`CriticalSpeed.to_dict` gives it), or the
     bound an out-of-range search gives: "< low" (smooth everywhere), "> high" (creeps
-    everywhere)."""
+    everywhere), "undecided"."""
     value = search["critical_speed_mm_s"]
     low, high = search["speed_range_mm_s"]
     if value is not None:
         return f"{value:.2f}"
+    if search["status"] == "undecided":
+        return "undecided"
     return f"< {low:.2f}" if search["status"] == "below-range" else f"> {high:.2f}"
+
+
+def format_bands(search: dict[str, Any]) -> str:
+    """The creeping bands of a search in mm/s, e.g. "0.25–1.24 stick-slip; 1.25–1.55
+    oscillation" ("none" when there is none)."""
+    parts = [f"{b['lower_mm_s']:.2f}–{b['upper_mm_s']:.2f} {b['kind']}"
+             for b in search.get("bands", [])]
+    return "; ".join(parts) if parts else "none"
 
 
 def _check_speed(name: str, value: float) -> float:
@@ -117,41 +226,43 @@ def _check_speed(name: str, value: float) -> float:
     return float(value)
 
 
-#: an oscillation whose ripple in the last quarter of a trial is below this fraction of the
-#: ripple in the quarter before is a decaying transient, not creep
-PERSISTENCE = 0.8
+def decide(run: Runner, command_speed: float, rule: VerdictRule | None = None,
+           *, start: float | None = None) -> tuple[TraceVerdict, float]:
+    """Run a trial until decided: ``run(duration)`` for each of ``rule.durations()`` in turn,
+    judged by :func:`trace_verdict`.  Returns the verdict and the duration [s] that decided it
+    (the maximum when still undecided)."""
+    rule = rule or VerdictRule()
+    verdict: TraceVerdict | None = None
+    duration = rule.initial_duration
+    for duration in rule.durations():
+        time, speed = run(duration)
+        verdict = trace_verdict(time, speed, command_speed, rule, start=start)
+        if verdict.decided:
+            break
+    assert verdict is not None
+    return verdict, duration
 
 
 def judge_trial(time: np.ndarray, speed: np.ndarray, command_speed: float,
-                thresholds: CreepThresholds | None = None) -> CreepTrial:
-    """Verdict on a trial started from rest, judged on its last quarter.
-
-    Creeping means the metrics say so in the last quarter *and* the ripple there is at least
-    ``PERSISTENCE`` × the ripple of the quarter before: stick-slip is a limit cycle of
-    constant amplitude, while a weakly damped start-up oscillation decays (it may still be
-    large after a few seconds; the paper's Fig. 6b "stabilised after 7 s" is of that kind).
-    """
-    t_end = float(time[-1])
-    late = creep_metrics(time, speed, command_speed, thresholds=thresholds,
-                         window=(0.75 * t_end, t_end))
-    early = creep_metrics(time, speed, command_speed, thresholds=thresholds,
-                          window=(0.5 * t_end, 0.75 * t_end))
-    decay = late.ripple_ratio / early.ripple_ratio if early.ripple_ratio > 0 else 1.0
-    trial = CreepTrial.from_metrics(command_speed, late)
-    creeping = trial.creeping and decay >= PERSISTENCE
-    return CreepTrial(speed=command_speed, creeping=creeping, ripple_ratio=trial.ripple_ratio,
-                      stick_fraction=trial.stick_fraction,
-                      stick_slip_frequency=trial.stick_slip_frequency, decay_ratio=decay)
+                rule: VerdictRule | None = None) -> CreepTrial:
+    """Verdict on a finished trace (no extension: "undecided" if it is too short to tell)."""
+    v = trace_verdict(time, speed, command_speed, rule)
+    return CreepTrial.from_verdict(command_speed, v, float(time[-1] - time[0]))
 
 
 def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
-                duration: float = 12.0, thresholds: CreepThresholds | None = None,
+                rule: VerdictRule | None = None,
                 options: SolverOptions | None = None) -> CreepTrial:
-    """Start the table from rest at ``speed`` [m/s] (nut at ``nut_speed``) and judge creep
-    with :func:`judge_trial`."""
-    result = simulate(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), duration,
-                      options=options)
-    return judge_trial(result.time, result["table_speed"], speed, thresholds)
+    """Start the table from rest at ``speed`` [m/s] (nut at ``nut_speed``) and run until the
+    verdict is decided (:func:`decide`)."""
+    profile = ConstantSpeed(speed, nut_speed, ramp_time=0.1)
+
+    def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
+        result = simulate(system, profile, duration, options=options)
+        return result.time, result["table_speed"]
+
+    verdict, duration = decide(run, speed, rule)
+    return CreepTrial.from_verdict(speed, verdict, duration)
 
 
 def _grid(lo: float, hi: float, step: float) -> np.ndarray:
@@ -162,150 +273,191 @@ def _grid(lo: float, hi: float, step: float) -> np.ndarray:
 def critical_speed_from_rest(
     system: DriveSystem, *, nut_speed: float = 0.0,
     speed_range: tuple[float, float] = (0.05 * MM_S, 3.0 * MM_S),
-    coarse_step: float = 0.1 * MM_S, resolution: float = 0.01 * MM_S, duration: float = 12.0,
-    thresholds: CreepThresholds | None = None, options: SolverOptions | None = None,
+    coarse_step: float = 0.1 * MM_S, resolution: float = 0.01 * MM_S,
+    rule: VerdictRule | None = None, options: SolverOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> CriticalSpeed:
-    """Coarse scan plus bisection, every trial from rest (see module docstring)."""
+    """Coarse scan plus bisection of every change of kind, every trial from rest (see module
+    docstring)."""
     lo, hi = (_check_speed("speed_range[0]", speed_range[0]),
               _check_speed("speed_range[1]", speed_range[1]))
     if hi <= lo:
         raise ValueError(f"speed_range = {speed_range!r}: expected low < high [m/s]")
     _check_speed("resolution", resolution)
     _check_speed("coarse_step", coarse_step)
-    trials: dict[float, CreepTrial] = {}
+    rule = rule or VerdictRule()
+    simulated = 0.0
 
-    def judge(v: float) -> bool:
-        trials[v] = creep_trial(system, v, nut_speed=nut_speed, duration=duration,
-                                thresholds=thresholds, options=options)
+    def judge(v: float) -> str:
+        nonlocal simulated
+        trial = creep_trial(system, v, nut_speed=nut_speed, rule=rule, options=options)
+        simulated += sum(d for d in rule.durations() if d <= trial.duration)
+        trials[v] = trial
         if progress:
             progress(len(trials), 0)
-        return trials[v].creeping
+        return trial.kind
 
-    status, crit = search_boundary(judge, lo, hi, coarse_step, resolution)
+    trials: dict[float, CreepTrial] = {}
+    search_kinds(judge, lo, hi, coarse_step, resolution)
     ordered = tuple(trials[k] for k in sorted(trials))
+    status, crit, kind = critical_of(ordered)
     return CriticalSpeed(drive=system.drive, table_position=system.table_position,
                          nut_speed=nut_speed, start="rest", critical_speed=crit, status=status,
                          resolution=resolution, speed_range=(lo, hi), trials=ordered,
-                         simulated_time=duration * len(trials))
+                         simulated_time=simulated, kind=kind, bands=bands_of(ordered),
+                         rule=rule)
+
+
+def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coarse_step: float,
+                 resolution: float, max_trials: int = 400) -> dict[float, str]:
+    """Kinds at a coarse grid on [low, high] [m/s], every boundary between two decided,
+    different kinds (at least one creeping) bisected to ``resolution``.  Each speed is
+    evaluated at most once; returns {speed: kind}."""
+    kinds: dict[float, str] = {}
+
+    def judge(v: float) -> str:
+        v = round(v, 12)
+        if v not in kinds:
+            kinds[v] = kind_at(v)
+        return kinds[v]
+
+    for v in _grid(low, high, coarse_step):
+        judge(float(v))
+    while len(kinds) < max_trials:
+        speeds = sorted(kinds)
+        todo = None
+        for a, b in zip(speeds[:-1], speeds[1:], strict=True):
+            ka, kb = kinds[a], kinds[b]
+            if ka == kb or "undecided" in (ka, kb) or not ({ka, kb} & set(CREEPING_KINDS)):
+                continue
+            if b - a > resolution * (1 + 1e-9):
+                todo = (a, b)
+                break
+        if todo is None:
+            break
+        a, b = todo
+        mid = round((a + b) / 2.0 / resolution) * resolution
+        if mid <= a + 1e-15 or mid >= b - 1e-15:
+            mid = (a + b) / 2.0
+        judge(mid)
+    return kinds
 
 
 def search_boundary(creeps: Callable[[float], bool], low: float, high: float,
                     coarse_step: float, resolution: float) -> tuple[str, float | None]:
-    """Smooth end of the highest creep boundary in [low, high] [m/s].
-
-    ``creeps(v)`` is evaluated on a coarse grid from ``low`` (so a creeping *band* is not
-    missed), then bisection between the highest creeping grid speed and its smooth neighbour
-    narrows the boundary to ``resolution``.  Each speed is evaluated at most once.
-    Returns (status, critical speed) with status found / below-range / above-range.
-    """
-    cache: dict[float, bool] = {}
-
-    def judge(v: float) -> bool:
-        v = round(v, 12)
-        if v not in cache:
-            cache[v] = creeps(v)
-        return cache[v]
-
-    grid = _grid(low, high, coarse_step)
-    flags = [judge(float(v)) for v in grid]
-    creeping = [float(v) for v, f in zip(grid, flags, strict=True) if f]
-    if not creeping:
-        return "below-range", None
-    if flags[-1]:
-        return "above-range", None
-    a = max(creeping)
-    b = float(grid[int(np.searchsorted(grid, a)) + 1])
-    while b - a > resolution * (1 + 1e-9):
-        mid = round((a + b) / 2.0 / resolution) * resolution
-        if mid <= a or mid >= b:
-            mid = (a + b) / 2.0
-        if judge(mid):
-            a = mid
-        else:
-            b = mid
-    return "found", b
+    """Smooth end of the highest creep boundary in [low, high] [m/s] for a yes/no judge
+    (:func:`search_kinds` with two kinds).  Returns (status, critical speed)."""
+    kinds = search_kinds(lambda v: "stick-slip" if creeps(v) else "smooth", low, high,
+                         coarse_step, resolution)
+    trials = [CreepTrial(speed=v, kind=k, ripple_ratio=0.0, stick_fraction=0.0,
+                         stick_slip_frequency=None) for v, k in kinds.items()]
+    status, crit, _ = critical_of(trials)
+    return status, crit
 
 
-def _staircase(speeds: np.ndarray, dwell: float, lead_in: float, nut_speed: float,
-               interval: float = 1e-3) -> tuple[SampledSpeed, np.ndarray]:
-    """Speed staircase: a ramp to speeds[0] over ``lead_in`` [s] … then ``dwell`` per step."""
-    starts = lead_in + dwell * np.arange(len(speeds))
-    t_end = starts[-1] + dwell
+def _staircase(speeds: np.ndarray, dwell: float | Sequence[float], lead_in: float,
+               nut_speed: float, interval: float = 1e-3) -> tuple[SampledSpeed, np.ndarray]:
+    """Speed staircase: a ramp to speeds[0] held for ``lead_in`` [s], then each speed for its
+    ``dwell`` [s] (one number for all, or one per speed)."""
+    dwells = np.broadcast_to(np.asarray(dwell, dtype=float), (len(speeds),))
+    starts = lead_in + np.concatenate([[0.0], np.cumsum(dwells[:-1])])
+    t_end = starts[-1] + dwells[-1]
     t = np.arange(int(round(t_end / interval)) + 1) * interval
     idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(speeds) - 1)
     vt = speeds[idx].astype(float)
-    ramp = min(0.1, lead_in)
+    ramp = min(0.1, lead_in) if lead_in > 0 else 0.1
     vt = np.where(t < ramp, speeds[0] * t / ramp, vt)
     vn = np.where(t < ramp, nut_speed * t / ramp, nut_speed)
     return SampledSpeed(time=t, table_speed=vt, nut_speed=vn), starts
 
 
-def _run_staircase(system: DriveSystem, speeds: np.ndarray, dwell: float, lead_in: float,
-                   nut_speed: float, thresholds: CreepThresholds | None,
-                   options: SolverOptions | None) -> tuple[list[CreepTrial], float]:
-    profile, starts = _staircase(speeds, dwell, lead_in, nut_speed)
-    duration = float(profile.time[-1])
-    result = simulate(system, profile, duration, options=options)
-    return judge_staircase(result.time, result["table_speed"], speeds, starts, dwell,
-                           thresholds), duration
-
-
 def judge_staircase(time: np.ndarray, speed: np.ndarray, speeds: np.ndarray,
-                    starts: np.ndarray, dwell: float,
-                    thresholds: CreepThresholds | None = None) -> list[CreepTrial]:
-    """Judge each step of a step-down trace on its second half (the step's own transient is
-    over by then), stopping at the first creeping step."""
+                    starts: np.ndarray, dwell: float | Sequence[float],
+                    rule: VerdictRule | None = None) -> list[CreepTrial]:
+    """Judge each step of a step-down trace with :func:`trace_verdict` on the step alone
+    (from its start to just before the next step)."""
+    dwells = np.broadcast_to(np.asarray(dwell, dtype=float), (len(speeds),))
     out = []
-    for v, t0 in zip(speeds, starts, strict=True):
-        # end just before the next step starts (its first sample belongs to the next step)
-        window = (t0 + 0.5 * dwell, t0 + dwell * (1.0 - 1e-6))
-        m = creep_metrics(time, speed, float(v), thresholds=thresholds, window=window)
-        out.append(CreepTrial.from_metrics(float(v), m))
-        if out[-1].creeping:
-            break
+    for v, t0, d in zip(speeds, starts, dwells, strict=True):
+        sel = (time >= t0) & (time < t0 + d * (1.0 - 1e-6))
+        verdict = trace_verdict(time[sel], speed[sel], float(v), rule)
+        out.append(CreepTrial.from_verdict(float(v), verdict, float(d)))
     return out
+
+
+def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_speed: float = 0.0,
+              rule: VerdictRule | None = None, options: SolverOptions | None = None,
+              stop_after: int | None = None) -> tuple[list[CreepTrial], float]:
+    """One continuous run from rest at ``speeds[0]`` stepping down through ``speeds`` [m/s],
+    each step held until decided: its dwell doubles from ``rule.initial_duration`` up to
+    ``rule.max_duration``, and the run is re-simulated from the start with the longer dwell
+    (the history before the step is unchanged).  ``stop_after``: stop at the first step after
+    that index whose kind differs from that step's.  Returns (trials, simulated time [s])."""
+    rule = rule or VerdictRule()
+    levels = rule.durations()
+    sp = np.asarray(speeds, dtype=float)
+    level = [0] * len(sp)
+    trials: list[CreepTrial] = []
+    simulated = 0.0
+
+    def done() -> bool:
+        if len(trials) == len(sp):
+            return True
+        return (stop_after is not None and len(trials) > stop_after + 1
+                and trials[-1].kind != trials[stop_after].kind)
+
+    while not done():
+        dwell = [levels[i] for i in level]
+        profile, starts = _staircase(sp, dwell, 0.0, nut_speed)
+        duration = float(profile.time[-1])
+        result = simulate(system, profile, duration, options=options)
+        simulated += duration
+        steps = judge_staircase(result.time, result["table_speed"], sp, starts, dwell, rule)
+        for k in range(len(trials), len(sp)):
+            if steps[k].kind == "undecided" and level[k] + 1 < len(levels):
+                level[k] += 1
+                break
+            trials.append(steps[k])
+            if done():
+                break
+    return trials, simulated
 
 
 def critical_speed_stepdown(
     system: DriveSystem, *, nut_speed: float = 0.0, start_speed: float = 3.0 * MM_S,
     lowest_speed: float = 0.05 * MM_S, step: float = 0.01 * MM_S,
-    coarse_step: float = 0.1 * MM_S, dwell: float = 4.0, lead_in: float = 6.0,
-    thresholds: CreepThresholds | None = None, options: SolverOptions | None = None,
+    coarse_step: float = 0.1 * MM_S, rule: VerdictRule | None = None,
+    options: SolverOptions | None = None,
 ) -> CriticalSpeed:
-    """The paper's protocol (Sect. 6) on a running table: step the command down until it crawls."""
+    """The paper's protocol (Sect. 6) on a running table: step the command down, each step
+    held until decided; a fine staircase (``step``) at each change of kind."""
     hi = _check_speed("start_speed", start_speed)
     lo = _check_speed("lowest_speed", lowest_speed)
     _check_speed("step", step)
     if hi <= lo:
         raise ValueError(f"start_speed = {hi!r}: expected above lowest_speed = {lo!r} [m/s]")
+    rule = rule or VerdictRule()
     coarse = _grid(lo, hi, coarse_step)[::-1]
-    coarse_trials, t1 = _run_staircase(system, coarse, dwell, lead_in, nut_speed, thresholds,
-                                       options)
-    trials = list(coarse_trials)
-    simulated = t1
-    if not coarse_trials[-1].creeping:
-        status, crit = "below-range", None
-    elif len(coarse_trials) == 1:
-        status, crit = "above-range", None
-    else:
-        last_smooth = coarse_trials[-2].speed
-        fine = np.round(np.arange(last_smooth, coarse_trials[-1].speed - step / 2, -step), 12)
-        approach = np.array([t.speed for t in coarse_trials[:-2]] + list(fine))
-        fine_trials, t2 = _run_staircase(system, approach, dwell, lead_in, nut_speed,
-                                         thresholds, options)
-        simulated += t2
-        trials += fine_trials
-        if not fine_trials[-1].creeping:
-            # the fine staircase stayed smooth down to the coarse creeping speed
-            status, crit = "found", float(fine_trials[-1].speed)
-        elif len(fine_trials) >= 2:
-            status, crit = "found", float(fine_trials[-2].speed)
-        else:
-            status, crit = "above-range", None
-    unique = {round(t.speed, 12): t for t in trials}
-    ordered = tuple(unique[k] for k in sorted(unique))
+    coarse_trials, simulated = walk_down(system, coarse, nut_speed=nut_speed, rule=rule,
+                                         options=options)
+    found: dict[float, CreepTrial] = {round(t.speed, 12): t for t in coarse_trials}
+    for i in range(len(coarse_trials) - 1):
+        upper, lower = coarse_trials[i], coarse_trials[i + 1]
+        if upper.kind == lower.kind or "undecided" in (upper.kind, lower.kind):
+            continue
+        fine = np.round(np.arange(upper.speed - step, lower.speed - step / 2, -step), 12)
+        fine_trials, t_fine = walk_down(system, [*coarse[:i + 1], *fine], nut_speed=nut_speed,
+                                        rule=rule, options=options, stop_after=i)
+        simulated += t_fine
+        # the fine walk's own steps, down to its first change of kind
+        for tr in fine_trials[i + 1:]:
+            found[round(tr.speed, 12)] = tr
+            if tr.kind != upper.kind:
+                break
+    ordered = tuple(found[k] for k in sorted(found))
+    status, crit, kind = critical_of(ordered)
     return CriticalSpeed(drive=system.drive, table_position=system.table_position,
                          nut_speed=nut_speed, start="running", critical_speed=crit,
                          status=status, resolution=step, speed_range=(lo, hi), trials=ordered,
-                         simulated_time=simulated)
+                         simulated_time=simulated, kind=kind, bands=bands_of(ordered),
+                         rule=rule)

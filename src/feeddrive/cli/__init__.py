@@ -12,6 +12,7 @@ from .. import __version__
 from . import (  # noqa: F401,E402  (registers commands)
     analyze_cmd,  # noqa: F401,E402  (registers commands)
     calibrate_cmd,
+    compensate_cmd,
     creep_cmd,
     identify_cmd,  # noqa: F401,E402  (registers commands)
     linear_cmd,

@@ -21,6 +21,10 @@ def calibrate_command(
                               "[SI unit of --unknown]."),
     high: float = typer.Option(20000.0, "--high", help="Upper end of the search bracket "
                                "[SI unit of --unknown]."),
+    tolerance: float = typer.Option(0.02, "--tolerance",
+                                    help="Relative width of the final bracket of the fit."),
+    max_duration: float = typer.Option(60.0, "--max-duration",
+                                       help="Longest creep trial [s] (see `feeddrive creep`)."),
     drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
     target: float = typer.Option(1.56, "--target", help="Target critical speed [mm/s] "
                                  "(default: Wang2021 Sect. 5.2, CDFS simulated)."),
@@ -32,10 +36,15 @@ def calibrate_command(
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
 ) -> None:
-    """Fit one unknown so the drive's critical creeping speed matches a target."""
+    """Fit one unknown so the drive's critical creeping speed matches a target: the drive
+    creeps (stick-slip or sustained oscillation) 0.01 mm/s below the target and not at it.
+    The fit is the geometric mean of the two values where those verdicts switch."""
     from ..analysis.calibrate import Target, Unknown, calibrate
+    from ..analysis.metrics import VerdictRule
     from ..parameters import save
 
+    if not (0 < tolerance < 1):
+        raise ParameterError("--tolerance", tolerance, "expected a fraction in (0, 1)")
     if not (math.isfinite(low) and low > 0):
         raise ParameterError("--low", low, f"expected 0 < --low < --high [SI unit of {unknown}]")
     if not (math.isfinite(high) and high > low):
@@ -44,11 +53,12 @@ def calibrate_command(
     if out:
         check_output_file(out, option="--out", inputs=[params_file], force=force)
     params = resolve_parameters(preset_name, params_file)
+    rule = VerdictRule(max_duration=max_duration)
     result = calibrate(
         params, Target(drive=drive, critical_speed=_units.speed("--target", target, positive=True),
                        table_position=_units.position("--position", position, params),
                        nut_speed=_units.speed("--nut-speed", nut_speed)),
-        Unknown(path=unknown, low=low, high=high),
+        Unknown(path=unknown, low=low, high=high), relative_tolerance=tolerance, rule=rule,
         progress=None if as_json else (lambda msg: console.print(f"  {msg}")))
     written = out if out and result.reached else None
     if written:
@@ -56,8 +66,11 @@ def calibrate_command(
     achieved = result.achieved.to_dict()
     data = {"unknown": unknown, "value": result.value, "target_mm_s": target,
             "achieved_mm_s": achieved["critical_speed_mm_s"], "achieved": achieved["display"],
+            "achieved_kind": achieved["kind"], "bands": achieved["bands"],
+            "tolerance": tolerance, "interval": list(result.interval),
             "reached": result.reached, "reason": result.reason() or None,
-            "evaluations": result.evaluations, "written": written}
+            "evaluations": result.evaluations, "verdict_rule": rule.to_dict(),
+            "written": written}
     if as_json:
         print_json(data)
     else:

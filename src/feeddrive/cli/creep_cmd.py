@@ -1,4 +1,4 @@
-"""`feeddrive creep`: critical creeping speed."""
+"""`feeddrive creep`: critical creeping speed and creeping bands."""
 
 from __future__ import annotations
 
@@ -23,20 +23,33 @@ def creep_command(
                               "`reproduce`)."),
     high: float = typer.Option(_HIGH, "--high", help="Highest speed tested, where the "
                                "step-down starts [mm/s] (as `reproduce`)."),
-    duration: float = typer.Option(protocol.TRIAL_DURATION, "--duration",
-                                   help="Simulated time per trial from rest [s]."),
+    initial_duration: float = typer.Option(protocol.TRIAL_DURATION, "--initial-duration",
+                                           help="First trial length [s]; doubled until the "
+                                           "verdict is decided."),
+    max_duration: float = typer.Option(60.0, "--max-duration",
+                                       help="Longest trial [s]; still undecided then: "
+                                       "'undecided'."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Critical creeping speed [mm/s] (lowest table speed without stick-slip), resolution
-    0.01 mm/s.  With --method both, the answers from rest and from a running table are shown.
-    The protocol (speed grid, steps) is the one `reproduce` uses, so both give one number."""
-    from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
+    """Critical creeping speed [mm/s]: the upper edge of the highest creeping band (the lowest
+    tested speed above every stick-slip or sustained oscillation), resolution 0.01 mm/s, with
+    every creeping band found and its kind.  Each trial runs until decided (smooth, stick-slip,
+    oscillation) or answers 'undecided'.  With --method both, the answers from rest and from a
+    running table are shown.  The protocol (speed grid, steps) is the one `reproduce` uses,
+    so both give one number."""
+    from ..analysis.critical import (
+        critical_speed_from_rest,
+        critical_speed_stepdown,
+        format_bands,
+    )
+    from ..analysis.metrics import VerdictRule
     from ..simulate import DriveSystem
 
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")
+    rule = VerdictRule(initial_duration=initial_duration, max_duration=max_duration)
     params = resolve_parameters(preset_name, params_file)
     system = DriveSystem(params, drive=drive,
                          table_position=_units.position("--position", position, params))
@@ -46,15 +59,18 @@ def creep_command(
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
             system, nut_speed=v_n, speed_range=(lo, hi), coarse_step=protocol.COARSE_STEP,
-            resolution=protocol.RESOLUTION, duration=duration))
+            resolution=protocol.RESOLUTION, rule=rule))
     if method in ("stepdown", "both"):
         results.append(critical_speed_stepdown(
             system, nut_speed=v_n, start_speed=hi, lowest_speed=lo, step=protocol.RESOLUTION,
-            coarse_step=protocol.STAIRCASE_COARSE_STEP))
+            coarse_step=protocol.STAIRCASE_COARSE_STEP, rule=rule))
+    searches = [r.to_dict() for r in results]
     out = {"drive": drive, "table_position_mm": position, "nut_speed_mm_s": nut_speed,
            "parameter_set": params.name,
-           "critical_speed_mm_s": results[0].to_dict()["critical_speed_mm_s"],
-           "searches": [r.to_dict() for r in results]}
+           "critical_speed_mm_s": searches[0]["critical_speed_mm_s"],
+           "status": searches[0]["status"], "kind": searches[0]["kind"],
+           "bands": searches[0]["bands"], "verdict_rule": rule.to_dict(),
+           "searches": searches}
     if len(results) == 2:
         a, b = (r.critical_speed for r in results)
         out["start_condition_matters"] = a != b
@@ -62,10 +78,11 @@ def creep_command(
         print_json(out)
         return
     default_grid = (low, high) == (_LOW, _HIGH)
-    for r in results:
+    for r, d in zip(results, searches, strict=True):
         console.print(f"{drive.upper()} at {position:g} mm, start from {r.start}: critical "
-                      f"creeping speed {r.display()} ({len(r.trials)} trials)",
-                      markup=False, highlight=False)
+                      f"creeping speed {r.display()} ({len(r.trials)} trials); creeping bands "
+                      f"[mm/s]: {format_bands(d)}", markup=False, highlight=False)
         if default_grid:
             console.print(f"  protocol {protocol.describe(r.start)}", markup=False,
                           highlight=False)
+    console.print(f"Verdict rule: {rule.describe()}", markup=False, highlight=False)

@@ -77,7 +77,13 @@ def simulate_command(
     from ..budget import MEMORY_WARNING_BYTES, run_budget
     from ..control import ConstantSpeed, SampledSpeed, SineSpeed
     from ..parameters import ParameterError
-    from ..simulate import DriveSystem, SimulationError, SolverOptions, simulate
+    from ..simulate import (
+        DriveSystem,
+        SimulationError,
+        SimulationInterrupted,
+        SolverOptions,
+        simulate,
+    )
 
     if profile not in PROFILES:
         raise ParameterError("--profile", profile, f"expected one of {', '.join(PROFILES)}")
@@ -120,26 +126,53 @@ def simulate_command(
     if not duration > 0:
         raise ParameterError("--duration", duration, "expected a time > 0 [s]")
     options = SolverOptions(max_steps=max_steps)
-    budget = run_budget(duration, max_step=options.max_step,
+    max_step = 1e-3 if options.max_step is None else options.max_step  # dopri5's default cap
+    budget = run_budget(duration, max_step=max_step,
                         output_interval=options.output_interval, max_steps=max_steps)
     if budget.steps_exceeded:
         raise ParameterError(
             "--duration", duration,
             f"needs at least {budget.min_steps:.3g} solver steps (step ≤ "
-            f"{options.max_step * 1e3:g} ms), more than --max-steps = {max_steps:.3g}; "
+            f"{max_step * 1e3:g} ms), more than --max-steps = {max_steps:.3g}; "
             f"expected ≤ {budget.longest_duration:g} [s], or raise --max-steps")
-    if budget.memory_bytes > MEMORY_WARNING_BYTES:
+    # .parquet/.csv outputs are written while the run goes (memory bounded); .nc/.mat at the end
+    streamed = output is not None and output.lower().endswith((".parquet", ".csv"))
+    if budget.memory_bytes > MEMORY_WARNING_BYTES and not streamed:
         _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
-                    f"{budget.memory_bytes / 1e9:.1f} GB of memory")
+                    f"{budget.memory_bytes / 1e9:.1f} GB of memory (a .parquet or .csv "
+                    "--output is written as the run goes and keeps memory small)")
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    bar = Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.fields[t]}"),
+                   TimeRemainingColumn(), console=err_console, transient=True,
+                   disable=as_json)
+    task = bar.add_task("run", total=duration, t="")
+
+    def advance(t: float, t_end: float) -> None:
+        if not bar.live.is_started:  # only long runs (chunked) report progress
+            bar.start()
+        bar.update(task, completed=t, t=f"{t:.4g} / {t_end:.4g} s")
+
     try:
-        result = simulate(system, prof, duration, options=options)
+        result = simulate(system, prof, duration, options=options,
+                          output=output if streamed else None, progress=advance)
     except SimulationError as err:
         message = str(err).replace("options.max_steps", "--max-steps")
         err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
+    except SimulationInterrupted as stop:
+        bar.stop()
+        err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
+                          soft_wrap=True)
+        raise typer.Exit(code=130) from None
+    finally:
+        bar.stop()
     summary = result.summary()
     summary["profile"] = profile
-    if output:
+    if output and streamed:
+        summary["output"] = output
+        summary["streamed"] = True
+    elif output:
         summary["output"] = str(result.save(output))
     if plot:
         from ..plotting import plot_result

@@ -9,6 +9,8 @@ go into the parameter vector, so one compiled model serves many parameter values
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import inspect
 from dataclasses import dataclass
 from types import ModuleType
@@ -19,6 +21,7 @@ import numpy as np
 from ..control import PROFILE_PARAMS, reference_kernel
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops
+from .compensation import emit_compensation
 from .disturbances import LoadProfile, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
@@ -100,6 +103,21 @@ def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
 def assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
              profile: Profile, load: LoadProfile | None = None) -> Model:
     """Build (or fetch from the cache) the compiled model of one drive and profile."""
+    key = (parameters, drive, table_position, nut_hold, profile, load)
+    try:
+        return _assemble_cached(*key)
+    except TypeError:  # unhashable inputs (array profiles, load records): build anew
+        return _assemble(*key)
+
+
+@functools.lru_cache(maxsize=64)
+def _assemble_cached(parameters: DriveParameters, drive: str, table_position: float,
+                     nut_hold: str, profile: Profile, load: LoadProfile | None) -> Model:
+    return _assemble(parameters, drive, table_position, nut_hold, profile, load)
+
+
+def _assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
+              profile: Profile, load: LoadProfile | None) -> Model:
     b = codegen.Builder()
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
     mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
@@ -161,6 +179,9 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
     b.emit(f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}")
     b.emit(f"{b.a('table_position_reference')} = ref_x")
     b.emit(f"{b.a('table_speed_reference')} = ref_v")
+    comp = emit_compensation(b, parameters, mech)
+    if comp is not None:
+        axes[0] = dataclasses.replace(axes[0], extra_current=comp)
     loops.emit_cascade(b, axes, channels, parameters.controller.mode)
     for ln in ripple_lines:
         b.emit(ln)
@@ -184,9 +205,7 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
     if load_code is not None:
         b.emit(f"{b.a('load_force')} = {load_code}")
 
-    from ..solvers import dopri5
-
-    source = codegen.module_source(b, dopri5.template_sources())
+    source = codegen.module_source(b, solver_sources())
     module = codegen.compile_module(source, b.dynamic_sources)
     return Model(
         state_names=tuple(s.name for s in b.states), states=tuple(b.states), aux=tuple(b.aux),
@@ -195,6 +214,17 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
         tolerance_scales=tuple(b.tol_scale.get(s.name, 1.0) for s in b.states),
         module=module, source=source, drive=drive,
         sites=tuple((site.name, law.name) for site, law, _ in laws))
+
+
+@functools.cache
+def solver_sources() -> list[str]:
+    """The integrator templates placed in every generated module (DOPRI5 as in engine v1, and
+    the dense-output DOPRI5 ⇄ RODAS4 driver).  numba compiles each at its first call, so a
+    model only ever run with one method never compiles the other.  Cached: reading template
+    sources with ``inspect`` costs ~15 ms, more than a short simulation."""
+    from ..solvers import dopri5, switching
+
+    return dopri5.template_sources() + switching.template_sources()
 
 
 def kernel_source(fn: Any) -> str:

@@ -15,6 +15,7 @@ process loads it without compiling, and a change in any part's kernel gives a ne
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import inspect
@@ -148,11 +149,7 @@ class Builder:
         """A kernel found at import time by ``expression`` (e.g. a registered friction law
         defined outside the package); its source enters the module's hash."""
         self.dynamic[alias] = expression
-        py = getattr(kernel, "py_func", kernel)
-        try:
-            self.dynamic_sources.append(inspect.getsource(py))
-        except (OSError, TypeError):
-            self.dynamic_sources.append(repr(py))
+        self.dynamic_sources.append(source_of(getattr(kernel, "py_func", kernel)))
         return alias
 
     def emit(self, line: str, *, sampled: bool = False) -> None:
@@ -166,6 +163,15 @@ class Builder:
         if not self.tables:
             return np.zeros(1)
         return np.concatenate(self.tables)
+
+
+@functools.lru_cache(maxsize=256)
+def source_of(fn: Any) -> str:
+    """Source text of a function (cached: ``inspect.getsource`` re-reads the file)."""
+    try:
+        return inspect.getsource(fn)
+    except (OSError, TypeError):
+        return repr(fn)
 
 
 def _indent(lines: list[str], level: int = 1) -> str:

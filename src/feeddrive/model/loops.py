@@ -133,6 +133,7 @@ class Axis:
     active: str = ""
     speed_unit: str = "rad/s"
     speed_law: str = "position"  # "speed": may run as a speed loop (controller.nut_loop)
+    extra_current: str = ""  # code of a current [A] added to the command (compensation)
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
@@ -207,8 +208,10 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
                    f"{ax.speed}, {P}, {ax.param_offset})")
     for ax, c in zip(axes, ic, strict=True):
         o = ax.param_offset
+        # compensation is continuous-only (refused with sampled loops): right-hand side only
+        extra = f" + {ax.extra_current}" if ax.extra_current and target == "aux" else ""
         out.append(f"    {c} = {sat}({ccmd}(e_{ax.name}, {b.y(ax.name + '_velocity_integral')}, "
-                   f"{P}, {o}) + {P}[{o + INJ_CURRENT}], {P}[{o + I_MAX}])")
+                   f"{P}, {o}) + {P}[{o + INJ_CURRENT}]{extra}, {P}[{o + I_MAX}])")
 
 
 def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: str) -> None:
@@ -254,6 +257,8 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: st
             f"    {b.dy(ic)} = {rate}(e, raw, P[{o + U_MAX}]) if P[{o + KII}] != 0.0 else 0.0",
             f"{b.a(ax.name + '_voltage')} = u",
         ]
+        if ax.active:  # a held axis (the CDFS nut) freezes its current integral too
+            lines += [f"if not ({ax.active}):", f"    {b.dy(ic)} = 0.0"]
     if mode == "torque_off":
         lines.append("# controller.mode = torque_off: the motors are disconnected (no current)")
     for ln in lines:

@@ -6,6 +6,7 @@ from collections.abc import Callable, Mapping
 
 from .components import (
     BallScrew,
+    Compensation,
     Controller,
     Coupling,
     Disturbances,
@@ -55,7 +56,8 @@ def preset(name: str) -> DriveParameters:
 
 
 __all__ = [
-    "BallScrew", "Controller", "Coupling", "Disturbances", "DriveParameters", "FrictionBranch",
+    "BallScrew", "Compensation", "Controller", "Coupling", "Disturbances", "DriveParameters",
+    "FrictionBranch",
     "FrictionSites", "LeadError", "LinearMotor", "LuGreParameters", "Motor", "ParameterError",
     "PRESETS", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict", "load", "loads",
     "preset", "save", "to_dict",

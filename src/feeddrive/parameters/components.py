@@ -91,6 +91,17 @@ class LuGreParameters(_Component):
             raise ParameterError(f"{self._label}.law", self.law,
                                  f"unknown friction law; expected one of {', '.join(law_names())}")
 
+    def mismatched(self, coulomb: float, static: float, stribeck_velocity: float,
+                   viscous: float) -> LuGreParameters:
+        """The site as a compensator with model errors sees it: F_c, F_s, v_s and σ2 of both
+        branches times the given factors (σ0, σ1 unchanged)."""
+        def br(b: FrictionBranch) -> FrictionBranch:
+            return replace(b, coulomb_force=b.coulomb_force * coulomb,
+                           static_force=b.static_force * static,
+                           stribeck_velocity=b.stribeck_velocity * stribeck_velocity,
+                           viscous_coefficient=b.viscous_coefficient * viscous)
+        return replace(self, positive=br(self.positive), negative=br(self.negative))
+
     def scaled(self, factor: float) -> LuGreParameters:
         """This site with every force and coefficient times ``factor`` (0 < factor ≤ 1); the
         Stribeck velocities and the bristle dynamics (z, ż) are unchanged, the force scales."""
@@ -219,6 +230,30 @@ class StiffnessModel(_Component):
 
 
 @dataclass(frozen=True)
+class Compensation(_Component):
+    """Friction compensation on the table-driving motor (screw motor or linear motor).
+
+    ``mode``: ``none``; ``feedforward`` — the static Stribeck + Coulomb + viscous curve of the
+    compensated sites at the *commanded* speed, added as current (model-based feed-forward,
+    Armstrong-Hélouvry et al., Automatica 30 (1994) 1083–1138); ``observer`` — a LuGre
+    observer at the *measured* speeds, ẑ' = v − σ0|v|ẑ/g(v) − k·e with e the table position
+    error, F̂ = σ0ẑ + σ1ẑ' + σ2v (Canudas de Wit, Olsson, Åström, Lischinsky, IEEE TAC 40
+    (1995) 419–425, Sect. V), added as current.  Compensated sites: the screw shaft and the
+    guide (the guide only, for a linear motor).  The ``*_scale`` factors give the model
+    mismatch the compensator works with (1 = exact; 1.2 = its value is 20 % high).
+    """
+
+    mode: str = choice(("none", "feedforward", "observer"), default="none")
+    coulomb_scale: float = quantity("-", low=0, high=10, default=1.0)
+    static_scale: float = quantity("-", low=0, high=10, default=1.0)
+    stribeck_velocity_scale: float = quantity("-", low=0, high=10, default=1.0)
+    viscous_scale: float = quantity("-", low=0, high=10, low_inclusive=True, default=1.0)
+    observer_gain: float = quantity("1/s", low=0, high=1e6, low_inclusive=True, default=0.0,
+                                    hint="k of the observer's correction −k·e [1/s]")
+    _label = "compensation"
+
+
+@dataclass(frozen=True)
 class Controller(_Component):
     """Cascade servo (position → velocity → current) shared by both motors.  Wang2021 Sect. 2.1.
 
@@ -242,6 +277,7 @@ class Controller(_Component):
     velocity_feedforward: bool = flag(default=True)
     nut_loop: str = choice(("position", "speed"), default="position")
     mode: str = choice(("cascade", "torque_off"), default="cascade")
+    compensation: Compensation = field(default_factory=lambda: Compensation())
     current_limit: float = quantity("A", low=0, high=1e4, default=1e4)
     voltage_limit: float = quantity("V", low=0, high=1e5, default=1e5)
     position_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__, protocol
-from ..analysis.critical import format_critical_speed
+from ..analysis.critical import format_bands, format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..parameters import DriveParameters
 from ..presets import wang2021
@@ -59,7 +59,10 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
                      "unit": unit, "deviation": _dev(ours, paper), "fitted_or_predicted": kind})
 
     def add_critical(item: str, source: str, paper: float, key: str, kind: str) -> None:
-        add(item, source, paper, c(key), "mm/s", kind, shown=format_critical_speed(crit[key]))
+        shown = format_critical_speed(crit[key])
+        if crit[key].get("kind"):
+            shown += f" ({crit[key]['kind']} below; creeping bands {format_bands(crit[key])})"
+        add(item, source, paper, c(key), "mm/s", kind, shown=shown)
 
     add_critical("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56,
                  f"crit-cdfs-{MID}", fitted_note)
@@ -221,7 +224,8 @@ def study_rows(rows: list[dict[str, Any]]) -> list[dict[str, str]]:
     return [{"variant": str(r["variant"]), "drive": str(r["drive"]).upper(),
              "v_n [mm/s]": f"{r['nut_speed_mm_s']:g}",
              "critical speed [mm/s]": _fmt(r["critical_speed_mm_s"]),
-             "status": str(r["status"])[:80]} for r in rows]
+             "status": str(r["status"])[:80], "kind": str(r.get("kind") or "—"),
+             "creeping bands [mm/s]": format_bands(r)} for r in rows]
 
 
 def target_rows(results: dict[str, Any]) -> list[dict[str, str]]:
@@ -331,8 +335,10 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         ("comparison", "Paper numbers beside ours", "Every number of Wang2021 the study "
          "touches. 'fitted' means the number was used to fit an unknown; everything else is "
          f"predicted. Critical speeds are {protocol.describe('rest')}, unless the row says "
-         f"step-down: {protocol.describe('running')}.  `feeddrive creep` runs the same "
-         "protocol by default and gives the same numbers.", comparison),
+         f"step-down: {protocol.describe('running')}; the critical speed is the upper edge "
+         "of the highest creeping band.  `feeddrive creep` runs the same protocol by default "
+         "and gives the same numbers.  Verdict rule: " + settings.rule().describe(),
+         comparison),
         ("fig6", "Fig. 6: CDFS at 1.55 and 1.56 mm/s", "Settling: the time after which the "
          "table speed stays within ±5 % of the command.", fig6),
         ("fig7", "Fig. 7: DDFS at 1.55 mm/s against hollow-motor speed", "", fig7),

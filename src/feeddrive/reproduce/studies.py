@@ -14,14 +14,16 @@ import numpy as np
 
 from .. import protocol
 from ..analysis.critical import (
+    CreepTrial,
     critical_speed_from_rest,
     critical_speed_stepdown,
-    judge_trial,
+    decide,
 )
-from ..analysis.metrics import reversal_overshoot
+from ..analysis.metrics import VerdictRule, reversal_overshoot
 from ..control import ConstantSpeed, SineSpeed
 from ..paper import PAPER
 from ..parameters import DriveParameters
+from ..result import Result
 from ..simulate import DriveSystem, simulate
 from ..stiffness import stiffness_chain
 from ..units import MM_PER_S
@@ -45,17 +47,25 @@ def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
 
 @dataclass(frozen=True)
 class StudySettings:
-    """Search settings shared by the studies (speeds in m/s, times in s)."""
+    """Search settings shared by the studies (speeds in m/s, times in s).
 
-    trial_duration: float = protocol.TRIAL_DURATION
+    Every creep trial runs ``trial_initial_duration``, doubling up to ``trial_max_duration``
+    until its verdict is decided (:class:`~feeddrive.analysis.metrics.VerdictRule`).
+    """
+
+    trial_initial_duration: float = protocol.TRIAL_DURATION
+    trial_max_duration: float = 240.0
     speed_range: tuple[float, float] = protocol.SPEED_RANGE
     coarse_step: float = protocol.COARSE_STEP
     resolution: float = protocol.RESOLUTION
     fig7_multiples: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 15.0, 20.0)
-    fig7_duration: float = 12.0
     sine_frequency: float = 0.2
     sine_periods: float = 2.0
     sine_nut_amplitudes: tuple[float, ...] = (0.0, 2e-3, 10e-3, 16e-3)
+
+    def rule(self) -> VerdictRule:
+        return VerdictRule(initial_duration=self.trial_initial_duration,
+                           max_duration=self.trial_max_duration)
 
 
 def critical_speed(params: DriveParameters, drive: str, position: float, nut_speed: float,
@@ -64,7 +74,7 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
     res = critical_speed_from_rest(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
         speed_range=settings.speed_range, coarse_step=settings.coarse_step,
-        resolution=settings.resolution, duration=settings.trial_duration)
+        resolution=settings.resolution, rule=settings.rule())
     return res.to_dict()
 
 
@@ -74,7 +84,8 @@ def critical_speed_running(params: DriveParameters, drive: str, position: float,
     res = critical_speed_stepdown(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
         start_speed=settings.speed_range[1], lowest_speed=settings.speed_range[0],
-        step=settings.resolution, coarse_step=protocol.STAIRCASE_COARSE_STEP)
+        step=settings.resolution, coarse_step=protocol.STAIRCASE_COARSE_STEP,
+        rule=settings.rule())
     return res.to_dict()
 
 
@@ -84,16 +95,35 @@ def speed_trace(result: Any, stride: int = 5) -> dict[str, list[float]]:
             "table_speed_reference": result["table_speed_reference"][::stride].tolist()}
 
 
+def decided_run(system: DriveSystem, profile: ConstantSpeed, rule: VerdictRule
+                ) -> tuple[Result, CreepTrial]:
+    """Simulate ``profile`` from rest until the creep verdict is decided; the last (deciding)
+    run and its verdict."""
+    runs: list[Result] = []
+
+    def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
+        runs.append(simulate(system, profile, duration))
+        return runs[-1].time, runs[-1]["table_speed"]
+
+    verdict, duration = decide(run, profile.table_speed, rule)
+    return runs[-1], CreepTrial.from_verdict(profile.table_speed, verdict, duration)
+
+
+def verdict_word(trial: CreepTrial) -> str:
+    """"creeping" (stick-slip or sustained oscillation), "smooth" or "undecided"."""
+    return "creeping" if trial.creeping else trial.kind
+
+
 def fig6(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
-    """CDFS at 1.55 and 1.56 mm/s, mid-screw (Wang2021 Fig. 6)."""
+    """CDFS at 1.55 and 1.56 mm/s, mid-screw (Wang2021 Fig. 6), each run until decided."""
     out: dict[str, Any] = {}
     for v in (1.55e-3, 1.56e-3):
-        r = simulate(DriveSystem(params, "cdfs", MID), ConstantSpeed(v),
-                     settings.trial_duration)
-        m = judge_trial(r.time, r["table_speed"], v)
-        out[f"{v / MM_S:.2f}"] = {"verdict": "creeping" if m.creeping else "smooth",
+        r, m = decided_run(DriveSystem(params, "cdfs", MID), ConstantSpeed(v), settings.rule())
+        out[f"{v / MM_S:.2f}"] = {"verdict": verdict_word(m), "kind": m.kind,
                                   "ripple_ratio": m.ripple_ratio,
                                   "stick_fraction": m.stick_fraction,
+                                  "frequency": m.stick_slip_frequency,
+                                  "duration": m.duration,
                                   "settling_time": settling_time(r.time, r["table_speed"], v),
                                   "trace": speed_trace(r)}
     return out
@@ -125,12 +155,12 @@ def fig7(params: DriveParameters, cdfs_critical: float, settings: StudySettings
     for k in (0.0, *settings.fig7_multiples):
         vn = k * cdfs_critical
         drive = "ddfs" if vn > 0 else "cdfs"
-        r = simulate(DriveSystem(params, drive, MID), ConstantSpeed(v, vn), settings.fig7_duration)
+        r, m = decided_run(DriveSystem(params, drive, MID), ConstantSpeed(v, vn),
+                           settings.rule())
         s = r["table_speed"]
-        m = judge_trial(r.time, s, v)
         rows.append({"multiple": k, "nut_speed": vn, "overshoot": overshoot(s, v),
                      "settling_time": settling_time(r.time, s, v),
-                     "verdict": "creeping" if m.creeping else "smooth",
+                     "verdict": verdict_word(m), "kind": m.kind,
                      "ripple_ratio": m.ripple_ratio})
         traces[f"{k:g}"] = speed_trace(r)
     return {"rows": rows, "traces": traces, "table_speed": v}

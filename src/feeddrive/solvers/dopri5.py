@@ -13,6 +13,7 @@ same tableau runs at a fixed step (used to verify the order).
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 from typing import TYPE_CHECKING, Any
@@ -67,6 +68,7 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
     raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
 
 
+@functools.lru_cache(maxsize=1)
 def template_sources() -> list[str]:
     """Text placed in each generated model module: tableau import and the integrator."""
     names = ", ".join(TABLEAU)
@@ -78,13 +80,21 @@ def template_sources() -> list[str]:
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
               n_pos: int, n_vel: int, n_cur: int, rtol: float, atol: np.ndarray,
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
-              max_steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                                       np.ndarray]:
-    """Integrate ``model`` from t = 0 to ``t_end`` (see :func:`integrate_template`)."""
+              max_steps: int, *, start: int = 0, held: np.ndarray | None = None,
+              memory: np.ndarray | None = None,
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``) to
+    ``t_end`` (see :func:`integrate_template`).  ``held`` (the sampled controller's values)
+    and ``memory`` (step size, last error) are updated in place, so that a run continued
+    from where a previous call stopped is bit-identical to one call over the whole span."""
+    held = np.zeros(model.n_held) if held is None else held
+    if memory is None:
+        memory = np.zeros(2 + len(model.states))
+        memory[:2] = (h_init, 1e-4)
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate(y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P,
-                               model.T, rtol, atol, rel_mask, h_init, h_max, adaptive,
-                               max_steps))
+                               model.T, rtol, atol, rel_mask, h_max, adaptive,
+                               max_steps, start, held, memory))
     return result
 
 
@@ -93,21 +103,26 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
 # division of the inlined right-hand side; bit-identical results, about 25 % less time.
 def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: int,
                        n_vel: int, n_cur: int, P: np.ndarray, T: np.ndarray, rtol: float,
-                       atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
-                       adaptive: int, max_steps: int,
+                       atol: np.ndarray, rel_mask: np.ndarray, h_max: float, adaptive: int,
+                       max_steps: int, start: int, held: np.ndarray, memory: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Integrate from t = 0 to ``t_end`` over a grid of breakpoints spaced ``base`` [s].
+    """Integrate from breakpoint ``start`` to ``t_end`` over a grid of breakpoints spaced
+    ``base`` [s], from the state ``y0`` at t = start·base.
 
-    Output is recorded every ``out_every`` breakpoints.  Returns (t_out, y_out, aux_out,
-    stats, held) with stats = [status, steps, rejected, rhs_evaluations, t_reached].
+    Output is recorded every ``out_every`` breakpoints (counted from 0).  ``held`` (sampled
+    controller) and ``memory`` = [step size, last error, last stage k7 …] are read and left
+    updated, so that consecutive calls continue one integration bit for bit (with continuous
+    control the first stage of a step is the previous step's last one, evaluated where that
+    step ended — a hair off the breakpoint when the step was not cut to it).  Returns
+    (t_out, y_out, aux_out, stats, held) with stats = [status, steps, rejected,
+    rhs_evaluations, t_reached].
     """
     n = y0.size
     n_break = int(round(t_end / base))
-    n_out = n_break // out_every + 1
+    n_out = n_break // out_every - (start + out_every - 1) // out_every + 1
     t_out = np.empty(n_out)
     y_out = np.empty((n_out, n))
     aux_out = np.empty((n_out, N_AUX))
-    held = np.zeros(N_HELD)
     y = y0.copy()
     k1 = np.empty(n)
     k2 = np.empty(n)
@@ -123,8 +138,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     rejected = 0
     n_rhs = 0
     status = STATUS_OK
-    h = h_init
-    err_old = 1e-4
+    h = memory[0]
+    err_old = memory[1]
     beta = 0.04
     alpha = 0.2 - 0.75 * beta
     t = 0.0
@@ -133,11 +148,18 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     # With every loop continuous nothing jumps at a breakpoint: the last stage of the step that
     # ended there, evaluated at exactly t_break, is the derivative there (first same as last).
     continuous = n_pos == 0 and n_vel == 0 and n_cur == 0
-    for kb in range(n_break + 1):
+    for kb in range(start, n_break + 1):
         t_break = kb * base
-        # discrete controller update and output at this breakpoint
-        sample_update(kb, t_break, y, held, P, T, n_pos, n_vel, n_cur, base)
-        if kb == 0 or not continuous:
+        # discrete controller update and output at this breakpoint (a continued run applied
+        # the update at its first breakpoint in the previous call already)
+        if kb > start or start == 0:
+            sample_update(kb, t_break, y, held, P, T, n_pos, n_vel, n_cur, base)
+        if kb == start and start > 0 and continuous:
+            rhs(t_break, y, held, P, T, n_pos, n_vel, n_cur, k1, aux)
+            n_rhs += 1
+            for i in range(n):
+                k1[i] = memory[2 + i]
+        elif kb == start or not continuous:
             rhs(t_break, y, held, P, T, n_pos, n_vel, n_cur, k1, aux)
             n_rhs += 1
         if kb % out_every == 0 and i_out < n_out:
@@ -240,5 +262,9 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 break
         if status != STATUS_OK:
             break
+    memory[0] = h
+    memory[1] = err_old
+    for i in range(n):
+        memory[2 + i] = k1[i]
     stats = np.array([float(status), float(steps), float(rejected), float(n_rhs), t])
     return t_out[:i_out], y_out[:i_out], aux_out[:i_out], stats, held

@@ -161,6 +161,12 @@ class BallScrewDrive(Mechanism):
             active=f"{b.p('nut.active')} > 0.5", speed_law="speed")
         return [screw, nut], channels
 
+    def compensation(self, b: Builder) -> tuple[list[tuple[str, str, str]], str]:
+        H = b.p("screw.H")
+        return ([("screw", "(ref_v + ref_vn)", f"{H} * {b.y('screw_speed')}"),
+                 ("guide", "ref_v", b.y("table_speed"))],
+                f"{H} / {b.p('screw_motor.torque_constant')}")
+
     def signals(self, b: Builder) -> None:
         b.add_aux("equivalent_stiffness", "N/m", "K_eq at the table position")
         b.add_aux("nut_position_reference", "m", "commanded nut position (linear)")

@@ -103,6 +103,15 @@ class Mechanism:
     def check_profile(self, nut_speed: float, nut_table: Any) -> None:
         """Refuse a reference this topology cannot follow."""
 
+    def compensation(self, b: Builder) -> tuple[list[tuple[str, str, str]], str]:
+        """Friction sites a compensator on the table-driving motor models, as (parameter key,
+        commanded speed code, measured speed code), and the code of the factor from force [N]
+        to that motor's current [A]."""
+        from ...parameters import ParameterError
+
+        raise ParameterError("controller.compensation.mode", "—",
+                             f"no friction compensation for the {self.drive} drive")
+
     def emit(self, b: Builder, m: Mechanics) -> None:
         raise NotImplementedError
 

@@ -63,6 +63,10 @@ class LinearMotorDrive(Mechanism):
                      current_state=b.y("motor_current"), speed_unit="m/s")
         return [motor], channels
 
+    def compensation(self, b: Builder) -> tuple[list[tuple[str, str, str]], str]:
+        return ([("guide", "ref_v", b.y("table_speed"))],
+                f"1.0 / {b.p('motor.force_constant')}")
+
     def emit(self, b: Builder, m: Mechanics) -> None:
         b.emit(f"v_t = {b.y('table_speed')}")
         for ln in m.always:

@@ -1,0 +1,93 @@
+"""Is the second motor worth it?  CDFS, CDFS + friction compensation (exact and mismatched),
+and the DDFS, side by side (issue 14): critical speed from rest, the linear creep band, and
+tracking at a constant speed inside the CDFS's creep range.
+
+Compensation laws: :class:`feeddrive.parameters.Compensation` (static feed-forward,
+Armstrong-Hélouvry et al. 1994; LuGre observer, Canudas de Wit et al. 1995).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..control import ConstantSpeed
+from ..linear import stability_band
+from ..parameters import Compensation, DriveParameters
+from ..simulate import DriveSystem, simulate
+from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
+from .metrics import VerdictRule
+
+
+@dataclass(frozen=True)
+class Case:
+    label: str
+    drive: str
+    compensation: Compensation
+    nut_speed: float = 0.0  # [m/s]
+
+
+def default_cases(mismatch: float = 0.2, nut_speed: float = 16e-3) -> list[Case]:
+    """None, exact, ±``mismatch`` on F_c, F_s and v_s, for both compensators; and the DDFS."""
+    up, down = 1.0 + mismatch, 1.0 - mismatch
+    pct = f"{100 * mismatch:g} %"
+    cases = [Case("CDFS, no compensation", "cdfs", Compensation())]
+    for mode in ("feedforward", "observer"):
+        cases.append(Case(f"CDFS + {mode}, exact model", "cdfs", Compensation(mode=mode)))
+        cases.append(Case(f"CDFS + {mode}, model +{pct}", "cdfs", Compensation(
+            mode=mode, coulomb_scale=up, static_scale=up, stribeck_velocity_scale=up)))
+        cases.append(Case(f"CDFS + {mode}, model −{pct}", "cdfs", Compensation(
+            mode=mode, coulomb_scale=down, static_scale=down, stribeck_velocity_scale=down)))
+    cases.append(Case(f"DDFS, v_n = {1e3 * nut_speed:g} mm/s", "ddfs", Compensation(),
+                      nut_speed))
+    return cases
+
+
+def _with(params: DriveParameters, case: Case) -> DriveParameters:
+    return params.replace_path("controller.compensation", case.compensation)
+
+
+def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4,
+             tracking_speed: float = 1.0e-3, duration: float = 12.0,
+             search: bool = True, rule: VerdictRule | None = None) -> dict[str, Any]:
+    """One row of the study (SI inside, mm and µm in the keys' units).  The tracking run
+    lasts ``duration`` [s]; its verdict and every critical-speed trial follow ``rule``."""
+    system = DriveSystem(_with(params, case), case.drive, table_position)
+    band = stability_band(system, case.nut_speed, points=25)
+    trial = creep_trial(system, tracking_speed, nut_speed=case.nut_speed, rule=rule)
+    run = simulate(system, ConstantSpeed(tracking_speed, case.nut_speed), duration)
+    m = run.creep_metrics()
+    sel = (run.time >= m.window_start) & (run.time <= m.window_end)
+    err = run["following_error"][sel]
+    row: dict[str, Any] = {
+        "case": case.label, "drive": case.drive, "compensation": case.compensation.mode,
+        "linear_unstable_bands_mm_s": [[1e3 * lo, 1e3 * hi] for lo, hi in band.intervals],
+        "tracking_speed_mm_s": 1e3 * tracking_speed,
+        "verdict_at_tracking_speed": trial.kind,
+        "speed_ripple_ratio": m.ripple_ratio,
+        "following_error_rms_um": 1e6 * float(np.sqrt(np.mean(err**2))),
+        "following_error_peak_um": 1e6 * float(np.max(np.abs(err))),
+    }
+    if search:
+        crit = critical_speed_from_rest(system, nut_speed=case.nut_speed, rule=rule)
+        row["critical_speed_mm_s"] = format_critical_speed(crit.to_dict())
+    return row
+
+
+def compensation_study(params: DriveParameters, cases: list[Case] | None = None, *,
+                       search: bool = True,
+                       progress: Callable[[int, int], None] | None = None,
+                       **kwargs: Any) -> list[dict[str, Any]]:
+    cases = cases if cases is not None else default_cases()
+    rows = []
+    for k, case in enumerate(cases):
+        rows.append(evaluate(params, case, search=search, **kwargs))
+        if progress:
+            progress(k + 1, len(cases))
+    return rows
+
+
+__all__ = ["Case", "compensation_study", "default_cases", "evaluate"]

@@ -1,0 +1,76 @@
+"""Friction compensation as a controller part: static feed-forward or a LuGre observer.
+
+See :class:`feeddrive.parameters.Compensation` for the laws and their sources.  The
+compensating force F̂ [N] of every compensated site is converted to current by the
+mechanism's factor (H/K_t for the screw motor, 1/K_f for a linear motor) and added to the
+compensated axis' current command.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .._jit import kernel
+from ..parameters import ParameterError
+from .codegen import Builder
+from .friction.lugre import branch, bristle_rate, stribeck_magnitude
+
+if TYPE_CHECKING:
+    from ..parameters import DriveParameters
+    from .mechanisms.base import Mechanism
+
+
+@kernel
+def feedforward_force(v: float, P: np.ndarray, o: int) -> float:
+    """Static Stribeck + Coulomb + viscous force [N] at speed v [m/s] (0 at v = 0)."""
+    if v == 0.0:
+        return 0.0
+    s = 1.0 if v > 0.0 else -1.0
+    return s * stribeck_magnitude(v, P, o) + P[branch(v, o) + 3] * v
+
+
+@kernel
+def observer_force(v: float, e: float, gain: float, y: np.ndarray, k: int, P: np.ndarray,
+                   o: int, dy: np.ndarray) -> float:
+    """LuGre observer (Canudas de Wit et al. 1995, Sect. V): ẑ' = v − σ0|v|ẑ/g(v) − k·e,
+    F̂ = σ0ẑ + σ1ẑ' + σ2v [N]."""
+    z = y[k]
+    dz = bristle_rate(v, z, P, o) - gain * e
+    dy[k] = dz
+    return P[o + 8] * z + P[o + 9] * dz + P[branch(v, o) + 3] * v
+
+
+def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism) -> str | None:
+    """Declare the compensator's states and parameters; emit its force lines; return the code
+    of the compensating current [A], or None without compensation."""
+    c = params.controller.compensation
+    if c.mode == "none":
+        return None
+    if params.controller.velocity_period > 0 or params.controller.current_period > 0:
+        raise ParameterError("controller.compensation.mode", c.mode,
+                             "compensation is modelled with continuous velocity and current "
+                             "loops only (set their periods to 0 [s])")
+    sites, factor = mech.compensation(b)
+    terms = []
+    gain = b.param("compensation.observer_gain", c.observer_gain)
+    for key, ref_speed, meas_speed in sites:
+        site = getattr(params.friction, key).mismatched(
+            c.coulomb_scale, c.static_scale, c.stribeck_velocity_scale, c.viscous_scale)
+        o = b.params(f"compensation.{key}", site.as_array())
+        if c.mode == "feedforward":
+            b.emit(f"comp_{key} = {b.use(feedforward_force)}({ref_speed}, P, {o})")
+        else:
+            k = b.state(f"{key}_friction_observer", "m",
+                        f"LuGre observer state of the {key} friction (compensation)",
+                        "position")
+            err = f"({b.y('table_position')} - ref_x)"
+            b.emit(f"comp_{key} = {b.use(observer_force)}({meas_speed}, {err}, P[{gain}], y, "
+                   f"{k}, P, {o}, dy)")
+        terms.append(f"comp_{key}")
+    b.add_aux("compensation_force", "N", f"friction compensation force ({c.mode})")
+    b.emit(f"{b.a('compensation_force')} = {' + '.join(terms)}")
+    return f"{factor} * {b.a('compensation_force')}"
+
+

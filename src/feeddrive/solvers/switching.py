@@ -1,0 +1,503 @@
+"""Dense-output integrator with automatic stiffness switching: DOPRI5 ⇄ RODAS4.
+
+One compiled driver (:func:`integrate_template`, placed in every generated model module as
+``integrate_dense``) runs in three modes:
+
+* ``MODE_DOPRI5``: Dormand–Prince 5(4) (the tableau of :mod:`feeddrive.solvers.dopri5`) with
+  its 4th-order continuous extension (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.6,
+  and their code ``dopri5.f``, ``CONTD5``; the same coefficients as scipy's RK45 ``P``);
+* ``MODE_RODAS4``: the Rosenbrock method of :mod:`feeddrive.solvers.rodas4`;
+* ``MODE_AUTO``: starts with DOPRI5 and switches to RODAS4 when Hairer's stiffness test says
+  the step is held by stability — h·‖k7 − k6‖/‖y7 − y6‖ > 3.25, the estimate of h|λ| from the
+  last two stages, in ``STIFF_STEPS`` of the recent accepted steps (``dopri5.f``, ``NSTIFF``
+  test) — and back to DOPRI5 when the Rosenbrock step h times the power-iteration estimate of
+  the Jacobian's spectral radius stays below ``NONSTIFF_HRHO`` for ``NONSTIFF_STEPS`` steps
+  (an explicit step of that size would be stable, and costs 6 right-hand sides instead of
+  6 + one per Jacobian column).
+
+Dense output: the step is not capped by the output interval.  Outputs on the grid
+t_i = i·out_every·base are interpolated inside the step that contains them.  Event times are
+exact step ends: the sampled-controller instants k·base when any loop is sampled (the
+zero-order-hold outputs jump there: ``sample_update`` runs, the derivative is re-evaluated),
+the profile breakpoints ``stops`` (kinks of the command: the Jacobian's f_t changes) and the end.
+With ``adaptive = 0`` the chosen method runs at the fixed step ``h_init`` and the output grid
+points are step ends too (used to verify the order).
+
+The solver never imports a model: the templates are compiled into each model's generated module
+next to its ``rhs`` and ``sample_update`` (:func:`template_sources`).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import rodas4
+from .dopri5 import (
+    A21,
+    A31,
+    A32,
+    A41,
+    A42,
+    A43,
+    A51,
+    A52,
+    A53,
+    A54,
+    A61,
+    A62,
+    A63,
+    A64,
+    A65,
+    B1,
+    B3,
+    B4,
+    B5,
+    B6,
+    C2,
+    C3,
+    C4,
+    C5,
+    E1,
+    E3,
+    E4,
+    E5,
+    E6,
+    E7,
+)
+
+if TYPE_CHECKING:
+    from ..model.assemble import Model
+
+MODE_DOPRI5, MODE_RODAS4, MODE_AUTO = 0, 1, 2
+
+# Dormand–Prince continuous extension (dopri5.f, CONTD5; scipy RK45.P last column)
+DP_D1 = -12715105075.0 / 11282082432.0
+DP_D3 = 87487479700.0 / 32700410799.0
+DP_D4 = -10690763975.0 / 1880347072.0
+DP_D5 = 701980252875.0 / 199316789632.0
+DP_D6 = -1453857185.0 / 822651844.0
+DP_D7 = 69997945.0 / 29380423.0
+
+# Switching thresholds (measured on the benchmark scenarios, benchmarks/README.md)
+STIFF_HLAMBDA = 3.25  # DOPRI5's stability boundary on the negative real axis is ≈ 3.3
+STIFF_STEPS = 15  # stiff verdicts (reset after 6 non-stiff steps in a row), dopri5.f
+NONSTIFF_HRHO = 3.0
+NONSTIFF_STEPS = 5
+POWER_ITERATIONS = 12
+
+STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "jacobians",
+              "rosenbrock_steps", "switches", "output_rhs_evaluations")
+
+CONSTANTS = ("MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "DP_D1", "DP_D3", "DP_D4", "DP_D5",
+             "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS", "NONSTIFF_HRHO", "NONSTIFF_STEPS",
+             "POWER_ITERATIONS")
+
+# Placeholders: the generated module supplies these (see feeddrive.solvers.dopri5).
+N_AUX = 0
+N_HELD = 1
+STATUS_OK, STATUS_MAX_STEPS, STATUS_STEP_UNDERFLOW, STATUS_NON_FINITE = 0, 1, 2, 3
+_r4_fd_jacobian: Any = None
+_r4_frozen_states: Any = None
+_r4_rodas4_step: Any = None
+_r4_rodas4_dense: Any = None
+_r4_spectral_radius: Any = None
+_dp5_step: Any = None
+_error_norm: Any = None
+
+
+def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    raise NotImplementedError("placeholder: the assembled model's right-hand side")
+
+
+def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
+
+
+def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
+              n_pos: int, n_vel: int, n_cur: int, rtol: float, atol: np.ndarray,
+              rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
+              max_steps: int, mode: int, stops: np.ndarray, want_aux: bool = True,
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Integrate ``model`` from t = 0 to ``t_end`` (see :func:`integrate_template`)."""
+    result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
+        model.module.integrate_dense(
+            y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P, model.T, rtol, atol,
+            rel_mask, h_init, h_max, adaptive, max_steps, mode,
+            np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux)))
+    return result
+
+
+def dp5_step_template(t: float, h: float, y: np.ndarray, k1: np.ndarray, held: np.ndarray,
+                      P: np.ndarray, T: np.ndarray, n_pos: int, n_vel: int, n_cur: int,
+                      k2: np.ndarray, k3: np.ndarray, k4: np.ndarray, k5: np.ndarray,
+                      k6: np.ndarray, k7: np.ndarray, yt: np.ndarray, y_new: np.ndarray,
+                      aux: np.ndarray, t_new: float) -> None:
+    """One Dormand–Prince step: y_new, k7 = f(t_new, y_new); ``yt`` keeps the stage-6
+    argument (for the stiffness test)."""
+    n = y.size
+    for i in range(n):
+        yt[i] = y[i] + h * A21 * k1[i]
+    rhs(t + C2 * h, yt, held, P, T, n_pos, n_vel, n_cur, k2, aux)
+    for i in range(n):
+        yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
+    rhs(t + C3 * h, yt, held, P, T, n_pos, n_vel, n_cur, k3, aux)
+    for i in range(n):
+        yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
+    rhs(t + C4 * h, yt, held, P, T, n_pos, n_vel, n_cur, k4, aux)
+    for i in range(n):
+        yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
+    rhs(t + C5 * h, yt, held, P, T, n_pos, n_vel, n_cur, k5, aux)
+    for i in range(n):
+        yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i]
+                            + A65 * k5[i])
+    rhs(t + h, yt, held, P, T, n_pos, n_vel, n_cur, k6, aux)
+    for i in range(n):
+        y_new[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
+    rhs(t_new, y_new, held, P, T, n_pos, n_vel, n_cur, k7, aux)
+
+
+def error_norm_template(e: np.ndarray, y: np.ndarray, y_new: np.ndarray, rtol: float,
+                        atol: np.ndarray, rel_mask: np.ndarray) -> float:
+    """RMS of the error estimate ``e`` weighted by atol + rtol·max(|y|, |y_new|) (relative part
+    only where ``rel_mask``); a non-finite norm counts as a failed step."""
+    n = e.size
+    err = 0.0
+    for i in range(n):
+        scale = atol[i] + rtol * rel_mask[i] * max(abs(y[i]), abs(y_new[i]))
+        r = e[i] / scale
+        err += r * r
+    err = math.sqrt(err / n)
+    if not math.isfinite(err):
+        err = 1e10
+    return err
+
+
+def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: int,
+                       n_vel: int, n_cur: int, P: np.ndarray, T: np.ndarray, rtol: float,
+                       atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
+                       adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
+                       want_aux: bool,
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Integrate from t = 0 to ``t_end`` with dense output every ``out_every·base`` [s].
+
+    ``stops``: sorted profile breakpoints [s] (exact step ends).  Returns (t_out, y_out,
+    aux_out, stats, held); stats as :data:`STAT_NAMES` (the first five as
+    :func:`feeddrive.solvers.dopri5.integrate_template`).  Without ``want_aux`` the auxiliary
+    signals are not evaluated at the outputs and ``aux_out`` has no rows.
+    """
+    n = y0.size
+    n_break = int(round(t_end / base))
+    t_end = n_break * base
+    n_out = n_break // out_every + 1
+    sampled = n_pos > 0 or n_vel > 0 or n_cur > 0
+    t_out = np.empty(n_out)
+    y_out = np.empty((n_out, n))
+    aux_out = np.empty((n_out if want_aux else 0, N_AUX))
+    held = np.zeros(N_HELD)
+    y = y0.copy()
+    f0 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    k5 = np.empty(n)
+    k6 = np.empty(n)
+    f_new = np.empty(n)
+    yt = np.empty(n)
+    y_new = np.empty(n)
+    e = np.empty(n)
+    q1 = np.empty(n)
+    q2 = np.empty(n)
+    q3 = np.empty(n)
+    J = np.zeros((n, n))
+    M = np.empty((n, n))
+    piv = np.zeros(n, dtype=np.int64)
+    ft = np.zeros(n)
+    yp = np.empty(n)
+    fp = np.empty(n)
+    v = np.empty(n)
+    w = np.empty(n)
+    live = np.ones(n, dtype=np.bool_)
+    all_live = np.ones(n, dtype=np.bool_)
+    aux = np.empty(N_AUX)
+    steps = 0
+    rejected = 0
+    n_rhs = 0
+    n_out_rhs = 0
+    n_jac = 0
+    n_rodas = 0
+    switches = 0
+    status = STATUS_OK
+    h = h_init
+    h_min = 1e-14
+    stiff = mode == MODE_RODAS4
+    jac_ok = False
+    frozen_known = False
+    stiff_count = 0
+    nonstiff_count = 0
+    rho = 0.0
+    # step-size controller memory: DOPRI5 PI controller, Gustafsson's for RODAS4
+    dp_err_old = 1e-4
+    beta = 0.04
+    alpha = 0.2 - 0.75 * beta
+    r4_err_old = 1e-2
+    r4_h_old = 0.0
+    r4_first = True
+    r4_rejected = False
+    i_stop = 0
+    n_stops = stops.size
+    kb = 0  # index of the current sample instant
+    t = 0.0
+    i_out = 0
+    sample_update(0, 0.0, y, held, P, T, n_pos, n_vel, n_cur, base)
+    rhs(0.0, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
+    n_rhs += 1
+    t_out[0] = 0.0
+    y_out[0, :] = y
+    if want_aux:
+        aux_out[0, :] = aux
+    i_out = 1
+    while t < t_end and status == STATUS_OK:
+        # ---- the next event: sample instant, profile breakpoint, output point (fixed), end
+        t_ev = t_end
+        is_sample = False
+        if sampled and (kb + 1) * base <= t_ev:
+            t_ev = (kb + 1) * base
+            is_sample = True
+        while i_stop < n_stops and stops[i_stop] <= t + 1e-12 * max(1.0, t):
+            i_stop += 1
+        is_stop = False
+        if i_stop < n_stops and stops[i_stop] < t_ev - 1e-12 * max(1.0, t_ev):
+            t_ev = stops[i_stop]
+            is_sample = False
+            is_stop = True
+        if adaptive == 0 and i_out < n_out:
+            t_grid = (i_out * out_every) * base
+            if t_grid < t_ev - 1e-12 * max(1.0, t_ev):
+                t_ev = t_grid
+                is_sample = False
+                is_stop = False
+        # ---- steps up to t_ev
+        while t < t_ev and status == STATUS_OK:
+            if stiff and not jac_ok:
+                calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur, atol, J,
+                                        ft, yp, fp, aux, live if frozen_known else all_live)
+                if calls < 0:  # a state taken as frozen moved: difference every column
+                    n_rhs -= calls
+                    calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur, atol,
+                                            J, ft, yp, fp, aux, all_live)
+                    frozen_known = False
+                n_rhs += calls
+                n_jac += 1
+                if not frozen_known:
+                    _r4_frozen_states(J, f0, live)
+                    frozen_known = True
+                jac_ok = True
+                if mode == MODE_AUTO:
+                    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+            last = False
+            h_try = min(h, h_max)
+            if t + h_try >= t_ev - 1e-12 * max(1.0, t_ev):
+                h_try = t_ev - t
+                last = True
+            while True:
+                t_new = t_ev if last else t + h_try
+                if stiff:
+                    calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, n_pos, n_vel,
+                                            n_cur, M, piv, k2, k3, k4, k5, k6, e, yt, fp,
+                                            y_new, aux, live)
+                    if calls == -2:
+                        # a frozen state moved: retry with the full Jacobian
+                        n_rhs += 5
+                        frozen_known = False
+                        for i in range(n):
+                            live[i] = True
+                        calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur,
+                                                atol, J, ft, yp, fp, aux, all_live)
+                        n_rhs += calls
+                        n_jac += 1
+                        continue
+                    steps += 1
+                    n_rodas += 1
+                    if calls < 0:
+                        err = 1e10  # singular matrix: shrink the step
+                    else:
+                        n_rhs += calls
+                        err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
+                else:
+                    _dp5_step(t, h_try, y, f0, held, P, T, n_pos, n_vel, n_cur, k2, k3, k4,
+                              k5, k6, f_new, yt, y_new, aux, t_new)
+                    n_rhs += 6
+                    steps += 1
+                    for i in range(n):
+                        e[i] = h_try * (E1 * f0[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i]
+                                        + E6 * k6[i] + E7 * f_new[i])
+                    err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
+                if adaptive == 0 or err <= 1.0:
+                    break
+                rejected += 1
+                if stiff:
+                    fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+                    h_try /= fac
+                    r4_rejected = True
+                else:
+                    h_try *= max(0.2, 0.9 * err ** (-0.2))
+                last = False
+                if h_try < h_min:
+                    status = STATUS_STEP_UNDERFLOW
+                    break
+                if steps > max_steps:
+                    status = STATUS_MAX_STEPS
+                    break
+            if status != STATUS_OK:
+                break
+            # ---- accepted: dense-output data of [t, t_new]
+            h_done = t_new - t
+            if stiff:
+                rhs(t_new, y_new, held, P, T, n_pos, n_vel, n_cur, f_new, aux)
+                n_rhs += 1
+                _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
+            else:
+                for i in range(n):
+                    ydiff = y_new[i] - y[i]
+                    bspl = h_try * f0[i] - ydiff
+                    q1[i] = ydiff
+                    q2[i] = bspl
+                    q3[i] = ydiff - h_try * f_new[i] - bspl
+                    e[i] = h_try * (DP_D1 * f0[i] + DP_D3 * k3[i] + DP_D4 * k4[i]
+                                    + DP_D5 * k5[i] + DP_D6 * k6[i] + DP_D7 * f_new[i])
+            # outputs strictly inside the step (an output at t_new that is an event time is
+            # written after the event below)
+            while i_out < n_out:
+                t_grid = (i_out * out_every) * base
+                if t_grid > t_new or (last and t_grid >= t_new - 1e-9 * base):
+                    break
+                th = (t_grid - t) / h_done
+                th1 = 1.0 - th
+                for i in range(n):
+                    if stiff:
+                        yp[i] = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * q2[i]))
+                    else:
+                        yp[i] = y[i] + th * (q1[i] + th1 * (q2[i] + th * (q3[i] + th1 * e[i])))
+                t_out[i_out] = t_grid
+                y_out[i_out, :] = yp
+                if want_aux:
+                    rhs(t_grid, yp, held, P, T, n_pos, n_vel, n_cur, fp, aux)
+                    n_out_rhs += 1
+                    aux_out[i_out, :] = aux
+                i_out += 1
+            # ---- stiffness detection and switching
+            used_rodas = stiff
+            if mode == MODE_AUTO:
+                if stiff:
+                    if rho * h_done < NONSTIFF_HRHO:
+                        nonstiff_count += 1
+                        if nonstiff_count >= NONSTIFF_STEPS:
+                            stiff = False
+                            switches += 1
+                            stiff_count = 0
+                            nonstiff_count = 0
+                            dp_err_old = 1e-4
+                    else:
+                        nonstiff_count = 0
+                else:
+                    num = 0.0
+                    den = 0.0
+                    for i in range(n):
+                        num += (f_new[i] - k6[i]) ** 2
+                        den += (y_new[i] - yt[i]) ** 2
+                    if den > 0.0 and h_done * math.sqrt(num / den) > STIFF_HLAMBDA:
+                        nonstiff_count = 0
+                        stiff_count += 1
+                        if stiff_count >= STIFF_STEPS:
+                            stiff = True
+                            switches += 1
+                            stiff_count = 0
+                            r4_first = True
+                    else:
+                        nonstiff_count += 1
+                        if nonstiff_count >= 6:
+                            stiff_count = 0
+            # ---- step-size control for the next step
+            if adaptive == 1:
+                if used_rodas:
+                    fac = 0.2 if err == 0.0 else max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+                    if not r4_first and err > 0.0:
+                        facpred = (r4_h_old / h_try) * (err * err / r4_err_old) ** 0.25 / 0.9
+                        fac = max(fac, max(1.0 / 6.0, min(5.0, facpred)))
+                    h_new = h_try / fac
+                    if r4_rejected:
+                        h_new = min(h_new, h_try)
+                    r4_first = False
+                    r4_h_old = h_try
+                    r4_err_old = max(1e-2, err)
+                    r4_rejected = False
+                elif err == 0.0:
+                    h_new = h_try * 5.0
+                else:
+                    fac = 0.9 * err ** (-alpha) * dp_err_old ** beta
+                    fac = min(5.0, max(0.2, fac))
+                    dp_err_old = max(err, 1e-4)
+                    h_new = h_try * fac
+                if not last or h_new < h:
+                    h = min(h_new, h_max)
+            for i in range(n):
+                y[i] = y_new[i]
+                f0[i] = f_new[i]
+            t = t_new
+            jac_ok = False
+            if steps > max_steps:
+                status = STATUS_MAX_STEPS
+                break
+            finite = True
+            for i in range(n):
+                if not math.isfinite(y[i]):
+                    finite = False
+            if not finite:
+                status = STATUS_NON_FINITE
+                break
+        if status != STATUS_OK:
+            break
+        # ---- at the event t_ev
+        if is_sample:
+            kb += 1
+            sample_update(kb, t, y, held, P, T, n_pos, n_vel, n_cur, base)
+            rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
+            n_rhs += 1
+        if is_stop:
+            i_stop += 1
+        while i_out < n_out:
+            t_grid = (i_out * out_every) * base
+            if abs(t_grid - t) > 1e-9 * base:
+                break
+            t_out[i_out] = t_grid
+            y_out[i_out, :] = y
+            if want_aux:
+                rhs(t, y, held, P, T, n_pos, n_vel, n_cur, fp, aux)
+                n_out_rhs += 1
+                aux_out[i_out, :] = aux
+            i_out += 1
+    stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
+                      t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs)])
+    return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats, held)
+
+
+_TEMPLATES = {"dp5_step_template": "_dp5_step", "error_norm_template": "_error_norm",
+              "integrate_template": "integrate_dense"}
+
+
+def template_sources() -> list[str]:
+    """Text placed in each generated model module: the RODAS4 kernels, the DOPRI5 step with its
+    continuous extension and the switching driver ``integrate_dense``.  numba compiles a
+    function at its first call, so a model run only with ``dopri5`` never compiles these."""
+    out = rodas4.template_sources()
+    out.append(f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})")
+    for fn in (dp5_step_template, error_norm_template, integrate_template):
+        src = inspect.getsource(fn)
+        for old, new in _TEMPLATES.items():
+            src = src.replace(f"{old}(", f"{new}(")
+        out.append("@kernel\n" + src)
+    return out

@@ -1,0 +1,151 @@
+"""The window-independent creep verdict (feeddrive.analysis.metrics.trace_verdict and
+feeddrive.analysis.critical.decide) on systems with known answers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from feeddrive.analysis.critical import decide
+from feeddrive.analysis.metrics import VerdictRule, trace_verdict
+
+# A mass pulled through a spring over a LuGre contact: the stick-slip example of
+# C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for control of
+# systems with friction", IEEE Trans. Autom. Control 40(3), 419–425 (1995), Sect. IV, whose
+# parameters Olsson et al., "Friction models and friction compensation", Eur. J. Control 4,
+# 176–195 (1998), Sect. 3 repeat: m = 1 kg, k = 2 N/m, σ0 = 1e5 N/m, σ1 = √1e5 N s/m,
+# σ2 = 0.4 N s/m, F_C = 1 N, F_S = 1.5 N, v_s = 1e-3 m/s.  The papers pull at 0.1 m/s; we
+# pull at 0.02 m/s, which stretches the stick phase: the stick-slip period is 22.3 s, longer
+# than a quarter of the 60-s default maximum trial and than the 12-s first trial.
+M, K, S0, S1, S2, FC, FS, VS = 1.0, 2.0, 1e5, math.sqrt(1e5), 0.4, 1.0, 1.5, 1e-3
+PULL = 0.02  # [m/s]
+
+
+def _rhs(t: float, y: np.ndarray) -> list[float]:
+    x, v, z = y
+    g = (FC + (FS - FC) * math.exp(-((v / VS) ** 2))) / S0
+    dz = v - abs(v) * z / g
+    friction = S0 * z + S1 * dz + S2 * v
+    return [v, (K * (PULL * t - x) - friction) / M, dz]
+
+
+def lugre_trace(duration: float, rtol: float = 1e-8) -> tuple[np.ndarray, np.ndarray,
+                                                                np.ndarray]:
+    """(time [s], mass speed [m/s], spring force [N]) from rest, sampled every 5 ms."""
+    t_eval = np.arange(0.0, duration + 1e-9, 5e-3)
+    sol = solve_ivp(_rhs, (0.0, t_eval[-1]), [0.0, 0.0, 0.0], method="LSODA", rtol=rtol,
+                    atol=[1e-12, 1e-12, 1e-14], t_eval=t_eval, max_step=0.05)
+    assert sol.status == 0, sol.message
+    x, v, _ = sol.y
+    return sol.t, v, K * (PULL * sol.t - x)
+
+
+@pytest.fixture(scope="module")
+def true_period() -> float:
+    """Stick-slip period [s] from a tighter solve, by another method than the verdict's: the
+    time between successive breakaways (maxima of the spring force)."""
+    t, _, force = lugre_trace(160.0, rtol=1e-10)
+    peaks = np.flatnonzero((force[1:-1] > force[:-2]) & (force[1:-1] >= force[2:])) + 1
+    breakaways = t[peaks][1:]  # the first breakaway starts from an unstretched spring
+    assert breakaways.size >= 4
+    return float(np.mean(np.diff(breakaways)))
+
+
+def test_long_period_lugre_stick_slip_is_found_with_its_frequency(true_period: float) -> None:
+    assert 20.0 < true_period < 25.0  # > 60 s / 4: the case the old fixed window got wrong
+    durations: list[float] = []
+
+    def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
+        durations.append(duration)
+        t, v, _ = lugre_trace(duration)
+        return t, v
+
+    verdict, used = decide(run, PULL, VerdictRule(max_duration=240.0))
+    assert verdict.kind == "stick-slip"
+    assert verdict.frequency == pytest.approx(1.0 / true_period, rel=0.02)
+    assert verdict.min_ratio < 0.01  # the mass stops
+    assert durations == [12.0, 24.0, 48.0, 96.0, 192.0][:len(durations)]
+    assert used > 60.0  # the trial extended itself past the old window
+
+
+def test_long_period_lugre_is_undecided_when_the_maximum_is_too_short() -> None:
+    # 60 s hold the first breakaway (≈ 37 s) and less than two periods: never a guess
+    t, v, _ = lugre_trace(60.0)
+    verdict = trace_verdict(t, v, PULL)
+    assert verdict.kind == "undecided"
+    assert verdict.frequency is None  # fewer than two periods seen
+
+
+def _decaying(t: np.ndarray, tau: float) -> np.ndarray:
+    return 1.0 + 1.5 * np.exp(-t / tau) * np.sin(2 * np.pi * 5.0 * t)
+
+
+def test_decaying_oscillation_is_undecided_until_it_has_decayed() -> None:
+    t = np.arange(0.0, 60.0, 1e-3)
+    v = _decaying(t, 6.0)
+    short = trace_verdict(t[t <= 12.0], v[t <= 12.0], 1.0)
+    assert short.kind == "undecided"  # still large and shrinking: not a limit cycle
+    full = trace_verdict(t, v, 1.0)
+    assert full.kind == "smooth"
+    # decided once 1.5·exp(-t/6) < 0.02 (t = 25.9 s) and 2 s have passed
+    assert full.decided_at == pytest.approx(6.0 * math.log(1.5 / 0.02) + 2.0, abs=0.05)
+
+
+def test_sustained_oscillation_never_sticks() -> None:
+    t = np.arange(0.0, 12.0, 1e-3)
+    v = 1.0 + 0.8 * np.sin(2 * np.pi * 5.4 * t)
+    verdict = trace_verdict(t, v, 1.0)
+    assert verdict.kind == "oscillation"
+    assert verdict.frequency == pytest.approx(5.4, rel=1e-3)
+    assert verdict.min_ratio == pytest.approx(0.2, abs=1e-3)
+
+
+def test_period_doubled_oscillation_is_a_limit_cycle() -> None:
+    # alternate cycles of two amplitudes (as the wang2021 CDFS shows near 1 mm/s)
+    t = np.arange(0.0, 12.0, 1e-3)
+    f = 5.0
+    amp = np.where(np.floor(t * f) % 2 == 0, 1.05, 0.95)
+    v = 1.0 + amp * np.sin(2 * np.pi * f * t)
+    verdict = trace_verdict(t, v, 1.0)
+    assert verdict.kind == "stick-slip"  # reaches −0.05 < 1 % of the command
+    assert "2 cycles" in verdict.reason
+    assert verdict.frequency == pytest.approx(f, rel=1e-3)
+
+
+def test_a_slow_passage_by_a_vanished_cycle_is_not_a_limit_cycle() -> None:
+    # amplitude that shrinks ever faster (a ghost of a limit cycle), then collapses
+    t = np.arange(0.0, 12.0, 1e-3)
+    amp = 0.8 * (1.0 - 0.02 * np.exp(t / 4.0))
+    v = 1.0 + np.clip(amp, 0.0, None) * np.sin(2 * np.pi * 5.4 * t)
+    assert trace_verdict(t, v, 1.0).kind == "undecided"
+
+
+def test_a_table_that_never_breaks_away_is_undecided() -> None:
+    t = np.arange(0.0, 12.0, 1e-3)
+    assert trace_verdict(t, np.zeros_like(t), 1.0).kind == "undecided"
+
+
+def test_negative_command_speed() -> None:
+    t = np.arange(0.0, 12.0, 1e-3)
+    v = -(1.0 + 0.8 * np.sin(2 * np.pi * 3.0 * t))
+    assert trace_verdict(t, v, -1.0).kind == "oscillation"
+
+
+def test_rule_durations_and_description() -> None:
+    rule = VerdictRule(initial_duration=12.0, max_duration=60.0)
+    assert rule.durations() == [12.0, 24.0, 48.0, 60.0]
+    text = rule.describe()
+    for piece in ("12 s", "60 s", "±2 %", "undecided", "stick-slip", "oscillation"):
+        assert piece in text
+    assert rule.to_dict()["description"] == text
+
+
+@pytest.mark.parametrize(("field", "value"), [("smooth_band", 0.0), ("max_duration", 5.0),
+                                              ("min_cycles", 1), ("stick_level", 1.5),
+                                              ("initial_duration", float("nan"))])
+def test_rule_rejects_bad_values(field: str, value: float) -> None:
+    with pytest.raises(ValueError, match=f"rule.{field}"):
+        VerdictRule(**{field: value})

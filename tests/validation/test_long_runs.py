@@ -1,0 +1,87 @@
+"""Long runs (issue 9 item 3): chunked integration is bit-identical to one integrator call,
+streams to a file without keeping the run, reports progress, and stops on Ctrl-C with what
+was computed."""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import feeddrive as fd
+from feeddrive.control import ConstantSpeed
+from feeddrive.simulate import SimulationInterrupted, SolverOptions, sampling
+from feeddrive.solvers import dopri5
+
+W = fd.preset("wang2021")
+sim_mod = importlib.import_module("feeddrive.simulate")
+
+
+def _one_call(system: fd.DriveSystem, profile: ConstantSpeed, duration: float) -> np.ndarray:
+    model = system.model(profile)
+    options = SolverOptions()
+    grid = sampling(system.parameters, options.output_interval)
+    atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
+                                 options.current_tolerance)
+    _, y, _, stats, _ = dopri5.integrate(
+        model, system.initial_vector(model), duration, grid.out_every, grid.base, grid.n_pos,
+        grid.n_vel, grid.n_cur, options.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
+    assert int(stats[0]) == 0
+    return y
+
+
+@pytest.mark.parametrize("sampled", [False, True])
+def test_chunked_run_is_bit_identical_to_one_call(sampled: bool, monkeypatch) -> None:
+    params = W
+    if sampled:
+        params = (W.replace_path("controller.position_period", 1e-3)
+                  .replace_path("controller.velocity_period", 5e-4)
+                  .replace_path("controller.current_period", 1.25e-4)
+                  .replace_path("controller.encoder_counts", 10000.0))
+    system = fd.DriveSystem(params, "cdfs", 0.4)
+    profile = ConstantSpeed(1.2e-3)
+    monkeypatch.setattr(sim_mod, "FIRST_CHUNK", 0.3)
+    monkeypatch.setattr(sim_mod, "CHUNK_WALL_TIME", 1e-4)  # many small chunks
+    seen: list[float] = []
+    r = fd.simulate(system, profile, 3.0, progress=lambda t, end: seen.append(t))
+    assert len(seen) > 5 and seen[-1] == pytest.approx(3.0)
+    y = _one_call(system, profile, 3.0)
+    states = np.column_stack([r[name] for name in system.model(profile).state_names])
+    np.testing.assert_array_equal(states, y)
+    assert np.all(np.diff(r.time) > 0)
+
+
+def test_streamed_run_writes_every_sample_and_keeps_only_the_end(tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr(sim_mod, "FIRST_CHUNK", 0.5)
+    monkeypatch.setattr(sim_mod, "KEEP_STREAMED", 1.0)
+    monkeypatch.setattr(sim_mod, "CHUNK_WALL_TIME", 1e-4)
+    out = tmp_path / "run.parquet"
+    r = fd.simulate(fd.DriveSystem(W, "cdfs", 0.4), ConstantSpeed(2e-3), 4.0, output=out)
+    frame = pd.read_parquet(out)
+    assert len(frame) == 4001 and frame["time [s]"].iloc[-1] == pytest.approx(4.0)
+    assert np.all(np.diff(frame["time [s]"].to_numpy()) > 0)
+    assert r.time[0] > 2.0 and r.time[-1] == pytest.approx(4.0)  # only the end is kept
+    np.testing.assert_allclose(frame["table_speed [mm/s]"].to_numpy()[-r.time.size:],
+                               1e3 * r["table_speed"], rtol=1e-12)
+
+
+def test_ctrl_c_between_chunks_keeps_what_was_computed(tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr(sim_mod, "FIRST_CHUNK", 0.5)
+    calls = []
+
+    def interrupt(t: float, end: float) -> None:
+        calls.append(t)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+
+    out = tmp_path / "run.csv"
+    with pytest.raises(SimulationInterrupted) as info:
+        fd.simulate(fd.DriveSystem(W, "cdfs", 0.4), ConstantSpeed(2e-3), 60.0, output=out,
+                    progress=interrupt)
+    stop = info.value
+    assert 0 < stop.t_reached < 60.0 and stop.output == str(out)
+    assert stop.result is not None and stop.result.time[-1] == pytest.approx(stop.t_reached)
+    written = pd.read_csv(out)
+    assert written["time [s]"].iloc[-1] == pytest.approx(stop.t_reached)

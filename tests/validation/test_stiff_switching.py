@@ -1,0 +1,122 @@
+"""The switching integrator (``SolverOptions(method="auto")``) against the references.
+
+* creeping cases (``reference.cases.RADAU_CASES``): ripple, stick-slip period and mean speed
+  within 1 % of the scipy Radau reference (rtol 1e-10) and of today's DOPRI5 engine, and the
+  same creep verdict;
+* a DDFS with the nut at 16 mm/s (the stiff screw bristle, λ ≈ 8000 1/s): the switch to
+  RODAS4 really happens, and the trace agrees with DOPRI5;
+* sampled control: the breakpoints stay exact; results agree with DOPRI5 to the tolerance and
+  the recorded times are the same.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from reference.cases import RADAU_CASES, Case  # noqa: E402
+from reference.make_radau_reference import stick_slip_figures  # noqa: E402
+
+import feeddrive as fd  # noqa: E402
+from feeddrive.analysis.metrics import creep_metrics  # noqa: E402
+from feeddrive.control import ConstantSpeed, SampledSpeed  # noqa: E402
+from feeddrive.simulate import DriveSystem, SolverOptions, profile_breakpoints, simulate  # noqa: E402
+
+DATA = ROOT / "tests" / "data"
+
+
+def _run(case: Case, method: str) -> tuple[np.ndarray, np.ndarray]:
+    r = simulate(DriveSystem(case.parameters(), case.drive, 0.4), case.profile(), case.duration,
+                 options=SolverOptions(method=method))
+    return r.time, r["table_speed"]
+
+
+@pytest.mark.parametrize("case", RADAU_CASES, ids=[c.name for c in RADAU_CASES])
+def test_auto_matches_radau_and_dopri5_within_1_percent(case: Case) -> None:
+    ref = np.load(DATA / f"radau_{case.name}.npz")
+    window = (float(ref["window"][0]), float(ref["window"][1]))
+    t, v = _run(case, "auto")
+    np.testing.assert_allclose(t, ref["time"], rtol=0, atol=1e-12)
+    t_dp, v_dp = _run(case, "dopri5")
+    auto, dp = stick_slip_figures(t, v, window), stick_slip_figures(t_dp, v_dp, window)
+    for key in ("ripple", "period", "mean_speed"):
+        assert auto[key] == pytest.approx(float(ref[key]), rel=0.01), (key, auto, dict(ref))
+        assert auto[key] == pytest.approx(dp[key], rel=0.01), (key, auto, dp)
+    verdict = creep_metrics(t, v, case.table_speed, window=window).verdict
+    assert verdict == creep_metrics(t_dp, v_dp, case.table_speed, window=window).verdict
+    assert verdict == "creeping"
+
+
+def test_auto_switches_to_rodas4_on_the_stiff_ddfs_and_agrees_with_dopri5() -> None:
+    system = DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+    profile = ConstantSpeed(0.5e-3, 16e-3)
+    auto = simulate(system, profile, 2.0, options=SolverOptions(method="auto"))
+    dp = simulate(system, profile, 2.0, options=SolverOptions(method="dopri5"))
+    stats = auto.solver_stats
+    assert stats["method_switches"] >= 1 and stats["rosenbrock_steps"] > stats["steps"] / 2
+    # far fewer steps than the stability-bound explicit method
+    assert stats["steps"] < dp.solver_stats["steps"] / 10
+    np.testing.assert_allclose(auto.time, dp.time, atol=1e-12)
+    assert np.max(np.abs(auto["table_position"] - dp["table_position"])) < 1e-8
+    assert np.max(np.abs(auto["table_speed"] - dp["table_speed"])) < 2e-3 * np.ptp(
+        dp["table_speed"])
+    # auxiliary signals are evaluated at the interpolated samples
+    assert np.max(np.abs(auto["drive_force"] - dp["drive_force"])) < 1e-3 * np.ptp(
+        dp["drive_force"])
+
+
+def test_auto_returns_to_dopri5_when_the_problem_is_not_stiff() -> None:
+    """CDFS stick-slip: the explicit method is the cheaper one; RODAS4 may be used at the
+    start, but the run ends on DOPRI5 and most steps are explicit."""
+    case = RADAU_CASES[0]
+    r = simulate(DriveSystem(case.parameters(), case.drive, 0.4), case.profile(), case.duration,
+                 options=SolverOptions(method="auto"))
+    stats = r.solver_stats
+    assert stats["rosenbrock_steps"] < 0.2 * stats["steps"], stats
+
+
+@pytest.mark.parametrize("method", ["auto", "rodas4"])
+def test_sampled_control_breakpoints_stay_exact(method: str) -> None:
+    """Sampled position and velocity loops (1 ms) with encoder quantisation: the zero-order
+    hold updates at exact step ends, so the stiff-aware run follows DOPRI5 (same sample
+    times, same held values up to the tolerance) and the quantised position commands agree."""
+    p = (fd.preset("wang2021").replace_path("controller.position_period", 1e-3)
+         .replace_path("controller.velocity_period", 1e-3)
+         .replace_path("controller.encoder_counts", 2 ** 20))
+    system = DriveSystem(p, "ddfs", 0.4)
+    profile = ConstantSpeed(2e-3, 16e-3)
+    dp = simulate(system, profile, 1.0, options=SolverOptions(method="dopri5"))
+    new = simulate(system, profile, 1.0, options=SolverOptions(method=method))
+    np.testing.assert_allclose(new.time, dp.time, atol=1e-12)
+    assert np.max(np.abs(new["table_position"] - dp["table_position"])) < 1e-8
+    assert np.max(np.abs(new["table_speed"] - dp["table_speed"])) < 2e-3 * np.ptp(
+        dp["table_speed"])
+    # the held current command (a zero-order-hold output) is the same sequence
+    held = "screw_current_command"
+    assert np.max(np.abs(new[held] - dp[held])) < 1e-3 * np.ptp(dp[held])
+
+
+def test_profile_breakpoints_are_declared() -> None:
+    assert list(profile_breakpoints(ConstantSpeed(1e-3, ramp_time=0.1), 1.0, 1e-3)) == [0.1]
+    assert profile_breakpoints(ConstantSpeed(1e-3, ramp_time=0.0), 1.0, 1e-3).size == 0
+    sampled = SampledSpeed(time=np.arange(11) * 0.01, table_speed=np.linspace(0, 1e-3, 11))
+    assert np.allclose(profile_breakpoints(sampled, 0.05, 1e-3), [0.01, 0.02, 0.03, 0.04])
+    fine = SampledSpeed(time=np.arange(11) * 1e-4, table_speed=np.zeros(11))
+    assert profile_breakpoints(fine, 1e-3, 1e-3).size == 0
+
+
+def test_sampled_profile_follows_dopri5() -> None:
+    """A piecewise-linear command with kinks every 10 ms declared as step ends."""
+    t = np.arange(201) * 0.01
+    profile = SampledSpeed(time=t, table_speed=3e-3 * np.sin(2 * np.pi * t) ** 2)
+    system = DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    dp = simulate(system, profile, 1.5, options=SolverOptions(method="dopri5"))
+    auto = simulate(system, profile, 1.5, options=SolverOptions(method="auto"))
+    assert np.max(np.abs(auto["table_position"] - dp["table_position"])) < 1e-8
