@@ -29,9 +29,9 @@ from pathlib import Path
 from feeddrive.parameters import preset
 from feeddrive.reproduce.runner import run
 from feeddrive.reproduce.studies import StudySettings
-settings = StudySettings(trial_duration=3.0, speed_range=(1.0e-3, 2.0e-3), coarse_step=0.5e-3,
-                         resolution=0.25e-3, fig7_multiples=(1.0,), fig7_duration=3.0,
-                         sine_periods=0.5, sine_nut_amplitudes=(0.0,))
+settings = StudySettings(trial_initial_duration=3.0, trial_max_duration=3.0,
+                         speed_range=(1.0e-3, 2.0e-3), coarse_step=0.5e-3, resolution=0.25e-3,
+                         fig7_multiples=(1.0,), sine_periods=0.5, sine_nut_amplitudes=(0.0,))
 run(preset("wang2021"), Path(sys.argv[1]), settings=settings, workers=1, study=False,
     notice=lambda text: print("NOTICE", text, file=sys.stderr, flush=True))
 """
@@ -105,7 +105,7 @@ def test_edited_entry_is_recomputed_with_a_notice(tmp_path: Path,
     entry = next((out / "data").glob("crit-cdfs-0.4-*.json"))
     raw = entry.read_bytes()
     head, _, body = raw.partition(b"\n")
-    edited = re.sub(rb'"critical_speed_mm_s": [0-9.]+', b'"critical_speed_mm_s": 9.99', body)
+    edited = re.sub(rb'"simulated_time_s": [0-9.]+', b'"simulated_time_s": 9.99', body)
     assert edited != body
     entry.write_bytes(head + b"\n" + edited)
     err = _finish(_start(out))

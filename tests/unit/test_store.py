@@ -83,7 +83,7 @@ def test_reproduce_key_has_version_kernel_code_and_inputs(tmp_path: Path) -> Non
     a = study_store(tmp_path, params, StudySettings())
     assert a.key == study_store(tmp_path, params, StudySettings()).key
     assert a.key != study_store(tmp_path, preset("wang2021-literal"), StudySettings()).key
-    assert a.key != study_store(tmp_path, params, StudySettings(trial_duration=6.0)).key
+    assert a.key != study_store(tmp_path, params, StudySettings(trial_initial_duration=6.0)).key
     assert a.key != store_key({"version": __version__, "kernel": KERNEL_HASH})
     assert len(KERNEL_HASH) == 16
 

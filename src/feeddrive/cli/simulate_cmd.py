@@ -6,7 +6,6 @@ from typing import Any
 
 import typer
 
-from ..io import check_format
 from ..outputs import check_output_file
 from . import _units
 from ._common import (
@@ -93,6 +92,8 @@ def simulate_command(
         raise ParameterError("--profile-file", None, "required for --profile csv")
     if max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
+    from ..io import check_format
+
     inputs = [params_file, profile_file]
     if output:
         check_format(output)

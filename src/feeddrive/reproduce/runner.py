@@ -30,7 +30,8 @@ _HERE = Path(__file__).resolve().parent
 _STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py",
                   _HERE.parent / "analysis" / "critical.py",
                   _HERE.parent / "analysis" / "metrics.py", _HERE.parent / "simulate.py",
-                  _HERE.parent / "result.py", _HERE.parent / "stiffness.py")
+                  _HERE.parent / "result.py", _HERE.parent / "stiffness.py",
+                  _HERE.parent / "protocol.py")
 
 
 def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
