@@ -191,9 +191,10 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     y = y0.copy()
     y[unknown] = sol.x * scale[unknown]
     res = residual(sol.x)
-    # residuals are rates divided by the solver tolerances (e.g. a table acceleration of
-    # 1e-9 m/s² is 1e-3): far below anything that moves the linearisation
-    if np.max(np.abs(res)) > 1e-3 or not np.all(np.isfinite(y)):
+    # residuals are rates divided by the solver tolerances: 0.1 is a table acceleration of
+    # 1e-7 m/s² (a force imbalance of ~1e-7 of the friction force), far below anything that
+    # moves the linearisation; the finite-difference Newton steps stall around 1e-3
+    if np.max(np.abs(res)) > 0.1 or not np.all(np.isfinite(y)):
         raise ParameterError("table_speed", table_speed * 1e3,
                              f"no steady sliding state found [mm/s] ({sol.message})")
     return model, y

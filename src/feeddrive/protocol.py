@@ -12,14 +12,16 @@ SPEED_RANGE = (0.02e-3, 3.02e-3)  # [m/s] lowest and highest speed tested
 COARSE_STEP = 0.2e-3  # [m/s] scan step from rest, before the bisection
 STAIRCASE_COARSE_STEP = 0.1e-3  # [m/s] first staircase of the step-down search
 RESOLUTION = 0.01e-3  # [m/s] Wang2021 Sect. 6: the speed was stepped down by 0.01 mm/s
-TRIAL_DURATION = 12.0  # [s] per trial from rest
+TRIAL_DURATION = 12.0  # [s] first trial length (doubled until the verdict is decided)
+TRIAL_MAX_DURATION = 240.0  # [s] longest trial; still undecided then: 'undecided'
 
 
 def describe(start: str) -> str:
     """The protocol in words, in mm/s, for the CLI and the report."""
     lo, hi = (1e3 * v for v in SPEED_RANGE)
     if start == "rest":
-        return (f"from rest: {TRIAL_DURATION:g}-s trials, scan {lo:g}–{hi:g} mm/s in "
+        return (f"from rest: trials of {TRIAL_DURATION:g} s doubled up to "
+                f"{TRIAL_MAX_DURATION:g} s until decided, scan {lo:g}–{hi:g} mm/s in "
                 f"{1e3 * COARSE_STEP:g}-mm/s steps, then bisection to {1e3 * RESOLUTION:g} mm/s")
     return (f"step-down on a running table: staircase from {hi:g} mm/s in "
             f"{1e3 * STAIRCASE_COARSE_STEP:g}-mm/s steps, then {1e3 * RESOLUTION:g}-mm/s steps "

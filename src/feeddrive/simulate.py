@@ -204,8 +204,8 @@ class SimulationInterrupted(KeyboardInterrupt):
 # output file each chunk is written and dropped (memory does not grow with the duration).
 CHUNK_WALL_TIME = 0.25
 FIRST_CHUNK = 2.0  # [s] simulated
-MAX_CHUNK_SAMPLES = 100_000
-KEEP_STREAMED = 120.0  # [s] of a streamed run kept in memory (its end) for the summary
+MAX_CHUNK_SAMPLES = 20_000
+KEEP_STREAMED = 60.0  # [s] of a streamed run kept in memory (its end) for the summary
 
 
 def simulate(system: DriveSystem, profile: Profile, duration: float, *,

@@ -173,8 +173,17 @@ def test_simulate_and_creep_help_defaults_agree_with_the_api() -> None:
     for command in ("simulate", "creep", "calibrate"):
         shown = " ".join(run(command, "--help").stdout.split())
         assert f"[default: {mid_mm:.1f}]" in shown, command
-    duration = inspect.signature(critical_speed_from_rest).parameters["duration"].default
-    assert f"[default: {duration:.1f}]" in " ".join(run("creep", "--help").stdout.split())
+    rule = inspect.signature(critical_speed_from_rest).parameters["rule"].default
+    from feeddrive.analysis.metrics import VerdictRule
+
+    rule = rule if rule is not None else VerdictRule()
+    from feeddrive import protocol
+
+    creep_help = " ".join(run("creep", "--help").stdout.split())
+    assert "--initial-duration <float> First trial length" in creep_help
+    assert f"[default: {protocol.TRIAL_DURATION:.1f}]" in creep_help
+    assert f"[default: {protocol.TRIAL_MAX_DURATION:.1f}]" in creep_help
+    assert rule.initial_duration == protocol.TRIAL_DURATION
 
 
 def test_params_show_labels_gains_and_limits_as_they_act() -> None:
@@ -526,7 +535,7 @@ README_COMMANDS_BAD_VALUE = [
     ["simulate", "--table-speed", "1", "--drive", "xdfs"],
     ["simulate", "--table-speed", "1", "--duration", "-1"],
     ["simulate", "--table-speed", "1", "--profile", "square"],
-    ["creep", "--duration", "-1"],
+    ["creep", "--max-duration", "-1"],
     ["creep", "--method", "guess"],
     ["calibrate", "--low", "-1"],
     ["params", "show", "--format", "yaml"],

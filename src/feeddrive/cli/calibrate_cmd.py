@@ -22,7 +22,8 @@ def calibrate_command(
     high: float = typer.Option(20000.0, "--high", help="Upper end of the search bracket "
                                "[SI unit of --unknown]."),
     tolerance: float = typer.Option(0.02, "--tolerance",
-                                    help="Relative width of the final bracket of the fit."),
+                                    help="Relative width of the final bracket of the fit "
+                                    "[fraction]."),
     max_duration: float = typer.Option(60.0, "--max-duration",
                                        help="Longest creep trial [s] (see `feeddrive creep`)."),
     drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),

@@ -26,7 +26,7 @@ def creep_command(
     initial_duration: float = typer.Option(protocol.TRIAL_DURATION, "--initial-duration",
                                            help="First trial length [s]; doubled until the "
                                            "verdict is decided."),
-    max_duration: float = typer.Option(60.0, "--max-duration",
+    max_duration: float = typer.Option(protocol.TRIAL_MAX_DURATION, "--max-duration",
                                        help="Longest trial [s]; still undecided then: "
                                        "'undecided'."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
@@ -58,7 +58,8 @@ def creep_command(
     results = []
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
-            system, nut_speed=v_n, speed_range=(lo, hi), coarse_step=protocol.COARSE_STEP,
+            system, nut_speed=v_n, speed_range=(lo, hi),
+            coarse_step=min(protocol.COARSE_STEP, (hi - lo) / 2),
             resolution=protocol.RESOLUTION, rule=rule))
     if method in ("stepdown", "both"):
         results.append(critical_speed_stepdown(

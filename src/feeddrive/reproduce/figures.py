@@ -149,9 +149,13 @@ def build_sine(data: dict[str, Any], amplitude_mm_s: float, figure: str) -> Any:
         vn = key.split("/")[1]
         _speed_axes(ax, trace, "table")
         _command(ax, trace)
-        value, at = reversal_overshoot_at(trace["time"], _mm_s(trace["table_speed"]),
-                                          _mm_s(trace["table_speed_reference"]),
-                                          amplitude_mm_s, data["frequency"])
+        # the number is the study's (full-resolution run); the stored trace only places it
+        _, at = reversal_overshoot_at(trace["time"], _mm_s(trace["table_speed"]),
+                                      _mm_s(trace["table_speed_reference"]),
+                                      amplitude_mm_s, data["frequency"])
+        value = next(r["reversal_overshoot"] for r in data["rows"]
+                     if abs(1e3 * r["table_amplitude"] - amplitude_mm_s) < 1e-9
+                     and abs(1e3 * r["nut_amplitude"] - float(vn)) < 1e-9)
         if at is not None:
             k = min(range(len(trace["time"])), key=lambda i: abs(trace["time"][i] - at))
             ax.plot(at, 1e3 * trace["table_speed"][k], "o", color="C3", ms=6,

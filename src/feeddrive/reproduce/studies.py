@@ -54,7 +54,7 @@ class StudySettings:
     """
 
     trial_initial_duration: float = protocol.TRIAL_DURATION
-    trial_max_duration: float = 240.0
+    trial_max_duration: float = protocol.TRIAL_MAX_DURATION
     speed_range: tuple[float, float] = protocol.SPEED_RANGE
     coarse_step: float = protocol.COARSE_STEP
     resolution: float = protocol.RESOLUTION

@@ -1,0 +1,263 @@
+"""What the page shows, computed with the public API from checked settings.  Results are
+plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is SI inside.
+
+* :func:`run_simulation` — one constant-speed run: traces (table speed and its command, motor
+  speeds), the summary (following error among it), the creep verdict with its kind
+  (:func:`verdict_of`), and the steady
+  friction curves of the sites the drive uses with their negative-slope bands and operating
+  points;
+* :func:`run_linear` — the linear stability band over table speed and the loop poles at the
+  operating point (friction linearised there), loop margins;
+* :func:`run_critical` — the critical-speed search from rest, the protocol `feeddrive creep`
+  uses (:mod:`feeddrive.protocol`), with progress and cancellation at every trial.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .settings import Checked
+
+#: traces sent to the page keep at most this many samples (min/max per bucket, so that
+#: stick-slip peaks survive)
+MAX_POINTS = 4000
+
+Report = Callable[[float, float, str], None]
+
+
+def _f(value: Any) -> float | None:
+    """A JSON number: None for None, NaN or ±inf."""
+    if value is None:
+        return None
+    v = float(value)
+    return v if math.isfinite(v) else None
+
+
+def _list(values: np.ndarray, scale: float = 1.0, digits: int = 7) -> list[float | None]:
+    arr = np.asarray(values, dtype=float) * scale
+    return [None if not math.isfinite(x) else float(f"{x:.{digits}g}") for x in arr.tolist()]
+
+
+def decimate(n: int, key: np.ndarray, max_points: int = MAX_POINTS) -> np.ndarray:
+    """Indices of at most ``max_points`` samples of ``n``: the minimum and maximum of ``key``
+    in each bucket, in time order (peaks of a stick-slip trace stay visible)."""
+    if n <= max_points:
+        return np.arange(n)
+    buckets = max_points // 2
+    edges = np.linspace(0, n, buckets + 1).astype(int)
+    out = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        seg = key[a:b]
+        i, j = a + int(np.argmin(seg)), a + int(np.argmax(seg))
+        out.extend(sorted({i, j}))
+    return np.asarray(out, dtype=int)
+
+
+def verdict_of(time: np.ndarray, speed: np.ndarray, command_speed: float) -> dict[str, Any]:
+    """The creep verdict and its kind, from the window-independent rule `feeddrive creep`
+    judges every trial by (:func:`feeddrive.analysis.metrics.trace_verdict`): a limit cycle
+    is *stick-slip* (the table stops) or *oscillation* (it does not); a decayed trace is
+    *smooth*; a trace that has done neither yet is *undecided* (a longer run decides)."""
+    from ..analysis.metrics import trace_verdict
+
+    v = trace_verdict(time, speed, command_speed)
+    ripple = f"ripple {100 * v.ripple_ratio:.3g} % of the command"
+    at = f" at {v.frequency:.3g} Hz" if v.frequency else ""
+    if v.kind == "stick-slip":
+        text = f"the table stops and slips{at}, {ripple}; {v.reason}"
+    elif v.kind == "oscillation":
+        text = f"a sustained oscillation{at} without stopping, {ripple}; {v.reason}"
+    elif v.kind == "smooth":
+        text = f"settled by {v.decided_at:.3g} s: {v.reason}"
+    else:
+        text = (f"{v.reason} after {float(time[-1]):g} s ({ripple}{at}); a longer simulated "
+                "time decides")
+    return {"verdict": "creeping" if v.creeping else v.kind, "kind": v.kind, "text": text,
+            "reason": v.reason, "frequency_hz": _f(v.frequency),
+            "decided_at_s": _f(v.decided_at), "ripple_ratio": _f(v.ripple_ratio)}
+
+
+def _sites(drive: str) -> tuple[str, ...]:
+    """The friction sites that act in ``drive`` (a held nut's friction does not)."""
+    from ..model import mechanism
+
+    if not mechanism(drive).has_lead_screw:
+        return ("guide",)
+    return ("screw", "nut", "guide") if drive == "ddfs" else ("screw", "guide")
+
+
+def friction_curves(checked: Checked, operating: dict[str, float] | None = None
+                    ) -> dict[str, Any]:
+    """Steady friction force [N] against sliding speed [mm/s] at each site the drive uses,
+    the speed bands where it falls (negative damping), and the sites' operating speeds."""
+    from ..friction import negative_slope_band, steady_friction
+
+    params = checked.params
+    assert params is not None
+    sites = _sites(checked.drive)
+    bands: dict[str, list[list[float]]] = {}
+    top = 2e-3
+    for site in sites:
+        lugre = getattr(params.friction, site)
+        bands[site] = []
+        for name, sign in (("positive", 1.0), ("negative", -1.0)):
+            band = negative_slope_band(lugre.branch(name))
+            if band is not None:
+                lo, hi = sorted((sign * band.lower, sign * band.upper))
+                bands[site].append([1e3 * lo, 1e3 * hi])
+                top = max(top, 2.0 * band.upper)
+    for speed in (operating or {}).values():
+        top = max(top, 1.25 * abs(speed) * 1e-3)
+    v = np.linspace(-top, top, 801)
+    curves = []
+    for site in sites:
+        lugre = getattr(params.friction, site)
+        curves.append({"site": site, "law": lugre.law, "speed_mm_s": _list(v, 1e3),
+                       "force_n": _list(steady_friction(v, lugre)),
+                       "negative_slope_mm_s": bands[site],
+                       "operating_speed_mm_s": _f((operating or {}).get(site)),
+                       "operating_force_n": _f(steady_friction(
+                           np.array([1e-3 * operating[site]]), lugre)[0])
+                       if operating and operating.get(site) is not None else None})
+    return {"sites": curves, "ball_nut_share": params.friction.ball_nut_share}
+
+
+def run_simulation(checked: Checked, report: Report) -> dict[str, Any]:
+    """One run at constant speed from rest; see the module docstring."""
+    from ..control import ConstantSpeed
+    from ..simulate import simulate
+
+    report(0.0, checked.duration, f"simulating {checked.duration:g} s of the "
+           f"{checked.drive.upper()}")  # raises if the page cancelled before the start
+    result = simulate(checked.system, ConstantSpeed(checked.table_speed, checked.nut_speed),
+                      checked.duration)
+    summary = result.summary()
+    t = result.time
+    speed = result["table_speed"]
+    idx = decimate(t.size, speed)
+    traces: dict[str, Any] = {
+        "time_s": _list(t[idx]),
+        "table_speed_mm_s": _list(speed[idx], 1e3),
+        "table_speed_reference_mm_s": _list(result["table_speed_reference"][idx], 1e3),
+    }
+    for name in ("screw_linear_speed", "nut_linear_speed"):
+        if name in result:  # without building the xarray Dataset
+            traces[f"{name}_mm_s"] = _list(result[name][idx], 1e3)
+    operating = {"guide": summary["mean_table_speed_mm_s"],
+                 "screw": summary["mean_screw_speed_mm_s"],
+                 "nut": summary["mean_nut_speed_mm_s"]}
+    clean = {k: v for k, v in summary.items() if k != "solver"}
+    clean["solver"] = {k: summary["solver"][k] for k in ("method", "steps", "rejected_steps",
+                                                         "wall_time_s")}
+    return {
+        "drive": checked.drive, "parameter_set": checked.params.name if checked.params else "",
+        "table_speed_mm_s": 1e3 * checked.table_speed,
+        "nut_speed_mm_s": 1e3 * checked.nut_speed, "duration_s": checked.duration,
+        "samples": int(t.size), "samples_sent": int(idx.size),
+        "summary": _json(clean), "verdict": verdict_of(t, speed, checked.table_speed),
+        "traces": traces,
+        "friction": friction_curves(checked, {k: v for k, v in operating.items()
+                                              if v is not None}),
+    }
+
+
+def _json(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _json(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json(v) for v in value]
+    if isinstance(value, float | np.floating):
+        return _f(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+class _BandCache:
+    """Stability bands by (parameters, drive, position, nut speed): a band does not depend
+    on the table speed, so moving that knob recomputes only the poles."""
+
+    def __init__(self, size: int = 16) -> None:
+        self._items: OrderedDict[Any, Any] = OrderedDict()
+        self._lock = threading.Lock()
+        self._size = size
+
+    def get(self, key: Any) -> Any:
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                return self._items[key]
+        return None
+
+    def put(self, key: Any, value: Any) -> None:
+        with self._lock:
+            self._items[key] = value
+            while len(self._items) > self._size:
+                self._items.popitem(last=False)
+
+
+BANDS = _BandCache()
+
+
+def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
+    """Linear stability band over table speed and loop poles at the operating point."""
+    from ..linear import loop_analysis, stability_band
+
+    system = checked.system
+    key = (checked.params, checked.drive, system.table_position, checked.nut_speed)
+    band = BANDS.get(key)
+    if band is None:
+        def progress(k: int, n: int) -> None:
+            report(k, n + 1, f"stability band: speed {k} of {n}")
+
+        band = stability_band(system, checked.nut_speed, progress=progress)
+        BANDS.put(key, band)
+    v = checked.table_speed
+    report(1.0, 1.0, "loop poles")
+    loops = loop_analysis(system, v, checked.nut_speed, frictionless=False)
+    d = loops.as_dict()
+    inside = any(lo <= abs(v) <= hi for lo, hi in band.intervals)
+    return _json({
+        "band": {**band.as_dict(), "speeds_mm_s": _list(band.speeds, 1e3),
+                 "max_real_part_1_per_s": _list(band.max_real_part),
+                 "frequency_hz": _list(band.frequency_hz)},
+        "inside_band": inside,
+        "table_speed_mm_s": 1e3 * v,
+        "poles": d["poles"], "least_damped_mode": d["least_damped_mode"], "loops": d["loops"],
+    })
+
+
+def estimated_trials() -> int:
+    """Trials of a search from rest on the protocol's grid: the scan, then the bisection."""
+    from .. import protocol
+
+    lo, hi = protocol.SPEED_RANGE
+    scan = int(math.floor((hi - lo) / protocol.COARSE_STEP + 1e-9)) + 1
+    return scan + math.ceil(math.log2(protocol.COARSE_STEP / protocol.RESOLUTION))
+
+
+def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
+    """Critical speed from rest, as `feeddrive creep` searches it (its grid, resolution and
+    verdict rule), reporting every trial."""
+    from .. import protocol
+    from ..analysis.critical import critical_speed_from_rest, format_bands
+
+    total = estimated_trials()
+    report(0, total, f"trial 1 of about {total}")  # raises if cancelled before the start
+
+    def progress(done: int, _: int) -> None:
+        report(done, max(total, done + 1), f"trial {done + 1} of about {max(total, done + 1)}")
+
+    found = critical_speed_from_rest(
+        checked.system, nut_speed=checked.nut_speed, speed_range=protocol.SPEED_RANGE,
+        coarse_step=protocol.COARSE_STEP, resolution=protocol.RESOLUTION, progress=progress)
+    out = found.to_dict()
+    out["protocol"] = protocol.describe("rest")
+    out["bands_text"] = format_bands(out)
+    return _json(out)

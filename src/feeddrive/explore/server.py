@@ -1,0 +1,371 @@
+"""The explorer's HTTP server: the standard library's threading server, one page, a JSON API.
+
+Routes (all on 127.0.0.1; a request naming another host is refused, so that a web page
+elsewhere cannot reach the server through a rebound DNS name; POST bodies must be JSON):
+
+=========================  ===========================================================
+``GET /``                  the page (``static/index.html``)
+``GET /static/NAME``       the page's script and style; ``plotly.min.js`` from the
+                           installed ``plotly`` package (no CDN)
+``GET /api/info``          fields with labels and units, presets, drives, compensation
+                           modes, the settings the server was started with, warm-up state
+``GET /api/state?QUERY``   the settings an address carries, checked
+``POST /api/check``        ``{"settings"}`` → messages per field, the set's own knob
+                           values, the address query
+``POST /api/jobs``         ``{"kind": "simulate"|"linear"|"critical", "settings"}`` → a job
+                           (or the messages, status 422)
+``GET /api/jobs/ID``       its state, progress and, once done, its result
+``POST /api/jobs/ID/cancel``
+``POST /api/export``       ``{"settings"}`` → ``{"filename", "toml"}``
+``POST /api/import``       ``{"toml", "settings"}`` → the settings the file gives
+=========================  ===========================================================
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import threading
+import time
+import traceback
+from http import HTTPStatus
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from importlib import resources
+from typing import Any
+from urllib.parse import urlsplit
+
+from .. import __version__
+from ..parameters import PRESETS, ParameterError
+from . import compute
+from .jobs import Busy, Job, Jobs
+from .settings import (
+    DEFAULTS,
+    FIELDS,
+    MAX_DURATION,
+    check,
+    compensation_modes,
+    export_toml,
+    from_query,
+    import_toml,
+    normalise,
+)
+
+MAX_BODY = 4 * 1024 * 1024  # [bytes] a parameter file is a few kB
+_STATIC = {"index.html": "text/html; charset=utf-8",
+           "explore.js": "text/javascript; charset=utf-8",
+           "explore.css": "text/css; charset=utf-8"}
+
+
+class MissingDependency(ImportError):
+    """The explorer's optional dependency is not installed."""
+
+
+def plotly_js() -> bytes:
+    """plotly.js as the installed ``plotly`` package ships it (its offline copy)."""
+    try:
+        root = resources.files("plotly")
+    except ModuleNotFoundError:
+        raise MissingDependency(
+            "the explorer needs plotly (it serves the page plotly's own copy of plotly.js); "
+            "install it with: pip install 'feeddrive[explore]'") from None
+    return (root / "package_data" / "plotly.min.js").read_bytes()
+
+
+def _static(name: str) -> bytes:
+    return (resources.files("feeddrive.explore") / "static" / name).read_bytes()
+
+
+class Explorer:
+    """State of one explorer: the settings it started with, its jobs, simulation speed."""
+
+    def __init__(self, initial: dict[str, Any] | None = None) -> None:
+        self.initial = normalise(initial)
+        self.jobs = Jobs()
+        self.ready = threading.Event()
+        self._rates: dict[str, float] = {}  # [s of wall time per s simulated] by drive
+        self._plotly: bytes | None = None
+
+    # ------------------------------------------------------------ work
+
+    def warm_up(self) -> Job:
+        """Load (or, on a fresh install, compile) the solver for the drives of the starting
+        parameter set, so that the first click is answered at once."""
+
+        def work(job: Job) -> None:
+            first = check(self.initial)
+            drives = list(dict.fromkeys((first.drive, "cdfs", "ddfs")))
+            for k, drive in enumerate(drives):
+                job.report(k, len(drives), f"preparing the solver for the {drive.upper()}")
+                # 1 mm/s creeps on the CDFS: the stick-slip metrics get loaded too
+                trial = check({**first.settings, "drive": drive, "table_speed": "1",
+                               "duration": "2"})
+                if not trial.ok:
+                    continue  # e.g. a drive this parameter set cannot build
+                compute.run_simulation(trial, _quiet)
+                started = time.perf_counter()
+                compute.run_simulation(trial, _quiet)
+                self._rates[drive] = (time.perf_counter() - started) / trial.duration
+            if first.ok:
+                job.report(len(drives), len(drives) + 1, "linear analysis")
+                compute.run_linear(first, _quiet)
+            self.ready.set()
+
+        job = self.jobs.start("warmup", work)
+
+        def ready_anyway() -> None:  # a warm-up that failed must not keep the page waiting
+            self.jobs.wait(job.id, 600)
+            self.ready.set()
+
+        threading.Thread(target=ready_anyway, daemon=True).start()
+        return job
+
+    def start(self, kind: str, settings: dict[str, Any]) -> tuple[Job | None, dict[str, Any]]:
+        checked = check(settings)
+        if not checked.ok:
+            return None, checked.as_dict()
+        if kind == "simulate":
+            rate = self._rates.get(checked.drive)
+
+            def simulate_work(job: Job) -> Any:
+                started = time.perf_counter()
+                out = compute.run_simulation(checked, job.report)
+                wall = time.perf_counter() - started
+                self._rates[checked.drive] = wall / checked.duration
+                out["wall_time_s"] = wall
+                return out
+
+            job = self.jobs.start(kind, simulate_work, _error_field,
+                                  expected_s=None if rate is None else rate * checked.duration,
+                                  text=f"simulating {checked.duration:g} s of the "
+                                       f"{checked.drive.upper()}")
+        elif kind == "linear":
+            job = self.jobs.start(kind, lambda j: compute.run_linear(checked, j.report),
+                                  _error_field)
+        elif kind == "critical":
+            total = compute.estimated_trials()
+            job = self.jobs.start(kind, lambda j: compute.run_critical(checked, j.report),
+                                  _error_field, text=f"trial 1 of about {total}",
+                                  total=total)
+        else:
+            raise ParameterError("kind", kind, "expected simulate, linear or critical")
+        return job, checked.as_dict()
+
+    def info(self) -> dict[str, Any]:
+        from ..model import drive_names
+
+        return {
+            "version": __version__, "presets": list(PRESETS), "drives": list(drive_names()),
+            "fields": [{"name": f.name, "label": f.label, "unit": f.unit, "group": f.group,
+                        "option": f.option, "path": f.path, "help": f.help} for f in FIELDS],
+            "compensation_modes": list(compensation_modes()),
+            "initial": self.initial, "defaults": DEFAULTS, "max_duration_s": MAX_DURATION,
+            "critical_trials": compute.estimated_trials(), "ready": self.ready.is_set(),
+        }
+
+    def plotly(self) -> bytes:
+        if self._plotly is None:
+            self._plotly = plotly_js()
+        return self._plotly
+
+
+def _quiet(done: float, total: float, text: str) -> None:
+    """Progress of work no page waits for."""
+
+
+def _error_field(err: BaseException) -> str | None:
+    """The page field a failed run's message belongs beside."""
+    text = str(err)
+    if text.startswith("command_speed"):  # the summary refuses a zero command
+        return "table_speed"
+    return None
+
+
+class ExplorerServer(ThreadingHTTPServer):
+    daemon_threads = True
+
+    def __init__(self, port: int, explorer: Explorer, host: str = "127.0.0.1") -> None:
+        self.explorer = explorer
+        super().__init__((host, port), Handler)
+
+    @property
+    def port(self) -> int:
+        return int(self.server_address[1])
+
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.port}/"
+
+
+class Handler(BaseHTTPRequestHandler):
+    server: ExplorerServer
+    protocol_version = "HTTP/1.1"
+
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002  (base signature)
+        """Quiet: the terminal shows the address and errors, not every poll."""
+
+    # ------------------------------------------------------------ plumbing
+
+    def _send(self, status: int, body: bytes, content_type: str,
+              cache: str = "no-store") -> None:
+        self.send_response(status)
+        self.send_header("Content-Type", content_type)
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", cache)
+        self.send_header("X-Content-Type-Options", "nosniff")
+        self.end_headers()
+        if self.command != "HEAD":
+            self.wfile.write(body)
+
+    def _json(self, status: int, data: Any) -> None:
+        body = json.dumps(data, allow_nan=False, separators=(",", ":")).encode("utf-8")
+        self._send(status, body, "application/json; charset=utf-8")
+
+    def _host_ok(self) -> bool:
+        host = (self.headers.get("Host") or "").lower()
+        port = self.server.port
+        return host in (f"127.0.0.1:{port}", f"localhost:{port}", "127.0.0.1", "localhost")
+
+    def _body(self) -> Any:
+        ctype = (self.headers.get("Content-Type") or "").split(";")[0].strip().lower()
+        if ctype != "application/json":
+            raise _HttpError(HTTPStatus.UNSUPPORTED_MEDIA_TYPE, "send JSON")
+        length = int(self.headers.get("Content-Length") or 0)
+        if length > MAX_BODY:
+            raise _HttpError(HTTPStatus.REQUEST_ENTITY_TOO_LARGE,
+                             f"request larger than {MAX_BODY // 1024 // 1024} MB")
+        try:
+            data = json.loads(self.rfile.read(length) or b"{}")
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            raise _HttpError(HTTPStatus.BAD_REQUEST, "not valid JSON") from None
+        if not isinstance(data, dict):
+            raise _HttpError(HTTPStatus.BAD_REQUEST, "expected a JSON object")
+        return data
+
+    def _dispatch(self, method: str) -> None:
+        if not self._host_ok():
+            self._json(HTTPStatus.FORBIDDEN, {"error": "the explorer answers 127.0.0.1 only"})
+            return
+        url = urlsplit(self.path)
+        try:
+            self._route(method, url.path, url.query)
+        except _HttpError as err:
+            self._json(err.status, {"error": err.message})
+        except (BrokenPipeError, ConnectionResetError):
+            pass
+        except Exception as err:  # the server must outlive any bug; the page shows it
+            traceback.print_exc(file=sys.stderr)
+            self._json(HTTPStatus.INTERNAL_SERVER_ERROR,
+                       {"error": f"internal error: {type(err).__name__}: {err}"})
+
+    def do_GET(self) -> None:  # noqa: N802  (BaseHTTPRequestHandler's name)
+        self._dispatch("GET")
+
+    def do_HEAD(self) -> None:  # noqa: N802
+        self._dispatch("GET")
+
+    def do_POST(self) -> None:  # noqa: N802
+        self._dispatch("POST")
+
+    # ------------------------------------------------------------ routes
+
+    def _route(self, method: str, path: str, query: str) -> None:
+        ex = self.server.explorer
+        if method == "GET":
+            if path in ("/", "/index.html"):
+                self._send(200, _static("index.html"), _STATIC["index.html"], "no-cache")
+            elif path == "/static/plotly.min.js":
+                self._send(200, ex.plotly(), "text/javascript; charset=utf-8",
+                           "max-age=86400")
+            elif path.startswith("/static/") and path[8:] in _STATIC:
+                name = path[8:]
+                self._send(200, _static(name), _STATIC[name], "no-cache")
+            elif path == "/api/info":
+                self._json(200, ex.info())
+            elif path == "/api/state":
+                settings, errors = from_query(query)
+                checked = check(settings).as_dict()
+                checked["errors"] = {**checked["errors"], **errors}
+                self._json(200, {"settings": settings, **checked})
+            elif path.startswith("/api/jobs/"):
+                job = ex.jobs.get(path.rsplit("/", 1)[-1])
+                if job is None:
+                    raise _HttpError(HTTPStatus.NOT_FOUND, "no such run")
+                self._json(200, job.as_dict())
+            elif path == "/favicon.ico":
+                self._send(204, b"", "image/x-icon", "max-age=86400")
+            else:
+                raise _HttpError(HTTPStatus.NOT_FOUND, f"no page {path}")
+            return
+        body = self._body()
+        if path == "/api/check":
+            self._json(200, check(body.get("settings")).as_dict())
+        elif path == "/api/jobs":
+            try:
+                job, checked = ex.start(str(body.get("kind")), body.get("settings") or {})
+            except Busy as err:
+                raise _HttpError(HTTPStatus.TOO_MANY_REQUESTS, str(err)) from None
+            except ParameterError as err:
+                raise _HttpError(HTTPStatus.BAD_REQUEST, str(err)) from None
+            if job is None:
+                self._json(HTTPStatus.UNPROCESSABLE_ENTITY, checked)
+            else:
+                self._json(HTTPStatus.ACCEPTED, {**job.as_dict(), "check": checked})
+        elif path.startswith("/api/jobs/") and path.endswith("/cancel"):
+            job = ex.jobs.cancel(path.split("/")[3])
+            if job is None:
+                raise _HttpError(HTTPStatus.NOT_FOUND, "no such run")
+            self._json(200, job.as_dict())
+        elif path == "/api/export":
+            done = check(body.get("settings"))
+            if not done.ok:
+                self._json(HTTPStatus.UNPROCESSABLE_ENTITY, done.as_dict())
+                return
+            name = done.params.name if done.params else "feeddrive"
+            self._json(200, {"filename": f"{_safe(name)}-{done.drive}.toml",
+                             "toml": export_toml(done)})
+        elif path == "/api/import":
+            text = body.get("toml")
+            if not isinstance(text, str):
+                raise _HttpError(HTTPStatus.BAD_REQUEST, "expected the file's text in 'toml'")
+            try:
+                settings = import_toml(text, body.get("settings"))
+            except ParameterError as err:
+                self._json(HTTPStatus.UNPROCESSABLE_ENTITY, {"errors": {"import": str(err)}})
+                return
+            self._json(200, {"settings": settings, **check(settings).as_dict()})
+        else:
+            raise _HttpError(HTTPStatus.NOT_FOUND, f"no page {path}")
+
+
+def _safe(name: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_." else "-" for c in name)[:60] or "feeddrive"
+
+
+class _HttpError(Exception):
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(message)
+        self.status = int(status)
+        self.message = message
+
+
+def make_server(port: int = 0, initial: dict[str, Any] | None = None, *,
+                warm_up: bool = True) -> ExplorerServer:
+    """A server on 127.0.0.1:``port`` (0: a free port), not yet serving; raises
+    :class:`MissingDependency` without plotly and :class:`OSError` when the port is taken."""
+    explorer = Explorer(initial)
+    explorer.plotly()  # fail now, not on the first page load
+    server = ExplorerServer(port, explorer)
+    if warm_up:
+        explorer.warm_up()
+    else:
+        explorer.ready.set()
+    return server
+
+
+def serve_in_thread(port: int = 0, initial: dict[str, Any] | None = None, *,
+                    warm_up: bool = True) -> ExplorerServer:
+    """Start a server in a daemon thread (tests, notebooks); stop it with ``shutdown()``."""
+    server = make_server(port, initial, warm_up=warm_up)
+    threading.Thread(target=server.serve_forever, name="feeddrive-explore", daemon=True
+                     ).start()
+    return server
