@@ -291,4 +291,37 @@ def shipped() -> DriveParameters:
     )
 
 
-PRESETS = {"wang2021": shipped, "wang2021-literal": literal}
+# ---- readings beyond the paper's model (issue 14), each a named preset
+
+RIPPLE_AMPLITUDE = 0.0135  # [N m], fitted: DDFS 0.50 mm/s at v_n = 16 mm/s (50 % threshold)
+RIPPLE_ORDER = 6.0  # per revolution
+
+RIPPLE_ASSUMPTIONS: tuple[Assumption, ...] = (
+    Assumption(
+        "torque-ripple", ("disturbances.screw_motor_ripple", "disturbances.hollow_motor_ripple"),
+        f"{RIPPLE_AMPLITUDE} N m at {RIPPLE_ORDER:g} per revolution, both motors (fitted)",
+        "Not in Wang2021's model; the authors' companion paper on the DDFS (Mech. Sci. 11, 163, "
+        "2020) studies the motors' torque harmonics.  0.0135 N m is about 0.6 % of the rated "
+        "torque of a servo motor with K_t = 0.55 N m/A (≈ 2.4 N m), the size cogging and "
+        "ripple have; 6 per revolution is the usual lowest cogging order.  The amplitude is "
+        "fitted to the DDFS critical speed 0.50 mm/s at v_n = 16 mm/s, where the critical "
+        "speed is defined by a 50 % ripple threshold (feeddrive.analysis.forced).",
+        fitted=True,
+    ),
+)
+
+
+def ripple() -> DriveParameters:
+    """``wang2021-ripple``: the shipped reading plus motor torque ripple on both motors."""
+    from ..parameters.components import Disturbances, TorqueRipple
+
+    r = TorqueRipple((RIPPLE_ORDER,), (RIPPLE_AMPLITUDE,), (0.0,))
+    base = shipped()
+    return base.with_values(
+        name="wang2021-ripple",
+        description="wang2021 plus motor torque ripple (0.0135 N m, 6 per revolution, both "
+        "motors; fitted to the DDFS critical speed by the 50 % ripple threshold). " + CITATION,
+        disturbances=Disturbances(screw_motor_ripple=r, hollow_motor_ripple=r))
+
+
+PRESETS = {"wang2021": shipped, "wang2021-literal": literal, "wang2021-ripple": ripple}

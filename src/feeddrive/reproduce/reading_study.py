@@ -88,6 +88,28 @@ def variants() -> list[Variant]:
             "controller.position_period": 1e-3, "controller.velocity_period": 1e-3,
             "controller.encoder_counts": 10000.0, "controller.grating_resolution": 1e-7}),
         *servo_variants(),
+        *beyond_variants(),
+    ]
+
+
+def beyond_variants() -> list[Variant]:
+    """Readings with effects the paper's model lacks (issue 14): ball–nut friction at the
+    relative screw−nut speed, motor torque ripple, real-drive limits and sampling."""
+    from ..presets.wang2021 import RIPPLE_AMPLITUDE, RIPPLE_ORDER
+
+    ripple = {"orders": (RIPPLE_ORDER,), "amplitudes": (RIPPLE_AMPLITUDE,), "phases": (0.0,)}
+    return [
+        *[(f"wang2021, ball–nut friction share {f:g} at the relative speed", SHIP,
+           {"friction.ball_nut_share": f}) for f in (1.0, 0.5, 0.2)],
+        ("wang2021-ripple: + motor torque ripple 0.0135 N m, 6/rev (verdict rule)", SHIP,
+         {"disturbances.screw_motor_ripple": ripple,
+          "disturbances.hollow_motor_ripple": ripple}),
+        ("wang2021, real drive: 17 A / 300 V limits, 8 kHz current, 4 kHz velocity, 2 kHz "
+         "position loops, 20-bit encoder, 0.05 µm grating", SHIP, {
+             "controller.current_limit": 17.0, "controller.voltage_limit": 300.0,
+             "controller.current_period": 1.25e-4, "controller.velocity_period": 2.5e-4,
+             "controller.position_period": 5e-4, "controller.encoder_counts": 2.0**20,
+             "controller.grating_resolution": 5e-8}),
     ]
 
 
@@ -118,6 +140,17 @@ def run_variant(job: tuple[str, str, dict[str, Any], str, float],
     name, preset, changes, drive, nut = job
     p = parameters.preset(preset)
     for path, value in changes.items():
+        if isinstance(value, dict):  # a component given by its fields (torque ripple)
+            from ..parameters import from_dict, to_dict
+
+            data = to_dict(p)
+            node = data
+            *parents, last = path.split(".")
+            for part in parents:
+                node = node[part]
+            node[last] = value
+            p = from_dict(data)
+            continue
         p = p.replace_path(path, value)
     row: dict[str, Any] = {"variant": name, "drive": drive, "nut_speed_mm_s": nut * 1e3,
                            "changes": changes}

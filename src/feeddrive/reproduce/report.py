@@ -17,6 +17,13 @@ from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
 from ..units import SITES
 from . import figures as figures_mod
+from .beyond_section import (
+    compensation_rows,
+    position_rows,
+    ripple_rows,
+    ripple_targets,
+    summary_text,
+)
 from .linear_section import linear_rows
 from .studies import MID, PAPER, StudySettings, write_csv
 
@@ -327,11 +334,15 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
                "DDFS Table 3": _fmt(1e3 * r["ddfs_paper"])} for r in results["table3"]]
     fig8_search = results["critical"]["crit-ddfs-fig8"]
     linear_text, linear = linear_rows(params, results)
+    forced = results.get("forced_study") or []
+    ripple_text, ripple = ripple_rows(forced)
     # (key, title, text, rows); figures go into the section CAPTIONS names (issue 12 item 20)
     sections: list[tuple[str, str, str, Any]] = [
+        ("reproduced", "What is reproduced and what is not", summary_text(results), []),
         ("targets", "Targets for the shipped reading", "Where a target is missed, the "
-         "model-reading study below is the evidence; docs/model-reading.md discusses it.",
-         target_rows(results)),
+         "model-reading study below is the evidence; docs/model-reading.md discusses it.  "
+         "The last rows are the targets on the torque-ripple reading (`wang2021-ripple`).",
+         target_rows(results) + (ripple_targets(forced) if forced else [])),
         ("comparison", "Paper numbers beside ours", "Every number of Wang2021 the study "
          "touches. 'fitted' means the number was used to fit an unknown; everything else is "
          f"predicted. Critical speeds are {protocol.describe('rest')}, unless the row says "
@@ -355,6 +366,15 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
          "negative-slope bands, zero-slope speeds and LuGre passivity per site. "
          + rigid_body_band(params) + ".", indicators),
         ("linear", "Linear analysis", linear_text, linear),
+        ("ripple", "The DDFS question: motor torque ripple", ripple_text, ripple),
+        ("ripple-positions", "Torque-ripple reading at the five table positions",
+         "Table 3's positions; the ripple reading has no mechanism that depends on the "
+         "position, so it predicts no trend.", position_rows(forced)),
+        ("compensation", "Friction compensation or a second motor?",
+         "CDFS with friction compensation (static feed-forward; LuGre observer after Canudas de "
+         "Wit et al. 1995), with the exact model and ±20 % error on F_c, F_s and v_s, against "
+         "the DDFS (`feeddrive compensate`).  Critical speeds from rest by the verdict rule.",
+         compensation_rows(results.get("compensation"))),
         ("readings", "Stiffness chain readings", "K_eq at mid-screw under readings of "
          "Eqs. (2)–(5); the paper states 21.6 N/µm.", readings),
         ("study", "Model-reading study", "How each unstated choice moves the critical speeds "

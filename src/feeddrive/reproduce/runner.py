@@ -22,16 +22,16 @@ from ..control import ConstantSpeed
 from ..parameters import DriveParameters, dumps
 from ..simulate import DriveSystem, simulate
 from ..store import ResultStore, code_hash, store_key
-from . import figures, reading_study, report, studies
+from . import figures, forced_study, reading_study, report, studies
 from .studies import MID, PAPER, StudySettings, write_csv
 
 _HERE = Path(__file__).resolve().parent
 # the code that computes the stored studies (beyond the compiled kernels)
-_STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py",
-                  _HERE.parent / "analysis" / "critical.py",
-                  _HERE.parent / "analysis" / "metrics.py", _HERE.parent / "simulate.py",
-                  _HERE.parent / "result.py", _HERE.parent / "stiffness.py",
-                  _HERE.parent / "protocol.py")
+_STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "forced_study.py",
+                  *(_HERE.parent / "analysis" / f"{name}.py"
+                    for name in ("critical", "metrics", "forced", "compensation")),
+                  _HERE.parent / "simulate.py", _HERE.parent / "result.py",
+                  _HERE.parent / "stiffness.py", _HERE.parent / "protocol.py")
 
 
 def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
@@ -55,6 +55,12 @@ def _critical_job(args: tuple[DriveParameters, str, float, float, StudySettings,
     if start == "rest":
         return studies.critical_speed(params, drive, position, nut_speed, settings)
     return studies.critical_speed_running(params, drive, position, nut_speed, settings)
+
+
+def _compensation_job(params: DriveParameters) -> dict[str, Any]:
+    from ..analysis.compensation import compensation_study
+
+    return {"rows": compensation_study(params)}
 
 
 def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = None,
@@ -85,15 +91,22 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
                                  "running")
     study_jobs = {f"study-{i}": job for i, job in enumerate(reading_study.jobs())} if study \
         else {}
-    total = len(jobs) + len(study_jobs) + 4
-    found = {k: store.get(k) for k in [*jobs, *study_jobs]}
-    done = sum(v is not None for v in found.values())
+    forced_jobs = {f"forced-{i}": job for i, job in enumerate(forced_study.jobs())} if study \
+        else {}
+    total = len(jobs) + len(study_jobs) + len(forced_jobs) + 5
+    found = {k: store.get(k) for k in [*jobs, *study_jobs, *forced_jobs,
+                                       *(["compensation"] if study else [])]}
+    done = sum(v is not None for k, v in found.items() if k != "compensation")
     if progress:
         progress("critical speeds", done, total)
     tasks: dict[str, tuple[Callable[..., dict[str, Any]], tuple[Any, ...]]] = {
         k: (_critical_job, (v,)) for k, v in jobs.items() if found[k] is None}
     tasks.update({k: (reading_study.run_variant, (v, settings))
                   for k, v in study_jobs.items() if found[k] is None})
+    tasks.update({k: (forced_study.run, (v,))
+                  for k, v in forced_jobs.items() if found[k] is None})
+    if study and found["compensation"] is None:
+        tasks["compensation"] = (_compensation_job, (params,))
     if tasks:
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
         # waits for its running searches took ~53 s to stop, issue 12 item 7)
@@ -114,6 +127,8 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     crit: dict[str, Any] = {k: found[k] for k in jobs}
     results["critical"] = crit
     results["reading_study"] = [found[k] for k in study_jobs]
+    results["forced_study"] = [found[k] for k in forced_jobs]
+    results["compensation"] = found["compensation"] if study else None
 
     def speed(key: str) -> float | None:
         v = crit[key]["critical_speed_mm_s"]

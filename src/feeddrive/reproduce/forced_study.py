@@ -1,0 +1,33 @@
+"""The DDFS question (issue 14): the torque-ripple reading ``wang2021-ripple``, whose creep
+is a forced oscillation and whose critical speed is defined by a ripple threshold
+(:mod:`feeddrive.analysis.forced`): CDFS and DDFS at every threshold, the DDFS against the
+hollow-motor speed, and the DDFS at the five table positions."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .. import parameters
+from ..analysis.forced import THRESHOLDS, threshold_critical_speed
+from ..simulate import DriveSystem
+from .studies import MID, PAPER
+
+PRESET = "wang2021-ripple"
+NUT_SPEEDS = (2e-3, 5e-3, 10e-3, 16e-3, 20e-3, 30e-3)  # [m/s] issue 14
+
+
+def jobs() -> list[tuple[str, float, float, float]]:
+    """(drive, nut speed [m/s], position [m], threshold)."""
+    out = [("cdfs", 0.0, MID, th) for th in THRESHOLDS]
+    out += [("ddfs", vn, MID, th) for vn in NUT_SPEEDS for th in THRESHOLDS]
+    out += [("ddfs", PAPER["experiment_nut_speed"], a, 0.5) for a in PAPER["positions"]
+            if a != MID]
+    return out
+
+
+def run(job: tuple[str, float, float, float]) -> dict[str, Any]:
+    drive, vn, position, threshold = job
+    system = DriveSystem(parameters.preset(PRESET), drive, position)
+    res = threshold_critical_speed(system, vn, threshold=threshold)
+    res["position_mm"] = 1e3 * position
+    return res
