@@ -44,6 +44,8 @@ def _source_digest() -> str:
 
 
 SOURCE_DIGEST = _source_digest()
+#: the kernels' source hash: names the compile cache and keys stored results (feeddrive.store)
+KERNEL_HASH = SOURCE_DIGEST
 
 
 def _cache_dir() -> str:

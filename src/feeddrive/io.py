@@ -7,6 +7,7 @@ as attributes (.mat: a ``units`` struct beside the signals).
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +20,21 @@ from .parameters import ParameterError
 from .units import ENGINEERING
 
 FORMATS = (".csv", ".parquet", ".nc", ".mat")
+
+#: how to get Parquet support (pyarrow is an optional dependency: docs/outputs.md)
+PARQUET_HINT = "Parquet output needs pyarrow: pip install 'feeddrive[parquet]'"
+
+
+def check_format(path: str | Path) -> str:
+    """The output format of ``path`` (its extension), refused before any work when unknown
+    or when its writer is not installed (Parquet without pyarrow)."""
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in FORMATS:
+        raise ParameterError("output", str(p), f"unknown extension; expected one of {FORMATS}")
+    if ext == ".parquet" and importlib.util.find_spec("pyarrow") is None:
+        raise ParameterError("output", str(p), PARQUET_HINT)
+    return ext
 
 
 def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
@@ -34,9 +50,7 @@ def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
 def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     """Write ``dataset`` to ``path``; the format follows the extension."""
     p = Path(path)
-    ext = p.suffix.lower()
-    if ext not in FORMATS:
-        raise ParameterError("output", str(p), f"unknown extension; expected one of {FORMATS}")
+    ext = check_format(p)
     p.parent.mkdir(parents=True, exist_ok=True)
     if ext == ".csv":
         to_engineering_frame(dataset).to_csv(p, index=False, float_format="%.10g")

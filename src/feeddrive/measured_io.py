@@ -15,8 +15,9 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -95,15 +96,19 @@ def unit_factor(unit: str, dimension: str, *, what: str) -> float:
 
 @dataclass(frozen=True)
 class CsvTable:
-    """A parsed delimited text file: header names (unit stripped), units, raw cells."""
+    """A scanned delimited text file: header names (unit stripped), units, the file line of
+    every data row.  Columns are parsed on demand (:meth:`numbers`), by pandas."""
 
     source: str
     names: tuple[str, ...]
     units: tuple[str | None, ...]
-    cells: tuple[tuple[str, ...], ...]  # one tuple of cells per column
     lines: np.ndarray  # file line number (1-based) of every data row
     header_line: int
+    path: Path
+    sep: str | None  # None: whitespace
+    skip: np.ndarray  # 0-based file lines that are not data rows (preamble, header, comments)
     decimal: str = "."
+    _parsed: dict[int, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
 
     def __len__(self) -> int:
         return int(self.lines.size)
@@ -125,32 +130,57 @@ class CsvTable:
         return MeasuredDataError(self.source, self.header_line,
                                  f"no column {wanted} in the header (columns: {shown})")
 
+    def _read(self, i: int, dtype: Any) -> Any:
+        import pandas as pd
+
+        _pandas_precision()
+        frame = pd.read_csv(
+            self.path, sep=r"\s+" if self.sep is None else self.sep, header=None,
+            names=list(range(len(self.names))), usecols=[i], index_col=False,
+            skiprows=self.skip.tolist(), skip_blank_lines=False, dtype={i: dtype},
+            decimal=self.decimal, keep_default_na=False, na_values=[""],
+            na_filter=dtype is not str,
+            skipinitialspace=True, encoding="utf-8-sig", encoding_errors="replace",
+            engine="c", quoting=3, **_PRECISION)
+        return frame[i].to_numpy()
+
+    def cell(self, i: int, k: int) -> str:
+        """The text of data row ``k`` in column ``i`` (for messages)."""
+        return str(self._read(i, str)[k]).strip()
+
     def numbers(self, name: str) -> np.ndarray:
         """Column ``name`` as float64, refusing empty, non-numeric and non-finite cells."""
         i = self.find(name)
         if i is None:
             raise self._missing([name])
-        raw = self.cells[i]
-        if self.decimal != ".":
-            raw = tuple(c.replace(self.decimal, ".") for c in raw)
+        if i in self._parsed:
+            return self._parsed[i]
         try:
-            values = np.array(raw, dtype=float)
-        except ValueError:
+            values = np.asarray(self._read(i, np.float64), dtype=float)
+        except (ValueError, TypeError):
+            values = None
+        if values is None or values.size != len(self):
+            # pandas refused a cell: find it, and its line, cell by cell
+            raw = self._read(i, str)
             values = np.empty(len(raw))
             for k, cell in enumerate(raw):
+                text = "" if cell is None or (isinstance(cell, float) and cell != cell) \
+                    else str(cell).strip()
                 try:
-                    values[k] = float(cell)
+                    values[k] = float(text.replace(self.decimal, ".") if self.decimal != "."
+                                      else text)
                 except ValueError:
-                    text = self.cells[i][k]
-                    problem = "empty cell" if not text.strip() else f"{text!r} is not a number"
+                    problem = "empty cell" if not text else f"{text!r} is not a number"
                     raise MeasuredDataError(self.source, int(self.lines[k]),
                                             f"column {self.names[i]!r}: {problem}") from None
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             k = int(bad[0])
+            text = self.cell(i, k)
+            problem = "empty cell" if not text else f"{text!r} is not a finite number"
             raise MeasuredDataError(self.source, int(self.lines[k]),
-                                    f"column {self.names[i]!r}: {self.cells[i][k]!r} is not a "
-                                    "finite number")
+                                    f"column {self.names[i]!r}: {problem}")
+        self._parsed[i] = values
         return values
 
     def quantity(self, names: Sequence[str], dimension: str, *, unit: str | None,
@@ -217,13 +247,63 @@ def check_text_file(path: str | Path) -> None:
                                 "text; export it as CSV (docs/measured-data.md)")
 
 
+_CHUNK = 1 << 22  # bytes scanned at a time (index arrays: 8 bytes per byte scanned)
+# exact (round-trip) float parsing: the default from pandas 3, an option before
+_PRECISION: dict[str, Any] = {}
+
+
+def _pandas_precision() -> None:
+    import pandas as pd
+
+    if int(pd.__version__.split(".")[0]) < 3:
+        _PRECISION["float_precision"] = "round_trip"
+
+
+_SPACE = np.zeros(256, dtype=bool)
+_SPACE[[9, 10, 11, 12, 13, 32]] = True
+
+
+def _scan_lines(data: np.ndarray, first_line: int, sep: str | None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For the complete lines in ``data`` (bytes, ending in a newline): (line numbers,
+    is-data-row mask, cell counts).  A data row is a line that is not blank and whose
+    first non-blank character is not ``#``."""
+    ends = np.flatnonzero(data == 10)
+    starts = np.r_[0, ends[:-1] + 1]
+    numbers = first_line + np.arange(ends.size)
+    space = _SPACE[data]
+    # first non-blank byte of each line: the next non-space at or after the start
+    nonspace = np.flatnonzero(~space)
+    k = np.searchsorted(nonspace, starts)
+    has = k < nonspace.size
+    first = np.where(has, nonspace[np.minimum(k, max(nonspace.size - 1, 0))], -1) \
+        if nonspace.size else np.full(starts.size, -1)
+    blank = ~has | (first >= ends)
+    comment = ~blank & (data[np.maximum(first, 0)] == ord("#"))
+    is_data = ~blank & ~comment
+    if sep is None:
+        # a cell starts at a non-space byte that follows a space (or the line start)
+        prev_space = np.r_[True, space[:-1]]
+        cell_starts = np.flatnonzero(~space & prev_space)
+    else:
+        cell_starts = np.flatnonzero(data == ord(sep))
+    counts = np.searchsorted(cell_starts, ends) - np.searchsorted(cell_starts, starts)
+    if sep is not None:
+        counts = counts + 1
+    return numbers, is_data, counts
+
+
 def read_csv_table(path: str | Path, *, sep: str | None = None,
                    decimal: str = ".") -> CsvTable:
-    """Parse a delimited text file with one header row.
+    """Scan a delimited text file with one header row.
 
     ``sep`` is the column separator; None detects it from the header (comma, semicolon,
     tab, else whitespace).  ``decimal`` is the decimal mark (``","`` for files written with
     a European locale; then the separator must not be a comma).
+
+    The file is scanned in chunks (line numbers of the data rows, cells per row) with numpy;
+    the columns a reader uses are then parsed by pandas' C reader, so a file of 10⁷ rows
+    needs about 16 bytes per row and used column, not Python strings for every cell.
     """
     p = Path(path)
     source = p.name
@@ -232,32 +312,57 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
         raise ValueError(f"decimal = {decimal!r}: expected '.' or ','")
     if sep is not None:
         sep = {"\\t": "\t", "tab": "\t", "space": None, "whitespace": None}.get(sep, sep)
-    text = p.read_text(encoding="utf-8-sig", errors="replace")
+        if sep is not None and len(sep.encode("utf-8")) != 1:
+            raise ValueError(f"sep = {sep!r}: expected one character, tab or space")
     header: list[str] | None = None
     header_line = 0
-    rows: list[list[str]] = []
-    lines: list[int] = []
-    for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
+    lines: list[np.ndarray] = []
+    skip: list[np.ndarray] = []
+    line_no = 1
+    with open(p, "rb") as f:
+        # the header: the first line that is neither blank nor a comment
+        while header is None:
+            raw = f.readline()
+            if not raw:
+                break
+            line = raw.decode("utf-8", errors="replace").lstrip("\ufeff").strip()
+            skip.append(np.array([line_no - 1]))
+            if line and not line.startswith("#"):
+                if sep is None:
+                    sep = _detect_separator(line)
+                if sep == decimal:
+                    raise MeasuredDataError(source, line_no, f"separator and decimal mark "
+                                            f"are both {decimal!r}")
+                header = _split(line, sep)
+                header_line = line_no
+            line_no += 1
         if header is None:
-            if sep is None:
-                sep = _detect_separator(line)
-            if sep == decimal:
-                raise MeasuredDataError(source, number, f"separator and decimal mark are both "
-                                        f"{decimal!r}")
-            header = _split(line, sep)
-            header_line = number
-            continue
-        cells = _split(line, sep)
-        if len(cells) != len(header):
-            raise MeasuredDataError(source, number, f"{len(cells)} cells, but the header (line "
-                                    f"{header_line}) has {len(header)} columns")
-        rows.append(cells)
-        lines.append(number)
-    if header is None:
-        raise MeasuredDataError(source, None, "no header row (the file is empty)")
+            raise MeasuredDataError(source, None, "no header row (the file is empty)")
+        tail = b""
+        while True:
+            chunk = f.read(_CHUNK)
+            data = tail + chunk
+            if not chunk:
+                if data and not data.endswith(b"\n"):
+                    data += b"\n"
+                tail = b""
+            else:
+                cut = data.rfind(b"\n") + 1
+                data, tail = data[:cut], data[cut:]
+            if data:
+                numbers, is_data, counts = _scan_lines(np.frombuffer(data, dtype=np.uint8),
+                                                       line_no, sep)
+                wrong = np.flatnonzero(is_data & (counts != len(header)))
+                if wrong.size:
+                    k = int(wrong[0])
+                    raise MeasuredDataError(source, int(numbers[k]), f"{int(counts[k])} cells, "
+                                            f"but the header (line {header_line}) has "
+                                            f"{len(header)} columns")
+                lines.append(numbers[is_data])
+                skip.append(numbers[~is_data] - 1)
+                line_no += numbers.size
+            if not chunk:
+                break
     parsed = [split_unit(h) for h in header]
     names = tuple(n for n, _ in parsed)
     seen: set[str] = set()
@@ -267,13 +372,17 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
         if n.lower() in seen:
             raise MeasuredDataError(source, header_line, f"column {n!r} appears twice")
         seen.add(n.lower())
-    columns = tuple(tuple(r[i] for r in rows) for i in range(len(names)))
     return CsvTable(source=source, names=names, units=tuple(u for _, u in parsed),
-                    cells=columns, lines=np.array(lines, dtype=int), header_line=header_line,
-                    decimal=decimal)
+                    lines=np.concatenate(lines) if lines else np.zeros(0, dtype=np.int64),
+                    header_line=header_line, path=p, sep=sep,
+                    skip=np.concatenate(skip).astype(np.int64), decimal=decimal)
 
 
 def _need_rows(table: CsvTable, minimum: int, what: str) -> None:
+    if len(table) == 0:
+        raise MeasuredDataError(table.source, None, f"empty: a header (line "
+                                f"{table.header_line}) and no data rows; a {what} needs at "
+                                f"least {minimum}")
     if len(table) < minimum:
         raise MeasuredDataError(table.source, None, f"{len(table)} data rows; a {what} needs at "
                                 f"least {minimum}")
@@ -284,11 +393,11 @@ def check_increasing(table: CsvTable, time: np.ndarray, column: str) -> None:
     bad = np.flatnonzero(np.diff(time) <= 0.0)
     if bad.size:
         k = int(bad[0]) + 1
-        cells = table.cells[table.find(column) or 0]
+        i = table.find(column) or 0
         raise MeasuredDataError(
             table.source, int(table.lines[k]),
-            f"column {column!r} does not increase ({cells[k - 1]} on line "
-            f"{int(table.lines[k - 1])}, then {cells[k]})")
+            f"column {column!r} does not increase ({table.cell(i, k - 1)} on line "
+            f"{int(table.lines[k - 1])}, then {table.cell(i, k)})")
 
 
 # ---------------------------------------------------------------- static friction tests
@@ -327,6 +436,7 @@ def read_static_test(
     required.
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
+    _need_rows(table, 1, "static friction test")
     speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit, default_unit="mm/s")
     if table.has(force_column) or not table.has(current_column):
         if not table.has(force_column):

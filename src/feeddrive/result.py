@@ -169,6 +169,7 @@ class Result:
         """
         from .analysis.metrics import position_metrics, sine_metrics
 
+        warnings: list[str] = []
         attrs = self.attrs
         frequency = _sine_frequency(attrs.get("profile", ""))
         out: dict[str, Any] = {"drive": attrs["drive"]}
@@ -200,6 +201,13 @@ class Result:
                 "stick_slip_frequency_hz": m.stick_slip_frequency,
                 "verdict": m.verdict,
             })
+            if m.unstable:
+                warnings.append(f"unstable: the loop diverges (table speed peaks at "
+                                f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, "
+                                f"limit {m.thresholds.max_speed_ratio:g}×)")
+        travel = self._travel_warning()
+        if travel:
+            warnings.append(travel)
         sel = (self.time >= window[0]) & (self.time <= window[1])
         out.update(position_metrics(self.time, self["following_error"], window))
         out.update({
@@ -207,8 +215,26 @@ class Result:
             "mean_screw_speed_mm_s": self._mean_mm_s("screw_linear_speed", sel),
             "mean_nut_speed_mm_s": self._mean_mm_s("nut_linear_speed", sel),
             "solver": self.solver_stats,
+            "warnings": warnings,
         })
         return out
+
+    def _travel_warning(self) -> str | None:
+        """Whether the table left the screw's travel (feeddrive.analysis.metrics)."""
+        import tomllib
+
+        from .analysis.metrics import travel_warning
+
+        if self._run is not None:
+            length = self._run.system.parameters.screw.length
+            start = self._run.system.table_position
+        else:
+            attrs = self.dataset.attrs
+            screw = tomllib.loads(attrs.get("parameters_toml", "")).get("screw", {})
+            if "length" not in screw or "table_start_position_m" not in attrs:
+                return None
+            length, start = screw["length"], attrs["table_start_position_m"]
+        return travel_warning(start, self["table_position"], length)
 
     def _hold_window(self) -> tuple[float, float]:
         """The steady window (:func:`steady_window`) of the first stretch where a sampled

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import budget
 from .control import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from .model.assemble import Model, assemble
 from .model.disturbances import LoadProfile
@@ -149,6 +150,28 @@ def sampling(params: DriveParameters, output_interval: float) -> Sampling:
     return Sampling(base, n[0], n[1], n[2], out_every)
 
 
+def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: Sampling,
+                     options: SolverOptions, y0: np.ndarray, t_end: float,
+                     adaptive: int, atol: np.ndarray, rel: np.ndarray, h_init: float,
+                     h_max: float) -> None:
+    """Refuse, before integrating with ``dopri5``, a run whose steps (projected from a short
+    probe) exceed ``max_steps`` (feeddrive.budget)."""
+    t_probe = budget.probe_time(t_end, grid.base) if adaptive else 0.0
+    if not t_probe:
+        return
+    allowed = int(options.max_steps * t_probe / t_end) + 1000
+    _, _, _, stats, _ = dopri5.integrate(
+        model, y0.copy(), t_probe, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
+        grid.n_cur, options.rtol, atol, rel, h_init, h_max, adaptive, allowed)
+    if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
+        problem = budget.step_rate_problem(
+            steps=int(stats[1]), probe_time=float(stats[4]), duration=t_end,
+            max_steps=options.max_steps, params=system.parameters, drive=system.drive,
+            speed=budget.profile_speed(profile))
+        if problem:
+            raise SimulationError(problem)
+
+
 def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarray:
     """Instants in (0, t_end) [s] where the command has a kink, declared to the dense-output
     integrator as step ends: the end of a constant-speed start ramp; the grid of a sampled
@@ -212,6 +235,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
                                  options.current_tolerance)
     y0 = system.initial_vector(model)
+    if output is None:  # a streamed run keeps only its last KEEP_STREAMED seconds
+        budget.check_output_memory(t_end, options.output_interval)
     started = _time.perf_counter()
     if options.method in _DENSE_MODES:
         if output is not None:
@@ -230,6 +255,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         h_init = 1e-6 if adaptive else options.fixed_step
         max_step = 1e-3 if options.max_step is None else options.max_step
         h_max = min(max_step, grid.base) if adaptive else options.fixed_step
+        _check_step_rate(system, profile, model, grid, options, y0, t_end, adaptive, atol,
+                         rel, h_init, h_max)
         try:
             t, y, aux, stats = _chunked_dopri5(
                 model, system, profile, y0, n_break, grid, options, atol, rel, h_init,
@@ -246,7 +273,7 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         raise SimulationError(
             f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
             f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
-            f"{int(stats[2])}); try a larger options.max_steps or check the parameters")
+            f"{int(stats[2])}); raise max_steps (--max-steps) or check the parameters")
     solver_stats = {
         "method": options.method, "rtol": options.rtol,
         "position_tolerance": options.position_tolerance,

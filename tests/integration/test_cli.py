@@ -205,7 +205,7 @@ def test_params_check_refuses_edited_files(tmp_path: Path, old: str, new: str,
     path = tmp_path / "edited.toml"
     path.write_text(text.replace(old, new), encoding="utf-8")
     line = one_line_error(run("params", "check", str(path)))
-    assert line.startswith(f"error: {field} = ")
+    assert line.startswith(f"error: {path}: {field} = ")  # the file, then the field (issue 13)
 
 
 def test_params_check_missing_file() -> None:

@@ -142,7 +142,8 @@ def test_a_bad_parameter_gets_the_message_params_check_prints(
     path.write_text(f'extends = "wang2021"\n{toml}\n', encoding="utf-8")
     result = runner.invoke(app, ["params", "check", str(path)])
     assert result.exit_code != 0
-    assert result.stderr.strip() == f"error: {out['errors'][field]}"
+    # the CLI names the file first (issue 13), then the explorer's message word for word
+    assert result.stderr.strip() == f"error: {path}: {out['errors'][field]}"
 
 
 def test_friction_scale_is_checked_like_a_parameter(server: ExplorerServer) -> None:

@@ -14,12 +14,12 @@ file), re-validating the result.  Keys follow the parameter file layout of
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from ..parameters import DriveParameters, ParameterError, from_dict, to_dict
+from ..parameters.toml_io import parse_toml, read_toml_file, toml_comment
 from .identification import SITES, DynamicFit, Estimate, StaticFit
 
 __all__ = ["friction_fragment", "load_fragment", "merge_fragment"]
@@ -34,9 +34,10 @@ _BRANCH_FIELDS = (
 
 def _ci(est: Estimate) -> str:
     level = f"{100 * est.confidence:.0f} %"
+    flag = "" if est.identifiable else f"; NOT IDENTIFIABLE: {est.identifiability_issue}"
     if not (math.isfinite(est.low) and math.isfinite(est.high)):
-        return f"{level} CI not determined"
-    return f"{level} CI {est.low:.6g} … {est.high:.6g}"
+        return f"{level} CI not determined{flag}"
+    return f"{level} CI {est.low:.6g} … {est.high:.6g}{flag}"
 
 
 def friction_fragment(
@@ -56,7 +57,7 @@ def friction_fragment(
         raise ParameterError("site", site, f"expected one of {', '.join(SITES)}")
     if static is None and dynamic is None:
         raise ValueError("friction_fragment: give a static fit, a dynamic fit or both")
-    origin = f" from {source}" if source else ""
+    origin = f" from {toml_comment(source)}" if source else ""
     lines = [
         f"# feeddrive friction fragment for the {site} site, identified{origin}.",
         "# SI units. Merge into a parameter set: feeddrive identify merge THIS_FILE --out FILE",
@@ -89,13 +90,10 @@ def friction_fragment(
 
 def load_fragment(path: str | Path) -> dict[str, Any]:
     """Read a TOML fragment file as a nested dict."""
-    p = Path(path)
-    if not p.is_file():
-        raise ParameterError("fragment", str(p), "no such file")
-    try:
-        return tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise ParameterError("fragment", str(p), f"not valid TOML: {err}") from None
+    data = read_toml_file(path, field="fragment")
+    if not data:
+        raise ParameterError("fragment", str(path), "empty: no values to merge")
+    return data
 
 
 def _deep_merge(base: dict[str, Any], update: Mapping[str, Any], path: str) -> dict[str, Any]:
@@ -126,11 +124,12 @@ def merge_fragment(base: DriveParameters,
     if isinstance(fragment, Path):
         data: Mapping[str, Any] = load_fragment(fragment)
     elif isinstance(fragment, str):
-        try:
-            data = tomllib.loads(fragment)
-        except tomllib.TOMLDecodeError as err:
-            raise ParameterError("fragment", "<toml>", f"not valid TOML: {err}") from None
+        data = parse_toml(fragment, field="fragment")
     else:
         data = fragment
-    merged = _deep_merge(to_dict(base), data, "")
-    return from_dict(merged)
+    try:
+        return from_dict(_deep_merge(to_dict(base), data, ""))
+    except ParameterError as err:
+        if isinstance(fragment, Path) and err.source is None:
+            raise err.in_file(str(fragment)) from None
+        raise

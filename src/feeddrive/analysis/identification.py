@@ -21,7 +21,9 @@ transients); the dynamic fit reports a profile-likelihood interval and says so p
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -54,9 +56,22 @@ Weighting = Literal["relative", "absolute"]
 MIN_SPEEDS_PER_DIRECTION = 5
 
 
+#: a fitted value is flagged unidentifiable when its confidence interval's half-width
+#: exceeds this fraction of |value| (the data do not pin it down to within ±50 %)
+MAX_RELATIVE_HALF_WIDTH = 0.5
+
+#: ... or when its estimate correlates more than this (in magnitude) with another fitted
+#: parameter: the data fix only a combination of the two
+MAX_CORRELATION = 0.995
+
+
 @dataclass(frozen=True)
 class Estimate:
-    """A fitted value with its standard error and two-sided confidence interval (SI unit)."""
+    """A fitted value with its standard error and two-sided confidence interval (SI unit).
+
+    ``max_correlation`` is the largest |correlation| of this estimate with another fitted
+    parameter (``correlated_with``); with the interval it decides :attr:`identifiable`.
+    """
 
     value: float
     stderr: float
@@ -64,10 +79,31 @@ class Estimate:
     high: float
     unit: str
     confidence: float
+    max_correlation: float = math.nan
+    correlated_with: str | None = None
 
     @property
     def relative_stderr(self) -> float:
         return abs(self.stderr / self.value) if self.value != 0 else math.inf
+
+    @property
+    def identifiability_issue(self) -> str | None:
+        """Why the data do not determine this value, or None when they do."""
+        level = f"{100 * self.confidence:.0f} %"
+        if not (math.isfinite(self.low) and math.isfinite(self.high)):
+            return f"{level} interval not determined"
+        half = 0.5 * (self.high - self.low)
+        if self.value == 0.0 or half > MAX_RELATIVE_HALF_WIDTH * abs(self.value):
+            return (f"{level} interval wider than ±{100 * MAX_RELATIVE_HALF_WIDTH:.0f} % of the "
+                    "value")
+        if math.isfinite(self.max_correlation) and abs(self.max_correlation) > MAX_CORRELATION:
+            return (f"correlation {self.max_correlation:+.4f} with {self.correlated_with}: the "
+                    "data fix only a combination of the two")
+        return None
+
+    @property
+    def identifiable(self) -> bool:
+        return self.identifiability_issue is None
 
     def to_dict(self, scale: float = 1.0, unit: str | None = None) -> dict[str, Any]:
         return {
@@ -77,7 +113,28 @@ class Estimate:
             "ci_high": _finite_or_none(self.high * scale),
             "unit": unit or self.unit,
             "confidence": self.confidence,
+            "max_correlation": _finite_or_none(self.max_correlation),
+            "correlated_with": self.correlated_with,
+            "identifiable": self.identifiable,
+            "identifiability_issue": self.identifiability_issue,
         }
+
+
+def _with_correlation(est: Estimate, corr: np.ndarray, i: int,
+                      names: tuple[str, ...]) -> Estimate:
+    """``est`` (parameter ``i`` of ``names``) with its largest correlation to another."""
+    row = np.where(np.arange(corr.shape[0]) == i, 0.0, np.nan_to_num(np.abs(corr[i]), nan=0.0))
+    j = int(np.argmax(row))
+    if row.size < 2 or not np.isfinite(corr[i, j]):
+        return est
+    return dataclasses.replace(est, max_correlation=float(corr[i, j]),
+                               correlated_with=names[j])
+
+
+def _correlation(cov: np.ndarray) -> np.ndarray:
+    with np.errstate(all="ignore"):
+        sd = np.sqrt(np.where(np.isfinite(np.diag(cov)), np.diag(cov), np.nan))
+        return np.asarray(cov / np.outer(sd, sd))
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -143,6 +200,11 @@ class BranchFit:
             "viscous_coefficient": self.viscous_coefficient,
         }
 
+    def unidentifiable(self) -> dict[str, str]:
+        """Name → reason of every estimate the data do not determine."""
+        return {name: est.identifiability_issue for name, est in self.estimates().items()
+                if est.identifiability_issue is not None}
+
 
 @dataclass(frozen=True)
 class StaticFit:
@@ -172,6 +234,7 @@ class StaticFit:
                 "stribeck_velocity": b.stribeck_velocity.to_dict(vs_scale, vs_unit),
                 "viscous_coefficient": b.viscous_coefficient.to_dict(),
                 "rmse": b.rmse,
+                "unidentifiable": b.unidentifiable(),
                 "points": int(b.speed.size),
                 "dof": b.dof,
             }
@@ -249,18 +312,27 @@ def fit_branch(speed: object, force: object, *, direction: str = "positive",
     tq = _t_quantile(confidence, dof)
     fc, dF, vs, s2 = (float(x) for x in theta)
     var_fs = cov[0, 0] + cov[1, 1] + 2.0 * cov[0, 1]
-    sd = np.sqrt(np.where(np.isfinite(np.diag(cov)), np.diag(cov), np.nan))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(sd, sd)
+    corr = _correlation(cov)
+    # the reported parameters are (F_c, F_s = F_c + ΔF, v_s, σ2): their correlations
+    to_reported = np.eye(4)
+    to_reported[1, 0] = 1.0
+    with np.errstate(all="ignore"):
+        reported = _correlation(to_reported @ cov @ to_reported.T)
+    names = ("F_c", "F_s", "v_s", "σ2")
     branch = FrictionBranch(coulomb_force=fc, static_force=fc + dF, stribeck_velocity=vs,
                             viscous_coefficient=s2)
+    ests = [_with_correlation(e, reported, i, names) for i, e in enumerate((
+        _estimate(fc, cov[0, 0], tq, "N", confidence),
+        _estimate(fc + dF, var_fs, tq, "N", confidence),
+        _estimate(vs, cov[2, 2], tq, "m/s", confidence),
+        _estimate(s2, cov[3, 3], tq, "N s/m", confidence)))]
     return BranchFit(
         direction=direction,
         branch=branch,
-        coulomb_force=_estimate(fc, cov[0, 0], tq, "N", confidence),
-        static_force=_estimate(fc + dF, var_fs, tq, "N", confidence),
-        stribeck_velocity=_estimate(vs, cov[2, 2], tq, "m/s", confidence),
-        viscous_coefficient=_estimate(s2, cov[3, 3], tq, "N s/m", confidence),
+        coulomb_force=ests[0],
+        static_force=ests[1],
+        stribeck_velocity=ests[2],
+        viscous_coefficient=ests[3],
         speed=v,
         force=f,
         fitted=fitted,
@@ -498,6 +570,9 @@ class DynamicFit:
 #: above this max|F|/F_s the linear pre-sliding model is flagged as biased
 LINEAR_MAX_FORCE_RATIO = 0.02
 
+#: largest sample interval of a pre-sliding test, as a multiple of the median interval
+MAX_STEP_RATIO = 100.0
+
 #: σ1 counts as determined when its standard error is at most this fraction of its value
 SIGMA1_MAX_RELATIVE_STDERR = 0.25
 
@@ -520,9 +595,18 @@ def _check_presliding(t: np.ndarray, f: np.ndarray, x: np.ndarray, mass: float,
         raise ValueError(f"{prefix}force, position: expected one value per time sample")
     if t.size < 20:
         raise ValueError(f"{prefix}time: {t.size} samples; the pre-sliding fit needs at least 20")
-    bad = np.flatnonzero(np.diff(t) <= 0)
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
     if bad.size:
         raise ValueError(f"{prefix}{_locate(lines, int(bad[0]) + 1)}: time does not increase")
+    # the model is integrated with a fixed number of steps per sample interval, set by the
+    # longest one: a gap would multiply the work of every interval
+    k = int(np.argmax(steps))
+    median = float(np.median(steps))
+    if steps[k] > MAX_STEP_RATIO * median:
+        raise ValueError(f"{prefix}{_locate(lines, k + 1)}: time jumps by {steps[k]:.6g} s, "
+                         f"more than {MAX_STEP_RATIO:g}× the median step {median:.3g} s; a "
+                         "pre-sliding test must be sampled evenly (split the record at the gap)")
     if not (isinstance(mass, int | float) and math.isfinite(mass) and mass > 0):
         raise ValueError(f"mass = {mass!r}: expected a positive mass [kg]")
     if np.ptp(x) == 0.0:
@@ -548,6 +632,7 @@ def fit_presliding(
     confidence: float = 0.95,
     lines: np.ndarray | None = None,
     source: str | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> DynamicFit:
     """Fit σ0 and σ1 to a pre-sliding test (force below breakaway).
 
@@ -572,7 +657,11 @@ def fit_presliding(
 
     σ1 is profiled: for each σ1 on a grid, σ0 is refitted; the interval where the residual
     stays within the F-test bound for ``confidence`` is ``sigma1_interval``.
+
+    ``progress`` receives a short line at each stage of a long fit (start k of 3, profile
+    point i of n).
     """
+    say = progress or (lambda _text: None)
     t = np.asarray(time, dtype=float)
     f = np.asarray(force, dtype=float)
     x = np.asarray(position, dtype=float)
@@ -640,7 +729,8 @@ def fit_presliding(
                              diff_step=1e-6, xtol=1e-10, ftol=1e-12)
 
     best = None
-    for s1_start in (0.02 * crit, 0.2 * crit, 1.0 * crit):
+    for k, s1_start in enumerate((0.02 * crit, 0.2 * crit, 1.0 * crit), start=1):
+        say(f"fitting σ0 and σ1: start {k} of 3")
         res = fit(None, (s0_init, s1_start))
         if best is None or res.cost < best.cost:
             best = res
@@ -670,9 +760,12 @@ def fit_presliding(
     i_hat = int(np.argmin(np.abs(grid - s1_hat)))
     prof[i_hat] = ssr
     # continuation: walk away from the optimum, each refit starting from its neighbour's σ0
+    done = 0
     for order in (range(i_hat + 1, grid.size), range(i_hat - 1, -1, -1)):
         s0_prev = s0_hat
         for i in order:
+            done += 1
+            say(f"profiling σ1: point {done} of {grid.size - 1}")
             res = fit(float(grid[i]), (s0_prev, float(grid[i])))
             prof[i] = 2.0 * res.cost * scale**2
             s0_prev = float(res.x[0] * s0_init)
@@ -681,6 +774,9 @@ def fit_presliding(
 
     s0_est = _estimate(s0_hat, cov[0, 0], tq, "N/m", confidence)
     s1_est = _estimate(s1_hat, cov[1, 1], tq, "N s/m", confidence)
+    if math.isfinite(corr):
+        s0_est = dataclasses.replace(s0_est, max_correlation=corr, correlated_with="σ1")
+        s1_est = dataclasses.replace(s1_est, max_correlation=corr, correlated_with="σ0")
     determined = (s1_est.relative_stderr <= SIGMA1_MAX_RELATIVE_STDERR and math.isfinite(high))
     if determined:
         note = (f"σ1 determined: {s1_hat:.4g} N s/m, ±{100 * s1_est.relative_stderr:.0f} % "

@@ -11,8 +11,11 @@ with explicit, user-changeable thresholds (:class:`CreepThresholds`):
 * **stick fraction**: fraction of the window's *time* during which the speed, in the
   command's direction, is below ``stick_level``·|v_cmd|,
 * **stick-slip frequency** [Hz]: the periodogram peak of the detrended speed,
-* **verdict**: ``"creeping"`` if the stick fraction or the ripple ratio exceeds its limit,
-  else ``"smooth"``.
+* **verdict**: ``"unstable"`` if the loop diverges — the speed peaks above
+  ``max_speed_ratio``·|v_cmd| (stick-slip peaks stay within a few times the command) or the
+  table runs backwards on average faster than the command; else ``"creeping"`` if the stick
+  fraction or the ripple ratio exceeds its limit; else ``"smooth"``.  The CLI exits with
+  status 3 on ``"unstable"`` (README, "Exit status").
 
 Negative command speeds are handled by working on the speed in the command's direction
 (speed·sign(v_cmd)) and on |v_cmd|; the reported mean speed keeps its sign.
@@ -35,6 +38,8 @@ __all__ = [
     "CreepThresholds",
     "MIN_SAMPLES",
     "creep_metrics",
+    "resample_size",
+    "travel_warning",
     "steady_window",
     "KINDS",
     "CREEPING_KINDS",
@@ -42,6 +47,10 @@ __all__ = [
     "VerdictRule",
     "trace_verdict",
 ]
+
+# numpy ≥ 2.0 calls it trapezoid; 1.26, the declared minimum, only has trapz
+# (found by .ci/min-versions)
+_trapezoid: Any = getattr(np, "trapezoid", None) or getattr(np, "trapz")  # noqa: B009
 
 #: fewest samples accepted in a trace, and in its steady window
 MIN_SAMPLES = 16
@@ -70,6 +79,10 @@ class CreepThresholds:
         No stick-slip frequency is reported when the periodogram peak (its main lobe) holds
         less than this share of the ripple power (default 0.1): the ripple is not periodic
         (broadband noise spreads its power over all frequencies).
+    max_speed_ratio:
+        The run is unstable if max|v|/|v_cmd| exceeds this (default 20).  Stick-slip of the
+        Wang2021 CDFS peaks at about 2.2× the command (0.5–1.5 mm/s, 12 s runs); a diverging
+        loop (a 100-t table) reaches 10⁴×.
     """
 
     stick_level: float = 0.1
@@ -77,10 +90,11 @@ class CreepThresholds:
     max_ripple_ratio: float = 0.5
     min_ripple_for_frequency: float = 0.02
     min_peak_share: float = 0.1
+    max_speed_ratio: float = 20.0
 
     def __post_init__(self) -> None:
         for name in ("stick_level", "max_stick_fraction", "max_ripple_ratio",
-                     "min_ripple_for_frequency", "min_peak_share"):
+                     "min_ripple_for_frequency", "min_peak_share", "max_speed_ratio"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float) \
                     or not math.isfinite(value) or value < 0:
@@ -116,7 +130,12 @@ class CreepMetrics:
 
     @property
     def creeping(self) -> bool:
-        return self.verdict == "creeping"
+        """Not smooth: creeping, or worse (``"unstable"``)."""
+        return self.verdict != "smooth"
+
+    @property
+    def unstable(self) -> bool:
+        return self.verdict == "unstable"
 
     def to_dict(self, units: Literal["SI", "mm"] = "SI") -> dict[str, Any]:
         """Plain dict for JSON output; speeds in m/s (``"SI"``) or mm/s (``"mm"``)."""
@@ -267,6 +286,25 @@ def steady_window(
 # ---------------------------------------------------------------- metrics
 
 
+def travel_warning(start_position: float, displacement: object,
+                   screw_length: float) -> str | None:
+    """A warning when the table leaves the screw's travel (0, ``screw_length``) [m], or None.
+
+    ``start_position`` [m] is the table's start a on the screw; ``displacement`` [m] its
+    motion from there (a simulated ``table_position``).  The model has no end stops, so such
+    a run means the loop diverged or the duration is too long for the speed.
+    """
+    x = start_position + np.asarray(displacement, dtype=float)
+    if x.size == 0:
+        return None
+    low, high = float(np.min(x)), float(np.max(x))
+    if low > 0.0 and high < screw_length:
+        return None
+    return (f"the table leaves the screw's travel: it reaches {1e3 * low:.4g} … "
+            f"{1e3 * high:.4g} mm on a {1e3 * screw_length:.4g}-mm screw (no end stops are "
+            "modelled)")
+
+
 def _time_below(t: np.ndarray, s: np.ndarray, level: float) -> float:
     """Time [s] during which the piecewise-linear interpolant of s is below ``level``."""
     a, b = s[:-1] - level, s[1:] - level
@@ -282,13 +320,38 @@ def _time_below(t: np.ndarray, s: np.ndarray, level: float) -> float:
     return total
 
 
+#: a uniform resampling grid holds at most this many times the samples it is made from
+MAX_RESAMPLE_FACTOR = 4
+
+
+def resample_size(t: np.ndarray, dt: float, *, lines: np.ndarray | None = None,
+                  source: str | None = None) -> int:
+    """Points of a uniform grid of step ``dt`` [s] over ``t``, refused with a message when
+    it would exceed :data:`MAX_RESAMPLE_FACTOR` × the samples (a gap in the record: a
+    31-row file whose last time is 10⁶ s would otherwise ask for 10⁹ points)."""
+    n = int(math.floor((float(t[-1]) - float(t[0])) / dt + 1e-9)) + 1
+    limit = MAX_RESAMPLE_FACTOR * int(t.size)
+    if n > limit:
+        steps = np.diff(t)
+        k = int(np.argmax(steps))
+        where = (f"line {int(lines[k + 1])}" if lines is not None and lines.size == t.size
+                 else f"sample {k + 1}")
+        prefix = f"{source}: " if source else ""
+        raise ValueError(
+            f"{prefix}time: a gap of {float(steps[k]):.6g} s before {where} (median step "
+            f"{dt:.3g} s); a uniform grid would need {n} points, more than "
+            f"{MAX_RESAMPLE_FACTOR}× the {t.size} samples; refused — split the record at the "
+            "gap")
+    return n
+
+
 def _uniform(t: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, float]:
     """Samples of s on a uniform grid (resampled linearly when the sampling jitters > 1 %)."""
     steps = np.diff(t)
     dt = float(np.median(steps))
     if float(np.max(np.abs(steps - dt))) <= 0.01 * dt:
         return s, dt
-    n = int(math.floor((t[-1] - t[0]) / dt)) + 1
+    n = resample_size(t, dt)
     grid = t[0] + dt * np.arange(n)
     return np.interp(grid, t, s), dt
 
@@ -376,13 +439,15 @@ def creep_metrics(
     along = vw * direction
     ref = abs(vc)
     duration = float(tw[-1] - tw[0])
-    mean_speed = float(np.trapezoid(vw, tw) / duration)
+    mean_speed = float(_trapezoid(vw, tw) / duration)
     ripple = float((np.max(along) - np.min(along)) / ref)
     min_ratio = float(np.min(along) / ref)
     max_ratio = float(np.max(along) / ref)
     stick = _time_below(tw, along, th.stick_level * ref) / duration
     freq = _dominant_frequency(tw, along, ripple, th)
     creeping = stick > th.max_stick_fraction or ripple > th.max_ripple_ratio
+    peak = float(np.max(np.abs(vw))) / ref
+    unstable = peak > th.max_speed_ratio or mean_speed / vc < -1.0
     return CreepMetrics(
         command_speed=vc,
         window_start=float(tw[0]),
@@ -392,7 +457,7 @@ def creep_metrics(
         min_ratio=min_ratio,
         stick_fraction=float(stick),
         stick_slip_frequency=freq,
-        verdict="creeping" if creeping else "smooth",
+        verdict="unstable" if unstable else "creeping" if creeping else "smooth",
         thresholds=th,
         max_ratio=max_ratio,
         window_samples=int(tw.size),

@@ -50,7 +50,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .metrics import CreepMetrics, CreepThresholds, creep_metrics, steady_window
+from .metrics import CreepMetrics, CreepThresholds, creep_metrics, resample_size, steady_window
 
 __all__ = [
     "CriticalSpeed",
@@ -94,8 +94,15 @@ class SpeedEstimate:
 
 
 def estimate_speed(time: object, position: object, *, smoothing_time: float | None = None,
-                   window: int | None = None, polyorder: int = 2) -> SpeedEstimate:
-    """Table speed [m/s] from position [m] by a Savitzky–Golay differentiator (see module)."""
+                   window: int | None = None, polyorder: int = 2,
+                   lines: np.ndarray | None = None, source: str | None = None
+                   ) -> SpeedEstimate:
+    """Table speed [m/s] from position [m] by a Savitzky–Golay differentiator (see module).
+
+    An uneven record is resampled onto a uniform grid of its median step, at most
+    :data:`~feeddrive.analysis.metrics.MAX_RESAMPLE_FACTOR` × its samples: a record with a
+    gap is refused, naming the gap (``lines``: file line of each sample; ``source``: file).
+    """
     t = np.asarray(time, dtype=float)
     x = np.asarray(position, dtype=float)
     if t.ndim != 1 or x.shape != t.shape:
@@ -112,7 +119,7 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
     dt = float(np.median(steps))
     resampled = bool(np.max(np.abs(steps - dt)) > 0.01 * dt)
     if resampled:
-        n = int(math.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
+        n = resample_size(t, dt, lines=lines, source=source)
         grid = t[0] + dt * np.arange(n)
         x = np.interp(grid, t, x)
         t = grid
@@ -442,6 +449,7 @@ def analyze_trace(
     min_step: float = DEFAULT_MIN_STEP,
     min_segment_time: float = DEFAULT_MIN_SEGMENT_TIME,
     source: str | None = None,
+    lines: np.ndarray | None = None,
 ) -> TraceAnalysis:
     """Creep metrics of a position trace, per commanded-speed segment.
 
@@ -459,12 +467,15 @@ def analyze_trace(
         Verdict limits (:class:`CreepThresholds`).
     smoothing_time, window:
         Savitzky–Golay window as a time [s] or in samples (see :func:`estimate_speed`).
+    source, lines:
+        File name and the file line of every sample, for error messages.
     """
     notes: list[str] = []
     t = np.asarray(time, dtype=float)
     x = np.asarray(position, dtype=float)
     if speed is None:
-        est = estimate_speed(t, x, smoothing_time=smoothing_time, window=window)
+        est = estimate_speed(t, x, smoothing_time=smoothing_time, window=window,
+                             lines=lines, source=source)
         tt, xx, vv = est.time, est.position, est.speed
         win, win_t = est.window, est.window_time
         notes.append(f"speed: Savitzky–Golay derivative, window {win} samples "
@@ -475,6 +486,8 @@ def analyze_trace(
         tt, xx, vv = t, x, np.asarray(speed, dtype=float)
         if vv.shape != tt.shape:
             raise ValueError("speed: expected one value per time sample")
+        if tt.size > 1:  # the metrics resample uneven records: refuse a gap here, by line
+            resample_size(tt, float(np.median(np.diff(tt))), lines=lines, source=source)
         win, win_t = 1, 0.0
         notes.append("speed: taken from the file's speed column")
 

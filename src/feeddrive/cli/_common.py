@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 import sys
 from collections.abc import Callable
 from typing import Any, TypeVar
@@ -12,6 +13,7 @@ import typer
 from rich.console import Console
 
 from .. import units
+from ..outputs import shown
 from ..parameters import DriveParameters, ParameterError, load, preset
 
 app = typer.Typer(
@@ -29,16 +31,73 @@ F = TypeVar("F", bound=Callable[..., Any])
 MM, MM_PER_S, N_PER_UM = units.MM, units.MM_PER_S, units.N_PER_UM
 
 
+#: exit status of a refused input or output destination (checked before any work)
+EXIT_REFUSED = 2
+#: exit status of work that could not finish: simulation failure, out of memory, I/O error
+EXIT_FAILED = 1
+#: exit status of a simulation that finished but diverged (verdict "unstable"); its summary
+#: and outputs are still written
+EXIT_UNSTABLE = 3
+
+# the arguments that name files, in the order they are named in a message
+_FILE_ARGUMENTS = ("file", "fragments", "params_file", "static", "out", "output", "plot")
+
+
+def _one_line(text: str) -> str:
+    """The message on one line: control characters (a newline in a file name) escaped."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii")
+                   for c in text)
+
+
+def _files_of(kwargs: dict[str, Any]) -> str:
+    names: list[str] = []
+    for key in _FILE_ARGUMENTS:
+        value = kwargs.get(key)
+        if isinstance(value, str | os.PathLike):
+            names.append(os.fspath(value))
+        elif isinstance(value, list | tuple):
+            names.extend(os.fspath(v) for v in value)
+    return ", ".join(shown(n) for n in names)
+
+
+def _fail(message: str, code: int) -> typer.Exit:
+    err_console.print(f"error: {_one_line(message)}", markup=False, highlight=False,
+                      soft_wrap=True)
+    return typer.Exit(code=code)
+
+
 def user_errors(fn: F) -> F:
-    """Turn a refused input into a one-line message on stderr and exit status 2."""
+    """Turn every expected failure into a one-line message on stderr, never a traceback.
+
+    Refused input or output destination: exit status 2.  Work that could not finish
+    (simulation failure, out of memory, nesting too deep, an I/O error): exit status 1.
+    The message names the file involved.
+    """
 
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             return fn(*args, **kwargs)
         except (ParameterError, ValueError, FileNotFoundError) as err:
-            err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
-            raise typer.Exit(code=2) from None
+            raise _fail(str(err), EXIT_REFUSED) from None
+        except OSError as err:
+            where = shown(os.fspath(err.filename)) if err.filename is not None else \
+                _files_of(kwargs) or "output"
+            raise _fail(f"{where}: {err.strerror or err}", EXIT_FAILED) from None
+        except MemoryError:
+            files = _files_of(kwargs)
+            raise _fail(f"{files + ': ' if files else ''}out of memory; the input or the "
+                        "requested output is too large", EXIT_FAILED) from None
+        except RecursionError:
+            files = _files_of(kwargs)
+            raise _fail(f"{files + ': ' if files else ''}nested too deeply to process",
+                        EXIT_REFUSED) from None
+        except RuntimeError as err:
+            # SimulationError, checked without importing the simulator at start-up
+            simulate = sys.modules.get("feeddrive.simulate")
+            if simulate is not None and isinstance(err, simulate.SimulationError):
+                raise _fail(f"simulation failed: {err}", EXIT_FAILED) from None
+            raise
 
     return wrapper  # type: ignore[return-value]
 

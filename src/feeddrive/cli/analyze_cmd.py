@@ -12,6 +12,7 @@ import typer
 
 from ..analysis.metrics import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME
+from ..outputs import check_output_file
 from ..parameters import ParameterError
 from ._common import MM_PER_S, app, console, print_json, user_errors
 
@@ -62,6 +63,7 @@ def analyze_command(
     max_ripple_ratio: float = typer.Option(_DEFAULTS.max_ripple_ratio, "--max-ripple-ratio",
                                            help="Creeping above this peak-to-peak ripple / "
                                            "command [-]."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
 ) -> None:
     """Creep metrics of a position trace (per segment of a step-down run) and the critical
     creeping speed."""
@@ -74,6 +76,8 @@ def analyze_command(
                                 ("--min-segment", min_segment, "s")):
         if not (math.isfinite(value) and value > 0):
             raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[file], force=force)
     thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,
                                  max_ripple_ratio=max_ripple_ratio)
     trace = read_position_trace(file, time_column=time_column, position_column=position_column,
@@ -86,7 +90,7 @@ def analyze_command(
         command=trace.command_speed, speed=trace.speed, thresholds=thresholds,
         smoothing_time=None if smoothing is None else smoothing * 1e-3,
         segment=segments, min_step=min_step * MM_PER_S, min_segment_time=min_segment,
-        source=trace.source)
+        source=trace.source, lines=trace.lines)
     if plot:
         from ..analysis.plots import plot_trace
 

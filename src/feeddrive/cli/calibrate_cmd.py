@@ -6,6 +6,7 @@ import math
 
 import typer
 
+from ..outputs import check_output_file
 from ..parameters import ParameterError
 from . import _units
 from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
@@ -34,6 +35,7 @@ def calibrate_command(
     params_file: str | None = typer.Option(None, "--params", help="Starting parameters (TOML)."),
     out: str | None = typer.Option(None, "--out", help="Write the fitted set to FILE.toml."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
 ) -> None:
     """Fit one unknown so the drive's critical creeping speed matches a target: the drive
     creeps (stick-slip or sustained oscillation) 0.01 mm/s below the target and not at it.
@@ -49,6 +51,8 @@ def calibrate_command(
     if not (math.isfinite(high) and high > low):
         raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
                                              f"{unknown}]")
+    if out:
+        check_output_file(out, option="--out", inputs=[params_file], force=force)
     params = resolve_parameters(preset_name, params_file)
     rule = VerdictRule(max_duration=max_duration)
     result = calibrate(

@@ -10,6 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from .. import units
+from ..outputs import check_output_file
 from ..parameters import DriveParameters, LuGreParameters, ParameterError
 from ._common import (
     MM_PER_S,
@@ -85,6 +86,7 @@ def friction_command(
     speed_min: float = typer.Option(0.05, "--speed-min", help="Scan: lowest speed [mm/s]."),
     speed_max: float = typer.Option(5.0, "--speed-max", help="Scan: highest speed [mm/s]."),
     points: int = typer.Option(400, "--points", help="Scan: number of speeds, log-spaced [-]."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
 ) -> None:
     """LuGre parameters of one friction site (Wang2021 Table 1) and analytic indicators.
 
@@ -100,6 +102,8 @@ def friction_command(
 
     if site not in SITES:
         raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[params_file], force=force)
     params = resolve_parameters(preset_name, params_file)
     lugre: LuGreParameters = getattr(params.friction, site)
     m, k, c = _scan_setup(params, mass, stiffness_n_per_um, damping)

@@ -12,12 +12,22 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from ..outputs import check_output_file, shown
 from ..parameters import DriveParameters, ParameterError, save
 
 if TYPE_CHECKING:
     from ..analysis.identification import DynamicFit, Estimate, StaticFit
 
-from ._common import MM_PER_S, N_PER_UM, app, console, print_json, resolve_parameters, user_errors
+from ._common import (
+    MM_PER_S,
+    N_PER_UM,
+    app,
+    console,
+    err_console,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 
 
 def _say(text: str) -> None:
@@ -49,6 +59,14 @@ def _base(preset_name: str | None, params_file: str | None,
     return params
 
 
+def _check_outputs(out: str | None, plot: str | None, inputs: list[str | None],
+                   force: bool) -> None:
+    if out:
+        check_output_file(out, option="--out", inputs=inputs, force=force)
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force)
+
+
 def _fmt(est: Estimate, scale: float = 1.0, digits: int = 4) -> str:
     v = est.value * scale
     if not (math.isfinite(est.low) and math.isfinite(est.high)):
@@ -64,7 +82,33 @@ def _print_static(fit: StaticFit, confidence: float) -> None:
     for name, b in fit.branches().items():
         _say(f"  {name} direction: {b.speed.size} tests, rms residual {b.rmse:.3g} N")
         for label, attr, scale, unit in rows:
-            _say(f"    {label:4s} = {_fmt(getattr(b, attr), scale)} {unit}")
+            est = getattr(b, attr)
+            flag = "" if est.identifiable else "  (not identifiable)"
+            _say(f"    {label:4s} = {_fmt(est, scale)} {unit}{flag}")
+    _warn_unidentifiable(fit)
+
+
+def _warnings(fit: StaticFit | DynamicFit) -> list[str]:
+    """One line per fitted value the data do not determine."""
+    from ..analysis.identification import StaticFit
+
+    if isinstance(fit, StaticFit):
+        labels = {"coulomb_force": "F_c", "static_force": "F_s", "stribeck_velocity": "v_s",
+                  "viscous_coefficient": "σ2"}
+        return [f"{labels[name]} ({direction}) is not identifiable from these data: {why}"
+                for direction, b in fit.branches().items()
+                for name, why in b.unidentifiable().items()]
+    out = []
+    for label, est in (("σ0", fit.bristle_stiffness), ("σ1", fit.bristle_damping)):
+        if not est.identifiable:
+            out.append(f"{label} is not identifiable from these data: "
+                       f"{est.identifiability_issue}")
+    return out
+
+
+def _warn_unidentifiable(fit: StaticFit | DynamicFit) -> None:
+    for text in _warnings(fit):
+        err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
 
 
 def _print_dynamic(fit: DynamicFit) -> None:
@@ -72,7 +116,8 @@ def _print_dynamic(fit: DynamicFit) -> None:
     level = f"{100 * s0.confidence:.0f} %"
     _say(f"pre-sliding fit of {fit.source}: model {fit.model}, mass {fit.mass:.4g} kg, "
                   f"rms residual {fit.rmse * 1e9:.3g} nm")
-    _say(f"  σ0 = {_fmt(s0, 1.0 / N_PER_UM)} N/µm ({level})")
+    _say(f"  σ0 = {_fmt(s0, 1.0 / N_PER_UM)} N/µm ({level})"
+         + ("" if s0.identifiable else "  (not identifiable)"))
     if fit.sigma1_determined:
         _say(f"  σ1 = {_fmt(s1)} N s/m ({level})")
     else:
@@ -84,6 +129,7 @@ def _print_dynamic(fit: DynamicFit) -> None:
     if fit.force_ratio is not None:
         _say(f"  max|F| = {100 * fit.force_ratio:.0f} % of F_s")
     _say(f"  {fit.note}")
+    _warn_unidentifiable(fit)
 
 
 @identify_app.command("static")
@@ -114,6 +160,7 @@ def static_command(
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
 ) -> None:
     """Fit F_c, F_s, v_s and σ2 per direction to constant-speed friction tests."""
     from ..analysis.fragments import friction_fragment
@@ -121,6 +168,7 @@ def static_command(
     from ..measured_io import read_static_test
 
     site = _site(site)
+    _check_outputs(out, plot, [file, params_file], force)
     params = _base(preset_name, params_file)
     motor = params.hollow_motor if site == "nut" else params.screw_motor
     kt = torque_constant if torque_constant is not None else motor.torque_constant
@@ -143,7 +191,7 @@ def static_command(
         plot_static_fit(fit, plot)
     if as_json:
         print_json({"site": site, "force_from": data.force_from, **fit.to_dict("mm"),
-                    "fragment": out, "plot": plot})
+                    "warnings": _warnings(fit), "fragment": out, "plot": plot})
         return
     _print_static(fit, confidence)
     if data.force_from != "force":
@@ -181,6 +229,7 @@ def dynamic_command(
     decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
 ) -> None:
     """Fit σ0 and σ1 to a pre-sliding test; says so when σ1 is poorly determined."""
     from ..analysis.fragments import friction_fragment
@@ -192,16 +241,20 @@ def dynamic_command(
         raise ValueError(f"--model = {model!r}: expected lugre or linear")
     if not (0.5 <= confidence < 1.0):
         raise ValueError(f"--confidence = {confidence!r}: expected a level in [0.5, 1)")
+    _check_outputs(out, plot, [file, params_file, *(static or [])], force)
     params = _base(preset_name, params_file, static)
     m = mass if mass is not None else site_mass(params, site)
     data = read_presliding_test(file, time_column=time_column, force_column=force_column,
                                 position_column=position_column, time_unit=time_unit,
                                 force_unit=force_unit, position_unit=position_unit, sep=sep,
                                 decimal=decimal)
-    fit = fit_presliding(data.time, data.force, data.position, mass=m,
-                         friction=getattr(params.friction, site),
-                         model=model,  # type: ignore[arg-type]
-                         confidence=confidence, lines=data.lines, source=data.source)
+    with err_console.status(f"fitting {shown(data.source)}") as status:
+        fit = fit_presliding(data.time, data.force, data.position, mass=m,
+                             friction=getattr(params.friction, site),
+                             model=model,  # type: ignore[arg-type]
+                             confidence=confidence, lines=data.lines, source=data.source,
+                             progress=lambda text: status.update(
+                                 f"fitting {shown(data.source)}: {text}"))
     if out:
         Path(out).write_text(friction_fragment(site, dynamic=fit, source=data.source),
                              encoding="utf-8")
@@ -211,7 +264,8 @@ def dynamic_command(
         plot_dynamic_fit(fit, plot)
     if as_json:
         print_json({"site": site, "mass_from": "option" if mass is not None else "parameters",
-                    **fit.to_dict(), "fragment": out, "plot": plot})
+                    **fit.to_dict(), "warnings": _warnings(fit), "fragment": out,
+                    "plot": plot})
         return
     _print_dynamic(fit)
     for path, what in ((out, "fragment"), (plot, "plot")):
@@ -226,8 +280,10 @@ def merge_command(
     out: str = typer.Option(..., "--out", help="Write the merged parameter set here."),
     preset_name: str | None = typer.Option(None, "--preset", help="Base parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Base parameter file."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
 ) -> None:
     """Merge identified fragments into a parameter set and validate the result."""
+    check_output_file(out, option="--out", inputs=[*fragments, params_file], force=force)
     params = _base(preset_name, params_file, fragments)
     names = ", ".join(Path(f).name for f in fragments)
     params = params.with_values(name=f"{params.name}-identified",

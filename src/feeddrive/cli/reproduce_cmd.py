@@ -8,6 +8,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ..__main__ import INTERRUPTED
+from ..outputs import check_output_dir, shown
 from ..parameters import ParameterError
 from ._common import app, console, err_console, resolve_parameters, user_errors
 
@@ -30,6 +31,7 @@ def reproduce_command(
 
     if workers < 1:
         raise ParameterError("--workers", workers, "expected a whole number ≥ 1")
+    check_output_dir(out, option="--out")
     params = resolve_parameters(preset_name, params_file)
     try:
         with Progress(TextColumn("{task.description}"), BarColumn(),
@@ -40,7 +42,12 @@ def reproduce_command(
             def progress(label: str, done: int, total: int) -> None:
                 bar.update(task, description=label, completed=done, total=total)
 
-            results = run(params, out, workers=workers, study=study, progress=progress)
+            def notice(text: str) -> None:
+                err_console.print(f"notice: {shown(text)}", markup=False, highlight=False,
+                                  soft_wrap=True)
+
+            results = run(params, out, workers=workers, study=study, progress=progress,
+                          notice=notice)
     except KeyboardInterrupt:
         err_console.print(f"interrupted: the studies finished so far are kept in "
                           f"{out / 'data'} and reused by a rerun", markup=False,

@@ -6,8 +6,17 @@ from typing import Any
 
 import typer
 
+from ..outputs import check_output_file
 from . import _units
-from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
+from ._common import (
+    EXIT_UNSTABLE,
+    app,
+    console,
+    err_console,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
 DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.simulate.SolverOptions.max_steps
@@ -57,6 +66,7 @@ def simulate_command(
                                       "FILE.csv|.parquet|.nc|.mat"),
     plot: str | None = typer.Option(None, "--plot", help="Write a PNG of the run."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
 ) -> None:
     """Simulate a drive and print a summary: for constant, trapezoid and step-down commands
     the mean and ripple of table speed after the transient, stick fraction and verdict; for a
@@ -82,6 +92,14 @@ def simulate_command(
         raise ParameterError("--profile-file", None, "required for --profile csv")
     if max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
+    from ..io import check_format
+
+    inputs = [params_file, profile_file]
+    if output:
+        check_format(output)
+        check_output_file(output, option="--output", inputs=inputs, force=force)
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[*inputs, output], force=force)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive,
                          table_position=_units.position("--position", position, params, drive))
@@ -161,14 +179,24 @@ def simulate_command(
         from ..plotting import plot_result
 
         summary["plot"] = str(plot_result(result, plot))
+    for text in summary.get("warnings", []):
+        err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
     if as_json:
         print_json(summary)
-        return
+    else:
+        _print_summary(summary, drive, profile, profile_file, table_speed, frequency,
+                       position, duration, params.name, output)
+    if summary.get("verdict") == "unstable":
+        raise typer.Exit(code=EXIT_UNSTABLE)
+
+
+def _print_summary(summary: dict[str, Any], drive: str, profile: str,
+                   profile_file: str | None, table_speed: float | None, frequency: float,
+                   position: float, duration: float, name: str, output: str | None) -> None:
     what = (f"{profile_file}" if profile == "csv" else
             f"{profile} {table_speed:g} mm/s" + (f" at {frequency:g} Hz" if profile == "sine"
                                                  else ""))
-    _say(f"{drive.upper()}, {what}, position {position:g} mm, {duration:g} s "
-         f"({params.name})")
+    _say(f"{drive.upper()}, {what}, position {position:g} mm, {duration:g} s ({name})")
     for label, text in _lines(summary):
         _say(f"  {label:24s} {text}")
     s = summary["solver"]

@@ -1,7 +1,13 @@
 """Parameter sets to and from TOML.  Lossless: floats are written with ``repr``.
 
 The writer is ours (not tomli-w) because it annotates every value with its unit, which is
-what a user editing the file needs; the reader is the standard library's ``tomllib``.
+what a user editing the file needs (tomli-w writes no comments; tomlkit would, at the cost of
+a dependency for one small function).  Every string goes through :func:`toml_string`, which
+escapes per the TOML 1.0 basic-string rules (backslash, quote and every control character),
+and every comment through :func:`toml_comment`, so no value or file name can end a line
+and inject a key; a test round-trips arbitrary text through ``tomllib``.  The reader is
+the standard library's ``tomllib``, behind :func:`parse_toml`, which refuses deeply nested
+input with one line instead of a ``RecursionError``.
 """
 
 from __future__ import annotations
@@ -42,6 +48,79 @@ def to_dict(obj: Any) -> dict[str, Any]:
     return out
 
 
+#: deepest table/array nesting accepted in a TOML file (a parameter set needs 4)
+MAX_TOML_DEPTH = 16
+
+_TOML_ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n",
+                 "\f": "\\f", "\r": "\\r"}
+
+
+def toml_string(text: str) -> str:
+    """``text`` as a TOML basic string: quoted, with backslash, quote and every control
+    character (U+0000–U+001F, U+007F) escaped (TOML 1.0, "String")."""
+    out = []
+    for c in text:
+        if c in _TOML_ESCAPES:
+            out.append(_TOML_ESCAPES[c])
+        elif ord(c) < 0x20 or ord(c) == 0x7F:
+            out.append(f"\\u{ord(c):04X}")
+        else:
+            out.append(c)
+    return '"' + "".join(out) + '"'
+
+
+def toml_comment(text: str) -> str:
+    """``text`` made safe inside a ``#`` comment: control characters shown escaped, so a
+    newline in a file name cannot start a new TOML line."""
+    return "".join(c if c.isprintable() or c == " " else
+                   c.encode("unicode_escape").decode("ascii") for c in text)
+
+
+def _depth(value: Any) -> int:
+    """Nesting depth of parsed TOML, without recursion."""
+    deepest = 0
+    stack: list[tuple[Any, int]] = [(value, 0)]
+    while stack:
+        item, level = stack.pop()
+        deepest = max(deepest, level)
+        if isinstance(item, dict):
+            stack.extend((v, level + 1) for v in item.values())
+        elif isinstance(item, list):
+            stack.extend((v, level + 1) for v in item)
+    return deepest
+
+
+def parse_toml(text: str, *, field: str = "file", source: str = "<toml>") -> dict[str, Any]:
+    """``tomllib.loads`` with one-line errors naming ``source``: invalid TOML, or nesting
+    deeper than :data:`MAX_TOML_DEPTH` (which would otherwise end in ``RecursionError``)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ParameterError(field, source, f"not valid TOML: {err}") from None
+    except RecursionError:
+        data = None
+    if data is None or _depth(data) > MAX_TOML_DEPTH:
+        raise ParameterError(field, source, f"tables or arrays nested more than "
+                             f"{MAX_TOML_DEPTH} deep; not a parameter file")
+    return data
+
+
+def read_toml_file(path: str | Path, *, field: str = "file") -> dict[str, Any]:
+    """Parse a TOML file; a missing file, a folder, non-UTF-8 bytes, invalid or deeply
+    nested TOML are refused with one line naming the file."""
+    p = Path(path)
+    if p.is_dir():
+        raise ParameterError(field, str(p), "is a folder, not a TOML file")
+    if not p.is_file():
+        raise ParameterError(field, str(p), "no such file")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise ParameterError(field, str(p), f"not UTF-8 text (byte {err.start}); expected a "
+                             "TOML file") from None
+    return parse_toml(text, field=field, source=str(p))
+
+
 def _format_value(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
@@ -50,8 +129,7 @@ def _format_value(value: Any) -> str:
     if isinstance(value, int):
         return repr(float(value))
     if isinstance(value, str):
-        escaped = value.replace("\\", "\\\\").replace('"', '\\"')
-        return f'"{escaped}"'
+        return toml_string(value)
     if isinstance(value, tuple | list):
         return "[" + ", ".join(_format_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {value!r} to TOML")
@@ -181,15 +259,12 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
 
 
 def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ParameterError("file", "<toml>", f"not valid TOML: {err}") from None
-    return from_dict(data, base_dir=base_dir)
+    return from_dict(parse_toml(text), base_dir=base_dir)
 
 
 def load(path: str | Path) -> DriveParameters:
-    p = Path(path)
-    if not p.is_file():
-        raise ParameterError("file", str(p), "no such file")
-    return loads(p.read_text(encoding="utf-8"), base_dir=p.parent)
+    data = read_toml_file(path)
+    try:
+        return from_dict(data, base_dir=Path(path).parent)
+    except ParameterError as err:
+        raise err.in_file(str(path)) from None

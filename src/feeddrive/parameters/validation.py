@@ -14,13 +14,24 @@ from typing import Any
 
 
 class ParameterError(ValueError):
-    """A parameter value was refused.  The message names field, value and expected unit."""
+    """A parameter value was refused.  The message names field, value and expected unit,
+    and the file it came from when there is one (``source``)."""
 
-    def __init__(self, field: str, value: object, message: str) -> None:
+    def __init__(self, field: str, value: object, message: str, *,
+                 source: str | None = None) -> None:
         self.field = field
         self.value = value
         self.message = message
-        super().__init__(f"{field} = {value!r}: {message}")
+        self.source = source
+        where = f"{source}: " if source else ""
+        super().__init__(f"{where}{field} = {value!r}: {message}")
+
+    def in_file(self, source: str) -> ParameterError:
+        """The same refusal, naming the file it came from (an error already naming its file,
+        e.g. from a file it extends, is kept)."""
+        if self.source is not None:
+            return self
+        return ParameterError(self.field, self.value, self.message, source=source)
 
 
 def quantity(

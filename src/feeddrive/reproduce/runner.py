@@ -1,14 +1,14 @@
 """`feeddrive reproduce`: run every study, write figures, tables and the report.
 
-Each finished study is stored at once as JSON under ``DIR/data/`` keyed by a hash of the
-parameter set and the settings, so an interrupted run loses nothing and a rerun skips what is
-done.  Critical-speed searches run in a process pool (2 workers by default).
+Each finished study is stored at once under ``DIR/data/`` (:class:`feeddrive.store.ResultStore`:
+atomic, checksummed entries keyed by the package version, the kernel hash, the study code
+and the parameter set and settings), so an interrupted run loses nothing and a rerun skips
+what is done; an entry that is corrupt or from other code is recomputed with a notice.
+Critical-speed searches run in a process pool (2 workers by default).
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 import multiprocessing
 import signal
 import time
@@ -17,34 +17,32 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from .._jit import KERNEL_HASH
 from ..control import ConstantSpeed
 from ..parameters import DriveParameters, dumps
 from ..simulate import DriveSystem, simulate
+from ..store import ResultStore, code_hash, store_key
 from . import figures, forced_study, reading_study, report, studies
 from .studies import MID, PAPER, StudySettings, write_csv
 
+_HERE = Path(__file__).resolve().parent
+# the code that computes the stored studies (beyond the compiled kernels)
+_STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "forced_study.py",
+                  *(_HERE.parent / "analysis" / f"{name}.py"
+                    for name in ("critical", "metrics", "forced", "compensation")),
+                  _HERE.parent / "simulate.py", _HERE.parent / "result.py",
+                  _HERE.parent / "stiffness.py", _HERE.parent / "protocol.py")
 
-class _Store:
-    """JSON results keyed by study name + parameter/settings hash."""
 
-    def __init__(self, root: Path, params: DriveParameters, settings: StudySettings) -> None:
-        self.root = root / "data"
-        self.root.mkdir(parents=True, exist_ok=True)
-        blob = dumps(params) + json.dumps(asdict(settings), sort_keys=True)
-        self.key = hashlib.sha256(blob.encode()).hexdigest()[:12]
+def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
+                notice: Callable[[str], None] | None = None) -> ResultStore:
+    """The store of ``out/data`` for this parameter set, these settings and this code."""
+    from .. import __version__
 
-    def path(self, name: str) -> Path:
-        return self.root / f"{name}-{self.key}.json"
-
-    def get(self, name: str) -> Any | None:
-        p = self.path(name)
-        return json.loads(p.read_text()) if p.exists() else None
-
-    def put(self, name: str, value: Any) -> Any:
-        tmp = self.path(name).with_suffix(".tmp")
-        tmp.write_text(json.dumps(value))
-        tmp.replace(self.path(name))
-        return value
+    key = store_key({"version": __version__, "kernel": KERNEL_HASH,
+                     "code": code_hash(_STUDY_SOURCES), "parameters": dumps(params),
+                     "settings": asdict(settings)})
+    return ResultStore(out / "data", key, notice=notice)
 
 
 def _ignore_sigint() -> None:
@@ -67,14 +65,17 @@ def _compensation_job(params: DriveParameters) -> dict[str, Any]:
 
 def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = None,
         workers: int = 2, study: bool = True,
-        progress: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
+        progress: Callable[[str, int, int], None] | None = None,
+        notice: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Run the whole study into ``out``; returns the collected results.
 
     ``study``: also run the model-reading study (variants of the Wang2021 presets).
+    ``notice``: receives a one-line message for each stored entry found unusable (corrupt,
+    edited, other code) and recomputed.
     """
     settings = settings or StudySettings()
     out.mkdir(parents=True, exist_ok=True)
-    store = _Store(out, params, settings)
+    store = study_store(out, params, settings, notice=notice)
     started = time.perf_counter()
     results: dict[str, Any] = {}
 
@@ -93,16 +94,18 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     forced_jobs = {f"forced-{i}": job for i, job in enumerate(forced_study.jobs())} if study \
         else {}
     total = len(jobs) + len(study_jobs) + len(forced_jobs) + 5
-    done = sum(store.get(k) is not None for k in [*jobs, *study_jobs, *forced_jobs])
+    found = {k: store.get(k) for k in [*jobs, *study_jobs, *forced_jobs,
+                                       *(["compensation"] if study else [])]}
+    done = sum(v is not None for k, v in found.items() if k != "compensation")
     if progress:
         progress("critical speeds", done, total)
     tasks: dict[str, tuple[Callable[..., dict[str, Any]], tuple[Any, ...]]] = {
-        k: (_critical_job, (v,)) for k, v in jobs.items() if store.get(k) is None}
+        k: (_critical_job, (v,)) for k, v in jobs.items() if found[k] is None}
     tasks.update({k: (reading_study.run_variant, (v, settings))
-                  for k, v in study_jobs.items() if store.get(k) is None})
+                  for k, v in study_jobs.items() if found[k] is None})
     tasks.update({k: (forced_study.run, (v,))
-                  for k, v in forced_jobs.items() if store.get(k) is None})
-    if study and store.get("compensation") is None:
+                  for k, v in forced_jobs.items() if found[k] is None})
+    if study and found["compensation"] is None:
         tasks["compensation"] = (_compensation_job, (params,))
     if tasks:
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
@@ -111,7 +114,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
         try:
             pending = {k: pool.apply_async(fn, args) for k, (fn, args) in tasks.items()}
             for k, handle in pending.items():
-                store.put(k, handle.get())  # each finished search is on disk at once
+                found[k] = store.put(k, handle.get())  # each finished search is on disk at once
                 done += 1
                 if progress:
                     progress(f"critical speed {k}", done, total)
@@ -121,11 +124,11 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
             raise
         finally:
             pool.join()
-    crit: dict[str, Any] = {k: store.get(k) for k in jobs}
+    crit: dict[str, Any] = {k: found[k] for k in jobs}
     results["critical"] = crit
-    results["reading_study"] = [store.get(k) for k in study_jobs]
-    results["forced_study"] = [store.get(k) for k in forced_jobs]
-    results["compensation"] = store.get("compensation") if study else None
+    results["reading_study"] = [found[k] for k in study_jobs]
+    results["forced_study"] = [found[k] for k in forced_jobs]
+    results["compensation"] = found["compensation"] if study else None
 
     def speed(key: str) -> float | None:
         v = crit[key]["critical_speed_mm_s"]
@@ -137,10 +140,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
                      ("fig7", lambda: studies.fig7(params, cdfs_mid, settings)),
                      ("figs9_10", lambda: studies.figs9_10(params, settings)),
                      ("fig8_trace", lambda: _fig8_trace(params, speed("crit-ddfs-fig8")))):
-        value = store.get(name)
-        if value is None:
-            value = store.put(name, fn())
-        results[name] = value
+        results[name] = store.get_or_compute(name, fn)
         done += 1
         if progress:
             progress(name, done, total)

@@ -1,0 +1,73 @@
+"""Runs that cannot finish are refused before integrating (feeddrive.budget): issue 13,
+item 4.
+
+Guards: two valid parameter sets (near-zero friction; a very fast current loop) ran to the
+50 M-step limit and failed after 77–137 s with advice the CLI did not offer; ``--duration
+1e9`` ended in a MemoryError traceback.  Figures measured on the development machine:
+near-zero friction needs ~4.1e6 steps per simulated second (the Wang2021 set ~1e3), refused
+after a 0.1-s probe in about 0.5 s.
+"""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+import feeddrive as fd
+from feeddrive.budget import time_constants
+from feeddrive.parameters import ParameterError, from_dict, to_dict
+
+BASE = fd.preset("wang2021")
+
+
+def near_zero_friction() -> fd.DriveParameters:
+    d = to_dict(BASE)
+    for site in ("screw", "nut", "guide"):
+        for branch in ("positive", "negative"):
+            d["friction"][site][branch].update(coulomb_force=1e-3, static_force=1.1e-3,
+                                               viscous_coefficient=1e-3)
+    return from_dict(d)
+
+
+def fast_current_loop() -> fd.DriveParameters:
+    return BASE.replace_path("controller.current_gain", 1e5)
+
+
+@pytest.mark.parametrize(("make", "named"), [
+    (near_zero_friction, "screw bristle relaxation F_c/(σ0·|v|)"),
+    (fast_current_loop, "screw motor current loop L/(R + K_ip)"),
+])
+def test_stiff_valid_sets_are_refused_early_naming_the_time_constant(make, named) -> None:
+    system = fd.DriveSystem(make(), "cdfs", 0.4)
+    fd.simulate(system, fd.ConstantSpeed(1e-3), 0.01)  # compile first: time the refusal only
+    started = time.perf_counter()
+    with pytest.raises(fd.SimulationError, match="refused before integrating.*max_steps") as err:
+        fd.simulate(system, fd.ConstantSpeed(1e-3), 10.0)
+    assert time.perf_counter() - started < 10.0  # was 77–137 s
+    assert named in str(err.value) and "--max-steps" in str(err.value)
+
+
+def test_a_larger_max_steps_lets_a_stiff_run_through() -> None:
+    system = fd.DriveSystem(fast_current_loop(), "cdfs", 0.4)
+    r = fd.simulate(system, fd.ConstantSpeed(1e-3), 0.5,
+                    options=fd.SolverOptions(max_steps=10_000_000))
+    assert r.solver_stats["steps"] > 1e4
+
+
+def test_huge_duration_refused_by_memory_estimate() -> None:
+    with pytest.raises(ParameterError, match=r"duration = 1000000000.0: .*GiB.*available"):
+        fd.simulate(fd.DriveSystem(BASE, "cdfs", 0.4), fd.ConstantSpeed(1e-3), 1e9)
+
+
+def test_normal_runs_are_not_refused() -> None:
+    r = fd.simulate(fd.DriveSystem(BASE, "ddfs", 0.4), fd.ConstantSpeed(0.5e-3, 16e-3), 2.0)
+    assert r.solver_stats["steps"] < 10_000
+
+
+def test_time_constants_of_wang2021() -> None:
+    # Wang2021 Table 1 screw branch: F_c = 68.5 N (− branch), σ0 = 3.64e7 N/m, at 1 mm/s
+    taus = time_constants(BASE, "cdfs", 1e-3)
+    assert taus["screw bristle relaxation F_c/(σ0·|v|)"] == pytest.approx(68.5 / 3.64e4)
+    # Table 2: L = 5.9 mH, R = 1.7 Ω; current gain 2 V/A (docs/model-reading.md)
+    assert taus["screw motor current loop L/(R + K_ip)"] == pytest.approx(5.9e-3 / 3.7)
