@@ -200,7 +200,9 @@ def test_replace_path_names_the_full_path_of_a_refused_value(leaf: tuple[str, di
                                                              bad: float) -> None:
     """Guards a fixed bug: replace_path named the component label ("motor.inductance",
     "friction_branch.static_force") instead of the path the caller gave."""
-    path, _ = leaf
+    path, meta = leaf
+    if bad == -1.0 and meta["low"] < -1.0:  # a signed quantity (a load force) allows -1
+        bad = meta["low"] * 10.0 - 1.0
     with pytest.raises(ParameterError) as info:
         preset("wang2021").replace_path(path, bad)
     assert info.value.field == path

@@ -49,7 +49,10 @@ def test_creep_cli_prints_critical_speed() -> None:
                                                                    pytest.approx(1.56), "smooth")
     assert top["upper_mm_s"] == pytest.approx(1.55)
     rule = out["verdict_rule"]
-    assert rule["max_duration"] == 60.0 and "undecided" in rule["description"]
+    from feeddrive import protocol
+
+    assert rule["max_duration"] == protocol.TRIAL_MAX_DURATION
+    assert "undecided" in rule["description"]
 
 
 @pytest.mark.slow
