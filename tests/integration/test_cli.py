@@ -296,3 +296,21 @@ def test_creep_rejects_a_maximum_below_the_first_trial() -> None:
     res = runner.invoke(app, ["creep", "--max-duration", "5"])
     assert res.exit_code == 2
     assert "max_duration" in res.output and len(res.output.strip().splitlines()) == 1
+
+
+def test_documented_keq_recipe_works_as_written(tmp_path: Path) -> None:
+    """Issue 12 item 15: docs/parameters.md's partial file for the paper's K_eq failed with
+    'name = None: missing field'.  The recipe, copied from the docs, must run as shown."""
+    import re
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "parameters.md").read_text()
+    block = re.search(r"\*\*Using the paper's value instead\.\*\*.*?```toml\n(.*?)```", doc,
+                      re.S)
+    assert block is not None
+    recipe = tmp_path / "keq.toml"
+    recipe.write_text(block.group(1))
+    res = runner.invoke(app, ["stiffness", "--params", str(recipe), "--positions", "400",
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    row = json.loads(res.output)["positions"][0]
+    assert row["equivalent_stiffness_N_per_um"] == pytest.approx(21.6)

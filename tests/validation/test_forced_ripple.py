@@ -79,3 +79,30 @@ def test_open_loop_ripple_matches_the_rigid_body_response() -> None:
     measured = 0.5 * (np.max(v) - np.min(v))
     assert measured == pytest.approx(expected, rel=0.02)
     assert not math.isnan(measured)
+
+
+def test_threshold_speed_does_not_depend_on_the_scan_grid() -> None:
+    """The answer is the lowest multiple of the resolution that passes, whatever the scan."""
+    system = fd.DriveSystem(RIPPLE, "ddfs", 0.4)
+    a = threshold_critical_speed(system, 16e-3, speed_range=(0.05e-3, 3.0e-3),
+                                 coarse_step=0.2e-3)
+    b = threshold_critical_speed(system, 16e-3, speed_range=(0.02e-3, 3.02e-3),
+                                 coarse_step=0.13e-3)
+    assert a["critical_speed_mm_s"] == b["critical_speed_mm_s"]
+
+
+def test_creep_cli_ripple_threshold_gives_the_forced_critical_speed() -> None:
+    """`feeddrive creep --preset wang2021-ripple --drive ddfs --nut-speed 16 --ripple-threshold
+    0.5 --json` (issue 14 acceptance on the ripple reading)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    res = CliRunner().invoke(app, ["creep", "--preset", "wang2021-ripple", "--drive", "ddfs",
+                                   "--nut-speed", "16", "--ripple-threshold", "0.5", "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert 0.40 <= out["critical_speed_mm_s"] <= 0.60
+    assert "0.5 × the command" in out["rule"] and out["kind"] == "oscillation"

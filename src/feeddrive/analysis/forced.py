@@ -86,7 +86,15 @@ def threshold_critical_speed(system: DriveSystem, nut_speed: float = 0.0, *,
                         a = mid
                     else:
                         b = mid
-                crit = math.ceil(b / resolution - 1e-9) * resolution
+                # the answer on the grid of multiples of the resolution, whatever the scan:
+                # the lowest multiple that does not exceed, with the one below it exceeding
+                k = math.floor(a / resolution + 1e-9) + 1
+                while above(k * resolution):
+                    k += 1
+                while k - 1 > 0 and (k - 1) * resolution > lo and not above(
+                        (k - 1) * resolution):
+                    k -= 1
+                crit = round(k * resolution, 12)
                 status = "found"
                 break
     # the kind just below the critical speed: the highest tested speed under it

@@ -29,6 +29,11 @@ def creep_command(
     max_duration: float = typer.Option(protocol.TRIAL_MAX_DURATION, "--max-duration",
                                        help="Longest trial [s]; still undecided then: "
                                        "'undecided'."),
+    ripple_threshold: float | None = typer.Option(
+        None, "--ripple-threshold", help="Define the critical speed by a ripple threshold "
+        "instead, for a forced oscillation (motor torque ripple, e.g. --preset "
+        "wang2021-ripple): the lowest command above which the steady peak-to-peak table-speed "
+        "ripple stays below this fraction of the command [fraction]."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
@@ -55,6 +60,27 @@ def creep_command(
                          table_position=_units.position("--position", position, params))
     v_n = _units.speed("--nut-speed", nut_speed)
     lo, hi = _units.speed_range("--low", low, "--high", high)
+    if ripple_threshold is not None:
+        from ..analysis.forced import threshold_critical_speed
+        from ..parameters import ParameterError
+
+        if not 0 < ripple_threshold <= 10:
+            raise ParameterError("--ripple-threshold", ripple_threshold,
+                                 "expected a fraction of the command in (0, 10]")
+        res = threshold_critical_speed(system, v_n, threshold=ripple_threshold,
+                                       speed_range=(lo, hi),
+                                       coarse_step=min(protocol.COARSE_STEP, (hi - lo) / 2),
+                                       resolution=protocol.RESOLUTION)
+        res.update(parameter_set=params.name, table_position_mm=position)
+        if as_json:
+            print_json(res)
+            return
+        shown = (f"{res['critical_speed_mm_s']:.2f} mm/s ({res['kind']} below it)"
+                 if res["critical_speed_mm_s"] is not None else res["status"])
+        console.print(f"{drive.upper()} at {position:g} mm, v_n = {nut_speed:g} mm/s: "
+                      f"critical speed {shown}", markup=False, highlight=False)
+        console.print(f"Rule: {res['rule']}", markup=False, highlight=False)
+        return
     results = []
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
