@@ -29,18 +29,28 @@ def _fmt(v: float | None) -> str:
     return "—" if v is None else f"{v:.2f}"
 
 
+def _shown(row: dict[str, Any] | None) -> str:
+    """The critical speed, or the bound an out-of-range search gives."""
+    if row is None:
+        return "—"
+    if row["critical_speed_mm_s"] is not None:
+        return f"{row['critical_speed_mm_s']:.2f}"
+    lo, hi = row["speed_range_mm_s"]
+    return f"> {hi:.2f}" if row["status"] == "above-range" else f"< {lo:.2f}"
+
+
 def ripple_rows(forced: list[dict[str, Any]]) -> tuple[str, list[dict[str, str]]]:
     rows = []
-    cdfs = {th: _v(_find(forced, "cdfs", 0.0, th)) for th in THRESHOLDS}
     rows.append({"drive": "CDFS", "v_n [mm/s]": "—",
-                 **{f"threshold {th:g}": _fmt(cdfs[th]) for th in THRESHOLDS},
+                 **{f"threshold {th:g}": _shown(_find(forced, "cdfs", 0.0, th))
+                    for th in THRESHOLDS},
                  "kind (0.5)": str((_find(forced, "cdfs", 0.0, 0.5) or {}).get("kind"))})
     vns = sorted({r["nut_speed_mm_s"] for r in forced if r["drive"] == "ddfs"
                   and abs(r["position_mm"] - 1e3 * MID) < 1e-6})
     for vn in vns:
-        vals = {th: _v(_find(forced, "ddfs", vn, th)) for th in THRESHOLDS}
         rows.append({"drive": "DDFS", "v_n [mm/s]": f"{vn:g}",
-                     **{f"threshold {th:g}": _fmt(vals[th]) for th in THRESHOLDS},
+                     **{f"threshold {th:g}": _shown(_find(forced, "ddfs", vn, th))
+                        for th in THRESHOLDS},
                      "kind (0.5)": str((_find(forced, "ddfs", vn, 0.5) or {}).get("kind"))})
     text = ("Reading `wang2021-ripple`: the shipped reading plus motor torque ripple "
             "(0.0135 N m, 6 per revolution, both motors; the amplitude is fitted to the DDFS "
