@@ -9,6 +9,7 @@ its attributes) is built on first use only — it costs more than a short stiff 
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -36,6 +37,7 @@ class Run:
                  system: DriveSystem, profile: Profile, solver_stats: dict[str, Any]) -> None:
         self.t, self.y, self.aux, self.model = t, y, aux, model
         self.system, self.profile, self.solver_stats = system, profile, solver_stats
+        self._deferred: Callable[[], np.ndarray] | None = None
         self.columns: dict[str, tuple[np.ndarray, int]] = {}
         for k, sig in enumerate(model.states):
             self.columns[sig.name] = (y, k)
@@ -48,9 +50,19 @@ class Run:
             self.meta["nut_linear_speed"] = ("m/s", "nut speed × H")
         self.meta["following_error"] = ("m", "commanded − table position")
 
+    def defer_aux(self, compute: Callable[[], np.ndarray]) -> None:
+        """The auxiliary signals were not recorded: ``compute()`` gives them when first read."""
+        self._deferred = compute
+
     def signal(self, name: str) -> np.ndarray:
         if name in self.columns:
             arr, k = self.columns[name]
+            if arr is self.aux and self._deferred is not None:
+                self.aux = self._deferred()
+                self._deferred = None
+                for j, sig in enumerate(self.model.aux):
+                    self.columns[sig.name] = (self.aux, j)
+                arr = self.aux
             return arr[:, k]
         if name in ("screw_linear_speed", "nut_linear_speed") and name in self.meta:
             H = self.system.parameters.screw.transmission_ratio

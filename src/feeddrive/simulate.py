@@ -246,10 +246,12 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         h_init = 1e-6 if adaptive else options.fixed_step
         h_max = (math.inf if options.max_step is None else options.max_step) if adaptive \
             else options.fixed_step
+        continuous = grid.n_pos == 0 and grid.n_vel == 0 and grid.n_cur == 0
         t, y, aux, stats, _ = switching.integrate(
             model, y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
             options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps, mode,
-            profile_breakpoints(profile, t_end, grid.base))
+            profile_breakpoints(profile, t_end, grid.base),
+            want_aux=not continuous)
     else:
         adaptive = 1 if options.method == "dopri5" else 0
         h_init = 1e-6 if adaptive else options.fixed_step
@@ -286,7 +288,10 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         solver_stats.update({
             "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
             "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
-    return Result.from_run(Run(t, y, aux, model, system, profile, solver_stats))
+    run = Run(t, y, aux, model, system, profile, solver_stats)
+    if aux.shape[0] != t.shape[0]:  # not recorded (continuous loops): evaluated when read
+        run.defer_aux(lambda: model.module.auxiliary(t, y, model.P, model.T))
+    return Result.from_run(run)
 
 
 def _chunked_dopri5(model: Model, system: DriveSystem, profile: Profile, y0: np.ndarray,

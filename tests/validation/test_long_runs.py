@@ -85,3 +85,26 @@ def test_ctrl_c_between_chunks_keeps_what_was_computed(tmp_path, monkeypatch) ->
     assert stop.result is not None and stop.result.time[-1] == pytest.approx(stop.t_reached)
     written = pd.read_csv(out)
     assert written["time [s]"].iloc[-1] == pytest.approx(stop.t_reached)
+
+
+def test_auxiliary_signals_evaluated_when_read_equal_the_recorded_ones() -> None:
+    """Issue 9 item 2: with continuous loops the dense-output run records states only; the
+    auxiliary signals computed on first read equal those the integrator would have recorded."""
+    from feeddrive.solvers import switching
+
+    system = fd.DriveSystem(W, "ddfs", 0.4)
+    profile = ConstantSpeed(0.5e-3, 16e-3)
+    options = SolverOptions(method="auto")
+    r = fd.simulate(system, profile, 2.0, options=options)
+    assert r.solver_stats["output_rhs_evaluations"] == 0  # nothing evaluated for the record
+    model = system.model(profile)
+    grid = sampling(W, options.output_interval)
+    atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
+                                 options.current_tolerance)
+    t, y, aux, _, _ = switching.integrate(
+        model, system.initial_vector(model), 2.0, grid.out_every, grid.base, 0, 0, 0,
+        options.rtol, atol, rel, 1e-6, np.inf, 1, options.max_steps, switching.MODE_AUTO,
+        sim_mod.profile_breakpoints(profile, 2.0, grid.base), want_aux=True)
+    np.testing.assert_array_equal(r.time, t)
+    for k, sig in enumerate(model.aux):
+        np.testing.assert_array_equal(r[sig.name], aux[:, k], err_msg=sig.name)

@@ -74,7 +74,25 @@ def template_sources() -> list[str]:
     names = ", ".join(TABLEAU)
     src = inspect.getsource(integrate_template).replace("def integrate_template(",
                                                         "def integrate(", 1)
-    return [f"from feeddrive.solvers.dopri5 import ({names})", "@kernel\n" + src]
+    aux = inspect.getsource(auxiliary_template).replace("def auxiliary_template(",
+                                                        "def auxiliary(", 1)
+    return [f"from feeddrive.solvers.dopri5 import ({names})", "@kernel\n" + src,
+            "@kernel\n" + aux]
+
+
+def auxiliary_template(t_out: np.ndarray, y_out: np.ndarray, P: np.ndarray,
+                       T: np.ndarray) -> np.ndarray:
+    """The auxiliary signals at recorded (t, y) of a run with continuous loops (where they
+    depend on nothing else): evaluated only when a Result is asked for one."""
+    n = t_out.size
+    out = np.empty((n, N_AUX))
+    held = np.zeros(N_HELD)
+    dy = np.empty(y_out.shape[1])
+    aux = np.empty(N_AUX)
+    for i in range(n):
+        rhs(t_out[i], y_out[i], held, P, T, 0, 0, 0, dy, aux)
+        out[i, :] = aux
+    return out
 
 
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
