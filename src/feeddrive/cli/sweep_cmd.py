@@ -99,7 +99,7 @@ def sweep_command(
     is committed at once to the store; a rerun skips the points already there, so an
     interrupted sweep resumes where it stopped.  Everything is checked before the first
     simulation."""
-    from ..sweep import SweepStore, estimate, export, load_config, run_sweep, to_dataset
+    from ..sweep import SweepStore, estimate, export, load_config, to_dataset
 
     cfg = load_config(config)
     store_path = Path(store) if store is not None else (
@@ -199,9 +199,16 @@ def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | N
         def progress(done: int, todo: int) -> None:
             bar.update(task, completed=done, total=todo)
 
-        return run_sweep(cfg, db, workers=workers, scheduler=scheduler,
-                         dask_workers=dask_workers, points=points, progress=progress,
-                         started=started)
+        try:
+            return run_sweep(cfg, db, workers=workers, scheduler=scheduler,
+                             dask_workers=dask_workers, points=points, progress=progress,
+                             started=started)
+        except KeyboardInterrupt:
+            bar.stop()
+            err_console.print(f"interrupted: every finished point is in {shown(db.path)}; "
+                              "rerun the same command to resume", markup=False,
+                              highlight=False, soft_wrap=True)
+            raise typer.Exit(code=130) from None
 
 
 @app.command("map")

@@ -457,7 +457,7 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
 
 def load_config(path: str | os.PathLike[str]) -> SweepConfig:
     """Read and check a sweep configuration; a refusal names the file and the key."""
-    data = read_toml_file(path)
+    data = read_toml_file(os.fspath(path))
     try:
         return parse_config(data, os.fspath(path))
     except ParameterError as err:

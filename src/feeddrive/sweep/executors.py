@@ -124,12 +124,14 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
     n = workers or os.cpu_count() or 1
     if n < 1:
         raise ValueError(f"--workers = {n}: expected ≥ 1")
+    # the pool starts its processes on demand (spawn): keep the setting for its lifetime
     with _single_threaded_children():
-        pool = cf.ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"))
-    try:
-        yield pool, n, f"local ({n} processes)"
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        pool = cf.ProcessPoolExecutor(max_workers=n,
+                                      mp_context=multiprocessing.get_context("spawn"))
+        try:
+            yield pool, n, f"local ({n} processes)"
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _structure_tasks(points: list[Point]) -> list[dict[str, Any]]:

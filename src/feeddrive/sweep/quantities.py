@@ -40,7 +40,8 @@ _KEYS = ("kind", "start", "low", "high", "coarse_step", "resolution", "initial_d
 #: value name → SI unit (for exports; speeds become mm/s at the edges)
 UNITS: dict[str, str] = {
     "critical_speed": "m/s", "linear_lower": "m/s", "linear_upper": "m/s",
-    "linear_mode_frequency": "Hz", "simulated_time": "s", "trials": "1", "creep_bands": "1", "linear_bands": "1",
+    "linear_mode_frequency": "Hz", "simulated_time": "s", "trials": "1", "creep_bands": "1",
+    "linear_bands": "1",
     "creeping": "1", "ripple_ratio": "1", "stick_fraction": "1", "frequency": "Hz",
     "duration": "s", "linear_growth_rate": "1/s", "linear_unstable": "1",
     "mode_frequency": "Hz", "damping_ratio": "1", "seconds": "s",
