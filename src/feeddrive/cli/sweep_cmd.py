@@ -182,6 +182,7 @@ def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | N
     from rich.text import Text
 
     from ..sweep import run_sweep
+    from ..sweep.executors import SweepAborted
 
     class Rate(ProgressColumn):
         def render(self, task: Any) -> Text:
@@ -203,6 +204,10 @@ def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | N
             return run_sweep(cfg, db, workers=workers, scheduler=scheduler,
                              dask_workers=dask_workers, points=points, progress=progress,
                              started=started)
+        except SweepAborted as err:
+            bar.stop()
+            err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+            raise typer.Exit(code=1) from None
         except KeyboardInterrupt:
             bar.stop()
             err_console.print(f"interrupted: every finished point is in {shown(db.path)}; "

@@ -29,7 +29,8 @@ from .design import Point, SweepConfig
 from .quantities import evaluate, warm
 from .store import SweepStore
 
-__all__ = ["DASK_HINT", "Estimate", "SweepSummary", "executor", "run_sweep", "estimate"]
+__all__ = ["DASK_HINT", "Estimate", "SweepAborted", "SweepSummary", "estimate", "executor",
+           "run_sweep"]
 
 DASK_HINT = "Dask executors need dask.distributed: pip install 'feeddrive[dask]'"
 # one thread per worker process: the parallelism is across points
@@ -37,6 +38,17 @@ _THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NU
 
 #: progress callback: (points done, points to do, seconds of the last point)
 Progress = Callable[[int, int], None]
+
+
+class SweepAborted(RuntimeError):
+    """The executor lost a worker (a process killed, out of memory, a Dask worker gone):
+    the points finished so far are stored; rerunning resumes."""
+
+
+def _lost_worker(err: BaseException) -> bool:
+    if isinstance(err, cf.process.BrokenProcessPool):
+        return True
+    return type(err).__name__ in ("KilledWorker", "CommClosedError", "FutureCancelledError")
 
 
 @dataclass(frozen=True)
@@ -195,9 +207,13 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
                     failed += "error" in value
                     if progress is not None:
                         progress(computed, len(todo))
-            except BaseException:
+            except BaseException as err:
                 for f in futures:
                     f.cancel()
+                if isinstance(err, Exception) and _lost_worker(err):
+                    raise SweepAborted(f"{where}: a worker was lost ({type(err).__name__}: "
+                                       f"{err}); {computed} points stored this run, rerun "
+                                       "to resume") from None
                 raise
     return SweepSummary(points=len(points), distinct=len(tasks), stored_before=len(done_before),
                         computed=computed, failed=failed, seconds=time.perf_counter() - t0,
