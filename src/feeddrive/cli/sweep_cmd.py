@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -80,7 +81,8 @@ def sweep_command(
     scheduler: str | None = typer.Option(None, "--scheduler", help="Address of a running "
                                          "Dask scheduler (tcp://HOST:PORT)."),
     dask_workers: int | None = typer.Option(None, "--dask-workers", help="Start a Dask "
-                                            "LocalCluster with this many worker processes."),
+                                            "LocalCluster with this many worker processes "
+                                            "[processes]."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Print the point count and an "
                                  "estimated time from a few timed points; store nothing."),
     plot: str | None = typer.Option(None, "--plot", help="Map (grid) or histogram (random, "
@@ -139,9 +141,8 @@ def sweep_command(
         return
     with SweepStore(store_path, option=option, notice=_notice) as db:
         summary = _run(cfg, db, points, workers, scheduler, dask_workers, quiet=as_json)
-        ds = to_dataset(db, cfg.name) if (plot or as_json) else None
-        shown_plot = _plot(ds, plot, x or cfg.map_axes[0], y or cfg.map_axes[1], None) \
-            if plot else None
+        shown_plot = _plot(to_dataset(db, cfg.name), plot, x or cfg.map_axes[0],
+                           y or cfg.map_axes[1], None) if plot else None
         if output:
             export(db, cfg.name, output)
     out = {"sweep": cfg.name, "store": os.fspath(store_path), "points": summary.points,
@@ -255,8 +256,7 @@ def map_command(
             export(db, sweep, output)
     desc: dict[str, Any] = {"sweep": sweep, "design": ds.attrs["design"],
                             "axes": [str(d) for d in ds.dims],
-                            "points": int(ds.sizes.get("sample", 0)) or int(
-                                __import__("math").prod(ds.sizes.values()))}
+                            "points": math.prod(ds.sizes.values())}
     if x is not None and y is not None:
         if plot is None:
             raise ValueError("--x/--y: give --plot FILE.png for the map")
