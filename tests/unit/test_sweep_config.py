@@ -187,3 +187,23 @@ def test_concurrent_writers_corrupt_nothing(tmp_path: Path) -> None:
     with SweepStore(path) as store:
         assert store.count() == 60
         assert all(store.get(f"key{i}") == {"values": {"i": i}} for i in range(60))
+
+
+def test_map_refuses_unknown_axes_and_missing_stores(tmp_path: Path) -> None:
+    from feeddrive.sweep.executors import description
+
+    cfg = _cfg(axes={"nut_speed": [1.0, 2.0], "table_position": [300, 500]})
+    points = cfg.points()
+    with SweepStore(tmp_path / "s.sqlite") as store:
+        store.register(cfg.name, description(cfg), [(p.index, p.key, p.coords) for p in points])
+        store.put(points[0].key, {"values": {"linear_upper": 1e-3, "linear_lower": 1e-4}})
+    runner = CliRunner()
+    res = runner.invoke(app, ["map", str(tmp_path / "s.sqlite"), "--x", "speed", "--y",
+                              "nut_speed", "--plot", str(tmp_path / "m.png")])
+    assert res.exit_code == 2 and "--x = 'speed': not an axis" in res.output, res.output
+    res = runner.invoke(app, ["map", str(tmp_path / "nothing.sqlite")])
+    assert res.exit_code == 2 and "no such store" in res.output, res.output
+    res = runner.invoke(app, ["map", str(tmp_path / "s.sqlite"), "--x", "table_position", "--y",
+                              "nut_speed", "--plot", str(tmp_path / "m.png")])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "m.png").exists()
