@@ -409,7 +409,11 @@ class StabilityBand:
 MARGINAL = 1e-7
 
 
-def _rightmost(system: DriveSystem, v: float, nut_speed: float) -> tuple[float, float]:
+def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
+                   ) -> tuple[float, float]:
+    """(real part [1/s], frequency [Hz]) of the rightmost pole of the closed loop linearised
+    at steady sliding at ``v`` [m/s], the marginal free-motion poles (:data:`MARGINAL`) left
+    out — the quantity :func:`stability_band` judges."""
     lin = linearize(system, v, nut_speed)
     ev = lin.poles()
     fastest = float(np.max(np.abs(ev)))
@@ -429,7 +433,7 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *, low: float = 
     re = np.empty(points)
     fr = np.empty(points)
     for k, v in enumerate(speeds):
-        re[k], fr[k] = _rightmost(system, float(v), nut_speed)
+        re[k], fr[k] = rightmost_pole(system, float(v), nut_speed)
         if progress is not None:
             progress(k + 1, points)
     unstable = re > 0
@@ -440,7 +444,7 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *, low: float = 
             ua = unstable[k]
             while b - a > tolerance:
                 m = 0.5 * (a + b)
-                if (_rightmost(system, m, nut_speed)[0] > 0) == ua:
+                if (rightmost_pole(system, m, nut_speed)[0] > 0) == ua:
                     a = m
                 else:
                     b = m
@@ -458,11 +462,11 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *, low: float = 
                 start = None
     if start is not None:
         intervals.append((start, float(speeds[-1])))
-    freqs = [_rightmost(system, math.sqrt(lo * hi), nut_speed)[1] for lo, hi in intervals]
+    freqs = [rightmost_pole(system, math.sqrt(lo * hi), nut_speed)[1] for lo, hi in intervals]
     return StabilityBand(intervals=intervals, mode_frequency_hz=freqs, speeds=speeds,
                          max_real_part=re, frequency_hz=fr, tolerance=tolerance,
                          nut_speed=nut_speed)
 
 
 __all__ = ["LinearModel", "LoopAnalysis", "LoopResult", "Pole", "StabilityBand",
-           "linearize", "loop_analysis", "stability_band", "steady_state"]
+           "linearize", "loop_analysis", "rightmost_pole", "stability_band", "steady_state"]

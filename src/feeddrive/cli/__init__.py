@@ -20,6 +20,7 @@ from . import (  # noqa: F401,E402  (registers commands)
     params_cmd,  # noqa: F401  (registers commands)
     reproduce_cmd,
     simulate_cmd,
+    sweep_cmd,  # noqa: F401  (registers commands)
 )
 from ._common import app
 from .friction_cmd import friction_command  # noqa: F401  (registers commands)

@@ -1,0 +1,468 @@
+"""Sweep configurations (TOML) and their designs: grid, random, Latin hypercube.
+
+A configuration names a base parameter set, the axes to vary and the quantity computed at each
+point (:mod:`.quantities`).  Everything a user can get wrong is checked by
+:func:`load_config` / :meth:`SweepConfig.points` *before* any simulation: each refusal is a
+:class:`~feeddrive.parameters.ParameterError` naming the configuration key
+(``axes."friction.screw.positive.static_force"``), the value and what was expected.
+
+Axis units: ``table_position`` [mm], ``nut_speed`` and ``table_speed`` [mm/s] (the CLI's
+units, converted to SI here, once); a parameter named by its dotted path takes the parameter
+file's SI unit, or a factor on the base value with ``relative = true``.  ``drive`` and
+``preset`` take names.  A ``*`` in a parameter path (``friction.*.*.static_force``) expands to
+one axis per matching numeric parameter, each varied on its own (relative only).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import itertools
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import units
+from ..parameters import DriveParameters, ParameterError, dumps, load, preset
+from ..parameters.toml_io import read_toml_file, to_dict
+from .quantities import QuantitySettings
+
+DESIGNS = ("grid", "random", "lhs")
+#: axes that are not parameters of the set: name → (unit in the configuration, SI factor)
+SPECIAL_AXES: dict[str, tuple[str, float]] = {
+    "drive": ("", 1.0), "preset": ("", 1.0),
+    "table_position": ("mm", units.MM), "nut_speed": ("mm/s", units.MM_PER_S),
+    "table_speed": ("mm/s", units.MM_PER_S),
+}
+DRIVES = ("cdfs", "ddfs", "linear-motor")
+#: drives without a driven nut: their nut speed is 0 whatever an axis says (the CDFS holds
+#: the hollow motor), so those points share one stored result
+NO_NUT_DRIVES = ("cdfs", "linear-motor")
+_TOP_KEYS = ("name", "preset", "params", "drive", "table_position", "nut_speed", "store",
+             "design", "quantity", "axes", "map")
+_AXIS_KEYS = ("values", "low", "high", "points", "scale", "relative")
+MAX_POINTS = 1_000_000
+
+
+def _refuse(key: str, value: object, message: str) -> ParameterError:
+    return ParameterError(key, value, message)
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One swept name and how its values are drawn.
+
+    ``values``: explicit values (grid: all of them; random / LHS: drawn among them).
+    ``low``/``high``: a continuous range in the configuration's unit; ``points`` values on a
+    grid (``scale`` ``linear`` or ``log``); random and LHS draw uniformly (log-uniformly).
+    ``relative``: the values are factors on the base parameter value.
+    """
+
+    name: str
+    values: tuple[Any, ...] | None = None
+    low: float | None = None
+    high: float | None = None
+    points: int | None = None
+    scale: str = "linear"
+    relative: bool = False
+
+    @property
+    def key(self) -> str:
+        return f'axes."{self.name}"' if "." in self.name else f"axes.{self.name}"
+
+    @property
+    def unit(self) -> str:
+        if self.relative:
+            return "1"
+        return SPECIAL_AXES.get(self.name, ("", 1.0))[0]
+
+    def grid(self) -> list[Any]:
+        if self.values is not None:
+            return list(self.values)
+        assert self.low is not None and self.high is not None
+        n = self.points or 0
+        if n == 1:
+            return [self.low]
+        if self.scale == "log":
+            return [float(v) for v in np.geomspace(self.low, self.high, n)]
+        return [float(v) for v in np.round(np.linspace(self.low, self.high, n), 12)]
+
+    def draw(self, u: float) -> Any:
+        """The value at quantile ``u`` ∈ [0, 1) of the axis's distribution."""
+        if self.values is not None:
+            return self.values[min(int(u * len(self.values)), len(self.values) - 1)]
+        assert self.low is not None and self.high is not None
+        if self.scale == "log":
+            return float(math.exp(math.log(self.low) + u * math.log(self.high / self.low)))
+        return float(self.low + u * (self.high - self.low))
+
+
+@dataclass(frozen=True)
+class Point:
+    """One design point: its index, coordinates (configuration units) and the task a worker
+    evaluates (:func:`.quantities.evaluate`), keyed by :func:`.store.point_key`."""
+
+    index: int
+    coords: dict[str, Any]
+    task: dict[str, Any]
+    key: str
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """A parsed sweep configuration (see docs/sweeps.md)."""
+
+    name: str
+    source: str
+    base: str  # preset name, or the parameter file's path
+    drive: str
+    table_position: float  # [mm]
+    nut_speed: float  # [mm/s]
+    design: str
+    samples: int | None
+    seed: int
+    axes: tuple[Axis, ...]
+    quantity: QuantitySettings
+    store: Path | None
+    map_axes: tuple[str | None, str | None] = (None, None)
+    raw: dict[str, Any] = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ points
+
+    def coordinates(self) -> list[dict[str, Any]]:
+        """The design's coordinates, in the configuration's units, in a fixed order."""
+        names = [a.name for a in self.axes]
+        if self.design == "grid":
+            grids = [a.grid() for a in self.axes]
+            count = math.prod(len(g) for g in grids)
+            if count > MAX_POINTS:
+                raise _refuse("design.kind", "grid", f"{count} points; at most {MAX_POINTS}")
+            return [dict(zip(names, combo, strict=True)) for combo in itertools.product(*grids)]
+        assert self.samples is not None
+        n, d = self.samples, len(self.axes)
+        if self.design == "lhs":
+            from scipy.stats import qmc
+
+            u = qmc.LatinHypercube(d=d, seed=self.seed).random(n) if d else np.zeros((n, 0))
+        else:
+            u = np.random.default_rng(self.seed).random((n, d))
+        return [{a.name: a.draw(float(u[i, j])) for j, a in enumerate(self.axes)}
+                for i in range(n)]
+
+    def points(self) -> list[Point]:
+        """Every design point with its task and store key; every point's parameter set is
+        built and validated here, so a bad value stops the sweep before any simulation."""
+        from .store import point_key
+
+        bases: dict[str, DriveParameters] = {}
+        out = []
+        for i, coords in enumerate(self.coordinates()):
+            task = self.task(coords, bases)
+            out.append(Point(index=i, coords=coords, task=task, key=point_key(task)))
+        return out
+
+    def _base(self, name: str, cache: dict[str, DriveParameters]) -> DriveParameters:
+        if name not in cache:
+            cache[name] = _load_base(name, self.source)
+        return cache[name]
+
+    def task(self, coords: Mapping[str, Any],
+             cache: dict[str, DriveParameters] | None = None) -> dict[str, Any]:
+        """What a worker needs for one point: the full parameter set as TOML text, drive,
+        table position [m], nut speed [m/s] and the quantity settings (SI)."""
+        cache = {} if cache is None else cache
+        base_name = str(coords.get("preset", self.base))
+        params = self._base(base_name, cache)
+        drive = str(coords.get("drive", self.drive))
+        position = float(coords.get("table_position", self.table_position)) * units.MM
+        nut = 0.0 if drive in NO_NUT_DRIVES else \
+            float(coords.get("nut_speed", self.nut_speed)) * units.MM_PER_S
+        quantity = self.quantity
+        if "table_speed" in coords:
+            quantity = quantity.with_table_speed(float(coords["table_speed"]) * units.MM_PER_S)
+        deferred = []
+        for axis in self.axes:
+            if axis.name in SPECIAL_AXES:
+                continue
+            value = coords[axis.name]
+            if axis.relative and _is_chain_stiffness(axis.name, params):
+                deferred.append((axis, value))
+                continue
+            params = _apply(params, axis, value)
+        for axis, value in deferred:
+            from ..stiffness import equivalent_stiffness
+
+            params = _apply_value(params, axis, value * equivalent_stiffness(params, position))
+        from ..simulate import DriveSystem
+
+        try:
+            DriveSystem(params, drive=drive, table_position=position)
+        except ParameterError as err:
+            key = {"table_position": _axis_or("table_position", self.axes),
+                   "drive": _axis_or("drive", self.axes)}.get(err.field, err.field)
+            raise _refuse(key, err.value, err.message) from None
+        return {"parameters": dumps(params), "drive": drive, "table_position": position,
+                "nut_speed": nut, "quantity": quantity.to_dict()}
+
+
+def _axis_or(name: str, axes: Sequence[Axis]) -> str:
+    return next((a.key for a in axes if a.name == name), name)
+
+
+def _is_chain_stiffness(name: str, params: DriveParameters) -> bool:
+    return name == "stiffness.equivalent_stiffness" and params.stiffness.equivalent_stiffness == 0
+
+
+def _apply(params: DriveParameters, axis: Axis, value: Any) -> DriveParameters:
+    if axis.relative:
+        base = _get_path(params, axis.name)
+        if _is_component(base):
+            try:
+                return params.replace_path(axis.name, base.scaled(value))
+            except ParameterError as err:
+                raise _refuse(axis.key, value, f"{err.field} = {err.value!r}: "
+                              f"{err.message}") from None
+        return _apply_value(params, axis, base * value)
+    return _apply_value(params, axis, value)
+
+
+def _apply_value(params: DriveParameters, axis: Axis, value: Any) -> DriveParameters:
+    if isinstance(value, list):
+        value = tuple(value)
+    try:
+        return params.replace_path(axis.name, value)
+    except ParameterError as err:
+        detail = f" ({err.field} = {err.value!r})" if err.field != axis.name else ""
+        raise _refuse(axis.key, value, f"{err.message}{detail}") from None
+
+
+def _is_component(obj: Any) -> bool:
+    return hasattr(obj, "scaled") and callable(obj.scaled)
+
+
+def _get_path(params: Any, path: str) -> Any:
+    obj = params
+    for part in path.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _load_base(name: str, source: str) -> DriveParameters:
+    if name.endswith(".toml"):
+        path = Path(name)
+        if not path.is_absolute():
+            path = Path(source).parent / path
+        return load(path)
+    try:
+        return preset(name)
+    except ParameterError as err:
+        raise _refuse("preset", name, err.message) from None
+
+
+def numeric_paths(params: DriveParameters) -> list[str]:
+    """Dotted names of every numeric parameter of ``params`` (for ``*`` axes)."""
+    out: list[str] = []
+
+    def walk(d: Mapping[str, Any], prefix: str) -> None:
+        for k, v in d.items():
+            path = f"{prefix}{k}"
+            if isinstance(v, Mapping):
+                walk(v, path + ".")
+            elif isinstance(v, int | float) and not isinstance(v, bool):
+                out.append(path)
+
+    walk(to_dict(params), "")
+    return out
+
+
+# ---------------------------------------------------------------------- parsing
+
+
+def _number(key: str, value: Any, *, positive: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise _refuse(key, value, "expected a finite number")
+    if positive and value <= 0:
+        raise _refuse(key, value, "expected a number > 0")
+    return float(value)
+
+
+def _parse_axis(name: str, spec: Any) -> Axis:
+    key = f'axes."{name}"' if "." in name else f"axes.{name}"
+    if isinstance(spec, list):
+        spec = {"values": spec}
+    if not isinstance(spec, dict):
+        raise _refuse(key, spec, "expected a list of values or a table "
+                      "{ low, high, points } / { values }")
+    unknown = sorted(set(spec) - set(_AXIS_KEYS))
+    if unknown:
+        raise _refuse(f"{key}.{unknown[0]}", spec[unknown[0]],
+                      f"unknown key; expected one of {', '.join(_AXIS_KEYS)}")
+    relative = spec.get("relative", False)
+    if not isinstance(relative, bool):
+        raise _refuse(f"{key}.relative", relative, "expected true or false")
+    scale = spec.get("scale", "linear")
+    if scale not in ("linear", "log"):
+        raise _refuse(f"{key}.scale", scale, "expected linear or log")
+    if "values" in spec:
+        values = spec["values"]
+        if not isinstance(values, list) or not values:
+            raise _refuse(f"{key}.values", values, "empty: expected at least one value")
+        if any(k in spec for k in ("low", "high", "points")):
+            raise _refuse(key, spec, "give either values or low/high, not both")
+        if relative:
+            for v in values:
+                _number(f"{key}.values", v, positive=True)
+        return Axis(name=name, values=tuple(values), relative=relative)
+    if "low" not in spec or "high" not in spec:
+        raise _refuse(key, spec, "expected values = [...] or low and high")
+    low = _number(f"{key}.low", spec["low"])
+    high = _number(f"{key}.high", spec["high"])
+    if not low < high and not (low == high and spec.get("points") == 1):
+        raise _refuse(f"{key}.high", high, f"empty range: expected > low = {low:g}")
+    points = spec.get("points")
+    if points is not None and (isinstance(points, bool) or not isinstance(points, int)
+                               or points < 1):
+        raise _refuse(f"{key}.points", points, "expected a whole number ≥ 1")
+    if scale == "log" and low <= 0:
+        raise _refuse(f"{key}.low", low, "a log scale needs low > 0")
+    if relative and low <= 0:
+        raise _refuse(f"{key}.low", low, "a relative factor must be > 0")
+    return Axis(name=name, low=low, high=high, points=points, scale=scale, relative=relative)
+
+
+def _check_axis_name(axis: Axis, base: DriveParameters) -> None:
+    """An unknown name, a relative special axis or a value of the wrong kind is refused."""
+    if axis.name in SPECIAL_AXES:
+        if axis.relative:
+            raise _refuse(f"{axis.key}.relative", True, f"{axis.name} cannot be relative")
+        if axis.name == "drive":
+            for v in axis.values or ():
+                if v not in DRIVES:
+                    raise _refuse(f"{axis.key}.values", v, f"expected one of {', '.join(DRIVES)}")
+        if axis.name in ("drive", "preset") and axis.values is None:
+            raise _refuse(axis.key, axis.low, "expected values = [...] (names)")
+        return
+    try:
+        current = _get_path(base, axis.name)
+    except AttributeError:
+        # replace_path names the first unknown part
+        try:
+            base.replace_path(axis.name, 0.0)
+        except ParameterError as err:
+            raise _refuse(axis.key, axis.name, err.message + " (not a parameter name)") from None
+        raise _refuse(axis.key, axis.name, "not a parameter name") from None
+    if axis.relative and not (_is_component(current) or (
+            isinstance(current, int | float) and not isinstance(current, bool))):
+        raise _refuse(f"{axis.key}.relative", True,
+                      f"{axis.name} is not a number or a friction site; give values instead")
+    if not axis.relative and _is_component(current) and axis.values is None:
+        raise _refuse(axis.key, axis.name, "a friction site is varied by relative = true")
+
+
+def _expand(axis: Axis, base: DriveParameters) -> list[Axis]:
+    if "*" not in axis.name:
+        return [axis]
+    if not axis.relative:
+        raise _refuse(f"{axis.key}.relative", False, "a name with * needs relative = true "
+                      "(each matching parameter has its own base value)")
+    names = [p for p in numeric_paths(base) if fnmatch.fnmatchcase(p, axis.name)]
+    if not names:
+        raise _refuse(axis.key, axis.name, "matches no numeric parameter")
+    return [Axis(name=n, values=axis.values, low=axis.low, high=axis.high, points=axis.points,
+                 scale=axis.scale, relative=True) for n in names]
+
+
+def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
+    """A :class:`SweepConfig` from parsed TOML; every key checked (see the module)."""
+    unknown = sorted(set(data) - set(_TOP_KEYS))
+    if unknown:
+        raise _refuse(unknown[0], data[unknown[0]],
+                      f"unknown key; expected one of {', '.join(_TOP_KEYS)}")
+    if "preset" in data and "params" in data:
+        raise _refuse("params", data["params"], "give either preset or params, not both")
+    base = str(data.get("params", data.get("preset", "wang2021")))
+    if "params" in data and not base.endswith(".toml"):
+        raise _refuse("params", base, "expected a .toml parameter file")
+    base_params = _load_base(base, source)
+    drive = data.get("drive", "cdfs")
+    if drive not in DRIVES:
+        raise _refuse("drive", drive, f"expected one of {', '.join(DRIVES)}")
+    position = _number("table_position", data.get("table_position", 400.0))
+    nut = _number("nut_speed", data.get("nut_speed", 0.0))
+
+    design = data.get("design", {})
+    if not isinstance(design, dict):
+        raise _refuse("design", design, "expected a table")
+    for k in design:
+        if k not in ("kind", "samples", "seed"):
+            raise _refuse(f"design.{k}", design[k], "unknown key; expected kind, samples, seed")
+    kind = design.get("kind", "grid")
+    if kind not in DESIGNS:
+        raise _refuse("design.kind", kind, f"expected one of {', '.join(DESIGNS)}")
+    samples = design.get("samples")
+    if kind != "grid":
+        if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+            raise _refuse("design.samples", samples, "expected a whole number ≥ 1")
+    elif samples is not None:
+        raise _refuse("design.samples", samples, "only for random or lhs designs")
+    seed = design.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise _refuse("design.seed", seed, "expected a whole number ≥ 0")
+
+    axes_spec = data.get("axes", {})
+    if not isinstance(axes_spec, dict):
+        raise _refuse("axes", axes_spec, "expected a table of axes")
+    axes: list[Axis] = []
+    for name, spec in axes_spec.items():
+        axis = _parse_axis(name, spec)
+        for a in _expand(axis, base_params):
+            _check_axis_name(a, base_params)
+            if kind == "grid" and a.values is None and a.points is None:
+                raise _refuse(f"{a.key}.points", None, "a grid axis needs points (or values)")
+            axes.append(a)
+    if kind != "grid" and not axes:
+        raise _refuse("axes", {}, f"a {kind} design needs at least one axis")
+
+    quantity = QuantitySettings.parse(data.get("quantity", {}))
+    if "table_speed" in axes_spec and quantity.kind not in ("creep-trial", "loop-margins"):
+        raise _refuse("axes.table_speed", axes_spec["table_speed"],
+                      f"only for quantity creep-trial or loop-margins, not {quantity.kind}")
+
+    store = data.get("store")
+    if store is not None and (not isinstance(store, str) or not store.strip()):
+        raise _refuse("store", store, "expected a file name")
+    store_path = None if store is None else (Path(source).parent / store)
+    map_spec = data.get("map", {})
+    if not isinstance(map_spec, dict):
+        raise _refuse("map", map_spec, "expected a table { x, y }")
+    names = {a.name for a in axes}
+    for k, v in map_spec.items():
+        if k not in ("x", "y"):
+            raise _refuse(f"map.{k}", v, "unknown key; expected x, y")
+        if v not in names:
+            raise _refuse(f"map.{k}", v, "not an axis of this sweep")
+    name = data.get("name", Path(source).stem)
+    if not isinstance(name, str) or not name.strip():
+        raise _refuse("name", name, "expected a non-empty name")
+    return SweepConfig(name=name, source=source, base=base, drive=drive,
+                       table_position=position, nut_speed=nut, design=kind,
+                       samples=samples if kind != "grid" else None, seed=seed,
+                       axes=tuple(axes), quantity=quantity, store=store_path,
+                       map_axes=(map_spec.get("x"), map_spec.get("y")), raw=dict(data))
+
+
+def load_config(path: str | os.PathLike[str]) -> SweepConfig:
+    """Read and check a sweep configuration; a refusal names the file and the key."""
+    data = read_toml_file(os.fspath(path))
+    try:
+        return parse_config(data, os.fspath(path))
+    except ParameterError as err:
+        raise err.in_file(os.fspath(path)) from None
+
+
+__all__ = ["DESIGNS", "DRIVES", "Axis", "Point", "SweepConfig", "load_config", "numeric_paths",
+           "parse_config"]

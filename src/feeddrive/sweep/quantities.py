@@ -1,0 +1,250 @@
+"""What a sweep computes at each point, and the function a worker runs.  SI inside.
+
+Quantities (``[quantity] kind``):
+
+* ``critical-speed``: the critical creeping speed and bands (:mod:`feeddrive.analysis.critical`),
+  ``start = "rest"`` (scan + bisection) or ``"running"`` (the paper's step-down), on the
+  protocol of :mod:`feeddrive.protocol` unless overridden;
+* ``creep-trial``: one trial from rest at ``table_speed``: verdict kind, ripple ratio, stick
+  fraction, frequency (:func:`~feeddrive.analysis.critical.creep_trial`);
+* ``linear-band``: the speeds at which steady sliding is linearly unstable
+  (:func:`feeddrive.linear.stability_band`);
+* ``loop-margins``: least-damped mode and every loop's margins
+  (:func:`feeddrive.linear.loop_analysis`) at ``table_speed``.
+
+``linear = true`` (default for ``critical-speed`` and ``creep-trial``) adds the linear
+prediction at each point, which maps draw over the simulated boundary: the linear band's
+upper edge beside a critical speed, the sign of the rightmost pole's real part at the trial
+speed beside a trial's verdict.
+
+:func:`evaluate` takes a task (:meth:`.design.SweepConfig.task`: parameter TOML text, drive,
+position, nut speed, settings) and returns ``{"values": {name: scalar (SI)}, "details": …}``,
+or ``{"error": message}`` when the point's simulation fails — so a local process and a Dask
+worker on another machine run exactly the same function on exactly the same inputs.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+from .. import protocol, units
+from ..parameters import ParameterError
+
+QUANTITIES = ("critical-speed", "creep-trial", "linear-band", "loop-margins")
+_KEYS = ("kind", "start", "low", "high", "coarse_step", "resolution", "initial_duration",
+         "max_duration", "table_speed", "linear", "linear_points")
+
+#: value name → SI unit (for exports; speeds become mm/s at the edges)
+UNITS: dict[str, str] = {
+    "critical_speed": "m/s", "linear_lower": "m/s", "linear_upper": "m/s",
+    "linear_mode_frequency": "Hz", "simulated_time": "s", "trials": "1", "creep_bands": "1",
+    "linear_bands": "1",
+    "creeping": "1", "ripple_ratio": "1", "stick_fraction": "1", "frequency": "Hz",
+    "duration": "s", "linear_growth_rate": "1/s", "linear_unstable": "1",
+    "mode_frequency": "Hz", "damping_ratio": "1", "seconds": "s",
+}
+
+
+@dataclass(frozen=True)
+class QuantitySettings:
+    """The ``[quantity]`` table, SI (the file gives speeds in mm/s)."""
+
+    kind: str = "critical-speed"
+    start: str = "rest"
+    low: float = protocol.SPEED_RANGE[0]  # [m/s]
+    high: float = protocol.SPEED_RANGE[1]  # [m/s]
+    coarse_step: float = protocol.COARSE_STEP  # [m/s]
+    resolution: float = protocol.RESOLUTION  # [m/s]
+    initial_duration: float = protocol.TRIAL_DURATION  # [s]
+    max_duration: float = protocol.TRIAL_MAX_DURATION  # [s]
+    table_speed: float = 1.0e-3  # [m/s] creep-trial, loop-margins
+    linear: bool = True
+    linear_points: int = 40
+
+    @classmethod
+    def parse(cls, spec: Any) -> QuantitySettings:
+        if not isinstance(spec, dict):
+            raise ParameterError("quantity", spec, "expected a table")
+        for k in spec:
+            if k not in _KEYS:
+                raise ParameterError(f"quantity.{k}", spec[k],
+                                     f"unknown key; expected one of {', '.join(_KEYS)}")
+        kind = spec.get("kind", "critical-speed")
+        if kind not in QUANTITIES:
+            raise ParameterError("quantity.kind", kind, f"expected one of {', '.join(QUANTITIES)}")
+        start = spec.get("start", "rest")
+        if start not in ("rest", "running"):
+            raise ParameterError("quantity.start", start, "expected rest or running")
+        values: dict[str, Any] = {"kind": kind, "start": start}
+        for k, factor in (("low", units.MM_PER_S), ("high", units.MM_PER_S),
+                          ("coarse_step", units.MM_PER_S), ("resolution", units.MM_PER_S),
+                          ("table_speed", units.MM_PER_S), ("initial_duration", 1.0),
+                          ("max_duration", 1.0)):
+            if k in spec:
+                v = spec[k]
+                if isinstance(v, bool) or not isinstance(v, int | float) \
+                        or not math.isfinite(v) or v <= 0:
+                    unit = "s" if factor == 1.0 else "mm/s"
+                    raise ParameterError(f"quantity.{k}", v, f"expected a number > 0 [{unit}]")
+                values[k] = float(v) * factor
+        if "linear" in spec:
+            if not isinstance(spec["linear"], bool):
+                raise ParameterError("quantity.linear", spec["linear"], "expected true or false")
+            values["linear"] = spec["linear"]
+        if "linear_points" in spec:
+            n = spec["linear_points"]
+            if isinstance(n, bool) or not isinstance(n, int) or n < 2:
+                raise ParameterError("quantity.linear_points", n, "expected a whole number ≥ 2")
+            values["linear_points"] = n
+        if start == "running" and "coarse_step" not in spec:
+            values["coarse_step"] = protocol.STAIRCASE_COARSE_STEP
+        out = cls(**values)
+        if out.high <= out.low:
+            raise ParameterError("quantity.high", out.high / units.MM_PER_S,
+                                 f"empty range: expected > low = {out.low / units.MM_PER_S:g} "
+                                 "[mm/s]")
+        if out.max_duration < out.initial_duration:
+            raise ParameterError("quantity.max_duration", out.max_duration,
+                                 f"expected ≥ initial_duration = {out.initial_duration:g} [s]")
+        return out
+
+    def with_table_speed(self, speed: float) -> QuantitySettings:
+        return replace(self, table_speed=speed)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Only what the quantity depends on (the store key is a hash of it)."""
+        d = asdict(self)
+        keep = {"critical-speed": ("start", "low", "high", "coarse_step", "resolution",
+                                   "initial_duration", "max_duration", "linear",
+                                   "linear_points"),
+                "creep-trial": ("table_speed", "initial_duration", "max_duration", "linear"),
+                "linear-band": ("low", "high", "linear_points"),
+                "loop-margins": ("table_speed",)}[self.kind]
+        return {"kind": self.kind, **{k: d[k] for k in keep}}
+
+
+def _linear_band(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
+    from ..linear import stability_band
+
+    band = stability_band(system, nut_speed, low=q["low"], high=q["high"],
+                          points=q["linear_points"])
+    top = band.intervals[-1] if band.intervals else (math.nan, math.nan)
+    return {"values": {"linear_lower": top[0], "linear_upper": top[1],
+                       "linear_mode_frequency": (band.mode_frequency_hz[-1]
+                                                 if band.mode_frequency_hz else math.nan),
+                       "linear_bands": len(band.intervals)},
+            "details": {"linear": band.as_dict()}}
+
+
+def _growth_rate(system: Any, speed: float, nut_speed: float) -> tuple[float, float]:
+    """Real part [1/s] and frequency [Hz] of the rightmost pole at steady sliding
+    (:func:`feeddrive.linear.rightmost_pole`)."""
+    from ..linear import rightmost_pole
+
+    return rightmost_pole(system, speed, nut_speed)
+
+
+def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
+    """The quantity ``q`` (:meth:`QuantitySettings.to_dict`) of ``system``."""
+    from ..analysis.metrics import VerdictRule
+
+    kind = q["kind"]
+    if kind == "linear-band":
+        return _linear_band(system, nut_speed, q)
+    if kind == "loop-margins":
+        from ..linear import loop_analysis
+
+        la = loop_analysis(system, q["table_speed"], nut_speed).as_dict()
+        values: dict[str, Any] = {
+            "mode_frequency": la["least_damped_mode"]["frequency_hz"],
+            "damping_ratio": la["least_damped_mode"]["damping_ratio"]}
+        for loop in la["loops"]:
+            stem = loop["loop"].replace(" ", "_")
+            for k in ("gain_margin_db", "phase_margin_deg", "crossover_hz",
+                      "closed_loop_bandwidth_hz"):
+                v = loop[k]
+                values[f"{stem}_{k}"] = math.nan if v is None else v
+        return {"values": values, "details": {"loops": la["loops"]}}
+    rule = VerdictRule(initial_duration=q["initial_duration"], max_duration=q["max_duration"])
+    if kind == "creep-trial":
+        from ..analysis.critical import creep_trial
+
+        trial = creep_trial(system, q["table_speed"], nut_speed=nut_speed, rule=rule)
+        values = {"kind": trial.kind, "creeping": int(trial.creeping),
+                  "ripple_ratio": trial.ripple_ratio, "stick_fraction": trial.stick_fraction,
+                  "frequency": (math.nan if trial.stick_slip_frequency is None
+                                else trial.stick_slip_frequency),
+                  "duration": trial.duration}
+        if q["linear"]:
+            growth, freq = _growth_rate(system, q["table_speed"], nut_speed)
+            values.update(linear_growth_rate=growth, linear_unstable=int(growth > 0),
+                          linear_mode_frequency=freq)
+        return {"values": values, "details": {"trial": trial.to_dict()}}
+    from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
+
+    if q["start"] == "rest":
+        search = critical_speed_from_rest(
+            system, nut_speed=nut_speed, speed_range=(q["low"], q["high"]),
+            coarse_step=min(q["coarse_step"], (q["high"] - q["low"]) / 2),
+            resolution=q["resolution"], rule=rule)
+    else:
+        search = critical_speed_stepdown(
+            system, nut_speed=nut_speed, start_speed=q["high"], lowest_speed=q["low"],
+            step=q["resolution"], coarse_step=q["coarse_step"], rule=rule)
+    d = search.to_dict()
+    values = {"critical_speed": (math.nan if search.critical_speed is None
+                                 else search.critical_speed),
+              "status": search.status, "kind": search.kind or "",
+              "creep_bands": len(d["bands"]), "trials": len(search.trials),
+              "simulated_time": search.simulated_time}
+    details: dict[str, Any] = {"bands": d["bands"], "display": d["display"]}
+    if q["linear"]:
+        lin = _linear_band(system, nut_speed, {**q, "low": min(q["low"], 1e-5),
+                                               "high": max(q["high"], 5e-3)})
+        values.update(lin["values"])
+        details.update(lin["details"])
+    return {"values": values, "details": details}
+
+
+def evaluate(task: dict[str, Any]) -> dict[str, Any]:
+    """Run one point (see the module).  Module-level and picklable: the function every
+    executor runs, in a local process or on a Dask worker."""
+    from ..parameters import loads
+    from ..simulate import DriveSystem, SimulationError
+
+    t0 = time.perf_counter()
+    try:
+        params = loads(task["parameters"])
+        system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
+        out = compute(system, task["nut_speed"], task["quantity"])
+    except (SimulationError, ValueError, ArithmeticError) as err:
+        return {"error": f"{type(err).__name__}: {err}",
+                "seconds": time.perf_counter() - t0}
+    out["seconds"] = time.perf_counter() - t0
+    return out
+
+
+def warm(task: dict[str, Any]) -> None:
+    """Compile (or load from numba's disk cache) the kernels ``task``'s quantity uses, with
+    a 20-ms run and, for linear quantities, one linearisation: cheap, and it leaves the
+    compiled modules on disk for every worker."""
+    from ..control import ConstantSpeed
+    from ..parameters import loads
+    from ..simulate import DriveSystem, simulate
+
+    params = loads(task["parameters"])
+    system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
+    q = task["quantity"]
+    speed = q.get("table_speed", 1e-3)
+    if q["kind"] in ("critical-speed", "creep-trial"):
+        simulate(system, ConstantSpeed(speed, task["nut_speed"], ramp_time=0.01), 0.02)
+    if q["kind"] in ("linear-band", "loop-margins") or q.get("linear"):
+        from ..linear import linearize
+
+        linearize(system, speed, task["nut_speed"])
+
+
+__all__ = ["QUANTITIES", "UNITS", "QuantitySettings", "compute", "evaluate", "warm"]
