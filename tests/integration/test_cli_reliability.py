@@ -72,3 +72,25 @@ def test_heavy_table_diverges_and_the_cli_says_unstable(tmp_path) -> None:
     assert result.exit_code == 3, result.output  # README "Exit status"
     assert "unstable" in result.stdout
     assert "warning: unstable: the loop diverges" in result.stderr
+
+
+def test_every_documented_writer_has_force_in_its_help() -> None:
+    """docs/outputs.md names the options that write; each command offers --force."""
+    import re
+
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "outputs.md").read_text(encoding="utf-8")
+    listed = re.search(r"Options that write: (.*?); each has", doc, re.S)
+    assert listed is not None
+    commands = {re.sub(r"\s+", " ", c).split(" --")[0]
+                for c in re.findall(r"`([^`]+)`", listed.group(1))}
+    assert {"simulate", "analyze", "identify static|dynamic", "identify merge", "calibrate",
+            "friction"} <= commands
+    for command in commands:
+        for variant in command.split(" ")[-1].split("|"):
+            args = [*command.split(" ")[:-1], variant] if "|" in command else command.split()
+            r = CliRunner().invoke(app, [*args, "--help"], env={"COLUMNS": "200"})
+            assert r.exit_code == 0 and "--force" in r.stdout, (args, r.stdout[-500:])
