@@ -246,3 +246,21 @@ def test_bad_part_values_give_one_line_errors(text: str, match: str) -> None:
     with pytest.raises(ParameterError, match=match) as err:
         loads(text)
     assert "\n" not in str(err.value)
+
+
+def test_hollow_motor_may_have_its_own_loops() -> None:
+    """Per-axis loops: `[hollow_controller]` gives the hollow motor its own gains; absent, it
+    uses `[controller]` (the same numbers give the same run, bit for bit)."""
+    w = fd.preset("wang2021")
+    profile = ConstantSpeed(0.5e-3, 16e-3)
+    base = fd.simulate(fd.DriveSystem(w, "ddfs", 0.4), profile, 0.5)
+    same = fd.simulate(fd.DriveSystem(w.with_values(hollow_controller=w.controller), "ddfs",
+                                      0.4), profile, 0.5)
+    np.testing.assert_array_equal(base["nut_speed"], same["nut_speed"])
+    own = w.with_values(hollow_controller=w.controller.with_values(velocity_gain=20.0))
+    other = fd.simulate(fd.DriveSystem(own, "ddfs", 0.4), profile, 0.5)
+    assert np.max(np.abs(other["nut_speed"] - base["nut_speed"])) > 0
+    model = fd.DriveSystem(own, "ddfs", 0.4).model(profile)
+    assert model.parameter("controller.nut.kvp") == 20.0
+    assert model.parameter("controller.screw.kvp") == w.controller.velocity_gain
+    assert loads(fd.parameters.dumps(own)) == own

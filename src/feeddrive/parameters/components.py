@@ -386,6 +386,8 @@ class DriveParameters(_Component):
     controller: Controller = field(default_factory=lambda: _default_controller())
     disturbances: Disturbances = field(default_factory=lambda: Disturbances())
     linear_motor: LinearMotor | None = None
+    # the hollow motor's own loops; absent: it uses ``controller`` as the screw motor does
+    hollow_controller: Controller | None = None
     _label = "parameters"
 
     def replace_path(self, path: str, value: Any) -> DriveParameters:

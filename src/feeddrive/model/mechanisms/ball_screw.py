@@ -139,7 +139,8 @@ class BallScrewDrive(Mechanism):
         c = self.params.controller
         H = self.params.screw.transmission_ratio
         o_s = axis_parameters(b, "screw", c, H, speed_mode=False)
-        o_n = axis_parameters(b, "nut", c, H, speed_mode=c.nut_loop == "speed")
+        cn = self.params.hollow_controller or c  # per-axis loops: the hollow motor's own
+        o_n = axis_parameters(b, "nut", cn, H, speed_mode=cn.nut_loop == "speed")
         Hp = f"P[{o_s + H_AX}]"
         channels = [
             Channel("screw_angle", b.y("screw_angle"), b.y("screw_speed"), f"P[{o_s + ENC_Q}]"),
