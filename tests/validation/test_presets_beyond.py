@@ -32,3 +32,20 @@ def test_drive_preset_cdfs_critical_speed_is_the_documented_one() -> None:
     assert "| real drive (`wang2021-drive`)" in DOC
     row = next(line for line in DOC.splitlines() if line.startswith("| real drive"))
     assert f"| {shown} |" in row
+
+
+def test_reading_figures_rows_name_each_reading_and_metric() -> None:
+    """Issue 14 item 3: Figs. 7/9/10 metrics per reading, shown in the report."""
+    from feeddrive.reproduce.beyond_section import reading_figure_rows
+    from feeddrive.reproduce.forced_study import FIGURE_READINGS
+
+    for _, preset, _ in FIGURE_READINGS:
+        fd.preset(preset)  # every reading is a shipped preset (with documented changes)
+    record = {"reading": "r", "fig7": [{"multiple": k, "overshoot": 0.5, "settling_time": 1.0,
+                                        "kind": "smooth"} for k in (0.0, 1.0, 10.0, 20.0)],
+              "sine": [{"table_amplitude": 1.56e-3, "nut_amplitude": vn,
+                        "reversal_overshoot": 0.25} for vn in (0.0, 2e-3, 10e-3, 16e-3)]}
+    (row,) = reading_figure_rows([record])
+    assert row["Fig. 7 overshoot at v_n = 0 / 1 / 10 / 20 × [%]"] == "50 / 50 / 50 / 50"
+    assert row["Figs. 9–10 reversal overshoot, v_np = 0 / 2 / 10 / 16 mm/s [%]"] == \
+        "25 / 25 / 25 / 25"

@@ -141,3 +141,26 @@ def summary_text(results: dict[str, Any]) -> str:
         "CDFS's creep band; with ±20 % model error see the compensation table.",
     ]
     return "\n".join(lines)
+
+
+def reading_figure_rows(readings: list[dict[str, Any]] | None) -> list[dict[str, str]]:
+    """Figs. 7, 9–10 metrics per reading: DDFS overshoot at 1.55 mm/s for v_n = 0, 1, 10,
+    20 × the CDFS critical speed, and the sine reversal overshoot at 1.56 mm/s for
+    v_np = 0, 2, 10, 16 mm/s."""
+    out = []
+    for r in readings or []:
+        if not r:
+            continue
+        f7 = {row["multiple"]: row for row in r["fig7"]}
+        sine = {round(1e3 * row["nut_amplitude"], 6): row for row in r["sine"]
+                if abs(1e3 * row["table_amplitude"] - 1.56) < 1e-9}
+        out.append({
+            "reading": r["reading"],
+            "Fig. 7 overshoot at v_n = 0 / 1 / 10 / 20 × [%]": " / ".join(
+                f"{100 * f7[k]['overshoot']:.0f}" if k in f7 else "—"
+                for k in (0.0, 1.0, 10.0, 20.0)),
+            "Figs. 9–10 reversal overshoot, v_np = 0 / 2 / 10 / 16 mm/s [%]": " / ".join(
+                f"{100 * sine[k]['reversal_overshoot']:.0f}" if k in sine else "—"
+                for k in (0.0, 2.0, 10.0, 16.0)),
+        })
+    return out

@@ -31,3 +31,30 @@ def run(job: tuple[str, float, float, float]) -> dict[str, Any]:
     res = threshold_critical_speed(system, vn, threshold=threshold)
     res["position_mm"] = 1e3 * position
     return res
+
+
+# ---- Figs. 7, 9–10 metrics per reading (issue 14 item 3)
+
+FIGURE_READINGS: tuple[tuple[str, str, dict[str, Any]], ...] = (
+    ("wang2021 (shipped)", "wang2021", {}),
+    ("wang2021-ripple (torque ripple)", "wang2021-ripple", {}),
+    ("wang2021-drive (real drive)", "wang2021-drive", {}),
+    ("wang2021, ball–nut share 0.5", "wang2021", {"friction.ball_nut_share": 0.5}),
+)
+
+
+def reading_figures(index: int, settings: Any) -> dict[str, Any]:
+    """Fig. 7 (DDFS at 1.55 mm/s against v_n) and Figs. 9–10 (sine reversal overshoot) metrics
+    of one reading, without traces."""
+    from .studies import fig7, figs9_10
+
+    label, preset, changes = FIGURE_READINGS[index]
+    p = parameters.preset(preset)
+    for path, value in changes.items():
+        p = p.replace_path(path, value)
+    f7 = fig7(p, PAPER["cdfs_critical_sim"], settings)
+    sine = figs9_10(p, settings)
+    return {"reading": label,
+            "fig7": [{k: r[k] for k in ("multiple", "overshoot", "settling_time", "kind")}
+                     for r in f7["rows"]],
+            "sine": sine["rows"]}

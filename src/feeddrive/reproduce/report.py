@@ -20,6 +20,7 @@ from . import figures as figures_mod
 from .beyond_section import (
     compensation_rows,
     position_rows,
+    reading_figure_rows,
     ripple_rows,
     ripple_targets,
     summary_text,
@@ -370,6 +371,11 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         ("ripple-positions", "Torque-ripple reading at the five table positions",
          "Table 3's positions; the ripple reading has no mechanism that depends on the "
          "position, so it predicts no trend.", position_rows(forced)),
+        ("reading-figures", "Figs. 7, 9–10 under each reading",
+         "The paper's Fig. 7 claim (overshoot and settling shrink as v_n grows, no gain beyond "
+         "10×) and Figs. 9–10 claim (reversal overshoot falls as the hollow-motor amplitude "
+         "grows), measured on each defended reading.",
+         reading_figure_rows(results.get("reading_figures"))),
         ("compensation", "Friction compensation or a second motor?",
          "CDFS with friction compensation (static feed-forward; LuGre observer after Canudas de "
          "Wit et al. 1995), with the exact model and ±20 % error on F_c, F_s and v_s, against "

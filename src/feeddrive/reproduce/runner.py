@@ -93,9 +93,11 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
         else {}
     forced_jobs = {f"forced-{i}": job for i, job in enumerate(forced_study.jobs())} if study \
         else {}
-    total = len(jobs) + len(study_jobs) + len(forced_jobs) + 5
-    found = {k: store.get(k) for k in [*jobs, *study_jobs, *forced_jobs,
-                                       *(["compensation"] if study else [])]}
+    figure_jobs = [f"readingfig-{i}" for i in range(len(forced_study.FIGURE_READINGS))] \
+        if study else []
+    extra = [*(["compensation"] if study else []), *figure_jobs]
+    total = len(jobs) + len(study_jobs) + len(forced_jobs) + len(figure_jobs) + 5
+    found = {k: store.get(k) for k in [*jobs, *study_jobs, *forced_jobs, *extra]}
     done = sum(v is not None for k, v in found.items() if k != "compensation")
     if progress:
         progress("critical speeds", done, total)
@@ -107,6 +109,8 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
                   for k, v in forced_jobs.items() if found[k] is None})
     if study and found["compensation"] is None:
         tasks["compensation"] = (_compensation_job, (params,))
+    tasks.update({k: (forced_study.reading_figures, (i, settings))
+                  for i, k in enumerate(figure_jobs) if found[k] is None})
     if tasks:
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
         # waits for its running searches took ~53 s to stop, issue 12 item 7)
@@ -129,6 +133,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     results["reading_study"] = [found[k] for k in study_jobs]
     results["forced_study"] = [found[k] for k in forced_jobs]
     results["compensation"] = found["compensation"] if study else None
+    results["reading_figures"] = [found[k] for k in figure_jobs]
 
     def speed(key: str) -> float | None:
         v = crit[key]["critical_speed_mm_s"]
