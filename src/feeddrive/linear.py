@@ -212,7 +212,6 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     live = _live_states(model, sys_)
     scale = _scales(model)
     n = len(live)
-    dy0, aux0 = f(y)
     A = np.empty((n, n))
     aux_names = [a.name for a in model.aux]
     axes = [a.removesuffix("_speed_command") for a in aux_names if a.endswith("_speed_command")]
@@ -234,7 +233,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
 
     C = np.empty((len(out_names), n))
     for j, k in enumerate(live):
-        h = 1e-4 * scale[k] * 100.0
+        h = 1e-2 * scale[k]  # a hundredth of the state's solver tolerance
         yp, ym = y.copy(), y.copy()
         yp[k] += h
         ym[k] -= h
@@ -245,7 +244,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     B = np.empty((n, len(in_slots)))
     D = np.empty((len(out_names), len(in_slots)))
     for j, slot in enumerate(in_slots):
-        h = 1e-6 if in_names[j].endswith("current_command_disturbance") else 1e-6
+        h = 1e-6  # [rad/s] or [A] of injected command
         Pp, Pm = model.P.copy(), model.P.copy()
         Pp[slot] += h
         Pm[slot] -= h

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import inspect
 from dataclasses import dataclass
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -182,7 +181,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     comp = emit_compensation(b, parameters, mech)
     if comp is not None:
         axes[0] = dataclasses.replace(axes[0], extra_current=comp)
-    loops.emit_cascade(b, axes, channels, parameters.controller.mode)
+    loops.emit_cascade(b, axes, channels)
     for ln in ripple_lines:
         b.emit(ln)
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
@@ -226,9 +225,5 @@ def solver_sources() -> list[str]:
 
     return dopri5.template_sources() + switching.template_sources()
 
-
-def kernel_source(fn: Any) -> str:
-    """Source text of a (possibly compiled) function."""
-    return inspect.getsource(getattr(fn, "py_func", fn))
 
 

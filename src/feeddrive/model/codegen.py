@@ -63,7 +63,6 @@ class Builder:
     imports: dict[str, str] = field(default_factory=dict)  # alias -> "module:attr"
     dynamic: dict[str, str] = field(default_factory=dict)  # alias -> registry expression
     dynamic_sources: list[str] = field(default_factory=list)
-    locals_: dict[str, str] = field(default_factory=dict)  # scalar name -> expression
     table_size: int = 0
     reference_call: str = "(0.0, 0.0, 0.0, 0.0)"
     tol_scale: dict[str, float] = field(default_factory=dict)

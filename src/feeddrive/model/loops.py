@@ -184,21 +184,42 @@ def declare_signals(b: Builder, axes: list[Axis]) -> None:
             b.add_held(f"{ax.name}.{held}")
 
 
+def _guarded(ax: Axis, body: list[str], indent: str = "    ") -> list[str]:
+    """``body`` at ``indent``, under ``if <ax.active>:`` when the axis is not always on."""
+    if not ax.active:
+        return [indent + ln for ln in body]
+    return [f"{indent}if {ax.active}:", *(f"{indent}    {ln}" for ln in body)]
+
+
+def _sampled_pi(error: str, law: str, integral: str, output: str, o: int, limit: int,
+                rate: str, sat: str, period: str, raw: str) -> list[str]:
+    """A sampled PI update with conditional anti-windup: error, unsaturated output, integral
+    advanced by ``period``, saturated output held."""
+    return [f"e = {error}",
+            f"{raw} = {law}(e, {integral}, P, {o})",
+            f"{integral} += {period} * {rate}(e, {raw}, P[{o + limit}])",
+            f"{output} = {sat}({raw}, P[{o + limit}])"]
+
+
+def _speed_law(b: Builder, ax: Axis) -> str:
+    """The kernel that turns the axis' position error into its speed command."""
+    return b.use(position_law) if ax.speed_law == "position" else b.use(speed_command)
+
+
 def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) -> None:
     """Speed and current commands of every axis into ``target`` (aux array expression)."""
     P = "P"
     sc = [f"{target}[{b.aux_index[f'{ax.name}_speed_command']}]" for ax in axes]
     ic = [f"{target}[{b.aux_index[f'{ax.name}_current_command']}]" for ax in axes]
-    pos_law, spd_cmd = b.use(position_law), b.use(speed_command)
     verr, sat, ccmd = b.use(velocity_error), b.use(saturate), b.use(current_command)
     out.append("if n_pos > 0:")
     for ax, s in zip(axes, sc, strict=True):
         out.append(f"    {s} = {b.h(ax.name + '.speed_command')}")
     out.append("else:")
     for ax, s in zip(axes, sc, strict=True):
-        law = pos_law if ax.speed_law == "position" else spd_cmd
-        out.append(f"    {s} = {law}({ax.reference} - {ax.position}, {ax.feedforward}, "
-                   f"{P}, {ax.param_offset}) + {P}[{ax.param_offset + INJ_SPEED}]")
+        out.append(f"    {s} = {_speed_law(b, ax)}({ax.reference} - {ax.position}, "
+                   f"{ax.feedforward}, {P}, {ax.param_offset}) + "
+                   f"{P}[{ax.param_offset + INJ_SPEED}]")
     out.append("if n_vel > 0:")
     for ax, c in zip(axes, ic, strict=True):
         out.append(f"    {c} = {b.h(ax.name + '.current_command')}")
@@ -214,12 +235,11 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
                    f"{P}, {o}) + {P}[{o + INJ_CURRENT}]{extra}, {P}[{o + I_MAX}])")
 
 
-def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: str) -> None:
+def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     """Write the continuous part into the right-hand side and the sampled part into the
     controller update, for every axis."""
     rate, sat, vcmd = b.use(integrator_rate), b.use(saturate), b.use(voltage_command)
-    verr, ccmd = b.use(velocity_error), b.use(current_command)
-    pos_law, spd_cmd, quant = b.use(position_law), b.use(speed_command), b.use(quantise)
+    verr, ccmd, quant = b.use(velocity_error), b.use(current_command), b.use(quantise)
 
     # ---- right-hand side: commands, continuous integrators, current loops
     lines: list[str] = []
@@ -227,16 +247,12 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: st
     lines.append(f"if n_vel == 0 and P[{axes[0].param_offset + KVI}] != 0.0:")
     for ax in axes:
         o = ax.param_offset
-        ind = "    "
-        if ax.active:
-            lines.append(f"    if {ax.active}:")
-            ind = "        "
-        lines.append(f"{ind}e_{ax.name} = {verr}({b.a(ax.name + '_speed_command')}, {ax.speed}, "
-                     f"P, {o})")
-        lines.append(f"{ind}raw = P[{o + KVP}] * e_{ax.name} + P[{o + KVI}] * "
-                     f"{b.y(ax.name + '_velocity_integral')}")
-        lines.append(f"{ind}{b.dy(ax.name + '_velocity_integral')} = {rate}(e_{ax.name}, raw, "
-                     f"P[{o + I_MAX}])")
+        lines += _guarded(ax, [
+            f"e_{ax.name} = {verr}({b.a(ax.name + '_speed_command')}, {ax.speed}, P, {o})",
+            f"raw = P[{o + KVP}] * e_{ax.name} + P[{o + KVI}] * "
+            f"{b.y(ax.name + '_velocity_integral')}",
+            f"{b.dy(ax.name + '_velocity_integral')} = {rate}(e_{ax.name}, raw, "
+            f"P[{o + I_MAX}])"])
         if ax.active:
             lines.append("    else:")
             lines.append(f"        {b.dy(ax.name + '_velocity_integral')} = 0.0")
@@ -259,8 +275,6 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: st
         ]
         if ax.active:  # a held axis (the CDFS nut) freezes its current integral too
             lines += [f"if not ({ax.active}):", f"    {b.dy(ic)} = 0.0"]
-    if mode == "torque_off":
-        lines.append("# controller.mode = torque_off: the motors are disconnected (no current)")
     for ln in lines:
         b.emit(ln)
 
@@ -268,22 +282,16 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: st
     s: list[str] = [f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}"]
     s.append("if n_pos > 0 and k % n_pos == 0:")
     for ax in axes:
-        ind = "    "
-        if ax.active:
-            s.append(f"    if {ax.active}:")
-            ind = "        "
-        for ch in channels:
-            if f"q_{ch.name}" in ax.position_q:
-                s.append(f"{ind}q_{ch.name} = {quant}({ch.state}, {ch.quantum})")
-        law = pos_law if ax.speed_law == "position" else spd_cmd
-        s.append(f"{ind}{b.h(ax.name + '.speed_command')} = {law}({ax.reference} - "
-                 f"{ax.position_q}, {ax.feedforward}, P, {ax.param_offset})")
+        body = [f"q_{ch.name} = {quant}({ch.state}, {ch.quantum})" for ch in channels
+                if f"q_{ch.name}" in ax.position_q]
+        body.append(f"{b.h(ax.name + '.speed_command')} = {_speed_law(b, ax)}({ax.reference} - "
+                    f"{ax.position_q}, {ax.feedforward}, P, {ax.param_offset})")
+        s += _guarded(ax, body)
     s.append("if n_vel > 0 and k % n_vel == 0:")
     s.append("    tv = n_vel * base")
     for ax in axes:
-        law = pos_law if ax.speed_law == "position" else spd_cmd
         s.append(f"    w_cmd_{ax.name} = {b.h(ax.name + '.speed_command')} if n_pos > 0 else "
-                 f"{law}({ax.reference} - {ax.position}, {ax.feedforward}, P, "
+                 f"{_speed_law(b, ax)}({ax.reference} - {ax.position}, {ax.feedforward}, P, "
                  f"{ax.param_offset})")
     for ch in channels:
         s.append(f"    q_{ch.name} = {quant}({ch.state}, {ch.quantum})")
@@ -302,18 +310,10 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: st
     for ch in channels:
         s.append(f"    {b.h('prev.' + ch.name)} = q_{ch.name}")
     for ax in axes:
-        o = ax.param_offset
-        ind = "    "
-        if ax.active:
-            s.append(f"    if {ax.active}:")
-            ind = "        "
-        s += [
-            f"{ind}e = {verr}(w_cmd_{ax.name}, {ax.speed_q}, P, {o})",
-            f"{ind}i_raw = {ccmd}(e, {b.h(ax.name + '.velocity_integral')}, P, {o})",
-            f"{ind}{b.h(ax.name + '.velocity_integral')} += tv * {rate}(e, i_raw, "
-            f"P[{o + I_MAX}])",
-            f"{ind}{b.h(ax.name + '.current_command')} = {sat}(i_raw, P[{o + I_MAX}])",
-        ]
+        s += _guarded(ax, _sampled_pi(
+            f"{verr}(w_cmd_{ax.name}, {ax.speed_q}, P, {ax.param_offset})", ccmd,
+            b.h(ax.name + ".velocity_integral"), b.h(ax.name + ".current_command"),
+            ax.param_offset, I_MAX, rate, sat, "tv", "i_raw"))
     s.append("if n_cur > 0 and k % n_cur == 0:")
     s.append("    tc = n_cur * base")
     s.append("    cmd = np.empty(N_AUX)")
@@ -321,17 +321,9 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel], mode: st
     _emit_commands(b, axes, cmd_lines, "cmd")
     s += ["    " + ln for ln in cmd_lines]
     for ax in axes:
-        o = ax.param_offset
-        ind = "    "
-        if ax.active:
-            s.append(f"    if {ax.active}:")
-            ind = "        "
-        s += [
-            f"{ind}e = cmd[{b.aux_index[ax.name + '_current_command']}] - {ax.current_state}",
-            f"{ind}u_raw = {vcmd}(e, {b.h(ax.name + '.current_integral')}, P, {o})",
-            f"{ind}{b.h(ax.name + '.current_integral')} += tc * {rate}(e, u_raw, "
-            f"P[{o + U_MAX}])",
-            f"{ind}{b.h(ax.name + '.voltage')} = {sat}(u_raw, P[{o + U_MAX}])",
-        ]
+        s += _guarded(ax, _sampled_pi(
+            f"cmd[{b.aux_index[ax.name + '_current_command']}] - {ax.current_state}", vcmd,
+            b.h(ax.name + ".current_integral"), b.h(ax.name + ".voltage"), ax.param_offset,
+            U_MAX, rate, sat, "tc", "u_raw"))
     for ln in s:
         b.emit(ln, sampled=True)
