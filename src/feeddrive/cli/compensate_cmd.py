@@ -12,13 +12,13 @@ from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters,
 def compensate_command(
     drive: str = typer.Option("cdfs", "--drive", help="cdfs (the drive compensated; the DDFS "
                               "is added as the alternative)"),
-    position: float = typer.Option(400.0, "--position", help="Table position \\[mm]."),
+    position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     mismatch: float = typer.Option(20.0, "--mismatch", help="Model error of the mismatched "
-                                   "cases on F_c, F_s and v_s \\[%]."),
+                                   "cases on F_c, F_s and v_s [%]."),
     nut_speed: float = typer.Option(16.0, "--nut-speed", help="Hollow-motor speed of the "
-                                    "DDFS row \\[mm/s]."),
+                                    "DDFS row [mm/s]."),
     tracking_speed: float = typer.Option(1.0, "--tracking-speed", help="Constant table speed "
-                                         "of the tracking run \\[mm/s]."),
+                                         "of the tracking run [mm/s]."),
     no_search: bool = typer.Option(False, "--no-search", help="Skip the critical-speed "
                                    "searches (fast: linear band and tracking only)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),

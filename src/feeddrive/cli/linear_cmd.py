@@ -12,9 +12,9 @@ from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters,
 def loops_command(
     drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
     table_speed: float = typer.Option(1.5, "--table-speed", help="Operating point: steady "
-                                      "table speed \\[mm/s]."),
-    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed \\[mm/s], DDFS."),
-    position: float = typer.Option(400.0, "--position", help="Table position \\[mm]."),
+                                      "table speed [mm/s]."),
+    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
+    position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     with_friction: bool = typer.Option(False, "--with-friction", help="Linearise with the "
                                        "friction laws at steady sliding (default: "
                                        "frictionless loops)."),
@@ -60,10 +60,10 @@ def loops_command(
 @user_errors
 def stability_command(
     drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
-    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed \\[mm/s], DDFS."),
-    position: float = typer.Option(400.0, "--position", help="Table position \\[mm]."),
-    low: float = typer.Option(0.01, "--low", help="Lowest table speed scanned \\[mm/s]."),
-    high: float = typer.Option(5.0, "--high", help="Highest table speed scanned \\[mm/s]."),
+    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
+    position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
+    low: float = typer.Option(0.01, "--low", help="Lowest table speed scanned [mm/s]."),
+    high: float = typer.Option(5.0, "--high", help="Highest table speed scanned [mm/s]."),
     points: int = typer.Option(40, "--points", help="Log-spaced scan points (edges are then "
                                "bisected to 0.001 mm/s)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
