@@ -35,8 +35,8 @@ _PUBLIC: dict[str, str] = {
     "DriveParameters": "parameters", "ParameterError": "parameters", "load": "parameters",
     "preset": "parameters", "save": "parameters",
     "Result": "result",
-    "DriveSystem": "simulate", "SimulationError": "simulate", "SolverOptions": "simulate",
-    "simulate": "simulate",
+    "DriveSystem": "simulate", "Simulation": "simulate", "SimulationError": "simulate",
+    "SolverOptions": "simulate", "simulate": "simulate",
     "friction": "", "model": "",
 }
 
@@ -53,7 +53,7 @@ if TYPE_CHECKING:
     from .model import LoadProfile, register_friction_law, register_mechanism
     from .parameters import DriveParameters, ParameterError, load, preset, save
     from .result import Result
-    from .simulate import DriveSystem, SimulationError, SolverOptions, simulate
+    from .simulate import DriveSystem, Simulation, SimulationError, SolverOptions, simulate
 
 
 def __getattr__(name: str) -> Any:
@@ -87,7 +87,8 @@ sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "ConstantSpeed", "CreepMetrics", "CreepThresholds", "CriticalSpeed", "DriveParameters",
-    "DriveSystem", "LoadProfile", "ParameterError", "Result", "SampledSpeed", "SimulationError",
+    "DriveSystem", "LoadProfile", "ParameterError", "Result", "SampledSpeed", "Simulation",
+    "SimulationError",
     "SineSpeed", "SolverOptions", "Target", "Unknown", "__version__", "calibrate",
     "creep_metrics", "critical_speed_from_rest", "critical_speed_stepdown", "friction", "load",
     "model", "preset", "register_friction_law", "register_mechanism", "save", "simulate",

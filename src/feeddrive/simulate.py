@@ -222,141 +222,185 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     memory does not grow with the duration (method ``dopri5``).  ``progress(t, t_end)`` is
     called after each chunk of a long run.
     """
-    options = options or SolverOptions()
-    if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
-        raise ParameterError("duration", duration, "expected a finite time > 0 [s]")
-    if not isinstance(profile, ConstantSpeed | SineSpeed | SampledSpeed):
-        raise ParameterError("profile", type(profile).__name__,
-                             "expected ConstantSpeed, SineSpeed or SampledSpeed")
-    model = system.model(profile)
-    grid = sampling(system.parameters, options.output_interval)
-    n_break = int(round(duration / grid.base))
-    t_end = n_break * grid.base
-    atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
-                                 options.current_tolerance)
-    y0 = system.initial_vector(model)
-    if output is None:  # a streamed run keeps only its last KEEP_STREAMED seconds
-        budget.check_output_memory(t_end, options.output_interval)
-    started = _time.perf_counter()
-    if options.method in _DENSE_MODES:
-        if output is not None:
-            raise ParameterError("output", str(output), "streaming a run to a file needs "
-                                 "options.method = dopri5")
+    return Simulation(system, profile, options).run(duration, output=output, progress=progress)
+
+
+class Simulation:
+    """A run from rest that can be continued.
+
+    ``run(duration)`` returns the Result over [0, ``duration``]; a later call with a longer
+    duration integrates on from where the previous one stopped (method ``dopri5``: the
+    integrator's state is carried over, so the Result is bit-identical to
+    ``simulate(system, profile, duration)``; the dense-output methods run again from rest).
+    The creep verdict uses it to lengthen an undecided trial without repeating it
+    (:func:`feeddrive.analysis.critical.decide`).
+    """
+
+    def __init__(self, system: DriveSystem, profile: Profile,
+                 options: SolverOptions | None = None) -> None:
+        if not isinstance(profile, ConstantSpeed | SineSpeed | SampledSpeed):
+            raise ParameterError("profile", type(profile).__name__,
+                                 "expected ConstantSpeed, SineSpeed or SampledSpeed")
+        self.system, self.profile = system, profile
+        self.options = options = options or SolverOptions()
+        self.model = system.model(profile)
+        self.grid = sampling(system.parameters, options.output_interval)
+        self.atol, self.rel = self.model.tolerances(
+            options.position_tolerance, options.speed_tolerance, options.current_tolerance)
+        self.y0 = system.initial_vector(self.model)
+        self._chunks: _Chunks | None = None
+
+    def run(self, duration: float, *, output: str | Path | None = None,
+            progress: Callable[[float, float], None] | None = None) -> Result:
+        """The Result over [0, ``duration``] [s] (see the class docstring)."""
+        if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
+            raise ParameterError("duration", duration, "expected a finite time > 0 [s]")
+        options, grid, model = self.options, self.grid, self.model
+        n_break = int(round(duration / grid.base))
+        t_end = n_break * grid.base
+        if output is None:  # a streamed run keeps only its last KEEP_STREAMED seconds
+            budget.check_output_memory(t_end, options.output_interval)
+        started = _time.perf_counter()
+        if options.method in _DENSE_MODES:
+            if output is not None:
+                raise ParameterError("output", str(output), "streaming a run to a file needs "
+                                     "options.method = dopri5")
+            t, y, aux, stats = self._dense(t_end)
+        else:
+            adaptive = 1 if options.method == "dopri5" else 0
+            h_init = 1e-6 if adaptive else options.fixed_step
+            max_step = 1e-3 if options.max_step is None else options.max_step
+            h_max = min(max_step, grid.base) if adaptive else options.fixed_step
+            _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
+                             adaptive, self.atol, self.rel, h_init, h_max)
+            chunks = self._chunks
+            if chunks is None or output is not None or n_break < chunks.start:
+                chunks = _Chunks(model, self.y0, grid, options, self.atol, self.rel, h_init,
+                                 h_max, adaptive)
+            self._chunks = None if output is not None else chunks
+            try:
+                t, y, aux, stats = chunks.advance(n_break, output, progress,
+                                                  self.system)
+            except _Stopped as stop:
+                partial = Result.from_run(Run(stop.t, stop.y, stop.aux, model, self.system,
+                                              self.profile,
+                                              {"method": options.method, "interrupted": True,
+                                               "t_reached_s": stop.t_reached}))
+                raise SimulationInterrupted(stop.t_reached, partial,
+                                            None if output is None else str(output)) from None
+        wall = _time.perf_counter() - started
+        status = int(stats[0])
+        if status != dopri5.STATUS_OK:
+            self._chunks = None
+            raise SimulationError(
+                f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
+                f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
+                f"{int(stats[2])}); raise max_steps (--max-steps) or check the parameters")
+        solver_stats = {
+            "method": options.method, "rtol": options.rtol,
+            "position_tolerance": options.position_tolerance,
+            "speed_tolerance": options.speed_tolerance,
+            "steps": int(stats[1]), "rejected_steps": int(stats[2]),
+            "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
+            "breakpoint_interval_s": grid.base,
+        }
+        if options.method in _DENSE_MODES:
+            solver_stats.update({
+                "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
+                "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
+        run = Run(t, y, aux, model, self.system, self.profile, solver_stats)
+        if aux.shape[0] != t.shape[0]:  # not recorded (continuous loops): evaluated when read
+            run.defer_aux(lambda: model.module.auxiliary(t, y, model.P, model.T))
+        return Result.from_run(run)
+
+    def _dense(self, t_end: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """One dense-output integration from rest to ``t_end`` (feeddrive.solvers.switching)."""
+        options, grid = self.options, self.grid
         mode, adaptive = _DENSE_MODES[options.method]
         h_init = 1e-6 if adaptive else options.fixed_step
         h_max = (math.inf if options.max_step is None else options.max_step) if adaptive \
             else options.fixed_step
         continuous = grid.n_pos == 0 and grid.n_vel == 0 and grid.n_cur == 0
         t, y, aux, stats, _ = switching.integrate(
-            model, y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
-            options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps, mode,
-            profile_breakpoints(profile, t_end, grid.base),
+            self.model, self.y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
+            grid.n_cur, options.rtol, self.atol, self.rel, h_init, h_max, adaptive,
+            options.max_steps, mode, profile_breakpoints(self.profile, t_end, grid.base),
             want_aux=not continuous)
-    else:
-        adaptive = 1 if options.method == "dopri5" else 0
-        h_init = 1e-6 if adaptive else options.fixed_step
-        max_step = 1e-3 if options.max_step is None else options.max_step
-        h_max = min(max_step, grid.base) if adaptive else options.fixed_step
-        _check_step_rate(system, profile, model, grid, options, y0, t_end, adaptive, atol,
-                         rel, h_init, h_max)
-        try:
-            t, y, aux, stats = _chunked_dopri5(
-                model, system, profile, y0, n_break, grid, options, atol, rel, h_init,
-                h_max, adaptive, output, progress)
-        except _Stopped as stop:
-            partial = Result.from_run(Run(stop.t, stop.y, stop.aux, model, system, profile,
-                                          {"method": options.method, "interrupted": True,
-                                           "t_reached_s": stop.t_reached}))
-            raise SimulationInterrupted(stop.t_reached, partial,
-                                        None if output is None else str(output)) from None
-    wall = _time.perf_counter() - started
-    status = int(stats[0])
-    if status != dopri5.STATUS_OK:
-        raise SimulationError(
-            f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
-            f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
-            f"{int(stats[2])}); raise max_steps (--max-steps) or check the parameters")
-    solver_stats = {
-        "method": options.method, "rtol": options.rtol,
-        "position_tolerance": options.position_tolerance,
-        "speed_tolerance": options.speed_tolerance,
-        "steps": int(stats[1]), "rejected_steps": int(stats[2]),
-        "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
-        "breakpoint_interval_s": grid.base,
-    }
-    if options.method in _DENSE_MODES:
-        solver_stats.update({
-            "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
-            "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
-    run = Run(t, y, aux, model, system, profile, solver_stats)
-    if aux.shape[0] != t.shape[0]:  # not recorded (continuous loops): evaluated when read
-        run.defer_aux(lambda: model.module.auxiliary(t, y, model.P, model.T))
-    return Result.from_run(run)
-
-
-def _chunked_dopri5(model: Model, system: DriveSystem, profile: Profile, y0: np.ndarray,
-                    n_break: int, grid: Sampling, options: SolverOptions, atol: np.ndarray,
-                    rel: np.ndarray, h_init: float, h_max: float, adaptive: int,
-                    output: str | Path | None,
-                    progress: Callable[[float, float], None] | None,
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """DOPRI5 over the breakpoints in chunks (one call when the run fits the first chunk);
-    the result is bit-identical to one call (the integrator's state is carried over)."""
-    from .io import ChunkWriter
-
-    every = grid.out_every
-    first = max(every, int(round(FIRST_CHUNK / grid.base)) // every * every)
-    t_end = n_break * grid.base
-    if n_break <= first and output is None:
-        t, y, aux, stats, _ = dopri5.integrate(
-            model, y0, t_end, every, grid.base, grid.n_pos, grid.n_vel, grid.n_cur,
-            options.rtol, atol, rel, h_init, h_max, adaptive, options.max_steps)
         return t, y, aux, stats
-    writer = ChunkWriter(output, model, system) if output is not None else None
-    held = np.zeros(model.n_held)
-    memory = np.zeros(2 + len(model.states))
-    memory[:2] = (h_init, 1e-4)
-    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    kept = 0
-    keep = int(KEEP_STREAMED / (every * grid.base)) + 1
-    totals = np.zeros(4)
-    start, size, y = 0, first, y0
-    stats = np.zeros(5)
-    try:
-        while start < n_break:
-            stop = min(n_break, start + size)
-            began = _time.perf_counter()
-            t, yy, aa, stats, _ = dopri5.integrate(
-                model, y, stop * grid.base, every, grid.base, grid.n_pos, grid.n_vel,
-                grid.n_cur, options.rtol, atol, rel, h_init, h_max, adaptive,
-                options.max_steps - int(totals[1]), start=start, held=held, memory=memory)
-            wall = _time.perf_counter() - began
-            totals[1:4] += stats[1:4]
-            if start > 0 and t.size and t[0] <= start * grid.base:
-                t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
-            if int(stats[0]) != dopri5.STATUS_OK:
-                break
+
+
+class _Chunks:
+    """DOPRI5 over the breakpoints in chunks, continued by each :meth:`advance`; the result
+    is bit-identical to one call over the whole span (the integrator's state is carried
+    over)."""
+
+    def __init__(self, model: Model, y0: np.ndarray, grid: Sampling, options: SolverOptions,
+                 atol: np.ndarray, rel: np.ndarray, h_init: float, h_max: float,
+                 adaptive: int) -> None:
+        self.model, self.grid, self.options = model, grid, options
+        self.atol, self.rel, self.h_init, self.h_max, self.adaptive = (
+            atol, rel, h_init, h_max, adaptive)
+        self.held = np.zeros(model.n_held)
+        self.memory = np.zeros(2 + len(model.states))
+        self.memory[:2] = (h_init, 1e-4)
+        self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self.totals = np.zeros(4)
+        self.stats = np.zeros(5)
+        self.start = 0
+        self.y = y0
+        every = grid.out_every
+        self.size = max(every, int(round(FIRST_CHUNK / grid.base)) // every * every)
+
+    def advance(self, n_break: int, output: str | Path | None,
+                progress: Callable[[float, float], None] | None, system: DriveSystem,
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Integrate on to breakpoint ``n_break``; (t, y, aux, stats) from t = 0."""
+        from .io import ChunkWriter
+
+        model, grid, options = self.model, self.grid, self.options
+        every = grid.out_every
+        t_end = n_break * grid.base
+        writer = ChunkWriter(output, model, system) if output is not None else None
+        kept = sum(p[0].size for p in self.parts)
+        keep = int(KEEP_STREAMED / (every * grid.base)) + 1
+        try:
+            while self.start < n_break:
+                stop = min(n_break, self.start + self.size)
+                began = _time.perf_counter()
+                t, yy, aa, stats, _ = dopri5.integrate(
+                    model, self.y, stop * grid.base, every, grid.base, grid.n_pos,
+                    grid.n_vel, grid.n_cur, options.rtol, self.atol, self.rel, self.h_init,
+                    self.h_max, self.adaptive, options.max_steps - int(self.totals[1]),
+                    start=self.start, held=self.held, memory=self.memory)
+                wall = _time.perf_counter() - began
+                self.stats = stats
+                self.totals[1:4] += stats[1:4]
+                if self.start > 0 and t.size and t[0] <= self.start * grid.base:
+                    t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
+                if int(stats[0]) != dopri5.STATUS_OK:
+                    break
+                if writer is not None:
+                    writer.write(t, yy, aa)
+                self.parts.append((t, yy, aa))
+                kept += t.size
+                while writer is not None and len(self.parts) > 1 \
+                        and kept - self.parts[0][0].size >= keep:
+                    kept -= self.parts.pop(0)[0].size
+                self.y = yy[-1].copy() if yy.shape[0] else self.y
+                self.start = stop
+                if progress is not None:
+                    progress(self.start * grid.base, t_end)
+                scale = CHUNK_WALL_TIME / max(wall, 1e-4)
+                self.size = max(every, min(int(self.size * min(scale, 4.0)) // every * every,
+                                           MAX_CHUNK_SAMPLES * every))
+        except KeyboardInterrupt:
+            raise _Stopped(self.start * grid.base, *_concat(self.parts, model)) from None
+        finally:
             if writer is not None:
-                writer.write(t, yy, aa)
-            parts.append((t, yy, aa))
-            kept += t.size
-            while writer is not None and len(parts) > 1 and kept - parts[0][0].size >= keep:
-                kept -= parts.pop(0)[0].size
-            y = yy[-1].copy() if yy.shape[0] else y
-            start = stop
-            if progress is not None:
-                progress(start * grid.base, t_end)
-            scale = CHUNK_WALL_TIME / max(wall, 1e-4)
-            size = max(every, min(int(size * min(scale, 4.0)) // every * every,
-                                  MAX_CHUNK_SAMPLES * every))
-    except KeyboardInterrupt:
-        raise _Stopped(start * grid.base, *_concat(parts, model)) from None
-    finally:
-        if writer is not None:
-            writer.close()
-    t, y_all, aux_all = _concat(parts, model)
-    stats = np.array([stats[0], totals[1], totals[2], totals[3], stats[4]])
-    return t, y_all, aux_all, stats
+                writer.close()
+        t, y_all, aux_all = _concat(self.parts, model)
+        s = self.stats
+        return t, y_all, aux_all, np.array([s[0], *self.totals[1:4], s[4]])
 
 
 class _Stopped(Exception):

@@ -53,6 +53,34 @@ def test_chunked_run_is_bit_identical_to_one_call(sampled: bool, monkeypatch) ->
     assert np.all(np.diff(r.time) > 0)
 
 
+@pytest.mark.parametrize("sampled", [False, True])
+def test_continued_simulation_is_bit_identical_to_a_run_from_rest(sampled: bool) -> None:
+    """Simulation.run(12) then .run(24) continues the first run; the 24-s Result equals
+    simulate(..., 24) sample for sample (the creep verdict lengthens trials this way)."""
+    params = W
+    if sampled:
+        params = (W.replace_path("controller.position_period", 1e-3)
+                  .replace_path("controller.velocity_period", 5e-4)
+                  .replace_path("controller.encoder_counts", 10000.0))
+    system = fd.DriveSystem(params, "cdfs", 0.4)
+    profile = ConstantSpeed(1.2e-3, ramp_time=0.1)
+    sim = fd.Simulation(system, profile)
+    short = sim.run(3.0)
+    evaluations = short.solver_stats["rhs_evaluations"]
+    long = sim.run(6.0)
+    ref = fd.simulate(system, profile, 6.0)
+    for name in ("table_speed", "table_position", "screw_current"):
+        np.testing.assert_array_equal(long[name], ref[name])
+    np.testing.assert_array_equal(long.time, ref.time)
+    np.testing.assert_array_equal(short["table_speed"], long["table_speed"][:short.time.size])
+    # continued, not repeated: the second call cost only the extra 3 s (a resumed chunk
+    # evaluates the right-hand side once more at its first point)
+    assert 0 <= long.solver_stats["rhs_evaluations"] - ref.solver_stats["rhs_evaluations"] <= 2
+    assert evaluations < long.solver_stats["rhs_evaluations"] < 3 * evaluations
+    # a shorter run than the last starts again from rest
+    np.testing.assert_array_equal(sim.run(3.0)["table_speed"], short["table_speed"])
+
+
 def test_streamed_run_writes_every_sample_and_keeps_only_the_end(tmp_path, monkeypatch) -> None:
     monkeypatch.setattr(sim_mod, "FIRST_CHUNK", 0.5)
     monkeypatch.setattr(sim_mod, "KEEP_STREAMED", 1.0)

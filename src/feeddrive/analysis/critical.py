@@ -35,7 +35,7 @@ import numpy as np
 
 from .. import units
 from ..control import ConstantSpeed, SampledSpeed
-from ..simulate import DriveSystem, SolverOptions, simulate
+from ..simulate import DriveSystem, Simulation, SolverOptions, simulate
 from .metrics import CREEPING_KINDS, TraceVerdict, VerdictRule, trace_verdict
 
 MM_S = units.MM_PER_S
@@ -254,11 +254,12 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
                 rule: VerdictRule | None = None,
                 options: SolverOptions | None = None) -> CreepTrial:
     """Start the table from rest at ``speed`` [m/s] (nut at ``nut_speed``) and run until the
-    verdict is decided (:func:`decide`)."""
-    profile = ConstantSpeed(speed, nut_speed, ramp_time=0.1)
+    verdict is decided (:func:`decide`); a longer trial continues the shorter one
+    (:class:`~feeddrive.simulate.Simulation`), so an undecided trial is not repeated."""
+    sim = Simulation(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), options)
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
-        result = simulate(system, profile, duration, options=options)
+        result = sim.run(duration)
         return result.time, result["table_speed"]
 
     verdict, duration = decide(run, speed, rule)
@@ -291,7 +292,7 @@ def critical_speed_from_rest(
     def judge(v: float) -> str:
         nonlocal simulated
         trial = creep_trial(system, v, nut_speed=nut_speed, rule=rule, options=options)
-        simulated += sum(d for d in rule.durations() if d <= trial.duration)
+        simulated += trial.duration  # the trial is continued, not repeated
         trials[v] = trial
         if progress:
             progress(len(trials), 0)

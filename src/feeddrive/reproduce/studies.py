@@ -24,7 +24,7 @@ from ..control import ConstantSpeed, SineSpeed
 from ..paper import PAPER
 from ..parameters import DriveParameters
 from ..result import Result
-from ..simulate import DriveSystem, simulate
+from ..simulate import DriveSystem, Simulation, simulate
 from ..stiffness import stiffness_chain
 from ..units import MM_PER_S
 
@@ -100,9 +100,10 @@ def decided_run(system: DriveSystem, profile: ConstantSpeed, rule: VerdictRule
     """Simulate ``profile`` from rest until the creep verdict is decided; the last (deciding)
     run and its verdict."""
     runs: list[Result] = []
+    sim = Simulation(system, profile)
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
-        runs.append(simulate(system, profile, duration))
+        runs.append(sim.run(duration))
         return runs[-1].time, runs[-1]["table_speed"]
 
     verdict, duration = decide(run, profile.table_speed, rule)
