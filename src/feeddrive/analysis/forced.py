@@ -54,17 +54,25 @@ def threshold_critical_speed(system: DriveSystem, nut_speed: float = 0.0, *,
                              threshold: float = 0.5,
                              speed_range: tuple[float, float] = (0.05e-3, 3.0e-3),
                              coarse_step: float = 0.2e-3, resolution: float = 0.01e-3,
-                             options: SolverOptions | None = None) -> dict[str, Any]:
+                             options: SolverOptions | None = None,
+                             known: dict[float, ForcedRipplePoint] | None = None,
+                             ) -> dict[str, Any]:
     """The lowest speed [m/s] in ``speed_range`` above which the steady ripple stays below
-    ``threshold`` × the command: scan down in ``coarse_step``, bisect to ``resolution``."""
+    ``threshold`` × the command: scan down in ``coarse_step``, bisect to ``resolution``.
+
+    ``known``: ripple points of this system and nut speed already simulated (filled in as the
+    search goes), so that searches at several thresholds share their runs
+    (:func:`threshold_critical_speeds`); the result lists the points this search used."""
     if not (0.0 < threshold and math.isfinite(threshold)):
         raise ValueError(f"threshold = {threshold!r}: expected > 0 (a ripple/command ratio)")
     lo, hi = speed_range
+    cache: dict[float, ForcedRipplePoint] = {} if known is None else known
     points: dict[float, ForcedRipplePoint] = {}
 
     def above(v: float) -> bool:
-        if v not in points:
-            points[v] = ripple_point(system, v, nut_speed, options=options)
+        if v not in cache:
+            cache[v] = ripple_point(system, v, nut_speed, options=options)
+        points[v] = cache[v]
         return points[v].exceeds(threshold)
 
     # coarse scan from the top (the ripple need not be monotonic: the CDFS is smooth again
@@ -112,3 +120,13 @@ def threshold_critical_speed(system: DriveSystem, nut_speed: float = 0.0, *,
                     "min_ratio": p.min_ratio, "mean_ratio": p.mean_ratio}
                    for p in sorted(points.values(), key=lambda p: p.speed)],
     }
+
+
+def threshold_critical_speeds(system: DriveSystem, nut_speed: float = 0.0, *,
+                              thresholds: tuple[float, ...] = THRESHOLDS,
+                              **search: Any) -> list[dict[str, Any]]:
+    """:func:`threshold_critical_speed` at each of ``thresholds``, the ripple runs shared
+    (the scan grid is the same for every threshold)."""
+    known: dict[float, ForcedRipplePoint] = {}
+    return [threshold_critical_speed(system, nut_speed, threshold=th, known=known, **search)
+            for th in thresholds]

@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import Any
 
 from .. import parameters
-from ..analysis.forced import THRESHOLDS, threshold_critical_speed
+from ..analysis.forced import THRESHOLDS, threshold_critical_speeds
 from ..simulate import DriveSystem
 from .studies import MID, PAPER
 
@@ -16,21 +16,24 @@ PRESET = "wang2021-ripple"
 NUT_SPEEDS = (2e-3, 5e-3, 10e-3, 16e-3, 20e-3, 30e-3)  # [m/s] issue 14
 
 
-def jobs() -> list[tuple[str, float, float, float]]:
-    """(drive, nut speed [m/s], position [m], threshold)."""
-    out = [("cdfs", 0.0, MID, th) for th in THRESHOLDS]
-    out += [("ddfs", vn, MID, th) for vn in NUT_SPEEDS for th in THRESHOLDS]
-    out += [("ddfs", PAPER["experiment_nut_speed"], a, 0.5) for a in PAPER["positions"]
+def jobs() -> list[tuple[str, float, float, tuple[float, ...]]]:
+    """(drive, nut speed [m/s], position [m], thresholds); the thresholds of one job share
+    their ripple runs."""
+    out = [("cdfs", 0.0, MID, THRESHOLDS)]
+    out += [("ddfs", vn, MID, THRESHOLDS) for vn in NUT_SPEEDS]
+    out += [("ddfs", PAPER["experiment_nut_speed"], a, (0.5,)) for a in PAPER["positions"]
             if a != MID]
     return out
 
 
-def run(job: tuple[str, float, float, float]) -> dict[str, Any]:
-    drive, vn, position, threshold = job
+def run(job: tuple[str, float, float, tuple[float, ...]]) -> dict[str, Any]:
+    """{"rows": one threshold search per threshold of the job}."""
+    drive, vn, position, thresholds = job
     system = DriveSystem(parameters.preset(PRESET), drive, position)
-    res = threshold_critical_speed(system, vn, threshold=threshold)
-    res["position_mm"] = 1e3 * position
-    return res
+    rows = threshold_critical_speeds(system, vn, thresholds=thresholds)
+    for res in rows:
+        res["position_mm"] = 1e3 * position
+    return {"rows": rows}
 
 
 # ---- Figs. 7, 9–10 metrics per reading (issue 14 item 3)

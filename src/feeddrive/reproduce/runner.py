@@ -96,32 +96,59 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     figure_jobs = [f"readingfig-{i}" for i in range(len(forced_study.FIGURE_READINGS))] \
         if study else []
     extra = [*(["compensation"] if study else []), *figure_jobs]
-    total = len(jobs) + len(study_jobs) + len(forced_jobs) + len(figure_jobs) + 5
-    found = {k: store.get(k) for k in [*jobs, *study_jobs, *forced_jobs, *extra]}
-    done = sum(v is not None for k, v in found.items() if k != "compensation")
+    figure_studies = ["fig6", "figs9_10", "fig7", "fig8_trace"]
+    names = [*jobs, *study_jobs, *forced_jobs, *extra, *figure_studies]
+    found = {k: store.get(k) for k in names}
+    done = sum(v is not None for v in found.values())
     if progress:
-        progress("critical speeds", done, total)
-    tasks: dict[str, tuple[Callable[..., dict[str, Any]], tuple[Any, ...]]] = {
-        k: (_critical_job, (v,)) for k, v in jobs.items() if found[k] is None}
-    tasks.update({k: (reading_study.run_variant, (v, settings))
-                  for k, v in study_jobs.items() if found[k] is None})
-    tasks.update({k: (forced_study.run, (v,))
-                  for k, v in forced_jobs.items() if found[k] is None})
-    if study and found["compensation"] is None:
+        progress("critical speeds", done, len(names))
+    # submitted roughly longest first, so that no long search starts last and runs alone:
+    # the step-down searches, the model-reading study (whose undecided readings run their
+    # trials to the longest duration), the rest, the paper's searches from rest
+    tasks: dict[str, tuple[Callable[..., Any], tuple[Any, ...]]] = {
+        k: (_critical_job, (v,)) for k, v in jobs.items() if v[5] != "rest"}
+    tasks.update({k: (reading_study.run_variant, (v, settings)) for k, v in study_jobs.items()})
+    tasks.update({k: (forced_study.run, (v,)) for k, v in forced_jobs.items()})
+    if study:
         tasks["compensation"] = (_compensation_job, (params,))
     tasks.update({k: (forced_study.reading_figures, (i, settings))
-                  for i, k in enumerate(figure_jobs) if found[k] is None})
-    if tasks:
+                  for i, k in enumerate(figure_jobs)})
+    tasks["fig6"] = (studies.fig6, (params, settings))
+    tasks["figs9_10"] = (studies.figs9_10, (params, settings))
+    tasks.update({k: (_critical_job, (v,)) for k, v in jobs.items() if k not in tasks})
+
+    def speed(key: str) -> float | None:
+        v = found[key]["critical_speed_mm_s"]
+        return None if v is None else v * 1e-3
+
+    # figure studies that need a critical speed: submitted once it is known
+    after = {"fig7": (f"crit-cdfs-{MID}", lambda: (
+                 studies.fig7, (params, speed(f"crit-cdfs-{MID}") or PAPER["cdfs_critical_sim"],
+                                settings))),
+             "fig8_trace": ("crit-ddfs-fig8", lambda: (
+                 _fig8_trace, (params, speed("crit-ddfs-fig8"))))}
+    todo = {k: v for k, v in tasks.items() if found[k] is None}
+    if todo or any(found[k] is None for k in after):
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
         # waits for its running searches took ~53 s to stop, issue 12 item 7)
         pool = multiprocessing.Pool(max(1, workers), initializer=_ignore_sigint)
         try:
-            pending = {k: pool.apply_async(fn, args) for k, (fn, args) in tasks.items()}
-            for k, handle in pending.items():
-                found[k] = store.put(k, handle.get())  # each finished search is on disk at once
-                done += 1
-                if progress:
-                    progress(f"critical speed {k}", done, total)
+            pending = {k: pool.apply_async(fn, args) for k, (fn, args) in todo.items()}
+            waiting = {k: dep for k, (dep, _) in after.items() if found[k] is None}
+            while pending or waiting:
+                for k, dep in list(waiting.items()):
+                    if found[dep] is not None:
+                        fn, args = after[k][1]()
+                        pending[k] = pool.apply_async(fn, args)
+                        del waiting[k]
+                finished = [k for k, handle in pending.items() if handle.ready()]
+                for k in finished:  # each finished study is on disk at once
+                    found[k] = store.put(k, pending.pop(k).get())
+                    done += 1
+                    if progress:
+                        progress(k, done, len(names))
+                if not finished:
+                    time.sleep(0.02)
             pool.close()
         except BaseException:
             pool.terminate()
@@ -131,24 +158,11 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     crit: dict[str, Any] = {k: found[k] for k in jobs}
     results["critical"] = crit
     results["reading_study"] = [found[k] for k in study_jobs]
-    results["forced_study"] = [found[k] for k in forced_jobs]
+    results["forced_study"] = [row for k in forced_jobs for row in found[k]["rows"]]
     results["compensation"] = found["compensation"] if study else None
     results["reading_figures"] = [found[k] for k in figure_jobs]
-
-    def speed(key: str) -> float | None:
-        v = crit[key]["critical_speed_mm_s"]
-        return None if v is None else v * 1e-3
-
-    # --- the figure studies
-    cdfs_mid = speed(f"crit-cdfs-{MID}") or PAPER["cdfs_critical_sim"]
-    for name, fn in (("fig6", lambda: studies.fig6(params, settings)),
-                     ("fig7", lambda: studies.fig7(params, cdfs_mid, settings)),
-                     ("figs9_10", lambda: studies.figs9_10(params, settings)),
-                     ("fig8_trace", lambda: _fig8_trace(params, speed("crit-ddfs-fig8")))):
-        results[name] = store.get_or_compute(name, fn)
-        done += 1
-        if progress:
-            progress(name, done, total)
+    for name in figure_studies:
+        results[name] = found[name]
 
     # --- tables and figures
     table3 = []
