@@ -152,8 +152,9 @@ def test_spectral_radius_estimate_matches_eigenvalues() -> None:
     atol, _ = model.tolerances(1e-10, 1e-8, 1e-6)
     calls = model.module._r4_fd_jacobian(0.2, y, f0, held, model.P, model.T, 0, 0, 0, atol, J,
                                          np.empty(n), np.empty(n), np.empty(n), aux,
-                                         np.ones(n, dtype=np.bool_))
-    assert calls == n + 1
+                                         np.ones(n, dtype=np.bool_), model.jacobian_pattern,
+                                         model.jacobian_colours)
+    assert calls == model.jacobian_colours.max() + 1
     true = np.max(np.abs(np.linalg.eigvals(J)))
     est = model.module._r4_spectral_radius(J, atol, np.empty(n), np.empty(n), 40)
     assert est == pytest.approx(true, rel=0.25)

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..control import PROFILE_PARAMS, reference_kernel
 from ..parameters import DriveParameters, ParameterError
-from . import codegen, loops
+from . import codegen, loops, sparsity
 from .compensation import emit_compensation
 from .disturbances import LoadProfile, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
@@ -45,6 +45,8 @@ class Model:
     source: str
     drive: str
     sites: tuple[tuple[str, str], ...]  # (site name, law name)
+    jacobian_pattern: np.ndarray  # (n, n + 1) uint8: dy[i] may depend on y[j] (column n: t)
+    jacobian_colours: np.ndarray  # (n + 1,) group of each column in the grouped FD Jacobian
 
     @property
     def n_held(self) -> int:
@@ -96,6 +98,7 @@ def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
     o = b.params(f"friction.{site.name}", packed)
     alias = b.use_dynamic(f"_law_{law.name.replace('-', '_')}",
                           f"_friction_law({law.name!r}).compiled", law.compiled)
+    b.local_kernel(alias, len(law.state_names))
     return f"f_{site.name} = {alias}({site.speed}, y, {y_offset}, P, {o}, dy)"
 
 
@@ -206,13 +209,16 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
 
     source = codegen.module_source(b, solver_sources())
     module = codegen.compile_module(source, b.dynamic_sources)
+    pattern = sparsity.jacobian_pattern(codegen.rhs_source(b), len(b.states),
+                                        frozenset(b.imports), b.local_kernels)
     return Model(
         state_names=tuple(s.name for s in b.states), states=tuple(b.states), aux=tuple(b.aux),
         parameter_names=tuple(b.param_names), P=b.packed_parameters(), T=b.packed_tables(),
         tolerance_kinds=tuple(s.kind for s in b.states),
         tolerance_scales=tuple(b.tol_scale.get(s.name, 1.0) for s in b.states),
         module=module, source=source, drive=drive,
-        sites=tuple((site.name, law.name) for site, law, _ in laws))
+        sites=tuple((site.name, law.name) for site, law, _ in laws),
+        jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern))
 
 
 @functools.cache

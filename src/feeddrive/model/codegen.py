@@ -63,6 +63,7 @@ class Builder:
     imports: dict[str, str] = field(default_factory=dict)  # alias -> "module:attr"
     dynamic: dict[str, str] = field(default_factory=dict)  # alias -> registry expression
     dynamic_sources: list[str] = field(default_factory=list)
+    local_kernels: dict[str, int] = field(default_factory=dict)  # alias -> its state count
     table_size: int = 0
     reference_call: str = "(0.0, 0.0, 0.0, 0.0)"
     tol_scale: dict[str, float] = field(default_factory=dict)
@@ -151,6 +152,13 @@ class Builder:
         self.dynamic_sources.append(source_of(getattr(kernel, "py_func", kernel)))
         return alias
 
+    def local_kernel(self, alias: str, n_states: int) -> None:
+        """Declare that kernel ``alias`` reads only ``y[k : k + n_states]`` of the state array it
+        is given (``k``: the argument after ``y``) and writes exactly ``dy`` at those places
+        (the friction-law interface); the Jacobian's sparsity pattern relies on it
+        (:mod:`feeddrive.model.sparsity`)."""
+        self.local_kernels[alias] = n_states
+
     def emit(self, line: str, *, sampled: bool = False) -> None:
         (self.sample_lines if sampled else self.rhs_lines).append(line)
 
@@ -178,6 +186,12 @@ def _indent(lines: list[str], level: int = 1) -> str:
     return "\n".join(pad + ln if ln else "" for ln in lines)
 
 
+def rhs_source(builder: Builder) -> str:
+    """The generated right-hand side ``rhs`` (without its decorator)."""
+    return ("def rhs(t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux):\n"
+            + _indent(builder.rhs_lines or ["pass"]) + "\n")
+
+
 def module_source(builder: Builder, solver_sources: list[str]) -> str:
     """The full text of the generated module."""
     head = [
@@ -198,9 +212,7 @@ def module_source(builder: Builder, solver_sources: list[str]) -> str:
         "",
         "",
         "@kernel",
-        "def rhs(t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux):",
-        _indent(builder.rhs_lines or ["pass"]),
-        "",
+        rhs_source(builder),
         "",
         "@kernel",
         "def sample_update(k, t, y, held, P, T, n_pos, n_vel, n_cur, base):",

@@ -66,8 +66,9 @@ def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism) -> s
                         f"LuGre observer state of the {key} friction (compensation)",
                         "position")
             err = f"({b.y('table_position')} - ref_x)"
-            b.emit(f"comp_{key} = {b.use(observer_force)}({meas_speed}, {err}, P[{gain}], y, "
-                   f"{k}, P, {o}, dy)")
+            observer = b.use(observer_force)
+            b.local_kernel(observer, 1)
+            b.emit(f"comp_{key} = {observer}({meas_speed}, {err}, P[{gain}], y, {k}, P, {o}, dy)")
         terms.append(f"comp_{key}")
     b.add_aux("compensation_force", "N", f"friction compensation force ({c.mode})")
     b.emit(f"{b.a('compensation_force')} = {' + '.join(terms)}")

@@ -13,7 +13,7 @@ One compiled driver (:func:`integrate_template`, placed in every generated model
   test) — and back to DOPRI5 when the Rosenbrock step h times the power-iteration estimate of
   the Jacobian's spectral radius stays below ``NONSTIFF_HRHO`` for ``NONSTIFF_STEPS`` steps
   (an explicit step of that size would be stable, and costs 6 right-hand sides instead of
-  6 + one per Jacobian column).
+  6 + one per group of Jacobian columns).
 
 Dense output: the step is not capped by the output interval.  Outputs on the grid
 t_i = i·out_every·base are interpolated inside the step that contains them.  Event times are
@@ -127,7 +127,8 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
         model.module.integrate_dense(
             y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P, model.T, rtol, atol,
             rel_mask, h_init, h_max, adaptive, max_steps, mode,
-            np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux)))
+            np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
+            model.jacobian_pattern, model.jacobian_colours))
     return result
 
 
@@ -180,14 +181,15 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                        n_vel: int, n_cur: int, P: np.ndarray, T: np.ndarray, rtol: float,
                        atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
                        adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
-                       want_aux: bool,
+                       want_aux: bool, S: np.ndarray, colour: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from t = 0 to ``t_end`` with dense output every ``out_every·base`` [s].
 
     ``stops``: sorted profile breakpoints [s] (exact step ends).  Returns (t_out, y_out,
     aux_out, stats, held); stats as :data:`STAT_NAMES` (the first five as
     :func:`feeddrive.solvers.dopri5.integrate_template`).  Without ``want_aux`` the auxiliary
-    signals are not evaluated at the outputs and ``aux_out`` has no rows.
+    signals are not evaluated at the outputs and ``aux_out`` has no rows.  ``S``, ``colour``:
+    the Jacobian's sparsity pattern and column groups (:func:`rodas4.fd_jacobian_template`).
     """
     n = y0.size
     n_break = int(round(t_end / base))
@@ -284,11 +286,12 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
         while t < t_ev and status == STATUS_OK:
             if stiff and not jac_ok:
                 calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur, atol, J,
-                                        ft, yp, fp, aux, live if frozen_known else all_live)
+                                        ft, yp, fp, aux, live if frozen_known else all_live,
+                                        S, colour)
                 if calls < 0:  # a state taken as frozen moved: difference every column
                     n_rhs -= calls
                     calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur, atol,
-                                            J, ft, yp, fp, aux, all_live)
+                                            J, ft, yp, fp, aux, all_live, S, colour)
                     frozen_known = False
                 n_rhs += calls
                 n_jac += 1
@@ -316,7 +319,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                         for i in range(n):
                             live[i] = True
                         calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur,
-                                                atol, J, ft, yp, fp, aux, all_live)
+                                                atol, J, ft, yp, fp, aux, all_live, S, colour)
                         n_rhs += calls
                         n_jac += 1
                         continue
