@@ -19,7 +19,7 @@ NUT_SPEEDS = (2e-3, 5e-3, 10e-3, 16e-3, 20e-3, 30e-3)  # [m/s] issue 14
 def jobs() -> list[tuple[str, float, float, tuple[float, ...]]]:
     """(drive, nut speed [m/s], position [m], thresholds); the thresholds of one job share
     their ripple runs."""
-    out = [("cdfs", 0.0, MID, THRESHOLDS)]
+    out: list[tuple[str, float, float, tuple[float, ...]]] = [("cdfs", 0.0, MID, THRESHOLDS)]
     out += [("ddfs", vn, MID, THRESHOLDS) for vn in NUT_SPEEDS]
     out += [("ddfs", PAPER["experiment_nut_speed"], a, (0.5,)) for a in PAPER["positions"]
             if a != MID]

@@ -118,15 +118,17 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     tasks.update({k: (_critical_job, (v,)) for k, v in jobs.items() if k not in tasks})
 
     def speed(key: str) -> float | None:
-        v = found[key]["critical_speed_mm_s"]
+        v = _entry(found, key)["critical_speed_mm_s"]
         return None if v is None else v * 1e-3
 
     # figure studies that need a critical speed: submitted once it is known
-    after = {"fig7": (f"crit-cdfs-{MID}", lambda: (
-                 studies.fig7, (params, speed(f"crit-cdfs-{MID}") or PAPER["cdfs_critical_sim"],
-                                settings))),
-             "fig8_trace": ("crit-ddfs-fig8", lambda: (
-                 _fig8_trace, (params, speed("crit-ddfs-fig8"))))}
+    cdfs_mid = f"crit-cdfs-{MID}"
+    after: dict[str, tuple[str, Callable[[], tuple[Callable[..., Any], tuple[Any, ...]]]]] = {
+        "fig7": (cdfs_mid, lambda: (studies.fig7, (
+            params, speed(cdfs_mid) or PAPER["cdfs_critical_sim"], settings))),
+        "fig8_trace": ("crit-ddfs-fig8", lambda: (
+            _fig8_trace, (params, speed("crit-ddfs-fig8")))),
+    }
     todo = {k: v for k, v in tasks.items() if found[k] is None}
     if todo or any(found[k] is None for k in after):
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
@@ -158,7 +160,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     crit: dict[str, Any] = {k: found[k] for k in jobs}
     results["critical"] = crit
     results["reading_study"] = [found[k] for k in study_jobs]
-    results["forced_study"] = [row for k in forced_jobs for row in found[k]["rows"]]
+    results["forced_study"] = [row for k in forced_jobs for row in _entry(found, k)["rows"]]
     results["compensation"] = found["compensation"] if study else None
     results["reading_figures"] = [found[k] for k in figure_jobs]
     for name in figure_studies:
@@ -184,6 +186,12 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     results["wall_time_s"] = time.perf_counter() - started
     report.write(params, settings, results, out)
     return results
+
+
+def _entry(found: dict[str, Any | None], key: str) -> Any:
+    value = found[key]
+    assert value is not None, key  # every entry is found or computed by now
+    return value
 
 
 def _fig8_trace(params: DriveParameters, critical: float | None) -> dict[str, Any]:
