@@ -120,3 +120,26 @@ def test_sampled_profile_follows_dopri5() -> None:
     dp = simulate(system, profile, 1.5, options=SolverOptions(method="dopri5"))
     auto = simulate(system, profile, 1.5, options=SolverOptions(method="auto"))
     assert np.max(np.abs(auto["table_position"] - dp["table_position"])) < 1e-8
+
+
+def test_auto_at_the_default_tolerance_damps_an_undamped_table_mode() -> None:
+    """Why creep verdicts (``feeddrive creep``, ``reproduce``) integrate with ``dopri5``
+    (benchmarks/README.md): on the ``wang2021-literal`` CDFS (no axial damping) at 0.2 mm/s,
+    DOPRI5 at rtol 1e-6 and both methods at rtol 1e-8 see stick-slip (ripple ≈ 2.2 × the
+    command); RODAS4 steps at rtol 1e-6 damp the undamped table mode numerically and the
+    trial settles "smooth".  If the switching driver stops doing so, the documented reason
+    for keeping ``dopri5`` as the verdicts' method is gone."""
+    from feeddrive.analysis.critical import creep_trial
+
+    system = DriveSystem(fd.preset("wang2021-literal"), "cdfs", 0.4)
+
+    def kind(method: str, rtol: float) -> tuple[str, float]:
+        options = SolverOptions(method=method, rtol=rtol, position_tolerance=1e-4 * rtol,
+                                speed_tolerance=1e-2 * rtol)
+        trial = creep_trial(system, 0.2e-3, options=options)
+        return trial.kind, trial.ripple_ratio
+
+    dopri, auto, auto_tight = kind("dopri5", 1e-6), kind("auto", 1e-6), kind("auto", 1e-8)
+    assert dopri[0] == auto_tight[0] == "stick-slip"
+    assert auto_tight[1] == pytest.approx(dopri[1], rel=0.01)
+    assert auto[0] == "smooth" and auto[1] < 0.05 * dopri[1]

@@ -45,6 +45,13 @@ def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
     return ResultStore(out / "data", key, notice=notice)
 
 
+def _timed(fn: Callable[..., Any], *args: Any) -> tuple[Any, float]:
+    """``fn(*args)`` and the CPU time it took in the worker [s]."""
+    began = time.process_time()
+    value = fn(*args)
+    return value, time.process_time() - began
+
+
 def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
@@ -130,22 +137,24 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
             _fig8_trace, (params, speed("crit-ddfs-fig8")))),
     }
     todo = {k: v for k, v in tasks.items() if found[k] is None}
+    cpu_seconds: dict[str, float] = {}  # of each study computed in this run
     if todo or any(found[k] is None for k in after):
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
         # waits for its running searches took ~53 s to stop, issue 12 item 7)
         pool = multiprocessing.Pool(max(1, workers), initializer=_ignore_sigint)
         try:
-            pending = {k: pool.apply_async(fn, args) for k, (fn, args) in todo.items()}
+            pending = {k: pool.apply_async(_timed, (fn, *args)) for k, (fn, args) in todo.items()}
             waiting = {k: dep for k, (dep, _) in after.items() if found[k] is None}
             while pending or waiting:
                 for k, dep in list(waiting.items()):
                     if found[dep] is not None:
                         fn, args = after[k][1]()
-                        pending[k] = pool.apply_async(fn, args)
+                        pending[k] = pool.apply_async(_timed, (fn, *args))
                         del waiting[k]
                 finished = [k for k, handle in pending.items() if handle.ready()]
                 for k in finished:  # each finished study is on disk at once
-                    found[k] = store.put(k, pending.pop(k).get())
+                    value, cpu_seconds[k] = pending.pop(k).get()
+                    found[k] = store.put(k, value)
                     done += 1
                     if progress:
                         progress(k, done, len(names))
@@ -184,6 +193,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
             *figures.figs9_10(results["figs9_10"], out), figures.fig14(table3, out)]
     results["figures"] = [p.name for p in pngs]
     results["wall_time_s"] = time.perf_counter() - started
+    results["cpu_seconds"] = cpu_seconds
     report.write(params, settings, results, out)
     return results
 
