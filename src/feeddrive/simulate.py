@@ -219,8 +219,9 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
 
     ``output`` (``.parquet`` or ``.csv``): every sample is written to that file as it is
     computed, in chunks, and the Result keeps only the last :data:`KEEP_STREAMED` seconds, so
-    memory does not grow with the duration (method ``dopri5``).  ``progress(t, t_end)`` is
-    called after each chunk of a long run.
+    memory does not grow with the duration.  ``progress(t, t_end)`` is called after each chunk
+    of a long run (``dopri5``: about :data:`CHUNK_WALL_TIME` of work; the dense-output methods:
+    :data:`DENSE_CHUNK` simulated seconds); Ctrl-C acts between chunks.
     """
     return Simulation(system, profile, options).run(duration, output=output, progress=progress)
 
@@ -229,9 +230,9 @@ class Simulation:
     """A run from rest that can be continued.
 
     ``run(duration)`` returns the Result over [0, ``duration``]; a later call with a longer
-    duration integrates on from where the previous one stopped (method ``dopri5``: the
-    integrator's state is carried over, so the Result is bit-identical to
-    ``simulate(system, profile, duration)``; the dense-output methods run again from rest).
+    duration integrates on from where the previous one stopped, the integrator's state carried
+    over, so the Result is bit-identical to ``simulate(system, profile, duration)`` (the
+    dense-output methods continue from the last multiple of :data:`DENSE_CHUNK`).
     The creep verdict uses it to lengthen an undecided trial without repeating it
     (:func:`feeddrive.analysis.critical.decide`).
     """
@@ -261,33 +262,27 @@ class Simulation:
         if output is None:  # a streamed run keeps only its last KEEP_STREAMED seconds
             budget.check_output_memory(t_end, options.output_interval)
         started = _time.perf_counter()
-        if options.method in _DENSE_MODES:
-            if output is not None:
-                raise ParameterError("output", str(output), "streaming a run to a file needs "
-                                     "options.method = dopri5")
-            t, y, aux, stats = self._dense(t_end)
-        else:
+        dense = options.method in _DENSE_MODES
+        if not dense:
             adaptive = 1 if options.method == "dopri5" else 0
             h_init = 1e-6 if adaptive else options.fixed_step
             max_step = 1e-3 if options.max_step is None else options.max_step
             h_max = min(max_step, grid.base) if adaptive else options.fixed_step
             _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
                              adaptive, self.atol, self.rel, h_init, h_max)
-            chunks = self._chunks
-            if chunks is None or output is not None or n_break < chunks.start:
-                chunks = _Chunks(model, self.y0, grid, options, self.atol, self.rel, h_init,
-                                 h_max, adaptive)
-            self._chunks = None if output is not None else chunks
-            try:
-                t, y, aux, stats = chunks.advance(n_break, output, progress,
-                                                  self.system)
-            except _Stopped as stop:
-                partial = Result.from_run(Run(stop.t, stop.y, stop.aux, model, self.system,
-                                              self.profile,
-                                              {"method": options.method, "interrupted": True,
-                                               "t_reached_s": stop.t_reached}))
-                raise SimulationInterrupted(stop.t_reached, partial,
-                                            None if output is None else str(output)) from None
+        chunks = self._chunks
+        if chunks is None or output is not None or n_break < chunks.start:
+            chunks = _Chunks(self, want_aux=output is not None)
+        self._chunks = None if output is not None else chunks
+        try:
+            t, y, aux, stats = chunks.advance(n_break, output, progress)
+        except _Stopped as stop:
+            partial = Result.from_run(Run(stop.t, stop.y, stop.aux, model, self.system,
+                                          self.profile,
+                                          {"method": options.method, "interrupted": True,
+                                           "t_reached_s": stop.t_reached}))
+            raise SimulationInterrupted(stop.t_reached, partial,
+                                        None if output is None else str(output)) from None
         wall = _time.perf_counter() - started
         status = int(stats[0])
         if status != dopri5.STATUS_OK:
@@ -304,7 +299,7 @@ class Simulation:
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
             "breakpoint_interval_s": grid.base,
         }
-        if options.method in _DENSE_MODES:
+        if dense:
             solver_stats.update({
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
                 "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
@@ -313,72 +308,120 @@ class Simulation:
             run.defer_aux(lambda: model.module.auxiliary(t, y, model.P, model.T))
         return Result.from_run(run)
 
-    def _dense(self, t_end: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """One dense-output integration from rest to ``t_end`` (feeddrive.solvers.switching)."""
-        options, grid = self.options, self.grid
-        mode, adaptive = _DENSE_MODES[options.method]
-        h_init = 1e-6 if adaptive else options.fixed_step
-        h_max = (math.inf if options.max_step is None else options.max_step) if adaptive \
-            else options.fixed_step
-        continuous = grid.n_pos == 0 and grid.n_vel == 0 and grid.n_cur == 0
-        t, y, aux, stats, _ = switching.integrate(
-            self.model, self.y0, t_end, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
-            grid.n_cur, options.rtol, self.atol, self.rel, h_init, h_max, adaptive,
-            options.max_steps, mode, profile_breakpoints(self.profile, t_end, grid.base),
-            want_aux=not continuous)
-        return t, y, aux, stats
+
+# A dense-output run is integrated in calls that end at the multiples of this [s] (simulated),
+# whatever its duration: the steps there are the same in every run, so a run continued to a
+# longer duration is bit-identical to one from rest, and Ctrl-C and progress act between calls.
+DENSE_CHUNK = 10.0
 
 
 class _Chunks:
-    """DOPRI5 over the breakpoints in chunks, continued by each :meth:`advance`; the result
-    is bit-identical to one call over the whole span (the integrator's state is carried
-    over)."""
+    """A run integrated in chunks and continued by each :meth:`advance`; the result is
+    bit-identical to one call over the whole span.
 
-    def __init__(self, model: Model, y0: np.ndarray, grid: Sampling, options: SolverOptions,
-                 atol: np.ndarray, rel: np.ndarray, h_init: float, h_max: float,
-                 adaptive: int) -> None:
-        self.model, self.grid, self.options = model, grid, options
-        self.atol, self.rel, self.h_init, self.h_max, self.adaptive = (
-            atol, rel, h_init, h_max, adaptive)
-        self.held = np.zeros(model.n_held)
-        self.memory = np.zeros(2 + len(model.states))
-        self.memory[:2] = (h_init, 1e-4)
-        self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-        self.totals = np.zeros(4)
-        self.stats = np.zeros(5)
-        self.start = 0
-        self.y = y0
+    ``dopri5`` (every breakpoint a step end): a chunk may end at any breakpoint; its size
+    follows :data:`CHUNK_WALL_TIME`.  Dense output (:mod:`feeddrive.solvers.switching`): the
+    chunks end at the multiples of :data:`DENSE_CHUNK`; the part after the last multiple is
+    integrated from a copy of the carried state and integrated again when the run is continued.
+    """
+
+    def __init__(self, sim: Simulation, *, want_aux: bool) -> None:
+        options, grid, model = sim.options, sim.grid, sim.model
+        self.sim = sim
+        self.dense = options.method in _DENSE_MODES
         every = grid.out_every
-        self.size = max(every, int(round(FIRST_CHUNK / grid.base)) // every * every)
+        n = len(model.states)
+        self.held = np.zeros(model.n_held)
+        if self.dense:
+            mode, adaptive = _DENSE_MODES[options.method]
+            self.h_init = 1e-6 if adaptive else options.fixed_step
+            self.h_max = ((math.inf if options.max_step is None else options.max_step)
+                          if adaptive else options.fixed_step)
+            self.mode, self.adaptive = mode, adaptive
+            self.memory = switching.new_memory(n)
+            continuous = grid.n_pos == 0 and grid.n_vel == 0 and grid.n_cur == 0
+            self.want_aux = want_aux or not continuous
+            self.size = max(every, int(round(DENSE_CHUNK / grid.base)) // every * every)
+        else:
+            self.adaptive = 1 if options.method == "dopri5" else 0
+            self.h_init = 1e-6 if self.adaptive else options.fixed_step
+            max_step = 1e-3 if options.max_step is None else options.max_step
+            self.h_max = min(max_step, grid.base) if self.adaptive else options.fixed_step
+            self.memory = np.zeros(2 + n)
+            self.memory[:2] = (self.h_init, 1e-4)
+            self.size = max(every, int(round(FIRST_CHUNK / grid.base)) // every * every)
+        self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self.totals = np.zeros(9 if self.dense else 5)
+        self.start = 0
+        self.y = sim.y0
+
+    def _call(self, y: np.ndarray, start: int, stop: int, held: np.ndarray,
+              memory: np.ndarray, max_steps: int,
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        sim, grid, options = self.sim, self.sim.grid, self.sim.options
+        t_stop = stop * grid.base
+        if self.dense:
+            t, yy, aa, stats, _ = switching.integrate(
+                sim.model, y, t_stop, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
+                grid.n_cur, options.rtol, sim.atol, sim.rel, self.h_init, self.h_max,
+                self.adaptive, max_steps, self.mode,
+                profile_breakpoints(sim.profile, t_stop, grid.base), self.want_aux,
+                start=start, held=held, memory=memory)
+        else:
+            t, yy, aa, stats, _ = dopri5.integrate(
+                sim.model, y, t_stop, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
+                grid.n_cur, options.rtol, sim.atol, sim.rel, self.h_init, self.h_max,
+                self.adaptive, max_steps, start=start, held=held, memory=memory)
+        if start > 0 and t.size and t[0] <= start * grid.base:
+            t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
+        return t, yy, aa, stats
+
+    def _add(self, stats: np.ndarray) -> np.ndarray:
+        """Totals so far with ``stats`` added (status and time reached from ``stats``)."""
+        out = self.totals + stats
+        out[0], out[4] = stats[0], stats[4]
+        return out
 
     def advance(self, n_break: int, output: str | Path | None,
-                progress: Callable[[float, float], None] | None, system: DriveSystem,
+                progress: Callable[[float, float], None] | None,
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Integrate on to breakpoint ``n_break``; (t, y, aux, stats) from t = 0."""
         from .io import ChunkWriter
 
-        model, grid, options = self.model, self.grid, self.options
+        sim, grid = self.sim, self.sim.grid
         every = grid.out_every
         t_end = n_break * grid.base
-        writer = ChunkWriter(output, model, system) if output is not None else None
+        writer = ChunkWriter(output, sim.model, sim.system) if output is not None else None
         kept = sum(p[0].size for p in self.parts)
         keep = int(KEEP_STREAMED / (every * grid.base)) + 1
+        tail: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        stats = self.totals
         try:
             while self.start < n_break:
-                stop = min(n_break, self.start + self.size)
+                if self.dense:
+                    stop = (self.start // self.size + 1) * self.size
+                    if stop > n_break:  # the tail, from a copy of the carried state
+                        t, yy, aa, last = self._call(
+                            self.y, self.start, n_break, self.held.copy(), self.memory.copy(),
+                            self.sim.options.max_steps - int(self.totals[1]))
+                        stats = self._add(last)
+                        if int(last[0]) == dopri5.STATUS_OK:
+                            tail.append((t, yy, aa))
+                            if writer is not None:
+                                writer.write(t, yy, aa)
+                            if progress is not None:
+                                progress(t_end, t_end)
+                        break
+                else:
+                    stop = min(n_break, self.start + self.size)
                 began = _time.perf_counter()
-                t, yy, aa, stats, _ = dopri5.integrate(
-                    model, self.y, stop * grid.base, every, grid.base, grid.n_pos,
-                    grid.n_vel, grid.n_cur, options.rtol, self.atol, self.rel, self.h_init,
-                    self.h_max, self.adaptive, options.max_steps - int(self.totals[1]),
-                    start=self.start, held=self.held, memory=self.memory)
+                t, yy, aa, last = self._call(self.y, self.start, stop, self.held, self.memory,
+                                             self.sim.options.max_steps - int(self.totals[1]))
                 wall = _time.perf_counter() - began
-                self.stats = stats
-                self.totals[1:4] += stats[1:4]
-                if self.start > 0 and t.size and t[0] <= self.start * grid.base:
-                    t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
-                if int(stats[0]) != dopri5.STATUS_OK:
+                stats = self._add(last)
+                if int(last[0]) != dopri5.STATUS_OK:
                     break
+                self.totals = stats
                 if writer is not None:
                     writer.write(t, yy, aa)
                 self.parts.append((t, yy, aa))
@@ -390,17 +433,17 @@ class _Chunks:
                 self.start = stop
                 if progress is not None:
                     progress(self.start * grid.base, t_end)
-                scale = CHUNK_WALL_TIME / max(wall, 1e-4)
-                self.size = max(every, min(int(self.size * min(scale, 4.0)) // every * every,
-                                           MAX_CHUNK_SAMPLES * every))
+                if not self.dense:
+                    scale = CHUNK_WALL_TIME / max(wall, 1e-4)
+                    self.size = max(every, min(int(self.size * min(scale, 4.0)) // every
+                                               * every, MAX_CHUNK_SAMPLES * every))
         except KeyboardInterrupt:
-            raise _Stopped(self.start * grid.base, *_concat(self.parts, model)) from None
+            raise _Stopped(self.start * grid.base, *_concat(self.parts, sim.model)) from None
         finally:
             if writer is not None:
                 writer.close()
-        t, y_all, aux_all = _concat(self.parts, model)
-        s = self.stats
-        return t, y_all, aux_all, np.array([s[0], *self.totals[1:4], s[4]])
+        t, y_all, aux_all = _concat([*self.parts, *tail], sim.model)
+        return t, y_all, aux_all, stats
 
 
 class _Stopped(Exception):

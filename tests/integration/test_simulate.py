@@ -160,3 +160,31 @@ def test_nut_speed_loop_runs_at_commanded_speed(params: fd.DriveParameters) -> N
     assert s["mean_table_speed_mm_s"] == pytest.approx(2.5, rel=0.01)
     assert np.allclose(r["nut_speed_command"], r["nut_speed_reference"] / p.screw
                        .transmission_ratio)
+
+
+def test_cli_method_auto_runs_the_stiff_aware_integrator(tmp_path) -> None:
+    """`feeddrive simulate --method auto`: the DDFS at 0.5 mm/s, v_n 16 (the stiff screw
+    bristle) — same mean speeds as the default dopri5, RODAS4 steps taken, streamed to a file;
+    every method the help names is one SolverOptions accepts; a wrong one is one line."""
+    from feeddrive.cli.simulate_cmd import CLI_METHODS
+    from feeddrive.simulate import METHODS
+
+    args = ["simulate", "--drive", "ddfs", "--table-speed", "0.5", "--nut-speed", "16",
+            "--duration", "3", "--json"]
+    default = json.loads(runner.invoke(app, args).stdout)
+    out = tmp_path / "run.parquet"
+    result = runner.invoke(app, [*args, "--method", "auto", "--output", str(out)])
+    assert result.exit_code == 0, result.output
+    auto = json.loads(result.stdout)
+    assert default["solver"]["method"] == "dopri5" and auto["solver"]["method"] == "auto"
+    assert auto["solver"]["rosenbrock_steps"] > 0
+    for key in ("mean_table_speed_mm_s", "mean_screw_speed_mm_s", "mean_nut_speed_mm_s"):
+        assert auto[key] == pytest.approx(default[key], rel=1e-4)
+    assert len(pd.read_parquet(out)) == 3001
+    help_text = " ".join(runner.invoke(app, ["simulate", "--help"]).stdout.split())
+    assert set(CLI_METHODS) <= set(METHODS)
+    assert all(m in help_text for m in CLI_METHODS)
+    bad = runner.invoke(app, ["simulate", "--table-speed", "1", "--method", "radau"])
+    assert bad.exit_code == 2
+    line = bad.stderr.strip()
+    assert line.count("\n") == 0 and "--method" in line and "radau" in line

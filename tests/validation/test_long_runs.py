@@ -136,3 +136,63 @@ def test_auxiliary_signals_evaluated_when_read_equal_the_recorded_ones() -> None
     np.testing.assert_array_equal(r.time, t)
     for k, sig in enumerate(model.aux):
         np.testing.assert_array_equal(r[sig.name], aux[:, k], err_msg=sig.name)
+
+
+@pytest.mark.parametrize(("drive", "nut_speed", "sampled"),
+                         [("cdfs", 0.0, False), ("ddfs", 16e-3, False), ("cdfs", 0.0, True)])
+def test_continued_dense_run_is_bit_identical_to_a_run_from_rest(
+        drive: str, nut_speed: float, sampled: bool) -> None:
+    """method "auto": a 12-s run continued to 24 s equals a 24-s run from rest sample for
+    sample (both end their calls at the multiples of DENSE_CHUNK, where the driver's state is
+    carried over: step size, method, switching counters, frozen states)."""
+    params = W
+    if sampled:
+        params = (W.replace_path("controller.position_period", 1e-3)
+                  .replace_path("controller.velocity_period", 5e-4))
+    system = fd.DriveSystem(params, drive, 0.4)
+    profile = ConstantSpeed(1.2e-3 if drive == "cdfs" else 0.5e-3, nut_speed, ramp_time=0.1)
+    options = SolverOptions(method="auto")
+    sim = fd.Simulation(system, profile, options)
+    short = sim.run(12.0)
+    long = sim.run(24.0)
+    ref = fd.simulate(system, profile, 24.0, options=options)
+    np.testing.assert_array_equal(long.time, ref.time)
+    for name in ("table_speed", "table_position", "screw_current"):
+        np.testing.assert_array_equal(long[name], ref[name])
+    # up to the last multiple of DENSE_CHUNK the short run is the long one's start
+    n = int(round(sim_mod.DENSE_CHUNK / 1e-3)) + 1
+    np.testing.assert_array_equal(short["table_speed"][:n], ref["table_speed"][:n])
+    if sampled:  # 12 s is a sample instant, a step end in every run: the whole short run
+        np.testing.assert_array_equal(short["table_speed"], ref["table_speed"][:12001])
+    assert long.solver_stats["method_switches"] == ref.solver_stats["method_switches"]
+
+
+def test_dense_run_streams_reports_progress_and_stops_on_ctrl_c(tmp_path, monkeypatch) -> None:
+    """method "auto" streams to a file chunk by chunk, keeps only the end, reports progress
+    after each DENSE_CHUNK, and Ctrl-C between chunks keeps what was computed."""
+    monkeypatch.setattr(sim_mod, "DENSE_CHUNK", 1.0)
+    monkeypatch.setattr(sim_mod, "KEEP_STREAMED", 1.0)
+    system = fd.DriveSystem(W, "ddfs", 0.4)
+    profile = ConstantSpeed(0.5e-3, 16e-3)
+    options = SolverOptions(method="auto")
+    seen: list[float] = []
+    out = tmp_path / "run.parquet"
+    r = fd.simulate(system, profile, 4.5, options=options, output=out,
+                    progress=lambda t, end: seen.append(t))
+    assert seen == pytest.approx([1.0, 2.0, 3.0, 4.0, 4.5])
+    whole = fd.simulate(system, profile, 4.5, options=options)
+    frame = pd.read_parquet(out)
+    np.testing.assert_array_equal(frame["time [s]"].to_numpy(), whole.time)
+    np.testing.assert_allclose(frame["table_speed [mm/s]"].to_numpy(),
+                               1e3 * whole["table_speed"], rtol=1e-12)
+    assert r.time[0] > 2.0 and r.time[-1] == pytest.approx(4.5)  # only the end is kept
+
+    def interrupt(t: float, end: float) -> None:
+        if t >= 2.0:
+            raise KeyboardInterrupt
+
+    with pytest.raises(SimulationInterrupted) as info:
+        fd.simulate(system, profile, 4.5, options=options, output=tmp_path / "cut.csv",
+                    progress=interrupt)
+    assert info.value.t_reached == pytest.approx(2.0)
+    assert pd.read_csv(tmp_path / "cut.csv")["time [s]"].iloc[-1] == pytest.approx(2.0)

@@ -92,9 +92,13 @@ POWER_ITERATIONS = 12
 STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "jacobians",
               "rosenbrock_steps", "switches", "output_rhs_evaluations")
 
-CONSTANTS = ("MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "DP_D1", "DP_D3", "DP_D4", "DP_D5",
-             "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS", "NONSTIFF_HRHO", "NONSTIFF_STEPS",
-             "POWER_ITERATIONS")
+# h, method, frozen states known, stiff and non-stiff counts, DOPRI5 error memory, RODAS4
+# error, step and first/rejected flags; then one live flag per state (integrate_template)
+MEMORY_SCALARS = 10
+
+CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "DP_D1", "DP_D3",
+             "DP_D4", "DP_D5", "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS", "NONSTIFF_HRHO",
+             "NONSTIFF_STEPS", "POWER_ITERATIONS")
 
 # Placeholders: the generated module supplies these (see feeddrive.solvers.dopri5).
 N_AUX = 0
@@ -117,18 +121,32 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
     raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
 
 
+def new_memory(n_states: int) -> np.ndarray:
+    """The carried-over state of a run that has not started (:func:`integrate_template`)."""
+    return np.zeros(MEMORY_SCALARS + n_states)
+
+
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
               n_pos: int, n_vel: int, n_cur: int, rtol: float, atol: np.ndarray,
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
-              max_steps: int, mode: int, stops: np.ndarray, want_aux: bool = True,
+              max_steps: int, mode: int, stops: np.ndarray, want_aux: bool = True, *,
+              start: int = 0, held: np.ndarray | None = None,
+              memory: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Integrate ``model`` from t = 0 to ``t_end`` (see :func:`integrate_template`)."""
+    """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``; a multiple
+    of ``out_every``) to ``t_end`` (see :func:`integrate_template`).  ``held`` and ``memory``
+    are updated in place, so a run continued from where a call stopped is bit-identical to
+    one call in which that instant is a step end (a profile breakpoint, a sample instant)."""
+    if start % out_every:
+        raise ValueError(f"start = {start}: expected a multiple of out_every = {out_every}")
+    held = np.zeros(model.n_held) if held is None else held
+    memory = new_memory(len(model.states)) if memory is None else memory
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate_dense(
             y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P, model.T, rtol, atol,
             rel_mask, h_init, h_max, adaptive, max_steps, mode,
             np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
-            model.jacobian_pattern, model.jacobian_colours))
+            model.jacobian_pattern, model.jacobian_colours, start, held, memory))
     return result
 
 
@@ -181,9 +199,16 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                        n_vel: int, n_cur: int, P: np.ndarray, T: np.ndarray, rtol: float,
                        atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
                        adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
-                       want_aux: bool, S: np.ndarray, colour: np.ndarray,
+                       want_aux: bool, S: np.ndarray, colour: np.ndarray, start: int,
+                       held: np.ndarray, memory: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Integrate from t = 0 to ``t_end`` with dense output every ``out_every·base`` [s].
+    """Integrate from t = start·base (state ``y0``) to ``t_end`` with dense output every
+    ``out_every·base`` [s].
+
+    ``held`` (the sampled controller's values) and ``memory`` (step size, method, switching
+    counters, step-size controller memory, which states are frozen; all 0 before the first
+    call) carry the driver's state from one call to the next: ``memory[0] == 0`` starts a
+    run, with the controller sampled at t = 0.
 
     ``stops``: sorted profile breakpoints [s] (exact step ends).  Returns (t_out, y_out,
     aux_out, stats, held); stats as :data:`STAT_NAMES` (the first five as
@@ -194,12 +219,12 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     n = y0.size
     n_break = int(round(t_end / base))
     t_end = n_break * base
-    n_out = n_break // out_every + 1
+    o0 = start // out_every  # index of the first output on the whole run's grid
+    n_out = (n_break - start) // out_every + 1
     sampled = n_pos > 0 or n_vel > 0 or n_cur > 0
     t_out = np.empty(n_out)
     y_out = np.empty((n_out, n))
     aux_out = np.empty((n_out if want_aux else 0, N_AUX))
-    held = np.zeros(N_HELD)
     y = y0.copy()
     f0 = np.empty(n)
     k2 = np.empty(n)
@@ -251,13 +276,28 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     r4_rejected = False
     i_stop = 0
     n_stops = stops.size
-    kb = 0  # index of the current sample instant
-    t = 0.0
+    kb = start  # index of the current sample instant
+    t = start * base
     i_out = 0
-    sample_update(0, 0.0, y, held, P, T, n_pos, n_vel, n_cur, base)
-    rhs(0.0, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
+    if memory[0] == 0.0:  # a new run
+        sample_update(0, 0.0, y, held, P, T, n_pos, n_vel, n_cur, base)
+    else:  # carried over from the call that ended at t
+        h = memory[0]
+        stiff = memory[1] != 0.0
+        frozen_known = memory[2] != 0.0
+        stiff_count = int(memory[3])
+        nonstiff_count = int(memory[4])
+        dp_err_old = memory[5]
+        r4_err_old = memory[6]
+        r4_h_old = memory[7]
+        r4_first = memory[8] != 0.0
+        r4_rejected = memory[9] != 0.0
+        for i in range(n):
+            live[i] = memory[MEMORY_SCALARS + i] != 0.0
+    # the derivative at t: what the previous call's last step (or event) left, recomputed
+    rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
     n_rhs += 1
-    t_out[0] = 0.0
+    t_out[0] = t
     y_out[0, :] = y
     if want_aux:
         aux_out[0, :] = aux
@@ -277,7 +317,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
             is_sample = False
             is_stop = True
         if adaptive == 0 and i_out < n_out:
-            t_grid = (i_out * out_every) * base
+            t_grid = ((o0 + i_out) * out_every) * base
             if t_grid < t_ev - 1e-12 * max(1.0, t_ev):
                 t_ev = t_grid
                 is_sample = False
@@ -375,7 +415,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
             # outputs strictly inside the step (an output at t_new that is an event time is
             # written after the event below)
             while i_out < n_out:
-                t_grid = (i_out * out_every) * base
+                t_grid = ((o0 + i_out) * out_every) * base
                 if t_grid > t_new or (last and t_grid >= t_new - 1e-9 * base):
                     break
                 th = (t_grid - t) / h_done
@@ -473,7 +513,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
         if is_stop:
             i_stop += 1
         while i_out < n_out:
-            t_grid = (i_out * out_every) * base
+            t_grid = ((o0 + i_out) * out_every) * base
             if abs(t_grid - t) > 1e-9 * base:
                 break
             t_out[i_out] = t_grid
@@ -483,6 +523,18 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 n_out_rhs += 1
                 aux_out[i_out, :] = aux
             i_out += 1
+    memory[0] = h
+    memory[1] = 1.0 if stiff else 0.0
+    memory[2] = 1.0 if frozen_known else 0.0
+    memory[3] = stiff_count
+    memory[4] = nonstiff_count
+    memory[5] = dp_err_old
+    memory[6] = r4_err_old
+    memory[7] = r4_h_old
+    memory[8] = 1.0 if r4_first else 0.0
+    memory[9] = 1.0 if r4_rejected else 0.0
+    for i in range(n):
+        memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
     stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
                       t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs)])
     return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats, held)
