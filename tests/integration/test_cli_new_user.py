@@ -69,13 +69,15 @@ def test_interrupt_while_importing_exits_130_without_traceback(
     assert err.strip() == "interrupted"
 
 
-def test_ctrl_c_on_reproduce_stops_within_a_second(tmp_path: Path) -> None:
+def test_ctrl_c_on_reproduce_stops_within_a_second(tmp_path: Path,
+                                                   interruptible: dict[str, Any]) -> None:
     """Issue 12 item 7: Ctrl-C on `reproduce` took ~53 s to act and printed nothing.  Now the
     worker pool is terminated at once, the message says what was kept, exit status 130."""
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "feeddrive", "reproduce", "--out", str(out),
                              "--no-study", "--workers", "1"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            **interruptible)
     deadline = time.monotonic() + 120
     while not list((out / "data").glob("*.json")):  # wait until the study is under way
         assert proc.poll() is None, proc.communicate()

@@ -385,10 +385,11 @@ def test_a_simulation_reports_its_expected_time(server: ExplorerServer) -> None:
 # ------------------------------------------------------------------ the command
 
 
-def test_feeddrive_explore_prints_its_address_and_stops_on_ctrl_c() -> None:
+def test_feeddrive_explore_prints_its_address_and_stops_on_ctrl_c(
+        interruptible: dict[str, Any]) -> None:
     proc = subprocess.Popen([sys.executable, "-m", "feeddrive", "explore", "--port", "0",
                              "--preset", "wang2021"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, **interruptible)
     try:
         assert proc.stdout is not None
         line = proc.stdout.readline()

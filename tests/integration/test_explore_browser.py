@@ -20,6 +20,7 @@ import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -35,10 +36,11 @@ pytestmark = pytest.mark.skipif(
 
 
 @pytest.fixture(scope="module")
-def explorer() -> Iterator[str]:
+def explorer(interruptible: dict[str, Any]) -> Iterator[str]:
     """`feeddrive explore --port 0`, started as a user starts it; its address."""
     proc = subprocess.Popen([sys.executable, "-m", "feeddrive", "explore", "--port", "0"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            **interruptible)
     try:
         assert proc.stdout is not None
         line = proc.stdout.readline()
