@@ -219,3 +219,21 @@ def test_report_fig6b_row_follows_the_settling_time(
     row = next(s for s in (out / "report.md").read_text(encoding="utf-8").splitlines()
                if "(Fig. 6b)" in s)
     assert fig6b_agreement(run_156["verdict"], run_156["settling_time"]) in row
+
+
+def test_ripple_table_shows_a_dash_not_none_when_out_of_range() -> None:
+    """The torque-ripple table printed "None" as the kind of an above-range search (found
+    reading the report, DDFS at v_n = 2 and 5 mm/s)."""
+    from feeddrive.analysis.forced import THRESHOLDS
+    from feeddrive.reproduce.beyond_section import ripple_rows
+
+    def row(drive: str, vn: float, th: float, crit: float | None, kind: str | None) -> dict:
+        return {"drive": drive, "nut_speed_mm_s": vn, "threshold": th, "position_mm": 400.0,
+                "critical_speed_mm_s": crit, "status": "found" if crit else "above-range",
+                "kind": kind, "speed_range_mm_s": [0.05, 3.0]}
+
+    forced = [row("cdfs", 0.0, th, 1.6, "oscillation") for th in THRESHOLDS]
+    forced += [row("ddfs", 2.0, th, None, None) for th in THRESHOLDS]
+    _, rows = ripple_rows(forced)
+    assert [r["kind (0.5)"] for r in rows] == ["oscillation", "—"]
+    assert rows[1]["threshold 0.5"] == "> 3.00"

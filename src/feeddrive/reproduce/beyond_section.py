@@ -39,19 +39,24 @@ def _shown(row: dict[str, Any] | None) -> str:
     return f"> {hi:.2f}" if row["status"] == "above-range" else f"< {lo:.2f}"
 
 
+def _kind(row: dict[str, Any] | None) -> str:
+    """The kind below the critical speed ("—" when there is none: out of range)."""
+    return "—" if row is None or row.get("kind") is None else str(row["kind"])
+
+
 def ripple_rows(forced: list[dict[str, Any]]) -> tuple[str, list[dict[str, str]]]:
     rows = []
     rows.append({"drive": "CDFS", "v_n [mm/s]": "—",
                  **{f"threshold {th:g}": _shown(_find(forced, "cdfs", 0.0, th))
                     for th in THRESHOLDS},
-                 "kind (0.5)": str((_find(forced, "cdfs", 0.0, 0.5) or {}).get("kind"))})
+                 "kind (0.5)": _kind(_find(forced, "cdfs", 0.0, 0.5))})
     vns = sorted({r["nut_speed_mm_s"] for r in forced if r["drive"] == "ddfs"
                   and abs(r["position_mm"] - 1e3 * MID) < 1e-6})
     for vn in vns:
         rows.append({"drive": "DDFS", "v_n [mm/s]": f"{vn:g}",
                      **{f"threshold {th:g}": _shown(_find(forced, "ddfs", vn, th))
                         for th in THRESHOLDS},
-                     "kind (0.5)": str((_find(forced, "ddfs", vn, 0.5) or {}).get("kind"))})
+                     "kind (0.5)": _kind(_find(forced, "ddfs", vn, 0.5))})
     text = ("Reading `wang2021-ripple`: the shipped reading plus motor torque ripple "
             "(0.0135 N m, 6 per revolution, both motors; the amplitude is fitted to the DDFS "
             "critical speed 0.50 mm/s at v_n = 16 mm/s).  The ripple on the fast shafts makes "
