@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import units
+from .. import protocol, units
 from ..control import ConstantSpeed, SampledSpeed
 from ..simulate import DriveSystem, Simulation, SolverOptions, simulate
 from .metrics import CREEPING_KINDS, TraceVerdict, VerdictRule, trace_verdict
@@ -273,13 +273,14 @@ def _grid(lo: float, hi: float, step: float) -> np.ndarray:
 
 def critical_speed_from_rest(
     system: DriveSystem, *, nut_speed: float = 0.0,
-    speed_range: tuple[float, float] = (0.05 * MM_S, 3.0 * MM_S),
-    coarse_step: float = 0.1 * MM_S, resolution: float = 0.01 * MM_S,
+    speed_range: tuple[float, float] = protocol.SPEED_RANGE,
+    coarse_step: float = protocol.COARSE_STEP, resolution: float = protocol.RESOLUTION,
     rule: VerdictRule | None = None, options: SolverOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> CriticalSpeed:
     """Coarse scan plus bisection of every change of kind, every trial from rest (see module
-    docstring)."""
+    docstring).  The defaults are the protocol of ``feeddrive creep`` and ``reproduce``
+    (:mod:`feeddrive.protocol`)."""
     lo, hi = (_check_speed("speed_range[0]", speed_range[0]),
               _check_speed("speed_range[1]", speed_range[1]))
     if hi <= lo:

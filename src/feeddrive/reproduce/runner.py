@@ -64,10 +64,10 @@ def _critical_job(args: tuple[DriveParameters, str, float, float, StudySettings,
     return studies.critical_speed_running(params, drive, position, nut_speed, settings)
 
 
-def _compensation_job(params: DriveParameters) -> dict[str, Any]:
+def _compensation_job(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
     from ..analysis.compensation import compensation_study
 
-    return {"rows": compensation_study(params)}
+    return {"rows": compensation_study(params, rule=settings.rule())}
 
 
 def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = None,
@@ -117,7 +117,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     tasks.update({k: (reading_study.run_variant, (v, settings)) for k, v in study_jobs.items()})
     tasks.update({k: (forced_study.run, (v,)) for k, v in forced_jobs.items()})
     if study:
-        tasks["compensation"] = (_compensation_job, (params,))
+        tasks["compensation"] = (_compensation_job, (params, settings))
     tasks.update({k: (forced_study.reading_figures, (i, settings))
                   for i, k in enumerate(figure_jobs)})
     tasks["fig6"] = (studies.fig6, (params, settings))
