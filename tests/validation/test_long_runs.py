@@ -196,3 +196,12 @@ def test_dense_run_streams_reports_progress_and_stops_on_ctrl_c(tmp_path, monkey
                     progress=interrupt)
     assert info.value.t_reached == pytest.approx(2.0)
     assert pd.read_csv(tmp_path / "cut.csv")["time [s]"].iloc[-1] == pytest.approx(2.0)
+
+
+def test_docs_state_the_dense_chunk_length() -> None:
+    """docs/model.md tells users where dense-output runs end their calls."""
+    from pathlib import Path
+
+    text = " ".join((Path(__file__).resolve().parents[2] / "docs" / "model.md")
+                    .read_text(encoding="utf-8").split())
+    assert f"multiples of {sim_mod.DENSE_CHUNK:g} s (`simulate.DENSE_CHUNK`)" in text
