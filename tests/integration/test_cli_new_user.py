@@ -580,3 +580,22 @@ def test_readme_command_table_matches_the_cli() -> None:
         for option in re.findall(r"--[a-z][a-z-]*", rest):
             assert option in shown, (cmd, option)
     assert "--profile " + "\\|".join(PROFILES) in readme
+
+
+def test_readme_python_example_runs_as_written(tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    """The README's Python block runs as printed, and the critical speed it shows in its
+    comment is the one it computes."""
+    import re
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    code = re.search(r"```python\n(.*?)```", readme, flags=re.S).group(1)  # type: ignore[union-attr]
+    shown = re.search(r"\.display\(\)\s+# '([^']+)'", code).group(1)  # type: ignore[union-attr]
+    monkeypatch.chdir(tmp_path)  # result.save("run.mat") writes here
+    namespace: dict[str, Any] = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    fd = namespace["fd"]
+    assert (tmp_path / "run.mat").exists()
+    crit = fd.critical_speed_from_rest(fd.DriveSystem(namespace["params"], "cdfs", 0.4))
+    assert crit.display() == shown
+    assert namespace["sim"].run(24.0).time[-1] == pytest.approx(24.0)
