@@ -7,6 +7,7 @@ import time as _time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -275,12 +276,10 @@ class Simulation:
             chunks = _Chunks(self, want_aux=output is not None)
         self._chunks = None if output is not None else chunks
         try:
-            t, y, aux, stats = chunks.advance(n_break, output, progress)
+            t, y, aux_parts, stats = chunks.advance(n_break, output, progress)
         except _Stopped as stop:
-            partial = Result.from_run(Run(stop.t, stop.y, stop.aux, model, self.system,
-                                          self.profile,
-                                          {"method": options.method, "interrupted": True,
-                                           "t_reached_s": stop.t_reached}))
+            partial = self._result(*stop.joined, {"method": options.method, "interrupted": True,
+                                                  "t_reached_s": stop.t_reached})
             raise SimulationInterrupted(stop.t_reached, partial,
                                         None if output is None else str(output)) from None
         wall = _time.perf_counter() - started
@@ -303,8 +302,16 @@ class Simulation:
             solver_stats.update({
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
                 "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
-        run = Run(t, y, aux, model, self.system, self.profile, solver_stats)
-        if aux.shape[0] != t.shape[0]:  # not recorded (continuous loops): evaluated when read
+        return self._result(t, y, aux_parts, solver_stats)
+
+    def _result(self, t: np.ndarray, y: np.ndarray, aux_parts: list[np.ndarray],
+                solver_stats: dict[str, Any]) -> Result:
+        model = self.model
+        run = Run(t, y, np.zeros((0, len(model.aux))), model, self.system, self.profile,
+                  solver_stats)
+        if sum(a.shape[0] for a in aux_parts) == t.shape[0]:  # recorded: joined when read
+            run.defer_aux(lambda: _join(aux_parts, len(model.aux)))
+        else:  # not recorded (continuous loops, dense output): evaluated when read
             run.defer_aux(lambda: model.module.auxiliary(t, y, model.P, model.T))
         return Result.from_run(run)
 
@@ -384,8 +391,9 @@ class _Chunks:
 
     def advance(self, n_break: int, output: str | Path | None,
                 progress: Callable[[float, float], None] | None,
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Integrate on to breakpoint ``n_break``; (t, y, aux, stats) from t = 0."""
+                ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], np.ndarray]:
+        """Integrate on to breakpoint ``n_break``; (t, y, the auxiliary signals' parts, stats)
+        from t = 0 (the parts are joined only if a signal among them is read)."""
         from .io import ChunkWriter
 
         sim, grid = self.sim, self.sim.grid
@@ -438,23 +446,31 @@ class _Chunks:
                     self.size = max(every, min(int(self.size * min(scale, 4.0)) // every
                                                * every, MAX_CHUNK_SAMPLES * every))
         except KeyboardInterrupt:
-            raise _Stopped(self.start * grid.base, *_concat(self.parts, sim.model)) from None
+            raise _Stopped(self.start * grid.base, self._joined(self.parts)) from None
         finally:
             if writer is not None:
                 writer.close()
-        t, y_all, aux_all = _concat([*self.parts, *tail], sim.model)
-        return t, y_all, aux_all, stats
+        return (*self._joined([*self.parts, *tail]), stats)
+
+    def _joined(self, parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+                ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+        """(t, y) of ``parts`` end to end, and their auxiliary arrays as a list."""
+        n = len(self.sim.model.states)
+        return (_join([p[0] for p in parts], None), _join([p[1] for p in parts], n),
+                [p[2] for p in parts])
 
 
 class _Stopped(Exception):
-    def __init__(self, t_reached: float, t: np.ndarray, y: np.ndarray, aux: np.ndarray):
+    def __init__(self, t_reached: float,
+                 joined: tuple[np.ndarray, np.ndarray, list[np.ndarray]]) -> None:
         super().__init__(t_reached)
-        self.t_reached, self.t, self.y, self.aux = t_reached, t, y, aux
+        self.t_reached, self.joined = t_reached, joined
 
 
-def _concat(parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
-            model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    if not parts:
-        return np.zeros(0), np.zeros((0, len(model.states))), np.zeros((0, len(model.aux)))
-    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-            np.concatenate([p[2] for p in parts]))
+def _join(arrays: list[np.ndarray], columns: int | None) -> np.ndarray:
+    """The chunks' arrays end to end (a single one as it is: no copy)."""
+    if len(arrays) == 1:
+        return arrays[0]
+    if not arrays:
+        return np.zeros(0) if columns is None else np.zeros((0, columns))
+    return np.concatenate(arrays)

@@ -196,6 +196,10 @@ def test_dense_run_streams_reports_progress_and_stops_on_ctrl_c(tmp_path, monkey
                     progress=interrupt)
     assert info.value.t_reached == pytest.approx(2.0)
     assert pd.read_csv(tmp_path / "cut.csv")["time [s]"].iloc[-1] == pytest.approx(2.0)
+    partial = info.value.result
+    assert partial is not None and partial.time[-1] == pytest.approx(2.0)
+    for sig in system.model(profile).aux:  # evaluated on reading, one per sample
+        assert partial[sig.name].shape == partial.time.shape, sig.name
 
 
 def test_docs_state_the_dense_chunk_length() -> None:
