@@ -263,18 +263,13 @@ class Simulation:
         if output is None:  # a streamed run keeps only its last KEEP_STREAMED seconds
             budget.check_output_memory(t_end, options.output_interval)
         started = _time.perf_counter()
-        dense = options.method in _DENSE_MODES
-        if not dense:
-            adaptive = 1 if options.method == "dopri5" else 0
-            h_init = 1e-6 if adaptive else options.fixed_step
-            max_step = 1e-3 if options.max_step is None else options.max_step
-            h_max = min(max_step, grid.base) if adaptive else options.fixed_step
-            _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
-                             adaptive, self.atol, self.rel, h_init, h_max)
         chunks = self._chunks
         if chunks is None or output is not None or n_break < chunks.start:
             chunks = _Chunks(self, want_aux=output is not None)
         self._chunks = None if output is not None else chunks
+        if not chunks.dense:
+            _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
+                             chunks.adaptive, self.atol, self.rel, chunks.h_init, chunks.h_max)
         try:
             t, y, aux_parts, stats = chunks.advance(n_break, output, progress)
         except _Stopped as stop:
@@ -298,7 +293,7 @@ class Simulation:
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
             "breakpoint_interval_s": grid.base,
         }
-        if dense:
+        if chunks.dense:
             solver_stats.update({
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
                 "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
