@@ -189,6 +189,7 @@ def test_simulate_and_creep_help_defaults_agree_with_the_api() -> None:
     assert f"[default: {protocol.TRIAL_DURATION:.1f}]" in creep_help
     assert f"[default: {protocol.TRIAL_MAX_DURATION:.1f}]" in creep_help
     assert rule.initial_duration == protocol.TRIAL_DURATION
+    assert rule.max_duration == protocol.TRIAL_MAX_DURATION  # API = CLI = report = explorer
 
 
 def test_params_show_labels_gains_and_limits_as_they_act() -> None:

@@ -33,6 +33,8 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import protocol
+
 __all__ = [
     "CreepMetrics",
     "CreepThresholds",
@@ -615,8 +617,9 @@ class VerdictRule:
     initial_duration:
         First trial length (default 12 s, the old fixed window).
     max_duration:
-        Longest trial (default 60 s): a trial still undecided then answers "undecided".
-        The trial length doubles from ``initial_duration`` until decided.
+        Longest trial (default 240 s): a trial still undecided then answers "undecided".
+        The trial length doubles from ``initial_duration`` until decided.  Both defaults are
+        the protocol of ``feeddrive creep`` and ``reproduce`` (:mod:`feeddrive.protocol`).
     """
 
     smooth_band: float = 0.02
@@ -628,8 +631,8 @@ class VerdictRule:
     envelope_tolerance: float = 0.05
     envelope_blocks: int = 3
     stick_level: float = 0.01
-    initial_duration: float = 12.0
-    max_duration: float = 60.0
+    initial_duration: float = protocol.TRIAL_DURATION
+    max_duration: float = protocol.TRIAL_MAX_DURATION
 
     def __post_init__(self) -> None:
         for name in ("smooth_band", "settle_time", "cycle_tolerance", "min_compare_time",
