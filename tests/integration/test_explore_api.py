@@ -475,3 +475,23 @@ def test_docs_name_the_fields_routes_and_options_the_code_has() -> None:
         for name in re.findall(r"--[a-z-]+", option):
             assert name in shown, name
     assert f"{st.MAX_DURATION:g} s" in doc
+
+
+def test_a_browser_resetting_a_kept_alive_connection_prints_nothing(
+        server: ExplorerServer, capfd: pytest.CaptureFixture[str]) -> None:
+    """Closing the page resets its kept-alive connection while the server waits for the next
+    request line; socketserver printed a ConnectionResetError traceback in the user's terminal
+    (seen in the browser test's teardown)."""
+    import socket
+    import struct
+    import time
+
+    sock = socket.create_connection(("127.0.0.1", server.port))
+    sock.sendall(b"GET /api/info HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
+    sock.recv(65536)  # the answer; the connection stays open (HTTP/1.1)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    sock.close()  # SO_LINGER 0: an RST, as a browser closing the tab may send
+    time.sleep(0.3)
+    _, err = capfd.readouterr()
+    assert "Traceback" not in err and "ConnectionResetError" not in err, err
+    assert request(server, "GET", "/api/info")[0] == 200  # still serving

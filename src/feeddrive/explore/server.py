@@ -191,6 +191,14 @@ class ExplorerServer(ThreadingHTTPServer):
     def port(self) -> int:
         return int(self.server_address[1])
 
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """A browser that closes a kept-alive connection resets it while the server waits for
+        the next request: nothing went wrong, so no traceback in the user's terminal.  Any
+        other error is printed as ``socketserver`` prints it."""
+        if isinstance(sys.exc_info()[1], ConnectionError):
+            return
+        super().handle_error(request, client_address)
+
     @property
     def url(self) -> str:
         return f"http://127.0.0.1:{self.port}/"
