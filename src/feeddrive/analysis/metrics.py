@@ -677,8 +677,8 @@ class VerdictRule:
             f"{100 * self.envelope_tolerance:g} % and does not shrink; it is stick-slip if "
             f"the speed falls below {100 * self.stick_level:g} % of the command, oscillation "
             f"if not. Otherwise, at {self.max_duration:g} s: undecided. Frequency: 1 / mean "
-            f"cycle period (command crossing to crossing) of the compared cycles, None until "
-            f"2 periods are seen.")
+            f"cycle period (command crossing to crossing) of the compared cycles; none is "
+            f"given until 2 periods are seen.")
 
     def to_dict(self) -> dict[str, Any]:
         return {**asdict(self), "description": self.describe()}
