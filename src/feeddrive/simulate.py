@@ -116,6 +116,14 @@ class SolverOptions:
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"options.{name}", v, "expected a finite value > 0")
 
+    @property
+    def largest_step(self) -> float:
+        """``max_step``, or its default: 1 ms for ``dopri5`` (and its fixed-step variant),
+        unlimited for the dense-output methods [s]."""
+        if self.max_step is not None:
+            return self.max_step
+        return math.inf if self.method in _DENSE_MODES else 1e-3
+
 
 class SimulationError(RuntimeError):
     """The integrator could not finish; the message says why and where."""
@@ -335,23 +343,18 @@ class _Chunks:
         n = len(model.states)
         self.held = np.zeros(model.n_held)
         if self.dense:
-            mode, adaptive = _DENSE_MODES[options.method]
-            self.h_init = 1e-6 if adaptive else options.fixed_step
-            self.h_max = ((math.inf if options.max_step is None else options.max_step)
-                          if adaptive else options.fixed_step)
-            self.mode, self.adaptive = mode, adaptive
-            self.memory = switching.new_memory(n)
+            self.mode, self.adaptive = _DENSE_MODES[options.method]
+            cap, first = options.largest_step, DENSE_CHUNK
             continuous = grid.n_pos == 0 and grid.n_vel == 0 and grid.n_cur == 0
             self.want_aux = want_aux or not continuous
-            self.size = max(every, int(round(DENSE_CHUNK / grid.base)) // every * every)
-        else:
+        else:  # every breakpoint a step end
             self.adaptive = 1 if options.method == "dopri5" else 0
-            self.h_init = 1e-6 if self.adaptive else options.fixed_step
-            max_step = 1e-3 if options.max_step is None else options.max_step
-            self.h_max = min(max_step, grid.base) if self.adaptive else options.fixed_step
-            self.memory = np.zeros(2 + n)
-            self.memory[:2] = (self.h_init, 1e-4)
-            self.size = max(every, int(round(FIRST_CHUNK / grid.base)) // every * every)
+            cap, first = min(options.largest_step, grid.base), FIRST_CHUNK
+        self.h_init = 1e-6 if self.adaptive else options.fixed_step
+        self.h_max = cap if self.adaptive else options.fixed_step
+        self.memory = (switching.new_memory(n) if self.dense
+                       else dopri5.new_memory(n, self.h_init))
+        self.size = max(every, int(round(first / grid.base)) // every * every)
         self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.totals = np.zeros(9 if self.dense else 5)
         self.start = 0
@@ -403,39 +406,38 @@ class _Chunks:
             while self.start < n_break:
                 if self.dense:
                     stop = (self.start // self.size + 1) * self.size
-                    if stop > n_break:  # the tail, from a copy of the carried state
-                        t, yy, aa, last = self._call(
-                            self.y, self.start, n_break, self.held.copy(), self.memory.copy(),
-                            self.sim.options.max_steps - int(self.totals[1]))
-                        stats = self._add(last)
-                        if int(last[0]) == dopri5.STATUS_OK:
-                            tail.append((t, yy, aa))
-                            if writer is not None:
-                                writer.write(t, yy, aa)
-                            if progress is not None:
-                                progress(t_end, t_end)
-                        break
                 else:
                     stop = min(n_break, self.start + self.size)
+                # a dense run's part after its last multiple of DENSE_CHUNK: integrated from a
+                # copy of the carried state and not kept for a continuation
+                commit = stop <= n_break
+                stop = min(stop, n_break)
+                held, memory = (self.held, self.memory) if commit else (
+                    self.held.copy(), self.memory.copy())
                 began = _time.perf_counter()
-                t, yy, aa, last = self._call(self.y, self.start, stop, self.held, self.memory,
+                t, yy, aa, last = self._call(self.y, self.start, stop, held, memory,
                                              self.sim.options.max_steps - int(self.totals[1]))
                 wall = _time.perf_counter() - began
                 stats = self._add(last)
                 if int(last[0]) != dopri5.STATUS_OK:
                     break
-                self.totals = stats
                 if writer is not None:
                     writer.write(t, yy, aa)
-                self.parts.append((t, yy, aa))
-                kept += t.size
-                while writer is not None and len(self.parts) > 1 \
-                        and kept - self.parts[0][0].size >= keep:
-                    kept -= self.parts.pop(0)[0].size
-                self.y = yy[-1].copy() if yy.shape[0] else self.y
-                self.start = stop
+                if commit:
+                    self.totals = stats
+                    self.parts.append((t, yy, aa))
+                    kept += t.size
+                    while writer is not None and len(self.parts) > 1 \
+                            and kept - self.parts[0][0].size >= keep:
+                        kept -= self.parts.pop(0)[0].size
+                    self.y = yy[-1].copy() if yy.shape[0] else self.y
+                    self.start = stop
+                else:
+                    tail.append((t, yy, aa))
                 if progress is not None:
-                    progress(self.start * grid.base, t_end)
+                    progress(stop * grid.base, t_end)
+                if not commit:
+                    break
                 if not self.dense:
                     scale = CHUNK_WALL_TIME / max(wall, 1e-4)
                     self.size = max(every, min(int(self.size * min(scale, 4.0)) // every

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import typer
@@ -137,9 +136,7 @@ def simulate_command(
     if not duration > 0:
         raise ParameterError("--duration", duration, "expected a time > 0 [s]")
     options = SolverOptions(method=method, max_steps=max_steps)
-    # dopri5's default step cap; the dense-output methods have none
-    max_step = (1e-3 if options.max_step is None else options.max_step) \
-        if method == "dopri5" else math.inf
+    max_step = options.largest_step
     budget = run_budget(duration, max_step=max_step,
                         output_interval=options.output_interval, max_steps=max_steps)
     if budget.steps_exceeded:

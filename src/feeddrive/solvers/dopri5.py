@@ -95,6 +95,14 @@ def auxiliary_template(t_out: np.ndarray, y_out: np.ndarray, P: np.ndarray,
     return out
 
 
+def new_memory(n_states: int, h_init: float) -> np.ndarray:
+    """The carried-over state (step size, last error, first stage) of a run that has not
+    started (:func:`integrate`)."""
+    memory = np.zeros(2 + n_states)
+    memory[:2] = (h_init, 1e-4)
+    return memory
+
+
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
               n_pos: int, n_vel: int, n_cur: int, rtol: float, atol: np.ndarray,
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
@@ -106,9 +114,7 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     and ``memory`` (step size, last error) are updated in place, so that a run continued
     from where a previous call stopped is bit-identical to one call over the whole span."""
     held = np.zeros(model.n_held) if held is None else held
-    if memory is None:
-        memory = np.zeros(2 + len(model.states))
-        memory[:2] = (h_init, 1e-4)
+    memory = new_memory(len(model.states), h_init) if memory is None else memory
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate(y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P,
                                model.T, rtol, atol, rel_mask, h_max, adaptive,
