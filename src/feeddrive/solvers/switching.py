@@ -104,6 +104,7 @@ CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "DP_D1
 N_AUX = 0
 N_HELD = 1
 STATUS_OK, STATUS_MAX_STEPS, STATUS_STEP_UNDERFLOW, STATUS_NON_FINITE = 0, 1, 2, 3
+STATUS_DIVERGED = 4
 _r4_fd_jacobian: Any = None
 _r4_frozen_states: Any = None
 _r4_rodas4_step: Any = None
@@ -131,22 +132,24 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
               max_steps: int, mode: int, stops: np.ndarray, want_aux: bool = True, *,
               start: int = 0, held: np.ndarray | None = None,
-              memory: np.ndarray | None = None,
+              memory: np.ndarray | None = None, bound: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``; a multiple
     of ``out_every``) to ``t_end`` (see :func:`integrate_template`).  ``held`` and ``memory``
     are updated in place, so a run continued from where a call stopped is bit-identical to
-    one call in which that instant is a step end (a profile breakpoint, a sample instant)."""
+    one call in which that instant is a step end (a profile breakpoint, a sample instant).
+    ``bound``: the largest |state| per state before the run stops as diverged (None: none)."""
     if start % out_every:
         raise ValueError(f"start = {start}: expected a multiple of out_every = {out_every}")
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states)) if memory is None else memory
+    bound = np.full(len(model.states), np.inf) if bound is None else bound
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate_dense(
             y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P, model.T, rtol, atol,
             rel_mask, h_init, h_max, adaptive, max_steps, mode,
             np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
-            model.jacobian_pattern, model.jacobian_colours, start, held, memory))
+            model.jacobian_pattern, model.jacobian_colours, start, held, memory, bound))
     return result
 
 
@@ -200,7 +203,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                        atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
                        adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
                        want_aux: bool, S: np.ndarray, colour: np.ndarray, start: int,
-                       held: np.ndarray, memory: np.ndarray,
+                       held: np.ndarray, memory: np.ndarray, bound: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from t = start·base (state ``y0``) to ``t_end`` with dense output every
     ``out_every·base`` [s].
@@ -215,6 +218,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     :func:`feeddrive.solvers.dopri5.integrate_template`).  Without ``want_aux`` the auxiliary
     signals are not evaluated at the outputs and ``aux_out`` has no rows.  ``S``, ``colour``:
     the Jacobian's sparsity pattern and column groups (:func:`rodas4.fd_jacobian_template`).
+    A state with |y_i| > ``bound[i]`` at a step end stops the run with ``STATUS_DIVERGED``; that
+    step end is recorded as the last output sample.
     """
     n = y0.size
     n_break = int(round(t_end / base))
@@ -496,11 +501,25 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 status = STATUS_MAX_STEPS
                 break
             finite = True
+            diverged = False
             for i in range(n):
                 if not math.isfinite(y[i]):
                     finite = False
+                elif abs(y[i]) > bound[i]:
+                    diverged = True
             if not finite:
                 status = STATUS_NON_FINITE
+                break
+            if diverged:
+                status = STATUS_DIVERGED
+                if i_out < n_out:
+                    t_out[i_out] = t
+                    y_out[i_out, :] = y
+                    if want_aux:
+                        rhs(t, y, held, P, T, n_pos, n_vel, n_cur, fp, aux)
+                        n_out_rhs += 1
+                        aux_out[i_out, :] = aux
+                    i_out += 1
                 break
         if status != STATUS_OK:
             break
