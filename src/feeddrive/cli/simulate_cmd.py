@@ -20,8 +20,9 @@ from ._common import (
 
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
 DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.simulate.SolverOptions.max_steps
+DEFAULT_METHOD = "modal"  # as feeddrive.simulate.SolverOptions.method (a test checks it)
 #: the integrators offered (feeddrive.simulate.METHODS without the fixed-step order checks)
-CLI_METHODS = ("dopri5", "auto", "rodas4", "dopri5-dense")
+CLI_METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense")
 
 
 def _say(text: str) -> None:
@@ -58,9 +59,10 @@ def simulate_command(
         None, "--profile-file", help="csv: a CSV with columns time [s] and table_speed "
         "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
     method: str = typer.Option(
-        "dopri5", "--method", help="Integrator: dopri5 (every output instant a step end; the "
-        "creep verdicts' method), auto (DOPRI5 and RODAS4 switched on stiffness: several "
-        "times faster on the DDFS; at the default tolerance it damps an undamped mode, see "
+        DEFAULT_METHOD, "--method", help="Integrator: modal (the default: DOPRI5 and "
+        "RODAS4 switched on stiffness, Rosenbrock steps capped on lightly damped modes), "
+        "dopri5 (every output instant a step end; the v1 engine), auto (switched on "
+        "stiffness alone: at the default tolerance it damps a slowly growing mode, see "
         "docs/model.md), rodas4 or dopri5-dense."),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
                                   help="Solver step limit [-]; a run that needs more is "

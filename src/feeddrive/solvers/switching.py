@@ -68,11 +68,16 @@ from .dopri5 import (
     E6,
     E7,
 )
+from .modes import H_LAMBDA as MODAL_H_LAMBDA
+from .modes import REFRESH as MODAL_REFRESH
+from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
+from .modes import jacobian_moved as modal_jacobian_moved
+from .modes import step_cap as modal_step_cap
 
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
-MODE_DOPRI5, MODE_RODAS4, MODE_AUTO = 0, 1, 2
+MODE_DOPRI5, MODE_RODAS4, MODE_AUTO, MODE_MODAL = 0, 1, 2, 3
 
 # Dormand–Prince continuous extension (dopri5.f, CONTD5; scipy RK45.P last column)
 DP_D1 = -12715105075.0 / 11282082432.0
@@ -88,17 +93,25 @@ STIFF_STEPS = 15  # stiff verdicts (reset after 6 non-stiff steps in a row), dop
 NONSTIFF_HRHO = 3.0
 NONSTIFF_STEPS = 5
 POWER_ITERATIONS = 12
+# MODE_MODAL (see the module docstring): RODAS4 steps capped on lightly damped modes
+MODAL_SWITCH_GAIN = 2.0  # switch to RODAS4 only if the capped step is ≥ this × DOPRI5's
+MODAL_RETRY = 500  # DOPRI5 steps before a refused switch is considered again
+# RODAS4 steps between two eigen-analyses at least (the cap of the last one holds meanwhile)
+MODAL_EVERY = 10
 
 STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "jacobians",
-              "rosenbrock_steps", "switches", "output_rhs_evaluations")
+              "rosenbrock_steps", "switches", "output_rhs_evaluations", "eigen_analyses")
 
 # h, method, frozen states known, stiff and non-stiff counts, DOPRI5 error memory, RODAS4
-# error, step and first/rejected flags; then one live flag per state (integrate_template)
-MEMORY_SCALARS = 10
+# error, step and first/rejected flags, the modal step cap, whether a reference Jacobian is
+# kept and the step count until which a switch is refused; then one live flag per state and the
+# modal reference Jacobian (n × n) (integrate_template)
+MEMORY_SCALARS = 13
 
-CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "DP_D1", "DP_D3",
-             "DP_D4", "DP_D5", "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS", "NONSTIFF_HRHO",
-             "NONSTIFF_STEPS", "POWER_ITERATIONS")
+CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_MODAL",
+             "DP_D1", "DP_D3", "DP_D4", "DP_D5", "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS",
+             "NONSTIFF_HRHO", "NONSTIFF_STEPS", "POWER_ITERATIONS", "MODAL_SWITCH_GAIN",
+             "MODAL_RETRY", "MODAL_EVERY")
 
 # Placeholders: the generated module supplies these (see feeddrive.solvers.dopri5).
 N_AUX = 0
@@ -124,7 +137,7 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
 
 def new_memory(n_states: int) -> np.ndarray:
     """The carried-over state of a run that has not started (:func:`integrate_template`)."""
-    return np.zeros(MEMORY_SCALARS + n_states)
+    return np.zeros(MEMORY_SCALARS + n_states + n_states * n_states)
 
 
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
@@ -271,6 +284,14 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     stiff_count = 0
     nonstiff_count = 0
     rho = 0.0
+    switching = mode == MODE_AUTO or mode == MODE_MODAL
+    modal = mode == MODE_MODAL
+    h_osc = math.inf  # MODE_MODAL: the step cap of the lightly damped modes
+    have_ref = False
+    J_ref = np.zeros((n, n))
+    refuse_until = 0
+    since_eig = 0
+    n_eig = 0
     # step-size controller memory: DOPRI5 PI controller, Gustafsson's for RODAS4
     dp_err_old = 1e-4
     beta = 0.04
@@ -297,8 +318,13 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
         r4_h_old = memory[7]
         r4_first = memory[8] != 0.0
         r4_rejected = memory[9] != 0.0
+        h_osc = memory[10]
+        have_ref = memory[11] != 0.0
+        refuse_until = int(memory[12])
         for i in range(n):
             live[i] = memory[MEMORY_SCALARS + i] != 0.0
+            for j in range(n):
+                J_ref[i, j] = memory[MEMORY_SCALARS + n + i * n + j]
     # the derivative at t: what the previous call's last step (or event) left, recomputed
     rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
     n_rhs += 1
@@ -344,10 +370,22 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     _r4_frozen_states(J, f0, live)
                     frozen_known = True
                 jac_ok = True
-                if mode == MODE_AUTO:
+                if switching:
                     rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                since_eig += 1
+                if modal and (not have_ref or (since_eig >= MODAL_EVERY and
+                                               modal_jacobian_moved(J, J_ref, MODAL_REFRESH))):
+                    since_eig = 0
+                    h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+                    n_eig += 1
+                    have_ref = True
+                    for i in range(n):
+                        for j in range(n):
+                            J_ref[i, j] = J[i, j]
             last = False
             h_try = min(h, h_max)
+            if stiff and modal:
+                h_try = min(h_try, h_osc)
             if t + h_try >= t_ev - 1e-12 * max(1.0, t_ev):
                 h_try = t_ev - t
                 last = True
@@ -439,7 +477,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 i_out += 1
             # ---- stiffness detection and switching
             used_rodas = stiff
-            if mode == MODE_AUTO:
+            if switching:
                 if stiff:
                     if rho * h_done < NONSTIFF_HRHO:
                         nonstiff_count += 1
@@ -457,10 +495,31 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     for i in range(n):
                         num += (f_new[i] - k6[i]) ** 2
                         den += (y_new[i] - yt[i]) ** 2
-                    if den > 0.0 and h_done * math.sqrt(num / den) > STIFF_HLAMBDA:
+                    if steps < refuse_until:
+                        pass  # MODE_MODAL: a switch was refused recently
+                    elif den > 0.0 and h_done * math.sqrt(num / den) > STIFF_HLAMBDA:
                         nonstiff_count = 0
                         stiff_count += 1
-                        if stiff_count >= STIFF_STEPS:
+                        go = stiff_count >= STIFF_STEPS
+                        if go and modal:
+                            # would RODAS4, capped on the lightly damped modes, step further?
+                            calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, n_pos,
+                                                    n_vel, n_cur, atol, J, ft, yp, fp, aux,
+                                                    all_live, S, colour)
+                            n_rhs += calls
+                            n_jac += 1
+                            h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
+                                                   MODAL_H_LAMBDA)
+                            n_eig += 1
+                            have_ref = True
+                            for i in range(n):
+                                for j in range(n):
+                                    J_ref[i, j] = J[i, j]
+                            if h_osc < MODAL_SWITCH_GAIN * h_done:
+                                go = False
+                                stiff_count = 0
+                                refuse_until = steps + MODAL_RETRY
+                        if go:
                             stiff = True
                             switches += 1
                             stiff_count = 0
@@ -552,10 +611,16 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     memory[7] = r4_h_old
     memory[8] = 1.0 if r4_first else 0.0
     memory[9] = 1.0 if r4_rejected else 0.0
+    memory[10] = h_osc
+    memory[11] = 1.0 if have_ref else 0.0
+    memory[12] = refuse_until
     for i in range(n):
         memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
+        for j in range(n):
+            memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
     stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
-                      t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs)])
+                      t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
+                      float(n_eig)])
     return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats, held)
 
 
@@ -569,6 +634,9 @@ def template_sources() -> list[str]:
     function at its first call, so a model run only with ``dopri5`` never compiles these."""
     out = rodas4.template_sources()
     out.append(f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})")
+    out.append("from feeddrive.solvers.modes import step_cap as modal_step_cap, "
+               "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
+               "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH")
     for fn in (dp5_step_template, error_norm_template, integrate_template):
         src = inspect.getsource(fn)
         for old, new in _TEMPLATES.items():
