@@ -135,3 +135,39 @@ def test_cli_default_is_the_options_default() -> None:
     from feeddrive.cli import simulate_cmd
     assert simulate_cmd.DEFAULT_METHOD == SolverOptions().method
     assert SolverOptions().method in simulate_cmd.CLI_METHODS
+
+
+def _dopri5_stability(y: float) -> complex:
+    from feeddrive.solvers import dopri5 as d
+    a = [[], [d.A21], [d.A31, d.A32], [d.A41, d.A42, d.A43], [d.A51, d.A52, d.A53, d.A54],
+         [d.A61, d.A62, d.A63, d.A64, d.A65]]
+    b = [d.B1, 0.0, d.B3, d.B4, d.B5, d.B6]
+    z = 1j * y
+    k: list[complex] = []
+    for row in a:
+        k.append(z * (1 + sum(c * kj for c, kj in zip(row, k, strict=False))))
+    return complex(1 + sum(bi * ki for bi, ki in zip(b, k, strict=True)))
+
+
+def test_dopri5_damping_on_the_imaginary_axis_is_as_documented() -> None:
+    ys = np.linspace(0.01, 1.0, 400)
+    zeta = np.array([-math.log(abs(_dopri5_stability(y))) / y for y in ys])
+    assert zeta.max() < 3.1e-5 and abs(ys[np.argmax(zeta)] - 0.84) < 0.05
+    assert all(abs(_dopri5_stability(y)) > 1.0 for y in (1.2, 2.0, 3.0))
+
+
+def test_docs_state_the_constants_of_the_code() -> None:
+    from pathlib import Path
+
+    from feeddrive.simulate import DIVERGENCE_SPEED_FLOOR, DIVERGENCE_SPEED_RATIO
+    from feeddrive.solvers import switching
+    text = " ".join((Path(__file__).parents[2] / "docs" / "model.md").read_text(
+        encoding="utf-8").split())
+    assert f"damping ratio below {modes.ZETA_LIGHT:g}" in text
+    assert f"h|λ| ≤ {modes.H_LAMBDA:g}" in text
+    assert f"moved by {100 * modes.REFRESH:g} % of its largest entry" in text
+    assert f"at most every {switching.MODAL_EVERY} Rosenbrock steps" in text
+    assert f"reconsidered {switching.MODAL_RETRY} steps later" in text
+    assert f"less than twice DOPRI5's step" in text and switching.MODAL_SWITCH_GAIN == 2.0
+    assert f"exceeds {DIVERGENCE_SPEED_RATIO:g} × the reference speed" in text
+    assert f"or {1e3 * DIVERGENCE_SPEED_FLOOR:g} mm/s" in text
