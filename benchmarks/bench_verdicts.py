@@ -59,8 +59,11 @@ V_T = STATE_NAMES.index("table_speed")
 
 
 def _variant(name: str) -> fd.DriveParameters:
+    name, _, share = name.partition("+share")
     base, _, factor = name.partition("*sigma0x")
     p = fd.preset(base)
+    if share:
+        p = p.replace_path("friction.ball_nut_share", float(share))
     if factor:
         p = p.replace_path("friction.screw.bristle_stiffness",
                            float(factor) * p.friction.screw.bristle_stiffness)
@@ -80,6 +83,14 @@ def _corpus() -> list[tuple[str, str, float, float, float]]:
     for v in (0.2, 0.5, 1.0, 3.0):
         out.append(("wang2021-literal", "cdfs", 0.4, v, 0.0))
     out.append(("wang2021-literal", "ddfs", 0.4, 0.5, 16.0))
+    # where `reproduce`'s model-reading study moved with the default method (issue 21):
+    # literal CDFS 0.02/0.03 (dopri5 smooth, modal stick-slip), literal DDFS band edges,
+    # ball-nut share 0.2 DDFS at 0.48 (dopri5 undecided, modal smooth)
+    for v in (0.02, 0.03, 0.04):
+        out.append(("wang2021-literal", "cdfs", 0.4, v, 0.0))
+    for v in (0.15, 1.82, 2.02, 3.02):
+        out.append(("wang2021-literal", "ddfs", 0.4, v, 16.0))
+    out.append(("wang2021+share0.2", "ddfs", 0.4, 0.48, 16.0))
     for f in ("10", "100"):
         out.append((f"wang2021*sigma0x{f}", "ddfs", 0.4, 0.5, 16.0))
         out.append((f"wang2021*sigma0x{f}", "cdfs", 0.4, 1.2, 0.0))
