@@ -158,18 +158,30 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--only", default="", help="comma-separated substrings of case keys")
     parser.add_argument("--reference-only", action="store_true")
+    parser.add_argument("--available", action="store_true",
+                        help="judge only the cases whose reference is already kept")
+    parser.add_argument("--reference-file", default=str(REFERENCE),
+                        help="where the reference verdicts are kept (several files are "
+                        "read: this one and the default)")
     parser.add_argument("--compare", default="auto,dopri5",
                         help="other methods judged too (comma-separated; '' for none)")
     args = parser.parse_args()
     cases = [c for c in CORPUS if not args.only
              or any(s in key(c) for s in args.only.split(","))]
-    refs: dict[str, Any] = json.loads(REFERENCE.read_text()) if REFERENCE.exists() else {}
+    kept = Path(args.reference_file)
+    refs: dict[str, Any] = {}
+    for path in sorted({kept, REFERENCE, *REFERENCE.parent.glob("bench_verdicts_reference*.json")}):
+        if path.exists():
+            refs.update(json.loads(path.read_text()))
+    if args.available:
+        cases = [c for c in cases if key(c) in refs]
+    own: dict[str, Any] = json.loads(kept.read_text()) if kept.exists() else {}
     for c in cases:
         if key(c) not in refs:
-            refs[key(c)] = reference_trial(c)
+            refs[key(c)] = own[key(c)] = reference_trial(c)
             print(f"reference {key(c)}: {refs[key(c)]}", flush=True)
-            REFERENCE.parent.mkdir(parents=True, exist_ok=True)
-            REFERENCE.write_text(json.dumps(refs, indent=1) + "\n")
+            kept.parent.mkdir(parents=True, exist_ok=True)
+            kept.write_text(json.dumps(own, indent=1) + "\n")
     if args.reference_only:
         return
     default = SolverOptions().method
