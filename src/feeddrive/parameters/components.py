@@ -12,6 +12,7 @@ from typing import Any, Self
 
 import numpy as np
 
+from .. import registry
 from .validation import ParameterError, choice, flag, quantities, quantity, validate
 
 _MM_HINT = "looks like millimetres; give metres"
@@ -85,11 +86,10 @@ class LuGreParameters(_Component):
     def _check(self) -> None:
         if not isinstance(self.law, str):
             raise ParameterError(f"{self._label}.law", self.law, "expected a law name")
-        from ..model.friction import law_names  # registry; imports no parameter module
-
-        if self.law not in law_names():
+        laws = registry.names(registry.FRICTION_LAWS)
+        if self.law not in laws:
             raise ParameterError(f"{self._label}.law", self.law,
-                                 f"unknown friction law; expected one of {', '.join(law_names())}")
+                                 f"unknown friction law; expected one of {', '.join(laws)}")
 
     def mismatched(self, coulomb: float, static: float, stribeck_velocity: float,
                    viscous: float) -> LuGreParameters:

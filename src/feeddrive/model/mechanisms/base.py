@@ -11,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from ... import registry
+
 if TYPE_CHECKING:
     from ...parameters import DriveParameters
     from ..codegen import Builder
@@ -116,37 +118,25 @@ class Mechanism:
         raise NotImplementedError
 
 
-_REGISTRY: dict[str, type[Mechanism]] = {}
-
-
 def register_mechanism(cls: type[Mechanism]) -> type[Mechanism]:
+    """Make topology ``cls`` available under each of its ``drives`` names
+    (:mod:`feeddrive.registry`, group ``feeddrive.mechanisms``)."""
     for drive in cls.drives:
-        _REGISTRY[drive] = cls
+        registry.register(registry.MECHANISMS, drive, cls)
     return cls
 
 
-def _discover() -> None:
-    """Import every module of this package once: each registers its topologies."""
-    import importlib
-    import pkgutil
-
-    from .. import mechanisms
-
-    for info in pkgutil.iter_modules(mechanisms.__path__):
-        importlib.import_module(f"{mechanisms.__name__}.{info.name}")
-
-
 def mechanism(drive: str) -> type[Mechanism]:
-    if not _REGISTRY:
-        _discover()
-    if drive not in _REGISTRY:
+    """The registered topology of drive name ``drive``."""
+    table = registry.table(registry.MECHANISMS)
+    if drive not in table:
         from ...parameters import ParameterError
 
-        raise ParameterError("drive", drive, f"expected one of {', '.join(drive_names())}")
-    return _REGISTRY[drive]
+        raise ParameterError("drive", drive, f"expected one of {', '.join(table)}")
+    cls: type[Mechanism] = table[drive]
+    return cls
 
 
 def drive_names() -> tuple[str, ...]:
-    if not _REGISTRY:
-        _discover()
-    return tuple(_REGISTRY)
+    """The names of the registered drive topologies."""
+    return registry.names(registry.MECHANISMS)
