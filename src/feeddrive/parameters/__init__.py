@@ -48,7 +48,18 @@ PRESETS = _Presets()
 
 
 def preset(name: str) -> DriveParameters:
-    """The named parameter set, e.g. ``preset("wang2021")``."""
+    """The named parameter set.
+
+    Parameters
+    ----------
+    name : str
+        A registered preset, e.g. ``"wang2021"`` or ``"wang2021-literal"``.
+
+    Returns
+    -------
+    DriveParameters
+        A new copy of the set.
+    """
     if name not in PRESETS:
         raise ParameterError(
             "preset", name, f"unknown preset; expected one of {', '.join(PRESETS)}"

@@ -190,6 +190,15 @@ def dumps(params: DriveParameters) -> str:
 
 
 def save(params: DriveParameters, path: str | Path) -> None:
+    """Write a parameter set as TOML (SI units), readable by :func:`load`.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The set to write.
+    path : str or pathlib.Path
+        The file to write.
+    """
     Path(path).write_text(dumps(params), encoding="utf-8")
 
 
@@ -263,6 +272,18 @@ def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
 
 
 def load(path: str | Path) -> DriveParameters:
+    """Read a parameter set from a TOML file (``extends = "NAME"`` or ``"FILE.toml"`` allowed).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    DriveParameters
+        The validated set; a refusal names the file, the field, the value and the unit.
+    """
     data = read_toml_file(path)
     try:
         return from_dict(data, base_dir=Path(path).parent)

@@ -50,6 +50,7 @@ class FrictionLaw:
     state_names: tuple[str, ...] = ()
     state_unit: str = "m"
     citation: str = ""
+    published: bool = True  # a published model: its docstring has a References section
     kernel: Any = None
 
     @property
@@ -112,8 +113,18 @@ class FrictionLaw:
 
 
 def register_friction_law(law: FrictionLaw) -> FrictionLaw:
-    """Make ``law`` available by ``law.name`` in parameter files and the API
-    (:mod:`feeddrive.registry`, group ``feeddrive.friction_laws``)."""
+    """Make ``law`` available by ``law.name`` in parameter files and the API.
+
+    Parameters
+    ----------
+    law : FrictionLaw
+        An instance of a law class (``name``, ``kernel``, ``state_names`` set).
+
+    Returns
+    -------
+    FrictionLaw
+        ``law``, registered in :mod:`feeddrive.registry` (group ``feeddrive.friction_laws``).
+    """
     if not law.name or not law.name.replace("-", "_").isidentifier():
         raise ValueError(f"friction law name {law.name!r}: expected a short identifier")
     if law.compiled is None:

@@ -70,6 +70,7 @@ class Mechanism:
     and :class:`~feeddrive.model.mechanisms.linear_motor.LinearMotorDrive`."""
 
     drives: tuple[str, ...] = ()
+    published: bool = True  # a published model: its docstring has a References section
     ripple_motors: tuple[str, ...] = ()  # motors whose torque ripple this topology models
     has_lead_screw = False
 
@@ -118,12 +119,23 @@ class Mechanism:
         raise NotImplementedError
 
 
-def register_mechanism(cls: type[Mechanism]) -> type[Mechanism]:
-    """Make topology ``cls`` available under each of its ``drives`` names
-    (:mod:`feeddrive.registry`, group ``feeddrive.mechanisms``)."""
-    for drive in cls.drives:
-        registry.register(registry.MECHANISMS, drive, cls)
-    return cls
+def register_mechanism(topology: type[Mechanism]) -> type[Mechanism]:
+    """Make a topology available under each of its ``drives`` names.
+
+    Parameters
+    ----------
+    topology : type of Mechanism
+        The mechanism class; usable as a class decorator.
+
+    Returns
+    -------
+    type of Mechanism
+        ``topology``, registered in :mod:`feeddrive.registry` (group
+        ``feeddrive.mechanisms``).
+    """
+    for drive in topology.drives:
+        registry.register(registry.MECHANISMS, drive, topology)
+    return topology
 
 
 def mechanism(drive: str) -> type[Mechanism]:
