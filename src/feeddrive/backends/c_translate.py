@@ -3,7 +3,7 @@
 The kernels are written in a small subset of Python (scalars, flat arrays, loops, calls of
 other kernels); this module turns a list of such functions, and every kernel they call,
 transitively, into one C text.  It is the mechanism of the C backend
-(:mod:`feeddrive.model.c_backend`, docs/c-backend.md): one source of every equation, two
+(:mod:`feeddrive.backends.c_backend`, docs/c-backend.md): one source of every equation, two
 compilers.  Anything outside the subset raises :class:`TranslationError` naming the function,
 file, line and construct; nothing is translated by guess.
 
@@ -118,7 +118,7 @@ ARRAY_CONSTRUCTORS = ("empty", "zeros", "ones")
 HELPERS = r"""
 #ifndef FD_TRANSLATE_HELPERS
 #define FD_TRANSLATE_HELPERS
-/* Python semantics of //, %, round, min, max and numpy.sign (feeddrive.model.c_translate) */
+/* Python semantics of //, %, round, min, max and numpy.sign (feeddrive.backends.c_translate) */
 static inline long fd_mod_l(long a, long b) {
     long r = a % b;
     if (r != 0 && ((r < 0) != (b < 0))) r += b;
