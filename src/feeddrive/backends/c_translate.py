@@ -1062,6 +1062,13 @@ class _Function:
                 continue
             zero = "0.0" if t == "double" else "0"
             decls.append(f"    {_C_SCALAR[t]} {self.cvar(name)} = {zero};")
+        # Python lets a parameter or local go unused; C's -Wunused-* would stop the build
+        loaded = {n.id for n in ast.walk(self.node)
+                  if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+        loaded |= {n.value.id for n in ast.walk(self.node) if isinstance(n, ast.Subscript)
+                   and isinstance(n.value, ast.Name)}
+        decls += [f"    (void){self.cvar(name)};" for name in self.locals
+                  if name not in loaded]
         guard = f"FDK_DEF_{self.cname}"
         self.unit.prototypes.append(f"#ifndef {guard}\n{head};\n#endif")
         self.unit.chunks.append(
