@@ -31,6 +31,7 @@ from feeddrive import profiles
 from feeddrive.backends.c_backend import (
     CompilerNotFound,
     c_model_source,
+    c_solver_source,
     compile_shared,
     find_compiler,
     load_shared,
@@ -306,3 +307,117 @@ def test_the_c_file_needs_only_the_three_standard_headers(built: dict[str, Built
     for b in built.values():
         includes = {ln.strip() for ln in b.source.splitlines() if ln.startswith("#include")}
         assert includes == {"#include <math.h>", "#include <string.h>", "#include <stdlib.h>"}
+
+
+# ---- the solver building blocks, translated from the project's own solver code
+@pytest.fixture(scope="module")
+def with_solver(tmp_path_factory: pytest.TempPathFactory) -> tuple[Model, Any]:
+    system, profile = CASES["wang2021-ddfs"]()
+    model = system.model(profile)
+    text = c_model_source(model) + "\n" + c_solver_source()
+    lib = load_shared(compile_shared(text, tmp_path_factory.mktemp("c_solver"), name="solver"))
+    return model, lib.lib
+
+
+def _ptr(a: np.ndarray) -> Any:
+    return a.ctypes.data_as(ctypes.c_void_p)
+
+
+def test_one_dopri5_step_in_c_equals_numba_s(with_solver: tuple[Model, Any]) -> None:
+    """fd_dp5_step and fd_error_norm (switching.dp5_step_template, error_norm_template) give
+    numba's stages, new state and error norm within 1e-12 of each component's scale."""
+    model, lib = with_solver
+    n, rng = len(model.states), np.random.default_rng(5)
+    y = rng.normal(size=n) * _scales(model)
+    held = np.zeros(model.n_held)
+    atol, rel = model.tolerances(1e-9, 1e-8, 1e-6)
+    t, h = 0.31, 2e-5
+    results = {}
+    for backend in ("numba", "c"):
+        k = [np.empty(n) for _ in range(7)]
+        yt, y_new, aux = np.empty(n), np.empty(n), np.empty(len(model.aux))
+        model.module.rhs(t, y, held, model.P, model.T, 0, 0, 0, k[0], aux)
+        if backend == "numba":
+            model.module._dp5_step(t, h, y, k[0], held, model.P, model.T, 0, 0, 0, *k[1:], yt,
+                                   y_new, aux, t + h)
+            err = model.module._error_norm(k[6], y, y_new, 1e-6, atol, rel)
+        else:
+            D, L = ctypes.c_double, ctypes.c_long
+            lib.fd_dp5_step(D(t), D(h), _ptr(y), _ptr(k[0]), _ptr(held), _ptr(model.P),
+                            _ptr(model.T), L(0), L(0), L(0), *map(_ptr, k[1:]), _ptr(yt),
+                            _ptr(y_new), _ptr(aux), D(t + h))
+            lib.fd_error_norm.restype = ctypes.c_double
+            err = lib.fd_error_norm(_ptr(k[6]), _ptr(y), _ptr(y_new), D(1e-6), _ptr(atol),
+                                    _ptr(rel))
+        results[backend] = (np.array(k + [yt, y_new]), err)
+    (kn, en), (kc, ec) = results["numba"], results["c"]
+    assert _ratio(kc.T, kn.T) <= RTOL
+    assert abs(ec - en) <= RTOL * abs(en)
+    assert np.max(np.abs(kn[8] - y)) > 0.0  # the step moved the state
+
+
+def test_one_rodas4_step_in_c_equals_numba_s(with_solver: tuple[Model, Any]) -> None:
+    """fd_fd_jacobian, fd_frozen_states, fd_rodas4_step and fd_rodas4_dense (rodas4.py's
+    templates, LU kernels included) agree with numba's."""
+    model, lib = with_solver
+    n, rng = len(model.states), np.random.default_rng(6)
+    y = rng.normal(size=n) * _scales(model)
+    held = np.zeros(model.n_held)
+    atol, _ = model.tolerances(1e-9, 1e-8, 1e-6)
+    S = np.ascontiguousarray(model.jacobian_pattern, dtype=np.uint8)
+    colour = np.ascontiguousarray(model.jacobian_colours, dtype=np.int64)
+    t, h = 0.31, 1e-4
+    out = {}
+    for backend in ("numba", "c"):
+        f0, ft, yp, fp = (np.empty(n) for _ in range(4))
+        aux = np.empty(len(model.aux))
+        J, M = np.empty((n, n)), np.empty((n, n))
+        live = np.ones(n, dtype=np.bool_)
+        piv = np.zeros(n, dtype=np.int64)
+        u = [np.empty(n) for _ in range(6)]
+        yt, fs, y_new, q1, q2 = (np.empty(n) for _ in range(5))
+        model.module.rhs(t, y, held, model.P, model.T, 0, 0, 0, f0, aux)
+        if backend == "numba":
+            m = model.module
+            calls = m._r4_fd_jacobian(t, y, f0, held, model.P, model.T, 0, 0, 0, atol, J, ft,
+                                      yp, fp, aux, live, S.astype(np.bool_), colour)
+            n_live = m._r4_frozen_states(J, f0, live)
+            status = m._r4_rodas4_step(t, h, y, f0, J, ft, held, model.P, model.T, 0, 0, 0, M,
+                                       piv, *u, yt, fs, y_new, aux, live)
+            m._r4_rodas4_dense(*u[:5], q1, q2)
+        else:
+            D, L = ctypes.c_double, ctypes.c_long
+            for fn in (lib.fd_fd_jacobian, lib.fd_frozen_states, lib.fd_rodas4_step):
+                fn.restype = ctypes.c_long
+            live_c = live.view(np.uint8)
+            calls = lib.fd_fd_jacobian(D(t), _ptr(y), _ptr(f0), _ptr(held), _ptr(model.P),
+                                       _ptr(model.T), L(0), L(0), L(0), _ptr(atol), _ptr(J),
+                                       _ptr(ft), _ptr(yp), _ptr(fp), _ptr(aux), _ptr(live_c),
+                                       _ptr(S), _ptr(colour))
+            n_live = lib.fd_frozen_states(_ptr(J), _ptr(f0), _ptr(live_c))
+            status = lib.fd_rodas4_step(D(t), D(h), _ptr(y), _ptr(f0), _ptr(J), _ptr(ft),
+                                        _ptr(held), _ptr(model.P), _ptr(model.T), L(0), L(0),
+                                        L(0), _ptr(M), _ptr(piv), *map(_ptr, u), _ptr(yt),
+                                        _ptr(fs), _ptr(y_new), _ptr(aux), _ptr(live_c))
+            lib.fd_rodas4_dense(*map(_ptr, u[:5]), _ptr(q1), _ptr(q2))
+        out[backend] = (int(calls), int(n_live), int(status), J.copy(), ft.copy(), live.copy(),
+                        piv.copy(), np.array(u + [y_new, q1, q2]))
+    a, b = out["numba"], out["c"]
+    assert a[:3] == b[:3] and a[2] == 5
+    assert _ratio(b[3], a[3]) <= RTOL and _ratio(b[4][None, :], a[4][None, :]) <= RTOL
+    assert np.array_equal(a[5], b[5]) and np.array_equal(a[6], b[6])
+    assert _ratio(b[7].T, a[7].T) <= RTOL
+
+
+def test_the_comparison_can_fail(built: dict[str, Built]) -> None:
+    """A parameter changed in its 9th digit on the C side only is caught by the bound."""
+    b = built["wang2021-ddfs"]
+    m = b.model
+    y = _scales(m) * np.linspace(-1.0, 1.0, len(m.states))
+    ref, c = np.empty((1, len(m.states))), np.empty((1, len(m.states)))
+    aux = np.empty(len(m.aux))
+    P = m.P.copy()
+    P[m.parameter_names.index("table.mass")] *= 1.0 + 1e-9
+    m.module.rhs(0.5, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, ref[0], aux)
+    b.lib.rhs(0.5, y, np.zeros(m.n_held), P, m.T, 0, 0, 0, c[0], aux)
+    assert _ratio(c, ref) > RTOL

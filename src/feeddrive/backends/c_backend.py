@@ -37,12 +37,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .c_translate import TranslationError, _Unit, c_text, translate_kernels
+from .c_translate import CFunction, TranslationError, _Unit, c_text, translate_kernels
 
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
-__all__ = ["CLibrary", "CompilerNotFound", "TranslationError", "c_model_source",
+__all__ = ["CLibrary", "CompilerNotFound", "SOLVER_SHAPES", "SOLVER_TYPES", "TranslationError",
+           "c_model_source", "c_solver_source", "solver_kernels",
            "compile_shared", "find_compiler", "load_shared", "translate_kernels",
            "STRICT_FLAGS"]
 
@@ -151,6 +152,63 @@ def c_model_source(model: Model) -> str:
         + ",\n".join("    " + _c_string(n) for n in model.parameter_names) + "\n};",
     ]
     return "\n".join(head) + "\n" + body + "\n" + "\n".join(tail) + "\n"
+
+
+#: array sizes of the solver building blocks' parameters, as C expressions of the model file
+SOLVER_SHAPES: dict[str, tuple[str, ...]] = {
+    **{name: ("FD_N_STATE",) for name in (
+        "y", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "yt", "y_new", "e", "atol", "rel_mask",
+        "f0", "ft", "yp", "fp", "live", "piv", "b", "u1", "u2", "u3", "u4", "u5", "u6", "fs",
+        "q1", "q2")},
+    "J": ("FD_N_STATE", "FD_N_STATE"), "M": ("FD_N_STATE", "FD_N_STATE"),
+    "S": ("FD_N_STATE", "FD_N_STATE + 1"), "colour": ("FD_N_STATE + 1",), "aux": ("FD_N_AUX",),
+}
+#: ``fd_rhs`` as the solver templates call it: writes held (non-const in the API), dy, aux
+RHS = CFunction("fd_rhs", None, (2, 8, 9))
+#: element types of the solver building blocks' non-double arrays (numpy int64 / bool_)
+SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*"}
+
+
+def solver_kernels() -> dict[str, Any]:
+    """The project's solver building blocks by exported C name: one DOPRI5 step, its error
+    norm, and the RODAS4 step with its grouped finite-difference Jacobian, frozen-state test
+    and dense output (:mod:`feeddrive.solvers.switching`, :mod:`feeddrive.solvers.rodas4`)."""
+    from ..solvers import rodas4, switching
+
+    return {"fd_dp5_step": switching.dp5_step_template,
+            "fd_error_norm": switching.error_norm_template,
+            "fd_fd_jacobian": rodas4.fd_jacobian_template,
+            "fd_frozen_states": rodas4.frozen_states_template,
+            "fd_rodas4_step": rodas4.rodas4_step_template,
+            "fd_rodas4_dense": rodas4.rodas4_dense_template}
+
+
+def c_solver_source(names: tuple[str, ...] | None = None) -> str:
+    """C99 text of the solver building blocks (:func:`solver_kernels`), translated from the
+    package's own solver code with ``rhs`` bound to ``fd_rhs``; append it to
+    :func:`c_model_source` (it uses that file's ``FD_N_*`` sizes and ``fd_rhs``).
+
+    Parameters
+    ----------
+    names
+        Exported C names to include (default: all of :func:`solver_kernels`).
+
+    Returns
+    -------
+    str
+        C99 source; the exported functions keep the Python templates' argument order, arrays
+        as pointers (``const`` where the template only reads them; ``piv`` and ``colour`` are
+        ``long *``, ``live`` and ``S`` ``unsigned char *``, ``J``/``M``/``S`` row-major).
+    """
+    kernels = solver_kernels()
+    chosen = tuple(kernels) if names is None else names
+    unknown = [n for n in chosen if n not in kernels]
+    if unknown:
+        raise ValueError(f"names = {unknown}: expected some of {', '.join(kernels)}")
+    return translate_kernels([kernels[n] for n in chosen], {"N_AUX": "FD_N_AUX"},
+                             bindings={"rhs": RHS}, shapes=SOLVER_SHAPES,
+                             param_types=SOLVER_TYPES,
+                             names={kernels[n].__name__: n for n in chosen})
 
 
 class CompilerNotFound(RuntimeError):

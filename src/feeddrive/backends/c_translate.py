@@ -43,7 +43,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["BUILTINS", "MATH", "NUMPY", "HELPERS", "TranslationError", "translate_kernels"]
+__all__ = ["BUILTINS", "MATH", "NUMPY", "HELPERS", "CFunction", "TranslationError",
+           "translate_kernels"]
 
 
 class TranslationError(ValueError):
@@ -248,6 +249,17 @@ class _Unit:
             self.active.pop()
         self.done[key] = sig
         return sig
+
+
+@dataclass(frozen=True)
+class CFunction:
+    """A C function a kernel calls by a bound name (``bindings`` of :func:`translate_kernels`):
+    its C name, result type ("double", "long", "bool" or None for void) and the positions of
+    the array arguments it writes (None: all — then the caller's arrays lose ``const``)."""
+
+    name: str
+    returns: str | None = None
+    writes: tuple[int, ...] | None = None
 
 
 class _Unknown(Exception):
@@ -584,9 +596,11 @@ class _Function:
             raise self.error(node, f"call of local {func.id!r}")
         target = self.resolve(func.id, func)
         if isinstance(target, str):  # a C function bound by name
-            return self.external_call(node, target, None)
+            target = CFunction(target)
         if isinstance(target, tuple) and len(target) == 2 and isinstance(target[0], str):
-            return self.external_call(node, target[0], target[1])
+            target = CFunction(target[0], target[1])
+        if isinstance(target, CFunction):
+            return self.external_call(node, target)
         if target is getattr(builtins, func.id, None) and func.id in BUILTINS:
             return self.builtin_call(node, func.id)
         if _py_function(target) is not None:
@@ -664,17 +678,21 @@ class _Function:
             self.unit.tuples[sig.returns.cname] = sig.returns
         return f"{sig.cname}({', '.join(args)})", sig.returns
 
-    def external_call(self, node: ast.Call, cname: str, rtype: str | None) -> tuple[str, Any]:
+    def external_call(self, node: ast.Call, target: CFunction) -> tuple[str, Any]:
         params: list[tuple[str, str | Arr]] = []
         for i, arg in enumerate(node.args):
             if isinstance(arg, ast.Name) and isinstance(self.locals.get(arg.id), Arr):
                 params.append((f"arg{i}", self.locals[arg.id]))
             else:
                 params.append((f"arg{i}", self.scalar(arg)[1]))
-        args = self.call_args(node, params, None)
+        written = None if target.writes is None else {f"arg{i}" for i in target.writes}
+        args = self.call_args(node, params, written)
         self.calls_total += 1
-        self.calls_with_writes += 1
-        return f"{cname}({', '.join(args)})", rtype
+        if written is None or written:
+            self.calls_with_writes += 1
+        if target.returns not in (None, "double", "long", "bool"):
+            raise TranslationError(f"binding {target.name}: result type {target.returns!r}")
+        return f"{target.name}({', '.join(args)})", target.returns
 
     # ---- type inference of locals
     def infer(self) -> None:
@@ -1113,9 +1131,9 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
         without being listed here.
     bindings
         Global names of called functions replaced by another Python function (translated too)
-        or by the name of a C function (a string, void result; or a pair ``(name, type)``,
-        type "double"/"long"/"bool"), e.g. ``{"rhs": "fd_rhs"}``.  A C function bound by name
-        is assumed to write every array it receives.
+        or by a C function: a :class:`CFunction` (name, result type, positions of the arrays
+        it writes), or just its name (void, assumed to write every array it receives), e.g.
+        ``{"rhs": CFunction("fd_rhs", None, (2, 8, 9))}``.
     shapes
         C expressions of array sizes by parameter name, e.g. ``{"y": ["FD_N_STATE"],
         "J": ["FD_N_STATE", "FD_N_STATE"]}``: needed for ``a.size``, ``M.shape[k]``, ``len``
