@@ -184,15 +184,15 @@ def _literal(value: Any) -> tuple[str, str]:
             raise TypeError(f"integer {v} does not fit a 64-bit long")
         return (f"{v}L" if not -(2 ** 31) < v < 2 ** 31 else str(v)), "long"
     if isinstance(value, (float, np.floating)):
-        v = float(value)
-        if math.isnan(v):
+        x = float(value)
+        if math.isnan(x):
             return "NAN", "double"
-        if math.isinf(v):
-            return ("HUGE_VAL" if v > 0 else "(-HUGE_VAL)"), "double"
-        text = repr(v)
+        if math.isinf(x):
+            return ("HUGE_VAL" if x > 0 else "(-HUGE_VAL)"), "double"
+        text = repr(x)
         if not any(c in text for c in ".en"):
             text += ".0"
-        return (f"({text})" if v < 0 else text), "double"
+        return (f"({text})" if x < 0 else text), "double"
     raise TypeError(f"{type(value).__name__} is not a number")
 
 
@@ -329,7 +329,7 @@ class _Function:
     def _return_type(self) -> str | Tup | None:
         ann = self.node.returns
         if ann is None:
-            return "infer"  # type: ignore[return-value]
+            return "infer"
         text = ast.unparse(ann).replace(" ", "")
         if text == "None":
             return None
@@ -544,11 +544,12 @@ class _Function:
             for mid in operands[1:-1]:
                 if any(isinstance(n, ast.Call) for n in ast.walk(mid)):
                     raise self.error(node, "a chained comparison with a call in the middle")
+        for op in node.ops:
+            if type(op) not in syms:
+                raise self.error(node, f"comparison {type(op).__name__}")
         codes = [self.scalar(o)[0] for o in operands]
         parts = []
         for i, op in enumerate(node.ops):
-            if type(op) not in syms:
-                raise self.error(node, f"comparison {type(op).__name__}")
             parts.append(f"({codes[i]} {syms[type(op)]} {codes[i + 1]})")
         return ("(" + " && ".join(parts) + ")" if len(parts) > 1 else parts[0]), "bool"
 
@@ -704,7 +705,7 @@ class _Function:
             elif isinstance(n, (ast.AugAssign, ast.For)):
                 targets = [n.target]
             for tgt in targets:
-                for t in ast.walk(tgt):
+                for t in (tgt.elts if isinstance(tgt, ast.Tuple) else [tgt]):
                     if isinstance(t, ast.Name):
                         self.assigned.add(t.id)
         self.assigned -= set(self.params)
@@ -976,11 +977,12 @@ class _Function:
         step = 1
         if len(it.args) == 3:
             node = it.args[2]
-            value = None
+            value: Any = None
             if isinstance(node, ast.Constant):
                 value = node.value
             elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub) \
-                    and isinstance(node.operand, ast.Constant):
+                    and isinstance(node.operand, ast.Constant) \
+                    and isinstance(node.operand.value, int):
                 value = -node.operand.value
             if not isinstance(value, int) or value == 0:
                 raise self.error(s, "a range step that is not a non-zero integer constant")
