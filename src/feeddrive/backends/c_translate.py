@@ -171,7 +171,8 @@ float for goto if inline int long register restrict return short signed sizeof s
 switch typedef union unsigned void volatile while _Bool _Complex _Imaginary main
 exp log log10 log1p expm1 sqrt sin cos tan asin acos atan atan2 sinh cosh tanh fabs floor ceil
 trunc pow hypot copysign fmod erf erfc rint isfinite isnan isinf abs labs memset memcpy malloc
-free NAN HUGE_VAL INFINITY""".split())
+free NAN HUGE_VAL INFINITY y0 y1 yn j0 j1 jn log2 exp2 cbrt lgamma tgamma fmin fmax fma round
+lround nearbyint remainder signbit fpclassify isgreater isless nan""".split())
 
 
 def _literal(value: Any) -> tuple[str, str]:
