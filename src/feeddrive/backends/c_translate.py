@@ -300,8 +300,13 @@ class _Function:
         self.calls_total = 0
 
     # ---- errors
-    def error(self, node: ast.AST | None, what: str) -> TranslationError:
+    def error(self, node: ast.AST | None, what: str, *, missing: bool = False
+              ) -> TranslationError:
+        """The error naming function, file, line and construct; ``missing``: the construct is
+        in the subset but the translation lacks information (a type, a size)."""
         line = self.first_line + getattr(node, "lineno", 1) - 1
+        if missing:
+            return TranslationError(f"{self.name} ({self.file}:{line}): {what}")
         return TranslationError(f"{self.name} ({self.file}:{line}): {what} is outside the C "
                                 f"backend's subset (docs/c-backend.md)")
 
@@ -313,8 +318,8 @@ class _Function:
         if spec is None and arg.annotation is not None:
             spec = ast.unparse(arg.annotation)
         if spec is None:
-            raise self.error(arg, f"parameter {name!r} without a type (annotate it, or pass "
-                                  f"param_types)")
+            raise self.error(arg, f"parameter {name!r} has no type (annotate it, or pass "
+                                  f"param_types)", missing=True)
         spec = str(spec).replace(" ", "")
         scalars = {"float": "double", "double": "double", "int": "long", "long": "long",
                    "bool": "bool"}
@@ -426,8 +431,9 @@ class _Function:
             return ("1",) * local.ndim  # a local array not declared yet: any size types alike
         shape = self.unit.shapes.get(name)
         if shape is None:
-            raise self.error(node, f"the size of array {name!r} (pass shapes={{{name!r}: "
-                                   f"(...)}} with C expressions)")
+            raise self.error(node, f"the size of array {name!r} is not known (pass "
+                                   f"shapes={{{name!r}: (...)}} with C expressions)",
+                             missing=True)
         return tuple(str(s) for s in shape)
 
     def e_Subscript(self, node: ast.Subscript) -> tuple[str, Any]:
