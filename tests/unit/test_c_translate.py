@@ -341,3 +341,21 @@ def test_every_kernel_of_the_package_translates_and_compiles(tmp_path: Path) -> 
             names={obj.py_func.__name__: "fd_" + qualified.replace(".", "_")}))
     if HAVE_CC:
         compile_shared("\n".join(texts), tmp_path, name="all_kernels")
+
+
+def bad_read_beside_write(y: np.ndarray) -> float:
+    return y[0] + _writes(y)
+
+
+def bad_param_retyped(n: int) -> float:
+    n = n / 2
+    return n
+
+
+@pytest.mark.parametrize("fn, what", [(bad_read_beside_write, "reads array 'y' beside"),
+                                      (bad_param_retyped, "parameter 'n' (long) assigned")],
+                         ids=["read-beside-write", "parameter-retyped"])
+def test_order_and_type_traps_raise(fn: Any, what: str) -> None:
+    """Python evaluates left to right and keeps a parameter's value exact; C would not."""
+    with pytest.raises(TranslationError, match=re.escape(what)):
+        translate_kernels([fn])

@@ -298,6 +298,8 @@ class _Function:
         self.cond_depth = 0
         self.calls_with_writes = 0
         self.calls_total = 0
+        self.stmt_writes: set[str] = set()  # arrays written by calls in this statement
+        self.stmt_reads: set[str] = set()  # arrays whose elements this statement reads
 
     # ---- errors
     def error(self, node: ast.AST | None, what: str, *, missing: bool = False
@@ -483,6 +485,7 @@ class _Function:
             if it == "double":
                 raise self.error(node, f"float index {ast.unparse(p)!r}")
             codes.append(c)
+        self.stmt_reads.add(base)
         if t.ndim == 1:
             return f"{self.cvar(base)}[{codes[0]}]", t.elem
         shape = self.shape_of(base, node)
@@ -668,6 +671,7 @@ class _Function:
                                            f"for {pname!r} ({ptype.elem}, {ptype.ndim}-D)")
                 if written is None or pname in written:
                     self.written.add(arg.id)
+                    self.stmt_writes.add(arg.id)
                 out.append(self.cvar(arg.id))
             else:
                 c, t = self.scalar(arg)
@@ -728,6 +732,9 @@ class _Function:
                         new: Any = t
                     else:
                         new = _unify(old if isinstance(old, str) else None, t)
+                    if name in self.params and new != old:
+                        raise self.error(n, f"parameter {name!r} ({old}) assigned a {t} value "
+                                            f"(declare it so, or use a local)")
                     if new != old:
                         self.locals[name] = new
                         changed = True
@@ -810,18 +817,35 @@ class _Function:
             out += self.stmt(s, level)
         return out
 
-    def stmt(self, s: ast.stmt, level: int) -> list[str]:
-        pad = "    " * level
+    def reset_order(self) -> None:
         self.calls_total = 0
         self.calls_with_writes = 0
+        self.stmt_writes = set()
+        self.stmt_reads = set()
+
+    def check_order(self, node: ast.AST) -> None:
+        """Refuse what C evaluates in an unspecified order but Python left to right: two calls
+        of which one writes an array, or an array element read beside a call that writes
+        that array."""
+        if self.calls_with_writes and self.calls_total > 1:
+            raise self.error(node, "a statement with two calls of which one writes an array "
+                                   "(C leaves their order open: split the statement)")
+        both = self.stmt_writes & self.stmt_reads
+        if both:
+            raise self.error(node, f"a statement that reads array {sorted(both)[0]!r} beside "
+                                   f"a call that writes it (C leaves their order open: split "
+                                   f"the statement)")
+        self.reset_order()
+
+    def stmt(self, s: ast.stmt, level: int) -> list[str]:
+        pad = "    " * level
+        self.reset_order()
         method = getattr(self, "s_" + type(s).__name__, None)
         if method is None:
             raise self.error(s, f"statement {type(s).__name__}")
         lines = method(s, level, pad)
-        if self.calls_with_writes and self.calls_total > 1 and not isinstance(
-                s, (ast.If, ast.While, ast.For)):
-            raise self.error(s, "a statement with two calls of which one writes an array "
-                                "(C leaves their order open: split the statement)")
+        if not isinstance(s, (ast.If, ast.While, ast.For)):  # those check their heads
+            self.check_order(s)
         return lines
 
     def s_Expr(self, s: ast.Expr, level: int, pad: str) -> list[str]:
@@ -840,6 +864,16 @@ class _Function:
 
     def s_Continue(self, s: ast.Continue, level: int, pad: str) -> list[str]:
         return [f"{pad}continue;"]
+
+    def store(self, tgt: ast.expr) -> tuple[str, Any]:
+        """An assignment target: its element is written, not read (for :meth:`check_order`;
+        reads in its index count)."""
+        before = set(self.stmt_reads)
+        code, t = self.target(tgt)
+        if isinstance(tgt, ast.Subscript) and isinstance(tgt.value, ast.Name) \
+                and tgt.value.id not in before:
+            self.stmt_reads.discard(tgt.value.id)
+        return code, t
 
     def target(self, tgt: ast.expr) -> tuple[str, Any]:
         if isinstance(tgt, ast.Name):
@@ -877,7 +911,7 @@ class _Function:
                     temps.append(f"fd_t{self.tmp}")
                     lines.append(f"{pad}    {_C_SCALAR[t]} {temps[-1]} = {c};")
                 for e, tmp in zip(names, temps, strict=True):
-                    lines.append(f"{pad}    {self.target(e)[0]} = {tmp};")
+                    lines.append(f"{pad}    {self.store(e)[0]} = {tmp};")
                 return lines + [f"{pad}}}"]
             code, t = self.expr(s.value)
             if not isinstance(t, Tup) or len(t.items) != len(names):
@@ -886,12 +920,12 @@ class _Function:
             tmp = f"fd_t{self.tmp}"
             lines = [f"{pad}{{", f"{pad}    {t.cname} {tmp} = {code};"]
             for i, e in enumerate(names):
-                lines.append(f"{pad}    {self.target(e)[0]} = {tmp}.v{i};")
+                lines.append(f"{pad}    {self.store(e)[0]} = {tmp}.v{i};")
             return lines + [f"{pad}}}"]
         code, t = self.expr(s.value)
         if not isinstance(t, str):
             raise self.error(s, f"assigning {ast.unparse(s.value)!r} (not a number)")
-        lhs, lt = self.target(tgt)
+        lhs, lt = self.store(tgt)
         if lt == "long" and t == "double":
             raise self.error(s, f"a float stored in integer {ast.unparse(tgt)!r}")
         return [f"{pad}{lhs} = {code};"]
@@ -945,11 +979,14 @@ class _Function:
 
     def s_If(self, s: ast.If, level: int, pad: str) -> list[str]:
         c, _ = self.scalar(s.test, test=True)
+        self.check_order(s)
         lines = [f"{pad}if ({c}) {{"]
         lines += self.block(s.body, level + 1)
         orelse = s.orelse
         while len(orelse) == 1 and isinstance(orelse[0], ast.If):
+            self.reset_order()
             c, _ = self.scalar(orelse[0].test, test=True)
+            self.check_order(orelse[0])
             lines.append(f"{pad}}} else if ({c}) {{")
             lines += self.block(orelse[0].body, level + 1)
             orelse = orelse[0].orelse
@@ -962,6 +999,7 @@ class _Function:
         if s.orelse:
             raise self.error(s, "while ... else")
         c, _ = self.scalar(s.test, test=True)
+        self.check_order(s)
         return [f"{pad}while ({c}) {{", *self.block(s.body, level + 1), f"{pad}}}"]
 
     def s_For(self, s: ast.For, level: int, pad: str) -> list[str]:
@@ -994,6 +1032,7 @@ class _Function:
             if not isinstance(value, int) or value == 0:
                 raise self.error(s, "a range step that is not a non-zero integer constant")
             step = value
+        self.check_order(s)
         self.tmp += 1
         i, e = f"fd_i{self.tmp}", f"fd_e{self.tmp}"
         var = self.cvar(s.target.id)
