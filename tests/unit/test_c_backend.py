@@ -195,10 +195,28 @@ class Built:
         self.lib = load_shared(compile_shared(self.source, folder, name=name.replace("-", "_")))
 
 
+class Models(dict[str, Built]):
+    """Each model built and compiled once per test module, when first asked for."""
+
+    def __init__(self, folder: Path):
+        super().__init__()
+        self.folder = folder
+
+    def __missing__(self, name: str) -> Built:
+        self[name] = Built(name, self.folder)
+        return self[name]
+
+
 @pytest.fixture(scope="module")
-def built(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Built]:
-    folder = tmp_path_factory.mktemp("c_backend")
-    return {name: Built(name, folder) for name in CASES}
+def built(tmp_path_factory: pytest.TempPathFactory) -> Models:
+    return Models(tmp_path_factory.mktemp("c_backend"))
+
+
+#: run in the quick suite (numba compiles each new model's module once, ~3 s cold); the
+#: other cases are marked slow (the CI runs them too)
+QUICK = ("wang2021-ddfs", "linear-motor", "observer-ripple-lead-cdfs", "load-record-ddfs",
+         "sampled-quantised-ddfs", "sampled-quantised-saturating-table-feedback-cdfs",
+         "stepdown-ddfs")
 
 
 def _ratio(c: np.ndarray, ref: np.ndarray) -> float:
@@ -258,8 +276,9 @@ def _evaluate(b: Built, seed: int) -> dict[str, float]:
 WORST: dict[str, dict[str, float]] = {}
 
 
-@pytest.mark.parametrize("name", list(CASES))
-def test_c_and_numba_agree_at_random_states(built: dict[str, Built], name: str) -> None:
+@pytest.mark.parametrize("name", [n if n in QUICK else pytest.param(n, marks=pytest.mark.slow)
+                                  for n in CASES])
+def test_c_and_numba_agree_at_random_states(built: Models, name: str) -> None:
     worst = _evaluate(built[name], seed=sum(map(ord, name)))
     WORST[name] = worst
     print(f"\n{name}: worst |f_C - f_numba| / (|f| + s_i): rhs {worst['rhs']:.2e}, "
@@ -268,15 +287,16 @@ def test_c_and_numba_agree_at_random_states(built: dict[str, Built], name: str) 
         assert value <= RTOL, f"{name}: {what} differs by {value:.3g} (> {RTOL:g})"
 
 
-def test_every_sampled_model_exercises_the_sampled_update(built: dict[str, Built]) -> None:
+def test_every_sampled_model_exercises_the_sampled_update() -> None:
     """The sampled cases have non-zero loop periods (so held is compared), and the continuous
     ones none (the test would pass vacuously otherwise)."""
-    for name, b in built.items():
-        g = b.grid
+    assert set(QUICK) <= set(CASES)
+    for name, case in CASES.items():
+        g = sampling(case()[0].parameters, 1e-3)
         assert (g.n_pos > 0 or g.n_vel > 0 or g.n_cur > 0) == name.startswith("sampled"), name
 
 
-def test_the_exported_data_are_the_model_s(built: dict[str, Built]) -> None:
+def test_the_exported_data_are_the_model_s(built: Models) -> None:
     """fd_parameters / fd_tables hold model.P and model.T bit for bit; FD_N_* are the sizes."""
     b = built["load-record-ddfs"]
     m = b.model
@@ -292,7 +312,7 @@ def test_the_exported_data_are_the_model_s(built: dict[str, Built]) -> None:
         assert f"#define {macro} {value}\n" in b.source
 
 
-def test_fd_aux_gives_the_rhs_auxiliary_outputs(built: dict[str, Built]) -> None:
+def test_fd_aux_gives_the_rhs_auxiliary_outputs(built: Models) -> None:
     b = built["wang2021-ddfs"]
     m = b.model
     y = np.linspace(-1e-3, 1e-3, len(m.states))
@@ -303,8 +323,9 @@ def test_fd_aux_gives_the_rhs_auxiliary_outputs(built: dict[str, Built]) -> None
     assert np.array_equal(a1, a2)
 
 
-def test_the_c_file_needs_only_the_three_standard_headers(built: dict[str, Built]) -> None:
-    for b in built.values():
+def test_the_c_file_needs_only_the_three_standard_headers(built: Models) -> None:
+    for name in QUICK:
+        b = built[name]
         includes = {ln.strip() for ln in b.source.splitlines() if ln.startswith("#include")}
         assert includes == {"#include <math.h>", "#include <string.h>", "#include <stdlib.h>"}
 
@@ -409,7 +430,7 @@ def test_one_rodas4_step_in_c_equals_numba_s(with_solver: tuple[Model, Any]) -> 
     assert _ratio(b[7].T, a[7].T) <= RTOL
 
 
-def test_the_comparison_can_fail(built: dict[str, Built]) -> None:
+def test_the_comparison_can_fail(built: Models) -> None:
     """A parameter changed in its 9th digit on the C side only is caught by the bound."""
     b = built["wang2021-ddfs"]
     m = b.model
