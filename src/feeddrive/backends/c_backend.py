@@ -170,9 +170,15 @@ SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*"
 
 
 def solver_kernels() -> dict[str, Any]:
-    """The project's solver building blocks by exported C name: one DOPRI5 step, its error
-    norm, and the RODAS4 step with its grouped finite-difference Jacobian, frozen-state test
-    and dense output (:mod:`feeddrive.solvers.switching`, :mod:`feeddrive.solvers.rodas4`)."""
+    """The project's solver building blocks by exported C name.
+
+    Returns
+    -------
+    dict
+        C name → Python template: one DOPRI5 step, its error norm, and the RODAS4 step with
+        its grouped finite-difference Jacobian, frozen-state test and dense output
+        (:mod:`feeddrive.solvers.switching`, :mod:`feeddrive.solvers.rodas4`).
+    """
     from ..solvers import rodas4, switching
 
     return {"fd_dp5_step": switching.dp5_step_template,
@@ -216,8 +222,19 @@ class CompilerNotFound(RuntimeError):
 
 
 def find_compiler() -> list[str]:
-    """The C compiler command: ``$CC`` (may hold options), else ``cc``, ``gcc`` or ``clang``
-    on PATH."""
+    """The C compiler command.
+
+    Returns
+    -------
+    list of str
+        ``$CC`` split into words (it may hold options), else the first of ``cc``, ``gcc``,
+        ``clang`` found on PATH.
+
+    Raises
+    ------
+    CompilerNotFound
+        None of them is there.
+    """
     env = os.environ.get("CC", "").strip()
     if env:
         cmd = shlex.split(env)
@@ -283,7 +300,15 @@ _DP = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 
 @dataclass
 class CLibrary:
-    """A compiled model library (:func:`load_shared`) with numba-like calls."""
+    """A compiled model library (:func:`load_shared`) with numba-like calls.
+
+    Parameters
+    ----------
+    lib
+        The ``ctypes.CDLL`` with argument types declared.
+    path
+        The shared library's file.
+    """
 
     lib: Any
     path: Path
@@ -306,8 +331,20 @@ class CLibrary:
 
 
 def load_shared(path: str | os.PathLike[str]) -> CLibrary:
-    """Load a library built by :func:`compile_shared` from :func:`c_model_source`; argument
-    types are declared, so a wrong array type raises instead of corrupting memory."""
+    """Load a library built by :func:`compile_shared` from :func:`c_model_source`.
+
+    Parameters
+    ----------
+    path
+        The shared library.
+
+    Returns
+    -------
+    CLibrary
+        ``fd_rhs``, ``fd_sample_update`` and ``fd_aux`` with their argument types declared
+        (float64 C-contiguous arrays), so a wrong array type raises instead of corrupting
+        memory.
+    """
     lib = ctypes.CDLL(str(path))
     L, D = ctypes.c_long, ctypes.c_double
     lib.fd_rhs.argtypes = [D, _DP, _DP, _DP, _DP, L, L, L, _DP, _DP]

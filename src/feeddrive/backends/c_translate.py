@@ -254,9 +254,18 @@ class _Unit:
 
 @dataclass(frozen=True)
 class CFunction:
-    """A C function a kernel calls by a bound name (``bindings`` of :func:`translate_kernels`):
-    its C name, result type ("double", "long", "bool" or None for void) and the positions of
-    the array arguments it writes (None: all — then the caller's arrays lose ``const``)."""
+    """A C function a kernel calls by a bound name (``bindings`` of :func:`translate_kernels`).
+
+    Parameters
+    ----------
+    name
+        Its C name.
+    returns
+        Result type: "double", "long", "bool", or None for void.
+    writes
+        Positions of the array arguments it writes (None: all — then the caller's arrays lose
+        ``const``).
+    """
 
     name: str
     returns: str | None = None
@@ -1191,6 +1200,8 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
         Types of unannotated or non-double parameters by ``"name"`` or ``"function.name"``:
         "float", "int", "bool", "double*", "long*", "bool*" (1-byte elements, numpy
         ``bool_``/``uint8``).
+    names
+        Exported C names by Python function name (default ``fd_<name>``).
 
     Returns
     -------

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
+from .. import registry
 from .components import (
     BallScrew,
     Compensation,
@@ -26,12 +27,12 @@ from .validation import ParameterError
 
 
 class _Presets(Mapping[str, Callable[[], DriveParameters]]):
-    """The registered presets (``feeddrive.presets``), imported on first use."""
+    """The registered presets (:mod:`feeddrive.registry`, group ``feeddrive.presets``: the
+    package's own in :mod:`feeddrive.presets` and any installed plug-in's), loaded on first
+    use."""
 
     def _table(self) -> dict[str, Callable[[], DriveParameters]]:
-        from ..presets import PRESETS as table
-
-        return table
+        return registry.table(registry.PRESETS)
 
     def __getitem__(self, name: str) -> Callable[[], DriveParameters]:
         return self._table()[name]
@@ -47,7 +48,18 @@ PRESETS = _Presets()
 
 
 def preset(name: str) -> DriveParameters:
-    """The named parameter set, e.g. ``preset("wang2021")``."""
+    """The named parameter set.
+
+    Parameters
+    ----------
+    name : str
+        A registered preset, e.g. ``"wang2021"`` or ``"wang2021-literal"``.
+
+    Returns
+    -------
+    DriveParameters
+        A new copy of the set.
+    """
     if name not in PRESETS:
         raise ParameterError(
             "preset", name, f"unknown preset; expected one of {', '.join(PRESETS)}"

@@ -12,6 +12,7 @@ from typing import Any, Self
 
 import numpy as np
 
+from .. import registry
 from .validation import ParameterError, choice, flag, quantities, quantity, validate
 
 _MM_HINT = "looks like millimetres; give metres"
@@ -85,11 +86,10 @@ class LuGreParameters(_Component):
     def _check(self) -> None:
         if not isinstance(self.law, str):
             raise ParameterError(f"{self._label}.law", self.law, "expected a law name")
-        from ..model.friction import law_names  # registry; imports no parameter module
-
-        if self.law not in law_names():
+        laws = registry.names(registry.FRICTION_LAWS)
+        if self.law not in laws:
             raise ParameterError(f"{self._label}.law", self.law,
-                                 f"unknown friction law; expected one of {', '.join(law_names())}")
+                                 f"unknown friction law; expected one of {', '.join(laws)}")
 
     def mismatched(self, coulomb: float, static: float, stribeck_velocity: float,
                    viscous: float) -> LuGreParameters:
@@ -372,7 +372,40 @@ class LinearMotor(_Component):
 
 @dataclass(frozen=True)
 class DriveParameters(_Component):
-    """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control."""
+    """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control.
+
+    All values SI (the TOML files and ``feeddrive params show`` too); each component validates
+    its own fields with units and ranges (:mod:`feeddrive.parameters.validation`).
+
+    Parameters
+    ----------
+    name : str
+        Name of the set (printed in reports, results and exports).
+    description : str
+        What the set is and where its values come from.
+    screw : BallScrew
+        Ball screw: lead, diameter, length, inertia (Wang2021 Table 2).
+    coupling : Coupling
+        Motor–screw coupling.
+    screw_motor : Motor
+        The screw's servo motor (R-L circuit, torque and back-EMF constants).
+    hollow_motor : Motor
+        The hollow motor driving the nut (DDFS).
+    table : Table
+        Table mass and guide.
+    friction : FrictionSites
+        Friction at the screw shaft, the hollow (nut) shaft and the guide, each with its law.
+    stiffness : StiffnessModel, default StiffnessModel()
+        Axial stiffness chain (Wang2021 Eqs. (2)–(5)) and structural damping.
+    controller : Controller, default the Table 2 gains
+        Cascade loops (position, velocity, current) of the screw motor.
+    disturbances : Disturbances, default Disturbances()
+        Load force, motor torque ripple, lead error.
+    linear_motor : LinearMotor or None, default None
+        The forcer of the ``linear-motor`` drive.
+    hollow_controller : Controller or None, default None
+        The hollow motor's own loops; None: it uses ``controller``.
+    """
 
     name: str
     description: str
@@ -391,7 +424,20 @@ class DriveParameters(_Component):
     _label = "parameters"
 
     def replace_path(self, path: str, value: Any) -> DriveParameters:
-        """Return a copy with the dotted ``path`` (e.g. ``controller.velocity_gain``) set."""
+        """A copy with one value, addressed by its dotted path, replaced.
+
+        Parameters
+        ----------
+        path : str
+            Dotted path, e.g. ``"controller.velocity_gain"``.
+        value : object
+            The new value, in the field's SI unit [unit of ``path``]; validated as on loading.
+
+        Returns
+        -------
+        DriveParameters
+            The changed copy (this set is unchanged).
+        """
         return _replace_path(self, path.split("."), value, path)
 
 

@@ -18,6 +18,7 @@ import types
 from pathlib import Path
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
+from .. import registry
 from .components import DriveParameters
 from .validation import ParameterError
 
@@ -189,6 +190,15 @@ def dumps(params: DriveParameters) -> str:
 
 
 def save(params: DriveParameters, path: str | Path) -> None:
+    """Write a parameter set as TOML (SI units), readable by :func:`load`.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The set to write.
+    path : str or pathlib.Path
+        The file to write.
+    """
     Path(path).write_text(dumps(params), encoding="utf-8")
 
 
@@ -241,16 +251,15 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
         parent_name = data["extends"]
         if not isinstance(parent_name, str):
             raise ParameterError("extends", parent_name, "expected a preset name or a file path")
-        from . import PRESETS, preset
-
-        if parent_name in PRESETS:
-            parent = preset(parent_name)
+        presets = registry.table(registry.PRESETS)
+        if parent_name in presets:
+            parent = presets[parent_name]()
         elif parent_name.endswith(".toml"):
             parent_path = (base_dir or Path.cwd()) / parent_name
             parent = load(parent_path)
         else:
             raise ParameterError("extends", parent_name,
-                                 f"expected one of {', '.join(PRESETS)} or a .toml file")
+                                 f"expected one of {', '.join(presets)} or a .toml file")
         changes = {k: v for k, v in data.items() if k != "extends"}
         changes.setdefault("name", f"{parent.name}+changes")
         data = _merge(to_dict(parent), changes)
@@ -263,6 +272,18 @@ def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
 
 
 def load(path: str | Path) -> DriveParameters:
+    """Read a parameter set from a TOML file (``extends = "NAME"`` or ``"FILE.toml"`` allowed).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    DriveParameters
+        The validated set; a refusal names the file, the field, the value and the unit.
+    """
     data = read_toml_file(path)
     try:
         return from_dict(data, base_dir=Path(path).parent)

@@ -27,6 +27,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ... import registry
+
 if TYPE_CHECKING:
     from ...parameters import LuGreParameters
 
@@ -48,6 +50,7 @@ class FrictionLaw:
     state_names: tuple[str, ...] = ()
     state_unit: str = "m"
     citation: str = ""
+    published: bool = True  # a published model: its docstring has a References section
     kernel: Any = None
 
     @property
@@ -109,32 +112,39 @@ class FrictionLaw:
         return LinearFriction(A=A, B=B, C=C, D=float(D))
 
 
-_REGISTRY: dict[str, FrictionLaw] = {}
-
-
 def register_friction_law(law: FrictionLaw) -> FrictionLaw:
-    """Make ``law`` available by ``law.name`` in parameter files and the API."""
+    """Make ``law`` available by ``law.name`` in parameter files and the API.
+
+    Parameters
+    ----------
+    law : FrictionLaw
+        An instance of a law class (``name``, ``kernel``, ``state_names`` set).
+
+    Returns
+    -------
+    FrictionLaw
+        ``law``, registered in :mod:`feeddrive.registry` (group ``feeddrive.friction_laws``).
+    """
     if not law.name or not law.name.replace("-", "_").isidentifier():
         raise ValueError(f"friction law name {law.name!r}: expected a short identifier")
     if law.compiled is None:
         raise ValueError(f"friction law {law.name!r}: no kernel")
-    _REGISTRY[law.name] = law
+    registry.register(registry.FRICTION_LAWS, law.name, law)
     return law
 
 
 def friction_law(name: str) -> FrictionLaw:
     """The registered law called ``name``."""
-    from . import builtin  # noqa: F401  (registers the package's laws)
-
-    if name not in _REGISTRY:
+    laws = registry.table(registry.FRICTION_LAWS)
+    if name not in laws:
         from ...parameters import ParameterError
 
         raise ParameterError("law", name,
-                             f"unknown friction law; expected one of {', '.join(law_names())}")
-    return _REGISTRY[name]
+                             f"unknown friction law; expected one of {', '.join(laws)}")
+    law: FrictionLaw = laws[name]
+    return law
 
 
 def law_names() -> tuple[str, ...]:
-    from . import builtin  # noqa: F401
-
-    return tuple(_REGISTRY)
+    """The names of the registered friction laws."""
+    return registry.names(registry.FRICTION_LAWS)

@@ -52,6 +52,19 @@ def lugre_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
 
 
 class LuGre(FrictionLaw):
+    """LuGre friction with Stribeck effect, per direction branch.
+
+    dz/dt = v − σ0·|v|·z / g(v),  F = σ0·z + σ1·dz/dt + σ2·v,
+    g(v) = F_c + (F_s − F_c)·exp(−(v/v_s)²); one bristle state z [m].  Parameters of a site
+    (:class:`~feeddrive.parameters.LuGreParameters`): F_c, F_s [N], v_s [m/s], σ2 [N s/m] per
+    branch, σ0 [N/m], σ1 [N s/m].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    .. [2] Wang2021 Eqs. (9)–(11), Table 1.
+    """
     name = "lugre"
     state_names = ("bristle",)
     citation = ("Canudas de Wit, Olsson, Åström, Lischinsky, IEEE TAC 40 (1995) 419-425; "

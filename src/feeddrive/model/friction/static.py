@@ -34,6 +34,17 @@ def no_friction_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
 
 
 class Stribeck(FrictionLaw):
+    """Static Stribeck + Coulomb + viscous friction with a smoothed sign function.
+
+    F = tanh(v/v_ε)·(F_c + (F_s − F_c)·exp(−(v/v_s)²)) + σ2·v, no state; v_ε [m/s] is the
+    site's ``smoothing_velocity``.
+
+    References
+    ----------
+    .. [1] B. Armstrong-Hélouvry, P. Dupont, C. Canudas de Wit, "A survey of models, analysis
+       tools and compensation methods for the control of machines with friction",
+       Automatica 30 (1994) 1083–1138.
+    """
     name = "stribeck"
     citation = "Armstrong-Hélouvry, Dupont, Canudas de Wit, Automatica 30 (1994) 1083-1138"
     kernel = stribeck_kernel
@@ -46,4 +57,5 @@ class NoFriction(FrictionLaw):
     """No friction at this site: a law with no states and zero force."""
 
     name = "none"
+    published = False
     kernel = no_friction_kernel
