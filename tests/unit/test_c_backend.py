@@ -442,3 +442,17 @@ def test_the_comparison_can_fail(built: Models) -> None:
     m.module.rhs(0.5, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, ref[0], aux)
     b.lib.rhs(0.5, y, np.zeros(m.n_held), P, m.T, 0, 0, 0, c[0], aux)
     assert _ratio(c, ref) > RTOL
+
+
+def test_without_data_the_file_leaves_p_and_t_to_the_host(built: Models,
+                                                          tmp_path: Path) -> None:
+    m = built["stepdown-ddfs"].model
+    text = c_model_source(m, data=False)
+    assert "fd_tables" not in text and "fd_parameters[" not in text
+    lib = load_shared(compile_shared(text, tmp_path, name="no_data"))
+    y = _scales(m)
+    a, b = np.empty(len(m.states)), np.empty(len(m.states))
+    aux = np.empty(len(m.aux))
+    lib.rhs(1.2, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, a, aux)
+    m.module.rhs(1.2, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, b, aux)
+    assert np.array_equal(a, b)

@@ -14,7 +14,7 @@ needs only ``<math.h>``, ``<string.h>`` and ``<stdlib.h>`` and exports::
                           const double *T, long n_pos, long n_vel, long n_cur, double base);
     void fd_aux(double t, const double *y, double *held, const double *P, const double *T,
                 long n_pos, long n_vel, long n_cur, double *aux);
-    extern const double fd_parameters[FD_N_PARAM], fd_tables[FD_N_TABLE];
+    extern const double fd_parameters[FD_N_PARAM], fd_tables[FD_N_TABLE];  (data=True)
     extern const char *const fd_state_names[FD_N_STATE], *const fd_aux_names[...],
                           *const fd_parameter_names[FD_N_PARAM];
 
@@ -78,7 +78,7 @@ def _c_doubles(values: np.ndarray) -> str:
     return "\n".join(lines) if lines else "    0.0,"
 
 
-def c_model_source(model: Model) -> str:
+def c_model_source(model: Model, *, data: bool = True) -> str:
     """One self-contained C99 file of ``model``'s right-hand side, sampled-controller update
     and auxiliary outputs (module docstring for the exported names).
 
@@ -87,11 +87,15 @@ def c_model_source(model: Model) -> str:
     model
         An assembled model (``DriveSystem.model(profile)``); its generated numba module is
         translated, with every kernel it calls.
+    data
+        Include ``fd_parameters`` and ``fd_tables`` (``model.P`` and ``model.T``, full
+        ``repr`` precision).  Without them the host passes its own P and T; a long sampled
+        profile's table can be megabytes of C text.
 
     Returns
     -------
     str
-        C99 source; ``fd_parameters`` and ``fd_tables`` hold ``model.P`` and ``model.T``.
+        C99 source.
 
     Raises
     ------
@@ -142,8 +146,9 @@ def c_model_source(model: Model) -> str:
         "    double dy[FD_N_STATE];\n"
         f"    {rhs.cname}(t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux);\n}}",
         "",
-        "const double fd_parameters[FD_N_PARAM] = {\n" + _c_doubles(model.P) + "\n};",
-        "const double fd_tables[FD_N_TABLE] = {\n" + _c_doubles(model.T) + "\n};",
+        *(["const double fd_parameters[FD_N_PARAM] = {\n" + _c_doubles(model.P) + "\n};",
+           "const double fd_tables[FD_N_TABLE] = {\n" + _c_doubles(model.T) + "\n};"]
+          if data else []),
         "const char *const fd_state_names[FD_N_STATE] = {\n"
         + ",\n".join("    " + _c_string(n) for n in model.state_names) + "\n};",
         f"const char *const fd_aux_names[{max(1, n_aux)}] = {{\n"
