@@ -42,7 +42,8 @@ from .c_translate import CFunction, TranslationError, _Unit, c_text, translate_k
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
-__all__ = ["CLibrary", "CompilerNotFound", "SOLVER_SHAPES", "SOLVER_TYPES", "TranslationError",
+__all__ = ["RHS", "SAMPLE_UPDATE", "CFunction", "CLibrary", "CompilerNotFound", "SOLVER_SHAPES",
+           "SOLVER_TYPES", "TranslationError",
            "c_model_source", "c_solver_source", "solver_kernels",
            "compile_shared", "find_compiler", "load_shared", "translate_kernels",
            "STRICT_FLAGS"]
@@ -168,8 +169,11 @@ SOLVER_SHAPES: dict[str, tuple[str, ...]] = {
     "J": ("FD_N_STATE", "FD_N_STATE"), "M": ("FD_N_STATE", "FD_N_STATE"),
     "S": ("FD_N_STATE", "FD_N_STATE + 1"), "colour": ("FD_N_STATE + 1",), "aux": ("FD_N_AUX",),
 }
-#: ``fd_rhs`` as the solver templates call it: writes held (non-const in the API), dy, aux
+#: ``fd_rhs`` as a translated template calls it (``bindings={"rhs": RHS}``): the arrays at
+#: positions 2, 8, 9 (held — non-const in the API —, dy, aux) are written, y, P, T stay const
 RHS = CFunction("fd_rhs", None, (2, 8, 9))
+#: ``fd_sample_update`` likewise: y (non-const in the API) and held
+SAMPLE_UPDATE = CFunction("fd_sample_update", None, (2, 3))
 #: element types of the solver building blocks' non-double arrays (numpy int64 / bool_)
 SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*"}
 
