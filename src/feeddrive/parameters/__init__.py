@@ -18,6 +18,7 @@ from .components import (
     LinearMotor,
     LuGreParameters,
     Motor,
+    SiteParameters,
     StiffnessModel,
     Table,
     TorqueRipple,
@@ -71,6 +72,6 @@ __all__ = [
     "BallScrew", "Compensation", "Controller", "Coupling", "Disturbances", "DriveParameters",
     "FrictionBranch",
     "FrictionSites", "LeadError", "LinearMotor", "LuGreParameters", "Motor", "ParameterError",
-    "PRESETS", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict", "load", "loads",
-    "preset", "save", "to_dict",
+    "PRESETS", "SiteParameters", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict",
+    "load", "loads", "preset", "save", "to_dict",
 ]

@@ -224,6 +224,8 @@ def _build(cls: type, data: Any, path: str) -> Any:
                     if not path or "." not in path else "")
             raise ParameterError(sub, None, "missing field" + hint)
         comp = _component_type(hints[f.name])
+        if comp is not None and hasattr(comp, "class_for"):  # chosen by the table (its law)
+            comp = comp.class_for(data[f.name], sub)
         kwargs[f.name] = _build(comp, data[f.name], sub) if comp else data[f.name]
     try:
         return cls(**kwargs)
@@ -237,11 +239,27 @@ def _build(cls: type, data: Any, path: str) -> Any:
 def _merge(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
     out = dict(base)
     for key, value in changes.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
+        if _new_site_class(out.get(key), value):
+            out[key] = value  # a law with other parameters: its table replaces the parent's
+        elif isinstance(value, dict) and isinstance(out.get(key), dict):
             out[key] = _merge(out[key], value)
         else:
             out[key] = value
     return out
+
+
+def _new_site_class(base: Any, change: Any) -> bool:
+    """True when ``change`` sets a friction law whose parameter class differs from the law's
+    of ``base`` (both site tables)."""
+    if not (isinstance(base, dict) and isinstance(change, dict) and "law" in change
+            and "law" in base):
+        return False
+    laws = registry.table(registry.FRICTION_LAWS)
+    if change["law"] not in laws or base["law"] not in laws:
+        return False
+    classes = {getattr(laws[name], "parameters_class", None) for name in (change["law"],
+                                                                          base["law"])}
+    return len(classes) > 1
 
 
 def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DriveParameters:

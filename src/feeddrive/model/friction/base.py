@@ -28,9 +28,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ... import registry
+from ...parameters import LuGreParameters as _LuGreParameters
 
 if TYPE_CHECKING:
     from ...parameters import LuGreParameters
+
+
+#: Names of a site's packed parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`,
+#: the default :meth:`FrictionLaw.pack`), in ``P`` order: their paths below ``friction.<site>``.
+SITE_SLOTS = tuple(f"{d}.{f}" for d in ("positive", "negative")
+                   for f in ("coulomb_force", "static_force", "stribeck_velocity",
+                             "viscous_coefficient")) + ("bristle_stiffness", "bristle_damping")
 
 
 @dataclass(frozen=True)
@@ -50,6 +58,10 @@ class FrictionLaw:
     state_names: tuple[str, ...] = ()
     state_unit: str = "m"
     citation: str = ""
+    #: names of the packed parameters (:meth:`pack`), paths below ``friction.<site>``
+    slots: tuple[str, ...] = SITE_SLOTS
+    #: the class of a site's parameters under this law (:class:`SiteParameters` subclass)
+    parameters_class: type = _LuGreParameters
     published: bool = True  # a published model: its docstring has a References section
     kernel: Any = None
 
@@ -64,16 +76,28 @@ class FrictionLaw:
         return None
 
     def pack(self, site: LuGreParameters) -> np.ndarray:
+        """The site's parameters packed for the kernel, in :meth:`site_slots` order [SI]."""
         return site.as_array()
 
+    def states(self, site: Any) -> tuple[str, ...]:
+        """The law's internal states at ``site`` (a law whose state count depends on its
+        parameters, e.g. GMS's N elements, overrides this); ``state_names`` by default."""
+        return self.state_names
+
+    def site_slots(self, site: Any) -> tuple[str, ...]:
+        """Names of :meth:`pack`'s values at ``site`` (paths below ``friction.<site>``);
+        ``slots`` by default."""
+        return self.slots
+
     def steady_state(self, v: float, site: LuGreParameters) -> np.ndarray:
-        return np.zeros(len(self.state_names))
+        """The internal states in steady sliding at speed ``v`` [m/s] (zeros by default)."""
+        return np.zeros(len(self.states(site)))
 
     def evaluate(self, v: float, states: np.ndarray, site: LuGreParameters,
                  packed: np.ndarray | None = None) -> tuple[float, np.ndarray]:
         """(force [N], state rates) at speed ``v`` [m/s] and internal ``states`` (Python call
         of the compiled kernel)."""
-        n = len(self.state_names)
+        n = len(self.states(site))
         y = np.zeros(max(n, 1))
         y[:n] = states
         dy = np.zeros(max(n, 1))
@@ -91,7 +115,7 @@ class FrictionLaw:
 
     def linearise(self, v: float, site: LuGreParameters) -> LinearFriction:
         """Central-difference linearisation of ``kernel`` at steady sliding speed ``v``."""
-        n = len(self.state_names)
+        n = len(self.states(site))
         P = self.pack(site)
         x0 = self.steady_state(v, site)
         dv = 1e-6 * max(abs(v), 1e-9)

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..._jit import kernel
 from .base import FrictionLaw
-from .lugre import branch
+from .lugre import COULOMB, SIGMA0, VISCOUS, branch
 
 
 @kernel
@@ -26,8 +26,8 @@ def dahl_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
                 dy: np.ndarray) -> float:
     b = branch(v, o)
     z = y[k]
-    dy[k] = v - P[o + 8] * abs(v) * z / P[b]
-    return P[o + 8] * z + P[b + 3] * v
+    dy[k] = v - P[o + SIGMA0] * abs(v) * z / P[b + COULOMB]
+    return P[o + SIGMA0] * z + P[b + VISCOUS] * v
 
 
 class Dahl(FrictionLaw):

@@ -17,14 +17,16 @@ import numpy as np
 
 from ..._jit import kernel
 from .base import FrictionLaw
-from .lugre import branch, stribeck_magnitude
+from .lugre import SLOTS, VISCOUS, branch, stribeck_magnitude
+
+SMOOTHING = len(SLOTS)  # the sign-function smoothing speed v_ε, after the LuGre slots
 
 
 @kernel
 def stribeck_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
                     dy: np.ndarray) -> float:
-    return (math.tanh(v / P[o + 10]) * stribeck_magnitude(v, P, o)
-            + P[branch(v, o) + 3] * v)
+    return (math.tanh(v / P[o + SMOOTHING]) * stribeck_magnitude(v, P, o)
+            + P[branch(v, o) + VISCOUS] * v)
 
 
 @kernel
@@ -48,6 +50,8 @@ class Stribeck(FrictionLaw):
     name = "stribeck"
     citation = "Armstrong-Hélouvry, Dupont, Canudas de Wit, Automatica 30 (1994) 1083-1138"
     kernel = stribeck_kernel
+
+    slots = (*SLOTS, "smoothing_velocity")
 
     def pack(self, site):
         return np.append(site.as_array(), site.smoothing_velocity)
