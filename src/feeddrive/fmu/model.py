@@ -55,6 +55,7 @@ class FmuModel:
     load_slot: int  # P index of disturbances.load_force
     nut_inputs: bool  # the nut has a live axis (DDFS, or the CDFS nut on its servo)
     nut_position_input: bool  # ... with a position loop (controller nut_loop = "position")
+    periods: dict[str, float]  # the loops' sample periods [s] (0: continuous), by loop name
 
 
 def build(parameters: DriveParameters, drive: str, table_position: float,
@@ -73,7 +74,10 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
     return FmuModel(model=model, drive=drive, profile_offset=o,
                     table_offset=int(model.P[o + 5]),
                     load_slot=names.index("disturbances.load_force"),
-                    nut_inputs=nut_inputs, nut_position_input=nut_position)
+                    nut_inputs=nut_inputs, nut_position_input=nut_position,
+                    periods={"position_period": parameters.controller.position_period,
+                             "velocity_period": parameters.controller.velocity_period,
+                             "current_period": parameters.controller.current_period})
 
 
 def numba_module(model: Model):  # type: ignore[no-untyped-def]
