@@ -37,8 +37,8 @@ class CompilerNotFound(RuntimeError):
 def find_compiler() -> list[str]:
     """The C compiler command (``$CC``, else cc, gcc or clang on PATH)."""
     try:
-        from ..model.c_backend import CompilerNotFound as _NotFound
-        from ..model.c_backend import find_compiler as _find
+        from ..backends.c_backend import CompilerNotFound as _NotFound
+        from ..backends.c_backend import find_compiler as _find
     except ImportError:  # pragma: no cover - the C backend is part of the package
         raise CompilerNotFound("the C backend (feeddrive.model.c_backend) is missing") from None
     try:
@@ -66,7 +66,7 @@ def library_suffix() -> str:
 def solver_c() -> str:
     """C text of the FMU's integrator (``fd_advance``), translated from the same Python the
     numba build compiles."""
-    from ..model.c_backend import translate_kernels
+    from ..backends.c_backend import translate_kernels
 
     shapes = {name: ["FD_N_STATE"] for name in (
         "y", "atol", "rel_mask", "f0", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "f_new", "yt",
@@ -83,7 +83,7 @@ def solver_c() -> str:
 
 def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: str) -> str:
     """The whole ``fmu.c``."""
-    from ..model.c_backend import c_model_source
+    from ..backends.c_backend import c_model_source
 
     wrapper = resources.files(__package__).joinpath("wrapper.c").read_text(encoding="utf-8")
     memory = "\n".join(f"#define FD_{name} {value}" for name, value in solver.CONSTANTS.items()

@@ -25,7 +25,8 @@ import numpy as np
 
 from ..solvers.dopri5 import E1, E3, E4, E5, E6, E7
 
-# memory[...]: step size, PI controller's last error, index of the last sample instant applied,
+# memory[...] (written with these literal indices in advance_template: the C translator takes a
+# name inside an assignment target for a local): step size, PI controller's last error, index of the last sample instant applied,
 # 1 if that instant is the current time (its update may be redone with new inputs), and the
 # counters: accepted steps, rejected steps, right-hand-side evaluations
 MEM_H, MEM_ERR, MEM_KB, MEM_AT_SAMPLE, MEM_STEPS, MEM_REJECTED, MEM_RHS = range(7)
@@ -101,7 +102,7 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
     status = STATUS_OK
     rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
     n_rhs += 1
-    memory[MEM_AT_SAMPLE] = 0.0
+    memory[3] = 0.0  # MEM_AT_SAMPLE
     while t < t_end and status == STATUS_OK:
         # ---- the next event: a sample instant or the communication point
         t_ev = t_end
@@ -172,16 +173,16 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
             if t_ev == t_end:
                 for i in range(held.size):
                     held_prev[i] = held[i]
-                memory[MEM_AT_SAMPLE] = 1.0
+                memory[3] = 1.0  # MEM_AT_SAMPLE
             sample_update(kb, t, y, held, P, T, n_pos, n_vel, n_cur, base)
             rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
             n_rhs += 1
-    memory[MEM_H] = h
-    memory[MEM_ERR] = err_old
-    memory[MEM_KB] = kb
-    memory[MEM_STEPS] += steps
-    memory[MEM_REJECTED] += rejected
-    memory[MEM_RHS] += n_rhs
+    memory[0] = h  # MEM_H
+    memory[1] = err_old  # MEM_ERR
+    memory[2] = kb  # MEM_KB
+    memory[4] += steps  # MEM_STEPS
+    memory[5] += rejected  # MEM_REJECTED
+    memory[6] += n_rhs  # MEM_RHS
     return status
 
 
