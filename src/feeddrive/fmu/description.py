@@ -501,6 +501,11 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         _c_array("double", "ATOL_SPEED", spd),
         _c_array("double", "ATOL_CURRENT", cur),
         _c_array("double", "REL_MASK", rel),
+        # nominal magnitudes of the continuous states (model exchange): the absolute
+        # tolerances of feeddrive's defaults over its relative tolerance, so an importer
+        # that takes atol = rtol·nominal weighs errors as feeddrive.simulate does
+        _c_array("double", "NOMINAL", [*(m.tolerances(1e-10, 1e-8, 1e-6)[0] / 1e-6),
+                                       1e-4, 1e-4]),
         "static const char *const SETTING_NAMES[] = {"
         + ", ".join(quote_c(s[0]) for s in SETTINGS) + "};",
         'static const char *const PERIOD_NAMES[] = {"controller.position_period", '

@@ -519,7 +519,8 @@ fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
     size_t i;
     (void)c;
-    for (i = 0; i < nx; i++) x_nominal[i] = 1.0;
+    if (nx != N_CSTATES) return fmi2Error;
+    for (i = 0; i < nx; i++) x_nominal[i] = NOMINAL[i];
     return fmi2OK;
 }
 
@@ -930,7 +931,8 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 nominal
                                              size_t nx) {
     size_t i;
     (void)c;
-    for (i = 0; i < nx; i++) nominals[i] = 1.0;
+    if (nx != N_CSTATES) return fmi3Error;
+    for (i = 0; i < nx; i++) nominals[i] = NOMINAL[i];
     return fmi3OK;
 }
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t *n) {
