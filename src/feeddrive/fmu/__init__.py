@@ -39,31 +39,29 @@ class ExportedFmu:
 
 
 def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], *,
-                  force: bool = False) -> Path:
-    """Refuse a request that cannot succeed before any work: unknown drive, FMI version or
-    kind, an output that exists (without ``force``) or cannot be written, no C compiler."""
+                  force: bool = False, inputs: tuple[str | None, ...] = (),
+                  option: str = "--out") -> Path:
+    """Refuse a request that cannot succeed, before any work: unknown drive, FMI version or
+    kind, an output that is not a writable new ``.fmu`` file (an existing one only with
+    ``force``; never one of ``inputs``), no C compiler.  One-line errors name what to change."""
     from ..model.mechanisms import drive_names
-    from .build import find_compiler
+    from ..outputs import check_output_file
+    from .build import CompilerNotFound, find_compiler
 
     if drive not in drive_names():
-        raise ParameterError("drive", drive, f"expected one of {', '.join(drive_names())}")
+        raise ParameterError("--drive", drive, f"expected one of {', '.join(drive_names())}")
     if fmi not in FMI_VERSIONS:
-        raise ParameterError("fmi", fmi, "expected 2 or 3")
+        raise ParameterError("--fmi", fmi, "expected 2 or 3 (FMI 2.0 or 3.0)")
     if kind not in KINDS:
-        raise ParameterError("kind", kind, "expected cs (co-simulation) or me (model exchange)")
-    path = Path(out)
-    if path.suffix.lower() != ".fmu":
-        raise ParameterError("out", str(path), "expected a file name ending in .fmu")
-    if path.is_dir():
-        raise ParameterError("out", str(path), "is a folder; expected a .fmu file name")
-    if path.exists() and not force:
-        raise ParameterError("out", str(path), "exists; use --force to replace it")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise ParameterError("out", str(path), f"folder {parent} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ParameterError("out", str(path), f"folder {parent} is not writable")
-    find_compiler()
+        raise ParameterError("--kind", kind,
+                             "expected cs (co-simulation) or me (model exchange)")
+    if Path(out).suffix.lower() != ".fmu":
+        raise ParameterError(option, os.fspath(out), "expected a file name ending in .fmu")
+    path = check_output_file(out, option=option, inputs=inputs, force=force)
+    try:
+        find_compiler()
+    except CompilerNotFound as err:
+        raise ValueError(str(err)) from None
     return path
 
 
