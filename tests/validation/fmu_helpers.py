@@ -38,10 +38,10 @@ class Reference:
 
     @classmethod
     def ramp(cls, table_mm_s: float, nut_mm_s: float, duration: float,
-             step: float = STEP) -> Reference:
+             step: float = STEP, ramp: float = RAMP) -> Reference:
         n = int(round(duration / step))
         t = np.arange(n + 1) * step
-        f = np.minimum(t / RAMP, 1.0)
+        f = np.minimum(t / ramp, 1.0) if ramp > 0 else np.ones_like(t)
         return cls(t, table_mm_s * 1e-3 * f, nut_mm_s * 1e-3 * f)
 
     def positions(self) -> tuple[np.ndarray, np.ndarray]:
@@ -52,9 +52,11 @@ class Reference:
         xn = np.concatenate([[0.0], np.cumsum(self.nut_speed[:-1] * dt)])
         return xt, xn
 
-    def profile(self, drive: str) -> SampledSpeed:
+    def profile(self, drive: str, hold: bool = True) -> SampledSpeed:
+        """Held (as a co-simulation FMU holds its inputs over a step) or linearly
+        interpolated (as fmpy interpolates a model exchange FMU's inputs)."""
         return SampledSpeed(self.time, self.table_speed,
-                            self.nut_speed if drive == "ddfs" else None, hold=True)
+                            self.nut_speed if drive == "ddfs" else None, hold=hold)
 
 
 def input_table(ref: Reference, names: tuple[str, ...], *, with_positions: bool = False
@@ -88,9 +90,10 @@ def run_fmu(path: Path, ref: Reference, *, start_values: dict | None = None,
 
 
 def run_feeddrive(drive: str, ref: Reference, params_name: str = "wang2021",
-                  params: object = None, **options: object):  # type: ignore[no-untyped-def]
+                  params: object = None, hold: bool = True,
+                  **options: object):  # type: ignore[no-untyped-def]
     p = params if params is not None else preset(params_name)
-    return simulate(DriveSystem(p, drive, 0.4), ref.profile(drive), float(ref.time[-1]),
+    return simulate(DriveSystem(p, drive, 0.4), ref.profile(drive, hold), float(ref.time[-1]),
                     options=SolverOptions(**options))  # type: ignore[arg-type]
 
 
