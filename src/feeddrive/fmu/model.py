@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 
@@ -66,7 +67,9 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
 
     DriveSystem(parameters, drive, table_position, nut_hold)  # the same checks as simulate
     profile = InputReference(table_speed, nut_speed)
-    model = assemble(parameters, drive, table_position, nut_hold, profile, _NO_LOAD)
+    # assemble reads only a profile's encode(): InputReference is one (not a simulate profile)
+    model = assemble(parameters, drive, table_position, nut_hold,
+                     profile, _NO_LOAD)  # type: ignore[arg-type]
     names = model.parameter_names
     o = names.index("profile[0]")
     nut_inputs = "controller.nut.kpp" in names and model.parameter("nut.active") > 0.5
@@ -80,7 +83,7 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
                              "current_period": parameters.controller.current_period})
 
 
-def numba_module(model: Model):  # type: ignore[no-untyped-def]
+def numba_module(model: Model) -> ModuleType:
     """The model's generated module with :func:`feeddrive.fmu.solver.advance_template` compiled
     beside its kernels (``module.advance``): the numba build of the FMU's integrator."""
     return compile_module(model.source + "\n\n" + solver.template_source() + "\n", [])

@@ -26,9 +26,10 @@ import numpy as np
 from ..solvers.dopri5 import E1, E3, E4, E5, E6, E7
 
 # memory[...] (written with these literal indices in advance_template: the C translator takes a
-# name inside an assignment target for a local): step size, PI controller's last error, index of the last sample instant applied,
-# 1 if that instant is the current time (its update may be redone with new inputs), and the
-# counters: accepted steps, rejected steps, right-hand-side evaluations
+# name inside an assignment target for a local): step size, PI controller's last error, index
+# of the last sample instant applied, 1 if that instant is the current time (its update may
+# be redone with new inputs), and the counters: accepted steps, rejected steps, right-hand-side
+# evaluations
 MEM_H, MEM_ERR, MEM_KB, MEM_AT_SAMPLE, MEM_STEPS, MEM_REJECTED, MEM_RHS = range(7)
 MEMORY_SIZE = 7
 STATUS_OK, STATUS_MAX_STEPS, STATUS_STEP_UNDERFLOW, STATUS_NON_FINITE = 0, 1, 2, 3
