@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import ctypes
 import math
-import re
 import zipfile
 from pathlib import Path
 
@@ -315,12 +314,3 @@ def test_sample_instants_are_kept_across_step_sizes(folder: Path) -> None:
     assert np.all(np.abs(runs[0] - runs[1]) <= 10 * (sim.atol + 1e-6 * np.abs(runs[0])))
 
 
-def test_docs_name_every_input(folder: Path) -> None:
-    """docs/fmu.md names the inputs and outputs the FMU declares."""
-    text = (Path(__file__).parents[2] / "docs" / "fmu.md").read_text(encoding="utf-8")
-    for drive, params in (("ddfs", "wang2021"), ("linear-motor", "linear-motor-example")):
-        fm = build(preset(params), drive, 0.4)
-        for v in variables(fm, "cs"):
-            if v.causality in ("input", "output"):
-                assert re.search(rf"`{re.escape(v.name)}`", text), v.name
-    assert STEP == 1e-3
