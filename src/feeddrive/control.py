@@ -85,13 +85,31 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
 
 @dataclass(frozen=True)
 class ConstantSpeed:
-    """Constant table speed [m/s] (and nut speed for the DDFS) after a linear start ramp."""
+    """Constant table speed (and nut speed for the DDFS) after a linear start ramp.
+
+    Parameters
+    ----------
+    table_speed : float
+        Commanded table speed [m/s] (Wang2021 Sect. 5.2: 1.55e-3 for Fig. 6).
+    nut_speed : float, default 0
+        Commanded speed of the nut driven by the hollow motor [m/s] (DDFS only; v_n of
+        Wang2021 Fig. 7); the screw turns at the sum of both.
+    ramp_time : float, default 0.1
+        Duration of the linear ramp from rest to the commanded speeds [s].
+    """
 
     table_speed: float
     nut_speed: float = 0.0
     ramp_time: float = 0.1  # [s]
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
+        """The profile as (parameter slots, data table) for the reference kernel.
+
+        Returns
+        -------
+        tuple of (dict, numpy.ndarray)
+            Slot index → value [SI] of the profile's parameter block, and its (empty) table.
+        """
         _finite("table_speed", self.table_speed, "m/s")
         _finite("nut_speed", self.nut_speed, "m/s")
         if not (self.ramp_time >= 0.0 and math.isfinite(self.ramp_time)):
@@ -102,10 +120,19 @@ class ConstantSpeed:
 
 @dataclass(frozen=True)
 class SineSpeed:
-    """Sinusoidal speeds v(t) = A·sin(2πft): table amplitude [m/s], nut amplitude [m/s].
+    """Sinusoidal speeds v(t) = A·sin(2πft) of the table and the nut.
 
     The screw's amplitude is their sum (Wang2021 Figs. 9–10: v_sp = v_tp + v_np).  The paper
     does not state the frequency; 0.2 Hz is our default (see docs/model.md).
+
+    Parameters
+    ----------
+    table_amplitude : float
+        Amplitude of the table speed [m/s].
+    nut_amplitude : float, default 0
+        Amplitude of the nut speed driven by the hollow motor [m/s] (DDFS only).
+    frequency : float, default 0.2
+        Frequency f of both sines [Hz].
     """
 
     table_amplitude: float
@@ -113,6 +140,13 @@ class SineSpeed:
     frequency: float = 0.2  # [Hz]
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
+        """The profile as (parameter slots, data table) for the reference kernel.
+
+        Returns
+        -------
+        tuple of (dict, numpy.ndarray)
+            Slot index → value [SI] of the profile's parameter block, and its (empty) table.
+        """
         _finite("table_amplitude", self.table_amplitude, "m/s")
         _finite("nut_amplitude", self.nut_amplitude, "m/s")
         if not (self.frequency > 0.0 and math.isfinite(self.frequency)):
@@ -123,11 +157,22 @@ class SineSpeed:
 
 @dataclass(frozen=True)
 class SampledSpeed:
-    """Table and nut speeds [m/s] sampled on a uniform time grid starting at 0 [s].
+    """Table and nut speeds sampled on a uniform time grid starting at 0.
 
     Speeds are interpolated linearly or, with ``hold``, each held until the next sample
     (zero-order hold, as a co-simulation FMU holds its inputs over a communication step);
     positions are their exact integrals.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Uniform, increasing sample instants from 0 [s].
+    table_speed : numpy.ndarray
+        Commanded table speed at each instant [m/s].
+    nut_speed : numpy.ndarray or None, default None
+        Commanded nut speed at each instant [m/s] (DDFS; None: zero).
+    hold : bool, default False
+        Hold each sample until the next (zero-order hold) instead of interpolating.
     """
 
     time: np.ndarray
@@ -136,6 +181,14 @@ class SampledSpeed:
     hold: bool = False
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
+        """The profile as (parameter slots, data table) for the reference kernel.
+
+        Returns
+        -------
+        tuple of (dict, numpy.ndarray)
+            Slot index → value [SI] of the profile's parameter block, and the table of
+            sample rows (time [s], table speed [m/s], nut speed [m/s], positions [m]).
+        """
         t = np.asarray(self.time, dtype=float)
         vt = np.asarray(self.table_speed, dtype=float)
         vn = np.zeros_like(vt) if self.nut_speed is None else np.asarray(self.nut_speed, float)
@@ -159,7 +212,24 @@ class SampledSpeed:
     def from_function(cls, table_speed: Callable[[np.ndarray], np.ndarray], duration: float,
                       nut_speed: Callable[[np.ndarray], np.ndarray] | None = None,
                       interval: float = 1e-4) -> SampledSpeed:
-        """Sample user functions of time [s] → speed [m/s] on a grid of ``interval`` [s]."""
+        """Sample user functions of time on a uniform grid.
+
+        Parameters
+        ----------
+        table_speed : callable
+            Time [s] (array) → commanded table speed [m/s].
+        duration : float
+            Time to cover [s] (the grid runs a little beyond it).
+        nut_speed : callable or None, default None
+            Time [s] (array) → commanded nut speed [m/s] (DDFS; None: zero).
+        interval : float, default 1e-4
+            Grid spacing [s].
+
+        Returns
+        -------
+        SampledSpeed
+            The sampled profile.
+        """
         n = int(math.ceil(duration / interval)) + 2
         t = np.arange(n) * interval
         vt = np.asarray(table_speed(t), dtype=float) * np.ones_like(t)

@@ -14,7 +14,7 @@ needs only ``<math.h>``, ``<string.h>`` and ``<stdlib.h>`` and exports::
                           const double *T, long n_pos, long n_vel, long n_cur, double base);
     void fd_aux(double t, const double *y, double *held, const double *P, const double *T,
                 long n_pos, long n_vel, long n_cur, double *aux);
-    extern const double fd_parameters[FD_N_PARAM], fd_tables[FD_N_TABLE];
+    extern const double fd_parameters[FD_N_PARAM], fd_tables[FD_N_TABLE];  (data=True)
     extern const char *const fd_state_names[FD_N_STATE], *const fd_aux_names[...],
                           *const fd_parameter_names[FD_N_PARAM];
 
@@ -37,12 +37,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .c_translate import TranslationError, _Unit, c_text, translate_kernels
+from .c_translate import CFunction, TranslationError, _Unit, c_text, translate_kernels
 
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
-__all__ = ["CLibrary", "CompilerNotFound", "TranslationError", "c_model_source",
+__all__ = ["RHS", "SAMPLE_UPDATE", "CFunction", "CLibrary", "CompilerNotFound", "SOLVER_SHAPES",
+           "SOLVER_TYPES", "TranslationError",
+           "c_model_source", "c_solver_source", "solver_kernels",
            "compile_shared", "find_compiler", "load_shared", "translate_kernels",
            "STRICT_FLAGS"]
 
@@ -77,7 +79,7 @@ def _c_doubles(values: np.ndarray) -> str:
     return "\n".join(lines) if lines else "    0.0,"
 
 
-def c_model_source(model: Model) -> str:
+def c_model_source(model: Model, *, data: bool = True) -> str:
     """One self-contained C99 file of ``model``'s right-hand side, sampled-controller update
     and auxiliary outputs (module docstring for the exported names).
 
@@ -86,11 +88,15 @@ def c_model_source(model: Model) -> str:
     model
         An assembled model (``DriveSystem.model(profile)``); its generated numba module is
         translated, with every kernel it calls.
+    data
+        Include ``fd_parameters`` and ``fd_tables`` (``model.P`` and ``model.T``, full
+        ``repr`` precision).  Without them the host passes its own P and T; a long sampled
+        profile's table can be megabytes of C text.
 
     Returns
     -------
     str
-        C99 source; ``fd_parameters`` and ``fd_tables`` hold ``model.P`` and ``model.T``.
+        C99 source.
 
     Raises
     ------
@@ -141,8 +147,9 @@ def c_model_source(model: Model) -> str:
         "    double dy[FD_N_STATE];\n"
         f"    {rhs.cname}(t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux);\n}}",
         "",
-        "const double fd_parameters[FD_N_PARAM] = {\n" + _c_doubles(model.P) + "\n};",
-        "const double fd_tables[FD_N_TABLE] = {\n" + _c_doubles(model.T) + "\n};",
+        *(["const double fd_parameters[FD_N_PARAM] = {\n" + _c_doubles(model.P) + "\n};",
+           "const double fd_tables[FD_N_TABLE] = {\n" + _c_doubles(model.T) + "\n};"]
+          if data else []),
         "const char *const fd_state_names[FD_N_STATE] = {\n"
         + ",\n".join("    " + _c_string(n) for n in model.state_names) + "\n};",
         f"const char *const fd_aux_names[{max(1, n_aux)}] = {{\n"
@@ -153,13 +160,90 @@ def c_model_source(model: Model) -> str:
     return "\n".join(head) + "\n" + body + "\n" + "\n".join(tail) + "\n"
 
 
+#: array sizes of the solver building blocks' parameters, as C expressions of the model file
+SOLVER_SHAPES: dict[str, tuple[str, ...]] = {
+    **{name: ("FD_N_STATE",) for name in (
+        "y", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "yt", "y_new", "e", "atol", "rel_mask",
+        "f0", "ft", "yp", "fp", "live", "piv", "b", "u1", "u2", "u3", "u4", "u5", "u6", "fs",
+        "q1", "q2")},
+    "J": ("FD_N_STATE", "FD_N_STATE"), "M": ("FD_N_STATE", "FD_N_STATE"),
+    "S": ("FD_N_STATE", "FD_N_STATE + 1"), "colour": ("FD_N_STATE + 1",), "aux": ("FD_N_AUX",),
+}
+#: ``fd_rhs`` as a translated template calls it (``bindings={"rhs": RHS}``): the arrays at
+#: positions 2, 8, 9 (held — non-const in the API —, dy, aux) are written, y, P, T stay const
+RHS = CFunction("fd_rhs", None, (2, 8, 9))
+#: ``fd_sample_update`` likewise: y (non-const in the API) and held
+SAMPLE_UPDATE = CFunction("fd_sample_update", None, (2, 3))
+#: element types of the solver building blocks' non-double arrays (numpy int64 / bool_)
+SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*"}
+
+
+def solver_kernels() -> dict[str, Any]:
+    """The project's solver building blocks by exported C name.
+
+    Returns
+    -------
+    dict
+        C name → Python template: one DOPRI5 step, its error norm, and the RODAS4 step with
+        its grouped finite-difference Jacobian, frozen-state test and dense output
+        (:mod:`feeddrive.solvers.switching`, :mod:`feeddrive.solvers.rodas4`).
+    """
+    from ..solvers import rodas4, switching
+
+    return {"fd_dp5_step": switching.dp5_step_template,
+            "fd_error_norm": switching.error_norm_template,
+            "fd_fd_jacobian": rodas4.fd_jacobian_template,
+            "fd_frozen_states": rodas4.frozen_states_template,
+            "fd_rodas4_step": rodas4.rodas4_step_template,
+            "fd_rodas4_dense": rodas4.rodas4_dense_template}
+
+
+def c_solver_source(names: tuple[str, ...] | None = None) -> str:
+    """C99 text of the solver building blocks (:func:`solver_kernels`), translated from the
+    package's own solver code with ``rhs`` bound to ``fd_rhs``; append it to
+    :func:`c_model_source` (it uses that file's ``FD_N_*`` sizes and ``fd_rhs``).
+
+    Parameters
+    ----------
+    names
+        Exported C names to include (default: all of :func:`solver_kernels`).
+
+    Returns
+    -------
+    str
+        C99 source; the exported functions keep the Python templates' argument order, arrays
+        as pointers (``const`` where the template only reads them; ``piv`` and ``colour`` are
+        ``long *``, ``live`` and ``S`` ``unsigned char *``, ``J``/``M``/``S`` row-major).
+    """
+    kernels = solver_kernels()
+    chosen = tuple(kernels) if names is None else names
+    unknown = [n for n in chosen if n not in kernels]
+    if unknown:
+        raise ValueError(f"names = {unknown}: expected some of {', '.join(kernels)}")
+    return translate_kernels([kernels[n] for n in chosen], {"N_AUX": "FD_N_AUX"},
+                             bindings={"rhs": RHS}, shapes=SOLVER_SHAPES,
+                             param_types=SOLVER_TYPES,
+                             names={kernels[n].__name__: n for n in chosen})
+
+
 class CompilerNotFound(RuntimeError):
     """No C compiler: set $CC or install gcc/clang."""
 
 
 def find_compiler() -> list[str]:
-    """The C compiler command: ``$CC`` (may hold options), else ``cc``, ``gcc`` or ``clang``
-    on PATH."""
+    """The C compiler command.
+
+    Returns
+    -------
+    list of str
+        ``$CC`` split into words (it may hold options), else the first of ``cc``, ``gcc``,
+        ``clang`` found on PATH.
+
+    Raises
+    ------
+    CompilerNotFound
+        None of them is there.
+    """
     env = os.environ.get("CC", "").strip()
     if env:
         cmd = shlex.split(env)
@@ -225,7 +309,15 @@ _DP = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 
 @dataclass
 class CLibrary:
-    """A compiled model library (:func:`load_shared`) with numba-like calls."""
+    """A compiled model library (:func:`load_shared`) with numba-like calls.
+
+    Parameters
+    ----------
+    lib
+        The ``ctypes.CDLL`` with argument types declared.
+    path
+        The shared library's file.
+    """
 
     lib: Any
     path: Path
@@ -248,8 +340,20 @@ class CLibrary:
 
 
 def load_shared(path: str | os.PathLike[str]) -> CLibrary:
-    """Load a library built by :func:`compile_shared` from :func:`c_model_source`; argument
-    types are declared, so a wrong array type raises instead of corrupting memory."""
+    """Load a library built by :func:`compile_shared` from :func:`c_model_source`.
+
+    Parameters
+    ----------
+    path
+        The shared library.
+
+    Returns
+    -------
+    CLibrary
+        ``fd_rhs``, ``fd_sample_update`` and ``fd_aux`` with their argument types declared
+        (float64 C-contiguous arrays), so a wrong array type raises instead of corrupting
+        memory.
+    """
     lib = ctypes.CDLL(str(path))
     L, D = ctypes.c_long, ctypes.c_double
     lib.fd_rhs.argtypes = [D, _DP, _DP, _DP, _DP, L, L, L, _DP, _DP]

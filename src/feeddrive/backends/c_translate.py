@@ -43,7 +43,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["BUILTINS", "MATH", "NUMPY", "HELPERS", "TranslationError", "translate_kernels"]
+__all__ = ["BUILTINS", "MATH", "NUMPY", "HELPERS", "CFunction", "TranslationError",
+           "translate_kernels"]
 
 
 class TranslationError(ValueError):
@@ -170,7 +171,8 @@ float for goto if inline int long register restrict return short signed sizeof s
 switch typedef union unsigned void volatile while _Bool _Complex _Imaginary main
 exp log log10 log1p expm1 sqrt sin cos tan asin acos atan atan2 sinh cosh tanh fabs floor ceil
 trunc pow hypot copysign fmod erf erfc rint isfinite isnan isinf abs labs memset memcpy malloc
-free NAN HUGE_VAL INFINITY""".split())
+free NAN HUGE_VAL INFINITY y0 y1 yn j0 j1 jn log2 exp2 cbrt lgamma tgamma fmin fmax fma round
+lround nearbyint remainder signbit fpclassify isgreater isless nan""".split())
 
 
 def _literal(value: Any) -> tuple[str, str]:
@@ -183,15 +185,15 @@ def _literal(value: Any) -> tuple[str, str]:
             raise TypeError(f"integer {v} does not fit a 64-bit long")
         return (f"{v}L" if not -(2 ** 31) < v < 2 ** 31 else str(v)), "long"
     if isinstance(value, (float, np.floating)):
-        v = float(value)
-        if math.isnan(v):
+        x = float(value)
+        if math.isnan(x):
             return "NAN", "double"
-        if math.isinf(v):
-            return ("HUGE_VAL" if v > 0 else "(-HUGE_VAL)"), "double"
-        text = repr(v)
+        if math.isinf(x):
+            return ("HUGE_VAL" if x > 0 else "(-HUGE_VAL)"), "double"
+        text = repr(x)
         if not any(c in text for c in ".en"):
             text += ".0"
-        return (f"({text})" if v < 0 else text), "double"
+        return (f"({text})" if x < 0 else text), "double"
     raise TypeError(f"{type(value).__name__} is not a number")
 
 
@@ -250,6 +252,26 @@ class _Unit:
         return sig
 
 
+@dataclass(frozen=True)
+class CFunction:
+    """A C function a kernel calls by a bound name (``bindings`` of :func:`translate_kernels`).
+
+    Parameters
+    ----------
+    name
+        Its C name.
+    returns
+        Result type: "double", "long", "bool", or None for void.
+    writes
+        Positions of the array arguments it writes (None: all — then the caller's arrays lose
+        ``const``).
+    """
+
+    name: str
+    returns: str | None = None
+    writes: tuple[int, ...] | None = None
+
+
 class _Unknown(Exception):
     """A local's type is not known yet (type inference iterates)."""
 
@@ -285,10 +307,17 @@ class _Function:
         self.cond_depth = 0
         self.calls_with_writes = 0
         self.calls_total = 0
+        self.stmt_writes: set[str] = set()  # arrays written by calls in this statement
+        self.stmt_reads: set[str] = set()  # arrays whose elements this statement reads
 
     # ---- errors
-    def error(self, node: ast.AST | None, what: str) -> TranslationError:
+    def error(self, node: ast.AST | None, what: str, *, missing: bool = False
+              ) -> TranslationError:
+        """The error naming function, file, line and construct; ``missing``: the construct is
+        in the subset but the translation lacks information (a type, a size)."""
         line = self.first_line + getattr(node, "lineno", 1) - 1
+        if missing:
+            return TranslationError(f"{self.name} ({self.file}:{line}): {what}")
         return TranslationError(f"{self.name} ({self.file}:{line}): {what} is outside the C "
                                 f"backend's subset (docs/c-backend.md)")
 
@@ -300,8 +329,8 @@ class _Function:
         if spec is None and arg.annotation is not None:
             spec = ast.unparse(arg.annotation)
         if spec is None:
-            raise self.error(arg, f"parameter {name!r} without a type (annotate it, or pass "
-                                  f"param_types)")
+            raise self.error(arg, f"parameter {name!r} has no type (annotate it, or pass "
+                                  f"param_types)", missing=True)
         spec = str(spec).replace(" ", "")
         scalars = {"float": "double", "double": "double", "int": "long", "long": "long",
                    "bool": "bool"}
@@ -317,7 +346,7 @@ class _Function:
     def _return_type(self) -> str | Tup | None:
         ann = self.node.returns
         if ann is None:
-            return "infer"  # type: ignore[return-value]
+            return "infer"
         text = ast.unparse(ann).replace(" ", "")
         if text == "None":
             return None
@@ -413,8 +442,9 @@ class _Function:
             return ("1",) * local.ndim  # a local array not declared yet: any size types alike
         shape = self.unit.shapes.get(name)
         if shape is None:
-            raise self.error(node, f"the size of array {name!r} (pass shapes={{{name!r}: "
-                                   f"(...)}} with C expressions)")
+            raise self.error(node, f"the size of array {name!r} is not known (pass "
+                                   f"shapes={{{name!r}: (...)}} with C expressions)",
+                             missing=True)
         return tuple(str(s) for s in shape)
 
     def e_Subscript(self, node: ast.Subscript) -> tuple[str, Any]:
@@ -464,6 +494,7 @@ class _Function:
             if it == "double":
                 raise self.error(node, f"float index {ast.unparse(p)!r}")
             codes.append(c)
+        self.stmt_reads.add(base)
         if t.ndim == 1:
             return f"{self.cvar(base)}[{codes[0]}]", t.elem
         shape = self.shape_of(base, node)
@@ -532,11 +563,12 @@ class _Function:
             for mid in operands[1:-1]:
                 if any(isinstance(n, ast.Call) for n in ast.walk(mid)):
                     raise self.error(node, "a chained comparison with a call in the middle")
+        for op in node.ops:
+            if type(op) not in syms:
+                raise self.error(node, f"comparison {type(op).__name__}")
         codes = [self.scalar(o)[0] for o in operands]
         parts = []
         for i, op in enumerate(node.ops):
-            if type(op) not in syms:
-                raise self.error(node, f"comparison {type(op).__name__}")
             parts.append(f"({codes[i]} {syms[type(op)]} {codes[i + 1]})")
         return ("(" + " && ".join(parts) + ")" if len(parts) > 1 else parts[0]), "bool"
 
@@ -584,9 +616,11 @@ class _Function:
             raise self.error(node, f"call of local {func.id!r}")
         target = self.resolve(func.id, func)
         if isinstance(target, str):  # a C function bound by name
-            return self.external_call(node, target, None)
+            target = CFunction(target)
         if isinstance(target, tuple) and len(target) == 2 and isinstance(target[0], str):
-            return self.external_call(node, target[0], target[1])
+            target = CFunction(target[0], target[1])
+        if isinstance(target, CFunction):
+            return self.external_call(node, target)
         if target is getattr(builtins, func.id, None) and func.id in BUILTINS:
             return self.builtin_call(node, func.id)
         if _py_function(target) is not None:
@@ -646,6 +680,7 @@ class _Function:
                                            f"for {pname!r} ({ptype.elem}, {ptype.ndim}-D)")
                 if written is None or pname in written:
                     self.written.add(arg.id)
+                    self.stmt_writes.add(arg.id)
                 out.append(self.cvar(arg.id))
             else:
                 c, t = self.scalar(arg)
@@ -664,17 +699,21 @@ class _Function:
             self.unit.tuples[sig.returns.cname] = sig.returns
         return f"{sig.cname}({', '.join(args)})", sig.returns
 
-    def external_call(self, node: ast.Call, cname: str, rtype: str | None) -> tuple[str, Any]:
+    def external_call(self, node: ast.Call, target: CFunction) -> tuple[str, Any]:
         params: list[tuple[str, str | Arr]] = []
         for i, arg in enumerate(node.args):
             if isinstance(arg, ast.Name) and isinstance(self.locals.get(arg.id), Arr):
                 params.append((f"arg{i}", self.locals[arg.id]))
             else:
                 params.append((f"arg{i}", self.scalar(arg)[1]))
-        args = self.call_args(node, params, None)
+        written = None if target.writes is None else {f"arg{i}" for i in target.writes}
+        args = self.call_args(node, params, written)
         self.calls_total += 1
-        self.calls_with_writes += 1
-        return f"{cname}({', '.join(args)})", rtype
+        if written is None or written:
+            self.calls_with_writes += 1
+        if target.returns not in (None, "double", "long", "bool"):
+            raise TranslationError(f"binding {target.name}: result type {target.returns!r}")
+        return f"{target.name}({', '.join(args)})", target.returns
 
     # ---- type inference of locals
     def infer(self) -> None:
@@ -686,7 +725,7 @@ class _Function:
             elif isinstance(n, (ast.AugAssign, ast.For)):
                 targets = [n.target]
             for tgt in targets:
-                for t in ast.walk(tgt):
+                for t in (tgt.elts if isinstance(tgt, ast.Tuple) else [tgt]):
                     if isinstance(t, ast.Name):
                         self.assigned.add(t.id)
         self.assigned -= set(self.params)
@@ -702,6 +741,9 @@ class _Function:
                         new: Any = t
                     else:
                         new = _unify(old if isinstance(old, str) else None, t)
+                    if name in self.params and new != old:
+                        raise self.error(n, f"parameter {name!r} ({old}) assigned a {t} value "
+                                            f"(declare it so, or use a local)")
                     if new != old:
                         self.locals[name] = new
                         changed = True
@@ -784,18 +826,35 @@ class _Function:
             out += self.stmt(s, level)
         return out
 
-    def stmt(self, s: ast.stmt, level: int) -> list[str]:
-        pad = "    " * level
+    def reset_order(self) -> None:
         self.calls_total = 0
         self.calls_with_writes = 0
+        self.stmt_writes = set()
+        self.stmt_reads = set()
+
+    def check_order(self, node: ast.AST) -> None:
+        """Refuse what C evaluates in an unspecified order but Python left to right: two calls
+        of which one writes an array, or an array element read beside a call that writes
+        that array."""
+        if self.calls_with_writes and self.calls_total > 1:
+            raise self.error(node, "a statement with two calls of which one writes an array "
+                                   "(C leaves their order open: split the statement)")
+        both = self.stmt_writes & self.stmt_reads
+        if both:
+            raise self.error(node, f"a statement that reads array {sorted(both)[0]!r} beside "
+                                   f"a call that writes it (C leaves their order open: split "
+                                   f"the statement)")
+        self.reset_order()
+
+    def stmt(self, s: ast.stmt, level: int) -> list[str]:
+        pad = "    " * level
+        self.reset_order()
         method = getattr(self, "s_" + type(s).__name__, None)
         if method is None:
             raise self.error(s, f"statement {type(s).__name__}")
         lines = method(s, level, pad)
-        if self.calls_with_writes and self.calls_total > 1 and not isinstance(
-                s, (ast.If, ast.While, ast.For)):
-            raise self.error(s, "a statement with two calls of which one writes an array "
-                                "(C leaves their order open: split the statement)")
+        if not isinstance(s, (ast.If, ast.While, ast.For)):  # those check their heads
+            self.check_order(s)
         return lines
 
     def s_Expr(self, s: ast.Expr, level: int, pad: str) -> list[str]:
@@ -814,6 +873,16 @@ class _Function:
 
     def s_Continue(self, s: ast.Continue, level: int, pad: str) -> list[str]:
         return [f"{pad}continue;"]
+
+    def store(self, tgt: ast.expr) -> tuple[str, Any]:
+        """An assignment target: its element is written, not read (for :meth:`check_order`;
+        reads in its index count)."""
+        before = set(self.stmt_reads)
+        code, t = self.target(tgt)
+        if isinstance(tgt, ast.Subscript) and isinstance(tgt.value, ast.Name) \
+                and tgt.value.id not in before:
+            self.stmt_reads.discard(tgt.value.id)
+        return code, t
 
     def target(self, tgt: ast.expr) -> tuple[str, Any]:
         if isinstance(tgt, ast.Name):
@@ -851,7 +920,7 @@ class _Function:
                     temps.append(f"fd_t{self.tmp}")
                     lines.append(f"{pad}    {_C_SCALAR[t]} {temps[-1]} = {c};")
                 for e, tmp in zip(names, temps, strict=True):
-                    lines.append(f"{pad}    {self.target(e)[0]} = {tmp};")
+                    lines.append(f"{pad}    {self.store(e)[0]} = {tmp};")
                 return lines + [f"{pad}}}"]
             code, t = self.expr(s.value)
             if not isinstance(t, Tup) or len(t.items) != len(names):
@@ -860,12 +929,12 @@ class _Function:
             tmp = f"fd_t{self.tmp}"
             lines = [f"{pad}{{", f"{pad}    {t.cname} {tmp} = {code};"]
             for i, e in enumerate(names):
-                lines.append(f"{pad}    {self.target(e)[0]} = {tmp}.v{i};")
+                lines.append(f"{pad}    {self.store(e)[0]} = {tmp}.v{i};")
             return lines + [f"{pad}}}"]
         code, t = self.expr(s.value)
         if not isinstance(t, str):
             raise self.error(s, f"assigning {ast.unparse(s.value)!r} (not a number)")
-        lhs, lt = self.target(tgt)
+        lhs, lt = self.store(tgt)
         if lt == "long" and t == "double":
             raise self.error(s, f"a float stored in integer {ast.unparse(tgt)!r}")
         return [f"{pad}{lhs} = {code};"]
@@ -919,11 +988,14 @@ class _Function:
 
     def s_If(self, s: ast.If, level: int, pad: str) -> list[str]:
         c, _ = self.scalar(s.test, test=True)
+        self.check_order(s)
         lines = [f"{pad}if ({c}) {{"]
         lines += self.block(s.body, level + 1)
         orelse = s.orelse
         while len(orelse) == 1 and isinstance(orelse[0], ast.If):
+            self.reset_order()
             c, _ = self.scalar(orelse[0].test, test=True)
+            self.check_order(orelse[0])
             lines.append(f"{pad}}} else if ({c}) {{")
             lines += self.block(orelse[0].body, level + 1)
             orelse = orelse[0].orelse
@@ -936,6 +1008,7 @@ class _Function:
         if s.orelse:
             raise self.error(s, "while ... else")
         c, _ = self.scalar(s.test, test=True)
+        self.check_order(s)
         return [f"{pad}while ({c}) {{", *self.block(s.body, level + 1), f"{pad}}}"]
 
     def s_For(self, s: ast.For, level: int, pad: str) -> list[str]:
@@ -958,15 +1031,17 @@ class _Function:
         step = 1
         if len(it.args) == 3:
             node = it.args[2]
-            value = None
+            value: Any = None
             if isinstance(node, ast.Constant):
                 value = node.value
             elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub) \
-                    and isinstance(node.operand, ast.Constant):
+                    and isinstance(node.operand, ast.Constant) \
+                    and isinstance(node.operand.value, int):
                 value = -node.operand.value
             if not isinstance(value, int) or value == 0:
                 raise self.error(s, "a range step that is not a non-zero integer constant")
             step = value
+        self.check_order(s)
         self.tmp += 1
         i, e = f"fd_i{self.tmp}", f"fd_e{self.tmp}"
         var = self.cvar(s.target.id)
@@ -1062,6 +1137,13 @@ class _Function:
                 continue
             zero = "0.0" if t == "double" else "0"
             decls.append(f"    {_C_SCALAR[t]} {self.cvar(name)} = {zero};")
+        # Python lets a parameter or local go unused; C's -Wunused-* would stop the build
+        loaded = {n.id for n in ast.walk(self.node)
+                  if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+        loaded |= {n.value.id for n in ast.walk(self.node) if isinstance(n, ast.Subscript)
+                   and isinstance(n.value, ast.Name)}
+        decls += [f"    (void){self.cvar(name)};" for name in self.locals
+                  if name not in loaded]
         guard = f"FDK_DEF_{self.cname}"
         self.unit.prototypes.append(f"#ifndef {guard}\n{head};\n#endif")
         self.unit.chunks.append(
@@ -1106,9 +1188,9 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
         without being listed here.
     bindings
         Global names of called functions replaced by another Python function (translated too)
-        or by the name of a C function (a string, void result; or a pair ``(name, type)``,
-        type "double"/"long"/"bool"), e.g. ``{"rhs": "fd_rhs"}``.  A C function bound by name
-        is assumed to write every array it receives.
+        or by a C function: a :class:`CFunction` (name, result type, positions of the arrays
+        it writes), or just its name (void, assumed to write every array it receives), e.g.
+        ``{"rhs": CFunction("fd_rhs", None, (2, 8, 9))}``.
     shapes
         C expressions of array sizes by parameter name, e.g. ``{"y": ["FD_N_STATE"],
         "J": ["FD_N_STATE", "FD_N_STATE"]}``: needed for ``a.size``, ``M.shape[k]``, ``len``
@@ -1118,6 +1200,8 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
         Types of unannotated or non-double parameters by ``"name"`` or ``"function.name"``:
         "float", "int", "bool", "double*", "long*", "bool*" (1-byte elements, numpy
         ``bool_``/``uint8``).
+    names
+        Exported C names by Python function name (default ``fd_<name>``).
 
     Returns
     -------
