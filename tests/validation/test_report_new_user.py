@@ -190,8 +190,16 @@ def test_report_places_each_figure_in_its_section_with_a_caption(
                           holder[0])
         assert match and match.group(1) != name and "Wang2021" in match.group(1)
         assert f"*{caption}*" in md
-    assert "<h2>Settings</h2>" in page and "StudySettings(" in page
-    assert "## Settings" in md and "StudySettings(" in md
+    # issue 24 item 3: the settings were a Python repr in SI
+    assert "<h2>Settings</h2>" in page and "<li>creep trials: 12 s" in page
+    assert "## Settings" in md and "* creep trials: 12 s" in md
+    assert "StudySettings(" not in page + md
+    # issue 24 item 1: the summary section was one paragraph of raw Markdown
+    summary = next(s for s in sections if s.startswith("What is reproduced"))
+    assert "<ul>" in summary and "<li><strong>Reproduced:</strong>" in summary
+    assert "<code>wang2021-ripple</code>" in summary
+    assert "**" not in page and "`" not in page
+    assert page.count("<table>") == md.count("\n|---")
 
 
 # ------------------------------------------------------------------ item 21: Fig. 6b

@@ -205,7 +205,9 @@ def _print_summary(summary: dict[str, Any], drive: str, profile: str,
     what = (f"{profile_file}" if profile == "csv" else
             f"{profile} {table_speed:g} mm/s" + (f" at {frequency:g} Hz" if profile == "sine"
                                                  else ""))
-    _say(f"{drive.upper()}, {what}, position {position:g} mm, {duration:g} s ({name})")
+    # a linear motor drives the table directly: its position moves no part of the model
+    where = "" if drive == "linear-motor" else f", position {position:g} mm"
+    _say(f"{drive.upper()}, {what}{where}, {duration:g} s ({name})")
     for label, text in _lines(summary):
         _say(f"  {label:24s} {text}")
     s = summary["solver"]
@@ -219,6 +221,8 @@ def _print_summary(summary: dict[str, Any], drive: str, profile: str,
 
 
 def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
+    from ..analysis.metrics import CreepThresholds, frequency_label
+
     n = _units.number
     rows: list[tuple[str, str]] = []
     if s["profile"] == "sine":
@@ -235,15 +239,33 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
         ]
     else:
         freq = s["stick_slip_frequency_hz"]
+        segments = s.get("segments") or []
+        # a multi-level profile: the lines below are its first hold at the top speed; every
+        # hold is summarised under "segments" (issue 24 item 6)
+        first = " (first hold)" if len(segments) > 1 else ""
         rows += [
-            ("command speed", f"{n(s['command_speed_mm_s'])} mm/s"),
+            ("command speed" + first, f"{n(s['command_speed_mm_s'])} mm/s"),
             ("mean table speed", f"{n(s['mean_table_speed_mm_s'])} mm/s"),
             ("ripple ratio", n(s["ripple_ratio"], 3)),
             ("min ratio", n(s["min_ratio"], 3)),
             ("stick fraction", n(s["stick_fraction"], 3)),
-            ("stick-slip frequency", "none" if freq is None else f"{n(freq, 3)} Hz"),
-            ("verdict", s["verdict"]),
+            (frequency_label(s["stick_fraction"]),
+             "none" if freq is None else f"{n(freq, 3)} Hz"),
+            ("verdict", f"{s['verdict']} (by the window rule, below)"),
         ]
+        if len(segments) > 1:
+            rows.append(("segments", f"{len(segments)} holds of one command speed, each "
+                                     "judged over its own steady window:"))
+            for i, g in enumerate(segments, start=1):
+                f = g["stick_slip_frequency_hz"]
+                at = "" if f is None else (f", {frequency_label(g['stick_fraction'])} "
+                                           f"{n(f, 3)} Hz")
+                rows.append((f"  {i}: {n(g['command_speed_mm_s'])} mm/s",
+                             f"{g['verdict']}, mean {n(g['mean_table_speed_mm_s'])} mm/s, "
+                             f"ripple {n(g['ripple_ratio'], 3)}, stick "
+                             f"{n(g['stick_fraction'], 3)}{at}; window "
+                             f"{n(g['window_s'][0])}–{n(g['window_s'][1])} s"))
+        rows.append(("verdict rule", s.get("verdict_rule") or CreepThresholds().describe()))
     a, b = s["window_s"]
     rows += [
         ("following error", f"max {n(s['following_error_max_um'], 3)} µm, rms "
@@ -254,7 +276,8 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
     if s["mean_screw_speed_mm_s"] is not None:  # a linear motor has no screw and no nut
         rows.append(("mean motor speeds", f"screw {n(s['mean_screw_speed_mm_s'])} mm/s, nut "
                                           f"{n(s['mean_nut_speed_mm_s'])} mm/s (× H)"))
-    rows.append(("window", f"{n(a)}–{n(b)} s"))
+    first_hold = s["profile"] != "sine" and len(s.get("segments") or []) > 1
+    rows.append(("window" + (" (first hold)" if first_hold else ""), f"{n(a)}–{n(b)} s"))
     return rows
 
 

@@ -28,7 +28,8 @@ CAPTIONS: dict[str, tuple[str, str]] = {
         "Wang2021 Fig. 7: overshoot and settling shrink as v_n grows, with no further gain "
         "beyond about 10× the CDFS critical speed."),
     "fig8_ddfs_critical.png": (
-        "fig8", "DDFS (v_n = 16 mm/s) at the critical speed feeddrive finds (dashed: "
+        "fig8", "DDFS (v_n = 16 mm/s) at feeddrive's critical speed when its search finds "
+        "one in range, else at the paper's 0.5 mm/s; the title says which (dashed: "
         "command). Wang2021 Fig. 8: smooth motion at 0.5 mm/s (v_s = 16.5 mm/s)."),
     "fig9_sine_1p56.png": (
         "sine", "Sinusoidal table speed of amplitude 1.56 mm/s, one panel per hollow-motor "
