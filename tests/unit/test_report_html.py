@@ -63,7 +63,7 @@ def test_summary_renders_as_a_list_with_bold_and_code() -> None:
     code = [text for stack, text in p.text if stack[-1] == "code"]
     assert "wang2021-ripple" in code
     # nothing of the Markdown source is left as text
-    for stack, text in p.text:
+    for _, text in p.text:
         assert "**" not in text and "`" not in text and not text.lstrip().startswith("* "), text
 
 
