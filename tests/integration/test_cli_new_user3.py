@@ -1,0 +1,100 @@
+"""Issue 24 ("what a new user hits", round 3): the words, the summaries, the commands.
+
+Each test names the item of issue 24 it guards.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+from typer.testing import CliRunner
+
+from feeddrive.cli import app
+
+runner = CliRunner()
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def run(*args: str) -> Any:
+    return runner.invoke(app, list(args))
+
+
+def _line(output: str, label: str) -> str:
+    return next(line for line in output.splitlines() if line.strip().startswith(label))
+
+
+# ------------------------------------------------------------------ items 4, 5: words
+
+
+def test_simulate_names_its_verdict_rule_and_calls_a_non_sticking_ripple_an_oscillation(
+        ) -> None:
+    """Item 4: simulate's "smooth" (ripple below 0.5) and creep's (±2 % limit cycle) were two
+    rules under one word, unnamed.  Item 5: a trapezoid whose table never stuck printed a
+    "stick-slip frequency"."""
+    res = run("simulate", "--drive", "cdfs", "--table-speed", "1.5", "--profile",
+              "trapezoid", "--duration", "6")
+    assert res.exit_code == 0, res.output
+    assert float(_line(res.output, "stick fraction").split()[-1]) == 0.0
+    assert "stick-slip" not in res.output
+    assert _line(res.output, "oscillation frequency").endswith("Hz")
+    assert "(by the window rule, below)" in _line(res.output, "verdict ")
+    rule = _line(res.output, "verdict rule")
+    assert "window rule" in rule and "50 %" in rule and "limit-cycle rule (±2 %)" in rule
+    js = json.loads(run("simulate", "--drive", "cdfs", "--table-speed", "1.5", "--duration",
+                        "2", "--json").output)
+    assert js["verdict_rule"].startswith("window rule")
+
+
+def test_creep_rule_text_is_named_the_limit_cycle_rule() -> None:
+    from feeddrive.analysis.metrics import VerdictRule
+
+    assert VerdictRule().describe().startswith("Limit-cycle rule.")
+
+
+def test_explorer_verdict_names_its_rule_in_percent() -> None:
+    """Item 4: the explorer said "within ±0.02 of the command" for ±2 %."""
+    import numpy as np
+
+    from feeddrive.explore.compute import verdict_of
+
+    t = np.arange(0.0, 12.0, 1e-3)
+    v = 1e-3 * (1.0 + 0.5 * np.exp(-t) * np.sin(2 * np.pi * 3 * t))
+    text = verdict_of(t, v, 1e-3)["text"]
+    assert "±2 %" in text and "±0.02" not in text and "limit-cycle rule" in text
+
+
+# ------------------------------------------------------------------ item 6: segments
+
+
+def test_stepdown_and_csv_profiles_are_summarised_per_hold(tmp_path: Path) -> None:
+    """Item 6: a six-step staircase printed one "command speed 1.6 mm/s" line, and a CSV
+    profile of 1 and 0.3 mm/s mentioned only the first level."""
+    res = run("simulate", "--drive", "cdfs", "--table-speed", "1.6", "--profile", "stepdown",
+              "--lowest-speed", "1.55", "--step", "0.01", "--dwell", "1.5")
+    assert res.exit_code == 0, res.output
+    assert "6 holds" in _line(res.output, "segments")
+    for i, speed in enumerate(("1.6", "1.59", "1.58", "1.57", "1.56", "1.55"), start=1):
+        assert _line(res.output, f"{i}: {speed} mm/s"), speed
+    profile = tmp_path / "levels.csv"
+    rows = ["time [s],table_speed [mm/s]"] + [
+        f"{t / 100:g},{1.0 if t < 300 else 0.3}" for t in range(0, 601)]
+    profile.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    res = run("simulate", "--drive", "cdfs", "--profile", "csv", "--profile-file",
+              str(profile), "--json")
+    assert res.exit_code == 0, res.output
+    segments = json.loads(res.output)["segments"]
+    assert [s["command_speed_mm_s"] for s in segments] == pytest.approx([1.0, 0.3])
+    for s in segments:
+        lo, hi = s["window_s"]
+        assert s["start_s"] <= lo < hi <= s["end_s"]
+
+
+def test_linear_motor_header_has_no_screw_position() -> None:
+    """Item 13: `simulate --drive linear-motor` printed "position 400 mm" (no screw)."""
+    res = run("simulate", "--drive", "linear-motor", "--table-speed", "1.0", "--duration",
+              "1")
+    assert res.exit_code == 0, res.output
+    assert "position" not in res.output.splitlines()[0]
