@@ -98,3 +98,28 @@ def test_linear_motor_header_has_no_screw_position() -> None:
               "1")
     assert res.exit_code == 0, res.output
     assert "position" not in res.output.splitlines()[0]
+
+
+# ------------------------------------------------------------------ item 7: friction law
+
+
+@pytest.mark.parametrize("law", ["dahl", "none"])
+def test_friction_command_follows_the_sites_law(tmp_path: Path, law: str) -> None:
+    """Item 7: with the guide set to `dahl` or `none`, `feeddrive friction --site guide`
+    still printed "LuGre friction", a negative-slope band and a passivity FAIL."""
+    params = tmp_path / f"{law}.toml"
+    params.write_text(f'extends = "wang2021"\n[friction.guide]\nlaw = "{law}"\n',
+                      encoding="utf-8")
+    res = run("friction", "--site", "guide", "--params", str(params))
+    assert res.exit_code == 0, res.output
+    assert "LuGre friction" not in res.output and "FAIL" not in res.output
+    assert f"uses the '{law}' law" in res.output
+    out = json.loads(run("friction", "--site", "guide", "--params", str(params),
+                         "--json").output)
+    assert out["law"] == law
+    for b in out["branches"].values():
+        assert b["negative_slope_band_mm_s"] is None and b["passive"] is None
+        assert b["unstable_band_mm_s"] is None
+    if law == "dahl":
+        assert out["branches"]["positive"]["min_steady_slope_N_s_per_m"] == pytest.approx(
+            61.6, rel=1e-3)
