@@ -187,7 +187,9 @@ def simulate_command(
     if plot:
         from ..plotting import plot_result
 
-        summary["plot"] = str(plot_result(result, plot))
+        summary["plot"] = str(plot_result(result, plot, title=run_header(
+            drive, profile, profile_file, table_speed, frequency, position, duration,
+            params.name)))
     for text in summary.get("warnings", []):
         err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
     if as_json:
@@ -199,15 +201,22 @@ def simulate_command(
         raise typer.Exit(code=EXIT_UNSTABLE)
 
 
-def _print_summary(summary: dict[str, Any], drive: str, profile: str,
-                   profile_file: str | None, table_speed: float | None, frequency: float,
-                   position: float, duration: float, name: str, output: str | None) -> None:
+def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,
+               frequency: float, position: float, duration: float, name: str) -> str:
+    """What was run, in the user's words: the summary's first line and the --plot title."""
     what = (f"{profile_file}" if profile == "csv" else
             f"{profile} {table_speed:g} mm/s" + (f" at {frequency:g} Hz" if profile == "sine"
                                                  else ""))
     # a linear motor drives the table directly: its position moves no part of the model
     where = "" if drive == "linear-motor" else f", position {position:g} mm"
-    _say(f"{drive.upper()}, {what}{where}, {duration:g} s ({name})")
+    return f"{drive.upper()}, {what}{where}, {duration:g} s ({name})"
+
+
+def _print_summary(summary: dict[str, Any], drive: str, profile: str,
+                   profile_file: str | None, table_speed: float | None, frequency: float,
+                   position: float, duration: float, name: str, output: str | None) -> None:
+    _say(run_header(drive, profile, profile_file, table_speed, frequency, position, duration,
+                    name))
     for label, text in _lines(summary):
         _say(f"  {label:24s} {text}")
     s = summary["solver"]
