@@ -20,6 +20,15 @@ _DENSE = 4000  # lines with more vertices are checked at their vertices only
 _SUBSTEPS = 24  # points per segment of a sparser line
 
 
+def _draw(fig: Figure) -> None:
+    """Draw ``fig`` on an Agg canvas (a figure closed by pyplot has lost its canvas)."""
+    if not hasattr(fig.canvas, "get_renderer"):
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()
+
+
 def _boxes(fig: Figure) -> list[tuple[str, Bbox]]:
     """Display boxes of the legends and of the labels drawn with a background box."""
     renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
@@ -70,7 +79,7 @@ def _data_points(ax: Any) -> list[tuple[str, np.ndarray]]:
 def covered_data(fig: Figure, margin: float = 1.0) -> list[str]:
     """Which legend or boxed label covers which plotted data (empty: none).  ``margin``
     [pixels] shrinks each box so that data only touching its edge does not count."""
-    fig.canvas.draw()
+    _draw(fig)
     found = []
     data = [(ax, _data_points(ax)) for ax in fig.get_axes() if ax.get_visible()]
     for label, box in _boxes(fig):
@@ -86,7 +95,7 @@ def covered_data(fig: Figure, margin: float = 1.0) -> list[str]:
 
 def clipped_artists(fig: Figure) -> list[str]:
     """Legends and boxed labels that stick out of the figure (cut off in the saved PNG)."""
-    fig.canvas.draw()
+    _draw(fig)
     page = fig.bbox
     return [f"{label} is cut off by the figure edge" for label, box in _boxes(fig)
             if box.x0 < page.x0 - 1 or box.x1 > page.x1 + 1 or box.y0 < page.y0 - 1
@@ -108,7 +117,7 @@ def _titles(fig: Figure) -> list[Any]:
 def overlapping_texts(fig: Figure) -> list[str]:
     """Pairs of text labels inside one axes drawn over each other, and legends or boxed
     labels over a title or an axis label."""
-    fig.canvas.draw()
+    _draw(fig)
     renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
     found = []
     for label, box in _boxes(fig):

@@ -120,8 +120,9 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
             _annotate(ax, panel, value, x, y, xs, ys)
         ax.set_xlabel(_label(x, ds[x]))
         ax.set_ylabel(_label(y, ds[y]))
+        # a single panel is titled by the figure's title alone (it said the name twice)
         ax.set_title(", ".join(f"{d} = {_coord_text(ds[d].values[i])}"
-                               for d, i in sel.items()) or str(ds.attrs.get("sweep")))
+                               for d, i in sel.items()))
     for ax in list(axes.flat)[len(combos):]:
         ax.set_visible(False)
     shown = [(n, st) for n, _, st in boundaries if n in drawn]
