@@ -111,9 +111,10 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
         for (name, level_source, style) in boundaries:
             if name in panel:
                 # contours at the same levels are labelled once: a second set of labels
-                # was drawn over the first (issue 24 item 2)
+                # was drawn over the first (issue 24 item 2); with the cells annotated the
+                # labels fell on the cell values, so the legend gives the levels instead
                 if _contour(ax, xs, ys, _field(panel, name, x, y), level_source, style, vmin,
-                            vmax, label=not labelled):
+                            vmax, label=not (labelled or annotate)):
                     drawn.add(name)
                     labelled = labelled or level_source != "half"
         if annotate:
@@ -127,14 +128,24 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
         ax.set_visible(False)
     shown = [(n, st) for n, _, st in boundaries if n in drawn]
     if shown:
-        handles = [Line2D([], [], color=style["colors"], ls=style["linestyles"], lw=1.5,
-                          label=_legend(n)) for n, style in shown]
+        levels = ", ".join(f"{v:.2f}" for v in np.linspace(vmin, vmax, 7)[1:-1])
+        unit = f" {vunit}" if vunit not in ("", "1") else ""
+        stated = False
+        handles = []
+        for n, style in shown:
+            label = _legend(n)
+            if annotate and not stated and any(s == "levels" for m, s, _ in boundaries
+                                               if m == n):
+                label += f"\n  levels {levels}{unit}"  # the contours carry no labels
+                stated = True
+            handles.append(Line2D([], [], color=style["colors"], ls=style["linestyles"],
+                                  lw=1.5, label=label))
         # one entry a row, below the panels: in one row the entries ran off both sides
         fig.legend(handles=handles, loc="outside lower center", ncol=1, frameon=False,
                    fontsize=8)
     fig.suptitle(f"sweep {ds.attrs.get('sweep')}: {value}")
     p = Path(path)
-    fig.savefig(p, dpi=110)
+    fig.savefig(p, dpi=110, bbox_inches="tight")  # nothing cut off at the edges
     plt.close(fig)
     return p
 
