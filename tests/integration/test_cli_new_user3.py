@@ -152,3 +152,31 @@ def test_sweep_dry_run_says_what_it_does_and_times_cpu_not_wall(
     lo, hi = js["seconds_per_point_range"]
     assert 0 < lo <= js["seconds_per_point"] <= hi < 50  # not the jumping wall clock
     assert not (tmp_path / "lb.sqlite").exists()  # a dry run stores nothing
+
+
+# ------------------------------------------------------------------ item 8: one scan range
+
+
+def test_stability_and_the_linear_band_sweep_scan_one_default_range() -> None:
+    """Item 8: `feeddrive stability` scanned 0.01–5 mm/s and the sweep's `linear-band`
+    quantity 0.02–3.02 mm/s by default."""
+    from feeddrive import protocol
+    from feeddrive.cli.linear_cmd import stability_command
+    from feeddrive.linear import stability_band
+    from feeddrive.sweep.quantities import QuantitySettings
+
+    q = QuantitySettings.parse({"kind": "linear-band"})
+    assert (q.low, q.high, q.linear_points) == (*protocol.LINEAR_SPEED_RANGE,
+                                                protocol.LINEAR_POINTS)
+    defaults = stability_band.__kwdefaults__
+    assert (defaults["low"], defaults["high"], defaults["points"]) == (
+        *protocol.LINEAR_SPEED_RANGE, protocol.LINEAR_POINTS)
+    import inspect
+
+    options = inspect.signature(stability_command).parameters
+    assert options["low"].default.default == pytest.approx(1e3 * q.low)
+    assert options["high"].default.default == pytest.approx(1e3 * q.high)
+    assert options["points"].default.default == q.linear_points
+    # the critical-speed search keeps its own range (its linear band beside it scans that)
+    c = QuantitySettings.parse({"kind": "critical-speed"})
+    assert (c.low, c.high) == protocol.SPEED_RANGE
