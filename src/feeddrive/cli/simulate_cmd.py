@@ -151,6 +151,14 @@ def simulate_command(
         _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
                     f"{budget.memory_bytes / 1e9:.1f} GB of memory (a .parquet or .csv "
                     "--output is written as the run goes and keeps memory small)")
+    if profile != "sine":  # a steady command: the observer's gain k checked there
+        from ..analysis.compensation import observer_gain_warning
+
+        # the lowest steady speed of the run: the observer's k destabilises slow sliding
+        steady = {"csv": 0.0, "stepdown": _units.speed("--lowest-speed", lowest_speed)}
+        k_warning = observer_gain_warning(system, steady.get(profile, v_t), v_n)
+        if k_warning:
+            _units.warn(k_warning)
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     bar = Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.fields[t]}"),
