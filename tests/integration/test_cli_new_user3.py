@@ -180,3 +180,69 @@ def test_stability_and_the_linear_band_sweep_scan_one_default_range() -> None:
     # the critical-speed search keeps its own range (its linear band beside it scans that)
     c = QuantitySettings.parse({"kind": "critical-speed"})
     assert (c.low, c.high) == protocol.SPEED_RANGE
+
+
+# ------------------------------------------------------------------ items 9, 13: compensation
+
+
+def test_simulate_warns_when_the_observer_gain_destabilises_the_loop(tmp_path: Path) -> None:
+    """Item 9: at k = 100 1/s the observer destabilised the loop at 0.5 mm/s, silently."""
+    params = tmp_path / "k.toml"
+    params.write_text('extends = "wang2021"\n[controller.compensation]\nmode = "observer"\n'
+                      "observer_gain = 100.0\n", encoding="utf-8")
+    res = run("simulate", "--table-speed", "0.5", "--duration", "0.5", "--params", str(params))
+    assert res.exit_code == 0, res.output
+    assert "warning: controller.compensation.observer_gain = 100 1/s" in res.stderr
+    quiet = run("simulate", "--table-speed", "0.5", "--duration", "0.5")
+    assert "observer_gain" not in quiet.stderr
+
+
+def test_compensate_puts_units_on_numbers_only() -> None:
+    """Item 13: `compensate` printed "none mm/s" and "undecided mm/s"."""
+    from feeddrive.cli.compensate_cmd import with_unit
+
+    assert with_unit("none") == "none" and with_unit("undecided") == "undecided"
+    assert with_unit("—") == "—"
+    assert with_unit("1.56") == "1.56 mm/s" and with_unit("< 0.02") == "< 0.02 mm/s"
+    assert with_unit("0.172–1.399") == "0.172–1.399 mm/s"
+
+
+# ------------------------------------------------------------------ item 10: parameter files
+
+
+def test_params_show_prints_the_resolved_set_behind_extends(tmp_path: Path) -> None:
+    """Item 10: no way to see the set behind an `extends = "wang2021"` file."""
+    params = tmp_path / "mine.toml"
+    params.write_text('extends = "wang2021"\n[table]\nmass = 25.0\n', encoding="utf-8")
+    res = run("params", "show", "--params", str(params), "--format", "json")
+    assert res.exit_code == 0, res.output
+    shown = json.loads(res.stdout)
+    from feeddrive.parameters import preset, to_dict
+
+    base = to_dict(preset("wang2021"))
+    assert shown["table"]["mass"] == 25.0
+    assert shown["screw"] == base["screw"] and shown["friction"] == base["friction"]
+    both = run("params", "show", "--params", str(params), "--preset", "wang2021")
+    assert both.exit_code != 0 and "give one, not both" in both.output
+
+
+def test_calibrate_out_marks_the_set_as_fitted(tmp_path: Path) -> None:
+    """Item 10: `calibrate --out` kept `name = "wang2021"` and the preset's description.
+    Item 13: its --max-duration defaulted to 60 s while creep and reproduce use 240 s."""
+    import inspect
+
+    from feeddrive import protocol
+    from feeddrive.cli.calibrate_cmd import calibrate_command, fitted_set
+    from feeddrive.parameters import load, preset, save
+
+    fitted = fitted_set(preset("wang2021"), "controller.velocity_integral_gain", 4321.0,
+                        "cdfs", 1.56, 400.0, 0.0)
+    path = tmp_path / "fitted.toml"
+    save(fitted, path)
+    back = load(path)
+    assert back.name == "wang2021-fitted"
+    assert back.description.startswith("Fitted by feeddrive calibrate")
+    assert "controller.velocity_integral_gain = 4321" in back.description
+    assert "CDFS critical speed 1.56 mm/s at 400 mm" in back.description
+    default = inspect.signature(calibrate_command).parameters["max_duration"].default
+    assert default.default == protocol.TRIAL_MAX_DURATION
