@@ -482,6 +482,9 @@ class DriveParameters(_Component):
         The forcer of the ``linear-motor`` drive.
     hollow_controller : Controller or None, default None
         The hollow motor's own loops; None: it uses ``controller``.
+    sections : tuple of (str, Component), default ()
+        Parts' own sections by name, sorted (``[rack_pinion]``, ``[acceleration_feedforward]``;
+        registry group ``feeddrive.sections``); read like fields (``params.rack_pinion``).
     """
 
     name: str
