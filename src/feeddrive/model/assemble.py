@@ -202,7 +202,14 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     comp = emit_compensation(b, parameters, mech)
     if comp is not None:
         axes[0] = dataclasses.replace(axes[0], extra_current=comp)
+    # parts of the model given as sections of their own (model/parts/): they declare their
+    # slots and may wire into the axes before the cascade, then write their sampled updates
+    parts = [s for _, s in parameters.sections if hasattr(s, "declare_part")]
+    for part in parts:
+        axes = part.declare_part(b, axes)
     loops.emit_cascade(b, axes, channels)
+    for part in parts:
+        part.emit_part(b)
     for ln in ripple_lines:
         b.emit(ln)
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
