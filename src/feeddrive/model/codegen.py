@@ -67,6 +67,7 @@ class Builder:
     table_size: int = 0
     reference_call: str = "(0.0, 0.0, 0.0, 0.0)"
     tol_scale: dict[str, float] = field(default_factory=dict)
+    derived: list[tuple[Signal, str, float]] = field(default_factory=list)
     state_index: dict[str, int] = field(default_factory=dict)
     aux_index: dict[str, int] = field(default_factory=dict)
     param_index: dict[str, int] = field(default_factory=dict)
@@ -107,6 +108,17 @@ class Builder:
             self.param(f"{prefix}[{i}]", float(v))
         return first
 
+    def named_params(self, prefix: str, names: tuple[str, ...], values: np.ndarray) -> int:
+        """Register a block of parameters ``prefix.name`` for each of ``names`` (SI), in
+        order; return the offset of the first (kernels add their part's named offsets)."""
+        values = np.asarray(values, dtype=float)
+        if values.shape != (len(names),):
+            raise ValueError(f"{prefix}: {values.size} values for {len(names)} named slots")
+        first = len(self.param_values)
+        for name, v in zip(names, values, strict=True):
+            self.param(f"{prefix}.{name}", float(v))
+        return first
+
     def p(self, name: str) -> str:
         return f"P[{self.param_index[name]}]"
 
@@ -116,6 +128,14 @@ class Builder:
         self.aux_index[name] = len(self.aux)
         self.aux.append(Signal(name, unit, description))
         return self.aux_index[name]
+
+    def add_derived(self, name: str, unit: str, description: str, source: str,
+                    factor: float) -> None:
+        """Declare a signal that is ``factor`` times state or signal ``source`` (e.g. the
+        screw's linear speed H·ω_s), computed from the recorded run when read."""
+        if name in self.aux_index or name in self.state_index:
+            raise ValueError(f"derived signal {name!r} is already a state or signal")
+        self.derived.append((Signal(name, unit, description), source, float(factor)))
 
     def a(self, name: str) -> str:
         return f"aux[{self.aux_index[name]}]"
