@@ -78,6 +78,9 @@ def _corpus() -> list[tuple[str, str, float, float, float]]:
     for a in (0.2, 0.3, 0.5, 0.6):
         for v in (1.0, 1.5, 1.6, 1.7):
             out.append(("wang2021", "cdfs", a, v, 0.0))
+    for a in (0.2, 0.6):  # Table 3's critical speed, 1.56 mm/s at every position
+        for v in (1.55, 1.56):
+            out.append(("wang2021", "cdfs", a, v, 0.0))
     for v in (0.02, 0.5, 1.0, 1.55):
         out.append(("wang2021", "ddfs", 0.4, v, 16.0))
     for v in (0.2, 0.5, 1.0, 3.0):
