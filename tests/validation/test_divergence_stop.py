@@ -72,3 +72,10 @@ def test_bounds_follow_the_command_nut_and_initial_speeds() -> None:
     kicked = DriveSystem(params, "ddfs", 0.4, initial_state={"table_speed": 0.1})
     assert divergence_bounds(kicked, profile, model)[table] == pytest.approx(
         DIVERGENCE_SPEED_RATIO * 0.1)
+
+
+def test_a_diverging_staircase_marks_its_steps_unstable() -> None:
+    from feeddrive.analysis.critical import walk_down
+    trials, simulated = walk_down(_system(400.0), [3e-3, 2e-3, 1e-3])
+    assert [t.kind for t in trials] == [UNSTABLE] * 3
+    assert simulated == pytest.approx(36.0)  # one run of three 12-s steps, stopped early
