@@ -95,7 +95,9 @@ NONSTIFF_STEPS = 5
 POWER_ITERATIONS = 12
 # MODE_MODAL (see the module docstring): RODAS4 steps capped on lightly damped modes
 MODAL_SWITCH_GAIN = 2.0  # switch to RODAS4 only if the capped step is ≥ this × DOPRI5's
-MODAL_RETRY = 500  # DOPRI5 steps before a refused switch is considered again
+# DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
+# of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
+MODAL_RETRY = 500
 # RODAS4 steps between two eigen-analyses at least (the cap of the last one holds meanwhile)
 MODAL_EVERY = 10
 
@@ -104,9 +106,10 @@ STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "ja
 
 # h, method, frozen states known, stiff and non-stiff counts, DOPRI5 error memory, RODAS4
 # error, step and first/rejected flags, the modal step cap, whether a reference Jacobian is
-# kept and the step count until which a switch is refused; then one live flag per state and the
-# modal reference Jacobian (n × n) (integrate_template)
-MEMORY_SCALARS = 13
+# kept, the step count until which a switch is refused and the DOPRI5 steps since the last
+# eigen-analysis; then one live flag per state and the modal reference Jacobian (n × n)
+# (integrate_template)
+MEMORY_SCALARS = 14
 
 CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_MODAL",
              "DP_D1", "DP_D3", "DP_D4", "DP_D5", "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS",
@@ -291,6 +294,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     J_ref = np.zeros((n, n))
     refuse_until = 0
     since_eig = 0
+    dp_since_eig = MODAL_RETRY  # the first accepted DOPRI5 step is analysed
     n_eig = 0
     # step-size controller memory: DOPRI5 PI controller, Gustafsson's for RODAS4
     dp_err_old = 1e-4
@@ -321,6 +325,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
         h_osc = memory[10]
         have_ref = memory[11] != 0.0
         refuse_until = int(memory[12])
+        dp_since_eig = int(memory[13])
         for i in range(n):
             live[i] = memory[MEMORY_SCALARS + i] != 0.0
             for j in range(n):
@@ -384,7 +389,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                             J_ref[i, j] = J[i, j]
             last = False
             h_try = min(h, h_max)
-            if stiff and modal:
+            if modal:  # both methods: DOPRI5 amplifies a mode at 1 < h|λ| < 3.3
                 h_try = min(h_try, h_osc)
             if t + h_try >= t_ev - 1e-12 * max(1.0, t_ev):
                 h_try = t_ev - t
@@ -490,6 +495,22 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     else:
                         nonstiff_count = 0
                 else:
+                    if modal:
+                        dp_since_eig += 1
+                    if modal and dp_since_eig >= MODAL_RETRY:
+                        # DOPRI5 too: its step on a lightly damped mode is capped as well
+                        dp_since_eig = 0
+                        calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, n_pos,
+                                                n_vel, n_cur, atol, J, ft, yp, fp, aux,
+                                                all_live, S, colour)
+                        n_rhs += calls
+                        n_jac += 1
+                        h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+                        n_eig += 1
+                        have_ref = True
+                        for i in range(n):
+                            for j in range(n):
+                                J_ref[i, j] = J[i, j]
                     num = 0.0
                     den = 0.0
                     for i in range(n):
@@ -614,6 +635,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     memory[10] = h_osc
     memory[11] = 1.0 if have_ref else 0.0
     memory[12] = refuse_until
+    memory[13] = dp_since_eig
     for i in range(n):
         memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
         for j in range(n):
