@@ -168,6 +168,7 @@ def test_docs_state_the_constants_of_the_code() -> None:
     assert f"moved by {100 * modes.REFRESH:g} % of its largest entry" in text
     assert f"at most every {switching.MODAL_EVERY} Rosenbrock steps" in text
     assert f"reconsidered {switching.MODAL_RETRY} steps later" in text
+    assert f"and every {switching.MODAL_RETRY} steps" in text
     assert "less than twice DOPRI5's step" in text and switching.MODAL_SWITCH_GAIN == 2.0
     assert f"exceeds {DIVERGENCE_SPEED_RATIO:g} × the reference speed" in text
     assert f"or {1e3 * DIVERGENCE_SPEED_FLOOR:g} mm/s" in text
