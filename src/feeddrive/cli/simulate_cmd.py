@@ -149,6 +149,10 @@ def simulate_command(
             f"expected ≤ {budget.longest_duration:g} [s], or raise --max-steps")
     # .parquet/.csv outputs are written while the run goes (memory bounded); .nc/.mat at the end
     streamed = output is not None and output.lower().endswith((".parquet", ".csv"))
+    if not streamed:  # a record that cannot fit is refused before any warning about it
+        from ..budget import check_output_memory
+
+        check_output_memory(duration, options.output_interval)
     if budget.memory_bytes > MEMORY_WARNING_BYTES and not streamed:
         _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
                     f"{budget.memory_bytes / 1e9:.1f} GB of memory (a .parquet or .csv "
