@@ -246,3 +246,25 @@ def test_calibrate_out_marks_the_set_as_fitted(tmp_path: Path) -> None:
     assert "CDFS critical speed 1.56 mm/s at 400 mm" in back.description
     default = inspect.signature(calibrate_command).parameters["max_duration"].default
     assert default.default == protocol.TRIAL_MAX_DURATION
+
+
+# ------------------------------------------------------------------ item 13: --help
+
+
+def test_help_lines_are_whole_and_drive_shows_its_choices() -> None:
+    """Item 13: `feeddrive --help` cut the stiffness line at "Eqs." and `--drive <str>` in
+    --help showed no choices."""
+    import re
+
+    import typer.main
+
+    group = typer.main.get_command(app)
+    for name, command in group.commands.items():  # type: ignore[attr-defined]
+        short = command.get_short_help_str(limit=300)
+        assert not re.search(r"\b(Eqs?|Figs?|Sect|e\.g|i\.e|vs)\.$", short), (name, short)
+        if any("--drive" in p.opts for p in command.params):
+            page = runner.invoke(app, [name, "--help"], env={"COLUMNS": "160"}).output
+            line = next(s for s in page.splitlines() if "--drive" in s)
+            assert "cdfs" in line.split("--drive")[1].split()[0], (name, line)
+    listing = runner.invoke(app, ["--help"], env={"COLUMNS": "100"}).output
+    assert "k_sa, K_a and K_eq at table positions" in listing

@@ -11,7 +11,8 @@ from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters,
 @app.command("loops")
 @user_errors
 def loops_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs|linear-motor",
+                              help="cdfs, ddfs or linear-motor"),
     table_speed: float = typer.Option(1.5, "--table-speed", help="Operating point: steady "
                                       "table speed [mm/s]."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
@@ -60,7 +61,8 @@ def loops_command(
 @app.command("stability")
 @user_errors
 def stability_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs|linear-motor",
+                              help="cdfs, ddfs or linear-motor"),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     low: float = typer.Option(1e3 * protocol.LINEAR_SPEED_RANGE[0], "--low",

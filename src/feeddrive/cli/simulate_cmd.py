@@ -31,7 +31,8 @@ def _say(text: str) -> None:
 @app.command("simulate")
 @user_errors
 def simulate_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor (a "
+    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs|linear-motor",
+                              help="cdfs, ddfs or linear-motor (a "
                               "direct-drive table; default preset linear-motor-example)"),
     table_speed: float | None = typer.Option(
         None, "--table-speed", help="Table speed [mm/s]: the command (constant), the "
