@@ -108,7 +108,15 @@ class Result:
     """A simulation's signals, its solver statistics and summaries.
 
     ``Result(dataset)`` wraps a Dataset; :meth:`from_run` (what :func:`simulate` returns)
-    keeps the raw arrays and builds ``.dataset`` only when it is read.
+    keeps the raw arrays and builds ``.dataset`` only when it is read.  ``result["name"]``
+    is a signal's values (SI), ``"name" in result`` tells whether the run has it.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset or None, default None
+        A run's dataset (signals SI, units in each variable's ``units`` attribute).
+    run : Run or None, keyword-only, default None
+        A run's raw arrays (give exactly one of ``dataset`` and ``run``).
     """
 
     def __init__(self, dataset: xr.Dataset | None = None, *, run: Run | None = None) -> None:
@@ -119,10 +127,25 @@ class Result:
 
     @classmethod
     def from_run(cls, run: Run) -> Result:
+        """The Result of a run's raw arrays (the dataset is built when first read).
+
+        Parameters
+        ----------
+        run : Run
+            Times, states and auxiliary signals of a run, with its model and system.
+
+        Returns
+        -------
+        Result
+            The lazily built result.
+        """
         return cls(run=run)
 
     @property
     def dataset(self) -> xr.Dataset:
+        """The run as an xarray Dataset: every state and signal over ``time`` [s], SI, with units
+        and descriptions in the attributes, the parameters and solver statistics attached.
+        """
         if self._dataset is None:
             assert self._run is not None
             self._dataset = self._run.dataset()
@@ -147,12 +170,15 @@ class Result:
 
     @property
     def time(self) -> np.ndarray:
+        """The recorded instants [s]."""
         if self._run is not None:
             return self._run.t
         return np.asarray(self.dataset["time"].values)
 
     @property
     def solver_stats(self) -> dict[str, Any]:
+        """The integrator's statistics: method, steps, rejected steps, right-hand-side calls,
+        status."""
         if self._run is not None:
             return dict(self._run.solver_stats)
         stats: dict[str, Any] = json.loads(self.dataset.attrs["solver"])
@@ -166,7 +192,20 @@ class Result:
 
     def creep_metrics(self, *, thresholds: CreepThresholds | None = None,
                       window: tuple[float, float] | None = None) -> CreepMetrics:
-        """Creep metrics of the table speed against the commanded speed."""
+        """Creep metrics of the table speed against the commanded speed.
+
+        Parameters
+        ----------
+        thresholds : CreepThresholds or None, default None
+            Verdict limits (None: the defaults).
+        window : tuple of float or None, default None
+            (start, end) of the part to assess [s]; None: the steady window after the transient.
+
+        Returns
+        -------
+        CreepMetrics
+            See :func:`feeddrive.creep_metrics`.
+        """
         from .analysis.metrics import creep_metrics
         return creep_metrics(self.time, self["table_speed"], self.command_speed,
                              thresholds=thresholds, window=window)
@@ -178,6 +217,11 @@ class Result:
         stick fraction, verdict, motor speeds.  Sine profiles: tracking error, reversal
         overshoot and stick time at reversals (constant-speed metrics mean nothing there).
         Both: following error and position deviation [µm] over the same window.
+
+        Returns
+        -------
+        dict
+            Plain values in mm/s, µm, s and Hz, with the names of their units.
         """
         from .analysis.metrics import position_metrics, sine_metrics
 
@@ -300,6 +344,19 @@ class Result:
         return 1e3 * float(np.mean(self[name][sel]))
 
     def save(self, path: str | Path) -> Path:
+        """Write the run to a file; the format follows the extension.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            ``.csv`` or ``.parquet`` (engineering units: mm, mm/s), ``.nc`` or ``.mat`` (SI, units
+            in the attributes).
+
+        Returns
+        -------
+        pathlib.Path
+            The written file.
+        """
         return save_result(self.dataset, path)
 
 

@@ -551,6 +551,7 @@ README_COMMANDS_BAD_FILE = [
     ["identify", "static", "{bad}"],
     ["identify", "dynamic", "{bad}"],
     ["analyze", "{bad}"],
+    ["export", "fmu", "--drive", "ddfs", "--out", "{bad}.fmu", "--params", "{bad}"],
 ]
 README_COMMANDS_BAD_VALUE = [
     ["reproduce", "--workers", "0"],
@@ -566,6 +567,7 @@ README_COMMANDS_BAD_VALUE = [
     ["identify", "static", "x.csv", "--site", "wheel"],
     ["identify", "dynamic", "x.csv", "--confidence", "2"],
     ["analyze", "x.csv", "--smoothing", "-5"],
+    ["export", "fmu", "--drive", "xdfs", "--out", "x.fmu"],
 ]
 
 
@@ -574,7 +576,7 @@ README_COMMANDS_BAD_VALUE = [
 def test_no_readme_command_prints_a_traceback(args: list[str], binary_file: str) -> None:
     """Issue 12 acceptance: each command of the README table, given a bad file or a bad
     value, answers with one line naming what is wrong (unwritable outputs: issue 13)."""
-    result = run(*[binary_file if a == "{bad}" else a for a in args])
+    result = run(*[a.replace("{bad}", binary_file) for a in args])
     assert result.exit_code == 2, result.output
     assert "Traceback" not in result.output
     lines = [s for s in result.stderr.strip().splitlines() if s.startswith("error: ")]
@@ -593,9 +595,9 @@ def test_readme_command_table_matches_the_cli() -> None:
     assert {cmd for cmd, _ in rows} >= {"reproduce", "simulate", "creep", "calibrate",
                                         "stiffness", "friction", "identify"}
     for cmd, rest in rows:
-        sub = re.match(r" ([a-z]+)\b", rest)  # a group's first subcommand (params show)
-        shown = run(cmd, sub.group(1), "--help").stdout if cmd == "params" and sub \
-            else run(cmd, "--help").stdout
+        words = rest.split()  # a group's subcommand (`export fmu`): its own --help
+        sub = words[:1] if words and re.fullmatch(r"[a-z]+", words[0]) else []
+        shown = run(cmd, *sub, "--help").stdout
         for option in re.findall(r"--[a-z][a-z-]*", rest):
             assert option in shown, (cmd, option)
     assert "--profile " + "\\|".join(PROFILES) in readme

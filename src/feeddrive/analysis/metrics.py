@@ -63,28 +63,28 @@ _MIN_WINDOW_SAMPLES = 8
 class CreepThresholds:
     """Limits that turn creep metrics into a verdict.  All ratios are relative to |v_cmd|.
 
-    Attributes
+    Parameters
     ----------
-    stick_level:
+    stick_level : float, default 0.1
         A sample *sticks* when its speed in the command's direction is below
-        ``stick_level``·|v_cmd| (default 0.1: below 10 % of the command).
-    max_stick_fraction:
-        The run is creeping if the stick fraction exceeds this (default 0.02: the table
-        sticks during more than 2 % of the window).
-    max_ripple_ratio:
-        The run is creeping if (max − min)/|v_cmd| exceeds this (default 0.5: a peak-to-peak
-        speed ripple of more than half the command).
-    min_ripple_for_frequency:
-        No stick-slip frequency is reported when the ripple ratio is below this (default
-        0.02): the ripple is negligible.
-    min_peak_share:
+        ``stick_level``·|v_cmd| [-] (below 10 % of the command).
+    max_stick_fraction : float, default 0.02
+        The run is creeping if the stick fraction exceeds this [-] (the table sticks during
+        more than 2 % of the window).
+    max_ripple_ratio : float, default 0.5
+        The run is creeping if (max − min)/|v_cmd| exceeds this [-] (a peak-to-peak speed
+        ripple of more than half the command).
+    min_ripple_for_frequency : float, default 0.02
+        No stick-slip frequency is reported when the ripple ratio is below this [-]: the
+        ripple is negligible.
+    min_peak_share : float, default 0.1
         No stick-slip frequency is reported when the periodogram peak (its main lobe) holds
-        less than this share of the ripple power (default 0.1): the ripple is not periodic
-        (broadband noise spreads its power over all frequencies).
-    max_speed_ratio:
-        The run is unstable if max|v|/|v_cmd| exceeds this (default 20).  Stick-slip of the
-        Wang2021 CDFS peaks at about 2.2× the command (0.5–1.5 mm/s, 12 s runs); a diverging
-        loop (a 100-t table) reaches 10⁴×.
+        less than this share of the ripple power [-]: the ripple is not periodic (broadband
+        noise spreads its power over all frequencies).
+    max_speed_ratio : float, default 20
+        The run is unstable if max|v|/|v_cmd| exceeds this [-].  Stick-slip of the Wang2021
+        CDFS peaks at about 2.2× the command (0.5–1.5 mm/s, 12 s runs); a diverging loop (a
+        100-t table) reaches 10⁴×.
     """
 
     stick_level: float = 0.1
@@ -131,9 +131,35 @@ def frequency_label(stick_fraction: float | None) -> str:
 class CreepMetrics:
     """Creep metrics of one trace over its steady window.
 
-    Speeds in [m/s], times in [s], frequency in [Hz]; ratios are dimensionless, relative to
-    |command_speed|.  ``stick_slip_frequency`` is None when the ripple is negligible or not
-    periodic.
+    Ratios are dimensionless, relative to |command_speed|.
+
+    Parameters
+    ----------
+    command_speed : float
+        Commanded table speed [m/s].
+    window_start : float
+        Start of the assessed window [s].
+    window_end : float
+        End of the assessed window [s].
+    mean_speed : float
+        Time-averaged table speed over the window [m/s].
+    ripple_ratio : float
+        Peak-to-peak speed over |command_speed| [-].
+    min_ratio : float
+        Lowest speed in the command's direction over |command_speed| [-].
+    stick_fraction : float
+        Share of the window during which the table sticks [-].
+    stick_slip_frequency : float or None
+        Frequency of the periodic speed ripple [Hz]; None when the ripple is negligible or not
+        periodic.
+    verdict : str
+        ``"smooth"``, ``"creeping"`` or ``"unstable"``.
+    thresholds : CreepThresholds
+        The limits that gave the verdict.
+    max_ratio : float, default nan
+        Largest |speed| over |command_speed| [-].
+    window_samples : int, default 0
+        Number of samples in the window.
     """
 
     command_speed: float
@@ -156,10 +182,22 @@ class CreepMetrics:
 
     @property
     def unstable(self) -> bool:
+        """The loop diverged (verdict ``"unstable"``)."""
         return self.verdict == "unstable"
 
     def to_dict(self, units: Literal["SI", "mm"] = "SI") -> dict[str, Any]:
-        """Plain dict for JSON output; speeds in m/s (``"SI"``) or mm/s (``"mm"``)."""
+        """The metrics as a plain dict for JSON output.
+
+        Parameters
+        ----------
+        units : {"SI", "mm"}, default "SI"
+            Speeds in m/s (``"SI"``) or mm/s (``"mm"``).
+
+        Returns
+        -------
+        dict
+            Every metric, with a ``"units"`` entry naming the units used.
+        """
         if units not in ("SI", "mm"):
             raise ValueError(f"units = {units!r}: expected 'SI' or 'mm'")
         k = 1.0 if units == "SI" else 1e3
@@ -419,22 +457,27 @@ def creep_metrics(
 ) -> CreepMetrics:
     """Creep metrics of a table-speed trace.
 
-    Parameters
-    ----------
-    time:
-        Sample times [s], strictly increasing (need not be uniform).
-    speed:
-        Table speed [m/s] at those times.
-    command_speed:
-        Commanded table speed [m/s], non-zero; negative for motion in the − direction.
-    thresholds:
-        Verdict limits; :class:`CreepThresholds` defaults when None.
-    window:
-        (start, end) [s] of the part to assess; :func:`steady_window` when None.
-
     The speed is treated as piecewise linear between samples: the stick fraction is the
     exact fraction of window time during which that interpolant is below
     ``stick_level``·|v_cmd|, and the mean speed is its time average.
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s], strictly increasing (need not be uniform).
+    speed : array_like
+        Table speed at those times [m/s].
+    command_speed : float
+        Commanded table speed [m/s], non-zero; negative for motion in the − direction.
+    thresholds : CreepThresholds or None, default None
+        Verdict limits; :class:`CreepThresholds` defaults when None.
+    window : tuple of float or None, default None
+        (start, end) of the part to assess [s]; :func:`steady_window` when None.
+
+    Returns
+    -------
+    CreepMetrics
+        Mean speed, ripple, stick fraction, ripple frequency and the verdict.
     """
     t, v = _as_trace(time, speed)
     vc = _check_command(command_speed)

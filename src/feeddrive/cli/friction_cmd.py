@@ -106,7 +106,8 @@ def friction_command(
     if plot:
         check_output_file(plot, option="--plot", inputs=[params_file], force=force)
     params = resolve_parameters(preset_name, params_file)
-    lugre: LuGreParameters = getattr(params.friction, site)
+    lugre: LuGreParameters = getattr(params.friction, site).require(
+        LuGreParameters, f"friction.{site}", "feeddrive friction")
     m, k, c = _scan_setup(params, mass, stiffness_n_per_um, damping)
     _positive("--speed-min", speed_min, "mm/s")
     if not (math.isfinite(speed_max) and speed_max > speed_min):

@@ -99,6 +99,7 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
     """Steady friction force [N] against sliding speed [mm/s] at each site the drive uses,
     the speed bands where it falls (negative damping), and the sites' operating speeds."""
     from ..friction import negative_slope_band, steady_friction
+    from ..parameters import LuGreParameters
 
     params = checked.params
     assert params is not None
@@ -106,7 +107,8 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
     bands: dict[str, list[list[float]]] = {}
     top = 2e-3
     for site in sites:
-        lugre = getattr(params.friction, site)
+        lugre = getattr(params.friction, site).require(LuGreParameters, f"friction.{site}",
+                                                       "the explorer's friction curves")
         bands[site] = []
         for name, sign in (("positive", 1.0), ("negative", -1.0)):
             band = negative_slope_band(lugre.branch(name))

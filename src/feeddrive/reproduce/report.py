@@ -13,7 +13,7 @@ from markdown_it import MarkdownIt
 from .. import __version__, protocol
 from ..analysis.critical import format_bands, format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
-from ..parameters import DriveParameters
+from ..parameters import DriveParameters, LuGreParameters
 from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
 from ..units import SITES
@@ -110,7 +110,8 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
             1e-6 * r["k_sa_paper"], 1e-6 * r["k_sa"], "N/µm", "predicted (E assumed)")
     add("K_eq at mid-screw", "Sect. 5.2, Eqs. (2)–(5)", 1e-6 * PAPER["k_eq_mid"],
         1e-6 * equivalent_stiffness(params, MID), "N/µm", "predicted")
-    band = negative_slope_band(params.friction.screw.positive)
+    screw = params.friction.screw.require(LuGreParameters, "friction.screw", "the report")
+    band = negative_slope_band(screw.positive)
     add("screw-shaft zero-slope speed (+ branch) vs CDFS critical speed", "Sect. 5.2 (1.56)",
         1.56, None if band is None else 1e3 * band.upper, "mm/s", "analytic indicator")
     f6 = results["fig6"]
@@ -233,7 +234,10 @@ def rigid_body_band(params: DriveParameters) -> str:
     # c·K_pp + c_i, a damper c and an integral term c_i·K_pp (current loop ideal at these
     # frequencies: PI, or P with its back-EMF damping neglected)
     stiffness = c.position_gain * damping + integral
-    st = sliding_stability(speeds, [params.friction.screw, params.friction.guide], mass,
+    sites = [getattr(params.friction, k).require(LuGreParameters, f"friction.{k}",
+                                                 "the rigid-drive indicator")
+             for k in ("screw", "guide")]
+    st = sliding_stability(speeds, sites, mass,
                            stiffness, damping, integral=c.position_gain * integral)
     bad = speeds[~st.stable]
     text = (f"Rigid CDFS (m = {mass:.0f} kg, loop damping {damping:.3g} N s/m, stiffness "
