@@ -109,7 +109,14 @@ class CreepThresholds:
 
 
     def describe(self) -> str:
-        """The window rule in words, with its numbers (printed beside its verdicts)."""
+        """The window rule in words, with its numbers (printed beside its verdicts).
+
+        Returns
+        -------
+        str
+            The rule, and the note that the limit-cycle rule of ``feeddrive creep`` can
+            judge a trace differently.
+        """
         return (f"window rule: over the steady window, creeping if the peak-to-peak ripple "
                 f"exceeds {100 * self.max_ripple_ratio:g} % of the command or the table "
                 f"sticks (below {100 * self.stick_level:g} % of the command) for more than "
