@@ -114,8 +114,7 @@ class CreepThresholds:
         Returns
         -------
         str
-            The rule, and the note that the limit-cycle rule of ``feeddrive creep`` can
-            judge a trace differently.
+            One sentence naming the limits, and the other rule that can differ.
         """
         return (f"window rule: over the steady window, creeping if the peak-to-peak ripple "
                 f"exceeds {100 * self.max_ripple_ratio:g} % of the command or the table "
