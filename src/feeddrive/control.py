@@ -14,7 +14,7 @@ import numpy as np
 
 from ._jit import kernel
 
-REF_CONSTANT, REF_SINE, REF_SAMPLED = 0, 1, 2
+REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
 # parameter block of a profile: kind, table speed, nut speed, ramp time, frequency or step,
 # and where its data table lies in T (offset, columns)
 PROFILE_PARAMS = ("kind", "table_speed", "nut_speed", "ramp_time", "frequency", "table_offset",
@@ -27,7 +27,11 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
     """Commanded (table position, table speed, nut position, nut speed) at time t [s].
 
     ``P[o:o+7]``: the profile block (:data:`PROFILE_PARAMS`); sampled profiles read a 4 × n
-    table at ``T[to:]`` (rows: table position, table speed, nut position, nut speed).
+    table at ``T[to:]`` (rows: table position, table speed, nut position, nut speed), their
+    speeds interpolated linearly or, with ``P[o+3]`` = 1, held (zero-order hold).  An
+    external input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its
+    host: positions X (row 0, 2) and speeds V with their rates A (rows 1, 3: [V, A]) at the
+    instant ``P[o+4]``, x = X + V·τ + A·τ²/2, v = V + A·τ, τ = t − ``P[o+4]``.
     """
     kind = int(P[o])
     if kind == REF_CONSTANT:
@@ -45,11 +49,19 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
         c = math.cos(w * t)
         return (P[o + 1] * (1.0 - c) / w, P[o + 1] * s, P[o + 2] * (1.0 - c) / w,
                 P[o + 2] * s)
-    dt = P[o + 4]
     to = int(P[o + 5])
+    if kind == REF_INPUT:
+        tau = t - P[o + 4]
+        return (T[to] + (T[to + 2] + 0.5 * T[to + 3] * tau) * tau, T[to + 2] + T[to + 3] * tau,
+                T[to + 4] + (T[to + 6] + 0.5 * T[to + 7] * tau) * tau,
+                T[to + 6] + T[to + 7] * tau)
+    dt = P[o + 4]
     n = int(P[o + 6])
+    hold = P[o + 3] > 0.5
     u = t / dt
-    k = int(math.floor(u))
+    # held speeds jump at the samples: an instant within 1e-9 of a sample step belongs to the
+    # new one (t = k·dt computed in floating point may land a hair before it)
+    k = int(math.floor(u + 1e-9)) if hold else int(math.floor(u))
     if k >= n - 1:
         k = n - 2
         u = float(n - 1)
@@ -60,12 +72,12 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
     tau = f * dt
     v0 = T[to + n + k]
     v1 = T[to + n + k + 1]
-    slope = (v1 - v0) / dt
+    slope = 0.0 if hold else (v1 - v0) / dt
     x_t = T[to + k] + v0 * tau + 0.5 * slope * tau * tau
     v_t = v0 + slope * tau
     v0 = T[to + 3 * n + k]
     v1 = T[to + 3 * n + k + 1]
-    slope = (v1 - v0) / dt
+    slope = 0.0 if hold else (v1 - v0) / dt
     x_n = T[to + 2 * n + k] + v0 * tau + 0.5 * slope * tau * tau
     v_n = v0 + slope * tau
     return x_t, v_t, x_n, v_n
@@ -147,7 +159,9 @@ class SineSpeed:
 class SampledSpeed:
     """Table and nut speeds sampled on a uniform time grid starting at 0.
 
-    Speeds are interpolated linearly; positions are their exact integrals.
+    Speeds are interpolated linearly or, with ``hold``, each held until the next sample
+    (zero-order hold, as a co-simulation FMU holds its inputs over a communication step);
+    positions are their exact integrals.
 
     Parameters
     ----------
@@ -157,11 +171,14 @@ class SampledSpeed:
         Commanded table speed at each instant [m/s].
     nut_speed : numpy.ndarray or None, default None
         Commanded nut speed at each instant [m/s] (DDFS; None: zero).
+    hold : bool, default False
+        Hold each sample until the next (zero-order hold) instead of interpolating.
     """
 
     time: np.ndarray
     table_speed: np.ndarray
     nut_speed: np.ndarray | None = None
+    hold: bool = False
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
         """The profile as (parameter slots, data table) for the reference kernel.
@@ -188,8 +205,8 @@ class SampledSpeed:
         for j, v in enumerate((vt, vn)):
             table[2 * j + 1] = v
             table[2 * j, 0] = 0.0
-            table[2 * j, 1:] = np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)
-        return ({0: REF_SAMPLED, 4: float(dt.mean())}, table)
+            table[2 * j, 1:] = np.cumsum((v[:-1] if self.hold else 0.5 * (v[1:] + v[:-1])) * dt)
+        return ({0: REF_SAMPLED, 3: 1.0 if self.hold else 0.0, 4: float(dt.mean())}, table)
 
     @classmethod
     def from_function(cls, table_speed: Callable[[np.ndarray], np.ndarray], duration: float,
