@@ -47,6 +47,8 @@ class Model:
     sites: tuple[tuple[str, str], ...]  # (site name, law name)
     jacobian_pattern: np.ndarray  # (n, n + 1) uint8: dy[i] may depend on y[j] (column n: t)
     jacobian_colours: np.ndarray  # (n + 1,) group of each column in the grouped FD Jacobian
+    # signals a part declares as factor × a state or signal: (signal, source name, factor)
+    derived: tuple[tuple[codegen.Signal, str, float], ...] = ()
 
     @property
     def n_held(self) -> int:
@@ -244,7 +246,8 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         tolerance_scales=tuple(b.tol_scale.get(s.name, 1.0) for s in b.states),
         module=module, source=source, drive=drive,
         sites=tuple((site.name, law.name) for site, law, _ in laws),
-        jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern))
+        jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
+        derived=tuple(b.derived))
 
 
 @functools.cache
