@@ -434,8 +434,11 @@ def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str) -> LoopR
         ph = np.interp(f, freq[k:k + 2], phase[k:k + 2])
         crossover = float(f)
         phase_margin = float(((ph + 180.0) + 180.0) % 360.0 - 180.0)
-    # phase crossings of −180° (mod 360) above the gain crossover
-    wrapped = (phase + 180.0) % 360.0 - 180.0
+    # phase crossings of −180° (mod 360) above the gain crossover: ``wrapped`` is the phase's
+    # distance from −180° (mod 360), zero on the crossing (before issue 23 it was the distance
+    # from 0°, so the margin was read at the −360° crossing: 76 dB for the wang2021 position
+    # loop, whose real margin is 1 dB at the 5.5-Hz velocity-loop resonance)
+    wrapped = (phase + 360.0) % 360.0 - 180.0
     cross = np.where(np.abs(np.diff(np.sign(wrapped))) > 0)[0]
     for k in cross:
         if abs(wrapped[k] - wrapped[k + 1]) > 180.0:  # a jump of the wrap, not a crossing

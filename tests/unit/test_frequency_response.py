@@ -26,13 +26,15 @@ CDFS = fd.DriveSystem(W, "cdfs", 0.4)
 V = 1.5e-3  # [m/s] operating point of the frictionless loops (as docs/linear.md)
 
 
-def _cdfs_from_equations(params: fd.DriveParameters, k_eq: float) -> ct.InputOutputSystem:
+def _cdfs_from_equations(params: fd.DriveParameters, k_eq: float, *,
+                         open_position_loop: bool = False) -> ct.InputOutputSystem:
     """The wang2021 CDFS closed loop built from its physical equations with python-control,
     independent of the engine and of ``linearize``'s matrices (frictionless): screw shaft
     J θ̈ = K_t i − H F_d, table m ẍ = F_d − F_load with F_d = k_eq (Hθ − x) + c (Hθ̇ − ẋ),
     armature L i̇ = u − R i − K_e θ̇; current PI, velocity PI on table-equivalent speed
     (H·(ω_c − θ̇)), position P with speed feed-forward: ω_c = (K_pp (r − x) + v_r)/H.
-    Inputs r [m], v_r [m/s], F_load [N]; outputs x [m], i [A]."""
+    Inputs r [m], v_r [m/s], F_load [N]; outputs x [m], i [A].  ``open_position_loop``: the
+    transfer ω_c → x instead (the position loop broken at its output)."""
     s, c = params.screw, params.controller
     H = s.transmission_ratio
     J = params.screw_motor.inertia + s.shaft_inertia
@@ -55,11 +57,29 @@ def _cdfs_from_equations(params: fd.DriveParameters, k_eq: float) -> ct.InputOut
     cv = ct.tf([H * c.velocity_gain, H * c.velocity_integral_gain], [1, 0], inputs="ew",
                outputs="ic")
     sw = ct.summing_junction(inputs=["wc", "-w"], output="ew")
+    if open_position_loop:
+        return ct.interconnect([plant, ci, si, cv, sw], inputs=["wc"], outputs=["x"],
+                               check_unused=False)
     ep = ct.summing_junction(inputs=["r", "-x"], output="ex")
     cp = ct.ss([], [], [], [[c.position_gain / H, 1.0 / H]], inputs=["ex", "vr"],
                outputs="wc")
     return ct.interconnect([plant, ci, si, cv, sw, ep, cp], inputs=["r", "vr", "F"],
                            outputs=["x", "i"])
+
+
+def test_position_loop_margins_match_python_control() -> None:
+    """The gain margin is read at the −180° crossing (before issue 23 it was read at −360°:
+    76 dB instead of python-control's 3 dB, the 5.5-Hz velocity-loop resonance)."""
+    la = loop_analysis(CDFS, V, frictionless=True, f_min=0.5, f_max=500.0, points=2000)
+    lin = la.linear
+    k_eq = equivalent_stiffness(W, 0.4 + lin.operating_point["table_position"])
+    c, H = W.controller, W.screw.transmission_ratio
+    ref = _cdfs_from_equations(W, k_eq, open_position_loop=True) * (c.position_gain / H)
+    gm, pm, _, _, w_gain_crossover, _ = ct.stability_margins(ref)
+    pos = {lp.name: lp for lp in la.loops}["screw position loop"]
+    assert pos.gain_margin_db == pytest.approx(20 * math.log10(gm), abs=0.05)
+    assert pos.phase_margin_deg == pytest.approx(pm, abs=0.1)
+    assert pos.crossover_hz == pytest.approx(w_gain_crossover / (2 * math.pi), rel=1e-3)
 
 
 def test_to_control_has_reference_and_load_inputs_named_as_the_simulation() -> None:
@@ -227,3 +247,19 @@ def test_a_set_with_torque_ripple_is_linearised_on_its_averaged_model_with_a_war
     la = loop_analysis(fd.DriveSystem(rippled, "cdfs", 0.4), V)
     assert la.as_dict()["notes"] == list(lin.notes)
     assert math.isfinite(la.dominant().frequency_hz)
+
+
+# ---------------------------------------------------------------- the package's top level
+
+
+def test_linear_analysis_is_reachable_from_the_top_level_and_dir_lists_public_names() -> None:
+    from feeddrive import linear
+
+    for name in ("linearize", "loop_analysis", "stability_band", "frequency_response"):
+        assert getattr(fd, name) is getattr(linear, name)
+    names = dir(fd)
+    for private in ("Any", "annotations", "importlib", "sys", "types", "TYPE_CHECKING"):
+        assert private not in names
+    assert all(not n.startswith("_") or n == "__version__" for n in names)
+    assert set(fd.__all__) <= set(names)
+    assert callable(fd.simulate) and callable(fd.preset)  # existing names keep working
