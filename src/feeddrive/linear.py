@@ -520,7 +520,7 @@ NAMED_RESPONSES: dict[str, tuple[str, str, str]] = {
                         "following error per commanded table position (1 − tracking)"),
     "dynamic_compliance": ("load_force", "table_position",
                            "table position per load force on the table [m/N] (the load acts "
-                           "against positive motion: the phase starts at 180°)"),
+                           "against positive motion: a positive load pushes the table back)"),
     "disturbance_sensitivity": ("current_command_disturbance", "table_position",
                                 "table position per current disturbance at the table-driving "
                                 "motor's current command [m/A] (a motor torque disturbance "

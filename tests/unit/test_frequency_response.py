@@ -263,3 +263,18 @@ def test_linear_analysis_is_reachable_from_the_top_level_and_dir_lists_public_na
     assert all(not n.startswith("_") or n == "__version__" for n in names)
     assert set(fd.__all__) <= set(names)
     assert callable(fd.simulate) and callable(fd.preset)  # existing names keep working
+
+
+def test_the_compliance_numbers_in_the_docs_are_the_code_s() -> None:
+    """docs/linear.md states C₀ and the low-frequency slope for wang2021."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "docs" / "linear.md").read_text(encoding="utf-8")
+    c0 = float(re.search(r"C₀ = ([0-9.]+) µm/N", text).group(1))  # type: ignore[union-attr]
+    assert c0 * 1e-6 == pytest.approx(_static_compliance(W.replace_path(
+        "controller.velocity_integral_gain", 0.0)), rel=1e-3)
+    slope = float(re.search(r"= ([0-9.]+e-8) m s/N", text).group(1))  # type: ignore[union-attr]
+    lin = linearize(CDFS, V, frictionless=True)
+    r = frequency_response(lin, "dynamic_compliance", frequency_hz=np.array([1e-3]))
+    assert r.magnitude[0] / (2 * np.pi * 1e-3) == pytest.approx(slope, rel=2e-3)
