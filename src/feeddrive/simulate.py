@@ -259,6 +259,15 @@ class Simulation:
             options.position_tolerance, options.speed_tolerance, options.current_tolerance)
         self.y0 = system.initial_vector(self.model)
         self._chunks: _Chunks | None = None
+        self._running: _Chunks | None = None
+
+    def live_time(self) -> float:
+        """The simulated time [s] the solver has reached in the run going on now, read while
+        :meth:`run` computes (from another thread: the compiled solver releases the GIL and
+        writes the time of each accepted step into its memory's last slot); 0 before the
+        first step."""
+        chunks = self._running
+        return 0.0 if chunks is None else float(chunks.live[-1])
 
     def run(self, duration: float, *, output: str | Path | None = None,
             progress: Callable[[float, float], None] | None = None) -> Result:
@@ -275,6 +284,7 @@ class Simulation:
         if chunks is None or output is not None or n_break < chunks.start:
             chunks = _Chunks(self, want_aux=output is not None)
         self._chunks = None if output is not None else chunks
+        self._running = chunks
         if not chunks.dense:
             _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
                              chunks.adaptive, self.atol, self.rel, chunks.h_init, chunks.h_max)
@@ -354,6 +364,7 @@ class _Chunks:
         self.h_max = cap if self.adaptive else options.fixed_step
         self.memory = (switching.new_memory(n) if self.dense
                        else dopri5.new_memory(n, self.h_init))
+        self.live = self.memory  # the memory of the solver call going on (live_time)
         self.size = max(every, int(round(first / grid.base)) // every * every)
         self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.totals = np.zeros(9 if self.dense else 5)
@@ -414,6 +425,7 @@ class _Chunks:
                 stop = min(stop, n_break)
                 held, memory = (self.held, self.memory) if commit else (
                     self.held.copy(), self.memory.copy())
+                self.live = memory  # its last slot: the solver's live time (live_time)
                 began = _time.perf_counter()
                 t, yy, aa, last = self._call(self.y, self.start, stop, held, memory,
                                              self.sim.options.max_steps - int(self.totals[1]))

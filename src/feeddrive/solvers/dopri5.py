@@ -97,8 +97,11 @@ def auxiliary_template(t_out: np.ndarray, y_out: np.ndarray, P: np.ndarray,
 
 def new_memory(n_states: int, h_init: float) -> np.ndarray:
     """The carried-over state (step size, last error, first stage) of a run that has not
-    started (:func:`integrate`)."""
-    memory = np.zeros(2 + n_states)
+    started (:func:`integrate`).  Its last slot is the *live time*: the time [s] of the last
+    accepted step, written by the compiled solver as it goes, so that another thread can read
+    a long call's progress while it runs (the kernels release the GIL;
+    feeddrive.simulate.Simulation.live_time)."""
+    memory = np.zeros(3 + n_states)
     memory[:2] = (h_init, 1e-4)
     return memory
 
@@ -264,6 +267,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 k1[i] = k7[i]
             fresh = True
             t = t_next if last else t + h_try
+            if memory.shape[0] > 2 + n:  # the live time slot (new_memory)
+                memory[memory.shape[0] - 1] = t
             if adaptive == 1:
                 if err == 0.0:
                     fac = 5.0

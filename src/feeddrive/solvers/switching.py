@@ -122,8 +122,11 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
 
 
 def new_memory(n_states: int) -> np.ndarray:
-    """The carried-over state of a run that has not started (:func:`integrate_template`)."""
-    return np.zeros(MEMORY_SCALARS + n_states)
+    """The carried-over state of a run that has not started (:func:`integrate_template`).
+    Its last slot is the *live time*: the time [s] of the last accepted step, written by the
+    compiled solver as it goes, so that another thread can read a long call's progress while
+    it runs (the kernels release the GIL; feeddrive.simulate.Simulation.live_time)."""
+    return np.zeros(MEMORY_SCALARS + n_states + 1)
 
 
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
@@ -491,6 +494,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 y[i] = y_new[i]
                 f0[i] = f_new[i]
             t = t_new
+            if memory.shape[0] > MEMORY_SCALARS + n:  # the live time slot (new_memory)
+                memory[memory.shape[0] - 1] = t
             jac_ok = False
             if steps > max_steps:
                 status = STATUS_MAX_STEPS
