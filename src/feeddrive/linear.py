@@ -426,6 +426,7 @@ def _freq_response(lin: LinearModel, inp: str, out: str, w: np.ndarray) -> np.nd
 def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str) -> LoopResult:
     mag = 20 * np.log10(np.abs(L))
     phase = np.degrees(np.unwrap(np.angle(L)))
+    phase -= 360.0 * np.ceil(phase[0] / 360.0)  # start in (−360°, 0°]: a loop lags
     crossover = phase_margin = gain_margin = bandwidth = None
     idx = np.where((mag[:-1] >= 0) & (mag[1:] < 0))[0]
     if idx.size:
@@ -453,6 +454,11 @@ def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str) -> LoopR
     if below.size:
         bandwidth = float(freq[below[0]])
     return LoopResult(name, freq, mag, phase, gain_margin, phase_margin, crossover, bandwidth)
+
+
+def _nut_speed_loop(system: DriveSystem) -> bool:
+    p = system.parameters
+    return (p.hollow_controller or p.controller).nut_loop == "speed"
 
 
 @dataclass(frozen=True)
@@ -503,6 +509,8 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
             S = _freq_response(lin_v, inp, f"{axis}_current_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop"))
         elif inp.endswith("_speed_command_disturbance"):
+            if axis == "nut" and _nut_speed_loop(system):
+                continue  # a hollow motor on a speed loop has no position loop
             S = _freq_response(lin, inp, f"{axis}_speed_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} position loop"))
     return LoopAnalysis(poles=classify_poles(lin.poles()), loops=loops, linear=lin)
@@ -600,6 +608,9 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
             raise ParameterError("input", input, "no such motor axis in this drive; expected "
                                  + ", ".join(f"{a}_{k}_loop" for a in _axes(lin)
                                              for k in ("position", "velocity")))
+        if kind == "position" and axis == "nut" and _nut_speed_loop(system):
+            raise ParameterError("input", input, "the hollow motor runs a speed loop "
+                                 "(controller.nut_loop = speed): it has no position loop")
         if kind == "velocity":
             open_pos = replace(system, parameters=system.parameters.replace_path(
                 "controller.position_gain", 0.0))
