@@ -673,6 +673,7 @@ class StabilityBand:
     frequency_hz: np.ndarray  # of the rightmost pole
     tolerance: float  # [m/s] bisection tolerance of the edges
     nut_speed: float
+    notes: tuple[str, ...] = ()  # e.g. the averaged model's warning (:func:`averaged`)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -686,6 +687,7 @@ class StabilityBand:
             "edge_tolerance_mm_s": 1e3 * self.tolerance,
             "scan_mm_s": [float(1e3 * self.speeds[0]), float(1e3 * self.speeds[-1]),
                           int(self.speeds.size)],
+            "notes": list(self.notes),
         }
 
 
@@ -743,7 +745,7 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *, low: float = 
     freqs = [rightmost_pole(system, math.sqrt(lo * hi), nut_speed)[1] for lo, hi in intervals]
     return StabilityBand(intervals=intervals, mode_frequency_hz=freqs, speeds=speeds,
                          max_real_part=re, frequency_hz=fr, tolerance=tolerance,
-                         nut_speed=nut_speed)
+                         nut_speed=nut_speed, notes=averaged(system)[1])
 
 
 __all__ = ["INPUT_UNITS", "MARGINAL", "NAMED_RESPONSES", "OUTPUT_UNITS", "FrequencyResponse",

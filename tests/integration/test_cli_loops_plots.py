@@ -55,3 +55,16 @@ def test_the_plot_destination_and_kind_are_checked_before_the_work(tmp_path: Pat
         lines = res.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("error: ") and needle in lines[0]
     assert existing.read_bytes() == b"x"
+
+
+def test_a_set_without_steady_state_is_linearised_averaged_with_a_stated_warning() -> None:
+    """wang2021-ripple has torque ripple: `loops` and `stability` say they used the
+    averaged model (issue 23 item 4)."""
+    for args in (["loops", "--preset", "wang2021-ripple", "--json"],
+                 ["stability", "--preset", "wang2021-ripple", "--points", "5", "--json"]):
+        res = runner.invoke(app, args)
+        assert res.exit_code == 0, res.output
+        notes = json.loads(res.stdout)["notes"]
+        assert len(notes) == 1 and "averaged model" in notes[0], notes
+    text = runner.invoke(app, ["loops", "--preset", "wang2021-ripple"]).stdout
+    assert "warning: screw-motor torque ripple" in text

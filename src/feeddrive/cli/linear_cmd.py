@@ -114,6 +114,8 @@ def stability_command(
         return
     console.print(f"[bold]{drive.upper()}[/] ({params.name}), v_n = {nut_speed:g} mm/s, "
                   f"scan {low:g}–{high:g} mm/s:")
+    for note in data["notes"]:
+        console.print(f"  {note}", markup=False)
     if not band.intervals:
         console.print("  steady sliding is linearly stable at every speed scanned")
     for (lo, hi), f in zip(data["unstable_bands_mm_s"], band.mode_frequency_hz, strict=True):
