@@ -33,7 +33,8 @@ def _cdfs_from_equations(params: fd.DriveParameters, k_eq: float, *,
     J θ̈ = K_t i − H F_d, table m ẍ = F_d − F_load with F_d = k_eq (Hθ − x) + c (Hθ̇ − ẋ),
     armature L i̇ = u − R i − K_e θ̇; current PI, velocity PI on table-equivalent speed
     (H·(ω_c − θ̇)), position P with speed feed-forward: ω_c = (K_pp (r − x) + v_r)/H.
-    Inputs r [m], v_r [m/s], F_load [N]; outputs x [m], i [A].  ``open_position_loop``: the
+    Inputs r [m], v_r [m/s], F_load [N], i_d [A] (added to the current command); outputs
+    x [m], i [A].  ``open_position_loop``: the
     transfer ω_c → x instead (the position loop broken at its output)."""
     s, c = params.screw, params.controller
     H = s.transmission_ratio
@@ -53,17 +54,17 @@ def _cdfs_from_equations(params: fd.DriveParameters, k_eq: float, *,
     C = np.array([[0, 0, 0, 0, 1], [0, 1, 0, 0, 0], [0, 0, 1, 0, 0]])
     plant = ct.ss(A, B, C, np.zeros((3, 2)), inputs=["u", "F"], outputs=["i", "w", "x"])
     ci = ct.tf([c.current_gain, c.current_integral_gain], [1, 0], inputs="ei", outputs="u")
-    si = ct.summing_junction(inputs=["ic", "-i"], output="ei")
+    si = ct.summing_junction(inputs=["ic", "id", "-i"], output="ei")
     cv = ct.tf([H * c.velocity_gain, H * c.velocity_integral_gain], [1, 0], inputs="ew",
                outputs="ic")
     sw = ct.summing_junction(inputs=["wc", "-w"], output="ew")
     if open_position_loop:
         return ct.interconnect([plant, ci, si, cv, sw], inputs=["wc"], outputs=["x"],
-                               check_unused=False)
+                               check_unused=False, add_unused=False)
     ep = ct.summing_junction(inputs=["r", "-x"], output="ex")
     cp = ct.ss([], [], [], [[c.position_gain / H, 1.0 / H]], inputs=["ex", "vr"],
                outputs="wc")
-    return ct.interconnect([plant, ci, si, cv, sw, ep, cp], inputs=["r", "vr", "F"],
+    return ct.interconnect([plant, ci, si, cv, sw, ep, cp], inputs=["r", "vr", "F", "id"],
                            outputs=["x", "i"])
 
 
@@ -100,7 +101,8 @@ def test_to_control_has_reference_and_load_inputs_named_as_the_simulation() -> N
 
 
 def test_frequency_responses_match_a_python_control_interconnection() -> None:
-    """Tracking, dynamic compliance and the current response to a load, CDFS, frictionless,
+    """Tracking, dynamic compliance, disturbance sensitivity and the current a load needs,
+    CDFS, frictionless,
     0.1–500 Hz: within 0.05 dB and 0.5° of the interconnection built from the equations."""
     lin = linearize(CDFS, V, frictionless=True)
     k_eq = equivalent_stiffness(W, 0.4 + lin.operating_point["table_position"])
@@ -111,6 +113,7 @@ def test_frequency_responses_match_a_python_control_interconnection() -> None:
     cases = {
         "tracking": g[0, 0] + s * g[0, 1],  # position reference with its speed feed-forward
         "dynamic_compliance": g[0, 2],
+        "disturbance_sensitivity": g[0, 3],
     }
     for name, want in cases.items():
         got = frequency_response(lin, name, frequency_hz=f).response
