@@ -269,6 +269,15 @@ class Simulation:
         chunks = self._running
         return 0.0 if chunks is None else float(chunks.live[-1])
 
+    def request_stop(self) -> None:
+        """Ask the run going on (in another thread) to stop: the compiled solver ends after
+        the step it is in, and :meth:`run` raises :class:`SimulationInterrupted` with what
+        was finished, as on Ctrl-C.  The explorer's Cancel uses it."""
+        chunks = self._running
+        if chunks is not None:
+            chunks.stop_requested = True
+            chunks.live[-2] = 1.0
+
     def run(self, duration: float, *, output: str | Path | None = None,
             progress: Callable[[float, float], None] | None = None) -> Result:
         """The Result over [0, ``duration``] [s] (see the class docstring)."""
@@ -291,6 +300,8 @@ class Simulation:
         try:
             t, y, aux_parts, stats = chunks.advance(n_break, output, progress)
         except _Stopped as stop:
+            if chunks.stop_requested:  # request_stop: not continued from
+                self._chunks = None
             partial = self._result(*stop.joined, {"method": options.method, "interrupted": True,
                                                   "t_reached_s": stop.t_reached})
             raise SimulationInterrupted(stop.t_reached, partial,
@@ -365,6 +376,7 @@ class _Chunks:
         self.memory = (switching.new_memory(n) if self.dense
                        else dopri5.new_memory(n, self.h_init))
         self.live = self.memory  # the memory of the solver call going on (live_time)
+        self.stop_requested = False  # Simulation.request_stop
         self.size = max(every, int(round(first / grid.base)) // every * every)
         self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.totals = np.zeros(9 if self.dense else 5)
@@ -426,11 +438,18 @@ class _Chunks:
                 held, memory = (self.held, self.memory) if commit else (
                     self.held.copy(), self.memory.copy())
                 self.live = memory  # its last slot: the solver's live time (live_time)
+                if self.stop_requested:
+                    raise KeyboardInterrupt  # a stop asked for between two calls
                 began = _time.perf_counter()
                 t, yy, aa, last = self._call(self.y, self.start, stop, held, memory,
                                              self.sim.options.max_steps - int(self.totals[1]))
                 wall = _time.perf_counter() - began
                 stats = self._add(last)
+                if int(last[0]) == dopri5.STATUS_STOPPED:
+                    # stopped inside the call (request_stop): its part is dropped and the
+                    # carried state it changed is not continued from
+                    self.sim._chunks = None
+                    raise KeyboardInterrupt
                 if int(last[0]) != dopri5.STATUS_OK:
                     break
                 if writer is not None:

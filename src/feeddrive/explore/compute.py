@@ -135,7 +135,7 @@ def run_simulation(checked: Checked, report: Report,
     releases the GIL, so the server answers polls meanwhile); ``keep(result)`` receives the
     full Result (the explorer keeps it for the signal picker and the downloads)."""
     from ..control import ConstantSpeed
-    from ..simulate import Simulation
+    from ..simulate import Simulation, SimulationInterrupted
 
     what = f"simulating {checked.duration:g} s of the {checked.drive.upper()}"
     report(0.0, checked.duration, what)  # raises if the page cancelled before the start
@@ -148,19 +148,23 @@ def run_simulation(checked: Checked, report: Report,
 
     def watch() -> None:
         # inside a long solver call: the time its compiled loop has reached, 10 times a
-        # second (cancelling takes effect at the next chunk's end, through ``progress``)
+        # second; a cancel stops the compiled loop after the step it is in
         while not finished.wait(0.1):
-            t = sim.live_time()
-            if t > 0.0:
-                try:
-                    report(t, checked.duration, f"{what}: {t:.3g} s done")
-                except Exception:  # a cancel: the worker's own report raises it
-                    return
+            try:
+                report(sim.live_time(), checked.duration,
+                       f"{what}: {sim.live_time():.3g} s done")
+            except Exception:  # the page cancelled (report raises Cancelled)
+                sim.request_stop()
+                return
 
     watcher = threading.Thread(target=watch, name="feeddrive-explore-progress", daemon=True)
     watcher.start()
     try:
         result = sim.run(checked.duration, progress=progress)
+    except SimulationInterrupted:
+        # stopped on the page's cancel: report raises its Cancelled
+        report(sim.live_time(), checked.duration, "cancelled")
+        raise RuntimeError("the run was stopped") from None
     finally:
         finished.set()
     if keep is not None:
