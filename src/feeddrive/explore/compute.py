@@ -7,7 +7,8 @@ plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is S
   friction curves of the sites the drive uses with their negative-slope bands and operating
   points;
 * :func:`run_linear` — the linear stability band over table speed and the loop poles at the
-  operating point (friction linearised there), loop margins;
+  operating point (friction linearised there, rigid-body poles marked by
+  :func:`feeddrive.linear.classify_poles`), loop margins and the loops' Bode curves;
 * :func:`run_critical` — the critical-speed search from rest, the protocol `feeddrive creep`
   uses (:mod:`feeddrive.protocol`), with progress and cancellation at every trial.
 """
