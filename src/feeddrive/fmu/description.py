@@ -81,8 +81,10 @@ _LUGRE_SLOTS = (("coulomb_force_positive", "N", "Coulomb force F_c, positive dir
 _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
     "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
     "speed_mode"}
+# "inputs.": the linearisation's zero-valued reference and load slots (feeddrive.linear);
+# the FMU's own inputs carry those signals
 _HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
-           "disturbances.load_offset", "disturbances.load_points")
+           "disturbances.load_offset", "disturbances.load_points", "inputs.")
 
 _SIMPLE = {
     "screw.H": ("m/rad", "lead per radian H (transmission ratio)"),

@@ -339,11 +339,13 @@ class Controller(_Component):
     """
 
     position_gain: float = quantity("1/s", low=0, high=1e5, low_inclusive=True)
-    velocity_gain: float = quantity("A s/rad", low=0, high=1e5, low_inclusive=True)
+    # per rad/s of the motor, or per m/s of table speed with velocity_gain_basis = "table"
+    velocity_gain: float = quantity("A s/rad", low=0, high=1e5, low_inclusive=True,
+                                    table_unit="A s/m")
     current_gain: float = quantity("V/A", low=0, high=1e5, low_inclusive=True)
     velocity_command_gain: float = quantity("rad/(V s)", low=0, high=1e6)
     velocity_integral_gain: float = quantity(
-        "A/rad", low=0, high=1e9, low_inclusive=True, default=0.0
+        "A/rad", low=0, high=1e9, low_inclusive=True, default=0.0, table_unit="A/m"
     )
     current_integral_gain: float = quantity(
         "V/(A s)", low=0, high=1e9, low_inclusive=True, default=0.0
