@@ -568,6 +568,39 @@ def _default_controller() -> Controller:
                       velocity_command_gain=250.0)
 
 
+def unit_of(cls: type, path: str) -> str | None:
+    """The unit a parameter class declares for a dotted path below it.
+
+    Parameters
+    ----------
+    cls : type
+        A parameter component class (e.g. :class:`LuGreParameters`).
+    path : str
+        Dotted path, entries of a tuple field with ``[i]``
+        (``"positive.coulomb_force"``, ``"element_stiffness[2]"``).
+
+    Returns
+    -------
+    str or None
+        The unit of the field's metadata (``"-"`` for dimensionless), None when the path
+        names no quantity of the class.
+    """
+    import typing
+
+    for i, part in enumerate(path.split(".")):
+        name = part.split("[", 1)[0]
+        found = {f.name: f for f in fields(cls)}.get(name)
+        if found is None:
+            return None
+        hint = typing.get_type_hints(cls).get(name)
+        if isinstance(hint, type) and hasattr(hint, "__dataclass_fields__"):
+            cls = hint
+            continue
+        unit = found.metadata.get("unit")
+        return str(unit) if unit is not None and i == path.count(".") else None
+    return None
+
+
 def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
     names = {f.name for f in fields(obj)}
     head = parts[0]
