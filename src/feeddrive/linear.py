@@ -355,13 +355,13 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         for a in axes:
             j = aux_names.index(f"{a}_{kind}")
             outs.append((f"{a}_{kind}", lambda yv, av, j=j: av[j]))
+    topology = _mechanism(sys_)
     for a in axes:
         j = st.index(f"{a}_current")
-        kt_name = ("motor.force_constant" if a == "motor" else f"{a}_motor.torque_constant")
+        kt_name, torque_name = topology.motor_output(a)
         kt = model.parameter(kt_name)
         outs.append((f"{a}_current", lambda yv, av, j=j: yv[j]))
-        outs.append(("motor_force" if a == "motor" else f"{a}_motor_torque",
-                     lambda yv, av, j=j, kt=kt: kt * yv[j]))
+        outs.append((torque_name, lambda yv, av, j=j, kt=kt: kt * yv[j]))
 
     def outputs(yv: np.ndarray, aux: np.ndarray) -> np.ndarray:
         return np.array([fn(yv, aux) for _, fn in outs])

@@ -134,6 +134,21 @@ class RackPinionDrive(Mechanism):
         for name in ("torque_constant", "back_emf_constant", "inductance", "resistance"):
             b.param(f"motor.{name}", getattr(rp.motor, name))
 
+    def motor_output(self, axis: str) -> tuple[str, str]:
+        """The motor's torque constant and torque [N m].
+
+        Parameters
+        ----------
+        axis : str
+            The drive's one axis (``"motor"``).
+
+        Returns
+        -------
+        tuple of (str, str)
+            Parameter slot and output name.
+        """
+        return "motor.torque_constant", "motor_torque"
+
     def motors(self, b: Builder) -> None:
         b.state("motor_current", "A", "motor current", "current")
 
