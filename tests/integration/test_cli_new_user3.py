@@ -268,6 +268,10 @@ def test_help_lines_are_whole_and_drive_shows_its_choices() -> None:
             assert "cdfs" in line.split("--drive")[1].split()[0], (name, line)
     listing = runner.invoke(app, ["--help"], env={"COLUMNS": "100"}).output
     assert "k_sa, K_a and K_eq at table positions" in listing
+    from feeddrive import registry
+    from feeddrive.cli.simulate_cmd import ALL_DRIVES
+
+    assert tuple(ALL_DRIVES.split("|")) == registry.names(registry.MECHANISMS)
 
 
 def test_parameters_doc_friction_table_is_what_the_cli_prints() -> None:
