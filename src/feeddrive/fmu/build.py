@@ -65,17 +65,17 @@ def library_suffix() -> str:
 
 def solver_c() -> str:
     """C text of the FMU's integrator (``fd_advance``), translated from the same Python the
-    numba build compiles."""
-    from ..backends.c_backend import translate_kernels
+    numba build compiles, with the model's ``fd_rhs`` / ``fd_sample_update`` as its ``rhs`` /
+    ``sample_update`` and the DOPRI5 step and error norm of :mod:`feeddrive.solvers.switching`
+    translated with it."""
+    from ..backends.c_backend import RHS, SAMPLE_UPDATE, SOLVER_SHAPES, translate_kernels
 
-    shapes = {name: ["FD_N_STATE"] for name in (
-        "y", "atol", "rel_mask", "f0", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "f_new", "yt",
-        "y_new", "e")}
-    shapes.update({"held": ["FD_N_HELD"], "held_prev": ["FD_N_HELD"], "aux": ["FD_N_AUX"],
-                   "memory": ["FD_MEMORY_SIZE"]})
+    shapes = dict(SOLVER_SHAPES)
+    shapes.update({"held": ("FD_N_HELD",), "held_prev": ("FD_N_HELD",), "aux": ("FD_N_AUX",),
+                   "f_new": ("FD_N_STATE",), "memory": ("FD_MEMORY_SIZE",)})
     return translate_kernels(
         [solver.advance_template], dict(solver.CONSTANTS),
-        bindings={"rhs": "fd_rhs", "sample_update": "fd_sample_update",
+        bindings={"rhs": RHS, "sample_update": SAMPLE_UPDATE,
                   "_dp5_step": switching.dp5_step_template,
                   "_error_norm": switching.error_norm_template},
         shapes=shapes, names={"advance_template": "fd_advance"})

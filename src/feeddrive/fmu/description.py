@@ -11,6 +11,7 @@ wrapper reads ``VR_KIND``/``VR_A``/``VR_B`` to find the value (``wrapper.c``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import uuid
@@ -77,6 +78,28 @@ _LUGRE_SLOTS = (("coulomb_force_positive", "N", "Coulomb force F_c, positive dir
                 ("bristle_stiffness", "N/m", "bristle stiffness σ0"),
                 ("bristle_damping", "N s/m", "bristle damping σ1"),
                 ("smoothing_velocity", "m/s", "sign-smoothing velocity (Stribeck law)"))
+
+# units of the packed friction slots a law's parameter class does not declare (smoothing speed)
+_SLOT_UNITS = {slot.split("_positive")[0]: unit for slot, unit, _ in _LUGRE_SLOTS}
+
+
+def _field_unit(obj: object, path: str) -> str | None:
+    """The declared unit of the parameter field at ``path`` (``positive.coulomb_force``,
+    ``element_stiffness[2]``) below a parameter record, or None."""
+    unit = None
+    for part in path.split("."):
+        name = part.split("[")[0]
+        if not dataclasses.is_dataclass(obj):
+            return None
+        field = {f.name: f for f in dataclasses.fields(obj)}.get(name)
+        if field is None:
+            return None
+        unit = field.metadata.get("unit")
+        obj = getattr(obj, name)
+    if unit is None:
+        return None
+    return "1" if unit in ("-", "") else unit.replace("^", "").replace("²", "2")
+
 
 _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
     "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
@@ -174,18 +197,20 @@ def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
                  "inj_current": ("A", "current-command injection (loop breaking; 0)")}
         unit, text = units[slot]
         return name, unit, f"{axis} axis: {text}", slot in _FIXED_PARAMETERS
-    match = re.fullmatch(r"(friction|compensation)\.(\w+)\[(\d+)\]", name)
+    match = re.fullmatch(r"(friction|compensation)\.(\w+)\.(.+)", name)
     if match:
-        group, site, i = match.group(1), match.group(2), int(match.group(3))
+        group, site, path = match.groups()
         law = dict(fm.model.sites).get(site, "lugre")
-        where = f"{site.replace('_', '–')} friction"
+        where = f"{site.replace('_', '–')} friction ({law})"
         if group == "compensation":
             where = f"{site} friction as the compensator assumes it"
-        if i < len(_LUGRE_SLOTS) and (law in ("lugre", "dahl", "stribeck", "none")
-                                      or group == "compensation"):
-            slot, unit, text = _LUGRE_SLOTS[i]
-            return f"{group}.{site}.{slot}", unit, f"{where} ({law}): {text}", False
-        return f"{group}.{site}.p{i}", "", f"{where} ({law}): packed parameter {i}", False
+        key = site if hasattr(fm.parameters.friction, site) else "screw"  # ball–nut: screw's
+        unit = _field_unit(getattr(fm.parameters.friction, key), path)
+        last = path.split(".")[-1].split("[")[0]
+        if unit is None:
+            unit = _SLOT_UNITS.get(last, "")
+        text = f"{where}: {path.replace('.', ' ').replace('_', ' ')}"
+        return name, unit, text, last in ("element_count",)
     match = re.fullmatch(r"disturbances\.(\w+)\[(\d+)\]", name)
     if match:
         field, i = match.group(1), int(match.group(2))

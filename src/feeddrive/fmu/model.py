@@ -57,6 +57,7 @@ class FmuModel:
     nut_inputs: bool  # the nut has a live axis (DDFS, or the CDFS nut on its servo)
     nut_position_input: bool  # ... with a position loop (controller nut_loop = "position")
     periods: dict[str, float]  # the loops' sample periods [s] (0: continuous), by loop name
+    parameters: DriveParameters  # the exported set (units of the parameter slots)
 
 
 def build(parameters: DriveParameters, drive: str, table_position: float,
@@ -80,7 +81,8 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
                     nut_inputs=nut_inputs, nut_position_input=nut_position,
                     periods={"position_period": parameters.controller.position_period,
                              "velocity_period": parameters.controller.velocity_period,
-                             "current_period": parameters.controller.current_period})
+                             "current_period": parameters.controller.current_period},
+                    parameters=parameters)
 
 
 def numba_module(model: Model) -> ModuleType:
