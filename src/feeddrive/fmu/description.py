@@ -205,12 +205,11 @@ def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
         if group == "compensation":
             where = f"{site} friction as the compensator assumes it"
         key = site if hasattr(fm.parameters.friction, site) else "screw"  # ball–nut: screw's
-        unit = _field_unit(getattr(fm.parameters.friction, key), path)
+        declared = _field_unit(getattr(fm.parameters.friction, key), path)
         last = path.split(".")[-1].split("[")[0]
-        if unit is None:
-            unit = _SLOT_UNITS.get(last, "")
+        slot_unit = declared if declared is not None else _SLOT_UNITS.get(last, "")
         text = f"{where}: {path.replace('.', ' ').replace('_', ' ')}"
-        return name, unit, text, last in ("element_count",)
+        return name, slot_unit, text, last in ("element_count",)
     match = re.fullmatch(r"disturbances\.(\w+)\[(\d+)\]", name)
     if match:
         field, i = match.group(1), int(match.group(2))
