@@ -314,3 +314,50 @@ def test_sample_instants_are_kept_across_step_sizes(folder: Path) -> None:
     assert np.all(np.abs(runs[0] - runs[1]) <= 10 * (sim.atol + 1e-6 * np.abs(runs[0])))
 
 
+
+
+@pytest.mark.slow
+def test_load_force_input_acts_on_the_table(folder: Path) -> None:
+    """A 200-N load stepped in through the ``load_force`` input at t = 0.5 s (a
+    communication point) moves the table as feeddrive's constant load from
+    ``disturbances.load_start`` = 0.5 s does."""
+    from fmpy import read_model_description
+
+    ref = Reference.ramp(2.0, 0.0, 1.5)
+    path = fmu_file(folder, "cdfs")
+    md = read_model_description(str(path))
+    names = tuple(v.name for v in md.modelVariables if v.causality == "input")
+    from fmu_helpers import input_table
+
+    table = input_table(ref, names)
+    load = np.zeros(table.size, dtype=[*table.dtype.descr, ("load_force", "f8")])
+    for n in table.dtype.names:
+        load[n] = table[n]
+    load["load_force"] = np.where(ref.time >= 0.5 - 1e-12, 200.0, 0.0)
+    from fmpy import simulate_fmu
+
+    rec = simulate_fmu(str(path), stop_time=1.5, output_interval=STEP, input=load,
+                       start_values=FMU_TIGHT, output=["table_position", "load_force"])
+    p = preset("wang2021")
+    loaded = p.with_values(disturbances=p.disturbances.with_values(load_force=200.0,
+                                                                   load_start=0.5))
+    assert _compare(rec, run_feeddrive("cdfs", ref, params=loaded, **TIGHT)) <= 1e-6
+    assert _compare(rec, run_feeddrive("cdfs", ref, **TIGHT)) > 1e-4
+
+
+@pytest.mark.parametrize(("drive", "params", "hold"), [
+    ("linear-motor", "linear-motor-example", "locked"), ("cdfs", "wang2021", "servo")])
+def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
+                                       hold: str) -> None:
+    """The linear motor, and the CDFS with its hollow motor on the servo (nut inputs live),
+    1 s with the ramp, as co-simulation FMUs in fmpy."""
+    from feeddrive.simulate import DriveSystem, SolverOptions, simulate
+
+    ref = Reference.ramp(2.0, 0.0, 1.0)
+    path = folder / f"{drive}-{hold}.fmu"
+    if not path.exists():
+        export_fmu(preset(params), drive, path, nut_hold=hold)
+    rec = run_fmu(path, ref, start_values=FMU_TIGHT)
+    result = simulate(DriveSystem(preset(params), drive, 0.4, nut_hold=hold),
+                      ref.profile(drive), 1.0, options=SolverOptions(**TIGHT))
+    assert _compare(rec, result) <= 1e-6
