@@ -66,7 +66,14 @@ def fmu_command(
     console.print(f"wrote {result.path} ({result.size_bytes / 1024:.0f} kB): FMI {fmi}.0 "
                   f"{data['kind']}, {drive} ({params.name}), {result.n_states} states, "
                   f"{result.n_variables} variables"
-                  f"{', sampled loops as time events' if result.sampled else ''}",
-                  markup=False, highlight=False)
-    console.print(f"  inputs:  {', '.join(result.inputs)}", markup=False, highlight=False)
-    console.print(f"  outputs: {', '.join(result.outputs)}", markup=False, highlight=False)
+                  f"{_sampling_note(kind) if result.sampled else ''}",
+                  markup=False, highlight=False, soft_wrap=True)
+    console.print(f"  inputs:  {', '.join(result.inputs)}", markup=False, highlight=False,
+                  soft_wrap=True)
+    console.print(f"  outputs: {', '.join(result.outputs)}", markup=False, highlight=False,
+                  soft_wrap=True)
+
+
+def _sampling_note(kind: str) -> str:
+    return (", sampled loops as time events" if kind == "me"
+            else ", sampled loops as exact events inside each step")

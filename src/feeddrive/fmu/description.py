@@ -305,7 +305,7 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
             continue
         name, unit, text, fixed = parameter_info(fm, pname)
         v.append(Variable(name, K_PARAM, k, 0, "parameter", "fixed" if fixed else "tunable",
-                          "exact", float(m.P[k]), unit, text))
+                          "exact", float(m.P[k]), unit, text, fixed=fixed))
     # settings
     for i, (name, unit, text, start) in enumerate(SETTINGS):
         value = start if start is not None else fm.periods[name.split(".")[1]]
