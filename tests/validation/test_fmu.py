@@ -345,19 +345,26 @@ def test_load_force_input_acts_on_the_table(folder: Path) -> None:
     assert _compare(rec, run_feeddrive("cdfs", ref, **TIGHT)) > 1e-4
 
 
+GMS_FILE = Path(__file__).parents[2] / "examples" / "gms_guide.toml"
+
+
 @pytest.mark.parametrize(("drive", "params", "hold"), [
-    ("linear-motor", "linear-motor-example", "locked"), ("cdfs", "wang2021", "servo")])
+    ("linear-motor", "linear-motor-example", "locked"), ("cdfs", "wang2021", "servo"),
+    ("cdfs", "gms", "locked")])
 def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
                                        hold: str) -> None:
-    """The linear motor, and the CDFS with its hollow motor on the servo (nut inputs live),
-    1 s with the ramp, as co-simulation FMUs in fmpy."""
+    """The linear motor, the CDFS with its hollow motor on the servo (nut inputs live) and
+    the CDFS with GMS friction on the guide (examples/gms_guide.toml), 1 s with the ramp, as
+    co-simulation FMUs in fmpy."""
+    from feeddrive.parameters import load
     from feeddrive.simulate import DriveSystem, SolverOptions, simulate
 
     ref = Reference.ramp(2.0, 0.0, 1.0)
-    path = folder / f"{drive}-{hold}.fmu"
+    p = load(GMS_FILE) if params == "gms" else preset(params)
+    path = folder / f"{drive}-{params}-{hold}.fmu"
     if not path.exists():
-        export_fmu(preset(params), drive, path, nut_hold=hold)
+        export_fmu(p, drive, path, nut_hold=hold)
     rec = run_fmu(path, ref, start_values=FMU_TIGHT)
-    result = simulate(DriveSystem(preset(params), drive, 0.4, nut_hold=hold),
+    result = simulate(DriveSystem(p, drive, 0.4, nut_hold=hold),
                       ref.profile(drive), 1.0, options=SolverOptions(**TIGHT))
     assert _compare(rec, result) <= 1e-6
