@@ -161,7 +161,7 @@ def test_c_integrator_follows_its_numba_build(folder: Path, tmp_path: Path,
         assert status == 0
         scale = sim.atol + 1e-6 * sim.rel * np.abs(sim.y)  # the integrator's error target
         worst = max(worst, float(np.max(np.abs(y - sim.y) / scale)))
-    assert worst <= 1e-3
+    assert worst <= 1e-6  # measured: 0 (bit-identical, gcc 12 -O2 -ffp-contract=off)
     assert memory[4] == sim.memory[4]  # the same number of accepted steps
     assert n_pos > 0 if params == "wang2021-drive" else n_pos == 0
 
