@@ -26,8 +26,9 @@ from .model import FmuModel
 
 HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
            3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
-#: flags of the binary: C99, optimised, no fused multiply-add (numba rounds each operation)
-CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared")
+#: flags of the binary: C99, optimised, no fused multiply-add (numba rounds each operation),
+#: only the FMI functions exported (two FMUs in one process never bind each other's model)
+CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared", "-fvisibility=hidden")
 
 
 class CompilerNotFound(RuntimeError):
@@ -107,8 +108,10 @@ def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: 
     return "\n".join(parts)
 
 
-def compile_library(source: str, fmi: int, folder: Path, identifier: str) -> Path:
-    """Compile ``source`` (with the FMI headers beside it) into ``folder/<identifier><ext>``."""
+def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
+                    export_all: bool = False) -> Path:
+    """Compile ``source`` (with the FMI headers beside it) into ``folder/<identifier><ext>``;
+    ``export_all``: the model's and integrator's functions visible too (tests call them)."""
     cc = find_compiler()
     folder.mkdir(parents=True, exist_ok=True)
     src = folder / "fmu.c"
@@ -118,7 +121,8 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str) -> Pat
         (folder / name).write_text(include.joinpath(name).read_text(encoding="utf-8"),
                                    encoding="utf-8")
     lib = folder / f"{identifier}{library_suffix()}"
-    cmd = [*cc, *CFLAGS, f"-I{folder}", "-o", str(lib), str(src), "-lm"]
+    flags = [f for f in CFLAGS if not (export_all and f.startswith("-fvisibility"))]
+    cmd = [*cc, *flags, f"-I{folder}", "-o", str(lib), str(src), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if proc.returncode != 0:
         raise RuntimeError(f"the C compiler failed ({' '.join(cmd)}):\n"
