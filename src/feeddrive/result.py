@@ -256,7 +256,11 @@ class Result:
                 "stick_fraction": m.stick_fraction,
                 "stick_slip_frequency_hz": m.stick_slip_frequency,
                 "verdict": m.verdict,
+                # the rule behind the word (issue 24 item 4)
+                "verdict_rule": m.thresholds.describe(),
             })
+            if not constant:
+                out["segments"] = self._hold_segments()
             if m.unstable:
                 warnings.append(f"unstable: the loop diverges (table speed peaks at "
                                 f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, "
@@ -306,6 +310,33 @@ class Result:
         if last - first < 16:
             return float(self.time[0]), float(self.time[-1])
         return steady_window(self.time[first:last + 1], self["table_speed"][first:last + 1], c)
+
+    def _hold_segments(self) -> list[dict[str, Any]]:
+        """Creep metrics of every stretch where a sampled command holds one non-zero speed
+        (each step of a staircase, each level of a CSV profile; ramps and stops are left
+        out), each judged over its own steady window: as ``feeddrive analyze`` summarises a
+        step-down trace per segment (issue 24 item 6)."""
+        from .analysis.metrics import creep_metrics, steady_window
+
+        t, v = self.time, self["table_speed"]
+        ref = self["table_speed_reference"]
+        change = np.flatnonzero(np.abs(np.diff(ref)) > 1e-12 + 1e-6 * np.abs(ref[1:]))
+        starts, ends = np.r_[0, change + 1], np.r_[change + 1, ref.size]
+        out: list[dict[str, Any]] = []
+        for a, b in zip(starts, ends, strict=True):
+            c = float(ref[a])
+            if b - a < 16 or c == 0.0:
+                continue
+            window = steady_window(t[a:b], v[a:b], c)
+            m = creep_metrics(t, v, c, window=window)
+            out.append({"start_s": float(t[a]), "end_s": float(t[b - 1]),
+                        "command_speed_mm_s": 1e3 * c,
+                        "mean_table_speed_mm_s": 1e3 * m.mean_speed,
+                        "ripple_ratio": m.ripple_ratio, "min_ratio": m.min_ratio,
+                        "stick_fraction": m.stick_fraction,
+                        "stick_slip_frequency_hz": m.stick_slip_frequency,
+                        "verdict": m.verdict, "window_s": [m.window_start, m.window_end]})
+        return out
 
     def _mean_mm_s(self, name: str, sel: np.ndarray) -> float | None:
         if name not in self:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -50,6 +51,7 @@ except CompilerNotFound:
 pytestmark = pytest.mark.skipif(not HAVE_CC, reason="no C compiler (set CC)")
 
 W = fd.preset("wang2021")
+GMS_EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "gms_guide.toml"
 LM = fd.preset("linear-motor-example")
 RTOL = 1e-12
 N_STATES = 40
@@ -142,6 +144,10 @@ CASES: dict[str, Callable[[], tuple[fd.DriveSystem, Any]]] = {
     "kv-position-output-cdfs": lambda: (
         fd.DriveSystem(_changes(W, {"controller.kv_placement": "position_output"}), "cdfs",
                        0.4), ConstantSpeed(1e-3)),
+    "gms-guide-cdfs": lambda: (fd.DriveSystem(fd.load(GMS_EXAMPLE), "cdfs", 0.4),
+                               ConstantSpeed(2e-3)),
+    "gms-guide-ddfs": lambda: (fd.DriveSystem(fd.load(GMS_EXAMPLE), "ddfs", 0.3),
+                               ConstantSpeed(0.5e-3, 16e-3)),
     "sampled-ddfs": lambda: (fd.DriveSystem(_changes(W, SAMPLED), "ddfs", 0.4),
                              ConstantSpeed(2e-3, 16e-3, ramp_time=0.02)),
     "sampled-quantised-ddfs": lambda: (fd.DriveSystem(_changes(W, SAMPLED | QUANTISED), "ddfs",
@@ -176,11 +182,14 @@ CASES: dict[str, Callable[[], tuple[fd.DriveSystem, Any]]] = {
 
 def _scales(model: Model) -> np.ndarray:
     """Typical size of each state: 1 mm and 1 mm/s (in the state's own unit via the
-    transmission ratio for angles), 1 A, and 1 µm for friction (bristle) states."""
+    transmission ratio for angles), 1 A, 1 µm for friction (bristle) states and 0.1 mm for
+    GMS elements (slip at k_i·z ≈ w_i·F_s: ~0.03–0.1 mm for the example's elements)."""
     atol, _ = model.tolerances(1e-3, 1e-3, 1.0)
     for i, name in enumerate(model.state_names):
         if name.endswith(("_bristle", "_friction_observer")):
             atol[i] = 1e-6
+        elif re.search(r"_element\d+$", name):
+            atol[i] = 1e-4
     return atol
 
 
@@ -214,7 +223,8 @@ def built(tmp_path_factory: pytest.TempPathFactory) -> Models:
 
 #: run in the quick suite (numba compiles each new model's module once, ~3 s cold); the
 #: other cases are marked slow (the CI runs them too)
-QUICK = ("wang2021-ddfs", "linear-motor", "observer-ripple-lead-cdfs", "load-record-ddfs",
+QUICK = ("wang2021-ddfs", "linear-motor", "gms-guide-cdfs", "observer-ripple-lead-cdfs",
+         "load-record-ddfs",
          "sampled-quantised-ddfs", "sampled-quantised-saturating-table-feedback-cdfs",
          "stepdown-ddfs")
 

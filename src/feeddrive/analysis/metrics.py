@@ -108,6 +108,25 @@ class CreepThresholds:
             raise ValueError("thresholds: max_stick_fraction must be < 1 and min_peak_share ≤ 1")
 
 
+    def describe(self) -> str:
+        """The window rule in words, with its numbers (printed beside its verdicts)."""
+        return (f"window rule: over the steady window, creeping if the peak-to-peak ripple "
+                f"exceeds {100 * self.max_ripple_ratio:g} % of the command or the table "
+                f"sticks (below {100 * self.stick_level:g} % of the command) for more than "
+                f"{100 * self.max_stick_fraction:g} % of it, else smooth; feeddrive creep, "
+                "reproduce and the explorer judge by the limit-cycle rule (±"
+                f"{100 * VerdictRule().smooth_band:g} %), which can "
+                "differ")
+
+
+def frequency_label(stick_fraction: float | None) -> str:
+    """What to call the dominant ripple frequency: "stick-slip frequency" only when the table
+    sticks, else "oscillation frequency" (issue 24 item 5: a trapezoid that never stuck
+    printed a "stick-slip frequency")."""
+    return ("stick-slip frequency" if stick_fraction is not None and stick_fraction > 0
+            else "oscillation frequency")
+
+
 @dataclass(frozen=True)
 class CreepMetrics:
     """Creep metrics of one trace over its steady window.
@@ -708,7 +727,8 @@ class VerdictRule:
     def describe(self) -> str:
         """The rule in words, with its numbers (printed beside every verdict)."""
         return (
-            f"A trial runs {self.initial_duration:g} s, doubling up to {self.max_duration:g} s "
+            f"Limit-cycle rule. A trial runs {self.initial_duration:g} s, doubling up to "
+            f"{self.max_duration:g} s "
             f"until decided. smooth: the speed stays within ±{100 * self.smooth_band:g} % of "
             f"the command for the last max({self.settle_time:g} s, 2 longest periods). "
             f"Limit cycle: over the last half of the trial (≥ {self.min_compare_time:g} s, the "
@@ -898,7 +918,7 @@ def trace_verdict(time: object, speed: object, command_speed: float,
             freq = 1.0 / float(np.mean(arr[-used:, 2]))
             if ripple < 2.0 * rule.smooth_band:
                 return TraceVerdict("smooth", None, ripple, low, stick, periods.size, b,
-                                    f"limit cycle below ±{rule.smooth_band:g} ripple")
+                                    f"limit cycle below ±{100 * rule.smooth_band:g} % ripple")
             kind = "stick-slip" if low < rule.stick_level else "oscillation"
             how = ("periodic" if multiplicity == 1 else
                    f"periodic over {multiplicity} cycles" if multiplicity > 0 else
@@ -914,7 +934,8 @@ def trace_verdict(time: object, speed: object, command_speed: float,
         decided_at = inside_from + settle
         ripple, low, stick = describe(inside_from, t_end)
         return TraceVerdict("smooth", None, ripple, low, stick, periods.size, decided_at,
-                            f"within ±{rule.smooth_band:g} of the command for ≥ {settle:g} s")
+                            f"within ±{100 * rule.smooth_band:g} % of the command for ≥ "
+                            f"{settle:g} s")
     a = t[0] + 0.75 * (t_end - t[0])
     ripple, low, stick = describe(a, t_end)
     seen = 1.0 / float(np.mean(periods[-rule.min_cycles:])) if periods.size >= 2 else None

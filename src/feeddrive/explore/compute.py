@@ -78,6 +78,8 @@ def verdict_of(time: np.ndarray, speed: np.ndarray, command_speed: float) -> dic
     else:
         text = (f"{v.reason} after {float(time[-1]):g} s ({ripple}{at}); a longer simulated "
                 "time decides")
+    # the rule named beside the word, as in every command (issue 24 item 4)
+    text += " (limit-cycle rule of feeddrive creep)"
     return {"verdict": "creeping" if v.creeping else v.kind, "kind": v.kind, "text": text,
             "reason": v.reason, "frequency_hz": _f(v.frequency),
             "decided_at_s": _f(v.decided_at), "ripple_ratio": _f(v.ripple_ratio)}

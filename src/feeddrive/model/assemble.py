@@ -146,7 +146,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     sites = mech.sites(b)
     laws: list[tuple[Site, FrictionLaw, int]] = []
     for site in sites:
-        site_params = getattr(parameters.friction, site.parameters_key)
+        site_params = site.parameters(parameters)
         law = friction_law(site_params.law)
         first = len(b.states)
         for state in law.states(site_params):
@@ -208,7 +208,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
                   load=load_code, torque_off=parameters.controller.mode == "torque_off")
     for site, law, first in laws:
-        code = _site_code(b, site, law, getattr(parameters.friction, site.parameters_key), first)
+        code = _site_code(b, site, law, site.parameters(parameters), first)
         for body, factor in site.bodies:
             term = f"- f_{site.name}" if factor == "1.0" else f"- {factor} * f_{site.name}"
             m.forces.setdefault(body, []).append(term)
@@ -216,7 +216,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
             m.gated.append(code)
             m.frozen.append(f"f_{site.name} = 0.0")
             m.frozen += [f"{b.dy(f'{site.name}_{s}')} = 0.0"
-                         for s in law.states(getattr(parameters.friction, site.parameters_key))]
+                         for s in law.states(site.parameters(parameters))]
         else:
             m.always.append(code)
     mech.emit(b, m)

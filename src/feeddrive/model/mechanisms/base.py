@@ -42,11 +42,30 @@ class Site:
     """A friction site placed by the mechanism: on one body, or between two (relative)."""
 
     name: str  # e.g. "screw", "ball_nut"
-    parameters_key: str  # friction.<key> in the parameter set
+    parameters_key: str  # friction.<key> in the parameter set, or a dotted path to them
     speed: str  # code of the sliding speed [m/s]
     bodies: tuple[tuple[str, str], ...]  # (body, factor code) pairs: term = − factor·F
     scale: float = 1.0  # share of the site's friction (ball–nut split)
     active: str = ""  # condition under which the site acts ("" = always)
+
+    def parameters(self, params: DriveParameters) -> Any:
+        """The site's parameters: ``friction.<parameters_key>``, or the dotted path
+        ``parameters_key`` names (a part's own section, e.g. ``rack_pinion.gearbox_friction``).
+
+        Parameters
+        ----------
+        params : DriveParameters
+            The parameter set.
+
+        Returns
+        -------
+        SiteParameters
+            The site's friction parameters.
+        """
+        obj: Any = params if "." in self.parameters_key else params.friction
+        for part in self.parameters_key.split("."):
+            obj = getattr(obj, part)
+        return obj
 
 
 @dataclass
