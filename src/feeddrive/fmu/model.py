@@ -115,7 +115,6 @@ class NumbaCoSimulation:
                                            current_tolerance)
         self.rtol, self.h_max, self.max_steps = rtol, h_max, max_steps
         self.integrate = integrate_speed_reference
-        self.params = fm.model  # for sampling: the DriveParameters are not kept on the model
         self.work = [np.zeros(self.n) for _ in range(10)]
         self.aux = np.zeros(len(m.aux))
         self.memory = solver.new_memory(1e-6)
@@ -129,10 +128,10 @@ class NumbaCoSimulation:
         self.grid = (g.base, g.n_pos, g.n_vel, g.n_cur)
         self._write_inputs(inputs)
         base, n_pos, n_vel, n_cur = self.grid
+        self.held_prev[:] = self.held  # as the FMU: the update at t0 is redone if the inputs
         self.module.sample_update(0, 0.0, self.y, self.held, self.P, self.T, n_pos, n_vel,
                                   n_cur, base)
-        self.held_prev[:] = self.held
-        self.memory[solver.MEM_AT_SAMPLE] = 0.0
+        self.memory[solver.MEM_AT_SAMPLE] = 1.0  # change before the first step
         self._last_inputs = dict(inputs)
 
     def _write_inputs(self, inputs: dict[str, float]) -> None:
