@@ -162,7 +162,7 @@ def test_c_integrator_follows_its_numba_build(folder: Path, tmp_path: Path,
     worst = 0.0
     for k, v in enumerate(speeds):
         inputs = {"table_speed_reference": float(v)}
-        redo = 1 if k > 0 and v != speeds[k - 1] else 0
+        redo = 1 if v != (speeds[k - 1] if k > 0 else 0.0) else 0  # vs the start value 0
         t, x_start = sim.t, float(sim.x_int[0])
         sim.do_step(h, inputs)
         T[fm.table_offset + 2] = v
