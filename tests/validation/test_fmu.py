@@ -362,21 +362,31 @@ GMS_FILE = Path(__file__).parents[2] / "examples" / "gms_guide.toml"
 
 @pytest.mark.parametrize(("drive", "params", "hold"), [
     ("linear-motor", "linear-motor-example", "locked"), ("cdfs", "wang2021", "servo"),
-    ("cdfs", "gms", "locked")])
+    ("cdfs", "gms", "locked"), ("ddfs", "nut-position-loop", "locked")])
 def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
                                        hold: str) -> None:
-    """The linear motor, the CDFS with its hollow motor on the servo (nut inputs live) and
-    the CDFS with GMS friction on the guide (examples/gms_guide.toml), 1 s with the ramp, as
-    co-simulation FMUs in fmpy."""
+    """The linear motor, the CDFS with its hollow motor on the servo (nut inputs live), the
+    CDFS with GMS friction on the guide (examples/gms_guide.toml) and the DDFS whose hollow
+    motor runs a position loop (the nut_position_reference input, positions given as
+    inputs), 1 s with the ramp, as co-simulation FMUs in fmpy."""
     from feeddrive.parameters import load
     from feeddrive.simulate import DriveSystem, SolverOptions, simulate
 
-    ref = Reference.ramp(2.0, 0.0, 1.0)
-    p = load(GMS_FILE) if params == "gms" else preset(params)
+    ref = Reference.ramp(2.0, 8.0 if drive == "ddfs" else 0.0, 1.0)
+    if params == "gms":
+        p = load(GMS_FILE)
+    elif params == "nut-position-loop":
+        w = preset("wang2021")
+        nut = w.hollow_controller or w.controller
+        p = w.with_values(hollow_controller=nut.with_values(nut_loop="position"))
+    else:
+        p = preset(params)
     path = folder / f"{drive}-{params}-{hold}.fmu"
     if not path.exists():
-        export_fmu(p, drive, path, nut_hold=hold)
-    rec = run_fmu(path, ref, start_values=FMU_TIGHT)
+        result_ = export_fmu(p, drive, path, nut_hold=hold)
+        assert ("nut_position_reference" in result_.inputs) == (params == "nut-position-loop")
+    rec = run_fmu(path, ref, start_values=FMU_TIGHT,
+                  with_positions=params == "nut-position-loop")
     result = simulate(DriveSystem(p, drive, 0.4, nut_hold=hold),
                       ref.profile(drive), 1.0, options=SolverOptions(**TIGHT))
     assert _compare(rec, result) <= 1e-6
