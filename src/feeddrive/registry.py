@@ -41,7 +41,7 @@ BUILTIN_PROVIDERS: dict[str, tuple[str, ...]] = {
     FRICTION_LAWS: ("feeddrive.model.friction.*",),
     PRESETS: ("feeddrive.presets",),
     # parameter sections of parts (e.g. ``[rack_pinion]``): registered by the part's module
-    SECTIONS: ("feeddrive.model.mechanisms.*",),
+    SECTIONS: ("feeddrive.model.mechanisms.*", "feeddrive.model.parts.*"),
 }
 
 _TABLES: dict[str, dict[str, Any]] = {group: {} for group in BUILTIN_PROVIDERS}

@@ -246,7 +246,10 @@ class Checked:
 
     def as_dict(self) -> dict[str, Any]:
         """What the page needs: messages, the parameter set's own knob values, the address."""
+        from .labels import field_units  # the knobs' units for this set (issue 23)
+
         return {"settings": self.settings, "errors": self.errors, "warnings": self.warnings,
+                "units": field_units(self.base),
                 "base": knob_values(self.base) if self.base is not None else None,
                 "base_name": self.base.name if self.base is not None else None,
                 "overrides": sorted(self.overrides), "disabled": self.disabled,

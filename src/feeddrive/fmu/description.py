@@ -11,7 +11,6 @@ wrapper reads ``VR_KIND``/``VR_A``/``VR_B`` to find the value (``wrapper.c``).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import re
 import uuid
@@ -20,7 +19,9 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from ..model.friction import friction_law
 from ..model.loops import AXIS_PARAMS
+from ..parameters.components import unit_of
 from .model import FmuModel
 
 # value-reference kinds (wrapper.c)
@@ -63,49 +64,13 @@ SETTINGS = (
 )
 S_INDEX = {name: i for i, (name, *_rest) in enumerate(SETTINGS)}
 
-_LUGRE_SLOTS = (("coulomb_force_positive", "N", "Coulomb force F_c, positive direction"),
-                ("static_force_positive", "N", "static force F_s, positive direction"),
-                ("stribeck_velocity_positive", "m/s", "Stribeck velocity v_s, positive "
-                 "direction"),
-                ("viscous_coefficient_positive", "N s/m", "viscous coefficient σ2, positive "
-                 "direction"),
-                ("coulomb_force_negative", "N", "Coulomb force F_c, negative direction"),
-                ("static_force_negative", "N", "static force F_s, negative direction"),
-                ("stribeck_velocity_negative", "m/s", "Stribeck velocity v_s, negative "
-                 "direction"),
-                ("viscous_coefficient_negative", "N s/m", "viscous coefficient σ2, negative "
-                 "direction"),
-                ("bristle_stiffness", "N/m", "bristle stiffness σ0"),
-                ("bristle_damping", "N s/m", "bristle damping σ1"),
-                ("smoothing_velocity", "m/s", "sign-smoothing velocity (Stribeck law)"))
-
-# units of the packed friction slots a law's parameter class does not declare (smoothing speed)
-_SLOT_UNITS = {slot.split("_positive")[0]: unit for slot, unit, _ in _LUGRE_SLOTS}
-
-
-def _field_unit(obj: object, path: str) -> str | None:
-    """The declared unit of the parameter field at ``path`` (``positive.coulomb_force``,
-    ``element_stiffness[2]``) below a parameter record, or None."""
-    unit = None
-    for part in path.split("."):
-        name = part.split("[")[0]
-        if not dataclasses.is_dataclass(obj):
-            return None
-        field = {f.name: f for f in dataclasses.fields(obj)}.get(name)
-        if field is None:
-            return None
-        unit = field.metadata.get("unit")
-        obj = getattr(obj, name)
-    if unit is None:
-        return None
-    return "1" if unit in ("-", "") else unit.replace("^", "").replace("²", "2")
-
-
 _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
     "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
     "speed_mode"}
+# "inputs.": the linearisation's zero-valued reference and load slots (feeddrive.linear);
+# the FMU's own inputs carry those signals
 _HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
-           "disturbances.load_offset", "disturbances.load_points")
+           "disturbances.load_offset", "disturbances.load_points", "inputs.")
 
 _SIMPLE = {
     "screw.H": ("m/rad", "lead per radian H (transmission ratio)"),
@@ -197,19 +162,16 @@ def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
                  "inj_current": ("A", "current-command injection (loop breaking; 0)")}
         unit, text = units[slot]
         return name, unit, f"{axis} axis: {text}", slot in _FIXED_PARAMETERS
-    match = re.fullmatch(r"(friction|compensation)\.(\w+)\.(.+)", name)
-    if match:
-        group, site, path = match.groups()
-        law = dict(fm.model.sites).get(site, "lugre")
-        where = f"{site.replace('_', '–')} friction ({law})"
-        if group == "compensation":
-            where = f"{site} friction as the compensator assumes it"
-        key = site if hasattr(fm.parameters.friction, site) else "screw"  # ball–nut: screw's
-        declared = _field_unit(getattr(fm.parameters.friction, key), path)
-        last = path.split(".")[-1].split("[")[0]
-        slot_unit = declared if declared is not None else _SLOT_UNITS.get(last, "")
-        text = f"{where}: {path.replace('.', ' ').replace('_', ' ')}"
-        return name, slot_unit, text, last in ("element_count",)
+    match = re.fullmatch(r"(friction|compensation)\.(\w+)\.([\w.\[\]]+)", name)
+    if match:  # a named slot of a site's law (its parameter class declares the unit)
+        group, site, slot = match.groups()
+        law = dict(fm.model.sites).get(site, "lugre") if group == "friction" else "lugre"
+        where = (f"{site.replace('_', '–')} friction" if group == "friction"
+                 else f"{site} friction as the compensator assumes it")
+        declared = unit_of(friction_law(law).parameters_class, slot)
+        if declared is None:  # a structural count (GMS elements): fixed at export
+            return name, "1", f"{where} ({law}): {slot} (fixed at export)", True
+        return name, "1" if declared == "-" else declared, f"{where} ({law}): {slot}", False
     match = re.fullmatch(r"disturbances\.(\w+)\[(\d+)\]", name)
     if match:
         field, i = match.group(1), int(match.group(2))
