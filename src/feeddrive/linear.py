@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -50,12 +50,10 @@ from . import protocol
 from .control import REFERENCE_INPUTS, ConstantSpeed
 from .model.assemble import Model
 from .model.loops import INJ_CURRENT, INJ_SPEED
-from .parameters import ParameterError
+from .model.mechanisms import Mechanism, mechanism
+from .parameters import LuGreParameters, ParameterError, SiteParameters
 from .simulate import DriveSystem
 
-# kinematic pairs: (position-like state, its rate state) — positions move with the reference
-_KINEMATIC = {"screw_angle": "screw_speed", "nut_angle": "nut_speed",
-              "table_position": "table_speed"}
 _T0 = 1.0  # [s] operating-point time (after the reference's start ramp)
 _PULL = 1e-8  # weight of the operating point's pull to its start (free directions)
 
@@ -136,10 +134,31 @@ def classify_poles(eigenvalues: np.ndarray) -> list[Pole]:
     return sorted(poles, key=lambda p: p.frequency_hz)
 
 
+def _mechanism(system: DriveSystem) -> Mechanism:
+    """The drive's topology, which declares its steady motion and what it holds still."""
+    return mechanism(system.drive)(system.parameters, system.drive, system.table_position,
+                                   system.nut_hold)
+
+
+def _no_friction(site: Any) -> LuGreParameters:
+    """A site with the law "none" (a law with parameters of its own becomes a LuGre-form
+    site on its Stribeck branches, which "none" ignores)."""
+    if isinstance(site, LuGreParameters):
+        return site.with_values(law="none")
+    return LuGreParameters(positive=site.positive, negative=site.negative,
+                           bristle_stiffness=1.0, bristle_damping=0.0, law="none")
+
+
 def _frictionless(system: DriveSystem) -> DriveSystem:
+    """Every friction site of the set — ``[friction.*]`` and those of a part's own section —
+    with the law "none"."""
     p = system.parameters
-    for site in ("screw", "nut", "guide"):
-        p = p.replace_path(f"friction.{site}.law", "none")
+    sites = [(f"friction.{f.name}", getattr(p.friction, f.name)) for f in fields(p.friction)]
+    sites += [(f"{name}.{f.name}", getattr(section, f.name)) for name, section in p.sections
+              for f in fields(section)]
+    for path, site in sites:
+        if isinstance(site, SiteParameters):
+            p = p.replace_path(path, _no_friction(site))
     return replace(system, parameters=p)
 
 
@@ -153,14 +172,9 @@ def _check_continuous(system: DriveSystem) -> None:
 
 
 def _live_states(model: Model, system: DriveSystem) -> list[int]:
-    """States that move: with the CDFS nut locked its states are frozen and dropped."""
-    live = []
-    nut_held = model.drive == "cdfs" and system.nut_hold == "locked"
-    for k, name in enumerate(model.state_names):
-        if nut_held and (name.startswith("nut_") or name.startswith("ball_nut_z")):
-            continue
-        live.append(k)
-    return live
+    """States that move: the states a drive holds still (the CDFS's locked nut) are dropped."""
+    frozen, _ = _mechanism(system).held()
+    return [k for k, name in enumerate(model.state_names) if not name.startswith(frozen)]
 
 
 def _scales(model: Model) -> np.ndarray:
@@ -198,24 +212,16 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     names = model.state_names
     n = len(names)
     y0 = np.zeros(n)
-    H = system.parameters.screw.transmission_ratio if "screw_speed" in names else 1.0
-    speeds = {"table_speed": table_speed, "screw_speed": (table_speed + nut_speed) / H,
-              "nut_speed": nut_speed / H}
-    held_nut = model.drive == "cdfs" and system.nut_hold == "locked"
-    if held_nut:
-        speeds["nut_speed"] = 0.0
-    for name, v in speeds.items():
-        if name in names:
-            y0[names.index(name)] = v
-    x_ref = table_speed * _T0
-    if "table_position" in names:
-        y0[names.index("table_position")] = x_ref
-    if "nut_angle" in names and not held_nut:
-        y0[names.index("nut_angle")] = nut_speed * _T0 / H
-    if "screw_angle" in names:
-        y0[names.index("screw_angle")] = (x_ref + (0 if held_nut else nut_speed * _T0)) / H
+    # the drive's kinematics: position-like state -> (its rate state, the steady rate);
+    # positions move with the reference, their rates are fixed
+    motion = {pos: pair for pos, pair in _mechanism(system).steady_motion(
+        table_speed, nut_speed).items() if pos in names and pair[0] in names}
+    kinematic = {pos: rate_state for pos, (rate_state, _) in motion.items()}
+    for pos, (rate_state, rate) in motion.items():
+        y0[names.index(rate_state)] = rate
+        y0[names.index(pos)] = rate * _T0
     live = _live_states(model, system)
-    fixed_speed = [names.index(s) for s in speeds if s in names]
+    fixed_speed = [names.index(rate_state) for rate_state in kinematic.values()]
     unknown = [k for k in live if k not in fixed_speed]
     scale = _scales(model)
 
@@ -226,12 +232,12 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
         r = []
         for k in unknown:
             name = names[k]
-            if name in _KINEMATIC:
+            if name in kinematic:
                 # its rate is the fixed speed: use the rate state's equation instead
                 continue
             r.append(dy[k] / scale[k])
-        for name, rate in _KINEMATIC.items():
-            if name in names and names.index(name) in unknown:
+        for name, rate in kinematic.items():
+            if names.index(name) in unknown:
                 r.append(dy[names.index(rate)] / scale[names.index(rate)])
         return np.array(r)
 
@@ -326,9 +332,8 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     aux_names = [a.name for a in model.aux]
     st = model.state_names
     axes = [a.removesuffix("_speed_command") for a in aux_names if a.endswith("_speed_command")]
-    nut_held = sys_.drive == "cdfs" and sys_.nut_hold == "locked"
-    if nut_held:
-        axes = [a for a in axes if a != "nut"]
+    idle = _mechanism(sys_).held()[1]
+    axes = [a for a in axes if a not in idle]
     pidx = model.parameter_names.index
     # inputs: (name, parameter slot)
     refs = [r for r in REFERENCE_INPUTS if not r.startswith("nut_") or "nut" in axes]
@@ -350,13 +355,13 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         for a in axes:
             j = aux_names.index(f"{a}_{kind}")
             outs.append((f"{a}_{kind}", lambda yv, av, j=j: av[j]))
+    topology = _mechanism(sys_)
     for a in axes:
         j = st.index(f"{a}_current")
-        kt_name = ("motor.force_constant" if a == "motor" else f"{a}_motor.torque_constant")
+        kt_name, torque_name = topology.motor_output(a)
         kt = model.parameter(kt_name)
         outs.append((f"{a}_current", lambda yv, av, j=j: yv[j]))
-        outs.append(("motor_force" if a == "motor" else f"{a}_motor_torque",
-                     lambda yv, av, j=j, kt=kt: kt * yv[j]))
+        outs.append((torque_name, lambda yv, av, j=j, kt=kt: kt * yv[j]))
 
     def outputs(yv: np.ndarray, aux: np.ndarray) -> np.ndarray:
         return np.array([fn(yv, aux) for _, fn in outs])

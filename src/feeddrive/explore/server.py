@@ -181,7 +181,7 @@ class Explorer:
 
 def _initial_units(initial: dict[str, Any]) -> dict[str, str]:
     """The fields' units for the starting parameter set (its velocity_gain_basis)."""
-    from .labels import field_units
+    from .settings import field_units
 
     checked = check(initial)
     return field_units(checked.base)
