@@ -362,7 +362,8 @@ GMS_FILE = Path(__file__).parents[2] / "examples" / "gms_guide.toml"
 
 @pytest.mark.parametrize(("drive", "params", "hold"), [
     ("linear-motor", "linear-motor-example", "locked"), ("cdfs", "wang2021", "servo"),
-    ("cdfs", "gms", "locked"), ("ddfs", "nut-position-loop", "locked")])
+    ("cdfs", "gms", "locked"), ("ddfs", "nut-position-loop", "locked"),
+    ("rack-pinion", "rack-pinion-example", "locked")])
 def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
                                        hold: str) -> None:
     """The linear motor, the CDFS with its hollow motor on the servo (nut inputs live), the

@@ -15,7 +15,8 @@ app.add_typer(export_app, name="export")
 @export_app.command("fmu")
 @user_errors
 def fmu_command(
-    drive: str = typer.Option(..., "--drive", help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option(..., "--drive", help="cdfs, ddfs, linear-motor or another "
+                              "registered drive (rack-pinion)"),
     out: str = typer.Option(..., "--out", help="The FMU file to write (DRIVE.fmu)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),

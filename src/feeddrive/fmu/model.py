@@ -58,6 +58,8 @@ class FmuModel:
     nut_position_input: bool  # ... with a position loop (controller nut_loop = "position")
     periods: dict[str, float]  # the loops' sample periods [s] (0: continuous), by loop name
     parameters: DriveParameters  # the exported set (units of the parameter slots)
+    table_position: float = 0.4  # [m] the nut's start position a (ball-screw drives)
+    nut_hold: str = "locked"
 
 
 def build(parameters: DriveParameters, drive: str, table_position: float,
@@ -82,7 +84,7 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
                     periods={"position_period": parameters.controller.position_period,
                              "velocity_period": parameters.controller.velocity_period,
                              "current_period": parameters.controller.current_period},
-                    parameters=parameters)
+                    parameters=parameters, table_position=table_position, nut_hold=nut_hold)
 
 
 def numba_module(model: Model) -> ModuleType:
