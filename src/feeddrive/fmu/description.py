@@ -259,7 +259,8 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
         slot, product = mech.motor_output(axis)
         unit = "N" if product.endswith("_force") else "N m"
         v.append(Variable(product, K_PRODUCT, m.parameter_names.index(slot),
-                          m.index(f"{axis}_current"), "output", "continuous", "calculated", None, unit,
+                          m.index(f"{axis}_current"), "output", "continuous", "calculated",
+                          None, unit,
                           f"{axis} motor {'force' if unit == 'N' else 'torque'} "
                           f"({slot.rsplit('.', 1)[-1].replace('_', ' ')} × current)"))
     aux_names = [a.name for a in m.aux]
