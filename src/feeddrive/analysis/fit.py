@@ -153,8 +153,7 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     first sample is taken as t = 0 with the drive at rest.  ``torque_constant`` [N m/A]
     turns a measured torque into the screw current the model has.
     """
-    from ..measured_io import COMMAND_COLUMNS, MeasuredDataError, check_increasing, \
-        read_csv_table, unit_factor
+    from ..measured_io import COMMAND_COLUMNS, check_increasing, read_csv_table
 
     table = read_csv_table(path, sep=None)
     src = table.source
@@ -228,7 +227,6 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
                 nut = np.interp(ref_t, t, ncmd)
     if not np.any(ref_v != 0.0):
         raise FitError(f"{src}: the command speed is zero throughout: nothing to fit")
-    del MeasuredDataError, unit_factor
     return Experiment(source=src, time=t, signals=measured, reference_time=ref_t,
                       table_speed=ref_v, nut_speed=nut,
                       noise={k: noise_level(v) for k, v in measured.items()})
@@ -422,8 +420,8 @@ class _Evaluator:
     def residual(self, theta: np.ndarray) -> np.ndarray:
         r = self.batch([theta])[0]
         if self.progress is not None and self.best is not None:
-            self.progress(f"{self.label}: evaluation {self.evaluations}: cost {0.5 * float(r @ r):.6g} "
-                          f"(best {self.best[0]:.6g})")
+            self.progress(f"{self.label}: evaluation {self.evaluations}: cost "
+                          f"{0.5 * float(r @ r):.6g} (best {self.best[0]:.6g})")
         return r
 
     def jacobian(self, theta: np.ndarray, lb: np.ndarray | None = None,

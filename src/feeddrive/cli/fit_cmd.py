@@ -153,3 +153,84 @@ def fit_command(
         _say(f"wrote {shown(plot)}")
     if result.interrupted:
         raise typer.Exit(code=130)
+
+
+@app.command("predict")
+@user_errors
+def predict_command(
+    fit_file: str = typer.Argument(..., help="A fitted file (feeddrive fit --out)."),
+    samples: int = typer.Option(100, "--samples", help="Monte Carlo samples [-]."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the draws [-]."),
+    store: str | None = typer.Option(None, "--store", help="Results store (SQLite; default "
+                                     "FIT.predict.sqlite); a rerun resumes from it."),
+    workers: int | None = typer.Option(None, "--workers", help="Local processes "
+                                       "(default: every core)."),
+    dask_workers: int | None = typer.Option(None, "--dask-workers",
+                                            help="A Dask LocalCluster of N workers."),
+    scheduler: str | None = typer.Option(None, "--scheduler",
+                                         help="Address of a running Dask scheduler."),
+    resolution: float | None = typer.Option(None, "--resolution", help="Critical-speed "
+                                            "search resolution [mm/s] (default 0.01)."),
+    low: float | None = typer.Option(None, "--low", help="Lowest speed searched [mm/s]."),
+    high: float | None = typer.Option(None, "--high", help="Highest speed searched [mm/s]."),
+    plot: str | None = typer.Option(None, "--plot", help="Histogram and convergence plot "
+                                    "FILE.png."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
+) -> None:
+    """The critical creeping speed as a distribution: Monte Carlo over the fit's covariance
+    (multivariate normal), each sample a critical-speed search from rest on the shared
+    protocol, run through the sweep machinery (local pool or Dask; resumable store).
+    Prints the 5/50/95 % points with their Monte Carlo 95 % intervals."""
+    from ..analysis.predict import plot_prediction, predict
+    from ..protocol import SPEED_RANGE
+
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[fit_file, store], force=force)
+    if workers is not None and workers < 1:
+        raise ValueError(f"--workers = {workers}: expected ≥ 1")
+    rng = None
+    if low is not None or high is not None:
+        lo = _units.speed("--low", low, positive=True) if low is not None else SPEED_RANGE[0]
+        hi = _units.speed("--high", high, positive=True) if high is not None else SPEED_RANGE[1]
+        if not hi > lo:
+            raise ValueError(f"--high {hi * 1e3:g}: expected > --low {lo * 1e3:g} [mm/s]")
+        rng = (lo, hi)
+    res = None if resolution is None else _units.speed("--resolution", resolution,
+                                                        positive=True)
+
+    def started(todo: int, where: str) -> None:
+        if not as_json:
+            _say(f"  {todo} samples to compute on {where}")
+
+    def progress(done: int, todo: int) -> None:
+        if not as_json and (done == todo or done % max(1, todo // 10) == 0):
+            _say(f"  {done}/{todo} samples")
+
+    pred = predict(fit_file, samples=samples, seed=seed, store=store, workers=workers,
+                   dask_workers=dask_workers, scheduler=scheduler, resolution=res,
+                   speed_range=rng, progress=progress, started=started)
+    if plot:
+        plot_prediction(pred, plot)
+    data = pred.to_dict()
+    data["plot"] = plot
+    if as_json:
+        print_json(data)
+        return
+    _say(f"{pred.record.drive.upper()} critical speed from rest over {', '.join(pred.record.free)}"
+         f": {samples} samples (seed {seed}), {pred.computed} computed now, store "
+         f"{shown(pred.store)}")
+    for p in data["percentiles"]:
+        v, (a, b) = p["critical_speed_mm_s"], p["mc_interval_mm_s"]
+
+        def fmt(x: float | str) -> str:
+            return f"{x:.3f}" if isinstance(x, float) else x
+
+        _say(f"  {p['percentile']:g} %: {fmt(v)} mm/s (Monte Carlo 95 % interval {fmt(a)} … "
+             f"{fmt(b)})")
+    _say(f"  search resolution {data['resolution_mm_s']:g} mm/s over "
+         f"{data['speed_range_mm_s'][0]:g}–{data['speed_range_mm_s'][1]:g} mm/s; "
+         f"{data['below_range']} below, {data['above_range']} above the range, "
+         f"{data['failed']} failed; {data['refused_draws']} draws refused (invalid sets)")
+    if plot:
+        _say(f"wrote {shown(plot)}")
