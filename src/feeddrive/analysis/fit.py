@@ -99,6 +99,11 @@ class Experiment:
     def duration(self) -> float:
         return float(self.time[-1])
 
+    @property
+    def span(self) -> float:
+        """Length of the record [s] (its first sample may come after the start)."""
+        return float(self.time[-1] - self.time[0])
+
     def profile(self) -> Any:
         from ..control import SampledSpeed
 
@@ -143,15 +148,18 @@ def _uniform_reference(t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.nda
 def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
                     command_speed: float | None = None,
                     profile: tuple[np.ndarray, np.ndarray] | None = None,
-                    torque_constant: float | None = None) -> Experiment:
+                    torque_constant: float | None = None,
+                    record_start: float = 0.0) -> Experiment:
     """Read one trace file (docs/measured-data.md rules; ``simulate --output X.csv`` files).
 
     ``signals``: the measured signals to fit (:data:`MEASURABLE` names); default every one
     found among table position and motor current/torque.  The reference: ``profile`` (time
     [s], table speed [m/s], on the record's clock), else ``command_speed`` [m/s] (constant,
     after a 0.1-s ramp as ``simulate`` does), else the file's command column.  The record's
-    first sample is taken as t = 0 with the drive at rest.  ``torque_constant`` [N m/A]
-    turns a measured torque into the screw current the model has.
+    first sample is taken as t = 0 with the drive at rest, or, with ``record_start`` [s]
+    (``command_speed`` only), as that long after the start from rest (a record of steady
+    sliding).  ``torque_constant`` [N m/A] turns a measured torque into the screw current
+    the model has.
     """
     from ..measured_io import COMMAND_COLUMNS, check_increasing, read_csv_table
 
@@ -165,7 +173,12 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     t_raw, _, _ = table.quantity(["time"], "time", unit=None, default_unit="s")
     check_increasing(table, t_raw, "time")
     t0 = float(t_raw[0])
-    t = t_raw - t0
+    if not (math.isfinite(record_start) and record_start >= 0):
+        raise FitError(f"--record-start {record_start!r}: expected a time ≥ 0 [s]")
+    if record_start > 0 and command_speed is None:
+        raise FitError(f"--record-start {record_start:g}: needs --command-speed (the reference "
+                       "before the record is otherwise unknown)")
+    t = t_raw - t0 + record_start
     wanted = list(signals) if signals else ["table_position", "screw_current",
                                             "screw_torque", "motor_current"]
     for name in wanted:
@@ -211,7 +224,7 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
                            f"the profile's {pt[0]:g} … {pt[-1]:g} s (non-overlapping times)")
         ref_t, ref_v = _uniform_reference(t, np.interp(t_raw, pt, pv))
     elif command_speed is not None:
-        ref_t = np.linspace(0.0, t[-1], max(3, int(round(t[-1] / 1e-3)) + 1))
+        ref_t = np.arange(int(math.ceil(t[-1] / 1e-3)) + 2) * 1e-3
         ref_v = float(command_speed) * np.clip(ref_t / 0.1, 0.0, 1.0)
     else:
         col = next((c for c in COMMAND_COLUMNS if table.has(c)), None)
@@ -604,8 +617,9 @@ def horizons(duration: float) -> list[float]:
 
 
 def _cut(e: Experiment, h: float) -> Experiment:
-    m = e.time <= h + 1e-12
-    keep = e.reference_time <= h + 2 * float(np.median(np.diff(e.reference_time)))
+    end = float(e.time[0]) + h
+    m = e.time <= end + 1e-12
+    keep = e.reference_time <= end + 2 * float(np.median(np.diff(e.reference_time)))
     return dataclasses.replace(e, time=e.time[m], signals={k: v[m] for k, v in
                                                            e.signals.items()},
                                reference_time=e.reference_time[keep],
@@ -743,7 +757,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     DriveSystem(base, drive=drive, table_position=table_position)  # validates drive/position
     theta0 = np.ones(len(free))
 
-    longest = max(e.duration for e in experiments)
+    longest = max(e.span for e in experiments)
     stages = horizons(longest) if horizon_continuation else [longest]
 
     def run(pool: cf.Executor | None) -> FitResult:
@@ -754,7 +768,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
         t0 = _time.perf_counter()
         ev = None
         for k, h in enumerate(stages, start=1):
-            stage = [e if e.duration <= h else _cut(e, h) for e in experiments]
+            stage = [e if e.span <= h else _cut(e, h) for e in experiments]
             ev = _Evaluator(base, drive, table_position, free, start, stage, weights, pool,
                             say, label=f"stage {k}/{len(stages)} (first {h:g} s)")
             try:
@@ -915,12 +929,13 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
 def synthetic_experiment(params: DriveParameters, speed: float, duration: float, *,
                          drive: str = "cdfs", table_position: float = 0.4,
                          position_quantum: float = 0.05e-6, current_noise: float = 0.01,
-                         seed: int = 0, ramp_time: float = 0.1,
+                         seed: int = 0, ramp_time: float = 0.1, record_start: float = 0.0,
                          source: str | None = None) -> Experiment:
     """A rig record made by simulation: constant ``speed`` [m/s] after a ``ramp_time`` [s]
     ramp for ``duration`` [s], sampled at 1 ms; table position quantised to
     ``position_quantum`` [m] (an encoder or interferometer count) and screw current with
-    white noise of ``current_noise`` × its rms (seeded).  For tests, the calibration
+    white noise of ``current_noise`` × its rms (seeded); ``record_start`` [s]: the record
+    keeps only the samples from then on (a record of steady sliding).  For tests, the calibration
     (benchmarks/fit_calibration.py) and docs/fitting.md's worked example."""
     from ..control import ConstantSpeed
     from ..simulate import DriveSystem, simulate
@@ -936,9 +951,10 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     i = np.asarray(result[cur_name])
     i = i + current_noise * float(np.sqrt(np.mean(i ** 2))) * rng.standard_normal(i.size)
     ref = np.asarray(result["table_speed_reference"])
-    signals = {"table_position": x, cur_name: i}
+    keep = t >= record_start - 1e-12
+    signals = {"table_position": x[keep], cur_name: i[keep]}
     return Experiment(source=source or f"synthetic {speed * 1e3:g} mm/s (seed {seed})",
-                      time=t, signals=signals, reference_time=t, table_speed=ref,
+                      time=t[keep], signals=signals, reference_time=t, table_speed=ref,
                       noise={k: noise_level(v) for k, v in signals.items()})
 
 
