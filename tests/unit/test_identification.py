@@ -239,3 +239,19 @@ def test_site_mass() -> None:
     assert site_mass(PARAMS, "guide") == 20.0
     with pytest.raises(ValueError, match="site"):
         site_mass(PARAMS, "spindle")
+
+
+def test_presliding_poor_fit_is_not_called_determined(step_test: tuple) -> None:
+    """Issue 22: a record the model cannot explain (here a 2 Hz, 1-µm vibration on top of
+    the step test) was reported with σ1 "determined ±1 %" despite a residual far above the
+    noise.  The residual check compares the rms residual with the record's own noise."""
+    t, f, x = step_test
+    disturbed = x + 1e-6 * np.sin(2 * np.pi * 2.0 * t)
+    fit = fit_presliding(t, f, disturbed, mass=MASS, friction=SCREW)
+    assert not fit.residual_ok
+    assert fit.rmse > 2 * fit.noise
+    assert not fit.sigma1_determined
+    assert "poor fit" in fit.note and "determined:" not in fit.note
+    # the clean record passes the same check
+    clean = fit_presliding(t, f, x, mass=MASS, friction=SCREW)
+    assert clean.residual_ok and clean.rmse <= 2 * clean.noise

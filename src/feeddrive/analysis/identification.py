@@ -528,6 +528,8 @@ class DynamicFit:
     correlation: float  # between σ0 and σ1 estimates
     source: str | None = None
     lines: np.ndarray | None = field(default=None, repr=False)
+    noise: float = math.nan  # [m] the record's noise level, from the data alone
+    residual_ok: bool = True  # rms residual ≤ MAX_RESIDUAL_RATIO × noise
 
     @property
     def residual(self) -> np.ndarray:
@@ -563,6 +565,8 @@ class DynamicFit:
             "rmse": self.rmse,
             "points": int(self.time.size),
             "force_ratio": self.force_ratio,
+            "noise": _finite_or_none(self.noise),
+            "residual_check": "passed" if self.residual_ok else "failed",
             "note": self.note,
         }
 
@@ -575,6 +579,12 @@ MAX_STEP_RATIO = 100.0
 
 #: σ1 counts as determined when its standard error is at most this fraction of its value
 SIGMA1_MAX_RELATIVE_STDERR = 0.25
+
+#: a fit whose rms residual exceeds this multiple of the record's own noise level (the
+#: robust scale of its second differences, :func:`feeddrive.analysis.fit.noise_level`) does
+#: not explain the record: nothing is called determined (issue 22: a 1.04e3-nm residual on a
+#: 3.5-µm record was reported with σ1 "determined ±1 %")
+MAX_RESIDUAL_RATIO = 2.0
 
 
 # Pre-sliding is the micrometre regime below breakaway (Wang2021 Sect. 4; Al-Bender et al.
@@ -777,8 +787,19 @@ def fit_presliding(
     if math.isfinite(corr):
         s0_est = dataclasses.replace(s0_est, max_correlation=corr, correlated_with="σ1")
         s1_est = dataclasses.replace(s1_est, max_correlation=corr, correlated_with="σ0")
-    determined = (s1_est.relative_stderr <= SIGMA1_MAX_RELATIVE_STDERR and math.isfinite(high))
-    if determined:
+    from .fit import noise_level
+
+    noise = noise_level(x)
+    rmse = math.sqrt(ssr / dof)
+    residual_ok = rmse <= MAX_RESIDUAL_RATIO * noise
+    determined = (residual_ok and s1_est.relative_stderr <= SIGMA1_MAX_RELATIVE_STDERR
+                  and math.isfinite(high))
+    if not residual_ok:
+        note = (f"poor fit: the rms residual {rmse * 1e9:.3g} nm is {rmse / noise:.3g}× the "
+                f"record's own noise {noise * 1e9:.3g} nm (from its second differences); the "
+                "model does not explain this record, so neither σ0 nor σ1 is determined. "
+                "Check the mass, the force channel and that the record stays in pre-sliding.")
+    elif determined:
         note = (f"σ1 determined: {s1_hat:.4g} N s/m, ±{100 * s1_est.relative_stderr:.0f} % "
                 f"(1 s.e.); σ2 = {sigma2:.4g} N s/m held fixed.")
     else:
@@ -798,9 +819,9 @@ def fit_presliding(
         viscous_coefficient=sigma2, sigma1_determined=determined, sigma1_interval=(low, high),
         note=note, time=t, force=f, position=x, fitted=fitted,
         position_offset=float(np.mean(x - simulate(s0_hat, s1_hat))),
-        rmse=math.sqrt(ssr / dof), dof=dof, profile_sigma1=grid, profile_ssr=prof,
+        rmse=rmse, dof=dof, profile_sigma1=grid, profile_ssr=prof,
         ssr_threshold=threshold, force_ratio=force_ratio, correlation=corr, source=source,
-        lines=lines,
+        lines=lines, noise=noise, residual_ok=residual_ok,
     )
 
 
