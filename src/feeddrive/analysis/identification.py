@@ -210,22 +210,35 @@ class BranchFit:
 class StaticFit:
     """Both directions of a static identification."""
 
-    positive: BranchFit
-    negative: BranchFit
+    positive: BranchFit | None
+    negative: BranchFit | None
     source: str | None = None
 
+    @property
+    def one_direction(self) -> str | None:
+        """The only direction fitted (a record with tests in one direction), else None."""
+        if self.positive is None:
+            return "negative"
+        return "positive" if self.negative is None else None
+
     def branches(self) -> dict[str, BranchFit]:
-        return {"positive": self.positive, "negative": self.negative}
+        """The fitted branches (one only for a one-direction record)."""
+        return {k: b for k, b in (("positive", self.positive), ("negative", self.negative))
+                if b is not None}
 
     def lugre(self, bristle_stiffness: float, bristle_damping: float) -> LuGreParameters:
         """The LuGre parameters the simulation takes, with σ0 [N/m] and σ1 [N s/m] given
         (e.g. from a base parameter set or :func:`fit_presliding`)."""
+        if self.positive is None or self.negative is None:
+            raise ValueError(f"only the {self.one_direction} branch was fitted (tests in one "
+                             "direction); merge the fragment into a parameter set, which keeps "
+                             "its other branch")
         return LuGreParameters(positive=self.positive.branch, negative=self.negative.branch,
                                bristle_stiffness=bristle_stiffness,
                                bristle_damping=bristle_damping)
 
     def to_dict(self, units: Literal["SI", "mm"] = "SI") -> dict[str, Any]:
-        out: dict[str, Any] = {"source": self.source}
+        out: dict[str, Any] = {"source": self.source, "one_direction": self.one_direction}
         for name, b in self.branches().items():
             vs_scale, vs_unit = (1.0, "m/s") if units == "SI" else (1e3, "mm/s")
             out[name] = {
@@ -374,8 +387,10 @@ def fit_static(
     lines, source:
         File line numbers of the tests and the file name, used in error messages.
 
-    Each direction needs at least :data:`MIN_SPEEDS_PER_DIRECTION` distinct speeds, spread
-    over the Stribeck region (around v_s) and the viscous region (well above it).
+    Each direction tested needs at least :data:`MIN_SPEEDS_PER_DIRECTION` distinct speeds,
+    spread over the Stribeck region (around v_s) and the viscous region (well above it).  A
+    record with tests in one direction only gives that branch only (the other is None;
+    :attr:`StaticFit.one_direction` names the fitted one).
     """
     v = np.asarray(speed, dtype=float)
     f = np.asarray(force, dtype=float)
@@ -395,9 +410,11 @@ def fit_static(
     if zero.size:
         raise ValueError(f"{prefix}{_locate(lines, int(zero[0]))}: speed 0 is not a sliding "
                          "test; the static fit needs constant non-zero speeds")
-    fits = {}
+    fits: dict[str, BranchFit | None] = {"positive": None, "negative": None}
     for direction, mask in (("positive", v > 0), ("negative", v < 0)):
         idx = np.flatnonzero(mask)
+        if idx.size == 0 and np.any(~mask):
+            continue  # a one-direction record: that branch only (issue 22)
         distinct = np.unique(np.abs(v[idx])).size
         if distinct < MIN_SPEEDS_PER_DIRECTION:
             other = "negative" if direction == "positive" else "positive"
@@ -542,6 +559,9 @@ class DynamicFit:
         simulate); check ``sigma1_determined`` and ``note``.
         """
         if isinstance(static, StaticFit):
+            if static.positive is None or static.negative is None:
+                static.lugre(0.0, 0.0)  # raises: one direction only
+            assert static.positive is not None and static.negative is not None
             pos, neg = static.positive.branch, static.negative.branch
         else:
             pos, neg = static.positive, static.negative

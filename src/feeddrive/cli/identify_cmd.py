@@ -79,6 +79,10 @@ def _print_static(fit: StaticFit, confidence: float) -> None:
     rows = (("F_c", "coulomb_force", 1.0, "N"), ("F_s", "static_force", 1.0, "N"),
             ("v_s", "stribeck_velocity", 1.0 / MM_PER_S, "mm/s"),
             ("σ2", "viscous_coefficient", 1.0, "N s/m"))
+    if fit.one_direction:
+        other = "negative" if fit.one_direction == "positive" else "positive"
+        _say(f"  tests in the {fit.one_direction} direction only: that branch only is fitted; "
+             f"the {other} branch is not (a fragment leaves it to the base set)")
     for name, b in fit.branches().items():
         _say(f"  {name} direction: {b.speed.size} tests, rms residual {b.rmse:.3g} N")
         for label, attr, scale, unit in rows:
