@@ -127,7 +127,8 @@ def fit_command(
          f"{result.evaluations} evaluations; {result.message}")
     for e in result.estimates:
         if math.isfinite(e.low) and math.isfinite(e.high):
-            ci = f"{level} CI {e.low:.6g} … {e.high:.6g} ({e.interval})"
+            ci = (f"{level} CI {e.low:.6g} … {e.high:.6g} (±{100 * e.relative_half_width:.2g} "
+                  f"%, {e.interval})")
         else:
             ci = f"{level} interval not determined"
         state = "determined" if e.determined else f"POORLY DETERMINED: {e.issue}"
