@@ -20,6 +20,7 @@ from . import (  # noqa: F401,E402  (registers commands)
     linear_cmd,
     params_cmd,  # noqa: F401  (registers commands)
     reproduce_cmd,
+    sensitivity_cmd,  # noqa: F401  (registers commands)
     simulate_cmd,
     sweep_cmd,  # noqa: F401  (registers commands)
 )
