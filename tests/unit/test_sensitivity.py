@@ -60,3 +60,23 @@ def test_unknown_pattern_is_refused() -> None:
     with pytest.raises(fd.ParameterError, match="matches no numeric parameter"):
         sensitivity("wang2021", quantity="linear-band", in_process=True,
                     patterns=["controller.nothing*"])
+
+
+def test_report_section_answers_the_axial_rigidity_claim(tmp_path) -> None:
+    """The reproduce report's section (feeddrive.reproduce.sensitivity_section) on the
+    stiffness rows: Wang2021 claims "the greater the axial rigidity, the lower the critical
+    speed"; the answer is read from those rows, with the numbers it rests on."""
+    from feeddrive.reproduce import sensitivity_section as sec
+
+    data = sensitivity(fd.preset("wang2021"), quantity="linear-band", in_process=True,
+                       linear_points=sec.LINEAR_POINTS,
+                       patterns=[*sec.AXIAL, "controller.velocity_gain"]).to_dict()
+    text, rows = sec.sensitivity_rows(data)
+    assert [r["parameter"] for r in rows][0] == "controller.velocity_gain"
+    answer = sec.axial_rigidity_answer(data)
+    assert answer in text and "axial rigidity" in answer
+    axial = [e for e in data["entries"] if e["path"] in sec.AXIAL]
+    if not any(e["resolved"] for e in axial):
+        assert "neither supports nor refutes" in answer
+    png = sec.figure(data, tmp_path)
+    assert png is not None and png.stat().st_size > 5000

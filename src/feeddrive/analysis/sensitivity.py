@@ -182,8 +182,10 @@ def _points_for(config: Any, params: DriveParameters, path: str, value: float, h
     return out
 
 
-def sensitivity(params_source: str, *, drive: str = "cdfs", table_position: float = 0.4,
+def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
+                table_position: float = 0.4,
                 quantity: str = "linear-band", patterns: Sequence[str] | None = None,
+                linear_points: int | None = None,
                 store: str | os.PathLike[str] | None = None, workers: int | None = None,
                 dask_workers: int | None = None, scheduler: str | None = None,
                 in_process: bool = False,
@@ -200,9 +202,12 @@ def sensitivity(params_source: str, *, drive: str = "cdfs", table_position: floa
     say = progress or (lambda _t: None)
     if quantity not in ("critical-speed", "linear-band"):
         raise ParameterError("--quantity", quantity, "expected critical-speed or linear-band")
-    source = os.fspath(Path(params_source).resolve()) if params_source.endswith(".toml") \
-        else params_source
-    params = _load_base(source, source)
+    if isinstance(params_source, DriveParameters):
+        params, source = params_source, params_source.name
+    else:
+        source = os.fspath(Path(params_source).resolve()) if params_source.endswith(".toml") \
+            else params_source
+        params = _load_base(source, source)
     paths, skipped = parameter_paths(params, drive, patterns)
     if not paths:
         raise ParameterError("--parameters", list(patterns or []), "leaves no parameter to "
@@ -211,10 +216,12 @@ def sensitivity(params_source: str, *, drive: str = "cdfs", table_position: floa
     spec: dict[str, Any] = {"kind": quantity, "linear": quantity == "critical-speed"}
     if quantity == "critical-speed":
         spec["linear"] = False
+    if linear_points is not None:
+        spec["linear_points"] = linear_points
     settings = QuantitySettings.parse(spec)
     resolution = settings.resolution if quantity == "critical-speed" else LINEAR_RESOLUTION
     key_name = "critical_speed" if quantity == "critical-speed" else "linear_upper"
-    config = SweepConfig(name=f"sensitivity-{Path(str(params_source)).stem}-{drive}-{quantity}",
+    config = SweepConfig(name=f"sensitivity-{Path(source).stem}-{drive}-{quantity}",
                          source=source if source.endswith(".toml") else "sensitivity.toml",
                          base=source, drive=drive, table_position=table_position * 1e3,
                          nut_speed=0.0, design="grid", samples=None, seed=0, axes=(),
