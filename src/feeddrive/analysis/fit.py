@@ -846,7 +846,7 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
         simulated.append(sims)
     if interrupted:
         nan = np.full((p, p), math.nan)
-        ests = tuple(ParameterEstimate(path=path, unit=u, start=float(s0), value=float(th * s0),
+        partial = tuple(ParameterEstimate(path=path, unit=u, start=float(s0), value=float(th * s0),
                                        stderr=math.nan, low=math.nan, high=math.nan,
                                        interval="none", determined=False,
                                        issue="fit interrupted: no interval")
@@ -854,7 +854,7 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
         return FitResult(parameters=params, base_name=base.name, drive=drive,
                          table_position=table_position, sources=tuple(e.source for e in
                                                                       experiments),
-                         estimates=ests, covariance=nan, correlation=nan,
+                         estimates=partial, covariance=nan, correlation=nan,
                          condition_number=math.nan, singular_values=np.full(p, math.nan),
                          poorly_determined=(), residuals=tuple(residuals), residual_ok=ok,
                          cost=0.5 * ssr, dof=dof, evaluations=evaluations + ev.evaluations,
@@ -868,7 +868,7 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
     scaled = jac * np.where(theta != 0, theta, 1.0)
     _, sv, vt = np.linalg.svd(scaled, full_matrices=False)
     cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else math.inf
-    combos = []
+    combos: list[dict[str, Any]] = []
     for i in range(sv.size):
         if sv[i] <= sv[0] / MAX_CONDITION or sv[i] == 0:
             vec = vt[i]
@@ -883,7 +883,7 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
     tq = float(stats.t.ppf(0.5 + confidence / 2.0, dof))
     threshold = ssr * (1.0 + float(stats.f.ppf(confidence, 1, dof)) / dof)
     cov = cov_t * np.outer(start, start)
-    ests = []
+    ests: list[ParameterEstimate] = []
     for j, path in enumerate(ev.paths):
         se_t = math.sqrt(cov_t[j, j]) if math.isfinite(cov_t[j, j]) and cov_t[j, j] >= 0 \
             else math.inf

@@ -257,10 +257,10 @@ def plot_prediction(pred: Prediction, path: str | os.PathLike[str],
         edges = np.arange(fin.min() - pred.resolution * 1e3, fin.max() + 2 * pred.resolution
                           * 1e3, pred.resolution * 1e3)
         ax.hist(fin, bins=edges if edges.size > 1 else 10, color="0.6")
-    for p in pred.percentiles:
-        if math.isfinite(p.value):
-            ax.axvline(p.value * 1e3, color="C0", ls="--", lw=0.8)
-            ax.text(p.value * 1e3, ax.get_ylim()[1] * 0.95, f"{p.level:g} %", fontsize=8)
+    for pc in pred.percentiles:
+        if math.isfinite(pc.value):
+            ax.axvline(pc.value * 1e3, color="C0", ls="--", lw=0.8)
+            ax.text(pc.value * 1e3, ax.get_ylim()[1] * 0.95, f"{pc.level:g} %", fontsize=8)
     if true_value is not None:
         ax.axvline(true_value * 1e3, color="C3", lw=1.2, label="true value")
         ax.legend(fontsize=8)

@@ -275,7 +275,8 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
         if not math.isfinite(q0) or q0 == 0:
             raise ParameterError("parameters", params.name, f"the base set's {key_name} is not "
                                  "found in the searched range; nothing to differentiate")
-        state = {p: {"k": 0, "done": False, "pts": None} for p in paths}
+        state: dict[str, dict[str, Any]] = {p: {"k": 0, "done": False, "pts": None}
+                                            for p in paths}
         for h_index, h in enumerate(STEPS):
             batch = []
             for path in paths:
@@ -317,7 +318,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     finally:
         if db is not None:
             db.close()
-    entries = []
+    entries: list[Entry] = []
     for path in paths:
         st = state[path]
         value = float(_value(params, path))
