@@ -162,3 +162,15 @@ def test_trace_without_reference(tmp_path) -> None:
         read_experiment(f)
     exp = read_experiment(f, command_speed=1e-3)
     assert exp.table_speed[-1] == pytest.approx(1e-3)
+
+
+def test_jacobian_columns_on_a_process_pool_give_the_same_fit() -> None:
+    """The columns run through feeddrive.sweep.executors (here a local pool of 2): the same
+    simulations, so the same numbers as in this process."""
+    truth = _truth()
+    exps = [synthetic_experiment(truth, 5.0e-3, 1.0, seed=3)]
+    free = ["friction.screw.positive.viscous_coefficient"]
+    here = fit_drive(fd.preset("wang2021"), exps, free, profile=False)
+    pool = fit_drive(fd.preset("wang2021"), exps, free, profile=False, workers=2)
+    assert pool.estimates[0].value == here.estimates[0].value
+    assert pool.estimates[0].stderr == here.estimates[0].stderr
