@@ -153,3 +153,34 @@ def test_trace_without_usable_signal_and_unknown_signal(tmp_path: Path) -> None:
                 timeout=120)
     assert done.returncode == 2 and "not a measurable signal" in done.stderr
     assert np.isfinite(1.0)
+
+
+def test_ctrl_c_keeps_the_best_point_so_far(tmp_path: Path, interruptible: dict) -> None:
+    """Ctrl-C during the search: the best point so far is printed and written (marked
+    interrupted, no intervals), exit status 130, no traceback."""
+    import signal
+    import time
+
+    names = _write_records(tmp_path, 10.0)
+    args = [sys.executable, "-m", "feeddrive", "fit", *names, "--out", "best.toml"]
+    for p in FREE:
+        args += ["--free", p]
+    proc = subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **interruptible)
+    assert proc.stdout is not None
+    seen = 0
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 300:
+        line = proc.stdout.readline()
+        if "stage 2/" in line:
+            seen += 1
+            if seen >= 2:
+                break
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert "interrupted" in out
+    record = tomllib.loads((tmp_path / "best.toml").read_text(encoding="utf-8"))
+    assert record["fit"]["interrupted"] is True
+    assert fd.load(tmp_path / "best.toml").name == "wang2021-fitted"

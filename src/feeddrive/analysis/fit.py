@@ -795,9 +795,18 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
             base, drive, table_position, free, start, experiments, weights, pool, say,
             label="final")
         say(f"search done: {evaluations} evaluations in {_time.perf_counter() - t0:.1f} s")
-        return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
-                          table_position, confidence, interrupted, message, profile, say,
-                          evaluations)
+        try:
+            return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
+                              table_position, confidence, interrupted, message, profile, say,
+                              evaluations)
+        except KeyboardInterrupt:  # during the intervals: the estimates without them
+            if final.best is not None and final.best[0] < 0.5 * float(
+                    final.batch([theta])[0] @ final.batch([theta])[0]):
+                theta = final.best[1]
+            return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
+                              table_position, confidence, True,
+                              "interrupted (Ctrl-C) while computing the intervals",
+                              profile, say, evaluations)
 
     if workers is None and dask_workers is None and scheduler is None:
         return run(None)
