@@ -155,6 +155,7 @@ def test_trace_without_usable_signal_and_unknown_signal(tmp_path: Path) -> None:
     assert np.isfinite(1.0)
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_the_best_point_so_far(tmp_path: Path, interruptible: dict) -> None:
     """Ctrl-C during the search: the best point so far is printed and written (marked
     interrupted, no intervals), exit status 130, no traceback."""
@@ -184,3 +185,20 @@ def test_ctrl_c_keeps_the_best_point_so_far(tmp_path: Path, interruptible: dict)
     record = tomllib.loads((tmp_path / "best.toml").read_text(encoding="utf-8"))
     assert record["fit"]["interrupted"] is True
     assert fd.load(tmp_path / "best.toml").name == "wang2021-fitted"
+
+
+@pytest.mark.slow
+def test_sensitivity_command_linear_band(tmp_path: Path) -> None:
+    done = _run("sensitivity", "--quantity", "linear-band", "--parameters",
+                "controller.velocity_gain", "--parameters", "hollow_motor.*", "--workers", "1",
+                "--store", "s.sqlite", "--plot", "tornado.png", "--json", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    data = json.loads(done.stdout)
+    (entry,) = data["entries"]
+    assert entry["path"] == "controller.velocity_gain" and entry["resolved"]
+    assert entry["halving_consistent"] and entry["elasticity"] < 0
+    assert "hollow_motor.inertia" in data["skipped"]
+    assert (tmp_path / "tornado.png").stat().st_size > 5000
+    bad = _run("sensitivity", "--quantity", "linear-band", "--parameters", "nothing.*",
+               cwd=tmp_path)
+    assert bad.returncode == 2 and "matches no numeric parameter" in bad.stderr

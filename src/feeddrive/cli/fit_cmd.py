@@ -208,9 +208,21 @@ def predict_command(
         if not as_json and (done == todo or done % max(1, todo // 10) == 0):
             _say(f"  {done}/{todo} samples")
 
-    pred = predict(fit_file, samples=samples, seed=seed, store=store, workers=workers,
-                   dask_workers=dask_workers, scheduler=scheduler, resolution=res,
-                   speed_range=rng, progress=progress, started=started)
+    from ..sweep.executors import SweepAborted
+
+    try:
+        pred = predict(fit_file, samples=samples, seed=seed, store=store, workers=workers,
+                       dask_workers=dask_workers, scheduler=scheduler, resolution=res,
+                       speed_range=rng, progress=progress, started=started)
+    except SweepAborted as err:
+        err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    except KeyboardInterrupt:
+        where = store or str(Path(fit_file).with_suffix(".predict.sqlite"))
+        err_console.print(f"interrupted: every finished sample is in {shown(where)}; rerun "
+                          "the same command to resume", markup=False, highlight=False,
+                          soft_wrap=True)
+        raise typer.Exit(code=130) from None
     if plot:
         plot_prediction(pred, plot)
     data = pred.to_dict()

@@ -9,7 +9,7 @@ import typer
 
 from ..outputs import check_output_file, shown
 from . import _units
-from ._common import app, console, print_json, user_errors
+from ._common import app, console, err_console, print_json, user_errors
 
 
 def _say(text: str) -> None:
@@ -58,10 +58,21 @@ def sensitivity_command(
     source = params_file or preset_name or "wang2021"
     params = load(source) if params_file else preset(source)
     table_position = _units.position("--position", position, params, drive)
-    result = sensitivity(source, drive=drive, table_position=table_position,
-                         quantity=quantity, patterns=parameters, store=store,
-                         workers=workers, dask_workers=dask_workers, scheduler=scheduler,
-                         progress=None if as_json else (lambda m: _say(f"  {m}")))
+    from ..sweep.executors import SweepAborted
+
+    try:
+        result = sensitivity(source, drive=drive, table_position=table_position,
+                             quantity=quantity, patterns=parameters, store=store,
+                             workers=workers, dask_workers=dask_workers, scheduler=scheduler,
+                             progress=None if as_json else (lambda m: _say(f"  {m}")))
+    except SweepAborted as err:
+        err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    except KeyboardInterrupt:
+        err_console.print("interrupted: every finished point is in the store; rerun the "
+                          "same command to resume", markup=False, highlight=False,
+                          soft_wrap=True)
+        raise typer.Exit(code=130) from None
     if plot:
         plot_tornado(result, plot)
     data = result.to_dict()
