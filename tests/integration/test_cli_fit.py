@@ -97,13 +97,15 @@ def test_predict_local_pool_and_dask_give_the_same_percentiles(
     folder, _ = fitted
     common = ["predict", "fitted.toml", "--samples", "6", "--low", "1.5", "--high", "2.5",
               "--json"]
-    local = _run(*common, "--workers", "2", "--store", "local.sqlite", cwd=folder)
+    local = _run(*common, "--workers", "2", "--store", "local.sqlite", "--plot", "mc.png",
+                 cwd=folder)
     assert local.returncode == 0, local.stderr
     dask = _run(*common, "--dask-workers", "2", "--store", "dask.sqlite", cwd=folder)
     assert dask.returncode == 0, dask.stderr
     a, b = json.loads(local.stdout), json.loads(dask.stdout)
     assert a["percentiles"] == b["percentiles"]
     assert "LocalCluster" in b["executor"]
+    assert (folder / "mc.png").stat().st_size > 5000
     true_cs = fd.critical_speed_from_rest(fd.DriveSystem(_truth(), "cdfs", 0.4),
                                           speed_range=(1.5e-3, 2.5e-3))
     assert true_cs.critical_speed is not None
