@@ -204,3 +204,15 @@ def test_sensitivity_command_linear_band(tmp_path: Path) -> None:
     bad = _run("sensitivity", "--quantity", "linear-band", "--parameters", "nothing.*",
                cwd=tmp_path)
     assert bad.returncode == 2 and "matches no numeric parameter" in bad.stderr
+
+
+def test_profile_that_does_not_cover_the_trace_is_refused(tmp_path: Path) -> None:
+    rows = "\n".join(f"{k * 1e-3},{k * 1e-3}" for k in range(2000))
+    (tmp_path / "t.csv").write_text("time [s],position [mm]\n" + rows + "\n", encoding="utf-8")
+    (tmp_path / "p.csv").write_text("time [s],table_speed [mm/s]\n0,1\n1.0,1\n",
+                                    encoding="utf-8")
+    done = _run("fit", "t.csv", "--free", "table.mass", "--profile", "p.csv", cwd=tmp_path,
+                timeout=120)
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "non-overlapping times" in lines[0]

@@ -57,6 +57,9 @@ def fit_command(
     command_speed: float | None = typer.Option(
         None, "--command-speed", help="Reference of traces without a command column: "
         "constant table speed [mm/s] after a 0.1-s ramp."),
+    profile_file: str | None = typer.Option(
+        None, "--profile", help="Reference of every trace from a CSV (time [s], table_speed "
+        "[mm/s], as simulate --profile-file), on the traces' clock; it must cover them."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     confidence: float = typer.Option(0.95, "--confidence", help="Interval level [fraction]."),
     max_evaluations: int = typer.Option(200, "--max-evaluations",
@@ -85,7 +88,9 @@ def fit_command(
         raise ValueError("--free: give at least one parameter path to fit")
     if not (0 < confidence < 1):
         raise ValueError(f"--confidence {confidence!r}: expected a fraction in (0, 1)")
-    inputs = [*traces, params_file]
+    if profile_file and command_speed is not None:
+        raise ValueError("--profile: give either --profile or --command-speed, not both")
+    inputs = [*traces, params_file, profile_file]
     if out:
         check_output_file(out, option="--out", inputs=inputs, force=force)
     if plot:
@@ -95,7 +100,13 @@ def fit_command(
     speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
     torque_constant = (params.linear_motor.force_constant if drive == "linear-motor"
                        and params.linear_motor is not None else params.screw_motor.torque_constant)
-    experiments = [read_experiment(t, signals=signal, command_speed=speed,
+    reference = None
+    if profile_file:
+        from ..profiles import from_csv
+
+        prof = from_csv(profile_file)
+        reference = (prof.time, prof.table_speed)
+    experiments = [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
                                    torque_constant=torque_constant) for t in traces]
     progress = None if as_json else (lambda msg: console.print(f"  {msg}", markup=False,
                                                                highlight=False))
