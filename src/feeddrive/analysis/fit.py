@@ -48,6 +48,7 @@ from scipy.optimize import least_squares
 
 from ..parameters import DriveParameters, ParameterError, dumps
 from ..parameters.toml_io import toml_comment, toml_string
+from .identification import _correlation, _covariance, noise_level
 
 __all__ = ["MEASURABLE", "Experiment", "FitError", "FitResult", "ParameterEstimate",
            "fit_drive", "free_parameter_bounds", "noise_level", "read_experiment"]
@@ -119,21 +120,6 @@ class Experiment:
         if np.any(v < -1e-12):
             out.add(-1)
         return out
-
-
-def noise_level(values: np.ndarray) -> float:
-    """The noise σ of a sampled signal from the data alone (see the module): the robust scale
-    of the second differences / √6, never below the resolution q/√12 of the record."""
-    x = np.asarray(values, dtype=float)
-    if x.size < 8:
-        return math.nan
-    d2 = np.diff(x, 2)
-    mad = float(np.median(np.abs(d2 - np.median(d2)))) * 1.4826 / math.sqrt(6.0)
-    steps = np.abs(np.diff(x))
-    steps = steps[steps > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)]
-    q = float(np.min(steps)) if steps.size else 0.0
-    floor = 1e-9 * float(np.max(np.abs(x))) if x.size else 0.0
-    return max(mad, q / math.sqrt(12.0), floor, 1e-300)
 
 
 def _uniform_reference(t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -885,8 +871,6 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
             combos.append({"singular_value_ratio": float(sv[i] / sv[0]) if sv[0] > 0 else 0.0,
                            "combination": {ev.paths[j]: float(vec[j]) for j in order
                                            if abs(vec[j]) >= 0.1}})
-    from .identification import _correlation, _covariance
-
     cov_t = _covariance(jac, ssr, dof)  # θ units
     corr = _correlation(cov_t)
     tq = float(stats.t.ppf(0.5 + confidence / 2.0, dof))

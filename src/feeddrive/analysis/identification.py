@@ -601,7 +601,7 @@ MAX_STEP_RATIO = 100.0
 SIGMA1_MAX_RELATIVE_STDERR = 0.25
 
 #: a fit whose rms residual exceeds this multiple of the record's own noise level (the
-#: robust scale of its second differences, :func:`feeddrive.analysis.fit.noise_level`) does
+#: robust scale of its second differences, :func:`noise_level`) does
 #: not explain the record: nothing is called determined (issue 22: a 1.04e3-nm residual on a
 #: 3.5-µm record was reported with σ1 "determined ±1 %")
 MAX_RESIDUAL_RATIO = 2.0
@@ -807,8 +807,6 @@ def fit_presliding(
     if math.isfinite(corr):
         s0_est = dataclasses.replace(s0_est, max_correlation=corr, correlated_with="σ1")
         s1_est = dataclasses.replace(s1_est, max_correlation=corr, correlated_with="σ0")
-    from .fit import noise_level
-
     noise = noise_level(x)
     rmse = math.sqrt(ssr / dof)
     residual_ok = rmse <= MAX_RESIDUAL_RATIO * noise
@@ -843,6 +841,23 @@ def fit_presliding(
         ssr_threshold=threshold, force_ratio=force_ratio, correlation=corr, source=source,
         lines=lines, noise=noise, residual_ok=residual_ok,
     )
+
+
+def noise_level(values: np.ndarray) -> float:
+    """The noise σ of a sampled signal from the data alone: the robust (median absolute
+    deviation) scale of its second differences / √6 (white noise e: var Δ²e = 6σ²), never
+    below the record's resolution q/√12 (q the smallest step between samples: encoder or
+    interferometer counts, or the printed digits)."""
+    x = np.asarray(values, dtype=float)
+    if x.size < 8:
+        return math.nan
+    d2 = np.diff(x, 2)
+    mad = float(np.median(np.abs(d2 - np.median(d2)))) * 1.4826 / math.sqrt(6.0)
+    steps = np.abs(np.diff(x))
+    steps = steps[steps > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)]
+    q = float(np.min(steps)) if steps.size else 0.0
+    floor = 1e-9 * float(np.max(np.abs(x))) if x.size else 0.0
+    return max(mad, q / math.sqrt(12.0), floor, 1e-300)
 
 
 def _profile_interval(grid: np.ndarray, prof: np.ndarray, threshold: float, s1_hat: float,
