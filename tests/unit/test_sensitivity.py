@@ -17,11 +17,12 @@ from feeddrive.linear import stability_band
 
 
 def _edge(params: fd.DriveParameters) -> float:
-    """The quantity as the sweep computes it (feeddrive.protocol's speed range, 40 points)."""
-    from feeddrive import protocol
+    """The quantity as the sweep computes it (the linear-band settings' range, 40 points)."""
+    from feeddrive.sweep.quantities import QuantitySettings
 
-    low, high = protocol.SPEED_RANGE
-    band = stability_band(fd.DriveSystem(params, "cdfs", 0.4), low=low, high=high, points=40)
+    q = QuantitySettings.parse({"kind": "linear-band"})
+    band = stability_band(fd.DriveSystem(params, "cdfs", 0.4), low=q.low, high=q.high,
+                          points=40)
     return band.intervals[-1][1]
 
 
@@ -35,11 +36,7 @@ def test_elasticity_matches_direct_central_difference() -> None:
     v0 = base.controller.velocity_gain
     plus = _edge(base.replace_path("controller.velocity_gain", v0 * 1.1))
     minus = _edge(base.replace_path("controller.velocity_gain", v0 * 0.9))
-    # each edge is bisected to 1e-6 m/s (the quantity's resolution), so the difference
-    # quotient is known to ±2·res/(2h·Q0)
-    q0 = _edge(base)
-    tol = 2 * result.resolution / (0.2 * q0)
-    assert kv.elasticity == pytest.approx((plus - minus) / (0.2 * q0), abs=tol)
+    assert kv.elasticity == pytest.approx((plus - minus) / (0.2 * _edge(base)), rel=1e-9)
     assert kv.elasticity < 0  # a stiffer velocity loop narrows the unstable band
     # the rule: a resolved effect is ≥ 10 resolutions; an unresolved one states its bound
     assert abs(kv.q_plus - kv.q_minus) >= MIN_EFFECT_RESOLUTIONS * result.resolution
