@@ -189,7 +189,8 @@ def test_example_map_of_cdfs_and_ddfs(tmp_path: Path) -> None:
     assert res.returncode == 0, res.stderr
     assert "map of critical_speed over table_position × nut_speed" in res.stdout
     assert (tmp_path / "map.png").stat().st_size > 10_000
-    ds = xr.open_dataset(tmp_path / "map.nc", engine="scipy")
+    ds = xr.open_dataset(tmp_path / "map.nc")
+    assert ds.attrs["Conventions"] == "CF-1.8"
     assert dict(ds.sizes) == {"drive": 2, "table_position": 2, "nut_speed": 2}
     assert ds["table_position"].attrs["units"] == "m"
     assert ds["critical_speed"].attrs["units"] == "m/s"
