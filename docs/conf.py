@@ -76,7 +76,8 @@ nitpick_ignore_regex = [
 ]
 
 # --- API reference --------------------------------------------------------------------------
-autodoc_default_options = {"members": True, "show-inheritance": False}
+# undoc-members: the constants of an __all__ have no docstring but belong in the reference
+autodoc_default_options = {"members": True, "undoc-members": True, "show-inheritance": False}
 autodoc_member_order = "bysource"
 autodoc_typehints = "none"  # the signatures carry the types; numpydoc renders the docstrings
 autosummary_generate = False
@@ -104,7 +105,7 @@ sphinx_gallery_conf = {
     "matplotlib_animations": False,
     "image_scrapers": ("matplotlib",),
     "reset_modules": ("matplotlib",),
-    "min_reported_time": 1,
+    "min_reported_time": 0,  # every example page states its run time
     "show_memory": False,
     "write_computation_times": True,
 }
