@@ -15,6 +15,7 @@ import pytest
 import xarray as xr
 
 import feeddrive as fd
+from feeddrive.sweep import SweepStore, export
 
 CF_TABLES = Path(__file__).resolve().parents[1] / "data" / "cf"
 CFCHECKS = Path(sys.executable).with_name("cfchecks")
@@ -81,11 +82,14 @@ def test_simulate_nc_attributes(run_nc: Path) -> None:
 def test_sweep_exports(tmp_path: Path) -> None:
     cfg = tmp_path / "cf.toml"
     cfg.write_text(SWEEP)
-    for out in ("cf.nc", "cf.parquet", "cf.csv"):
-        res = subprocess.run([sys.executable, "-m", "feeddrive", "sweep", str(cfg), "--workers",
-                              "1", "--output", out], cwd=tmp_path, capture_output=True,
-                             text=True, timeout=300)
-        assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, "-m", "feeddrive", "sweep", str(cfg), "--workers",
+                          "1", "--output", "cf.nc"], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    # the other formats from the same store, as `feeddrive map cf.sqlite --output …` writes
+    store = SweepStore(tmp_path / "cf.sqlite")
+    for out in ("cf.parquet", "cf.csv"):
+        export(store, "cf", tmp_path / out)
     with xr.open_dataset(tmp_path / "cf.nc") as ds:
         assert ds.attrs["Conventions"] == "CF-1.8"
         assert ds.attrs["title"].startswith("feeddrive sweep cf: grid design")
