@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 import xarray as xr
@@ -109,3 +110,17 @@ def test_sweep_exports(tmp_path: Path) -> None:
     assert sorted(table["table_position"].to_pylist()) == [300.0, 300.0, 500.0, 500.0]
     header = (tmp_path / "cf.csv").read_text(encoding="utf-8").splitlines()[0]
     assert "table_position [mm]" in header and "friction.screw [factor]" in header
+
+
+def test_outputs_doc_states_the_writers_conventions() -> None:
+    """docs/outputs.md against feeddrive.io: the CF version, the time coordinate's long name,
+    the engine and the Parquet metadata keys it names."""
+    from feeddrive import io
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "outputs.md").read_text("utf-8")
+    assert f'`Conventions = "{io.CF_CONVENTIONS}"`' in doc
+    assert f'`long_name = "{io.TIME_LONG_NAME}"`' in doc
+    assert f"`{io.NETCDF_ENGINE}` engine" in doc
+    table = io.arrow_table({"x": (np.zeros(2), "mm", "a length")})
+    assert set(table.schema.field("x").metadata) == {b"unit", b"long_name"}
+    assert "`unit` (`mm`), `long_name`" in doc
