@@ -66,7 +66,8 @@ nitpick_ignore_regex = [
     ("py:.*", r"(.*\.)?_\w+(\..*)?"),
     # the internals the docstrings name but the reference does not document (the generated
     # model's machinery, the solvers, the file plumbing): they show as code, not as links
-    ("py:.*", r"feeddrive\.(solvers|protocol|analysis\.critical|model\.(codegen|loops|"
+    ("py:.*", r"feeddrive\.(solvers|protocol|registry|presets|fmu\.(solver|build|model)|"
+              r"analysis\.critical|model\.(codegen|loops|"
               r"disturbances|compensation|friction\.\w+|mechanisms\.\w+)|"
               r"parameters\.(components|toml_io|validation))(\..*)?"),
     ("py:.*", r"(DENSE_CHUNK|KEEP_STREAMED|CHUNK_WALL_TIME|SimulationInterrupted|MARGINAL|"

@@ -68,7 +68,7 @@ def bristle_step_kernel(z: float, v: float, h: float, p: np.ndarray) -> float:
     if v == 0.0:
         return z
     g = stribeck_magnitude_kernel(v, p)
-    lam = p[8] * abs(v) / g
+    lam = p[lugre.SIGMA0] * abs(v) / g
     z_ss = v / lam
     return z_ss + (z - z_ss) * math.exp(-lam * h)
 

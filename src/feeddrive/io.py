@@ -182,22 +182,22 @@ class ChunkWriter:
     the columns of :func:`to_engineering_frame` or :func:`to_arrow_table`), so a long run
     never holds all of them."""
 
-    def __init__(self, path: str | Path, model: Any, system: Any) -> None:
+    def __init__(self, path: str | Path, model: Any, system: Any, run_type: Any) -> None:
+        """``run_type``: :class:`feeddrive.result.Run` (passed in, so that this writer does not
+        import the results layer that imports it)."""
         self.path = Path(path)
         ext = self.path.suffix.lower()
         if ext not in (".parquet", ".csv"):
             raise ParameterError("output", str(self.path), "a streamed run is written as "
                                  ".parquet or .csv (.nc and .mat hold the whole run)")
-        self.ext, self.model, self.system = ext, model, system
+        self.ext, self.model, self.system, self.run_type = ext, model, system, run_type
         self._writer: Any = None
         self._first = True
         self.path.parent.mkdir(parents=True, exist_ok=True)
 
     def _columns(self, t: np.ndarray, y: np.ndarray,
                  aux: np.ndarray) -> dict[str, tuple[np.ndarray, str, str]]:
-        from .result import Run
-
-        run = Run(t, y, aux, self.model, self.system, None, {})  # type: ignore[arg-type]
+        run = self.run_type(t, y, aux, self.model, self.system, None, {})
         cols = {"time": (t, "s", TIME_LONG_NAME)}
         for name, (unit, description) in run.meta.items():
             eng_unit, factor = ENGINEERING.get(unit, (unit, 1.0))

@@ -119,8 +119,7 @@ def test_every_gallery_example_ran_in_the_build(script: Path) -> None:
 
 def test_gallery_covers_the_brief() -> None:
     """Issue 26: a paper figure, a drive from parts, a friction fit from a measured file, a
-    sweep map, linear analysis — and the FMU example only once ``feeddrive export fmu``
-    exists (a marked slot until then)."""
+    sweep map, linear analysis, and the FMU export (``feeddrive export fmu``)."""
     stems = " ".join(p.stem for p in EXAMPLES)
     for topic in ("fig6", "custom_drive", "identify", "sweep_map", "linear"):
         assert topic in stems, topic
@@ -128,9 +127,5 @@ def test_gallery_covers_the_brief() -> None:
 
     from feeddrive.cli import app
 
-    has_export = "export" in get_command(app).commands  # type: ignore[attr-defined]
-    header = (ROOT / "docs" / "examples" / "GALLERY_HEADER.rst").read_text(encoding="utf-8")
-    if has_export:
-        assert "fmu" in stems, "feeddrive export exists: its gallery example is missing"
-    else:
-        assert "FMU export (slot)" in header
+    assert "export" in get_command(app).commands  # type: ignore[attr-defined]
+    assert "fmu_export" in stems

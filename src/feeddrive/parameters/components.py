@@ -12,6 +12,7 @@ from typing import Any, Self
 
 import numpy as np
 
+from .. import registry
 from .validation import ParameterError, choice, flag, quantities, quantity, validate
 
 _MM_HINT = "looks like millimetres; give metres"
@@ -64,7 +65,75 @@ class FrictionBranch(_Component):
 
 
 @dataclass(frozen=True)
-class LuGreParameters(_Component):
+class SiteParameters(_Component):
+    """Base of the parameters of one friction site.  Its ``law`` picks the class: each
+    friction law names its parameter class (``FrictionLaw.parameters_class``), so a law with
+    parameters of its own (e.g. GMS) brings them in its own module; laws without (LuGre,
+    Stribeck, Dahl, none) share :class:`LuGreParameters`."""
+
+    _label = "friction"
+
+    @property
+    def law_name(self) -> str:
+        """The site's friction law."""
+        return str(vars(self).get("law", ""))
+
+    @staticmethod
+    def class_for(data: Any, path: str) -> type[SiteParameters]:
+        """The parameter class of a site table (its ``law``, default ``"lugre"``).
+
+        Parameters
+        ----------
+        data : dict
+            The site's table as read from TOML.
+        path : str
+            Its dotted path, for messages (``"friction.guide"``).
+
+        Returns
+        -------
+        type of SiteParameters
+            The class the site's law declares.
+        """
+        law = data.get("law", "lugre") if isinstance(data, dict) else "lugre"
+        laws = registry.table(registry.FRICTION_LAWS)
+        if not isinstance(law, str) or law not in laws:
+            raise ParameterError(f"{path}.law", law,
+                                 f"unknown friction law; expected one of {', '.join(laws)}")
+        cls: type[SiteParameters] = getattr(laws[law], "parameters_class", LuGreParameters)
+        return cls
+
+    def require(self, kind: type[SiteParameters], path: str, what: str) -> Any:
+        """This site as ``kind``, or a refusal naming the site, its law and what needs it.
+
+        Parameters
+        ----------
+        kind : type of SiteParameters
+            The parameter class the caller works with (e.g. :class:`LuGreParameters`).
+        path : str
+            The site's dotted path, for the message (``"friction.guide"``).
+        what : str
+            What needs that class (``"friction compensation"``).
+
+        Returns
+        -------
+        SiteParameters
+            ``self``, of class ``kind``.
+        """
+        if not isinstance(self, kind):
+            raise ParameterError(f"{path}.law", self.law_name,
+                                 f"{what} works with {kind.__name__} sites (laws "
+                                 f"{', '.join(_laws_of(kind))}); this site's law has "
+                                 f"parameters of its own ({type(self).__name__})")
+        return self
+
+
+def _laws_of(kind: type[SiteParameters]) -> list[str]:
+    return [name for name, law in registry.table(registry.FRICTION_LAWS).items()
+            if getattr(law, "parameters_class", LuGreParameters) is kind]
+
+
+@dataclass(frozen=True)
+class LuGreParameters(SiteParameters):
     """LuGre friction at one site, linear (force) form.  Wang2021 Eqs. (9)–(11), Table 1.
 
     Rotary sites (screw and hollow shafts) are stored as the paper does: torques divided by
@@ -85,11 +154,15 @@ class LuGreParameters(_Component):
     def _check(self) -> None:
         if not isinstance(self.law, str):
             raise ParameterError(f"{self._label}.law", self.law, "expected a law name")
-        from ..model.friction import law_names  # registry; imports no parameter module
-
-        if self.law not in law_names():
+        laws = registry.table(registry.FRICTION_LAWS)
+        if self.law not in laws:
             raise ParameterError(f"{self._label}.law", self.law,
-                                 f"unknown friction law; expected one of {', '.join(law_names())}")
+                                 f"unknown friction law; expected one of {', '.join(laws)}")
+        own = getattr(laws[self.law], "parameters_class", LuGreParameters)
+        if own is not LuGreParameters:
+            raise ParameterError(f"{self._label}.law", self.law,
+                                 f"this law takes the parameters of {own.__name__}, not "
+                                 "LuGre's (give the site's table in that form)")
 
     def mismatched(self, coulomb: float, static: float, stribeck_velocity: float,
                    viscous: float) -> LuGreParameters:
@@ -142,9 +215,9 @@ class FrictionSites(_Component):
     reading (every friction at its own shaft's speed); with the nut held (CDFS) f has no effect.
     """
 
-    screw: LuGreParameters
-    nut: LuGreParameters
-    guide: LuGreParameters
+    screw: SiteParameters
+    nut: SiteParameters
+    guide: SiteParameters
     ball_nut_share: float = quantity("-", low=0, high=1, low_inclusive=True, default=0.0,
                                      hint="a fraction between 0 and 1")
     _label = "friction"
@@ -372,7 +445,40 @@ class LinearMotor(_Component):
 
 @dataclass(frozen=True)
 class DriveParameters(_Component):
-    """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control."""
+    """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control.
+
+    All values SI (the TOML files and ``feeddrive params show`` too); each component validates
+    its own fields with units and ranges (:mod:`feeddrive.parameters.validation`).
+
+    Parameters
+    ----------
+    name : str
+        Name of the set (printed in reports, results and exports).
+    description : str
+        What the set is and where its values come from.
+    screw : BallScrew
+        Ball screw: lead, diameter, length, inertia (Wang2021 Table 2).
+    coupling : Coupling
+        Motor–screw coupling.
+    screw_motor : Motor
+        The screw's servo motor (R-L circuit, torque and back-EMF constants).
+    hollow_motor : Motor
+        The hollow motor driving the nut (DDFS).
+    table : Table
+        Table mass and guide.
+    friction : FrictionSites
+        Friction at the screw shaft, the hollow (nut) shaft and the guide, each with its law.
+    stiffness : StiffnessModel, default StiffnessModel()
+        Axial stiffness chain (Wang2021 Eqs. (2)–(5)) and structural damping.
+    controller : Controller, default the Table 2 gains
+        Cascade loops (position, velocity, current) of the screw motor.
+    disturbances : Disturbances, default Disturbances()
+        Load force, motor torque ripple, lead error.
+    linear_motor : LinearMotor or None, default None
+        The forcer of the ``linear-motor`` drive.
+    hollow_controller : Controller or None, default None
+        The hollow motor's own loops; None: it uses ``controller``.
+    """
 
     name: str
     description: str
@@ -391,7 +497,20 @@ class DriveParameters(_Component):
     _label = "parameters"
 
     def replace_path(self, path: str, value: Any) -> DriveParameters:
-        """Return a copy with the dotted ``path`` (e.g. ``controller.velocity_gain``) set."""
+        """A copy with one value, addressed by its dotted path, replaced.
+
+        Parameters
+        ----------
+        path : str
+            Dotted path, e.g. ``"controller.velocity_gain"``.
+        value : object
+            The new value, in the field's SI unit [unit of ``path``]; validated as on loading.
+
+        Returns
+        -------
+        DriveParameters
+            The changed copy (this set is unchanged).
+        """
         return _replace_path(self, path.split("."), value, path)
 
 

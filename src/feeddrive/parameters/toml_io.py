@@ -18,6 +18,7 @@ import types
 from pathlib import Path
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
+from .. import registry
 from .components import DriveParameters
 from .validation import ParameterError
 
@@ -189,6 +190,15 @@ def dumps(params: DriveParameters) -> str:
 
 
 def save(params: DriveParameters, path: str | Path) -> None:
+    """Write a parameter set as TOML (SI units), readable by :func:`load`.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The set to write.
+    path : str or pathlib.Path
+        The file to write.
+    """
     Path(path).write_text(dumps(params), encoding="utf-8")
 
 
@@ -214,6 +224,8 @@ def _build(cls: type, data: Any, path: str) -> Any:
                     if not path or "." not in path else "")
             raise ParameterError(sub, None, "missing field" + hint)
         comp = _component_type(hints[f.name])
+        if comp is not None and hasattr(comp, "class_for"):  # chosen by the table (its law)
+            comp = comp.class_for(data[f.name], sub)
         kwargs[f.name] = _build(comp, data[f.name], sub) if comp else data[f.name]
     try:
         return cls(**kwargs)
@@ -227,11 +239,27 @@ def _build(cls: type, data: Any, path: str) -> Any:
 def _merge(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
     out = dict(base)
     for key, value in changes.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
+        if _new_site_class(out.get(key), value):
+            out[key] = value  # a law with other parameters: its table replaces the parent's
+        elif isinstance(value, dict) and isinstance(out.get(key), dict):
             out[key] = _merge(out[key], value)
         else:
             out[key] = value
     return out
+
+
+def _new_site_class(base: Any, change: Any) -> bool:
+    """True when ``change`` sets a friction law whose parameter class differs from the law's
+    of ``base`` (both site tables)."""
+    if not (isinstance(base, dict) and isinstance(change, dict) and "law" in change
+            and "law" in base):
+        return False
+    laws = registry.table(registry.FRICTION_LAWS)
+    if change["law"] not in laws or base["law"] not in laws:
+        return False
+    classes = {getattr(laws[name], "parameters_class", None) for name in (change["law"],
+                                                                          base["law"])}
+    return len(classes) > 1
 
 
 def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DriveParameters:
@@ -241,16 +269,15 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
         parent_name = data["extends"]
         if not isinstance(parent_name, str):
             raise ParameterError("extends", parent_name, "expected a preset name or a file path")
-        from . import PRESETS, preset
-
-        if parent_name in PRESETS:
-            parent = preset(parent_name)
+        presets = registry.table(registry.PRESETS)
+        if parent_name in presets:
+            parent = presets[parent_name]()
         elif parent_name.endswith(".toml"):
             parent_path = (base_dir or Path.cwd()) / parent_name
             parent = load(parent_path)
         else:
             raise ParameterError("extends", parent_name,
-                                 f"expected one of {', '.join(PRESETS)} or a .toml file")
+                                 f"expected one of {', '.join(presets)} or a .toml file")
         changes = {k: v for k, v in data.items() if k != "extends"}
         changes.setdefault("name", f"{parent.name}+changes")
         data = _merge(to_dict(parent), changes)
@@ -263,6 +290,18 @@ def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
 
 
 def load(path: str | Path) -> DriveParameters:
+    """Read a parameter set from a TOML file (``extends = "NAME"`` or ``"FILE.toml"`` allowed).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    DriveParameters
+        The validated set; a refusal names the file, the field, the value and the unit.
+    """
     data = read_toml_file(path)
     try:
         return from_dict(data, base_dir=Path(path).parent)

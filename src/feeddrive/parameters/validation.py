@@ -14,8 +14,22 @@ from typing import Any
 
 
 class ParameterError(ValueError):
-    """A parameter value was refused.  The message names field, value and expected unit,
-    and the file it came from when there is one (``source``)."""
+    """A parameter value was refused.
+
+    The message names field, value and expected unit, and the file it came from when there is
+    one (``source``).
+
+    Parameters
+    ----------
+    field : str
+        Dotted name of the refused field (e.g. ``"table.mass"``).
+    value : object
+        The refused value.
+    message : str
+        What was expected, with its unit.
+    source : str or None, default None
+        The file the value came from.
+    """
 
     def __init__(self, field: str, value: object, message: str, *,
                  source: str | None = None) -> None:
@@ -27,8 +41,18 @@ class ParameterError(ValueError):
         super().__init__(f"{where}{field} = {value!r}: {message}")
 
     def in_file(self, source: str) -> ParameterError:
-        """The same refusal, naming the file it came from (an error already naming its file,
-        e.g. from a file it extends, is kept)."""
+        """The same refusal, naming the file it came from.
+
+        Parameters
+        ----------
+        source : str
+            The file; an error already naming its file (e.g. from a file it extends) is kept.
+
+        Returns
+        -------
+        ParameterError
+            An error whose message names ``source``.
+        """
         if self.source is not None:
             return self
         return ParameterError(self.field, self.value, self.message, source=source)

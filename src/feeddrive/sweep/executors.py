@@ -222,12 +222,24 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
 
 @dataclass(frozen=True)
 class Estimate:
+    """A sweep's point count and cost.  ``seconds_per_point`` is the mean CPU time [s] of the
+    timed points (CPU, not wall: a loaded machine's wall time made the estimate vary 3.0–10.8 s
+    between runs of one config, issue 24 item 11); ``point_seconds`` each timed point's."""
+
     points: int
     distinct: int
     stored: int
     timed: int
     seconds_per_point: float
     workers: int
+    point_seconds: tuple[float, ...] = ()
+
+    @property
+    def spread(self) -> tuple[float, float]:
+        """(fastest, slowest) timed point [s CPU]; the points of a sweep differ in cost."""
+        if not self.point_seconds:
+            return (0.0, 0.0)
+        return (min(self.point_seconds), max(self.point_seconds))
 
     @property
     def seconds(self) -> float:
@@ -237,9 +249,11 @@ class Estimate:
 
 
 def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
-             sample: int = 3, points: list[Point] | None = None) -> Estimate:
+             sample: int = 3, points: list[Point] | None = None,
+             progress: Callable[[str], None] | None = None) -> Estimate:
     """Count the points and time up to ``sample`` of the unfinished ones here (kernels
-    warmed first, nothing written)."""
+    warmed first, nothing written), in CPU seconds of this process; ``progress`` is told
+    what is being done."""
     points = config.points() if points is None else points
     tasks: dict[str, dict[str, Any]] = {}
     for p in points:
@@ -249,13 +263,19 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
     picks = [todo[round(i * (len(todo) - 1) / max(sample - 1, 1))]
              for i in range(min(sample, len(todo)))]
     picks = list(dict.fromkeys(picks))
+    if progress is not None and picks:
+        progress(f"compiling the model kernels, then timing {len(picks)} of the "
+                 f"{len(todo)} points to compute (each a full evaluation, nothing stored)")
     for task in _structure_tasks([p for p in points if p.key in set(picks)]):
         warm(task)
     seconds = []
-    for key in picks:
-        t = time.perf_counter()
+    for i, key in enumerate(picks, start=1):
+        if progress is not None:
+            progress(f"timing point {i} of {len(picks)}")
+        t = time.process_time()
         evaluate(tasks[key])
-        seconds.append(time.perf_counter() - t)
+        seconds.append(time.process_time() - t)
     mean = sum(seconds) / len(seconds) if seconds else 0.0
     return Estimate(points=len(points), distinct=len(tasks), stored=len(stored),
-                    timed=len(seconds), seconds_per_point=mean, workers=workers)
+                    timed=len(seconds), seconds_per_point=mean, workers=workers,
+                    point_seconds=tuple(seconds))

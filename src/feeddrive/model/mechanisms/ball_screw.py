@@ -56,7 +56,24 @@ def equivalent_stiffness_kernel(x_t: float, P: np.ndarray, o: int) -> float:
 
 @register_mechanism
 class BallScrewDrive(Mechanism):
-    """CDFS / DDFS ball-screw mechanism (see module docstring)."""
+    """CDFS / DDFS ball-screw mechanism (see the module docstring for its equations).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set (SI).
+    drive : {"cdfs", "ddfs"}
+        Which drive: the hollow motor held (CDFS) or driving the nut (DDFS).
+    table_position : float
+        Table position a along the screw [m] (sets K_eq(a), Wang2021 Eqs. (2)–(5)).
+    nut_hold : {"locked", "servo"}
+        How the CDFS holds the nut.
+
+    References
+    ----------
+    .. [1] Z. Wang, X. Feng, H. Yang, H. Jin, "Research on low-speed characteristics of
+       differential double-drive feed system", Mech. Sci. 12 (2021) 791–800, Eqs. (1)–(8).
+    """
 
     drives = ("cdfs", "ddfs")
     ripple_motors = ("screw", "nut")

@@ -11,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from ... import registry
+
 if TYPE_CHECKING:
     from ...parameters import DriveParameters
     from ..codegen import Builder
@@ -68,6 +70,7 @@ class Mechanism:
     and :class:`~feeddrive.model.mechanisms.linear_motor.LinearMotorDrive`."""
 
     drives: tuple[str, ...] = ()
+    published: bool = True  # a published model: its docstring has a References section
     ripple_motors: tuple[str, ...] = ()  # motors whose torque ripple this topology models
     has_lead_screw = False
 
@@ -116,37 +119,36 @@ class Mechanism:
         raise NotImplementedError
 
 
-_REGISTRY: dict[str, type[Mechanism]] = {}
+def register_mechanism(topology: type[Mechanism]) -> type[Mechanism]:
+    """Make a topology available under each of its ``drives`` names.
 
+    Parameters
+    ----------
+    topology : type of Mechanism
+        The mechanism class; usable as a class decorator.
 
-def register_mechanism(cls: type[Mechanism]) -> type[Mechanism]:
-    for drive in cls.drives:
-        _REGISTRY[drive] = cls
-    return cls
-
-
-def _discover() -> None:
-    """Import every module of this package once: each registers its topologies."""
-    import importlib
-    import pkgutil
-
-    from .. import mechanisms
-
-    for info in pkgutil.iter_modules(mechanisms.__path__):
-        importlib.import_module(f"{mechanisms.__name__}.{info.name}")
+    Returns
+    -------
+    type of Mechanism
+        ``topology``, registered in :mod:`feeddrive.registry` (group
+        ``feeddrive.mechanisms``).
+    """
+    for drive in topology.drives:
+        registry.register(registry.MECHANISMS, drive, topology)
+    return topology
 
 
 def mechanism(drive: str) -> type[Mechanism]:
-    if not _REGISTRY:
-        _discover()
-    if drive not in _REGISTRY:
+    """The registered topology of drive name ``drive``."""
+    table = registry.table(registry.MECHANISMS)
+    if drive not in table:
         from ...parameters import ParameterError
 
-        raise ParameterError("drive", drive, f"expected one of {', '.join(drive_names())}")
-    return _REGISTRY[drive]
+        raise ParameterError("drive", drive, f"expected one of {', '.join(table)}")
+    cls: type[Mechanism] = table[drive]
+    return cls
 
 
 def drive_names() -> tuple[str, ...]:
-    if not _REGISTRY:
-        _discover()
-    return tuple(_REGISTRY)
+    """The names of the registered drive topologies."""
+    return registry.names(registry.MECHANISMS)
