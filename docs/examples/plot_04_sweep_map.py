@@ -5,7 +5,7 @@ A sweep map: the linear creep band over table position and a loop gain
 A sweep computes one quantity at every point of a design and stores each point in a
 resumable SQLite store; a map draws it.  The quantity here is the cheap ``linear-band``
 (the speeds at which steady sliding is linearly unstable, no time simulation) for the CDFS
-over a 2 × 2 grid of table position and the velocity-loop integral gain (relative to the
+over a 2 × 3 grid of table position and the velocity-loop integral gain (relative to the
 preset's).  The same from the shell::
 
     feeddrive sweep band.toml --output band.nc
@@ -39,7 +39,7 @@ linear_points = 10
 
 [axes]
 table_position = [200, 600]   # [mm]
-"controller.velocity_integral_gain" = { values = [0.8, 1.2], relative = true }
+"controller.velocity_integral_gain" = { values = [0.8, 1.0, 1.2], relative = true }
 ''', encoding="utf-8")
 
     config = sweep.load_config(folder / "band.toml")
