@@ -10,8 +10,9 @@ that provide them sit above it).  A group's providers are
 * every installed distribution's `entry points <https://packaging.python.org/en/latest/
   specifications/entry-points/>`_ in the group of that name: ``feeddrive.mechanisms`` (name =
   drive name, value = a mechanism class), ``feeddrive.friction_laws`` (name = law name, value
-  = a friction-law instance) and ``feeddrive.presets`` (name = set name, value = a function
-  returning the parameter set).
+  = a friction-law instance), ``feeddrive.presets`` (name = set name, value = a function
+  returning the parameter set) and ``feeddrive.sections`` (name = a parameter-file section
+  such as ``rack_pinion``, value = the part's parameter class).
 
 Both are imported only when a group is first read, so that ``import feeddrive.parameters``
 stays cheap and a broken third-party plug-in cannot stop the package from importing.
@@ -32,12 +33,15 @@ from typing import Any
 MECHANISMS = "feeddrive.mechanisms"
 FRICTION_LAWS = "feeddrive.friction_laws"
 PRESETS = "feeddrive.presets"
+SECTIONS = "feeddrive.sections"
 
 #: The package's own providers of each group (modules that register on import).
 BUILTIN_PROVIDERS: dict[str, tuple[str, ...]] = {
     MECHANISMS: ("feeddrive.model.mechanisms.*",),
     FRICTION_LAWS: ("feeddrive.model.friction.*",),
     PRESETS: ("feeddrive.presets",),
+    # parameter sections of parts (e.g. ``[rack_pinion]``): registered by the part's module
+    SECTIONS: ("feeddrive.model.mechanisms.*", "feeddrive.model.parts.*"),
 }
 
 _TABLES: dict[str, dict[str, Any]] = {group: {} for group in BUILTIN_PROVIDERS}

@@ -193,13 +193,28 @@ class Sampling:
 def sampling(params: DriveParameters, output_interval: float) -> Sampling:
     c = params.controller
     periods = [c.position_period, c.velocity_period, c.current_period]
-    nonzero = [p for p in periods if p > 0]
+    # sampled parts (model/parts/) with schedules of their own: (field, period [s]) pairs
+    schedules = [(f"{name}.{field}", period) for name, section in params.sections
+                 for field, period in getattr(section, "schedule", lambda: ())()]
+    if any(p > 0 for _, p in schedules) and not any(p > 0 for p in periods):
+        field, period = next(fp for fp in schedules if fp[1] > 0)
+        raise ParameterError(field, period, "a sampled part needs sampled loops (set "
+                             "controller.current_period > 0 [s]): the breakpoints of "
+                             "continuous loops assume nothing jumps there")
+    nonzero = [p for p in periods if p > 0] + [p for _, p in schedules if p > 0]
     if (c.encoder_counts > 0 or c.grating_resolution > 0) and not (
             c.position_period > 0 and c.velocity_period > 0):
         raise ParameterError("controller.encoder_counts", c.encoder_counts,
                              "quantisation needs sampled position and velocity loops "
                              "(set controller.position_period and velocity_period > 0 [s])")
     base = min(nonzero) if nonzero else output_interval
+    named = [(f"controller.{k}", p) for k, p in zip(
+        ("position_period", "velocity_period", "current_period"), periods, strict=True)]
+    for field, period in named + schedules:  # every schedule lands on the breakpoint grid
+        if period > 0 and abs(period / base - round(period / base)) > 1e-9 * period / base:
+            raise ParameterError(field, period, f"expected a multiple of the fastest sample "
+                                 f"period {base:g} [s] (each schedule is an exact event "
+                                 "time on one breakpoint grid)")
     n = [int(round(p / base)) if p > 0 else 0 for p in periods]
     out_every = max(1, int(round(output_interval / base)))
     if abs(out_every * base - output_interval) > 1e-9 * output_interval:

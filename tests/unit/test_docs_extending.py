@@ -62,8 +62,23 @@ def test_the_quoted_gms_diff_touches_one_package_file() -> None:
         assert name in DOC
     assert "gms" in law_names()
     if (ROOT / ".git").exists() and shutil.which("git"):  # the quote is the real diff
-        real = subprocess.run(["git", "show", "--stat", "--format=", "5e1a742"], cwd=ROOT,
-                              capture_output=True, text=True)
+        real = subprocess.run(["git", "show", "--name-only", "--format=", "5e1a742"],
+                              cwd=ROOT, capture_output=True, text=True)
         if real.returncode == 0:  # a shallow clone may not hold the commit
-            assert re.findall(r"src/feeddrive/\S+\.py", real.stdout) == [
+            assert [f for f in real.stdout.split() if f.startswith("src/feeddrive/")] == [
                 "src/feeddrive/model/friction/gms.py"]
+
+
+def test_the_quoted_part_diff_touches_one_package_file() -> None:
+    """Issue 19's "a loop with its own rate" (≤ 3 package files), as the doc quotes it."""
+    block = DOC.split("git show 8278df3 --stat")[1].split("```")[1]
+    assert "acceleration_feedforward.py" in block and "2 files changed" in block
+    from feeddrive.model.parts.acceleration_feedforward import AccelerationFeedforward
+
+    assert AccelerationFeedforward(gain=1.6, period=1e-3).schedule() == (("period", 1e-3),)
+    if (ROOT / ".git").exists() and shutil.which("git"):
+        real = subprocess.run(["git", "show", "--name-only", "--format=", "8278df3"],
+                              cwd=ROOT, capture_output=True, text=True)
+        if real.returncode == 0:
+            assert [f for f in real.stdout.split() if f.startswith("src/feeddrive/")] == [
+                "src/feeddrive/model/parts/acceleration_feedforward.py"]

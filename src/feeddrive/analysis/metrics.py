@@ -109,7 +109,13 @@ class CreepThresholds:
 
 
     def describe(self) -> str:
-        """The window rule in words, with its numbers (printed beside its verdicts)."""
+        """The window rule in words, with its numbers (printed beside its verdicts).
+
+        Returns
+        -------
+        str
+            One sentence naming the limits, and the other rule that can differ.
+        """
         return (f"window rule: over the steady window, creeping if the peak-to-peak ripple "
                 f"exceeds {100 * self.max_ripple_ratio:g} % of the command or the table "
                 f"sticks (below {100 * self.stick_level:g} % of the command) for more than "

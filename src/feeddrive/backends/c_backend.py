@@ -260,7 +260,8 @@ def find_compiler() -> list[str]:
 
 def compile_shared(c_text: str, folder: str | os.PathLike[str], *, name: str = "fd_model",
                    strict: bool = True, optimise: str = "-O1") -> Path:
-    """Compile ``c_text`` into a shared library ``folder/<name>.so`` (``.dll`` on Windows).
+    """Compile ``c_text`` into a shared library ``folder/<name>.so`` (``.dll`` on Windows)
+    with a gcc-compatible compiler (gcc, clang, MinGW; :func:`find_compiler`).
 
     Parameters
     ----------

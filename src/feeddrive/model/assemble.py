@@ -47,6 +47,8 @@ class Model:
     sites: tuple[tuple[str, str], ...]  # (site name, law name)
     jacobian_pattern: np.ndarray  # (n, n + 1) uint8: dy[i] may depend on y[j] (column n: t)
     jacobian_colours: np.ndarray  # (n + 1,) group of each column in the grouped FD Jacobian
+    # signals a part declares as factor × a state or signal: (signal, source name, factor)
+    derived: tuple[tuple[codegen.Signal, str, float], ...] = ()
 
     @property
     def n_held(self) -> int:
@@ -146,7 +148,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     sites = mech.sites(b)
     laws: list[tuple[Site, FrictionLaw, int]] = []
     for site in sites:
-        site_params = getattr(parameters.friction, site.parameters_key)
+        site_params = site.parameters(parameters)
         law = friction_law(site_params.law)
         first = len(b.states)
         for state in law.states(site_params):
@@ -202,13 +204,20 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     comp = emit_compensation(b, parameters, mech)
     if comp is not None:
         axes[0] = dataclasses.replace(axes[0], extra_current=comp)
+    # parts of the model given as sections of their own (model/parts/): they declare their
+    # slots and may wire into the axes before the cascade, then write their sampled updates
+    parts = [s for _, s in parameters.sections if hasattr(s, "declare_part")]
+    for part in parts:
+        axes = part.declare_part(b, axes)
     loops.emit_cascade(b, axes, channels)
+    for part in parts:
+        part.emit_part(b)
     for ln in ripple_lines:
         b.emit(ln)
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
                   load=load_code, torque_off=parameters.controller.mode == "torque_off")
     for site, law, first in laws:
-        code = _site_code(b, site, law, getattr(parameters.friction, site.parameters_key), first)
+        code = _site_code(b, site, law, site.parameters(parameters), first)
         for body, factor in site.bodies:
             term = f"- f_{site.name}" if factor == "1.0" else f"- {factor} * f_{site.name}"
             m.forces.setdefault(body, []).append(term)
@@ -216,7 +225,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
             m.gated.append(code)
             m.frozen.append(f"f_{site.name} = 0.0")
             m.frozen += [f"{b.dy(f'{site.name}_{s}')} = 0.0"
-                         for s in law.states(getattr(parameters.friction, site.parameters_key))]
+                         for s in law.states(site.parameters(parameters))]
         else:
             m.always.append(code)
     mech.emit(b, m)
@@ -237,7 +246,8 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         tolerance_scales=tuple(b.tol_scale.get(s.name, 1.0) for s in b.states),
         module=module, source=source, drive=drive,
         sites=tuple((site.name, law.name) for site, law, _ in laws),
-        jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern))
+        jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
+        derived=tuple(b.derived))
 
 
 @functools.cache

@@ -8,6 +8,7 @@ from .. import registry
 from .components import (
     BallScrew,
     Compensation,
+    Component,
     Controller,
     Coupling,
     Disturbances,
@@ -69,8 +70,8 @@ def preset(name: str) -> DriveParameters:
 
 
 __all__ = [
-    "BallScrew", "Compensation", "Controller", "Coupling", "Disturbances", "DriveParameters",
-    "FrictionBranch",
+    "BallScrew", "Component", "Compensation", "Controller", "Coupling", "Disturbances",
+    "DriveParameters", "FrictionBranch",
     "FrictionSites", "LeadError", "LinearMotor", "LuGreParameters", "Motor", "ParameterError",
     "PRESETS", "SiteParameters", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict",
     "load", "loads", "preset", "save", "to_dict",

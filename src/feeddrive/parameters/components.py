@@ -34,6 +34,10 @@ class _Component:
         return replace(self, **changes)  # type: ignore[type-var]
 
 
+#: the base of every parameter component: a part's own section subclasses it
+Component = _Component
+
+
 @dataclass(frozen=True)
 class FrictionBranch(_Component):
     """One direction of a LuGre/Stribeck friction law, as magnitudes.  Wang2021 Table 1.
@@ -478,6 +482,9 @@ class DriveParameters(_Component):
         The forcer of the ``linear-motor`` drive.
     hollow_controller : Controller or None, default None
         The hollow motor's own loops; None: it uses ``controller``.
+    sections : tuple of (str, Component), default ()
+        Parts' own sections by name, sorted (``[rack_pinion]``, ``[acceleration_feedforward]``;
+        registry group ``feeddrive.sections``); read like fields (``params.rack_pinion``).
     """
 
     name: str
@@ -494,7 +501,47 @@ class DriveParameters(_Component):
     linear_motor: LinearMotor | None = None
     # the hollow motor's own loops; absent: it uses ``controller`` as the screw motor does
     hollow_controller: Controller | None = None
+    # parts' own sections ([rack_pinion], ...), by name: registry group feeddrive.sections
+    sections: tuple[tuple[str, Any], ...] = ()
     _label = "parameters"
+
+    def _check(self) -> None:
+        known = registry.table(registry.SECTIONS)
+        names = [name for name, _ in self.sections]
+        if names != sorted(set(names)):
+            raise ParameterError("sections", names, "expected each section once, sorted")
+        for name, value in self.sections:
+            cls = known.get(name)
+            if cls is None:
+                raise ParameterError(name, "…", f"unknown section; expected one of "
+                                     f"{', '.join(known) or '(none registered)'}")
+            if not isinstance(value, cls):
+                raise ParameterError(name, type(value).__name__, f"expected {cls.__name__}")
+
+    def section(self, name: str) -> Any:
+        """A part's own parameter section (e.g. ``"rack_pinion"``), or None if absent.
+
+        Parameters
+        ----------
+        name : str
+            The section's name in the parameter file.
+
+        Returns
+        -------
+        Component or None
+            The section's parameters.
+        """
+        return dict(self.sections).get(name)
+
+    def __getattr__(self, name: str) -> Any:
+        # sections read like fields (params.rack_pinion, dotted paths); only called when
+        # normal attribute lookup fails
+        if name.startswith("_") or name == "sections":
+            raise AttributeError(name)
+        for key, value in object.__getattribute__(self, "sections"):
+            if key == name:
+                return value
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def replace_path(self, path: str, value: Any) -> DriveParameters:
         """A copy with one value, addressed by its dotted path, replaced.
@@ -522,6 +569,11 @@ def _default_controller() -> Controller:
 def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
     names = {f.name for f in fields(obj)}
     head = parts[0]
+    sections = dict(getattr(obj, "sections", ()) if head not in names else ())
+    if head in sections:
+        changed = (_replace_path(sections[head], parts[1:], value, full) if len(parts) > 1
+                   else value)
+        return replace(obj, sections=tuple(sorted({**sections, head: changed}.items())))
     if head not in names:
         raise ParameterError(full, value, f"unknown field {head!r}")
     if len(parts) == 1:

@@ -45,6 +45,9 @@ def to_dict(obj: Any) -> dict[str, Any]:
         value = getattr(obj, f.name)
         if value is None:
             continue
+        if f.name == "sections":  # parts' own sections are tables of the file's top level
+            out.update({name: to_dict(section) for name, section in value})
+            continue
         out[f.name] = to_dict(value) if dataclasses.is_dataclass(value) else value
     return out
 
@@ -158,6 +161,9 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
         value = getattr(obj, f.name)
         if value is None:
             continue
+        if f.name == "sections":
+            nested += list(value)
+            continue
         if dataclasses.is_dataclass(value):
             nested.append((f.name, value))
         else:
@@ -207,6 +213,13 @@ def _build(cls: type, data: Any, path: str) -> Any:
         raise ParameterError(path, data, "expected a table of values")
     hints = get_type_hints(cls)
     names = {f.name for f in dataclasses.fields(cls)}
+    if "sections" in names:  # a part's own section: its class is registered under its name
+        known = registry.table(registry.SECTIONS)
+        found = {key: _build(known[key], data[key], f"{path}.{key}" if path else key)
+                 for key in sorted(set(data) - names) if key in known}
+        data = {k: v for k, v in data.items() if k not in found}
+        if found:
+            data["sections"] = tuple(found.items())
     unknown = sorted(set(data) - names)
     if unknown:
         key = unknown[0]

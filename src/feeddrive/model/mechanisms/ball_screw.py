@@ -185,10 +185,47 @@ class BallScrewDrive(Mechanism):
                  ("guide", "ref_v", b.y("table_speed"))],
                 f"{H} / {b.p('screw_motor.torque_constant')}")
 
+    def steady_motion(self, table_speed: float, nut_speed: float
+                      ) -> dict[str, tuple[str, float]]:
+        """Screw at (v_t + v_n)/H, nut at v_n/H (0 when held), table at v_t (Eq. 8).
+
+        Parameters
+        ----------
+        table_speed : float
+            Commanded table speed [m/s].
+        nut_speed : float
+            Commanded nut speed [m/s].
+
+        Returns
+        -------
+        dict
+            Angle/position state → (rate state, steady rate [rad/s or m/s]).
+        """
+        H = self.params.screw.transmission_ratio
+        v_n = nut_speed if self.nut_active else 0.0
+        return {"screw_angle": ("screw_speed", (table_speed + v_n) / H),
+                "nut_angle": ("nut_speed", v_n / H),
+                "table_position": ("table_speed", table_speed)}
+
+    def held(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """The CDFS with its nut locked: the nut's states and the hollow motor's axis.
+
+        Returns
+        -------
+        tuple of (tuple of str, tuple of str)
+            Frozen state-name prefixes and idle axes.
+        """
+        if self.nut_active:
+            return (), ()
+        return ("nut_", "ball_nut_z"), ("nut",)
+
     def signals(self, b: Builder) -> None:
         b.add_aux("equivalent_stiffness", "N/m", "K_eq at the table position")
         b.add_aux("nut_position_reference", "m", "commanded nut position (linear)")
         b.add_aux("nut_speed_reference", "m/s", "commanded nut speed (linear)")
+        H = self.params.screw.transmission_ratio
+        b.add_derived("screw_linear_speed", "m/s", "screw speed × H", "screw_speed", H)
+        b.add_derived("nut_linear_speed", "m/s", "nut speed × H", "nut_speed", H)
 
     def emit(self, b: Builder, m: Mechanics) -> None:
         from ..disturbances import harmonics

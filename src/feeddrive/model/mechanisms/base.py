@@ -42,11 +42,30 @@ class Site:
     """A friction site placed by the mechanism: on one body, or between two (relative)."""
 
     name: str  # e.g. "screw", "ball_nut"
-    parameters_key: str  # friction.<key> in the parameter set
+    parameters_key: str  # friction.<key> in the parameter set, or a dotted path to them
     speed: str  # code of the sliding speed [m/s]
     bodies: tuple[tuple[str, str], ...]  # (body, factor code) pairs: term = − factor·F
     scale: float = 1.0  # share of the site's friction (ball–nut split)
     active: str = ""  # condition under which the site acts ("" = always)
+
+    def parameters(self, params: DriveParameters) -> Any:
+        """The site's parameters: ``friction.<parameters_key>``, or the dotted path
+        ``parameters_key`` names (a part's own section, e.g. ``rack_pinion.gearbox_friction``).
+
+        Parameters
+        ----------
+        params : DriveParameters
+            The parameter set.
+
+        Returns
+        -------
+        SiteParameters
+            The site's friction parameters.
+        """
+        obj: Any = params if "." in self.parameters_key else params.friction
+        for part in self.parameters_key.split("."):
+            obj = getattr(obj, part)
+        return obj
 
 
 @dataclass
@@ -70,6 +89,8 @@ class Mechanism:
     and :class:`~feeddrive.model.mechanisms.linear_motor.LinearMotorDrive`."""
 
     drives: tuple[str, ...] = ()
+    #: the parameter set a command uses for this drive when none is named
+    example_preset: str = "wang2021"
     published: bool = True  # a published model: its docstring has a References section
     ripple_motors: tuple[str, ...] = ()  # motors whose torque ripple this topology models
     has_lead_screw = False
@@ -114,6 +135,36 @@ class Mechanism:
 
         raise ParameterError("controller.compensation.mode", "—",
                              f"no friction compensation for the {self.drive} drive")
+
+    def steady_motion(self, table_speed: float, nut_speed: float
+                      ) -> dict[str, tuple[str, float]]:
+        """The kinematics of steady motion, for the linear analysis' operating point.
+
+        Parameters
+        ----------
+        table_speed : float
+            Commanded table speed [m/s].
+        nut_speed : float
+            Commanded nut speed [m/s] (drives with a driven nut).
+
+        Returns
+        -------
+        dict
+            Position-like state → (its rate state, the steady rate in that state's unit per
+            second [unit/s]); e.g. ``{"table_position": ("table_speed", v)}``.
+        """
+        return {"table_position": ("table_speed", table_speed)}
+
+    def held(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """What this drive holds still (the CDFS's locked nut).
+
+        Returns
+        -------
+        tuple of (tuple of str, tuple of str)
+            Prefixes of the frozen states' names, and the names of the axes that do not
+            run; both empty by default.
+        """
+        return (), ()
 
     def emit(self, b: Builder, m: Mechanics) -> None:
         raise NotImplementedError

@@ -36,6 +36,7 @@ class LinearMotorDrive(Mechanism):
         Unused (the drive has no nut).
     """
     drives = ("linear-motor",)
+    example_preset = "linear-motor-example"
     published = False  # a generic direct drive, not a published model
 
     @classmethod
