@@ -93,7 +93,7 @@ def test_every_state_signal_and_parameter_is_declared_with_its_unit(folder: Path
     params = [v for v in vs.values() if v.causality == "parameter" and v.type == "Real"]
     slots = {v.a for v in params if v.kind == 4}
     hidden = {i for i, n in enumerate(fm.model.parameter_names)
-              if n.startswith(("profile[", "disturbances.load_"))}
+              if n.startswith(("profile[", "disturbances.load_", "inputs."))}
     hidden.discard(fm.model.parameter_names.index("disturbances.load_start"))
     assert slots | hidden == set(range(len(fm.model.parameter_names)))
     for v in params:

@@ -19,7 +19,9 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from ..model.friction import friction_law
 from ..model.loops import AXIS_PARAMS
+from ..parameters.components import unit_of
 from .model import FmuModel
 
 # value-reference kinds (wrapper.c)
@@ -62,27 +64,13 @@ SETTINGS = (
 )
 S_INDEX = {name: i for i, (name, *_rest) in enumerate(SETTINGS)}
 
-_LUGRE_SLOTS = (("coulomb_force_positive", "N", "Coulomb force F_c, positive direction"),
-                ("static_force_positive", "N", "static force F_s, positive direction"),
-                ("stribeck_velocity_positive", "m/s", "Stribeck velocity v_s, positive "
-                 "direction"),
-                ("viscous_coefficient_positive", "N s/m", "viscous coefficient σ2, positive "
-                 "direction"),
-                ("coulomb_force_negative", "N", "Coulomb force F_c, negative direction"),
-                ("static_force_negative", "N", "static force F_s, negative direction"),
-                ("stribeck_velocity_negative", "m/s", "Stribeck velocity v_s, negative "
-                 "direction"),
-                ("viscous_coefficient_negative", "N s/m", "viscous coefficient σ2, negative "
-                 "direction"),
-                ("bristle_stiffness", "N/m", "bristle stiffness σ0"),
-                ("bristle_damping", "N s/m", "bristle damping σ1"),
-                ("smoothing_velocity", "m/s", "sign-smoothing velocity (Stribeck law)"))
-
 _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
     "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
     "speed_mode"}
+# "inputs.": the linearisation's zero-valued reference and load slots (feeddrive.linear);
+# the FMU's own inputs carry those signals
 _HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
-           "disturbances.load_offset", "disturbances.load_points")
+           "disturbances.load_offset", "disturbances.load_points", "inputs.")
 
 _SIMPLE = {
     "screw.H": ("m/rad", "lead per radian H (transmission ratio)"),
@@ -174,18 +162,16 @@ def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
                  "inj_current": ("A", "current-command injection (loop breaking; 0)")}
         unit, text = units[slot]
         return name, unit, f"{axis} axis: {text}", slot in _FIXED_PARAMETERS
-    match = re.fullmatch(r"(friction|compensation)\.(\w+)\[(\d+)\]", name)
-    if match:
-        group, site, i = match.group(1), match.group(2), int(match.group(3))
-        law = dict(fm.model.sites).get(site, "lugre")
-        where = f"{site.replace('_', '–')} friction"
-        if group == "compensation":
-            where = f"{site} friction as the compensator assumes it"
-        if i < len(_LUGRE_SLOTS) and (law in ("lugre", "dahl", "stribeck", "none")
-                                      or group == "compensation"):
-            slot, unit, text = _LUGRE_SLOTS[i]
-            return f"{group}.{site}.{slot}", unit, f"{where} ({law}): {text}", False
-        return f"{group}.{site}.p{i}", "", f"{where} ({law}): packed parameter {i}", False
+    match = re.fullmatch(r"(friction|compensation)\.(\w+)\.([\w.\[\]]+)", name)
+    if match:  # a named slot of a site's law (its parameter class declares the unit)
+        group, site, slot = match.groups()
+        law = dict(fm.model.sites).get(site, "lugre") if group == "friction" else "lugre"
+        where = (f"{site.replace('_', '–')} friction" if group == "friction"
+                 else f"{site} friction as the compensator assumes it")
+        declared = unit_of(friction_law(law).parameters_class, slot)
+        if declared is None:  # a structural count (GMS elements): fixed at export
+            return name, "1", f"{where} ({law}): {slot} (fixed at export)", True
+        return name, "1" if declared == "-" else declared, f"{where} ({law}): {slot}", False
     match = re.fullmatch(r"disturbances\.(\w+)\[(\d+)\]", name)
     if match:
         field, i = match.group(1), int(match.group(2))
