@@ -174,7 +174,7 @@ SOLVER_SHAPES: dict[str, tuple[str, ...]] = {
 RHS = CFunction("fd_rhs", None, (2, 8, 9))
 #: ``fd_sample_update`` likewise: y (non-const in the API) and held
 SAMPLE_UPDATE = CFunction("fd_sample_update", None, (2, 3))
-#: element types of the solver building blocks' non-double arrays (numpy int64 / bool_)
+#: element types of the solver building blocks' non-double arrays (numpy ``int64`` / ``bool_``)
 SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*"}
 
 

@@ -245,18 +245,24 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
         name = a.name if a.name not in input_names else f"model.{a.name}"
         v.append(Variable(name, K_AUX, j, 0, "output" if a.name in out_names else "local",
                           "continuous", "calculated", None, a.unit, a.description))
-    # derived outputs: motor torques, following error
-    for key, label in (("screw", "screw motor"), ("nut", "hollow motor")):
-        if f"{key}_current" in m.state_names and (key == "screw" or fm.nut_inputs):
-            v.append(Variable(f"{key}_motor_torque", K_PRODUCT,
-                              m.parameter_names.index(f"{key}_motor.torque_constant"),
-                              m.index(f"{key}_current"), "output", "continuous",
-                              "calculated", None, "N m", f"{label} torque K_t·i"))
-    if "motor_current" in m.state_names:
-        v.append(Variable("motor_force", K_PRODUCT,
-                          m.parameter_names.index("motor.force_constant"),
-                          m.index("motor_current"), "output", "continuous", "calculated",
-                          None, "N", "linear motor force K_f·i"))
+    # derived outputs: each live motor's torque (or force), the following error; where the
+    # motor turns current into torque the topology says (Mechanism.motor_output)
+    from ..model.mechanisms import mechanism
+
+    mech = mechanism(fm.drive)(fm.parameters, fm.drive, fm.table_position, fm.nut_hold)
+    for a in m.aux:
+        axis = a.name.removesuffix("_speed_command")
+        if axis == a.name or f"{axis}_current" not in m.state_names:
+            continue
+        if axis == "nut" and not fm.nut_inputs:
+            continue
+        slot, product = mech.motor_output(axis)
+        unit = "N" if product.endswith("_force") else "N m"
+        v.append(Variable(product, K_PRODUCT, m.parameter_names.index(slot),
+                          m.index(f"{axis}_current"), "output", "continuous", "calculated",
+                          None, unit,
+                          f"{axis} motor {'force' if unit == 'N' else 'torque'} "
+                          f"({slot.rsplit('.', 1)[-1].replace('_', ' ')} × current)"))
     aux_names = [a.name for a in m.aux]
     v.append(Variable("following_error", K_ERROR, aux_names.index("table_position_reference"),
                       m.index("table_position"), "output", "continuous", "calculated", None,
@@ -267,7 +273,7 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
             continue
         name, unit, text, fixed = parameter_info(fm, pname)
         v.append(Variable(name, K_PARAM, k, 0, "parameter", "fixed" if fixed else "tunable",
-                          "exact", float(m.P[k]), unit, text))
+                          "exact", float(m.P[k]), unit, text, fixed=fixed))
     # settings
     for i, (name, unit, text, start) in enumerate(SETTINGS):
         value = start if start is not None else fm.periods[name.split(".")[1]]

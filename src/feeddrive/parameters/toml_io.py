@@ -279,7 +279,10 @@ def _new_site_class(base: Any, change: Any) -> bool:
 
 def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DriveParameters:
     """Build a parameter set.  ``extends = "NAME"`` (a preset) or ``"FILE.toml"`` (relative to
-    ``base_dir``) starts from that set; the other values replace its values."""
+    ``base_dir``) starts from that set; the other values replace its values.  A ``[fit]``
+    table (written by ``feeddrive fit``: the data, free parameters and intervals of the fit
+    that made the set) is a record, not a parameter, and is not read here."""
+    data = {k: v for k, v in data.items() if k != "fit"}
     if "extends" in data:
         parent_name = data["extends"]
         if not isinstance(parent_name, str):
