@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import typer
 
 from .. import protocol
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from .simulate_cmd import ALL_DRIVES
 
 
 @app.command("loops")
 @user_errors
 def loops_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
+                              help="cdfs, ddfs, linear-motor or rack-pinion"),
     table_speed: float = typer.Option(1.5, "--table-speed", help="Operating point: steady "
                                       "table speed [mm/s]."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
@@ -21,14 +25,29 @@ def loops_command(
                                        "frictionless loops)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    plot: str | None = typer.Option(None, "--plot", help="Write a Bode plot (PNG)."),
+    plot: str | None = typer.Option(None, "--plot", help="Write a plot of the loops "
+                                    "(PNG, PDF or SVG; its kind: --plot-kind)."),
+    plot_kind: str = typer.Option("bode", "--plot-kind", help="bode (open-loop magnitude and "
+                                  "phase, crossover and margins marked), nyquist, or step "
+                                  "(closed-loop responses to a reference and a load step)."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing plot file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Poles (frequency, damping ratio) and the velocity- and position-loop margins and
-    bandwidths of every motor axis, from the closed loop linearised at steady sliding."""
+    """Poles (frequency, damping ratio; rigid-body poles listed as such) and the velocity-
+    and position-loop margins and bandwidths of every motor axis, from the closed loop
+    linearised at steady sliding."""
     from ..linear import loop_analysis
+    from ..linear_plots import PLOT_KINDS
+    from ..outputs import check_output_file
+    from ..parameters import ParameterError
     from ..simulate import DriveSystem
 
+    if plot_kind not in PLOT_KINDS:
+        raise ParameterError("--plot-kind", plot_kind, f"expected {', '.join(PLOT_KINDS)}")
+    if plot:
+        if Path(plot).suffix.lower() not in (".png", ".pdf", ".svg"):
+            raise ParameterError("--plot", plot, "expected a .png, .pdf or .svg file name")
+        check_output_file(plot, option="--plot", inputs=[params_file], force=force)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, position * MM)
     result = loop_analysis(system, table_speed * MM_PER_S, nut_speed * MM_PER_S,
@@ -37,7 +56,8 @@ def loops_command(
     if plot:
         from ..linear_plots import plot_loops
 
-        data["plot"] = str(plot_loops(result, plot))
+        data["plot"] = str(plot_loops(result, plot, plot_kind))
+        data["plot_kind"] = plot_kind
     if as_json:
         print_json(data)
         return
@@ -46,6 +66,12 @@ def loops_command(
                   f"{'frictionless' if not with_friction else 'with friction'}, "
                   f"{table_speed:g} mm/s: least-damped mode {d['frequency_hz']:.3f} Hz, "
                   f"ζ = {d['damping_ratio']:.4f}")
+    for note in data["notes"]:
+        console.print(f"  {note}", markup=False)
+    rigid = sum(p["kind"] == "rigid-body" for p in data["poles"])
+    if rigid:
+        console.print(f"  {rigid} rigid-body pole{'s' if rigid > 1 else ''} (a free motion no "
+                      "loop holds; no damping ratio)")
     for lp in data["loops"]:
         def fmt(v: float | None, unit: str) -> str:
             return "—" if v is None else f"{v:.2f} {unit}"
@@ -60,7 +86,8 @@ def loops_command(
 @app.command("stability")
 @user_errors
 def stability_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
+                              help="cdfs, ddfs, linear-motor or rack-pinion"),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     low: float = typer.Option(1e3 * protocol.LINEAR_SPEED_RANGE[0], "--low",
@@ -95,6 +122,8 @@ def stability_command(
         return
     console.print(f"[bold]{drive.upper()}[/] ({params.name}), v_n = {nut_speed:g} mm/s, "
                   f"scan {low:g}–{high:g} mm/s:")
+    for note in data["notes"]:
+        console.print(f"  {note}", markup=False)
     if not band.intervals:
         console.print("  steady sliding is linearly stable at every speed scanned")
     for (lo, hi), f in zip(data["unstable_bands_mm_s"], band.mode_frequency_hz, strict=True):

@@ -18,6 +18,9 @@ from ._common import (
     user_errors,
 )
 
+#: every drive topology, for --help (the registry is not imported at start-up: it loads numba;
+#: tests/integration/test_cli_new_user3.py checks this against feeddrive.registry)
+ALL_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
 DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.simulate.SolverOptions.max_steps
 DEFAULT_METHOD = "modal"  # as feeddrive.simulate.SolverOptions.method (a test checks it)
@@ -32,8 +35,10 @@ def _say(text: str) -> None:
 @app.command("simulate")
 @user_errors
 def simulate_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor (a "
-                              "direct-drive table; default preset linear-motor-example)"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
+                              help="cdfs, ddfs, linear-motor (a "
+                              "direct-drive table; default preset linear-motor-example) or "
+                              "rack-pinion"),
     table_speed: float | None = typer.Option(
         None, "--table-speed", help="Table speed [mm/s]: the command (constant), the "
         "amplitude (sine), the top speed (trapezoid), the first step (stepdown). Required "

@@ -27,6 +27,7 @@ from .beyond_section import (
     summary_text,
 )
 from .linear_section import linear_rows
+from .sensitivity_section import sensitivity_rows
 from .studies import MID, PAPER, StudySettings, write_csv
 
 
@@ -240,7 +241,7 @@ def rigid_body_band(params: DriveParameters) -> str:
     st = sliding_stability(speeds, sites, mass,
                            stiffness, damping, integral=c.position_gain * integral)
     bad = speeds[~st.stable]
-    text = (f"rigid CDFS (m = {mass:.0f} kg, loop damping {damping:.3g} N s/m, stiffness "
+    text = (f"Rigid CDFS (m = {mass:.0f} kg, loop damping {damping:.3g} N s/m, stiffness "
             f"{stiffness:.3g} N/m, integral {c.position_gain * integral:.3g} N/(m s))")
     if bad.size == 0:
         return text + ": steady sliding linearly stable at every speed 0.02–4 mm/s"
@@ -428,6 +429,8 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
          "negative-slope bands, zero-slope speeds and LuGre passivity per site. "
          + rigid_body_band(params) + ".  " + RIGID_VS_LINEAR, indicators),
         ("linear", "Linear analysis", linear_text, linear),
+        ("sensitivity", "Which parameter matters: the linear band's upper edge",
+         *sensitivity_rows(results.get("sensitivity"))),
         ("ripple", "The DDFS question: motor torque ripple", ripple_text, ripple),
         ("ripple-positions", "Torque-ripple reading at the five table positions",
          "Table 3's positions; the ripple reading has no mechanism that depends on the "
