@@ -19,8 +19,9 @@ with ζ = −1e-4 still grows).  The explicit DOPRI5 steps are capped alike: on 
 DOPRI5's |R(iy)| exceeds 1 for 1 < y < 3.3, so at its stability limit it amplifies a lightly
 damped mode into a false instability (|ζ_num| ≤ 3.1e-5 below y = 1).  Stiff *decaying*
 components (real eigenvalues, heavily damped pairs) do not cap the step: there the L-stable
-step is what makes the method fast.  The idea of telling the two apart from the spectrum is Shampine's (L. F. Shampine, "Stiffness and
-nonstiff differential equation solvers, II: detecting stiffness with Runge–Kutta methods",
+step is what makes the method fast.  The idea of telling the two apart from the spectrum is
+Shampine's (L. F. Shampine, "Stiffness and nonstiff differential equation solvers, II:
+detecting stiffness with Runge–Kutta methods",
 ACM TOMS 3 (1977) 44–53) and Hairer–Wanner's ``dopri5.f`` stiffness test, which estimates
 h|λ| of the dominant mode only; the eigen-decomposition gives every mode with its damping.
 """
