@@ -401,10 +401,16 @@ class Simulation:
         self._running: _Chunks | None = None
 
     def live_time(self) -> float:
-        """The simulated time [s] the solver has reached in the run going on now, read while
-        :meth:`run` computes (from another thread: the compiled solver releases the GIL and
-        writes the time of each accepted step into its memory's last slot); 0 before the
-        first step."""
+        """The simulated time the solver has reached in the run going on now.
+
+        Read while :meth:`run` computes (from another thread: the compiled solver releases the
+        GIL and writes the time of each accepted step into its memory's last slot).
+
+        Returns
+        -------
+        float
+            The time reached [s]; 0 before the first step.
+        """
         chunks = self._running
         return 0.0 if chunks is None else float(chunks.live[-1])
 
