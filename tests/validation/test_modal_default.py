@@ -24,14 +24,18 @@ from feeddrive.control import ConstantSpeed
 from feeddrive.simulate import DriveSystem, SolverOptions, simulate
 from feeddrive.solvers import modes, rodas4
 
+MODAL = SolverOptions(method="modal")
 
-def test_modal_is_the_default() -> None:
-    assert SolverOptions().method == "modal"
+
+def test_modal_is_offered_and_dopri5_stays_the_default() -> None:
+    """``modal`` is not yet the default (docs/model.md says why); it is one option away."""
+    assert SolverOptions().method == "dopri5"
+    assert MODAL.method == "modal"
 
 
 def test_literal_cdfs_at_0p2_creeps_under_the_default() -> None:
     system = DriveSystem(fd.preset("wang2021-literal"), "cdfs", 0.4)
-    default = creep_trial(system, 0.2e-3)
+    default = creep_trial(system, 0.2e-3, options=MODAL)
     dopri = creep_trial(system, 0.2e-3, options=SolverOptions(method="dopri5"))
     auto = creep_trial(system, 0.2e-3, options=SolverOptions(method="auto"))
     assert default.kind == dopri.kind == "stick-slip"
@@ -49,7 +53,7 @@ def _stiff_ddfs(factor: float) -> DriveSystem:
 def test_sigma0_x100_ddfs_takes_at_most_1e5_calls() -> None:
     """The DDFS at 0.5 mm/s, v_n = 16 mm/s, screw bristle stiffness × 100: 14.9 M calls with
     ``dopri5`` (1-ms cap, explicit; issue 21)."""
-    r = simulate(_stiff_ddfs(100.0), ConstantSpeed(0.5e-3, 16e-3), 10.0)
+    r = simulate(_stiff_ddfs(100.0), ConstantSpeed(0.5e-3, 16e-3), 10.0, options=MODAL)
     assert r.solver_stats["rhs_evaluations"] <= 100_000, r.solver_stats
     assert r.solver_stats["rosenbrock_steps"] > 0
 
@@ -63,7 +67,7 @@ def test_base_scenarios_cost_at_most_twice_auto(name: str) -> None:
     drive, vt, vn = BASE[name]
     system = DriveSystem(fd.preset("wang2021"), drive, 0.4)
     profile = ConstantSpeed(vt, vn, ramp_time=0.1)
-    modal = simulate(system, profile, 10.0)
+    modal = simulate(system, profile, 10.0, options=MODAL)
     auto = simulate(system, profile, 10.0, options=SolverOptions(method="auto"))
     assert modal.solver_stats["rhs_evaluations"] <= 2 * auto.solver_stats["rhs_evaluations"]
     # and the same answer: the table speed over the run within the tolerances' reach
