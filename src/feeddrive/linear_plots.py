@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING
 
 from matplotlib.figure import Figure
 
+from .outputs import atomic_path
+
 if TYPE_CHECKING:
     from .linear import LoopAnalysis, StabilityBand
 
@@ -32,7 +34,8 @@ def plot_loops(analysis: LoopAnalysis, path: str | Path) -> Path:
                  f"{' (frictionless)' if lin.frictionless else ''}: least-damped mode "
                  f"{d.frequency_hz:.2f} Hz, ζ = {d.damping_ratio:.3f}")
     p = Path(path)
-    fig.savefig(p, dpi=110)
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=110)
     return p
 
 
@@ -48,5 +51,6 @@ def plot_band(band: StabilityBand, path: str | Path) -> Path:
     ax.set_ylabel("largest real part of the poles [1/s]")
     ax.set_title("Linear stability of steady sliding (shaded: unstable)")
     p = Path(path)
-    fig.savefig(p, dpi=110)
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=110)
     return p

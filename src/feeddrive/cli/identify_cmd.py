@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..outputs import check_output_file, shown
+from ..outputs import atomic_path, check_output_file, shown
 from ..parameters import DriveParameters, ParameterError, save
 
 if TYPE_CHECKING:
@@ -183,8 +183,9 @@ def static_command(
                      weighting=weighting,  # type: ignore[arg-type]
                      lines=data.lines, source=data.source)
     if out:
-        Path(out).write_text(friction_fragment(site, static=fit, source=data.source),
-                             encoding="utf-8")
+        with atomic_path(out) as tmp:
+            tmp.write_text(friction_fragment(site, static=fit, source=data.source),
+                           encoding="utf-8")
     if plot:
         from ..analysis.plots import plot_static_fit
 
@@ -256,8 +257,9 @@ def dynamic_command(
                              progress=lambda text: status.update(
                                  f"fitting {shown(data.source)}: {text}"))
     if out:
-        Path(out).write_text(friction_fragment(site, dynamic=fit, source=data.source),
-                             encoding="utf-8")
+        with atomic_path(out) as tmp:
+            tmp.write_text(friction_fragment(site, dynamic=fit, source=data.source),
+                           encoding="utf-8")
     if plot:
         from ..analysis.plots import plot_dynamic_fit
 

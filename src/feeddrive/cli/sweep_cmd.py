@@ -121,26 +121,26 @@ def sweep_command(
         raise ValueError(f"--workers = {workers}: expected ≥ 1")
     if dask_workers is not None and dask_workers < 1:
         raise ValueError(f"--dask-workers = {dask_workers}: expected ≥ 1")
-    points = cfg.points()  # every point's parameter set validated here
-    if dry_run:
+    if dry_run:  # counts from the design; only the timed points are built
         db = SweepStore(store_path, option=option, create=False) if store_path.exists() \
             else None
         n = dask_workers or workers or os.cpu_count() or 1
-        est = estimate(cfg, db, workers=n, points=points)
+        est = estimate(cfg, db, workers=n)
         out = {"sweep": cfg.name, "points": est.points, "distinct": est.distinct,
                "stored": est.stored, "to_compute": est.distinct - est.stored,
                "timed_points": est.timed, "seconds_per_point": est.seconds_per_point,
-               "workers": n, "estimated_seconds": est.seconds}
+               "workers": n, "estimated_seconds": est.seconds,
+               "parameter_sets_built": est.built}
         if as_json:
             print_json(out)
             return
-        console.print(f"sweep {cfg.name}: {est.points} points ({est.distinct} distinct, "
+        console.print(f"sweep {shown(cfg.name)}: {est.points} points ({est.distinct} distinct, "
                       f"{est.stored} already stored, {est.distinct - est.stored} to compute); "
                       f"{est.seconds_per_point:.3g} s per point ({est.timed} timed) → about "
                       f"{est.seconds:.0f} s on {n} workers", markup=False, highlight=False)
         return
     with SweepStore(store_path, option=option, notice=_notice) as db:
-        summary = _run(cfg, db, points, workers, scheduler, dask_workers, quiet=as_json)
+        summary = _run(cfg, db, workers, scheduler, dask_workers, quiet=as_json)
         shown_plot = _plot(to_dataset(db, cfg.name), plot, x or cfg.map_axes[0],
                            y or cfg.map_axes[1], None) if plot else None
         if output:
@@ -149,14 +149,18 @@ def sweep_command(
            "distinct": summary.distinct, "stored_before": summary.stored_before,
            "computed": summary.computed, "failed": summary.failed,
            "seconds": summary.seconds, "points_per_second": summary.rate,
-           "executor": summary.executor, "plot": plot, "output": output}
+           "executor": summary.executor, "computed_elsewhere": summary.elsewhere,
+           "plot": plot, "output": output}
     if as_json:
         out["points_per_second"] = None if summary.computed == 0 else summary.rate
         print_json(out)
         return
-    console.print(f"sweep {cfg.name}: {summary.points} points, {summary.distinct} distinct; "
-                  f"{summary.stored_before} found in {shown(store_path)}, {summary.computed} "
-                  f"computed ({summary.failed} failed) in {summary.seconds:.1f} s"
+    console.print(f"sweep {shown(cfg.name)}: {summary.points} points, {summary.distinct} "
+                  f"distinct; {summary.stored_before} found in {shown(store_path)}, "
+                  f"{summary.computed} computed ({summary.failed} failed)"
+                  + (f", {summary.elsewhere} computed meanwhile by another sweep"
+                     if summary.elsewhere else "")
+                  + f" in {summary.seconds:.1f} s"
                   + (f", {_speed_column(summary.rate)} on {summary.executor}"
                      if summary.computed else ""), markup=False, highlight=False)
     if plot:
@@ -169,7 +173,7 @@ def _notice(text: str) -> None:
     err_console.print(f"notice: {text}", markup=False, highlight=False, soft_wrap=True)
 
 
-def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | None,
+def _run(cfg: Any, db: Any, workers: int | None, scheduler: str | None,
          dask_workers: int | None, *, quiet: bool) -> Any:
     from rich.progress import (
         BarColumn,
@@ -183,7 +187,7 @@ def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | N
     from rich.text import Text
 
     from ..sweep import run_sweep
-    from ..sweep.executors import SweepAborted
+    from ..sweep.executors import SweepAborted, SweepInterrupted
 
     class Rate(ProgressColumn):
         def render(self, task: Any) -> Text:
@@ -193,27 +197,34 @@ def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | N
                    Rate(), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
                    console=err_console, transient=True, disable=quiet)
     with bar:
-        task = bar.add_task(f"sweep {cfg.name}", total=None)
+        name = shown(cfg.name)
+        task = bar.add_task(f"sweep {name}: checking points", total=None)
+
+        def checked(done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total)
 
         def started(todo: int, where: str) -> None:
-            bar.update(task, total=todo, description=f"sweep {cfg.name} on {where}")
+            bar.update(task, completed=0, total=todo, description=f"sweep {name} on {where}")
 
         def progress(done: int, todo: int) -> None:
             bar.update(task, completed=done, total=todo)
 
         try:
             return run_sweep(cfg, db, workers=workers, scheduler=scheduler,
-                             dask_workers=dask_workers, points=points, progress=progress,
-                             started=started)
+                             dask_workers=dask_workers, progress=progress,
+                             started=started, checked=checked)
         except SweepAborted as err:
             bar.stop()
             err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
             raise typer.Exit(code=1) from None
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as err:
             bar.stop()
-            err_console.print(f"interrupted: every finished point is in {shown(db.path)}; "
-                              "rerun the same command to resume", markup=False,
-                              highlight=False, soft_wrap=True)
+            kept = f"{err.computed} computed this run; " if isinstance(err, SweepInterrupted) \
+                else ""
+            err_console.print(f"interrupted: every finished point is in {shown(db.path)} "
+                              f"({kept}the points in flight were cancelled); rerun the same "
+                              "command to resume", markup=False, highlight=False,
+                              soft_wrap=True)
             raise typer.Exit(code=130) from None
 
 

@@ -189,7 +189,11 @@ def dumps(params: DriveParameters) -> str:
 
 
 def save(params: DriveParameters, path: str | Path) -> None:
-    Path(path).write_text(dumps(params), encoding="utf-8")
+    """Write ``params`` to ``path`` (atomically: :func:`feeddrive.outputs.atomic_path`)."""
+    from ..outputs import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(dumps(params), encoding="utf-8")
 
 
 def _build(cls: type, data: Any, path: str) -> Any:

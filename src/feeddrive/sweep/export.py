@@ -20,6 +20,7 @@ import pandas as pd
 import xarray as xr
 
 from .. import units
+from ..outputs import atomic_path
 from .design import SPECIAL_AXES
 from .quantities import UNITS
 from .store import SweepStore
@@ -132,16 +133,17 @@ def to_frame(store: SweepStore, sweep: str) -> pd.DataFrame:
 def export(store: SweepStore, sweep: str, path: str | Path) -> Path:
     p = Path(path)
     ext = p.suffix.lower()
-    if ext == ".nc":
-        ds = to_dataset(store, sweep)
-        for name in ds.data_vars:
-            if ds[name].dtype == np.int64:
-                ds[name] = ds[name].astype(np.int32)  # NetCDF3 has no 64-bit integers
-        ds.to_netcdf(p, engine="scipy")
-    elif ext == ".parquet":
-        to_frame(store, sweep).to_parquet(p)
-    elif ext == ".csv":
-        to_frame(store, sweep).to_csv(p, float_format="%.10g")
-    else:
+    if ext not in (".nc", ".parquet", ".csv"):
         raise ValueError(f"{p}: unknown extension; expected one of {EXPORT_FORMATS}")
+    with atomic_path(p) as tmp:
+        if ext == ".nc":
+            ds = to_dataset(store, sweep)
+            for name in ds.data_vars:
+                if ds[name].dtype == np.int64:
+                    ds[name] = ds[name].astype(np.int32)  # NetCDF3 has no 64-bit integers
+            ds.to_netcdf(tmp, engine="scipy")
+        elif ext == ".parquet":
+            to_frame(store, sweep).to_parquet(tmp)
+        else:
+            to_frame(store, sweep).to_csv(tmp, float_format="%.10g")
     return p

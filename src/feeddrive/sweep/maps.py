@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 from .. import units
+from ..outputs import atomic_path
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -125,7 +126,8 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
     fig.suptitle(f"sweep {ds.attrs.get('sweep')}: {value}")
     fig.tight_layout(rect=(0, 0.06 if boundaries else 0, 1, 1))
     p = Path(path)
-    fig.savefig(p, dpi=110)
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return p
 
@@ -267,6 +269,7 @@ def plot_histogram(ds: xr.Dataset, path: str | Path, *, value: str | None = None
                  f"points with a finite {value}")
     ax.legend(loc="upper right")
     fig.tight_layout()
-    fig.savefig(Path(path), dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return stats
