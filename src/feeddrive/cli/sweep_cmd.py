@@ -139,8 +139,9 @@ def sweep_command(
                       f"{est.seconds_per_point:.3g} s per point ({est.timed} timed) → about "
                       f"{est.seconds:.0f} s on {n} workers", markup=False, highlight=False)
         return
-    with SweepStore(store_path, option=option, notice=_notice) as db:
-        summary = _run(cfg, db, workers, scheduler, dask_workers, quiet=as_json)
+    summary, db = _run(cfg, lambda: SweepStore(store_path, option=option, notice=_notice),
+                       workers, scheduler, dask_workers, quiet=as_json)
+    with db:
         shown_plot = _plot(to_dataset(db, cfg.name), plot, x or cfg.map_axes[0],
                            y or cfg.map_axes[1], None) if plot else None
         if output:
@@ -173,8 +174,9 @@ def _notice(text: str) -> None:
     err_console.print(f"notice: {text}", markup=False, highlight=False, soft_wrap=True)
 
 
-def _run(cfg: Any, db: Any, workers: int | None, scheduler: str | None,
-         dask_workers: int | None, *, quiet: bool) -> Any:
+def _run(cfg: Any, open_store: Any, workers: int | None, scheduler: str | None,
+         dask_workers: int | None, *, quiet: bool) -> tuple[Any, Any]:
+    """Check every point, then open the store and run: (summary, the open store)."""
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -187,7 +189,7 @@ def _run(cfg: Any, db: Any, workers: int | None, scheduler: str | None,
     from rich.text import Text
 
     from ..sweep import run_sweep
-    from ..sweep.executors import SweepAborted, SweepInterrupted
+    from ..sweep.executors import SweepAborted, SweepInterrupted, check_design
 
     class Rate(ProgressColumn):
         def render(self, task: Any) -> Text:
@@ -209,10 +211,16 @@ def _run(cfg: Any, db: Any, workers: int | None, scheduler: str | None,
         def progress(done: int, todo: int) -> None:
             bar.update(task, completed=done, total=todo)
 
+        design = check_design(cfg, checked=checked)  # every point, before the store opens
+        db = open_store()
         try:
-            return run_sweep(cfg, db, workers=workers, scheduler=scheduler,
-                             dask_workers=dask_workers, progress=progress,
-                             started=started, checked=checked)
+            try:
+                return run_sweep(cfg, db, workers=workers, scheduler=scheduler,
+                                 dask_workers=dask_workers, progress=progress,
+                                 started=started, design=design), db
+            except BaseException:
+                db.close()
+                raise
         except SweepAborted as err:
             bar.stop()
             err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)

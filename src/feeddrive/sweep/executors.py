@@ -226,6 +226,30 @@ def description(config: SweepConfig) -> dict[str, Any]:
             "quantity": config.quantity.to_dict(), "map": list(config.map_axes)}
 
 
+@dataclass(frozen=True)
+class CheckedDesign:
+    """Every point of a design built and checked: its key, in design order, and one task
+    per model structure (to warm the compiled kernels)."""
+
+    keys: list[str]
+    structures: dict[tuple[Any, ...], dict[str, Any]]
+
+
+def check_design(config: SweepConfig, *, points: list[Point] | None = None,
+                 checked: Progress | None = None) -> CheckedDesign:
+    """Build and check every point's parameter set, one at a time, keeping only its key (a
+    bad value is refused here, before any simulation and before the store is touched)."""
+    total = config.count() if points is None else len(points)
+    keys: list[str] = []
+    structures: dict[tuple[Any, ...], dict[str, Any]] = {}
+    for p in (points if points is not None else config.iter_points()):
+        keys.append(p.key)
+        structures.setdefault(_structure(p.task, p.coords), p.task)
+        if checked is not None and (len(keys) % 200 == 0 or len(keys) == total):
+            checked(len(keys), total)
+    return CheckedDesign(keys, structures)
+
+
 #: points in flight per worker: enough to keep every worker busy, few enough that a
 #: million-point design never holds more than a handful of tasks (and Ctrl-C has little to
 #: cancel)
@@ -237,7 +261,8 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
               points: list[Point] | None = None,
               progress: Progress | None = None,
               started: Callable[[int, str], None] | None = None,
-              checked: Progress | None = None) -> SweepSummary:
+              checked: Progress | None = None,
+              design: CheckedDesign | None = None) -> SweepSummary:
     """Compute every design point of ``config`` not yet in ``store``; see the module.
 
     First every point's parameter set is built and checked (a bad value stops the sweep
@@ -255,14 +280,9 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
     workers are stopped at once) and the interrupt is raised again.
     """
     t0 = time.perf_counter()
-    total = config.count() if points is None else len(points)
-    keys: list[str] = []
-    structures: dict[tuple[Any, ...], dict[str, Any]] = {}
-    for p in (points if points is not None else config.iter_points()):
-        keys.append(p.key)
-        structures.setdefault(_structure(p.task, p.coords), p.task)
-        if checked is not None and (len(keys) % 200 == 0 or len(keys) == total):
-            checked(len(keys), total)
+    if design is None:
+        design = check_design(config, points=points, checked=checked)
+    keys, structures = design.keys, design.structures
     coords = (p.coords for p in points) if points is not None else config.iter_coordinates()
     store.register(config.name, description(config),
                    ((i, k, c) for (i, k), c in zip(enumerate(keys), coords, strict=True)),
