@@ -282,6 +282,9 @@ def _settings_of(body: dict[str, Any], key: str = "settings") -> dict[str, Any] 
         if item is not None and not isinstance(item, str | int | float | bool):
             raise _HttpError(HTTPStatus.BAD_REQUEST, f"'{key}.{name[:40]}' must be text or a "
                              f"number, not {type(item).__name__}")
+        if isinstance(item, int) and not isinstance(item, bool) and abs(item) > 1e300:
+            raise _HttpError(HTTPStatus.BAD_REQUEST, f"'{key}.{name[:40]}': a number too "
+                             "large for a field")
     return value
 
 
@@ -352,7 +355,7 @@ class Handler(BaseHTTPRequestHandler):
                              "deep")
         try:
             data = json.loads(raw or b"{}")
-        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
+        except (ValueError, RecursionError):  # JSONDecodeError, UnicodeDecodeError, huge ints
             raise _HttpError(HTTPStatus.BAD_REQUEST, "not valid JSON") from None
         if not isinstance(data, dict):
             raise _HttpError(HTTPStatus.BAD_REQUEST, "expected a JSON object")
