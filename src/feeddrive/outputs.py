@@ -142,11 +142,6 @@ def check_output_file(path: str | os.PathLike[str], *, option: str,
     if not text.strip():
         raise OutputError(f"{option} {text!r}: empty file name")
     p = Path(text)
-    if formats is not None:
-        allowed = tuple(formats)
-        if p.suffix.lower() not in allowed:
-            raise OutputError(f"{option} {shown(p)}: expected a file name ending in "
-                              f"{', '.join(allowed)}")
     if p.is_dir():
         raise OutputError(f"{option} {shown(p)}: is a folder; expected a file name")
     _check_folder(option, p, p.parent)
@@ -156,6 +151,11 @@ def check_output_file(path: str | os.PathLike[str], *, option: str,
         if _same_file(p, Path(inp)) or p.resolve() == Path(inp).resolve():
             raise OutputError(f"{option} {shown(p)}: is an input of this command; refusing to "
                               "overwrite it")
+    if formats is not None:
+        allowed = tuple(formats)
+        if p.suffix.lower() not in allowed:
+            raise OutputError(f"{option} {shown(p)}: expected a file name ending in "
+                              f"{', '.join(allowed)}")
     if p.exists() and not force:
         raise OutputError(f"{option} {shown(p)}: exists; pass --force to replace it")
     _probe_writable(option, p)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import typer
 
+from ..outputs import PLOT_FORMATS, check_output_file
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
 
@@ -20,7 +21,9 @@ def loops_command(
                                        "frictionless loops)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    plot: str | None = typer.Option(None, "--plot", help="Write a Bode plot (PNG)."),
+    plot: str | None = typer.Option(None, "--plot", help="Write a Bode plot [.png, .pdf, "
+                                    ".svg]."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Poles (frequency, damping ratio) and the velocity- and position-loop margins and
@@ -28,6 +31,9 @@ def loops_command(
     from ..linear import loop_analysis
     from ..simulate import DriveSystem
 
+    if plot:  # before any work
+        check_output_file(plot, option="--plot", inputs=[params_file], force=force,
+                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, position * MM)
     result = loop_analysis(system, table_speed * MM_PER_S, nut_speed * MM_PER_S,
@@ -68,7 +74,8 @@ def stability_command(
                                "bisected to 0.001 mm/s)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    plot: str | None = typer.Option(None, "--plot", help="Write the scan (PNG)."),
+    plot: str | None = typer.Option(None, "--plot", help="Write the scan [.png, .pdf, .svg]."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Table speeds at which steady sliding is linearly unstable (full model, every friction
@@ -76,6 +83,9 @@ def stability_command(
     from ..linear import stability_band
     from ..simulate import DriveSystem
 
+    if plot:  # before any work
+        check_output_file(plot, option="--plot", inputs=[params_file], force=force,
+                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, position * MM)
     band = stability_band(system, nut_speed * MM_PER_S, low=low * MM_PER_S,

@@ -6,7 +6,7 @@ from typing import Any
 
 import typer
 
-from ..outputs import check_output_file
+from ..outputs import PLOT_FORMATS, check_output_file
 from . import _units
 from ._common import (
     EXIT_UNSTABLE,
@@ -108,7 +108,8 @@ def simulate_command(
         check_format(output)
         check_output_file(output, option="--output", inputs=inputs, force=force)
     if plot:
-        check_output_file(plot, option="--plot", inputs=[*inputs, output], force=force)
+        check_output_file(plot, option="--plot", inputs=[*inputs, output], force=force,
+                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive,
                          table_position=_units.position("--position", position, params, drive))

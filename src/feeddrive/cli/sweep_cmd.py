@@ -9,7 +9,7 @@ from typing import Any
 
 import typer
 
-from ..outputs import check_output_file, shown
+from ..outputs import PLOT_FORMATS, check_output_file, shown
 from ._common import app, console, err_console, print_json, user_errors
 
 _PLOT_FORMATS = (".png", ".pdf", ".svg")
@@ -24,7 +24,8 @@ def _check_outputs(plot: str | None, output: str | None, inputs: list[str], forc
     if plot is not None:
         if Path(plot).suffix.lower() not in _PLOT_FORMATS:
             raise ValueError(f"--plot {shown(plot)}: expected one of {', '.join(_PLOT_FORMATS)}")
-        check_output_file(plot, option="--plot", inputs=inputs, force=force)
+        check_output_file(plot, option="--plot", inputs=inputs, force=force,
+                          formats=PLOT_FORMATS)
     if output is not None:
         ext = Path(output).suffix.lower()
         if ext not in _EXPORT_FORMATS:
