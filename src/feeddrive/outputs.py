@@ -46,11 +46,14 @@ def shown(path: str | os.PathLike[str], limit: int | None = MAX_SHOWN) -> str:
     """A path (or any user text) as printed in a one-line message: control characters
     escaped (``\\n``, ``\\x1b``), and cut to ``limit`` characters (:func:`cut`)."""
     text = os.fspath(path)
-    if limit is not None and len(text) > 4 * limit:
-        text = text[:4 * limit]  # escape no more than can be shown
+    length = len(text)
+    if limit is not None and length > limit:
+        text = text[:limit]  # escape no more than can be shown
     if not text.isprintable():
         text = text.encode("unicode_escape").decode("ascii")
-    return cut(text, limit)
+    if limit is not None and (length > limit or len(text) > limit):
+        return f"{text[:limit]}… ({length} characters)"
+    return text
 
 
 def cut(text: str, limit: int | None = MAX_SHOWN) -> str:

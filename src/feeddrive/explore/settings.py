@@ -52,7 +52,9 @@ PAPER_NUT_SPEED_MM_S = 16.0
 #: a plain harmonic of the motor shaft: 6 per revolution is a common cogging order
 DEFAULT_RIPPLE_ORDER = 6.0
 
-_FRICTION_SCALE = {"unit": "-", "low": 0.0, "high": 10.0, "low_inclusive": False,
+# a thousandth of the set's friction is the least the page runs (1e-320 passed the check
+# and then broke the run): a physical lower bound, as the compensation scales have
+_FRICTION_SCALE = {"unit": "-", "low": 1e-3, "high": 10.0, "low_inclusive": True,
                    "hint": "1 is the parameter set's friction"}
 _RIPPLE = "disturbances.screw_motor_ripple"
 

@@ -27,6 +27,8 @@ _REPR.maxlevel = 4
 
 def shown_value(value: object) -> str:
     """``repr(value)`` for a message: long text and deep or long lists cut (``...``)."""
+    if isinstance(value, str) and len(value) > MAX_SHOWN:
+        return f"{value[:MAX_SHOWN]!r}… ({len(value)} characters)"
     text = repr(value) if isinstance(value, int | float | bool | None) else _REPR.repr(value)
     return _cut(text)
 
