@@ -268,7 +268,13 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
             parent = preset(parent_name)
         elif parent_name.endswith(".toml"):
             parent_path = (base_dir or Path.cwd()) / parent_name
-            parent = load(parent_path)
+            try:
+                parent = load(parent_path)
+            except ParameterError as err:
+                if err.field == "file" and err.value == str(parent_path):
+                    # the named file itself cannot be read: say so about extends
+                    raise ParameterError("extends", parent_name, err.message) from None
+                raise
         else:
             raise ParameterError("extends", parent_name,
                                  f"expected one of {', '.join(PRESETS)} or a .toml file")
