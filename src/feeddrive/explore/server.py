@@ -24,6 +24,7 @@ elsewhere cannot reach the server through a rebound DNS name; POST bodies must b
 from __future__ import annotations
 
 import json
+import socket
 import sys
 import threading
 import time
@@ -191,6 +192,9 @@ class ExplorerServer(ThreadingHTTPServer):
     is closed after :data:`READ_TIMEOUT` s without a byte (``Handler.timeout``)."""
 
     daemon_threads = True
+    # the listen backlog: connections past the cap are accepted (and answered 503) at once,
+    # not left unaccepted in the kernel's queue
+    request_queue_size = 2 * MAX_CONNECTIONS
 
     def __init__(self, port: int, explorer: Explorer, host: str = "127.0.0.1") -> None:
         self.explorer = explorer
@@ -233,11 +237,13 @@ class ExplorerServer(ThreadingHTTPServer):
 def _refuse_connection(sock: Any) -> None:
     """Answer a connection over the cap with 503 and close it (never blocks long)."""
     try:
-        sock.settimeout(1.0)
+        sock.settimeout(0.1)
         body = b'{"error":"too many connections to the explorer; retry"}'
         sock.sendall(b"HTTP/1.1 503 Service Unavailable\r\nContent-Type: application/json"
                      b"\r\nContent-Length: " + str(len(body)).encode() +
                      b"\r\nConnection: close\r\n\r\n" + body)
+        sock.shutdown(socket.SHUT_WR)
+        sock.recv(65536)  # what the client sent, briefly: closing unread would reset the answer
     except OSError:
         pass
     finally:
