@@ -455,7 +455,7 @@ def test_two_sweeps_on_one_store_compute_each_point_once(tmp_path: Path) -> None
     first = _start_sweep(tmp_path, store, "--workers", "1", "--json")
     second = _start_sweep(tmp_path, store, "--workers", "1", "--json")
     outs = [p.communicate(timeout=400) for p in (first, second)]
-    for p, (out, err) in zip((first, second), outs, strict=True):
+    for p, (_out, err) in zip((first, second), outs, strict=True):
         assert p.returncode == 0, err
     a, b = (json.loads(out) for out, _ in outs)
     assert a["computed"] + b["computed"] == 8  # each point computed once, by one of them
