@@ -216,3 +216,16 @@ def test_bounded_fuzz_never_answers_500_or_prints_a_traceback(
     assert statuses.count(0) == 0  # every request answered
     assert len({s for s in statuses if 400 <= s < 500}) >= 4
     _no_traceback(capfd)
+
+
+def test_the_limits_in_docs_explore_md_are_the_servers() -> None:
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "explore.md").read_text()
+    section = " ".join(doc.split("### Hostile requests", 1)[1].split("\n## ", 1)[0].split())
+    assert f"sends nothing for {srv_mod.READ_TIMEOUT:g} s" in section
+    assert f"at most {srv_mod.MAX_CONNECTIONS} connections" in section
+    assert f"more than {srv_mod.MAX_JSON_DEPTH} deep" in section
+    assert f"at most {st.MAX_PARAMS_TEXT // 1024} kB" in section
+    assert f"over {srv_mod.MAX_BODY // 1024 // 1024} MB" in section
+    assert "0.001 ≤ k ≤ 10" in doc and st._FRICTION_SCALE["low"] == 0.001
