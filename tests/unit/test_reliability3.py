@@ -413,3 +413,13 @@ def test_a_folder_in_place_of_a_cache_entry_is_recomputed_with_a_notice(tmp_path
     assert value == {"v": 1}
     assert len(notices) == 1 and "is a folder" in notices[0] and "recomputing" in notices[0]
     assert (store.path("study") / "mine.txt").read_text() == "keep"  # never removed
+
+
+def test_the_explorer_refuses_a_tiny_period_in_an_imported_set() -> None:
+    text = dumps(preset("wang2021")).replace("current_period = 0.0",
+                                             "current_period = 5e-324")
+    assert "5e-324" in text
+    with pytest.raises(ParameterError, match="continuous loop"):
+        st.import_toml(text)
+    out = st.check({"params": text})
+    assert "continuous loop" in out.errors["params"]
