@@ -86,8 +86,7 @@ def test_a_bad_content_length_is_a_400_with_a_message(
 
 @pytest.mark.parametrize("body", [
     b"[" * 50_000 + b"]" * 50_000, b'{"settings": ' + b"[" * 50_000 + b"]" * 50_000 + b"}",
-    b'{"settings": [1, 2]}', b'{"settings": "x"}', b'{"settings": {"table_speed": [1]}}',
-    b'{"settings": {"table_speed": {"a": 1}}}', b'{"settings": {"table_speed": 1' +
+    b'{"settings": [1, 2]}', b'{"settings": "x"}', b'{"settings": {"table_speed": 1' +
     b"0" * 400 + b"}}", b'{"settings": {"table_speed": 1' + b"0" * 5000 + b"}}",
     b'"x"', b"\xff\xfe",
 ])
@@ -98,6 +97,16 @@ def test_malformed_json_is_a_4xx_with_a_message(server: ExplorerServer,
     status, answer = post(server, path, body)
     assert 400 <= status < 500, (status, answer)
     assert isinstance(answer, dict) and ("error" in answer or "errors" in answer)
+    _no_traceback(capfd)
+
+
+def test_a_field_holding_a_list_gets_its_message_beside_the_field(
+        server: ExplorerServer, capfd: pytest.CaptureFixture[str]) -> None:
+    for value in ([1], {"a": 1}, [[[[1]]]]):
+        status, answer = post(server, "/api/check",
+                              json.dumps({"settings": {"table_speed": value}}).encode())
+        assert status == 200 and "Input should be a valid number" in \
+            answer["errors"]["table_speed"]
     _no_traceback(capfd)
 
 
