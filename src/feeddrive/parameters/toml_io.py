@@ -13,6 +13,7 @@ input with one line instead of a ``RecursionError``.
 from __future__ import annotations
 
 import dataclasses
+import re
 import stat
 import threading
 import tomllib
@@ -57,9 +58,14 @@ _TOML_ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n"
                  "\f": "\\f", "\r": "\\r"}
 
 
+_NEEDS_ESCAPE = re.compile('[\\\\"\\x00-\\x1f\\x7f]')
+
+
 def toml_string(text: str) -> str:
     """``text`` as a TOML basic string: quoted, with backslash, quote and every control
     character (U+0000–U+001F, U+007F) escaped (TOML 1.0, "String")."""
+    if not _NEEDS_ESCAPE.search(text):  # the common case, without a loop per character
+        return f'"{text}"'
     out = []
     for c in text:
         if c in _TOML_ESCAPES:
