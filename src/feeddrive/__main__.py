@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 
-INTERRUPTED = 130  # 128 + SIGINT, the shell convention
+from .exit_codes import INTERRUPTED
 
 
 def _run_app() -> None:

@@ -25,7 +25,7 @@ config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
 
 _HERE = Path(__file__).resolve().parent
 _KERNEL_SOURCES = ("_jit.py", "friction.py", "control.py", "analysis/identification.py")
-_KERNEL_FOLDERS = ("model", "solvers")
+_KERNEL_FOLDERS = ("model", "solvers", "fmu")
 
 
 def _kernel_files() -> list[Path]:

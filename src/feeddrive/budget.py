@@ -114,6 +114,8 @@ def time_constants(params: DriveParameters, drive: str, speed: float) -> dict[st
                                                                                ("guide",))
     for site in sites:
         lugre = getattr(params.friction, site)
+        if not hasattr(lugre, "bristle_stiffness"):  # a law with parameters of its own
+            continue
         fc = min(lugre.positive.coulomb_force, lugre.negative.coulomb_force)
         out[f"{site} bristle relaxation F_c/(σ0·|v|)"] = fc / (lugre.bristle_stiffness * v)
     c = params.controller

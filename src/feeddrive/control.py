@@ -14,7 +14,7 @@ import numpy as np
 
 from ._jit import kernel
 
-REF_CONSTANT, REF_SINE, REF_SAMPLED = 0, 1, 2
+REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
 # parameter block of a profile: kind, table speed, nut speed, ramp time, frequency or step,
 # and where its data table lies in T (offset, columns)
 PROFILE_PARAMS = ("kind", "table_speed", "nut_speed", "ramp_time", "frequency", "table_offset",
@@ -27,7 +27,11 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
     """Commanded (table position, table speed, nut position, nut speed) at time t [s].
 
     ``P[o:o+7]``: the profile block (:data:`PROFILE_PARAMS`); sampled profiles read a 4 × n
-    table at ``T[to:]`` (rows: table position, table speed, nut position, nut speed).
+    table at ``T[to:]`` (rows: table position, table speed, nut position, nut speed), their
+    speeds interpolated linearly or, with ``P[o+3]`` = 1, held (zero-order hold).  An
+    external input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its
+    host: positions X (row 0, 2) and speeds V with their rates A (rows 1, 3: [V, A]) at the
+    instant ``P[o+4]``, x = X + V·τ + A·τ²/2, v = V + A·τ, τ = t − ``P[o+4]``.
     """
     kind = int(P[o])
     if kind == REF_CONSTANT:
@@ -45,11 +49,19 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
         c = math.cos(w * t)
         return (P[o + 1] * (1.0 - c) / w, P[o + 1] * s, P[o + 2] * (1.0 - c) / w,
                 P[o + 2] * s)
-    dt = P[o + 4]
     to = int(P[o + 5])
+    if kind == REF_INPUT:
+        tau = t - P[o + 4]
+        return (T[to] + (T[to + 2] + 0.5 * T[to + 3] * tau) * tau, T[to + 2] + T[to + 3] * tau,
+                T[to + 4] + (T[to + 6] + 0.5 * T[to + 7] * tau) * tau,
+                T[to + 6] + T[to + 7] * tau)
+    dt = P[o + 4]
     n = int(P[o + 6])
+    hold = P[o + 3] > 0.5
     u = t / dt
-    k = int(math.floor(u))
+    # held speeds jump at the samples: an instant within 1e-9 of a sample step belongs to the
+    # new one (t = k·dt computed in floating point may land a hair before it)
+    k = int(math.floor(u + 1e-9)) if hold else int(math.floor(u))
     if k >= n - 1:
         k = n - 2
         u = float(n - 1)
@@ -60,12 +72,12 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
     tau = f * dt
     v0 = T[to + n + k]
     v1 = T[to + n + k + 1]
-    slope = (v1 - v0) / dt
+    slope = 0.0 if hold else (v1 - v0) / dt
     x_t = T[to + k] + v0 * tau + 0.5 * slope * tau * tau
     v_t = v0 + slope * tau
     v0 = T[to + 3 * n + k]
     v1 = T[to + 3 * n + k + 1]
-    slope = (v1 - v0) / dt
+    slope = 0.0 if hold else (v1 - v0) / dt
     x_n = T[to + 2 * n + k] + v0 * tau + 0.5 * slope * tau * tau
     v_n = v0 + slope * tau
     return x_t, v_t, x_n, v_n
@@ -73,13 +85,31 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
 
 @dataclass(frozen=True)
 class ConstantSpeed:
-    """Constant table speed [m/s] (and nut speed for the DDFS) after a linear start ramp."""
+    """Constant table speed (and nut speed for the DDFS) after a linear start ramp.
+
+    Parameters
+    ----------
+    table_speed : float
+        Commanded table speed [m/s] (Wang2021 Sect. 5.2: 1.55e-3 for Fig. 6).
+    nut_speed : float, default 0
+        Commanded speed of the nut driven by the hollow motor [m/s] (DDFS only; v_n of
+        Wang2021 Fig. 7); the screw turns at the sum of both.
+    ramp_time : float, default 0.1
+        Duration of the linear ramp from rest to the commanded speeds [s].
+    """
 
     table_speed: float
     nut_speed: float = 0.0
     ramp_time: float = 0.1  # [s]
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
+        """The profile as (parameter slots, data table) for the reference kernel.
+
+        Returns
+        -------
+        tuple of (dict, numpy.ndarray)
+            Slot index → value [SI] of the profile's parameter block, and its (empty) table.
+        """
         _finite("table_speed", self.table_speed, "m/s")
         _finite("nut_speed", self.nut_speed, "m/s")
         if not (self.ramp_time >= 0.0 and math.isfinite(self.ramp_time)):
@@ -90,10 +120,19 @@ class ConstantSpeed:
 
 @dataclass(frozen=True)
 class SineSpeed:
-    """Sinusoidal speeds v(t) = A·sin(2πft): table amplitude [m/s], nut amplitude [m/s].
+    """Sinusoidal speeds v(t) = A·sin(2πft) of the table and the nut.
 
     The screw's amplitude is their sum (Wang2021 Figs. 9–10: v_sp = v_tp + v_np).  The paper
     does not state the frequency; 0.2 Hz is our default (see docs/model.md).
+
+    Parameters
+    ----------
+    table_amplitude : float
+        Amplitude of the table speed [m/s].
+    nut_amplitude : float, default 0
+        Amplitude of the nut speed driven by the hollow motor [m/s] (DDFS only).
+    frequency : float, default 0.2
+        Frequency f of both sines [Hz].
     """
 
     table_amplitude: float
@@ -101,6 +140,13 @@ class SineSpeed:
     frequency: float = 0.2  # [Hz]
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
+        """The profile as (parameter slots, data table) for the reference kernel.
+
+        Returns
+        -------
+        tuple of (dict, numpy.ndarray)
+            Slot index → value [SI] of the profile's parameter block, and its (empty) table.
+        """
         _finite("table_amplitude", self.table_amplitude, "m/s")
         _finite("nut_amplitude", self.nut_amplitude, "m/s")
         if not (self.frequency > 0.0 and math.isfinite(self.frequency)):
@@ -111,16 +157,38 @@ class SineSpeed:
 
 @dataclass(frozen=True)
 class SampledSpeed:
-    """Table and nut speeds [m/s] sampled on a uniform time grid starting at 0 [s].
+    """Table and nut speeds sampled on a uniform time grid starting at 0.
 
-    Speeds are interpolated linearly; positions are their exact integrals.
+    Speeds are interpolated linearly or, with ``hold``, each held until the next sample
+    (zero-order hold, as a co-simulation FMU holds its inputs over a communication step);
+    positions are their exact integrals.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Uniform, increasing sample instants from 0 [s].
+    table_speed : numpy.ndarray
+        Commanded table speed at each instant [m/s].
+    nut_speed : numpy.ndarray or None, default None
+        Commanded nut speed at each instant [m/s] (DDFS; None: zero).
+    hold : bool, default False
+        Hold each sample until the next (zero-order hold) instead of interpolating.
     """
 
     time: np.ndarray
     table_speed: np.ndarray
     nut_speed: np.ndarray | None = None
+    hold: bool = False
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
+        """The profile as (parameter slots, data table) for the reference kernel.
+
+        Returns
+        -------
+        tuple of (dict, numpy.ndarray)
+            Slot index → value [SI] of the profile's parameter block, and the table of
+            sample rows (time [s], table speed [m/s], nut speed [m/s], positions [m]).
+        """
         t = np.asarray(self.time, dtype=float)
         vt = np.asarray(self.table_speed, dtype=float)
         vn = np.zeros_like(vt) if self.nut_speed is None else np.asarray(self.nut_speed, float)
@@ -137,14 +205,31 @@ class SampledSpeed:
         for j, v in enumerate((vt, vn)):
             table[2 * j + 1] = v
             table[2 * j, 0] = 0.0
-            table[2 * j, 1:] = np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)
-        return ({0: REF_SAMPLED, 4: float(dt.mean())}, table)
+            table[2 * j, 1:] = np.cumsum((v[:-1] if self.hold else 0.5 * (v[1:] + v[:-1])) * dt)
+        return ({0: REF_SAMPLED, 3: 1.0 if self.hold else 0.0, 4: float(dt.mean())}, table)
 
     @classmethod
     def from_function(cls, table_speed: Callable[[np.ndarray], np.ndarray], duration: float,
                       nut_speed: Callable[[np.ndarray], np.ndarray] | None = None,
                       interval: float = 1e-4) -> SampledSpeed:
-        """Sample user functions of time [s] → speed [m/s] on a grid of ``interval`` [s]."""
+        """Sample user functions of time on a uniform grid.
+
+        Parameters
+        ----------
+        table_speed : callable
+            Time [s] (array) → commanded table speed [m/s].
+        duration : float
+            Time to cover [s] (the grid runs a little beyond it).
+        nut_speed : callable or None, default None
+            Time [s] (array) → commanded nut speed [m/s] (DDFS; None: zero).
+        interval : float, default 1e-4
+            Grid spacing [s].
+
+        Returns
+        -------
+        SampledSpeed
+            The sampled profile.
+        """
         n = int(math.ceil(duration / interval)) + 2
         t = np.arange(n) * interval
         vt = np.asarray(table_speed(t), dtype=float) * np.ones_like(t)

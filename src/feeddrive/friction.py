@@ -4,7 +4,8 @@ The LuGre force itself is :mod:`feeddrive.model.friction.lugre` (the engine's); 
 is its array API and the analytic indicators.  All functions use the linear (force) form of
 Table 1: force in N, speed in m/s, bristle
 deflection z in m.  The screw and hollow shafts are rotary sites; the paper divides their
-torques by H = p_h/2π, and :func:`torque_from_force` / :func:`rotary_speed` undo that.
+torques by H = p_h/2π (:attr:`feeddrive.parameters.BallScrew.transmission_ratio`): T = H·F,
+ω = v/H.
 
 The scalar kernels (``*_kernel``) are numba-compiled and shared with the simulation engine,
 so the physics exists once.  ``p`` is the float64[10] vector of
@@ -68,7 +69,7 @@ def bristle_step_kernel(z: float, v: float, h: float, p: np.ndarray) -> float:
     if v == 0.0:
         return z
     g = stribeck_magnitude_kernel(v, p)
-    lam = p[8] * abs(v) / g
+    lam = p[lugre.SIGMA0] * abs(v) / g
     z_ss = v / lam
     return z_ss + (z - z_ss) * math.exp(-lam * h)
 
@@ -129,34 +130,6 @@ def bristle_bound(params: LuGreParameters) -> float:
     """max(F_s)/σ0 [m]: |z| never leaves this bound once inside (Canudas de Wit 1995)."""
     static = max(params.positive.static_force, params.negative.static_force)
     return static / params.bristle_stiffness
-
-
-# ---------------------------------------------------------------- rotary <-> linear (÷ H)
-
-
-def transmission_ratio(lead: float) -> float:
-    """H = p_h/2π [m/rad].  Wang2021 Eq. (8)."""
-    return lead / (2.0 * math.pi)
-
-
-def torque_from_force(force: object, lead: float) -> np.ndarray:
-    """Shaft torque [N m] from Table 1's linear-equivalent force [N]: T = H·F."""
-    return np.asarray(force, dtype=float) * transmission_ratio(lead)
-
-
-def force_from_torque(torque: object, lead: float) -> np.ndarray:
-    """Linear-equivalent force [N] from shaft torque [N m]: F = T/H (as Table 1 does)."""
-    return np.asarray(torque, dtype=float) / transmission_ratio(lead)
-
-
-def rotary_speed(speed: object, lead: float) -> np.ndarray:
-    """Shaft speed [rad/s] from linear-equivalent speed [m/s]: ω = v/H."""
-    return np.asarray(speed, dtype=float) / transmission_ratio(lead)
-
-
-def linear_speed(rotary: object, lead: float) -> np.ndarray:
-    """Linear-equivalent speed [m/s] from shaft speed [rad/s]: v = H·ω."""
-    return np.asarray(rotary, dtype=float) * transmission_ratio(lead)
 
 
 # ---------------------------------------------------------------- analytic indicators

@@ -88,13 +88,15 @@ class ChunkWriter:
     ``path`` (a run stopped by Ctrl-C keeps the samples written so far, complete rows),
     :meth:`abort` removes it (a write that failed: nothing partial under ``path``)."""
 
-    def __init__(self, path: str | Path, model: Any, system: Any) -> None:
+    def __init__(self, path: str | Path, model: Any, system: Any, run_type: Any) -> None:
+        """``run_type``: :class:`feeddrive.result.Run` (passed in, so that this writer does not
+        import the results layer that imports it)."""
         self.path = Path(path)
         ext = self.path.suffix.lower()
         if ext not in (".parquet", ".csv"):
             raise ParameterError("output", str(self.path), "a streamed run is written as "
                                  ".parquet or .csv (.nc and .mat hold the whole run)")
-        self.ext, self.model, self.system = ext, model, system
+        self.ext, self.model, self.system, self.run_type = ext, model, system, run_type
         self._writer: Any = None
         self._atomic: Any = None
         self._first = True
@@ -103,9 +105,7 @@ class ChunkWriter:
         self._tmp = self._atomic.__enter__()
 
     def _frame(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> pd.DataFrame:
-        from .result import Run
-
-        run = Run(t, y, aux, self.model, self.system, None, {})  # type: ignore[arg-type]
+        run = self.run_type(t, y, aux, self.model, self.system, None, {})
         cols = {"time [s]": t}
         for name, (unit, _) in run.meta.items():
             eng_unit, factor = ENGINEERING.get(unit, (unit, 1.0))

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
+from . import protocol
 from .control import ConstantSpeed
 from .model.assemble import Model
 from .model.loops import INJ_CURRENT, INJ_SPEED
@@ -421,11 +422,14 @@ def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
     return float(ev[k].real), float(abs(ev[k].imag) / (2 * np.pi))
 
 
-def stability_band(system: DriveSystem, nut_speed: float = 0.0, *, low: float = 1e-5,
-                   high: float = 5e-3, points: int = 40, tolerance: float = 1e-6,
+def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
+                   low: float = protocol.LINEAR_SPEED_RANGE[0],
+                   high: float = protocol.LINEAR_SPEED_RANGE[1],
+                   points: int = protocol.LINEAR_POINTS, tolerance: float = 1e-6,
                    progress: Any = None) -> StabilityBand:
-    """Scan table speeds from ``low`` to ``high`` [m/s] (log-spaced), then bisect every
-    stable/unstable change to ``tolerance`` [m/s]."""
+    """Scan table speeds from ``low`` to ``high`` [m/s] (log-spaced; default
+    ``feeddrive.protocol.LINEAR_SPEED_RANGE``), then bisect every stable/unstable change to
+    ``tolerance`` [m/s]."""
     if not (0 < low < high):
         raise ParameterError("low", low * 1e3, f"expected 0 < low < high = {high * 1e3} [mm/s]")
     speeds = np.geomspace(low, high, points)

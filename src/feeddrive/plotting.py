@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import matplotlib
 
@@ -14,33 +14,29 @@ if TYPE_CHECKING:
     from .result import Result
 
 
-def plot_result(result: Result, path: str | Path) -> Path:
-    """Table speed against its command, motor speeds and friction forces of one run."""
-    t = result.time
-    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
-    ax = axes[0]
-    ax.plot(t, 1e3 * result["table_speed"], lw=0.8, label="table")
-    ax.plot(t, 1e3 * result["table_speed_reference"], "k--", lw=0.8, label="command")
-    ax.set_ylabel("table speed [mm/s]")
-    ax.legend(loc="best")
-    ax = axes[1]
-    if "screw_linear_speed" in result.dataset:
-        ax.plot(t, 1e3 * result["screw_linear_speed"], lw=0.8, label="screw × H")
-        ax.plot(t, 1e3 * result["nut_linear_speed"], lw=0.8, label="nut × H")
-        ax.set_ylabel("motor speed [mm/s]")
-    else:
-        ax.plot(t, result["motor_current"], lw=0.8, label="motor current")
-        ax.set_ylabel("current [A]")
-    ax.legend(loc="best")
-    ax = axes[2]
-    for name in [n for n in result.dataset.data_vars if str(n).endswith("_friction")]:
-        ax.plot(t, result[str(name)], lw=0.8, label=str(name).replace("_", " "))
-    ax.set_ylabel("friction [N]")
-    ax.set_xlabel("time [s]")
-    ax.legend(loc="best")
+def run_title(result: Result) -> str:
+    """What was run, for the figure title: drive, profile, speed, position, duration, set."""
     attrs = result.dataset.attrs
-    fig.suptitle(f"{attrs['drive'].upper()} — {attrs['parameter_set']}")
-    fig.tight_layout()
+    kind = str(attrs.get("profile", "")).split("(")[0] or "profile"
+    what = {"ConstantSpeed": "constant", "SineSpeed": "sine amplitude",
+            "SampledSpeed": "sampled profile, top speed"}.get(kind, kind)
+    drive = str(attrs["drive"])
+    where = ("" if drive == "linear-motor"
+             else f", position {1e3 * float(attrs.get('table_start_position_m', 0.0)):g} mm")
+    return (f"{drive.upper()}, {what} {1e3 * abs(result.command_speed):.4g} mm/s{where}, "
+            f"{float(result.time[-1]):.4g} s — {attrs['parameter_set']}")
+
+
+def _legend_above(ax: Any) -> None:
+    """The legend in a row above its panel: inside, it covered the trace (issue 24 item 2)."""
+    n = len(ax.get_legend_handles_labels()[0])
+    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=max(n, 1), fontsize=8,
+              frameon=False, borderaxespad=0.2)
+
+
+def plot_result(result: Result, path: str | Path, title: str | None = None) -> Path:
+    """Write :func:`result_figure` of one run to ``path`` (PNG)."""
+    fig = result_figure(result, title)
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     from .outputs import atomic_path
@@ -49,3 +45,32 @@ def plot_result(result: Result, path: str | Path) -> Path:
         fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return p
+
+
+def result_figure(result: Result, title: str | None = None) -> Any:
+    """Table speed against its command, motor speeds and friction forces of one run;
+    ``title`` defaults to :func:`run_title`."""
+    t = result.time
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8.6), sharex=True, layout="constrained")
+    ax = axes[0]
+    ax.plot(t, 1e3 * result["table_speed"], lw=0.8, label="table")
+    ax.plot(t, 1e3 * result["table_speed_reference"], "k--", lw=0.8, label="command")
+    ax.set_ylabel("table speed [mm/s]")
+    _legend_above(ax)
+    ax = axes[1]
+    if "screw_linear_speed" in result.dataset:
+        ax.plot(t, 1e3 * result["screw_linear_speed"], lw=0.8, label="screw × H")
+        ax.plot(t, 1e3 * result["nut_linear_speed"], lw=0.8, label="nut × H")
+        ax.set_ylabel("motor speed [mm/s]")
+    else:
+        ax.plot(t, result["motor_current"], lw=0.8, label="motor current")
+        ax.set_ylabel("current [A]")
+    _legend_above(ax)
+    ax = axes[2]
+    for name in [n for n in result.dataset.data_vars if str(n).endswith("_friction")]:
+        ax.plot(t, result[str(name)], lw=0.8, label=str(name).replace("_", " "))
+    ax.set_ylabel("friction [N]")
+    ax.set_xlabel("time [s]")
+    _legend_above(ax)
+    fig.suptitle(title or run_title(result), fontsize=10)
+    return fig

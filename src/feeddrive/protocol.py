@@ -14,6 +14,11 @@ STAIRCASE_COARSE_STEP = 0.1e-3  # [m/s] first staircase of the step-down search
 RESOLUTION = 0.01e-3  # [m/s] Wang2021 Sect. 6: the speed was stepped down by 0.01 mm/s
 TRIAL_DURATION = 12.0  # [s] first trial length (doubled until the verdict is decided)
 TRIAL_MAX_DURATION = 240.0  # [s] longest trial; still undecided then: 'undecided'
+# the linear stability scan of steady sliding (`feeddrive stability`, the sweep's
+# `linear-band` quantity, the explorer, linear.stability_band): one default range (issue 24
+# item 8: the command scanned 0.01–5 mm/s and the sweep 0.02–3.02 mm/s)
+LINEAR_SPEED_RANGE = (0.01e-3, 5e-3)  # [m/s] log-spaced scan, edges bisected
+LINEAR_POINTS = 40  # [-] scan points
 
 
 def describe(start: str) -> str:

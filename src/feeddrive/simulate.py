@@ -27,14 +27,24 @@ DRIVES = drive_names()
 class DriveSystem:
     """A drive to simulate: parameters, topology, where the table starts, and how.
 
-    ``drive``: a registered topology — ``"cdfs"``, ``"ddfs"`` (Wang2021's ball-screw drives)
-    or ``"linear-motor"`` (a direct-drive table; needs ``parameters.linear_motor``).
-    ``table_position`` [m] is the
-    distance a of the nut from the motor-side screw support (Wang2021 Table 3: 0.2 … 0.6 m;
-    mid-screw 0.4 m).  For the CDFS the hollow motor is held: ``nut_hold = "locked"`` freezes
-    the nut's states (the default), ``"servo"`` keeps the hollow motor's loop at zero command.
-    ``initial_state`` sets states by name (SI; e.g. ``{"table_speed": 5e-3}``), all others
-    start at 0; ``load`` adds a load-force record on the table (:class:`LoadProfile`).
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The parameter set (SI).
+    drive : str, default "ddfs"
+        A registered topology — ``"cdfs"``, ``"ddfs"`` (Wang2021's ball-screw drives) or
+        ``"linear-motor"`` (a direct-drive table; needs ``parameters.linear_motor``).
+    table_position : float, default 0.4
+        Distance a of the nut from the motor-side screw support [m] (Wang2021 Table 3:
+        0.2 … 0.6 m; mid-screw 0.4 m).
+    nut_hold : {"locked", "servo"}, default "locked"
+        For the CDFS the hollow motor is held: ``"locked"`` freezes the nut's states,
+        ``"servo"`` keeps the hollow motor's loop at zero command.
+    initial_state : mapping of str to float, default {}
+        States set by name, in each state's SI unit [unit of the state] (e.g.
+        ``{"table_speed": 5e-3}``); all others start at 0.
+    load : LoadProfile or None, default None
+        A load-force record on the table.
     """
 
     parameters: DriveParameters
@@ -54,11 +64,35 @@ class DriveSystem:
                                      "in the state's SI unit")
 
     def model(self, profile: Profile) -> Model:
-        """The assembled model of this drive following ``profile``."""
+        """The assembled model of this drive following ``profile``.
+
+        Parameters
+        ----------
+        profile : ConstantSpeed, SineSpeed or SampledSpeed
+            The reference the loops follow.
+
+        Returns
+        -------
+        Model
+            Names, units, packed parameters and the compiled module (cached per structure).
+        """
         return assemble(self.parameters, self.drive, self.table_position, self.nut_hold,
                         profile, self.load)
 
     def initial_vector(self, model: Model) -> np.ndarray:
+        """The initial state vector of ``model``: zeros except the states named in
+        ``initial_state``.
+
+        Parameters
+        ----------
+        model : Model
+            The assembled model (its state order).
+
+        Returns
+        -------
+        numpy.ndarray
+            One value per state, each in that state's SI unit [unit of the state].
+        """
         y0 = np.zeros(len(model.state_names))
         for name, value in self.initial_state.items():
             y0[model.index(name)] = float(value)
@@ -76,22 +110,36 @@ _DENSE_MODES = {"auto": (switching.MODE_AUTO, 1), "rodas4": (switching.MODE_RODA
 class SolverOptions:
     """Integrator settings, echoed in the result.
 
-    ``method``:
+    Parameters
+    ----------
+    method : str, default "dopri5"
+        * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps
+          at most ``max_step``, default 1 ms, and the output interval); the engine v1
+          behaviour, kept bit for bit;
+        * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
+          automatically; dense output (steps not capped by the output interval);
+        * ``"rodas4"``: the Rosenbrock method RODAS4 throughout, dense output;
+        * ``"dopri5-dense"``: DOPRI5 throughout with dense output;
+        * ``"dopri5-fixed"``, ``"rodas4-fixed"``: fixed step ``fixed_step`` (order checks).
 
-    * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps at
-      most ``max_step``, default 1 ms, and the output interval); the engine v1 behaviour,
-      kept bit for bit;
-    * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
-      automatically; dense output (steps not capped by the output interval);
-    * ``"rodas4"``: the Rosenbrock method RODAS4 throughout, dense output;
-    * ``"dopri5-dense"``: DOPRI5 throughout with dense output;
-    * ``"dopri5-fixed"``, ``"rodas4-fixed"``: fixed step ``fixed_step`` (order checks).
-
-    See :mod:`feeddrive.solvers.switching`.  ``output_interval`` [s] is the spacing of the
-    recorded samples (for ``dopri5`` also the breakpoint spacing under continuous control).
-    ``max_step`` [s]: largest step (``None``: 1 ms for ``dopri5``, unlimited for the
-    dense-output methods).  ``position_tolerance`` [m] and ``speed_tolerance`` [m/s]
-    are absolute error targets (angles scaled by H), combined with ``rtol`` on speeds.
+        See :mod:`feeddrive.solvers.switching`.
+    rtol : float, default 1e-6
+        Relative tolerance on speeds and currents [-].
+    position_tolerance : float, default 1e-10
+        Absolute error target of positions [m] (angles scaled by H).
+    speed_tolerance : float, default 1e-8
+        Absolute error target of speeds [m/s] (rotary speeds scaled by H).
+    current_tolerance : float, default 1e-6
+        Absolute error target of motor currents [A].
+    output_interval : float, default 1e-3
+        Spacing of the recorded samples [s] (for ``dopri5`` also the breakpoint spacing under
+        continuous control).
+    max_step : float or None, default None
+        Largest step [s] (None: 1 ms for ``dopri5``, unlimited for the dense-output methods).
+    fixed_step : float, default 1e-5
+        Step of the fixed-step methods [s].
+    max_steps : int, default 50 000 000
+        A run that would need more steps is refused before it starts.
     """
 
     method: str = "dopri5"
@@ -119,7 +167,8 @@ class SolverOptions:
     @property
     def largest_step(self) -> float:
         """``max_step``, or its default: 1 ms for ``dopri5`` (and its fixed-step variant),
-        unlimited for the dense-output methods [s]."""
+        unlimited for the dense-output methods [s].
+        """
         if self.max_step is not None:
             return self.max_step
         return math.inf if self.method in _DENSE_MODES else 1e-3
@@ -144,13 +193,28 @@ class Sampling:
 def sampling(params: DriveParameters, output_interval: float) -> Sampling:
     c = params.controller
     periods = [c.position_period, c.velocity_period, c.current_period]
-    nonzero = [p for p in periods if p > 0]
+    # sampled parts (model/parts/) with schedules of their own: (field, period [s]) pairs
+    schedules = [(f"{name}.{field}", period) for name, section in params.sections
+                 for field, period in getattr(section, "schedule", lambda: ())()]
+    if any(p > 0 for _, p in schedules) and not any(p > 0 for p in periods):
+        field, period = next(fp for fp in schedules if fp[1] > 0)
+        raise ParameterError(field, period, "a sampled part needs sampled loops (set "
+                             "controller.current_period > 0 [s]): the breakpoints of "
+                             "continuous loops assume nothing jumps there")
+    nonzero = [p for p in periods if p > 0] + [p for _, p in schedules if p > 0]
     if (c.encoder_counts > 0 or c.grating_resolution > 0) and not (
             c.position_period > 0 and c.velocity_period > 0):
         raise ParameterError("controller.encoder_counts", c.encoder_counts,
                              "quantisation needs sampled position and velocity loops "
                              "(set controller.position_period and velocity_period > 0 [s])")
     base = min(nonzero) if nonzero else output_interval
+    named = [(f"controller.{k}", p) for k, p in zip(
+        ("position_period", "velocity_period", "current_period"), periods, strict=True)]
+    for field, period in named + schedules:  # every schedule lands on the breakpoint grid
+        if period > 0 and abs(period / base - round(period / base)) > 1e-9 * period / base:
+            raise ParameterError(field, period, f"expected a multiple of the fastest sample "
+                                 f"period {base:g} [s] (each schedule is an exact event "
+                                 "time on one breakpoint grid)")
     n = [int(round(p / base)) if p > 0 else 0 for p in periods]
     out_every = max(1, int(round(output_interval / base)))
     if abs(out_every * base - output_interval) > 1e-9 * output_interval:
@@ -220,17 +284,40 @@ KEEP_STREAMED = 60.0  # [s] of a streamed run kept in memory (its end) for the s
 def simulate(system: DriveSystem, profile: Profile, duration: float, *,
              options: SolverOptions | None = None, output: str | Path | None = None,
              progress: Callable[[float, float], None] | None = None) -> Result:
-    """Simulate ``system`` following ``profile`` for ``duration`` [s] from rest.
-
-    Returns a :class:`Result` (named signals, SI units; the xarray Dataset is built when
-    read).  Raises :class:`SimulationError` if the integrator fails (never returns NaN
-    silently) and :class:`SimulationInterrupted` on Ctrl-C.
+    """Simulate ``system`` following ``profile`` for ``duration`` from rest.
 
     ``output`` (``.parquet`` or ``.csv``): every sample is written to that file as it is
     computed, in chunks, and the Result keeps only the last :data:`KEEP_STREAMED` seconds, so
     memory does not grow with the duration.  ``progress(t, t_end)`` is called after each chunk
     of a long run (``dopri5``: about :data:`CHUNK_WALL_TIME` of work; the dense-output methods:
     :data:`DENSE_CHUNK` simulated seconds); Ctrl-C acts between chunks.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    profile : ConstantSpeed, SineSpeed or SampledSpeed
+        The reference the loops follow.
+    duration : float
+        Simulated time [s].
+    options : SolverOptions or None, default None
+        Integrator settings (None: the defaults).
+    output : str, pathlib.Path or None, default None
+        Stream every sample to this ``.parquet`` or ``.csv`` file.
+    progress : callable or None, default None
+        Called as ``progress(t, t_end)`` [s] after each chunk.
+
+    Returns
+    -------
+    Result
+        Named signals, SI units; the xarray Dataset is built when read.
+
+    Raises
+    ------
+    SimulationError
+        If the integrator fails (a result is never NaN silently).
+    SimulationInterrupted
+        On Ctrl-C, holding the part of the run that was finished.
     """
     return Simulation(system, profile, options).run(duration, output=output, progress=progress)
 
@@ -244,6 +331,15 @@ class Simulation:
     dense-output methods continue from the last multiple of :data:`DENSE_CHUNK`).
     The creep verdict uses it to lengthen an undecided trial without repeating it
     (:func:`feeddrive.analysis.critical.decide`).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    profile : ConstantSpeed, SineSpeed or SampledSpeed
+        The reference the loops follow.
+    options : SolverOptions or None, default None
+        Integrator settings (None: the defaults).
     """
 
     def __init__(self, system: DriveSystem, profile: Profile,
@@ -262,7 +358,22 @@ class Simulation:
 
     def run(self, duration: float, *, output: str | Path | None = None,
             progress: Callable[[float, float], None] | None = None) -> Result:
-        """The Result over [0, ``duration``] [s] (see the class docstring)."""
+        """The Result over [0, ``duration``], continuing the previous call where possible.
+
+        Parameters
+        ----------
+        duration : float
+            End of the run [s].
+        output : str, pathlib.Path or None, default None
+            Stream every sample to this ``.parquet`` or ``.csv`` file (the run then starts anew).
+        progress : callable or None, default None
+            Called as ``progress(t, t_end)`` [s] after each chunk.
+
+        Returns
+        -------
+        Result
+            Bit-identical to ``simulate(system, profile, duration)``.
+        """
         if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
             raise ParameterError("duration", duration, "expected a finite time > 0 [s]")
         options, grid, model = self.options, self.grid, self.model
@@ -397,7 +508,7 @@ class _Chunks:
         sim, grid = self.sim, self.sim.grid
         every = grid.out_every
         t_end = n_break * grid.base
-        writer = ChunkWriter(output, sim.model, sim.system) if output is not None else None
+        writer = ChunkWriter(output, sim.model, sim.system, Run) if output is not None else None
         kept = sum(p[0].size for p in self.parts)
         keep = int(KEEP_STREAMED / (every * grid.base)) + 1
         tail: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []

@@ -11,6 +11,7 @@ from matplotlib.figure import Figure
 
 from . import units
 from .friction import negative_slope_band, steady_friction
+from .model.friction import friction_law
 from .parameters import LuGreParameters
 
 _MM_PER_S = units.MM_PER_S
@@ -25,7 +26,12 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
     negative-slope band is shaded and its zero-slope speed marked.  ``speed_max`` [m/s]
     defaults to three times the larger zero-slope speed (or 5 v_s without a band).
     """
-    bands = {name: negative_slope_band(params.branch(name)) for name in ("positive", "negative")}
+    from .site_indicators import STRIBECK_CURVE_LAWS, steady_slope
+
+    # the site's own law: a Dahl or frictionless site has no Stribeck curve (issue 24 item 7)
+    stribeck = params.law in STRIBECK_CURVE_LAWS
+    bands = {name: (negative_slope_band(params.branch(name)) if stribeck
+                    else steady_slope(params, name).band) for name in ("positive", "negative")}
     if speed_max is None:
         edges = [b.upper for b in bands.values() if b is not None]
         vs = max(params.positive.stribeck_velocity, params.negative.stribeck_velocity)
@@ -37,13 +43,14 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
     ax = fig.add_subplot()
     styles = {"positive": ("C0", 1.0), "negative": ("C3", -1.0)}
     for name, (colour, sign) in styles.items():
-        force = np.abs(steady_friction(sign * speed, params))
+        force = np.abs(steady_friction(sign * speed, params) if stribeck
+                       else friction_law(params.law).steady_force(sign * speed, params))
         ax.plot(speed / _MM_PER_S, force, color=colour, label=f"{name} branch")
         band = bands[name]
         if band is not None:
             ax.axvspan(band.lower / _MM_PER_S, band.upper / _MM_PER_S, color=colour, alpha=0.08)
             v0 = band.zero_slope_speed
-            f0 = float(np.abs(steady_friction(sign * v0, params)))
+            f0 = float(np.interp(v0, speed, force))
             ax.axvline(v0 / _MM_PER_S, color=colour, linestyle="--", linewidth=0.8)
             ax.plot([v0 / _MM_PER_S], [f0], "o", color=colour,
                     label=f"zero slope, {name}: {v0 / _MM_PER_S:.2f} mm/s")

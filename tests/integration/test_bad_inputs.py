@@ -14,7 +14,6 @@ import hashlib
 import os
 import subprocess
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -116,10 +115,8 @@ def test_every_command_refuses_every_bad_file(corpus: dict[str, Path], tmp_path:
                                               command: str, bad: str) -> None:
     before = _digest(corpus)
     path = corpus.get(bad, corpus["empty.csv"].parent / bad)
-    started = time.perf_counter()
     result = _invoke(COMMANDS[command](str(path), tmp_path))
     _one_line_error(result, shown(path.name))
-    assert time.perf_counter() - started < 30.0
     assert _digest(corpus) == before
     assert not (tmp_path / "r").exists() and not (tmp_path / "m.toml").exists()
 
@@ -176,11 +173,21 @@ def test_unusable_outputs_are_refused_before_any_work(inputs: dict[str, Path], t
         else:
             target = target.removesuffix(ext)
     before = _digest(inputs)
-    started = time.perf_counter()
-    result = _invoke(WRITERS[writer](inputs, target))
+    # refused before the simulation or fit: exit status 2 is "refused before any work"
+    # (README), and no simulation starts (issue 24 item 14: was a 5-s wall-clock bound)
+    import importlib
+
+    sim_module = importlib.import_module("feeddrive.simulate")
+
+    def never(*_: Any, **__: Any) -> Any:
+        raise AssertionError("simulated although refused")
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(sim_module.Simulation, "run", never)
+        mp.setattr(sim_module, "simulate", never)
+        result = _invoke(WRITERS[writer](inputs, target))
     line = _one_line_error(result, shown(target))
     assert result.exit_code == 2, line
-    assert time.perf_counter() - started < 5.0  # refused before the simulation or fit
     assert _digest(inputs) == before
     assert not (tmp_path / "no").exists()
 
@@ -242,10 +249,8 @@ def test_memory_bounded_in_a_subprocess(corpus: dict[str, Path], case: str) -> N
             "deep-toml": ["params", "check", str(corpus["deep.toml"])],
             "huge-duration": ["simulate", "--table-speed", "1", "--duration", "1e9"]}[case]
     env = {**os.environ, "COLUMNS": "200"}
-    started = time.perf_counter()
     r = subprocess.run([sys.executable, "-c", _LIMITED.format(limit=LIMIT), *args],
-                       capture_output=True, text=True, timeout=120, env=env)
-    assert time.perf_counter() - started < 60
+                       capture_output=True, text=True, timeout=600, env=env)  # a hang guard
     assert r.returncode != 0
     assert "Traceback" not in r.stderr and "MemoryError" not in r.stderr, r.stderr[-2000:]
     lines = r.stderr.strip().splitlines()

@@ -69,26 +69,33 @@ def test_interrupt_while_importing_exits_130_without_traceback(
     assert err.strip() == "interrupted"
 
 
-def test_ctrl_c_on_reproduce_stops_within_a_second(tmp_path: Path,
-                                                   interruptible: dict[str, Any]) -> None:
+def test_ctrl_c_on_reproduce_stops_the_work(tmp_path: Path,
+                                            interruptible: dict[str, Any]) -> None:
     """Issue 12 item 7: Ctrl-C on `reproduce` took ~53 s to act and printed nothing.  Now the
-    worker pool is terminated at once, the message says what was kept, exit status 130."""
+    worker pool is terminated at once, the message says what was kept, exit status 130.
+    Issue 24 item 14: the test asserted < 2 s of wall time and failed on a busy machine; it
+    now counts the work done after the signal: no study is started or stored after it
+    (one running at the signal may land), instead of timing it."""
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "feeddrive", "reproduce", "--out", str(out),
                              "--no-study", "--workers", "1"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             **interruptible)
-    deadline = time.monotonic() + 120
+    deadline = time.monotonic() + 600  # a hang guard only: the first study takes seconds
     while not list((out / "data").glob("*.json")):  # wait until the study is under way
         assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() < deadline
+        if time.monotonic() > deadline:
+            proc.kill()
+            pytest.fail("reproduce stored no study in 600 s (hung)")
         time.sleep(0.05)
+    at_signal = len(list((out / "data").glob("*.json")))
     proc.send_signal(signal.SIGINT)
-    sent = time.monotonic()
-    stdout, stderr = proc.communicate(timeout=30)
-    elapsed = time.monotonic() - sent
+    stdout, stderr = proc.communicate(timeout=300)  # a hang guard, not a speed bound
     assert proc.returncode == 130, (stdout, stderr)
-    assert elapsed < 2.0, elapsed  # the issue's target: ~1 s (slack for a loaded CI machine)
+    # --workers 1: at most the one study running at the signal is stored after it, and the
+    # report (written after every study) is never reached
+    assert len(list((out / "data").glob("*.json"))) <= at_signal + 1
+    assert not (out / "report.md").exists()
     assert "Traceback" not in stdout + stderr
     assert f"kept in {out / 'data'}" in stderr.replace("\n", "")
     assert list((out / "data").glob("*.json"))
@@ -311,9 +318,18 @@ def test_calibration_reached_within_tolerance() -> None:
 def test_a_run_beyond_the_step_limit_is_refused_before_it_starts() -> None:
     """Issue 12 item 9: `simulate --duration 100000` reached 12.2 GB and ended in a
     SimulationError traceback naming options.max_steps, which the CLI did not offer."""
-    started = time.perf_counter()
-    line = one_line_error(run("simulate", "--table-speed", "1", "--duration", "100000"))
-    assert time.perf_counter() - started < 5.0  # refused up front, not after 50 M steps
+    import importlib
+
+    sim_module = importlib.import_module("feeddrive.simulate")
+
+    def never(*_: Any, **__: Any) -> Any:
+        raise AssertionError("simulated although refused")
+
+    # refused up front, not after 50 M steps: no simulation starts (issue 24 item 14: was a
+    # wall-clock bound)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(sim_module, "simulate", never)
+        line = one_line_error(run("simulate", "--table-speed", "1", "--duration", "100000"))
     assert "--duration = 100000.0" in line and "--max-steps" in line
     assert "expected ≤ 50000 [s]" in line
 
@@ -535,6 +551,7 @@ README_COMMANDS_BAD_FILE = [
     ["identify", "static", "{bad}"],
     ["identify", "dynamic", "{bad}"],
     ["analyze", "{bad}"],
+    ["export", "fmu", "--drive", "ddfs", "--out", "{bad}.fmu", "--params", "{bad}"],
 ]
 README_COMMANDS_BAD_VALUE = [
     ["reproduce", "--workers", "0"],
@@ -550,6 +567,7 @@ README_COMMANDS_BAD_VALUE = [
     ["identify", "static", "x.csv", "--site", "wheel"],
     ["identify", "dynamic", "x.csv", "--confidence", "2"],
     ["analyze", "x.csv", "--smoothing", "-5"],
+    ["export", "fmu", "--drive", "xdfs", "--out", "x.fmu"],
 ]
 
 
@@ -558,7 +576,7 @@ README_COMMANDS_BAD_VALUE = [
 def test_no_readme_command_prints_a_traceback(args: list[str], binary_file: str) -> None:
     """Issue 12 acceptance: each command of the README table, given a bad file or a bad
     value, answers with one line naming what is wrong (unwritable outputs: issue 13)."""
-    result = run(*[binary_file if a == "{bad}" else a for a in args])
+    result = run(*[a.replace("{bad}", binary_file) for a in args])
     assert result.exit_code == 2, result.output
     assert "Traceback" not in result.output
     lines = [s for s in result.stderr.strip().splitlines() if s.startswith("error: ")]
@@ -577,7 +595,9 @@ def test_readme_command_table_matches_the_cli() -> None:
     assert {cmd for cmd, _ in rows} >= {"reproduce", "simulate", "creep", "calibrate",
                                         "stiffness", "friction", "identify"}
     for cmd, rest in rows:
-        shown = run(cmd, "--help").stdout
+        words = rest.split()  # a group's subcommand (`export fmu`): its own --help
+        sub = words[:1] if words and re.fullmatch(r"[a-z]+", words[0]) else []
+        shown = run(cmd, *sub, "--help").stdout
         for option in re.findall(r"--[a-z][a-z-]*", rest):
             assert option in shown, (cmd, option)
     assert "--profile " + "\\|".join(PROFILES) in readme

@@ -170,36 +170,39 @@ def test_sigkill_then_rerun_loses_and_duplicates_nothing(tmp_path: Path) -> None
     pd.testing.assert_frame_equal(resumed, uninterrupted)
 
 
-def test_example_map_of_cdfs_and_ddfs(tmp_path: Path) -> None:
-    """examples/position_nut_speed.toml on a coarser grid and speed range (the full example
-    takes about a minute on two cores: benchmarks/README.md): the map has a panel per drive
-    over table position × nut speed; the NetCDF export has those three dimensions."""
-    data = tomllib.loads((EXAMPLES / "position_nut_speed.toml").read_text())
-    assert data["axes"]["drive"] == ["cdfs", "ddfs"]
-    text = (EXAMPLES / "position_nut_speed.toml").read_text()
-    text = text.replace("[quantity]\n", "[quantity]\nlow = 1.0\nhigh = 2.0\ncoarse_step = 0.5\n"
-                        "resolution = 0.1\ninitial_duration = 3.0\nmax_duration = 3.0\n"
+def test_example_map_shows_the_gain_and_not_the_position(tmp_path: Path) -> None:
+    """examples/position_velocity_gain.toml (issue 24 item 12: the previous example's map was
+    1.56 in every CDFS cell, a colourbar for a constant field and two legend entries for
+    boundaries never drawn), on a coarser grid and search: the critical speed changes along
+    the gain axis, is the same at every position, and the NetCDF export has both axes."""
+    text = (EXAMPLES / "position_velocity_gain.toml").read_text()
+    data = tomllib.loads(text)
+    assert data["axes"]["controller.velocity_gain"]["relative"] is True
+    text = text.replace("[quantity]\n", "[quantity]\nlow = 1.0\nhigh = 3.0\ncoarse_step = 0.5\n"
+                        "resolution = 0.1\ninitial_duration = 6.0\nmax_duration = 24.0\n"
                         "linear_points = 8\n")
-    text = text.replace("table_position = { low = 200, high = 600, points = 5 }",
+    text = text.replace("table_position = { low = 200, high = 600, points = 3 }",
                         "table_position = { low = 200, high = 600, points = 2 }")
-    text = text.replace("nut_speed = [2, 10, 20, 30, 40]", "nut_speed = [2, 40]")
-    cfg = tmp_path / "position_nut_speed.toml"
+    text = text.replace("values = [0.8, 0.9, 1.0, 1.1, 1.2]", "values = [0.9, 1.2]")
+    cfg = tmp_path / "position_velocity_gain.toml"
     cfg.write_text(text)
     res = _sweep(str(cfg), "--plot", "map.png", "--output", "map.nc", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
-    assert "map of critical_speed over table_position × nut_speed" in res.stdout
+    assert "map of critical_speed over table_position × controller.velocity_gain" in res.stdout
     assert (tmp_path / "map.png").stat().st_size > 10_000
     ds = xr.open_dataset(tmp_path / "map.nc", engine="scipy")
-    assert dict(ds.sizes) == {"drive": 2, "table_position": 2, "nut_speed": 2}
-    assert ds["table_position"].attrs["units"] == "m"
-    assert ds["critical_speed"].attrs["units"] == "m/s"
-    for name in ("critical_speed", "linear_upper", "status"):  # the CDFS ignores the nut speed
-        cdfs = ds[name].sel(drive="cdfs").values
-        np.testing.assert_array_equal(cdfs[:, 0], cdfs[:, 1])
+    assert dict(ds.sizes) == {"table_position": 2, "controller.velocity_gain": 2}
+    crit = ds["critical_speed"].transpose("table_position", "controller.velocity_gain").values
     ds.close()
-    again = subprocess.run([sys.executable, "-m", "feeddrive", "map", "position_nut_speed.sqlite",
-                            "--x", "nut_speed", "--y", "table_position", "--plot", "map2.png"],
-                           cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert np.all(np.isfinite(crit))
+    # a higher velocity-loop gain damps the servo mode: a lower critical speed (0.1 mm/s
+    # resolution here); the position moves it by less than one resolution step
+    assert np.all(crit[:, 0] > crit[:, 1] + 0.5e-3)
+    assert np.all(np.abs(crit[0] - crit[1]) <= 0.1e-3 + 1e-9)
+    again = subprocess.run([sys.executable, "-m", "feeddrive", "map",
+                            "position_velocity_gain.sqlite", "--x", "controller.velocity_gain",
+                            "--y", "table_position", "--plot", "map2.png"],
+                           cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert again.returncode == 0, again.stderr
     assert (tmp_path / "map2.png").exists()
 

@@ -3,6 +3,8 @@ Wit et al. (IEEE TAC 40 (1995) 419–425, Sect. V) on the wang2021 CDFS."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -73,3 +75,27 @@ def test_compensation_with_sampled_loops_is_refused() -> None:
          .replace_path("controller.velocity_period", 5e-4))
     with pytest.raises(ParameterError, match="compensation.mode.*continuous"):
         fd.simulate(fd.DriveSystem(p, "cdfs", 0.4), fd.ConstantSpeed(1e-3), 0.1)
+
+
+def test_observer_gain_table_of_the_docs_and_the_warning() -> None:
+    """Issue 24 item 9: at k = 100 1/s the observer destabilised the loop at 0.5 mm/s and
+    nothing said what k is usable.  docs/linear.md's table (marked entries) and the warning
+    `feeddrive simulate` prints."""
+    from feeddrive.analysis.compensation import observer_gain_warning
+    from feeddrive.linear import rightmost_pole
+
+    def system(k: float) -> fd.DriveSystem:
+        comp = Compensation(mode="observer", observer_gain=k)
+        return fd.DriveSystem(W.replace_path("controller.compensation", comp), "cdfs", 0.4)
+
+    for k, growth in ((0.0, -1.15), (3.0, -0.75), (100.0, 16.7)):
+        # the table's 3 significant digits
+        assert rightmost_pole(system(k), 0.5e-3)[0] == pytest.approx(growth, rel=0.005,
+                                                                      abs=0.006), k
+    text = observer_gain_warning(system(100.0), 0.5e-3)
+    assert text is not None and "observer_gain = 100 1/s" in text and "0.5 mm/s" in text
+    assert observer_gain_warning(system(100.0), 5e-3) is None  # stable there
+    assert observer_gain_warning(system(0.0), 0.5e-3) is None
+    assert observer_gain_warning(system(3.0), 0.5e-3) is None
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "linear.md").read_text()
+    assert "| 100 | +45.1 | **+16.7** |" in doc and "| 3 | +4.57 | **−0.75** |" in doc

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import shutil
+import subprocess
 from pathlib import Path
 
 import feeddrive
@@ -46,3 +48,37 @@ def test_the_quoted_linear_motor_diff_touches_four_package_files() -> None:
     files = re.findall(r"src/feeddrive/\S+\.py", block)
     assert len(files) == 4
     assert "4 files changed" in block
+
+
+def test_the_quoted_gms_diff_touches_one_package_file() -> None:
+    """Issue 19's GMS acceptance (≤ 2 package files), as the doc quotes the commit."""
+    block = DOC.split("git show 5e1a742 --stat")[1].split("```")[1]
+    assert re.findall(r"src/feeddrive/\S+\.py", block) == [
+        "src/feeddrive/model/friction/gms.py"]
+    from feeddrive.model.friction import gms
+
+    assert gms.GMS.parameters_class is gms.GMSParameters
+    for name in ("SIGMA0", "COULOMB", "VISCOUS"):
+        assert name in DOC
+    assert "gms" in law_names()
+    if (ROOT / ".git").exists() and shutil.which("git"):  # the quote is the real diff
+        real = subprocess.run(["git", "show", "--name-only", "--format=", "5e1a742"],
+                              cwd=ROOT, capture_output=True, text=True)
+        if real.returncode == 0:  # a shallow clone may not hold the commit
+            assert [f for f in real.stdout.split() if f.startswith("src/feeddrive/")] == [
+                "src/feeddrive/model/friction/gms.py"]
+
+
+def test_the_quoted_part_diff_touches_one_package_file() -> None:
+    """Issue 19's "a loop with its own rate" (≤ 3 package files), as the doc quotes it."""
+    block = DOC.split("git show 8278df3 --stat")[1].split("```")[1]
+    assert "acceleration_feedforward.py" in block and "2 files changed" in block
+    from feeddrive.model.parts.acceleration_feedforward import AccelerationFeedforward
+
+    assert AccelerationFeedforward(gain=1.6, period=1e-3).schedule() == (("period", 1e-3),)
+    if (ROOT / ".git").exists() and shutil.which("git"):
+        real = subprocess.run(["git", "show", "--name-only", "--format=", "8278df3"],
+                              cwd=ROOT, capture_output=True, text=True)
+        if real.returncode == 0:
+            assert [f for f in real.stdout.split() if f.startswith("src/feeddrive/")] == [
+                "src/feeddrive/model/parts/acceleration_feedforward.py"]

@@ -45,11 +45,15 @@ def test_every_key_design_and_quantity_is_documented() -> None:
 
 
 def test_examples_parse_with_the_documented_counts() -> None:
-    pos = load_config(ROOT / "examples" / "position_nut_speed.toml").points()
-    assert len(pos) == 50 and len({p.key for p in pos}) == 30
+    pos = load_config(ROOT / "examples" / "position_velocity_gain.toml").points()
+    assert len(pos) == 15 and len({p.key for p in pos}) == 15
+    # the CDFS holds its nut: its points at every nut speed share one key (computed once)
+    shared = parse_config({"axes": {"drive": ["cdfs", "ddfs"], "table_position": [200, 400],
+                                    "nut_speed": [2, 10]}}, "study.toml").points()
+    assert len(shared) == 8 and len({p.key for p in shared}) == 6
     unc = load_config(ROOT / "examples" / "uncertainty.toml")
     assert unc.design == "lhs" and len(unc.coordinates()) == 200
-    assert "| 50 (30 distinct" in DOC and "| 200 |" in DOC
+    assert "| 15 |" in DOC and "| 200 |" in DOC
 
 
 def test_the_quoted_refusal_is_the_code_s() -> None:

@@ -26,7 +26,22 @@ from .metrics import VerdictRule
 
 @dataclass(frozen=True)
 class Target:
-    """A critical speed [m/s] to reproduce, with the drive, position [m] and nut speed [m/s]."""
+    """A critical speed to reproduce, and where it was measured.
+
+    Parameters
+    ----------
+    drive : str
+        The topology the target belongs to (``"cdfs"``, ``"ddfs"``, ...).
+    critical_speed : float
+        The critical creeping speed to reproduce [m/s] (Wang2021 Sect. 5.2: 1.56e-3 for the
+        CDFS).
+    table_position : float, default 0.4
+        Table position a along the screw [m].
+    nut_speed : float, default 0
+        Hollow-motor (nut) speed of the trials [m/s] (DDFS).
+    source : str, default ""
+        Where the number comes from (table, figure), printed beside the fit.
+    """
 
     drive: str
     critical_speed: float
@@ -37,7 +52,18 @@ class Target:
 
 @dataclass(frozen=True)
 class Unknown:
-    """A parameter path (e.g. ``controller.velocity_integral_gain``) and its search bracket."""
+    """A parameter to fit, by its dotted path, and its search bracket.
+
+    Parameters
+    ----------
+    path : str
+        Dotted path into :class:`~feeddrive.parameters.DriveParameters`, e.g.
+        ``"controller.velocity_integral_gain"``.
+    low : float
+        Lower end of the bracket, in the parameter's own SI unit [unit of ``path``].
+    high : float
+        Upper end of the bracket [unit of ``path``].
+    """
 
     path: str
     low: float
@@ -107,6 +133,30 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     their geometric mean √(s₁s₂): as far as possible from both switches, where a trial can
     linger for minutes by a limit cycle that has just vanished (so the Fig. 6 verdicts do not
     hang on the trial length).  ``interval`` holds (s₁, s₂).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The set whose ``unknown`` is fitted; every other value is kept.
+    target : Target
+        The critical speed to reproduce.
+    unknown : Unknown
+        The parameter to fit and its bracket.
+    relative_tolerance : float, default 0.02
+        Relative width at which each bisection stops [-].
+    rule : VerdictRule or None, default None
+        How each trial is judged; None: the protocol's rule (:mod:`feeddrive.protocol`).
+    speed_range : tuple of float, default (5e-5, 3e-3)
+        Speeds the check search may test [m/s].
+    resolution : float, default 1e-5
+        Speed resolution of the target [m/s] (0.01 mm/s, as the paper's step-down).
+    progress : callable or None, default None
+        Called with a line of text after each evaluation.
+
+    Returns
+    -------
+    Calibration
+        The fitted set, the value, its interval (s₁, s₂) and the critical speed it achieves.
     """
     if not (0 < unknown.low < unknown.high and math.isfinite(unknown.high)):
         raise ValueError(f"unknown {unknown.path}: expected 0 < low < high, got "

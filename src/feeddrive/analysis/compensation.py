@@ -91,3 +91,32 @@ def compensation_study(params: DriveParameters, cases: list[Case] | None = None,
 
 
 __all__ = ["Case", "compensation_study", "default_cases", "evaluate"]
+
+
+def observer_gain_warning(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
+                          ) -> str | None:
+    """A warning when the observer's correction gain k (``observer_gain``) makes the closed
+    loop, linearised at steady sliding at ``table_speed`` [m/s], unstable where it is stable
+    with k = 0; None otherwise (no observer, k = 0, or unstable without k too: the
+    friction's own creep band).  At k = 100 1/s the observer destabilised the CDFS at
+    0.5 mm/s (speed error 7.35× the command, issue 24 item 9); docs/linear.md gives the usable
+    range of k."""
+    from dataclasses import replace
+
+    from ..linear import rightmost_pole
+
+    comp = system.parameters.controller.compensation
+    if comp.mode != "observer" or comp.observer_gain == 0.0 or table_speed == 0.0:
+        return None
+    growth, freq = rightmost_pole(system, table_speed, nut_speed)
+    if growth <= 0.0:
+        return None
+    plain = DriveSystem(system.parameters.replace_path(
+        "controller.compensation", replace(comp, observer_gain=0.0)), system.drive,
+        system.table_position)
+    if rightmost_pole(plain, table_speed, nut_speed)[0] > 0.0:
+        return None
+    return (f"controller.compensation.observer_gain = {comp.observer_gain:g} 1/s makes the "
+            f"loop linearised at {1e3 * table_speed:g} mm/s unstable (a {freq:.3g}-Hz mode "
+            f"growing at {growth:.3g} 1/s; with k = 0 it is stable): lower k "
+            "(docs/linear.md gives the usable range)")

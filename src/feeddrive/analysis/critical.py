@@ -141,11 +141,36 @@ def critical_of(trials: Sequence[CreepTrial]) -> tuple[str, float | None, str | 
 class CriticalSpeed:
     """Result of a critical-speed search.
 
-    ``status``: ``"found"``; ``"below-range"`` (smooth at every tested speed: the critical
-    speed is below ``speed_range[0]``); ``"above-range"`` (creeps at the top tested speed);
-    ``"undecided"`` (a trial above the highest creeping band stayed undecided).  ``bands``:
-    every non-smooth run of tested speeds, with its kind; ``kind``: the kind of the highest
-    creeping band.
+    Parameters
+    ----------
+    drive : str
+        The topology searched.
+    table_position : float
+        Table position a of the trials [m].
+    nut_speed : float
+        Hollow-motor (nut) speed of the trials [m/s].
+    start : str
+        ``"rest"`` (every trial from rest) or ``"stepdown"`` (the paper's protocol).
+    critical_speed : float or None
+        The lowest smooth speed above the highest creeping band [m/s]; None when out of range.
+    status : str
+        ``"found"``; ``"below-range"`` (smooth at every tested speed: the critical speed is
+        below ``speed_range[0]``); ``"above-range"`` (creeps at the top tested speed);
+        ``"undecided"`` (a trial above the highest creeping band stayed undecided).
+    resolution : float
+        Speed resolution of the search [m/s].
+    speed_range : tuple of float
+        Lowest and highest tested speed [m/s].
+    trials : tuple of CreepTrial, default ()
+        Every trial with its verdict.
+    simulated_time : float, default 0
+        Simulated time of all trials [s].
+    kind : str or None, default None
+        Kind of the highest creeping band (``"stick-slip"`` or ``"oscillation"``).
+    bands : tuple of CreepBand, default ()
+        Every non-smooth run of tested speeds, with its kind.
+    rule : VerdictRule, default VerdictRule()
+        The rule that judged the trials.
     """
 
     drive: str
@@ -163,7 +188,13 @@ class CriticalSpeed:
     rule: VerdictRule = field(default_factory=VerdictRule)
 
     def display(self) -> str:
-        """The result in mm/s as a user reads it, with the bound when out of range."""
+        """The result in mm/s as a user reads it, with the bound when out of range.
+
+        Returns
+        -------
+        str
+            E.g. ``"1.56 mm/s, oscillation below it"``.
+        """
         text = format_critical_speed({
             "critical_speed_mm_s": None if self.critical_speed is None
             else self.critical_speed / MM_S,
@@ -179,7 +210,13 @@ class CriticalSpeed:
         return f"{text} mm/s{kind}"
 
     def to_dict(self) -> dict[str, Any]:
-        """Engineering units (mm, mm/s) for printing and JSON."""
+        """The result in engineering units (mm, mm/s) for printing and JSON.
+
+        Returns
+        -------
+        dict
+            Plain values; speeds in mm/s, positions in mm, times in s.
+        """
         return {
             "drive": self.drive,
             "table_position_mm": self.table_position * 1e3,
@@ -278,9 +315,40 @@ def critical_speed_from_rest(
     rule: VerdictRule | None = None, options: SolverOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> CriticalSpeed:
-    """Coarse scan plus bisection of every change of kind, every trial from rest (see module
-    docstring).  The defaults are the protocol of ``feeddrive creep`` and ``reproduce``
-    (:mod:`feeddrive.protocol`)."""
+    """Critical creeping speed by a coarse scan plus bisection, every trial from rest.
+
+    Every change of verdict kind found by the coarse scan is bisected to ``resolution`` (see
+    the module docstring).  The defaults are the protocol of ``feeddrive creep`` and
+    ``reproduce`` (:mod:`feeddrive.protocol`).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive to search.
+    nut_speed : float, default 0
+        Hollow-motor (nut) speed of every trial [m/s] (DDFS).
+    speed_range : tuple of float, default (2e-5, 3.02e-3)
+        Lowest and highest table speed tested [m/s].
+    coarse_step : float, default 2e-4
+        Spacing of the coarse scan [m/s].
+    resolution : float, default 1e-5
+        Resolution of the bisections [m/s].
+    rule : VerdictRule or None, default None
+        How a trial is judged (None: the protocol's rule).
+    options : SolverOptions or None, default None
+        Integrator settings of the trials.
+    progress : callable or None, default None
+        Called as ``progress(done, total)`` after each trial.
+
+    Returns
+    -------
+    CriticalSpeed
+        The critical speed, its status, the creeping bands and every trial.
+
+    References
+    ----------
+    Wang2021 Sect. 5.2 (Figs. 6-8) defines the critical creeping speed studied here.
+    """
     lo, hi = (_check_speed("speed_range[0]", speed_range[0]),
               _check_speed("speed_range[1]", speed_range[1]))
     if hi <= lo:
@@ -431,8 +499,39 @@ def critical_speed_stepdown(
     coarse_step: float = 0.1 * MM_S, rule: VerdictRule | None = None,
     options: SolverOptions | None = None,
 ) -> CriticalSpeed:
-    """The paper's protocol (Sect. 6) on a running table: step the command down, each step
-    held until decided; a fine staircase (``step``) at each change of kind."""
+    """Critical creeping speed by the paper's protocol on a running table.
+
+    The command steps down, each step held until decided; a fine staircase (``step``) is run
+    at each change of kind.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive to search.
+    nut_speed : float, default 0
+        Hollow-motor (nut) speed [m/s] (DDFS).
+    start_speed : float, default 3e-3
+        First commanded table speed [m/s].
+    lowest_speed : float, default 5e-5
+        Speed at which the staircase stops [m/s].
+    step : float, default 1e-5
+        Fine step of the staircase [m/s] (Wang2021 Sect. 6: 0.01 mm/s).
+    coarse_step : float, default 1e-4
+        Coarse step until the first change of kind [m/s].
+    rule : VerdictRule or None, default None
+        How each step is judged (None: the protocol's rule).
+    options : SolverOptions or None, default None
+        Integrator settings.
+
+    Returns
+    -------
+    CriticalSpeed
+        The critical speed (``start = "stepdown"``), its status and the steps as trials.
+
+    References
+    ----------
+    Wang2021 Sect. 6 (Fig. 13): the experiment's step-down protocol.
+    """
     hi = _check_speed("start_speed", start_speed)
     lo = _check_speed("lowest_speed", lowest_speed)
     _check_speed("step", step)

@@ -63,28 +63,28 @@ _MIN_WINDOW_SAMPLES = 8
 class CreepThresholds:
     """Limits that turn creep metrics into a verdict.  All ratios are relative to |v_cmd|.
 
-    Attributes
+    Parameters
     ----------
-    stick_level:
+    stick_level : float, default 0.1
         A sample *sticks* when its speed in the command's direction is below
-        ``stick_level``·|v_cmd| (default 0.1: below 10 % of the command).
-    max_stick_fraction:
-        The run is creeping if the stick fraction exceeds this (default 0.02: the table
-        sticks during more than 2 % of the window).
-    max_ripple_ratio:
-        The run is creeping if (max − min)/|v_cmd| exceeds this (default 0.5: a peak-to-peak
-        speed ripple of more than half the command).
-    min_ripple_for_frequency:
-        No stick-slip frequency is reported when the ripple ratio is below this (default
-        0.02): the ripple is negligible.
-    min_peak_share:
+        ``stick_level``·|v_cmd| [-] (below 10 % of the command).
+    max_stick_fraction : float, default 0.02
+        The run is creeping if the stick fraction exceeds this [-] (the table sticks during
+        more than 2 % of the window).
+    max_ripple_ratio : float, default 0.5
+        The run is creeping if (max − min)/|v_cmd| exceeds this [-] (a peak-to-peak speed
+        ripple of more than half the command).
+    min_ripple_for_frequency : float, default 0.02
+        No stick-slip frequency is reported when the ripple ratio is below this [-]: the
+        ripple is negligible.
+    min_peak_share : float, default 0.1
         No stick-slip frequency is reported when the periodogram peak (its main lobe) holds
-        less than this share of the ripple power (default 0.1): the ripple is not periodic
-        (broadband noise spreads its power over all frequencies).
-    max_speed_ratio:
-        The run is unstable if max|v|/|v_cmd| exceeds this (default 20).  Stick-slip of the
-        Wang2021 CDFS peaks at about 2.2× the command (0.5–1.5 mm/s, 12 s runs); a diverging
-        loop (a 100-t table) reaches 10⁴×.
+        less than this share of the ripple power [-]: the ripple is not periodic (broadband
+        noise spreads its power over all frequencies).
+    max_speed_ratio : float, default 20
+        The run is unstable if max|v|/|v_cmd| exceeds this [-].  Stick-slip of the Wang2021
+        CDFS peaks at about 2.2× the command (0.5–1.5 mm/s, 12 s runs); a diverging loop (a
+        100-t table) reaches 10⁴×.
     """
 
     stick_level: float = 0.1
@@ -108,13 +108,64 @@ class CreepThresholds:
             raise ValueError("thresholds: max_stick_fraction must be < 1 and min_peak_share ≤ 1")
 
 
+    def describe(self) -> str:
+        """The window rule in words, with its numbers (printed beside its verdicts).
+
+        Returns
+        -------
+        str
+            One sentence naming the limits, and the other rule that can differ.
+        """
+        return (f"window rule: over the steady window, creeping if the peak-to-peak ripple "
+                f"exceeds {100 * self.max_ripple_ratio:g} % of the command or the table "
+                f"sticks (below {100 * self.stick_level:g} % of the command) for more than "
+                f"{100 * self.max_stick_fraction:g} % of it, else smooth; feeddrive creep, "
+                "reproduce and the explorer judge by the limit-cycle rule (±"
+                f"{100 * VerdictRule().smooth_band:g} %), which can "
+                "differ")
+
+
+def frequency_label(stick_fraction: float | None) -> str:
+    """What to call the dominant ripple frequency: "stick-slip frequency" only when the table
+    sticks, else "oscillation frequency" (issue 24 item 5: a trapezoid that never stuck
+    printed a "stick-slip frequency")."""
+    return ("stick-slip frequency" if stick_fraction is not None and stick_fraction > 0
+            else "oscillation frequency")
+
+
 @dataclass(frozen=True)
 class CreepMetrics:
     """Creep metrics of one trace over its steady window.
 
-    Speeds in [m/s], times in [s], frequency in [Hz]; ratios are dimensionless, relative to
-    |command_speed|.  ``stick_slip_frequency`` is None when the ripple is negligible or not
-    periodic.
+    Ratios are dimensionless, relative to |command_speed|.
+
+    Parameters
+    ----------
+    command_speed : float
+        Commanded table speed [m/s].
+    window_start : float
+        Start of the assessed window [s].
+    window_end : float
+        End of the assessed window [s].
+    mean_speed : float
+        Time-averaged table speed over the window [m/s].
+    ripple_ratio : float
+        Peak-to-peak speed over |command_speed| [-].
+    min_ratio : float
+        Lowest speed in the command's direction over |command_speed| [-].
+    stick_fraction : float
+        Share of the window during which the table sticks [-].
+    stick_slip_frequency : float or None
+        Frequency of the periodic speed ripple [Hz]; None when the ripple is negligible or not
+        periodic.
+    verdict : str
+        ``"smooth"``, ``"creeping"`` or ``"unstable"``.
+    thresholds : CreepThresholds
+        The limits that gave the verdict.
+    max_ratio : float, default nan
+        Largest |speed| over |command_speed| [-].
+    window_samples : int, default 0
+        Number of samples in the window.
     """
 
     command_speed: float
@@ -137,10 +188,22 @@ class CreepMetrics:
 
     @property
     def unstable(self) -> bool:
+        """The loop diverged (verdict ``"unstable"``)."""
         return self.verdict == "unstable"
 
     def to_dict(self, units: Literal["SI", "mm"] = "SI") -> dict[str, Any]:
-        """Plain dict for JSON output; speeds in m/s (``"SI"``) or mm/s (``"mm"``)."""
+        """The metrics as a plain dict for JSON output.
+
+        Parameters
+        ----------
+        units : {"SI", "mm"}, default "SI"
+            Speeds in m/s (``"SI"``) or mm/s (``"mm"``).
+
+        Returns
+        -------
+        dict
+            Every metric, with a ``"units"`` entry naming the units used.
+        """
         if units not in ("SI", "mm"):
             raise ValueError(f"units = {units!r}: expected 'SI' or 'mm'")
         k = 1.0 if units == "SI" else 1e3
@@ -400,22 +463,27 @@ def creep_metrics(
 ) -> CreepMetrics:
     """Creep metrics of a table-speed trace.
 
-    Parameters
-    ----------
-    time:
-        Sample times [s], strictly increasing (need not be uniform).
-    speed:
-        Table speed [m/s] at those times.
-    command_speed:
-        Commanded table speed [m/s], non-zero; negative for motion in the − direction.
-    thresholds:
-        Verdict limits; :class:`CreepThresholds` defaults when None.
-    window:
-        (start, end) [s] of the part to assess; :func:`steady_window` when None.
-
     The speed is treated as piecewise linear between samples: the stick fraction is the
     exact fraction of window time during which that interpolant is below
     ``stick_level``·|v_cmd|, and the mean speed is its time average.
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s], strictly increasing (need not be uniform).
+    speed : array_like
+        Table speed at those times [m/s].
+    command_speed : float
+        Commanded table speed [m/s], non-zero; negative for motion in the − direction.
+    thresholds : CreepThresholds or None, default None
+        Verdict limits; :class:`CreepThresholds` defaults when None.
+    window : tuple of float or None, default None
+        (start, end) of the part to assess [s]; :func:`steady_window` when None.
+
+    Returns
+    -------
+    CreepMetrics
+        Mean speed, ripple, stick fraction, ripple frequency and the verdict.
     """
     t, v = _as_trace(time, speed)
     vc = _check_command(command_speed)
@@ -665,7 +733,8 @@ class VerdictRule:
     def describe(self) -> str:
         """The rule in words, with its numbers (printed beside every verdict)."""
         return (
-            f"A trial runs {self.initial_duration:g} s, doubling up to {self.max_duration:g} s "
+            f"Limit-cycle rule. A trial runs {self.initial_duration:g} s, doubling up to "
+            f"{self.max_duration:g} s "
             f"until decided. smooth: the speed stays within ±{100 * self.smooth_band:g} % of "
             f"the command for the last max({self.settle_time:g} s, 2 longest periods). "
             f"Limit cycle: over the last half of the trial (≥ {self.min_compare_time:g} s, the "
@@ -855,7 +924,7 @@ def trace_verdict(time: object, speed: object, command_speed: float,
             freq = 1.0 / float(np.mean(arr[-used:, 2]))
             if ripple < 2.0 * rule.smooth_band:
                 return TraceVerdict("smooth", None, ripple, low, stick, periods.size, b,
-                                    f"limit cycle below ±{rule.smooth_band:g} ripple")
+                                    f"limit cycle below ±{100 * rule.smooth_band:g} % ripple")
             kind = "stick-slip" if low < rule.stick_level else "oscillation"
             how = ("periodic" if multiplicity == 1 else
                    f"periodic over {multiplicity} cycles" if multiplicity > 0 else
@@ -871,7 +940,8 @@ def trace_verdict(time: object, speed: object, command_speed: float,
         decided_at = inside_from + settle
         ripple, low, stick = describe(inside_from, t_end)
         return TraceVerdict("smooth", None, ripple, low, stick, periods.size, decided_at,
-                            f"within ±{rule.smooth_band:g} of the command for ≥ {settle:g} s")
+                            f"within ±{100 * rule.smooth_band:g} % of the command for ≥ "
+                            f"{settle:g} s")
     a = t[0] + 0.75 * (t_end - t[0])
     ripple, low, stick = describe(a, t_end)
     seen = 1.0 / float(np.mean(periods[-rule.min_cycles:])) if periods.size >= 2 else None

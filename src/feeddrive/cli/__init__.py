@@ -15,6 +15,7 @@ from . import (  # noqa: F401,E402  (registers commands)
     compensate_cmd,
     creep_cmd,
     explore_cmd,  # noqa: F401  (registers commands)
+    export_cmd,  # noqa: F401  (registers commands)
     identify_cmd,  # noqa: F401,E402  (registers commands)
     linear_cmd,
     params_cmd,  # noqa: F401  (registers commands)

@@ -12,7 +12,7 @@ from typing import Any, TypeVar
 import typer
 from rich.console import Console
 
-from .. import units
+from .. import registry, units
 from ..outputs import shown
 from ..parameters import DriveParameters, ParameterError, load, preset
 
@@ -108,7 +108,11 @@ def user_errors(fn: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
-DEFAULT_PRESETS = {"linear-motor": "linear-motor-example"}
+def default_preset(drive: str | None) -> str:
+    """The set a command uses for ``drive`` when none is named: the topology's own example
+    (``Mechanism.example_preset``), ``wang2021`` for the paper's drives."""
+    topology = registry.table(registry.MECHANISMS).get(drive or "")
+    return str(getattr(topology, "example_preset", "wang2021"))
 
 
 def resolve_parameters(preset_name: str | None, params_file: str | None,
@@ -119,7 +123,7 @@ def resolve_parameters(preset_name: str | None, params_file: str | None,
         raise ParameterError("--params", params_file, "give either --preset or --params, not both")
     if params_file:
         return load(params_file)
-    return preset(preset_name or DEFAULT_PRESETS.get(drive or "", "wang2021"))
+    return preset(preset_name or default_preset(drive))
 
 
 def print_json(data: Any) -> None:

@@ -105,15 +105,20 @@ def analyze_command(
                   f"{trace.position_column!r}")
     for note in result.notes:
         _say(f"  {note}")
+    from ..analysis.metrics import frequency_label
+
     for i, seg in enumerate(result.segments, start=1):
         m = seg.metrics
         freq = (f"{m.stick_slip_frequency:.3g} Hz" if m.stick_slip_frequency is not None
                 else "none")
+        # "stick-slip" only when the table sticks (issue 24 item 5)
+        freq_word = frequency_label(m.stick_fraction).removesuffix(" frequency")
         _say(
             f"  segment {i}: {seg.start:.2f}–{seg.end:.2f} s (window from "
             f"{m.window_start:.2f} s), command {seg.command_speed / MM_PER_S:.4g} mm/s "
             f"({seg.command_from}): {m.verdict.upper()}  ripple {m.ripple_ratio:.3g}, "
-            f"min {m.min_ratio:.3g}, stick {m.stick_fraction:.3g}, stick-slip {freq}")
+            f"min {m.min_ratio:.3g}, stick {m.stick_fraction:.3g}, {freq_word} {freq}")
+    _say(f"  verdicts by the {thresholds.describe()}")
     for c in result.critical:
         smooth = (f"{c.lowest_smooth / MM_PER_S:.4g} mm/s" if c.lowest_smooth is not None
                   else "none (every segment creeps)")

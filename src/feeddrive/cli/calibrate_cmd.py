@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import typer
 
+from .. import protocol
 from ..outputs import check_output_file
 from ..parameters import ParameterError
 from . import _units
@@ -24,8 +26,9 @@ def calibrate_command(
     tolerance: float = typer.Option(0.02, "--tolerance",
                                     help="Relative width of the final bracket of the fit "
                                     "[fraction]."),
-    max_duration: float = typer.Option(60.0, "--max-duration",
-                                       help="Longest creep trial [s] (see `feeddrive creep`)."),
+    max_duration: float = typer.Option(protocol.TRIAL_MAX_DURATION, "--max-duration",
+                                       help="Longest creep trial [s]; the default is the "
+                                       "protocol of `feeddrive creep` and `reproduce`."),
     drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
     target: float = typer.Option(1.56, "--target", help="Target critical speed [mm/s] "
                                  "(default: Wang2021 Sect. 5.2, CDFS simulated)."),
@@ -64,7 +67,8 @@ def calibrate_command(
         progress=None if as_json else (lambda msg: console.print(f"  {msg}")))
     written = out if out and result.reached else None
     if written:
-        save(result.parameters, written)
+        save(fitted_set(result.parameters, unknown, result.value, drive, target, position,
+                        nut_speed), written)
     achieved = result.achieved.to_dict()
     data = {"unknown": unknown, "value": result.value, "target_mm_s": target,
             "achieved_mm_s": achieved["critical_speed_mm_s"], "achieved": achieved["display"],
@@ -86,3 +90,20 @@ def calibrate_command(
                           + (f"; {out} not written" if out else ""),
                           markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1)
+
+
+def fitted_set(params: Any, unknown: str, value: float, drive: str, target: float,
+               position: float, nut_speed: float) -> Any:
+    """The fitted set as `calibrate --out` writes it: named and described as fitted, so that
+    a file written from `wang2021` is not taken for the preset (issue 24 item 10)."""
+    import datetime as dt
+    from dataclasses import replace
+
+    from .. import __version__
+
+    when = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d")
+    vn = f", v_n = {nut_speed:g} mm/s" if nut_speed else ""
+    note = (f"Fitted by feeddrive calibrate {__version__} on {when}: {unknown} = {value:.6g} "
+            f"gives the {drive.upper()} critical speed {target:g} mm/s at {position:g} mm{vn}. "
+            f"Started from {params.name!r}: {params.description}")
+    return replace(params, name=f"{params.name}-fitted", description=note)

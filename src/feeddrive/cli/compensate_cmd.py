@@ -53,6 +53,13 @@ def compensate_command(
     for r in rows:
         bands = ", ".join(f"{lo:.3f}–{hi:.3f}" for lo, hi in r["linear_unstable_bands_mm_s"])
         crit = r.get("critical_speed_mm_s", "—")
-        console.print(f"  {r['case']:34s} critical {crit:>8s} mm/s  linear band "
-                      f"{bands or 'none':>13s} mm/s  {r['verdict_at_tracking_speed']:11s} "
+        console.print(f"  {r['case']:34s} critical {with_unit(crit):>13s}  linear band "
+                      f"{with_unit(bands or 'none'):>18s}  "
+                      f"{r['verdict_at_tracking_speed']:11s} "
                       f"error rms {r['following_error_rms_um']:.2f} µm", markup=False)
+
+
+def with_unit(text: str) -> str:
+    """A speed or band with its unit; a word ("none", "undecided", "—") without one
+    (issue 24 item 13: "none mm/s", "undecided mm/s")."""
+    return f"{text} mm/s" if text[:1].isdigit() or text[:1] in "<>" else text

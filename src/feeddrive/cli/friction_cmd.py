@@ -106,7 +106,8 @@ def friction_command(
         check_output_file(plot, option="--plot", inputs=[params_file], force=force,
                           formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file)
-    lugre: LuGreParameters = getattr(params.friction, site)
+    lugre: LuGreParameters = getattr(params.friction, site).require(
+        LuGreParameters, f"friction.{site}", "feeddrive friction")
     m, k, c = _scan_setup(params, mass, stiffness_n_per_um, damping)
     _positive("--speed-min", speed_min, "mm/s")
     if not (math.isfinite(speed_max) and speed_max > speed_min):
@@ -116,13 +117,18 @@ def friction_command(
         raise ParameterError("--points", points, "expected at least 2")
     speeds = np.geomspace(speed_min, speed_max, points) * MM_PER_S
 
+    from .. import site_indicators
+
+    law = lugre.law  # every indicator follows the site's own law (issue 24 item 7)
+    passivity = site_indicators.has_passivity_criterion(lugre)
     branches: dict[str, dict[str, Any]] = {}
     for name in BRANCHES:
         b = lugre.branch(name)
-        band = friction.negative_slope_band(b)
-        margin = friction.passivity_margin(b, lugre)
+        slope = site_indicators.steady_slope(lugre, name)
+        band = slope.band
+        margin = friction.passivity_margin(b, lugre) if passivity else None
         sign = 1.0 if name == "positive" else -1.0
-        scan = friction.sliding_stability(sign * speeds, [lugre], m, k, c)
+        scan = site_indicators.site_sliding_stability(sign * speeds, lugre, m, k, c)
         unstable = friction.unstable_speed_band(scan)
         branches[name] = {
             "coulomb_force_N": b.coulomb_force,
@@ -132,8 +138,9 @@ def friction_command(
             "negative_slope_band_mm_s": (None if band is None
                                          else [_mm_s(band.lower), _mm_s(band.upper)]),
             "zero_slope_speed_mm_s": None if band is None else _mm_s(band.zero_slope_speed),
+            "min_steady_slope_N_s_per_m": slope.min_slope,
             "passivity_margin_N_s_per_m": margin,
-            "passive": margin > 0.0,
+            "passive": None if margin is None else margin > 0.0,
             "unstable_band_mm_s": (None if unstable is None
                                    else [_mm_s(unstable[0]), _mm_s(unstable[1])]),
             "unstable_points": int(np.count_nonzero(~scan.stable)),
@@ -143,6 +150,7 @@ def friction_command(
     zero_pos = branches["positive"]["zero_slope_speed_mm_s"]
     result: dict[str, Any] = {
         "site": site,
+        "law": law,
         "parameters": params.name,
         "source": "Wang2021 Table 1 (rotary sites as forces: torque / H)",
         "bristle_stiffness_N_per_m": lugre.bristle_stiffness,
@@ -175,7 +183,10 @@ def friction_command(
     def fmt_band(band: list[float] | None) -> str:
         return "none" if band is None else f"{band[0]:.3f} … {band[1]:.3f}"
 
-    table = Table(title=f"LuGre friction, {site} — {params.name} (Wang2021 Table 1)")
+    law_title = {"lugre": "LuGre", "dahl": "Dahl", "stribeck": "static Stribeck",
+                 "none": "no"}.get(law, law)
+    table = Table(title=f"{law_title} friction, {site} — {params.name} (parameters: "
+                        "Wang2021 Table 1)")
     table.add_column("quantity")
     for name in BRANCHES:
         table.add_column(name, justify="right")
@@ -194,9 +205,13 @@ def friction_command(
     table.add_row(escape("zero-slope speed [mm/s]"),
                   *("none" if branches[n]["zero_slope_speed_mm_s"] is None
                     else f"{branches[n]['zero_slope_speed_mm_s']:.3f}" for n in BRANCHES))
+    if law not in site_indicators.STRIBECK_CURVE_LAWS:
+        table.add_row(escape("smallest steady slope [N s/m]"),
+                      *(f"{branches[n]['min_steady_slope_N_s_per_m']:.4g}" for n in BRANCHES))
     table.add_row(escape("σ2 − σ1(F_s−F_c)/F_c [N s/m]"),
-                  *(f"{branches[n]['passivity_margin_N_s_per_m']:.4g} "
-                    f"{'pass' if branches[n]['passive'] else 'FAIL'}" for n in BRANCHES))
+                  *((f"{branches[n]['passivity_margin_N_s_per_m']:.4g} "
+                     f"{'pass' if branches[n]['passive'] else 'FAIL'}") if passivity
+                    else "— (a LuGre criterion)" for n in BRANCHES))
     table.add_row(escape("unstable sliding [mm/s]"),
                   *(fmt_band(branches[n]["unstable_band_mm_s"]) for n in BRANCHES))
     console.print(table)
@@ -206,11 +221,20 @@ def friction_command(
             f"CDFS critical creeping speed: {_mm_s(paper_speed):.2f} mm/s "
             f"({zero_pos / _mm_s(paper_speed) - 1.0:+.1%})."
         )
-    console.print(
-        "Passivity margin > 0 is a sufficient condition for the LuGre map to be dissipative "
-        "(Barabanov & Ortega 2000); a FAIL does not by itself mean instability.",
-        markup=False, highlight=False,
-    )
+    if passivity:
+        console.print(
+            "Passivity margin > 0 is a sufficient condition for the LuGre map to be "
+            "dissipative (Barabanov & Ortega 2000); a FAIL does not by itself mean "
+            "instability.", markup=False, highlight=False,
+        )
+    else:
+        unused = site_indicators.UNUSED_PARAMETERS.get(law)
+        console.print(
+            f"The {site} site uses the {law!r} law: slopes and the scan come from that law's "
+            "steady curve and linearisation; the LuGre passivity margin does not apply."
+            + (f" Parameters above that this law does not use: {unused}." if unused else ""),
+            markup=False, highlight=False,
+        )
     console.print(
         f"Stability scan: m = {m:g} kg, k = {k / N_PER_UM:.4g} N/µm, c = {c:g} N s/m, "
         f"{points} speeds {speed_min:g} … {speed_max:g} mm/s (log-spaced). "

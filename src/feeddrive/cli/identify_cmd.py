@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from ..outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
-from ..parameters import DriveParameters, ParameterError, save
+from ..parameters import DriveParameters, LuGreParameters, ParameterError, save
 
 if TYPE_CHECKING:
     from ..analysis.identification import DynamicFit, Estimate, StaticFit
@@ -252,7 +252,8 @@ def dynamic_command(
                                 decimal=decimal)
     with err_console.status(f"fitting {shown(data.source)}") as status:
         fit = fit_presliding(data.time, data.force, data.position, mass=m,
-                             friction=getattr(params.friction, site),
+                             friction=getattr(params.friction, site).require(
+                                 LuGreParameters, f"friction.{site}", "identify dynamic"),
                              model=model,  # type: ignore[arg-type]
                              confidence=confidence, lines=data.lines, source=data.source,
                              progress=lambda text: status.update(

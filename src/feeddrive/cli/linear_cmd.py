@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import typer
 
+from .. import protocol
 from ..outputs import PLOT_FORMATS, check_output_file
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
@@ -68,10 +69,14 @@ def stability_command(
     drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
-    low: float = typer.Option(0.01, "--low", help="Lowest table speed scanned [mm/s]."),
-    high: float = typer.Option(5.0, "--high", help="Highest table speed scanned [mm/s]."),
-    points: int = typer.Option(40, "--points", help="Log-spaced scan points (edges are then "
-                               "bisected to 0.001 mm/s)."),
+    low: float = typer.Option(1e3 * protocol.LINEAR_SPEED_RANGE[0], "--low",
+                              help="Lowest table speed scanned [mm/s] (the default range is "
+                              "the sweep's linear-band default too)."),
+    high: float = typer.Option(1e3 * protocol.LINEAR_SPEED_RANGE[1], "--high",
+                               help="Highest table speed scanned [mm/s]."),
+    points: int = typer.Option(protocol.LINEAR_POINTS, "--points",
+                               help="Log-spaced scan points (edges are then bisected to "
+                               "0.001 mm/s)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     plot: str | None = typer.Option(None, "--plot", help="Write the scan [.png, .pdf, .svg]."),

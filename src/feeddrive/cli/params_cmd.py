@@ -17,11 +17,18 @@ app.add_typer(params_app, name="params")
 @params_app.command("show")
 @user_errors
 def show(
-    preset_name: str = typer.Option("wang2021", "--preset", help="Named parameter set."),
+    preset_name: str | None = typer.Option(None, "--preset",
+                                           help="Named parameter set (default wang2021)."),
+    params_file: str | None = typer.Option(
+        None, "--params", help="Parameter file (TOML): print the whole set it resolves to, "
+        "with everything its `extends` brings in."),
     fmt: str = typer.Option("toml", "--format", help="toml or json"),
 ) -> None:
-    """Print a parameter set (SI units) as TOML or JSON."""
-    params = preset(preset_name)
+    """Print a parameter set (SI units) as TOML or JSON: a preset, or the resolved set of a
+    parameter file."""
+    if preset_name is not None and params_file is not None:
+        raise ValueError("--preset and --params: give one, not both")
+    params = load(params_file) if params_file is not None else preset(preset_name or "wang2021")
     if fmt == "toml":
         typer.echo(dumps(params), nl=False)
     elif fmt == "json":

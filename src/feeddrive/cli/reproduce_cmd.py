@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..__main__ import INTERRUPTED
+from ..exit_codes import INTERRUPTED
 from ..outputs import check_output_dir, shown
 from ..parameters import ParameterError
 from ._common import app, console, err_console, resolve_parameters, user_errors

@@ -152,6 +152,14 @@ def simulate_command(
         _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
                     f"{budget.memory_bytes / 1e9:.1f} GB of memory (a .parquet or .csv "
                     "--output is written as the run goes and keeps memory small)")
+    if profile != "sine":  # a steady command: the observer's gain k checked there
+        from ..analysis.compensation import observer_gain_warning
+
+        # the lowest steady speed of the run: the observer's k destabilises slow sliding
+        steady = {"csv": 0.0, "stepdown": _units.speed("--lowest-speed", lowest_speed)}
+        k_warning = observer_gain_warning(system, steady.get(profile, v_t), v_n)
+        if k_warning:
+            _units.warn(k_warning)
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     bar = Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.fields[t]}"),
@@ -188,7 +196,9 @@ def simulate_command(
     if plot:
         from ..plotting import plot_result
 
-        summary["plot"] = str(plot_result(result, plot))
+        summary["plot"] = str(plot_result(result, plot, title=run_header(
+            drive, profile, profile_file, table_speed, frequency, position, duration,
+            params.name)))
     for text in summary.get("warnings", []):
         err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
     if as_json:
@@ -200,13 +210,22 @@ def simulate_command(
         raise typer.Exit(code=EXIT_UNSTABLE)
 
 
-def _print_summary(summary: dict[str, Any], drive: str, profile: str,
-                   profile_file: str | None, table_speed: float | None, frequency: float,
-                   position: float, duration: float, name: str, output: str | None) -> None:
+def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,
+               frequency: float, position: float, duration: float, name: str) -> str:
+    """What was run, in the user's words: the summary's first line and the --plot title."""
     what = (f"{profile_file}" if profile == "csv" else
             f"{profile} {table_speed:g} mm/s" + (f" at {frequency:g} Hz" if profile == "sine"
                                                  else ""))
-    _say(f"{drive.upper()}, {what}, position {position:g} mm, {duration:g} s ({name})")
+    # a linear motor drives the table directly: its position moves no part of the model
+    where = "" if drive == "linear-motor" else f", position {position:g} mm"
+    return f"{drive.upper()}, {what}{where}, {duration:g} s ({name})"
+
+
+def _print_summary(summary: dict[str, Any], drive: str, profile: str,
+                   profile_file: str | None, table_speed: float | None, frequency: float,
+                   position: float, duration: float, name: str, output: str | None) -> None:
+    _say(run_header(drive, profile, profile_file, table_speed, frequency, position, duration,
+                    name))
     for label, text in _lines(summary):
         _say(f"  {label:24s} {text}")
     s = summary["solver"]
@@ -220,6 +239,8 @@ def _print_summary(summary: dict[str, Any], drive: str, profile: str,
 
 
 def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
+    from ..analysis.metrics import CreepThresholds, frequency_label
+
     n = _units.number
     rows: list[tuple[str, str]] = []
     if s["profile"] == "sine":
@@ -236,15 +257,33 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
         ]
     else:
         freq = s["stick_slip_frequency_hz"]
+        segments = s.get("segments") or []
+        # a multi-level profile: the lines below are its first hold at the top speed; every
+        # hold is summarised under "segments" (issue 24 item 6)
+        first = " (first hold)" if len(segments) > 1 else ""
         rows += [
-            ("command speed", f"{n(s['command_speed_mm_s'])} mm/s"),
+            ("command speed" + first, f"{n(s['command_speed_mm_s'])} mm/s"),
             ("mean table speed", f"{n(s['mean_table_speed_mm_s'])} mm/s"),
             ("ripple ratio", n(s["ripple_ratio"], 3)),
             ("min ratio", n(s["min_ratio"], 3)),
             ("stick fraction", n(s["stick_fraction"], 3)),
-            ("stick-slip frequency", "none" if freq is None else f"{n(freq, 3)} Hz"),
-            ("verdict", s["verdict"]),
+            (frequency_label(s["stick_fraction"]),
+             "none" if freq is None else f"{n(freq, 3)} Hz"),
+            ("verdict", f"{s['verdict']} (by the window rule, below)"),
         ]
+        if len(segments) > 1:
+            rows.append(("segments", f"{len(segments)} holds of one command speed, each "
+                                     "judged over its own steady window:"))
+            for i, g in enumerate(segments, start=1):
+                f = g["stick_slip_frequency_hz"]
+                at = "" if f is None else (f", {frequency_label(g['stick_fraction'])} "
+                                           f"{n(f, 3)} Hz")
+                rows.append((f"  {i}: {n(g['command_speed_mm_s'])} mm/s",
+                             f"{g['verdict']}, mean {n(g['mean_table_speed_mm_s'])} mm/s, "
+                             f"ripple {n(g['ripple_ratio'], 3)}, stick "
+                             f"{n(g['stick_fraction'], 3)}{at}; window "
+                             f"{n(g['window_s'][0])}–{n(g['window_s'][1])} s"))
+        rows.append(("verdict rule", s.get("verdict_rule") or CreepThresholds().describe()))
     a, b = s["window_s"]
     rows += [
         ("following error", f"max {n(s['following_error_max_um'], 3)} µm, rms "
@@ -255,7 +294,8 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
     if s["mean_screw_speed_mm_s"] is not None:  # a linear motor has no screw and no nut
         rows.append(("mean motor speeds", f"screw {n(s['mean_screw_speed_mm_s'])} mm/s, nut "
                                           f"{n(s['mean_nut_speed_mm_s'])} mm/s (× H)"))
-    rows.append(("window", f"{n(a)}–{n(b)} s"))
+    first_hold = s["profile"] != "sine" and len(s.get("segments") or []) > 1
+    rows.append(("window" + (" (first hold)" if first_hold else ""), f"{n(a)}–{n(b)} s"))
     return rows
 
 

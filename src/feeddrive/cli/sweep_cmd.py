@@ -126,19 +126,32 @@ def sweep_command(
         db = SweepStore(store_path, option=option, create=False) if store_path.exists() \
             else None
         n = dask_workers or workers or os.cpu_count() or 1
-        est = estimate(cfg, db, workers=n)
+        est = estimate(cfg, db, workers=n,
+                       progress=None if as_json else
+                       lambda text: err_console.print(f"dry run: {text} …", markup=False,
+                                                      highlight=False, soft_wrap=True))
+        lo, hi = est.spread
+        total_range = ([est.seconds * lo / est.seconds_per_point,
+                        est.seconds * hi / est.seconds_per_point]
+                       if est.seconds_per_point > 0 else [0.0, 0.0])
         out = {"sweep": cfg.name, "points": est.points, "distinct": est.distinct,
                "stored": est.stored, "to_compute": est.distinct - est.stored,
                "timed_points": est.timed, "seconds_per_point": est.seconds_per_point,
-               "workers": n, "estimated_seconds": est.seconds,
+               "seconds_per_point_range": [lo, hi], "workers": n,
+               "estimated_seconds": est.seconds,
+               "estimated_seconds_range": total_range,
+               "timing": "CPU seconds of the timed points, one core per worker",
                "parameter_sets_built": est.built}
         if as_json:
             print_json(out)
             return
+        cost = (f"{est.seconds_per_point:.3g} s CPU per point ({est.timed} timed: "
+                f"{lo:.3g}–{hi:.3g} s) → about {est.seconds:.3g} s "
+                f"({total_range[0]:.3g}–{total_range[1]:.3g} s) on {n} workers with a free core "
+                "each; longer on a loaded machine" if est.timed else "nothing to time")
         console.print(f"sweep {shown(cfg.name)}: {est.points} points ({est.distinct} distinct, "
                       f"{est.stored} already stored, {est.distinct - est.stored} to compute); "
-                      f"{est.seconds_per_point:.3g} s per point ({est.timed} timed) → about "
-                      f"{est.seconds:.0f} s on {n} workers", markup=False, highlight=False)
+                      + cost, markup=False, highlight=False, soft_wrap=True)
         return
     summary, db = _run(cfg, lambda: SweepStore(store_path, option=option, notice=_notice),
                        workers, scheduler, dask_workers, quiet=as_json)

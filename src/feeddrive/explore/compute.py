@@ -78,6 +78,8 @@ def verdict_of(time: np.ndarray, speed: np.ndarray, command_speed: float) -> dic
     else:
         text = (f"{v.reason} after {float(time[-1]):g} s ({ripple}{at}); a longer simulated "
                 "time decides")
+    # the rule named beside the word, as in every command (issue 24 item 4)
+    text += " (limit-cycle rule of feeddrive creep)"
     return {"verdict": "creeping" if v.creeping else v.kind, "kind": v.kind, "text": text,
             "reason": v.reason, "frequency_hz": _f(v.frequency),
             "decided_at_s": _f(v.decided_at), "ripple_ratio": _f(v.ripple_ratio)}
@@ -97,6 +99,7 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
     """Steady friction force [N] against sliding speed [mm/s] at each site the drive uses,
     the speed bands where it falls (negative damping), and the sites' operating speeds."""
     from ..friction import negative_slope_band, steady_friction
+    from ..parameters import LuGreParameters
 
     params = checked.params
     assert params is not None
@@ -104,7 +107,8 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
     bands: dict[str, list[list[float]]] = {}
     top = 2e-3
     for site in sites:
-        lugre = getattr(params.friction, site)
+        lugre = getattr(params.friction, site).require(LuGreParameters, f"friction.{site}",
+                                                       "the explorer's friction curves")
         bands[site] = []
         for name, sign in (("positive", 1.0), ("negative", -1.0)):
             band = negative_slope_band(lugre.branch(name))

@@ -62,7 +62,25 @@ class Model:
                                  ) from None
 
     def parameter(self, name: str) -> float:
-        return float(self.P[self.parameter_names.index(name)])
+        """The value of a named parameter slot of this model.
+
+        Parameters
+        ----------
+        name : str
+            A slot name, e.g. ``"friction.screw.bristle_stiffness"``, ``"table.mass"``,
+            ``"controller.screw.kvp"`` (:attr:`parameter_names` lists them).
+
+        Returns
+        -------
+        float
+            The value, in the slot's SI unit [unit of ``name``].
+        """
+        try:
+            return float(self.P[self.parameter_names.index(name)])
+        except ValueError:
+            near = [n for n in self.parameter_names if n.split(".")[0] == name.split(".")[0]]
+            raise ParameterError("parameter", name, "no such slot in this model; expected one "
+                                 f"of {', '.join(near or self.parameter_names)}") from None
 
     def tolerances(self, position: float, speed: float, current: float
                    ) -> tuple[np.ndarray, np.ndarray]:
@@ -95,10 +113,10 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
 def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
                y_offset: int) -> str:
     packed = law.pack(params.scaled(site.scale) if site.scale != 1.0 else params)
-    o = b.params(f"friction.{site.name}", packed)
+    o = b.named_params(f"friction.{site.name}", law.site_slots(params), packed)
     alias = b.use_dynamic(f"_law_{law.name.replace('-', '_')}",
                           f"_friction_law({law.name!r}).compiled", law.compiled)
-    b.local_kernel(alias, len(law.state_names))
+    b.local_kernel(alias, len(law.states(params)))
     return f"f_{site.name} = {alias}({site.speed}, y, {y_offset}, P, {o}, dy)"
 
 
@@ -128,10 +146,10 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     sites = mech.sites(b)
     laws: list[tuple[Site, FrictionLaw, int]] = []
     for site in sites:
-        site_params = getattr(parameters.friction, site.parameters_key)
+        site_params = site.parameters(parameters)
         law = friction_law(site_params.law)
         first = len(b.states)
-        for state in law.state_names:
+        for state in law.states(site_params):
             b.state(f"{site.name}_{state}", law.state_unit,
                     f"{law.name} {state} state, {site.name.replace('_', '–')} friction",
                     "position")
@@ -184,20 +202,28 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     comp = emit_compensation(b, parameters, mech)
     if comp is not None:
         axes[0] = dataclasses.replace(axes[0], extra_current=comp)
+    # parts of the model given as sections of their own (model/parts/): they declare their
+    # slots and may wire into the axes before the cascade, then write their sampled updates
+    parts = [s for _, s in parameters.sections if hasattr(s, "declare_part")]
+    for part in parts:
+        axes = part.declare_part(b, axes)
     loops.emit_cascade(b, axes, channels)
+    for part in parts:
+        part.emit_part(b)
     for ln in ripple_lines:
         b.emit(ln)
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
                   load=load_code, torque_off=parameters.controller.mode == "torque_off")
     for site, law, first in laws:
-        code = _site_code(b, site, law, getattr(parameters.friction, site.parameters_key), first)
+        code = _site_code(b, site, law, site.parameters(parameters), first)
         for body, factor in site.bodies:
             term = f"- f_{site.name}" if factor == "1.0" else f"- {factor} * f_{site.name}"
             m.forces.setdefault(body, []).append(term)
         if site.active:
             m.gated.append(code)
             m.frozen.append(f"f_{site.name} = 0.0")
-            m.frozen += [f"{b.dy(f'{site.name}_{s}')} = 0.0" for s in law.state_names]
+            m.frozen += [f"{b.dy(f'{site.name}_{s}')} = 0.0"
+                         for s in law.states(site.parameters(parameters))]
         else:
             m.always.append(code)
     mech.emit(b, m)

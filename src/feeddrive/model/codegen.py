@@ -107,6 +107,17 @@ class Builder:
             self.param(f"{prefix}[{i}]", float(v))
         return first
 
+    def named_params(self, prefix: str, names: tuple[str, ...], values: np.ndarray) -> int:
+        """Register a block of parameters ``prefix.name`` for each of ``names`` (SI), in
+        order; return the offset of the first (kernels add their part's named offsets)."""
+        values = np.asarray(values, dtype=float)
+        if values.shape != (len(names),):
+            raise ValueError(f"{prefix}: {values.size} values for {len(names)} named slots")
+        first = len(self.param_values)
+        for name, v in zip(names, values, strict=True):
+            self.param(f"{prefix}.{name}", float(v))
+        return first
+
     def p(self, name: str) -> str:
         return f"P[{self.param_index[name]}]"
 

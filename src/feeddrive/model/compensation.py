@@ -13,9 +13,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._jit import kernel
-from ..parameters import ParameterError
+from ..parameters import LuGreParameters, ParameterError
 from .codegen import Builder
-from .friction.lugre import branch, bristle_rate, stribeck_magnitude
+from .friction.lugre import (
+    SIGMA0,
+    SIGMA1,
+    SLOTS,
+    VISCOUS,
+    branch,
+    bristle_rate,
+    stribeck_magnitude,
+)
 
 if TYPE_CHECKING:
     from ..parameters import DriveParameters
@@ -28,7 +36,7 @@ def feedforward_force(v: float, P: np.ndarray, o: int) -> float:
     if v == 0.0:
         return 0.0
     s = 1.0 if v > 0.0 else -1.0
-    return s * stribeck_magnitude(v, P, o) + P[branch(v, o) + 3] * v
+    return s * stribeck_magnitude(v, P, o) + P[branch(v, o) + VISCOUS] * v
 
 
 @kernel
@@ -39,7 +47,7 @@ def observer_force(v: float, e: float, gain: float, y: np.ndarray, k: int, P: np
     z = y[k]
     dz = bristle_rate(v, z, P, o) - gain * e
     dy[k] = dz
-    return P[o + 8] * z + P[o + 9] * dz + P[branch(v, o) + 3] * v
+    return P[o + SIGMA0] * z + P[o + SIGMA1] * dz + P[branch(v, o) + VISCOUS] * v
 
 
 def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism) -> str | None:
@@ -56,9 +64,10 @@ def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism) -> s
     terms = []
     gain = b.param("compensation.observer_gain", c.observer_gain)
     for key, ref_speed, meas_speed in sites:
-        site = getattr(params.friction, key).mismatched(
+        site = getattr(params.friction, key).require(
+            LuGreParameters, f"friction.{key}", "friction compensation").mismatched(
             c.coulomb_scale, c.static_scale, c.stribeck_velocity_scale, c.viscous_scale)
-        o = b.params(f"compensation.{key}", site.as_array())
+        o = b.named_params(f"compensation.{key}", SLOTS, site.as_array())
         if c.mode == "feedforward":
             b.emit(f"comp_{key} = {b.use(feedforward_force)}({ref_speed}, P, {o})")
         else:

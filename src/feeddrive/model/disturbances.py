@@ -51,13 +51,29 @@ def load_force(t: float, P: np.ndarray, o: int, T: np.ndarray) -> float:
 
 @dataclass(frozen=True)
 class LoadProfile:
-    """A table load force record: ``force`` [N] on a uniform ``time`` grid from 0 [s]
-    (linear interpolation, the last value held), acting against positive table motion."""
+    """A table load force record, acting against positive table motion.
+
+    Linear interpolation between samples, the last value held after the record.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Uniform, increasing sample instants from 0 [s].
+    force : numpy.ndarray
+        Load force at each instant [N].
+    """
 
     time: np.ndarray
     force: np.ndarray
 
     def encode(self) -> tuple[float, np.ndarray]:
+        """The record as (sample interval, force samples) for the load kernel.
+
+        Returns
+        -------
+        tuple of (float, numpy.ndarray)
+            The sample interval [s] and the force samples [N].
+        """
         t = np.asarray(self.time, dtype=float)
         f = np.asarray(self.force, dtype=float)
         if t.ndim != 1 or t.size < 2 or f.shape != t.shape:

@@ -134,6 +134,9 @@ class Axis:
     speed_unit: str = "rad/s"
     speed_law: str = "position"  # "speed": may run as a speed loop (controller.nut_loop)
     extra_current: str = ""  # code of a current [A] added to the command (compensation)
+    # code of a current [A] added to the current command in every loop configuration,
+    # sampled or continuous (a feed-forward part); saturated with the command
+    current_feedforward: str = ""
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
@@ -222,7 +225,10 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
                    f"{P}[{ax.param_offset + INJ_SPEED}]")
     out.append("if n_vel > 0:")
     for ax, c in zip(axes, ic, strict=True):
-        out.append(f"    {c} = {b.h(ax.name + '.current_command')}")
+        held = b.h(ax.name + '.current_command')
+        out.append(f"    {c} = {sat}({held} + {ax.current_feedforward}, "
+                   f"{P}[{ax.param_offset + I_MAX}])" if ax.current_feedforward
+                   else f"    {c} = {held}")
     out.append("else:")
     for ax in axes:
         out.append(f"    e_{ax.name} = {verr}({target}[{b.aux_index[ax.name + '_speed_command']}], "
@@ -231,6 +237,8 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
         o = ax.param_offset
         # compensation is continuous-only (refused with sampled loops): right-hand side only
         extra = f" + {ax.extra_current}" if ax.extra_current and target == "aux" else ""
+        if ax.current_feedforward:
+            extra += f" + {ax.current_feedforward}"
         out.append(f"    {c} = {sat}({ccmd}(e_{ax.name}, {b.y(ax.name + '_velocity_integral')}, "
                    f"{P}, {o}) + {P}[{o + INJ_CURRENT}]{extra}, {P}[{o + I_MAX}])")
 

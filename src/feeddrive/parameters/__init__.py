@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
+from .. import registry
 from .components import (
     BallScrew,
     Compensation,
+    Component,
     Controller,
     Coupling,
     Disturbances,
@@ -17,6 +19,7 @@ from .components import (
     LinearMotor,
     LuGreParameters,
     Motor,
+    SiteParameters,
     StiffnessModel,
     Table,
     TorqueRipple,
@@ -26,12 +29,12 @@ from .validation import ParameterError
 
 
 class _Presets(Mapping[str, Callable[[], DriveParameters]]):
-    """The registered presets (``feeddrive.presets``), imported on first use."""
+    """The registered presets (:mod:`feeddrive.registry`, group ``feeddrive.presets``: the
+    package's own in :mod:`feeddrive.presets` and any installed plug-in's), loaded on first
+    use."""
 
     def _table(self) -> dict[str, Callable[[], DriveParameters]]:
-        from ..presets import PRESETS as table
-
-        return table
+        return registry.table(registry.PRESETS)
 
     def __getitem__(self, name: str) -> Callable[[], DriveParameters]:
         return self._table()[name]
@@ -47,7 +50,18 @@ PRESETS = _Presets()
 
 
 def preset(name: str) -> DriveParameters:
-    """The named parameter set, e.g. ``preset("wang2021")``."""
+    """The named parameter set.
+
+    Parameters
+    ----------
+    name : str
+        A registered preset, e.g. ``"wang2021"`` or ``"wang2021-literal"``.
+
+    Returns
+    -------
+    DriveParameters
+        A new copy of the set.
+    """
     if name not in PRESETS:
         raise ParameterError(
             "preset", name, f"unknown preset; expected one of {', '.join(PRESETS)}"
@@ -56,9 +70,9 @@ def preset(name: str) -> DriveParameters:
 
 
 __all__ = [
-    "BallScrew", "Compensation", "Controller", "Coupling", "Disturbances", "DriveParameters",
-    "FrictionBranch",
+    "BallScrew", "Component", "Compensation", "Controller", "Coupling", "Disturbances",
+    "DriveParameters", "FrictionBranch",
     "FrictionSites", "LeadError", "LinearMotor", "LuGreParameters", "Motor", "ParameterError",
-    "PRESETS", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict", "load", "loads",
-    "preset", "save", "to_dict",
+    "PRESETS", "SiteParameters", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict",
+    "load", "loads", "preset", "save", "to_dict",
 ]

@@ -12,6 +12,7 @@ from typing import Any, Self
 
 import numpy as np
 
+from .. import registry
 from .validation import ParameterError, choice, flag, quantities, quantity, validate
 
 _MM_HINT = "looks like millimetres; give metres"
@@ -39,6 +40,10 @@ class _Component:
 
     def with_values(self, **changes: Any) -> Self:
         return replace(self, **changes)  # type: ignore[type-var]
+
+
+#: the base of every parameter component: a part's own section subclasses it
+Component = _Component
 
 
 @dataclass(frozen=True)
@@ -72,7 +77,75 @@ class FrictionBranch(_Component):
 
 
 @dataclass(frozen=True)
-class LuGreParameters(_Component):
+class SiteParameters(_Component):
+    """Base of the parameters of one friction site.  Its ``law`` picks the class: each
+    friction law names its parameter class (``FrictionLaw.parameters_class``), so a law with
+    parameters of its own (e.g. GMS) brings them in its own module; laws without (LuGre,
+    Stribeck, Dahl, none) share :class:`LuGreParameters`."""
+
+    _label = "friction"
+
+    @property
+    def law_name(self) -> str:
+        """The site's friction law."""
+        return str(vars(self).get("law", ""))
+
+    @staticmethod
+    def class_for(data: Any, path: str) -> type[SiteParameters]:
+        """The parameter class of a site table (its ``law``, default ``"lugre"``).
+
+        Parameters
+        ----------
+        data : dict
+            The site's table as read from TOML.
+        path : str
+            Its dotted path, for messages (``"friction.guide"``).
+
+        Returns
+        -------
+        type of SiteParameters
+            The class the site's law declares.
+        """
+        law = data.get("law", "lugre") if isinstance(data, dict) else "lugre"
+        laws = registry.table(registry.FRICTION_LAWS)
+        if not isinstance(law, str) or law not in laws:
+            raise ParameterError(f"{path}.law", law,
+                                 f"unknown friction law; expected one of {', '.join(laws)}")
+        cls: type[SiteParameters] = getattr(laws[law], "parameters_class", LuGreParameters)
+        return cls
+
+    def require(self, kind: type[SiteParameters], path: str, what: str) -> Any:
+        """This site as ``kind``, or a refusal naming the site, its law and what needs it.
+
+        Parameters
+        ----------
+        kind : type of SiteParameters
+            The parameter class the caller works with (e.g. :class:`LuGreParameters`).
+        path : str
+            The site's dotted path, for the message (``"friction.guide"``).
+        what : str
+            What needs that class (``"friction compensation"``).
+
+        Returns
+        -------
+        SiteParameters
+            ``self``, of class ``kind``.
+        """
+        if not isinstance(self, kind):
+            raise ParameterError(f"{path}.law", self.law_name,
+                                 f"{what} works with {kind.__name__} sites (laws "
+                                 f"{', '.join(_laws_of(kind))}); this site's law has "
+                                 f"parameters of its own ({type(self).__name__})")
+        return self
+
+
+def _laws_of(kind: type[SiteParameters]) -> list[str]:
+    return [name for name, law in registry.table(registry.FRICTION_LAWS).items()
+            if getattr(law, "parameters_class", LuGreParameters) is kind]
+
+
+@dataclass(frozen=True)
+class LuGreParameters(SiteParameters):
     """LuGre friction at one site, linear (force) form.  Wang2021 Eqs. (9)–(11), Table 1.
 
     Rotary sites (screw and hollow shafts) are stored as the paper does: torques divided by
@@ -93,11 +166,15 @@ class LuGreParameters(_Component):
     def _check(self) -> None:
         if not isinstance(self.law, str):
             raise ParameterError(f"{self._label}.law", self.law, "expected a law name")
-        from ..model.friction import law_names  # registry; imports no parameter module
-
-        if self.law not in law_names():
+        laws = registry.table(registry.FRICTION_LAWS)
+        if self.law not in laws:
             raise ParameterError(f"{self._label}.law", self.law,
-                                 f"unknown friction law; expected one of {', '.join(law_names())}")
+                                 f"unknown friction law; expected one of {', '.join(laws)}")
+        own = getattr(laws[self.law], "parameters_class", LuGreParameters)
+        if own is not LuGreParameters:
+            raise ParameterError(f"{self._label}.law", self.law,
+                                 f"this law takes the parameters of {own.__name__}, not "
+                                 "LuGre's (give the site's table in that form)")
 
     def mismatched(self, coulomb: float, static: float, stribeck_velocity: float,
                    viscous: float) -> LuGreParameters:
@@ -150,9 +227,9 @@ class FrictionSites(_Component):
     reading (every friction at its own shaft's speed); with the nut held (CDFS) f has no effect.
     """
 
-    screw: LuGreParameters
-    nut: LuGreParameters
-    guide: LuGreParameters
+    screw: SiteParameters
+    nut: SiteParameters
+    guide: SiteParameters
     ball_nut_share: float = quantity("-", low=0, high=1, low_inclusive=True, default=0.0,
                                      hint="a fraction between 0 and 1")
     _label = "friction"
@@ -394,7 +471,43 @@ class LinearMotor(_Component):
 
 @dataclass(frozen=True)
 class DriveParameters(_Component):
-    """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control."""
+    """Everything that defines a feed drive: mechanics, motors, friction, stiffness, control.
+
+    All values SI (the TOML files and ``feeddrive params show`` too); each component validates
+    its own fields with units and ranges (:mod:`feeddrive.parameters.validation`).
+
+    Parameters
+    ----------
+    name : str
+        Name of the set (printed in reports, results and exports).
+    description : str
+        What the set is and where its values come from.
+    screw : BallScrew
+        Ball screw: lead, diameter, length, inertia (Wang2021 Table 2).
+    coupling : Coupling
+        Motor–screw coupling.
+    screw_motor : Motor
+        The screw's servo motor (R-L circuit, torque and back-EMF constants).
+    hollow_motor : Motor
+        The hollow motor driving the nut (DDFS).
+    table : Table
+        Table mass and guide.
+    friction : FrictionSites
+        Friction at the screw shaft, the hollow (nut) shaft and the guide, each with its law.
+    stiffness : StiffnessModel, default StiffnessModel()
+        Axial stiffness chain (Wang2021 Eqs. (2)–(5)) and structural damping.
+    controller : Controller, default the Table 2 gains
+        Cascade loops (position, velocity, current) of the screw motor.
+    disturbances : Disturbances, default Disturbances()
+        Load force, motor torque ripple, lead error.
+    linear_motor : LinearMotor or None, default None
+        The forcer of the ``linear-motor`` drive.
+    hollow_controller : Controller or None, default None
+        The hollow motor's own loops; None: it uses ``controller``.
+    sections : tuple of (str, Component), default ()
+        Parts' own sections by name, sorted (``[rack_pinion]``, ``[acceleration_feedforward]``;
+        registry group ``feeddrive.sections``); read like fields (``params.rack_pinion``).
+    """
 
     name: str
     description: str
@@ -410,14 +523,65 @@ class DriveParameters(_Component):
     linear_motor: LinearMotor | None = None
     # the hollow motor's own loops; absent: it uses ``controller`` as the screw motor does
     hollow_controller: Controller | None = None
+    # parts' own sections ([rack_pinion], ...), by name: registry group feeddrive.sections
+    sections: tuple[tuple[str, Any], ...] = ()
     _label = "parameters"
 
     def _check(self) -> None:
         _check_text("name", self.name, MAX_NAME, lines=False)
         _check_text("description", self.description, MAX_DESCRIPTION, lines=True)
+        known = registry.table(registry.SECTIONS)
+        names = [name for name, _ in self.sections]
+        if names != sorted(set(names)):
+            raise ParameterError("sections", names, "expected each section once, sorted")
+        for name, value in self.sections:
+            cls = known.get(name)
+            if cls is None:
+                raise ParameterError(name, "…", f"unknown section; expected one of "
+                                     f"{', '.join(known) or '(none registered)'}")
+            if not isinstance(value, cls):
+                raise ParameterError(name, type(value).__name__, f"expected {cls.__name__}")
+
+    def section(self, name: str) -> Any:
+        """A part's own parameter section (e.g. ``"rack_pinion"``), or None if absent.
+
+        Parameters
+        ----------
+        name : str
+            The section's name in the parameter file.
+
+        Returns
+        -------
+        Component or None
+            The section's parameters.
+        """
+        return dict(self.sections).get(name)
+
+    def __getattr__(self, name: str) -> Any:
+        # sections read like fields (params.rack_pinion, dotted paths); only called when
+        # normal attribute lookup fails
+        if name.startswith("_") or name == "sections":
+            raise AttributeError(name)
+        for key, value in object.__getattribute__(self, "sections"):
+            if key == name:
+                return value
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def replace_path(self, path: str, value: Any) -> DriveParameters:
-        """Return a copy with the dotted ``path`` (e.g. ``controller.velocity_gain``) set."""
+        """A copy with one value, addressed by its dotted path, replaced.
+
+        Parameters
+        ----------
+        path : str
+            Dotted path, e.g. ``"controller.velocity_gain"``.
+        value : object
+            The new value, in the field's SI unit [unit of ``path``]; validated as on loading.
+
+        Returns
+        -------
+        DriveParameters
+            The changed copy (this set is unchanged).
+        """
         return _replace_path(self, path.split("."), value, path)
 
 
@@ -443,6 +607,11 @@ def _default_controller() -> Controller:
 def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
     names = {f.name for f in fields(obj)}
     head = parts[0]
+    sections = dict(getattr(obj, "sections", ()) if head not in names else ())
+    if head in sections:
+        changed = (_replace_path(sections[head], parts[1:], value, full) if len(parts) > 1
+                   else value)
+        return replace(obj, sections=tuple(sorted({**sections, head: changed}.items())))
     if head not in names:
         raise ParameterError(full, value, f"unknown field {head!r}")
     if len(parts) == 1:

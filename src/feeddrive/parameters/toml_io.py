@@ -21,6 +21,7 @@ import types
 from pathlib import Path
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
+from .. import registry
 from .components import DriveParameters
 from .validation import ParameterError
 
@@ -46,6 +47,9 @@ def to_dict(obj: Any) -> dict[str, Any]:
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
         if value is None:
+            continue
+        if f.name == "sections":  # parts' own sections are tables of the file's top level
+            out.update({name: to_dict(section) for name, section in value})
             continue
         out[f.name] = to_dict(value) if dataclasses.is_dataclass(value) else value
     return out
@@ -180,6 +184,9 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
         value = getattr(obj, f.name)
         if value is None:
             continue
+        if f.name == "sections":
+            nested += list(value)
+            continue
         if dataclasses.is_dataclass(value):
             nested.append((f.name, value))
         else:
@@ -212,10 +219,18 @@ def dumps(params: DriveParameters) -> str:
 
 
 def save(params: DriveParameters, path: str | Path) -> None:
-    """Write ``params`` to ``path`` (atomically: :func:`feeddrive.outputs.atomic_path`)."""
+    """Write a parameter set as TOML (SI units), readable by :func:`load`.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The set to write.
+    path : str or pathlib.Path
+        The file to write.
+    """
     from ..outputs import atomic_path
 
-    with atomic_path(path) as tmp:
+    with atomic_path(path) as tmp:  # nothing partial under the name (a full disk)
         tmp.write_text(dumps(params), encoding="utf-8")
 
 
@@ -224,6 +239,13 @@ def _build(cls: type, data: Any, path: str) -> Any:
         raise ParameterError(path, data, "expected a table of values")
     hints = get_type_hints(cls)
     names = {f.name for f in dataclasses.fields(cls)}
+    if "sections" in names:  # a part's own section: its class is registered under its name
+        known = registry.table(registry.SECTIONS)
+        found = {key: _build(known[key], data[key], f"{path}.{key}" if path else key)
+                 for key in sorted(set(data) - names) if key in known}
+        data = {k: v for k, v in data.items() if k not in found}
+        if found:
+            data["sections"] = tuple(found.items())
     unknown = sorted(set(data) - names)
     if unknown:
         key = unknown[0]
@@ -241,6 +263,8 @@ def _build(cls: type, data: Any, path: str) -> Any:
                     if not path or "." not in path else "")
             raise ParameterError(sub, None, "missing field" + hint)
         comp = _component_type(hints[f.name])
+        if comp is not None and hasattr(comp, "class_for"):  # chosen by the table (its law)
+            comp = comp.class_for(data[f.name], sub)
         kwargs[f.name] = _build(comp, data[f.name], sub) if comp else data[f.name]
     try:
         return cls(**kwargs)
@@ -254,11 +278,27 @@ def _build(cls: type, data: Any, path: str) -> Any:
 def _merge(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
     out = dict(base)
     for key, value in changes.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
+        if _new_site_class(out.get(key), value):
+            out[key] = value  # a law with other parameters: its table replaces the parent's
+        elif isinstance(value, dict) and isinstance(out.get(key), dict):
             out[key] = _merge(out[key], value)
         else:
             out[key] = value
     return out
+
+
+def _new_site_class(base: Any, change: Any) -> bool:
+    """True when ``change`` sets a friction law whose parameter class differs from the law's
+    of ``base`` (both site tables)."""
+    if not (isinstance(base, dict) and isinstance(change, dict) and "law" in change
+            and "law" in base):
+        return False
+    laws = registry.table(registry.FRICTION_LAWS)
+    if change["law"] not in laws or base["law"] not in laws:
+        return False
+    classes = {getattr(laws[name], "parameters_class", None) for name in (change["law"],
+                                                                          base["law"])}
+    return len(classes) > 1
 
 
 def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DriveParameters:
@@ -268,10 +308,9 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
         parent_name = data["extends"]
         if not isinstance(parent_name, str):
             raise ParameterError("extends", parent_name, "expected a preset name or a file path")
-        from . import PRESETS, preset
-
-        if parent_name in PRESETS:
-            parent = preset(parent_name)
+        presets = registry.table(registry.PRESETS)
+        if parent_name in presets:
+            parent = presets[parent_name]()
         elif parent_name.endswith(".toml"):
             parent_path = (base_dir or Path.cwd()) / parent_name
             try:
@@ -283,7 +322,7 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
                 raise
         else:
             raise ParameterError("extends", parent_name,
-                                 f"expected one of {', '.join(PRESETS)} or a .toml file")
+                                 f"expected one of {', '.join(presets)} or a .toml file")
         changes = {k: v for k, v in data.items() if k != "extends"}
         changes.setdefault("name", parent.name if parent.name.endswith("+changes")
                            else f"{parent.name}+changes")
@@ -302,9 +341,21 @@ _loading = threading.local()  # the files being read, outermost first (extends c
 
 
 def load(path: str | Path) -> DriveParameters:
-    """Read a parameter file; ``extends`` chains are followed, a cycle (``a.toml`` extends
-    ``b.toml`` extends ``a.toml``) or a chain longer than :data:`MAX_EXTENDS` files is
-    refused naming its files."""
+    """Read a parameter set from a TOML file (``extends = "NAME"`` or ``"FILE.toml"`` allowed).
+
+    ``extends`` chains are followed; a cycle (``a.toml`` extends ``b.toml`` extends
+    ``a.toml``) or a chain longer than :data:`MAX_EXTENDS` files is refused naming its files.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    DriveParameters
+        The validated set; a refusal names the file, the field, the value and the unit.
+    """
     chain: list[tuple[Path, str]] = _loading.__dict__.setdefault("chain", [])
     try:
         resolved = Path(path).resolve()

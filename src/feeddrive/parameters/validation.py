@@ -40,9 +40,23 @@ def _cut(text: str) -> str:
 
 
 class ParameterError(ValueError):
-    """A parameter value was refused.  The message names field, value and expected unit,
-    and the file it came from when there is one (``source``).  Long field names, values
-    and file names are cut in the message (:data:`MAX_SHOWN`); the attributes keep them."""
+    """A parameter value was refused.
+
+    The message names field, value and expected unit, and the file it came from when there is
+    one (``source``).  Long field names, values and file names are cut in the message
+    (:data:`MAX_SHOWN`); the attributes keep them.
+
+    Parameters
+    ----------
+    field : str
+        Dotted name of the refused field (e.g. ``"table.mass"``).
+    value : object
+        The refused value.
+    message : str
+        What was expected, with its unit.
+    source : str or None, default None
+        The file the value came from.
+    """
 
     def __init__(self, field: str, value: object, message: str, *,
                  source: str | None = None) -> None:
@@ -54,8 +68,18 @@ class ParameterError(ValueError):
         super().__init__(f"{where}{_cut(str(field))} = {shown_value(value)}: {message}")
 
     def in_file(self, source: str) -> ParameterError:
-        """The same refusal, naming the file it came from (an error already naming its file,
-        e.g. from a file it extends, is kept)."""
+        """The same refusal, naming the file it came from.
+
+        Parameters
+        ----------
+        source : str
+            The file; an error already naming its file (e.g. from a file it extends) is kept.
+
+        Returns
+        -------
+        ParameterError
+            An error whose message names ``source``.
+        """
         if self.source is not None:
             return self
         return ParameterError(self.field, self.value, self.message, source=source)

@@ -28,7 +28,8 @@ CAPTIONS: dict[str, tuple[str, str]] = {
         "Wang2021 Fig. 7: overshoot and settling shrink as v_n grows, with no further gain "
         "beyond about 10× the CDFS critical speed."),
     "fig8_ddfs_critical.png": (
-        "fig8", "DDFS (v_n = 16 mm/s) at the critical speed feeddrive finds (dashed: "
+        "fig8", "DDFS (v_n = 16 mm/s) at feeddrive's critical speed when its search finds "
+        "one in range, else at the paper's 0.5 mm/s; the title says which (dashed: "
         "command). Wang2021 Fig. 8: smooth motion at 0.5 mm/s (v_s = 16.5 mm/s)."),
     "fig9_sine_1p56.png": (
         "sine", "Sinusoidal table speed of amplitude 1.56 mm/s, one panel per hollow-motor "
@@ -65,15 +66,24 @@ def _command(ax: Any, trace: dict[str, list[float]]) -> None:
             label="command")
 
 
+def _legend_outside(fig: Any, ax: Any, where: str = "upper") -> None:
+    """One legend for the figure, above or below the panels: on a trace that fills its axes
+    an inner legend always covers data (issue 24 item 2).  Below when the figure has a
+    suptitle (constrained layout puts an upper legend over it)."""
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc=f"outside {where} center", ncol=len(handles),
+               fontsize=8, frameon=False)
+
+
 def build_fig6(data: dict[str, Any]) -> Any:
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True, layout="constrained")
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.9), sharey=True, layout="constrained")
     for ax, (key, d) in zip(axes, data.items(), strict=True):
         _speed_axes(ax, d["trace"], "table")
         _command(ax, d["trace"])
         ax.set_title(f"CDFS, v = {key} mm/s: {d['verdict']}")
         ax.set_xlabel("time [s]")
     axes[0].set_ylabel("table speed [mm/s]")
-    axes[0].legend()
+    _legend_outside(fig, axes[0])
     return fig
 
 
@@ -81,18 +91,35 @@ def fig6(data: dict[str, Any], out: Path) -> Path:
     return _save(build_fig6(data), out / "fig6_cdfs_1p55_1p56.png")
 
 
+#: the part of viridis a trace may use: its last fifth is yellow, invisible on white
+TRACE_COLOR_RANGE = (0.0, 0.8)
+
+
+def trace_color(i: int, n: int) -> Any:
+    """Colour of trace ``i`` of ``n`` overlaid traces in order: viridis, without its yellow
+    end (Fig. 7's seventh trace was invisible, issue 24 item 2)."""
+    lo, hi = TRACE_COLOR_RANGE
+    return plt.get_cmap("viridis")(lo + (hi - lo) * i / max(n - 1, 1))
+
+
 def build_fig7(data: dict[str, Any]) -> Any:
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8), layout="constrained")
-    colors = plt.get_cmap("viridis")
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), layout="constrained")
     traces = list(data["traces"].items())
-    for i, (key, trace) in enumerate(traces):
-        _speed_axes(axes[0], trace, f"{key}×", color=colors(i / max(len(traces) - 1, 1)))
+    # v_n = 0 (the hollow motor held: the CDFS's behaviour) in grey beneath the others, the
+    # DDFS's traces in viridis order
+    ddfs = [(k, t) for k, t in traces if float(k) > 0]
+    for key, trace in traces:
+        if float(key) <= 0:
+            _speed_axes(axes[0], trace, f"{key}× (nut held)", color="0.6")
+    for i, (key, trace) in enumerate(ddfs):
+        _speed_axes(axes[0], trace, f"{key}×", color=trace_color(i, len(ddfs)))
     axes[0].set_xlabel("time [s]")
     axes[0].set_ylabel("table speed [mm/s]")
     axes[0].set_title("DDFS at 1.55 mm/s")
-    # outside the axes: seven traces and their legend used to cover the data
+    # below the axes, in rows: seven traces and their legend used to cover the data, and a
+    # legend beside the axes took 40 % of the width (issue 24 item 2)
     axes[0].legend(title="v_n / v_crit,CDFS", fontsize=7, title_fontsize=7,
-                   loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+                   loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=4)
     rows = [r for r in data["rows"] if r["multiple"] > 0]
     vn = [1e3 * r["nut_speed"] for r in rows]
     left = axes[1].plot(vn, [100 * r["overshoot"] for r in rows], "o-", color="C0",
@@ -133,7 +160,7 @@ def build_fig8(trace: dict[str, Any], critical: dict[str, Any]) -> Any:
     ax.set_title(fig8_title(critical), fontsize=9)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("table speed [mm/s]")
-    ax.legend()
+    _legend_outside(fig, ax)
     return fig
 
 
@@ -146,7 +173,7 @@ def build_sine(data: dict[str, Any], amplitude_mm_s: float, figure: str) -> Any:
     hidden), the largest reversal overshoot marked and written in each panel."""
     traces = [(k, t) for k, t in data["traces"].items()
               if abs(float(k.split("/")[0]) - amplitude_mm_s) < 1e-9]
-    fig, axes = plt.subplots(len(traces), 1, figsize=(8, 1.9 * len(traces) + 0.6),
+    fig, axes = plt.subplots(len(traces), 1, figsize=(8, 1.9 * len(traces) + 1.0),
                              sharex=True, sharey=True, layout="constrained", squeeze=False)
     for ax, (key, trace) in zip(axes[:, 0], traces, strict=True):
         vn = key.split("/")[1]
@@ -160,14 +187,18 @@ def build_sine(data: dict[str, Any], amplitude_mm_s: float, figure: str) -> Any:
                      if abs(1e3 * r["table_amplitude"] - amplitude_mm_s) < 1e-9
                      and abs(1e3 * r["nut_amplitude"] - float(vn)) < 1e-9)
         if at is not None:
+            # the overshoot is the largest gap between table and command near a reversal
+            # (not a peak of the trace): drawn as that gap, a bar from command to table
             k = min(range(len(trace["time"])), key=lambda i: abs(trace["time"][i] - at))
-            ax.plot(at, 1e3 * trace["table_speed"][k], "o", color="C3", ms=6,
-                    label="largest reversal overshoot")
-        ax.text(0.01, 0.95, f"v_np = {vn} mm/s: reversal overshoot {100 * value:.0f} %",
-                transform=ax.transAxes, va="top", fontsize=8,
-                bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"})
-        ax.set_ylabel("[mm/s]")
-    axes[0, 0].legend(fontsize=7, loc="upper right")
+            ref_k = 1e3 * trace["table_speed_reference"][k]
+            ax.plot([at, at], [ref_k, 1e3 * trace["table_speed"][k]], "-", color="C3", lw=2.2,
+                    solid_capstyle="butt",
+                    label="largest gap to the command near a reversal (reversal overshoot)")
+        # the panel's label as its title: a box in the axes blanked the trace's peak
+        ax.set_title(f"v_np = {vn} mm/s: reversal overshoot {100 * value:.0f} %",
+                     loc="left", fontsize=8, pad=3)
+        ax.set_ylabel("table speed\n[mm/s]", fontsize=8)
+    _legend_outside(fig, axes[0, 0], "lower")
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(f"{figure}: sinusoidal table speed, amplitude {amplitude_mm_s:g} mm/s, "
                  f"{data['frequency']:g} Hz")
@@ -206,8 +237,9 @@ def build_fig14(rows: list[dict[str, Any]]) -> Any:
     ax2.plot(pos, [1e-6 * r["k_sa"] for r in rows], "k:", label="k_sa (right axis)")
     ax2.set_ylabel("k_sa [N/µm]")
     handles = ax.get_legend_handles_labels()[0] + ax2.get_legend_handles_labels()[0]
-    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.12, 1.0),
-              borderaxespad=0.0)
+    # below the plot, in two columns: beside it, the legend took 40 % of the width
+    fig.legend(handles=handles, fontsize=7, loc="outside lower center", ncol=2,
+               frameon=False)
     ax.set_title("critical speed against table position (Table 3, Fig. 14)")
     return fig
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from .. import protocol
 from ..analysis.critical import format_critical_speed
 from ..linear import loop_analysis, stability_band
 from ..paper import PAPER
@@ -31,7 +32,8 @@ def linear_rows(params: DriveParameters, results: dict[str, Any]) -> tuple[str, 
              ("DDFS (v_n = 16 mm/s)", "ddfs", PAPER["ddfs_sim_nut_speed"], "crit-ddfs-fig8"))
     for label, drive, vn, key in cases:
         band = stability_band(DriveSystem(params, drive, MID), vn, points=30)
-        shown = ("stable at every speed 0.01–5 mm/s" if not band.intervals else "; ".join(
+        lo, hi = (1e3 * v for v in protocol.LINEAR_SPEED_RANGE)
+        shown = (f"stable at every speed {lo:g}–{hi:g} mm/s" if not band.intervals else "; ".join(
             f"{1e3 * lo:.3f}–{1e3 * hi:.3f} mm/s ({f:.2f} Hz)"
             for (lo, hi), f in zip(band.intervals, band.mode_frequency_hz, strict=True)))
         sim = format_critical_speed(crit[key]) if key in crit else "—"

@@ -8,12 +8,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from markdown_it import MarkdownIt
 
 from .. import __version__, protocol
 from ..analysis.critical import format_bands, format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
 from ..outputs import atomic_path
-from ..parameters import DriveParameters
+from ..parameters import DriveParameters, LuGreParameters
 from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
 from ..units import SITES
@@ -67,10 +68,21 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
                      "feeddrive": shown if shown is not None else _fmt(ours, digits),
                      "unit": unit, "deviation": _dev(ours, paper), "fitted_or_predicted": kind})
 
+    shown_bands: dict[str, str] = {}  # drive → bands already written in a row above
+
     def add_critical(item: str, source: str, paper: float, key: str, kind: str) -> None:
         shown = format_critical_speed(crit[key])
         if crit[key].get("kind"):
-            shown += f" ({crit[key]['kind']} below; creeping bands {format_bands(crit[key])})"
+            bands = format_bands(crit[key])
+            drive = str(crit[key].get("drive", key))
+            # a band string is written once per drive; rows with the same bands refer to it
+            # (Table 3's five rows repeated one string, issue 24 item 3)
+            if shown_bands.get(drive) == bands:
+                shown += (f" ({crit[key]['kind']} below; creeping bands as in the "
+                          f"{drive.upper()} row above)")
+            else:
+                shown += f" ({crit[key]['kind']} below; creeping bands {bands})"
+                shown_bands[drive] = bands
         add(item, source, paper, c(key), "mm/s", kind, shown=shown)
 
     add_critical("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56,
@@ -85,9 +97,12 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
     add("ratio CDFS / DDFS critical speed", "Sect. 5.2, Fig. 8", 1.56 / 0.5, ratio, "-",
         "predicted", shown=ratio_text)
     for i, a in enumerate(PAPER["positions"]):
+        # the fit targeted Sect. 5.2's *simulated* 1.56 mm/s, not Table 3's measured value:
+        # every Table 3 row is a prediction (issue 24 item 3)
         add_critical(f"CDFS critical speed at x_t = {1e3 * a:.0f} mm (measured)", "Table 3",
                      1e3 * PAPER["cdfs_table3"][i], f"crit-cdfs-{a}",
-                     fitted_note if a == MID else "predicted")
+                     "predicted (the fit targeted the simulated 1.56 mm/s, not this row)"
+                     if a == MID and params.name == "wang2021" else "predicted")
     for i, a in enumerate(PAPER["positions"]):
         add_critical(f"DDFS critical speed at x_t = {1e3 * a:.0f} mm, v_n = 20 mm/s (measured)",
                      "Table 3", 1e3 * PAPER["ddfs_table3"][i], f"crit-ddfs-{a}", "predicted")
@@ -96,7 +111,8 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
             1e-6 * r["k_sa_paper"], 1e-6 * r["k_sa"], "N/µm", "predicted (E assumed)")
     add("K_eq at mid-screw", "Sect. 5.2, Eqs. (2)–(5)", 1e-6 * PAPER["k_eq_mid"],
         1e-6 * equivalent_stiffness(params, MID), "N/µm", "predicted")
-    band = negative_slope_band(params.friction.screw.positive)
+    screw = params.friction.screw.require(LuGreParameters, "friction.screw", "the report")
+    band = negative_slope_band(screw.positive)
     add("screw-shaft zero-slope speed (+ branch) vs CDFS critical speed", "Sect. 5.2 (1.56)",
         1.56, None if band is None else 1e3 * band.upper, "mm/s", "analytic indicator")
     f6 = results["fig6"]
@@ -219,7 +235,10 @@ def rigid_body_band(params: DriveParameters) -> str:
     # c·K_pp + c_i, a damper c and an integral term c_i·K_pp (current loop ideal at these
     # frequencies: PI, or P with its back-EMF damping neglected)
     stiffness = c.position_gain * damping + integral
-    st = sliding_stability(speeds, [params.friction.screw, params.friction.guide], mass,
+    sites = [getattr(params.friction, k).require(LuGreParameters, f"friction.{k}",
+                                                 "the rigid-drive indicator")
+             for k in ("screw", "guide")]
+    st = sliding_stability(speeds, sites, mass,
                            stiffness, damping, integral=c.position_gain * integral)
     bad = speeds[~st.stable]
     text = (f"rigid CDFS (m = {mass:.0f} kg, loop damping {damping:.3g} N s/m, stiffness "
@@ -227,6 +246,16 @@ def rigid_body_band(params: DriveParameters) -> str:
     if bad.size == 0:
         return text + ": steady sliding linearly stable at every speed 0.02–4 mm/s"
     return text + f": linearly unstable from {1e3 * bad.min():.2f} to {1e3 * bad.max():.2f} mm/s"
+
+
+# why the two "linearly unstable" bands of the report differ (issue 24 item 3)
+RIGID_VS_LINEAR = (
+    "This band is a one-mass estimate: the table and rotors move as one rigid body and the "
+    "current loop is ideal.  The linear analysis section below linearises the whole model "
+    "(screw, nut and guide compliance, each friction site's bristle dynamics, the current "
+    "loop), so its band differs; that one, the band `feeddrive stability` gives, is the "
+    "model's answer, and this one only shows that the Stribeck slope of the friction "
+    "destabilises the servo mode at a few mm/s and below.")
 
 
 def study_rows(rows: list[dict[str, Any]]) -> list[dict[str, str]]:
@@ -290,18 +319,50 @@ def _table_md(rows: list[dict[str, str]]) -> str:
         return ""
     keys = list(rows[0])
     lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-    lines += ["| " + " | ".join(str(r[k]) for k in keys) + " |" for r in rows]
+    lines += ["| " + " | ".join(str(r[k]).replace("|", "\\|") for k in keys) + " |"
+              for r in rows]
     return "\n".join(lines)
 
 
-def _table_html(rows: list[dict[str, str]]) -> str:
-    if not rows:
-        return ""
-    keys = list(rows[0])
-    head = "".join(f"<th>{html.escape(k)}</th>" for k in keys)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(r[k]))}</td>" for k in keys)
-                   + "</tr>" for r in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+def _markdown() -> MarkdownIt:
+    """The one Markdown renderer of the report: report.md is the source, report.html its
+    rendering (CommonMark with tables; raw HTML in the text is escaped, issue 24 item 1)."""
+    return MarkdownIt("commonmark", {"html": False}).enable("table")
+
+
+def render_html(markdown_text: str) -> str:
+    """HTML of a piece of the report's Markdown (lists, emphasis, code, links, tables)."""
+    return str(_markdown().render(markdown_text))
+
+
+def run_text(results: dict[str, Any]) -> str:
+    """The report header's account of the run: its wall time, and how many studies were
+    computed and how many reused from OUT/data (a resumed run's wall time is not the study's
+    cost, issue 24 item 3)."""
+    text = f"wall time {results['wall_time_s']:.0f} s"
+    reused, total = results.get("studies_reused"), results.get("studies_total")
+    if reused is None or total is None:
+        return text
+    if reused == 0:
+        return text + f", all {total} studies computed in this run"
+    return (text + f"; {reused} of {total} studies reused from an earlier run (OUT/data/), "
+            f"{total - reused} computed in this run")
+
+
+def settings_markdown(settings: StudySettings) -> str:
+    """The study settings as a reader's list in mm/s and s (not a Python repr in SI)."""
+    lo, hi = (1e3 * v for v in settings.speed_range)
+    fig7 = ", ".join(f"{m:g}" for m in settings.fig7_multiples)
+    vnp = ", ".join(f"{1e3 * v:g}" for v in settings.sine_nut_amplitudes)
+    return "\n".join([
+        f"* creep trials: {settings.trial_initial_duration:g} s, doubled up to "
+        f"{settings.trial_max_duration:g} s until the verdict is decided",
+        f"* critical-speed search: {lo:g}–{hi:g} mm/s, scan step "
+        f"{1e3 * settings.coarse_step:g} mm/s, resolution {1e3 * settings.resolution:g} mm/s",
+        f"* Fig. 7: v_n = {fig7} × the CDFS critical speed",
+        f"* Figs. 9–10: sine {settings.sine_frequency:g} Hz, {settings.sine_periods:g} periods, "
+        f"hollow-motor amplitudes v_np = {vnp} mm/s",
+    ])
 
 
 def write(params: DriveParameters, settings: StudySettings, results: dict[str, Any],
@@ -366,7 +427,7 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
          assumptions),
         ("indicators", "Analytic indicators", "Steady friction curves (Table 1): "
          "negative-slope bands, zero-slope speeds and LuGre passivity per site. "
-         + rigid_body_band(params) + ".", indicators),
+         + rigid_body_band(params) + ".  " + RIGID_VS_LINEAR, indicators),
         ("linear", "Linear analysis", linear_text, linear),
         ("ripple", "The DDFS question: motor torque ripple", ripple_text, ripple),
         ("ripple-positions", "Torque-ripple reading at the five table positions",
@@ -395,39 +456,39 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
                      == key] for key in placed}
     unplaced = [f for f in results["figures"] if figures_mod.CAPTIONS.get(f, ("",))[0]
                 not in placed]
-    settings_text = repr(settings)
+    settings_text = settings_markdown(settings)
 
     def caption(name: str) -> str:
         return figures_mod.CAPTIONS.get(name, ("", name))[1]
 
+    header = (f"feeddrive {__version__}, {when}, {run_text(results)}. "
+              f"{wang2021.CITATION}.")
     md = [f"# feeddrive reproduction of Wang2021 — parameter set `{params.name}`", "",
-          f"feeddrive {__version__}, {when}, wall time {results['wall_time_s']:.0f} s. "
-          f"{wang2021.CITATION}.", ""]
+          header, ""]
     for key, title, text, rows in sections:
         md += [f"## {title}", "", text, "", _table_md(rows), ""]
         for name in figures[key]:
             md += [f"![{name}]({name})", "", f"*{caption(name)}*", ""]
     for name in unplaced:
         md += [f"![{name}]({name})", "", f"*{caption(name)}*", ""]
-    md += ["## Settings", "", "```", settings_text, "```", ""]
+    md += ["## Settings", "", settings_text, ""]
     md_path = out / "report.md"
     with atomic_path(md_path) as tmp:
         tmp.write_text("\n".join(md), encoding="utf-8")
     name = html.escape(params.name)
     body = [f"<h1>feeddrive reproduction of Wang2021 — <code>{name}</code></h1>",
-            f"<p>feeddrive {__version__}, {when}, wall time {results['wall_time_s']:.0f} s. "
-            f"{html.escape(wang2021.CITATION)}.</p>"]
+            render_html(header)]
 
     def figure_html(name: str) -> str:
         return (f'<figure><img src="{html.escape(name)}" alt="{html.escape(caption(name))}">'
                 f"<figcaption>{html.escape(caption(name))}</figcaption></figure>")
 
     for key, title, text, rows in sections:
-        body += [f"<h2>{html.escape(title)}</h2>", f"<p>{html.escape(text)}</p>",
-                 _table_html(rows)]
+        body += [f"<h2>{html.escape(title)}</h2>", render_html(text),
+                 render_html(_table_md(rows))]
         body += [figure_html(f) for f in figures[key]]
     body += [figure_html(f) for f in unplaced]
-    body += ["<h2>Settings</h2>", f"<pre>{html.escape(settings_text)}</pre>"]
+    body += ["<h2>Settings</h2>", render_html(settings_text)]
     style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto}"
              "table{border-collapse:collapse;font-size:0.9em}td,th{border:1px solid #ccc;"
              "padding:3px 6px}img{max-width:100%}figcaption{font-size:0.9em;color:#333}")

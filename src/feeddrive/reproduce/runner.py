@@ -194,6 +194,8 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     results["figures"] = [p.name for p in pngs]
     results["wall_time_s"] = time.perf_counter() - started
     results["cpu_seconds"] = cpu_seconds
+    results["studies_total"] = len(names)
+    results["studies_reused"] = len(names) - len(cpu_seconds)
     report.write(params, settings, results, out)
     return results
 

@@ -391,12 +391,24 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
 
 @dataclass(frozen=True)
 class Estimate:
+    """A sweep's point count and cost.  ``seconds_per_point`` is the mean CPU time [s] of the
+    timed points (CPU, not wall: a loaded machine's wall time made the estimate vary 3.0–10.8 s
+    between runs of one config, issue 24 item 11); ``point_seconds`` each timed point's."""
+
     points: int
     distinct: int
     stored: int
     timed: int
     seconds_per_point: float
     workers: int
+    point_seconds: tuple[float, ...] = ()
+
+    @property
+    def spread(self) -> tuple[float, float]:
+        """(fastest, slowest) timed point [s CPU]; the points of a sweep differ in cost."""
+        if not self.point_seconds:
+            return (0.0, 0.0)
+        return (min(self.point_seconds), max(self.point_seconds))
     built: int = 0  # parameter sets built for the estimate
 
     @property
@@ -407,9 +419,11 @@ class Estimate:
 
 
 def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
-             sample: int = 3, points: list[Point] | None = None) -> Estimate:
+             sample: int = 3, points: list[Point] | None = None,
+             progress: Callable[[str], None] | None = None) -> Estimate:
     """Count the points and time up to ``sample`` of them here (kernels warmed first,
-    nothing written), building only those ``sample`` parameter sets.
+    nothing written), in CPU seconds of this process, building only those ``sample``
+    parameter sets; ``progress`` is told what is being done.
 
     The counts come from the design alone (:meth:`.SweepConfig.count`,
     :meth:`.SweepConfig.distinct_count`); ``stored`` is how many of this sweep's points the
@@ -440,13 +454,20 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
         if registered and all(registered.get(p.index) == p.key for p in chosen):
             stored = store.stored_count(config.name)
     todo = [p for p in chosen if store is None or store.get(p.key) is None]
+    if progress is not None and todo:
+        progress(f"compiling the model kernels, then timing {len(todo)} of the "
+                 f"{distinct - stored} points to compute (each a full evaluation, nothing "
+                 "stored)")
     for task in _structure_tasks(todo):
         warm(task)
     seconds = []
-    for p in todo:
-        t = time.perf_counter()
+    for i, p in enumerate(todo, start=1):
+        if progress is not None:
+            progress(f"timing point {i} of {len(todo)}")
+        t = time.process_time()
         evaluate(p.task)
-        seconds.append(time.perf_counter() - t)
+        seconds.append(time.process_time() - t)
     mean = sum(seconds) / len(seconds) if seconds else 0.0
     return Estimate(points=count, distinct=distinct, stored=stored, timed=len(seconds),
-                    seconds_per_point=mean, workers=workers, built=len(chosen))
+                    seconds_per_point=mean, workers=workers, point_seconds=tuple(seconds),
+                    built=len(chosen))

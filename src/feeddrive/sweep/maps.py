@@ -83,7 +83,8 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
                          f"{MAX_PANELS}: export the sweep and plot a subset")
     ncol = min(len(combos), 3)
     nrow = math.ceil(len(combos) / ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.2 * nrow), squeeze=False)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.2 * nrow + 0.5),
+                             squeeze=False, layout="constrained")
     xs, _ = _eng(ds[x])
     ys, _ = _eng(ds[y])
     all_values, vunit = _eng(ds[value])
@@ -96,6 +97,7 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
     if vmax <= vmin:
         vmin, vmax = vmin - 0.5 * abs(vmin or 1.0), vmax + 0.5 * abs(vmax or 1.0)
     boundaries = _boundaries(ds, quantity)
+    drawn: set[str] = set()  # the boundaries drawn in some panel: only those in the legend
     annotate = ds.sizes[x] * ds.sizes[y] <= 120
     for ax, combo in zip(axes.flat, combos, strict=False):
         sel = {d: i for d, i in zip(others, combo, strict=True)}
@@ -106,28 +108,46 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
                              vmin=vmin, vmax=vmax, cmap="viridis")
         fig.colorbar(mesh, ax=ax, label=f"{value} [{vunit}]" if vunit not in ("", "1")
                      else value)
+        labelled = False
         for (name, level_source, style) in boundaries:
             if name in panel:
-                _contour(ax, xs, ys, _field(panel, name, x, y), level_source, style, vmin,
-                         vmax)
+                # contours at the same levels are labelled once: a second set of labels
+                # was drawn over the first (issue 24 item 2); with the cells annotated the
+                # labels fell on the cell values, so the legend gives the levels instead
+                if _contour(ax, xs, ys, _field(panel, name, x, y), level_source, style, vmin,
+                            vmax, label=not (labelled or annotate)):
+                    drawn.add(name)
+                    labelled = labelled or level_source != "half"
         if annotate:
             _annotate(ax, panel, value, x, y, xs, ys)
         ax.set_xlabel(_label(x, ds[x]))
         ax.set_ylabel(_label(y, ds[y]))
+        # a single panel is titled by the figure's title alone (it said the name twice)
         ax.set_title(", ".join(f"{d} = {_coord_text(ds[d].values[i])}"
-                               for d, i in sel.items()) or str(ds.attrs.get("sweep")))
+                               for d, i in sel.items()))
     for ax in list(axes.flat)[len(combos):]:
         ax.set_visible(False)
-    if boundaries:
-        handles = [Line2D([], [], color=style["colors"], ls=style["linestyles"], lw=1.5,
-                          label=label) for label, _, style in
-                   [(_legend(n), s, st) for n, s, st in boundaries]]
-        fig.legend(handles=handles, loc="lower center", ncol=len(handles), frameon=False)
+    shown = [(n, st) for n, _, st in boundaries if n in drawn]
+    if shown:
+        levels = ", ".join(f"{v:.2f}" for v in np.linspace(vmin, vmax, 7)[1:-1])
+        unit = f" {vunit}" if vunit not in ("", "1") else ""
+        stated = False
+        handles = []
+        for n, style in shown:
+            label = _legend(n)
+            if annotate and not stated and any(s == "levels" for m, s, _ in boundaries
+                                               if m == n):
+                label += f"\n  levels {levels}{unit}"  # the contours carry no labels
+                stated = True
+            handles.append(Line2D([], [], color=style["colors"], ls=style["linestyles"],
+                                  lw=1.5, label=label))
+        # one entry a row, below the panels: in one row the entries ran off both sides
+        fig.legend(handles=handles, loc="outside lower center", ncol=1, frameon=False,
+                   fontsize=8)
     fig.suptitle(f"sweep {ds.attrs.get('sweep')}: {value}")
-    fig.tight_layout(rect=(0, 0.06 if boundaries else 0, 1, 1))
     p = Path(path)
     with atomic_path(p) as tmp:
-        fig.savefig(tmp, dpi=110)
+        fig.savefig(tmp, dpi=110, bbox_inches="tight")  # nothing cut off at the edges
     plt.close(fig)
     return p
 
@@ -203,23 +223,27 @@ def _boundaries(ds: xr.Dataset, quantity: str) -> list[tuple[str, str, dict[str,
 
 
 def _contour(ax: Any, xs: np.ndarray, ys: np.ndarray, z: np.ndarray, levels: str,
-             style: dict[str, Any], vmin: float, vmax: float) -> None:
+             style: dict[str, Any], vmin: float, vmax: float, label: bool = True) -> bool:
+    """Draw one boundary's contours; whether any line was drawn."""
     if len(xs) < 2 or len(ys) < 2 or z.dtype.kind not in "fiu":
-        return
+        return False
     z = np.ma.masked_invalid(z.astype(float))
     if z.count() < 4:
-        return
+        return False
     if levels == "half":
         lv = [0.5]
     else:
         if not vmax > vmin:
-            return
+            return False
         lv = list(np.linspace(vmin, vmax, 7)[1:-1])
     if z.min() > lv[-1] or z.max() < lv[0] or z.max() - z.min() < 1e-9 * max(abs(z.max()), 1):
-        return
+        return False
     cs = ax.contour(xs, ys, z, levels=lv, linewidths=1.5, **style)
-    if levels != "half":
+    if not any(len(p.vertices) for p in cs.get_paths()):
+        return False
+    if levels != "half" and label:
         ax.clabel(cs, fmt="%.2f", fontsize=7)
+    return True
 
 
 def percentiles(ds: xr.Dataset, value: str | None = None) -> dict[str, Any]:

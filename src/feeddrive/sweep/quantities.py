@@ -101,6 +101,10 @@ class QuantitySettings:
             values["linear_points"] = n
         if start == "running" and "coarse_step" not in spec:
             values["coarse_step"] = protocol.STAIRCASE_COARSE_STEP
+        if kind == "linear-band":  # the scan `feeddrive stability` runs by default
+            values.setdefault("low", protocol.LINEAR_SPEED_RANGE[0])
+            values.setdefault("high", protocol.LINEAR_SPEED_RANGE[1])
+            values.setdefault("linear_points", protocol.LINEAR_POINTS)
         out = cls(**values)
         if out.high <= out.low:
             raise ParameterError("quantity.high", out.high / units.MM_PER_S,

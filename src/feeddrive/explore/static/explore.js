@@ -360,7 +360,7 @@ function renderRun(res) {
     `${what}, ${fmt(res.duration_s)} s simulated (${res.parameter_set}) · mean table speed ` +
     `${fmt(s.mean_table_speed_mm_s)} mm/s · following error max ` +
     `${fmt(s.following_error_max_um, 3)} µm · judged on ${fmt(s.window_s[0], 3)}–` +
-    `${fmt(s.window_s[1], 3)} s (window verdict of feeddrive simulate: ${s.verdict}) · ` +
+    `${fmt(s.window_s[1], 3)} s (feeddrive simulate's window rule says ${s.verdict}: ripple ≤ 50 %, stick ≤ 2 %) · ` +
     `solver ${s.solver.steps} steps`;
   const t = res.traces;
   const hover = (name) => `t = %{x:.4f} s<br>${name} = %{y:.4g} mm/s<extra></extra>`;

@@ -27,8 +27,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ... import registry
+from ...parameters import LuGreParameters as _LuGreParameters
+
 if TYPE_CHECKING:
     from ...parameters import LuGreParameters
+
+
+#: Names of a site's packed parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`,
+#: the default :meth:`FrictionLaw.pack`), in ``P`` order: their paths below ``friction.<site>``.
+SITE_SLOTS = tuple(f"{d}.{f}" for d in ("positive", "negative")
+                   for f in ("coulomb_force", "static_force", "stribeck_velocity",
+                             "viscous_coefficient")) + ("bristle_stiffness", "bristle_damping")
 
 
 @dataclass(frozen=True)
@@ -48,6 +58,11 @@ class FrictionLaw:
     state_names: tuple[str, ...] = ()
     state_unit: str = "m"
     citation: str = ""
+    #: names of the packed parameters (:meth:`pack`), paths below ``friction.<site>``
+    slots: tuple[str, ...] = SITE_SLOTS
+    #: the class of a site's parameters under this law (:class:`SiteParameters` subclass)
+    parameters_class: type = _LuGreParameters
+    published: bool = True  # a published model: its docstring has a References section
     kernel: Any = None
 
     @property
@@ -61,16 +76,28 @@ class FrictionLaw:
         return None
 
     def pack(self, site: LuGreParameters) -> np.ndarray:
+        """The site's parameters packed for the kernel, in :meth:`site_slots` order [SI]."""
         return site.as_array()
 
+    def states(self, site: Any) -> tuple[str, ...]:
+        """The law's internal states at ``site`` (a law whose state count depends on its
+        parameters, e.g. GMS's N elements, overrides this); ``state_names`` by default."""
+        return self.state_names
+
+    def site_slots(self, site: Any) -> tuple[str, ...]:
+        """Names of :meth:`pack`'s values at ``site`` (paths below ``friction.<site>``);
+        ``slots`` by default."""
+        return self.slots
+
     def steady_state(self, v: float, site: LuGreParameters) -> np.ndarray:
-        return np.zeros(len(self.state_names))
+        """The internal states in steady sliding at speed ``v`` [m/s] (zeros by default)."""
+        return np.zeros(len(self.states(site)))
 
     def evaluate(self, v: float, states: np.ndarray, site: LuGreParameters,
                  packed: np.ndarray | None = None) -> tuple[float, np.ndarray]:
         """(force [N], state rates) at speed ``v`` [m/s] and internal ``states`` (Python call
         of the compiled kernel)."""
-        n = len(self.state_names)
+        n = len(self.states(site))
         y = np.zeros(max(n, 1))
         y[:n] = states
         dy = np.zeros(max(n, 1))
@@ -88,7 +115,7 @@ class FrictionLaw:
 
     def linearise(self, v: float, site: LuGreParameters) -> LinearFriction:
         """Central-difference linearisation of ``kernel`` at steady sliding speed ``v``."""
-        n = len(self.state_names)
+        n = len(self.states(site))
         P = self.pack(site)
         x0 = self.steady_state(v, site)
         dv = 1e-6 * max(abs(v), 1e-9)
@@ -109,32 +136,39 @@ class FrictionLaw:
         return LinearFriction(A=A, B=B, C=C, D=float(D))
 
 
-_REGISTRY: dict[str, FrictionLaw] = {}
-
-
 def register_friction_law(law: FrictionLaw) -> FrictionLaw:
-    """Make ``law`` available by ``law.name`` in parameter files and the API."""
+    """Make ``law`` available by ``law.name`` in parameter files and the API.
+
+    Parameters
+    ----------
+    law : FrictionLaw
+        An instance of a law class (``name``, ``kernel``, ``state_names`` set).
+
+    Returns
+    -------
+    FrictionLaw
+        ``law``, registered in :mod:`feeddrive.registry` (group ``feeddrive.friction_laws``).
+    """
     if not law.name or not law.name.replace("-", "_").isidentifier():
         raise ValueError(f"friction law name {law.name!r}: expected a short identifier")
     if law.compiled is None:
         raise ValueError(f"friction law {law.name!r}: no kernel")
-    _REGISTRY[law.name] = law
+    registry.register(registry.FRICTION_LAWS, law.name, law)
     return law
 
 
 def friction_law(name: str) -> FrictionLaw:
     """The registered law called ``name``."""
-    from . import builtin  # noqa: F401  (registers the package's laws)
-
-    if name not in _REGISTRY:
+    laws = registry.table(registry.FRICTION_LAWS)
+    if name not in laws:
         from ...parameters import ParameterError
 
         raise ParameterError("law", name,
-                             f"unknown friction law; expected one of {', '.join(law_names())}")
-    return _REGISTRY[name]
+                             f"unknown friction law; expected one of {', '.join(laws)}")
+    law: FrictionLaw = laws[name]
+    return law
 
 
 def law_names() -> tuple[str, ...]:
-    from . import builtin  # noqa: F401
-
-    return tuple(_REGISTRY)
+    """The names of the registered friction laws."""
+    return registry.names(registry.FRICTION_LAWS)

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..._jit import kernel
 from .base import FrictionLaw
-from .lugre import branch
+from .lugre import COULOMB, SIGMA0, VISCOUS, branch
 
 
 @kernel
@@ -26,11 +26,23 @@ def dahl_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
                 dy: np.ndarray) -> float:
     b = branch(v, o)
     z = y[k]
-    dy[k] = v - P[o + 8] * abs(v) * z / P[b]
-    return P[o + 8] * z + P[b + 3] * v
+    dy[k] = v - P[o + SIGMA0] * abs(v) * z / P[b + COULOMB]
+    return P[o + SIGMA0] * z + P[b + VISCOUS] * v
 
 
 class Dahl(FrictionLaw):
+    """Dahl friction: pre-sliding elasticity and Coulomb friction, no Stribeck effect.
+
+    dz/dt = v − σ0·|v|·z / F_c,  F = σ0·z + σ2·v; one bristle state z [m].  Uses F_c [N] and
+    σ2 [N s/m] of each branch and σ0 [N/m] of the site.
+
+    References
+    ----------
+    .. [1] P. R. Dahl, "A solid friction model", Aerospace Corp. report
+       TOR-0158(3107-18)-1, 1968.
+    .. [2] H. Olsson, K. J. Åström, C. Canudas de Wit, M. Gäfvert, P. Lischinsky, "Friction
+       models and friction compensation", Eur. J. Control 4 (1998) 176–195, Eq. (9).
+    """
     name = "dahl"
     state_names = ("bristle",)
     citation = "Dahl 1968; Olsson et al., Eur. J. Control 4 (1998) 176-195, Eq. (9)"

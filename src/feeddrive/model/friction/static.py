@@ -17,14 +17,16 @@ import numpy as np
 
 from ..._jit import kernel
 from .base import FrictionLaw
-from .lugre import branch, stribeck_magnitude
+from .lugre import SLOTS, VISCOUS, branch, stribeck_magnitude
+
+SMOOTHING = len(SLOTS)  # the sign-function smoothing speed v_ε, after the LuGre slots
 
 
 @kernel
 def stribeck_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
                     dy: np.ndarray) -> float:
-    return (math.tanh(v / P[o + 10]) * stribeck_magnitude(v, P, o)
-            + P[branch(v, o) + 3] * v)
+    return (math.tanh(v / P[o + SMOOTHING]) * stribeck_magnitude(v, P, o)
+            + P[branch(v, o) + VISCOUS] * v)
 
 
 @kernel
@@ -34,9 +36,22 @@ def no_friction_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
 
 
 class Stribeck(FrictionLaw):
+    """Static Stribeck + Coulomb + viscous friction with a smoothed sign function.
+
+    F = tanh(v/v_ε)·(F_c + (F_s − F_c)·exp(−(v/v_s)²)) + σ2·v, no state; v_ε [m/s] is the
+    site's ``smoothing_velocity``.
+
+    References
+    ----------
+    .. [1] B. Armstrong-Hélouvry, P. Dupont, C. Canudas de Wit, "A survey of models, analysis
+       tools and compensation methods for the control of machines with friction",
+       Automatica 30 (1994) 1083–1138.
+    """
     name = "stribeck"
     citation = "Armstrong-Hélouvry, Dupont, Canudas de Wit, Automatica 30 (1994) 1083-1138"
     kernel = stribeck_kernel
+
+    slots = (*SLOTS, "smoothing_velocity")
 
     def pack(self, site):
         return np.append(site.as_array(), site.smoothing_velocity)
@@ -46,4 +61,5 @@ class NoFriction(FrictionLaw):
     """No friction at this site: a law with no states and zero force."""
 
     name = "none"
+    published = False
     kernel = no_friction_kernel

@@ -56,7 +56,24 @@ def equivalent_stiffness_kernel(x_t: float, P: np.ndarray, o: int) -> float:
 
 @register_mechanism
 class BallScrewDrive(Mechanism):
-    """CDFS / DDFS ball-screw mechanism (see module docstring)."""
+    """CDFS / DDFS ball-screw mechanism (see the module docstring for its equations).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set (SI).
+    drive : {"cdfs", "ddfs"}
+        Which drive: the hollow motor held (CDFS) or driving the nut (DDFS).
+    table_position : float
+        Table position a along the screw [m] (sets K_eq(a), Wang2021 Eqs. (2)–(5)).
+    nut_hold : {"locked", "servo"}
+        How the CDFS holds the nut.
+
+    References
+    ----------
+    .. [1] Z. Wang, X. Feng, H. Yang, H. Jin, "Research on low-speed characteristics of
+       differential double-drive feed system", Mech. Sci. 12 (2021) 791–800, Eqs. (1)–(8).
+    """
 
     drives = ("cdfs", "ddfs")
     ripple_motors = ("screw", "nut")
@@ -167,6 +184,40 @@ class BallScrewDrive(Mechanism):
         return ([("screw", "(ref_v + ref_vn)", f"{H} * {b.y('screw_speed')}"),
                  ("guide", "ref_v", b.y("table_speed"))],
                 f"{H} / {b.p('screw_motor.torque_constant')}")
+
+    def steady_motion(self, table_speed: float, nut_speed: float
+                      ) -> dict[str, tuple[str, float]]:
+        """Screw at (v_t + v_n)/H, nut at v_n/H (0 when held), table at v_t (Eq. 8).
+
+        Parameters
+        ----------
+        table_speed : float
+            Commanded table speed [m/s].
+        nut_speed : float
+            Commanded nut speed [m/s].
+
+        Returns
+        -------
+        dict
+            Angle/position state → (rate state, steady rate [rad/s or m/s]).
+        """
+        H = self.params.screw.transmission_ratio
+        v_n = nut_speed if self.nut_active else 0.0
+        return {"screw_angle": ("screw_speed", (table_speed + v_n) / H),
+                "nut_angle": ("nut_speed", v_n / H),
+                "table_position": ("table_speed", table_speed)}
+
+    def held(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """The CDFS with its nut locked: the nut's states and the hollow motor's axis.
+
+        Returns
+        -------
+        tuple of (tuple of str, tuple of str)
+            Frozen state-name prefixes and idle axes.
+        """
+        if self.nut_active:
+            return (), ()
+        return ("nut_", "ball_nut_z"), ("nut",)
 
     def signals(self, b: Builder) -> None:
         b.add_aux("equivalent_stiffness", "N/m", "K_eq at the table position")

@@ -11,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from ... import registry
+
 if TYPE_CHECKING:
     from ...parameters import DriveParameters
     from ..codegen import Builder
@@ -40,11 +42,30 @@ class Site:
     """A friction site placed by the mechanism: on one body, or between two (relative)."""
 
     name: str  # e.g. "screw", "ball_nut"
-    parameters_key: str  # friction.<key> in the parameter set
+    parameters_key: str  # friction.<key> in the parameter set, or a dotted path to them
     speed: str  # code of the sliding speed [m/s]
     bodies: tuple[tuple[str, str], ...]  # (body, factor code) pairs: term = − factor·F
     scale: float = 1.0  # share of the site's friction (ball–nut split)
     active: str = ""  # condition under which the site acts ("" = always)
+
+    def parameters(self, params: DriveParameters) -> Any:
+        """The site's parameters: ``friction.<parameters_key>``, or the dotted path
+        ``parameters_key`` names (a part's own section, e.g. ``rack_pinion.gearbox_friction``).
+
+        Parameters
+        ----------
+        params : DriveParameters
+            The parameter set.
+
+        Returns
+        -------
+        SiteParameters
+            The site's friction parameters.
+        """
+        obj: Any = params if "." in self.parameters_key else params.friction
+        for part in self.parameters_key.split("."):
+            obj = getattr(obj, part)
+        return obj
 
 
 @dataclass
@@ -68,6 +89,9 @@ class Mechanism:
     and :class:`~feeddrive.model.mechanisms.linear_motor.LinearMotorDrive`."""
 
     drives: tuple[str, ...] = ()
+    #: the parameter set a command uses for this drive when none is named
+    example_preset: str = "wang2021"
+    published: bool = True  # a published model: its docstring has a References section
     ripple_motors: tuple[str, ...] = ()  # motors whose torque ripple this topology models
     has_lead_screw = False
 
@@ -112,41 +136,70 @@ class Mechanism:
         raise ParameterError("controller.compensation.mode", "—",
                              f"no friction compensation for the {self.drive} drive")
 
+    def steady_motion(self, table_speed: float, nut_speed: float
+                      ) -> dict[str, tuple[str, float]]:
+        """The kinematics of steady motion, for the linear analysis' operating point.
+
+        Parameters
+        ----------
+        table_speed : float
+            Commanded table speed [m/s].
+        nut_speed : float
+            Commanded nut speed [m/s] (drives with a driven nut).
+
+        Returns
+        -------
+        dict
+            Position-like state → (its rate state, the steady rate in that state's unit per
+            second [unit/s]); e.g. ``{"table_position": ("table_speed", v)}``.
+        """
+        return {"table_position": ("table_speed", table_speed)}
+
+    def held(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """What this drive holds still (the CDFS's locked nut).
+
+        Returns
+        -------
+        tuple of (tuple of str, tuple of str)
+            Prefixes of the frozen states' names, and the names of the axes that do not
+            run; both empty by default.
+        """
+        return (), ()
+
     def emit(self, b: Builder, m: Mechanics) -> None:
         raise NotImplementedError
 
 
-_REGISTRY: dict[str, type[Mechanism]] = {}
+def register_mechanism(topology: type[Mechanism]) -> type[Mechanism]:
+    """Make a topology available under each of its ``drives`` names.
 
+    Parameters
+    ----------
+    topology : type of Mechanism
+        The mechanism class; usable as a class decorator.
 
-def register_mechanism(cls: type[Mechanism]) -> type[Mechanism]:
-    for drive in cls.drives:
-        _REGISTRY[drive] = cls
-    return cls
-
-
-def _discover() -> None:
-    """Import every module of this package once: each registers its topologies."""
-    import importlib
-    import pkgutil
-
-    from .. import mechanisms
-
-    for info in pkgutil.iter_modules(mechanisms.__path__):
-        importlib.import_module(f"{mechanisms.__name__}.{info.name}")
+    Returns
+    -------
+    type of Mechanism
+        ``topology``, registered in :mod:`feeddrive.registry` (group
+        ``feeddrive.mechanisms``).
+    """
+    for drive in topology.drives:
+        registry.register(registry.MECHANISMS, drive, topology)
+    return topology
 
 
 def mechanism(drive: str) -> type[Mechanism]:
-    if not _REGISTRY:
-        _discover()
-    if drive not in _REGISTRY:
+    """The registered topology of drive name ``drive``."""
+    table = registry.table(registry.MECHANISMS)
+    if drive not in table:
         from ...parameters import ParameterError
 
-        raise ParameterError("drive", drive, f"expected one of {', '.join(drive_names())}")
-    return _REGISTRY[drive]
+        raise ParameterError("drive", drive, f"expected one of {', '.join(table)}")
+    cls: type[Mechanism] = table[drive]
+    return cls
 
 
 def drive_names() -> tuple[str, ...]:
-    if not _REGISTRY:
-        _discover()
-    return tuple(_REGISTRY)
+    """The names of the registered drive topologies."""
+    return registry.names(registry.MECHANISMS)

@@ -20,7 +20,24 @@ from .base import Body, Mechanics, Mechanism, Site, register_mechanism
 
 @register_mechanism
 class LinearMotorDrive(Mechanism):
+    """A direct-drive table: a linear motor's forcer on the table, guide friction only.
+
+    (m_t + m_f)·dv_t/dt = K_f·i − F_guide − F_load,  L·di/dt = u − R·i − K_e·v_t.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set (SI); needs its ``linear_motor`` section.
+    drive : {"linear-motor"}
+        The drive name.
+    table_position : float
+        Table position [m] (no stiffness depends on it here).
+    nut_hold : str
+        Unused (the drive has no nut).
+    """
     drives = ("linear-motor",)
+    example_preset = "linear-motor-example"
+    published = False  # a generic direct drive, not a published model
 
     @classmethod
     def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:

@@ -1,0 +1,365 @@
+"""The C backend: the assembled model's right-hand side, sampled-controller update and
+auxiliary outputs as one standalone C99 file, translated from the same kernels numba compiles.
+
+:func:`c_model_source` reads the generated module of a :class:`~feeddrive.model.assemble.Model`
+(its ``rhs`` and ``sample_update``) and translates them and every kernel they call with
+:func:`feeddrive.backends.c_translate.translate_kernels` — no equation is written a second time
+(docs/c-backend.md explains the mechanism and the subset a kernel must stay in).  The file
+needs only ``<math.h>``, ``<string.h>`` and ``<stdlib.h>`` and exports::
+
+    #define FD_N_STATE, FD_N_AUX, FD_N_HELD, FD_N_PARAM, FD_N_TABLE
+    void fd_rhs(double t, const double *y, double *held, const double *P, const double *T,
+                long n_pos, long n_vel, long n_cur, double *dy, double *aux);
+    void fd_sample_update(long k, double t, double *y, double *held, const double *P,
+                          const double *T, long n_pos, long n_vel, long n_cur, double base);
+    void fd_aux(double t, const double *y, double *held, const double *P, const double *T,
+                long n_pos, long n_vel, long n_cur, double *aux);
+    extern const double fd_parameters[FD_N_PARAM], fd_tables[FD_N_TABLE];  (data=True)
+    extern const char *const fd_state_names[FD_N_STATE], *const fd_aux_names[...],
+                          *const fd_parameter_names[FD_N_PARAM];
+
+with the arguments of the numba ``model.module.rhs`` / ``sample_update`` (``n_pos``, ``n_vel``,
+``n_cur``: loop sample periods in multiples of ``base`` [s], 0 = continuous).
+:func:`compile_shared` builds a shared library with the system's C compiler and
+:func:`load_shared` wraps it with ctypes (used by the tests).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import shlex
+import shutil
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .c_translate import CFunction, TranslationError, _Unit, c_text, translate_kernels
+
+if TYPE_CHECKING:
+    from ..model.assemble import Model
+
+__all__ = ["RHS", "SAMPLE_UPDATE", "CFunction", "CLibrary", "CompilerNotFound", "SOLVER_SHAPES",
+           "SOLVER_TYPES", "TranslationError",
+           "c_model_source", "c_solver_source", "solver_kernels",
+           "compile_shared", "find_compiler", "load_shared", "translate_kernels",
+           "STRICT_FLAGS"]
+
+#: the warnings the generated C is compiled clean with (tests compile with them)
+STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
+
+_GENERATED_TYPES = {
+    **{f"rhs.{k}": v for k, v in (("t", "float"), ("y", "double*"), ("held", "double*"),
+                                  ("P", "double*"), ("T", "double*"), ("n_pos", "int"),
+                                  ("n_vel", "int"), ("n_cur", "int"), ("dy", "double*"),
+                                  ("aux", "double*"))},
+    **{f"sample_update.{k}": v for k, v in (("k", "int"), ("t", "float"), ("y", "double*"),
+                                            ("held", "double*"), ("P", "double*"),
+                                            ("T", "double*"), ("n_pos", "int"),
+                                            ("n_vel", "int"), ("n_cur", "int"),
+                                            ("base", "float"))},
+}
+
+
+def _c_string(text: str) -> str:
+    out = text.encode("utf-8").decode("ascii", "backslashreplace")
+    return '"' + out.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _c_doubles(values: np.ndarray) -> str:
+    items = [repr(float(v)) if np.isfinite(v) else ("NAN" if np.isnan(v) else
+                                                   ("HUGE_VAL" if v > 0 else "-HUGE_VAL"))
+             for v in np.asarray(values, dtype=float).ravel()]
+    lines = []
+    for i in range(0, len(items), 6):
+        lines.append("    " + ", ".join(items[i:i + 6]) + ",")
+    return "\n".join(lines) if lines else "    0.0,"
+
+
+def c_model_source(model: Model, *, data: bool = True) -> str:
+    """One self-contained C99 file of ``model``'s right-hand side, sampled-controller update
+    and auxiliary outputs (module docstring for the exported names).
+
+    Parameters
+    ----------
+    model
+        An assembled model (``DriveSystem.model(profile)``); its generated numba module is
+        translated, with every kernel it calls.
+    data
+        Include ``fd_parameters`` and ``fd_tables`` (``model.P`` and ``model.T``, full
+        ``repr`` precision).  Without them the host passes its own P and T; a long sampled
+        profile's table can be megabytes of C text.
+
+    Returns
+    -------
+    str
+        C99 source.
+
+    Raises
+    ------
+    TranslationError
+        A kernel of the model uses a construct outside the C backend's subset.
+    """
+    module = model.module
+    unit = _Unit(constants={}, bindings={}, shapes={}, param_types=_GENERATED_TYPES)
+    rhs = unit.function(module.rhs.py_func, "fd_model_rhs")
+    upd = unit.function(module.sample_update.py_func, "fd_model_sample_update")
+    n_state, n_aux, n_held = len(model.states), len(model.aux), int(module.N_HELD)
+    n_param, n_table = int(model.P.size), int(model.T.size)
+    head = [
+        f"/* Generated by feeddrive.backends.c_backend from the kernels of one assembled model "
+        f"({model.drive}; {n_state} states).  Do not edit: regenerate. */",
+        f"#define FD_N_STATE {n_state}",
+        f"#define FD_N_AUX {n_aux}",
+        f"#define FD_N_HELD {n_held}",
+        f"#define FD_N_PARAM {n_param}",
+        f"#define FD_N_TABLE {n_table}",
+    ]
+    body = c_text(unit)
+    rhs_args = "t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux"
+    upd_args = "k, t, y, held, P, T, n_pos, n_vel, n_cur, base"
+    tail = [
+        "void fd_rhs(double t, const double *y, double *held, const double *P, const double *T,"
+        "\n            long n_pos, long n_vel, long n_cur, double *dy, double *aux);",
+        "void fd_sample_update(long k, double t, double *y, double *held, const double *P,"
+        "\n                      const double *T, long n_pos, long n_vel, long n_cur, "
+        "double base);",
+        "void fd_aux(double t, const double *y, double *held, const double *P, const double *T,"
+        "\n            long n_pos, long n_vel, long n_cur, double *aux);",
+        "",
+        "/* dy = f(t, y) and the auxiliary signals; held: the sampled controller's values */",
+        "void fd_rhs(double t, const double *y, double *held, const double *P, const double *T,"
+        "\n            long n_pos, long n_vel, long n_cur, double *dy, double *aux)\n{\n"
+        f"    {rhs.cname}({rhs_args});\n}}",
+        "",
+        "/* the sampled controller at sample instant k (t = k*base): updates held */",
+        "void fd_sample_update(long k, double t, double *y, double *held, const double *P,"
+        "\n                      const double *T, long n_pos, long n_vel, long n_cur, "
+        "double base)\n{\n"
+        f"    {'(void)y; ' if 'y' not in upd.written else ''}{upd.cname}({upd_args});\n}}",
+        "",
+        "/* the auxiliary signals alone */",
+        "void fd_aux(double t, const double *y, double *held, const double *P, const double *T,"
+        "\n            long n_pos, long n_vel, long n_cur, double *aux)\n{\n"
+        "    double dy[FD_N_STATE];\n"
+        f"    {rhs.cname}(t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux);\n}}",
+        "",
+        *(["const double fd_parameters[FD_N_PARAM] = {\n" + _c_doubles(model.P) + "\n};",
+           "const double fd_tables[FD_N_TABLE] = {\n" + _c_doubles(model.T) + "\n};"]
+          if data else []),
+        "const char *const fd_state_names[FD_N_STATE] = {\n"
+        + ",\n".join("    " + _c_string(n) for n in model.state_names) + "\n};",
+        f"const char *const fd_aux_names[{max(1, n_aux)}] = {{\n"
+        + (",\n".join("    " + _c_string(a.name) for a in model.aux) or '    ""') + "\n};",
+        "const char *const fd_parameter_names[FD_N_PARAM] = {\n"
+        + ",\n".join("    " + _c_string(n) for n in model.parameter_names) + "\n};",
+    ]
+    return "\n".join(head) + "\n" + body + "\n" + "\n".join(tail) + "\n"
+
+
+#: array sizes of the solver building blocks' parameters, as C expressions of the model file
+SOLVER_SHAPES: dict[str, tuple[str, ...]] = {
+    **{name: ("FD_N_STATE",) for name in (
+        "y", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "yt", "y_new", "e", "atol", "rel_mask",
+        "f0", "ft", "yp", "fp", "live", "piv", "b", "u1", "u2", "u3", "u4", "u5", "u6", "fs",
+        "q1", "q2")},
+    "J": ("FD_N_STATE", "FD_N_STATE"), "M": ("FD_N_STATE", "FD_N_STATE"),
+    "S": ("FD_N_STATE", "FD_N_STATE + 1"), "colour": ("FD_N_STATE + 1",), "aux": ("FD_N_AUX",),
+}
+#: ``fd_rhs`` as a translated template calls it (``bindings={"rhs": RHS}``): the arrays at
+#: positions 2, 8, 9 (held — non-const in the API —, dy, aux) are written, y, P, T stay const
+RHS = CFunction("fd_rhs", None, (2, 8, 9))
+#: ``fd_sample_update`` likewise: y (non-const in the API) and held
+SAMPLE_UPDATE = CFunction("fd_sample_update", None, (2, 3))
+#: element types of the solver building blocks' non-double arrays (numpy int64 / bool_)
+SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*"}
+
+
+def solver_kernels() -> dict[str, Any]:
+    """The project's solver building blocks by exported C name.
+
+    Returns
+    -------
+    dict
+        C name → Python template: one DOPRI5 step, its error norm, and the RODAS4 step with
+        its grouped finite-difference Jacobian, frozen-state test and dense output
+        (:mod:`feeddrive.solvers.switching`, :mod:`feeddrive.solvers.rodas4`).
+    """
+    from ..solvers import rodas4, switching
+
+    return {"fd_dp5_step": switching.dp5_step_template,
+            "fd_error_norm": switching.error_norm_template,
+            "fd_fd_jacobian": rodas4.fd_jacobian_template,
+            "fd_frozen_states": rodas4.frozen_states_template,
+            "fd_rodas4_step": rodas4.rodas4_step_template,
+            "fd_rodas4_dense": rodas4.rodas4_dense_template}
+
+
+def c_solver_source(names: tuple[str, ...] | None = None) -> str:
+    """C99 text of the solver building blocks (:func:`solver_kernels`), translated from the
+    package's own solver code with ``rhs`` bound to ``fd_rhs``; append it to
+    :func:`c_model_source` (it uses that file's ``FD_N_*`` sizes and ``fd_rhs``).
+
+    Parameters
+    ----------
+    names
+        Exported C names to include (default: all of :func:`solver_kernels`).
+
+    Returns
+    -------
+    str
+        C99 source; the exported functions keep the Python templates' argument order, arrays
+        as pointers (``const`` where the template only reads them; ``piv`` and ``colour`` are
+        ``long *``, ``live`` and ``S`` ``unsigned char *``, ``J``/``M``/``S`` row-major).
+    """
+    kernels = solver_kernels()
+    chosen = tuple(kernels) if names is None else names
+    unknown = [n for n in chosen if n not in kernels]
+    if unknown:
+        raise ValueError(f"names = {unknown}: expected some of {', '.join(kernels)}")
+    return translate_kernels([kernels[n] for n in chosen], {"N_AUX": "FD_N_AUX"},
+                             bindings={"rhs": RHS}, shapes=SOLVER_SHAPES,
+                             param_types=SOLVER_TYPES,
+                             names={kernels[n].__name__: n for n in chosen})
+
+
+class CompilerNotFound(RuntimeError):
+    """No C compiler: set $CC or install gcc/clang."""
+
+
+def find_compiler() -> list[str]:
+    """The C compiler command.
+
+    Returns
+    -------
+    list of str
+        ``$CC`` split into words (it may hold options), else the first of ``cc``, ``gcc``,
+        ``clang`` found on PATH.
+
+    Raises
+    ------
+    CompilerNotFound
+        None of them is there.
+    """
+    env = os.environ.get("CC", "").strip()
+    if env:
+        cmd = shlex.split(env)
+        if shutil.which(cmd[0]) is None:
+            raise CompilerNotFound(f"CC = {env!r}: {cmd[0]!r} is not an executable on PATH")
+        return cmd
+    for name in ("cc", "gcc", "clang"):
+        path = shutil.which(name)
+        if path:
+            return [path]
+    raise CompilerNotFound("no C compiler found: set CC or install gcc or clang "
+                           "(looked for cc, gcc, clang on PATH)")
+
+
+def compile_shared(c_text: str, folder: str | os.PathLike[str], *, name: str = "fd_model",
+                   strict: bool = True, optimise: str = "-O1") -> Path:
+    """Compile ``c_text`` into a shared library ``folder/<name>.so`` (``.dll`` on Windows).
+
+    Parameters
+    ----------
+    c_text
+        C99 source (:func:`c_model_source`).
+    folder
+        Existing or new folder for the ``.c`` file and the library.
+    name
+        File stem.
+    strict
+        Compile with :data:`STRICT_FLAGS` (warnings are errors).
+    optimise
+        Optimisation flag.  ``-ffp-contract=off`` is always passed: a fused multiply-add
+        would round differently from numba.
+
+    Returns
+    -------
+    Path
+        The shared library.
+
+    Raises
+    ------
+    CompilerNotFound
+        No C compiler (see :func:`find_compiler`).
+    RuntimeError
+        The compiler failed; the message holds its output.
+    """
+    cc = find_compiler()
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    src = out / f"{name}.c"
+    src.write_text(c_text, encoding="utf-8")
+    lib = out / (f"{name}.dll" if os.name == "nt" else f"{name}.so")
+    flags = [*(STRICT_FLAGS if strict else ("-std=c99",)), optimise, "-ffp-contract=off",
+             "-fPIC", "-shared"]
+    proc = subprocess.run([*cc, *flags, "-o", str(lib), str(src), "-lm"], capture_output=True,
+                          text=True, check=False)
+    if proc.returncode != 0:
+        raise RuntimeError(f"C compiler failed on {src} ({' '.join(cc + flags)}):\n"
+                           f"{proc.stderr.strip() or proc.stdout.strip()}")
+    return lib
+
+
+_DP = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+
+
+@dataclass
+class CLibrary:
+    """A compiled model library (:func:`load_shared`) with numba-like calls.
+
+    Parameters
+    ----------
+    lib
+        The ``ctypes.CDLL`` with argument types declared.
+    path
+        The shared library's file.
+    """
+
+    lib: Any
+    path: Path
+
+    def rhs(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
+            n_pos: int, n_vel: int, n_cur: int, dy: np.ndarray, aux: np.ndarray) -> None:
+        """``fd_rhs``: fills ``dy`` and ``aux`` in place (the numba ``rhs`` signature)."""
+        self.lib.fd_rhs(float(t), y, held, P, T, int(n_pos), int(n_vel), int(n_cur), dy, aux)
+
+    def sample_update(self, k: int, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray,
+                      T: np.ndarray, n_pos: int, n_vel: int, n_cur: int, base: float) -> None:
+        """``fd_sample_update``: updates ``held`` in place."""
+        self.lib.fd_sample_update(int(k), float(t), y, held, P, T, int(n_pos), int(n_vel),
+                                  int(n_cur), float(base))
+
+    def aux(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
+            n_pos: int, n_vel: int, n_cur: int, aux: np.ndarray) -> None:
+        """``fd_aux``: fills ``aux`` in place."""
+        self.lib.fd_aux(float(t), y, held, P, T, int(n_pos), int(n_vel), int(n_cur), aux)
+
+
+def load_shared(path: str | os.PathLike[str]) -> CLibrary:
+    """Load a library built by :func:`compile_shared` from :func:`c_model_source`.
+
+    Parameters
+    ----------
+    path
+        The shared library.
+
+    Returns
+    -------
+    CLibrary
+        ``fd_rhs``, ``fd_sample_update`` and ``fd_aux`` with their argument types declared
+        (float64 C-contiguous arrays), so a wrong array type raises instead of corrupting
+        memory.
+    """
+    lib = ctypes.CDLL(str(path))
+    L, D = ctypes.c_long, ctypes.c_double
+    lib.fd_rhs.argtypes = [D, _DP, _DP, _DP, _DP, L, L, L, _DP, _DP]
+    lib.fd_rhs.restype = None
+    lib.fd_sample_update.argtypes = [L, D, _DP, _DP, _DP, _DP, L, L, L, D]
+    lib.fd_sample_update.restype = None
+    lib.fd_aux.argtypes = [D, _DP, _DP, _DP, _DP, L, L, L, _DP]
+    lib.fd_aux.restype = None
+    return CLibrary(lib=lib, path=Path(path))

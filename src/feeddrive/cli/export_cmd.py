@@ -1,0 +1,72 @@
+"""`feeddrive export fmu`: a drive as a standalone FMU (docs/fmu.md)."""
+
+from __future__ import annotations
+
+import typer
+
+from . import _units
+from ._common import app, console, print_json, resolve_parameters, user_errors
+
+export_app = typer.Typer(no_args_is_help=True,
+                         help="Export a drive for other tools (FMU: docs/fmu.md).")
+app.add_typer(export_app, name="export")
+
+
+@export_app.command("fmu")
+@user_errors
+def fmu_command(
+    drive: str = typer.Option(..., "--drive", help="cdfs, ddfs or linear-motor"),
+    out: str = typer.Option(..., "--out", help="The FMU file to write (DRIVE.fmu)."),
+    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
+    params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    position: float = typer.Option(400.0, "--position", help="Table position on the screw "
+                                   "at the start [mm]."),
+    fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
+    kind: str = typer.Option("cs", "--kind", help="cs (co-simulation: the FMU integrates, "
+                             "sampled loops as exact events) or me (model exchange: the "
+                             "importer integrates, sampled loops as time events)."),
+    table_speed: float = typer.Option(0.0, "--table-speed", help="Start value of the "
+                                      "table_speed_reference input [mm/s]."),
+    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Start value of the "
+                                    "nut_speed_reference input [mm/s] (DDFS)."),
+    nut_hold: str = typer.Option("locked", "--nut-hold", help="CDFS hollow motor: locked "
+                                 "(nut frozen) or servo (its loop at zero command)."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
+    as_json: bool = typer.Option(False, "--json", help="Print what was written as JSON."),
+) -> None:
+    """Write the drive as an FMU (FMI 2.0 or 3.0, co-simulation or model exchange): a binary
+    for this platform built with the machine's C compiler (needs only libc and libm) and its
+    C sources.  Inputs: the position/speed references and a table load force; outputs: table
+    position and speed, motor angles, speeds, currents and torques, friction forces, following
+    error; every model parameter tunable."""
+    from ..fmu import check_request, export_fmu
+    from ..parameters import ParameterError
+
+    check_request(drive, fmi, kind, out, force=force, inputs=(params_file,))
+    if nut_hold not in ("locked", "servo"):
+        raise ParameterError("--nut-hold", nut_hold, "expected locked or servo")
+    v_t = _units.speed("--table-speed", table_speed)
+    v_n = _units.speed("--nut-speed", nut_speed)
+    if v_n != 0.0 and (drive == "linear-motor" or (drive == "cdfs" and nut_hold == "locked")):
+        raise ParameterError("--nut-speed", nut_speed,
+                             f"the {drive} drive has no live nut axis; expected 0 [mm/s]")
+    params = resolve_parameters(preset_name, params_file, drive)
+    a = _units.position("--position", position, params, drive)
+    result = export_fmu(params, drive, out, table_position=a, nut_hold=nut_hold, fmi=fmi,
+                        kind=kind, table_speed=v_t, nut_speed=v_n, force=force)
+    data = {"fmu": str(result.path), "fmi_version": f"{fmi}.0",
+            "kind": "co-simulation" if kind == "cs" else "model exchange",
+            "model_identifier": result.identifier, "size_bytes": result.size_bytes,
+            "variables": result.n_variables, "states": result.n_states,
+            "sampled_loops": result.sampled, "inputs": list(result.inputs),
+            "outputs": list(result.outputs)}
+    if as_json:
+        print_json(data)
+        return
+    console.print(f"wrote {result.path} ({result.size_bytes / 1024:.0f} kB): FMI {fmi}.0 "
+                  f"{data['kind']}, {drive} ({params.name}), {result.n_states} states, "
+                  f"{result.n_variables} variables"
+                  f"{', sampled loops as time events' if result.sampled else ''}",
+                  markup=False, highlight=False)
+    console.print(f"  inputs:  {', '.join(result.inputs)}", markup=False, highlight=False)
+    console.print(f"  outputs: {', '.join(result.outputs)}", markup=False, highlight=False)

@@ -1,0 +1,536 @@
+"""The FMU's variables from the model's declarations, as ``modelDescription.xml`` and C tables.
+
+Every state, auxiliary signal and parameter of the assembled model becomes a variable with
+its name, unit and description (states and signals carry theirs in the model; a parameter's
+unit and meaning follow from its slot name, :func:`parameter_info`).  Inputs are named as
+the linear model names its reference and load inputs; outputs are the table's position and
+speed, the motors' angles, speeds, currents and torques, the friction force of every site
+and the following error.  A value reference is the variable's index in one table; the C
+wrapper reads ``VR_KIND``/``VR_A``/``VR_B`` to find the value (``wrapper.c``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import uuid
+from dataclasses import dataclass
+from xml.sax.saxutils import escape, quoteattr
+
+import numpy as np
+
+from ..model.loops import AXIS_PARAMS
+from .model import FmuModel
+
+# value-reference kinds (wrapper.c)
+K_TIME, K_STATE, K_DER, K_AUX, K_PARAM, K_INPUT, K_SETTING, K_PRODUCT, K_ERROR, K_BOOLEAN = \
+    range(10)
+
+# input slots u[...] of the wrapper
+INPUTS = ("table_position_reference", "table_speed_reference", "nut_position_reference",
+          "nut_speed_reference", "load_force")
+IN_XT, IN_VT, IN_XN, IN_VN, IN_LOAD = range(5)
+INPUT_INFO = {
+    "table_position_reference": ("m", "commanded table position; read when "
+                                 "integrate_speed_reference is false"),
+    "table_speed_reference": ("m/s", "commanded table speed (also the velocity "
+                              "feed-forward), held over a communication step"),
+    "nut_position_reference": ("m", "commanded nut position (linear: H·θ_n); read when "
+                               "integrate_speed_reference is false"),
+    "nut_speed_reference": ("m/s", "commanded nut speed (linear: H·ω_n, also the hollow "
+                            "motor's feed-forward), held over a communication step"),
+    "load_force": ("N", "load force on the table, against positive motion, from "
+                   "disturbances.load_start on"),
+}
+
+# wrapper settings s[...]: (name, unit, description, start or None: from the parameters)
+SETTINGS = (
+    ("solver.relative_tolerance", "1", "relative error target of the embedded DOPRI5 "
+     "(speeds and currents)", 1e-6),
+    ("solver.position_tolerance", "m", "absolute error target on positions (angles: ÷ H)",
+     1e-10),
+    ("solver.speed_tolerance", "m/s", "absolute error target on speeds (angular: ÷ H)", 1e-8),
+    ("solver.current_tolerance", "A", "absolute error target on currents", 1e-6),
+    ("solver.max_step", "s", "largest integrator step", 1e-3),
+    ("controller.position_period", "s", "position-loop sample period (0: continuous)", None),
+    ("controller.velocity_period", "s", "velocity-loop sample period (0: continuous)", None),
+    ("controller.current_period", "s", "current-loop sample period (0: continuous)", None),
+    ("integrate_speed_reference", "", "true: the commanded positions are the integrals of the "
+     "speed-reference inputs from the start (the position inputs give their start values); "
+     "false: the position-reference inputs are the commanded positions, advanced within a "
+     "step by the speed references", 1.0),
+)
+S_INDEX = {name: i for i, (name, *_rest) in enumerate(SETTINGS)}
+
+_LUGRE_SLOTS = (("coulomb_force_positive", "N", "Coulomb force F_c, positive direction"),
+                ("static_force_positive", "N", "static force F_s, positive direction"),
+                ("stribeck_velocity_positive", "m/s", "Stribeck velocity v_s, positive "
+                 "direction"),
+                ("viscous_coefficient_positive", "N s/m", "viscous coefficient σ2, positive "
+                 "direction"),
+                ("coulomb_force_negative", "N", "Coulomb force F_c, negative direction"),
+                ("static_force_negative", "N", "static force F_s, negative direction"),
+                ("stribeck_velocity_negative", "m/s", "Stribeck velocity v_s, negative "
+                 "direction"),
+                ("viscous_coefficient_negative", "N s/m", "viscous coefficient σ2, negative "
+                 "direction"),
+                ("bristle_stiffness", "N/m", "bristle stiffness σ0"),
+                ("bristle_damping", "N s/m", "bristle damping σ1"),
+                ("smoothing_velocity", "m/s", "sign-smoothing velocity (Stribeck law)"))
+
+_FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
+    "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
+    "speed_mode"}
+_HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
+           "disturbances.load_offset", "disturbances.load_points")
+
+_SIMPLE = {
+    "screw.H": ("m/rad", "lead per radian H (transmission ratio)"),
+    "screw.J": ("kg m2", "screw motor and shaft inertia"),
+    "nut.J": ("kg m2", "hollow motor and nut inertia"),
+    "table.mass": ("kg", "table (and forcer) mass"),
+    "stiffness.axial_damping": ("N s/m", "screw–nut–table axial damping c_ax"),
+    "stiffness.k_fixed": ("N/m", "fixed equivalent stiffness K_eq (0: from the chain)"),
+    "stiffness.c0": ("m/N", "axial compliance of bearings, nut and (torsion) coupling"),
+    "stiffness.ea": ("N", "screw axial rigidity E·A"),
+    "stiffness.length": ("m", "screw length between supports"),
+    "stiffness.support": ("1", "screw support: 0 fixed–fixed, 1 fixed–free"),
+    "stiffness.x0": ("m", "nut position a at the start (distance from the motor support)"),
+    "nut.active": ("1", "1: the hollow motor and nut are live; 0: held"),
+    "screw_motor.torque_constant": ("N m/A", "screw motor torque constant K_t"),
+    "screw_motor.back_emf_constant": ("V s/rad", "screw motor back-EMF constant K_e"),
+    "screw_motor.inductance": ("H", "screw motor armature inductance L"),
+    "screw_motor.resistance": ("Ohm", "screw motor armature resistance R"),
+    "nut_motor.torque_constant": ("N m/A", "hollow motor torque constant K_t"),
+    "nut_motor.back_emf_constant": ("V s/rad", "hollow motor back-EMF constant K_e"),
+    "nut_motor.inductance": ("H", "hollow motor armature inductance L"),
+    "nut_motor.resistance": ("Ohm", "hollow motor armature resistance R"),
+    "motor.force_constant": ("N/A", "linear motor force constant K_f"),
+    "motor.back_emf_constant": ("V s/m", "linear motor back-EMF constant K_e"),
+    "motor.inductance": ("H", "linear motor inductance L"),
+    "motor.resistance": ("Ohm", "linear motor resistance R"),
+    "disturbances.load_start": ("s", "time from which the load_force input acts"),
+    "compensation.observer_gain": ("1/s", "friction observer gain (compensation)"),
+}
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One FMU variable: where its value lives (kind, a, b) and how it is declared."""
+
+    name: str
+    kind: int
+    a: int
+    b: int
+    causality: str
+    variability: str
+    initial: str | None
+    start: float | None
+    unit: str
+    description: str
+    type: str = "Real"  # or "Boolean"
+    derivative: int | None = None  # value reference of the state (der variables)
+    fixed: bool = False  # a setting that may not change after initialisation
+
+
+def _axis_units(fm: FmuModel, axis: str) -> tuple[str, str]:
+    """(speed unit of the axis' commands, unit of its velocity-loop error)."""
+    m = fm.model
+    speed_unit = next(a.unit for a in m.aux if a.name == f"{axis}_speed_command")
+    basis = m.parameter(f"controller.{axis}.v_basis")
+    err = "m/s" if basis > 0.5 else speed_unit
+    return speed_unit, err
+
+
+def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
+    """(FMU name, unit, description, fixed) of the model parameter slot ``name``."""
+    if name in _SIMPLE:
+        unit, text = _SIMPLE[name]
+        return name, unit, text, name.split(".")[-1] in _FIXED_PARAMETERS
+    match = re.fullmatch(r"controller\.(\w+)\.(\w+)", name)
+    if match:
+        axis, slot = match.groups()
+        speed, err = _axis_units(fm, axis)
+        angle = "rad" if speed == "rad/s" else "m"
+        e_pos = err.replace("/s", "")
+        units = {"kpp": ("1/s", "position-loop gain K_pp"),
+                 "kvp": (f"A s/{e_pos}", "velocity-loop proportional gain K_vp"),
+                 "kvi": (f"A/{e_pos}", "velocity-loop integral gain K_vi"),
+                 "kip": ("V/A", "current-loop proportional gain K_ip"),
+                 "kii": ("V/(A s)", "current-loop integral gain K_ii"),
+                 "kv": ("1", "velocity-adjusting gain K_v"),
+                 "kv_place": ("1", "where K_v acts: 0 none, 1 position output, 2 velocity "
+                              "error"),
+                 "v_basis": ("1", "velocity gains on 0: motor speed, 1: table speed"),
+                 "v_feedback": ("1", "velocity feedback from 0: motor encoder, 1: table"),
+                 "ff": ("1", "velocity feed-forward on (1) or off (0)"),
+                 "i_max": ("A", "current command limit"),
+                 "u_max": ("V", "voltage limit"),
+                 "enc_q": ("rad", "encoder count size (0: ideal)"),
+                 "grat_q": ("m", "linear-scale resolution (0: ideal)"),
+                 "speed_mode": ("1", "1: speed loop only (no position feedback)"),
+                 "H": (f"m/{angle}" if angle == "rad" else "1", "transmission of the axis"),
+                 "inj_speed": (speed, "speed-command injection (loop breaking; 0)"),
+                 "inj_current": ("A", "current-command injection (loop breaking; 0)")}
+        unit, text = units[slot]
+        return name, unit, f"{axis} axis: {text}", slot in _FIXED_PARAMETERS
+    match = re.fullmatch(r"(friction|compensation)\.(\w+)\[(\d+)\]", name)
+    if match:
+        group, site, i = match.group(1), match.group(2), int(match.group(3))
+        law = dict(fm.model.sites).get(site, "lugre")
+        where = f"{site.replace('_', '–')} friction"
+        if group == "compensation":
+            where = f"{site} friction as the compensator assumes it"
+        if i < len(_LUGRE_SLOTS) and (law in ("lugre", "dahl", "stribeck", "none")
+                                      or group == "compensation"):
+            slot, unit, text = _LUGRE_SLOTS[i]
+            return f"{group}.{site}.{slot}", unit, f"{where} ({law}): {text}", False
+        return f"{group}.{site}.p{i}", "", f"{where} ({law}): packed parameter {i}", False
+    match = re.fullmatch(r"disturbances\.(\w+)\[(\d+)\]", name)
+    if match:
+        field, i = match.group(1), int(match.group(2))
+        n = sum(1 for p in fm.model.parameter_names if p.startswith(f"disturbances.{field}["))
+        k, part = i % (n // 3), ("order", "amplitude", "phase")[i // (n // 3)]
+        amp = "m" if field == "lead_error" else "N m"
+        unit = {"order": "1" if field != "lead_error" else "1", "amplitude": amp,
+                "phase": "rad"}[part]
+        return (f"disturbances.{field}.{part}[{k + 1}]", unit,
+                f"{field.replace('_', ' ')}: harmonic {k + 1} {part}", False)
+    return name, "", "model parameter", False
+
+
+def _outputs(fm: FmuModel) -> set[str]:
+    m = fm.model
+    names = {"table_position", "table_speed"}
+    for s in m.state_names:
+        if s.endswith(("_angle", "_speed", "_current")) and not s.endswith("_integral"):
+            if s.startswith("nut_") and not fm.nut_inputs:
+                continue
+            names.add(s)
+    names |= {f"{site}_friction" for site, _ in m.sites}
+    return names
+
+
+def variables(fm: FmuModel, kind: str) -> list[Variable]:
+    """Every variable of the FMU (value reference = position in the list)."""
+    m = fm.model
+    me = kind == "me"
+    out_names = _outputs(fm)
+    v: list[Variable] = [Variable("time", K_TIME, 0, 0, "independent", "continuous", None, None,
+                                  "s", "simulation time")]
+    starts = {"table_speed_reference": float(m.T[fm.table_offset + 2]),
+              "nut_speed_reference": float(m.T[fm.table_offset + 6]),
+              "load_force": float(m.P[fm.load_slot])}
+    present = ["table_position_reference", "table_speed_reference"]
+    if fm.nut_inputs:
+        present += ["nut_position_reference"] if fm.nut_position_input else []
+        present += ["nut_speed_reference"]
+    present.append("load_force")
+    for name in present:
+        unit, text = INPUT_INFO[name]
+        v.append(Variable(name, K_INPUT, INPUTS.index(name), 0, "input", "continuous", None,
+                          starts.get(name, 0.0), unit, text))
+    input_names = set(present)
+    # states
+    state_vr: dict[int, int] = {}
+    for i, s in enumerate(m.states):
+        out = s.name in out_names
+        state_vr[i] = len(v)
+        v.append(Variable(s.name, K_STATE, i, 0, "output" if out else "local", "continuous",
+                          "exact", 0.0, s.unit, s.description))
+    n = len(m.states)
+    ref_states = [("reference.table_position", "integral of table_speed_reference (the "
+                   "commanded table position when integrate_speed_reference)")]
+    ref_states.append(("reference.nut_position", "integral of nut_speed_reference (the "
+                       "commanded nut position when integrate_speed_reference)"))
+    for j, (name, text) in enumerate(ref_states):
+        state_vr[n + j] = len(v)
+        v.append(Variable(name, K_STATE, n + j, 0, "local", "continuous", "calculated", None,
+                          "m", text))
+    if me:
+        for i in range(n + len(ref_states)):
+            sv = v[state_vr[i]]
+            unit = _rate_unit(sv.unit)
+            v.append(Variable(f"der({sv.name})", K_DER, i, 0, "local", "continuous",
+                              "calculated", None, unit, f"rate of {sv.name}",
+                              derivative=state_vr[i]))
+    # auxiliary signals
+    for j, a in enumerate(m.aux):
+        name = a.name if a.name not in input_names else f"model.{a.name}"
+        v.append(Variable(name, K_AUX, j, 0, "output" if a.name in out_names else "local",
+                          "continuous", "calculated", None, a.unit, a.description))
+    # derived outputs: motor torques, following error
+    for key, label in (("screw", "screw motor"), ("nut", "hollow motor")):
+        if f"{key}_current" in m.state_names and (key == "screw" or fm.nut_inputs):
+            v.append(Variable(f"{key}_motor_torque", K_PRODUCT,
+                              m.parameter_names.index(f"{key}_motor.torque_constant"),
+                              m.index(f"{key}_current"), "output", "continuous",
+                              "calculated", None, "N m", f"{label} torque K_t·i"))
+    if "motor_current" in m.state_names:
+        v.append(Variable("motor_force", K_PRODUCT,
+                          m.parameter_names.index("motor.force_constant"),
+                          m.index("motor_current"), "output", "continuous", "calculated",
+                          None, "N", "linear motor force K_f·i"))
+    aux_names = [a.name for a in m.aux]
+    v.append(Variable("following_error", K_ERROR, aux_names.index("table_position_reference"),
+                      m.index("table_position"), "output", "continuous", "calculated", None,
+                      "m", "commanded minus actual table position"))
+    # parameters
+    for k, pname in enumerate(m.parameter_names):
+        if pname.startswith(_HIDDEN):
+            continue
+        name, unit, text, fixed = parameter_info(fm, pname)
+        v.append(Variable(name, K_PARAM, k, 0, "parameter", "fixed" if fixed else "tunable",
+                          "exact", float(m.P[k]), unit, text))
+    # settings
+    for i, (name, unit, text, start) in enumerate(SETTINGS):
+        value = start if start is not None else fm.periods[name.split(".")[1]]
+        if name == "integrate_speed_reference":
+            v.append(Variable(name, K_BOOLEAN, i, 0, "parameter", "fixed", "exact", value, "",
+                              text, type="Boolean", fixed=True))
+        else:
+            v.append(Variable(name, K_SETTING, i, 0, "parameter", "fixed", "exact", value, unit,
+                              text, fixed=True))
+    names = [x.name for x in v]
+    if len(set(names)) != len(names):
+        dup = sorted({x for x in names if names.count(x) > 1})
+        raise ValueError(f"FMU variable names not unique: {', '.join(dup)}")
+    return v
+
+
+def _rate_unit(unit: str) -> str:
+    if unit in ("", "1"):
+        return "1/s"
+    if unit.endswith("/s"):
+        return unit[:-2] + "/s2"
+    if unit == "A s":
+        return "A"
+    return f"{unit}/s"
+
+
+# ---------------------------------------------------------------- units
+_BASE = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+_SYMBOLS: dict[str, dict[str, int]] = {
+    "kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "A": {"A": 1}, "rad": {"rad": 1},
+    "N": {"kg": 1, "m": 1, "s": -2}, "V": {"kg": 1, "m": 2, "s": -3, "A": -1},
+    "Ohm": {"kg": 1, "m": 2, "s": -3, "A": -2}, "H": {"kg": 1, "m": 2, "s": -2, "A": -2},
+}
+
+
+def base_units(unit: str) -> dict[str, int]:
+    """SI base-unit exponents of a unit string such as ``"N s/m"``, ``"V/(A s)"``, ``"kg m2"``."""
+    out: dict[str, int] = {}
+    text = unit.replace("(", "").replace(")", "")
+    parts = text.split("/")
+    for sign, part in zip((1, *([-1] * (len(parts) - 1))), parts, strict=True):
+        for token in part.split():
+            if token == "1":
+                continue
+            match = re.fullmatch(r"([A-Za-z]+)(-?\d*)", token)
+            if not match or match.group(1) not in _SYMBOLS:
+                raise ValueError(f"unit {unit!r}: unknown symbol {token!r}")
+            power = int(match.group(2) or 1) * sign
+            for base, e in _SYMBOLS[match.group(1)].items():
+                out[base] = out.get(base, 0) + e * power
+    return {k: e for k, e in out.items() if e}
+
+
+# ---------------------------------------------------------------- XML
+def _attrs(**kw: object) -> str:
+    return " ".join(f"{k}={quoteattr(str(val))}" for k, val in kw.items() if val is not None)
+
+
+def _number(x: float) -> str:
+    if not math.isfinite(x):
+        raise ValueError(f"start value {x!r} is not finite")
+    return repr(float(x))
+
+
+def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
+                      identifier: str, token: str, description: str,
+                      generation: str) -> str:
+    """The text of ``modelDescription.xml`` (FMI 2.0 or 3.0)."""
+    units = sorted({x.unit for x in vs if x.unit})
+    me = kind == "me"
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>']
+    if fmi == 2:
+        lines.append("<fmiModelDescription " + _attrs(
+            fmiVersion="2.0", modelName=identifier, guid=token, description=description,
+            generationTool=generation, variableNamingConvention="structured",
+            numberOfEventIndicators=0) + ">")
+        if me:
+            lines.append("  <ModelExchange " + _attrs(
+                modelIdentifier=identifier, canGetAndSetFMUstate="true",
+                canSerializeFMUstate="true", canNotUseMemoryManagementFunctions="true") + ">")
+            lines.append('    <SourceFiles><File name="fmu.c"/></SourceFiles>')
+            lines.append("  </ModelExchange>")
+        else:
+            lines.append("  <CoSimulation " + _attrs(
+                modelIdentifier=identifier, canHandleVariableCommunicationStepSize="true",
+                canInterpolateInputs="true", maxOutputDerivativeOrder=0,
+                canGetAndSetFMUstate="true", canSerializeFMUstate="true",
+                canNotUseMemoryManagementFunctions="true") + ">")
+            lines.append('    <SourceFiles><File name="fmu.c"/></SourceFiles>')
+            lines.append("  </CoSimulation>")
+    else:
+        lines.append("<fmiModelDescription " + _attrs(
+            fmiVersion="3.0", modelName=identifier, instantiationToken=token,
+            description=description, generationTool=generation,
+            variableNamingConvention="structured") + ">")
+        if me:
+            lines.append("  <ModelExchange " + _attrs(
+                modelIdentifier=identifier, canGetAndSetFMUState="true",
+                canSerializeFMUState="true") + "/>")
+        else:
+            lines.append("  <CoSimulation " + _attrs(
+                modelIdentifier=identifier, canHandleVariableCommunicationStepSize="true",
+                canGetAndSetFMUState="true", canSerializeFMUState="true",
+                hasEventMode="false") + "/>")
+    lines.append("  <UnitDefinitions>")
+    for u in units:
+        base = base_units(u)
+        lines.append(f"    <Unit name={quoteattr(u)}><BaseUnit "
+                     + _attrs(**{k: base[k] for k in _BASE if k in base}) + "/></Unit>")
+    lines.append("  </UnitDefinitions>")
+    lines.append("  <DefaultExperiment " + _attrs(startTime="0.0", stopTime="10.0",
+                                                  stepSize="0.001") + "/>")
+    lines.append("  <ModelVariables>")
+    index = {}
+    for vr, x in enumerate(vs):
+        index[vr] = vr + 1  # FMI 2 indices are 1-based positions in ModelVariables
+        common = _attrs(name=x.name, valueReference=vr, description=x.description,
+                        causality=x.causality, variability=x.variability, initial=x.initial)
+        start = None
+        if x.start is not None:
+            start = ("true" if x.start else "false") if x.type == "Boolean" else _number(
+                x.start)
+        if fmi == 2:
+            inner = _attrs(unit=x.unit or None, start=start,
+                           derivative=None if x.derivative is None else x.derivative + 1)
+            lines.append(f"    <ScalarVariable {common}><{x.type} {inner}/></ScalarVariable>")
+        else:
+            tag = "Float64" if x.type == "Real" else "Boolean"
+            inner = _attrs(unit=x.unit or None, start=start, derivative=x.derivative)
+            lines.append(f"    <{tag} {common} {inner}/>".replace("  /", " /"))
+    lines.append("  </ModelVariables>")
+    lines.append("  <ModelStructure>")
+    outputs = [vr for vr, x in enumerate(vs) if x.causality == "output"]
+    ders = [vr for vr, x in enumerate(vs) if x.derivative is not None]
+    initial = [vr for vr, x in enumerate(vs)
+               if (x.causality == "output" and x.initial in ("approx", "calculated"))
+               or (me and (x.derivative is not None or (x.kind == K_STATE
+                                                          and x.initial == "calculated")))]
+    if fmi == 2:
+        for tag, vrs in (("Outputs", outputs), ("Derivatives", ders),
+                         ("InitialUnknowns", initial)):
+            if vrs:
+                lines.append(f"    <{tag}>")
+                lines += [f'      <Unknown index="{index[vr]}"/>' for vr in vrs]
+                lines.append(f"    </{tag}>")
+    else:
+        lines += [f'    <Output valueReference="{vr}"/>' for vr in outputs]
+        lines += [f'    <ContinuousStateDerivative valueReference="{vr}"/>' for vr in ders]
+        lines += [f'    <InitialUnknown valueReference="{vr}"/>' for vr in initial]
+    lines.append("  </ModelStructure>")
+    lines.append("</fmiModelDescription>")
+    return "\n".join(lines) + "\n"
+
+
+def new_token() -> str:
+    return "{" + str(uuid.uuid4()) + "}"
+
+
+# ---------------------------------------------------------------- C tables
+def _c_array(ctype: str, name: str, values: list[float] | list[int] | np.ndarray) -> str:
+    items = [repr(float(x)) if ctype == "double" else str(int(x)) for x in values] or ["0"]
+    rows = [", ".join(items[i:i + 8]) for i in range(0, len(items), 8)]
+    return f"static const {ctype} {name}[] = {{\n    " + ",\n    ".join(rows) + "\n};"
+
+
+def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: str) -> str:
+    """The C definitions the wrapper reads: sizes, value-reference table, start values."""
+    m = fm.model
+    pos, _ = m.tolerances(1.0, 0.0, 0.0)
+    spd, _ = m.tolerances(0.0, 1.0, 0.0)
+    cur, rel = m.tolerances(0.0, 0.0, 1.0)
+    u_start = [0.0] * len(INPUTS)
+    for x in vs:
+        if x.kind == K_INPUT:
+            u_start[x.a] = float(x.start or 0.0)
+    s_start = [0.0] * len(SETTINGS)
+    for x in vs:
+        if x.kind in (K_SETTING, K_BOOLEAN):
+            s_start[x.a] = float(x.start or 0.0)
+    out = [
+        f"#define FMU_FMI_VERSION {fmi}",
+        f"#define FMU_KIND_ME {1 if kind == 'me' else 0}",
+        f"#define INSTANTIATION_TOKEN {quote_c(token)}",
+        f"#define N_VR {len(vs)}",
+        f"#define N_INPUT {len(INPUTS)}",
+        f"#define N_SETTING {len(SETTINGS)}",
+        f"#define PROFILE_OFFSET {fm.profile_offset}",
+        f"#define TABLE_OFFSET {fm.table_offset}",
+        f"#define LOAD_SLOT {fm.load_slot}",
+        "#define MAX_STEPS_PER_CALL 50000000",
+        *[f"#define IN_{k} {i}" for k, i in (("XT", IN_XT), ("VT", IN_VT), ("XN", IN_XN),
+                                             ("VN", IN_VN), ("LOAD", IN_LOAD))],
+        *[f"#define {n} {i}" for n, i in (
+            ("S_RTOL", S_INDEX["solver.relative_tolerance"]),
+            ("S_POSITION_TOL", S_INDEX["solver.position_tolerance"]),
+            ("S_SPEED_TOL", S_INDEX["solver.speed_tolerance"]),
+            ("S_CURRENT_TOL", S_INDEX["solver.current_tolerance"]),
+            ("S_MAX_STEP", S_INDEX["solver.max_step"]),
+            ("S_POSITION_PERIOD", S_INDEX["controller.position_period"]),
+            ("S_VELOCITY_PERIOD", S_INDEX["controller.velocity_period"]),
+            ("S_CURRENT_PERIOD", S_INDEX["controller.current_period"]),
+            ("S_INTEGRATE", S_INDEX["integrate_speed_reference"]))],
+        *[f"#define {name} {value}" for name, value in (
+            ("K_TIME", K_TIME), ("K_STATE", K_STATE), ("K_DER", K_DER), ("K_AUX", K_AUX),
+            ("K_PARAM", K_PARAM), ("K_INPUT", K_INPUT), ("K_SETTING", K_SETTING),
+            ("K_PRODUCT", K_PRODUCT), ("K_ERROR", K_ERROR), ("K_BOOLEAN", K_BOOLEAN))],
+        _c_array("int", "VR_KIND", [x.kind for x in vs]),
+        _c_array("int", "VR_A", [x.a for x in vs]),
+        _c_array("int", "VR_B", [x.b for x in vs]),
+        _c_array("int", "VR_FIXED", [1 if x.fixed else 0 for x in vs]),
+        _c_array("double", "Y_START", [0.0] * len(m.states)),
+        _c_array("double", "P_START", m.P),
+        _c_array("double", "T_START", m.T),
+        _c_array("double", "U_START", u_start),
+        _c_array("double", "S_START", s_start),
+        _c_array("double", "ATOL_POSITION", pos),
+        _c_array("double", "ATOL_SPEED", spd),
+        _c_array("double", "ATOL_CURRENT", cur),
+        _c_array("double", "REL_MASK", rel),
+        # nominal magnitudes of the continuous states (model exchange): the absolute
+        # tolerances of feeddrive's defaults over its relative tolerance, so an importer
+        # that takes atol = rtol·nominal weighs errors as feeddrive.simulate does
+        _c_array("double", "NOMINAL", [*(m.tolerances(1e-10, 1e-8, 1e-6)[0] / 1e-6),
+                                       1e-4, 1e-4]),
+        "static const char *const SETTING_NAMES[] = {"
+        + ", ".join(quote_c(s[0]) for s in SETTINGS) + "};",
+        'static const char *const PERIOD_NAMES[] = {"controller.position_period", '
+        '"controller.velocity_period", "controller.current_period"};',
+        "static const char *const STATUS_MESSAGES[] = {"
+        + ", ".join(quote_c(t) for t in _status_messages()) + "};",
+    ]
+    return "\n".join(out) + "\n"
+
+
+def _status_messages() -> list[str]:
+    from .solver import STATUS_MESSAGES
+
+    return [STATUS_MESSAGES[i] for i in range(4)]
+
+
+def quote_c(text: str) -> str:
+    """A C string literal (ASCII, escapes for the rest)."""
+    body = text.encode("ascii", "backslashreplace").decode("ascii")
+    return '"' + body.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def xml_text(text: str) -> str:
+    return escape(text)
+
+
+__all__ = ["Variable", "variables", "model_description", "c_tables", "parameter_info",
+           "base_units", "AXIS_PARAMS"]

@@ -1,0 +1,163 @@
+"""The model an FMU carries: the drive assembled with its reference and load read from inputs.
+
+The reference is :class:`InputReference` (``feeddrive.control.REF_INPUT``): the reference
+kernel reads the commanded positions and speeds from a 4 × 2 block of the data table ``T``
+that the FMU writes from its inputs at each communication point (co-simulation) or each
+input change (model exchange).  The table load force is the parameter slot
+``disturbances.load_force`` (acting from ``disturbances.load_start`` on), present in every
+exported model (a zero load record makes the assembler emit it).  Nothing else differs from
+the model ``feeddrive.simulate`` integrates.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import ModuleType
+
+import numpy as np
+
+from ..control import REF_INPUT
+from ..model.assemble import Model, assemble
+from ..model.codegen import compile_module
+from ..model.disturbances import LoadProfile
+from ..parameters import DriveParameters, ParameterError
+from . import solver
+
+# the zero load record that makes the assembler emit the load-force slot
+_NO_LOAD = LoadProfile(time=np.array([0.0, 1.0]), force=np.zeros(2))
+
+
+@dataclass(frozen=True)
+class InputReference:
+    """The reference as external inputs: start values of the table and nut speeds [m/s]."""
+
+    table_speed: float = 0.0
+    nut_speed: float = 0.0
+
+    def encode(self) -> tuple[dict[int, float], np.ndarray]:
+        for name, v in (("table_speed", self.table_speed), ("nut_speed", self.nut_speed)):
+            if not math.isfinite(v):
+                raise ParameterError(name, v, "expected a finite speed [m/s]")
+        table = np.zeros((4, 2))
+        table[1, 0] = self.table_speed
+        table[3, 0] = self.nut_speed
+        return {0: REF_INPUT}, table
+
+
+@dataclass(frozen=True)
+class FmuModel:
+    """The assembled model and where its inputs live (indices into ``P`` and ``T``)."""
+
+    model: Model
+    drive: str
+    profile_offset: int  # first slot of the profile block in P
+    table_offset: int  # first slot of the reference block in T
+    load_slot: int  # P index of disturbances.load_force
+    nut_inputs: bool  # the nut has a live axis (DDFS, or the CDFS nut on its servo)
+    nut_position_input: bool  # ... with a position loop (controller nut_loop = "position")
+    periods: dict[str, float]  # the loops' sample periods [s] (0: continuous), by loop name
+
+
+def build(parameters: DriveParameters, drive: str, table_position: float,
+          nut_hold: str = "locked", table_speed: float = 0.0,
+          nut_speed: float = 0.0) -> FmuModel:
+    """Assemble ``drive`` with its reference and load force read from the FMU's inputs."""
+    from ..simulate import DriveSystem
+
+    DriveSystem(parameters, drive, table_position, nut_hold)  # the same checks as simulate
+    profile = InputReference(table_speed, nut_speed)
+    # assemble reads only a profile's encode(): InputReference is one (not a simulate profile)
+    model = assemble(parameters, drive, table_position, nut_hold,
+                     profile, _NO_LOAD)  # type: ignore[arg-type]
+    names = model.parameter_names
+    o = names.index("profile[0]")
+    nut_inputs = "controller.nut.kpp" in names and model.parameter("nut.active") > 0.5
+    nut_position = nut_inputs and model.parameter("controller.nut.speed_mode") < 0.5
+    return FmuModel(model=model, drive=drive, profile_offset=o,
+                    table_offset=int(model.P[o + 5]),
+                    load_slot=names.index("disturbances.load_force"),
+                    nut_inputs=nut_inputs, nut_position_input=nut_position,
+                    periods={"position_period": parameters.controller.position_period,
+                             "velocity_period": parameters.controller.velocity_period,
+                             "current_period": parameters.controller.current_period})
+
+
+def numba_module(model: Model) -> ModuleType:
+    """The model's generated module with :func:`feeddrive.fmu.solver.advance_template` compiled
+    beside its kernels (``module.advance``): the numba build of the FMU's integrator."""
+    return compile_module(model.source + "\n\n" + solver.template_source() + "\n", [])
+
+
+class NumbaCoSimulation:
+    """The FMU's co-simulation step run through numba (the same integrator text as the C
+    build): what the tests compare the FMU's binary with, and the benchmark's in-process
+    reference.  ``inputs`` of :meth:`do_step` are held over the step, as the FMU holds them."""
+
+    def __init__(self, fm: FmuModel, *, rtol: float = 1e-6, position_tolerance: float = 1e-10,
+                 speed_tolerance: float = 1e-8, current_tolerance: float = 1e-6,
+                 h_max: float = 1e-3, integrate_speed_reference: bool = True,
+                 max_steps: int = 10_000_000, P: np.ndarray | None = None) -> None:
+        from ..simulate import sampling
+
+        self.fm = fm
+        m = fm.model
+        self.module = numba_module(m)
+        self.P = m.P.copy() if P is None else np.array(P, dtype=float)
+        self.T = m.T.copy()
+        self.n = len(m.states)
+        self.y = np.zeros(self.n)
+        self.held = np.zeros(m.n_held)
+        self.held_prev = np.zeros(m.n_held)
+        self.atol, self.rel = m.tolerances(position_tolerance, speed_tolerance,
+                                           current_tolerance)
+        self.rtol, self.h_max, self.max_steps = rtol, h_max, max_steps
+        self.integrate = integrate_speed_reference
+        self.params = fm.model  # for sampling: the DriveParameters are not kept on the model
+        self.work = [np.zeros(self.n) for _ in range(10)]
+        self.aux = np.zeros(len(m.aux))
+        self.memory = solver.new_memory(1e-6)
+        self.grid: tuple[float, int, int, int] | None = None
+        self.t = 0.0
+        self.x_int = np.zeros(2)  # integrals of the speed references (table, nut)
+        self._sampling = sampling
+
+    def start(self, params: DriveParameters, inputs: dict[str, float]) -> None:
+        g = self._sampling(params, 1e-3)
+        self.grid = (g.base, g.n_pos, g.n_vel, g.n_cur)
+        self._write_inputs(inputs)
+        base, n_pos, n_vel, n_cur = self.grid
+        self.module.sample_update(0, 0.0, self.y, self.held, self.P, self.T, n_pos, n_vel,
+                                  n_cur, base)
+        self.held_prev[:] = self.held
+        self.memory[solver.MEM_AT_SAMPLE] = 0.0
+        self._last_inputs = dict(inputs)
+
+    def _write_inputs(self, inputs: dict[str, float]) -> None:
+        fm, T, to = self.fm, self.T, self.fm.table_offset
+        vt = inputs.get("table_speed_reference", 0.0)
+        vn = inputs.get("nut_speed_reference", 0.0)
+        T[to] = self.x_int[0] if self.integrate else inputs.get("table_position_reference", 0.0)
+        T[to + 2], T[to + 3] = vt, 0.0
+        T[to + 4] = self.x_int[1] if self.integrate else inputs.get("nut_position_reference",
+                                                                     0.0)
+        T[to + 6], T[to + 7] = vn, 0.0
+        self.P[fm.profile_offset + 4] = self.t
+        self.P[fm.load_slot] = inputs.get("load_force", 0.0)
+
+    def do_step(self, h: float, inputs: dict[str, float]) -> None:
+        assert self.grid is not None
+        base, n_pos, n_vel, n_cur = self.grid
+        redo = 1 if inputs != self._last_inputs else 0
+        self._last_inputs = dict(inputs)
+        self._write_inputs(inputs)
+        w = self.work
+        status = self.module.advance(
+            self.t, self.t + h, 0.0, self.n, self.y, self.held, self.held_prev, self.P, self.T,
+            n_pos, n_vel, n_cur, base, self.rtol, self.atol, self.rel, self.h_max,
+            self.max_steps, redo, self.memory, *w[:10], self.aux)
+        if status != solver.STATUS_OK:
+            raise RuntimeError(f"t = {self.t:g} s: {solver.STATUS_MESSAGES[status]}")
+        self.x_int[0] += inputs.get("table_speed_reference", 0.0) * h
+        self.x_int[1] += inputs.get("nut_speed_reference", 0.0) * h
+        self.t += h

@@ -1,0 +1,973 @@
+/* feeddrive FMU wrapper: the FMI 2.0 / 3.0 functions around a generated drive model.
+ *
+ * Compiled after the generated parts in one translation unit (feeddrive.fmu.build):
+ *   - the model (feeddrive.model.c_backend): FD_N_STATE, FD_N_AUX, FD_N_HELD, FD_N_PARAM,
+ *     FD_N_TABLE, fd_rhs(), fd_sample_update();
+ *   - the integrator (feeddrive.fmu.solver.advance_template, translated): FD_ADVANCE();
+ *   - the variable tables (feeddrive.fmu.description): VR_KIND/VR_A/VR_B, start values.
+ * Nothing here is physics: the wrapper moves values between the importer and the arrays the
+ * generated code reads (states y, held controller values, parameters P, data table T).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if FMU_FMI_VERSION == 2
+#include "fmi2Functions.h"
+#else
+#include "fmi3Functions.h"
+#endif
+
+#define N_REF_STATES 2
+#define N_CSTATES (FD_N_STATE + N_REF_STATES)
+#define N_WORK 10
+
+typedef struct {
+    double t, t0, stop_time;
+    double y[N_CSTATES];
+    double dy[N_CSTATES];
+    double held[FD_N_HELD], held_prev[FD_N_HELD];
+    double P[FD_N_PARAM];
+    double T[FD_N_TABLE];
+    double aux[FD_N_AUX];
+    double u[N_INPUT], du[N_INPUT];
+    double s[N_SETTING];
+    double atol[FD_N_STATE], rel[FD_N_STATE];
+    double work[N_WORK][FD_N_STATE];
+    double memory[FD_MEMORY_SIZE];
+    double base, next_event;
+    long n_pos, n_vel, n_cur, k_event;
+    int sampled, inputs_changed, dirty, initialized, terminated, logging, model_exchange;
+    char name[256];
+#if FMU_FMI_VERSION == 2
+    fmi2CallbackFunctions cb;
+#else
+    fmi3InstanceEnvironment env;
+    fmi3LogMessageCallback log;
+#endif
+} Fmu;
+
+enum { ST_OK = 0, ST_WARNING = 1, ST_DISCARD = 2, ST_ERROR = 3, ST_FATAL = 4 };
+
+static void fmu_log(Fmu *m, int status, const char *message) {
+#if FMU_FMI_VERSION == 2
+    if (m->cb.logger)
+        m->cb.logger(m->cb.componentEnvironment, m->name, (fmi2Status)status,
+                     status >= ST_ERROR ? "logStatusError" : "logAll", "%s", message);
+#else
+    if (m->log)
+        m->log(m->env, (fmi3Status)status,
+               status >= ST_ERROR ? "logStatusError" : "logAll", message);
+#endif
+}
+
+static Fmu *fmu_new(const char *name, int model_exchange) {
+    Fmu *m = (Fmu *)calloc(1, sizeof(Fmu));
+    if (!m) return NULL;
+    strncpy(m->name, name ? name : "feeddrive", sizeof(m->name) - 1);
+    m->model_exchange = model_exchange;
+    return m;
+}
+
+/* start values: the state of an instance after instantiation or reset */
+static void fmu_defaults(Fmu *m) {
+    int i;
+    memset(m->y, 0, sizeof(m->y));
+    for (i = 0; i < FD_N_STATE; i++) m->y[i] = Y_START[i];
+    memset(m->held, 0, sizeof(m->held));
+    memcpy(m->P, P_START, sizeof(m->P));
+    memcpy(m->T, T_START, sizeof(m->T));
+    memcpy(m->u, U_START, sizeof(m->u));
+    memset(m->du, 0, sizeof(m->du));
+    memcpy(m->s, S_START, sizeof(m->s));
+    m->t = 0.0;
+    m->t0 = 0.0;
+    m->initialized = 0;
+    m->terminated = 0;
+    m->dirty = 1;
+}
+
+/* the reference block of T (feeddrive.control.REF_INPUT) and the load slot, from the inputs;
+   the commanded positions are the inputs or the integrals of the speed references */
+static void fmu_write_inputs(Fmu *m, int with_rates) {
+    int integrate = m->s[S_INTEGRATE] > 0.5;
+    m->T[TABLE_OFFSET + 0] = integrate ? m->y[FD_N_STATE] : m->u[IN_XT];
+    m->T[TABLE_OFFSET + 2] = m->u[IN_VT];
+    m->T[TABLE_OFFSET + 3] = with_rates ? m->du[IN_VT] : 0.0;
+    m->T[TABLE_OFFSET + 4] = integrate ? m->y[FD_N_STATE + 1] : m->u[IN_XN];
+    m->T[TABLE_OFFSET + 6] = m->u[IN_VN];
+    m->T[TABLE_OFFSET + 7] = with_rates ? m->du[IN_VN] : 0.0;
+    m->P[PROFILE_OFFSET + 4] = m->t;
+    m->P[LOAD_SLOT] = m->u[IN_LOAD];
+}
+
+/* derivatives and signals at (t, y) (model exchange; co-simulation after a step) */
+static void fmu_evaluate(Fmu *m) {
+    if (!m->dirty) return;
+    if (m->model_exchange) fmu_write_inputs(m, 0);
+    fd_rhs(m->t, m->y, m->held, m->P, m->T, m->n_pos, m->n_vel, m->n_cur, m->dy, m->aux);
+    m->dy[FD_N_STATE] = m->u[IN_VT];
+    m->dy[FD_N_STATE + 1] = m->u[IN_VN];
+    m->dirty = 0;
+}
+
+static int fmu_sampling(Fmu *m) {
+    double periods[3];
+    long n[3];
+    double base = 0.0;
+    int i;
+    char msg[200];
+    periods[0] = m->s[S_POSITION_PERIOD];
+    periods[1] = m->s[S_VELOCITY_PERIOD];
+    periods[2] = m->s[S_CURRENT_PERIOD];
+    for (i = 0; i < 3; i++) {
+        if (!(periods[i] >= 0.0) || !isfinite(periods[i])) {
+            snprintf(msg, sizeof msg, "%s = %g: expected a period >= 0 [s]", PERIOD_NAMES[i],
+                     periods[i]);
+            fmu_log(m, ST_ERROR, msg);
+            return ST_ERROR;
+        }
+        if (periods[i] > 0.0 && (base == 0.0 || periods[i] < base)) base = periods[i];
+    }
+    for (i = 0; i < 3; i++) {
+        n[i] = periods[i] > 0.0 ? (long)floor(periods[i] / base + 0.5) : 0;
+        if (periods[i] > 0.0 && fabs(n[i] * base - periods[i]) > 1e-9 * periods[i]) {
+            snprintf(msg, sizeof msg, "%s = %g: must be an integer multiple of the fastest "
+                     "controller period %g [s]", PERIOD_NAMES[i], periods[i], base);
+            fmu_log(m, ST_ERROR, msg);
+            return ST_ERROR;
+        }
+    }
+    m->base = base > 0.0 ? base : 1.0;
+    m->n_pos = n[0];
+    m->n_vel = n[1];
+    m->n_cur = n[2];
+    m->sampled = base > 0.0;
+    return ST_OK;
+}
+
+static int fmu_check_settings(Fmu *m) {
+    int i;
+    char msg[200];
+    for (i = 0; i < N_SETTING; i++) {
+        if (i == S_POSITION_PERIOD || i == S_VELOCITY_PERIOD || i == S_CURRENT_PERIOD ||
+            i == S_INTEGRATE)
+            continue;
+        if (!(m->s[i] > 0.0) || !isfinite(m->s[i])) {
+            snprintf(msg, sizeof msg, "%s = %g: expected a finite value > 0", SETTING_NAMES[i],
+                     m->s[i]);
+            fmu_log(m, ST_ERROR, msg);
+            return ST_ERROR;
+        }
+    }
+    for (i = 0; i < FD_N_STATE; i++) {
+        m->atol[i] = ATOL_POSITION[i] * m->s[S_POSITION_TOL] + ATOL_SPEED[i] * m->s[S_SPEED_TOL]
+                     + ATOL_CURRENT[i] * m->s[S_CURRENT_TOL];
+        m->rel[i] = REL_MASK[i];
+    }
+    return ST_OK;
+}
+
+/* leave initialisation: sampling grid, the controller sampled at t0, the signals there */
+static int fmu_initialize(Fmu *m) {
+    int i;
+    if (fmu_sampling(m) != ST_OK || fmu_check_settings(m) != ST_OK) return ST_ERROR;
+    for (i = 0; i < FD_MEMORY_SIZE; i++) m->memory[i] = 0.0;
+    m->memory[FD_MEM_H] = 1e-6;
+    m->memory[FD_MEM_ERR] = 1e-4;
+    m->y[FD_N_STATE] = m->u[IN_XT];  /* the speed integrals start at the position inputs */
+    m->y[FD_N_STATE + 1] = m->u[IN_XN];
+    m->t = m->t0;
+    fmu_write_inputs(m, !m->model_exchange);
+    memcpy(m->held_prev, m->held, sizeof(m->held));
+    fd_sample_update(0, m->t, m->y, m->held, m->P, m->T, m->n_pos, m->n_vel, m->n_cur,
+                     m->base);
+    m->memory[FD_MEM_AT_SAMPLE] = 1.0;
+    m->k_event = 0;
+    m->next_event = m->t0 + m->base;
+    m->inputs_changed = 0;
+    m->dirty = 1;
+    fmu_evaluate(m);
+    m->initialized = 1;
+    return ST_OK;
+}
+
+static int fmu_do_step(Fmu *m, double t, double h) {
+    long status;
+    int redo, i;
+    double t_end = t + h;
+    char msg[300];
+    if (!m->initialized || m->terminated) return ST_ERROR;
+    if (fabs(t - m->t) > 1e-9 * (fabs(t) + 1.0)) {
+        snprintf(msg, sizeof msg, "doStep at t = %.17g s, but the FMU is at t = %.17g s", t, m->t);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
+    if (!(h >= 0.0)) return ST_ERROR;
+    redo = m->inputs_changed;
+    m->inputs_changed = 0;
+    fmu_write_inputs(m, 1);
+    status = FD_ADVANCE(m->t, t_end, m->t0, (long)FD_N_STATE, m->y, m->held, m->held_prev, m->P,
+                        m->T, m->n_pos, m->n_vel, m->n_cur, m->base, m->s[S_RTOL], m->atol,
+                        m->rel, m->s[S_MAX_STEP], (long)MAX_STEPS_PER_CALL, (long)redo,
+                        m->memory, m->work[0], m->work[1], m->work[2], m->work[3], m->work[4],
+                        m->work[5], m->work[6], m->work[7], m->work[8], m->work[9], m->aux);
+    if (status != 0) {
+        snprintf(msg, sizeof msg, "integration stopped near t = %.9g s: %s", m->t,
+                 STATUS_MESSAGES[status < 0 || status > 3 ? 0 : status]);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
+    /* the speed integrals: exact for speeds held (and ramped at their input rates) */
+    for (i = 0; i < 2; i++) {
+        int v = i == 0 ? IN_VT : IN_VN;
+        m->y[FD_N_STATE + i] += m->u[v] * h + 0.5 * m->du[v] * h * h;
+    }
+    m->t = t_end;
+    for (i = 0; i < FD_N_STATE; i++) m->dy[i] = m->work[0][i]; /* f at t_end */
+    m->dy[FD_N_STATE] = m->u[IN_VT];
+    m->dy[FD_N_STATE + 1] = m->u[IN_VN];
+    m->dirty = 0;
+    return ST_OK;
+}
+
+/* ---- model exchange: time events at the sample instants t0 + k·base */
+static void fmu_event_update(Fmu *m, int *next_defined, double *next_time) {
+    if (m->sampled) {
+        while (m->t >= m->next_event - 1e-9 * m->base) {
+            m->k_event += 1;
+            fmu_write_inputs(m, 0);
+            fd_sample_update(m->k_event, m->t, m->y, m->held, m->P, m->T, m->n_pos, m->n_vel,
+                             m->n_cur, m->base);
+            m->next_event = m->t0 + (m->k_event + 1) * m->base;
+            m->dirty = 1;
+        }
+        *next_defined = 1;
+        *next_time = m->next_event;
+    } else {
+        *next_defined = 0;
+        *next_time = 0.0;
+    }
+}
+
+/* ---- value references */
+static double fmu_get(Fmu *m, int vr) {
+    int a = VR_A[vr], b = VR_B[vr];
+    switch (VR_KIND[vr]) {
+    case K_TIME: return m->t;
+    case K_STATE: return m->y[a];
+    case K_DER: fmu_evaluate(m); return m->dy[a];
+    case K_AUX: fmu_evaluate(m); return m->aux[a];
+    case K_PARAM: return m->P[a];
+    case K_INPUT: return m->u[a];
+    case K_SETTING: return m->s[a];
+    case K_PRODUCT: return m->P[a] * m->y[b];
+    case K_ERROR: fmu_evaluate(m); return m->aux[a] - m->y[b];
+    default: return 0.0;
+    }
+}
+
+static int fmu_set(Fmu *m, int vr, double value) {
+    int a = VR_A[vr];
+    switch (VR_KIND[vr]) {
+    case K_STATE: m->y[a] = value; m->dirty = 1; return ST_OK;
+    case K_PARAM: m->P[a] = value; m->dirty = 1; return ST_OK;
+    case K_INPUT:
+        if (m->u[a] != value) m->inputs_changed = 1;
+        m->u[a] = value;
+        m->dirty = 1;
+        return ST_OK;
+    case K_SETTING:
+        if (m->initialized && VR_FIXED[vr]) return ST_ERROR;
+        m->s[a] = value;
+        return ST_OK;
+    default: return ST_ERROR;
+    }
+}
+
+static int fmu_check_vr(Fmu *m, int vr, int boolean) {
+    if (vr < 0 || vr >= N_VR || (VR_KIND[vr] == K_BOOLEAN) != boolean) {
+        char msg[100];
+        snprintf(msg, sizeof msg, "unknown value reference %d", vr);
+        fmu_log(m, ST_ERROR, msg);
+        return 0;
+    }
+    return 1;
+}
+
+#if FMU_FMI_VERSION == 2
+/* ======================================================================== FMI 2.0 */
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t n,
+                               const fmi2String categories[]) {
+    (void)n; (void)categories;
+    ((Fmu *)c)->logging = loggingOn;
+    return fmi2OK;
+}
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation,
+                              const fmi2CallbackFunctions *functions, fmi2Boolean visible,
+                              fmi2Boolean loggingOn) {
+    Fmu *m;
+    (void)fmuResourceLocation; (void)visible;
+    if ((fmuType == fmi2ModelExchange) != FMU_KIND_ME) return NULL;
+    if (!fmuGUID || strcmp(fmuGUID, INSTANTIATION_TOKEN) != 0) {
+        if (functions && functions->logger)
+            functions->logger(functions->componentEnvironment, instanceName, fmi2Error,
+                              "logStatusError", "GUID does not match this FMU's");
+        return NULL;
+    }
+    m = fmu_new(instanceName, FMU_KIND_ME);
+    if (!m) return NULL;
+    if (functions) m->cb = *functions;
+    m->logging = loggingOn;
+    fmu_defaults(m);
+    return m;
+}
+
+void fmi2FreeInstance(fmi2Component c) { free(c); }
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
+                               fmi2Real tolerance, fmi2Real startTime,
+                               fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    Fmu *m = (Fmu *)c;
+    if (toleranceDefined && tolerance > 0.0) m->s[S_RTOL] = tolerance;
+    m->t0 = startTime;
+    m->t = startTime;
+    m->stop_time = stopTimeDefined ? stopTime : 0.0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) { (void)c; return fmi2OK; }
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    return fmu_initialize((Fmu *)c) == ST_OK ? fmi2OK : fmi2Error;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) { ((Fmu *)c)->terminated = 1; return fmi2OK; }
+
+fmi2Status fmi2Reset(fmi2Component c) { fmu_defaults((Fmu *)c); return fmi2OK; }
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                       fmi2Real value[]) {
+    size_t i;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi2Error;
+        value[i] = fmu_get((Fmu *)c, (int)vr[i]);
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                       const fmi2Real value[]) {
+    size_t i;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi2Error;
+        if (fmu_set((Fmu *)c, (int)vr[i], value[i]) != ST_OK) return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Boolean value[]) {
+    size_t i;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi2Error;
+        value[i] = ((Fmu *)c)->s[VR_A[vr[i]]] > 0.5 ? fmi2True : fmi2False;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Boolean value[]) {
+    size_t i;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi2Error;
+        if (((Fmu *)c)->initialized) return fmi2Error;
+        ((Fmu *)c)->s[VR_A[vr[i]]] = value[i] ? 1.0 : 0.0;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Integer value[]) {
+    (void)c; (void)vr; (void)value;
+    return nvr == 0 ? fmi2OK : fmi2Error;
+}
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Integer value[]) {
+    (void)c; (void)vr; (void)value;
+    return nvr == 0 ? fmi2OK : fmi2Error;
+}
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         fmi2String value[]) {
+    (void)c; (void)vr; (void)value;
+    return nvr == 0 ? fmi2OK : fmi2Error;
+}
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         const fmi2String value[]) {
+    (void)c; (void)vr; (void)value;
+    return nvr == 0 ? fmi2OK : fmi2Error;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) {
+    Fmu *copy = (Fmu *)malloc(sizeof(Fmu));
+    if (!copy) return fmi2Error;
+    memcpy(copy, c, sizeof(Fmu));
+    if (*s) free(*s);
+    *s = copy;
+    return fmi2OK;
+}
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) {
+    if (!s) return fmi2Error;
+    memcpy(c, s, sizeof(Fmu));
+    return fmi2OK;
+}
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) {
+    (void)c;
+    free(*s);
+    *s = NULL;
+    return fmi2OK;
+}
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *size) {
+    (void)c; (void)s;
+    *size = sizeof(Fmu);
+    return fmi2OK;
+}
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte data[],
+                                 size_t size) {
+    (void)c;
+    if (size < sizeof(Fmu)) return fmi2Error;
+    memcpy(data, s, sizeof(Fmu));
+    return fmi2OK;
+}
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte data[], size_t size,
+                                   fmi2FMUstate *s) {
+    (void)c;
+    if (size < sizeof(Fmu)) return fmi2Error;
+    if (!*s) *s = malloc(sizeof(Fmu));
+    if (!*s) return fmi2Error;
+    memcpy(*s, data, sizeof(Fmu));
+    return fmi2OK;
+}
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[],
+                                        size_t nu, const fmi2ValueReference z[], size_t nz,
+                                        const fmi2Real dv[], fmi2Real dz[]) {
+    (void)c; (void)u; (void)nu; (void)z; (void)nz; (void)dv; (void)dz;
+    return fmi2Error;
+}
+
+/* model exchange */
+fmi2Status fmi2EnterEventMode(fmi2Component c) { (void)c; return fmi2OK; }
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
+    int defined;
+    double next;
+    fmu_event_update((Fmu *)c, &defined, &next);
+    info->newDiscreteStatesNeeded = fmi2False;
+    info->terminateSimulation = fmi2False;
+    info->nominalsOfContinuousStatesChanged = fmi2False;
+    info->valuesOfContinuousStatesChanged = fmi2False;
+    info->nextEventTimeDefined = defined ? fmi2True : fmi2False;
+    info->nextEventTime = next;
+    return fmi2OK;
+}
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { (void)c; return fmi2OK; }
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode,
+                                       fmi2Boolean *terminateSimulation) {
+    (void)c; (void)noSetFMUStatePriorToCurrentPoint;
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    return fmi2OK;
+}
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    ((Fmu *)c)->t = time;
+    ((Fmu *)c)->dirty = 1;
+    return fmi2OK;
+}
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    Fmu *m = (Fmu *)c;
+    size_t i;
+    if (nx != N_CSTATES) return fmi2Error;
+    for (i = 0; i < nx; i++) m->y[i] = x[i];
+    m->dirty = 1;
+    return fmi2OK;
+}
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
+    Fmu *m = (Fmu *)c;
+    size_t i;
+    if (nx != N_CSTATES) return fmi2Error;
+    fmu_evaluate(m);
+    for (i = 0; i < nx; i++) dx[i] = m->dy[i];
+    return fmi2OK;
+}
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t nz) {
+    (void)c; (void)z;
+    return nz == 0 ? fmi2OK : fmi2Error;
+}
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    Fmu *m = (Fmu *)c;
+    size_t i;
+    if (nx != N_CSTATES) return fmi2Error;
+    for (i = 0; i < nx; i++) x[i] = m->y[i];
+    return fmi2OK;
+}
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    size_t i;
+    (void)c;
+    if (nx != N_CSTATES) return fmi2Error;
+    for (i = 0; i < nx; i++) x_nominal[i] = NOMINAL[i];
+    return fmi2OK;
+}
+
+/* co-simulation */
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
+                                       size_t nvr, const fmi2Integer order[],
+                                       const fmi2Real value[]) {
+    Fmu *m = (Fmu *)c;
+    size_t i;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr(m, (int)vr[i], 0) || VR_KIND[vr[i]] != K_INPUT) return fmi2Error;
+        if (order[i] == 1) {
+            if (m->du[VR_A[vr[i]]] != value[i]) m->inputs_changed = 1;
+            m->du[VR_A[vr[i]]] = value[i];
+        } else if (order[i] > 1) {
+            return fmi2Error;
+        }
+    }
+    return fmi2OK;
+}
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
+                                        size_t nvr, const fmi2Integer order[],
+                                        fmi2Real value[]) {
+    (void)c; (void)vr; (void)order; (void)value;
+    return nvr == 0 ? fmi2OK : fmi2Error;
+}
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
+                      fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentCommunicationPoint) {
+    (void)noSetFMUStatePriorToCurrentCommunicationPoint;
+    return fmu_do_step((Fmu *)c, currentCommunicationPoint, communicationStepSize) == ST_OK
+               ? fmi2OK : fmi2Error;
+}
+fmi2Status fmi2CancelStep(fmi2Component c) { (void)c; return fmi2Error; }
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+    (void)c; (void)s;
+    *value = fmi2OK;
+    return fmi2OK;
+}
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    if (s == fmi2LastSuccessfulTime) {
+        *value = ((Fmu *)c)->t;
+        return fmi2OK;
+    }
+    return fmi2Discard;
+}
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+    (void)c; (void)s; (void)value;
+    return fmi2Discard;
+}
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    (void)c;
+    if (s == fmi2Terminated) {
+        *value = fmi2False;
+        return fmi2OK;
+    }
+    return fmi2Discard;
+}
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+    (void)c; (void)s; (void)value;
+    return fmi2Discard;
+}
+
+#else
+/* ======================================================================== FMI 3.0 */
+const char *fmi3GetVersion(void) { return fmi3Version; }
+
+fmi3Status fmi3SetDebugLogging(fmi3Instance c, fmi3Boolean loggingOn, size_t n,
+                               const fmi3String categories[]) {
+    (void)n; (void)categories;
+    ((Fmu *)c)->logging = loggingOn;
+    return fmi3OK;
+}
+
+static fmi3Instance fmu3_instantiate(fmi3String instanceName, fmi3String token,
+                                     fmi3Boolean loggingOn, fmi3InstanceEnvironment env,
+                                     fmi3LogMessageCallback logMessage, int model_exchange) {
+    Fmu *m;
+    if (model_exchange != FMU_KIND_ME) return NULL;
+    if (!token || strcmp(token, INSTANTIATION_TOKEN) != 0) {
+        if (logMessage)
+            logMessage(env, fmi3Error, "logStatusError",
+                       "instantiation token does not match this FMU's");
+        return NULL;
+    }
+    m = fmu_new(instanceName, model_exchange);
+    if (!m) return NULL;
+    m->env = env;
+    m->log = logMessage;
+    m->logging = loggingOn;
+    fmu_defaults(m);
+    return m;
+}
+
+fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String token,
+                                          fmi3String resourcePath, fmi3Boolean visible,
+                                          fmi3Boolean loggingOn,
+                                          fmi3InstanceEnvironment env,
+                                          fmi3LogMessageCallback logMessage) {
+    (void)resourcePath; (void)visible;
+    return fmu3_instantiate(instanceName, token, loggingOn, env, logMessage, 1);
+}
+
+fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String token,
+                                         fmi3String resourcePath, fmi3Boolean visible,
+                                         fmi3Boolean loggingOn, fmi3Boolean eventModeUsed,
+                                         fmi3Boolean earlyReturnAllowed,
+                                         const fmi3ValueReference required[], size_t nRequired,
+                                         fmi3InstanceEnvironment env,
+                                         fmi3LogMessageCallback logMessage,
+                                         fmi3IntermediateUpdateCallback intermediateUpdate) {
+    (void)resourcePath; (void)visible; (void)earlyReturnAllowed; (void)required;
+    (void)nRequired; (void)intermediateUpdate;
+    if (eventModeUsed) return NULL;  /* no clocks: hasEventMode="false" */
+    return fmu3_instantiate(instanceName, token, loggingOn, env, logMessage, 0);
+}
+
+fmi3Instance fmi3InstantiateScheduledExecution(
+    fmi3String instanceName, fmi3String token, fmi3String resourcePath, fmi3Boolean visible,
+    fmi3Boolean loggingOn, fmi3InstanceEnvironment env, fmi3LogMessageCallback logMessage,
+    fmi3ClockUpdateCallback clockUpdate, fmi3LockPreemptionCallback lockPreemption,
+    fmi3UnlockPreemptionCallback unlockPreemption) {
+    (void)instanceName; (void)token; (void)resourcePath; (void)visible; (void)loggingOn;
+    (void)env; (void)logMessage; (void)clockUpdate; (void)lockPreemption;
+    (void)unlockPreemption;
+    return NULL;
+}
+
+void fmi3FreeInstance(fmi3Instance c) { free(c); }
+
+fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefined,
+                                       fmi3Float64 tolerance, fmi3Float64 startTime,
+                                       fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
+    Fmu *m = (Fmu *)c;
+    if (toleranceDefined && tolerance > 0.0) m->s[S_RTOL] = tolerance;
+    m->t0 = startTime;
+    m->t = startTime;
+    m->stop_time = stopTimeDefined ? stopTime : 0.0;
+    return fmi3OK;
+}
+fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
+    return fmu_initialize((Fmu *)c) == ST_OK ? fmi3OK : fmi3Error;
+}
+fmi3Status fmi3EnterEventMode(fmi3Instance c) { (void)c; return fmi3OK; }
+fmi3Status fmi3Terminate(fmi3Instance c) { ((Fmu *)c)->terminated = 1; return fmi3OK; }
+fmi3Status fmi3Reset(fmi3Instance c) { fmu_defaults((Fmu *)c); return fmi3OK; }
+
+fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                          fmi3Float64 values[], size_t nValues) {
+    size_t i;
+    if (nValues < nvr) return fmi3Error;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi3Error;
+        values[i] = fmu_get((Fmu *)c, (int)vr[i]);
+    }
+    return fmi3OK;
+}
+fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                          const fmi3Float64 values[], size_t nValues) {
+    size_t i;
+    if (nValues < nvr) return fmi3Error;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi3Error;
+        if (fmu_set((Fmu *)c, (int)vr[i], values[i]) != ST_OK) return fmi3Error;
+    }
+    return fmi3OK;
+}
+fmi3Status fmi3GetBoolean(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                          fmi3Boolean values[], size_t nValues) {
+    size_t i;
+    if (nValues < nvr) return fmi3Error;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi3Error;
+        values[i] = ((Fmu *)c)->s[VR_A[vr[i]]] > 0.5;
+    }
+    return fmi3OK;
+}
+fmi3Status fmi3SetBoolean(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                          const fmi3Boolean values[], size_t nValues) {
+    size_t i;
+    if (nValues < nvr) return fmi3Error;
+    for (i = 0; i < nvr; i++) {
+        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi3Error;
+        if (((Fmu *)c)->initialized) return fmi3Error;
+        ((Fmu *)c)->s[VR_A[vr[i]]] = values[i] ? 1.0 : 0.0;
+    }
+    return fmi3OK;
+}
+
+#define FMU3_NO_TYPE(NAME, CTYPE)                                                         \
+    fmi3Status fmi3Get##NAME(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,   \
+                             CTYPE values[], size_t nValues) {                            \
+        (void)c; (void)vr; (void)values; (void)nValues;                                   \
+        return nvr == 0 ? fmi3OK : fmi3Error;                                             \
+    }                                                                                     \
+    fmi3Status fmi3Set##NAME(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,   \
+                             const CTYPE values[], size_t nValues) {                      \
+        (void)c; (void)vr; (void)values; (void)nValues;                                   \
+        return nvr == 0 ? fmi3OK : fmi3Error;                                             \
+    }
+FMU3_NO_TYPE(Float32, fmi3Float32)
+FMU3_NO_TYPE(Int8, fmi3Int8)
+FMU3_NO_TYPE(UInt8, fmi3UInt8)
+FMU3_NO_TYPE(Int16, fmi3Int16)
+FMU3_NO_TYPE(UInt16, fmi3UInt16)
+FMU3_NO_TYPE(Int32, fmi3Int32)
+FMU3_NO_TYPE(UInt32, fmi3UInt32)
+FMU3_NO_TYPE(Int64, fmi3Int64)
+FMU3_NO_TYPE(UInt64, fmi3UInt64)
+FMU3_NO_TYPE(String, fmi3String)
+
+fmi3Status fmi3GetBinary(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                         size_t valueSizes[], fmi3Binary values[], size_t nValues) {
+    (void)c; (void)vr; (void)valueSizes; (void)values; (void)nValues;
+    return nvr == 0 ? fmi3OK : fmi3Error;
+}
+fmi3Status fmi3SetBinary(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                         const size_t valueSizes[], const fmi3Binary values[],
+                         size_t nValues) {
+    (void)c; (void)vr; (void)valueSizes; (void)values; (void)nValues;
+    return nvr == 0 ? fmi3OK : fmi3Error;
+}
+fmi3Status fmi3GetClock(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                        fmi3Clock values[]) {
+    (void)c; (void)vr; (void)values;
+    return nvr == 0 ? fmi3OK : fmi3Error;
+}
+fmi3Status fmi3SetClock(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                        const fmi3Clock values[]) {
+    (void)c; (void)vr; (void)values;
+    return nvr == 0 ? fmi3OK : fmi3Error;
+}
+fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance c, fmi3ValueReference vr,
+                                               size_t *n) {
+    (void)c; (void)vr; (void)n;
+    return fmi3Error;
+}
+fmi3Status fmi3GetVariableDependencies(fmi3Instance c, fmi3ValueReference dependent,
+                                       size_t elementIndicesOfDependent[],
+                                       fmi3ValueReference independents[],
+                                       size_t elementIndicesOfIndependents[],
+                                       fmi3DependencyKind dependencyKinds[],
+                                       size_t nDependencies) {
+    (void)c; (void)dependent; (void)elementIndicesOfDependent; (void)independents;
+    (void)elementIndicesOfIndependents; (void)dependencyKinds; (void)nDependencies;
+    return fmi3Error;
+}
+fmi3Status fmi3GetFMUState(fmi3Instance c, fmi3FMUState *s) {
+    Fmu *copy = (Fmu *)malloc(sizeof(Fmu));
+    if (!copy) return fmi3Error;
+    memcpy(copy, c, sizeof(Fmu));
+    if (*s) free(*s);
+    *s = copy;
+    return fmi3OK;
+}
+fmi3Status fmi3SetFMUState(fmi3Instance c, fmi3FMUState s) {
+    if (!s) return fmi3Error;
+    memcpy(c, s, sizeof(Fmu));
+    return fmi3OK;
+}
+fmi3Status fmi3FreeFMUState(fmi3Instance c, fmi3FMUState *s) {
+    (void)c;
+    free(*s);
+    *s = NULL;
+    return fmi3OK;
+}
+fmi3Status fmi3SerializedFMUStateSize(fmi3Instance c, fmi3FMUState s, size_t *size) {
+    (void)c; (void)s;
+    *size = sizeof(Fmu);
+    return fmi3OK;
+}
+fmi3Status fmi3SerializeFMUState(fmi3Instance c, fmi3FMUState s, fmi3Byte data[], size_t size) {
+    (void)c;
+    if (size < sizeof(Fmu)) return fmi3Error;
+    memcpy(data, s, sizeof(Fmu));
+    return fmi3OK;
+}
+fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte data[], size_t size,
+                                   fmi3FMUState *s) {
+    (void)c;
+    if (size < sizeof(Fmu)) return fmi3Error;
+    if (!*s) *s = malloc(sizeof(Fmu));
+    if (!*s) return fmi3Error;
+    memcpy(*s, data, sizeof(Fmu));
+    return fmi3OK;
+}
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
+                                        size_t nUnknowns, const fmi3ValueReference knowns[],
+                                        size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
+                                        fmi3Float64 sensitivity[], size_t nSensitivity) {
+    (void)c; (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed;
+    (void)nSeed; (void)sensitivity; (void)nSensitivity;
+    return fmi3Error;
+}
+fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
+                                    size_t nUnknowns, const fmi3ValueReference knowns[],
+                                    size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
+                                    fmi3Float64 sensitivity[], size_t nSensitivity) {
+    (void)c; (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed;
+    (void)nSeed; (void)sensitivity; (void)nSensitivity;
+    return fmi3Error;
+}
+fmi3Status fmi3EnterConfigurationMode(fmi3Instance c) { (void)c; return fmi3Error; }
+fmi3Status fmi3ExitConfigurationMode(fmi3Instance c) { (void)c; return fmi3Error; }
+fmi3Status fmi3GetIntervalDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                                  fmi3Float64 intervals[], fmi3IntervalQualifier q[]) {
+    (void)c; (void)vr; (void)nvr; (void)intervals; (void)q;
+    return fmi3Error;
+}
+fmi3Status fmi3GetIntervalFraction(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                                   fmi3UInt64 counters[], fmi3UInt64 resolutions[],
+                                   fmi3IntervalQualifier q[]) {
+    (void)c; (void)vr; (void)nvr; (void)counters; (void)resolutions; (void)q;
+    return fmi3Error;
+}
+fmi3Status fmi3GetShiftDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                               fmi3Float64 shifts[]) {
+    (void)c; (void)vr; (void)nvr; (void)shifts;
+    return fmi3Error;
+}
+fmi3Status fmi3GetShiftFraction(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                                fmi3UInt64 counters[], fmi3UInt64 resolutions[]) {
+    (void)c; (void)vr; (void)nvr; (void)counters; (void)resolutions;
+    return fmi3Error;
+}
+fmi3Status fmi3SetIntervalDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                                  const fmi3Float64 intervals[]) {
+    (void)c; (void)vr; (void)nvr; (void)intervals;
+    return fmi3Error;
+}
+fmi3Status fmi3SetIntervalFraction(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                                   const fmi3UInt64 counters[],
+                                   const fmi3UInt64 resolutions[]) {
+    (void)c; (void)vr; (void)nvr; (void)counters; (void)resolutions;
+    return fmi3Error;
+}
+fmi3Status fmi3SetShiftDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                               const fmi3Float64 shifts[]) {
+    (void)c; (void)vr; (void)nvr; (void)shifts;
+    return fmi3Error;
+}
+fmi3Status fmi3SetShiftFraction(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                                const fmi3UInt64 counters[], const fmi3UInt64 resolutions[]) {
+    (void)c; (void)vr; (void)nvr; (void)counters; (void)resolutions;
+    return fmi3Error;
+}
+fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance c) { (void)c; return fmi3OK; }
+fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *discreteStatesNeedUpdate,
+                                    fmi3Boolean *terminateSimulation,
+                                    fmi3Boolean *nominalsOfContinuousStatesChanged,
+                                    fmi3Boolean *valuesOfContinuousStatesChanged,
+                                    fmi3Boolean *nextEventTimeDefined,
+                                    fmi3Float64 *nextEventTime) {
+    int defined = 0;
+    double next = 0.0;
+    if (((Fmu *)c)->model_exchange) fmu_event_update((Fmu *)c, &defined, &next);
+    *discreteStatesNeedUpdate = fmi3False;
+    *terminateSimulation = fmi3False;
+    *nominalsOfContinuousStatesChanged = fmi3False;
+    *valuesOfContinuousStatesChanged = fmi3False;
+    *nextEventTimeDefined = defined ? fmi3True : fmi3False;
+    *nextEventTime = next;
+    return fmi3OK;
+}
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) { (void)c; return fmi3OK; }
+fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c,
+                                       fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi3Boolean *enterEventMode,
+                                       fmi3Boolean *terminateSimulation) {
+    (void)c; (void)noSetFMUStatePriorToCurrentPoint;
+    *enterEventMode = fmi3False;
+    *terminateSimulation = fmi3False;
+    return fmi3OK;
+}
+fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64 time) {
+    ((Fmu *)c)->t = time;
+    ((Fmu *)c)->dirty = 1;
+    return fmi3OK;
+}
+fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t nx) {
+    Fmu *m = (Fmu *)c;
+    size_t i;
+    if (nx != N_CSTATES) return fmi3Error;
+    for (i = 0; i < nx; i++) m->y[i] = x[i];
+    m->dirty = 1;
+    return fmi3OK;
+}
+fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], size_t nx) {
+    Fmu *m = (Fmu *)c;
+    size_t i;
+    if (nx != N_CSTATES) return fmi3Error;
+    fmu_evaluate(m);
+    for (i = 0; i < nx; i++) dx[i] = m->dy[i];
+    return fmi3OK;
+}
+fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 z[], size_t nz) {
+    (void)c; (void)z;
+    return nz == 0 ? fmi3OK : fmi3Error;
+}
+fmi3Status fmi3GetContinuousStates(fmi3Instance c, fmi3Float64 x[], size_t nx) {
+    Fmu *m = (Fmu *)c;
+    size_t i;
+    if (nx != N_CSTATES) return fmi3Error;
+    for (i = 0; i < nx; i++) x[i] = m->y[i];
+    return fmi3OK;
+}
+fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 nominals[],
+                                             size_t nx) {
+    size_t i;
+    (void)c;
+    if (nx != N_CSTATES) return fmi3Error;
+    for (i = 0; i < nx; i++) nominals[i] = NOMINAL[i];
+    return fmi3OK;
+}
+fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t *n) {
+    (void)c;
+    *n = 0;
+    return fmi3OK;
+}
+fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance c, size_t *n) {
+    *n = ((Fmu *)c)->model_exchange ? N_CSTATES : 0;
+    return fmi3OK;
+}
+fmi3Status fmi3EnterStepMode(fmi3Instance c) { (void)c; return fmi3OK; }
+fmi3Status fmi3GetOutputDerivatives(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
+                                    const fmi3Int32 order[], fmi3Float64 values[],
+                                    size_t nValues) {
+    (void)c; (void)vr; (void)order; (void)values; (void)nValues;
+    return nvr == 0 ? fmi3OK : fmi3Error;
+}
+fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint,
+                      fmi3Float64 communicationStepSize,
+                      fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                      fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
+                      fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
+    int status;
+    (void)noSetFMUStatePriorToCurrentPoint;
+    status = fmu_do_step((Fmu *)c, currentCommunicationPoint, communicationStepSize);
+    *eventHandlingNeeded = fmi3False;
+    *terminateSimulation = fmi3False;
+    *earlyReturn = fmi3False;
+    *lastSuccessfulTime = ((Fmu *)c)->t;
+    return status == ST_OK ? fmi3OK : fmi3Error;
+}
+fmi3Status fmi3ActivateModelPartition(fmi3Instance c, fmi3ValueReference clockReference,
+                                      fmi3Float64 activationTime) {
+    (void)c; (void)clockReference; (void)activationTime;
+    return fmi3Error;
+}
+#endif

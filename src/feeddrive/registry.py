@@ -1,0 +1,139 @@
+"""The ground floor: plug-ins found by name — drive mechanisms, friction laws, parameter sets.
+
+This module imports nothing from feeddrive, so any layer may ask it for a name without an
+import cycle (:mod:`feeddrive.parameters` asks for friction-law and preset names; the parts
+that provide them sit above it).  A group's providers are
+
+* the package's own modules, listed in :data:`BUILTIN_PROVIDERS` (``"package.*"``: every
+  module of that package, so a new mechanism or law module is found without a list to edit);
+  importing one registers what it defines (it calls :func:`register`), and
+* every installed distribution's `entry points <https://packaging.python.org/en/latest/
+  specifications/entry-points/>`_ in the group of that name: ``feeddrive.mechanisms`` (name =
+  drive name, value = a mechanism class), ``feeddrive.friction_laws`` (name = law name, value
+  = a friction-law instance), ``feeddrive.presets`` (name = set name, value = a function
+  returning the parameter set) and ``feeddrive.sections`` (name = a parameter-file section
+  such as ``rack_pinion``, value = the part's parameter class).
+
+Both are imported only when a group is first read, so that ``import feeddrive.parameters``
+stays cheap and a broken third-party plug-in cannot stop the package from importing.
+
+Example ``pyproject.toml`` of a plug-in package::
+
+    [project.entry-points."feeddrive.presets"]
+    my-mill = "my_mill.params:my_mill"
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from importlib.metadata import entry_points
+from typing import Any
+
+MECHANISMS = "feeddrive.mechanisms"
+FRICTION_LAWS = "feeddrive.friction_laws"
+PRESETS = "feeddrive.presets"
+SECTIONS = "feeddrive.sections"
+
+#: The package's own providers of each group (modules that register on import).
+BUILTIN_PROVIDERS: dict[str, tuple[str, ...]] = {
+    MECHANISMS: ("feeddrive.model.mechanisms.*",),
+    FRICTION_LAWS: ("feeddrive.model.friction.*",),
+    PRESETS: ("feeddrive.presets",),
+    # parameter sections of parts (e.g. ``[rack_pinion]``): registered by the part's module
+    SECTIONS: ("feeddrive.model.mechanisms.*", "feeddrive.model.parts.*"),
+}
+
+_TABLES: dict[str, dict[str, Any]] = {group: {} for group in BUILTIN_PROVIDERS}
+_LOADED: set[str] = set()
+_LOADING: set[str] = set()
+
+
+class PluginError(RuntimeError):
+    """An installed entry point of a feeddrive group could not be loaded."""
+
+
+def register(group: str, name: str, obj: Any) -> Any:
+    """Make ``obj`` available as ``name`` in ``group``; returns ``obj``.
+
+    Parameters
+    ----------
+    group : str
+        One of :data:`MECHANISMS`, :data:`FRICTION_LAWS`, :data:`PRESETS`.
+    name : str
+        The name users give (drive name, law name, preset name).
+    obj : object
+        What the name stands for.
+
+    Returns
+    -------
+    object
+        ``obj``, unchanged (so that ``register`` can end a definition).
+    """
+    _table_of(group)[name] = obj
+    return obj
+
+
+def table(group: str) -> dict[str, Any]:
+    """Every registered name of ``group`` and what it stands for, providers loaded first.
+
+    Parameters
+    ----------
+    group : str
+        One of :data:`MECHANISMS`, :data:`FRICTION_LAWS`, :data:`PRESETS`.
+
+    Returns
+    -------
+    dict
+        Name → registered object, in registration order (built-in providers first).
+    """
+    tab = _table_of(group)
+    if group not in _LOADED and group not in _LOADING:
+        _LOADING.add(group)
+        try:
+            for provider in BUILTIN_PROVIDERS[group]:
+                _import_provider(provider)
+            for ep in entry_points(group=group):
+                try:
+                    obj = ep.load()
+                except Exception as exc:  # a third-party plug-in: name it, never a traceback
+                    raise PluginError(f"entry point {ep.name!r} = {ep.value!r} of group "
+                                      f"{group!r} could not be loaded: {exc}") from exc
+                tab.setdefault(ep.name, obj)
+            _LOADED.add(group)
+        finally:
+            _LOADING.discard(group)
+    return tab
+
+
+def names(group: str) -> tuple[str, ...]:
+    """The registered names of ``group`` (see :func:`table`).
+
+    Parameters
+    ----------
+    group : str
+        One of :data:`MECHANISMS`, :data:`FRICTION_LAWS`, :data:`PRESETS`.
+
+    Returns
+    -------
+    tuple of str
+        The names, in registration order.
+    """
+    return tuple(table(group))
+
+
+def _import_provider(provider: str) -> None:
+    if not provider.endswith(".*"):
+        importlib.import_module(provider)
+        return
+    package = importlib.import_module(provider[:-2])
+    for info in sorted(pkgutil.iter_modules(package.__path__), key=lambda i: i.name):
+        importlib.import_module(f"{package.__name__}.{info.name}")
+
+
+def _table_of(group: str) -> dict[str, Any]:
+    try:
+        return _TABLES[group]
+    except KeyError:
+        raise KeyError(f"unknown plug-in group {group!r}; expected one of "
+                       f"{', '.join(_TABLES)}") from None

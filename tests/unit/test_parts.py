@@ -1,0 +1,82 @@
+"""A model part with a sample rate of its own (issue 19, "a loop with its own rate"): the
+acceleration feed-forward of model/parts/, updated at 1 kHz while the current loop runs at
+8 kHz, its schedule merged into the breakpoint grid."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import feeddrive as fd
+from feeddrive.parameters import ParameterError, loads
+
+LOOPS = """extends = "wang2021"
+name = "sampled"
+[controller]
+current_period = 1.25e-4
+velocity_period = 2.5e-4
+position_period = 1e-3
+"""
+PART = """[acceleration_feedforward]
+gain = {gain}
+period = {period}
+"""
+SINE = fd.SineSpeed(10e-3, frequency=2.0)
+OPTIONS = fd.SolverOptions(output_interval=1.25e-4)
+
+
+def run(text: str, duration: float = 0.3) -> fd.Result:
+    return fd.simulate(fd.DriveSystem(loads(text), "cdfs", 0.4), SINE, duration,
+                       options=OPTIONS)
+
+
+def test_the_current_is_held_between_its_own_samples():
+    """It changes only at multiples of its 1-ms period, to K_a·Δv_ref/T_a over the last
+    period (the recorded reference), while the loops run at 8/4/1 kHz."""
+    gain, period = 1.6, 1e-3
+    r = run(LOOPS + PART.format(gain=gain, period=period))
+    t, i = r.time, r["acceleration_feedforward_current"]
+    v_ref = r["table_speed_reference"]
+    changes = t[1:][np.diff(i) != 0]
+    assert changes.size > 100
+    assert np.allclose(changes / period, np.round(changes / period), atol=1e-9)
+    k = np.flatnonzero(np.isclose(t % period, 0.0, atol=1e-12) | np.isclose(
+        t % period, period, atol=1e-12))
+    k = k[(t[k] > 1.5 * period)]
+    step = int(round(period / OPTIONS.output_interval))
+    expected = gain * (v_ref[k] - v_ref[k - step]) / period
+    assert np.allclose(i[k], expected, rtol=1e-9, atol=1e-12)
+
+
+def test_it_reduces_the_following_error_of_a_sine():
+    without = run(LOOPS, 0.5).summary()["following_error_max_um"]
+    with_ff = run(LOOPS + PART.format(gain=1.6, period=1e-3), 0.5).summary()[
+        "following_error_max_um"]
+    assert with_ff < 0.8 * without
+
+
+def test_zero_gain_leaves_the_run_unchanged():
+    a = run(LOOPS)
+    b = run(LOOPS + PART.format(gain=0.0, period=1e-3))
+    np.testing.assert_array_equal(a["table_position"], b["table_position"])
+
+
+@pytest.mark.parametrize("text, field", [
+    (LOOPS + PART.format(gain=1.0, period=3e-4), "acceleration_feedforward.period"),
+    ('extends = "wang2021"\n' + PART.format(gain=1.0, period=1e-3),
+     "acceleration_feedforward.period"),
+    (LOOPS.replace("velocity_period = 2.5e-4", "velocity_period = 3e-4"),
+     "controller.velocity_period"),
+])
+def test_schedules_off_the_grid_are_refused(text, field):
+    """A period that is no multiple of the fastest one, and a sampled part beside continuous
+    loops, are refused before any integration, naming the field."""
+    with pytest.raises(ParameterError) as err:
+        run(text)
+    assert err.value.field == field
+
+
+def test_an_unknown_axis_is_refused():
+    text = LOOPS + PART.format(gain=1.0, period=1e-3) + 'axis = "nut_motor"\n'
+    with pytest.raises(ParameterError, match="acceleration_feedforward.axis.*screw"):
+        run(text)

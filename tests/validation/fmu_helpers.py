@@ -1,0 +1,117 @@
+"""Shared by the FMU tests: scenarios, an fmpy run with the reference as an input table, and
+the feeddrive run driven by the same zero-order-held reference."""
+
+from __future__ import annotations
+
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from feeddrive.control import SampledSpeed
+from feeddrive.parameters import preset
+from feeddrive.simulate import DriveSystem, SolverOptions, simulate
+
+#: the issue's scenarios (issue 20 item 5): drive, table speed, nut speed [mm/s]
+SCENARIOS = {"cdfs-2": ("cdfs", 2.0, 0.0), "cdfs-1.2": ("cdfs", 1.2, 0.0),
+             "ddfs-0.5-16": ("ddfs", 0.5, 16.0)}
+#: communication step h [s] and the reference's start ramp [s] (as ConstantSpeed's default)
+STEP = 1e-3
+RAMP = 0.1
+#: tolerances of both integrators in the comparison: 1000× tighter than feeddrive's defaults,
+#: so the comparison measures the FMU, not the integrators' own error (with the defaults the
+#: creeping CDFS at 1.2 mm/s differs by 2e-8 m of 12 mm between the two, stick-slip timing)
+TIGHT = {"rtol": 1e-9, "position_tolerance": 1e-13, "speed_tolerance": 1e-11,
+         "current_tolerance": 1e-9}
+FMU_TIGHT = {"solver.relative_tolerance": 1e-9, "solver.position_tolerance": 1e-13,
+             "solver.speed_tolerance": 1e-11, "solver.current_tolerance": 1e-9}
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A commanded speed ramp sampled at the communication points."""
+
+    time: np.ndarray
+    table_speed: np.ndarray  # [m/s]
+    nut_speed: np.ndarray
+
+    @classmethod
+    def ramp(cls, table_mm_s: float, nut_mm_s: float, duration: float,
+             step: float = STEP, ramp: float = RAMP) -> Reference:
+        n = int(round(duration / step))
+        t = np.arange(n + 1) * step
+        f = np.minimum(t / ramp, 1.0) if ramp > 0 else np.ones_like(t)
+        return cls(t, table_mm_s * 1e-3 * f, nut_mm_s * 1e-3 * f)
+
+    def positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """Integrals of the held speeds at the sample times (what a set-point generator
+        gives as position commands)."""
+        dt = np.diff(self.time)
+        xt = np.concatenate([[0.0], np.cumsum(self.table_speed[:-1] * dt)])
+        xn = np.concatenate([[0.0], np.cumsum(self.nut_speed[:-1] * dt)])
+        return xt, xn
+
+    def profile(self, drive: str, hold: bool = True) -> SampledSpeed:
+        """Held (as a co-simulation FMU holds its inputs over a step) or linearly
+        interpolated (as fmpy interpolates a model exchange FMU's inputs)."""
+        return SampledSpeed(self.time, self.table_speed,
+                            self.nut_speed if drive == "ddfs" else None, hold=hold)
+
+
+def input_table(ref: Reference, names: tuple[str, ...], *, with_positions: bool = False
+                ) -> np.ndarray:
+    xt, xn = ref.positions()
+    columns = {"table_speed_reference": ref.table_speed, "nut_speed_reference": ref.nut_speed,
+               "table_position_reference": xt, "nut_position_reference": xn}
+    use = [n for n in names if n in columns and (with_positions or "speed" in n)]
+    table = np.zeros(ref.time.size, dtype=[("time", "f8"), *((n, "f8") for n in use)])
+    table["time"] = ref.time
+    for n in use:
+        table[n] = columns[n]
+    return table
+
+
+def run_fmu(path: Path, ref: Reference, *, start_values: dict | None = None,
+            with_positions: bool = False, outputs: tuple[str, ...] = ("table_position",
+                                                                      "table_speed"),
+            **kw: object) -> np.ndarray:
+    from fmpy import read_model_description, simulate_fmu
+
+    md = read_model_description(str(path))
+    inputs = tuple(v.name for v in md.modelVariables if v.causality == "input")
+    values = dict(start_values or {})
+    if with_positions:
+        values["integrate_speed_reference"] = False
+    return simulate_fmu(str(path), start_time=0.0, stop_time=float(ref.time[-1]),
+                        output_interval=STEP, input=input_table(ref, inputs,
+                                                                with_positions=with_positions),
+                        start_values=values, output=list(outputs), **kw)
+
+
+def run_feeddrive(drive: str, ref: Reference, params_name: str = "wang2021",
+                  params: object = None, hold: bool = True,
+                  **options: object):  # type: ignore[no-untyped-def]
+    p = params if params is not None else preset(params_name)
+    return simulate(DriveSystem(p, drive, 0.4), ref.profile(drive, hold), float(ref.time[-1]),
+                    options=SolverOptions(**options))  # type: ignore[arg-type]
+
+
+def on_grid(rec: np.ndarray, times: np.ndarray, name: str) -> np.ndarray:
+    """The recorded ``name`` at ``times`` (the last record at each instant: model exchange
+    records before and after an event)."""
+    idx = np.searchsorted(rec["time"], times + 1e-9 * STEP, side="right") - 1
+    return rec[name][idx]
+
+
+def needed_libraries(fmu: Path, folder: Path) -> set[str]:
+    """The NEEDED entries of the FMU's binary (readelf -d)."""
+    import subprocess
+
+    with zipfile.ZipFile(fmu) as zf:
+        names = [n for n in zf.namelist() if n.startswith("binaries/")]
+        zf.extractall(folder)
+    out = subprocess.run(["readelf", "-d", str(folder / names[0])], capture_output=True,
+                         text=True, check=True).stdout
+    return {line.split("[", 1)[1].split("]", 1)[0] for line in out.splitlines()
+            if "(NEEDED)" in line}

@@ -1,0 +1,316 @@
+"""FMU export (issue 20): validity, standalone binary, the C integrator equal to its numba build,
+and the FMU simulated by fmpy equal to feeddrive.simulate driven by the same reference."""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmu_helpers import (
+    FMU_TIGHT,
+    SCENARIOS,
+    STEP,
+    TIGHT,
+    Reference,
+    needed_libraries,
+    on_grid,
+    run_feeddrive,
+    run_fmu,
+)
+
+from feeddrive.analysis.metrics import creep_metrics
+from feeddrive.fmu import export_fmu
+from feeddrive.fmu.description import base_units, variables
+from feeddrive.fmu.model import NumbaCoSimulation, build
+from feeddrive.parameters import preset
+
+fmpy = pytest.importorskip("fmpy")
+pytest.importorskip("fmpy.validation")
+CC = pytest.importorskip("feeddrive.backends.c_backend")
+
+try:
+    CC.find_compiler()
+except CC.CompilerNotFound:  # pragma: no cover - CI has a compiler
+    pytest.skip("no C compiler", allow_module_level=True)
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("fmu")
+
+
+_BUILT: dict[tuple, Path] = {}
+
+
+def fmu_file(folder: Path, drive: str, fmi: int = 2, kind: str = "cs",
+             params: str = "wang2021", **kw: float) -> Path:
+    key = (drive, fmi, kind, params, tuple(sorted(kw.items())))
+    if key not in _BUILT:
+        path = folder / f"{drive}-{params}-{fmi}-{kind}-{len(_BUILT)}.fmu"
+        export_fmu(preset(params), drive, path, fmi=fmi, kind=kind, **kw)
+        _BUILT[key] = path
+    return _BUILT[key]
+
+
+# ---------------------------------------------------------------- validity, standalone
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("kind", ["cs", "me"])
+def test_fmpy_validate_finds_no_problem(folder: Path, fmi: int, kind: str) -> None:
+    from fmpy.validation import validate_fmu
+
+    path = fmu_file(folder, "ddfs", fmi, kind)
+    assert validate_fmu(str(path)) == []
+    with zipfile.ZipFile(path) as zf:
+        names = set(zf.namelist())
+    assert "sources/fmu.c" in names and "documentation/building.txt" in names
+    assert (fmi == 3) == ("sources/buildDescription.xml" in names)
+
+
+@pytest.mark.parametrize("drive", ["cdfs", "ddfs", "linear-motor"])
+def test_binary_needs_only_libc_and_libm(folder: Path, drive: str, tmp_path: Path) -> None:
+    params = "linear-motor-example" if drive == "linear-motor" else "wang2021"
+    path = fmu_file(folder, drive, params=params)
+    assert needed_libraries(path, tmp_path) <= {"libc.so.6", "libm.so.6"}
+
+
+def test_every_state_signal_and_parameter_is_declared_with_its_unit(folder: Path) -> None:
+    """States and signals by their model names; parameters (but the reference and load slots
+    that the inputs drive) with start value = the model's number and a unit that parses."""
+    fm = build(preset("wang2021"), "ddfs", 0.4)
+    vs = {v.name: v for v in variables(fm, "cs")}
+    for s in fm.model.states:
+        assert vs[s.name].unit == s.unit and vs[s.name].description == s.description
+    inputs = {v.name for v in vs.values() if v.causality == "input"}
+    assert inputs == {"table_position_reference", "table_speed_reference",
+                      "nut_speed_reference", "load_force"}  # wang2021's nut: a speed loop
+    for a in fm.model.aux:
+        name = a.name if a.name not in inputs else f"model.{a.name}"
+        assert vs[name].unit == a.unit
+    params = [v for v in vs.values() if v.causality == "parameter" and v.type == "Real"]
+    slots = {v.a for v in params if v.kind == 4}
+    hidden = {i for i, n in enumerate(fm.model.parameter_names)
+              if n.startswith(("profile[", "disturbances.load_"))}
+    hidden.discard(fm.model.parameter_names.index("disturbances.load_start"))
+    assert slots | hidden == set(range(len(fm.model.parameter_names)))
+    for v in params:
+        if v.kind == 4:
+            assert v.start == fm.model.P[v.a]
+        assert v.unit, v.name
+        base_units(v.unit)  # parses
+    assert vs["friction.guide.bristle_stiffness"].unit == "N/m"
+    basis = preset("wang2021").controller.velocity_gain_basis  # gains on m/s of the table
+    assert vs["controller.screw.kvp"].unit == ("A s/m" if basis == "table" else "A s/rad")
+    assert base_units("V/(A s)") == {"kg": 1, "m": 2, "s": -4, "A": -2}
+
+
+# ---------------------------------------------------------------- C integrator = numba
+def _c_advance(lib: ctypes.CDLL):  # type: ignore[no-untyped-def]
+    D, L = ctypes.c_double, ctypes.c_long
+    arr = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+    f = lib.fd_advance
+    f.argtypes = [D, D, D, L, arr, arr, arr, arr, arr, L, L, L, D, D, arr, arr, D, L, L, arr,
+                  *([arr] * 10), arr]
+    f.restype = L
+    g = lib.fd_sample_update
+    g.argtypes = [L, D, arr, arr, arr, arr, L, L, L, D]
+    g.restype = None
+    return f, g
+
+
+@pytest.mark.parametrize("params", ["wang2021", "wang2021-drive"])
+def test_c_integrator_follows_its_numba_build(folder: Path, tmp_path: Path,
+                                              params: str) -> None:
+    """fd_advance in the FMU's binary (translated from advance_template) and the numba build
+    of the same text give the same trajectory over 300 communication steps with changing
+    inputs: continuous loops, and sampled 8/4/2-kHz loops with quantised feedback (events,
+    the update on a communication point redone when the inputs change)."""
+    path = fmu_file(folder, "cdfs", params=params)
+    with zipfile.ZipFile(path) as zf:
+        lib_name = next(n for n in zf.namelist() if n.startswith("binaries/"))
+        zf.extract(lib_name, tmp_path)
+    lib = ctypes.CDLL(str(tmp_path / lib_name))
+    c_adv, c_update = _c_advance(lib)
+    p = preset(params)
+    fm = build(p, "cdfs", 0.4)
+    sim = NumbaCoSimulation(fm)
+    sim.start(p, {"table_speed_reference": 0.0})
+    n = sim.n
+    y, held, held_prev = sim.y.copy(), sim.held.copy(), sim.held_prev.copy()
+    P, T, memory = sim.P.copy(), sim.T.copy(), sim.memory.copy()
+    work = [np.zeros(n) for _ in range(10)]
+    aux = np.zeros(len(fm.model.aux))
+    base, n_pos, n_vel, n_cur = sim.grid  # type: ignore[misc]
+    rng = np.random.default_rng(7)
+    speeds = 2e-3 * np.minimum(np.arange(300) / 50.0, 1.0) + 1e-4 * rng.standard_normal(300)
+    h = 7.5e-4  # not a multiple of the 125-µs sample period: events inside and on the steps
+    worst = 0.0
+    for k, v in enumerate(speeds):
+        inputs = {"table_speed_reference": float(v)}
+        redo = 1 if k > 0 and v != speeds[k - 1] else 0
+        t, x_start = sim.t, float(sim.x_int[0])
+        sim.do_step(h, inputs)
+        T[fm.table_offset + 2] = v
+        T[fm.table_offset] = x_start
+        P[fm.profile_offset + 4] = t
+        status = c_adv(t, t + h, 0.0, n, y, held, held_prev, P, T, n_pos, n_vel, n_cur, base,
+                       1e-6, sim.atol, sim.rel, 1e-3, 10_000_000, redo, memory, *work, aux)
+        assert status == 0
+        scale = sim.atol + 1e-6 * sim.rel * np.abs(sim.y)  # the integrator's error target
+        worst = max(worst, float(np.max(np.abs(y - sim.y) / scale)))
+    assert worst <= 1e-3
+    assert memory[4] == sim.memory[4]  # the same number of accepted steps
+    assert n_pos > 0 if params == "wang2021-drive" else n_pos == 0
+
+
+# ---------------------------------------------------------------- FMU in fmpy = feeddrive
+def _compare(rec: np.ndarray, result, name: str = "table_position") -> float:  # type: ignore[no-untyped-def]
+    x = result[name]
+    stroke = abs(float(x[-1] - x[0]))
+    dev = float(np.max(np.abs(on_grid(rec, result.time, name) - x)))
+    return dev / stroke
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scenario", list(SCENARIOS))
+def test_fmu_in_fmpy_equals_feeddrive(folder: Path, scenario: str) -> None:
+    """10 s of each scenario: the reference ramp (0.1 s) as an input table on the
+    communication grid h = 1 ms, held by the FMU over each step; feeddrive.simulate driven by
+    the same zero-order-held reference (SampledSpeed(hold=True) on that grid).  Table position
+    within 1e-6 of the stroke |x(10 s) − x(0)| and the same creep verdict."""
+    drive, vt, vn = SCENARIOS[scenario]
+    ref = Reference.ramp(vt, vn, 10.0)
+    rec = run_fmu(fmu_file(folder, drive), ref, start_values=FMU_TIGHT)
+    result = run_feeddrive(drive, ref, **TIGHT)
+    assert _compare(rec, result) <= 1e-6
+    t = rec["time"]
+    mine = creep_metrics(t, rec["table_speed"], vt * 1e-3)
+    theirs = result.creep_metrics()
+    assert mine.verdict == theirs.verdict == ("creeping" if scenario == "cdfs-1.2"
+                                              else "smooth")
+
+
+@pytest.mark.slow
+def test_fmi3_and_position_inputs_give_the_same_run(folder: Path) -> None:
+    """FMI 3.0 co-simulation with the position references given as inputs (not integrated
+    from the speeds) follows the same trace."""
+    ref = Reference.ramp(0.5, 16.0, 3.0)
+    rec = run_fmu(fmu_file(folder, "ddfs", 3), ref, with_positions=True)
+    assert _compare(rec, run_feeddrive("ddfs", ref, **TIGHT)) <= 1e-6
+
+
+@pytest.mark.slow
+def test_input_derivatives_interpolate_the_reference(folder: Path, tmp_path: Path) -> None:
+    """FMI 2.0 canInterpolateInputs: given the input slopes (fmi2SetRealInputDerivatives),
+    the FMU follows the linearly interpolated reference of a plain SampledSpeed.  (Driven
+    step by step through fmpy's FMU2Slave: fmpy 0.3's simulate_fmu sizes its derivative
+    buffer for 9 inputs.)"""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    path = fmu_file(folder, "ddfs")
+    ref = Reference.ramp(0.5, 16.0, 2.0, step=0.05)
+    md = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzipped = extract(str(path), unzipdir=str(tmp_path / "u"))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="d")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    speeds = [vr["table_speed_reference"], vr["nut_speed_reference"]]
+    h_out = STEP
+    n = int(round(2.0 / h_out))
+    x = [0.0]
+    slope_t = np.diff(ref.table_speed) / np.diff(ref.time)
+    slope_n = np.diff(ref.nut_speed) / np.diff(ref.time)
+    for k in range(n):
+        t = k * h_out
+        i = min(int(t / 0.05 + 1e-9), slope_t.size - 1)
+        tau = t - ref.time[i]
+        fmu.setReal(speeds, [ref.table_speed[i] + slope_t[i] * tau,
+                             ref.nut_speed[i] + slope_n[i] * tau])
+        fmu.setRealInputDerivatives(speeds, [1, 1], [slope_t[i], slope_n[i]])
+        fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h_out)
+        x.append(fmu.getReal([vr["table_position"]])[0])
+    fmu.terminate()
+    fmu.freeInstance()
+    rec = np.zeros(n + 1, dtype=[("time", "f8"), ("table_position", "f8")])
+    rec["time"] = np.arange(n + 1) * h_out
+    rec["table_position"] = x
+    assert _compare(rec, run_feeddrive("ddfs", ref, hold=False, **TIGHT)) <= 1e-6
+    assert _compare(rec, run_feeddrive("ddfs", ref, **TIGHT)) > 1e-4  # held: another run
+
+
+@pytest.mark.slow
+def test_tunable_parameter_changes_the_run_as_in_feeddrive(folder: Path) -> None:
+    """Doubling the table mass: in fmpy as a start value of the FMU's ``table.mass``, in
+    feeddrive in the parameter set; the runs agree with each other and differ from the
+    unchanged run."""
+    p = preset("wang2021")
+    heavy = p.with_values(table=p.table.with_values(mass=2.0 * p.table.mass))
+    changed = np.flatnonzero(build(heavy, "cdfs", 0.4).model.P != build(p, "cdfs", 0.4).model.P)
+    fm = build(p, "cdfs", 0.4)
+    assert [fm.model.parameter_names[i] for i in changed] == ["table.mass"]
+    ref = Reference.ramp(2.0, 0.0, 2.0)
+    path = fmu_file(folder, "cdfs")
+    rec = run_fmu(path, ref, start_values={"table.mass": 2.0 * p.table.mass})
+    assert _compare(rec, run_feeddrive("cdfs", ref, params=heavy, **TIGHT)) <= 1e-6
+    assert _compare(rec, run_feeddrive("cdfs", ref, **TIGHT)) > 1e-4
+
+
+@pytest.mark.slow
+def test_model_exchange_in_fmpy_follows_feeddrive(folder: Path) -> None:
+    """Model exchange: fmpy's CVODE integrates the FMU's derivatives (relative tolerance 1e-8;
+    atol = rtol·nominal, the nominals being feeddrive's default absolute tolerances over its
+    relative one).  Constant speed references from t = 0: fmpy sets a model-exchange FMU's
+    inputs only at its output points and does not restart CVODE there, so a varying input is
+    the importer's approximation (docs/fmu.md); co-simulation holds them exactly."""
+    ref = Reference.ramp(0.5, 16.0, 3.0, ramp=0.0)
+    rec = run_fmu(fmu_file(folder, "ddfs", 2, "me"), ref, relative_tolerance=1e-8)
+    assert _compare(rec, run_feeddrive("ddfs", ref, **TIGHT)) <= 1e-6
+
+
+@pytest.mark.slow
+def test_model_exchange_samples_the_loops_at_time_events(folder: Path) -> None:
+    """Sampled 8/4/2-kHz loops with quantised feedback (wang2021-drive) in model exchange:
+    the sample instants are time events of the FMU; the run follows feeddrive's."""
+    ref = Reference.ramp(0.5, 16.0, 0.5, ramp=0.0)
+    rec = run_fmu(fmu_file(folder, "ddfs", 3, "me", params="wang2021-drive"), ref,
+                  relative_tolerance=1e-10)
+    result = run_feeddrive("ddfs", ref, "wang2021-drive", **TIGHT)
+    assert _compare(rec, result) <= 1e-5
+
+
+@pytest.mark.slow
+def test_cosimulation_samples_the_loops_inside_a_step(folder: Path) -> None:
+    ref = Reference.ramp(0.5, 16.0, 2.0)
+    rec = run_fmu(fmu_file(folder, "ddfs", params="wang2021-drive"), ref,
+                  start_values=FMU_TIGHT)
+    assert _compare(rec, run_feeddrive("ddfs", ref, "wang2021-drive", **TIGHT)) <= 1e-6
+
+
+def test_sample_instants_are_kept_across_step_sizes(folder: Path) -> None:
+    """A communication step that is no multiple of the sample period lands the sample
+    instants inside steps: the same run as with steps on the sample grid."""
+    base = preset("wang2021-drive")  # sampled loops, ideal feedback (no count flips)
+    p = base.with_values(controller=base.controller.with_values(encoder_counts=0.0,
+                                                                grating_resolution=0.0))
+    fm = build(p, "cdfs", 0.4)
+    runs = []
+    for h in (5e-4, 3e-4):
+        sim = NumbaCoSimulation(fm)
+        sim.start(p, {"table_speed_reference": 2e-3})
+        n = int(round(0.03 / h))
+        for _ in range(n):
+            sim.do_step(h, {"table_speed_reference": 2e-3})
+        assert math.isclose(sim.t, 0.03, rel_tol=1e-12)
+        runs.append(sim.y.copy())
+    sim = NumbaCoSimulation(fm)
+    assert np.all(np.abs(runs[0] - runs[1]) <= 10 * (sim.atol + 1e-6 * np.abs(runs[0])))
+
+
