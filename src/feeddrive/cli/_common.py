@@ -61,6 +61,24 @@ def _files_of(kwargs: dict[str, Any]) -> str:
     return ", ".join(shown(n) for n in names)
 
 
+def interrupted() -> typer.Exit:
+    """The exit of a command stopped by Ctrl-C, once its message is printed: quick.
+
+    The objects alive now are moved out of the garbage collector's reach (``gc.freeze``):
+    the interpreter's exit then skips a last collection over numba's object graph, which took
+    1.4–1.7 s of a Ctrl-C's time (measured: 0.2 s with the freeze).  Everything the command
+    keeps is written and closed before this is called.
+    """
+    import gc
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    gc.freeze()
+    from ..exit_codes import INTERRUPTED
+
+    return typer.Exit(code=INTERRUPTED)
+
+
 def _fail(message: str, code: int) -> typer.Exit:
     err_console.print(f"error: {_one_line(message)}", markup=False, highlight=False,
                       soft_wrap=True)

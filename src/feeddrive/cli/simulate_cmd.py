@@ -13,6 +13,7 @@ from ._common import (
     app,
     console,
     err_console,
+    interrupted,
     print_json,
     resolve_parameters,
     user_errors,
@@ -183,7 +184,7 @@ def simulate_command(
         bar.stop()
         err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
                           soft_wrap=True)
-        raise typer.Exit(code=130) from None
+        raise interrupted() from None
     finally:
         bar.stop()
     summary = result.summary()

@@ -10,7 +10,7 @@ from typing import Any
 import typer
 
 from ..outputs import PLOT_FORMATS, check_output_file, shown
-from ._common import app, console, err_console, print_json, user_errors
+from ._common import app, console, err_console, interrupted, print_json, user_errors
 
 _PLOT_FORMATS = (".png", ".pdf", ".svg")
 _EXPORT_FORMATS = (".csv", ".parquet", ".nc")
@@ -247,7 +247,7 @@ def _run(cfg: Any, open_store: Any, workers: int | None, scheduler: str | None,
                               f"({kept}the points in flight were cancelled); rerun the same "
                               "command to resume", markup=False, highlight=False,
                               soft_wrap=True)
-            raise typer.Exit(code=130) from None
+            raise interrupted() from None
 
 
 @app.command("map")
