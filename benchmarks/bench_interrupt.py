@@ -18,7 +18,7 @@ point is stored, sends SIGINT to the sweep's process only (a terminal's Ctrl-C),
   must be equal: every finished point kept), and whether the store grows afterwards (it must
   not: the points in flight are cancelled, not left running).
 
-The test (tests/integration/test_reliability3.py) checks the behaviour; the time is measured
+The test (tests/integration/test_reliability3_cli.py) checks the behaviour; the time is measured
 here, not asserted.  Writes ``benchmarks/results/bench_interrupt.json``.
 """
 
