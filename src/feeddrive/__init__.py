@@ -37,11 +37,13 @@ _PUBLIC: dict[str, str] = {
     "Result": "result",
     "DriveSystem": "simulate", "Simulation": "simulate", "SimulationError": "simulate",
     "SolverOptions": "simulate", "simulate": "simulate",
-    "friction": "", "model": "",
+    "frequency_response": "linear", "linearize": "linear", "loop_analysis": "linear",
+    "stability_band": "linear",
+    "friction": "", "linear": "", "model": "",
 }
 
 if TYPE_CHECKING:
-    from . import friction, model
+    from . import friction, linear, model
     from .analysis.calibrate import Target, Unknown, calibrate
     from .analysis.critical import (
         CriticalSpeed,
@@ -50,6 +52,7 @@ if TYPE_CHECKING:
     )
     from .analysis.metrics import CreepMetrics, CreepThresholds, creep_metrics
     from .control import ConstantSpeed, SampledSpeed, SineSpeed
+    from .linear import frequency_response, linearize, loop_analysis, stability_band
     from .model import LoadProfile, register_friction_law, register_mechanism
     from .parameters import DriveParameters, ParameterError, load, preset, save
     from .result import Result
@@ -69,7 +72,8 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted([*globals(), *_PUBLIC])
+    """The public names only (not this module's own imports and helpers)."""
+    return sorted({*__all__, *_PUBLIC})
 
 
 class _Package(types.ModuleType):
@@ -90,6 +94,8 @@ __all__ = [
     "DriveSystem", "LoadProfile", "ParameterError", "Result", "SampledSpeed", "Simulation",
     "SimulationError",
     "SineSpeed", "SolverOptions", "Target", "Unknown", "__version__", "calibrate",
-    "creep_metrics", "critical_speed_from_rest", "critical_speed_stepdown", "friction", "load",
-    "model", "preset", "register_friction_law", "register_mechanism", "save", "simulate",
+    "creep_metrics", "critical_speed_from_rest", "critical_speed_stepdown",
+    "frequency_response", "friction", "linear", "linearize", "load", "loop_analysis", "model",
+    "preset", "register_friction_law", "register_mechanism", "save", "simulate",
+    "stability_band",
 ]

@@ -8,6 +8,12 @@ all kernel sources: any change to any of them starts a fresh cache.
 
 ``error_model="numpy"``: float division follows IEEE (no Python ZeroDivisionError checks),
 about 25 % faster per right-hand-side evaluation; non-finite states are caught by the solver.
+
+``nogil=True``: a compiled call releases Python's global interpreter lock while it runs, so
+other threads of the process keep going during a long solver call (the explorer's server
+answers its page's polls while a run computes: issue 23; measured in
+benchmarks/bench_explore_polls.py).  Kernels touch only their own arrays, never Python
+objects, so nothing else changes.
 """
 
 from __future__ import annotations
@@ -63,7 +69,7 @@ def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
         previous = config.CACHE_DIR
         config.CACHE_DIR = _CACHE_DIR  # read once, when the dispatcher sets up its cache
         try:
-            return njit(cache=True, error_model="numpy", **options)(fn)
+            return njit(cache=True, error_model="numpy", nogil=True, **options)(fn)
         finally:
             config.CACHE_DIR = previous
 

@@ -83,6 +83,22 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
     return x_t, v_t, x_n, v_n
 
 
+#: zero-valued inputs added to the profile's reference (the linearisation's reference inputs,
+#: :mod:`feeddrive.linear`), in the order ``reference_with_inputs`` reads them
+REFERENCE_INPUTS = ("table_position_reference", "table_speed_reference",
+                    "nut_position_reference", "nut_speed_reference")
+
+
+@kernel
+def reference_with_inputs(t: float, P: np.ndarray, o: int, oi: int,
+                          T: np.ndarray) -> tuple[float, float, float, float]:
+    """:func:`reference_kernel` with ``P[oi:oi+4]`` (:data:`REFERENCE_INPUTS`, zero in a
+    simulation) added to the table position [m], table speed [m/s], nut position [m] and nut
+    speed [m/s] it commands."""
+    x_t, v_t, x_n, v_n = reference_kernel(t, P, o, T)
+    return x_t + P[oi], v_t + P[oi + 1], x_n + P[oi + 2], v_n + P[oi + 3]
+
+
 @dataclass(frozen=True)
 class ConstantSpeed:
     """Constant table speed (and nut speed for the DDFS) after a linear start ramp.

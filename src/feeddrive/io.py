@@ -1,8 +1,13 @@
-"""Writers for simulation results: CSV, Parquet, NetCDF, MATLAB .mat.
+"""Writers for simulation results: CSV, Parquet, NetCDF, MATLAB .mat (docs/outputs.md).
 
-CSV and Parquet are edge formats: engineering units (mm, mm/s, N/µm), the unit in brackets
-in each column name, e.g. ``table_position [mm]``.  NetCDF and .mat keep SI with the units
-as attributes (.mat: a ``units`` struct beside the signals).
+* CSV: engineering units (mm, mm/s, N/µm), the unit in brackets in each column name, e.g.
+  ``table_position [mm]`` — a human reads it.
+* Parquet: the same numbers and units as CSV, plain column names (``table_position``) and
+  each field's unit in the Arrow schema's field metadata (``unit``, ``long_name``).
+* NetCDF: NetCDF4 (HDF5, h5netcdf engine), SI, with the CF-1.8 global attributes
+  (``Conventions``, ``title``, ``source``, ``history``, ``references``) and each variable's
+  ``units`` (UDUNITS spelling) and ``long_name``.
+* .mat: SI, each signal an N×1 column vector, a ``units`` struct beside the signals.
 
 Every file is written under a temporary name in its folder and renamed when complete
 (:func:`feeddrive.outputs.atomic_path`): a full disk never leaves a truncated file under the
@@ -12,6 +17,8 @@ output's name.
 from __future__ import annotations
 
 import importlib.util
+from collections.abc import Mapping
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -20,11 +27,27 @@ import pandas as pd
 import scipy.io
 import xarray as xr
 
+from . import __version__
 from .outputs import atomic_path
 from .parameters import ParameterError
 from .units import ENGINEERING
 
 FORMATS = (".csv", ".parquet", ".nc", ".mat")
+
+#: the CF version the NetCDF exports follow (global attribute ``Conventions``)
+CF_CONVENTIONS = "CF-1.8"
+#: xarray's engine for NetCDF4 files (scipy writes NetCDF3 only)
+NETCDF_ENGINE = "h5netcdf"
+#: the global attribute ``references`` of every NetCDF export
+REFERENCES = ("Wang2021: Z. Wang, X. Feng, H. Yang, H. Jin, Research on low-speed "
+              "characteristics of differential double-drive feed system, Mechanical Sciences "
+              "12, 791-800 (2021), doi:10.5194/ms-12-791-2021")
+#: the long name of the time coordinate: simulated seconds from the start of the run (not a
+#: calendar time, so no ``axis = "T"``: CF 4.4 asks a time axis for "seconds since <date>")
+TIME_LONG_NAME = "time since the start of the run"
+
+# UDUNITS spellings of the units that differ from the package's (µ is not UDUNITS)
+_UDUNITS = {"": "1", "N/µm": "N/um", "µm": "um", "µs": "us"}
 
 #: how to get Parquet support (pyarrow is an optional dependency: docs/outputs.md)
 PARQUET_HINT = "Parquet output needs pyarrow: pip install 'feeddrive[parquet]'"
@@ -42,14 +65,92 @@ def check_format(path: str | Path) -> str:
     return ext
 
 
-def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
-    """All time signals as a DataFrame in engineering units, units in the column names."""
-    cols = {"time [s]": dataset["time"].values}
+def udunits(unit: str) -> str:
+    """``unit`` in UDUNITS-2 spelling, as CF's ``units`` attribute wants it ("" → "1")."""
+    return _UDUNITS.get(unit, unit)
+
+
+def cf_attributes(dataset: xr.Dataset, *, title: str, action: str) -> xr.Dataset:
+    """A shallow copy of ``dataset`` with the CF-1.8 attributes of a NetCDF export.
+
+    Globals: ``Conventions``, ``title``, ``source`` (feeddrive and its version, then any
+    former ``source``), ``history``
+    (one line per writing, newest first, ISO 8601 UTC), ``references`` (Wang2021); a former
+    free-text ``conventions`` becomes ``comment``.  Variables and coordinates: ``units`` in
+    UDUNITS spelling, ``long_name`` (the variable's name if it had none).  No variable has a
+    CF standard name (the table has none for a machine's positions, speeds or currents).
+    """
+    ds = dataset.copy(deep=False)
+    attrs = dict(ds.attrs)
+    comment = attrs.pop("conventions", None)
+    stamp = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    entry = f"{stamp} feeddrive {__version__}: {action}"
+    history = f"{entry}\n{attrs['history']}" if attrs.get("history") else entry
+    source = f"feeddrive {__version__}"
+    if attrs.get("source"):  # a sweep's configuration file: kept after the program
+        source = f"{source}; {attrs['source']}"
+    attrs.update({"Conventions": CF_CONVENTIONS, "title": title, "source": source,
+                  "history": history, "references": REFERENCES})
+    if comment is not None:
+        attrs["comment"] = f"{attrs['comment']}; {comment}" if attrs.get("comment") \
+            else comment
+    # NetCDF has no boolean attribute type
+    ds.attrs = {k: (int(v) if isinstance(v, bool | np.bool_) else v) for k, v in attrs.items()}
+    for name in [*ds.coords, *ds.data_vars]:
+        var = ds[name]
+        new = dict(var.attrs)
+        if "units" in new or name == "time":
+            new["units"] = udunits(str(new.get("units", "s")))
+        new.setdefault("long_name", str(name).replace("_", " "))
+        if name == "time":
+            new["long_name"] = TIME_LONG_NAME
+        ds[name].attrs = new
+    return ds
+
+
+def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
+    """``dataset`` (already with :func:`cf_attributes`) as a NetCDF4 file."""
+    dataset.to_netcdf(path, engine="h5netcdf")
+
+
+def arrow_table(columns: Mapping[str, tuple[np.ndarray, str, str]],
+                metadata: Mapping[str, str] | None = None) -> Any:
+    """A pyarrow Table from ``{name: (values, unit, long_name)}``: plain field names, the unit
+    and description in each field's metadata (``unit``, ``long_name``)."""
+    import pyarrow as pa
+
+    fields, arrays = [], []
+    for name, (values, unit, long_name) in columns.items():
+        array = pa.array(values)
+        arrays.append(array)
+        fields.append(pa.field(name, array.type, metadata={"unit": unit,
+                                                             "long_name": long_name}))
+    meta = {"feeddrive_version": __version__,
+            "units": "as feeddrive's CSV: mm, mm/s, N/µm, otherwise SI; each field's unit "
+                     "in its metadata", **(metadata or {})}
+    return pa.Table.from_arrays(arrays, schema=pa.schema(fields, metadata=meta))
+
+
+def _engineering_columns(dataset: xr.Dataset) -> dict[str, tuple[np.ndarray, str, str]]:
+    cols = {"time": (dataset["time"].values, "s", TIME_LONG_NAME)}
     for name, var in dataset.data_vars.items():
         unit = var.attrs.get("units", "")
         eng_unit, factor = ENGINEERING.get(unit, (unit, 1.0))
-        cols[f"{name} [{eng_unit}]"] = var.values * factor
-    return pd.DataFrame(cols)
+        cols[str(name)] = (var.values * factor, eng_unit, str(var.attrs.get("long_name", "")))
+    return cols
+
+
+def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
+    """All time signals as a DataFrame in engineering units, units in the column names
+    (the CSV export's columns: ``time [s]``, ``table_position [mm]``, …)."""
+    return pd.DataFrame({f"{name} [{unit}]": values
+                         for name, (values, unit, _) in _engineering_columns(dataset).items()})
+
+
+def to_arrow_table(dataset: xr.Dataset) -> Any:
+    """All time signals as a pyarrow Table in engineering units (the Parquet export): plain
+    names, each field's unit in its metadata."""
+    return arrow_table(_engineering_columns(dataset))
 
 
 def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
@@ -66,23 +167,30 @@ def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
     if ext == ".csv":
         to_engineering_frame(dataset).to_csv(p, index=False, float_format="%.10g")
     elif ext == ".parquet":
-        to_engineering_frame(dataset).to_parquet(p, index=False)
+        import pyarrow.parquet as pq
+
+        pq.write_table(to_arrow_table(dataset), p)
     elif ext == ".nc":
-        dataset.to_netcdf(p, engine="scipy")
+        title = f"feeddrive simulation: {dataset.attrs.get('drive', '')} drive"
+        if dataset.attrs.get("parameter_set"):
+            title += f", parameter set {dataset.attrs['parameter_set']}"
+        write_netcdf(cf_attributes(dataset, title=title, action="simulate"), p)
     else:
         signals = {name: var.values for name, var in dataset.data_vars.items()}
         signals["time"] = dataset["time"].values
         units = {name: var.attrs.get("units", "") for name, var in dataset.data_vars.items()}
         units["time"] = "s"
+        # oned_as="column": each signal an N×1 column vector, as MATLAB users index them
         scipy.io.savemat(p, {"feeddrive": {**signals, "units": units,
                                             "attrs": {k: str(v) for k, v in
                                                       dataset.attrs.items()}}},
-                         long_field_names=True, do_compression=True)
+                         long_field_names=True, do_compression=True, oned_as="column")
 
 
 class ChunkWriter:
-    """Appends a run's samples to ``.parquet`` or ``.csv`` chunk by chunk (engineering units,
-    the columns of :func:`to_engineering_frame`), so a long run never holds all of them.
+    """Appends a run's samples to ``.parquet`` or ``.csv`` chunk by chunk (engineering units;
+    the columns of :func:`to_engineering_frame` or :func:`to_arrow_table`), so a long run
+    never holds all of them.
 
     The samples go to a temporary name in the output's folder; :meth:`close` renames it to
     ``path`` (a run stopped by Ctrl-C keeps the samples written so far, complete rows),
@@ -104,26 +212,28 @@ class ChunkWriter:
         self._atomic = atomic_path(self.path)
         self._tmp = self._atomic.__enter__()
 
-    def _frame(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> pd.DataFrame:
+    def _columns(self, t: np.ndarray, y: np.ndarray,
+                 aux: np.ndarray) -> dict[str, tuple[np.ndarray, str, str]]:
         run = self.run_type(t, y, aux, self.model, self.system, None, {})
-        cols = {"time [s]": t}
-        for name, (unit, _) in run.meta.items():
+        cols = {"time": (t, "s", TIME_LONG_NAME)}
+        for name, (unit, description) in run.meta.items():
             eng_unit, factor = ENGINEERING.get(unit, (unit, 1.0))
-            cols[f"{name} [{eng_unit}]"] = run.signal(name) * factor
-        return pd.DataFrame(cols)
+            cols[name] = (run.signal(name) * factor, eng_unit, description)
+        return cols
 
     def write(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> None:
         if t.size == 0:
             return
-        frame = self._frame(t, y, aux)
+        cols = self._columns(t, y, aux)
         if self.ext == ".csv":
+            frame = pd.DataFrame({f"{name} [{unit}]": values
+                                  for name, (values, unit, _) in cols.items()})
             frame.to_csv(self._tmp, mode="w" if self._first else "a", header=self._first,
                          index=False, float_format="%.10g")
         else:
-            import pyarrow as pa
             import pyarrow.parquet as pq
 
-            table = pa.Table.from_pandas(frame, preserve_index=False)
+            table = arrow_table(cols)
             if self._writer is None:
                 self._writer = pq.ParquetWriter(self._tmp, table.schema)
             self._writer.write_table(table)

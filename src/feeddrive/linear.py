@@ -15,32 +15,47 @@
   every friction site and bristle state), edges refined by bisection to a stated tolerance,
   with the unstable mode's frequency.
 
-Inputs (per motor axis ``a``): ``a_speed_command_disturbance`` [rad/s, or m/s for a linear
-motor] added to the position loop's output, ``a_current_command_disturbance`` [A] added to the
-velocity loop's output.  Outputs: ``table_position`` [m], ``table_speed`` [m/s], and per axis
-``a_speed_command``, ``a_current_command`` (the loop signals *after* the injection).
+* :func:`frequency_response` — a named transfer (tracking, dynamic compliance, disturbance
+  sensitivity, a loop gain) or any input → output pair, on a frequency grid [Hz].
+
+Inputs, named as the simulation's signals (:data:`INPUT_UNITS`): ``table_position_reference``
+[m] and ``table_speed_reference`` [m/s] (the profile's commanded table position and speed —
+the speed is the position loop's feed-forward), for a DDFS also ``nut_position_reference``,
+``nut_speed_reference`` [m/s] (the hollow motor's), ``load_force`` [N] on the table (against
+positive motion), and per motor axis ``a``: ``a_speed_command_disturbance`` [rad/s, or m/s
+for a linear motor] added to the position loop's output and ``a_current_command_disturbance``
+[A] added to the velocity loop's output.  Outputs (:data:`OUTPUT_UNITS`): ``table_position``
+[m], ``table_speed`` [m/s], ``following_error`` [m] (commanded − table position), and per
+axis ``a_speed_command``, ``a_current_command`` (the loop signals *after* the injection), the
+motor current ``a_current`` [A] and its torque ``a_motor_torque`` [N m] (a linear motor's
+force ``motor_force`` [N]).
+
+Rigid-body poles — the free motions no loop holds, zero eigenvalues that finite differences
+place at ±1e-9…1e-6 1/s — are recognised by one rule (:func:`classify_poles`, :data:`MARGINAL`)
+that ``loops``, ``stability``, the report and the explorer share; they are listed as such,
+without a damping ratio.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
 from scipy import optimize
 
 from . import protocol
-from .control import ConstantSpeed
+from .control import REFERENCE_INPUTS, ConstantSpeed
 from .model.assemble import Model
 from .model.loops import INJ_CURRENT, INJ_SPEED
-from .parameters import ParameterError
+from .model.mechanisms import Mechanism, mechanism
+from .parameters import LuGreParameters, ParameterError, SiteParameters
 from .simulate import DriveSystem
 
-# kinematic pairs: (position-like state, its rate state) — positions move with the reference
-_KINEMATIC = {"screw_angle": "screw_speed", "nut_angle": "nut_speed",
-              "table_position": "table_speed"}
 _T0 = 1.0  # [s] operating-point time (after the reference's start ramp)
+_PULL = 1e-8  # weight of the operating point's pull to its start (free directions)
 
 
 @dataclass(frozen=True)
@@ -73,8 +88,12 @@ class LinearModel:
 
 @dataclass(frozen=True)
 class Pole:
+    """One eigenvalue of the linearised closed loop.  ``rigid_body``: a free motion no loop
+    holds (see :func:`classify_poles`), which has no damping ratio."""
+
     real: float  # [1/s]
     imag: float  # [rad/s]
+    rigid_body: bool = False
 
     @property
     def frequency_hz(self) -> float:
@@ -85,11 +104,61 @@ class Pole:
         mag = abs(complex(self.real, self.imag))
         return -self.real / mag if mag > 0 else 1.0
 
+    def as_dict(self) -> dict[str, Any]:
+        if self.rigid_body:
+            return {"kind": "rigid-body", "real_1_per_s": self.real,
+                    "imag_rad_per_s": self.imag,
+                    "note": "a free motion no loop holds (an eigenvalue 0 that finite "
+                            "differences place near 0); no damping ratio"}
+        return {"kind": "oscillatory" if abs(self.imag) > 0 else "real",
+                "real_1_per_s": self.real, "imag_rad_per_s": self.imag,
+                "frequency_hz": self.frequency_hz, "damping_ratio": self.damping_ratio}
+
+
+# Free directions (e.g. the nut angle of a hollow motor on a speed loop, which no loop holds)
+# give real poles at 0 that finite differences place at ±1e-9…1e-6 1/s; real poles smaller
+# than this fraction of the fastest pole are treated as those marginal modes.
+MARGINAL = 1e-7
+
+
+def classify_poles(eigenvalues: np.ndarray) -> list[Pole]:
+    """The one rule for rigid-body poles: an eigenvalue whose real and imaginary parts are
+    both below :data:`MARGINAL` × the fastest pole's magnitude is a free rigid-body motion
+    (listed as such, without a damping ratio); every other eigenvalue — a genuinely unstable
+    real pole included — is kept as it is.  Sorted by frequency."""
+    ev = np.asarray(eigenvalues, dtype=complex)
+    fastest = float(np.max(np.abs(ev))) if ev.size else 0.0
+    limit = MARGINAL * fastest
+    poles = [Pole(float(z.real), float(z.imag),
+                  rigid_body=bool(abs(z.imag) < limit and abs(z) < limit)) for z in ev]
+    return sorted(poles, key=lambda p: p.frequency_hz)
+
+
+def _mechanism(system: DriveSystem) -> Mechanism:
+    """The drive's topology, which declares its steady motion and what it holds still."""
+    return mechanism(system.drive)(system.parameters, system.drive, system.table_position,
+                                   system.nut_hold)
+
+
+def _no_friction(site: Any) -> LuGreParameters:
+    """A site with the law "none" (a law with parameters of its own becomes a LuGre-form
+    site on its Stribeck branches, which "none" ignores)."""
+    if isinstance(site, LuGreParameters):
+        return site.with_values(law="none")
+    return LuGreParameters(positive=site.positive, negative=site.negative,
+                           bristle_stiffness=1.0, bristle_damping=0.0, law="none")
+
 
 def _frictionless(system: DriveSystem) -> DriveSystem:
+    """Every friction site of the set — ``[friction.*]`` and those of a part's own section —
+    with the law "none"."""
     p = system.parameters
-    for site in ("screw", "nut", "guide"):
-        p = p.replace_path(f"friction.{site}.law", "none")
+    sites = [(f"friction.{f.name}", getattr(p.friction, f.name)) for f in fields(p.friction)]
+    sites += [(f"{name}.{f.name}", getattr(section, f.name)) for name, section in p.sections
+              for f in fields(section)]
+    for path, site in sites:
+        if isinstance(site, SiteParameters):
+            p = p.replace_path(path, _no_friction(site))
     return replace(system, parameters=p)
 
 
@@ -103,14 +172,9 @@ def _check_continuous(system: DriveSystem) -> None:
 
 
 def _live_states(model: Model, system: DriveSystem) -> list[int]:
-    """States that move: with the CDFS nut locked its states are frozen and dropped."""
-    live = []
-    nut_held = model.drive == "cdfs" and system.nut_hold == "locked"
-    for k, name in enumerate(model.state_names):
-        if nut_held and (name.startswith("nut_") or name.startswith("ball_nut_z")):
-            continue
-        live.append(k)
-    return live
+    """States that move: the states a drive holds still (the CDFS's locked nut) are dropped."""
+    frozen, _ = _mechanism(system).held()
+    return [k for k, name in enumerate(model.state_names) if not name.startswith(frozen)]
 
 
 def _scales(model: Model) -> np.ndarray:
@@ -148,24 +212,16 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     names = model.state_names
     n = len(names)
     y0 = np.zeros(n)
-    H = system.parameters.screw.transmission_ratio if "screw_speed" in names else 1.0
-    speeds = {"table_speed": table_speed, "screw_speed": (table_speed + nut_speed) / H,
-              "nut_speed": nut_speed / H}
-    held_nut = model.drive == "cdfs" and system.nut_hold == "locked"
-    if held_nut:
-        speeds["nut_speed"] = 0.0
-    for name, v in speeds.items():
-        if name in names:
-            y0[names.index(name)] = v
-    x_ref = table_speed * _T0
-    if "table_position" in names:
-        y0[names.index("table_position")] = x_ref
-    if "nut_angle" in names and not held_nut:
-        y0[names.index("nut_angle")] = nut_speed * _T0 / H
-    if "screw_angle" in names:
-        y0[names.index("screw_angle")] = (x_ref + (0 if held_nut else nut_speed * _T0)) / H
+    # the drive's kinematics: position-like state -> (its rate state, the steady rate);
+    # positions move with the reference, their rates are fixed
+    motion = {pos: pair for pos, pair in _mechanism(system).steady_motion(
+        table_speed, nut_speed).items() if pos in names and pair[0] in names}
+    kinematic = {pos: rate_state for pos, (rate_state, _) in motion.items()}
+    for pos, (rate_state, rate) in motion.items():
+        y0[names.index(rate_state)] = rate
+        y0[names.index(pos)] = rate * _T0
     live = _live_states(model, system)
-    fixed_speed = [names.index(s) for s in speeds if s in names]
+    fixed_speed = [names.index(rate_state) for rate_state in kinematic.values()]
     unknown = [k for k in live if k not in fixed_speed]
     scale = _scales(model)
 
@@ -176,19 +232,28 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
         r = []
         for k in unknown:
             name = names[k]
-            if name in _KINEMATIC:
+            if name in kinematic:
                 # its rate is the fixed speed: use the rate state's equation instead
                 continue
             r.append(dy[k] / scale[k])
-        for name, rate in _KINEMATIC.items():
-            if name in names and names.index(name) in unknown:
+        for name, rate in kinematic.items():
+            if names.index(name) in unknown:
                 r.append(dy[names.index(rate)] / scale[names.index(rate)])
         return np.array(r)
 
-    # Levenberg–Marquardt stays near the start along directions the equations leave free
-    # (e.g. the table position with the position loop open)
-    sol = optimize.least_squares(residual, y0[unknown] / scale[unknown], method="lm",
-                                 xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    # Directions no equation holds (the common rotation of screw and nut under a hollow motor
+    # on a speed loop, the table position with the position loop open) make the Jacobian
+    # singular: Levenberg–Marquardt then walks along them on rounding noise (the DDFS nut
+    # angle ended 10³ rad from its start, at a different place on each call).  A weak pull to
+    # the start (1e-8 of the equations' weight) holds them there and moves the other states
+    # by ~1e-16 of their tolerance.
+    u0 = y0[unknown] / scale[unknown]
+
+    def regularised(u: np.ndarray) -> np.ndarray:
+        return np.concatenate([residual(u), _PULL * (u - u0)])
+
+    sol = optimize.least_squares(regularised, u0, method="lm", xtol=1e-15, ftol=1e-15,
+                                 gtol=1e-15)
     y = y0.copy()
     y[unknown] = sol.x * scale[unknown]
     res = residual(sol.x)
@@ -201,13 +266,63 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     return model, y
 
 
+#: units of the linear model's inputs (a linear motor's speed-command disturbance is m/s)
+INPUT_UNITS = {"table_position_reference": "m", "table_speed_reference": "m/s",
+               "nut_position_reference": "m", "nut_speed_reference": "m/s",
+               "load_force": "N", "speed_command_disturbance": "rad/s",
+               "current_command_disturbance": "A"}
+#: units of its outputs (by name, or by the part after the axis name)
+OUTPUT_UNITS = {"table_position": "m", "table_speed": "m/s", "following_error": "m",
+                "speed_command": "rad/s", "current_command": "A", "current": "A",
+                "motor_torque": "N m", "motor_force": "N"}
+# finite-difference step of each kind of input (every input enters the right-hand side
+# linearly except through friction compensation at the commanded speed)
+_INPUT_STEP = {"m": 1e-8, "m/s": 1e-8, "N": 1e-3, "rad/s": 1e-6, "A": 1e-6}
+
+
+def unit_of(name: str, names: tuple[str, ...] = ()) -> str:
+    """The unit of an input or output of :func:`linearize` (the linear motor's speed
+    command and its disturbance are m/s)."""
+    if name in INPUT_UNITS:
+        return INPUT_UNITS[name]
+    if name in OUTPUT_UNITS:
+        return OUTPUT_UNITS[name]
+    axis, _, rest = name.partition("_")
+    if axis == "motor" and rest.startswith("speed_command"):
+        return "m/s"
+    return INPUT_UNITS.get(rest, OUTPUT_UNITS.get(rest, ""))
+
+
+def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
+    """The system without what gives it no steady state: torque ripple and lead error are
+    zero-mean harmonics of a shaft angle, so their average over a revolution is nothing; the
+    drive is linearised on that averaged model and the returned note says so."""
+    d = system.parameters.disturbances
+    left = [label for label, r in (("screw-motor torque ripple", d.screw_motor_ripple),
+                                   ("hollow-motor torque ripple", d.hollow_motor_ripple),
+                                   ("lead error", d.lead_error))
+            if any(a != 0.0 for a in r.amplitudes)]
+    if not left:
+        return system, ()
+    quiet = dataclasses.replace(
+        d, screw_motor_ripple=type(d.screw_motor_ripple)(),
+        hollow_motor_ripple=type(d.hollow_motor_ripple)(), lead_error=type(d.lead_error)())
+    params = dataclasses.replace(system.parameters, disturbances=quiet)
+    note = (f"warning: {' and '.join(left)} of the parameter set give no steady state; "
+            "linearised on the averaged model (their harmonics average to zero over a "
+            "revolution and are left out)")
+    return replace(system, parameters=params), (note,)
+
+
 def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float = 0.0, *,
               frictionless: bool = False) -> LinearModel:
     """Linearise the closed loop of ``system`` at steady sliding at ``table_speed`` [m/s]
-    (``nut_speed`` [m/s] for the DDFS), or with every friction law set to "none"."""
+    (``nut_speed`` [m/s] for the DDFS), or with every friction law set to "none".  A set with
+    torque ripple or lead error (no steady state) is linearised on its averaged model
+    (:func:`averaged`), with a warning in ``notes``."""
     if table_speed == 0.0 and not frictionless:
         raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
-    sys_ = _frictionless(system) if frictionless else system
+    sys_, notes = averaged(_frictionless(system) if frictionless else system)
     model, y = steady_state(sys_, table_speed, nut_speed)
     f = _Evaluator(model)
     live = _live_states(model, sys_)
@@ -215,24 +330,43 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     n = len(live)
     A = np.empty((n, n))
     aux_names = [a.name for a in model.aux]
+    st = model.state_names
     axes = [a.removesuffix("_speed_command") for a in aux_names if a.endswith("_speed_command")]
-    if sys_.drive == "cdfs" and sys_.nut_hold == "locked":
-        axes = [a for a in axes if a != "nut"]
-    out_aux = [f"{a}_{k}" for a in axes for k in ("speed_command", "current_command")]
-    out_names = ["table_position", "table_speed", *out_aux]
-    in_slots = []
-    in_names = []
+    idle = _mechanism(sys_).held()[1]
+    axes = [a for a in axes if a not in idle]
+    pidx = model.parameter_names.index
+    # inputs: (name, parameter slot)
+    refs = [r for r in REFERENCE_INPUTS if not r.startswith("nut_") or "nut" in axes]
+    ins: list[tuple[str, int]] = [(r, pidx(f"inputs.{r}")) for r in refs]
+    ins.append(("load_force", pidx("inputs.load_force")))
     for a in axes:
-        first = model.parameter_names.index(f"controller.{a}.kpp")
-        in_slots += [first + INJ_SPEED, first + INJ_CURRENT]
-        in_names += [f"{a}_speed_command_disturbance", f"{a}_current_command_disturbance"]
+        first = pidx(f"controller.{a}.kpp")
+        ins += [(f"{a}_speed_command_disturbance", first + INJ_SPEED),
+                (f"{a}_current_command_disturbance", first + INJ_CURRENT)]
+    # outputs: (name, function of (state vector, aux vector))
+    k_x, k_v = st.index("table_position"), st.index("table_speed")
+    k_ref = aux_names.index("table_position_reference")
+    outs: list[tuple[str, Any]] = [
+        ("table_position", lambda yv, av: yv[k_x]),
+        ("table_speed", lambda yv, av: yv[k_v]),
+        ("following_error", lambda yv, av: av[k_ref] - yv[k_x]),
+    ]
+    for kind in ("speed_command", "current_command"):
+        for a in axes:
+            j = aux_names.index(f"{a}_{kind}")
+            outs.append((f"{a}_{kind}", lambda yv, av, j=j: av[j]))
+    topology = _mechanism(sys_)
+    for a in axes:
+        j = st.index(f"{a}_current")
+        kt_name, torque_name = topology.motor_output(a)
+        kt = model.parameter(kt_name)
+        outs.append((f"{a}_current", lambda yv, av, j=j: yv[j]))
+        outs.append((torque_name, lambda yv, av, j=j, kt=kt: kt * yv[j]))
 
     def outputs(yv: np.ndarray, aux: np.ndarray) -> np.ndarray:
-        st = model.state_names
-        return np.array([yv[st.index("table_position")], yv[st.index("table_speed")],
-                         *[aux[aux_names.index(o)] for o in out_aux]])
+        return np.array([fn(yv, aux) for _, fn in outs])
 
-    C = np.empty((len(out_names), n))
+    C = np.empty((len(outs), n))
     for j, k in enumerate(live):
         h = 1e-2 * scale[k]  # a hundredth of the state's solver tolerance
         yp, ym = y.copy(), y.copy()
@@ -242,10 +376,11 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         dm, am = f(ym)
         A[:, j] = (dp[live] - dm[live]) / (2 * h)
         C[:, j] = (outputs(yp, ap) - outputs(ym, am)) / (2 * h)
-    B = np.empty((n, len(in_slots)))
-    D = np.empty((len(out_names), len(in_slots)))
-    for j, slot in enumerate(in_slots):
-        h = 1e-6  # [rad/s] or [A] of injected command
+    B = np.empty((n, len(ins)))
+    D = np.empty((len(outs), len(ins)))
+    in_names = tuple(name for name, _ in ins)
+    for j, (name, slot) in enumerate(ins):
+        h = _INPUT_STEP[unit_of(name)]
         Pp, Pm = model.P.copy(), model.P.copy()
         Pp[slot] += h
         Pm[slot] -= h
@@ -254,10 +389,11 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         B[:, j] = (dp[live] - dm[live]) / (2 * h)
         D[:, j] = (outputs(y, ap) - outputs(y, am)) / (2 * h)
     names = tuple(model.state_names[k] for k in live)
-    return LinearModel(A=A, B=B, C=C, D=D, states=names, inputs=tuple(in_names),
-                       outputs=tuple(out_names),
+    return LinearModel(A=A, B=B, C=C, D=D, states=names, inputs=in_names,
+                       outputs=tuple(name for name, _ in outs),
                        operating_point={model.state_names[k]: float(y[k]) for k in live},
-                       table_speed=table_speed, nut_speed=nut_speed, frictionless=frictionless)
+                       table_speed=table_speed, nut_speed=nut_speed, frictionless=frictionless,
+                       notes=notes)
 
 
 # ---------------------------------------------------------------- loops
@@ -296,6 +432,7 @@ def _freq_response(lin: LinearModel, inp: str, out: str, w: np.ndarray) -> np.nd
 def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str) -> LoopResult:
     mag = 20 * np.log10(np.abs(L))
     phase = np.degrees(np.unwrap(np.angle(L)))
+    phase -= 360.0 * np.ceil(phase[0] / 360.0)  # start in (−360°, 0°]: a loop lags
     crossover = phase_margin = gain_margin = bandwidth = None
     idx = np.where((mag[:-1] >= 0) & (mag[1:] < 0))[0]
     if idx.size:
@@ -304,8 +441,11 @@ def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str) -> LoopR
         ph = np.interp(f, freq[k:k + 2], phase[k:k + 2])
         crossover = float(f)
         phase_margin = float(((ph + 180.0) + 180.0) % 360.0 - 180.0)
-    # phase crossings of −180° (mod 360) above the gain crossover
-    wrapped = (phase + 180.0) % 360.0 - 180.0
+    # phase crossings of −180° (mod 360) above the gain crossover: ``wrapped`` is the phase's
+    # distance from −180° (mod 360), zero on the crossing (before issue 23 it was the distance
+    # from 0°, so the margin was read at the −360° crossing: 76 dB for the wang2021 position
+    # loop, whose real margin is 1 dB at the 5.5-Hz velocity-loop resonance)
+    wrapped = (phase + 360.0) % 360.0 - 180.0
     cross = np.where(np.abs(np.diff(np.sign(wrapped))) > 0)[0]
     for k in cross:
         if abs(wrapped[k] - wrapped[k + 1]) > 180.0:  # a jump of the wrap, not a crossing
@@ -322,6 +462,11 @@ def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str) -> LoopR
     return LoopResult(name, freq, mag, phase, gain_margin, phase_margin, crossover, bandwidth)
 
 
+def _nut_speed_loop(system: DriveSystem) -> bool:
+    p = system.parameters
+    return (p.hollow_controller or p.controller).nut_loop == "speed"
+
+
 @dataclass(frozen=True)
 class LoopAnalysis:
     poles: list[Pole]
@@ -329,10 +474,12 @@ class LoopAnalysis:
     linear: LinearModel
 
     def dominant(self) -> Pole:
-        """The least-damped oscillatory pole pair (the mode friction destabilises first)."""
-        osc = [p for p in self.poles if p.imag > 1e-6]
+        """The least-damped oscillatory pole pair (the mode friction destabilises first); the
+        rigid-body poles are not modes and are never it."""
+        modes = [p for p in self.poles if not p.rigid_body] or list(self.poles)
+        osc = [p for p in modes if p.imag > 1e-6]
         return min(osc, key=lambda p: p.damping_ratio) if osc else min(
-            self.poles, key=lambda p: -p.real)
+            modes, key=lambda p: -p.real)
 
     def as_dict(self) -> dict[str, Any]:
         d = self.dominant()
@@ -341,10 +488,12 @@ class LoopAnalysis:
             "frictionless": self.linear.frictionless,
             "least_damped_mode": {"frequency_hz": d.frequency_hz,
                                   "damping_ratio": d.damping_ratio},
-            "poles": [{"real_1_per_s": p.real, "imag_rad_per_s": p.imag,
-                       "frequency_hz": p.frequency_hz, "damping_ratio": p.damping_ratio}
-                      for p in self.poles if p.imag >= 0],
+            "pole_rule": (f"rigid-body: |Re| and |Im| below {MARGINAL:g} × the fastest pole "
+                          "(free motions no loop holds; no damping ratio); each complex pair "
+                          "listed once (Im ≥ 0)"),
+            "poles": [p.as_dict() for p in self.poles if p.imag >= 0],
             "loops": [lp.as_dict() for lp in self.loops],
+            "notes": list(self.linear.notes),
         }
 
 
@@ -361,16 +510,159 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
     lin_v = linearize(open_pos, table_speed, nut_speed, frictionless=frictionless)
     loops = []
     for inp in lin.inputs:
-        axis, kind = inp.split("_", 1)[0], inp
-        if kind.endswith("current_command_disturbance"):
+        axis = inp.split("_", 1)[0]
+        if inp.endswith("_current_command_disturbance"):
             S = _freq_response(lin_v, inp, f"{axis}_current_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop"))
-        else:
+        elif inp.endswith("_speed_command_disturbance"):
+            if axis == "nut" and _nut_speed_loop(system):
+                continue  # a hollow motor on a speed loop has no position loop
             S = _freq_response(lin, inp, f"{axis}_speed_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} position loop"))
-    poles = sorted((Pole(float(z.real), float(z.imag)) for z in lin.poles()),
-                   key=lambda p: p.frequency_hz)
-    return LoopAnalysis(poles=poles, loops=loops, linear=lin)
+    return LoopAnalysis(poles=classify_poles(lin.poles()), loops=loops, linear=lin)
+
+
+# ---------------------------------------------------------------- named frequency responses
+
+
+#: the named transfers of :func:`frequency_response`: (input, output, what it is)
+NAMED_RESPONSES: dict[str, tuple[str, str, str]] = {
+    "tracking": ("table_position_reference", "table_position",
+                 "table position per commanded table position, the command's speed "
+                 "feed-forward included (position reference r with speed reference s·r)"),
+    "following_error": ("table_position_reference", "following_error",
+                        "following error per commanded table position (1 − tracking)"),
+    "dynamic_compliance": ("load_force", "table_position",
+                           "table position per load force on the table [m/N] (the load acts "
+                           "against positive motion: a positive load pushes the table back)"),
+    "disturbance_sensitivity": ("current_command_disturbance", "table_position",
+                                "table position per current disturbance at the table-driving "
+                                "motor's current command [m/A] (a motor torque disturbance "
+                                "÷ K_t), loops closed"),
+}
+
+
+@dataclass(frozen=True)
+class FrequencyResponse:
+    """One transfer on a frequency grid: ``response`` complex, in ``unit``."""
+
+    name: str
+    input: str
+    output: str
+    unit: str
+    frequency_hz: np.ndarray
+    response: np.ndarray
+    description: str = ""
+    notes: tuple[str, ...] = ()
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        return np.abs(self.response)
+
+    @property
+    def magnitude_db(self) -> np.ndarray:
+        return 20 * np.log10(np.abs(self.response))
+
+    @property
+    def phase_deg(self) -> np.ndarray:
+        return np.degrees(np.unwrap(np.angle(self.response)))
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "input": self.input, "output": self.output,
+                "unit": self.unit, "description": self.description,
+                "frequency_hz": self.frequency_hz.tolist(),
+                "magnitude": self.magnitude.tolist(), "phase_deg": self.phase_deg.tolist(),
+                "notes": list(self.notes)}
+
+
+def _axis_name(lin: LinearModel) -> str:
+    """The table-driving motor axis (the screw motor, or a linear motor)."""
+    for a in ("screw", "motor"):
+        if f"{a}_current_command_disturbance" in lin.inputs:
+            return a
+    raise ValueError("the linear model has no table-driving motor axis")
+
+
+def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A002
+                       output: str | None = None, frequency_hz: np.ndarray | None = None, *,
+                       table_speed: float = 1e-3, nut_speed: float = 0.0,
+                       frictionless: bool = True) -> FrequencyResponse:
+    """A transfer of the closed loop linearised at steady sliding (:func:`linearize`).
+
+    ``input`` is a name of :data:`NAMED_RESPONSES` (``"tracking"``, ``"dynamic_compliance"``,
+    …; ``output`` then omitted), a loop gain ``"<axis>_position_loop"`` /
+    ``"<axis>_velocity_loop"`` (L = 1/S − 1 at the loop break, as :func:`loop_analysis`; the
+    velocity loop with the position loop open), or any input of the linear model with
+    ``output`` any of its outputs, e.g. ``frequency_response(system, "load_force",
+    "table_position")``.  ``system`` a DriveSystem (linearised at ``table_speed`` [m/s],
+    frictionless by default) or a LinearModel (loop gains need a DriveSystem).  Frequencies
+    [Hz], default 200 log-spaced from 0.1 to 1000 Hz."""
+    freq = (np.logspace(-1, 3, 200) if frequency_hz is None
+            else np.asarray(frequency_hz, dtype=float))
+    if freq.ndim != 1 or freq.size == 0 or not np.all(freq > 0):
+        raise ParameterError("frequency_hz", frequency_hz, "expected positive frequencies [Hz]")
+    w = 2 * np.pi * freq
+    is_lin = isinstance(system, LinearModel)
+    if input.endswith(("_position_loop", "_velocity_loop")) and output is None:
+        if is_lin:
+            raise ParameterError("system", "LinearModel", "a loop gain needs the DriveSystem "
+                                 "(its velocity loop is linearised with the position loop open)")
+        assert isinstance(system, DriveSystem)
+        axis, _, kind = input.rpartition("_")[0].rpartition("_")
+        lin = linearize(system, table_speed, nut_speed, frictionless=frictionless)
+        if f"{axis}_current_command_disturbance" not in lin.inputs:
+            raise ParameterError("input", input, "no such motor axis in this drive; expected "
+                                 + ", ".join(f"{a}_{k}_loop" for a in _axes(lin)
+                                             for k in ("position", "velocity")))
+        if kind == "position" and axis == "nut" and _nut_speed_loop(system):
+            raise ParameterError("input", input, "the hollow motor runs a speed loop "
+                                 "(controller.nut_loop = speed): it has no position loop")
+        if kind == "velocity":
+            open_pos = replace(system, parameters=system.parameters.replace_path(
+                "controller.position_gain", 0.0))
+            lin = linearize(open_pos, table_speed, nut_speed, frictionless=frictionless)
+            S = _freq_response(lin, f"{axis}_current_command_disturbance",
+                               f"{axis}_current_command", w)
+        else:
+            S = _freq_response(lin, f"{axis}_speed_command_disturbance",
+                               f"{axis}_speed_command", w)
+        return FrequencyResponse(input, f"{axis}_{kind}_command_disturbance",
+                                 f"{axis}_{kind}_command", "-", freq, 1.0 / S - 1.0,
+                                 f"{axis} {kind}-loop gain L = 1/S − 1", lin.notes)
+    if is_lin:
+        assert isinstance(system, LinearModel)
+        lin = system
+    else:
+        assert isinstance(system, DriveSystem)
+        lin = linearize(system, table_speed, nut_speed, frictionless=frictionless)
+    name, description = f"{input} → {output}", ""
+    if input in NAMED_RESPONSES:
+        if output is not None:
+            raise ParameterError("output", output, f"{input!r} names its output; omit it")
+        name = input
+        inp, output, description = NAMED_RESPONSES[input]
+        if inp == "current_command_disturbance":
+            inp = f"{_axis_name(lin)}_current_command_disturbance"
+    else:
+        inp = input
+    if inp not in lin.inputs:
+        raise ParameterError("input", input, "expected one of " + ", ".join(
+            [*NAMED_RESPONSES, *(f"{a}_{k}_loop" for a in _axes(lin)
+                                 for k in ("position", "velocity")), *lin.inputs]))
+    if output is None or output not in lin.outputs:
+        raise ParameterError("output", output, "expected one of " + ", ".join(lin.outputs))
+    resp = _freq_response(lin, inp, output, w)
+    if name in ("tracking", "following_error"):
+        # the profile commands the speed with the position: r and its rate s·r together
+        resp = resp + 1j * w * _freq_response(lin, "table_speed_reference", output, w)
+    out_unit, in_unit = unit_of(output), unit_of(inp)
+    unit = "-" if out_unit == in_unit else f"{out_unit}/{in_unit}"
+    return FrequencyResponse(name, inp, output, unit, freq, resp, description, lin.notes)
+
+
+def _axes(lin: LinearModel) -> list[str]:
+    return [i.removesuffix("_current_command_disturbance") for i in lin.inputs
+            if i.endswith("_current_command_disturbance")]
 
 
 # ---------------------------------------------------------------- stability band
@@ -387,6 +679,7 @@ class StabilityBand:
     frequency_hz: np.ndarray  # of the rightmost pole
     tolerance: float  # [m/s] bisection tolerance of the edges
     nut_speed: float
+    notes: tuple[str, ...] = ()  # e.g. the averaged model's warning (:func:`averaged`)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -400,13 +693,8 @@ class StabilityBand:
             "edge_tolerance_mm_s": 1e3 * self.tolerance,
             "scan_mm_s": [float(1e3 * self.speeds[0]), float(1e3 * self.speeds[-1]),
                           int(self.speeds.size)],
+            "notes": list(self.notes),
         }
-
-
-# Free directions (e.g. the nut angle of a hollow motor on a speed loop, which no loop holds)
-# give real poles at 0 that finite differences place at ±1e-9…1e-6 1/s; real poles smaller
-# than this fraction of the fastest pole are treated as those marginal modes.
-MARGINAL = 1e-7
 
 
 def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
@@ -415,11 +703,9 @@ def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
     at steady sliding at ``v`` [m/s], the marginal free-motion poles (:data:`MARGINAL`) left
     out — the quantity :func:`stability_band` judges."""
     lin = linearize(system, v, nut_speed)
-    ev = lin.poles()
-    fastest = float(np.max(np.abs(ev)))
-    ev = ev[~((np.abs(ev.imag) < MARGINAL * fastest) & (np.abs(ev) < MARGINAL * fastest))]
-    k = int(np.argmax(ev.real))
-    return float(ev[k].real), float(abs(ev[k].imag) / (2 * np.pi))
+    live = [p for p in classify_poles(lin.poles()) if not p.rigid_body]
+    p = max(live, key=lambda q: q.real)
+    return p.real, abs(p.imag) / (2 * np.pi)
 
 
 def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
@@ -468,8 +754,10 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     freqs = [rightmost_pole(system, math.sqrt(lo * hi), nut_speed)[1] for lo, hi in intervals]
     return StabilityBand(intervals=intervals, mode_frequency_hz=freqs, speeds=speeds,
                          max_real_part=re, frequency_hz=fr, tolerance=tolerance,
-                         nut_speed=nut_speed)
+                         nut_speed=nut_speed, notes=averaged(system)[1])
 
 
-__all__ = ["LinearModel", "LoopAnalysis", "LoopResult", "Pole", "StabilityBand",
-           "linearize", "loop_analysis", "rightmost_pole", "stability_band", "steady_state"]
+__all__ = ["INPUT_UNITS", "MARGINAL", "NAMED_RESPONSES", "OUTPUT_UNITS", "FrequencyResponse",
+           "LinearModel", "LoopAnalysis", "LoopResult", "Pole", "StabilityBand", "averaged",
+           "classify_poles", "frequency_response", "linearize", "loop_analysis",
+           "rightmost_pole", "stability_band", "steady_state", "unit_of"]

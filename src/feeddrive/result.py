@@ -45,9 +45,9 @@ class Run:
             self.columns[sig.name] = (aux, k)
         self.meta = {sig.name: (sig.unit, sig.description) for sig in (*model.states,
                                                                         *model.aux)}
-        if "screw_speed" in model.state_names:
-            self.meta["screw_linear_speed"] = ("m/s", "screw speed × H")
-            self.meta["nut_linear_speed"] = ("m/s", "nut speed × H")
+        self.derived = {sig.name: (source, factor) for sig, source, factor in model.derived}
+        for sig, _, _ in model.derived:
+            self.meta[sig.name] = (sig.unit, sig.description)
         self.meta["following_error"] = ("m", "commanded − table position")
 
     def defer_aux(self, compute: Callable[[], np.ndarray]) -> None:
@@ -64,9 +64,9 @@ class Run:
                     self.columns[sig.name] = (self.aux, j)
                 arr = self.aux
             return arr[:, k]
-        if name in ("screw_linear_speed", "nut_linear_speed") and name in self.meta:
-            H = self.system.parameters.screw.transmission_ratio
-            return H * self.signal(name.replace("_linear", ""))
+        if name in self.derived:
+            source, factor = self.derived[name]
+            return factor * self.signal(source)
         if name == "following_error":
             return self.signal("table_position_reference") - self.signal("table_position")
         raise KeyError(name)

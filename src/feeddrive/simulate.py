@@ -355,6 +355,24 @@ class Simulation:
             options.position_tolerance, options.speed_tolerance, options.current_tolerance)
         self.y0 = system.initial_vector(self.model)
         self._chunks: _Chunks | None = None
+        self._running: _Chunks | None = None
+
+    def live_time(self) -> float:
+        """The simulated time [s] the solver has reached in the run going on now, read while
+        :meth:`run` computes (from another thread: the compiled solver releases the GIL and
+        writes the time of each accepted step into its memory's last slot); 0 before the
+        first step."""
+        chunks = self._running
+        return 0.0 if chunks is None else float(chunks.live[-1])
+
+    def request_stop(self) -> None:
+        """Ask the run going on (in another thread) to stop: the compiled solver ends after
+        the step it is in, and :meth:`run` raises :class:`SimulationInterrupted` with what
+        was finished, as on Ctrl-C.  The explorer's Cancel uses it."""
+        chunks = self._running
+        if chunks is not None:
+            chunks.stop_requested = True
+            chunks.live[-2] = 1.0
 
     def run(self, duration: float, *, output: str | Path | None = None,
             progress: Callable[[float, float], None] | None = None) -> Result:
@@ -386,12 +404,15 @@ class Simulation:
         if chunks is None or output is not None or n_break < chunks.start:
             chunks = _Chunks(self, want_aux=output is not None)
         self._chunks = None if output is not None else chunks
+        self._running = chunks
         if not chunks.dense:
             _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
                              chunks.adaptive, self.atol, self.rel, chunks.h_init, chunks.h_max)
         try:
             t, y, aux_parts, stats = chunks.advance(n_break, output, progress)
         except _Stopped as stop:
+            if chunks.stop_requested:  # request_stop: not continued from
+                self._chunks = None
             partial = self._result(*stop.joined, {"method": options.method, "interrupted": True,
                                                   "t_reached_s": stop.t_reached})
             raise SimulationInterrupted(stop.t_reached, partial,
@@ -465,6 +486,8 @@ class _Chunks:
         self.h_max = cap if self.adaptive else options.fixed_step
         self.memory = (switching.new_memory(n) if self.dense
                        else dopri5.new_memory(n, self.h_init))
+        self.live = self.memory  # the memory of the solver call going on (live_time)
+        self.stop_requested = False  # Simulation.request_stop
         self.size = max(every, int(round(first / grid.base)) // every * every)
         self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.totals = np.zeros(9 if self.dense else 5)
@@ -525,11 +548,19 @@ class _Chunks:
                 stop = min(stop, n_break)
                 held, memory = (self.held, self.memory) if commit else (
                     self.held.copy(), self.memory.copy())
+                self.live = memory  # its last slot: the solver's live time (live_time)
+                if self.stop_requested:
+                    raise KeyboardInterrupt  # a stop asked for between two calls
                 began = _time.perf_counter()
                 t, yy, aa, last = self._call(self.y, self.start, stop, held, memory,
                                              self.sim.options.max_steps - int(self.totals[1]))
                 wall = _time.perf_counter() - began
                 stats = self._add(last)
+                if int(last[0]) == dopri5.STATUS_STOPPED:
+                    # stopped inside the call (request_stop): its part is dropped and the
+                    # carried state it changed is not continued from
+                    self.sim._chunks = None
+                    raise KeyboardInterrupt
                 if int(last[0]) != dopri5.STATUS_OK:
                     break
                 if writer is not None:

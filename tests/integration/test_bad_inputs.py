@@ -102,6 +102,10 @@ COMMANDS: dict[str, Callable[[str, Path], list[str]]] = {
     "identify dynamic": lambda f, out: ["identify", "dynamic", f],
     "identify merge": lambda f, out: ["identify", "merge", f, "--out", str(out / "m.toml")],
     "analyze": lambda f, out: ["analyze", f],
+    "fit": lambda f, out: ["fit", f, "--free", "table.mass", "--out", str(out / "m.toml")],
+    "fit --params": lambda f, out: ["fit", f, "--free", "table.mass", "--params", f],
+    "predict": lambda f, out: ["predict", f],
+    "sensitivity --params": lambda f, out: ["sensitivity", "--params", f],
 }
 
 BAD_FILES = ["empty.csv", "blank-and-comments.csv", "binary.dat", "données µ✓.csv",
@@ -158,6 +162,12 @@ WRITERS: dict[str, Callable[[dict[str, Path], str], list[str]]] = {
     "analyze --plot": lambda i, o: ["analyze", str(i["trace"]), "--plot", o],
     "friction --plot": lambda i, o: ["friction", "--plot", o],
     "reproduce --out": lambda i, o: ["reproduce", "--out", o],
+    "fit --out": lambda i, o: ["fit", str(i["trace"]), "--free", "table.mass",
+                               "--command-speed", "1.5", "--out", o],
+    "fit --plot": lambda i, o: ["fit", str(i["trace"]), "--free", "table.mass",
+                                "--command-speed", "1.5", "--plot", o],
+    "predict --plot": lambda i, o: ["predict", str(i["params"]), "--plot", o],
+    "sensitivity --plot": lambda i, o: ["sensitivity", "--plot", o],
 }
 
 

@@ -143,8 +143,8 @@ def test_identify_dynamic_says_when_sigma1_is_poorly_determined(tmp_path: Path) 
     [
         ("speed,force\n1,80\n2,abc\n", ["bad.csv, line 3", "'abc' is not a number"]),
         ("speed,friction\n1,80\n", ["no column 'force' or 'current'", "'speed', 'friction'"]),
-        ("speed,force\n" + "".join(f"{v},80\n" for v in range(1, 9)),
-         ["0 distinct negative speed", "positive direction only"]),
+        ("speed,force\n" + "".join(f"{v},80\n" for v in range(1, 4)),
+         ["3 distinct positive speed", "at least 5"]),
         ("speed,force\n1,80\n-1,-80\n", ["1 distinct positive speed", "at least 5"]),
     ],
 )
@@ -259,3 +259,21 @@ def test_analyze_zero_command_speed(tmp_path: Path) -> None:
     t, x, _ = stepdown_positions([False], [1.6])
     p = write_csv(tmp_path / "ok.csv", "time,position", [t, x])
     one_line_error(run("analyze", p, "--command-speed", "0"), "command_speed")
+
+
+def test_identify_static_one_direction_record(tmp_path: Path) -> None:
+    """Issue 22: a one-direction record gives that branch only, and says so; the fragment
+    holds that branch only, so merging keeps the base set's other branch."""
+    from feeddrive.friction import steady_friction
+    from feeddrive.parameters import preset
+
+    screw = preset("wang2021").friction.screw
+    v = np.geomspace(0.05, 20.0, 25)  # [mm/s]
+    f = steady_friction(v * 1e-3, screw)
+    p = tmp_path / "one.csv"
+    write_csv(p, "speed,force", [v, f])
+    r = run("identify", "static", p, "--out", tmp_path / "frag.toml")
+    assert r.exit_code == 0, r.output
+    assert "positive direction only" in r.stdout
+    frag = (tmp_path / "frag.toml").read_text(encoding="utf-8")
+    assert "[friction.screw.positive]" in frag and "negative" not in frag

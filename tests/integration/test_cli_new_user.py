@@ -105,7 +105,7 @@ def test_ctrl_c_on_reproduce_stops_the_work(tmp_path: Path,
 
 # options whose value has no unit (counts, ratios, levels)
 DIMENSIONLESS = {"--stick-level", "--max-stick-fraction", "--max-ripple-ratio", "--workers",
-                 "--points", "--confidence", "--max-steps"}
+                 "--points", "--confidence", "--max-steps", "--fmi"}  # --fmi: a version
 
 
 def _commands() -> list[tuple[list[str], Any]]:

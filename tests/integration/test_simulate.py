@@ -104,25 +104,49 @@ def test_solver_failure_is_reported_not_nan(params: fd.DriveParameters) -> None:
 
 @pytest.mark.parametrize("ext", [".csv", ".parquet", ".nc", ".mat"])
 def test_writers(params: fd.DriveParameters, tmp_path, ext: str) -> None:
+    """Each format by its convention (issue 26 item 3, docs/outputs.md): CSV bracketed names
+    in mm; Parquet plain names, the same numbers, the unit in each field's metadata; NetCDF4
+    with CF-1.8 attributes, SI; .mat N×1 column vectors, SI."""
     r = simulate(DriveSystem(params, "cdfs", 0.4), ConstantSpeed(2e-3), 0.5)
     path = r.save(tmp_path / f"run{ext}")
     n = r.time.size
     if ext == ".csv":
         df = pd.read_csv(path)
         assert df["table_speed [mm/s]"].to_numpy() == pytest.approx(1e3 * r["table_speed"])
-        assert len(df) == n
+        assert len(df) == n and df.columns[0] == "time [s]"
     elif ext == ".parquet":
-        df = pd.read_parquet(path)
-        assert df["table_position [mm]"].to_numpy() == pytest.approx(1e3 * r["table_position"])
+        import pyarrow.parquet as pq
+
+        table = pq.read_table(path)
+        assert not [name for name in table.column_names if "[" in name or " " in name]
+        assert table.column_names[:2] == ["time", "screw_angle"]
+        assert table["table_position"].to_numpy() == pytest.approx(1e3 * r["table_position"])
+        units = {f.name: f.metadata[b"unit"].decode() for f in table.schema}
+        assert units["time"] == "s" and units["table_position"] == "mm"
+        assert units["table_speed"] == "mm/s" and units["screw_speed"] == "rad/s"
+        assert set(units) == set(table.column_names)  # every field carries its unit
     elif ext == ".nc":
-        ds = xr.open_dataset(path, engine="scipy")
+        with open(path, "rb") as f:
+            assert f.read(8) == b"\x89HDF\r\n\x1a\n"  # NetCDF4 is an HDF5 file
+        ds = xr.open_dataset(path)
+        assert ds.attrs["Conventions"] == "CF-1.8"
+        for key in ("title", "source", "history", "references"):
+            assert ds.attrs[key], key
+        assert "doi:10.5194/ms-12-791-2021" in ds.attrs["references"]
+        assert ds.attrs["source"] == f"feeddrive {fd.__version__}"
         assert ds["table_speed"].attrs["units"] == "m/s"
         assert ds["table_speed"].values == pytest.approx(r["table_speed"])
+        assert ds["time"].attrs == {"units": "s", "long_name": "time since the start of the run"}
+        for name, var in ds.data_vars.items():
+            assert var.attrs["units"] and var.attrs["long_name"], name
         ds.close()
     else:
         m = scipy.io.loadmat(path, simplify_cells=True)["feeddrive"]
         assert m["table_speed"] == pytest.approx(r["table_speed"])
         assert m["units"]["table_speed"] == "m/s"
+        raw = scipy.io.loadmat(path)["feeddrive"][0, 0]
+        for name in ("time", "table_speed", "table_position", "screw_angle"):
+            assert raw[name].shape == (n, 1), name  # column vectors, as MATLAB users expect
 
 
 def test_cli_simulate_acceptance(tmp_path) -> None:

@@ -190,9 +190,12 @@ def test_example_map_shows_the_gain_and_not_the_position(tmp_path: Path) -> None
     assert res.returncode == 0, res.stderr
     assert "map of critical_speed over table_position × controller.velocity_gain" in res.stdout
     assert (tmp_path / "map.png").stat().st_size > 10_000
-    ds = xr.open_dataset(tmp_path / "map.nc", engine="scipy")
-    assert dict(ds.sizes) == {"table_position": 2, "controller.velocity_gain": 2}
-    crit = ds["critical_speed"].transpose("table_position", "controller.velocity_gain").values
+    ds = xr.open_dataset(tmp_path / "map.nc")
+    assert ds.attrs["Conventions"] == "CF-1.8"
+    # a CF variable name has no dot: the parameter path is kept in the attribute `parameter`
+    assert dict(ds.sizes) == {"table_position": 2, "controller_velocity_gain": 2}
+    assert ds["controller_velocity_gain"].attrs["parameter"] == "controller.velocity_gain"
+    crit = ds["critical_speed"].transpose("table_position", "controller_velocity_gain").values
     ds.close()
     assert np.all(np.isfinite(crit))
     # a higher velocity-loop gain damps the servo mode: a lower critical speed (0.1 mm/s

@@ -466,3 +466,17 @@ def test_without_data_the_file_leaves_p_and_t_to_the_host(built: Models,
     lib.rhs(1.2, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, a, aux)
     m.module.rhs(1.2, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, b, aux)
     assert np.array_equal(a, b)
+
+
+def test_the_docs_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """docs/c-backend.md's first Python block, run as written (in a temporary folder)."""
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "c-backend.md").read_text("utf-8")
+    code = doc.split("```python\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(tmp_path)
+    scope: dict[str, Any] = {}
+    exec(compile(code, "docs/c-backend.md", "exec"), scope)
+    m = scope["model"]
+    dy, aux = np.empty(len(m.states)), np.empty(len(m.aux))
+    scope["lib"].rhs(0.2, np.zeros(len(m.states)), np.zeros(m.n_held), m.P, m.T, 0, 0, 0, dy,
+                     aux)
+    assert (tmp_path / "build" / "fd_model.c").is_file() and np.all(np.isfinite(dy))

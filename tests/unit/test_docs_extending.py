@@ -82,3 +82,17 @@ def test_the_quoted_part_diff_touches_one_package_file() -> None:
         if real.returncode == 0:
             assert [f for f in real.stdout.split() if f.startswith("src/feeddrive/")] == [
                 "src/feeddrive/model/parts/acceleration_feedforward.py"]
+
+
+def test_the_quoted_rack_pinion_diff_touches_two_package_files() -> None:
+    """Issue 19's rack-and-pinion acceptance (≤ 3 package files), as the doc quotes it."""
+    block = DOC.split("git show caab0d2 --stat")[1].split("```")[1]
+    files = re.findall(r"src/feeddrive/\S+\.py", block)
+    assert files == ["src/feeddrive/model/mechanisms/rack_pinion.py",
+                     "src/feeddrive/presets/rack_pinion.py"]
+    assert "rack-pinion" in drive_names()
+    if (ROOT / ".git").exists() and shutil.which("git"):
+        real = subprocess.run(["git", "show", "--name-only", "--format=", "caab0d2"],
+                              cwd=ROOT, capture_output=True, text=True)
+        if real.returncode == 0:
+            assert [f for f in real.stdout.split() if f.startswith("src/feeddrive/")] == files

@@ -28,7 +28,8 @@ def _example(heading: str) -> str:
 
 def test_docs_name_every_input_output_and_setting() -> None:
     for drive, params in (("cdfs", "wang2021"), ("ddfs", "wang2021"),
-                          ("linear-motor", "linear-motor-example")):
+                          ("linear-motor", "linear-motor-example"),
+                          ("rack-pinion", "rack-pinion-example")):
         fm = build(preset(params), drive, 0.4)
         for v in variables(fm, "cs"):
             if v.causality in ("input", "output"):

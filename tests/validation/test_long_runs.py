@@ -88,10 +88,10 @@ def test_streamed_run_writes_every_sample_and_keeps_only_the_end(tmp_path, monke
     out = tmp_path / "run.parquet"
     r = fd.simulate(fd.DriveSystem(W, "cdfs", 0.4), ConstantSpeed(2e-3), 4.0, output=out)
     frame = pd.read_parquet(out)
-    assert len(frame) == 4001 and frame["time [s]"].iloc[-1] == pytest.approx(4.0)
-    assert np.all(np.diff(frame["time [s]"].to_numpy()) > 0)
+    assert len(frame) == 4001 and frame["time"].iloc[-1] == pytest.approx(4.0)
+    assert np.all(np.diff(frame["time"].to_numpy()) > 0)
     assert r.time[0] > 2.0 and r.time[-1] == pytest.approx(4.0)  # only the end is kept
-    np.testing.assert_allclose(frame["table_speed [mm/s]"].to_numpy()[-r.time.size:],
+    np.testing.assert_allclose(frame["table_speed"].to_numpy()[-r.time.size:],
                                1e3 * r["table_speed"], rtol=1e-12)
 
 
@@ -182,8 +182,8 @@ def test_dense_run_streams_reports_progress_and_stops_on_ctrl_c(tmp_path, monkey
     assert seen == pytest.approx([1.0, 2.0, 3.0, 4.0, 4.5])
     whole = fd.simulate(system, profile, 4.5, options=options)
     frame = pd.read_parquet(out)
-    np.testing.assert_array_equal(frame["time [s]"].to_numpy(), whole.time)
-    np.testing.assert_allclose(frame["table_speed [mm/s]"].to_numpy(),
+    np.testing.assert_array_equal(frame["time"].to_numpy(), whole.time)
+    np.testing.assert_allclose(frame["table_speed"].to_numpy(),
                                1e3 * whole["table_speed"], rtol=1e-12)
     assert r.time[0] > 2.0 and r.time[-1] == pytest.approx(4.5)  # only the end is kept
 

@@ -210,22 +210,35 @@ class BranchFit:
 class StaticFit:
     """Both directions of a static identification."""
 
-    positive: BranchFit
-    negative: BranchFit
+    positive: BranchFit | None
+    negative: BranchFit | None
     source: str | None = None
 
+    @property
+    def one_direction(self) -> str | None:
+        """The only direction fitted (a record with tests in one direction), else None."""
+        if self.positive is None:
+            return "negative"
+        return "positive" if self.negative is None else None
+
     def branches(self) -> dict[str, BranchFit]:
-        return {"positive": self.positive, "negative": self.negative}
+        """The fitted branches (one only for a one-direction record)."""
+        return {k: b for k, b in (("positive", self.positive), ("negative", self.negative))
+                if b is not None}
 
     def lugre(self, bristle_stiffness: float, bristle_damping: float) -> LuGreParameters:
         """The LuGre parameters the simulation takes, with σ0 [N/m] and σ1 [N s/m] given
         (e.g. from a base parameter set or :func:`fit_presliding`)."""
+        if self.positive is None or self.negative is None:
+            raise ValueError(f"only the {self.one_direction} branch was fitted (tests in one "
+                             "direction); merge the fragment into a parameter set, which keeps "
+                             "its other branch")
         return LuGreParameters(positive=self.positive.branch, negative=self.negative.branch,
                                bristle_stiffness=bristle_stiffness,
                                bristle_damping=bristle_damping)
 
     def to_dict(self, units: Literal["SI", "mm"] = "SI") -> dict[str, Any]:
-        out: dict[str, Any] = {"source": self.source}
+        out: dict[str, Any] = {"source": self.source, "one_direction": self.one_direction}
         for name, b in self.branches().items():
             vs_scale, vs_unit = (1.0, "m/s") if units == "SI" else (1e3, "mm/s")
             out[name] = {
@@ -379,8 +392,10 @@ def fit_static(
     lines, source:
         File line numbers of the tests and the file name, used in error messages.
 
-    Each direction needs at least :data:`MIN_SPEEDS_PER_DIRECTION` distinct speeds, spread
-    over the Stribeck region (around v_s) and the viscous region (well above it).
+    Each direction tested needs at least :data:`MIN_SPEEDS_PER_DIRECTION` distinct speeds,
+    spread over the Stribeck region (around v_s) and the viscous region (well above it).  A
+    record with tests in one direction only gives that branch only (the other is None;
+    :attr:`StaticFit.one_direction` names the fitted one).
     """
     v = np.asarray(speed, dtype=float)
     f = np.asarray(force, dtype=float)
@@ -410,9 +425,11 @@ def fit_static(
             raise ValueError(f"{prefix}{_locate(lines, k)}: {name} {arr[k] * edge:.4g} "
                              f"{edge_unit}: beyond any feed drive (|{name}| ≤ "
                              f"{limit * edge:g} {edge_unit}); check the file's unit")
-    fits = {}
+    fits: dict[str, BranchFit | None] = {"positive": None, "negative": None}
     for direction, mask in (("positive", v > 0), ("negative", v < 0)):
         idx = np.flatnonzero(mask)
+        if idx.size == 0 and np.any(~mask):
+            continue  # a one-direction record: that branch only (issue 22)
         distinct = np.unique(np.abs(v[idx])).size
         if distinct < MIN_SPEEDS_PER_DIRECTION:
             other = "negative" if direction == "positive" else "positive"
@@ -548,6 +565,8 @@ class DynamicFit:
     correlation: float  # between σ0 and σ1 estimates
     source: str | None = None
     lines: np.ndarray | None = field(default=None, repr=False)
+    noise: float = math.nan  # [m] the record's noise level, from the data alone
+    residual_ok: bool = True  # rms residual ≤ MAX_RESIDUAL_RATIO × noise
 
     @property
     def residual(self) -> np.ndarray:
@@ -560,6 +579,9 @@ class DynamicFit:
         simulate); check ``sigma1_determined`` and ``note``.
         """
         if isinstance(static, StaticFit):
+            if static.positive is None or static.negative is None:
+                static.lugre(0.0, 0.0)  # raises: one direction only
+            assert static.positive is not None and static.negative is not None
             pos, neg = static.positive.branch, static.negative.branch
         else:
             pos, neg = static.positive, static.negative
@@ -583,6 +605,8 @@ class DynamicFit:
             "rmse": self.rmse,
             "points": int(self.time.size),
             "force_ratio": self.force_ratio,
+            "noise": _finite_or_none(self.noise),
+            "residual_check": "passed" if self.residual_ok else "failed",
             "note": self.note,
         }
 
@@ -595,6 +619,12 @@ MAX_STEP_RATIO = 100.0
 
 #: σ1 counts as determined when its standard error is at most this fraction of its value
 SIGMA1_MAX_RELATIVE_STDERR = 0.25
+
+#: a fit whose rms residual exceeds this multiple of the record's own noise level (the
+#: robust scale of its second differences, :func:`noise_level`) does
+#: not explain the record: nothing is called determined (issue 22: a 1.04e3-nm residual on a
+#: 3.5-µm record was reported with σ1 "determined ±1 %")
+MAX_RESIDUAL_RATIO = 2.0
 
 
 # Pre-sliding is the micrometre regime below breakaway (Wang2021 Sect. 4; Al-Bender et al.
@@ -797,8 +827,17 @@ def fit_presliding(
     if math.isfinite(corr):
         s0_est = dataclasses.replace(s0_est, max_correlation=corr, correlated_with="σ1")
         s1_est = dataclasses.replace(s1_est, max_correlation=corr, correlated_with="σ0")
-    determined = (s1_est.relative_stderr <= SIGMA1_MAX_RELATIVE_STDERR and math.isfinite(high))
-    if determined:
+    noise = noise_level(x)
+    rmse = math.sqrt(ssr / dof)
+    residual_ok = rmse <= MAX_RESIDUAL_RATIO * noise
+    determined = (residual_ok and s1_est.relative_stderr <= SIGMA1_MAX_RELATIVE_STDERR
+                  and math.isfinite(high))
+    if not residual_ok:
+        note = (f"poor fit: the rms residual {rmse * 1e9:.3g} nm is {rmse / noise:.3g}× the "
+                f"record's own noise {noise * 1e9:.3g} nm (from its second differences); the "
+                "model does not explain this record, so neither σ0 nor σ1 is determined. "
+                "Check the mass, the force channel and that the record stays in pre-sliding.")
+    elif determined:
         note = (f"σ1 determined: {s1_hat:.4g} N s/m, ±{100 * s1_est.relative_stderr:.0f} % "
                 f"(1 s.e.); σ2 = {sigma2:.4g} N s/m held fixed.")
     else:
@@ -818,10 +857,27 @@ def fit_presliding(
         viscous_coefficient=sigma2, sigma1_determined=determined, sigma1_interval=(low, high),
         note=note, time=t, force=f, position=x, fitted=fitted,
         position_offset=float(np.mean(x - simulate(s0_hat, s1_hat))),
-        rmse=math.sqrt(ssr / dof), dof=dof, profile_sigma1=grid, profile_ssr=prof,
+        rmse=rmse, dof=dof, profile_sigma1=grid, profile_ssr=prof,
         ssr_threshold=threshold, force_ratio=force_ratio, correlation=corr, source=source,
-        lines=lines,
+        lines=lines, noise=noise, residual_ok=residual_ok,
     )
+
+
+def noise_level(values: np.ndarray) -> float:
+    """The noise σ of a sampled signal from the data alone: the robust (median absolute
+    deviation) scale of its second differences / √6 (white noise e: var Δ²e = 6σ²), never
+    below the record's resolution q/√12 (q the smallest step between samples: encoder or
+    interferometer counts, or the printed digits)."""
+    x = np.asarray(values, dtype=float)
+    if x.size < 8:
+        return math.nan
+    d2 = np.diff(x, 2)
+    mad = float(np.median(np.abs(d2 - np.median(d2)))) * 1.4826 / math.sqrt(6.0)
+    steps = np.abs(np.diff(x))
+    steps = steps[steps > 1e-12 * max(float(np.max(np.abs(x))), 1e-300)]
+    q = float(np.min(steps)) if steps.size else 0.0
+    floor = 1e-9 * float(np.max(np.abs(x))) if x.size else 0.0
+    return max(mad, q / math.sqrt(12.0), floor, 1e-300)
 
 
 def _profile_interval(grid: np.ndarray, prof: np.ndarray, threshold: float, s1_hat: float,

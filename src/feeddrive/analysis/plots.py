@@ -27,7 +27,8 @@ def _save(fig: Figure, path: str | Path) -> None:
 def plot_static_fit(fit: StaticFit, path: str | Path) -> None:
     """Measured and fitted steady friction per direction, and the residuals."""
     fig = Figure(figsize=(10, 6.5), layout="constrained")
-    axes = fig.subplots(2, 2, sharex="col", height_ratios=[2, 1])
+    axes = fig.subplots(2, len(fit.branches()), sharex="col", height_ratios=[2, 1],
+                        squeeze=False)
     for col, (name, b) in enumerate(fit.branches().items()):
         v_mm = b.speed * 1e3
         grid = np.geomspace(float(np.min(b.speed)), float(np.max(b.speed)), 300)

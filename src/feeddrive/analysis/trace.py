@@ -394,6 +394,9 @@ class TraceAnalysis:
     segments: tuple[TraceSegment, ...]
     critical: tuple[CriticalSpeed, ...]
     notes: tuple[str, ...] = field(default=())
+    #: "constant-speed" (segments of constant command, judged), or "non-constant-speed"
+    #: (a move or a ramp: nothing to judge for creep)
+    record: str = "constant-speed"
 
     def to_dict(self, units: Literal["SI", "mm"] = "mm") -> dict[str, Any]:
         k = 1.0 if units == "SI" else 1e3
@@ -412,8 +415,39 @@ class TraceAnalysis:
                 for c in self.critical
             ],
             "speed_unit": "m/s" if units == "SI" else "mm/s",
+            "record": self.record,
             "notes": list(self.notes),
         }
+
+
+#: a span whose speed trend (the range of a quadratic fit of the speed over it) exceeds this
+#: fraction of its mean speed is not at constant speed: a move or a ramp.  Stick-slip at a
+#: constant command is periodic about its mean, so its quadratic trend is small (measured:
+#: below 0.1 over a 1-s span at 1 mm/s); a 0 → 644 → 0 mm/s move gives about 1.5.
+MAX_SPEED_TREND = 0.5
+
+
+def speed_trend(t: np.ndarray, v: np.ndarray) -> float:
+    """Range of the least-squares quadratic in time through the speed ``v`` over ``t``,
+    relative to the mean |speed| (see :data:`MAX_SPEED_TREND`); inf at rest."""
+    if t.size < 8:
+        return 0.0
+    mean = abs(float(np.mean(v)))
+    if mean == 0.0:
+        return math.inf
+    tc = (t - t[0]) / max(float(t[-1] - t[0]), 1e-300)
+    fit = np.polyval(np.polyfit(tc, v, 2), tc)
+    return float(np.ptp(fit)) / mean
+
+
+def _moving_part(t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Samples from the first to the last with |v| above 2 % of its peak."""
+    peak = float(np.max(np.abs(v))) if v.size else 0.0
+    moving = np.flatnonzero(np.abs(v) > 0.02 * peak) if peak > 0 else np.zeros(0, int)
+    sel = np.zeros(t.size, dtype=bool)
+    if moving.size:
+        sel[moving[0]:moving[-1] + 1] = True
+    return sel
 
 
 def _slope(t: np.ndarray, x: np.ndarray) -> float:
@@ -534,6 +568,32 @@ def analyze_trace(
         notes.append("command speed not given: estimated as the mean speed (slope of the "
                      "position) over each segment's steady window")
 
+    if command_speed is None:
+        # a move or a ramp has no constant-speed span to judge (issue 22: a 0 → 644 → 0 mm/s
+        # move in 0.54 s was called creeping with a "3.9 Hz stick-slip")
+        whole = _moving_part(tt, vv)
+        trend = speed_trend(tt[whole], vv[whole]) if np.count_nonzero(whole) >= 8 else 0.0
+        steady = [r for r in runs if speed_trend(
+            tt[(tt >= r[0]) & (tt <= r[1])], vv[(tt >= r[0]) & (tt <= r[1])]) <=
+            MAX_SPEED_TREND] if runs else []
+        if trend > MAX_SPEED_TREND and not steady:
+            sel = whole
+            lo_v, hi_v = float(np.min(vv[sel])), float(np.max(vv[sel]))
+            notes.append(
+                f"non-constant-speed record (a move or a ramp): the speed goes from "
+                f"{1e3 * lo_v:.4g} to {1e3 * hi_v:.4g} mm/s over {tt[sel][0]:.3f}–"
+                f"{tt[sel][-1]:.3f} s with no constant-speed span of {min_segment_time:g} s; "
+                "creep is judged on constant-speed records only, so no verdict is given")
+            return TraceAnalysis(source=source, time=tt, position=xx, speed=vv, window=win,
+                                 window_time=win_t, segments=(), critical=(),
+                                 notes=tuple(notes), record="non-constant-speed")
+        if len(steady) < len(runs):
+            for r in runs:
+                if r not in steady:
+                    notes.append(f"span {r[0]:.2f}–{r[1]:.2f} s skipped: not at constant "
+                                 "speed (a ramp or a move)")
+            runs = steady
+
     segments: list[TraceSegment] = []
     for a, b, given, origin in runs:
         sel = (tt >= a) & (tt <= b)
@@ -554,6 +614,16 @@ def analyze_trace(
         m = creep_metrics(ts, vs, c, thresholds=thresholds)
         segments.append(TraceSegment(start=float(ts[0]), end=float(ts[-1]), command_speed=c,
                                      command_from=origin, metrics=m))
+    if (len(segments) >= 2 and segments[0].command_from == "estimated"
+            and segments[0].metrics.creeping and not segments[1].metrics.creeping
+            and abs(segments[0].command_speed - segments[1].command_speed) <= min_step):
+        # the drive cannot creep and then run smoothly at one command: the first span is
+        # the start-up transient decaying (issue 22: it made its own "creeping" segment at
+        # 1.599 mm/s beside the smooth 1.6 mm/s one, and a wrong critical speed)
+        first = segments.pop(0)
+        notes.append(f"start-up transient {first.start:.2f}–{first.end:.2f} s excluded: it "
+                     f"oscillates and then settles at the same speed "
+                     f"({1e3 * segments[0].command_speed:.4g} mm/s)")
     if not segments:
         raise ValueError(f"{source + ': ' if source else ''}no moving segment to analyse "
                          "(the table does not move)")

@@ -174,7 +174,7 @@ SOLVER_SHAPES: dict[str, tuple[str, ...]] = {
 RHS = CFunction("fd_rhs", None, (2, 8, 9))
 #: ``fd_sample_update`` likewise: y (non-const in the API) and held
 SAMPLE_UPDATE = CFunction("fd_sample_update", None, (2, 3))
-#: element types of the solver building blocks' non-double arrays (numpy int64 / bool_)
+#: element types of the solver building blocks' non-double arrays (numpy ``int64`` / ``bool_``)
 SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*"}
 
 
@@ -260,7 +260,8 @@ def find_compiler() -> list[str]:
 
 def compile_shared(c_text: str, folder: str | os.PathLike[str], *, name: str = "fd_model",
                    strict: bool = True, optimise: str = "-O1") -> Path:
-    """Compile ``c_text`` into a shared library ``folder/<name>.so`` (``.dll`` on Windows).
+    """Compile ``c_text`` into a shared library ``folder/<name>.so`` (``.dll`` on Windows)
+    with a gcc-compatible compiler (gcc, clang, MinGW; :func:`find_compiler`).
 
     Parameters
     ----------

@@ -886,6 +886,10 @@ class _Function:
 
     def target(self, tgt: ast.expr) -> tuple[str, Any]:
         if isinstance(tgt, ast.Name):
+            if tgt.id not in self.locals:
+                raise self.error(tgt, f"assigning {tgt.id!r}, whose type is not known (a "
+                                      f"global, or a local first set by an augmented "
+                                      f"assignment)")
             if tgt.id in self.params and isinstance(self.locals[tgt.id], Arr):
                 raise self.error(tgt, f"rebinding array parameter {tgt.id!r}")
             return self.cvar(tgt.id), self.locals[tgt.id]

@@ -16,10 +16,12 @@ from . import (  # noqa: F401,E402  (registers commands)
     creep_cmd,
     explore_cmd,  # noqa: F401  (registers commands)
     export_cmd,  # noqa: F401  (registers commands)
+    fit_cmd,  # noqa: F401  (registers commands)
     identify_cmd,  # noqa: F401,E402  (registers commands)
     linear_cmd,
     params_cmd,  # noqa: F401  (registers commands)
     reproduce_cmd,
+    sensitivity_cmd,  # noqa: F401  (registers commands)
     simulate_cmd,
     sweep_cmd,  # noqa: F401  (registers commands)
 )

@@ -18,7 +18,7 @@ from ..parameters import DriveParameters, ParameterError, load, preset
 
 app = typer.Typer(
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,  # feeddrive --install-completion [bash|zsh|fish|powershell]
     rich_markup_mode=None,  # Rich markup would eat the units: "[mm/s]" (issue 12 item 1)
     help="feeddrive: low-speed simulation and analysis of ball-screw feed drives (Wang2021).",
 )

@@ -15,7 +15,8 @@ app.add_typer(export_app, name="export")
 @export_app.command("fmu")
 @user_errors
 def fmu_command(
-    drive: str = typer.Option(..., "--drive", help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option(..., "--drive", help="cdfs, ddfs, linear-motor or another "
+                              "registered drive (rack-pinion)"),
     out: str = typer.Option(..., "--out", help="The FMU file to write (DRIVE.fmu)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
@@ -66,7 +67,14 @@ def fmu_command(
     console.print(f"wrote {result.path} ({result.size_bytes / 1024:.0f} kB): FMI {fmi}.0 "
                   f"{data['kind']}, {drive} ({params.name}), {result.n_states} states, "
                   f"{result.n_variables} variables"
-                  f"{', sampled loops as time events' if result.sampled else ''}",
-                  markup=False, highlight=False)
-    console.print(f"  inputs:  {', '.join(result.inputs)}", markup=False, highlight=False)
-    console.print(f"  outputs: {', '.join(result.outputs)}", markup=False, highlight=False)
+                  f"{_sampling_note(kind) if result.sampled else ''}",
+                  markup=False, highlight=False, soft_wrap=True)
+    console.print(f"  inputs:  {', '.join(result.inputs)}", markup=False, highlight=False,
+                  soft_wrap=True)
+    console.print(f"  outputs: {', '.join(result.outputs)}", markup=False, highlight=False,
+                  soft_wrap=True)
+
+
+def _sampling_note(kind: str) -> str:
+    return (", sampled loops as time events" if kind == "me"
+            else ", sampled loops as exact events inside each step")

@@ -80,6 +80,10 @@ def _print_static(fit: StaticFit, confidence: float) -> None:
     rows = (("F_c", "coulomb_force", 1.0, "N"), ("F_s", "static_force", 1.0, "N"),
             ("v_s", "stribeck_velocity", 1.0 / MM_PER_S, "mm/s"),
             ("σ2", "viscous_coefficient", 1.0, "N s/m"))
+    if fit.one_direction:
+        other = "negative" if fit.one_direction == "positive" else "positive"
+        _say(f"  tests in the {fit.one_direction} direction only: that branch only is fitted; "
+             f"the {other} branch is not (a fragment leaves it to the base set)")
     for name, b in fit.branches().items():
         _say(f"  {name} direction: {b.speed.size} tests, rms residual {b.rmse:.3g} N")
         for label, attr, scale, unit in rows:
@@ -100,6 +104,10 @@ def _warnings(fit: StaticFit | DynamicFit) -> list[str]:
                 for direction, b in fit.branches().items()
                 for name, why in b.unidentifiable().items()]
     out = []
+    if not fit.residual_ok:
+        return [f"poor fit: rms residual {fit.rmse * 1e9:.3g} nm is "
+                f"{fit.rmse / fit.noise:.3g}× the record's own noise {fit.noise * 1e9:.3g} nm; "
+                "σ0 and σ1 are not determined"]
     for label, est in (("σ0", fit.bristle_stiffness), ("σ1", fit.bristle_damping)):
         if not est.identifiable:
             out.append(f"{label} is not identifiable from these data: "
@@ -118,8 +126,10 @@ def _print_dynamic(fit: DynamicFit) -> None:
     _say(f"pre-sliding fit of {fit.source}: model {fit.model}, mass {fit.mass:.4g} kg, "
                   f"rms residual {fit.rmse * 1e9:.3g} nm")
     _say(f"  σ0 = {_fmt(s0, 1.0 / N_PER_UM)} N/µm ({level})"
-         + ("" if s0.identifiable else "  (not identifiable)"))
-    if fit.sigma1_determined:
+         + ("" if s0.identifiable and fit.residual_ok else "  (not identifiable)"))
+    if not fit.residual_ok:
+        _say("  σ1 not determined: poor fit (the residual exceeds the record's noise)")
+    elif fit.sigma1_determined:
         _say(f"  σ1 = {_fmt(s1)} N s/m ({level})")
     else:
         low, high = fit.sigma1_interval

@@ -22,17 +22,26 @@ def loops_command(
                                        "frictionless loops)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    plot: str | None = typer.Option(None, "--plot", help="Write a Bode plot [.png, .pdf, "
-                                    ".svg]."),
-    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
+    plot: str | None = typer.Option(None, "--plot", help="Write a plot of the loops "
+                                    "(PNG, PDF or SVG; its kind: --plot-kind)."),
+    plot_kind: str = typer.Option("bode", "--plot-kind", help="bode (open-loop magnitude and "
+                                  "phase, crossover and margins marked), nyquist, or step "
+                                  "(closed-loop responses to a reference and a load step)."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing plot file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
-    """Poles (frequency, damping ratio) and the velocity- and position-loop margins and
-    bandwidths of every motor axis, from the closed loop linearised at steady sliding."""
+    """Poles (frequency, damping ratio; rigid-body poles listed as such) and the velocity-
+    and position-loop margins and bandwidths of every motor axis, from the closed loop
+    linearised at steady sliding."""
     from ..linear import loop_analysis
+    from ..linear_plots import PLOT_KINDS
+    from ..outputs import check_output_file
+    from ..parameters import ParameterError
     from ..simulate import DriveSystem
 
-    if plot:  # before any work
+    if plot_kind not in PLOT_KINDS:
+        raise ParameterError("--plot-kind", plot_kind, f"expected {', '.join(PLOT_KINDS)}")
+    if plot:
         check_output_file(plot, option="--plot", inputs=[params_file], force=force,
                           formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
@@ -43,7 +52,8 @@ def loops_command(
     if plot:
         from ..linear_plots import plot_loops
 
-        data["plot"] = str(plot_loops(result, plot))
+        data["plot"] = str(plot_loops(result, plot, plot_kind))
+        data["plot_kind"] = plot_kind
     if as_json:
         print_json(data)
         return
@@ -52,6 +62,12 @@ def loops_command(
                   f"{'frictionless' if not with_friction else 'with friction'}, "
                   f"{table_speed:g} mm/s: least-damped mode {d['frequency_hz']:.3f} Hz, "
                   f"ζ = {d['damping_ratio']:.4f}")
+    for note in data["notes"]:
+        console.print(f"  {note}", markup=False)
+    rigid = sum(p["kind"] == "rigid-body" for p in data["poles"])
+    if rigid:
+        console.print(f"  {rigid} rigid-body pole{'s' if rigid > 1 else ''} (a free motion no "
+                      "loop holds; no damping ratio)")
     for lp in data["loops"]:
         def fmt(v: float | None, unit: str) -> str:
             return "—" if v is None else f"{v:.2f} {unit}"
@@ -105,6 +121,8 @@ def stability_command(
         return
     console.print(f"[bold]{drive.upper()}[/] ({params.name}), v_n = {nut_speed:g} mm/s, "
                   f"scan {low:g}–{high:g} mm/s:")
+    for note in data["notes"]:
+        console.print(f"  {note}", markup=False)
     if not band.intervals:
         console.print("  steady sliding is linearly stable at every speed scanned")
     for (lo, hi), f in zip(data["unstable_bands_mm_s"], band.mode_frequency_hz, strict=True):

@@ -7,7 +7,8 @@ plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is S
   friction curves of the sites the drive uses with their negative-slope bands and operating
   points;
 * :func:`run_linear` — the linear stability band over table speed and the loop poles at the
-  operating point (friction linearised there), loop margins;
+  operating point (friction linearised there, rigid-body poles marked by
+  :func:`feeddrive.linear.classify_poles`), loop margins and the loops' Bode curves;
 * :func:`run_critical` — the critical-speed search from rest, the protocol `feeddrive creep`
   uses (:mod:`feeddrive.protocol`), with progress and cancellation at every trial.
 """
@@ -132,15 +133,47 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
     return {"sites": curves, "ball_nut_share": params.friction.ball_nut_share}
 
 
-def run_simulation(checked: Checked, report: Report) -> dict[str, Any]:
-    """One run at constant speed from rest; see the module docstring."""
+def run_simulation(checked: Checked, report: Report,
+                   keep: Callable[[Any], None] | None = None) -> dict[str, Any]:
+    """One run at constant speed from rest; see the module docstring.  Progress is the
+    simulated time reached, reported after each chunk of the solver (the compiled solver
+    releases the GIL, so the server answers polls meanwhile); ``keep(result)`` receives the
+    full Result (the explorer keeps it for the signal picker and the downloads)."""
     from ..control import ConstantSpeed
-    from ..simulate import simulate
+    from ..simulate import Simulation, SimulationInterrupted
 
-    report(0.0, checked.duration, f"simulating {checked.duration:g} s of the "
-           f"{checked.drive.upper()}")  # raises if the page cancelled before the start
-    result = simulate(checked.system, ConstantSpeed(checked.table_speed, checked.nut_speed),
-                      checked.duration)
+    what = f"simulating {checked.duration:g} s of the {checked.drive.upper()}"
+    report(0.0, checked.duration, what)  # raises if the page cancelled before the start
+
+    def progress(t: float, t_end: float) -> None:
+        report(t, t_end, f"{what}: {t:.3g} s done")  # raises Cancelled between chunks
+
+    sim = Simulation(checked.system, ConstantSpeed(checked.table_speed, checked.nut_speed))
+    finished = threading.Event()
+
+    def watch() -> None:
+        # inside a long solver call: the time its compiled loop has reached, 10 times a
+        # second; a cancel stops the compiled loop after the step it is in
+        while not finished.wait(0.1):
+            try:
+                report(sim.live_time(), checked.duration,
+                       f"{what}: {sim.live_time():.3g} s done")
+            except Exception:  # the page cancelled (report raises Cancelled)
+                sim.request_stop()
+                return
+
+    watcher = threading.Thread(target=watch, name="feeddrive-explore-progress", daemon=True)
+    watcher.start()
+    try:
+        result = sim.run(checked.duration, progress=progress)
+    except SimulationInterrupted:
+        # stopped on the page's cancel: report raises its Cancelled
+        report(sim.live_time(), checked.duration, "cancelled")
+        raise RuntimeError("the run was stopped") from None
+    finally:
+        finished.set()
+    if keep is not None:
+        keep(result)
     summary = result.summary()
     t = result.time
     speed = result["table_speed"]
@@ -227,7 +260,12 @@ def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
     loops = loop_analysis(system, v, checked.nut_speed, frictionless=False)
     d = loops.as_dict()
     inside = any(lo <= abs(v) <= hi for lo, hi in band.intervals)
+    bode = [{"loop": lp.name, "frequency_hz": _list(lp.frequency_hz, digits=6),
+             "magnitude_db": _list(lp.magnitude_db, digits=6),
+             "phase_deg": _list(lp.phase_deg, digits=6), **lp.as_dict()}
+            for lp in loops.loops]
     return _json({
+        "bode": bode, "notes": d["notes"], "pole_rule": d["pole_rule"],
         "band": {**band.as_dict(), "speeds_mm_s": _list(band.speeds, 1e3),
                  "max_real_part_1_per_s": _list(band.max_real_part),
                  "frequency_hz": _list(band.frequency_hz)},

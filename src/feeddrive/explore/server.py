@@ -18,6 +18,11 @@ elsewhere cannot reach the server through a rebound DNS name; POST bodies must b
 ``POST /api/jobs/ID/cancel``
 ``POST /api/export``       ``{"settings"}`` → ``{"filename", "toml"}``
 ``POST /api/import``       ``{"toml", "settings"}`` → the settings the file gives
+``GET /api/runs/ID/signals``  every signal of a finished run's Dataset (name, unit,
+                           description) and the run's settings
+``GET /api/runs/ID/signal?name=N``  one signal, engineering units, peaks kept
+``GET /api/runs/ID/data.csv``, ``data.mat``  the run's every sample (download)
+``POST /api/measured``     ``{"csv", "name"}`` → a measured position trace to overlay
 =========================  ===========================================================
 """
 
@@ -39,6 +44,7 @@ from .. import __version__
 from ..parameters import PRESETS, ParameterError
 from . import compute
 from .jobs import Busy, Job, Jobs
+from .runs import Runs
 from .settings import (
     DEFAULTS,
     FIELDS,
@@ -88,6 +94,7 @@ class Explorer:
     def __init__(self, initial: dict[str, Any] | None = None) -> None:
         self.initial = normalise(initial)
         self.jobs = Jobs()
+        self.runs = Runs()  # finished simulations for the signal picker and downloads
         self.ready = threading.Event()
         self._rates: dict[str, float] = {}  # [s of wall time per s simulated] by drive
         self._plotly: bytes | None = None
@@ -135,7 +142,10 @@ class Explorer:
 
             def simulate_work(job: Job) -> Any:
                 started = time.perf_counter()
-                out = compute.run_simulation(checked, job.report)
+                out = compute.run_simulation(
+                    checked, job.report,
+                    keep=lambda result: self.runs.put(job.id, result, checked.settings))
+                out["run_id"] = job.id
                 wall = time.perf_counter() - started
                 self._rates[checked.drive] = wall / checked.duration
                 out["wall_time_s"] = wall
@@ -165,6 +175,7 @@ class Explorer:
             "fields": [{"name": f.name, "label": f.label, "unit": f.unit, "group": f.group,
                         "option": f.option, "path": f.path, "help": f.help} for f in FIELDS],
             "compensation_modes": list(compensation_modes()),
+            "units": _initial_units(self.initial),
             "initial": self.initial, "defaults": DEFAULTS, "max_duration_s": MAX_DURATION,
             "critical_trials": compute.estimated_trials(), "ready": self.ready.is_set(),
         }
@@ -173,6 +184,14 @@ class Explorer:
         if self._plotly is None:
             self._plotly = plotly_js()
         return self._plotly
+
+
+def _initial_units(initial: dict[str, Any]) -> dict[str, str]:
+    """The fields' units for the starting parameter set (its velocity_gain_basis)."""
+    from .settings import field_units
+
+    checked = check(initial)
+    return field_units(checked.base)
 
 
 def _quiet(done: float, total: float, text: str) -> None:
@@ -399,6 +418,9 @@ class Handler(BaseHTTPRequestHandler):
 
     def _route(self, method: str, path: str, query: str) -> None:
         ex = self.server.explorer
+        if path.startswith("/api/runs/") or path == "/api/measured":
+            self._route_runs(method, path, query)
+            return
         if method == "GET":
             if path in ("/", "/index.html"):
                 self._send(200, _static("index.html"), _STATIC["index.html"], "no-cache")
@@ -463,6 +485,66 @@ class Handler(BaseHTTPRequestHandler):
                 self._json(HTTPStatus.UNPROCESSABLE_ENTITY, {"errors": {"import": str(err)}})
                 return
             self._json(200, {"settings": settings, **check(settings).as_dict()})
+        else:
+            raise _HttpError(HTTPStatus.NOT_FOUND, f"no page {path}")
+
+
+    # ------------------------------------------------------------ runs (issue 23)
+
+    def _route_runs(self, method: str, path: str, query: str) -> None:
+        """A finished run's signals and downloads, and a measured trace to overlay."""
+        from urllib.parse import parse_qs
+
+        from . import runs
+
+        ex = self.server.explorer
+        if path == "/api/measured":
+            if method != "POST":
+                raise _HttpError(HTTPStatus.METHOD_NOT_ALLOWED, "POST a measured trace")
+            body = self._body()
+            text, name = body.get("csv"), body.get("name") or "measured.csv"
+            if not isinstance(text, str) or not isinstance(name, str):
+                raise _HttpError(HTTPStatus.BAD_REQUEST, "expected the file's text in 'csv'")
+            try:
+                self._json(200, runs.measured_trace(text, name))
+            except ValueError as err:
+                self._json(HTTPStatus.UNPROCESSABLE_ENTITY, {"error": str(err)})
+            return
+        if method != "GET":
+            raise _HttpError(HTTPStatus.METHOD_NOT_ALLOWED, "GET a run's signals")
+        parts = path.split("/")  # "", "api", "runs", ID, what
+        if len(parts) != 5:
+            raise _HttpError(HTTPStatus.NOT_FOUND, f"no page {path}")
+        kept = ex.runs.get(parts[3])
+        if kept is None:
+            raise _HttpError(HTTPStatus.NOT_FOUND, "no such run (finished runs are kept "
+                             f"{runs.KEEP_RUNS} at a time)")
+        result, settings = kept
+        what = parts[4]
+        if what == "signals":
+            self._json(200, {"run_id": parts[3], "settings": settings,
+                             "signals": runs.signal_list(result)})
+        elif what == "signal":
+            name = (parse_qs(query).get("name") or [""])[0]
+            try:
+                self._json(200, runs.signal(result, name))
+            except KeyError:
+                raise _HttpError(HTTPStatus.NOT_FOUND, f"the run has no signal {name!r}"
+                                 ) from None
+        elif what in ("data.csv", "data.mat"):
+            fmt = what.rsplit(".", 1)[1]
+            body = runs.export(result, fmt)
+            filename = f"feeddrive-{_safe(settings.get('drive', 'run'))}-{parts[3]}.{fmt}"
+            self.send_response(200)
+            self.send_header("Content-Type", "text/csv; charset=utf-8" if fmt == "csv"
+                             else "application/octet-stream")
+            self.send_header("Content-Length", str(len(body)))
+            self.send_header("Content-Disposition", f'attachment; filename="{filename}"')
+            self.send_header("Cache-Control", "no-store")
+            self.send_header("X-Content-Type-Options", "nosniff")
+            self.end_headers()
+            if self.command != "HEAD":
+                self.wfile.write(body)
         else:
             raise _HttpError(HTTPStatus.NOT_FOUND, f"no page {path}")
 

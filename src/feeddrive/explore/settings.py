@@ -43,7 +43,7 @@ from ..parameters import (
     preset,
     to_dict,
 )
-from ..parameters.validation import check_quantity
+from ..parameters.validation import check_quantity, resolved_unit
 
 #: longest simulated time the page runs [s]; `feeddrive simulate` runs longer ones
 MAX_DURATION = 120.0
@@ -269,6 +269,7 @@ class Checked:
     def as_dict(self) -> dict[str, Any]:
         """What the page needs: messages, the parameter set's own knob values, the address."""
         return {"settings": self.settings, "errors": self.errors, "warnings": self.warnings,
+                "units": field_units(self.base),
                 "base": knob_values(self.base) if self.base is not None else None,
                 "base_name": self.base.name if self.base is not None else None,
                 "overrides": sorted(self.overrides), "disabled": self.disabled,
@@ -505,3 +506,33 @@ def import_toml(text: str, current: Mapping[str, Any] | None = None) -> dict[str
                 continue
             s[names[m.group(1)]] = value if isinstance(value, str) else _text(float(value))
     return s
+
+# ---- the page's knob units from the parameters' own metadata, resolved for the parameter set
+# (a velocity-loop gain is per rad/s of the motor, or per m/s of table speed on the set's
+# velocity_gain_basis = "table": A s/rad or A s/m, a factor H ≈ 10⁻³ apart)
+
+
+def field_unit(f: Field, params: DriveParameters | None) -> str:
+    """The unit of field ``f`` for ``params``: its parameter's metadata when it has a path
+    (``controller.velocity_gain``, ``disturbances.screw_motor_ripple.amplitudes[0]``), else
+    the field's own."""
+    if not f.path or params is None:
+        return f.unit
+    parts = [re.sub(r"\[\d+\]$", "", p) for p in f.path.split(".")]
+    obj: Any = params
+    for part in parts[:-1]:
+        obj = getattr(obj, part, None)
+        if obj is None:
+            return f.unit
+    try:
+        unit = resolved_unit(obj, parts[-1])
+    except (KeyError, TypeError):
+        return f.unit
+    if unit == "-" and f.unit not in ("", "-"):
+        return f.unit  # e.g. a ripple order: "per rev" says more than "-"
+    return unit or f.unit
+
+
+def field_units(params: DriveParameters | None) -> dict[str, str]:
+    """Every field's unit for ``params``."""
+    return {f.name: field_unit(f, params) for f in FIELDS}

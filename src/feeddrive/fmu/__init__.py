@@ -3,7 +3,7 @@
 ``export_fmu(parameters, drive, out, ...)`` assembles the drive with its reference and load
 force as inputs (:mod:`feeddrive.fmu.model`), declares every state, signal and parameter
 (:mod:`feeddrive.fmu.description`), translates the model and the integrator to C
-(:mod:`feeddrive.model.c_backend`, :mod:`feeddrive.fmu.solver`), compiles them with the
+(:mod:`feeddrive.backends.c_backend`, :mod:`feeddrive.fmu.solver`), compiles them with the
 machine's C compiler and zips the FMU with its sources (:mod:`feeddrive.fmu.build`).
 docs/fmu.md describes the inputs, outputs and the use from fmpy, PathSim, OpenModelica and
 Simulink.

@@ -19,7 +19,9 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from ..model.friction import friction_law
 from ..model.loops import AXIS_PARAMS
+from ..parameters.components import unit_of
 from .model import FmuModel
 
 # value-reference kinds (wrapper.c)
@@ -62,27 +64,13 @@ SETTINGS = (
 )
 S_INDEX = {name: i for i, (name, *_rest) in enumerate(SETTINGS)}
 
-_LUGRE_SLOTS = (("coulomb_force_positive", "N", "Coulomb force F_c, positive direction"),
-                ("static_force_positive", "N", "static force F_s, positive direction"),
-                ("stribeck_velocity_positive", "m/s", "Stribeck velocity v_s, positive "
-                 "direction"),
-                ("viscous_coefficient_positive", "N s/m", "viscous coefficient σ2, positive "
-                 "direction"),
-                ("coulomb_force_negative", "N", "Coulomb force F_c, negative direction"),
-                ("static_force_negative", "N", "static force F_s, negative direction"),
-                ("stribeck_velocity_negative", "m/s", "Stribeck velocity v_s, negative "
-                 "direction"),
-                ("viscous_coefficient_negative", "N s/m", "viscous coefficient σ2, negative "
-                 "direction"),
-                ("bristle_stiffness", "N/m", "bristle stiffness σ0"),
-                ("bristle_damping", "N s/m", "bristle damping σ1"),
-                ("smoothing_velocity", "m/s", "sign-smoothing velocity (Stribeck law)"))
-
 _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
     "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
     "speed_mode"}
+# "inputs.": the linearisation's zero-valued reference and load slots (feeddrive.linear);
+# the FMU's own inputs carry those signals
 _HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
-           "disturbances.load_offset", "disturbances.load_points")
+           "disturbances.load_offset", "disturbances.load_points", "inputs.")
 
 _SIMPLE = {
     "screw.H": ("m/rad", "lead per radian H (transmission ratio)"),
@@ -174,18 +162,16 @@ def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
                  "inj_current": ("A", "current-command injection (loop breaking; 0)")}
         unit, text = units[slot]
         return name, unit, f"{axis} axis: {text}", slot in _FIXED_PARAMETERS
-    match = re.fullmatch(r"(friction|compensation)\.(\w+)\[(\d+)\]", name)
-    if match:
-        group, site, i = match.group(1), match.group(2), int(match.group(3))
-        law = dict(fm.model.sites).get(site, "lugre")
-        where = f"{site.replace('_', '–')} friction"
-        if group == "compensation":
-            where = f"{site} friction as the compensator assumes it"
-        if i < len(_LUGRE_SLOTS) and (law in ("lugre", "dahl", "stribeck", "none")
-                                      or group == "compensation"):
-            slot, unit, text = _LUGRE_SLOTS[i]
-            return f"{group}.{site}.{slot}", unit, f"{where} ({law}): {text}", False
-        return f"{group}.{site}.p{i}", "", f"{where} ({law}): packed parameter {i}", False
+    match = re.fullmatch(r"(friction|compensation)\.(\w+)\.([\w.\[\]]+)", name)
+    if match:  # a named slot of a site's law (its parameter class declares the unit)
+        group, site, slot = match.groups()
+        law = dict(fm.model.sites).get(site, "lugre") if group == "friction" else "lugre"
+        where = (f"{site.replace('_', '–')} friction" if group == "friction"
+                 else f"{site} friction as the compensator assumes it")
+        declared = unit_of(friction_law(law).parameters_class, slot)
+        if declared is None:  # a structural count (GMS elements): fixed at export
+            return name, "1", f"{where} ({law}): {slot} (fixed at export)", True
+        return name, "1" if declared == "-" else declared, f"{where} ({law}): {slot}", False
     match = re.fullmatch(r"disturbances\.(\w+)\[(\d+)\]", name)
     if match:
         field, i = match.group(1), int(match.group(2))
@@ -259,18 +245,24 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
         name = a.name if a.name not in input_names else f"model.{a.name}"
         v.append(Variable(name, K_AUX, j, 0, "output" if a.name in out_names else "local",
                           "continuous", "calculated", None, a.unit, a.description))
-    # derived outputs: motor torques, following error
-    for key, label in (("screw", "screw motor"), ("nut", "hollow motor")):
-        if f"{key}_current" in m.state_names and (key == "screw" or fm.nut_inputs):
-            v.append(Variable(f"{key}_motor_torque", K_PRODUCT,
-                              m.parameter_names.index(f"{key}_motor.torque_constant"),
-                              m.index(f"{key}_current"), "output", "continuous",
-                              "calculated", None, "N m", f"{label} torque K_t·i"))
-    if "motor_current" in m.state_names:
-        v.append(Variable("motor_force", K_PRODUCT,
-                          m.parameter_names.index("motor.force_constant"),
-                          m.index("motor_current"), "output", "continuous", "calculated",
-                          None, "N", "linear motor force K_f·i"))
+    # derived outputs: each live motor's torque (or force), the following error; where the
+    # motor turns current into torque the topology says (Mechanism.motor_output)
+    from ..model.mechanisms import mechanism
+
+    mech = mechanism(fm.drive)(fm.parameters, fm.drive, fm.table_position, fm.nut_hold)
+    for a in m.aux:
+        axis = a.name.removesuffix("_speed_command")
+        if axis == a.name or f"{axis}_current" not in m.state_names:
+            continue
+        if axis == "nut" and not fm.nut_inputs:
+            continue
+        slot, product = mech.motor_output(axis)
+        unit = "N" if product.endswith("_force") else "N m"
+        v.append(Variable(product, K_PRODUCT, m.parameter_names.index(slot),
+                          m.index(f"{axis}_current"), "output", "continuous", "calculated",
+                          None, unit,
+                          f"{axis} motor {'force' if unit == 'N' else 'torque'} "
+                          f"({slot.rsplit('.', 1)[-1].replace('_', ' ')} × current)"))
     aux_names = [a.name for a in m.aux]
     v.append(Variable("following_error", K_ERROR, aux_names.index("table_position_reference"),
                       m.index("table_position"), "output", "continuous", "calculated", None,
@@ -281,7 +273,7 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
             continue
         name, unit, text, fixed = parameter_info(fm, pname)
         v.append(Variable(name, K_PARAM, k, 0, "parameter", "fixed" if fixed else "tunable",
-                          "exact", float(m.P[k]), unit, text))
+                          "exact", float(m.P[k]), unit, text, fixed=fixed))
     # settings
     for i, (name, unit, text, start) in enumerate(SETTINGS):
         value = start if start is not None else fm.periods[name.split(".")[1]]

@@ -57,6 +57,9 @@ class FmuModel:
     nut_inputs: bool  # the nut has a live axis (DDFS, or the CDFS nut on its servo)
     nut_position_input: bool  # ... with a position loop (controller nut_loop = "position")
     periods: dict[str, float]  # the loops' sample periods [s] (0: continuous), by loop name
+    parameters: DriveParameters  # the exported set (units of the parameter slots)
+    table_position: float = 0.4  # [m] the nut's start position a (ball-screw drives)
+    nut_hold: str = "locked"
 
 
 def build(parameters: DriveParameters, drive: str, table_position: float,
@@ -80,7 +83,8 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
                     nut_inputs=nut_inputs, nut_position_input=nut_position,
                     periods={"position_period": parameters.controller.position_period,
                              "velocity_period": parameters.controller.velocity_period,
-                             "current_period": parameters.controller.current_period})
+                             "current_period": parameters.controller.current_period},
+                    parameters=parameters, table_position=table_position, nut_hold=nut_hold)
 
 
 def numba_module(model: Model) -> ModuleType:
@@ -113,7 +117,6 @@ class NumbaCoSimulation:
                                            current_tolerance)
         self.rtol, self.h_max, self.max_steps = rtol, h_max, max_steps
         self.integrate = integrate_speed_reference
-        self.params = fm.model  # for sampling: the DriveParameters are not kept on the model
         self.work = [np.zeros(self.n) for _ in range(10)]
         self.aux = np.zeros(len(m.aux))
         self.memory = solver.new_memory(1e-6)
@@ -127,10 +130,10 @@ class NumbaCoSimulation:
         self.grid = (g.base, g.n_pos, g.n_vel, g.n_cur)
         self._write_inputs(inputs)
         base, n_pos, n_vel, n_cur = self.grid
+        self.held_prev[:] = self.held  # as the FMU: the update at t0 is redone if the inputs
         self.module.sample_update(0, 0.0, self.y, self.held, self.P, self.T, n_pos, n_vel,
                                   n_cur, base)
-        self.held_prev[:] = self.held
-        self.memory[solver.MEM_AT_SAMPLE] = 0.0
+        self.memory[solver.MEM_AT_SAMPLE] = 1.0  # change before the first step
         self._last_inputs = dict(inputs)
 
     def _write_inputs(self, inputs: dict[str, float]) -> None:

@@ -4,7 +4,7 @@
 and built twice from that one text: by numba into a model's generated module (next to its
 ``rhs``, ``sample_update`` and the DOPRI5 step :func:`feeddrive.solvers.switching.
 dp5_step_template`, :func:`~feeddrive.solvers.switching.error_norm_template` it calls), and by
-the C translator (:mod:`feeddrive.model.c_backend`) into the FMU's C source.  The tests run
+the C translator (:mod:`feeddrive.backends.c_backend`) into the FMU's C source.  The tests run
 both on the same model and inputs and require the same trajectory.
 
 It is the ``MODE_DOPRI5`` part of :func:`feeddrive.solvers.switching.integrate_template` with

@@ -272,7 +272,11 @@ static int fmu_set(Fmu *m, int vr, double value) {
     int a = VR_A[vr];
     switch (VR_KIND[vr]) {
     case K_STATE: m->y[a] = value; m->dirty = 1; return ST_OK;
-    case K_PARAM: m->P[a] = value; m->dirty = 1; return ST_OK;
+    case K_PARAM:
+        if (m->initialized && VR_FIXED[vr]) return ST_ERROR; /* a switch: before init only */
+        m->P[a] = value;
+        m->dirty = 1;
+        return ST_OK;
     case K_INPUT:
         if (m->u[a] != value) m->inputs_changed = 1;
         m->u[a] = value;

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..control import PROFILE_PARAMS, reference_kernel
+from ..control import PROFILE_PARAMS, REFERENCE_INPUTS, reference_with_inputs
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
 from .compensation import emit_compensation
@@ -47,6 +47,8 @@ class Model:
     sites: tuple[tuple[str, str], ...]  # (site name, law name)
     jacobian_pattern: np.ndarray  # (n, n + 1) uint8: dy[i] may depend on y[j] (column n: t)
     jacobian_colours: np.ndarray  # (n + 1,) group of each column in the grouped FD Jacobian
+    # signals a part declares as factor × a state or signal: (signal, source name, factor)
+    derived: tuple[tuple[codegen.Signal, str, float], ...] = ()
 
     @property
     def n_held(self) -> int:
@@ -107,7 +109,11 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     block[5] = b.table(table)
     block[6] = table.shape[1]
     o = b.params("profile", block)
-    b.reference_call = f"{b.use(reference_kernel)}(t, P, {o}, T)"
+    # the linearisation's reference inputs (feeddrive.linear), zero in a simulation
+    oi = b.param(f"inputs.{REFERENCE_INPUTS[0]}", 0.0)
+    for name in REFERENCE_INPUTS[1:]:
+        b.param(f"inputs.{name}", 0.0)
+    b.reference_call = f"{b.use(reference_with_inputs)}(t, P, {o}, {oi}, T)"
 
 
 def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
@@ -175,6 +181,10 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
 
     dist = parameters.disturbances
     load_code = emit_load(b, dist.load_force, dist.load_start, load)
+    load_aux = load_code is not None
+    # the linearisation's load-force input [N] (feeddrive.linear), zero in a simulation
+    o_load = b.param("inputs.load_force", 0.0)
+    load_code = f"P[{o_load}]" if load_code is None else f"({load_code} + P[{o_load}])"
     ripple: dict[str, str] = {}
     ripple_lines: list[str] = []
     for key, r in (("screw", dist.screw_motor_ripple), ("nut", dist.hollow_motor_ripple)):
@@ -230,7 +240,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     for site, _, _ in laws:
         b.emit(f"{b.a(site.name + '_friction')} = f_{site.name}")
     b.emit(f"{b.a('drive_force')} = f_d")
-    if load_code is not None:
+    if load_aux:
         b.emit(f"{b.a('load_force')} = {load_code}")
 
     source = codegen.module_source(b, solver_sources())
@@ -244,7 +254,8 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         tolerance_scales=tuple(b.tol_scale.get(s.name, 1.0) for s in b.states),
         module=module, source=source, drive=drive,
         sites=tuple((site.name, law.name) for site, law, _ in laws),
-        jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern))
+        jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
+        derived=tuple(b.derived))
 
 
 @functools.cache

@@ -67,6 +67,7 @@ class Builder:
     table_size: int = 0
     reference_call: str = "(0.0, 0.0, 0.0, 0.0)"
     tol_scale: dict[str, float] = field(default_factory=dict)
+    derived: list[tuple[Signal, str, float]] = field(default_factory=list)
     state_index: dict[str, int] = field(default_factory=dict)
     aux_index: dict[str, int] = field(default_factory=dict)
     param_index: dict[str, int] = field(default_factory=dict)
@@ -127,6 +128,14 @@ class Builder:
         self.aux_index[name] = len(self.aux)
         self.aux.append(Signal(name, unit, description))
         return self.aux_index[name]
+
+    def add_derived(self, name: str, unit: str, description: str, source: str,
+                    factor: float) -> None:
+        """Declare a signal that is ``factor`` times state or signal ``source`` (e.g. the
+        screw's linear speed H·ω_s), computed from the recorded run when read."""
+        if name in self.aux_index or name in self.state_index:
+            raise ValueError(f"derived signal {name!r} is already a state or signal")
+        self.derived.append((Signal(name, unit, description), source, float(factor)))
 
     def a(self, name: str) -> str:
         return f"aux[{self.aux_index[name]}]"

@@ -350,11 +350,13 @@ class Controller(_Component):
     """
 
     position_gain: float = quantity("1/s", low=0, high=1e5, low_inclusive=True)
-    velocity_gain: float = quantity("A s/rad", low=0, high=1e5, low_inclusive=True)
+    # per rad/s of the motor, or per m/s of table speed with velocity_gain_basis = "table"
+    velocity_gain: float = quantity("A s/rad", low=0, high=1e5, low_inclusive=True,
+                                    table_unit="A s/m")
     current_gain: float = quantity("V/A", low=0, high=1e5, low_inclusive=True)
     velocity_command_gain: float = quantity("rad/(V s)", low=0, high=1e6)
     velocity_integral_gain: float = quantity(
-        "A/rad", low=0, high=1e9, low_inclusive=True, default=0.0
+        "A/rad", low=0, high=1e9, low_inclusive=True, default=0.0, table_unit="A/m"
     )
     current_integral_gain: float = quantity(
         "V/(A s)", low=0, high=1e9, low_inclusive=True, default=0.0
@@ -602,6 +604,39 @@ def _check_text(key: str, text: Any, limit: int, *, lines: bool) -> None:
 def _default_controller() -> Controller:
     return Controller(position_gain=8.0, velocity_gain=45.0, current_gain=2.0,
                       velocity_command_gain=250.0)
+
+
+def unit_of(cls: type, path: str) -> str | None:
+    """The unit a parameter class declares for a dotted path below it.
+
+    Parameters
+    ----------
+    cls : type
+        A parameter component class (e.g. :class:`LuGreParameters`).
+    path : str
+        Dotted path, entries of a tuple field with ``[i]``
+        (``"positive.coulomb_force"``, ``"element_stiffness[2]"``).
+
+    Returns
+    -------
+    str or None
+        The unit of the field's metadata (``"-"`` for dimensionless), None when the path
+        names no quantity of the class.
+    """
+    import typing
+
+    for i, part in enumerate(path.split(".")):
+        name = part.split("[", 1)[0]
+        found = {f.name: f for f in fields(cls)}.get(name)
+        if found is None:
+            return None
+        hint = typing.get_type_hints(cls).get(name)
+        if isinstance(hint, type) and hasattr(hint, "__dataclass_fields__"):
+            cls = hint
+            continue
+        unit = found.metadata.get("unit")
+        return str(unit) if unit is not None and i == path.count(".") else None
+    return None
 
 
 def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:

@@ -23,7 +23,7 @@ from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .. import registry
 from .components import DriveParameters
-from .validation import ParameterError
+from .validation import ParameterError, resolved_unit
 
 
 def _is_component(tp: Any) -> bool:
@@ -163,10 +163,12 @@ def _format_value(value: Any) -> str:
 
 
 def _unit_label(obj: Any, name: str, unit: str) -> str:
-    """The unit a value is read in; a gain on the table-speed basis is per m/s, not per rad/s
-    (issue 12 item 16)."""
-    if name == "velocity_gain" and getattr(obj, "velocity_gain_basis", None) == "table":
-        return "A s/m, per table speed (velocity_gain_basis = table)"
+    """The unit a value is read in, from the field's own metadata resolved for the set's
+    ``velocity_gain_basis``: a gain on the table-speed basis is per m/s, not per rad/s
+    (issue 12 item 16, issue 23)."""
+    resolved = resolved_unit(obj, name)
+    if resolved != unit:
+        return f"{resolved}, per table speed (velocity_gain_basis = table)"
     return unit
 
 
@@ -303,7 +305,10 @@ def _new_site_class(base: Any, change: Any) -> bool:
 
 def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DriveParameters:
     """Build a parameter set.  ``extends = "NAME"`` (a preset) or ``"FILE.toml"`` (relative to
-    ``base_dir``) starts from that set; the other values replace its values."""
+    ``base_dir``) starts from that set; the other values replace its values.  A ``[fit]``
+    table (written by ``feeddrive fit``: the data, free parameters and intervals of the fit
+    that made the set) is a record, not a parameter, and is not read here."""
+    data = {k: v for k, v in data.items() if k != "fit"}
     if "extends" in data:
         parent_name = data["extends"]
         if not isinstance(parent_name, str):

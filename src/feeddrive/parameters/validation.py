@@ -93,13 +93,18 @@ def quantity(
     low_inclusive: bool = False,
     hint: str = "",
     default: Any = dataclasses.MISSING,
+    table_unit: str = "",
 ) -> Any:
     """Declare a float field in SI ``unit`` whose sensible values lie in [low, high].
 
     ``hint`` is appended to the message when a value falls outside the range, e.g.
-    "a lead of 5 looks like millimetres; give metres".
+    "a lead of 5 looks like millimetres; give metres".  ``table_unit``: the unit instead when
+    the component's ``velocity_gain_basis`` is "table" (a velocity-loop gain acting on m/s of
+    table motion rather than rad/s of the motor; :func:`resolved_unit`).
     """
     meta = {"unit": unit, "low": low, "high": high, "low_inclusive": low_inclusive, "hint": hint}
+    if table_unit:
+        meta["table_unit"] = table_unit
     if default is dataclasses.MISSING:
         return dataclasses.field(metadata=meta)
     return dataclasses.field(default=default, metadata=meta)
@@ -150,12 +155,35 @@ def check_quantity(path: str, value: object, meta: dict[str, Any]) -> float:
     return v
 
 
+def resolved_unit(obj: object, name: str) -> str:
+    """The unit field ``name`` of the dataclass ``obj`` is read in, resolved for the object's
+    ``velocity_gain_basis`` (a velocity-loop gain on the table basis is per m/s of table
+    speed, not per rad/s of the motor: a factor H ≈ 10⁻³ apart)."""
+    meta = _metadata(obj, name)
+    return _unit_in(meta, obj)
+
+
+def _metadata(obj: object, name: str) -> Any:
+    for f in dataclasses.fields(obj):  # type: ignore[arg-type]
+        if f.name == name:
+            return f.metadata
+    raise KeyError(name)
+
+
+def _unit_in(meta: Any, obj: object) -> str:
+    if meta.get("table_unit") and getattr(obj, "velocity_gain_basis", "") == "table":
+        return str(meta["table_unit"])
+    return str(meta.get("unit", ""))
+
+
 def validate(obj: object, prefix: str) -> None:
     """Check every declared field of the dataclass ``obj``; ``prefix`` names it in messages."""
     for f in dataclasses.fields(obj):  # type: ignore[arg-type]
         value = getattr(obj, f.name)
         path = f"{prefix}.{f.name}"
-        meta = f.metadata
+        meta: Any = f.metadata
+        if "table_unit" in meta:  # messages in the unit the value is read in
+            meta = {**meta, "unit": _unit_in(meta, obj)}
         if meta.get("vector"):
             if isinstance(value, str) or not isinstance(value, list | tuple):
                 raise ParameterError(path, value, f"expected a list of numbers [{meta['unit']}]")

@@ -41,6 +41,11 @@ CAPTIONS: dict[str, tuple[str, str]] = {
         "table3", "Critical creeping speed against table position, feeddrive (solid) and "
         "Table 3's measurements (dashed), with k_sa (dotted, right axis). Wang2021 Fig. 14 "
         "and Table 3: the critical speed is highest at mid-screw, where k_sa is lowest."),
+    "sensitivity_linear_band.png": (
+        "sensitivity", "Tornado chart: change of the CDFS linear band's upper edge [%] at −step "
+        "(blue) and +step (red) of each parameter, ranked by elasticity (feeddrive "
+        "sensitivity --quantity linear-band; * the halving check failed). No counterpart in "
+        "the paper."),
 }
 
 

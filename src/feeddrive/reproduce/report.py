@@ -28,6 +28,7 @@ from .beyond_section import (
     summary_text,
 )
 from .linear_section import linear_rows
+from .sensitivity_section import sensitivity_rows
 from .studies import MID, PAPER, StudySettings, write_csv
 
 
@@ -429,6 +430,8 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
          "negative-slope bands, zero-slope speeds and LuGre passivity per site. "
          + rigid_body_band(params) + ".  " + RIGID_VS_LINEAR, indicators),
         ("linear", "Linear analysis", linear_text, linear),
+        ("sensitivity", "Which parameter matters: the linear band's upper edge",
+         *sensitivity_rows(results.get("sensitivity"))),
         ("ripple", "The DDFS question: motor torque ripple", ripple_text, ripple),
         ("ripple-positions", "Torque-ripple reading at the five table positions",
          "Table 3's positions; the ripple reading has no mechanism that depends on the "

@@ -22,14 +22,15 @@ from ..control import ConstantSpeed
 from ..parameters import DriveParameters, dumps
 from ..simulate import DriveSystem, simulate
 from ..store import ResultStore, code_hash, store_key
-from . import figures, forced_study, reading_study, report, studies
+from . import figures, forced_study, reading_study, report, sensitivity_section, studies
 from .studies import MID, PAPER, StudySettings, write_csv
 
 _HERE = Path(__file__).resolve().parent
 # the code that computes the stored studies (beyond the compiled kernels)
 _STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "forced_study.py",
                   *(_HERE.parent / "analysis" / f"{name}.py"
-                    for name in ("critical", "metrics", "forced", "compensation")),
+                    for name in ("critical", "metrics", "forced", "compensation",
+                                 "sensitivity")),
                   _HERE.parent / "simulate.py", _HERE.parent / "result.py",
                   _HERE.parent / "stiffness.py", _HERE.parent / "protocol.py")
 
@@ -102,7 +103,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
         else {}
     figure_jobs = [f"readingfig-{i}" for i in range(len(forced_study.FIGURE_READINGS))] \
         if study else []
-    extra = [*(["compensation"] if study else []), *figure_jobs]
+    extra = [*(["compensation", "sensitivity"] if study else []), *figure_jobs]
     figure_studies = ["fig6", "figs9_10", "fig7", "fig8_trace"]
     names = [*jobs, *study_jobs, *forced_jobs, *extra, *figure_studies]
     found = {k: store.get(k) for k in names}
@@ -118,6 +119,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     tasks.update({k: (forced_study.run, (v,)) for k, v in forced_jobs.items()})
     if study:
         tasks["compensation"] = (_compensation_job, (params, settings))
+        tasks["sensitivity"] = (sensitivity_section.compute, (params,))
     tasks.update({k: (forced_study.reading_figures, (i, settings))
                   for i, k in enumerate(figure_jobs)})
     tasks["fig6"] = (studies.fig6, (params, settings))
@@ -171,6 +173,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     results["reading_study"] = [found[k] for k in study_jobs]
     results["forced_study"] = [row for k in forced_jobs for row in _entry(found, k)["rows"]]
     results["compensation"] = found["compensation"] if study else None
+    results["sensitivity"] = found["sensitivity"] if study else None
     results["reading_figures"] = [found[k] for k in figure_jobs]
     for name in figure_studies:
         results[name] = found[name]
@@ -191,6 +194,8 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     pngs = [figures.fig6(results["fig6"], out), figures.fig7(results["fig7"], out),
             figures.fig8(results["fig8_trace"], crit["crit-ddfs-fig8"], out),
             *figures.figs9_10(results["figs9_10"], out), figures.fig14(table3, out)]
+    tornado = sensitivity_section.figure(results["sensitivity"], out)
+    pngs += [tornado] if tornado is not None else []
     results["figures"] = [p.name for p in pngs]
     results["wall_time_s"] = time.perf_counter() - started
     results["cpu_seconds"] = cpu_seconds

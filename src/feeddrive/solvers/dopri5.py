@@ -38,17 +38,19 @@ ORDER = 5
 TABLEAU = ("C2", "C3", "C4", "C5", "A21", "A31", "A32", "A41", "A42", "A43", "A51", "A52", "A53",
            "A54", "A61", "A62", "A63", "A64", "A65", "B1", "B3", "B4", "B5", "B6", "E1", "E3",
            "E4", "E5", "E6", "E7", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
-           "STATUS_NON_FINITE")
+           "STATUS_NON_FINITE", "STATUS_STOPPED")
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1
 STATUS_STEP_UNDERFLOW = 2
 STATUS_NON_FINITE = 3
+STATUS_STOPPED = 4  # another thread asked the running call to stop (new_memory's stop slot)
 STATUS_MESSAGES = {
     STATUS_OK: "success",
     STATUS_MAX_STEPS: "maximum number of steps reached",
     STATUS_STEP_UNDERFLOW: "step size fell below its minimum",
     STATUS_NON_FINITE: "state became non-finite (NaN or Inf)",
+    STATUS_STOPPED: "stopped on request",
 }
 
 
@@ -97,8 +99,12 @@ def auxiliary_template(t_out: np.ndarray, y_out: np.ndarray, P: np.ndarray,
 
 def new_memory(n_states: int, h_init: float) -> np.ndarray:
     """The carried-over state (step size, last error, first stage) of a run that has not
-    started (:func:`integrate`)."""
-    memory = np.zeros(2 + n_states)
+    started (:func:`integrate`).  Its last two slots are a *stop request* (non-zero: the
+    call ends after its current step with STATUS_STOPPED) and the *live time* (the time [s]
+    of the last accepted step, written as the solver goes): another thread reads a long
+    call's progress and stops it while it runs (the kernels release the GIL;
+    feeddrive.simulate.Simulation.live_time and request_stop)."""
+    memory = np.zeros(4 + n_states)
     memory[:2] = (h_init, 1e-4)
     return memory
 
@@ -264,6 +270,11 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 k1[i] = k7[i]
             fresh = True
             t = t_next if last else t + h_try
+            if memory.shape[0] > 3 + n:  # the live time and stop slots (new_memory)
+                memory[memory.shape[0] - 1] = t
+                if memory[memory.shape[0] - 2] != 0.0:
+                    status = STATUS_STOPPED
+                    break
             if adaptive == 1:
                 if err == 0.0:
                     fac = 5.0

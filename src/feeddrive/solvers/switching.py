@@ -104,6 +104,7 @@ CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "DP_D1
 N_AUX = 0
 N_HELD = 1
 STATUS_OK, STATUS_MAX_STEPS, STATUS_STEP_UNDERFLOW, STATUS_NON_FINITE = 0, 1, 2, 3
+STATUS_STOPPED = 4
 _r4_fd_jacobian: Any = None
 _r4_frozen_states: Any = None
 _r4_rodas4_step: Any = None
@@ -122,8 +123,13 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
 
 
 def new_memory(n_states: int) -> np.ndarray:
-    """The carried-over state of a run that has not started (:func:`integrate_template`)."""
-    return np.zeros(MEMORY_SCALARS + n_states)
+    """The carried-over state of a run that has not started (:func:`integrate_template`).
+    Its last two slots are a *stop request* (non-zero: the call ends after its current step
+    with STATUS_STOPPED) and the *live time* (the time [s] of the last accepted step, written
+    as the solver goes): another thread reads a long call's progress and stops it while it
+    runs (the kernels release the GIL; feeddrive.simulate.Simulation.live_time and
+    request_stop)."""
+    return np.zeros(MEMORY_SCALARS + n_states + 2)
 
 
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
@@ -491,6 +497,11 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 y[i] = y_new[i]
                 f0[i] = f_new[i]
             t = t_new
+            if memory.shape[0] > MEMORY_SCALARS + n + 1:  # live time, stop (new_memory)
+                memory[memory.shape[0] - 1] = t
+                if memory[memory.shape[0] - 2] != 0.0:
+                    status = STATUS_STOPPED
+                    break
             jac_ok = False
             if steps > max_steps:
                 status = STATUS_MAX_STEPS

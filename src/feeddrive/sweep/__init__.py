@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from .design import Axis, Point, SweepConfig, load_config, parse_config
 from .executors import Estimate, SweepSummary, estimate, executor, run_sweep
-from .export import EXPORT_FORMATS, export, to_dataset, to_frame
+from .export import EXPORT_FORMATS, export, to_dataset, to_frame, to_table
 from .maps import percentiles, plot_histogram, plot_map
 from .quantities import QUANTITIES, QuantitySettings, evaluate
 from .store import StoreError, SweepStore, point_key
@@ -19,5 +19,5 @@ __all__ = [
     "EXPORT_FORMATS", "QUANTITIES", "Axis", "Estimate", "Point", "QuantitySettings",
     "StoreError", "SweepConfig", "SweepStore", "SweepSummary", "estimate", "evaluate",
     "executor", "export", "load_config", "parse_config", "percentiles", "plot_histogram",
-    "plot_map", "point_key", "run_sweep", "to_dataset", "to_frame",
+    "plot_map", "point_key", "run_sweep", "to_dataset", "to_frame", "to_table",
 ]

@@ -4,9 +4,11 @@
   drive a dimension of names), a random or Latin-hypercube design has one dimension
   ``sample`` with the axes as coordinates.  Points not computed yet are NaN.
 * :func:`to_frame`: one row per design point, engineering units in the column names
-  (``table_position [mm]``, ``critical_speed [mm/s]``), as every CSV/Parquet of feeddrive.
-* :func:`export`: ``.csv``, ``.parquet`` (the frame) or ``.nc`` (the Dataset, NetCDF via
-  scipy, SI).
+  (``table_position [mm]``, ``critical_speed [mm/s]``), as every CSV of feeddrive.
+* :func:`to_table`: the same rows and numbers as a pyarrow Table with plain names, each
+  field's unit in its metadata, as every Parquet of feeddrive.
+* :func:`export`: ``.csv`` (the frame), ``.parquet`` (the table) or ``.nc`` (the Dataset,
+  NetCDF4 with CF-1.8 attributes, SI) — docs/outputs.md.
 """
 
 from __future__ import annotations
@@ -15,17 +17,17 @@ import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 import xarray as xr
 
 from .. import units
+from ..io import arrow_table, cf_attributes, write_netcdf
 from ..outputs import atomic_path
 from .design import SPECIAL_AXES
 from .quantities import UNITS
 from .store import SweepStore
 
-__all__ = ["EXPORT_FORMATS", "export", "to_dataset", "to_frame"]
+__all__ = ["EXPORT_FORMATS", "export", "to_dataset", "to_frame", "to_table"]
 
 EXPORT_FORMATS = (".csv", ".parquet", ".nc")
 
@@ -41,6 +43,27 @@ def _si_unit(name: str, axis: dict[str, Any]) -> str:
     if axis["relative"]:
         return "1"
     return {"mm": "m", "mm/s": "m/s"}.get(axis["unit"], axis["unit"])
+
+
+# units of the per-loop values of loop-margins, named by their suffix (…_crossover_hz); dB is
+# no UDUNITS unit: a gain margin in dB is written with unit "1" and says dB in its long name
+_SUFFIX_UNITS = {"_hz": ("Hz", ""), "_deg": ("degree", ""), "_db": ("1", "in dB")}
+
+
+def _unit(name: str) -> tuple[str, str]:
+    """(SI unit, a note for the long name) of a stored value."""
+    if name in UNITS:
+        return UNITS[name], ""
+    for suffix, (unit, note) in _SUFFIX_UNITS.items():
+        if name.endswith(suffix):
+            return unit, note
+    return ("1", "1 once the point is computed") if name == "done" else ("", "")
+
+
+def _netcdf_name(name: str) -> str:
+    """A CF variable name (letters, digits, underscores): a parameter path's dots become
+    underscores (``friction.screw`` → ``friction_screw``); the path stays in ``parameter``."""
+    return name.replace(".", "_")
 
 
 def _value(v: Any) -> Any:
@@ -102,8 +125,11 @@ def to_dataset(store: SweepStore, sweep: str) -> xr.Dataset:
         if a["relative"]:
             ds[a["name"]].attrs["long_name"] = f"factor on the base value of {a['name']}"
     for name in values:
-        if name in UNITS:
-            ds[name].attrs["units"] = UNITS[name]
+        unit, note = _unit(name)
+        if unit:
+            ds[name].attrs["units"] = unit
+        if note:
+            ds[name].attrs["long_name"] = f"{name.replace('_', ' ')} ({note})"
         if ds[name].dtype == object:
             ds[name] = ds[name].fillna("").astype(str)
     ds.attrs.update({"sweep": sweep, "design": desc["design"],
@@ -112,38 +138,65 @@ def to_dataset(store: SweepStore, sweep: str) -> xr.Dataset:
     return ds
 
 
-def to_frame(store: SweepStore, sweep: str) -> pd.DataFrame:
-    """One row per design point in engineering units (see the module)."""
+def _engineering(store: SweepStore, sweep: str
+                 ) -> tuple[pd.DataFrame, dict[str, tuple[str, str]]]:
+    """The rows in engineering units, plain names; each column's (unit, description)."""
     desc, records = _records(store, sweep)
     axes = {a["name"]: a for a in desc["axes"]}
     frame = pd.DataFrame.from_records(records).set_index("index")
-    renamed = {}
+    meta: dict[str, tuple[str, str]] = {}
     for col in frame.columns:
-        unit = _si_unit(col, axes[col]) if col in axes else UNITS.get(col, "")
+        unit = _si_unit(col, axes[col]) if col in axes else _unit(col)[0]
         eng, factor = units.ENGINEERING.get(unit, (unit, 1.0))
         if factor != 1.0 and pd.api.types.is_numeric_dtype(frame[col]):
             frame[col] = frame[col] * factor
         if col in axes and axes[col]["relative"]:
-            renamed[col] = f"{col} [factor]"
-        elif eng not in ("", "1"):
-            renamed[col] = f"{col} [{eng}]"
+            meta[col] = ("factor", f"factor on the base value of {col}")
+        else:
+            meta[col] = (eng, "")
+    return frame, meta
+
+
+def to_frame(store: SweepStore, sweep: str) -> pd.DataFrame:
+    """One row per design point in engineering units (see the module)."""
+    frame, meta = _engineering(store, sweep)
+    renamed = {col: f"{col} [{unit}]" for col, (unit, _) in meta.items()
+               if unit not in ("", "1")}
     return frame.rename(columns=renamed)
 
 
+def to_table(store: SweepStore, sweep: str) -> Any:
+    """One row per design point as a pyarrow Table: the numbers of :func:`to_frame`, plain
+    names, each field's unit in its metadata (a relative axis: unit ``1``, long name 'factor
+    on the base value of …')."""
+    frame, meta = _engineering(store, sweep)
+    columns = {"index": (frame.index.to_numpy(), "1", "design point number")}
+    for col, (unit, description) in meta.items():
+        unit = "1" if unit in ("", "factor") else unit
+        columns[str(col)] = (frame[col].to_numpy(), unit, description)
+    return arrow_table(columns, {"sweep": sweep})
+
+
 def export(store: SweepStore, sweep: str, path: str | Path) -> Path:
+    """Write the sweep to ``path``; the format follows the extension (see the module)."""
     p = Path(path)
     ext = p.suffix.lower()
     if ext not in (".nc", ".parquet", ".csv"):
         raise ValueError(f"{p}: unknown extension; expected one of {EXPORT_FORMATS}")
-    with atomic_path(p) as tmp:
+    with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
         if ext == ".nc":
             ds = to_dataset(store, sweep)
-            for name in ds.data_vars:
-                if ds[name].dtype == np.int64:
-                    ds[name] = ds[name].astype(np.int32)  # NetCDF3 has no 64-bit integers
-            ds.to_netcdf(tmp, engine="scipy")
+            dotted = [str(n) for n in [*ds.coords, *ds.data_vars] if "." in str(n)]
+            for name in dotted:
+                ds[name].attrs["parameter"] = name
+            ds = ds.rename({name: _netcdf_name(name) for name in dotted})
+            write_netcdf(cf_attributes(ds, title=f"feeddrive sweep {sweep}: "
+                                       f"{ds.attrs['design']} design, {ds.attrs['quantity']}",
+                                       action=f"sweep export of {sweep}"), tmp)
         elif ext == ".parquet":
-            to_frame(store, sweep).to_parquet(tmp)
+            import pyarrow.parquet as pq
+
+            pq.write_table(to_table(store, sweep), tmp)
         else:
             to_frame(store, sweep).to_csv(tmp, float_format="%.10g")
     return p

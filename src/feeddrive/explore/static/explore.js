@@ -5,8 +5,15 @@
 
 const $ = (id) => document.getElementById(id);
 const COLORS = { screw: "#1f6feb", nut: "#8250df", guide: "#bf8700" };
+// the mode bar stands vertically at the right, beside the title rather than over it; its
+// camera button downloads the figure (PNG, named after the plot)
 const PLOT_CONFIG = { responsive: true, displaylogo: false,
                       modeBarButtonsToRemove: ["lasso2d", "select2d"] };
+function plotConfig(name) {
+  return { ...PLOT_CONFIG, toImageButtonOptions: { format: "png", filename: `feeddrive-${name}`,
+                                                   scale: 2 } };
+}
+const DEFAULT_SIGNAL = "following_error";
 const GROUPS = [
   ["Drive and command", ["preset", "drive", "table_speed", "nut_speed", "position", "duration"]],
   ["Knobs", ["position_gain", "velocity_gain", "velocity_integral_gain", "friction_scale",
@@ -17,7 +24,7 @@ const FILE_BASE = "__params__";
 const state = {
   info: null, fields: {}, params: null, baseName: null, preset: "wang2021",
   checkSeq: 0, runSeq: 0, checkTimer: null, simJob: null, linJob: null, critJob: null,
-  lastRun: null,
+  lastRun: null, runs: [], signal: DEFAULT_SIGNAL, measured: null, units: {},
 };
 
 // ------------------------------------------------------------------ plumbing
@@ -158,7 +165,17 @@ function fill(settings) {
   presetOptions();
 }
 
+function showUnits(units) {
+  if (!units) return;
+  state.units = units;
+  for (const [name, unit] of Object.entries(units)) {
+    const span = document.querySelector(`#row-${name} .unit`);
+    if (span) span.textContent = unit ? `[${unit}]` : "";
+  }
+}
+
 function showMessages(result) {
+  showUnits(result.units);
   const errors = result.errors || {};
   const warnings = result.warnings || {};
   for (const name of Object.keys(state.fields)) {
@@ -222,7 +239,9 @@ function showProgress(box, job) {
   const bar = box.querySelector(".bar");
   const p = job.progress;
   let fraction = null;
-  if (job.kind === "simulate") {
+  if (job.kind === "simulate" && p.done > 0 && p.total > 0) {
+    fraction = Math.min(1, p.done / p.total);  // simulated time reached, after each chunk
+  } else if (job.kind === "simulate") {
     if (job.expected_s) fraction = Math.min(0.97, job.elapsed_s / job.expected_s);
   } else if (p.total > 0) {
     fraction = Math.min(1, p.done / p.total);
@@ -285,6 +304,7 @@ async function run() {
   state.simJob = null;
   if (job.state === "done") {
     renderRun(job.result);
+    addRun(job.result, settings);
     const shown = (performance.now() - clicked) / 1000;
     $("verdict").dataset.shownAfterS = shown.toFixed(3);
     status(`shown ${shown.toFixed(2)} s after the click (solver ${
@@ -293,7 +313,7 @@ async function run() {
   } else if (job.state === "failed") {
     const box = job.field ? $(`msg-${job.field}`) : $("msg-run");
     box.textContent = job.error;
-    setVerdict(null, "the run failed");
+    clearRun(`the run failed: ${job.error}`);
     status("the run failed");
   } else {
     status("run cancelled");
@@ -313,7 +333,22 @@ async function runLinear(settings, seq) {
     $("msg-linear").textContent = `linear analysis: ${job.error}`;
     Plotly.purge($("plot-band"));
     Plotly.purge($("plot-poles"));
+    Plotly.purge($("plot-bode"));
   }
+}
+
+function clearRun(text) {
+  // a failed run's page shows no earlier run's results under its message
+  state.lastRun = null;
+  setVerdict(null, text);
+  $("run-facts").textContent = "";
+  $("linear-facts").textContent = "";
+  $("settings-diff").textContent = "";
+  for (const id of ["plot-speed", "plot-friction", "plot-signal", "plot-band", "plot-poles",
+                    "plot-bode"]) {
+    Plotly.purge($(id));
+  }
+  for (const id of ["download-csv", "download-mat"]) $(id).hidden = true;
 }
 
 function setVerdict(verdict, text) {
@@ -341,7 +376,8 @@ function setVerdict(verdict, text) {
 function layout(title, xTitle, yTitle, extra = {}) {
   return {
     title: { text: title, font: { size: 13 } },
-    margin: { l: 62, r: 15, t: 38, b: 58 },
+    margin: { l: 62, r: 40, t: 38, b: 58 },
+    modebar: { orientation: "v" },
     xaxis: { title: { text: xTitle }, zeroline: false, ...(extra.xaxis || {}) },
     yaxis: { title: { text: yTitle }, ...(extra.yaxis || {}) },
     legend: { orientation: "h", y: -0.28, font: { size: 11 } },
@@ -381,9 +417,15 @@ function renderRun(res) {
                   type: "scatter", mode: "lines", visible: "legendonly",
                   line: { color: COLORS.nut, width: 1 }, hovertemplate: hover("hollow") });
   }
+  if (state.measured) {
+    traces.push({ x: state.measured.time_s, y: state.measured.speed_mm_s, type: "scatter",
+                  mode: "lines", name: `measured (${state.measured.name})`,
+                  line: { color: "#1a7f37", width: 1.2 },
+                  hovertemplate: hover("measured") });
+  }
   const l = layout(`table speed: ${what}`, "time [s]", "speed [mm/s]",
                    { uirevision: "speed" });
-  Plotly.react($("plot-speed"), traces, l, PLOT_CONFIG);
+  Plotly.react($("plot-speed"), traces, l, plotConfig("table-speed"));
   renderFriction(res.friction);
 }
 
@@ -415,7 +457,7 @@ function renderFriction(fr) {
   Plotly.react($("plot-friction"), traces,
                layout("steady friction (shaded: where it falls with speed)",
                       "sliding speed [mm/s]", "friction force [N]",
-                      { shapes, uirevision: "friction" }), PLOT_CONFIG);
+                      { shapes, uirevision: "friction" }), plotConfig("friction"));
 }
 
 function renderLinear(res) {
@@ -442,17 +484,25 @@ function renderLinear(res) {
                       { xaxis: { type: "log" }, shapes, uirevision: "band",
                         annotations: [{ x: Math.log10(v), y: 1, xref: "x", yref: "paper",
                                         text: "this run", showarrow: false, yanchor: "bottom",
-                                        font: { size: 10 } }] }), PLOT_CONFIG);
-  const poles = res.poles;
+                                        font: { size: 10 } }] }), plotConfig("band"));
+  const rigid = res.poles.filter((p) => p.kind === "rigid-body");
+  const poles = res.poles.filter((p) => p.kind !== "rigid-body");
   const xs = poles.map((p) => p.real_1_per_s);
   const ys = poles.map((p) => p.frequency_hz * Math.sign(p.imag_rad_per_s || 0));
   const slow = poles.filter((p) => p.frequency_hz < 200).map((p) => p.real_1_per_s);
   const lo = Math.min(...(slow.length ? slow : xs));
   const hi = Math.max(...xs.filter((x) => x >= lo), 0);
   const pad = 0.08 * (hi - lo || 1);
-  Plotly.react($("plot-poles"), [{
+  const rigidTrace = {
+    x: rigid.map(() => 0), y: rigid.map(() => 0), type: "scatter", mode: "markers",
+    name: `rigid-body (free motion, ${rigid.length})`,
+    marker: { size: 11, symbol: "circle-open", color: "#888" },
+    hovertemplate: "rigid-body pole: a free motion no loop holds<br>(an eigenvalue 0; " +
+      "no damping ratio)<extra></extra>",
+  };
+  Plotly.react($("plot-poles"), [...(rigid.length ? [rigidTrace] : []), {
     x: xs, y: poles.map((p) => p.imag_rad_per_s / (2 * Math.PI)), type: "scatter",
-    mode: "markers", name: "poles",
+    mode: "markers", name: "poles", showlegend: rigid.length > 0,
     marker: { size: 9, symbol: "x", color: xs.map((x) => (x > 0 ? "#b42318" : "#1f6feb")) },
     customdata: poles.map((p) => [p.frequency_hz, p.damping_ratio]),
     hovertemplate: "Re = %{x:.4g} 1/s<br>Im/2π = %{y:.4g} Hz<br>|s|/2π = " +
@@ -461,15 +511,184 @@ function renderLinear(res) {
              "real part [1/s]", "imaginary part / 2π [Hz]",
              { xaxis: { range: [lo - pad, hi + pad] }, uirevision: `poles-${ys.length}`,
                shapes: [{ type: "line", xref: "x", yref: "paper", x0: 0, x1: 0, y0: 0, y1: 1,
-                          line: { color: "#888", width: 1 } }] }), PLOT_CONFIG);
+                          line: { color: "#888", width: 1 } }] }), plotConfig("poles"));
+  renderBode(res.bode || []);
   const d = res.least_damped_mode;
   const loops = res.loops.map((lp) => `${lp.loop}: phase margin ` +
     `${fmt(lp.phase_margin_deg, 3, "°")}, gain margin ${fmt(lp.gain_margin_db, 3, "dB")}`)
     .join(" · ");
+  const notes = (res.notes || []).join(" · ");
   $("linear-facts").textContent =
     `Steady sliding at ${fmt(res.table_speed_mm_s)} mm/s is linearly ` +
     `${res.inside_band ? "UNSTABLE (inside the band)" : "stable"}; least-damped mode ` +
-    `${fmt(d.frequency_hz, 3)} Hz, ζ = ${fmt(d.damping_ratio, 3)} · ${loops}`;
+    `${fmt(d.frequency_hz, 3)} Hz, ζ = ${fmt(d.damping_ratio, 3)} · ${loops}` +
+    (rigid.length ? ` · ${rigid.length} rigid-body pole(s), not a mode` : "") +
+    (notes ? ` · ${notes}` : "");
+}
+
+
+// ------------------------------------------------------------------ loops: Bode plot
+
+function renderBode(bode) {
+  if (!bode.length) {
+    Plotly.purge($("plot-bode"));
+    return;
+  }
+  const colors = ["#1f6feb", "#bf8700", "#8250df", "#1a7f37"];
+  const traces = [];
+  const shapes = [
+    { type: "line", xref: "paper", yref: "y", x0: 0, x1: 1, y0: 0, y1: 0,
+      line: { color: "#1d2330", width: 1 } },
+    { type: "line", xref: "paper", yref: "y2", x0: 0, x1: 1, y0: -180, y1: -180,
+      line: { color: "#1d2330", width: 1 } },
+  ];
+  const annotations = [];
+  bode.forEach((lp, k) => {
+    const color = colors[k % colors.length];
+    const pm = lp.phase_margin_deg === null ? "" : `, PM ${fmt(lp.phase_margin_deg, 3)}°`;
+    const gm = lp.gain_margin_db === null ? "" : `, GM ${fmt(lp.gain_margin_db, 3)} dB`;
+    traces.push({ x: lp.frequency_hz, y: lp.magnitude_db, type: "scatter", mode: "lines",
+                  name: `${lp.loop}${pm}${gm}`, line: { color, width: 1.5 }, yaxis: "y",
+                  legendgroup: lp.loop,
+                  hovertemplate: `${lp.loop}: %{x:.4g} Hz, |L| = %{y:.4g} dB<extra></extra>` });
+    traces.push({ x: lp.frequency_hz, y: lp.phase_deg, type: "scatter", mode: "lines",
+                  name: lp.loop, showlegend: false, line: { color, width: 1.5 }, yaxis: "y2",
+                  legendgroup: lp.loop,
+                  hovertemplate: `${lp.loop}: %{x:.4g} Hz, ∠L = %{y:.4g}°<extra></extra>` });
+    if (lp.crossover_hz !== null) {
+      const fc = lp.crossover_hz;
+      shapes.push({ type: "line", xref: "x", yref: "paper", x0: fc, x1: fc, y0: 0, y1: 1,
+                    line: { color, width: 1, dash: "dot" } });
+      traces.push({ x: [fc], y: [0], type: "scatter", mode: "markers", yaxis: "y",
+                    showlegend: false, marker: { color, size: 8 }, legendgroup: lp.loop,
+                    hovertemplate: `${lp.loop}: crossover ${fmt(fc, 4)} Hz<extra></extra>` });
+      if (lp.phase_margin_deg !== null) {
+        annotations.push({ x: Math.log10(fc), y: -180 + lp.phase_margin_deg, xref: "x",
+                           yref: "y2", ax: 0, ay: 0, text: `PM ${fmt(lp.phase_margin_deg, 3)}°`,
+                           showarrow: false, xanchor: "left", font: { size: 10, color } });
+      }
+    }
+  });
+  const l = layout("loop gains L(jω) (loop broken at its command; crossover dotted)",
+                   "frequency [Hz]", "|L| [dB]", { shapes, annotations, uirevision: "bode" });
+  l.xaxis.type = "log";
+  l.xaxis.anchor = "y2";
+  l.yaxis = { title: { text: "|L| [dB]" }, domain: [0.55, 1] };
+  l.yaxis2 = { title: { text: "∠L [°]" }, domain: [0, 0.45] };
+  l.legend = { orientation: "h", y: -0.18, font: { size: 11 } };
+  Plotly.react($("plot-bode"), traces, l, plotConfig("bode"));
+}
+
+// ------------------------------------------------------------------ runs: signals, A/B
+
+function runLabel(run) {
+  const s = run.settings;
+  return `${run.id}: ${String(s.drive).toUpperCase()} ${s.table_speed} mm/s, ${s.duration} s` +
+    (s.preset ? ` (${s.preset})` : "");
+}
+
+function addRun(res, settings) {
+  if (!res.run_id) return;
+  const run = { id: res.run_id, settings: { ...settings } };
+  delete run.settings.params;
+  state.runs = [run, ...state.runs.filter((r) => r.id !== run.id)].slice(0, 10);
+  $("download-csv").href = `/api/runs/${run.id}/data.csv`;
+  $("download-mat").href = `/api/runs/${run.id}/data.mat`;
+  $("download-csv").hidden = false;
+  $("download-mat").hidden = false;
+  const compare = $("compare");
+  const keep = compare.value;
+  compare.textContent = "";
+  compare.add(new Option("(no other run)", ""));
+  for (const r of state.runs.slice(1)) compare.add(new Option(runLabel(r), r.id));
+  compare.value = [...compare.options].some((o) => o.value === keep) ? keep : "";
+  compare.disabled = state.runs.length < 2;
+  loadSignals(run.id);
+}
+
+async function loadSignals(id) {
+  const r = await api("GET", `/api/runs/${id}/signals`);
+  if (r.status !== 200 || !state.runs.length || state.runs[0].id !== id) return;
+  const select = $("signal");
+  select.textContent = "";
+  for (const sig of r.data.signals) {
+    select.add(new Option(`${sig.name} [${sig.unit}] — ${sig.label}`, sig.name));
+  }
+  const names = r.data.signals.map((x) => x.name);
+  select.value = names.includes(state.signal) ? state.signal : names[0];
+  state.signal = select.value;
+  select.disabled = false;
+  renderSignal();
+}
+
+function settingsDiff(a, b) {
+  const rows = [];
+  for (const key of new Set([...Object.keys(a), ...Object.keys(b)])) {
+    if (String(a[key] ?? "") !== String(b[key] ?? "")) {
+      const f = state.fields[key];
+      const unit = state.units[key] || (f && f.unit) || "";
+      rows.push(`${f ? f.label : key}: A ${a[key] ?? "—"} → B ${b[key] ?? "—"}` +
+                (unit ? ` [${unit}]` : ""));
+    }
+  }
+  return rows;
+}
+
+async function renderSignal() {
+  const name = $("signal").value;
+  if (!name || !state.runs.length) return;
+  state.signal = name;
+  const a = state.runs[0];
+  const bId = $("compare").value;
+  const b = state.runs.find((r) => r.id === bId);
+  const [ra, rb] = await Promise.all([
+    api("GET", `/api/runs/${a.id}/signal?name=${encodeURIComponent(name)}`),
+    b ? api("GET", `/api/runs/${b.id}/signal?name=${encodeURIComponent(name)}`) : null,
+  ]);
+  if (ra.status !== 200 || $("signal").value !== name) return;
+  const sig = ra.data;
+  const hover = (who) => `${who}: t = %{x:.4f} s<br>${name} = %{y:.5g} ${sig.unit}<extra></extra>`;
+  const traces = [{ x: sig.time_s, y: sig.values, type: "scatter", mode: "lines",
+                    name: `A: ${runLabel(a)}`, line: { color: "#1f6feb", width: 1.4 },
+                    hovertemplate: hover("A") }];
+  const diff = $("settings-diff");
+  diff.textContent = "";
+  if (b && rb && rb.status === 200) {
+    traces.push({ x: rb.data.time_s, y: rb.data.values, type: "scatter", mode: "lines",
+                  name: `B: ${runLabel(b)}`, line: { color: "#b42318", width: 1.2, dash: "dash" },
+                  hovertemplate: hover("B") });
+    const rows = settingsDiff(a.settings, b.settings);
+    diff.textContent = rows.length ? `A/B settings: ${rows.join(" · ")}`
+      : "A/B settings: the same";
+  } else if (b && rb) {
+    diff.textContent = `run B: ${rb.data.error || "not available"}`;
+  }
+  const m = state.measured;
+  if (m && (name === "table_speed" || name === "table_position")) {
+    traces.push({ x: m.time_s, y: name === "table_speed" ? m.speed_mm_s : m.position_mm,
+                  type: "scatter", mode: "lines", name: `measured (${m.name})`,
+                  line: { color: "#1a7f37", width: 1.2 }, hovertemplate: hover("measured") });
+  }
+  Plotly.react($("plot-signal"), traces,
+               layout(`${sig.label} [${sig.unit}]`, "time [s]", `${name} [${sig.unit}]`,
+                      { uirevision: `signal-${name}` }), plotConfig(`signal-${name}`));
+  $("plot-signal").dataset.signal = name;
+  $("plot-signal").dataset.traces = String(traces.length);
+}
+
+async function loadMeasured(file) {
+  $("msg-measured").textContent = "";
+  const text = await file.text();
+  const r = await api("POST", "/api/measured", { csv: text, name: file.name });
+  if (r.status !== 200) {
+    $("msg-measured").textContent = r.data.error || `refused (${r.status})`;
+    return;
+  }
+  state.measured = r.data;
+  $("measured-clear").hidden = false;
+  status(`measured ${r.data.name}: ${r.data.samples} samples (speed from ${r.data.speed_from})`);
+  if (state.lastRun) renderRun(state.lastRun);
+  renderSignal();
 }
 
 // ------------------------------------------------------------------ critical speed
@@ -608,6 +827,20 @@ async function start() {
     e.target.value = "";
   });
   $("copy-link").addEventListener("click", copyLink);
+  $("signal").addEventListener("change", renderSignal);
+  $("compare").addEventListener("change", renderSignal);
+  $("measured-file").addEventListener("change", (e) => {
+    const file = e.target.files[0];
+    if (file) loadMeasured(file);
+    e.target.value = "";
+  });
+  $("measured-clear").addEventListener("click", () => {
+    state.measured = null;
+    $("measured-clear").hidden = true;
+    if (state.lastRun) renderRun(state.lastRun);
+    renderSignal();
+  });
+  showUnits(info.units);
   document.body.dataset.ready = "yes";
   if (Object.keys(first.data.errors || {}).length === 0) run();
 }

@@ -223,6 +223,9 @@ class BallScrewDrive(Mechanism):
         b.add_aux("equivalent_stiffness", "N/m", "K_eq at the table position")
         b.add_aux("nut_position_reference", "m", "commanded nut position (linear)")
         b.add_aux("nut_speed_reference", "m/s", "commanded nut speed (linear)")
+        H = self.params.screw.transmission_ratio
+        b.add_derived("screw_linear_speed", "m/s", "screw speed × H", "screw_speed", H)
+        b.add_derived("nut_linear_speed", "m/s", "nut speed × H", "nut_speed", H)
 
     def emit(self, b: Builder, m: Mechanics) -> None:
         from ..disturbances import harmonics

@@ -155,6 +155,22 @@ class Mechanism:
         """
         return {"table_position": ("table_speed", table_speed)}
 
+    def motor_output(self, axis: str) -> tuple[str, str]:
+        """Where the motor of ``axis`` turns current into torque or force.
+
+        Parameters
+        ----------
+        axis : str
+            A controller axis of this drive.
+
+        Returns
+        -------
+        tuple of (str, str)
+            The model's parameter slot of its torque (or force) constant, and the name of
+            the output ``constant × current`` in a linear model.
+        """
+        return f"{axis}_motor.torque_constant", f"{axis}_motor_torque"
+
     def held(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
         """What this drive holds still (the CDFS's locked nut).
 

@@ -64,6 +64,21 @@ class LinearMotorDrive(Mechanism):
         b.param("motor.inductance", lm.inductance)
         b.param("motor.resistance", lm.resistance)
 
+    def motor_output(self, axis: str) -> tuple[str, str]:
+        """The forcer's force constant and the motor force [N].
+
+        Parameters
+        ----------
+        axis : str
+            The drive's one axis (``"motor"``).
+
+        Returns
+        -------
+        tuple of (str, str)
+            Parameter slot and output name.
+        """
+        return "motor.force_constant", "motor_force"
+
     def motors(self, b: Builder) -> None:
         b.state("motor_current", "A", "linear motor current", "current")
 

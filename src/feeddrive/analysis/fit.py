@@ -1,0 +1,1008 @@
+"""Fit a whole drive to measured time traces, with uncertainty.  SI units inside.
+
+Output-error least squares (``scipy.optimize.least_squares``, trust-region reflective):
+each experiment (a trace file) is simulated from rest with its own reference, taken from
+the file's command columns (``table_speed_reference``/``command_speed`` and, for the DDFS,
+``nut_speed_reference``) or given as a profile, and every measured signal (table position
+or speed, motor current or torque) is compared sample by sample with the simulation,
+interpolated onto the measured times.
+
+Free parameters are addressed by their dotted path (``controller.velocity_integral_gain``),
+as ``calibrate --unknown`` and sweep axes address them
+(:meth:`~feeddrive.parameters.DriveParameters.replace_path`); they are fitted as factors on
+their start value, bounded by the parameter's declared plausible range
+(:func:`~feeddrive.parameters.validation.quantity`) unless bounds are given.
+
+Weights.  Each signal of each experiment is divided by its noise level σ estimated from the
+data alone, without the model: the robust (median absolute deviation) scale of its second
+differences / √6 (white noise: var Δ²e = 6σ²), but never below the record's resolution
+q/√12 (q the smallest step between samples: encoder or interferometer quantisation, or the
+printed digits).  ``weights`` multiply that.  With the model right, the weighted residual
+then has rms ≈ 1; the *residual check* compares each signal's residual rms with its σ and
+refuses to call any parameter determined when a ratio exceeds :data:`MAX_RESIDUAL_RATIO`.
+
+Uncertainty.  Covariance s²(JᵀJ)⁻¹ (s² = SSR/dof) from the Jacobian at the optimum (forward
+differences, each column one batch of simulations, run in parallel through the sweep
+executors when asked), correlation matrix, the condition number of J with columns scaled by
+the parameter values, and the poorly determined combinations: the right singular vectors
+whose singular value is below 1/:data:`MAX_CONDITION` of the largest.  A parameter whose
+linear interval is not credible (half-width above :data:`PROFILE_ABOVE` of its value, or
+reaching a bound) gets a profile-likelihood interval: it is fixed on a grid and the others
+refitted; the interval keeps the values whose SSR stays below SSR·(1 + F(1, dof)/dof).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import dataclasses
+import math
+import time as _time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import stats
+from scipy.optimize import least_squares
+
+from ..parameters import DriveParameters, ParameterError, dumps
+from ..parameters.toml_io import toml_comment, toml_string
+from .identification import _correlation, _covariance, noise_level
+
+__all__ = ["MEASURABLE", "Experiment", "FitError", "FitResult", "ParameterEstimate",
+           "fit_drive", "free_parameter_bounds", "noise_level", "read_experiment"]
+
+#: signals a trace may carry: name → (dimension, default unit, header aliases)
+MEASURABLE: dict[str, tuple[str, str, tuple[str, ...]]] = {
+    "table_position": ("length", "mm", ("table_position", "position")),
+    "table_speed": ("speed", "mm/s", ("table_speed",)),
+    "screw_current": ("current", "A", ("screw_current", "screw_motor_current", "current")),
+    "nut_current": ("current", "A", ("nut_current", "hollow_motor_current")),
+    "screw_torque": ("torque", "N m", ("screw_torque", "screw_motor_torque", "torque")),
+    "motor_current": ("current", "A", ("motor_current",)),
+}
+#: a residual rms above this multiple of the data's own noise level: a poor fit
+MAX_RESIDUAL_RATIO = 2.0
+#: condition number of the scaled Jacobian above which a combination is poorly determined
+MAX_CONDITION = 1e3
+#: a linear 95 % half-width above this fraction of the value is not trusted: profile instead
+PROFILE_ABOVE = 0.25
+#: relative half-width above which a parameter is reported poorly determined
+MAX_RELATIVE_HALF_WIDTH = 0.5
+#: relative forward-difference step of the Jacobian
+JACOBIAN_STEP = 1e-3
+
+_TORQUE_UNITS = {"N m": 1.0, "Nm": 1.0, "N·m": 1.0, "mN m": 1e-3}
+
+
+class FitError(ValueError):
+    """A fit was refused before it started (bad path, unusable trace, no overlap …)."""
+
+
+# ------------------------------------------------------------------ experiments
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One measured trace: sample times [s] from the start of the record (the drive at
+    rest at 0), measured signals (SI) and the reference the drive followed."""
+
+    source: str
+    time: np.ndarray
+    signals: Mapping[str, np.ndarray]
+    reference_time: np.ndarray  # uniform grid from 0 [s]
+    table_speed: np.ndarray  # [m/s] commanded table speed on reference_time
+    nut_speed: np.ndarray | None = None  # [m/s]
+    noise: Mapping[str, float] = field(default_factory=dict)  # σ per signal (SI)
+
+    @property
+    def duration(self) -> float:
+        return float(self.time[-1])
+
+    @property
+    def span(self) -> float:
+        """Length of the record [s] (its first sample may come after the start)."""
+        return float(self.time[-1] - self.time[0])
+
+    def profile(self) -> Any:
+        from ..control import SampledSpeed
+
+        return SampledSpeed(time=self.reference_time, table_speed=self.table_speed,
+                            nut_speed=self.nut_speed)
+
+    def direction(self) -> set[int]:
+        """Signs of the commanded table speed (+1, −1) during the record."""
+        v = self.table_speed
+        out = set()
+        if np.any(v > 1e-12):
+            out.add(1)
+        if np.any(v < -1e-12):
+            out.add(-1)
+        return out
+
+
+def _uniform_reference(t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The command on a uniform grid from 0 (the record's median step)."""
+    dt = float(np.median(np.diff(t)))
+    n = int(math.floor(t[-1] / dt + 1e-9)) + 1
+    grid = np.arange(n + 1) * dt
+    vv = np.interp(grid, t, v, left=v[0], right=v[-1])
+    return grid, vv
+
+
+def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
+                    command_speed: float | None = None,
+                    profile: tuple[np.ndarray, np.ndarray] | None = None,
+                    torque_constant: float | None = None,
+                    record_start: float = 0.0) -> Experiment:
+    """Read one trace file (docs/measured-data.md rules; ``simulate --output X.csv`` files).
+
+    ``signals``: the measured signals to fit (:data:`MEASURABLE` names); default every one
+    found among table position and motor current/torque.  The reference: ``profile`` (time
+    [s], table speed [m/s], on the record's clock), else ``command_speed`` [m/s] (constant,
+    after a 0.1-s ramp as ``simulate`` does), else the file's command column.  The record's
+    first sample is taken as t = 0 with the drive at rest, or, with ``record_start`` [s]
+    (``command_speed`` only), as that long after the start from rest (a record of steady
+    sliding).  ``torque_constant`` [N m/A] turns a measured torque into the screw current
+    the model has.
+    """
+    from ..measured_io import COMMAND_COLUMNS, check_increasing, read_csv_table
+
+    table = read_csv_table(path, sep=None)
+    src = table.source
+    if len(table) < 16:
+        raise FitError(f"{src}: {len(table)} data rows; a trace needs at least 16")
+    time_col = next((c for c in ("time",) if table.has(c)), None)
+    if time_col is None:
+        raise table._missing(["time"])
+    t_raw, _, _ = table.quantity(["time"], "time", unit=None, default_unit="s")
+    check_increasing(table, t_raw, "time")
+    t0 = float(t_raw[0])
+    if not (math.isfinite(record_start) and record_start >= 0):
+        raise FitError(f"--record-start {record_start!r}: expected a time ≥ 0 [s]")
+    if record_start > 0 and command_speed is None:
+        raise FitError(f"--record-start {record_start:g}: needs --command-speed (the reference "
+                       "before the record is otherwise unknown)")
+    t = t_raw - t0 + record_start
+    wanted = list(signals) if signals else ["table_position", "screw_current",
+                                            "screw_torque", "motor_current"]
+    for name in wanted:
+        if name not in MEASURABLE:
+            raise FitError(f"--signal {name!r}: not a measurable signal; expected one of "
+                           f"{', '.join(MEASURABLE)}")
+    measured: dict[str, np.ndarray] = {}
+    for name in wanted:
+        dim, default, aliases = MEASURABLE[name]
+        col = next((a for a in aliases if table.has(a)), None)
+        if col is None:
+            if signals:
+                raise FitError(f"{src}: no column for signal {name!r} (looked for "
+                               f"{', '.join(aliases)}; columns: {', '.join(table.names)})")
+            continue
+        if dim == "torque":
+            i = table.find(col)
+            unit = table.units[i] if i is not None and table.units[i] else default
+            if unit not in _TORQUE_UNITS:
+                raise FitError(f"{src}: column {col!r}: unit {unit!r} is not a torque unit; "
+                               f"expected one of {', '.join(_TORQUE_UNITS)}")
+            if not torque_constant:
+                raise FitError(f"{src}: column {col!r}: a torque needs the motor torque "
+                               "constant to compare with the model's current")
+            values = table.numbers(col) * _TORQUE_UNITS[unit] / torque_constant
+            name = "screw_current"
+        else:
+            values, _, _ = table.quantity([col], dim, unit=None, default_unit=default)
+        if float(np.ptp(values)) == 0.0:
+            if signals:
+                raise FitError(f"{src}: signal {name!r} (column {col!r}) is constant: no "
+                               "usable information")
+            continue
+        measured[name] = values
+    if not measured:
+        raise FitError(f"{src}: no usable measured signal (looked for "
+                       f"{', '.join(wanted)}; columns: {', '.join(table.names)})")
+    nut = None
+    if profile is not None:
+        pt, pv = (np.asarray(a, dtype=float) for a in profile)
+        if pt.size < 2 or pt[0] > t_raw[0] + 1e-9 or pt[-1] < t_raw[-1] - 1e-9:
+            raise FitError(f"{src}: times {t_raw[0]:g} … {t_raw[-1]:g} s are not covered by "
+                           f"the profile's {pt[0]:g} … {pt[-1]:g} s (non-overlapping times)")
+        ref_t, ref_v = _uniform_reference(t, np.interp(t_raw, pt, pv))
+    elif command_speed is not None:
+        ref_t = np.arange(int(math.ceil(t[-1] / 1e-3)) + 2) * 1e-3
+        ref_v = float(command_speed) * np.clip(ref_t / 0.1, 0.0, 1.0)
+    else:
+        col = next((c for c in COMMAND_COLUMNS if table.has(c)), None)
+        if col is None:
+            raise FitError(f"{src}: no command column ({', '.join(COMMAND_COLUMNS)}): give the "
+                           "reference (--command-speed or --profile)")
+        cmd, _, _ = table.quantity([col], "speed", unit=None, default_unit="mm/s")
+        ref_t, ref_v = _uniform_reference(t, cmd)
+        if table.has("nut_speed_reference"):
+            ncmd, _, _ = table.quantity(["nut_speed_reference"], "speed", unit=None,
+                                        default_unit="mm/s")
+            if np.any(ncmd != 0):
+                nut = np.interp(ref_t, t, ncmd)
+    if not np.any(ref_v != 0.0):
+        raise FitError(f"{src}: the command speed is zero throughout: nothing to fit")
+    return Experiment(source=src, time=t, signals=measured, reference_time=ref_t,
+                      table_speed=ref_v, nut_speed=nut,
+                      noise={k: noise_level(v) for k, v in measured.items()})
+
+
+# ------------------------------------------------------------------ parameters
+
+
+def _field_meta(params: DriveParameters, path: str) -> tuple[float, dict[str, Any]]:
+    """(current value, metadata) of a numeric parameter ``path``; one-line refusals."""
+    obj: Any = params
+    parts = path.split(".")
+    for k, part in enumerate(parts):
+        names = {f.name: f for f in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) \
+            else {}
+        if part not in names:
+            where = ".".join(parts[:k]) or "the parameter set"
+            raise FitError(f"--free {path}: unknown parameter ({part!r} is not a field of "
+                           f"{where})")
+        f = names[part]
+        obj = getattr(obj, part)
+        if k == len(parts) - 1:
+            if obj is None or dataclasses.is_dataclass(obj) or isinstance(obj, bool) or \
+                    not isinstance(obj, int | float) or "unit" not in f.metadata:
+                raise FitError(f"--free {path}: not a numeric parameter")
+            return float(obj), dict(f.metadata)
+        if obj is None:
+            raise FitError(f"--free {path}: {'.'.join(parts[:k + 1])} is not set in this "
+                           "parameter set")
+    raise FitError(f"--free {path}: not a numeric parameter")
+
+
+def free_parameter_bounds(params: DriveParameters, path: str) -> tuple[float, float]:
+    """The declared plausible range [SI] of parameter ``path``."""
+    _, meta = _field_meta(params, path)
+    return float(meta["low"]), float(meta["high"])
+
+
+def _no_effect(params: DriveParameters, drive: str, path: str,
+               experiments: Sequence[Experiment]) -> str | None:
+    """Why ``path`` cannot change the simulated traces, or None (checked before any run)."""
+    head = path.split(".")
+    directions = set().union(*(e.direction() for e in experiments)) if experiments else set()
+    nut_driven = drive == "ddfs" and any(
+        e.nut_speed is not None and np.any(e.nut_speed != 0) for e in experiments)
+    if drive in ("cdfs", "ddfs") and head[0] == "linear_motor":
+        return f"the {drive.upper()} has no linear motor"
+    if drive == "linear-motor" and head[0] in ("screw", "coupling", "screw_motor",
+                                               "hollow_motor", "hollow_controller"):
+        return "a linear-motor drive has no ball screw"
+    if drive == "cdfs" and (head[0] in ("hollow_motor", "hollow_controller")
+                            or path == "screw.nut_inertia"
+                            or (head[:2] == ["friction", "nut"])
+                            or path == "friction.ball_nut_share"):
+        return "the CDFS holds the nut (hollow motor locked)"
+    if len(head) >= 4 and head[0] == "friction" and head[2] in ("positive", "negative"):
+        sign = 1 if head[2] == "positive" else -1
+        if directions and sign not in directions and not (nut_driven and head[1] != "guide"):
+            return (f"every trace moves the table in the "
+                    f"{'positive' if -sign > 0 else 'negative'} direction only")
+    if head[:2] == ["controller", "compensation"] and head[-1] != "mode" and \
+            params.controller.compensation.mode == "none":
+        return "friction compensation is off (controller.compensation.mode = none)"
+    if path == "disturbances.load_start" and params.disturbances.load_force == 0:
+        return "there is no load force (disturbances.load_force = 0)"
+    if path.endswith("_limit"):
+        return None
+    if path == "stiffness.equivalent_stiffness" and params.stiffness.equivalent_stiffness == 0:
+        return "0 means the chain stiffness of Eqs. (2)–(5) is used; free the parts instead"
+    return None
+
+
+# ------------------------------------------------------------------ evaluation (workers)
+
+
+def _options_for(exp_dt: float) -> dict[str, float]:
+    return {"output_interval": min(1e-3, exp_dt)}
+
+
+def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
+    """Simulate one experiment at one parameter point and return the fitted signals on the
+    measured times (SI).  Module-level and picklable: every executor runs it.  ``task``:
+    ``parameters`` (TOML text), ``drive``, ``table_position`` [m], ``reference_time``,
+    ``table_speed``, ``nut_speed``, ``time``, ``signals`` (names)."""
+    from ..control import SampledSpeed
+    from ..parameters import loads
+    from ..simulate import DriveSystem, SimulationError, SolverOptions, simulate
+
+    try:
+        params = loads(task["parameters"])
+        system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
+        prof = SampledSpeed(time=np.asarray(task["reference_time"]),
+                            table_speed=np.asarray(task["table_speed"]),
+                            nut_speed=None if task["nut_speed"] is None
+                            else np.asarray(task["nut_speed"]))
+        t = np.asarray(task["time"])
+        try:
+            opts = SolverOptions(output_interval=task["output_interval"])
+            result = simulate(system, prof, float(t[-1]) + opts.output_interval, options=opts)
+        except ParameterError:
+            result = simulate(system, prof, float(t[-1]) + 1e-3)
+        out = {}
+        for name in task["signals"]:
+            out[name] = np.interp(t, result.time, result[name])
+        return {"signals": out}
+    except (SimulationError, ValueError, ArithmeticError) as err:
+        return {"error": f"{type(err).__name__}: {err}"}
+
+
+class _Evaluator:
+    """Residuals at parameter points, each experiment one task; batches go to an executor
+    (or run here), so a Jacobian's columns are simulated in parallel."""
+
+    def __init__(self, base: DriveParameters, drive: str, table_position: float,
+                 paths: Sequence[str], start: np.ndarray, experiments: Sequence[Experiment],
+                 weights: Mapping[str, float], pool: cf.Executor | None,
+                 progress: Callable[[str], None] | None, label: str = "") -> None:
+        self.label = label
+        self.base, self.drive, self.position = base, drive, table_position
+        self.paths, self.start = list(paths), start
+        self.experiments = list(experiments)
+        self.pool = pool
+        self.progress = progress
+        self.scale = []
+        self.evaluations = 0
+        self.best: tuple[float, np.ndarray] | None = None
+        for e in self.experiments:
+            for name in e.signals:
+                self.scale.append(weights.get(name, 1.0) / e.noise[name])
+        self.n_residuals = sum(e.time.size * len(e.signals) for e in self.experiments)
+        self._cache: dict[bytes, np.ndarray] = {}
+
+    def parameters(self, theta: np.ndarray) -> DriveParameters:
+        p = self.base
+        for path, s, v0 in zip(self.paths, theta, self.start, strict=True):
+            p = p.replace_path(path, float(s * v0))
+        return p
+
+    def _tasks(self, theta: np.ndarray) -> list[dict[str, Any]] | None:
+        try:
+            text = dumps(self.parameters(theta))
+        except ParameterError:
+            return None
+        return [{"parameters": text, "drive": self.drive, "table_position": self.position,
+                 "reference_time": e.reference_time, "table_speed": e.table_speed,
+                 "nut_speed": e.nut_speed, "time": e.time, "signals": list(e.signals),
+                 "output_interval": _options_for(float(np.median(np.diff(e.time))))[
+                     "output_interval"]}
+                for e in self.experiments]
+
+    def _residual(self, outs: list[dict[str, Any]] | None) -> np.ndarray:
+        if outs is None or any("error" in o for o in outs):
+            return np.full(self.n_residuals, 1e6)
+        parts = []
+        k = 0
+        for e, o in zip(self.experiments, outs, strict=True):
+            for name, meas in e.signals.items():
+                parts.append((o["signals"][name] - meas) * self.scale[k])
+                k += 1
+        r = np.concatenate(parts)
+        return r if np.all(np.isfinite(r)) else np.full(self.n_residuals, 1e6)
+
+    def batch(self, thetas: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """Residual vectors at each of ``thetas`` (cached)."""
+        keys = [np.asarray(th, dtype=float).tobytes() for th in thetas]
+        todo = [(k, th) for k, th in zip(keys, thetas, strict=True) if k not in self._cache]
+        todo = list({k: th for k, th in todo}.items())
+        tasks = [(k, self._tasks(np.asarray(th, dtype=float))) for k, th in todo]
+        flat = [(k, i, t) for k, ts in tasks if ts is not None for i, t in enumerate(ts)]
+        if self.pool is not None and len(flat) > 1:
+            futures = [self.pool.submit(simulate_experiment, t) for _, _, t in flat]
+            results = [f.result() for f in futures]
+        else:
+            results = [simulate_experiment(t) for _, _, t in flat]
+        by_key: dict[bytes, list[dict[str, Any]]] = {}
+        for (k, _, _), res in zip(flat, results, strict=True):
+            by_key.setdefault(k, []).append(res)
+        for (k, ts), (_, th) in zip(tasks, todo, strict=True):
+            r = self._residual(by_key.get(k) if ts is not None else None)
+            self._cache[k] = r
+            self.evaluations += 1
+            cost = 0.5 * float(r @ r)
+            if self.best is None or cost < self.best[0]:
+                self.best = (cost, np.asarray(th, dtype=float).copy())
+        if len(self._cache) > 256:
+            for k in list(self._cache)[:128]:
+                self._cache.pop(k)
+        return [self._cache[k] if k in self._cache else self.batch([th])[0]
+                for k, th in zip(keys, thetas, strict=True)]
+
+    def residual(self, theta: np.ndarray) -> np.ndarray:
+        r = self.batch([theta])[0]
+        if self.progress is not None and self.best is not None:
+            self.progress(f"{self.label}: evaluation {self.evaluations}: cost "
+                          f"{0.5 * float(r @ r):.6g} (best {self.best[0]:.6g})")
+        return r
+
+    def jacobian(self, theta: np.ndarray, lb: np.ndarray | None = None,
+                 ub: np.ndarray | None = None) -> np.ndarray:
+        theta = np.asarray(theta, dtype=float)
+        steps = JACOBIAN_STEP * np.maximum(np.abs(theta), 1e-3)
+        if ub is not None:
+            steps = np.where(theta + steps > ub, -steps, steps)
+        points = [theta]
+        for j in range(theta.size):
+            p = theta.copy()
+            p[j] += steps[j]
+            points.append(p)
+        rs = self.batch(points)
+        return np.column_stack([(rs[j + 1] - rs[0]) / steps[j] for j in range(theta.size)])
+
+
+# ------------------------------------------------------------------ results
+
+
+@dataclass(frozen=True)
+class ParameterEstimate:
+    """One fitted parameter [SI]: value, standard error, interval, how it was found."""
+
+    path: str
+    unit: str
+    start: float
+    value: float
+    stderr: float
+    low: float
+    high: float
+    interval: str  # "linear" or "profile"
+    determined: bool
+    issue: str | None = None
+
+    @property
+    def relative_half_width(self) -> float:
+        if self.value == 0 or not (math.isfinite(self.low) and math.isfinite(self.high)):
+            return math.inf
+        return 0.5 * (self.high - self.low) / abs(self.value)
+
+    def to_dict(self) -> dict[str, Any]:
+        def fin(x: float) -> float | None:
+            return float(x) if math.isfinite(x) else None
+
+        return {"path": self.path, "unit": self.unit, "start": self.start, "value": self.value,
+                "stderr": fin(self.stderr), "ci_low": fin(self.low), "ci_high": fin(self.high),
+                "interval": self.interval, "relative_half_width": fin(self.relative_half_width),
+                "determined": self.determined, "issue": self.issue}
+
+
+@dataclass(frozen=True)
+class SignalResidual:
+    source: str
+    signal: str
+    samples: int
+    rms: float  # [SI]
+    noise: float  # [SI], from the data alone
+    ratio: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """What :func:`fit_drive` found; :meth:`to_dict` is the CLI's JSON."""
+
+    parameters: DriveParameters
+    base_name: str
+    drive: str
+    table_position: float
+    sources: tuple[str, ...]
+    estimates: tuple[ParameterEstimate, ...]
+    covariance: np.ndarray  # SI, of the free parameters
+    correlation: np.ndarray
+    condition_number: float
+    singular_values: np.ndarray
+    poorly_determined: tuple[dict[str, Any], ...]
+    residuals: tuple[SignalResidual, ...]
+    residual_ok: bool
+    cost: float
+    dof: int
+    evaluations: int
+    confidence: float
+    interrupted: bool = False
+    message: str = ""
+    simulated: tuple[dict[str, np.ndarray], ...] = ()
+    experiments: tuple[Experiment, ...] = ()
+
+    @property
+    def paths(self) -> list[str]:
+        return [e.path for e in self.estimates]
+
+    def to_dict(self) -> dict[str, Any]:
+        corr = np.where(np.isfinite(self.correlation), self.correlation, 0.0)
+        return {"parameter_set": self.base_name, "drive": self.drive,
+                "table_position_mm": self.table_position * 1e3, "data": list(self.sources),
+                "estimates": [e.to_dict() for e in self.estimates],
+                "correlation": corr.tolist(),
+                "condition_number": (float(self.condition_number)
+                                     if math.isfinite(self.condition_number) else None),
+                "poorly_determined_combinations": list(self.poorly_determined),
+                "residuals": [r.to_dict() for r in self.residuals],
+                "residual_check": ("passed" if self.residual_ok else
+                                   f"failed: a residual rms exceeds {MAX_RESIDUAL_RATIO:g}× "
+                                   "the data's noise; no parameter is reported determined"),
+                "cost": self.cost, "dof": self.dof, "evaluations": self.evaluations,
+                "confidence": self.confidence, "interrupted": self.interrupted,
+                "message": self.message}
+
+    def fitted_toml(self, extends: str, data_names: Sequence[str] | None = None) -> str:
+        """A parameter file that ``extends`` the base set with the fitted values, and a
+        ``[fit]`` table recording data, free parameters, estimates, intervals, covariance
+        (the loader ignores ``[fit]``; ``feeddrive predict`` reads it)."""
+        lines = ["# feeddrive fit: fitted parameter set (docs/fitting.md). SI units.",
+                 f"extends = {toml_string(extends)}",
+                 f"name = {toml_string(self.base_name + '-fitted')}"]
+        groups: dict[str, list[ParameterEstimate]] = {}
+        for e in self.estimates:
+            table, _, key = e.path.rpartition(".")
+            groups.setdefault(table, []).append(e)
+        for table, ests in groups.items():
+            if table:
+                lines.append(f"\n[{table}]")
+            for e in ests:
+                ci = (f"{100 * self.confidence:.0f} % CI {e.low:.6g} … {e.high:.6g} "
+                      f"({e.interval})" if math.isfinite(e.low) and math.isfinite(e.high)
+                      else "interval not determined")
+                note = "" if e.determined else f"; POORLY DETERMINED: {e.issue}"
+                key = e.path.rpartition(".")[2]
+                lines.append(f"{key} = {e.value!r}  # [{e.unit}] {toml_comment(ci + note)}")
+        names = list(data_names or self.sources)
+        lines += ["\n[fit]",
+                  f"data = [{', '.join(toml_string(s) for s in names)}]",
+                  f"drive = {toml_string(self.drive)}",
+                  f"table_position = {self.table_position!r}  # [m]",
+                  f"free = [{', '.join(toml_string(p) for p in self.paths)}]",
+                  f"estimates = [{', '.join(repr(e.value) for e in self.estimates)}]",
+                  f"ci_low = [{', '.join(repr(_toml_float(e.low)) for e in self.estimates)}]",
+                  f"ci_high = [{', '.join(repr(_toml_float(e.high)) for e in self.estimates)}]",
+                  f"interval = [{', '.join(toml_string(e.interval) for e in self.estimates)}]",
+                  f"determined = [{', '.join('true' if e.determined else 'false' for e in self.estimates)}]",  # noqa: E501
+                  f"confidence = {self.confidence!r}",
+                  "covariance = [" + ", ".join(
+                      "[" + ", ".join(repr(_toml_float(v)) for v in row) + "]"
+                      for row in self.covariance) + "]",
+                  f"residual_check = {'true' if self.residual_ok else 'false'}",
+                  f"interrupted = {'true' if self.interrupted else 'false'}"]
+        return "\n".join(lines) + "\n"
+
+
+def _toml_float(x: float) -> float:
+    """TOML has inf but the record is read back by numpy: keep a huge finite stand-in."""
+    return float(x) if math.isfinite(x) else 1e300
+
+
+# ------------------------------------------------------------------ the fit
+
+#: the first stage of the horizon continuation [s], and the factor between stages
+FIRST_HORIZON = 0.5
+HORIZON_FACTOR = 3.0
+
+
+def horizons(duration: float) -> list[float]:
+    """Record lengths [s] the search is run on in turn: 0.5 s, ×3 each stage, then all of
+    it.  A stick-slip or lightly damped record drifts in phase as a parameter changes, so
+    its misfit over a long record is a narrow valley among local minima; over its first
+    half second (the start-up transient) it is nearly quadratic.  Each stage starts from
+    the last one's optimum, inside the next one's valley (measured: from factors 1.2, 0.8,
+    1.1 off, a fit on the full 10-s records ends in a local minimum with σ2 5× too large;
+    the continuation reaches the truth within the noise)."""
+    out = []
+    h = FIRST_HORIZON
+    while h < duration:
+        out.append(h)
+        h *= HORIZON_FACTOR
+    out.append(duration)
+    return out
+
+
+def _cut(e: Experiment, h: float) -> Experiment:
+    end = float(e.time[0]) + h
+    m = e.time <= end + 1e-12
+    keep = e.reference_time <= end + 2 * float(np.median(np.diff(e.reference_time)))
+    return dataclasses.replace(e, time=e.time[m], signals={k: v[m] for k, v in
+                                                           e.signals.items()},
+                               reference_time=e.reference_time[keep],
+                               table_speed=e.table_speed[keep],
+                               nut_speed=None if e.nut_speed is None else e.nut_speed[keep])
+
+
+def _profile(ev: _Evaluator, theta: np.ndarray, j: int, lb: np.ndarray, ub: np.ndarray,
+             ssr: float, threshold: float, se: float, say: Callable[[str], None]
+             ) -> tuple[float, float]:
+    """Profile-likelihood interval of parameter ``j`` (in θ units): walk out on each side,
+    refitting the others, until SSR crosses ``threshold`` or a bound is reached."""
+    others = [k for k in range(theta.size) if k != j]
+
+    def refit(value: float, start: np.ndarray) -> tuple[float, np.ndarray]:
+        if not others:
+            th = theta.copy()
+            th[j] = value
+            r = ev.batch([th])[0]
+            return float(r @ r), th
+
+        def fun(sub: np.ndarray) -> np.ndarray:
+            th = theta.copy()
+            th[others] = sub
+            th[j] = value
+            return ev.batch([th])[0]
+
+        def jac(sub: np.ndarray) -> np.ndarray:
+            th = theta.copy()
+            th[others] = sub
+            th[j] = value
+            return ev.jacobian(th)[:, others]
+
+        res = least_squares(fun, start[others], jac=jac, bounds=(lb[others], ub[others]),
+                            x_scale=np.maximum(np.abs(start[others]), 1e-3), max_nfev=20,
+                            xtol=1e-6, ftol=1e-8)
+        th = theta.copy()
+        th[others] = res.x
+        th[j] = value
+        return 2.0 * float(res.cost), th
+
+    ends = []
+    step = max(se, 0.02 * abs(theta[j]), 1e-6) if math.isfinite(se) else 0.1 * abs(theta[j])
+    for sign in (-1.0, 1.0):
+        prev_v, prev_s = theta[j], ssr
+        start = theta.copy()
+        found = math.inf * sign
+        v = theta[j]
+        for k in range(12):
+            v = theta[j] + sign * step * (1.6 ** k)
+            bound = lb[j] if sign < 0 else ub[j]
+            if (sign < 0 and v <= bound) or (sign > 0 and v >= bound):
+                v = bound
+            say(f"profile {ev.paths[j]}: {'lower' if sign < 0 else 'upper'} side, point {k + 1}")
+            s, start = refit(v, start)
+            if s > threshold:
+                found = float(np.interp(threshold, [prev_s, s], [prev_v, v]))
+                break
+            prev_v, prev_s = v, s
+            if v == bound:
+                found = bound if sign < 0 and bound > 0 else (-math.inf if sign < 0 else
+                                                               math.inf)
+                if sign < 0 and bound <= 0:
+                    found = max(bound, 0.0)
+                break
+        ends.append(found)
+    return ends[0], ends[1]
+
+
+def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Sequence[str],
+              *, drive: str = "cdfs", table_position: float = 0.4,
+              weights: Mapping[str, float] | None = None,
+              bounds: Mapping[str, tuple[float, float]] | None = None,
+              confidence: float = 0.95, max_evaluations: int = 200,
+              profile: bool = True, horizon_continuation: bool = True,
+              workers: int | None = None,
+              dask_workers: int | None = None, scheduler: str | None = None,
+              progress: Callable[[str], None] | None = None) -> FitResult:
+    """Least-squares fit of the ``free`` parameters (dotted paths) of ``base`` to every
+    experiment at once (see the module).  ``weights`` multiply a signal's residuals (by
+    signal name); ``bounds`` replace a parameter's declared range [SI].  Jacobian columns
+    are simulated through a local process pool (``workers`` > 1) or Dask (``dask_workers``
+    or ``scheduler``); by default here, one after the other.  ``horizon_continuation``:
+    the search runs on the first :func:`horizons` seconds of every record, each stage
+    starting from the last (see docs/fitting.md); the intervals are always from the whole
+    records.  Ctrl-C stops the search and
+    returns the best point so far (``interrupted``; no intervals).  Everything is checked
+    before the first simulation: a :class:`FitError` names the problem."""
+    from ..simulate import DriveSystem
+
+    say = progress or (lambda _t: None)
+    if not experiments:
+        raise FitError("no trace given")
+    if not free:
+        raise FitError("--free: give at least one parameter path to fit")
+    if len(set(free)) != len(free):
+        raise FitError(f"--free: {sorted({p for p in free if list(free).count(p) > 1})[0]} "
+                       "given twice")
+    weights = dict(weights or {})
+    for name, w in weights.items():
+        if name not in MEASURABLE:
+            raise FitError(f"--weight {name}: not a measurable signal; expected one of "
+                           f"{', '.join(MEASURABLE)}")
+        if not (math.isfinite(w) and w > 0):
+            raise FitError(f"--weight {name}={w!r}: expected a weight > 0")
+    if not (0 < confidence < 1):
+        raise FitError(f"confidence = {confidence!r}: expected a fraction in (0, 1)")
+    start = np.empty(len(free))
+    lb = np.empty(len(free))
+    ub = np.empty(len(free))
+    units_ = []
+    for i, path in enumerate(free):
+        value, meta = _field_meta(base, path)
+        reason = _no_effect(base, drive, path, experiments)
+        if reason:
+            raise FitError(f"--free {path}: has no effect on these traces ({reason})")
+        if value == 0.0:
+            raise FitError(f"--free {path}: starts at 0 [{meta['unit']}]; give a nonzero "
+                           "start value in the parameter file (the fit works in factors on "
+                           "the start)")
+        lo, hi = bounds.get(path, (meta["low"], meta["high"])) if bounds else \
+            (meta["low"], meta["high"])
+        if not lo < value < hi and not (lo <= value <= hi):
+            raise FitError(f"--free {path}: start {value:g} outside its bounds {lo:g} … "
+                           f"{hi:g} [{meta['unit']}]")
+        start[i] = value
+        lo_t, hi_t = lo / value, hi / value
+        lb[i], ub[i] = min(lo_t, hi_t), max(lo_t, hi_t)
+        if not meta.get("low_inclusive", False):
+            lb[i] = lb[i] * (1 + 1e-9) if lb[i] > 0 else lb[i] + 1e-12
+        units_.append(str(meta["unit"]))
+    for e in experiments:
+        if e.nut_speed is not None and drive != "ddfs":
+            raise FitError(f"{e.source}: commands a nut speed; only the DDFS drives its nut")
+    DriveSystem(base, drive=drive, table_position=table_position)  # validates drive/position
+    theta0 = np.ones(len(free))
+
+    longest = max(e.span for e in experiments)
+    stages = horizons(longest) if horizon_continuation else [longest]
+
+    def run(pool: cf.Executor | None) -> FitResult:
+        theta = theta0
+        interrupted = False
+        message = ""
+        evaluations = 0
+        t0 = _time.perf_counter()
+        ev = None
+        for k, h in enumerate(stages, start=1):
+            stage = [e if e.span <= h else _cut(e, h) for e in experiments]
+            ev = _Evaluator(base, drive, table_position, free, start, stage, weights, pool,
+                            say, label=f"stage {k}/{len(stages)} (first {h:g} s)")
+            try:
+                res = least_squares(ev.residual, theta, jac=lambda th, ev=ev: ev.jacobian(
+                                        th, lb, ub),
+                                    bounds=(lb, ub), x_scale=np.ones(len(free)), method="trf",
+                                    max_nfev=max_evaluations, xtol=1e-8, ftol=1e-10,
+                                    gtol=1e-10)
+                theta = np.clip(res.x, lb, ub)
+                message = str(res.message)
+            except KeyboardInterrupt:
+                interrupted = True
+                if ev.best is None and k == 1:
+                    raise
+                if ev.best is not None:
+                    theta = ev.best[1]
+                message = (f"interrupted (Ctrl-C) in stage {k} of {len(stages)}: the best "
+                           "point so far")
+            evaluations += ev.evaluations
+            if interrupted:
+                break
+        assert ev is not None
+        final = ev if not interrupted and stages[-1] >= longest else _Evaluator(
+            base, drive, table_position, free, start, experiments, weights, pool, say,
+            label="final")
+        say(f"search done: {evaluations} evaluations in {_time.perf_counter() - t0:.1f} s")
+        try:
+            return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
+                              table_position, confidence, interrupted, message, profile, say,
+                              evaluations)
+        except KeyboardInterrupt:  # during the intervals: the estimates without them
+            if final.best is not None and final.best[0] < 0.5 * float(
+                    final.batch([theta])[0] @ final.batch([theta])[0]):
+                theta = final.best[1]
+            return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
+                              table_position, confidence, True,
+                              "interrupted (Ctrl-C) while computing the intervals",
+                              profile, say, evaluations)
+
+    if workers is None and dask_workers is None and scheduler is None:
+        return run(None)
+    from ..sweep.executors import executor
+    from ..sweep.quantities import warm
+
+    warm_task = {"parameters": dumps(base), "drive": drive, "table_position": table_position,
+                 "nut_speed": 0.0, "quantity": {"kind": "creep-trial", "table_speed": 1e-3,
+                                                "linear": False}}
+    warm(warm_task)
+    with executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers,
+                  warm_tasks=[warm_task]) as (pool, n, where):
+        say(f"Jacobian columns on {where}")
+        return run(pool)
+
+
+def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndarray,
+               ub: np.ndarray, units_: list[str], experiments: Sequence[Experiment],
+               base: DriveParameters, drive: str, table_position: float, confidence: float,
+               interrupted: bool, message: str, profile: bool,
+               say: Callable[[str], None], evaluations: int = 0) -> FitResult:
+    r = ev.batch([theta])[0]
+    ssr = float(r @ r)
+    n, p = r.size, theta.size
+    dof = max(n - p, 1)
+    params = ev.parameters(theta)
+    # residuals per signal, in SI, against the data's own noise
+    residuals = []
+    simulated: list[dict[str, np.ndarray]] = []
+    k = 0
+    offset = 0
+    ok = True
+    for e in experiments:
+        sims = {}
+        for name, meas in e.signals.items():
+            m = meas.size
+            raw = r[offset:offset + m] / ev.scale[k]
+            sims[name] = meas + raw
+            rms = float(np.sqrt(np.mean(raw ** 2)))
+            ratio = rms / e.noise[name]
+            ok &= ratio <= MAX_RESIDUAL_RATIO
+            residuals.append(SignalResidual(source=e.source, signal=name, samples=m, rms=rms,
+                                            noise=float(e.noise[name]), ratio=ratio))
+            offset += m
+            k += 1
+        simulated.append(sims)
+    if interrupted:
+        nan = np.full((p, p), math.nan)
+        partial = tuple(ParameterEstimate(path=path, unit=u, start=float(s0), value=float(th * s0),
+                                       stderr=math.nan, low=math.nan, high=math.nan,
+                                       interval="none", determined=False,
+                                       issue="fit interrupted: no interval")
+                     for path, u, s0, th in zip(ev.paths, units_, start, theta, strict=True))
+        return FitResult(parameters=params, base_name=base.name, drive=drive,
+                         table_position=table_position, sources=tuple(e.source for e in
+                                                                      experiments),
+                         estimates=partial, covariance=nan, correlation=nan,
+                         condition_number=math.nan, singular_values=np.full(p, math.nan),
+                         poorly_determined=(), residuals=tuple(residuals), residual_ok=ok,
+                         cost=0.5 * ssr, dof=dof, evaluations=evaluations + ev.evaluations,
+                         confidence=confidence, interrupted=True, message=message,
+                         simulated=tuple(simulated), experiments=tuple(experiments))
+    say("Jacobian at the optimum")
+    jac = ev.jacobian(theta, lb, ub)
+    zero = [ev.paths[j] for j in range(p) if not np.any(jac[:, j] != 0)]
+    s2 = ssr / dof
+    # in relative units (columns × θ): a scale-free condition number
+    scaled = jac * np.where(theta != 0, theta, 1.0)
+    _, sv, vt = np.linalg.svd(scaled, full_matrices=False)
+    cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else math.inf
+    combos: list[dict[str, Any]] = []
+    for i in range(sv.size):
+        if sv[i] <= sv[0] / MAX_CONDITION or sv[i] == 0:
+            vec = vt[i]
+            order = np.argsort(-np.abs(vec))
+            combos.append({"singular_value_ratio": float(sv[i] / sv[0]) if sv[0] > 0 else 0.0,
+                           "combination": {ev.paths[j]: float(vec[j]) for j in order
+                                           if abs(vec[j]) >= 0.1}})
+    cov_t = _covariance(jac, ssr, dof)  # θ units
+    corr = _correlation(cov_t)
+    tq = float(stats.t.ppf(0.5 + confidence / 2.0, dof))
+    threshold = ssr * (1.0 + float(stats.f.ppf(confidence, 1, dof)) / dof)
+    cov = cov_t * np.outer(start, start)
+    ests: list[ParameterEstimate] = []
+    for j, path in enumerate(ev.paths):
+        se_t = math.sqrt(cov_t[j, j]) if math.isfinite(cov_t[j, j]) and cov_t[j, j] >= 0 \
+            else math.inf
+        lo_t, hi_t = theta[j] - tq * se_t, theta[j] + tq * se_t
+        how = "linear"
+        if profile and ok and (not math.isfinite(se_t) or tq * se_t > PROFILE_ABOVE *
+                               abs(theta[j]) or lo_t < lb[j] or hi_t > ub[j]):
+            lo_t, hi_t = _profile(ev, theta, j, lb, ub, ssr, threshold, se_t, say)
+            how = "profile"
+        value = float(theta[j] * start[j])
+        lo, hi = sorted((lo_t * start[j], hi_t * start[j]))
+        issue = None
+        half = 0.5 * (hi - lo) / abs(value) if math.isfinite(hi - lo) else math.inf
+        if path in zero:
+            issue = "no effect on the simulated traces (zero Jacobian column)"
+        elif not ok:
+            issue = (f"poor fit: residual rms up to "
+                     f"{max(x.ratio for x in residuals):.3g}× the data's noise")
+        elif half > MAX_RELATIVE_HALF_WIDTH:
+            issue = (f"{100 * confidence:.0f} % interval wider than "
+                     f"±{100 * MAX_RELATIVE_HALF_WIDTH:.0f} % of the value")
+        elif any(path in c["combination"] and abs(c["combination"][path]) >= 0.3
+                 for c in combos):
+            issue = "part of a poorly determined combination (see the SVD)"
+        ests.append(ParameterEstimate(path=path, unit=units_[j], start=float(start[j]),
+                                      value=value, stderr=se_t * abs(start[j]), low=lo, high=hi,
+                                      interval=how, determined=issue is None, issue=issue))
+    del s2
+    return FitResult(parameters=params, base_name=base.name, drive=drive,
+                     table_position=table_position,
+                     sources=tuple(e.source for e in experiments), estimates=tuple(ests),
+                     covariance=cov, correlation=corr, condition_number=cond,
+                     singular_values=sv, poorly_determined=tuple(combos),
+                     residuals=tuple(residuals), residual_ok=ok, cost=0.5 * ssr, dof=dof,
+                     evaluations=evaluations + ev.evaluations, confidence=confidence,
+                     interrupted=False, message=message, simulated=tuple(simulated),
+                     experiments=tuple(experiments))
+
+
+# ------------------------------------------------------------------ synthetic rig data
+
+
+def synthetic_experiment(params: DriveParameters, speed: float, duration: float, *,
+                         drive: str = "cdfs", table_position: float = 0.4,
+                         position_quantum: float = 0.05e-6, current_noise: float = 0.01,
+                         seed: int = 0, ramp_time: float = 0.1, record_start: float = 0.0,
+                         source: str | None = None) -> Experiment:
+    """A rig record made by simulation: constant ``speed`` [m/s] after a ``ramp_time`` [s]
+    ramp for ``duration`` [s], sampled at 1 ms; table position quantised to
+    ``position_quantum`` [m] (an encoder or interferometer count) and screw current with
+    white noise of ``current_noise`` × its rms (seeded); ``record_start`` [s]: the record
+    keeps only the samples from then on (a record of steady sliding).  For tests, the calibration
+    (benchmarks/fit_calibration.py) and docs/fitting.md's worked example."""
+    from ..control import ConstantSpeed
+    from ..simulate import DriveSystem, simulate
+
+    system = DriveSystem(params, drive=drive, table_position=table_position)
+    result = simulate(system, ConstantSpeed(speed, ramp_time=ramp_time), duration)
+    t = np.asarray(result.time)
+    rng = np.random.default_rng(seed)
+    x = np.asarray(result["table_position"])
+    if position_quantum > 0:
+        x = np.round(x / position_quantum) * position_quantum
+    cur_name = "motor_current" if drive == "linear-motor" else "screw_current"
+    i = np.asarray(result[cur_name])
+    i = i + current_noise * float(np.sqrt(np.mean(i ** 2))) * rng.standard_normal(i.size)
+    ref = np.asarray(result["table_speed_reference"])
+    keep = t >= record_start - 1e-12
+    signals = {"table_position": x[keep], cur_name: i[keep]}
+    return Experiment(source=source or f"synthetic {speed * 1e3:g} mm/s (seed {seed})",
+                      time=t[keep], signals=signals, reference_time=t, table_speed=ref,
+                      noise={k: noise_level(v) for k, v in signals.items()})
+
+
+# ------------------------------------------------------------------ residual plots
+
+#: signal → (engineering unit, factor from SI) for plots and the CLI
+EDGE_UNITS = {"table_position": ("µm", 1e6), "table_speed": ("mm/s", 1e3),
+              "screw_current": ("A", 1.0), "nut_current": ("A", 1.0),
+              "motor_current": ("A", 1.0)}
+
+
+def plot_residuals(result: FitResult, path: str | Path) -> Path:
+    """One row per measured signal of each trace: measured and simulated (left; position
+    relative to the command's integral), residual against time with ±2σ of the data's noise
+    (middle), and the residual's histogram (right)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [(e, name, sim) for e, sims in zip(result.experiments, result.simulated,
+                                              strict=True) for name, sim in sims.items()]
+    fig, axes = plt.subplots(len(rows), 3, figsize=(12, 2.4 * len(rows) + 0.6),
+                             squeeze=False, gridspec_kw={"width_ratios": [3, 3, 1]})
+    for (e, name, sim), ax in zip(rows, axes, strict=True):
+        unit, k = EDGE_UNITS.get(name, ("SI", 1.0))
+        meas = np.asarray(e.signals[name])
+        shown_meas, shown_sim = meas, np.asarray(sim)
+        label = name
+        if name == "table_position":
+            ref = np.interp(e.time, e.reference_time, np.concatenate(
+                [[0.0], np.cumsum(0.5 * (e.table_speed[1:] + e.table_speed[:-1])
+                                  * np.diff(e.reference_time))]))
+            shown_meas, shown_sim = meas - ref, shown_sim - ref
+            label = "position − command"
+        ax[0].plot(e.time, k * shown_meas, lw=0.6, label="measured")
+        ax[0].plot(e.time, k * shown_sim, lw=0.8, label="fitted model")
+        ax[0].set_ylabel(f"{label} [{unit}]", fontsize=8)
+        ax[0].set_title(Path(e.source).name, fontsize=8)
+        ax[0].legend(fontsize=7, loc="best")
+        res = k * (shown_sim - shown_meas)
+        ax[1].plot(e.time, res, lw=0.5)
+        sig = 2 * k * e.noise[name]
+        ax[1].axhline(sig, color="k", ls="--", lw=0.6)
+        ax[1].axhline(-sig, color="k", ls="--", lw=0.6)
+        ax[1].set_ylabel(f"residual [{unit}]", fontsize=8)
+        ax[2].hist(res, bins=40, orientation="horizontal", color="0.5")
+        ax[2].set_xticks([])
+    axes[-1][0].set_xlabel("time [s]")
+    axes[-1][1].set_xlabel("time [s] (dashed: ±2σ of the data's own noise)")
+    check = "passed" if result.residual_ok else "FAILED"
+    fig.suptitle(f"feeddrive fit — {result.drive.upper()}, residual check {check}",
+                 fontsize=10)
+    fig.tight_layout()
+    p = Path(path)
+    fig.savefig(p, dpi=100)
+    plt.close(fig)
+    return p

@@ -1,0 +1,393 @@
+"""Which parameter matters: elasticities of the critical speed (or of the linear band's
+upper edge) to every numeric parameter, by central finite differences through the sweep
+machinery.  SI inside.
+
+Quantity Q: the critical speed from rest (``critical-speed``, resolution 0.01 mm/s on the
+shared protocol) or the upper edge of the linearly unstable band of steady sliding
+(``linear-band``, bisected to 10⁻³ mm/s: cheap, no simulation).  For each parameter p with
+value p₀ ≠ 0, Q is evaluated at p₀(1 ± h) and the elasticity is E = (Q₊ − Q₋)/(2h·Q₀): the
+% change of Q per % change of p.  A zero-valued parameter with a stated scale s
+(:data:`ZERO_SCALES`) gets the absolute derivative (Q₊ − Q₋)/(2h·s) at ±h·s instead.
+
+The step: h starts at :data:`STEPS`\\[0] and is doubled until the step's effect |Q₊ − Q₋| is
+at least 10× the quantity's resolution (the resolution ≤ 0.1× the effect); a parameter still
+below that at the largest step is reported *not resolved*, with the bound |E| < 10·res/(2hQ₀).
+Each resolved value is checked by halving: E at h/2 must agree within 20 % or within the
+resolution's share 2·res/(h·Q₀); otherwise the response is flagged nonlinear (a knife edge
+between two regimes, e.g. a speed at which a limit cycle appears).  A step that the set's own
+checks refuse (F_s ≥ F_c, a range) stops the doubling.
+
+Parameters left out, each with the reason: those without effect on the drive (the fit's
+rules: :func:`feeddrive.analysis.fit._no_effect`, positive direction), structural switches
+(loop periods, encoder counts, the support-bearing count), limits at the top of their range
+(no limit in effect), the smoothing velocity of a LuGre site (static law only), and
+zero-valued parameters without a stated scale.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import math
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..parameters import DriveParameters, ParameterError
+
+__all__ = ["STEPS", "ZERO_SCALES", "SensitivityResult", "parameter_paths", "plot_tornado",
+           "sensitivity"]
+
+#: relative steps tried in turn (doubling)
+STEPS = (0.1, 0.2, 0.4)
+#: the effect must be at least this many resolutions
+MIN_EFFECT_RESOLUTIONS = 10.0
+#: scale s [SI] of zero-valued parameters, for their absolute derivative
+ZERO_SCALES: dict[str, float] = {"stiffness.axial_damping": 1e4,
+                                 "controller.current_integral_gain": 1e3,
+                                 "disturbances.load_force": 10.0}
+#: parameters that switch the model's structure rather than scale a value
+_STRUCTURAL = ("controller.position_period", "controller.velocity_period",
+               "controller.current_period", "controller.encoder_counts",
+               "controller.grating_resolution", "stiffness.support_bearing_count")
+#: the linear band's bisection tolerance [m/s] (feeddrive.linear.stability_band)
+LINEAR_RESOLUTION = 1e-6
+
+
+def _value(params: Any, path: str) -> Any:
+    obj = params
+    for part in path.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def parameter_paths(params: DriveParameters, drive: str,
+                    patterns: Sequence[str] | None = None) -> tuple[list[str], dict[str, str]]:
+    """(paths to vary, {left-out path: reason}) for ``params`` on ``drive``."""
+    import dataclasses
+
+    from ..sweep.design import numeric_paths
+    from .fit import Experiment, _no_effect
+
+    t = np.array([0.0, 1.0])
+    forward = Experiment(source="", time=t, signals={}, reference_time=t,
+                         table_speed=np.array([1e-3, 1e-3]))
+    keep: list[str] = []
+    skipped: dict[str, str] = {}
+    for path in numeric_paths(params):
+        if patterns and not any(fnmatch.fnmatchcase(path, p) for p in patterns):
+            continue
+        value = float(_value(params, path))
+        reason = _no_effect(params, drive, path, [forward])
+        if reason is None and path in _STRUCTURAL:
+            reason = "a structural switch, not a scale"
+        if reason is None and path.endswith("smoothing_velocity"):
+            site = _value(params, path.rsplit(".", 1)[0])
+            if getattr(site, "law", "lugre") == "lugre":
+                reason = "used by the static friction law only"
+        if reason is None and path.endswith("_limit"):
+            parent = _value(params, path.rsplit(".", 1)[0])
+            meta = {f.name: f.metadata for f in dataclasses.fields(parent)}
+            if value >= meta[path.rsplit(".", 1)[1]]["high"]:
+                reason = "no limit in effect (the top of its range)"
+        if reason is None and value == 0.0 and path not in ZERO_SCALES:
+            reason = "zero-valued, no stated scale for an absolute step"
+        if reason:
+            skipped[path] = reason
+        else:
+            keep.append(path)
+    if patterns and not keep and not skipped:
+        raise ParameterError("--parameters", list(patterns), "matches no numeric parameter")
+    return keep, skipped
+
+
+@dataclass(frozen=True)
+class Entry:
+    path: str
+    value: float  # p₀ [SI]
+    absolute: bool  # zero-valued: derivative, not elasticity
+    step: float  # relative h (absolute: h·s is the step [SI])
+    q_minus: float  # [SI]
+    q_plus: float
+    elasticity: float  # E (relative) or dQ/dp [SI/SI] (absolute); nan if not resolved
+    bound: float  # |E| < bound when not resolved
+    resolved: bool
+    halved: float  # E at h/2 (nan if not resolved)
+    consistent: bool
+    note: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        def fin(x: float) -> float | None:
+            return float(x) if math.isfinite(x) else None
+
+        return {"path": self.path, "value": self.value, "kind": "derivative" if self.absolute
+                else "elasticity", "step": self.step, "q_minus": fin(self.q_minus),
+                "q_plus": fin(self.q_plus), "elasticity": fin(self.elasticity),
+                "bound": fin(self.bound), "resolved": self.resolved,
+                "elasticity_half_step": fin(self.halved),
+                "halving_consistent": self.consistent, "note": self.note}
+
+
+@dataclass(frozen=True)
+class SensitivityResult:
+    parameter_set: str
+    drive: str
+    quantity: str  # "critical_speed" or "linear_upper"
+    base: float  # Q₀ [m/s]
+    resolution: float  # [m/s]
+    entries: tuple[Entry, ...]  # ranked by |E|, resolved first
+    skipped: dict[str, str]
+    evaluations: int
+    executor: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"parameter_set": self.parameter_set, "drive": self.drive,
+                "quantity": self.quantity, "base_mm_s": self.base * 1e3,
+                "resolution_mm_s": self.resolution * 1e3,
+                "rule": (f"each step's effect ≥ {MIN_EFFECT_RESOLUTIONS:g}× the resolution "
+                         f"(steps tried {', '.join(f'{h:g}' for h in STEPS)}), checked by "
+                         "halving"),
+                "entries": [e.to_dict() for e in self.entries], "skipped": self.skipped,
+                "evaluations": self.evaluations, "executor": self.executor}
+
+
+def _task(config: Any, params: DriveParameters) -> dict[str, Any]:
+    """The sweep task of ``params`` (as :meth:`SweepConfig.task` builds it)."""
+    from ..parameters import dumps
+    from ..simulate import DriveSystem
+
+    position = config.table_position * 1e-3
+    DriveSystem(params, drive=config.drive, table_position=position)
+    return {"parameters": dumps(params), "drive": config.drive, "table_position": position,
+            "nut_speed": 0.0, "quantity": config.quantity.to_dict()}
+
+
+def _points_for(config: Any, params: DriveParameters, path: str, value: float, h: float,
+                absolute: bool) -> list[Any] | None:
+    from ..sweep.design import Point
+    from ..sweep.store import point_key
+
+    delta = h * (ZERO_SCALES[path] if absolute else value)
+    out = []
+    for sign in (-1.0, 1.0):
+        coords = {path: value + sign * delta}
+        try:
+            task = _task(config, params.replace_path(path, value + sign * delta))
+        except ParameterError:
+            return None
+        out.append(Point(index=0, coords=coords, task=task, key=point_key(task)))
+    return out
+
+
+def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
+                table_position: float = 0.4,
+                quantity: str = "linear-band", patterns: Sequence[str] | None = None,
+                linear_points: int | None = None,
+                store: str | os.PathLike[str] | None = None, workers: int | None = None,
+                dask_workers: int | None = None, scheduler: str | None = None,
+                in_process: bool = False,
+                progress: Callable[[str], None] | None = None) -> SensitivityResult:
+    """Elasticities of ``quantity`` (``critical-speed`` or ``linear-band``) of the set
+    ``params_source`` (a preset name or a .toml file) on ``drive`` (see the module).  Points
+    run through :func:`feeddrive.sweep.run_sweep` (store, local pool or Dask), or, with
+    ``in_process``, through the same :func:`feeddrive.sweep.quantities.evaluate` here."""
+    from ..sweep import SweepStore
+    from ..sweep.design import SweepConfig, _load_base
+    from ..sweep.executors import run_sweep
+    from ..sweep.quantities import QuantitySettings, evaluate
+
+    say = progress or (lambda _t: None)
+    if quantity not in ("critical-speed", "linear-band"):
+        raise ParameterError("--quantity", quantity, "expected critical-speed or linear-band")
+    if isinstance(params_source, DriveParameters):
+        params, source = params_source, params_source.name
+    else:
+        source = os.fspath(Path(params_source).resolve()) if params_source.endswith(".toml") \
+            else params_source
+        params = _load_base(source, source)
+    paths, skipped = parameter_paths(params, drive, patterns)
+    if not paths:
+        raise ParameterError("--parameters", list(patterns or []), "leaves no parameter to "
+                             "vary (" + "; ".join(f"{k}: {v}" for k, v in skipped.items())[:300]
+                             + ")")
+    spec: dict[str, Any] = {"kind": quantity, "linear": quantity == "critical-speed"}
+    if quantity == "critical-speed":
+        spec["linear"] = False
+    if linear_points is not None:
+        spec["linear_points"] = linear_points
+    settings = QuantitySettings.parse(spec)
+    resolution = settings.resolution if quantity == "critical-speed" else LINEAR_RESOLUTION
+    key_name = "critical_speed" if quantity == "critical-speed" else "linear_upper"
+    config = SweepConfig(name=f"sensitivity-{Path(source).stem}-{drive}-{quantity}",
+                         source=source if source.endswith(".toml") else "sensitivity.toml",
+                         base=source, drive=drive, table_position=table_position * 1e3,
+                         nut_speed=0.0, design="grid", samples=None, seed=0, axes=(),
+                         quantity=settings, store=None, raw={"sensitivity": True})
+    results: dict[str, dict[str, Any]] = {}
+    count = 0
+    rounds: list[str] = []
+    where = "this process"
+    db = None if in_process else SweepStore(
+        Path(store) if store is not None else Path(f"{config.name}.sqlite"), option="--store")
+
+    def run(points: list[Any]) -> None:
+        nonlocal count, where
+        todo = [p for p in points if p.key not in results]
+        todo = list({p.key: p for p in todo}.values())
+        if not todo:
+            return
+        if db is None:
+            for k, p in enumerate(todo, start=1):
+                results[p.key] = evaluate(p.task)
+                say(f"{k}/{len(todo)} points")
+        else:
+            import dataclasses
+
+            todo = [dataclasses.replace(p, index=i) for i, p in enumerate(todo)]
+            stage = dataclasses.replace(config, name=f"{config.name}-{len(rounds)}")
+            rounds.append(stage.name)
+            summary = run_sweep(stage, db, workers=workers, scheduler=scheduler,
+                                dask_workers=dask_workers, points=todo,
+                                progress=lambda d, n: say(f"{d}/{n} points"))
+            where = summary.executor if summary.computed else where
+            for p in todo:
+                results[p.key] = db.get(p.key) or {"error": "missing"}
+        count += len(todo)
+
+    def q(point: Any) -> float:
+        got = results[point.key]
+        v = got.get("values", {}).get(key_name, math.nan)
+        if quantity == "critical-speed" and got.get("values", {}).get("status") != "found":
+            return math.nan
+        return float(v) if isinstance(v, int | float) else math.nan
+
+    try:
+        from ..sweep.design import Point
+        from ..sweep.store import point_key
+
+        base_task = _task(config, params)
+        base_point = Point(index=0, coords={}, task=base_task, key=point_key(base_task))
+        run([base_point])
+        q0 = q(base_point)
+        if not math.isfinite(q0) or q0 == 0:
+            raise ParameterError("parameters", params.name, f"the base set's {key_name} is not "
+                                 "found in the searched range; nothing to differentiate")
+        state: dict[str, dict[str, Any]] = {p: {"k": 0, "done": False, "pts": None}
+                                            for p in paths}
+        for h_index, h in enumerate(STEPS):
+            batch = []
+            for path in paths:
+                st = state[path]
+                if st["done"]:
+                    continue
+                value = float(_value(params, path))
+                pts = _points_for(config, params, path, value, h, value == 0.0)
+                if pts is None:
+                    st["done"] = True
+                    st["note"] = f"a ±{h:g} step is refused by the set's checks"
+                    continue
+                st["pts"], st["h"] = pts, h
+                batch += pts
+            say(f"step ±{h:g}: {len(batch)} points")
+            run(batch)
+            for path in paths:
+                st = state[path]
+                if st["done"] or st.get("h") != h:
+                    continue
+                qm, qp = q(st["pts"][0]), q(st["pts"][1])
+                st["qm"], st["qp"] = qm, qp
+                if math.isfinite(qm) and math.isfinite(qp) and \
+                        abs(qp - qm) >= MIN_EFFECT_RESOLUTIONS * resolution:
+                    st["done"], st["resolved"] = True, True
+                elif h_index == len(STEPS) - 1:
+                    st["done"] = True
+        # halving check of the resolved ones
+        batch = []
+        for path in paths:
+            st = state[path]
+            if st.get("resolved"):
+                value = float(_value(params, path))
+                half = _points_for(config, params, path, value, st["h"] / 2, value == 0.0)
+                st["half"] = half
+                batch += half or []
+        say(f"halving check: {len(batch)} points")
+        run(batch)
+    finally:
+        if db is not None:
+            db.close()
+    entries: list[Entry] = []
+    for path in paths:
+        st = state[path]
+        value = float(_value(params, path))
+        absolute = value == 0.0
+        h = st.get("h", math.nan)
+        scale = ZERO_SCALES.get(path, 1.0) if absolute else q0
+        qm, qp = st.get("qm", math.nan), st.get("qp", math.nan)
+        note = st.get("note", "")
+        if st.get("resolved"):
+            e = (qp - qm) / (2 * h * scale)
+            half = st.get("half")
+            if half:
+                eh = (q(half[1]) - q(half[0])) / (h * scale)
+            else:
+                eh = math.nan
+            tol = max(0.2 * abs(e), 2 * resolution / (h * scale))
+            consistent = math.isfinite(eh) and abs(eh - e) <= tol
+            if not consistent:
+                note = note or (f"nonlinear: at half the step {eh:.3g} against {e:.3g}")
+            entries.append(Entry(path, value, absolute, h, qm, qp, e, math.nan, True, eh,
+                                 consistent, note))
+        else:
+            if not math.isfinite(h):
+                bound = math.nan
+            else:
+                bound = MIN_EFFECT_RESOLUTIONS * resolution / (2 * h * scale)
+            if not note:
+                note = ("a trial failed or left the range" if not (math.isfinite(qm) and
+                                                                   math.isfinite(qp))
+                        else f"effect below {MIN_EFFECT_RESOLUTIONS:g}× the resolution at "
+                        f"±{h:g}")
+            entries.append(Entry(path, value, absolute, h, qm, qp, math.nan, bound, False,
+                                 math.nan, False, note))
+    entries.sort(key=lambda e: (not e.resolved, -abs(e.elasticity) if e.resolved else
+                                -(e.bound if math.isfinite(e.bound) else 0.0)))
+    return SensitivityResult(parameter_set=params.name, drive=drive, quantity=key_name,
+                             base=q0, resolution=resolution, entries=tuple(entries),
+                             skipped=skipped, evaluations=count, executor=where)
+
+
+def plot_tornado(result: SensitivityResult, path: str | os.PathLike[str],
+                 top: int = 20) -> Path:
+    """Ranked tornado chart: for each resolved parameter, the change of Q [%] at −h and +h
+    (the step beside its name); absolute derivatives are marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [e for e in result.entries if e.resolved][:top]
+    fig, ax = plt.subplots(figsize=(9, 0.32 * max(len(rows), 3) + 1.4))
+    y = np.arange(len(rows))[::-1]
+    for yi, e in zip(y, rows, strict=True):
+        lo = 100 * (e.q_minus / result.base - 1)
+        hi = 100 * (e.q_plus / result.base - 1)
+        ax.barh(yi, lo, color="C0", alpha=0.8)
+        ax.barh(yi, hi, color="C3", alpha=0.8)
+    labels = [f"{e.path} (±{100 * e.step:g} %{', abs' if e.absolute else ''})"
+              + ("" if e.consistent else " *") for e in rows]
+    ax.set_yticks(y, labels, fontsize=7)
+    ax.axvline(0, color="k", lw=0.8)
+    what = "critical speed" if result.quantity == "critical_speed" else \
+        "linear band's upper edge"
+    ax.set_xlabel(f"change of the {what} [%] (blue: parameter −step, red: +step; "
+                  f"base {result.base * 1e3:.3f} mm/s)", fontsize=8)
+    ax.set_title(f"{result.parameter_set}, {result.drive.upper()}: {what} by parameter "
+                 "(* halving check failed: nonlinear)", fontsize=9)
+    fig.tight_layout()
+    p = Path(path)
+    fig.savefig(p, dpi=100)
+    plt.close(fig)
+    return p

@@ -1,0 +1,260 @@
+"""`feeddrive fit` and `feeddrive predict`: a whole drive fitted to measured traces, and the
+critical speed carried through the fit's uncertainty (docs/fitting.md)."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..outputs import check_output_file, shown
+from . import _units
+from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
+
+
+def _say(text: str) -> None:
+    console.print(text, markup=False, highlight=False, soft_wrap=True)
+
+
+def _weights(items: list[str] | None) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        try:
+            w = float(value)
+        except ValueError:
+            w = math.nan
+        if not sep or not name.strip() or not (math.isfinite(w) and w > 0):
+            raise ValueError(f"--weight {item!r}: expected SIGNAL=W with a weight W > 0 "
+                             "(e.g. table_position=2)")
+        out[name.strip()] = w
+    return out
+
+
+@app.command("fit")
+@user_errors
+def fit_command(
+    traces: Annotated[list[str], typer.Argument(
+        help="Trace CSV files (simulate --output files, or measured: docs/measured-data.md), "
+        "one experiment each, fitted together.")],
+    free: Annotated[list[str] | None, typer.Option(
+        "--free", help="Dotted parameter path to fit (repeat for several), e.g. "
+        "controller.velocity_integral_gain; bounds: the parameter's plausible range.")] = None,
+    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    preset_name: str | None = typer.Option(None, "--preset", help="Starting parameter set "
+                                           "(default wang2021)."),
+    params_file: str | None = typer.Option(None, "--params", help="Starting parameters (TOML)."),
+    weight: Annotated[list[str] | None, typer.Option(
+        "--weight", help="SIGNAL=W: multiply that signal's residuals (already divided by "
+        "the data's own noise level) by W, e.g. screw_current=0.5.")] = None,
+    signal: Annotated[list[str] | None, typer.Option(
+        "--signal", help="Measured signal to fit (repeat): table_position, table_speed, "
+        "screw_current, nut_current, screw_torque, motor_current (default: table position "
+        "and motor current or torque, those present).")] = None,
+    command_speed: float | None = typer.Option(
+        None, "--command-speed", help="Reference of traces without a command column: "
+        "constant table speed [mm/s] after a 0.1-s ramp."),
+    profile_file: str | None = typer.Option(
+        None, "--profile", help="Reference of every trace from a CSV (time [s], table_speed "
+        "[mm/s], as simulate --profile-file), on the traces' clock; it must cover them."),
+    position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
+    confidence: float = typer.Option(0.95, "--confidence", help="Interval level [fraction]."),
+    max_evaluations: int = typer.Option(200, "--max-evaluations",
+                                        help="Residual evaluations per stage [-]."),
+    no_profile: bool = typer.Option(False, "--no-profile", help="Linear intervals only "
+                                    "(no profile likelihood)."),
+    workers: int | None = typer.Option(None, "--workers", help="Local processes for the "
+                                       "Jacobian columns (default: none, in this process)."),
+    dask_workers: int | None = typer.Option(None, "--dask-workers",
+                                            help="A Dask LocalCluster of N workers."),
+    scheduler: str | None = typer.Option(None, "--scheduler",
+                                         help="Address of a running Dask scheduler."),
+    out: str | None = typer.Option(None, "--out", help="Write the fitted set (extends the "
+                                   "base set, with a [fit] record) to FILE.toml."),
+    plot: str | None = typer.Option(None, "--plot", help="Write residual plots to FILE.png."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
+) -> None:
+    """Fit parameters of a whole drive to measured time traces by least squares (several
+    experiments at once), with standard errors, correlations, identifiability (condition
+    number, poorly determined combinations), profile-likelihood intervals where the linear
+    one is not credible, and a residual check. Values are in the parameter file's SI units."""
+    from ..analysis.fit import fit_drive, plot_residuals, read_experiment
+
+    if not free:
+        raise ValueError("--free: give at least one parameter path to fit")
+    if not (0 < confidence < 1):
+        raise ValueError(f"--confidence {confidence!r}: expected a fraction in (0, 1)")
+    if profile_file and command_speed is not None:
+        raise ValueError("--profile: give either --profile or --command-speed, not both")
+    inputs = [*traces, params_file, profile_file]
+    if out:
+        check_output_file(out, option="--out", inputs=inputs, force=force)
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force)
+    params = resolve_parameters(preset_name, params_file, drive)
+    table_position = _units.position("--position", position, params, drive)
+    speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
+    torque_constant = (params.linear_motor.force_constant if drive == "linear-motor"
+                       and params.linear_motor is not None else params.screw_motor.torque_constant)
+    reference = None
+    if profile_file:
+        from ..profiles import from_csv
+
+        prof = from_csv(profile_file)
+        reference = (prof.time, prof.table_speed)
+    experiments = [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
+                                   torque_constant=torque_constant) for t in traces]
+    progress = None if as_json else (lambda msg: console.print(f"  {msg}", markup=False,
+                                                               highlight=False))
+    result = fit_drive(params, experiments, free, drive=drive, table_position=table_position,
+                       weights=_weights(weight), confidence=confidence,
+                       max_evaluations=max_evaluations, profile=not no_profile,
+                       workers=workers, dask_workers=dask_workers, scheduler=scheduler,
+                       progress=progress)
+    written = None
+    if out:
+        if params_file:
+            extends = os.path.relpath(Path(params_file).resolve(), Path(out).resolve().parent)
+        else:
+            extends = preset_name or "wang2021"
+        data_names = [os.path.relpath(Path(t).resolve(), Path(out).resolve().parent)
+                      for t in traces]
+        Path(out).write_text(result.fitted_toml(extends, data_names), encoding="utf-8")
+        written = out
+    if plot:
+        plot_residuals(result, plot)
+    data = result.to_dict()
+    data["written"] = written
+    data["plot"] = plot
+    if as_json:
+        print_json(data)
+        return
+    level = f"{100 * confidence:.0f} %"
+    _say(f"fit of {len(free)} parameter(s) to {len(traces)} trace(s), {drive.upper()}: "
+         f"{result.evaluations} evaluations; {result.message}")
+    for e in result.estimates:
+        if math.isfinite(e.low) and math.isfinite(e.high):
+            ci = (f"{level} CI {e.low:.6g} … {e.high:.6g} (±{100 * e.relative_half_width:.2g} "
+                  f"%, {e.interval})")
+        else:
+            ci = f"{level} interval not determined"
+        state = "determined" if e.determined else f"POORLY DETERMINED: {e.issue}"
+        _say(f"  {e.path} = {e.value:.6g} [{e.unit}] (start {e.start:.6g}), {ci}; {state}")
+    cond = result.condition_number
+    _say(f"  condition number (relative parameters) {cond:.3g}" if math.isfinite(cond)
+         else "  condition number: not available")
+    for c in result.poorly_determined:
+        combo = " ".join(f"{v:+.2f}·{k}" for k, v in c["combination"].items())
+        _say(f"  poorly determined combination (singular value {c['singular_value_ratio']:.2g}"
+             f" of the largest): {combo}")
+    for r in result.residuals:
+        _say(f"  residual {shown(Path(r.source).name)} {r.signal}: rms {r.rms:.4g}, "
+             f"{r.ratio:.2f}× the data's noise {r.noise:.3g} [SI]")
+    if not result.residual_ok:
+        err_console.print("warning: poor fit: a residual exceeds 2× the data's own noise; "
+                          "the model does not explain the data, and no parameter is "
+                          "reported determined", markup=False, highlight=False,
+                          soft_wrap=True)
+    if written:
+        _say(f"wrote {shown(written)}")
+    if plot:
+        _say(f"wrote {shown(plot)}")
+    if result.interrupted:
+        raise typer.Exit(code=130)
+
+
+@app.command("predict")
+@user_errors
+def predict_command(
+    fit_file: str = typer.Argument(..., help="A fitted file (feeddrive fit --out)."),
+    samples: int = typer.Option(100, "--samples", help="Monte Carlo samples [-]."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the draws [-]."),
+    store: str | None = typer.Option(None, "--store", help="Results store (SQLite; default "
+                                     "FIT.predict.sqlite); a rerun resumes from it."),
+    workers: int | None = typer.Option(None, "--workers", help="Local processes "
+                                       "(default: every core)."),
+    dask_workers: int | None = typer.Option(None, "--dask-workers",
+                                            help="A Dask LocalCluster of N workers."),
+    scheduler: str | None = typer.Option(None, "--scheduler",
+                                         help="Address of a running Dask scheduler."),
+    resolution: float | None = typer.Option(None, "--resolution", help="Critical-speed "
+                                            "search resolution [mm/s] (default 0.01)."),
+    low: float | None = typer.Option(None, "--low", help="Lowest speed searched [mm/s]."),
+    high: float | None = typer.Option(None, "--high", help="Highest speed searched [mm/s]."),
+    plot: str | None = typer.Option(None, "--plot", help="Histogram and convergence plot "
+                                    "FILE.png."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
+) -> None:
+    """The critical creeping speed as a distribution: Monte Carlo over the fit's covariance
+    (multivariate normal), each sample a critical-speed search from rest on the shared
+    protocol, run through the sweep machinery (local pool or Dask; resumable store).
+    Prints the 5/50/95 % points with their Monte Carlo 95 % intervals."""
+    from ..analysis.predict import plot_prediction, predict
+    from ..protocol import SPEED_RANGE
+
+    if plot:
+        check_output_file(plot, option="--plot", inputs=[fit_file, store], force=force)
+    if workers is not None and workers < 1:
+        raise ValueError(f"--workers = {workers}: expected ≥ 1")
+    rng = None
+    if low is not None or high is not None:
+        lo = _units.speed("--low", low, positive=True) if low is not None else SPEED_RANGE[0]
+        hi = _units.speed("--high", high, positive=True) if high is not None else SPEED_RANGE[1]
+        if not hi > lo:
+            raise ValueError(f"--high {hi * 1e3:g}: expected > --low {lo * 1e3:g} [mm/s]")
+        rng = (lo, hi)
+    res = None if resolution is None else _units.speed("--resolution", resolution,
+                                                        positive=True)
+
+    def started(todo: int, where: str) -> None:
+        if not as_json:
+            _say(f"  {todo} samples to compute on {where}")
+
+    def progress(done: int, todo: int) -> None:
+        if not as_json and (done == todo or done % max(1, todo // 10) == 0):
+            _say(f"  {done}/{todo} samples")
+
+    from ..sweep.executors import SweepAborted
+
+    try:
+        pred = predict(fit_file, samples=samples, seed=seed, store=store, workers=workers,
+                       dask_workers=dask_workers, scheduler=scheduler, resolution=res,
+                       speed_range=rng, progress=progress, started=started)
+    except SweepAborted as err:
+        err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    except KeyboardInterrupt:
+        where = store or str(Path(fit_file).with_suffix(".predict.sqlite"))
+        err_console.print(f"interrupted: every finished sample is in {shown(where)}; rerun "
+                          "the same command to resume", markup=False, highlight=False,
+                          soft_wrap=True)
+        raise typer.Exit(code=130) from None
+    if plot:
+        plot_prediction(pred, plot)
+    data = pred.to_dict()
+    data["plot"] = plot
+    if as_json:
+        print_json(data)
+        return
+    _say(f"{pred.record.drive.upper()} critical speed from rest over {', '.join(pred.record.free)}"
+         f": {samples} samples (seed {seed}), {pred.computed} computed now, store "
+         f"{shown(pred.store)}")
+    for p in data["percentiles"]:
+        v, (a, b) = p["critical_speed_mm_s"], p["mc_interval_mm_s"]
+
+        def fmt(x: float | str) -> str:
+            return f"{x:.3f}" if isinstance(x, float) else x
+
+        _say(f"  {p['percentile']:g} %: {fmt(v)} mm/s (Monte Carlo 95 % interval {fmt(a)} … "
+             f"{fmt(b)})")
+    _say(f"  search resolution {data['resolution_mm_s']:g} mm/s over "
+         f"{data['speed_range_mm_s'][0]:g}–{data['speed_range_mm_s'][1]:g} mm/s; "
+         f"{data['below_range']} below, {data['above_range']} above the range, "
+         f"{data['failed']} failed; {data['refused_draws']} draws refused (invalid sets)")
+    if plot:
+        _say(f"wrote {shown(plot)}")

@@ -1,0 +1,83 @@
+"""`feeddrive sensitivity` (issue 22 item 5): elasticities by central differences through the
+sweep machinery, the step rule and its halving check; the linear band's upper edge (cheap)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import feeddrive as fd
+from feeddrive.analysis.sensitivity import (
+    MIN_EFFECT_RESOLUTIONS,
+    parameter_paths,
+    sensitivity,
+)
+from feeddrive.linear import stability_band
+
+
+def _edge(params: fd.DriveParameters) -> float:
+    """The quantity as the sweep computes it (the linear-band settings' range, 40 points)."""
+    from feeddrive.sweep.quantities import QuantitySettings
+
+    q = QuantitySettings.parse({"kind": "linear-band"})
+    band = stability_band(fd.DriveSystem(params, "cdfs", 0.4), low=q.low, high=q.high,
+                          points=40)
+    return band.intervals[-1][1]
+
+
+def test_elasticity_matches_direct_central_difference() -> None:
+    result = sensitivity("wang2021", quantity="linear-band", in_process=True,
+                         patterns=["controller.velocity_gain", "screw.youngs_modulus"])
+    by = {e.path: e for e in result.entries}
+    kv = by["controller.velocity_gain"]
+    assert kv.resolved and kv.step == 0.1 and kv.consistent
+    base = fd.preset("wang2021")
+    v0 = base.controller.velocity_gain
+    plus = _edge(base.replace_path("controller.velocity_gain", v0 * 1.1))
+    minus = _edge(base.replace_path("controller.velocity_gain", v0 * 0.9))
+    assert kv.elasticity == pytest.approx((plus - minus) / (0.2 * _edge(base)), rel=1e-9)
+    assert kv.elasticity < 0  # a stiffer velocity loop narrows the unstable band
+    # the rule: a resolved effect is ≥ 10 resolutions; an unresolved one states its bound
+    assert abs(kv.q_plus - kv.q_minus) >= MIN_EFFECT_RESOLUTIONS * result.resolution
+    e = by["screw.youngs_modulus"]
+    if not e.resolved:
+        assert e.step == 0.4 and math.isfinite(e.bound)
+        assert abs(e.q_plus - e.q_minus) < MIN_EFFECT_RESOLUTIONS * result.resolution
+
+
+def test_left_out_parameters_name_their_reason() -> None:
+    keep, skipped = parameter_paths(fd.preset("wang2021"), "cdfs")
+    assert "controller.velocity_integral_gain" in keep
+    assert "hollow mot" not in " ".join(keep)
+    assert "CDFS" in skipped["hollow_motor.inertia"]
+    assert "negative direction" not in skipped.get("friction.screw.negative.static_force", "x")
+    assert "positive direction" in skipped["friction.screw.negative.static_force"]
+    assert "structural" in skipped["controller.position_period"]
+    assert "no limit" in skipped["controller.current_limit"]
+
+
+def test_unknown_pattern_is_refused() -> None:
+    with pytest.raises(fd.ParameterError, match="matches no numeric parameter"):
+        sensitivity("wang2021", quantity="linear-band", in_process=True,
+                    patterns=["controller.nothing*"])
+
+
+def test_report_section_answers_the_axial_rigidity_claim(tmp_path) -> None:
+    """The reproduce report's section (feeddrive.reproduce.sensitivity_section) on the
+    stiffness rows: Wang2021 claims "the greater the axial rigidity, the lower the critical
+    speed"; the answer is read from those rows, with the numbers it rests on."""
+    from feeddrive.reproduce import sensitivity_section as sec
+
+    data = sensitivity(fd.preset("wang2021"), quantity="linear-band", in_process=True,
+                       linear_points=sec.LINEAR_POINTS,
+                       patterns=[*sec.AXIAL, "controller.velocity_gain"]).to_dict()
+    text, rows = sec.sensitivity_rows(data)
+    assert [r["parameter"] for r in rows][0] == "controller.velocity_gain"
+    answer = sec.axial_rigidity_answer(data)
+    assert answer in text and "axial rigidity" in answer
+    axial = [e for e in data["entries"] if e["path"] in sec.AXIAL]
+    if not any(e["resolved"] for e in axial):
+        assert "neither supports nor refutes" in answer
+    png = sec.figure(data, tmp_path)
+    assert png is not None and png.stat().st_size > 5000
