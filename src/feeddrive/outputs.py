@@ -157,8 +157,9 @@ def check_output_file(path: str | os.PathLike[str], *, option: str,
     if formats is not None:
         allowed = tuple(formats)
         if p.suffix.lower() not in allowed:
-            raise OutputError(f"{option} {shown(p)}: expected a file name ending in "
-                              f"{', '.join(allowed)}")
+            names = allowed[0] if len(allowed) == 1 else \
+                f"{', '.join(allowed[:-1])} or {allowed[-1]}"
+            raise OutputError(f"{option} {shown(p)}: expected a {names} file name")
     if p.exists() and not force:
         raise OutputError(f"{option} {shown(p)}: exists; pass --force to replace it")
     _probe_writable(option, p)

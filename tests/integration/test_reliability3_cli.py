@@ -225,7 +225,7 @@ def test_a_plot_with_a_wrong_format_is_refused_before_any_work(tmp_path: Path,
                                                                command: str) -> None:
     started = time.perf_counter()
     result = runner.invoke(app, [*PLOTTERS[command], "--plot", str(tmp_path / "r.txt")])
-    _one_line(result, "--plot", "r.txt", ".png, .pdf, .svg")
+    _one_line(result, "--plot", "r.txt", "expected a .png, .pdf or .svg file name")
     assert result.exit_code == 2
     assert time.perf_counter() - started < 5  # simulate ran 40 s before refusing
 
