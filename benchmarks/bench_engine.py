@@ -1,4 +1,4 @@
-"""Benchmark (issue 9): the stiff-aware engine against scipy LSODA and odeint on the plain-Python
+"""Benchmark (issues 9, 21): the default engine against scipy LSODA and odeint on the plain-Python
 model, at matched accuracy.
 
 Run from the repository root (about 5 minutes on 2 cores)::
@@ -11,14 +11,18 @@ Scenarios: the shipped ``wang2021`` preset, table at mid-screw, from rest with t
 * ``cdfs_2p0``       CDFS at 2.0 mm/s (smooth after a decaying transient);
 * ``cdfs_1p2``       CDFS at 1.2 mm/s (creeping: stick-slip throughout);
 * ``ddfs_0p5_vn16``  DDFS at 0.5 mm/s with v_n = 16 mm/s (smooth; the screw bristle sliding at
-  16.5 mm/s is stiff, λ ≈ 8000 1/s).
+  16.5 mm/s is stiff, λ ≈ 8000 1/s);
+* stress variants (issue 21): ``ddfs_0p5_vn16_s0x10``, ``…_s0x100`` and ``cdfs_2p0_s0x100``,
+  the screw bristle stiffness σ0 × 10 and × 100 (λ up to 8e5 1/s); their tight reference is
+  RODAS4 at the same tight tolerances (DOPRI5 would need ~10⁸ calls).
 
 Contestants, each recording the 15 states on the same 1-ms grid:
 
 * **engine**: on the model assembled once (as the baselines' ``ReferenceModel``),
-  ``switching.integrate`` (``SolverOptions(method="auto")``, DOPRI5 ⇄ RODAS4 with
-  dense output) with the auxiliary signals not evaluated (``want_aux=False``), which is what
-  the baselines deliver too; and, for information, the whole ``simulate()`` call (aux signals
+  ``switching.integrate`` with the default method (``SolverOptions()``: ``modal``, DOPRI5 ⇄
+  RODAS4 with the Rosenbrock steps capped on lightly damped modes, dense output) with the
+  auxiliary signals not evaluated (``want_aux=False``), which is what the baselines deliver
+  too; and, for information, the whole ``simulate()`` call (aux signals
   at every sample, xarray Dataset: issue 9 items 2–3 make those lazy);
 * **LSODA**: ``scipy.integrate.solve_ivp(method="LSODA", rtol=1e-6)`` with the engine's
   absolute tolerances, ``t_eval`` on the grid, RHS ``reference.scipy_model.ReferenceModel``;
@@ -85,11 +89,19 @@ TIGHT = SolverOptions(method="dopri5", rtol=1e-10, position_tolerance=1e-14,
                       speed_tolerance=1e-12, current_tolerance=1e-10)
 OUTPUT = 1e-3  # s
 
+# name -> (drive, table speed, nut speed, kind, screw bristle stiffness factor σ0 ×)
 SCENARIOS = {
-    "cdfs_2p0": ("cdfs", 2.0e-3, 0.0, "smooth"),
-    "cdfs_1p2": ("cdfs", 1.2e-3, 0.0, "creeping"),
-    "ddfs_0p5_vn16": ("ddfs", 0.5e-3, 16e-3, "smooth"),
+    "cdfs_2p0": ("cdfs", 2.0e-3, 0.0, "smooth", 1.0),
+    "cdfs_1p2": ("cdfs", 1.2e-3, 0.0, "creeping", 1.0),
+    "ddfs_0p5_vn16": ("ddfs", 0.5e-3, 16e-3, "smooth", 1.0),
+    "ddfs_0p5_vn16_s0x10": ("ddfs", 0.5e-3, 16e-3, "smooth", 10.0),
+    "ddfs_0p5_vn16_s0x100": ("ddfs", 0.5e-3, 16e-3, "smooth", 100.0),
+    "cdfs_2p0_s0x100": ("cdfs", 2.0e-3, 0.0, "smooth", 100.0),
 }
+# the tight reference of the stress variants: RODAS4 (DOPRI5 at rtol 1e-10 would take
+# ~10⁸ calls on the stiff bristle); the same tolerances as TIGHT
+TIGHT_STIFF = SolverOptions(method="rodas4", rtol=1e-10, position_tolerance=1e-14,
+                            speed_tolerance=1e-12, current_tolerance=1e-10)
 DURATIONS = (10.0, 100.0)
 
 
@@ -126,12 +138,16 @@ def cpu(fn: Any) -> tuple[float, Any]:
 
 
 def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
-    drive, v_t, v_n, kind = SCENARIOS[name]
+    drive, v_t, v_n, kind, sigma0 = SCENARIOS[name]
     params = fd.preset("wang2021")
+    if sigma0 != 1.0:
+        params = params.replace_path("friction.screw.bristle_stiffness",
+                                     sigma0 * params.friction.screw.bristle_stiffness)
     system = DriveSystem(params, drive, 0.4)
     profile = ConstantSpeed(v_t, v_n)
     grid = np.arange(int(round(duration / OUTPUT)) + 1) * OUTPUT
-    truth = simulate(system, profile, duration, options=TIGHT)["table_position"]
+    truth = simulate(system, profile, duration,
+                     options=TIGHT if sigma0 == 1.0 else TIGHT_STIFF)["table_position"]
     ref = ReferenceModel(params, drive, 0.4, profile)
     model = system.model(profile)
     atol = ref.tolerances()
@@ -157,7 +173,7 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
     err_lsoda = float(np.max(np.abs(sol.y[X_T] - truth)))
     err_odeint = float(np.max(np.abs(y_ode[:, X_T] - truth)))
     target = min(err_lsoda, err_odeint)
-    options = SolverOptions(method="auto")
+    options = SolverOptions()  # the default method
     for _ in range(4):
         t, y, stats = engine_states(system, model, profile, duration, options)
         err_engine = float(np.max(np.abs(y[:, X_T] - truth)))
@@ -176,6 +192,7 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
     med = {k: float(np.median(v)) for k, v in times.items()}
     return {
         "scenario": name, "kind": kind, "duration_s": duration, "drive": drive,
+        "screw_bristle_stiffness_factor": sigma0,
         "table_speed_mm_s": v_t * 1e3, "nut_speed_mm_s": v_n * 1e3,
         "engine_options": {"method": options.method, "rtol": options.rtol,
                            "position_tolerance": options.position_tolerance},
@@ -209,7 +226,7 @@ def compile_times() -> dict[str, dict[str, float]]:
         "simulate(DriveSystem(p, 'ddfs', 0.4), ConstantSpeed(1e-3, 1e-2), 0.01, options=o)\n"
         "print(time.perf_counter() - t0)\n")
     out: dict[str, dict[str, float]] = {}
-    for method in ("dopri5", "auto"):
+    for method in ("dopri5", "auto", "modal"):
         with tempfile.TemporaryDirectory() as cache:
             env = dict(os.environ, NUMBA_CACHE_DIR=cache)
             for label in ("empty_cache_s", "warm_cache_s"):

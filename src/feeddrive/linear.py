@@ -316,10 +316,28 @@ def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
 
 def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float = 0.0, *,
               frictionless: bool = False) -> LinearModel:
-    """Linearise the closed loop of ``system`` at steady sliding at ``table_speed`` [m/s]
-    (``nut_speed`` [m/s] for the DDFS), or with every friction law set to "none".  A set with
-    torque ripple or lead error (no steady state) is linearised on its averaged model
-    (:func:`averaged`), with a warning in ``notes``."""
+    """Linearise the closed loop of ``system`` at steady sliding.
+
+    A set with torque ripple or lead error (no steady state) is linearised on its averaged
+    model (:func:`averaged`), with a warning in ``notes``.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (continuous loops).
+    table_speed : float, default 1e-3
+        Steady table speed of the operating point [m/s].
+    nut_speed : float, default 0
+        Steady nut speed of the operating point [m/s] (DDFS).
+    frictionless : bool, default False
+        Linearise with every friction law set to "none".
+
+    Returns
+    -------
+    LinearModel
+        A, B, C, D over the live states with named inputs and outputs (``to_control()``: a
+        python-control StateSpace), the operating point and notes.
+    """
     if table_speed == 0.0 and not frictionless:
         raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
     sys_, notes = averaged(_frictionless(system) if frictionless else system)
@@ -500,8 +518,33 @@ class LoopAnalysis:
 def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float = 0.0, *,
                   frictionless: bool = True, f_min: float = 0.5, f_max: float = 500.0,
                   points: int = 400) -> LoopAnalysis:
-    """Poles and velocity/position loop transfers of every motor axis between ``f_min`` and
-    ``f_max`` [Hz].  The velocity loop is analysed with the position loop open (K_pp = 0)."""
+    """Poles and velocity/position loop transfers of every motor axis.
+
+    The velocity loop is analysed with the position loop open (K_pp = 0).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (continuous loops).
+    table_speed : float, default 1e-3
+        Steady table speed of the operating point [m/s].
+    nut_speed : float, default 0
+        Steady nut speed of the operating point [m/s] (DDFS).
+    frictionless : bool, default True
+        Linearise with every friction law set to "none".
+    f_min : float, default 0.5
+        Lowest frequency of the loop transfers [Hz].
+    f_max : float, default 500
+        Highest frequency [Hz].
+    points : int, default 400
+        Number of log-spaced frequencies.
+
+    Returns
+    -------
+    LoopAnalysis
+        Classified poles, the least-damped mode and each loop's margins, crossover and
+        bandwidth.
+    """
     lin = linearize(system, table_speed, nut_speed, frictionless=frictionless)
     freq = np.logspace(np.log10(f_min), np.log10(f_max), points)
     w = 2 * np.pi * freq
@@ -589,14 +632,33 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
                        frictionless: bool = True) -> FrequencyResponse:
     """A transfer of the closed loop linearised at steady sliding (:func:`linearize`).
 
-    ``input`` is a name of :data:`NAMED_RESPONSES` (``"tracking"``, ``"dynamic_compliance"``,
-    …; ``output`` then omitted), a loop gain ``"<axis>_position_loop"`` /
-    ``"<axis>_velocity_loop"`` (L = 1/S − 1 at the loop break, as :func:`loop_analysis`; the
-    velocity loop with the position loop open), or any input of the linear model with
-    ``output`` any of its outputs, e.g. ``frequency_response(system, "load_force",
-    "table_position")``.  ``system`` a DriveSystem (linearised at ``table_speed`` [m/s],
-    frictionless by default) or a LinearModel (loop gains need a DriveSystem).  Frequencies
-    [Hz], default 200 log-spaced from 0.1 to 1000 Hz."""
+    Parameters
+    ----------
+    system : DriveSystem or LinearModel
+        The drive (linearised at ``table_speed``, frictionless by default) or a linear model
+        already made (loop gains need a DriveSystem).
+    input : str
+        A name of :data:`NAMED_RESPONSES` (``"tracking"``, ``"dynamic_compliance"``, …;
+        ``output`` then omitted), a loop gain ``"<axis>_position_loop"`` /
+        ``"<axis>_velocity_loop"`` (L = 1/S − 1 at the loop break, as :func:`loop_analysis`;
+        the velocity loop with the position loop open), or any input of the linear model.
+    output : str or None, default None
+        Any output of the linear model (with an input name), e.g.
+        ``frequency_response(system, "load_force", "table_position")``.
+    frequency_hz : numpy.ndarray or None, default None
+        Frequencies [Hz]; None: 200 log-spaced from 0.1 to 1000 Hz.
+    table_speed : float, default 1e-3
+        Steady table speed of the operating point [m/s].
+    nut_speed : float, default 0
+        Steady nut speed of the operating point [m/s] (DDFS).
+    frictionless : bool, default True
+        Linearise with every friction law set to "none".
+
+    Returns
+    -------
+    FrequencyResponse
+        Complex response, magnitude [dB] and phase [deg] over ``frequency_hz``, with its units.
+    """
     freq = (np.logspace(-1, 3, 200) if frequency_hz is None
             else np.asarray(frequency_hz, dtype=float))
     if freq.ndim != 1 or freq.size == 0 or not np.all(freq > 0):
@@ -713,9 +775,34 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
                    high: float = protocol.LINEAR_SPEED_RANGE[1],
                    points: int = protocol.LINEAR_POINTS, tolerance: float = 1e-6,
                    progress: Any = None) -> StabilityBand:
-    """Scan table speeds from ``low`` to ``high`` [m/s] (log-spaced; default
-    ``feeddrive.protocol.LINEAR_SPEED_RANGE``), then bisect every stable/unstable change to
-    ``tolerance`` [m/s]."""
+    """Speeds at which steady sliding is linearly unstable.
+
+    Scans table speeds from ``low`` to ``high`` (log-spaced; the default is
+    ``feeddrive.protocol.LINEAR_SPEED_RANGE``), then bisects every stable/unstable change to
+    ``tolerance``.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (continuous loops).
+    nut_speed : float, default 0
+        Nut speed of every operating point [m/s] (DDFS).
+    low : float, default 1e-5
+        Lowest table speed scanned [m/s].
+    high : float, default 5e-3
+        Highest table speed scanned [m/s].
+    points : int, default 40
+        Number of scanned speeds.
+    tolerance : float, default 1e-6
+        Resolution of the bisected band edges [m/s].
+    progress : callable or None, default None
+        Called as ``progress(done, total)`` after each operating point.
+
+    Returns
+    -------
+    StabilityBand
+        The unstable intervals with the unstable mode's frequency, and the scan.
+    """
     if not (0 < low < high):
         raise ParameterError("low", low * 1e3, f"expected 0 < low < high = {high * 1e3} [mm/s]")
     speeds = np.geomspace(low, high, points)

@@ -85,7 +85,8 @@ def table(group: str) -> dict[str, Any]:
     Returns
     -------
     dict
-        Name → registered object, in registration order (built-in providers first).
+        Name → registered object, sorted by name (registration order depends on which module
+        happened to be imported first).
     """
     tab = _table_of(group)
     if group not in _LOADED and group not in _LOADING:
@@ -103,7 +104,7 @@ def table(group: str) -> dict[str, Any]:
             _LOADED.add(group)
         finally:
             _LOADING.discard(group)
-    return tab
+    return dict(sorted(tab.items()))
 
 
 def names(group: str) -> tuple[str, ...]:
@@ -117,7 +118,7 @@ def names(group: str) -> tuple[str, ...]:
     Returns
     -------
     tuple of str
-        The names, in registration order.
+        The names, sorted.
     """
     return tuple(table(group))
 

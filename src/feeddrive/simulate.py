@@ -99,9 +99,11 @@ class DriveSystem:
         return y0
 
 
-METHODS = ("dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed", "rodas4-fixed")
+METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed",
+           "rodas4-fixed")
 # method -> (driver mode, adaptive) of feeddrive.solvers.switching
-_DENSE_MODES = {"auto": (switching.MODE_AUTO, 1), "rodas4": (switching.MODE_RODAS4, 1),
+_DENSE_MODES = {"modal": (switching.MODE_MODAL, 1), "auto": (switching.MODE_AUTO, 1),
+                "rodas4": (switching.MODE_RODAS4, 1),
                 "dopri5-dense": (switching.MODE_DOPRI5, 1),
                 "rodas4-fixed": (switching.MODE_RODAS4, 0)}
 
@@ -112,12 +114,19 @@ class SolverOptions:
 
     Parameters
     ----------
-    method : str, default "dopri5"
+    method : str, default "modal"
+        * ``"modal"`` (the default): DOPRI5 where the problem is not stiff, RODAS4 where it
+          is, with each Rosenbrock step capped so that every lightly damped, undamped or
+          growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.7 for damping
+          ratios below 0.02: :mod:`feeddrive.solvers.modes`), and no switch where that cap
+          leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
+          early (:func:`divergence_bounds`);
         * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps
           at most ``max_step``, default 1 ms, and the output interval); the engine v1
           behaviour, kept bit for bit;
         * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
-          automatically; dense output (steps not capped by the output interval);
+          automatically on Hairer's stiffness test alone; dense output (steps not capped by
+          the output interval); at rtol 1e-6 its RODAS4 steps can damp a slowly growing mode;
         * ``"rodas4"``: the Rosenbrock method RODAS4 throughout, dense output;
         * ``"dopri5-dense"``: DOPRI5 throughout with dense output;
         * ``"dopri5-fixed"``, ``"rodas4-fixed"``: fixed step ``fixed_step`` (order checks).
@@ -142,7 +151,7 @@ class SolverOptions:
         A run that would need more steps is refused before it starts.
     """
 
-    method: str = "dopri5"
+    method: str = "modal"
     rtol: float = 1e-6
     position_tolerance: float = 1e-10
     speed_tolerance: float = 1e-8
@@ -226,7 +235,7 @@ def sampling(params: DriveParameters, output_interval: float) -> Sampling:
 def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: Sampling,
                      options: SolverOptions, y0: np.ndarray, t_end: float,
                      adaptive: int, atol: np.ndarray, rel: np.ndarray, h_init: float,
-                     h_max: float) -> None:
+                     h_max: float, bound: np.ndarray) -> None:
     """Refuse, before integrating with ``dopri5``, a run whose steps (projected from a short
     probe) exceed ``max_steps`` (feeddrive.budget)."""
     t_probe = budget.probe_time(t_end, grid.base) if adaptive else 0.0
@@ -235,7 +244,7 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
     allowed = int(options.max_steps * t_probe / t_end) + 1000
     _, _, _, stats, _ = dopri5.integrate(
         model, y0.copy(), t_probe, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
-        grid.n_cur, options.rtol, atol, rel, h_init, h_max, adaptive, allowed)
+        grid.n_cur, options.rtol, atol, rel, h_init, h_max, adaptive, allowed, bound=bound)
     if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
         problem = budget.step_rate_problem(
             steps=int(stats[1]), probe_time=float(stats[4]), duration=t_end,
@@ -243,6 +252,39 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
             speed=budget.profile_speed(profile))
         if problem:
             raise SimulationError(problem)
+
+
+# A run stops early as diverged when a speed state exceeds this multiple of the reference
+# speed: the largest commanded table plus nut speed, the largest initial speed or 1 mm/s,
+# whichever is largest.  5× the "unstable" verdict's 20× (feeddrive.analysis.metrics
+# CreepThresholds.max_speed_ratio): a run stopped here is "unstable" by that verdict too.
+DIVERGENCE_SPEED_RATIO = 100.0
+DIVERGENCE_SPEED_FLOOR = 1e-3  # [m/s]
+
+
+def _peak(value: Any) -> float:
+    if value is None:
+        return 0.0
+    return float(np.max(np.abs(np.asarray(value, dtype=float)), initial=0.0))
+
+
+def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np.ndarray:
+    """The largest |state| per state [SI] before a run stops as diverged: speed states (linear
+    and, through the lead, rotary) at :data:`DIVERGENCE_SPEED_RATIO` × the reference speed;
+    other states unbounded (a diverging loop shows in its speeds first)."""
+    command = sum(_peak(getattr(profile, name, None)) for name in (
+        "table_speed", "nut_speed", "table_amplitude", "nut_amplitude"))
+    initial = max((abs(float(v)) for k, v in system.initial_state.items() if "speed" in k),
+                  default=0.0)
+    limit = DIVERGENCE_SPEED_RATIO * max(command, initial, DIVERGENCE_SPEED_FLOOR)
+    bound = np.full(len(model.states), np.inf)
+    for i, (kind, scale) in enumerate(zip(model.tolerance_kinds, model.tolerance_scales,
+                                          strict=True)):
+        if kind == "speed":
+            bound[i] = limit
+        elif kind == "rotary_speed":
+            bound[i] = limit / scale
+    return bound
 
 
 def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarray:
@@ -354,14 +396,21 @@ class Simulation:
         self.atol, self.rel = self.model.tolerances(
             options.position_tolerance, options.speed_tolerance, options.current_tolerance)
         self.y0 = system.initial_vector(self.model)
+        self.bound = divergence_bounds(system, profile, self.model)
         self._chunks: _Chunks | None = None
         self._running: _Chunks | None = None
 
     def live_time(self) -> float:
-        """The simulated time [s] the solver has reached in the run going on now, read while
-        :meth:`run` computes (from another thread: the compiled solver releases the GIL and
-        writes the time of each accepted step into its memory's last slot); 0 before the
-        first step."""
+        """The simulated time the solver has reached in the run going on now.
+
+        Read while :meth:`run` computes (from another thread: the compiled solver releases the
+        GIL and writes the time of each accepted step into its memory's last slot).
+
+        Returns
+        -------
+        float
+            The time reached [s]; 0 before the first step.
+        """
         chunks = self._running
         return 0.0 if chunks is None else float(chunks.live[-1])
 
@@ -407,7 +456,8 @@ class Simulation:
         self._running = chunks
         if not chunks.dense:
             _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
-                             chunks.adaptive, self.atol, self.rel, chunks.h_init, chunks.h_max)
+                             chunks.adaptive, self.atol, self.rel, chunks.h_init, chunks.h_max,
+                             self.bound)
         try:
             t, y, aux_parts, stats = chunks.advance(n_break, output, progress)
         except _Stopped as stop:
@@ -419,7 +469,8 @@ class Simulation:
                                         None if output is None else str(output)) from None
         wall = _time.perf_counter() - started
         status = int(stats[0])
-        if status != dopri5.STATUS_OK:
+        diverged = status == dopri5.STATUS_DIVERGED
+        if status != dopri5.STATUS_OK and not diverged:
             self._chunks = None
             raise SimulationError(
                 f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
@@ -433,10 +484,14 @@ class Simulation:
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
             "breakpoint_interval_s": grid.base,
         }
+        if diverged:  # stopped early: the Result ends where a speed left its bound
+            solver_stats.update({"diverged": True, "diverged_at_s": float(stats[4]),
+                                 "divergence_speed_ratio": DIVERGENCE_SPEED_RATIO})
         if chunks.dense:
             solver_stats.update({
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
-                "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8])})
+                "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8]),
+                "eigen_analyses": int(stats[9])})
         return self._result(t, y, aux_parts, solver_stats)
 
     def _result(self, t: np.ndarray, y: np.ndarray, aux_parts: list[np.ndarray],
@@ -490,8 +545,9 @@ class _Chunks:
         self.stop_requested = False  # Simulation.request_stop
         self.size = max(every, int(round(first / grid.base)) // every * every)
         self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-        self.totals = np.zeros(9 if self.dense else 5)
+        self.totals = np.zeros(len(switching.STAT_NAMES) if self.dense else 5)
         self.start = 0
+        self.diverged = False
         self.y = sim.y0
 
     def _call(self, y: np.ndarray, start: int, stop: int, held: np.ndarray,
@@ -505,12 +561,13 @@ class _Chunks:
                 grid.n_cur, options.rtol, sim.atol, sim.rel, self.h_init, self.h_max,
                 self.adaptive, max_steps, self.mode,
                 profile_breakpoints(sim.profile, t_stop, grid.base), self.want_aux,
-                start=start, held=held, memory=memory)
+                start=start, held=held, memory=memory, bound=sim.bound)
         else:
             t, yy, aa, stats, _ = dopri5.integrate(
                 sim.model, y, t_stop, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
                 grid.n_cur, options.rtol, sim.atol, sim.rel, self.h_init, self.h_max,
-                self.adaptive, max_steps, start=start, held=held, memory=memory)
+                self.adaptive, max_steps, start=start, held=held, memory=memory,
+                bound=sim.bound)
         if start > 0 and t.size and t[0] <= start * grid.base:
             t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
         return t, yy, aa, stats
@@ -537,7 +594,7 @@ class _Chunks:
         tail: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         stats = self.totals
         try:
-            while self.start < n_break:
+            while self.start < n_break and not self.diverged:
                 if self.dense:
                     stop = (self.start // self.size + 1) * self.size
                 else:
@@ -556,6 +613,15 @@ class _Chunks:
                                              self.sim.options.max_steps - int(self.totals[1]))
                 wall = _time.perf_counter() - began
                 stats = self._add(last)
+                if int(last[0]) == dopri5.STATUS_DIVERGED:
+                    # kept up to the divergence and final: a continuation returns it again
+                    self.totals = stats
+                    self.parts.append((t, yy, aa))
+                    if writer is not None:
+                        writer.write(t, yy, aa)
+                    self.start = max(self.start, int(math.ceil(last[4] / grid.base - 1e-9)))
+                    self.diverged = True
+                    break
                 if int(last[0]) == dopri5.STATUS_STOPPED:
                     # stopped inside the call (request_stop): its part is dropped and the
                     # carried state it changed is not continued from

@@ -105,7 +105,8 @@ def test_ctrl_c_on_reproduce_stops_the_work(tmp_path: Path,
 
 # options whose value has no unit (counts, ratios, levels)
 DIMENSIONLESS = {"--stick-level", "--max-stick-fraction", "--max-ripple-ratio", "--workers",
-                 "--points", "--confidence", "--max-steps", "--fmi"}  # --fmi: a version
+                 "--points", "--confidence", "--max-steps", "--fmi",
+                 "--dask-workers", "--samples"}  # --fmi: a version; counts
 
 
 def _commands() -> list[tuple[list[str], Any]]:

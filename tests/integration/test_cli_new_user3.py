@@ -246,3 +246,72 @@ def test_calibrate_out_marks_the_set_as_fitted(tmp_path: Path) -> None:
     assert "CDFS critical speed 1.56 mm/s at 400 mm" in back.description
     default = inspect.signature(calibrate_command).parameters["max_duration"].default
     assert default.default == protocol.TRIAL_MAX_DURATION
+
+
+# ------------------------------------------------------------------ item 13: --help
+
+
+def test_help_lines_are_whole_and_drive_shows_its_choices() -> None:
+    """Item 13: `feeddrive --help` cut the stiffness line at "Eqs." and `--drive <str>` in
+    --help showed no choices."""
+    import re
+
+    import typer.main
+
+    group = typer.main.get_command(app)
+    for name, command in group.commands.items():  # type: ignore[attr-defined]
+        short = command.get_short_help_str(limit=300)
+        assert not re.search(r"\b(Eqs?|Figs?|Sect|e\.g|i\.e|vs)\.$", short), (name, short)
+        if any("--drive" in p.opts for p in command.params):
+            page = runner.invoke(app, [name, "--help"], env={"COLUMNS": "160"}).output
+            line = next(s for s in page.splitlines() if "--drive" in s)
+            assert "cdfs" in line.split("--drive")[1].split()[0], (name, line)
+    listing = runner.invoke(app, ["--help"], env={"COLUMNS": "100"}).output
+    assert "k_sa, K_a and K_eq at table positions" in listing
+    from feeddrive import registry
+    from feeddrive.cli.simulate_cmd import ALL_DRIVES
+
+    # the registry's order follows import order: the set is what --help must show
+    assert set(ALL_DRIVES.split("|")) == set(registry.names(registry.MECHANISMS))
+
+
+def test_parameters_doc_friction_table_is_what_the_cli_prints() -> None:
+    """Item 13: docs/parameters.md's friction-indicator table described wang2021-literal
+    (damping 0), not the CLI default set."""
+    doc = (ROOT / "docs" / "parameters.md").read_text(encoding="utf-8")
+    table = doc[doc.index("## Friction indicators"):]
+    rows = [line for line in table.splitlines() if line.startswith(("| screw shaft |",
+                                                                    "| hollow (nut) shaft |",
+                                                                    "| linear guide |"))]
+    assert len(rows) == 6
+    sites = {"screw shaft": "screw", "hollow (nut) shaft": "nut", "linear guide": "guide"}
+
+    def band(b: Any) -> str:
+        return "none" if b is None else f"{b[0]:.3f} … {b[1]:.3f}"
+
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        site, branch = sites[cells[0]], {"+": "positive", "−": "negative"}[cells[1]]
+        for preset_name, column in (("wang2021", 5), ("wang2021-literal", 6)):
+            out = json.loads(run("friction", "--site", site, "--preset", preset_name,
+                                 "--json").output)
+            assert cells[column] == band(out["branches"][branch]["unstable_band_mm_s"]), row
+
+
+def test_readme_says_what_ci_runs_and_the_quick_loop() -> None:
+    """Item 13: the README said `.ci/run` "runs exactly this" though it runs
+    `.ci/min-versions` first.  Item 15: `pytest -m "not slow"` documented as the quick loop,
+    the README's command still runs everything."""
+    import re
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert "bash .ci/min-versions" in ci
+    assert ci.index("bash .ci/min-versions") < ci.index(".venv/bin/python -m pytest")
+    said = readme[readme.index("(`.ci/run`"):][:200]
+    assert "`.ci/min-versions`" in said  # it runs before the README's command
+    assert '`.venv/bin/python -m pytest -m "not slow"`' in readme
+    test_command = re.search(r"^\{ .*$", readme, flags=re.M)
+    assert test_command and "-m pytest" in test_command.group(0)
+    assert "not slow" not in test_command.group(0)  # the README's command runs everything
+    assert "slow:" in (ROOT / "pyproject.toml").read_text(encoding="utf-8")

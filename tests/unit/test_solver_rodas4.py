@@ -82,7 +82,7 @@ def _exact_ramp(params: object, profile: ConstantSpeed, times: np.ndarray) -> np
     return r["table_speed"]
 
 
-@pytest.mark.parametrize("method", ["auto", "rodas4", "dopri5-dense"])
+@pytest.mark.parametrize("method", ["modal", "auto", "rodas4", "dopri5-dense"])
 def test_dense_output_follows_the_exact_response_within_tolerance(method: str) -> None:
     """Tolerances 10× below the defaults (speed 1e-9 m/s, position 1e-11 m, rtol 1e-7): the
     recorded samples, most of them interpolated, follow the exact response to 5e-8 m/s and

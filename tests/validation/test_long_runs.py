@@ -45,7 +45,9 @@ def test_chunked_run_is_bit_identical_to_one_call(sampled: bool, monkeypatch) ->
     monkeypatch.setattr(sim_mod, "FIRST_CHUNK", 0.3)
     monkeypatch.setattr(sim_mod, "CHUNK_WALL_TIME", 1e-4)  # many small chunks
     seen: list[float] = []
-    r = fd.simulate(system, profile, 3.0, progress=lambda t, end: seen.append(t))
+    # dopri5's wall-time chunks (the dense-output methods chunk at DENSE_CHUNK: tested below)
+    r = fd.simulate(system, profile, 3.0, progress=lambda t, end: seen.append(t),
+                    options=fd.SolverOptions(method="dopri5"))
     assert len(seen) > 5 and seen[-1] == pytest.approx(3.0)
     y = _one_call(system, profile, 3.0)
     states = np.column_stack([r[name] for name in system.model(profile).state_names])
@@ -64,11 +66,14 @@ def test_continued_simulation_is_bit_identical_to_a_run_from_rest(sampled: bool)
                   .replace_path("controller.encoder_counts", 10000.0))
     system = fd.DriveSystem(params, "cdfs", 0.4)
     profile = ConstantSpeed(1.2e-3, ramp_time=0.1)
-    sim = fd.Simulation(system, profile)
+    # dopri5 continues from any instant; the dense-output methods (the default) from the
+    # multiples of DENSE_CHUNK (their own tests)
+    explicit = fd.SolverOptions(method="dopri5")
+    sim = fd.Simulation(system, profile, explicit)
     short = sim.run(3.0)
     evaluations = short.solver_stats["rhs_evaluations"]
     long = sim.run(6.0)
-    ref = fd.simulate(system, profile, 6.0)
+    ref = fd.simulate(system, profile, 6.0, options=explicit)
     for name in ("table_speed", "table_position", "screw_current"):
         np.testing.assert_array_equal(long[name], ref[name])
     np.testing.assert_array_equal(long.time, ref.time)
@@ -86,7 +91,9 @@ def test_streamed_run_writes_every_sample_and_keeps_only_the_end(tmp_path, monke
     monkeypatch.setattr(sim_mod, "KEEP_STREAMED", 1.0)
     monkeypatch.setattr(sim_mod, "CHUNK_WALL_TIME", 1e-4)
     out = tmp_path / "run.parquet"
-    r = fd.simulate(fd.DriveSystem(W, "cdfs", 0.4), ConstantSpeed(2e-3), 4.0, output=out)
+    # dopri5's small chunks (a dense-output run of 4 s is one chunk: DENSE_CHUNK = 10 s)
+    r = fd.simulate(fd.DriveSystem(W, "cdfs", 0.4), ConstantSpeed(2e-3), 4.0, output=out,
+                    options=fd.SolverOptions(method="dopri5"))
     frame = pd.read_parquet(out)
     assert len(frame) == 4001 and frame["time"].iloc[-1] == pytest.approx(4.0)
     assert np.all(np.diff(frame["time"].to_numpy()) > 0)

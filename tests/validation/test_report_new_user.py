@@ -1,6 +1,7 @@
 """Issue 12 items 17–21: the report and its figures, as a new user reads them.
 
-One reproduction without the model-reading study (~20 s) serves every test here.
+The session's one reproduction (tests/validation/conftest.py, shared with
+test_reproduction.py) serves every test here.
 """
 
 from __future__ import annotations
@@ -19,12 +20,8 @@ runner = CliRunner()
 
 
 @pytest.fixture(scope="module")
-def reproduced(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Any]]:
-    from feeddrive.parameters import preset
-    from feeddrive.reproduce import run
-
-    out = tmp_path_factory.mktemp("reproduce")
-    return out, run(preset("wang2021"), out, workers=2, study=False)
+def reproduced(full_reproduction: tuple[Path, dict[str, Any]]) -> tuple[Path, dict[str, Any]]:
+    return full_reproduction
 
 
 # ------------------------------------------------------------------ item 17: None leaks

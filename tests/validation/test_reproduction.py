@@ -56,9 +56,8 @@ def test_creep_cli_prints_critical_speed() -> None:
 
 
 @pytest.mark.slow
-def test_reproduce_writes_report_with_every_paper_number(tmp_path) -> None:
-    res = runner.invoke(app, ["reproduce", "--out", str(tmp_path), "--workers", "2"])
-    assert res.exit_code == 0, res.output
+def test_reproduce_writes_report_with_every_paper_number(full_reproduction) -> None:
+    tmp_path = full_reproduction[0]  # `feeddrive reproduce --out DIR` (conftest.py)
     md = (tmp_path / "report.md").read_text()
     html = (tmp_path / "report.html").read_text()
     # Wang2021: Sect. 5.2, Fig. 8, Table 3 (both drives, k_sa), K_eq

@@ -82,7 +82,7 @@ def test_auto_returns_to_dopri5_when_the_problem_is_not_stiff() -> None:
     assert stats["rosenbrock_steps"] < 0.2 * stats["steps"], stats
 
 
-@pytest.mark.parametrize("method", ["auto", "rodas4"])
+@pytest.mark.parametrize("method", ["modal", "auto", "rodas4"])
 def test_sampled_control_breakpoints_stay_exact(method: str) -> None:
     """Sampled position and velocity loops (1 ms) with encoder quantisation: the zero-order
     hold updates at exact step ends, so the stiff-aware run follows DOPRI5 (same sample

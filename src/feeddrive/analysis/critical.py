@@ -40,6 +40,12 @@ from .metrics import CREEPING_KINDS, TraceVerdict, VerdictRule, trace_verdict
 
 MM_S = units.MM_PER_S
 
+#: the kind of a trial whose run diverged (stopped early, :data:`feeddrive.simulate.
+#: DIVERGENCE_SPEED_RATIO`): not smooth, not a limit cycle either
+UNSTABLE = "unstable"
+#: kinds that are not smooth: the critical speed is the upper edge of the highest such band
+NON_SMOOTH = (*CREEPING_KINDS, UNSTABLE)
+
 #: a trace runner for :func:`decide`: duration [s] → (time [s], speed [m/s])
 Runner = Callable[[float], tuple[np.ndarray, np.ndarray]]
 
@@ -125,7 +131,7 @@ def bands_of(trials: Sequence[CreepTrial], *, smooth_too: bool = False) -> tuple
 def critical_of(trials: Sequence[CreepTrial]) -> tuple[str, float | None, str | None]:
     """(status, critical speed [m/s], kind of the highest creeping band) of a set of trials."""
     ordered = sorted(trials, key=lambda tr: tr.speed)
-    creeping = [tr for tr in ordered if tr.creeping]
+    creeping = [tr for tr in ordered if tr.kind in NON_SMOOTH]
     top = creeping[-1] if creeping else None
     above = [tr for tr in ordered if top is None or tr.speed > top.speed]
     if any(tr.kind == "undecided" for tr in above):
@@ -297,10 +303,31 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
         result = sim.run(duration)
+        if result.solver_stats.get("diverged"):
+            raise _Diverged(result.time, result["table_speed"])
         return result.time, result["table_speed"]
 
-    verdict, duration = decide(run, speed, rule)
+    try:
+        verdict, duration = decide(run, speed, rule)
+    except _Diverged as stop:
+        return stop.trial(speed)
     return CreepTrial.from_verdict(speed, verdict, duration)
+
+
+class _Diverged(Exception):
+    """A trial's run stopped early as diverged (:func:`feeddrive.simulate.divergence_bounds`)."""
+
+    def __init__(self, time: np.ndarray, speed: np.ndarray) -> None:
+        super().__init__(float(time[-1]))
+        self.time, self.speed = time, speed
+
+    def trial(self, command: float) -> CreepTrial:
+        along = self.speed * math.copysign(1.0, command) / abs(command)
+        end = float(self.time[-1])
+        return CreepTrial(speed=command, kind=UNSTABLE,
+                          ripple_ratio=float(np.max(along) - np.min(along)),
+                          stick_fraction=math.nan, stick_slip_frequency=None,
+                          min_ratio=float(np.min(along)), duration=end, decided_at=end)
 
 
 def _grid(lo: float, hi: float, step: float) -> np.ndarray:
@@ -398,7 +425,7 @@ def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coars
         todo = None
         for a, b in zip(speeds[:-1], speeds[1:], strict=True):
             ka, kb = kinds[a], kinds[b]
-            if ka == kb or "undecided" in (ka, kb) or not ({ka, kb} & set(CREEPING_KINDS)):
+            if ka == kb or "undecided" in (ka, kb) or not ({ka, kb} & set(NON_SMOOTH)):
                 continue
             if b - a > resolution * (1 + 1e-9):
                 todo = (a, b)
@@ -482,6 +509,16 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
         duration = float(profile.time[-1])
         result = simulate(system, profile, duration, options=options)
         simulated += duration
+        if result.solver_stats.get("diverged"):  # every step from the divergence on
+            reached = float(result.time[-1])
+            for k in range(len(trials), len(sp)):
+                if starts[k] + dwell[k] > reached:
+                    trials.extend(_Diverged(result.time, result["table_speed"]).trial(float(v))
+                                  for v in sp[k:])
+                    break
+                trials.append(judge_staircase(result.time, result["table_speed"], sp[k:k + 1],
+                                              starts[k:k + 1], dwell[k], rule)[0])
+            break
         steps = judge_staircase(result.time, result["table_speed"], sp, starts, dwell, rule)
         for k in range(len(trials), len(sp)):
             if steps[k].kind == "undecided" and level[k] + 1 < len(levels):

@@ -29,7 +29,7 @@ def calibrate_command(
     max_duration: float = typer.Option(protocol.TRIAL_MAX_DURATION, "--max-duration",
                                        help="Longest creep trial [s]; the default is the "
                                        "protocol of `feeddrive creep` and `reproduce`."),
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
+    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs", help="cdfs or ddfs"),
     target: float = typer.Option(1.56, "--target", help="Target critical speed [mm/s] "
                                  "(default: Wang2021 Sect. 5.2, CDFS simulated)."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),

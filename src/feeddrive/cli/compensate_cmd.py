@@ -10,7 +10,8 @@ from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters,
 @app.command("compensate")
 @user_errors
 def compensate_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs (the drive compensated; the DDFS "
+    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs",
+                              help="cdfs (the drive compensated; the DDFS "
                               "is added as the alternative)"),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     mismatch: float = typer.Option(20.0, "--mismatch", help="Model error of the mismatched "

@@ -14,7 +14,7 @@ _LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
 @app.command("creep")
 @user_errors
 def creep_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs or ddfs"),
+    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs", help="cdfs or ddfs"),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Hollow-motor speed [mm/s] (DDFS)."),
     method: str = typer.Option("both", "--method", help="bisect (from rest), stepdown (the "

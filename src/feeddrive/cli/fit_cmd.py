@@ -43,7 +43,8 @@ def fit_command(
     free: Annotated[list[str] | None, typer.Option(
         "--free", help="Dotted parameter path to fit (repeat for several), e.g. "
         "controller.velocity_integral_gain; bounds: the parameter's plausible range.")] = None,
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs|linear-motor",
+                              help="cdfs, ddfs or linear-motor"),
     preset_name: str | None = typer.Option(None, "--preset", help="Starting parameter set "
                                            "(default wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Starting parameters (TOML)."),

@@ -88,10 +88,11 @@ def friction_command(
     points: int = typer.Option(400, "--points", help="Scan: number of speeds, log-spaced [-]."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
 ) -> None:
-    """LuGre parameters of one friction site (Wang2021 Table 1) and analytic indicators.
+    """Friction parameters of one site (Wang2021 Table 1) and analytic indicators of its law.
 
-    Per branch: the negative-slope band of the steady friction curve and its zero-slope speed
-    (below it friction has negative damping), the passivity margin σ2 − σ1(F_s − F_c)/F_c,
+    Per branch, under the site's law (LuGre, Dahl, static Stribeck, none): the negative-slope
+    band of the steady friction curve and its zero-slope speed (below it friction has
+    negative damping), the LuGre passivity margin σ2 − σ1(F_s − F_c)/F_c (LuGre only),
     and a linear-stability scan of steady sliding of a mass–spring–damper on this site.
     The scan is an indicator for a generic oscillator, not the drive: it leaves out the servo
     loops, the drive inertias and the other sites.

@@ -19,7 +19,8 @@ def _say(text: str) -> None:
 @app.command("sensitivity")
 @user_errors
 def sensitivity_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs|linear-motor",
+                              help="cdfs, ddfs or linear-motor"),
     preset_name: str | None = typer.Option(None, "--preset", help="Parameter set (default "
                                            "wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),

@@ -19,10 +19,14 @@ from ._common import (
     user_errors,
 )
 
+#: every drive topology, for --help (the registry is not imported at start-up: it loads numba;
+#: tests/integration/test_cli_new_user3.py checks this against feeddrive.registry)
+ALL_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
 DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.simulate.SolverOptions.max_steps
+DEFAULT_METHOD = "modal"  # as feeddrive.simulate.SolverOptions.method (a test checks it)
 #: the integrators offered (feeddrive.simulate.METHODS without the fixed-step order checks)
-CLI_METHODS = ("dopri5", "auto", "rodas4", "dopri5-dense")
+CLI_METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense")
 
 
 def _say(text: str) -> None:
@@ -32,8 +36,10 @@ def _say(text: str) -> None:
 @app.command("simulate")
 @user_errors
 def simulate_command(
-    drive: str = typer.Option("cdfs", "--drive", help="cdfs, ddfs or linear-motor (a "
-                              "direct-drive table; default preset linear-motor-example)"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
+                              help="cdfs, ddfs, linear-motor (a "
+                              "direct-drive table; default preset linear-motor-example) or "
+                              "rack-pinion"),
     table_speed: float | None = typer.Option(
         None, "--table-speed", help="Table speed [mm/s]: the command (constant), the "
         "amplitude (sine), the top speed (trapezoid), the first step (stepdown). Required "
@@ -59,9 +65,10 @@ def simulate_command(
         None, "--profile-file", help="csv: a CSV with columns time [s] and table_speed "
         "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
     method: str = typer.Option(
-        "dopri5", "--method", help="Integrator: dopri5 (every output instant a step end; the "
-        "creep verdicts' method), auto (DOPRI5 and RODAS4 switched on stiffness: several "
-        "times faster on the DDFS; at the default tolerance it damps an undamped mode, see "
+        DEFAULT_METHOD, "--method", help="Integrator: modal (the default: DOPRI5 and "
+        "RODAS4 switched on stiffness, Rosenbrock steps capped on lightly damped modes), "
+        "dopri5 (every output instant a step end; the v1 engine), auto (switched on "
+        "stiffness alone: at the default tolerance it damps a slowly growing mode, see "
         "docs/model.md), rodas4 or dopri5-dense."),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
                                   help="Solver step limit [-]; a run that needs more is "
@@ -149,6 +156,10 @@ def simulate_command(
             f"expected ≤ {budget.longest_duration:g} [s], or raise --max-steps")
     # .parquet/.csv outputs are written while the run goes (memory bounded); .nc/.mat at the end
     streamed = output is not None and output.lower().endswith((".parquet", ".csv"))
+    if not streamed:  # a record that cannot fit is refused before any warning about it
+        from ..budget import check_output_memory
+
+        check_output_memory(duration, options.output_interval)
     if budget.memory_bytes > MEMORY_WARNING_BYTES and not streamed:
         _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
                     f"{budget.memory_bytes / 1e9:.1f} GB of memory (a .parquet or .csv "

@@ -62,7 +62,7 @@ def stiffness_command(
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
 ) -> None:
-    """k_sa, K_a and K_eq (Wang2021 Eqs. 2–5) at table positions, in N/µm.
+    """k_sa, K_a and K_eq at table positions, in N/µm: equations (2)–(5) of Wang2021.
 
     Also compares K_eq at mid-screw with the 2.16e7 N/m (21.6 N/µm) of Wang2021 Sect. 5.2 and
     lists the readings of Eqs. (2)–(5) that come closest to it.

@@ -271,7 +271,7 @@ def map_command(
 ) -> None:
     """Maps of a stored sweep: a heatmap of a value over two swept axes with the linear
     stability boundary (dashed) drawn over the simulated creep boundary (solid), one panel
-    per value of the other axes (e.g. per drive); for a random or Latin-hypercube design the
+    per value of the other axes (one per drive, say); for a random or Latin-hypercube design the
     histogram and 5/50/95 % percentiles (Monte Carlo).  Reads the store only."""
     from ..sweep import SweepStore, export, percentiles, plot_histogram, plot_map, to_dataset
 

@@ -33,7 +33,8 @@ CAPTIONS: dict[str, tuple[str, str]] = {
         "command). Wang2021 Fig. 8: smooth motion at 0.5 mm/s (v_s = 16.5 mm/s)."),
     "fig9_sine_1p56.png": (
         "sine", "Sinusoidal table speed of amplitude 1.56 mm/s, one panel per hollow-motor "
-        "amplitude v_np; the largest reversal overshoot is marked. Wang2021 Fig. 9: the "
+        "amplitude v_np; the largest reversal overshoot (the largest gap between table and "
+        "command near a reversal) is drawn as a red bar. Wang2021 Fig. 9: the "
         "overshoot at speed reversal falls as v_np grows."),
     "fig10_sine_2.png": (
         "sine", "As Fig. 9 at 2 mm/s amplitude. Wang2021 Fig. 10: the same trend at 2 mm/s."),

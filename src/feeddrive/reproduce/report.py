@@ -242,7 +242,7 @@ def rigid_body_band(params: DriveParameters) -> str:
     st = sliding_stability(speeds, sites, mass,
                            stiffness, damping, integral=c.position_gain * integral)
     bad = speeds[~st.stable]
-    text = (f"rigid CDFS (m = {mass:.0f} kg, loop damping {damping:.3g} N s/m, stiffness "
+    text = (f"Rigid CDFS (m = {mass:.0f} kg, loop damping {damping:.3g} N s/m, stiffness "
             f"{stiffness:.3g} N/m, integral {c.position_gain * integral:.3g} N/(m s))")
     if bad.size == 0:
         return text + ": steady sliding linearly stable at every speed 0.02–4 mm/s"

@@ -38,19 +38,23 @@ ORDER = 5
 TABLEAU = ("C2", "C3", "C4", "C5", "A21", "A31", "A32", "A41", "A42", "A43", "A51", "A52", "A53",
            "A54", "A61", "A62", "A63", "A64", "A65", "B1", "B3", "B4", "B5", "B6", "E1", "E3",
            "E4", "E5", "E6", "E7", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
-           "STATUS_NON_FINITE", "STATUS_STOPPED")
+           "STATUS_NON_FINITE", "STATUS_STOPPED", "STATUS_DIVERGED")
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1
 STATUS_STEP_UNDERFLOW = 2
 STATUS_NON_FINITE = 3
 STATUS_STOPPED = 4  # another thread asked the running call to stop (new_memory's stop slot)
+# a state beyond its divergence bound (feeddrive.simulate.divergence_bounds): the run stops
+# early, the state there recorded as its last sample; not an error, the verdict is "unstable"
+STATUS_DIVERGED = 5
 STATUS_MESSAGES = {
     STATUS_OK: "success",
     STATUS_MAX_STEPS: "maximum number of steps reached",
     STATUS_STEP_UNDERFLOW: "step size fell below its minimum",
     STATUS_NON_FINITE: "state became non-finite (NaN or Inf)",
     STATUS_STOPPED: "stopped on request",
+    STATUS_DIVERGED: "a state left its divergence bound (the loop diverges)",
 }
 
 
@@ -113,18 +117,20 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
               n_pos: int, n_vel: int, n_cur: int, rtol: float, atol: np.ndarray,
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
               max_steps: int, *, start: int = 0, held: np.ndarray | None = None,
-              memory: np.ndarray | None = None,
+              memory: np.ndarray | None = None, bound: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``) to
     ``t_end`` (see :func:`integrate_template`).  ``held`` (the sampled controller's values)
     and ``memory`` (step size, last error) are updated in place, so that a run continued
-    from where a previous call stopped is bit-identical to one call over the whole span."""
+    from where a previous call stopped is bit-identical to one call over the whole span.
+    ``bound``: the largest |state| per state before the run stops as diverged (None: none)."""
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states), h_init) if memory is None else memory
+    bound = np.full(len(model.states), np.inf) if bound is None else bound
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate(y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P,
                                model.T, rtol, atol, rel_mask, h_max, adaptive,
-                               max_steps, start, held, memory))
+                               max_steps, start, held, memory, bound))
     return result
 
 
@@ -135,6 +141,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                        n_vel: int, n_cur: int, P: np.ndarray, T: np.ndarray, rtol: float,
                        atol: np.ndarray, rel_mask: np.ndarray, h_max: float, adaptive: int,
                        max_steps: int, start: int, held: np.ndarray, memory: np.ndarray,
+                       bound: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from breakpoint ``start`` to ``t_end`` over a grid of breakpoints spaced
     ``base`` [s], from the state ``y0`` at t = start·base.
@@ -145,7 +152,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     control the first stage of a step is the previous step's last one, evaluated where that
     step ended — a hair off the breakpoint when the step was not cut to it).  Returns
     (t_out, y_out, aux_out, stats, held) with stats = [status, steps, rejected,
-    rhs_evaluations, t_reached].
+    rhs_evaluations, t_reached].  A state with |y_i| > ``bound[i]`` at a step end stops the run
+    with ``STATUS_DIVERGED``; that step end is recorded as the last output sample.
     """
     n = y0.size
     n_break = int(round(t_end / base))
@@ -289,11 +297,22 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 status = STATUS_MAX_STEPS
                 break
             finite = True
+            diverged = False
             for i in range(n):
                 if not math.isfinite(y[i]):
                     finite = False
+                elif abs(y[i]) > bound[i]:
+                    diverged = True
             if not finite:
                 status = STATUS_NON_FINITE
+                break
+            if diverged:
+                status = STATUS_DIVERGED
+                if i_out < n_out:  # the last rhs call was at (t, y): aux is that of y
+                    t_out[i_out] = t
+                    y_out[i_out, :] = y
+                    aux_out[i_out, :] = aux
+                    i_out += 1
                 break
         if status != STATUS_OK:
             break

@@ -68,11 +68,16 @@ from .dopri5 import (
     E6,
     E7,
 )
+from .modes import H_LAMBDA as MODAL_H_LAMBDA
+from .modes import REFRESH as MODAL_REFRESH
+from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
+from .modes import jacobian_moved as modal_jacobian_moved
+from .modes import step_cap as modal_step_cap
 
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
-MODE_DOPRI5, MODE_RODAS4, MODE_AUTO = 0, 1, 2
+MODE_DOPRI5, MODE_RODAS4, MODE_AUTO, MODE_MODAL = 0, 1, 2, 3
 
 # Dormand–Prince continuous extension (dopri5.f, CONTD5; scipy RK45.P last column)
 DP_D1 = -12715105075.0 / 11282082432.0
@@ -88,23 +93,35 @@ STIFF_STEPS = 15  # stiff verdicts (reset after 6 non-stiff steps in a row), dop
 NONSTIFF_HRHO = 3.0
 NONSTIFF_STEPS = 5
 POWER_ITERATIONS = 12
+# MODE_MODAL (see the module docstring): RODAS4 steps capped on lightly damped modes
+MODAL_SWITCH_GAIN = 2.0  # switch to RODAS4 only if the capped step is ≥ this × DOPRI5's
+# DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
+# of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
+MODAL_RETRY = 500
+# RODAS4 steps between two eigen-analyses at least (the cap of the last one holds meanwhile)
+MODAL_EVERY = 10
 
 STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "jacobians",
-              "rosenbrock_steps", "switches", "output_rhs_evaluations")
+              "rosenbrock_steps", "switches", "output_rhs_evaluations", "eigen_analyses")
 
 # h, method, frozen states known, stiff and non-stiff counts, DOPRI5 error memory, RODAS4
-# error, step and first/rejected flags; then one live flag per state (integrate_template)
-MEMORY_SCALARS = 10
+# error, step and first/rejected flags, the modal step cap, whether a reference Jacobian is
+# kept, the step count until which a switch is refused and the DOPRI5 steps since the last
+# eigen-analysis; then one live flag per state and the modal reference Jacobian (n × n)
+# (integrate_template)
+MEMORY_SCALARS = 14
 
-CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "DP_D1", "DP_D3",
-             "DP_D4", "DP_D5", "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS", "NONSTIFF_HRHO",
-             "NONSTIFF_STEPS", "POWER_ITERATIONS")
+CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_MODAL",
+             "DP_D1", "DP_D3", "DP_D4", "DP_D5", "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS",
+             "NONSTIFF_HRHO", "NONSTIFF_STEPS", "POWER_ITERATIONS", "MODAL_SWITCH_GAIN",
+             "MODAL_RETRY", "MODAL_EVERY")
 
 # Placeholders: the generated module supplies these (see feeddrive.solvers.dopri5).
 N_AUX = 0
 N_HELD = 1
 STATUS_OK, STATUS_MAX_STEPS, STATUS_STEP_UNDERFLOW, STATUS_NON_FINITE = 0, 1, 2, 3
 STATUS_STOPPED = 4
+STATUS_DIVERGED = 5
 _r4_fd_jacobian: Any = None
 _r4_frozen_states: Any = None
 _r4_rodas4_step: Any = None
@@ -129,7 +146,7 @@ def new_memory(n_states: int) -> np.ndarray:
     as the solver goes): another thread reads a long call's progress and stops it while it
     runs (the kernels release the GIL; feeddrive.simulate.Simulation.live_time and
     request_stop)."""
-    return np.zeros(MEMORY_SCALARS + n_states + 2)
+    return np.zeros(MEMORY_SCALARS + n_states + n_states * n_states + 2)
 
 
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
@@ -137,22 +154,24 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
               max_steps: int, mode: int, stops: np.ndarray, want_aux: bool = True, *,
               start: int = 0, held: np.ndarray | None = None,
-              memory: np.ndarray | None = None,
+              memory: np.ndarray | None = None, bound: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``; a multiple
     of ``out_every``) to ``t_end`` (see :func:`integrate_template`).  ``held`` and ``memory``
     are updated in place, so a run continued from where a call stopped is bit-identical to
-    one call in which that instant is a step end (a profile breakpoint, a sample instant)."""
+    one call in which that instant is a step end (a profile breakpoint, a sample instant).
+    ``bound``: the largest |state| per state before the run stops as diverged (None: none)."""
     if start % out_every:
         raise ValueError(f"start = {start}: expected a multiple of out_every = {out_every}")
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states)) if memory is None else memory
+    bound = np.full(len(model.states), np.inf) if bound is None else bound
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate_dense(
             y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P, model.T, rtol, atol,
             rel_mask, h_init, h_max, adaptive, max_steps, mode,
             np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
-            model.jacobian_pattern, model.jacobian_colours, start, held, memory))
+            model.jacobian_pattern, model.jacobian_colours, start, held, memory, bound))
     return result
 
 
@@ -206,7 +225,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                        atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
                        adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
                        want_aux: bool, S: np.ndarray, colour: np.ndarray, start: int,
-                       held: np.ndarray, memory: np.ndarray,
+                       held: np.ndarray, memory: np.ndarray, bound: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from t = start·base (state ``y0``) to ``t_end`` with dense output every
     ``out_every·base`` [s].
@@ -221,6 +240,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     :func:`feeddrive.solvers.dopri5.integrate_template`).  Without ``want_aux`` the auxiliary
     signals are not evaluated at the outputs and ``aux_out`` has no rows.  ``S``, ``colour``:
     the Jacobian's sparsity pattern and column groups (:func:`rodas4.fd_jacobian_template`).
+    A state with |y_i| > ``bound[i]`` at a step end stops the run with ``STATUS_DIVERGED``; that
+    step end is recorded as the last output sample.
     """
     n = y0.size
     n_break = int(round(t_end / base))
@@ -272,6 +293,15 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     stiff_count = 0
     nonstiff_count = 0
     rho = 0.0
+    switching = mode == MODE_AUTO or mode == MODE_MODAL
+    modal = mode == MODE_MODAL
+    h_osc = math.inf  # MODE_MODAL: the step cap of the lightly damped modes
+    have_ref = False
+    J_ref = np.zeros((n, n))
+    refuse_until = 0
+    since_eig = 0
+    dp_since_eig = MODAL_RETRY  # the first accepted DOPRI5 step is analysed
+    n_eig = 0
     # step-size controller memory: DOPRI5 PI controller, Gustafsson's for RODAS4
     dp_err_old = 1e-4
     beta = 0.04
@@ -298,8 +328,14 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
         r4_h_old = memory[7]
         r4_first = memory[8] != 0.0
         r4_rejected = memory[9] != 0.0
+        h_osc = memory[10]
+        have_ref = memory[11] != 0.0
+        refuse_until = int(memory[12])
+        dp_since_eig = int(memory[13])
         for i in range(n):
             live[i] = memory[MEMORY_SCALARS + i] != 0.0
+            for j in range(n):
+                J_ref[i, j] = memory[MEMORY_SCALARS + n + i * n + j]
     # the derivative at t: what the previous call's last step (or event) left, recomputed
     rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
     n_rhs += 1
@@ -345,10 +381,22 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     _r4_frozen_states(J, f0, live)
                     frozen_known = True
                 jac_ok = True
-                if mode == MODE_AUTO:
+                if switching:
                     rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                since_eig += 1
+                if modal and (not have_ref or (since_eig >= MODAL_EVERY and
+                                               modal_jacobian_moved(J, J_ref, MODAL_REFRESH))):
+                    since_eig = 0
+                    h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+                    n_eig += 1
+                    have_ref = True
+                    for i in range(n):
+                        for j in range(n):
+                            J_ref[i, j] = J[i, j]
             last = False
             h_try = min(h, h_max)
+            if modal:  # both methods: DOPRI5 amplifies a mode at 1 < h|λ| < 3.3
+                h_try = min(h_try, h_osc)
             if t + h_try >= t_ev - 1e-12 * max(1.0, t_ev):
                 h_try = t_ev - t
                 last = True
@@ -440,7 +488,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 i_out += 1
             # ---- stiffness detection and switching
             used_rodas = stiff
-            if mode == MODE_AUTO:
+            if switching:
                 if stiff:
                     if rho * h_done < NONSTIFF_HRHO:
                         nonstiff_count += 1
@@ -453,15 +501,52 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     else:
                         nonstiff_count = 0
                 else:
+                    if modal:
+                        dp_since_eig += 1
+                    if modal and dp_since_eig >= MODAL_RETRY:
+                        # DOPRI5 too: its step on a lightly damped mode is capped as well
+                        dp_since_eig = 0
+                        calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, n_pos,
+                                                n_vel, n_cur, atol, J, ft, yp, fp, aux,
+                                                all_live, S, colour)
+                        n_rhs += calls
+                        n_jac += 1
+                        h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+                        n_eig += 1
+                        have_ref = True
+                        for i in range(n):
+                            for j in range(n):
+                                J_ref[i, j] = J[i, j]
                     num = 0.0
                     den = 0.0
                     for i in range(n):
                         num += (f_new[i] - k6[i]) ** 2
                         den += (y_new[i] - yt[i]) ** 2
-                    if den > 0.0 and h_done * math.sqrt(num / den) > STIFF_HLAMBDA:
+                    if steps < refuse_until:
+                        pass  # MODE_MODAL: a switch was refused recently
+                    elif den > 0.0 and h_done * math.sqrt(num / den) > STIFF_HLAMBDA:
                         nonstiff_count = 0
                         stiff_count += 1
-                        if stiff_count >= STIFF_STEPS:
+                        go = stiff_count >= STIFF_STEPS
+                        if go and modal:
+                            # would RODAS4, capped on the lightly damped modes, step further?
+                            calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, n_pos,
+                                                    n_vel, n_cur, atol, J, ft, yp, fp, aux,
+                                                    all_live, S, colour)
+                            n_rhs += calls
+                            n_jac += 1
+                            h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
+                                                   MODAL_H_LAMBDA)
+                            n_eig += 1
+                            have_ref = True
+                            for i in range(n):
+                                for j in range(n):
+                                    J_ref[i, j] = J[i, j]
+                            if h_osc < MODAL_SWITCH_GAIN * h_done:
+                                go = False
+                                stiff_count = 0
+                                refuse_until = steps + MODAL_RETRY
+                        if go:
                             stiff = True
                             switches += 1
                             stiff_count = 0
@@ -497,7 +582,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 y[i] = y_new[i]
                 f0[i] = f_new[i]
             t = t_new
-            if memory.shape[0] > MEMORY_SCALARS + n + 1:  # live time, stop (new_memory)
+            if memory.shape[0] > MEMORY_SCALARS + n + n * n + 1:  # live time, stop (new_memory)
                 memory[memory.shape[0] - 1] = t
                 if memory[memory.shape[0] - 2] != 0.0:
                     status = STATUS_STOPPED
@@ -507,11 +592,25 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 status = STATUS_MAX_STEPS
                 break
             finite = True
+            diverged = False
             for i in range(n):
                 if not math.isfinite(y[i]):
                     finite = False
+                elif abs(y[i]) > bound[i]:
+                    diverged = True
             if not finite:
                 status = STATUS_NON_FINITE
+                break
+            if diverged:
+                status = STATUS_DIVERGED
+                if i_out < n_out:
+                    t_out[i_out] = t
+                    y_out[i_out, :] = y
+                    if want_aux:
+                        rhs(t, y, held, P, T, n_pos, n_vel, n_cur, fp, aux)
+                        n_out_rhs += 1
+                        aux_out[i_out, :] = aux
+                    i_out += 1
                 break
         if status != STATUS_OK:
             break
@@ -544,10 +643,17 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     memory[7] = r4_h_old
     memory[8] = 1.0 if r4_first else 0.0
     memory[9] = 1.0 if r4_rejected else 0.0
+    memory[10] = h_osc
+    memory[11] = 1.0 if have_ref else 0.0
+    memory[12] = refuse_until
+    memory[13] = dp_since_eig
     for i in range(n):
         memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
+        for j in range(n):
+            memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
     stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
-                      t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs)])
+                      t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
+                      float(n_eig)])
     return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats, held)
 
 
@@ -561,6 +667,9 @@ def template_sources() -> list[str]:
     function at its first call, so a model run only with ``dopri5`` never compiles these."""
     out = rodas4.template_sources()
     out.append(f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})")
+    out.append("from feeddrive.solvers.modes import step_cap as modal_step_cap, "
+               "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
+               "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH")
     for fn in (dp5_step_template, error_norm_template, integrate_template):
         src = inspect.getsource(fn)
         for old, new in _TEMPLATES.items():

@@ -1,0 +1,211 @@
+"""Benchmark (issue 21): creep verdicts of the default integrator against a tight reference.
+
+Run from the repository root::
+
+    python benchmarks/bench_verdicts.py [--only NAME,...] [--reference-only]
+
+Each trial of :data:`CORPUS` is judged twice by the same verdict rule
+(:class:`feeddrive.analysis.metrics.VerdictRule`, the protocol's 12 s doubling to 240 s until
+decided, :func:`feeddrive.analysis.critical.decide`):
+
+* **reference**: scipy ``solve_ivp(method="Radau", rtol=1e-10)`` on the plain-Python model
+  ``reference/scipy_model.ReferenceModel`` with absolute tolerances 1000× tighter than the
+  engine's defaults, split at the end of the start ramp, its analytic Jacobian — the settings
+  of ``reference/make_radau_reference.py``; a longer trial continues the shorter one from its
+  last state;
+* **engine**: :func:`feeddrive.analysis.critical.creep_trial` with the default
+  ``SolverOptions()`` (and, for comparison, ``auto`` and ``dopri5``).
+
+The corpus: the ``wang2021`` CDFS at mid-screw on both sides of every band edge and of the
+critical speed that ``feeddrive reproduce`` reports (0.18–0.21, 1.41/1.42, 1.55/1.56 mm/s),
+Table 3's positions at their critical speeds (± 0.01 mm/s), the DDFS with v_n = 16 mm/s, the
+``wang2021-literal`` CDFS (0.2 mm/s: the growing table mode) and DDFS, and stress variants with
+the screw bristle stiffness σ0 × 10 and × 100.
+
+The reference verdicts are kept in ``benchmarks/results/bench_verdicts_reference.json`` (they
+do not depend on the engine; delete the file to recompute them).  Writes
+``benchmarks/results/bench_verdicts.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from reference.scipy_model import STATE_NAMES, ReferenceModel, tolerances  # noqa: E402
+
+import feeddrive as fd  # noqa: E402
+from feeddrive.analysis.critical import creep_trial, decide  # noqa: E402
+from feeddrive.control import ConstantSpeed  # noqa: E402
+from feeddrive.simulate import DriveSystem, SolverOptions  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results" / "bench_verdicts.json"
+REFERENCE = ROOT / "benchmarks" / "results" / "bench_verdicts_reference.json"
+RTOL = 1e-10
+ATOL_SCALE = 1e-3
+RAMP = 0.1  # [s] the creep trials' start ramp
+V_T = STATE_NAMES.index("table_speed")
+
+
+def _variant(name: str) -> fd.DriveParameters:
+    name, _, share = name.partition("+share")
+    base, _, factor = name.partition("*sigma0x")
+    p = fd.preset(base)
+    if share:
+        p = p.replace_path("friction.ball_nut_share", float(share))
+    if factor:
+        p = p.replace_path("friction.screw.bristle_stiffness",
+                           float(factor) * p.friction.screw.bristle_stiffness)
+    return p
+
+
+def _corpus() -> list[tuple[str, str, float, float, float]]:
+    """(preset[*sigma0xN], drive, table position [m], table speed [mm/s], nut speed [mm/s])."""
+    out = []
+    for v in (0.17, 0.18, 0.20, 0.21, 0.5, 1.0, 1.41, 1.42, 1.55, 1.56, 1.57, 2.0, 3.0):
+        out.append(("wang2021", "cdfs", 0.4, v, 0.0))
+    for a in (0.2, 0.3, 0.5, 0.6):
+        for v in (1.0, 1.5, 1.6, 1.7):
+            out.append(("wang2021", "cdfs", a, v, 0.0))
+    for a in (0.2, 0.6):  # Table 3's critical speed, 1.56 mm/s at every position
+        for v in (1.55, 1.56):
+            out.append(("wang2021", "cdfs", a, v, 0.0))
+    for v in (0.02, 0.5, 1.0, 1.55):
+        out.append(("wang2021", "ddfs", 0.4, v, 16.0))
+    for v in (0.2, 0.5, 1.0, 3.0):
+        out.append(("wang2021-literal", "cdfs", 0.4, v, 0.0))
+    out.append(("wang2021-literal", "ddfs", 0.4, 0.5, 16.0))
+    # where `reproduce`'s model-reading study moved with the default method (issue 21):
+    # literal CDFS 0.02/0.03 (dopri5 smooth, modal stick-slip), literal DDFS band edges,
+    # ball-nut share 0.2 DDFS at 0.48 (dopri5 undecided, modal smooth)
+    for v in (0.02, 0.03, 0.04):
+        out.append(("wang2021-literal", "cdfs", 0.4, v, 0.0))
+    for v in (0.15, 1.82, 2.02, 3.02):
+        out.append(("wang2021-literal", "ddfs", 0.4, v, 16.0))
+    out.append(("wang2021+share0.2", "ddfs", 0.4, 0.48, 16.0))
+    for f in ("10", "100"):
+        out.append((f"wang2021*sigma0x{f}", "ddfs", 0.4, 0.5, 16.0))
+        out.append((f"wang2021*sigma0x{f}", "cdfs", 0.4, 1.2, 0.0))
+        out.append((f"wang2021*sigma0x{f}", "cdfs", 0.4, 2.0, 0.0))
+    return out
+
+
+CORPUS = _corpus()
+
+
+def key(case: tuple[str, str, float, float, float]) -> str:
+    preset, drive, a, v, vn = case
+    return f"{preset}/{drive}/a{a:g}/v{v:g}/vn{vn:g}"
+
+
+def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
+    preset, drive, a, v, vn = case
+    params = _variant(preset)
+    profile = ConstantSpeed(v * 1e-3, vn * 1e-3, ramp_time=RAMP)
+    model = ReferenceModel(params, drive, a, profile)
+    atol = tolerances(model.H) * ATOL_SCALE
+    state = {"t": 0.0, "y": np.zeros(len(STATE_NAMES)), "time": [np.zeros(1)],
+             "speed": [np.zeros(1)], "nfev": 0}
+
+    def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
+        while state["t"] < duration - 1e-12:
+            a0 = state["t"]
+            b = RAMP if a0 < RAMP else duration
+            n0, n1 = int(round(a0 * 1e3)), int(round(b * 1e3))
+            grid = np.arange(n0 + 1, n1 + 1) * 1e-3
+            sol = solve_ivp(model, (a0, b), state["y"], method="Radau", rtol=RTOL, atol=atol,
+                            jac=model.jacobian, t_eval=grid, dense_output=True)
+            if sol.status != 0:
+                raise RuntimeError(f"{key(case)}: Radau failed at {sol.t[-1]:g} s")
+            state["time"].append(sol.t)
+            state["speed"].append(sol.y[V_T])
+            state["y"] = sol.sol(b)
+            state["t"] = b
+            state["nfev"] += int(sol.nfev)
+        t = np.concatenate(state["time"])
+        s = np.concatenate(state["speed"])
+        keep = t <= duration + 1e-9
+        return t[keep], s[keep]
+
+    started = time.process_time()
+    verdict, duration = decide(run, v * 1e-3)
+    return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio, "duration_s": duration,
+            "decided_at_s": verdict.decided_at, "cpu_s": time.process_time() - started,
+            "rhs_calls": state["nfev"]}
+
+
+def engine_trial(case: tuple[str, str, float, float, float], method: str | None
+                 ) -> dict[str, Any]:
+    preset, drive, a, v, vn = case
+    system = DriveSystem(_variant(preset), drive, a)
+    options = SolverOptions() if method is None else SolverOptions(method=method)
+    started = time.process_time()
+    trial = creep_trial(system, v * 1e-3, nut_speed=vn * 1e-3, options=options)
+    return {"kind": trial.kind, "ripple_ratio": trial.ripple_ratio,
+            "duration_s": trial.duration, "decided_at_s": trial.decided_at,
+            "cpu_s": time.process_time() - started}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--only", default="", help="comma-separated substrings of case keys")
+    parser.add_argument("--reference-only", action="store_true")
+    parser.add_argument("--available", action="store_true",
+                        help="judge only the cases whose reference is already kept")
+    parser.add_argument("--reference-file", default=str(REFERENCE),
+                        help="where the reference verdicts are kept (several files are "
+                        "read: this one and the default)")
+    parser.add_argument("--compare", default="auto,dopri5",
+                        help="other methods judged too (comma-separated; '' for none)")
+    args = parser.parse_args()
+    cases = [c for c in CORPUS if not args.only
+             or any(s in key(c) for s in args.only.split(","))]
+    kept = Path(args.reference_file)
+    refs: dict[str, Any] = {}
+    for path in sorted({kept, REFERENCE, *REFERENCE.parent.glob("bench_verdicts_reference*.json")}):
+        if path.exists():
+            refs.update(json.loads(path.read_text()))
+    if args.available:
+        cases = [c for c in cases if key(c) in refs]
+    own: dict[str, Any] = json.loads(kept.read_text()) if kept.exists() else {}
+    for c in cases:
+        if key(c) not in refs:
+            refs[key(c)] = own[key(c)] = reference_trial(c)
+            print(f"reference {key(c)}: {refs[key(c)]}", flush=True)
+            kept.parent.mkdir(parents=True, exist_ok=True)
+            kept.write_text(json.dumps(own, indent=1) + "\n")
+    if args.reference_only:
+        return
+    default = SolverOptions().method
+    methods = [default, *[m for m in args.compare.split(",") if m and m != default]]
+    rows = []
+    for c in cases:
+        row: dict[str, Any] = {"case": key(c), "reference": refs[key(c)]}
+        for m in methods:
+            row[m] = engine_trial(c, None if m == default else m)
+            row[m]["agrees"] = row[m]["kind"] == refs[key(c)]["kind"]
+        rows.append(row)
+        print(f"{key(c):45s} ref {refs[key(c)]['kind']:11s} "
+              + "  ".join(f"{m} {row[m]['kind']:11s}{'' if row[m]['agrees'] else ' ✗'}"
+                          for m in methods), flush=True)
+    summary = {m: {"agree": sum(r[m]["agrees"] for r in rows), "of": len(rows),
+                   "cpu_s": sum(r[m]["cpu_s"] for r in rows)} for m in methods}
+    summary["reference"] = {"cpu_s": sum(r["reference"]["cpu_s"] for r in rows)}
+    print(json.dumps(summary, indent=1))
+    RESULTS.write_text(json.dumps({"default_method": default, "summary": summary,
+                                   "rows": rows}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()

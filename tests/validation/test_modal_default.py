@@ -1,0 +1,174 @@
+"""The default integrator ``modal``: fast on stiff drives, faithful to growing modes (issue 21).
+
+Counts, not time (benchmarks/bench_engine.py measures time).  References:
+
+* the ``wang2021-literal`` CDFS at 0.2 mm/s creeps in a tight Radau run (rtol 1e-10, issue 21)
+  and under DOPRI5 (rtol 1e-6 and 1e-8; tests/validation/test_stiff_switching.py): a table
+  mode λ ≈ 3.0 ± 1268i 1/s grows into stick-slip, ripple ≈ 2.2 × the command;
+* ``auto`` (DOPRI5 ⇄ RODAS4 on Hairer's stiffness test alone) is the speed reference: counted
+  in the same test, today's code;
+* the stability function of RODAS4 on the imaginary axis, from its tableau (Hairer & Wanner,
+  Solving ODEs II, Sect. IV.7, rodas.f), is what :mod:`feeddrive.solvers.modes` states.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import feeddrive as fd
+from feeddrive.analysis.critical import creep_trial
+from feeddrive.control import ConstantSpeed
+from feeddrive.simulate import DriveSystem, SolverOptions, simulate
+from feeddrive.solvers import modes, rodas4
+
+
+def test_modal_is_the_default() -> None:
+    assert SolverOptions().method == "modal"
+
+
+def test_literal_cdfs_at_0p2_creeps_under_the_default() -> None:
+    system = DriveSystem(fd.preset("wang2021-literal"), "cdfs", 0.4)
+    default = creep_trial(system, 0.2e-3)
+    dopri = creep_trial(system, 0.2e-3, options=SolverOptions(method="dopri5"))
+    auto = creep_trial(system, 0.2e-3, options=SolverOptions(method="auto"))
+    assert default.kind == dopri.kind == "stick-slip"
+    assert default.ripple_ratio == pytest.approx(dopri.ripple_ratio, rel=0.02)
+    assert auto.kind == "smooth"  # what the modal cap is for
+
+
+def _stiff_ddfs(factor: float) -> DriveSystem:
+    p = fd.preset("wang2021")
+    p = p.replace_path("friction.screw.bristle_stiffness",
+                       factor * p.friction.screw.bristle_stiffness)
+    return DriveSystem(p, "ddfs", 0.4)
+
+
+def test_sigma0_x100_ddfs_takes_at_most_1e5_calls() -> None:
+    """The DDFS at 0.5 mm/s, v_n = 16 mm/s, screw bristle stiffness × 100: 14.9 M calls with
+    ``dopri5`` (1-ms cap, explicit; issue 21)."""
+    r = simulate(_stiff_ddfs(100.0), ConstantSpeed(0.5e-3, 16e-3), 10.0)
+    assert r.solver_stats["rhs_evaluations"] <= 100_000, r.solver_stats
+    assert r.solver_stats["rosenbrock_steps"] > 0
+
+
+BASE = {"cdfs_2p0": ("cdfs", 2.0e-3, 0.0), "cdfs_1p2": ("cdfs", 1.2e-3, 0.0),
+        "ddfs_0p5_vn16": ("ddfs", 0.5e-3, 16e-3)}
+
+
+@pytest.mark.parametrize("name", sorted(BASE))
+def test_base_scenarios_cost_at_most_twice_auto(name: str) -> None:
+    drive, vt, vn = BASE[name]
+    system = DriveSystem(fd.preset("wang2021"), drive, 0.4)
+    profile = ConstantSpeed(vt, vn, ramp_time=0.1)
+    modal = simulate(system, profile, 10.0)
+    auto = simulate(system, profile, 10.0, options=SolverOptions(method="auto"))
+    assert modal.solver_stats["rhs_evaluations"] <= 2 * auto.solver_stats["rhs_evaluations"]
+    # and the same answer: the table speed over the run within the tolerances' reach
+    assert np.max(np.abs(modal["table_speed"] - auto["table_speed"])) < 0.05 * vt
+
+
+def _rodas4_stability(y: float) -> complex:
+    """R(iy) of RODAS4: one step of h = 1 on y' = iy·u from u = 1 (the step's formulas)."""
+    z, g = 1j * y, 1.0 / rodas4.R4_GAMMA
+    m = g - z
+    u1 = z / m
+    u2 = (z * (1 + rodas4.R4_A21 * u1) + rodas4.R4_C21 * u1) / m
+    u3 = (z * (1 + rodas4.R4_A31 * u1 + rodas4.R4_A32 * u2) + rodas4.R4_C31 * u1
+          + rodas4.R4_C32 * u2) / m
+    u4 = (z * (1 + rodas4.R4_A41 * u1 + rodas4.R4_A42 * u2 + rodas4.R4_A43 * u3)
+          + rodas4.R4_C41 * u1 + rodas4.R4_C42 * u2 + rodas4.R4_C43 * u3) / m
+    yt = 1 + rodas4.R4_A51 * u1 + rodas4.R4_A52 * u2 + rodas4.R4_A53 * u3 + rodas4.R4_A54 * u4
+    u5 = (z * yt + rodas4.R4_C51 * u1 + rodas4.R4_C52 * u2 + rodas4.R4_C53 * u3
+          + rodas4.R4_C54 * u4) / m
+    yt = yt + u5
+    u6 = (z * yt + rodas4.R4_C61 * u1 + rodas4.R4_C62 * u2 + rodas4.R4_C63 * u3
+          + rodas4.R4_C64 * u4 + rodas4.R4_C65 * u5) / m
+    return complex(yt + u6)
+
+
+def test_rodas4_damping_on_the_imaginary_axis_is_as_stated() -> None:
+    def zeta(y: float) -> float:
+        return -math.log(abs(_rodas4_stability(y))) / y
+
+    assert zeta(modes.H_LAMBDA) < 1.3e-5  # the cap: a mode growing at ζ = −1e-4 still grows
+    assert abs(_rodas4_stability(1.0)) == pytest.approx(0.999937, abs=1e-6)
+    assert abs(_rodas4_stability(2.5)) == pytest.approx(0.9954, abs=1e-4)
+    assert abs(_rodas4_stability(10.0)) == pytest.approx(0.715, abs=1e-3)
+    assert 0.03 < zeta(10.0) < 0.04
+
+
+def _oscillator(omega: float, zeta: float) -> np.ndarray:
+    return np.array([[0.0, 1.0], [-omega ** 2, -2.0 * zeta * omega]])
+
+
+def test_step_cap_resolves_light_modes_only() -> None:
+    live = np.ones(4, dtype=np.bool_)
+    light, heavy = _oscillator(1268.0, -0.0024), _oscillator(2437.0, 0.13)
+    J = np.zeros((4, 4))
+    J[:2, :2], J[2:, 2:] = light, heavy
+    assert modes.step_cap(J, live, modes.ZETA_LIGHT, modes.H_LAMBDA) == pytest.approx(
+        modes.H_LAMBDA / 1268.0, rel=1e-9)
+    J[:2, :2] = _oscillator(1268.0, 0.05)  # damped: no cap
+    assert math.isinf(modes.step_cap(J, live, modes.ZETA_LIGHT, modes.H_LAMBDA))
+    # a stiff real mode (a sliding bristle) does not cap the step either
+    J[:2, :2] = [[-8.0e5, 0.0], [0.0, -3.0]]
+    assert math.isinf(modes.step_cap(J, live, modes.ZETA_LIGHT, modes.H_LAMBDA))
+    # a state taken as frozen is left out
+    J[:2, :2] = light
+    live[1] = False
+    assert math.isinf(modes.step_cap(J, live, modes.ZETA_LIGHT, modes.H_LAMBDA))
+
+
+def test_jacobian_moved_row_wise() -> None:
+    J = np.array([[-8e5, 1.0], [3.0, -2.0]])
+    K = J.copy()
+    K[0, 1] = 2.0  # tiny against its row's largest entry
+    assert not modes.jacobian_moved(K, J, modes.REFRESH)
+    K[1, 0] = 3.3
+    assert modes.jacobian_moved(K, J, modes.REFRESH)
+
+
+def test_cli_default_is_the_options_default() -> None:
+    from feeddrive.cli import simulate_cmd
+    assert simulate_cmd.DEFAULT_METHOD == SolverOptions().method
+    assert SolverOptions().method in simulate_cmd.CLI_METHODS
+
+
+def _dopri5_stability(y: float) -> complex:
+    from feeddrive.solvers import dopri5 as d
+    a = [[], [d.A21], [d.A31, d.A32], [d.A41, d.A42, d.A43], [d.A51, d.A52, d.A53, d.A54],
+         [d.A61, d.A62, d.A63, d.A64, d.A65]]
+    b = [d.B1, 0.0, d.B3, d.B4, d.B5, d.B6]
+    z = 1j * y
+    k: list[complex] = []
+    for row in a:
+        k.append(z * (1 + sum(c * kj for c, kj in zip(row, k, strict=False))))
+    return complex(1 + sum(bi * ki for bi, ki in zip(b, k, strict=True)))
+
+
+def test_dopri5_damping_on_the_imaginary_axis_is_as_documented() -> None:
+    ys = np.linspace(0.01, 1.0, 400)
+    zeta = np.array([-math.log(abs(_dopri5_stability(y))) / y for y in ys])
+    assert zeta.max() < 3.1e-5 and abs(ys[np.argmax(zeta)] - 0.84) < 0.05
+    assert all(abs(_dopri5_stability(y)) > 1.0 for y in (1.2, 2.0, 3.0))
+
+
+def test_docs_state_the_constants_of_the_code() -> None:
+    from pathlib import Path
+
+    from feeddrive.simulate import DIVERGENCE_SPEED_FLOOR, DIVERGENCE_SPEED_RATIO
+    from feeddrive.solvers import switching
+    text = " ".join((Path(__file__).parents[2] / "docs" / "model.md").read_text(
+        encoding="utf-8").split())
+    assert f"damping ratio below {modes.ZETA_LIGHT:g}" in text
+    assert f"h|λ| ≤ {modes.H_LAMBDA:g}" in text
+    assert f"moved by {100 * modes.REFRESH:g} % of its largest entry" in text
+    assert f"at most every {switching.MODAL_EVERY} Rosenbrock steps" in text
+    assert f"reconsidered {switching.MODAL_RETRY} steps later" in text
+    assert f"and every {switching.MODAL_RETRY} steps" in text
+    assert "less than twice DOPRI5's step" in text and switching.MODAL_SWITCH_GAIN == 2.0
+    assert f"exceeds {DIVERGENCE_SPEED_RATIO:g} × the reference speed" in text
+    assert f"or {1e3 * DIVERGENCE_SPEED_FLOOR:g} mm/s" in text
