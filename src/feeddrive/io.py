@@ -8,6 +8,10 @@
   (``Conventions``, ``title``, ``source``, ``history``, ``references``) and each variable's
   ``units`` (UDUNITS spelling) and ``long_name``.
 * .mat: SI, each signal an N×1 column vector, a ``units`` struct beside the signals.
+
+Every file is written under a temporary name in its folder and renamed when complete
+(:func:`feeddrive.outputs.atomic_path`): a full disk never leaves a truncated file under the
+output's name.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import scipy.io
 import xarray as xr
 
 from . import __version__
+from .outputs import atomic_path
 from .parameters import ParameterError
 from .units import ENGINEERING
 
@@ -153,6 +158,12 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     p = Path(path)
     ext = check_format(p)
     p.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(p) as tmp:
+        _write(dataset, tmp, ext)
+    return p
+
+
+def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
     if ext == ".csv":
         to_engineering_frame(dataset).to_csv(p, index=False, float_format="%.10g")
     elif ext == ".parquet":
@@ -174,13 +185,16 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
                                             "attrs": {k: str(v) for k, v in
                                                       dataset.attrs.items()}}},
                          long_field_names=True, do_compression=True, oned_as="column")
-    return p
 
 
 class ChunkWriter:
     """Appends a run's samples to ``.parquet`` or ``.csv`` chunk by chunk (engineering units;
     the columns of :func:`to_engineering_frame` or :func:`to_arrow_table`), so a long run
-    never holds all of them."""
+    never holds all of them.
+
+    The samples go to a temporary name in the output's folder; :meth:`close` renames it to
+    ``path`` (a run stopped by Ctrl-C keeps the samples written so far, complete rows),
+    :meth:`abort` removes it (a write that failed: nothing partial under ``path``)."""
 
     def __init__(self, path: str | Path, model: Any, system: Any, run_type: Any) -> None:
         """``run_type``: :class:`feeddrive.result.Run` (passed in, so that this writer does not
@@ -192,8 +206,11 @@ class ChunkWriter:
                                  ".parquet or .csv (.nc and .mat hold the whole run)")
         self.ext, self.model, self.system, self.run_type = ext, model, system, run_type
         self._writer: Any = None
+        self._atomic: Any = None
         self._first = True
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._atomic = atomic_path(self.path)
+        self._tmp = self._atomic.__enter__()
 
     def _columns(self, t: np.ndarray, y: np.ndarray,
                  aux: np.ndarray) -> dict[str, tuple[np.ndarray, str, str]]:
@@ -211,18 +228,45 @@ class ChunkWriter:
         if self.ext == ".csv":
             frame = pd.DataFrame({f"{name} [{unit}]": values
                                   for name, (values, unit, _) in cols.items()})
-            frame.to_csv(self.path, mode="w" if self._first else "a", header=self._first,
+            frame.to_csv(self._tmp, mode="w" if self._first else "a", header=self._first,
                          index=False, float_format="%.10g")
         else:
             import pyarrow.parquet as pq
 
             table = arrow_table(cols)
             if self._writer is None:
-                self._writer = pq.ParquetWriter(self.path, table.schema)
+                self._writer = pq.ParquetWriter(self._tmp, table.schema)
             self._writer.write_table(table)
         self._first = False
 
     def close(self) -> None:
+        """Finish the file and rename it to ``path``."""
+        if self._atomic is None:
+            return
+        try:
+            if self._writer is not None:
+                self._writer.close()
+                self._writer = None
+        except BaseException as err:
+            self._end(err)
+            raise
+        self._end(None)
+
+    def abort(self, err: BaseException | None = None) -> None:
+        """Remove the temporary file: nothing is left under ``path``."""
+        if self._atomic is None:
+            return
         if self._writer is not None:
-            self._writer.close()
+            try:
+                self._writer.close()
+            except Exception:  # noqa: BLE001  (the file is removed anyway)
+                pass
             self._writer = None
+        self._end(err or RuntimeError("aborted"))
+
+    def _end(self, err: BaseException | None) -> None:
+        atomic, self._atomic = self._atomic, None
+        if err is None:
+            atomic.__exit__(None, None, None)
+        else:
+            atomic.__exit__(type(err), err, None)

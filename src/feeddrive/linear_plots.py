@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib.figure import Figure
 
+from .outputs import atomic_path
+
 if TYPE_CHECKING:
     from .linear import LoopAnalysis, StabilityBand
 
@@ -29,7 +31,8 @@ def plot_loops(analysis: LoopAnalysis, path: str | Path, kind: str = "bode") -> 
     draw = {"bode": _bode, "nyquist": _nyquist, "step": _step}[kind]
     fig = draw(analysis)
     p = Path(path)
-    fig.savefig(p, dpi=110)
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=110)
     return p
 
 
@@ -157,5 +160,6 @@ def plot_band(band: StabilityBand, path: str | Path) -> Path:
     ax.set_ylabel("largest real part of the poles [1/s]")
     ax.set_title("Linear stability of steady sliding (shaded: unstable)")
     p = Path(path)
-    fig.savefig(p, dpi=110)
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=110)
     return p

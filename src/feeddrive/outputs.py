@@ -10,30 +10,89 @@ Rules (docs/outputs.md):
 * an existing output file is replaced only with ``force`` (``--force`` on the CLI);
 * the destination must be writable: probed by opening it (an existing file for update
   without truncating it, a new name by creating and removing it), so a read-only folder, a
-  read-only mount or a name under a file is refused before a simulation or fit runs.
+  read-only mount or a name under a file is refused before a simulation or fit runs;
+* its format (the extension) is checked with the rest, before any work, where the option
+  takes a fixed set of formats (``--plot``: :data:`PLOT_FORMATS`);
+* nothing partial is ever left under an output's name: every writer writes through
+  :func:`atomic_path`, to a temporary name in the same folder (``.NAME.XXXXXXXX.partial.EXT``),
+  flushed to disk and renamed over the final name only once complete, so a full disk, an
+  error or a kill mid-write leaves the old file (or none), never a truncated one.
 
 Errors are :class:`OutputError` (a ``ValueError``) naming the option and the path.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
-from collections.abc import Iterable
+import secrets
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-__all__ = ["OutputError", "check_output_dir", "check_output_file", "shown"]
+__all__ = ["PLOT_FORMATS", "OutputError", "atomic_path", "check_output_dir",
+           "check_output_file", "cut", "shown"]
+
+#: the figure formats every ``--plot`` option takes (matplotlib writes each)
+PLOT_FORMATS = (".png", ".pdf", ".svg")
+#: longest user text echoed in a one-line message [characters]; longer text is cut
+MAX_SHOWN = 200
 
 
 class OutputError(ValueError):
     """An output destination was refused; the message names the option and the path."""
 
 
-def shown(path: str | os.PathLike[str]) -> str:
-    """A path as printed in a one-line message: control characters escaped (``\\n``)."""
+def shown(path: str | os.PathLike[str], limit: int | None = MAX_SHOWN) -> str:
+    """A path (or any user text) as printed in a one-line message: control characters
+    escaped (``\\n``, ``\\x1b``), and cut to ``limit`` characters (:func:`cut`)."""
     text = os.fspath(path)
-    if text.isprintable():
+    length = len(text)
+    if limit is not None and length > limit:
+        text = text[:limit]  # escape no more than can be shown
+    if not text.isprintable():
+        text = text.encode("unicode_escape").decode("ascii")
+    if limit is not None and (length > limit or len(text) > limit):
+        return f"{text[:limit]}… ({length} characters)"
+    return text
+
+
+def cut(text: str, limit: int | None = MAX_SHOWN) -> str:
+    """``text`` cut to about ``limit`` characters, saying how long it was."""
+    if limit is None or len(text) <= limit:
         return text
-    return text.encode("unicode_escape").decode("ascii")
+    return f"{text[:limit]}… ({len(text)} characters)"
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """A temporary name to write ``path`` under, renamed over ``path`` when the block ends
+    without an error (removed otherwise): the one atomic-write helper of the package.
+
+    The temporary file is created in the same folder (a rename within one file system is
+    atomic), with the permissions a new file gets (the umask), named
+    ``.STEM.XXXXXXXX.partial.EXT`` so that a writer choosing its format by the extension
+    (matplotlib) still does.  It is flushed to disk (``fsync``) before the rename.
+    """
+    p = Path(path)
+    while True:
+        tmp = p.with_name(f".{p.stem}.{secrets.token_hex(4)}.partial{p.suffix}")
+        try:
+            os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+            break
+        except FileExistsError:
+            continue
+    try:
+        yield tmp
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, p)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 def _same_file(a: Path, b: Path) -> bool:
@@ -75,11 +134,12 @@ def _probe_writable(option: str, p: Path, probe: Path | None = None) -> None:
 
 def check_output_file(path: str | os.PathLike[str], *, option: str,
                       inputs: Iterable[str | os.PathLike[str] | None] = (),
-                      force: bool = False) -> Path:
+                      force: bool = False, formats: Iterable[str] | None = None) -> Path:
     """Refuse ``path`` as an output file unless it can be written (see the module rules).
 
     ``option`` names the CLI option (``--out``) in messages; ``inputs`` are the files the
-    command reads, which an output may never replace.  Returns the path.
+    command reads, which an output may never replace; ``formats`` the extensions the option
+    takes (any when None).  Returns the path.
     """
     text = os.fspath(path)
     if not text.strip():
@@ -94,6 +154,12 @@ def check_output_file(path: str | os.PathLike[str], *, option: str,
         if _same_file(p, Path(inp)) or p.resolve() == Path(inp).resolve():
             raise OutputError(f"{option} {shown(p)}: is an input of this command; refusing to "
                               "overwrite it")
+    if formats is not None:
+        allowed = tuple(formats)
+        if p.suffix.lower() not in allowed:
+            names = allowed[0] if len(allowed) == 1 else \
+                f"{', '.join(allowed[:-1])} or {allowed[-1]}"
+            raise OutputError(f"{option} {shown(p)}: expected a {names} file name")
     if p.exists() and not force:
         raise OutputError(f"{option} {shown(p)}: exists; pass --force to replace it")
     _probe_writable(option, p)

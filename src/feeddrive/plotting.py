@@ -39,7 +39,10 @@ def plot_result(result: Result, path: str | Path, title: str | None = None) -> P
     fig = result_figure(result, title)
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=110)
+    from .outputs import atomic_path
+
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return p
 

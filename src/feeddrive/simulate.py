@@ -652,10 +652,15 @@ class _Chunks:
                     self.size = max(every, min(int(self.size * min(scale, 4.0)) // every
                                                * every, MAX_CHUNK_SAMPLES * every))
         except KeyboardInterrupt:
-            raise _Stopped(self.start * grid.base, self._joined(self.parts)) from None
-        finally:
             if writer is not None:
-                writer.close()
+                writer.close()  # the samples so far, complete rows
+            raise _Stopped(self.start * grid.base, self._joined(self.parts)) from None
+        except BaseException as err:
+            if writer is not None:
+                writer.abort(err)  # e.g. a full disk: nothing partial under the output name
+            raise
+        if writer is not None:
+            writer.close()
         return (*self._joined([*self.parts, *tail]), stats)
 
     def _joined(self, parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]],

@@ -8,12 +8,18 @@ Guarantees:
   hash of the compiled kernels' sources, a hash of the computing code and the inputs (see
   :func:`store_key`), so a value from other code or other inputs is never reused;
 * **atomic writes**: an entry is written to a temporary file with a unique name in the
-  same folder, flushed to disk, then renamed over the entry (``os.replace``), so a reader
+  same folder, flushed to disk, then renamed over the entry (``os.replace``, through
+  :func:`feeddrive.outputs.atomic_path`, the helper every output file uses), so a reader
   sees the old entry or the new one, never half of one, even with concurrent writers or a
   ``SIGKILL`` at any point;
 * **checksummed**: each entry's first line is a header with its name, key and the SHA-256
-  of the payload; an entry that is truncated, edited by hand or written for another key
-  is not used: it is reported with a one-line notice and recomputed.
+  of the payload; an entry that is truncated, damaged or written for another key is not
+  used: it is reported with a one-line notice and recomputed.  The checksum is *unkeyed*:
+  it guards against accidents (a truncated write, a damaged disk, a careless edit), not
+  against someone who edits an entry and recomputes its SHA-256 — such an entry is
+  accepted, as is anything a user with write access to the folder puts there;
+* **a folder in an entry's place** is reported with a one-line notice; the value is then
+  recomputed on every run (the folder is never removed) until the folder is moved away.
 
 Entry file ``<name>-<key16>.json``::
 
@@ -26,11 +32,12 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 import time
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
+
+from .outputs import atomic_path, shown
 
 __all__ = ["FORMAT", "ResultStore", "code_hash", "store_key"]
 
@@ -79,6 +86,10 @@ class ResultStore:
             raw = p.read_bytes()
         except FileNotFoundError:
             return None
+        except IsADirectoryError:
+            self._say(f"{shown(p)}: is a folder, not a store entry; recomputing (move the "
+                      "folder away to keep the result)")
+            return None
         except OSError as err:
             self._say(f"{p}: unreadable ({err.strerror or err}); recomputing")
             return None
@@ -114,19 +125,11 @@ class ResultStore:
         body = json.dumps(value).encode("utf-8")
         header = json.dumps({"feeddrive-store": FORMAT, "name": name, "key": self.key,
                              "sha256": hashlib.sha256(body).hexdigest()}).encode("utf-8")
-        fd, tmp = tempfile.mkstemp(dir=self.root, prefix=f".{name}-", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "wb") as f:
-                f.write(header + b"\n" + body)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, self.path(name))
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        target = self.path(name)
+        if target.is_dir():  # noticed by get(); the value is used, not stored
+            return json.loads(body)
+        with atomic_path(target) as tmp:
+            tmp.write_bytes(header + b"\n" + body)
         return json.loads(body)
 
     def get_or_compute(self, name: str, compute: Callable[[], Any]) -> Any:
@@ -136,7 +139,7 @@ class ResultStore:
     def _clean_stale_temporaries(self) -> None:
         """Remove temporary files left by a killed writer (older than an hour)."""
         now = time.time()
-        for tmp in self.root.glob(".*.tmp"):
+        for tmp in [*self.root.glob(".*.tmp"), *self.root.glob(".*.partial.*")]:
             try:
                 if now - tmp.stat().st_mtime > _STALE_TEMP_SECONDS:
                     tmp.unlink()

@@ -65,4 +65,7 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> None:
     """Write ``fig`` to ``path``; the format follows the file extension (e.g. .png)."""
-    fig.savefig(path, dpi=dpi)
+    from .outputs import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi)

@@ -147,7 +147,7 @@ def test_a_bad_parameter_gets_the_message_params_check_prints(
 
 
 def test_friction_scale_is_checked_like_a_parameter(server: ExplorerServer) -> None:
-    for value, text in (("0", "friction_scale = 0.0: expected 0 … 10 [-]"),
+    for value, text in (("0", "friction_scale = 0.0: expected 0.001 … 10 [-]"),
                         ("ten", "friction_scale = 'ten': expected a number [-]")):
         assert check(server, friction_scale=value)["errors"]["friction_scale"].startswith(text)
 

@@ -360,6 +360,11 @@ def _locate(lines: np.ndarray | None, i: int) -> str:
     return f"line {int(lines[i])}" if lines is not None else f"index {i}"
 
 
+#: largest |speed| [m/s] and |force| [N] a friction test can hold (far above any feed drive)
+MAX_TEST_SPEED = 100.0
+MAX_TEST_FORCE = 1e7
+
+
 def fit_static(
     speed: object,
     force: object,
@@ -410,6 +415,16 @@ def fit_static(
     if zero.size:
         raise ValueError(f"{prefix}{_locate(lines, int(zero[0]))}: speed 0 is not a sliding "
                          "test; the static fit needs constant non-zero speeds")
+    # values no feed drive reaches (a wrong unit or a damaged file) would overflow the fit
+    for name, arr, limit, unit, edge in (("speed", v, MAX_TEST_SPEED, "m/s", 1e3),
+                                         ("force", f, MAX_TEST_FORCE, "N", 1.0)):
+        big = np.flatnonzero(np.abs(arr) > limit)
+        if big.size:
+            k = int(big[0])
+            edge_unit = "mm/s" if name == "speed" else unit
+            raise ValueError(f"{prefix}{_locate(lines, k)}: {name} {arr[k] * edge:.4g} "
+                             f"{edge_unit}: beyond any feed drive (|{name}| ≤ "
+                             f"{limit * edge:g} {edge_unit}); check the file's unit")
     fits: dict[str, BranchFit | None] = {"positive": None, "negative": None}
     for direction, mask in (("positive", v > 0), ("negative", v < 0)):
         idx = np.flatnonzero(mask)
@@ -431,9 +446,14 @@ def fit_static(
             raise ValueError(f"{prefix}{_locate(lines, k)}: the force changes sign within the "
                              f"{direction}-speed tests (give signed forces or magnitudes)")
         sub_lines = None if lines is None else np.asarray(lines)[idx]
-        fits[direction] = fit_branch(v[idx], f[idx], direction=direction,
-                                     confidence=confidence, weighting=weighting,
-                                     lines=sub_lines)
+        try:
+            fits[direction] = fit_branch(v[idx], f[idx], direction=direction,
+                                         confidence=confidence, weighting=weighting,
+                                         lines=sub_lines)
+        except ValueError as err:  # the optimiser's own refusal: name the file
+            if prefix and not str(err).startswith(prefix):
+                raise ValueError(f"{prefix}{direction} branch: the fit failed ({err})") from None
+            raise
     return StaticFit(positive=fits["positive"], negative=fits["negative"], source=source)
 
 

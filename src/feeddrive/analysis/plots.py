@@ -18,7 +18,10 @@ __all__ = ["plot_dynamic_fit", "plot_static_fit", "plot_trace"]
 
 
 def _save(fig: Figure, path: str | Path) -> None:
-    fig.savefig(Path(path), dpi=120)
+    from ..outputs import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=120)
 
 
 def plot_static_fit(fit: StaticFit, path: str | Path) -> None:

@@ -277,6 +277,9 @@ def plot_prediction(pred: Prediction, path: str | os.PathLike[str],
     ax2.legend(fontsize=8)
     fig.tight_layout()
     p = Path(path)
-    fig.savefig(p, dpi=100)
+    from ..outputs import atomic_path
+
+    with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
     return p

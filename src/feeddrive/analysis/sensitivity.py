@@ -388,6 +388,9 @@ def plot_tornado(result: SensitivityResult, path: str | os.PathLike[str],
                  "(* halving check failed: nonlinear)", fontsize=9)
     fig.tight_layout()
     p = Path(path)
-    fig.savefig(p, dpi=100)
+    from ..outputs import atomic_path
+
+    with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
     return p

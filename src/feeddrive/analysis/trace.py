@@ -130,7 +130,13 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
         raise ValueError(f"window = {window}: expected an odd number of samples > polyorder "
                          f"= {polyorder}")
     if window > t.size:
-        raise ValueError(f"window = {window} samples: longer than the trace ({t.size} samples)")
+        where = f"{source}: " if source else ""
+        span = window * dt
+        raise ValueError(f"{where}smoothing window = {window} samples ({span * 1e3:.4g} ms at "
+                         f"the {dt * 1e3:.4g}-ms sample step): longer than the trace "
+                         f"({t.size} samples, {t.size * dt:.4g} s); give a shorter "
+                         f"--smoothing (at most {(t.size - (1 - t.size % 2)) * dt * 1e3:.4g} "
+                         "ms) or a longer record")
     from scipy.signal import savgol_filter  # here: keeps `feeddrive --help` fast
 
     speed = savgol_filter(x, window, polyorder, deriv=1, delta=dt, mode="interp")

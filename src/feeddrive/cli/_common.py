@@ -40,7 +40,8 @@ EXIT_FAILED = 1
 EXIT_UNSTABLE = 3
 
 # the arguments that name files, in the order they are named in a message
-_FILE_ARGUMENTS = ("file", "fragments", "params_file", "static", "out", "output", "plot")
+_FILE_ARGUMENTS = ("config", "store", "file", "fragments", "params_file", "static", "out", "output",
+                   "plot")
 
 
 def _one_line(text: str) -> str:
@@ -58,6 +59,24 @@ def _files_of(kwargs: dict[str, Any]) -> str:
         elif isinstance(value, list | tuple):
             names.extend(os.fspath(v) for v in value)
     return ", ".join(shown(n) for n in names)
+
+
+def interrupted() -> typer.Exit:
+    """The exit of a command stopped by Ctrl-C, once its message is printed: quick.
+
+    The objects alive now are moved out of the garbage collector's reach (``gc.freeze``):
+    the interpreter's exit then skips a last collection over numba's object graph, which took
+    1.4–1.7 s of a Ctrl-C's time (measured: 0.2 s with the freeze).  Everything the command
+    keeps is written and closed before this is called.
+    """
+    import gc
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    gc.freeze()
+    from ..exit_codes import INTERRUPTED
+
+    return typer.Exit(code=INTERRUPTED)
 
 
 def _fail(message: str, code: int) -> typer.Exit:
@@ -92,11 +111,16 @@ def user_errors(fn: F) -> F:
             files = _files_of(kwargs)
             raise _fail(f"{files + ': ' if files else ''}nested too deeply to process",
                         EXIT_REFUSED) from None
-        except RuntimeError as err:
-            # SimulationError, checked without importing the simulator at start-up
+        except Exception as err:
+            # SimulationError and sqlite3.Error, checked without importing either at start-up
             simulate = sys.modules.get("feeddrive.simulate")
             if simulate is not None and isinstance(err, simulate.SimulationError):
                 raise _fail(f"simulation failed: {err}", EXIT_FAILED) from None
+            sqlite3 = sys.modules.get("sqlite3")
+            if sqlite3 is not None and isinstance(err, sqlite3.Error):
+                files = _files_of(kwargs)
+                raise _fail(f"{files + ': ' if files else ''}database error (SQLite: {err})",
+                            EXIT_FAILED) from None
             raise
 
     return wrapper  # type: ignore[return-value]

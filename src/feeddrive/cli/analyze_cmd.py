@@ -12,7 +12,7 @@ import typer
 
 from ..analysis.metrics import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME
-from ..outputs import check_output_file
+from ..outputs import PLOT_FORMATS, check_output_file
 from ..parameters import ParameterError
 from ._common import MM_PER_S, app, console, print_json, user_errors
 
@@ -77,7 +77,8 @@ def analyze_command(
         if not (math.isfinite(value) and value > 0):
             raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
     if plot:
-        check_output_file(plot, option="--plot", inputs=[file], force=force)
+        check_output_file(plot, option="--plot", inputs=[file], force=force,
+                          formats=PLOT_FORMATS)
     thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,
                                  max_ripple_ratio=max_ripple_ratio)
     trace = read_position_trace(file, time_column=time_column, position_column=position_column,

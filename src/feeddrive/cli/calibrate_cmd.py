@@ -55,7 +55,8 @@ def calibrate_command(
         raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
                                              f"{unknown}]")
     if out:
-        check_output_file(out, option="--out", inputs=[params_file], force=force)
+        check_output_file(out, option="--out", inputs=[params_file], force=force,
+                          formats=(".toml",))
     params = resolve_parameters(preset_name, params_file)
     rule = VerdictRule(max_duration=max_duration)
     result = calibrate(

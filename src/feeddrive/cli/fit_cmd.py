@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from ..outputs import check_output_file, shown
+from ..outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
 from . import _units
 from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
 
@@ -95,7 +95,8 @@ def fit_command(
     if out:
         check_output_file(out, option="--out", inputs=inputs, force=force)
     if plot:
-        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force)
+        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force,
+                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     table_position = _units.position("--position", position, params, drive)
     speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
@@ -124,7 +125,8 @@ def fit_command(
             extends = preset_name or "wang2021"
         data_names = [os.path.relpath(Path(t).resolve(), Path(out).resolve().parent)
                       for t in traces]
-        Path(out).write_text(result.fitted_toml(extends, data_names), encoding="utf-8")
+        with atomic_path(out) as tmp:  # nothing partial under the name (a full disk)
+            tmp.write_text(result.fitted_toml(extends, data_names), encoding="utf-8")
         written = out
     if plot:
         plot_residuals(result, plot)
@@ -199,7 +201,8 @@ def predict_command(
     from ..protocol import SPEED_RANGE
 
     if plot:
-        check_output_file(plot, option="--plot", inputs=[fit_file, store], force=force)
+        check_output_file(plot, option="--plot", inputs=[fit_file, store], force=force,
+                          formats=PLOT_FORMATS)
     if workers is not None and workers < 1:
         raise ValueError(f"--workers = {workers}: expected ≥ 1")
     rng = None

@@ -10,7 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from .. import units
-from ..outputs import check_output_file
+from ..outputs import PLOT_FORMATS, check_output_file
 from ..parameters import DriveParameters, LuGreParameters, ParameterError
 from ._common import (
     MM_PER_S,
@@ -104,7 +104,8 @@ def friction_command(
     if site not in SITES:
         raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
     if plot:
-        check_output_file(plot, option="--plot", inputs=[params_file], force=force)
+        check_output_file(plot, option="--plot", inputs=[params_file], force=force,
+                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file)
     lugre: LuGreParameters = getattr(params.friction, site).require(
         LuGreParameters, f"friction.{site}", "feeddrive friction")

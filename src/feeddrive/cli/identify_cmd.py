@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..outputs import check_output_file, shown
+from ..outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
 from ..parameters import DriveParameters, LuGreParameters, ParameterError, save
 
 if TYPE_CHECKING:
@@ -62,9 +62,10 @@ def _base(preset_name: str | None, params_file: str | None,
 def _check_outputs(out: str | None, plot: str | None, inputs: list[str | None],
                    force: bool) -> None:
     if out:
-        check_output_file(out, option="--out", inputs=inputs, force=force)
+        check_output_file(out, option="--out", inputs=inputs, force=force, formats=(".toml",))
     if plot:
-        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force)
+        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force,
+                          formats=PLOT_FORMATS)
 
 
 def _fmt(est: Estimate, scale: float = 1.0, digits: int = 4) -> str:
@@ -193,8 +194,9 @@ def static_command(
                      weighting=weighting,  # type: ignore[arg-type]
                      lines=data.lines, source=data.source)
     if out:
-        Path(out).write_text(friction_fragment(site, static=fit, source=data.source),
-                             encoding="utf-8")
+        with atomic_path(out) as tmp:
+            tmp.write_text(friction_fragment(site, static=fit, source=data.source),
+                           encoding="utf-8")
     if plot:
         from ..analysis.plots import plot_static_fit
 
@@ -267,8 +269,9 @@ def dynamic_command(
                              progress=lambda text: status.update(
                                  f"fitting {shown(data.source)}: {text}"))
     if out:
-        Path(out).write_text(friction_fragment(site, dynamic=fit, source=data.source),
-                             encoding="utf-8")
+        with atomic_path(out) as tmp:
+            tmp.write_text(friction_fragment(site, dynamic=fit, source=data.source),
+                           encoding="utf-8")
     if plot:
         from ..analysis.plots import plot_dynamic_fit
 
@@ -294,7 +297,8 @@ def merge_command(
     force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
 ) -> None:
     """Merge identified fragments into a parameter set and validate the result."""
-    check_output_file(out, option="--out", inputs=[*fragments, params_file], force=force)
+    check_output_file(out, option="--out", inputs=[*fragments, params_file], force=force,
+                      formats=(".toml",))
     params = _base(preset_name, params_file, fragments)
     names = ", ".join(Path(f).name for f in fragments)
     params = params.with_values(name=f"{params.name}-identified",

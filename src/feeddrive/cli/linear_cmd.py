@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import typer
 
 from .. import protocol
+from ..outputs import PLOT_FORMATS, check_output_file
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 from .simulate_cmd import ALL_DRIVES
 
@@ -45,9 +44,8 @@ def loops_command(
     if plot_kind not in PLOT_KINDS:
         raise ParameterError("--plot-kind", plot_kind, f"expected {', '.join(PLOT_KINDS)}")
     if plot:
-        if Path(plot).suffix.lower() not in (".png", ".pdf", ".svg"):
-            raise ParameterError("--plot", plot, "expected a .png, .pdf or .svg file name")
-        check_output_file(plot, option="--plot", inputs=[params_file], force=force)
+        check_output_file(plot, option="--plot", inputs=[params_file], force=force,
+                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, position * MM)
     result = loop_analysis(system, table_speed * MM_PER_S, nut_speed * MM_PER_S,
@@ -100,7 +98,8 @@ def stability_command(
                                "0.001 mm/s)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    plot: str | None = typer.Option(None, "--plot", help="Write the scan (PNG)."),
+    plot: str | None = typer.Option(None, "--plot", help="Write the scan [.png, .pdf, .svg]."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
 ) -> None:
     """Table speeds at which steady sliding is linearly unstable (full model, every friction
@@ -108,6 +107,9 @@ def stability_command(
     from ..linear import stability_band
     from ..simulate import DriveSystem
 
+    if plot:  # before any work
+        check_output_file(plot, option="--plot", inputs=[params_file], force=force,
+                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, position * MM)
     band = stability_band(system, nut_speed * MM_PER_S, low=low * MM_PER_S,

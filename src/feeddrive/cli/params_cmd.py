@@ -6,6 +6,7 @@ import json
 
 import typer
 
+from ..outputs import shown
 from ..parameters import dumps, load, preset, to_dict
 from ._common import app, console, user_errors
 
@@ -41,4 +42,5 @@ def show(
 def check(file: str = typer.Argument(..., help="Parameter file (TOML).")) -> None:
     """Validate a parameter file; exit non-zero with the offending field if it is refused."""
     params = load(file)
-    console.print(f"ok: {file} is a valid parameter set ({params.name})")
+    console.print(f"ok: {shown(file)} is a valid parameter set ({shown(params.name)})",
+                  markup=False, highlight=False, soft_wrap=True)

@@ -7,10 +7,16 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..exit_codes import INTERRUPTED
 from ..outputs import check_output_dir, shown
 from ..parameters import ParameterError
-from ._common import app, console, err_console, resolve_parameters, user_errors
+from ._common import (
+    app,
+    console,
+    err_console,
+    interrupted,
+    resolve_parameters,
+    user_errors,
+)
 
 
 @app.command("reproduce")
@@ -52,7 +58,7 @@ def reproduce_command(
         err_console.print(f"interrupted: the studies finished so far are kept in "
                           f"{out / 'data'} and reused by a rerun", markup=False,
                           highlight=False, soft_wrap=True)
-        raise typer.Exit(code=INTERRUPTED) from None
+        raise interrupted() from None
     console.print(f"wrote {out / 'report.html'}, {out / 'report.md'}, "
                   f"{len(results['figures'])} figures, tables in {out} "
                   f"({results['wall_time_s']:.0f} s)")

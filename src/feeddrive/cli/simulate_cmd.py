@@ -6,13 +6,14 @@ from typing import Any
 
 import typer
 
-from ..outputs import check_output_file
+from ..outputs import PLOT_FORMATS, check_output_file
 from . import _units
 from ._common import (
     EXIT_UNSTABLE,
     app,
     console,
     err_console,
+    interrupted,
     print_json,
     resolve_parameters,
     user_errors,
@@ -115,7 +116,8 @@ def simulate_command(
         check_format(output)
         check_output_file(output, option="--output", inputs=inputs, force=force)
     if plot:
-        check_output_file(plot, option="--plot", inputs=[*inputs, output], force=force)
+        check_output_file(plot, option="--plot", inputs=[*inputs, output], force=force,
+                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive,
                          table_position=_units.position("--position", position, params, drive))
@@ -193,7 +195,7 @@ def simulate_command(
         bar.stop()
         err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
                           soft_wrap=True)
-        raise typer.Exit(code=130) from None
+        raise interrupted() from None
     finally:
         bar.stop()
     summary = result.summary()

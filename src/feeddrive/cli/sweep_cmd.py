@@ -9,8 +9,8 @@ from typing import Any
 
 import typer
 
-from ..outputs import check_output_file, shown
-from ._common import app, console, err_console, print_json, user_errors
+from ..outputs import PLOT_FORMATS, check_output_file, shown
+from ._common import app, console, err_console, interrupted, print_json, user_errors
 
 _PLOT_FORMATS = (".png", ".pdf", ".svg")
 _EXPORT_FORMATS = (".csv", ".parquet", ".nc")
@@ -24,7 +24,8 @@ def _check_outputs(plot: str | None, output: str | None, inputs: list[str], forc
     if plot is not None:
         if Path(plot).suffix.lower() not in _PLOT_FORMATS:
             raise ValueError(f"--plot {shown(plot)}: expected one of {', '.join(_PLOT_FORMATS)}")
-        check_output_file(plot, option="--plot", inputs=inputs, force=force)
+        check_output_file(plot, option="--plot", inputs=inputs, force=force,
+                          formats=PLOT_FORMATS)
     if output is not None:
         ext = Path(output).suffix.lower()
         if ext not in _EXPORT_FORMATS:
@@ -121,12 +122,11 @@ def sweep_command(
         raise ValueError(f"--workers = {workers}: expected ≥ 1")
     if dask_workers is not None and dask_workers < 1:
         raise ValueError(f"--dask-workers = {dask_workers}: expected ≥ 1")
-    points = cfg.points()  # every point's parameter set validated here
-    if dry_run:
+    if dry_run:  # counts from the design; only the timed points are built
         db = SweepStore(store_path, option=option, create=False) if store_path.exists() \
             else None
         n = dask_workers or workers or os.cpu_count() or 1
-        est = estimate(cfg, db, workers=n, points=points,
+        est = estimate(cfg, db, workers=n,
                        progress=None if as_json else
                        lambda text: err_console.print(f"dry run: {text} …", markup=False,
                                                       highlight=False, soft_wrap=True))
@@ -140,7 +140,8 @@ def sweep_command(
                "seconds_per_point_range": [lo, hi], "workers": n,
                "estimated_seconds": est.seconds,
                "estimated_seconds_range": total_range,
-               "timing": "CPU seconds of the timed points, one core per worker"}
+               "timing": "CPU seconds of the timed points, one core per worker",
+               "parameter_sets_built": est.built}
         if as_json:
             print_json(out)
             return
@@ -148,12 +149,13 @@ def sweep_command(
                 f"{lo:.3g}–{hi:.3g} s) → about {est.seconds:.3g} s "
                 f"({total_range[0]:.3g}–{total_range[1]:.3g} s) on {n} workers with a free core "
                 "each; longer on a loaded machine" if est.timed else "nothing to time")
-        console.print(f"sweep {cfg.name}: {est.points} points ({est.distinct} distinct, "
+        console.print(f"sweep {shown(cfg.name)}: {est.points} points ({est.distinct} distinct, "
                       f"{est.stored} already stored, {est.distinct - est.stored} to compute); "
                       + cost, markup=False, highlight=False, soft_wrap=True)
         return
-    with SweepStore(store_path, option=option, notice=_notice) as db:
-        summary = _run(cfg, db, points, workers, scheduler, dask_workers, quiet=as_json)
+    summary, db = _run(cfg, lambda: SweepStore(store_path, option=option, notice=_notice),
+                       workers, scheduler, dask_workers, quiet=as_json)
+    with db:
         shown_plot = _plot(to_dataset(db, cfg.name), plot, x or cfg.map_axes[0],
                            y or cfg.map_axes[1], None) if plot else None
         if output:
@@ -162,14 +164,18 @@ def sweep_command(
            "distinct": summary.distinct, "stored_before": summary.stored_before,
            "computed": summary.computed, "failed": summary.failed,
            "seconds": summary.seconds, "points_per_second": summary.rate,
-           "executor": summary.executor, "plot": plot, "output": output}
+           "executor": summary.executor, "computed_elsewhere": summary.elsewhere,
+           "plot": plot, "output": output}
     if as_json:
         out["points_per_second"] = None if summary.computed == 0 else summary.rate
         print_json(out)
         return
-    console.print(f"sweep {cfg.name}: {summary.points} points, {summary.distinct} distinct; "
-                  f"{summary.stored_before} found in {shown(store_path)}, {summary.computed} "
-                  f"computed ({summary.failed} failed) in {summary.seconds:.1f} s"
+    console.print(f"sweep {shown(cfg.name)}: {summary.points} points, {summary.distinct} "
+                  f"distinct; {summary.stored_before} found in {shown(store_path)}, "
+                  f"{summary.computed} computed ({summary.failed} failed)"
+                  + (f", {summary.elsewhere} computed meanwhile by another sweep"
+                     if summary.elsewhere else "")
+                  + f" in {summary.seconds:.1f} s"
                   + (f", {_speed_column(summary.rate)} on {summary.executor}"
                      if summary.computed else ""), markup=False, highlight=False)
     if plot:
@@ -182,8 +188,9 @@ def _notice(text: str) -> None:
     err_console.print(f"notice: {text}", markup=False, highlight=False, soft_wrap=True)
 
 
-def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | None,
-         dask_workers: int | None, *, quiet: bool) -> Any:
+def _run(cfg: Any, open_store: Any, workers: int | None, scheduler: str | None,
+         dask_workers: int | None, *, quiet: bool) -> tuple[Any, Any]:
+    """Check every point, then open the store and run: (summary, the open store)."""
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -196,7 +203,7 @@ def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | N
     from rich.text import Text
 
     from ..sweep import run_sweep
-    from ..sweep.executors import SweepAborted
+    from ..sweep.executors import SweepAborted, SweepInterrupted, check_design
 
     class Rate(ProgressColumn):
         def render(self, task: Any) -> Text:
@@ -206,28 +213,41 @@ def _run(cfg: Any, db: Any, points: Any, workers: int | None, scheduler: str | N
                    Rate(), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
                    console=err_console, transient=True, disable=quiet)
     with bar:
-        task = bar.add_task(f"sweep {cfg.name}", total=None)
+        name = shown(cfg.name)
+        task = bar.add_task(f"sweep {name}: checking points", total=None)
+
+        def checked(done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total)
 
         def started(todo: int, where: str) -> None:
-            bar.update(task, total=todo, description=f"sweep {cfg.name} on {where}")
+            bar.update(task, completed=0, total=todo, description=f"sweep {name} on {where}")
 
         def progress(done: int, todo: int) -> None:
             bar.update(task, completed=done, total=todo)
 
+        design = check_design(cfg, checked=checked)  # every point, before the store opens
+        db = open_store()
         try:
-            return run_sweep(cfg, db, workers=workers, scheduler=scheduler,
-                             dask_workers=dask_workers, points=points, progress=progress,
-                             started=started)
+            try:
+                return run_sweep(cfg, db, workers=workers, scheduler=scheduler,
+                                 dask_workers=dask_workers, progress=progress,
+                                 started=started, design=design), db
+            except BaseException:
+                db.close()
+                raise
         except SweepAborted as err:
             bar.stop()
             err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
             raise typer.Exit(code=1) from None
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as err:
             bar.stop()
-            err_console.print(f"interrupted: every finished point is in {shown(db.path)}; "
-                              "rerun the same command to resume", markup=False,
-                              highlight=False, soft_wrap=True)
-            raise typer.Exit(code=130) from None
+            kept = f"{err.computed} computed this run; " if isinstance(err, SweepInterrupted) \
+                else ""
+            err_console.print(f"interrupted: every finished point is in {shown(db.path)} "
+                              f"({kept}the points in flight were cancelled); rerun the same "
+                              "command to resume", markup=False, highlight=False,
+                              soft_wrap=True)
+            raise interrupted() from None
 
 
 @app.command("map")

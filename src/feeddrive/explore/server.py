@@ -29,6 +29,7 @@ elsewhere cannot reach the server through a rebound DNS name; POST bodies must b
 from __future__ import annotations
 
 import json
+import socket
 import sys
 import threading
 import time
@@ -57,6 +58,12 @@ from .settings import (
 )
 
 MAX_BODY = 4 * 1024 * 1024  # [bytes] a parameter file is a few kB
+#: [s] a connection that sends nothing for this long is closed (a slow or stalled client)
+READ_TIMEOUT = 20.0
+#: connections served at once; one more is answered 503 and closed
+MAX_CONNECTIONS = 32
+#: deepest JSON nesting a request may have (the page sends 2 levels)
+MAX_JSON_DEPTH = 32
 _STATIC = {"index.html": "text/html; charset=utf-8",
            "explore.js": "text/javascript; charset=utf-8",
            "explore.css": "text/css; charset=utf-8"}
@@ -200,11 +207,34 @@ def _error_field(err: BaseException) -> str | None:
 
 
 class ExplorerServer(ThreadingHTTPServer):
+    """One thread per connection, at most :data:`MAX_CONNECTIONS` at once; each connection
+    is closed after :data:`READ_TIMEOUT` s without a byte (``Handler.timeout``)."""
+
     daemon_threads = True
+    # the listen backlog: connections past the cap are accepted (and answered 503) at once,
+    # not left unaccepted in the kernel's queue
+    request_queue_size = 2 * MAX_CONNECTIONS
 
     def __init__(self, port: int, explorer: Explorer, host: str = "127.0.0.1") -> None:
         self.explorer = explorer
+        self._slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
         super().__init__((host, port), Handler)
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        if not self._slots.acquire(blocking=False):
+            _refuse_connection(request)
+            return
+        try:
+            super().process_request(request, client_address)
+        except BaseException:
+            self._slots.release()
+            raise
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self._slots.release()
 
     @property
     def port(self) -> int:
@@ -214,7 +244,7 @@ class ExplorerServer(ThreadingHTTPServer):
         """A browser that closes a kept-alive connection resets it while the server waits for
         the next request: nothing went wrong, so no traceback in the user's terminal.  Any
         other error is printed as ``socketserver`` prints it."""
-        if isinstance(sys.exc_info()[1], ConnectionError):
+        if isinstance(sys.exc_info()[1], ConnectionError | TimeoutError):
             return
         super().handle_error(request, client_address)
 
@@ -223,9 +253,68 @@ class ExplorerServer(ThreadingHTTPServer):
         return f"http://127.0.0.1:{self.port}/"
 
 
+def _refuse_connection(sock: Any) -> None:
+    """Answer a connection over the cap with 503 and close it (never blocks long)."""
+    try:
+        sock.settimeout(0.1)
+        body = b'{"error":"too many connections to the explorer; retry"}'
+        sock.sendall(b"HTTP/1.1 503 Service Unavailable\r\nContent-Type: application/json"
+                     b"\r\nContent-Length: " + str(len(body)).encode() +
+                     b"\r\nConnection: close\r\n\r\n" + body)
+        sock.shutdown(socket.SHUT_WR)
+        sock.recv(65536)  # what the client sent, briefly: closing unread would reset the answer
+    except OSError:
+        pass
+    finally:
+        try:
+            sock.close()
+        except OSError:
+            pass
+
+
+def _json_depth(raw: bytes) -> int:
+    """Deepest [ / { nesting of JSON text (strings skipped), without parsing it."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for byte in raw:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif byte == 0x5C:  # backslash
+                escaped = True
+            elif byte == 0x22:  # quote
+                in_string = False
+        elif byte == 0x22:
+            in_string = True
+        elif byte in (0x5B, 0x7B):
+            depth += 1
+            deepest = max(deepest, depth)
+        elif byte in (0x5D, 0x7D):
+            depth -= 1
+    return deepest
+
+
+def _settings_of(body: dict[str, Any], key: str = "settings") -> dict[str, Any] | None:
+    """``body[key]``: absent, or an object of field values; anything else is a 400 naming
+    the key.  (A field holding a list or an object is refused beside the field by the
+    check, as any value that is not a number; its nesting is bounded by the body's.)"""
+    value = body.get(key)
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise _HttpError(HTTPStatus.BAD_REQUEST, f"'{key}' must be an object of field "
+                         f"values, not {type(value).__name__}")
+    for name, item in value.items():
+        if isinstance(item, int) and not isinstance(item, bool) and abs(item) > 1e300:
+            raise _HttpError(HTTPStatus.BAD_REQUEST, f"'{key}.{name[:40]}': a number too "
+                             "large for a field")
+    return value
+
+
 class Handler(BaseHTTPRequestHandler):
     server: ExplorerServer
     protocol_version = "HTTP/1.1"
+    timeout = READ_TIMEOUT  # socket timeout: a stalled client is dropped
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002  (base signature)
         """Quiet: the terminal shows the address and errors, not every poll."""
@@ -252,17 +341,44 @@ class Handler(BaseHTTPRequestHandler):
         port = self.server.port
         return host in (f"127.0.0.1:{port}", f"localhost:{port}", "127.0.0.1", "localhost")
 
+    def _origin_ok(self) -> bool:
+        """A POST from a page comes with its Origin: it must be the explorer's own (a page
+        elsewhere cannot start runs); a request without one (curl, a script) is allowed."""
+        origin = self.headers.get("Origin")
+        if origin is None:
+            return True
+        port = self.server.port
+        return origin.lower() in (f"http://127.0.0.1:{port}", f"http://localhost:{port}")
+
     def _body(self) -> Any:
         ctype = (self.headers.get("Content-Type") or "").split(";")[0].strip().lower()
         if ctype != "application/json":
             raise _HttpError(HTTPStatus.UNSUPPORTED_MEDIA_TYPE, "send JSON")
-        length = int(self.headers.get("Content-Length") or 0)
+        text = (self.headers.get("Content-Length") or "0").strip()
+        if not text.isdigit() or not text.isascii():
+            self.close_connection = True  # where the body ends is unknown
+            raise _HttpError(HTTPStatus.BAD_REQUEST, f"Content-Length {text[:20]!r}: expected "
+                             "a whole number of bytes ≥ 0")
+        length = int(text)
         if length > MAX_BODY:
+            self.close_connection = True
             raise _HttpError(HTTPStatus.REQUEST_ENTITY_TOO_LARGE,
                              f"request larger than {MAX_BODY // 1024 // 1024} MB")
         try:
-            data = json.loads(self.rfile.read(length) or b"{}")
-        except (json.JSONDecodeError, UnicodeDecodeError):
+            raw = self.rfile.read(length)
+        except TimeoutError:
+            self.close_connection = True
+            raise _HttpError(HTTPStatus.REQUEST_TIMEOUT, f"the request body did not arrive "
+                             f"within {READ_TIMEOUT:g} s") from None
+        if len(raw) < length:
+            self.close_connection = True
+            raise _HttpError(HTTPStatus.BAD_REQUEST, "the request body ended early")
+        if _json_depth(raw) > MAX_JSON_DEPTH:
+            raise _HttpError(HTTPStatus.BAD_REQUEST, f"JSON nested more than {MAX_JSON_DEPTH} "
+                             "deep")
+        try:
+            data = json.loads(raw or b"{}")
+        except (ValueError, RecursionError):  # JSONDecodeError, UnicodeDecodeError, huge ints
             raise _HttpError(HTTPStatus.BAD_REQUEST, "not valid JSON") from None
         if not isinstance(data, dict):
             raise _HttpError(HTTPStatus.BAD_REQUEST, "expected a JSON object")
@@ -272,13 +388,18 @@ class Handler(BaseHTTPRequestHandler):
         if not self._host_ok():
             self._json(HTTPStatus.FORBIDDEN, {"error": "the explorer answers 127.0.0.1 only"})
             return
+        if self.command == "POST" and not self._origin_ok():
+            self.close_connection = True
+            self._json(HTTPStatus.FORBIDDEN, {"error": "requests from other pages are refused "
+                                              "(Origin is not the explorer's address)"})
+            return
         url = urlsplit(self.path)
         try:
             self._route(method, url.path, url.query)
         except _HttpError as err:
             self._json(err.status, {"error": err.message})
-        except (BrokenPipeError, ConnectionResetError):
-            pass
+        except (BrokenPipeError, ConnectionResetError, TimeoutError):
+            self.close_connection = True
         except Exception as err:  # the server must outlive any bug; the page shows it
             traceback.print_exc(file=sys.stderr)
             self._json(HTTPStatus.INTERNAL_SERVER_ERROR,
@@ -327,11 +448,12 @@ class Handler(BaseHTTPRequestHandler):
                 raise _HttpError(HTTPStatus.NOT_FOUND, f"no page {path}")
             return
         body = self._body()
+        given = _settings_of(body)
         if path == "/api/check":
-            self._json(200, check(body.get("settings")).as_dict())
+            self._json(200, check(given).as_dict())
         elif path == "/api/jobs":
             try:
-                job, checked = ex.start(str(body.get("kind")), body.get("settings") or {})
+                job, checked = ex.start(str(body.get("kind"))[:40], given or {})
             except Busy as err:
                 raise _HttpError(HTTPStatus.TOO_MANY_REQUESTS, str(err)) from None
             except ParameterError as err:
@@ -346,7 +468,7 @@ class Handler(BaseHTTPRequestHandler):
                 raise _HttpError(HTTPStatus.NOT_FOUND, "no such run")
             self._json(200, job.as_dict())
         elif path == "/api/export":
-            done = check(body.get("settings"))
+            done = check(given)
             if not done.ok:
                 self._json(HTTPStatus.UNPROCESSABLE_ENTITY, done.as_dict())
                 return
@@ -358,7 +480,7 @@ class Handler(BaseHTTPRequestHandler):
             if not isinstance(text, str):
                 raise _HttpError(HTTPStatus.BAD_REQUEST, "expected the file's text in 'toml'")
             try:
-                settings = import_toml(text, body.get("settings"))
+                settings = import_toml(text, given)
             except ParameterError as err:
                 self._json(HTTPStatus.UNPROCESSABLE_ENTITY, {"errors": {"import": str(err)}})
                 return

@@ -52,7 +52,9 @@ PAPER_NUT_SPEED_MM_S = 16.0
 #: a plain harmonic of the motor shaft: 6 per revolution is a common cogging order
 DEFAULT_RIPPLE_ORDER = 6.0
 
-_FRICTION_SCALE = {"unit": "-", "low": 0.0, "high": 10.0, "low_inclusive": False,
+# a thousandth of the set's friction is the least the page runs (1e-320 passed the check
+# and then broke the run): a physical lower bound, as the compensation scales have
+_FRICTION_SCALE = {"unit": "-", "low": 1e-3, "high": 10.0, "low_inclusive": True,
                    "hint": "1 is the parameter set's friction"}
 _RIPPLE = "disturbances.screw_motor_ripple"
 
@@ -191,13 +193,20 @@ def _with_cli_warnings(fn: Any, *args: Any) -> tuple[Any, str]:
 # ---------------------------------------------------------------- parameter sets
 
 
+#: longest parameter text the page sends or an address carries [characters, decompressed]
+MAX_PARAMS_TEXT = 256 * 1024
+
+
 def loads_params(text: str) -> DriveParameters:
     """A parameter set from the page (an imported file or the address): TOML, whose
-    ``extends`` may name a preset but not a file (the server reads no file for a page)."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ParameterError("file", "<toml>", f"not valid TOML: {err}") from None
+    ``extends`` may name a preset but not a file (the server reads no file for a page).
+    Read as the CLI reads a file: nesting deeper than the CLI accepts is refused."""
+    from ..parameters.toml_io import parse_toml
+
+    if len(text) > MAX_PARAMS_TEXT:
+        raise ParameterError("file", "<toml>", f"{len(text)} characters; a parameter file "
+                             f"is at most {MAX_PARAMS_TEXT // 1024} kB here")
+    data = parse_toml(text, source="<toml>")
     parent = data.get("extends")
     if parent is not None and parent not in PRESETS:
         raise ParameterError("extends", parent, f"expected one of {', '.join(PRESETS)} (the "
@@ -212,11 +221,24 @@ def encode_params(text: str) -> str:
 
 
 def decode_params(blob: str) -> str:
+    """Address form → TOML text, decompressing at most :data:`MAX_PARAMS_TEXT` bytes (a
+    small address that inflates to megabytes is refused, not inflated)."""
+    shown_blob = blob[:20] + ("…" if len(blob) > 20 else "")
     try:
         raw = base64.urlsafe_b64decode(blob + "=" * (-len(blob) % 4))
-        return zlib.decompress(raw).decode("utf-8")
-    except (binascii.Error, zlib.error, UnicodeDecodeError, ValueError):
-        raise ParameterError("params", blob[:20] + ("…" if len(blob) > 20 else ""),
+        inflate = zlib.decompressobj()
+        text = inflate.decompress(raw, MAX_PARAMS_TEXT)
+        if inflate.unconsumed_tail or not inflate.eof:
+            if inflate.unconsumed_tail:
+                raise ParameterError("params", shown_blob, "the parameter set it carries is "
+                                     f"larger than {MAX_PARAMS_TEXT // 1024} kB; not one "
+                                     "this page wrote")
+            raise zlib.error("truncated")
+        return text.decode("utf-8")
+    except (binascii.Error, zlib.error, UnicodeDecodeError, ValueError) as err:
+        if isinstance(err, ParameterError):
+            raise
+        raise ParameterError("params", shown_blob,
                              "not a parameter set (the address was cut or changed)") from None
 
 
@@ -478,7 +500,9 @@ def import_toml(text: str, current: Mapping[str, Any] | None = None) -> dict[str
         if m and m.group(1) in names:
             try:
                 value = tomllib.loads(f"v = {m.group(2)}")["v"]
-            except tomllib.TOMLDecodeError:
+            except (tomllib.TOMLDecodeError, RecursionError):
+                continue
+            if not isinstance(value, str | int | float) or isinstance(value, bool):
                 continue
             s[names[m.group(1)]] = value if isinstance(value, str) else _text(float(value))
     return s

@@ -9,7 +9,6 @@ only the C standard library and libm; the FMU carries it (with the FMI headers) 
 
 from __future__ import annotations
 
-import os
 import platform
 import shutil
 import subprocess
@@ -168,8 +167,10 @@ def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
     plat = platform_folder(fmi)
     with tempfile.TemporaryDirectory(prefix="feeddrive-fmu-") as tmp:
         lib = compile_library(source, fmi, Path(tmp), identifier)
-        partial = out.with_name(f".{out.name}.partial")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
+        from ..outputs import atomic_path
+
+        with atomic_path(out) as partial, \
+                zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
             zf.writestr("modelDescription.xml", xml)
             zf.write(lib, f"binaries/{plat}/{lib.name}")
             zf.writestr("sources/fmu.c", source)
@@ -180,7 +181,6 @@ def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
             example = "win64/" if fmi == 2 else "x86_64-windows/"
             zf.writestr("documentation/building.txt",
                         BUILD_NOTE.format(fmi=fmi, ident=identifier, plat_example=example))
-        os.replace(partial, out)
     return out
 
 

@@ -16,6 +16,14 @@ from .. import registry
 from .validation import ParameterError, choice, flag, quantities, quantity, validate
 
 _MM_HINT = "looks like millimetres; give metres"
+#: shortest sampling period of a discrete loop [s]: 1 µs (a faster loop is continuous: 0)
+MIN_PERIOD = 1e-6
+#: finest linear-scale resolution [m]: 1 nm
+MIN_GRATING = 1e-9
+#: longest parameter-set name [characters] (it is printed on one line)
+MAX_NAME = 200
+#: longest parameter-set description [characters]
+MAX_DESCRIPTION = 10_000
 
 
 class _Component:
@@ -321,9 +329,12 @@ class Compensation(_Component):
     """
 
     mode: str = choice(("none", "feedforward", "observer"), default="none")
-    coulomb_scale: float = quantity("-", low=0, high=10, default=1.0)
-    static_scale: float = quantity("-", low=0, high=10, default=1.0)
-    stribeck_velocity_scale: float = quantity("-", low=0, high=10, default=1.0)
+    # a model a thousand times off is no compensator: the lower bounds keep the products
+    # physical (a factor 1e-320 passed and the run then overflowed)
+    coulomb_scale: float = quantity("-", low=1e-3, high=10, low_inclusive=True, default=1.0)
+    static_scale: float = quantity("-", low=1e-3, high=10, low_inclusive=True, default=1.0)
+    stribeck_velocity_scale: float = quantity("-", low=1e-3, high=10, low_inclusive=True,
+                                              default=1.0)
     viscous_scale: float = quantity("-", low=0, high=10, low_inclusive=True, default=1.0)
     observer_gain: float = quantity("1/s", low=0, high=1e6, low_inclusive=True, default=0.0,
                                     hint="k of the observer's correction −k·e [1/s]")
@@ -372,6 +383,17 @@ class Controller(_Component):
 
     def _check(self) -> None:
         periods = [p for p in (self.position_period, self.velocity_period, self.current_period)]
+        for name, p in zip(("position", "velocity", "current"), periods, strict=True):
+            if 0 < p < MIN_PERIOD:
+                raise ParameterError(f"controller.{name}_period", p,
+                                     f"expected 0 (a continuous loop) or {MIN_PERIOD:g} … 0.1 "
+                                     "[s] (1 µs = 1e-6 s)")
+        if 0 < self.grating_resolution < MIN_GRATING:
+            raise ParameterError("controller.grating_resolution", self.grating_resolution,
+                                 f"expected 0 (no quantisation) or {MIN_GRATING:g} … 0.001 [m]")
+        if 0 < self.encoder_counts < 1:
+            raise ParameterError("controller.encoder_counts", self.encoder_counts,
+                                 "expected 0 (no quantisation) or ≥ 1 [counts/rev]")
         nonzero = [p for p in periods if p > 0]
         if nonzero:
             base = min(nonzero)
@@ -508,6 +530,8 @@ class DriveParameters(_Component):
     _label = "parameters"
 
     def _check(self) -> None:
+        _check_text("name", self.name, MAX_NAME, lines=False)
+        _check_text("description", self.description, MAX_DESCRIPTION, lines=True)
         known = registry.table(registry.SECTIONS)
         names = [name for name, _ in self.sections]
         if names != sorted(set(names)):
@@ -561,6 +585,20 @@ class DriveParameters(_Component):
             The changed copy (this set is unchanged).
         """
         return _replace_path(self, path.split("."), value, path)
+
+
+def _check_text(key: str, text: Any, limit: int, *, lines: bool) -> None:
+    """A name or description: text, at most ``limit`` characters, no control characters
+    (a description may have line breaks and tabs)."""
+    if not isinstance(text, str):
+        raise ParameterError(key, text, "expected text")
+    if len(text) > limit:
+        raise ParameterError(key, text, f"{len(text)} characters; at most {limit}")
+    allowed = "\n\t" if lines else ""
+    bad = next((c for c in text if not c.isprintable() and c not in allowed), None)
+    if bad is not None:
+        raise ParameterError(key, text, f"contains the control character {bad!r}; expected "
+                             "plain text")
 
 
 def _default_controller() -> Controller:

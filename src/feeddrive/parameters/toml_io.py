@@ -13,6 +13,9 @@ input with one line instead of a ``RecursionError``.
 from __future__ import annotations
 
 import dataclasses
+import re
+import stat
+import threading
 import tomllib
 import types
 from pathlib import Path
@@ -59,9 +62,14 @@ _TOML_ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n"
                  "\f": "\\f", "\r": "\\r"}
 
 
+_NEEDS_ESCAPE = re.compile('[\\\\"\\x00-\\x1f\\x7f]')
+
+
 def toml_string(text: str) -> str:
     """``text`` as a TOML basic string: quoted, with backslash, quote and every control
     character (U+0000–U+001F, U+007F) escaped (TOML 1.0, "String")."""
+    if not _NEEDS_ESCAPE.search(text):  # the common case, without a loop per character
+        return f'"{text}"'
     out = []
     for c in text:
         if c in _TOML_ESCAPES:
@@ -109,14 +117,29 @@ def parse_toml(text: str, *, field: str = "file", source: str = "<toml>") -> dic
     return data
 
 
+#: largest TOML file read [bytes] (a parameter set is a few kB)
+MAX_TOML_BYTES = 16 * 1024 * 1024
+
+
 def read_toml_file(path: str | Path, *, field: str = "file") -> dict[str, Any]:
-    """Parse a TOML file; a missing file, a folder, non-UTF-8 bytes, invalid or deeply
-    nested TOML are refused with one line naming the file."""
+    """Parse a TOML file; a missing file, a folder, a FIFO or device, a name the system
+    refuses (too long), non-UTF-8 bytes, invalid or deeply nested TOML are refused with one
+    line naming the file."""
     p = Path(path)
-    if p.is_dir():
+    try:
+        info = p.stat()
+    except (FileNotFoundError, NotADirectoryError):
+        raise ParameterError(field, str(p), "no such file") from None
+    except OSError as err:
+        raise ParameterError(field, str(p), f"cannot be read ({err.strerror or err})") from None
+    if stat.S_ISDIR(info.st_mode):
         raise ParameterError(field, str(p), "is a folder, not a TOML file")
-    if not p.is_file():
-        raise ParameterError(field, str(p), "no such file")
+    if not stat.S_ISREG(info.st_mode):
+        raise ParameterError(field, str(p), "is not a regular file (a FIFO, device or "
+                             "socket); expected a TOML file")
+    if info.st_size > MAX_TOML_BYTES:
+        raise ParameterError(field, str(p), f"{info.st_size} bytes; a parameter or sweep "
+                             f"file is at most {MAX_TOML_BYTES // 1024 // 1024} MB")
     try:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError as err:
@@ -207,7 +230,10 @@ def save(params: DriveParameters, path: str | Path) -> None:
     path : str or pathlib.Path
         The file to write.
     """
-    Path(path).write_text(dumps(params), encoding="utf-8")
+    from ..outputs import atomic_path
+
+    with atomic_path(path) as tmp:  # nothing partial under the name (a full disk)
+        tmp.write_text(dumps(params), encoding="utf-8")
 
 
 def _build(cls: type, data: Any, path: str) -> Any:
@@ -292,12 +318,19 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
             parent = presets[parent_name]()
         elif parent_name.endswith(".toml"):
             parent_path = (base_dir or Path.cwd()) / parent_name
-            parent = load(parent_path)
+            try:
+                parent = load(parent_path)
+            except ParameterError as err:
+                if err.field == "file" and err.value == str(parent_path):
+                    # the named file itself cannot be read: say so about extends
+                    raise ParameterError("extends", parent_name, err.message) from None
+                raise
         else:
             raise ParameterError("extends", parent_name,
                                  f"expected one of {', '.join(presets)} or a .toml file")
         changes = {k: v for k, v in data.items() if k != "extends"}
-        changes.setdefault("name", f"{parent.name}+changes")
+        changes.setdefault("name", parent.name if parent.name.endswith("+changes")
+                           else f"{parent.name}+changes")
         data = _merge(to_dict(parent), changes)
     result: DriveParameters = _build(DriveParameters, data, "")
     return result
@@ -307,8 +340,16 @@ def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
     return from_dict(parse_toml(text), base_dir=base_dir)
 
 
+#: longest chain of files each extending the next
+MAX_EXTENDS = 32
+_loading = threading.local()  # the files being read, outermost first (extends chains)
+
+
 def load(path: str | Path) -> DriveParameters:
     """Read a parameter set from a TOML file (``extends = "NAME"`` or ``"FILE.toml"`` allowed).
+
+    ``extends`` chains are followed; a cycle (``a.toml`` extends ``b.toml`` extends
+    ``a.toml``) or a chain longer than :data:`MAX_EXTENDS` files is refused naming its files.
 
     Parameters
     ----------
@@ -320,8 +361,25 @@ def load(path: str | Path) -> DriveParameters:
     DriveParameters
         The validated set; a refusal names the file, the field, the value and the unit.
     """
-    data = read_toml_file(path)
+    chain: list[tuple[Path, str]] = _loading.__dict__.setdefault("chain", [])
     try:
+        resolved = Path(path).resolve()
+    except (OSError, RuntimeError):
+        resolved = Path(path).absolute()
+    names = [name for _, name in chain]
+    if any(r == resolved for r, _ in chain):
+        start = next(i for i, (r, _) in enumerate(chain) if r == resolved)
+        cycle = " → ".join([*names[start:], str(path)])
+        raise ParameterError("extends", str(path), f"a cycle of extends: {cycle}")
+    if len(chain) >= MAX_EXTENDS:
+        raise ParameterError("extends", str(path), f"a chain of more than {MAX_EXTENDS} "
+                             f"files ({names[0]} → {names[1]} → … → {names[-1]}); extend a "
+                             "preset or a shorter chain")
+    chain.append((resolved, str(path)))
+    try:
+        data = read_toml_file(path)
         return from_dict(data, base_dir=Path(path).parent)
     except ParameterError as err:
         raise err.in_file(str(path)) from None
+    finally:
+        chain.pop()

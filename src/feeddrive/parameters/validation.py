@@ -10,14 +10,41 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import reprlib
 from typing import Any
+
+#: longest field name, file name or value shown in a message [characters]; longer ones are
+#: cut (a 10-MB value is not echoed whole)
+MAX_SHOWN = 200
+
+_REPR = reprlib.Repr()
+_REPR.maxstring = MAX_SHOWN
+_REPR.maxother = MAX_SHOWN
+_REPR.maxlist = _REPR.maxtuple = 20
+_REPR.maxdict = 10
+_REPR.maxlevel = 4
+
+
+def shown_value(value: object) -> str:
+    """``repr(value)`` for a message: long text and deep or long lists cut (``...``)."""
+    if isinstance(value, str) and len(value) > MAX_SHOWN:
+        return f"{value[:MAX_SHOWN]!r}… ({len(value)} characters)"
+    text = repr(value) if isinstance(value, int | float | bool | None) else _REPR.repr(value)
+    return _cut(text)
+
+
+def _cut(text: str) -> str:
+    if len(text) <= MAX_SHOWN:
+        return text
+    return f"{text[:MAX_SHOWN]}… ({len(text)} characters)"
 
 
 class ParameterError(ValueError):
     """A parameter value was refused.
 
     The message names field, value and expected unit, and the file it came from when there is
-    one (``source``).
+    one (``source``).  Long field names, values and file names are cut in the message
+    (:data:`MAX_SHOWN`); the attributes keep them.
 
     Parameters
     ----------
@@ -37,8 +64,8 @@ class ParameterError(ValueError):
         self.value = value
         self.message = message
         self.source = source
-        where = f"{source}: " if source else ""
-        super().__init__(f"{where}{field} = {value!r}: {message}")
+        where = f"{_cut(source)}: " if source else ""
+        super().__init__(f"{where}{_cut(str(field))} = {shown_value(value)}: {message}")
 
     def in_file(self, source: str) -> ParameterError:
         """The same refusal, naming the file it came from.

@@ -13,6 +13,7 @@ from markdown_it import MarkdownIt
 from .. import __version__, protocol
 from ..analysis.critical import format_bands, format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
+from ..outputs import atomic_path
 from ..parameters import DriveParameters, LuGreParameters
 from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
@@ -475,7 +476,8 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         md += [f"![{name}]({name})", "", f"*{caption(name)}*", ""]
     md += ["## Settings", "", settings_text, ""]
     md_path = out / "report.md"
-    md_path.write_text("\n".join(md), encoding="utf-8")
+    with atomic_path(md_path) as tmp:
+        tmp.write_text("\n".join(md), encoding="utf-8")
     name = html.escape(params.name)
     body = [f"<h1>feeddrive reproduction of Wang2021 — <code>{name}</code></h1>",
             render_html(header)]
@@ -494,7 +496,8 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
              "table{border-collapse:collapse;font-size:0.9em}td,th{border:1px solid #ccc;"
              "padding:3px 6px}img{max-width:100%}figcaption{font-size:0.9em;color:#333}")
     html_path = out / "report.html"
-    html_path.write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>feeddrive "
-                         f"report</title><style>{style}</style></head><body>{''.join(body)}"
-                         "</body></html>", encoding="utf-8")
+    with atomic_path(html_path) as tmp:
+        tmp.write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>feeddrive "
+                       f"report</title><style>{style}</style></head><body>{''.join(body)}"
+                       "</body></html>", encoding="utf-8")
     return md_path, html_path

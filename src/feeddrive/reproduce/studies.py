@@ -42,7 +42,10 @@ def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
     """A table of rows as CSV, floats without binary noise."""
     import pandas as pd
 
-    pd.DataFrame(rows).to_csv(path, index=False, float_format=CSV_FLOAT)
+    from ..outputs import atomic_path
+
+    with atomic_path(path) as tmp:
+        pd.DataFrame(rows).to_csv(tmp, index=False, float_format=CSV_FLOAT)
 
 
 @dataclass(frozen=True)

@@ -16,10 +16,11 @@ one axis per matching numeric parameter, each varied on its own (relative only).
 from __future__ import annotations
 
 import fnmatch
+import hashlib
 import itertools
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -45,7 +46,10 @@ NO_NUT_DRIVES = ("cdfs", "linear-motor")
 _TOP_KEYS = ("name", "preset", "params", "drive", "table_position", "nut_speed", "store",
              "design", "quantity", "axes", "map")
 _AXIS_KEYS = ("values", "low", "high", "points", "scale", "relative")
+#: most design points of one sweep (grid points or samples), refused from the counts alone
 MAX_POINTS = 1_000_000
+#: longest sweep name [characters]; a name is also a file name (NAME.sqlite)
+MAX_NAME = 100
 
 
 def _refuse(key: str, value: object, message: str) -> ParameterError:
@@ -79,6 +83,10 @@ class Axis:
         if self.relative:
             return "1"
         return SPECIAL_AXES.get(self.name, ("", 1.0))[0]
+
+    def size(self) -> int:
+        """How many values a grid takes on this axis (nothing materialised)."""
+        return len(self.values) if self.values is not None else int(self.points or 0)
 
     def grid(self) -> list[Any]:
         if self.values is not None:
@@ -133,15 +141,24 @@ class SweepConfig:
 
     # ------------------------------------------------------------------ points
 
-    def coordinates(self) -> list[dict[str, Any]]:
-        """The design's coordinates, in the configuration's units, in a fixed order."""
+    def count(self) -> int:
+        """How many design points (from the axes' sizes or ``samples``; nothing built)."""
+        if self.design == "grid":
+            return math.prod(a.size() for a in self.axes)
+        assert self.samples is not None
+        return self.samples
+
+    def iter_coordinates(self) -> Iterator[dict[str, Any]]:
+        """The design's coordinates, in the configuration's units, in a fixed order, one at
+        a time (a grid is never materialised; a random or LHS design holds its n × d
+        quantiles, ≤ :data:`MAX_POINTS` rows)."""
+        _check_count(self.count(), self.design)
         names = [a.name for a in self.axes]
         if self.design == "grid":
             grids = [a.grid() for a in self.axes]
-            count = math.prod(len(g) for g in grids)
-            if count > MAX_POINTS:
-                raise _refuse("design.kind", "grid", f"{count} points; at most {MAX_POINTS}")
-            return [dict(zip(names, combo, strict=True)) for combo in itertools.product(*grids)]
+            for combo in itertools.product(*grids):
+                yield dict(zip(names, combo, strict=True))
+            return
         assert self.samples is not None
         n, d = self.samples, len(self.axes)
         if self.design == "lhs":
@@ -150,20 +167,45 @@ class SweepConfig:
             u = qmc.LatinHypercube(d=d, seed=self.seed).random(n) if d else np.zeros((n, 0))
         else:
             u = np.random.default_rng(self.seed).random((n, d))
-        return [{a.name: a.draw(float(u[i, j])) for j, a in enumerate(self.axes)}
-                for i in range(n)]
+        for i in range(n):
+            yield {a.name: a.draw(float(u[i, j])) for j, a in enumerate(self.axes)}
+
+    def coordinates(self) -> list[dict[str, Any]]:
+        """Every coordinate of :meth:`iter_coordinates` as a list."""
+        return list(self.iter_coordinates())
+
+    def effective(self, coords: Mapping[str, Any]) -> tuple[Any, ...]:
+        """What a point's result depends on among its coordinates: a drive without a nut
+        ignores ``nut_speed`` (those points share one stored result)."""
+        drive = str(coords.get("drive", self.drive))
+        return tuple(sorted((k, repr(v)) for k, v in coords.items()
+                            if not (k == "nut_speed" and drive in NO_NUT_DRIVES)))
+
+    def distinct_count(self) -> int:
+        """How many distinct computations the design asks for, from the coordinates alone
+        (:meth:`effective`); no parameter set is built."""
+        seen = set()
+        for coords in self.iter_coordinates():
+            seen.add(hashlib.blake2b(repr(self.effective(coords)).encode(), digest_size=12)
+                     .digest())
+        return len(seen)
+
+    def iter_points(self, *, bases: dict[str, DriveParameters] | None = None
+                    ) -> Iterator[Point]:
+        """Every design point with its task and store key, built one at a time."""
+        from .store import point_key
+
+        bases = {} if bases is None else bases
+        for i, coords in enumerate(self.iter_coordinates()):
+            task = self.task(coords, bases)
+            yield Point(index=i, coords=coords, task=task, key=point_key(task))
 
     def points(self) -> list[Point]:
         """Every design point with its task and store key; every point's parameter set is
-        built and validated here, so a bad value stops the sweep before any simulation."""
-        from .store import point_key
-
-        bases: dict[str, DriveParameters] = {}
-        out = []
-        for i, coords in enumerate(self.coordinates()):
-            task = self.task(coords, bases)
-            out.append(Point(index=i, coords=coords, task=task, key=point_key(task)))
-        return out
+        built and validated here, so a bad value stops the sweep before any simulation.
+        (A run does not hold them all: :func:`.executors.run_sweep` streams
+        :meth:`iter_points`.)"""
+        return list(self.iter_points())
 
     def _base(self, name: str, cache: dict[str, DriveParameters]) -> DriveParameters:
         if name not in cache:
@@ -207,6 +249,30 @@ class SweepConfig:
             raise _refuse(key, err.value, err.message) from None
         return {"parameters": dumps(params), "drive": drive, "table_position": position,
                 "nut_speed": nut, "quantity": quantity.to_dict()}
+
+
+def _check_count(count: int, design: str) -> None:
+    if count > MAX_POINTS:
+        key = "design.samples" if design != "grid" else "axes"
+        raise _refuse(key, count, f"{count} design points; at most {MAX_POINTS} (refused "
+                      "before any point is built)")
+
+
+def check_name(key: str, name: Any) -> str:
+    """A sweep's name: text of 1 to :data:`MAX_NAME` printable characters, no path
+    separator and no leading dot (``NAME.sqlite`` is the default store, in the current
+    folder: a name never reaches another folder)."""
+    if not isinstance(name, str):
+        raise _refuse(key, name, "expected a text name")
+    if not name.strip():
+        raise _refuse(key, name, "expected a non-empty name")
+    if len(name) > MAX_NAME:
+        raise _refuse(key, name, f"{len(name)} characters; at most {MAX_NAME}")
+    if not name.isprintable():
+        raise _refuse(key, name, "contains control characters")
+    if any(c in name for c in "/\\") or name.startswith(".") or ":" in name:
+        raise _refuse(key, name, "a name, not a path: no /, \\, : and no leading dot")
+    return name
 
 
 def _axis_or(name: str, axes: Sequence[Axis]) -> str:
@@ -327,6 +393,8 @@ def _parse_axis(name: str, spec: Any) -> Axis:
     if points is not None and (isinstance(points, bool) or not isinstance(points, int)
                                or points < 1):
         raise _refuse(f"{key}.points", points, "expected a whole number ≥ 1")
+    if points is not None and points > MAX_POINTS:
+        raise _refuse(f"{key}.points", points, f"at most {MAX_POINTS} design points")
     if scale == "log" and low <= 0:
         raise _refuse(f"{key}.low", low, "a log scale needs low > 0")
     if relative and low <= 0:
@@ -407,6 +475,9 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
     if kind != "grid":
         if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
             raise _refuse("design.samples", samples, "expected a whole number ≥ 1")
+        if samples > MAX_POINTS:
+            raise _refuse("design.samples", samples, f"at most {MAX_POINTS} samples (as a "
+                          "grid's points)")
     elif samples is not None:
         raise _refuse("design.samples", samples, "only for random or lhs designs")
     seed = design.get("seed", 0)
@@ -445,9 +516,9 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
             raise _refuse(f"map.{k}", v, "unknown key; expected x, y")
         if v not in names:
             raise _refuse(f"map.{k}", v, "not an axis of this sweep")
-    name = data.get("name", Path(source).stem)
-    if not isinstance(name, str) or not name.strip():
-        raise _refuse("name", name, "expected a non-empty name")
+    if kind == "grid":
+        _check_count(math.prod(a.size() for a in axes), kind)
+    name = check_name("name", data.get("name", Path(source).stem))
     return SweepConfig(name=name, source=source, base=base, drive=drive,
                        table_position=position, nut_speed=nut, design=kind,
                        samples=samples if kind != "grid" else None, seed=seed,
@@ -464,5 +535,5 @@ def load_config(path: str | os.PathLike[str]) -> SweepConfig:
         raise err.in_file(os.fspath(path)) from None
 
 
-__all__ = ["DESIGNS", "DRIVES", "Axis", "Point", "SweepConfig", "load_config", "numeric_paths",
-           "parse_config"]
+__all__ = ["DESIGNS", "DRIVES", "MAX_POINTS", "Axis", "Point", "SweepConfig", "check_name",
+           "load_config", "numeric_paths", "parse_config"]

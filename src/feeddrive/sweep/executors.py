@@ -18,10 +18,14 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
+import ctypes
 import multiprocessing
 import os
+import signal
+import sys
+import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,8 +33,8 @@ from .design import Point, SweepConfig
 from .quantities import evaluate, warm
 from .store import SweepStore
 
-__all__ = ["DASK_HINT", "Estimate", "SweepAborted", "SweepSummary", "estimate", "executor",
-           "run_sweep"]
+__all__ = ["DASK_HINT", "Estimate", "SweepAborted", "SweepInterrupted", "SweepSummary",
+           "estimate", "executor", "run_sweep"]
 
 DASK_HINT = "Dask executors need dask.distributed: pip install 'feeddrive[dask]'"
 # one thread per worker process: the parallelism is across points
@@ -43,6 +47,15 @@ Progress = Callable[[int, int], None]
 class SweepAborted(RuntimeError):
     """The executor lost a worker (a process killed, out of memory, a Dask worker gone):
     the points finished so far are stored; rerunning resumes."""
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped the sweep: ``computed`` points were stored this run, nothing more was
+    submitted, the points in flight were cancelled."""
+
+    def __init__(self, computed: int) -> None:
+        super().__init__(computed)
+        self.computed = computed
 
 
 def _lost_worker(err: BaseException) -> bool:
@@ -64,6 +77,7 @@ class SweepSummary:
     seconds: float
     workers: int
     executor: str
+    elsewhere: int = 0  # points another sweep on the same store computed meanwhile
 
     @property
     def rate(self) -> float:
@@ -139,22 +153,67 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
     # the pool starts its processes on demand (spawn): keep the setting for its lifetime
     with _single_threaded_children():
         pool = cf.ProcessPoolExecutor(max_workers=n,
-                                      mp_context=multiprocessing.get_context("spawn"))
+                                      mp_context=multiprocessing.get_context("spawn"),
+                                      initializer=_worker_start, initargs=(os.getpid(),))
         try:
             yield pool, n, f"local ({n} processes)"
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+        except BaseException:
+            _stop_workers(pool)  # Ctrl-C or an error: do not wait for the points in flight
+            raise
+        pool.shutdown(wait=True)
 
 
-def _structure_tasks(points: list[Point]) -> list[dict[str, Any]]:
-    """One task per distinct model structure among ``points`` (drive, and every non-numeric
-    setting: friction laws, modes …; numbers do not change the compiled code)."""
+def _worker_start(parent: int) -> None:
+    """Set up one local worker process: Ctrl-C is the parent's to handle (it stops the
+    workers itself), and the worker exits when its parent dies (``SIGKILL`` of the sweep
+    leaves no orphan): Linux's parent-death signal, and on every system a thread that
+    checks the parent once a second."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:  # the parent died before this line
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(1.0)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="feeddrive-parent-watch", daemon=True).start()
+
+
+def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
+    """Cancel what is queued and stop the worker processes now (their points in flight are
+    lost, not stored: a rerun computes them)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        with contextlib.suppress(Exception):
+            proc.terminate()
+    for proc in processes:
+        with contextlib.suppress(Exception):
+            proc.join(2.0)
+            if proc.is_alive():
+                proc.kill()
+
+
+def _structure(task: dict[str, Any], coords: dict[str, Any]) -> tuple[Any, ...]:
+    """A point's model structure: drive, quantity and every non-numeric setting (friction
+    laws, modes …; numbers do not change the compiled code)."""
+    return (task["drive"], task["quantity"]["kind"],
+            tuple(sorted((k, repr(v)) for k, v in coords.items()
+                         if not isinstance(v, int | float) or isinstance(v, bool))))
+
+
+def _structure_tasks(points: Iterable[Point]) -> list[dict[str, Any]]:
+    """One task per distinct model structure among ``points``."""
     seen: dict[tuple[Any, ...], dict[str, Any]] = {}
     for p in points:
-        sig = (p.task["drive"], p.task["quantity"]["kind"],
-               tuple(sorted((k, repr(v)) for k, v in p.coords.items()
-                            if not isinstance(v, int | float) or isinstance(v, bool))))
-        seen.setdefault(sig, p.task)
+        seen.setdefault(_structure(p.task, p.coords), p.task)
     return list(seen.values())
 
 
@@ -167,57 +226,167 @@ def description(config: SweepConfig) -> dict[str, Any]:
             "quantity": config.quantity.to_dict(), "map": list(config.map_axes)}
 
 
+@dataclass(frozen=True)
+class CheckedDesign:
+    """Every point of a design built and checked: its key, in design order, and one task
+    per model structure (to warm the compiled kernels)."""
+
+    keys: list[str]
+    structures: dict[tuple[Any, ...], dict[str, Any]]
+
+
+def check_design(config: SweepConfig, *, points: list[Point] | None = None,
+                 checked: Progress | None = None) -> CheckedDesign:
+    """Build and check every point's parameter set, one at a time, keeping only its key (a
+    bad value is refused here, before any simulation and before the store is touched)."""
+    total = config.count() if points is None else len(points)
+    keys: list[str] = []
+    structures: dict[tuple[Any, ...], dict[str, Any]] = {}
+    for p in (points if points is not None else config.iter_points()):
+        keys.append(p.key)
+        structures.setdefault(_structure(p.task, p.coords), p.task)
+        if checked is not None and (len(keys) % 200 == 0 or len(keys) == total):
+            checked(len(keys), total)
+    return CheckedDesign(keys, structures)
+
+
+#: points in flight per worker: enough to keep every worker busy, few enough that a
+#: million-point design never holds more than a handful of tasks (and Ctrl-C has little to
+#: cancel)
+IN_FLIGHT_PER_WORKER = 2
+
+
 def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = None,
               scheduler: str | None = None, dask_workers: int | None = None,
               points: list[Point] | None = None,
               progress: Progress | None = None,
-              started: Callable[[int, str], None] | None = None) -> SweepSummary:
+              started: Callable[[int, str], None] | None = None,
+              checked: Progress | None = None,
+              design: CheckedDesign | None = None) -> SweepSummary:
     """Compute every design point of ``config`` not yet in ``store``; see the module.
 
-    ``progress(done, todo)`` after each stored point; ``started(todo, executor)`` once the
-    executor is up.  Stored points are never recomputed; a failed point (its simulation
-    failed) is stored with its error, so a rerun does not retry it.
+    First every point's parameter set is built and checked (a bad value stops the sweep
+    before any simulation) keeping only its key; the design is registered in the store;
+    then the points still to compute are built again one at a time and submitted as
+    workers free up (at most :data:`IN_FLIGHT_PER_WORKER` per worker in flight), each
+    claimed in the store first (:meth:`.SweepStore.claim`: a point another live sweep is
+    computing is left to it and waited for at the end).
+
+    ``checked(done, total)`` during the check; ``started(todo, executor)`` once the
+    executor is up; ``progress(done, todo)`` after each stored point.  Stored points are
+    never recomputed; a failed point (its simulation failed) is stored with its error, so a
+    rerun does not retry it.  On Ctrl-C (``KeyboardInterrupt``) nothing more is submitted,
+    every result already returned is stored, the points in flight are cancelled (local
+    workers are stopped at once) and the interrupt is raised again.
     """
     t0 = time.perf_counter()
-    points = config.points() if points is None else points
+    if design is None:
+        design = check_design(config, points=points, checked=checked)
+    keys, structures = design.keys, design.structures
+    coords = (p.coords for p in points) if points is not None else config.iter_coordinates()
     store.register(config.name, description(config),
-                   [(p.index, p.key, p.coords) for p in points])
-    tasks: dict[str, dict[str, Any]] = {}
-    for p in points:
-        tasks.setdefault(p.key, p.task)
-    done_before = store.finished(tasks)
-    todo = {k: t for k, t in tasks.items() if k not in done_before}
-    failed = computed = 0
+                   ((i, k, c) for (i, k), c in zip(enumerate(keys), coords, strict=True)),
+                   count=len(keys))
+    first: dict[str, int] = {}
+    for i, k in enumerate(keys):
+        first.setdefault(k, i)
+    done_before = store.finished(first)
+    todo = {i for k, i in first.items() if k not in done_before}
+    failed = computed = elsewhere = 0
     n_workers, where = 0, "none"
+
+    def todo_tasks(indices: set[int]) -> Iterator[tuple[int, dict[str, Any]]]:
+        """The tasks of ``indices``, in design order, built one at a time."""
+        if points is not None:
+            yield from ((p.index, p.task) for p in points if p.index in indices)
+            return
+        bases: dict[str, Any] = {}
+        for i, c in enumerate(config.iter_coordinates()):
+            if i in indices:
+                yield i, config.task(c, bases)
+
     if todo:
-        todo_points = [p for p in points if p.key in todo]
-        structures = _structure_tasks(todo_points)
-        for task in structures:
+        for task in structures.values():
             warm(task)
         with executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers,
-                      warm_tasks=structures) as (pool, n_workers, where):
+                      warm_tasks=list(structures.values())) as (pool, n_workers, where):
             if started is not None:
                 started(len(todo), where)
-            futures = {pool.submit(evaluate, task): key for key, task in todo.items()}
+            limit = max(1, IN_FLIGHT_PER_WORKER * n_workers)
+            inflight: dict[cf.Future[Any], str] = {}
+            waiting: set[int] = set()  # claimed by another live sweep
+            source: Iterator[tuple[int, dict[str, Any]]] = todo_tasks(todo)
+
+            def store_result(fut: cf.Future[Any]) -> None:
+                nonlocal computed, failed
+                value = fut.result()
+                store.put(inflight[fut], value)
+                del inflight[fut]
+                computed += 1
+                failed += "error" in value
+                if progress is not None:
+                    progress(computed + elsewhere, len(todo))
+
+            retrying = False
+
+            def fill() -> bool:
+                """Submit until ``limit`` points are in flight; False once none is left."""
+                nonlocal elsewhere, source, retrying
+                while len(inflight) < limit:
+                    item = next(source, None)
+                    if item is None:
+                        if not waiting:
+                            return False
+                        if inflight:  # come back to them once a worker is free
+                            return True
+                        # only points other live sweeps hold are left: look again
+                        if retrying:
+                            time.sleep(0.5)
+                        retrying = True
+                        source = todo_tasks(set(waiting))
+                        waiting.clear()
+                        continue
+                    i, task = item
+                    state = store.claim(keys[i])
+                    if state == "stored":
+                        elsewhere += 1
+                        if progress is not None:
+                            progress(computed + elsewhere, len(todo))
+                    elif state == "busy":
+                        waiting.add(i)
+                    else:
+                        inflight[pool.submit(evaluate, task)] = keys[i]
+                return True
+
             try:
-                for fut in cf.as_completed(futures):
-                    value = fut.result()
-                    store.put(futures[fut], value)
-                    computed += 1
-                    failed += "error" in value
-                    if progress is not None:
-                        progress(computed, len(todo))
+                more = fill()
+                while inflight or more:
+                    done, _ = cf.wait(list(inflight), timeout=1.0,
+                                      return_when=cf.FIRST_COMPLETED)
+                    for fut in done:
+                        store_result(fut)
+                    store.refresh_claims()
+                    more = fill()
             except BaseException as err:
-                for f in futures:
-                    f.cancel()
+                # nothing more is submitted; what has returned is stored; the rest is
+                # cancelled (the executor's exit stops local workers at once)
+                for fut in list(inflight):
+                    if fut.done() and not fut.cancelled() and fut.exception() is None:
+                        store_result(fut)
+                    else:
+                        fut.cancel()
                 if isinstance(err, Exception) and _lost_worker(err):
                     raise SweepAborted(f"{where}: a worker was lost ({type(err).__name__}: "
                                        f"{err}); {computed} points stored this run, rerun "
                                        "to resume") from None
+                if isinstance(err, KeyboardInterrupt):
+                    raise SweepInterrupted(computed) from None
                 raise
-    return SweepSummary(points=len(points), distinct=len(tasks), stored_before=len(done_before),
+            finally:
+                store.release_claims()
+    return SweepSummary(points=len(keys), distinct=len(first), stored_before=len(done_before),
                         computed=computed, failed=failed, seconds=time.perf_counter() - t0,
-                        workers=n_workers, executor=where)
+                        workers=n_workers, executor=where, elsewhere=elsewhere)
 
 
 @dataclass(frozen=True)
@@ -240,6 +409,7 @@ class Estimate:
         if not self.point_seconds:
             return (0.0, 0.0)
         return (min(self.point_seconds), max(self.point_seconds))
+    built: int = 0  # parameter sets built for the estimate
 
     @property
     def seconds(self) -> float:
@@ -251,31 +421,53 @@ class Estimate:
 def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
              sample: int = 3, points: list[Point] | None = None,
              progress: Callable[[str], None] | None = None) -> Estimate:
-    """Count the points and time up to ``sample`` of the unfinished ones here (kernels
-    warmed first, nothing written), in CPU seconds of this process; ``progress`` is told
-    what is being done."""
-    points = config.points() if points is None else points
-    tasks: dict[str, dict[str, Any]] = {}
-    for p in points:
-        tasks.setdefault(p.key, p.task)
-    stored = store.finished(tasks) if store is not None else set()
-    todo = [k for k in tasks if k not in stored]
-    picks = [todo[round(i * (len(todo) - 1) / max(sample - 1, 1))]
-             for i in range(min(sample, len(todo)))]
-    picks = list(dict.fromkeys(picks))
-    if progress is not None and picks:
-        progress(f"compiling the model kernels, then timing {len(picks)} of the "
-                 f"{len(todo)} points to compute (each a full evaluation, nothing stored)")
-    for task in _structure_tasks([p for p in points if p.key in set(picks)]):
+    """Count the points and time up to ``sample`` of them here (kernels warmed first,
+    nothing written), in CPU seconds of this process, building only those ``sample``
+    parameter sets; ``progress`` is told what is being done.
+
+    The counts come from the design alone (:meth:`.SweepConfig.count`,
+    :meth:`.SweepConfig.distinct_count`); ``stored`` is how many of this sweep's points the
+    store holds, when the design it registered there is this one (its keys at the timed
+    points are the keys rebuilt here), else 0.
+    """
+    count = config.count() if points is None else len(points)
+    distinct = config.distinct_count() if points is None else len({p.key for p in points})
+    picks = sorted({round(i * (count - 1) / max(sample - 1, 1))
+                    for i in range(min(sample, count))})
+    if points is not None:
+        chosen = [points[i] for i in picks]
+    else:
+        chosen = []
+        from .store import point_key
+
+        bases: dict[str, Any] = {}
+        wanted = set(picks)
+        for i, coords in enumerate(config.iter_coordinates()):
+            if i in wanted:
+                task = config.task(coords, bases)
+                chosen.append(Point(index=i, coords=coords, task=task, key=point_key(task)))
+                if len(chosen) == len(wanted):
+                    break
+    stored = 0
+    if store is not None:
+        registered = store.point_keys(config.name, [p.index for p in chosen])
+        if registered and all(registered.get(p.index) == p.key for p in chosen):
+            stored = store.stored_count(config.name)
+    todo = [p for p in chosen if store is None or store.get(p.key) is None]
+    if progress is not None and todo:
+        progress(f"compiling the model kernels, then timing {len(todo)} of the "
+                 f"{distinct - stored} points to compute (each a full evaluation, nothing "
+                 "stored)")
+    for task in _structure_tasks(todo):
         warm(task)
     seconds = []
-    for i, key in enumerate(picks, start=1):
+    for i, p in enumerate(todo, start=1):
         if progress is not None:
-            progress(f"timing point {i} of {len(picks)}")
+            progress(f"timing point {i} of {len(todo)}")
         t = time.process_time()
-        evaluate(tasks[key])
+        evaluate(p.task)
         seconds.append(time.process_time() - t)
     mean = sum(seconds) / len(seconds) if seconds else 0.0
-    return Estimate(points=len(points), distinct=len(tasks), stored=len(stored),
-                    timed=len(seconds), seconds_per_point=mean, workers=workers,
-                    point_seconds=tuple(seconds))
+    return Estimate(points=count, distinct=distinct, stored=stored, timed=len(seconds),
+                    seconds_per_point=mean, workers=workers, point_seconds=tuple(seconds),
+                    built=len(chosen))

@@ -22,6 +22,7 @@ import xarray as xr
 
 from .. import units
 from ..io import arrow_table, cf_attributes, write_netcdf
+from ..outputs import atomic_path
 from .design import SPECIAL_AXES
 from .quantities import UNITS
 from .store import SweepStore
@@ -180,21 +181,22 @@ def export(store: SweepStore, sweep: str, path: str | Path) -> Path:
     """Write the sweep to ``path``; the format follows the extension (see the module)."""
     p = Path(path)
     ext = p.suffix.lower()
-    if ext == ".nc":
-        ds = to_dataset(store, sweep)
-        dotted = [str(n) for n in [*ds.coords, *ds.data_vars] if "." in str(n)]
-        for name in dotted:
-            ds[name].attrs["parameter"] = name
-        ds = ds.rename({name: _netcdf_name(name) for name in dotted})
-        write_netcdf(cf_attributes(ds, title=f"feeddrive sweep {sweep}: {ds.attrs['design']} "
-                                   f"design, {ds.attrs['quantity']}",
-                                   action=f"sweep export of {sweep}"), p)
-    elif ext == ".parquet":
-        import pyarrow.parquet as pq
-
-        pq.write_table(to_table(store, sweep), p)
-    elif ext == ".csv":
-        to_frame(store, sweep).to_csv(p, float_format="%.10g")
-    else:
+    if ext not in (".nc", ".parquet", ".csv"):
         raise ValueError(f"{p}: unknown extension; expected one of {EXPORT_FORMATS}")
+    with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
+        if ext == ".nc":
+            ds = to_dataset(store, sweep)
+            dotted = [str(n) for n in [*ds.coords, *ds.data_vars] if "." in str(n)]
+            for name in dotted:
+                ds[name].attrs["parameter"] = name
+            ds = ds.rename({name: _netcdf_name(name) for name in dotted})
+            write_netcdf(cf_attributes(ds, title=f"feeddrive sweep {sweep}: "
+                                       f"{ds.attrs['design']} design, {ds.attrs['quantity']}",
+                                       action=f"sweep export of {sweep}"), tmp)
+        elif ext == ".parquet":
+            import pyarrow.parquet as pq
+
+            pq.write_table(to_table(store, sweep), tmp)
+        else:
+            to_frame(store, sweep).to_csv(tmp, float_format="%.10g")
     return p

@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 from .. import units
+from ..outputs import atomic_path
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -145,7 +146,8 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
                    fontsize=8)
     fig.suptitle(f"sweep {ds.attrs.get('sweep')}: {value}")
     p = Path(path)
-    fig.savefig(p, dpi=110, bbox_inches="tight")  # nothing cut off at the edges
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=110, bbox_inches="tight")  # nothing cut off at the edges
     plt.close(fig)
     return p
 
@@ -291,6 +293,7 @@ def plot_histogram(ds: xr.Dataset, path: str | Path, *, value: str | None = None
                  f"points with a finite {value}")
     ax.legend(loc="upper right")
     fig.tight_layout()
-    fig.savefig(Path(path), dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return stats

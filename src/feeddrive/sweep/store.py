@@ -17,28 +17,45 @@ Guarantees:
 * ``results.key`` is the primary key: a point is stored once, whoever computes it; two sweeps
   writing to one store at once serialise on SQLite's lock (WAL: readers never block);
 * a design point refers to its result by key (``points``), so points with identical inputs
-  (a CDFS at two nut speeds, which it ignores; two sweeps sharing points) share one result.
+  (a CDFS at two nut speeds, which it ignores; two sweeps sharing points) share one result;
+* a point being computed is *claimed* (``claims``: its key, the claiming process and host,
+  refreshed while it runs), so two sweeps on one store never compute a point twice: the
+  second skips a point claimed by a live sweep and comes back to it at the end (taking it
+  over if that sweep died: its process is gone, or, on another host, its claim was not
+  refreshed for :data:`CLAIM_STALE` s);
+* any SQLite failure (a full disk, a lock held past the timeout, a read-only journal) is a
+  :class:`StoreFailure` (an ``OSError`` naming the store): the CLI prints it on one line;
+  every point committed before it stays in the store.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import itertools
 import json
 import math
 import os
+import socket
 import sqlite3
 import time
+import uuid
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from .. import __version__
 from .._jit import KERNEL_HASH
 from ..outputs import OutputError, shown
 from ..store import FORMAT, code_hash, store_key
 
-__all__ = ["SweepStore", "StoreError", "point_key"]
+__all__ = ["CLAIM_STALE", "StoreError", "StoreFailure", "SweepStore", "point_key"]
+
+#: [s] a claim from another host not refreshed for this long is taken over
+CLAIM_STALE = 600.0
+#: [s] how often a running sweep refreshes its claims
+CLAIM_REFRESH = 60.0
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 _HERE = Path(__file__).resolve().parent.parent
 # the code that computes a point beyond the compiled kernels (KERNEL_HASH covers those)
@@ -57,11 +74,46 @@ CREATE TABLE IF NOT EXISTS points (
     sweep TEXT NOT NULL, idx INTEGER NOT NULL, key TEXT NOT NULL, coords TEXT NOT NULL,
     PRIMARY KEY (sweep, idx));
 CREATE INDEX IF NOT EXISTS points_key ON points (key);
+CREATE TABLE IF NOT EXISTS claims (
+    key TEXT PRIMARY KEY, owner TEXT NOT NULL, host TEXT NOT NULL, pid INTEGER NOT NULL,
+    since REAL NOT NULL);
 """
 
 
 class StoreError(OutputError):
     """The store cannot be used (not writable, not a store, another format)."""
+
+
+class StoreFailure(OSError):
+    """SQLite failed while the store was in use (disk full, lock timeout, I/O error);
+    ``filename`` is the store, ``strerror`` SQLite's message."""
+
+
+def _guarded(fn: _F) -> _F:
+    """A :class:`SweepStore` method whose ``sqlite3.Error`` becomes a :class:`StoreFailure`."""
+
+    @functools.wraps(fn)
+    def wrapper(self: SweepStore, *args: Any, **kwargs: Any) -> Any:
+        try:
+            return fn(self, *args, **kwargs)
+        except sqlite3.Error as err:
+            raise StoreFailure(0, f"SQLite: {err}; every point stored before is kept",
+                               os.fspath(self.path)) from None
+
+    return wrapper  # type: ignore[return-value]
+
+
+def _alive(host: str, pid: int, since: float) -> bool:
+    """Whether the process holding a claim still runs (another host: refreshed lately)."""
+    if host != socket.gethostname():
+        return time.time() - since < CLAIM_STALE
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 @functools.cache
@@ -103,6 +155,8 @@ class SweepStore:
         self.path = Path(path)
         self.option = option
         self.notice = notice
+        self.owner = uuid.uuid4().hex
+        self._refreshed = time.time()
         self._check_writable(create)
         try:
             self._db = sqlite3.connect(self.path, timeout=120.0, isolation_level=None)
@@ -116,6 +170,8 @@ class SweepStore:
                     "INSERT OR IGNORE INTO meta VALUES ('format', ?)", (str(FORMAT),)))
             elif fmt[0] != str(FORMAT):
                 raise self._error(f"store format {fmt[0]}, expected {FORMAT}")
+        except sqlite3.OperationalError as err:
+            raise StoreFailure(0, f"SQLite: {err}", os.fspath(self.path)) from None
         except sqlite3.DatabaseError as err:
             raise self._error(f"not a feeddrive sweep store ({err})") from None
         if mode.lower() != "wal":
@@ -175,16 +231,69 @@ class SweepStore:
 
     # ------------------------------------------------------------------ results
 
+    @_guarded
     def put(self, key: str, value: Mapping[str, Any]) -> None:
         """Store ``value`` under ``key`` in its own committed transaction (a damaged entry
-        of that key is replaced; an intact one is kept: the value is the same)."""
+        of that key is replaced; an intact one is kept: the value is the same), releasing
+        this store's claim on it."""
         payload = _json(value)
         digest = hashlib.sha256(payload.encode("utf-8")).hexdigest()
-        self._write(lambda db: db.execute(
-            "INSERT INTO results VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT(key) DO UPDATE SET "
-            "sha256 = excluded.sha256, payload = excluded.payload, written = excluded.written "
-            "WHERE results.sha256 != excluded.sha256",
-            (key, digest, payload, __version__, KERNEL_HASH, time.time())))
+
+        def write(db: sqlite3.Connection) -> None:
+            db.execute(
+                "INSERT INTO results VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT(key) DO UPDATE SET "
+                "sha256 = excluded.sha256, payload = excluded.payload, "
+                "written = excluded.written WHERE results.sha256 != excluded.sha256",
+                (key, digest, payload, __version__, KERNEL_HASH, time.time()))
+            db.execute("DELETE FROM claims WHERE key = ? AND owner = ?", (key, self.owner))
+
+        self._write(write)
+
+    # ------------------------------------------------------------------ claims
+
+    @_guarded
+    def claim(self, key: str) -> str:
+        """Claim ``key`` for this store object: ``"stored"`` (an intact result is there),
+        ``"busy"`` (claimed by a live sweep) or ``"mine"`` (claimed now, or a dead sweep's
+        claim taken over)."""
+
+        def write(db: sqlite3.Connection) -> str:
+            row = db.execute("SELECT sha256, payload FROM results WHERE key = ?",
+                             (key,)).fetchone()
+            if row is not None and hashlib.sha256(row[1].encode("utf-8")).hexdigest() \
+                    == row[0]:
+                return "stored"
+            held = db.execute("SELECT owner, host, pid, since FROM claims WHERE key = ?",
+                              (key,)).fetchone()
+            if held is not None and held[0] != self.owner and _alive(held[1], held[2],
+                                                                     held[3]):
+                return "busy"
+            db.execute("INSERT OR REPLACE INTO claims VALUES (?, ?, ?, ?, ?)",
+                       (key, self.owner, socket.gethostname(), os.getpid(), time.time()))
+            return "mine"
+
+        result: str = self._write(write)
+        return result
+
+    @_guarded
+    def refresh_claims(self, *, force: bool = False) -> None:
+        """Mark this store's claims as alive (every :data:`CLAIM_REFRESH` s at most)."""
+        now = time.time()
+        if force or now - self._refreshed >= CLAIM_REFRESH:
+            self._refreshed = now
+            self._write(lambda db: db.execute("UPDATE claims SET since = ? WHERE owner = ?",
+                                              (now, self.owner)))
+
+    @_guarded
+    def release_claims(self, keys: Iterable[str] | None = None) -> None:
+        """Drop this store's claims (on ``keys`` only, when given)."""
+        if keys is None:
+            self._write(lambda db: db.execute("DELETE FROM claims WHERE owner = ?",
+                                              (self.owner,)))
+        else:
+            wanted = [(k, self.owner) for k in keys]
+            self._write(lambda db: db.executemany(
+                "DELETE FROM claims WHERE key = ? AND owner = ?", wanted))
 
     def _decode(self, key: str, digest: str, payload: str) -> dict[str, Any] | None:
         if hashlib.sha256(payload.encode("utf-8")).hexdigest() != digest:
@@ -198,11 +307,13 @@ class SweepStore:
             return None
         return value if isinstance(value, dict) else None
 
+    @_guarded
     def get(self, key: str) -> dict[str, Any] | None:
         row = self._db.execute("SELECT sha256, payload FROM results WHERE key = ?",
                                (key,)).fetchone()
         return None if row is None else self._decode(key, row[0], row[1])
 
+    @_guarded
     def finished(self, keys: Iterable[str]) -> set[str]:
         """Those of ``keys`` with an intact stored result."""
         wanted = set(keys)
@@ -212,34 +323,51 @@ class SweepStore:
                 out.add(key)
         return out
 
+    @_guarded
     def count(self) -> int:
         return int(self._db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
 
     # ------------------------------------------------------------------ sweeps
 
+    @_guarded
     def register(self, name: str, description: Mapping[str, Any],
-                 points: Iterable[tuple[int, str, Mapping[str, Any]]]) -> None:
+                 points: Iterable[tuple[int, str, Mapping[str, Any]]],
+                 count: int | None = None) -> None:
         """Record sweep ``name`` (its configuration, axes, quantity) and its design points
         ``(index, key, coordinates)``, replacing an earlier design of that name in one
-        transaction.  Results are not touched: they are keyed by their inputs."""
-        rows = [(name, i, key, _json(coords)) for i, key, coords in points]
+        transaction.  Results are not touched: they are keyed by their inputs.  ``points``
+        is read once, as it is written (a generator: never all in memory); ``count`` (how
+        many it yields) lets an unchanged design be recognised without reading it."""
+        if count is None:
+            points = list(points)
+            count = len(points)
         text = _json(description)
+        it = iter(points)
+        first = next(it, None)
+        rows = ((name, i, key, _json(coords))
+                for i, key, coords in itertools.chain([first] if first else [], it))
 
         def write(db: sqlite3.Connection) -> None:
             old = db.execute("SELECT description FROM sweeps WHERE name = ?", (name,)).fetchone()
             if old is not None and old[0] == text and db.execute(
                     "SELECT COUNT(*) FROM points WHERE sweep = ?", (name,)).fetchone()[0] \
-                    == len(rows):
-                return
+                    == count:
+                # the same design; the same keys unless the code or version changed
+                stored = db.execute("SELECT key FROM points WHERE sweep = ? AND idx = ?",
+                                    (name, first[0] if first else 0)).fetchone()
+                if first is None or (stored is not None and stored[0] == first[1]):
+                    return
             db.execute("DELETE FROM points WHERE sweep = ?", (name,))
             db.execute("INSERT OR REPLACE INTO sweeps VALUES (?, ?, ?)", (name, text, time.time()))
             db.executemany("INSERT INTO points VALUES (?, ?, ?, ?)", rows)
 
         self._write(write)
 
+    @_guarded
     def sweeps(self) -> list[str]:
         return [r[0] for r in self._db.execute("SELECT name FROM sweeps ORDER BY updated")]
 
+    @_guarded
     def description(self, name: str) -> dict[str, Any]:
         row = self._db.execute("SELECT description FROM sweeps WHERE name = ?",
                                (name,)).fetchone()
@@ -249,6 +377,25 @@ class SweepStore:
         value: dict[str, Any] = json.loads(row[0])
         return value
 
+    @_guarded
+    def point_keys(self, name: str, indices: Iterable[int]) -> dict[int, str]:
+        """The keys registered for sweep ``name`` at ``indices`` (absent ones left out)."""
+        out = {}
+        for i in indices:
+            row = self._db.execute("SELECT key FROM points WHERE sweep = ? AND idx = ?",
+                                   (name, i)).fetchone()
+            if row is not None:
+                out[i] = str(row[0])
+        return out
+
+    @_guarded
+    def stored_count(self, name: str) -> int:
+        """How many distinct results of sweep ``name``'s registered points are stored."""
+        return int(self._db.execute(
+            "SELECT COUNT(DISTINCT p.key) FROM points p JOIN results r ON r.key = p.key "
+            "WHERE p.sweep = ?", (name,)).fetchone()[0])
+
+    @_guarded
     def rows(self, name: str) -> list[tuple[int, str, dict[str, Any], dict[str, Any] | None]]:
         """(index, key, coordinates, result or None) of every design point of ``name``."""
         self.description(name)
