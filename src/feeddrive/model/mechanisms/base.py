@@ -91,6 +91,9 @@ class Mechanism:
     drives: tuple[str, ...] = ()
     #: the parameter set a command uses for this drive when none is named
     example_preset: str = "wang2021"
+    #: a drive with one motor: (slot of its torque or force constant, the output name of
+    #: constant × current); None: per axis, ``<axis>_motor.torque_constant``
+    single_motor: tuple[str, str] | None = None
     published: bool = True  # a published model: its docstring has a References section
     ripple_motors: tuple[str, ...] = ()  # motors whose torque ripple this topology models
     has_lead_screw = False
@@ -169,6 +172,8 @@ class Mechanism:
             The model's parameter slot of its torque (or force) constant, and the name of
             the output ``constant × current`` in a linear model.
         """
+        if self.single_motor is not None:
+            return self.single_motor
         return f"{axis}_motor.torque_constant", f"{axis}_motor_torque"
 
     def held(self) -> tuple[tuple[str, ...], tuple[str, ...]]:

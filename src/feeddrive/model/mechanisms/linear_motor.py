@@ -37,6 +37,7 @@ class LinearMotorDrive(Mechanism):
     """
     drives = ("linear-motor",)
     example_preset = "linear-motor-example"
+    single_motor = ("motor.force_constant", "motor_force")
     published = False  # a generic direct drive, not a published model
 
     @classmethod
@@ -63,21 +64,6 @@ class LinearMotorDrive(Mechanism):
         b.param("motor.back_emf_constant", lm.back_emf_constant)
         b.param("motor.inductance", lm.inductance)
         b.param("motor.resistance", lm.resistance)
-
-    def motor_output(self, axis: str) -> tuple[str, str]:
-        """The forcer's force constant and the motor force [N].
-
-        Parameters
-        ----------
-        axis : str
-            The drive's one axis (``"motor"``).
-
-        Returns
-        -------
-        tuple of (str, str)
-            Parameter slot and output name.
-        """
-        return "motor.force_constant", "motor_force"
 
     def motors(self, b: Builder) -> None:
         b.state("motor_current", "A", "linear motor current", "current")

@@ -96,6 +96,7 @@ class RackPinionDrive(Mechanism):
 
     drives = ("rack-pinion",)
     example_preset = "rack-pinion-example"
+    single_motor = ("motor.torque_constant", "motor_torque")
     published = False  # a textbook topology, not one publication's model
 
     @classmethod
@@ -133,21 +134,6 @@ class RackPinionDrive(Mechanism):
         b.param("table.mass", self.params.table.mass)
         for name in ("torque_constant", "back_emf_constant", "inductance", "resistance"):
             b.param(f"motor.{name}", getattr(rp.motor, name))
-
-    def motor_output(self, axis: str) -> tuple[str, str]:
-        """The motor's torque constant and torque [N m].
-
-        Parameters
-        ----------
-        axis : str
-            The drive's one axis (``"motor"``).
-
-        Returns
-        -------
-        tuple of (str, str)
-            Parameter slot and output name.
-        """
-        return "motor.torque_constant", "motor_torque"
 
     def motors(self, b: Builder) -> None:
         b.state("motor_current", "A", "motor current", "current")
