@@ -120,7 +120,7 @@ class SolverOptions:
           growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.7 for damping
           ratios below 0.02: :mod:`feeddrive.solvers.modes`), and no switch where that cap
           leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
-          early (:func:`divergence_bounds`);
+          early (``divergence_bounds``);
         * ``"dopri5"`` (the default): adaptive Dormand–Prince 5(4), every output instant a
           step end (steps at most ``max_step``, default 1 ms, and the output interval); the
           engine v1 behaviour, kept bit for bit (``modal`` is not yet the default: see

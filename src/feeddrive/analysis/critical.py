@@ -315,7 +315,7 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
 
 
 class _Diverged(Exception):
-    """A trial's run stopped early as diverged (:func:`feeddrive.simulate.divergence_bounds`)."""
+    """A trial's run stopped early as diverged (``divergence_bounds``)."""
 
     def __init__(self, time: np.ndarray, speed: np.ndarray) -> None:
         super().__init__(float(time[-1]))

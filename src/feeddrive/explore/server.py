@@ -207,8 +207,8 @@ def _error_field(err: BaseException) -> str | None:
 
 
 class ExplorerServer(ThreadingHTTPServer):
-    """One thread per connection, at most :data:`MAX_CONNECTIONS` at once; each connection
-    is closed after :data:`READ_TIMEOUT` s without a byte (``Handler.timeout``)."""
+    """One thread per connection, at most ``MAX_CONNECTIONS`` at once; each connection
+    is closed after ``READ_TIMEOUT`` s without a byte (``Handler.timeout``)."""
 
     daemon_threads = True
     # the listen backlog: connections past the cap are accepted (and answered 503) at once,

@@ -349,7 +349,7 @@ def load(path: str | Path) -> DriveParameters:
     """Read a parameter set from a TOML file (``extends = "NAME"`` or ``"FILE.toml"`` allowed).
 
     ``extends`` chains are followed; a cycle (``a.toml`` extends ``b.toml`` extends
-    ``a.toml``) or a chain longer than :data:`MAX_EXTENDS` files is refused naming its files.
+    ``a.toml``) or a chain longer than ``MAX_EXTENDS`` files is refused naming its files.
 
     Parameters
     ----------

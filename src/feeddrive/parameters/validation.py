@@ -44,7 +44,7 @@ class ParameterError(ValueError):
 
     The message names field, value and expected unit, and the file it came from when there is
     one (``source``).  Long field names, values and file names are cut in the message
-    (:data:`MAX_SHOWN`); the attributes keep them.
+    (``MAX_SHOWN``); the attributes keep them.
 
     Parameters
     ----------

@@ -151,7 +151,7 @@ class SweepConfig:
     def iter_coordinates(self) -> Iterator[dict[str, Any]]:
         """The design's coordinates, in the configuration's units, in a fixed order, one at
         a time (a grid is never materialised; a random or LHS design holds its n × d
-        quantiles, ≤ :data:`MAX_POINTS` rows)."""
+        quantiles, ≤ ``MAX_POINTS`` rows)."""
         _check_count(self.count(), self.design)
         names = [a.name for a in self.axes]
         if self.design == "grid":
@@ -259,7 +259,7 @@ def _check_count(count: int, design: str) -> None:
 
 
 def check_name(key: str, name: Any) -> str:
-    """A sweep's name: text of 1 to :data:`MAX_NAME` printable characters, no path
+    """A sweep's name: text of 1 to ``MAX_NAME`` printable characters, no path
     separator and no leading dot (``NAME.sqlite`` is the default store, in the current
     folder: a name never reaches another folder)."""
     if not isinstance(name, str):

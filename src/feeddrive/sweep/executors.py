@@ -268,7 +268,7 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
     First every point's parameter set is built and checked (a bad value stops the sweep
     before any simulation) keeping only its key; the design is registered in the store;
     then the points still to compute are built again one at a time and submitted as
-    workers free up (at most :data:`IN_FLIGHT_PER_WORKER` per worker in flight), each
+    workers free up (at most ``IN_FLIGHT_PER_WORKER`` per worker in flight), each
     claimed in the store first (:meth:`.SweepStore.claim`: a point another live sweep is
     computing is left to it and waited for at the end).
 
@@ -425,10 +425,11 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
     nothing written), in CPU seconds of this process, building only those ``sample``
     parameter sets; ``progress`` is told what is being done.
 
-    The counts come from the design alone (:meth:`.SweepConfig.count`,
-    :meth:`.SweepConfig.distinct_count`); ``stored`` is how many of this sweep's points the
-    store holds, when the design it registered there is this one (its keys at the timed
-    points are the keys rebuilt here), else 0.
+    The counts come from the design alone
+    (:meth:`feeddrive.sweep.design.SweepConfig.count`,
+    :meth:`feeddrive.sweep.design.SweepConfig.distinct_count`); ``stored`` is how many of
+    this sweep's points the store holds, when the design it registered there is this one
+    (its keys at the timed points are the keys rebuilt here), else 0.
     """
     count = config.count() if points is None else len(points)
     distinct = config.distinct_count() if points is None else len({p.key for p in points})

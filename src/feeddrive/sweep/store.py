@@ -277,7 +277,7 @@ class SweepStore:
 
     @_guarded
     def refresh_claims(self, *, force: bool = False) -> None:
-        """Mark this store's claims as alive (every :data:`CLAIM_REFRESH` s at most)."""
+        """Mark this store's claims as alive (every ``CLAIM_REFRESH`` s at most)."""
         now = time.time()
         if force or now - self._refreshed >= CLAIM_REFRESH:
             self._refreshed = now
