@@ -60,6 +60,8 @@ nitpick_ignore_regex = [
     # builtins and typing words as numpydoc writes them in "Parameters" types
     ("py:.*", r"(optional|default.*|array_like|array-like|callable|iterable|sequence|"
               r"mapping|file-like|path-like|scalar|None|Any|Self|T|F)"),
+    # a generic type in a field's annotation, split at its comma by the docstring parser
+    ("py:class", r"'?(tuple|dict|list|set)\[.*"),
     ("py:class", r"(ndarray|Dataset|DataArray|DataFrame|Series|Figure|Axes|Path|PathLike|"
                  r"StateSpace|TransferFunction|Console|Typer|Future|Executor|Client)"),
     # private names are not in the reference by design

@@ -66,7 +66,7 @@ def test_reproduce_writes_report_with_every_paper_number(full_reproduction) -> N
         assert number in md, number
         assert number in html, number
     pngs = sorted(p.name for p in tmp_path.glob("*.png"))
-    assert len(pngs) == 6
+    assert len(pngs) == 7  # Figs. 6–10, 14 and the sensitivity chart (issue 22)
     for csv in ("table3_position.csv", "fig7_nut_speed.csv", "figs9_10_reversal.csv",
                 "paper_comparison.csv", "critical_speeds.csv"):
         assert (tmp_path / csv).exists()

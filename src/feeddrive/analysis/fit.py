@@ -9,7 +9,7 @@ interpolated onto the measured times.
 
 Free parameters are addressed by their dotted path (``controller.velocity_integral_gain``),
 as ``calibrate --unknown`` and sweep axes address them
-(:meth:`~feeddrive.parameters.DriveParameters.replace_path`); they are fitted as factors on
+(``DriveParameters.replace_path``); they are fitted as factors on
 their start value, bounded by the parameter's declared plausible range
 (:func:`~feeddrive.parameters.validation.quantity`) unless bounds are given.
 
@@ -19,14 +19,14 @@ differences / √6 (white noise: var Δ²e = 6σ²), but never below the record'
 q/√12 (q the smallest step between samples: encoder or interferometer quantisation, or the
 printed digits).  ``weights`` multiply that.  With the model right, the weighted residual
 then has rms ≈ 1; the *residual check* compares each signal's residual rms with its σ and
-refuses to call any parameter determined when a ratio exceeds :data:`MAX_RESIDUAL_RATIO`.
+refuses to call any parameter determined when a ratio exceeds ``MAX_RESIDUAL_RATIO``.
 
 Uncertainty.  Covariance s²(JᵀJ)⁻¹ (s² = SSR/dof) from the Jacobian at the optimum (forward
 differences, each column one batch of simulations, run in parallel through the sweep
 executors when asked), correlation matrix, the condition number of J with columns scaled by
 the parameter values, and the poorly determined combinations: the right singular vectors
-whose singular value is below 1/:data:`MAX_CONDITION` of the largest.  A parameter whose
-linear interval is not credible (half-width above :data:`PROFILE_ABOVE` of its value, or
+whose singular value is below 1/``MAX_CONDITION`` of the largest.  A parameter whose
+linear interval is not credible (half-width above ``PROFILE_ABOVE`` of its value, or
 reaching a bound) gets a profile-likelihood interval: it is fixed on a grid and the others
 refitted; the interval keeps the values whose SSR stays below SSR·(1 + F(1, dof)/dof).
 """
@@ -689,7 +689,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     signal name); ``bounds`` replace a parameter's declared range [SI].  Jacobian columns
     are simulated through a local process pool (``workers`` > 1) or Dask (``dask_workers``
     or ``scheduler``); by default here, one after the other.  ``horizon_continuation``:
-    the search runs on the first :func:`horizons` seconds of every record, each stage
+    the search runs on the first ``horizons`` seconds of every record, each stage
     starting from the last (see docs/fitting.md); the intervals are always from the whole
     records.  Ctrl-C stops the search and
     returns the best point so far (``interrupted``; no intervals).  Everything is checked

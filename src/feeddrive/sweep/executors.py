@@ -269,8 +269,8 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
     before any simulation) keeping only its key; the design is registered in the store;
     then the points still to compute are built again one at a time and submitted as
     workers free up (at most ``IN_FLIGHT_PER_WORKER`` per worker in flight), each
-    claimed in the store first (:meth:`.SweepStore.claim`: a point another live sweep is
-    computing is left to it and waited for at the end).
+    claimed in the store first (:meth:`feeddrive.sweep.SweepStore.claim`: a point another
+    live sweep is computing is left to it and waited for at the end).
 
     ``checked(done, total)`` during the check; ``started(todo, executor)`` once the
     executor is up; ``progress(done, todo)`` after each stored point.  Stored points are
