@@ -28,9 +28,10 @@ import os
 import secrets
 from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 __all__ = ["PLOT_FORMATS", "OutputError", "atomic_path", "check_output_dir",
-           "check_output_file", "cut", "shown"]
+           "check_output_file", "cut", "save_figure", "shown"]
 
 #: the figure formats every ``--plot`` option takes (matplotlib writes each)
 PLOT_FORMATS = (".png", ".pdf", ".svg")
@@ -94,6 +95,16 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
             os.unlink(tmp)
         raise
 
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int,
+                tight: bool = False) -> Path:
+    """Write a matplotlib figure through :func:`atomic_path` (the format follows the
+    extension; nothing partial is left under the name on a full disk); ``tight``: no margin
+    cut off (``bbox_inches="tight"``).  Returns the path written."""
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, **({"bbox_inches": "tight"} if tight else {}))
+    return Path(path)
 
 def _same_file(a: Path, b: Path) -> bool:
     try:

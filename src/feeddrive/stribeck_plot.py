@@ -65,7 +65,6 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> None:
     """Write ``fig`` to ``path``; the format follows the file extension (e.g. .png)."""
-    from .outputs import atomic_path
+    from .outputs import save_figure as save
 
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=dpi)
+    save(fig, path, dpi=dpi)

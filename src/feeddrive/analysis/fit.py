@@ -1002,10 +1002,8 @@ def plot_residuals(result: FitResult, path: str | Path) -> Path:
     fig.suptitle(f"feeddrive fit — {result.drive.upper()}, residual check {check}",
                  fontsize=10)
     fig.tight_layout()
-    p = Path(path)
-    from ..outputs import atomic_path
+    from ..outputs import save_figure
 
-    with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
-        fig.savefig(tmp, dpi=100)
+    p = save_figure(fig, path, dpi=100)
     plt.close(fig)
     return p

@@ -18,10 +18,9 @@ __all__ = ["plot_dynamic_fit", "plot_static_fit", "plot_trace"]
 
 
 def _save(fig: Figure, path: str | Path) -> None:
-    from ..outputs import atomic_path
+    from ..outputs import save_figure
 
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120)
+    save_figure(fig, path, dpi=120)
 
 
 def plot_static_fit(fit: StaticFit, path: str | Path) -> None:

@@ -276,10 +276,8 @@ def plot_prediction(pred: Prediction, path: str | os.PathLike[str],
     ax2.set_title("convergence", fontsize=9)
     ax2.legend(fontsize=8)
     fig.tight_layout()
-    p = Path(path)
-    from ..outputs import atomic_path
+    from ..outputs import save_figure
 
-    with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
-        fig.savefig(tmp, dpi=100)
+    p = save_figure(fig, path, dpi=100)
     plt.close(fig)
     return p

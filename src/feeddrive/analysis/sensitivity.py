@@ -387,10 +387,8 @@ def plot_tornado(result: SensitivityResult, path: str | os.PathLike[str],
     ax.set_title(f"{result.parameter_set}, {result.drive.upper()}: {what} by parameter "
                  "(* halving check failed: nonlinear)", fontsize=9)
     fig.tight_layout()
-    p = Path(path)
-    from ..outputs import atomic_path
+    from ..outputs import save_figure
 
-    with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
-        fig.savefig(tmp, dpi=100)
+    p = save_figure(fig, path, dpi=100)
     plt.close(fig)
     return p
