@@ -42,6 +42,20 @@ class LinearMotorDrive(Mechanism):
 
     @classmethod
     def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
+        """Parameters
+        ----------
+        params : DriveParameters
+            The parameter set [SI].
+        drive : str
+            The drive name.
+        table_position : float
+            Table position at the start [m].
+
+        Raises
+        ------
+        ParameterError
+            When the parameter set has no ``[linear_motor]`` section.
+        """
         if params.linear_motor is None:
             raise ParameterError("linear_motor", None,
                                  "the linear-motor drive needs a [linear_motor] section "
