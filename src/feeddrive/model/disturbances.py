@@ -19,8 +19,29 @@ from .codegen import Builder
 
 @kernel
 def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float]:
-    """(Σ A_k sin(n_k θ + φ_k), its derivative in θ); block P[o:o+3n] = orders, amplitudes,
-    phases."""
+    """A harmonic series and its slope: (Σ A_k sin(n_k θ + φ_k), Σ A_k n_k cos(n_k θ + φ_k)).
+
+    Used for motor torque ripple and cogging (θ the motor angle) and for the screw's lead error
+    (θ the relative screw–nut angle).
+
+    Parameters
+    ----------
+    theta : float
+        The angle the series is periodic in [rad].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the block in ``P``: n orders [-], n amplitudes [N m or m], n phases [rad].
+    n : int
+        Number of harmonics.
+
+    Returns
+    -------
+    value : float
+        The series at ``theta`` [N m for ripple, m for lead error].
+    slope : float
+        Its derivative with respect to ``theta`` [N m/rad or m/rad].
+    """
     value = 0.0
     slope = 0.0
     for k in range(n):
@@ -32,9 +53,27 @@ def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float
 
 @kernel
 def load_force(t: float, P: np.ndarray, o: int, T: np.ndarray) -> float:
-    """Table load force [N] at t [s]: the constant ``P[o]`` from ``P[o+1]`` on, plus a sampled
-    record (``P[o+4]`` points at ``T[P[o+3]:]``, uniform step ``P[o+2]``, linear
-    interpolation, the last value held)."""
+    """Table load force at time t: a constant step plus an optional sampled record.
+
+    The constant ``P[o]`` acts from ``P[o+1]`` on; the record (``P[o+4]`` points at
+    ``T[P[o+3]:]``, uniform step ``P[o+2]``) is interpolated linearly and its last value held.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the load block in ``P``.
+    T : numpy.ndarray
+        The model's packed tables (the record's samples [N]).
+
+    Returns
+    -------
+    float
+        Load force against positive table motion [N].
+    """
     f = P[o] if t >= P[o + 1] else 0.0
     to = int(P[o + 3])
     n = int(P[o + 4])
@@ -87,7 +126,24 @@ class LoadProfile:
 
 
 def emit_load(b: Builder, force: float, start: float, record: LoadProfile | None) -> str | None:
-    """Register the load block; return the code of the load force, or None if there is none."""
+    """Register the table-load block and return the code of the load force.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    force : float
+        Constant load force [N].
+    start : float
+        Time the constant load is applied [s].
+    record : LoadProfile or None
+        A sampled load record added to the constant, if any.
+
+    Returns
+    -------
+    str or None
+        Code of the load force [N]; None when there is no load (force 0 and no record).
+    """
     if force == 0.0 and record is None:
         return None
     step, values = record.encode() if record is not None else (1.0, np.zeros(1))
@@ -102,7 +158,22 @@ def emit_load(b: Builder, force: float, start: float, record: LoadProfile | None
 
 def emit_harmonics(b: Builder, name: str,
                    ripple: TorqueRipple | LeadError) -> tuple[int, int] | None:
-    """Register a harmonic series (TorqueRipple or LeadError); (offset, count) or None."""
+    """Register a harmonic series (torque ripple or lead error) as a parameter block.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    name : str
+        The block's name below ``disturbances.``.
+    ripple : TorqueRipple or LeadError
+        Orders [-], amplitudes [N m or m] and phases [rad] of the harmonics.
+
+    Returns
+    -------
+    tuple of (int, int) or None
+        (offset of the block in ``P``, number of harmonics); None when every amplitude is 0.
+    """
     orders = tuple(ripple.orders)
     amps = tuple(ripple.amplitudes)
     phases = tuple(ripple.phases)
