@@ -433,8 +433,8 @@ class SlidingStability:
     ----------
     speed : numpy.ndarray
         The speeds scanned [m/s].
-    stable : numpy.ndarray
-        Whether steady sliding is stable at each speed (bool) [-].
+    stable : numpy.ndarray of bool
+        Whether steady sliding is stable at each speed.
     max_real_part : numpy.ndarray
         Largest real part of the closed-loop poles at each speed [1/s].
     coefficients : numpy.ndarray

@@ -40,6 +40,7 @@ CHECKED = ("PR01", "PR02", "RT01", "GL08")
 UNIT = re.compile(r"\[[^\]\s][^\]]*\](?!_)")  # ``[N/m]``, not a citation ``[1]_``
 # types whose values are physical quantities (or arrays of them) unless stated otherwise
 PHYSICAL_TYPE = re.compile(r"\b(float|complex|ndarray|array|array_like)\b")
+COUNTS = re.compile(r"\bof (int|bool|str)\b")  # ``numpy.ndarray of int``: indices, flags
 CITES = re.compile(r"Wang2021|et al\.")
 # published methods that are not registered parts (those are found through the registry)
 PUBLISHED = (
@@ -176,7 +177,8 @@ def problems(path: str, obj: object, published: bool = False) -> list[str]:
     except Exception as error:  # a malformed section is a defect of its own
         return [*found, f"unparsable docstring: {error}"]
     missing = [p.name for p in doc["Parameters"]
-               if PHYSICAL_TYPE.search(p.type) and not UNIT.search(" ".join(p.desc))]
+               if PHYSICAL_TYPE.search(p.type) and not COUNTS.search(p.type)
+               and not UNIT.search(" ".join(p.desc))]
     if missing:
         found.append(f"no [unit] in the description of {missing}")
     body = " ".join(doc["Summary"] + doc["Extended Summary"] + doc["Notes"])

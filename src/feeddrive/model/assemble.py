@@ -59,10 +59,10 @@ class Model:
         The drive name it was built for.
     sites : tuple of (str, str)
         (site name, law name) of each friction site.
-    jacobian_pattern : numpy.ndarray
+    jacobian_pattern : numpy.ndarray of int
         (n, n + 1) uint8: 1 where dy[i] may depend on y[j] (column n: on t).
-    jacobian_colours : numpy.ndarray
-        (n + 1,) column groups of the grouped finite-difference Jacobian [-].
+    jacobian_colours : numpy.ndarray of int
+        (n + 1,) column groups of the grouped finite-difference Jacobian.
     derived : tuple of (Signal, str, float), default ()
         Signals a part declares as factor × a state or signal: (signal, source, factor
     [signal unit per source unit]).
