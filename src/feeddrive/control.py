@@ -24,14 +24,30 @@ PROFILE_PARAMS = ("kind", "table_speed", "nut_speed", "ramp_time", "frequency", 
 @kernel
 def reference_kernel(t: float, P: np.ndarray, o: int,
                      T: np.ndarray) -> tuple[float, float, float, float]:
-    """Commanded (table position, table speed, nut position, nut speed) at time t [s].
+    """Commanded (table position, table speed, nut position, nut speed) at time t.
 
-    ``P[o:o+7]``: the profile block (:data:`PROFILE_PARAMS`); sampled profiles read a 4 × n
+    ``P[o:o+7]`` is the profile block (:data:`PROFILE_PARAMS`); sampled profiles read a 4 × n
     table at ``T[to:]`` (rows: table position, table speed, nut position, nut speed), their
-    speeds interpolated linearly or, with ``P[o+3]`` = 1, held (zero-order hold).  An
-    external input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its
-    host: positions X (row 0, 2) and speeds V with their rates A (rows 1, 3: [V, A]) at the
-    instant ``P[o+4]``, x = X + V·τ + A·τ²/2, v = V + A·τ, τ = t − ``P[o+4]``.
+    speeds interpolated linearly or, with ``P[o+3]`` = 1, held (zero-order hold).  An external
+    input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its host:
+    positions X (rows 0, 2) and speeds V with their rates A (rows 1, 3: [V, A]) at the instant
+    ``P[o+4]``, x = X + V·τ + A·τ²/2, v = V + A·τ, τ = t − ``P[o+4]``.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the profile block in ``P``.
+    T : numpy.ndarray
+        The packed tables (sampled profiles, the external input's table) [SI].
+
+    Returns
+    -------
+    tuple of float
+        Table position [m], table speed [m/s], nut position [m], nut speed [m/s].
     """
     kind = int(P[o])
     if kind == REF_CONSTANT:
@@ -92,9 +108,29 @@ REFERENCE_INPUTS = ("table_position_reference", "table_speed_reference",
 @kernel
 def reference_with_inputs(t: float, P: np.ndarray, o: int, oi: int,
                           T: np.ndarray) -> tuple[float, float, float, float]:
-    """:func:`reference_kernel` with ``P[oi:oi+4]`` (:data:`REFERENCE_INPUTS`, zero in a
-    simulation) added to the table position [m], table speed [m/s], nut position [m] and nut
-    speed [m/s] it commands."""
+    """:func:`reference_kernel` plus the linearisation's reference inputs.
+
+    ``P[oi:oi+4]`` (:data:`REFERENCE_INPUTS`, zero in a simulation) are added to the four
+    commanded values.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the profile block in ``P``.
+    oi : int
+        Offset of the reference inputs in ``P``.
+    T : numpy.ndarray
+        The packed tables [SI].
+
+    Returns
+    -------
+    tuple of float
+        Table position [m], table speed [m/s], nut position [m], nut speed [m/s].
+    """
     x_t, v_t, x_n, v_n = reference_kernel(t, P, o, T)
     return x_t + P[oi], v_t + P[oi + 1], x_n + P[oi + 2], v_n + P[oi + 3]
 
@@ -149,6 +185,10 @@ class SineSpeed:
         Amplitude of the nut speed driven by the hollow motor [m/s] (DDFS only).
     frequency : float, default 0.2
         Frequency f of both sines [Hz].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 5.3, Figs. 9–10.
     """
 
     table_amplitude: float

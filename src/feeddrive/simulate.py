@@ -190,8 +190,22 @@ class SimulationError(RuntimeError):
 
 @dataclass(frozen=True)
 class Sampling:
-    """The breakpoint grid: fastest controller period ``base`` [s], loop periods in units of
-    it (0 = continuous), and the output stride."""
+    """The breakpoint grid of a run: the fastest sample period and every loop's period in it.
+
+    Parameters
+    ----------
+    base : float
+        The fastest sample period, the breakpoint unit [s] (the output interval when every
+        loop is continuous).
+    n_pos : int
+        Position-loop period in units of ``base``; 0 = continuous.
+    n_vel : int
+        Velocity-loop period in units of ``base``; 0 = continuous.
+    n_cur : int
+        Current-loop period in units of ``base``; 0 = continuous.
+    out_every : int
+        Output stride, in units of ``base``.
+    """
 
     base: float
     n_pos: int
@@ -201,6 +215,29 @@ class Sampling:
 
 
 def sampling(params: DriveParameters, output_interval: float) -> Sampling:
+    """The breakpoint grid of a parameter set: every sample schedule on one grid.
+
+    The controller's three loop periods and the schedules of sampled parts must all be
+    multiples of the fastest, as must the output interval, so each is an exact event time.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set (its controller periods and sampled parts).
+    output_interval : float
+        Interval of the recorded output [s].
+
+    Returns
+    -------
+    Sampling
+        The grid.
+
+    Raises
+    ------
+    ParameterError
+        For a period that is not a multiple of the fastest, quantised feedback with continuous
+        position or velocity loops, or a sampled part with continuous loops.
+    """
     c = params.controller
     periods = [c.position_period, c.velocity_period, c.current_period]
     # sampled parts (model/parts/) with schedules of their own: (field, period [s]) pairs
@@ -270,9 +307,27 @@ def _peak(value: Any) -> float:
 
 
 def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np.ndarray:
-    """The largest |state| per state [SI] before a run stops as diverged: speed states (linear
-    and, through the lead, rotary) at :data:`DIVERGENCE_SPEED_RATIO` × the reference speed;
-    other states unbounded (a diverging loop shows in its speeds first)."""
+    """The largest |state| per state before a run stops as diverged.
+
+    Speed states (linear and, through the lead, rotary) are bounded at
+    :data:`DIVERGENCE_SPEED_RATIO` × the reference speed (or the initial speed, at least
+    :data:`DIVERGENCE_SPEED_FLOOR`); the other states are unbounded, since a diverging loop shows
+    in its speeds first.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (its initial state).
+    profile : Profile
+        The reference profile (its speeds).
+    model : Model
+        The assembled model (the states' tolerance kinds and scales).
+
+    Returns
+    -------
+    numpy.ndarray
+        Bound per state [SI, per state]; ``inf`` where unbounded.
+    """
     command = sum(_peak(getattr(profile, name, None)) for name in (
         "table_speed", "nut_speed", "table_amplitude", "nut_amplitude"))
     initial = max((abs(float(v)) for k, v in system.initial_state.items() if "speed" in k),
@@ -289,10 +344,27 @@ def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np
 
 
 def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarray:
-    """Instants in (0, t_end) [s] where the command has a kink, declared to the dense-output
-    integrator as step ends: the end of a constant-speed start ramp; the grid of a sampled
-    profile (piecewise-linear speed) when it is no finer than ``base``, the breakpoint unit —
-    a finer grid is left to the error control, as the fixed-breakpoint integrator does."""
+    """Instants where the command has a kink, declared to the dense-output integrator as step
+    ends.
+
+    The end of a constant-speed start ramp; the grid of a sampled profile (piecewise-linear
+    speed) when it is no finer than ``base`` — a finer grid is left to the error control, as
+    the fixed-breakpoint integrator does.
+
+    Parameters
+    ----------
+    profile : Profile
+        The reference profile.
+    t_end : float
+        End of the run [s].
+    base : float
+        The breakpoint unit (:class:`Sampling`) [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The instants in (0, t_end) [s]; empty when there are none.
+    """
     if isinstance(profile, ConstantSpeed):
         stops = [profile.ramp_time] if 0.0 < profile.ramp_time < t_end else []
         return np.array(stops, dtype=float)
@@ -304,8 +376,19 @@ def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarr
 
 
 class SimulationInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a long run: the integration stopped between two chunks; what was
-    computed up to ``t_reached`` [s] is in ``result`` (and written to ``output``)."""
+    """Ctrl-C during a long run: the integration stopped between two chunks.
+
+    What was computed up to ``t_reached`` is in ``result`` (and written to ``output``).
+
+    Parameters
+    ----------
+    t_reached : float
+        Simulated time reached [s].
+    result : Result or None
+        The run up to there; None when nothing was recorded yet.
+    output : str or None
+        The file the samples so far were written to, if any.
+    """
 
     def __init__(self, t_reached: float, result: Result | None, output: str | None) -> None:
         self.t_reached = t_reached
