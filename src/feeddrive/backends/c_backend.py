@@ -325,18 +325,77 @@ class CLibrary:
 
     def rhs(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
             n_pos: int, n_vel: int, n_cur: int, dy: np.ndarray, aux: np.ndarray) -> None:
-        """``fd_rhs``: fills ``dy`` and ``aux`` in place (the numba ``rhs`` signature)."""
+        """Call the C library's ``fd_rhs``: fill ``dy`` and ``aux`` in place (the numba ``rhs``
+        signature).
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : numpy.ndarray
+            State vector [SI, per state].
+        held : numpy.ndarray
+            Values the sampled controller holds [SI, per value].
+        P : numpy.ndarray
+            Packed parameter vector [SI, per slot].
+        T : numpy.ndarray
+            Packed tables [SI].
+        n_pos, n_vel, n_cur : int
+            Position, velocity and current loop periods in breakpoint units (0 = continuous).
+        dy : numpy.ndarray
+            Output: state rates [SI per second, per state].
+        aux : numpy.ndarray
+            Output: auxiliary signals [SI, per signal].
+        """
         self.lib.fd_rhs(float(t), y, held, P, T, int(n_pos), int(n_vel), int(n_cur), dy, aux)
 
     def sample_update(self, k: int, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray,
                       T: np.ndarray, n_pos: int, n_vel: int, n_cur: int, base: float) -> None:
-        """``fd_sample_update``: updates ``held`` in place."""
+        """Call the C library's ``fd_sample_update``: update ``held`` in place at sample ``k``.
+
+        Parameters
+        ----------
+        k : int
+            The breakpoint index (which loops sample at it).
+        t : float
+            Time [s].
+        y : numpy.ndarray
+            State vector [SI, per state].
+        held : numpy.ndarray
+            Values the sampled controller holds [SI, per value].
+        P : numpy.ndarray
+            Packed parameter vector [SI, per slot].
+        T : numpy.ndarray
+            Packed tables [SI].
+        n_pos, n_vel, n_cur : int
+            Position, velocity and current loop periods in breakpoint units (0 = continuous).
+        base : float
+            The breakpoint unit [s].
+        """
         self.lib.fd_sample_update(int(k), float(t), y, held, P, T, int(n_pos), int(n_vel),
                                   int(n_cur), float(base))
 
     def aux(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
             n_pos: int, n_vel: int, n_cur: int, aux: np.ndarray) -> None:
-        """``fd_aux``: fills ``aux`` in place."""
+        """Call the C library's ``fd_aux``: fill ``aux`` in place.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : numpy.ndarray
+            State vector [SI, per state].
+        held : numpy.ndarray
+            Values the sampled controller holds [SI, per value].
+        P : numpy.ndarray
+            Packed parameter vector [SI, per slot].
+        T : numpy.ndarray
+            Packed tables [SI].
+        n_pos, n_vel, n_cur : int
+            Position, velocity and current loop periods in breakpoint units (0 = continuous).
+        aux : numpy.ndarray
+            Output: auxiliary signals [SI, per signal].
+        """
         self.lib.fd_aux(float(t), y, held, P, T, int(n_pos), int(n_vel), int(n_cur), aux)
 
 
