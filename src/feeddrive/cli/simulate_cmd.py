@@ -232,7 +232,7 @@ def run_header(drive: str, profile: str, profile_file: str | None, table_speed: 
         The drive name.
     profile : str
         One of ``PROFILES``: ``"constant"``, ``"sine"``, ``"trapezoid"``, ``"stepdown"``,
-    ``"csv"``.
+        ``"csv"``.
     profile_file : str or None
         The profile's CSV file, for ``csv``.
     table_speed : float or None
