@@ -72,6 +72,26 @@ class Unknown:
 
 @dataclass(frozen=True)
 class Calibration:
+    """A fitted parameter: the set with the value in place and what it achieves.
+
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The set with the fitted value.
+    unknown : Unknown
+        The parameter that was fitted.
+    value : float
+        Its fitted value, √(s₁s₂) [unit of ``unknown.path``].
+    target : Target
+        The critical speed fitted to.
+    achieved : CriticalSpeed
+        The critical-speed search at the fitted value.
+    evaluations : int
+        Creep searches run.
+    interval : tuple of (float, float)
+        (s₁, s₂): every value between them gives the target critical speed [unit of
+        ``unknown.path``].
+    """
     parameters: DriveParameters
     unknown: Unknown
     value: float
@@ -82,6 +102,7 @@ class Calibration:
 
     @property
     def deviation(self) -> float | None:
+        """Achieved / target critical speed − 1 [-]; None when none was found."""
         c = self.achieved.critical_speed
         return None if c is None else c / self.target.critical_speed - 1.0
 
@@ -100,7 +121,13 @@ class Calibration:
         return c is not None and abs(c - self.target.critical_speed) <= self.tolerance
 
     def reason(self) -> str:
-        """What was reached, and why it misses the target, in mm/s ("" if reached)."""
+        """What was reached, and why it misses the target, in mm/s ("" if reached).
+
+        Returns
+        -------
+        str
+            A sentence, or ``""``.
+        """
         if self.reached:
             return ""
         a = self.achieved
