@@ -65,7 +65,7 @@ class Model:
         (n + 1,) column groups of the grouped finite-difference Jacobian.
     derived : tuple of (Signal, str, float), default ()
         Signals a part declares as factor × a state or signal: (signal, source, factor
-    [signal unit per source unit]).
+        [signal unit per source unit]).
     """
 
     state_names: tuple[str, ...]

@@ -97,7 +97,7 @@ class Builder:
         State → its tolerance scale [m per state unit].
     derived : list of (Signal, str, float)
         Derived signals: (signal, source state or signal, factor [signal unit per source
-    unit]).
+        unit]).
     state_index, aux_index, param_index : dict of str to int
         Name → index in ``y``, ``aux`` and ``P``.
     """
