@@ -41,7 +41,7 @@ def stribeck_magnitude_kernel(v: float, p: np.ndarray) -> float:
     v : float
         Sliding speed [m/s].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -66,7 +66,7 @@ def steady_force_kernel(v: float, p: np.ndarray) -> float:
     v : float
         Sliding speed [m/s].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -90,7 +90,7 @@ def bristle_rate_kernel(v: float, z: float, p: np.ndarray) -> float:
     z : float
         Bristle deflection [m].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -117,7 +117,7 @@ def force_kernel(v: float, z: float, p: np.ndarray) -> float:
     z : float
         Bristle deflection [m].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -149,7 +149,7 @@ def bristle_step_kernel(z: float, v: float, h: float, p: np.ndarray) -> float:
     h : float
         Step length [s].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -417,7 +417,7 @@ def passivity_margin(branch: FrictionBranch, params: LuGreParameters) -> float:
     ----------
     .. [1] N. Barabanov, R. Ortega, "Necessary and sufficient conditions for passivity of the
        LuGre friction model", IEEE Trans. Autom. Control 45 (2000) 830–832.
-    .. [1] K. J. Åström, C. Canudas de Wit, "Revisiting the LuGre friction model", IEEE Control
+    .. [2] K. J. Åström, C. Canudas de Wit, "Revisiting the LuGre friction model", IEEE Control
        Systems Magazine 28 (2008) 101–114.
     """
     b = branch

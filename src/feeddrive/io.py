@@ -109,7 +109,7 @@ def cf_attributes(dataset: xr.Dataset, *, title: str, action: str) -> xr.Dataset
     Parameters
     ----------
     dataset : xarray.Dataset
-        A run's dataset (:meth:`Result.to_xarray`), signals in SI with their units.
+        A run's dataset (``Result.dataset``), signals in SI with their units.
     title : str
         The file's ``title``.
     action : str
@@ -216,7 +216,7 @@ def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
     Parameters
     ----------
     dataset : xarray.Dataset
-        A run's dataset (:meth:`Result.to_xarray`), signals in SI with their units.
+        A run's dataset (``Result.dataset``), signals in SI with their units.
 
     Returns
     -------
@@ -233,7 +233,7 @@ def to_arrow_table(dataset: xr.Dataset) -> Any:
     Parameters
     ----------
     dataset : xarray.Dataset
-        A run's dataset (:meth:`Result.to_xarray`), signals in SI with their units.
+        A run's dataset (``Result.dataset``), signals in SI with their units.
 
     Returns
     -------
@@ -251,7 +251,7 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     Parameters
     ----------
     dataset : xarray.Dataset
-        A run's dataset (:meth:`Result.to_xarray`), signals in SI with their units.
+        A run's dataset (``Result.dataset``), signals in SI with their units.
     path : str or Path
         The output file (``.nc``, ``.csv``, ``.parquet``, ``.mat``); its folder is created.
 
@@ -315,7 +315,7 @@ class ChunkWriter:
     system : DriveSystem
         The drive the run simulates.
     run_type : type
-        :class:`feeddrive.result.Run`, passed in so that this writer does not import the
+        ``feeddrive.result.Run``, passed in so that this writer does not import the
         results layer that imports it.
 
     Raises

@@ -313,7 +313,7 @@ class CsvTable:
         names : sequence of str
             Candidate column names, in order of preference.
         dimension : str
-            The quantity's dimension (see :func:`unit_factor`).
+            The quantity's dimension (see ``unit_factor``).
         unit : str or None
             The unit an option gives, or None.
         default_unit : str

@@ -940,7 +940,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     profile : bool, default True
         Profile-likelihood intervals where the linear ones are unreliable.
     horizon_continuation : bool, default True
-        Run the search on growing record lengths (:func:`horizons`).
+        Run the search on growing record lengths (``horizons``).
     workers : int, optional
         Local worker processes for the Jacobian columns.
     dask_workers : int, optional

@@ -171,7 +171,7 @@ class Explorer:
         job : Job or None
             The started job; None when a setting was refused.
         checked : dict
-            The check's messages and values (:meth:`Checked.as_dict`).
+            The check's messages and values (``Checked.as_dict``).
         """
         checked = check(settings)
         if not checked.ok:

@@ -185,7 +185,7 @@ class SweepConfig:
     Parameters
     ----------
     name : str
-        The sweep's name (:func:`check_name`).
+        The sweep's name (``check_name``).
     source : str
         The configuration file.
     base : str

@@ -296,7 +296,7 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     Parameters
     ----------
     task : dict
-        The point's task (:meth:`SweepConfig.task`).
+        The point's task (``SweepConfig.task``).
 
     Returns
     -------

@@ -436,7 +436,7 @@ class SweepStore:
         name : str
             The sweep's name.
         description : mapping
-            What :func:`feeddrive.sweep.executors.description` records.
+            What ``feeddrive.sweep.executors.description`` records.
         points : iterable of (int, str, mapping)
             (index, key, coordinates) of every design point.
         count : int, optional
@@ -490,7 +490,7 @@ class SweepStore:
         Returns
         -------
         dict
-            The description (:func:`feeddrive.sweep.executors.description`).
+            The description (``feeddrive.sweep.executors.description``).
 
         Raises
         ------
