@@ -41,7 +41,8 @@ def stribeck_magnitude_kernel(v: float, p: np.ndarray) -> float:
     v : float
         Sliding speed [m/s].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -66,7 +67,8 @@ def steady_force_kernel(v: float, p: np.ndarray) -> float:
     v : float
         Sliding speed [m/s].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -90,7 +92,8 @@ def bristle_rate_kernel(v: float, z: float, p: np.ndarray) -> float:
     z : float
         Bristle deflection [m].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -117,7 +120,8 @@ def force_kernel(v: float, z: float, p: np.ndarray) -> float:
     z : float
         Bristle deflection [m].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
@@ -149,7 +153,8 @@ def bristle_step_kernel(z: float, v: float, h: float, p: np.ndarray) -> float:
     h : float
         Step length [s].
     p : numpy.ndarray
-        One site's packed LuGre parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
 
     Returns
     -------
