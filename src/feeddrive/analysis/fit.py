@@ -132,7 +132,7 @@ class Experiment:
         SampledSpeed
             ``reference_time``, ``table_speed`` and ``nut_speed`` [SI].
         """
-        from ..control import SampledSpeed
+        from ..model.reference import SampledSpeed
 
         return SampledSpeed(time=self.reference_time, table_speed=self.table_speed,
                             nut_speed=self.nut_speed)
@@ -204,7 +204,7 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     FitError
         For a trace that cannot be fitted (no signal, no reference, bad cells).
     """
-    from ..measured_io import COMMAND_COLUMNS, check_increasing, read_csv_table
+    from ..io.measured import COMMAND_COLUMNS, check_increasing, read_csv_table
 
     table = read_csv_table(path, sep=None)
     src = table.source
@@ -397,9 +397,9 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
         ``{"signals": {name: values on the measured times}}`` [SI unit of each signal], or
         ``{"error": message}`` when the simulation failed.
     """
-    from ..control import SampledSpeed
+    from ..engine.simulate import DriveSystem, SimulationError, SolverOptions, simulate
+    from ..model.reference import SampledSpeed
     from ..parameters import loads
-    from ..simulate import DriveSystem, SimulationError, SolverOptions, simulate
 
     try:
         params = loads(task["parameters"])
@@ -969,7 +969,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     .. [2] D. M. Bates, D. G. Watts, Nonlinear Regression Analysis and Its Applications,
        Wiley, 1988 (linear and profile intervals).
     """
-    from ..simulate import DriveSystem
+    from ..engine.simulate import DriveSystem
 
     say = progress or (lambda _t: None)
     if not experiments:
@@ -1236,8 +1236,8 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     Experiment
         The synthetic record.
     """
-    from ..control import ConstantSpeed
-    from ..simulate import DriveSystem, simulate
+    from ..engine.simulate import DriveSystem, simulate
+    from ..model.reference import ConstantSpeed
 
     system = DriveSystem(params, drive=drive, table_position=table_position)
     result = simulate(system, ConstantSpeed(speed, ramp_time=ramp_time), duration)
@@ -1321,7 +1321,7 @@ def plot_residuals(result: FitResult, path: str | Path) -> Path:
     fig.suptitle(f"feeddrive fit — {result.drive.upper()}, residual check {check}",
                  fontsize=10)
     fig.tight_layout()
-    from ..outputs import save_figure
+    from ..io.outputs import save_figure
 
     p = save_figure(fig, path, dpi=100)
     plt.close(fig)

@@ -307,12 +307,12 @@ def predict(fit_file: str | os.PathLike[str], *, samples: int = 100, seed: int =
     Prediction
         The percentiles and every draw's critical speed.
     """
-    from .. import protocol
     from ..sweep import SweepStore
     from ..sweep.design import Axis, Point, SweepConfig
     from ..sweep.executors import run_sweep
     from ..sweep.quantities import QuantitySettings
     from ..sweep.store import point_key
+    from . import protocol
 
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
         raise ParameterError("--samples", samples, "expected a whole number ≥ 1")
@@ -420,7 +420,7 @@ def plot_prediction(pred: Prediction, path: str | os.PathLike[str],
     ax2.set_title("convergence", fontsize=9)
     ax2.legend(fontsize=8)
     fig.tight_layout()
-    from ..outputs import save_figure
+    from ..io.outputs import save_figure
 
     p = save_figure(fig, path, dpi=100)
     plt.close(fig)

@@ -8,9 +8,9 @@ plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is S
   points;
 * :func:`run_linear` — the linear stability band over table speed and the loop poles at the
   operating point (friction linearised there, rigid-body poles marked by
-  :func:`feeddrive.linear.classify_poles`), loop margins and the loops' Bode curves;
+  :func:`feeddrive.analysis.linear.classify_poles`), loop margins and the loops' Bode curves;
 * :func:`run_critical` — the critical-speed search from rest, the protocol `feeddrive creep`
-  uses (:mod:`feeddrive.protocol`), with progress and cancellation at every trial.
+  uses (:mod:`feeddrive.analysis.protocol`), with progress and cancellation at every trial.
 """
 
 from __future__ import annotations
@@ -144,7 +144,7 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
         ``sites``: per site its speeds [mm/s], forces [N] per branch, negative-slope bands
         [mm/s] and operating speed [mm/s]; ``ball_nut_share`` [-].
     """
-    from ..friction import negative_slope_band, steady_friction
+    from ..model.friction.stribeck import negative_slope_band, steady_friction
     from ..parameters import LuGreParameters
 
     params = checked.params
@@ -193,7 +193,7 @@ def run_simulation(checked: Checked, report: Report,
         ``report(done, total, text)``: the job's progress (raises ``Cancelled`` once the page
         cancelled).
     keep : callable, optional
-        Receives the full :class:`~feeddrive.result.Result`.
+        Receives the full :class:`~feeddrive.engine.result.Result`.
 
     Returns
     -------
@@ -202,8 +202,8 @@ def run_simulation(checked: Checked, report: Report,
         the verdict (:func:`verdict_of`), the decimated traces and the friction curves
         (:func:`friction_curves`).
     """
-    from ..control import ConstantSpeed
-    from ..simulate import Simulation, SimulationInterrupted
+    from ..engine.simulate import Simulation, SimulationInterrupted
+    from ..model.reference import ConstantSpeed
 
     what = f"simulating {checked.duration:g} s of the {checked.drive.upper()}"
     report(0.0, checked.duration, what)  # raises if the page cancelled before the start
@@ -324,7 +324,7 @@ def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
         the operating speed lies inside it, and the poles, least-damped mode and loop
         margins at the operating point.
     """
-    from ..linear import loop_analysis, stability_band
+    from ..analysis.linear import loop_analysis, stability_band
 
     system = checked.system
     key = (checked.params, checked.drive, system.table_position, checked.nut_speed)
@@ -363,7 +363,7 @@ def estimated_trials() -> int:
     int
         Number of creep trials, for the progress bar.
     """
-    from .. import protocol
+    from ..analysis import protocol
 
     lo, hi = protocol.SPEED_RANGE
     scan = int(math.floor((hi - lo) / protocol.COARSE_STEP + 1e-9)) + 1
@@ -388,7 +388,7 @@ def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
         The search's result as JSON-safe values, in engineering units (critical speed
         [mm/s], kind, trials).
     """
-    from .. import protocol
+    from ..analysis import protocol
     from ..analysis.critical import critical_speed_from_rest, format_bands
 
     total = estimated_trials()

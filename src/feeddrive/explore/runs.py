@@ -153,7 +153,7 @@ def export(result: Any, fmt: str) -> bytes:
     bytes
         The file's contents.
     """
-    from ..io import save_result
+    from ..io.results import save_result
 
     if fmt not in ("csv", "mat"):
         raise ValueError(f"format = {fmt!r}: expected csv or mat")
@@ -190,7 +190,7 @@ def measured_trace(text: str, name: str = "measured.csv") -> dict[str, Any]:
     ValueError
         For a file larger than the page accepts.
     """
-    from ..measured_io import read_position_trace
+    from ..io.measured import read_position_trace
 
     if len(text.encode("utf-8")) > MAX_MEASURED:
         raise ValueError(f"{name}: larger than {MAX_MEASURED // 1024 // 1024} MB")

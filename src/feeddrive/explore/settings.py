@@ -460,8 +460,8 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
     Checked
         The system and command to run, or the messages.
     """
+    from ..engine.simulate import DriveSystem
     from ..model import drive_names, mechanism
-    from ..simulate import DriveSystem
 
     s = normalise(settings)
     out = Checked(settings=s)

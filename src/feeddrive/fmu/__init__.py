@@ -100,8 +100,8 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
     ValueError
         Without a C compiler (the compiler search's message).
     """
+    from ..io.outputs import check_output_file
     from ..model.mechanisms import drive_names
-    from ..outputs import check_output_file
     from .build import CompilerNotFound, find_compiler
 
     if drive not in drive_names():

@@ -31,7 +31,7 @@ def compute(params: DriveParameters) -> dict[str, Any]:
     Returns
     -------
     dict
-        :meth:`~feeddrive.analysis.sensitivity.Sensitivity.to_dict`: the linear band's upper
+        :meth:`~feeddrive.analysis.sensitivity.SensitivityResult.to_dict`: the linear band's upper
         edge at the base point [mm/s] and, per parameter, the band with it moved down and up
         and its elasticity.
     """

@@ -10,7 +10,7 @@
 * .mat: SI, each signal an N×1 column vector, a ``units`` struct beside the signals.
 
 Every file is written under a temporary name in its folder and renamed when complete
-(:func:`feeddrive.outputs.atomic_path`): a full disk never leaves a truncated file under the
+(:func:`feeddrive.io.outputs.atomic_path`): a full disk never leaves a truncated file under the
 output's name.
 """
 
@@ -27,10 +27,10 @@ import pandas as pd
 import scipy.io
 import xarray as xr
 
-from . import __version__
+from .. import __version__
+from ..parameters import ParameterError
+from ..units import ENGINEERING
 from .outputs import atomic_path
-from .parameters import ParameterError
-from .units import ENGINEERING
 
 FORMATS = (".csv", ".parquet", ".nc", ".mat")
 
@@ -315,7 +315,7 @@ class ChunkWriter:
     system : DriveSystem
         The drive the run simulates.
     run_type : type
-        ``feeddrive.result.Run``, passed in so that this writer does not import the
+        ``feeddrive.engine.result.Run``, passed in so that this writer does not import the
         results layer that imports it.
 
     Raises

@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib.figure import Figure
 
-from .outputs import atomic_path
+from ..io.outputs import atomic_path
 
 if TYPE_CHECKING:
-    from .linear import LoopAnalysis, StabilityBand
+    from ..analysis.linear import LoopAnalysis, StabilityBand
 
 #: the kinds of `feeddrive loops --plot-kind`
 PLOT_KINDS = ("bode", "nyquist", "step")
@@ -32,7 +32,7 @@ def plot_loops(analysis: LoopAnalysis, path: str | Path, kind: str = "bode") -> 
     Parameters
     ----------
     analysis : LoopAnalysis
-        The analysis from :func:`feeddrive.linear.analyze_loops`.
+        The analysis from :func:`feeddrive.analysis.linear.loop_analysis`.
     path : str or Path
         The image file; written atomically.
     kind : str, default "bode"
@@ -169,7 +169,7 @@ def plot_band(band: StabilityBand, path: str | Path) -> Path:
     Parameters
     ----------
     band : StabilityBand
-        The scan from :func:`feeddrive.linear.stability_band`.
+        The scan from :func:`feeddrive.analysis.linear.stability_band`.
     path : str or Path
         The image file; written atomically.
 
