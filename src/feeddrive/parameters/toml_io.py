@@ -437,7 +437,7 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
 
 
 def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
-    """A parameter set from TOML text (:func:`parse_toml`, then :func:`from_dict`).
+    """A parameter set from TOML text (``parse_toml``, then ``from_dict``).
 
     Parameters
     ----------

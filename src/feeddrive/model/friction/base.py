@@ -46,7 +46,7 @@ class LinearFriction:
     """Friction linearised at steady sliding: δẋ = A δx + B δv, δF = C δx + D δv.
 
     The small-signal model of a law around constant sliding at speed v (x the law's internal
-    states); :mod:`feeddrive.linear` puts it into the drive's state-space model.
+    states); :mod:`feeddrive.analysis.linear` puts it into the drive's state-space model.
 
     Parameters
     ----------
