@@ -474,7 +474,8 @@ class Handler(BaseHTTPRequestHandler):
                        {"error": f"internal error: {type(err).__name__}: {err}"})
 
     def do_GET(self) -> None:  # noqa: N802  (BaseHTTPRequestHandler's name)
-        """Answer a GET request: the page, its scripts, settings, job polls, exports."""
+        """Answer a GET request: the page and its static files, the form's info, the state of an
+        address, job polls and a kept run's signals and CSV (the module lists the routes)."""
         self._dispatch("GET")
 
     def do_HEAD(self) -> None:  # noqa: N802
@@ -482,7 +483,8 @@ class Handler(BaseHTTPRequestHandler):
         self._dispatch("GET")
 
     def do_POST(self) -> None:  # noqa: N802
-        """Answer a POST request: start or cancel a job, import a parameter file."""
+        """Answer a POST request: check settings, start or cancel a job, import or export a
+        parameter file, load a measured trace (the module lists the routes)."""
         self._dispatch("POST")
 
     # ------------------------------------------------------------ routes
