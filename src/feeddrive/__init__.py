@@ -28,8 +28,8 @@ _PUBLIC: dict[str, str] = {
     "calibrate": "analysis.calibrate",
     "CriticalSpeed": "analysis.critical", "critical_speed_from_rest": "analysis.critical",
     "critical_speed_stepdown": "analysis.critical",
-    "CreepMetrics": "analysis.metrics", "CreepThresholds": "analysis.metrics",
-    "creep_metrics": "analysis.metrics",
+    "CreepMetrics": "analysis.creep_window", "CreepThresholds": "analysis.creep_window",
+    "creep_metrics": "analysis.creep_window",
     "ConstantSpeed": "control", "SampledSpeed": "control", "SineSpeed": "control",
     "LoadProfile": "model", "register_friction_law": "model", "register_mechanism": "model",
     "DriveParameters": "parameters", "ParameterError": "parameters", "load": "parameters",
@@ -45,12 +45,12 @@ _PUBLIC: dict[str, str] = {
 if TYPE_CHECKING:
     from . import friction, linear, model
     from .analysis.calibrate import Target, Unknown, calibrate
+    from .analysis.creep_window import CreepMetrics, CreepThresholds, creep_metrics
     from .analysis.critical import (
         CriticalSpeed,
         critical_speed_from_rest,
         critical_speed_stepdown,
     )
-    from .analysis.metrics import CreepMetrics, CreepThresholds, creep_metrics
     from .control import ConstantSpeed, SampledSpeed, SineSpeed
     from .linear import frequency_response, linearize, loop_analysis, stability_band
     from .model import LoadProfile, register_friction_law, register_mechanism

@@ -19,7 +19,7 @@ from ..linear import stability_band
 from ..parameters import Compensation, DriveParameters
 from ..simulate import DriveSystem, simulate
 from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
-from .metrics import VerdictRule
+from .cycle_verdict import VerdictRule
 
 
 @dataclass(frozen=True)

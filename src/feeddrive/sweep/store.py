@@ -59,8 +59,9 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 
 _HERE = Path(__file__).resolve().parent.parent
 # the code that computes a point beyond the compiled kernels (KERNEL_HASH covers those)
-_SOURCES = ("sweep/quantities.py", "analysis/critical.py", "analysis/metrics.py", "linear.py",
-            "simulate.py", "control.py", "protocol.py", "parameters/components.py",
+_SOURCES = ("sweep/quantities.py", "analysis/critical.py", "analysis/cycle_verdict.py",
+            "analysis/creep_window.py", "analysis/trace_input.py", "analysis/verdict_words.py",
+            "linear.py", "simulate.py", "control.py", "protocol.py", "parameters/components.py",
             "parameters/toml_io.py", "stiffness.py")
 
 _SCHEMA = """
