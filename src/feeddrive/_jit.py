@@ -30,7 +30,7 @@ from numba import njit
 config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
 
 _HERE = Path(__file__).resolve().parent
-_KERNEL_SOURCES = ("_jit.py", "friction.py", "control.py", "analysis/identification.py")
+_KERNEL_SOURCES = ("_jit.py", "friction.py", "control.py")
 _KERNEL_FOLDERS = ("model", "solvers", "fmu")
 
 

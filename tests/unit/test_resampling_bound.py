@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from feeddrive.analysis.creep_window import creep_metrics
-from feeddrive.analysis.identification import fit_presliding
+from feeddrive.analysis.presliding import fit_presliding
 from feeddrive.analysis.trace import analyze_trace, estimate_speed
 from feeddrive.analysis.trace_input import MAX_RESAMPLE_FACTOR
 
