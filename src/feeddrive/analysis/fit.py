@@ -51,7 +51,7 @@ from ..parameters.toml_io import toml_comment, toml_string
 from .fit_statistics import correlation, covariance, noise_level
 
 __all__ = ["MEASURABLE", "Experiment", "FitError", "FitResult", "ParameterEstimate",
-           "fit_drive", "free_parameter_bounds", "noise_level", "read_experiment"]
+           "fit_drive", "free_parameter_bounds", "read_experiment"]
 
 #: signals a trace may carry: name → (dimension, default unit, header aliases)
 MEASURABLE: dict[str, tuple[str, str, tuple[str, ...]]] = {
