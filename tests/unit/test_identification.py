@@ -323,3 +323,18 @@ def test_static_one_direction_record_fits_that_branch_only() -> None:
     assert list(fit.branches()) == ["positive"]
     with pytest.raises(ValueError, match="only the positive branch"):
         fit.lugre(1.0, 0.0)
+
+
+def test_docs_state_the_rigs_step_and_the_mechanisms_declaration() -> None:
+    """docs/measured-data.md gives the rig's step rule and docs/extending.md the mechanism
+    declaration identification reads; both as the code has them."""
+    from pathlib import Path
+
+    from feeddrive.analysis.presliding_rig import STEP_RATE
+    from feeddrive.model.mechanisms.base import Mechanism
+
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    measured = " ".join((docs / "measured-data.md").read_text(encoding="utf-8").split())
+    assert f"h·max(√(σ0/m), (σ1 + σ2)/m) ≤ {STEP_RATE:g} per sample interval" in measured
+    assert "`site_masses`" in (docs / "extending.md").read_text(encoding="utf-8")
+    assert callable(Mechanism.site_masses)
