@@ -418,6 +418,7 @@ def site_mass(params: DriveParameters, site: str, drive: str) -> float:
     float
         The mass [kg], referred to the site's sliding speed (a rotary site: inertia / H²).
     """
+    # a site's moving mass depends on neither the table position nor how a nut is held
     masses = mechanism(drive)(params, drive, 0.0, "locked").site_masses()
     if site not in masses:
         raise ParameterError("site", site, f"expected one of {', '.join(masses)} "
