@@ -133,9 +133,10 @@ MAX_STEP_RATIO = 100.0
 SIGMA1_MAX_RELATIVE_STDERR = 0.25
 
 #: a fit whose rms residual exceeds this multiple of the record's own noise level (the
-#: robust scale of its second differences, :func:`noise_level`) does
-#: not explain the record: nothing is called determined (issue 22: a 1.04e3-nm residual on a
-#: 3.5-µm record was reported with σ1 "determined ±1 %")
+#: robust scale of its second differences,
+#: :func:`~feeddrive.analysis.fit_statistics.noise_level`) does not explain the record:
+#: nothing is called determined (issue 22: a 1.04e3-nm residual on a 3.5-µm record was
+#: reported with σ1 "determined ±1 %")
 MAX_RESIDUAL_RATIO = 2.0
 
 
@@ -207,10 +208,12 @@ def fit_presliding(
         The moving mass [kg] the force acts on (for a rotary site, the inertia referred to
         the table: J/H²).
     friction:
-        Static branches and σ2 of the site (e.g. from :func:`fit_static` via
-        :meth:`StaticFit.lugre`, or a parameter set); its σ0, σ1 only seed the fit.  Required
-        for ``model="lugre"``; for ``model="linear"`` σ2 is taken from it (mean of the
-        branches) or 0 without it, in which case the fitted σ1 is σ1 + σ2.
+        Static branches and σ2 of the site (e.g. from
+        :func:`~feeddrive.analysis.static_fit.fit_static` via
+        :meth:`~feeddrive.analysis.static_fit.StaticFit.lugre`, or a parameter set); its σ0,
+        σ1 only seed the fit.  Required for ``model="lugre"``; for ``model="linear"`` σ2 is
+        taken from it (mean of the branches) or 0 without it, in which case the fitted σ1 is
+        σ1 + σ2.
     model:
         ``"lugre"`` simulates the full bristle equation; ``"linear"`` the linearised
         pre-sliding dynamics m ẍ + (σ1 + σ2) ẋ + σ0 x = F.  The LuGre bristle equation

@@ -96,7 +96,8 @@ class StaticFit:
 
     def lugre(self, bristle_stiffness: float, bristle_damping: float) -> LuGreParameters:
         """The LuGre parameters the simulation takes, with σ0 [N/m] and σ1 [N s/m] given
-        (e.g. from a base parameter set or :func:`fit_presliding`)."""
+        (e.g. from a base parameter set or
+        :func:`~feeddrive.analysis.presliding.fit_presliding`)."""
         if self.positive is None or self.negative is None:
             raise ValueError(f"only the {self.one_direction} branch was fitted (tests in one "
                              "direction); merge the fragment into a parameter set, which keeps "

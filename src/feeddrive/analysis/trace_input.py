@@ -14,8 +14,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["MAX_RESAMPLE_FACTOR", "MIN_SAMPLES", "MIN_WINDOW_SAMPLES", "as_trace",
-           "check_command", "check_fraction", "resample_size", "time_below", "trapezoid",
-           "uniform_samples"]
+           "check_command", "check_fraction", "resample_size", "time_below", "uniform_samples"]
 
 # numpy ≥ 2.0 calls it trapezoid; 1.26, the declared minimum, only has trapz
 # (found by .ci/min-versions)

@@ -19,11 +19,17 @@ from __future__ import annotations
 __all__ = ["CREEPING", "CREEPING_KINDS", "KINDS", "MEANING", "NON_SMOOTH", "OSCILLATION",
            "SMOOTH", "STICK_SLIP", "UNDECIDED", "UNSTABLE", "WINDOW_VERDICTS"]
 
+#: the table follows the command (both rules)
 SMOOTH = "smooth"
+#: not smooth: stick-slip or a sustained oscillation (both rules)
 CREEPING = "creeping"
+#: a creeping limit cycle in which the table stops (the limit-cycle rule)
 STICK_SLIP = "stick-slip"
+#: a creeping limit cycle in which the table never stops (the limit-cycle rule)
 OSCILLATION = "oscillation"
+#: not decided yet (the limit-cycle rule)
 UNDECIDED = "undecided"
+#: the loop diverged (the window rule; a diverged trial's kind)
 UNSTABLE = "unstable"
 
 #: the four kinds of :func:`~feeddrive.analysis.cycle_verdict.trace_verdict`; the first two
