@@ -140,10 +140,11 @@ SIGMA1_MAX_RELATIVE_STDERR = 0.25
 MAX_RESIDUAL_RATIO = 2.0
 
 
-# Pre-sliding is the micrometre regime below breakaway (Wang2021 Sect. 4; Al-Bender et al.
-# 2004: a few µm to tens of µm).  A record that spans more has slid; a fit to it returns a
-# meaningless σ0 (a 10-mm sliding record gave 4.5e-5 N/µm against 36.4, issue 12 item 5).
-MAX_PRESLIDING_DISPLACEMENT = 100e-6  # [m]
+#: largest displacement span [m] of a pre-sliding record.  Pre-sliding is the micrometre
+#: regime below breakaway (Wang2021 Sect. 4; Al-Bender et al. 2004: a few µm to tens of µm).
+#: A record that spans more has slid; a fit to it returns a meaningless σ0 (a 10-mm sliding
+#: record gave 4.5e-5 N/µm against 36.4, issue 12 item 5).
+MAX_PRESLIDING_DISPLACEMENT = 100e-6
 
 
 def _check_presliding(t: np.ndarray, f: np.ndarray, x: np.ndarray, mass: float,

@@ -239,8 +239,9 @@ def fit_branch(speed: object, force: object, *, direction: str = "positive",
     )
 
 
-#: largest |speed| [m/s] and |force| [N] a friction test can hold (far above any feed drive)
+#: largest |speed| [m/s] a friction test can hold (far above any feed drive)
 MAX_TEST_SPEED = 100.0
+#: largest |force| [N] a friction test can hold
 MAX_TEST_FORCE = 1e7
 
 
