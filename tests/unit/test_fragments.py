@@ -13,7 +13,7 @@ from feeddrive.analysis.fragments import friction_fragment, merge_fragment
 from feeddrive.analysis.presliding import fit_presliding
 from feeddrive.analysis.presliding_rig import simulate_presliding
 from feeddrive.analysis.static_fit import fit_static
-from feeddrive.friction import steady_friction
+from feeddrive.model.friction.stribeck import steady_friction
 from feeddrive.parameters import ParameterError
 
 BASE = feeddrive.preset("wang2021")

@@ -14,8 +14,7 @@ import pytest
 import feeddrive
 from feeddrive.analysis.critical import creep_trial
 from feeddrive.analysis.verdict_words import UNSTABLE
-from feeddrive.control import ConstantSpeed
-from feeddrive.simulate import (
+from feeddrive.engine.simulate import (
     DIVERGENCE_SPEED_RATIO,
     DriveSystem,
     Simulation,
@@ -23,6 +22,7 @@ from feeddrive.simulate import (
     divergence_bounds,
     simulate,
 )
+from feeddrive.model.reference import ConstantSpeed
 
 COMMAND = 1e-3  # [m/s]
 

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import protocol
+from . import protocol
 from .trace_input import MIN_WINDOW_SAMPLES, as_trace, check_command, time_below
 from .verdict_words import CREEPING_KINDS, OSCILLATION, SMOOTH, STICK_SLIP, UNDECIDED
 
@@ -68,7 +68,7 @@ class VerdictRule:
     max_duration:
         Longest trial (default 240 s): a trial still undecided then answers "undecided".
         The trial length doubles from ``initial_duration`` until decided.  Both defaults are
-        the protocol of ``feeddrive creep`` and ``reproduce`` (:mod:`feeddrive.protocol`).
+        the protocol of ``feeddrive creep`` and ``reproduce`` (:mod:`feeddrive.analysis.protocol`).
     """
 
     smooth_band: float = 0.02

@@ -11,15 +11,15 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from .presliding import DynamicFit
-from .static_fit import StaticFit, stribeck_curve
-from .trace import TraceAnalysis
+from ..analysis.presliding import DynamicFit
+from ..analysis.static_fit import StaticFit, stribeck_curve
+from ..analysis.trace import TraceAnalysis
 
 __all__ = ["plot_dynamic_fit", "plot_static_fit", "plot_trace"]
 
 
 def _save(fig: Figure, path: str | Path) -> None:
-    from ..outputs import save_figure
+    from ..io.outputs import save_figure
 
     save_figure(fig, path, dpi=120)
 
