@@ -68,7 +68,7 @@ class VerdictRule:
     max_duration:
         Longest trial (default 240 s): a trial still undecided then answers "undecided".
         The trial length doubles from ``initial_duration`` until decided.  Both defaults are
-        the protocol of ``feeddrive creep`` and ``reproduce`` (:mod:`feeddrive.analysis.protocol`).
+        the protocol of ``feeddrive creep`` and ``reproduce`` (``feeddrive.analysis.protocol``).
     """
 
     smooth_band: float = 0.02
