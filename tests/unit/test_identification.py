@@ -330,12 +330,13 @@ def test_docs_state_the_rigs_step_and_the_mechanisms_declaration() -> None:
     declaration identification reads; both as the code has them."""
     from pathlib import Path
 
-    from feeddrive.analysis.presliding_rig import STEP_RATE
+    from feeddrive.analysis.presliding_rig import MIN_STEPS, STEP_RATE
     from feeddrive.model.mechanisms.base import Mechanism
 
     docs = Path(__file__).resolve().parents[2] / "docs"
     measured = " ".join((docs / "measured-data.md").read_text(encoding="utf-8").split())
-    assert f"h·max(√(σ0/m), (σ1 + σ2)/m) ≤ {STEP_RATE:g} per sample interval" in measured
+    assert (f"h·max(√(σ0/m), (σ1 + σ2)/m) ≤ {STEP_RATE:g} and at least {MIN_STEPS} steps per "
+            "sample interval") in measured
     assert "`site_masses`" in (docs / "extending.md").read_text(encoding="utf-8")
     assert callable(Mechanism.site_masses)
 
