@@ -219,16 +219,17 @@ def rosenbrock_dense_source(tab: RosenbrockTableau, name: str) -> str:
 _COUNTER = [0]
 
 
-def _define(source: str, name: str) -> Any:
-    """The function ``name`` defined by ``source`` in this module's namespace, its text
-    registered with :mod:`linecache` so that :mod:`inspect` (numba's cache, the C translator)
-    reads it."""
+def _define(source: str, name: str, scope: dict[str, Any] | None = None) -> Any:
+    """The function ``name`` defined by ``source`` in this module's namespace (``scope``:
+    names that replace its globals, e.g. a test's ``rhs``), its text registered with
+    :mod:`linecache` so that :mod:`inspect` (numba's cache, the C translator) reads it."""
     _COUNTER[0] += 1
     filename = f"<feeddrive.solvers.steps:{name}:{_COUNTER[0]}>"
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
-    scope: dict[str, Any] = {}
-    exec(compile(source, filename, "exec"), globals(), scope)  # noqa: S102 - our own text
-    fn = scope[name]
+    namespace = {**globals(), **(scope or {})}
+    local: dict[str, Any] = {}
+    exec(compile(source, filename, "exec"), namespace, local)  # noqa: S102 - our own text
+    fn = local[name]
     fn.__module__ = __name__
     return fn
 
@@ -257,9 +258,11 @@ def function(name: str) -> Any:
     return _define(sources()[name], name)
 
 
-def explicit_step(tab: ExplicitTableau) -> Any:
-    """The Python function of one step of ``tab`` (for tests and the C translator)."""
-    return _define(explicit_step_source(tab, f"_{tab.name}_step"), f"_{tab.name}_step")
+def explicit_step(tab: ExplicitTableau, rhs: Any = None) -> Any:
+    """The Python function of one step of ``tab`` (for tests and the C translator), calling
+    ``rhs`` (default: the placeholder the generated modules replace)."""
+    return _define(explicit_step_source(tab, f"_{tab.name}_step"), f"_{tab.name}_step",
+                   None if rhs is None else {"rhs": rhs})
 
 
 def explicit_error(tab: ExplicitTableau) -> Any:
@@ -268,9 +271,10 @@ def explicit_error(tab: ExplicitTableau) -> Any:
                    f"_{tab.name}_error")
 
 
-def rosenbrock_step(tab: RosenbrockTableau) -> Any:
-    """The Python function of one step of the Rosenbrock method ``tab``."""
-    return _define(rosenbrock_step_source(tab, f"_{tab.name}_step"), f"_{tab.name}_step")
+def rosenbrock_step(tab: RosenbrockTableau, rhs: Any = None) -> Any:
+    """The Python function of one step of the Rosenbrock method ``tab``, calling ``rhs``."""
+    return _define(rosenbrock_step_source(tab, f"_{tab.name}_step"), f"_{tab.name}_step",
+                   None if rhs is None else {"rhs": rhs})
 
 
 def template_sources() -> list[str]:
