@@ -118,17 +118,19 @@ def main() -> None:
     parser.add_argument("--old", type=Path, required=True, help="baseline source tree")
     parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds (median)")
     parser.add_argument("--work", type=Path, default=Path("/tmp/feeddrive-bench-old-new"))
+    parser.add_argument("--only", default="", help="comma-separated methods (e.g. dopri5)")
     args = parser.parse_args()
+    cases = [c for c in CASES if not args.only or c[0] in args.only.split(",")]
     workers = {"old": Worker(args.old.resolve(), args.work / "old"),
                "new": Worker(ROOT, args.work / "new")}
     times: dict[str, dict[str, list[float]]] = {"old": {}, "new": {}}
     started = time.time()
-    for method, name, duration in CASES:  # warm-up: compile or load numba's cache
+    for method, name, duration in cases:  # warm-up: compile or load numba's cache
         for w in workers.values():
             w.run(method, name, duration)
     for r in range(args.rounds):
         order = ("old", "new") if r % 2 == 0 else ("new", "old")
-        for method, name, duration in CASES:
+        for method, name, duration in cases:
             key = f"{method} {name} {duration:g}s"
             for tree in order:
                 times[tree].setdefault(key, []).append(workers[tree].run(method, name,
@@ -137,7 +139,7 @@ def main() -> None:
     for w in workers.values():
         w.close()
     rows = []
-    for method, name, duration in CASES:
+    for method, name, duration in cases:
         key = f"{method} {name} {duration:g}s"
         old = float(np.median(times["old"][key]))
         new = float(np.median(times["new"][key]))
@@ -156,6 +158,8 @@ def main() -> None:
     summary = {"median_ratio": float(np.median(ratios)), "worst_ratio": float(max(ratios)),
                "within_10_percent": bool(max(ratios) <= 1.10)}
     print(json.dumps(summary))
+    if args.only:  # a partial run is not the recorded result
+        return
     RESULTS.write_text(json.dumps({
         "baseline": str(args.old), "rounds": args.rounds, "cases": rows, "summary": summary,
         "machine": {"nproc": os.cpu_count(), "python": platform.python_version(),

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from . import steps
 from .schedule import due, next_instant
 from .tableaux import DOPRI5
 
@@ -75,8 +76,8 @@ def template_sources() -> list[str]:
     """Text placed in each generated model module: the status codes and the integrator (its
     step is the one of :mod:`feeddrive.solvers.steps`, placed beside it)."""
     names = ", ".join(TABLEAU)
-    src = inspect.getsource(integrate_template).replace("def integrate_template(",
-                                                        "def integrate(", 1)
+    src = steps.inline_steps(inspect.getsource(integrate_template)).replace(
+        "def integrate_template(", "def integrate(", 1)
     aux = inspect.getsource(auxiliary_template).replace("def auxiliary_template(",
                                                         "def auxiliary(", 1)
     return [f"from feeddrive.solvers.dopri5 import ({names})",

@@ -26,9 +26,12 @@ is in its vectors (a sampled loop reads its period from ``P``), so a step serves
 
 from __future__ import annotations
 
+import ast
 import functools
+import inspect
 import linecache
 import math
+import textwrap
 from typing import Any
 
 import numpy as np
@@ -277,12 +280,74 @@ def rosenbrock_step(tab: RosenbrockTableau, rhs: Any = None) -> Any:
                    None if rhs is None else {"rhs": rhs})
 
 
+def _norm_source() -> str:
+    return inspect.getsource(error_norm_template).replace("def error_norm_template(",
+                                                          "def _error_norm(", 1)
+
+
+class _Rename(ast.NodeTransformer):
+    def __init__(self, names: dict[str, ast.expr]) -> None:
+        self.names = names
+
+    def visit_Name(self, node: ast.Name) -> ast.expr:
+        return self.names.get(node.id, node)
+
+
+def _body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
+    """The statements of step function ``name`` with its parameters renamed to the argument
+    expressions of ``call``; a final ``return x`` becomes ``target = x``."""
+    source = _norm_source() if name == "_error_norm" else sources()[name]
+    fn = ast.parse(source).body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    params = [a.arg for a in fn.args.args]
+    if len(call.args) != len(params) or call.keywords:
+        raise ValueError(f"{name}: called with {len(call.args)} positional arguments for "
+                         f"{len(params)} parameters")
+    rename = _Rename(dict(zip(params, call.args, strict=True)))
+    out = []
+    for stmt in fn.body:
+        if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
+            continue  # the docstring
+        if isinstance(stmt, ast.Return):
+            if target is None or stmt.value is None:
+                raise ValueError(f"{name}: a returned value needs an assignment target")
+            stmt = ast.Assign(targets=[target], value=stmt.value, lineno=0)
+        out += ast.unparse(rename.visit(stmt)).splitlines()
+    return out
+
+
+INLINED = ("_dp5_step", "_dp5_error", "_dp5_dense", "_error_norm")
+
+
+def inline_steps(source: str, names: tuple[str, ...] = INLINED) -> str:
+    """``source`` (a driver's function text) with every call statement of the written steps
+    ``names`` — ``name(args)`` or ``target = name(args)`` — replaced by the step's body with
+    its parameters renamed to the arguments: the text numba compiles is then what a
+    hand-inlined step was (a call per step, with its array arguments reference-counted, cost
+    ~10 % of a DOPRI5 run of a drive: benchmarks/bench_old_new.py).  The C translation keeps
+    the calls (:mod:`feeddrive.fmu.solver`): both build the same step text."""
+    lines = source.splitlines()
+    tree = ast.parse(textwrap.dedent(source))
+    found: list[tuple[int, int, int, list[str]]] = []
+    for node in ast.walk(tree):
+        value, target = None, None
+        if isinstance(node, ast.Expr):
+            value = node.value
+        elif isinstance(node, ast.Assign) and len(node.targets) == 1:
+            value, target = node.value, node.targets[0]
+        if (isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
+                and value.func.id in names):
+            assert node.end_lineno is not None
+            found.append((node.lineno, node.end_lineno, node.col_offset,
+                          _body(value.func.id, value, target)))
+    for start, end, col, body in sorted(found, reverse=True):
+        lines[start - 1:end] = [" " * col + ln for ln in body]
+    return "\n".join(lines) + "\n"
+
+
 def template_sources() -> list[str]:
     """Text placed in each generated model module: the error norm and every step function
-    (numba compiles each at its first call: a model run with one method compiles only its
-    step)."""
-    import inspect
+    (the drivers have the explicit step written into their text, :func:`inline_steps`; the
+    FMU's integrator and the Rosenbrock branch call them)."""
 
-    norm = inspect.getsource(error_norm_template).replace("def error_norm_template(",
-                                                          "def _error_norm(", 1)
-    return ["@kernel\n" + norm] + ["@kernel\n" + src for src in sources().values()]
+    return ["@kernel\n" + _norm_source()] + ["@kernel\n" + src for src in sources().values()]

@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from . import steps
 from .modes import H_LAMBDA as MODAL_H_LAMBDA
 from .modes import REFRESH as MODAL_REFRESH
 from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
@@ -584,8 +585,8 @@ def template_sources() -> list[str]:
     (its steps are those of :mod:`feeddrive.solvers.steps`, its Jacobian kernels those of
     :mod:`feeddrive.solvers.rodas4`, placed beside it).  numba compiles a function at its
     first call, so a model run only with ``dopri5`` never compiles this one."""
-    src = inspect.getsource(integrate_template).replace("def integrate_template(",
-                                                        "def integrate_dense(", 1)
+    src = steps.inline_steps(inspect.getsource(integrate_template)).replace(
+        "def integrate_template(", "def integrate_dense(", 1)
     return [f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})",
             "from feeddrive.solvers.schedule import due, next_instant",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
