@@ -145,3 +145,21 @@ def test_the_schedule_merges_clocks_as_breakpoint_counts() -> None:
     assert schedule.due(0, grid, tick) == 2 and list(tick) == [0, 0, -1]
     assert schedule.next_instant(5, schedule.no_schedule(3)) == -1
     assert schedule.due(0, schedule.no_schedule(3), tick) == 0
+
+
+def test_the_drivers_have_the_step_written_in_and_the_fmu_calls_it() -> None:
+    """dopri5's and the dense driver's text hold the DOPRI5 step's statements in place of the
+    call (steps.inline_steps); the FMU's integrator, which the C translator reads, calls the
+    same step function."""
+    from feeddrive.fmu import solver as fmu_solver
+    from feeddrive.solvers import dopri5, switching
+
+    stage = "yt[i] = y[i] + h_try * 0.2 * k1[i]"  # the first stage, h renamed to h_try
+    for text in (dopri5.template_sources()[2], switching.template_sources()[-1]):
+        assert "_dp5_step(" not in text and "_dp5_error(" not in text
+        assert "0.0012326388888888888" in text  # the first error weight, 71/57600
+    assert stage in dopri5.template_sources()[2]
+    assert stage.replace("k1", "f0") in switching.template_sources()[-1]
+    assert "_dp5_step(" in fmu_solver.template_source()
+    with pytest.raises(ValueError, match="positional arguments"):
+        steps.inline_steps("def f(h, k):\n    _dp5_error(h, k)\n")

@@ -330,6 +330,8 @@ def inline_steps(source: str, names: tuple[str, ...] = INLINED) -> str:
     tree = ast.parse(textwrap.dedent(source))
     found: list[tuple[int, int, int, list[str]]] = []
     for node in ast.walk(tree):
+        if not isinstance(node, ast.stmt):
+            continue
         value, target = None, None
         if isinstance(node, ast.Expr):
             value = node.value
