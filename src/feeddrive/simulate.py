@@ -223,7 +223,9 @@ def sampling(params: DriveParameters, output_interval: float,
     default the model's).
 
     Every period must be a multiple of the fastest one (each instant is an exact breakpoint
-    count); the output interval a multiple of the fastest period."""
+    count); the output interval a multiple of the fastest period.  A sampled part may run
+    beside continuous loops: the solvers stop at its instants only (its clock is the
+    schedule), re-evaluating the derivative there."""
     c = params.controller
     loops = [(f"controller.{k}", float(getattr(c, k))) for k in (
         "position_period", "velocity_period", "current_period")]
@@ -231,11 +233,6 @@ def sampling(params: DriveParameters, output_interval: float,
     parts = [(f"{name}.{field}", float(period)) for name, section in params.sections
              for field, period in getattr(section, "schedule", lambda: ())()]
     clocks = list(model.periods(P).items()) if model is not None else loops + parts
-    if any(p > 0 for _, p in parts) and not any(p > 0 for _, p in loops):
-        field, period = next(fp for fp in parts if fp[1] > 0)
-        raise ParameterError(field, period, "a sampled part needs sampled loops (set "
-                             "controller.current_period > 0 [s]): the breakpoints of "
-                             "continuous loops assume nothing jumps there")
     if (c.encoder_counts > 0 or c.grating_resolution > 0) and not (
             c.position_period > 0 and c.velocity_period > 0):
         raise ParameterError("controller.encoder_counts", c.encoder_counts,
@@ -243,9 +240,9 @@ def sampling(params: DriveParameters, output_interval: float,
                              "(set controller.position_period and velocity_period > 0 [s])")
     nonzero = [p for _, p in clocks if p > 0]
     base = min(nonzero) if nonzero else output_interval
-    for field, period in clocks:  # every schedule lands on the breakpoint grid
+    for slot, period in clocks:  # every schedule lands on the breakpoint grid
         if period > 0 and abs(period / base - round(period / base)) > 1e-9 * period / base:
-            raise ParameterError(field, period, f"expected a multiple of the fastest sample "
+            raise ParameterError(slot, period, f"expected a multiple of the fastest sample "
                                  f"period {base:g} [s] (each schedule is an exact event "
                                  "time on one breakpoint grid)")
     steps = tuple(int(round(p / base)) if p > 0 else 0 for _, p in clocks)
