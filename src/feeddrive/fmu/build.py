@@ -84,7 +84,9 @@ def solver_c() -> str:
         bindings={"rhs": RHS, "sample_update": SAMPLE_UPDATE,
                   "_dp5_step": steps.function("_dp5_step"),
                   "_dp5_error": steps.function("_dp5_error"),
-                  "_error_norm": steps.error_norm_template},
+                  "_error_norm": steps.error_norm_template,
+                  "_pi_factor": steps.pi_factor_template,
+                  "_reject_factor": steps.reject_factor_template},
         shapes=shapes, names={"advance_template": "fd_advance"})
 
 

@@ -51,6 +51,8 @@ CONSTANTS = {"MEM_H": MEM_H, "MEM_ERR": MEM_ERR, "MEM_KB": MEM_KB,
 _dp5_step: Any = None
 _dp5_error: Any = None
 _error_norm: Any = None
+_pi_factor: Any = None
+_reject_factor: Any = None
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
@@ -137,7 +139,8 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
                 if err <= 1.0:
                     break
                 rejected += 1
-                h_try *= max(0.2, 0.9 * err ** (-0.2))
+                fac = _reject_factor(err)
+                h_try *= fac
                 last = False
                 if h_try < h_min:
                     status = STATUS_STEP_UNDERFLOW
@@ -148,13 +151,10 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
             if status != STATUS_OK:
                 break
             # ---- accepted: PI step-size control for the next step
-            if err == 0.0:
-                h_new = h_try * 5.0
-            else:
-                fac = 0.9 * err ** (-alpha) * err_old ** beta
-                fac = min(5.0, max(0.2, fac))
+            fac = _pi_factor(err, err_old, alpha, beta)
+            if err != 0.0:
                 err_old = max(err, 1e-4)
-                h_new = h_try * fac
+            h_new = h_try * fac
             if not last or h_new < h:
                 h = min(h_new, h_max)
             finite = True

@@ -69,6 +69,8 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
 _dp5_step: Any = None  # the generated module's DOPRI5 step (feeddrive.solvers.steps)
 _dp5_error: Any = None
 _error_norm: Any = None
+_pi_factor: Any = None
+_reject_factor: Any = None
 
 
 @functools.lru_cache(maxsize=1)
@@ -241,7 +243,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 if err <= 1.0:
                     break
                 rejected += 1
-                fac = max(0.2, 0.9 * err ** (-0.2))
+                fac = _reject_factor(err)
                 h_try *= fac
                 last = False
                 if h_try < h_min:
@@ -263,11 +265,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     status = STATUS_STOPPED
                     break
             if adaptive == 1:
-                if err == 0.0:
-                    fac = 5.0
-                else:
-                    fac = 0.9 * err ** (-alpha) * err_old ** beta
-                    fac = min(5.0, max(0.2, fac))
+                fac = _pi_factor(err, err_old, alpha, beta)
                 err_old = max(err, 1e-4)
                 h_new = h_try * fac
                 if not last or h_new < h:

@@ -63,6 +63,25 @@ def error_norm_template(e: np.ndarray, y: np.ndarray, y_new: np.ndarray, rtol: f
     return err
 
 
+def pi_factor_template(err: float, err_old: float, alpha: float, beta: float) -> float:
+    """The step-size controller of the explicit steps: after an accepted step with error norm
+    ``err`` (``err_old``: the previous accepted step's, floored at 1e-4), the next step is
+    this factor times the last — Hairer's PI controller 0.9·err^(−α)·err_old^β in [0.2, 5],
+    5 after an exact step (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.4, and their
+    ``dopri5.f``; α = 0.2 − 0.75β, β = 0.04)."""
+    fac = 5.0
+    if err != 0.0:
+        fac = min(5.0, max(0.2, 0.9 * err ** (-alpha) * err_old ** beta))
+    return fac
+
+
+def reject_factor_template(err: float) -> float:
+    """The factor of the retry after a rejected explicit step of error norm ``err`` > 1:
+    0.9·err^(−1/5), at least 0.2 (``dopri5.f``)."""
+    fac = max(0.2, 0.9 * err ** (-0.2))
+    return fac
+
+
 def _num(x: float) -> str:
     return repr(float(x))
 
@@ -280,9 +299,14 @@ def rosenbrock_step(tab: RosenbrockTableau, rhs: Any = None) -> Any:
                    None if rhs is None else {"rhs": rhs})
 
 
-def _norm_source() -> str:
-    return inspect.getsource(error_norm_template).replace("def error_norm_template(",
-                                                          "def _error_norm(", 1)
+_HAND_WRITTEN: dict[str, Any] = {"_error_norm": error_norm_template,
+                                  "_pi_factor": pi_factor_template,
+                                  "_reject_factor": reject_factor_template}
+
+
+def _norm_source(name: str = "_error_norm") -> str:
+    fn = _HAND_WRITTEN[name]
+    return inspect.getsource(fn).replace(f"def {fn.__name__}(", f"def {name}(", 1)
 
 
 class _Rename(ast.NodeTransformer):
@@ -296,7 +320,7 @@ class _Rename(ast.NodeTransformer):
 def _body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
     """The statements of step function ``name`` with its parameters renamed to the argument
     expressions of ``call``; a final ``return x`` becomes ``target = x``."""
-    source = _norm_source() if name == "_error_norm" else sources()[name]
+    source = _norm_source(name) if name in _HAND_WRITTEN else sources()[name]
     fn = ast.parse(source).body[0]
     assert isinstance(fn, ast.FunctionDef)
     params = [a.arg for a in fn.args.args]
@@ -316,7 +340,8 @@ def _body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
     return out
 
 
-INLINED = ("_dp5_step", "_dp5_error", "_dp5_dense", "_error_norm")
+INLINED = ("_dp5_step", "_dp5_error", "_dp5_dense", "_error_norm", "_pi_factor",
+           "_reject_factor")
 
 
 def inline_steps(source: str, names: tuple[str, ...] = INLINED) -> str:
@@ -352,4 +377,5 @@ def template_sources() -> list[str]:
     (the drivers have the explicit step written into their text, :func:`inline_steps`; the
     FMU's integrator and the Rosenbrock branch call them)."""
 
-    return ["@kernel\n" + _norm_source()] + ["@kernel\n" + src for src in sources().values()]
+    return (["@kernel\n" + _norm_source(name) for name in _HAND_WRITTEN]
+            + ["@kernel\n" + src for src in sources().values()])

@@ -97,6 +97,8 @@ _dp5_step: Any = None
 _dp5_error: Any = None
 _dp5_dense: Any = None
 _error_norm: Any = None
+_pi_factor: Any = None
+_reject_factor: Any = None
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
@@ -365,7 +367,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     h_try /= fac
                     r4_rejected = True
                 else:
-                    h_try *= max(0.2, 0.9 * err ** (-0.2))
+                    fac = _reject_factor(err)
+                    h_try *= fac
                 last = False
                 if h_try < h_min:
                     status = STATUS_STEP_UNDERFLOW
@@ -491,12 +494,10 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     r4_h_old = h_try
                     r4_err_old = max(1e-2, err)
                     r4_rejected = False
-                elif err == 0.0:
-                    h_new = h_try * 5.0
-                else:
-                    fac = 0.9 * err ** (-alpha) * dp_err_old ** beta
-                    fac = min(5.0, max(0.2, fac))
-                    dp_err_old = max(err, 1e-4)
+                else:  # DOPRI5: the explicit steps' controller (feeddrive.solvers.steps)
+                    fac = _pi_factor(err, dp_err_old, alpha, beta)
+                    if err != 0.0:
+                        dp_err_old = max(err, 1e-4)
                     h_new = h_try * fac
                 if not last or h_new < h:
                     h = min(h_new, h_max)
