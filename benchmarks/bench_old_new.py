@@ -55,8 +55,7 @@ spec = importlib.util.spec_from_file_location("bench_engine", root + "/benchmark
 be = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(be)
 import feeddrive as fd
-from feeddrive.control import ConstantSpeed
-from feeddrive.simulate import DriveSystem, SolverOptions, simulate
+from feeddrive import ConstantSpeed, DriveSystem, SolverOptions, simulate  # both trees' API
 assert fd.__file__.startswith(root), (fd.__file__, root)
 built = {}
 def case(name):

@@ -2,8 +2,9 @@
 
 A model declares a clock for each sampled part (the three loops, a feed-forward with its own
 rate …; :meth:`feeddrive.model.codegen.Builder.clock`), its period a parameter slot.  A run
-puts every instant on one breakpoint grid t = k·base [s] (:func:`feeddrive.simulate.sampling`:
-``base`` is the fastest period, every period a multiple of it) and gives the driver the
+puts every instant on one breakpoint grid t = k·base [s]
+(:func:`feeddrive.engine.simulate.sampling`: ``base`` is the fastest period, every period a
+multiple of it) and gives the driver the
 schedule as ``steps``: clock c has its instants at the breakpoints k with k mod steps[c] = 0
 (steps[c] = 0: the part runs continuously).  The driver lands on each merged instant exactly
 (:func:`next_instant`), and calls the model's ``sample_update(t, y, held, P, T, tick)`` there
