@@ -1,5 +1,6 @@
 """Solvers as data (issue 19 item 5): the tableaux, the one explicit Runge–Kutta step and the one
-Rosenbrock step written for any of them, and the sample schedule's event kernels.
+Rosenbrock step written for any of them (two tableaux each), and the sample schedule's event
+kernels.
 
 References: scipy's RK45 and RK23 (``scipy.integrate._ivp.rk``: their own copies of the
 Dormand–Prince and Bogacki–Shampine coefficients, a matrix-form step) for the explicit step;
@@ -19,6 +20,7 @@ from feeddrive.solvers import schedule, steps
 from feeddrive.solvers.tableaux import (
     BS3,
     DOPRI5,
+    RODAS3,
     RODAS4,
     ExplicitTableau,
     RosenbrockTableau,
@@ -83,29 +85,31 @@ def test_each_tableau_has_its_order_through_the_one_step(tab: ExplicitTableau) -
                                                                  abs=0.3)
 
 
-def test_the_rosenbrock_step_has_rodas4_s_order_on_a_linear_system() -> None:
-    """RODAS4 through the one Rosenbrock step: local error ~ h^5 on y' = Λy (exact Jacobian,
-    f_t = 0); the error estimate u6 ~ h^4 (the embedded solution is of order 3)."""
+@pytest.mark.parametrize("tab", [RODAS4, RODAS3])
+def test_the_rosenbrock_step_has_each_tableau_s_order_on_a_linear_system(
+        tab: RosenbrockTableau) -> None:
+    """RODAS4 and RODAS3 through the one Rosenbrock step: local error ~ h^(p+1) on y' = Λy
+    (exact Jacobian, f_t = 0), the error estimate u_S ~ h^(q+1) (q: the embedded order)."""
     from scipy.linalg import expm
 
     from feeddrive.solvers.rodas4 import lu_factor, lu_solve
 
-    step = steps.rosenbrock_step(RODAS4, rhs=_linear_rhs)
+    step = steps.rosenbrock_step(tab, rhs=_linear_rhs)
     step.__globals__.update(lu_factor=lu_factor.py_func, lu_solve=lu_solve.py_func)
-    y0, n = np.array([1.0, 0.3]), 2
+    y0, n, S = np.array([1.0, 0.3]), 2, len(tab.c)
     local, estimate = [], []
     for h in (0.04, 0.02):
         f0 = LAMBDA @ y0
-        u = [np.empty(n) for _ in range(6)]
+        u = [np.empty(n) for _ in range(S)]
         y_new = np.empty(n)
         calls = step(0.0, h, y0, f0, LAMBDA.copy(), np.zeros(n), None, None, None,
                      np.empty((n, n)), np.zeros(n, dtype=np.int64), *u, np.empty(n),
                      np.empty(n), y_new, None, np.ones(n, dtype=bool))
-        assert calls == RODAS4.stages == 5
+        assert calls == tab.stages == S - 1
         local.append(np.linalg.norm(y_new - expm(h * LAMBDA) @ y0))
-        estimate.append(np.linalg.norm(u[5]))
-    assert math.log2(local[0] / local[1]) == pytest.approx(RODAS4.order + 1, abs=0.4)
-    assert math.log2(estimate[0] / estimate[1]) == pytest.approx(RODAS4.embedded_order + 1,
+        estimate.append(np.linalg.norm(u[-1]))
+    assert math.log2(local[0] / local[1]) == pytest.approx(tab.order + 1, abs=0.4)
+    assert math.log2(estimate[0] / estimate[1]) == pytest.approx(tab.embedded_order + 1,
                                                                  abs=0.4)
 
 

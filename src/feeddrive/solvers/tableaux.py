@@ -14,6 +14,10 @@ embedded Runge–Kutta step and the one Rosenbrock step for any of them, and the
 * :data:`BS3`: Bogacki–Shampine 3(2), P. Bogacki and L. F. Shampine, "A 3(2) pair of
   Runge–Kutta formulas", Appl. Math. Lett. 2 (1989) 321–325 (scipy's RK23): a second tableau
   of the same step (used by the tests: the step is generic, its order is the tableau's).
+* :data:`RODAS3`: A. Sandu, J. G. Verwer, J. G. Blom, E. J. Spee, G. R. Carmichael and
+  F. A. Potra, "Benchmarking stiff ODE solvers for atmospheric chemistry problems II:
+  Rosenbrock solvers", Atmos. Environ. 31 (1997) 3459–3472 (as in the KPP code's
+  ``Rodas3``): a second Rosenbrock tableau of the same step, order 3(2), no dense output.
 * :data:`RODAS4`: E. Hairer and G. Wanner, *Solving Ordinary Differential Equations II*, 2nd
   ed., Springer (1996), Sect. IV.7, as in their ``rodas.f`` (``ROCOE``, ``METH = 1``, with the
   dense-output coefficients ``D21 … D35``).
@@ -104,8 +108,8 @@ class RosenbrockTableau:
     d : tuple of float
         d_s, the weight of h·f_t in stage s (Hairer & Wanner's γ_s).
     dense : tuple of tuple of float
-        Rows of the dense-output vectors q_r = Σ_j dense[r][j] u_j over the first S − 1
-        increments: y(θ) = (1 − θ)·y_0 + θ·(y_1 + (1 − θ)·(q_1 + θ·q_2)).
+        Rows (empty: none) of the dense-output vectors q_r = Σ_j dense[r][j] u_j over the
+        first S − 1 increments: y(θ) = (1 − θ)·y_0 + θ·(y_1 + (1 − θ)·(q_1 + θ·q_2)).
     reference : str
         Where the numbers come from.
 
@@ -197,5 +201,14 @@ RODAS4 = RosenbrockTableau(
             0.2476722511418386e+02, -0.6594389125716872e+01)),
     reference="Hairer & Wanner, Solving ODEs II, Sect. IV.7; rodas.f ROCOE METH = 1")
 
+RODAS3 = RosenbrockTableau(
+    name="rodas3", order=3, embedded_order=2, gamma=0.5,
+    c=(0.0, 0.0, 1.0, 1.0),
+    a=((), (0.0,), (2.0, 0.0), (2.0, 0.0, 1.0)),
+    cc=((), (4.0,), (1.0, -1.0), (1.0, -1.0, -8.0 / 3.0)),
+    d=(0.5, 1.5, 0.0, 0.0),
+    dense=(),
+    reference="Sandu et al., Atmos. Environ. 31 (1997) 3459-3472; KPP Rodas3")
+
 EXPLICIT = {t.name: t for t in (DOPRI5, BS3)}
-ROSENBROCK = {t.name: t for t in (RODAS4,)}
+ROSENBROCK = {t.name: t for t in (RODAS4, RODAS3)}
