@@ -1,9 +1,12 @@
 """Compiled Dormand–Prince 5(4) integrator for the closed-loop drive, with declared breakpoints.
 
-Breakpoints are the controller sample instants (the zero-order-hold outputs jump there) and the
-output instants; the integrator lands on each exactly, applies the discrete controller update,
-and restarts the step from there, so no step straddles a jump in the right-hand side
-(the "declare your discontinuities" lesson of diffrax; python-control issue #933).
+Breakpoints are the instants of the model's sample schedule (every sampled part's clock,
+:mod:`feeddrive.solvers.schedule`; the zero-order-hold outputs jump there) and the output
+instants; the integrator lands on each exactly, applies the sampled parts' update where one is
+due, and restarts the step from there, so no step straddles a jump in the right-hand side
+(the "declare your discontinuities" lesson of diffrax; python-control issue #933).  The step
+is the one explicit step of :mod:`feeddrive.solvers.steps` for the tableau
+:data:`feeddrive.solvers.tableaux.DOPRI5`, written into :func:`integrate_template`'s text.
 
 Error control: mixed absolute/relative weights per state; states whose absolute size carries no
 meaning (shaft angles, positions) use absolute tolerance only.  Step-size control is Hairer's
@@ -29,16 +32,16 @@ if TYPE_CHECKING:
 
 ORDER = DOPRI5.order
 # module constants the generated module imports from here
-TABLEAU = ("STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW", "STATUS_NON_FINITE",
-           "STATUS_STOPPED", "STATUS_DIVERGED")
+CONSTANTS = ("STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW", "STATUS_NON_FINITE",
+             "STATUS_STOPPED", "STATUS_DIVERGED")
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1
 STATUS_STEP_UNDERFLOW = 2
 STATUS_NON_FINITE = 3
 STATUS_STOPPED = 4  # another thread asked the running call to stop (new_memory's stop slot)
-# a state beyond its divergence bound (feeddrive.engine.simulate.divergence_bounds): the run stops
-# early, the state there recorded as its last sample; not an error, the verdict is "unstable"
+# a state beyond its divergence bound (feeddrive.engine.simulate.divergence_bounds): the run
+# stops early, the state there recorded as its last sample; not an error, the verdict is "unstable"
 STATUS_DIVERGED = 5
 STATUS_MESSAGES = {
     STATUS_OK: "success",
@@ -77,7 +80,7 @@ _reject_factor: Any = None
 def template_sources() -> list[str]:
     """Text placed in each generated model module: the status codes and the integrator (its
     step is the one of :mod:`feeddrive.solvers.steps`, placed beside it)."""
-    names = ", ".join(TABLEAU)
+    names = ", ".join(CONSTANTS)
     src = steps.inline_steps(inspect.getsource(integrate_template)).replace(
         "def integrate_template(", "def integrate(", 1)
     aux = inspect.getsource(auxiliary_template).replace("def auxiliary_template(",
