@@ -45,10 +45,9 @@ CITES = re.compile(r"Wang2021|et al\.")
 # published methods that are not registered parts (those are found through the registry)
 PUBLISHED = (
     "feeddrive.solvers.dopri5.integrate",  # Dormand & Prince 1980
-    "feeddrive.solvers.switching.dp5_step_template",
     "feeddrive.solvers.switching.integrate",  # DOPRI5 + RODAS4 (Hairer & Wanner)
-    "feeddrive.solvers.rodas4.rodas4_step_template",  # Hairer & Wanner, Solving ODEs II
-    "feeddrive.solvers.rodas4.rodas4_dense_template",
+    "feeddrive.solvers.steps.explicit_step_source",  # the embedded Runge-Kutta step
+    "feeddrive.solvers.steps.rosenbrock_step_source",  # Hairer & Wanner, Solving ODEs II
     "feeddrive.model.friction.lugre.force",  # Canudas de Wit et al. 1995
     "feeddrive.model.friction.lugre.bristle_rate",
     "feeddrive.model.friction.lugre.stribeck_magnitude",
@@ -204,7 +203,7 @@ def test_the_public_api_is_collected():
     """The walk finds functions, classes, methods, kernels and parts of every layer."""
     for path in ("feeddrive.engine.simulate.simulate", "feeddrive.engine.result.Result.summary",
                  "feeddrive.model.friction.lugre.LuGre", "feeddrive.model.friction.lugre.force",
-                 "feeddrive.analysis.metrics", "feeddrive.sweep.design"):
+                 "feeddrive.analysis.cycle_verdict", "feeddrive.sweep.design"):
         assert path in API
     assert not any(".cli." in p and p.endswith("_command") for p in API)  # --help text
     assert not any("._" in p for p in API)

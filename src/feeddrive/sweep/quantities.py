@@ -230,7 +230,7 @@ def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
     dict
         The quantity's values by name [SI].
     """
-    from ..analysis.metrics import VerdictRule
+    from ..analysis.cycle_verdict import VerdictRule
 
     kind = q["kind"]
     if kind == "linear-band":
