@@ -131,7 +131,29 @@ def resample_size(t: np.ndarray, dt: float, *, lines: np.ndarray | None = None,
                   source: str | None = None) -> int:
     """Points of a uniform grid of step ``dt`` [s] over ``t``, refused with a message when
     it would exceed :data:`MAX_RESAMPLE_FACTOR` × the samples (a gap in the record: a
-    31-row file whose last time is 10⁶ s would otherwise ask for 10⁹ points)."""
+    31-row file whose last time is 10⁶ s would otherwise ask for 10⁹ points).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    dt : float
+        Grid step [s].
+    lines : numpy.ndarray of int, optional
+        The file line of each sample, for the message.
+    source : str, optional
+        The file, for the message.
+
+    Returns
+    -------
+    int
+        Number of grid points.
+
+    Raises
+    ------
+    ValueError
+        When the grid would be too large, naming the gap.
+    """
     n = int(math.floor((float(t[-1]) - float(t[0])) / dt + 1e-9)) + 1
     limit = MAX_RESAMPLE_FACTOR * int(t.size)
     if n > limit:
