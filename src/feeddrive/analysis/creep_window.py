@@ -302,6 +302,10 @@ def steady_window(
     ------
     ValueError
         For ``min_fraction > max_fraction`` or ``reach_level`` outside (0, 1].
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 6b (the ~7-s start transient)..
     """
     t, v = as_trace(time, speed)
     vc = check_command(command_speed)

@@ -228,6 +228,10 @@ def stribeck_curve(theta: np.ndarray, v: np.ndarray) -> np.ndarray:
     -------
     numpy.ndarray
         The steady friction force magnitude [N].
+
+    References
+    ----------
+    .. [1] Wang2021 Eq. (11), Table 1..
     """
     fc, dF, vs, s2 = theta
     return np.asarray(fc + dF * np.exp(-((v / vs) ** 2)) + s2 * v)

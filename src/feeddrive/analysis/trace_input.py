@@ -109,7 +109,22 @@ def check_fraction(name: str, value: float) -> float:
 
 
 def time_below(t: np.ndarray, s: np.ndarray, level: float) -> float:
-    """Time [s] during which the piecewise-linear interpolant of s is below ``level``."""
+    """Time [s] during which the piecewise-linear interpolant of s is below ``level``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    s : numpy.ndarray
+        The signal [its unit].
+    level : float
+        The level [unit of ``s``].
+
+    Returns
+    -------
+    float
+        The time [s].
+    """
     a, b = s[:-1] - level, s[1:] - level
     dt = np.diff(t)
     both = (a < 0) & (b < 0)
@@ -171,7 +186,22 @@ def resample_size(t: np.ndarray, dt: float, *, lines: np.ndarray | None = None,
 
 
 def uniform_samples(t: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, float]:
-    """Samples of s on a uniform grid (resampled linearly when the sampling jitters > 1 %)."""
+    """Samples of s on a uniform grid (resampled linearly when the sampling jitters > 1 %).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    s : numpy.ndarray
+        The signal [its unit].
+
+    Returns
+    -------
+    samples : numpy.ndarray
+        The signal on the uniform grid [unit of ``s``].
+    dt : float
+        The grid step [s].
+    """
     steps = np.diff(t)
     dt = float(np.median(steps))
     if float(np.max(np.abs(steps - dt))) <= 0.01 * dt:

@@ -193,7 +193,19 @@ class Sampling:
     """The breakpoint grid of a run and its sample schedule: breakpoint unit ``base`` [s] (the
     fastest sample period), per clock of the model (:attr:`Model.clocks
     <feeddrive.model.assemble.Model.clocks>`: the loops and every sampled part) its period in
-    breakpoints (0 = continuous), and the output stride in breakpoints."""
+    breakpoints (0 = continuous), and the output stride in breakpoints.
+
+    Parameters
+    ----------
+    base : float
+        The breakpoint unit, the fastest sample period [s].
+    clocks : tuple of str
+        The model's clocks, by their period's parameter path.
+    steps : tuple of int
+        Each clock's period in breakpoints; 0 = continuous.
+    out_every : int
+        The output stride in breakpoints.
+    """
 
     base: float
     clocks: tuple[str, ...]
@@ -211,7 +223,18 @@ class Sampling:
         return any(n > 0 for n in self.steps)
 
     def step(self, clock: str) -> int:
-        """The period of ``clock`` (e.g. ``"controller.velocity_period"``) in breakpoints."""
+        """The period of ``clock`` (e.g. ``"controller.velocity_period"``) in breakpoints.
+
+        Parameters
+        ----------
+        clock : str
+            The clock's period path.
+
+        Returns
+        -------
+        int
+            Breakpoints per period; 0 = continuous.
+        """
         return self.steps[self.clocks.index(clock)]
 
 
@@ -225,7 +248,30 @@ def sampling(params: DriveParameters, output_interval: float,
     Every period must be a multiple of the fastest one (each instant is an exact breakpoint
     count); the output interval a multiple of the fastest period.  A sampled part may run
     beside continuous loops: the solvers stop at its instants only (its clock is the
-    schedule), re-evaluating the derivative there."""
+    schedule), re-evaluating the derivative there.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    output_interval : float
+        Interval of the recorded output [s].
+    model : Model, optional
+        The assembled model, whose clocks are the schedule.
+    P : numpy.ndarray, optional
+        The parameter vector the periods are read from [SI, per slot].
+
+    Returns
+    -------
+    Sampling
+        The grid and schedule.
+
+    Raises
+    ------
+    ParameterError
+        For a period that is not a multiple of the fastest, an output interval that is not,
+        or quantised feedback with continuous position or velocity loops.
+    """
     c = params.controller
     loops = [(f"controller.{k}", float(getattr(c, k))) for k in (
         "position_period", "velocity_period", "current_period")]

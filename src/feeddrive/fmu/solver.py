@@ -148,8 +148,11 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
         Packed parameter vector [SI, per slot].
     T : numpy.ndarray
         Packed tables [SI].
-    n_pos, n_vel, n_cur : int
-        Loop periods in units of ``base``; 0 for continuous.
+    schedule : numpy.ndarray of int
+        Each clock's period in units of ``base``; 0 for continuous
+        (:mod:`feeddrive.solvers.schedule`).
+    tick : numpy.ndarray of int
+        Work space, one per clock.
     base : float
         The sample grid's unit [s].
     rtol : float

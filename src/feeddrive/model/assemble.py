@@ -63,6 +63,8 @@ class Model:
         (n, n + 1) uint8: 1 where dy[i] may depend on y[j] (column n: on t).
     jacobian_colours : numpy.ndarray of int
         (n + 1,) column groups of the grouped finite-difference Jacobian.
+    clocks : tuple of (str, int), default ()
+        The sample schedule: each clock's period slot and its index in ``P``.
     derived : tuple of (Signal, str, float), default ()
         Signals a part declares as factor × a state or signal: (signal, source, factor
         [signal unit per source unit]).
@@ -94,12 +96,29 @@ class Model:
 
     def periods(self, P: np.ndarray | None = None) -> dict[str, float]:
         """Sample period [s] of every clock of the schedule by name (0: continuous), read from
-        the parameter vector ``P`` (default: the model's)."""
+        the parameter vector ``P`` (default: the model's).
+
+        Parameters
+        ----------
+        P : numpy.ndarray, optional
+            The parameter vector [SI, per slot].
+
+        Returns
+        -------
+        dict of str to float
+            Clock → period [s].
+        """
         P = self.P if P is None else P
         return {name: float(P[k]) for name, k in self.clocks}
 
     def continuous_ticks(self) -> np.ndarray:
-        """The ``tick`` argument of ``sample_update`` with no clock due (all −1)."""
+        """The ``tick`` argument of ``sample_update`` with no clock due (all −1).
+
+        Returns
+        -------
+        numpy.ndarray of int
+            −1 per clock.
+        """
         return np.full(int(self.module.N_CLOCK), -1, dtype=np.int64)
 
     def index(self, name: str) -> int:

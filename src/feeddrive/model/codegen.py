@@ -98,6 +98,8 @@ class Builder:
     derived : list of (Signal, str, float)
         Derived signals: (signal, source state or signal, factor [signal unit per source
         unit]).
+    clocks : list of (str, int)
+        Declared clocks: period slot and its index in ``P`` (:meth:`clock`).
     state_index, aux_index, param_index : dict of str to int
         Name → index in ``y``, ``aux`` and ``P``.
     """
@@ -399,14 +401,41 @@ class Builder:
         sampled update tests ``tick[c] >= 0`` (``tick[c] == 0``: its first instant), the
         right-hand side ``P[<period>] > 0.0`` (sampled, holding its outputs) — a model reads
         its schedule from its parameter vector, the solver's call arguments stay the same
-        for every model."""
+        for every model.
+
+        Parameters
+        ----------
+        name : str
+            The parameter slot of the period (already declared).
+
+        Returns
+        -------
+        int
+            The clock's index c.
+
+        Raises
+        ------
+        ValueError
+            When the clock is declared twice.
+        """
         if any(n == name for n, _ in self.clocks):
             raise ValueError(f"clock {name!r} declared twice")
         self.clocks.append((name, self.param_index[name]))
         return len(self.clocks) - 1
 
     def tick(self, name: str) -> str:
-        """Code of clock ``name``'s count at this instant in the sampled update (−1: none)."""
+        """Code of clock ``name``'s count at this instant in the sampled update (−1: none).
+
+        Parameters
+        ----------
+        name : str
+            The clock's period slot.
+
+        Returns
+        -------
+        str
+            E.g. ``"tick[1]"``.
+        """
         return f"tick[{[n for n, _ in self.clocks].index(name)}]"
 
     def table(self, values: np.ndarray) -> int:

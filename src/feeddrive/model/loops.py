@@ -366,7 +366,15 @@ CLOCKS = ("position_period", "velocity_period", "current_period")
 
 def declare_clocks(b: Builder, c: object) -> None:
     """The three loops' sample periods [s] as parameter slots ``controller.<loop>_period`` and
-    as clocks of the model's sample schedule (:meth:`Builder.clock`; 0 = continuous)."""
+    as clocks of the model's sample schedule (:meth:`Builder.clock`; 0 = continuous).
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    c : Controller
+        The controller parameters (its three periods [s]).
+    """
     for name in CLOCKS:
         b.param(f"controller.{name}", float(getattr(c, name)))
         b.clock(f"controller.{name}")

@@ -224,6 +224,13 @@ def explicit_step_source(tab: ExplicitTableau, name: str) -> str:
     -------
     str
         Python source of the function (annotated, for the C translator).
+
+    References
+    ----------
+    .. [1] E. Hairer, S. P. Nørsett, G. Wanner, Solving Ordinary Differential Equations I,
+       2nd ed., Springer, 1993, Sect. II.1 (explicit Runge–Kutta methods), Sect. II.4
+       (embedded pairs); DOPRI5: J. R. Dormand, P. J. Prince, J. Comput. Appl. Math. 6 (1980)
+       19–26.
     """
     ks = _stage_names(tab)
     S = len(tab.c)

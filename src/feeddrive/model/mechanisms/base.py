@@ -365,6 +365,10 @@ class Mechanism:
         -------
         dict
             Site parameters key → effective mass [kg]; empty when the topology declares none.
+
+        References
+        ----------
+        .. [1] Wang2021 Table 1 (the force form of the rotary sites)..
         """
         return {}
 
