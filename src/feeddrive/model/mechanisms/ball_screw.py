@@ -266,6 +266,10 @@ class BallScrewDrive(Mechanism):
         -------
         dict
             Site parameters key → effective mass [kg].
+
+        References
+        ----------
+        .. [1] Wang2021 Table 2, Eq. (8).
         """
         p = self.params
         h = p.screw.transmission_ratio
