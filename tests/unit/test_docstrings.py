@@ -37,7 +37,8 @@ import feeddrive as fd
 from feeddrive import registry
 
 CHECKED = ("PR01", "PR02", "RT01", "GL08")
-UNIT = re.compile(r"\[[^\]\s][^\]]*\](?!_)")  # ``[N/m]``, not a citation ``[1]_``
+# ``[N/m]``; not a citation ``[1]_`` nor an index ``P[o + k]``
+UNIT = re.compile(r"(?<![\w\]])\[[^\]\s][^\]]*\](?!_)")
 # types whose values are physical quantities (or arrays of them) unless stated otherwise
 PHYSICAL_TYPE = re.compile(r"\b(float|complex|ndarray|array|array_like)\b")
 COUNTS = re.compile(r"\bof (int|bool|str)\b")  # ``numpy.ndarray of int``: indices, flags
@@ -251,6 +252,22 @@ def unitless(speed: float) -> float:
     return 2 * speed
 
 
+def indexed(speed: float) -> float:
+    """The speed read from the packed vector.
+
+    Parameters
+    ----------
+    speed : float
+        Taken from P[o + 2], not a unit.
+
+    Returns
+    -------
+    float
+        The speed [m/s].
+    """
+    return speed
+
+
 def cited(speed: float) -> float:
     """The Stribeck curve of Wang2021 Eq. (9).
 
@@ -297,12 +314,13 @@ def _hidden(speed):
     paths = public_api(package)
     assert paths == ["fd_synthetic", "fd_synthetic.laws", "fd_synthetic.laws.bare",
                      "fd_synthetic.laws.cited", "fd_synthetic.laws.good",
-                     "fd_synthetic.laws.unitless"]
+                     "fd_synthetic.laws.indexed", "fd_synthetic.laws.unitless"]
     found = {p: " ".join(problems(p, _object(p))) for p in paths}
     assert "GL08" in found["fd_synthetic.laws.bare"]
     assert "PR01" not in found["fd_synthetic.laws.unitless"]
     assert "RT01" in found["fd_synthetic.laws.unitless"]
     assert "no [unit]" in found["fd_synthetic.laws.unitless"]
+    assert "no [unit]" in found["fd_synthetic.laws.indexed"]  # an index is not a unit
     assert "References" in found["fd_synthetic.laws.cited"]
     assert found["fd_synthetic.laws.good"] == ""
     bare = _object("fd_synthetic.laws.bare")
