@@ -22,7 +22,7 @@ from fmu_helpers import (
     run_fmu,
 )
 
-from feeddrive.analysis.metrics import creep_metrics
+from feeddrive.analysis.creep_window import creep_metrics
 from feeddrive.fmu import export_fmu
 from feeddrive.fmu.description import base_units, variables
 from feeddrive.fmu.model import NumbaCoSimulation, build

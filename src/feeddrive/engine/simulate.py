@@ -288,7 +288,7 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
 
 # A run stops early as diverged when a speed state exceeds this multiple of the reference
 # speed: the largest commanded table plus nut speed, the largest initial speed or 1 mm/s,
-# whichever is largest.  5× the "unstable" verdict's 20× (feeddrive.analysis.metrics
+# whichever is largest.  5× the "unstable" verdict's 20× (feeddrive.analysis.creep_window
 # CreepThresholds.max_speed_ratio): a run stopped here is "unstable" by that verdict too.
 DIVERGENCE_SPEED_RATIO = 100.0
 DIVERGENCE_SPEED_FLOOR = 1e-3  # [m/s]
