@@ -172,7 +172,7 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     relative_tolerance : float, default 0.02
         Relative width at which each bisection stops [-].
     rule : VerdictRule or None, default None
-        How each trial is judged; None: the protocol's rule (:mod:`feeddrive.analysis.protocol`).
+        How each trial is judged; None: the protocol's rule (``feeddrive.analysis.protocol``).
     speed_range : tuple of float, default (5e-5, 3e-3)
         Speeds the check search may test [m/s].
     resolution : float, default 1e-5

@@ -519,7 +519,7 @@ def critical_speed_from_rest(
 
     Every change of verdict kind found by the coarse scan is bisected to ``resolution`` (see
     the module docstring).  The defaults are the protocol of ``feeddrive creep`` and
-    ``reproduce`` (:mod:`feeddrive.analysis.protocol`).
+    ``reproduce`` (``feeddrive.analysis.protocol``).
 
     Parameters
     ----------

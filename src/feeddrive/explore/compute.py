@@ -10,7 +10,7 @@ plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is S
   operating point (friction linearised there, rigid-body poles marked by
   :func:`feeddrive.analysis.linear.classify_poles`), loop margins and the loops' Bode curves;
 * :func:`run_critical` — the critical-speed search from rest, the protocol `feeddrive creep`
-  uses (:mod:`feeddrive.analysis.protocol`), with progress and cancellation at every trial.
+  uses (``feeddrive.analysis.protocol``), with progress and cancellation at every trial.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Quantities (``[quantity] kind``):
 
 * ``critical-speed``: the critical creeping speed and bands (:mod:`feeddrive.analysis.critical`),
   ``start = "rest"`` (scan + bisection) or ``"running"`` (the paper's step-down), on the
-  protocol of :mod:`feeddrive.analysis.protocol` unless overridden;
+  protocol of ``feeddrive.analysis.protocol`` unless overridden;
 * ``creep-trial``: one trial from rest at ``table_speed``: verdict kind, ripple ratio, stick
   fraction, frequency (:func:`~feeddrive.analysis.critical.creep_trial`);
 * ``linear-band``: the speeds at which steady sliding is linearly unstable
