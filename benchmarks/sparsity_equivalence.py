@@ -74,9 +74,9 @@ def _cases() -> dict[str, Any]:
         "rack-pinion-dahl-stribeck": lambda: (fd.DriveSystem(ch(RP, {
             "rack_pinion.gearbox_friction.law": "dahl", "friction.guide.law": "stribeck"}),
             "rack-pinion", 0.4), ConstantSpeed(2e-3)),
-        "rack-pinion-sampled-quantised": lambda: (fd.DriveSystem(ch(RP, sampled | dict(mod.QUANTISED)),
-                                                                 "rack-pinion", 0.4),
-                                                  ConstantSpeed(2e-3)),
+        "rack-pinion-sampled-quantised": lambda: (
+            fd.DriveSystem(ch(RP, sampled | dict(mod.QUANTISED)), "rack-pinion", 0.4),
+            ConstantSpeed(2e-3)),
         "acceleration-feedforward-ddfs": lambda: (fd.DriveSystem(with_acc(ch(W, sampled)), "ddfs",
                                                                  0.4),
                                                   ConstantSpeed(2e-3, 16e-3, ramp_time=0.02)),
