@@ -12,7 +12,8 @@ and the acceleration feed-forward part, this compares three patterns of ∂f/∂
   Jacobian at ``N_STATES`` random states (both signs of every speed; sampled models also with
   their loops' flags set).
 
-It prints one line per model and fails (exit 1) where declared ⊉ parsed or declared ⊉
+It prints one line per model (with the time each pattern takes to compute: the old analysis
+un-cached, the declared one from ``Model.flows``) and fails (exit 1) where declared ⊉ parsed or declared ⊉
 observed.  Run from the repository root::
 
     python benchmarks/sparsity_equivalence.py
@@ -24,6 +25,7 @@ import dataclasses
 import importlib.util
 import subprocess
 import sys
+import time
 import types
 from pathlib import Path
 from typing import Any
@@ -34,6 +36,7 @@ import feeddrive as fd
 from feeddrive.control import ConstantSpeed
 from feeddrive.model.assemble import Model
 from feeddrive.model.friction import friction_law
+from feeddrive.model.sparsity import declared_pattern
 
 ROOT = Path(__file__).resolve().parents[1]
 OLD = "ec220f9"  # the last commit with the text-parsing analysis
@@ -109,6 +112,7 @@ def parsed_pattern(old: types.ModuleType, model: Model, system: fd.DriveSystem) 
     if "_observer_force" in aliases:
         local["_observer_force"] = 1
     pure = frozenset(aliases | {"_friction_law"})
+    old._pattern.cache_clear()
     return old.jacobian_pattern(rhs, len(model.state_names), pure, local)
 
 
@@ -153,11 +157,19 @@ def main() -> int:
     print(f"{'model':48s} {'n':>3s} {'declared':>8s} {'parsed':>6s} {'observed':>8s}  "
           f"declared − parsed")
     totals = np.zeros(3, dtype=int)
+    times = np.zeros(2)
     for name, case in _cases().items():
         system, profile = case()
         model = system.model(profile)
         D = model.jacobian_pattern.astype(bool)
+        t0 = time.perf_counter()
         S = parsed_pattern(old, model, system).astype(bool)
+        t1 = time.perf_counter()
+        again = declared_pattern(model.state_names, [a.name for a in model.aux],
+                                 {w: set(r) for w, r in model.flows})
+        t2 = time.perf_counter()
+        assert np.array_equal(again, model.jacobian_pattern)
+        times += (t1 - t0, t2 - t1)
         O = observed_pattern(model, seed=sum(map(ord, name))).astype(bool)
         extra = [(model.state_names[i], (model.state_names + ("t",))[j])
                  for i, j in np.argwhere(D & ~S)]
@@ -170,6 +182,8 @@ def main() -> int:
             names = model.state_names + ("t",)
             print("   NOT DECLARED:", [(names[i], names[j]) for i, j in missing])
     print(f"{'total':48s} {'':3s} {totals[0]:8d} {totals[1]:6d} {totals[2]:8d}")
+    print(f"pattern computation, all models: parsed {1e3 * times[0]:.1f} ms, declared "
+          f"{1e3 * times[1]:.1f} ms")
     return 1 if bad else 0
 
 
