@@ -51,7 +51,7 @@ from .control import REFERENCE_INPUTS, ConstantSpeed
 from .model.assemble import Model
 from .model.loops import INJ_CURRENT, INJ_SPEED
 from .model.mechanisms import Mechanism, mechanism
-from .parameters import LuGreParameters, ParameterError, SiteParameters
+from .parameters import LeadError, LuGreParameters, ParameterError, SiteParameters, TorqueRipple
 from .simulate import DriveSystem
 
 _T0 = 1.0  # [s] operating-point time (after the reference's start ramp)
@@ -298,15 +298,16 @@ def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
     zero-mean harmonics of a shaft angle, so their average over a revolution is nothing; the
     drive is linearised on that averaged model and the returned note says so."""
     d = system.parameters.disturbances
-    left = [label for label, r in (("screw-motor torque ripple", d.screw_motor_ripple),
-                                   ("hollow-motor torque ripple", d.hollow_motor_ripple),
-                                   ("lead error", d.lead_error))
-            if any(a != 0.0 for a in r.amplitudes)]
+    motors = {m.ripple: m for m in mechanism(system.drive).drive_motors if m.ripple}
+    harmonic = [f.name for f in fields(d)
+                if isinstance(getattr(d, f.name), (TorqueRipple, LeadError))]
+    left = [f"{(motors[name].label or f'{motors[name].name} motor').replace(' ', '-')} "
+            "torque ripple"
+            if name in motors else name.replace("_", " ")
+            for name in harmonic if any(a != 0.0 for a in getattr(d, name).amplitudes)]
     if not left:
         return system, ()
-    quiet = dataclasses.replace(
-        d, screw_motor_ripple=type(d.screw_motor_ripple)(),
-        hollow_motor_ripple=type(d.hollow_motor_ripple)(), lead_error=type(d.lead_error)())
+    quiet = dataclasses.replace(d, **{name: type(getattr(d, name))() for name in harmonic})
     params = dataclasses.replace(system.parameters, disturbances=quiet)
     note = (f"warning: {' and '.join(left)} of the parameter set give no steady state; "
             "linearised on the averaged model (their harmonics average to zero over a "
@@ -619,10 +620,12 @@ class FrequencyResponse:
 
 
 def _axis_name(lin: LinearModel) -> str:
-    """The table-driving motor axis (the screw motor, or a linear motor)."""
-    for a in ("screw", "motor"):
-        if f"{a}_current_command_disturbance" in lin.inputs:
-            return a
+    """The table-driving motor axis: the mechanism's first axis (the screw motor, a linear
+    motor, the rack-and-pinion's motor), the first whose inputs the linear model has."""
+    suffix = "_current_command_disturbance"
+    for name in lin.inputs:
+        if name.endswith(suffix):
+            return name.removesuffix(suffix)
     raise ValueError("the linear model has no table-driving motor axis")
 
 

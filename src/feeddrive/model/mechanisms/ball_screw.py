@@ -76,9 +76,12 @@ class BallScrewDrive(Mechanism):
     """
 
     drives = ("cdfs", "ddfs")
-    drive_motors = (DriveMotor("screw", "screw_angle", "screw", "screw_motor_ripple"),
-                    DriveMotor("nut", "nut_angle", "nut", "hollow_motor_ripple"))
+    drive_motors = (DriveMotor("screw", "screw_angle", "screw", "screw_motor_ripple",
+                               "screw motor"),
+                    DriveMotor("nut", "nut_angle", "nut", "hollow_motor_ripple",
+                               "hollow motor"))
     has_lead_screw = True
+    travel_length = "screw.length"
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:

@@ -78,6 +78,7 @@ class DriveMotor:
     angle: str  # the state of its rotor angle [rad] ("" for a linear motor)
     body: str  # the body its torque acts on (a key of ``Mechanics.forces``)
     ripple: str = ""  # the ``[disturbances]`` field of its torque ripple ("" = not modelled)
+    label: str = ""  # its name in messages, e.g. "hollow motor" ("" = ``<name> motor``)
 
 
 @dataclass
@@ -117,6 +118,9 @@ class Mechanism:
     #: its motors: rotor-angle state, the body driven, the disturbance field of its ripple
     drive_motors: tuple[DriveMotor, ...] = ()
     has_lead_screw = False
+    #: dotted parameter path of the table's travel [m] (the ball screw's ``screw.length``);
+    #: "" = no travel limit known (a run's summary warns when the table leaves it)
+    travel_length: str = ""
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:
