@@ -13,8 +13,8 @@ and the acceleration feed-forward part, this compares three patterns of ∂f/∂
   their loops' flags set).
 
 It prints one line per model (with the time each pattern takes to compute: the old analysis
-un-cached, the declared one from ``Model.flows``) and fails (exit 1) where declared ⊉ parsed or declared ⊉
-observed.  Run from the repository root::
+un-cached, the declared one from ``Model.flows``) and fails (exit 1) where declared ⊉ parsed
+or declared ⊉ observed.  Run from the repository root::
 
     python benchmarks/sparsity_equivalence.py
 """
