@@ -82,6 +82,7 @@ class BallScrewDrive(Mechanism):
                                "hollow motor"))
     has_lead_screw = True
     travel_length = "screw.length"
+    travel_ends = "the screw supports"
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:

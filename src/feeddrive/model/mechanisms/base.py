@@ -121,6 +121,7 @@ class Mechanism:
     #: dotted parameter path of the table's travel [m] (the ball screw's ``screw.length``);
     #: "" = no travel limit known (a run's summary warns when the table leaves it)
     travel_length: str = ""
+    travel_ends: str = ""  # what bounds that travel, for messages ("the screw supports")
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:
