@@ -212,7 +212,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     for site, law, _ in laws:
         b.add_aux(f"{site.name}_friction", "N",
                   f"{site.name.replace('_', '–')} friction ({law.name}"
-                  f"{', torque ÷ H' if site.name != 'guide' else ''})")
+                  f"{', torque ÷ H' if site.rotary else ''})")
     b.add_aux("drive_force", "N", "force driving the table (screw–nut force F_d, or motor)")
     b.add_aux("table_position_reference", "m", "commanded table position")
     b.add_aux("table_speed_reference", "m/s", "commanded table speed")

@@ -150,13 +150,14 @@ class BallScrewDrive(Mechanism):
         out = []
         if share < 1.0:
             out.append(Site("screw", "screw", f"{H} * w_s", (("screw", H),), 1.0 - share,
-                            reads=("w_s",)))
+                            reads=("w_s",), rotary=True))
         out.append(Site("nut", "nut", f"{H} * w_n", (("nut", H),), 1.0, nut_on,
-                        reads=("w_n",)))
+                        reads=("w_n",), rotary=True))
         out.append(Site("guide", "guide", "v_t", (("table", "1.0"),), reads=("v_t",)))
         if share > 0.0:
             out.append(Site("ball_nut", "screw", f"{H} * (w_s - w_n)",
-                            (("screw", H), ("nut", f"(-{H})")), share, reads=("w_s", "w_n")))
+                            (("screw", H), ("nut", f"(-{H})")), share, reads=("w_s", "w_n"),
+                            rotary=True))
         return out
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:

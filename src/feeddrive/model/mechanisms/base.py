@@ -49,6 +49,7 @@ class Site:
     active: str = ""  # condition under which the site acts ("" = always)
     # what ``speed`` is computed from (``Builder.flow`` names, e.g. "y:screw_speed")
     reads: tuple[str, ...] = ()
+    rotary: bool = False  # on a shaft, its torque stored as force at the lever (torque ÷ H)
 
     def parameters(self, params: DriveParameters) -> Any:
         """The site's parameters: ``friction.<parameters_key>``, or the dotted path

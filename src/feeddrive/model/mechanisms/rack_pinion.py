@@ -142,7 +142,7 @@ class RackPinionDrive(Mechanism):
     def sites(self, b: Builder) -> list[Site]:
         H = b.p("rack_pinion.H")
         return [Site("gearbox", "rack_pinion.gearbox_friction", f"{H} * w_m", (("motor", H),),
-                     reads=("w_m",)),
+                     reads=("w_m",), rotary=True),
                 Site("guide", "guide", "v_t", (("table", "1.0"),), reads=("v_t",))]
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
