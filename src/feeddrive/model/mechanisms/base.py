@@ -73,13 +73,28 @@ class Site:
 
 @dataclass(frozen=True)
 class DriveMotor:
-    """A motor of a mechanism as the disturbances see it (:attr:`Mechanism.drive_motors`)."""
+    """A motor of a mechanism as the disturbances see it (:attr:`Mechanism.drive_motors`).
 
-    name: str  # its key, e.g. "screw": the ripple's signal is ``<name>_ripple_torque``
-    angle: str  # the state of its rotor angle [rad] ("" for a linear motor)
-    body: str  # the body its torque acts on (a key of ``Mechanics.forces``)
-    ripple: str = ""  # the ``[disturbances]`` field of its torque ripple ("" = not modelled)
-    label: str = ""  # its name in messages, e.g. "hollow motor" ("" = ``<name> motor``)
+    Parameters
+    ----------
+    name : str
+        Its key, e.g. ``"screw"``: its ripple signal is ``<name>_ripple_torque`` [N m].
+    angle : str
+        The state of its rotor angle [rad] ("" for a linear motor).
+    body : str
+        The body its torque acts on (a key of :attr:`Mechanics.forces`).
+    ripple : str, default ""
+        The ``[disturbances]`` field of its torque ripple ("" = not modelled: a ripple given
+        for this drive is refused).
+    label : str, default ""
+        Its name in messages, e.g. ``"hollow motor"`` ("" = ``"<name> motor"``).
+    """
+
+    name: str
+    angle: str
+    body: str
+    ripple: str = ""
+    label: str = ""
 
 
 @dataclass
