@@ -481,9 +481,14 @@ def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str) -> LoopR
     return LoopResult(name, freq, mag, phase, gain_margin, phase_margin, crossover, bandwidth)
 
 
-def _nut_speed_loop(system: DriveSystem) -> bool:
-    p = system.parameters
-    return (p.hollow_controller or p.controller).nut_loop == "speed"
+def _speed_loop_only(system: DriveSystem, axis: str, table_speed: float,
+                     nut_speed: float) -> bool:
+    """Whether ``axis`` runs a speed loop only (its parameter block's speed-mode slot, as its
+    mechanism wires it — the hollow motor with ``controller.nut_loop = "speed"``): it then
+    has no position loop."""
+    model = system.model(ConstantSpeed(table_speed, nut_speed, ramp_time=0.0))
+    slot = f"controller.{axis}.speed_mode"
+    return slot in model.parameter_names and model.parameter(slot) > 0.5
 
 
 @dataclass(frozen=True)
@@ -559,8 +564,8 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
             S = _freq_response(lin_v, inp, f"{axis}_current_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop"))
         elif inp.endswith("_speed_command_disturbance"):
-            if axis == "nut" and _nut_speed_loop(system):
-                continue  # a hollow motor on a speed loop has no position loop
+            if _speed_loop_only(system, axis, table_speed, nut_speed):
+                continue  # e.g. a hollow motor on a speed loop: no position loop
             S = _freq_response(lin, inp, f"{axis}_speed_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} position loop"))
     return LoopAnalysis(poles=classify_poles(lin.poles()), loops=loops, linear=lin)
@@ -679,9 +684,9 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
             raise ParameterError("input", input, "no such motor axis in this drive; expected "
                                  + ", ".join(f"{a}_{k}_loop" for a in _axes(lin)
                                              for k in ("position", "velocity")))
-        if kind == "position" and axis == "nut" and _nut_speed_loop(system):
-            raise ParameterError("input", input, "the hollow motor runs a speed loop "
-                                 "(controller.nut_loop = speed): it has no position loop")
+        if kind == "position" and _speed_loop_only(system, axis, table_speed, nut_speed):
+            raise ParameterError("input", input, f"the {axis} axis runs a speed loop only "
+                                 "(e.g. controller.nut_loop = speed): it has no position loop")
         if kind == "velocity":
             open_pos = replace(system, parameters=system.parameters.replace_path(
                 "controller.position_gain", 0.0))

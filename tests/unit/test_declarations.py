@@ -109,3 +109,19 @@ def test_the_travel_is_the_mechanism_s() -> None:
     lm = fd.simulate(fd.DriveSystem(LM, "linear-motor", length - 2e-4), ConstantSpeed(10e-3),
                      0.2)
     assert not [w for w in lm.summary()["warnings"] if "travel" in w or "screw" in w]
+
+
+def test_an_axis_on_a_speed_loop_has_no_position_loop() -> None:
+    """Read from the axis' own speed-mode slot, not from the axis name: the DDFS nut on a
+    speed loop (``controller.nut_loop = "speed"``, wang2021's) has no position loop in the
+    loop analysis and none to ask for; the screw axis keeps its own, and the nut gets one on
+    a position loop."""
+    speed = fd.DriveSystem(W.replace_path("controller.nut_loop", "speed"), "ddfs", 0.4)
+    names = [loop.name for loop in fd.loop_analysis(speed, 1e-3, 16e-3).loops]
+    assert "nut position loop" not in names
+    assert {"screw position loop", "nut velocity loop"} <= set(names)
+    with pytest.raises(ParameterError, match="nut axis runs a speed loop only"):
+        fd.frequency_response(speed, "nut_position_loop", nut_speed=16e-3)
+    position = fd.DriveSystem(W.replace_path("controller.nut_loop", "position"), "ddfs", 0.4)
+    assert "nut position loop" in [loop.name for loop in
+                                   fd.loop_analysis(position, 1e-3, 16e-3).loops]
