@@ -143,6 +143,10 @@ def _ripple(b: codegen.Builder, parameters: DriveParameters, mech: Any, drive: s
     (ripple code per motor name, its lines, the ripple names read per body)."""
     dist = parameters.disturbances
     claimed = {m.ripple: m for m in mech.drive_motors if m.ripple}
+    for m in claimed.values():
+        if m.angle not in b.state_index:
+            raise ValueError(f"motor {m.name!r}: its ripple needs its rotor-angle state; "
+                             f"{m.angle!r} is no state of the {drive} model")
     for f in dataclasses.fields(dist):
         value = getattr(dist, f.name)
         if (isinstance(value, TorqueRipple) and f.name not in claimed
