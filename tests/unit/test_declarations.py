@@ -125,3 +125,13 @@ def test_an_axis_on_a_speed_loop_has_no_position_loop() -> None:
     position = fd.DriveSystem(W.replace_path("controller.nut_loop", "position"), "ddfs", 0.4)
     assert "nut position loop" in [loop.name for loop in
                                    fd.loop_analysis(position, 1e-3, 16e-3).loops]
+
+
+def test_the_run_header_names_the_position_where_the_model_uses_it() -> None:
+    """Only the ball screw's stiffness depends on the table position (K_eq(a))."""
+    from feeddrive.cli.simulate_cmd import run_header
+
+    for drive, shown in (("cdfs", True), ("ddfs", True), ("linear-motor", False),
+                         ("rack-pinion", False)):
+        head = run_header(drive, "constant", None, 1.0, 0.0, 400.0, 2.0, "p")
+        assert ("position 400 mm" in head) is shown, head

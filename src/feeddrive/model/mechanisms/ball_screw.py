@@ -83,6 +83,7 @@ class BallScrewDrive(Mechanism):
     has_lead_screw = True
     travel_length = "screw.length"
     travel_ends = "the screw supports"
+    uses_table_position = True
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:

@@ -138,6 +138,9 @@ class Mechanism:
     #: "" = no travel limit known (a run's summary warns when the table leaves it)
     travel_length: str = ""
     travel_ends: str = ""  # what bounds that travel, for messages ("the screw supports")
+    #: whether the model depends on the table's position (the ball screw's K_eq(a)); a run's
+    #: header names the position only then
+    uses_table_position = False
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:
