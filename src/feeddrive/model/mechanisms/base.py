@@ -3,7 +3,11 @@
 A mechanism is registered by drive name (``"cdfs"``, ``"ddfs"``, ``"linear-motor"``).  It
 declares its states, parameters, friction sites, motors and controller axes to a
 :class:`~feeddrive.model.codegen.Builder`, and writes its equations with the friction and
-disturbance terms the assembler hands it per body.  The interface is :class:`Mechanism`.
+disturbance terms the assembler hands it per body — each with what it is computed from
+(``Builder.emit(..., writes=, reads=)``; ``Site.reads``, the ``Axis`` ``*_reads``), from which
+the Jacobian's pattern is assembled.  Class attributes declare the rest of its structure: its
+motors (:class:`DriveMotor`, for torque ripple), the table's travel, whether the model depends
+on the table position.  The interface is :class:`Mechanism`.
 """
 
 from __future__ import annotations
