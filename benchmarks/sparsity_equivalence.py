@@ -33,9 +33,9 @@ from typing import Any
 import numpy as np
 
 import feeddrive as fd
-from feeddrive.control import ConstantSpeed
 from feeddrive.model.assemble import Model
 from feeddrive.model.friction import friction_law
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.model.sparsity import declared_pattern
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.control import ConstantSpeed
-from feeddrive.linear import averaged
+from feeddrive.analysis.linear import averaged
+from feeddrive.engine.result import Result
 from feeddrive.model.mechanisms import mechanism
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.parameters import Compensation, ParameterError, TorqueRipple
-from feeddrive.result import Result
 
 W = fd.preset("wang2021")
 LM = fd.preset("linear-motor-example")
