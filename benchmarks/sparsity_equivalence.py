@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib.util
+import inspect
 import subprocess
 import sys
 import time
@@ -126,6 +127,19 @@ def _scales(model: Model) -> np.ndarray:
     return atol
 
 
+def _inputs(model: Model, sampled: bool) -> tuple[np.ndarray, tuple[int, ...]]:
+    """(P, loop flags) of one right-hand-side call: the sampled parts holding their outputs
+    when ``sampled`` — by the loop-period flags of the rhs (engine v2) or, where the rhs has
+    none, by every clock of the model's schedule at a period > 0."""
+    P = model.P.copy()
+    if "n_pos" in inspect.signature(model.module.rhs.py_func).parameters:
+        return P, (1, 1, 1) if sampled else (0, 0, 0)
+    if sampled:
+        for _, slot in getattr(model, "clocks", ()):
+            P[slot] = 1e-4
+    return P, ()
+
+
 def observed_pattern(model: Model, seed: int) -> np.ndarray:
     n = len(model.state_names)
     full = np.ones((n, n + 1), dtype=np.uint8)
@@ -137,14 +151,14 @@ def observed_pattern(model: Model, seed: int) -> np.ndarray:
     for k in range(N_STATES):
         y = rng.normal(size=n) * scale * rng.choice([0.1, 1.0, 10.0], size=n)
         t = float(rng.uniform(0.0, 2.0))
-        flags = (1, 1, 1) if k % 5 == 4 else (0, 0, 0)
+        P, flags = _inputs(model, sampled=k % 5 == 4)
         held = rng.normal(size=model.n_held) * 0.1
         aux = np.empty(len(model.aux))
         f0 = np.empty(n)
-        model.module.rhs(t, y, held, model.P, model.T, *flags, f0, aux)
+        model.module.rhs(t, y, held, P, model.T, *flags, f0, aux)
         J = np.empty((n, n))
         ft = np.empty(n)
-        model.module._r4_fd_jacobian(t, y, f0, held, model.P, model.T, *flags, atol, J, ft,
+        model.module._r4_fd_jacobian(t, y, f0, held, P, model.T, *flags, atol, J, ft,
                                      np.empty(n), np.empty(n), aux, np.ones(n, dtype=np.bool_),
                                      full, colour)
         seen |= np.column_stack([J, ft]) != 0.0
