@@ -129,14 +129,14 @@ def _scales(model: Model) -> np.ndarray:
 
 def _inputs(model: Model, sampled: bool) -> tuple[np.ndarray, tuple[int, ...]]:
     """(P, loop flags) of one right-hand-side call: the sampled parts holding their outputs
-    when ``sampled`` — by the loop-period flags of the rhs (engine v2) or, where the rhs has
-    none, by every clock of the model's schedule at a period > 0."""
+    when ``sampled``, else running continuously — by the loop-period flags of the rhs (engine
+    v2) or, where the rhs has none, by every clock of the model's schedule at a period > 0
+    (or 0)."""
     P = model.P.copy()
     if "n_pos" in inspect.signature(model.module.rhs.py_func).parameters:
         return P, (1, 1, 1) if sampled else (0, 0, 0)
-    if sampled:
-        for _, slot in getattr(model, "clocks", ()):
-            P[slot] = 1e-4
+    for _, slot in getattr(model, "clocks", ()):
+        P[slot] = 1e-4 if sampled else 0.0
     return P, ()
 
 

@@ -5,8 +5,6 @@ these declarations instead of knowing the ball screw.
 
 from __future__ import annotations
 
-import inspect
-
 import numpy as np
 import pytest
 
@@ -54,10 +52,7 @@ def test_ripple_acts_on_the_declared_motor_s_angle() -> None:
     y = np.zeros(len(model.states))
     y[model.index("nut_angle")] = 0.2
     aux = np.empty(len(model.aux))
-    flags = (0, 0, 0) if "n_pos" in inspect.signature(model.module.rhs.py_func).parameters \
-        else ()  # the loops continuous: by their flags, or (no flags) by their periods (0)
-    model.module.rhs(0.1, y, np.zeros(model.n_held), model.P, model.T, *flags,
-                     np.empty(len(y)), aux)
+    model.module.rhs(0.1, y, np.zeros(model.n_held), model.P, model.T, np.empty(len(y)), aux)
     ripple = aux[[a.name for a in model.aux].index("nut_ripple_torque")]
     assert ripple == pytest.approx(0.0135 * np.sin(6.0 * 0.2 + 0.3), rel=1e-15)
 
