@@ -63,6 +63,10 @@ class Model:
         (n, n + 1) uint8: 1 where dy[i] may depend on y[j] (column n: on t).
     jacobian_colours : numpy.ndarray of int
         (n + 1,) column groups of the grouped finite-difference Jacobian.
+    flows : tuple of (str, tuple of str), default ()
+        The parts' declared flows: each written quantity and what it reads.
+    compensation : CompensationFootprint, optional
+        What the compensator reads and adds; None without compensation.
     clocks : tuple of (str, int), default ()
         The sample schedule: each clock's period slot and its index in ``P``.
     derived : tuple of (Signal, str, float), default ()

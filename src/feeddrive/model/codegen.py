@@ -87,8 +87,8 @@ class Builder:
         Kernel alias → expression that finds a kernel at import time (registered laws).
     dynamic_sources : list of str
         Sources of those kernels (they enter the module's hash).
-    local_kernels : dict of str to int
-        Kernel alias → the number of states it reads and writes (for the sparsity pattern).
+    flows : dict of str to set of str
+        Written quantity → what it reads (:meth:`flow`); the Jacobian's pattern comes from it.
     table_size : int
         Total length of ``T`` so far.
     reference_call : str
@@ -530,7 +530,19 @@ class Builder:
     def emit(self, line: str, *, sampled: bool = False,
              writes: str | tuple[str, ...] | list[str] = (),
              reads: str | tuple[str, ...] | list[str] = ()) -> None:
-        """Append a line of code; ``writes``/``reads``: its :meth:`flow` (right-hand side)."""
+        """Append a line of code to the right-hand side or to the sampled-controller update.
+
+        Parameters
+        ----------
+        line : str
+            The code, without the function body's indentation.
+        sampled : bool, default False
+            Append to the sampled-controller update instead of the right-hand side.
+        writes : str or sequence of str, optional
+            What the line sets, declared as a :meth:`flow` (right-hand side only).
+        reads : str or sequence of str, optional
+            What those values are computed from.
+        """
         (self.sample_lines if sampled else self.rhs_lines).append(line)
         if writes:
             self.flow(writes, reads)

@@ -142,9 +142,31 @@ class CompensationFootprint:
 
 def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism, axis: str
                       ) -> CompensationFootprint | None:
-    """Declare the compensator's states and parameters; emit its force lines; return its
-    footprint (with the code of the compensating current [A] for ``axis``), or None without
-    compensation."""
+    """Add the friction compensator to the model: its parameters, observer states and force lines.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    params : DriveParameters
+        The parameter set; its ``controller.compensation`` chooses the mode and mismatch.
+    mech : Mechanism
+        The mechanism, which names the compensated sites and the force-to-current factor.
+    axis : str
+        The controller axis the compensating current is added to.
+
+    Returns
+    -------
+    CompensationFootprint or None
+        What the compensator reads and adds, with the code of its current [A]; None without
+        compensation.
+
+    Raises
+    ------
+    ParameterError
+        With sampled velocity or current loops (compensation is modelled continuous only), or
+        when a compensated site's law is not LuGre.
+    """
     c = params.controller.compensation
     if c.mode == "none":
         return None

@@ -266,16 +266,45 @@ class Channel:
 class Axis:
     """One motor's cascade as the mechanism wires it: its references, feedback and current.
 
-    ``position``/``position_q``: code for the measured position [m] continuous/sampled (with
-    quantised channels as ``q_<channel>``); ``feedforward``: speed [m/s]; ``reference``:
-    commanded position [m]; ``speed``: the measured motor speed, continuous; ``speed_q``: the
-    same from sampled channel speeds (``s_<channel>``); ``active``: code of a condition under
-    which the axis runs ("" = always); ``speed_unit``: unit of its speed command;
-    ``speed_law = "speed"``: the axis may run a speed loop only (its block's speed-mode slot).
-    ``position_reads``, ``speed_reads``, ``current_reads``, ``extra_reads``: what the
-    continuous ``position``, ``speed``, ``current_state`` and ``extra_current`` code is
-    computed from (``Builder.flow`` names, e.g. ``"y:table_position"``) — the loops' part of
-    the Jacobian's structure.
+    Parameters
+    ----------
+    name : str
+        The axis' name (``"screw"``, ``"nut"``, ``"motor"``).
+    param_offset : int
+        Offset of its parameter block in ``P`` (from :func:`axis_parameters`).
+    reference : str
+        Code of the commanded position [m].
+    feedforward : str
+        Code of the speed feed-forward [m/s].
+    position : str
+        Code of the measured position, continuous [m].
+    position_q : str
+        The same from quantised channels (``q_<channel>``), for sampled loops [m].
+    speed : str
+        Code of the measured motor speed, continuous [rad/s].
+    speed_q : str
+        The same from sampled channel speeds (``s_<channel>``) [rad/s].
+    current_state : str
+        Code of the motor current state [A].
+    active : str, default ""
+        Code of the condition under which the axis runs; empty for always.
+    speed_unit : str, default "rad/s"
+        Unit of its speed command.
+    speed_law : str, default "position"
+        ``"speed"``: the axis may run a speed loop only (its block's speed-mode slot).
+    extra_current : str, default ""
+        Code of a current added to the command, continuous loops only (compensation) [A].
+    current_feedforward : str, default ""
+        Code of a current added to the command in every loop configuration (a feed-forward
+        part), saturated with it [A].
+    position_reads : tuple of str, default ()
+        What the continuous ``position`` code is computed from (``Builder.flow`` names).
+    speed_reads : tuple of str, default ()
+        What the ``speed`` code is computed from.
+    current_reads : tuple of str, default ()
+        What the ``current_state`` code is computed from.
+    extra_reads : tuple of str, default ()
+        What the ``extra_current`` code is computed from.
     """
 
     name: str

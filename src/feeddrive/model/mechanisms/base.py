@@ -79,6 +79,10 @@ class Site:
         Share of the site's friction acting here [-] (the ball–nut split).
     active : str, default ""
         Code of the condition under which the site acts; empty for always.
+    reads : tuple of str, default ()
+        What the sliding speed is computed from (``Builder.flow`` names).
+    rotary : bool, default False
+        On a shaft: its torque stored as force at the lever (torque ÷ H).
     """
 
     name: str  # e.g. "screw", "ball_nut"
@@ -139,10 +143,31 @@ class DriveMotor:
 
 @dataclass
 class Mechanics:
-    """What the assembler hands a mechanism to write its equations: per-body external force
-    terms and what they are computed from (``Builder.flow`` names), the friction-site code
-    lines (always-on and gated by a site's condition), the lines that freeze gated sites'
-    states, and the disturbance terms (ripple per motor name, lead-error block, load)."""
+    """What the assembler hands a mechanism to write its equations with.
+
+    Parameters
+    ----------
+    forces : dict of str to list of str
+        Per body, the external force terms (friction, disturbances) [N or N m].
+    always : list of str
+        Code lines of the friction sites that always act.
+    gated : list of str
+        Code lines of the sites gated by their ``active`` condition.
+    frozen : list of str
+        Code lines that freeze the states of gated sites while they are off.
+    ripple : dict of str to str
+        Per motor, the code of its torque-ripple term [N m].
+    lead : tuple of (int, int) or None
+        Parameter offsets of the lead-error disturbance, if any.
+    load : str or None
+        Code of the external load force on the table [N], if any.
+    torque_off : bool
+        Whether the motor torque is switched off (free-running studies).
+    reads : dict of str to list of str, optional
+        Per body, what its external terms are computed from (``Builder.flow`` names).
+    load_reads : tuple of str, default ()
+        What the load force is computed from.
+    """
 
     forces: dict[str, list[str]]
     always: list[str]
@@ -156,7 +181,18 @@ class Mechanics:
     load_reads: tuple[str, ...] = ()
 
     def body_reads(self, body: str) -> list[str]:
-        """What the external terms of ``body`` (friction, ripple) are computed from."""
+        """What the external terms of a body (friction, ripple) are computed from.
+
+        Parameters
+        ----------
+        body : str
+            The body.
+
+        Returns
+        -------
+        list of str
+            ``Builder.flow`` names; empty for a body without external terms.
+        """
         return list(self.reads.get(body, ()))
 
 
@@ -313,10 +349,26 @@ class Mechanism:
 
     def compensation(self, b: Builder
                      ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:
-        """Friction sites a compensator on the table-driving motor models, as (parameter key,
-        commanded speed code, measured speed code, the states that measured speed reads as
-        ``Builder.flow`` names), and the code of the factor from force [N] to that motor's
-        current [A]."""
+        """The friction sites a compensator on the table-driving motor models.
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+
+        Returns
+        -------
+        sites : list of (str, str, str, tuple of str)
+            (parameter key, commanded speed code, measured speed code, the states that measured
+            speed reads as ``Builder.flow`` names) per compensated site.
+        factor : str
+            Code of the factor from force [N] to that motor's current [A].
+
+        Raises
+        ------
+        ParameterError
+            When the topology has no friction compensation (the default).
+        """
         from ...parameters import ParameterError
 
         raise ParameterError("controller.compensation.mode", "—",
