@@ -133,7 +133,7 @@ def _integrate(step: float, force: np.ndarray, mass: float, packed: np.ndarray,
     n = rig.n_states
     t_end = (force.size - 1) * step
     _, y, _, stats, _ = rig.module.integrate(
-        y0, t_end, 1, step, no_schedule(1), P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
+        y0, t_end, 1, step, no_schedule(0), P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
         substeps * force.size + 10, 0, np.zeros(1), new_memory(n, h), np.full(n, math.inf))
     status = int(stats[0])
     if status != STATUS_OK or y.shape[0] != force.size:
