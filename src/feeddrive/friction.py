@@ -26,8 +26,8 @@ from scipy.optimize import brentq
 
 from ._jit import kernel
 from .model.friction import lugre
+from .model.friction.lugre_parameters import FrictionBranch, LuGreParameters
 from .paper import CDFS_CRITICAL_SPEED
-from .parameters import FrictionBranch, LuGreParameters
 
 # ---------------------------------------------------------------- compiled scalar kernels
 

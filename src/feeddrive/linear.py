@@ -49,9 +49,10 @@ from scipy import optimize
 from . import protocol
 from .control import REFERENCE_INPUTS, ConstantSpeed
 from .model.assemble import Model
+from .model.friction.lugre_parameters import LuGreParameters
 from .model.loops import INJ_CURRENT, INJ_SPEED
 from .model.mechanisms import Mechanism, mechanism
-from .parameters import LuGreParameters, ParameterError, SiteParameters
+from .parameters import ParameterError, SiteParameters
 from .simulate import DriveSystem
 
 _T0 = 1.0  # [s] operating-point time (after the reference's start ramp)

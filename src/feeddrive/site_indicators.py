@@ -16,7 +16,7 @@ import numpy as np
 
 from .friction import NegativeSlopeBand, SlidingStability, negative_slope_band, sliding_stability
 from .model.friction import friction_law
-from .parameters import LuGreParameters
+from .model.friction.lugre_parameters import LuGreParameters
 
 #: laws whose steady curve is the Stribeck curve of Wang2021 Eq. (11) (the static law's tanh
 #: smoothing only acts below its smoothing velocity, 1 µm/s by default)

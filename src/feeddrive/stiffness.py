@@ -10,7 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .parameters import BallScrew, Coupling, DriveParameters, ParameterError, StiffnessModel
+from .model.mechanisms.ball_screw_parameters import BallScrew, Coupling, StiffnessModel
+from .parameters import DriveParameters, ParameterError
 
 
 def _check_positions(position: object, length: float) -> np.ndarray:

@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from . import units
 from .friction import negative_slope_band, steady_friction
 from .model.friction import friction_law
-from .parameters import LuGreParameters
+from .model.friction.lugre_parameters import LuGreParameters
 
 _MM_PER_S = units.MM_PER_S
 

@@ -39,7 +39,8 @@ from feeddrive.backends.c_backend import (
 )
 from feeddrive.control import ConstantSpeed, SampledSpeed, SineSpeed
 from feeddrive.model.assemble import Model
-from feeddrive.parameters import Compensation, LeadError, TorqueRipple
+from feeddrive.model.disturbances import LeadError, TorqueRipple
+from feeddrive.model.loops import Compensation
 from feeddrive.simulate import sampling
 
 try:

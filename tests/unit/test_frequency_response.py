@@ -18,7 +18,8 @@ from feeddrive.linear import (
     linearize,
     loop_analysis,
 )
-from feeddrive.parameters import ParameterError, TorqueRipple
+from feeddrive.model.disturbances import TorqueRipple
+from feeddrive.parameters import ParameterError
 from feeddrive.stiffness import equivalent_stiffness
 
 W = fd.preset("wang2021")

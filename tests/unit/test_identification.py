@@ -26,7 +26,7 @@ from feeddrive.analysis.identification import (
     site_mass,
 )
 from feeddrive.friction import bristle_rate, steady_friction
-from feeddrive.parameters import LuGreParameters
+from feeddrive.model.friction.lugre_parameters import LuGreParameters
 
 PARAMS = feeddrive.preset("wang2021")
 SCREW = PARAMS.friction.screw

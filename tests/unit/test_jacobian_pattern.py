@@ -22,8 +22,9 @@ import pytest
 import feeddrive as fd
 from feeddrive.control import ConstantSpeed
 from feeddrive.model.assemble import Model
+from feeddrive.model.disturbances import LeadError, TorqueRipple
+from feeddrive.model.loops import Compensation
 from feeddrive.model.sparsity import colour_columns, jacobian_pattern
-from feeddrive.parameters import Compensation, LeadError, TorqueRipple
 
 W = fd.preset("wang2021")
 

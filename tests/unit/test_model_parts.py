@@ -9,8 +9,9 @@ import pytest
 
 import feeddrive as fd
 from feeddrive.control import ConstantSpeed
+from feeddrive.model.disturbances import LeadError, TorqueRipple
 from feeddrive.model.friction import FrictionLaw, friction_law, register_friction_law
-from feeddrive.parameters import LeadError, ParameterError, TorqueRipple, loads
+from feeddrive.parameters import ParameterError, loads
 
 # ---------------------------------------------------------------- a toy law in this file only
 

@@ -440,6 +440,7 @@ def test_the_explorer_refuses_a_tiny_period_in_an_imported_set() -> None:
 def test_the_statements_of_docs_outputs_md_are_the_codes(tmp_path: Path) -> None:
     import re
 
+    from feeddrive.model import loops
     from feeddrive.parameters import components, toml_io, validation
 
     doc = " ".join((Path(__file__).resolve().parents[2] / "docs" / "outputs.md").read_text()
@@ -452,6 +453,6 @@ def test_the_statements_of_docs_outputs_md_are_the_codes(tmp_path: Path) -> None
     assert f"files over {toml_io.MAX_TOML_BYTES // 1024 // 1024} MB" in doc
     assert f"at most {components.MAX_NAME} characters" in doc
     assert f"at most {components.MAX_DESCRIPTION:,} characters".replace(",", " ") in doc
-    assert components.MIN_PERIOD == 1e-6 and "at least 1 µs" in doc
-    assert components.MIN_GRATING == 1e-9 and "at least 1 nm" in doc
+    assert loops.MIN_PERIOD == 1e-6 and "at least 1 µs" in doc
+    assert loops.MIN_GRATING == 1e-9 and "at least 1 nm" in doc
     assert "`stribeck_velocity_scale` at least 0.001" in doc

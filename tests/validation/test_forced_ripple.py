@@ -12,7 +12,7 @@ import feeddrive as fd
 from feeddrive.analysis import forced
 from feeddrive.analysis.forced import ripple_point, threshold_critical_speed
 from feeddrive.control import ConstantSpeed
-from feeddrive.parameters import TorqueRipple
+from feeddrive.model.disturbances import TorqueRipple
 
 RIPPLE = fd.preset("wang2021-ripple")
 

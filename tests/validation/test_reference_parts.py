@@ -38,7 +38,7 @@ from reference.scipy_model import ReferenceModel  # noqa: E402
 
 import feeddrive  # noqa: E402
 from feeddrive.control import ConstantSpeed, SineSpeed  # noqa: E402
-from feeddrive.parameters import LeadError, TorqueRipple  # noqa: E402
+from feeddrive.model.disturbances import LeadError, TorqueRipple  # noqa: E402
 from feeddrive.simulate import DriveSystem  # noqa: E402
 
 TABLE_POSITION = 0.35

@@ -16,7 +16,8 @@ import numpy as np
 
 from ..control import ConstantSpeed
 from ..linear import stability_band
-from ..parameters import Compensation, DriveParameters
+from ..model.loops import Compensation
+from ..parameters import DriveParameters
 from ..simulate import DriveSystem, simulate
 from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
 from .metrics import VerdictRule

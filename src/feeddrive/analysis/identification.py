@@ -34,7 +34,8 @@ from scipy.optimize import least_squares
 from .. import units
 from .._jit import kernel
 from ..friction import bristle_rate_kernel
-from ..parameters import DriveParameters, FrictionBranch, LuGreParameters, ParameterError
+from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
+from ..parameters import DriveParameters, ParameterError
 
 __all__ = [
     "MIN_SPEEDS_PER_DIRECTION",

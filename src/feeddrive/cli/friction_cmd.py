@@ -10,8 +10,9 @@ from rich.markup import escape
 from rich.table import Table
 
 from .. import units
+from ..model.friction.lugre_parameters import LuGreParameters
 from ..outputs import PLOT_FORMATS, check_output_file
-from ..parameters import DriveParameters, LuGreParameters, ParameterError
+from ..parameters import DriveParameters, ParameterError
 from ._common import (
     MM_PER_S,
     N_PER_UM,

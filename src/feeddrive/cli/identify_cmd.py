@@ -12,8 +12,9 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from ..model.friction.lugre_parameters import LuGreParameters
 from ..outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
-from ..parameters import DriveParameters, LuGreParameters, ParameterError, save
+from ..parameters import DriveParameters, ParameterError, save
 
 if TYPE_CHECKING:
     from ..analysis.identification import DynamicFit, Estimate, StaticFit

@@ -100,7 +100,7 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
     """Steady friction force [N] against sliding speed [mm/s] at each site the drive uses,
     the speed bands where it falls (negative damping), and the sites' operating speeds."""
     from ..friction import negative_slope_band, steady_friction
-    from ..parameters import LuGreParameters
+    from ..model.friction.lugre_parameters import LuGreParameters
 
     params = checked.params
     assert params is not None

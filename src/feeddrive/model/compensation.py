@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._jit import kernel
-from ..parameters import LuGreParameters, ParameterError
+from ..parameters import ParameterError
 from .codegen import Builder
 from .friction.lugre import (
     SIGMA0,
@@ -24,6 +24,7 @@ from .friction.lugre import (
     bristle_rate,
     stribeck_magnitude,
 )
+from .friction.lugre_parameters import LuGreParameters
 
 if TYPE_CHECKING:
     from ..parameters import DriveParameters

@@ -17,18 +17,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..parameters.components import (
+from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
+from ..model.loops import Controller
+from ..model.mechanisms.ball_screw_parameters import (
     BallScrew,
-    Controller,
     Coupling,
-    DriveParameters,
-    FrictionBranch,
     FrictionSites,
-    LuGreParameters,
-    Motor,
     StiffnessModel,
-    Table,
 )
+from ..model.mechanisms.shared import Motor, Table
+from ..parameters.components import DriveParameters
 from ..stiffness import equivalent_stiffness
 
 CITATION = (
@@ -313,7 +311,7 @@ RIPPLE_ASSUMPTIONS: tuple[Assumption, ...] = (
 
 def ripple() -> DriveParameters:
     """``wang2021-ripple``: the shipped reading plus motor torque ripple on both motors."""
-    from ..parameters.components import Disturbances, TorqueRipple
+    from ..model.disturbances import Disturbances, TorqueRipple
 
     r = TorqueRipple((RIPPLE_ORDER,), (RIPPLE_AMPLITUDE,), (0.0,))
     base = shipped()

@@ -13,8 +13,9 @@ from markdown_it import MarkdownIt
 from .. import __version__, protocol
 from ..analysis.critical import format_bands, format_critical_speed
 from ..friction import negative_slope_band, passivity_margin, sliding_stability
+from ..model.friction.lugre_parameters import LuGreParameters
 from ..outputs import atomic_path
-from ..parameters import DriveParameters, LuGreParameters
+from ..parameters import DriveParameters
 from ..presets import wang2021
 from ..stiffness import equivalent_stiffness, mid_screw_readings
 from ..units import SITES

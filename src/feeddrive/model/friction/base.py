@@ -28,10 +28,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ... import registry
-from ...parameters import LuGreParameters as _LuGreParameters
+from .lugre_parameters import LuGreParameters as _LuGreParameters
 
 if TYPE_CHECKING:
-    from ...parameters import LuGreParameters
+    from .lugre_parameters import LuGreParameters
 
 
 #: Names of a site's packed parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`,
