@@ -308,7 +308,7 @@ def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
     quiet = dataclasses.replace(
         d, screw_motor_ripple=type(d.screw_motor_ripple)(),
         hollow_motor_ripple=type(d.hollow_motor_ripple)(), lead_error=type(d.lead_error)())
-    params = dataclasses.replace(system.parameters, disturbances=quiet)
+    params = system.parameters.with_values(disturbances=quiet)
     note = (f"warning: {' and '.join(left)} of the parameter set give no steady state; "
             "linearised on the averaged model (their harmonics average to zero over a "
             "revolution and are left out)")

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import pytest
 
-import feeddrive as fd
 from feeddrive.explore import settings as st
+from feeddrive.model.loops import Controller
 from feeddrive.outputs import atomic_path, shown
 from feeddrive.parameters import ParameterError, dumps, load, preset
 from feeddrive.parameters.toml_io import MAX_EXTENDS
@@ -293,7 +293,7 @@ def test_a_period_is_zero_or_at_least_a_microsecond(tmp_path: Path, period: str,
 
 def test_periods_of_zero_and_a_microsecond_are_accepted(tmp_path: Path) -> None:
     base = preset("wang2021").controller
-    assert fd.parameters.Controller(**{**base.__dict__, "current_period": 1e-6,
+    assert Controller(**{**base.__dict__, "current_period": 1e-6,
                                        "velocity_period": 2e-6, "position_period": 0.0})
 
 

@@ -10,7 +10,7 @@ import pytest
 
 import feeddrive as fd
 from feeddrive import registry
-from feeddrive.parameters import Component, ParameterError, dumps, loads
+from feeddrive.parameters import Component, ParameterError, composition, dumps, loads
 from feeddrive.parameters.validation import quantity
 
 
@@ -55,8 +55,11 @@ def test_an_unknown_section_is_an_unknown_key():
         loads('extends = "wang2021"\n[no_such_part]\nx = 1\n')
 
 
-def test_a_set_without_sections_has_none():
+def test_a_set_has_exactly_its_kinds_sections():
+    # every part is a section (issue 19 item 1): the ball-screw kind's, and no part's own
     params = fd.preset("wang2021")
-    assert params.sections == () and params.section("toy_gear") is None
+    assert {name for name, _ in params.sections} == set(composition("ball-screw").order())
+    assert params.section("toy_gear") is None
+    assert params.linear_motor is None  # a registered section the set does not give
     with pytest.raises(AttributeError):
         _ = params.toy_gear

@@ -2,7 +2,7 @@
 and the DDFS, side by side (issue 14): critical speed from rest, the linear creep band, and
 tracking at a constant speed inside the CDFS's creep range.
 
-Compensation laws: :class:`feeddrive.parameters.Compensation` (static feed-forward,
+Compensation laws: :class:`feeddrive.model.loops.Compensation` (static feed-forward,
 Armstrong-Hélouvry et al. 1994; LuGre observer, Canudas de Wit et al. 1995).
 """
 

@@ -1,6 +1,6 @@
 """Friction compensation as a controller part: static feed-forward or a LuGre observer.
 
-See :class:`feeddrive.parameters.Compensation` for the laws and their sources.  The
+See :class:`feeddrive.model.loops.Compensation` for the laws and their sources.  The
 compensating force F̂ [N] of every compensated site is converted to current by the
 mechanism's factor (H/K_t for the screw motor, 1/K_f for a linear motor) and added to the
 compensated axis' current command.

@@ -3,22 +3,22 @@
 A set is a composition of its parts' sections (:class:`DriveParameters`); each part's
 parameter class lives with the part (registry group ``feeddrive.sections``):
 
-=====================================  ==========================================================
-section                                class (module)
-=====================================  ==========================================================
-``screw``, ``coupling``,               ``BallScrew``, ``Coupling``, ``StiffnessModel``,
-``stiffness``, ``friction``            ``FrictionSites`` (:mod:`feeddrive.model.mechanisms.ball_screw_parameters`)
-``screw_motor``, ``hollow_motor``,     ``Motor``, ``Table`` (:mod:`feeddrive.model.mechanisms.shared`)
-``table``
-``linear_motor``                       ``LinearMotor`` (:mod:`feeddrive.model.mechanisms.linear_motor`)
-``rack_pinion``                        ``RackPinion`` (:mod:`feeddrive.model.mechanisms.rack_pinion`)
-``controller``, ``hollow_controller``  ``Controller``, ``Compensation`` (:mod:`feeddrive.model.loops`)
-``disturbances``                       ``Disturbances``, ``TorqueRipple``, ``LeadError`` (:mod:`feeddrive.model.disturbances`)
-``acceleration_feedforward``           ``AccelerationFeedforward`` (:mod:`feeddrive.model.parts.acceleration_feedforward`)
-``friction.<site>``                    by its law: ``LuGreParameters``, ``FrictionBranch``
-                                       (:mod:`feeddrive.model.friction.lugre_parameters`),
-                                       ``GMSParameters`` (:mod:`feeddrive.model.friction.gms`)
-=====================================  ==========================================================
+* ``screw``, ``coupling``, ``stiffness``, ``friction``: ``BallScrew``, ``Coupling``,
+  ``StiffnessModel``, ``FrictionSites`` (:mod:`feeddrive.model.mechanisms.ball_screw_parameters`,
+  which also registers the mechanism kind ``"ball-screw"``);
+* ``screw_motor``, ``hollow_motor``, ``table``: ``Motor``, ``Table``
+  (:mod:`feeddrive.model.mechanisms.shared`);
+* ``linear_motor``: ``LinearMotor`` (:mod:`feeddrive.model.mechanisms.linear_motor`);
+* ``rack_pinion``: ``RackPinion`` (:mod:`feeddrive.model.mechanisms.rack_pinion`);
+* ``controller``, ``hollow_controller``: ``Controller`` with its ``Compensation``
+  (:mod:`feeddrive.model.loops`);
+* ``disturbances``: ``Disturbances``, ``TorqueRipple``, ``LeadError``
+  (:mod:`feeddrive.model.disturbances`);
+* ``acceleration_feedforward``: ``AccelerationFeedforward``
+  (:mod:`feeddrive.model.parts.acceleration_feedforward`);
+* ``friction.<site>``, by the site's law: ``LuGreParameters`` and ``FrictionBranch``
+  (:mod:`feeddrive.model.friction.lugre_parameters`), ``GMSParameters``
+  (:mod:`feeddrive.model.friction.gms`).
 """
 
 from __future__ import annotations

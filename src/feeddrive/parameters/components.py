@@ -15,7 +15,6 @@ Ranges are plausibility bounds for machine-tool feed drives; they exist to catch
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
 from typing import Any, Self

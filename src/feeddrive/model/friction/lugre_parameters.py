@@ -80,8 +80,9 @@ class LuGreParameters(SiteParameters):
                                  f"unknown friction law; expected one of {', '.join(laws)}")
         own = getattr(laws[self.law], "parameters_class", None)
         if own is not LuGreParameters:
+            own_name = getattr(own, "__name__", own)
             raise ParameterError(f"{self._label}.law", self.law,
-                                 f"this law takes the parameters of {own.__name__}, not "
+                                 f"this law takes the parameters of {own_name}, not "
                                  "LuGre's (give the site's table in that form)")
 
     def mismatched(self, coulomb: float, static: float, stribeck_velocity: float,
