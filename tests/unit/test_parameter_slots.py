@@ -10,8 +10,11 @@ import numpy as np
 import pytest
 import scipy.io
 import xarray as xr
+from typer.testing import CliRunner
 
 import feeddrive as fd
+from feeddrive import registry
+from feeddrive.cli import app, params_cmd
 from feeddrive.control import ConstantSpeed
 from feeddrive.model.assemble import assemble
 from feeddrive.model.slots import FORMAT, packed_vector, slot_table, slot_unit, slots_json
@@ -99,3 +102,19 @@ def test_a_run_writes_its_slots_and_they_read_back_from_netcdf_and_mat(tmp_path:
     attrs = scipy.io.loadmat(mat, simplify_cells=True)["feeddrive"]["attrs"]
     np.testing.assert_array_equal(packed_vector(json.loads(attrs["parameter_slots"]))[1],
                                   model.P)
+
+
+def test_params_slots_prints_the_models_record():
+    runner = CliRunner()
+    out = runner.invoke(app, ["params", "slots", "--drive", "ddfs", "--json"])
+    assert out.exit_code == 0, out.output
+    model = assemble(fd.preset("wang2021"), "ddfs", 0.4, "locked", ConstantSpeed(0.0))
+    names, P = packed_vector(out.output)
+    assert names == model.parameter_names
+    np.testing.assert_array_equal(P, model.P)
+    text = runner.invoke(app, ["params", "slots", "--drive", "ddfs"]).output.splitlines()
+    shown = [ln.split()[0] for ln in text]
+    assert shown == [n for n in model.parameter_names if not n.startswith("profile[")]
+    assert "table.mass" in shown and text[shown.index("table.mass")].endswith("[kg]")
+    # the help lists the registered drives
+    assert params_cmd._DRIVES == "|".join(registry.names(registry.MECHANISMS))
