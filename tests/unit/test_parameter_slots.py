@@ -118,3 +118,18 @@ def test_params_slots_prints_the_models_record():
     assert "table.mass" in shown and text[shown.index("table.mass")].endswith("[kg]")
     # the help lists the registered drives
     assert params_cmd._DRIVES == "|".join(registry.names(registry.MECHANISMS))
+
+
+def test_the_reproduction_report_writes_the_models_slots():
+    from feeddrive.reproduce.report import parameter_slot_rows
+    from feeddrive.reproduce.studies import MID
+
+    params = fd.preset("wang2021")
+    rows = parameter_slot_rows(params)
+    for drive in ("cdfs", "ddfs"):
+        model = DriveSystem(params, drive, MID).model(ConstantSpeed(0.0))
+        mine = [r for r in rows if r["drive"] == drive]
+        keep = [i for i, n in enumerate(model.parameter_names) if not n.startswith("profile[")]
+        assert [r["slot"] for r in mine] == [model.parameter_names[i] for i in keep]
+        np.testing.assert_array_equal([float(r["value"]) for r in mine], model.P[keep])
+        assert all(r["unit"] for r in mine)
