@@ -1,7 +1,7 @@
 """The parameters a run used, written from the assembled model's named slots.
 
 A model's numbers live in its packed vector ``P``, each under a slot name
-(:attr:`Model.parameter_names`, :meth:`Model.parameter`).  :func:`slot_table` writes those
+(``Model.parameter_names``, ``Model.parameter(name)``).  :func:`slot_table` writes those
 slots with their SI units, so a run's record (its NetCDF/MAT attribute ``parameter_slots``,
 :attr:`feeddrive.Result.parameter_slots`) is what the kernels read, not the parameter set
 serialised again: a value the mechanism derives (the screw's H, an axis' inertia sum, the
@@ -73,10 +73,10 @@ def slot_unit(model: Model, name: str) -> str:
 
     Parameters
     ----------
-    model : Model
+    model : feeddrive.model.Model
         The assembled model.
     name : str
-        One of its slot names (:attr:`Model.parameter_names`).
+        One of its slot names (``Model.parameter_names``).
 
     Returns
     -------
@@ -131,7 +131,7 @@ def slot_table(model: Model) -> list[tuple[str, float, str]]:
 
     Parameters
     ----------
-    model : Model
+    model : feeddrive.model.Model
         The assembled model.
 
     Returns
@@ -151,7 +151,7 @@ def slots_json(model: Model) -> str:
 
     Parameters
     ----------
-    model : Model
+    model : feeddrive.model.Model
         The assembled model.
 
     Returns

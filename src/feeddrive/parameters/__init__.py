@@ -15,7 +15,7 @@ parameter class lives with the part (registry group ``feeddrive.sections``):
 * ``disturbances``: ``Disturbances``, ``TorqueRipple``, ``LeadError``
   (:mod:`feeddrive.model.disturbances`);
 * ``acceleration_feedforward``: ``AccelerationFeedforward``
-  (:mod:`feeddrive.model.parts.acceleration_feedforward`);
+  (``feeddrive.model.parts.acceleration_feedforward``);
 * ``friction.<site>``, by the site's law: ``LuGreParameters`` and ``FrictionBranch``
   (:mod:`feeddrive.model.friction.lugre_parameters`), ``GMSParameters``
   (:mod:`feeddrive.model.friction.gms`).

@@ -196,9 +196,9 @@ class DriveParameters(_Component):
     """A feed drive's parameters: a composition of its parts' sections, chosen by name.
 
     All values SI (the TOML files and ``feeddrive params show`` too).  The ``mechanism`` kind
-    names the parts the set must have (:class:`Composition`); each part's section is an
-    instance of the parameter class its module registers (registry group
-    ``feeddrive.sections``), which validates its own fields with units and ranges
+    names the parts the set must have (:class:`~feeddrive.parameters.Composition`); each
+    part's section is an instance of the parameter class its module registers (registry
+    group ``feeddrive.sections``), which validates its own fields with units and ranges
     (:mod:`feeddrive.parameters.validation`).  Sections read like fields
     (``params.screw.lead``, ``params.controller``); an optional section a set does not give
     reads as None (``params.linear_motor``).
