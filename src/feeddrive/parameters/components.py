@@ -56,7 +56,7 @@ class SiteParameters(_Component):
     """Base of the parameters of one friction site.  Its ``law`` picks the class: each
     friction law names its parameter class (``FrictionLaw.parameters_class``), so a law with
     parameters of its own (e.g. GMS) brings them in its own module; laws without (LuGre,
-    Stribeck, Dahl, none) share :class:`LuGreParameters`."""
+    Stribeck, Dahl, none) share ``LuGreParameters``."""
 
     _label = "friction"
 
@@ -98,7 +98,7 @@ class SiteParameters(_Component):
         Parameters
         ----------
         kind : type of SiteParameters
-            The parameter class the caller works with (e.g. :class:`LuGreParameters`).
+            The parameter class the caller works with (e.g. ``LuGreParameters``).
         path : str
             The site's dotted path, for the message (``"friction.guide"``).
         what : str
@@ -268,8 +268,8 @@ class DriveParameters(_Component):
                                      'extends = "wang2021" or another preset)')
 
     def ordered_sections(self) -> list[tuple[str, Any]]:
-        """The sections in file order: the kind's parts as its :class:`Composition` lists
-        them, then the others by name.
+        """The sections in file order: the kind's parts as its
+        :class:`~feeddrive.parameters.Composition` lists them, then the others by name.
 
         Returns
         -------
@@ -346,7 +346,7 @@ def unit_of(cls: type, path: str) -> str | None:
     Parameters
     ----------
     cls : type
-        A parameter component class (e.g. :class:`LuGreParameters`).
+        A parameter component class (e.g. ``LuGreParameters``).
     path : str
         Dotted path, entries of a tuple field with ``[i]``
         (``"positive.coulomb_force"``, ``"element_stiffness[2]"``).

@@ -3,12 +3,11 @@ bristle σ0, σ1 (Wang2021 Table 1).  The class of the ``lugre``, ``stribeck``, 
 ``none`` laws' sites (:attr:`feeddrive.model.friction.FrictionLaw.parameters_class`); GMS
 keeps its own class beside its law (:mod:`feeddrive.model.friction.gms`).
 
-References
-----------
-.. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for control
-   of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
-.. [2] Z. Wang, X. Feng, H. Yang, H. Jin, "Research on low-speed characteristics of
-   differential double-drive feed system", Mech. Sci. 12 (2021) 791–800, Table 1.
+Sources: the LuGre model of C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky,
+"A new model for control of systems with friction", IEEE Trans. Autom. Control 40 (1995)
+419–425, with the values of Z. Wang, X. Feng, H. Yang, H. Jin, "Research on low-speed
+characteristics of differential double-drive feed system", Mech. Sci. 12 (2021) 791–800,
+Table 1.
 """
 
 from __future__ import annotations

@@ -10,11 +10,9 @@ is made of.  The mechanism itself (the CDFS and DDFS equations) is
 :mod:`feeddrive.model.mechanisms.ball_screw`; this module stays apart from it so that the
 stiffness chain (:mod:`feeddrive.stiffness`), which the mechanism uses, can read these classes.
 
-References
-----------
-.. [1] Z. Wang, X. Feng, H. Yang, H. Jin, "Research on low-speed characteristics of
-   differential double-drive feed system", Mech. Sci. 12 (2021) 791–800, Tables 1–2,
-   Eqs. (2)–(8).
+Source: Z. Wang, X. Feng, H. Yang, H. Jin, "Research on low-speed characteristics of
+differential double-drive feed system", Mech. Sci. 12 (2021) 791–800, Tables 1–2,
+Eqs. (2)–(8).
 """
 
 from __future__ import annotations
