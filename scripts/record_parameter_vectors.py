@@ -65,7 +65,10 @@ def sources() -> list[tuple[str, str | None, str | None, Path | None]]:
 
 
 def record() -> dict[str, Any]:
-    from feeddrive.control import ConstantSpeed
+    try:  # the tree of the record (ec220f9), or the tree after the layout commit
+        from feeddrive.control import ConstantSpeed  # type: ignore[import-not-found]
+    except ImportError:
+        from feeddrive.model.reference import ConstantSpeed
     from feeddrive.model.assemble import assemble
     from feeddrive.model.mechanisms import mechanism
     from feeddrive.parameters import ParameterError, loads, preset, to_dict

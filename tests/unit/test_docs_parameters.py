@@ -53,8 +53,8 @@ def test_the_named_files_commands_and_names_exist():
         assert path in LAYOUT and (ROOT / path).is_file(), path
     assert "params upgrade" in LAYOUT  # the decision: none is needed, said so
     from feeddrive.cli.params_cmd import slots
+    from feeddrive.engine.result import Result
     from feeddrive.model import slots as slots_module
-    from feeddrive.result import Result
 
     assert callable(slots) and "feeddrive params slots --drive" in SLOTS
     assert "DERIVED_UNITS" in SLOTS and hasattr(slots_module, "DERIVED_UNITS")

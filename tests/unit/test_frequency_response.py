@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.linear import (
+from feeddrive.analysis.linear import (
     MARGINAL,
     classify_poles,
     frequency_response,
@@ -19,8 +19,8 @@ from feeddrive.linear import (
     loop_analysis,
 )
 from feeddrive.model.disturbances import TorqueRipple
+from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness
 from feeddrive.parameters import ParameterError
-from feeddrive.stiffness import equivalent_stiffness
 
 W = fd.preset("wang2021")
 CDFS = fd.DriveSystem(W, "cdfs", 0.4)

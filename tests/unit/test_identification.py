@@ -25,8 +25,8 @@ from feeddrive.analysis.identification import (
     simulate_presliding,
     site_mass,
 )
-from feeddrive.friction import bristle_rate, steady_friction
 from feeddrive.model.friction.lugre_parameters import LuGreParameters
+from feeddrive.model.friction.stribeck import bristle_rate, steady_friction
 
 PARAMS = feeddrive.preset("wang2021")
 SCREW = PARAMS.friction.screw

@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.control import ConstantSpeed
 from feeddrive.model.assemble import Model
 from feeddrive.model.disturbances import LeadError, TorqueRipple
 from feeddrive.model.loops import Compensation
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.model.sparsity import colour_columns, jacobian_pattern
 
 W = fd.preset("wang2021")

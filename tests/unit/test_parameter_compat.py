@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from feeddrive.control import ConstantSpeed
 from feeddrive.model.assemble import assemble
 from feeddrive.model.mechanisms import mechanism
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.parameters import ParameterError, dumps, loads, preset, to_dict
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -15,11 +15,11 @@ from typer.testing import CliRunner
 import feeddrive as fd
 from feeddrive import registry
 from feeddrive.cli import app, params_cmd
-from feeddrive.control import ConstantSpeed
+from feeddrive.engine.simulate import DriveSystem, simulate
 from feeddrive.model.assemble import assemble
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.model.slots import FORMAT, packed_vector, slot_table, slot_unit, slots_json
 from feeddrive.parameters import ParameterError, loads
-from feeddrive.simulate import DriveSystem, simulate
 
 ROOT = Path(__file__).resolve().parents[2]
 CASES = [("wang2021", "cdfs"), ("wang2021", "ddfs"), ("wang2021-ripple", "ddfs"),

@@ -33,8 +33,8 @@ from scipy.optimize import least_squares
 
 from .. import units
 from .._jit import kernel
-from ..friction import bristle_rate_kernel
 from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
+from ..model.friction.stribeck import bristle_rate_kernel
 from ..parameters import DriveParameters, ParameterError
 
 __all__ = [

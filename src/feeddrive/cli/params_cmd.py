@@ -6,7 +6,7 @@ import json
 
 import typer
 
-from ..outputs import shown
+from ..io.outputs import shown
 from ..parameters import dumps, load, preset, to_dict
 from . import _units
 from ._common import app, console, print_json, resolve_parameters, user_errors
@@ -58,9 +58,9 @@ def slots(
     """Print the parameters a run of DRIVE uses, as the assembled model's named slots (SI
     value and unit per slot), the record a run writes; the reference profile's block is
     left out (it is the command, not a parameter)."""
-    from ..control import ConstantSpeed
+    from ..engine.simulate import DriveSystem
+    from ..model.reference import ConstantSpeed
     from ..model.slots import slot_table, slots_json
-    from ..simulate import DriveSystem
 
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive,

@@ -84,7 +84,7 @@ def slot_unit(model: Model, name: str) -> str:
         The unit.
     """
     if name.startswith("profile["):
-        return ""  # the reference profile's encoded block (feeddrive.control)
+        return ""  # the reference profile's encoded block (feeddrive.model.reference)
     axis = re.fullmatch(r"controller\.(\w+)\.(\w+)", name)
     if axis:
         return _axis_unit(model, axis.group(1), axis.group(2))

@@ -25,9 +25,9 @@ from ..model.mechanisms.ball_screw_parameters import (
     FrictionSites,
     StiffnessModel,
 )
+from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness
 from ..model.mechanisms.shared import Motor, Table
 from ..parameters.components import DriveParameters
-from ..stiffness import equivalent_stiffness
 
 CITATION = (
     "Z. Wang, X. Feng, H. Yang, H. Jin, 'Research on low-speed characteristics of differential "

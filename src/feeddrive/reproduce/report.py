@@ -10,17 +10,18 @@ from typing import Any
 import numpy as np
 from markdown_it import MarkdownIt
 
-from .. import __version__, protocol
+from .. import __version__
+from ..analysis import protocol
 from ..analysis.critical import format_bands, format_critical_speed
-from ..control import ConstantSpeed
-from ..friction import negative_slope_band, passivity_margin, sliding_stability
+from ..engine.simulate import DriveSystem
+from ..io.outputs import atomic_path
 from ..model.friction.lugre_parameters import LuGreParameters
+from ..model.friction.stribeck import negative_slope_band, passivity_margin, sliding_stability
+from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness, mid_screw_readings
+from ..model.reference import ConstantSpeed
 from ..model.slots import slot_table
-from ..outputs import atomic_path
 from ..parameters import DriveParameters
 from ..presets import wang2021
-from ..simulate import DriveSystem
-from ..stiffness import equivalent_stiffness, mid_screw_readings
 from ..units import SITES
 from . import figures as figures_mod
 from .beyond_section import (

@@ -8,7 +8,8 @@ screw-shaft, hollow-shaft and guide sites, each with its law), registered in
 ``mechanism = "ball-screw"`` file — and every parameter file written before the composition —
 is made of.  The mechanism itself (the CDFS and DDFS equations) is
 :mod:`feeddrive.model.mechanisms.ball_screw`; this module stays apart from it so that the
-stiffness chain (:mod:`feeddrive.stiffness`), which the mechanism uses, can read these classes.
+stiffness chain (:mod:`feeddrive.model.mechanisms.ball_screw_stiffness`), which the
+mechanism uses, can read these classes.
 
 Source: Z. Wang, X. Feng, H. Yang, H. Jin, "Research on low-speed characteristics of
 differential double-drive feed system", Mech. Sci. 12 (2021) 791–800, Tables 1–2,

@@ -25,10 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ._jit import kernel
-from .model.friction import lugre
-from .model.friction.lugre_parameters import FrictionBranch, LuGreParameters
-from .paper import CDFS_CRITICAL_SPEED
+from ..._jit import kernel
+from . import lugre
+from .lugre_parameters import FrictionBranch, LuGreParameters
 
 # ---------------------------------------------------------------- compiled scalar kernels
 
@@ -134,10 +133,6 @@ def bristle_bound(params: LuGreParameters) -> float:
 
 
 # ---------------------------------------------------------------- analytic indicators
-
-# Wang2021 Sect. 5.2, Fig. 6: the simulated CDFS critical speed the zero-slope speed is
-# compared with (the number lives in feeddrive.paper)
-PAPER_CDFS_CRITICAL_SPEED = CDFS_CRITICAL_SPEED
 
 
 @dataclass(frozen=True)
