@@ -95,3 +95,9 @@ def test_the_kinds_defaults_fill_what_a_set_leaves_out():
     assert bare.stiffness == StiffnessModel() and bare.disturbances == Disturbances()
     assert bare.controller == base.controller  # Table 2's gains
     assert bare.with_values(controller=None).controller == base.controller
+
+
+def test_a_written_file_carries_its_kinds_note():
+    note = composition("ball-screw").file_note
+    assert "torques divided by H" in note
+    assert f"# {note}\n" in dumps(fd.preset("wang2021"))

@@ -153,11 +153,15 @@ class Composition:
         none (``("controller", default_controller)``); written after ``required``.
     description : str, default ""
         One line on the kind, for messages and ``feeddrive params show``.
+    file_note : str, default ""
+        What a reader of a file of this kind must know about its values (a comment line
+        at the top of a written file, e.g. how rotary sites' friction is stored).
     """
 
     required: tuple[str, ...]
     defaults: tuple[tuple[str, Callable[[], Any]], ...] = ()
     description: str = ""
+    file_note: str = ""
 
     def order(self) -> tuple[str, ...]:
         """The section names of this kind, in file order.

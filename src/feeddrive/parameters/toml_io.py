@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .. import registry
-from .components import DriveParameters
+from .components import DriveParameters, composition
 from .validation import ParameterError, resolved_unit
 
 
@@ -218,9 +218,10 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
 
 def dumps(params: DriveParameters) -> str:
     """TOML text of a parameter set, SI units noted beside each value."""
+    note = composition(params.mechanism).file_note
     lines = [
         "# feeddrive parameter set. SI units throughout (m, s, N, kg, A, V, rad).",
-        "# Friction forces at the screw and hollow shafts are torques divided by H = lead/2π.",
+        *([f"# {toml_comment(note)}"] if note else []),
         "# `mechanism` names the kind of drive the sections describe (docs/parameters.md).",
     ]
     _emit(params, "", lines)

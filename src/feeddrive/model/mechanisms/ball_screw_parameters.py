@@ -118,7 +118,9 @@ BALL_SCREW = registry.register(registry.MECHANISM_KINDS, "ball-screw", Compositi
               ("disturbances", Disturbances)),
     description="ball screw with a screw motor and a hollow (nut) motor (Wang2021): the "
     "cdfs and ddfs drives; the linear-motor and rack-pinion drives read its table, guide "
-    "friction and controller with their own section"))
+    "friction and controller with their own section",
+    file_note="Friction forces at the screw and hollow shafts are torques divided by "
+    "H = lead/2π."))
 
 __all__ = ["BALL_SCREW", "BallScrew", "Coupling", "FrictionSites", "Motor", "StiffnessModel",
            "Table"]
