@@ -45,6 +45,7 @@ from ..model.disturbances import LoadProfile, emit_load
 from ..model.friction import friction_law
 from ..model.friction.lugre_parameters import LuGreParameters
 from ..solvers.dopri5 import STATUS_MESSAGES, STATUS_OK, new_memory
+from ..solvers.schedule import no_schedule
 
 __all__ = ["LINEAR_BREAKAWAY", "MIN_STEPS", "STEP_RATE", "UNIFORM_JITTER", "simulate_presliding"]
 
@@ -132,7 +133,7 @@ def _integrate(step: float, force: np.ndarray, mass: float, packed: np.ndarray,
     n = rig.n_states
     t_end = (force.size - 1) * step
     _, y, _, stats, _ = rig.module.integrate(
-        y0, t_end, 1, step, 0, 0, 0, P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
+        y0, t_end, 1, step, no_schedule(1), P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
         substeps * force.size + 10, 0, np.zeros(1), new_memory(n, h), np.full(n, math.inf))
     status = int(stats[0])
     if status != STATUS_OK or y.shape[0] != force.size:

@@ -214,6 +214,17 @@ class Sampling:
         """The period of ``clock`` (e.g. ``"controller.velocity_period"``) in breakpoints."""
         return self.steps[self.clocks.index(clock)]
 
+    def parameters(self, model: Model, P: np.ndarray | None = None) -> np.ndarray:
+        """``P`` (default: the model's) with each sampled clock's period slot set to the
+        spacing of its instants on the grid, steps·base [s]: what a sampled part integrates
+        over is the time between its instants (equal to the declared period within the
+        1e-9 the grid allows)."""
+        out = (model.P if P is None else P).copy()
+        for (_, slot), n in zip(model.clocks, self.steps, strict=True):
+            if n > 0:
+                out[slot] = n * self.base
+        return out
+
 
 def sampling(params: DriveParameters, output_interval: float,
              model: Model | None = None, *, P: np.ndarray | None = None) -> Sampling:
@@ -265,7 +276,7 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
     allowed = int(options.max_steps * t_probe / t_end) + 1000
     _, _, _, stats, _ = dopri5.integrate(
         model, y0.copy(), t_probe, grid.out_every, grid.base, grid.schedule, options.rtol,
-        atol, rel, h_init, h_max, adaptive, allowed, bound=bound)
+        atol, rel, h_init, h_max, adaptive, allowed, bound=bound, P=grid.parameters(model))
     if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
         problem = budget.step_rate_problem(
             steps=int(stats[1]), probe_time=float(stats[4]), duration=t_end,
@@ -414,6 +425,7 @@ class Simulation:
         self.options = options = options or SolverOptions()
         self.model = system.model(profile)
         self.grid = sampling(system.parameters, options.output_interval, self.model)
+        self.P = self.grid.parameters(self.model)  # the sample periods on the grid
         self.atol, self.rel = self.model.tolerances(
             options.position_tolerance, options.speed_tolerance, options.current_tolerance)
         self.y0 = system.initial_vector(self.model)
@@ -580,13 +592,13 @@ class _Chunks:
                 sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule, options.rtol,
                 sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive, max_steps, self.mode,
                 profile_breakpoints(sim.profile, t_stop, grid.base), self.want_aux,
-                start=start, held=held, memory=memory, bound=sim.bound)
+                start=start, held=held, memory=memory, bound=sim.bound, P=sim.P)
         else:
             t, yy, aa, stats, _ = dopri5.integrate(
                 sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule, options.rtol,
                 sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive, max_steps,
                 start=start, held=held, memory=memory,
-                bound=sim.bound)
+                bound=sim.bound, P=sim.P)
         if start > 0 and t.size and t[0] <= start * grid.base:
             t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
         return t, yy, aa, stats

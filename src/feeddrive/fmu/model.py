@@ -133,6 +133,7 @@ class NumbaCoSimulation:
             if name.startswith("controller."):
                 self.P[k] = getattr(params.controller, name.split(".", 1)[1])
         g = self._sampling(params, 1e-3, m, P=self.P)
+        self.P = g.parameters(m, self.P)  # the periods on the grid, as the FMU writes them
         self.grid = (g.base, g.schedule)
         self._write_inputs(inputs)
         self.held_prev[:] = self.held  # as the FMU: the update at t0 is redone if the inputs

@@ -144,6 +144,10 @@ static int fmu_sampling(Fmu *m) {
             return ST_ERROR;
         }
     }
+    /* each sampled part integrates over the spacing of its instants on the grid
+       (feeddrive.engine.simulate.Sampling.parameters) */
+    for (i = 0; i < FD_N_CLOCK; i++)
+        if (m->steps[i] > 0) m->P[CLOCK_SLOT[i]] = m->steps[i] * base;
     m->base = base > 0.0 ? base : 1.0;
     m->sampled = base > 0.0;
     return ST_OK;

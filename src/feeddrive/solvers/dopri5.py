@@ -122,19 +122,23 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
               max_steps: int, *, start: int = 0, held: np.ndarray | None = None,
               memory: np.ndarray | None = None, bound: np.ndarray | None = None,
+              P: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``) to
     ``t_end`` (see :func:`integrate_template`; ``schedule``: the run's sample schedule,
     :func:`feeddrive.engine.simulate.sampling`).  ``held`` (the sampled controller's values)
     and ``memory`` (step size, last error) are updated in place, so that a run continued
     from where a previous call stopped is bit-identical to one call over the whole span.
-    ``bound``: the largest |state| per state before the run stops as diverged (None: none)."""
+    ``bound``: the largest |state| per state before the run stops as diverged (None: none);
+    ``P``: the parameter vector (None: the model's; a run passes the periods on its grid,
+    :meth:`feeddrive.engine.simulate.Sampling.parameters`)."""
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states), h_init) if memory is None else memory
     bound = np.full(len(model.states), np.inf) if bound is None else bound
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate(y0, t_end, out_every, base,
-                               np.ascontiguousarray(schedule, dtype=np.int64), model.P, model.T,
+                               np.ascontiguousarray(schedule, dtype=np.int64),
+                               model.P if P is None else P, model.T,
                                rtol, atol, rel_mask, h_max, adaptive, max_steps, start, held,
                                memory, bound))
     return result

@@ -125,12 +125,14 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
               max_steps: int, mode: int, stops: np.ndarray, want_aux: bool = True, *,
               start: int = 0, held: np.ndarray | None = None,
               memory: np.ndarray | None = None, bound: np.ndarray | None = None,
+              P: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``; a multiple
     of ``out_every``) to ``t_end`` (see :func:`integrate_template`).  ``held`` and ``memory``
     are updated in place, so a run continued from where a call stopped is bit-identical to
     one call in which that instant is a step end (a profile breakpoint, a sample instant).
-    ``bound``: the largest |state| per state before the run stops as diverged (None: none)."""
+    ``bound``: the largest |state| per state before the run stops as diverged (None: none);
+    ``P``: the parameter vector (None: the model's; a run passes the periods on its grid)."""
     if start % out_every:
         raise ValueError(f"start = {start}: expected a multiple of out_every = {out_every}")
     held = np.zeros(model.n_held) if held is None else held
@@ -138,8 +140,9 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     bound = np.full(len(model.states), np.inf) if bound is None else bound
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate_dense(
-            y0, t_end, out_every, base, np.ascontiguousarray(schedule, dtype=np.int64), model.P,
-            model.T, rtol, atol, rel_mask, h_init, h_max, adaptive, max_steps, mode,
+            y0, t_end, out_every, base, np.ascontiguousarray(schedule, dtype=np.int64),
+            model.P if P is None else P, model.T, rtol, atol, rel_mask, h_init, h_max,
+            adaptive, max_steps, mode,
             np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
             model.jacobian_pattern, model.jacobian_colours, start, held, memory, bound))
     return result
