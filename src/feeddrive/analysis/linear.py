@@ -49,6 +49,7 @@ from scipy import optimize
 
 from ..engine.simulate import DriveSystem
 from ..model.assemble import Model
+from ..model.disturbances import LeadError, TorqueRipple
 from ..model.friction.lugre_parameters import LuGreParameters
 from ..model.loops import INJ_CURRENT, INJ_SPEED
 from ..model.mechanisms import Mechanism, mechanism
@@ -305,15 +306,16 @@ def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
     zero-mean harmonics of a shaft angle, so their average over a revolution is nothing; the
     drive is linearised on that averaged model and the returned note says so."""
     d = system.parameters.disturbances
-    left = [label for label, r in (("screw-motor torque ripple", d.screw_motor_ripple),
-                                   ("hollow-motor torque ripple", d.hollow_motor_ripple),
-                                   ("lead error", d.lead_error))
-            if any(a != 0.0 for a in r.amplitudes)]
+    motors = {m.ripple: m for m in mechanism(system.drive).drive_motors if m.ripple}
+    harmonic = [f.name for f in fields(d)
+                if isinstance(getattr(d, f.name), (TorqueRipple, LeadError))]
+    left = [f"{(motors[name].label or f'{motors[name].name} motor').replace(' ', '-')} "
+            "torque ripple"
+            if name in motors else name.replace("_", " ")
+            for name in harmonic if any(a != 0.0 for a in getattr(d, name).amplitudes)]
     if not left:
         return system, ()
-    quiet = dataclasses.replace(
-        d, screw_motor_ripple=type(d.screw_motor_ripple)(),
-        hollow_motor_ripple=type(d.hollow_motor_ripple)(), lead_error=type(d.lead_error)())
+    quiet = dataclasses.replace(d, **{name: type(getattr(d, name))() for name in harmonic})
     params = system.parameters.with_values(disturbances=quiet)
     note = (f"warning: {' and '.join(left)} of the parameter set give no steady state; "
             "linearised on the averaged model (their harmonics average to zero over a "
@@ -487,9 +489,14 @@ def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str) -> LoopR
     return LoopResult(name, freq, mag, phase, gain_margin, phase_margin, crossover, bandwidth)
 
 
-def _nut_speed_loop(system: DriveSystem) -> bool:
-    p = system.parameters
-    return (p.hollow_controller or p.controller).nut_loop == "speed"
+def _speed_loop_only(system: DriveSystem, axis: str, table_speed: float,
+                     nut_speed: float) -> bool:
+    """Whether ``axis`` runs a speed loop only (its parameter block's speed-mode slot, as its
+    mechanism wires it — the hollow motor with ``controller.nut_loop = "speed"``): it then
+    has no position loop."""
+    model = system.model(ConstantSpeed(table_speed, nut_speed, ramp_time=0.0))
+    slot = f"controller.{axis}.speed_mode"
+    return slot in model.parameter_names and model.parameter(slot) > 0.5
 
 
 @dataclass(frozen=True)
@@ -565,8 +572,8 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
             S = _freq_response(lin_v, inp, f"{axis}_current_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop"))
         elif inp.endswith("_speed_command_disturbance"):
-            if axis == "nut" and _nut_speed_loop(system):
-                continue  # a hollow motor on a speed loop has no position loop
+            if _speed_loop_only(system, axis, table_speed, nut_speed):
+                continue  # e.g. a hollow motor on a speed loop: no position loop
             S = _freq_response(lin, inp, f"{axis}_speed_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} position loop"))
     return LoopAnalysis(poles=classify_poles(lin.poles()), loops=loops, linear=lin)
@@ -626,10 +633,12 @@ class FrequencyResponse:
 
 
 def _axis_name(lin: LinearModel) -> str:
-    """The table-driving motor axis (the screw motor, or a linear motor)."""
-    for a in ("screw", "motor"):
-        if f"{a}_current_command_disturbance" in lin.inputs:
-            return a
+    """The table-driving motor axis: the mechanism's first axis (the screw motor, a linear
+    motor, the rack-and-pinion's motor), the first whose inputs the linear model has."""
+    suffix = "_current_command_disturbance"
+    for name in lin.inputs:
+        if name.endswith(suffix):
+            return name.removesuffix(suffix)
     raise ValueError("the linear model has no table-driving motor axis")
 
 
@@ -683,9 +692,9 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
             raise ParameterError("input", input, "no such motor axis in this drive; expected "
                                  + ", ".join(f"{a}_{k}_loop" for a in _axes(lin)
                                              for k in ("position", "velocity")))
-        if kind == "position" and axis == "nut" and _nut_speed_loop(system):
-            raise ParameterError("input", input, "the hollow motor runs a speed loop "
-                                 "(controller.nut_loop = speed): it has no position loop")
+        if kind == "position" and _speed_loop_only(system, axis, table_speed, nut_speed):
+            raise ParameterError("input", input, f"the {axis} axis runs a speed loop only "
+                                 "(e.g. controller.nut_loop = speed): it has no position loop")
         if kind == "velocity":
             open_pos = replace(system, parameters=system.parameters.replace_path(
                 "controller.position_gain", 0.0))

@@ -52,13 +52,25 @@ def speed_range(low_option: str, low: float, high_option: str, high: float
 
 def position(option: str, value: float, params: DriveParameters,
              drive: str = "cdfs") -> float:
-    """Table position ``value`` [mm] → [m]; on a ball-screw drive strictly between the screw
-    supports (a linear motor has no screw to bound it)."""
-    length_mm = params.screw.length / MM
+    """Table position ``value`` [mm] → [m]; strictly within the travel the drive's mechanism
+    declares (``Mechanism.travel_length``: a ball screw's supports; a linear motor has no
+    screw to bound it)."""
+    from ..model.mechanisms import mechanism
+
     _finite(option, value, "mm")
-    if drive in ("cdfs", "ddfs") and not 0.0 < value < length_mm:
-        raise ParameterError(option, value, f"expected 0 < position < {length_mm:g} [mm] "
-                                            "(strictly between the screw supports)")
+    try:
+        topology = mechanism(drive)
+    except ParameterError:  # an unknown drive: refused where the drive is read
+        topology = None
+    if topology is not None and topology.travel_length:
+        length: object = params
+        for key in topology.travel_length.split("."):
+            length = getattr(length, key)
+        assert isinstance(length, (int, float))
+        length_mm = float(length) / MM
+        if not 0.0 < value < length_mm:
+            raise ParameterError(option, value, f"expected 0 < position < {length_mm:g} [mm] "
+                                                f"(strictly between {topology.travel_ends})")
     if 0.0 < value < SMALLEST_PLAUSIBLE_POSITION_MM:
         warn(f"{option} = {value:g} mm looks like a value in metres "
              f"({value * 1e3:g} mm?); the CLI takes mm")

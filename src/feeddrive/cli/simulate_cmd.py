@@ -228,8 +228,10 @@ def run_header(drive: str, profile: str, profile_file: str | None, table_speed: 
     what = (f"{profile_file}" if profile == "csv" else
             f"{profile} {table_speed:g} mm/s" + (f" at {frequency:g} Hz" if profile == "sine"
                                                  else ""))
-    # a linear motor drives the table directly: its position moves no part of the model
-    where = "" if drive == "linear-motor" else f", position {position:g} mm"
+    # a position only where the drive's model depends on it (the ball screw's K_eq(a))
+    from ..model.mechanisms import mechanism
+
+    where = f", position {position:g} mm" if mechanism(drive).uses_table_position else ""
     return f"{drive.upper()}, {what}{where}, {duration:g} s ({name})"
 
 

@@ -303,21 +303,34 @@ class Result:
         return out
 
     def _travel_warning(self) -> str | None:
-        """Whether the table left the screw's travel (feeddrive.analysis.tracking)."""
+        """Whether the table left its travel (feeddrive.analysis.tracking): the length the
+        drive's mechanism names (``Mechanism.travel_length``, e.g. the screw's)."""
         import tomllib
 
         from ..analysis.tracking import travel_warning
+        from ..model.mechanisms import mechanism
 
+        attrs = self.dataset.attrs
+        drive = self._run.system.drive if self._run is not None else attrs.get("drive", "")
+        try:
+            path = mechanism(drive).travel_length
+        except ValueError:  # a drive this installation does not know (ParameterError)
+            return None
+        if not path:
+            return None
+        where: Any
         if self._run is not None:
-            length = self._run.system.parameters.screw.length
-            start = self._run.system.table_position
+            where, start = self._run.system.parameters, self._run.system.table_position
         else:
-            attrs = self.dataset.attrs
-            screw = tomllib.loads(attrs.get("parameters_toml", "")).get("screw", {})
-            if "length" not in screw or "table_start_position_m" not in attrs:
+            if "table_start_position_m" not in attrs:
                 return None
-            length, start = screw["length"], attrs["table_start_position_m"]
-        return travel_warning(start, self["table_position"], length)
+            where = tomllib.loads(attrs.get("parameters_toml", ""))
+            start = attrs["table_start_position_m"]
+        for key in path.split("."):
+            where = getattr(where, key) if self._run is not None else where.get(key, {})
+        if not isinstance(where, (int, float)):
+            return None
+        return travel_warning(start, self["table_position"], float(where))
 
     def _hold_window(self) -> tuple[float, float]:
         """The steady window (:func:`steady_window`) of the first stretch where a sampled

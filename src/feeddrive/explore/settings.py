@@ -318,7 +318,7 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
     out.drive = drive
     if drive != "ddfs":
         out.disabled.append("nut_speed")
-    if not mechanism(drive).ripple_motors:
+    if not any(m.ripple for m in mechanism(drive).drive_motors):
         out.disabled += ["ripple_amplitude", "ripple_order"]
     from ..cli import _units
 

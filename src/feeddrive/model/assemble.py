@@ -19,8 +19,8 @@ import numpy as np
 
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
-from .compensation import emit_compensation
-from .disturbances import LoadProfile, emit_harmonics, emit_load, harmonics
+from .compensation import CompensationFootprint, emit_compensation
+from .disturbances import LoadProfile, TorqueRipple, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
 from .reference import PROFILE_PARAMS, REFERENCE_INPUTS, reference_with_inputs
@@ -49,6 +49,10 @@ class Model:
     jacobian_colours: np.ndarray  # (n + 1,) group of each column in the grouped FD Jacobian
     # signals a part declares as factor × a state or signal: (signal, source name, factor)
     derived: tuple[tuple[codegen.Signal, str, float], ...] = ()
+    # what each right-hand-side quantity is computed from, as the parts declared it
+    # (``Builder.flow``; the Jacobian pattern follows from it)
+    flows: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    compensation: CompensationFootprint | None = None  # the compensator's reads and adds
     # the sample schedule: (name, index in P of its period [s]) per clock (Builder.clock)
     clocks: tuple[tuple[str, int], ...] = ()
 
@@ -134,8 +138,50 @@ def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
     o = b.named_params(f"friction.{site.name}", law.site_slots(params), packed)
     alias = b.use_dynamic(f"_law_{law.name.replace('-', '_')}",
                           f"_friction_law({law.name!r}).compiled", law.compiled)
-    b.local_kernel(alias, len(law.states(params)))
+    # the friction-law interface: the kernel reads its sliding speed and its own states
+    # y[k : k + m] only, and writes dy at exactly those places
+    if not site.reads:
+        raise ValueError(f"friction site {site.name!r}: its mechanism declares no reads of "
+                         "its sliding speed (Site.reads)")
+    own = [b.states[k].name for k in range(y_offset, y_offset + len(law.states(params)))]
+    b.flow((f"f_{site.name}", *(f"dy:{s}" for s in own)),
+           (*site.reads, *(f"y:{s}" for s in own)))
     return f"f_{site.name} = {alias}({site.speed}, y, {y_offset}, P, {o}, dy)"
+
+
+def _ripple(b: codegen.Builder, parameters: DriveParameters, mech: Any, drive: str
+            ) -> tuple[dict[str, str], list[str], dict[str, list[str]]]:
+    """Torque ripple of the motors the mechanism declares (:attr:`Mechanism.drive_motors`):
+    (ripple code per motor name, its lines, the ripple names read per body)."""
+    dist = parameters.disturbances
+    claimed = {m.ripple: m for m in mech.drive_motors if m.ripple}
+    for m in claimed.values():
+        if m.angle not in b.state_index:
+            raise ValueError(f"motor {m.name!r}: its ripple needs its rotor-angle state; "
+                             f"{m.angle!r} is no state of the {drive} model")
+    for f in dataclasses.fields(dist):
+        value = getattr(dist, f.name)
+        if (isinstance(value, TorqueRipple) and f.name not in claimed
+                and any(a != 0.0 for a in value.amplitudes)):
+            raise ParameterError(f"disturbances.{f.name}", value.amplitudes,
+                                 f"the {drive} drive has no such motor")
+    ripple: dict[str, str] = {}
+    lines: list[str] = []
+    reads: dict[str, list[str]] = {}
+    for motor in claimed.values():
+        block = emit_harmonics(b, motor.ripple, getattr(dist, motor.ripple))
+        if block is None:
+            continue
+        key = motor.name
+        b.add_aux(f"{key}_ripple_torque", "N m", f"{key} motor torque ripple")
+        ripple[key] = f"rip_{key}"
+        lines.append(f"rip_{key} = {b.use(harmonics)}({b.y(motor.angle)}, P, "
+                     f"{block[0]}, {block[1]})[0]")
+        lines.append(f"{b.a(key + '_ripple_torque')} = rip_{key}")
+        b.flow(f"rip_{key}", f"y:{motor.angle}")
+        b.flow(f"aux:{key}_ripple_torque", f"rip_{key}")
+        reads.setdefault(motor.body, []).append(f"rip_{key}")
+    return ripple, lines, reads
 
 
 def assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
@@ -182,7 +228,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     for site, law, _ in laws:
         b.add_aux(f"{site.name}_friction", "N",
                   f"{site.name.replace('_', '–')} friction ({law.name}"
-                  f"{', torque ÷ H' if site.name != 'guide' else ''})")
+                  f"{', torque ÷ H' if site.rotary else ''})")
     b.add_aux("drive_force", "N", "force driving the table (screw–nut force F_d, or motor)")
     b.add_aux("table_position_reference", "m", "commanded table position")
     b.add_aux("table_speed_reference", "m/s", "commanded table speed")
@@ -197,21 +243,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     # the linearisation's load-force input [N] (feeddrive.analysis.linear), zero in a simulation
     o_load = b.param("inputs.load_force", 0.0)
     load_code = f"P[{o_load}]" if load_code is None else f"({load_code} + P[{o_load}])"
-    ripple: dict[str, str] = {}
-    ripple_lines: list[str] = []
-    for key, r in (("screw", dist.screw_motor_ripple), ("nut", dist.hollow_motor_ripple)):
-        field = f"{'screw' if key == 'screw' else 'hollow'}_motor_ripple"
-        block = emit_harmonics(b, field, r)
-        if block is None:
-            continue
-        if key not in mech.ripple_motors:
-            raise ParameterError(f"disturbances.{field}", r.amplitudes,
-                                 f"the {drive} drive has no such motor")
-        b.add_aux(f"{key}_ripple_torque", "N m", f"{key} motor torque ripple")
-        ripple[key] = f"rip_{key}"
-        ripple_lines.append(f"rip_{key} = {b.use(harmonics)}({b.y(key + '_angle')}, P, "
-                            f"{block[0]}, {block[1]})[0]")
-        ripple_lines.append(f"{b.a(key + '_ripple_torque')} = rip_{key}")
+    ripple, ripple_lines, ripple_reads = _ripple(b, parameters, mech, drive)
     lead = emit_harmonics(b, "lead_error", dist.lead_error)
     if lead is not None and not mech.has_lead_screw:
         raise ParameterError("disturbances.lead_error", dist.lead_error.amplitudes,
@@ -221,12 +253,16 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     loops.declare_clocks(b, parameters.controller)
 
     # ---- right-hand side
-    b.emit(f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}")
-    b.emit(f"{b.a('table_position_reference')} = ref_x")
-    b.emit(f"{b.a('table_speed_reference')} = ref_v")
-    comp = emit_compensation(b, parameters, mech)
+    b.emit(f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}", writes="reference",
+           reads="t")
+    b.emit(f"{b.a('table_position_reference')} = ref_x",
+           writes="aux:table_position_reference", reads="reference")
+    b.emit(f"{b.a('table_speed_reference')} = ref_v", writes="aux:table_speed_reference",
+           reads="reference")
+    comp = emit_compensation(b, parameters, mech, axes[0].name)
     if comp is not None:
-        axes[0] = dataclasses.replace(axes[0], extra_current=comp)
+        axes[0] = dataclasses.replace(axes[0], extra_current=comp.current,
+                                      extra_reads=(f"aux:{comp.force}",))
     # parts of the model given as sections of their own (model/parts/): they declare their
     # slots and may wire into the axes before the cascade, then write their sampled updates
     parts = [s for _, s in parameters.sections if hasattr(s, "declare_part")]
@@ -238,12 +274,14 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     for ln in ripple_lines:
         b.emit(ln)
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
-                  load=load_code, torque_off=parameters.controller.mode == "torque_off")
+                  load=load_code, torque_off=parameters.controller.mode == "torque_off",
+                  reads=ripple_reads, load_reads=("t",) if load_aux else ())
     for site, law, first in laws:
         code = _site_code(b, site, law, site.parameters(parameters), first)
         for body, factor in site.bodies:
             term = f"- f_{site.name}" if factor == "1.0" else f"- {factor} * f_{site.name}"
             m.forces.setdefault(body, []).append(term)
+            m.reads.setdefault(body, []).append(f"f_{site.name}")
         if site.active:
             m.gated.append(code)
             m.frozen.append(f"f_{site.name} = 0.0")
@@ -253,15 +291,16 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
             m.always.append(code)
     mech.emit(b, m)
     for site, _, _ in laws:
-        b.emit(f"{b.a(site.name + '_friction')} = f_{site.name}")
-    b.emit(f"{b.a('drive_force')} = f_d")
+        b.emit(f"{b.a(site.name + '_friction')} = f_{site.name}",
+               writes=f"aux:{site.name}_friction", reads=f"f_{site.name}")
+    b.emit(f"{b.a('drive_force')} = f_d", writes="aux:drive_force", reads="f_d")
     if load_aux:
-        b.emit(f"{b.a('load_force')} = {load_code}")
+        b.emit(f"{b.a('load_force')} = {load_code}", writes="aux:load_force", reads="t")
 
     source = codegen.module_source(b, solver_sources())
     module = codegen.compile_module(source, b.dynamic_sources)
-    pattern = sparsity.jacobian_pattern(codegen.rhs_source(b), len(b.states),
-                                        frozenset(b.imports), b.local_kernels)
+    pattern = sparsity.declared_pattern([s.name for s in b.states], [a.name for a in b.aux],
+                                        b.flows)
     return Model(
         state_names=tuple(s.name for s in b.states), states=tuple(b.states), aux=tuple(b.aux),
         parameter_names=tuple(b.param_names), P=b.packed_parameters(), T=b.packed_tables(),
@@ -270,7 +309,8 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         module=module, source=source, drive=drive,
         sites=tuple((site.name, law.name) for site, law, _ in laws),
         jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
-        derived=tuple(b.derived), clocks=tuple(b.clocks))
+        derived=tuple(b.derived), clocks=tuple(b.clocks),
+        flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp)
 
 
 @functools.cache

@@ -63,7 +63,8 @@ class Builder:
     imports: dict[str, str] = field(default_factory=dict)  # alias -> "module:attr"
     dynamic: dict[str, str] = field(default_factory=dict)  # alias -> registry expression
     dynamic_sources: list[str] = field(default_factory=list)
-    local_kernels: dict[str, int] = field(default_factory=dict)  # alias -> its state count
+    # quantity -> the quantities it is computed from (``flow``): the Jacobian's structure
+    flows: dict[str, set[str]] = field(default_factory=dict)
     # the sample schedule: (name, index in P of its period [s]) of every sampled part
     clocks: list[tuple[str, int]] = field(default_factory=list)
     table_size: int = 0
@@ -192,15 +193,38 @@ class Builder:
         self.dynamic_sources.append(source_of(getattr(kernel, "py_func", kernel)))
         return alias
 
-    def local_kernel(self, alias: str, n_states: int) -> None:
-        """Declare that kernel ``alias`` reads only ``y[k : k + n_states]`` of the state array it
-        is given (``k``: the argument after ``y``) and writes exactly ``dy`` at those places
-        (the friction-law interface); the Jacobian's sparsity pattern relies on it
-        (:mod:`feeddrive.model.sparsity`)."""
-        self.local_kernels[alias] = n_states
+    def flow(self, writes: str | tuple[str, ...] | list[str],
+             reads: str | tuple[str, ...] | list[str] = ()) -> None:
+        """Declare that the code a part emits computes ``writes`` from ``reads``, the
+        quantities of one right-hand-side call (:mod:`feeddrive.model.sparsity` assembles the
+        Jacobian's pattern from these declarations).
 
-    def emit(self, line: str, *, sampled: bool = False) -> None:
+        Parameters
+        ----------
+        writes : str or sequence of str
+            What the code sets: ``"dy:<state>"`` (a state's derivative), ``"aux:<signal>"``
+            (an auxiliary output) or a part-level name (e.g. ``"f_d"``, ``"reference"``).
+        reads : str or sequence of str
+            What those values may depend on (each of its branches counted): ``"y:<state>"``,
+            ``"t"``, ``"aux:<signal>"`` or a part-level name that some part writes.  Parameters,
+            held (sampled) values and tables are constants of a call and are not listed.
+        """
+        ws = (writes,) if isinstance(writes, str) else tuple(writes)
+        rs = (reads,) if isinstance(reads, str) else tuple(reads)
+        for w in ws:
+            if w == "t" or w.startswith("y:"):
+                raise ValueError(f"flow: {w!r} is an input of the right-hand side, not written")
+            self.flows.setdefault(w, set()).update(rs)
+
+    def emit(self, line: str, *, sampled: bool = False,
+             writes: str | tuple[str, ...] | list[str] = (),
+             reads: str | tuple[str, ...] | list[str] = ()) -> None:
+        """Append a line of code; ``writes``/``reads``: its :meth:`flow` (right-hand side)."""
         (self.sample_lines if sampled else self.rhs_lines).append(line)
+        if writes:
+            self.flow(writes, reads)
+        elif reads:
+            raise ValueError(f"emit: reads {reads!r} declared without what they compute")
 
     # ---- packing
     def packed_parameters(self) -> np.ndarray:

@@ -8,6 +8,7 @@ compensated axis' current command.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -51,9 +52,44 @@ def observer_force(v: float, e: float, gain: float, y: np.ndarray, k: int, P: np
     return P[o + SIGMA0] * z + P[o + SIGMA1] * dz + P[branch(v, o) + VISCOUS] * v
 
 
-def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism) -> str | None:
-    """Declare the compensator's states and parameters; emit its force lines; return the code
-    of the compensating current [A], or None without compensation."""
+@dataclass(frozen=True)
+class CompensationFootprint:
+    """What the compensator of an assembled model reads and what it adds.
+
+    Parameters
+    ----------
+    mode : {"feedforward", "observer"}
+        The compensation law (``controller.compensation.mode``).
+    axis : str
+        The controller axis whose current command it adds to (the table-driving motor's).
+    sites : tuple of str
+        The friction sites it compensates (keys below ``friction.``).
+    reads : tuple of str
+        The states and signals its force is computed from (``Builder.flow`` names:
+        ``"y:<state>"``, ``"reference"`` for the commanded motion).
+    states : tuple of str
+        Its own states (the observer's ẑ per site; none for the feed-forward).
+    force : str
+        The signal of the compensating force [N] (``"compensation_force"``).
+    current : str
+        Code of the current [A] it adds to ``axis``' command (the force × the mechanism's
+        factor H/K_t or 1/K_f).
+    """
+
+    mode: str
+    axis: str
+    sites: tuple[str, ...]
+    reads: tuple[str, ...]
+    states: tuple[str, ...]
+    force: str
+    current: str
+
+
+def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism, axis: str
+                      ) -> CompensationFootprint | None:
+    """Declare the compensator's states and parameters; emit its force lines; return its
+    footprint (with the code of the compensating current [A] for ``axis``), or None without
+    compensation."""
     c = params.controller.compensation
     if c.mode == "none":
         return None
@@ -63,25 +99,36 @@ def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism) -> s
                              "loops only (set their periods to 0 [s])")
     sites, factor = mech.compensation(b)
     terms = []
+    reads: list[str] = []
+    states: list[str] = []
     gain = b.param("compensation.observer_gain", c.observer_gain)
-    for key, ref_speed, meas_speed in sites:
+    for key, ref_speed, meas_speed, meas_reads in sites:
         site = getattr(params.friction, key).require(
             LuGreParameters, f"friction.{key}", "friction compensation").mismatched(
             c.coulomb_scale, c.static_scale, c.stribeck_velocity_scale, c.viscous_scale)
         o = b.named_params(f"compensation.{key}", SLOTS, site.as_array())
         if c.mode == "feedforward":
-            b.emit(f"comp_{key} = {b.use(feedforward_force)}({ref_speed}, P, {o})")
+            b.emit(f"comp_{key} = {b.use(feedforward_force)}({ref_speed}, P, {o})",
+                   writes=f"comp_{key}", reads="reference")
+            site_reads = ["reference"]
         else:
-            k = b.state(f"{key}_friction_observer", "m",
-                        f"LuGre observer state of the {key} friction (compensation)",
-                        "position")
+            name = f"{key}_friction_observer"
+            k = b.state(name, "m", f"LuGre observer state of the {key} friction "
+                        "(compensation)", "position")
             err = f"({b.y('table_position')} - ref_x)"
             observer = b.use(observer_force)
-            b.local_kernel(observer, 1)
-            b.emit(f"comp_{key} = {observer}({meas_speed}, {err}, P[{gain}], y, {k}, P, {o}, dy)")
+            # the observer kernel reads and writes its own state y[k] only
+            site_reads = [*meas_reads, "y:table_position", "reference", f"y:{name}"]
+            b.emit(f"comp_{key} = {observer}({meas_speed}, {err}, P[{gain}], y, {k}, P, {o}, dy)",
+                   writes=(f"comp_{key}", f"dy:{name}"), reads=tuple(site_reads))
+            states.append(name)
+        reads += site_reads
         terms.append(f"comp_{key}")
     b.add_aux("compensation_force", "N", f"friction compensation force ({c.mode})")
-    b.emit(f"{b.a('compensation_force')} = {' + '.join(terms)}")
-    return f"{factor} * {b.a('compensation_force')}"
-
-
+    b.emit(f"{b.a('compensation_force')} = {' + '.join(terms)}",
+           writes="aux:compensation_force", reads=tuple(terms))
+    return CompensationFootprint(
+        mode=c.mode, axis=axis, sites=tuple(key for key, *_ in sites),
+        reads=tuple(r for r in dict.fromkeys(reads) if r.removeprefix("y:") not in states),
+        states=tuple(states), force="compensation_force",
+        current=f"{factor} * {b.a('compensation_force')}")

@@ -122,6 +122,10 @@ class Axis:
     same from sampled channel speeds (``s_<channel>``); ``active``: code of a condition under
     which the axis runs ("" = always); ``speed_unit``: unit of its speed command;
     ``speed_law = "speed"``: the axis may run a speed loop only (its block's speed-mode slot).
+    ``position_reads``, ``speed_reads``, ``current_reads``, ``extra_reads``: what the
+    continuous ``position``, ``speed``, ``current_state`` and ``extra_current`` code is
+    computed from (``Builder.flow`` names, e.g. ``"y:table_position"``) — the loops' part of
+    the Jacobian's structure.
     """
 
     name: str
@@ -140,6 +144,10 @@ class Axis:
     # code of a current [A] added to the current command in every loop configuration,
     # sampled or continuous (a feed-forward part); saturated with the command
     current_feedforward: str = ""
+    position_reads: tuple[str, ...] = ()
+    speed_reads: tuple[str, ...] = ()
+    current_reads: tuple[str, ...] = ()
+    extra_reads: tuple[str, ...] = ()  # of extra_current (current_feedforward: held only)
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
@@ -260,11 +268,32 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
                    f"{P}, {o}) + {P}[{o + INJ_CURRENT}]{extra}, {P}[{o + I_MAX}])")
 
 
+def _declare_flows(b: Builder, axes: list[Axis]) -> None:
+    """What each axis' continuous loop signals and integrator rates are computed from (both
+    branches of the sampled/continuous switches: the held values carry nothing)."""
+    for ax in axes:
+        if not (ax.position_reads and ax.speed_reads and ax.current_reads):
+            raise ValueError(f"axis {ax.name!r}: its mechanism declares no reads of its "
+                             "position, speed or current (Axis.*_reads)")
+        if ax.extra_current and not ax.extra_reads:
+            raise ValueError(f"axis {ax.name!r}: extra_current without extra_reads")
+        n = ax.name
+        b.flow(f"aux:{n}_speed_command", ("reference", *ax.position_reads))
+        b.flow(f"dy:{n}_velocity_integral",
+               (f"aux:{n}_speed_command", *ax.speed_reads, f"y:{n}_velocity_integral"))
+        b.flow(f"aux:{n}_current_command",
+               (f"aux:{n}_speed_command", *ax.speed_reads, f"y:{n}_velocity_integral",
+                *ax.extra_reads))
+        b.flow((f"aux:{n}_voltage", f"dy:{n}_current_integral"),
+               (f"aux:{n}_current_command", *ax.current_reads, f"y:{n}_current_integral"))
+
+
 def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     """Write the continuous part into the right-hand side and the sampled part into the
     controller update, for every axis."""
     rate, sat, vcmd = b.use(integrator_rate), b.use(saturate), b.use(voltage_command)
     verr, ccmd, quant = b.use(velocity_error), b.use(current_command), b.use(quantise)
+    _declare_flows(b, axes)
 
     # ---- right-hand side: commands, continuous integrators, current loops
     lines: list[str] = []

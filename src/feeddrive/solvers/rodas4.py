@@ -19,7 +19,7 @@ so u_6 is the error estimate.  Dense output on θ = (t* − t)/h ∈ [0, 1]::
 
 The Jacobian is taken by forward differences of the model's compiled right-hand side, grouped
 (Curtis, Powell & Reid, J. Inst. Maths Applics 13 (1974) 117–119): the structural pattern of
-∂f/∂(y, t) comes from the generated source (:mod:`feeddrive.model.sparsity`), columns no row
+∂f/∂(y, t) comes from the parts' declarations (:mod:`feeddrive.model.sparsity`), columns no row
 shares are coloured alike, and each colour costs one call — 8 instead of 16 for the wang2021
 DDFS (:func:`fd_jacobian_template`; a full pattern with one column per colour is the plain
 Jacobian, used by the tests as the reference).  The linear systems are solved by a small LU

@@ -2,7 +2,16 @@
 
 from __future__ import annotations
 
-from .base import Body, Mechanics, Mechanism, Site, drive_names, mechanism, register_mechanism
+from .base import (
+    Body,
+    DriveMotor,
+    Mechanics,
+    Mechanism,
+    Site,
+    drive_names,
+    mechanism,
+    register_mechanism,
+)
 
-__all__ = ["Body", "Mechanics", "Mechanism", "Site", "drive_names", "mechanism",
+__all__ = ["Body", "DriveMotor", "Mechanics", "Mechanism", "Site", "drive_names", "mechanism",
            "register_mechanism"]

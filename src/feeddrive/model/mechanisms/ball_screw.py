@@ -28,7 +28,7 @@ from ...parameters import DriveParameters, ParameterError
 from ..codegen import Builder
 from ..loops import ENC_Q, GRAT_Q, H_AX, V_FEEDBACK, Axis, Channel, axis_parameters
 from .ball_screw_stiffness import axial_stiffness, equivalent_stiffness, torsional_stiffness
-from .base import Body, Mechanics, Mechanism, Site, register_mechanism
+from .base import Body, DriveMotor, Mechanics, Mechanism, Site, register_mechanism
 
 # stiffness block: fixed K_eq (0 = from the chain), c0, EA, length, support, x0
 _STIFF = ("k_fixed", "c0", "ea", "length", "support", "x0")
@@ -76,8 +76,14 @@ class BallScrewDrive(Mechanism):
     """
 
     drives = ("cdfs", "ddfs")
-    ripple_motors = ("screw", "nut")
+    drive_motors = (DriveMotor("screw", "screw_angle", "screw", "screw_motor_ripple",
+                               "screw motor"),
+                    DriveMotor("nut", "nut_angle", "nut", "hollow_motor_ripple",
+                               "hollow motor"))
     has_lead_screw = True
+    travel_length = "screw.length"
+    travel_ends = "the screw supports"
+    uses_table_position = True
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:
@@ -144,12 +150,15 @@ class BallScrewDrive(Mechanism):
         share = self.params.friction.ball_nut_share
         out = []
         if share < 1.0:
-            out.append(Site("screw", "screw", f"{H} * w_s", (("screw", H),), 1.0 - share))
-        out.append(Site("nut", "nut", f"{H} * w_n", (("nut", H),), 1.0, nut_on))
-        out.append(Site("guide", "guide", "v_t", (("table", "1.0"),)))
+            out.append(Site("screw", "screw", f"{H} * w_s", (("screw", H),), 1.0 - share,
+                            reads=("w_s",), rotary=True))
+        out.append(Site("nut", "nut", f"{H} * w_n", (("nut", H),), 1.0, nut_on,
+                        reads=("w_n",), rotary=True))
+        out.append(Site("guide", "guide", "v_t", (("table", "1.0"),), reads=("v_t",)))
         if share > 0.0:
             out.append(Site("ball_nut", "screw", f"{H} * (w_s - w_n)",
-                            (("screw", H), ("nut", f"(-{H})")), share))
+                            (("screw", H), ("nut", f"(-{H})")), share, reads=("w_s", "w_n"),
+                            rotary=True))
         return out
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
@@ -171,18 +180,24 @@ class BallScrewDrive(Mechanism):
             speed=(f"(({b.y('table_speed')} + {Hp} * {b.y('nut_speed')}) / {Hp} if {fb} "
                    f"else {b.y('screw_speed')})"),
             speed_q=f"((s_table + {Hp} * s_nut_angle) / {Hp} if {fb} else s_screw_angle)",
-            current_state=b.y("screw_current"))
+            current_state=b.y("screw_current"), position_reads=("y:table_position",),
+            speed_reads=("y:table_speed", "y:nut_speed", "y:screw_speed"),
+            current_reads=("y:screw_current",))
         nut = Axis(
             name="nut", param_offset=o_n, reference="ref_xn", feedforward="ref_vn",
             position=f"{Hp} * {b.y('nut_angle')}", position_q=f"{Hp} * q_nut_angle",
             speed=b.y("nut_speed"), speed_q="s_nut_angle", current_state=b.y("nut_current"),
-            active=f"{b.p('nut.active')} > 0.5", speed_law="speed")
+            active=f"{b.p('nut.active')} > 0.5", speed_law="speed",
+            position_reads=("y:nut_angle",), speed_reads=("y:nut_speed",),
+            current_reads=("y:nut_current",))
         return [screw, nut], channels
 
-    def compensation(self, b: Builder) -> tuple[list[tuple[str, str, str]], str]:
+    def compensation(self, b: Builder
+                     ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:
         H = b.p("screw.H")
-        return ([("screw", "(ref_v + ref_vn)", f"{H} * {b.y('screw_speed')}"),
-                 ("guide", "ref_v", b.y("table_speed"))],
+        return ([("screw", "(ref_v + ref_vn)", f"{H} * {b.y('screw_speed')}",
+                  ("y:screw_speed",)),
+                 ("guide", "ref_v", b.y("table_speed"), ("y:table_speed",))],
                 f"{H} / {b.p('screw_motor.torque_constant')}")
 
     def steady_motion(self, table_speed: float, nut_speed: float
@@ -246,51 +261,64 @@ class BallScrewDrive(Mechanism):
         from ..disturbances import harmonics
 
         H = b.p("screw.H")
-        b.emit(f"{b.a('nut_position_reference')} = ref_xn")
-        b.emit(f"{b.a('nut_speed_reference')} = ref_vn")
-        b.emit(f"w_s = {b.y('screw_speed')}")
-        b.emit(f"w_n = {b.y('nut_speed')}")
-        b.emit(f"v_t = {b.y('table_speed')}")
+        b.emit(f"{b.a('nut_position_reference')} = ref_xn",
+               writes="aux:nut_position_reference", reads="reference")
+        b.emit(f"{b.a('nut_speed_reference')} = ref_vn", writes="aux:nut_speed_reference",
+               reads="reference")
+        b.emit(f"w_s = {b.y('screw_speed')}", writes="w_s", reads="y:screw_speed")
+        b.emit(f"w_n = {b.y('nut_speed')}", writes="w_n", reads="y:nut_speed")
+        b.emit(f"v_t = {b.y('table_speed')}", writes="v_t", reads="y:table_speed")
         for ln in m.always:
             b.emit(ln)
         k_eq = b.use(equivalent_stiffness_kernel)
         b.emit(f"k_eq = {k_eq}({b.y('table_position')}, P, "
-               f"{b.param_index['stiffness.k_fixed']})")
+               f"{b.param_index['stiffness.k_fixed']})", writes="k_eq",
+               reads="y:table_position")
         c_ax = b.p("stiffness.axial_damping")
         th_rel = f"({b.y('screw_angle')} - {b.y('nut_angle')})"
+        stretch = ("k_eq", "y:screw_angle", "y:nut_angle", "y:table_position", "w_s", "w_n",
+                   "v_t")
         if m.lead is None:
             b.emit(f"f_d = (k_eq * ({H} * {th_rel} - {b.y('table_position')}) "
-                   f"+ {c_ax} * ({H} * (w_s - w_n) - v_t))")
+                   f"+ {c_ax} * ({H} * (w_s - w_n) - v_t))", writes="f_d", reads=stretch)
             lever = H
+            lever_reads: tuple[str, ...] = ()
         else:
             hh = b.use(harmonics)
-            b.emit(f"lead_dev, lead_slope = {hh}({th_rel}, P, {m.lead[0]}, {m.lead[1]})")
+            b.emit(f"lead_dev, lead_slope = {hh}({th_rel}, P, {m.lead[0]}, {m.lead[1]})",
+                   writes="lead", reads=("y:screw_angle", "y:nut_angle"))
             b.emit(f"f_d = (k_eq * ({H} * {th_rel} + lead_dev - {b.y('table_position')}) "
-                   f"+ {c_ax} * (({H} + lead_slope) * (w_s - w_n) - v_t))")
+                   f"+ {c_ax} * (({H} + lead_slope) * (w_s - w_n) - v_t))", writes="f_d",
+                   reads=(*stretch, "lead"))
             lever = f"({H} + lead_slope)"
+            lever_reads = ("lead",)
         screw = self._shaft(b, "screw", m, f"- {lever} * f_d")
         table = Body(drive=["f_d"], external=list(m.forces.get("table", [])))
         if m.load is not None:
             table.external.append(f"- {m.load}")
-        b.emit(f"{b.dy('screw_angle')} = w_s")
-        b.emit(f"{b.dy('screw_speed')} = ({screw.expression()}) / {b.p('screw.J')}")
-        b.emit(f"{b.dy('table_position')} = v_t")
-        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}")
+        b.emit(f"{b.dy('screw_angle')} = w_s", writes="dy:screw_angle", reads="w_s")
+        b.emit(f"{b.dy('screw_speed')} = ({screw.expression()}) / {b.p('screw.J')}",
+               writes="dy:screw_speed", reads=self._shaft_reads("screw", m, lever_reads))
+        b.emit(f"{b.dy('table_position')} = v_t", writes="dy:table_position", reads="v_t")
+        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}",
+               writes="dy:table_speed", reads=("f_d", *m.body_reads("table"), *m.load_reads))
         self._current(b, "screw", "w_s", m.torque_off)
         # the hollow motor and nut: live in the DDFS (or with the CDFS nut on its servo)
         b.emit(f"if {b.p('nut.active')} > 0.5:")
         for ln in m.gated:
             b.emit("    " + ln)
         nut = self._shaft(b, "nut", m, f"+ {lever} * f_d")
-        b.emit(f"    {b.dy('nut_angle')} = w_n")
-        b.emit(f"    {b.dy('nut_speed')} = ({nut.expression()}) / {b.p('nut.J')}")
+        b.emit(f"    {b.dy('nut_angle')} = w_n", writes="dy:nut_angle", reads="w_n")
+        b.emit(f"    {b.dy('nut_speed')} = ({nut.expression()}) / {b.p('nut.J')}",
+               writes="dy:nut_speed", reads=self._shaft_reads("nut", m, lever_reads))
         self._current(b, "nut", "w_n", m.torque_off, indent="    ")
         b.emit("else:")
-        for ln in m.frozen:
+        for ln in m.frozen:  # their values (0) carry no state: nothing to declare
             b.emit("    " + ln)
         for name in ("nut_angle", "nut_speed", "nut_current"):
             b.emit(f"    {b.dy(name)} = 0.0")
-        b.emit(f"{b.a('equivalent_stiffness')} = k_eq")
+        b.emit(f"{b.a('equivalent_stiffness')} = k_eq", writes="aux:equivalent_stiffness",
+               reads="k_eq")
 
     def _shaft(self, b: Builder, key: str, m: Mechanics, reaction: str) -> Body:
         shaft = Body(drive=[] if m.torque_off else
@@ -301,13 +329,19 @@ class BallScrewDrive(Mechanism):
         shaft.reaction = [reaction]
         return shaft
 
+    def _shaft_reads(self, key: str, m: Mechanics, lever: tuple[str, ...]) -> tuple[str, ...]:
+        """What a shaft's equation (:meth:`_shaft`) is computed from."""
+        motor = () if m.torque_off else (f"y:{key}_current",)
+        return (*motor, *m.body_reads(key), "f_d", *lever)
+
     def _current(self, b: Builder, key: str, speed: str, torque_off: bool,
                  indent: str = "") -> None:
         i = f"{key}_current"
         if torque_off:
-            b.emit(f"{indent}{b.dy(i)} = 0.0")
+            b.emit(f"{indent}{b.dy(i)} = 0.0", writes=f"dy:{i}")
             return
         mot = f"{key}_motor"
         b.emit(f"{indent}{b.dy(i)} = ({b.a(key + '_voltage')} - {b.p(mot + '.resistance')} * "
                f"{b.y(i)} - {b.p(mot + '.back_emf_constant')} * {speed}) / "
-               f"{b.p(mot + '.inductance')}")
+               f"{b.p(mot + '.inductance')}", writes=f"dy:{i}",
+               reads=(f"aux:{key}_voltage", f"y:{i}", speed))

@@ -3,7 +3,11 @@
 A mechanism is registered by drive name (``"cdfs"``, ``"ddfs"``, ``"linear-motor"``).  It
 declares its states, parameters, friction sites, motors and controller axes to a
 :class:`~feeddrive.model.codegen.Builder`, and writes its equations with the friction and
-disturbance terms the assembler hands it per body.  The interface is :class:`Mechanism`.
+disturbance terms the assembler hands it per body — each with what it is computed from
+(``Builder.emit(..., writes=, reads=)``; ``Site.reads``, the ``Axis`` ``*_reads``), from which
+the Jacobian's pattern is assembled.  Class attributes declare the rest of its structure: its
+motors (:class:`DriveMotor`, for torque ripple), the table's travel, whether the model depends
+on the table position.  The interface is :class:`Mechanism`.
 """
 
 from __future__ import annotations
@@ -47,6 +51,9 @@ class Site:
     bodies: tuple[tuple[str, str], ...]  # (body, factor code) pairs: term = − factor·F
     scale: float = 1.0  # share of the site's friction (ball–nut split)
     active: str = ""  # condition under which the site acts ("" = always)
+    # what ``speed`` is computed from (``Builder.flow`` names, e.g. "y:screw_speed")
+    reads: tuple[str, ...] = ()
+    rotary: bool = False  # on a shaft, its torque stored as force at the lever (torque ÷ H)
 
     def parameters(self, params: DriveParameters) -> Any:
         """The site's parameters: ``friction.<parameters_key>``, or the dotted path
@@ -68,11 +75,38 @@ class Site:
         return obj
 
 
+@dataclass(frozen=True)
+class DriveMotor:
+    """A motor of a mechanism as the disturbances see it (:attr:`Mechanism.drive_motors`).
+
+    Parameters
+    ----------
+    name : str
+        Its key, e.g. ``"screw"``: its ripple signal is ``<name>_ripple_torque`` [N m].
+    angle : str
+        The state of its rotor angle [rad] ("" for a linear motor).
+    body : str
+        The body its torque acts on (a key of :attr:`Mechanics.forces`).
+    ripple : str, default ""
+        The ``[disturbances]`` field of its torque ripple ("" = not modelled: a ripple given
+        for this drive is refused).
+    label : str, default ""
+        Its name in messages, e.g. ``"hollow motor"`` ("" = ``"<name> motor"``).
+    """
+
+    name: str
+    angle: str
+    body: str
+    ripple: str = ""
+    label: str = ""
+
+
 @dataclass
 class Mechanics:
     """What the assembler hands a mechanism to write its equations: per-body external force
-    terms, the friction-site code lines (always-on and gated by a site's condition), the lines
-    that freeze gated sites' states, and the disturbance terms."""
+    terms and what they are computed from (``Builder.flow`` names), the friction-site code
+    lines (always-on and gated by a site's condition), the lines that freeze gated sites'
+    states, and the disturbance terms (ripple per motor name, lead-error block, load)."""
 
     forces: dict[str, list[str]]
     always: list[str]
@@ -82,6 +116,12 @@ class Mechanics:
     lead: tuple[int, int] | None
     load: str | None
     torque_off: bool
+    reads: dict[str, list[str]] = field(default_factory=dict)  # body -> its terms' inputs
+    load_reads: tuple[str, ...] = ()
+
+    def body_reads(self, body: str) -> list[str]:
+        """What the external terms of ``body`` (friction, ripple) are computed from."""
+        return list(self.reads.get(body, ()))
 
 
 class Mechanism:
@@ -95,8 +135,16 @@ class Mechanism:
     #: constant × current); None: per axis, ``<axis>_motor.torque_constant``
     single_motor: tuple[str, str] | None = None
     published: bool = True  # a published model: its docstring has a References section
-    ripple_motors: tuple[str, ...] = ()  # motors whose torque ripple this topology models
+    #: its motors: rotor-angle state, the body driven, the disturbance field of its ripple
+    drive_motors: tuple[DriveMotor, ...] = ()
     has_lead_screw = False
+    #: dotted parameter path of the table's travel [m] (the ball screw's ``screw.length``);
+    #: "" = no travel limit known (a run's summary warns when the table leaves it)
+    travel_length: str = ""
+    travel_ends: str = ""  # what bounds that travel, for messages ("the screw supports")
+    #: whether the model depends on the table's position (the ball screw's K_eq(a)); a run's
+    #: header names the position only then
+    uses_table_position = False
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:
@@ -130,10 +178,12 @@ class Mechanism:
     def check_profile(self, nut_speed: float, nut_table: Any) -> None:
         """Refuse a reference this topology cannot follow."""
 
-    def compensation(self, b: Builder) -> tuple[list[tuple[str, str, str]], str]:
+    def compensation(self, b: Builder
+                     ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:
         """Friction sites a compensator on the table-driving motor models, as (parameter key,
-        commanded speed code, measured speed code), and the code of the factor from force [N]
-        to that motor's current [A]."""
+        commanded speed code, measured speed code, the states that measured speed reads as
+        ``Builder.flow`` names), and the code of the factor from force [N] to that motor's
+        current [A]."""
         from ...parameters import ParameterError
 
         raise ParameterError("controller.compensation.mode", "—",

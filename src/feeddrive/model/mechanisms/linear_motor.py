@@ -18,7 +18,7 @@ from ...parameters import Component, DriveParameters, ParameterError
 from ...parameters.validation import quantity
 from ..codegen import Builder
 from ..loops import GRAT_Q, Axis, Channel, axis_parameters
-from .base import Body, Mechanics, Mechanism, Site, register_mechanism
+from .base import Body, DriveMotor, Mechanics, Mechanism, Site, register_mechanism
 
 
 @dataclass(frozen=True)
@@ -56,6 +56,7 @@ class LinearMotorDrive(Mechanism):
     drives = ("linear-motor",)
     example_preset = "linear-motor-example"
     single_motor = ("motor.force_constant", "motor_force")
+    drive_motors = (DriveMotor("motor", "", "table"),)  # no torque ripple modelled
     published = False  # a generic direct drive, not a published model
 
     @classmethod
@@ -87,7 +88,7 @@ class LinearMotorDrive(Mechanism):
         b.state("motor_current", "A", "linear motor current", "current")
 
     def sites(self, b: Builder) -> list[Site]:
-        return [Site("guide", "guide", "v_t", (("table", "1.0"),))]
+        return [Site("guide", "guide", "v_t", (("table", "1.0"),), reads=("v_t",))]
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
         o = axis_parameters(b, "motor", self.params.controller, 1.0, speed_mode=False)
@@ -96,11 +97,14 @@ class LinearMotorDrive(Mechanism):
         motor = Axis(name="motor", param_offset=o, reference="ref_x", feedforward="ref_v",
                      position=b.y("table_position"), position_q="q_table",
                      speed=b.y("table_speed"), speed_q="s_table",
-                     current_state=b.y("motor_current"), speed_unit="m/s")
+                     current_state=b.y("motor_current"), speed_unit="m/s",
+                     position_reads=("y:table_position",), speed_reads=("y:table_speed",),
+                     current_reads=("y:motor_current",))
         return [motor], channels
 
-    def compensation(self, b: Builder) -> tuple[list[tuple[str, str, str]], str]:
-        return ([("guide", "ref_v", b.y("table_speed"))],
+    def compensation(self, b: Builder
+                     ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:
+        return ([("guide", "ref_v", b.y("table_speed"), ("y:table_speed",))],
                 f"1.0 / {b.p('motor.force_constant')}")
 
     def site_masses(self) -> dict[str, float]:
@@ -117,20 +121,24 @@ class LinearMotorDrive(Mechanism):
         return {"guide": self.params.table.mass + lm.forcer_mass}
 
     def emit(self, b: Builder, m: Mechanics) -> None:
-        b.emit(f"v_t = {b.y('table_speed')}")
+        b.emit(f"v_t = {b.y('table_speed')}", writes="v_t", reads="y:table_speed")
         for ln in m.always:
             b.emit(ln)
         drive = "0.0" if m.torque_off else (
             f"{b.p('motor.force_constant')} * {b.y('motor_current')}")
-        b.emit(f"f_d = {drive}")
+        b.emit(f"f_d = {drive}", writes="f_d",
+               reads=() if m.torque_off else ("y:motor_current",))
         table = Body(drive=["f_d"], external=list(m.forces.get("table", [])))
         if m.load is not None:
             table.external.append(f"- {m.load}")
-        b.emit(f"{b.dy('table_position')} = v_t")
-        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}")
+        b.emit(f"{b.dy('table_position')} = v_t", writes="dy:table_position", reads="v_t")
+        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}",
+               writes="dy:table_speed", reads=("f_d", *m.body_reads("table"), *m.load_reads))
         if m.torque_off:
-            b.emit(f"{b.dy('motor_current')} = 0.0")
+            b.emit(f"{b.dy('motor_current')} = 0.0", writes="dy:motor_current")
         else:
             b.emit(f"{b.dy('motor_current')} = ({b.a('motor_voltage')} - "
                    f"{b.p('motor.resistance')} * {b.y('motor_current')} - "
-                   f"{b.p('motor.back_emf_constant')} * v_t) / {b.p('motor.inductance')}")
+                   f"{b.p('motor.back_emf_constant')} * v_t) / {b.p('motor.inductance')}",
+                   writes="dy:motor_current",
+                   reads=("aux:motor_voltage", "y:motor_current", "v_t"))
