@@ -99,8 +99,8 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
                     ) -> dict[str, Any]:
     """Steady friction force [N] against sliding speed [mm/s] at each site the drive uses,
     the speed bands where it falls (negative damping), and the sites' operating speeds."""
+    from ..model.friction.lugre_parameters import LuGreParameters
     from ..model.friction.stribeck import negative_slope_band, steady_friction
-    from ..parameters import LuGreParameters
 
     params = checked.params
     assert params is not None

@@ -17,19 +17,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness
-from ..parameters.components import (
+from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
+from ..model.loops import Controller
+from ..model.mechanisms.ball_screw_parameters import (
     BallScrew,
-    Controller,
     Coupling,
-    DriveParameters,
-    FrictionBranch,
     FrictionSites,
-    LuGreParameters,
-    Motor,
     StiffnessModel,
-    Table,
 )
+from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness
+from ..model.mechanisms.shared import Motor, Table
+from ..parameters.components import DriveParameters
 
 CITATION = (
     "Z. Wang, X. Feng, H. Yang, H. Jin, 'Research on low-speed characteristics of differential "
@@ -313,7 +311,7 @@ RIPPLE_ASSUMPTIONS: tuple[Assumption, ...] = (
 
 def ripple() -> DriveParameters:
     """``wang2021-ripple``: the shipped reading plus motor torque ripple on both motors."""
-    from ..parameters.components import Disturbances, TorqueRipple
+    from ..model.disturbances import Disturbances, TorqueRipple
 
     r = TorqueRipple((RIPPLE_ORDER,), (RIPPLE_AMPLITUDE,), (0.0,))
     base = shipped()
