@@ -19,7 +19,8 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
-from feeddrive.parameters import DriveParameters, Motor
+from feeddrive.model.mechanisms.shared import Motor
+from feeddrive.parameters import DriveParameters
 
 N_STATE = 15
 TAU, ONE = 15, 16  # augmented states: time and the constant 1

@@ -114,7 +114,8 @@ from typing import Any
 
 import numpy as np
 
-from feeddrive.parameters import DriveParameters, LuGreParameters
+from feeddrive.model.friction.lugre_parameters import LuGreParameters
+from feeddrive.parameters import DriveParameters
 
 STATE_NAMES = (
     "screw_angle", "screw_speed", "nut_angle", "nut_speed", "table_position", "table_speed",

@@ -11,8 +11,10 @@ that provide them sit above it).  A group's providers are
   specifications/entry-points/>`_ in the group of that name: ``feeddrive.mechanisms`` (name =
   drive name, value = a mechanism class), ``feeddrive.friction_laws`` (name = law name, value
   = a friction-law instance), ``feeddrive.presets`` (name = set name, value = a function
-  returning the parameter set) and ``feeddrive.sections`` (name = a parameter-file section
-  such as ``rack_pinion``, value = the part's parameter class).
+  returning the parameter set), ``feeddrive.sections`` (name = a parameter-file section
+  such as ``screw``, ``controller`` or ``rack_pinion``, value = the part's parameter class)
+  and ``feeddrive.mechanism_kinds`` (name = a parameter file's ``mechanism`` kind such as
+  ``ball-screw``, value = a :class:`feeddrive.parameters.Composition` naming its parts).
 
 Both are imported only when a group is first read, so that ``import feeddrive.parameters``
 stays cheap and a broken third-party plug-in cannot stop the package from importing.
@@ -34,14 +36,19 @@ MECHANISMS = "feeddrive.mechanisms"
 FRICTION_LAWS = "feeddrive.friction_laws"
 PRESETS = "feeddrive.presets"
 SECTIONS = "feeddrive.sections"
+MECHANISM_KINDS = "feeddrive.mechanism_kinds"
 
 #: The package's own providers of each group (modules that register on import).
 BUILTIN_PROVIDERS: dict[str, tuple[str, ...]] = {
     MECHANISMS: ("feeddrive.model.mechanisms.*",),
     FRICTION_LAWS: ("feeddrive.model.friction.*",),
     PRESETS: ("feeddrive.presets",),
-    # parameter sections of parts (e.g. ``[rack_pinion]``): registered by the part's module
-    SECTIONS: ("feeddrive.model.mechanisms.*", "feeddrive.model.parts.*"),
+    # parameter sections of parts (``[screw]``, ``[controller]``, ``[rack_pinion]`` …):
+    # registered by the part's own module
+    SECTIONS: ("feeddrive.model.mechanisms.*", "feeddrive.model.parts.*",
+               "feeddrive.model.loops", "feeddrive.model.disturbances"),
+    # a parameter file's ``mechanism`` kind: the parts it is composed of
+    MECHANISM_KINDS: ("feeddrive.model.mechanisms.*",),
 }
 
 _TABLES: dict[str, dict[str, Any]] = {group: {} for group in BUILTIN_PROVIDERS}

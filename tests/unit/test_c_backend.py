@@ -39,8 +39,9 @@ from feeddrive.backends.c_backend import (
 from feeddrive.engine.simulate import sampling
 from feeddrive.model import reference as profiles
 from feeddrive.model.assemble import Model
+from feeddrive.model.disturbances import LeadError, TorqueRipple
+from feeddrive.model.loops import Compensation
 from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
-from feeddrive.parameters import Compensation, LeadError, TorqueRipple
 from feeddrive.solvers.schedule import due
 
 try:

@@ -12,7 +12,8 @@ import feeddrive as fd
 from feeddrive.analysis.compensation import Case, default_cases, evaluate
 from feeddrive.analysis.critical import creep_trial
 from feeddrive.analysis.linear import stability_band
-from feeddrive.parameters import Compensation, ParameterError
+from feeddrive.model.loops import Compensation
+from feeddrive.parameters import ParameterError
 
 W = fd.preset("wang2021")
 

@@ -11,9 +11,11 @@ import pytest
 import feeddrive as fd
 from feeddrive.analysis.linear import averaged
 from feeddrive.engine.result import Result
+from feeddrive.model.disturbances import TorqueRipple
+from feeddrive.model.loops import Compensation
 from feeddrive.model.mechanisms import mechanism
 from feeddrive.model.reference import ConstantSpeed
-from feeddrive.parameters import Compensation, ParameterError, TorqueRipple
+from feeddrive.parameters import ParameterError
 
 W = fd.preset("wang2021")
 LM = fd.preset("linear-motor-example")

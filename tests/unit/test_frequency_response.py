@@ -18,8 +18,9 @@ from feeddrive.analysis.linear import (
     linearize,
     loop_analysis,
 )
+from feeddrive.model.disturbances import TorqueRipple
 from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness
-from feeddrive.parameters import ParameterError, TorqueRipple
+from feeddrive.parameters import ParameterError
 
 W = fd.preset("wang2021")
 CDFS = fd.DriveSystem(W, "cdfs", 0.4)

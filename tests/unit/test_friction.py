@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from feeddrive import friction, preset
-from feeddrive.parameters import LuGreParameters
+from feeddrive.model.friction.lugre_parameters import LuGreParameters
 
 PARAMS = preset("wang2021")
 SITES: dict[str, LuGreParameters] = {

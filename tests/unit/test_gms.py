@@ -13,7 +13,8 @@ from scipy.integrate import solve_ivp
 import feeddrive as fd
 from feeddrive.model.friction import friction_law
 from feeddrive.model.friction.gms import GMSParameters
-from feeddrive.parameters import FrictionBranch, LuGreParameters, ParameterError
+from feeddrive.model.friction.lugre_parameters import FrictionBranch, LuGreParameters
+from feeddrive.parameters import ParameterError
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "gms_guide.toml"
 BRANCH = FrictionBranch(coulomb_force=10.0, static_force=20.0, stribeck_velocity=1e-3,

@@ -23,8 +23,8 @@ import feeddrive
 from feeddrive.analysis.presliding import fit_presliding, site_mass
 from feeddrive.analysis.presliding_rig import simulate_presliding
 from feeddrive.analysis.static_fit import fit_static
+from feeddrive.model.friction.lugre_parameters import LuGreParameters
 from feeddrive.model.friction.stribeck import bristle_rate, steady_friction
-from feeddrive.parameters import LuGreParameters
 
 PARAMS = feeddrive.preset("wang2021")
 SCREW = PARAMS.friction.screw

@@ -25,9 +25,10 @@ import pytest
 
 import feeddrive as fd
 from feeddrive.model.assemble import Model
+from feeddrive.model.disturbances import LeadError, TorqueRipple
+from feeddrive.model.loops import Compensation
 from feeddrive.model.reference import ConstantSpeed
 from feeddrive.model.sparsity import colour_columns, declared_pattern
-from feeddrive.parameters import Compensation, LeadError, TorqueRipple
 
 W = fd.preset("wang2021")
 

@@ -11,6 +11,7 @@ import pytest
 import feeddrive as fd
 from feeddrive import friction
 from feeddrive.analysis.linear import linearize, loop_analysis, stability_band
+from feeddrive.model.friction.lugre_parameters import LuGreParameters
 from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness
 from feeddrive.parameters import ParameterError
 
@@ -117,7 +118,7 @@ def test_sampled_loops_are_refused_with_the_field_named() -> None:
 # ---------------------------------------------------------------- single-mass LuGre system
 
 
-def _mass_spring_rhs(y: np.ndarray, v_drive: float, site: fd.parameters.LuGreParameters,
+def _mass_spring_rhs(y: np.ndarray, v_drive: float, site: LuGreParameters,
                      mass: float, k: float, c: float) -> np.ndarray:
     """x_rel = spring stretch, v, z: mass pulled at v_drive through spring k and damper c on
     one LuGre contact (Åström & Canudas de Wit, IEEE CSM 28 (2008) 101–114, Sect. 'stick-slip')."""
@@ -130,7 +131,7 @@ def _mass_spring_rhs(y: np.ndarray, v_drive: float, site: fd.parameters.LuGrePar
     return np.array([v_drive - v, (k * stretch + c * (v_drive - v) - f) / mass, dz])
 
 
-def _fd_rightmost(v: float, site: fd.parameters.LuGreParameters, mass: float, k: float,
+def _fd_rightmost(v: float, site: LuGreParameters, mass: float, k: float,
                   c: float) -> float:
     """Rightmost eigenvalue of a finite-difference Jacobian at steady sliding at v."""
     b = site.positive

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
+from feeddrive.model.disturbances import LeadError, TorqueRipple
 from feeddrive.model.friction import FrictionLaw, friction_law, register_friction_law
 from feeddrive.model.reference import ConstantSpeed
-from feeddrive.parameters import LeadError, ParameterError, TorqueRipple, loads
+from feeddrive.parameters import ParameterError, loads
 
 # ---------------------------------------------------------------- a toy law in this file only
 

@@ -32,7 +32,10 @@ def numeric_leaves(obj: Any, prefix: str = "") -> list[tuple[str, dict[str, Any]
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
         path = f"{prefix}.{f.name}" if prefix else f.name
-        if dataclasses.is_dataclass(value):
+        if f.name == "sections":  # the composition's parts, each a section of its own
+            for name, section in value:
+                out.extend(numeric_leaves(section, f"{prefix}.{name}" if prefix else name))
+        elif dataclasses.is_dataclass(value):
             out.extend(numeric_leaves(value, path))
         elif "unit" in f.metadata and not f.metadata.get("vector"):
             out.append((path, dict(f.metadata)))

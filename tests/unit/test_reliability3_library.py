@@ -21,10 +21,10 @@ from pathlib import Path
 
 import pytest
 
-import feeddrive as fd
 from feeddrive.explore import settings as st
 from feeddrive.io.json_store import ResultStore
 from feeddrive.io.outputs import atomic_path, shown
+from feeddrive.model.loops import Controller
 from feeddrive.parameters import ParameterError, dumps, load, preset
 from feeddrive.parameters.toml_io import MAX_EXTENDS
 from feeddrive.sweep import design as sweep_design
@@ -293,7 +293,7 @@ def test_a_period_is_zero_or_at_least_a_microsecond(tmp_path: Path, period: str,
 
 def test_periods_of_zero_and_a_microsecond_are_accepted(tmp_path: Path) -> None:
     base = preset("wang2021").controller
-    assert fd.parameters.Controller(**{**base.__dict__, "current_period": 1e-6,
+    assert Controller(**{**base.__dict__, "current_period": 1e-6,
                                        "velocity_period": 2e-6, "position_period": 0.0})
 
 
@@ -440,6 +440,7 @@ def test_the_explorer_refuses_a_tiny_period_in_an_imported_set() -> None:
 def test_the_statements_of_docs_outputs_md_are_the_codes(tmp_path: Path) -> None:
     import re
 
+    from feeddrive.model import loops
     from feeddrive.parameters import components, toml_io, validation
 
     doc = " ".join((Path(__file__).resolve().parents[2] / "docs" / "outputs.md").read_text()
@@ -452,6 +453,6 @@ def test_the_statements_of_docs_outputs_md_are_the_codes(tmp_path: Path) -> None
     assert f"files over {toml_io.MAX_TOML_BYTES // 1024 // 1024} MB" in doc
     assert f"at most {components.MAX_NAME} characters" in doc
     assert f"at most {components.MAX_DESCRIPTION:,} characters".replace(",", " ") in doc
-    assert components.MIN_PERIOD == 1e-6 and "at least 1 µs" in doc
-    assert components.MIN_GRATING == 1e-9 and "at least 1 nm" in doc
+    assert loops.MIN_PERIOD == 1e-6 and "at least 1 µs" in doc
+    assert loops.MIN_GRATING == 1e-9 and "at least 1 nm" in doc
     assert "`stribeck_velocity_scale` at least 0.001" in doc

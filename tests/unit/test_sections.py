@@ -10,7 +10,7 @@ import pytest
 
 import feeddrive as fd
 from feeddrive import registry
-from feeddrive.parameters import Component, ParameterError, dumps, loads
+from feeddrive.parameters import Component, ParameterError, composition, dumps, loads
 from feeddrive.parameters.validation import quantity
 
 
@@ -55,8 +55,49 @@ def test_an_unknown_section_is_an_unknown_key():
         loads('extends = "wang2021"\n[no_such_part]\nx = 1\n')
 
 
-def test_a_set_without_sections_has_none():
+def test_a_set_has_exactly_its_kinds_sections():
+    # every part is a section (issue 19 item 1): the ball-screw kind's, and no part's own
     params = fd.preset("wang2021")
-    assert params.sections == () and params.section("toy_gear") is None
+    assert {name for name, _ in params.sections} == set(composition("ball-screw").order())
+    assert params.section("toy_gear") is None
+    assert params.linear_motor is None  # a registered section the set does not give
     with pytest.raises(AttributeError):
         _ = params.toy_gear
+
+
+def test_a_file_names_its_mechanism_kind():
+    plain = loads('extends = "wang2021"\n')
+    named = loads('extends = "wang2021"\nmechanism = "ball-screw"\n')
+    assert named == plain and plain.mechanism == "ball-screw"
+    with pytest.raises(ParameterError, match="mechanism = 'gantry': unknown mechanism kind; "
+                       "expected one of ball-screw"):
+        loads('extends = "wang2021"\nmechanism = "gantry"\n')
+
+
+def test_a_kinds_required_part_is_named_when_missing():
+    text = dumps(fd.preset("wang2021"))
+    start = text.index("[coupling]")
+    end = text.index("\n[", start + 1)
+    with pytest.raises(ParameterError) as err:
+        loads(text[:start] + text[end + 1:])
+    assert err.value.field == "coupling" and "missing field" in err.value.message
+
+
+def test_the_kinds_defaults_fill_what_a_set_leaves_out():
+    from feeddrive.model.disturbances import Disturbances
+    from feeddrive.model.mechanisms.ball_screw_parameters import StiffnessModel
+
+    base = fd.preset("wang2021-literal")
+    bare = fd.DriveParameters(name="bare", description="", screw=base.screw,
+                              coupling=base.coupling, screw_motor=base.screw_motor,
+                              hollow_motor=base.hollow_motor, table=base.table,
+                              friction=base.friction)
+    assert bare.stiffness == StiffnessModel() and bare.disturbances == Disturbances()
+    assert bare.controller == base.controller  # Table 2's gains
+    assert bare.with_values(controller=None).controller == base.controller
+
+
+def test_a_written_file_carries_its_kinds_note():
+    note = composition("ball-screw").file_note
+    assert "torques divided by H" in note
+    assert f"# {note}\n" in dumps(fd.preset("wang2021"))

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from feeddrive import friction, preset
-from feeddrive.parameters import LuGreParameters
+from feeddrive.model.friction.lugre_parameters import LuGreParameters
 
 PARAMS = preset("wang2021")
 SITES: dict[str, LuGreParameters] = {

@@ -11,8 +11,8 @@ import pytest
 import feeddrive as fd
 from feeddrive.analysis import forced
 from feeddrive.analysis.forced import ripple_point, threshold_critical_speed
+from feeddrive.model.disturbances import TorqueRipple
 from feeddrive.model.reference import ConstantSpeed
-from feeddrive.parameters import TorqueRipple
 
 RIPPLE = fd.preset("wang2021-ripple")
 

@@ -2,7 +2,7 @@
 and the DDFS, side by side (issue 14): critical speed from rest, the linear creep band, and
 tracking at a constant speed inside the CDFS's creep range.
 
-Compensation laws: :class:`feeddrive.parameters.Compensation` (static feed-forward,
+Compensation laws: :class:`feeddrive.model.loops.Compensation` (static feed-forward,
 Armstrong-Hélouvry et al. 1994; LuGre observer, Canudas de Wit et al. 1995).
 """
 
@@ -15,8 +15,9 @@ from typing import Any
 import numpy as np
 
 from ..engine.simulate import DriveSystem, simulate
+from ..model.loops import Compensation
 from ..model.reference import ConstantSpeed
-from ..parameters import Compensation, DriveParameters
+from ..parameters import DriveParameters
 from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
 from .cycle_verdict import VerdictRule
 from .linear import stability_band

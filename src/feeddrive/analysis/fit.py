@@ -298,6 +298,10 @@ def _field_meta(params: DriveParameters, path: str) -> tuple[float, dict[str, An
     for k, part in enumerate(parts):
         names = {f.name: f for f in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) \
             else {}
+        sections = dict(getattr(obj, "sections", ()) if k == 0 else ())
+        if part in sections and k < len(parts) - 1:  # a part's section of the composition
+            obj = sections[part]
+            continue
         if part not in names:
             where = ".".join(parts[:k]) or "the parameter set"
             raise FitError(f"--free {path}: unknown parameter ({part!r} is not a field of "

@@ -49,16 +49,12 @@ from scipy import optimize
 
 from ..engine.simulate import DriveSystem
 from ..model.assemble import Model
+from ..model.disturbances import LeadError, TorqueRipple
+from ..model.friction.lugre_parameters import LuGreParameters
 from ..model.loops import INJ_CURRENT, INJ_SPEED
 from ..model.mechanisms import Mechanism, mechanism
 from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
-from ..parameters import (
-    LeadError,
-    LuGreParameters,
-    ParameterError,
-    SiteParameters,
-    TorqueRipple,
-)
+from ..parameters import ParameterError, SiteParameters
 from . import protocol
 
 _T0 = 1.0  # [s] operating-point time (after the reference's start ramp)
@@ -443,7 +439,7 @@ def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
     if not left:
         return system, ()
     quiet = dataclasses.replace(d, **{name: type(getattr(d, name))() for name in harmonic})
-    params = dataclasses.replace(system.parameters, disturbances=quiet)
+    params = system.parameters.with_values(disturbances=quiet)
     note = (f"warning: {' and '.join(left)} of the parameter set give no steady state; "
             "linearised on the averaged model (their harmonics average to zero over a "
             "revolution and are left out)")

@@ -27,8 +27,9 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import least_squares
 
+from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
 from ..model.mechanisms import mechanism
-from ..parameters import DriveParameters, FrictionBranch, LuGreParameters, ParameterError
+from ..parameters import DriveParameters, ParameterError
 from .fit_statistics import (
     Estimate,
     covariance,

@@ -43,7 +43,7 @@ from ..model import codegen
 from ..model.assemble import solver_sources
 from ..model.disturbances import LoadProfile, emit_load
 from ..model.friction import friction_law
-from ..parameters import LuGreParameters
+from ..model.friction.lugre_parameters import LuGreParameters
 from ..solvers.dopri5 import STATUS_MESSAGES, STATUS_OK, new_memory
 from ..solvers.schedule import no_schedule
 

@@ -18,7 +18,7 @@ from typing import Any, Literal
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..parameters import FrictionBranch, LuGreParameters
+from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
 from .fit_statistics import (
     Estimate,
     correlation,

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from .. import units
 from ..io.outputs import PLOT_FORMATS, check_output_file
-from ..parameters import DriveParameters, LuGreParameters, ParameterError
+from ..parameters import DriveParameters, ParameterError
 from ._common import (
     MM_PER_S,
     N_PER_UM,
@@ -107,6 +107,8 @@ def friction_command(
     if plot:
         check_output_file(plot, option="--plot", inputs=[params_file], force=force,
                           formats=PLOT_FORMATS)
+    from ..model.friction.lugre_parameters import LuGreParameters  # numba: at use only
+
     params = resolve_parameters(preset_name, params_file)
     lugre: LuGreParameters = getattr(params.friction, site).require(
         LuGreParameters, f"friction.{site}", "feeddrive friction")

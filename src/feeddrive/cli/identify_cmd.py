@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from ..io.outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
-from ..parameters import DriveParameters, LuGreParameters, ParameterError, save
+from ..parameters import DriveParameters, ParameterError, save
 
 if TYPE_CHECKING:
     from ..analysis.fit_statistics import Estimate
@@ -256,6 +256,8 @@ def dynamic_command(
     if not (0.5 <= confidence < 1.0):
         raise ValueError(f"--confidence = {confidence!r}: expected a level in [0.5, 1)")
     _check_outputs(out, plot, [file, params_file, *(static or [])], force)
+    from ..model.friction.lugre_parameters import LuGreParameters  # numba: at use only
+
     params = _base(preset_name, params_file, static)
     m = mass if mass is not None else site_mass(params, site, "cdfs")
     data = read_presliding_test(file, time_column=time_column, force_column=force_column,

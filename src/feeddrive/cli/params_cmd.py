@@ -1,4 +1,4 @@
-"""`feeddrive params show|check`."""
+"""`feeddrive params show|slots|check`."""
 
 from __future__ import annotations
 
@@ -8,7 +8,11 @@ import typer
 
 from ..io.outputs import shown
 from ..parameters import dumps, load, preset, to_dict
-from ._common import app, console, user_errors
+from . import _units
+from ._common import app, console, print_json, resolve_parameters, user_errors
+
+#: every drive topology, for --help (as `feeddrive simulate` lists them)
+_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
 
 params_app = typer.Typer(no_args_is_help=True, help="Show and check parameter sets.")
 app.add_typer(params_app, name="params")
@@ -35,6 +39,40 @@ def show(
         typer.echo(json.dumps(to_dict(params), indent=2))
     else:
         raise ValueError(f"--format = {fmt!r}: expected toml or json")
+
+
+@params_app.command("slots")
+@user_errors
+def slots(
+    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
+                                           "(default wang2021, or the drive's example set)."),
+    params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    drive: str = typer.Option("cdfs", "--drive", metavar=_DRIVES,
+                              help="The drive whose model is assembled."),
+    position: float = typer.Option(400.0, "--position", help="Table position on the screw "
+                                   "[mm]."),
+    as_json: bool = typer.Option(False, "--json", help="Print the slot record as JSON (the "
+                                 "parameter_slots attribute a run writes; its profile "
+                                 "block is a zero command)."),
+) -> None:
+    """Print the parameters a run of DRIVE uses, as the assembled model's named slots (SI
+    value and unit per slot), the record a run writes; the reference profile's block is
+    left out (it is the command, not a parameter)."""
+    from ..engine.simulate import DriveSystem
+    from ..model.reference import ConstantSpeed
+    from ..model.slots import slot_table, slots_json
+
+    params = resolve_parameters(preset_name, params_file, drive)
+    system = DriveSystem(params, drive=drive,
+                         table_position=_units.position("--position", position, params, drive))
+    model = system.model(ConstantSpeed(0.0))
+    if as_json:
+        print_json(json.loads(slots_json(model)))
+        return
+    rows = [r for r in slot_table(model) if not r[0].startswith("profile[")]
+    width = max(len(name) for name, _, _ in rows)
+    for name, value, unit in rows:
+        typer.echo(f"{name:<{width}}  {value!r:>24}  [{unit}]")
 
 
 @params_app.command("check")

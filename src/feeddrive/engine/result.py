@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from ..io.results import save_result
+from ..model.slots import slot_table, slots_json
 from ..parameters import dumps
 from ..units import ENGINEERING as _ENGINEERING
 
@@ -142,6 +143,9 @@ class Run:
             "conventions": "SI units; friction at the shafts as torque ÷ H (Wang2021 Table 1)",
         }
         if full:
+            # what the run used: the model's named slots with units, written from the
+            # assembled model (feeddrive.model.slots); the set as given, to run it again
+            attrs["parameter_slots"] = slots_json(self.model)
             attrs["parameters_toml"] = dumps(system.parameters)
         return attrs
 
@@ -272,6 +276,25 @@ class Result:
             return dict(self._run.solver_stats)
         stats: dict[str, Any] = json.loads(self.dataset.attrs["solver"])
         return stats
+
+    @property
+    def parameter_slots(self) -> list[tuple[str, float, str]]:
+        """The parameters the run used, as the model's named slots: (slot name, value [SI],
+        unit) in the packed vector's order (:mod:`feeddrive.model.slots`).
+
+        Returns
+        -------
+        list of (str, float, str)
+            One row per slot; read from the record's ``parameter_slots`` attribute when
+            the result was loaded from a file.
+        """
+        if self._run is not None:
+            return slot_table(self._run.model)
+        text = self.dataset.attrs.get("parameter_slots")
+        if text is None:
+            return []
+        rows = json.loads(text)["slots"]
+        return [(str(n), float(v), str(u)) for n, v, u in rows]
 
     @property
     def command_speed(self) -> float:

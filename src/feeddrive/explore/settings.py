@@ -33,9 +33,9 @@ from dataclasses import dataclass, field
 from typing import Any
 from urllib.parse import parse_qsl, urlencode
 
+from ..model.loops import Compensation
 from ..parameters import (
     PRESETS,
-    Compensation,
     DriveParameters,
     ParameterError,
     dumps,

@@ -17,10 +17,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..parameters import DriveParameters, ParameterError, TorqueRipple
+from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
 from .compensation import CompensationFootprint, emit_compensation
-from .disturbances import LoadProfile, emit_harmonics, emit_load, harmonics
+from .disturbances import LoadProfile, TorqueRipple, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
 from .reference import PROFILE_PARAMS, REFERENCE_INPUTS, reference_with_inputs

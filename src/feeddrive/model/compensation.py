@@ -1,6 +1,6 @@
 """Friction compensation as a controller part: static feed-forward or a LuGre observer.
 
-See :class:`feeddrive.parameters.Compensation` for the laws and their sources.  The
+See :class:`feeddrive.model.loops.Compensation` for the laws and their sources.  The
 compensating force F̂ [N] of every compensated site is converted to current by the
 mechanism's factor (H/K_t for the screw motor, 1/K_f for a linear motor) and added to the
 compensated axis' current command.
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._jit import kernel
-from ..parameters import LuGreParameters, ParameterError
+from ..parameters import ParameterError
 from .codegen import Builder
 from .friction.lugre import (
     SIGMA0,
@@ -25,6 +25,7 @@ from .friction.lugre import (
     bristle_rate,
     stribeck_magnitude,
 )
+from .friction.lugre_parameters import LuGreParameters
 
 if TYPE_CHECKING:
     from ..parameters import DriveParameters

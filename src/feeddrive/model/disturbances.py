@@ -8,12 +8,15 @@ amplitudes are all zero, so the default model is exactly the undisturbed one.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
+from .. import registry
 from .._jit import kernel
-from ..parameters import LeadError, TorqueRipple
+from ..parameters import Component, ParameterError
+from ..parameters.validation import quantities, quantity
 from .codegen import Builder
 
 
@@ -181,3 +184,62 @@ def emit_harmonics(b: Builder, name: str,
         return None
     o = b.params(f"disturbances.{name}", np.array(orders + amps + phases))
     return o, len(orders)
+
+
+# ---- the disturbances' parameters: section [disturbances]
+
+
+@dataclass(frozen=True)
+class TorqueRipple(Component):
+    """Motor torque ripple and cogging: T_r(θ) = Σ_k A_k·sin(n_k·θ + φ_k), θ the motor shaft
+    angle [rad].  ``orders`` n_k per revolution, ``amplitudes`` A_k [N m], ``phases`` φ_k [rad]."""
+
+    orders: tuple[float, ...] = quantities("-", low=0, high=1e4)
+    amplitudes: tuple[float, ...] = quantities("N m", low=0, high=1e3)
+    phases: tuple[float, ...] = quantities("rad", low=-1e3, high=1e3)
+    _label = "ripple"
+
+    def _check(self) -> None:
+        _same_length(self, ("orders", "amplitudes", "phases"))
+
+
+@dataclass(frozen=True)
+class LeadError(Component):
+    """Screw lead error: the nut advances H·θ + Σ_k a_k·sin(n_k·θ + φ_k) [m] for a relative
+    screw–nut angle θ [rad]; ``amplitudes`` a_k [m] (typically a few µm)."""
+
+    orders: tuple[float, ...] = quantities("-", low=0, high=1e4)
+    amplitudes: tuple[float, ...] = quantities("m", low=0, high=1e-3, hint="1 µm = 1e-6 m")
+    phases: tuple[float, ...] = quantities("rad", low=-1e3, high=1e3)
+    _label = "lead_error"
+
+    def _check(self) -> None:
+        _same_length(self, ("orders", "amplitudes", "phases"))
+
+
+def _same_length(obj: Any, names: tuple[str, ...]) -> None:
+    lengths = {len(getattr(obj, n)) for n in names}
+    if len(lengths) > 1:
+        raise ParameterError(f"{obj._label}.{names[1]}", getattr(obj, names[1]),
+                             f"expected as many entries as {names[0]} "
+                             f"({len(getattr(obj, names[0]))})")
+
+
+@dataclass(frozen=True)
+class Disturbances(Component):
+    """Forces and errors acting on the drive besides friction (all zero by default).
+
+    ``load_force`` [N] acts on the table against positive motion (a cutting force resisting
+    the feed is positive), from ``load_start`` [s]; a time profile is given through the API
+    (:class:`feeddrive.LoadProfile`).
+    """
+
+    load_force: float = quantity("N", low=-1e6, high=1e6, default=0.0)
+    load_start: float = quantity("s", low=0, high=1e9, low_inclusive=True, default=0.0)
+    screw_motor_ripple: TorqueRipple = field(default_factory=lambda: TorqueRipple())
+    hollow_motor_ripple: TorqueRipple = field(default_factory=lambda: TorqueRipple())
+    lead_error: LeadError = field(default_factory=lambda: LeadError())
+    _label = "disturbances"
+
+
+registry.register(registry.SECTIONS, "disturbances", Disturbances)

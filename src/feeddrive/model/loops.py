@@ -18,11 +18,14 @@ writes the per-axis code into the assembled model.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import registry
 from .._jit import kernel
+from ..parameters import Component, ParameterError
+from ..parameters.validation import choice, flag, quantity
 from .codegen import Builder
 
 # parameter block of one axis (offsets from the axis' first slot)
@@ -330,28 +333,7 @@ class Axis:
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
-    """Register an axis' parameter block (:data:`AXIS_PARAMS`) from its controller settings.
-
-    Parameters
-    ----------
-    b : Builder
-        The model builder.
-    axis : str
-        The axis' name; the slots are ``controller.<axis>.<name>``.
-    c : Controller
-        The axis' controller parameters (gains [SI], limits, placement options).
-    H : float
-        The axis' transmission ratio, table travel per motor radian [m/rad].
-    speed_mode : bool
-        Whether the axis runs a speed loop only.
-
-    Returns
-    -------
-    int
-        Offset of the block's first slot in ``P``.
-    """
-    from ..parameters import Controller
-
+    """Register the parameter block of ``axis`` from a :class:`Controller`; return offset."""
     assert isinstance(c, Controller)
     values = {
         "kpp": c.position_gain, "kvp": c.velocity_gain, "kvi": c.velocity_integral_gain,
@@ -619,3 +601,120 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
             U_MAX, rate, sat, "tc", "u_raw"))
     for ln in s:
         b.emit(ln, sampled=True)
+
+
+# ---- the loops' parameters: sections [controller] and [hollow_controller]
+
+#: shortest sampling period of a discrete loop [s]: 1 µs (a faster loop is continuous: 0)
+MIN_PERIOD = 1e-6
+#: finest linear-scale resolution [m]: 1 nm
+MIN_GRATING = 1e-9
+
+
+@dataclass(frozen=True)
+class Compensation(Component):
+    """Friction compensation on the table-driving motor (screw motor or linear motor).
+
+    ``mode``: ``none``; ``feedforward`` — the static Stribeck + Coulomb + viscous curve of the
+    compensated sites at the *commanded* speed, added as current (model-based feed-forward,
+    Armstrong-Hélouvry et al., Automatica 30 (1994) 1083–1138); ``observer`` — a LuGre
+    observer at the *measured* speeds, ẑ' = v − σ0|v|ẑ/g(v) − k·e with e the table position
+    error, F̂ = σ0ẑ + σ1ẑ' + σ2v (Canudas de Wit, Olsson, Åström, Lischinsky, IEEE TAC 40
+    (1995) 419–425, Sect. V), added as current.  Compensated sites: the screw shaft and the
+    guide (the guide only, for a linear motor).  The ``*_scale`` factors give the model
+    mismatch the compensator works with (1 = exact; 1.2 = its value is 20 % high).
+    """
+
+    mode: str = choice(("none", "feedforward", "observer"), default="none")
+    # a model a thousand times off is no compensator: the lower bounds keep the products
+    # physical (a factor 1e-320 passed and the run then overflowed)
+    coulomb_scale: float = quantity("-", low=1e-3, high=10, low_inclusive=True, default=1.0)
+    static_scale: float = quantity("-", low=1e-3, high=10, low_inclusive=True, default=1.0)
+    stribeck_velocity_scale: float = quantity("-", low=1e-3, high=10, low_inclusive=True,
+                                              default=1.0)
+    viscous_scale: float = quantity("-", low=0, high=10, low_inclusive=True, default=1.0)
+    observer_gain: float = quantity("1/s", low=0, high=1e6, low_inclusive=True, default=0.0,
+                                    hint="k of the observer's correction −k·e [1/s]")
+    _label = "compensation"
+
+
+@dataclass(frozen=True)
+class Controller(Component):
+    """Cascade servo (position → velocity → current) shared by both motors.  Wang2021 Sect. 2.1.
+
+    The block diagram (Fig. 5) is an image; the structure is an explicit choice, see
+    docs/model.md.  Gains are in the units stated; a period of 0 means a continuous loop.
+    """
+
+    position_gain: float = quantity("1/s", low=0, high=1e5, low_inclusive=True)
+    # per rad/s of the motor, or per m/s of table speed with velocity_gain_basis = "table"
+    velocity_gain: float = quantity("A s/rad", low=0, high=1e5, low_inclusive=True,
+                                    table_unit="A s/m")
+    current_gain: float = quantity("V/A", low=0, high=1e5, low_inclusive=True)
+    velocity_command_gain: float = quantity("rad/(V s)", low=0, high=1e6)
+    velocity_integral_gain: float = quantity(
+        "A/rad", low=0, high=1e9, low_inclusive=True, default=0.0, table_unit="A/m"
+    )
+    current_integral_gain: float = quantity(
+        "V/(A s)", low=0, high=1e9, low_inclusive=True, default=0.0
+    )
+    kv_placement: str = choice(("none", "position_output", "velocity_error"), default="none")
+    velocity_gain_basis: str = choice(("motor", "table"), default="motor")
+    velocity_feedback: str = choice(("motor", "table"), default="motor")
+    velocity_feedforward: bool = flag(default=True)
+    nut_loop: str = choice(("position", "speed"), default="position")
+    mode: str = choice(("cascade", "torque_off"), default="cascade")
+    compensation: Compensation = field(default_factory=lambda: Compensation())
+    current_limit: float = quantity("A", low=0, high=1e4, default=1e4)
+    voltage_limit: float = quantity("V", low=0, high=1e5, default=1e5)
+    position_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)
+    velocity_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)
+    current_period: float = quantity("s", low=0, high=0.1, low_inclusive=True, default=0.0)
+    encoder_counts: float = quantity(
+        "counts/rev", low=0, high=1e10, low_inclusive=True, default=0.0
+    )
+    grating_resolution: float = quantity(
+        "m", low=0, high=1e-3, low_inclusive=True, default=0.0, hint="1 µm = 1e-6 m"
+    )
+    _label = "controller"
+
+    def _check(self) -> None:
+        periods = [p for p in (self.position_period, self.velocity_period, self.current_period)]
+        for name, p in zip(("position", "velocity", "current"), periods, strict=True):
+            if 0 < p < MIN_PERIOD:
+                raise ParameterError(f"controller.{name}_period", p,
+                                     f"expected 0 (a continuous loop) or {MIN_PERIOD:g} … 0.1 "
+                                     "[s] (1 µs = 1e-6 s)")
+        if 0 < self.grating_resolution < MIN_GRATING:
+            raise ParameterError("controller.grating_resolution", self.grating_resolution,
+                                 f"expected 0 (no quantisation) or {MIN_GRATING:g} … 0.001 [m]")
+        if 0 < self.encoder_counts < 1:
+            raise ParameterError("controller.encoder_counts", self.encoder_counts,
+                                 "expected 0 (no quantisation) or ≥ 1 [counts/rev]")
+        nonzero = [p for p in periods if p > 0]
+        if nonzero:
+            base = min(nonzero)
+            for name, p in zip(("position", "velocity", "current"), periods, strict=True):
+                if p > 0 and abs(p / base - round(p / base)) > 1e-9:
+                    raise ParameterError(
+                        f"controller.{name}_period",
+                        p,
+                        f"must be an integer multiple of the fastest period {base:g} [s]",
+                    )
+
+
+def default_controller() -> Controller:
+    """The cascade with Wang2021 Table 2's gains (K_pp, K_vp, K_ip, K_v), everything else at
+    its default.
+
+    Returns
+    -------
+    Controller
+        The default ``[controller]`` section.
+    """
+    return Controller(position_gain=8.0, velocity_gain=45.0, current_gain=2.0,
+                      velocity_command_gain=250.0)
+
+
+for _name in ("controller", "hollow_controller"):
+    registry.register(registry.SECTIONS, _name, Controller)

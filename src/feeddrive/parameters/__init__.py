@@ -1,4 +1,25 @@
-"""Parameter sets: validated component dataclasses, named presets, TOML io."""
+"""Parameter sets: the machinery — validation, the composition container, TOML io, presets.
+
+A set is a composition of its parts' sections (:class:`DriveParameters`); each part's
+parameter class lives with the part (registry group ``feeddrive.sections``):
+
+* ``screw``, ``coupling``, ``stiffness``, ``friction``: ``BallScrew``, ``Coupling``,
+  ``StiffnessModel``, ``FrictionSites`` (:mod:`feeddrive.model.mechanisms.ball_screw_parameters`,
+  which also registers the mechanism kind ``"ball-screw"``);
+* ``screw_motor``, ``hollow_motor``, ``table``: ``Motor``, ``Table``
+  (:mod:`feeddrive.model.mechanisms.shared`);
+* ``linear_motor``: ``LinearMotor`` (:mod:`feeddrive.model.mechanisms.linear_motor`);
+* ``rack_pinion``: ``RackPinion`` (:mod:`feeddrive.model.mechanisms.rack_pinion`);
+* ``controller``, ``hollow_controller``: ``Controller`` with its ``Compensation``
+  (:mod:`feeddrive.model.loops`);
+* ``disturbances``: ``Disturbances``, ``TorqueRipple``, ``LeadError``
+  (:mod:`feeddrive.model.disturbances`);
+* ``acceleration_feedforward``: ``AccelerationFeedforward``
+  (``feeddrive.model.parts.acceleration_feedforward``);
+* ``friction.<site>``, by the site's law: ``LuGreParameters`` and ``FrictionBranch``
+  (:mod:`feeddrive.model.friction.lugre_parameters`), ``GMSParameters``
+  (:mod:`feeddrive.model.friction.gms`).
+"""
 
 from __future__ import annotations
 
@@ -6,23 +27,11 @@ from collections.abc import Callable, Mapping
 
 from .. import registry
 from .components import (
-    BallScrew,
-    Compensation,
     Component,
-    Controller,
-    Coupling,
-    Disturbances,
+    Composition,
     DriveParameters,
-    FrictionBranch,
-    FrictionSites,
-    LeadError,
-    LinearMotor,
-    LuGreParameters,
-    Motor,
     SiteParameters,
-    StiffnessModel,
-    Table,
-    TorqueRipple,
+    composition,
 )
 from .toml_io import dumps, from_dict, load, loads, save, to_dict
 from .validation import ParameterError
@@ -70,9 +79,7 @@ def preset(name: str) -> DriveParameters:
 
 
 __all__ = [
-    "BallScrew", "Component", "Compensation", "Controller", "Coupling", "Disturbances",
-    "DriveParameters", "FrictionBranch",
-    "FrictionSites", "LeadError", "LinearMotor", "LuGreParameters", "Motor", "ParameterError",
-    "PRESETS", "SiteParameters", "StiffnessModel", "Table", "TorqueRipple", "dumps", "from_dict",
-    "load", "loads", "preset", "save", "to_dict",
+    "Component", "Composition", "DriveParameters", "ParameterError", "PRESETS",
+    "SiteParameters", "composition", "dumps", "from_dict", "load", "loads", "preset", "save",
+    "to_dict",
 ]

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .. import registry
-from .components import DriveParameters
+from .components import DriveParameters, composition
 from .validation import ParameterError, resolved_unit
 
 
@@ -59,11 +59,17 @@ def to_dict(obj: Any) -> dict[str, Any]:
         value = getattr(obj, f.name)
         if value is None:
             continue
-        if f.name == "sections":  # parts' own sections are tables of the file's top level
-            out.update({name: to_dict(section) for name, section in value})
+        if f.name == "sections":  # parts' sections are tables of the file's top level
+            out.update({name: to_dict(section) for name, section in _in_file_order(obj)})
             continue
         out[f.name] = to_dict(value) if dataclasses.is_dataclass(value) else value
     return out
+
+
+def _in_file_order(obj: Any) -> list[tuple[str, Any]]:
+    """A composition's sections in the order its mechanism kind writes them."""
+    ordered = getattr(obj, "ordered_sections", None)
+    return list(ordered() if ordered is not None else obj.sections)
 
 
 #: deepest table/array nesting accepted in a TOML file (a parameter set needs 4)
@@ -258,7 +264,7 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
         if value is None:
             continue
         if f.name == "sections":
-            nested += list(value)
+            nested += _in_file_order(obj)
             continue
         if dataclasses.is_dataclass(value):
             nested.append((f.name, value))
@@ -282,21 +288,12 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
 
 
 def dumps(params: DriveParameters) -> str:
-    """TOML text of a parameter set, SI units noted beside each value.
-
-    Parameters
-    ----------
-    params : DriveParameters
-        The parameter set.
-
-    Returns
-    -------
-    str
-        TOML that :func:`loads` reads back to an equal set.
-    """
+    """TOML text of a parameter set, SI units noted beside each value."""
+    note = composition(params.mechanism).file_note
     lines = [
         "# feeddrive parameter set. SI units throughout (m, s, N, kg, A, V, rad).",
-        "# Friction forces at the screw and hollow shafts are torques divided by H = lead/2π.",
+        *([f"# {toml_comment(note)}"] if note else []),
+        "# `mechanism` names the kind of drive the sections describe (docs/parameters.md).",
     ]
     _emit(params, "", lines)
     return "\n".join(lines) + "\n"

@@ -11,8 +11,8 @@ from matplotlib.figure import Figure
 
 from .. import units
 from ..model.friction import friction_law
+from ..model.friction.lugre_parameters import LuGreParameters
 from ..model.friction.stribeck import negative_slope_band, steady_friction
-from ..parameters import LuGreParameters
 
 _MM_PER_S = units.MM_PER_S
 

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import math
 
-from ..parameters.components import DriveParameters, LinearMotor
+from ..model.mechanisms.linear_motor import LinearMotor
+from ..parameters.components import DriveParameters
 from . import wang2021
 
 FORCE_CONSTANT = 73.0  # N/A

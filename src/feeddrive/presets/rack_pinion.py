@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import math
 
+from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
 from ..model.mechanisms.rack_pinion import RackPinion
-from ..parameters.components import DriveParameters, FrictionBranch, LuGreParameters
+from ..parameters.components import DriveParameters
 from . import wang2021
 
 GEAR_RATIO = 10.0
@@ -66,7 +67,7 @@ def example() -> DriveParameters:
         name="rack-pinion-example",
         description="Example rack-and-pinion axis: Wang2021's motor, table mass and guide "
         "friction, a 10:1 gearbox and 30-mm pinion; see feeddrive/presets/rack_pinion.py.",
-        controller=controller, sections=(("rack_pinion", section),))
+        controller=controller, rack_pinion=section)
 
 
 PRESETS = {"rack-pinion-example": example}

@@ -17,19 +17,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness
-from ..parameters.components import (
+from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
+from ..model.loops import Controller
+from ..model.mechanisms.ball_screw_parameters import (
     BallScrew,
-    Controller,
     Coupling,
-    DriveParameters,
-    FrictionBranch,
     FrictionSites,
-    LuGreParameters,
-    Motor,
     StiffnessModel,
-    Table,
 )
+from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness
+from ..model.mechanisms.shared import Motor, Table
+from ..parameters.components import DriveParameters
 
 CITATION = (
     "Z. Wang, X. Feng, H. Yang, H. Jin, 'Research on low-speed characteristics of differential "
@@ -402,21 +400,8 @@ RIPPLE_ASSUMPTIONS: tuple[Assumption, ...] = (
 
 
 def ripple() -> DriveParameters:
-    """The ``wang2021-ripple`` parameter set: ``wang2021`` plus motor torque ripple on both motors.
-
-    0.0135 N m at 6 per revolution, fitted to the DDFS critical speed by the 50 % ripple
-    threshold.
-
-    Returns
-    -------
-    DriveParameters
-        The parameter set [SI].
-
-    References
-    ----------
-    .. [1] Wang2021 Fig. 8 (the DDFS critical speed the amplitude is fitted to).
-    """
-    from ..parameters.components import Disturbances, TorqueRipple
+    """``wang2021-ripple``: the shipped reading plus motor torque ripple on both motors."""
+    from ..model.disturbances import Disturbances, TorqueRipple
 
     r = TorqueRipple((RIPPLE_ORDER,), (RIPPLE_AMPLITUDE,), (0.0,))
     base = shipped()

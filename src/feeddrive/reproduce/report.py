@@ -13,10 +13,14 @@ from markdown_it import MarkdownIt
 from .. import __version__
 from ..analysis import protocol
 from ..analysis.critical import format_bands, format_critical_speed
+from ..engine.simulate import DriveSystem
 from ..io.outputs import atomic_path
+from ..model.friction.lugre_parameters import LuGreParameters
 from ..model.friction.stribeck import negative_slope_band, passivity_margin, sliding_stability
 from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness, mid_screw_readings
-from ..parameters import DriveParameters, LuGreParameters
+from ..model.reference import ConstantSpeed
+from ..model.slots import slot_table
+from ..parameters import DriveParameters
 from ..presets import wang2021
 from ..units import SITES
 from . import figures as figures_mod
@@ -502,6 +506,28 @@ def settings_markdown(settings: StudySettings) -> str:
     ])
 
 
+def parameter_slot_rows(params: DriveParameters) -> list[dict[str, Any]]:
+    """The parameters the studies' CDFS and DDFS runs use, as their models' named slots at
+    mid-screw (:mod:`feeddrive.model.slots`), the reference profile's block left out.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The study's parameter set.
+
+    Returns
+    -------
+    list of dict
+        One row per drive and slot: ``drive``, ``slot``, ``value`` [SI], ``unit``.
+    """
+    rows = []
+    for drive in ("cdfs", "ddfs"):
+        model = DriveSystem(params, drive, MID).model(ConstantSpeed(0.0))
+        rows += [{"drive": drive, "slot": name, "value": repr(value), "unit": unit}
+                 for name, value, unit in slot_table(model) if not name.startswith("profile[")]
+    return rows
+
+
 def write(params: DriveParameters, settings: StudySettings, results: dict[str, Any],
           out: Path) -> tuple[Path, Path]:
     """Write the reproduction report: its CSV tables, ``report.md`` and ``report.html``.
@@ -524,6 +550,8 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
     """
     comparison = comparison_rows(params, results)
     write_csv(comparison, out / "paper_comparison.csv")
+    # what the runs used, written from the models (not the set serialised again)
+    write_csv(parameter_slot_rows(params), out / "parameter_slots.csv")
     assumptions = [{"id": a.id, "fields": ", ".join(a.fields), "value": a.value,
                     "fitted": "fitted" if a.fitted else "assumed", "why": a.rationale}
                    for a in wang2021.ASSUMPTIONS]
@@ -578,7 +606,8 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         ("table3", "Table 3 and Fig. 14: critical speed against table position", "v_n = "
          "20 mm/s for the DDFS, as in the experiment (Sect. 6).", table3),
         ("assumptions", "Modelling assumptions", "What the paper does not give, and what we "
-         "chose (presets/wang2021.py; change any of them in a parameter file).",
+         "chose (presets/wang2021.py; change any of them in a parameter file).  The numbers "
+         "the CDFS and DDFS models run with, slot by slot with units: parameter_slots.csv.",
          assumptions),
         ("indicators", "Analytic indicators", "Steady friction curves (Table 1): "
          "negative-slope bands, zero-slope speeds and LuGre passivity per site. "

@@ -8,8 +8,9 @@ carries its own analytic description):
   ``y[k : k + len(state_names)]`` and it writes their rates to ``dy`` at the same places; its
   parameters are ``P[o : o + n]`` as packed by :meth:`FrictionLaw.pack`.  Returns the friction
   force [N] with the sign of the sliding speed.
-* ``pack(site)`` — the parameter vector from a site's :class:`~feeddrive.parameters.LuGreParameters`
-  (every law reads the same cited fields: F_c, F_s, v_s, σ2 per direction, σ0, σ1).
+* ``pack(site)`` — the parameter vector from a site's
+  :class:`~feeddrive.model.friction.lugre_parameters.LuGreParameters` (every law reads the
+  same cited fields: F_c, F_s, v_s, σ2 per direction, σ0, σ1).
 * ``steady_force(v, site)`` — the steady curve [N] (constant sliding at ``v``);
 * ``steady_state(v, site)`` — the internal states at steady sliding;
 * ``linearise(v, site)`` — (A, B, C, D) of δẋ = A δx + B δv, δF = C δx + D δv at steady
@@ -28,14 +29,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ... import registry
-from ...parameters import LuGreParameters as _LuGreParameters
+from .lugre_parameters import LuGreParameters as _LuGreParameters
 
 if TYPE_CHECKING:
-    from ...parameters import LuGreParameters
+    from .lugre_parameters import LuGreParameters
 
 
-#: Names of a site's packed parameters (:meth:`~feeddrive.parameters.LuGreParameters.as_array`,
-#: the default :meth:`FrictionLaw.pack`), in ``P`` order: their paths below ``friction.<site>``.
+#: Names of a site's packed parameters
+#: (:meth:`~feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`, the default
+#: :meth:`FrictionLaw.pack`), in ``P`` order: their paths below ``friction.<site>``.
 SITE_SLOTS = tuple(f"{d}.{f}" for d in ("positive", "negative")
                    for f in ("coulomb_force", "static_force", "stribeck_velocity",
                              "viscous_coefficient")) + ("bristle_stiffness", "bristle_damping")

@@ -31,10 +31,11 @@ from typing import Any
 import numpy as np
 
 from ..._jit import kernel
-from ...parameters import FrictionBranch, ParameterError, SiteParameters
+from ...parameters import ParameterError, SiteParameters
 from ...parameters.validation import quantities, quantity
 from .base import FrictionLaw, LinearFriction, register_friction_law
 from .lugre import NEGATIVE, SLOTS, VISCOUS, branch, stribeck_magnitude
+from .lugre_parameters import FrictionBranch
 
 # the block: the Stribeck branches (LuGre's first 8 slots), then C, the slip margin, N,
 # k_1..k_N, α_1..α_N

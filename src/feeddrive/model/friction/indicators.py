@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...parameters import LuGreParameters
 from . import friction_law
+from .lugre_parameters import LuGreParameters
 from .stribeck import NegativeSlopeBand, SlidingStability, negative_slope_band, sliding_stability
 
 #: laws whose steady curve is the Stribeck curve of Wang2021 Eq. (11) (the static law's tanh

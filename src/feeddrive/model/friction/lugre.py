@@ -3,9 +3,9 @@
 
 Parameters at ``P[o : o + 10]``, named by :data:`SLOTS` (their paths below
 ``friction.<site>``): (F_c, F_s, v_s, σ2) of the + branch, then of the − branch, then σ0, σ1 —
-:meth:`feeddrive.parameters.LuGreParameters.as_array`.  Kernels read them through the named
-offsets (``P[o + SIGMA0]``, ``P[branch(v, o) + VISCOUS]``).  Force in N, speed in m/s,
-bristle deflection z in m; the + branch applies for v ≥ 0.
+:meth:`feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`.  Kernels read them
+through the named offsets (``P[o + SIGMA0]``, ``P[branch(v, o) + VISCOUS]``).  Force in N,
+speed in m/s, bristle deflection z in m; the + branch applies for v ≥ 0.
 """
 
 from __future__ import annotations
@@ -181,8 +181,8 @@ class LuGre(FrictionLaw):
 
     dz/dt = v − σ0·|v|·z / g(v),  F = σ0·z + σ1·dz/dt + σ2·v,
     g(v) = F_c + (F_s − F_c)·exp(−(v/v_s)²); one bristle state z [m].  Parameters of a site
-    (:class:`~feeddrive.parameters.LuGreParameters`): F_c, F_s [N], v_s [m/s], σ2 [N s/m] per
-    branch, σ0 [N/m], σ1 [N s/m].
+    (:class:`~feeddrive.model.friction.lugre_parameters.LuGreParameters`): F_c, F_s [N],
+    v_s [m/s], σ2 [N s/m] per branch, σ0 [N/m], σ1 [N s/m].
 
     References
     ----------

@@ -4,12 +4,13 @@ The LuGre force itself is :mod:`feeddrive.model.friction.lugre` (the engine's); 
 is its array API and the analytic indicators.  All functions use the linear (force) form of
 Table 1: force in N, speed in m/s, bristle
 deflection z in m.  The screw and hollow shafts are rotary sites; the paper divides their
-torques by H = p_h/2π (:attr:`feeddrive.parameters.BallScrew.transmission_ratio`): T = H·F,
-ω = v/H.
+torques by H = p_h/2π
+(:attr:`feeddrive.model.mechanisms.ball_screw_parameters.BallScrew.transmission_ratio`):
+T = H·F, ω = v/H.
 
 The scalar kernels (``*_kernel``) are numba-compiled and shared with the simulation engine,
 so the physics exists once.  ``p`` is the float64[10] vector of
-:meth:`feeddrive.parameters.LuGreParameters.as_array`:
+:meth:`feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`:
 (F_c+, F_s+, v_s+, σ2+, F_c−, F_s−, v_s−, σ2−, σ0, σ1).
 
 Sign convention: the friction force has the sign of the sliding speed (it opposes motion when
@@ -25,8 +26,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..._jit import kernel
-from ...parameters import FrictionBranch, LuGreParameters
 from . import lugre
+from .lugre_parameters import FrictionBranch, LuGreParameters
 
 # ---------------------------------------------------------------- compiled scalar kernels
 

@@ -10,7 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...parameters import BallScrew, Coupling, DriveParameters, ParameterError, StiffnessModel
+from ...parameters import DriveParameters, ParameterError
+from .ball_screw_parameters import BallScrew, Coupling, StiffnessModel
 
 
 def _check_positions(position: object, length: float) -> np.ndarray:

@@ -8,14 +8,32 @@ gains act on m/s (transmission 1).  Needs the ``[linear_motor]`` parameter secti
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ...parameters import DriveParameters, ParameterError
+from ... import registry
+from ...parameters import Component, DriveParameters, ParameterError
+from ...parameters.validation import quantity
 from ..codegen import Builder
 from ..loops import GRAT_Q, Axis, Channel, axis_parameters
 from .base import Body, DriveMotor, Mechanics, Mechanism, Site, register_mechanism
+
+
+@dataclass(frozen=True)
+class LinearMotor(Component):
+    """Linear motor of a direct-drive table: force constant, back-EMF, R-L winding, forcer."""
+
+    force_constant: float = quantity("N/A", low=1e-2, high=1e4)
+    back_emf_constant: float = quantity("V s/m", low=1e-2, high=1e4)
+    inductance: float = quantity("H", low=1e-6, high=1.0, hint="20 mH = 0.02 H")
+    resistance: float = quantity("ohm", low=1e-3, high=1e3)
+    forcer_mass: float = quantity("kg", low=0, high=1e4, low_inclusive=True)
+    _label = "linear_motor"
+
+
+registry.register(registry.SECTIONS, "linear_motor", LinearMotor)
 
 
 @register_mechanism

@@ -24,11 +24,12 @@ from typing import Any
 import numpy as np
 
 from ... import registry
-from ...parameters import Component, DriveParameters, Motor, ParameterError, SiteParameters
+from ...parameters import Component, DriveParameters, ParameterError, SiteParameters
 from ...parameters.validation import quantity
 from ..codegen import Builder
 from ..loops import ENC_Q, GRAT_Q, H_AX, V_FEEDBACK, Axis, Channel, axis_parameters
 from .base import Body, DriveMotor, Mechanics, Mechanism, Site, register_mechanism
+from .shared import Motor
 
 
 @dataclass(frozen=True)
