@@ -192,7 +192,17 @@ def emit_harmonics(b: Builder, name: str,
 @dataclass(frozen=True)
 class TorqueRipple(Component):
     """Motor torque ripple and cogging: T_r(θ) = Σ_k A_k·sin(n_k·θ + φ_k), θ the motor shaft
-    angle [rad].  ``orders`` n_k per revolution, ``amplitudes`` A_k [N m], ``phases`` φ_k [rad]."""
+    angle [rad].  ``orders`` n_k per revolution, ``amplitudes`` A_k [N m], ``phases`` φ_k [rad].
+
+    Parameters
+    ----------
+    orders : tuple of float
+        Harmonic orders n_k per revolution [-].
+    amplitudes : tuple of float
+        Amplitudes A_k [N m].
+    phases : tuple of float
+        Phases φ_k [rad].
+    """
 
     orders: tuple[float, ...] = quantities("-", low=0, high=1e4)
     amplitudes: tuple[float, ...] = quantities("N m", low=0, high=1e3)
@@ -206,7 +216,17 @@ class TorqueRipple(Component):
 @dataclass(frozen=True)
 class LeadError(Component):
     """Screw lead error: the nut advances H·θ + Σ_k a_k·sin(n_k·θ + φ_k) [m] for a relative
-    screw–nut angle θ [rad]; ``amplitudes`` a_k [m] (typically a few µm)."""
+    screw–nut angle θ [rad]; ``amplitudes`` a_k [m] (typically a few µm).
+
+    Parameters
+    ----------
+    orders : tuple of float
+        Harmonic orders n_k per revolution [-].
+    amplitudes : tuple of float
+        Amplitudes a_k [m].
+    phases : tuple of float
+        Phases φ_k [rad].
+    """
 
     orders: tuple[float, ...] = quantities("-", low=0, high=1e4)
     amplitudes: tuple[float, ...] = quantities("m", low=0, high=1e-3, hint="1 µm = 1e-6 m")
@@ -232,6 +252,19 @@ class Disturbances(Component):
     ``load_force`` [N] acts on the table against positive motion (a cutting force resisting
     the feed is positive), from ``load_start`` [s]; a time profile is given through the API
     (:class:`feeddrive.LoadProfile`).
+
+    Parameters
+    ----------
+    load_force : float, default 0.0
+        Constant load on the table against positive motion [N].
+    load_start : float, default 0.0
+        When the load is applied [s].
+    screw_motor_ripple : TorqueRipple
+        Torque ripple of the screw motor.
+    hollow_motor_ripple : TorqueRipple
+        Torque ripple of the hollow motor.
+    lead_error : LeadError
+        The screw's lead error.
     """
 
     load_force: float = quantity("N", low=-1e6, high=1e6, default=0.0)

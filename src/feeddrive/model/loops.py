@@ -623,6 +623,29 @@ class Compensation(Component):
     (1995) 419–425, Sect. V), added as current.  Compensated sites: the screw shaft and the
     guide (the guide only, for a linear motor).  The ``*_scale`` factors give the model
     mismatch the compensator works with (1 = exact; 1.2 = its value is 20 % high).
+
+    Parameters
+    ----------
+    mode : str, default "none"
+        ``"none"``, ``"feedforward"`` or ``"observer"``.
+    coulomb_scale : float, default 1.0
+        The compensator's F_c over the site's [-].
+    static_scale : float, default 1.0
+        Its F_s over the site's [-].
+    stribeck_velocity_scale : float, default 1.0
+        Its v_s over the site's [-].
+    viscous_scale : float, default 1.0
+        Its σ2 over the site's [-].
+    observer_gain : float, default 0.0
+        Observer gain k [1/s].
+
+    References
+    ----------
+    .. [1] B. Armstrong-Hélouvry, P. Dupont, C. Canudas de Wit, "A survey of models, analysis
+       tools and compensation methods for the control of machines with friction",
+       Automatica 30 (1994) 1083–1138.
+    .. [2] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
     """
 
     mode: str = choice(("none", "feedforward", "observer"), default="none")
@@ -644,6 +667,53 @@ class Controller(Component):
 
     The block diagram (Fig. 5) is an image; the structure is an explicit choice, see
     docs/model.md.  Gains are in the units stated; a period of 0 means a continuous loop.
+
+    Parameters
+    ----------
+    position_gain : float
+        K_pp [1/s].
+    velocity_gain : float
+        K_vp [A s/rad] (A s/m on the table basis).
+    current_gain : float
+        K_ip [V/A].
+    velocity_command_gain : float
+        K_v, Table 2's "velocity-adjusting gain" [rad/(V s)].
+    velocity_integral_gain : float, default 0.0
+        K_vi [A/rad] (A/m on the table basis).
+    current_integral_gain : float, default 0.0
+        K_ii [V/(A s)].
+    kv_placement : str, default "none"
+        Where K_v enters: ``"none"``, ``"position_output"``, ``"velocity_error"``.
+    velocity_gain_basis : str, default "motor"
+        Velocity gains on rad/s of the motor or m/s of the table (``"table"``).
+    velocity_feedback : str, default "motor"
+        Velocity feedback from the motor encoder or the table scale.
+    velocity_feedforward : bool, default True
+        Feed the commanded speed forward.
+    nut_loop : str, default "position"
+        The hollow motor's loop: ``"position"`` or ``"speed"``.
+    mode : str, default "cascade"
+        ``"cascade"`` or ``"torque_off"``.
+    compensation : Compensation
+        Friction compensation.
+    current_limit : float, default 1e4
+        Current limit [A].
+    voltage_limit : float, default 1e5
+        Voltage limit [V].
+    position_period : float, default 0.0
+        Position-loop sample period; 0 = continuous [s].
+    velocity_period : float, default 0.0
+        Velocity-loop sample period [s].
+    current_period : float, default 0.0
+        Current-loop sample period [s].
+    encoder_counts : float, default 0.0
+        Motor encoder counts per revolution; 0 = ideal [counts/rev].
+    grating_resolution : float, default 0.0
+        Table scale resolution; 0 = ideal [m].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 2.1, Table 2.
     """
 
     position_gain: float = quantity("1/s", low=0, high=1e5, low_inclusive=True)
