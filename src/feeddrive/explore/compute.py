@@ -129,7 +129,21 @@ def _sites(drive: str) -> tuple[str, ...]:
 def friction_curves(checked: Checked, operating: dict[str, float] | None = None
                     ) -> dict[str, Any]:
     """Steady friction force [N] against sliding speed [mm/s] at each site the drive uses,
-    the speed bands where it falls (negative damping), and the sites' operating speeds."""
+    the speed bands where it falls (negative damping), and the sites' operating speeds.
+
+    Parameters
+    ----------
+    checked : Checked
+        The page's checked settings (:func:`feeddrive.explore.settings.check`).
+    operating : dict of str to float, optional
+        Site → its sliding speed at the operating point [m/s].
+
+    Returns
+    -------
+    dict
+        Per site: speeds [mm/s], forces [N] per branch, negative-slope bands [mm/s] and the
+        operating speed [mm/s].
+    """
     from ..model.friction.lugre_parameters import LuGreParameters
     from ..model.friction.stribeck import negative_slope_band, steady_friction
 

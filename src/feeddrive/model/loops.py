@@ -333,7 +333,26 @@ class Axis:
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
-    """Register the parameter block of ``axis`` from a :class:`Controller`; return offset."""
+    """Register an axis' parameter block (:data:`AXIS_PARAMS`) from its controller settings.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    axis : str
+        The axis' name; the slots are ``controller.<axis>.<name>``.
+    c : Controller
+        The axis' controller parameters (gains [SI], limits, placement options).
+    H : float
+        The axis' transmission ratio, table travel per motor radian [m/rad].
+    speed_mode : bool
+        Whether the axis runs a speed loop only.
+
+    Returns
+    -------
+    int
+        Offset of the block's first slot in ``P``.
+    """
     assert isinstance(c, Controller)
     values = {
         "kpp": c.position_gain, "kvp": c.velocity_gain, "kvi": c.velocity_integral_gain,

@@ -288,7 +288,18 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
 
 
 def dumps(params: DriveParameters) -> str:
-    """TOML text of a parameter set, SI units noted beside each value."""
+    """TOML text of a parameter set, SI units noted beside each value.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+
+    Returns
+    -------
+    str
+        TOML that :func:`loads` reads back to an equal set.
+    """
     note = composition(params.mechanism).file_note
     lines = [
         "# feeddrive parameter set. SI units throughout (m, s, N, kg, A, V, rad).",

@@ -400,7 +400,20 @@ RIPPLE_ASSUMPTIONS: tuple[Assumption, ...] = (
 
 
 def ripple() -> DriveParameters:
-    """``wang2021-ripple``: the shipped reading plus motor torque ripple on both motors."""
+    """The ``wang2021-ripple`` parameter set: ``wang2021`` plus motor torque ripple on both motors.
+
+    0.0135 N m at 6 per revolution, fitted to the DDFS critical speed by the 50 % ripple
+    threshold.
+
+    Returns
+    -------
+    DriveParameters
+        The parameter set [SI].
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 8 (the DDFS critical speed the amplitude is fitted to).
+    """
     from ..model.disturbances import Disturbances, TorqueRipple
 
     r = TorqueRipple((RIPPLE_ORDER,), (RIPPLE_AMPLITUDE,), (0.0,))
