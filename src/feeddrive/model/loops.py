@@ -800,6 +800,10 @@ def default_controller() -> Controller:
     -------
     Controller
         The default ``[controller]`` section.
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2.
     """
     return Controller(position_gain=8.0, velocity_gain=45.0, current_gain=2.0,
                       velocity_command_gain=250.0)

@@ -122,7 +122,12 @@ class BallScrew(Component):
 
     @property
     def transmission_ratio(self) -> float:
-        """H = p_h / 2π: table travel per screw radian [m/rad] (Wang2021 Eq. (8))."""
+        """H = p_h / 2π: table travel per screw radian [m/rad].
+
+        References
+        ----------
+        .. [1] Wang2021 Eq. (8).
+        """
         return self.lead / (2.0 * math.pi)
 
 
