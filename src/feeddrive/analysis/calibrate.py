@@ -72,6 +72,26 @@ class Unknown:
 
 @dataclass(frozen=True)
 class Calibration:
+    """A fitted parameter: the set with the value in place and what it achieves.
+
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The set with the fitted value.
+    unknown : Unknown
+        The parameter that was fitted.
+    value : float
+        Its fitted value, √(s₁s₂) [unit of ``unknown.path``].
+    target : Target
+        The critical speed fitted to.
+    achieved : CriticalSpeed
+        The critical-speed search at the fitted value.
+    evaluations : int
+        Creep searches run.
+    interval : tuple of (float, float)
+        (s₁, s₂): every value between them gives the target critical speed [unit of
+        ``unknown.path``].
+    """
     parameters: DriveParameters
     unknown: Unknown
     value: float
@@ -82,6 +102,7 @@ class Calibration:
 
     @property
     def deviation(self) -> float | None:
+        """Achieved / target critical speed − 1 [-]; None when none was found."""
         c = self.achieved.critical_speed
         return None if c is None else c / self.target.critical_speed - 1.0
 
@@ -100,7 +121,13 @@ class Calibration:
         return c is not None and abs(c - self.target.critical_speed) <= self.tolerance
 
     def reason(self) -> str:
-        """What was reached, and why it misses the target, in mm/s ("" if reached)."""
+        """What was reached, and why it misses the target, in mm/s ("" if reached).
+
+        Returns
+        -------
+        str
+            A sentence, or ``""``.
+        """
         if self.reached:
             return ""
         a = self.achieved
@@ -145,7 +172,7 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     relative_tolerance : float, default 0.02
         Relative width at which each bisection stops [-].
     rule : VerdictRule or None, default None
-        How each trial is judged; None: the protocol's rule (:mod:`feeddrive.analysis.protocol`).
+        How each trial is judged; None: the protocol's rule (``feeddrive.analysis.protocol``).
     speed_range : tuple of float, default (5e-5, 3e-3)
         Speeds the check search may test [m/s].
     resolution : float, default 1e-5

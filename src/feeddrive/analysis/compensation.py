@@ -25,6 +25,19 @@ from .linear import stability_band
 
 @dataclass(frozen=True)
 class Case:
+    """One case of the friction-compensation study.
+
+    Parameters
+    ----------
+    label : str
+        The case's name in the report.
+    drive : str
+        ``"cdfs"`` or ``"ddfs"``.
+    compensation : Compensation
+        The compensator and its model mismatch.
+    nut_speed : float, default 0.0
+        Nut speed (DDFS) [m/s].
+    """
     label: str
     drive: str
     compensation: Compensation
@@ -32,7 +45,20 @@ class Case:
 
 
 def default_cases(mismatch: float = 0.2, nut_speed: float = 16e-3) -> list[Case]:
-    """None, exact, ±``mismatch`` on F_c, F_s and v_s, for both compensators; and the DDFS."""
+    """None, exact, ±``mismatch`` on F_c, F_s and v_s, for both compensators; and the DDFS.
+
+    Parameters
+    ----------
+    mismatch : float, default 0.2
+        Relative error of the compensator's F_c, F_s and v_s [-].
+    nut_speed : float, default 0.016
+        Nut speed of the DDFS case [m/s].
+
+    Returns
+    -------
+    list of Case
+        The cases.
+    """
     up, down = 1.0 + mismatch, 1.0 - mismatch
     pct = f"{100 * mismatch:g} %"
     cases = [Case("CDFS, no compensation", "cdfs", Compensation())]
@@ -55,7 +81,31 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
              tracking_speed: float = 1.0e-3, duration: float = 12.0,
              search: bool = True, rule: VerdictRule | None = None) -> dict[str, Any]:
     """One row of the study (SI inside, mm and µm in the keys' units).  The tracking run
-    lasts ``duration`` [s]; its verdict and every critical-speed trial follow ``rule``."""
+    lasts ``duration`` [s]; its verdict and every critical-speed trial follow ``rule``.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    case : Case
+        The case.
+    table_position : float, default 0.4
+        Table position [m].
+    tracking_speed : float, default 0.001
+        Speed of the tracking run [m/s].
+    duration : float, default 12.0
+        Length of the tracking run [s].
+    search : bool, default True
+        Also search the critical speed.
+    rule : VerdictRule, optional
+        The creep-verdict rule.
+
+    Returns
+    -------
+    dict
+        The case, its critical speed [mm/s], linear creep bands [mm/s], verdict at the
+        tracking speed and rms following error [µm].
+    """
     system = DriveSystem(_with(params, case), case.drive, table_position)
     band = stability_band(system, case.nut_speed, points=25)
     trial = creep_trial(system, tracking_speed, nut_speed=case.nut_speed, rule=rule)
@@ -82,6 +132,26 @@ def compensation_study(params: DriveParameters, cases: list[Case] | None = None,
                        search: bool = True,
                        progress: Callable[[int, int], None] | None = None,
                        **kwargs: Any) -> list[dict[str, Any]]:
+    """Evaluate every case of the friction-compensation study (:func:`evaluate`).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    cases : list of Case, optional
+        The cases; :func:`default_cases` by default.
+    search : bool, default True
+        Also search each case's critical speed.
+    progress : callable, optional
+        ``progress(done, total)`` after each case.
+    **kwargs
+        Passed to :func:`evaluate` (table position, tracking speed, duration, rule).
+
+    Returns
+    -------
+    list of dict
+        One row per case.
+    """
     cases = cases if cases is not None else default_cases()
     rows = []
     for k, case in enumerate(cases):
@@ -101,7 +171,22 @@ def observer_gain_warning(system: DriveSystem, table_speed: float, nut_speed: fl
     with k = 0; None otherwise (no observer, k = 0, or unstable without k too: the
     friction's own creep band).  At k = 100 1/s the observer destabilised the CDFS at
     0.5 mm/s (speed error 7.35× the command, issue 24 item 9); docs/linear.md gives the usable
-    range of k."""
+    range of k.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    table_speed : float
+        Steady table speed [m/s].
+    nut_speed : float, default 0.0
+        Steady nut speed [m/s].
+
+    Returns
+    -------
+    str or None
+        The warning, or None.
+    """
     from dataclasses import replace
 
     from .linear import rightmost_pole

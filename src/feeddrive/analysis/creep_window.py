@@ -123,7 +123,18 @@ class CreepThresholds:
 def frequency_label(stick_fraction: float | None) -> str:
     """What to call the dominant ripple frequency: "stick-slip frequency" only when the table
     sticks, else "oscillation frequency" (issue 24 item 5: a trapezoid that never stuck
-    printed a "stick-slip frequency")."""
+    printed a "stick-slip frequency").
+
+    Parameters
+    ----------
+    stick_fraction : float or None
+        The fraction of the window the table sticks [-]; None when unknown.
+
+    Returns
+    -------
+    str
+        ``"stick-slip frequency"`` or ``"oscillation frequency"``.
+    """
     return ("stick-slip frequency" if stick_fraction is not None and stick_fraction > 0
             else "oscillation frequency")
 
@@ -259,6 +270,42 @@ def steady_window(
     established.  Records with a long start transient (Wang2021 Fig. 6b settles after ~7 s)
     should be long enough that the transient ends before ``max_fraction``·D, or be given
     an explicit window.
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s].
+    speed : array_like
+        Table speed [m/s].
+    command_speed : float
+        Commanded table speed [m/s].
+    settle_fraction : float, default 0.1
+        Settling margin after the command is reached, a fraction of the record [-].
+    min_fraction : float, default 0.2
+        Earliest start, a fraction of the record [-].
+    max_fraction : float, default 0.5
+        Latest start, a fraction of the record [-].
+    reach_level : float, default 0.9
+        Speed that counts as reaching the command, a fraction of it [-].
+    persistence : float, default 0.8
+        A window whose second half's ripple is below this × its first half's moves its
+        start to the midpoint (a decaying start-up oscillation) [-].
+    min_window_fraction : float, default 0.25
+        Shortest window after such moves, a fraction of the record [-].
+
+    Returns
+    -------
+    tuple of (float, float)
+        (start, end) [s].
+
+    Raises
+    ------
+    ValueError
+        For ``min_fraction > max_fraction`` or ``reach_level`` outside (0, 1].
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 6b (the ~7-s start transient)..
     """
     t, v = as_trace(time, speed)
     vc = check_command(command_speed)

@@ -55,6 +55,25 @@ class CreepTrial:
 
     ``duration`` [s]: the simulated length that decided it (the maximum when undecided);
     ``decided_at`` [s]: when, within it, the outcome was first decided.
+
+    Parameters
+    ----------
+    speed : float
+        Commanded table speed [m/s].
+    kind : str
+        One of ``KINDS``: ``"stick-slip"``, ``"oscillation"``, ``"smooth"``, ``"undecided"``.
+    ripple_ratio : float
+        Peak-to-peak speed ripple over the command [-].
+    stick_fraction : float
+        Fraction of the judged stretch the table is stuck (below the stick level) [-].
+    stick_slip_frequency : float or None
+        Frequency of the limit cycle [Hz].
+    min_ratio : float, default nan
+        Smallest speed along the motion over the command [-].
+    duration : float, default 0.0
+        Simulated length that decided it [s].
+    decided_at : float, optional
+        When the outcome was first decided [s].
     """
 
     speed: float
@@ -68,16 +87,39 @@ class CreepTrial:
 
     @property
     def creeping(self) -> bool:
+        """Whether the kind is a creeping one (stick-slip or oscillation)."""
         return self.kind in CREEPING_KINDS
 
     @classmethod
     def from_verdict(cls, speed: float, v: TraceVerdict, duration: float) -> CreepTrial:
+        """A trial from a trace verdict.
+
+        Parameters
+        ----------
+        speed : float
+            Commanded table speed [m/s].
+        v : TraceVerdict
+            The verdict (:func:`~feeddrive.analysis.metrics.trace_verdict`).
+        duration : float
+            Simulated length that decided it [s].
+
+        Returns
+        -------
+        CreepTrial
+            The trial.
+        """
         return cls(speed=speed, kind=v.kind, ripple_ratio=v.ripple_ratio,
                    stick_fraction=v.stick_fraction, stick_slip_frequency=v.frequency,
                    min_ratio=v.min_ratio, duration=duration, decided_at=v.decided_at)
 
     def to_dict(self) -> dict[str, Any]:
-        """Speed in mm/s, the rest as stored."""
+        """Speed in mm/s, the rest as stored.
+
+        Returns
+        -------
+        dict
+            The fields, ``speed`` in mm/s, and ``creeping``.
+        """
         return {**asdict(self), "speed": self.speed / MM_S, "creeping": self.creeping}
 
 
@@ -85,7 +127,25 @@ class CreepTrial:
 class CreepBand:
     """A run of tested speeds [m/s] with one kind: ``lower``…``upper`` are its lowest and
     highest tested speeds; ``below``/``above`` the nearest tested speeds outside it (None at
-    the end of the range) and their kinds."""
+    the end of the range) and their kinds.
+
+    Parameters
+    ----------
+    kind : str
+        The band's kind (``"stick-slip"``, ``"oscillation"``, ``"smooth"``).
+    lower : float
+        Its lowest tested speed [m/s].
+    upper : float
+        Its highest tested speed [m/s].
+    below : float or None
+        The nearest tested speed below it [m/s].
+    below_kind : str or None
+        That speed's kind.
+    above : float or None
+        The nearest tested speed above it [m/s].
+    above_kind : str or None
+        That speed's kind.
+    """
 
     kind: str
     lower: float
@@ -96,6 +156,14 @@ class CreepBand:
     above_kind: str | None
 
     def to_dict(self) -> dict[str, Any]:
+        """The band for JSON, speeds in mm/s.
+
+        Returns
+        -------
+        dict
+            ``kind``, ``lower_mm_s``, ``upper_mm_s``, ``below_mm_s``, ``below_kind``,
+            ``above_mm_s``, ``above_kind``.
+        """
         def mm(v: float | None) -> float | None:
             return None if v is None else round(v / MM_S, 6)
         return {"kind": self.kind, "lower_mm_s": mm(self.lower), "upper_mm_s": mm(self.upper),
@@ -105,7 +173,20 @@ class CreepBand:
 
 def bands_of(trials: Sequence[CreepTrial], *, smooth_too: bool = False) -> tuple[CreepBand, ...]:
     """Maximal runs of one kind among ``trials`` sorted by speed (smooth runs only if
-    ``smooth_too``)."""
+    ``smooth_too``).
+
+    Parameters
+    ----------
+    trials : sequence of CreepTrial
+        The tested speeds.
+    smooth_too : bool, default False
+        Also return the smooth runs.
+
+    Returns
+    -------
+    tuple of CreepBand
+        The bands, by increasing speed.
+    """
     ordered = sorted(trials, key=lambda tr: tr.speed)
     runs: list[list[CreepTrial]] = []
     for tr in ordered:
@@ -128,7 +209,23 @@ def bands_of(trials: Sequence[CreepTrial], *, smooth_too: bool = False) -> tuple
 
 
 def critical_of(trials: Sequence[CreepTrial]) -> tuple[str, float | None, str | None]:
-    """(status, critical speed [m/s], kind of the highest creeping band) of a set of trials."""
+    """(status, critical speed [m/s], kind of the highest creeping band) of a set of trials.
+
+    Parameters
+    ----------
+    trials : sequence of CreepTrial
+        The tested speeds.
+
+    Returns
+    -------
+    status : str
+        ``"found"``, ``"below-range"`` (smooth everywhere), ``"above-range"`` (creeps
+        everywhere) or ``"undecided"``.
+    critical_speed : float or None
+        The smooth end of the highest creeping band [m/s].
+    kind : str or None
+        That band's kind.
+    """
     ordered = sorted(trials, key=lambda tr: tr.speed)
     creeping = [tr for tr in ordered if tr.kind in NON_SMOOTH]
     top = creeping[-1] if creeping else None
@@ -244,7 +341,18 @@ class CriticalSpeed:
 def format_critical_speed(search: dict[str, Any]) -> str:
     """Critical speed [mm/s] of a search (as :meth:`CriticalSpeed.to_dict` gives it), or the
     bound an out-of-range search gives: "< low" (smooth everywhere), "> high" (creeps
-    everywhere), "undecided"."""
+    everywhere), "undecided".
+
+    Parameters
+    ----------
+    search : dict
+        A search's result (:meth:`CriticalSpeed.to_dict`).
+
+    Returns
+    -------
+    str
+        The speed or bound, in mm/s without the unit.
+    """
     value = search["critical_speed_mm_s"]
     low, high = search["speed_range_mm_s"]
     if value is not None:
@@ -256,7 +364,18 @@ def format_critical_speed(search: dict[str, Any]) -> str:
 
 def format_bands(search: dict[str, Any]) -> str:
     """The creeping bands of a search in mm/s, e.g. "0.25–1.24 stick-slip; 1.25–1.55
-    oscillation" ("none" when there is none)."""
+    oscillation" ("none" when there is none).
+
+    Parameters
+    ----------
+    search : dict
+        A search's result (:meth:`CriticalSpeed.to_dict`).
+
+    Returns
+    -------
+    str
+        The bands.
+    """
     parts = [f"{b['lower_mm_s']:.2f}–{b['upper_mm_s']:.2f} {b['kind']}"
              for b in search.get("bands", [])]
     return "; ".join(parts) if parts else "none"
@@ -272,7 +391,26 @@ def decide(run: Runner, command_speed: float, rule: VerdictRule | None = None,
            *, start: float | None = None) -> tuple[TraceVerdict, float]:
     """Run a trial until decided: ``run(duration)`` for each of ``rule.durations()`` in turn,
     judged by :func:`trace_verdict`.  Returns the verdict and the duration [s] that decided it
-    (the maximum when still undecided)."""
+    (the maximum when still undecided).
+
+    Parameters
+    ----------
+    run : callable
+        ``run(duration)`` → (time [s], table speed [m/s]) of the trial up to ``duration``.
+    command_speed : float
+        Commanded table speed [m/s].
+    rule : VerdictRule, optional
+        The creep-verdict rule (trial durations); the protocol's default when omitted.
+    start : float, optional
+        Judge the trace from this time on [s].
+
+    Returns
+    -------
+    verdict : TraceVerdict
+        The verdict.
+    duration : float
+        The duration that decided it [s].
+    """
     rule = rule or VerdictRule()
     verdict: TraceVerdict | None = None
     duration = rule.initial_duration
@@ -287,7 +425,24 @@ def decide(run: Runner, command_speed: float, rule: VerdictRule | None = None,
 
 def judge_trial(time: np.ndarray, speed: np.ndarray, command_speed: float,
                 rule: VerdictRule | None = None) -> CreepTrial:
-    """Verdict on a finished trace (no extension: "undecided" if it is too short to tell)."""
+    """Verdict on a finished trace (no extension: "undecided" if it is too short to tell).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    speed : numpy.ndarray
+        Table speed [m/s].
+    command_speed : float
+        Commanded table speed [m/s].
+    rule : VerdictRule, optional
+        The creep-verdict rule (trial durations); the protocol's default when omitted.
+
+    Returns
+    -------
+    CreepTrial
+        The verdict.
+    """
     v = trace_verdict(time, speed, command_speed, rule)
     return CreepTrial.from_verdict(command_speed, v, float(time[-1] - time[0]))
 
@@ -297,7 +452,26 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
                 options: SolverOptions | None = None) -> CreepTrial:
     """Start the table from rest at ``speed`` [m/s] (nut at ``nut_speed``) and run until the
     verdict is decided (:func:`decide`); a longer trial continues the shorter one
-    (:class:`~feeddrive.engine.simulate.Simulation`), so an undecided trial is not repeated."""
+    (:class:`~feeddrive.engine.simulate.Simulation`), so an undecided trial is not repeated.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    speed : float
+        Commanded table speed [m/s].
+    nut_speed : float, default 0.0
+        Nut speed [m/s].
+    rule : VerdictRule, optional
+        The creep-verdict rule (trial durations); the protocol's default when omitted.
+    options : SolverOptions, optional
+        The solver options.
+
+    Returns
+    -------
+    CreepTrial
+        The verdict.
+    """
     sim = Simulation(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), options)
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
@@ -345,7 +519,7 @@ def critical_speed_from_rest(
 
     Every change of verdict kind found by the coarse scan is bisected to ``resolution`` (see
     the module docstring).  The defaults are the protocol of ``feeddrive creep`` and
-    ``reproduce`` (:mod:`feeddrive.analysis.protocol`).
+    ``reproduce`` (``feeddrive.analysis.protocol``).
 
     Parameters
     ----------
@@ -408,7 +582,28 @@ def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coars
                  resolution: float, max_trials: int = 400) -> dict[float, str]:
     """Kinds at a coarse grid on [low, high] [m/s], every boundary between two decided,
     different kinds (at least one creeping) bisected to ``resolution``.  Each speed is
-    evaluated at most once; returns {speed: kind}."""
+    evaluated at most once; returns {speed: kind}.
+
+    Parameters
+    ----------
+    kind_at : callable
+        ``kind_at(speed)`` → the kind at ``speed`` [m/s].
+    low : float
+        Lowest speed [m/s].
+    high : float
+        Highest speed [m/s].
+    coarse_step : float
+        Step of the coarse grid [m/s].
+    resolution : float
+        Bisection resolution [m/s].
+    max_trials : int, default 400
+        Most speeds evaluated.
+
+    Returns
+    -------
+    dict of float to str
+        Speed [m/s] → kind.
+    """
     kinds: dict[float, str] = {}
 
     def judge(v: float) -> str:
@@ -442,7 +637,28 @@ def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coars
 def search_boundary(creeps: Callable[[float], bool], low: float, high: float,
                     coarse_step: float, resolution: float) -> tuple[str, float | None]:
     """Smooth end of the highest creep boundary in [low, high] [m/s] for a yes/no judge
-    (:func:`search_kinds` with two kinds).  Returns (status, critical speed)."""
+    (:func:`search_kinds` with two kinds).  Returns (status, critical speed).
+
+    Parameters
+    ----------
+    creeps : callable
+        ``creeps(speed)`` → whether the table creeps at ``speed`` [m/s].
+    low : float
+        Lowest speed [m/s].
+    high : float
+        Highest speed [m/s].
+    coarse_step : float
+        Step of the coarse grid [m/s].
+    resolution : float
+        Bisection resolution [m/s].
+
+    Returns
+    -------
+    status : str
+        As :func:`critical_of`: ``"found"``, ``"below-range"``, ``"above-range"``, ``"undecided"``.
+    critical_speed : float or None
+        The smooth end of the highest boundary [m/s].
+    """
     kinds = search_kinds(lambda v: STICK_SLIP if creeps(v) else SMOOTH, low, high,
                          coarse_step, resolution)
     trials = [CreepTrial(speed=v, kind=k, ripple_ratio=0.0, stick_fraction=0.0,
@@ -455,7 +671,28 @@ def judge_staircase(time: np.ndarray, speed: np.ndarray, speeds: np.ndarray,
                     starts: np.ndarray, dwell: float | Sequence[float],
                     rule: VerdictRule | None = None) -> list[CreepTrial]:
     """Judge each step of a step-down trace with :func:`trace_verdict` on the step alone
-    (from its start to just before the next step)."""
+    (from its start to just before the next step).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    speed : numpy.ndarray
+        Table speed [m/s].
+    speeds : numpy.ndarray
+        Commanded speed of each step [m/s].
+    starts : numpy.ndarray
+        Start time of each step [s].
+    dwell : float or sequence of float
+        Length of each step [s].
+    rule : VerdictRule, optional
+        The creep-verdict rule (trial durations); the protocol's default when omitted.
+
+    Returns
+    -------
+    list of CreepTrial
+        One per step.
+    """
     dwells = np.broadcast_to(np.asarray(dwell, dtype=float), (len(speeds),))
     out = []
     for v, t0, d in zip(speeds, starts, dwells, strict=True):
@@ -472,7 +709,30 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
     each step held until decided: its dwell doubles from ``rule.initial_duration`` up to
     ``rule.max_duration``, and the run is re-simulated from the start with the longer dwell
     (the history before the step is unchanged).  ``stop_after``: stop at the first step after
-    that index whose kind differs from that step's.  Returns (trials, simulated time [s])."""
+    that index whose kind differs from that step's.  Returns (trials, simulated time [s]).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    speeds : sequence of float
+        The step speeds, decreasing [m/s].
+    nut_speed : float, default 0.0
+        Nut speed [m/s].
+    rule : VerdictRule, optional
+        The creep-verdict rule (trial durations); the protocol's default when omitted.
+    options : SolverOptions, optional
+        The solver options.
+    stop_after : int, optional
+        Stop at the first step after this index whose kind differs from its own.
+
+    Returns
+    -------
+    trials : list of CreepTrial
+        One per step walked.
+    duration : float
+        Simulated time [s].
+    """
     rule = rule or VerdictRule()
     levels = rule.durations()
     sp = np.asarray(speeds, dtype=float)

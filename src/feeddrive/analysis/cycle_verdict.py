@@ -27,48 +27,56 @@ __all__ = ["TraceVerdict", "VerdictRule", "trace_verdict"]
 
 @dataclass(frozen=True)
 class VerdictRule:
-    """When a trial's outcome is decided (:func:`trace_verdict`).  Ratios are relative to
-    |v_cmd|, times in [s].
+    """When a trial's outcome is decided (:func:`trace_verdict`).
 
-    Attributes
+    Ratios are relative to |v_cmd|.  The trial length doubles from ``initial_duration`` until
+    decided; both duration defaults are the protocol of ``feeddrive creep`` and ``reproduce``
+    (``feeddrive.analysis.protocol``).
+
+    Parameters
     ----------
-    smooth_band:
-        *Decayed*: the speed has stayed within ±``smooth_band``·|v_cmd| of the command for
-        the settling stretch (default 0.02).  A limit cycle whose peak-to-peak ripple is
-        below 2·``smooth_band`` is smooth too.
-    settle_time:
-        The settling stretch lasts at least this long (default 2 s) and at least two of the
-        longest oscillation periods seen.
-    cycle_tolerance:
-        *Limit cycle*: the compared cycles' highest speed, lowest speed and period agree
-        within this fraction of the ripple and of the mean period (default 0.02).  A cycle
-        runs from one upward crossing of the command to the next.
-    min_cycles:
-        At least this many repetitions are compared (default 3); the compared cycles are those
-        of the last half of the trace (never the first cycle, which starts from rest or from
-        the previous state) …
-    min_compare_time:
-        … or of the last ``min_compare_time`` if longer (default 2 s), so a slowly decaying
-        envelope is not mistaken for a limit cycle.  The drift between the quarters of the
-        compared stretch must also not speed up (a trajectory lingering by a limit cycle that
-        has just vanished drifts ever faster), unless below a tenth of ``cycle_tolerance``.
-    max_multiplicity:
-        Period-doubled cycles repeat after p cycles; p up to this (default 8) is tried.
-    envelope_tolerance, envelope_blocks:
-        An irregular oscillation (no repetition) is sustained when the highest and lowest
-        speeds of the last ``envelope_blocks`` blocks of cycles (default 3, each ≥ 8 cycles
-        and ≥ ``min_compare_time``) agree within ``envelope_tolerance`` of the ripple
-        (default 0.05) and the ripple does not shrink block after block.
-    stick_level:
+    smooth_band : float, default 0.02
+        *Decayed*: the speed has stayed within ±``smooth_band``·|v_cmd| of the command for the
+        settling stretch [-].  A limit cycle whose peak-to-peak ripple is below
+        2·``smooth_band`` is smooth too.
+    settle_time : float, default 2.0
+        The settling stretch lasts at least this long and at least two of the longest
+        oscillation periods seen [s].
+    cycle_tolerance : float, default 0.02
+        *Limit cycle*: the compared cycles' highest speed, lowest speed and period agree within
+        this fraction of the ripple and of the mean period [-].  A cycle runs from one upward
+        crossing of the command to the next.
+    min_cycles : int, default 3
+        At least this many repetitions are compared; the compared cycles are those of the last
+        half of the trace (never the first cycle, which starts from rest or from the previous
+        state) …
+    min_compare_time : float, default 2.0
+        … or of the last ``min_compare_time`` if longer, so a slowly decaying envelope is not
+        mistaken for a limit cycle [s].  The drift between the quarters of the compared stretch
+        must also not speed up (a trajectory lingering by a limit cycle that has just vanished
+        drifts ever faster), unless below a tenth of ``cycle_tolerance``.
+    max_multiplicity : int, default 8
+        Period-doubled cycles repeat after p cycles; p up to this is tried.
+    envelope_tolerance : float, default 0.05
+        An irregular oscillation (no repetition) is sustained when the highest and lowest speeds
+        of the last ``envelope_blocks`` blocks of cycles agree within this fraction of the
+        ripple [-] and the ripple does not shrink block after block.
+    envelope_blocks : int, default 3
+        Blocks compared, each ≥ 8 cycles and ≥ ``min_compare_time``.
+    stick_level : float, default 0.01
         A limit cycle is *stick-slip* when the table speed in the command's direction falls
-        below ``stick_level``·|v_cmd| (default 0.01: the table stops, up to the bristles'
-        micro-motion, or moves backwards), else *oscillation*.
-    initial_duration:
-        First trial length (default 12 s, the old fixed window).
-    max_duration:
-        Longest trial (default 240 s): a trial still undecided then answers "undecided".
-        The trial length doubles from ``initial_duration`` until decided.  Both defaults are
-        the protocol of ``feeddrive creep`` and ``reproduce`` (``feeddrive.analysis.protocol``).
+        below ``stick_level``·|v_cmd| (the table stops, up to the bristles' micro-motion, or
+        moves backwards), else *oscillation* [-].
+    initial_duration : float
+        First trial length, the protocol's ``TRIAL_DURATION`` (12 s) [s].
+    max_duration : float
+        Longest trial, the protocol's ``TRIAL_MAX_DURATION`` (240 s) [s]: a trial still
+        undecided then answers "undecided".
+
+    Raises
+    ------
+    ValueError
+        For a value out of range, naming ``rule.<field>``.
     """
 
     smooth_band: float = 0.02
@@ -105,14 +113,26 @@ class VerdictRule:
                              f"initial_duration = {self.initial_duration!r} [s]")
 
     def durations(self) -> list[float]:
-        """Trial lengths [s] tried in turn: initial_duration doubling up to max_duration."""
+        """Trial lengths [s] tried in turn: initial_duration doubling up to max_duration.
+
+        Returns
+        -------
+        list of float
+            The lengths [s].
+        """
         out = [self.initial_duration]
         while out[-1] < self.max_duration * (1 - 1e-12):
             out.append(min(2.0 * out[-1], self.max_duration))
         return out
 
     def describe(self) -> str:
-        """The rule in words, with its numbers (printed beside every verdict)."""
+        """The rule in words, with its numbers (printed beside every verdict).
+
+        Returns
+        -------
+        str
+            One paragraph.
+        """
         return (
             f"Limit-cycle rule. A trial runs {self.initial_duration:g} s, doubling up to "
             f"{self.max_duration:g} s "
@@ -131,6 +151,13 @@ class VerdictRule:
             f"given until 2 periods are seen.")
 
     def to_dict(self) -> dict[str, Any]:
+        """The rule for JSON reports.
+
+        Returns
+        -------
+        dict
+            Its fields and ``description`` (:meth:`describe`).
+        """
         return {**asdict(self), "description": self.describe()}
 
 
@@ -144,6 +171,25 @@ class TraceVerdict:
     limit cycle, else the last settling stretch (smooth) or the trace's last quarter.
     ``frequency`` is None until two complete periods are seen, and for a smooth trace.
     ``decided_at``: the time at which the outcome was first decided.
+
+    Parameters
+    ----------
+    kind : str
+        ``"stick-slip"``, ``"oscillation"``, ``"smooth"`` or ``"undecided"``.
+    frequency : float or None
+        Frequency of the limit cycle [Hz].
+    ripple_ratio : float
+        Peak-to-peak speed over |v_cmd| [-].
+    min_ratio : float
+        Lowest speed along the motion over |v_cmd| [-].
+    stick_fraction : float
+        Fraction of the judged stretch spent below the stick level [-].
+    cycles : int
+        Cycles compared.
+    decided_at : float or None
+        When the outcome was first decided [s].
+    reason : str
+        Why, in words.
     """
 
     kind: str
@@ -157,10 +203,12 @@ class TraceVerdict:
 
     @property
     def creeping(self) -> bool:
+        """Whether the kind is a creeping one (stick-slip or oscillation)."""
         return self.kind in CREEPING_KINDS
 
     @property
     def decided(self) -> bool:
+        """Whether the trace was decided (any kind but ``"undecided"``)."""
         return self.kind != UNDECIDED
 
 
@@ -262,6 +310,24 @@ def trace_verdict(time: object, speed: object, command_speed: float,
     longer trace can only turn "undecided" into a decision.
 
     ``start`` [s]: ignore samples before it (default: the first sample).
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s].
+    speed : array_like
+        Table speed [m/s].
+    command_speed : float
+        Commanded table speed, non-zero [m/s].
+    rule : VerdictRule, optional
+        The rule; the protocol's default when omitted.
+    start : float, optional
+        Ignore samples before this time [s].
+
+    Returns
+    -------
+    TraceVerdict
+        The verdict.
     """
     rule = rule or VerdictRule()
     t, v = as_trace(time, speed)

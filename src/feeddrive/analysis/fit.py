@@ -86,7 +86,25 @@ class FitError(ValueError):
 @dataclass(frozen=True)
 class Experiment:
     """One measured trace: sample times [s] from the start of the record (the drive at
-    rest at 0), measured signals (SI) and the reference the drive followed."""
+    rest at 0), measured signals (SI) and the reference the drive followed.
+
+    Parameters
+    ----------
+    source : str
+        The file (or label) it came from.
+    time : numpy.ndarray
+        Sample times from the start of the record [s].
+    signals : mapping of str to numpy.ndarray
+        Measured signals by name (:data:`MEASURABLE`) [SI unit of the signal].
+    reference_time : numpy.ndarray
+        Uniform grid from 0 of the reference [s].
+    table_speed : numpy.ndarray
+        Commanded table speed on ``reference_time`` [m/s].
+    nut_speed : numpy.ndarray, optional
+        Commanded nut speed on ``reference_time`` [m/s].
+    noise : mapping of str to float, optional
+        Noise σ per signal, from the data alone [SI unit of the signal].
+    """
 
     source: str
     time: np.ndarray
@@ -98,6 +116,7 @@ class Experiment:
 
     @property
     def duration(self) -> float:
+        """Length of the record, its last sample time [s]."""
         return float(self.time[-1])
 
     @property
@@ -106,13 +125,26 @@ class Experiment:
         return float(self.time[-1] - self.time[0])
 
     def profile(self) -> Any:
+        """The reference as a profile the simulator follows.
+
+        Returns
+        -------
+        SampledSpeed
+            ``reference_time``, ``table_speed`` and ``nut_speed`` [SI].
+        """
         from ..model.reference import SampledSpeed
 
         return SampledSpeed(time=self.reference_time, table_speed=self.table_speed,
                             nut_speed=self.nut_speed)
 
     def direction(self) -> set[int]:
-        """Signs of the commanded table speed (+1, −1) during the record."""
+        """Signs of the commanded table speed during the record.
+
+        Returns
+        -------
+        set of int
+            +1, −1 or both.
+        """
         v = self.table_speed
         out = set()
         if np.any(v > 1e-12):
@@ -146,6 +178,31 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     (``command_speed`` only), as that long after the start from rest (a record of steady
     sliding).  ``torque_constant`` [N m/A] turns a measured torque into the screw current
     the model has.
+
+    Parameters
+    ----------
+    path : str or Path
+        The trace file.
+    signals : sequence of str, optional
+        The signals to fit.
+    command_speed : float, optional
+        Constant commanded table speed [m/s].
+    profile : tuple of (numpy.ndarray, numpy.ndarray), optional
+        (time [s], table speed [m/s]) of the reference.
+    torque_constant : float, optional
+        K_t [N m/A], to turn a measured torque into current.
+    record_start : float, default 0.0
+        Time of the first sample after the start from rest [s].
+
+    Returns
+    -------
+    Experiment
+        The trace in SI.
+
+    Raises
+    ------
+    FitError
+        For a trace that cannot be fitted (no signal, no reference, bad cells).
     """
     from ..io.measured import COMMAND_COLUMNS, check_increasing, read_csv_table
 
@@ -263,7 +320,25 @@ def _field_meta(params: DriveParameters, path: str) -> tuple[float, dict[str, An
 
 
 def free_parameter_bounds(params: DriveParameters, path: str) -> tuple[float, float]:
-    """The declared plausible range [SI] of parameter ``path``."""
+    """The declared plausible range [SI] of parameter ``path``.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    path : str
+        The parameter's dotted path.
+
+    Returns
+    -------
+    tuple of (float, float)
+        (low, high) [SI unit of the parameter].
+
+    Raises
+    ------
+    FitError
+        For a path that is not a numeric parameter of the set.
+    """
     _, meta = _field_meta(params, path)
     return float(meta["low"]), float(meta["high"])
 
@@ -313,7 +388,19 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     """Simulate one experiment at one parameter point and return the fitted signals on the
     measured times (SI).  Module-level and picklable: every executor runs it.  ``task``:
     ``parameters`` (TOML text), ``drive``, ``table_position`` [m], ``reference_time``,
-    ``table_speed``, ``nut_speed``, ``time``, ``signals`` (names)."""
+    ``table_speed``, ``nut_speed``, ``time``, ``signals`` (names).
+
+    Parameters
+    ----------
+    task : mapping
+        The task.
+
+    Returns
+    -------
+    dict
+        ``{"signals": {name: values on the measured times}}`` [SI unit of each signal], or
+        ``{"error": message}`` when the simulation failed.
+    """
     from ..engine.simulate import DriveSystem, SimulationError, SolverOptions, simulate
     from ..model.reference import SampledSpeed
     from ..parameters import loads
@@ -447,7 +534,31 @@ class _Evaluator:
 
 @dataclass(frozen=True)
 class ParameterEstimate:
-    """One fitted parameter [SI]: value, standard error, interval, how it was found."""
+    """One fitted parameter [SI]: value, standard error, interval, how it was found.
+
+    Parameters
+    ----------
+    path : str
+        The parameter's dotted path.
+    unit : str
+        Its unit.
+    start : float
+        Its start value [unit].
+    value : float
+        Its estimate [unit].
+    stderr : float
+        Standard error [unit].
+    low : float
+        Lower end of the confidence interval [unit].
+    high : float
+        Upper end [unit].
+    interval : str
+        ``"linear"`` (from the covariance) or ``"profile"`` (profile likelihood).
+    determined : bool
+        Whether the data determine it.
+    issue : str, optional
+        Why it is not determined, if so.
+    """
 
     path: str
     unit: str
@@ -462,11 +573,19 @@ class ParameterEstimate:
 
     @property
     def relative_half_width(self) -> float:
+        """Half the interval's width over |value| [-]; inf when unbounded."""
         if self.value == 0 or not (math.isfinite(self.low) and math.isfinite(self.high)):
             return math.inf
         return 0.5 * (self.high - self.low) / abs(self.value)
 
     def to_dict(self) -> dict[str, Any]:
+        """The estimate for the JSON report.
+
+        Returns
+        -------
+        dict
+            The fields, non-finite numbers as None, and the relative half-width.
+        """
         def fin(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
 
@@ -478,6 +597,23 @@ class ParameterEstimate:
 
 @dataclass(frozen=True)
 class SignalResidual:
+    """The residual of one fitted signal of one trace against the data's own noise.
+
+    Parameters
+    ----------
+    source : str
+        The trace.
+    signal : str
+        The signal.
+    samples : int
+        Samples compared.
+    rms : float
+        Residual rms [SI unit of the signal].
+    noise : float
+        Noise σ of the data, from the data alone [SI unit of the signal].
+    ratio : float
+        rms / noise [-]; about 1 for a model that explains the data.
+    """
     source: str
     signal: str
     samples: int
@@ -486,12 +622,65 @@ class SignalResidual:
     ratio: float
 
     def to_dict(self) -> dict[str, Any]:
+        """The residual for the JSON report.
+
+        Returns
+        -------
+        dict
+            The fields.
+        """
         return dataclasses.asdict(self)
 
 
 @dataclass(frozen=True)
 class FitResult:
-    """What :func:`fit_drive` found; :meth:`to_dict` is the CLI's JSON."""
+    """What :func:`fit_drive` found; :meth:`to_dict` is the CLI's JSON.
+
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The base set with the fitted values.
+    base_name : str
+        The base set's name.
+    drive : str
+        The drive.
+    table_position : float
+        Table position [m].
+    sources : tuple of str
+        The traces.
+    estimates : tuple of ParameterEstimate
+        One per free parameter.
+    covariance : numpy.ndarray
+        Covariance of the free parameters [SI, per pair].
+    correlation : numpy.ndarray
+        Their correlation matrix [-].
+    condition_number : float
+        Condition number of the scaled Jacobian [-].
+    singular_values : numpy.ndarray
+        Its singular values [-].
+    poorly_determined : tuple of dict
+        The parameter combinations the data barely determine.
+    residuals : tuple of SignalResidual
+        One per trace and signal.
+    residual_ok : bool
+        Whether every residual is near the data's noise.
+    cost : float
+        Final weighted sum of squares [-].
+    dof : int
+        Degrees of freedom.
+    evaluations : int
+        Simulations run.
+    confidence : float
+        Confidence level of the intervals [-].
+    interrupted : bool, default False
+        Stopped by Ctrl-C (best point so far, no intervals).
+    message : str, default ""
+        The optimiser's message.
+    simulated : tuple of dict, default ()
+        The simulated signals per trace, at the estimate.
+    experiments : tuple of Experiment, default ()
+        The traces fitted.
+    """
 
     parameters: DriveParameters
     base_name: str
@@ -517,9 +706,18 @@ class FitResult:
 
     @property
     def paths(self) -> list[str]:
+        """The free parameters' dotted paths, in estimate order."""
         return [e.path for e in self.estimates]
 
     def to_dict(self) -> dict[str, Any]:
+        """The result for the JSON report (``feeddrive fit --json``).
+
+        Returns
+        -------
+        dict
+            Set, drive, position [mm], data, estimates, correlation, condition number, poorly
+            determined combinations, residuals, cost and counts.
+        """
         corr = np.where(np.isfinite(self.correlation), self.correlation, 0.0)
         return {"parameter_set": self.base_name, "drive": self.drive,
                 "table_position_mm": self.table_position * 1e3, "data": list(self.sources),
@@ -539,7 +737,20 @@ class FitResult:
     def fitted_toml(self, extends: str, data_names: Sequence[str] | None = None) -> str:
         """A parameter file that ``extends`` the base set with the fitted values, and a
         ``[fit]`` table recording data, free parameters, estimates, intervals, covariance
-        (the loader ignores ``[fit]``; ``feeddrive predict`` reads it)."""
+        (the loader ignores ``[fit]``; ``feeddrive predict`` reads it).
+
+        Parameters
+        ----------
+        extends : str
+            What the file extends: a preset name or the base file's path.
+        data_names : sequence of str, optional
+            The data files as recorded; the sources by default.
+
+        Returns
+        -------
+        str
+            The TOML text.
+        """
         lines = ["# feeddrive fit: fitted parameter set (docs/fitting.md). SI units.",
                  f"extends = {toml_string(extends)}",
                  f"name = {toml_string(self.base_name + '-fitted')}"]
@@ -596,7 +807,18 @@ def horizons(duration: float) -> list[float]:
     half second (the start-up transient) it is nearly quadratic.  Each stage starts from
     the last one's optimum, inside the next one's valley (measured: from factors 1.2, 0.8,
     1.1 off, a fit on the full 10-s records ends in a local minimum with σ2 5× too large;
-    the continuation reaches the truth within the noise)."""
+    the continuation reaches the truth within the noise).
+
+    Parameters
+    ----------
+    duration : float
+        The longest record [s].
+
+    Returns
+    -------
+    list of float
+        The stage lengths [s], the last one ``duration``.
+    """
     out = []
     h = FIRST_HORIZON
     while h < duration:
@@ -697,7 +919,60 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     starting from the last (see docs/fitting.md); the intervals are always from the whole
     records.  Ctrl-C stops the search and
     returns the best point so far (``interrupted``; no intervals).  Everything is checked
-    before the first simulation: a :class:`FitError` names the problem."""
+    before the first simulation: a :class:`FitError` names the problem.
+
+    Parameters
+    ----------
+    base : DriveParameters
+        The set whose ``free`` parameters are fitted.
+    experiments : sequence of Experiment
+        The measured traces, fitted at once.
+    free : sequence of str
+        Dotted paths of the parameters to fit.
+    drive : str, default "cdfs"
+        The drive.
+    table_position : float, default 0.4
+        Table position [m].
+    weights : mapping of str to float, optional
+        Factor on each signal's residuals, by signal name [-].
+    bounds : mapping of str to (float, float), optional
+        Ranges replacing the declared ones [SI unit of the parameter].
+    confidence : float, default 0.95
+        Confidence level of the intervals [-].
+    max_evaluations : int, default 200
+        Most simulations of the search.
+    profile : bool, default True
+        Profile-likelihood intervals where the linear ones are unreliable.
+    horizon_continuation : bool, default True
+        Run the search on growing record lengths (``horizons``).
+    workers : int, optional
+        Local worker processes for the Jacobian columns.
+    dask_workers : int, optional
+        Workers of a local Dask cluster.
+    scheduler : str, optional
+        Address of a Dask scheduler.
+    progress : callable, optional
+        Told in one line what is being done.
+
+    Returns
+    -------
+    FitResult
+        Estimates, intervals, covariance and residuals.
+
+    Raises
+    ------
+    FitError
+        For a problem found before the first simulation.
+
+    References
+    ----------
+    .. [1] M. A. Branch, T. F. Coleman, Y. Li, "A subspace, interior, and conjugate gradient
+       method for large-scale bound-constrained minimization problems", SIAM J. Sci.
+       Comput. 21 (1999) 1–23 (the trust-region reflective method of
+       ``scipy.optimize.least_squares``).
+    .. [2] D. M. Bates, D. G. Watts, Nonlinear Regression Analysis and Its Applications,
+       Wiley, 1988 (linear and profile intervals).
+    """
     from ..engine.simulate import DriveSystem
 
     say = progress or (lambda _t: None)
@@ -933,7 +1208,38 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     ``position_quantum`` [m] (an encoder or interferometer count) and screw current with
     white noise of ``current_noise`` × its rms (seeded); ``record_start`` [s]: the record
     keeps only the samples from then on (a record of steady sliding).  For tests, the calibration
-    (benchmarks/fit_calibration.py) and docs/fitting.md's worked example."""
+    (benchmarks/fit_calibration.py) and docs/fitting.md's worked example.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The "true" parameter set.
+    speed : float
+        Commanded table speed [m/s].
+    duration : float
+        Record length [s].
+    drive : str, default "cdfs"
+        The drive.
+    table_position : float, default 0.4
+        Table position [m].
+    position_quantum : float, default 5e-8
+        Count size of the position measurement [m].
+    current_noise : float, default 0.01
+        Current noise σ relative to its rms [-].
+    seed : int, default 0
+        Seed of the noise.
+    ramp_time : float, default 0.1
+        Start ramp [s].
+    record_start : float, default 0.0
+        Start of the kept record [s].
+    source : str, optional
+        The record's label.
+
+    Returns
+    -------
+    Experiment
+        The synthetic record.
+    """
     from ..engine.simulate import DriveSystem, simulate
     from ..model.reference import ConstantSpeed
 
@@ -966,7 +1272,20 @@ EDGE_UNITS = {"table_position": ("µm", 1e6), "table_speed": ("mm/s", 1e3),
 def plot_residuals(result: FitResult, path: str | Path) -> Path:
     """One row per measured signal of each trace: measured and simulated (left; position
     relative to the command's integral), residual against time with ±2σ of the data's noise
-    (middle), and the residual's histogram (right)."""
+    (middle), and the residual's histogram (right).
+
+    Parameters
+    ----------
+    result : FitResult
+        The fit (with its simulated signals).
+    path : str or Path
+        The image file.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -40,6 +40,25 @@ class Estimate:
 
     ``max_correlation`` is the largest |correlation| of this estimate with another fitted
     parameter (``correlated_with``); with the interval it decides :attr:`identifiable`.
+
+    Parameters
+    ----------
+    value : float
+        The estimate [unit].
+    stderr : float
+        Its standard error [unit].
+    low : float
+        Lower end of the confidence interval [unit].
+    high : float
+        Upper end [unit].
+    unit : str
+        The SI unit.
+    confidence : float
+        Level of the interval [-].
+    max_correlation : float, default nan
+        Largest |correlation| with another fitted parameter [-].
+    correlated_with : str, optional
+        That parameter.
     """
 
     value: float
@@ -53,6 +72,7 @@ class Estimate:
 
     @property
     def relative_stderr(self) -> float:
+        """|stderr / value| [-]; inf for a zero value."""
         return abs(self.stderr / self.value) if self.value != 0 else math.inf
 
     @property
@@ -72,9 +92,25 @@ class Estimate:
 
     @property
     def identifiable(self) -> bool:
+        """Whether the data determine the value (no ``identifiability_issue``)."""
         return self.identifiability_issue is None
 
     def to_dict(self, scale: float = 1.0, unit: str | None = None) -> dict[str, Any]:
+        """The estimate for JSON, optionally rescaled for display.
+
+        Parameters
+        ----------
+        scale : float, default 1.0
+            Factor applied to the value, error and interval [display unit per SI unit].
+        unit : str, optional
+            The display unit; the SI unit by default.
+
+        Returns
+        -------
+        dict
+            ``value``, ``stderr``, ``ci_low``, ``ci_high`` [unit], ``unit``, ``confidence``, the
+            largest correlation and its partner, and the identifiability verdict.
+        """
         return {
             "value": self.value * scale,
             "stderr": finite_or_none(self.stderr * scale),
@@ -91,7 +127,24 @@ class Estimate:
 
 def with_correlation(est: Estimate, corr: np.ndarray, i: int,
                      names: tuple[str, ...]) -> Estimate:
-    """``est`` (parameter ``i`` of ``names``) with its largest correlation to another."""
+    """``est`` (parameter ``i`` of ``names``) with its largest correlation to another.
+
+    Parameters
+    ----------
+    est : Estimate
+        The estimate.
+    corr : numpy.ndarray
+        Correlation matrix of the fitted parameters [-].
+    i : int
+        Its index.
+    names : tuple of str
+        The parameters' names.
+
+    Returns
+    -------
+    Estimate
+        ``est`` with ``max_correlation`` and ``correlated_with`` set.
+    """
     row = np.where(np.arange(corr.shape[0]) == i, 0.0, np.nan_to_num(np.abs(corr[i]), nan=0.0))
     j = int(np.argmax(row))
     if row.size < 2 or not np.isfinite(corr[i, j]):
@@ -101,25 +154,80 @@ def with_correlation(est: Estimate, corr: np.ndarray, i: int,
 
 
 def correlation(cov: np.ndarray) -> np.ndarray:
-    """The correlation matrix of covariance ``cov`` (NaN where a variance is not finite)."""
+    """The correlation matrix of covariance ``cov`` (NaN where a variance is not finite).
+
+    Parameters
+    ----------
+    cov : numpy.ndarray
+        Covariance matrix [SI, per pair].
+
+    Returns
+    -------
+    numpy.ndarray
+        Correlation matrix [-].
+    """
     with np.errstate(all="ignore"):
         sd = np.sqrt(np.where(np.isfinite(np.diag(cov)), np.diag(cov), np.nan))
         return np.asarray(cov / np.outer(sd, sd))
 
 
 def finite_or_none(x: float) -> float | None:
-    """``x``, or None when it is not finite (JSON has no inf)."""
+    """``x``, or None when it is not finite (JSON has no inf).
+
+    Parameters
+    ----------
+    x : float
+        The value [any unit].
+
+    Returns
+    -------
+    float or None
+        ``x`` or None.
+    """
     return float(x) if math.isfinite(x) else None
 
 
 def t_quantile(confidence: float, dof: int) -> float:
-    """Two-sided Student t quantile at ``confidence`` for ``dof`` degrees of freedom."""
+    """Two-sided Student t quantile at ``confidence`` for ``dof`` degrees of freedom.
+
+    Parameters
+    ----------
+    confidence : float
+        Two-sided level, e.g. 0.95 [-].
+    dof : int
+        Degrees of freedom.
+
+    Returns
+    -------
+    float
+        The quantile [-]; inf without degrees of freedom.
+    """
     return float(stats.t.ppf(0.5 + confidence / 2.0, dof)) if dof > 0 else math.inf
 
 
 def covariance(jac: np.ndarray, ssr: float, dof: int) -> np.ndarray:
     """s²(JᵀJ)⁻¹ by SVD.  Parameters that move along a (numerically) null direction of J
-    get infinite variance; the others keep the pseudo-inverse variance."""
+    get infinite variance; the others keep the pseudo-inverse variance.
+
+    Parameters
+    ----------
+    jac : numpy.ndarray
+        Jacobian of the residuals at the optimum [residual unit per parameter unit].
+    ssr : float
+        Sum of squared residuals [residual unit²].
+    dof : int
+        Degrees of freedom.
+
+    Returns
+    -------
+    numpy.ndarray
+        Covariance of the parameters [parameter units²].
+
+    References
+    ----------
+    .. [1] D. M. Bates, D. G. Watts, Nonlinear Regression Analysis and Its Applications,
+       Wiley, 1988, Sect. 2.3.
+    """
     s2 = ssr / dof if dof > 0 else math.inf
     _, sv, vt = np.linalg.svd(jac, full_matrices=False)
     tol = float(sv.max(initial=0.0)) * max(jac.shape) * np.finfo(float).eps
@@ -134,14 +242,46 @@ def covariance(jac: np.ndarray, ssr: float, dof: int) -> np.ndarray:
 
 
 def estimate(value: float, var: float, tq: float, unit: str, confidence: float) -> Estimate:
-    """An :class:`Estimate` of ``value`` with variance ``var`` and t quantile ``tq``."""
+    """An :class:`Estimate` of ``value`` with variance ``var`` and t quantile ``tq``.
+
+    Parameters
+    ----------
+    value : float
+        The value [unit].
+    var : float
+        Its variance [unit²].
+    tq : float
+        The t quantile [-].
+    unit : str
+        The unit.
+    confidence : float
+        Level of the interval [-].
+
+    Returns
+    -------
+    Estimate
+        Value ± tq·√var.
+    """
     se = math.sqrt(var) if var >= 0 and math.isfinite(var) else math.inf
     return Estimate(value=float(value), stderr=se, low=value - tq * se, high=value + tq * se,
                     unit=unit, confidence=confidence)
 
 
 def locate(lines: np.ndarray | None, i: int) -> str:
-    """Where sample ``i`` came from, for a message: its file line, else its index."""
+    """Where sample ``i`` came from, for a message: its file line, else its index.
+
+    Parameters
+    ----------
+    lines : numpy.ndarray of int or None
+        File line of every sample.
+    i : int
+        The sample.
+
+    Returns
+    -------
+    str
+        ``"line N"`` or ``"index i"``.
+    """
     return f"line {int(lines[i])}" if lines is not None else f"index {i}"
 
 
@@ -149,7 +289,18 @@ def noise_level(values: np.ndarray) -> float:
     """The noise σ of a sampled signal from the data alone: the robust (median absolute
     deviation) scale of its second differences / √6 (white noise e: var Δ²e = 6σ²), never
     below the record's resolution q/√12 (q the smallest step between samples: encoder or
-    interferometer counts, or the printed digits)."""
+    interferometer counts, or the printed digits).
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        The signal [its unit].
+
+    Returns
+    -------
+    float
+        σ [unit of the signal]; nan for fewer than 8 samples.
+    """
     x = np.asarray(values, dtype=float)
     if x.size < 8:
         return math.nan

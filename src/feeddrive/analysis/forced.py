@@ -27,6 +27,21 @@ TRIAL = 12.0  # [s] the forced ripple is steady after the start (checked against
 
 @dataclass(frozen=True)
 class ForcedRipplePoint:
+    """The steady table-speed ripple at one commanded speed (the forced-ripple criterion).
+
+    Parameters
+    ----------
+    speed : float
+        Commanded table speed [m/s].
+    ripple_ratio : float
+        Steady peak-to-peak speed over the command [-].
+    min_ratio : float
+        Lowest speed over the command [-].
+    mean_ratio : float
+        Mean speed over the command [-].
+    stuck : bool
+        The table stopped or reversed (stick-slip rather than forced ripple).
+    """
     speed: float  # [m/s]
     ripple_ratio: float  # steady peak-to-peak / command
     min_ratio: float  # lowest speed / command
@@ -35,7 +50,18 @@ class ForcedRipplePoint:
 
     def exceeds(self, threshold: float) -> bool:
         """Ripple above ``threshold`` × command, or a mean off the command by more than half
-        of it (a table that has not broken away has no ripple, and no speed either)."""
+        of it (a table that has not broken away has no ripple, and no speed either).
+
+        Parameters
+        ----------
+        threshold : float
+            The ripple threshold, relative to the command [-].
+
+        Returns
+        -------
+        bool
+            Whether the point fails the criterion.
+        """
         return (self.ripple_ratio > threshold
                 or abs(self.mean_ratio - 1.0) > 0.5 * threshold)
 
@@ -43,7 +69,26 @@ class ForcedRipplePoint:
 def ripple_point(system: DriveSystem, speed: float, nut_speed: float = 0.0, *,
                  duration: float = TRIAL, options: SolverOptions | None = None
                  ) -> ForcedRipplePoint:
-    """Steady table-speed ripple at ``speed`` [m/s] over the last half of a ``duration`` run."""
+    """Steady table-speed ripple at ``speed`` [m/s] over the last half of a ``duration`` run.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    speed : float
+        Commanded table speed [m/s].
+    nut_speed : float, default 0.0
+        Nut speed [m/s].
+    duration : float, default 12.0
+        Length of the run [s].
+    options : SolverOptions, optional
+        The solver options.
+
+    Returns
+    -------
+    ForcedRipplePoint
+        The ripple.
+    """
     r = simulate(system, ConstantSpeed(speed, nut_speed), duration, options=options)
     m = creep_metrics(r.time, r["table_speed"], speed, window=(duration / 2.0, duration))
     return ForcedRipplePoint(speed, m.ripple_ratio, m.min_ratio, m.mean_speed / speed,
@@ -62,7 +107,38 @@ def threshold_critical_speed(system: DriveSystem, nut_speed: float = 0.0, *,
 
     ``known``: ripple points of this system and nut speed already simulated (filled in as the
     search goes), so that searches at several thresholds share their runs
-    (:func:`threshold_critical_speeds`); the result lists the points this search used."""
+    (:func:`threshold_critical_speeds`); the result lists the points this search used.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    nut_speed : float, default 0.0
+        Nut speed [m/s].
+    threshold : float, default 0.5
+        Ripple threshold, relative to the command [-].
+    speed_range : tuple of (float, float)
+        Speeds searched [m/s].
+    coarse_step : float, default 2e-4
+        Step of the scan [m/s].
+    resolution : float, default 1e-5
+        Bisection resolution [m/s].
+    options : SolverOptions, optional
+        The solver options.
+    known : dict of float to ForcedRipplePoint, optional
+        Points already simulated, by speed [m/s]; filled in as the search goes.
+
+    Returns
+    -------
+    dict
+        Drive, nut speed [mm/s], threshold, critical speed [mm/s] (None when out of range),
+        status, kind, the speed range [mm/s] and the points used.
+
+    Raises
+    ------
+    ValueError
+        For a threshold ≤ 0.
+    """
     if not (0.0 < threshold and math.isfinite(threshold)):
         raise ValueError(f"threshold = {threshold!r}: expected > 0 (a ripple/command ratio)")
     lo, hi = speed_range
@@ -126,7 +202,24 @@ def threshold_critical_speeds(system: DriveSystem, nut_speed: float = 0.0, *,
                               thresholds: tuple[float, ...] = THRESHOLDS,
                               **search: Any) -> list[dict[str, Any]]:
     """:func:`threshold_critical_speed` at each of ``thresholds``, the ripple runs shared
-    (the scan grid is the same for every threshold)."""
+    (the scan grid is the same for every threshold).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    nut_speed : float, default 0.0
+        Nut speed [m/s].
+    thresholds : tuple of float, default (0.3, 0.5, 1.0)
+        Ripple thresholds, relative to the command [-].
+    **search
+        Passed to :func:`threshold_critical_speed`.
+
+    Returns
+    -------
+    list of dict
+        One search result per threshold.
+    """
     known: dict[float, ForcedRipplePoint] = {}
     return [threshold_critical_speed(system, nut_speed, threshold=th, known=known, **search)
             for th in thresholds]

@@ -55,6 +55,24 @@ def friction_fragment(
 
     A σ1 the dynamic fit could not determine is left out (the base set's value stays on
     merging) unless ``include_undetermined``; the fragment says why in a comment.
+
+    Parameters
+    ----------
+    site : str
+        The friction site (``screw``, ``nut``, ``guide``).
+    static : StaticFit, optional
+        The static (Stribeck) fit.
+    dynamic : DynamicFit, optional
+        The pre-sliding (σ0, σ1) fit.
+    source : str, optional
+        The data file, recorded in a comment.
+    include_undetermined : bool, default False
+        Keep a σ1 the fit could not determine.
+
+    Returns
+    -------
+    str
+        The TOML text.
     """
     if site not in SITES:
         raise ParameterError("site", site, f"expected one of {', '.join(SITES)}")
@@ -92,7 +110,23 @@ def friction_fragment(
 
 
 def load_fragment(path: str | Path) -> dict[str, Any]:
-    """Read a TOML fragment file as a nested dict."""
+    """Read a TOML fragment file as a nested dict.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file.
+
+    Returns
+    -------
+    dict
+        The nested tables.
+
+    Raises
+    ------
+    ParameterError
+        For an empty fragment (a file that is not valid TOML is refused by the TOML reader).
+    """
     data = read_toml_file(path, field="fragment")
     if not data:
         raise ParameterError("fragment", str(path), "empty: no values to merge")
@@ -123,6 +157,23 @@ def merge_fragment(base: DriveParameters,
     ``fragment`` is a nested mapping, TOML text (``str``) or a TOML file (``Path``).  Keys
     must exist in the parameter set; a refused value raises :class:`ParameterError` naming
     its full path (e.g. ``friction.screw.positive.static_force``).
+
+    Parameters
+    ----------
+    base : DriveParameters
+        The parameter set.
+    fragment : str, Path or mapping
+        The values to replace.
+
+    Returns
+    -------
+    DriveParameters
+        The merged, validated set.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown key or a refused value, naming its full path.
     """
     if isinstance(fragment, Path):
         data: Mapping[str, Any] = load_fragment(fragment)

@@ -63,7 +63,36 @@ _PULL = 1e-8  # weight of the operating point's pull to its start (free directio
 
 @dataclass(frozen=True)
 class LinearModel:
-    """δẋ = A δx + B δu, δy = C δx + D δu around ``operating_point``."""
+    """The drive's closed loop linearised at steady sliding: δẋ = A δx + B δu, δy = C δx + D δu.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        (n, n) state matrix [SI].
+    B : numpy.ndarray
+        (n, m) input matrix [SI].
+    C : numpy.ndarray
+        (p, n) output matrix [SI].
+    D : numpy.ndarray
+        (p, m) feed-through matrix [SI].
+    states : tuple of str
+        State names, in ``x`` order.
+    inputs : tuple of str
+        Input names (references, loop-breaking injections, disturbances); units by
+        :func:`unit_of`.
+    outputs : tuple of str
+        Output names; units by :func:`unit_of`.
+    operating_point : dict of str to float
+        The steady state, by state name [SI, per state].
+    table_speed : float
+        Table speed of the operating point [m/s].
+    nut_speed : float
+        Nut speed of the operating point [m/s].
+    frictionless : bool
+        Whether the friction sites were left out.
+    notes : tuple of str, default ()
+        Warnings, e.g. the averaged model's (:func:`averaged`).
+    """
 
     A: np.ndarray
     B: np.ndarray
@@ -79,10 +108,23 @@ class LinearModel:
     notes: tuple[str, ...] = field(default=())
 
     def poles(self) -> np.ndarray:
+        """Eigenvalues of ``A``: the closed loop's poles at the operating point.
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex poles [1/s].
+        """
         return np.linalg.eigvals(self.A)
 
     def to_control(self) -> Any:
-        """python-control ``StateSpace`` with the state, input and output names."""
+        """The model as a python-control ``StateSpace``.
+
+        Returns
+        -------
+        control.StateSpace
+            With the state, input and output names.
+        """
         import control
 
         return control.ss(self.A, self.B, self.C, self.D, states=list(self.states),
@@ -91,8 +133,17 @@ class LinearModel:
 
 @dataclass(frozen=True)
 class Pole:
-    """One eigenvalue of the linearised closed loop.  ``rigid_body``: a free motion no loop
-    holds (see :func:`classify_poles`), which has no damping ratio."""
+    """One eigenvalue of the linearised closed loop.
+
+    Parameters
+    ----------
+    real : float
+        Real part [1/s].
+    imag : float
+        Imaginary part [rad/s].
+    rigid_body : bool, default False
+        A free motion no loop holds (see :func:`classify_poles`), which has no damping ratio.
+    """
 
     real: float  # [1/s]
     imag: float  # [rad/s]
@@ -100,14 +151,24 @@ class Pole:
 
     @property
     def frequency_hz(self) -> float:
+        """Natural frequency |p|/(2π) [Hz]."""
         return abs(complex(self.real, self.imag)) / (2 * math.pi)
 
     @property
     def damping_ratio(self) -> float:
+        """Damping ratio −Re(p)/|p| [-]; 1 for a pole at the origin."""
         mag = abs(complex(self.real, self.imag))
         return -self.real / mag if mag > 0 else 1.0
 
     def as_dict(self) -> dict[str, Any]:
+        """The pole for the JSON report.
+
+        Returns
+        -------
+        dict
+            ``kind`` (rigid-body, oscillatory, real), real [1/s] and imaginary [rad/s] parts and,
+            except for a rigid-body pole, frequency [Hz] and damping ratio [-].
+        """
         if self.rigid_body:
             return {"kind": "rigid-body", "real_1_per_s": self.real,
                     "imag_rad_per_s": self.imag,
@@ -125,10 +186,22 @@ MARGINAL = 1e-7
 
 
 def classify_poles(eigenvalues: np.ndarray) -> list[Pole]:
-    """The one rule for rigid-body poles: an eigenvalue whose real and imaginary parts are
-    both below :data:`MARGINAL` × the fastest pole's magnitude is a free rigid-body motion
-    (listed as such, without a damping ratio); every other eigenvalue — a genuinely unstable
-    real pole included — is kept as it is.  Sorted by frequency."""
+    """Mark the free rigid-body poles, the one rule every analysis uses, and sort by frequency.
+
+    An eigenvalue whose real and imaginary parts are both below :data:`MARGINAL` × the fastest
+    pole's magnitude is a free rigid-body motion (listed as such, without a damping ratio);
+    every other eigenvalue — a genuinely unstable real pole included — is kept as it is.
+
+    Parameters
+    ----------
+    eigenvalues : numpy.ndarray
+        The closed loop's eigenvalues [1/s].
+
+    Returns
+    -------
+    list of Pole
+        Sorted by frequency.
+    """
     ev = np.asarray(eigenvalues, dtype=complex)
     fastest = float(np.max(np.abs(ev))) if ev.size else 0.0
     limit = MARGINAL * fastest
@@ -210,9 +283,32 @@ class _Evaluator:
 
 def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
                  ) -> tuple[Model, np.ndarray]:
-    """The state of steady sliding at ``table_speed`` [m/s] (and nut speed) at t = 1 s:
-    accelerations, bristle, current and integrator rates zero; positions move with the
-    reference.  Raises ParameterError if no steady state is found."""
+    """The model's state in steady sliding at a table speed, at t = 1 s.
+
+    Accelerations and the bristle, current and integrator rates are zero; positions move with
+    the reference at the drive's kinematic rates.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (continuous loops).
+    table_speed : float
+        Steady table speed [m/s].
+    nut_speed : float, default 0.0
+        Steady nut speed [m/s].
+
+    Returns
+    -------
+    model : Model
+        The assembled model of the constant-speed profile.
+    state : numpy.ndarray
+        The steady state [SI, per state].
+
+    Raises
+    ------
+    ParameterError
+        When no steady state is found, or the loops are sampled.
+    """
     _check_continuous(system)
     profile = ConstantSpeed(table_speed, nut_speed, ramp_time=0.0)
     model = system.model(profile)
@@ -289,8 +385,21 @@ _INPUT_STEP = {"m": 1e-8, "m/s": 1e-8, "N": 1e-3, "rad/s": 1e-6, "A": 1e-6}
 
 
 def unit_of(name: str, names: tuple[str, ...] = ()) -> str:
-    """The unit of an input or output of :func:`linearize` (the linear motor's speed
-    command and its disturbance are m/s)."""
+    """The unit of an input or output of :func:`linearize`.
+
+    Parameters
+    ----------
+    name : str
+        The input or output name (``screw_speed_command``, ``table_position``, …).
+    names : tuple of str, optional
+        Not used by the lookup (no caller passes it).
+
+    Returns
+    -------
+    str
+        The unit; ``"m/s"`` for the linear motor's speed command and its disturbance, ``""``
+        when unknown.
+    """
     if name in INPUT_UNITS:
         return INPUT_UNITS[name]
     if name in OUTPUT_UNITS:
@@ -302,9 +411,23 @@ def unit_of(name: str, names: tuple[str, ...] = ()) -> str:
 
 
 def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
-    """The system without what gives it no steady state: torque ripple and lead error are
-    zero-mean harmonics of a shaft angle, so their average over a revolution is nothing; the
-    drive is linearised on that averaged model and the returned note says so."""
+    """The system without what gives it no steady state: torque ripple and lead error.
+
+    Both are zero-mean harmonics of a shaft angle, so their average over a revolution is
+    nothing; the drive is linearised on that averaged model and the returned note says so.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+
+    Returns
+    -------
+    system : DriveSystem
+        The drive with ripple and lead error removed (``system`` itself when it has none).
+    notes : tuple of str
+        The warning naming what was left out; empty when nothing was.
+    """
     d = system.parameters.disturbances
     motors = {m.ripple: m for m in mechanism(system.drive).drive_motors if m.ripple}
     harmonic = [f.name for f in fields(d)
@@ -428,7 +551,27 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
 
 @dataclass(frozen=True)
 class LoopResult:
-    """One loop's open-loop transfer L(jω) and its margins."""
+    """One loop's open-loop transfer L(jω) and its margins.
+
+    Parameters
+    ----------
+    name : str
+        The loop (``"screw velocity loop"``, ``"screw position loop"``, …).
+    frequency_hz : numpy.ndarray
+        Frequency grid [Hz].
+    magnitude_db : numpy.ndarray
+        |L(jω)| [dB].
+    phase_deg : numpy.ndarray
+        ∠L(jω), unwrapped [deg].
+    gain_margin_db : float or None
+        Gain margin [dB]; None when the phase never crosses −180°.
+    phase_margin_deg : float or None
+        Phase margin [deg]; None when the gain never crosses 0 dB.
+    crossover_hz : float or None
+        Gain-crossover frequency [Hz].
+    bandwidth_hz : float or None
+        Closed-loop −3 dB bandwidth [Hz].
+    """
 
     name: str
     frequency_hz: np.ndarray
@@ -440,6 +583,14 @@ class LoopResult:
     bandwidth_hz: float | None  # closed loop −3 dB
 
     def as_dict(self) -> dict[str, Any]:
+        """The loop's margins for the JSON report.
+
+        Returns
+        -------
+        dict
+            Loop name, gain margin [dB], phase margin [deg], crossover and closed-loop bandwidth
+            [Hz].
+        """
         return {"loop": self.name, "gain_margin_db": self.gain_margin_db,
                 "phase_margin_deg": self.phase_margin_deg, "crossover_hz": self.crossover_hz,
                 "closed_loop_bandwidth_hz": self.bandwidth_hz}
@@ -501,19 +652,46 @@ def _speed_loop_only(system: DriveSystem, axis: str, table_speed: float,
 
 @dataclass(frozen=True)
 class LoopAnalysis:
+    """Poles and loop margins of the drive linearised at one table speed.
+
+    Parameters
+    ----------
+    poles : list of Pole
+        The closed loop's poles (:func:`classify_poles`).
+    loops : list of LoopResult
+        Each loop opened at its injection point.
+    linear : LinearModel
+        The linear model they come from.
+    """
     poles: list[Pole]
     loops: list[LoopResult]
     linear: LinearModel
 
     def dominant(self) -> Pole:
-        """The least-damped oscillatory pole pair (the mode friction destabilises first); the
-        rigid-body poles are not modes and are never it."""
+        """The least-damped oscillatory pole pair: the mode friction destabilises first.
+
+        The rigid-body poles are not modes and are never it; without an oscillatory pole, the
+        slowest real one.
+
+        Returns
+        -------
+        Pole
+            The dominant pole (Im > 0 for a pair).
+        """
         modes = [p for p in self.poles if not p.rigid_body] or list(self.poles)
         osc = [p for p in modes if p.imag > 1e-6]
         return min(osc, key=lambda p: p.damping_ratio) if osc else min(
             modes, key=lambda p: -p.real)
 
     def as_dict(self) -> dict[str, Any]:
+        """The analysis for the JSON report (``feeddrive loops --json``).
+
+        Returns
+        -------
+        dict
+            Table speed [mm/s], the least-damped mode's frequency [Hz] and damping ratio [-], the
+            pole rule, the poles (each pair once), the loops' margins and the notes.
+        """
         d = self.dominant()
         return {
             "table_speed_mm_s": 1e3 * self.linear.table_speed,
@@ -601,7 +779,27 @@ NAMED_RESPONSES: dict[str, tuple[str, str, str]] = {
 
 @dataclass(frozen=True)
 class FrequencyResponse:
-    """One transfer on a frequency grid: ``response`` complex, in ``unit``."""
+    """One transfer function evaluated on a frequency grid.
+
+    Parameters
+    ----------
+    name : str
+        The transfer's name.
+    input : str
+        Its input.
+    output : str
+        Its output.
+    unit : str
+        Unit of the response (output unit per input unit).
+    frequency_hz : numpy.ndarray
+        Frequency grid [Hz].
+    response : numpy.ndarray
+        Complex response at each frequency [unit].
+    description : str, default ""
+        What the transfer shows.
+    notes : tuple of str, default ()
+        Warnings carried from the linear model.
+    """
 
     name: str
     input: str
@@ -614,17 +812,27 @@ class FrequencyResponse:
 
     @property
     def magnitude(self) -> np.ndarray:
+        """|G(jω)| at each frequency, in :attr:`unit`."""
         return np.abs(self.response)
 
     @property
     def magnitude_db(self) -> np.ndarray:
+        """20·log10 |G(jω)| at each frequency [dB]."""
         return 20 * np.log10(np.abs(self.response))
 
     @property
     def phase_deg(self) -> np.ndarray:
+        """∠G(jω), unwrapped along the grid [deg]."""
         return np.degrees(np.unwrap(np.angle(self.response)))
 
     def as_dict(self) -> dict[str, Any]:
+        """The response for the JSON report.
+
+        Returns
+        -------
+        dict
+            Names, unit, description, the grid [Hz], magnitude [unit], phase [deg] and notes.
+        """
         return {"name": self.name, "input": self.input, "output": self.output,
                 "unit": self.unit, "description": self.description,
                 "frequency_hz": self.frequency_hz.tolist(),
@@ -748,7 +956,27 @@ def _axes(lin: LinearModel) -> list[str]:
 
 @dataclass(frozen=True)
 class StabilityBand:
-    """Speeds [m/s] at which steady sliding is linearly unstable, with the unstable mode."""
+    """Speeds at which steady sliding is linearly unstable, with the unstable mode.
+
+    Parameters
+    ----------
+    intervals : list of (float, float)
+        (lower, upper) edges of each unstable band [m/s].
+    mode_frequency_hz : list of float
+        Frequency of the rightmost pole at each band's middle [Hz].
+    speeds : numpy.ndarray
+        The scanned speeds [m/s].
+    max_real_part : numpy.ndarray
+        Real part of the rightmost pole at each scanned speed [1/s].
+    frequency_hz : numpy.ndarray
+        Frequency of that pole [Hz].
+    tolerance : float
+        Bisection tolerance of the edges [m/s].
+    nut_speed : float
+        Nut speed of the scan [m/s].
+    notes : tuple of str, default ()
+        Warnings, e.g. the averaged model's (:func:`averaged`).
+    """
 
     intervals: list[tuple[float, float]]  # (lower, upper) edges [m/s]
     mode_frequency_hz: list[float]  # of the rightmost pole, at each interval's middle
@@ -760,6 +988,14 @@ class StabilityBand:
     notes: tuple[str, ...] = ()  # e.g. the averaged model's warning (:func:`averaged`)
 
     def as_dict(self) -> dict[str, Any]:
+        """The band for the JSON report (``feeddrive stability --json``).
+
+        Returns
+        -------
+        dict
+            The rule, nut speed, bands and edge tolerance [mm/s], the unstable modes' frequencies
+            [Hz], the scan's range [mm/s] and size, and the notes.
+        """
         return {
             "rule": "steady sliding is unstable where the closed loop linearised at that speed "
                     "(every friction site and bristle state) has a pole with positive real "
@@ -777,9 +1013,27 @@ class StabilityBand:
 
 def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
                    ) -> tuple[float, float]:
-    """(real part [1/s], frequency [Hz]) of the rightmost pole of the closed loop linearised
-    at steady sliding at ``v`` [m/s], the marginal free-motion poles (:data:`MARGINAL`) left
-    out — the quantity :func:`stability_band` judges."""
+    """The rightmost pole of the closed loop linearised at one steady sliding speed.
+
+    The marginal free-motion poles (:data:`MARGINAL`) are left out: this is the quantity
+    :func:`stability_band` judges.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (continuous loops).
+    v : float
+        Steady table speed [m/s].
+    nut_speed : float, default 0.0
+        Steady nut speed [m/s].
+
+    Returns
+    -------
+    real : float
+        Its real part [1/s]; positive means unstable.
+    frequency : float
+        Its frequency |Im|/(2π) [Hz].
+    """
     lin = linearize(system, v, nut_speed)
     live = [p for p in classify_poles(lin.poles()) if not p.rigid_body]
     p = max(live, key=lambda q: q.real)

@@ -34,6 +34,25 @@ PERCENTILES = (5.0, 50.0, 95.0)
 
 @dataclass(frozen=True)
 class FitRecord:
+    """A fitted parameter set with its ``[fit]`` table, as ``feeddrive predict`` reads it.
+
+    Parameters
+    ----------
+    path : Path
+        The fitted file.
+    parameters : DriveParameters
+        The fitted set.
+    drive : str
+        The drive it was fitted on.
+    table_position : float
+        Table position [m].
+    free : tuple of str
+        The fitted parameters' paths.
+    estimates : numpy.ndarray
+        Their estimates [SI unit of each].
+    covariance : numpy.ndarray
+        Their covariance [SI, per pair].
+    """
     path: Path
     parameters: DriveParameters
     drive: str
@@ -44,7 +63,24 @@ class FitRecord:
 
 
 def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
-    """The fitted set and its ``[fit]`` table; one-line refusals naming the key."""
+    """The fitted set and its ``[fit]`` table; one-line refusals naming the key.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The fitted file.
+
+    Returns
+    -------
+    FitRecord
+        The record.
+
+    Raises
+    ------
+    ParameterError
+        For a file without a ``[fit]`` table, a missing key, a covariance that does not match
+        the estimates or is not finite, or an interrupted fit.
+    """
     p = Path(path)
     data = read_toml_file(p, field="FIT")
     rec = data.get("fit")
@@ -107,12 +143,33 @@ def _draw(record: FitRecord, samples: int, seed: int) -> tuple[list[dict[str, fl
 
 @dataclass(frozen=True)
 class Percentile:
+    """One percentile of the predicted critical speed, with its Monte Carlo interval.
+
+    Parameters
+    ----------
+    level : float
+        The percentile [%].
+    value : float
+        The critical speed at it [m/s]; ±inf when censored at the range's end.
+    low : float
+        Lower end of its 95 % Monte Carlo interval [m/s].
+    high : float
+        Upper end [m/s].
+    """
     level: float  # [%]
     value: float  # [m/s] (±inf: censored at the range's end)
     low: float  # 95 % Monte Carlo interval [m/s]
     high: float
 
     def to_dict(self) -> dict[str, Any]:
+        """The percentile for the JSON report.
+
+        Returns
+        -------
+        dict
+            Level [%], critical speed and interval [mm/s] ("below range"/"above range" when
+            censored).
+        """
         def mm(x: float) -> float | str:
             return x * 1e3 if math.isfinite(x) else ("below range" if x < 0 else "above range")
 
@@ -122,6 +179,37 @@ class Percentile:
 
 @dataclass(frozen=True)
 class Prediction:
+    """The Monte Carlo prediction of the critical speed from a fit's covariance.
+
+    Parameters
+    ----------
+    record : FitRecord
+        The fit.
+    samples : int
+        Parameter draws.
+    seed : int
+        Seed of the draws.
+    values : numpy.ndarray
+        Critical speed per draw [m/s]; ±inf censored, nan failed.
+    statuses : tuple of str
+        The search status per draw.
+    refused_draws : int
+        Draws outside the parameters' ranges, redrawn.
+    percentiles : tuple of Percentile
+        The 5/50/95 % points.
+    resolution : float
+        Search resolution [m/s].
+    speed_range : tuple of (float, float)
+        Speeds searched [m/s].
+    store : str
+        The sweep store used.
+    executor : str
+        Where the points ran.
+    computed : int
+        Points computed this run.
+    extra : dict, optional
+        Further report entries.
+    """
     record: FitRecord
     samples: int
     seed: int
@@ -137,6 +225,14 @@ class Prediction:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
+        """The prediction for the JSON report (``feeddrive predict --json``).
+
+        Returns
+        -------
+        dict
+            Fit, drive, samples, seed, free parameters, percentiles, mean [mm/s] and the counts
+            found, below and above range.
+        """
         fin = self.values[np.isfinite(self.values)]
         return {"fit": os.fspath(self.record.path), "drive": self.record.drive,
                 "samples": self.samples, "seed": self.seed,
@@ -177,7 +273,40 @@ def predict(fit_file: str | os.PathLike[str], *, samples: int = 100, seed: int =
             started: Callable[[int, str], None] | None = None) -> Prediction:
     """Monte Carlo of the critical speed from rest over the fit's covariance (see the
     module); ``resolution`` and ``speed_range`` [m/s], ``max_duration`` [s] override the
-    shared protocol.  Points already in ``store`` are not recomputed."""
+    shared protocol.  Points already in ``store`` are not recomputed.
+
+    Parameters
+    ----------
+    fit_file : str or os.PathLike
+        The fitted parameter file (``feeddrive fit --out``).
+    samples : int, default 100
+        Parameter draws.
+    seed : int, default 0
+        Seed of the draws.
+    store : str or os.PathLike, optional
+        The sweep store of the points.
+    workers : int, optional
+        Local worker processes.
+    dask_workers : int, optional
+        Workers of a local Dask cluster.
+    scheduler : str, optional
+        Address of a Dask scheduler.
+    resolution : float, optional
+        Search resolution [m/s].
+    speed_range : tuple of (float, float), optional
+        Speeds searched [m/s].
+    max_duration : float, optional
+        Longest creep trial [s].
+    progress : callable, optional
+        ``progress(done, total)``.
+    started : callable, optional
+        ``started(todo, executor)``.
+
+    Returns
+    -------
+    Prediction
+        The percentiles and every draw's critical speed.
+    """
     from ..sweep import SweepStore
     from ..sweep.design import Axis, Point, SweepConfig
     from ..sweep.executors import run_sweep
@@ -245,7 +374,22 @@ def predict(fit_file: str | os.PathLike[str], *, samples: int = 100, seed: int =
 def plot_prediction(pred: Prediction, path: str | os.PathLike[str],
                     true_value: float | None = None) -> Path:
     """Histogram of the critical speed [mm/s] with the 5/50/95 % points, and each
-    percentile against the number of samples (convergence)."""
+    percentile against the number of samples (convergence).
+
+    Parameters
+    ----------
+    pred : Prediction
+        The prediction.
+    path : str or os.PathLike
+        The image file.
+    true_value : float, optional
+        A known critical speed to mark (synthetic data) [m/s].
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -54,6 +54,57 @@ class DynamicFit:
     ``sigma1_determined`` is False when the data do not pin σ1 down (relative standard
     error above ``SIGMA1_MAX_RELATIVE_STDERR`` or an unbounded profile interval); then
     report ``sigma1_interval`` rather than ``bristle_damping.value``.
+
+    Parameters
+    ----------
+    model : str
+        ``"lugre"`` or ``"linear"``.
+    mass : float
+        The moving mass [kg].
+    bristle_stiffness : Estimate
+        σ0 [N/m].
+    bristle_damping : Estimate
+        σ1 [N s/m].
+    viscous_coefficient : float
+        σ2 held fixed [N s/m].
+    sigma1_determined : bool
+        Whether the data pin σ1 down.
+    sigma1_interval : tuple of (float, float)
+        Profile interval of σ1; the upper end may be inf [N s/m].
+    note : str
+        What to make of σ1, in words.
+    time : numpy.ndarray
+        Sample times [s].
+    force : numpy.ndarray
+        Applied force [N].
+    position : numpy.ndarray
+        Measured displacement [m].
+    fitted : numpy.ndarray
+        Model displacement, offset included [m].
+    position_offset : float
+        The measurement's zero relative to the rest position [m].
+    rmse : float
+        RMS residual [m].
+    dof : int
+        Degrees of freedom.
+    profile_sigma1 : numpy.ndarray
+        σ1 grid of the profile [N s/m].
+    profile_ssr : numpy.ndarray
+        Residual sum of squares along it [m²].
+    ssr_threshold : float
+        The F-test bound [m²].
+    force_ratio : float or None
+        max|F| / F_s [-]; None when F_s is unknown.
+    correlation : float
+        Correlation between the σ0 and σ1 estimates [-].
+    source : str, optional
+        The data file.
+    lines : numpy.ndarray of int, optional
+        File line of every sample.
+    noise : float, default nan
+        The record's noise level, from the data alone [m].
+    residual_ok : bool, default True
+        Whether the RMS residual is within the allowed multiple of the noise.
     """
 
     model: str
@@ -83,6 +134,7 @@ class DynamicFit:
 
     @property
     def residual(self) -> np.ndarray:
+        """Measured minus fitted displacement [m]."""
         return self.position - self.fitted
 
     def lugre(self, static: LuGreParameters | StaticFit) -> LuGreParameters:
@@ -90,6 +142,21 @@ class DynamicFit:
 
         σ1 is taken as fitted even when it is poorly determined (a value is needed to
         simulate); check ``sigma1_determined`` and ``note``.
+
+        Parameters
+        ----------
+        static : LuGreParameters or StaticFit
+            The static branches (and σ2).
+
+        Returns
+        -------
+        LuGreParameters
+            The site with the fitted σ0 and σ1.
+
+        Raises
+        ------
+        ValueError
+            For a static fit with one direction only.
         """
         if isinstance(static, StaticFit):
             if static.positive is None or static.negative is None:
@@ -103,6 +170,14 @@ class DynamicFit:
                                bristle_damping=self.bristle_damping.value)
 
     def to_dict(self) -> dict[str, Any]:
+        """The fit for the JSON report (``feeddrive identify dynamic --json``).
+
+        Returns
+        -------
+        dict
+            Source, model, mass [kg], the σ0 and σ1 estimates, whether σ1 is determined and its
+            profile interval, the fit's residual and noise, and the note.
+        """
         low, high = self.sigma1_interval
         return {
             "source": self.source,
@@ -201,32 +276,61 @@ def fit_presliding(
 ) -> DynamicFit:
     """Fit σ0 and σ1 to a pre-sliding test (force below breakaway).
 
+    σ1 is profiled: for each σ1 on a grid, σ0 is refitted; the interval where the residual
+    stays within the F-test bound for ``confidence`` is ``sigma1_interval``.
+
     Parameters
     ----------
-    time, force, position:
-        Samples [s], applied force [N] and displacement [m] (any zero: an offset is fitted).
-        The test must start at rest; the force must stay below breakaway (|F| < F_s).
-    mass:
-        The moving mass [kg] the force acts on (for a rotary site, the inertia referred to
-        the table: J/H²).
-    friction:
+    time : array_like
+        Sample times [s]; the test must start at rest.
+    force : array_like
+        Applied force, below breakaway (|F| < F_s) [N].
+    position : array_like
+        Displacement (any zero: an offset is fitted) [m].
+    mass : float
+        The moving mass the force acts on (for a rotary site, the inertia referred to the
+        table: J/H²) [kg].
+    friction : LuGreParameters, optional
         Static branches and σ2 of the site (e.g. from
         :func:`~feeddrive.analysis.static_fit.fit_static` via
         :meth:`~feeddrive.analysis.static_fit.StaticFit.lugre`, or a parameter set); its σ0,
         σ1 only seed the fit.  Required for ``model="lugre"``; for ``model="linear"`` σ2 is
         taken from it (mean of the branches) or 0 without it, in which case the fitted σ1 is
         σ1 + σ2.
-    model:
-        ``"lugre"`` simulates the full bristle equation; ``"linear"`` the linearised
-        pre-sliding dynamics m ẍ + (σ1 + σ2) ẋ + σ0 x = F.  The LuGre bristle equation
-        softens with load, so the linear fit underestimates σ0 by up to about 2·max|F|/F_s
-        after force steps (less under symmetric sines): keep |F| ≤ 0.02 F_s with it.
+    model : {"lugre", "linear"}, default "lugre"
+        ``"lugre"`` simulates the full bristle equation (Wang2021 Eq. (11)); ``"linear"`` the
+        linearised pre-sliding dynamics m ẍ + (σ1 + σ2) ẋ + σ0 x = F.  The LuGre bristle
+        equation softens with load, so the linear fit underestimates σ0 by up to about
+        2·max|F|/F_s after force steps (less under symmetric sines): keep |F| ≤ 0.02 F_s with
+        it.
+    confidence : float, default 0.95
+        Level of the intervals [-].
+    lines : numpy.ndarray of int, optional
+        File line of every sample, for messages.
+    source : str, optional
+        The file name, for messages.
+    progress : callable, optional
+        Receives a short line at each stage of a long fit (start k of 3, profile point i of n).
 
-    σ1 is profiled: for each σ1 on a grid, σ0 is refitted; the interval where the residual
-    stays within the F-test bound for ``confidence`` is ``sigma1_interval``.
+    Returns
+    -------
+    DynamicFit
+        σ0, σ1 with their intervals, and the fit's residuals.
 
-    ``progress`` receives a short line at each stage of a long fit (start k of 3, profile
-    point i of n).
+    Raises
+    ------
+    ValueError
+        For arrays that are not 1-D of one length or not finite, fewer than 20 samples, time
+        that does not increase or jumps, a non-positive mass, a constant or too large
+        displacement (the table slid), a constant force, an unknown model, or the LuGre model
+        without ``friction``.
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    .. [2] D. M. Bates, D. G. Watts, Nonlinear Regression Analysis and Its Applications,
+       Wiley, 1988 (profile intervals).
     """
     say = progress or (lambda _text: None)
     t = np.asarray(time, dtype=float)

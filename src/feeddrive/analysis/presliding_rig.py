@@ -171,6 +171,12 @@ def simulate_presliding(time: object, force: object, mass: float, friction: LuGr
     -------
     numpy.ndarray
         Displacement at each instant [m], from the rest position x = 0 before the force.
+
+    References
+    ----------
+    .. [1] Wang2021 Eq. (11).
+    .. [2] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
     """
     t = np.asarray(time, dtype=float)
     f = np.asarray(force, dtype=float)

@@ -22,7 +22,19 @@ LINEAR_POINTS = 40  # [-] scan points
 
 
 def describe(start: str) -> str:
-    """The protocol in words, in mm/s, for the CLI and the report."""
+    """The critical-speed search protocol in words, in mm/s, for the CLI and the report.
+
+    Parameters
+    ----------
+    start : str
+        ``"rest"`` (trials from rest, scan then bisection) or ``"stepdown"`` (a staircase on a
+        running table).
+
+    Returns
+    -------
+    str
+        One sentence with the durations [s], the speed range and the steps [mm/s].
+    """
     lo, hi = (1e3 * v for v in SPEED_RANGE)
     if start == "rest":
         return (f"from rest: trials of {TRIAL_DURATION:g} s doubled up to "

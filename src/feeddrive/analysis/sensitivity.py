@@ -66,7 +66,29 @@ def _value(params: Any, path: str) -> Any:
 
 def parameter_paths(params: DriveParameters, drive: str,
                     patterns: Sequence[str] | None = None) -> tuple[list[str], dict[str, str]]:
-    """(paths to vary, {left-out path: reason}) for ``params`` on ``drive``."""
+    """(paths to vary, {left-out path: reason}) for ``params`` on ``drive``.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    drive : str
+        The drive (sites and motors it does not use are left out).
+    patterns : sequence of str, optional
+        Glob patterns of the paths to vary; every numeric one by default.
+
+    Returns
+    -------
+    paths : list of str
+        The paths to vary.
+    skipped : dict of str to str
+        Left-out path → reason.
+
+    Raises
+    ------
+    ParameterError
+        When the patterns match no numeric parameter.
+    """
     import dataclasses
 
     from ..sweep.design import numeric_paths
@@ -106,6 +128,35 @@ def parameter_paths(params: DriveParameters, drive: str,
 
 @dataclass(frozen=True)
 class Entry:
+    """The sensitivity of the quantity to one parameter.
+
+    Parameters
+    ----------
+    path : str
+        The parameter's dotted path.
+    value : float
+        Its base value p₀ [SI unit of the parameter].
+    absolute : bool
+        p₀ = 0: a derivative dQ/dp, not an elasticity.
+    step : float
+        The relative step h (absolute: h·s is the step) [-].
+    q_minus : float
+        Q at p₀(1 − h) [m/s].
+    q_plus : float
+        Q at p₀(1 + h) [m/s].
+    elasticity : float
+        E = (ΔQ/Q₀)/(Δp/p₀) [-] (absolute: dQ/dp [SI/SI]); nan when not resolved.
+    bound : float
+        When not resolved, |E| < bound [-].
+    resolved : bool
+        Whether the step's effect exceeds the resolution enough.
+    halved : float
+        E at h/2 [-]; nan when not resolved.
+    consistent : bool
+        Whether E at h and h/2 agree.
+    note : str, default ""
+        Why it is not resolved or not consistent.
+    """
     path: str
     value: float  # p₀ [SI]
     absolute: bool  # zero-valued: derivative, not elasticity
@@ -120,6 +171,13 @@ class Entry:
     note: str = ""
 
     def to_dict(self) -> dict[str, Any]:
+        """The entry for the JSON report.
+
+        Returns
+        -------
+        dict
+            The fields, non-finite numbers as None.
+        """
         def fin(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
 
@@ -133,6 +191,30 @@ class Entry:
 
 @dataclass(frozen=True)
 class SensitivityResult:
+    """Elasticities of a quantity (critical speed or the linear band's upper edge) to every
+    varied parameter.
+
+    Parameters
+    ----------
+    parameter_set : str
+        The set's name.
+    drive : str
+        The drive.
+    quantity : str
+        ``"critical_speed"`` or ``"linear_upper"``.
+    base : float
+        Q₀ at the base point [m/s].
+    resolution : float
+        Resolution of Q [m/s].
+    entries : tuple of Entry
+        Ranked by |E|, resolved first.
+    skipped : dict of str to str
+        Left-out path → reason.
+    evaluations : int
+        Points evaluated.
+    executor : str
+        Where they ran.
+    """
     parameter_set: str
     drive: str
     quantity: str  # "critical_speed" or "linear_upper"
@@ -144,6 +226,14 @@ class SensitivityResult:
     executor: str
 
     def to_dict(self) -> dict[str, Any]:
+        """The result for the JSON report (``feeddrive sensitivity --json``).
+
+        Returns
+        -------
+        dict
+            Set, drive, quantity, Q₀ and resolution [mm/s], the rule, the entries, the skipped
+            paths and the counts.
+        """
         return {"parameter_set": self.parameter_set, "drive": self.drive,
                 "quantity": self.quantity, "base_mm_s": self.base * 1e3,
                 "resolution_mm_s": self.resolution * 1e3,
@@ -193,7 +283,40 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     """Elasticities of ``quantity`` (``critical-speed`` or ``linear-band``) of the set
     ``params_source`` (a preset name or a .toml file) on ``drive`` (see the module).  Points
     run through :func:`feeddrive.sweep.run_sweep` (store, local pool or Dask), or, with
-    ``in_process``, through the same :func:`feeddrive.sweep.quantities.evaluate` here."""
+    ``in_process``, through the same :func:`feeddrive.sweep.quantities.evaluate` here.
+
+    Parameters
+    ----------
+    params_source : str or DriveParameters
+        A preset name, a ``.toml`` file or a parameter set.
+    drive : str, default "cdfs"
+        The drive.
+    table_position : float, default 0.4
+        Table position [m].
+    quantity : str, default "linear-band"
+        ``"critical-speed"`` or ``"linear-band"``.
+    patterns : sequence of str, optional
+        Glob patterns of the paths to vary.
+    linear_points : int, optional
+        Speeds of the linear scan.
+    store : str or os.PathLike, optional
+        The sweep store.
+    workers : int, optional
+        Local worker processes.
+    dask_workers : int, optional
+        Workers of a local Dask cluster.
+    scheduler : str, optional
+        Address of a Dask scheduler.
+    in_process : bool, default False
+        Evaluate here, without a store or pool.
+    progress : callable, optional
+        Told in one line what is being done.
+
+    Returns
+    -------
+    SensitivityResult
+        The ranked elasticities.
+    """
     from ..sweep import SweepStore
     from ..sweep.design import SweepConfig, _load_base
     from ..sweep.executors import run_sweep
@@ -362,7 +485,22 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
 def plot_tornado(result: SensitivityResult, path: str | os.PathLike[str],
                  top: int = 20) -> Path:
     """Ranked tornado chart: for each resolved parameter, the change of Q [%] at −h and +h
-    (the step beside its name); absolute derivatives are marked."""
+    (the step beside its name); absolute derivatives are marked.
+
+    Parameters
+    ----------
+    result : SensitivityResult
+        The result.
+    path : str or os.PathLike
+        The image file.
+    top : int, default 20
+        Most parameters shown.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

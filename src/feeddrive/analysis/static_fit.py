@@ -40,7 +40,37 @@ MIN_SPEEDS_PER_DIRECTION = 5
 
 @dataclass(frozen=True)
 class BranchFit:
-    """Fit of one direction's steady friction curve.  Speeds and forces as magnitudes."""
+    """Fit of one direction's steady friction curve.  Speeds and forces as magnitudes.
+
+    Parameters
+    ----------
+    direction : str
+        ``"positive"`` or ``"negative"``.
+    branch : FrictionBranch
+        The fitted F_c, F_s, v_s, σ2.
+    coulomb_force : Estimate
+        F_c [N].
+    static_force : Estimate
+        F_s [N].
+    stribeck_velocity : Estimate
+        v_s [m/s].
+    viscous_coefficient : Estimate
+        σ2 [N s/m].
+    speed : numpy.ndarray
+        Tested speeds, magnitudes [m/s].
+    force : numpy.ndarray
+        Measured forces, magnitudes [N].
+    fitted : numpy.ndarray
+        Fitted forces [N].
+    lines : numpy.ndarray of int or None
+        File line of every test.
+    rmse : float
+        RMS of force − fitted [N].
+    dof : int
+        Degrees of freedom.
+    correlation : numpy.ndarray
+        Correlation of (F_c, F_s − F_c, v_s, σ2) [-].
+    """
 
     direction: str
     branch: FrictionBranch
@@ -58,9 +88,17 @@ class BranchFit:
 
     @property
     def residual(self) -> np.ndarray:
+        """Measured minus fitted force at each tested speed [N]."""
         return self.force - self.fitted
 
     def estimates(self) -> dict[str, Estimate]:
+        """The four estimates by parameter name.
+
+        Returns
+        -------
+        dict of str to Estimate
+            ``coulomb_force``, ``static_force``, ``stribeck_velocity``, ``viscous_coefficient``.
+        """
         return {
             "coulomb_force": self.coulomb_force,
             "static_force": self.static_force,
@@ -69,14 +107,30 @@ class BranchFit:
         }
 
     def unidentifiable(self) -> dict[str, str]:
-        """Name → reason of every estimate the data do not determine."""
+        """Name → reason of every estimate the data do not determine.
+
+        Returns
+        -------
+        dict of str to str
+            Empty when every estimate is determined.
+        """
         return {name: est.identifiability_issue for name, est in self.estimates().items()
                 if est.identifiability_issue is not None}
 
 
 @dataclass(frozen=True)
 class StaticFit:
-    """Both directions of a static identification."""
+    """Both directions of a static identification.
+
+    Parameters
+    ----------
+    positive : BranchFit or None
+        The + branch; None when no test went that way.
+    negative : BranchFit or None
+        The − branch.
+    source : str, optional
+        The data file.
+    """
 
     positive: BranchFit | None
     negative: BranchFit | None
@@ -90,14 +144,38 @@ class StaticFit:
         return "positive" if self.negative is None else None
 
     def branches(self) -> dict[str, BranchFit]:
-        """The fitted branches (one only for a one-direction record)."""
+        """The fitted branches (one only for a one-direction record).
+
+        Returns
+        -------
+        dict of str to BranchFit
+            Direction → fit.
+        """
         return {k: b for k, b in (("positive", self.positive), ("negative", self.negative))
                 if b is not None}
 
     def lugre(self, bristle_stiffness: float, bristle_damping: float) -> LuGreParameters:
         """The LuGre parameters the simulation takes, with σ0 [N/m] and σ1 [N s/m] given
         (e.g. from a base parameter set or
-        :func:`~feeddrive.analysis.presliding.fit_presliding`)."""
+        :func:`~feeddrive.analysis.presliding.fit_presliding`).
+
+        Parameters
+        ----------
+        bristle_stiffness : float
+            σ0 [N/m].
+        bristle_damping : float
+            σ1 [N s/m].
+
+        Returns
+        -------
+        LuGreParameters
+            The site.
+
+        Raises
+        ------
+        ValueError
+            When only one direction was fitted.
+        """
         if self.positive is None or self.negative is None:
             raise ValueError(f"only the {self.one_direction} branch was fitted (tests in one "
                              "direction); merge the fragment into a parameter set, which keeps "
@@ -107,6 +185,19 @@ class StaticFit:
                                bristle_damping=bristle_damping)
 
     def to_dict(self, units: Literal["SI", "mm"] = "SI") -> dict[str, Any]:
+        """The fit for the JSON report (``feeddrive identify static --json``).
+
+        Parameters
+        ----------
+        units : {"SI", "mm"}, default "SI"
+            Unit of the Stribeck velocity.
+
+        Returns
+        -------
+        dict
+            Source, the one direction (if so) and, per branch, the estimates, RMS error [N], the
+            unidentifiable ones, the number of tests and the degrees of freedom.
+        """
         out: dict[str, Any] = {"source": self.source, "one_direction": self.one_direction}
         for name, b in self.branches().items():
             vs_scale, vs_unit = (1.0, "m/s") if units == "SI" else (1e3, "mm/s")
@@ -137,6 +228,10 @@ def stribeck_curve(theta: np.ndarray, v: np.ndarray) -> np.ndarray:
     -------
     numpy.ndarray
         The steady friction force magnitude [N].
+
+    References
+    ----------
+    .. [1] Wang2021 Eq. (11), Table 1..
     """
     fc, dF, vs, s2 = theta
     return np.asarray(fc + dF * np.exp(-((v / vs) ** 2)) + s2 * v)
@@ -160,6 +255,38 @@ def fit_branch(speed: object, force: object, *, direction: str = "positive",
     ln F_model − ln F (noise proportional to the force); ``"absolute"`` plain residuals
     (noise of constant size).  The confidence intervals assume the chosen noise model:
     with the wrong one they are too narrow where the noise is underestimated.
+
+    Parameters
+    ----------
+    speed : array_like
+        Tested speeds, magnitudes [m/s].
+    force : array_like
+        Measured friction forces, magnitudes [N].
+    direction : str, default "positive"
+        The branch's direction, for the result and messages.
+    confidence : float, default 0.95
+        Level of the intervals [-].
+    weighting : {"relative", "absolute"}, default "relative"
+        The noise model.
+    lines : numpy.ndarray of int, optional
+        File line of every test, for messages.
+
+    Returns
+    -------
+    BranchFit
+        The fit.
+
+    Raises
+    ------
+    ValueError
+        For an unknown weighting.
+
+    References
+    ----------
+    .. [1] M. A. Branch, T. F. Coleman, Y. Li, "A subspace, interior, and conjugate gradient
+       method for large-scale bound-constrained minimization problems", SIAM J. Sci.
+       Comput. 21 (1999) 1–23.
+    .. [2] Wang2021 Eq. (11), Table 1 (the curve).
     """
     if weighting not in ("relative", "absolute"):
         raise ValueError(f"weighting = {weighting!r}: expected 'relative' or 'absolute'")
@@ -256,26 +383,43 @@ def fit_static(
 ) -> StaticFit:
     """Identify both friction branches from constant-speed tests.
 
-    Parameters
-    ----------
-    speed:
-        Sliding speed of each test [m/s], signed: positive tests give the + branch, negative
-        tests the − branch (Wang2021 Table 1's direction convention).
-    force:
-        Friction force of each test [N]: signed (friction has the sign of the speed) or as
-        magnitudes; within one direction the sign must not change.
-    confidence:
-        Level of the reported confidence intervals (default 0.95).
-    weighting:
-        ``"relative"`` (noise proportional to the force, the default) or ``"absolute"``;
-        see :func:`fit_branch`.
-    lines, source:
-        File line numbers of the tests and the file name, used in error messages.
-
     Each direction tested needs at least :data:`MIN_SPEEDS_PER_DIRECTION` distinct speeds,
     spread over the Stribeck region (around v_s) and the viscous region (well above it).  A
     record with tests in one direction only gives that branch only (the other is None;
     :attr:`StaticFit.one_direction` names the fitted one).
+
+    Parameters
+    ----------
+    speed : array_like
+        Sliding speed of each test, signed: positive tests give the + branch, negative tests
+        the − branch (Wang2021 Table 1's direction convention) [m/s].
+    force : array_like
+        Friction force of each test, signed (friction has the sign of the speed) or as
+        magnitudes; within one direction the sign must not change [N].
+    confidence : float, default 0.95
+        Level of the reported confidence intervals [-].
+    weighting : {"relative", "absolute"}, default "relative"
+        Noise proportional to the force, or of constant size; see :func:`fit_branch`.
+    lines : numpy.ndarray of int, optional
+        File line numbers of the tests, used in error messages.
+    source : str, optional
+        The file name, used in error messages.
+
+    Returns
+    -------
+    StaticFit
+        Both branches (or the one tested).
+
+    Raises
+    ------
+    ValueError
+        For mismatched or non-finite arrays, a zero speed, a value beyond any feed drive, a
+        confidence outside [0.5, 1), too few distinct speeds in a direction, or a force that is
+        zero or changes sign within a direction.
+
+    References
+    ----------
+    .. [1] Wang2021 Table 1, Eq. (11).
     """
     v = np.asarray(speed, dtype=float)
     f = np.asarray(force, dtype=float)

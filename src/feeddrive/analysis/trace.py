@@ -74,7 +74,22 @@ _MAX_SEGMENTATION_POINTS = 20000
 def savgol_window(sample_time: float, *, smoothing_time: float = DEFAULT_SMOOTHING_TIME,
                   polyorder: int = 2) -> int:
     """Odd Savitzky–Golay window [samples] spanning ``smoothing_time`` [s], at least
-    ``polyorder`` + 3 samples."""
+    ``polyorder`` + 3 samples.
+
+    Parameters
+    ----------
+    sample_time : float
+        Sample interval [s].
+    smoothing_time : float, default 0.02
+        Window length [s].
+    polyorder : int, default 2
+        Polynomial order.
+
+    Returns
+    -------
+    int
+        The window [samples].
+    """
     if not (sample_time > 0 and math.isfinite(sample_time)):
         raise ValueError(f"sample_time = {sample_time!r}: expected a positive step [s]")
     if not (smoothing_time > 0 and math.isfinite(smoothing_time)):
@@ -86,6 +101,23 @@ def savgol_window(sample_time: float, *, smoothing_time: float = DEFAULT_SMOOTHI
 
 @dataclass(frozen=True)
 class SpeedEstimate:
+    """Table speed from a position record by a Savitzky–Golay differentiator.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Uniform sample times [s].
+    position : numpy.ndarray
+        Position on that grid [m].
+    speed : numpy.ndarray
+        The estimated speed [m/s].
+    window : int
+        Filter window [samples].
+    window_time : float
+        Filter window [s].
+    resampled : bool
+        Whether the record was resampled onto a uniform grid.
+    """
     time: np.ndarray  # [s], uniform
     position: np.ndarray  # [m] on that grid
     speed: np.ndarray  # [m/s]
@@ -103,6 +135,38 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
     An uneven record is resampled onto a uniform grid of its median step, at most
     :data:`~feeddrive.analysis.trace_input.MAX_RESAMPLE_FACTOR` × its samples: a record with a
     gap is refused, naming the gap (``lines``: file line of each sample; ``source``: file).
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times, increasing [s].
+    position : array_like
+        Table position [m].
+    smoothing_time : float, optional
+        Window as a time [s]; 20 ms by default.
+    window : int, optional
+        Window in samples instead (odd, > ``polyorder``).
+    polyorder : int, default 2
+        Polynomial order.
+    lines : numpy.ndarray of int, optional
+        The file line of each sample.
+    source : str, optional
+        The file.
+
+    Returns
+    -------
+    SpeedEstimate
+        The speed on a uniform grid.
+
+    Raises
+    ------
+    ValueError
+        For fewer than 16 samples, non-finite or non-increasing times, a gap or a bad window.
+
+    References
+    ----------
+    .. [1] A. Savitzky, M. J. E. Golay, "Smoothing and differentiation of data by simplified
+       least squares procedures", Anal. Chem. 36 (1964) 1627–1639.
     """
     t = np.asarray(time, dtype=float)
     x = np.asarray(position, dtype=float)
@@ -295,6 +359,33 @@ def find_segments(time: object, position: object, speed: object, *,
     ``time`` [s], ``position`` [m], ``speed`` [m/s] on a common grid; ``start`` [s] is where
     segmentation begins (default: ``min_segment_time`` after the speed first reaches 90 % of
     the overall mean speed).  Rests are left out.
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s].
+    position : array_like
+        Table position [m].
+    speed : array_like
+        Table speed [m/s].
+    thresholds : CreepThresholds, optional
+        Verdict limits.
+    min_step : float, default 5e-6
+        Smallest command change that starts a segment [m/s].
+    min_segment_time : float, default 1.0
+        Shortest segment [s].
+    start : float, optional
+        Where segmentation begins [s].
+
+    Returns
+    -------
+    list of (float, float)
+        (start, end) of each segment [s].
+
+    Raises
+    ------
+    ValueError
+        For a non-positive ``min_step`` or ``min_segment_time``.
     """
     t = np.asarray(time, dtype=float)
     x = np.asarray(position, dtype=float)
@@ -357,6 +448,21 @@ def _command_runs(time: np.ndarray, command: np.ndarray) -> list[tuple[float, fl
 
 @dataclass(frozen=True)
 class TraceSegment:
+    """One constant-command segment of a trace and its creep metrics.
+
+    Parameters
+    ----------
+    start : float
+        Start [s].
+    end : float
+        End [s].
+    command_speed : float
+        Commanded speed [m/s].
+    command_from : str
+        ``"given"``, ``"column"`` or ``"estimated"``.
+    metrics : CreepMetrics
+        The segment's creep metrics.
+    """
     start: float  # [s]
     end: float  # [s]
     command_speed: float  # [m/s]
@@ -364,6 +470,18 @@ class TraceSegment:
     metrics: CreepMetrics
 
     def to_dict(self, units: Literal["SI", "mm"] = "mm") -> dict[str, Any]:
+        """The segment for the JSON report.
+
+        Parameters
+        ----------
+        units : {"SI", "mm"}, default "mm"
+            Units of the metrics.
+
+        Returns
+        -------
+        dict
+            Start and end [s], where the command came from, and the metrics.
+        """
         return {"start": self.start, "end": self.end, "command_from": self.command_from,
                 "metrics": self.metrics.to_dict(units)}
 
@@ -376,6 +494,21 @@ class CriticalSpeed:
     (the paper's critical creeping speed, Wang2021 Sect. 5.2: creeps at 1.55, stable at
     1.56 mm/s → 1.56 mm/s).  ``first_creeping``: the highest creeping command speed.
     ``monotonic`` is False when a smooth segment lies below a creeping one.
+
+    Parameters
+    ----------
+    direction : str
+        ``"positive"`` or ``"negative"``.
+    lowest_smooth : float or None
+        The critical creeping speed [m/s].
+    first_creeping : float or None
+        The highest creeping command speed [m/s].
+    monotonic : bool
+        False when a smooth segment lies below a creeping one.
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 5.2, Sect. 6.
     """
 
     direction: str
@@ -386,6 +519,32 @@ class CriticalSpeed:
 
 @dataclass(frozen=True)
 class TraceAnalysis:
+    """Creep metrics of a position trace, per commanded-speed segment (:func:`analyze_trace`).
+
+    Parameters
+    ----------
+    source : str or None
+        The file.
+    time : numpy.ndarray
+        Sample times [s].
+    position : numpy.ndarray
+        Table position [m].
+    speed : numpy.ndarray
+        Table speed [m/s].
+    window : int
+        Savitzky–Golay window [samples].
+    window_time : float
+        Savitzky–Golay window [s].
+    segments : tuple of TraceSegment
+        The judged segments.
+    critical : tuple of CriticalSpeed
+        The critical speed per direction (step-down records).
+    notes : tuple of str, default ()
+        Warnings.
+    record : str, default "constant-speed"
+        ``"constant-speed"`` (segments judged) or ``"non-constant-speed"`` (a move or a
+        ramp: nothing to judge).
+    """
     source: str | None
     time: np.ndarray
     position: np.ndarray
@@ -400,6 +559,19 @@ class TraceAnalysis:
     record: str = "constant-speed"
 
     def to_dict(self, units: Literal["SI", "mm"] = "mm") -> dict[str, Any]:
+        """The analysis for the JSON report (``feeddrive analyze --json``).
+
+        Parameters
+        ----------
+        units : {"SI", "mm"}, default "mm"
+            Units of speeds and positions.
+
+        Returns
+        -------
+        dict
+            Source, sample count, duration [s], the filter window, the segments, the critical
+            speeds and the notes.
+        """
         k = 1.0 if units == "SI" else 1e3
         return {
             "source": self.source,
@@ -430,7 +602,20 @@ MAX_SPEED_TREND = 0.5
 
 def speed_trend(t: np.ndarray, v: np.ndarray) -> float:
     """Range of the least-squares quadratic in time through the speed ``v`` over ``t``,
-    relative to the mean |speed| (see :data:`MAX_SPEED_TREND`); inf at rest."""
+    relative to the mean |speed| (see :data:`MAX_SPEED_TREND`); inf at rest.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    v : numpy.ndarray
+        Speed [m/s].
+
+    Returns
+    -------
+    float
+        The relative range [-].
+    """
     if t.size < 8:
         return 0.0
     mean = abs(float(np.mean(v)))
@@ -496,20 +681,45 @@ def analyze_trace(
 
     Parameters
     ----------
-    time, position:
-        Samples [s] and table position [m].
-    command_speed:
-        The commanded speed [m/s] of the whole trace (one segment).  Else ``command`` (a
-        per-sample command speed [m/s], e.g. a file column) defines the segments; else they
-        are detected (``segment=True``) and each command speed is estimated.
-    speed:
-        Table speed [m/s] per sample, to use instead of differentiating the position.
-    thresholds:
-        Verdict limits (:class:`CreepThresholds`).
-    smoothing_time, window:
-        Savitzky–Golay window as a time [s] or in samples (see :func:`estimate_speed`).
-    source, lines:
-        File name and the file line of every sample, for error messages.
+    time : array_like
+        Sample times [s].
+    position : array_like
+        Table position [m].
+    command_speed : float, optional
+        The commanded speed of the whole trace (one segment) [m/s].  Else ``command`` defines
+        the segments; else they are detected (``segment=True``) and each command speed is
+        estimated.
+    command : array_like, optional
+        A per-sample command speed, e.g. a file column [m/s].
+    speed : array_like, optional
+        Table speed per sample, to use instead of differentiating the position [m/s].
+    thresholds : CreepThresholds, optional
+        Verdict limits.
+    smoothing_time : float, optional
+        Savitzky–Golay window as a time [s] (see :func:`estimate_speed`).
+    window : int, optional
+        The window in samples instead.
+    segment : bool, default True
+        Detect segments when no command is given.
+    min_step : float, default 5e-6
+        Smallest command change that starts a segment [m/s].
+    min_segment_time : float, default 1.0
+        Shortest segment [s].
+    source : str, optional
+        File name, for error messages.
+    lines : numpy.ndarray of int, optional
+        The file line of every sample, for error messages.
+
+    Returns
+    -------
+    TraceAnalysis
+        The segments, their metrics and the critical speeds.
+
+    Raises
+    ------
+    ValueError
+        For arrays of unequal length, a zero or non-finite command speed, a trace that
+        :func:`estimate_speed` refuses, or no moving segment to analyse.
     """
     notes: list[str] = []
     t = np.asarray(time, dtype=float)

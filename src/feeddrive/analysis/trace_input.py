@@ -109,7 +109,22 @@ def check_fraction(name: str, value: float) -> float:
 
 
 def time_below(t: np.ndarray, s: np.ndarray, level: float) -> float:
-    """Time [s] during which the piecewise-linear interpolant of s is below ``level``."""
+    """Time [s] during which the piecewise-linear interpolant of s is below ``level``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    s : numpy.ndarray
+        The signal [its unit].
+    level : float
+        The level [unit of ``s``].
+
+    Returns
+    -------
+    float
+        The time [s].
+    """
     a, b = s[:-1] - level, s[1:] - level
     dt = np.diff(t)
     both = (a < 0) & (b < 0)
@@ -131,7 +146,29 @@ def resample_size(t: np.ndarray, dt: float, *, lines: np.ndarray | None = None,
                   source: str | None = None) -> int:
     """Points of a uniform grid of step ``dt`` [s] over ``t``, refused with a message when
     it would exceed :data:`MAX_RESAMPLE_FACTOR` × the samples (a gap in the record: a
-    31-row file whose last time is 10⁶ s would otherwise ask for 10⁹ points)."""
+    31-row file whose last time is 10⁶ s would otherwise ask for 10⁹ points).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    dt : float
+        Grid step [s].
+    lines : numpy.ndarray of int, optional
+        The file line of each sample, for the message.
+    source : str, optional
+        The file, for the message.
+
+    Returns
+    -------
+    int
+        Number of grid points.
+
+    Raises
+    ------
+    ValueError
+        When the grid would be too large, naming the gap.
+    """
     n = int(math.floor((float(t[-1]) - float(t[0])) / dt + 1e-9)) + 1
     limit = MAX_RESAMPLE_FACTOR * int(t.size)
     if n > limit:
@@ -149,7 +186,22 @@ def resample_size(t: np.ndarray, dt: float, *, lines: np.ndarray | None = None,
 
 
 def uniform_samples(t: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, float]:
-    """Samples of s on a uniform grid (resampled linearly when the sampling jitters > 1 %)."""
+    """Samples of s on a uniform grid (resampled linearly when the sampling jitters > 1 %).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    s : numpy.ndarray
+        The signal [its unit].
+
+    Returns
+    -------
+    samples : numpy.ndarray
+        The signal on the uniform grid [unit of ``s``].
+    dt : float
+        The grid step [s].
+    """
     steps = np.diff(t)
     dt = float(np.median(steps))
     if float(np.max(np.abs(steps - dt))) <= 0.01 * dt:

@@ -23,13 +23,57 @@ __all__ = ["SineMetrics", "position_metrics", "reversal_overshoot", "reversal_ov
 def reversal_overshoot(time: np.ndarray, speed: np.ndarray, reference: np.ndarray,
                        amplitude: float, frequency: float) -> float:
     """Largest |v − v_ref| / amplitude within ±10 % of a period around each reference zero
-    crossing after the first period (Wang2021 Figs. 9–10: overshoot at speed reversal)."""
+    crossing after the first period (Wang2021 Figs. 9–10: overshoot at speed reversal).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    speed : numpy.ndarray
+        Table speed [m/s].
+    reference : numpy.ndarray
+        Commanded speed [m/s].
+    amplitude : float
+        Amplitude A of the command [m/s].
+    frequency : float
+        Frequency f of the command [Hz].
+
+    Returns
+    -------
+    float
+        The overshoot, a fraction of A [-].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 5.3, Figs. 9–10.
+    """
     return reversal_overshoot_at(time, speed, reference, amplitude, frequency)[0]
 
 
 def reversal_overshoot_at(time: ArrayLike, speed: ArrayLike, reference: ArrayLike,
                           amplitude: float, frequency: float) -> tuple[float, float | None]:
-    """:func:`reversal_overshoot` and the time [s] where it occurs (None: no reversal)."""
+    """:func:`reversal_overshoot` and the time [s] where it occurs (None: no reversal).
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s].
+    speed : array_like
+        Table speed [m/s].
+    reference : array_like
+        Commanded speed [m/s].
+    amplitude : float
+        Amplitude A of the command [m/s].
+    frequency : float
+        Frequency f of the command [Hz].
+
+    Returns
+    -------
+    overshoot : float
+        The overshoot, a fraction of A [-].
+    time : float or None
+        When it occurs [s].
+    """
     t = np.asarray(time, dtype=float)
     v = np.asarray(speed, dtype=float)
     ref = np.asarray(reference, dtype=float)
@@ -55,6 +99,33 @@ class SineMetrics:
     of A); ``stick_time_at_reversals`` [s]: mean time around each reversal during which
     |v| < ``stick_level``·A, beside ``reference_dwell`` [s], the time the command itself
     spends there (so the excess is the table's sticking at reversal, Wang2021 Sect. 5.3).
+
+    Parameters
+    ----------
+    amplitude : float
+        Amplitude A of the command [m/s].
+    frequency : float
+        Frequency f [Hz].
+    tracking_error_rms : float
+        RMS |v − v_ref| [m/s].
+    tracking_error_max : float
+        Largest |v − v_ref| [m/s].
+    reversal_overshoot : float
+        :func:`reversal_overshoot`, a fraction of A [-].
+    stick_time_at_reversals : float
+        Mean time around a reversal with |v| below the stick level [s].
+    reference_dwell : float
+        The time the command itself spends there [s].
+    reversals : int
+        Reversals judged.
+    window_start : float
+        Start of the judged window [s].
+    window_end : float
+        End of the judged window [s].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 5.3, Figs. 9–10.
     """
 
     amplitude: float
@@ -71,7 +142,26 @@ class SineMetrics:
 
 def sine_metrics(time: np.ndarray, speed: np.ndarray, reference: np.ndarray, *,
                  frequency: float, stick_level: float = 0.1) -> SineMetrics:
-    """:class:`SineMetrics` of a table-speed trace against its sinusoidal reference."""
+    """:class:`SineMetrics` of a table-speed trace against its sinusoidal reference.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    speed : numpy.ndarray
+        Table speed [m/s].
+    reference : numpy.ndarray
+        The sinusoidal command [m/s].
+    frequency : float
+        Its frequency [Hz].
+    stick_level : float, default 0.1
+        Speed that counts as stuck, a fraction of the amplitude [-].
+
+    Returns
+    -------
+    SineMetrics
+        The metrics.
+    """
     t, v = as_trace(time, speed)
     ref = np.asarray(reference, dtype=float)
     if ref.shape != t.shape:
@@ -110,6 +200,26 @@ def position_metrics(time: np.ndarray, following_error: np.ndarray,
     ``following_error_max_um`` / ``_rms_um``: largest and RMS |x_ref − x| (commanded minus
     table position); ``position_deviation_um``: peak-to-peak variation of the following error
     (0 for motion at a constant lag; stick-slip shows as a sawtooth of this height).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    following_error : numpy.ndarray
+        Commanded minus table position [m].
+    window : tuple of (float, float)
+        (start, end) of the judged window [s].
+
+    Returns
+    -------
+    dict of str to float
+        ``following_error_max_um``, ``following_error_rms_um``, ``position_deviation_um``
+        [µm].
+
+    Raises
+    ------
+    ValueError
+        When the window holds no sample.
     """
     t = np.asarray(time, dtype=float)
     e = np.asarray(following_error, dtype=float)
@@ -129,6 +239,20 @@ def travel_warning(start_position: float, displacement: object,
     ``start_position`` [m] is the table's start a on the screw; ``displacement`` [m] its
     motion from there (a simulated ``table_position``).  The model has no end stops, so such
     a run means the loop diverged or the duration is too long for the speed.
+
+    Parameters
+    ----------
+    start_position : float
+        The table's start a on the screw [m].
+    displacement : array_like
+        Its motion from there [m].
+    screw_length : float
+        The screw's length [m].
+
+    Returns
+    -------
+    str or None
+        The warning.
     """
     x = start_position + np.asarray(displacement, dtype=float)
     if x.size == 0:

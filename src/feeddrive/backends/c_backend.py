@@ -329,18 +329,69 @@ class CLibrary:
 
     def rhs(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
             dy: np.ndarray, aux: np.ndarray) -> None:
-        """``fd_rhs``: fills ``dy`` and ``aux`` in place (the numba ``rhs`` signature)."""
+        """Call the C library's ``fd_rhs``: fill ``dy`` and ``aux`` in place (the numba ``rhs``
+        signature).
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : numpy.ndarray
+            State vector [SI, per state].
+        held : numpy.ndarray
+            Values the sampled controller holds [SI, per value].
+        P : numpy.ndarray
+            Packed parameter vector [SI, per slot].
+        T : numpy.ndarray
+            Packed tables [SI].
+        dy : numpy.ndarray
+            Output: state rates [SI per second, per state].
+        aux : numpy.ndarray
+            Output: auxiliary signals [SI, per signal].
+        """
         self.lib.fd_rhs(float(t), y, held, P, T, dy, aux)
 
     def sample_update(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray,
                       T: np.ndarray, tick: np.ndarray) -> None:
-        """``fd_sample_update``: updates ``held`` in place (``tick``: int64, one per clock)."""
+        """Call the C library's ``fd_sample_update``: update ``held`` in place at a sample instant.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : numpy.ndarray
+            State vector [SI, per state].
+        held : numpy.ndarray
+            Values the sampled controller holds [SI, per value].
+        P : numpy.ndarray
+            Packed parameter vector [SI, per slot].
+        T : numpy.ndarray
+            Packed tables [SI].
+        tick : numpy.ndarray of int
+            Each clock's instant count now, −1 when it has none (int64, one per clock).
+        """
         self.lib.fd_sample_update(float(t), y, held, P, T,
                                   np.ascontiguousarray(tick, dtype=np.int64))
 
     def aux(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
             aux: np.ndarray) -> None:
-        """``fd_aux``: fills ``aux`` in place."""
+        """Call the C library's ``fd_aux``: fill ``aux`` in place.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        y : numpy.ndarray
+            State vector [SI, per state].
+        held : numpy.ndarray
+            Values the sampled controller holds [SI, per value].
+        P : numpy.ndarray
+            Packed parameter vector [SI, per slot].
+        T : numpy.ndarray
+            Packed tables [SI].
+        aux : numpy.ndarray
+            Output: auxiliary signals [SI, per signal].
+        """
         self.lib.fd_aux(float(t), y, held, P, T, aux)
 
 

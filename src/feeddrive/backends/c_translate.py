@@ -59,7 +59,15 @@ _C_ELEM = {"double": "double", "long": "long", "bool": "unsigned char"}
 
 @dataclass(frozen=True)
 class Arr:
-    """An array: element type ("double", "long", "bool") and its number of dimensions."""
+    """The C type of an array argument.
+
+    Parameters
+    ----------
+    elem : str
+        Element type: ``"double"``, ``"long"`` or ``"bool"``.
+    ndim : int, default 1
+        Number of dimensions.
+    """
 
     elem: str
     ndim: int = 1
@@ -67,12 +75,19 @@ class Arr:
 
 @dataclass(frozen=True)
 class Tup:
-    """A tuple result of a kernel (a C struct ``fd_tuple_<codes>``)."""
+    """A tuple result of a kernel, returned in C as a struct ``fd_tuple_<codes>``.
+
+    Parameters
+    ----------
+    items : tuple of str
+        The C type of each element, in order.
+    """
 
     items: tuple[str, ...]
 
     @property
     def cname(self) -> str:
+        """The struct's C name, ``fd_tuple_`` followed by each element type's first letter."""
         return "fd_tuple_" + "".join(t[0] for t in self.items)
 
 
@@ -1231,6 +1246,18 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
 
 
 def c_text(unit: _Unit) -> str:
+    """The C source of one translation: headers, helpers, tuple structs, prototypes, functions.
+
+    Parameters
+    ----------
+    unit : _Unit
+        The translation (every function once, in dependency order).
+
+    Returns
+    -------
+    str
+        The C text.
+    """
     parts = ["#include <math.h>", "#include <string.h>", "#include <stdlib.h>", HELPERS,
              _structs(unit.tuples), "\n".join(unit.prototypes), "\n\n".join(unit.chunks)]
     return "\n".join(p for p in parts if p) + "\n"

@@ -94,8 +94,34 @@ def calibrate_command(
 
 def fitted_set(params: Any, unknown: str, value: float, drive: str, target: float,
                position: float, nut_speed: float) -> Any:
-    """The fitted set as `calibrate --out` writes it: named and described as fitted, so that
-    a file written from `wang2021` is not taken for the preset (issue 24 item 10)."""
+    """The fitted parameter set as ``calibrate --out`` writes it: named and described as fitted.
+
+    So that a file written from ``wang2021`` is not taken for the preset (issue 24 item 10):
+    the name gets ``-fitted``, the description says what was fitted to which target, when, by
+    which version, and from which set.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The set with the fitted value in place.
+    unknown : str
+        The fitted parameter's path.
+    value : float
+        Its fitted value [SI unit of the parameter].
+    drive : str
+        The drive the target belongs to.
+    target : float
+        The critical speed fitted to [mm/s].
+    position : float
+        The table position of the target [mm].
+    nut_speed : float
+        The nut speed of the target (DDFS) [mm/s].
+
+    Returns
+    -------
+    DriveParameters
+        ``params`` renamed and re-described.
+    """
     import datetime as dt
     from dataclasses import replace
 

@@ -61,6 +61,18 @@ def compensate_command(
 
 
 def with_unit(text: str) -> str:
-    """A speed or band with its unit; a word ("none", "undecided", "—") without one
-    (issue 24 item 13: "none mm/s", "undecided mm/s")."""
+    """A speed or band as printed, with its unit; a word (``none``, ``undecided``, ``—``) without.
+
+    Issue 24 item 13: the output read "none mm/s", "undecided mm/s".
+
+    Parameters
+    ----------
+    text : str
+        A formatted speed, band (``"<0.5"``, ``"1.2–1.6"``) or word.
+
+    Returns
+    -------
+    str
+        ``text`` followed by ``" mm/s"`` when it starts with a digit, ``<`` or ``>``.
+    """
     return f"{text} mm/s" if text[:1].isdigit() or text[:1] in "<>" else text

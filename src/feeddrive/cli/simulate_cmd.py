@@ -224,7 +224,34 @@ def simulate_command(
 
 def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,
                frequency: float, position: float, duration: float, name: str) -> str:
-    """What was run, in the user's words: the summary's first line and the --plot title."""
+    """What was run, in the user's words: the summary's first line and the ``--plot`` title.
+
+    Parameters
+    ----------
+    drive : str
+        The drive name.
+    profile : str
+        One of ``PROFILES``: ``"constant"``, ``"sine"``, ``"trapezoid"``, ``"stepdown"``,
+        ``"csv"``.
+    profile_file : str or None
+        The profile's CSV file, for ``csv``.
+    table_speed : float or None
+        Commanded table speed or amplitude [mm/s].
+    frequency : float
+        Sine frequency [Hz].
+    position : float
+        Table start position [mm] (not shown for a linear motor, whose position moves no part
+        of the model).
+    duration : float
+        Simulated time [s].
+    name : str
+        The parameter set's name.
+
+    Returns
+    -------
+    str
+        E.g. ``"DDFS, constant 1.55 mm/s, position 400 mm, 10 s (wang2021)"``.
+    """
     what = (f"{profile_file}" if profile == "csv" else
             f"{profile} {table_speed:g} mm/s" + (f" at {frequency:g} Hz" if profile == "sine"
                                                  else ""))

@@ -17,7 +17,27 @@ _READINGS_SHOWN = 5
 
 
 def parse_positions_mm(text: str, screw_length: float) -> list[float]:
-    """Comma-separated table positions in mm → metres, each strictly between the supports."""
+    """Parse ``--positions``: comma-separated table positions in mm, converted to metres.
+
+    A value that looks like metres (below the smallest plausible position) is warned about.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"200,400,600"`` [mm].
+    screw_length : float
+        The screw's length l [m]; each position must be strictly inside (0, l).
+
+    Returns
+    -------
+    list of float
+        The positions [m].
+
+    Raises
+    ------
+    ParameterError
+        For a token that is not a number or lies outside the supports.
+    """
     length_mm = screw_length / MM
     out = []
     for token in text.split(","):

@@ -40,7 +40,21 @@ MEMORY_WARNING_BYTES = 2e9
 
 @dataclass(frozen=True)
 class RunBudget:
-    """Lower bound of the solver steps and estimate of the memory of a run."""
+    """Lower bound of a run's solver steps and estimate of its recorded output's memory.
+
+    Parameters
+    ----------
+    duration : float
+        Simulated time [s].
+    min_steps : int
+        Fewest steps the run can take: the step never exceeds the solver's ``max_step``.
+    max_steps : int
+        The solver's step limit.
+    samples : int
+        Number of recorded output samples.
+    memory_bytes : float
+        Estimated memory of the recorded output [bytes].
+    """
 
     duration: float  # [s]
     min_steps: int  # the step never exceeds max_step [s]
@@ -50,6 +64,7 @@ class RunBudget:
 
     @property
     def steps_exceeded(self) -> bool:
+        """Whether even the fewest possible steps exceed the step limit."""
         return self.min_steps > self.max_steps
 
     @property
@@ -60,8 +75,24 @@ class RunBudget:
 
 def run_budget(duration: float, *, max_step: float, output_interval: float,
                max_steps: int) -> RunBudget:
-    """Budget of a run of ``duration`` [s] with the solver's ``max_step`` [s],
-    ``output_interval`` [s] and step limit ``max_steps``."""
+    """Budget a run before it starts: its fewest steps and its output's memory.
+
+    Parameters
+    ----------
+    duration : float
+        Simulated time [s].
+    max_step : float
+        The solver's largest step [s].
+    output_interval : float
+        Interval of the recorded output [s].
+    max_steps : int
+        The solver's step limit.
+
+    Returns
+    -------
+    RunBudget
+        The run's step bound and memory estimate.
+    """
     samples = int(math.floor(duration / output_interval)) + 1
     return RunBudget(duration=duration, min_steps=int(math.ceil(duration / max_step)),
                      max_steps=max_steps, samples=samples,
@@ -77,8 +108,15 @@ _COPY_FACTOR = 2.0
 
 
 def available_memory() -> int:
-    """Bytes of memory available to a new allocation (Linux ``MemAvailable``; 4 GiB if
-    unknown)."""
+    """Bytes of memory available to a new allocation.
+
+    Linux ``MemAvailable`` from ``/proc/meminfo``, else ``sysconf``; 4 GiB when neither is known.
+
+    Returns
+    -------
+    int
+        Available memory [bytes].
+    """
     try:
         with open("/proc/meminfo", encoding="ascii") as f:
             for line in f:
@@ -93,7 +131,21 @@ def available_memory() -> int:
 
 
 def check_output_memory(duration: float, output_interval: float) -> None:
-    """Refuse a run whose recorded output would not fit in memory."""
+    """Refuse a run whose recorded output would not fit in memory.
+
+    Parameters
+    ----------
+    duration : float
+        Simulated time [s].
+    output_interval : float
+        Interval of the recorded output [s].
+
+    Raises
+    ------
+    ParameterError
+        When the output (with its working copies) would need more than half the available
+        memory; the message names the duration and the way out.
+    """
     samples = int(duration / output_interval) + 1
     need = samples * BYTES_PER_SAMPLE * _COPY_FACTOR
     free = available_memory()
@@ -106,8 +158,29 @@ def check_output_memory(duration: float, output_interval: float) -> None:
 
 
 def time_constants(params: DriveParameters, drive: str, speed: float) -> dict[str, float]:
-    """The parameter set's fast time constants [s], by name, at table speed ``speed``
-    [m/s] (for the bristle relaxation F_c/(σ0·|v|), Wang2021 Eqs. 9–11)."""
+    """The parameter set's fast time constants, by name, at a table speed.
+
+    The bristle relaxation F_c/(σ0·|v|) of each LuGre site (Wang2021 Eqs. (9)–(11)) and each
+    motor's current loop L/(R + K_ip): the candidates for what forces small solver steps.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set [SI].
+    drive : str
+        The drive name (which sites and motors take part).
+    speed : float
+        Table speed the relaxation is evaluated at [m/s]; at least 1 µm/s is used.
+
+    Returns
+    -------
+    dict of str to float
+        Description → time constant [s].
+
+    References
+    ----------
+    .. [1] Wang2021 Eqs. (9)–(11).
+    """
     v = max(abs(speed), 1e-6)
     out: dict[str, float] = {}
     sites = {"ddfs": ("screw", "nut", "guide"), "cdfs": ("screw", "guide")}.get(drive,
@@ -132,8 +205,18 @@ def time_constants(params: DriveParameters, drive: str, speed: float) -> dict[st
 
 
 def profile_speed(profile: Any) -> float:
-    """The largest commanded table speed [m/s] of a speed profile (its amplitude, or the
-    largest sample), 1 mm/s when it has none."""
+    """The largest commanded table speed of a speed profile: its amplitude or its largest sample.
+
+    Parameters
+    ----------
+    profile : Profile
+        A reference profile (with ``table_speed`` or ``table_amplitude``).
+
+    Returns
+    -------
+    float
+        The speed [m/s]; 1 mm/s when the profile has none.
+    """
     for name in ("table_speed", "table_amplitude"):
         value = getattr(profile, name, None)
         if value is not None:
@@ -144,8 +227,34 @@ def profile_speed(profile: Any) -> float:
 
 def step_rate_problem(*, steps: int, probe_time: float, duration: float, max_steps: int,
                       params: DriveParameters, drive: str, speed: float) -> str | None:
-    """Why a run whose probe of ``probe_time`` [s] took ``steps`` steps cannot finish within
-    ``max_steps`` over ``duration`` [s] (see the module), or None when it can."""
+    """Why a run cannot finish within its step limit, judged from a short probe, or None.
+
+    The probe's step rate is projected over the duration; when it exceeds ``max_steps`` (with
+    a margin) the message names the cause — the fastest time constant, or a chattering
+    solution — and the remedies.
+
+    Parameters
+    ----------
+    steps : int
+        Steps the probe took.
+    probe_time : float
+        The probe's simulated time [s].
+    duration : float
+        The run's simulated time [s].
+    max_steps : int
+        The solver's step limit.
+    params : DriveParameters
+        The parameter set [SI].
+    drive : str
+        The drive name.
+    speed : float
+        The run's largest commanded table speed [m/s].
+
+    Returns
+    -------
+    str or None
+        A one-line refusal, or None when the run can finish.
+    """
     rate = steps / probe_time
     projected = rate * duration
     if projected * STEP_MARGIN <= max_steps:
@@ -168,8 +277,21 @@ def step_rate_problem(*, steps: int, probe_time: float, duration: float, max_ste
 
 
 def probe_time(duration: float, base: float) -> float:
-    """The probe's simulated time [s]: ``PROBE_TIME``, a multiple of ``base`` [s]; 0 when
-    the run itself is not much longer."""
+    """The simulated time of the step-rate probe run before a long simulation.
+
+    Parameters
+    ----------
+    duration : float
+        The run's simulated time [s].
+    base : float
+        The sample period the probe is a multiple of [s].
+
+    Returns
+    -------
+    float
+        ``PROBE_TIME`` rounded to a multiple of ``base`` [s]; 0 (no probe) when the run is not
+        much longer than the probe.
+    """
     if duration <= 4.0 * PROBE_TIME:
         return 0.0
     return max(1, round(PROBE_TIME / base)) * base

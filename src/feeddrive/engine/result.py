@@ -32,7 +32,28 @@ ENGINEERING = _ENGINEERING
 
 
 class Run:
-    """The raw output of one simulation and what names it (no copies)."""
+    """The raw output of one simulation and what names it, without copies.
+
+    Signals are read by name from the state and auxiliary arrays (:meth:`signal`); the
+    derived signals and the following error are computed when read.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Output instants [s].
+    y : numpy.ndarray
+        States at those instants, (samples, states) [SI, per state].
+    aux : numpy.ndarray
+        Auxiliary outputs at those instants, (samples, outputs) [SI, per output].
+    model : Model
+        The assembled model (signal names, units, descriptions).
+    system : DriveSystem
+        The drive that was simulated.
+    profile : Profile
+        The reference profile.
+    solver_stats : dict
+        The solver's statistics (steps, rejections, method).
+    """
 
     def __init__(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray, model: Model,
                  system: DriveSystem, profile: Profile, solver_stats: dict[str, Any]) -> None:
@@ -52,10 +73,34 @@ class Run:
         self.meta["following_error"] = ("m", "commanded − table position")
 
     def defer_aux(self, compute: Callable[[], np.ndarray]) -> None:
-        """The auxiliary signals were not recorded: ``compute()`` gives them when first read."""
+        """Mark the auxiliary signals as not recorded: ``compute()`` gives them when first read.
+
+        Parameters
+        ----------
+        compute : callable
+            Returns the (samples, outputs) auxiliary array [SI, per output].
+        """
         self._deferred = compute
 
     def signal(self, name: str) -> np.ndarray:
+        """One signal of the run by name: a state, an auxiliary output, a derived signal or the
+        following error.
+
+        Parameters
+        ----------
+        name : str
+            The signal's name (``table_speed``, ``screw_linear_speed``, ``following_error``, …).
+
+        Returns
+        -------
+        numpy.ndarray
+            Its samples, a view where possible [SI unit of the signal].
+
+        Raises
+        ------
+        KeyError
+            For an unknown name.
+        """
         if name in self.columns:
             arr, k = self.columns[name]
             if arr is self.aux and self._deferred is not None:
@@ -73,6 +118,18 @@ class Run:
         raise KeyError(name)
 
     def attrs(self, *, full: bool) -> dict[str, Any]:
+        """The run's attributes: drive, start position, laws, profile, parameter set, solver.
+
+        Parameters
+        ----------
+        full : bool
+            Also include the parameter set as TOML (``parameters_toml``).
+
+        Returns
+        -------
+        dict
+            Attribute name → value (JSON text for the structured ones).
+        """
         system, profile = self.system, self.profile
         attrs: dict[str, Any] = {
             "drive": system.drive,
@@ -93,6 +150,13 @@ class Run:
         return attrs
 
     def dataset(self) -> xr.Dataset:
+        """The run as an xarray Dataset: every signal over ``time`` with its unit and description.
+
+        Returns
+        -------
+        xarray.Dataset
+            The signals in SI, the full attributes (:meth:`attrs`).
+        """
         data_vars = {name: ("time", np.array(self.signal(name)),
                             {"units": unit, "long_name": desc})
                      for name, (unit, desc) in self.meta.items()}
@@ -103,8 +167,33 @@ class Run:
 def build_dataset(t: np.ndarray, y: np.ndarray, aux: np.ndarray, model: Model,
                   system: DriveSystem, profile: Profile,
                   solver_stats: dict[str, Any]) -> xr.Dataset:
-    """Named signals of a run: every state and auxiliary output of the assembled model, SI
-    units and descriptions from its parts, plus derived linear speeds and following error."""
+    """Named signals of a run as an xarray Dataset.
+
+    Every state and auxiliary output of the assembled model, SI units and descriptions from its
+    parts, plus the derived linear speeds and the following error.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Output instants [s].
+    y : numpy.ndarray
+        States, (samples, states) [SI, per state].
+    aux : numpy.ndarray
+        Auxiliary outputs, (samples, outputs) [SI, per output].
+    model : Model
+        The assembled model.
+    system : DriveSystem
+        The drive that was simulated.
+    profile : Profile
+        The reference profile.
+    solver_stats : dict
+        The solver's statistics.
+
+    Returns
+    -------
+    xarray.Dataset
+        The run's signals and attributes.
+    """
     return Run(t, y, aux, model, system, profile, solver_stats).dataset()
 
 

@@ -193,7 +193,19 @@ class Sampling:
     """The breakpoint grid of a run and its sample schedule: breakpoint unit ``base`` [s] (the
     fastest sample period), per clock of the model (:attr:`Model.clocks
     <feeddrive.model.assemble.Model.clocks>`: the loops and every sampled part) its period in
-    breakpoints (0 = continuous), and the output stride in breakpoints."""
+    breakpoints (0 = continuous), and the output stride in breakpoints.
+
+    Parameters
+    ----------
+    base : float
+        The breakpoint unit, the fastest sample period [s].
+    clocks : tuple of str
+        The model's clocks, by their period's parameter path.
+    steps : tuple of int
+        Each clock's period in breakpoints; 0 = continuous.
+    out_every : int
+        The output stride in breakpoints.
+    """
 
     base: float
     clocks: tuple[str, ...]
@@ -211,14 +223,38 @@ class Sampling:
         return any(n > 0 for n in self.steps)
 
     def step(self, clock: str) -> int:
-        """The period of ``clock`` (e.g. ``"controller.velocity_period"``) in breakpoints."""
+        """The period of ``clock`` (e.g. ``"controller.velocity_period"``) in breakpoints.
+
+        Parameters
+        ----------
+        clock : str
+            The clock's period path.
+
+        Returns
+        -------
+        int
+            Breakpoints per period; 0 = continuous.
+        """
         return self.steps[self.clocks.index(clock)]
 
     def parameters(self, model: Model, P: np.ndarray | None = None) -> np.ndarray:
         """``P`` (default: the model's) with each sampled clock's period slot set to the
         spacing of its instants on the grid, steps·base [s]: what a sampled part integrates
         over is the time between its instants (equal to the declared period within the
-        1e-9 the grid allows)."""
+        1e-9 the grid allows).
+
+        Parameters
+        ----------
+        model : Model
+            The assembled model (its clocks' period slots).
+        P : numpy.ndarray, optional
+            The parameter vector to start from; the model's by default [SI, per slot].
+
+        Returns
+        -------
+        numpy.ndarray
+            A copy with the sampled periods on the grid [SI, per slot].
+        """
         out = (model.P if P is None else P).copy()
         for (_, slot), n in zip(model.clocks, self.steps, strict=True):
             if n > 0:
@@ -236,7 +272,30 @@ def sampling(params: DriveParameters, output_interval: float,
     Every period must be a multiple of the fastest one (each instant is an exact breakpoint
     count); the output interval a multiple of the fastest period.  A sampled part may run
     beside continuous loops: the solvers stop at its instants only (its clock is the
-    schedule), re-evaluating the derivative there."""
+    schedule), re-evaluating the derivative there.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    output_interval : float
+        Interval of the recorded output [s].
+    model : Model, optional
+        The assembled model, whose clocks are the schedule.
+    P : numpy.ndarray, optional
+        The parameter vector the periods are read from [SI, per slot].
+
+    Returns
+    -------
+    Sampling
+        The grid and schedule.
+
+    Raises
+    ------
+    ParameterError
+        For a period that is not a multiple of the fastest, an output interval that is not,
+        or quantised feedback with continuous position or velocity loops.
+    """
     c = params.controller
     loops = [(f"controller.{k}", float(getattr(c, k))) for k in (
         "position_period", "velocity_period", "current_period")]
@@ -301,9 +360,27 @@ def _peak(value: Any) -> float:
 
 
 def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np.ndarray:
-    """The largest |state| per state [SI] before a run stops as diverged: speed states (linear
-    and, through the lead, rotary) at :data:`DIVERGENCE_SPEED_RATIO` × the reference speed;
-    other states unbounded (a diverging loop shows in its speeds first)."""
+    """The largest |state| per state before a run stops as diverged.
+
+    Speed states (linear and, through the lead, rotary) are bounded at
+    :data:`DIVERGENCE_SPEED_RATIO` × the reference speed (or the initial speed, at least
+    :data:`DIVERGENCE_SPEED_FLOOR`); the other states are unbounded, since a diverging loop shows
+    in its speeds first.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (its initial state).
+    profile : Profile
+        The reference profile (its speeds).
+    model : Model
+        The assembled model (the states' tolerance kinds and scales).
+
+    Returns
+    -------
+    numpy.ndarray
+        Bound per state [SI, per state]; ``inf`` where unbounded.
+    """
     command = sum(_peak(getattr(profile, name, None)) for name in (
         "table_speed", "nut_speed", "table_amplitude", "nut_amplitude"))
     initial = max((abs(float(v)) for k, v in system.initial_state.items() if "speed" in k),
@@ -320,10 +397,27 @@ def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np
 
 
 def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarray:
-    """Instants in (0, t_end) [s] where the command has a kink, declared to the dense-output
-    integrator as step ends: the end of a constant-speed start ramp; the grid of a sampled
-    profile (piecewise-linear speed) when it is no finer than ``base``, the breakpoint unit —
-    a finer grid is left to the error control, as the fixed-breakpoint integrator does."""
+    """Instants where the command has a kink, declared to the dense-output integrator as step
+    ends.
+
+    The end of a constant-speed start ramp; the grid of a sampled profile (piecewise-linear
+    speed) when it is no finer than ``base`` — a finer grid is left to the error control, as
+    the fixed-breakpoint integrator does.
+
+    Parameters
+    ----------
+    profile : Profile
+        The reference profile.
+    t_end : float
+        End of the run [s].
+    base : float
+        The breakpoint unit (:class:`Sampling`) [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The instants in (0, t_end) [s]; empty when there are none.
+    """
     if isinstance(profile, ConstantSpeed):
         stops = [profile.ramp_time] if 0.0 < profile.ramp_time < t_end else []
         return np.array(stops, dtype=float)
@@ -335,8 +429,19 @@ def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarr
 
 
 class SimulationInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a long run: the integration stopped between two chunks; what was
-    computed up to ``t_reached`` [s] is in ``result`` (and written to ``output``)."""
+    """Ctrl-C during a long run: the integration stopped between two chunks.
+
+    What was computed up to ``t_reached`` is in ``result`` (and written to ``output``).
+
+    Parameters
+    ----------
+    t_reached : float
+        Simulated time reached [s].
+    result : Result or None
+        The run up to there; None when nothing was recorded yet.
+    output : str or None
+        The file the samples so far were written to, if any.
+    """
 
     def __init__(self, t_reached: float, result: Result | None, output: str | None) -> None:
         self.t_reached = t_reached

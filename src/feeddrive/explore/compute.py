@@ -10,7 +10,7 @@ plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is S
   operating point (friction linearised there, rigid-body poles marked by
   :func:`feeddrive.analysis.linear.classify_poles`), loop margins and the loops' Bode curves;
 * :func:`run_critical` — the critical-speed search from rest, the protocol `feeddrive creep`
-  uses (:mod:`feeddrive.analysis.protocol`), with progress and cancellation at every trial.
+  uses (``feeddrive.analysis.protocol``), with progress and cancellation at every trial.
 """
 
 from __future__ import annotations
@@ -47,7 +47,22 @@ def _list(values: np.ndarray, scale: float = 1.0, digits: int = 7) -> list[float
 
 def decimate(n: int, key: np.ndarray, max_points: int = MAX_POINTS) -> np.ndarray:
     """Indices of at most ``max_points`` samples of ``n``: the minimum and maximum of ``key``
-    in each bucket, in time order (peaks of a stick-slip trace stay visible)."""
+    in each bucket, in time order (peaks of a stick-slip trace stay visible).
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    key : numpy.ndarray
+        The signal the extremes are taken of [its unit].
+    max_points : int, default 4000
+        Most indices returned.
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Sample indices, increasing.
+    """
     if n <= max_points:
         return np.arange(n)
     buckets = max_points // 2
@@ -64,7 +79,23 @@ def verdict_of(time: np.ndarray, speed: np.ndarray, command_speed: float) -> dic
     """The creep verdict and its kind, from the window-independent rule `feeddrive creep`
     judges every trial by (:func:`feeddrive.analysis.cycle_verdict.trace_verdict`): a limit cycle
     is *stick-slip* (the table stops) or *oscillation* (it does not); a decayed trace is
-    *smooth*; a trace that has done neither yet is *undecided* (a longer run decides)."""
+    *smooth*; a trace that has done neither yet is *undecided* (a longer run decides).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    speed : numpy.ndarray
+        Table speed [m/s].
+    command_speed : float
+        The commanded speed [m/s].
+
+    Returns
+    -------
+    dict
+        The verdict word, kind, a sentence, the reason, the limit cycle's frequency [Hz],
+        when it was decided [s] and the ripple ratio [-].
+    """
     from ..analysis.cycle_verdict import trace_verdict
 
     v = trace_verdict(time, speed, command_speed)
@@ -98,7 +129,21 @@ def _sites(drive: str) -> tuple[str, ...]:
 def friction_curves(checked: Checked, operating: dict[str, float] | None = None
                     ) -> dict[str, Any]:
     """Steady friction force [N] against sliding speed [mm/s] at each site the drive uses,
-    the speed bands where it falls (negative damping), and the sites' operating speeds."""
+    the speed bands where it falls (negative damping), and the sites' operating speeds.
+
+    Parameters
+    ----------
+    checked : Checked
+        The page's checked settings (:func:`feeddrive.explore.settings.check`).
+    operating : dict of str to float, optional
+        Site → its sliding speed at the operating point [m/s].
+
+    Returns
+    -------
+    dict
+        Per site: speeds [mm/s], forces [N] per branch, negative-slope bands [mm/s] and the
+        operating speed [mm/s].
+    """
     from ..model.friction.lugre_parameters import LuGreParameters
     from ..model.friction.stribeck import negative_slope_band, steady_friction
 
@@ -138,7 +183,25 @@ def run_simulation(checked: Checked, report: Report,
     """One run at constant speed from rest; see the module docstring.  Progress is the
     simulated time reached, reported after each chunk of the solver (the compiled solver
     releases the GIL, so the server answers polls meanwhile); ``keep(result)`` receives the
-    full Result (the explorer keeps it for the signal picker and the downloads)."""
+    full Result (the explorer keeps it for the signal picker and the downloads).
+
+    Parameters
+    ----------
+    checked : Checked
+        The page's checked settings (:func:`feeddrive.explore.settings.check`).
+    report : callable
+        ``report(done, total, text)``: the job's progress (raises ``Cancelled`` once the page
+        cancelled).
+    keep : callable, optional
+        Receives the full :class:`~feeddrive.engine.result.Result`.
+
+    Returns
+    -------
+    dict
+        Drive, parameter set, speeds [mm/s], duration [s], sample counts, the run's summary,
+        the verdict (:func:`verdict_of`), the decimated traces and the friction curves
+        (:func:`friction_curves`).
+    """
     from ..engine.simulate import Simulation, SimulationInterrupted
     from ..model.reference import ConstantSpeed
 
@@ -243,7 +306,24 @@ BANDS = _BandCache()
 
 
 def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
-    """Linear stability band over table speed and loop poles at the operating point."""
+    """Linear stability band over table speed and loop poles at the operating point.
+
+    Parameters
+    ----------
+    checked : Checked
+        The page's checked settings (:func:`feeddrive.explore.settings.check`).
+    report : callable
+        ``report(done, total, text)``: the job's progress (raises ``Cancelled`` once the page
+        cancelled).
+
+    Returns
+    -------
+    dict
+        The Bode data of the loops, the stability band (:meth:`StabilityBand.as_dict` with
+        the scan's speeds [mm/s], rightmost real parts [1/s] and frequencies [Hz]), whether
+        the operating speed lies inside it, and the poles, least-damped mode and loop
+        margins at the operating point.
+    """
     from ..analysis.linear import loop_analysis, stability_band
 
     system = checked.system
@@ -276,7 +356,13 @@ def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
 
 
 def estimated_trials() -> int:
-    """Trials of a search from rest on the protocol's grid: the scan, then the bisection."""
+    """Trials of a search from rest on the protocol's grid: the scan, then the bisection.
+
+    Returns
+    -------
+    int
+        Number of creep trials, for the progress bar.
+    """
     from ..analysis import protocol
 
     lo, hi = protocol.SPEED_RANGE
@@ -286,7 +372,22 @@ def estimated_trials() -> int:
 
 def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
     """Critical speed from rest, as `feeddrive creep` searches it (its grid, resolution and
-    verdict rule), reporting every trial."""
+    verdict rule), reporting every trial.
+
+    Parameters
+    ----------
+    checked : Checked
+        The page's checked settings (:func:`feeddrive.explore.settings.check`).
+    report : callable
+        ``report(done, total, text)``: the job's progress (raises ``Cancelled`` once the page
+        cancelled).
+
+    Returns
+    -------
+    dict
+        The search's result as JSON-safe values, in engineering units (critical speed
+        [mm/s], kind, trials).
+    """
     from ..analysis import protocol
     from ..analysis.critical import critical_speed_from_rest, format_bands
 

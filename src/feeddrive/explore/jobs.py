@@ -33,6 +33,38 @@ class Busy(RuntimeError):
 
 @dataclass
 class Job:
+    """One piece of work the page started (a simulation, a linear analysis, a critical-speed
+    search), with its progress and its outcome.
+
+    Parameters
+    ----------
+    id : str
+        The job's id, as the page polls it.
+    kind : str
+        ``"simulate"``, ``"linear"``, ``"critical"`` or ``"warmup"``.
+    state : str, default "running"
+        ``"running"``, ``"done"``, ``"failed"`` or ``"cancelled"``.
+    done : float, default 0.0
+        Progress so far [unit of ``total``].
+    total : float, default 0.0
+        Progress at the end [s simulated, or trials].
+    text : str, default ""
+        What is being done, for the page.
+    started : float
+        ``time.monotonic()`` at the start [s].
+    finished : float, optional
+        ``time.monotonic()`` at the end [s].
+    result : object, optional
+        The work's result, once done.
+    error : str, optional
+        The one-line message of a failure.
+    field : str, optional
+        The page field the error belongs beside.
+    cancel_event : threading.Event
+        Set when the page cancels.
+    expected_s : float, optional
+        Wall time the work is expected to take [s].
+    """
     id: str
     kind: str
     state: str = "running"  # running, done, failed, cancelled
@@ -48,12 +80,35 @@ class Job:
     expected_s: float | None = None  # wall time the work is expected to take
 
     def report(self, done: float, total: float, text: str) -> None:
-        """Progress from the work; raises :class:`Cancelled` once the page cancelled."""
+        """Progress from the work; raises :class:`Cancelled` once the page cancelled.
+
+        Parameters
+        ----------
+        done : float
+            Progress so far [s simulated, or trials].
+        total : float
+            Progress at the end [s simulated, or trials].
+        text : str
+            What is being done.
+
+        Raises
+        ------
+        Cancelled
+            Once the page cancelled the job.
+        """
         if self.cancel_event.is_set():
             raise Cancelled
         self.done, self.total, self.text = float(done), float(total), text
 
     def as_dict(self) -> dict[str, Any]:
+        """The job as the page polls it.
+
+        Returns
+        -------
+        dict
+            Id, kind, state, progress, elapsed and expected time [s], and the result (done) or the
+            error and its field (failed).
+        """
         end = self.finished if self.finished is not None else time.monotonic()
         out: dict[str, Any] = {
             "id": self.id, "kind": self.kind, "state": self.state,
@@ -81,13 +136,41 @@ class Jobs:
         self._ids = itertools.count(1)
 
     def running(self) -> int:
+        """Number of jobs still running.
+
+        Returns
+        -------
+        int
+            The count.
+        """
         with self._lock:
             return sum(j.state == "running" for j in self._jobs.values())
 
     def start(self, kind: str, work: Work, error_field: ErrorField | None = None,
               expected_s: float | None = None, text: str = "", total: float = 0.0) -> Job:
         """Run ``work(job)`` in a thread; ``text`` and ``total`` are its progress until it
-        reports its own."""
+        reports its own.
+
+        Parameters
+        ----------
+        kind : str
+            The job's kind.
+        work : callable
+            ``work(job)``, returns the result.
+        error_field : callable, optional
+            Maps an exception to the page field it belongs beside.
+        expected_s : float, optional
+            Wall time the work is expected to take [s].
+        text : str, default ""
+            Initial progress text.
+        total : float, default 0.0
+            Initial progress total [s simulated, or trials].
+
+        Returns
+        -------
+        Job
+            The job, running.
+        """
         with self._lock:
             if sum(j.state == "running" for j in self._jobs.values()) >= MAX_RUNNING:
                 raise Busy(f"{MAX_RUNNING} runs are going on; cancel one or wait")
@@ -126,17 +209,54 @@ class Jobs:
             job.finished = time.monotonic()
 
     def get(self, job_id: str) -> Job | None:
+        """A job by id.
+
+        Parameters
+        ----------
+        job_id : str
+            The id.
+
+        Returns
+        -------
+        Job or None
+            The job; None for an unknown id.
+        """
         with self._lock:
             return self._jobs.get(job_id)
 
     def cancel(self, job_id: str) -> Job | None:
+        """Ask a running job to stop (it stops at its next progress report).
+
+        Parameters
+        ----------
+        job_id : str
+            The id.
+
+        Returns
+        -------
+        Job or None
+            The job; None for an unknown id.
+        """
         job = self.get(job_id)
         if job is not None and job.state == "running":
             job.cancel_event.set()
         return job
 
     def wait(self, job_id: str, timeout: float) -> Job | None:
-        """For tests and the CLI: block until the job ended or ``timeout`` [s] passed."""
+        """For tests and the CLI: block until the job ended or ``timeout`` [s] passed.
+
+        Parameters
+        ----------
+        job_id : str
+            The id.
+        timeout : float
+            Longest wait [s].
+
+        Returns
+        -------
+        Job or None
+            The job; None for an unknown id.
+        """
         end = time.monotonic() + timeout
         job = self.get(job_id)
         while job is not None and job.state == "running" and time.monotonic() < end:

@@ -28,7 +28,13 @@ MAX_MEASURED = 8 * 1024 * 1024
 
 
 class Runs:
-    """Finished simulations by job id, the oldest dropped beyond :data:`KEEP_RUNS`."""
+    """Finished simulations by job id, the oldest dropped beyond :data:`KEEP_RUNS`.
+
+    Parameters
+    ----------
+    keep : int, default 12
+        How many runs are kept.
+    """
 
     def __init__(self, keep: int = KEEP_RUNS) -> None:
         self._items: OrderedDict[str, tuple[Any, dict[str, str]]] = OrderedDict()
@@ -36,12 +42,35 @@ class Runs:
         self._keep = keep
 
     def put(self, run_id: str, result: Any, settings: dict[str, str]) -> None:
+        """Keep a finished run, dropping the oldest beyond the limit.
+
+        Parameters
+        ----------
+        run_id : str
+            The job id of the run.
+        result : Result
+            The run.
+        settings : dict of str to str
+            The page settings it was run with.
+        """
         with self._lock:
             self._items[run_id] = (result, dict(settings))
             while len(self._items) > self._keep:
                 self._items.popitem(last=False)
 
     def get(self, run_id: str) -> tuple[Any, dict[str, str]] | None:
+        """A kept run by id.
+
+        Parameters
+        ----------
+        run_id : str
+            The job id of the run.
+
+        Returns
+        -------
+        tuple of (Result, dict) or None
+            The run and its settings; None when unknown or dropped.
+        """
         with self._lock:
             return self._items.get(run_id)
 
@@ -51,7 +80,18 @@ def _engineering(unit: str) -> tuple[str, float]:
 
 
 def signal_list(result: Any) -> list[dict[str, str]]:
-    """Every signal of the run's Dataset: name, unit (engineering) and description."""
+    """Every signal of the run's Dataset: name, unit (engineering) and description.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+
+    Returns
+    -------
+    list of dict of str to str
+        ``name``, ``unit`` and ``description`` of each signal.
+    """
     ds = result.dataset
     out = []
     for name, var in ds.data_vars.items():
@@ -62,7 +102,28 @@ def signal_list(result: Any) -> list[dict[str, str]]:
 
 
 def signal(result: Any, name: str, max_points: int = MAX_POINTS) -> dict[str, Any]:
-    """One signal, decimated keeping its peaks; KeyError when the run has no such signal."""
+    """One signal, decimated keeping its peaks; KeyError when the run has no such signal.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    name : str
+        The signal.
+    max_points : int, default 4000
+        Most samples returned.
+
+    Returns
+    -------
+    dict
+        Name, unit, label, time [s] and values [engineering unit of the signal], and the
+        sample counts (recorded, sent).
+
+    Raises
+    ------
+    KeyError
+        When the run has no such signal.
+    """
     ds = result.dataset
     if name not in ds.data_vars:
         raise KeyError(name)
@@ -78,7 +139,20 @@ def signal(result: Any, name: str, max_points: int = MAX_POINTS) -> dict[str, An
 
 def export(result: Any, fmt: str) -> bytes:
     """The run's every sample as ``fmt`` ("csv": engineering units in the column names, as
-    ``feeddrive simulate --out run.csv`` writes; "mat": SI with a ``units`` struct)."""
+    ``feeddrive simulate --out run.csv`` writes; "mat": SI with a ``units`` struct).
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    fmt : str
+        ``"csv"`` or ``"mat"``.
+
+    Returns
+    -------
+    bytes
+        The file's contents.
+    """
     from ..io.results import save_result
 
     if fmt not in ("csv", "mat"):
@@ -94,7 +168,28 @@ def measured_trace(text: str, name: str = "measured.csv") -> dict[str, Any]:
     ``position`` or ``table_position`` [mm] by default, units in brackets honoured) as the
     page overlays it: time [s], position [mm], speed [mm/s] (its own speed column when the
     file has ``table_speed``, else the position differentiated).  A refused file raises
-    ValueError with the file's line named."""
+    ValueError with the file's line named.
+
+    Parameters
+    ----------
+    text : str
+        The CSV text.
+    name : str, default "measured.csv"
+        The file's name, for messages.
+
+    Returns
+    -------
+    dict
+        Name, sample count, decimated ``time_s`` [s], ``position_mm`` [mm] and ``speed_mm_s``
+        [mm/s], and where the speed came from.
+
+    Raises
+    ------
+    MeasuredDataError
+        For a file ``feeddrive analyze`` would refuse.
+    ValueError
+        For a file larger than the page accepts.
+    """
     from ..io.measured import read_position_trace
 
     if len(text.encode("utf-8")) > MAX_MEASURED:

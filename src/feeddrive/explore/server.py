@@ -74,7 +74,18 @@ class MissingDependency(ImportError):
 
 
 def plotly_js() -> bytes:
-    """plotly.js as the installed ``plotly`` package ships it (its offline copy)."""
+    """plotly.js as the installed ``plotly`` package ships it (its offline copy).
+
+    Returns
+    -------
+    bytes
+        The minified script.
+
+    Raises
+    ------
+    MissingDependency
+        When plotly is not installed.
+    """
     try:
         root = resources.files("plotly")
     except ModuleNotFoundError:
@@ -89,7 +100,13 @@ def _static(name: str) -> bytes:
 
 
 class Explorer:
-    """State of one explorer: the settings it started with, its jobs, simulation speed."""
+    """State of one explorer: the settings it started with, its jobs, simulation speed.
+
+    Parameters
+    ----------
+    initial : dict, optional
+        The starting settings (from the ``feeddrive explore`` options).
+    """
 
     def __init__(self, initial: dict[str, Any] | None = None) -> None:
         self.initial = normalise(initial)
@@ -103,7 +120,13 @@ class Explorer:
 
     def warm_up(self) -> Job:
         """Load (or, on a fresh install, compile) the solver for the drives of the starting
-        parameter set, so that the first click is answered at once."""
+        parameter set, so that the first click is answered at once.
+
+        Returns
+        -------
+        Job
+            The warm-up job.
+        """
 
         def work(job: Job) -> None:
             first = check(self.initial)
@@ -134,6 +157,22 @@ class Explorer:
         return job
 
     def start(self, kind: str, settings: dict[str, Any]) -> tuple[Job | None, dict[str, Any]]:
+        """Check the page's settings and start a job of ``kind`` with them.
+
+        Parameters
+        ----------
+        kind : str
+            ``"simulate"``, ``"linear"`` or ``"critical"``.
+        settings : dict
+            The page's settings.
+
+        Returns
+        -------
+        job : Job or None
+            The started job; None when a setting was refused.
+        checked : dict
+            The check's messages and values (``Checked.as_dict``).
+        """
         checked = check(settings)
         if not checked.ok:
             return None, checked.as_dict()
@@ -168,6 +207,16 @@ class Explorer:
         return job, checked.as_dict()
 
     def info(self) -> dict[str, Any]:
+        """What the page needs to build its form.
+
+        Returns
+        -------
+        dict
+            Version, presets, drives, fields (name, label, unit, group, option, path, help),
+            compensation modes, the fields' units, the starting settings and defaults, the
+            longest duration [s], the critical search's trial count and whether the solver is
+            ready.
+        """
         from ..model import drive_names
 
         return {
@@ -181,6 +230,13 @@ class Explorer:
         }
 
     def plotly(self) -> bytes:
+        """plotly.js, read once and kept.
+
+        Returns
+        -------
+        bytes
+            The script.
+        """
         if self._plotly is None:
             self._plotly = plotly_js()
         return self._plotly
@@ -208,7 +264,17 @@ def _error_field(err: BaseException) -> str | None:
 
 class ExplorerServer(ThreadingHTTPServer):
     """One thread per connection, at most ``MAX_CONNECTIONS`` at once; each connection
-    is closed after ``READ_TIMEOUT`` s without a byte (``Handler.timeout``)."""
+    is closed after ``READ_TIMEOUT`` s without a byte (``Handler.timeout``).
+
+    Parameters
+    ----------
+    port : int
+        The port; 0 for a free one.
+    explorer : Explorer
+        The explorer state the handlers serve.
+    host : str, default "127.0.0.1"
+        The address to listen on.
+    """
 
     daemon_threads = True
     # the listen backlog: connections past the cap are accepted (and answered 503) at once,
@@ -238,6 +304,7 @@ class ExplorerServer(ThreadingHTTPServer):
 
     @property
     def port(self) -> int:
+        """The port the server listens on."""
         return int(self.server_address[1])
 
     def handle_error(self, request: Any, client_address: Any) -> None:
@@ -250,6 +317,7 @@ class ExplorerServer(ThreadingHTTPServer):
 
     @property
     def url(self) -> str:
+        """The page's address, ``http://127.0.0.1:<port>/``."""
         return f"http://127.0.0.1:{self.port}/"
 
 
@@ -406,12 +474,17 @@ class Handler(BaseHTTPRequestHandler):
                        {"error": f"internal error: {type(err).__name__}: {err}"})
 
     def do_GET(self) -> None:  # noqa: N802  (BaseHTTPRequestHandler's name)
+        """Answer a GET request: the page and its static files, the form's info, the state of an
+        address, job polls and a kept run's signals and CSV (the module lists the routes)."""
         self._dispatch("GET")
 
     def do_HEAD(self) -> None:  # noqa: N802
+        """Answer a HEAD request as a GET."""
         self._dispatch("GET")
 
     def do_POST(self) -> None:  # noqa: N802
+        """Answer a POST request: check settings, start or cancel a job, import or export a
+        parameter file, load a measured trace (the module lists the routes)."""
         self._dispatch("POST")
 
     # ------------------------------------------------------------ routes
@@ -563,7 +636,22 @@ class _HttpError(Exception):
 def make_server(port: int = 0, initial: dict[str, Any] | None = None, *,
                 warm_up: bool = True) -> ExplorerServer:
     """A server on 127.0.0.1:``port`` (0: a free port), not yet serving; raises
-    :class:`MissingDependency` without plotly and :class:`OSError` when the port is taken."""
+    :class:`MissingDependency` without plotly and :class:`OSError` when the port is taken.
+
+    Parameters
+    ----------
+    port : int, default 0
+        The port; 0 for a free one.
+    initial : dict, optional
+        The starting settings.
+    warm_up : bool, default True
+        Start loading the solver at once.
+
+    Returns
+    -------
+    ExplorerServer
+        The server.
+    """
     explorer = Explorer(initial)
     explorer.plotly()  # fail now, not on the first page load
     server = ExplorerServer(port, explorer)
@@ -576,7 +664,22 @@ def make_server(port: int = 0, initial: dict[str, Any] | None = None, *,
 
 def serve_in_thread(port: int = 0, initial: dict[str, Any] | None = None, *,
                     warm_up: bool = True) -> ExplorerServer:
-    """Start a server in a daemon thread (tests, notebooks); stop it with ``shutdown()``."""
+    """Start a server in a daemon thread (tests, notebooks); stop it with ``shutdown()``.
+
+    Parameters
+    ----------
+    port : int, default 0
+        The port; 0 for a free one.
+    initial : dict, optional
+        The starting settings.
+    warm_up : bool, default True
+        Start loading the solver at once.
+
+    Returns
+    -------
+    ExplorerServer
+        The running server.
+    """
     server = make_server(port, initial, warm_up=warm_up)
     threading.Thread(target=server.serve_forever, name="feeddrive-explore", daemon=True
                      ).start()

@@ -61,7 +61,25 @@ _RIPPLE = "disturbances.screw_motor_ripple"
 
 @dataclass(frozen=True)
 class Field:
-    """One field of the page: ``name`` is its key in settings and in the address."""
+    """One field of the page: ``name`` is its key in settings and in the address.
+
+    Parameters
+    ----------
+    name : str
+        The field's key.
+    label : str
+        Its label on the page.
+    unit : str
+        Its unit on the page (mm, mm/s, N/µm, otherwise SI).
+    group : str
+        The form section it belongs to.
+    option : str, default ""
+        The matching ``feeddrive simulate`` option.
+    path : str, default ""
+        The parameter it sets (a knob), if any.
+    help : str, default ""
+        Its help text.
+    """
 
     name: str
     label: str
@@ -110,7 +128,13 @@ DEFAULTS: dict[str, str] = {
 
 
 def compensation_modes() -> tuple[str, ...]:
-    """The friction-compensation modes (``controller.compensation.mode``)."""
+    """The friction-compensation modes (``controller.compensation.mode``).
+
+    Returns
+    -------
+    tuple of str
+        ``"none"``, ``"feedforward"``, ``"observer"``.
+    """
     for f in dataclasses.fields(Compensation):
         if f.name == "mode":
             return tuple(f.metadata["options"])
@@ -118,7 +142,18 @@ def compensation_modes() -> tuple[str, ...]:
 
 
 def knob_values(params: DriveParameters) -> dict[str, str]:
-    """The knob fields as the parameter set ``params`` has them."""
+    """The knob fields as the parameter set ``params`` has them.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+
+    Returns
+    -------
+    dict of str to str
+        Field name → value in the field's unit, as text.
+    """
     c = params.controller
     ripple = params.disturbances.screw_motor_ripple
     out = {
@@ -171,7 +206,15 @@ def _cli_number(option: str, text: Any) -> float:
 
 class UsageError(ParameterError):
     """What the CLI (typer) prints for an option given something that is not a number; a
-    test keeps the two equal."""
+    test keeps the two equal.
+
+    Parameters
+    ----------
+    option : str
+        The option, e.g. ``--table-speed``.
+    text : object
+        What was given.
+    """
 
     def __init__(self, option: str, text: Any) -> None:
         self.field, self.value = option, text
@@ -200,7 +243,23 @@ MAX_PARAMS_TEXT = 256 * 1024
 def loads_params(text: str) -> DriveParameters:
     """A parameter set from the page (an imported file or the address): TOML, whose
     ``extends`` may name a preset but not a file (the server reads no file for a page).
-    Read as the CLI reads a file: nesting deeper than the CLI accepts is refused."""
+    Read as the CLI reads a file: nesting deeper than the CLI accepts is refused.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+
+    Returns
+    -------
+    DriveParameters
+        The parameter set.
+
+    Raises
+    ------
+    ParameterError
+        For a refused file, an ``extends`` that names a file, or too deep nesting.
+    """
     from ..parameters.toml_io import parse_toml
 
     if len(text) > MAX_PARAMS_TEXT:
@@ -215,14 +274,41 @@ def loads_params(text: str) -> DriveParameters:
 
 
 def encode_params(text: str) -> str:
-    """TOML text → compact address form (zlib, base64url)."""
+    """TOML text → compact address form (zlib, base64url).
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+
+    Returns
+    -------
+    str
+        The address form.
+    """
     packed = zlib.compress(text.encode("utf-8"), 9)
     return base64.urlsafe_b64encode(packed).decode("ascii").rstrip("=")
 
 
 def decode_params(blob: str) -> str:
     """Address form → TOML text, decompressing at most :data:`MAX_PARAMS_TEXT` bytes (a
-    small address that inflates to megabytes is refused, not inflated)."""
+    small address that inflates to megabytes is refused, not inflated).
+
+    Parameters
+    ----------
+    blob : str
+        The address form.
+
+    Returns
+    -------
+    str
+        The TOML text.
+
+    Raises
+    ------
+    ParameterError
+        For a blob that is not valid or inflates beyond the limit.
+    """
     shown_blob = blob[:20] + ("…" if len(blob) > 20 else "")
     try:
         raw = base64.urlsafe_b64decode(blob + "=" * (-len(blob) % 4))
@@ -247,7 +333,35 @@ def decode_params(blob: str) -> str:
 
 @dataclass
 class Checked:
-    """Settings checked: the system and command to run, or a message per field."""
+    """Settings checked: the system and command to run, or a message per field.
+
+    Parameters
+    ----------
+    settings : dict of str to str
+        The settings as given, normalised.
+    errors : dict of str to str
+        Field → message, for refused values.
+    warnings : dict of str to str
+        Field → message, for suspicious values.
+    base : DriveParameters, optional
+        The parameter set before the knobs.
+    params : DriveParameters, optional
+        The set with the knobs applied.
+    system : DriveSystem, optional
+        The drive to run.
+    drive : str, default "cdfs"
+        The drive name.
+    table_speed : float, default 0.0
+        Commanded table speed [m/s].
+    nut_speed : float, default 0.0
+        Commanded nut speed [m/s].
+    duration : float, default 10.0
+        Simulated time [s].
+    overrides : dict of str to str
+        The knobs that differ from the set's own values.
+    disabled : list of str
+        Fields this drive does not use.
+    """
 
     settings: dict[str, str]
     errors: dict[str, str] = field(default_factory=dict)
@@ -264,10 +378,18 @@ class Checked:
 
     @property
     def ok(self) -> bool:
+        """Whether no field was refused."""
         return not self.errors
 
     def as_dict(self) -> dict[str, Any]:
-        """What the page needs: messages, the parameter set's own knob values, the address."""
+        """What the page needs: messages, the parameter set's own knob values, the address.
+
+        Returns
+        -------
+        dict
+            Settings, errors, warnings, the fields' units, the base set's knob values and name,
+            the overridden knobs, the disabled fields and the address query.
+        """
         return {"settings": self.settings, "errors": self.errors, "warnings": self.warnings,
                 "units": field_units(self.base),
                 "base": knob_values(self.base) if self.base is not None else None,
@@ -277,7 +399,18 @@ class Checked:
 
 
 def normalise(settings: Mapping[str, Any] | None) -> dict[str, str]:
-    """Every field present, as text; unknown keys dropped."""
+    """Every field present, as text; unknown keys dropped.
+
+    Parameters
+    ----------
+    settings : mapping or None
+        The settings as received.
+
+    Returns
+    -------
+    dict of str to str
+        Every field, with the defaults where absent.
+    """
     out = dict(DEFAULTS)
     params_text = None
     for key, value in (settings or {}).items():
@@ -292,13 +425,41 @@ def normalise(settings: Mapping[str, Any] | None) -> dict[str, str]:
 
 
 def base_parameters(settings: Mapping[str, str]) -> DriveParameters:
+    """The parameter set the settings start from: the imported file, else the named preset.
+
+    Parameters
+    ----------
+    settings : mapping of str to str
+        The page's settings.
+
+    Returns
+    -------
+    DriveParameters
+        The set.
+
+    Raises
+    ------
+    ParameterError
+        For a refused file or an unknown preset.
+    """
     if settings.get("params"):
         return loads_params(settings["params"])
     return preset(settings.get("preset", DEFAULTS["preset"]))
 
 
 def check(settings: Mapping[str, Any] | None) -> Checked:
-    """Check every field; never raises for a bad value (each lands in ``errors``)."""
+    """Check every field; never raises for a bad value (each lands in ``errors``).
+
+    Parameters
+    ----------
+    settings : mapping or None
+        The page's settings.
+
+    Returns
+    -------
+    Checked
+        The system and command to run, or the messages.
+    """
     from ..engine.simulate import DriveSystem
     from ..model import drive_names, mechanism
 
@@ -420,7 +581,20 @@ def _field_of(err: ParameterError) -> str:
 
 
 def to_query(settings: Mapping[str, str], checked: Checked | None = None) -> str:
-    """The address's query: the parameter set, the run fields, the knobs that override it."""
+    """The address's query: the parameter set, the run fields, the knobs that override it.
+
+    Parameters
+    ----------
+    settings : mapping of str to str
+        The page's settings.
+    checked : Checked, optional
+        The check, for the knobs that differ from the set's own values.
+
+    Returns
+    -------
+    str
+        The query string.
+    """
     s = normalise(settings)
     pairs: list[tuple[str, str]] = []
     if s.get("params"):
@@ -437,7 +611,20 @@ def to_query(settings: Mapping[str, str], checked: Checked | None = None) -> str
 
 def from_query(query: str) -> tuple[dict[str, str], dict[str, str]]:
     """Settings from an address's query (knobs the address leaves out: the set's own values),
-    and a message for a parameter blob that cannot be read."""
+    and a message for a parameter blob that cannot be read.
+
+    Parameters
+    ----------
+    query : str
+        The address's query string.
+
+    Returns
+    -------
+    settings : dict of str to str
+        The settings.
+    errors : dict of str to str
+        Field → message for a blob that cannot be read.
+    """
     given = dict(parse_qsl(query.lstrip("?"), keep_blank_values=True))
     errors: dict[str, str] = {}
     raw: dict[str, Any] = {k: v for k, v in given.items() if k in FIELD}
@@ -468,7 +655,18 @@ _RUN_IN_FILE = {"drive": "drive", "table_speed": "table_speed_mm_s",
 def export_toml(checked: Checked) -> str:
     """The checked settings as a parameter file: the parameter set with the knobs applied,
     and the run fields in comment lines (ignored by ``feeddrive.load``; read back by
-    :func:`import_toml`)."""
+    :func:`import_toml`).
+
+    Parameters
+    ----------
+    checked : Checked
+        The checked settings.
+
+    Returns
+    -------
+    str
+        The TOML text.
+    """
     assert checked.params is not None
     params = checked.params
     if checked.overrides:
@@ -489,7 +687,25 @@ def export_toml(checked: Checked) -> str:
 def import_toml(text: str, current: Mapping[str, Any] | None = None) -> dict[str, str]:
     """Settings from a parameter file (exported or hand-written): its parameter set becomes
     the base, the knobs take its values, run settings come from its ``# explore.`` lines
-    (else stay as they are).  Raises :class:`ParameterError` for a file that is refused."""
+    (else stay as they are).  Raises :class:`ParameterError` for a file that is refused.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    current : mapping, optional
+        The page's current settings.
+
+    Returns
+    -------
+    dict of str to str
+        The new settings.
+
+    Raises
+    ------
+    ParameterError
+        For a refused file.
+    """
     params = loads_params(text)
     s = normalise(current)
     s["params"] = dumps(params)
@@ -515,7 +731,20 @@ def import_toml(text: str, current: Mapping[str, Any] | None = None) -> dict[str
 def field_unit(f: Field, params: DriveParameters | None) -> str:
     """The unit of field ``f`` for ``params``: its parameter's metadata when it has a path
     (``controller.velocity_gain``, ``disturbances.screw_motor_ripple.amplitudes[0]``), else
-    the field's own."""
+    the field's own.
+
+    Parameters
+    ----------
+    f : Field
+        The field.
+    params : DriveParameters or None
+        The parameter set; None before one is loaded.
+
+    Returns
+    -------
+    str
+        The unit.
+    """
     if not f.path or params is None:
         return f.unit
     parts = [re.sub(r"\[\d+\]$", "", p) for p in f.path.split(".")]
@@ -534,5 +763,16 @@ def field_unit(f: Field, params: DriveParameters | None) -> str:
 
 
 def field_units(params: DriveParameters | None) -> dict[str, str]:
-    """Every field's unit for ``params``."""
+    """Every field's unit for ``params``.
+
+    Parameters
+    ----------
+    params : DriveParameters or None
+        The parameter set; None before one is loaded.
+
+    Returns
+    -------
+    dict of str to str
+        Field name → unit.
+    """
     return {f.name: field_unit(f, params) for f in FIELDS}

@@ -24,7 +24,31 @@ KINDS = ("cs", "me")
 
 @dataclass(frozen=True)
 class ExportedFmu:
-    """What :func:`export_fmu` wrote."""
+    """What :func:`export_fmu` wrote.
+
+    Parameters
+    ----------
+    path : Path
+        The ``.fmu`` file.
+    fmi : int
+        FMI version, 2 or 3.
+    kind : str
+        ``"cs"`` (co-simulation) or ``"me"`` (model exchange).
+    identifier : str
+        The model identifier (the binary's name).
+    n_variables : int
+        Number of FMU variables.
+    n_states : int
+        Number of continuous states.
+    inputs : tuple of str
+        Names of the input variables.
+    outputs : tuple of str
+        Names of the output variables.
+    size_bytes : int
+        Size of the file [bytes].
+    sampled : bool
+        Whether any loop is sampled (events in the FMU).
+    """
 
     path: Path
     fmi: int
@@ -43,7 +67,39 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
                   option: str = "--out") -> Path:
     """Refuse a request that cannot succeed, before any work: unknown drive, FMI version or
     kind, an output that is not a writable new ``.fmu`` file (an existing one only with
-    ``force``; never one of ``inputs``), no C compiler.  One-line errors name what to change."""
+    ``force``; never one of ``inputs``), no C compiler.  One-line errors name what to change.
+
+    Parameters
+    ----------
+    drive : str
+        The drive name.
+    fmi : int
+        FMI version, 2 or 3.
+    kind : str
+        ``"cs"`` or ``"me"``.
+    out : str or os.PathLike
+        The ``.fmu`` file to write.
+    force : bool, default False
+        Replace an existing file.
+    inputs : tuple of (str or None), default ()
+        Files the command reads, which the output may never replace.
+    option : str, default "--out"
+        The option named in messages.
+
+    Returns
+    -------
+    Path
+        The output path.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown drive, FMI version or kind.
+    OutputError
+        For an output that cannot be written.
+    ValueError
+        Without a C compiler (the compiler search's message).
+    """
     from ..io.outputs import check_output_file
     from ..model.mechanisms import drive_names
     from .build import CompilerNotFound, find_compiler
@@ -77,6 +133,41 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
     as exact events inside a step) or ``"me"`` (model exchange: derivatives, sampled loops as
     time events).  Raises :class:`~feeddrive.parameters.ParameterError` on a bad request
     (before any work) and ``CompilerNotFound`` without a C compiler.
+
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The parameter set [SI].
+    drive : str
+        The drive name.
+    out : str or os.PathLike
+        The ``.fmu`` file.
+    table_position : float, default 0.4
+        The nut's start position a [m].
+    nut_hold : str, default "locked"
+        How the CDFS holds its nut.
+    fmi : int, default 2
+        FMI version, 2 or 3.
+    kind : str, default "cs"
+        ``"cs"`` or ``"me"``.
+    table_speed : float, default 0.0
+        Start value of the table-speed input [m/s].
+    nut_speed : float, default 0.0
+        Start value of the nut-speed input [m/s].
+    force : bool, default False
+        Replace an existing file.
+    identifier : str, optional
+        The model identifier; derived from the drive by default.
+
+    Returns
+    -------
+    ExportedFmu
+        What was written.
+
+    References
+    ----------
+    .. [1] Modelica Association, Functional Mock-up Interface 2.0.4 and 3.0,
+       https://fmi-standard.org/.
     """
     from .build import package
     from .description import new_token, variables

@@ -35,7 +35,18 @@ class CompilerNotFound(RuntimeError):
 
 
 def find_compiler() -> list[str]:
-    """The C compiler command (``$CC``, else cc, gcc or clang on PATH)."""
+    """The C compiler command (``$CC``, else cc, gcc or clang on PATH).
+
+    Returns
+    -------
+    list of str
+        The command and its fixed arguments.
+
+    Raises
+    ------
+    CompilerNotFound
+        When no compiler is found.
+    """
     try:
         from ..backends.c_backend import CompilerNotFound as _NotFound
         from ..backends.c_backend import find_compiler as _find
@@ -48,7 +59,18 @@ def find_compiler() -> list[str]:
 
 
 def platform_folder(fmi: int) -> str:
-    """The ``binaries/`` subfolder of this platform (FMI 2 and FMI 3 spell them differently)."""
+    """The ``binaries/`` subfolder of this platform (FMI 2 and FMI 3 spell them differently).
+
+    Parameters
+    ----------
+    fmi : int
+        FMI version, 2 or 3.
+
+    Returns
+    -------
+    str
+        E.g. ``"linux64"`` (FMI 2) or ``"x86_64-linux"`` (FMI 3).
+    """
     machine = platform.machine().lower()
     arch = {"amd64": "x86_64", "arm64": "aarch64"}.get(machine, machine)
     system = {"linux": "linux", "darwin": "darwin", "win32": "windows"}.get(sys.platform,
@@ -60,14 +82,27 @@ def platform_folder(fmi: int) -> str:
 
 
 def library_suffix() -> str:
+    """The shared-library extension of this platform.
+
+    Returns
+    -------
+    str
+        ``".dll"``, ``".dylib"`` or ``".so"``.
+    """
     return {"win32": ".dll", "darwin": ".dylib"}.get(sys.platform, ".so")
 
 
 def solver_c() -> str:
     """C text of the FMU's integrator (``fd_advance``), translated from the same Python the
     numba build compiles, with the model's ``fd_rhs`` / ``fd_sample_update`` as its ``rhs`` /
-    ``sample_update`` and the DOPRI5 step, error estimate and norm of
-    :mod:`feeddrive.solvers.steps` translated with it."""
+    ``sample_update`` and the DOPRI5 step and error norm of :mod:`feeddrive.solvers.switching`
+    translated with it.
+
+    Returns
+    -------
+    str
+        The C text.
+    """
     from ..backends.c_backend import (
         RHS,
         SAMPLE_UPDATE,
@@ -91,7 +126,26 @@ def solver_c() -> str:
 
 
 def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: str) -> str:
-    """The whole ``fmu.c``."""
+    """The whole ``fmu.c``.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model and where its inputs live.
+    vs : list of Variable
+        The FMU's variables (:func:`feeddrive.fmu.description.variables`).
+    fmi : int
+        FMI version, 2 or 3.
+    kind : str
+        ``"cs"`` or ``"me"``.
+    token : str
+        The instantiation token (GUID) the description declares.
+
+    Returns
+    -------
+    str
+        The C source.
+    """
     from ..backends.c_backend import c_model_source
     from ..backends.c_translate import _mangle
 
@@ -123,7 +177,33 @@ def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: 
 def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
                     export_all: bool = False) -> Path:
     """Compile ``source`` (with the FMI headers beside it) into ``folder/<identifier><ext>``;
-    ``export_all``: the model's and integrator's functions visible too (tests call them)."""
+    ``export_all``: the model's and integrator's functions visible too (tests call them).
+
+    Parameters
+    ----------
+    source : str
+        The C source (``fmu.c``).
+    fmi : int
+        FMI version, 2 or 3 (which headers).
+    folder : Path
+        Where to write the source and the library.
+    identifier : str
+        The library's name.
+    export_all : bool, default False
+        Export every function, not only the FMI ones.
+
+    Returns
+    -------
+    Path
+        The library.
+
+    Raises
+    ------
+    CompilerNotFound
+        Without a C compiler.
+    RuntimeError
+        When the compiler fails (its output in the message).
+    """
     cc = find_compiler()
     folder.mkdir(parents=True, exist_ok=True)
     src = folder / "fmu.c"
@@ -161,6 +241,18 @@ modelDescription.xml; FMI 3: sources/buildDescription.xml).
 
 
 def build_description(identifier: str) -> str:
+    """The ``sources/buildDescription.xml`` of an FMI 3 FMU: one C99 source, ``fmu.c``.
+
+    Parameters
+    ----------
+    identifier : str
+        The model identifier.
+
+    Returns
+    -------
+    str
+        The XML text.
+    """
     return ('<?xml version="1.0" encoding="UTF-8"?>\n'
             '<fmiBuildDescription fmiVersion="3.0">\n'
             f'  <BuildConfiguration modelIdentifier="{identifier}">\n'
@@ -173,7 +265,34 @@ def build_description(identifier: str) -> str:
 
 def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
             identifier: str, token: str, description: str, generation: str) -> Path:
-    """Write the FMU ``out`` (a zip): modelDescription.xml, binary, sources, build note."""
+    """Write the FMU ``out`` (a zip): modelDescription.xml, binary, sources, build note.
+
+    Parameters
+    ----------
+    out : Path
+        The ``.fmu`` file, written atomically.
+    fm : FmuModel
+        The assembled model and where its inputs live.
+    vs : list of Variable
+        The FMU's variables (:func:`feeddrive.fmu.description.variables`).
+    fmi : int
+        FMI version, 2 or 3.
+    kind : str
+        ``"cs"`` or ``"me"``.
+    identifier : str
+        The model identifier.
+    token : str
+        The instantiation token (GUID).
+    description : str
+        The model's description text.
+    generation : str
+        The generation tool text.
+
+    Returns
+    -------
+    Path
+        ``out``.
+    """
     source = fmu_source(fm, vs, fmi=fmi, kind=kind, token=token)
     xml = model_description(fm, vs, fmi=fmi, kind=kind, identifier=identifier, token=token,
                             description=description, generation=generation)
@@ -198,5 +317,11 @@ def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
 
 
 def which_compiler() -> str:
-    """The compiler's path, for messages."""
+    """The compiler's path, for messages.
+
+    Returns
+    -------
+    str
+        The path, or the command as given.
+    """
     return shutil.which(find_compiler()[0]) or find_compiler()[0]

@@ -107,7 +107,38 @@ _SIMPLE = {
 
 @dataclass(frozen=True)
 class Variable:
-    """One FMU variable: where its value lives (kind, a, b) and how it is declared."""
+    """One FMU variable: where its value lives (kind, a, b) and how it is declared.
+
+    Parameters
+    ----------
+    name : str
+        The variable's FMU name.
+    kind : int
+        Where its value lives: ``K_TIME``, ``K_STATE``, ``K_DER``, ``K_AUX``, ``K_PARAM``,
+        ``K_INPUT``, ``K_SETTING``, ``K_PRODUCT``, ``K_ERROR`` or ``K_BOOLEAN``.
+    a : int
+        First index of its location (e.g. the state or parameter index).
+    b : int
+        Second index (e.g. the factor of a product variable); 0 when unused.
+    causality : str
+        FMI causality (``"parameter"``, ``"input"``, ``"output"``, ``"local"``, …).
+    variability : str
+        FMI variability (``"fixed"``, ``"tunable"``, ``"continuous"``, …).
+    initial : str or None
+        FMI ``initial`` attribute, if declared.
+    start : float or None
+        Start value [its unit], if declared.
+    unit : str
+        Its unit.
+    description : str
+        Its description.
+    type : str, default "Real"
+        ``"Real"`` or ``"Boolean"``.
+    derivative : int, optional
+        Value reference of the state a ``der(…)`` variable belongs to.
+    fixed : bool, default False
+        A setting that may not change after initialisation.
+    """
 
     name: str
     kind: int
@@ -134,7 +165,20 @@ def _axis_units(fm: FmuModel, axis: str) -> tuple[str, str]:
 
 
 def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
-    """(FMU name, unit, description, fixed) of the model parameter slot ``name``."""
+    """(FMU name, unit, description, fixed) of the model parameter slot ``name``.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model and where its inputs live.
+    name : str
+        A model parameter slot (``friction.screw.bristle_stiffness``).
+
+    Returns
+    -------
+    tuple of (str, str, str, bool)
+        The FMU variable name, its unit, description and whether it is fixed.
+    """
     if name in _SIMPLE:
         unit, text = _SIMPLE[name]
         return name, unit, text, name.split(".")[-1] in _FIXED_PARAMETERS
@@ -201,7 +245,20 @@ def _outputs(fm: FmuModel) -> set[str]:
 
 
 def variables(fm: FmuModel, kind: str) -> list[Variable]:
-    """Every variable of the FMU (value reference = position in the list)."""
+    """Every variable of the FMU (value reference = position in the list).
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model and where its inputs live.
+    kind : str
+        ``"cs"`` or ``"me"``.
+
+    Returns
+    -------
+    list of Variable
+        The variables.
+    """
     m = fm.model
     me = kind == "me"
     out_names = _outputs(fm)
@@ -313,7 +370,23 @@ _SYMBOLS: dict[str, dict[str, int]] = {
 
 
 def base_units(unit: str) -> dict[str, int]:
-    """SI base-unit exponents of a unit string such as ``"N s/m"``, ``"V/(A s)"``, ``"kg m2"``."""
+    """SI base-unit exponents of a unit string such as ``"N s/m"``, ``"V/(A s)"``, ``"kg m2"``.
+
+    Parameters
+    ----------
+    unit : str
+        The unit.
+
+    Returns
+    -------
+    dict of str to int
+        Base unit (``kg``, ``m``, ``s``, ``A``, ``K``, ``mol``, ``cd``, ``rad``) → exponent.
+
+    Raises
+    ------
+    ValueError
+        For a unit the parser does not know.
+    """
     out: dict[str, int] = {}
     text = unit.replace("(", "").replace(")", "")
     parts = text.split("/")
@@ -344,7 +417,37 @@ def _number(x: float) -> str:
 def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
                       identifier: str, token: str, description: str,
                       generation: str) -> str:
-    """The text of ``modelDescription.xml`` (FMI 2.0 or 3.0)."""
+    """The text of ``modelDescription.xml`` (FMI 2.0 or 3.0).
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model and where its inputs live.
+    vs : list of Variable
+        The FMU's variables (:func:`variables`).
+    fmi : int
+        FMI version, 2 or 3.
+    kind : str
+        ``"cs"`` or ``"me"``.
+    identifier : str
+        The model identifier.
+    token : str
+        The instantiation token (GUID).
+    description : str
+        The model's description text.
+    generation : str
+        The generation tool text.
+
+    Returns
+    -------
+    str
+        The XML.
+
+    References
+    ----------
+    .. [1] Modelica Association, Functional Mock-up Interface 2.0.4 and 3.0,
+       https://fmi-standard.org/.
+    """
     units = sorted({x.unit for x in vs if x.unit})
     me = kind == "me"
     lines = ['<?xml version="1.0" encoding="UTF-8"?>']
@@ -432,6 +535,13 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
 
 
 def new_token() -> str:
+    """A new instantiation token: a random UUID in braces.
+
+    Returns
+    -------
+    str
+        E.g. ``"{0f8e…}"``.
+    """
     return "{" + str(uuid.uuid4()) + "}"
 
 
@@ -443,7 +553,26 @@ def _c_array(ctype: str, name: str, values: list[float] | list[int] | np.ndarray
 
 
 def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: str) -> str:
-    """The C definitions the wrapper reads: sizes, value-reference table, start values."""
+    """The C definitions the wrapper reads: sizes, value-reference table, start values.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model and where its inputs live.
+    vs : list of Variable
+        The FMU's variables (:func:`variables`).
+    fmi : int
+        FMI version, 2 or 3.
+    kind : str
+        ``"cs"`` or ``"me"``.
+    token : str
+        The instantiation token.
+
+    Returns
+    -------
+    str
+        C text.
+    """
     m = fm.model
     pos, _ = m.tolerances(1.0, 0.0, 0.0)
     spd, _ = m.tolerances(0.0, 1.0, 0.0)
@@ -524,12 +653,35 @@ def _status_messages() -> list[str]:
 
 
 def quote_c(text: str) -> str:
-    """A C string literal (ASCII, escapes for the rest)."""
+    """A C string literal (ASCII, escapes for the rest).
+
+    Parameters
+    ----------
+    text : str
+        The text.
+
+    Returns
+    -------
+    str
+        The literal, with its quotes.
+    """
     body = text.encode("ascii", "backslashreplace").decode("ascii")
     return '"' + body.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
 def xml_text(text: str) -> str:
+    """Text escaped for an XML attribute or element (``&``, ``<``, ``>``).
+
+    Parameters
+    ----------
+    text : str
+        The text.
+
+    Returns
+    -------
+    str
+        The escaped text.
+    """
     return escape(text)
 
 

@@ -31,12 +31,35 @@ _NO_LOAD = LoadProfile(time=np.array([0.0, 1.0]), force=np.zeros(2))
 
 @dataclass(frozen=True)
 class InputReference:
-    """The reference as external inputs: start values of the table and nut speeds [m/s]."""
+    """The reference as external inputs: start values of the table and nut speeds [m/s].
+
+    Parameters
+    ----------
+    table_speed : float, default 0.0
+        Start value of the table speed [m/s].
+    nut_speed : float, default 0.0
+        Start value of the nut speed [m/s].
+    """
 
     table_speed: float = 0.0
     nut_speed: float = 0.0
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
+        """The reference as (parameter slots, data table) for the reference kernel: the
+        external-input kind and a 4 × 2 table the host writes (speeds in rows 1 and 3).
+
+        Returns
+        -------
+        slots : dict of int to float
+            Profile-block slot → value.
+        table : numpy.ndarray
+            The 4 × 2 input table [m, m/s].
+
+        Raises
+        ------
+        ParameterError
+            For a non-finite speed.
+        """
         for name, v in (("table_speed", self.table_speed), ("nut_speed", self.nut_speed)):
             if not math.isfinite(v):
                 raise ParameterError(name, v, "expected a finite speed [m/s]")
@@ -48,7 +71,33 @@ class InputReference:
 
 @dataclass(frozen=True)
 class FmuModel:
-    """The assembled model and where its inputs live (indices into ``P`` and ``T``)."""
+    """The assembled model and where its inputs live (indices into ``P`` and ``T``).
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+    drive : str
+        The drive name.
+    profile_offset : int
+        First slot of the profile block in ``P``.
+    table_offset : int
+        First slot of the reference block in ``T``.
+    load_slot : int
+        ``P`` index of ``disturbances.load_force``.
+    nut_inputs : bool
+        The nut has a live axis (DDFS, or the CDFS nut on its servo).
+    nut_position_input : bool
+        ... with a position loop (``controller.nut_loop = "position"``).
+    periods : dict of str to float
+        The loops' sample periods by loop name [s]; 0 for continuous.
+    parameters : DriveParameters
+        The exported set (units of the parameter slots).
+    table_position : float, default 0.4
+        The nut's start position a [m].
+    nut_hold : str, default "locked"
+        How the CDFS holds its nut.
+    """
 
     model: Model
     drive: str
@@ -66,7 +115,28 @@ class FmuModel:
 def build(parameters: DriveParameters, drive: str, table_position: float,
           nut_hold: str = "locked", table_speed: float = 0.0,
           nut_speed: float = 0.0) -> FmuModel:
-    """Assemble ``drive`` with its reference and load force read from the FMU's inputs."""
+    """Assemble ``drive`` with its reference and load force read from the FMU's inputs.
+
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The parameter set [SI].
+    drive : str
+        The drive name.
+    table_position : float
+        The nut's start position a [m].
+    nut_hold : str, default "locked"
+        How the CDFS holds its nut.
+    table_speed : float, default 0.0
+        Start value of the table-speed input [m/s].
+    nut_speed : float, default 0.0
+        Start value of the nut-speed input [m/s].
+
+    Returns
+    -------
+    FmuModel
+        The model and the indices of its inputs.
+    """
     from ..engine.simulate import DriveSystem
 
     DriveSystem(parameters, drive, table_position, nut_hold)  # the same checks as simulate
@@ -90,14 +160,47 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
 
 def numba_module(model: Model) -> ModuleType:
     """The model's generated module with :func:`feeddrive.fmu.solver.advance_template` compiled
-    beside its kernels (``module.advance``): the numba build of the FMU's integrator."""
+    beside its kernels (``module.advance``): the numba build of the FMU's integrator.
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+
+    Returns
+    -------
+    module
+        The compiled module, with ``advance``.
+    """
     return compile_module(model.source + "\n\n" + solver.template_source() + "\n", [])
 
 
 class NumbaCoSimulation:
     """The FMU's co-simulation step run through numba (the same integrator text as the C
     build): what the tests compare the FMU's binary with, and the benchmark's in-process
-    reference.  ``inputs`` of :meth:`do_step` are held over the step, as the FMU holds them."""
+    reference.  ``inputs`` of :meth:`do_step` are held over the step, as the FMU holds them.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model.
+    rtol : float, default 1e-6
+        Relative tolerance [-].
+    position_tolerance : float, default 1e-10
+        Absolute tolerance of positions [m].
+    speed_tolerance : float, default 1e-8
+        Absolute tolerance of speeds [m/s].
+    current_tolerance : float, default 1e-6
+        Absolute tolerance of currents [A].
+    h_max : float, default 1e-3
+        Largest step [s].
+    integrate_speed_reference : bool, default True
+        Integrate the speed inputs into the position references, as the FMU does.
+    max_steps : int, default 10000000
+        Step limit per call.
+    P : numpy.ndarray, optional
+        Parameter vector to use instead of the model's [SI, per slot].
+    """
 
     def __init__(self, fm: FmuModel, *, rtol: float = 1e-6, position_tolerance: float = 1e-10,
                  speed_tolerance: float = 1e-8, current_tolerance: float = 1e-6,
@@ -128,6 +231,15 @@ class NumbaCoSimulation:
         self._sampling = sampling
 
     def start(self, params: DriveParameters, inputs: dict[str, float]) -> None:
+        """Initialise as the FMU does: the sample grid, the inputs and the update at t = 0.
+
+        Parameters
+        ----------
+        params : DriveParameters
+            The parameter set (its sample periods).
+        inputs : dict of str to float
+            Input name → value [SI unit of the input].
+        """
         m = self.fm.model
         for name, k in m.clocks:  # the loops' periods of ``params`` (the FMU's settings)
             if name.startswith("controller."):
@@ -155,6 +267,20 @@ class NumbaCoSimulation:
         self.P[fm.load_slot] = inputs.get("load_force", 0.0)
 
     def do_step(self, h: float, inputs: dict[str, float]) -> None:
+        """Advance one communication step with the inputs held over it, as ``fmi2DoStep`` does.
+
+        Parameters
+        ----------
+        h : float
+            Step length [s].
+        inputs : dict of str to float
+            Input name → value [SI unit of the input].
+
+        Raises
+        ------
+        RuntimeError
+            When the integrator reports a failure (its status message).
+        """
         assert self.grid is not None
         base, steps = self.grid
         redo = 1 if inputs != self._last_inputs else 0

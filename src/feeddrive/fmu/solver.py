@@ -56,15 +56,52 @@ _reject_factor: Any = None
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's right-hand side, which replaces it in the generated
+    module; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The ``rhs`` arguments (t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux).
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
     raise NotImplementedError("placeholder: the assembled model's right-hand side")
 
 
 def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's sampled-controller update, which replaces it in the
+    generated module; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The ``sample_update`` arguments (k, t, y, held, P, T, n_pos, n_vel, n_cur, base).
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
     raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
 
 
 def new_memory(h_init: float) -> np.ndarray:
-    """The solver memory of a run that has not started (see :func:`advance_template`)."""
+    """The solver memory of a run that has not started (see :func:`advance_template`).
+
+    Parameters
+    ----------
+    h_init : float
+        First step size [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The memory (``MEMORY_SIZE`` values) [mixed, see MEM_*].
+    """
     memory = np.zeros(MEMORY_SIZE)
     memory[MEM_H] = h_init
     memory[MEM_ERR] = 1e-4
@@ -90,6 +127,63 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
     ``held_prev`` with the new inputs (an instant on a communication point takes the inputs
     of the step that starts there).  ``held`` is left updated, ``aux`` holds
     the signals at ``t_end``.  The other arrays (length ``n``) are work space.
+
+    Parameters
+    ----------
+    t : float
+        Start time of the call [s].
+    t_end : float
+        End time [s].
+    t0 : float
+        Start of the run, the origin of the sample grid [s].
+    n : int
+        Number of states.
+    y : numpy.ndarray
+        States, advanced in place [SI, per state].
+    held : numpy.ndarray
+        Held controller values, updated in place [SI, per value].
+    held_prev : numpy.ndarray
+        Held values before the last update (for ``redo``) [SI, per value].
+    P : numpy.ndarray
+        Packed parameter vector [SI, per slot].
+    T : numpy.ndarray
+        Packed tables [SI].
+    schedule : numpy.ndarray of int
+        Each clock's period in units of ``base``; 0 for continuous
+        (:mod:`feeddrive.solvers.schedule`).
+    tick : numpy.ndarray of int
+        Work space, one per clock.
+    base : float
+        The sample grid's unit [s].
+    rtol : float
+        Relative tolerance [-].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    rel_mask : numpy.ndarray
+        1 where the relative tolerance applies, else 0 [-].
+    h_max : float
+        Largest step [s].
+    max_steps : int
+        Step limit of the call.
+    redo : int
+        1 when the inputs changed since the last call.
+    memory : numpy.ndarray
+        Solver memory carried between calls (:func:`new_memory`) [mixed, see MEM_*].
+    f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e : numpy.ndarray
+        Work space, length ``n`` [SI per second, per state].
+    aux : numpy.ndarray
+        Output: the signals at ``t_end`` [SI, per signal].
+
+    Returns
+    -------
+    int
+        ``STATUS_OK``, ``STATUS_MAX_STEPS``, ``STATUS_STEP_UNDERFLOW`` or
+        ``STATUS_NON_FINITE``.
+
+    References
+    ----------
+    .. [1] J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput.
+       Appl. Math. 6 (1980) 19–26.
     """
     kb = int(memory[MEM_KB])
     if redo == 1 and memory[MEM_AT_SAMPLE] > 0.5:
@@ -192,7 +286,13 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
 
 def template_source() -> str:
     """The text of :func:`advance_template` as placed in a model's generated module (named
-    ``advance``)."""
+    ``advance``).
+
+    Returns
+    -------
+    str
+        Python source.
+    """
     src = inspect.getsource(advance_template).replace("def advance_template(", "def advance(", 1)
     consts = "\n".join(f"{k} = {v!r}" for k, v in CONSTANTS.items())
     return (consts + "\nfrom feeddrive.solvers.schedule import due, next_instant\n\n\n@kernel\n"

@@ -46,7 +46,18 @@ _STALE_TEMP_SECONDS = 3600.0
 
 
 def code_hash(paths: Iterable[str | os.PathLike[str]]) -> str:
-    """SHA-256 (hex) of the contents of ``paths``, in the given order."""
+    """SHA-256 of the contents of files, in the given order (the code a stored result depends on).
+
+    Parameters
+    ----------
+    paths : iterable of (str or os.PathLike)
+        The files.
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     digest = hashlib.sha256()
     for p in paths:
         data = Path(p).read_bytes()
@@ -56,13 +67,37 @@ def code_hash(paths: Iterable[str | os.PathLike[str]]) -> str:
 
 
 def store_key(parts: Mapping[str, Any]) -> str:
-    """SHA-256 (hex) of ``parts`` (version, kernel hash, inputs …) as canonical JSON."""
+    """SHA-256 of a store's key parts (version, kernel hash, inputs, …) as canonical JSON.
+
+    Parameters
+    ----------
+    parts : mapping of str to object
+        The parts; values that JSON cannot hold are written with ``str``.
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     blob = json.dumps(parts, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(blob.encode("utf-8")).hexdigest()
 
 
 class ResultStore:
-    """JSON values by name under ``root``, for one key (see the module)."""
+    """JSON values stored by name under a folder, for one key (see the module).
+
+    An entry made under another key (another version, code or input) is never read; a
+    damaged entry is noticed and recomputed.
+
+    Parameters
+    ----------
+    root : str or os.PathLike
+        The store's folder; created if missing.
+    key : str
+        The key of this store's entries (:func:`store_key`).
+    notice : callable, optional
+        Called with a one-line message when an entry is unusable and recomputed.
+    """
 
     def __init__(self, root: str | os.PathLike[str], key: str, *,
                  notice: Callable[[str], None] | None = None) -> None:
@@ -73,6 +108,18 @@ class ResultStore:
         self._clean_stale_temporaries()
 
     def path(self, name: str) -> Path:
+        """The file of an entry under this store's key.
+
+        Parameters
+        ----------
+        name : str
+            The entry's name.
+
+        Returns
+        -------
+        Path
+            ``root / "<name>-<key[:16]>.json"``.
+        """
         return self.root / f"{name}-{self.key[:16]}.json"
 
     def _say(self, text: str) -> None:
@@ -80,7 +127,18 @@ class ResultStore:
             self.notice(text)
 
     def get(self, name: str) -> Any | None:
-        """The stored value, or None when absent or unusable (which is then noticed)."""
+        """The stored value of an entry, or None when absent or unusable (which is then noticed).
+
+        Parameters
+        ----------
+        name : str
+            The entry's name.
+
+        Returns
+        -------
+        object or None
+            The value as JSON gave it back.
+        """
         p = self.path(name)
         try:
             raw = p.read_bytes()
@@ -120,8 +178,21 @@ class ResultStore:
         return None
 
     def put(self, name: str, value: Any) -> Any:
-        """Store ``value`` atomically; returns it as a later :meth:`get` will (through
-        JSON), so a first run and a rerun from the store compute from identical data."""
+        """Store a value atomically.
+
+        Parameters
+        ----------
+        name : str
+            The entry's name.
+        value : object
+            A JSON-serialisable value.
+
+        Returns
+        -------
+        object
+            The value as a later :meth:`get` will give it (through JSON), so a first run and a rerun
+            from the store compute from identical data.
+        """
         body = json.dumps(value).encode("utf-8")
         header = json.dumps({"feeddrive-store": FORMAT, "name": name, "key": self.key,
                              "sha256": hashlib.sha256(body).hexdigest()}).encode("utf-8")
@@ -133,6 +204,20 @@ class ResultStore:
         return json.loads(body)
 
     def get_or_compute(self, name: str, compute: Callable[[], Any]) -> Any:
+        """The stored value of an entry, or ``compute()`` stored and returned when there is none.
+
+        Parameters
+        ----------
+        name : str
+            The entry's name.
+        compute : callable
+            Computes the value (JSON-serialisable).
+
+        Returns
+        -------
+        object
+            The value, through JSON either way.
+        """
         value = self.get(name)
         return self.put(name, compute()) if value is None else value
 

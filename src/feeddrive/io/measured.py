@@ -64,7 +64,17 @@ _UNIT_RE = re.compile(r"^(?P<name>.*?)\s*\[(?P<unit>[^\]]*)\]\s*$")
 
 
 class MeasuredDataError(ValueError):
-    """A measured-data file was refused; the message names file, line and problem."""
+    """A measured-data file was refused; the message names the file, the line and the problem.
+
+    Parameters
+    ----------
+    source : str
+        The file's name as shown.
+    line : int or None
+        The 1-based file line of the problem; None when it concerns the whole file.
+    message : str
+        What is wrong.
+    """
 
     def __init__(self, source: str, line: int | None, message: str) -> None:
         self.source = source
@@ -74,7 +84,20 @@ class MeasuredDataError(ValueError):
 
 
 def split_unit(header: str) -> tuple[str, str | None]:
-    """``"time [s]"`` → ``("time", "s")``; ``"time"`` → ``("time", None)``."""
+    """Split a header cell into its name and its bracketed unit.
+
+    Parameters
+    ----------
+    header : str
+        The cell, e.g. ``"time [s]"`` (quotes and spaces stripped).
+
+    Returns
+    -------
+    name : str
+        ``"time"``.
+    unit : str or None
+        ``"s"``; None when the cell gives no unit.
+    """
     text = header.strip().strip('"').strip()
     m = _UNIT_RE.match(text)
     if m:
@@ -83,7 +106,27 @@ def split_unit(header: str) -> tuple[str, str | None]:
 
 
 def unit_factor(unit: str, dimension: str, *, what: str) -> float:
-    """SI factor of ``unit`` for ``dimension`` (length, time, speed, force, current)."""
+    """The factor that converts a value in ``unit`` to SI, for one dimension.
+
+    Parameters
+    ----------
+    unit : str
+        The unit as written (``"mm/s"``, ``"um"``, ``"kN"``); case-insensitive as a fallback.
+    dimension : str
+        ``"length"``, ``"time"``, ``"speed"``, ``"force"`` or ``"current"``.
+    what : str
+        What is being read, for the message.
+
+    Returns
+    -------
+    float
+        SI value of one ``unit`` [SI unit of the dimension].
+
+    Raises
+    ------
+    ValueError
+        When ``unit`` is not a unit of ``dimension``; the message lists the known ones.
+    """
     table = _DIMENSIONS[dimension]
     if unit in table:
         return table[unit]
@@ -96,8 +139,31 @@ def unit_factor(unit: str, dimension: str, *, what: str) -> float:
 
 @dataclass(frozen=True)
 class CsvTable:
-    """A scanned delimited text file: header names (unit stripped), units, the file line of
-    every data row.  Columns are parsed on demand (:meth:`numbers`), by pandas."""
+    """A scanned delimited text file; its columns are parsed on demand by pandas.
+
+    Parameters
+    ----------
+    source : str
+        The file's name as shown in messages.
+    names : tuple of str
+        Header names, units stripped.
+    units : tuple of (str or None)
+        Each column's bracketed unit, None when the header gives none.
+    lines : numpy.ndarray of int
+        The 1-based file line of every data row.
+    header_line : int
+        The header's file line.
+    path : Path
+        The file.
+    sep : str or None
+        The column separator; None for whitespace.
+    skip : numpy.ndarray of int
+        0-based file lines that are not data rows (preamble, header, comments).
+    decimal : str, default "."
+        The decimal mark.
+    _parsed : dict
+        Cache of the columns parsed so far (internal; not compared or shown).
+    """
 
     source: str
     names: tuple[str, ...]
@@ -114,7 +180,18 @@ class CsvTable:
         return int(self.lines.size)
 
     def find(self, name: str) -> int | None:
-        """Index of the column called ``name`` (case-insensitive, unit ignored), or None."""
+        """Index of a column by name, case-insensitive, unit ignored.
+
+        Parameters
+        ----------
+        name : str
+            The column name.
+
+        Returns
+        -------
+        int or None
+            Its index; None when the file has no such column.
+        """
         key = name.strip().lower()
         for i, n in enumerate(self.names):
             if n.lower() == key:
@@ -122,6 +199,18 @@ class CsvTable:
         return None
 
     def has(self, name: str) -> bool:
+        """Whether the file has a column of this name (case-insensitive, unit ignored).
+
+        Parameters
+        ----------
+        name : str
+            The column name.
+
+        Returns
+        -------
+        bool
+            True when :meth:`find` finds it.
+        """
         return self.find(name) is not None
 
     def _missing(self, names: Sequence[str]) -> MeasuredDataError:
@@ -145,11 +234,40 @@ class CsvTable:
         return frame[i].to_numpy()
 
     def cell(self, i: int, k: int) -> str:
-        """The text of data row ``k`` in column ``i`` (for messages)."""
+        """The text of one cell, for messages.
+
+        Parameters
+        ----------
+        i : int
+            Column index.
+        k : int
+            Data-row index (0-based, not the file line).
+
+        Returns
+        -------
+        str
+            The cell's text, stripped.
+        """
         return str(self._read(i, str)[k]).strip()
 
     def numbers(self, name: str) -> np.ndarray:
-        """Column ``name`` as float64, refusing empty, non-numeric and non-finite cells."""
+        """A column as float64, refusing empty, non-numeric and non-finite cells.
+
+        Parameters
+        ----------
+        name : str
+            The column name.
+
+        Returns
+        -------
+        numpy.ndarray
+            The values, in the file's unit [unit of the column].
+
+        Raises
+        ------
+        MeasuredDataError
+            For a missing column, or a bad cell (named with its file line).
+        """
         i = self.find(name)
         if i is None:
             raise self._missing([name])
@@ -185,10 +303,35 @@ class CsvTable:
 
     def quantity(self, names: Sequence[str], dimension: str, *, unit: str | None,
                  default_unit: str) -> tuple[np.ndarray, str, str]:
-        """The first present column of ``names`` in SI, with its name and the unit used.
+        """The first present column of ``names``, converted to SI.
 
         The unit is ``unit`` if given (an option), else the header's bracketed unit, else
-        ``default_unit``.  An option that contradicts the header's unit is refused.
+        ``default_unit``; an option that contradicts the header's unit is refused.
+
+        Parameters
+        ----------
+        names : sequence of str
+            Candidate column names, in order of preference.
+        dimension : str
+            The quantity's dimension (see ``unit_factor``).
+        unit : str or None
+            The unit an option gives, or None.
+        default_unit : str
+            The unit when neither the option nor the header gives one.
+
+        Returns
+        -------
+        values : numpy.ndarray
+            The column in SI [SI unit of the dimension].
+        name : str
+            The column used.
+        unit : str
+            The unit it was read in.
+
+        Raises
+        ------
+        MeasuredDataError
+            When no candidate is present, a cell is bad, or option and header disagree.
         """
         for name in names:
             i = self.find(name)
@@ -228,9 +371,23 @@ _BINARY_SIGNATURES = ((b"PAR1", "a Parquet file"), (b"\x89HDF", "an HDF5/NetCDF-
 
 
 def check_text_file(path: str | Path) -> None:
-    """Refuse, saying what it is, a path that is not a text file: a directory, a Parquet,
-    NetCDF, .mat or other binary file (issue 12 item 14: they were reported as "line 2: 1
-    cells, but the header has 4 columns" or "no such file")."""
+    """Refuse, saying what it is, a path that is not a text file.
+
+    A directory, a Parquet, NetCDF, .mat or other binary file is named as such (issue 12 item
+    14: they were reported as "line 2: 1 cells, but the header has 4 columns").
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to read.
+
+    Raises
+    ------
+    MeasuredDataError
+        For a directory or a binary file.
+    FileNotFoundError
+        When nothing is at ``path``.
+    """
     p = Path(path)
     if p.is_dir():
         raise MeasuredDataError(p.name, None, "is a directory; expected a CSV file")
@@ -297,13 +454,32 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
                    decimal: str = ".") -> CsvTable:
     """Scan a delimited text file with one header row.
 
-    ``sep`` is the column separator; None detects it from the header (comma, semicolon,
-    tab, else whitespace).  ``decimal`` is the decimal mark (``","`` for files written with
-    a European locale; then the separator must not be a comma).
-
     The file is scanned in chunks (line numbers of the data rows, cells per row) with numpy;
-    the columns a reader uses are then parsed by pandas' C reader, so a file of 10⁷ rows
-    needs about 16 bytes per row and used column, not Python strings for every cell.
+    the columns a reader uses are then parsed by pandas' C reader, so a file of 10⁷ rows needs
+    about 16 bytes per row and used column, not Python strings for every cell.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (``#`` comment lines allowed, see docs/measured-data.md).
+    sep : str, optional
+        Column separator, or ``tab``/``space``; detected from the header (comma, semicolon,
+        tab, else whitespace) when omitted.
+    decimal : str, default "."
+        Decimal mark (``","`` for a European locale; the separator must then not be a
+        comma).
+
+    Returns
+    -------
+    CsvTable
+        The scanned table.
+
+    Raises
+    ------
+    MeasuredDataError
+        For a binary file, a missing header or a row with the wrong number of cells.
+    ValueError
+        For an unknown ``sep`` or ``decimal``.
     """
     p = Path(path)
     source = p.name
@@ -389,7 +565,22 @@ def _need_rows(table: CsvTable, minimum: int, what: str) -> None:
 
 
 def check_increasing(table: CsvTable, time: np.ndarray, column: str) -> None:
-    """Refuse a time column that does not strictly increase, naming the line."""
+    """Refuse a time column that does not strictly increase, naming the line.
+
+    Parameters
+    ----------
+    table : CsvTable
+        The scanned file.
+    time : numpy.ndarray
+        The column's values [s].
+    column : str
+        The column's name, for the message.
+
+    Raises
+    ------
+    MeasuredDataError
+        At the first row whose time does not exceed the one before.
+    """
     bad = np.flatnonzero(np.diff(time) <= 0.0)
     if bad.size:
         k = int(bad[0]) + 1
@@ -405,7 +596,21 @@ def check_increasing(table: CsvTable, time: np.ndarray, column: str) -> None:
 
 @dataclass(frozen=True)
 class StaticTest:
-    """Constant-speed friction tests: one row per test.  SI units."""
+    """Constant-speed friction tests, one row per test, in SI.
+
+    Parameters
+    ----------
+    speed : numpy.ndarray
+        Signed sliding speed of each test [m/s].
+    force : numpy.ndarray
+        Friction force, signed or as magnitudes [N].
+    lines : numpy.ndarray of int
+        The file line of every row.
+    source : str
+        The file's name.
+    force_from : str
+        ``"force"``, or ``"current × K_t / H"`` when converted from motor current.
+    """
 
     speed: np.ndarray  # [m/s], signed
     force: np.ndarray  # [N], friction force (signed or magnitudes)
@@ -428,12 +633,42 @@ def read_static_test(
     sep: str | None = None,
     decimal: str = ".",
 ) -> StaticTest:
-    """Read constant-speed friction tests (speed and friction force per row).
+    """Read constant-speed friction tests: speed and friction force per row.
 
-    Default columns: ``speed`` [mm/s] and ``force`` [N].  Without a force column, a
-    ``current`` column [A] is converted as F = K_t·i/H with H = ``lead``/2π (Wang2021 Eq. 8
-    and Table 1's force convention); ``torque_constant`` [N m/A] and ``lead`` [m] are then
-    required.
+    Default columns ``speed`` [mm/s] and ``force`` [N].  Without a force column, a ``current``
+    column [A] is converted as F = K_t·i/H with H = ``lead``/2π (Wang2021 Eq. (8) and Table 1's
+    force convention); ``torque_constant`` and ``lead`` are then required.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    speed_column, force_column, current_column : str
+        Column names.
+    speed_unit, force_unit, current_unit : str, optional
+        Units overriding the header's (refused when they contradict it).
+    torque_constant : float, optional
+        Motor torque constant K_t, for a current column [N m/A].
+    lead : float, optional
+        Screw lead p_h, for a current column [m].
+    sep : str, optional
+        Column separator; detected from the header when omitted.
+    decimal : str, default "."
+        Decimal mark.
+
+    Returns
+    -------
+    StaticTest
+        The tests in SI.
+
+    Raises
+    ------
+    MeasuredDataError
+        For a missing column or constant, or a bad cell.
+
+    References
+    ----------
+    .. [1] Wang2021 Eq. (8), Table 1.
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
     _need_rows(table, 1, "static friction test")
@@ -465,7 +700,21 @@ def read_static_test(
 
 @dataclass(frozen=True)
 class PreslidingTest:
-    """A pre-sliding (below breakaway) test: applied force and displacement.  SI units."""
+    """A pre-sliding test (below breakaway): applied force and displacement, in SI.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    force : numpy.ndarray
+        Applied force [N].
+    position : numpy.ndarray
+        Displacement [m].
+    lines : numpy.ndarray of int
+        The file line of every row.
+    source : str
+        The file's name.
+    """
 
     time: np.ndarray  # [s]
     force: np.ndarray  # [N]
@@ -486,7 +735,31 @@ def read_presliding_test(
     sep: str | None = None,
     decimal: str = ".",
 ) -> PreslidingTest:
-    """Read a pre-sliding test: ``time`` [s], ``force`` [N], ``position`` [µm] by default."""
+    """Read a pre-sliding test: columns ``time`` [s], ``force`` [N], ``position`` [µm] by default.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file (at least 20 rows).
+    time_column, force_column, position_column : str
+        Column names.
+    time_unit, force_unit, position_unit : str, optional
+        Units overriding the header's.
+    sep : str, optional
+        Column separator; detected from the header when omitted.
+    decimal : str, default "."
+        Decimal mark (``","`` for a European locale).
+
+    Returns
+    -------
+    PreslidingTest
+        The test in SI.
+
+    Raises
+    ------
+    MeasuredDataError
+        For missing columns, too few rows, bad cells or non-increasing time.
+    """
     table = read_csv_table(path, sep=sep, decimal=decimal)
     _need_rows(table, 20, "pre-sliding test")
     time, tname, _ = table.quantity([time_column], "time", unit=time_unit, default_unit="s")
@@ -503,7 +776,25 @@ def read_presliding_test(
 
 @dataclass(frozen=True)
 class PositionTrace:
-    """A table position trace (interferometer export or simulator CSV).  SI units."""
+    """A table position trace (interferometer export or the simulator's CSV), in SI.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    position : numpy.ndarray
+        Table position [m].
+    lines : numpy.ndarray of int
+        The file line of every row.
+    source : str
+        The file's name.
+    position_column : str
+        The column the position was read from.
+    command_speed : numpy.ndarray, optional
+        Commanded speed, when the file has a command column [m/s].
+    speed : numpy.ndarray, optional
+        Measured speed, when a speed column was asked for [m/s].
+    """
 
     time: np.ndarray  # [s]
     position: np.ndarray  # [m]
@@ -530,10 +821,38 @@ def read_position_trace(
     """Read time and table position; default columns ``time`` [s] and ``position`` [mm].
 
     Without ``position_column``, a ``position`` column is used, else ``table_position`` (the
-    simulator's export).  The command speed [mm/s] is read from ``command_column``, or
-    without it from a ``command_speed`` or ``table_speed_reference`` (simulator) column when
-    present; it marks the segments of a step-down run.  ``speed_column`` names a speed
-    column [mm/s] to use instead of differentiating the position.
+    simulator's export).  The command speed [mm/s] is read from ``command_column``, or without
+    it from a ``command_speed`` or ``table_speed_reference`` column when present; it marks the
+    segments of a step-down run.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file (at least 16 rows).
+    time_column : str, default "time"
+        The time column.
+    position_column : str, optional
+        The position column.
+    command_column : str, optional
+        The command-speed column.
+    speed_column : str, optional
+        A speed column [mm/s] to use instead of differentiating the position.
+    time_unit, position_unit, speed_unit : str, optional
+        Units overriding the header's.
+    sep : str, optional
+        Column separator; detected from the header when omitted.
+    decimal : str, default "."
+        Decimal mark (``","`` for a European locale).
+
+    Returns
+    -------
+    PositionTrace
+        The trace in SI.
+
+    Raises
+    ------
+    MeasuredDataError
+        For missing columns, too few rows, bad cells or non-increasing time.
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
     _need_rows(table, 16, "position trace")

@@ -44,8 +44,23 @@ class OutputError(ValueError):
 
 
 def shown(path: str | os.PathLike[str], limit: int | None = MAX_SHOWN) -> str:
-    """A path (or any user text) as printed in a one-line message: control characters
-    escaped (``\\n``, ``\\x1b``), and cut to ``limit`` characters (:func:`cut`)."""
+    """A path (or any user text) as printed in a one-line message.
+
+    Control characters are escaped (``\\n``, ``\\x1b``) and the text is cut to ``limit``
+    characters (:func:`cut`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The text.
+    limit : int or None, default MAX_SHOWN
+        Most characters shown; None for no limit.
+
+    Returns
+    -------
+    str
+        The printable text, saying its length when cut.
+    """
     text = os.fspath(path)
     length = len(text)
     if limit is not None and length > limit:
@@ -58,7 +73,20 @@ def shown(path: str | os.PathLike[str], limit: int | None = MAX_SHOWN) -> str:
 
 
 def cut(text: str, limit: int | None = MAX_SHOWN) -> str:
-    """``text`` cut to about ``limit`` characters, saying how long it was."""
+    """Text cut to about ``limit`` characters, saying how long it was.
+
+    Parameters
+    ----------
+    text : str
+        The text.
+    limit : int or None, default MAX_SHOWN
+        Most characters kept; None for no limit.
+
+    Returns
+    -------
+    str
+        ``text``, or its start followed by ``… (N characters)``.
+    """
     if limit is None or len(text) <= limit:
         return text
     return f"{text[:limit]}… ({len(text)} characters)"
@@ -66,13 +94,23 @@ def cut(text: str, limit: int | None = MAX_SHOWN) -> str:
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """A temporary name to write ``path`` under, renamed over ``path`` when the block ends
-    without an error (removed otherwise): the one atomic-write helper of the package.
+    """A temporary name to write ``path`` under, renamed over it when the block ends.
 
-    The temporary file is created in the same folder (a rename within one file system is
-    atomic), with the permissions a new file gets (the umask), named
-    ``.STEM.XXXXXXXX.partial.EXT`` so that a writer choosing its format by the extension
-    (matplotlib) still does.  It is flushed to disk (``fsync``) before the rename.
+    The package's one atomic-write helper.  The temporary file is created in the same folder (a
+    rename within one file system is atomic), with the permissions a new file gets (the umask),
+    named ``.STEM.XXXXXXXX.partial.EXT`` so that a writer choosing its format by the extension
+    (matplotlib) still does; it is flushed to disk (``fsync``) before the rename, and removed
+    when the block raises.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write.
+
+    Yields
+    ------
+    Path
+        The temporary name to write to.
     """
     p = Path(path)
     while True:
@@ -99,9 +137,25 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
 def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int,
                 tight: bool = False) -> Path:
-    """Write a matplotlib figure through :func:`atomic_path` (the format follows the
-    extension; nothing partial is left under the name on a full disk); ``tight``: no margin
-    cut off (``bbox_inches="tight"``).  Returns the path written."""
+    """Write a matplotlib figure atomically (:func:`atomic_path`), the format following the
+    extension.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or os.PathLike
+        The image file.
+    dpi : int
+        Resolution [dots per inch].
+    tight : bool, default False
+        No margin cut off (``bbox_inches="tight"``).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=dpi, **({"bbox_inches": "tight"} if tight else {}))
     return Path(path)
@@ -146,11 +200,33 @@ def _probe_writable(option: str, p: Path, probe: Path | None = None) -> None:
 def check_output_file(path: str | os.PathLike[str], *, option: str,
                       inputs: Iterable[str | os.PathLike[str] | None] = (),
                       force: bool = False, formats: Iterable[str] | None = None) -> Path:
-    """Refuse ``path`` as an output file unless it can be written (see the module rules).
+    """Refuse a path as an output file unless it can be written, before any work starts.
 
-    ``option`` names the CLI option (``--out``) in messages; ``inputs`` are the files the
-    command reads, which an output may never replace; ``formats`` the extensions the option
-    takes (any when None).  Returns the path.
+    See the module's rules: not empty, not a folder, its folder exists and is writable, not one
+    of the command's inputs, not an existing file unless ``force``, an accepted extension.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output file.
+    option : str
+        The CLI option (``--out``), named in messages.
+    inputs : iterable of (str or os.PathLike or None), optional
+        The files the command reads, which an output may never replace.
+    force : bool, default False
+        Whether an existing file may be replaced.
+    formats : iterable of str, optional
+        The extensions the option takes; any when None.
+
+    Returns
+    -------
+    Path
+        The path.
+
+    Raises
+    ------
+    OutputError
+        One line naming the option, the path and the problem.
     """
     text = os.fspath(path)
     if not text.strip():
@@ -178,9 +254,28 @@ def check_output_file(path: str | os.PathLike[str], *, option: str,
 
 
 def check_output_dir(path: str | os.PathLike[str], *, option: str) -> Path:
-    """Refuse ``path`` as an output folder: it must be a writable folder or a new name in an
-    existing, writable folder.  Returns the path.  (The command writes only its own file
-    names into it, so an input kept there is never replaced.)"""
+    """Refuse a path as an output folder unless it is a writable folder or a new name in one.
+
+    The command writes only its own file names into it, so an input kept there is never
+    replaced.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output folder.
+    option : str
+        The CLI option, named in messages.
+
+    Returns
+    -------
+    Path
+        The path.
+
+    Raises
+    ------
+    OutputError
+        For an empty name, a file, a missing parent or a folder that cannot be written.
+    """
     text = os.fspath(path)
     if not text.strip():
         raise OutputError(f"{option} {text!r}: empty folder name")

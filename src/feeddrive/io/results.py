@@ -54,8 +54,23 @@ PARQUET_HINT = "Parquet output needs pyarrow: pip install 'feeddrive[parquet]'"
 
 
 def check_format(path: str | Path) -> str:
-    """The output format of ``path`` (its extension), refused before any work when unknown
-    or when its writer is not installed (Parquet without pyarrow)."""
+    """The output format of a path, checked before any work starts.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output file; its extension chooses the format (``FORMATS``).
+
+    Returns
+    -------
+    str
+        The lower-case extension, e.g. ``".nc"``.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown extension, or ``.parquet`` without pyarrow installed.
+    """
     p = Path(path)
     ext = p.suffix.lower()
     if ext not in FORMATS:
@@ -66,19 +81,49 @@ def check_format(path: str | Path) -> str:
 
 
 def udunits(unit: str) -> str:
-    """``unit`` in UDUNITS-2 spelling, as CF's ``units`` attribute wants it ("" → "1")."""
+    """A unit in UDUNITS-2 spelling, as the CF ``units`` attribute wants it.
+
+    Parameters
+    ----------
+    unit : str
+        The package's spelling (``"N s/m"``, ``"kg m^2"``, ``""``).
+
+    Returns
+    -------
+    str
+        The UDUNITS spelling; ``""`` becomes ``"1"``.
+    """
     return _UDUNITS.get(unit, unit)
 
 
 def cf_attributes(dataset: xr.Dataset, *, title: str, action: str) -> xr.Dataset:
-    """A shallow copy of ``dataset`` with the CF-1.8 attributes of a NetCDF export.
+    """A shallow copy of a dataset with the CF-1.8 attributes of a NetCDF export.
 
-    Globals: ``Conventions``, ``title``, ``source`` (feeddrive and its version, then any
-    former ``source``), ``history``
-    (one line per writing, newest first, ISO 8601 UTC), ``references`` (Wang2021); a former
-    free-text ``conventions`` becomes ``comment``.  Variables and coordinates: ``units`` in
-    UDUNITS spelling, ``long_name`` (the variable's name if it had none).  No variable has a
-    CF standard name (the table has none for a machine's positions, speeds or currents).
+    Globals: ``Conventions``, ``title``, ``source`` (feeddrive and its version, then any former
+    ``source``), ``history`` (one line per writing, newest first, ISO 8601 UTC), ``references``
+    (the Wang2021 citation); a former free-text ``conventions`` becomes ``comment``.  Variables
+    and coordinates: ``units`` in UDUNITS spelling, ``long_name`` (the variable's name if it had
+    none).  No variable has a CF standard name (the table has none for a machine's positions,
+    speeds or currents).
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A run's dataset (``Result.dataset``), signals in SI with their units.
+    title : str
+        The file's ``title``.
+    action : str
+        What wrote it, for the ``history`` line (``"simulate --drive ddfs"``).
+
+    Returns
+    -------
+    xarray.Dataset
+        The dataset with the attributes; the data are shared, not copied.
+
+    References
+    ----------
+    .. [1] CF Conventions 1.8, https://cfconventions.org/.
+    .. [2] Wang2021, the ``references`` attribute.
     """
     ds = dataset.copy(deep=False)
     attrs = dict(ds.attrs)
@@ -109,14 +154,37 @@ def cf_attributes(dataset: xr.Dataset, *, title: str, action: str) -> xr.Dataset
 
 
 def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
-    """``dataset`` (already with :func:`cf_attributes`) as a NetCDF4 file."""
+    """Write a dataset as a NetCDF4 file (h5netcdf engine).
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The dataset, already with :func:`cf_attributes`.
+    path : str or Path
+        The file to write.
+    """
     dataset.to_netcdf(path, engine="h5netcdf")
 
 
 def arrow_table(columns: Mapping[str, tuple[np.ndarray, str, str]],
                 metadata: Mapping[str, str] | None = None) -> Any:
-    """A pyarrow Table from ``{name: (values, unit, long_name)}``: plain field names, the unit
-    and description in each field's metadata (``unit``, ``long_name``)."""
+    """A pyarrow Table from named columns with their units and descriptions.
+
+    Plain field names; each field's ``unit`` and ``long_name`` in its metadata, the package
+    version and unit convention in the schema's.
+
+    Parameters
+    ----------
+    columns : mapping of str to (numpy.ndarray, str, str)
+        ``{name: (values, unit, long_name)}``, values in the stated unit [unit].
+    metadata : mapping of str to str, optional
+        Further schema metadata.
+
+    Returns
+    -------
+    pyarrow.Table
+        The table.
+    """
     import pyarrow as pa
 
     fields, arrays = [], []
@@ -141,20 +209,62 @@ def _engineering_columns(dataset: xr.Dataset) -> dict[str, tuple[np.ndarray, str
 
 
 def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
-    """All time signals as a DataFrame in engineering units, units in the column names
-    (the CSV export's columns: ``time [s]``, ``table_position [mm]``, …)."""
+    """A run's time signals as a DataFrame in engineering units, the units in the column names.
+
+    The CSV export's columns: ``time [s]``, ``table_position [mm]``, ``table_speed [mm/s]``, …
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A run's dataset (``Result.dataset``), signals in SI with their units.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One column per signal, in mm, mm/s, N/µm, otherwise SI.
+    """
     return pd.DataFrame({f"{name} [{unit}]": values
                          for name, (values, unit, _) in _engineering_columns(dataset).items()})
 
 
 def to_arrow_table(dataset: xr.Dataset) -> Any:
-    """All time signals as a pyarrow Table in engineering units (the Parquet export): plain
-    names, each field's unit in its metadata."""
+    """A run's time signals as a pyarrow Table in engineering units (the Parquet export).
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A run's dataset (``Result.dataset``), signals in SI with their units.
+
+    Returns
+    -------
+    pyarrow.Table
+        Plain field names, each field's unit in its metadata.
+    """
     return arrow_table(_engineering_columns(dataset))
 
 
 def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
-    """Write ``dataset`` to ``path``; the format follows the extension."""
+    """Write a run's dataset to a file, the format following the extension.
+
+    Written atomically: to a temporary name in the same folder, then renamed.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        A run's dataset (``Result.dataset``), signals in SI with their units.
+    path : str or Path
+        The output file (``.nc``, ``.csv``, ``.parquet``, ``.mat``); its folder is created.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown extension or a missing writer (:func:`check_format`).
+    """
     p = Path(path)
     ext = check_format(p)
     p.parent.mkdir(parents=True, exist_ok=True)
@@ -188,17 +298,33 @@ def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
 
 
 class ChunkWriter:
-    """Appends a run's samples to ``.parquet`` or ``.csv`` chunk by chunk (engineering units;
-    the columns of :func:`to_engineering_frame` or :func:`to_arrow_table`), so a long run
-    never holds all of them.
+    """Appends a run's samples to ``.parquet`` or ``.csv`` chunk by chunk, so a long run never
+    holds all of them.
 
+    Engineering units, the columns of :func:`to_engineering_frame` or :func:`to_arrow_table`.
     The samples go to a temporary name in the output's folder; :meth:`close` renames it to
     ``path`` (a run stopped by Ctrl-C keeps the samples written so far, complete rows),
-    :meth:`abort` removes it (a write that failed: nothing partial under ``path``)."""
+    :meth:`abort` removes it (a write that failed: nothing partial under ``path``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The output file, ``.parquet`` or ``.csv``.
+    model : Model
+        The assembled model (signal names and units).
+    system : DriveSystem
+        The drive the run simulates.
+    run_type : type
+        ``feeddrive.engine.result.Run``, passed in so that this writer does not import the
+        results layer that imports it.
+
+    Raises
+    ------
+    ParameterError
+        For another extension (``.nc`` and ``.mat`` hold the whole run).
+    """
 
     def __init__(self, path: str | Path, model: Any, system: Any, run_type: Any) -> None:
-        """``run_type``: :class:`feeddrive.engine.result.Run` (passed in, so that this writer
-        does not import the results layer that imports it)."""
         self.path = Path(path)
         ext = self.path.suffix.lower()
         if ext not in (".parquet", ".csv"):
@@ -222,6 +348,17 @@ class ChunkWriter:
         return cols
 
     def write(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> None:
+        """Append one chunk of samples.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Sample times [s].
+        y : numpy.ndarray
+            States at those times, (samples, states) [SI, per state].
+        aux : numpy.ndarray
+            Auxiliary outputs at those times, (samples, outputs) [SI, per output].
+        """
         if t.size == 0:
             return
         cols = self._columns(t, y, aux)
@@ -253,7 +390,13 @@ class ChunkWriter:
         self._end(None)
 
     def abort(self, err: BaseException | None = None) -> None:
-        """Remove the temporary file: nothing is left under ``path``."""
+        """Remove the temporary file: nothing is left under ``path``.
+
+        Parameters
+        ----------
+        err : BaseException, optional
+            The error that stopped the write (passed to the atomic writer's exit).
+        """
         if self._atomic is None:
             return
         if self._writer is not None:

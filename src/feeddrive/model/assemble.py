@@ -31,7 +31,48 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Model:
-    """An assembled drive model: names, packed numbers and its compiled module."""
+    """An assembled drive model: its named slots, packed numbers and compiled module.
+
+    Parameters
+    ----------
+    state_names : tuple of str
+        State names, in ``y`` order.
+    states : tuple of Signal
+        The states with units and descriptions.
+    aux : tuple of Signal
+        The auxiliary outputs the right-hand side writes.
+    parameter_names : tuple of str
+        Parameter slot names, in ``P`` order.
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    T : numpy.ndarray
+        The packed data tables (profiles, load records) [SI].
+    tolerance_kinds : tuple of str
+        Tolerance class of each state.
+    tolerance_scales : tuple of float
+        Tolerance scale of each state [m per state unit].
+    module : module
+        The compiled module (``rhs``, ``sample_update``, the solver drivers).
+    source : str
+        Its source text.
+    drive : str
+        The drive name it was built for.
+    sites : tuple of (str, str)
+        (site name, law name) of each friction site.
+    jacobian_pattern : numpy.ndarray of int
+        (n, n + 1) uint8: 1 where dy[i] may depend on y[j] (column n: on t).
+    jacobian_colours : numpy.ndarray of int
+        (n + 1,) column groups of the grouped finite-difference Jacobian.
+    flows : tuple of (str, tuple of str), default ()
+        The parts' declared flows: each written quantity and what it reads.
+    compensation : CompensationFootprint, optional
+        What the compensator reads and adds; None without compensation.
+    clocks : tuple of (str, int), default ()
+        The sample schedule: each clock's period slot and its index in ``P``.
+    derived : tuple of (Signal, str, float), default ()
+        Signals a part declares as factor × a state or signal: (signal, source, factor
+        [signal unit per source unit]).
+    """
 
     state_names: tuple[str, ...]
     states: tuple[codegen.Signal, ...]
@@ -58,20 +99,54 @@ class Model:
 
     @property
     def n_held(self) -> int:
+        """Number of values the sampled controller holds between updates (at least 1)."""
         return int(self.module.N_HELD)
 
     def periods(self, P: np.ndarray | None = None) -> dict[str, float]:
         """Sample period [s] of every clock of the schedule by name (0: continuous), read from
-        the parameter vector ``P`` (default: the model's)."""
+        the parameter vector ``P`` (default: the model's).
+
+        Parameters
+        ----------
+        P : numpy.ndarray, optional
+            The parameter vector [SI, per slot].
+
+        Returns
+        -------
+        dict of str to float
+            Clock → period [s].
+        """
         P = self.P if P is None else P
         return {name: float(P[k]) for name, k in self.clocks}
 
     def continuous_ticks(self) -> np.ndarray:
-        """The ``tick`` argument of ``sample_update`` with no clock due (all −1)."""
+        """The ``tick`` argument of ``sample_update`` with no clock due (all −1).
+
+        Returns
+        -------
+        numpy.ndarray of int
+            −1 per clock.
+        """
         return np.full(int(self.module.N_CLOCK), -1, dtype=np.int64)
 
     def index(self, name: str) -> int:
-        """Position of state ``name`` in the state vector."""
+        """Position of a state in the state vector.
+
+        Parameters
+        ----------
+        name : str
+            A state name (:attr:`state_names`).
+
+        Returns
+        -------
+        int
+            Its index in ``y``.
+
+        Raises
+        ------
+        ParameterError
+            For an unknown name; the message lists the model's states.
+        """
         try:
             return self.state_names.index(name)
         except ValueError:
@@ -102,7 +177,27 @@ class Model:
 
     def tolerances(self, position: float, speed: float, current: float
                    ) -> tuple[np.ndarray, np.ndarray]:
-        """(absolute tolerance, relative-tolerance mask) per state."""
+        """Absolute tolerance and relative-tolerance mask of each state, from the solver options.
+
+        Angles and rotary speeds divide the linear tolerances by their scale H; integrals follow
+        the position or current tolerance.
+
+        Parameters
+        ----------
+        position : float
+            Absolute tolerance of positions [m].
+        speed : float
+            Absolute tolerance of speeds [m/s].
+        current : float
+            Absolute tolerance of currents [A].
+
+        Returns
+        -------
+        atol : numpy.ndarray
+            Absolute tolerance per state [state unit].
+        relative : numpy.ndarray
+            1 for the states whose error is also weighed relative to their size, else 0.
+        """
         atol = np.empty(len(self.states))
         rel = np.zeros(len(self.states))
         for i, (kind, scale) in enumerate(zip(self.tolerance_kinds, self.tolerance_scales,
@@ -186,7 +281,38 @@ def _ripple(b: codegen.Builder, parameters: DriveParameters, mech: Any, drive: s
 
 def assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
              profile: Profile, load: LoadProfile | None = None) -> Model:
-    """Build (or fetch from the cache) the compiled model of one drive and profile."""
+    """Build the compiled model of one drive, parameter set and reference profile.
+
+    Each part (mechanism, friction sites and their laws, controller axes, disturbances,
+    compensation) declares its slots to a :class:`~feeddrive.model.codegen.Builder`; the
+    generated module is compiled once and cached by its source hash.  Hashable inputs are also
+    cached in memory.
+
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The parameter set [SI].
+    drive : str
+        The drive name (``"cdfs"``, ``"ddfs"``, ``"linear-motor"``, ``"rack-pinion"``).
+    table_position : float
+        Table position at the start [m] (sets the ball screw's K_eq).
+    nut_hold : str
+        How the CDFS holds its nut: ``"locked"`` or ``"servo"``.
+    profile : Profile
+        The reference profile.
+    load : LoadProfile, optional
+        A table load record.
+
+    Returns
+    -------
+    Model
+        The assembled model.
+
+    Raises
+    ------
+    ParameterError
+        When a part refuses the parameters, the drive name or the profile.
+    """
     key = (parameters, drive, table_position, nut_hold, profile, load)
     try:
         return _assemble_cached(*key)
@@ -315,10 +441,17 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
 
 @functools.cache
 def solver_sources() -> list[str]:
-    """The integrator templates placed in every generated module (DOPRI5 as in engine v1, and
-    the dense-output DOPRI5 ⇄ RODAS4 driver).  numba compiles each at its first call, so a
-    model only ever run with one method never compiles the other.  Cached: reading template
-    sources with ``inspect`` costs ~15 ms, more than a short simulation."""
+    """The integrator templates pasted into every generated module.
+
+    DOPRI5 as in engine v1 and the dense-output DOPRI5 ⇄ RODAS4 driver; numba compiles each at
+    its first call, so a model only ever run with one method never compiles the other.  Cached:
+    reading template sources with ``inspect`` costs ~15 ms, more than a short simulation.
+
+    Returns
+    -------
+    list of str
+        Python sources of the solver drivers.
+    """
     from ..solvers import dopri5, rodas4, steps, switching
 
     return (steps.template_sources() + rodas4.template_sources() + dopri5.template_sources()

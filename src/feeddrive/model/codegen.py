@@ -40,7 +40,19 @@ RELATIVE_KINDS = ("speed", "rotary_speed", "current")
 
 @dataclass(frozen=True)
 class Signal:
-    """A named slot: state, auxiliary output or parameter."""
+    """A named slot of the model: a state, an auxiliary output or a parameter.
+
+    Parameters
+    ----------
+    name : str
+        The slot's name (``table_speed``, ``friction.screw.bristle_stiffness``).
+    unit : str
+        Its unit (SI, e.g. ``"m/s"``).
+    description : str
+        A short description for listings and exports.
+    kind : str, default ""
+        Tolerance class of a state (one of ``TOLERANCE_KINDS``); empty for other slots.
+    """
 
     name: str
     unit: str
@@ -50,7 +62,47 @@ class Signal:
 
 @dataclass
 class Builder:
-    """Collects the slots and code lines of all parts of one model."""
+    """Collects the named slots and the code lines of every part of one model.
+
+    Parts call its methods; the assembler then packs the parameters and tables and writes the
+    module.  The fields are the builder's bookkeeping, filled by those calls.
+
+    Parameters
+    ----------
+    states, aux : list of Signal
+        Declared states and auxiliary outputs, in index order.
+    held : list of str
+        Names of the values a sampled controller holds between updates.
+    param_names : list of str
+        Parameter names, in ``P`` order.
+    param_values : list of float
+        Parameter values, in ``P`` order [SI, per slot].
+    tables : list of numpy.ndarray
+        Flat data tables (profiles, load records), concatenated into ``T`` [SI].
+    rhs_lines, sample_lines : list of str
+        Code lines of the right-hand side and of the sampled-controller update.
+    imports : dict of str to str
+        Kernel alias → ``"module:attr"`` the generated module imports.
+    dynamic : dict of str to str
+        Kernel alias → expression that finds a kernel at import time (registered laws).
+    dynamic_sources : list of str
+        Sources of those kernels (they enter the module's hash).
+    flows : dict of str to set of str
+        Written quantity → what it reads (:meth:`flow`); the Jacobian's pattern comes from it.
+    table_size : int
+        Total length of ``T`` so far.
+    reference_call : str
+        Code of the reference-profile call, returning (x, v, x_n, v_n).
+    tol_scale : dict of str to float
+        State → its tolerance scale [m per state unit].
+    derived : list of (Signal, str, float)
+        Derived signals: (signal, source state or signal, factor [signal unit per source
+        unit]).
+    clocks : list of (str, int)
+        Declared clocks: period slot and its index in ``P`` (:meth:`clock`).
+    state_index, aux_index, param_index : dict of str to int
+        Name → index in ``y``, ``aux`` and ``P``.
+    """
 
     states: list[Signal] = field(default_factory=list)
     aux: list[Signal] = field(default_factory=list)
@@ -78,8 +130,33 @@ class Builder:
     # ---- slots
     def state(self, name: str, unit: str, description: str, kind: str,
               scale: float = 1.0) -> int:
-        """Declare a state; ``scale`` [m per state unit] converts the solver's position and
-        speed tolerances for angles (the transmission ratio H)."""
+        """Declare a state of the model.
+
+        Parameters
+        ----------
+        name : str
+            The state's name; unique in the model.
+        unit : str
+            Its unit (SI).
+        description : str
+            A short description.
+        kind : str
+            Its tolerance class, one of ``TOLERANCE_KINDS`` (how its absolute tolerance follows
+            from the solver options).
+        scale : float, default 1.0
+            Converts the solver's position and speed tolerances for angles: the transmission ratio
+            H [m per state unit].
+
+        Returns
+        -------
+        int
+            The state's index in ``y``.
+
+        Raises
+        ------
+        ValueError
+            When the name is declared twice or the kind is unknown.
+        """
         self.tol_scale[name] = scale
         if name in self.state_index:
             raise ValueError(f"state {name!r} declared twice")
@@ -90,13 +167,57 @@ class Builder:
         return self.state_index[name]
 
     def y(self, name: str) -> str:
+        """Code that reads state ``name`` in the generated kernels.
+
+        Parameters
+        ----------
+        name : str
+            The declared name.
+
+        Returns
+        -------
+        str
+            The index expression, e.g. ``"y[4]"``.
+        """
         return f"y[{self.state_index[name]}]"
 
     def dy(self, name: str) -> str:
+        """Code that reads the rate of state ``name`` in the generated kernels.
+
+        The right-hand side assigns each state's rate through it.
+
+        Parameters
+        ----------
+        name : str
+            The declared name.
+
+        Returns
+        -------
+        str
+            The index expression, e.g. ``"dy[4]"``.
+        """
         return f"dy[{self.state_index[name]}]"
 
     def param(self, name: str, value: float) -> int:
-        """Register parameter ``name`` (SI) and return its index in P."""
+        """Register a named parameter.
+
+        Parameters
+        ----------
+        name : str
+            The parameter's path (``screw_motor.torque_constant``); unique in the model.
+        value : float
+            Its value [SI, the unit of the quantity it names].
+
+        Returns
+        -------
+        int
+            Its index in ``P``.
+
+        Raises
+        ------
+        ValueError
+            When the name is declared twice.
+        """
         if name in self.param_index:
             raise ValueError(f"parameter {name!r} declared twice")
         self.param_index[name] = len(self.param_values)
@@ -105,15 +226,49 @@ class Builder:
         return self.param_index[name]
 
     def params(self, prefix: str, values: np.ndarray) -> int:
-        """Register a block of parameters ``prefix[0..n)``; return the offset of the first."""
+        """Register an unnamed block of parameters ``prefix[0]`` … ``prefix[n-1]``.
+
+        Parameters
+        ----------
+        prefix : str
+            The block's name.
+        values : numpy.ndarray
+            The values [SI, per slot].
+
+        Returns
+        -------
+        int
+            Offset of the first in ``P``.
+        """
         first = len(self.param_values)
         for i, v in enumerate(np.asarray(values, dtype=float)):
             self.param(f"{prefix}[{i}]", float(v))
         return first
 
     def named_params(self, prefix: str, names: tuple[str, ...], values: np.ndarray) -> int:
-        """Register a block of parameters ``prefix.name`` for each of ``names`` (SI), in
-        order; return the offset of the first (kernels add their part's named offsets)."""
+        """Register a block of parameters ``prefix.<name>`` for each of ``names``, in order.
+
+        Kernels add their part's named offsets (``P[o + SIGMA0]``) to the returned offset.
+
+        Parameters
+        ----------
+        prefix : str
+            The block's path (``friction.screw``).
+        names : tuple of str
+            The slot names, in kernel order.
+        values : numpy.ndarray
+            One value per name [SI, per slot].
+
+        Returns
+        -------
+        int
+            Offset of the first in ``P``.
+
+        Raises
+        ------
+        ValueError
+            When the number of values differs from the number of names.
+        """
         values = np.asarray(values, dtype=float)
         if values.shape != (len(names),):
             raise ValueError(f"{prefix}: {values.size} values for {len(names)} named slots")
@@ -123,9 +278,42 @@ class Builder:
         return first
 
     def p(self, name: str) -> str:
+        """Code that reads parameter ``name`` in the generated kernels.
+
+        Parameters
+        ----------
+        name : str
+            The declared name.
+
+        Returns
+        -------
+        str
+            The index expression, e.g. ``"P[4]"``.
+        """
         return f"P[{self.param_index[name]}]"
 
     def add_aux(self, name: str, unit: str, description: str) -> int:
+        """Declare an auxiliary output (a signal the right-hand side computes and the run records).
+
+        Parameters
+        ----------
+        name : str
+            The signal's name; unique among the auxiliary outputs.
+        unit : str
+            Its unit (SI).
+        description : str
+            A short description.
+
+        Returns
+        -------
+        int
+            Its index in ``aux``.
+
+        Raises
+        ------
+        ValueError
+            When the name is declared twice.
+        """
         if name in self.aux_index:
             raise ValueError(f"auxiliary signal {name!r} declared twice")
         self.aux_index[name] = len(self.aux)
@@ -134,20 +322,76 @@ class Builder:
 
     def add_derived(self, name: str, unit: str, description: str, source: str,
                     factor: float) -> None:
-        """Declare a signal that is ``factor`` times state or signal ``source`` (e.g. the
-        screw's linear speed H·ω_s), computed from the recorded run when read."""
+        """Declare a signal that is a fixed multiple of a state or signal, computed when read.
+
+        E.g. the screw's linear speed H·ω_s; nothing is added to the right-hand side.
+
+        Parameters
+        ----------
+        name : str
+            The signal's name; not already a state or signal.
+        unit : str
+            Its unit (SI).
+        description : str
+            A short description.
+        source : str
+            The state or auxiliary signal it is computed from.
+        factor : float
+            The multiple [unit of the signal per unit of the source].
+
+        Raises
+        ------
+        ValueError
+            When the name is already a state or signal.
+        """
         if name in self.aux_index or name in self.state_index:
             raise ValueError(f"derived signal {name!r} is already a state or signal")
         self.derived.append((Signal(name, unit, description), source, float(factor)))
 
     def a(self, name: str) -> str:
+        """Code that reads auxiliary output ``name`` in the generated kernels.
+
+        Parameters
+        ----------
+        name : str
+            The declared name.
+
+        Returns
+        -------
+        str
+            The index expression, e.g. ``"aux[4]"``.
+        """
         return f"aux[{self.aux_index[name]}]"
 
     def add_held(self, name: str) -> str:
+        """Declare a value a sampled controller holds between its updates.
+
+        Parameters
+        ----------
+        name : str
+            The held value's name (``screw.current_command``).
+
+        Returns
+        -------
+        str
+            The index expression in ``held``, e.g. ``"held[2]"``.
+        """
         self.held.append(name)
         return f"held[{len(self.held) - 1}]"
 
     def h(self, name: str) -> str:
+        """Code that reads held value ``name`` in the generated kernels.
+
+        Parameters
+        ----------
+        name : str
+            The declared name.
+
+        Returns
+        -------
+        str
+            The index expression, e.g. ``"held[4]"``.
+        """
         return f"held[{self.held.index(name)}]"
 
     def clock(self, name: str) -> int:
@@ -158,18 +402,56 @@ class Builder:
         sampled update tests ``tick[c] >= 0`` (``tick[c] == 0``: its first instant), the
         right-hand side ``P[<period>] > 0.0`` (sampled, holding its outputs) — a model reads
         its schedule from its parameter vector, the solver's call arguments stay the same
-        for every model."""
+        for every model.
+
+        Parameters
+        ----------
+        name : str
+            The parameter slot of the period (already declared).
+
+        Returns
+        -------
+        int
+            The clock's index c.
+
+        Raises
+        ------
+        ValueError
+            When the clock is declared twice.
+        """
         if any(n == name for n, _ in self.clocks):
             raise ValueError(f"clock {name!r} declared twice")
         self.clocks.append((name, self.param_index[name]))
         return len(self.clocks) - 1
 
     def tick(self, name: str) -> str:
-        """Code of clock ``name``'s count at this instant in the sampled update (−1: none)."""
+        """Code of clock ``name``'s count at this instant in the sampled update (−1: none).
+
+        Parameters
+        ----------
+        name : str
+            The clock's period slot.
+
+        Returns
+        -------
+        str
+            E.g. ``"tick[1]"``.
+        """
         return f"tick[{[n for n, _ in self.clocks].index(name)}]"
 
     def table(self, values: np.ndarray) -> int:
-        """Append a flat data table (profiles, load records); return its offset in T."""
+        """Append a flat data table (tabulated profile, load record) to ``T``.
+
+        Parameters
+        ----------
+        values : numpy.ndarray
+            The table's values, flattened in C order [SI].
+
+        Returns
+        -------
+        int
+            Its offset in ``T``.
+        """
         flat = np.ascontiguousarray(values, dtype=float).ravel()
         offset = self.table_size
         self.tables.append(flat)
@@ -178,7 +460,19 @@ class Builder:
 
     # ---- code
     def use(self, fn: Any) -> str:
-        """Import a package kernel into the generated module; return its local alias."""
+        """Import a package kernel into the generated module.
+
+        Parameters
+        ----------
+        fn : numba dispatcher or function
+            The kernel (defined at module level, importable by ``module:name``).
+
+        Returns
+        -------
+        str
+            Its local alias in the generated code (module-qualified when two kernels share a
+            name).
+        """
         alias = f"_{fn.__name__}"
         target = f"{fn.__module__}:{fn.__name__}"
         if self.imports.get(alias, target) != target:
@@ -187,8 +481,25 @@ class Builder:
         return alias
 
     def use_dynamic(self, alias: str, expression: str, kernel: Any) -> str:
-        """A kernel found at import time by ``expression`` (e.g. a registered friction law
-        defined outside the package); its source enters the module's hash."""
+        """Bind a kernel that the generated module finds at import time by an expression.
+
+        For kernels defined outside the package (a friction law a user registered); its source
+        enters the module's hash, so editing it gives a new compiled module.
+
+        Parameters
+        ----------
+        alias : str
+            Its local name in the generated code.
+        expression : str
+            Python expression that evaluates to the kernel at import time.
+        kernel : numba dispatcher or function
+            The kernel itself (for its source).
+
+        Returns
+        -------
+        str
+            ``alias``.
+        """
         self.dynamic[alias] = expression
         self.dynamic_sources.append(source_of(getattr(kernel, "py_func", kernel)))
         return alias
@@ -219,7 +530,19 @@ class Builder:
     def emit(self, line: str, *, sampled: bool = False,
              writes: str | tuple[str, ...] | list[str] = (),
              reads: str | tuple[str, ...] | list[str] = ()) -> None:
-        """Append a line of code; ``writes``/``reads``: its :meth:`flow` (right-hand side)."""
+        """Append a line of code to the right-hand side or to the sampled-controller update.
+
+        Parameters
+        ----------
+        line : str
+            The code, without the function body's indentation.
+        sampled : bool, default False
+            Append to the sampled-controller update instead of the right-hand side.
+        writes : str or sequence of str, optional
+            What the line sets, declared as a :meth:`flow` (right-hand side only).
+        reads : str or sequence of str, optional
+            What those values are computed from.
+        """
         (self.sample_lines if sampled else self.rhs_lines).append(line)
         if writes:
             self.flow(writes, reads)
@@ -228,9 +551,23 @@ class Builder:
 
     # ---- packing
     def packed_parameters(self) -> np.ndarray:
+        """The parameter vector ``P`` the kernels read.
+
+        Returns
+        -------
+        numpy.ndarray
+            The values in index order [SI, per slot].
+        """
         return np.array(self.param_values, dtype=float)
 
     def packed_tables(self) -> np.ndarray:
+        """The data-table vector ``T``: every table concatenated.
+
+        Returns
+        -------
+        numpy.ndarray
+            The tables in offset order (one zero when there are none) [SI].
+        """
         if not self.tables:
             return np.zeros(1)
         return np.concatenate(self.tables)
@@ -238,7 +575,18 @@ class Builder:
 
 @functools.lru_cache(maxsize=256)
 def source_of(fn: Any) -> str:
-    """Source text of a function (cached: ``inspect.getsource`` re-reads the file)."""
+    """Source text of a function, cached (``inspect.getsource`` re-reads the file each time).
+
+    Parameters
+    ----------
+    fn : function
+        The function.
+
+    Returns
+    -------
+    str
+        Its source, or its ``repr`` when the source is not available.
+    """
     try:
         return inspect.getsource(fn)
     except (OSError, TypeError):
@@ -251,13 +599,39 @@ def _indent(lines: list[str], level: int = 1) -> str:
 
 
 def rhs_source(builder: Builder) -> str:
-    """The generated right-hand side ``rhs`` (without its decorator)."""
+    """The text of the generated right-hand side ``rhs(t, y, held, P, T, n_pos, n_vel, n_cur,
+    dy, aux)``, without its decorator.
+
+    Parameters
+    ----------
+    builder : Builder
+        The builder every part has declared to.
+
+    Returns
+    -------
+    str
+        Python source of the function.
+    """
     return ("def rhs(t, y, held, P, T, dy, aux):\n"
             + _indent(builder.rhs_lines or ["pass"]) + "\n")
 
 
 def module_source(builder: Builder, solver_sources: list[str]) -> str:
-    """The full text of the generated module."""
+    """The full text of the generated module: imports, sizes, ``rhs``, ``sample_update`` and the
+    solver templates.
+
+    Parameters
+    ----------
+    builder : Builder
+        The builder every part has declared to.
+    solver_sources : list of str
+        Source of the solver drivers pasted after the model's kernels.
+
+    Returns
+    -------
+    str
+        Python source of the module.
+    """
     head = [
         '"""Generated by feeddrive.model.codegen: one assembled drive model.  Do not edit."""',
         "import math",
@@ -291,7 +665,24 @@ _LOADED: dict[str, ModuleType] = {}
 
 
 def compile_module(source: str, extra_sources: list[str]) -> ModuleType:
-    """Write ``source`` to the cache folder under a hash name and import it (once per process)."""
+    """Write a generated module to the cache folder under a hash of its text and import it.
+
+    The hash covers ``source``, the package's kernel sources and ``extra_sources``, so a change
+    to any of them gives a new file and numba's per-file cache stays valid; imported once per
+    process.
+
+    Parameters
+    ----------
+    source : str
+        Python source from :func:`module_source`.
+    extra_sources : list of str
+        Further sources that enter the hash (kernels of registered laws).
+
+    Returns
+    -------
+    module
+        The imported module.
+    """
     digest = hashlib.sha256(source.encode())
     digest.update(SOURCE_DIGEST.encode())
     for s in extra_sources:

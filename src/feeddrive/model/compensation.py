@@ -34,7 +34,31 @@ if TYPE_CHECKING:
 
 @kernel
 def feedforward_force(v: float, P: np.ndarray, o: int) -> float:
-    """Static Stribeck + Coulomb + viscous force [N] at speed v [m/s] (0 at v = 0)."""
+    """Static friction feed-forward: sgn(v)·σ0·g(v) + σ2·v, 0 at v = 0.
+
+    The Stribeck + Coulomb + viscous curve of the site's (mismatched) LuGre parameters, at the
+    commanded speed.
+
+    Parameters
+    ----------
+    v : float
+        Commanded sliding speed [m/s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the compensated site's LuGre block in ``P``.
+
+    Returns
+    -------
+    float
+        Compensating force [N].
+
+    References
+    ----------
+    .. [1] B. Armstrong-Hélouvry, P. Dupont, C. Canudas de Wit, "A survey of models, analysis
+       tools and compensation methods for the control of machines with friction",
+       Automatica 30 (1994) 1083–1138.
+    """
     if v == 0.0:
         return 0.0
     s = 1.0 if v > 0.0 else -1.0
@@ -44,8 +68,40 @@ def feedforward_force(v: float, P: np.ndarray, o: int) -> float:
 @kernel
 def observer_force(v: float, e: float, gain: float, y: np.ndarray, k: int, P: np.ndarray,
                    o: int, dy: np.ndarray) -> float:
-    """LuGre observer (Canudas de Wit et al. 1995, Sect. V): ẑ' = v − σ0|v|ẑ/g(v) − k·e,
-    F̂ = σ0ẑ + σ1ẑ' + σ2v [N]."""
+    """LuGre friction observer: ẑ' = v − σ0|v|ẑ/g(v) − k·e, F̂ = σ0ẑ + σ1ẑ' + σ2v.
+
+    The observer of Canudas de Wit et al. (1995), Sect. V, driven by the measured speed and
+    corrected by the table's position error.
+
+    Parameters
+    ----------
+    v : float
+        Measured sliding speed [m/s].
+    e : float
+        Table position error, measured − commanded [m].
+    gain : float
+        Observer gain k [1/s].
+    y : numpy.ndarray
+        The model's state vector; the observer state ẑ is ``y[k]`` [m].
+    k : int
+        Index of ẑ in ``y``.
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the compensated site's LuGre block in ``P``.
+    dy : numpy.ndarray
+        The state-rate vector; ẑ' is written to ``dy[k]`` [m/s].
+
+    Returns
+    -------
+    float
+        Estimated friction force F̂ [N].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    """
     z = y[k]
     dz = bristle_rate(v, z, P, o) - gain * e
     dy[k] = dz
@@ -87,9 +143,31 @@ class CompensationFootprint:
 
 def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism, axis: str
                       ) -> CompensationFootprint | None:
-    """Declare the compensator's states and parameters; emit its force lines; return its
-    footprint (with the code of the compensating current [A] for ``axis``), or None without
-    compensation."""
+    """Add the friction compensator to the model: its parameters, observer states and force lines.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    params : DriveParameters
+        The parameter set; its ``controller.compensation`` chooses the mode and mismatch.
+    mech : Mechanism
+        The mechanism, which names the compensated sites and the force-to-current factor.
+    axis : str
+        The controller axis the compensating current is added to.
+
+    Returns
+    -------
+    CompensationFootprint or None
+        What the compensator reads and adds, with the code of its current [A]; None without
+        compensation.
+
+    Raises
+    ------
+    ParameterError
+        With sampled velocity or current loops (compensation is modelled continuous only), or
+        when a compensated site's law is not LuGre.
+    """
     c = params.controller.compensation
     if c.mode == "none":
         return None

@@ -22,8 +22,29 @@ from .codegen import Builder
 
 @kernel
 def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float]:
-    """(Σ A_k sin(n_k θ + φ_k), its derivative in θ); block P[o:o+3n] = orders, amplitudes,
-    phases."""
+    """A harmonic series and its slope: (Σ A_k sin(n_k θ + φ_k), Σ A_k n_k cos(n_k θ + φ_k)).
+
+    Used for motor torque ripple and cogging (θ the motor angle) and for the screw's lead error
+    (θ the relative screw–nut angle).
+
+    Parameters
+    ----------
+    theta : float
+        The angle the series is periodic in [rad].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the block in ``P``: n orders [-], n amplitudes [N m or m], n phases [rad].
+    n : int
+        Number of harmonics.
+
+    Returns
+    -------
+    value : float
+        The series at ``theta`` [N m for ripple, m for lead error].
+    slope : float
+        Its derivative with respect to ``theta`` [N m/rad or m/rad].
+    """
     value = 0.0
     slope = 0.0
     for k in range(n):
@@ -35,9 +56,27 @@ def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float
 
 @kernel
 def load_force(t: float, P: np.ndarray, o: int, T: np.ndarray) -> float:
-    """Table load force [N] at t [s]: the constant ``P[o]`` from ``P[o+1]`` on, plus a sampled
-    record (``P[o+4]`` points at ``T[P[o+3]:]``, uniform step ``P[o+2]``, linear
-    interpolation, the last value held)."""
+    """Table load force at time t: a constant step plus an optional sampled record.
+
+    The constant ``P[o]`` acts from ``P[o+1]`` on; the record (``P[o+4]`` points at
+    ``T[P[o+3]:]``, uniform step ``P[o+2]``) is interpolated linearly and its last value held.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the load block in ``P``.
+    T : numpy.ndarray
+        The model's packed tables (the record's samples [N]).
+
+    Returns
+    -------
+    float
+        Load force against positive table motion [N].
+    """
     f = P[o] if t >= P[o + 1] else 0.0
     to = int(P[o + 3])
     n = int(P[o + 4])
@@ -90,7 +129,24 @@ class LoadProfile:
 
 
 def emit_load(b: Builder, force: float, start: float, record: LoadProfile | None) -> str | None:
-    """Register the load block; return the code of the load force, or None if there is none."""
+    """Register the table-load block and return the code of the load force.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    force : float
+        Constant load force [N].
+    start : float
+        Time the constant load is applied [s].
+    record : LoadProfile or None
+        A sampled load record added to the constant, if any.
+
+    Returns
+    -------
+    str or None
+        Code of the load force [N]; None when there is no load (force 0 and no record).
+    """
     if force == 0.0 and record is None:
         return None
     step, values = record.encode() if record is not None else (1.0, np.zeros(1))
@@ -105,7 +161,22 @@ def emit_load(b: Builder, force: float, start: float, record: LoadProfile | None
 
 def emit_harmonics(b: Builder, name: str,
                    ripple: TorqueRipple | LeadError) -> tuple[int, int] | None:
-    """Register a harmonic series (TorqueRipple or LeadError); (offset, count) or None."""
+    """Register a harmonic series (torque ripple or lead error) as a parameter block.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    name : str
+        The block's name below ``disturbances.``.
+    ripple : TorqueRipple or LeadError
+        Orders [-], amplitudes [N m or m] and phases [rad] of the harmonics.
+
+    Returns
+    -------
+    tuple of (int, int) or None
+        (offset of the block in ``P``, number of harmonics); None when every amplitude is 0.
+    """
     orders = tuple(ripple.orders)
     amps = tuple(ripple.amplitudes)
     phases = tuple(ripple.phases)
@@ -121,7 +192,17 @@ def emit_harmonics(b: Builder, name: str,
 @dataclass(frozen=True)
 class TorqueRipple(Component):
     """Motor torque ripple and cogging: T_r(θ) = Σ_k A_k·sin(n_k·θ + φ_k), θ the motor shaft
-    angle [rad].  ``orders`` n_k per revolution, ``amplitudes`` A_k [N m], ``phases`` φ_k [rad]."""
+    angle [rad].  ``orders`` n_k per revolution, ``amplitudes`` A_k [N m], ``phases`` φ_k [rad].
+
+    Parameters
+    ----------
+    orders : tuple of float
+        Harmonic orders n_k per revolution [-].
+    amplitudes : tuple of float
+        Amplitudes A_k [N m].
+    phases : tuple of float
+        Phases φ_k [rad].
+    """
 
     orders: tuple[float, ...] = quantities("-", low=0, high=1e4)
     amplitudes: tuple[float, ...] = quantities("N m", low=0, high=1e3)
@@ -135,7 +216,17 @@ class TorqueRipple(Component):
 @dataclass(frozen=True)
 class LeadError(Component):
     """Screw lead error: the nut advances H·θ + Σ_k a_k·sin(n_k·θ + φ_k) [m] for a relative
-    screw–nut angle θ [rad]; ``amplitudes`` a_k [m] (typically a few µm)."""
+    screw–nut angle θ [rad]; ``amplitudes`` a_k [m] (typically a few µm).
+
+    Parameters
+    ----------
+    orders : tuple of float
+        Harmonic orders n_k per revolution [-].
+    amplitudes : tuple of float
+        Amplitudes a_k [m].
+    phases : tuple of float
+        Phases φ_k [rad].
+    """
 
     orders: tuple[float, ...] = quantities("-", low=0, high=1e4)
     amplitudes: tuple[float, ...] = quantities("m", low=0, high=1e-3, hint="1 µm = 1e-6 m")
@@ -161,6 +252,19 @@ class Disturbances(Component):
     ``load_force`` [N] acts on the table against positive motion (a cutting force resisting
     the feed is positive), from ``load_start`` [s]; a time profile is given through the API
     (:class:`feeddrive.LoadProfile`).
+
+    Parameters
+    ----------
+    load_force : float, default 0.0
+        Constant load on the table against positive motion [N].
+    load_start : float, default 0.0
+        When the load is applied [s].
+    screw_motor_ripple : TorqueRipple
+        Torque ripple of the screw motor.
+    hollow_motor_ripple : TorqueRipple
+        Torque ripple of the hollow motor.
+    lead_error : LeadError
+        The screw's lead error.
     """
 
     load_force: float = quantity("N", low=-1e6, high=1e6, default=0.0)

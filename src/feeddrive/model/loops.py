@@ -40,7 +40,20 @@ KPP, KVP, KVI, KIP, KII, KV, KV_PLACE, V_BASIS, V_FEEDBACK, FF, I_MAX, U_MAX, EN
 
 @kernel
 def quantise(value: float, step: float) -> float:
-    """Floor quantisation to ``step`` (an incremental encoder or grating count); 0 = ideal."""
+    """Floor quantisation to a count size: what an incremental encoder or grating reports.
+
+    Parameters
+    ----------
+    value : float
+        The true position [rad or m].
+    step : float
+        The count size [rad or m]; 0 or less for an ideal sensor.
+
+    Returns
+    -------
+    float
+        ``step·floor(value/step)``, or ``value`` unchanged [rad or m].
+    """
     if step <= 0.0:
         return value
     return step * math.floor(value / step)
@@ -48,7 +61,31 @@ def quantise(value: float, step: float) -> float:
 
 @kernel
 def position_law(error: float, speed_ff: float, P: np.ndarray, o: int) -> float:
-    """Speed command [rad/s of the axis] from position error [m] and feed-forward [m/s]."""
+    """Position-loop law: speed command from the position error and the speed feed-forward.
+
+    ω_cmd = (K_pp·e [·K_v] + ff·v_ff) / H, K_v applied here when ``kv_placement =
+    "position_output"`` (Wang2021 Sect. 2.1, Fig. 2; Table 2's K_pp).
+
+    Parameters
+    ----------
+    error : float
+        Position error, reference − measured [m].
+    speed_ff : float
+        Speed feed-forward [m/s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the axis' parameter block (:data:`AXIS_PARAMS`) in ``P``.
+
+    Returns
+    -------
+    float
+        Speed command of the axis' motor [rad/s] (m/s for a linear motor, H = 1).
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 2.1, Fig. 2 (cascade), Table 2 (gains).
+    """
     k = P[o + KPP]
     if int(P[o + KV_PLACE]) == 1:
         k *= P[o + KV]
@@ -57,8 +94,26 @@ def position_law(error: float, speed_ff: float, P: np.ndarray, o: int) -> float:
 
 @kernel
 def speed_command(error: float, speed_ref: float, P: np.ndarray, o: int) -> float:
-    """Position loop, or (speed mode, the hollow motor's ``nut_loop = "speed"``) the
-    commanded speed itself with no position feedback."""
+    """The axis' speed command: the position loop, or in speed mode the commanded speed itself.
+
+    Speed mode is the hollow motor's ``controller.nut_loop = "speed"``: no position feedback.
+
+    Parameters
+    ----------
+    error : float
+        Position error, reference − measured [m].
+    speed_ref : float
+        Commanded speed, also the feed-forward [m/s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the axis' parameter block (:data:`AXIS_PARAMS`) in ``P``.
+
+    Returns
+    -------
+    float
+        Speed command of the axis' motor [rad/s].
+    """
     if P[o + SPEED_MODE] > 0.5:
         return speed_ref / P[o + H_AX]
     return position_law(error, speed_ref, P, o)
@@ -66,7 +121,27 @@ def speed_command(error: float, speed_ref: float, P: np.ndarray, o: int) -> floa
 
 @kernel
 def velocity_error(speed_cmd: float, speed_meas: float, P: np.ndarray, o: int) -> float:
-    """Velocity-loop error in the units the gains act on (see module docstring)."""
+    """Velocity-loop error in the units its gains act on.
+
+    e = ω_cmd − ω_meas, times H when the gains act on table motion (``velocity_gain_basis =
+    "table"``), divided by K_v when ``kv_placement = "velocity_error"``.
+
+    Parameters
+    ----------
+    speed_cmd : float
+        Speed command [rad/s].
+    speed_meas : float
+        Measured speed [rad/s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the axis' parameter block (:data:`AXIS_PARAMS`) in ``P``.
+
+    Returns
+    -------
+    float
+        The error the velocity gains multiply [rad/s, or m/s on the table basis].
+    """
     e = speed_cmd - speed_meas
     if int(P[o + V_BASIS]) == 1:
         e *= P[o + H_AX]
@@ -77,6 +152,20 @@ def velocity_error(speed_cmd: float, speed_meas: float, P: np.ndarray, o: int) -
 
 @kernel
 def saturate(value: float, limit: float) -> float:
+    """Clip a command to ±limit.
+
+    Parameters
+    ----------
+    value : float
+        The unsaturated command [A or V].
+    limit : float
+        The limit, positive [A or V].
+
+    Returns
+    -------
+    float
+        ``value`` clipped to [−limit, limit] [A or V].
+    """
     if value > limit:
         return limit
     if value < -limit:
@@ -86,7 +175,22 @@ def saturate(value: float, limit: float) -> float:
 
 @kernel
 def integrator_rate(error: float, unsaturated: float, limit: float) -> float:
-    """Conditional integration (anti-windup): stop integrating into a saturated output."""
+    """Conditional integration (anti-windup): the integrator's input, zero while it winds up.
+
+    Parameters
+    ----------
+    error : float
+        The loop error being integrated [rad/s or A].
+    unsaturated : float
+        The loop's output before saturation [A or V].
+    limit : float
+        The output limit [A or V].
+
+    Returns
+    -------
+    float
+        ``error``, or 0 when the output is saturated and the error drives it further out.
+    """
     if (unsaturated > limit and error > 0.0) or (unsaturated < -limit and error < 0.0):
         return 0.0
     return error
@@ -94,17 +198,66 @@ def integrator_rate(error: float, unsaturated: float, limit: float) -> float:
 
 @kernel
 def current_command(error: float, integral: float, P: np.ndarray, o: int) -> float:
+    """Velocity-loop PI law: current command K_vp·e + K_vi·∫e.
+
+    Parameters
+    ----------
+    error : float
+        Velocity error from :func:`velocity_error` [rad/s].
+    integral : float
+        The velocity-loop integral state [rad].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the axis' parameter block (:data:`AXIS_PARAMS`) in ``P``.
+
+    Returns
+    -------
+    float
+        Current command before saturation [A].
+    """
     return P[o + KVP] * error + P[o + KVI] * integral
 
 
 @kernel
 def voltage_command(error: float, integral: float, P: np.ndarray, o: int) -> float:
+    """Current-loop PI law: armature voltage K_ip·e + K_ii·∫e.
+
+    Parameters
+    ----------
+    error : float
+        Current error, command − measured [A].
+    integral : float
+        The current-loop integral state [A s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the axis' parameter block (:data:`AXIS_PARAMS`) in ``P``.
+
+    Returns
+    -------
+    float
+        Voltage command before saturation [V].
+    """
     return P[o + KIP] * error + P[o + KII] * integral
 
 
 @dataclass(frozen=True)
 class Channel:
-    """A measured position for sampled loops: state expression and quantisation slot."""
+    """A measured position the sampled loops read, with its quantisation.
+
+    Parameters
+    ----------
+    name : str
+        The channel's name; sampled code reads it as ``q_<name>`` and its speed as
+        ``s_<name>``.
+    state : str
+        Code of the true position, e.g. ``"y[4]"`` [rad or m].
+    speed : str
+        Code of its true rate [rad/s or m/s].
+    quantum : str
+        Code of the count size (0 = ideal) [rad or m].
+    """
 
     name: str
     state: str  # code expression of the true value, e.g. "y[4]"
@@ -114,18 +267,47 @@ class Channel:
 
 @dataclass(frozen=True)
 class Axis:
-    """One motor's cascade, as the mechanism wires it.
+    """One motor's cascade as the mechanism wires it: its references, feedback and current.
 
-    ``position``/``position_q``: code for the measured position [m] continuous/sampled (with
-    quantised channels as ``q_<channel>``); ``feedforward``: speed [m/s]; ``reference``:
-    commanded position [m]; ``speed``: the measured motor speed, continuous; ``speed_q``: the
-    same from sampled channel speeds (``s_<channel>``); ``active``: code of a condition under
-    which the axis runs ("" = always); ``speed_unit``: unit of its speed command;
-    ``speed_law = "speed"``: the axis may run a speed loop only (its block's speed-mode slot).
-    ``position_reads``, ``speed_reads``, ``current_reads``, ``extra_reads``: what the
-    continuous ``position``, ``speed``, ``current_state`` and ``extra_current`` code is
-    computed from (``Builder.flow`` names, e.g. ``"y:table_position"``) — the loops' part of
-    the Jacobian's structure.
+    Parameters
+    ----------
+    name : str
+        The axis' name (``"screw"``, ``"nut"``, ``"motor"``).
+    param_offset : int
+        Offset of its parameter block in ``P`` (from :func:`axis_parameters`).
+    reference : str
+        Code of the commanded position [m].
+    feedforward : str
+        Code of the speed feed-forward [m/s].
+    position : str
+        Code of the measured position, continuous [m].
+    position_q : str
+        The same from quantised channels (``q_<channel>``), for sampled loops [m].
+    speed : str
+        Code of the measured motor speed, continuous [rad/s].
+    speed_q : str
+        The same from sampled channel speeds (``s_<channel>``) [rad/s].
+    current_state : str
+        Code of the motor current state [A].
+    active : str, default ""
+        Code of the condition under which the axis runs; empty for always.
+    speed_unit : str, default "rad/s"
+        Unit of its speed command.
+    speed_law : str, default "position"
+        ``"speed"``: the axis may run a speed loop only (its block's speed-mode slot).
+    extra_current : str, default ""
+        Code of a current added to the command, continuous loops only (compensation) [A].
+    current_feedforward : str, default ""
+        Code of a current added to the command in every loop configuration (a feed-forward
+        part), saturated with it [A].
+    position_reads : tuple of str, default ()
+        What the continuous ``position`` code is computed from (``Builder.flow`` names).
+    speed_reads : tuple of str, default ()
+        What the ``speed`` code is computed from.
+    current_reads : tuple of str, default ()
+        What the ``current_state`` code is computed from.
+    extra_reads : tuple of str, default ()
+        What the ``extra_current`` code is computed from.
     """
 
     name: str
@@ -151,7 +333,26 @@ class Axis:
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
-    """Register the parameter block of ``axis`` from a :class:`Controller`; return offset."""
+    """Register an axis' parameter block (:data:`AXIS_PARAMS`) from its controller settings.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    axis : str
+        The axis' name; the slots are ``controller.<axis>.<name>``.
+    c : Controller
+        The axis' controller parameters (gains [SI], limits, placement options).
+    H : float
+        The axis' transmission ratio, table travel per motor radian [m/rad].
+    speed_mode : bool
+        Whether the axis runs a speed loop only.
+
+    Returns
+    -------
+    int
+        Offset of the block's first slot in ``P``.
+    """
     assert isinstance(c, Controller)
     values = {
         "kpp": c.position_gain, "kvp": c.velocity_gain, "kvi": c.velocity_integral_gain,
@@ -178,7 +379,15 @@ CLOCKS = ("position_period", "velocity_period", "current_period")
 
 def declare_clocks(b: Builder, c: object) -> None:
     """The three loops' sample periods [s] as parameter slots ``controller.<loop>_period`` and
-    as clocks of the model's sample schedule (:meth:`Builder.clock`; 0 = continuous)."""
+    as clocks of the model's sample schedule (:meth:`Builder.clock`; 0 = continuous).
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    c : Controller
+        The controller parameters (its three periods [s]).
+    """
     for name in CLOCKS:
         b.param(f"controller.{name}", float(getattr(c, name)))
         b.clock(f"controller.{name}")
@@ -190,7 +399,16 @@ def _period(b: Builder, loop: str) -> str:
 
 
 def declare_states(b: Builder, axes: list[Axis]) -> None:
-    """Loop integrator states, grouped by loop (all velocity integrals, then all current)."""
+    """Declare the loops' integrator states, grouped by loop (all velocity integrals, then all
+    current integrals).
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    axes : list of Axis
+        The mechanism's axes.
+    """
     for ax in axes:
         b.state(f"{ax.name}_velocity_integral", "rad", f"{ax.name} velocity-loop integral",
                 "velocity_integral")
@@ -200,6 +418,16 @@ def declare_states(b: Builder, axes: list[Axis]) -> None:
 
 
 def declare_signals(b: Builder, axes: list[Axis]) -> None:
+    """Declare the cascade's outputs (speed and current commands, voltages) and the values a
+    sampled loop holds between its updates.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    axes : list of Axis
+        The mechanism's axes.
+    """
     for ax in axes:
         b.add_aux(f"{ax.name}_speed_command", ax.speed_unit, f"{ax.name} speed command")
     for ax in axes:
@@ -289,8 +517,18 @@ def _declare_flows(b: Builder, axes: list[Axis]) -> None:
 
 
 def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
-    """Write the continuous part into the right-hand side and the sampled part into the
-    controller update, for every axis."""
+    """Write every axis' cascade: the continuous part into the right-hand side, the sampled part
+    into the controller update.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    axes : list of Axis
+        The mechanism's axes.
+    channels : list of Channel
+        The measured positions the sampled loops quantise.
+    """
     rate, sat, vcmd = b.use(integrator_rate), b.use(saturate), b.use(voltage_command)
     verr, ccmd, quant = b.use(velocity_error), b.use(current_command), b.use(quantise)
     _declare_flows(b, axes)
@@ -404,6 +642,29 @@ class Compensation(Component):
     (1995) 419–425, Sect. V), added as current.  Compensated sites: the screw shaft and the
     guide (the guide only, for a linear motor).  The ``*_scale`` factors give the model
     mismatch the compensator works with (1 = exact; 1.2 = its value is 20 % high).
+
+    Parameters
+    ----------
+    mode : str, default "none"
+        ``"none"``, ``"feedforward"`` or ``"observer"``.
+    coulomb_scale : float, default 1.0
+        The compensator's F_c over the site's [-].
+    static_scale : float, default 1.0
+        Its F_s over the site's [-].
+    stribeck_velocity_scale : float, default 1.0
+        Its v_s over the site's [-].
+    viscous_scale : float, default 1.0
+        Its σ2 over the site's [-].
+    observer_gain : float, default 0.0
+        Observer gain k [1/s].
+
+    References
+    ----------
+    .. [1] B. Armstrong-Hélouvry, P. Dupont, C. Canudas de Wit, "A survey of models, analysis
+       tools and compensation methods for the control of machines with friction",
+       Automatica 30 (1994) 1083–1138.
+    .. [2] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
     """
 
     mode: str = choice(("none", "feedforward", "observer"), default="none")
@@ -425,6 +686,53 @@ class Controller(Component):
 
     The block diagram (Fig. 5) is an image; the structure is an explicit choice, see
     docs/model.md.  Gains are in the units stated; a period of 0 means a continuous loop.
+
+    Parameters
+    ----------
+    position_gain : float
+        K_pp [1/s].
+    velocity_gain : float
+        K_vp [A s/rad] (A s/m on the table basis).
+    current_gain : float
+        K_ip [V/A].
+    velocity_command_gain : float
+        K_v, Table 2's "velocity-adjusting gain" [rad/(V s)].
+    velocity_integral_gain : float, default 0.0
+        K_vi [A/rad] (A/m on the table basis).
+    current_integral_gain : float, default 0.0
+        K_ii [V/(A s)].
+    kv_placement : str, default "none"
+        Where K_v enters: ``"none"``, ``"position_output"``, ``"velocity_error"``.
+    velocity_gain_basis : str, default "motor"
+        Velocity gains on rad/s of the motor or m/s of the table (``"table"``).
+    velocity_feedback : str, default "motor"
+        Velocity feedback from the motor encoder or the table scale.
+    velocity_feedforward : bool, default True
+        Feed the commanded speed forward.
+    nut_loop : str, default "position"
+        The hollow motor's loop: ``"position"`` or ``"speed"``.
+    mode : str, default "cascade"
+        ``"cascade"`` or ``"torque_off"``.
+    compensation : Compensation
+        Friction compensation.
+    current_limit : float, default 1e4
+        Current limit [A].
+    voltage_limit : float, default 1e5
+        Voltage limit [V].
+    position_period : float, default 0.0
+        Position-loop sample period; 0 = continuous [s].
+    velocity_period : float, default 0.0
+        Velocity-loop sample period [s].
+    current_period : float, default 0.0
+        Current-loop sample period [s].
+    encoder_counts : float, default 0.0
+        Motor encoder counts per revolution; 0 = ideal [counts/rev].
+    grating_resolution : float, default 0.0
+        Table scale resolution; 0 = ideal [m].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 2.1, Table 2.
     """
 
     position_gain: float = quantity("1/s", low=0, high=1e5, low_inclusive=True)
@@ -492,6 +800,10 @@ def default_controller() -> Controller:
     -------
     Controller
         The default ``[controller]`` section.
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2.
     """
     return Controller(position_gain=8.0, velocity_gain=45.0, current_gain=2.0,
                       velocity_command_gain=250.0)

@@ -31,14 +31,30 @@ PROFILE_PARAMS = ("kind", "table_speed", "nut_speed", "ramp_time", "frequency", 
 @kernel
 def reference_kernel(t: float, P: np.ndarray, o: int,
                      T: np.ndarray) -> tuple[float, float, float, float]:
-    """Commanded (table position, table speed, nut position, nut speed) at time t [s].
+    """Commanded (table position, table speed, nut position, nut speed) at time t.
 
-    ``P[o:o+7]``: the profile block (:data:`PROFILE_PARAMS`); sampled profiles read a 4 × n
+    ``P[o:o+7]`` is the profile block (:data:`PROFILE_PARAMS`); sampled profiles read a 4 × n
     table at ``T[to:]`` (rows: table position, table speed, nut position, nut speed), their
-    speeds interpolated linearly or, with ``P[o+3]`` = 1, held (zero-order hold).  An
-    external input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its
-    host: positions X (row 0, 2) and speeds V with their rates A (rows 1, 3: [V, A]) at the
-    instant ``P[o+4]``, x = X + V·τ + A·τ²/2, v = V + A·τ, τ = t − ``P[o+4]``.
+    speeds interpolated linearly or, with ``P[o+3]`` = 1, held (zero-order hold).  An external
+    input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its host:
+    positions X (rows 0, 2) and speeds V with their rates A (rows 1, 3: [V, A]) at the instant
+    ``P[o+4]``, x = X + V·τ + A·τ²/2, v = V + A·τ, τ = t − ``P[o+4]``.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the profile block in ``P``.
+    T : numpy.ndarray
+        The packed tables (sampled profiles, the external input's table) [SI].
+
+    Returns
+    -------
+    tuple of float
+        Table position [m], table speed [m/s], nut position [m], nut speed [m/s].
     """
     kind = int(P[o])
     if kind == REF_CONSTANT:
@@ -99,9 +115,29 @@ REFERENCE_INPUTS = ("table_position_reference", "table_speed_reference",
 @kernel
 def reference_with_inputs(t: float, P: np.ndarray, o: int, oi: int,
                           T: np.ndarray) -> tuple[float, float, float, float]:
-    """:func:`reference_kernel` with ``P[oi:oi+4]`` (:data:`REFERENCE_INPUTS`, zero in a
-    simulation) added to the table position [m], table speed [m/s], nut position [m] and nut
-    speed [m/s] it commands."""
+    """:func:`reference_kernel` plus the linearisation's reference inputs.
+
+    ``P[oi:oi+4]`` (:data:`REFERENCE_INPUTS`, zero in a simulation) are added to the four
+    commanded values.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the profile block in ``P``.
+    oi : int
+        Offset of the reference inputs in ``P``.
+    T : numpy.ndarray
+        The packed tables [SI].
+
+    Returns
+    -------
+    tuple of float
+        Table position [m], table speed [m/s], nut position [m], nut speed [m/s].
+    """
     x_t, v_t, x_n, v_n = reference_kernel(t, P, o, T)
     return x_t + P[oi], v_t + P[oi + 1], x_n + P[oi + 2], v_n + P[oi + 3]
 
@@ -156,6 +192,10 @@ class SineSpeed:
         Amplitude of the nut speed driven by the hollow motor [m/s] (DDFS only).
     frequency : float, default 0.2
         Frequency f of both sines [Hz].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 5.3, Figs. 9–10.
     """
 
     table_amplitude: float
@@ -282,9 +322,31 @@ def _positive(name: str, value: float, unit: str) -> float:
 
 def trapezoid(table_speed: float, duration: float, *, ramp_time: float = 0.5,
               nut_speed: float = 0.0, interval: float = _INTERVAL) -> SampledSpeed:
-    """A move: ramp from rest to ``table_speed`` [m/s] over ``ramp_time`` [s], hold, and
-    ramp back to rest so that the table stops at ``duration`` [s].  The nut speed [m/s]
-    (DDFS) follows the same shape."""
+    """A move: ramp from rest to a table speed, hold, and ramp back so the table stops at the end.
+
+    Parameters
+    ----------
+    table_speed : float
+        Hold speed [m/s].
+    duration : float
+        Time at which the table is back at rest [s].
+    ramp_time : float, default 0.5
+        Length of each ramp, less than half the duration [s].
+    nut_speed : float, default 0.0
+        Hold speed of the nut (DDFS), same shape [m/s].
+    interval : float, optional
+        Sample interval of the tabulated profile [s].
+
+    Returns
+    -------
+    SampledSpeed
+        The tabulated profile.
+
+    Raises
+    ------
+    ParameterError
+        For a non-positive duration or ramp time, or ramps longer than the move.
+    """
     duration = _positive("duration", duration, "s")
     ramp_time = _positive("ramp_time", ramp_time, "s")
     if 2.0 * ramp_time >= duration:
@@ -298,10 +360,45 @@ def trapezoid(table_speed: float, duration: float, *, ramp_time: float = 0.5,
 def stepdown(start_speed: float, lowest_speed: float, *, step: float = 0.01e-3,
              dwell: float = 4.0, lead_in: float = 6.0, nut_speed: float = 0.0,
              interval: float = _INTERVAL) -> tuple[SampledSpeed, np.ndarray]:
-    """The paper's step-down experiment (Wang2021 Sect. 6): run at ``start_speed`` [m/s] for
-    ``lead_in`` [s], then lower the command by ``step`` [m/s] every ``dwell`` [s] down to
-    ``lowest_speed``.  Returns the profile and the step speeds [m/s]; its duration is
-    ``profile.time[-1]``.  The same staircase `creep --method stepdown` runs."""
+    """The paper's step-down experiment: lower the commanded speed in steps until the table crawls.
+
+    Run at ``start_speed`` for ``lead_in``, then lower the command by ``step`` every ``dwell``
+    down to ``lowest_speed`` (Wang2021 Sect. 6, Fig. 13) — the staircase ``creep --method
+    stepdown`` runs.  The profile's duration is ``profile.time[-1]``.
+
+    Parameters
+    ----------
+    start_speed : float
+        First speed [m/s].
+    lowest_speed : float
+        Last speed, below ``start_speed`` [m/s].
+    step : float, default 1e-5
+        Speed decrement, the paper's 0.01 mm/s [m/s].
+    dwell : float, default 4.0
+        Time at each step [s].
+    lead_in : float, default 6.0
+        Time at the first speed [s].
+    nut_speed : float, default 0.0
+        Constant nut speed (DDFS) [m/s].
+    interval : float, optional
+        Sample interval of the tabulated profile [s].
+
+    Returns
+    -------
+    profile : SampledSpeed
+        The tabulated staircase.
+    speeds : numpy.ndarray
+        The step speeds [m/s].
+
+    Raises
+    ------
+    ParameterError
+        For a non-positive value or ``lowest_speed ≥ start_speed``.
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 6, Fig. 13.
+    """
     for name, value in (("start_speed", start_speed), ("lowest_speed", lowest_speed),
                         ("step", step)):
         _positive(name, value, "m/s")
@@ -317,11 +414,30 @@ def stepdown(start_speed: float, lowest_speed: float, *, step: float = 0.01e-3,
 
 
 def from_csv(path: str | Path, *, interval: float = _INTERVAL) -> SampledSpeed:
-    """A profile from a CSV file with columns ``time`` and ``table_speed`` (optionally
-    ``nut_speed``), in s and mm/s unless a header states its unit (``time [ms]``,
-    ``table_speed [m/s]``).  Times must increase from 0; they are resampled onto a uniform
-    grid of ``interval`` [s].  The format of docs/measured-data.md (``#`` comments, separator
-    detected)."""
+    """A speed profile from a CSV file with columns ``time`` and ``table_speed`` (optionally
+    ``nut_speed``).
+
+    In s and mm/s unless a header states its unit (``time [ms]``, ``table_speed [m/s]``); the
+    format of docs/measured-data.md (``#`` comments, separator detected).  Times must increase
+    from 0; they are resampled onto a uniform grid.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    interval : float, optional
+        Sample interval of the resampled profile [s].
+
+    Returns
+    -------
+    SampledSpeed
+        The profile in SI.
+
+    Raises
+    ------
+    MeasuredDataError
+        For missing columns, bad cells, or times that do not increase from 0.
+    """
     from ..io.measured import MeasuredDataError, read_csv_table
 
     table = read_csv_table(path)

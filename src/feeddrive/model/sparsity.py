@@ -81,7 +81,23 @@ def declared_pattern(states: Sequence[str], aux: Sequence[str],
 
 def colour_columns(S: np.ndarray) -> np.ndarray:
     """Greedy largest-first colouring of the columns of ``S``: two columns share a colour only
-    if no row has both.  Returns the colour (group number, from 0) of every column."""
+    if no row has both.  Returns the colour (group number, from 0) of every column.
+
+    Parameters
+    ----------
+    S : numpy.ndarray of int
+        The sparsity pattern, (n, n + 1): 1 where dy[i] may depend on y[j] (column n: t).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The group of every column.
+
+    References
+    ----------
+    .. [1] A. R. Curtis, M. J. D. Powell, J. K. Reid, "On the estimation of sparse Jacobian
+       matrices", J. Inst. Math. Appl. 13 (1974) 117–119.
+    """
     B = np.asarray(S, dtype=bool)
     conflict = (B.T.astype(np.int64) @ B.astype(np.int64)) > 0
     ncol = B.shape[1]

@@ -44,6 +44,23 @@ class _Component:
         """Cross-field checks; override where needed."""
 
     def with_values(self, **changes: Any) -> Self:
+        """A copy with some fields replaced, validated like the original.
+
+        Parameters
+        ----------
+        **changes
+            Field name → new value [SI unit of the field].
+
+        Returns
+        -------
+        Component
+            The new component.
+
+        Raises
+        ------
+        ParameterError
+            For an unknown field or a refused value.
+        """
         return replace(self, **changes)  # type: ignore[type-var]
 
 

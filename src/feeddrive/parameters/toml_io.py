@@ -42,7 +42,18 @@ def _component_type(tp: Any) -> Any:
 
 
 def to_dict(obj: Any) -> dict[str, Any]:
-    """Nested plain dict of a parameter dataclass."""
+    """Nested plain dict of a parameter dataclass.
+
+    Parameters
+    ----------
+    obj : object
+        A parameter dataclass.
+
+    Returns
+    -------
+    dict
+        Field → value, nested for components [SI].
+    """
     out: dict[str, Any] = {}
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
@@ -73,7 +84,18 @@ _NEEDS_ESCAPE = re.compile('[\\\\"\\x00-\\x1f\\x7f]')
 
 def toml_string(text: str) -> str:
     """``text`` as a TOML basic string: quoted, with backslash, quote and every control
-    character (U+0000–U+001F, U+007F) escaped (TOML 1.0, "String")."""
+    character (U+0000–U+001F, U+007F) escaped (TOML 1.0, "String").
+
+    Parameters
+    ----------
+    text : str
+        The text.
+
+    Returns
+    -------
+    str
+        The TOML string, with its quotes.
+    """
     if not _NEEDS_ESCAPE.search(text):  # the common case, without a loop per character
         return f'"{text}"'
     out = []
@@ -89,7 +111,18 @@ def toml_string(text: str) -> str:
 
 def toml_comment(text: str) -> str:
     """``text`` made safe inside a ``#`` comment: control characters shown escaped, so a
-    newline in a file name cannot start a new TOML line."""
+    newline in a file name cannot start a new TOML line.
+
+    Parameters
+    ----------
+    text : str
+        The text.
+
+    Returns
+    -------
+    str
+        The text with control characters escaped.
+    """
     return "".join(c if c.isprintable() or c == " " else
                    c.encode("unicode_escape").decode("ascii") for c in text)
 
@@ -110,7 +143,27 @@ def _depth(value: Any) -> int:
 
 def parse_toml(text: str, *, field: str = "file", source: str = "<toml>") -> dict[str, Any]:
     """``tomllib.loads`` with one-line errors naming ``source``: invalid TOML, or nesting
-    deeper than :data:`MAX_TOML_DEPTH` (which would otherwise end in ``RecursionError``)."""
+    deeper than :data:`MAX_TOML_DEPTH` (which would otherwise end in ``RecursionError``).
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    field : str, default "file"
+        The field named in messages.
+    source : str, default "<toml>"
+        Where the text came from, for messages.
+
+    Returns
+    -------
+    dict
+        The parsed tables.
+
+    Raises
+    ------
+    ParameterError
+        For invalid or too deeply nested TOML.
+    """
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -130,7 +183,25 @@ MAX_TOML_BYTES = 16 * 1024 * 1024
 def read_toml_file(path: str | Path, *, field: str = "file") -> dict[str, Any]:
     """Parse a TOML file; a missing file, a folder, a FIFO or device, a name the system
     refuses (too long), non-UTF-8 bytes, invalid or deeply nested TOML are refused with one
-    line naming the file."""
+    line naming the file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    field : str, default "file"
+        The field named in messages.
+
+    Returns
+    -------
+    dict
+        The parsed tables.
+
+    Raises
+    ------
+    ParameterError
+        For a file that cannot be read as TOML, with one line naming it.
+    """
     p = Path(path)
     try:
         info = p.stat()
@@ -217,7 +288,18 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
 
 
 def dumps(params: DriveParameters) -> str:
-    """TOML text of a parameter set, SI units noted beside each value."""
+    """TOML text of a parameter set, SI units noted beside each value.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+
+    Returns
+    -------
+    str
+        TOML that :func:`loads` reads back to an equal set.
+    """
     note = composition(params.mechanism).file_note
     lines = [
         "# feeddrive parameter set. SI units throughout (m, s, N, kg, A, V, rad).",
@@ -315,7 +397,25 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
     """Build a parameter set.  ``extends = "NAME"`` (a preset) or ``"FILE.toml"`` (relative to
     ``base_dir``) starts from that set; the other values replace its values.  A ``[fit]``
     table (written by ``feeddrive fit``: the data, free parameters and intervals of the fit
-    that made the set) is a record, not a parameter, and is not read here."""
+    that made the set) is a record, not a parameter, and is not read here.
+
+    Parameters
+    ----------
+    data : dict
+        Parsed TOML.
+    base_dir : Path, optional
+        Folder a relative ``extends`` file is read from.
+
+    Returns
+    -------
+    DriveParameters
+        The validated set.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown key or a refused value, naming its path.
+    """
     data = {k: v for k, v in data.items() if k != "fit"}
     if "extends" in data:
         parent_name = data["extends"]
@@ -345,6 +445,25 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
 
 
 def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
+    """A parameter set from TOML text (``parse_toml``, then ``from_dict``).
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    base_dir : Path, optional
+        Folder a relative ``extends`` file is read from.
+
+    Returns
+    -------
+    DriveParameters
+        The validated set.
+
+    Raises
+    ------
+    ParameterError
+        For invalid TOML, an unknown key or a refused value.
+    """
     return from_dict(parse_toml(text), base_dir=base_dir)
 
 

@@ -26,7 +26,18 @@ _REPR.maxlevel = 4
 
 
 def shown_value(value: object) -> str:
-    """``repr(value)`` for a message: long text and deep or long lists cut (``...``)."""
+    """``repr(value)`` for a message: long text and deep or long lists cut (``...``).
+
+    Parameters
+    ----------
+    value : object
+        The value.
+
+    Returns
+    -------
+    str
+        Its shortened ``repr``.
+    """
     if isinstance(value, str) and len(value) > MAX_SHOWN:
         return f"{value[:MAX_SHOWN]!r}… ({len(value)} characters)"
     text = repr(value) if isinstance(value, int | float | bool | None) else _REPR.repr(value)
@@ -101,6 +112,28 @@ def quantity(
     "a lead of 5 looks like millimetres; give metres".  ``table_unit``: the unit instead when
     the component's ``velocity_gain_basis`` is "table" (a velocity-loop gain acting on m/s of
     table motion rather than rad/s of the motor; :func:`resolved_unit`).
+
+    Parameters
+    ----------
+    unit : str
+        The SI unit.
+    low : float
+        Lowest sensible value [unit].
+    high : float
+        Highest sensible value [unit].
+    low_inclusive : bool, default False
+        Whether ``low`` itself is allowed.
+    hint : str, default ""
+        Appended to the message of a value out of range.
+    default : object, optional
+        The default; the field is required without it.
+    table_unit : str, default ""
+        The unit on the table basis.
+
+    Returns
+    -------
+    dataclasses.Field
+        The field, its metadata read by :func:`validate`.
     """
     meta = {"unit": unit, "low": low, "high": high, "low_inclusive": low_inclusive, "hint": hint}
     if table_unit:
@@ -112,19 +145,62 @@ def quantity(
 
 def quantities(unit: str, *, low: float, high: float, low_inclusive: bool = True,
                hint: str = "") -> Any:
-    """Declare a tuple of floats in SI ``unit`` (e.g. harmonic amplitudes), default empty."""
+    """Declare a tuple of floats in SI ``unit`` (e.g. harmonic amplitudes), default empty.
+
+    Parameters
+    ----------
+    unit : str
+        The SI unit of every element.
+    low : float
+        Lowest sensible element [unit].
+    high : float
+        Highest sensible element [unit].
+    low_inclusive : bool, default True
+        Whether ``low`` itself is allowed.
+    hint : str, default ""
+        Appended to the message of a value out of range.
+
+    Returns
+    -------
+    dataclasses.Field
+        The field, its metadata read by :func:`validate`.
+    """
     meta = {"unit": unit, "low": low, "high": high, "low_inclusive": low_inclusive,
             "hint": hint, "vector": True}
     return dataclasses.field(default=(), metadata=meta)
 
 
 def choice(options: tuple[str, ...], *, default: str) -> Any:
-    """Declare a string field restricted to ``options``."""
+    """Declare a string field restricted to ``options``.
+
+    Parameters
+    ----------
+    options : tuple of str
+        The allowed values.
+    default : str
+        The default, one of ``options``.
+
+    Returns
+    -------
+    dataclasses.Field
+        The field, its metadata read by :func:`validate`.
+    """
     return dataclasses.field(default=default, metadata={"options": options})
 
 
 def flag(*, default: bool) -> Any:
-    """Declare a boolean field."""
+    """Declare a boolean field.
+
+    Parameters
+    ----------
+    default : bool
+        The default.
+
+    Returns
+    -------
+    dataclasses.Field
+        The field, its metadata read by :func:`validate`.
+    """
     return dataclasses.field(default=default, metadata={"flag": True})
 
 
@@ -138,7 +214,28 @@ def _format_range(meta: dict[str, Any]) -> str:
 
 
 def check_quantity(path: str, value: object, meta: dict[str, Any]) -> float:
-    """Return ``value`` as float or raise :class:`ParameterError` for ``path``."""
+    """Return ``value`` as float or raise :class:`ParameterError` for ``path``.
+
+    Parameters
+    ----------
+    path : str
+        The field's dotted path, for the message.
+    value : object
+        The value given.
+    meta : dict
+        The field's metadata (unit, low, high, hint).
+
+    Returns
+    -------
+    float
+        The value [the field's unit].
+
+    Raises
+    ------
+    ParameterError
+        For a non-number, a non-finite number or one outside the field's range, naming the
+        path, the value and the expected unit.
+    """
     unit = meta["unit"]
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ParameterError(path, value, f"expected a number [{unit}]")
@@ -158,7 +255,20 @@ def check_quantity(path: str, value: object, meta: dict[str, Any]) -> float:
 def resolved_unit(obj: object, name: str) -> str:
     """The unit field ``name`` of the dataclass ``obj`` is read in, resolved for the object's
     ``velocity_gain_basis`` (a velocity-loop gain on the table basis is per m/s of table
-    speed, not per rad/s of the motor: a factor H ≈ 10⁻³ apart)."""
+    speed, not per rad/s of the motor: a factor H ≈ 10⁻³ apart).
+
+    Parameters
+    ----------
+    obj : object
+        A parameter dataclass.
+    name : str
+        One of its fields.
+
+    Returns
+    -------
+    str
+        The unit.
+    """
     meta = _metadata(obj, name)
     return _unit_in(meta, obj)
 
@@ -177,7 +287,20 @@ def _unit_in(meta: Any, obj: object) -> str:
 
 
 def validate(obj: object, prefix: str) -> None:
-    """Check every declared field of the dataclass ``obj``; ``prefix`` names it in messages."""
+    """Check every declared field of the dataclass ``obj``; ``prefix`` names it in messages.
+
+    Parameters
+    ----------
+    obj : object
+        A parameter dataclass.
+    prefix : str
+        Its dotted path (``friction.screw``).
+
+    Raises
+    ------
+    ParameterError
+        At the first field refused, naming its full path, the value and the expected unit.
+    """
     for f in dataclasses.fields(obj):  # type: ignore[arg-type]
         value = getattr(obj, f.name)
         path = f"{prefix}.{f.name}"

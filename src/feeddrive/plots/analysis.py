@@ -25,7 +25,15 @@ def _save(fig: Figure, path: str | Path) -> None:
 
 
 def plot_static_fit(fit: StaticFit, path: str | Path) -> None:
-    """Measured and fitted steady friction per direction, and the residuals."""
+    """Measured and fitted steady friction per direction, and the residuals.
+
+    Parameters
+    ----------
+    fit : StaticFit
+        The static friction fit.
+    path : str or Path
+        The image file.
+    """
     fig = Figure(figsize=(10, 6.5), layout="constrained")
     axes = fig.subplots(2, len(fit.branches()), sharex="col", height_ratios=[2, 1],
                         squeeze=False)
@@ -57,7 +65,15 @@ def plot_static_fit(fit: StaticFit, path: str | Path) -> None:
 
 
 def plot_dynamic_fit(fit: DynamicFit, path: str | Path) -> None:
-    """Measured and simulated pre-sliding displacement, residual, and the σ1 profile."""
+    """Measured and simulated pre-sliding displacement, residual, and the σ1 profile.
+
+    Parameters
+    ----------
+    fit : DynamicFit
+        The pre-sliding fit.
+    path : str or Path
+        The image file.
+    """
     fig = Figure(figsize=(10, 7.5), layout="constrained")
     ax = fig.subplots(3, 1, height_ratios=[2, 1, 1.4])
     ax[0].plot(fit.time, fit.position * 1e6, ".", ms=2, label="measured")
@@ -90,7 +106,15 @@ def plot_dynamic_fit(fit: DynamicFit, path: str | Path) -> None:
 
 
 def plot_trace(analysis: TraceAnalysis, path: str | Path) -> None:
-    """Position and speed of a trace, segments shaded, command speeds and windows marked."""
+    """Position and speed of a trace, segments shaded, command speeds and windows marked.
+
+    Parameters
+    ----------
+    analysis : TraceAnalysis
+        The analysed trace.
+    path : str or Path
+        The image file.
+    """
     fig = Figure(figsize=(11, 6.5), layout="constrained")
     ax = fig.subplots(2, 1, sharex=True)
     ax[0].plot(analysis.time, analysis.position * 1e3, lw=0.8)

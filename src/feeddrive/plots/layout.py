@@ -77,8 +77,20 @@ def _data_points(ax: Any) -> list[tuple[str, np.ndarray]]:
 
 
 def covered_data(fig: Figure, margin: float = 1.0) -> list[str]:
-    """Which legend or boxed label covers which plotted data (empty: none).  ``margin``
-    [pixels] shrinks each box so that data only touching its edge does not count."""
+    """Which legend or boxed label covers which plotted data.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure, drawn before it is measured.
+    margin : float, default 1.0
+        Shrinks each box so that data only touching its edge does not count [pixels].
+
+    Returns
+    -------
+    list of str
+        One line per (label, series) with the number of covered points; empty when none.
+    """
     _draw(fig)
     found = []
     data = [(ax, _data_points(ax)) for ax in fig.get_axes() if ax.get_visible()]
@@ -94,7 +106,18 @@ def covered_data(fig: Figure, margin: float = 1.0) -> list[str]:
 
 
 def clipped_artists(fig: Figure) -> list[str]:
-    """Legends and boxed labels that stick out of the figure (cut off in the saved PNG)."""
+    """Legends and boxed labels that stick out of the figure (cut off in the saved PNG).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure, drawn before it is measured.
+
+    Returns
+    -------
+    list of str
+        One line per clipped label; empty when none.
+    """
     _draw(fig)
     page = fig.bbox
     return [f"{label} is cut off by the figure edge" for label, box in _boxes(fig)
@@ -115,8 +138,19 @@ def _titles(fig: Figure) -> list[Any]:
 
 
 def overlapping_texts(fig: Figure) -> list[str]:
-    """Pairs of text labels inside one axes drawn over each other, and legends or boxed
-    labels over a title or an axis label."""
+    """Text labels drawn over each other in one axes, and legends or boxed labels over a title or
+    an axis label.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure, drawn before it is measured.
+
+    Returns
+    -------
+    list of str
+        One line per overlapping pair; empty when none.
+    """
     _draw(fig)
     renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
     found = []

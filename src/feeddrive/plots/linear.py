@@ -27,7 +27,22 @@ def _title(analysis: LoopAnalysis, what: str) -> str:
 
 
 def plot_loops(analysis: LoopAnalysis, path: str | Path, kind: str = "bode") -> Path:
-    """Write the loops' plot of ``kind`` (:data:`PLOT_KINDS`) to ``path``."""
+    """Write a plot of the loops' open-loop transfers.
+
+    Parameters
+    ----------
+    analysis : LoopAnalysis
+        The analysis from :func:`feeddrive.analysis.linear.loop_analysis`.
+    path : str or Path
+        The image file; written atomically.
+    kind : str, default "bode"
+        One of :data:`PLOT_KINDS`: ``"bode"``, ``"nyquist"`` or ``"step"``.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     draw = {"bode": _bode, "nyquist": _nyquist, "step": _step}[kind]
     fig = draw(analysis)
     p = Path(path)
@@ -149,7 +164,20 @@ def _step(analysis: LoopAnalysis) -> Figure:
 
 
 def plot_band(band: StabilityBand, path: str | Path) -> Path:
-    """Rightmost pole's real part against table speed, unstable bands shaded."""
+    """Plot the rightmost pole's real part against table speed, the unstable bands shaded.
+
+    Parameters
+    ----------
+    band : StabilityBand
+        The scan from :func:`feeddrive.analysis.linear.stability_band`.
+    path : str or Path
+        The image file; written atomically.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     fig = Figure(figsize=(8, 4.5), layout="constrained")
     ax = fig.subplots()
     ax.semilogx(1e3 * band.speeds, band.max_real_part, "o-", ms=3, lw=1.0)

@@ -15,7 +15,19 @@ if TYPE_CHECKING:
 
 
 def run_title(result: Result) -> str:
-    """What was run, for the figure title: drive, profile, speed, position, duration, set."""
+    """What was run, for a figure title: drive, profile, speed, position, duration, parameter set.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+
+    Returns
+    -------
+    str
+        E.g. ``"DDFS, constant 1.55 mm/s, position 400 mm, 10 s — wang2021"`` (engineering
+        units).
+    """
     attrs = result.dataset.attrs
     kind = str(attrs.get("profile", "")).split("(")[0] or "profile"
     what = {"ConstantSpeed": "constant", "SineSpeed": "sine amplitude",
@@ -35,7 +47,22 @@ def _legend_above(ax: Any) -> None:
 
 
 def plot_result(result: Result, path: str | Path, title: str | None = None) -> Path:
-    """Write :func:`result_figure` of one run to ``path`` (PNG)."""
+    """Write :func:`result_figure` of one run to a PNG file, atomically.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    path : str or Path
+        The image file; its folder is created.
+    title : str, optional
+        The title; :func:`run_title` by default.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     fig = result_figure(result, title)
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
@@ -48,8 +75,20 @@ def plot_result(result: Result, path: str | Path, title: str | None = None) -> P
 
 
 def result_figure(result: Result, title: str | None = None) -> Any:
-    """Table speed against its command, motor speeds and friction forces of one run;
-    ``title`` defaults to :func:`run_title`."""
+    """The figure of one run: table speed against its command, motor speeds, friction forces.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    title : str, optional
+        The title; :func:`run_title` by default.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three stacked axes sharing time [s], speeds in mm/s, forces in N.
+    """
     t = result.time
     fig, axes = plt.subplots(3, 1, figsize=(8, 8.6), sharex=True, layout="constrained")
     ax = axes[0]

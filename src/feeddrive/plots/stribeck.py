@@ -19,12 +19,31 @@ _MM_PER_S = units.MM_PER_S
 
 def stribeck_figure(params: LuGreParameters, title: str = "",
                     speed_max: float | None = None) -> Figure:
-    """Steady friction force [N] against sliding speed [mm/s] for both branches.
+    """Steady friction force against sliding speed for both branches of a site.
 
-    The curve is Wang2021 Eq. (11) at steady state (Stribeck + Coulomb + viscous, Table 1);
-    the negative branch is drawn as magnitudes so the two can be compared.  Each branch's
-    negative-slope band is shaded and its zero-slope speed marked.  ``speed_max`` [m/s]
-    defaults to three times the larger zero-slope speed (or 5 v_s without a band).
+    The curve is Wang2021 Eq. (11) at steady state (Stribeck + Coulomb + viscous, Table 1) for
+    LuGre and static sites, the law's own steady curve otherwise; the negative branch is drawn
+    as magnitudes so the two can be compared.  Each branch's negative-slope band is shaded and
+    its zero-slope speed marked.
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The friction site.
+    title : str, default ""
+        The figure title.
+    speed_max : float, optional
+        Largest speed drawn [m/s]; three times the larger zero-slope speed (or 5 v_s without
+        a band) by default.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Force [N] against speed [mm/s].
+
+    References
+    ----------
+    .. [1] Wang2021 Eq. (11), Table 1.
     """
     from ..model.friction.indicators import STRIBECK_CURVE_LAWS, steady_slope
 
@@ -64,7 +83,17 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
 
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> None:
-    """Write ``fig`` to ``path``; the format follows the file extension (e.g. .png)."""
+    """Write a figure atomically, the format following the file extension (e.g. ``.png``).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or Path
+        The image file.
+    dpi : int, default 120
+        Resolution [dots per inch].
+    """
     from ..io.outputs import save_figure as save
 
     save(fig, path, dpi=dpi)

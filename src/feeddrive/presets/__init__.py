@@ -25,6 +25,15 @@ for _name, _factory in PRESETS.items():
 
 
 def register_preset(name: str, factory: Callable[[], DriveParameters]) -> None:
-    """Make ``factory()`` available as ``preset(name)`` and ``extends = "name"``."""
+    """Make a parameter set available by name, to ``preset(name)``, ``--preset`` and
+    ``extends = "name"`` in a parameter file.
+
+    Parameters
+    ----------
+    name : str
+        The preset's name.
+    factory : callable
+        Called with no arguments, returns the :class:`DriveParameters` (built on each use).
+    """
     PRESETS[name] = factory
     registry.register(registry.PRESETS, name, factory)

@@ -26,6 +26,22 @@ PINION_INERTIA = 5e-4  # kg m², at the pinion
 
 
 def example() -> DriveParameters:
+    """The ``rack-pinion-example`` parameter set: a rack-and-pinion table axis.
+
+    Wang2021's servo motor, table mass and guide friction (Tables 1–2) behind a 10:1 gearbox and
+    a 30-mm pinion (H = 3 mm/rad), a 2e8 N/m tooth mesh (first resonance near 500 Hz) and
+    gearbox friction of the size of Wang2021's screw-shaft site; loops tuned to ≈1 kHz current,
+    ≈30 Hz velocity (integral corner 3 Hz) and a 30 1/s position loop.
+
+    Returns
+    -------
+    DriveParameters
+        The parameter set [SI].
+
+    References
+    ----------
+    .. [1] Wang2021 Table 1 (friction), Table 2 (motor, table mass).
+    """
     base = wang2021.literal()
     motor = base.screw_motor
     H = PINION_RADIUS / GEAR_RATIO

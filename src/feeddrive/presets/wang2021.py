@@ -38,7 +38,21 @@ CITATION = (
 
 @dataclass(frozen=True)
 class Assumption:
-    """A value or choice the paper does not give (or gives wrongly), and why we chose it."""
+    """A value or choice the paper does not give (or gives wrongly), and why it was chosen.
+
+    Parameters
+    ----------
+    id : str
+        Short key (``"eta"``, ``"cascade"``), cited in docs and descriptions.
+    fields : tuple of str
+        The parameter paths it sets.
+    value : str
+        The value or choice, as text with its unit.
+    rationale : str
+        Why: the calculation, the source or the fit behind it.
+    fitted : bool, default False
+        Whether the value was fitted to one of the paper's results rather than derived.
+    """
 
     id: str
     fields: tuple[str, ...]
@@ -171,7 +185,21 @@ def _branch(fc: float, fs: float, vs: float, s2: float) -> FrictionBranch:
 
 
 def friction_sites() -> FrictionSites:
-    """Wang2021 Table 1, negative branch stored as magnitudes."""
+    """The LuGre parameters of the three friction sites: screw shaft, hollow (nut) shaft and linear
+    guide.
+
+    Wang2021 Table 1 (forces already divided by H, so linear-equivalent), the negative branch
+    stored as magnitudes.
+
+    Returns
+    -------
+    FrictionSites
+        Screw, nut and guide sites [SI].
+
+    References
+    ----------
+    .. [1] Wang2021 Table 1 and Eqs. (9)–(11).
+    """
     return FrictionSites(
         screw=LuGreParameters(
             positive=_branch(73.4, 96.4, 8.64e-4, 3.14e3),
@@ -195,7 +223,19 @@ def friction_sites() -> FrictionSites:
 
 
 def motor() -> Motor:
-    """Wang2021 Table 2, the same motor for screw and hollow shaft."""
+    """The servo motor of Wang2021 Table 2, used for both the screw and the hollow shaft.
+
+    The inertia is read as 1.38e-3 kg m²: the table's 1.38×10³ is a typo (ASSUMPTIONS ``"J-typo"``).
+
+    Returns
+    -------
+    Motor
+        K_t 0.55 N m/A, K_e 0.15 V s/rad, L 5.9 mH, R 1.7 Ω, J 1.38e-3 kg m².
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2.
+    """
     return Motor(
         torque_constant=0.55,
         back_emf_constant=0.15,
@@ -206,6 +246,19 @@ def motor() -> Motor:
 
 
 def ball_screw() -> BallScrew:
+    """The ball screw of Wang2021 Table 2 (d = 16 mm, l = 800 mm, 5 mm lead) with E = 206 GPa.
+
+    E is not stated in the paper; 206 GPa reproduces Table 3's k_sa row through Eq. (4).
+
+    Returns
+    -------
+    BallScrew
+        Geometry, stiffnesses, efficiency and inertias [SI].
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2, Table 3, Eq. (4).
+    """
     return BallScrew(
         length=_SCREW_LENGTH,
         diameter=_SCREW_DIAMETER,
@@ -222,7 +275,17 @@ def ball_screw() -> BallScrew:
 
 
 def literal_controller() -> Controller:
-    """Table 2 gains read literally in SI (see ASSUMPTIONS 'cascade')."""
+    """The loop gains of Wang2021 Table 2 read literally in SI (see ASSUMPTIONS ``"cascade"``).
+
+    Returns
+    -------
+    Controller
+        K_pp 8 1/s, K_vp 45 A s/rad, K_ip 2 V/A, K_v 250; no integral gains.
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2.
+    """
     return Controller(
         position_gain=8.0,
         velocity_gain=45.0,
@@ -232,7 +295,20 @@ def literal_controller() -> Controller:
 
 
 def literal() -> DriveParameters:
-    """``wang2021-literal``: Tables 1 and 2 read literally in SI."""
+    """The ``wang2021-literal`` parameter set: Tables 1 and 2 read literally in SI.
+
+    A model wired this way does not creep at 1.5 mm/s (the velocity loop is far stiffer than
+    the friction's negative damping); it is kept to show that.
+
+    Returns
+    -------
+    DriveParameters
+        The parameter set [SI].
+
+    References
+    ----------
+    .. [1] Wang2021 Tables 1–2.
+    """
     return DriveParameters(
         name="wang2021-literal",
         description="Wang2021 Tables 1-2 read literally in SI units. " + CITATION,
@@ -264,7 +340,21 @@ def _axial_damping(params: DriveParameters) -> float:
 
 
 def shipped() -> DriveParameters:
-    """``wang2021``: the default reading.  See ASSUMPTIONS and docs/model-reading.md."""
+    """The ``wang2021`` parameter set: the default reading of the unstated model details.
+
+    The literal set with the velocity gains on table motion, PI current and velocity loops, the
+    hollow motor on a speed loop and the axial damping the reading derives; see ASSUMPTIONS and
+    docs/model-reading.md.
+
+    Returns
+    -------
+    DriveParameters
+        The parameter set [SI].
+
+    References
+    ----------
+    .. [1] Wang2021 Tables 1–2, Sect. 2.1.
+    """
     base = literal()
     controller = base.controller.with_values(
         velocity_gain_basis="table",
@@ -310,7 +400,20 @@ RIPPLE_ASSUMPTIONS: tuple[Assumption, ...] = (
 
 
 def ripple() -> DriveParameters:
-    """``wang2021-ripple``: the shipped reading plus motor torque ripple on both motors."""
+    """The ``wang2021-ripple`` parameter set: ``wang2021`` plus motor torque ripple on both motors.
+
+    0.0135 N m at 6 per revolution, fitted to the DDFS critical speed by the 50 % ripple
+    threshold.
+
+    Returns
+    -------
+    DriveParameters
+        The parameter set [SI].
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 8 (the DDFS critical speed the amplitude is fitted to).
+    """
     from ..model.disturbances import Disturbances, TorqueRipple
 
     r = TorqueRipple((RIPPLE_ORDER,), (RIPPLE_AMPLITUDE,), (0.0,))
@@ -348,8 +451,20 @@ DRIVE_ASSUMPTIONS: tuple[Assumption, ...] = (
 
 
 def drive() -> DriveParameters:
-    """``wang2021-drive``: the shipped reading with a real drive's limits, sampled loops and
-    quantised feedback (DRIVE_ASSUMPTIONS)."""
+    """The ``wang2021-drive`` parameter set: ``wang2021`` with a real drive's limits.
+
+    Current and voltage limits (17 A, 300 V), 8/4/2 kHz sampled current, velocity and position
+    loops and quantised feedback (2^20-count encoders, 50 nm scale); see DRIVE_ASSUMPTIONS.
+
+    Returns
+    -------
+    DriveParameters
+        The parameter set [SI].
+
+    References
+    ----------
+    .. [1] Wang2021 Tables 1–2.
+    """
     base = shipped()
     controller = base.controller.with_values(
         current_limit=17.0, voltage_limit=300.0, current_period=1.25e-4,

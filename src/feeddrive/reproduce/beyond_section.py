@@ -45,6 +45,21 @@ def _kind(row: dict[str, Any] | None) -> str:
 
 
 def ripple_rows(forced: list[dict[str, Any]]) -> tuple[str, list[dict[str, str]]]:
+    """The ripple reading's critical speeds for every drive, nut speed and ripple threshold, and
+    the section text that introduces them.
+
+    Parameters
+    ----------
+    forced : list of dict
+        The stored rows of the forced (ripple-threshold) study.
+
+    Returns
+    -------
+    text : str
+        The section's Markdown text.
+    rows : list of dict of str to str
+        One row per drive and nut speed: column heading → formatted cell [mm/s].
+    """
     rows = []
     rows.append({"drive": "CDFS", "v_n [mm/s]": "—",
                  **{f"threshold {th:g}": _shown(_find(forced, "cdfs", 0.0, th))
@@ -70,6 +85,24 @@ def ripple_rows(forced: list[dict[str, Any]]) -> tuple[str, list[dict[str, str]]
 
 
 def position_rows(forced: list[dict[str, Any]]) -> list[dict[str, str]]:
+    """The DDFS critical speed along the screw (v_n = 20 mm/s, ripple threshold 0.5), the
+    counterpart of Wang2021 Table 3's DDFS row.
+
+    Parameters
+    ----------
+    forced : list of dict
+        The stored rows of the forced (ripple-threshold) study.
+
+    Returns
+    -------
+    list of dict of str to str
+        One report-table row per table position, in order of position:
+        column heading (with its unit) → formatted cell.
+
+    References
+    ----------
+    .. [1] Wang2021 Table 3, Fig. 14.
+    """
     out = []
     for r in sorted((r for r in forced if r["drive"] == "ddfs"
                      and abs(r["nut_speed_mm_s"] - 20.0) < 1e-9 and r["threshold"] == 0.5),
@@ -81,6 +114,20 @@ def position_rows(forced: list[dict[str, Any]]) -> list[dict[str, str]]:
 
 
 def compensation_rows(comp: dict[str, Any] | None) -> list[dict[str, str]]:
+    """The report's friction-compensation table: critical speed, linear creep band, verdict at the
+    tracking speed and rms following error of each compensation case.
+
+    Parameters
+    ----------
+    comp : dict or None
+        The stored compensation study; None or empty when it was not run.
+
+    Returns
+    -------
+    list of dict of str to str
+        One report-table row per case (none when the study was not run):
+        column heading (with its unit) → formatted cell.
+    """
     if not comp:
         return []
     out = []
@@ -95,7 +142,19 @@ def compensation_rows(comp: dict[str, Any] | None) -> list[dict[str, str]]:
 
 
 def ripple_targets(forced: list[dict[str, Any]]) -> list[dict[str, str]]:
-    """Issue 14's targets, on the ripple reading with the 0.5 threshold."""
+    """Issue 14's targets, on the ripple reading with the 0.5 threshold.
+
+    Parameters
+    ----------
+    forced : list of dict
+        The stored rows of the forced (ripple-threshold) study.
+
+    Returns
+    -------
+    list of dict of str to str
+        One report-table row per target (met or missed, with the margin):
+        column heading (with its unit) → formatted cell.
+    """
     rows = []
 
     def add(name: str, req: str, shown: str, ok: bool | None) -> None:
@@ -118,7 +177,18 @@ def ripple_targets(forced: list[dict[str, Any]]) -> list[dict[str, str]]:
 
 
 def summary_text(results: dict[str, Any]) -> str:
-    """What is reproduced and what is not, with the mechanism of each miss (report top)."""
+    """What is reproduced and what is not, with the mechanism of each miss (report top).
+
+    Parameters
+    ----------
+    results : dict
+        Every study's stored results.
+
+    Returns
+    -------
+    str
+        Markdown for the top of the report.
+    """
     crit = results["critical"]
     cdfs = crit[f"crit-cdfs-{MID}"]
     ddfs = crit["crit-ddfs-fig8"]
@@ -151,7 +221,24 @@ def summary_text(results: dict[str, Any]) -> str:
 def reading_figure_rows(readings: list[dict[str, Any]] | None) -> list[dict[str, str]]:
     """Figs. 7, 9–10 metrics per reading: DDFS overshoot at 1.55 mm/s for v_n = 0, 1, 10,
     20 × the CDFS critical speed, and the sine reversal overshoot at 1.56 mm/s for
-    v_np = 0, 2, 10, 16 mm/s."""
+    v_np = 0, 2, 10, 16 mm/s.
+
+    Parameters
+    ----------
+    readings : list of dict or None
+        The stored per-reading metrics (:func:`feeddrive.reproduce.forced_study.reading_figures`);
+        None when they were not computed.
+
+    Returns
+    -------
+    list of dict of str to str
+        One report-table row per reading:
+        column heading (with its unit) → formatted cell.
+
+    References
+    ----------
+    .. [1] Wang2021 Figs. 7, 9–10.
+    """
     out = []
     for r in readings or []:
         if not r:

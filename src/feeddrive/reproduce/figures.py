@@ -82,6 +82,22 @@ def _legend_outside(fig: Any, ax: Any, where: str = "upper") -> None:
 
 
 def build_fig6(data: dict[str, Any]) -> Any:
+    """The two CDFS runs of Wang2021 Fig. 6 side by side: table speed and its command.
+
+    Parameters
+    ----------
+    data : dict
+        Per commanded speed (``"1.55"``, ``"1.56"`` mm/s): its ``trace`` and ``verdict``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Table speed [mm/s] against time [s].
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 6.
+    """
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.9), sharey=True, layout="constrained")
     for ax, (key, d) in zip(axes, data.items(), strict=True):
         _speed_axes(ax, d["trace"], "table")
@@ -94,6 +110,24 @@ def build_fig6(data: dict[str, Any]) -> Any:
 
 
 def fig6(data: dict[str, Any], out: Path) -> Path:
+    """Draw :func:`build_fig6` and save it as ``out/fig6_cdfs_1p55_1p56.png``.
+
+    Parameters
+    ----------
+    data : dict
+        The stored study (as :func:`build_fig6` takes it).
+    out : Path
+        The report folder.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 6.
+    """
     return _save(build_fig6(data), out / "fig6_cdfs_1p55_1p56.png")
 
 
@@ -103,12 +137,43 @@ TRACE_COLOR_RANGE = (0.0, 0.8)
 
 def trace_color(i: int, n: int) -> Any:
     """Colour of trace ``i`` of ``n`` overlaid traces in order: viridis, without its yellow
-    end (Fig. 7's seventh trace was invisible, issue 24 item 2)."""
+    end (Fig. 7's seventh trace was invisible, issue 24 item 2).
+
+    Parameters
+    ----------
+    i : int
+        The trace's position.
+    n : int
+        Number of traces.
+
+    Returns
+    -------
+    tuple of float
+        RGBA colour.
+    """
     lo, hi = TRACE_COLOR_RANGE
     return plt.get_cmap("viridis")(lo + (hi - lo) * i / max(n - 1, 1))
 
 
 def build_fig7(data: dict[str, Any]) -> Any:
+    """The DDFS at 1.55 mm/s for each hollow-motor speed v_n = k × the CDFS critical speed, as in
+    Wang2021 Fig. 7: the traces (v_n = 0 in grey beneath) and the overshoot and settling time
+    against k.
+
+    Parameters
+    ----------
+    data : dict
+        The stored Fig. 7 study: ``traces`` by multiple k and the metric ``rows``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two panels, speeds in mm/s.
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 7.
+    """
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), layout="constrained")
     traces = list(data["traces"].items())
     # v_n = 0 (the hollow motor held: the CDFS's behaviour) in grey beneath the others, the
@@ -145,11 +210,44 @@ def build_fig7(data: dict[str, Any]) -> Any:
 
 
 def fig7(data: dict[str, Any], out: Path) -> Path:
+    """Draw :func:`build_fig7` and save it as ``out/fig7_ddfs_nut_speed.png``.
+
+    Parameters
+    ----------
+    data : dict
+        The stored study (as :func:`build_fig7` takes it).
+    out : Path
+        The report folder.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 7.
+    """
     return _save(build_fig7(data), out / "fig7_ddfs_nut_speed.png")
 
 
 def fig8_title(critical: dict[str, Any]) -> str:
-    """Title of Fig. 8; an out-of-range search says its bound, never "None" (issue 12 item 17)."""
+    """Title of Fig. 8; an out-of-range search says its bound, never "None" (issue 12 item 17).
+
+    Parameters
+    ----------
+    critical : dict
+        The DDFS critical-speed search's result.
+
+    Returns
+    -------
+    str
+        The title, with the critical speed or the search's bound [mm/s].
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 8.
+    """
     from ..analysis.critical import format_critical_speed
 
     c = critical["critical_speed_mm_s"]
@@ -160,6 +258,24 @@ def fig8_title(critical: dict[str, Any]) -> str:
 
 
 def build_fig8(trace: dict[str, Any], critical: dict[str, Any]) -> Any:
+    """The DDFS run at its critical speed (Wang2021 Fig. 8): table speed and command.
+
+    Parameters
+    ----------
+    trace : dict
+        The run's decimated ``time`` [s], ``table_speed`` and ``table_speed_reference`` [m/s].
+    critical : dict
+        The critical-speed search's result (for the title, :func:`fig8_title`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Table speed [mm/s] against time [s].
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 8.
+    """
     fig, ax = plt.subplots(figsize=(7, 3.6), layout="constrained")
     _speed_axes(ax, trace, "table")
     _command(ax, trace)
@@ -171,12 +287,51 @@ def build_fig8(trace: dict[str, Any], critical: dict[str, Any]) -> Any:
 
 
 def fig8(trace: dict[str, Any], critical: dict[str, Any], out: Path) -> Path:
+    """Draw :func:`build_fig8` and save it as ``out/fig8_ddfs_critical.png``.
+
+    Parameters
+    ----------
+    trace : dict
+        The run's decimated trace.
+    critical : dict
+        The critical-speed search's result.
+    out : Path
+        The report folder.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 8.
+    """
     return _save(build_fig8(trace, critical), out / "fig8_ddfs_critical.png")
 
 
 def build_sine(data: dict[str, Any], amplitude_mm_s: float, figure: str) -> Any:
     """Small multiples: one panel per hollow-motor amplitude (overlaid, the 10 mm/s trace was
-    hidden), the largest reversal overshoot marked and written in each panel."""
+    hidden), the largest reversal overshoot marked and written in each panel.
+
+    Parameters
+    ----------
+    data : dict
+        The stored Figs. 9–10 study.
+    amplitude_mm_s : float
+        The table-speed amplitude shown [mm/s].
+    figure : str
+        Which paper figure it reproduces, for the title (``"Fig. 9"``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per hollow-motor amplitude, speeds in mm/s.
+
+    References
+    ----------
+    .. [1] Wang2021 Figs. 9–10.
+    """
     traces = [(k, t) for k, t in data["traces"].items()
               if abs(float(k.split("/")[0]) - amplitude_mm_s) < 1e-9]
     fig, axes = plt.subplots(len(traces), 1, figsize=(8, 1.9 * len(traces) + 1.0),
@@ -212,12 +367,49 @@ def build_sine(data: dict[str, Any], amplitude_mm_s: float, figure: str) -> Any:
 
 
 def figs9_10(data: dict[str, Any], out: Path) -> list[Path]:
+    """Draw :func:`build_sine` for the 1.56 and 2 mm/s amplitudes and save them as
+    ``out/fig9_sine_1p56.png`` and ``out/fig10_sine_2.png``.
+
+    Parameters
+    ----------
+    data : dict
+        The stored Figs. 9–10 study.
+    out : Path
+        The report folder.
+
+    Returns
+    -------
+    list of Path
+        The two files written.
+
+    References
+    ----------
+    .. [1] Wang2021 Figs. 9–10.
+    """
     return [_save(build_sine(data, amp, figure), out / name)
             for amp, figure, name in ((1.56, "Fig. 9", "fig9_sine_1p56.png"),
                                       (2.0, "Fig. 10", "fig10_sine_2.png"))]
 
 
 def build_fig14(rows: list[dict[str, Any]]) -> Any:
+    """Critical speed against table position, feeddrive's beside Wang2021 Table 3's measured
+    values, for CDFS and DDFS.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Per position: ``position`` [m], ``cdfs``/``ddfs`` critical speeds [m/s] (None when not
+        found) and the paper's ``cdfs_paper``/``ddfs_paper`` [m/s].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Speeds in mm/s against position in mm.
+
+    References
+    ----------
+    .. [1] Wang2021 Table 3, Fig. 14.
+    """
     fig, ax = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
     pos = [1e3 * r["position"] for r in rows]
 
@@ -251,4 +443,22 @@ def build_fig14(rows: list[dict[str, Any]]) -> Any:
 
 
 def fig14(rows: list[dict[str, Any]], out: Path) -> Path:
+    """Draw :func:`build_fig14` and save it as ``out/fig14_position.png``.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Per position, as :func:`build_fig14` takes them.
+    out : Path
+        The report folder.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 14.
+    """
     return _save(build_fig14(rows), out / "fig14_position.png")

@@ -17,8 +17,13 @@ NUT_SPEEDS = (2e-3, 5e-3, 10e-3, 16e-3, 20e-3, 30e-3)  # [m/s] issue 14
 
 
 def jobs() -> list[tuple[str, float, float, tuple[float, ...]]]:
-    """(drive, nut speed [m/s], position [m], thresholds); the thresholds of one job share
-    their ripple runs."""
+    """The forced (torque-ripple) study's jobs; the thresholds of one job share their ripple runs.
+
+    Returns
+    -------
+    list of tuple of (str, float, float, tuple of float)
+        (drive, nut speed [m/s], position [m], ripple thresholds [-]).
+    """
     out: list[tuple[str, float, float, tuple[float, ...]]] = [("cdfs", 0.0, MID, THRESHOLDS)]
     out += [("ddfs", vn, MID, THRESHOLDS) for vn in NUT_SPEEDS]
     out += [("ddfs", PAPER["experiment_nut_speed"], a, (0.5,)) for a in PAPER["positions"]
@@ -27,7 +32,18 @@ def jobs() -> list[tuple[str, float, float, tuple[float, ...]]]:
 
 
 def run(job: tuple[str, float, float, tuple[float, ...]]) -> dict[str, Any]:
-    """{"rows": one threshold search per threshold of the job}."""
+    """Run one job of the forced study: a critical-speed search per ripple threshold.
+
+    Parameters
+    ----------
+    job : tuple of (str, float, float, tuple of float)
+        (drive, nut speed [m/s], position [m], thresholds), one item of :func:`jobs`.
+
+    Returns
+    -------
+    dict
+        ``{"rows": [...]}``, one search result per threshold (critical speed [mm/s], kind).
+    """
     drive, vn, position, thresholds = job
     system = DriveSystem(parameters.preset(PRESET), drive, position)
     rows = threshold_critical_speeds(system, vn, thresholds=thresholds)
@@ -48,7 +64,25 @@ FIGURE_READINGS: tuple[tuple[str, str, dict[str, Any]], ...] = (
 
 def reading_figures(index: int, settings: Any) -> dict[str, Any]:
     """Fig. 7 (DDFS at 1.55 mm/s against v_n) and Figs. 9–10 (sine reversal overshoot) metrics
-    of one reading, without traces."""
+    of one reading, without traces.
+
+    Parameters
+    ----------
+    index : int
+        The reading's index in the model-reading study.
+    settings : StudySettings
+        The search settings.
+
+    Returns
+    -------
+    dict
+        The reading's name and its Fig. 7 and Figs. 9–10 metrics (overshoot [-], settling time
+        [s]).
+
+    References
+    ----------
+    .. [1] Wang2021 Figs. 7, 9–10.
+    """
     from .studies import fig7, figs9_10
 
     label, preset, changes = FIGURE_READINGS[index]

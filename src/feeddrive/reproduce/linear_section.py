@@ -17,7 +17,22 @@ MID = 0.4  # [m] mid-screw, Wang2021 Table 3
 
 def linear_rows(params: DriveParameters, results: dict[str, Any]) -> tuple[str, list[dict]]:
     """(section text, rows): the least-damped frictionless mode and loop margins of the CDFS,
-    and for CDFS and DDFS the linearly unstable band next to the simulated critical speed."""
+    and for CDFS and DDFS the linearly unstable band next to the simulated critical speed.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    results : dict
+        Every study's stored results (for the simulated critical speeds).
+
+    Returns
+    -------
+    text : str
+        The section's Markdown text.
+    rows : list of dict
+        One row per drive and quantity: column heading → formatted cell (mm/s, Hz, dB, deg).
+    """
     crit = results.get("critical", {})
     rows: list[dict[str, str]] = []
     la = loop_analysis(DriveSystem(params, "cdfs", MID), 1.5e-3, frictionless=True)

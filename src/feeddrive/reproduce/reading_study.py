@@ -28,7 +28,24 @@ SERVO_DAMPING = 0.3
 def dominant_mode(params: DriveParameters, drive: str = "cdfs",
                   position: float = MID) -> tuple[float, float]:
     """(frequency [Hz], damping ratio) of the least-damped oscillatory mode of the drive with
-    friction off, continuous loops, at rest (:func:`feeddrive.analysis.linear.loop_analysis`)."""
+    friction off, continuous loops, at rest (:func:`feeddrive.analysis.linear.loop_analysis`).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    drive : str, default "cdfs"
+        The drive.
+    position : float, default 0.4
+        Table position [m].
+
+    Returns
+    -------
+    frequency : float
+        The mode's frequency [Hz].
+    damping : float
+        Its damping ratio [-].
+    """
     from ..analysis.linear import loop_analysis
 
     d = loop_analysis(DriveSystem(params, drive, position), 0.0, frictionless=True).dominant()
@@ -39,7 +56,20 @@ def dominant_mode(params: DriveParameters, drive: str = "cdfs",
 def servo_factor(path: str, target: float = SERVO_DAMPING) -> float:
     """Factor on the shipped ``path`` (a gain) at which the CDFS's frictionless dominant mode
     reaches damping ``target`` (bisection on a log scale to 0.1 %; the end of the final
-    bracket whose damping is ≥ ``target``)."""
+    bracket whose damping is ≥ ``target``).
+
+    Parameters
+    ----------
+    path : str
+        The gain's parameter path (``controller.velocity_gain``).
+    target : float, default 0.3
+        The damping ratio sought [-].
+
+    Returns
+    -------
+    float
+        The factor [-].
+    """
     ship = parameters.preset(SHIP)
     section, name = path.split(".")
     base = float(getattr(getattr(ship, section), name))
@@ -59,6 +89,21 @@ def servo_factor(path: str, target: float = SERVO_DAMPING) -> float:
 
 
 def variants() -> list[Variant]:
+    """The model readings the study compares: from ``wang2021-literal`` (Table 2 in SI) one
+    unstated choice at a time up to the shipped ``wang2021``, then variations of it (velocity
+    integral, current loop, K_eq, damping, feedback, sampling), the servo-tuned readings
+    (:func:`servo_variants`) and those with effects the paper's model lacks
+    (:func:`beyond_variants`).
+
+    Returns
+    -------
+    list of tuple of (str, str, dict)
+        (name, preset, changes: parameter path → value).
+
+    References
+    ----------
+    .. [1] Wang2021 Tables 1–2.
+    """
     ship = parameters.preset(SHIP)
     damp = ship.stiffness.axial_damping
     kvi = ship.controller.velocity_integral_gain
@@ -94,7 +139,13 @@ def variants() -> list[Variant]:
 
 def beyond_variants() -> list[Variant]:
     """Readings with effects the paper's model lacks (issue 14): ball–nut friction at the
-    relative screw−nut speed, motor torque ripple, real-drive limits and sampling."""
+    relative screw−nut speed, motor torque ripple, real-drive limits and sampling.
+
+    Returns
+    -------
+    list of tuple of (str, str, dict)
+        (name, preset, changes: parameter path → value).
+    """
     from ..presets.wang2021 import RIPPLE_AMPLITUDE, RIPPLE_ORDER
 
     ripple = {"orders": (RIPPLE_ORDER,), "amplitudes": (RIPPLE_AMPLITUDE,), "phases": (0.0,)}
@@ -116,7 +167,17 @@ def beyond_variants() -> list[Variant]:
 def servo_variants() -> list[Variant]:
     """Loops tuned as a servo engineer would: the frictionless dominant mode damped with
     ζ ≥ 0.3 (the shipped reading has ζ ≈ 0.03), by raising K_vp (Table 2's 45) or by
-    lowering the unstated velocity integral."""
+    lowering the unstated velocity integral.
+
+    Returns
+    -------
+    list of tuple of (str, str, dict)
+        (name, preset, changes: parameter path → value).
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2.
+    """
     ship = parameters.preset(SHIP)
     kvp = servo_factor("controller.velocity_gain")
     kvi = servo_factor("controller.velocity_integral_gain")
@@ -130,13 +191,39 @@ def servo_variants() -> list[Variant]:
 
 
 def jobs() -> list[tuple[str, str, dict[str, Any], str, float]]:
+    """The model-reading study's jobs: every variant on the CDFS and on the DDFS (at the paper's
+    simulated nut speed).
+
+    Returns
+    -------
+    list of tuple of (str, str, dict, str, float)
+        (variant name, preset, changes, drive, nut speed [m/s]).
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 8 (the DDFS nut speed).
+    """
     return [(name, preset, changes, drive, nut) for name, preset, changes in variants()
             for drive, nut in (("cdfs", 0.0), ("ddfs", PAPER["ddfs_sim_nut_speed"]))]
 
 
 def run_variant(job: tuple[str, str, dict[str, Any], str, float],
                 settings: StudySettings | None = None) -> dict[str, Any]:
-    """One row: the variant's critical speed [mm/s] for one drive (failures are rows too)."""
+    """One row: the variant's critical speed [mm/s] for one drive (failures are rows too).
+
+    Parameters
+    ----------
+    job : tuple of (str, str, dict, str, float)
+        One item of :func:`jobs`: (variant, preset, changes, drive, nut speed [m/s]).
+    settings : StudySettings, optional
+        The search settings; the defaults when omitted.
+
+    Returns
+    -------
+    dict
+        The variant, drive, nut speed [mm/s], critical speed [mm/s] (None when not found),
+        status, kind and creeping bands.
+    """
     name, preset, changes, drive, nut = job
     p = parameters.preset(preset)
     for path, value in changes.items():

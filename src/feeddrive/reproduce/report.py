@@ -48,7 +48,22 @@ def _dev(ours: float | None, paper: float | None) -> str:
 
 
 def critical_ratio(cdfs: dict[str, Any], ddfs: dict[str, Any]) -> tuple[float | None, str]:
-    """CDFS/DDFS critical-speed ratio, or the bound when the DDFS search was below range."""
+    """CDFS/DDFS critical-speed ratio, or the bound when the DDFS search was below range.
+
+    Parameters
+    ----------
+    cdfs : dict
+        The CDFS critical-speed search's result.
+    ddfs : dict
+        The DDFS one.
+
+    Returns
+    -------
+    ratio : float or None
+        v_crit,CDFS / v_crit,DDFS [-]; None when the DDFS search found no speed.
+    shown : str
+        The ratio as printed (``"> 3.1"`` for a bound).
+    """
     a, b = cdfs["critical_speed_mm_s"], ddfs["critical_speed_mm_s"]
     if a is not None and b:
         return a / b, f"{a / b:.2f}"
@@ -58,6 +73,26 @@ def critical_ratio(cdfs: dict[str, Any], ddfs: dict[str, Any]) -> tuple[float | 
 
 
 def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[dict[str, str]]:
+    """The report's main table: each quantity the paper reports beside feeddrive's, with its
+    source, the difference and whether it was fitted or predicted.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set the report is about.
+    results : dict
+        Every study's stored results.
+
+    Returns
+    -------
+    list of dict of str to str
+        One report-table row per quantity (critical speeds, settling times, overshoots):
+        column heading (with its unit) → formatted cell.
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 5.2, Sect. 6, Figs. 6–8, Table 3.
+    """
     crit = results["critical"]
 
     def c(key: str) -> float | None:
@@ -154,7 +189,24 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
 def fig6b_agreement(verdict: str, settling_time: float | None) -> str:
     """Whether the 1.56-mm/s CDFS run agrees with Fig. 6b: stable, *and* settled at about the
     paper's ~7 s.  "About" is read as ±30 %, the precision of a time read off a plot; a run
-    that is stable but settles at 11.7 s does not agree (issue 12 item 21)."""
+    that is stable but settles at 11.7 s does not agree (issue 12 item 21).
+
+    Parameters
+    ----------
+    verdict : str
+        The run's verdict word (:func:`feeddrive.reproduce.studies.verdict_word`).
+    settling_time : float or None
+        Its settling time [s]; None when it never settled.
+
+    Returns
+    -------
+    str
+        ``"agrees (…)"`` with the settling-time deviation, or ``"differs: …"`` saying how.
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 6b, Sect. 5.2.
+    """
     paper = PAPER["fig6b_settling"]
     if verdict != "smooth":
         return "differs: not stable"
@@ -210,6 +262,20 @@ def _position_trend(rows: list[dict[str, Any]]) -> str:
 
 
 def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
+    """The steady-curve indicators of every friction site and branch: negative-slope band,
+    zero-slope speed and the LuGre passivity margin.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set the report is about.
+
+    Returns
+    -------
+    list of dict of str to str
+        One report-table row per site and branch:
+        column heading (with its unit) → formatted cell.
+    """
     rows = []
     for site in SITES:
         lg = getattr(params.friction, site)
@@ -228,7 +294,18 @@ def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
 
 def rigid_body_band(params: DriveParameters) -> str:
     """Unstable band of steady sliding of the CDFS treated as one rigid mass (screw + guide
-    friction) held by the velocity loop's damping and the position loop's stiffness."""
+    friction) held by the velocity loop's damping and the position loop's stiffness.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set the report is about.
+
+    Returns
+    -------
+    str
+        A sentence with the band [mm/s], or that sliding is stable over the scan.
+    """
     H = params.screw.transmission_ratio
     mass = (params.screw_motor.inertia + params.screw.shaft_inertia) / H**2 + params.table.mass
     c = params.controller
@@ -265,6 +342,19 @@ RIGID_VS_LINEAR = (
 
 
 def study_rows(rows: list[dict[str, Any]]) -> list[dict[str, str]]:
+    """The model-reading study's table: critical speed, status, kind and creeping bands of every
+    variant and drive.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The stored rows (:func:`feeddrive.reproduce.reading_study.run_variant`).
+
+    Returns
+    -------
+    list of dict of str to str
+        One row per variant and drive: column heading → formatted cell [mm/s].
+    """
     return [{"variant": str(r["variant"]), "drive": str(r["drive"]).upper(),
              "v_n [mm/s]": f"{r['nut_speed_mm_s']:g}",
              "critical speed [mm/s]": _fmt(r["critical_speed_mm_s"]),
@@ -273,7 +363,19 @@ def study_rows(rows: list[dict[str, Any]]) -> list[dict[str, str]]:
 
 
 def target_rows(results: dict[str, Any]) -> list[dict[str, str]]:
-    """The issue's targets for the shipped preset, met or missed, with the margin."""
+    """The issue's targets for the shipped preset, met or missed, with the margin.
+
+    Parameters
+    ----------
+    results : dict
+        Every study's stored results.
+
+    Returns
+    -------
+    list of dict of str to str
+        One report-table row per target:
+        column heading (with its unit) → formatted cell.
+    """
     crit = results["critical"]
 
     def c(key: str) -> float | None:
@@ -337,14 +439,36 @@ def _markdown() -> MarkdownIt:
 
 
 def render_html(markdown_text: str) -> str:
-    """HTML of a piece of the report's Markdown (lists, emphasis, code, links, tables)."""
+    """HTML of a piece of the report's Markdown (lists, emphasis, code, links, tables).
+
+    Parameters
+    ----------
+    markdown_text : str
+        The Markdown.
+
+    Returns
+    -------
+    str
+        The HTML fragment.
+    """
     return str(_markdown().render(markdown_text))
 
 
 def run_text(results: dict[str, Any]) -> str:
     """The report header's account of the run: its wall time, and how many studies were
     computed and how many reused from OUT/data (a resumed run's wall time is not the study's
-    cost, issue 24 item 3)."""
+    cost, issue 24 item 3).
+
+    Parameters
+    ----------
+    results : dict
+        Every study's stored results.
+
+    Returns
+    -------
+    str
+        The sentence.
+    """
     text = f"wall time {results['wall_time_s']:.0f} s"
     reused, total = results.get("studies_reused"), results.get("studies_total")
     if reused is None or total is None:
@@ -356,7 +480,18 @@ def run_text(results: dict[str, Any]) -> str:
 
 
 def settings_markdown(settings: StudySettings) -> str:
-    """The study settings as a reader's list in mm/s and s (not a Python repr in SI)."""
+    """The study settings as a reader's list in mm/s and s (not a Python repr in SI).
+
+    Parameters
+    ----------
+    settings : StudySettings
+        The search settings.
+
+    Returns
+    -------
+    str
+        A Markdown list.
+    """
     lo, hi = (1e3 * v for v in settings.speed_range)
     fig7 = ", ".join(f"{m:g}" for m in settings.fig7_multiples)
     vnp = ", ".join(f"{1e3 * v:g}" for v in settings.sine_nut_amplitudes)
@@ -395,6 +530,24 @@ def parameter_slot_rows(params: DriveParameters) -> list[dict[str, Any]]:
 
 def write(params: DriveParameters, settings: StudySettings, results: dict[str, Any],
           out: Path) -> tuple[Path, Path]:
+    """Write the reproduction report: its CSV tables, ``report.md`` and ``report.html``.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set the report is about.
+    settings : StudySettings
+        The search settings.
+    results : dict
+        Every study's stored results.
+    out : Path
+        The report folder.
+
+    Returns
+    -------
+    tuple of (Path, Path)
+        The Markdown and HTML reports.
+    """
     comparison = comparison_rows(params, results)
     write_csv(comparison, out / "paper_comparison.csv")
     # what the runs used, written from the models (not the set serialised again)

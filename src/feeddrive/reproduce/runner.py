@@ -40,7 +40,24 @@ _STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "for
 
 def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
                 notice: Callable[[str], None] | None = None) -> ResultStore:
-    """The store of ``out/data`` for this parameter set, these settings and this code."""
+    """The store of ``out/data`` for this parameter set, these settings and this code.
+
+    Parameters
+    ----------
+    out : Path
+        The report folder.
+    params : DriveParameters
+        The parameter set.
+    settings : StudySettings
+        The search settings.
+    notice : callable, optional
+        Receives a one-line message for each unusable stored entry.
+
+    Returns
+    -------
+    ResultStore
+        The store, keyed by the set, the settings and the code.
+    """
     from .. import __version__
 
     key = store_key({"version": __version__, "kernel": KERNEL_HASH,
@@ -83,6 +100,32 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     ``study``: also run the model-reading study (variants of the Wang2021 presets).
     ``notice``: receives a one-line message for each stored entry found unusable (corrupt,
     edited, other code) and recomputed.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set studied.
+    out : Path
+        The report folder; studies already stored in ``out/data`` are reused.
+    settings : StudySettings, optional
+        The search settings; the defaults when omitted.
+    workers : int, default 2
+        Processes that run the studies.
+    study : bool, default True
+        Also run the model-reading study.
+    progress : callable, optional
+        ``progress(stage, done, total)`` as the studies finish.
+    notice : callable, optional
+        Receives a one-line message for each unusable stored entry.
+
+    Returns
+    -------
+    dict
+        Every study's results.
+
+    References
+    ----------
+    .. [1] Wang2021 (the figures, tables and sections the studies reproduce).
     """
     settings = settings or StudySettings()
     out.mkdir(parents=True, exist_ok=True)

@@ -21,7 +21,20 @@ AXIAL = ("screw.nut_axial_stiffness", "screw.nut_bearing_axial_stiffness",
 
 
 def compute(params: DriveParameters) -> dict[str, Any]:
-    """The CDFS linear-band sensitivity of ``params`` at mid-screw, as a dict (stored)."""
+    """The CDFS linear-band sensitivity of ``params`` at mid-screw, as a dict (stored).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+
+    Returns
+    -------
+    dict
+        :meth:`~feeddrive.analysis.sensitivity.SensitivityResult.to_dict`: the linear band's upper
+        edge at the base point [mm/s] and, per parameter, the band with it moved down and up
+        and its elasticity.
+    """
     from ..analysis.sensitivity import sensitivity
 
     return sensitivity(params, drive="cdfs", table_position=0.4, quantity="linear-band",
@@ -29,7 +42,20 @@ def compute(params: DriveParameters) -> dict[str, Any]:
 
 
 def figure(data: dict[str, Any] | None, out: Path) -> Path | None:
-    """The tornado chart ``out/FIGURE`` from the stored dict."""
+    """The tornado chart ``out/FIGURE`` from the stored dict.
+
+    Parameters
+    ----------
+    data : dict or None
+        The stored sensitivity study; None when it was not run.
+    out : Path
+        The report folder.
+
+    Returns
+    -------
+    Path or None
+        The chart written; None without data.
+    """
     if not data:
         return None
     from ..analysis.sensitivity import Entry, SensitivityResult, plot_tornado
@@ -54,7 +80,24 @@ def _num(x: float | None) -> float:
 
 def axial_rigidity_answer(data: dict[str, Any]) -> str:
     """The claim "the greater the axial rigidity, the lower the critical speed" against the
-    chart's stiffness rows."""
+    chart's stiffness rows.
+
+    The claim is Wang2021's conclusion on axial rigidity.
+
+    Parameters
+    ----------
+    data : dict
+        The stored sensitivity study (:func:`compute`).
+
+    Returns
+    -------
+    str
+        A sentence saying whether the chart bears the claim out.
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 6, Sect. 7 (conclusion 3), Table 3.
+    """
     rows = {e["path"]: e for e in data["entries"] if e["path"] in AXIAL}
     if not rows:
         return "No stiffness row was varied."
@@ -79,7 +122,20 @@ def axial_rigidity_answer(data: dict[str, Any]) -> str:
 
 
 def sensitivity_rows(data: dict[str, Any] | None) -> tuple[str, list[dict[str, str]]]:
-    """(section text, rows) from the stored dict (None: the study was not run)."""
+    """(section text, rows) from the stored dict (None: the study was not run).
+
+    Parameters
+    ----------
+    data : dict or None
+        The stored sensitivity study.
+
+    Returns
+    -------
+    text : str
+        The section's Markdown text.
+    rows : list of dict of str to str
+        One row per parameter: column heading → formatted cell [mm/s].
+    """
     if not data:
         return "Not computed (run without --no-study).", []
     rows = []

@@ -40,7 +40,15 @@ CSV_FLOAT = "%.10g"
 
 
 def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
-    """A table of rows as CSV, floats without binary noise."""
+    """A table of rows as CSV, floats without binary noise.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows; the keys of the first are the header.
+    path : Path
+        The CSV file.
+    """
     import pandas as pd
 
     from ..io.outputs import atomic_path
@@ -55,6 +63,31 @@ class StudySettings:
 
     Every creep trial runs ``trial_initial_duration``, doubling up to ``trial_max_duration``
     until its verdict is decided (:class:`~feeddrive.analysis.cycle_verdict.VerdictRule`).
+
+    Parameters
+    ----------
+    trial_initial_duration : float, default 12.0
+        First duration of a creep trial [s].
+    trial_max_duration : float, default 240.0
+        Longest duration of a creep trial [s].
+    speed_range : tuple of (float, float)
+        Speeds the critical-speed search covers [m/s].
+    coarse_step : float, default 2e-4
+        Step of the coarse scan [m/s].
+    resolution : float, default 1e-5
+        Bisection resolution, the paper's 0.01 mm/s [m/s].
+    fig7_multiples : tuple of float
+        Hollow-motor speeds of Fig. 7 as multiples of the CDFS critical speed [-].
+    sine_frequency : float, default 0.2
+        Frequency of the Figs. 9–10 sine (not stated by the paper) [Hz].
+    sine_periods : float, default 2.0
+        Periods simulated [-].
+    sine_nut_amplitudes : tuple of float
+        Hollow-motor amplitudes of Figs. 9–10 [m/s].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 6 (0.01 mm/s steps), Figs. 7, 9–10.
     """
 
     trial_initial_duration: float = protocol.TRIAL_DURATION
@@ -68,13 +101,40 @@ class StudySettings:
     sine_nut_amplitudes: tuple[float, ...] = (0.0, 2e-3, 10e-3, 16e-3)
 
     def rule(self) -> VerdictRule:
+        """The creep-verdict rule of these settings' trial durations.
+
+        Returns
+        -------
+        VerdictRule
+            Trials of ``trial_initial_duration`` doubled up to ``trial_max_duration``.
+        """
         return VerdictRule(initial_duration=self.trial_initial_duration,
                            max_duration=self.trial_max_duration)
 
 
 def critical_speed(params: DriveParameters, drive: str, position: float, nut_speed: float,
                    settings: StudySettings) -> dict[str, Any]:
-    """Critical speed from rest (scan + bisection) at one position."""
+    """Critical speed from rest (scan + bisection) at one position.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    drive : str
+        ``"cdfs"`` or ``"ddfs"``.
+    position : float
+        Table position [m].
+    nut_speed : float
+        Nut speed (DDFS) [m/s].
+    settings : StudySettings
+        The search settings.
+
+    Returns
+    -------
+    dict
+        The search's result in engineering units (``CriticalSpeed.to_dict``: the speed
+        [mm/s], or the bound of an out-of-range search, its kind, bands and trials).
+    """
     res = critical_speed_from_rest(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
         speed_range=settings.speed_range, coarse_step=settings.coarse_step,
@@ -84,7 +144,31 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
 
 def critical_speed_running(params: DriveParameters, drive: str, position: float,
                            nut_speed: float, settings: StudySettings) -> dict[str, Any]:
-    """Critical speed by the paper's step-down protocol on a running table (Sect. 6)."""
+    """Critical speed by the paper's step-down protocol on a running table (Sect. 6).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    drive : str
+        ``"cdfs"`` or ``"ddfs"``.
+    position : float
+        Table position [m].
+    nut_speed : float
+        Nut speed (DDFS) [m/s].
+    settings : StudySettings
+        The search settings.
+
+    Returns
+    -------
+    dict
+        The search's result in engineering units (``CriticalSpeed.to_dict``: the speed
+        [mm/s], its kind and the staircase's steps).
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 6, Fig. 13.
+    """
     res = critical_speed_stepdown(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
         start_speed=settings.speed_range[1], lowest_speed=settings.speed_range[0],
@@ -94,6 +178,20 @@ def critical_speed_running(params: DriveParameters, drive: str, position: float,
 
 
 def speed_trace(result: Any, stride: int = 5) -> dict[str, list[float]]:
+    """A run's table speed and its command, decimated for the stored study and the figures.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    stride : int, default 5
+        Keep every ``stride``-th sample.
+
+    Returns
+    -------
+    dict of str to list of float
+        ``time`` [s], ``table_speed`` and ``table_speed_reference`` [m/s].
+    """
     return {"time": result.time[::stride].tolist(),
             "table_speed": result["table_speed"][::stride].tolist(),
             "table_speed_reference": result["table_speed_reference"][::stride].tolist()}
@@ -102,7 +200,24 @@ def speed_trace(result: Any, stride: int = 5) -> dict[str, list[float]]:
 def decided_run(system: DriveSystem, profile: ConstantSpeed, rule: VerdictRule
                 ) -> tuple[Result, CreepTrial]:
     """Simulate ``profile`` from rest until the creep verdict is decided; the last (deciding)
-    run and its verdict."""
+    run and its verdict.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    profile : ConstantSpeed
+        The commanded speed.
+    rule : VerdictRule
+        The verdict rule (trial durations).
+
+    Returns
+    -------
+    result : Result
+        The deciding run.
+    trial : CreepTrial
+        Its verdict.
+    """
     runs: list[Result] = []
     sim = Simulation(system, profile)
 
@@ -115,12 +230,42 @@ def decided_run(system: DriveSystem, profile: ConstantSpeed, rule: VerdictRule
 
 
 def verdict_word(trial: CreepTrial) -> str:
-    """"creeping" (stick-slip or sustained oscillation), "smooth" or "undecided"."""
+    """"creeping" (stick-slip or sustained oscillation), "smooth" or "undecided".
+
+    Parameters
+    ----------
+    trial : CreepTrial
+        A creep trial's verdict.
+
+    Returns
+    -------
+    str
+        The word.
+    """
     return "creeping" if trial.creeping else trial.kind
 
 
 def fig6(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
-    """CDFS at 1.55 and 1.56 mm/s, mid-screw (Wang2021 Fig. 6), each run until decided."""
+    """CDFS at 1.55 and 1.56 mm/s, mid-screw (Wang2021 Fig. 6), each run until decided.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    settings : StudySettings
+        The search settings.
+
+    Returns
+    -------
+    dict
+        Per commanded speed (``"1.55"``, ``"1.56"`` mm/s): verdict, kind, ripple ratio,
+        stick fraction, stick-slip frequency [Hz], duration and settling time [s], and the
+        decimated trace.
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 6, Sect. 5.2.
+    """
     out: dict[str, Any] = {}
     for v in (1.55e-3, 1.56e-3):
         r, m = decided_run(DriveSystem(params, "cdfs", MID), ConstantSpeed(v), settings.rule())
@@ -136,7 +281,24 @@ def fig6(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
 
 def settling_time(time: np.ndarray, speed: np.ndarray, command: float,
                   band: float = 0.05) -> float | None:
-    """Time [s] after which |speed − command| stays within ``band``·|command|; None if never."""
+    """Time [s] after which |speed − command| stays within ``band``·|command|; None if never.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    speed : numpy.ndarray
+        The speed trace [m/s].
+    command : float
+        The commanded speed [m/s].
+    band : float, default 0.05
+        The band, relative to the command [-].
+
+    Returns
+    -------
+    float or None
+        The settling time [s].
+    """
     outside = np.abs(speed - command) > band * abs(command)
     if not outside.any():
         return 0.0
@@ -147,13 +309,46 @@ def settling_time(time: np.ndarray, speed: np.ndarray, command: float,
 
 
 def overshoot(speed: np.ndarray, command: float) -> float:
-    """Peak overshoot (max − command)/command, ≥ 0."""
+    """Peak overshoot (max − command)/command, ≥ 0.
+
+    Parameters
+    ----------
+    speed : numpy.ndarray
+        The speed trace [m/s].
+    command : float
+        The commanded speed [m/s].
+
+    Returns
+    -------
+    float
+        The overshoot [-].
+    """
     return max(0.0, float(np.max(speed) - command) / abs(command))
 
 
 def fig7(params: DriveParameters, cdfs_critical: float, settings: StudySettings
          ) -> dict[str, Any]:
-    """DDFS at 1.55 mm/s for hollow-motor speeds v_n = k × the CDFS critical speed (Fig. 7)."""
+    """DDFS at 1.55 mm/s for hollow-motor speeds v_n = k × the CDFS critical speed (Fig. 7).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    cdfs_critical : float
+        The CDFS critical speed the multiples refer to [m/s].
+    settings : StudySettings
+        The search settings.
+
+    Returns
+    -------
+    dict
+        The decimated traces by multiple and a row per multiple (nut speed [m/s], overshoot
+        [-], settling time [s], verdict).
+
+    References
+    ----------
+    .. [1] Wang2021 Fig. 7.
+    """
     v = 1.55e-3
     rows = []
     traces = {}
@@ -172,7 +367,26 @@ def fig7(params: DriveParameters, cdfs_critical: float, settings: StudySettings
 
 
 def figs9_10(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
-    """Sinusoidal table speed, amplitudes 1.56 and 2 mm/s, several nut amplitudes."""
+    """Sinusoidal table speed, amplitudes 1.56 and 2 mm/s, several nut amplitudes.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    settings : StudySettings
+        The search settings (frequency, periods, nut amplitudes).
+
+    Returns
+    -------
+    dict
+        ``rows`` (table, nut and screw amplitudes [m/s] and the reversal overshoot of each
+        run), the decimated ``traces`` by ``"amplitude/nut amplitude"`` [mm/s] and the
+        ``frequency`` [Hz].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 5.3, Figs. 9–10.
+    """
     rows = []
     traces = {}
     duration = settings.sine_periods / settings.sine_frequency + 1.0 / settings.sine_frequency
@@ -190,6 +404,22 @@ def figs9_10(params: DriveParameters, settings: StudySettings) -> dict[str, Any]
 
 
 def stiffness_rows(params: DriveParameters) -> list[dict[str, float]]:
+    """k_sa and K_eq at the positions of Wang2021 Table 3, beside the paper's k_sa row.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+
+    Returns
+    -------
+    list of dict of str to float
+        Per position: ``position`` [m], ``k_sa``, ``k_sa_paper`` and ``k_eq`` [N/m].
+
+    References
+    ----------
+    .. [1] Wang2021 Table 3, Eqs. (2)–(5).
+    """
     chain = stiffness_chain(params, np.array(PAPER["positions"]))
     return [{"position": float(a), "k_sa": float(k), "k_sa_paper": float(kp),
              "k_eq": float(ke)}

@@ -62,10 +62,38 @@ N_HELD = 1
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's right-hand side.
+
+    The generated module replaces it; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The model function's arguments.
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
     raise NotImplementedError("placeholder: the assembled model's right-hand side")
 
 
 def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's sampled-controller update.
+
+    The generated module replaces it; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The model function's arguments.
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
     raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
 
 
@@ -79,7 +107,13 @@ _reject_factor: Any = None
 @functools.lru_cache(maxsize=1)
 def template_sources() -> list[str]:
     """Text placed in each generated model module: the status codes and the integrator (its
-    step is the one of :mod:`feeddrive.solvers.steps`, placed beside it)."""
+    step is the one of :mod:`feeddrive.solvers.steps`, placed beside it).
+
+    Returns
+    -------
+    list of str
+        Python sources.
+    """
     names = ", ".join(CONSTANTS)
     src = steps.inline_steps(inspect.getsource(integrate_template)).replace(
         "def integrate_template(", "def integrate(", 1)
@@ -93,7 +127,24 @@ def template_sources() -> list[str]:
 def auxiliary_template(t_out: np.ndarray, y_out: np.ndarray, P: np.ndarray,
                        T: np.ndarray) -> np.ndarray:
     """The auxiliary signals at recorded (t, y) of a run with continuous loops (where they
-    depend on nothing else): evaluated only when a Result is asked for one."""
+    depend on nothing else): evaluated only when a Result is asked for one.
+
+    Parameters
+    ----------
+    t_out : numpy.ndarray
+        Recorded times [s].
+    y_out : numpy.ndarray
+        Recorded states [SI, per state].
+    P : numpy.ndarray
+        Packed parameter vector [SI, per slot].
+    T : numpy.ndarray
+        Packed tables [SI].
+
+    Returns
+    -------
+    numpy.ndarray
+        Auxiliary signals at each recorded time [SI, per signal].
+    """
     n = t_out.size
     out = np.empty((n, N_AUX))
     held = np.zeros(N_HELD)
@@ -111,7 +162,20 @@ def new_memory(n_states: int, h_init: float) -> np.ndarray:
     call ends after its current step with STATUS_STOPPED) and the *live time* (the time [s]
     of the last accepted step, written as the solver goes): another thread reads a long
     call's progress and stops it while it runs (the kernels release the GIL;
-    feeddrive.engine.simulate.Simulation.live_time and request_stop)."""
+    feeddrive.engine.simulate.Simulation.live_time and request_stop).
+
+    Parameters
+    ----------
+    n_states : int
+        Number of states.
+    h_init : float
+        First step size [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The memory [mixed: s, -, state rates].
+    """
     memory = np.zeros(4 + n_states)
     memory[:2] = (h_init, 1e-4)
     return memory
@@ -131,7 +195,70 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     from where a previous call stopped is bit-identical to one call over the whole span.
     ``bound``: the largest |state| per state before the run stops as diverged (None: none);
     ``P``: the parameter vector (None: the model's; a run passes the periods on its grid,
-    :meth:`feeddrive.engine.simulate.Sampling.parameters`)."""
+    :meth:`feeddrive.engine.simulate.Sampling.parameters`).
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+    y0 : numpy.ndarray
+        State at t = start·base [SI, per state].
+    t_end : float
+        End of the run [s].
+    out_every : int
+        Output stride in breakpoints.
+    base : float
+        Breakpoint spacing [s].
+    schedule : numpy.ndarray of int
+        Breakpoints between two instants of each clock; 0 = continuous
+        (:mod:`feeddrive.solvers.schedule`).
+    rtol : float
+        Relative tolerance [-].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    rel_mask : numpy.ndarray
+        1 where the relative tolerance applies [-].
+    h_init : float
+        First step size [s].
+    h_max : float
+        Largest step [s].
+    adaptive : int
+        1 for error-controlled steps, 0 for a fixed step (used to verify the order).
+    max_steps : int
+        Step limit of the call.
+    start : int, default 0
+        Breakpoint index the call starts from.
+    held : numpy.ndarray, optional
+        Held controller values, updated in place [SI, per value].
+    memory : numpy.ndarray, optional
+        Driver memory, updated in place (:func:`new_memory`) [mixed, see the driver].
+    bound : numpy.ndarray, optional
+        Largest |state| per state before the run stops as diverged [SI, per state]; none by
+        default.
+    P : numpy.ndarray, optional
+        The parameter vector; the model's by default [SI, per slot].
+
+    Returns
+    -------
+    t_out : numpy.ndarray
+        Output times [s].
+    y_out : numpy.ndarray
+        States at them [SI, per state].
+    aux_out : numpy.ndarray
+        Auxiliary signals at them [SI, per signal].
+    stats : numpy.ndarray
+        Status, steps, rejected steps, right-hand-side evaluations, time reached [s]
+        [mixed].
+    held : numpy.ndarray
+        The held controller values at the end [SI, per value].
+
+    References
+    ----------
+    .. [1] J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput.
+       Appl. Math. 6 (1980) 19–26.
+    .. [2] E. Hairer, S. P. Nørsett, G. Wanner, Solving Ordinary Differential Equations I,
+       2nd ed., Springer, 1993, Sect. II.4–II.6.
+    """
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states), h_init) if memory is None else memory
     bound = np.full(len(model.states), np.inf) if bound is None else bound
@@ -166,6 +293,65 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     (t_out, y_out, aux_out, stats, held) with stats = [status, steps, rejected,
     rhs_evaluations, t_reached].  A state with |y_i| > ``bound[i]`` at a step end stops the run
     with ``STATUS_DIVERGED``; that step end is recorded as the last output sample.
+
+    Parameters
+    ----------
+    y0 : numpy.ndarray
+        State at t = start·base [SI, per state].
+    t_end : float
+        End of the run [s].
+    out_every : int
+        Output stride in breakpoints.
+    base : float
+        Breakpoint spacing [s].
+    schedule : numpy.ndarray of int
+        Breakpoints between two instants of each clock; 0 = continuous
+        (:mod:`feeddrive.solvers.schedule`).
+    P : numpy.ndarray
+        Packed parameter vector [SI, per slot].
+    T : numpy.ndarray
+        Packed tables [SI].
+    rtol : float
+        Relative tolerance [-].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    rel_mask : numpy.ndarray
+        1 where the relative tolerance applies [-].
+    h_max : float
+        Largest step [s].
+    adaptive : int
+        1 for error-controlled steps, 0 for a fixed step (used to verify the order).
+    max_steps : int
+        Step limit of the call.
+    start : int
+        Breakpoint index the call starts from.
+    held : numpy.ndarray
+        Held controller values, read and left updated [SI, per value].
+    memory : numpy.ndarray
+        Driver memory carried between calls, read and left updated [mixed, see the driver].
+    bound : numpy.ndarray
+        Largest |state| per state before the run stops as diverged [SI, per state].
+
+    Returns
+    -------
+    t_out : numpy.ndarray
+        Output times [s].
+    y_out : numpy.ndarray
+        States at them [SI, per state].
+    aux_out : numpy.ndarray
+        Auxiliary signals at them [SI, per signal].
+    stats : numpy.ndarray
+        Status, steps, rejected steps, right-hand-side evaluations, time reached [s]
+        [mixed].
+    held : numpy.ndarray
+        The held controller values at the end [SI, per value].
+
+    References
+    ----------
+    .. [1] J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput.
+       Appl. Math. 6 (1980) 19–26.
+    .. [2] E. Hairer, S. P. Nørsett, G. Wanner, Solving Ordinary Differential Equations I,
+       2nd ed., Springer, 1993, Sect. II.4–II.6.
     """
     n = y0.size
     n_break = int(round(t_end / base))

@@ -69,13 +69,40 @@ N_HELD = 1
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's right-hand side.
+
+    The generated module replaces it; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The model function's arguments.
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
     raise NotImplementedError("placeholder: the assembled model's right-hand side")
 
 
 @kernel
 def lu_factor(M: np.ndarray, piv: np.ndarray) -> bool:
     """In-place LU factorisation with partial pivoting (rows swapped whole, as LAPACK getrf).
-    Returns False if a pivot is exactly zero."""
+    Returns False if a pivot is exactly zero.
+
+    Parameters
+    ----------
+    M : numpy.ndarray
+        The square matrix, overwritten by its LU factors [SI].
+    piv : numpy.ndarray of int
+        Output: the row permutation.
+
+    Returns
+    -------
+    bool
+        True, or False for an exactly zero pivot (singular matrix).
+    """
     n = M.shape[0]
     for k in range(n):
         p = k
@@ -104,7 +131,17 @@ def lu_factor(M: np.ndarray, piv: np.ndarray) -> bool:
 
 @kernel
 def lu_solve(M: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
-    """Solve (LU) x = b in place after :func:`lu_factor`."""
+    """Solve (LU) x = b in place after :func:`lu_factor`.
+
+    Parameters
+    ----------
+    M : numpy.ndarray
+        LU factors from :func:`lu_factor` [SI].
+    piv : numpy.ndarray of int
+        Their row permutation.
+    b : numpy.ndarray
+        Right-hand side, overwritten by the solution [SI].
+    """
     n = M.shape[0]
     for k in range(n):
         p = piv[k]
@@ -139,7 +176,47 @@ def fd_jacobian_template(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarr
     column is the plain one-column-per-call Jacobian.  Columns of states not ``live`` (see
     :func:`frozen_states`) are 0 and not differenced; a group left without a live column costs
     no call.  Returns the number of right-hand-side evaluations, negated if a state taken as
-    frozen has a derivative or a sensitivity (then nothing is to be trusted)."""
+    frozen has a derivative or a sensitivity (then nothing is to be trusted).
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y : numpy.ndarray
+        State [SI, per state].
+    f0 : numpy.ndarray
+        f(t, y), evaluated by the caller [SI per second, per state].
+    held : numpy.ndarray
+        Held controller values [SI, per value].
+    P : numpy.ndarray
+        Packed parameter vector [SI, per slot].
+    T : numpy.ndarray
+        Packed tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state, scales the differences [SI, per state].
+    J : numpy.ndarray
+        Output: ∂f/∂y [1/s, per pair].
+    ft : numpy.ndarray
+        Output: ∂f/∂t [SI per second², per state].
+    yp, fp, aux : numpy.ndarray
+        Work space [SI].
+    live : numpy.ndarray of bool
+        States that are not frozen.
+    S : numpy.ndarray of int
+        Sparsity pattern, (n, n + 1).
+    colour : numpy.ndarray of int
+        Column groups.
+
+    Returns
+    -------
+    int
+        Right-hand-side evaluations; negative when a frozen state moved.
+
+    References
+    ----------
+    .. [1] A. R. Curtis, M. J. D. Powell, J. K. Reid, "On the estimation of sparse Jacobian
+       matrices", J. Inst. Math. Appl. 13 (1974) 117–119.
+    """
     n = y.size
     n_groups = 0
     for j in range(n + 1):
@@ -193,7 +270,22 @@ def frozen_states_template(J: np.ndarray, f0: np.ndarray, live: np.ndarray) -> i
     whatever its Jacobian column holds, so that column need not be differenced.  Whether the
     derivative is still 0 is checked at every stage (the Rosenbrock step of
     :mod:`feeddrive.solvers.steps` reports a
-    violation and the caller goes back to the full Jacobian)."""
+    violation and the caller goes back to the full Jacobian).
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        Jacobian ∂f/∂y [1/s, per pair].
+    f0 : numpy.ndarray
+        f(t, y) [SI per second, per state].
+    live : numpy.ndarray of bool
+        Output: which states are live.
+
+    Returns
+    -------
+    int
+        Number of live states.
+    """
     n = f0.size
     count = 0
     for i in range(n):
@@ -213,7 +305,24 @@ def spectral_radius_template(J: np.ndarray, scale: np.ndarray, v: np.ndarray,
                              w: np.ndarray, iterations: int) -> float:
     """Estimate of the largest |eigenvalue| of J [1/s] by power iteration in the norm weighted
     by ``scale`` (the absolute tolerances): the geometric mean of the growth factors over the
-    second half of the iterations, which also converges for a dominant complex pair."""
+    second half of the iterations, which also converges for a dominant complex pair.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        Jacobian ∂f/∂y [1/s, per pair].
+    scale : numpy.ndarray
+        Weights of the norm, the absolute tolerances [SI, per state].
+    v, w : numpy.ndarray
+        Work space [-].
+    iterations : int
+        Power iterations.
+
+    Returns
+    -------
+    float
+        The estimate [1/s].
+    """
     n = J.shape[0]
     for i in range(n):
         v[i] = scale[i] * (1.0 + 0.1 * ((i * 7) % 5))
@@ -248,7 +357,13 @@ _TEMPLATES = (fd_jacobian_template, frozen_states_template, spectral_radius_temp
 def template_sources() -> list[str]:
     """Text placed in each generated model module: the LU kernels and the Jacobian, frozen-state
     and spectral-radius templates, renamed ``_r4_<name>`` (the module's own ``rhs`` is the one
-    they call)."""
+    they call).
+
+    Returns
+    -------
+    list of str
+        Python sources.
+    """
     out = ["from feeddrive.solvers.rodas4 import lu_factor, lu_solve"]
     for fn in _TEMPLATES:
         name = fn.__name__.removesuffix("_template")

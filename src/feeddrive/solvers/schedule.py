@@ -25,7 +25,22 @@ from .._jit import kernel
 @kernel
 def due(kb: int, steps: np.ndarray, tick: np.ndarray) -> int:
     """Write ``tick[c]`` = the count of clock c's instant at breakpoint ``kb`` (kb / steps[c]),
-    or −1 if clock c has none there; return how many clocks have one."""
+    or −1 if clock c has none there; return how many clocks have one.
+
+    Parameters
+    ----------
+    kb : int
+        The breakpoint index.
+    steps : numpy.ndarray of int
+        Period of each clock in breakpoints; 0 for a continuous part.
+    tick : numpy.ndarray of int
+        Output: each clock's instant count, or −1.
+
+    Returns
+    -------
+    int
+        Number of clocks with an instant at ``kb``.
+    """
     count = 0
     for c in range(steps.size):
         if steps[c] > 0 and kb % steps[c] == 0:
@@ -39,7 +54,20 @@ def due(kb: int, steps: np.ndarray, tick: np.ndarray) -> int:
 @kernel
 def next_instant(kb: int, steps: np.ndarray) -> int:
     """The first breakpoint after ``kb`` at which some clock has an instant (−1: every part
-    runs continuously)."""
+    runs continuously).
+
+    Parameters
+    ----------
+    kb : int
+        The current breakpoint index.
+    steps : numpy.ndarray of int
+        Period of each clock in breakpoints; 0 for a continuous part.
+
+    Returns
+    -------
+    int
+        The next breakpoint index with an instant, or −1.
+    """
     best = -1
     for c in range(steps.size):
         if steps[c] > 0:
@@ -50,5 +78,16 @@ def next_instant(kb: int, steps: np.ndarray) -> int:
 
 
 def no_schedule(n_clocks: int) -> np.ndarray:
-    """``steps`` of a run with every part continuous."""
+    """``steps`` of a run with every part continuous.
+
+    Parameters
+    ----------
+    n_clocks : int
+        Number of clocks the model declares.
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Zeros, at least one.
+    """
     return np.zeros(max(1, n_clocks), dtype=np.int64)

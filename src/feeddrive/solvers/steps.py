@@ -44,13 +44,53 @@ RHS_ARGS = "held, P, T"
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's right-hand side.
+
+    The generated module replaces it; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The model function's arguments.
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
     raise NotImplementedError("placeholder: the assembled model's right-hand side")
 
 
 def error_norm_template(e: np.ndarray, y: np.ndarray, y_new: np.ndarray, rtol: float,
                         atol: np.ndarray, rel_mask: np.ndarray) -> float:
     """RMS of the error estimate ``e`` weighted by atol + rtol·max(|y|, |y_new|) (relative part
-    only where ``rel_mask``); a non-finite norm counts as a failed step."""
+    only where ``rel_mask``); a non-finite norm counts as a failed step.
+
+    Parameters
+    ----------
+    e : numpy.ndarray
+        Error estimate of the step [SI, per state].
+    y : numpy.ndarray
+        State at the start of the step [SI, per state].
+    y_new : numpy.ndarray
+        State at its end [SI, per state].
+    rtol : float
+        Relative tolerance [-].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    rel_mask : numpy.ndarray
+        1 where the relative tolerance applies [-].
+
+    Returns
+    -------
+    float
+        The norm [-]; inf when not finite.
+
+    References
+    ----------
+    .. [1] E. Hairer, S. P. Nørsett, G. Wanner, Solving Ordinary Differential Equations I,
+       2nd ed., Springer, 1993, Sect. II.4, Eq. (4.11).
+    """
     n = e.size
     err = 0.0
     for i in range(n):
@@ -68,7 +108,29 @@ def pi_factor_template(err: float, err_old: float, alpha: float, beta: float) ->
     ``err`` (``err_old``: the previous accepted step's, floored at 1e-4), the next step is
     this factor times the last — Hairer's PI controller 0.9·err^(−α)·err_old^β in [0.2, 5],
     5 after an exact step (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.4, and their
-    ``dopri5.f``; α = 0.2 − 0.75β, β = 0.04)."""
+    ``dopri5.f``; α = 0.2 − 0.75β, β = 0.04).
+
+    Parameters
+    ----------
+    err : float
+        Error norm of the accepted step [-].
+    err_old : float
+        That of the previous accepted step [-].
+    alpha : float
+        Exponent α [-].
+    beta : float
+        Exponent β [-].
+
+    Returns
+    -------
+    float
+        The step-size factor, in [0.2, 5] [-].
+
+    References
+    ----------
+    .. [1] E. Hairer, S. P. Nørsett, G. Wanner, Solving Ordinary Differential Equations I,
+       2nd ed., Springer, 1993, Sect. II.4, and their ``dopri5.f``.
+    """
     fac = 5.0
     if err != 0.0:
         fac = min(5.0, max(0.2, 0.9 * err ** (-alpha) * err_old ** beta))
@@ -77,7 +139,18 @@ def pi_factor_template(err: float, err_old: float, alpha: float, beta: float) ->
 
 def reject_factor_template(err: float) -> float:
     """The factor of the retry after a rejected explicit step of error norm ``err`` > 1:
-    0.9·err^(−1/5), at least 0.2 (``dopri5.f``)."""
+    0.9·err^(−1/5), at least 0.2 (``dopri5.f``).
+
+    Parameters
+    ----------
+    err : float
+        Error norm of the rejected step, > 1 [-].
+
+    Returns
+    -------
+    float
+        The step-size factor [-].
+    """
     fac = max(0.2, 0.9 * err ** (-0.2))
     return fac
 
@@ -138,7 +211,27 @@ def explicit_step_source(tab: ExplicitTableau, name: str) -> str:
 
     ``k1`` = f(t, y) is given; the step leaves y_new, the stages and (FSAL) k_new =
     f(t_new, y_new); ``yt`` keeps the last stage's argument (the stiffness test of
-    :mod:`feeddrive.solvers.switching` compares it with y_new)."""
+    :mod:`feeddrive.solvers.switching` compares it with y_new).
+
+    Parameters
+    ----------
+    tab : ExplicitTableau
+        The explicit embedded Runge–Kutta pair (:mod:`feeddrive.solvers.tableaux`).
+    name : str
+        The function's name in the generated text.
+
+    Returns
+    -------
+    str
+        Python source of the function (annotated, for the C translator).
+
+    References
+    ----------
+    .. [1] E. Hairer, S. P. Nørsett, G. Wanner, Solving Ordinary Differential Equations I,
+       2nd ed., Springer, 1993, Sect. II.1 (explicit Runge–Kutta methods), Sect. II.4
+       (embedded pairs); DOPRI5: J. R. Dormand, P. J. Prince, J. Comput. Appl. Math. 6 (1980)
+       19–26.
+    """
     ks = _stage_names(tab)
     S = len(tab.c)
     lines = [_signature(name, f"t, h, y, k1, {RHS_ARGS}, {', '.join(ks[1:])}, yt, y_new, aux, "
@@ -161,7 +254,22 @@ def explicit_step_source(tab: ExplicitTableau, name: str) -> str:
 def explicit_combination_source(tab: ExplicitTableau, weights: tuple[float, ...],
                                 name: str) -> str:
     """``name(h, k1, …, out)``: out = h·Σ w_j k_j over the stages of ``e`` (the error
-    estimate with ``tab.e``, the continuous extension's last vector with ``tab.dense``)."""
+    estimate with ``tab.e``, the continuous extension's last vector with ``tab.dense``).
+
+    Parameters
+    ----------
+    tab : ExplicitTableau
+        The explicit embedded Runge–Kutta pair (:mod:`feeddrive.solvers.tableaux`).
+    weights : tuple of float
+        The combination's weights, one per stage [-].
+    name : str
+        The function's name in the generated text.
+
+    Returns
+    -------
+    str
+        Python source of the function (annotated, for the C translator).
+    """
     ks = _stage_names(tab)
     comb = _h_times([(w, f"{k}[i]") for w, k in zip(weights, ks, strict=True)])
     return (_signature(name, f"h, {', '.join(ks)}, out", "None") + "\n"
@@ -177,7 +285,25 @@ def rosenbrock_step_source(tab: RosenbrockTableau, name: str) -> str:
 
     y_new, the error estimate u_S and the increments u_1 … u_S−1 (dense output).  Returns the
     number of right-hand-side evaluations (S − 1), −1 if the matrix is singular, −2 if a state
-    assumed frozen (``live`` false) got a non-zero derivative."""
+    assumed frozen (``live`` false) got a non-zero derivative.
+
+    Parameters
+    ----------
+    tab : RosenbrockTableau
+        The Rosenbrock method (:mod:`feeddrive.solvers.tableaux`).
+    name : str
+        The function's name in the generated text.
+
+    Returns
+    -------
+    str
+        Python source of the function (annotated, for the C translator).
+
+    References
+    ----------
+    .. [1] E. Hairer, G. Wanner, Solving Ordinary Differential Equations II, 2nd ed.,
+       Springer, 1996, Sect. IV.7.
+    """
     S = len(tab.c)
     us = [f"u{s + 1}" for s in range(S)]
     lines = [_signature(name, f"t, h, y, f0, J, ft, {RHS_ARGS}, M, piv, {', '.join(us)}, yt, "
@@ -228,7 +354,20 @@ def rosenbrock_step_source(tab: RosenbrockTableau, name: str) -> str:
 
 
 def rosenbrock_dense_source(tab: RosenbrockTableau, name: str) -> str:
-    """``name(u1, …, u(S−1), q1, q2)``: the dense-output vectors of the step just taken."""
+    """``name(u1, …, u(S−1), q1, q2)``: the dense-output vectors of the step just taken.
+
+    Parameters
+    ----------
+    tab : RosenbrockTableau
+        The Rosenbrock method (:mod:`feeddrive.solvers.tableaux`).
+    name : str
+        The function's name in the generated text.
+
+    Returns
+    -------
+    str
+        Python source of the function (annotated, for the C translator).
+    """
     us = [f"u{s + 1}" for s in range(len(tab.c) - 1)]
     qs = [f"q{r + 1}" for r in range(len(tab.dense))]
     body = [f"        {q}[i] = {_sum([(w, f'{u}[i]') for w, u in zip(row, us, strict=True)])}"
@@ -264,7 +403,13 @@ STEP_NAMES = {"dp5_step": "_dp5_step", "dp5_error": "_dp5_error", "dp5_dense": "
 
 @functools.cache
 def sources() -> dict[str, str]:
-    """The generated text of every step function, by name in the generated modules."""
+    """The generated text of every step function, by name in the generated modules.
+
+    Returns
+    -------
+    dict of str to str
+        Function name → Python source.
+    """
     return {
         "_dp5_step": explicit_step_source(DOPRI5, "_dp5_step"),
         "_dp5_error": explicit_combination_source(DOPRI5, DOPRI5.e, "_dp5_error"),
@@ -276,25 +421,73 @@ def sources() -> dict[str, str]:
 
 @functools.cache
 def function(name: str) -> Any:
-    """The Python function of the generated step ``name`` (a key of :func:`sources`)."""
+    """The Python function of the generated step ``name`` (a key of :func:`sources`).
+
+    Parameters
+    ----------
+    name : str
+        A key of :func:`sources`.
+
+    Returns
+    -------
+    function
+        The function.
+    """
     return _define(sources()[name], name)
 
 
 def explicit_step(tab: ExplicitTableau, rhs: Any = None) -> Any:
     """The Python function of one step of ``tab`` (for tests and the C translator), calling
-    ``rhs`` (default: the placeholder the generated modules replace)."""
+    ``rhs`` (default: the placeholder the generated modules replace).
+
+    Parameters
+    ----------
+    tab : ExplicitTableau
+        The explicit embedded Runge–Kutta pair (:mod:`feeddrive.solvers.tableaux`).
+    rhs : callable, optional
+        The right-hand side the step calls.
+
+    Returns
+    -------
+    function
+        The step.
+    """
     return _define(explicit_step_source(tab, f"_{tab.name}_step"), f"_{tab.name}_step",
                    None if rhs is None else {"rhs": rhs})
 
 
 def explicit_error(tab: ExplicitTableau) -> Any:
-    """The Python function computing ``tab``'s error estimate h·Σ e_j k_j."""
+    """The Python function computing ``tab``'s error estimate h·Σ e_j k_j.
+
+    Parameters
+    ----------
+    tab : ExplicitTableau
+        The explicit embedded Runge–Kutta pair (:mod:`feeddrive.solvers.tableaux`).
+
+    Returns
+    -------
+    function
+        The error function.
+    """
     return _define(explicit_combination_source(tab, tab.e, f"_{tab.name}_error"),
                    f"_{tab.name}_error")
 
 
 def rosenbrock_step(tab: RosenbrockTableau, rhs: Any = None) -> Any:
-    """The Python function of one step of the Rosenbrock method ``tab``, calling ``rhs``."""
+    """The Python function of one step of the Rosenbrock method ``tab``, calling ``rhs``.
+
+    Parameters
+    ----------
+    tab : RosenbrockTableau
+        The Rosenbrock method (:mod:`feeddrive.solvers.tableaux`).
+    rhs : callable, optional
+        The right-hand side the step calls.
+
+    Returns
+    -------
+    function
+        The step.
+    """
     return _define(rosenbrock_step_source(tab, f"_{tab.name}_step"), f"_{tab.name}_step",
                    None if rhs is None else {"rhs": rhs})
 
@@ -350,7 +543,20 @@ def inline_steps(source: str, names: tuple[str, ...] = INLINED) -> str:
     its parameters renamed to the arguments: the text numba compiles is then what a
     hand-inlined step was (a call per step, with its array arguments reference-counted, cost
     ~10 % of a DOPRI5 run of a drive: benchmarks/bench_old_new.py).  The C translation keeps
-    the calls (:mod:`feeddrive.fmu.solver`): both build the same step text."""
+    the calls (:mod:`feeddrive.fmu.solver`): both build the same step text.
+
+    Parameters
+    ----------
+    source : str
+        The driver's function text.
+    names : tuple of str, default INLINED
+        The step functions to inline.
+
+    Returns
+    -------
+    str
+        The text with the step calls replaced by their bodies.
+    """
     lines = source.splitlines()
     tree = ast.parse(textwrap.dedent(source))
     found: list[tuple[int, int, int, list[str]]] = []
@@ -375,7 +581,13 @@ def inline_steps(source: str, names: tuple[str, ...] = INLINED) -> str:
 def template_sources() -> list[str]:
     """Text placed in each generated model module: the error norm and every step function
     (the drivers have the explicit step written into their text, :func:`inline_steps`; the
-    FMU's integrator and the Rosenbrock branch call them)."""
+    FMU's integrator and the Rosenbrock branch call them).
+
+    Returns
+    -------
+    list of str
+        Python sources.
+    """
 
     return (["@kernel\n" + _norm_source(name) for name in _HAND_WRITTEN]
             + ["@kernel\n" + src for src in sources().values()])

@@ -102,10 +102,38 @@ _reject_factor: Any = None
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's right-hand side.
+
+    The generated module replaces it; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The model function's arguments.
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
     raise NotImplementedError("placeholder: the assembled model's right-hand side")
 
 
 def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's sampled-controller update.
+
+    The generated module replaces it; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The model function's arguments.
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
     raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
 
 
@@ -115,7 +143,18 @@ def new_memory(n_states: int) -> np.ndarray:
     with STATUS_STOPPED) and the *live time* (the time [s] of the last accepted step, written
     as the solver goes): another thread reads a long call's progress and stops it while it
     runs (the kernels release the GIL; feeddrive.engine.simulate.Simulation.live_time and
-    request_stop)."""
+    request_stop).
+
+    Parameters
+    ----------
+    n_states : int
+        Number of states.
+
+    Returns
+    -------
+    numpy.ndarray
+        Zeros [mixed, see :func:`integrate_template`].
+    """
     return np.zeros(MEMORY_SCALARS + n_states + n_states * n_states + 2)
 
 
@@ -132,7 +171,81 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     are updated in place, so a run continued from where a call stopped is bit-identical to
     one call in which that instant is a step end (a profile breakpoint, a sample instant).
     ``bound``: the largest |state| per state before the run stops as diverged (None: none);
-    ``P``: the parameter vector (None: the model's; a run passes the periods on its grid)."""
+    ``P``: the parameter vector (None: the model's; a run passes the periods on its grid).
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+    y0 : numpy.ndarray
+        State at t = start·base [SI, per state].
+    t_end : float
+        End of the run [s].
+    out_every : int
+        Output stride in breakpoints.
+    base : float
+        Breakpoint spacing [s].
+    schedule : numpy.ndarray of int
+        Breakpoints between two instants of each clock; 0 = continuous
+        (:mod:`feeddrive.solvers.schedule`).
+    rtol : float
+        Relative tolerance [-].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    rel_mask : numpy.ndarray
+        1 where the relative tolerance applies [-].
+    h_init : float
+        First step size [s].
+    h_max : float
+        Largest step [s].
+    adaptive : int
+        1 for error-controlled steps, 0 for a fixed step (used to verify the order).
+    max_steps : int
+        Step limit of the call.
+    mode : int
+        ``MODE_DOPRI5``, ``MODE_RODAS4``, ``MODE_AUTO`` or ``MODE_MODAL`` (see the module).
+    stops : numpy.ndarray
+        Sorted profile breakpoints, exact step ends [s].
+    want_aux : bool, default True
+        Evaluate the auxiliary signals at the outputs.
+    start : int, default 0
+        Breakpoint index the call starts from.
+    held : numpy.ndarray, optional
+        Held controller values, updated in place [SI, per value].
+    memory : numpy.ndarray, optional
+        Driver memory, updated in place (:func:`new_memory`) [mixed, see the driver].
+    bound : numpy.ndarray, optional
+        Largest |state| per state before the run stops as diverged [SI, per state]; none by
+        default.
+    P : numpy.ndarray, optional
+        The parameter vector; the model's by default [SI, per slot].
+
+    Returns
+    -------
+    t_out : numpy.ndarray
+        Output times [s].
+    y_out : numpy.ndarray
+        States at them [SI, per state].
+    aux_out : numpy.ndarray
+        Auxiliary signals at them [SI, per signal].
+    stats : numpy.ndarray
+        As :data:`STAT_NAMES`: status, steps, rejected, right-hand-side evaluations, time
+        reached [s], Jacobians, … [mixed].
+    held : numpy.ndarray
+        The held controller values at the end [SI, per value].
+
+    Raises
+    ------
+    ValueError
+        When ``start`` is not a multiple of ``out_every``.
+
+    References
+    ----------
+    .. [1] J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput.
+       Appl. Math. 6 (1980) 19–26.
+    .. [2] E. Hairer, G. Wanner, Solving Ordinary Differential Equations II, 2nd ed., Springer,
+       1996, Sect. IV.7 (RODAS4).
+    """
     if start % out_every:
         raise ValueError(f"start = {start}: expected a multiple of out_every = {out_every}")
     held = np.zeros(model.n_held) if held is None else held
@@ -171,6 +284,77 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     the Jacobian's sparsity pattern and column groups (:func:`rodas4.fd_jacobian_template`).
     A state with |y_i| > ``bound[i]`` at a step end stops the run with ``STATUS_DIVERGED``; that
     step end is recorded as the last output sample.
+
+    Parameters
+    ----------
+    y0 : numpy.ndarray
+        State at t = start·base [SI, per state].
+    t_end : float
+        End of the run [s].
+    out_every : int
+        Output stride in breakpoints.
+    base : float
+        Breakpoint spacing [s].
+    schedule : numpy.ndarray of int
+        Breakpoints between two instants of each clock; 0 = continuous
+        (:mod:`feeddrive.solvers.schedule`).
+    P : numpy.ndarray
+        Packed parameter vector [SI, per slot].
+    T : numpy.ndarray
+        Packed tables [SI].
+    rtol : float
+        Relative tolerance [-].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    rel_mask : numpy.ndarray
+        1 where the relative tolerance applies [-].
+    h_init : float
+        First step size [s].
+    h_max : float
+        Largest step [s].
+    adaptive : int
+        1 for error-controlled steps, 0 for a fixed step (used to verify the order).
+    max_steps : int
+        Step limit of the call.
+    mode : int
+        ``MODE_DOPRI5``, ``MODE_RODAS4``, ``MODE_AUTO`` or ``MODE_MODAL`` (see the module).
+    stops : numpy.ndarray
+        Sorted profile breakpoints, exact step ends [s].
+    want_aux : bool
+        Evaluate the auxiliary signals at the outputs.
+    S : numpy.ndarray of int
+        The Jacobian's sparsity pattern, (n, n + 1).
+    colour : numpy.ndarray of int
+        Its column groups.
+    start : int
+        Breakpoint index the call starts from.
+    held : numpy.ndarray
+        Held controller values, read and left updated [SI, per value].
+    memory : numpy.ndarray
+        Driver memory carried between calls, read and left updated [mixed, see the driver].
+    bound : numpy.ndarray
+        Largest |state| per state before the run stops as diverged [SI, per state].
+
+    Returns
+    -------
+    t_out : numpy.ndarray
+        Output times [s].
+    y_out : numpy.ndarray
+        States at them [SI, per state].
+    aux_out : numpy.ndarray
+        Auxiliary signals at them [SI, per signal].
+    stats : numpy.ndarray
+        As :data:`STAT_NAMES`: status, steps, rejected, right-hand-side evaluations, time
+        reached [s], Jacobians, … [mixed].
+    held : numpy.ndarray
+        The held controller values at the end [SI, per value].
+
+    References
+    ----------
+    .. [1] J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput.
+       Appl. Math. 6 (1980) 19–26.
+    .. [2] E. Hairer, G. Wanner, Solving Ordinary Differential Equations II, 2nd ed., Springer,
+       1996, Sect. IV.7 (RODAS4).
     """
     n = y0.size
     n_break = int(round(t_end / base))
@@ -588,7 +772,13 @@ def template_sources() -> list[str]:
     """Text placed in each generated model module: the switching driver ``integrate_dense``
     (its steps are those of :mod:`feeddrive.solvers.steps`, its Jacobian kernels those of
     :mod:`feeddrive.solvers.rodas4`, placed beside it).  numba compiles a function at its
-    first call, so a model run only with ``dopri5`` never compiles this one."""
+    first call, so a model run only with ``dopri5`` never compiles this one.
+
+    Returns
+    -------
+    list of str
+        Python sources.
+    """
     src = steps.inline_steps(inspect.getsource(integrate_template)).replace(
         "def integrate_template(", "def integrate_dense(", 1)
     return [f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})",

@@ -43,17 +43,18 @@ class ExplicitTableau:
     c : tuple of float
         Nodes c_s of the stages s = 1 … S (c_1 = 0) [fraction of the step].
     a : tuple of tuple of float
-        Row s holds a_s1 … a_s,s-1 (row 1 is empty).
+        Row s holds a_s1 … a_s,s-1 (row 1 is empty) [-].
     b : tuple of float
-        Weights of the propagated solution over the S stages.
+        Weights of the propagated solution over the S stages [-].
     e : tuple of float
-        Error weights b − b̂ over the S stages and, when ``fsal``, the stage at the new point.
+        Error weights b − b̂ over the S stages and, when ``fsal``, the stage at the new point
+        [-].
     fsal : bool
         The derivative at the new point (t + h, y_new) is a stage of the next step ("first
         same as last"); the step evaluates it.
     dense : tuple of float, optional
         Coefficients of the 4th-order continuous extension over the same stages as ``e``
-        (Hairer–Nørsett–Wanner, Sect. II.6); empty if the method has none.
+        (Hairer–Nørsett–Wanner, Sect. II.6); empty if the method has none [-].
     reference : str
         Where the numbers come from.
     """
@@ -98,18 +99,18 @@ class RosenbrockTableau:
     order, embedded_order : int
         Orders of the solution and of the embedded one.
     gamma : float
-        The diagonal γ.
+        The diagonal γ [-].
     c : tuple of float
         Nodes c_s (c_1 = 0) [fraction of the step].
     a : tuple of tuple of float
-        Row s: a_s1 … a_s,s-1 (increment form).
+        Row s: a_s1 … a_s,s-1 (increment form) [-].
     cc : tuple of tuple of float
-        Row s: c_s1 … c_s,s-1 (increment form).
+        Row s: c_s1 … c_s,s-1 (increment form) [-].
     d : tuple of float
-        d_s, the weight of h·f_t in stage s (Hairer & Wanner's γ_s).
+        d_s, the weight of h·f_t in stage s (Hairer & Wanner's γ_s) [-].
     dense : tuple of tuple of float
         Rows (empty: none) of the dense-output vectors q_r = Σ_j dense[r][j] u_j over the
-        first S − 1 increments: y(θ) = (1 − θ)·y_0 + θ·(y_1 + (1 − θ)·(q_1 + θ·q_2)).
+        first S − 1 increments: y(θ) = (1 − θ)·y_0 + θ·(y_1 + (1 − θ)·(q_1 + θ·q_2)) [-].
     reference : str
         Where the numbers come from.
 

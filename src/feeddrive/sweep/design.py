@@ -64,6 +64,24 @@ class Axis:
     ``low``/``high``: a continuous range in the configuration's unit; ``points`` values on a
     grid (``scale`` ``linear`` or ``log``); random and LHS draw uniformly (log-uniformly).
     ``relative``: the values are factors on the base parameter value.
+
+    Parameters
+    ----------
+    name : str
+        The swept name: a parameter path (``friction.screw.bristle_stiffness``) or a special
+        axis (``table_speed``, ``table_position``, ``nut_speed``, ``drive``, ``preset``).
+    values : tuple, optional
+        Explicit values, in the configuration's unit.
+    low : float, optional
+        Lower end of a continuous range [configuration unit of the axis].
+    high : float, optional
+        Upper end of the range [configuration unit of the axis].
+    points : int, optional
+        Number of grid values on the range.
+    scale : str, default "linear"
+        ``"linear"`` or ``"log"`` spacing (uniform or log-uniform draws).
+    relative : bool, default False
+        The values are factors on the base parameter value.
     """
 
     name: str
@@ -76,19 +94,35 @@ class Axis:
 
     @property
     def key(self) -> str:
+        """The axis's key in the configuration file, quoted when the name is dotted."""
         return f'axes."{self.name}"' if "." in self.name else f"axes.{self.name}"
 
     @property
     def unit(self) -> str:
+        """The configuration unit of the axis's values (``"1"`` for a relative axis)."""
         if self.relative:
             return "1"
         return SPECIAL_AXES.get(self.name, ("", 1.0))[0]
 
     def size(self) -> int:
-        """How many values a grid takes on this axis (nothing materialised)."""
+        """How many values a grid takes on this axis (nothing materialised).
+
+        Returns
+        -------
+        int
+            The number of explicit values, or ``points``.
+        """
         return len(self.values) if self.values is not None else int(self.points or 0)
 
     def grid(self) -> list[Any]:
+        """The axis's grid values, in the configuration's unit.
+
+        Returns
+        -------
+        list
+            The explicit values, or ``points`` values from ``low`` to ``high`` on the axis's
+            scale.
+        """
         if self.values is not None:
             return list(self.values)
         assert self.low is not None and self.high is not None
@@ -100,7 +134,19 @@ class Axis:
         return [float(v) for v in np.round(np.linspace(self.low, self.high, n), 12)]
 
     def draw(self, u: float) -> Any:
-        """The value at quantile ``u`` ∈ [0, 1) of the axis's distribution."""
+        """The value at a quantile of the axis's distribution (random and LHS designs).
+
+        Parameters
+        ----------
+        u : float
+            The quantile, in [0, 1) [-].
+
+        Returns
+        -------
+        object
+            One of the explicit values, or a value in [low, high) drawn uniformly or
+            log-uniformly [configuration unit of the axis].
+        """
         if self.values is not None:
             return self.values[min(int(u * len(self.values)), len(self.values) - 1)]
         assert self.low is not None and self.high is not None
@@ -112,7 +158,19 @@ class Axis:
 @dataclass(frozen=True)
 class Point:
     """One design point: its index, coordinates (configuration units) and the task a worker
-    evaluates (:func:`.quantities.evaluate`), keyed by :func:`.store.point_key`."""
+    evaluates (:func:`.quantities.evaluate`), keyed by :func:`.store.point_key`.
+
+    Parameters
+    ----------
+    index : int
+        The point's number in design order.
+    coords : dict
+        Axis name → value, in configuration units.
+    task : dict
+        What a worker needs: parameter set as TOML, drive, position, nut speed, quantity (SI).
+    key : str
+        The store key of the task.
+    """
 
     index: int
     coords: dict[str, Any]
@@ -122,7 +180,39 @@ class Point:
 
 @dataclass(frozen=True)
 class SweepConfig:
-    """A parsed sweep configuration (see docs/sweeps.md)."""
+    """A parsed sweep configuration (see docs/sweeps.md).
+
+    Parameters
+    ----------
+    name : str
+        The sweep's name (``check_name``).
+    source : str
+        The configuration file.
+    base : str
+        Preset name, or the parameter file's path.
+    drive : str
+        The drive name.
+    table_position : float
+        Table position [mm].
+    nut_speed : float
+        Nut speed [mm/s].
+    design : str
+        ``"grid"``, ``"random"`` or ``"lhs"``.
+    samples : int or None
+        Number of points of a random or LHS design.
+    seed : int
+        Seed of the random and LHS draws.
+    axes : tuple of Axis
+        The swept names.
+    quantity : QuantitySettings
+        What each point computes.
+    store : Path or None
+        The store file; ``NAME.sqlite`` when None.
+    map_axes : tuple of (str or None, str or None), default (None, None)
+        The default x and y axes of ``feeddrive map``.
+    raw : dict, optional
+        The parsed TOML, recorded in the store.
+    """
 
     name: str
     source: str
@@ -142,7 +232,13 @@ class SweepConfig:
     # ------------------------------------------------------------------ points
 
     def count(self) -> int:
-        """How many design points (from the axes' sizes or ``samples``; nothing built)."""
+        """How many design points, from the axes' sizes or ``samples``; nothing is built.
+
+        Returns
+        -------
+        int
+            The number of points.
+        """
         if self.design == "grid":
             return math.prod(a.size() for a in self.axes)
         assert self.samples is not None
@@ -171,19 +267,43 @@ class SweepConfig:
             yield {a.name: a.draw(float(u[i, j])) for j, a in enumerate(self.axes)}
 
     def coordinates(self) -> list[dict[str, Any]]:
-        """Every coordinate of :meth:`iter_coordinates` as a list."""
+        """Every coordinate of :meth:`iter_coordinates` as a list.
+
+        Returns
+        -------
+        list of dict
+            Axis name → value, in configuration units, in design order.
+        """
         return list(self.iter_coordinates())
 
     def effective(self, coords: Mapping[str, Any]) -> tuple[Any, ...]:
-        """What a point's result depends on among its coordinates: a drive without a nut
-        ignores ``nut_speed`` (those points share one stored result)."""
+        """What a point's result depends on among its coordinates.
+
+        A drive without a nut ignores ``nut_speed``, so those points share one stored result.
+
+        Parameters
+        ----------
+        coords : mapping
+            The point's coordinates.
+
+        Returns
+        -------
+        tuple
+            Sorted (name, repr of value) pairs.
+        """
         drive = str(coords.get("drive", self.drive))
         return tuple(sorted((k, repr(v)) for k, v in coords.items()
                             if not (k == "nut_speed" and drive in NO_NUT_DRIVES)))
 
     def distinct_count(self) -> int:
         """How many distinct computations the design asks for, from the coordinates alone
-        (:meth:`effective`); no parameter set is built."""
+        (:meth:`effective`); no parameter set is built.
+
+        Returns
+        -------
+        int
+            The number of distinct points.
+        """
         seen = set()
         for coords in self.iter_coordinates():
             seen.add(hashlib.blake2b(repr(self.effective(coords)).encode(), digest_size=12)
@@ -192,7 +312,18 @@ class SweepConfig:
 
     def iter_points(self, *, bases: dict[str, DriveParameters] | None = None
                     ) -> Iterator[Point]:
-        """Every design point with its task and store key, built one at a time."""
+        """Every design point with its task and store key, built one at a time.
+
+        Parameters
+        ----------
+        bases : dict of str to DriveParameters, optional
+            Cache of base parameter sets by name, filled as they are loaded.
+
+        Yields
+        ------
+        Point
+            The points, in design order.
+        """
         from .store import point_key
 
         bases = {} if bases is None else bases
@@ -201,10 +332,17 @@ class SweepConfig:
             yield Point(index=i, coords=coords, task=task, key=point_key(task))
 
     def points(self) -> list[Point]:
-        """Every design point with its task and store key; every point's parameter set is
-        built and validated here, so a bad value stops the sweep before any simulation.
-        (A run does not hold them all: :func:`.executors.run_sweep` streams
-        :meth:`iter_points`.)"""
+        """Every design point with its task and store key.
+
+        Every point's parameter set is built and validated here, so a bad value stops the sweep
+        before any simulation (a run does not hold them all: :func:`.executors.run_sweep` streams
+        :meth:`iter_points`).
+
+        Returns
+        -------
+        list of Point
+            The points, in design order.
+        """
         return list(self.iter_points())
 
     def _base(self, name: str, cache: dict[str, DriveParameters]) -> DriveParameters:
@@ -214,8 +352,26 @@ class SweepConfig:
 
     def task(self, coords: Mapping[str, Any],
              cache: dict[str, DriveParameters] | None = None) -> dict[str, Any]:
-        """What a worker needs for one point: the full parameter set as TOML text, drive,
-        table position [m], nut speed [m/s] and the quantity settings (SI)."""
+        """What a worker needs for one point, in SI.
+
+        Parameters
+        ----------
+        coords : mapping
+            The point's coordinates, in configuration units.
+        cache : dict of str to DriveParameters, optional
+            Cache of base parameter sets by name.
+
+        Returns
+        -------
+        dict
+            The full parameter set as TOML text, drive, table position [m], nut speed [m/s] and
+            the quantity settings.
+
+        Raises
+        ------
+        ParameterError
+            When a coordinate makes an invalid parameter set.
+        """
         cache = {} if cache is None else cache
         base_name = str(coords.get("preset", self.base))
         params = self._base(base_name, cache)
@@ -259,9 +415,29 @@ def _check_count(count: int, design: str) -> None:
 
 
 def check_name(key: str, name: Any) -> str:
-    """A sweep's name: text of 1 to ``MAX_NAME`` printable characters, no path
-    separator and no leading dot (``NAME.sqlite`` is the default store, in the current
-    folder: a name never reaches another folder)."""
+    """Check a sweep's name: text of 1 to ``MAX_NAME`` printable characters, no path separator,
+    no ``:`` and no leading dot.
+
+    ``NAME.sqlite`` is the default store, in the current folder: a name never reaches another
+    folder.
+
+    Parameters
+    ----------
+    key : str
+        The configuration key, for the message.
+    name : object
+        The value given.
+
+    Returns
+    -------
+    str
+        ``name``.
+
+    Raises
+    ------
+    ParameterError
+        For anything else.
+    """
     if not isinstance(name, str):
         raise _refuse(key, name, "expected a text name")
     if not name.strip():
@@ -330,7 +506,18 @@ def _load_base(name: str, source: str) -> DriveParameters:
 
 
 def numeric_paths(params: DriveParameters) -> list[str]:
-    """Dotted names of every numeric parameter of ``params`` (for ``*`` axes)."""
+    """Dotted names of every numeric parameter of a set (what a ``*`` axis sweeps).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+
+    Returns
+    -------
+    list of str
+        The paths, in the set's order.
+    """
     out: list[str] = []
 
     def walk(d: Mapping[str, Any], prefix: str) -> None:
@@ -445,7 +632,25 @@ def _expand(axis: Axis, base: DriveParameters) -> list[Axis]:
 
 
 def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
-    """A :class:`SweepConfig` from parsed TOML; every key checked (see the module)."""
+    """A :class:`SweepConfig` from parsed TOML; every key checked (see the module).
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed TOML.
+    source : str
+        The file it came from (relative paths in it are relative to its folder).
+
+    Returns
+    -------
+    SweepConfig
+        The configuration.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown key or a bad value, naming the key.
+    """
     unknown = sorted(set(data) - set(_TOP_KEYS))
     if unknown:
         raise _refuse(unknown[0], data[unknown[0]],
@@ -527,7 +732,23 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
 
 
 def load_config(path: str | os.PathLike[str]) -> SweepConfig:
-    """Read and check a sweep configuration; a refusal names the file and the key."""
+    """Read and check a sweep configuration file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file.
+
+    Returns
+    -------
+    SweepConfig
+        The configuration.
+
+    Raises
+    ------
+    ParameterError
+        Naming the file and the key.
+    """
     data = read_toml_file(os.fspath(path))
     try:
         return parse_config(data, os.fspath(path))

@@ -51,7 +51,13 @@ class SweepAborted(RuntimeError):
 
 class SweepInterrupted(KeyboardInterrupt):
     """Ctrl-C stopped the sweep: ``computed`` points were stored this run, nothing more was
-    submitted, the points in flight were cancelled."""
+    submitted, the points in flight were cancelled.
+
+    Parameters
+    ----------
+    computed : int
+        Points computed and stored this run.
+    """
 
     def __init__(self, computed: int) -> None:
         super().__init__(computed)
@@ -67,7 +73,29 @@ def _lost_worker(err: BaseException) -> bool:
 @dataclass(frozen=True)
 class SweepSummary:
     """What a run did: design points, distinct computations, found already stored, computed
-    now, failed (stored with their error), wall time [s] and workers."""
+    now, failed (stored with their error), wall time [s] and workers.
+
+    Parameters
+    ----------
+    points : int
+        Design points.
+    distinct : int
+        Distinct computations among them.
+    stored_before : int
+        Already stored when the run started.
+    computed : int
+        Computed now.
+    failed : int
+        Failed (stored with their error).
+    seconds : float
+        Wall time [s].
+    workers : int
+        Number of workers.
+    executor : str
+        Which executor ran them.
+    elsewhere : int, default 0
+        Points another sweep on the same store computed meanwhile.
+    """
 
     points: int
     distinct: int
@@ -116,7 +144,29 @@ def _warm_worker(tasks: list[dict[str, Any]]) -> None:
 def executor(*, workers: int | None = None, scheduler: str | None = None,
              dask_workers: int | None = None, warm_tasks: list[dict[str, Any]] | None = None
              ) -> Iterator[tuple[cf.Executor, int, str]]:
-    """(executor, worker count, description): a local process pool, or Dask."""
+    """Start the executor a sweep runs on: a local process pool, or Dask.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local worker processes; the CPU count by default.
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    dask_workers : int, optional
+        Start a local Dask cluster of this many workers.
+    warm_tasks : list of dict, optional
+        One task per model structure, run once on every worker to compile its kernels.
+
+    Yields
+    ------
+    tuple of (concurrent.futures.Executor, int, str)
+        The executor, its worker count and a description.
+
+    Raises
+    ------
+    ValueError
+        For both ``scheduler`` and ``dask_workers``, or a scheduler that cannot be reached.
+    """
     if scheduler is not None and dask_workers is not None:
         raise ValueError("--scheduler and --dask-workers: give one, not both")
     if scheduler is not None or dask_workers is not None:
@@ -218,7 +268,19 @@ def _structure_tasks(points: Iterable[Point]) -> list[dict[str, Any]]:
 
 
 def description(config: SweepConfig) -> dict[str, Any]:
-    """What the store records about a sweep (exports and maps read it back)."""
+    """What the store records about a sweep; exports and maps read it back.
+
+    Parameters
+    ----------
+    config : SweepConfig
+        The configuration.
+
+    Returns
+    -------
+    dict
+        The raw configuration, source, design, the axes (name, unit, relative, grid values)
+        and the quantity settings.
+    """
     return {"config": config.raw, "source": config.source, "design": config.design,
             "axes": [{"name": a.name, "unit": a.unit, "relative": a.relative,
                       "values": None if config.design != "grid" else a.grid()}
@@ -229,7 +291,15 @@ def description(config: SweepConfig) -> dict[str, Any]:
 @dataclass(frozen=True)
 class CheckedDesign:
     """Every point of a design built and checked: its key, in design order, and one task
-    per model structure (to warm the compiled kernels)."""
+    per model structure (to warm the compiled kernels).
+
+    Parameters
+    ----------
+    keys : list of str
+        Every point's store key, in design order.
+    structures : dict
+        Model structure → one task of that structure.
+    """
 
     keys: list[str]
     structures: dict[tuple[Any, ...], dict[str, Any]]
@@ -238,7 +308,27 @@ class CheckedDesign:
 def check_design(config: SweepConfig, *, points: list[Point] | None = None,
                  checked: Progress | None = None) -> CheckedDesign:
     """Build and check every point's parameter set, one at a time, keeping only its key (a
-    bad value is refused here, before any simulation and before the store is touched)."""
+    bad value is refused here, before any simulation and before the store is touched).
+
+    Parameters
+    ----------
+    config : SweepConfig
+        The configuration.
+    points : list of Point, optional
+        Points already built; built one at a time from ``config`` otherwise.
+    checked : callable, optional
+        ``checked(done, total)``, every 200 points and at the end.
+
+    Returns
+    -------
+    CheckedDesign
+        The keys and one task per structure.
+
+    Raises
+    ------
+    ParameterError
+        At the first point whose parameter set is invalid.
+    """
     total = config.count() if points is None else len(points)
     keys: list[str] = []
     structures: dict[tuple[Any, ...], dict[str, Any]] = {}
@@ -278,6 +368,39 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
     rerun does not retry it.  On Ctrl-C (``KeyboardInterrupt``) nothing more is submitted,
     every result already returned is stored, the points in flight are cancelled (local
     workers are stopped at once) and the interrupt is raised again.
+
+    Parameters
+    ----------
+    config : SweepConfig
+        The configuration.
+    store : SweepStore
+        The store.
+    workers : int, optional
+        Local worker processes.
+    scheduler : str, optional
+        Address of a Dask scheduler.
+    dask_workers : int, optional
+        Workers of a local Dask cluster.
+    points : list of Point, optional
+        Points already built.
+    progress : callable, optional
+        ``progress(done, todo)`` after each stored point.
+    started : callable, optional
+        ``started(todo, executor)`` once the executor is up.
+    checked : callable, optional
+        ``checked(done, total)`` during the check.
+    design : CheckedDesign, optional
+        The checked design, when the caller has it already.
+
+    Returns
+    -------
+    SweepSummary
+        What the run did.
+
+    Raises
+    ------
+    SweepInterrupted
+        On Ctrl-C, after storing every result already returned.
     """
     t0 = time.perf_counter()
     if design is None:
@@ -393,7 +516,27 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
 class Estimate:
     """A sweep's point count and cost.  ``seconds_per_point`` is the mean CPU time [s] of the
     timed points (CPU, not wall: a loaded machine's wall time made the estimate vary 3.0–10.8 s
-    between runs of one config, issue 24 item 11); ``point_seconds`` each timed point's."""
+    between runs of one config, issue 24 item 11); ``point_seconds`` each timed point's.
+
+    Parameters
+    ----------
+    points : int
+        Design points.
+    distinct : int
+        Distinct computations among them.
+    stored : int
+        Of them, already stored under this design.
+    timed : int
+        Points timed for the estimate.
+    seconds_per_point : float
+        Mean CPU time of a timed point [s].
+    workers : int
+        Workers the estimate assumes.
+    point_seconds : tuple of float, default ()
+        CPU time of each timed point [s].
+    built : int, default 0
+        Parameter sets built for the estimate.
+    """
 
     points: int
     distinct: int
@@ -430,6 +573,26 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
     :meth:`feeddrive.sweep.design.SweepConfig.distinct_count`); ``stored`` is how many of
     this sweep's points the store holds, when the design it registered there is this one
     (its keys at the timed points are the keys rebuilt here), else 0.
+
+    Parameters
+    ----------
+    config : SweepConfig
+        The configuration.
+    store : SweepStore or None
+        The store, for the count already stored.
+    workers : int
+        Workers the estimate assumes.
+    sample : int, default 3
+        Points to time.
+    points : list of Point, optional
+        Points already built.
+    progress : callable, optional
+        Told in one line what is being done.
+
+    Returns
+    -------
+    Estimate
+        The counts and the cost.
     """
     count = config.count() if points is None else len(points)
     distinct = config.distinct_count() if points is None else len({p.key for p in points})

@@ -101,7 +101,22 @@ def _value_columns(records: list[dict[str, Any]], axes: list[str]) -> list[str]:
 
 
 def to_dataset(store: SweepStore, sweep: str) -> xr.Dataset:
-    """The sweep as an xarray Dataset (see the module)."""
+    """The sweep as an xarray Dataset (see the module).
+
+    A grid design is indexed by its axes (each in design order), other designs by ``sample``.
+
+    Parameters
+    ----------
+    store : SweepStore
+        The store.
+    sweep : str
+        The sweep's name.
+
+    Returns
+    -------
+    xarray.Dataset
+        The quantity's values per point, in SI.
+    """
     desc, records = _records(store, sweep)
     axes = [a["name"] for a in desc["axes"]]
     values = _value_columns(records, axes)
@@ -158,7 +173,20 @@ def _engineering(store: SweepStore, sweep: str
 
 
 def to_frame(store: SweepStore, sweep: str) -> pd.DataFrame:
-    """One row per design point in engineering units (see the module)."""
+    """One row per design point in engineering units (see the module).
+
+    Parameters
+    ----------
+    store : SweepStore
+        The store.
+    sweep : str
+        The sweep's name.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns named ``name [unit]`` (mm, mm/s, N/µm, otherwise SI).
+    """
     frame, meta = _engineering(store, sweep)
     renamed = {col: f"{col} [{unit}]" for col, (unit, _) in meta.items()
                if unit not in ("", "1")}
@@ -168,7 +196,20 @@ def to_frame(store: SweepStore, sweep: str) -> pd.DataFrame:
 def to_table(store: SweepStore, sweep: str) -> Any:
     """One row per design point as a pyarrow Table: the numbers of :func:`to_frame`, plain
     names, each field's unit in its metadata (a relative axis: unit ``1``, long name 'factor
-    on the base value of …')."""
+    on the base value of …').
+
+    Parameters
+    ----------
+    store : SweepStore
+        The store.
+    sweep : str
+        The sweep's name.
+
+    Returns
+    -------
+    pyarrow.Table
+        One row per point, units in the field metadata.
+    """
     frame, meta = _engineering(store, sweep)
     columns = {"index": (frame.index.to_numpy(), "1", "design point number")}
     for col, (unit, description) in meta.items():
@@ -178,7 +219,29 @@ def to_table(store: SweepStore, sweep: str) -> Any:
 
 
 def export(store: SweepStore, sweep: str, path: str | Path) -> Path:
-    """Write the sweep to ``path``; the format follows the extension (see the module)."""
+    """Write the sweep to ``path``; the format follows the extension (see the module).
+
+    Written atomically (nothing partial under the name).
+
+    Parameters
+    ----------
+    store : SweepStore
+        The store.
+    sweep : str
+        The sweep's name.
+    path : str or Path
+        ``.nc`` (CF-1.8, SI), ``.parquet`` or ``.csv`` (engineering units).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ValueError
+        For another extension.
+    """
     p = Path(path)
     ext = p.suffix.lower()
     if ext not in (".nc", ".parquet", ".csv"):

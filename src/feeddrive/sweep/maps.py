@@ -64,7 +64,31 @@ def _check_name(ds: xr.Dataset, name: str, what: str, where: tuple[str, ...]) ->
 
 def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | None = None
              ) -> Path:
-    """Heatmap of ``value`` over axes ``x`` and ``y`` of a grid sweep (see the module)."""
+    """Heatmap of ``value`` over axes ``x`` and ``y`` of a grid sweep (see the module).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The sweep (:func:`feeddrive.sweep.export.to_dataset`), a grid design.
+    x : str
+        The axis along x.
+    y : str
+        The axis along y, another one.
+    path : str or Path
+        The image file.
+    value : str, optional
+        The variable shown; the quantity's default value otherwise.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    ValueError
+        For a non-grid design, an unknown axis or value, or ``x == y``.
+    """
     if "sample" in ds.dims:
         raise ValueError(f"sweep {ds.attrs.get('sweep')!r} is a {ds.attrs.get('design')} design: "
                          "a map needs a grid; use the histogram (no --x/--y)")
@@ -247,7 +271,21 @@ def _contour(ax: Any, xs: np.ndarray, ys: np.ndarray, z: np.ndarray, levels: str
 
 
 def percentiles(ds: xr.Dataset, value: str | None = None) -> dict[str, Any]:
-    """Count, found and the 5/50/95 % percentiles (engineering units) of ``value``."""
+    """Count, found and the 5/50/95 % percentiles (engineering units) of ``value``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The sweep.
+    value : str, optional
+        The variable; the quantity's default value otherwise.
+
+    Returns
+    -------
+    dict
+        Value name, unit, point and finite counts, ``p5``/``p50``/``p95`` and mean and standard
+        deviation [engineering unit of the value].
+    """
     value = value or DEFAULT_VALUE.get(str(ds.attrs.get("quantity")), "")
     _check_name(ds, value, "--value", tuple(str(v) for v in ds.data_vars))
     v, unit = _eng(ds[value])
@@ -265,7 +303,22 @@ def percentiles(ds: xr.Dataset, value: str | None = None) -> dict[str, Any]:
 def plot_histogram(ds: xr.Dataset, path: str | Path, *, value: str | None = None
                    ) -> dict[str, Any]:
     """Histogram of ``value`` with its percentiles; the linear band's upper edge beside a
-    critical speed.  Returns :func:`percentiles`."""
+    critical speed.  Returns :func:`percentiles`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The sweep.
+    path : str or Path
+        The image file.
+    value : str, optional
+        The variable; the quantity's default value otherwise.
+
+    Returns
+    -------
+    dict
+        :func:`percentiles` of the value.
+    """
     stats = percentiles(ds, value)
     value = stats["value"]
     v, unit = _eng(ds[value])

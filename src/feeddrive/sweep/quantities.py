@@ -4,7 +4,7 @@ Quantities (``[quantity] kind``):
 
 * ``critical-speed``: the critical creeping speed and bands (:mod:`feeddrive.analysis.critical`),
   ``start = "rest"`` (scan + bisection) or ``"running"`` (the paper's step-down), on the
-  protocol of :mod:`feeddrive.analysis.protocol` unless overridden;
+  protocol of ``feeddrive.analysis.protocol`` unless overridden;
 * ``creep-trial``: one trial from rest at ``table_speed``: verdict kind, ripple ratio, stick
   fraction, frequency (:func:`~feeddrive.analysis.critical.creep_trial`);
 * ``linear-band``: the speeds at which steady sliding is linearly unstable
@@ -51,7 +51,33 @@ UNITS: dict[str, str] = {
 
 @dataclass(frozen=True)
 class QuantitySettings:
-    """The ``[quantity]`` table, SI (the file gives speeds in mm/s)."""
+    """The ``[quantity]`` table of a sweep, in SI (the file gives speeds in mm/s).
+
+    Parameters
+    ----------
+    kind : str, default "critical-speed"
+        ``"critical-speed"``, ``"creep-trial"``, ``"linear-band"`` or ``"loop-margins"``.
+    start : str, default "rest"
+        Critical-speed search from ``"rest"`` or on a ``"running"`` table.
+    low : float
+        Lowest speed searched [m/s].
+    high : float
+        Highest speed searched [m/s].
+    coarse_step : float
+        Step of the coarse scan [m/s].
+    resolution : float
+        Bisection resolution [m/s].
+    initial_duration : float
+        First trial duration [s].
+    max_duration : float
+        Longest trial duration [s].
+    table_speed : float, default 1e-3
+        Table speed of a creep trial or loop-margin point [m/s].
+    linear : bool, default True
+        Also compute the linear stability band.
+    linear_points : int, default 40
+        Speeds of the linear scan.
+    """
 
     kind: str = "critical-speed"
     start: str = "rest"
@@ -67,6 +93,23 @@ class QuantitySettings:
 
     @classmethod
     def parse(cls, spec: Any) -> QuantitySettings:
+        """The settings from a ``[quantity]`` table, speeds converted from mm/s.
+
+        Parameters
+        ----------
+        spec : dict
+            The parsed table.
+
+        Returns
+        -------
+        QuantitySettings
+            The settings.
+
+        Raises
+        ------
+        ParameterError
+            For an unknown key or a bad value, naming ``quantity.<key>``.
+        """
         if not isinstance(spec, dict):
             raise ParameterError("quantity", spec, "expected a table")
         for k in spec:
@@ -117,10 +160,28 @@ class QuantitySettings:
         return out
 
     def with_table_speed(self, speed: float) -> QuantitySettings:
+        """These settings with another table speed (a ``table_speed`` axis).
+
+        Parameters
+        ----------
+        speed : float
+            Table speed [m/s].
+
+        Returns
+        -------
+        QuantitySettings
+            The new settings.
+        """
         return replace(self, table_speed=speed)
 
     def to_dict(self) -> dict[str, Any]:
-        """Only what the quantity depends on (the store key is a hash of it)."""
+        """Only what the quantity depends on (the store key is a hash of it).
+
+        Returns
+        -------
+        dict
+            ``kind`` and the settings its computation reads [SI].
+        """
         d = asdict(self)
         keep = {"critical-speed": ("start", "low", "high", "coarse_step", "resolution",
                                    "initial_duration", "max_duration", "linear",
@@ -153,7 +214,22 @@ def _growth_rate(system: Any, speed: float, nut_speed: float) -> tuple[float, fl
 
 
 def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
-    """The quantity ``q`` (:meth:`QuantitySettings.to_dict`) of ``system``."""
+    """Compute one sweep quantity of a drive.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    nut_speed : float
+        Nut speed [m/s].
+    q : dict
+        The quantity settings (:meth:`QuantitySettings.to_dict`).
+
+    Returns
+    -------
+    dict
+        The quantity's values by name [SI].
+    """
     from ..analysis.cycle_verdict import VerdictRule
 
     kind = q["kind"]
@@ -216,7 +292,19 @@ def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
 
 def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     """Run one point (see the module).  Module-level and picklable: the function every
-    executor runs, in a local process or on a Dask worker."""
+    executor runs, in a local process or on a Dask worker.
+
+    Parameters
+    ----------
+    task : dict
+        The point's task (``SweepConfig.task``).
+
+    Returns
+    -------
+    dict
+        The values and ``seconds`` (CPU time of the point [s]); ``error`` instead of the values
+        when the simulation failed.
+    """
     from ..engine.simulate import DriveSystem, SimulationError
     from ..parameters import loads
 
@@ -235,7 +323,13 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
 def warm(task: dict[str, Any]) -> None:
     """Compile (or load from numba's disk cache) the kernels ``task``'s quantity uses, with
     a 20-ms run and, for linear quantities, one linearisation: cheap, and it leaves the
-    compiled modules on disk for every worker."""
+    compiled modules on disk for every worker.
+
+    Parameters
+    ----------
+    task : dict
+        A task of the model structure to compile.
+    """
     from ..engine.simulate import DriveSystem, simulate
     from ..model.reference import ConstantSpeed
     from ..parameters import loads

@@ -126,7 +126,18 @@ def _code_hash() -> str:
 def point_key(task: Mapping[str, Any]) -> str:
     """The key of one point: :func:`feeddrive.io.json_store.store_key` of the version, kernel hash,
     code hash and the task (full parameter set as TOML, drive, position, nut speed,
-    quantity settings)."""
+    quantity settings).
+
+    Parameters
+    ----------
+    task : mapping
+        The point's task.
+
+    Returns
+    -------
+    str
+        The key (hex).
+    """
     return store_key({"version": __version__, "kernel": KERNEL_HASH, "code": _code_hash(),
                       "task": dict(task)})
 
@@ -150,6 +161,25 @@ class SweepStore:
     ``option`` names the setting that gave the path (``store``, ``--store``) in messages;
     ``notice`` receives a one-line message for each stored entry found unusable.
     ``create``: a missing file is created (its folder must exist); else it is refused.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The SQLite file.
+    option : str, default "store"
+        The setting that gave the path, named in messages.
+    create : bool, default True
+        Create a missing file (its folder must exist).
+    notice : callable, optional
+        Receives a one-line message for each stored entry found unusable.
+
+    Raises
+    ------
+    StoreError
+        For a file that is not a store, of another format, or on a file system without
+        SQLite's WAL journal.
+    StoreFailure
+        When SQLite cannot open it.
     """
 
     def __init__(self, path: str | os.PathLike[str], *, option: str = "store",
@@ -219,6 +249,7 @@ class SweepStore:
         return out
 
     def close(self) -> None:
+        """Close the database connection."""
         self._db.close()
 
     def __enter__(self) -> SweepStore:
@@ -237,7 +268,15 @@ class SweepStore:
     def put(self, key: str, value: Mapping[str, Any]) -> None:
         """Store ``value`` under ``key`` in its own committed transaction (a damaged entry
         of that key is replaced; an intact one is kept: the value is the same), releasing
-        this store's claim on it."""
+        this store's claim on it.
+
+        Parameters
+        ----------
+        key : str
+            A point's store key (:func:`point_key`).
+        value : mapping
+            The point's result (JSON-serialisable).
+        """
         payload = _json(value)
         digest = hashlib.sha256(payload.encode("utf-8")).hexdigest()
 
@@ -257,7 +296,18 @@ class SweepStore:
     def claim(self, key: str) -> str:
         """Claim ``key`` for this store object: ``"stored"`` (an intact result is there),
         ``"busy"`` (claimed by a live sweep) or ``"mine"`` (claimed now, or a dead sweep's
-        claim taken over)."""
+        claim taken over).
+
+        Parameters
+        ----------
+        key : str
+            A point's store key (:func:`point_key`).
+
+        Returns
+        -------
+        str
+            ``"stored"``, ``"busy"`` or ``"mine"``.
+        """
 
         def write(db: sqlite3.Connection) -> str:
             row = db.execute("SELECT sha256, payload FROM results WHERE key = ?",
@@ -279,7 +329,13 @@ class SweepStore:
 
     @_guarded
     def refresh_claims(self, *, force: bool = False) -> None:
-        """Mark this store's claims as alive (every ``CLAIM_REFRESH`` s at most)."""
+        """Mark this store's claims as alive (every ``CLAIM_REFRESH`` s at most).
+
+        Parameters
+        ----------
+        force : bool, default False
+            Refresh now, however recent the last refresh.
+        """
         now = time.time()
         if force or now - self._refreshed >= CLAIM_REFRESH:
             self._refreshed = now
@@ -288,7 +344,13 @@ class SweepStore:
 
     @_guarded
     def release_claims(self, keys: Iterable[str] | None = None) -> None:
-        """Drop this store's claims (on ``keys`` only, when given)."""
+        """Drop this store's claims (on ``keys`` only, when given).
+
+        Parameters
+        ----------
+        keys : iterable of str, optional
+            The keys; all of this store's claims when omitted.
+        """
         if keys is None:
             self._write(lambda db: db.execute("DELETE FROM claims WHERE owner = ?",
                                               (self.owner,)))
@@ -311,13 +373,36 @@ class SweepStore:
 
     @_guarded
     def get(self, key: str) -> dict[str, Any] | None:
+        """The stored result of a key, or None when absent or damaged (a damaged one is noticed).
+
+        Parameters
+        ----------
+        key : str
+            A point's store key (:func:`point_key`).
+
+        Returns
+        -------
+        dict or None
+            The result.
+        """
         row = self._db.execute("SELECT sha256, payload FROM results WHERE key = ?",
                                (key,)).fetchone()
         return None if row is None else self._decode(key, row[0], row[1])
 
     @_guarded
     def finished(self, keys: Iterable[str]) -> set[str]:
-        """Those of ``keys`` with an intact stored result."""
+        """Those of ``keys`` with an intact stored result.
+
+        Parameters
+        ----------
+        keys : iterable of str
+            Store keys.
+
+        Returns
+        -------
+        set of str
+            The keys whose result is stored and intact.
+        """
         wanted = set(keys)
         out = set()
         for key, digest, payload in self._db.execute("SELECT key, sha256, payload FROM results"):
@@ -327,6 +412,13 @@ class SweepStore:
 
     @_guarded
     def count(self) -> int:
+        """Number of results in the store, over all sweeps.
+
+        Returns
+        -------
+        int
+            The count.
+        """
         return int(self._db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
 
     # ------------------------------------------------------------------ sweeps
@@ -339,7 +431,19 @@ class SweepStore:
         ``(index, key, coordinates)``, replacing an earlier design of that name in one
         transaction.  Results are not touched: they are keyed by their inputs.  ``points``
         is read once, as it is written (a generator: never all in memory); ``count`` (how
-        many it yields) lets an unchanged design be recognised without reading it."""
+        many it yields) lets an unchanged design be recognised without reading it.
+
+        Parameters
+        ----------
+        name : str
+            The sweep's name.
+        description : mapping
+            What ``feeddrive.sweep.executors.description`` records.
+        points : iterable of (int, str, mapping)
+            (index, key, coordinates) of every design point.
+        count : int, optional
+            How many ``points`` yields.
+        """
         if count is None:
             points = list(points)
             count = len(points)
@@ -367,10 +471,34 @@ class SweepStore:
 
     @_guarded
     def sweeps(self) -> list[str]:
+        """Names of the sweeps registered in the store, oldest update first.
+
+        Returns
+        -------
+        list of str
+            The names.
+        """
         return [r[0] for r in self._db.execute("SELECT name FROM sweeps ORDER BY updated")]
 
     @_guarded
     def description(self, name: str) -> dict[str, Any]:
+        """What was recorded about a sweep at registration.
+
+        Parameters
+        ----------
+        name : str
+            The sweep's name.
+
+        Returns
+        -------
+        dict
+            The description (``feeddrive.sweep.executors.description``).
+
+        Raises
+        ------
+        StoreError
+            When no sweep of that name is registered.
+        """
         row = self._db.execute("SELECT description FROM sweeps WHERE name = ?",
                                (name,)).fetchone()
         if row is None:
@@ -381,7 +509,20 @@ class SweepStore:
 
     @_guarded
     def point_keys(self, name: str, indices: Iterable[int]) -> dict[int, str]:
-        """The keys registered for sweep ``name`` at ``indices`` (absent ones left out)."""
+        """The keys registered for sweep ``name`` at ``indices`` (absent ones left out).
+
+        Parameters
+        ----------
+        name : str
+            The sweep's name.
+        indices : iterable of int
+            Design-point indices.
+
+        Returns
+        -------
+        dict of int to str
+            Index → key.
+        """
         out = {}
         for i in indices:
             row = self._db.execute("SELECT key FROM points WHERE sweep = ? AND idx = ?",
@@ -392,14 +533,36 @@ class SweepStore:
 
     @_guarded
     def stored_count(self, name: str) -> int:
-        """How many distinct results of sweep ``name``'s registered points are stored."""
+        """How many distinct results of sweep ``name``'s registered points are stored.
+
+        Parameters
+        ----------
+        name : str
+            The sweep's name.
+
+        Returns
+        -------
+        int
+            The count.
+        """
         return int(self._db.execute(
             "SELECT COUNT(DISTINCT p.key) FROM points p JOIN results r ON r.key = p.key "
             "WHERE p.sweep = ?", (name,)).fetchone()[0])
 
     @_guarded
     def rows(self, name: str) -> list[tuple[int, str, dict[str, Any], dict[str, Any] | None]]:
-        """(index, key, coordinates, result or None) of every design point of ``name``."""
+        """(index, key, coordinates, result or None) of every design point of ``name``.
+
+        Parameters
+        ----------
+        name : str
+            The sweep's name.
+
+        Returns
+        -------
+        list of tuple
+            (index, key, coordinates, result or None), in design order.
+        """
         self.description(name)
         out = []
         for idx, key, coords, digest, payload in self._db.execute(

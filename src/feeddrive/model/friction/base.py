@@ -45,7 +45,22 @@ SITE_SLOTS = tuple(f"{d}.{f}" for d in ("positive", "negative")
 
 @dataclass(frozen=True)
 class LinearFriction:
-    """Friction linearised at steady sliding: δẋ = A δx + B δv, δF = C δx + D δv."""
+    """Friction linearised at steady sliding: δẋ = A δx + B δv, δF = C δx + D δv.
+
+    The small-signal model of a law around constant sliding at speed v (x the law's internal
+    states); :mod:`feeddrive.analysis.linear` puts it into the drive's state-space model.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        (n, n) state matrix of the internal states [1/s].
+    B : numpy.ndarray
+        (n,) input vector, rate of each state per unit of sliding speed [state unit/m].
+    C : numpy.ndarray
+        (n,) output vector, friction force per unit of each state [N/state unit].
+    D : float
+        Direct feed-through, the force per unit of sliding speed [N s/m].
+    """
 
     A: np.ndarray  # (n, n) [1/s]
     B: np.ndarray  # (n,)  [1/m] per state unit
@@ -78,27 +93,91 @@ class FrictionLaw:
         return None
 
     def pack(self, site: LuGreParameters) -> np.ndarray:
-        """The site's parameters packed for the kernel, in :meth:`site_slots` order [SI]."""
+        """The site's parameters packed for the kernel, in :meth:`site_slots` order.
+
+        Parameters
+        ----------
+        site : LuGreParameters
+            The friction site's parameters (the law's ``parameters_class``).
+
+        Returns
+        -------
+        numpy.ndarray
+            The values the kernel reads at ``P[o : o + n]`` [SI, per slot].
+        """
         return site.as_array()
 
     def states(self, site: Any) -> tuple[str, ...]:
-        """The law's internal states at ``site`` (a law whose state count depends on its
-        parameters, e.g. GMS's N elements, overrides this); ``state_names`` by default."""
+        """Names of the law's internal states at ``site``.
+
+        A law whose state count depends on its parameters (GMS's N elements) overrides this.
+
+        Parameters
+        ----------
+        site : SiteParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        tuple of str
+            One name per state, in ``y`` order; ``state_names`` by default.
+        """
         return self.state_names
 
     def site_slots(self, site: Any) -> tuple[str, ...]:
-        """Names of :meth:`pack`'s values at ``site`` (paths below ``friction.<site>``);
-        ``slots`` by default."""
+        """Names of the values :meth:`pack` returns at ``site``.
+
+        Parameters
+        ----------
+        site : SiteParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        tuple of str
+            Parameter paths below ``friction.<site>``, in ``P`` order; ``slots`` by default.
+        """
         return self.slots
 
     def steady_state(self, v: float, site: LuGreParameters) -> np.ndarray:
-        """The internal states in steady sliding at speed ``v`` [m/s] (zeros by default)."""
+        """The law's internal states in steady sliding.
+
+        Parameters
+        ----------
+        v : float
+            Constant sliding speed [m/s].
+        site : LuGreParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            The states, in :meth:`states` order [state units]; zeros by default (a stateless law).
+        """
         return np.zeros(len(self.states(site)))
 
     def evaluate(self, v: float, states: np.ndarray, site: LuGreParameters,
                  packed: np.ndarray | None = None) -> tuple[float, np.ndarray]:
-        """(force [N], state rates) at speed ``v`` [m/s] and internal ``states`` (Python call
-        of the compiled kernel)."""
+        """Friction force and state rates at one instant, by a Python call of the compiled kernel.
+
+        Parameters
+        ----------
+        v : float
+            Sliding speed [m/s].
+        states : numpy.ndarray
+            The law's internal states, in :meth:`states` order [state units].
+        site : LuGreParameters
+            The friction site's parameters.
+        packed : numpy.ndarray, optional
+            The site packed by :meth:`pack` [SI, per slot]; packed on each call when omitted.
+
+        Returns
+        -------
+        force : float
+            Friction force with the sign of the sliding speed [N].
+        rates : numpy.ndarray
+            Time derivatives of ``states`` [state units/s].
+        """
         n = len(self.states(site))
         y = np.zeros(max(n, 1))
         y[:n] = states
@@ -108,6 +187,20 @@ class FrictionLaw:
         return force, dy[:n].copy()
 
     def steady_force(self, v: object, site: LuGreParameters) -> np.ndarray:
+        """The steady friction curve: the force after sliding long enough at constant speed.
+
+        Parameters
+        ----------
+        v : array_like
+            Sliding speed(s) [m/s].
+        site : LuGreParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            Friction force at each speed, shaped like ``v`` [N].
+        """
         speeds = np.asarray(v, dtype=float)
         P = self.pack(site)
         out = np.empty(speeds.size)
@@ -116,7 +209,24 @@ class FrictionLaw:
         return out.reshape(speeds.shape)
 
     def linearise(self, v: float, site: LuGreParameters) -> LinearFriction:
-        """Central-difference linearisation of ``kernel`` at steady sliding speed ``v``."""
+        """Linearise the law at steady sliding by central differences of its kernel.
+
+        Steps of 1e-6 relative in the speed and in each state; laws with a closed form (LuGre, GMS)
+        override this, and the tests compare the two.
+
+        Parameters
+        ----------
+        v : float
+            Steady sliding speed of the operating point [m/s], v ≠ 0 for laws whose states have no
+            steady value at rest.
+        site : LuGreParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        LinearFriction
+            (A, B, C, D) of the small-signal model at ``v``.
+        """
         n = len(self.states(site))
         P = self.pack(site)
         x0 = self.steady_state(v, site)
@@ -160,7 +270,24 @@ def register_friction_law(law: FrictionLaw) -> FrictionLaw:
 
 
 def friction_law(name: str) -> FrictionLaw:
-    """The registered law called ``name``."""
+    """Look up a registered friction law by the name a parameter file uses.
+
+    Parameters
+    ----------
+    name : str
+        The law's name (``"lugre"``, ``"stribeck"``, ``"dahl"``, ``"gms"``, ``"none"`` or one a
+        user registered).
+
+    Returns
+    -------
+    FrictionLaw
+        The registered law instance.
+
+    Raises
+    ------
+    ParameterError
+        When no law of that name is registered; the message lists the known names.
+    """
     laws = registry.table(registry.FRICTION_LAWS)
     if name not in laws:
         from ...parameters import ParameterError
@@ -172,5 +299,11 @@ def friction_law(name: str) -> FrictionLaw:
 
 
 def law_names() -> tuple[str, ...]:
-    """The names of the registered friction laws."""
+    """Names of the registered friction laws, in registration order.
+
+    Returns
+    -------
+    tuple of str
+        The names a ``[friction.<site>] law = ...`` line accepts.
+    """
     return registry.names(registry.FRICTION_LAWS)

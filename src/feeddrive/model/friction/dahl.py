@@ -24,6 +24,36 @@ from .lugre import COULOMB, SIGMA0, VISCOUS, branch
 @kernel
 def dahl_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
                 dy: np.ndarray) -> float:
+    """Kernel of the Dahl law: dz/dt = v − σ0·|v|·z / F_c, F = σ0·z + σ2·v.
+
+    Parameters
+    ----------
+    v : float
+        Sliding speed [m/s].
+    y : numpy.ndarray
+        The model's state vector; this law's states are ``y[k : k + n_states]`` [m].
+    k : int
+        Index of the law's first state in ``y``.
+    P : numpy.ndarray
+        The model's packed parameter vector [SI, per slot].
+    o : int
+        Offset of this site's parameter block in ``P``.
+    dy : numpy.ndarray
+        The state-rate vector; the kernel writes its states' rates at ``dy[k : k + n_states]``
+        [m/s].
+
+    Returns
+    -------
+    float
+        Friction force [N].
+
+    References
+    ----------
+    .. [1] P. R. Dahl, "A solid friction model", Aerospace Corp. report
+       TOR-0158(3107-18)-1, 1968.
+    .. [2] H. Olsson, K. J. Åström, C. Canudas de Wit, M. Gäfvert, P. Lischinsky, "Friction
+       models and friction compensation", Eur. J. Control 4 (1998) 176–195, Eq. (9).
+    """
     b = branch(v, o)
     z = y[k]
     dy[k] = v - P[o + SIGMA0] * abs(v) * z / P[b + COULOMB]
@@ -49,6 +79,20 @@ class Dahl(FrictionLaw):
     kernel = dahl_kernel
 
     def steady_state(self, v: float, site):
+        """Bristle deflection in steady sliding, z = sgn(v)·F_c/σ0.
+
+        Parameters
+        ----------
+        v : float
+            Constant sliding speed [m/s].
+        site : LuGreParameters
+            The friction site's parameters (F_c of the branch of v, σ0).
+
+        Returns
+        -------
+        numpy.ndarray
+            The one state z [m]; 0 at v = 0.
+        """
         if v == 0.0:
             return np.zeros(1)
         b = site.positive if v > 0 else site.negative

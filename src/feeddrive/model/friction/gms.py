@@ -125,6 +125,37 @@ class GMSParameters(SiteParameters):
 @kernel
 def gms_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
                dy: np.ndarray) -> float:
+    """Kernel of the GMS law: N elements that stick (dδ_i/dt = v) or slip toward α_i·s(v).
+
+    An element slips once F_i·sgn(v) ≥ (1 − margin)·α_i·|s(v)|; the force is Σ k_i·δ_i + σ2·v.
+
+    Parameters
+    ----------
+    v : float
+        Sliding speed [m/s].
+    y : numpy.ndarray
+        The model's state vector; this law's states are ``y[k : k + n_states]`` [m].
+    k : int
+        Index of the law's first state in ``y``.
+    P : numpy.ndarray
+        The model's packed parameter vector [SI, per slot].
+    o : int
+        Offset of this site's parameter block in ``P``.
+    dy : numpy.ndarray
+        The state-rate vector; the kernel writes its states' rates at ``dy[k : k + n_states]``
+        [m/s].
+
+    Returns
+    -------
+    float
+        Friction force [N].
+
+    References
+    ----------
+    .. [1] F. Al-Bender, V. Lampaert, J. Swevers, "The generalized Maxwell-slip model: a
+       novel model for friction simulation and compensation", IEEE Trans. Autom. Control
+       50 (2005) 1883–1887.
+    """
     n = int(P[o + COUNT])
     s = stribeck_magnitude(v, P, o)
     sgn = 1.0 if v >= 0.0 else -1.0
@@ -160,18 +191,52 @@ class GMS(FrictionLaw):
     parameters_class = GMSParameters
 
     def states(self, site: Any) -> tuple[str, ...]:
-        """One deflection state per element."""
+        """One deflection state per slip element.
+
+        Parameters
+        ----------
+        site : GMSParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        tuple of str
+            ``element0`` … ``element{N-1}``.
+        """
         return tuple(f"element{i}" for i in range(len(site.element_stiffness)))
 
     def site_slots(self, site: Any) -> tuple[str, ...]:
-        """The Stribeck branches, C, N, then each element's stiffness and weight."""
+        """Names of the packed values: the Stribeck branches, C, the slip margin, N, each element's
+        stiffness and weight.
+
+        Parameters
+        ----------
+        site : GMSParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        tuple of str
+            Parameter paths below ``friction.<site>``, in ``P`` order.
+        """
         n = len(site.element_stiffness)
         return (*SLOTS[:ATTRACTION], "attraction", "slip_margin", "element_count",
                 *(f"element_stiffness[{i}]" for i in range(n)),
                 *(f"element_weight[{i}]" for i in range(n)))
 
     def pack(self, site: Any) -> np.ndarray:
-        """(F_c, F_s, v_s, σ2)± , C, slip margin, N, k_1..k_N, α_1..α_N [SI]."""
+        """The site's parameters in the kernel's order.
+
+        Parameters
+        ----------
+        site : GMSParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            (F_c, F_s, v_s, σ2)±, C [N/s], slip margin [-], N [-], k_1..k_N [N/m], α_1..α_N [-].
+        """
         p, m = site.positive, site.negative
         return np.array([p.coulomb_force, p.static_force, p.stribeck_velocity,
                          p.viscous_coefficient, m.coulomb_force, m.static_force,
@@ -181,7 +246,26 @@ class GMS(FrictionLaw):
                          *site.element_weight], dtype=float)
 
     def steady_state(self, v: float, site: Any) -> np.ndarray:
-        """Every element slipping at its share of the Stribeck curve: δ_i = α_i·s(v)/k_i."""
+        """Element deflections in steady sliding: every element slips at δ_i = α_i·s(v)/k_i.
+
+        Parameters
+        ----------
+        v : float
+            Constant sliding speed [m/s].
+        site : GMSParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            The N deflections [m]; zeros at v = 0.
+
+        References
+        ----------
+        .. [1] F. Al-Bender, V. Lampaert, J. Swevers, "The generalized Maxwell-slip model: a
+           novel model for friction simulation and compensation", IEEE Trans. Autom. Control
+           50 (2005) 1883–1887.
+        """
         if v == 0.0:
             return np.zeros(len(site.element_stiffness))
         s = math.copysign(float(stribeck_magnitude(v, self.pack(site), 0)), v)
@@ -189,9 +273,35 @@ class GMS(FrictionLaw):
                                                    site.element_weight, strict=True)])
 
     def linearise(self, v: float, site: Any) -> LinearFriction:
-        """Analytic, at steady sliding (every element slipping): δδ̇_i = −(C/|s|)·δδ_i +
-        C·α_i·|s|'(v)·sgn(v)/(k_i·|s|)·δv, δF = Σ k_i·δδ_i + σ2·δv.  (A perturbation that
-        unloads an element makes it stick; the slip branch is the one steady sliding is on.)"""
+        """Analytic linearisation at steady sliding, every element slipping.
+
+        δδ̇_i = −(C/|s|)·δδ_i + C·α_i·|s|'(v)·sgn(v)/(k_i·|s|)·δv, δF = Σ k_i·δδ_i + σ2·δv.  A
+        perturbation that unloads an element makes it stick; the slip branch is the one steady
+        sliding is on.
+
+        Parameters
+        ----------
+        v : float
+            Steady sliding speed of the operating point [m/s], v ≠ 0.
+        site : GMSParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        LinearFriction
+            (A, B, C, D) of the small-signal model at ``v``.
+
+        Raises
+        ------
+        ValueError
+            At v = 0, where the elements have no steady slipping state.
+
+        References
+        ----------
+        .. [1] F. Al-Bender, V. Lampaert, J. Swevers, "The generalized Maxwell-slip model: a
+           novel model for friction simulation and compensation", IEEE Trans. Autom. Control
+           50 (2005) 1883–1887.
+        """
         if v == 0.0:
             raise ValueError("speed: the GMS law is linearised at steady sliding (v ≠ 0)")
         b = site.positive if v >= 0 else site.negative

@@ -28,17 +28,38 @@ _SLOPE_SCAN = np.geomspace(1e-6, 0.1, 2001)
 
 @dataclass(frozen=True)
 class SteadySlope:
-    """The steady curve's slope over the scan: its negative-slope band (None when the slope
-    never goes negative) and its smallest slope [N s/m]."""
+    """The steady friction curve's slope over the scan.
+
+    Parameters
+    ----------
+    band : NegativeSlopeBand or None
+        The negative-slope band; None when the slope never goes negative.
+    min_slope : float
+        The smallest slope over the scan [N s/m].
+    """
 
     band: NegativeSlopeBand | None
     min_slope: float
 
 
 def steady_slope(site: LuGreParameters, branch: str) -> SteadySlope:
-    """Negative-slope band of the site's steady friction curve on one branch (speeds as
-    magnitudes [m/s]): analytic for the Stribeck curve (LuGre, static), from the law's own
-    steady curve on a log grid otherwise."""
+    """Negative-slope band of a site's steady friction curve on one direction branch.
+
+    Analytic for the laws whose steady curve is the Stribeck curve (LuGre, static); for any
+    other law, from its own steady curve on a log grid of speeds.
+
+    Parameters
+    ----------
+    site : LuGreParameters
+        The friction site (any law's parameters).
+    branch : str
+        ``"positive"`` or ``"negative"``; speeds are magnitudes.
+
+    Returns
+    -------
+    SteadySlope
+        The band [m/s] and the smallest slope [N s/m].
+    """
     sign = 1.0 if branch == "positive" else -1.0
     law = friction_law(site.law)
     v = sign * _SLOPE_SCAN
@@ -54,20 +75,63 @@ def steady_slope(site: LuGreParameters, branch: str) -> SteadySlope:
 
 
 def has_passivity_criterion(site: LuGreParameters) -> bool:
-    """The passivity margin σ2 − σ1(F_s − F_c)/F_c is a LuGre criterion (Barabanov & Ortega
-    2000); it says nothing about another law."""
+    """Whether the passivity margin σ2 − σ1(F_s − F_c)/F_c applies to the site's law.
+
+    It is a LuGre criterion (Barabanov & Ortega 2000) and says nothing about another law.
+
+    Parameters
+    ----------
+    site : LuGreParameters
+        The friction site.
+
+    Returns
+    -------
+    bool
+        True for a LuGre site.
+
+    References
+    ----------
+    .. [1] N. Barabanov, R. Ortega, "Necessary and sufficient conditions for passivity of the
+       LuGre friction model", IEEE Trans. Autom. Control 45 (2000) 830–832.
+    """
     return site.law == "lugre"
 
 
 def site_sliding_stability(speed: object, site: LuGreParameters, mass: float,
                            stiffness: float, damping: float, *,
                            analytic: bool = True) -> SlidingStability:
-    """Linear stability of a mass ``mass`` [kg] pulled at each ``speed`` [m/s] through a
-    spring ``stiffness`` [N/m] and a damper ``damping`` [N s/m] while sliding on ``site``.
+    """Linear stability of a mass pulled through a spring and damper while sliding on one site.
+
     LuGre: the cubic of :func:`feeddrive.model.friction.stribeck.sliding_stability`; any
     other law: the eigenvalues of the same oscillator with the law's own linearisation
     (:meth:`FrictionLaw.linearise`), δẋ = δu, m δu̇ = −k δx − c δu − C δz − D δu,
-    δż = A δz + B δu (``analytic=False`` takes this path for LuGre too: the cross-check)."""
+    δż = A δz + B δu.
+
+    Parameters
+    ----------
+    speed : array_like
+        Steady sliding speeds, finite and non-zero [m/s].
+    site : LuGreParameters
+        The friction site (any law's parameters).
+    mass : float
+        The sliding mass [kg].
+    stiffness : float
+        Spring stiffness [N/m].
+    damping : float
+        Damping [N s/m].
+    analytic : bool, default True
+        Use the LuGre cubic; False takes the eigenvalue path for LuGre too (the cross-check).
+
+    Returns
+    -------
+    SlidingStability
+        Stability and largest real part [1/s] per speed.
+
+    Raises
+    ------
+    ValueError
+        For a zero or non-finite speed.
+    """
     if site.law == "lugre" and analytic:
         return sliding_stability(speed, [site], mass, stiffness, damping)
     law = friction_law(site.law)

@@ -27,6 +27,21 @@ class FrictionBranch(Component):
 
     Table 1 prints the negative branch with minus signs on F_c, F_s and v_s; here every branch
     is stored as magnitudes and the sign comes from the direction of motion.
+
+    Parameters
+    ----------
+    coulomb_force : float
+        Coulomb (sliding) friction F_c, magnitude [N].
+    static_force : float
+        Breakaway (static) friction F_s ≥ F_c, magnitude [N].
+    stribeck_velocity : float
+        Stribeck velocity v_s, magnitude [m/s].
+    viscous_coefficient : float
+        Viscous coefficient σ2 [N s/m].
+
+    References
+    ----------
+    .. [1] Wang2021 Table 1.
     """
 
     coulomb_force: float = quantity(
@@ -58,6 +73,27 @@ class LuGreParameters(SiteParameters):
     Rotary sites (screw and hollow shafts) are stored as the paper does: torques divided by
     H = p_h/2π, angles multiplied by H, so forces in N and speeds in m/s of the equivalent
     nut/table motion.  σ0 and σ1 are shared by both branches, as in Table 1.
+
+    Parameters
+    ----------
+    positive : FrictionBranch
+        The + branch (v ≥ 0).
+    negative : FrictionBranch
+        The − branch, as magnitudes.
+    bristle_stiffness : float
+        σ0 [N/m].
+    bristle_damping : float
+        σ1 [N s/m].
+    law : str, default "lugre"
+        The site's friction law (``"lugre"``, ``"stribeck"``, ``"dahl"``, ``"none"``).
+    smoothing_velocity : float, default 1e-6
+        Sign-function smoothing v_ε of the static law only [m/s].
+
+    References
+    ----------
+    .. [1] Wang2021 Eqs. (9)–(11), Table 1.
+    .. [2] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
     """
 
     positive: FrictionBranch
@@ -87,7 +123,24 @@ class LuGreParameters(SiteParameters):
     def mismatched(self, coulomb: float, static: float, stribeck_velocity: float,
                    viscous: float) -> LuGreParameters:
         """The site as a compensator with model errors sees it: F_c, F_s, v_s and σ2 of both
-        branches times the given factors (σ0, σ1 unchanged)."""
+        branches times the given factors (σ0, σ1 unchanged).
+
+        Parameters
+        ----------
+        coulomb : float
+            Factor on F_c [-].
+        static : float
+            Factor on F_s [-].
+        stribeck_velocity : float
+            Factor on v_s [-].
+        viscous : float
+            Factor on σ2 [-].
+
+        Returns
+        -------
+        LuGreParameters
+            The mismatched site.
+        """
         def br(b: FrictionBranch) -> FrictionBranch:
             return replace(b, coulomb_force=b.coulomb_force * coulomb,
                            static_force=b.static_force * static,
@@ -97,7 +150,18 @@ class LuGreParameters(SiteParameters):
 
     def scaled(self, factor: float) -> LuGreParameters:
         """This site with every force and coefficient times ``factor`` (0 < factor ≤ 1); the
-        Stribeck velocities and the bristle dynamics (z, ż) are unchanged, the force scales."""
+        Stribeck velocities and the bristle dynamics (z, ż) are unchanged, the force scales.
+
+        Parameters
+        ----------
+        factor : float
+            The share of the site's friction, 0 < factor ≤ 1 [-].
+
+        Returns
+        -------
+        LuGreParameters
+            The scaled site.
+        """
         def br(b: FrictionBranch) -> FrictionBranch:
             return replace(b, coulomb_force=b.coulomb_force * factor,
                            static_force=b.static_force * factor,
@@ -107,7 +171,13 @@ class LuGreParameters(SiteParameters):
                        bristle_damping=self.bristle_damping * factor)
 
     def as_array(self) -> np.ndarray:
-        """Pack as float64[10]: (F_c, F_s, v_s, σ2) for +, then −, then σ0, σ1."""
+        """Pack as float64[10]: (F_c, F_s, v_s, σ2) for +, then −, then σ0, σ1.
+
+        Returns
+        -------
+        numpy.ndarray
+            The ten values [SI, per slot].
+        """
         p, n = self.positive, self.negative
         return np.array(
             [
@@ -119,6 +189,23 @@ class LuGreParameters(SiteParameters):
         )
 
     def branch(self, name: str) -> FrictionBranch:
+        """One direction branch by name.
+
+        Parameters
+        ----------
+        name : str
+            ``"positive"`` or ``"negative"``.
+
+        Returns
+        -------
+        FrictionBranch
+            The branch.
+
+        Raises
+        ------
+        ParameterError
+            For another name.
+        """
         if name not in ("positive", "negative"):
             raise ParameterError("branch", name, "expected positive or negative")
         return self.positive if name == "positive" else self.negative

@@ -25,6 +25,35 @@ SMOOTHING = len(SLOTS)  # the sign-function smoothing speed v_ε, after the LuGr
 @kernel
 def stribeck_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
                     dy: np.ndarray) -> float:
+    """Kernel of the static Stribeck law: F = tanh(v/v_ε)·σ0·g(v) + σ2·v, no state.
+
+    Parameters
+    ----------
+    v : float
+        Sliding speed [m/s].
+    y : numpy.ndarray
+        The model's state vector; this law's states are ``y[k : k + n_states]`` [m].
+    k : int
+        Index of the law's first state in ``y``.
+    P : numpy.ndarray
+        The model's packed parameter vector [SI, per slot].
+    o : int
+        Offset of this site's parameter block in ``P``.
+    dy : numpy.ndarray
+        The state-rate vector; the kernel writes its states' rates at ``dy[k : k + n_states]``
+        [m/s].
+
+    Returns
+    -------
+    float
+        Friction force [N].
+
+    References
+    ----------
+    .. [1] B. Armstrong-Hélouvry, P. Dupont, C. Canudas de Wit, "A survey of models, analysis
+       tools and compensation methods for the control of machines with friction",
+       Automatica 30 (1994) 1083–1138.
+    """
     return (math.tanh(v / P[o + SMOOTHING]) * stribeck_magnitude(v, P, o)
             + P[branch(v, o) + VISCOUS] * v)
 
@@ -32,6 +61,29 @@ def stribeck_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
 @kernel
 def no_friction_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
                        dy: np.ndarray) -> float:
+    """Kernel of the ``none`` law: zero force, no state.
+
+    Parameters
+    ----------
+    v : float
+        Sliding speed [m/s].
+    y : numpy.ndarray
+        The model's state vector; this law's states are ``y[k : k + n_states]`` [m].
+    k : int
+        Index of the law's first state in ``y``.
+    P : numpy.ndarray
+        The model's packed parameter vector [SI, per slot].
+    o : int
+        Offset of this site's parameter block in ``P``.
+    dy : numpy.ndarray
+        The state-rate vector; the kernel writes its states' rates at ``dy[k : k + n_states]``
+        [m/s].
+
+    Returns
+    -------
+    float
+        0.0 [N].
+    """
     return 0.0
 
 
@@ -54,6 +106,18 @@ class Stribeck(FrictionLaw):
     slots = (*SLOTS, "smoothing_velocity")
 
     def pack(self, site):
+        """The LuGre slots of the site followed by its smoothing speed v_ε.
+
+        Parameters
+        ----------
+        site : LuGreParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            (F_c, F_s, v_s, σ2)±, σ0, σ1, v_ε [SI, per slot].
+        """
         return np.append(site.as_array(), site.smoothing_velocity)
 
 

@@ -34,13 +34,47 @@ from .lugre_parameters import FrictionBranch, LuGreParameters
 
 @kernel
 def stribeck_magnitude_kernel(v: float, p: np.ndarray) -> float:
-    """σ0·g(v) = F_c + (F_s − F_c)·exp(−(v/v_s)²) [N] (Eq. 11, third line), branch by sign."""
+    """Stribeck magnitude σ0·g(v) = F_c + (F_s − F_c)·exp(−(v/v_s)²), branch by the sign of v.
+
+    Parameters
+    ----------
+    v : float
+        Sliding speed [m/s].
+    p : numpy.ndarray
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+
+    Returns
+    -------
+    float
+        The magnitude [N].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    .. [2] Wang2021 Eq. (11).
+    """
     return lugre.stribeck_magnitude(v, p, 0)
 
 
 @kernel
 def steady_force_kernel(v: float, p: np.ndarray) -> float:
-    """Steady-state friction: sign(v)·σ0·g(v) + σ2·v [N]; zero at v = 0."""
+    """Steady friction sgn(v)·σ0·g(v) + σ2·v, zero at v = 0.
+
+    Parameters
+    ----------
+    v : float
+        Sliding speed [m/s].
+    p : numpy.ndarray
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+
+    Returns
+    -------
+    float
+        Friction force [N].
+    """
     if v == 0.0:
         return 0.0
     s = 1.0 if v > 0.0 else -1.0
@@ -49,22 +83,83 @@ def steady_force_kernel(v: float, p: np.ndarray) -> float:
 
 @kernel
 def bristle_rate_kernel(v: float, z: float, p: np.ndarray) -> float:
-    """dz/dt = v − σ0·|v|·z / (σ0·g(v)) [m/s].  Safe at v = 0 (g ≥ F_c > 0)."""
+    """LuGre bristle rate dz/dt = v − σ0·|v|·z / (σ0·g(v)); safe at v = 0 (g ≥ F_c > 0).
+
+    Parameters
+    ----------
+    v : float
+        Sliding speed [m/s].
+    z : float
+        Bristle deflection [m].
+    p : numpy.ndarray
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+
+    Returns
+    -------
+    float
+        dz/dt [m/s].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    .. [2] Wang2021 Eq. (11).
+    """
     return lugre.bristle_rate(v, z, p, 0)
 
 
 @kernel
 def force_kernel(v: float, z: float, p: np.ndarray) -> float:
-    """F = σ0·z + σ1·dz/dt + σ2·v [N]."""
+    """LuGre force F = σ0·z + σ1·dz/dt + σ2·v with dz/dt from the bristle rate.
+
+    Parameters
+    ----------
+    v : float
+        Sliding speed [m/s].
+    z : float
+        Bristle deflection [m].
+    p : numpy.ndarray
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+
+    Returns
+    -------
+    float
+        Friction force [N].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    .. [2] Wang2021 Eq. (11).
+    """
     return lugre.force(v, z, lugre.bristle_rate(v, z, p, 0), p, 0)
 
 
 @kernel
 def bristle_step_kernel(z: float, v: float, h: float, p: np.ndarray) -> float:
-    """Exact bristle update over a step h with v held: z relaxes exponentially.
+    """Exact bristle update over a step with the speed held: z relaxes exponentially.
 
-    dz/dt = v − λ z with λ = σ0|v|/(σ0 g(v)) ≥ 0, so
-    z(h) = z_ss + (z − z_ss)·exp(−λh), z_ss = v/λ; for v = 0, z stays.
+    dz/dt = v − λz with λ = σ0|v|/(σ0·g(v)) ≥ 0, so z(h) = z_ss + (z − z_ss)·exp(−λh),
+    z_ss = v/λ; for v = 0, z stays.
+
+    Parameters
+    ----------
+    z : float
+        Bristle deflection at the start of the step [m].
+    v : float
+        Sliding speed, held over the step [m/s].
+    h : float
+        Step length [s].
+    p : numpy.ndarray
+        One site's packed LuGre parameters
+        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+
+    Returns
+    -------
+    float
+        Bristle deflection at the end of the step [m].
     """
     if v == 0.0:
         return z
@@ -101,33 +196,141 @@ def _apply(fn_id: int, velocity: object, bristle: object, params: LuGreParameter
 
 
 def stribeck_magnitude(velocity: object, params: LuGreParameters) -> np.ndarray:
-    """σ0·g(v) [N] at sliding speed ``velocity`` [m/s].  Wang2021 Eq. (11)."""
+    """Stribeck magnitude σ0·g(v) of a LuGre site, elementwise.
+
+    Parameters
+    ----------
+    velocity : array_like
+        Sliding speed(s) [m/s].
+    params : LuGreParameters
+        The friction site's parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        σ0·g(v), shaped like ``velocity`` [N].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    .. [2] Wang2021 Eq. (11).
+    """
     return _apply(0, velocity, 0.0, params)
 
 
 def steady_friction(velocity: object, params: LuGreParameters) -> np.ndarray:
-    """Steady-state (Stribeck + Coulomb + viscous) friction force [N] at ``velocity`` [m/s]."""
+    """Steady (Stribeck + Coulomb + viscous) friction force of a LuGre site, elementwise.
+
+    Parameters
+    ----------
+    velocity : array_like
+        Sliding speed(s) [m/s].
+    params : LuGreParameters
+        The friction site's parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        Friction force, shaped like ``velocity`` [N].
+    """
     return _apply(1, velocity, 0.0, params)
 
 
 def bristle_rate(velocity: object, bristle: object, params: LuGreParameters) -> np.ndarray:
-    """dz/dt [m/s] for sliding speed [m/s] and bristle deflection z [m].  Wang2021 Eq. (11)."""
+    """LuGre bristle rate dz/dt, elementwise.
+
+    Parameters
+    ----------
+    velocity : array_like
+        Sliding speed(s) [m/s].
+    bristle : array_like
+        Bristle deflection(s) z [m], broadcast against ``velocity``.
+    params : LuGreParameters
+        The friction site's parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        dz/dt [m/s].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    .. [2] Wang2021 Eq. (11).
+    """
     return _apply(2, velocity, bristle, params)
 
 
 def friction_force(velocity: object, bristle: object, params: LuGreParameters) -> np.ndarray:
-    """LuGre friction force [N].  Wang2021 Eq. (11), first line."""
+    """LuGre friction force F = σ0·z + σ1·dz/dt + σ2·v, elementwise.
+
+    Parameters
+    ----------
+    velocity : array_like
+        Sliding speed(s) [m/s].
+    bristle : array_like
+        Bristle deflection(s) z [m], broadcast against ``velocity``.
+    params : LuGreParameters
+        The friction site's parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        Friction force [N].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    .. [2] Wang2021 Eq. (11).
+    """
     return _apply(3, velocity, bristle, params)
 
 
 def bristle_step(bristle: float, velocity: float, step: float, params: LuGreParameters) -> float:
-    """Exact z after ``step`` [s] with ``velocity`` [m/s] held (see kernel)."""
+    """Exact bristle deflection after a step with the speed held (see
+    :func:`bristle_step_kernel`).
+
+    Parameters
+    ----------
+    bristle : float
+        Bristle deflection at the start [m].
+    velocity : float
+        Sliding speed, held [m/s].
+    step : float
+        Step length [s].
+    params : LuGreParameters
+        The friction site's parameters.
+
+    Returns
+    -------
+    float
+        Bristle deflection at the end of the step [m].
+    """
     return float(bristle_step_kernel(float(bristle), float(velocity), float(step),
                                      params.as_array()))
 
 
 def bristle_bound(params: LuGreParameters) -> float:
-    """max(F_s)/σ0 [m]: |z| never leaves this bound once inside (Canudas de Wit 1995)."""
+    """The bristle bound max(F_s)/σ0: once inside, |z| never leaves it.
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The friction site's parameters.
+
+    Returns
+    -------
+    float
+        The bound [m].
+
+    References
+    ----------
+    .. [1] C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for
+       control of systems with friction", IEEE Trans. Autom. Control 40 (1995) 419–425.
+    """
     static = max(params.positive.static_force, params.negative.static_force)
     return static / params.bristle_stiffness
 
@@ -137,7 +340,15 @@ def bristle_bound(params: LuGreParameters) -> float:
 
 @dataclass(frozen=True)
 class NegativeSlopeBand:
-    """Speeds [m/s] between which the steady friction curve falls (negative damping)."""
+    """Speeds between which the steady friction curve falls (negative damping).
+
+    Parameters
+    ----------
+    lower : float
+        Lower edge [m/s] (0 without viscous friction).
+    upper : float
+        Upper edge, the zero-slope speed [m/s].
+    """
 
     lower: float
     upper: float
@@ -154,10 +365,20 @@ def _stribeck_slope(v: float, b: FrictionBranch) -> float:
 
 
 def negative_slope_band(branch: FrictionBranch) -> NegativeSlopeBand | None:
-    """Speed band where d(steady friction)/dv < 0, for one branch (speeds as magnitudes).
+    """Speed band where d(steady friction)/dv < 0, for one direction branch.
 
-    slope(v) = σ2 − (F_s − F_c)·2v/v_s²·exp(−(v/v_s)²); the Stribeck term peaks at
-    v = v_s/√2.  None if σ2 exceeds that peak (friction never has negative damping).
+    slope(v) = σ2 − (F_s − F_c)·2v/v_s²·exp(−(v/v_s)²); the Stribeck term's slope peaks at
+    v = v_s/√2, and the band's edges are found by Brent's method on either side.
+
+    Parameters
+    ----------
+    branch : FrictionBranch
+        One direction's F_c, F_s [N], v_s [m/s], σ2 [N s/m] (speeds as magnitudes).
+
+    Returns
+    -------
+    NegativeSlopeBand or None
+        The band; None when σ2 exceeds the Stribeck slope's peak (never negative damping).
     """
     vs = branch.stribeck_velocity
     v_peak = vs / math.sqrt(2.0)
@@ -177,10 +398,28 @@ def negative_slope_band(branch: FrictionBranch) -> NegativeSlopeBand | None:
 
 
 def passivity_margin(branch: FrictionBranch, params: LuGreParameters) -> float:
-    """σ2 − σ1·(F_s − F_c)/F_c [N s/m]; positive means the LuGre map is passive.
+    """Passivity margin σ2 − σ1·(F_s − F_c)/F_c of the LuGre map v ↦ F.
 
-    Sufficient condition for dissipativity of v ↦ F (Barabanov & Ortega 2000; Åström &
-    Canudas de Wit, IEEE CSM 2008).
+    A positive margin is a sufficient condition for the map to be dissipative.
+
+    Parameters
+    ----------
+    branch : FrictionBranch
+        One direction's F_c, F_s [N] and σ2 [N s/m].
+    params : LuGreParameters
+        The friction site's parameters.
+
+    Returns
+    -------
+    float
+        The margin [N s/m]; positive means passive.
+
+    References
+    ----------
+    .. [1] N. Barabanov, R. Ortega, "Necessary and sufficient conditions for passivity of the
+       LuGre friction model", IEEE Trans. Autom. Control 45 (2000) 830–832.
+    .. [2] K. J. Åström, C. Canudas de Wit, "Revisiting the LuGre friction model", IEEE Control
+       Systems Magazine 28 (2008) 101–114.
     """
     b = branch
     return b.viscous_coefficient - params.bristle_damping * (
@@ -189,7 +428,19 @@ def passivity_margin(branch: FrictionBranch, params: LuGreParameters) -> float:
 
 @dataclass(frozen=True)
 class SlidingStability:
-    """Linear stability of steady sliding at each speed of ``speed`` [m/s]."""
+    """Linear stability of steady sliding at each speed of a scan.
+
+    Parameters
+    ----------
+    speed : numpy.ndarray
+        The speeds scanned [m/s].
+    stable : numpy.ndarray of bool
+        Whether steady sliding is stable at each speed.
+    max_real_part : numpy.ndarray
+        Largest real part of the closed-loop poles at each speed [1/s].
+    coefficients : numpy.ndarray
+        Characteristic polynomial per speed, highest power first [SI].
+    """
 
     speed: np.ndarray
     stable: np.ndarray
@@ -220,13 +471,37 @@ def characteristic_polynomial(
     damping: float,
     integral: float = 0.0,
 ) -> np.ndarray:
-    """Characteristic polynomial (highest power first) of a mass sliding on LuGre sites.
+    """Characteristic polynomial of a mass sliding on LuGre sites, pulled through a spring.
 
-    Mass ``mass`` [kg] pulled at constant ``speed`` [m/s] through a spring ``stiffness``
-    [N/m], a damper ``damping`` [N s/m] and optionally an integral term ``integral`` [N/(m s)]
-    (a PI servo), with every site in ``sites`` sliding at the same speed.  For one site and
-    no integral term this is the cubic of Åström & Canudas de Wit (IEEE CSM 2008):
+    Mass ``mass`` pulled at constant ``speed`` through a spring, a damper and optionally an
+    integral term (a PI servo), every site in ``sites`` sliding at the same speed.  For one site
+    and no integral term this is the cubic of Åström & Canudas de Wit (2008):
     m s³ + (mλ + c + σ2 − aσ1) s² + (cλ + k + σ2λ − aσ0) s + kλ.
+
+    Parameters
+    ----------
+    speed : float
+        Steady sliding speed [m/s], non-zero.
+    sites : list of LuGreParameters
+        The friction sites.
+    mass : float
+        The sliding mass [kg].
+    stiffness : float
+        Spring stiffness k [N/m].
+    damping : float
+        Damping c [N s/m].
+    integral : float, default 0.0
+        Integral gain of a PI servo [N/(m s)].
+
+    Returns
+    -------
+    numpy.ndarray
+        Coefficients, highest power first [SI].
+
+    References
+    ----------
+    .. [1] K. J. Åström, C. Canudas de Wit, "Revisiting the LuGre friction model", IEEE Control
+       Systems Magazine 28 (2008) 101–114.
     """
     P = np.polynomial.polynomial
     # drive: s·(m s² + c s + k) + k_i, i.e. the motion equation multiplied by s
@@ -257,8 +532,35 @@ def sliding_stability(
     damping: float,
     integral: float = 0.0,
 ) -> SlidingStability:
-    """Hurwitz stability of steady sliding over an array of speeds [m/s]; see
-    :func:`characteristic_polynomial`.  Unstable speeds are where stick-slip can start."""
+    """Hurwitz stability of steady sliding over a scan of speeds.
+
+    See :func:`characteristic_polynomial`; unstable speeds are where stick-slip can start.
+
+    Parameters
+    ----------
+    speed : array_like
+        Steady sliding speeds, finite and non-zero [m/s].
+    sites : list of LuGreParameters
+        The friction sites.
+    mass : float
+        The sliding mass [kg].
+    stiffness : float
+        Spring stiffness [N/m].
+    damping : float
+        Damping [N s/m].
+    integral : float, default 0.0
+        Integral gain of a PI servo [N/(m s)].
+
+    Returns
+    -------
+    SlidingStability
+        Stability, largest real part and polynomial per speed.
+
+    Raises
+    ------
+    ValueError
+        For a zero or non-finite speed.
+    """
     v = np.atleast_1d(np.asarray(speed, dtype=float))
     if np.any(v == 0.0) or not np.all(np.isfinite(v)):
         raise ValueError("speed: steady sliding needs finite, non-zero speeds [m/s]")
@@ -270,7 +572,18 @@ def sliding_stability(
 
 
 def unstable_speed_band(stability: SlidingStability) -> tuple[float, float] | None:
-    """(lowest, highest) unstable speed of a stability scan, or None if all stable."""
+    """The lowest and highest unstable speed of a stability scan.
+
+    Parameters
+    ----------
+    stability : SlidingStability
+        A scan from :func:`sliding_stability`.
+
+    Returns
+    -------
+    tuple of (float, float) or None
+        (lowest, highest) unstable speed magnitude [m/s]; None when every speed is stable.
+    """
     bad = stability.speed[~stability.stable]
     if bad.size == 0:
         return None

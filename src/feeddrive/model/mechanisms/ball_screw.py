@@ -36,7 +36,32 @@ _STIFF = ("k_fixed", "c0", "ea", "length", "support", "x0")
 
 @kernel
 def equivalent_stiffness_kernel(x_t: float, P: np.ndarray, o: int) -> float:
-    """K_eq [N/m] at table displacement x_t [m] from the start position.  Eqs. (4)–(5)."""
+    """Screw–nut–table equivalent axial stiffness K_eq at the current table displacement.
+
+    1/K_eq = c0 + c_screw(a), c0 the position-independent compliances (bearings, nut, optional
+    torsion; Wang2021 Eqs. (2), (3), (5)) and c_screw the screw's axial compliance at nut position
+    a = x0 + x_t, Wang2021 Eq. (4): a(l − a)/(EA·l) between fixed–fixed supports, a/(EA) for
+    fixed–free.  a is kept 1e-3·l inside the supports, where Eq. (4) diverges.  A fixed K_eq in
+    the block (> 0) is returned as is.
+
+    Parameters
+    ----------
+    x_t : float
+        Table displacement from its start position [m].
+    P : numpy.ndarray
+        The packed parameter vector [SI, per slot].
+    o : int
+        Offset of the stiffness block (K_fixed, c0, EA, l, support, x0) in ``P``.
+
+    Returns
+    -------
+    float
+        K_eq [N/m].
+
+    References
+    ----------
+    .. [1] Wang2021 Eqs. (2)–(5).
+    """
     if P[o] > 0.0:
         return P[o]
     a = P[o + 5] + x_t
@@ -92,6 +117,20 @@ class BallScrewDrive(Mechanism):
 
     @classmethod
     def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
+        """Parameters
+        ----------
+        params : DriveParameters
+            The parameter set [SI].
+        drive : str
+            The drive name.
+        table_position : float
+            Table position at the start [m].
+
+        Raises
+        ------
+        ParameterError
+            When the table position is not strictly between the screw's supports.
+        """
         length = params.screw.length
         a = table_position
         if not (math.isfinite(a) and 0.0 < a < length):
@@ -242,6 +281,10 @@ class BallScrewDrive(Mechanism):
         -------
         dict
             Site parameters key → effective mass [kg].
+
+        References
+        ----------
+        .. [1] Wang2021 Table 2, Eq. (8).
         """
         p = self.params
         h = p.screw.transmission_ratio

@@ -40,6 +40,21 @@ class FrictionSites(Component):
     H(ω_s − ω_n) between screw and nut, with its reaction on the nut; the rest (1 − f) acts
     between screw shaft and ground (support bearings) at the screw speed.  f = 0 is the paper's
     reading (every friction at its own shaft's speed); with the nut held (CDFS) f has no effect.
+
+    Parameters
+    ----------
+    screw : SiteParameters
+        Screw-shaft friction (force form: torque ÷ H).
+    nut : SiteParameters
+        Hollow (nut) shaft friction (force form).
+    guide : SiteParameters
+        Linear-guide friction.
+    ball_nut_share : float, default 0.0
+        The share f of the screw-shaft friction acting at the ball–nut contact [-].
+
+    References
+    ----------
+    .. [1] Wang2021 Sect. 4, Table 1.
     """
 
     screw: SiteParameters
@@ -52,7 +67,37 @@ class FrictionSites(Component):
 
 @dataclass(frozen=True)
 class BallScrew(Component):
-    """Ball screw, its supports and nut.  Wang2021 Table 2 and Eqs. (2)–(5)."""
+    """Ball screw, its supports and nut.  Wang2021 Table 2 and Eqs. (2)–(5).
+
+    Parameters
+    ----------
+    length : float
+        Length l between the supports [m].
+    diameter : float
+        Screw diameter d [m].
+    lead : float
+        Lead p_h [m].
+    youngs_modulus : float
+        Young's modulus E of the screw [Pa].
+    torsional_stiffness : float
+        Torsional stiffness of the screw shaft K_sθ [N m/rad].
+    nut_axial_stiffness : float
+        Axial stiffness of the nut K_na [N/m].
+    nut_bearing_axial_stiffness : float
+        Axial stiffness of the nut's bearing K_nba [N/m].
+    support_bearing_axial_stiffness : float
+        Axial stiffness of one support bearing K_ba [N/m].
+    efficiency : float
+        Transmission efficiency η [-].
+    shaft_inertia : float
+        Inertia of the screw shaft [kg m^2].
+    nut_inertia : float
+        Inertia of the nut and hollow shaft [kg m^2].
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2, Eqs. (2)–(5).
+    """
 
     length: float = quantity("m", low=0.01, high=20, hint=_MM_HINT)
     diameter: float = quantity("m", low=1e-3, high=0.5, hint=_MM_HINT)
@@ -77,12 +122,28 @@ class BallScrew(Component):
 
     @property
     def transmission_ratio(self) -> float:
-        """H = p_h / 2π [m/rad].  Wang2021 Eq. (8)."""
+        """H = p_h / 2π: table travel per screw radian [m/rad].
+
+        References
+        ----------
+        .. [1] Wang2021 Eq. (8).
+        """
         return self.lead / (2.0 * math.pi)
 
 
 @dataclass(frozen=True)
 class Coupling(Component):
+    """The motor–screw coupling.
+
+    Parameters
+    ----------
+    torsional_stiffness : float
+        Torsional stiffness K_c [N m/rad] (Wang2021 Eq. (2)).
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2, Eq. (2).
+    """
     torsional_stiffness: float = quantity("N m/rad", low=1, high=1e9)
     _label = "coupling"
 
@@ -93,6 +154,25 @@ class StiffnessModel(Component):
 
     ``equivalent_stiffness`` set to a positive value overrides the chain (e.g. the paper's
     stated 2.16e7 N/m); 0 means "compute from Eqs. (2)–(5) at the table position".
+
+    Parameters
+    ----------
+    screw_support : str, default "fixed-fixed"
+        ``"fixed-fixed"`` (Wang2021 Eq. (4)) or ``"fixed-free"``.
+    support_bearing_count : float, default 2.0
+        Support bearings in series in Eq. (3) [-].
+    include_torsion : bool, default True
+        Keep the torsion term of Eq. (5).
+    equivalent_stiffness : float, default 0.0
+        A fixed K_eq overriding the chain; 0 computes it [N/m].
+    axial_damping : float, default 0.0
+        Structural axial damping c_ax of the screw–nut–table chain [N s/m].
+    position_dependent : bool, default True
+        Whether K_eq follows the table position during a run.
+
+    References
+    ----------
+    .. [1] Wang2021 Eqs. (2)–(5).
     """
 
     screw_support: str = choice(("fixed-fixed", "fixed-free"), default="fixed-fixed")

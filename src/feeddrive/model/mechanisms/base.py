@@ -25,13 +25,32 @@ if TYPE_CHECKING:
 
 @dataclass
 class Body:
-    """Terms of one body's equation, in the order they are summed."""
+    """The force terms of one body's equation of motion, in the order they are summed.
+
+    Each term is a code fragment ``"+ expr"`` or ``"- expr"`` [N or N m].
+
+    Parameters
+    ----------
+    drive : list of str
+        Motor torque or coupling force, first.
+    external : list of str
+        Friction and disturbance terms.
+    reaction : list of str
+        Coupling reactions, last.
+    """
 
     drive: list[str] = field(default_factory=list)  # motor torque / coupling force first
     external: list[str] = field(default_factory=list)  # friction, disturbances
     reaction: list[str] = field(default_factory=list)  # coupling reactions last
 
     def expression(self) -> str:
+        """The body's net force as one code expression, terms joined in order.
+
+        Returns
+        -------
+        str
+            The sum (``"0.0"`` for a body with no terms) [N or N m].
+        """
         terms = self.drive + self.external + self.reaction
         if not terms:
             return "0.0"
@@ -43,7 +62,28 @@ class Body:
 
 @dataclass(frozen=True)
 class Site:
-    """A friction site placed by the mechanism: on one body, or between two (relative)."""
+    """A friction site the mechanism places: on one body, or between two (relative sliding).
+
+    Parameters
+    ----------
+    name : str
+        The site's name in the model (``"screw"``, ``"ball_nut"``, …).
+    parameters_key : str
+        ``friction.<key>`` of the parameter set, or a dotted path to a part's own section
+        (``rack_pinion.gearbox_friction``).
+    speed : str
+        Code of the sliding speed at the site [m/s] (linear-equivalent for rotary sites).
+    bodies : tuple of (str, str)
+        (body, factor code) pairs: each body's equation gets the term −factor·F.
+    scale : float, default 1.0
+        Share of the site's friction acting here [-] (the ball–nut split).
+    active : str, default ""
+        Code of the condition under which the site acts; empty for always.
+    reads : tuple of str, default ()
+        What the sliding speed is computed from (``Builder.flow`` names).
+    rotary : bool, default False
+        On a shaft: its torque stored as force at the lever (torque ÷ H).
+    """
 
     name: str  # e.g. "screw", "ball_nut"
     parameters_key: str  # friction.<key> in the parameter set, or a dotted path to them
@@ -103,10 +143,31 @@ class DriveMotor:
 
 @dataclass
 class Mechanics:
-    """What the assembler hands a mechanism to write its equations: per-body external force
-    terms and what they are computed from (``Builder.flow`` names), the friction-site code
-    lines (always-on and gated by a site's condition), the lines that freeze gated sites'
-    states, and the disturbance terms (ripple per motor name, lead-error block, load)."""
+    """What the assembler hands a mechanism to write its equations with.
+
+    Parameters
+    ----------
+    forces : dict of str to list of str
+        Per body, the external force terms (friction, disturbances) [N or N m].
+    always : list of str
+        Code lines of the friction sites that always act.
+    gated : list of str
+        Code lines of the sites gated by their ``active`` condition.
+    frozen : list of str
+        Code lines that freeze the states of gated sites while they are off.
+    ripple : dict of str to str
+        Per motor, the code of its torque-ripple term [N m].
+    lead : tuple of (int, int) or None
+        Parameter offsets of the lead-error disturbance, if any.
+    load : str or None
+        Code of the external load force on the table [N], if any.
+    torque_off : bool
+        Whether the motor torque is switched off (free-running studies).
+    reads : dict of str to list of str, optional
+        Per body, what its external terms are computed from (``Builder.flow`` names).
+    load_reads : tuple of str, default ()
+        What the load force is computed from.
+    """
 
     forces: dict[str, list[str]]
     always: list[str]
@@ -120,13 +181,40 @@ class Mechanics:
     load_reads: tuple[str, ...] = ()
 
     def body_reads(self, body: str) -> list[str]:
-        """What the external terms of ``body`` (friction, ripple) are computed from."""
+        """What the external terms of a body (friction, ripple) are computed from.
+
+        Parameters
+        ----------
+        body : str
+            The body.
+
+        Returns
+        -------
+        list of str
+            ``Builder.flow`` names; empty for a body without external terms.
+        """
         return list(self.reads.get(body, ()))
 
 
 class Mechanism:
-    """Interface of a topology; see :class:`~feeddrive.model.mechanisms.ball_screw.BallScrewDrive`
-    and :class:`~feeddrive.model.mechanisms.linear_motor.LinearMotorDrive`."""
+    """Interface of a drive topology: bodies, couplings and where motors and friction act.
+
+    A subclass sets ``drives`` (its registered names) and implements :meth:`declare`,
+    :meth:`parameters`, :meth:`sites`, :meth:`motors`, :meth:`axes` and :meth:`emit`; see
+    :class:`~feeddrive.model.mechanisms.ball_screw.BallScrewDrive` and
+    :class:`~feeddrive.model.mechanisms.linear_motor.LinearMotorDrive`.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set [SI].
+    drive : str
+        The drive name the model is built for (one of ``drives``).
+    table_position : float
+        Table position along the axis at the start [m].
+    nut_hold : str
+        How a held nut is held (``"locked"`` or ``"servo"``); topologies without a nut ignore it.
+    """
 
     drives: tuple[str, ...] = ()
     #: the parameter set a command uses for this drive when none is named
@@ -155,35 +243,132 @@ class Mechanism:
 
     @classmethod
     def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
-        """Refuse a system this topology cannot represent (one-line ParameterError)."""
+        """Refuse a system this topology cannot represent, before the model is built.
+
+        Parameters
+        ----------
+        params : DriveParameters
+            The parameter set [SI].
+        drive : str
+            The drive name.
+        table_position : float
+            Table position at the start [m].
+
+        Raises
+        ------
+        ParameterError
+            One line naming the field, the value and what was expected.
+        """
 
     def declare(self, b: Builder) -> None:
+        """Declare the mechanism's states (name, unit, meaning, tolerance class) to the builder.
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+        """
         raise NotImplementedError
 
     def parameters(self, b: Builder) -> None:
+        """Declare the mechanism's named parameter slots (masses, inertias, stiffnesses) [SI].
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+        """
         raise NotImplementedError
 
     def sites(self, b: Builder) -> list[Site]:
+        """Place the friction sites of this topology.
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+
+        Returns
+        -------
+        list of Site
+            The sites, each with its sliding speed and the bodies its force acts on.
+        """
         raise NotImplementedError
 
     def motors(self, b: Builder) -> None:
+        """Declare the motors' electrical states (their currents [A]).
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+        """
         raise NotImplementedError
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
+        """The controller axes and the measurement channels of this topology.
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+
+        Returns
+        -------
+        axes : list of Axis
+            One cascade per driven motor, with its reference, feedback and current state.
+        channels : list of Channel
+            The quantised encoders and scales the loops read.
+        """
         raise NotImplementedError
 
     def signals(self, b: Builder) -> None:
-        """Auxiliary outputs of the mechanism itself (after the controller's)."""
+        """Declare the mechanism's own auxiliary and derived outputs (after the controller's).
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+        """
 
     def check_profile(self, nut_speed: float, nut_table: Any) -> None:
-        """Refuse a reference this topology cannot follow."""
+        """Refuse a reference this topology cannot follow.
+
+        Parameters
+        ----------
+        nut_speed : float
+            Commanded constant nut speed [m/s].
+        nut_table : numpy.ndarray
+            Tabulated nut-speed reference, if any [m/s].
+
+        Raises
+        ------
+        ParameterError
+            One line naming the field, the value and what was expected.
+        """
 
     def compensation(self, b: Builder
                      ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:
-        """Friction sites a compensator on the table-driving motor models, as (parameter key,
-        commanded speed code, measured speed code, the states that measured speed reads as
-        ``Builder.flow`` names), and the code of the factor from force [N] to that motor's
-        current [A]."""
+        """The friction sites a compensator on the table-driving motor models.
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+
+        Returns
+        -------
+        sites : list of (str, str, str, tuple of str)
+            (parameter key, commanded speed code, measured speed code, the states that measured
+            speed reads as ``Builder.flow`` names) per compensated site.
+        factor : str
+            Code of the factor from force [N] to that motor's current [A].
+
+        Raises
+        ------
+        ParameterError
+            When the topology has no friction compensation (the default).
+        """
         from ...parameters import ParameterError
 
         raise ParameterError("controller.compensation.mode", "—",
@@ -248,10 +433,23 @@ class Mechanism:
         -------
         dict
             Site parameters key → effective mass [kg]; empty when the topology declares none.
+
+        References
+        ----------
+        .. [1] Wang2021 Table 1 (the force form of the rotary sites)..
         """
         return {}
 
     def emit(self, b: Builder, m: Mechanics) -> None:
+        """Write the mechanism's equations of motion into the right-hand side.
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder the mechanism declares to and writes code through.
+        m : Mechanics
+            The friction, disturbance and ripple terms per body from the assembler.
+        """
         raise NotImplementedError
 
 
@@ -275,7 +473,24 @@ def register_mechanism(topology: type[Mechanism]) -> type[Mechanism]:
 
 
 def mechanism(drive: str) -> type[Mechanism]:
-    """The registered topology of drive name ``drive``."""
+    """Look up the registered topology of a drive name.
+
+    Parameters
+    ----------
+    drive : str
+        The drive name (``"cdfs"``, ``"ddfs"``, ``"linear-motor"``, ``"rack-pinion"`` or one a
+        user registered).
+
+    Returns
+    -------
+    type of Mechanism
+        The topology class.
+
+    Raises
+    ------
+    ParameterError
+        When no topology of that name is registered; the message lists the known names.
+    """
     table = registry.table(registry.MECHANISMS)
     if drive not in table:
         from ...parameters import ParameterError
@@ -286,5 +501,11 @@ def mechanism(drive: str) -> type[Mechanism]:
 
 
 def drive_names() -> tuple[str, ...]:
-    """The names of the registered drive topologies."""
+    """Names of the registered drive topologies, in registration order.
+
+    Returns
+    -------
+    tuple of str
+        The names ``--drive`` accepts.
+    """
     return registry.names(registry.MECHANISMS)

@@ -23,7 +23,21 @@ from .base import Body, DriveMotor, Mechanics, Mechanism, Site, register_mechani
 
 @dataclass(frozen=True)
 class LinearMotor(Component):
-    """Linear motor of a direct-drive table: force constant, back-EMF, R-L winding, forcer."""
+    """Linear motor of a direct-drive table: force constant, back-EMF, R-L winding, forcer.
+
+    Parameters
+    ----------
+    force_constant : float
+        K_f [N/A].
+    back_emf_constant : float
+        K_e [V s/m].
+    inductance : float
+        Winding inductance L [H].
+    resistance : float
+        Winding resistance R [ohm].
+    forcer_mass : float
+        Mass of the forcer, moving with the table [kg].
+    """
 
     force_constant: float = quantity("N/A", low=1e-2, high=1e4)
     back_emf_constant: float = quantity("V s/m", low=1e-2, high=1e4)
@@ -61,6 +75,20 @@ class LinearMotorDrive(Mechanism):
 
     @classmethod
     def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
+        """Parameters
+        ----------
+        params : DriveParameters
+            The parameter set [SI].
+        drive : str
+            The drive name.
+        table_position : float
+            Table position at the start [m].
+
+        Raises
+        ------
+        ParameterError
+            When the parameter set has no ``[linear_motor]`` section.
+        """
         if params.linear_motor is None:
             raise ParameterError("linear_motor", None,
                                  "the linear-motor drive needs a [linear_motor] section "

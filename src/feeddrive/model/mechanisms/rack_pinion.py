@@ -103,6 +103,20 @@ class RackPinionDrive(Mechanism):
 
     @classmethod
     def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
+        """Parameters
+        ----------
+        params : DriveParameters
+            The parameter set [SI].
+        drive : str
+            The drive name.
+        table_position : float
+            Table position at the start [m].
+
+        Raises
+        ------
+        ParameterError
+            When the parameter set has no ``[rack_pinion]`` section.
+        """
         if params.section("rack_pinion") is None:
             raise ParameterError("rack_pinion", None,
                                  "the rack-pinion drive needs a [rack_pinion] section "
@@ -115,6 +129,7 @@ class RackPinionDrive(Mechanism):
 
     @property
     def section(self) -> RackPinion:
+        """The parameter set's ``[rack_pinion]`` section (:class:`RackPinion`)."""
         rp = self.params.section("rack_pinion")
         assert isinstance(rp, RackPinion)
         return rp

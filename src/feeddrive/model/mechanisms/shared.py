@@ -15,7 +15,25 @@ from ...parameters.validation import quantity
 
 @dataclass(frozen=True)
 class Motor(Component):
-    """Permanent-magnet servo motor as an R-L armature with back-EMF.  Wang2021 Table 2."""
+    """Permanent-magnet servo motor as an R-L armature with back-EMF.  Wang2021 Table 2.
+
+    Parameters
+    ----------
+    torque_constant : float
+        K_t [N m/A].
+    back_emf_constant : float
+        K_e [V s/rad].
+    inductance : float
+        Armature inductance L [H].
+    resistance : float
+        Armature resistance R [ohm].
+    inertia : float
+        Rotor inertia J [kg m^2].
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2.
+    """
 
     torque_constant: float = quantity("N m/A", low=1e-3, high=100)
     back_emf_constant: float = quantity("V s/rad", low=1e-3, high=100)
@@ -32,6 +50,17 @@ class Motor(Component):
 
 @dataclass(frozen=True)
 class Table(Component):
+    """The moving table.
+
+    Parameters
+    ----------
+    mass : float
+        Table mass m_t [kg] (Wang2021 Table 2).
+
+    References
+    ----------
+    .. [1] Wang2021 Table 2.
+    """
     mass: float = quantity("kg", low=0.01, high=1e5)
     _label = "table"
 

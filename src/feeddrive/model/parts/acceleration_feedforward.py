@@ -53,7 +53,13 @@ class AccelerationFeedforward(Component):
     _label = "acceleration_feedforward"
 
     def schedule(self) -> tuple[tuple[str, float], ...]:
-        """The part's sample schedule: (field, period [s]) pairs."""
+        """The part's sample schedule, merged with the other sampled parts' as exact event times.
+
+        Returns
+        -------
+        tuple of (str, float)
+            (field, period [s]) pairs: the one ``period`` field.
+        """
         return (("period", self.period),)
 
     def declare_part(self, b: Any, axes: list[Any]) -> list[Any]:
