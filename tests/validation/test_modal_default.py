@@ -27,10 +27,9 @@ from feeddrive.solvers import modes, rodas4
 MODAL = SolverOptions(method="modal")
 
 
-def test_modal_is_offered_and_dopri5_stays_the_default() -> None:
-    """``modal`` is not yet the default (docs/model.md says why); it is one option away."""
-    assert SolverOptions().method == "dopri5"
-    assert MODAL.method == "modal"
+def test_modal_is_the_default() -> None:
+    assert SolverOptions().method == "modal"
+    assert MODAL == SolverOptions()
 
 
 def test_literal_cdfs_at_0p2_creeps_under_the_default() -> None:
@@ -176,3 +175,63 @@ def test_docs_state_the_constants_of_the_code() -> None:
     assert "less than twice DOPRI5's step" in text and switching.MODAL_SWITCH_GAIN == 2.0
     assert f"exceeds {DIVERGENCE_SPEED_RATIO:g} × the reference speed" in text
     assert f"or {1e3 * DIVERGENCE_SPEED_FLOOR:g} mm/s" in text
+
+
+def _real_eigenvalues(M: np.ndarray) -> np.ndarray:
+    n = M.shape[0]
+    A = np.zeros((n + 1, n + 1))
+    A[1:, 1:] = M
+    wr, wi = np.zeros(n + 1), np.zeros(n + 1)
+    assert modes.real_eigenvalues(A, wr, wi)
+    return wr[1:] + 1j * wi[1:]
+
+
+def test_real_eigenvalues_agree_with_lapack() -> None:
+    """The real-arithmetic QR (EISPACK hqr) against LAPACK's ``geev`` (numpy): dense, badly
+    scaled (a diagonal similarity over 1e±7, as the drive's rows) and sparse matrices of the
+    step cap's sizes, every eigenvalue within 1e-10 of the spectral radius."""
+    rng = np.random.default_rng(21)
+    for trial in range(300):
+        n = int(rng.integers(1, 17))
+        M = rng.normal(size=(n, n))
+        D = np.exp(rng.normal(size=n) * 4.0)
+        if trial % 3:
+            M = M * D[:, None] / D[None, :]
+        if trial % 3 == 2:
+            M = M * (rng.random((n, n)) < 0.6) + np.diag(rng.normal(size=n))
+        ours, ref = _real_eigenvalues(M), np.linalg.eigvals(M)
+        scale = max(float(np.max(np.abs(ref))), 1e-300)
+        for e in ref:
+            assert np.min(np.abs(ours - e)) <= 1e-10 * scale, (trial, n)
+
+
+def test_step_cap_on_the_literal_cdfs_jacobian_is_lapack_s() -> None:
+    """On the Jacobian of the growing case (literal CDFS at 0.2 mm/s, 1 s in) the cap from the
+    real QR is the one from LAPACK's eigenvalues: the table mode, h|λ| = H_LAMBDA."""
+    system = DriveSystem(fd.preset("wang2021-literal"), "cdfs", 0.4)
+    profile = ConstantSpeed(0.2e-3, 0.0, ramp_time=0.1)
+    model = system.model(profile)
+    r = simulate(system, profile, 1.0)
+    y = np.array([float(r[name][-1]) for name in model.state_names])
+    n = y.size
+    held, aux = np.zeros(model.n_held), np.empty(len(model.aux))
+
+    def f(x: np.ndarray) -> np.ndarray:
+        out = np.empty(n)
+        model.module.rhs(1.0, x, held, model.P, model.T, 0, 0, 0, out, aux)
+        return out
+
+    J = np.empty((n, n))
+    for j in range(n):  # central differences
+        h = 1e-6 * max(abs(y[j]), 1e-9)
+        yp, ym = y.copy(), y.copy()
+        yp[j] += h
+        ym[j] -= h
+        J[:, j] = (f(yp) - f(ym)) / (2 * h)
+    live = np.any(J != 0.0, axis=1)
+    ev = np.linalg.eigvals(J[np.ix_(live, live)])
+    light = [abs(e) for e in ev
+             if abs(e.imag) > 1e-9 * abs(e) and -e.real / abs(e) < modes.ZETA_LIGHT]
+    assert light and 1000.0 < max(light) < 1500.0  # the table mode, ≈ 1268 1/s
+    assert modes.step_cap(J, live, modes.ZETA_LIGHT, modes.H_LAMBDA) == pytest.approx(
+        modes.H_LAMBDA / max(light), rel=1e-8)
