@@ -43,7 +43,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from reference.scipy_model import STATE_NAMES, ReferenceModel, tolerances  # noqa: E402
+from reference.scipy_model import ReferenceModel  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.analysis.critical import creep_trial, decide  # noqa: E402
@@ -55,14 +55,12 @@ REFERENCE = ROOT / "benchmarks" / "results" / "bench_verdicts_reference.json"
 RTOL = 1e-10
 ATOL_SCALE = 1e-3
 RAMP = 0.1  # [s] the creep trials' start ramp
-V_T = STATE_NAMES.index("table_speed")
 
 
 def _readings() -> dict[str, dict[str, Any]]:
     """Model readings of ``reproduce``'s model-reading study with a continuous-loop critical
     speed (feeddrive.reproduce.reading_study.variants), by a short name: the changes to
     ``wang2021``."""
-    from feeddrive.reproduce.reading_study import servo_factor
     ship = fd.preset("wang2021")
     kvi = ship.controller.velocity_integral_gain
     out: dict[str, dict[str, Any]] = {
@@ -72,8 +70,10 @@ def _readings() -> dict[str, dict[str, Any]]:
     out["keq-paper"] = {"stiffness.equivalent_stiffness": 2.16e7}
     out["damping4"] = {"stiffness.axial_damping": 4 * ship.stiffness.axial_damping}
     out["nut-position-loop"] = {"controller.nut_loop": "position"}
-    out["servo-vi"] = {"controller.velocity_integral_gain":
-                       servo_factor("controller.velocity_integral_gain") * kvi}
+    out["sampled-1khz"] = {"controller.position_period": 1e-3,
+                           "controller.velocity_period": 1e-3,
+                           "controller.encoder_counts": 10000.0,
+                           "controller.grating_resolution": 1e-7}
     return out
 
 
@@ -124,7 +124,8 @@ def _corpus() -> list[tuple[str, str, float, float, float]]:
                                      ("vfb-table", "cdfs", 1.54, 0.0),
                                      ("keq-paper", "cdfs", 1.56, 0.0),
                                      ("damping4", "cdfs", 1.56, 0.0),
-                                     ("servo-vi", "cdfs", 0.85, 0.0)):
+                                     ("sampled-1khz", "cdfs", 2.21, 0.0),
+                                     ("sampled-1khz", "ddfs", 1.75, 16.0)):
         for v in (round(crit - 0.01, 2), crit):
             out.append((f"wang2021~{reading}", drive, 0.4, v, vn))
     # the hollow motor on a position loop too: no critical speed (undecided at 2.02); the top
@@ -148,13 +149,42 @@ def key(case: tuple[str, str, float, float, float]) -> str:
     return f"{preset}/{drive}/a{a:g}/v{v:g}/vn{vn:g}"
 
 
+def sampled_reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
+    """The reference of a trial with sampled loops: ``reference/sampled.py`` (the plant by
+    DOP853 at rtol 1e-10 between sample instants, the held outputs updated at each, as
+    tests/validation/test_reference_sampled.py checks the engine against), absolute
+    tolerances 1000× the engine's; each longer trial runs again from rest (the held values
+    are not carried over)."""
+    from reference.sampled import simulate_sampled
+    preset, drive, a, v, vn = case
+    profile = ConstantSpeed(v * 1e-3, vn * 1e-3, ramp_time=RAMP)
+    model = ReferenceModel(_variant(preset), drive, a, profile)
+    v_t = model.state_names.index("table_speed")
+    atol = model.tolerances() * ATOL_SCALE
+
+    def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
+        t, y, _ = simulate_sampled(model, duration, rtol=RTOL, atol=atol)
+        return t, y[:, v_t]
+
+    started = time.process_time()
+    verdict, duration = decide(run, v * 1e-3)
+    return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio, "duration_s": duration,
+            "decided_at_s": verdict.decided_at, "cpu_s": time.process_time() - started,
+            "method": "DOP853 between sample instants"}
+
+
 def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
     preset, drive, a, v, vn = case
     params = _variant(preset)
+    c = params.controller
+    if c.position_period > 0 or c.velocity_period > 0 or c.current_period > 0:
+        return sampled_reference_trial(case)
     profile = ConstantSpeed(v * 1e-3, vn * 1e-3, ramp_time=RAMP)
     model = ReferenceModel(params, drive, a, profile)
-    atol = tolerances(model.H) * ATOL_SCALE
-    state = {"t": 0.0, "y": np.zeros(len(STATE_NAMES)), "time": [np.zeros(1)],
+    atol = model.tolerances() * ATOL_SCALE  # per state (= tolerances(H) for 15 states)
+    v_t = model.state_names.index("table_speed")
+    # the model's own state count: a ball–nut share 0 < f < 1 adds a bristle state
+    state = {"t": 0.0, "y": np.zeros(model.n_state), "time": [np.zeros(1)],
              "speed": [np.zeros(1)], "nfev": 0}
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
@@ -168,7 +198,7 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
             if sol.status != 0:
                 raise RuntimeError(f"{key(case)}: Radau failed at {sol.t[-1]:g} s")
             state["time"].append(sol.t)
-            state["speed"].append(sol.y[V_T])
+            state["speed"].append(sol.y[v_t])
             state["y"] = sol.sol(b)
             state["t"] = b
             state["nfev"] += int(sol.nfev)
