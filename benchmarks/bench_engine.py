@@ -68,9 +68,7 @@ from reference.scipy_model import STATE_NAMES, ReferenceModel  # noqa: E402
 from scipy.integrate import odeint, solve_ivp  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
-from feeddrive.control import ConstantSpeed  # noqa: E402
-from feeddrive.model.assemble import Model  # noqa: E402
-from feeddrive.simulate import (  # noqa: E402
+from feeddrive.engine.simulate import (  # noqa: E402
     _DENSE_MODES,
     DriveSystem,
     SolverOptions,
@@ -78,6 +76,8 @@ from feeddrive.simulate import (  # noqa: E402
     sampling,
     simulate,
 )
+from feeddrive.model.assemble import Model  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 from feeddrive.solvers import switching  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "bench_engine.json"
@@ -218,8 +218,8 @@ def compile_times() -> dict[str, dict[str, float]]:
     code = (
         "import sys, time; t0 = time.perf_counter()\n"
         "import feeddrive\n"
-        "from feeddrive.simulate import simulate, DriveSystem, SolverOptions\n"
-        "from feeddrive.control import ConstantSpeed\n"
+        "from feeddrive.engine.simulate import simulate, DriveSystem, SolverOptions\n"
+        "from feeddrive.model.reference import ConstantSpeed\n"
         "p = feeddrive.preset('wang2021')\n"
         "o = SolverOptions(method=sys.argv[1])\n"
         "simulate(DriveSystem(p, 'cdfs', 0.4), ConstantSpeed(1e-3), 0.01, options=o)\n"

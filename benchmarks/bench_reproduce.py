@@ -38,9 +38,9 @@ if str(ROOT) not in sys.path:
 from reference.scipy_model import STATE_NAMES, ReferenceModel, tolerances  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
-from feeddrive.control import ConstantSpeed  # noqa: E402
+from feeddrive.engine.simulate import DriveSystem, simulate  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 from feeddrive.reproduce import run  # noqa: E402
-from feeddrive.simulate import DriveSystem, simulate  # noqa: E402
 
 PARTS = {"crit": "critical-speed searches (Table 3, Fig. 8, step-down)",
          "study": "model-reading study", "forced": "torque-ripple threshold searches",

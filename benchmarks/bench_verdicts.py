@@ -47,8 +47,8 @@ from reference.scipy_model import ReferenceModel  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.analysis.critical import creep_trial, decide  # noqa: E402
-from feeddrive.control import ConstantSpeed  # noqa: E402
-from feeddrive.simulate import DriveSystem, SolverOptions  # noqa: E402
+from feeddrive.engine.simulate import DriveSystem, SolverOptions  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "bench_verdicts.json"
 REFERENCE = ROOT / "benchmarks" / "results" / "bench_verdicts_reference.json"

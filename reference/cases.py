@@ -24,7 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import feeddrive
-from feeddrive.control import ConstantSpeed
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.parameters import DriveParameters
 
 MID_SCREW = 0.4  # m, Wang2021 Sect. 5.2 (table in the middle of the screw)

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import feeddrive as fd
-from feeddrive.control import ConstantSpeed, SampledSpeed, SineSpeed
+from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
 
 OUT = Path(__file__).resolve().parents[1] / "tests" / "data" / "engine_v1_regression.npz"
 

@@ -20,7 +20,7 @@ import numpy as np
 
 import feeddrive as fd
 from feeddrive.analysis.fragments import merge_fragment
-from feeddrive.friction import steady_friction
+from feeddrive.model.friction.stribeck import steady_friction
 
 screw = fd.preset("wang2021").friction.screw
 speed = np.repeat(np.geomspace(0.05, 50.0, 30), 3)  # [mm/s], both directions

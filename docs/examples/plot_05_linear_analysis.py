@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import feeddrive as fd
-from feeddrive.linear import loop_analysis, stability_band
+from feeddrive.analysis.linear import loop_analysis, stability_band
 
 system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
 

@@ -45,7 +45,7 @@ print(f"table position at 2 s: FMU {1e3 * run['table_position'][-1]:.6f} mm, "
       f"{1e9 * np.max(np.abs(x_fmu - ref['table_position'])):.3g} nm")
 
 fig, ax = plt.subplots(figsize=(8, 3.6), layout="constrained")
-ax.plot(ref.time, 1e3 * ref["table_speed"], lw=1.5, label="feeddrive.simulate")
+ax.plot(ref.time, 1e3 * ref["table_speed"], lw=1.5, label="feeddrive.engine.simulate")
 ax.plot(run["time"], 1e3 * run["table_speed"], "--", lw=1.0, label="FMU in fmpy")
 ax.set_xlabel("time [s]")
 ax.set_ylabel("table speed [mm/s]")

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
-# public name → module that defines it ("" : the name is a submodule)
+# public name → module that defines it ("" : the name is a submodule, see _SUBMODULES)
 _PUBLIC: dict[str, str] = {
     "Target": "analysis.calibrate", "Unknown": "analysis.calibrate",
     "calibrate": "analysis.calibrate",
@@ -30,33 +30,40 @@ _PUBLIC: dict[str, str] = {
     "critical_speed_stepdown": "analysis.critical",
     "CreepMetrics": "analysis.metrics", "CreepThresholds": "analysis.metrics",
     "creep_metrics": "analysis.metrics",
-    "ConstantSpeed": "control", "SampledSpeed": "control", "SineSpeed": "control",
+    "ConstantSpeed": "model.reference", "SampledSpeed": "model.reference",
+    "SineSpeed": "model.reference",
     "LoadProfile": "model", "register_friction_law": "model", "register_mechanism": "model",
     "DriveParameters": "parameters", "ParameterError": "parameters", "load": "parameters",
     "preset": "parameters", "save": "parameters",
-    "Result": "result",
-    "DriveSystem": "simulate", "Simulation": "simulate", "SimulationError": "simulate",
-    "SolverOptions": "simulate", "simulate": "simulate",
-    "frequency_response": "linear", "linearize": "linear", "loop_analysis": "linear",
-    "stability_band": "linear",
+    "Result": "engine.result",
+    "DriveSystem": "engine.simulate", "Simulation": "engine.simulate",
+    "SimulationError": "engine.simulate", "SolverOptions": "engine.simulate",
+    "simulate": "engine.simulate",
+    "frequency_response": "analysis.linear", "linearize": "analysis.linear",
+    "loop_analysis": "analysis.linear", "stability_band": "analysis.linear",
     "friction": "", "linear": "", "model": "",
 }
+# public submodule name → the module it is
+_SUBMODULES: dict[str, str] = {"friction": "model.friction.stribeck", "linear": "analysis.linear",
+                               "model": "model"}
 
 if TYPE_CHECKING:
-    from . import friction, linear, model
+    from . import model
+    from .analysis import linear
     from .analysis.calibrate import Target, Unknown, calibrate
     from .analysis.critical import (
         CriticalSpeed,
         critical_speed_from_rest,
         critical_speed_stepdown,
     )
+    from .analysis.linear import frequency_response, linearize, loop_analysis, stability_band
     from .analysis.metrics import CreepMetrics, CreepThresholds, creep_metrics
-    from .control import ConstantSpeed, SampledSpeed, SineSpeed
-    from .linear import frequency_response, linearize, loop_analysis, stability_band
+    from .engine.result import Result
+    from .engine.simulate import DriveSystem, Simulation, SimulationError, SolverOptions, simulate
     from .model import LoadProfile, register_friction_law, register_mechanism
+    from .model.friction import stribeck as friction
+    from .model.reference import ConstantSpeed, SampledSpeed, SineSpeed
     from .parameters import DriveParameters, ParameterError, load, preset, save
-    from .result import Result
-    from .simulate import DriveSystem, Simulation, SimulationError, SolverOptions, simulate
 
 
 def __getattr__(name: str) -> Any:
@@ -64,7 +71,7 @@ def __getattr__(name: str) -> Any:
     if module is None:
         raise AttributeError(f"module 'feeddrive' has no attribute {name!r}")
     if module == "":
-        value = importlib.import_module(f".{name}", __name__)
+        value = importlib.import_module(f".{_SUBMODULES[name]}", __name__)
     else:
         value = getattr(importlib.import_module(f".{module}", __name__), name)
     globals()[name] = value

@@ -30,7 +30,7 @@ from numba import njit
 config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
 
 _HERE = Path(__file__).resolve().parent
-_KERNEL_SOURCES = ("_jit.py", "friction.py", "control.py", "analysis/identification.py")
+_KERNEL_SOURCES = ("_jit.py", "analysis/identification.py")  # model/ holds friction, reference
 _KERNEL_FOLDERS = ("model", "solvers", "fmu")
 
 
@@ -50,7 +50,8 @@ def _source_digest() -> str:
 
 
 SOURCE_DIGEST = _source_digest()
-#: the kernels' source hash: names the compile cache and keys stored results (feeddrive.store)
+#: the kernels' source hash: names the compile cache and keys stored results
+#: (feeddrive.io.json_store)
 KERNEL_HASH = SOURCE_DIGEST
 
 

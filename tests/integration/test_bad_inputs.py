@@ -23,8 +23,8 @@ import pytest
 from typer.testing import CliRunner
 
 from feeddrive.cli import app
-from feeddrive.friction import steady_friction
-from feeddrive.outputs import shown
+from feeddrive.io.outputs import shown
+from feeddrive.model.friction.stribeck import steady_friction
 from feeddrive.parameters import dumps, preset
 
 runner = CliRunner()
@@ -187,7 +187,7 @@ def test_unusable_outputs_are_refused_before_any_work(inputs: dict[str, Path], t
     # (README), and no simulation starts (issue 24 item 14: was a 5-s wall-clock bound)
     import importlib
 
-    sim_module = importlib.import_module("feeddrive.simulate")
+    sim_module = importlib.import_module("feeddrive.engine.simulate")
 
     def never(*_: Any, **__: Any) -> Any:
         raise AssertionError("simulated although refused")

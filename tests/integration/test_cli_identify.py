@@ -21,7 +21,7 @@ from typer.testing import CliRunner
 import feeddrive
 from feeddrive.analysis.identification import simulate_presliding, site_mass
 from feeddrive.cli import app
-from feeddrive.friction import steady_friction
+from feeddrive.model.friction.stribeck import steady_friction
 
 runner = CliRunner()
 PARAMS = feeddrive.preset("wang2021")
@@ -199,7 +199,7 @@ CREEPS = [False, False, False, True, True]
 
 def test_analyze_simulator_style_export(tmp_path: Path) -> None:
     t, x, cmd = stepdown_positions(CREEPS, STEPS)
-    # feeddrive.io's CSV export names: time [s], table_position [mm], table_speed_reference
+    # feeddrive.io.results's CSV export names: time [s], table_position [mm], table_speed_reference
     p = write_csv(tmp_path / "run.csv", "time [s],table_position [mm],table_speed_reference "
                   "[mm/s]", [t, x, cmd], fmt="{:.10g}")
     png = tmp_path / "run.png"
@@ -264,7 +264,7 @@ def test_analyze_zero_command_speed(tmp_path: Path) -> None:
 def test_identify_static_one_direction_record(tmp_path: Path) -> None:
     """Issue 22: a one-direction record gives that branch only, and says so; the fragment
     holds that branch only, so merging keeps the base set's other branch."""
-    from feeddrive.friction import steady_friction
+    from feeddrive.model.friction.stribeck import steady_friction
     from feeddrive.parameters import preset
 
     screw = preset("wang2021").friction.screw

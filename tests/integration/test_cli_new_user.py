@@ -41,9 +41,9 @@ def test_cli_import_leaves_heavy_modules_alone() -> None:
 
 def test_public_api_still_resolves_lazily() -> None:
     import feeddrive as fd
-    import feeddrive.simulate  # noqa: F401  (the submodule must not shadow the function)
+    import feeddrive.engine.simulate  # noqa: F401  (the submodule must not shadow the function)
 
-    assert fd.simulate.__module__ == "feeddrive.simulate"
+    assert fd.simulate.__module__ == "feeddrive.engine.simulate"
     assert callable(fd.simulate) and fd.simulate.__name__ == "simulate"
     assert set(fd.__all__) <= set(dir(fd))
     with pytest.raises(AttributeError):
@@ -179,8 +179,8 @@ def test_simulate_and_creep_help_defaults_agree_with_the_api() -> None:
     import inspect
 
     from feeddrive.analysis.critical import critical_speed_from_rest
+    from feeddrive.model.mechanisms.ball_screw_stiffness import mid_screw_position
     from feeddrive.parameters import preset
-    from feeddrive.stiffness import mid_screw_position
 
     mid_mm = 1e3 * mid_screw_position(preset("wang2021").screw)
     for command in ("simulate", "creep", "calibrate"):
@@ -190,7 +190,7 @@ def test_simulate_and_creep_help_defaults_agree_with_the_api() -> None:
     from feeddrive.analysis.metrics import VerdictRule
 
     rule = rule if rule is not None else VerdictRule()
-    from feeddrive import protocol
+    from feeddrive.analysis import protocol
 
     creep_help = " ".join(run("creep", "--help").stdout.split())
     assert "--initial-duration <float> First trial length" in creep_help
@@ -321,7 +321,7 @@ def test_a_run_beyond_the_step_limit_is_refused_before_it_starts() -> None:
     SimulationError traceback naming options.max_steps, which the CLI did not offer."""
     import importlib
 
-    sim_module = importlib.import_module("feeddrive.simulate")
+    sim_module = importlib.import_module("feeddrive.engine.simulate")
 
     def never(*_: Any, **__: Any) -> Any:
         raise AssertionError("simulated although refused")
@@ -342,7 +342,7 @@ def test_solver_exhaustion_names_the_cli_option() -> None:
 
 
 def test_a_run_that_needs_much_memory_is_announced() -> None:
-    from feeddrive.budget import run_budget
+    from feeddrive.engine.budget import run_budget
 
     b = run_budget(100000.0, max_step=1e-3, output_interval=1e-3, max_steps=50_000_000)
     assert b.steps_exceeded and b.longest_duration == pytest.approx(50000.0)

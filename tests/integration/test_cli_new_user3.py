@@ -160,9 +160,9 @@ def test_sweep_dry_run_says_what_it_does_and_times_cpu_not_wall(
 def test_stability_and_the_linear_band_sweep_scan_one_default_range() -> None:
     """Item 8: `feeddrive stability` scanned 0.01–5 mm/s and the sweep's `linear-band`
     quantity 0.02–3.02 mm/s by default."""
-    from feeddrive import protocol
+    from feeddrive.analysis import protocol
+    from feeddrive.analysis.linear import stability_band
     from feeddrive.cli.linear_cmd import stability_command
-    from feeddrive.linear import stability_band
     from feeddrive.sweep.quantities import QuantitySettings
 
     q = QuantitySettings.parse({"kind": "linear-band"})
@@ -231,7 +231,7 @@ def test_calibrate_out_marks_the_set_as_fitted(tmp_path: Path) -> None:
     Item 13: its --max-duration defaulted to 60 s while creep and reproduce use 240 s."""
     import inspect
 
-    from feeddrive import protocol
+    from feeddrive.analysis import protocol
     from feeddrive.cli.calibrate_cmd import calibrate_command, fitted_set
     from feeddrive.parameters import load, preset, save
 

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 import feeddrive as fd
 from feeddrive.cli import app
-from feeddrive.friction import steady_friction
+from feeddrive.model.friction.stribeck import steady_friction
 from feeddrive.parameters import save
 
 SCREW = fd.preset("wang2021").friction.screw
@@ -46,7 +46,7 @@ def test_parquet_without_pyarrow_is_refused_before_simulating(monkeypatch,
     from typer.testing import CliRunner
 
     from feeddrive.cli import app
-    from feeddrive.io import PARQUET_HINT, check_format
+    from feeddrive.io.results import PARQUET_HINT, check_format
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",

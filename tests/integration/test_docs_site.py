@@ -87,8 +87,8 @@ def test_every_public_name_is_in_the_reference() -> None:
     assert not missing, missing
     # the reference is no empty shell: the everyday API's classes and functions by kind
     assert {"feeddrive.Simulation", "feeddrive.Result"} <= inv["py:class"]
-    assert {"feeddrive.simulate", "feeddrive.preset"} <= inv["py:function"]
-    assert {"feeddrive.friction", "feeddrive.sweep"} <= inv["py:module"]
+    assert {"feeddrive.engine.simulate", "feeddrive.preset"} <= inv["py:function"]
+    assert {"feeddrive.model.friction.stribeck", "feeddrive.sweep"} <= inv["py:module"]
 
 
 def test_every_cli_command_is_in_the_reference() -> None:

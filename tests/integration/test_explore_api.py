@@ -229,7 +229,7 @@ def test_friction_curves_show_the_negative_slope_bands(server: ExplorerServer) -
 
 
 def test_the_linear_job_gives_the_stability_band_and_the_poles(server: ExplorerServer) -> None:
-    from feeddrive.linear import loop_analysis, stability_band
+    from feeddrive.analysis.linear import loop_analysis, stability_band
 
     job = run_job(server, "linear", {"drive": "cdfs", "table_speed": "1"})
     assert job["state"] == "done", job

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from feeddrive.explore import ExplorerServer, serve_in_thread
-from feeddrive.measured_io import read_position_trace
+from feeddrive.io.measured import read_position_trace
 
 CHROMIUM = Path("/usr/bin/chromium")
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",

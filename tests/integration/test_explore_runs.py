@@ -20,7 +20,7 @@ import pytest
 import scipy.io
 
 from feeddrive.explore import ExplorerServer, serve_in_thread
-from feeddrive.measured_io import read_position_trace
+from feeddrive.io.measured import read_position_trace
 
 
 @pytest.fixture(scope="module")
@@ -69,7 +69,7 @@ def test_polls_are_answered_while_the_progress_advances_inside_the_compiled_solv
     report advances *within* one solver call (the solver writes it as it steps).  No latency
     is asserted: benchmarks/bench_explore_polls.py records it.  The divergence stop (issue 21)
     would end this run at ~1.9 s as unstable; it is lifted so that the call runs on."""
-    module = importlib.import_module("feeddrive.simulate")  # fd.simulate is the function
+    module = importlib.import_module("feeddrive.engine.simulate")  # fd.simulate is the function
     monkeypatch.setattr(module, "DIVERGENCE_SPEED_RATIO", math.inf)
     finish(server, {"drive": "cdfs", "table_speed": "1", "duration": "1"})  # solver loaded
     status, job, _ = request(server, "POST", "/api/jobs", {"kind": "simulate", "settings": {

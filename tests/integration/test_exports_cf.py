@@ -113,9 +113,9 @@ def test_sweep_exports(tmp_path: Path) -> None:
 
 
 def test_outputs_doc_states_the_writers_conventions() -> None:
-    """docs/outputs.md against feeddrive.io: the CF version, the time coordinate's long name,
-    the engine and the Parquet metadata keys it names."""
-    from feeddrive import io
+    """docs/outputs.md against feeddrive.io.results: the CF version, the time coordinate's long
+    name, the engine and the Parquet metadata keys it names."""
+    from feeddrive.io import results as io
 
     doc = (Path(__file__).resolve().parents[2] / "docs" / "outputs.md").read_text("utf-8")
     assert f'`Conventions = "{io.CF_CONVENTIONS}"`' in doc

@@ -13,9 +13,9 @@ from typer.testing import CliRunner
 
 import feeddrive as fd
 from feeddrive.cli import app
-from feeddrive.control import ConstantSpeed, SampledSpeed, SineSpeed
+from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate
+from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
 from feeddrive.parameters import ParameterError
-from feeddrive.simulate import DriveSystem, SolverOptions, simulate
 
 runner = CliRunner()
 
@@ -96,7 +96,7 @@ def test_bad_inputs(params: fd.DriveParameters) -> None:
 
 
 def test_solver_failure_is_reported_not_nan(params: fd.DriveParameters) -> None:
-    from feeddrive.simulate import SimulationError
+    from feeddrive.engine.simulate import SimulationError
     with pytest.raises(SimulationError, match="maximum number of steps"):
         simulate(DriveSystem(params, "cdfs", 0.4), ConstantSpeed(1e-3), 1.0,
                  options=SolverOptions(max_steps=10))
@@ -191,7 +191,7 @@ def test_cli_method_auto_runs_the_stiff_aware_integrator(tmp_path) -> None:
     bristle) — same mean speeds as the default (modal), RODAS4 steps taken, streamed to a file;
     every method the help names is one SolverOptions accepts; a wrong one is one line."""
     from feeddrive.cli.simulate_cmd import CLI_METHODS
-    from feeddrive.simulate import METHODS
+    from feeddrive.engine.simulate import METHODS
 
     args = ["simulate", "--drive", "ddfs", "--table-speed", "0.5", "--nut-speed", "16",
             "--duration", "3", "--json"]

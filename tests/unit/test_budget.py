@@ -1,4 +1,4 @@
-"""Runs that cannot finish are refused before integrating (feeddrive.budget): issue 13,
+"""Runs that cannot finish are refused before integrating (feeddrive.engine.budget): issue 13,
 item 4.
 
 Guards: two valid parameter sets (near-zero friction; a very fast current loop) ran to the
@@ -13,7 +13,7 @@ from __future__ import annotations
 import pytest
 
 import feeddrive as fd
-from feeddrive.budget import time_constants
+from feeddrive.engine.budget import time_constants
 from feeddrive.parameters import ParameterError, from_dict, to_dict
 
 BASE = fd.preset("wang2021")
@@ -42,7 +42,7 @@ def test_stiff_valid_sets_are_refused_early_naming_the_time_constant(
     default ``modal`` runs them (below)."""
     import importlib
 
-    sim_module = importlib.import_module("feeddrive.simulate")
+    sim_module = importlib.import_module("feeddrive.engine.simulate")
 
     system = fd.DriveSystem(make(), "cdfs", 0.4)
     # the work done before the refusal, counted in solver steps (issue 24 item 14: no

@@ -28,7 +28,6 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive import profiles
 from feeddrive.backends.c_backend import (
     CompilerNotFound,
     c_model_source,
@@ -37,10 +36,11 @@ from feeddrive.backends.c_backend import (
     find_compiler,
     load_shared,
 )
-from feeddrive.control import ConstantSpeed, SampledSpeed, SineSpeed
+from feeddrive.engine.simulate import sampling
+from feeddrive.model import reference as profiles
 from feeddrive.model.assemble import Model
+from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
 from feeddrive.parameters import Compensation, LeadError, TorqueRipple
-from feeddrive.simulate import sampling
 
 try:
     find_compiler()

@@ -329,7 +329,7 @@ def test_the_docs_list_the_subset_the_code_supports() -> None:
 #: kernels outside the subset by design, with the reason: they return arrays (analysis-side
 #: helpers called from Python; no model calls them)
 NOT_TRANSLATED = {"feeddrive.analysis.identification._presliding_kernel": "return annotation",
-                  "feeddrive.friction._map1": "return annotation",
+                  "feeddrive.model.friction.stribeck._map1": "return annotation",
                   # the modal method's eigen-analysis (issue 21): complex LAPACK eigenvalues
                   # and 2-D Jacobians; the FMU's embedded solver does not use it.  Value: the
                   # refusal's message

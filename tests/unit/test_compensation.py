@@ -11,7 +11,7 @@ import pytest
 import feeddrive as fd
 from feeddrive.analysis.compensation import Case, default_cases, evaluate
 from feeddrive.analysis.critical import creep_trial
-from feeddrive.linear import stability_band
+from feeddrive.analysis.linear import stability_band
 from feeddrive.parameters import Compensation, ParameterError
 
 W = fd.preset("wang2021")
@@ -82,7 +82,7 @@ def test_observer_gain_table_of_the_docs_and_the_warning() -> None:
     nothing said what k is usable.  docs/linear.md's table (marked entries) and the warning
     `feeddrive simulate` prints."""
     from feeddrive.analysis.compensation import observer_gain_warning
-    from feeddrive.linear import rightmost_pole
+    from feeddrive.analysis.linear import rightmost_pole
 
     def system(k: float) -> fd.DriveSystem:
         comp = Compensation(mode="observer", observer_gain=k)

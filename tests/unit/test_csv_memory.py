@@ -21,7 +21,7 @@ ROWS = 1_000_000
 _MEASURE = """
 import resource, sys
 import numpy, pandas
-from feeddrive.measured_io import read_position_trace
+from feeddrive.io.measured import read_position_trace
 before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 trace = read_position_trace(sys.argv[1])
 after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

@@ -59,8 +59,8 @@ API = public_api()
 
 def test_the_public_api_is_collected():
     """The list covers the top-level names, their methods and the registered parts."""
-    assert "feeddrive.simulate.simulate" in API
-    assert "feeddrive.result.Result.summary" in API
+    assert "feeddrive.engine.simulate.simulate" in API
+    assert "feeddrive.engine.result.Result.summary" in API
     assert "feeddrive.model.friction.lugre.LuGre" in API
     assert "feeddrive.model.mechanisms.ball_screw.BallScrewDrive" in API or any(
         p.startswith("feeddrive.model.mechanisms.ball_screw.") for p in API)

@@ -1,4 +1,4 @@
-"""Issue 24 item 2: legends and labels covered the data.  feeddrive.figure_layout checks a
+"""Issue 24 item 2: legends and labels covered the data.  feeddrive.plots.layout checks a
 figure as matplotlib draws it; these tests show that it catches each fault the issue saw, and
 that the figures of `simulate --plot` and `map --plot` have none of them (the reproduction's
 figures: tests/validation/test_report_new_user.py)."""
@@ -13,7 +13,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 import xarray as xr  # noqa: E402
 
-from feeddrive.figure_layout import (  # noqa: E402
+from feeddrive.plots.layout import (  # noqa: E402
     clipped_artists,
     covered_data,
     overlapping_texts,
@@ -73,7 +73,7 @@ def test_simulate_plot_keeps_legends_off_the_traces_and_says_what_ran(drive: str
     """Item 2: `simulate --plot` had its legends on the traces and a title without speed or
     profile."""
     import feeddrive as fd
-    from feeddrive.plotting import result_figure
+    from feeddrive.plots.result import result_figure
 
     params = fd.preset("linear-motor-example" if drive == "linear-motor" else "wang2021")
     nut = 16e-3 if drive == "ddfs" else 0.0

@@ -11,7 +11,7 @@ import pytest
 import feeddrive
 from feeddrive.analysis.fragments import friction_fragment, merge_fragment
 from feeddrive.analysis.identification import fit_presliding, fit_static, simulate_presliding
-from feeddrive.friction import steady_friction
+from feeddrive.model.friction.stribeck import steady_friction
 from feeddrive.parameters import ParameterError
 
 BASE = feeddrive.preset("wang2021")

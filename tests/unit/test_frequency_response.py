@@ -11,15 +11,15 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.linear import (
+from feeddrive.analysis.linear import (
     MARGINAL,
     classify_poles,
     frequency_response,
     linearize,
     loop_analysis,
 )
+from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness
 from feeddrive.parameters import ParameterError, TorqueRipple
-from feeddrive.stiffness import equivalent_stiffness
 
 W = fd.preset("wang2021")
 CDFS = fd.DriveSystem(W, "cdfs", 0.4)

@@ -1,4 +1,5 @@
-"""LuGre friction (feeddrive.friction): properties of the model and of the exact bristle step.
+"""LuGre friction (feeddrive.model.friction.stribeck): properties of the model and of the
+exact bristle step.
 
 Reference formulas are written out here, independently of the package, from Wang2021
 Eq. (11): F = σ0 z + σ1 ż + σ2 v, ż = v − σ0|v| z / G(v), G(v) = F_c + (F_s − F_c)e^{−(v/v_s)²}.

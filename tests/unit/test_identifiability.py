@@ -14,8 +14,8 @@ import pytest
 
 import feeddrive
 from feeddrive.analysis.identification import MAX_CORRELATION, Estimate, fit_static
-from feeddrive.friction import steady_friction
-from feeddrive.measured_io import MeasuredDataError, read_static_test
+from feeddrive.io.measured import MeasuredDataError, read_static_test
+from feeddrive.model.friction.stribeck import steady_friction
 
 SCREW = feeddrive.preset("wang2021").friction.screw
 

@@ -25,7 +25,7 @@ from feeddrive.analysis.identification import (
     simulate_presliding,
     site_mass,
 )
-from feeddrive.friction import bristle_rate, steady_friction
+from feeddrive.model.friction.stribeck import bristle_rate, steady_friction
 from feeddrive.parameters import LuGreParameters
 
 PARAMS = feeddrive.preset("wang2021")

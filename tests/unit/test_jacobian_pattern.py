@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.control import ConstantSpeed
 from feeddrive.model.assemble import Model
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.model.sparsity import colour_columns, jacobian_pattern
 from feeddrive.parameters import Compensation, LeadError, TorqueRipple
 

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import feeddrive
 from feeddrive import _jit
-from feeddrive.control import ConstantSpeed
 from feeddrive.model import codegen
+from feeddrive.model.reference import ConstantSpeed
 
 PKG = Path(feeddrive.__file__).resolve().parent
 
@@ -66,7 +66,7 @@ def test_a_second_process_loads_the_assembled_model_from_disk(tmp_path) -> None:
     import sys
 
     code = ("import feeddrive as fd\n"
-            "from feeddrive.control import ConstantSpeed\n"
+            "from feeddrive.model.reference import ConstantSpeed\n"
             "s = fd.DriveSystem(fd.preset('linear-motor-example'), 'linear-motor')\n"
             "fd.simulate(s, ConstantSpeed(1e-3), 0.01)\n"
             "st = s.model(ConstantSpeed(1e-3)).module.integrate_dense.stats\n"

@@ -10,9 +10,9 @@ import pytest
 
 import feeddrive as fd
 from feeddrive import friction
-from feeddrive.linear import linearize, loop_analysis, stability_band
+from feeddrive.analysis.linear import linearize, loop_analysis, stability_band
+from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness
 from feeddrive.parameters import ParameterError
-from feeddrive.stiffness import equivalent_stiffness
 
 W = fd.preset("wang2021")
 CDFS = fd.DriveSystem(W, "cdfs", 0.4)

@@ -11,7 +11,7 @@ import time
 import pytest
 
 import feeddrive as fd
-from feeddrive.simulate import Simulation, SimulationInterrupted, SolverOptions
+from feeddrive.engine.simulate import Simulation, SimulationInterrupted, SolverOptions
 
 W = fd.preset("wang2021")
 
@@ -23,7 +23,7 @@ def test_live_time_advances_inside_a_call_and_a_stop_request_ends_it(
     advances while it runs and request_stop ends it with what was finished.  The divergence
     stop (issue 21) would end this run at ~1.9 s as unstable: it is lifted here so that the
     call runs on as the explorer's did."""
-    module = importlib.import_module("feeddrive.simulate")  # fd.simulate is the function
+    module = importlib.import_module("feeddrive.engine.simulate")  # fd.simulate is the function
     monkeypatch.setattr(module, "DIVERGENCE_SPEED_RATIO", math.inf)
     p = W.replace_path("controller.position_gain", 45.0)
     sim = Simulation(fd.DriveSystem(p, "cdfs", 0.4), fd.ConstantSpeed(1e-3),

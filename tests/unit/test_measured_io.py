@@ -1,4 +1,4 @@
-"""CSV readers for measured data (feeddrive.measured_io): units, columns, precise errors."""
+"""CSV readers for measured data (feeddrive.io.measured): units, columns, precise errors."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from feeddrive.measured_io import (
+from feeddrive.io.measured import (
     MeasuredDataError,
     read_csv_table,
     read_position_trace,
@@ -43,7 +43,7 @@ def test_position_trace_honours_bracketed_units(tmp_path: Path) -> None:
 
 
 def test_position_trace_falls_back_to_table_position_and_reads_command(tmp_path: Path) -> None:
-    # the simulator's CSV export style (feeddrive.io): units in brackets, engineering units
+    # the simulator's CSV export style (feeddrive.io.results): units in brackets, engineering units
     rows = "\n".join(f"{i * 0.1:g},{i * 0.16:g},1.6,1.6" for i in range(20))
     p = write(tmp_path, "time [s],table_position [mm],table_speed [mm/s],"
                         f"table_speed_reference [mm/s]\n{rows}\n")

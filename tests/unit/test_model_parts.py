@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.control import ConstantSpeed
 from feeddrive.model.friction import FrictionLaw, friction_law, register_friction_law
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.parameters import LeadError, ParameterError, TorqueRipple, loads
 
 # ---------------------------------------------------------------- a toy law in this file only

@@ -1,4 +1,4 @@
-"""Output destinations are checked before any work (feeddrive.outputs): issue 13, items 3
+"""Output destinations are checked before any work (feeddrive.io.outputs): issue 13, items 3
 and 8 (and issue 12, item 8).
 
 Guards: ``identify static victim.csv --out victim.csv`` replaced the measured data; an output
@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from feeddrive.outputs import OutputError, check_output_dir, check_output_file, shown
+from feeddrive.io.outputs import OutputError, check_output_dir, check_output_file, shown
 
 
 def test_a_new_file_in_an_existing_folder_is_accepted(tmp_path: Path) -> None:

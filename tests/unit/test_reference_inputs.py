@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from feeddrive.control import PROFILE_PARAMS, REF_INPUT, SampledSpeed, reference_kernel
 from feeddrive.fmu.model import InputReference
+from feeddrive.model.reference import PROFILE_PARAMS, REF_INPUT, SampledSpeed, reference_kernel
 
 
 def _call(profile: object, t: float) -> tuple[float, float, float, float]:

@@ -23,10 +23,10 @@ import pytest
 
 import feeddrive as fd
 from feeddrive.explore import settings as st
-from feeddrive.outputs import atomic_path, shown
+from feeddrive.io.json_store import ResultStore
+from feeddrive.io.outputs import atomic_path, shown
 from feeddrive.parameters import ParameterError, dumps, load, preset
 from feeddrive.parameters.toml_io import MAX_EXTENDS
-from feeddrive.store import ResultStore
 from feeddrive.sweep import design as sweep_design
 from feeddrive.sweep.design import MAX_POINTS, parse_config
 from feeddrive.sweep.store import StoreFailure, SweepStore
@@ -53,11 +53,11 @@ _WRITERS = """
     from pathlib import Path
     import numpy as np, xarray as xr
     from matplotlib.figure import Figure
-    from feeddrive.io import save_result
+    from feeddrive.io.results import save_result
     from feeddrive.parameters import preset, save
     from feeddrive.reproduce.studies import write_csv
-    from feeddrive.store import ResultStore
-    from feeddrive.stribeck_plot import save_figure
+    from feeddrive.io.json_store import ResultStore
+    from feeddrive.plots.stribeck import save_figure
     out = Path(sys.argv[1])
     n = 20000
     ds = xr.Dataset({"table_speed": ("time", np.linspace(0, 1, n), {"units": "m/s"})},

@@ -8,12 +8,12 @@ import math
 import pytest
 
 import feeddrive as fd
+from feeddrive.analysis.linear import stability_band
 from feeddrive.analysis.sensitivity import (
     MIN_EFFECT_RESOLUTIONS,
     parameter_paths,
     sensitivity,
 )
-from feeddrive.linear import stability_band
 
 
 def _edge(params: fd.DriveParameters) -> float:

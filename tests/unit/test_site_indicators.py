@@ -8,17 +8,17 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from feeddrive.friction import negative_slope_band, sliding_stability
+from feeddrive.model.friction.indicators import site_sliding_stability, steady_slope
+from feeddrive.model.friction.stribeck import negative_slope_band, sliding_stability
 from feeddrive.parameters import preset
-from feeddrive.site_indicators import site_sliding_stability, steady_slope
 
 GUIDE = preset("wang2021").friction.guide
 
 
 def test_generic_linearisation_matches_the_lugre_cubic() -> None:
     """Cross-path check: the eigenvalues of the oscillator built from LuGre.linearise agree
-    with the Åström–Canudas de Wit cubic of feeddrive.friction (a light, stiff case where
-    the scan has an unstable band, and the drive's own K_eq case)."""
+    with the Åström–Canudas de Wit cubic of feeddrive.model.friction.stribeck (a light, stiff
+    case where the scan has an unstable band, and the drive's own K_eq case)."""
     speeds = np.geomspace(1e-5, 5e-3, 60)
     for mass, k, c in ((1.0, 2e4, 0.0), (20.0, 32.3e6, 2541.0)):
         poly = sliding_stability(speeds, [GUIDE], mass, k, c)

@@ -22,10 +22,10 @@ from reference.linear_model import augmented_matrix, exact_response  # noqa: E40
 from reference.scipy_model import STATE_NAMES  # noqa: E402
 
 import feeddrive  # noqa: E402
-from feeddrive.control import ConstantSpeed  # noqa: E402
-from feeddrive.simulate import DriveSystem, SolverOptions, sampling, simulate  # noqa: E402
+from feeddrive.engine.simulate import DriveSystem, SolverOptions, sampling, simulate  # noqa: E402
+from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 from feeddrive.solvers import dopri5  # noqa: E402
-from feeddrive.stiffness import equivalent_stiffness  # noqa: E402
 
 X_T, V_T = STATE_NAMES.index("table_position"), STATE_NAMES.index("table_speed")
 

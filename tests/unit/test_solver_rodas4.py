@@ -32,8 +32,8 @@ from test_solver_order import (  # noqa: E402
     scaled_error,
 )
 
-from feeddrive.control import ConstantSpeed  # noqa: E402
-from feeddrive.simulate import DriveSystem, SolverOptions, simulate  # noqa: E402
+from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 from feeddrive.solvers import rodas4  # noqa: E402
 
 IX = {name: k for k, name in enumerate(STATE_NAMES)}

@@ -1,4 +1,4 @@
-"""Linear stability of steady sliding (feeddrive.friction.characteristic_polynomial).
+"""Linear stability of steady sliding (feeddrive.model.friction.stribeck.characteristic_polynomial).
 
 Reference: Åström & Canudas de Wit, "Revisiting the LuGre friction model", IEEE Control
 Systems Magazine 28(6), 2008: a mass m pulled at constant speed through a spring k and a

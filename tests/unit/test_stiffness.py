@@ -1,4 +1,5 @@
-"""Stiffness chain (feeddrive.stiffness): Wang2021 Eqs. (2)–(5), written out independently."""
+"""Stiffness chain (feeddrive.model.mechanisms.ball_screw_stiffness): Wang2021 Eqs. (2)–(5),
+written out independently."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from feeddrive import ParameterError, preset, stiffness
+from feeddrive import ParameterError, preset
+from feeddrive.model.mechanisms import ball_screw_stiffness as stiffness
 
 PARAMS = preset("wang2021")
 S = PARAMS.screw

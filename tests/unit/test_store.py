@@ -1,4 +1,4 @@
-"""The result store (feeddrive.store) cannot lie: issue 13, item 9.
+"""The result store (feeddrive.io.json_store) cannot lie: issue 13, item 9.
 
 Guards the bugs found in the reproduce cache: a hand-edited entry (1.56 → 9.99) went into the
 report; the key omitted the package version and kernel hash; a truncated entry made every
@@ -23,13 +23,13 @@ from pathlib import Path
 
 import pytest
 
-import feeddrive.store
+import feeddrive.io.json_store
 from feeddrive import __version__
 from feeddrive._jit import KERNEL_HASH
+from feeddrive.io.json_store import ResultStore, store_key
 from feeddrive.parameters import preset
 from feeddrive.reproduce.runner import study_store
 from feeddrive.reproduce.studies import StudySettings
-from feeddrive.store import ResultStore, store_key
 
 KEY = store_key({"version": "test", "inputs": [1, 2, 3]})
 
@@ -88,7 +88,7 @@ def test_reproduce_key_has_version_kernel_code_and_inputs(tmp_path: Path) -> Non
     assert len(KERNEL_HASH) == 16
 
 
-# the store module alone (it imports only feeddrive.outputs, which imports nothing of
+# the store module alone (it imports only feeddrive.io.outputs, which imports nothing of
 # feeddrive; the package's __init__ is not run): a worker starts in ~50 ms
 _WORKER = textwrap.dedent("""
     import importlib
@@ -96,9 +96,9 @@ _WORKER = textwrap.dedent("""
     import sys
     import types
     package = types.ModuleType("feeddrive")
-    package.__path__ = [os.path.dirname(sys.argv[5])]
+    package.__path__ = [os.path.dirname(os.path.dirname(sys.argv[5]))]
     sys.modules["feeddrive"] = package
-    store_module = importlib.import_module("feeddrive.store")
+    store_module = importlib.import_module("feeddrive.io.json_store")
     root, key, worker, rounds = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
     store = store_module.ResultStore(root, key)
     print("ready", flush=True)
@@ -119,7 +119,7 @@ def _spawn(tmp_path: Path, *args: str) -> subprocess.Popen[str]:
     script = tmp_path / "worker.py"
     if not script.exists():
         script.write_text(_WORKER, encoding="utf-8")
-    return subprocess.Popen([sys.executable, str(script), *args, feeddrive.store.__file__],
+    return subprocess.Popen([sys.executable, str(script), *args, feeddrive.io.json_store.__file__],
                             stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
 

@@ -53,8 +53,8 @@ def test_random_designs_are_reproducible(kind: str) -> None:
 
 
 def test_relative_axes_scale_sites_and_chain_stiffness() -> None:
+    from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness
     from feeddrive.parameters import loads, preset
-    from feeddrive.stiffness import equivalent_stiffness
 
     cfg = _cfg(axes={"friction.screw": {"values": [1.1], "relative": True},
                      "stiffness.equivalent_stiffness": {"values": [0.8], "relative": True}})

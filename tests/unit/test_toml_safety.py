@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from feeddrive.analysis.fragments import friction_fragment, merge_fragment
 from feeddrive.analysis.identification import fit_static
-from feeddrive.friction import steady_friction
+from feeddrive.model.friction.stribeck import steady_friction
 from feeddrive.parameters import ParameterError, dumps, load, loads, preset, to_dict
 from feeddrive.parameters.toml_io import MAX_TOML_DEPTH, parse_toml, toml_comment, toml_string
 

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from feeddrive.control import SampledSpeed
+from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate
+from feeddrive.model.reference import SampledSpeed
 from feeddrive.parameters import preset
-from feeddrive.simulate import DriveSystem, SolverOptions, simulate
 
 #: the issue's scenarios (issue 20 item 5): drive, table speed, nut speed [mm/s]
 SCENARIOS = {"cdfs-2": ("cdfs", 2.0, 0.0), "cdfs-1.2": ("cdfs", 1.2, 0.0),

@@ -9,7 +9,7 @@ import pytest
 import feeddrive as fd
 from feeddrive.analysis.critical import creep_trial
 from feeddrive.analysis.metrics import VerdictRule, trace_verdict
-from feeddrive.control import ConstantSpeed
+from feeddrive.model.reference import ConstantSpeed
 
 SYSTEM = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
 # Wang2021 Sect. 5.2, Fig. 6: creeps at 1.55 mm/s, stable at 1.56 mm/s

@@ -13,8 +13,7 @@ import pytest
 
 import feeddrive
 from feeddrive.analysis.critical import UNSTABLE, creep_trial
-from feeddrive.control import ConstantSpeed
-from feeddrive.simulate import (
+from feeddrive.engine.simulate import (
     DIVERGENCE_SPEED_RATIO,
     DriveSystem,
     Simulation,
@@ -22,6 +21,7 @@ from feeddrive.simulate import (
     divergence_bounds,
     simulate,
 )
+from feeddrive.model.reference import ConstantSpeed
 
 COMMAND = 1e-3  # [m/s]
 

@@ -28,9 +28,9 @@ from reference.make_radau_reference import stick_slip_figures  # noqa: E402
 from reference.scipy_model import STATE_NAMES, ReferenceModel  # noqa: E402
 
 import feeddrive  # noqa: E402
-from feeddrive.control import ConstantSpeed, SineSpeed  # noqa: E402
-from feeddrive.simulate import DriveSystem, SolverOptions, simulate  # noqa: E402
-from feeddrive.stiffness import equivalent_stiffness  # noqa: E402
+from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate  # noqa: E402
+from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed, SineSpeed  # noqa: E402
 
 IX = {name: k for k, name in enumerate(STATE_NAMES)}
 
@@ -272,7 +272,8 @@ def test_engine_rhs_equals_reference_model_at_random_states(variant: str, setup:
 
 
 def test_reference_stiffness_chain_matches_package_stiffness() -> None:
-    """The reference's own Eqs. (2)–(5) against feeddrive.stiffness at Table 3's positions."""
+    """The reference's own Eqs. (2)–(5) against feeddrive.model.mechanisms.ball_screw_stiffness
+    at Table 3's positions."""
     params = feeddrive.preset("wang2021-literal")
     for a in (0.2, 0.3, 0.4, 0.5, 0.6):
         model = ReferenceModel(params, "cdfs", a, ConstantSpeed(1e-3))

@@ -22,7 +22,7 @@ if str(ROOT) not in sys.path:
 from reference.record_engine_v1 import cases  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
-from feeddrive.control import ConstantSpeed  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 
 DATA = np.load(ROOT / "tests" / "data" / "engine_v1_regression.npz")
 CASES = cases()

@@ -370,8 +370,8 @@ def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
     CDFS with GMS friction on the guide (examples/gms_guide.toml) and the DDFS whose hollow
     motor runs a position loop (the nut_position_reference input, positions given as
     inputs), 1 s with the ramp, as co-simulation FMUs in fmpy."""
+    from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate
     from feeddrive.parameters import load
-    from feeddrive.simulate import DriveSystem, SolverOptions, simulate
 
     ref = Reference.ramp(2.0, 8.0 if drive == "ddfs" else 0.0, 1.0)
     if params == "gms":

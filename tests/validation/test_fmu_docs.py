@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from feeddrive.control import SampledSpeed
+from feeddrive.engine.simulate import DriveSystem, simulate
 from feeddrive.fmu.description import SETTINGS, variables
 from feeddrive.fmu.model import build
+from feeddrive.model.reference import SampledSpeed
 from feeddrive.parameters import preset
-from feeddrive.simulate import DriveSystem, simulate
 
 DOC = Path(__file__).parents[2] / "docs" / "fmu.md"
 TEXT = DOC.read_text(encoding="utf-8")

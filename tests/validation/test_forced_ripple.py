@@ -11,7 +11,7 @@ import pytest
 import feeddrive as fd
 from feeddrive.analysis import forced
 from feeddrive.analysis.forced import ripple_point, threshold_critical_speed
-from feeddrive.control import ConstantSpeed
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.parameters import TorqueRipple
 
 RIPPLE = fd.preset("wang2021-ripple")

@@ -11,12 +11,12 @@ import pandas as pd
 import pytest
 
 import feeddrive as fd
-from feeddrive.control import ConstantSpeed
-from feeddrive.simulate import SimulationInterrupted, SolverOptions, sampling
+from feeddrive.engine.simulate import SimulationInterrupted, SolverOptions, sampling
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.solvers import dopri5
 
 W = fd.preset("wang2021")
-sim_mod = importlib.import_module("feeddrive.simulate")
+sim_mod = importlib.import_module("feeddrive.engine.simulate")
 
 
 def _one_call(system: fd.DriveSystem, profile: ConstantSpeed, duration: float) -> np.ndarray:

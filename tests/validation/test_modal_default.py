@@ -20,8 +20,8 @@ import pytest
 
 import feeddrive as fd
 from feeddrive.analysis.critical import creep_trial
-from feeddrive.control import ConstantSpeed
-from feeddrive.simulate import DriveSystem, SolverOptions, simulate
+from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate
+from feeddrive.model.reference import ConstantSpeed
 from feeddrive.solvers import modes, rodas4
 
 MODAL = SolverOptions(method="modal")
@@ -162,7 +162,7 @@ def test_dopri5_damping_on_the_imaginary_axis_is_as_documented() -> None:
 def test_docs_state_the_constants_of_the_code() -> None:
     from pathlib import Path
 
-    from feeddrive.simulate import DIVERGENCE_SPEED_FLOOR, DIVERGENCE_SPEED_RATIO
+    from feeddrive.engine.simulate import DIVERGENCE_SPEED_FLOOR, DIVERGENCE_SPEED_RATIO
     from feeddrive.solvers import switching
     text = " ".join((Path(__file__).parents[2] / "docs" / "model.md").read_text(
         encoding="utf-8").split())

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import feeddrive as fd
-from feeddrive import protocol
+from feeddrive.analysis import protocol
 from feeddrive.analysis.critical import critical_speed_from_rest
 from feeddrive.parameters import dumps, loads
 from feeddrive.presets import wang2021

@@ -37,9 +37,9 @@ if str(ROOT) not in sys.path:
 from reference.scipy_model import ReferenceModel  # noqa: E402
 
 import feeddrive  # noqa: E402
-from feeddrive.control import ConstantSpeed, SineSpeed  # noqa: E402
+from feeddrive.engine.simulate import DriveSystem  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed, SineSpeed  # noqa: E402
 from feeddrive.parameters import LeadError, TorqueRipple  # noqa: E402
-from feeddrive.simulate import DriveSystem  # noqa: E402
 
 TABLE_POSITION = 0.35
 RTOL = 1e-9

@@ -33,8 +33,8 @@ from reference.sampled import quantise, simulate_sampled  # noqa: E402
 from reference.scipy_model import ReferenceModel, sampling_grid  # noqa: E402
 
 import feeddrive  # noqa: E402
-from feeddrive.control import ConstantSpeed  # noqa: E402
-from feeddrive.simulate import DriveSystem, SolverOptions, sampling, simulate  # noqa: E402
+from feeddrive.engine.simulate import DriveSystem, SolverOptions, sampling, simulate  # noqa: E402
+from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 
 TOL = 1e-7  # of each trace's largest value; the agreement achieved is ≤ 3e-10
 DURATION = 0.05

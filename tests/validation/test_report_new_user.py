@@ -174,7 +174,7 @@ def test_no_figure_of_the_report_hides_data_under_a_legend_or_label(
     import matplotlib.colors as mcolors
     import matplotlib.pyplot as plt
 
-    from feeddrive.figure_layout import clipped_artists, covered_data, overlapping_texts
+    from feeddrive.plots.layout import clipped_artists, covered_data, overlapping_texts
     from feeddrive.reproduce import figures as F
 
     res = reproduced[1]

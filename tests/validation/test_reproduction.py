@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 import feeddrive as fd
 from feeddrive.analysis.critical import critical_speed_from_rest
 from feeddrive.cli import app
-from feeddrive.simulate import DriveSystem
+from feeddrive.engine.simulate import DriveSystem
 
 runner = CliRunner()
 
@@ -49,7 +49,7 @@ def test_creep_cli_prints_critical_speed() -> None:
                                                                    pytest.approx(1.56), "smooth")
     assert top["upper_mm_s"] == pytest.approx(1.55)
     rule = out["verdict_rule"]
-    from feeddrive import protocol
+    from feeddrive.analysis import protocol
 
     assert rule["max_duration"] == protocol.TRIAL_MAX_DURATION
     assert "undecided" in rule["description"]

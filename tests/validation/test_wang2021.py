@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from feeddrive import friction, preset, stiffness
+from feeddrive import friction, preset
+from feeddrive.model.mechanisms import ball_screw_stiffness as stiffness
+from feeddrive.reproduce import paper
 
 PARAMS = preset("wang2021")
 
@@ -123,7 +125,7 @@ def test_screw_zero_slope_speed_is_1_60_mm_s() -> None:
     assert band is not None
     assert band.zero_slope_speed == pytest.approx(root, rel=1e-9)
     assert band.zero_slope_speed / PAPER_CDFS_CRITICAL - 1.0 == pytest.approx(0.029, abs=0.002)
-    assert friction.PAPER_CDFS_CRITICAL_SPEED == PAPER_CDFS_CRITICAL
+    assert paper.CDFS_CRITICAL_SPEED == PAPER_CDFS_CRITICAL
 
 
 @pytest.mark.parametrize("site", sorted(TABLE1))

@@ -18,8 +18,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from ..engine.simulate import DriveSystem
 from ..parameters import DriveParameters
-from ..simulate import DriveSystem
 from .critical import CriticalSpeed, creep_trial, critical_speed_from_rest
 from .metrics import VerdictRule
 
@@ -145,7 +145,7 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     relative_tolerance : float, default 0.02
         Relative width at which each bisection stops [-].
     rule : VerdictRule or None, default None
-        How each trial is judged; None: the protocol's rule (:mod:`feeddrive.protocol`).
+        How each trial is judged; None: the protocol's rule (:mod:`feeddrive.analysis.protocol`).
     speed_range : tuple of float, default (5e-5, 3e-3)
         Speeds the check search may test [m/s].
     resolution : float, default 1e-5

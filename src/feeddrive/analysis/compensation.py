@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from ..control import ConstantSpeed
-from ..linear import stability_band
+from ..engine.simulate import DriveSystem, simulate
+from ..model.reference import ConstantSpeed
 from ..parameters import Compensation, DriveParameters
-from ..simulate import DriveSystem, simulate
 from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
+from .linear import stability_band
 from .metrics import VerdictRule
 
 
@@ -103,7 +103,7 @@ def observer_gain_warning(system: DriveSystem, table_speed: float, nut_speed: fl
     range of k."""
     from dataclasses import replace
 
-    from ..linear import rightmost_pole
+    from .linear import rightmost_pole
 
     comp = system.parameters.controller.compensation
     if comp.mode != "observer" or comp.observer_gain == 0.0 or table_speed == 0.0:

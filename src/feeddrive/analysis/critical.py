@@ -33,15 +33,16 @@ from typing import Any
 
 import numpy as np
 
-from .. import protocol, units
-from ..control import ConstantSpeed, SampledSpeed
-from ..simulate import DriveSystem, Simulation, SolverOptions, simulate
+from .. import units
+from ..engine.simulate import DriveSystem, Simulation, SolverOptions, simulate
+from ..model.reference import ConstantSpeed, _staircase
+from . import protocol
 from .metrics import CREEPING_KINDS, TraceVerdict, VerdictRule, trace_verdict
 
 MM_S = units.MM_PER_S
 
-#: the kind of a trial whose run diverged (stopped early, :data:`feeddrive.simulate.
-#: DIVERGENCE_SPEED_RATIO`): not smooth, not a limit cycle either
+#: the kind of a trial whose run diverged (stopped early, :data:`feeddrive.engine.
+#: simulate.DIVERGENCE_SPEED_RATIO`): not smooth, not a limit cycle either
 UNSTABLE = "unstable"
 #: kinds that are not smooth: the critical speed is the upper edge of the highest such band
 NON_SMOOTH = (*CREEPING_KINDS, UNSTABLE)
@@ -298,7 +299,7 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
                 options: SolverOptions | None = None) -> CreepTrial:
     """Start the table from rest at ``speed`` [m/s] (nut at ``nut_speed``) and run until the
     verdict is decided (:func:`decide`); a longer trial continues the shorter one
-    (:class:`~feeddrive.simulate.Simulation`), so an undecided trial is not repeated."""
+    (:class:`~feeddrive.engine.simulate.Simulation`), so an undecided trial is not repeated."""
     sim = Simulation(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), options)
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
@@ -346,7 +347,7 @@ def critical_speed_from_rest(
 
     Every change of verdict kind found by the coarse scan is bisected to ``resolution`` (see
     the module docstring).  The defaults are the protocol of ``feeddrive creep`` and
-    ``reproduce`` (:mod:`feeddrive.protocol`).
+    ``reproduce`` (:mod:`feeddrive.analysis.protocol`).
 
     Parameters
     ----------
@@ -450,22 +451,6 @@ def search_boundary(creeps: Callable[[float], bool], low: float, high: float,
                          stick_slip_frequency=None) for v, k in kinds.items()]
     status, crit, _ = critical_of(trials)
     return status, crit
-
-
-def _staircase(speeds: np.ndarray, dwell: float | Sequence[float], lead_in: float,
-               nut_speed: float, interval: float = 1e-3) -> tuple[SampledSpeed, np.ndarray]:
-    """Speed staircase: a ramp to speeds[0] held for ``lead_in`` [s], then each speed for its
-    ``dwell`` [s] (one number for all, or one per speed)."""
-    dwells = np.broadcast_to(np.asarray(dwell, dtype=float), (len(speeds),))
-    starts = lead_in + np.concatenate([[0.0], np.cumsum(dwells[:-1])])
-    t_end = starts[-1] + dwells[-1]
-    t = np.arange(int(round(t_end / interval)) + 1) * interval
-    idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(speeds) - 1)
-    vt = speeds[idx].astype(float)
-    ramp = min(0.1, lead_in) if lead_in > 0 else 0.1
-    vt = np.where(t < ramp, speeds[0] * t / ramp, vt)
-    vn = np.where(t < ramp, nut_speed * t / ramp, nut_speed)
-    return SampledSpeed(time=t, table_speed=vt, nut_speed=vn), starts
 
 
 def judge_staircase(time: np.ndarray, speed: np.ndarray, speeds: np.ndarray,

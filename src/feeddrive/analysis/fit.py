@@ -106,7 +106,7 @@ class Experiment:
         return float(self.time[-1] - self.time[0])
 
     def profile(self) -> Any:
-        from ..control import SampledSpeed
+        from ..model.reference import SampledSpeed
 
         return SampledSpeed(time=self.reference_time, table_speed=self.table_speed,
                             nut_speed=self.nut_speed)
@@ -147,7 +147,7 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     sliding).  ``torque_constant`` [N m/A] turns a measured torque into the screw current
     the model has.
     """
-    from ..measured_io import COMMAND_COLUMNS, check_increasing, read_csv_table
+    from ..io.measured import COMMAND_COLUMNS, check_increasing, read_csv_table
 
     table = read_csv_table(path, sep=None)
     src = table.source
@@ -310,9 +310,9 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     measured times (SI).  Module-level and picklable: every executor runs it.  ``task``:
     ``parameters`` (TOML text), ``drive``, ``table_position`` [m], ``reference_time``,
     ``table_speed``, ``nut_speed``, ``time``, ``signals`` (names)."""
-    from ..control import SampledSpeed
+    from ..engine.simulate import DriveSystem, SimulationError, SolverOptions, simulate
+    from ..model.reference import SampledSpeed
     from ..parameters import loads
-    from ..simulate import DriveSystem, SimulationError, SolverOptions, simulate
 
     try:
         params = loads(task["parameters"])
@@ -694,7 +694,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     records.  Ctrl-C stops the search and
     returns the best point so far (``interrupted``; no intervals).  Everything is checked
     before the first simulation: a :class:`FitError` names the problem."""
-    from ..simulate import DriveSystem
+    from ..engine.simulate import DriveSystem
 
     say = progress or (lambda _t: None)
     if not experiments:
@@ -930,8 +930,8 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     white noise of ``current_noise`` × its rms (seeded); ``record_start`` [s]: the record
     keeps only the samples from then on (a record of steady sliding).  For tests, the calibration
     (benchmarks/fit_calibration.py) and docs/fitting.md's worked example."""
-    from ..control import ConstantSpeed
-    from ..simulate import DriveSystem, simulate
+    from ..engine.simulate import DriveSystem, simulate
+    from ..model.reference import ConstantSpeed
 
     system = DriveSystem(params, drive=drive, table_position=table_position)
     result = simulate(system, ConstantSpeed(speed, ramp_time=ramp_time), duration)
@@ -1002,7 +1002,7 @@ def plot_residuals(result: FitResult, path: str | Path) -> Path:
     fig.suptitle(f"feeddrive fit — {result.drive.upper()}, residual check {check}",
                  fontsize=10)
     fig.tight_layout()
-    from ..outputs import save_figure
+    from ..io.outputs import save_figure
 
     p = save_figure(fig, path, dpi=100)
     plt.close(fig)

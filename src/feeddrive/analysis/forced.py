@@ -17,8 +17,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ..control import ConstantSpeed
-from ..simulate import DriveSystem, SolverOptions, simulate
+from ..engine.simulate import DriveSystem, SolverOptions, simulate
+from ..model.reference import ConstantSpeed
 from .metrics import creep_metrics
 
 THRESHOLDS = (0.3, 0.5, 1.0)

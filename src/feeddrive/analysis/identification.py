@@ -33,7 +33,7 @@ from scipy.optimize import least_squares
 
 from .. import units
 from .._jit import kernel
-from ..friction import bristle_rate_kernel
+from ..model.friction.stribeck import bristle_rate_kernel
 from ..parameters import DriveParameters, FrictionBranch, LuGreParameters, ParameterError
 
 __all__ = [

@@ -33,7 +33,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .. import protocol
+from . import protocol
 
 __all__ = [
     "CreepMetrics",
@@ -687,7 +687,7 @@ class VerdictRule:
     max_duration:
         Longest trial (default 240 s): a trial still undecided then answers "undecided".
         The trial length doubles from ``initial_duration`` until decided.  Both defaults are
-        the protocol of ``feeddrive creep`` and ``reproduce`` (:mod:`feeddrive.protocol`).
+        the protocol of ``feeddrive creep`` and ``reproduce`` (:mod:`feeddrive.analysis.protocol`).
     """
 
     smooth_band: float = 0.02

@@ -178,12 +178,12 @@ def predict(fit_file: str | os.PathLike[str], *, samples: int = 100, seed: int =
     """Monte Carlo of the critical speed from rest over the fit's covariance (see the
     module); ``resolution`` and ``speed_range`` [m/s], ``max_duration`` [s] override the
     shared protocol.  Points already in ``store`` are not recomputed."""
-    from .. import protocol
     from ..sweep import SweepStore
     from ..sweep.design import Axis, Point, SweepConfig
     from ..sweep.executors import run_sweep
     from ..sweep.quantities import QuantitySettings
     from ..sweep.store import point_key
+    from . import protocol
 
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
         raise ParameterError("--samples", samples, "expected a whole number ≥ 1")
@@ -276,7 +276,7 @@ def plot_prediction(pred: Prediction, path: str | os.PathLike[str],
     ax2.set_title("convergence", fontsize=9)
     ax2.legend(fontsize=8)
     fig.tight_layout()
-    from ..outputs import save_figure
+    from ..io.outputs import save_figure
 
     p = save_figure(fig, path, dpi=100)
     plt.close(fig)

@@ -53,7 +53,7 @@ ZERO_SCALES: dict[str, float] = {"stiffness.axial_damping": 1e4,
 _STRUCTURAL = ("controller.position_period", "controller.velocity_period",
                "controller.current_period", "controller.encoder_counts",
                "controller.grating_resolution", "stiffness.support_bearing_count")
-#: the linear band's bisection tolerance [m/s] (feeddrive.linear.stability_band)
+#: the linear band's bisection tolerance [m/s] (feeddrive.analysis.linear.stability_band)
 LINEAR_RESOLUTION = 1e-6
 
 
@@ -156,8 +156,8 @@ class SensitivityResult:
 
 def _task(config: Any, params: DriveParameters) -> dict[str, Any]:
     """The sweep task of ``params`` (as :meth:`SweepConfig.task` builds it)."""
+    from ..engine.simulate import DriveSystem
     from ..parameters import dumps
-    from ..simulate import DriveSystem
 
     position = config.table_position * 1e-3
     DriveSystem(params, drive=config.drive, table_position=position)
@@ -387,7 +387,7 @@ def plot_tornado(result: SensitivityResult, path: str | os.PathLike[str],
     ax.set_title(f"{result.parameter_set}, {result.drive.upper()}: {what} by parameter "
                  "(* halving check failed: nonlinear)", fontsize=9)
     fig.tight_layout()
-    from ..outputs import save_figure
+    from ..io.outputs import save_figure
 
     p = save_figure(fig, path, dpi=100)
     plt.close(fig)

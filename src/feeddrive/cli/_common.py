@@ -13,7 +13,7 @@ import typer
 from rich.console import Console
 
 from .. import registry, units
-from ..outputs import shown
+from ..io.outputs import shown
 from ..parameters import DriveParameters, ParameterError, load, preset
 
 app = typer.Typer(
@@ -113,7 +113,7 @@ def user_errors(fn: F) -> F:
                         EXIT_REFUSED) from None
         except Exception as err:
             # SimulationError and sqlite3.Error, checked without importing either at start-up
-            simulate = sys.modules.get("feeddrive.simulate")
+            simulate = sys.modules.get("feeddrive.engine.simulate")
             if simulate is not None and isinstance(err, simulate.SimulationError):
                 raise _fail(f"simulation failed: {err}", EXIT_FAILED) from None
             sqlite3 = sys.modules.get("sqlite3")

@@ -1,7 +1,7 @@
 """`feeddrive analyze`: creep analysis of a measured (or exported) position trace.
 
 File format: docs/measured-data.md.  The logic lives in feeddrive.analysis.trace and
-feeddrive.measured_io.
+feeddrive.io.measured.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import typer
 
 from ..analysis.metrics import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME
-from ..outputs import PLOT_FORMATS, check_output_file
+from ..io.outputs import PLOT_FORMATS, check_output_file
 from ..parameters import ParameterError
 from ._common import MM_PER_S, app, console, print_json, user_errors
 
@@ -68,7 +68,7 @@ def analyze_command(
     """Creep metrics of a position trace (per segment of a step-down run) and the critical
     creeping speed."""
     from ..analysis.trace import analyze_trace
-    from ..measured_io import read_position_trace
+    from ..io.measured import read_position_trace
 
     if smoothing is not None and not (math.isfinite(smoothing) and smoothing > 0):
         raise ParameterError("--smoothing", smoothing, "expected a window > 0 [ms]")
@@ -93,7 +93,7 @@ def analyze_command(
         segment=segments, min_step=min_step * MM_PER_S, min_segment_time=min_segment,
         source=trace.source, lines=trace.lines)
     if plot:
-        from ..analysis.plots import plot_trace
+        from ..plots.analysis import plot_trace
 
         plot_trace(result, plot)
     if as_json:

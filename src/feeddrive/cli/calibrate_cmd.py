@@ -7,8 +7,8 @@ from typing import Any
 
 import typer
 
-from .. import protocol
-from ..outputs import check_output_file
+from ..analysis import protocol
+from ..io.outputs import check_output_file
 from ..parameters import ParameterError
 from . import _units
 from ._common import app, console, err_console, print_json, resolve_parameters, user_errors

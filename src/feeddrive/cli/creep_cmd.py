@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from .. import protocol
+from ..analysis import protocol
 from . import _units
 from ._common import MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
@@ -50,7 +50,7 @@ def creep_command(
         format_bands,
     )
     from ..analysis.metrics import VerdictRule
-    from ..simulate import DriveSystem
+    from ..engine.simulate import DriveSystem
 
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")

@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from ..outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
+from ..io.outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
 from . import _units
 from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
 
@@ -104,7 +104,7 @@ def fit_command(
                        and params.linear_motor is not None else params.screw_motor.torque_constant)
     reference = None
     if profile_file:
-        from ..profiles import from_csv
+        from ..model.reference import from_csv
 
         prof = from_csv(profile_file)
         reference = (prof.time, prof.table_speed)
@@ -198,7 +198,7 @@ def predict_command(
     protocol, run through the sweep machinery (local pool or Dask; resumable store).
     Prints the 5/50/95 % points with their Monte Carlo 95 % intervals."""
     from ..analysis.predict import plot_prediction, predict
-    from ..protocol import SPEED_RANGE
+    from ..analysis.protocol import SPEED_RANGE
 
     if plot:
         check_output_file(plot, option="--plot", inputs=[fit_file, store], force=force,

@@ -10,7 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from .. import units
-from ..outputs import PLOT_FORMATS, check_output_file
+from ..io.outputs import PLOT_FORMATS, check_output_file
 from ..parameters import DriveParameters, LuGreParameters, ParameterError
 from ._common import (
     MM_PER_S,
@@ -45,7 +45,7 @@ def _positive(option: str, value: float, unit: str, allow_zero: bool = False) ->
 def _scan_setup(params: DriveParameters, mass: float | None, stiffness_n_per_um: float | None,
                 damping: float | None) -> tuple[float, float, float]:
     """(m [kg], k [N/m], c [N s/m]) of the scan; defaults come from the parameter set."""
-    from .. import stiffness
+    from ..model.mechanisms import ball_screw_stiffness as stiffness
 
     m = params.table.mass if mass is None else _positive("--mass", mass, "kg")
     if stiffness_n_per_um is None:
@@ -99,7 +99,8 @@ def friction_command(
     """
     import numpy as np
 
-    from .. import friction
+    from ..model.friction import stribeck as friction
+    from ..reproduce.paper import CDFS_CRITICAL_SPEED
 
     if site not in SITES:
         raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
@@ -118,7 +119,7 @@ def friction_command(
         raise ParameterError("--points", points, "expected at least 2")
     speeds = np.geomspace(speed_min, speed_max, points) * MM_PER_S
 
-    from .. import site_indicators
+    from ..model.friction import indicators as site_indicators
 
     law = lugre.law  # every indicator follows the site's own law (issue 24 item 7)
     passivity = site_indicators.has_passivity_criterion(lugre)
@@ -147,7 +148,7 @@ def friction_command(
             "unstable_points": int(np.count_nonzero(~scan.stable)),
         }
 
-    paper_speed = friction.PAPER_CDFS_CRITICAL_SPEED
+    paper_speed = CDFS_CRITICAL_SPEED  # Wang2021 Sect. 5.2, Fig. 6
     zero_pos = branches["positive"]["zero_slope_speed_mm_s"]
     result: dict[str, Any] = {
         "site": site,
@@ -170,7 +171,7 @@ def friction_command(
         },
     }
     if plot:
-        from ..stribeck_plot import save_figure, stribeck_figure
+        from ..plots.stribeck import save_figure, stribeck_figure
 
         fig = stribeck_figure(lugre, title=f"Steady friction, {site} ({params.name}), "
                                            "Wang2021 Table 1")

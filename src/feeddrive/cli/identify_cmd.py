@@ -1,7 +1,7 @@
 """`feeddrive identify static|dynamic|merge`: LuGre friction from measurements.
 
 File formats: docs/measured-data.md.  The logic lives in feeddrive.analysis.identification,
-feeddrive.analysis.fragments and feeddrive.measured_io.
+feeddrive.analysis.fragments and feeddrive.io.measured.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
+from ..io.outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
 from ..parameters import DriveParameters, LuGreParameters, ParameterError, save
 
 if TYPE_CHECKING:
@@ -176,7 +176,7 @@ def static_command(
     """Fit F_c, F_s, v_s and σ2 per direction to constant-speed friction tests."""
     from ..analysis.fragments import friction_fragment
     from ..analysis.identification import fit_static
-    from ..measured_io import read_static_test
+    from ..io.measured import read_static_test
 
     site = _site(site)
     _check_outputs(out, plot, [file, params_file], force)
@@ -198,7 +198,7 @@ def static_command(
             tmp.write_text(friction_fragment(site, static=fit, source=data.source),
                            encoding="utf-8")
     if plot:
-        from ..analysis.plots import plot_static_fit
+        from ..plots.analysis import plot_static_fit
 
         plot_static_fit(fit, plot)
     if as_json:
@@ -246,7 +246,7 @@ def dynamic_command(
     """Fit σ0 and σ1 to a pre-sliding test; says so when σ1 is poorly determined."""
     from ..analysis.fragments import friction_fragment
     from ..analysis.identification import fit_presliding, site_mass
-    from ..measured_io import read_presliding_test
+    from ..io.measured import read_presliding_test
 
     site = _site(site)
     if model not in ("lugre", "linear"):
@@ -273,7 +273,7 @@ def dynamic_command(
             tmp.write_text(friction_fragment(site, dynamic=fit, source=data.source),
                            encoding="utf-8")
     if plot:
-        from ..analysis.plots import plot_dynamic_fit
+        from ..plots.analysis import plot_dynamic_fit
 
         plot_dynamic_fit(fit, plot)
     if as_json:

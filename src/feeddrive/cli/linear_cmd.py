@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import typer
 
-from .. import protocol
-from ..outputs import PLOT_FORMATS, check_output_file
+from ..analysis import protocol
+from ..io.outputs import PLOT_FORMATS, check_output_file
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 from .simulate_cmd import ALL_DRIVES
 
@@ -35,11 +35,11 @@ def loops_command(
     """Poles (frequency, damping ratio; rigid-body poles listed as such) and the velocity-
     and position-loop margins and bandwidths of every motor axis, from the closed loop
     linearised at steady sliding."""
-    from ..linear import loop_analysis
-    from ..linear_plots import PLOT_KINDS
-    from ..outputs import check_output_file
+    from ..analysis.linear import loop_analysis
+    from ..engine.simulate import DriveSystem
+    from ..io.outputs import check_output_file
     from ..parameters import ParameterError
-    from ..simulate import DriveSystem
+    from ..plots.linear import PLOT_KINDS
 
     if plot_kind not in PLOT_KINDS:
         raise ParameterError("--plot-kind", plot_kind, f"expected {', '.join(PLOT_KINDS)}")
@@ -52,7 +52,7 @@ def loops_command(
                            frictionless=not with_friction)
     data = result.as_dict()
     if plot:
-        from ..linear_plots import plot_loops
+        from ..plots.linear import plot_loops
 
         data["plot"] = str(plot_loops(result, plot, plot_kind))
         data["plot_kind"] = plot_kind
@@ -104,8 +104,8 @@ def stability_command(
 ) -> None:
     """Table speeds at which steady sliding is linearly unstable (full model, every friction
     site and bristle state), with the unstable mode's frequency."""
-    from ..linear import stability_band
-    from ..simulate import DriveSystem
+    from ..analysis.linear import stability_band
+    from ..engine.simulate import DriveSystem
 
     if plot:  # before any work
         check_output_file(plot, option="--plot", inputs=[params_file], force=force,
@@ -116,7 +116,7 @@ def stability_command(
                           high=high * MM_PER_S, points=points)
     data = band.as_dict()
     if plot:
-        from ..linear_plots import plot_band
+        from ..plots.linear import plot_band
 
         data["plot"] = str(plot_band(band, plot))
     if as_json:

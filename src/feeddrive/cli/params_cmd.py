@@ -6,7 +6,7 @@ import json
 
 import typer
 
-from ..outputs import shown
+from ..io.outputs import shown
 from ..parameters import dumps, load, preset, to_dict
 from ._common import app, console, user_errors
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..outputs import check_output_dir, shown
+from ..io.outputs import check_output_dir, shown
 from ..parameters import ParameterError
 from ._common import (
     app,

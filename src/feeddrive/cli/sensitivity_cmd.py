@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from ..outputs import check_output_file, shown
+from ..io.outputs import check_output_file, shown
 from . import _units
 from ._common import app, console, err_console, print_json, user_errors
 

@@ -6,7 +6,7 @@ from typing import Any
 
 import typer
 
-from ..outputs import PLOT_FORMATS, check_output_file
+from ..io.outputs import PLOT_FORMATS, check_output_file
 from . import _units
 from ._common import (
     EXIT_UNSTABLE,
@@ -23,9 +23,9 @@ from ._common import (
 #: tests/integration/test_cli_new_user3.py checks this against feeddrive.registry)
 ALL_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
-DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.simulate.SolverOptions.max_steps
-DEFAULT_METHOD = "modal"  # as feeddrive.simulate.SolverOptions.method (a test checks it)
-#: the integrators offered (feeddrive.simulate.METHODS without the fixed-step order checks)
+DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.engine.simulate.SolverOptions.max_steps
+DEFAULT_METHOD = "modal"  # as feeddrive.engine.simulate.SolverOptions.method (a test checks it)
+#: the integrators offered (feeddrive.engine.simulate.METHODS without the fixed-step order checks)
 CLI_METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense")
 
 
@@ -87,17 +87,17 @@ def simulate_command(
     the mean and ripple of table speed after the transient, stick fraction and verdict; for a
     sine the tracking error, reversal overshoot and stick time at reversals; always the
     following error and position deviation [µm]."""
-    from .. import profiles
-    from ..budget import MEMORY_WARNING_BYTES, run_budget
-    from ..control import ConstantSpeed, SampledSpeed, SineSpeed
-    from ..parameters import ParameterError
-    from ..simulate import (
+    from ..engine.budget import MEMORY_WARNING_BYTES, run_budget
+    from ..engine.simulate import (
         DriveSystem,
         SimulationError,
         SimulationInterrupted,
         SolverOptions,
         simulate,
     )
+    from ..model import reference
+    from ..model.reference import ConstantSpeed, SampledSpeed, SineSpeed
+    from ..parameters import ParameterError
 
     if profile not in PROFILES:
         raise ParameterError("--profile", profile, f"expected one of {', '.join(PROFILES)}")
@@ -109,7 +109,7 @@ def simulate_command(
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
     if method not in CLI_METHODS:
         raise ParameterError("--method", method, f"expected one of {', '.join(CLI_METHODS)}")
-    from ..io import check_format
+    from ..io.results import check_format
 
     inputs = [params_file, profile_file]
     if output:
@@ -129,16 +129,16 @@ def simulate_command(
     elif profile == "sine":
         prof = SineSpeed(v_t, v_n, frequency)
     elif profile == "trapezoid":
-        prof = profiles.trapezoid(v_t, duration or 10.0, ramp_time=ramp_time, nut_speed=v_n)
+        prof = reference.trapezoid(v_t, duration or 10.0, ramp_time=ramp_time, nut_speed=v_n)
     elif profile == "stepdown":
         low = _units.speed("--lowest-speed", lowest_speed, positive=True)
         if not lowest_speed < table_speed:  # type: ignore[operator]
             raise ParameterError("--lowest-speed", lowest_speed,
                                  f"expected < --table-speed = {table_speed:g} [mm/s]")
-        prof, _ = profiles.stepdown(v_t, low, step=_units.speed("--step", step, positive=True),
+        prof, _ = reference.stepdown(v_t, low, step=_units.speed("--step", step, positive=True),
                                     dwell=dwell, nut_speed=v_n)
     else:
-        prof = profiles.from_csv(str(profile_file))
+        prof = reference.from_csv(str(profile_file))
     if isinstance(prof, SampledSpeed) and duration is None:
         duration = float(prof.time[-1])
     duration = 10.0 if duration is None else duration
@@ -157,7 +157,7 @@ def simulate_command(
     # .parquet/.csv outputs are written while the run goes (memory bounded); .nc/.mat at the end
     streamed = output is not None and output.lower().endswith((".parquet", ".csv"))
     if not streamed:  # a record that cannot fit is refused before any warning about it
-        from ..budget import check_output_memory
+        from ..engine.budget import check_output_memory
 
         check_output_memory(duration, options.output_interval)
     if budget.memory_bytes > MEMORY_WARNING_BYTES and not streamed:
@@ -206,7 +206,7 @@ def simulate_command(
     elif output:
         summary["output"] = str(result.save(output))
     if plot:
-        from ..plotting import plot_result
+        from ..plots.result import plot_result
 
         summary["plot"] = str(plot_result(result, plot, title=run_header(
             drive, profile, profile_file, table_speed, frequency, position, duration,

@@ -9,13 +9,10 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from .. import stiffness
 from ..parameters import ParameterError
 from . import _units
 from ._common import MM, N_PER_UM, app, console, print_json, resolve_parameters, user_errors
 
-_TABLE3 = dict(zip(stiffness.TABLE3_POSITIONS, stiffness.TABLE3_SCREW_AXIAL_STIFFNESS,
-                   strict=True))
 _READINGS_SHOWN = 5
 
 
@@ -44,7 +41,11 @@ def parse_positions_mm(text: str, screw_length: float) -> list[float]:
 
 
 def _table3_value(position: float) -> float | None:
-    for a, k in _TABLE3.items():
+    # imported here: the model package compiles numba kernels, `feeddrive --help` must not
+    from ..model.mechanisms import ball_screw_stiffness as stiffness
+
+    for a, k in zip(stiffness.TABLE3_POSITIONS, stiffness.TABLE3_SCREW_AXIAL_STIFFNESS,
+                    strict=True):
         if math.isclose(a, position, rel_tol=0.0, abs_tol=1e-9):
             return k
     return None
@@ -67,6 +68,8 @@ def stiffness_command(
     Also compares K_eq at mid-screw with the 2.16e7 N/m (21.6 N/µm) of Wang2021 Sect. 5.2 and
     lists the readings of Eqs. (2)–(5) that come closest to it.
     """
+    from ..model.mechanisms import ball_screw_stiffness as stiffness
+
     params = resolve_parameters(preset_name, params_file)
     a = parse_positions_mm(positions, params.screw.length)
     chain = stiffness.stiffness_chain(params, a)

@@ -9,7 +9,7 @@ from typing import Any
 
 import typer
 
-from ..outputs import PLOT_FORMATS, check_output_file, shown
+from ..io.outputs import PLOT_FORMATS, check_output_file, shown
 from ._common import app, console, err_console, interrupted, print_json, user_errors
 
 _PLOT_FORMATS = (".png", ".pdf", ".svg")
@@ -19,7 +19,7 @@ _EXPORT_FORMATS = (".csv", ".parquet", ".nc")
 def _check_outputs(plot: str | None, output: str | None, inputs: list[str], force: bool
                    ) -> None:
     """Every output refused before any work: format, folder, existing file, writability."""
-    from ..io import PARQUET_HINT
+    from ..io.results import PARQUET_HINT
 
     if plot is not None:
         if Path(plot).suffix.lower() not in _PLOT_FORMATS:

@@ -8,9 +8,9 @@ plain JSON-ready dicts in the page's units (mm/s, mm, µm, N, Hz); the work is S
   points;
 * :func:`run_linear` — the linear stability band over table speed and the loop poles at the
   operating point (friction linearised there, rigid-body poles marked by
-  :func:`feeddrive.linear.classify_poles`), loop margins and the loops' Bode curves;
+  :func:`feeddrive.analysis.linear.classify_poles`), loop margins and the loops' Bode curves;
 * :func:`run_critical` — the critical-speed search from rest, the protocol `feeddrive creep`
-  uses (:mod:`feeddrive.protocol`), with progress and cancellation at every trial.
+  uses (:mod:`feeddrive.analysis.protocol`), with progress and cancellation at every trial.
 """
 
 from __future__ import annotations
@@ -99,7 +99,7 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
                     ) -> dict[str, Any]:
     """Steady friction force [N] against sliding speed [mm/s] at each site the drive uses,
     the speed bands where it falls (negative damping), and the sites' operating speeds."""
-    from ..friction import negative_slope_band, steady_friction
+    from ..model.friction.stribeck import negative_slope_band, steady_friction
     from ..parameters import LuGreParameters
 
     params = checked.params
@@ -139,8 +139,8 @@ def run_simulation(checked: Checked, report: Report,
     simulated time reached, reported after each chunk of the solver (the compiled solver
     releases the GIL, so the server answers polls meanwhile); ``keep(result)`` receives the
     full Result (the explorer keeps it for the signal picker and the downloads)."""
-    from ..control import ConstantSpeed
-    from ..simulate import Simulation, SimulationInterrupted
+    from ..engine.simulate import Simulation, SimulationInterrupted
+    from ..model.reference import ConstantSpeed
 
     what = f"simulating {checked.duration:g} s of the {checked.drive.upper()}"
     report(0.0, checked.duration, what)  # raises if the page cancelled before the start
@@ -244,7 +244,7 @@ BANDS = _BandCache()
 
 def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
     """Linear stability band over table speed and loop poles at the operating point."""
-    from ..linear import loop_analysis, stability_band
+    from ..analysis.linear import loop_analysis, stability_band
 
     system = checked.system
     key = (checked.params, checked.drive, system.table_position, checked.nut_speed)
@@ -277,7 +277,7 @@ def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
 
 def estimated_trials() -> int:
     """Trials of a search from rest on the protocol's grid: the scan, then the bisection."""
-    from .. import protocol
+    from ..analysis import protocol
 
     lo, hi = protocol.SPEED_RANGE
     scan = int(math.floor((hi - lo) / protocol.COARSE_STEP + 1e-9)) + 1
@@ -287,7 +287,7 @@ def estimated_trials() -> int:
 def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
     """Critical speed from rest, as `feeddrive creep` searches it (its grid, resolution and
     verdict rule), reporting every trial."""
-    from .. import protocol
+    from ..analysis import protocol
     from ..analysis.critical import critical_speed_from_rest, format_bands
 
     total = estimated_trials()

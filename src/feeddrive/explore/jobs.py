@@ -1,7 +1,7 @@
 """Background work for the page: each run is a job in its own thread, with progress the page
 polls and a cancel flag the work checks at every progress report (a critical-speed search
 stops after the trial it is in; a single simulation is stopped inside the compiled solver,
-after the step it is in: :meth:`feeddrive.simulate.Simulation.request_stop`)."""
+after the step it is in: :meth:`feeddrive.engine.simulate.Simulation.request_stop`)."""
 
 from __future__ import annotations
 

@@ -79,7 +79,7 @@ def signal(result: Any, name: str, max_points: int = MAX_POINTS) -> dict[str, An
 def export(result: Any, fmt: str) -> bytes:
     """The run's every sample as ``fmt`` ("csv": engineering units in the column names, as
     ``feeddrive simulate --out run.csv`` writes; "mat": SI with a ``units`` struct)."""
-    from ..io import save_result
+    from ..io.results import save_result
 
     if fmt not in ("csv", "mat"):
         raise ValueError(f"format = {fmt!r}: expected csv or mat")
@@ -95,7 +95,7 @@ def measured_trace(text: str, name: str = "measured.csv") -> dict[str, Any]:
     page overlays it: time [s], position [mm], speed [mm/s] (its own speed column when the
     file has ``table_speed``, else the position differentiated).  A refused file raises
     ValueError with the file's line named."""
-    from ..measured_io import read_position_trace
+    from ..io.measured import read_position_trace
 
     if len(text.encode("utf-8")) > MAX_MEASURED:
         raise ValueError(f"{name}: larger than {MAX_MEASURED // 1024 // 1024} MB")

@@ -299,8 +299,8 @@ def base_parameters(settings: Mapping[str, str]) -> DriveParameters:
 
 def check(settings: Mapping[str, Any] | None) -> Checked:
     """Check every field; never raises for a bad value (each lands in ``errors``)."""
+    from ..engine.simulate import DriveSystem
     from ..model import drive_names, mechanism
-    from ..simulate import DriveSystem
 
     s = normalise(settings)
     out = Checked(settings=s)

@@ -44,8 +44,8 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
     """Refuse a request that cannot succeed, before any work: unknown drive, FMI version or
     kind, an output that is not a writable new ``.fmu`` file (an existing one only with
     ``force``; never one of ``inputs``), no C compiler.  One-line errors name what to change."""
+    from ..io.outputs import check_output_file
     from ..model.mechanisms import drive_names
-    from ..outputs import check_output_file
     from .build import CompilerNotFound, find_compiler
 
     if drive not in drive_names():

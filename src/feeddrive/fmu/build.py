@@ -167,7 +167,7 @@ def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
     plat = platform_folder(fmi)
     with tempfile.TemporaryDirectory(prefix="feeddrive-fmu-") as tmp:
         lib = compile_library(source, fmi, Path(tmp), identifier)
-        from ..outputs import atomic_path
+        from ..io.outputs import atomic_path
 
         with atomic_path(out) as partial, \
                 zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:

@@ -67,7 +67,7 @@ S_INDEX = {name: i for i, (name, *_rest) in enumerate(SETTINGS)}
 _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
     "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
     "speed_mode"}
-# "inputs.": the linearisation's zero-valued reference and load slots (feeddrive.linear);
+# "inputs.": the linearisation's zero-valued reference and load slots (feeddrive.analysis.linear);
 # the FMU's own inputs carry those signals
 _HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
            "disturbances.load_offset", "disturbances.load_points", "inputs.")

@@ -1,6 +1,6 @@
 """The model an FMU carries: the drive assembled with its reference and load read from inputs.
 
-The reference is :class:`InputReference` (``feeddrive.control.REF_INPUT``): the reference
+The reference is :class:`InputReference` (``feeddrive.model.reference.REF_INPUT``): the reference
 kernel reads the commanded positions and speeds from a 4 × 2 block of the data table ``T``
 that the FMU writes from its inputs at each communication point (co-simulation) or each
 input change (model exchange).  The table load force is the parameter slot
@@ -17,10 +17,10 @@ from types import ModuleType
 
 import numpy as np
 
-from ..control import REF_INPUT
 from ..model.assemble import Model, assemble
 from ..model.codegen import compile_module
 from ..model.disturbances import LoadProfile
+from ..model.reference import REF_INPUT
 from ..parameters import DriveParameters, ParameterError
 from . import solver
 
@@ -66,7 +66,7 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
           nut_hold: str = "locked", table_speed: float = 0.0,
           nut_speed: float = 0.0) -> FmuModel:
     """Assemble ``drive`` with its reference and load force read from the FMU's inputs."""
-    from ..simulate import DriveSystem
+    from ..engine.simulate import DriveSystem
 
     DriveSystem(parameters, drive, table_position, nut_hold)  # the same checks as simulate
     profile = InputReference(table_speed, nut_speed)
@@ -102,7 +102,7 @@ class NumbaCoSimulation:
                  speed_tolerance: float = 1e-8, current_tolerance: float = 1e-6,
                  h_max: float = 1e-3, integrate_speed_reference: bool = True,
                  max_steps: int = 10_000_000, P: np.ndarray | None = None) -> None:
-        from ..simulate import sampling
+        from ..engine.simulate import sampling
 
         self.fm = fm
         m = fm.model

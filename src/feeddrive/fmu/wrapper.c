@@ -88,7 +88,7 @@ static void fmu_defaults(Fmu *m) {
     m->dirty = 1;
 }
 
-/* the reference block of T (feeddrive.control.REF_INPUT) and the load slot, from the inputs;
+/* the reference block of T (feeddrive.model.reference.REF_INPUT) and the load slot, from the inputs;
    the commanded positions are the inputs or the integrals of the speed references */
 static void fmu_write_inputs(Fmu *m, int with_rates) {
     int integrate = m->s[S_INTEGRATE] > 0.5;

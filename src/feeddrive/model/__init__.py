@@ -4,6 +4,7 @@
 * :mod:`~feeddrive.model.friction` — friction laws (LuGre, static Stribeck, Dahl, none);
 * :mod:`~feeddrive.model.loops` — cascade loops per motor axis, continuous or sampled;
 * :mod:`~feeddrive.model.disturbances` — load force, torque ripple, lead error;
+* :mod:`~feeddrive.model.reference` — reference profiles (what the table is commanded to do);
 * :mod:`~feeddrive.model.assemble` — parts → :class:`Model` (names, packed vectors, kernels);
 * :mod:`~feeddrive.model.codegen` — the builder and the per-model numba-cached module.
 

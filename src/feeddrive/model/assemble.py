@@ -17,16 +17,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..control import PROFILE_PARAMS, REFERENCE_INPUTS, reference_with_inputs
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
 from .compensation import emit_compensation
 from .disturbances import LoadProfile, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
+from .reference import PROFILE_PARAMS, REFERENCE_INPUTS, reference_with_inputs
 
 if TYPE_CHECKING:
-    from ..control import Profile
+    from .reference import Profile
 
 
 @dataclass(frozen=True)
@@ -109,7 +109,7 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     block[5] = b.table(table)
     block[6] = table.shape[1]
     o = b.params("profile", block)
-    # the linearisation's reference inputs (feeddrive.linear), zero in a simulation
+    # the linearisation's reference inputs (feeddrive.analysis.linear), zero in a simulation
     oi = b.param(f"inputs.{REFERENCE_INPUTS[0]}", 0.0)
     for name in REFERENCE_INPUTS[1:]:
         b.param(f"inputs.{name}", 0.0)
@@ -182,7 +182,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     dist = parameters.disturbances
     load_code = emit_load(b, dist.load_force, dist.load_start, load)
     load_aux = load_code is not None
-    # the linearisation's load-force input [N] (feeddrive.linear), zero in a simulation
+    # the linearisation's load-force input [N] (feeddrive.analysis.linear), zero in a simulation
     o_load = b.param("inputs.load_force", 0.0)
     load_code = f"P[{o_load}]" if load_code is None else f"({load_code} + P[{o_load}])"
     ripple: dict[str, str] = {}

@@ -27,7 +27,7 @@ from .codegen import Builder
 
 # parameter block of one axis (offsets from the axis' first slot)
 # ``inj_speed`` [rad/s] and ``inj_current`` [A] are zero inputs added to the continuous speed
-# and current commands: loop-breaking points for the linearisation (feeddrive.linear).
+# and current commands: loop-breaking points for the linearisation (feeddrive.analysis.linear).
 AXIS_PARAMS = ("kpp", "kvp", "kvi", "kip", "kii", "kv", "kv_place", "v_basis", "v_feedback",
                "ff", "i_max", "u_max", "enc_q", "grat_q", "speed_mode", "H", "inj_speed",
                "inj_current")

@@ -230,7 +230,7 @@ def save(params: DriveParameters, path: str | Path) -> None:
     path : str or pathlib.Path
         The file to write.
     """
-    from ..outputs import atomic_path
+    from ..io.outputs import atomic_path
 
     with atomic_path(path) as tmp:  # nothing partial under the name (a full disk)
         tmp.write_text(dumps(params), encoding="utf-8")

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness
 from ..parameters.components import (
     BallScrew,
     Controller,
@@ -29,7 +30,6 @@ from ..parameters.components import (
     StiffnessModel,
     Table,
 )
-from ..stiffness import equivalent_stiffness
 
 CITATION = (
     "Z. Wang, X. Feng, H. Yang, H. Jin, 'Research on low-speed characteristics of differential "

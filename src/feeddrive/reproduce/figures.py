@@ -51,7 +51,7 @@ CAPTIONS: dict[str, tuple[str, str]] = {
 
 
 def _save(fig: Any, path: Path) -> Path:
-    from ..outputs import atomic_path
+    from ..io.outputs import atomic_path
 
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, bbox_inches="tight")

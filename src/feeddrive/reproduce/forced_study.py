@@ -9,7 +9,7 @@ from typing import Any
 
 from .. import parameters
 from ..analysis.forced import THRESHOLDS, threshold_critical_speeds
-from ..simulate import DriveSystem
+from ..engine.simulate import DriveSystem
 from .studies import MID, PAPER
 
 PRESET = "wang2021-ripple"

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from .. import protocol
+from ..analysis import protocol
 from ..analysis.critical import format_critical_speed
-from ..linear import loop_analysis, stability_band
-from ..paper import PAPER
+from ..analysis.linear import loop_analysis, stability_band
+from ..engine.simulate import DriveSystem
 from ..parameters import DriveParameters
-from ..simulate import DriveSystem
+from .paper import PAPER
 
 MID = 0.4  # [m] mid-screw, Wang2021 Table 3
 

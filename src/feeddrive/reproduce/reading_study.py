@@ -12,8 +12,8 @@ from functools import lru_cache
 from typing import Any
 
 from .. import parameters
+from ..engine.simulate import DriveSystem, SimulationError
 from ..parameters import DriveParameters
-from ..simulate import DriveSystem, SimulationError
 from .studies import MID, PAPER, StudySettings, critical_speed
 
 LIT = "wang2021-literal"
@@ -28,8 +28,8 @@ SERVO_DAMPING = 0.3
 def dominant_mode(params: DriveParameters, drive: str = "cdfs",
                   position: float = MID) -> tuple[float, float]:
     """(frequency [Hz], damping ratio) of the least-damped oscillatory mode of the drive with
-    friction off, continuous loops, at rest (:func:`feeddrive.linear.loop_analysis`)."""
-    from ..linear import loop_analysis
+    friction off, continuous loops, at rest (:func:`feeddrive.analysis.linear.loop_analysis`)."""
+    from ..analysis.linear import loop_analysis
 
     d = loop_analysis(DriveSystem(params, drive, position), 0.0, frictionless=True).dominant()
     return d.frequency_hz, d.damping_ratio

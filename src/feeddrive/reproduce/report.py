@@ -10,13 +10,14 @@ from typing import Any
 import numpy as np
 from markdown_it import MarkdownIt
 
-from .. import __version__, protocol
+from .. import __version__
+from ..analysis import protocol
 from ..analysis.critical import format_bands, format_critical_speed
-from ..friction import negative_slope_band, passivity_margin, sliding_stability
-from ..outputs import atomic_path
+from ..io.outputs import atomic_path
+from ..model.friction.stribeck import negative_slope_band, passivity_margin, sliding_stability
+from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness, mid_screw_readings
 from ..parameters import DriveParameters, LuGreParameters
 from ..presets import wang2021
-from ..stiffness import equivalent_stiffness, mid_screw_readings
 from ..units import SITES
 from . import figures as figures_mod
 from .beyond_section import (

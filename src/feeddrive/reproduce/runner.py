@@ -1,9 +1,10 @@
 """`feeddrive reproduce`: run every study, write figures, tables and the report.
 
-Each finished study is stored at once under ``DIR/data/`` (:class:`feeddrive.store.ResultStore`:
-atomic, checksummed entries keyed by the package version, the kernel hash, the study code
-and the parameter set and settings), so an interrupted run loses nothing and a rerun skips
-what is done; an entry that is corrupt or from other code is recomputed with a notice.
+Each finished study is stored at once under ``DIR/data/``
+(:class:`feeddrive.io.json_store.ResultStore`: atomic, checksummed entries keyed by the
+package version, the kernel hash, the study code and the parameter set and settings), so an
+interrupted run loses nothing and a rerun skips what is done; an entry that is corrupt or
+from other code is recomputed with a notice.
 Critical-speed searches run in a process pool (2 workers by default).
 """
 
@@ -18,10 +19,10 @@ from pathlib import Path
 from typing import Any
 
 from .._jit import KERNEL_HASH
-from ..control import ConstantSpeed
+from ..engine.simulate import DriveSystem, simulate
+from ..io.json_store import ResultStore, code_hash, store_key
+from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters, dumps
-from ..simulate import DriveSystem, simulate
-from ..store import ResultStore, code_hash, store_key
 from . import figures, forced_study, reading_study, report, sensitivity_section, studies
 from .studies import MID, PAPER, StudySettings, write_csv
 
@@ -31,8 +32,9 @@ _STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "for
                   *(_HERE.parent / "analysis" / f"{name}.py"
                     for name in ("critical", "metrics", "forced", "compensation",
                                  "sensitivity")),
-                  _HERE.parent / "simulate.py", _HERE.parent / "result.py",
-                  _HERE.parent / "stiffness.py", _HERE.parent / "protocol.py")
+                  _HERE.parent / "engine" / "simulate.py", _HERE.parent / "engine" / "result.py",
+                  _HERE.parent / "model" / "mechanisms" / "ball_screw_stiffness.py",
+                  _HERE.parent / "analysis" / "protocol.py")
 
 
 def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import protocol
+from ..analysis import protocol
 from ..analysis.critical import (
     CreepTrial,
     critical_speed_from_rest,
@@ -20,13 +20,13 @@ from ..analysis.critical import (
     decide,
 )
 from ..analysis.metrics import VerdictRule, reversal_overshoot
-from ..control import ConstantSpeed, SineSpeed
-from ..paper import PAPER
+from ..engine.result import Result
+from ..engine.simulate import DriveSystem, Simulation, simulate
+from ..model.mechanisms.ball_screw_stiffness import stiffness_chain
+from ..model.reference import ConstantSpeed, SineSpeed
 from ..parameters import DriveParameters
-from ..result import Result
-from ..simulate import DriveSystem, Simulation, simulate
-from ..stiffness import stiffness_chain
 from ..units import MM_PER_S
+from .paper import PAPER
 
 MM_S = MM_PER_S
 MID = 0.4  # [m] mid-screw, Wang2021 Table 3 measurement point 3
@@ -34,7 +34,7 @@ MID = 0.4  # [m] mid-screw, Wang2021 Table 3 measurement point 3
 
 
 # CSV tables: 10 significant digits, so 1e-6 × 220.9e6 is written 220.9 and not
-# 220.89999999999998 (issue 12 item 13); as feeddrive.io writes signals
+# 220.89999999999998 (issue 12 item 13); as feeddrive.io.results writes signals
 CSV_FLOAT = "%.10g"
 
 
@@ -42,7 +42,7 @@ def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
     """A table of rows as CSV, floats without binary noise."""
     import pandas as pd
 
-    from ..outputs import atomic_path
+    from ..io.outputs import atomic_path
 
     with atomic_path(path) as tmp:
         pd.DataFrame(rows).to_csv(tmp, index=False, float_format=CSV_FLOAT)

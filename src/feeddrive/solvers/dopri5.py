@@ -45,7 +45,7 @@ STATUS_MAX_STEPS = 1
 STATUS_STEP_UNDERFLOW = 2
 STATUS_NON_FINITE = 3
 STATUS_STOPPED = 4  # another thread asked the running call to stop (new_memory's stop slot)
-# a state beyond its divergence bound (feeddrive.simulate.divergence_bounds): the run stops
+# a state beyond its divergence bound (feeddrive.engine.simulate.divergence_bounds): the run stops
 # early, the state there recorded as its last sample; not an error, the verdict is "unstable"
 STATUS_DIVERGED = 5
 STATUS_MESSAGES = {
@@ -107,7 +107,7 @@ def new_memory(n_states: int, h_init: float) -> np.ndarray:
     call ends after its current step with STATUS_STOPPED) and the *live time* (the time [s]
     of the last accepted step, written as the solver goes): another thread reads a long
     call's progress and stops it while it runs (the kernels release the GIL;
-    feeddrive.simulate.Simulation.live_time and request_stop)."""
+    feeddrive.engine.simulate.Simulation.live_time and request_stop)."""
     memory = np.zeros(4 + n_states)
     memory[:2] = (h_init, 1e-4)
     return memory

@@ -144,7 +144,7 @@ def new_memory(n_states: int) -> np.ndarray:
     Its last two slots are a *stop request* (non-zero: the call ends after its current step
     with STATUS_STOPPED) and the *live time* (the time [s] of the last accepted step, written
     as the solver goes): another thread reads a long call's progress and stops it while it
-    runs (the kernels release the GIL; feeddrive.simulate.Simulation.live_time and
+    runs (the kernels release the GIL; feeddrive.engine.simulate.Simulation.live_time and
     request_stop)."""
     return np.zeros(MEMORY_SCALARS + n_states + n_states * n_states + 2)
 

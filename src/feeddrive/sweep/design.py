@@ -236,10 +236,10 @@ class SweepConfig:
                 continue
             params = _apply(params, axis, value)
         for axis, value in deferred:
-            from ..stiffness import equivalent_stiffness
+            from ..model.mechanisms.ball_screw_stiffness import equivalent_stiffness
 
             params = _apply_value(params, axis, value * equivalent_stiffness(params, position))
-        from ..simulate import DriveSystem
+        from ..engine.simulate import DriveSystem
 
         try:
             DriveSystem(params, drive=drive, table_position=position)

@@ -21,8 +21,8 @@ import pandas as pd
 import xarray as xr
 
 from .. import units
-from ..io import arrow_table, cf_attributes, write_netcdf
-from ..outputs import atomic_path
+from ..io.outputs import atomic_path
+from ..io.results import arrow_table, cf_attributes, write_netcdf
 from .design import SPECIAL_AXES
 from .quantities import UNITS
 from .store import SweepStore

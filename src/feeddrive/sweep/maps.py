@@ -23,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from .. import units
-from ..outputs import atomic_path
+from ..io.outputs import atomic_path
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402

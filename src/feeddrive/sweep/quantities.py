@@ -4,13 +4,13 @@ Quantities (``[quantity] kind``):
 
 * ``critical-speed``: the critical creeping speed and bands (:mod:`feeddrive.analysis.critical`),
   ``start = "rest"`` (scan + bisection) or ``"running"`` (the paper's step-down), on the
-  protocol of :mod:`feeddrive.protocol` unless overridden;
+  protocol of :mod:`feeddrive.analysis.protocol` unless overridden;
 * ``creep-trial``: one trial from rest at ``table_speed``: verdict kind, ripple ratio, stick
   fraction, frequency (:func:`~feeddrive.analysis.critical.creep_trial`);
 * ``linear-band``: the speeds at which steady sliding is linearly unstable
-  (:func:`feeddrive.linear.stability_band`);
+  (:func:`feeddrive.analysis.linear.stability_band`);
 * ``loop-margins``: least-damped mode and every loop's margins
-  (:func:`feeddrive.linear.loop_analysis`) at ``table_speed``.
+  (:func:`feeddrive.analysis.linear.loop_analysis`) at ``table_speed``.
 
 ``linear = true`` (default for ``critical-speed`` and ``creep-trial``) adds the linear
 prediction at each point, which maps draw over the simulated boundary: the linear band's
@@ -30,7 +30,8 @@ import time
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
-from .. import protocol, units
+from .. import units
+from ..analysis import protocol
 from ..parameters import ParameterError
 
 QUANTITIES = ("critical-speed", "creep-trial", "linear-band", "loop-margins")
@@ -131,7 +132,7 @@ class QuantitySettings:
 
 
 def _linear_band(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
-    from ..linear import stability_band
+    from ..analysis.linear import stability_band
 
     band = stability_band(system, nut_speed, low=q["low"], high=q["high"],
                           points=q["linear_points"])
@@ -145,8 +146,8 @@ def _linear_band(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, 
 
 def _growth_rate(system: Any, speed: float, nut_speed: float) -> tuple[float, float]:
     """Real part [1/s] and frequency [Hz] of the rightmost pole at steady sliding
-    (:func:`feeddrive.linear.rightmost_pole`)."""
-    from ..linear import rightmost_pole
+    (:func:`feeddrive.analysis.linear.rightmost_pole`)."""
+    from ..analysis.linear import rightmost_pole
 
     return rightmost_pole(system, speed, nut_speed)
 
@@ -159,7 +160,7 @@ def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
     if kind == "linear-band":
         return _linear_band(system, nut_speed, q)
     if kind == "loop-margins":
-        from ..linear import loop_analysis
+        from ..analysis.linear import loop_analysis
 
         la = loop_analysis(system, q["table_speed"], nut_speed).as_dict()
         values: dict[str, Any] = {
@@ -216,8 +217,8 @@ def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
 def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     """Run one point (see the module).  Module-level and picklable: the function every
     executor runs, in a local process or on a Dask worker."""
+    from ..engine.simulate import DriveSystem, SimulationError
     from ..parameters import loads
-    from ..simulate import DriveSystem, SimulationError
 
     t0 = time.perf_counter()
     try:
@@ -235,9 +236,9 @@ def warm(task: dict[str, Any]) -> None:
     """Compile (or load from numba's disk cache) the kernels ``task``'s quantity uses, with
     a 20-ms run and, for linear quantities, one linearisation: cheap, and it leaves the
     compiled modules on disk for every worker."""
-    from ..control import ConstantSpeed
+    from ..engine.simulate import DriveSystem, simulate
+    from ..model.reference import ConstantSpeed
     from ..parameters import loads
-    from ..simulate import DriveSystem, simulate
 
     params = loads(task["parameters"])
     system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
@@ -246,7 +247,7 @@ def warm(task: dict[str, Any]) -> None:
     if q["kind"] in ("critical-speed", "creep-trial"):
         simulate(system, ConstantSpeed(speed, task["nut_speed"], ramp_time=0.01), 0.02)
     if q["kind"] in ("linear-band", "loop-margins") or q.get("linear"):
-        from ..linear import linearize
+        from ..analysis.linear import linearize
 
         linearize(system, speed, task["nut_speed"])
 

@@ -1,8 +1,8 @@
 """The sweep results store: one SQLite file (stdlib ``sqlite3``, WAL journal).
 
-It extends :mod:`feeddrive.store` (the reproduce cache) rather than replacing it: the same
-key — :func:`feeddrive.store.store_key` of the package version, the kernel hash
-(:data:`feeddrive._jit.KERNEL_HASH`), a :func:`~feeddrive.store.code_hash` of the computing
+It extends :mod:`feeddrive.io.json_store` (the reproduce cache) rather than replacing it: the same
+key — :func:`feeddrive.io.json_store.store_key` of the package version, the kernel hash
+(:data:`feeddrive._jit.KERNEL_HASH`), a :func:`~feeddrive.io.json_store.code_hash` of the computing
 code and the point's full inputs — and the same entry rule: each value is stored with the
 SHA-256 of its payload and checked on every read; an entry that fails the check is reported
 with a one-line notice and recomputed.  Only the container differs: reproduce keeps a dozen
@@ -46,8 +46,8 @@ from typing import Any, TypeVar
 
 from .. import __version__
 from .._jit import KERNEL_HASH
-from ..outputs import OutputError, shown
-from ..store import FORMAT, code_hash, store_key
+from ..io.json_store import FORMAT, code_hash, store_key
+from ..io.outputs import OutputError, shown
 
 __all__ = ["CLAIM_STALE", "StoreError", "StoreFailure", "SweepStore", "point_key"]
 
@@ -59,9 +59,10 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 
 _HERE = Path(__file__).resolve().parent.parent
 # the code that computes a point beyond the compiled kernels (KERNEL_HASH covers those)
-_SOURCES = ("sweep/quantities.py", "analysis/critical.py", "analysis/metrics.py", "linear.py",
-            "simulate.py", "control.py", "protocol.py", "parameters/components.py",
-            "parameters/toml_io.py", "stiffness.py")
+_SOURCES = ("sweep/quantities.py", "analysis/critical.py", "analysis/metrics.py",
+            "analysis/linear.py", "engine/simulate.py", "model/reference.py",
+            "analysis/protocol.py", "parameters/components.py", "parameters/toml_io.py",
+            "model/mechanisms/ball_screw_stiffness.py")
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (name TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -122,7 +123,7 @@ def _code_hash() -> str:
 
 
 def point_key(task: Mapping[str, Any]) -> str:
-    """The key of one point: :func:`feeddrive.store.store_key` of the version, kernel hash,
+    """The key of one point: :func:`feeddrive.io.json_store.store_key` of the version, kernel hash,
     code hash and the task (full parameter set as TOML, drive, position, nut speed,
     quantity settings)."""
     return store_key({"version": __version__, "kernel": KERNEL_HASH, "code": _code_hash(),

@@ -25,9 +25,9 @@ import numpy as np
 
 from ..._jit import kernel
 from ...parameters import DriveParameters, ParameterError
-from ...stiffness import axial_stiffness, equivalent_stiffness, torsional_stiffness
 from ..codegen import Builder
 from ..loops import ENC_Q, GRAT_Q, H_AX, V_FEEDBACK, Axis, Channel, axis_parameters
+from .ball_screw_stiffness import axial_stiffness, equivalent_stiffness, torsional_stiffness
 from .base import Body, Mechanics, Mechanism, Site, register_mechanism
 
 # stiffness block: fixed K_eq (0 = from the chain), c0, EA, length, support, x0

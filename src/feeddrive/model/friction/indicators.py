@@ -1,9 +1,9 @@
 """Friction indicators of one site under the site's own law (``[friction.SITE] law``).
 
-:mod:`feeddrive.friction` gives the LuGre forms (Wang2021 Eq. 11): the analytic negative-slope
-band, the LuGre passivity margin and the Åström–Canudas de Wit cubic of a mass sliding on the
-site.  A site may use another law (Dahl, static Stribeck, none, or a registered one); these
-functions read the law's own steady curve and linearisation instead, so that
+:mod:`feeddrive.model.friction.stribeck` gives the LuGre forms (Wang2021 Eq. 11): the
+analytic negative-slope band, the LuGre passivity margin and the Åström–Canudas de Wit cubic
+of a mass sliding on the site.  A site may use another law (Dahl, static Stribeck, none, or a
+registered one); these functions read the law's own steady curve and linearisation instead, so that
 ``feeddrive friction --site`` does not report LuGre numbers for a Dahl or frictionless site
 (issue 24 item 7).
 """
@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .friction import NegativeSlopeBand, SlidingStability, negative_slope_band, sliding_stability
-from .model.friction import friction_law
-from .parameters import LuGreParameters
+from ...parameters import LuGreParameters
+from . import friction_law
+from .stribeck import NegativeSlopeBand, SlidingStability, negative_slope_band, sliding_stability
 
 #: laws whose steady curve is the Stribeck curve of Wang2021 Eq. (11) (the static law's tanh
 #: smoothing only acts below its smoothing velocity, 1 µm/s by default)
@@ -64,8 +64,8 @@ def site_sliding_stability(speed: object, site: LuGreParameters, mass: float,
                            analytic: bool = True) -> SlidingStability:
     """Linear stability of a mass ``mass`` [kg] pulled at each ``speed`` [m/s] through a
     spring ``stiffness`` [N/m] and a damper ``damping`` [N s/m] while sliding on ``site``.
-    LuGre: the cubic of :func:`feeddrive.friction.sliding_stability`; any other law: the
-    eigenvalues of the same oscillator with the law's own linearisation
+    LuGre: the cubic of :func:`feeddrive.model.friction.stribeck.sliding_stability`; any
+    other law: the eigenvalues of the same oscillator with the law's own linearisation
     (:meth:`FrictionLaw.linearise`), δẋ = δu, m δu̇ = −k δx − c δu − C δz − D δu,
     δż = A δz + B δu (``analytic=False`` takes this path for LuGre too: the cross-check)."""
     if site.law == "lugre" and analytic:

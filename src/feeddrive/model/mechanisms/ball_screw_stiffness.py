@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .parameters import BallScrew, Coupling, DriveParameters, ParameterError, StiffnessModel
+from ...parameters import BallScrew, Coupling, DriveParameters, ParameterError, StiffnessModel
 
 
 def _check_positions(position: object, length: float) -> np.ndarray:

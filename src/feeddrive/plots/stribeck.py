@@ -9,10 +9,10 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from . import units
-from .friction import negative_slope_band, steady_friction
-from .model.friction import friction_law
-from .parameters import LuGreParameters
+from .. import units
+from ..model.friction import friction_law
+from ..model.friction.stribeck import negative_slope_band, steady_friction
+from ..parameters import LuGreParameters
 
 _MM_PER_S = units.MM_PER_S
 
@@ -26,7 +26,7 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
     negative-slope band is shaded and its zero-slope speed marked.  ``speed_max`` [m/s]
     defaults to three times the larger zero-slope speed (or 5 v_s without a band).
     """
-    from .site_indicators import STRIBECK_CURVE_LAWS, steady_slope
+    from ..model.friction.indicators import STRIBECK_CURVE_LAWS, steady_slope
 
     # the site's own law: a Dahl or frictionless site has no Stribeck curve (issue 24 item 7)
     stribeck = params.law in STRIBECK_CURVE_LAWS
@@ -65,6 +65,6 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> None:
     """Write ``fig`` to ``path``; the format follows the file extension (e.g. .png)."""
-    from .outputs import save_figure as save
+    from ..io.outputs import save_figure as save
 
     save(fig, path, dpi=dpi)

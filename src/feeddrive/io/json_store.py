@@ -9,7 +9,7 @@ Guarantees:
   :func:`store_key`), so a value from other code or other inputs is never reused;
 * **atomic writes**: an entry is written to a temporary file with a unique name in the
   same folder, flushed to disk, then renamed over the entry (``os.replace``, through
-  :func:`feeddrive.outputs.atomic_path`, the helper every output file uses), so a reader
+  :func:`feeddrive.io.outputs.atomic_path`, the helper every output file uses), so a reader
   sees the old entry or the new one, never half of one, even with concurrent writers or a
   ``SIGKILL`` at any point;
 * **checksummed**: each entry's first line is a header with its name, key and the SHA-256

@@ -11,14 +11,14 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from .identification import DynamicFit, StaticFit, _stribeck_model
-from .trace import TraceAnalysis
+from ..analysis.identification import DynamicFit, StaticFit, _stribeck_model
+from ..analysis.trace import TraceAnalysis
 
 __all__ = ["plot_dynamic_fit", "plot_static_fit", "plot_trace"]
 
 
 def _save(fig: Figure, path: str | Path) -> None:
-    from ..outputs import save_figure
+    from ..io.outputs import save_figure
 
     save_figure(fig, path, dpi=120)
 

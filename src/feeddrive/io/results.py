@@ -10,7 +10,7 @@
 * .mat: SI, each signal an N×1 column vector, a ``units`` struct beside the signals.
 
 Every file is written under a temporary name in its folder and renamed when complete
-(:func:`feeddrive.outputs.atomic_path`): a full disk never leaves a truncated file under the
+(:func:`feeddrive.io.outputs.atomic_path`): a full disk never leaves a truncated file under the
 output's name.
 """
 
@@ -27,10 +27,10 @@ import pandas as pd
 import scipy.io
 import xarray as xr
 
-from . import __version__
+from .. import __version__
+from ..parameters import ParameterError
+from ..units import ENGINEERING
 from .outputs import atomic_path
-from .parameters import ParameterError
-from .units import ENGINEERING
 
 FORMATS = (".csv", ".parquet", ".nc", ".mat")
 
@@ -197,8 +197,8 @@ class ChunkWriter:
     :meth:`abort` removes it (a write that failed: nothing partial under ``path``)."""
 
     def __init__(self, path: str | Path, model: Any, system: Any, run_type: Any) -> None:
-        """``run_type``: :class:`feeddrive.result.Run` (passed in, so that this writer does not
-        import the results layer that imports it)."""
+        """``run_type``: :class:`feeddrive.engine.result.Run` (passed in, so that this writer
+        does not import the results layer that imports it)."""
         self.path = Path(path)
         ext = self.path.suffix.lower()
         if ext not in (".parquet", ".csv"):

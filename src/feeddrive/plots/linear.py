@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib.figure import Figure
 
-from .outputs import atomic_path
+from ..io.outputs import atomic_path
 
 if TYPE_CHECKING:
-    from .linear import LoopAnalysis, StabilityBand
+    from ..analysis.linear import LoopAnalysis, StabilityBand
 
 #: the kinds of `feeddrive loops --plot-kind`
 PLOT_KINDS = ("bode", "nyquist", "step")

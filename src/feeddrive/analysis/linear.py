@@ -6,7 +6,8 @@
   right-hand side, positions moving with the reference); the Jacobians are central
   differences of the compiled right-hand side, each state perturbed on its own tolerance
   scale.  The friction laws' analytic linearisations (``FrictionLaw.linearise``) serve the
-  sliding-stability indicators of :mod:`feeddrive.friction` and are checked against this.
+  sliding-stability indicators of :mod:`feeddrive.model.friction.stribeck` and are checked
+  against this.
 * :func:`loop_analysis` — poles with frequency and damping ratio, and the velocity- and
   position-loop transfer functions L(s) of each motor axis (loop broken at the current and
   speed commands by zero-valued injection inputs, L = 1/S − 1), with gain/phase margins and
@@ -46,13 +47,13 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
+from ..engine.simulate import DriveSystem
+from ..model.assemble import Model
+from ..model.loops import INJ_CURRENT, INJ_SPEED
+from ..model.mechanisms import Mechanism, mechanism
+from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
+from ..parameters import LuGreParameters, ParameterError, SiteParameters
 from . import protocol
-from .control import REFERENCE_INPUTS, ConstantSpeed
-from .model.assemble import Model
-from .model.loops import INJ_CURRENT, INJ_SPEED
-from .model.mechanisms import Mechanism, mechanism
-from .parameters import LuGreParameters, ParameterError, SiteParameters
-from .simulate import DriveSystem
 
 _T0 = 1.0  # [s] operating-point time (after the reference's start ramp)
 _PULL = 1e-8  # weight of the operating point's pull to its start (free directions)
@@ -778,8 +779,8 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     """Speeds at which steady sliding is linearly unstable.
 
     Scans table speeds from ``low`` to ``high`` (log-spaced; the default is
-    ``feeddrive.protocol.LINEAR_SPEED_RANGE``), then bisects every stable/unstable change to
-    ``tolerance``.
+    ``feeddrive.analysis.protocol.LINEAR_SPEED_RANGE``), then bisects every stable/unstable
+    change to ``tolerance``.
 
     Parameters
     ----------

@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 if TYPE_CHECKING:
-    from .result import Result
+    from ..engine.result import Result
 
 
 def run_title(result: Result) -> str:
@@ -39,7 +39,7 @@ def plot_result(result: Result, path: str | Path, title: str | None = None) -> P
     fig = result_figure(result, title)
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    from .outputs import atomic_path
+    from ..io.outputs import atomic_path
 
     with atomic_path(p) as tmp:
         fig.savefig(tmp, dpi=110)

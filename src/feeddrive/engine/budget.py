@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from .parameters import DriveParameters, ParameterError
+from ..parameters import DriveParameters, ParameterError
 
 # bytes per recorded sample: the solver's output arrays (time, 15 states, 15 auxiliaries of
 # the ball-screw drives, float64: 12.2 GB measured at 5e7 samples, i.e. 244 B) and the

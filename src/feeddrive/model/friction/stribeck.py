@@ -24,10 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ._jit import kernel
-from .model.friction import lugre
-from .paper import CDFS_CRITICAL_SPEED
-from .parameters import FrictionBranch, LuGreParameters
+from ..._jit import kernel
+from ...parameters import FrictionBranch, LuGreParameters
+from . import lugre
 
 # ---------------------------------------------------------------- compiled scalar kernels
 
@@ -133,10 +132,6 @@ def bristle_bound(params: LuGreParameters) -> float:
 
 
 # ---------------------------------------------------------------- analytic indicators
-
-# Wang2021 Sect. 5.2, Fig. 6: the simulated CDFS critical speed the zero-slope speed is
-# compared with (the number lives in feeddrive.paper)
-PAPER_CDFS_CRITICAL_SPEED = CDFS_CRITICAL_SPEED
 
 
 @dataclass(frozen=True)

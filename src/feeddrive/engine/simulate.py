@@ -11,14 +11,14 @@ from typing import Any
 
 import numpy as np
 
+from ..model.assemble import Model, assemble
+from ..model.disturbances import LoadProfile
+from ..model.mechanisms import drive_names, mechanism
+from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
+from ..parameters import DriveParameters, ParameterError
+from ..solvers import dopri5, switching
 from . import budget
-from .control import ConstantSpeed, Profile, SampledSpeed, SineSpeed
-from .model.assemble import Model, assemble
-from .model.disturbances import LoadProfile
-from .model.mechanisms import drive_names, mechanism
-from .parameters import DriveParameters, ParameterError
 from .result import Result, Run
-from .solvers import dopri5, switching
 
 DRIVES = drive_names()
 
@@ -237,7 +237,7 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
                      adaptive: int, atol: np.ndarray, rel: np.ndarray, h_init: float,
                      h_max: float, bound: np.ndarray) -> None:
     """Refuse, before integrating with ``dopri5``, a run whose steps (projected from a short
-    probe) exceed ``max_steps`` (feeddrive.budget)."""
+    probe) exceed ``max_steps`` (feeddrive.engine.budget)."""
     t_probe = budget.probe_time(t_end, grid.base) if adaptive else 0.0
     if not t_probe:
         return
@@ -583,7 +583,7 @@ class _Chunks:
                 ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], np.ndarray]:
         """Integrate on to breakpoint ``n_break``; (t, y, the auxiliary signals' parts, stats)
         from t = 0 (the parts are joined only if a signal among them is read)."""
-        from .io import ChunkWriter
+        from ..io.results import ChunkWriter
 
         sim, grid = self.sim, self.sim.grid
         every = grid.out_every
