@@ -111,7 +111,7 @@ def _corpus() -> list[tuple[str, str, float, float, float]]:
     # where `reproduce`'s model-reading study moved with the default method (issue 21):
     # literal CDFS 0.02/0.03 (dopri5 smooth, modal stick-slip), literal DDFS band edges,
     # ball-nut share 0.2 DDFS at 0.48 (dopri5 undecided, modal smooth)
-    for v in (0.02, 0.03, 0.04):
+    for v in (0.02, 0.03, 0.04, 0.05, 0.06):  # modal: the band from 0.06 (dopri5: 0.04)
         out.append(("wang2021-literal", "cdfs", 0.4, v, 0.0))
     for v in (0.15, 1.82, 2.02, 3.02):
         out.append(("wang2021-literal", "ddfs", 0.4, v, 16.0))
@@ -128,6 +128,9 @@ def _corpus() -> list[tuple[str, str, float, float, float]]:
                                      ("sampled-1khz", "ddfs", 1.75, 16.0)):
         for v in (round(crit - 0.01, 2), crit):
             out.append((f"wang2021~{reading}", drive, 0.4, v, vn))
+    # the sampled 1-kHz DDFS's upper band: from 0.94 under modal, from 1.07 under dopri5
+    for v in (0.93, 0.94, 1.06, 1.07):
+        out.append(("wang2021~sampled-1khz", "ddfs", 0.4, v, 16.0))
     # the hollow motor on a position loop too: no critical speed (undecided at 2.02); the top
     # of its oscillation band
     out.append(("wang2021~nut-position-loop", "ddfs", 0.4, 1.82, 16.0))

@@ -117,7 +117,7 @@ class SolverOptions:
     method : str, default "modal"
         * ``"modal"`` (the default): DOPRI5 where the problem is not stiff, RODAS4 where it
           is, with each Rosenbrock step capped so that every lightly damped, undamped or
-          growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.7 for damping
+          growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.35 for damping
           ratios below 0.02: :mod:`feeddrive.solvers.modes`), and no switch where that cap
           leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
           early (``divergence_bounds``);
