@@ -12,17 +12,22 @@ decided, :func:`feeddrive.analysis.critical.decide`):
   ``reference/scipy_model.ReferenceModel`` with absolute tolerances 1000× tighter than the
   engine's defaults, split at the end of the start ramp, its analytic Jacobian — the settings
   of ``reference/make_radau_reference.py``; a longer trial continues the shorter one from its
-  last state;
+  last state.  Readings with sampled loops: ``reference/sampled.py`` (DOP853 at rtol 1e-10
+  between the sample instants, the held outputs updated at each; the same absolute
+  tolerances), each longer trial from rest;
 * **engine**: :func:`feeddrive.analysis.critical.creep_trial` with the default
   ``SolverOptions()`` (and, for comparison, ``auto`` and ``dopri5``).
 
-The corpus: the ``wang2021`` CDFS at mid-screw on both sides of every band edge and of the
-critical speed that ``feeddrive reproduce`` reports (0.18–0.21, 1.41/1.42, 1.55/1.56 mm/s),
-Table 3's positions at their critical speeds (± 0.01 mm/s), the DDFS with v_n = 16 mm/s, the
-``wang2021-literal`` CDFS (0.2 mm/s: the growing table mode) and DDFS, and stress variants with
-the screw bristle stiffness σ0 × 10 and × 100.
+The corpus (89 trials): the ``wang2021`` CDFS at mid-screw on both sides of every band edge and
+of the critical speed that ``feeddrive reproduce`` reports (0.17–0.21, 1.41/1.42, 1.55–1.57
+mm/s), Table 3's positions at their critical speeds, the DDFS with v_n = 16 mm/s, the
+``wang2021-literal`` CDFS (0.2 mm/s: the growing table mode; 0.02–0.06 where the band starts)
+and DDFS, both sides of every critical speed of the model-reading study (velocity integral
+0.5–1.5×, table feedback, the paper's K_eq, damping × 4, the sampled 1-kHz loops, the ball–nut
+shares 1 and 0.5), the trials where that study's band lists moved with the default method,
+and stress variants with the screw bristle stiffness σ0 × 10 and × 100.
 
-The reference verdicts are kept in ``benchmarks/results/bench_verdicts_reference.json`` (they
+The reference verdicts are kept in ``benchmarks/results/bench_verdicts_reference*.json`` (they
 do not depend on the engine; delete the file to recompute them).  Writes
 ``benchmarks/results/bench_verdicts.json``.
 """
