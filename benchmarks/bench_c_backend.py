@@ -34,7 +34,7 @@ void fd_bench(long n, const double *t, const double *y, const double *P, const d
     double held[FD_N_HELD] = {0.0};
     double dy[FD_N_STATE];
     for (long i = 0; i < n; ++i)
-        fd_rhs(t[i], y + i * FD_N_STATE, held, P, T, 0, 0, 0, dy, out + i * FD_N_AUX);
+        fd_rhs(t[i], y + i * FD_N_STATE, held, P, T, dy, out + i * FD_N_AUX);
 }
 """
 
@@ -45,7 +45,7 @@ def numba_loop(rhs: object) -> object:
     def loop(t, y, held, P, T, out):  # type: ignore[no-untyped-def]
         dy = np.empty(y.shape[1])
         for i in range(t.size):
-            rhs(t[i], y[i], held, P, T, 0, 0, 0, dy, out[i])
+            rhs(t[i], y[i], held, P, T, dy, out[i])
 
     return loop
 

@@ -116,14 +116,14 @@ def engine_states(system: DriveSystem, model: Model, profile: ConstantSpeed, dur
                   options: SolverOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """What ``simulate`` does with an assembled ``model``, without aux signals or the
     Dataset (the model is built once, as the baselines' ``ReferenceModel``)."""
-    grid = sampling(system.parameters, options.output_interval)
+    grid = sampling(system.parameters, options.output_interval, model)
     t_end = int(round(duration / grid.base)) * grid.base
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
                                  options.current_tolerance)
     mode, _ = _DENSE_MODES[options.method]
     t, y, _, stats, _ = switching.integrate(
-        model, system.initial_vector(model), t_end, grid.out_every, grid.base, grid.n_pos,
-        grid.n_vel, grid.n_cur, options.rtol, atol, rel, 1e-6, math.inf, 1,
+        model, system.initial_vector(model), t_end, grid.out_every, grid.base, grid.schedule,
+        options.rtol, atol, rel, 1e-6, math.inf, 1,
         options.max_steps, mode, profile_breakpoints(profile, t_end, grid.base),
         want_aux=False)
     if int(stats[0]) != 0:

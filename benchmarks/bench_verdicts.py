@@ -5,7 +5,7 @@ Run from the repository root::
     python benchmarks/bench_verdicts.py [--only NAME,...] [--reference-only]
 
 Each trial of :data:`CORPUS` is judged twice by the same verdict rule
-(:class:`feeddrive.analysis.metrics.VerdictRule`, the protocol's 12 s doubling to 240 s until
+(:class:`feeddrive.analysis.cycle_verdict.VerdictRule`, the protocol's 12 s doubling to 240 s until
 decided, :func:`feeddrive.analysis.critical.decide`):
 
 * **reference**: scipy ``solve_ivp(method="Radau", rtol=1e-10)`` on the plain-Python model

@@ -73,7 +73,7 @@ nitpick_ignore_regex = [
               r"disturbances|compensation|friction\.\w+|mechanisms\.\w+)|"
               r"parameters\.(components|toml_io|validation))(\..*)?"),
     ("py:.*", r"(DENSE_CHUNK|KEEP_STREAMED|CHUNK_WALL_TIME|SimulationInterrupted|MARGINAL|"
-              r"MAX_RESAMPLE_FACTOR|feeddrive\.analysis\.metrics\.MAX_RESAMPLE_FACTOR|"
+              r"MAX_RESAMPLE_FACTOR|feeddrive\.analysis\.trace_input\.MAX_RESAMPLE_FACTOR|"
               r"steady_window|identifiable|from_run|settings|server|jobs|compute|"
               r"store\.point_key)"),
 ]

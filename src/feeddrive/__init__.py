@@ -28,8 +28,8 @@ _PUBLIC: dict[str, str] = {
     "calibrate": "analysis.calibrate",
     "CriticalSpeed": "analysis.critical", "critical_speed_from_rest": "analysis.critical",
     "critical_speed_stepdown": "analysis.critical",
-    "CreepMetrics": "analysis.metrics", "CreepThresholds": "analysis.metrics",
-    "creep_metrics": "analysis.metrics",
+    "CreepMetrics": "analysis.creep_window", "CreepThresholds": "analysis.creep_window",
+    "creep_metrics": "analysis.creep_window",
     "ConstantSpeed": "model.reference", "SampledSpeed": "model.reference",
     "SineSpeed": "model.reference",
     "LoadProfile": "model", "register_friction_law": "model", "register_mechanism": "model",
@@ -51,13 +51,13 @@ if TYPE_CHECKING:
     from . import model
     from .analysis import linear
     from .analysis.calibrate import Target, Unknown, calibrate
+    from .analysis.creep_window import CreepMetrics, CreepThresholds, creep_metrics
     from .analysis.critical import (
         CriticalSpeed,
         critical_speed_from_rest,
         critical_speed_stepdown,
     )
     from .analysis.linear import frequency_response, linearize, loop_analysis, stability_band
-    from .analysis.metrics import CreepMetrics, CreepThresholds, creep_metrics
     from .engine.result import Result
     from .engine.simulate import DriveSystem, Simulation, SimulationError, SolverOptions, simulate
     from .model import LoadProfile, register_friction_law, register_mechanism

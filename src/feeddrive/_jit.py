@@ -30,7 +30,7 @@ from numba import njit
 config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
 
 _HERE = Path(__file__).resolve().parent
-_KERNEL_SOURCES = ("_jit.py", "analysis/identification.py")  # model/ holds friction, reference
+_KERNEL_SOURCES = ("_jit.py",)  # model/ holds friction, reference
 _KERNEL_FOLDERS = ("model", "solvers", "fmu")
 
 

@@ -19,7 +19,8 @@ import pytest
 from typer.testing import CliRunner
 
 import feeddrive
-from feeddrive.analysis.identification import simulate_presliding, site_mass
+from feeddrive.analysis.presliding import site_mass
+from feeddrive.analysis.presliding_rig import simulate_presliding
 from feeddrive.cli import app
 from feeddrive.model.friction.stribeck import steady_friction
 
@@ -62,7 +63,7 @@ def static_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def presliding_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
     t = np.arange(0.0, 1.0, 1.0 / 2000.0)
     f = 30.0 * np.clip((t - 0.05) / 0.002, 0.0, 1.0)
-    x = simulate_presliding(t, f, site_mass(PARAMS, "screw"), SCREW)
+    x = simulate_presliding(t, f, site_mass(PARAMS, "screw", "cdfs"), SCREW)
     x = x + 0.01 * np.ptp(x) * np.random.default_rng(1).standard_normal(x.size)
     return write_csv(tmp_path_factory.mktemp("pre") / "presliding.csv",
                      "time [s],force [N],position [um]", [t, f, x * 1e6])
@@ -126,7 +127,7 @@ def test_identify_dynamic_then_merge(static_csv: Path, presliding_csv: Path,
 def test_identify_dynamic_says_when_sigma1_is_poorly_determined(tmp_path: Path) -> None:
     t = np.arange(0.0, 4.0, 0.01)
     f = 15.0 * (1.0 - np.cos(np.pi * t))
-    x = simulate_presliding(t, f, site_mass(PARAMS, "screw"), SCREW)
+    x = simulate_presliding(t, f, site_mass(PARAMS, "screw", "cdfs"), SCREW)
     x = x + 0.01 * np.ptp(x) * np.random.default_rng(3).standard_normal(x.size)
     p = write_csv(tmp_path / "slow.csv", "time,force,position", [t, f, x * 1e6])
     r = run("identify", "dynamic", p)

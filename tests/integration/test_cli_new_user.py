@@ -187,7 +187,7 @@ def test_simulate_and_creep_help_defaults_agree_with_the_api() -> None:
         shown = " ".join(run(command, "--help").stdout.split())
         assert f"[default: {mid_mm:.1f}]" in shown, command
     rule = inspect.signature(critical_speed_from_rest).parameters["rule"].default
-    from feeddrive.analysis.metrics import VerdictRule
+    from feeddrive.analysis.cycle_verdict import VerdictRule
 
     rule = rule if rule is not None else VerdictRule()
     from feeddrive.analysis import protocol
@@ -435,7 +435,7 @@ def test_sine_runs_are_summarised_with_sine_metrics() -> None:
 def test_sine_metrics_of_a_perfect_follower() -> None:
     import numpy as np
 
-    from feeddrive.analysis.metrics import sine_metrics
+    from feeddrive.analysis.tracking import sine_metrics
 
     t = np.arange(0.0, 10.0, 1e-3)
     ref = 2e-3 * np.sin(2 * np.pi * 0.5 * t)

@@ -49,7 +49,7 @@ def test_simulate_names_its_verdict_rule_and_calls_a_non_sticking_ripple_an_osci
 
 
 def test_creep_rule_text_is_named_the_limit_cycle_rule() -> None:
-    from feeddrive.analysis.metrics import VerdictRule
+    from feeddrive.analysis.cycle_verdict import VerdictRule
 
     assert VerdictRule().describe().startswith("Limit-cycle rule.")
 

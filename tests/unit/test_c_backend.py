@@ -41,6 +41,7 @@ from feeddrive.model import reference as profiles
 from feeddrive.model.assemble import Model
 from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
 from feeddrive.parameters import Compensation, LeadError, TorqueRipple
+from feeddrive.solvers.schedule import due
 
 try:
     find_compiler()
@@ -199,7 +200,7 @@ class Built:
     def __init__(self, name: str, folder: Path):
         system, profile = CASES[name]()
         self.model = system.model(profile)
-        self.grid = sampling(system.parameters, 1e-3)
+        self.grid = sampling(system.parameters, 1e-3, self.model)
         self.source = c_model_source(self.model)
         self.lib = load_shared(compile_shared(self.source, folder, name=name.replace("-", "_")))
 
@@ -245,7 +246,10 @@ def _evaluate(b: Built, seed: int) -> dict[str, float]:
     rng = np.random.default_rng(seed)
     scale = _scales(m)
     g = b.grid
-    flags = (g.n_pos, g.n_vel, g.n_cur)
+    sampled = g.sampled
+    schedule = g.schedule
+    tick0, tick = np.empty(schedule.size, dtype=np.int64), np.empty(schedule.size, dtype=np.int64)
+    due(0, schedule, tick0)  # every clock has an instant at breakpoint 0
     f = {"numba": np.empty((N_STATES, n)), "c": np.empty((N_STATES, n))}
     a = {"numba": np.empty((N_STATES, n_aux)), "c": np.empty((N_STATES, n_aux))}
     h = {"numba": np.empty((N_STATES, m.n_held)), "c": np.empty((N_STATES, m.n_held))}
@@ -253,34 +257,38 @@ def _evaluate(b: Built, seed: int) -> dict[str, float]:
         y = rng.normal(size=n) * scale * rng.choice([0.1, 1.0, 10.0], size=n)
         t = float(rng.uniform(0.0, 2.5))
         held0 = np.zeros(m.n_held)
-        if any(flags):
+        if sampled:
             held0 = rng.normal(size=m.n_held) * 0.1
             k = int(rng.integers(0, 40))
             if r % 4 == 0:
                 k = 0
             t = k * g.base
+            due(k, schedule, tick)
         for key, backend in (("numba", m.module), ("c", b.lib)):
             held = held0.copy()
-            if any(flags):
+            if sampled:
                 # first a sample instant with every loop due (k = 0), then the random one
-                backend.sample_update(0, 0.0, y, held, m.P, m.T, *flags, g.base)
-                backend.sample_update(k, t, y, held, m.P, m.T, *flags, g.base)
+                backend.sample_update(0.0, y, held, m.P, m.T, tick0)
+                backend.sample_update(t, y, held, m.P, m.T, tick)
             dy = np.empty(n)
             aux = np.empty(n_aux)
-            backend.rhs(t, y, held, m.P, m.T, *flags, dy, aux)
+            backend.rhs(t, y, held, m.P, m.T, dy, aux)
             f[key][r], a[key][r], h[key][r] = dy, aux, held
-    if any(flags):  # the same model with continuous loops reads no held values
+    if sampled:  # the same model with continuous loops reads no held values
+        P_continuous = m.P.copy()
+        for _, slot in m.clocks:
+            P_continuous[slot] = 0.0
         for r in range(N_STATES // 4):
             y = rng.normal(size=n) * scale
             t = float(rng.uniform(0.0, 2.5))
             for key, backend in (("numba", m.module), ("c", b.lib)):
                 dy = np.empty(n)
                 aux = np.empty(n_aux)
-                backend.rhs(t, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, dy, aux)
+                backend.rhs(t, y, np.zeros(m.n_held), P_continuous, m.T, dy, aux)
                 f[key][r] = dy
     assert np.all(np.isfinite(f["numba"])) and np.all(np.isfinite(a["numba"]))
     return {"rhs": _ratio(f["c"], f["numba"]), "aux": _ratio(a["c"], a["numba"]),
-            "held": _ratio(h["c"], h["numba"]) if any(flags) else 0.0}
+            "held": _ratio(h["c"], h["numba"]) if sampled else 0.0}
 
 
 WORST: dict[str, dict[str, float]] = {}
@@ -303,7 +311,7 @@ def test_every_sampled_model_exercises_the_sampled_update() -> None:
     assert set(QUICK) <= set(CASES)
     for name, case in CASES.items():
         g = sampling(case()[0].parameters, 1e-3)
-        assert (g.n_pos > 0 or g.n_vel > 0 or g.n_cur > 0) == name.startswith("sampled"), name
+        assert g.sampled == name.startswith("sampled"), name
 
 
 def test_the_exported_data_are_the_model_s(built: Models) -> None:
@@ -328,8 +336,8 @@ def test_fd_aux_gives_the_rhs_auxiliary_outputs(built: Models) -> None:
     y = np.linspace(-1e-3, 1e-3, len(m.states))
     a1 = np.empty(len(m.aux))
     a2 = np.empty(len(m.aux))
-    b.lib.rhs(0.7, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, np.empty(len(m.states)), a1)
-    b.lib.aux(0.7, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, a2)
+    b.lib.rhs(0.7, y, np.zeros(m.n_held), m.P, m.T, np.empty(len(m.states)), a1)
+    b.lib.aux(0.7, y, np.zeros(m.n_held), m.P, m.T, a2)
     assert np.array_equal(a1, a2)
 
 
@@ -367,15 +375,15 @@ def test_one_dopri5_step_in_c_equals_numba_s(with_solver: tuple[Model, Any]) -> 
     for backend in ("numba", "c"):
         k = [np.empty(n) for _ in range(7)]
         yt, y_new, aux = np.empty(n), np.empty(n), np.empty(len(model.aux))
-        model.module.rhs(t, y, held, model.P, model.T, 0, 0, 0, k[0], aux)
+        model.module.rhs(t, y, held, model.P, model.T, k[0], aux)
         if backend == "numba":
-            model.module._dp5_step(t, h, y, k[0], held, model.P, model.T, 0, 0, 0, *k[1:], yt,
+            model.module._dp5_step(t, h, y, k[0], held, model.P, model.T, *k[1:], yt,
                                    y_new, aux, t + h)
             err = model.module._error_norm(k[6], y, y_new, 1e-6, atol, rel)
         else:
-            D, L = ctypes.c_double, ctypes.c_long
+            D = ctypes.c_double
             lib.fd_dp5_step(D(t), D(h), _ptr(y), _ptr(k[0]), _ptr(held), _ptr(model.P),
-                            _ptr(model.T), L(0), L(0), L(0), *map(_ptr, k[1:]), _ptr(yt),
+                            _ptr(model.T), *map(_ptr, k[1:]), _ptr(yt),
                             _ptr(y_new), _ptr(aux), D(t + h))
             lib.fd_error_norm.restype = ctypes.c_double
             err = lib.fd_error_norm(_ptr(k[6]), _ptr(y), _ptr(y_new), D(1e-6), _ptr(atol),
@@ -407,28 +415,28 @@ def test_one_rodas4_step_in_c_equals_numba_s(with_solver: tuple[Model, Any]) -> 
         piv = np.zeros(n, dtype=np.int64)
         u = [np.empty(n) for _ in range(6)]
         yt, fs, y_new, q1, q2 = (np.empty(n) for _ in range(5))
-        model.module.rhs(t, y, held, model.P, model.T, 0, 0, 0, f0, aux)
+        model.module.rhs(t, y, held, model.P, model.T, f0, aux)
         if backend == "numba":
             m = model.module
-            calls = m._r4_fd_jacobian(t, y, f0, held, model.P, model.T, 0, 0, 0, atol, J, ft,
+            calls = m._r4_fd_jacobian(t, y, f0, held, model.P, model.T, atol, J, ft,
                                       yp, fp, aux, live, S.astype(np.bool_), colour)
             n_live = m._r4_frozen_states(J, f0, live)
-            status = m._r4_rodas4_step(t, h, y, f0, J, ft, held, model.P, model.T, 0, 0, 0, M,
+            status = m._r4_rodas4_step(t, h, y, f0, J, ft, held, model.P, model.T, M,
                                        piv, *u, yt, fs, y_new, aux, live)
             m._r4_rodas4_dense(*u[:5], q1, q2)
         else:
-            D, L = ctypes.c_double, ctypes.c_long
+            D = ctypes.c_double
             for fn in (lib.fd_fd_jacobian, lib.fd_frozen_states, lib.fd_rodas4_step):
                 fn.restype = ctypes.c_long
             live_c = live.view(np.uint8)
             calls = lib.fd_fd_jacobian(D(t), _ptr(y), _ptr(f0), _ptr(held), _ptr(model.P),
-                                       _ptr(model.T), L(0), L(0), L(0), _ptr(atol), _ptr(J),
+                                       _ptr(model.T), _ptr(atol), _ptr(J),
                                        _ptr(ft), _ptr(yp), _ptr(fp), _ptr(aux), _ptr(live_c),
                                        _ptr(S), _ptr(colour))
             n_live = lib.fd_frozen_states(_ptr(J), _ptr(f0), _ptr(live_c))
             status = lib.fd_rodas4_step(D(t), D(h), _ptr(y), _ptr(f0), _ptr(J), _ptr(ft),
-                                        _ptr(held), _ptr(model.P), _ptr(model.T), L(0), L(0),
-                                        L(0), _ptr(M), _ptr(piv), *map(_ptr, u), _ptr(yt),
+                                        _ptr(held), _ptr(model.P), _ptr(model.T),
+                                        _ptr(M), _ptr(piv), *map(_ptr, u), _ptr(yt),
                                         _ptr(fs), _ptr(y_new), _ptr(aux), _ptr(live_c))
             lib.fd_rodas4_dense(*map(_ptr, u[:5]), _ptr(q1), _ptr(q2))
         out[backend] = (int(calls), int(n_live), int(status), J.copy(), ft.copy(), live.copy(),
@@ -449,8 +457,8 @@ def test_the_comparison_can_fail(built: Models) -> None:
     aux = np.empty(len(m.aux))
     P = m.P.copy()
     P[m.parameter_names.index("table.mass")] *= 1.0 + 1e-9
-    m.module.rhs(0.5, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, ref[0], aux)
-    b.lib.rhs(0.5, y, np.zeros(m.n_held), P, m.T, 0, 0, 0, c[0], aux)
+    m.module.rhs(0.5, y, np.zeros(m.n_held), m.P, m.T, ref[0], aux)
+    b.lib.rhs(0.5, y, np.zeros(m.n_held), P, m.T, c[0], aux)
     assert _ratio(c, ref) > RTOL
 
 
@@ -463,8 +471,8 @@ def test_without_data_the_file_leaves_p_and_t_to_the_host(built: Models,
     y = _scales(m)
     a, b = np.empty(len(m.states)), np.empty(len(m.states))
     aux = np.empty(len(m.aux))
-    lib.rhs(1.2, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, a, aux)
-    m.module.rhs(1.2, y, np.zeros(m.n_held), m.P, m.T, 0, 0, 0, b, aux)
+    lib.rhs(1.2, y, np.zeros(m.n_held), m.P, m.T, a, aux)
+    m.module.rhs(1.2, y, np.zeros(m.n_held), m.P, m.T, b, aux)
     assert np.array_equal(a, b)
 
 
@@ -477,6 +485,6 @@ def test_the_docs_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
     exec(compile(code, "docs/c-backend.md", "exec"), scope)
     m = scope["model"]
     dy, aux = np.empty(len(m.states)), np.empty(len(m.aux))
-    scope["lib"].rhs(0.2, np.zeros(len(m.states)), np.zeros(m.n_held), m.P, m.T, 0, 0, 0, dy,
+    scope["lib"].rhs(0.2, np.zeros(len(m.states)), np.zeros(m.n_held), m.P, m.T, dy,
                      aux)
     assert (tmp_path / "build" / "fd_model.c").is_file() and np.all(np.isfinite(dy))

@@ -16,10 +16,10 @@ from feeddrive.analysis.fit import (
     FitError,
     fit_drive,
     horizons,
-    noise_level,
     read_experiment,
     synthetic_experiment,
 )
+from feeddrive.analysis.fit_statistics import noise_level
 
 FREE = {"controller.velocity_integral_gain": 1.2,
         "friction.screw.positive.viscous_coefficient": 0.8,

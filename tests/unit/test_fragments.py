@@ -10,7 +10,9 @@ import pytest
 
 import feeddrive
 from feeddrive.analysis.fragments import friction_fragment, merge_fragment
-from feeddrive.analysis.identification import fit_presliding, fit_static, simulate_presliding
+from feeddrive.analysis.presliding import fit_presliding
+from feeddrive.analysis.presliding_rig import simulate_presliding
+from feeddrive.analysis.static_fit import fit_static
 from feeddrive.model.friction.stribeck import steady_friction
 from feeddrive.parameters import ParameterError
 

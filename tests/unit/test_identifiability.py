@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import feeddrive
-from feeddrive.analysis.identification import MAX_CORRELATION, Estimate, fit_static
+from feeddrive.analysis.fit_statistics import MAX_CORRELATION, Estimate
+from feeddrive.analysis.static_fit import fit_static
 from feeddrive.io.measured import MeasuredDataError, read_static_test
 from feeddrive.model.friction.stribeck import steady_friction
 

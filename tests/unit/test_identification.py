@@ -1,12 +1,13 @@
-"""Friction identification round trips (feeddrive.analysis.identification).
+"""Friction identification round trips (feeddrive.analysis.static_fit, .presliding).
 
 Synthetic data use the Wang2021 Table 1 screw-shaft parameters (``preset("wang2021")``).
 Static tests: the steady LuGre curve (Wang2021 Eq. 9 in force form) at constant speeds plus
 2 % Gaussian noise proportional to the force.  Pre-sliding tests: a mass on the full LuGre
 contact (Canudas de Wit et al. 1995) integrated with scipy's DOP853 at rtol 1e-10 (an
-integrator independent of the RK4 the fit uses), plus position noise of 2 % of the
-displacement amplitude.  The mass is the screw-site inertia referred to the table,
-(J_motor + J_shaft)/H² ≈ 2243 kg (Wang2021 Table 2 and Eq. 8, see ``site_mass``).
+integrator independent of the engine's DOPRI5 the fit uses), plus position noise of 2 % of
+the displacement amplitude.  The mass is the screw-site inertia referred to the table,
+(J_motor + J_shaft)/H² ≈ 2243 kg (Wang2021 Table 2 and Eq. 8, declared by the ball-screw
+mechanism, see ``site_mass``).
 """
 
 from __future__ import annotations
@@ -19,18 +20,15 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import feeddrive
-from feeddrive.analysis.identification import (
-    fit_presliding,
-    fit_static,
-    simulate_presliding,
-    site_mass,
-)
+from feeddrive.analysis.presliding import fit_presliding, site_mass
+from feeddrive.analysis.presliding_rig import simulate_presliding
+from feeddrive.analysis.static_fit import fit_static
 from feeddrive.model.friction.stribeck import bristle_rate, steady_friction
 from feeddrive.parameters import LuGreParameters
 
 PARAMS = feeddrive.preset("wang2021")
 SCREW = PARAMS.friction.screw
-MASS = site_mass(PARAMS, "screw")
+MASS = site_mass(PARAMS, "screw", "cdfs")
 STATIC_FIELDS = ("coulomb_force", "static_force", "stribeck_velocity", "viscous_coefficient")
 
 
@@ -155,10 +153,47 @@ def step_test() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return t, f, x + 0.01 * np.ptp(x) * rng.standard_normal(x.size) + 3e-3
 
 
-def test_rk4_presliding_matches_dop853_reference(step_test: tuple) -> None:
+def test_engine_presliding_matches_dop853_reference() -> None:
+    """The engine's DOPRI5 at the rig's fixed step: 2.6e-6 of the displacement (the RK4 it
+    replaced was 9.2e-6 off; the tolerance is the one that held it)."""
     t, f, x = lugre_reference(force_step, 0.3, 2000.0)
     model = simulate_presliding(t, f, MASS, SCREW)
     assert np.max(np.abs(model - x)) < 1e-5 * np.ptp(x)
+
+
+def test_unevenly_sampled_presliding_record_matches_the_reference() -> None:
+    """A jittered record (±20 % of the step) is integrated on a finer uniform grid and read at
+    its own instants: it matches DOP853 at those instants."""
+    t = np.arange(0.0, 0.3, 1.0 / 2000.0)
+    t[1:-1] += np.random.default_rng(4).uniform(-1e-4, 1e-4, t.size - 2)
+    s0, s1 = SCREW.bristle_stiffness, SCREW.bristle_damping
+
+    def rhs(time: float, y: np.ndarray) -> list[float]:
+        x, v, z = y
+        zdot = float(bristle_rate(v, z, SCREW))
+        s2 = (SCREW.positive if v >= 0 else SCREW.negative).viscous_coefficient
+        return [v, (np.interp(time, t, f) - s0 * z - s1 * zdot - s2 * v) / MASS, zdot]
+
+    f = np.array([force_step(x) for x in t])
+    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0, 0.0], method="DOP853", t_eval=t,
+                    rtol=1e-10, atol=1e-16, max_step=2e-4)
+    model = simulate_presliding(t, f, MASS, SCREW)
+    assert np.max(np.abs(model - sol.y[0])) < 1e-4 * np.ptp(sol.y[0])
+
+
+def test_linear_model_is_the_linear_ode() -> None:
+    """model="linear" is m ẍ + (σ1 + σ2) ẋ + σ0 x = F exactly (a step response from rest
+    against scipy.signal's exact discretisation of the same linear system)."""
+    from scipy import signal
+
+    t = np.arange(0.0, 0.2, 1.0 / 2000.0)
+    f = np.where(t > 0.0, 0.3, 0.0)
+    f[0] = 0.0
+    s2 = 0.5 * (SCREW.positive.viscous_coefficient + SCREW.negative.viscous_coefficient)
+    sys_ = signal.lti([1.0], [MASS, SCREW.bristle_damping + s2, SCREW.bristle_stiffness])
+    _, exact, _ = signal.lsim(sys_, f, t, interp=True)
+    model = simulate_presliding(t, f, MASS, SCREW, model="linear")
+    assert np.max(np.abs(model - exact)) < 1e-6 * np.ptp(exact)
 
 
 def test_presliding_step_recovers_sigma0_and_sigma1(step_test: tuple) -> None:
@@ -233,11 +268,30 @@ def test_presliding_bad_input() -> None:
 
 def test_site_mass() -> None:
     h = PARAMS.screw.lead / (2 * math.pi)
-    assert site_mass(PARAMS, "screw") == pytest.approx(
+    assert site_mass(PARAMS, "screw", "cdfs") == pytest.approx(
         (1.38e-3 + PARAMS.screw.shaft_inertia) / h**2)
-    assert site_mass(PARAMS, "guide") == 20.0
+    assert site_mass(PARAMS, "guide", "cdfs") == 20.0
     with pytest.raises(ValueError, match="site"):
-        site_mass(PARAMS, "spindle")
+        site_mass(PARAMS, "spindle", "cdfs")
+
+
+def test_site_masses_are_the_mechanisms_declarations() -> None:
+    """Each mechanism declares its sites' moving mass (issue 19 item 3): the identification
+    does not know the topology.  Values from the parameter sets' own fields."""
+    lm = feeddrive.preset("linear-motor-example")
+    assert lm.linear_motor is not None
+    assert site_mass(lm, "guide", "linear-motor") == pytest.approx(
+        lm.table.mass + lm.linear_motor.forcer_mass)
+    rp = feeddrive.preset("rack-pinion-example")
+    sec = rp.section("rack_pinion")
+    inertia = sec.motor.inertia + sec.gearbox_inertia + sec.pinion_inertia / sec.gear_ratio**2
+    assert site_mass(rp, "rack_pinion.gearbox_friction", "rack-pinion") == pytest.approx(
+        inertia / sec.transmission_ratio**2)
+    assert site_mass(rp, "guide", "rack-pinion") == rp.table.mass
+    with pytest.raises(ValueError, match="screw.*linear-motor"):
+        site_mass(lm, "screw", "linear-motor")
+    with pytest.raises(ValueError, match="linear_motor"):
+        site_mass(PARAMS, "guide", "linear-motor")  # no [linear_motor] section
 
 
 def test_presliding_poor_fit_is_not_called_determined(step_test: tuple) -> None:
@@ -269,3 +323,42 @@ def test_static_one_direction_record_fits_that_branch_only() -> None:
     assert list(fit.branches()) == ["positive"]
     with pytest.raises(ValueError, match="only the positive branch"):
         fit.lugre(1.0, 0.0)
+
+
+def test_docs_state_the_rigs_step_and_the_mechanisms_declaration() -> None:
+    """docs/measured-data.md gives the rig's step rule and docs/extending.md the mechanism
+    declaration identification reads; both as the code has them."""
+    from pathlib import Path
+
+    from feeddrive.analysis.presliding_rig import MIN_STEPS, STEP_RATE
+    from feeddrive.model.mechanisms.base import Mechanism
+
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    measured = " ".join((docs / "measured-data.md").read_text(encoding="utf-8").split())
+    assert (f"h·max(√(σ0/m), (σ1 + σ2)/m) ≤ {STEP_RATE:g} and at least {MIN_STEPS} steps per "
+            "sample interval") in measured
+    assert "`site_masses`" in (docs / "extending.md").read_text(encoding="utf-8")
+    assert callable(Mechanism.site_masses)
+
+
+def test_engine_presliding_at_the_guide_site_matches_dop853() -> None:
+    """The guide site (wang2021 Table 1 guide values, the table's 20 kg) sampled at 1 kHz: the
+    rig takes 3 steps per sample there (√(σ0/m) = 148 1/s); a 10 N step, 44 % of F_s."""
+    guide = PARAMS.friction.guide
+    mass = site_mass(PARAMS, "guide", "cdfs")
+    t = np.arange(0.0, 0.5, 1e-3)
+
+    def force(time: float) -> float:
+        return 10.0 * min(max((time - 0.05) / 0.002, 0.0), 1.0)
+
+    def rhs(time: float, y: np.ndarray) -> list[float]:
+        x, v, z = y
+        zdot = float(bristle_rate(v, z, guide))
+        s2 = (guide.positive if v >= 0 else guide.negative).viscous_coefficient
+        return [v, (force(time) - guide.bristle_stiffness * z - guide.bristle_damping * zdot
+                    - s2 * v) / mass, zdot]
+
+    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0, 0.0], method="DOP853", t_eval=t,
+                    rtol=1e-10, atol=1e-16, max_step=1e-3)
+    model = simulate_presliding(t, np.array([force(x) for x in t]), mass, guide)
+    assert np.max(np.abs(model - sol.y[0])) < 1e-5 * np.ptp(sol.y[0])

@@ -56,31 +56,41 @@ CASES: dict[str, Callable[[], tuple[fd.DriveSystem, ConstantSpeed]]] = {
 }
 
 
+def _parameters(model: Model, sampled: bool) -> np.ndarray:
+    """The model's P; ``sampled``: with every clock of its schedule at a period > 0 (the
+    right-hand side then reads the held values of the sampled parts)."""
+    P = model.P.copy()
+    if sampled:
+        for _, slot in model.clocks:
+            P[slot] = 1e-4
+    return P
+
+
 def _jacobian(model: Model, t: float, y: np.ndarray, S: np.ndarray, colour: np.ndarray,
-              live: np.ndarray | None = None, flags: tuple[int, int, int] = (0, 0, 0),
+              live: np.ndarray | None = None, sampled: bool = False,
               ) -> tuple[np.ndarray, int]:
     """([J | ft], calls) of the compiled grouped finite-difference Jacobian."""
     n = y.size
+    P = _parameters(model, sampled)
     held = np.zeros(model.n_held)
     aux = np.empty(len(model.aux))
     f0 = np.empty(n)
-    model.module.rhs(t, y, held, model.P, model.T, *flags, f0, aux)
+    model.module.rhs(t, y, held, P, model.T, f0, aux)
     J = np.empty((n, n))
     ft = np.empty(n)
     atol, _ = model.tolerances(1e-9, 1e-8, 1e-6)
     live = np.ones(n, dtype=np.bool_) if live is None else live
-    calls = model.module._r4_fd_jacobian(t, y, f0, held, model.P, model.T, *flags, atol, J, ft,
+    calls = model.module._r4_fd_jacobian(t, y, f0, held, P, model.T, atol, J, ft,
                                          np.empty(n), np.empty(n), aux, live, S, colour)
     return np.column_stack([J, ft]), int(calls)
 
 
-def dense_jacobian(model: Model, t: float, y: np.ndarray,
-                   flags: tuple[int, int, int] = (0, 0, 0)) -> np.ndarray:
+def dense_jacobian(model: Model, t: float, y: np.ndarray, sampled: bool = False) -> np.ndarray:
     """[∂f/∂y | ∂f/∂t], one right-hand-side call per column (full pattern, one column a
     group)."""
     n = y.size
     full = np.ones((n, n + 1), dtype=np.uint8)
-    return _jacobian(model, t, y, full, np.arange(n + 1), flags=flags)[0]
+    return _jacobian(model, t, y, full, np.arange(n + 1), sampled=sampled)[0]
 
 
 def undeclared_entries(S: np.ndarray, J: np.ndarray) -> list[tuple[int, int]]:
@@ -114,11 +124,11 @@ def test_pattern_covers_the_dense_jacobian_and_groups_reproduce_it(case: str) ->
     assert S.sum() < S.size  # the analysis understood the model (else everything is 1)
     seen = np.zeros_like(S, dtype=bool)
     for k, (t, y) in enumerate(random_states(system, profile, model, 30, seed=len(case))):
-        flags = (1, 1, 1) if k % 5 == 4 else (0, 0, 0)  # sampled loops read held values
-        dense = dense_jacobian(model, t, y, flags)
-        assert undeclared_entries(S, dense) == [], (case, t, y, flags)
+        sampled = k % 5 == 4  # sampled loops read held values
+        dense = dense_jacobian(model, t, y, sampled)
+        assert undeclared_entries(S, dense) == [], (case, t, y, sampled)
         seen |= dense != 0.0
-        grouped, calls = _jacobian(model, t, y, S, colour, flags=flags)
+        grouped, calls = _jacobian(model, t, y, S, colour, sampled=sampled)
         np.testing.assert_array_equal(grouped, dense)
         assert calls == colour.max() + 1
     # the states exercised the model: most declared entries were seen non-zero
@@ -154,7 +164,7 @@ def test_groups_are_fewer_than_live_columns() -> None:
     n = len(cdfs.state_names)
     y = np.full(n, 1e-4)
     f0 = np.empty(n)
-    cdfs.module.rhs(0.2, y, np.zeros(cdfs.n_held), cdfs.P, cdfs.T, 0, 0, 0, f0,
+    cdfs.module.rhs(0.2, y, np.zeros(cdfs.n_held), cdfs.P, cdfs.T, f0,
                     np.empty(len(cdfs.aux)))
     dense = dense_jacobian(cdfs, 0.2, y)
     live = np.array([f0[i] != 0.0 or np.any(dense[i] != 0.0) for i in range(n)])

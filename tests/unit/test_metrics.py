@@ -1,4 +1,4 @@
-"""Creep metrics on synthetic traces with known answers (feeddrive.analysis.metrics)."""
+"""Creep metrics on synthetic traces with known answers (feeddrive.analysis.creep_window)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from feeddrive.analysis.metrics import CreepThresholds, creep_metrics, steady_window
+from feeddrive.analysis.creep_window import CreepThresholds, creep_metrics, steady_window
 
 V_CMD = 1.55e-3  # m/s, the CDFS creeping speed of Wang2021 Sect. 5.2
 
@@ -192,7 +192,7 @@ def test_steady_window_skips_a_decaying_start_up_oscillation() -> None:
     # a weakly damped servo transient (5 Hz, time constant 0.6 s) is not creep: the window
     # moves past it and the verdict is smooth; constant-amplitude stick-slip keeps the
     # window of the base rule and stays creeping
-    from feeddrive.analysis.metrics import creep_metrics, steady_window
+    from feeddrive.analysis.creep_window import creep_metrics, steady_window
     t = np.arange(0.0, 5.0, 1e-3)
     v0 = 0.5e-3
     decaying = v0 * (1 + 2.0 * np.exp(-t / 0.6) * np.sin(2 * np.pi * 5 * t))

@@ -9,9 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from feeddrive.analysis.identification import fit_presliding
-from feeddrive.analysis.metrics import MAX_RESAMPLE_FACTOR, creep_metrics
+from feeddrive.analysis.creep_window import creep_metrics
+from feeddrive.analysis.presliding import fit_presliding
 from feeddrive.analysis.trace import analyze_trace, estimate_speed
+from feeddrive.analysis.trace_input import MAX_RESAMPLE_FACTOR
 
 
 def gap_trace(gap: float) -> tuple[np.ndarray, np.ndarray]:

@@ -118,11 +118,11 @@ def test_continuous_control_reuses_the_last_stage_at_breakpoints() -> None:
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
                                  options.current_tolerance)
     t, y, aux, stats, held = dopri5.integrate(
-        model, system.initial_vector(model), 0.5, grid.out_every, grid.base, 0, 0, 0,
+        model, system.initial_vector(model), 0.5, grid.out_every, grid.base, grid.schedule,
         options.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
     assert int(stats[3]) == 6 * int(stats[1]) + 1
     fresh = np.empty(len(model.aux))
     dy = np.empty(len(model.states))
     for k in range(0, t.size, 7):
-        model.module.rhs(t[k], y[k], held, model.P, model.T, 0, 0, 0, dy, fresh)
+        model.module.rhs(t[k], y[k], held, model.P, model.T, dy, fresh)
         np.testing.assert_array_equal(aux[k], fresh)

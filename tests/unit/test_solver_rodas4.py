@@ -147,10 +147,10 @@ def test_spectral_radius_estimate_matches_eigenvalues() -> None:
     f0 = np.empty(n)
     aux = np.empty(len(model.aux))
     held = np.zeros(model.n_held)
-    model.module.rhs(0.2, y, held, model.P, model.T, 0, 0, 0, f0, aux)
+    model.module.rhs(0.2, y, held, model.P, model.T, f0, aux)
     J = np.zeros((n, n))
     atol, _ = model.tolerances(1e-10, 1e-8, 1e-6)
-    calls = model.module._r4_fd_jacobian(0.2, y, f0, held, model.P, model.T, 0, 0, 0, atol, J,
+    calls = model.module._r4_fd_jacobian(0.2, y, f0, held, model.P, model.T, atol, J,
                                          np.empty(n), np.empty(n), np.empty(n), aux,
                                          np.ones(n, dtype=np.bool_), model.jacobian_pattern,
                                          model.jacobian_colours)

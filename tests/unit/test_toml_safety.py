@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from feeddrive.analysis.fragments import friction_fragment, merge_fragment
-from feeddrive.analysis.identification import fit_static
+from feeddrive.analysis.static_fit import fit_static
 from feeddrive.model.friction.stribeck import steady_friction
 from feeddrive.parameters import ParameterError, dumps, load, loads, preset, to_dict
 from feeddrive.parameters.toml_io import MAX_TOML_DEPTH, parse_toml, toml_comment, toml_string

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from feeddrive.analysis.metrics import creep_metrics, travel_warning
+from feeddrive.analysis.creep_window import creep_metrics
+from feeddrive.analysis.tracking import travel_warning
 
 
 def test_growing_oscillation_is_unstable_stick_slip_is_not() -> None:

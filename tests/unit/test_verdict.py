@@ -1,4 +1,4 @@
-"""The window-independent creep verdict (feeddrive.analysis.metrics.trace_verdict and
+"""The window-independent creep verdict (feeddrive.analysis.cycle_verdict.trace_verdict and
 feeddrive.analysis.critical.decide) on systems with known answers."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from feeddrive.analysis.critical import decide
-from feeddrive.analysis.metrics import VerdictRule, trace_verdict
+from feeddrive.analysis.cycle_verdict import VerdictRule, trace_verdict
 
 # A mass pulled through a spring over a LuGre contact: the stick-slip example of
 # C. Canudas de Wit, H. Olsson, K. J. Åström, P. Lischinsky, "A new model for control of

@@ -8,7 +8,7 @@ import pytest
 
 import feeddrive as fd
 from feeddrive.analysis.critical import creep_trial
-from feeddrive.analysis.metrics import VerdictRule, trace_verdict
+from feeddrive.analysis.cycle_verdict import VerdictRule, trace_verdict
 from feeddrive.model.reference import ConstantSpeed
 
 SYSTEM = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import feeddrive
-from feeddrive.analysis.critical import UNSTABLE, creep_trial
+from feeddrive.analysis.critical import creep_trial
+from feeddrive.analysis.verdict_words import UNSTABLE
 from feeddrive.engine.simulate import (
     DIVERGENCE_SPEED_RATIO,
     DriveSystem,

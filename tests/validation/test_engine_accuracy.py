@@ -242,7 +242,7 @@ def test_engine_rhs_equals_reference_model_at_random_states(variant: str, setup:
     i_cmd, voltage = [], []
     for k, (t, y) in enumerate(zip(times, states, strict=True)):
         dy = np.empty(len(STATE_NAMES))
-        engine_model.module.rhs(float(t), y, held, engine_model.P, engine_model.T, 0, 0, 0, dy,
+        engine_model.module.rhs(float(t), y, held, engine_model.P, engine_model.T, dy,
                                 aux)
         engine[k] = dy
         i_cmd.append(aux[a_icmd])

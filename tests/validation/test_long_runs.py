@@ -26,8 +26,8 @@ def _one_call(system: fd.DriveSystem, profile: ConstantSpeed, duration: float) -
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
                                  options.current_tolerance)
     _, y, _, stats, _ = dopri5.integrate(
-        model, system.initial_vector(model), duration, grid.out_every, grid.base, grid.n_pos,
-        grid.n_vel, grid.n_cur, options.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
+        model, system.initial_vector(model), duration, grid.out_every, grid.base,
+        grid.schedule, options.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
     assert int(stats[0]) == 0
     return y
 
@@ -137,7 +137,7 @@ def test_auxiliary_signals_evaluated_when_read_equal_the_recorded_ones() -> None
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
                                  options.current_tolerance)
     t, y, aux, _, _ = switching.integrate(
-        model, system.initial_vector(model), 2.0, grid.out_every, grid.base, 0, 0, 0,
+        model, system.initial_vector(model), 2.0, grid.out_every, grid.base, grid.schedule,
         options.rtol, atol, rel, 1e-6, np.inf, 1, options.max_steps, switching.MODE_AUTO,
         sim_mod.profile_breakpoints(profile, 2.0, grid.base), want_aux=True)
     np.testing.assert_array_equal(r.time, t)

@@ -143,10 +143,8 @@ def test_cli_default_is_the_options_default() -> None:
 
 
 def _dopri5_stability(y: float) -> complex:
-    from feeddrive.solvers import dopri5 as d
-    a = [[], [d.A21], [d.A31, d.A32], [d.A41, d.A42, d.A43], [d.A51, d.A52, d.A53, d.A54],
-         [d.A61, d.A62, d.A63, d.A64, d.A65]]
-    b = [d.B1, 0.0, d.B3, d.B4, d.B5, d.B6]
+    from feeddrive.solvers.tableaux import DOPRI5
+    a, b = [list(row) for row in DOPRI5.a], list(DOPRI5.b)
     z = 1j * y
     k: list[complex] = []
     for row in a:

@@ -240,7 +240,7 @@ def _evaluate(case: Case, seed: str
     reference = np.empty_like(states)
     for k, (t, y) in enumerate(zip(times, states, strict=True)):
         dy = np.empty(states.shape[1])
-        engine_model.module.rhs(float(t), y, held, engine_model.P, engine_model.T, 0, 0, 0, dy,
+        engine_model.module.rhs(float(t), y, held, engine_model.P, engine_model.T, dy,
                                 aux)
         engine[k] = dy
         reference[k] = model(float(t), y)
@@ -324,7 +324,7 @@ def test_share_one_matches_share_zero_on_the_locked_cdfs_from_equal_bristles() -
         t = float(rng.uniform(0.0, 1.0))
         d0, d1 = m0(t, y0), m1(t, y1)
         de = np.empty_like(d1)
-        e1.module.rhs(t, y1, np.zeros(e1.n_held), e1.P, e1.T, 0, 0, 0, de,
+        e1.module.rhs(t, y1, np.zeros(e1.n_held), e1.P, e1.T, de,
                       np.zeros(len(e1.aux)))
         for j, name in enumerate(m1.state_names):
             j0 = m0.state_names.index(name.replace("ball_nut_", "screw_"))
@@ -341,7 +341,7 @@ def test_locked_nut_freezes_every_nut_state_including_its_current_integral() -> 
     y = np.zeros(len(engine.state_names))
     y[engine.index("nut_current")] = 1.0
     dy = np.empty_like(y)
-    engine.module.rhs(0.2, y, np.zeros(engine.n_held), engine.P, engine.T, 0, 0, 0, dy,
+    engine.module.rhs(0.2, y, np.zeros(engine.n_held), engine.P, engine.T, dy,
                       np.zeros(len(engine.aux)))
     reference = ReferenceModel(params, "cdfs", TABLE_POSITION, CDFS)(0.2, y)
     assert reference[engine.index("nut_current_integral")] == 0.0

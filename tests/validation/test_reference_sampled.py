@@ -175,7 +175,8 @@ def test_reference_sample_grid_is_the_engines(periods: tuple[float, float, float
         p = p.replace_path(f"controller.{name}_period", value)
     mine, engine = sampling_grid(p, 1e-3), sampling(p, 1e-3)
     assert (mine.base, mine.n_pos, mine.n_vel, mine.n_cur, mine.out_every) == (
-        engine.base, engine.n_pos, engine.n_vel, engine.n_cur, engine.out_every)
+        engine.base, *(engine.step(f"controller.{loop}_period")
+                       for loop in ("position", "velocity", "current")), engine.out_every)
 
 
 def test_quantise_is_a_floor_count() -> None:

@@ -25,7 +25,7 @@ from reference.cases import RADAU_CASES, Case  # noqa: E402
 from reference.make_radau_reference import stick_slip_figures  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
-from feeddrive.analysis.metrics import creep_metrics  # noqa: E402
+from feeddrive.analysis.creep_window import creep_metrics  # noqa: E402
 from feeddrive.engine.simulate import DriveSystem, SolverOptions, profile_breakpoints, simulate  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed, SampledSpeed  # noqa: E402
 

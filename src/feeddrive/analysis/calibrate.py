@@ -8,7 +8,7 @@ which the creep verdict 0.01 mm/s *below the target speed* switches between cree
 speed is assumed to move monotonically with the parameter inside the bracket; the bracket ends
 are checked first); the fit is the geometric mean of the two, and a full critical-speed search
 at the fitted value reports what was achieved.  Every trial runs until
-decided (:class:`~feeddrive.analysis.metrics.VerdictRule`); an undecided trial stops the fit
+decided (:class:`~feeddrive.analysis.cycle_verdict.VerdictRule`); an undecided trial stops the fit
 with an error rather than being counted on either side.
 """
 
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from ..engine.simulate import DriveSystem
 from ..parameters import DriveParameters
 from .critical import CriticalSpeed, creep_trial, critical_speed_from_rest
-from .metrics import VerdictRule
+from .cycle_verdict import VerdictRule
 
 
 @dataclass(frozen=True)

@@ -18,8 +18,8 @@ from ..engine.simulate import DriveSystem, simulate
 from ..model.reference import ConstantSpeed
 from ..parameters import Compensation, DriveParameters
 from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
+from .cycle_verdict import VerdictRule
 from .linear import stability_band
-from .metrics import VerdictRule
 
 
 @dataclass(frozen=True)

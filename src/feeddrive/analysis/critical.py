@@ -1,7 +1,7 @@
 """Critical creeping speed and creeping bands.  SI units.
 
-Every trial is judged by :func:`feeddrive.analysis.metrics.trace_verdict` and runs until its
-outcome is decided (:class:`~feeddrive.analysis.metrics.VerdictRule`): the speed settles
+Every trial is judged by :func:`feeddrive.analysis.cycle_verdict.trace_verdict` and runs until
+its outcome is decided (:class:`~feeddrive.analysis.cycle_verdict.VerdictRule`): the speed settles
 within a band around the command (``smooth``), or the oscillation repeats as a limit cycle
 (``stick-slip`` when the table stops, ``oscillation`` when it never does).  A trial still
 undecided at the rule's maximum duration answers ``undecided``; it is never guessed.
@@ -37,15 +37,13 @@ from .. import units
 from ..engine.simulate import DriveSystem, Simulation, SolverOptions, simulate
 from ..model.reference import ConstantSpeed, _staircase
 from . import protocol
-from .metrics import CREEPING_KINDS, TraceVerdict, VerdictRule, trace_verdict
+from .cycle_verdict import TraceVerdict, VerdictRule, trace_verdict
+from .verdict_words import CREEPING_KINDS, NON_SMOOTH, SMOOTH, STICK_SLIP, UNDECIDED, UNSTABLE
 
 MM_S = units.MM_PER_S
 
-#: the kind of a trial whose run diverged (stopped early, :data:`feeddrive.engine.
-#: simulate.DIVERGENCE_SPEED_RATIO`): not smooth, not a limit cycle either
-UNSTABLE = "unstable"
-#: kinds that are not smooth: the critical speed is the upper edge of the highest such band
-NON_SMOOTH = (*CREEPING_KINDS, UNSTABLE)
+# a trial whose run diverged (stopped early, feeddrive.engine.simulate.DIVERGENCE_SPEED_RATIO)
+# has the kind UNSTABLE: not smooth, not a limit cycle either
 
 #: a trace runner for :func:`decide`: duration [s] → (time [s], speed [m/s])
 Runner = Callable[[float], tuple[np.ndarray, np.ndarray]]
@@ -117,7 +115,7 @@ def bands_of(trials: Sequence[CreepTrial], *, smooth_too: bool = False) -> tuple
             runs.append([tr])
     out = []
     for i, run in enumerate(runs):
-        if run[0].kind == "smooth" and not smooth_too:
+        if run[0].kind == SMOOTH and not smooth_too:
             continue
         below = runs[i - 1][-1] if i > 0 else None
         above = runs[i + 1][0] if i + 1 < len(runs) else None
@@ -135,8 +133,8 @@ def critical_of(trials: Sequence[CreepTrial]) -> tuple[str, float | None, str | 
     creeping = [tr for tr in ordered if tr.kind in NON_SMOOTH]
     top = creeping[-1] if creeping else None
     above = [tr for tr in ordered if top is None or tr.speed > top.speed]
-    if any(tr.kind == "undecided" for tr in above):
-        return "undecided", None, None if top is None else top.kind
+    if any(tr.kind == UNDECIDED for tr in above):
+        return UNDECIDED, None, None if top is None else top.kind
     if top is None:
         return "below-range", None, None
     if not above:
@@ -212,7 +210,7 @@ class CriticalSpeed:
             return f"{text} mm/s (smooth at every tested speed)"
         if self.status == "above-range":
             return f"{text} mm/s (creeps at every tested speed{kind})"
-        if self.status == "undecided":
+        if self.status == UNDECIDED:
             return f"{text} (a trial above the highest creeping band is undecided)"
         return f"{text} mm/s{kind}"
 
@@ -251,8 +249,8 @@ def format_critical_speed(search: dict[str, Any]) -> str:
     low, high = search["speed_range_mm_s"]
     if value is not None:
         return f"{value:.2f}"
-    if search["status"] == "undecided":
-        return "undecided"
+    if search["status"] == UNDECIDED:
+        return UNDECIDED
     return f"< {low:.2f}" if search["status"] == "below-range" else f"> {high:.2f}"
 
 
@@ -426,7 +424,7 @@ def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coars
         todo = None
         for a, b in zip(speeds[:-1], speeds[1:], strict=True):
             ka, kb = kinds[a], kinds[b]
-            if ka == kb or "undecided" in (ka, kb) or not ({ka, kb} & set(NON_SMOOTH)):
+            if ka == kb or UNDECIDED in (ka, kb) or not ({ka, kb} & set(NON_SMOOTH)):
                 continue
             if b - a > resolution * (1 + 1e-9):
                 todo = (a, b)
@@ -445,7 +443,7 @@ def search_boundary(creeps: Callable[[float], bool], low: float, high: float,
                     coarse_step: float, resolution: float) -> tuple[str, float | None]:
     """Smooth end of the highest creep boundary in [low, high] [m/s] for a yes/no judge
     (:func:`search_kinds` with two kinds).  Returns (status, critical speed)."""
-    kinds = search_kinds(lambda v: "stick-slip" if creeps(v) else "smooth", low, high,
+    kinds = search_kinds(lambda v: STICK_SLIP if creeps(v) else SMOOTH, low, high,
                          coarse_step, resolution)
     trials = [CreepTrial(speed=v, kind=k, ripple_ratio=0.0, stick_fraction=0.0,
                          stick_slip_frequency=None) for v, k in kinds.items()]
@@ -506,7 +504,7 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
             break
         steps = judge_staircase(result.time, result["table_speed"], sp, starts, dwell, rule)
         for k in range(len(trials), len(sp)):
-            if steps[k].kind == "undecided" and level[k] + 1 < len(levels):
+            if steps[k].kind == UNDECIDED and level[k] + 1 < len(levels):
                 level[k] += 1
                 break
             trials.append(steps[k])
@@ -566,7 +564,7 @@ def critical_speed_stepdown(
     found: dict[float, CreepTrial] = {round(t.speed, 12): t for t in coarse_trials}
     for i in range(len(coarse_trials) - 1):
         upper, lower = coarse_trials[i], coarse_trials[i + 1]
-        if upper.kind == lower.kind or "undecided" in (upper.kind, lower.kind):
+        if upper.kind == lower.kind or UNDECIDED in (upper.kind, lower.kind):
             continue
         fine = np.round(np.arange(upper.speed - step, lower.speed - step / 2, -step), 12)
         fine_trials, t_fine = walk_down(system, [*coarse[:i + 1], *fine], nut_speed=nut_speed,

@@ -48,10 +48,10 @@ from scipy.optimize import least_squares
 
 from ..parameters import DriveParameters, ParameterError, dumps
 from ..parameters.toml_io import toml_comment, toml_string
-from .identification import _correlation, _covariance, noise_level
+from .fit_statistics import correlation, covariance, noise_level
 
 __all__ = ["MEASURABLE", "Experiment", "FitError", "FitResult", "ParameterEstimate",
-           "fit_drive", "free_parameter_bounds", "noise_level", "read_experiment"]
+           "fit_drive", "free_parameter_bounds", "read_experiment"]
 
 #: signals a trace may carry: name → (dimension, default unit, header aliases)
 MEASURABLE: dict[str, tuple[str, str, tuple[str, ...]]] = {
@@ -871,8 +871,8 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
             combos.append({"singular_value_ratio": float(sv[i] / sv[0]) if sv[0] > 0 else 0.0,
                            "combination": {ev.paths[j]: float(vec[j]) for j in order
                                            if abs(vec[j]) >= 0.1}})
-    cov_t = _covariance(jac, ssr, dof)  # θ units
-    corr = _correlation(cov_t)
+    cov_t = covariance(jac, ssr, dof)  # θ units
+    corr = correlation(cov_t)
     tq = float(stats.t.ppf(0.5 + confidence / 2.0, dof))
     threshold = ssr * (1.0 + float(stats.f.ppf(confidence, 1, dof)) / dof)
     cov = cov_t * np.outer(start, start)

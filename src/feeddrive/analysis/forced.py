@@ -3,7 +3,7 @@
 A periodic disturbance on a fast shaft (the DDFS's motors turn at ~16 mm/s of nut motion)
 makes the table speed ripple at the disturbance's frequency at every speed; the ripple's size
 falls roughly as 1/v_n and does not depend on the command.  Such a drive never "creeps" in
-the sense of :class:`~feeddrive.analysis.metrics.VerdictRule` (stick-slip or a self-sustained
+the sense of :class:`~feeddrive.analysis.cycle_verdict.VerdictRule` (stick-slip or a self-sustained
 oscillation): it oscillates everywhere, and its critical speed is *defined by a threshold* —
 the lowest command at which the steady peak-to-peak table-speed ripple stays below ``threshold``
 × the command.  With 1.0 the speed just touches zero (a visible staircase in a position
@@ -19,7 +19,7 @@ from typing import Any
 
 from ..engine.simulate import DriveSystem, SolverOptions, simulate
 from ..model.reference import ConstantSpeed
-from .metrics import creep_metrics
+from .creep_window import creep_metrics
 
 THRESHOLDS = (0.3, 0.5, 1.0)
 TRIAL = 12.0  # [s] the forced ripple is steady after the start (checked against 24 s)

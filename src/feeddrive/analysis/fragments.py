@@ -20,7 +20,10 @@ from typing import Any
 
 from ..parameters import DriveParameters, ParameterError, from_dict, to_dict
 from ..parameters.toml_io import parse_toml, read_toml_file, toml_comment
-from .identification import SITES, DynamicFit, Estimate, StaticFit
+from ..units import SITES
+from .fit_statistics import Estimate
+from .presliding import DynamicFit
+from .static_fit import StaticFit
 
 __all__ = ["friction_fragment", "load_fragment", "merge_fragment"]
 

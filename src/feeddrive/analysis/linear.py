@@ -196,8 +196,13 @@ class _Evaluator:
                                                                                np.ndarray]:
         dy = np.empty(self.n)
         aux = np.empty(len(self.model.aux))
-        self.model.module.rhs(_T0, np.ascontiguousarray(y, dtype=float), self.held,
-                              self.model.P if P is None else P, self.model.T, 0, 0, 0, dy, aux)
+        P = self.model.P if P is None else P
+        if any(P[k] != 0.0 for _, k in self.model.clocks):  # the loops as continuous ones
+            P = P.copy()
+            for _, k in self.model.clocks:
+                P[k] = 0.0
+        self.model.module.rhs(_T0, np.ascontiguousarray(y, dtype=float), self.held, P,
+                              self.model.T, dy, aux)
         return dy, aux
 
 

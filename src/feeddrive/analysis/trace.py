@@ -1,7 +1,7 @@
 """Creep analysis of a measured (or exported) table position trace.  SI units.
 
 Pipeline: position [m] → speed by a Savitzky–Golay differentiator → segments (one per
-commanded speed) → :func:`feeddrive.analysis.metrics.creep_metrics` per segment → critical
+commanded speed) → :func:`feeddrive.analysis.creep_window.creep_metrics` per segment → critical
 speed of a step-down run (Wang2021 Sect. 6: the speed is lowered in 0.01 mm/s steps until
 the table crawls).
 
@@ -50,7 +50,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .metrics import CreepMetrics, CreepThresholds, creep_metrics, resample_size, steady_window
+from .creep_window import CreepMetrics, CreepThresholds, creep_metrics, steady_window
+from .trace_input import resample_size
 
 __all__ = [
     "CriticalSpeed",
@@ -100,7 +101,7 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
     """Table speed [m/s] from position [m] by a Savitzky–Golay differentiator (see module).
 
     An uneven record is resampled onto a uniform grid of its median step, at most
-    :data:`~feeddrive.analysis.metrics.MAX_RESAMPLE_FACTOR` × its samples: a record with a
+    :data:`~feeddrive.analysis.trace_input.MAX_RESAMPLE_FACTOR` × its samples: a record with a
     gap is refused, naming the gap (``lines``: file line of each sample; ``source``: file).
     """
     t = np.asarray(time, dtype=float)

@@ -8,18 +8,20 @@ auxiliary outputs as one standalone C99 file, translated from the same kernels n
 needs only ``<math.h>``, ``<string.h>`` and ``<stdlib.h>`` and exports::
 
     #define FD_N_STATE, FD_N_AUX, FD_N_HELD, FD_N_PARAM, FD_N_TABLE
+    #define FD_N_CLOCK
     void fd_rhs(double t, const double *y, double *held, const double *P, const double *T,
-                long n_pos, long n_vel, long n_cur, double *dy, double *aux);
-    void fd_sample_update(long k, double t, double *y, double *held, const double *P,
-                          const double *T, long n_pos, long n_vel, long n_cur, double base);
+                double *dy, double *aux);
+    void fd_sample_update(double t, double *y, double *held, const double *P,
+                          const double *T, const long *tick);
     void fd_aux(double t, const double *y, double *held, const double *P, const double *T,
-                long n_pos, long n_vel, long n_cur, double *aux);
+                double *aux);
     extern const double fd_parameters[FD_N_PARAM], fd_tables[FD_N_TABLE];  (data=True)
     extern const char *const fd_state_names[FD_N_STATE], *const fd_aux_names[...],
                           *const fd_parameter_names[FD_N_PARAM];
 
-with the arguments of the numba ``model.module.rhs`` / ``sample_update`` (``n_pos``, ``n_vel``,
-``n_cur``: loop sample periods in multiples of ``base`` [s], 0 = continuous).
+with the arguments of the numba ``model.module.rhs`` / ``sample_update`` (a sampled part reads
+its period from ``P``; ``tick``: per clock of the model's sample schedule, the count of its
+instant now or −1, :mod:`feeddrive.solvers.schedule`).
 :func:`compile_shared` builds a shared library with the system's C compiler and
 :func:`load_shared` wraps it with ctypes (used by the tests).
 """
@@ -53,14 +55,11 @@ STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
 
 _GENERATED_TYPES = {
     **{f"rhs.{k}": v for k, v in (("t", "float"), ("y", "double*"), ("held", "double*"),
-                                  ("P", "double*"), ("T", "double*"), ("n_pos", "int"),
-                                  ("n_vel", "int"), ("n_cur", "int"), ("dy", "double*"),
+                                  ("P", "double*"), ("T", "double*"), ("dy", "double*"),
                                   ("aux", "double*"))},
-    **{f"sample_update.{k}": v for k, v in (("k", "int"), ("t", "float"), ("y", "double*"),
+    **{f"sample_update.{k}": v for k, v in (("t", "float"), ("y", "double*"),
                                             ("held", "double*"), ("P", "double*"),
-                                            ("T", "double*"), ("n_pos", "int"),
-                                            ("n_vel", "int"), ("n_cur", "int"),
-                                            ("base", "float"))},
+                                            ("T", "double*"), ("tick", "long*"))},
 }
 
 
@@ -115,37 +114,37 @@ def c_model_source(model: Model, *, data: bool = True) -> str:
         f"#define FD_N_STATE {n_state}",
         f"#define FD_N_AUX {n_aux}",
         f"#define FD_N_HELD {n_held}",
+        f"#define FD_N_CLOCK {int(module.N_CLOCK)}",
         f"#define FD_N_PARAM {n_param}",
         f"#define FD_N_TABLE {n_table}",
     ]
     body = c_text(unit)
-    rhs_args = "t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux"
-    upd_args = "k, t, y, held, P, T, n_pos, n_vel, n_cur, base"
+    rhs_args = "t, y, held, P, T, dy, aux"
+    upd_args = "t, y, held, P, T, tick"
     tail = [
         "void fd_rhs(double t, const double *y, double *held, const double *P, const double *T,"
-        "\n            long n_pos, long n_vel, long n_cur, double *dy, double *aux);",
-        "void fd_sample_update(long k, double t, double *y, double *held, const double *P,"
-        "\n                      const double *T, long n_pos, long n_vel, long n_cur, "
-        "double base);",
+        "\n            double *dy, double *aux);",
+        "void fd_sample_update(double t, double *y, double *held, const double *P,"
+        "\n                      const double *T, const long *tick);",
         "void fd_aux(double t, const double *y, double *held, const double *P, const double *T,"
-        "\n            long n_pos, long n_vel, long n_cur, double *aux);",
+        "\n            double *aux);",
         "",
         "/* dy = f(t, y) and the auxiliary signals; held: the sampled controller's values */",
         "void fd_rhs(double t, const double *y, double *held, const double *P, const double *T,"
-        "\n            long n_pos, long n_vel, long n_cur, double *dy, double *aux)\n{\n"
+        "\n            double *dy, double *aux)\n{\n"
         f"    {rhs.cname}({rhs_args});\n}}",
         "",
-        "/* the sampled controller at sample instant k (t = k*base): updates held */",
-        "void fd_sample_update(long k, double t, double *y, double *held, const double *P,"
-        "\n                      const double *T, long n_pos, long n_vel, long n_cur, "
-        "double base)\n{\n"
+        "/* the sampled parts at an instant of the schedule (tick: per clock its count, or -1):"
+        " updates held */",
+        "void fd_sample_update(double t, double *y, double *held, const double *P,"
+        "\n                      const double *T, const long *tick)\n{\n"
         f"    {'(void)y; ' if 'y' not in upd.written else ''}{upd.cname}({upd_args});\n}}",
         "",
         "/* the auxiliary signals alone */",
         "void fd_aux(double t, const double *y, double *held, const double *P, const double *T,"
-        "\n            long n_pos, long n_vel, long n_cur, double *aux)\n{\n"
+        "\n            double *aux)\n{\n"
         "    double dy[FD_N_STATE];\n"
-        f"    {rhs.cname}(t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux);\n}}",
+        f"    {rhs.cname}(t, y, held, P, T, dy, aux);\n}}",
         "",
         *(["const double fd_parameters[FD_N_PARAM] = {\n" + _c_doubles(model.P) + "\n};",
            "const double fd_tables[FD_N_TABLE] = {\n" + _c_doubles(model.T) + "\n};"]
@@ -165,17 +164,19 @@ SOLVER_SHAPES: dict[str, tuple[str, ...]] = {
     **{name: ("FD_N_STATE",) for name in (
         "y", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "yt", "y_new", "e", "atol", "rel_mask",
         "f0", "ft", "yp", "fp", "live", "piv", "b", "u1", "u2", "u3", "u4", "u5", "u6", "fs",
-        "q1", "q2")},
+        "q1", "q2", "out")},
     "J": ("FD_N_STATE", "FD_N_STATE"), "M": ("FD_N_STATE", "FD_N_STATE"),
     "S": ("FD_N_STATE", "FD_N_STATE + 1"), "colour": ("FD_N_STATE + 1",), "aux": ("FD_N_AUX",),
+    "steps": ("FD_N_CLOCK",), "schedule": ("FD_N_CLOCK",), "tick": ("FD_N_CLOCK",),
 }
 #: ``fd_rhs`` as a translated template calls it (``bindings={"rhs": RHS}``): the arrays at
-#: positions 2, 8, 9 (held — non-const in the API —, dy, aux) are written, y, P, T stay const
-RHS = CFunction("fd_rhs", None, (2, 8, 9))
+#: positions 2, 5, 6 (held — non-const in the API —, dy, aux) are written, y, P, T stay const
+RHS = CFunction("fd_rhs", None, (2, 5, 6))
 #: ``fd_sample_update`` likewise: y (non-const in the API) and held
-SAMPLE_UPDATE = CFunction("fd_sample_update", None, (2, 3))
+SAMPLE_UPDATE = CFunction("fd_sample_update", None, (1, 2))
 #: element types of the solver building blocks' non-double arrays (numpy ``int64`` / ``bool_``)
-SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*"}
+SOLVER_TYPES = {"piv": "long*", "live": "bool*", "S": "bool*", "colour": "long*",
+                "steps": "long*", "schedule": "long*", "tick": "long*"}
 
 
 def solver_kernels() -> dict[str, Any]:
@@ -184,18 +185,20 @@ def solver_kernels() -> dict[str, Any]:
     Returns
     -------
     dict
-        C name → Python template: one DOPRI5 step, its error norm, and the RODAS4 step with
-        its grouped finite-difference Jacobian, frozen-state test and dense output
-        (:mod:`feeddrive.solvers.switching`, :mod:`feeddrive.solvers.rodas4`).
+        C name → Python template: one DOPRI5 step, its error estimate and norm, and the
+        RODAS4 step with its grouped finite-difference Jacobian, frozen-state test and dense
+        output (the steps of :mod:`feeddrive.solvers.steps` written for the tableaux of
+        :mod:`feeddrive.solvers.tableaux`; :mod:`feeddrive.solvers.rodas4`).
     """
-    from ..solvers import rodas4, switching
+    from ..solvers import rodas4, steps
 
-    return {"fd_dp5_step": switching.dp5_step_template,
-            "fd_error_norm": switching.error_norm_template,
+    return {"fd_dp5_step": steps.function("_dp5_step"),
+            "fd_dp5_error": steps.function("_dp5_error"),
+            "fd_error_norm": steps.error_norm_template,
             "fd_fd_jacobian": rodas4.fd_jacobian_template,
             "fd_frozen_states": rodas4.frozen_states_template,
-            "fd_rodas4_step": rodas4.rodas4_step_template,
-            "fd_rodas4_dense": rodas4.rodas4_dense_template}
+            "fd_rodas4_step": steps.function("_r4_rodas4_step"),
+            "fd_rodas4_dense": steps.function("_r4_rodas4_dense")}
 
 
 def c_solver_source(names: tuple[str, ...] | None = None) -> str:
@@ -306,6 +309,7 @@ def compile_shared(c_text: str, folder: str | os.PathLike[str], *, name: str = "
 
 
 _DP = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+_LP = np.ctypeslib.ndpointer(dtype=np.int64, flags="C_CONTIGUOUS")
 
 
 @dataclass
@@ -324,20 +328,20 @@ class CLibrary:
     path: Path
 
     def rhs(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
-            n_pos: int, n_vel: int, n_cur: int, dy: np.ndarray, aux: np.ndarray) -> None:
+            dy: np.ndarray, aux: np.ndarray) -> None:
         """``fd_rhs``: fills ``dy`` and ``aux`` in place (the numba ``rhs`` signature)."""
-        self.lib.fd_rhs(float(t), y, held, P, T, int(n_pos), int(n_vel), int(n_cur), dy, aux)
+        self.lib.fd_rhs(float(t), y, held, P, T, dy, aux)
 
-    def sample_update(self, k: int, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray,
-                      T: np.ndarray, n_pos: int, n_vel: int, n_cur: int, base: float) -> None:
-        """``fd_sample_update``: updates ``held`` in place."""
-        self.lib.fd_sample_update(int(k), float(t), y, held, P, T, int(n_pos), int(n_vel),
-                                  int(n_cur), float(base))
+    def sample_update(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray,
+                      T: np.ndarray, tick: np.ndarray) -> None:
+        """``fd_sample_update``: updates ``held`` in place (``tick``: int64, one per clock)."""
+        self.lib.fd_sample_update(float(t), y, held, P, T,
+                                  np.ascontiguousarray(tick, dtype=np.int64))
 
     def aux(self, t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
-            n_pos: int, n_vel: int, n_cur: int, aux: np.ndarray) -> None:
+            aux: np.ndarray) -> None:
         """``fd_aux``: fills ``aux`` in place."""
-        self.lib.fd_aux(float(t), y, held, P, T, int(n_pos), int(n_vel), int(n_cur), aux)
+        self.lib.fd_aux(float(t), y, held, P, T, aux)
 
 
 def load_shared(path: str | os.PathLike[str]) -> CLibrary:
@@ -356,11 +360,11 @@ def load_shared(path: str | os.PathLike[str]) -> CLibrary:
         memory.
     """
     lib = ctypes.CDLL(str(path))
-    L, D = ctypes.c_long, ctypes.c_double
-    lib.fd_rhs.argtypes = [D, _DP, _DP, _DP, _DP, L, L, L, _DP, _DP]
+    D = ctypes.c_double
+    lib.fd_rhs.argtypes = [D, _DP, _DP, _DP, _DP, _DP, _DP]
     lib.fd_rhs.restype = None
-    lib.fd_sample_update.argtypes = [L, D, _DP, _DP, _DP, _DP, L, L, L, D]
+    lib.fd_sample_update.argtypes = [D, _DP, _DP, _DP, _DP, _LP]
     lib.fd_sample_update.restype = None
-    lib.fd_aux.argtypes = [D, _DP, _DP, _DP, _DP, L, L, L, _DP]
+    lib.fd_aux.argtypes = [D, _DP, _DP, _DP, _DP, _DP]
     lib.fd_aux.restype = None
     return CLibrary(lib=lib, path=Path(path))

@@ -10,7 +10,7 @@ import math
 
 import typer
 
-from ..analysis.metrics import CreepThresholds
+from ..analysis.creep_window import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME
 from ..io.outputs import PLOT_FORMATS, check_output_file
 from ..parameters import ParameterError
@@ -105,7 +105,7 @@ def analyze_command(
                   f"{trace.position_column!r}")
     for note in result.notes:
         _say(f"  {note}")
-    from ..analysis.metrics import frequency_label
+    from ..analysis.creep_window import frequency_label
 
     for i, seg in enumerate(result.segments, start=1):
         m = seg.metrics

@@ -44,7 +44,7 @@ def calibrate_command(
     creeps (stick-slip or sustained oscillation) 0.01 mm/s below the target and not at it.
     The fit is the geometric mean of the two values where those verdicts switch."""
     from ..analysis.calibrate import Target, Unknown, calibrate
-    from ..analysis.metrics import VerdictRule
+    from ..analysis.cycle_verdict import VerdictRule
     from ..parameters import save
 
     if not (0 < tolerance < 1):

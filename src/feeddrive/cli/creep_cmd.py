@@ -49,7 +49,7 @@ def creep_command(
         critical_speed_stepdown,
         format_bands,
     )
-    from ..analysis.metrics import VerdictRule
+    from ..analysis.cycle_verdict import VerdictRule
     from ..engine.simulate import DriveSystem
 
     if method not in ("bisect", "stepdown", "both"):

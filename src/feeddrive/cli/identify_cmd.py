@@ -1,7 +1,7 @@
 """`feeddrive identify static|dynamic|merge`: LuGre friction from measurements.
 
-File formats: docs/measured-data.md.  The logic lives in feeddrive.analysis.identification,
-feeddrive.analysis.fragments and feeddrive.io.measured.
+File formats: docs/measured-data.md.  The logic lives in feeddrive.analysis.static_fit,
+feeddrive.analysis.presliding, feeddrive.analysis.fragments and feeddrive.io.measured.
 """
 
 from __future__ import annotations
@@ -16,7 +16,9 @@ from ..io.outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
 from ..parameters import DriveParameters, LuGreParameters, ParameterError, save
 
 if TYPE_CHECKING:
-    from ..analysis.identification import DynamicFit, Estimate, StaticFit
+    from ..analysis.fit_statistics import Estimate
+    from ..analysis.presliding import DynamicFit
+    from ..analysis.static_fit import StaticFit
 
 from ._common import (
     MM_PER_S,
@@ -38,7 +40,7 @@ identify_app = typer.Typer(no_args_is_help=True,
                            help="Identify LuGre friction parameters from measured tests.")
 app.add_typer(identify_app, name="identify")
 
-SITES = ("screw", "nut", "guide")  # as feeddrive.analysis.identification.SITES
+SITES = ("screw", "nut", "guide")  # the CDFS/DDFS sites (feeddrive.units.SITES)
 _SITE_HELP = "Friction site: screw, nut or guide (Wang2021 Sect. 4)."
 _SEP_HELP = "Column separator (default: detected; 'tab', 'space' accepted)."
 
@@ -95,7 +97,7 @@ def _print_static(fit: StaticFit, confidence: float) -> None:
 
 def _warnings(fit: StaticFit | DynamicFit) -> list[str]:
     """One line per fitted value the data do not determine."""
-    from ..analysis.identification import StaticFit
+    from ..analysis.static_fit import StaticFit
 
     if isinstance(fit, StaticFit):
         labels = {"coulomb_force": "F_c", "static_force": "F_s", "stribeck_velocity": "v_s",
@@ -175,7 +177,7 @@ def static_command(
 ) -> None:
     """Fit F_c, F_s, v_s and σ2 per direction to constant-speed friction tests."""
     from ..analysis.fragments import friction_fragment
-    from ..analysis.identification import fit_static
+    from ..analysis.static_fit import fit_static
     from ..io.measured import read_static_test
 
     site = _site(site)
@@ -245,7 +247,7 @@ def dynamic_command(
 ) -> None:
     """Fit σ0 and σ1 to a pre-sliding test; says so when σ1 is poorly determined."""
     from ..analysis.fragments import friction_fragment
-    from ..analysis.identification import fit_presliding, site_mass
+    from ..analysis.presliding import fit_presliding, site_mass
     from ..io.measured import read_presliding_test
 
     site = _site(site)
@@ -255,7 +257,7 @@ def dynamic_command(
         raise ValueError(f"--confidence = {confidence!r}: expected a level in [0.5, 1)")
     _check_outputs(out, plot, [file, params_file, *(static or [])], force)
     params = _base(preset_name, params_file, static)
-    m = mass if mass is not None else site_mass(params, site)
+    m = mass if mass is not None else site_mass(params, site, "cdfs")
     data = read_presliding_test(file, time_column=time_column, force_column=force_column,
                                 position_column=position_column, time_unit=time_unit,
                                 force_unit=force_unit, position_unit=position_unit, sep=sep,

@@ -251,7 +251,7 @@ def _print_summary(summary: dict[str, Any], drive: str, profile: str,
 
 
 def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
-    from ..analysis.metrics import CreepThresholds, frequency_label
+    from ..analysis.creep_window import CreepThresholds, frequency_label
 
     n = _units.number
     rows: list[tuple[str, str]] = []

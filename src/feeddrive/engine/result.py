@@ -21,7 +21,7 @@ from ..parameters import dumps
 from ..units import ENGINEERING as _ENGINEERING
 
 if TYPE_CHECKING:
-    from ..analysis.metrics import CreepMetrics, CreepThresholds
+    from ..analysis.creep_window import CreepMetrics, CreepThresholds
     from ..model.assemble import Model
     from ..model.reference import Profile
     from .simulate import DriveSystem
@@ -206,7 +206,7 @@ class Result:
         CreepMetrics
             See :func:`feeddrive.creep_metrics`.
         """
-        from ..analysis.metrics import creep_metrics
+        from ..analysis.creep_window import creep_metrics
         return creep_metrics(self.time, self["table_speed"], self.command_speed,
                              thresholds=thresholds, window=window)
 
@@ -223,7 +223,7 @@ class Result:
         dict
             Plain values in mm/s, µm, s and Hz, with the names of their units.
         """
-        from ..analysis.metrics import position_metrics, sine_metrics
+        from ..analysis.tracking import position_metrics, sine_metrics
 
         warnings: list[str] = []
         attrs = self.attrs
@@ -280,10 +280,10 @@ class Result:
         return out
 
     def _travel_warning(self) -> str | None:
-        """Whether the table left the screw's travel (feeddrive.analysis.metrics)."""
+        """Whether the table left the screw's travel (feeddrive.analysis.tracking)."""
         import tomllib
 
-        from ..analysis.metrics import travel_warning
+        from ..analysis.tracking import travel_warning
 
         if self._run is not None:
             length = self._run.system.parameters.screw.length
@@ -300,7 +300,7 @@ class Result:
         """The steady window (:func:`steady_window`) of the first stretch where a sampled
         command holds its largest speed (the top of a trapezoid, the first step of a
         staircase), so that ramps are not judged as creep."""
-        from ..analysis.metrics import steady_window
+        from ..analysis.creep_window import steady_window
 
         ref, c = self["table_speed_reference"], self.command_speed
         hold = np.abs(ref - c) <= 1e-6 * abs(c)
@@ -316,7 +316,7 @@ class Result:
         (each step of a staircase, each level of a CSV profile; ramps and stops are left
         out), each judged over its own steady window: as ``feeddrive analyze`` summarises a
         step-down trace per segment (issue 24 item 6)."""
-        from ..analysis.metrics import creep_metrics, steady_window
+        from ..analysis.creep_window import creep_metrics, steady_window
 
         t, v = self.time, self["table_speed"]
         ref = self["table_speed_reference"]

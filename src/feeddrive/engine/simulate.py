@@ -189,47 +189,78 @@ class SimulationError(RuntimeError):
 
 @dataclass(frozen=True)
 class Sampling:
-    """The breakpoint grid: fastest controller period ``base`` [s], loop periods in units of
-    it (0 = continuous), and the output stride."""
+    """The breakpoint grid of a run and its sample schedule: breakpoint unit ``base`` [s] (the
+    fastest sample period), per clock of the model (:attr:`Model.clocks
+    <feeddrive.model.assemble.Model.clocks>`: the loops and every sampled part) its period in
+    breakpoints (0 = continuous), and the output stride in breakpoints."""
 
     base: float
-    n_pos: int
-    n_vel: int
-    n_cur: int
+    clocks: tuple[str, ...]
+    steps: tuple[int, ...]
     out_every: int
 
+    @property
+    def schedule(self) -> np.ndarray:
+        """``steps`` as the solvers take it (int64; one entry at least)."""
+        return np.array(self.steps or (0,), dtype=np.int64)
 
-def sampling(params: DriveParameters, output_interval: float) -> Sampling:
+    @property
+    def sampled(self) -> bool:
+        """Whether any part is sampled (the run has instants where outputs jump)."""
+        return any(n > 0 for n in self.steps)
+
+    def step(self, clock: str) -> int:
+        """The period of ``clock`` (e.g. ``"controller.velocity_period"``) in breakpoints."""
+        return self.steps[self.clocks.index(clock)]
+
+    def parameters(self, model: Model, P: np.ndarray | None = None) -> np.ndarray:
+        """``P`` (default: the model's) with each sampled clock's period slot set to the
+        spacing of its instants on the grid, steps·base [s]: what a sampled part integrates
+        over is the time between its instants (equal to the declared period within the
+        1e-9 the grid allows)."""
+        out = (model.P if P is None else P).copy()
+        for (_, slot), n in zip(model.clocks, self.steps, strict=True):
+            if n > 0:
+                out[slot] = n * self.base
+        return out
+
+
+def sampling(params: DriveParameters, output_interval: float,
+             model: Model | None = None, *, P: np.ndarray | None = None) -> Sampling:
+    """The breakpoint grid and sample schedule of a run of ``params`` (``model``: its assembled
+    model, whose declared clocks are the schedule; None: the three loops' and the sections'
+    own schedules read from ``params``; ``P``: the parameter vector the periods are read from,
+    default the model's).
+
+    Every period must be a multiple of the fastest one (each instant is an exact breakpoint
+    count); the output interval a multiple of the fastest period.  A sampled part may run
+    beside continuous loops: the solvers stop at its instants only (its clock is the
+    schedule), re-evaluating the derivative there."""
     c = params.controller
-    periods = [c.position_period, c.velocity_period, c.current_period]
+    loops = [(f"controller.{k}", float(getattr(c, k))) for k in (
+        "position_period", "velocity_period", "current_period")]
     # sampled parts (model/parts/) with schedules of their own: (field, period [s]) pairs
-    schedules = [(f"{name}.{field}", period) for name, section in params.sections
-                 for field, period in getattr(section, "schedule", lambda: ())()]
-    if any(p > 0 for _, p in schedules) and not any(p > 0 for p in periods):
-        field, period = next(fp for fp in schedules if fp[1] > 0)
-        raise ParameterError(field, period, "a sampled part needs sampled loops (set "
-                             "controller.current_period > 0 [s]): the breakpoints of "
-                             "continuous loops assume nothing jumps there")
-    nonzero = [p for p in periods if p > 0] + [p for _, p in schedules if p > 0]
+    parts = [(f"{name}.{field}", float(period)) for name, section in params.sections
+             for field, period in getattr(section, "schedule", lambda: ())()]
+    clocks = list(model.periods(P).items()) if model is not None else loops + parts
     if (c.encoder_counts > 0 or c.grating_resolution > 0) and not (
             c.position_period > 0 and c.velocity_period > 0):
         raise ParameterError("controller.encoder_counts", c.encoder_counts,
                              "quantisation needs sampled position and velocity loops "
                              "(set controller.position_period and velocity_period > 0 [s])")
+    nonzero = [p for _, p in clocks if p > 0]
     base = min(nonzero) if nonzero else output_interval
-    named = [(f"controller.{k}", p) for k, p in zip(
-        ("position_period", "velocity_period", "current_period"), periods, strict=True)]
-    for field, period in named + schedules:  # every schedule lands on the breakpoint grid
+    for slot, period in clocks:  # every schedule lands on the breakpoint grid
         if period > 0 and abs(period / base - round(period / base)) > 1e-9 * period / base:
-            raise ParameterError(field, period, f"expected a multiple of the fastest sample "
+            raise ParameterError(slot, period, f"expected a multiple of the fastest sample "
                                  f"period {base:g} [s] (each schedule is an exact event "
                                  "time on one breakpoint grid)")
-    n = [int(round(p / base)) if p > 0 else 0 for p in periods]
+    steps = tuple(int(round(p / base)) if p > 0 else 0 for _, p in clocks)
     out_every = max(1, int(round(output_interval / base)))
     if abs(out_every * base - output_interval) > 1e-9 * output_interval:
         raise ParameterError("options.output_interval", output_interval,
                              f"must be a multiple of the fastest controller period {base:g} [s]")
-    return Sampling(base, n[0], n[1], n[2], out_every)
+    return Sampling(base, tuple(name for name, _ in clocks), steps, out_every)
 
 
 def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: Sampling,
@@ -243,8 +274,8 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
         return
     allowed = int(options.max_steps * t_probe / t_end) + 1000
     _, _, _, stats, _ = dopri5.integrate(
-        model, y0.copy(), t_probe, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
-        grid.n_cur, options.rtol, atol, rel, h_init, h_max, adaptive, allowed, bound=bound)
+        model, y0.copy(), t_probe, grid.out_every, grid.base, grid.schedule, options.rtol,
+        atol, rel, h_init, h_max, adaptive, allowed, bound=bound, P=grid.parameters(model))
     if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
         problem = budget.step_rate_problem(
             steps=int(stats[1]), probe_time=float(stats[4]), duration=t_end,
@@ -256,7 +287,7 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
 
 # A run stops early as diverged when a speed state exceeds this multiple of the reference
 # speed: the largest commanded table plus nut speed, the largest initial speed or 1 mm/s,
-# whichever is largest.  5× the "unstable" verdict's 20× (feeddrive.analysis.metrics
+# whichever is largest.  5× the "unstable" verdict's 20× (feeddrive.analysis.creep_window
 # CreepThresholds.max_speed_ratio): a run stopped here is "unstable" by that verdict too.
 DIVERGENCE_SPEED_RATIO = 100.0
 DIVERGENCE_SPEED_FLOOR = 1e-3  # [m/s]
@@ -392,7 +423,8 @@ class Simulation:
         self.system, self.profile = system, profile
         self.options = options = options or SolverOptions()
         self.model = system.model(profile)
-        self.grid = sampling(system.parameters, options.output_interval)
+        self.grid = sampling(system.parameters, options.output_interval, self.model)
+        self.P = self.grid.parameters(self.model)  # the sample periods on the grid
         self.atol, self.rel = self.model.tolerances(
             options.position_tolerance, options.speed_tolerance, options.current_tolerance)
         self.y0 = system.initial_vector(self.model)
@@ -532,8 +564,7 @@ class _Chunks:
         if self.dense:
             self.mode, self.adaptive = _DENSE_MODES[options.method]
             cap, first = options.largest_step, DENSE_CHUNK
-            continuous = grid.n_pos == 0 and grid.n_vel == 0 and grid.n_cur == 0
-            self.want_aux = want_aux or not continuous
+            self.want_aux = want_aux or grid.sampled
         else:  # every breakpoint a step end
             self.adaptive = 1 if options.method == "dopri5" else 0
             cap, first = min(options.largest_step, grid.base), FIRST_CHUNK
@@ -557,17 +588,16 @@ class _Chunks:
         t_stop = stop * grid.base
         if self.dense:
             t, yy, aa, stats, _ = switching.integrate(
-                sim.model, y, t_stop, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
-                grid.n_cur, options.rtol, sim.atol, sim.rel, self.h_init, self.h_max,
-                self.adaptive, max_steps, self.mode,
+                sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule, options.rtol,
+                sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive, max_steps, self.mode,
                 profile_breakpoints(sim.profile, t_stop, grid.base), self.want_aux,
-                start=start, held=held, memory=memory, bound=sim.bound)
+                start=start, held=held, memory=memory, bound=sim.bound, P=sim.P)
         else:
             t, yy, aa, stats, _ = dopri5.integrate(
-                sim.model, y, t_stop, grid.out_every, grid.base, grid.n_pos, grid.n_vel,
-                grid.n_cur, options.rtol, sim.atol, sim.rel, self.h_init, self.h_max,
-                self.adaptive, max_steps, start=start, held=held, memory=memory,
-                bound=sim.bound)
+                sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule, options.rtol,
+                sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive, max_steps,
+                start=start, held=held, memory=memory,
+                bound=sim.bound, P=sim.P)
         if start > 0 and t.size and t[0] <= start * grid.base:
             t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
         return t, yy, aa, stats

@@ -62,10 +62,10 @@ def decimate(n: int, key: np.ndarray, max_points: int = MAX_POINTS) -> np.ndarra
 
 def verdict_of(time: np.ndarray, speed: np.ndarray, command_speed: float) -> dict[str, Any]:
     """The creep verdict and its kind, from the window-independent rule `feeddrive creep`
-    judges every trial by (:func:`feeddrive.analysis.metrics.trace_verdict`): a limit cycle
+    judges every trial by (:func:`feeddrive.analysis.cycle_verdict.trace_verdict`): a limit cycle
     is *stick-slip* (the table stops) or *oscillation* (it does not); a decayed trace is
     *smooth*; a trace that has done neither yet is *undecided* (a longer run decides)."""
-    from ..analysis.metrics import trace_verdict
+    from ..analysis.cycle_verdict import trace_verdict
 
     v = trace_verdict(time, speed, command_speed)
     ripple = f"ripple {100 * v.ripple_ratio:.3g} % of the command"

@@ -18,7 +18,7 @@ import zipfile
 from importlib import resources
 from pathlib import Path
 
-from ..solvers import switching
+from ..solvers import schedule, steps
 from . import solver
 from .description import Variable, c_tables, model_description
 from .model import FmuModel
@@ -66,24 +66,34 @@ def library_suffix() -> str:
 def solver_c() -> str:
     """C text of the FMU's integrator (``fd_advance``), translated from the same Python the
     numba build compiles, with the model's ``fd_rhs`` / ``fd_sample_update`` as its ``rhs`` /
-    ``sample_update`` and the DOPRI5 step and error norm of :mod:`feeddrive.solvers.switching`
-    translated with it."""
-    from ..backends.c_backend import RHS, SAMPLE_UPDATE, SOLVER_SHAPES, translate_kernels
+    ``sample_update`` and the DOPRI5 step, error estimate and norm of
+    :mod:`feeddrive.solvers.steps` translated with it."""
+    from ..backends.c_backend import (
+        RHS,
+        SAMPLE_UPDATE,
+        SOLVER_SHAPES,
+        SOLVER_TYPES,
+        translate_kernels,
+    )
 
     shapes = dict(SOLVER_SHAPES)
     shapes.update({"held": ("FD_N_HELD",), "held_prev": ("FD_N_HELD",), "aux": ("FD_N_AUX",),
                    "f_new": ("FD_N_STATE",), "memory": ("FD_MEMORY_SIZE",)})
     return translate_kernels(
-        [solver.advance_template], dict(solver.CONSTANTS),
+        [solver.advance_template], dict(solver.CONSTANTS), param_types=SOLVER_TYPES,
         bindings={"rhs": RHS, "sample_update": SAMPLE_UPDATE,
-                  "_dp5_step": switching.dp5_step_template,
-                  "_error_norm": switching.error_norm_template},
+                  "_dp5_step": steps.function("_dp5_step"),
+                  "_dp5_error": steps.function("_dp5_error"),
+                  "_error_norm": steps.error_norm_template,
+                  "_pi_factor": steps.pi_factor_template,
+                  "_reject_factor": steps.reject_factor_template},
         shapes=shapes, names={"advance_template": "fd_advance"})
 
 
 def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: str) -> str:
     """The whole ``fmu.c``."""
     from ..backends.c_backend import c_model_source
+    from ..backends.c_translate import _mangle
 
     wrapper = resources.files(__package__).joinpath("wrapper.c").read_text(encoding="utf-8")
     memory = "\n".join(f"#define FD_{name} {value}" for name, value in solver.CONSTANTS.items()
@@ -99,6 +109,9 @@ def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: 
         memory,
         solver_c(),
         "#define FD_ADVANCE fd_advance",
+        # the schedule's kernels, translated with the integrator (it calls them)
+        f"#define FD_DUE {_mangle(schedule.due.py_func)}",
+        f"#define FD_NEXT_INSTANT {_mangle(schedule.next_instant.py_func)}",
         "/* ---- variables and start values (feeddrive.fmu.description) */",
         c_tables(fm, vs, fmi=fmi, kind=kind, token=token),
         "/* ---- the FMI functions */",

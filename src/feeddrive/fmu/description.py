@@ -70,7 +70,10 @@ _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisati
 # "inputs.": the linearisation's zero-valued reference and load slots (feeddrive.analysis.linear);
 # the FMU's own inputs carry those signals
 _HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
-           "disturbances.load_offset", "disturbances.load_points", "inputs.")
+           "disturbances.load_offset", "disturbances.load_points", "inputs.",
+           # the loops' periods: settings of their own (SETTINGS), written into these slots
+           "controller.position_period", "controller.velocity_period",
+           "controller.current_period")
 
 _SIMPLE = {
     "screw.H": ("m/rad", "lead per radian H (transmission ratio)"),
@@ -475,7 +478,9 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
             ("S_POSITION_PERIOD", S_INDEX["controller.position_period"]),
             ("S_VELOCITY_PERIOD", S_INDEX["controller.velocity_period"]),
             ("S_CURRENT_PERIOD", S_INDEX["controller.current_period"]),
-            ("S_INTEGRATE", S_INDEX["integrate_speed_reference"]))],
+            ("S_INTEGRATE", S_INDEX["integrate_speed_reference"]),
+            *((f"P_{k.upper()}", m.parameter_names.index(f"controller.{k}"))
+              for k in ("position_period", "velocity_period", "current_period")))],
         *[f"#define {name} {value}" for name, value in (
             ("K_TIME", K_TIME), ("K_STATE", K_STATE), ("K_DER", K_DER), ("K_AUX", K_AUX),
             ("K_PARAM", K_PARAM), ("K_INPUT", K_INPUT), ("K_SETTING", K_SETTING),
@@ -502,6 +507,10 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         + ", ".join(quote_c(s[0]) for s in SETTINGS) + "};",
         'static const char *const PERIOD_NAMES[] = {"controller.position_period", '
         '"controller.velocity_period", "controller.current_period"};',
+        # the sample schedule: the parameter slot of every clock's period (C fmu_sampling)
+        _c_array("int", "CLOCK_SLOT", [k for _, k in m.clocks]),
+        "static const char *const CLOCK_NAMES[] = {"
+        + ", ".join(quote_c(name) for name, _ in m.clocks) + "};",
         "static const char *const STATUS_MESSAGES[] = {"
         + ", ".join(quote_c(t) for t in _status_messages()) + "};",
     ]

@@ -22,6 +22,7 @@ from ..model.codegen import compile_module
 from ..model.disturbances import LoadProfile
 from ..model.reference import REF_INPUT
 from ..parameters import DriveParameters, ParameterError
+from ..solvers import schedule
 from . import solver
 
 # the zero load record that makes the assembler emit the load-force slot
@@ -120,19 +121,24 @@ class NumbaCoSimulation:
         self.work = [np.zeros(self.n) for _ in range(10)]
         self.aux = np.zeros(len(m.aux))
         self.memory = solver.new_memory(1e-6)
-        self.grid: tuple[float, int, int, int] | None = None
+        self.grid: tuple[float, np.ndarray] | None = None  # breakpoint unit [s], schedule
+        self.tick = m.continuous_ticks()
         self.t = 0.0
         self.x_int = np.zeros(2)  # integrals of the speed references (table, nut)
         self._sampling = sampling
 
     def start(self, params: DriveParameters, inputs: dict[str, float]) -> None:
-        g = self._sampling(params, 1e-3)
-        self.grid = (g.base, g.n_pos, g.n_vel, g.n_cur)
+        m = self.fm.model
+        for name, k in m.clocks:  # the loops' periods of ``params`` (the FMU's settings)
+            if name.startswith("controller."):
+                self.P[k] = getattr(params.controller, name.split(".", 1)[1])
+        g = self._sampling(params, 1e-3, m, P=self.P)
+        self.P = g.parameters(m, self.P)  # the periods on the grid, as the FMU writes them
+        self.grid = (g.base, g.schedule)
         self._write_inputs(inputs)
-        base, n_pos, n_vel, n_cur = self.grid
         self.held_prev[:] = self.held  # as the FMU: the update at t0 is redone if the inputs
-        self.module.sample_update(0, 0.0, self.y, self.held, self.P, self.T, n_pos, n_vel,
-                                  n_cur, base)
+        if schedule.due(0, g.schedule, self.tick) > 0:
+            self.module.sample_update(0.0, self.y, self.held, self.P, self.T, self.tick)
         self.memory[solver.MEM_AT_SAMPLE] = 1.0  # change before the first step
         self._last_inputs = dict(inputs)
 
@@ -150,14 +156,14 @@ class NumbaCoSimulation:
 
     def do_step(self, h: float, inputs: dict[str, float]) -> None:
         assert self.grid is not None
-        base, n_pos, n_vel, n_cur = self.grid
+        base, steps = self.grid
         redo = 1 if inputs != self._last_inputs else 0
         self._last_inputs = dict(inputs)
         self._write_inputs(inputs)
         w = self.work
         status = self.module.advance(
             self.t, self.t + h, 0.0, self.n, self.y, self.held, self.held_prev, self.P, self.T,
-            n_pos, n_vel, n_cur, base, self.rtol, self.atol, self.rel, self.h_max,
+            steps, self.tick, base, self.rtol, self.atol, self.rel, self.h_max,
             self.max_steps, redo, self.memory, *w[:10], self.aux)
         if status != solver.STATUS_OK:
             raise RuntimeError(f"t = {self.t:g} s: {solver.STATUS_MESSAGES[status]}")

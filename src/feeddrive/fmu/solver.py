@@ -2,8 +2,9 @@
 
 :func:`advance_template` is written once, in the restricted Python of the package's kernels,
 and built twice from that one text: by numba into a model's generated module (next to its
-``rhs``, ``sample_update`` and the DOPRI5 step :func:`feeddrive.solvers.switching.
-dp5_step_template`, :func:`~feeddrive.solvers.switching.error_norm_template` it calls), and by
+``rhs``, ``sample_update`` and the DOPRI5 step, error estimate and error norm it calls — the
+one explicit step of :mod:`feeddrive.solvers.steps` written for the tableau
+:data:`feeddrive.solvers.tableaux.DOPRI5`, the same text every driver calls), and by
 the C translator (:mod:`feeddrive.backends.c_backend`) into the FMU's C source.  The tests run
 both on the same model and inputs and require the same trajectory.
 
@@ -23,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ..solvers.dopri5 import E1, E3, E4, E5, E6, E7
+from ..solvers.schedule import due, next_instant
 
 # memory[...] (written with these literal indices in advance_template: the C translator takes a
 # name inside an assignment target for a local): step size, PI controller's last error, index
@@ -39,8 +40,7 @@ STATUS_MESSAGES = {
     STATUS_STEP_UNDERFLOW: "step size fell below its minimum",
     STATUS_NON_FINITE: "state became non-finite (NaN or Inf)",
 }
-CONSTANTS = {"E1": E1, "E3": E3, "E4": E4, "E5": E5, "E6": E6, "E7": E7,
-             "MEM_H": MEM_H, "MEM_ERR": MEM_ERR, "MEM_KB": MEM_KB,
+CONSTANTS = {"MEM_H": MEM_H, "MEM_ERR": MEM_ERR, "MEM_KB": MEM_KB,
              "MEM_AT_SAMPLE": MEM_AT_SAMPLE, "MEM_STEPS": MEM_STEPS,
              "MEM_REJECTED": MEM_REJECTED, "MEM_RHS": MEM_RHS, "STATUS_OK": STATUS_OK,
              "STATUS_MAX_STEPS": STATUS_MAX_STEPS,
@@ -49,7 +49,10 @@ CONSTANTS = {"E1": E1, "E3": E3, "E4": E4, "E5": E5, "E6": E6, "E7": E7,
 
 # Placeholders: the generated module supplies these (see feeddrive.solvers.dopri5).
 _dp5_step: Any = None
+_dp5_error: Any = None
 _error_norm: Any = None
+_pi_factor: Any = None
+_reject_factor: Any = None
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
@@ -70,7 +73,7 @@ def new_memory(h_init: float) -> np.ndarray:
 
 def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
                      held: np.ndarray, held_prev: np.ndarray, P: np.ndarray, T: np.ndarray,
-                     n_pos: int, n_vel: int, n_cur: int, base: float, rtol: float,
+                     schedule: np.ndarray, tick: np.ndarray, base: float, rtol: float,
                      atol: np.ndarray, rel_mask: np.ndarray, h_max: float, max_steps: int,
                      redo: int, memory: np.ndarray, f0: np.ndarray, k2: np.ndarray,
                      k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
@@ -78,20 +81,22 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
                      aux: np.ndarray) -> int:
     """Integrate the ``n`` states ``y`` from ``t`` to ``t_end`` [s]; return a status.
 
-    Sample instants are ``t0 + k·base`` (``t0``: the start of the run, where the caller applied
-    ``sample_update(0, …)``); ``memory`` (:data:`MEM_H` …) carries the step size, controller
-    memory and the index of the last instant applied from one call to the next.  ``redo`` = 1:
-    the inputs changed since the last call; if that call ended on a sample instant, its update
-    is repeated from ``held_prev`` with the new inputs (an instant on a communication point
-    takes the inputs of the step that starts there).  ``held`` is left updated, ``aux`` holds
+    Sample instants are ``t0 + k·base`` for the breakpoints k of the schedule ``schedule``
+    (:mod:`feeddrive.solvers.schedule`; ``t0``: the start of the run, where the caller applied
+    the update of breakpoint 0; ``tick``: work space, one per clock); ``memory``
+    (:data:`MEM_H` …) carries the step size, controller memory and the index of the last
+    instant applied from one call to the next.  ``redo`` = 1: the inputs changed since the
+    last call; if that call ended on a sample instant, its update is repeated from
+    ``held_prev`` with the new inputs (an instant on a communication point takes the inputs
+    of the step that starts there).  ``held`` is left updated, ``aux`` holds
     the signals at ``t_end``.  The other arrays (length ``n``) are work space.
     """
-    sampled = n_pos > 0 or n_vel > 0 or n_cur > 0
     kb = int(memory[MEM_KB])
     if redo == 1 and memory[MEM_AT_SAMPLE] > 0.5:
         for i in range(held.size):
             held[i] = held_prev[i]
-        sample_update(kb, t, y, held, P, T, n_pos, n_vel, n_cur, base)
+        due(kb, schedule, tick)
+        sample_update(t, y, held, P, T, tick)
     h = memory[MEM_H]
     err_old = memory[MEM_ERR]
     steps = 0
@@ -101,15 +106,16 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
     alpha = 0.2 - 0.75 * beta
     h_min = 1e-14
     status = STATUS_OK
-    rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
+    rhs(t, y, held, P, T, f0, aux)
     n_rhs += 1
     memory[3] = 0.0  # MEM_AT_SAMPLE
     while t < t_end and status == STATUS_OK:
         # ---- the next event: a sample instant or the communication point
         t_ev = t_end
         is_sample = False
-        if sampled:
-            t_s = t0 + (kb + 1) * base
+        kb_next = next_instant(kb, schedule)  # the schedule's next instant (-1: none)
+        if kb_next >= 0:
+            t_s = t0 + kb_next * base
             if t_s <= t_end + 1e-9 * base:
                 is_sample = True
                 if t_s < t_end - 1e-9 * base:
@@ -124,18 +130,17 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
             t_new = t_ev
             while True:
                 t_new = t_ev if last else t + h_try
-                _dp5_step(t, h_try, y, f0, held, P, T, n_pos, n_vel, n_cur, k2, k3, k4, k5,
-                          k6, f_new, yt, y_new, aux, t_new)
+                _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4, k5, k6, f_new, yt, y_new,
+                          aux, t_new)
                 n_rhs += 6
                 steps += 1
-                for i in range(n):
-                    e[i] = h_try * (E1 * f0[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i]
-                                    + E6 * k6[i] + E7 * f_new[i])
+                _dp5_error(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
                 err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
                 if err <= 1.0:
                     break
                 rejected += 1
-                h_try *= max(0.2, 0.9 * err ** (-0.2))
+                fac = _reject_factor(err)
+                h_try *= fac
                 last = False
                 if h_try < h_min:
                     status = STATUS_STEP_UNDERFLOW
@@ -146,13 +151,10 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
             if status != STATUS_OK:
                 break
             # ---- accepted: PI step-size control for the next step
-            if err == 0.0:
-                h_new = h_try * 5.0
-            else:
-                fac = 0.9 * err ** (-alpha) * err_old ** beta
-                fac = min(5.0, max(0.2, fac))
+            fac = _pi_factor(err, err_old, alpha, beta)
+            if err != 0.0:
                 err_old = max(err, 1e-4)
-                h_new = h_try * fac
+            h_new = h_try * fac
             if not last or h_new < h:
                 h = min(h_new, h_max)
             finite = True
@@ -170,13 +172,14 @@ def advance_template(t: float, t_end: float, t0: float, n: int, y: np.ndarray,
             break
         # ---- at the event
         if is_sample:
-            kb += 1
+            kb = kb_next
             if t_ev == t_end:
                 for i in range(held.size):
                     held_prev[i] = held[i]
                 memory[3] = 1.0  # MEM_AT_SAMPLE
-            sample_update(kb, t, y, held, P, T, n_pos, n_vel, n_cur, base)
-            rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
+            due(kb, schedule, tick)
+            sample_update(t, y, held, P, T, tick)
+            rhs(t, y, held, P, T, f0, aux)
             n_rhs += 1
     memory[0] = h  # MEM_H
     memory[1] = err_old  # MEM_ERR
@@ -191,5 +194,6 @@ def template_source() -> str:
     """The text of :func:`advance_template` as placed in a model's generated module (named
     ``advance``)."""
     src = inspect.getsource(advance_template).replace("def advance_template(", "def advance(", 1)
-    consts = "\n".join(f"{k} = {v!r}" for k, v in CONSTANTS.items() if not k.startswith("E"))
-    return consts + "\n\n\n@kernel\n" + src
+    consts = "\n".join(f"{k} = {v!r}" for k, v in CONSTANTS.items())
+    return (consts + "\nfrom feeddrive.solvers.schedule import due, next_instant\n\n\n@kernel\n"
+            + src)

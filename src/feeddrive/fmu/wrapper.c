@@ -37,7 +37,7 @@ typedef struct {
     double work[N_WORK][FD_N_STATE];
     double memory[FD_MEMORY_SIZE];
     double base, next_event;
-    long n_pos, n_vel, n_cur, k_event;
+    long steps[FD_N_CLOCK], tick[FD_N_CLOCK], k_event;
     int sampled, inputs_changed, dirty, initialized, terminated, logging, model_exchange;
     char name[256];
 #if FMU_FMI_VERSION == 2
@@ -106,43 +106,49 @@ static void fmu_write_inputs(Fmu *m, int with_rates) {
 static void fmu_evaluate(Fmu *m) {
     if (!m->dirty) return;
     if (m->model_exchange) fmu_write_inputs(m, 0);
-    fd_rhs(m->t, m->y, m->held, m->P, m->T, m->n_pos, m->n_vel, m->n_cur, m->dy, m->aux);
+    fd_rhs(m->t, m->y, m->held, m->P, m->T, m->dy, m->aux);
     m->dy[FD_N_STATE] = m->u[IN_VT];
     m->dy[FD_N_STATE + 1] = m->u[IN_VN];
     m->dirty = 0;
 }
 
+/* the sample schedule (feeddrive.solvers.schedule): the loop periods of the settings go into
+   their parameter slots, then every clock of the model (CLOCK_SLOT) is put on one grid */
 static int fmu_sampling(Fmu *m) {
-    double periods[3];
-    long n[3];
-    double base = 0.0;
+    static const int settings[3] = {S_POSITION_PERIOD, S_VELOCITY_PERIOD, S_CURRENT_PERIOD};
+    static const int slots[3] = {P_POSITION_PERIOD, P_VELOCITY_PERIOD, P_CURRENT_PERIOD};
+    double base = 0.0, period;
     int i;
     char msg[200];
-    periods[0] = m->s[S_POSITION_PERIOD];
-    periods[1] = m->s[S_VELOCITY_PERIOD];
-    periods[2] = m->s[S_CURRENT_PERIOD];
     for (i = 0; i < 3; i++) {
-        if (!(periods[i] >= 0.0) || !isfinite(periods[i])) {
+        period = m->s[settings[i]];
+        if (!(period >= 0.0) || !isfinite(period)) {
             snprintf(msg, sizeof msg, "%s = %g: expected a period >= 0 [s]", PERIOD_NAMES[i],
-                     periods[i]);
+                     period);
             fmu_log(m, ST_ERROR, msg);
             return ST_ERROR;
         }
-        if (periods[i] > 0.0 && (base == 0.0 || periods[i] < base)) base = periods[i];
+        m->P[slots[i]] = period;
     }
-    for (i = 0; i < 3; i++) {
-        n[i] = periods[i] > 0.0 ? (long)floor(periods[i] / base + 0.5) : 0;
-        if (periods[i] > 0.0 && fabs(n[i] * base - periods[i]) > 1e-9 * periods[i]) {
+    for (i = 0; i < FD_N_CLOCK; i++) {
+        period = m->P[CLOCK_SLOT[i]];
+        if (period > 0.0 && (base == 0.0 || period < base)) base = period;
+    }
+    for (i = 0; i < FD_N_CLOCK; i++) {
+        period = m->P[CLOCK_SLOT[i]];
+        m->steps[i] = period > 0.0 ? (long)floor(period / base + 0.5) : 0;
+        if (period > 0.0 && fabs(m->steps[i] * base - period) > 1e-9 * period) {
             snprintf(msg, sizeof msg, "%s = %g: must be an integer multiple of the fastest "
-                     "controller period %g [s]", PERIOD_NAMES[i], periods[i], base);
+                     "controller period %g [s]", CLOCK_NAMES[i], period, base);
             fmu_log(m, ST_ERROR, msg);
             return ST_ERROR;
         }
     }
+    /* each sampled part integrates over the spacing of its instants on the grid
+       (feeddrive.engine.simulate.Sampling.parameters) */
+    for (i = 0; i < FD_N_CLOCK; i++)
+        if (m->steps[i] > 0) m->P[CLOCK_SLOT[i]] = m->steps[i] * base;
     m->base = base > 0.0 ? base : 1.0;
-    m->n_pos = n[0];
-    m->n_vel = n[1];
-    m->n_cur = n[2];
     m->sampled = base > 0.0;
     return ST_OK;
 }
@@ -181,11 +187,11 @@ static int fmu_initialize(Fmu *m) {
     m->t = m->t0;
     fmu_write_inputs(m, !m->model_exchange);
     memcpy(m->held_prev, m->held, sizeof(m->held));
-    fd_sample_update(0, m->t, m->y, m->held, m->P, m->T, m->n_pos, m->n_vel, m->n_cur,
-                     m->base);
+    if (FD_DUE(0, m->steps, m->tick) > 0)
+        fd_sample_update(m->t, m->y, m->held, m->P, m->T, m->tick);
     m->memory[FD_MEM_AT_SAMPLE] = 1.0;
     m->k_event = 0;
-    m->next_event = m->t0 + m->base;
+    m->next_event = m->t0 + (m->sampled ? FD_NEXT_INSTANT(0, m->steps) : 1) * m->base;
     m->inputs_changed = 0;
     m->dirty = 1;
     fmu_evaluate(m);
@@ -209,7 +215,7 @@ static int fmu_do_step(Fmu *m, double t, double h) {
     m->inputs_changed = 0;
     fmu_write_inputs(m, 1);
     status = FD_ADVANCE(m->t, t_end, m->t0, (long)FD_N_STATE, m->y, m->held, m->held_prev, m->P,
-                        m->T, m->n_pos, m->n_vel, m->n_cur, m->base, m->s[S_RTOL], m->atol,
+                        m->T, m->steps, m->tick, m->base, m->s[S_RTOL], m->atol,
                         m->rel, m->s[S_MAX_STEP], (long)MAX_STEPS_PER_CALL, (long)redo,
                         m->memory, m->work[0], m->work[1], m->work[2], m->work[3], m->work[4],
                         m->work[5], m->work[6], m->work[7], m->work[8], m->work[9], m->aux);
@@ -236,11 +242,11 @@ static int fmu_do_step(Fmu *m, double t, double h) {
 static void fmu_event_update(Fmu *m, int *next_defined, double *next_time) {
     if (m->sampled) {
         while (m->t >= m->next_event - 1e-9 * m->base) {
-            m->k_event += 1;
+            m->k_event = FD_NEXT_INSTANT(m->k_event, m->steps);
             fmu_write_inputs(m, 0);
-            fd_sample_update(m->k_event, m->t, m->y, m->held, m->P, m->T, m->n_pos, m->n_vel,
-                             m->n_cur, m->base);
-            m->next_event = m->t0 + (m->k_event + 1) * m->base;
+            FD_DUE(m->k_event, m->steps, m->tick);
+            fd_sample_update(m->t, m->y, m->held, m->P, m->T, m->tick);
+            m->next_event = m->t0 + FD_NEXT_INSTANT(m->k_event, m->steps) * m->base;
             m->dirty = 1;
         }
         *next_defined = 1;

@@ -49,10 +49,22 @@ class Model:
     jacobian_colours: np.ndarray  # (n + 1,) group of each column in the grouped FD Jacobian
     # signals a part declares as factor × a state or signal: (signal, source name, factor)
     derived: tuple[tuple[codegen.Signal, str, float], ...] = ()
+    # the sample schedule: (name, index in P of its period [s]) per clock (Builder.clock)
+    clocks: tuple[tuple[str, int], ...] = ()
 
     @property
     def n_held(self) -> int:
         return int(self.module.N_HELD)
+
+    def periods(self, P: np.ndarray | None = None) -> dict[str, float]:
+        """Sample period [s] of every clock of the schedule by name (0: continuous), read from
+        the parameter vector ``P`` (default: the model's)."""
+        P = self.P if P is None else P
+        return {name: float(P[k]) for name, k in self.clocks}
+
+    def continuous_ticks(self) -> np.ndarray:
+        """The ``tick`` argument of ``sample_update`` with no clock due (all −1)."""
+        return np.full(int(self.module.N_CLOCK), -1, dtype=np.int64)
 
     def index(self, name: str) -> int:
         """Position of state ``name`` in the state vector."""
@@ -205,6 +217,9 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         raise ParameterError("disturbances.lead_error", dist.lead_error.amplitudes,
                              f"the {drive} drive has no lead screw")
 
+    # the sample schedule: the loops' clocks (the parts' own join in declare_part)
+    loops.declare_clocks(b, parameters.controller)
+
     # ---- right-hand side
     b.emit(f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}")
     b.emit(f"{b.a('table_position_reference')} = ref_x")
@@ -255,7 +270,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         module=module, source=source, drive=drive,
         sites=tuple((site.name, law.name) for site, law, _ in laws),
         jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
-        derived=tuple(b.derived))
+        derived=tuple(b.derived), clocks=tuple(b.clocks))
 
 
 @functools.cache
@@ -264,9 +279,10 @@ def solver_sources() -> list[str]:
     the dense-output DOPRI5 ⇄ RODAS4 driver).  numba compiles each at its first call, so a
     model only ever run with one method never compiles the other.  Cached: reading template
     sources with ``inspect`` costs ~15 ms, more than a short simulation."""
-    from ..solvers import dopri5, switching
+    from ..solvers import dopri5, rodas4, steps, switching
 
-    return dopri5.template_sources() + switching.template_sources()
+    return (steps.template_sources() + rodas4.template_sources() + dopri5.template_sources()
+            + switching.template_sources())
 
 
 

@@ -64,6 +64,8 @@ class Builder:
     dynamic: dict[str, str] = field(default_factory=dict)  # alias -> registry expression
     dynamic_sources: list[str] = field(default_factory=list)
     local_kernels: dict[str, int] = field(default_factory=dict)  # alias -> its state count
+    # the sample schedule: (name, index in P of its period [s]) of every sampled part
+    clocks: list[tuple[str, int]] = field(default_factory=list)
     table_size: int = 0
     reference_call: str = "(0.0, 0.0, 0.0, 0.0)"
     tol_scale: dict[str, float] = field(default_factory=dict)
@@ -147,6 +149,24 @@ class Builder:
     def h(self, name: str) -> str:
         return f"held[{self.held.index(name)}]"
 
+    def clock(self, name: str) -> int:
+        """Declare a sampled part's clock, its period [s] the parameter slot ``name`` (0: the
+        part runs continuously): the solver merges every clock's instants k·period into its
+        event times and calls ``sample_update`` there with ``tick[c]``, the count k of the
+        clock's instant now (−1: not one of its instants).  Returns the clock's index c: the
+        sampled update tests ``tick[c] >= 0`` (``tick[c] == 0``: its first instant), the
+        right-hand side ``P[<period>] > 0.0`` (sampled, holding its outputs) — a model reads
+        its schedule from its parameter vector, the solver's call arguments stay the same
+        for every model."""
+        if any(n == name for n, _ in self.clocks):
+            raise ValueError(f"clock {name!r} declared twice")
+        self.clocks.append((name, self.param_index[name]))
+        return len(self.clocks) - 1
+
+    def tick(self, name: str) -> str:
+        """Code of clock ``name``'s count at this instant in the sampled update (−1: none)."""
+        return f"tick[{[n for n, _ in self.clocks].index(name)}]"
+
     def table(self, values: np.ndarray) -> int:
         """Append a flat data table (profiles, load records); return its offset in T."""
         flat = np.ascontiguousarray(values, dtype=float).ravel()
@@ -208,7 +228,7 @@ def _indent(lines: list[str], level: int = 1) -> str:
 
 def rhs_source(builder: Builder) -> str:
     """The generated right-hand side ``rhs`` (without its decorator)."""
-    return ("def rhs(t, y, held, P, T, n_pos, n_vel, n_cur, dy, aux):\n"
+    return ("def rhs(t, y, held, P, T, dy, aux):\n"
             + _indent(builder.rhs_lines or ["pass"]) + "\n")
 
 
@@ -229,13 +249,14 @@ def module_source(builder: Builder, solver_sources: list[str]) -> str:
         f"N_STATE = {len(builder.states)}",
         f"N_AUX = {len(builder.aux)}",
         f"N_HELD = {max(1, len(builder.held))}",
+        f"N_CLOCK = {max(1, len(builder.clocks))}",
         "",
         "",
         "@kernel",
         rhs_source(builder),
         "",
         "@kernel",
-        "def sample_update(k, t, y, held, P, T, n_pos, n_vel, n_cur, base):",
+        "def sample_update(t, y, held, P, T, tick):",
         _indent(builder.sample_lines or ["pass"]),
         "",
     ]

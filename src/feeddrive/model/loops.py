@@ -164,6 +164,22 @@ def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: b
     return first
 
 
+CLOCKS = ("position_period", "velocity_period", "current_period")
+
+
+def declare_clocks(b: Builder, c: object) -> None:
+    """The three loops' sample periods [s] as parameter slots ``controller.<loop>_period`` and
+    as clocks of the model's sample schedule (:meth:`Builder.clock`; 0 = continuous)."""
+    for name in CLOCKS:
+        b.param(f"controller.{name}", float(getattr(c, name)))
+        b.clock(f"controller.{name}")
+
+
+def _period(b: Builder, loop: str) -> str:
+    """Code of a loop's sample period [s] (``loop``: position, velocity or current)."""
+    return b.p(f"controller.{loop}_period")
+
+
 def declare_states(b: Builder, axes: list[Axis]) -> None:
     """Loop integrator states, grouped by loop (all velocity integrals, then all current)."""
     for ax in axes:
@@ -215,7 +231,7 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
     sc = [f"{target}[{b.aux_index[f'{ax.name}_speed_command']}]" for ax in axes]
     ic = [f"{target}[{b.aux_index[f'{ax.name}_current_command']}]" for ax in axes]
     verr, sat, ccmd = b.use(velocity_error), b.use(saturate), b.use(current_command)
-    out.append("if n_pos > 0:")
+    out.append(f"if {_period(b, 'position')} > 0.0:")
     for ax, s in zip(axes, sc, strict=True):
         out.append(f"    {s} = {b.h(ax.name + '.speed_command')}")
     out.append("else:")
@@ -223,7 +239,7 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
         out.append(f"    {s} = {_speed_law(b, ax)}({ax.reference} - {ax.position}, "
                    f"{ax.feedforward}, {P}, {ax.param_offset}) + "
                    f"{P}[{ax.param_offset + INJ_SPEED}]")
-    out.append("if n_vel > 0:")
+    out.append(f"if {_period(b, 'velocity')} > 0.0:")
     for ax, c in zip(axes, ic, strict=True):
         held = b.h(ax.name + '.current_command')
         out.append(f"    {c} = {sat}({held} + {ax.current_feedforward}, "
@@ -252,7 +268,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     # ---- right-hand side: commands, continuous integrators, current loops
     lines: list[str] = []
     _emit_commands(b, axes, lines, "aux")
-    lines.append(f"if n_vel == 0 and P[{axes[0].param_offset + KVI}] != 0.0:")
+    lines.append(f"if {_period(b, 'velocity')} == 0.0 and P[{axes[0].param_offset + KVI}] != 0.0:")
     for ax in axes:
         o = ax.param_offset
         lines += _guarded(ax, [
@@ -271,7 +287,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
         o = ax.param_offset
         ic = ax.name + "_current_integral"
         lines += [
-            "if n_cur > 0:",
+            f"if {_period(b, 'current')} > 0.0:",
             f"    u = {b.h(ax.name + '.voltage')}",
             f"    {b.dy(ic)} = 0.0",
             "else:",
@@ -288,17 +304,18 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
 
     # ---- sampled update
     s: list[str] = [f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}"]
-    s.append("if n_pos > 0 and k % n_pos == 0:")
+    s.append(f"if {b.tick('controller.position_period')} >= 0:")
     for ax in axes:
         body = [f"q_{ch.name} = {quant}({ch.state}, {ch.quantum})" for ch in channels
                 if f"q_{ch.name}" in ax.position_q]
         body.append(f"{b.h(ax.name + '.speed_command')} = {_speed_law(b, ax)}({ax.reference} - "
                     f"{ax.position_q}, {ax.feedforward}, P, {ax.param_offset})")
         s += _guarded(ax, body)
-    s.append("if n_vel > 0 and k % n_vel == 0:")
-    s.append("    tv = n_vel * base")
+    s.append(f"if {b.tick('controller.velocity_period')} >= 0:")
+    s.append(f"    tv = {_period(b, 'velocity')}")
     for ax in axes:
-        s.append(f"    w_cmd_{ax.name} = {b.h(ax.name + '.speed_command')} if n_pos > 0 else "
+        s.append(f"    w_cmd_{ax.name} = {b.h(ax.name + '.speed_command')} if "
+                 f"{_period(b, 'position')} > 0.0 else "
                  f"{_speed_law(b, ax)}({ax.reference} - {ax.position}, {ax.feedforward}, P, "
                  f"{ax.param_offset})")
     for ch in channels:
@@ -306,7 +323,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     quanta = " or ".join(f"{ch.quantum} > 0.0" for ch in dict(
         (c.quantum, c) for c in channels).values())
     s.append(f"    if {quanta}:")
-    s.append("        if k == 0:")
+    s.append(f"        if {b.tick('controller.velocity_period')} == 0:")
     for ch in channels:
         s.append(f"            s_{ch.name} = 0.0")
     s.append("        else:")
@@ -322,8 +339,8 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
             f"{verr}(w_cmd_{ax.name}, {ax.speed_q}, P, {ax.param_offset})", ccmd,
             b.h(ax.name + ".velocity_integral"), b.h(ax.name + ".current_command"),
             ax.param_offset, I_MAX, rate, sat, "tv", "i_raw"))
-    s.append("if n_cur > 0 and k % n_cur == 0:")
-    s.append("    tc = n_cur * base")
+    s.append(f"if {b.tick('controller.current_period')} >= 0:")
+    s.append(f"    tc = {_period(b, 'current')}")
     s.append("    cmd = np.empty(N_AUX)")
     cmd_lines: list[str] = []
     _emit_commands(b, axes, cmd_lines, "cmd")

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..analysis.identification import DynamicFit, StaticFit, _stribeck_model
+from ..analysis.presliding import DynamicFit
+from ..analysis.static_fit import StaticFit, stribeck_curve
 from ..analysis.trace import TraceAnalysis
 
 __all__ = ["plot_dynamic_fit", "plot_static_fit", "plot_trace"]
@@ -36,7 +37,7 @@ def plot_static_fit(fit: StaticFit, path: str | Path) -> None:
                           b.branch.stribeck_velocity, b.branch.viscous_coefficient])
         top, bottom = axes[0, col], axes[1, col]
         top.plot(v_mm, b.force, "o", ms=3, label="measured")
-        top.plot(grid * 1e3, _stribeck_model(theta, grid), "-", label="fit")
+        top.plot(grid * 1e3, stribeck_curve(theta, grid), "-", label="fit")
         top.axvline(b.branch.stribeck_velocity * 1e3, ls=":", c="grey", label="v_s")
         top.set_xscale("log")
         top.set_ylabel("|friction force| [N]")

@@ -14,7 +14,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from ..analysis.metrics import reversal_overshoot_at  # noqa: E402
+from ..analysis.tracking import reversal_overshoot_at  # noqa: E402
 
 # file → (report section, caption: what it shows; what the paper shows)
 CAPTIONS: dict[str, tuple[str, str]] = {

@@ -30,7 +30,8 @@ _HERE = Path(__file__).resolve().parent
 # the code that computes the stored studies (beyond the compiled kernels)
 _STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "forced_study.py",
                   *(_HERE.parent / "analysis" / f"{name}.py"
-                    for name in ("critical", "metrics", "forced", "compensation",
+                    for name in ("critical", "cycle_verdict", "creep_window", "tracking",
+                                 "trace_input", "verdict_words", "forced", "compensation",
                                  "sensitivity")),
                   _HERE.parent / "engine" / "simulate.py", _HERE.parent / "engine" / "result.py",
                   _HERE.parent / "model" / "mechanisms" / "ball_screw_stiffness.py",

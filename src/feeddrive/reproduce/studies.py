@@ -19,7 +19,8 @@ from ..analysis.critical import (
     critical_speed_stepdown,
     decide,
 )
-from ..analysis.metrics import VerdictRule, reversal_overshoot
+from ..analysis.cycle_verdict import VerdictRule
+from ..analysis.tracking import reversal_overshoot
 from ..engine.result import Result
 from ..engine.simulate import DriveSystem, Simulation, simulate
 from ..model.mechanisms.ball_screw_stiffness import stiffness_chain
@@ -53,7 +54,7 @@ class StudySettings:
     """Search settings shared by the studies (speeds in m/s, times in s).
 
     Every creep trial runs ``trial_initial_duration``, doubling up to ``trial_max_duration``
-    until its verdict is decided (:class:`~feeddrive.analysis.metrics.VerdictRule`).
+    until its verdict is decided (:class:`~feeddrive.analysis.cycle_verdict.VerdictRule`).
     """
 
     trial_initial_duration: float = protocol.TRIAL_DURATION

@@ -1,9 +1,12 @@
 """Compiled Dormand–Prince 5(4) integrator for the closed-loop drive, with declared breakpoints.
 
-Breakpoints are the controller sample instants (the zero-order-hold outputs jump there) and the
-output instants; the integrator lands on each exactly, applies the discrete controller update,
-and restarts the step from there, so no step straddles a jump in the right-hand side
-(the "declare your discontinuities" lesson of diffrax; python-control issue #933).
+Breakpoints are the instants of the model's sample schedule (every sampled part's clock,
+:mod:`feeddrive.solvers.schedule`; the zero-order-hold outputs jump there) and the output
+instants; the integrator lands on each exactly, applies the sampled parts' update where one is
+due, and restarts the step from there, so no step straddles a jump in the right-hand side
+(the "declare your discontinuities" lesson of diffrax; python-control issue #933).  The step
+is the one explicit step of :mod:`feeddrive.solvers.steps` for the tableau
+:data:`feeddrive.solvers.tableaux.DOPRI5`, written into :func:`integrate_template`'s text.
 
 Error control: mixed absolute/relative weights per state; states whose absolute size carries no
 meaning (shaft angles, positions) use absolute tolerance only.  Step-size control is Hairer's
@@ -20,33 +23,25 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from . import steps
+from .schedule import due, next_instant
+from .tableaux import DOPRI5
+
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
-# Dormand–Prince coefficients
-C2, C3, C4, C5 = 1 / 5, 3 / 10, 4 / 5, 8 / 9
-A21 = 1 / 5
-A31, A32 = 3 / 40, 9 / 40
-A41, A42, A43 = 44 / 45, -56 / 15, 32 / 9
-A51, A52, A53, A54 = 19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729
-A61, A62, A63, A64, A65 = 9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656
-B1, B3, B4, B5, B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
-E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525,
-                          -1 / 40)
-
-ORDER = 5
-TABLEAU = ("C2", "C3", "C4", "C5", "A21", "A31", "A32", "A41", "A42", "A43", "A51", "A52", "A53",
-           "A54", "A61", "A62", "A63", "A64", "A65", "B1", "B3", "B4", "B5", "B6", "E1", "E3",
-           "E4", "E5", "E6", "E7", "STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW",
-           "STATUS_NON_FINITE", "STATUS_STOPPED", "STATUS_DIVERGED")
+ORDER = DOPRI5.order
+# module constants the generated module imports from here
+CONSTANTS = ("STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW", "STATUS_NON_FINITE",
+             "STATUS_STOPPED", "STATUS_DIVERGED")
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1
 STATUS_STEP_UNDERFLOW = 2
 STATUS_NON_FINITE = 3
 STATUS_STOPPED = 4  # another thread asked the running call to stop (new_memory's stop slot)
-# a state beyond its divergence bound (feeddrive.engine.simulate.divergence_bounds): the run stops
-# early, the state there recorded as its last sample; not an error, the verdict is "unstable"
+# a state beyond its divergence bound (feeddrive.engine.simulate.divergence_bounds): the run
+# stops early, the state there recorded as its last sample; not an error, the verdict is "unstable"
 STATUS_DIVERGED = 5
 STATUS_MESSAGES = {
     STATUS_OK: "success",
@@ -74,15 +69,24 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
     raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
 
 
+_dp5_step: Any = None  # the generated module's DOPRI5 step (feeddrive.solvers.steps)
+_dp5_error: Any = None
+_error_norm: Any = None
+_pi_factor: Any = None
+_reject_factor: Any = None
+
+
 @functools.lru_cache(maxsize=1)
 def template_sources() -> list[str]:
-    """Text placed in each generated model module: tableau import and the integrator."""
-    names = ", ".join(TABLEAU)
-    src = inspect.getsource(integrate_template).replace("def integrate_template(",
-                                                        "def integrate(", 1)
+    """Text placed in each generated model module: the status codes and the integrator (its
+    step is the one of :mod:`feeddrive.solvers.steps`, placed beside it)."""
+    names = ", ".join(CONSTANTS)
+    src = steps.inline_steps(inspect.getsource(integrate_template)).replace(
+        "def integrate_template(", "def integrate(", 1)
     aux = inspect.getsource(auxiliary_template).replace("def auxiliary_template(",
                                                         "def auxiliary(", 1)
-    return [f"from feeddrive.solvers.dopri5 import ({names})", "@kernel\n" + src,
+    return [f"from feeddrive.solvers.dopri5 import ({names})",
+            "from feeddrive.solvers.schedule import due, next_instant", "@kernel\n" + src,
             "@kernel\n" + aux]
 
 
@@ -96,7 +100,7 @@ def auxiliary_template(t_out: np.ndarray, y_out: np.ndarray, P: np.ndarray,
     dy = np.empty(y_out.shape[1])
     aux = np.empty(N_AUX)
     for i in range(n):
-        rhs(t_out[i], y_out[i], held, P, T, 0, 0, 0, dy, aux)
+        rhs(t_out[i], y_out[i], held, P, T, dy, aux)
         out[i, :] = aux
     return out
 
@@ -114,37 +118,45 @@ def new_memory(n_states: int, h_init: float) -> np.ndarray:
 
 
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
-              n_pos: int, n_vel: int, n_cur: int, rtol: float, atol: np.ndarray,
+              schedule: np.ndarray, rtol: float, atol: np.ndarray,
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
               max_steps: int, *, start: int = 0, held: np.ndarray | None = None,
               memory: np.ndarray | None = None, bound: np.ndarray | None = None,
+              P: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``) to
-    ``t_end`` (see :func:`integrate_template`).  ``held`` (the sampled controller's values)
+    ``t_end`` (see :func:`integrate_template`; ``schedule``: the run's sample schedule,
+    :func:`feeddrive.engine.simulate.sampling`).  ``held`` (the sampled controller's values)
     and ``memory`` (step size, last error) are updated in place, so that a run continued
     from where a previous call stopped is bit-identical to one call over the whole span.
-    ``bound``: the largest |state| per state before the run stops as diverged (None: none)."""
+    ``bound``: the largest |state| per state before the run stops as diverged (None: none);
+    ``P``: the parameter vector (None: the model's; a run passes the periods on its grid,
+    :meth:`feeddrive.engine.simulate.Sampling.parameters`)."""
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states), h_init) if memory is None else memory
     bound = np.full(len(model.states), np.inf) if bound is None else bound
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
-        model.module.integrate(y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P,
-                               model.T, rtol, atol, rel_mask, h_max, adaptive,
-                               max_steps, start, held, memory, bound))
+        model.module.integrate(y0, t_end, out_every, base,
+                               np.ascontiguousarray(schedule, dtype=np.int64),
+                               model.P if P is None else P, model.T,
+                               rtol, atol, rel_mask, h_max, adaptive, max_steps, start, held,
+                               memory, bound))
     return result
 
 
 # error_model="numpy" (feeddrive._jit): a division by zero gives inf/NaN (caught below as a
 # rejected step or STATUS_NON_FINITE) instead of Python's ZeroDivisionError check on every
 # division of the inlined right-hand side; bit-identical results, about 25 % less time.
-def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: int,
-                       n_vel: int, n_cur: int, P: np.ndarray, T: np.ndarray, rtol: float,
+def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
+                       schedule: np.ndarray, P: np.ndarray, T: np.ndarray, rtol: float,
                        atol: np.ndarray, rel_mask: np.ndarray, h_max: float, adaptive: int,
                        max_steps: int, start: int, held: np.ndarray, memory: np.ndarray,
                        bound: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from breakpoint ``start`` to ``t_end`` over a grid of breakpoints spaced
-    ``base`` [s], from the state ``y0`` at t = start·base.
+    ``base`` [s], from the state ``y0`` at t = start·base.  ``schedule``: the sample schedule, the
+    breakpoints between two instants of each clock (:mod:`feeddrive.solvers.schedule`); at an
+    instant the sampled parts are updated and the step restarts from the new derivative.
 
     Output is recorded every ``out_every`` breakpoints (counted from 0).  ``held`` (sampled
     controller) and ``memory`` = [step size, last error, last stage k7 …] are read and left
@@ -171,6 +183,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     k7 = np.empty(n)
     yt = np.empty(n)
     y_new = np.empty(n)
+    e = np.empty(n)
     aux = np.empty(N_AUX)
     steps = 0
     rejected = 0
@@ -185,20 +198,22 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     h_min = 1e-14
     # With every loop continuous nothing jumps at a breakpoint: the last stage of the step that
     # ended there, evaluated at exactly t_break, is the derivative there (first same as last).
-    continuous = n_pos == 0 and n_vel == 0 and n_cur == 0
+    continuous = next_instant(0, schedule) < 0
+    tick = np.empty(schedule.size, dtype=np.int64)
     for kb in range(start, n_break + 1):
         t_break = kb * base
-        # discrete controller update and output at this breakpoint (a continued run applied
-        # the update at its first breakpoint in the previous call already)
-        if kb > start or start == 0:
-            sample_update(kb, t_break, y, held, P, T, n_pos, n_vel, n_cur, base)
+        # the sample instants of the schedule at this breakpoint: the sampled parts' update
+        # (a continued run applied the update at its first breakpoint in the previous call)
+        n_due = due(kb, schedule, tick)
+        if n_due > 0 and (kb > start or start == 0):
+            sample_update(t_break, y, held, P, T, tick)
         if kb == start and start > 0 and continuous:
-            rhs(t_break, y, held, P, T, n_pos, n_vel, n_cur, k1, aux)
+            rhs(t_break, y, held, P, T, k1, aux)
             n_rhs += 1
             for i in range(n):
                 k1[i] = memory[2 + i]
-        elif kb == start or not continuous:
-            rhs(t_break, y, held, P, T, n_pos, n_vel, n_cur, k1, aux)
+        elif kb == start or n_due > 0:
+            rhs(t_break, y, held, P, T, k1, aux)
             n_rhs += 1
         if kb % out_every == 0 and i_out < n_out:
             t_out[i_out] = t_break
@@ -212,7 +227,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
         fresh = True
         while t < t_next - 1e-15 * t_next:
             if not fresh:
-                rhs(t, y, held, P, T, n_pos, n_vel, n_cur, k1, aux)
+                rhs(t, y, held, P, T, k1, aux)
                 n_rhs += 1
             fresh = False
             last = False
@@ -222,47 +237,20 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
             else:
                 h_try = h
             while True:
-                for i in range(n):
-                    yt[i] = y[i] + h_try * A21 * k1[i]
-                rhs(t + C2 * h_try, yt, held, P, T, n_pos, n_vel, n_cur, k2, aux)
-                for i in range(n):
-                    yt[i] = y[i] + h_try * (A31 * k1[i] + A32 * k2[i])
-                rhs(t + C3 * h_try, yt, held, P, T, n_pos, n_vel, n_cur, k3, aux)
-                for i in range(n):
-                    yt[i] = y[i] + h_try * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-                rhs(t + C4 * h_try, yt, held, P, T, n_pos, n_vel, n_cur, k4, aux)
-                for i in range(n):
-                    yt[i] = y[i] + h_try * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i]
-                                            + A54 * k4[i])
-                rhs(t + C5 * h_try, yt, held, P, T, n_pos, n_vel, n_cur, k5, aux)
-                for i in range(n):
-                    yt[i] = y[i] + h_try * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i]
-                                            + A64 * k4[i] + A65 * k5[i])
-                rhs(t + h_try, yt, held, P, T, n_pos, n_vel, n_cur, k6, aux)
-                for i in range(n):
-                    y_new[i] = y[i] + h_try * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i]
-                                               + B5 * k5[i] + B6 * k6[i])
                 t_new = t_next if last else t + h_try
-                rhs(t_new, y_new, held, P, T, n_pos, n_vel, n_cur, k7, aux)
+                _dp5_step(t, h_try, y, k1, held, P, T, k2, k3, k4, k5, k6, k7, yt, y_new, aux,
+                          t_new)
                 n_rhs += 6
                 steps += 1
                 if adaptive == 0:
                     err = 0.0
                     break
-                err = 0.0
-                for i in range(n):
-                    e = h_try * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i]
-                                 + E6 * k6[i] + E7 * k7[i])
-                    scale = atol[i] + rtol * rel_mask[i] * max(abs(y[i]), abs(y_new[i]))
-                    r = e / scale
-                    err += r * r
-                err = math.sqrt(err / n)
-                if not math.isfinite(err):
-                    err = 1e10
+                _dp5_error(h_try, k1, k2, k3, k4, k5, k6, k7, e)
+                err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
                 if err <= 1.0:
                     break
                 rejected += 1
-                fac = max(0.2, 0.9 * err ** (-0.2))
+                fac = _reject_factor(err)
                 h_try *= fac
                 last = False
                 if h_try < h_min:
@@ -284,11 +272,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     status = STATUS_STOPPED
                     break
             if adaptive == 1:
-                if err == 0.0:
-                    fac = 5.0
-                else:
-                    fac = 0.9 * err ** (-alpha) * err_old ** beta
-                    fac = min(5.0, max(0.2, fac))
+                fac = _pi_factor(err, err_old, alpha, beta)
                 err_old = max(err, 1e-4)
                 h_new = h_try * fac
                 if not last or h_new < h:

@@ -28,9 +28,10 @@ factorisation with partial pivoting written for the 10–20 states of a feed dri
 solve, so each stage would refactor — about 4× slower per step at 15 states (measured in
 ``benchmarks/README.md``).
 
-The step templates are compiled into each generated model module (see
-:mod:`feeddrive.solvers.switching`); this file only holds the tableau and the model-free
-kernels.
+The coefficients are the tableau :data:`feeddrive.solvers.tableaux.RODAS4`; the step itself is
+the one Rosenbrock step of :mod:`feeddrive.solvers.steps` written for that tableau.  This file
+holds the model-free kernels (LU, Jacobian, frozen states, spectral radius), compiled into
+each generated model module beside the step (see :mod:`feeddrive.solvers.switching`).
 """
 
 from __future__ import annotations
@@ -42,34 +43,23 @@ from typing import Any
 import numpy as np
 
 from .._jit import kernel
+from .tableaux import RODAS4
 
 ORDER = 4  # of the main solution; the embedded solution is of order 3
 EMBEDDED_ORDER = 3
 
-# Hairer & Wanner, rodas.f, ROCOE, METH = 1 (RODAS4)
-R4_GAMMA = 0.25
-R4_C2, R4_C3, R4_C4 = 0.386, 0.21, 0.63
-R4_D1, R4_D2, R4_D3, R4_D4 = 0.25, -0.1043, 0.1035, -0.3620000000000023e-01
-R4_A21 = 0.1544000000000000e+01
-R4_A31, R4_A32 = 0.9466785280815826e+00, 0.2557011698983284e+00
-R4_A41, R4_A42, R4_A43 = 0.3314825187068521e+01, 0.2896124015972201e+01, 0.9986419139977817e+00
-R4_A51, R4_A52, R4_A53, R4_A54 = (0.1221224509226641e+01, 0.6019134481288629e+01,
-                                  0.1253708332932087e+02, -0.6878860361058950e+00)
-R4_C21 = -0.5668800000000000e+01
-R4_C31, R4_C32 = -0.2430093356833875e+01, -0.2063599157091915e+00
-R4_C41, R4_C42, R4_C43 = (-0.1073529058151375e+00, -0.9594562251023355e+01,
-                          -0.2047028614809616e+02)
-R4_C51, R4_C52, R4_C53, R4_C54 = (0.7496443313967647e+01, -0.1024680431464352e+02,
-                                  -0.3399990352819905e+02, 0.1170890893206160e+02)
-R4_C61, R4_C62, R4_C63, R4_C64, R4_C65 = (0.8083246795921522e+01, -0.7981132988064893e+01,
-                                          -0.3152159432874371e+02, 0.1631930543123136e+02,
-                                          -0.6058818238834054e+01)
-R4_H21, R4_H22, R4_H23, R4_H24, R4_H25 = (0.1012623508344586e+02, -0.7487995877610167e+01,
-                                          -0.3480091861555747e+02, -0.7992771707568823e+01,
-                                          0.1025137723295662e+01)
-R4_H31, R4_H32, R4_H33, R4_H34, R4_H35 = (-0.6762803392801253e+00, 0.6087714651680015e+01,
-                                          0.1643084320892478e+02, 0.2476722511418386e+02,
-                                          -0.6594389125716872e+01)
+# Hairer & Wanner, rodas.f, ROCOE, METH = 1 (RODAS4): the numbers are the tableau
+# feeddrive.solvers.tableaux.RODAS4; these names are kept for the tests and the docs
+R4_GAMMA = RODAS4.gamma
+R4_C2, R4_C3, R4_C4 = RODAS4.c[1:4]
+R4_D1, R4_D2, R4_D3, R4_D4 = RODAS4.d[:4]
+(R4_A21,), (R4_A31, R4_A32), (R4_A41, R4_A42, R4_A43) = RODAS4.a[1:4]
+R4_A51, R4_A52, R4_A53, R4_A54 = RODAS4.a[4]
+(R4_C21,), (R4_C31, R4_C32), (R4_C41, R4_C42, R4_C43) = RODAS4.cc[1:4]
+R4_C51, R4_C52, R4_C53, R4_C54 = RODAS4.cc[4]
+R4_C61, R4_C62, R4_C63, R4_C64, R4_C65 = RODAS4.cc[5]
+R4_H21, R4_H22, R4_H23, R4_H24, R4_H25 = RODAS4.dense[0]
+R4_H31, R4_H32, R4_H33, R4_H34, R4_H35 = RODAS4.dense[1]
 
 TABLEAU = tuple(name for name in dir() if name.startswith("R4_"))
 
@@ -135,8 +125,8 @@ def lu_solve(M: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
 
 
 def fd_jacobian_template(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray,
-                         P: np.ndarray, T: np.ndarray, n_pos: int, n_vel: int, n_cur: int,
-                         atol: np.ndarray, J: np.ndarray, ft: np.ndarray, yp: np.ndarray,
+                         P: np.ndarray, T: np.ndarray, atol: np.ndarray, J: np.ndarray,
+                         ft: np.ndarray, yp: np.ndarray,
                          fp: np.ndarray, aux: np.ndarray, live: np.ndarray, S: np.ndarray,
                          colour: np.ndarray) -> int:
     """J = ∂f/∂y and ft = ∂f/∂t by grouped forward differences; f0 = f(t, y).
@@ -174,7 +164,7 @@ def fd_jacobian_template(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarr
                 used = True
         if not used:
             continue
-        rhs(t + dt if colour[n] == g else t, yp, held, P, T, n_pos, n_vel, n_cur, fp, aux)
+        rhs(t + dt if colour[n] == g else t, yp, held, P, T, fp, aux)
         calls += 1
         for j in range(n):
             if colour[j] == g and live[j]:
@@ -201,7 +191,8 @@ def frozen_states_template(J: np.ndarray, f0: np.ndarray, live: np.ndarray) -> i
     If a state's derivative vanishes identically (the nut states of a CDFS with the nut
     locked, a loop integral whose gain is 0), every Rosenbrock stage gives it a zero increment
     whatever its Jacobian column holds, so that column need not be differenced.  Whether the
-    derivative is still 0 is checked at every stage (:func:`rodas4_step_template` reports a
+    derivative is still 0 is checked at every stage (the Rosenbrock step of
+    :mod:`feeddrive.solvers.steps` reports a
     violation and the caller goes back to the full Jacobian)."""
     n = f0.size
     count = 0
@@ -216,97 +207,6 @@ def frozen_states_template(J: np.ndarray, f0: np.ndarray, live: np.ndarray) -> i
         if live[i]:
             count += 1
     return count
-
-
-def rodas4_step_template(t: float, h: float, y: np.ndarray, f0: np.ndarray, J: np.ndarray,
-                         ft: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
-                         n_pos: int, n_vel: int, n_cur: int, M: np.ndarray, piv: np.ndarray,
-                         u1: np.ndarray, u2: np.ndarray, u3: np.ndarray, u4: np.ndarray,
-                         u5: np.ndarray, u6: np.ndarray, yt: np.ndarray, fs: np.ndarray,
-                         y_new: np.ndarray, aux: np.ndarray, live: np.ndarray) -> int:
-    """One RODAS4 step of size h: y_new, the error estimate u6 and the stages u1…u5 for the
-    dense output.  Returns the number of right-hand-side evaluations (5), −1 if the matrix is
-    singular, −2 if a state assumed frozen (``live`` false) got a non-zero derivative."""
-    n = y.size
-    g = 1.0 / (R4_GAMMA * h)
-    for i in range(n):
-        for j in range(n):
-            M[i, j] = -J[i, j]
-        M[i, i] += g
-    if not lu_factor(M, piv):
-        return -1
-    ih = 1.0 / h
-    frozen_ok = True
-    # stage 1
-    for i in range(n):
-        u1[i] = f0[i] + h * R4_D1 * ft[i]
-    lu_solve(M, piv, u1)
-    # stage 2
-    for i in range(n):
-        yt[i] = y[i] + R4_A21 * u1[i]
-    rhs(t + R4_C2 * h, yt, held, P, T, n_pos, n_vel, n_cur, fs, aux)
-    for i in range(n):
-        if not live[i] and fs[i] != 0.0:
-            frozen_ok = False
-    for i in range(n):
-        u2[i] = fs[i] + h * R4_D2 * ft[i] + R4_C21 * ih * u1[i]
-    lu_solve(M, piv, u2)
-    # stage 3
-    for i in range(n):
-        yt[i] = y[i] + R4_A31 * u1[i] + R4_A32 * u2[i]
-    rhs(t + R4_C3 * h, yt, held, P, T, n_pos, n_vel, n_cur, fs, aux)
-    for i in range(n):
-        if not live[i] and fs[i] != 0.0:
-            frozen_ok = False
-    for i in range(n):
-        u3[i] = fs[i] + h * R4_D3 * ft[i] + ih * (R4_C31 * u1[i] + R4_C32 * u2[i])
-    lu_solve(M, piv, u3)
-    # stage 4
-    for i in range(n):
-        yt[i] = y[i] + R4_A41 * u1[i] + R4_A42 * u2[i] + R4_A43 * u3[i]
-    rhs(t + R4_C4 * h, yt, held, P, T, n_pos, n_vel, n_cur, fs, aux)
-    for i in range(n):
-        if not live[i] and fs[i] != 0.0:
-            frozen_ok = False
-    for i in range(n):
-        u4[i] = fs[i] + h * R4_D4 * ft[i] + ih * (R4_C41 * u1[i] + R4_C42 * u2[i]
-                                                  + R4_C43 * u3[i])
-    lu_solve(M, piv, u4)
-    # stage 5
-    for i in range(n):
-        yt[i] = y[i] + R4_A51 * u1[i] + R4_A52 * u2[i] + R4_A53 * u3[i] + R4_A54 * u4[i]
-    rhs(t + h, yt, held, P, T, n_pos, n_vel, n_cur, fs, aux)
-    for i in range(n):
-        if not live[i] and fs[i] != 0.0:
-            frozen_ok = False
-        u5[i] = fs[i] + ih * (R4_C51 * u1[i] + R4_C52 * u2[i] + R4_C53 * u3[i]
-                              + R4_C54 * u4[i])
-    lu_solve(M, piv, u5)
-    # stage 6: its argument is the embedded (order-3) solution
-    for i in range(n):
-        yt[i] += u5[i]
-    rhs(t + h, yt, held, P, T, n_pos, n_vel, n_cur, fs, aux)
-    for i in range(n):
-        if not live[i] and fs[i] != 0.0:
-            frozen_ok = False
-        u6[i] = fs[i] + ih * (R4_C61 * u1[i] + R4_C62 * u2[i] + R4_C63 * u3[i]
-                              + R4_C64 * u4[i] + R4_C65 * u5[i])
-    lu_solve(M, piv, u6)
-    for i in range(n):
-        y_new[i] = yt[i] + u6[i]
-    if not frozen_ok:
-        return -2
-    return 5
-
-
-def rodas4_dense_template(u1: np.ndarray, u2: np.ndarray, u3: np.ndarray, u4: np.ndarray,
-                          u5: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> None:
-    """The two dense-output vectors of the step just taken."""
-    for i in range(u1.size):
-        q1[i] = (R4_H21 * u1[i] + R4_H22 * u2[i] + R4_H23 * u3[i] + R4_H24 * u4[i]
-                 + R4_H25 * u5[i])
-        q2[i] = (R4_H31 * u1[i] + R4_H32 * u2[i] + R4_H33 * u3[i] + R4_H34 * u4[i]
-                 + R4_H35 * u5[i])
 
 
 def spectral_radius_template(J: np.ndarray, scale: np.ndarray, v: np.ndarray,
@@ -342,16 +242,14 @@ def spectral_radius_template(J: np.ndarray, scale: np.ndarray, v: np.ndarray,
     return math.exp(log_sum / counted) if counted else 0.0
 
 
-_TEMPLATES = (fd_jacobian_template, frozen_states_template, rodas4_step_template,
-              rodas4_dense_template, spectral_radius_template)
+_TEMPLATES = (fd_jacobian_template, frozen_states_template, spectral_radius_template)
 
 
 def template_sources() -> list[str]:
-    """Text placed in each generated model module: tableau, LU kernels and step templates,
-    renamed ``_r4_<name>`` (the module's own ``rhs`` is the one they call)."""
-    names = ", ".join(TABLEAU)
-    out = [f"from feeddrive.solvers.rodas4 import ({names})",
-           "from feeddrive.solvers.rodas4 import lu_factor, lu_solve"]
+    """Text placed in each generated model module: the LU kernels and the Jacobian, frozen-state
+    and spectral-radius templates, renamed ``_r4_<name>`` (the module's own ``rhs`` is the one
+    they call)."""
+    out = ["from feeddrive.solvers.rodas4 import lu_factor, lu_solve"]
     for fn in _TEMPLATES:
         name = fn.__name__.removesuffix("_template")
         src = inspect.getsource(fn).replace(f"def {fn.__name__}(", f"def _r4_{name}(", 1)

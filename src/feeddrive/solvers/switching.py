@@ -3,10 +3,13 @@
 One compiled driver (:func:`integrate_template`, placed in every generated model module as
 ``integrate_dense``) runs in three modes:
 
-* ``MODE_DOPRI5``: Dormand–Prince 5(4) (the tableau of :mod:`feeddrive.solvers.dopri5`) with
-  its 4th-order continuous extension (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.6,
+* ``MODE_DOPRI5``: Dormand–Prince 5(4) (the tableau :data:`feeddrive.solvers.tableaux.DOPRI5`
+  through the one explicit step of :mod:`feeddrive.solvers.steps`) with its 4th-order
+  continuous extension (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.6,
   and their code ``dopri5.f``, ``CONTD5``; the same coefficients as scipy's RK45 ``P``);
-* ``MODE_RODAS4``: the Rosenbrock method of :mod:`feeddrive.solvers.rodas4`;
+* ``MODE_RODAS4``: the tableau :data:`~feeddrive.solvers.tableaux.RODAS4` through the one
+  Rosenbrock step of :mod:`feeddrive.solvers.steps` (Jacobian kernels:
+  :mod:`feeddrive.solvers.rodas4`);
 * ``MODE_AUTO``: starts with DOPRI5 and switches to RODAS4 when Hairer's stiffness test says
   the step is held by stability — h·‖k7 − k6‖/‖y7 − y6‖ > 3.25, the estimate of h|λ| from the
   last two stages, in ``STIFF_STEPS`` of the recent accepted steps (``dopri5.f``, ``NSTIFF``
@@ -17,8 +20,9 @@ One compiled driver (:func:`integrate_template`, placed in every generated model
 
 Dense output: the step is not capped by the output interval.  Outputs on the grid
 t_i = i·out_every·base are interpolated inside the step that contains them.  Event times are
-exact step ends: the sampled-controller instants k·base when any loop is sampled (the
-zero-order-hold outputs jump there: ``sample_update`` runs, the derivative is re-evaluated),
+exact step ends: the instants of the sample schedule ``schedule`` — every clock's, merged
+(:mod:`feeddrive.solvers.schedule`; the zero-order-hold outputs jump there:
+``sample_update`` runs, the derivative is re-evaluated),
 the profile breakpoints ``stops`` (kinks of the command: the Jacobian's f_t changes) and the end.
 With ``adaptive = 0`` the chosen method runs at the fixed step ``h_init`` and the output grid
 points are step ends too (used to verify the order).
@@ -35,57 +39,19 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import rodas4
-from .dopri5 import (
-    A21,
-    A31,
-    A32,
-    A41,
-    A42,
-    A43,
-    A51,
-    A52,
-    A53,
-    A54,
-    A61,
-    A62,
-    A63,
-    A64,
-    A65,
-    B1,
-    B3,
-    B4,
-    B5,
-    B6,
-    C2,
-    C3,
-    C4,
-    C5,
-    E1,
-    E3,
-    E4,
-    E5,
-    E6,
-    E7,
-)
+from . import steps
 from .modes import H_LAMBDA as MODAL_H_LAMBDA
 from .modes import REFRESH as MODAL_REFRESH
 from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
 from .modes import jacobian_moved as modal_jacobian_moved
 from .modes import step_cap as modal_step_cap
+from .schedule import due, next_instant
 
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
 MODE_DOPRI5, MODE_RODAS4, MODE_AUTO, MODE_MODAL = 0, 1, 2, 3
 
-# Dormand–Prince continuous extension (dopri5.f, CONTD5; scipy RK45.P last column)
-DP_D1 = -12715105075.0 / 11282082432.0
-DP_D3 = 87487479700.0 / 32700410799.0
-DP_D4 = -10690763975.0 / 1880347072.0
-DP_D5 = 701980252875.0 / 199316789632.0
-DP_D6 = -1453857185.0 / 822651844.0
-DP_D7 = 69997945.0 / 29380423.0
 
 # Switching thresholds (measured on the benchmark scenarios, benchmarks/README.md)
 STIFF_HLAMBDA = 3.25  # DOPRI5's stability boundary on the negative real axis is ≈ 3.3
@@ -112,7 +78,7 @@ STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "ja
 MEMORY_SCALARS = 14
 
 CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_MODAL",
-             "DP_D1", "DP_D3", "DP_D4", "DP_D5", "DP_D6", "DP_D7", "STIFF_HLAMBDA", "STIFF_STEPS",
+             "STIFF_HLAMBDA", "STIFF_STEPS",
              "NONSTIFF_HRHO", "NONSTIFF_STEPS", "POWER_ITERATIONS", "MODAL_SWITCH_GAIN",
              "MODAL_RETRY", "MODAL_EVERY")
 
@@ -128,7 +94,11 @@ _r4_rodas4_step: Any = None
 _r4_rodas4_dense: Any = None
 _r4_spectral_radius: Any = None
 _dp5_step: Any = None
+_dp5_error: Any = None
+_dp5_dense: Any = None
 _error_norm: Any = None
+_pi_factor: Any = None
+_reject_factor: Any = None
 
 
 def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
@@ -150,17 +120,19 @@ def new_memory(n_states: int) -> np.ndarray:
 
 
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
-              n_pos: int, n_vel: int, n_cur: int, rtol: float, atol: np.ndarray,
+              schedule: np.ndarray, rtol: float, atol: np.ndarray,
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
               max_steps: int, mode: int, stops: np.ndarray, want_aux: bool = True, *,
               start: int = 0, held: np.ndarray | None = None,
               memory: np.ndarray | None = None, bound: np.ndarray | None = None,
+              P: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``; a multiple
     of ``out_every``) to ``t_end`` (see :func:`integrate_template`).  ``held`` and ``memory``
     are updated in place, so a run continued from where a call stopped is bit-identical to
     one call in which that instant is a step end (a profile breakpoint, a sample instant).
-    ``bound``: the largest |state| per state before the run stops as diverged (None: none)."""
+    ``bound``: the largest |state| per state before the run stops as diverged (None: none);
+    ``P``: the parameter vector (None: the model's; a run passes the periods on its grid)."""
     if start % out_every:
         raise ValueError(f"start = {start}: expected a multiple of out_every = {out_every}")
     held = np.zeros(model.n_held) if held is None else held
@@ -168,67 +140,24 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     bound = np.full(len(model.states), np.inf) if bound is None else bound
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         model.module.integrate_dense(
-            y0, t_end, out_every, base, n_pos, n_vel, n_cur, model.P, model.T, rtol, atol,
-            rel_mask, h_init, h_max, adaptive, max_steps, mode,
+            y0, t_end, out_every, base, np.ascontiguousarray(schedule, dtype=np.int64),
+            model.P if P is None else P, model.T, rtol, atol, rel_mask, h_init, h_max,
+            adaptive, max_steps, mode,
             np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
             model.jacobian_pattern, model.jacobian_colours, start, held, memory, bound))
     return result
 
 
-def dp5_step_template(t: float, h: float, y: np.ndarray, k1: np.ndarray, held: np.ndarray,
-                      P: np.ndarray, T: np.ndarray, n_pos: int, n_vel: int, n_cur: int,
-                      k2: np.ndarray, k3: np.ndarray, k4: np.ndarray, k5: np.ndarray,
-                      k6: np.ndarray, k7: np.ndarray, yt: np.ndarray, y_new: np.ndarray,
-                      aux: np.ndarray, t_new: float) -> None:
-    """One Dormand–Prince step: y_new, k7 = f(t_new, y_new); ``yt`` keeps the stage-6
-    argument (for the stiffness test)."""
-    n = y.size
-    for i in range(n):
-        yt[i] = y[i] + h * A21 * k1[i]
-    rhs(t + C2 * h, yt, held, P, T, n_pos, n_vel, n_cur, k2, aux)
-    for i in range(n):
-        yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    rhs(t + C3 * h, yt, held, P, T, n_pos, n_vel, n_cur, k3, aux)
-    for i in range(n):
-        yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    rhs(t + C4 * h, yt, held, P, T, n_pos, n_vel, n_cur, k4, aux)
-    for i in range(n):
-        yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    rhs(t + C5 * h, yt, held, P, T, n_pos, n_vel, n_cur, k5, aux)
-    for i in range(n):
-        yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i]
-                            + A65 * k5[i])
-    rhs(t + h, yt, held, P, T, n_pos, n_vel, n_cur, k6, aux)
-    for i in range(n):
-        y_new[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
-    rhs(t_new, y_new, held, P, T, n_pos, n_vel, n_cur, k7, aux)
-
-
-def error_norm_template(e: np.ndarray, y: np.ndarray, y_new: np.ndarray, rtol: float,
-                        atol: np.ndarray, rel_mask: np.ndarray) -> float:
-    """RMS of the error estimate ``e`` weighted by atol + rtol·max(|y|, |y_new|) (relative part
-    only where ``rel_mask``); a non-finite norm counts as a failed step."""
-    n = e.size
-    err = 0.0
-    for i in range(n):
-        scale = atol[i] + rtol * rel_mask[i] * max(abs(y[i]), abs(y_new[i]))
-        r = e[i] / scale
-        err += r * r
-    err = math.sqrt(err / n)
-    if not math.isfinite(err):
-        err = 1e10
-    return err
-
-
-def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float, n_pos: int,
-                       n_vel: int, n_cur: int, P: np.ndarray, T: np.ndarray, rtol: float,
+def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
+                       schedule: np.ndarray, P: np.ndarray, T: np.ndarray, rtol: float,
                        atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
                        adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
                        want_aux: bool, S: np.ndarray, colour: np.ndarray, start: int,
                        held: np.ndarray, memory: np.ndarray, bound: np.ndarray,
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from t = start·base (state ``y0``) to ``t_end`` with dense output every
-    ``out_every·base`` [s].
+    ``out_every·base`` [s]; ``schedule``: the sample schedule (breakpoints of ``base`` [s] between
+    two instants of each clock, 0 = continuous; :mod:`feeddrive.solvers.schedule`).
 
     ``held`` (the sampled controller's values) and ``memory`` (step size, method, switching
     counters, step-size controller memory, which states are frozen; all 0 before the first
@@ -248,7 +177,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     t_end = n_break * base
     o0 = start // out_every  # index of the first output on the whole run's grid
     n_out = (n_break - start) // out_every + 1
-    sampled = n_pos > 0 or n_vel > 0 or n_cur > 0
+    tick = np.empty(schedule.size, dtype=np.int64)
     t_out = np.empty(n_out)
     y_out = np.empty((n_out, n))
     aux_out = np.empty((n_out if want_aux else 0, N_AUX))
@@ -316,7 +245,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     t = start * base
     i_out = 0
     if memory[0] == 0.0:  # a new run
-        sample_update(0, 0.0, y, held, P, T, n_pos, n_vel, n_cur, base)
+        if due(0, schedule, tick) > 0:
+            sample_update(0.0, y, held, P, T, tick)
     else:  # carried over from the call that ended at t
         h = memory[0]
         stiff = memory[1] != 0.0
@@ -337,7 +267,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
             for j in range(n):
                 J_ref[i, j] = memory[MEMORY_SCALARS + n + i * n + j]
     # the derivative at t: what the previous call's last step (or event) left, recomputed
-    rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
+    rhs(t, y, held, P, T, f0, aux)
     n_rhs += 1
     t_out[0] = t
     y_out[0, :] = y
@@ -348,8 +278,9 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
         # ---- the next event: sample instant, profile breakpoint, output point (fixed), end
         t_ev = t_end
         is_sample = False
-        if sampled and (kb + 1) * base <= t_ev:
-            t_ev = (kb + 1) * base
+        kb_next = next_instant(kb, schedule)  # the schedule's next instant (-1: none)
+        if kb_next >= 0 and kb_next * base <= t_ev:
+            t_ev = kb_next * base
             is_sample = True
         while i_stop < n_stops and stops[i_stop] <= t + 1e-12 * max(1.0, t):
             i_stop += 1
@@ -367,12 +298,12 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
         # ---- steps up to t_ev
         while t < t_ev and status == STATUS_OK:
             if stiff and not jac_ok:
-                calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur, atol, J,
+                calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J,
                                         ft, yp, fp, aux, live if frozen_known else all_live,
                                         S, colour)
                 if calls < 0:  # a state taken as frozen moved: difference every column
                     n_rhs -= calls
-                    calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur, atol,
+                    calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol,
                                             J, ft, yp, fp, aux, all_live, S, colour)
                     frozen_known = False
                 n_rhs += calls
@@ -403,8 +334,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
             while True:
                 t_new = t_ev if last else t + h_try
                 if stiff:
-                    calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, n_pos, n_vel,
-                                            n_cur, M, piv, k2, k3, k4, k5, k6, e, yt, fp,
+                    calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, M, piv, k2, k3,
+                                            k4, k5, k6, e, yt, fp,
                                             y_new, aux, live)
                     if calls == -2:
                         # a frozen state moved: retry with the full Jacobian
@@ -412,7 +343,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                         frozen_known = False
                         for i in range(n):
                             live[i] = True
-                        calls = _r4_fd_jacobian(t, y, f0, held, P, T, n_pos, n_vel, n_cur,
+                        calls = _r4_fd_jacobian(t, y, f0, held, P, T,
                                                 atol, J, ft, yp, fp, aux, all_live, S, colour)
                         n_rhs += calls
                         n_jac += 1
@@ -425,13 +356,11 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                         n_rhs += calls
                         err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
                 else:
-                    _dp5_step(t, h_try, y, f0, held, P, T, n_pos, n_vel, n_cur, k2, k3, k4,
+                    _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4,
                               k5, k6, f_new, yt, y_new, aux, t_new)
                     n_rhs += 6
                     steps += 1
-                    for i in range(n):
-                        e[i] = h_try * (E1 * f0[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i]
-                                        + E6 * k6[i] + E7 * f_new[i])
+                    _dp5_error(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
                     err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
                 if adaptive == 0 or err <= 1.0:
                     break
@@ -441,7 +370,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     h_try /= fac
                     r4_rejected = True
                 else:
-                    h_try *= max(0.2, 0.9 * err ** (-0.2))
+                    fac = _reject_factor(err)
+                    h_try *= fac
                 last = False
                 if h_try < h_min:
                     status = STATUS_STEP_UNDERFLOW
@@ -454,7 +384,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
             # ---- accepted: dense-output data of [t, t_new]
             h_done = t_new - t
             if stiff:
-                rhs(t_new, y_new, held, P, T, n_pos, n_vel, n_cur, f_new, aux)
+                rhs(t_new, y_new, held, P, T, f_new, aux)
                 n_rhs += 1
                 _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
             else:
@@ -464,8 +394,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     q1[i] = ydiff
                     q2[i] = bspl
                     q3[i] = ydiff - h_try * f_new[i] - bspl
-                    e[i] = h_try * (DP_D1 * f0[i] + DP_D3 * k3[i] + DP_D4 * k4[i]
-                                    + DP_D5 * k5[i] + DP_D6 * k6[i] + DP_D7 * f_new[i])
+                _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
             # outputs strictly inside the step (an output at t_new that is an event time is
             # written after the event below)
             while i_out < n_out:
@@ -482,7 +411,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                 t_out[i_out] = t_grid
                 y_out[i_out, :] = yp
                 if want_aux:
-                    rhs(t_grid, yp, held, P, T, n_pos, n_vel, n_cur, fp, aux)
+                    rhs(t_grid, yp, held, P, T, fp, aux)
                     n_out_rhs += 1
                     aux_out[i_out, :] = aux
                 i_out += 1
@@ -506,9 +435,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     if modal and dp_since_eig >= MODAL_RETRY:
                         # DOPRI5 too: its step on a lightly damped mode is capped as well
                         dp_since_eig = 0
-                        calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, n_pos,
-                                                n_vel, n_cur, atol, J, ft, yp, fp, aux,
-                                                all_live, S, colour)
+                        calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, atol, J, ft,
+                                                yp, fp, aux, all_live, S, colour)
                         n_rhs += calls
                         n_jac += 1
                         h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
@@ -530,8 +458,8 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                         go = stiff_count >= STIFF_STEPS
                         if go and modal:
                             # would RODAS4, capped on the lightly damped modes, step further?
-                            calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, n_pos,
-                                                    n_vel, n_cur, atol, J, ft, yp, fp, aux,
+                            calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, atol,
+                                                    J, ft, yp, fp, aux,
                                                     all_live, S, colour)
                             n_rhs += calls
                             n_jac += 1
@@ -569,12 +497,10 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     r4_h_old = h_try
                     r4_err_old = max(1e-2, err)
                     r4_rejected = False
-                elif err == 0.0:
-                    h_new = h_try * 5.0
-                else:
-                    fac = 0.9 * err ** (-alpha) * dp_err_old ** beta
-                    fac = min(5.0, max(0.2, fac))
-                    dp_err_old = max(err, 1e-4)
+                else:  # DOPRI5: the explicit steps' controller (feeddrive.solvers.steps)
+                    fac = _pi_factor(err, dp_err_old, alpha, beta)
+                    if err != 0.0:
+                        dp_err_old = max(err, 1e-4)
                     h_new = h_try * fac
                 if not last or h_new < h:
                     h = min(h_new, h_max)
@@ -607,7 +533,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
                     t_out[i_out] = t
                     y_out[i_out, :] = y
                     if want_aux:
-                        rhs(t, y, held, P, T, n_pos, n_vel, n_cur, fp, aux)
+                        rhs(t, y, held, P, T, fp, aux)
                         n_out_rhs += 1
                         aux_out[i_out, :] = aux
                     i_out += 1
@@ -616,9 +542,10 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
             break
         # ---- at the event t_ev
         if is_sample:
-            kb += 1
-            sample_update(kb, t, y, held, P, T, n_pos, n_vel, n_cur, base)
-            rhs(t, y, held, P, T, n_pos, n_vel, n_cur, f0, aux)
+            kb = kb_next
+            due(kb, schedule, tick)
+            sample_update(t, y, held, P, T, tick)
+            rhs(t, y, held, P, T, f0, aux)
             n_rhs += 1
         if is_stop:
             i_stop += 1
@@ -629,7 +556,7 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
             t_out[i_out] = t_grid
             y_out[i_out, :] = y
             if want_aux:
-                rhs(t, y, held, P, T, n_pos, n_vel, n_cur, fp, aux)
+                rhs(t, y, held, P, T, fp, aux)
                 n_out_rhs += 1
                 aux_out[i_out, :] = aux
             i_out += 1
@@ -657,22 +584,16 @@ def integrate_template(y0: np.ndarray, t_end: float, out_every: int, base: float
     return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats, held)
 
 
-_TEMPLATES = {"dp5_step_template": "_dp5_step", "error_norm_template": "_error_norm",
-              "integrate_template": "integrate_dense"}
-
-
 def template_sources() -> list[str]:
-    """Text placed in each generated model module: the RODAS4 kernels, the DOPRI5 step with its
-    continuous extension and the switching driver ``integrate_dense``.  numba compiles a
-    function at its first call, so a model run only with ``dopri5`` never compiles these."""
-    out = rodas4.template_sources()
-    out.append(f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})")
-    out.append("from feeddrive.solvers.modes import step_cap as modal_step_cap, "
-               "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
-               "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH")
-    for fn in (dp5_step_template, error_norm_template, integrate_template):
-        src = inspect.getsource(fn)
-        for old, new in _TEMPLATES.items():
-            src = src.replace(f"{old}(", f"{new}(")
-        out.append("@kernel\n" + src)
-    return out
+    """Text placed in each generated model module: the switching driver ``integrate_dense``
+    (its steps are those of :mod:`feeddrive.solvers.steps`, its Jacobian kernels those of
+    :mod:`feeddrive.solvers.rodas4`, placed beside it).  numba compiles a function at its
+    first call, so a model run only with ``dopri5`` never compiles this one."""
+    src = steps.inline_steps(inspect.getsource(integrate_template)).replace(
+        "def integrate_template(", "def integrate_dense(", 1)
+    return [f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})",
+            "from feeddrive.solvers.schedule import due, next_instant",
+            "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
+            "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
+            "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH",
+            "@kernel\n" + src]

@@ -154,7 +154,7 @@ def _growth_rate(system: Any, speed: float, nut_speed: float) -> tuple[float, fl
 
 def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
     """The quantity ``q`` (:meth:`QuantitySettings.to_dict`) of ``system``."""
-    from ..analysis.metrics import VerdictRule
+    from ..analysis.cycle_verdict import VerdictRule
 
     kind = q["kind"]
     if kind == "linear-band":

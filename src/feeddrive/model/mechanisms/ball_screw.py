@@ -219,6 +219,21 @@ class BallScrewDrive(Mechanism):
             return (), ()
         return ("nut_", "ball_nut_z"), ("nut",)
 
+    def site_masses(self) -> dict[str, float]:
+        """screw: (J_screw-motor + J_screw-shaft)/H²; nut: (J_hollow-motor + J_nut)/H²;
+        guide: the table mass (Wang2021 Table 2; H = lead/2π, Eq. 8).
+
+        Returns
+        -------
+        dict
+            Site parameters key → effective mass [kg].
+        """
+        p = self.params
+        h = p.screw.transmission_ratio
+        return {"screw": (p.screw_motor.inertia + p.screw.shaft_inertia) / h**2,
+                "nut": (p.hollow_motor.inertia + p.screw.nut_inertia) / h**2,
+                "guide": p.table.mass}
+
     def signals(self, b: Builder) -> None:
         b.add_aux("equivalent_stiffness", "N/m", "K_eq at the table position")
         b.add_aux("nut_position_reference", "m", "commanded nut position (linear)")

@@ -187,6 +187,20 @@ class Mechanism:
         """
         return (), ()
 
+    def site_masses(self) -> dict[str, float]:
+        """The mass a pre-sliding test at each friction site moves (for identification).
+
+        A site is named by where its parameters live (:attr:`Site.parameters_key`); a rotary
+        site's friction is stored as force against its linear-equivalent speed (Wang2021
+        Table 1 divides torques by H), so its inertia J counts as J/H².
+
+        Returns
+        -------
+        dict
+            Site parameters key → effective mass [kg]; empty when the topology declares none.
+        """
+        return {}
+
     def emit(self, b: Builder, m: Mechanics) -> None:
         raise NotImplementedError
 

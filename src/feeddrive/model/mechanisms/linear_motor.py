@@ -85,6 +85,19 @@ class LinearMotorDrive(Mechanism):
         return ([("guide", "ref_v", b.y("table_speed"))],
                 f"1.0 / {b.p('motor.force_constant')}")
 
+    def site_masses(self) -> dict[str, float]:
+        """guide: the table with the forcer, m_t + m_f.
+
+        Returns
+        -------
+        dict
+            Site parameters key → effective mass [kg].
+        """
+        self.check(self.params, self.drive, self.table_position)
+        lm = self.params.linear_motor
+        assert lm is not None
+        return {"guide": self.params.table.mass + lm.forcer_mass}
+
     def emit(self, b: Builder, m: Mechanics) -> None:
         b.emit(f"v_t = {b.y('table_speed')}")
         for ln in m.always:

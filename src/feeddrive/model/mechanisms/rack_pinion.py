@@ -178,6 +178,20 @@ class RackPinionDrive(Mechanism):
         return {"motor_angle": ("motor_speed", table_speed / self.section.transmission_ratio),
                 "table_position": ("table_speed", table_speed)}
 
+    def site_masses(self) -> dict[str, float]:
+        """gearbox: the motor-side inertia J = J_m + J_g + J_p/G² as J/H²; guide: the table.
+
+        Returns
+        -------
+        dict
+            Site parameters key → effective mass [kg].
+        """
+        self.check(self.params, self.drive, self.table_position)
+        rp = self.section
+        inertia = rp.motor.inertia + rp.gearbox_inertia + rp.pinion_inertia / rp.gear_ratio**2
+        return {"rack_pinion.gearbox_friction": inertia / rp.transmission_ratio**2,
+                "guide": self.params.table.mass}
+
     def emit(self, b: Builder, m: Mechanics) -> None:
         H = b.p("rack_pinion.H")
         b.emit(f"w_m = {b.y('motor_speed')}")

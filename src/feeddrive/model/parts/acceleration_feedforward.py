@@ -77,6 +77,7 @@ class AccelerationFeedforward(Component):
             raise ParameterError(f"{self._label}.axis", self.axis,
                                  f"expected one of {', '.join(names)}")
         b.named_params(self._label, ("gain", "period"), np.array([self.gain, self.period]))
+        b.clock(f"{self._label}.period")
         current = b.add_held(f"{self._label}.current")
         b.add_held(f"{self._label}.previous_speed")
         b.add_aux(f"{self._label}_current", "A",
@@ -97,9 +98,9 @@ class AccelerationFeedforward(Component):
         """
         gain, period = b.p(f"{self._label}.gain"), b.p(f"{self._label}.period")
         current, previous = b.h(f"{self._label}.current"), b.h(f"{self._label}.previous_speed")
-        for line in (f"n_acc = int({period} / base + 0.5)",
-                     "if k % n_acc == 0:",
-                     "    if k == 0:",
+        tick = b.tick(f"{self._label}.period")
+        for line in (f"if {tick} >= 0:",
+                     f"    if {tick} == 0:",
                      f"        {current} = 0.0",
                      "    else:",
                      f"        {current} = {gain} * (ref_v - {previous}) / {period}",
