@@ -218,7 +218,7 @@ def test_step_cap_on_the_literal_cdfs_jacobian_is_lapack_s() -> None:
 
     def f(x: np.ndarray) -> np.ndarray:
         out = np.empty(n)
-        model.module.rhs(1.0, x, held, model.P, model.T, 0, 0, 0, out, aux)
+        model.module.rhs(1.0, x, held, model.P, model.T, out, aux)
         return out
 
     J = np.empty((n, n))
