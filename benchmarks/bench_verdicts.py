@@ -12,17 +12,22 @@ decided, :func:`feeddrive.analysis.critical.decide`):
   ``reference/scipy_model.ReferenceModel`` with absolute tolerances 1000× tighter than the
   engine's defaults, split at the end of the start ramp, its analytic Jacobian — the settings
   of ``reference/make_radau_reference.py``; a longer trial continues the shorter one from its
-  last state;
+  last state.  Readings with sampled loops: ``reference/sampled.py`` (DOP853 at rtol 1e-10
+  between the sample instants, the held outputs updated at each; the same absolute
+  tolerances), each longer trial from rest;
 * **engine**: :func:`feeddrive.analysis.critical.creep_trial` with the default
   ``SolverOptions()`` (and, for comparison, ``auto`` and ``dopri5``).
 
-The corpus: the ``wang2021`` CDFS at mid-screw on both sides of every band edge and of the
-critical speed that ``feeddrive reproduce`` reports (0.18–0.21, 1.41/1.42, 1.55/1.56 mm/s),
-Table 3's positions at their critical speeds (± 0.01 mm/s), the DDFS with v_n = 16 mm/s, the
-``wang2021-literal`` CDFS (0.2 mm/s: the growing table mode) and DDFS, and stress variants with
-the screw bristle stiffness σ0 × 10 and × 100.
+The corpus (89 trials): the ``wang2021`` CDFS at mid-screw on both sides of every band edge and
+of the critical speed that ``feeddrive reproduce`` reports (0.17–0.21, 1.41/1.42, 1.55–1.57
+mm/s), Table 3's positions at their critical speeds, the DDFS with v_n = 16 mm/s, the
+``wang2021-literal`` CDFS (0.2 mm/s: the growing table mode; 0.02–0.06 where the band starts)
+and DDFS, both sides of every critical speed of the model-reading study (velocity integral
+0.5–1.5×, table feedback, the paper's K_eq, damping × 4, the sampled 1-kHz loops, the ball–nut
+shares 1 and 0.5), the trials where that study's band lists moved with the default method,
+and stress variants with the screw bristle stiffness σ0 × 10 and × 100.
 
-The reference verdicts are kept in ``benchmarks/results/bench_verdicts_reference.json`` (they
+The reference verdicts are kept in ``benchmarks/results/bench_verdicts_reference*.json`` (they
 do not depend on the engine; delete the file to recompute them).  Writes
 ``benchmarks/results/bench_verdicts.json``.
 """
@@ -43,7 +48,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from reference.scipy_model import STATE_NAMES, ReferenceModel, tolerances  # noqa: E402
+from reference.scipy_model import ReferenceModel  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.analysis.critical import creep_trial, decide  # noqa: E402
@@ -55,13 +60,35 @@ REFERENCE = ROOT / "benchmarks" / "results" / "bench_verdicts_reference.json"
 RTOL = 1e-10
 ATOL_SCALE = 1e-3
 RAMP = 0.1  # [s] the creep trials' start ramp
-V_T = STATE_NAMES.index("table_speed")
+
+
+def _readings() -> dict[str, dict[str, Any]]:
+    """Model readings of ``reproduce``'s model-reading study with a continuous-loop critical
+    speed (feeddrive.reproduce.reading_study.variants), by a short name: the changes to
+    ``wang2021``."""
+    ship = fd.preset("wang2021")
+    kvi = ship.controller.velocity_integral_gain
+    out: dict[str, dict[str, Any]] = {
+        f"vi{f:g}": {"controller.velocity_integral_gain": f * kvi}
+        for f in (0.5, 0.6, 0.7, 0.8, 0.9, 1.5)}
+    out["vfb-table"] = {"controller.velocity_feedback": "table"}
+    out["keq-paper"] = {"stiffness.equivalent_stiffness": 2.16e7}
+    out["damping4"] = {"stiffness.axial_damping": 4 * ship.stiffness.axial_damping}
+    out["nut-position-loop"] = {"controller.nut_loop": "position"}
+    out["sampled-1khz"] = {"controller.position_period": 1e-3,
+                           "controller.velocity_period": 1e-3,
+                           "controller.encoder_counts": 10000.0,
+                           "controller.grating_resolution": 1e-7}
+    return out
 
 
 def _variant(name: str) -> fd.DriveParameters:
+    name, _, reading = name.partition("~")
     name, _, share = name.partition("+share")
     base, _, factor = name.partition("*sigma0x")
     p = fd.preset(base)
+    for path, value in (_readings()[reading] if reading else {}).items():
+        p = p.replace_path(path, value)
     if share:
         p = p.replace_path("friction.ball_nut_share", float(share))
     if factor:
@@ -89,11 +116,32 @@ def _corpus() -> list[tuple[str, str, float, float, float]]:
     # where `reproduce`'s model-reading study moved with the default method (issue 21):
     # literal CDFS 0.02/0.03 (dopri5 smooth, modal stick-slip), literal DDFS band edges,
     # ball-nut share 0.2 DDFS at 0.48 (dopri5 undecided, modal smooth)
-    for v in (0.02, 0.03, 0.04):
+    for v in (0.02, 0.03, 0.04, 0.05, 0.06):  # modal: the band from 0.06 (dopri5: 0.04)
         out.append(("wang2021-literal", "cdfs", 0.4, v, 0.0))
     for v in (0.15, 1.82, 2.02, 3.02):
         out.append(("wang2021-literal", "ddfs", 0.4, v, 16.0))
     out.append(("wang2021+share0.2", "ddfs", 0.4, 0.48, 16.0))
+    # both sides of every continuous-loop critical speed of the model-reading study (the
+    # last creeping and the first smooth speed of reproduce's 0.01-mm/s search)
+    for reading, drive, crit, vn in (("vi0.5", "cdfs", 1.24, 0.0), ("vi0.6", "cdfs", 1.29, 0.0),
+                                     ("vi0.7", "cdfs", 1.35, 0.0), ("vi0.8", "cdfs", 1.42, 0.0),
+                                     ("vi0.9", "cdfs", 1.48, 0.0), ("vi1.5", "cdfs", 1.98, 0.0),
+                                     ("vfb-table", "cdfs", 1.54, 0.0),
+                                     ("keq-paper", "cdfs", 1.56, 0.0),
+                                     ("damping4", "cdfs", 1.56, 0.0),
+                                     ("sampled-1khz", "cdfs", 2.21, 0.0),
+                                     ("sampled-1khz", "ddfs", 1.75, 16.0)):
+        for v in (round(crit - 0.01, 2), crit):
+            out.append((f"wang2021~{reading}", drive, 0.4, v, vn))
+    # the sampled 1-kHz DDFS's upper band: from 0.94 under modal, from 1.07 under dopri5
+    for v in (0.93, 0.94, 1.06, 1.07):
+        out.append(("wang2021~sampled-1khz", "ddfs", 0.4, v, 16.0))
+    # the hollow motor on a position loop too: no critical speed (undecided at 2.02); the top
+    # of its oscillation band
+    out.append(("wang2021~nut-position-loop", "ddfs", 0.4, 1.82, 16.0))
+    for share, crit in (("1", 1.98), ("0.5", 1.55)):  # the ball–nut share DDFS readings
+        for v in (round(crit - 0.01, 2), crit):
+            out.append((f"wang2021+share{share}", "ddfs", 0.4, v, 16.0))
     for f in ("10", "100"):
         out.append((f"wang2021*sigma0x{f}", "ddfs", 0.4, 0.5, 16.0))
         out.append((f"wang2021*sigma0x{f}", "cdfs", 0.4, 1.2, 0.0))
@@ -109,13 +157,42 @@ def key(case: tuple[str, str, float, float, float]) -> str:
     return f"{preset}/{drive}/a{a:g}/v{v:g}/vn{vn:g}"
 
 
+def sampled_reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
+    """The reference of a trial with sampled loops: ``reference/sampled.py`` (the plant by
+    DOP853 at rtol 1e-10 between sample instants, the held outputs updated at each, as
+    tests/validation/test_reference_sampled.py checks the engine against), absolute
+    tolerances 1000× the engine's; each longer trial runs again from rest (the held values
+    are not carried over)."""
+    from reference.sampled import simulate_sampled
+    preset, drive, a, v, vn = case
+    profile = ConstantSpeed(v * 1e-3, vn * 1e-3, ramp_time=RAMP)
+    model = ReferenceModel(_variant(preset), drive, a, profile)
+    v_t = model.state_names.index("table_speed")
+    atol = model.tolerances() * ATOL_SCALE
+
+    def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
+        t, y, _ = simulate_sampled(model, duration, rtol=RTOL, atol=atol)
+        return t, y[:, v_t]
+
+    started = time.process_time()
+    verdict, duration = decide(run, v * 1e-3)
+    return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio, "duration_s": duration,
+            "decided_at_s": verdict.decided_at, "cpu_s": time.process_time() - started,
+            "method": "DOP853 between sample instants"}
+
+
 def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
     preset, drive, a, v, vn = case
     params = _variant(preset)
+    c = params.controller
+    if c.position_period > 0 or c.velocity_period > 0 or c.current_period > 0:
+        return sampled_reference_trial(case)
     profile = ConstantSpeed(v * 1e-3, vn * 1e-3, ramp_time=RAMP)
     model = ReferenceModel(params, drive, a, profile)
-    atol = tolerances(model.H) * ATOL_SCALE
-    state = {"t": 0.0, "y": np.zeros(len(STATE_NAMES)), "time": [np.zeros(1)],
+    atol = model.tolerances() * ATOL_SCALE  # per state (= tolerances(H) for 15 states)
+    v_t = model.state_names.index("table_speed")
+    # the model's own state count: a ball–nut share 0 < f < 1 adds a bristle state
+    state = {"t": 0.0, "y": np.zeros(model.n_state), "time": [np.zeros(1)],
              "speed": [np.zeros(1)], "nfev": 0}
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
@@ -129,7 +206,7 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
             if sol.status != 0:
                 raise RuntimeError(f"{key(case)}: Radau failed at {sol.t[-1]:g} s")
             state["time"].append(sol.t)
-            state["speed"].append(sol.y[V_T])
+            state["speed"].append(sol.y[v_t])
             state["y"] = sol.sol(b)
             state["t"] = b
             state["nfev"] += int(sol.nfev)

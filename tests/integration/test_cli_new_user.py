@@ -330,13 +330,18 @@ def test_a_run_beyond_the_step_limit_is_refused_before_it_starts() -> None:
     # wall-clock bound)
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(sim_module, "simulate", never)
-        line = one_line_error(run("simulate", "--table-speed", "1", "--duration", "100000"))
+        # the step budget is dopri5's (1-ms steps: 1e8 > 5e7); the default (modal, no step
+        # cap) is refused up front too, by the record's memory (one line, "duration = …")
+        line = one_line_error(run("simulate", "--table-speed", "1", "--duration", "100000",
+                                  "--method", "dopri5"))
     assert "--duration = 100000.0" in line and "--max-steps" in line
     assert "expected ≤ 50000 [s]" in line
 
 
 def test_solver_exhaustion_names_the_cli_option() -> None:
-    result = run("simulate", "--table-speed", "1", "--duration", "0.2", "--max-steps", "201")
+    # dopri5 needs > 201 steps for 0.2 s (1-ms cap); the default (modal) takes 122
+    result = run("simulate", "--table-speed", "1", "--duration", "0.2", "--max-steps", "201",
+                 "--method", "dopri5")
     line = one_line_error(result, code=1)
     assert "--max-steps" in line and "options.max_steps" not in line
 

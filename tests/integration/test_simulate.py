@@ -188,7 +188,7 @@ def test_nut_speed_loop_runs_at_commanded_speed(params: fd.DriveParameters) -> N
 
 def test_cli_method_auto_runs_the_stiff_aware_integrator(tmp_path) -> None:
     """`feeddrive simulate --method auto`: the DDFS at 0.5 mm/s, v_n 16 (the stiff screw
-    bristle) — same mean speeds as the default (dopri5), RODAS4 steps taken, streamed to a file;
+    bristle) — same mean speeds as the default (modal), RODAS4 steps taken, streamed to a file;
     every method the help names is one SolverOptions accepts; a wrong one is one line."""
     from feeddrive.cli.simulate_cmd import CLI_METHODS
     from feeddrive.engine.simulate import METHODS
@@ -200,7 +200,7 @@ def test_cli_method_auto_runs_the_stiff_aware_integrator(tmp_path) -> None:
     result = runner.invoke(app, [*args, "--method", "auto", "--output", str(out)])
     assert result.exit_code == 0, result.output
     auto = json.loads(result.stdout)
-    assert default["solver"]["method"] == "dopri5" and auto["solver"]["method"] == "auto"
+    assert default["solver"]["method"] == "modal" and auto["solver"]["method"] == "auto"
     assert auto["solver"]["rosenbrock_steps"] > 0
     for key in ("mean_table_speed_mm_s", "mean_screw_speed_mm_s", "mean_nut_speed_mm_s"):
         assert auto[key] == pytest.approx(default[key], rel=1e-4)

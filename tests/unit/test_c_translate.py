@@ -333,6 +333,7 @@ NOT_TRANSLATED = {"feeddrive.model.friction.stribeck._map1": "return annotation"
                   # and 2-D Jacobians; the FMU's embedded solver does not use it.  Value: the
                   # refusal's message
                   "feeddrive.solvers.modes.step_cap": "complex128",
+                  "feeddrive.solvers.modes.real_eigenvalues": "the size of array 'A'",
                   "feeddrive.solvers.modes.jacobian_moved": "2 indices of a 1-D array"}
 
 

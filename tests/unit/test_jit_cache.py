@@ -69,7 +69,7 @@ def test_a_second_process_loads_the_assembled_model_from_disk(tmp_path) -> None:
             "from feeddrive.model.reference import ConstantSpeed\n"
             "s = fd.DriveSystem(fd.preset('linear-motor-example'), 'linear-motor')\n"
             "fd.simulate(s, ConstantSpeed(1e-3), 0.01)\n"
-            "st = s.model(ConstantSpeed(1e-3)).module.integrate.stats\n"
+            "st = s.model(ConstantSpeed(1e-3)).module.integrate_dense.stats\n"
             "print(sum(st.cache_hits.values()), sum(st.cache_misses.values()))\n")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,

@@ -123,12 +123,12 @@ def test_sampled_profile_follows_dopri5() -> None:
 
 
 def test_auto_at_the_default_tolerance_damps_an_undamped_table_mode() -> None:
-    """Why creep verdicts (``feeddrive creep``, ``reproduce``) integrate with ``dopri5``
-    (benchmarks/README.md): on the ``wang2021-literal`` CDFS (no axial damping) at 0.2 mm/s,
-    DOPRI5 at rtol 1e-6 and both methods at rtol 1e-8 see stick-slip (ripple ≈ 2.2 × the
-    command); RODAS4 steps at rtol 1e-6 damp the undamped table mode numerically and the
-    trial settles "smooth".  If the switching driver stops doing so, the documented reason
-    for keeping ``dopri5`` as the verdicts' method is gone."""
+    """Why the default is ``modal`` and not ``auto`` (docs/model.md): on the
+    ``wang2021-literal`` CDFS (no axial damping) at 0.2 mm/s, DOPRI5 at rtol 1e-6 and both
+    methods at rtol 1e-8 (absolute tolerances tightened alike) see stick-slip (ripple ≈ 2.2 ×
+    the command); ``auto``'s RODAS4 steps at rtol 1e-6 damp the growing table mode
+    numerically and the trial settles "smooth" (``modal`` caps those steps:
+    tests/validation/test_modal_default.py)."""
     from feeddrive.analysis.critical import creep_trial
 
     system = DriveSystem(fd.preset("wang2021-literal"), "cdfs", 0.4)

@@ -24,7 +24,7 @@ from ._common import (
 ALL_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
 DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.engine.simulate.SolverOptions.max_steps
-DEFAULT_METHOD = "dopri5"  # as feeddrive.engine.simulate.SolverOptions.method (a test checks it)
+DEFAULT_METHOD = "modal"  # as feeddrive.engine.simulate.SolverOptions.method (a test checks it)
 #: the integrators offered (feeddrive.engine.simulate.METHODS without the fixed-step order checks)
 CLI_METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense")
 
@@ -65,9 +65,9 @@ def simulate_command(
         None, "--profile-file", help="csv: a CSV with columns time [s] and table_speed "
         "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
     method: str = typer.Option(
-        DEFAULT_METHOD, "--method", help="Integrator: dopri5 (the default: every "
-        "output instant a step end; the v1 engine), modal (DOPRI5 and RODAS4 switched on "
-        "stiffness, Rosenbrock steps capped on lightly damped modes), auto (switched on "
+        DEFAULT_METHOD, "--method", help="Integrator: modal (the default: DOPRI5 and "
+        "RODAS4 switched on stiffness, steps capped on lightly damped modes), dopri5 "
+        "(every output instant a step end; the v1 engine), auto (switched on "
         "stiffness alone: at the default tolerance it damps a slowly growing mode, see "
         "docs/model.md), rodas4 or dopri5-dense."),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",

@@ -114,17 +114,16 @@ class SolverOptions:
 
     Parameters
     ----------
-    method : str, default "dopri5"
-        * ``"modal"``: DOPRI5 where the problem is not stiff, RODAS4 where it
+    method : str, default "modal"
+        * ``"modal"`` (the default): DOPRI5 where the problem is not stiff, RODAS4 where it
           is, with each Rosenbrock step capped so that every lightly damped, undamped or
-          growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.7 for damping
+          growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.35 for damping
           ratios below 0.02: :mod:`feeddrive.solvers.modes`), and no switch where that cap
           leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
           early (``divergence_bounds``);
-        * ``"dopri5"`` (the default): adaptive Dormand–Prince 5(4), every output instant a
-          step end (steps at most ``max_step``, default 1 ms, and the output interval); the
-          engine v1 behaviour, kept bit for bit (``modal`` is not yet the default: see
-          docs/model.md);
+        * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps
+          at most ``max_step``, default 1 ms, and the output interval); the engine v1
+          behaviour, kept bit for bit;
         * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
           automatically on Hairer's stiffness test alone; dense output (steps not capped by
           the output interval); at rtol 1e-6 its RODAS4 steps can damp a slowly growing mode;
@@ -152,7 +151,7 @@ class SolverOptions:
         A run that would need more steps is refused before it starts.
     """
 
-    method: str = "dopri5"
+    method: str = "modal"
     rtol: float = 1e-6
     position_tolerance: float = 1e-10
     speed_tolerance: float = 1e-8
