@@ -361,12 +361,12 @@ def _check_text(key: str, text: Any, limit: int, *, lines: bool) -> None:
                              "plain text")
 
 
-def unit_of(cls: type, path: str) -> str | None:
+def unit_of(component: type, path: str) -> str | None:
     """The unit a parameter class declares for a dotted path below it.
 
     Parameters
     ----------
-    cls : type
+    component : type
         A parameter component class (e.g. ``LuGreParameters``).
     path : str
         Dotted path, entries of a tuple field with ``[i]``
@@ -382,18 +382,18 @@ def unit_of(cls: type, path: str) -> str | None:
 
     for i, part in enumerate(path.split(".")):
         name = part.split("[", 1)[0]
-        found = {f.name: f for f in fields(cls)}.get(name)
-        if found is None and "sections" in {f.name for f in fields(cls)}:
+        found = {f.name: f for f in fields(component)}.get(name)
+        if found is None and "sections" in {f.name for f in fields(component)}:
             section = registry.table(registry.SECTIONS).get(name)
             if section is None:
                 return None
-            cls = section  # a part's section of the composition
+            component = section  # a part's section of the composition
             continue
         if found is None:
             return None
-        hint = typing.get_type_hints(cls).get(name)
+        hint = typing.get_type_hints(component).get(name)
         if isinstance(hint, type) and hasattr(hint, "__dataclass_fields__"):
-            cls = hint
+            component = hint
             continue
         unit = found.metadata.get("unit")
         return str(unit) if unit is not None and i == path.count(".") else None

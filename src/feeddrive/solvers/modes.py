@@ -49,15 +49,34 @@ REFRESH = 0.05
 
 @kernel
 def real_eigenvalues(A: np.ndarray, wr: np.ndarray, wi: np.ndarray) -> bool:
-    """The eigenvalues wr[k] + i·wi[k] (k = 1 … n) of the real n × n matrix in A[1:, 1:]
-    (row and column 0 unused; A is overwritten), in real arithmetic: balancing (Parlett &
-    Reinsch), reduction to Hessenberg form by stabilised elementary similarity
-    transformations and the Francis double-shift QR iteration — EISPACK's ``balanc``,
-    ``elmhes`` and ``hqr`` (Wilkinson & Reinsch, *Handbook for Automatic Computation II*,
-    Springer 1971, contributions II/11, II/13, II/14), in the 1-based form of Press et al.,
-    *Numerical Recipes*, 2nd ed., Sect. 11.5–11.6.  Complex pairs come as conjugates
-    (wi[k] < 0 first).  False if an eigenvalue took more than 30 iterations (then wr, wi
-    are incomplete)."""
+    """The eigenvalues of a real n × n matrix, in real arithmetic.
+
+    Balancing (Parlett & Reinsch), reduction to Hessenberg form by stabilised elementary
+    similarity transformations and the Francis double-shift QR iteration — EISPACK's
+    ``balanc``, ``elmhes`` and ``hqr`` [1]_, in the 1-based form of [2]_.  Complex pairs come
+    as conjugates (wi[k] < 0 first).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        (n + 1) × (n + 1) array whose A[1:, 1:] holds the matrix (row and column 0 unused);
+        overwritten [1/s].
+    wr : numpy.ndarray
+        Length n + 1: receives the real parts in wr[1:] [1/s].
+    wi : numpy.ndarray
+        Length n + 1: receives the imaginary parts in wi[1:] [rad/s].
+
+    Returns
+    -------
+    bool
+        False if an eigenvalue took more than 30 iterations (then wr, wi are incomplete).
+
+    References
+    ----------
+    .. [1] J. H. Wilkinson, C. Reinsch, *Handbook for Automatic Computation II: Linear
+       Algebra*, Springer 1971, contributions II/11, II/13, II/14.
+    .. [2] W. H. Press et al., *Numerical Recipes*, 2nd ed., Sect. 11.5–11.6.
+    """
     n = A.shape[0] - 1
     # balance (Parlett & Reinsch; NR balanc)
     radix = 2.0
@@ -251,11 +270,29 @@ def real_eigenvalues(A: np.ndarray, wr: np.ndarray, wi: np.ndarray) -> bool:
 
 @kernel
 def step_cap(J: np.ndarray, live: np.ndarray, zeta_light: float, h_lambda: float) -> float:
-    """The largest step [s] that resolves every lightly damped mode of J (see the module):
-    min over eigenvalues λ with Im λ ≠ 0 and −Re λ/|λ| < ``zeta_light`` of ``h_lambda``/|λ|;
-    inf if there is none (or J is not finite).  The eigenvalues in real arithmetic
-    (:func:`real_eigenvalues`, ≈ 5× faster than LAPACK's complex ``zgeev`` on these sizes);
-    should that not converge, by ``zgeev``."""
+    """The largest step that resolves every lightly damped mode of J (see the module).
+
+    The minimum over eigenvalues λ with Im λ ≠ 0 and −Re λ/|λ| < ``zeta_light`` of
+    ``h_lambda``/|λ|.  The eigenvalues in real arithmetic (:func:`real_eigenvalues`, ≈ 5×
+    faster than LAPACK's complex ``zgeev`` on these sizes); should that not converge, by
+    ``zgeev``.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        n × n Jacobian of the right-hand side [1/s].
+    live : numpy.ndarray
+        n flags: the states that take part (held or frozen states are left out) [-].
+    zeta_light : float
+        Damping ratio below which a mode counts as lightly damped [-].
+    h_lambda : float
+        Largest h·|λ| allowed on such a mode [-].
+
+    Returns
+    -------
+    float
+        The step cap [s]; inf if there is no such mode (or J is not finite).
+    """
     n = J.shape[0]
     m = 0
     for i in range(n):
@@ -300,9 +337,26 @@ def step_cap(J: np.ndarray, live: np.ndarray, zeta_light: float, h_lambda: float
 
 @kernel
 def jacobian_moved(J: np.ndarray, J_ref: np.ndarray, refresh: float) -> bool:
-    """Whether a row of J differs from that of ``J_ref`` by more than ``refresh`` of the row's
-    largest entry (max-norm, row by row; the rows of a drive's Jacobian differ in scale by
-    orders of magnitude, and an eigenvalue moves by about the size of the change)."""
+    """Whether the Jacobian has moved enough since the last eigen-analysis to redo it.
+
+    Max-norm, row by row: the rows of a drive's Jacobian differ in scale by orders of
+    magnitude, and an eigenvalue moves by about the size of the change.
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        The current n × n Jacobian [1/s].
+    J_ref : numpy.ndarray
+        The Jacobian of the last eigen-analysis [1/s].
+    refresh : float
+        Relative change of a row (to the row's largest entry) that counts as moved [-].
+
+    Returns
+    -------
+    bool
+        True if some row of J differs from that of ``J_ref`` by more than ``refresh`` of the
+        row's largest entry.
+    """
     n = J.shape[0]
     for i in range(n):
         row = 0.0

@@ -41,8 +41,8 @@ def stribeck_magnitude_kernel(v: float, p: np.ndarray) -> float:
     v : float
         Sliding speed [m/s].
     p : numpy.ndarray
-        One site's packed LuGre parameters
-        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters [SI, per slot]
+        (:meth:`~feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`).
 
     Returns
     -------
@@ -67,8 +67,8 @@ def steady_force_kernel(v: float, p: np.ndarray) -> float:
     v : float
         Sliding speed [m/s].
     p : numpy.ndarray
-        One site's packed LuGre parameters
-        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters [SI, per slot]
+        (:meth:`~feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`).
 
     Returns
     -------
@@ -78,7 +78,7 @@ def steady_force_kernel(v: float, p: np.ndarray) -> float:
     if v == 0.0:
         return 0.0
     s = 1.0 if v > 0.0 else -1.0
-    return s * lugre.stribeck_magnitude(v, p, 0) + p[lugre.branch(v, 0) + 3] * v
+    return s * lugre.stribeck_magnitude(v, p, 0) + p[lugre.branch(v, 0) + lugre.VISCOUS] * v
 
 
 @kernel
@@ -92,8 +92,8 @@ def bristle_rate_kernel(v: float, z: float, p: np.ndarray) -> float:
     z : float
         Bristle deflection [m].
     p : numpy.ndarray
-        One site's packed LuGre parameters
-        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters [SI, per slot]
+        (:meth:`~feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`).
 
     Returns
     -------
@@ -120,8 +120,8 @@ def force_kernel(v: float, z: float, p: np.ndarray) -> float:
     z : float
         Bristle deflection [m].
     p : numpy.ndarray
-        One site's packed LuGre parameters
-        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters [SI, per slot]
+        (:meth:`~feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`).
 
     Returns
     -------
@@ -153,8 +153,8 @@ def bristle_step_kernel(z: float, v: float, h: float, p: np.ndarray) -> float:
     h : float
         Step length [s].
     p : numpy.ndarray
-        One site's packed LuGre parameters
-        (:meth:`~feeddrive.parameters.LuGreParameters.as_array`) [SI, per slot].
+        One site's packed LuGre parameters [SI, per slot]
+        (:meth:`~feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`).
 
     Returns
     -------
