@@ -1,7 +1,7 @@
 """Reference profiles: what the table (and, for the DDFS, the nut) is commanded to do.
 
-Profiles are immutable descriptions; :meth:`encode` gives the numbers the compiled
-:func:`reference_kernel` reads (a parameter block and a data table).
+Profiles are immutable descriptions; each profile's ``encode()`` gives the numbers the
+compiled ``reference_kernel`` reads (a parameter block and a data table).
 
 Speed profiles built on :class:`SampledSpeed` (SI units): :func:`trapezoid`, the paper's
 step-down staircase (:func:`stepdown`), and a profile read from a CSV file
