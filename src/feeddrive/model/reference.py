@@ -33,7 +33,7 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
                      T: np.ndarray) -> tuple[float, float, float, float]:
     """Commanded (table position, table speed, nut position, nut speed) at time t.
 
-    ``P[o:o+7]`` is the profile block (:data:`PROFILE_PARAMS`); sampled profiles read a 4 × n
+    ``P[o:o+7]`` is the profile block (``PROFILE_PARAMS``); sampled profiles read a 4 × n
     table at ``T[to:]`` (rows: table position, table speed, nut position, nut speed), their
     speeds interpolated linearly or, with ``P[o+3]`` = 1, held (zero-order hold).  An external
     input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its host:
