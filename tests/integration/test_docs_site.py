@@ -87,7 +87,7 @@ def test_every_public_name_is_in_the_reference() -> None:
     assert not missing, missing
     # the reference is no empty shell: the everyday API's classes and functions by kind
     assert {"feeddrive.Simulation", "feeddrive.Result"} <= inv["py:class"]
-    assert {"feeddrive.engine.simulate", "feeddrive.preset"} <= inv["py:function"]
+    assert {"feeddrive.simulate", "feeddrive.preset"} <= inv["py:function"]
     assert {"feeddrive.model.friction.stribeck", "feeddrive.sweep"} <= inv["py:module"]
 
 
