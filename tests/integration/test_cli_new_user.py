@@ -69,36 +69,44 @@ def test_interrupt_while_importing_exits_130_without_traceback(
     assert err.strip() == "interrupted"
 
 
+def _stored(out: Path) -> list[Path]:
+    """The studies stored under ``out/data`` (not the store's hidden temporary files)."""
+    return [p for p in (out / "data").glob("*.json") if not p.name.startswith(".")]
+
+
 def test_ctrl_c_on_reproduce_stops_the_work(tmp_path: Path,
                                             interruptible: dict[str, Any]) -> None:
     """Issue 12 item 7: Ctrl-C on `reproduce` took ~53 s to act and printed nothing.  Now the
     worker pool is terminated at once, the message says what was kept, exit status 130.
     Issue 24 item 14: the test asserted < 2 s of wall time and failed on a busy machine; it
     now counts the work done after the signal: no study is started or stored after it
-    (one running at the signal may land), instead of timing it."""
+    (one running at the signal may land), instead of timing it.
+    Issue 21: the wait counted the store's temporary ``.NAME.xxxx.partial.json`` (pathlib's
+    ``*`` matches dot files), so the signal could arrive before any study was stored; only
+    stored entries are counted now."""
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "feeddrive", "reproduce", "--out", str(out),
                              "--no-study", "--workers", "1"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             **interruptible)
     deadline = time.monotonic() + 600  # a hang guard only: the first study takes seconds
-    while not list((out / "data").glob("*.json")):  # wait until the study is under way
+    while not _stored(out):  # wait until the study is under way
         assert proc.poll() is None, proc.communicate()
         if time.monotonic() > deadline:
             proc.kill()
             pytest.fail("reproduce stored no study in 600 s (hung)")
         time.sleep(0.05)
-    at_signal = len(list((out / "data").glob("*.json")))
+    at_signal = len(_stored(out))
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=300)  # a hang guard, not a speed bound
     assert proc.returncode == 130, (stdout, stderr)
     # --workers 1: at most the one study running at the signal is stored after it, and the
     # report (written after every study) is never reached
-    assert len(list((out / "data").glob("*.json"))) <= at_signal + 1
+    assert len(_stored(out)) <= at_signal + 1
     assert not (out / "report.md").exists()
     assert "Traceback" not in stdout + stderr
     assert f"kept in {out / 'data'}" in stderr.replace("\n", "")
-    assert list((out / "data").glob("*.json"))
+    assert _stored(out)
 
 
 # ------------------------------------------------------------------ item 1: units in --help
