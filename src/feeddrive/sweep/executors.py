@@ -431,82 +431,89 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
     if todo:
         for task in structures.values():
             warm(task)
-        with executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers,
-                      warm_tasks=list(structures.values())) as (pool, n_workers, where):
-            if started is not None:
-                started(len(todo), where)
-            limit = max(1, IN_FLIGHT_PER_WORKER * n_workers)
-            inflight: dict[cf.Future[Any], str] = {}
-            waiting: set[int] = set()  # claimed by another live sweep
-            source: Iterator[tuple[int, dict[str, Any]]] = todo_tasks(todo)
+        try:
+            with executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers,
+                          warm_tasks=list(structures.values())) as (pool, n_workers, where):
+                if started is not None:
+                    started(len(todo), where)
+                limit = max(1, IN_FLIGHT_PER_WORKER * n_workers)
+                inflight: dict[cf.Future[Any], str] = {}
+                waiting: set[int] = set()  # claimed by another live sweep
+                source: Iterator[tuple[int, dict[str, Any]]] = todo_tasks(todo)
 
-            def store_result(fut: cf.Future[Any]) -> None:
-                nonlocal computed, failed
-                value = fut.result()
-                store.put(inflight[fut], value)
-                del inflight[fut]
-                computed += 1
-                failed += "error" in value
-                if progress is not None:
-                    progress(computed + elsewhere, len(todo))
+                def store_result(fut: cf.Future[Any]) -> None:
+                    nonlocal computed, failed
+                    value = fut.result()
+                    store.put(inflight[fut], value)
+                    del inflight[fut]
+                    computed += 1
+                    failed += "error" in value
+                    if progress is not None:
+                        progress(computed + elsewhere, len(todo))
 
-            retrying = False
+                retrying = False
 
-            def fill() -> bool:
-                """Submit until ``limit`` points are in flight; False once none is left."""
-                nonlocal elsewhere, source, retrying
-                while len(inflight) < limit:
-                    item = next(source, None)
-                    if item is None:
-                        if not waiting:
-                            return False
-                        if inflight:  # come back to them once a worker is free
-                            return True
-                        # only points other live sweeps hold are left: look again
-                        if retrying:
-                            time.sleep(0.5)
-                        retrying = True
-                        source = todo_tasks(set(waiting))
-                        waiting.clear()
-                        continue
-                    i, task = item
-                    state = store.claim(keys[i])
-                    if state == "stored":
-                        elsewhere += 1
-                        if progress is not None:
-                            progress(computed + elsewhere, len(todo))
-                    elif state == "busy":
-                        waiting.add(i)
-                    else:
-                        inflight[pool.submit(evaluate, task)] = keys[i]
-                return True
+                def fill() -> bool:
+                    """Submit until ``limit`` points are in flight; False once none is left."""
+                    nonlocal elsewhere, source, retrying
+                    while len(inflight) < limit:
+                        item = next(source, None)
+                        if item is None:
+                            if not waiting:
+                                return False
+                            if inflight:  # come back to them once a worker is free
+                                return True
+                            # only points other live sweeps hold are left: look again
+                            if retrying:
+                                time.sleep(0.5)
+                            retrying = True
+                            source = todo_tasks(set(waiting))
+                            waiting.clear()
+                            continue
+                        i, task = item
+                        state = store.claim(keys[i])
+                        if state == "stored":
+                            elsewhere += 1
+                            if progress is not None:
+                                progress(computed + elsewhere, len(todo))
+                        elif state == "busy":
+                            waiting.add(i)
+                        else:
+                            inflight[pool.submit(evaluate, task)] = keys[i]
+                    return True
 
-            try:
-                more = fill()
-                while inflight or more:
-                    done, _ = cf.wait(list(inflight), timeout=1.0,
-                                      return_when=cf.FIRST_COMPLETED)
-                    for fut in done:
-                        store_result(fut)
-                    store.refresh_claims()
+                try:
                     more = fill()
-            except BaseException as err:
-                # nothing more is submitted; what has returned is stored; the rest is
-                # cancelled (the executor's exit stops local workers at once)
-                for fut in list(inflight):
-                    if fut.done() and not fut.cancelled() and fut.exception() is None:
-                        store_result(fut)
-                    else:
-                        fut.cancel()
-                if isinstance(err, Exception) and _lost_worker(err):
-                    raise SweepAborted(f"{where}: a worker was lost ({type(err).__name__}: "
-                                       f"{err}); {computed} points stored this run, rerun "
-                                       "to resume") from None
-                if isinstance(err, KeyboardInterrupt):
-                    raise SweepInterrupted(computed) from None
+                    while inflight or more:
+                        done, _ = cf.wait(list(inflight), timeout=1.0,
+                                          return_when=cf.FIRST_COMPLETED)
+                        for fut in done:
+                            store_result(fut)
+                        store.refresh_claims()
+                        more = fill()
+                except BaseException as err:
+                    # nothing more is submitted; what has returned is stored; the rest is
+                    # cancelled (the executor's exit stops local workers at once)
+                    for fut in list(inflight):
+                        if fut.done() and not fut.cancelled() and fut.exception() is None:
+                            store_result(fut)
+                        else:
+                            fut.cancel()
+                    if isinstance(err, Exception) and _lost_worker(err):
+                        raise SweepAborted(f"{where}: a worker was lost ({type(err).__name__}: "
+                                           f"{err}); {computed} points stored this run, rerun "
+                                           "to resume") from None
+                    if isinstance(err, KeyboardInterrupt):
+                        raise SweepInterrupted(computed) from None
+                    raise
+                finally:
+                    store.release_claims()
+        except KeyboardInterrupt as err:
+            # a Ctrl-C outside the loop (while the pool starts or shuts down, or the claims
+            # are released) still reports what this run stored
+            if isinstance(err, SweepInterrupted):
                 raise
-            finally:
-                store.release_claims()
+            raise SweepInterrupted(computed) from None
     return SweepSummary(points=len(keys), distinct=len(first), stored_before=len(done_before),
                         computed=computed, failed=failed, seconds=time.perf_counter() - t0,
                         workers=n_workers, executor=where, elsewhere=elsewhere)
