@@ -266,16 +266,20 @@ class _Evaluator:
         self.held = np.zeros(model.n_held)
         self.aux = np.zeros(len(model.aux))
         self.n = len(model.states)
+        self.P = self._continuous(model.P)  # the model's own, checked once
+
+    def _continuous(self, P: np.ndarray) -> np.ndarray:
+        if any(P[k] != 0.0 for _, k in self.model.clocks):  # the loops as continuous ones
+            P = P.copy()
+            for _, k in self.model.clocks:
+                P[k] = 0.0
+        return P
 
     def __call__(self, y: np.ndarray, P: np.ndarray | None = None) -> tuple[np.ndarray,
                                                                                np.ndarray]:
         dy = np.empty(self.n)
         aux = np.empty(len(self.model.aux))
-        P = self.model.P if P is None else P
-        if any(P[k] != 0.0 for _, k in self.model.clocks):  # the loops as continuous ones
-            P = P.copy()
-            for _, k in self.model.clocks:
-                P[k] = 0.0
+        P = self.P if P is None else self._continuous(P)
         self.model.module.rhs(_T0, np.ascontiguousarray(y, dtype=float), self.held, P,
                               self.model.T, dy, aux)
         return dy, aux
@@ -329,21 +333,20 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     unknown = [k for k in live if k not in fixed_speed]
     scale = _scales(model)
 
+    # the equations: each unknown's own rate, except a kinematic position's (its rate is the
+    # fixed speed: the rate state's equation is used instead), in that order
+    rows = np.array([k for k in unknown if names[k] not in kinematic]
+                    + [names.index(rate) for name, rate in kinematic.items()
+                       if names.index(name) in unknown], dtype=np.intp)
+    row_scale = scale[rows]
+    at = np.array(unknown, dtype=np.intp)
+    at_scale = scale[at]
+
     def residual(u: np.ndarray) -> np.ndarray:
         y = y0.copy()
-        y[unknown] = u * scale[unknown]
+        y[at] = u * at_scale
         dy, _ = f(y)
-        r = []
-        for k in unknown:
-            name = names[k]
-            if name in kinematic:
-                # its rate is the fixed speed: use the rate state's equation instead
-                continue
-            r.append(dy[k] / scale[k])
-        for name, rate in kinematic.items():
-            if names.index(name) in unknown:
-                r.append(dy[names.index(rate)] / scale[names.index(rate)])
-        return np.array(r)
+        return dy[rows] / row_scale
 
     # Directions no equation holds (the common rotation of screw and nut under a hollow motor
     # on a speed loop, the table position with the position loop open) make the Jacobian
@@ -446,6 +449,52 @@ def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
     return replace(system, parameters=params), (note,)
 
 
+def _state_steps(f: _Evaluator, y: np.ndarray, live: list[int], scale: np.ndarray) -> Any:
+    """The central differences of the state Jacobian, column by column: (column, step [SI],
+    (y + h, its rates, its aux), (y − h, its rates, its aux)) for each live state; the step
+    is a hundredth of the state's solver tolerance."""
+    for j, k in enumerate(live):
+        h = 1e-2 * scale[k]  # a hundredth of the state's solver tolerance
+        yp, ym = y.copy(), y.copy()
+        yp[k] += h
+        ym[k] -= h
+        dp, ap = f(yp)
+        dm, am = f(ym)
+        yield j, h, (yp, dp, ap), (ym, dm, am)
+
+
+def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
+                 ) -> np.ndarray:
+    """The A matrix of :func:`linearize` alone (the same steady state and the same
+    differences, bit for bit), without the inputs' and outputs' matrices it does not need:
+    what :func:`rightmost_pole` and :func:`stability_band` judge.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (continuous loops).
+    table_speed : float
+        Steady table speed of the operating point [m/s], non-zero.
+    nut_speed : float, default 0.0
+        Steady nut speed of the operating point [m/s] (DDFS).
+
+    Returns
+    -------
+    numpy.ndarray
+        A over the live states [1/s and the states' unit ratios], as ``linearize(...).A``.
+    """
+    if table_speed == 0.0:
+        raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
+    sys_, _ = averaged(system)
+    model, y = steady_state(sys_, table_speed, nut_speed)
+    f = _Evaluator(model)
+    live = _live_states(model, sys_)
+    A = np.empty((len(live), len(live)))
+    for j, h, (_, dp, _), (_, dm, _) in _state_steps(f, y, live, _scales(model)):
+        A[:, j] = (dp[live] - dm[live]) / (2 * h)
+    return A
+
+
 def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float = 0.0, *,
               frictionless: bool = False) -> LinearModel:
     """Linearise the closed loop of ``system`` at steady sliding.
@@ -517,13 +566,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         return np.array([fn(yv, aux) for _, fn in outs])
 
     C = np.empty((len(outs), n))
-    for j, k in enumerate(live):
-        h = 1e-2 * scale[k]  # a hundredth of the state's solver tolerance
-        yp, ym = y.copy(), y.copy()
-        yp[k] += h
-        ym[k] -= h
-        dp, ap = f(yp)
-        dm, am = f(ym)
+    for j, h, (yp, dp, ap), (ym, dm, am) in _state_steps(f, y, live, scale):
         A[:, j] = (dp[live] - dm[live]) / (2 * h)
         C[:, j] = (outputs(yp, ap) - outputs(ym, am)) / (2 * h)
     B = np.empty((n, len(ins)))
@@ -1034,8 +1077,8 @@ def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
     frequency : float
         Its frequency |Im|/(2π) [Hz].
     """
-    lin = linearize(system, v, nut_speed)
-    live = [p for p in classify_poles(lin.poles()) if not p.rigid_body]
+    live = [p for p in classify_poles(np.linalg.eigvals(state_matrix(system, v, nut_speed)))
+            if not p.rigid_body]
     p = max(live, key=lambda q: q.real)
     return p.real, abs(p.imag) / (2 * np.pi)
 
@@ -1117,4 +1160,4 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
 __all__ = ["INPUT_UNITS", "MARGINAL", "NAMED_RESPONSES", "OUTPUT_UNITS", "FrequencyResponse",
            "LinearModel", "LoopAnalysis", "LoopResult", "Pole", "StabilityBand", "averaged",
            "classify_poles", "frequency_response", "linearize", "loop_analysis",
-           "rightmost_pole", "stability_band", "steady_state", "unit_of"]
+           "rightmost_pole", "stability_band", "state_matrix", "steady_state", "unit_of"]

@@ -537,6 +537,110 @@ class Simulation:
         self._chunks: _Chunks | None = None
         self._running: _Chunks | None = None
 
+    def keep_checkpoints(self) -> None:
+        """Keep the carried state at every committed chunk end of the coming runs, so that a
+        later :class:`Simulation` of a profile with the same beginning can start there
+        (:meth:`resume`) instead of from rest."""
+        if self._chunks is None:
+            self._chunks = _Chunks(self, want_aux=False)
+        if self._chunks.checkpoints is None:
+            self._chunks.checkpoints = [] if self._chunks.start == 0 else None
+
+    def resume(self, previous: Simulation) -> float:
+        """Start this run where ``previous`` (run with :meth:`keep_checkpoints`) committed its
+        last chunk before the two profiles part: the result is bit-identical to a run from
+        rest, since the state carried at a chunk end (states, held controller values, the
+        integrator's memory, counters) is what the run from rest has there.
+
+        Only tabulated profiles (:class:`~feeddrive.model.reference.SampledSpeed`, e.g. the
+        step-down staircase) of the same system, options and grid are resumed; the profiles
+        agree up to the last sample both have equal (two samples are kept in hand: the
+        reference interpolates between neighbours).
+
+        Parameters
+        ----------
+        previous : Simulation
+            An earlier run of the same system with another profile.
+
+        Returns
+        -------
+        float
+            The time the run resumes from [s]; 0 when nothing is shared (a run from rest).
+        """
+        kept = self._shared(previous)
+        if not kept:
+            return 0.0
+        start, y, held, memory, totals, n_parts = kept[-1]
+        chunks = _Chunks(self, want_aux=False)
+        chunks.checkpoints = kept
+        chunks.start, chunks.y, chunks.held = start, y.copy(), held.copy()
+        chunks.memory = chunks.live = memory.copy()
+        chunks.totals = totals.copy()
+        chunks.parts = previous._chunks.parts[:n_parts] if previous._chunks else []
+        self._chunks = chunks
+        return start * self.grid.base
+
+    def resumable_from(self, previous: Simulation) -> float:
+        """The time [s] :meth:`resume` would start this run from (0: from rest), without
+        resuming.
+
+        Parameters
+        ----------
+        previous : Simulation
+            An earlier run of the same system with another profile.
+
+        Returns
+        -------
+        float
+            The time [s].
+        """
+        kept = self._shared(previous)
+        return kept[-1][0] * self.grid.base if kept else 0.0
+
+    def _shared(self, previous: Simulation) -> list[tuple[int, np.ndarray, np.ndarray,
+                                                          np.ndarray, np.ndarray, int]]:
+        """The checkpoints of ``previous`` this run's profile shares (empty: none)."""
+        prev = previous._chunks
+        if prev is None or not prev.checkpoints or not self._same_but_profile(previous):
+            return []
+        a, b = self.profile, previous.profile
+        assert isinstance(a, SampledSpeed) and isinstance(b, SampledSpeed)
+        n = min(len(a.time), len(b.time))
+        differ = np.flatnonzero(
+            (np.asarray(a.time[:n]) != np.asarray(b.time[:n]))
+            | (np.asarray(a.table_speed[:n]) != np.asarray(b.table_speed[:n]))
+            | (_nut(a)[:n] != _nut(b)[:n]))
+        same = int(differ[0]) if differ.size else n  # samples 0 … same − 1 agree
+        if same < 2:
+            return []
+        until = float(a.time[same - 2]) + 1e-12  # the run reads up to the next sample
+        return [c for c in prev.checkpoints if c[0] * self.grid.base <= until]
+
+    def _same_but_profile(self, other: Simulation) -> bool:
+        """Whether ``other`` integrates the same model, options and grid, and both profiles are
+        tables that are the model's only table (so they differ only in the profile's
+        numbers and its length slot)."""
+        a, b = self.profile, other.profile
+        if not (isinstance(a, SampledSpeed) and isinstance(b, SampledSpeed)
+                and a.hold == b.hold and self.system is other.system
+                and self.options == other.options and self.grid == other.grid
+                and self.model.source == other.model.source
+                and self.model.parameter_names == other.model.parameter_names):
+            return False
+        names = self.model.parameter_names
+        if "profile[6]" not in names:
+            return False
+        length = names.index("profile[6]")
+        if self.model.T.size != 4 * int(self.P[length]) \
+                or other.model.T.size != 4 * int(other.P[length]):
+            return False  # another table (a load record) shares T
+        mask = np.arange(self.P.size) != length
+        return bool(np.array_equal(self.P[mask], other.P[mask])
+                    and np.array_equal(self.atol, other.atol)
+                    and np.array_equal(self.rel, other.rel)
+                    and np.array_equal(self.y0, other.y0)
+                    and np.array_equal(self.bound, other.bound))
+
     def live_time(self) -> float:
         """The simulated time the solver has reached in the run going on now.
 
@@ -685,6 +789,10 @@ class _Chunks:
         self.start = 0
         self.diverged = False
         self.y = sim.y0
+        # (breakpoint, y, held, memory, totals, parts so far) at each committed chunk end,
+        # kept for Simulation.resume when Simulation.keep_checkpoints asked for them
+        self.checkpoints: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                     int]] | None = None
 
     def _call(self, y: np.ndarray, start: int, stop: int, held: np.ndarray,
               memory: np.ndarray, max_steps: int,
@@ -775,6 +883,10 @@ class _Chunks:
                         kept -= self.parts.pop(0)[0].size
                     self.y = yy[-1].copy() if yy.shape[0] else self.y
                     self.start = stop
+                    if self.checkpoints is not None and writer is None:
+                        self.checkpoints.append((stop, self.y.copy(), self.held.copy(),
+                                                 self.memory.copy(), self.totals.copy(),
+                                                 len(self.parts)))
                 else:
                     tail.append((t, yy, aa))
                 if progress is not None:
@@ -810,6 +922,12 @@ class _Stopped(Exception):
                  joined: tuple[np.ndarray, np.ndarray, list[np.ndarray]]) -> None:
         super().__init__(t_reached)
         self.t_reached, self.joined = t_reached, joined
+
+
+def _nut(profile: SampledSpeed) -> np.ndarray:
+    """A tabulated profile's nut speeds (zeros when it has none) [m/s]."""
+    t = np.asarray(profile.time)
+    return np.zeros(t.shape) if profile.nut_speed is None else np.asarray(profile.nut_speed)
 
 
 def _join(arrays: list[np.ndarray], columns: int | None) -> np.ndarray:
