@@ -73,13 +73,29 @@ def default_cases(mismatch: float = 0.2, nut_speed: float = 16e-3) -> list[Case]
     return cases
 
 
-def _with(params: DriveParameters, case: Case) -> DriveParameters:
+def case_parameters(params: DriveParameters, case: Case) -> DriveParameters:
+    """The parameter set of one case: ``params`` with the case's compensator.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    case : Case
+        The case.
+
+    Returns
+    -------
+    DriveParameters
+        ``params`` with ``controller.compensation`` set to the case's.
+    """
     return params.replace_path("controller.compensation", case.compensation)
+
 
 
 def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4,
              tracking_speed: float = 1.0e-3, duration: float = 12.0,
-             search: bool = True, rule: VerdictRule | None = None) -> dict[str, Any]:
+             search: bool = True, rule: VerdictRule | None = None,
+             found: dict[str, Any] | None = None) -> dict[str, Any]:
     """One row of the study (SI inside, mm and µm in the keys' units).  The tracking run
     lasts ``duration`` [s]; its verdict and every critical-speed trial follow ``rule``.
 
@@ -99,6 +115,10 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         Also search the critical speed.
     rule : VerdictRule, optional
         The creep-verdict rule.
+    found : dict, optional
+        The case's critical-speed search already made elsewhere (``CriticalSpeed.to_dict``
+        of :func:`~feeddrive.analysis.critical.critical_speed_from_rest` on this case's system
+        and nut speed with the protocol's grid and ``rule``): used instead of searching again.
 
     Returns
     -------
@@ -106,7 +126,7 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         The case, its critical speed [mm/s], linear creep bands [mm/s], verdict at the
         tracking speed and rms following error [µm].
     """
-    system = DriveSystem(_with(params, case), case.drive, table_position)
+    system = DriveSystem(case_parameters(params, case), case.drive, table_position)
     band = stability_band(system, case.nut_speed, points=25)
     trial = creep_trial(system, tracking_speed, nut_speed=case.nut_speed, rule=rule)
     run = simulate(system, ConstantSpeed(tracking_speed, case.nut_speed), duration)
@@ -123,14 +143,17 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         "following_error_peak_um": 1e6 * float(np.max(np.abs(err))),
     }
     if search:
-        crit = critical_speed_from_rest(system, nut_speed=case.nut_speed, rule=rule)
-        row["critical_speed_mm_s"] = format_critical_speed(crit.to_dict())
+        if found is None:
+            found = critical_speed_from_rest(system, nut_speed=case.nut_speed,
+                                             rule=rule).to_dict()
+        row["critical_speed_mm_s"] = format_critical_speed(found)
     return row
 
 
 def compensation_study(params: DriveParameters, cases: list[Case] | None = None, *,
                        search: bool = True,
                        progress: Callable[[int, int], None] | None = None,
+                       found: dict[int, dict[str, Any]] | None = None,
                        **kwargs: Any) -> list[dict[str, Any]]:
     """Evaluate every case of the friction-compensation study (:func:`evaluate`).
 
@@ -144,6 +167,8 @@ def compensation_study(params: DriveParameters, cases: list[Case] | None = None,
         Also search each case's critical speed.
     progress : callable, optional
         ``progress(done, total)`` after each case.
+    found : dict of int to dict, optional
+        Critical-speed searches already made, by case index (see :func:`evaluate`).
     **kwargs
         Passed to :func:`evaluate` (table position, tracking speed, duration, rule).
 
@@ -155,13 +180,14 @@ def compensation_study(params: DriveParameters, cases: list[Case] | None = None,
     cases = cases if cases is not None else default_cases()
     rows = []
     for k, case in enumerate(cases):
-        rows.append(evaluate(params, case, search=search, **kwargs))
+        rows.append(evaluate(params, case, search=search, found=(found or {}).get(k),
+                             **kwargs))
         if progress:
             progress(k + 1, len(cases))
     return rows
 
 
-__all__ = ["Case", "compensation_study", "default_cases", "evaluate"]
+__all__ = ["Case", "case_parameters", "compensation_study", "default_cases", "evaluate"]
 
 
 def observer_gain_warning(system: DriveSystem, table_speed: float, nut_speed: float = 0.0

@@ -210,6 +210,27 @@ def classify_poles(eigenvalues: np.ndarray) -> list[Pole]:
     return sorted(poles, key=lambda p: p.frequency_hz)
 
 
+def dominant_pole(poles: list[Pole]) -> Pole:
+    """The least-damped oscillatory pole pair of classified poles (:func:`classify_poles`):
+    the mode friction destabilises first; the rigid-body poles are never it; without an
+    oscillatory pole, the slowest real one.
+
+    Parameters
+    ----------
+    poles : list of Pole
+        The classified poles.
+
+    Returns
+    -------
+    Pole
+        The dominant pole (Im > 0 for a pair).
+    """
+    modes = [p for p in poles if not p.rigid_body] or list(poles)
+    osc = [p for p in modes if p.imag > 1e-6]
+    return min(osc, key=lambda p: p.damping_ratio) if osc else min(
+        modes, key=lambda p: -p.real)
+
+
 def _mechanism(system: DriveSystem) -> Mechanism:
     """The drive's topology, which declares its steady motion and what it holds still."""
     return mechanism(system.drive)(system.parameters, system.drive, system.table_position,
@@ -463,8 +484,8 @@ def _state_steps(f: _Evaluator, y: np.ndarray, live: list[int], scale: np.ndarra
         yield j, h, (yp, dp, ap), (ym, dm, am)
 
 
-def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
-                 ) -> np.ndarray:
+def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0, *,
+                 frictionless: bool = False) -> np.ndarray:
     """The A matrix of :func:`linearize` alone (the same steady state and the same
     differences, bit for bit), without the inputs' and outputs' matrices it does not need:
     what :func:`rightmost_pole` and :func:`stability_band` judge.
@@ -477,15 +498,17 @@ def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
         Steady table speed of the operating point [m/s], non-zero.
     nut_speed : float, default 0.0
         Steady nut speed of the operating point [m/s] (DDFS).
+    frictionless : bool, default False
+        Linearise with every friction law set to "none" (then the speed may be 0).
 
     Returns
     -------
     numpy.ndarray
         A over the live states [1/s and the states' unit ratios], as ``linearize(...).A``.
     """
-    if table_speed == 0.0:
+    if table_speed == 0.0 and not frictionless:
         raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
-    sys_, _ = averaged(system)
+    sys_, _ = averaged(_frictionless(system) if frictionless else system)
     model, y = steady_state(sys_, table_speed, nut_speed)
     f = _Evaluator(model)
     live = _live_states(model, sys_)
@@ -721,10 +744,7 @@ class LoopAnalysis:
         Pole
             The dominant pole (Im > 0 for a pair).
         """
-        modes = [p for p in self.poles if not p.rigid_body] or list(self.poles)
-        osc = [p for p in modes if p.imag > 1e-6]
-        return min(osc, key=lambda p: p.damping_ratio) if osc else min(
-            modes, key=lambda p: -p.real)
+        return dominant_pole(self.poles)
 
     def as_dict(self) -> dict[str, Any]:
         """The analysis for the JSON report (``feeddrive loops --json``).
@@ -1159,5 +1179,5 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
 
 __all__ = ["INPUT_UNITS", "MARGINAL", "NAMED_RESPONSES", "OUTPUT_UNITS", "FrequencyResponse",
            "LinearModel", "LoopAnalysis", "LoopResult", "Pole", "StabilityBand", "averaged",
-           "classify_poles", "frequency_response", "linearize", "loop_analysis",
+           "classify_poles", "dominant_pole", "frequency_response", "linearize", "loop_analysis",
            "rightmost_pole", "stability_band", "state_matrix", "steady_state", "unit_of"]
