@@ -307,6 +307,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     results["cpu_seconds"] = cpu_seconds
     results["studies_total"] = len(names)
     results["studies_reused"] = len(names) - len(cpu_seconds)
+    results["studies_shared"] = [k for k in shared if k in cpu_seconds]
     report.write(params, settings, results, out)
     return results
 
