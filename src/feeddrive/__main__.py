@@ -12,9 +12,9 @@ from .exit_codes import INTERRUPTED
 
 
 def _run_app() -> None:
-    from .cli import app
+    from .cli import app_for
 
-    app()
+    app_for(sys.argv[1:])()  # only the running command's module is imported (issue 21)
 
 
 def main() -> None:

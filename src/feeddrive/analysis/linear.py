@@ -45,7 +45,6 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
-from scipy import optimize
 
 from ..engine.simulate import DriveSystem
 from ..model.assemble import Model
@@ -355,6 +354,8 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
 
     def regularised(u: np.ndarray) -> np.ndarray:
         return np.concatenate([residual(u), _PULL * (u - u0)])
+
+    from scipy import optimize  # here: `simulate` imports this module, not scipy (issue 21)
 
     sol = optimize.least_squares(regularised, u0, method="lm", xtol=1e-15, ftol=1e-15,
                                  gtol=1e-15)

@@ -11,12 +11,17 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import json
+import os
+import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._jit import CACHE_DIR
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
 from .compensation import CompensationFootprint, emit_compensation
@@ -444,18 +449,37 @@ def solver_sources() -> list[str]:
     """The integrator templates pasted into every generated module.
 
     DOPRI5 as in engine v1 and the dense-output DOPRI5 ⇄ RODAS4 driver; numba compiles each at
-    its first call, so a model only ever run with one method never compiles the other.  Cached:
-    reading template sources with ``inspect`` costs ~15 ms, more than a short simulation.
+    its first call, so a model only ever run with one method never compiles the other.  Cached
+    in memory and on disk, in the compile cache's folder (named after the hash of every
+    kernel source, the solvers' included: :mod:`feeddrive._jit`): reading and inlining the
+    templates with ``inspect`` and ``ast`` costs a fresh process 0.1–0.2 s, more than a short
+    simulation (issue 21 item 4).
 
     Returns
     -------
     list of str
         Python sources of the solver drivers.
     """
+    path = Path(CACHE_DIR) / "solver_sources.json"
+    try:
+        stored = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(stored, list) and all(isinstance(s, str) for s in stored):
+            return stored
+    except (OSError, ValueError):
+        pass
     from ..solvers import dopri5, rodas4, steps, switching
 
-    return (steps.template_sources() + rodas4.template_sources() + dopri5.template_sources()
-            + switching.template_sources())
+    sources = (steps.template_sources() + rodas4.template_sources()
+               + dopri5.template_sources() + switching.template_sources())
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".solver_sources.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(sources, fh)
+        os.replace(tmp, path)  # atomic: a concurrent process reads the old file or the new
+    except OSError:  # a read-only cache folder: the sources are rebuilt in each process
+        pass
+    return sources
 
 
 

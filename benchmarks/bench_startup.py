@@ -1,0 +1,132 @@
+"""Benchmark: the start-up of a short ``feeddrive simulate`` in a fresh process (issue 21 item 4).
+
+Run from the repository root::
+
+    python benchmarks/bench_startup.py [--runs 11] [--label after]
+
+Target: a 1-s ``feeddrive simulate --drive cdfs --table-speed 2 --duration 1 --json`` in a
+fresh process takes ≤ 1.0 s wall with the compile cache warm.  One warm-up run fills the cache
+(and is not counted); then ``--runs`` fresh processes are started one after another and each is
+timed: **wall** (from the start of the process to its exit) and **CPU** (user + system time
+of the child, from ``getrusage(RUSAGE_CHILDREN)``).  Medians are reported, beside the
+machine's load average before and after (the machine is shared: wall time grows with the
+load, CPU time much less).
+
+For scale, the same is measured for the floor every Python command pays: ``python -c pass``
+and ``python -c "import numpy"`` (interleaved with the simulate runs, same load).
+
+The command's JSON output must be the same in every run, byte for byte, except the solver's
+own ``wall_time_s`` (a clock reading): checked here, and its digest recorded, so that a
+change of start-up code that changed a result would show.
+
+Writes ``benchmarks/results/bench_startup.json`` (one entry per ``--label``; earlier labels
+are kept, so "before" and "after" sit side by side).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import platform
+import re
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results" / "bench_startup.json"
+
+SIMULATE_ARGS = ["simulate", "--drive", "cdfs", "--table-speed", "2", "--duration", "1",
+                 "--json"]
+
+
+def _feeddrive_command() -> list[str]:
+    """The installed ``feeddrive`` script beside this interpreter (what a user runs), else
+    ``python -m feeddrive``."""
+    script = Path(sys.executable).with_name("feeddrive")
+    if script.exists():
+        return [str(script)]
+    found = shutil.which("feeddrive")
+    return [found] if found else [sys.executable, "-m", "feeddrive"]
+
+
+def _run(cmd: list[str]) -> tuple[float, float, bytes]:
+    """Wall [s], CPU (user + system of the child) [s] and standard output of one fresh
+    process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, cwd=ROOT, check=False)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed ({proc.returncode}): "
+                         f"{proc.stderr.decode()[-2000:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, proc.stdout
+
+
+def _normalised(out: bytes) -> bytes:
+    """The JSON output without the solver's clock reading."""
+    return re.sub(rb'"wall_time_s": [0-9.e+-]+', b'"wall_time_s": 0', out)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=11, help="fresh processes per command")
+    parser.add_argument("--label", default="current", help="name of this measurement")
+    parser.add_argument("--note", default="", help="what was measured (the code's state)")
+    args = parser.parse_args()
+
+    simulate = [*_feeddrive_command(), *SIMULATE_ARGS]
+    floor = {"python -c pass": [sys.executable, "-c", "pass"],
+             "python -c 'import numpy'": [sys.executable, "-c", "import numpy"]}
+    _run(simulate)  # warm-up: the compile cache filled, files in the page cache
+    load_before = os.getloadavg()
+    samples: dict[str, dict[str, list[float]]] = {
+        name: {"wall_s": [], "cpu_s": []} for name in ["simulate", *floor]}
+    outputs: set[bytes] = set()
+    for _ in range(args.runs):
+        wall, cpu, out = _run(simulate)
+        samples["simulate"]["wall_s"].append(wall)
+        samples["simulate"]["cpu_s"].append(cpu)
+        outputs.add(_normalised(out))
+        for name, cmd in floor.items():
+            wall, cpu, _ = _run(cmd)
+            samples[name]["wall_s"].append(wall)
+            samples[name]["cpu_s"].append(cpu)
+    load_after = os.getloadavg()
+    if len(outputs) != 1:
+        raise SystemExit("the JSON output differs between runs (beyond wall_time_s)")
+    output = outputs.pop()
+    entry = {
+        "note": args.note,
+        "recorded_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+        "machine": {"python": platform.python_version(), "cpus": os.cpu_count(),
+                    "load_average_1min_before": round(load_before[0], 2),
+                    "load_average_1min_after": round(load_after[0], 2)},
+        "command": " ".join(["feeddrive", *SIMULATE_ARGS]),
+        "runs": args.runs,
+        "output_sha256": hashlib.sha256(output).hexdigest(),
+        "median": {name: {key: round(statistics.median(v), 4) for key, v in s.items()}
+                   for name, s in samples.items()},
+        "samples": {name: {key: [round(x, 4) for x in v] for key, v in s.items()}
+                    for name, s in samples.items()},
+    }
+    results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+    results[args.label] = entry
+    RESULTS.write_text(json.dumps(results, indent=2) + "\n")
+    m = entry["median"]
+    print(f"{args.label}: load {load_before[0]:.2f} → {load_after[0]:.2f}, {args.runs} runs")
+    for name, med in m.items():
+        print(f"  {name:28s} wall {med['wall_s']:.3f} s   CPU {med['cpu_s']:.3f} s")
+    print(f"  output sha256 {entry['output_sha256'][:16]} (wall_time_s blanked)")
+
+
+if __name__ == "__main__":
+    main()
