@@ -12,12 +12,22 @@ of the child, from ``getrusage(RUSAGE_CHILDREN)``).  Medians are reported, besid
 machine's load average before and after (the machine is shared: wall time grows with the
 load, CPU time much less).
 
+Python's bytecode cache is used as on a user's machine: ``PYTHONDONTWRITEBYTECODE`` is removed
+from the children's environment (pip compiles an installed package's modules; an editable
+install writes them at its first import), so the warm-up run writes what is missing; with
+``--no-bytecode`` the variable is kept and every module of the package (and the generated
+model module) is compiled from its source in every run, as in a session that sets it.
+
 For scale, the same is measured for the floor every Python command pays: ``python -c pass``
 and ``python -c "import numpy"`` (interleaved with the simulate runs, same load).
 
 The command's JSON output must be the same in every run, byte for byte, except the solver's
 own ``wall_time_s`` (a clock reading): checked here, and its digest recorded, so that a
 change of start-up code that changed a result would show.
+
+``--variant before=/path/to/old/src`` times another state of the package beside the installed
+one (on ``PYTHONPATH``, so it needs no install of its own), interleaved run by run: a fair
+before/after on a shared machine, whose load moves within minutes.
 
 Writes ``benchmarks/results/bench_startup.json`` (one entry per ``--label``; earlier labels
 are kept, so "before" and "after" sit side by side).
@@ -56,12 +66,12 @@ def _feeddrive_command() -> list[str]:
     return [found] if found else [sys.executable, "-m", "feeddrive"]
 
 
-def _run(cmd: list[str]) -> tuple[float, float, bytes]:
+def _run(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float, float, bytes]:
     """Wall [s], CPU (user + system of the child) [s] and standard output of one fresh
     process."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, cwd=ROOT, check=False)
+    proc = subprocess.run(cmd, capture_output=True, cwd=ROOT, check=False, env=env)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode != 0:
@@ -81,29 +91,46 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=11, help="fresh processes per command")
     parser.add_argument("--label", default="current", help="name of this measurement")
     parser.add_argument("--note", default="", help="what was measured (the code's state)")
+    parser.add_argument("--no-bytecode", action="store_true",
+                        help="keep PYTHONDONTWRITEBYTECODE (modules compiled in every run)")
+    parser.add_argument("--variant", action="append", default=[], metavar="NAME=SRC",
+                        help="also time the package in folder SRC (e.g. an older commit's "
+                        "src/, on PYTHONPATH), interleaved with the installed one; repeatable")
     args = parser.parse_args()
+    env = dict(os.environ)
+    if not args.no_bytecode:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+    bytecode = "PYTHONDONTWRITEBYTECODE" not in env
+    variants: dict[str, dict[str, str]] = {}
+    for spec in args.variant:
+        name, _, src = spec.partition("=")
+        variants[name] = dict(env, PYTHONPATH=str(Path(src).resolve()))
+    variants["installed"] = env
 
     simulate = [*_feeddrive_command(), *SIMULATE_ARGS]
     floor = {"python -c pass": [sys.executable, "-c", "pass"],
              "python -c 'import numpy'": [sys.executable, "-c", "import numpy"]}
-    _run(simulate)  # warm-up: the compile cache filled, files in the page cache
+    for venv in variants.values():
+        _run(simulate, venv)  # warm-up: the compile caches filled, files in the page cache
     load_before = os.getloadavg()
+    names = [f"simulate [{v}]" for v in variants] + list(floor)
     samples: dict[str, dict[str, list[float]]] = {
-        name: {"wall_s": [], "cpu_s": []} for name in ["simulate", *floor]}
-    outputs: set[bytes] = set()
-    for _ in range(args.runs):
-        wall, cpu, out = _run(simulate)
-        samples["simulate"]["wall_s"].append(wall)
-        samples["simulate"]["cpu_s"].append(cpu)
-        outputs.add(_normalised(out))
+        name: {"wall_s": [], "cpu_s": []} for name in names}
+    outputs: dict[str, set[bytes]] = {v: set() for v in variants}
+    for _ in range(args.runs):  # interleaved: every command sees the same load
+        for variant, venv in variants.items():
+            wall, cpu, out = _run(simulate, venv)
+            samples[f"simulate [{variant}]"]["wall_s"].append(wall)
+            samples[f"simulate [{variant}]"]["cpu_s"].append(cpu)
+            outputs[variant].add(_normalised(out))
         for name, cmd in floor.items():
-            wall, cpu, _ = _run(cmd)
+            wall, cpu, _ = _run(cmd, env)
             samples[name]["wall_s"].append(wall)
             samples[name]["cpu_s"].append(cpu)
     load_after = os.getloadavg()
-    if len(outputs) != 1:
+    if any(len(o) != 1 for o in outputs.values()):
         raise SystemExit("the JSON output differs between runs (beyond wall_time_s)")
-    output = outputs.pop()
+    digests = {v: hashlib.sha256(next(iter(o))).hexdigest() for v, o in outputs.items()}
     entry = {
         "note": args.note,
         "recorded_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
@@ -112,7 +139,11 @@ def main() -> None:
                     "load_average_1min_after": round(load_after[0], 2)},
         "command": " ".join(["feeddrive", *SIMULATE_ARGS]),
         "runs": args.runs,
-        "output_sha256": hashlib.sha256(output).hexdigest(),
+        "bytecode_cache": bytecode,
+        "variants": {v: venv.get("PYTHONPATH", "(installed package)")
+                     for v, venv in variants.items()},
+        "output_sha256": digests,
+        "same_output": len(set(digests.values())) == 1,
         "median": {name: {key: round(statistics.median(v), 4) for key, v in s.items()}
                    for name, s in samples.items()},
         "samples": {name: {key: [round(x, 4) for x in v] for key, v in s.items()}
@@ -121,11 +152,12 @@ def main() -> None:
     results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
     results[args.label] = entry
     RESULTS.write_text(json.dumps(results, indent=2) + "\n")
-    m = entry["median"]
-    print(f"{args.label}: load {load_before[0]:.2f} → {load_after[0]:.2f}, {args.runs} runs")
-    for name, med in m.items():
+    print(f"{args.label}: load {load_before[0]:.2f} → {load_after[0]:.2f}, {args.runs} runs, "
+          f"bytecode cache {'used' if bytecode else 'off'}")
+    for name, med in entry["median"].items():
         print(f"  {name:28s} wall {med['wall_s']:.3f} s   CPU {med['cpu_s']:.3f} s")
-    print(f"  output sha256 {entry['output_sha256'][:16]} (wall_time_s blanked)")
+    print(f"  output sha256 {', '.join(f'{v} {d[:16]}' for v, d in digests.items())} "
+          f"(wall_time_s blanked): {'the same' if entry['same_output'] else 'DIFFERENT'}")
 
 
 if __name__ == "__main__":

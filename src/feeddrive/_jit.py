@@ -93,8 +93,10 @@ def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
         previous = config.CACHE_DIR
         config.CACHE_DIR = _CACHE_DIR  # read once, when the dispatcher sets up its cache
         try:
-            dispatcher = njit(cache=True, error_model="numpy", nogil=True, **options)(fn)
-            dispatcher._cache = _LoadingCache(fn)  # as enable_caching() does, faster loads
+            # cache=True, with the loading cache: what numba's enable_caching() does with its
+            # own class (one cache object, not numba's made and then replaced)
+            dispatcher = njit(error_model="numpy", nogil=True, **options)(fn)
+            dispatcher._cache = _LoadingCache(fn)
             return dispatcher
         finally:
             config.CACHE_DIR = previous

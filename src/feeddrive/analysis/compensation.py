@@ -18,9 +18,7 @@ from ..engine.simulate import DriveSystem, simulate
 from ..model.loops import Compensation
 from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters
-from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
 from .cycle_verdict import VerdictRule
-from .linear import stability_band
 
 
 @dataclass(frozen=True)
@@ -107,6 +105,10 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         tracking speed and rms following error [µm].
     """
     system = DriveSystem(_with(params, case), case.drive, table_position)
+    # imported here: `simulate` imports this module for observer_gain_warning alone
+    from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
+    from .linear import stability_band
+
     band = stability_band(system, case.nut_speed, points=25)
     trial = creep_trial(system, tracking_speed, nut_speed=case.nut_speed, rule=rule)
     run = simulate(system, ConstantSpeed(tracking_speed, case.nut_speed), duration)
