@@ -86,6 +86,55 @@ def _normalised(out: bytes) -> bytes:
     return re.sub(rb'"wall_time_s": [0-9.e+-]+', b'"wall_time_s": 0', out)
 
 
+#: what the start-up work costs, piece by piece: CPU of a fresh process doing ``code`` minus
+#: one doing ``base`` (the pieces overlap: scipy.signal imports scipy.stats, for one)
+COMPONENTS: dict[str, tuple[str, str]] = {
+    "numpy": ("pass", "import numpy"),
+    "numba (import)": ("import numpy", "import numba"),
+    "numba refresh (what a cache load did before it was skipped)": (
+        "import numba", "import numba; from numba.core.registry import cpu_target; "
+        "cpu_target.target_context.refresh()"),
+    "typer": ("pass", "import typer"),
+    "typer's pydantic adapters (parsing any option)": ("import typer",
+                                                        "import typer, typer._adapters"),
+    "rich.console": ("import typer", "import typer, rich.console"),
+    "rich.progress": ("import typer, rich.console",
+                      "import typer, rich.console, rich.progress"),
+    "xarray + pandas": ("import numpy", "import numpy, xarray"),
+    "scipy.signal": ("import numpy", "import numpy, scipy.signal"),
+    "scipy.optimize": ("import numpy", "import numpy, scipy.optimize"),
+    "scipy.linalg": ("import numpy", "import numpy, scipy.linalg"),
+    "every command module (feeddrive.cli before)": (
+        "import feeddrive.cli, feeddrive.cli.simulate_cmd",
+        "import feeddrive.cli; feeddrive.cli.load_commands()"),
+    "solver template sources, built (now read from the cache folder)": (
+        "import numba, feeddrive.solvers.switching, feeddrive.solvers.dopri5, "
+        "feeddrive.solvers.rodas4",
+        "import numba, feeddrive.solvers.switching, feeddrive.solvers.dopri5, "
+        "feeddrive.solvers.rodas4, feeddrive.solvers.steps; "
+        "[m.template_sources() for m in (feeddrive.solvers.steps, feeddrive.solvers.rodas4, "
+        "feeddrive.solvers.dopri5, feeddrive.solvers.switching)]"),
+    "the simulate path's feeddrive modules (engine, model, solvers, analyses)": (
+        "import numba, feeddrive.cli, feeddrive.cli.simulate_cmd",
+        "import numba, feeddrive.cli, feeddrive.cli.simulate_cmd, feeddrive.engine.simulate, "
+        "feeddrive.analysis.compensation, feeddrive.analysis.creep_window, "
+        "feeddrive.analysis.tracking"),
+}
+
+
+def components(runs: int, env: dict[str, str]) -> dict[str, float]:
+    """Median CPU [s] of each piece of :data:`COMPONENTS`, base and code interleaved."""
+    out = {}
+    for name, (base, code) in COMPONENTS.items():
+        diffs = []
+        for _ in range(runs):
+            diffs.append(_run([sys.executable, "-c", code], env)[1]
+                         - _run([sys.executable, "-c", base], env)[1])
+        out[name] = round(statistics.median(diffs), 4)
+        print(f"  {name:70s} {out[name]:.3f} s CPU")
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=11, help="fresh processes per command")
@@ -93,6 +142,8 @@ def main() -> None:
     parser.add_argument("--note", default="", help="what was measured (the code's state)")
     parser.add_argument("--no-bytecode", action="store_true",
                         help="keep PYTHONDONTWRITEBYTECODE (modules compiled in every run)")
+    parser.add_argument("--components", action="store_true",
+                        help="also time each piece of the start-up work (COMPONENTS)")
     parser.add_argument("--variant", action="append", default=[], metavar="NAME=SRC",
                         help="also time the package in folder SRC (e.g. an older commit's "
                         "src/, on PYTHONPATH), interleaved with the installed one; repeatable")
@@ -127,6 +178,7 @@ def main() -> None:
             wall, cpu, _ = _run(cmd, env)
             samples[name]["wall_s"].append(wall)
             samples[name]["cpu_s"].append(cpu)
+    parts = components(args.runs, env) if args.components else None
     load_after = os.getloadavg()
     if any(len(o) != 1 for o in outputs.values()):
         raise SystemExit("the JSON output differs between runs (beyond wall_time_s)")
@@ -149,6 +201,8 @@ def main() -> None:
         "samples": {name: {key: [round(x, 4) for x in v] for key, v in s.items()}
                     for name, s in samples.items()},
     }
+    if parts is not None:
+        entry["component_cpu_s"] = parts
     results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
     results[args.label] = entry
     RESULTS.write_text(json.dumps(results, indent=2) + "\n")
