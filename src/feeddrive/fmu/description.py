@@ -21,6 +21,7 @@ import numpy as np
 
 from ..model.friction import friction_law
 from ..model.loops import AXIS_PARAMS
+from ..model.reference import INPUT_INSTANT
 from ..parameters.components import unit_of
 from .model import FmuModel
 
@@ -594,6 +595,7 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         f"#define N_SETTING {len(SETTINGS)}",
         f"#define PROFILE_OFFSET {fm.profile_offset}",
         f"#define TABLE_OFFSET {fm.table_offset}",
+        f"#define INPUT_INSTANT_SLOT {fm.profile_offset + INPUT_INSTANT}",
         f"#define LOAD_SLOT {fm.load_slot}",
         "#define MAX_STEPS_PER_CALL 50000000",
         *[f"#define IN_{k} {i}" for k, i in (("XT", IN_XT), ("VT", IN_VT), ("XN", IN_XN),
