@@ -236,8 +236,10 @@ def test_the_compensation_study_runs_on_the_drives_that_declare_a_compensator() 
     """``compensate`` asks the topologies: a drive with a compensator and no driven nut,
     with the drive of its topology that drives the nut as the alternative."""
     from feeddrive.analysis.compensation import default_cases, study_drives
+    from feeddrive.cli.compensate_cmd import STUDY_DRIVES
 
     assert study_drives(W) == {"cdfs": "ddfs", "linear-motor": None}
+    assert STUDY_DRIVES.split("|") == list(study_drives(W))  # what --help lists
     cases = default_cases(0.2, drive="linear-motor", alternative=None)
     assert [c.drive for c in cases] == ["linear-motor"] * 7
     assert cases[0].label == "LINEAR-MOTOR, no compensation"

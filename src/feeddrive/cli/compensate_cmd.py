@@ -7,14 +7,18 @@ import typer
 
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
+#: the drives the study compensates, for --help (feeddrive.analysis.compensation.study_drives
+#: asks the topologies; tests/unit/test_declarations.py checks this against it)
+STUDY_DRIVES = "cdfs|linear-motor"
+
 
 @app.command("compensate")
 @user_errors
 def compensate_command(
-    drive: str = typer.Option("cdfs", "--drive", metavar="DRIVE",
-                              help="The drive compensated: one with friction compensation "
-                              "and no driven nut (cdfs, linear-motor); for the CDFS the DDFS "
-                              "is added as the alternative."),
+    drive: str = typer.Option("cdfs", "--drive", metavar=STUDY_DRIVES,
+                              help="The drive compensated (one with friction compensation and "
+                              "no driven nut); for the CDFS the DDFS is added as the "
+                              "alternative."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     mismatch: float = typer.Option(20.0, "--mismatch", help="Model error of the mismatched "
                                    "cases on F_c, F_s and v_s [%]."),

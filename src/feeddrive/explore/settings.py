@@ -551,10 +551,10 @@ def _apply(data: dict[str, Any], name: str, s: Mapping[str, str], own: Mapping[s
         k = check_quantity("friction_scale", _value(s[name]), dict(_FRICTION_SCALE))
         for path in _friction_paths(base, s["drive"]):
             *where, last = path.split(".")
-            section = data
-            for key in where:
-                section = section[key]
-            section[last] = to_dict(operator.attrgetter(path)(base).scaled(k))
+            node = data
+            for part in where:
+                node = node[part]
+            node[last] = to_dict(operator.attrgetter(path)(base).scaled(k))
     elif name.startswith("ripple"):
         ripple = base.disturbances.screw_motor_ripple
         data["disturbances"]["screw_motor_ripple"] = {
