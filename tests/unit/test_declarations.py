@@ -253,3 +253,19 @@ def test_the_result_title_names_the_position_where_the_model_uses_it() -> None:
     for drive, params, shown in (("cdfs", W, True), ("rack-pinion", RP, False)):
         run = fd.simulate(fd.DriveSystem(params, drive, 0.4), ConstantSpeed(1e-3), 0.01)
         assert (", position 400 mm" in run_title(run)) is shown, run_title(run)
+
+
+def test_a_sweep_runs_any_registered_drive_and_asks_it_about_the_nut() -> None:
+    """A sweep's drive takes every registered drive; a drive that follows no nut speed (its
+    topology's ``nut_driven_drives``) shares one result across nut speeds."""
+    from feeddrive.sweep import parse_config
+
+    def keys(config: dict) -> int:
+        return len({p.key for p in parse_config(config, "study.toml").points()})
+
+    assert keys({"drive": "rack-pinion", "preset": "rack-pinion-example",
+                 "axes": {"nut_speed": [2, 10]}}) == 1
+    assert keys({"drive": "ddfs", "axes": {"nut_speed": [2, 10]}}) == 2
+    assert keys({"drive": "cdfs", "axes": {"nut_speed": [2, 10]}}) == 1
+    with pytest.raises(ParameterError, match="rack-pinion"):
+        parse_config({"axes": {"drive": ["gantry"]}}, "study.toml").points()

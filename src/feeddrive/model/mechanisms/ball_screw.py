@@ -114,6 +114,7 @@ class BallScrewDrive(Mechanism):
     uses_table_position = True
     table_axis = "screw"
     nut_axis = "nut"
+    nut_driven_drives = ("ddfs",)
     part_name = "ball screw"
     own_sections = ("screw", "coupling", "stiffness", "screw_motor", "hollow_motor",
                     "hollow_controller")
@@ -158,17 +159,6 @@ class BallScrewDrive(Mechanism):
             ``"the CDFS"``, ``"the DDFS"``.
         """
         return f"the {drive.upper()}"
-
-    def follows_nut_reference(self) -> bool:
-        """Only the DDFS drives its nut: the CDFS holds it (locked, or on its servo at zero
-        command).
-
-        Returns
-        -------
-        bool
-            Whether the drive is the DDFS.
-        """
-        return self.drive == "ddfs"
 
     def held_parameters(self) -> tuple[tuple[str, ...], str]:
         """The CDFS with its nut locked: the hollow motor, its loops, the nut's inertia and

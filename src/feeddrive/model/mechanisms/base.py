@@ -239,6 +239,9 @@ class Mechanism:
     #: the controller axis that follows the nut reference (a profile's nut speed, the
     #: ``nut_*_reference`` inputs); "" = the topology has none
     nut_axis: str = ""
+    #: the drives of this topology that follow a commanded nut speed (the DDFS; the CDFS holds
+    #: its nut, locked or on its servo at zero command)
+    nut_driven_drives: tuple[str, ...] = ()
     #: what this topology's own parameter sections describe, for messages ("ball screw")
     part_name: str = ""
     #: the parameter-file sections only this topology reads (its parts beyond the table,
@@ -305,9 +308,9 @@ class Mechanism:
         Returns
         -------
         bool
-            True when :attr:`nut_axis` runs (the default rule).
+            True for the drives :attr:`nut_driven_drives` names.
         """
-        return bool(self.nut_axis) and self.nut_axis in self.live_axes()
+        return self.drive in self.nut_driven_drives
 
     def held_parameters(self) -> tuple[tuple[str, ...], str]:
         """The parameters that cannot act in this drive because a part is held still.
