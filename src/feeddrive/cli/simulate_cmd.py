@@ -23,6 +23,8 @@ from ._common import (
 #: every drive topology, for --help (the registry is not imported at start-up: it loads numba;
 #: tests/integration/test_cli_new_user3.py checks this against feeddrive.registry)
 ALL_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
+#: the same list as words, for help texts ("cdfs, ddfs, linear-motor or rack-pinion")
+ALL_DRIVES_TEXT = " or ".join(ALL_DRIVES.replace("|", ", ").rsplit(", ", 1))
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
 DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.engine.simulate.SolverOptions.max_steps
 DEFAULT_METHOD = "modal"  # as feeddrive.engine.simulate.SolverOptions.method (a test checks it)

@@ -98,7 +98,7 @@ static void fmu_write_inputs(Fmu *m, int with_rates) {
     m->T[TABLE_OFFSET + 4] = integrate ? m->y[FD_N_STATE + 1] : m->u[IN_XN];
     m->T[TABLE_OFFSET + 6] = m->u[IN_VN];
     m->T[TABLE_OFFSET + 7] = with_rates ? m->du[IN_VN] : 0.0;
-    m->P[PROFILE_OFFSET + 4] = m->t;
+    m->P[INPUT_INSTANT_SLOT] = m->t;
     m->P[LOAD_SLOT] = m->u[IN_LOAD];
 }
 

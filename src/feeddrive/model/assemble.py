@@ -28,7 +28,14 @@ from .compensation import CompensationFootprint, emit_compensation
 from .disturbances import LoadProfile, TorqueRipple, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
-from .reference import PROFILE_PARAMS, REFERENCE_INPUTS, reference_with_inputs
+from .reference import (
+    NUT_SPEED,
+    PROFILE_PARAMS,
+    REFERENCE_INPUTS,
+    TABLE_COLUMNS,
+    TABLE_OFFSET,
+    reference_with_inputs,
+)
 
 if TYPE_CHECKING:
     from .reference import Profile
@@ -220,10 +227,10 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     block = np.zeros(len(PROFILE_PARAMS))
     for k, v in values.items():
         block[k] = v
-    mech.check_profile(float(block[2]), table[3])
+    mech.check_profile(float(block[NUT_SPEED]), table[3])
     table = np.ascontiguousarray(table, dtype=float)
-    block[5] = b.table(table)
-    block[6] = table.shape[1]
+    block[TABLE_OFFSET] = b.table(table)
+    block[TABLE_COLUMNS] = table.shape[1]
     o = b.params("profile", block)
     # the linearisation's reference inputs (feeddrive.analysis.linear), zero in a simulation
     oi = b.param(f"inputs.{REFERENCE_INPUTS[0]}", 0.0)
