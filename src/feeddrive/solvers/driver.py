@@ -115,7 +115,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
                     adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
                     want_aux: bool, S: np.ndarray, colour: np.ndarray, start: int,
-                    held: np.ndarray, memory: np.ndarray, bound: np.ndarray, t: float,
+                    held: np.ndarray, memory: np.ndarray, bound: np.ndarray,
+                    t_buf: np.ndarray, y_buf: np.ndarray, aux_buf: np.ndarray, t: float,
                     t0: float, n: int, y: np.ndarray, held_prev: np.ndarray,
                     tick: np.ndarray, redo: int, f0: np.ndarray, k2: np.ndarray,
                     k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
@@ -178,6 +179,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     bound : numpy.ndarray
         Largest |state| per state before the run stops as diverged [SI, per state] (not
         ``COMM``).
+    t_buf, y_buf, aux_buf : numpy.ndarray
+        Output buffers (``DENSE``): if they hold the call's outputs (at least as many rows,
+        as many columns), the outputs are written into them and returned as views of their
+        first rows — no fresh array to fault in and fill per call; else new arrays [s; SI].
     t : float
         Start time of the call [s] (``COMM``).
     t0 : float
@@ -226,9 +231,18 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             n_out = n_break // out_every - (start + out_every - 1) // out_every + 1
         t = start * base
         tick = np.empty(schedule.size, dtype=np.int64)
-        t_out = np.empty(n_out)
-        y_out = np.empty((n_out, n))
-        aux_out = np.empty((n_out if want_aux else 0, N_AUX))
+        n_aux_out = n_out if want_aux else 0
+        if (DENSE and t_buf.shape[0] >= n_out and y_buf.shape[0] >= n_out
+                and y_buf.shape[1] == n and aux_buf.shape[0] >= n_aux_out
+                and aux_buf.shape[1] == N_AUX):
+            # the caller's buffers, reused from call to call (every row returned is written)
+            t_out = t_buf[:n_out]
+            y_out = y_buf[:n_out]
+            aux_out = aux_buf[:n_aux_out]
+        else:  # uninitialised: every row returned is written
+            t_out = np.empty(n_out)
+            y_out = np.empty((n_out, n))
+            aux_out = np.empty((n_aux_out, N_AUX))
         y = y0.copy()
         f0 = np.empty(n)
         k2 = np.empty(n)
@@ -1006,7 +1020,8 @@ _LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol"
                 "rel_mask", "h_max", "adaptive", "max_steps", "start", "held", "memory", "bound")
 _DENSE_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                  "rel_mask", "h_init", "h_max", "adaptive", "max_steps", "mode", "stops",
-                 "want_aux", "S", "colour", "start", "held", "memory", "bound")
+                 "want_aux", "S", "colour", "start", "held", "memory", "bound", "t_buf",
+                 "y_buf", "aux_buf")
 _COMM_PARAMS = ("t", "t_end", "t0", "n", "y", "held", "held_prev", "P", "T", "schedule",
                 "tick", "base", "rtol", "atol", "rel_mask", "h_max", "max_steps", "redo",
                 "memory", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e",
@@ -1014,7 +1029,7 @@ _COMM_PARAMS = ("t", "t_end", "t0", "n", "y", "held", "held_prev", "P", "T", "sc
 _FLAGS = ("LAND", "DENSE", "COMM")
 _MODES = {"MODE_DOPRI5": MODE_DOPRI5, "MODE_RODAS4": MODE_RODAS4, "MODE_AUTO": MODE_AUTO,
           "MODE_MODAL": MODE_MODAL}
-USES = {
+USES: dict[str, tuple[tuple[str, ...], dict[str, Any], str]] = {
     "integrate": (_LAND_PARAMS, {"LAND": True, "mode": MODE_DOPRI5, "want_aux": True},
                   "The breakpoint driver (feeddrive.solvers.dopri5): "
                   "feeddrive.solvers.driver.driver_template specialised (LAND)."),
