@@ -848,28 +848,6 @@ class _Fold(ast.NodeTransformer):
         return node
 
 
-def _constant_locals(fn: ast.FunctionDef) -> dict[str, bool]:
-    """The locals of ``fn`` every assignment of which stores one and the same bool
-    constant (e.g. ``stiff`` where the method is DOPRI5 throughout)."""
-    params = {a.arg for a in fn.args.args}
-    values: dict[str, set[Any]] = {}
-    other: set[str] = set(params)
-    for node in ast.walk(fn):
-        if (isinstance(node, ast.Assign) and len(node.targets) == 1
-                and isinstance(node.targets[0], ast.Name)):
-            name = node.targets[0].id
-            if isinstance(node.value, ast.Constant) and isinstance(node.value.value, bool):
-                values.setdefault(name, set()).add(node.value.value)
-            else:
-                other.add(name)
-        elif isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For)):
-            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
-            for tgt in targets:
-                other.update(n.id for n in ast.walk(tgt) if isinstance(n, ast.Name))
-    return {name: next(iter(vals)) for name, vals in values.items()
-            if len(vals) == 1 and name not in other}
-
-
 _PURE_CALLS = {"int", "float", "min", "max", "abs"}
 
 
@@ -885,25 +863,42 @@ def _pure(node: ast.AST) -> bool:
     return True
 
 
-def _dead_locals(fn: ast.FunctionDef) -> set[str]:
-    """The locals of ``fn`` never read whose every store is a plain (augmented) assignment
-    of a value without side effects (what the folding left of a flag's variables)."""
+def _scan(fn: ast.FunctionDef) -> tuple[dict[str, bool], set[str]]:
+    """(the locals of ``fn`` every assignment of which stores one and the same bool constant,
+    e.g. ``stiff`` where the method is DOPRI5 throughout; the locals never read whose every
+    store is a plain or augmented assignment of a value without side effects — what the
+    folding left of a flag's variables), in one walk."""
     params = {a.arg for a in fn.args.args}
+    values: dict[str, set[Any]] = {}
+    other: set[str] = set(params)  # stored otherwise than as one bool constant
     read: set[str] = set()
-    stores: dict[str, bool] = {}
+    removable: dict[str, bool] = {}
     for node in ast.walk(fn):
-        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load):
-            read.add(node.id)
-        elif isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For)):
-            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
-            simple = (not isinstance(node, (ast.For, ast.AnnAssign)) and len(targets) == 1
-                      and isinstance(targets[0], ast.Name) and _pure(node.value))
+        if isinstance(node, ast.Name):
+            if isinstance(node.ctx, ast.Load):
+                read.add(node.id)
+            continue
+        if not isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For)):
+            continue
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+        name = targets[0].id if len(targets) == 1 and isinstance(targets[0], ast.Name) else None
+        simple = (name is not None and isinstance(node, (ast.Assign, ast.AugAssign))
+                  and _pure(node.value))
+        if (name is not None and isinstance(node, ast.Assign)
+                and isinstance(node.value, ast.Constant) and isinstance(node.value.value, bool)):
+            values.setdefault(name, set()).add(node.value.value)
+        else:
             for tgt in targets:
-                for n in ast.walk(tgt):
-                    if isinstance(n, ast.Name):
-                        stores[n.id] = stores.get(n.id, True) and simple
-    return {name for name, ok in stores.items() if ok and name not in read
-            and name not in params}
+                other.update(n.id for n in ast.walk(tgt) if isinstance(n, ast.Name))
+        for tgt in targets:
+            for n in ast.walk(tgt):
+                if isinstance(n, ast.Name):
+                    removable[n.id] = removable.get(n.id, True) and simple
+    constant = {name: next(iter(vals)) for name, vals in values.items()
+                if len(vals) == 1 and name not in other}
+    dead = {name for name, ok in removable.items()
+            if ok and name not in read and name not in params}
+    return constant, dead
 
 
 class _DropAssign(ast.NodeTransformer):
@@ -920,6 +915,12 @@ class _DropAssign(ast.NodeTransformer):
         if isinstance(node.target, ast.Name) and node.target.id in self.names:
             return None
         return node
+
+
+@functools.cache
+def _text_of(template: Any) -> str:
+    """The source of ``template``, read once per process (``inspect`` tokenises the file)."""
+    return textwrap.dedent(inspect.getsource(template))
 
 
 def specialise(template: Any, name: str, params: Sequence[str], constants: Mapping[str, Any],
@@ -955,7 +956,7 @@ def specialise(template: Any, name: str, params: Sequence[str], constants: Mappi
         A parameter the template does not have, or one the specialisation still reads but
         neither takes nor assigns.
     """
-    tree = ast.parse(textwrap.dedent(inspect.getsource(template)))
+    tree = ast.parse(_text_of(template))
     fn = tree.body[0]
     assert isinstance(fn, ast.FunctionDef)
     by_name = {a.arg: a for a in fn.args.args}
@@ -968,11 +969,10 @@ def specialise(template: Any, name: str, params: Sequence[str], constants: Mappi
     fn.returns = None if returns is None else ast.Name(returns, ast.Load())
     consts = dict(constants)
     while True:
-        tree = ast.fix_missing_locations(_Fold(consts).visit(tree))
+        tree = _Fold(consts).visit(tree)
         fn = tree.body[0]
         assert isinstance(fn, ast.FunctionDef)
-        folded = _constant_locals(fn)
-        dead = _dead_locals(fn)
+        folded, dead = _scan(fn)
         if not folded and not dead:
             break
         tree = _DropAssign(set(folded) | dead).visit(tree)

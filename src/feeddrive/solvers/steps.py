@@ -480,6 +480,7 @@ _HAND_WRITTEN: dict[str, Any] = {"_error_norm": error_norm_template,
                                   "_reject_factor": reject_factor_template}
 
 
+@functools.cache
 def _norm_source(name: str = "_error_norm") -> str:
     fn = _HAND_WRITTEN[name]
     return inspect.getsource(fn).replace(f"def {fn.__name__}(", f"def {name}(", 1)
