@@ -42,12 +42,16 @@ import inspect
 import linecache
 import math
 import operator
+import os
+import tempfile
 import textwrap
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .._jit import CACHE_DIR
 from . import steps
 from .modes import H_LAMBDA as MODAL_H_LAMBDA
 from .modes import REFRESH as MODAL_REFRESH
@@ -1048,6 +1052,10 @@ def source(use: str, inline: bool = True) -> str:
     explicit step written in (:func:`feeddrive.solvers.steps.inline_steps`) unless
     ``inline`` is false (the C translation calls the step functions).
 
+    The text is kept in the compile cache's folder (named after the hash of every solver
+    source, :data:`feeddrive._jit.CACHE_DIR`): a fresh process reads it instead of
+    specialising again (~50 ms of a start-up).
+
     Parameters
     ----------
     use : str
@@ -1060,8 +1068,24 @@ def source(use: str, inline: bool = True) -> str:
     str
         Python source of the function ``use``.
     """
+    if use not in USES:
+        raise KeyError(f"{use!r}: not a use of the driver ({', '.join(USES)})")
+    path = Path(CACHE_DIR) / "drivers" / f"{use}{'' if inline else '_calls'}.py"
+    try:
+        return path.read_text(encoding="utf-8")
+    except OSError:
+        pass
     params, fixed, doc = USES[use]
     constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
     text = specialise(driver_template, use, params, constants, doc,
                       "int" if use == "advance" else None)
-    return steps.inline_steps(text) if inline else text
+    text = steps.inline_steps(text) if inline else text
+    try:  # atomic: a concurrent process never reads a half file
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        pass  # a read-only cache: specialised again next time
+    return text
