@@ -159,8 +159,9 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
 
 
 def numba_module(model: Model) -> ModuleType:
-    """The model's generated module with :func:`feeddrive.fmu.solver.advance_template` compiled
-    beside its kernels (``module.advance``): the numba build of the FMU's integrator.
+    """The model's generated module with the FMU's integrator
+    (:func:`feeddrive.fmu.solver.template_source`) compiled beside its kernels
+    (``module.advance``): the numba build of the FMU's integrator.
 
     Parameters
     ----------

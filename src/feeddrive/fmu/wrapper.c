@@ -3,7 +3,7 @@
  * Compiled after the generated parts in one translation unit (feeddrive.fmu.build):
  *   - the model (feeddrive.model.c_backend): FD_N_STATE, FD_N_AUX, FD_N_HELD, FD_N_PARAM,
  *     FD_N_TABLE, fd_rhs(), fd_sample_update();
- *   - the integrator (feeddrive.fmu.solver.advance_template, translated): FD_ADVANCE();
+ *   - the integrator (feeddrive.solvers.driver specialised COMM, translated): FD_ADVANCE();
  *   - the variable tables (feeddrive.fmu.description): VR_KIND/VR_A/VR_B, start values.
  * Nothing here is physics: the wrapper moves values between the importer and the arrays the
  * generated code reads (states y, held controller values, parameters P, data table T).

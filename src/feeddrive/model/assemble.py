@@ -455,10 +455,12 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
 def solver_sources() -> list[str]:
     """The integrator templates pasted into every generated module.
 
-    DOPRI5 as in engine v1 and the dense-output DOPRI5 ⇄ RODAS4 driver; numba compiles each at
+    The one driver of :mod:`feeddrive.solvers.driver`, specialised as ``integrate`` (DOPRI5
+    landing on every breakpoint, as in engine v1) and ``integrate_dense`` (dense output,
+    DOPRI5 ⇄ RODAS4), beside the steps and Jacobian kernels they call; numba compiles each at
     its first call, so a model only ever run with one method never compiles the other.  Cached
     in memory and on disk, in the compile cache's folder (named after the hash of every
-    kernel source, the solvers' included: :mod:`feeddrive._jit`): reading and inlining the
+    kernel source, the solvers' included: :mod:`feeddrive._jit`): reading and specialising the
     templates with ``inspect`` and ``ast`` costs a fresh process 0.1–0.2 s, more than a short
     simulation (issue 21 item 4).
 
