@@ -116,6 +116,10 @@ def test_the_specialised_text_is_kept_in_the_cache_folder_and_read_back(
                                   {"LAND": False, "DENSE": False, **driver._MODES, **fixed},
                                   doc, "int")
         assert fresh == made
+        path.write_text(made[: len(made) // 2] + "\n    if (\n", encoding="utf-8")  # damaged
+        driver.source.cache_clear()
+        assert driver.source("advance", inline=False) == made
+        assert path.read_text(encoding="utf-8") == made
         with pytest.raises(KeyError):
             driver.source("nothing")
     finally:

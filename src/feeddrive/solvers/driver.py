@@ -1054,7 +1054,8 @@ def source(use: str, inline: bool = True) -> str:
 
     The text is kept in the compile cache's folder (named after the hash of every solver
     source, :data:`feeddrive._jit.CACHE_DIR`): a fresh process reads it instead of
-    specialising again (~50 ms of a start-up).
+    specialising again (~50 ms of a start-up); a file that is not the one function is
+    rebuilt.
 
     Parameters
     ----------
@@ -1072,8 +1073,12 @@ def source(use: str, inline: bool = True) -> str:
         raise KeyError(f"{use!r}: not a use of the driver ({', '.join(USES)})")
     path = Path(CACHE_DIR) / "drivers" / f"{use}{'' if inline else '_calls'}.py"
     try:
-        return path.read_text(encoding="utf-8")
-    except OSError:
+        stored = path.read_text(encoding="utf-8")
+        tree = ast.parse(stored)  # a damaged file is rebuilt
+        if (len(tree.body) == 1 and isinstance(tree.body[0], ast.FunctionDef)
+                and tree.body[0].name == use):
+            return stored
+    except (OSError, SyntaxError, ValueError):
         pass
     params, fixed, doc = USES[use]
     constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
