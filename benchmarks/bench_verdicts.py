@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -57,9 +58,34 @@ from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "bench_verdicts.json"
 REFERENCE = ROOT / "benchmarks" / "results" / "bench_verdicts_reference.json"
+TRACES = ROOT / "benchmarks" / "results" / "verdict_traces"
 RTOL = 1e-10
+#: the kind of reference kept: the growth-checked verdict rule on the step-capped Radau run
+RULE = "growth-checked, step-capped"
+CHUNK = 0.05  # [s] the reference's step cap is evaluated at the start of each such stretch
+ZETA_REF = 0.02  # oscillatory modes below this damping ratio are resolved (step_cap)
+H_LAMBDA_REF = 0.25  # … to h·|λ| ≤ this (Radau IIA's numerical damping ratio 1.1e-7)
 ATOL_SCALE = 1e-3
 RAMP = 0.1  # [s] the creep trials' start ramp
+
+
+def step_cap(jac: np.ndarray) -> float:
+    """The reference's step cap [s]: ``H_LAMBDA_REF``/max|λ| over the eigenvalues λ of the
+    Jacobian with Im λ ≠ 0 and damping ratio −Re λ/|λ| < ``ZETA_REF`` (inf if none).
+
+    Radau IIA is L-stable: on a step h|λ| ≫ 1 it damps an oscillatory mode that its error
+    estimate does not see — one whose amplitude is below the absolute tolerance, such as a
+    mode growing from the start transient's seed.  Its amplification on the imaginary axis,
+    R(iy) = (1 + 2iy/5 − y²/20)/(1 − 3iy/5 − 3y²/20 + iy³/60), gives a numerical damping
+    ratio −ln|R(iy)|/y of 1.1e-7 at y = 0.25, 1.3e-4 at 1, 0.045 at 4 and 0.11 at 8 (the
+    uncapped steps of the literal CDFS at 0.06 mm/s: ≈ 18 ms, h|λ| ≈ 23 on its 202-Hz table
+    mode, whose damping ratio is −7.3e-4: a growing mode, damped away).  Capped,
+    the numerical damping is ≤ 1.5e-4 of the smallest |ζ| in the corpus."""
+    ev = np.linalg.eigvals(jac)
+    a = np.abs(ev)
+    light = (ev.imag != 0.0) & (a > 0.0)
+    light[light] = -ev.real[light] / a[light] < ZETA_REF
+    return H_LAMBDA_REF / float(a[light].max()) if np.any(light) else math.inf
 
 
 def _readings() -> dict[str, dict[str, Any]]:
@@ -157,6 +183,14 @@ def key(case: tuple[str, str, float, float, float]) -> str:
     return f"{preset}/{drive}/a{a:g}/v{v:g}/vn{vn:g}"
 
 
+def _keep_trace(case: tuple[str, str, float, float, float], t: np.ndarray,
+                speed: np.ndarray) -> None:
+    """Keep a reference trial's table-speed trace (``TRACES``, not committed: 1-2 MB a
+    trial), so a verdict can be judged again without integrating again."""
+    TRACES.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(TRACES / (key(case).replace("/", "_") + ".npz"), time=t, speed=speed)
+
+
 def sampled_reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
     """The reference of a trial with sampled loops: ``reference/sampled.py`` (the plant by
     DOP853 at rtol 1e-10 between sample instants, the held outputs updated at each, as
@@ -170,15 +204,20 @@ def sampled_reference_trial(case: tuple[str, str, float, float, float]) -> dict[
     v_t = model.state_names.index("table_speed")
     atol = model.tolerances() * ATOL_SCALE
 
+    runs: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
-        t, y, _ = simulate_sampled(model, duration, rtol=RTOL, atol=atol)
-        return t, y[:, v_t]
+        if duration not in runs:
+            t, y, _ = simulate_sampled(model, duration, rtol=RTOL, atol=atol)
+            runs[duration] = (t, y[:, v_t])
+        return runs[duration]
 
     started = time.process_time()
     verdict, duration = decide(run, v * 1e-3)
+    _keep_trace(case, *run(duration))
     return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio, "duration_s": duration,
             "decided_at_s": verdict.decided_at, "cpu_s": time.process_time() - started,
-            "method": "DOP853 between sample instants"}
+            "method": "DOP853 between sample instants", "rule": RULE}
 
 
 def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
@@ -192,17 +231,25 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
     atol = model.tolerances() * ATOL_SCALE  # per state (= tolerances(H) for 15 states)
     v_t = model.state_names.index("table_speed")
     # the model's own state count: a ball–nut share 0 < f < 1 adds a bristle state
-    state = {"t": 0.0, "y": np.zeros(model.n_state), "time": [np.zeros(1)],
-             "speed": [np.zeros(1)], "nfev": 0}
+    state: dict[str, Any] = {"t": 0.0, "y": np.zeros(model.n_state), "time": [np.zeros(1)],
+                             "speed": [np.zeros(1)], "nfev": 0, "steps": 0, "capped": 0,
+                             "min_cap": math.inf, "h": 1e-6}
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
         while state["t"] < duration - 1e-12:
             a0 = state["t"]
-            b = RAMP if a0 < RAMP else duration
-            n0, n1 = int(round(a0 * 1e3)), int(round(b * 1e3))
+            # on the 1-ms grid: the ramp's end, then chunks of CHUNK
+            n0 = int(round(a0 * 1e3))
+            n1 = min(int(round((RAMP if a0 < RAMP else duration) * 1e3)),
+                     n0 + int(round(CHUNK * 1e3)))
+            b = n1 * 1e-3
             grid = np.arange(n0 + 1, n1 + 1) * 1e-3
+            cap = step_cap(model.jacobian(a0, state["y"]))
+            state["capped"] += math.isfinite(cap)
+            state["min_cap"] = min(state["min_cap"], cap)
             sol = solve_ivp(model, (a0, b), state["y"], method="Radau", rtol=RTOL, atol=atol,
-                            jac=model.jacobian, t_eval=grid, dense_output=True)
+                            jac=model.jacobian, t_eval=grid, dense_output=True,
+                            max_step=cap, first_step=min(state["h"], cap, b - a0))
             if sol.status != 0:
                 raise RuntimeError(f"{key(case)}: Radau failed at {sol.t[-1]:g} s")
             state["time"].append(sol.t)
@@ -210,6 +257,10 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
             state["y"] = sol.sol(b)
             state["t"] = b
             state["nfev"] += int(sol.nfev)
+            steps = np.diff(sol.sol.ts)
+            state["steps"] += steps.size
+            # the last full step (the chunk's end cuts the final one short)
+            state["h"] = float(steps[-2] if steps.size > 1 else steps[-1])
         t = np.concatenate(state["time"])
         s = np.concatenate(state["speed"])
         keep = t <= duration + 1e-9
@@ -217,9 +268,13 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
 
     started = time.process_time()
     verdict, duration = decide(run, v * 1e-3)
+    _keep_trace(case, *run(duration))
     return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio, "duration_s": duration,
             "decided_at_s": verdict.decided_at, "cpu_s": time.process_time() - started,
-            "rhs_calls": state["nfev"]}
+            "rhs_calls": state["nfev"], "steps": state["steps"],
+            "capped_chunks": state["capped"], "chunks": int(round(duration / CHUNK)),
+            "min_step_cap_s": state["min_cap"] if math.isfinite(state["min_cap"]) else None,
+            "rule": RULE}
 
 
 def engine_trial(case: tuple[str, str, float, float, float], method: str | None
@@ -243,6 +298,9 @@ def main() -> None:
     parser.add_argument("--reference-file", default=str(REFERENCE),
                         help="where the reference verdicts are kept (several files are "
                         "read: this one and the default)")
+    parser.add_argument("--recompute", action="store_true",
+                        help="compute again the selected cases' references of an older rule "
+                        "(kept in --reference-file; they replace the older ones)")
     parser.add_argument("--compare", default="auto,dopri5",
                         help="other methods judged too (comma-separated; '' for none)")
     args = parser.parse_args()
@@ -252,16 +310,20 @@ def main() -> None:
     refs: dict[str, Any] = {}
     for path in sorted({kept, REFERENCE, *REFERENCE.parent.glob("bench_verdicts_reference*.json")}):
         if path.exists():
-            refs.update(json.loads(path.read_text()))
+            for k, ref in json.loads(path.read_text()).items():
+                # a reference of the current rule and step cap replaces an older one
+                if k not in refs or refs[k].get("rule") != RULE or ref.get("rule") == RULE:
+                    refs[k] = ref
     if args.available:
         cases = [c for c in cases if key(c) in refs]
     own: dict[str, Any] = json.loads(kept.read_text()) if kept.exists() else {}
     for c in cases:
-        if key(c) not in refs:
+        if key(c) not in refs or (args.recompute and refs[key(c)].get("rule") != RULE):
             refs[key(c)] = own[key(c)] = reference_trial(c)
             print(f"reference {key(c)}: {refs[key(c)]}", flush=True)
             kept.parent.mkdir(parents=True, exist_ok=True)
             kept.write_text(json.dumps(own, indent=1) + "\n")
+
     if args.reference_only:
         return
     default = SolverOptions().method
