@@ -204,3 +204,25 @@ def test_a_steady_noise_floor_looks_growing_by_chance_only() -> None:
     p = 1.0 / math.factorial(rule.growth_run)
     sd = math.sqrt(n * p * (1 - p))
     assert abs(flagged - n * p) < 4 * sd, flagged
+
+
+def _quasi_periodic(t: np.ndarray, shrink: float) -> np.ndarray:
+    """An irregular oscillation (two incommensurate tones: no cycle repeats), its amplitude
+    falling linearly by ``shrink`` (a fraction) over the trace."""
+    amp = 1.0 - shrink * t / t[-1]
+    return 1.0 + amp * (0.8 * np.sin(2 * np.pi * 5.0 * t)
+                        + 0.05 * np.sin(2 * np.pi * 5.0 * math.sqrt(2.0) * t))
+
+
+def test_an_irregular_envelope_that_shrinks_by_noise_only_is_sustained() -> None:
+    # issue 21: the literal CDFS's chaotic stick-slip at 0.04 mm/s had block widths falling by
+    # 0.02 % (2.2296, 2.2294, 2.2289) and stayed "undecided"; below a tenth of the envelope
+    # tolerance a shrink is no decay
+    t = np.arange(0.0, 48.0 + 1e-9, 1e-3)
+    # amplitude −0.5 % over 48 s: the three blocks' widths fall by 0.16 % in all, each after
+    # the other (the old rule: undecided); a time constant of 10⁴ s is no decay in 240 s
+    steady = trace_verdict(t, _quasi_periodic(t, 5e-3), 1.0)
+    assert steady.kind == "oscillation"
+    assert "irregular" in steady.reason
+    # −2 % over 48 s: the widths fall by more than a tenth of the 5 % tolerance: decaying
+    assert trace_verdict(t, _quasi_periodic(t, 2e-2), 1.0).kind == "undecided"
