@@ -53,6 +53,7 @@ from reference.scipy_model import ReferenceModel  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.analysis.critical import creep_trial, decide  # noqa: E402
+from feeddrive.analysis.cycle_verdict import VerdictRule, trace_verdict  # noqa: E402
 from feeddrive.engine.simulate import DriveSystem, SolverOptions  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 
@@ -191,6 +192,29 @@ def _keep_trace(case: tuple[str, str, float, float, float], t: np.ndarray,
     np.savez_compressed(TRACES / (key(case).replace("/", "_") + ".npz"), time=t, speed=speed)
 
 
+def rejudge(case: tuple[str, str, float, float, float]) -> dict[str, Any] | None:
+    """The current rule's verdict on a kept reference trace (``TRACES``), trial length by
+    trial length as :func:`~feeddrive.analysis.critical.decide` runs them; None if there is
+    no trace or the rule is still undecided at its end short of the maximum (a longer run is
+    needed)."""
+    path = TRACES / (key(case).replace("/", "_") + ".npz")
+    if not path.exists():
+        return None
+    kept = np.load(path)
+    t, speed = kept["time"], kept["speed"]
+    v = case[3] * 1e-3
+    rule = VerdictRule()
+    for duration in rule.durations():
+        if duration > t[-1] + 1e-9:
+            return None
+        sel = t <= duration + 1e-9
+        verdict = trace_verdict(t[sel], speed[sel], v, rule)
+        if verdict.decided or duration >= rule.max_duration:
+            return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio,
+                    "duration_s": duration, "decided_at_s": verdict.decided_at}
+    return None
+
+
 def sampled_reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
     """The reference of a trial with sampled loops: ``reference/sampled.py`` (the plant by
     DOP853 at rtol 1e-10 between sample instants, the held outputs updated at each, as
@@ -301,6 +325,9 @@ def main() -> None:
     parser.add_argument("--recompute", action="store_true",
                         help="compute again the selected cases' references of an older rule "
                         "(kept in --reference-file; they replace the older ones)")
+    parser.add_argument("--rejudge", action="store_true",
+                        help="judge the kept reference traces again by the current rule and "
+                        "update the kept verdicts (no integration)")
     parser.add_argument("--compare", default="auto,dopri5",
                         help="other methods judged too (comma-separated; '' for none)")
     args = parser.parse_args()
@@ -314,6 +341,23 @@ def main() -> None:
                 # a reference of the current rule and step cap replaces an older one
                 if k not in refs or refs[k].get("rule") != RULE or ref.get("rule") == RULE:
                     refs[k] = ref
+    if args.rejudge:
+        for path in sorted(REFERENCE.parent.glob("bench_verdicts_reference*.json")):
+            stored = json.loads(path.read_text())
+            for c in CORPUS:
+                ref = stored.get(key(c))
+                if ref is None or ref.get("rule") != RULE:
+                    continue
+                again = rejudge(c)
+                if again is None:
+                    print(f"{key(c)}: no trace, or undecided at its end", flush=True)
+                    continue
+                if any(again[k] != ref[k] for k in ("kind", "duration_s")):
+                    print(f"{key(c)}: {ref['kind']} at {ref['duration_s']:g} s -> "
+                          f"{again['kind']} at {again['duration_s']:g} s", flush=True)
+                ref.update(again)
+            path.write_text(json.dumps(stored, indent=1) + "\n")
+        return
     if args.available:
         cases = [c for c in cases if key(c) in refs]
     own: dict[str, Any] = json.loads(kept.read_text()) if kept.exists() else {}
