@@ -45,14 +45,13 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
-from scipy import optimize
 
 from ..engine.simulate import DriveSystem
 from ..model.assemble import Model
 from ..model.disturbances import LeadError, TorqueRipple
 from ..model.friction.lugre_parameters import LuGreParameters
 from ..model.loops import INJ_CURRENT, INJ_SPEED
-from ..model.mechanisms import Mechanism, mechanism
+from ..model.mechanisms import mechanism
 from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
 from ..parameters import ParameterError, SiteParameters
 from . import protocol
@@ -210,12 +209,6 @@ def classify_poles(eigenvalues: np.ndarray) -> list[Pole]:
     return sorted(poles, key=lambda p: p.frequency_hz)
 
 
-def _mechanism(system: DriveSystem) -> Mechanism:
-    """The drive's topology, which declares its steady motion and what it holds still."""
-    return mechanism(system.drive)(system.parameters, system.drive, system.table_position,
-                                   system.nut_hold)
-
-
 def _no_friction(site: Any) -> LuGreParameters:
     """A site with the law "none" (a law with parameters of its own becomes a LuGre-form
     site on its Stribeck branches, which "none" ignores)."""
@@ -249,7 +242,7 @@ def _check_continuous(system: DriveSystem) -> None:
 
 def _live_states(model: Model, system: DriveSystem) -> list[int]:
     """States that move: the states a drive holds still (the CDFS's locked nut) are dropped."""
-    frozen, _ = _mechanism(system).held()
+    frozen, _ = system.topology().held()
     return [k for k, name in enumerate(model.state_names) if not name.startswith(frozen)]
 
 
@@ -318,7 +311,7 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     y0 = np.zeros(n)
     # the drive's kinematics: position-like state -> (its rate state, the steady rate);
     # positions move with the reference, their rates are fixed
-    motion = {pos: pair for pos, pair in _mechanism(system).steady_motion(
+    motion = {pos: pair for pos, pair in system.topology().steady_motion(
         table_speed, nut_speed).items() if pos in names and pair[0] in names}
     kinematic = {pos: rate_state for pos, (rate_state, _) in motion.items()}
     for pos, (rate_state, rate) in motion.items():
@@ -355,6 +348,8 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
 
     def regularised(u: np.ndarray) -> np.ndarray:
         return np.concatenate([residual(u), _PULL * (u - u0)])
+
+    from scipy import optimize  # here: `simulate` imports this module, not scipy (issue 21)
 
     sol = optimize.least_squares(regularised, u0, method="lm", xtol=1e-15, ftol=1e-15,
                                  gtol=1e-15)
@@ -482,7 +477,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     aux_names = [a.name for a in model.aux]
     st = model.state_names
     axes = [a.removesuffix("_speed_command") for a in aux_names if a.endswith("_speed_command")]
-    idle = _mechanism(sys_).held()[1]
+    idle = sys_.topology().held()[1]
     axes = [a for a in axes if a not in idle]
     pidx = model.parameter_names.index
     # inputs: (name, parameter slot)
@@ -505,7 +500,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         for a in axes:
             j = aux_names.index(f"{a}_{kind}")
             outs.append((f"{a}_{kind}", lambda yv, av, j=j: av[j]))
-    topology = _mechanism(sys_)
+    topology = sys_.topology()
     for a in axes:
         j = st.index(f"{a}_current")
         kt_name, torque_name = topology.motor_output(a)

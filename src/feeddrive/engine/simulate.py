@@ -13,7 +13,7 @@ import numpy as np
 
 from ..model.assemble import Model, assemble
 from ..model.disturbances import LoadProfile
-from ..model.mechanisms import drive_names, mechanism
+from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..parameters import DriveParameters, ParameterError
 from ..solvers import dopri5, switching
@@ -62,6 +62,17 @@ class DriveSystem:
             if not (isinstance(value, int | float) and math.isfinite(value)):
                 raise ParameterError(f"initial_state.{name}", value, "expected a finite number "
                                      "in the state's SI unit")
+
+    def topology(self) -> Mechanism:
+        """The drive's topology, which declares its structure (axes, sites, what it holds).
+
+        Returns
+        -------
+        Mechanism
+            The registered mechanism of :attr:`drive`, built for this system.
+        """
+        return mechanism(self.drive)(self.parameters, self.drive, self.table_position,
+                                     self.nut_hold)
 
     def model(self, profile: Profile) -> Model:
         """The assembled model of this drive following ``profile``.

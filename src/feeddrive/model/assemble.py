@@ -11,19 +11,31 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import json
+import os
+import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._jit import CACHE_DIR
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
 from .compensation import CompensationFootprint, emit_compensation
 from .disturbances import LoadProfile, TorqueRipple, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
-from .reference import PROFILE_PARAMS, REFERENCE_INPUTS, reference_with_inputs
+from .reference import (
+    NUT_SPEED,
+    PROFILE_PARAMS,
+    REFERENCE_INPUTS,
+    TABLE_COLUMNS,
+    TABLE_OFFSET,
+    reference_with_inputs,
+)
 
 if TYPE_CHECKING:
     from .reference import Profile
@@ -215,10 +227,10 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     block = np.zeros(len(PROFILE_PARAMS))
     for k, v in values.items():
         block[k] = v
-    mech.check_profile(float(block[2]), table[3])
+    mech.check_profile(float(block[NUT_SPEED]), table[3])
     table = np.ascontiguousarray(table, dtype=float)
-    block[5] = b.table(table)
-    block[6] = table.shape[1]
+    block[TABLE_OFFSET] = b.table(table)
+    block[TABLE_COLUMNS] = table.shape[1]
     o = b.params("profile", block)
     # the linearisation's reference inputs (feeddrive.analysis.linear), zero in a simulation
     oi = b.param(f"inputs.{REFERENCE_INPUTS[0]}", 0.0)
@@ -443,19 +455,40 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
 def solver_sources() -> list[str]:
     """The integrator templates pasted into every generated module.
 
-    DOPRI5 as in engine v1 and the dense-output DOPRI5 ⇄ RODAS4 driver; numba compiles each at
-    its first call, so a model only ever run with one method never compiles the other.  Cached:
-    reading template sources with ``inspect`` costs ~15 ms, more than a short simulation.
+    The one driver of :mod:`feeddrive.solvers.driver`, specialised as ``integrate`` (DOPRI5
+    landing on every breakpoint, as in engine v1) and ``integrate_dense`` (dense output,
+    DOPRI5 ⇄ RODAS4), beside the steps and Jacobian kernels they call; numba compiles each at
+    its first call, so a model only ever run with one method never compiles the other.  Cached
+    in memory and on disk, in the compile cache's folder (named after the hash of every
+    kernel source, the solvers' included: :mod:`feeddrive._jit`): reading and specialising the
+    templates with ``inspect`` and ``ast`` costs a fresh process 0.1–0.2 s, more than a short
+    simulation (issue 21 item 4).
 
     Returns
     -------
     list of str
         Python sources of the solver drivers.
     """
+    path = Path(CACHE_DIR) / "solver_sources.json"
+    try:
+        stored = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(stored, list) and all(isinstance(s, str) for s in stored):
+            return stored
+    except (OSError, ValueError):
+        pass
     from ..solvers import dopri5, rodas4, steps, switching
 
-    return (steps.template_sources() + rodas4.template_sources() + dopri5.template_sources()
-            + switching.template_sources())
+    sources = (steps.template_sources() + rodas4.template_sources()
+               + dopri5.template_sources() + switching.template_sources())
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".solver_sources.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(sources, fh)
+        os.replace(tmp, path)  # atomic: a concurrent process reads the old file or the new
+    except OSError:  # a read-only cache folder: the sources are rebuilt in each process
+        pass
+    return sources
 
 
 
