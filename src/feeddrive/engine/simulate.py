@@ -16,7 +16,7 @@ from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..parameters import DriveParameters, ParameterError
-from ..solvers import dopri5, switching
+from ..solvers import dopri5, modes, switching
 from . import budget
 from .result import Result, Run
 
@@ -197,8 +197,8 @@ class SolverOptions:
         """
         methods = {
             "modal": "DOPRI5/RODAS4 switched on stiffness, every step capped at h·|λ| ≤ "
-                     f"{switching.MODAL_H_LAMBDA:g} on each oscillatory mode of the Jacobian "
-                     f"with damping ratio < {switching.MODAL_ZETA_LIGHT:g}",
+                     f"{modes.H_LAMBDA:g} on each oscillatory mode of the Jacobian "
+                     f"with damping ratio < {modes.ZETA_LIGHT:g}",
             "dopri5": "adaptive Dormand–Prince 5(4)",
             "auto": "DOPRI5/RODAS4 switched on Hairer's stiffness test, no mode cap",
             "rodas4": "Rosenbrock RODAS4",
