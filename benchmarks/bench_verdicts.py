@@ -325,6 +325,9 @@ def main() -> None:
     parser.add_argument("--recompute", action="store_true",
                         help="compute again the selected cases' references of an older rule "
                         "(kept in --reference-file; they replace the older ones)")
+    parser.add_argument("--engine-all", action="store_true",
+                        help="judge every selected case by the engine, computing no "
+                        "reference (cases without one are listed as not computed)")
     parser.add_argument("--rejudge", action="store_true",
                         help="judge the kept reference traces again by the current rule and "
                         "update the kept verdicts (no integration)")
@@ -360,8 +363,15 @@ def main() -> None:
         return
     if args.available:
         cases = [c for c in cases if key(c) in refs]
+    if args.engine_all:  # no reference is computed: a case without one is judged unmatched
+        args.reference_only = False
+        missing = {key(c) for c in cases if key(c) not in refs}
+    else:
+        missing = set()
     own: dict[str, Any] = json.loads(kept.read_text()) if kept.exists() else {}
     for c in cases:
+        if key(c) in missing:
+            continue
         if key(c) not in refs or (args.recompute and refs[key(c)].get("rule") != RULE):
             refs[key(c)] = own[key(c)] = reference_trial(c)
             print(f"reference {key(c)}: {refs[key(c)]}", flush=True)
@@ -374,21 +384,31 @@ def main() -> None:
     methods = [default, *[m for m in args.compare.split(",") if m and m != default]]
     rows = []
     for c in cases:
-        row: dict[str, Any] = {"case": key(c), "reference": refs[key(c)]}
+        ref = refs.get(key(c))
+        row: dict[str, Any] = {"case": key(c), "reference": ref}
         for m in methods:
             row[m] = engine_trial(c, None if m == default else m)
-            row[m]["agrees"] = row[m]["kind"] == refs[key(c)]["kind"]
+            row[m]["agrees"] = None if ref is None else row[m]["kind"] == ref["kind"]
         rows.append(row)
-        print(f"{key(c):45s} ref {refs[key(c)]['kind']:11s} "
-              + "  ".join(f"{m} {row[m]['kind']:11s}{'' if row[m]['agrees'] else ' ✗'}"
+        print(f"{key(c):45s} ref {ref['kind'] if ref else '(none)':11s} "
+              + "  ".join(f"{m} {row[m]['kind']:11s}"
+                          f"{' ✗' if row[m]['agrees'] is False else ''}"
                           for m in methods), flush=True)
-    summary = {m: {"agree": sum(r[m]["agrees"] for r in rows), "of": len(rows),
-                   "cpu_s": sum(r[m]["cpu_s"] for r in rows)} for m in methods}
-    summary["reference"] = {"cpu_s": sum(r["reference"]["cpu_s"] for r in rows)}
+    judged = [r for r in rows if r["reference"] is not None]
+    summary: dict[str, Any] = {
+        m: {"agree": sum(bool(r[m]["agrees"]) for r in judged), "of": len(judged),
+            "cpu_s": sum(r[m]["cpu_s"] for r in rows),
+            "disagree": [r["case"] for r in judged if not r[m]["agrees"]]}
+        for m in methods}
+    summary["reference"] = {
+        "cpu_s": sum(r["reference"]["cpu_s"] for r in judged),
+        # the references of the current rule and step cap, and those kept from before
+        "current": sum(r["reference"].get("rule") == RULE for r in judged),
+        "older": [r["case"] for r in judged if r["reference"].get("rule") != RULE]}
+    summary["not_computed"] = [r["case"] for r in rows if r["reference"] is None]
     print(json.dumps(summary, indent=1))
     RESULTS.write_text(json.dumps({"default_method": default, "summary": summary,
                                    "rows": rows}, indent=1) + "\n")
-
 
 if __name__ == "__main__":
     main()
