@@ -328,6 +328,9 @@ def main() -> None:
     parser.add_argument("--engine-all", action="store_true",
                         help="judge every selected case by the engine, computing no "
                         "reference (cases without one are listed as not computed)")
+    parser.add_argument("--resummarise", action="store_true",
+                        help="judge the engine rows of the results file against the "
+                        "references kept now (no integration)")
     parser.add_argument("--rejudge", action="store_true",
                         help="judge the kept reference traces again by the current rule and "
                         "update the kept verdicts (no integration)")
@@ -344,6 +347,18 @@ def main() -> None:
                 # a reference of the current rule and step cap replaces an older one
                 if k not in refs or refs[k].get("rule") != RULE or ref.get("rule") == RULE:
                     refs[k] = ref
+    if args.resummarise:  # the engine rows kept, judged against the references kept now
+        kept_rows = json.loads(RESULTS.read_text())
+        methods = [m for m in kept_rows["rows"][0] if m not in ("case", "reference")]
+        for row in kept_rows["rows"]:
+            row["reference"] = refs.get(row["case"])
+            for m in methods:
+                row[m]["agrees"] = (None if row["reference"] is None
+                                    else row[m]["kind"] == row["reference"]["kind"])
+        kept_rows["summary"] = summarise(kept_rows["rows"], methods)
+        print(json.dumps(kept_rows["summary"], indent=1))
+        RESULTS.write_text(json.dumps(kept_rows, indent=1) + "\n")
+        return
     if args.rejudge:
         for path in sorted(REFERENCE.parent.glob("bench_verdicts_reference*.json")):
             stored = json.loads(path.read_text())
@@ -394,6 +409,14 @@ def main() -> None:
               + "  ".join(f"{m} {row[m]['kind']:11s}"
                           f"{' ✗' if row[m]['agrees'] is False else ''}"
                           for m in methods), flush=True)
+    summary = summarise(rows, methods)
+    print(json.dumps(summary, indent=1))
+    RESULTS.write_text(json.dumps({"default_method": default, "summary": summary,
+                                   "rows": rows}, indent=1) + "\n")
+
+
+def summarise(rows: list[dict[str, Any]], methods: list[str]) -> dict[str, Any]:
+    """Agreement per method over the rows with a reference, and what the references are."""
     judged = [r for r in rows if r["reference"] is not None]
     summary: dict[str, Any] = {
         m: {"agree": sum(bool(r[m]["agrees"]) for r in judged), "of": len(judged),
@@ -406,9 +429,7 @@ def main() -> None:
         "current": sum(r["reference"].get("rule") == RULE for r in judged),
         "older": [r["case"] for r in judged if r["reference"].get("rule") != RULE]}
     summary["not_computed"] = [r["case"] for r in rows if r["reference"] is None]
-    print(json.dumps(summary, indent=1))
-    RESULTS.write_text(json.dumps({"default_method": default, "summary": summary,
-                                   "rows": rows}, indent=1) + "\n")
+    return summary
 
 if __name__ == "__main__":
     main()
