@@ -39,7 +39,8 @@ Timing: CPU time (``time.process_time``), contestants interleaved round by round
 Compile time: fresh processes on an empty numba cache: import and 10 ms of a CDFS and a DDFS
 with ``dopri5`` and with ``auto``; then the same again with the cache on disk.
 
-Writes ``benchmarks/results/bench_engine.json``.
+Writes ``benchmarks/results/bench_engine.json`` and the table, every target marked met or
+missed, to ``benchmarks/results/bench_engine.md``.
 """
 
 from __future__ import annotations
@@ -85,6 +86,7 @@ X_T = STATE_NAMES.index("table_position")
 TARGET_LSODA = 30.0
 TARGET_ODEINT = 15.0
 TARGET_LONG_OVER_SHORT = 3.0
+TARGET_RELATIVE_ERROR = 1e-6  # the speed targets hold at ≤ this relative position error
 TIGHT = SolverOptions(method="dopri5", rtol=1e-10, position_tolerance=1e-14,
                       speed_tolerance=1e-12, current_tolerance=1e-10)
 OUTPUT = 1e-3  # s
@@ -221,6 +223,8 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
         "max_position_error_m": {"engine": err_engine, "lsoda": err_lsoda,
                                  "odeint": err_odeint},
         "engine_at_least_as_accurate": err_engine <= target,
+        # the target's accuracy: the largest position error over the largest |x_t|
+        "engine_relative_position_error": err_engine / float(np.max(np.abs(truth))),
     }
 
 
@@ -261,6 +265,39 @@ def machine() -> dict[str, Any]:
             "platform": platform.platform()}
 
 
+def mark(ok: bool) -> str:
+    """A target's mark in the table."""
+    return "met" if ok else "**missed**"
+
+
+def markdown_table(rows: list[dict[str, Any]]) -> str:
+    """The results as a Markdown table, every target marked met or missed (issue 21: ≥ 30×
+    LSODA and ≥ 15× odeint at ≤ 1e-6 relative position error, engine call and
+    ``simulate()``, 10 s and 100 s)."""
+    head = ("| scenario | s | engine ms | simulate() ms | LSODA ms | odeint ms | × LSODA "
+            "engine / simulate() | × odeint engine / simulate() | RHS calls engine / LSODA "
+            "/ odeint | max x_t error [m] engine / LSODA / odeint | relative error engine | "
+            f"≥ {TARGET_LSODA:g}× LSODA engine / simulate() | ≥ {TARGET_ODEINT:g}× odeint "
+            f"engine / simulate() | ≤ {TARGET_RELATIVE_ERROR:g} relative |")
+    lines = [head, "|" + " --- |" * head.count(" | ") + " --- |"]
+    for r in rows:
+        c, n, e = r["cpu_ms"], r["rhs_calls"], r["max_position_error_m"]
+        rel = r["engine_relative_position_error"]
+        lines.append(
+            f"| {r['scenario']} | {r['duration_s']:.0f} | {c['engine']:.2f} | "
+            f"{c['simulate']:.2f} | {c['lsoda']:.0f} | {c['odeint']:.0f} | "
+            f"{r['ratio_lsoda']:.1f} / {r['ratio_lsoda_simulate']:.1f} | "
+            f"{r['ratio_odeint']:.1f} / {r['ratio_odeint_simulate']:.1f} | "
+            f"{n['engine']} / {n['lsoda']} / {n['odeint']} | "
+            f"{e['engine']:.1e} / {e['lsoda']:.1e} / {e['odeint']:.1e} | {rel:.1e} | "
+            f"{mark(r['ratio_lsoda'] >= TARGET_LSODA)} / "
+            f"{mark(r['ratio_lsoda_simulate'] >= TARGET_LSODA)} | "
+            f"{mark(r['ratio_odeint'] >= TARGET_ODEINT)} / "
+            f"{mark(r['ratio_odeint_simulate'] >= TARGET_ODEINT)} | "
+            f"{mark(rel <= TARGET_RELATIVE_ERROR)} |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=5, help="interleaved rounds (median)")
@@ -289,7 +326,9 @@ def main() -> None:
         targets[key] = {"lsoda_30x": r["ratio_lsoda"] >= TARGET_LSODA,
                         "odeint_15x": r["ratio_odeint"] >= TARGET_ODEINT,
                         "lsoda_30x_simulate": r["ratio_lsoda_simulate"] >= TARGET_LSODA,
-                        "odeint_15x_simulate": r["ratio_odeint_simulate"] >= TARGET_ODEINT}
+                        "odeint_15x_simulate": r["ratio_odeint_simulate"] >= TARGET_ODEINT,
+                        "relative_error_1e-6": r["engine_relative_position_error"]
+                        <= TARGET_RELATIVE_ERROR}
     for name in names:
         short = [r for r in rows if r["scenario"] == name and r["duration_s"] == 10.0]
         long = [r for r in rows if r["scenario"] == name and r["duration_s"] == 100.0]
@@ -304,9 +343,12 @@ def main() -> None:
         print("compile:", report["compile"])
     for k, v in targets.items():
         print(k, v)
+    table = markdown_table(rows)
+    print(table)
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps(report, indent=2) + "\n")
-    print(f"→ {RESULTS.relative_to(ROOT)}")
+    RESULTS.with_suffix(".md").write_text(table + "\n")
+    print(f"→ {RESULTS.relative_to(ROOT)}, {RESULTS.with_suffix('.md').relative_to(ROOT)}")
 
 
 if __name__ == "__main__":

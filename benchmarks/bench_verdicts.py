@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -52,14 +53,40 @@ from reference.scipy_model import ReferenceModel  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.analysis.critical import creep_trial, decide  # noqa: E402
+from feeddrive.analysis.cycle_verdict import VerdictRule, trace_verdict  # noqa: E402
 from feeddrive.engine.simulate import DriveSystem, SolverOptions  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "bench_verdicts.json"
 REFERENCE = ROOT / "benchmarks" / "results" / "bench_verdicts_reference.json"
+TRACES = ROOT / "benchmarks" / "results" / "verdict_traces"
 RTOL = 1e-10
+#: the kind of reference kept: the growth-checked verdict rule on the step-capped Radau run
+RULE = "growth-checked, step-capped"
+CHUNK = 0.05  # [s] the reference's step cap is evaluated at the start of each such stretch
+ZETA_REF = 0.02  # oscillatory modes below this damping ratio are resolved (step_cap)
+H_LAMBDA_REF = 0.25  # … to h·|λ| ≤ this (Radau IIA's numerical damping ratio 1.1e-7)
 ATOL_SCALE = 1e-3
 RAMP = 0.1  # [s] the creep trials' start ramp
+
+
+def step_cap(jac: np.ndarray) -> float:
+    """The reference's step cap [s]: ``H_LAMBDA_REF``/max|λ| over the eigenvalues λ of the
+    Jacobian with Im λ ≠ 0 and damping ratio −Re λ/|λ| < ``ZETA_REF`` (inf if none).
+
+    Radau IIA is L-stable: on a step h|λ| ≫ 1 it damps an oscillatory mode that its error
+    estimate does not see — one whose amplitude is below the absolute tolerance, such as a
+    mode growing from the start transient's seed.  Its amplification on the imaginary axis,
+    R(iy) = (1 + 2iy/5 − y²/20)/(1 − 3iy/5 − 3y²/20 + iy³/60), gives a numerical damping
+    ratio −ln|R(iy)|/y of 1.1e-7 at y = 0.25, 1.3e-4 at 1, 0.045 at 4 and 0.11 at 8 (the
+    uncapped steps of the literal CDFS at 0.06 mm/s: ≈ 18 ms, h|λ| ≈ 23 on its 202-Hz table
+    mode, whose damping ratio is −7.3e-4: a growing mode, damped away).  Capped,
+    the numerical damping is ≤ 1.5e-4 of the smallest |ζ| in the corpus."""
+    ev = np.linalg.eigvals(jac)
+    a = np.abs(ev)
+    light = (ev.imag != 0.0) & (a > 0.0)
+    light[light] = -ev.real[light] / a[light] < ZETA_REF
+    return H_LAMBDA_REF / float(a[light].max()) if np.any(light) else math.inf
 
 
 def _readings() -> dict[str, dict[str, Any]]:
@@ -157,6 +184,37 @@ def key(case: tuple[str, str, float, float, float]) -> str:
     return f"{preset}/{drive}/a{a:g}/v{v:g}/vn{vn:g}"
 
 
+def _keep_trace(case: tuple[str, str, float, float, float], t: np.ndarray,
+                speed: np.ndarray) -> None:
+    """Keep a reference trial's table-speed trace (``TRACES``, not committed: 1-2 MB a
+    trial), so a verdict can be judged again without integrating again."""
+    TRACES.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(TRACES / (key(case).replace("/", "_") + ".npz"), time=t, speed=speed)
+
+
+def rejudge(case: tuple[str, str, float, float, float]) -> dict[str, Any] | None:
+    """The current rule's verdict on a kept reference trace (``TRACES``), trial length by
+    trial length as :func:`~feeddrive.analysis.critical.decide` runs them; None if there is
+    no trace or the rule is still undecided at its end short of the maximum (a longer run is
+    needed)."""
+    path = TRACES / (key(case).replace("/", "_") + ".npz")
+    if not path.exists():
+        return None
+    kept = np.load(path)
+    t, speed = kept["time"], kept["speed"]
+    v = case[3] * 1e-3
+    rule = VerdictRule()
+    for duration in rule.durations():
+        if duration > t[-1] + 1e-9:
+            return None
+        sel = t <= duration + 1e-9
+        verdict = trace_verdict(t[sel], speed[sel], v, rule)
+        if verdict.decided or duration >= rule.max_duration:
+            return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio,
+                    "duration_s": duration, "decided_at_s": verdict.decided_at}
+    return None
+
+
 def sampled_reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
     """The reference of a trial with sampled loops: ``reference/sampled.py`` (the plant by
     DOP853 at rtol 1e-10 between sample instants, the held outputs updated at each, as
@@ -170,15 +228,20 @@ def sampled_reference_trial(case: tuple[str, str, float, float, float]) -> dict[
     v_t = model.state_names.index("table_speed")
     atol = model.tolerances() * ATOL_SCALE
 
+    runs: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
-        t, y, _ = simulate_sampled(model, duration, rtol=RTOL, atol=atol)
-        return t, y[:, v_t]
+        if duration not in runs:
+            t, y, _ = simulate_sampled(model, duration, rtol=RTOL, atol=atol)
+            runs[duration] = (t, y[:, v_t])
+        return runs[duration]
 
     started = time.process_time()
     verdict, duration = decide(run, v * 1e-3)
+    _keep_trace(case, *run(duration))
     return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio, "duration_s": duration,
             "decided_at_s": verdict.decided_at, "cpu_s": time.process_time() - started,
-            "method": "DOP853 between sample instants"}
+            "method": "DOP853 between sample instants", "rule": RULE}
 
 
 def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any]:
@@ -192,17 +255,25 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
     atol = model.tolerances() * ATOL_SCALE  # per state (= tolerances(H) for 15 states)
     v_t = model.state_names.index("table_speed")
     # the model's own state count: a ball–nut share 0 < f < 1 adds a bristle state
-    state = {"t": 0.0, "y": np.zeros(model.n_state), "time": [np.zeros(1)],
-             "speed": [np.zeros(1)], "nfev": 0}
+    state: dict[str, Any] = {"t": 0.0, "y": np.zeros(model.n_state), "time": [np.zeros(1)],
+                             "speed": [np.zeros(1)], "nfev": 0, "steps": 0, "capped": 0,
+                             "min_cap": math.inf, "h": 1e-6}
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
         while state["t"] < duration - 1e-12:
             a0 = state["t"]
-            b = RAMP if a0 < RAMP else duration
-            n0, n1 = int(round(a0 * 1e3)), int(round(b * 1e3))
+            # on the 1-ms grid: the ramp's end, then chunks of CHUNK
+            n0 = int(round(a0 * 1e3))
+            n1 = min(int(round((RAMP if a0 < RAMP else duration) * 1e3)),
+                     n0 + int(round(CHUNK * 1e3)))
+            b = n1 * 1e-3
             grid = np.arange(n0 + 1, n1 + 1) * 1e-3
+            cap = step_cap(model.jacobian(a0, state["y"]))
+            state["capped"] += math.isfinite(cap)
+            state["min_cap"] = min(state["min_cap"], cap)
             sol = solve_ivp(model, (a0, b), state["y"], method="Radau", rtol=RTOL, atol=atol,
-                            jac=model.jacobian, t_eval=grid, dense_output=True)
+                            jac=model.jacobian, t_eval=grid, dense_output=True,
+                            max_step=cap, first_step=min(state["h"], cap, b - a0))
             if sol.status != 0:
                 raise RuntimeError(f"{key(case)}: Radau failed at {sol.t[-1]:g} s")
             state["time"].append(sol.t)
@@ -210,6 +281,10 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
             state["y"] = sol.sol(b)
             state["t"] = b
             state["nfev"] += int(sol.nfev)
+            steps = np.diff(sol.sol.ts)
+            state["steps"] += steps.size
+            # the last full step (the chunk's end cuts the final one short)
+            state["h"] = float(steps[-2] if steps.size > 1 else steps[-1])
         t = np.concatenate(state["time"])
         s = np.concatenate(state["speed"])
         keep = t <= duration + 1e-9
@@ -217,9 +292,13 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
 
     started = time.process_time()
     verdict, duration = decide(run, v * 1e-3)
+    _keep_trace(case, *run(duration))
     return {"kind": verdict.kind, "ripple_ratio": verdict.ripple_ratio, "duration_s": duration,
             "decided_at_s": verdict.decided_at, "cpu_s": time.process_time() - started,
-            "rhs_calls": state["nfev"]}
+            "rhs_calls": state["nfev"], "steps": state["steps"],
+            "capped_chunks": state["capped"], "chunks": int(round(duration / CHUNK)),
+            "min_step_cap_s": state["min_cap"] if math.isfinite(state["min_cap"]) else None,
+            "rule": RULE}
 
 
 def engine_trial(case: tuple[str, str, float, float, float], method: str | None
@@ -243,6 +322,18 @@ def main() -> None:
     parser.add_argument("--reference-file", default=str(REFERENCE),
                         help="where the reference verdicts are kept (several files are "
                         "read: this one and the default)")
+    parser.add_argument("--recompute", action="store_true",
+                        help="compute again the selected cases' references of an older rule "
+                        "(kept in --reference-file; they replace the older ones)")
+    parser.add_argument("--engine-all", action="store_true",
+                        help="judge every selected case by the engine, computing no "
+                        "reference (cases without one are listed as not computed)")
+    parser.add_argument("--resummarise", action="store_true",
+                        help="judge the engine rows of the results file against the "
+                        "references kept now (no integration)")
+    parser.add_argument("--rejudge", action="store_true",
+                        help="judge the kept reference traces again by the current rule and "
+                        "update the kept verdicts (no integration)")
     parser.add_argument("--compare", default="auto,dopri5",
                         help="other methods judged too (comma-separated; '' for none)")
     args = parser.parse_args()
@@ -252,37 +343,93 @@ def main() -> None:
     refs: dict[str, Any] = {}
     for path in sorted({kept, REFERENCE, *REFERENCE.parent.glob("bench_verdicts_reference*.json")}):
         if path.exists():
-            refs.update(json.loads(path.read_text()))
+            for k, ref in json.loads(path.read_text()).items():
+                # a reference of the current rule and step cap replaces an older one
+                if k not in refs or refs[k].get("rule") != RULE or ref.get("rule") == RULE:
+                    refs[k] = ref
+    if args.resummarise:  # the engine rows kept, judged against the references kept now
+        kept_rows = json.loads(RESULTS.read_text())
+        methods = [m for m in kept_rows["rows"][0] if m not in ("case", "reference")]
+        for row in kept_rows["rows"]:
+            row["reference"] = refs.get(row["case"])
+            for m in methods:
+                row[m]["agrees"] = (None if row["reference"] is None
+                                    else row[m]["kind"] == row["reference"]["kind"])
+        kept_rows["summary"] = summarise(kept_rows["rows"], methods)
+        print(json.dumps(kept_rows["summary"], indent=1))
+        RESULTS.write_text(json.dumps(kept_rows, indent=1) + "\n")
+        return
+    if args.rejudge:
+        for path in sorted(REFERENCE.parent.glob("bench_verdicts_reference*.json")):
+            stored = json.loads(path.read_text())
+            for c in CORPUS:
+                ref = stored.get(key(c))
+                if ref is None or ref.get("rule") != RULE:
+                    continue
+                again = rejudge(c)
+                if again is None:
+                    print(f"{key(c)}: no trace, or undecided at its end", flush=True)
+                    continue
+                if any(again[k] != ref[k] for k in ("kind", "duration_s")):
+                    print(f"{key(c)}: {ref['kind']} at {ref['duration_s']:g} s -> "
+                          f"{again['kind']} at {again['duration_s']:g} s", flush=True)
+                ref.update(again)
+            path.write_text(json.dumps(stored, indent=1) + "\n")
+        return
     if args.available:
         cases = [c for c in cases if key(c) in refs]
+    if args.engine_all:  # no reference is computed: a case without one is judged unmatched
+        args.reference_only = False
+        missing = {key(c) for c in cases if key(c) not in refs}
+    else:
+        missing = set()
     own: dict[str, Any] = json.loads(kept.read_text()) if kept.exists() else {}
     for c in cases:
-        if key(c) not in refs:
+        if key(c) in missing:
+            continue
+        if key(c) not in refs or (args.recompute and refs[key(c)].get("rule") != RULE):
             refs[key(c)] = own[key(c)] = reference_trial(c)
             print(f"reference {key(c)}: {refs[key(c)]}", flush=True)
             kept.parent.mkdir(parents=True, exist_ok=True)
             kept.write_text(json.dumps(own, indent=1) + "\n")
+
     if args.reference_only:
         return
     default = SolverOptions().method
     methods = [default, *[m for m in args.compare.split(",") if m and m != default]]
     rows = []
     for c in cases:
-        row: dict[str, Any] = {"case": key(c), "reference": refs[key(c)]}
+        ref = refs.get(key(c))
+        row: dict[str, Any] = {"case": key(c), "reference": ref}
         for m in methods:
             row[m] = engine_trial(c, None if m == default else m)
-            row[m]["agrees"] = row[m]["kind"] == refs[key(c)]["kind"]
+            row[m]["agrees"] = None if ref is None else row[m]["kind"] == ref["kind"]
         rows.append(row)
-        print(f"{key(c):45s} ref {refs[key(c)]['kind']:11s} "
-              + "  ".join(f"{m} {row[m]['kind']:11s}{'' if row[m]['agrees'] else ' ✗'}"
+        print(f"{key(c):45s} ref {ref['kind'] if ref else '(none)':11s} "
+              + "  ".join(f"{m} {row[m]['kind']:11s}"
+                          f"{' ✗' if row[m]['agrees'] is False else ''}"
                           for m in methods), flush=True)
-    summary = {m: {"agree": sum(r[m]["agrees"] for r in rows), "of": len(rows),
-                   "cpu_s": sum(r[m]["cpu_s"] for r in rows)} for m in methods}
-    summary["reference"] = {"cpu_s": sum(r["reference"]["cpu_s"] for r in rows)}
+    summary = summarise(rows, methods)
     print(json.dumps(summary, indent=1))
     RESULTS.write_text(json.dumps({"default_method": default, "summary": summary,
                                    "rows": rows}, indent=1) + "\n")
 
+
+def summarise(rows: list[dict[str, Any]], methods: list[str]) -> dict[str, Any]:
+    """Agreement per method over the rows with a reference, and what the references are."""
+    judged = [r for r in rows if r["reference"] is not None]
+    summary: dict[str, Any] = {
+        m: {"agree": sum(bool(r[m]["agrees"]) for r in judged), "of": len(judged),
+            "cpu_s": sum(r[m]["cpu_s"] for r in rows),
+            "disagree": [r["case"] for r in judged if not r[m]["agrees"]]}
+        for m in methods}
+    summary["reference"] = {
+        "cpu_s": sum(r["reference"]["cpu_s"] for r in judged),
+        # the references of the current rule and step cap, and those kept from before
+        "current": sum(r["reference"].get("rule") == RULE for r in judged),
+        "older": [r["case"] for r in judged if r["reference"].get("rule") != RULE]}
+    summary["not_computed"] = [r["case"] for r in rows if r["reference"] is None]
+    return summary
 
 if __name__ == "__main__":
     main()

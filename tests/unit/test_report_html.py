@@ -84,7 +84,8 @@ def test_settings_are_a_list_in_mm_s_not_a_repr() -> None:
     text = settings_markdown(StudySettings())
     assert "StudySettings(" not in text and "e-05" not in text
     assert "0.02–3.02 mm/s" in text and "240 s" in text
-    assert [t for t, _ in _parse(render_html(text)).tags].count("li") == 4
+    # trials, search, Fig. 7, Figs. 9–10 and (issue 21) the integrator
+    assert [t for t, _ in _parse(render_html(text)).tags].count("li") == 5
 
 
 def test_resumed_run_says_how_many_studies_were_reused() -> None:

@@ -145,7 +145,84 @@ def test_rule_durations_and_description() -> None:
 
 @pytest.mark.parametrize(("field", "value"), [("smooth_band", 0.0), ("max_duration", 5.0),
                                               ("min_cycles", 1), ("stick_level", 1.5),
+                                              ("growth_run", 1), ("growth_blocks", 4),
                                               ("initial_duration", float("nan"))])
 def test_rule_rejects_bad_values(field: str, value: float) -> None:
     with pytest.raises(ValueError, match=f"rule.{field}"):
         VerdictRule(**{field: value})
+
+
+# -- a mode growing inside the band is not "decayed" (issue 21: the wang2021-literal CDFS at
+# 0.04-0.06 mm/s, whose 202-Hz table mode grows from ≈ 8 s and was judged smooth at 12 s)
+
+
+def _growing(t: np.ndarray, seed: float, rate: float, cap: float = 0.9) -> np.ndarray:
+    """1 + a start transient that decays + a 200-Hz mode growing from ``seed`` at ``rate``
+    [1/s] up to the amplitude ``cap`` (a sustained oscillation once it saturates)."""
+    amp = np.minimum(seed * np.exp(rate * t), cap)
+    return 1.0 + 0.5 * np.exp(-t / 0.3) * np.sin(2 * np.pi * 5.0 * t) \
+        + amp * np.sin(2 * np.pi * 200.0 * t)
+
+
+def test_a_mode_growing_inside_the_band_is_undecided_until_it_leaves_it() -> None:
+    t = np.arange(0.0, 48.0 + 1e-9, 1e-3)
+    v = _growing(t, 1e-8, 1.0)  # 1.6e-3 at 12 s: inside ±2 %, the old rule's "smooth"
+    short = trace_verdict(t[t <= 12.0], v[t <= 12.0], 1.0)
+    assert short.kind == "undecided"
+    assert short.reason == "inside the band but the deviation is growing"
+    assert short.ripple_ratio < 0.01  # inside the band all along
+    grown = trace_verdict(t, v, 1.0)  # saturated at 0.9 from 18.2 s
+    assert grown.kind == "oscillation"
+    assert grown.frequency == pytest.approx(200.0, rel=1e-3)
+
+
+def test_a_mode_just_across_the_hysteresis_is_not_yet_a_limit_cycle() -> None:
+    # a fast mode growing slowly per cycle (×1.012 a 5-ms cycle) that has only just crossed
+    # the ±1 % hysteresis: its few cycles agree within 2 %, but span < min_compare_time
+    t = np.arange(0.0, 12.0 + 1e-9, 1e-3)
+    v = _growing(t, 0.011 * math.exp(-2.4 * 12.0), 2.4)
+    verdict = trace_verdict(t, v, 1.0)
+    assert verdict.kind == "undecided"
+
+
+def test_a_decayed_transient_with_a_steady_floor_is_smooth() -> None:
+    t = np.arange(0.0, 12.0 + 1e-9, 1e-3)
+    v = _growing(t, 1e-6, 0.0)  # a steady 200-Hz ripple of 1e-6: not growing
+    assert trace_verdict(t, v, 1.0).kind == "smooth"
+
+
+def test_a_steady_noise_floor_looks_growing_by_chance_only() -> None:
+    # the rule's reasoning (VerdictRule.growth_run): steady noise rises over growth_run
+    # blocks by chance 1/growth_run! (1/24); that only makes the trial longer
+    rule = VerdictRule()
+    rng = np.random.default_rng(21)
+    t = np.arange(0.0, 12.0 + 1e-9, 1e-3)
+    base = 1.0 + 0.5 * np.exp(-t / 0.3) * np.sin(2 * np.pi * 5.0 * t)
+    n = 600
+    flagged = sum(trace_verdict(t, base + 1e-9 * rng.standard_normal(t.size), 1.0,
+                                rule).kind == "undecided" for _ in range(n))
+    p = 1.0 / math.factorial(rule.growth_run)
+    sd = math.sqrt(n * p * (1 - p))
+    assert abs(flagged - n * p) < 4 * sd, flagged
+
+
+def _quasi_periodic(t: np.ndarray, shrink: float) -> np.ndarray:
+    """An irregular oscillation (two incommensurate tones: no cycle repeats), its amplitude
+    falling linearly by ``shrink`` (a fraction) over the trace."""
+    amp = 1.0 - shrink * t / t[-1]
+    return 1.0 + amp * (0.8 * np.sin(2 * np.pi * 5.0 * t)
+                        + 0.05 * np.sin(2 * np.pi * 5.0 * math.sqrt(2.0) * t))
+
+
+def test_an_irregular_envelope_that_shrinks_by_noise_only_is_sustained() -> None:
+    # issue 21: the literal CDFS's chaotic stick-slip at 0.04 mm/s had block widths falling by
+    # 0.02 % (2.2296, 2.2294, 2.2289) and stayed "undecided"; below a tenth of the envelope
+    # tolerance a shrink is no decay
+    t = np.arange(0.0, 48.0 + 1e-9, 1e-3)
+    # amplitude −0.5 % over 48 s: the three blocks' widths fall by 0.16 % in all, each after
+    # the other (the old rule: undecided); a time constant of 10⁴ s is no decay in 240 s
+    steady = trace_verdict(t, _quasi_periodic(t, 5e-3), 1.0)
+    assert steady.kind == "oscillation"
+    assert "irregular" in steady.reason
+    # −2 % over 48 s: the widths fall by more than a tenth of the 5 % tolerance: decaying
+    assert trace_verdict(t, _quasi_periodic(t, 2e-2), 1.0).kind == "undecided"

@@ -22,7 +22,7 @@ from . import protocol
 from .trace_input import MIN_WINDOW_SAMPLES, as_trace, check_command, time_below
 from .verdict_words import CREEPING_KINDS, OSCILLATION, SMOOTH, STICK_SLIP, UNDECIDED
 
-__all__ = ["TraceVerdict", "VerdictRule", "trace_verdict"]
+__all__ = ["TraceVerdict", "VerdictRule", "growing", "trace_verdict"]
 
 
 @dataclass(frozen=True)
@@ -42,6 +42,16 @@ class VerdictRule:
     settle_time : float, default 2.0
         The settling stretch lasts at least this long and at least two of the longest
         oscillation periods seen [s].
+    growth_blocks : int, default 8
+        *Decayed* also needs the deviation not to be growing: the settling stretch is cut
+        into this many equal blocks (≥ 0.25 s each at the default ``settle_time``) …
+    growth_run : int, default 4
+        … and the trace is not decayed while the peak-to-peak speed of each of its last
+        ``growth_run`` blocks exceeds the block's before (a mode growing inside the band,
+        seeded by the start transient or the integration error: it leaves the band later,
+        so a longer trial decides).  A decaying transient shrinks block after block and
+        never rises so; a steady (noise-like) deviation rises over ``growth_run`` blocks by
+        chance 1/``growth_run``! (1/24), which only makes the trial longer.
     cycle_tolerance : float, default 0.02
         *Limit cycle*: the compared cycles' highest speed, lowest speed and period agree within
         this fraction of the ripple and of the mean period [-].  A cycle runs from one upward
@@ -52,15 +62,20 @@ class VerdictRule:
         state) …
     min_compare_time : float, default 2.0
         … or of the last ``min_compare_time`` if longer, so a slowly decaying envelope is not
-        mistaken for a limit cycle [s].  The drift between the quarters of the compared stretch
-        must also not speed up (a trajectory lingering by a limit cycle that has just vanished
-        drifts ever faster), unless below a tenth of ``cycle_tolerance``.
+        mistaken for a limit cycle, and they span at least ``min_compare_time`` (a mode that
+        has just grown across the command's band is not yet a cycle) [s].  The drift
+        between the quarters of the compared stretch must also not speed up (a trajectory
+        lingering by a limit cycle that has just vanished drifts ever faster), unless below a
+        tenth of ``cycle_tolerance``.
     max_multiplicity : int, default 8
         Period-doubled cycles repeat after p cycles; p up to this is tried.
     envelope_tolerance : float, default 0.05
         An irregular oscillation (no repetition) is sustained when the highest and lowest speeds
         of the last ``envelope_blocks`` blocks of cycles agree within this fraction of the
-        ripple [-] and the ripple does not shrink block after block.
+        ripple [-] and the ripple does not shrink block after block by more than a tenth of
+        this in all (the floor of the periodic drift test: the widths of a steady chaotic
+        envelope fall block after block by chance 1/``envelope_blocks``!, by 0.02 % on the
+        ``wang2021-literal`` CDFS at 0.04 mm/s, 24–48 s).
     envelope_blocks : int, default 3
         Blocks compared, each ≥ 8 cycles and ≥ ``min_compare_time``.
     stick_level : float, default 0.01
@@ -81,6 +96,8 @@ class VerdictRule:
 
     smooth_band: float = 0.02
     settle_time: float = 2.0
+    growth_blocks: int = 8
+    growth_run: int = 4
     cycle_tolerance: float = 0.02
     min_cycles: int = 3
     min_compare_time: float = 2.0
@@ -98,7 +115,7 @@ class VerdictRule:
             if isinstance(value, bool) or not isinstance(value, int | float) \
                     or not math.isfinite(value) or value <= 0:
                 raise ValueError(f"rule.{name} = {value!r}: expected a finite number > 0")
-        for name in ("min_cycles", "max_multiplicity", "envelope_blocks"):
+        for name in ("min_cycles", "max_multiplicity", "envelope_blocks", "growth_run"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 2 - (
                     name == "max_multiplicity"):
@@ -108,6 +125,10 @@ class VerdictRule:
             if getattr(self, name) >= 1.0:
                 raise ValueError(f"rule.{name} = {getattr(self, name)!r}: expected < 1 (a "
                                  "fraction of the command speed)")
+        if isinstance(self.growth_blocks, bool) or not isinstance(self.growth_blocks, int) \
+                or self.growth_blocks <= self.growth_run:
+            raise ValueError(f"rule.growth_blocks = {self.growth_blocks!r}: expected an "
+                             f"integer > growth_run = {self.growth_run!r}")
         if self.max_duration < self.initial_duration:
             raise ValueError(f"rule.max_duration = {self.max_duration!r}: must not be below "
                              f"initial_duration = {self.initial_duration!r} [s]")
@@ -137,14 +158,19 @@ class VerdictRule:
             f"Limit-cycle rule. A trial runs {self.initial_duration:g} s, doubling up to "
             f"{self.max_duration:g} s "
             f"until decided. smooth: the speed stays within ±{100 * self.smooth_band:g} % of "
-            f"the command for the last max({self.settle_time:g} s, 2 longest periods). "
+            f"the command for the last max({self.settle_time:g} s, 2 longest periods), and "
+            f"not growing: the peak-to-peak speed of the last {self.growth_run} of "
+            f"{self.growth_blocks} equal blocks of that stretch does not rise block after "
+            f"block. "
             f"Limit cycle: over the last half of the trial (≥ {self.min_compare_time:g} s, the "
-            f"first cycle excluded) ≥ {self.min_cycles} repetitions of 1 to "
+            f"first cycle excluded, spanning ≥ {self.min_compare_time:g} s) ≥ "
+            f"{self.min_cycles} repetitions of 1 to "
             f"{self.max_multiplicity} cycles agree in highest speed, lowest speed and period "
             f"within {100 * self.cycle_tolerance:g} % and their drift is not speeding up, or "
             f"(irregular) the envelope of the last "
             f"{self.envelope_blocks} blocks of ≥ 8 cycles agrees within "
-            f"{100 * self.envelope_tolerance:g} % and does not shrink; it is stick-slip if "
+            f"{100 * self.envelope_tolerance:g} % and does not shrink by more than "
+            f"{10 * self.envelope_tolerance:g} %; it is stick-slip if "
             f"the speed falls below {100 * self.stick_level:g} % of the command, oscillation "
             f"if not. Otherwise, at {self.max_duration:g} s: undecided. Frequency: 1 / mean "
             f"cycle period (command crossing to crossing) of the compared cycles; none is "
@@ -267,7 +293,8 @@ def _repeating(cycles: np.ndarray, rule: VerdictRule) -> tuple[int, int] | None:
     between quarters of the compared stretch (:func:`_converging`).  Otherwise an
     irregular (e.g. chaotic) oscillation counts as sustained when the envelope (highest and
     lowest speed) of ``envelope_blocks`` blocks of ≥ 8 cycles agrees within
-    ``envelope_tolerance`` and the ripple does not shrink block after block; multiplicity 0.
+    ``envelope_tolerance`` and the ripple does not shrink block after block by more than a
+    tenth of that tolerance; multiplicity 0.
     """
     n = cycles.shape[0]
     tol = rule.cycle_tolerance
@@ -293,9 +320,36 @@ def _repeating(cycles: np.ndarray, rule: VerdictRule) -> tuple[int, int] | None:
     scale = float(np.max(width))
     if (scale > 0.0 and np.ptp(high) <= rule.envelope_tolerance * scale
             and np.ptp(low) <= rule.envelope_tolerance * scale
-            and not np.all(np.diff(width) < 0)):
+            and not (np.all(np.diff(width) < 0)
+                     and width[0] - width[-1] > 0.1 * rule.envelope_tolerance * scale)):
         return k * size, 0
     return None
+
+
+def growing(t: np.ndarray, u: np.ndarray, a: float, b: float, rule: VerdictRule) -> bool:
+    """Whether the deviation ``u`` grows over [a, b]: the peak-to-peak of each of the last
+    ``rule.growth_run`` of ``rule.growth_blocks`` equal blocks exceeds the block's before.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Sample times [s].
+    u : numpy.ndarray
+        Speed deviation from the command, a fraction of |v_cmd| [-].
+    a, b : float
+        The stretch judged [s].
+    rule : VerdictRule
+        ``growth_blocks`` and ``growth_run``.
+
+    Returns
+    -------
+    bool
+        True if the deviation rises block after block up to ``b``.
+    """
+    edges = np.searchsorted(t, np.linspace(a, b, rule.growth_blocks + 1))
+    ptp = [float(np.ptp(u[i0:i1 + 1])) if i1 > i0 else 0.0
+           for i0, i1 in zip(edges[:-1], edges[1:], strict=True)]
+    return bool(np.all(np.diff(ptp[-rule.growth_run - 1:]) > 0.0))
 
 
 def trace_verdict(time: object, speed: object, command_speed: float,
@@ -353,7 +407,11 @@ def trace_verdict(time: object, speed: object, command_speed: float,
     # least min_compare_time; never the first cycle) repeat
     compare_from = t_end - max(0.5 * (t_end - float(t[0])), rule.min_compare_time)
     first = 1 + int(np.searchsorted(ups[1:], compare_from - 1e-12))  # never the first cycle
-    if ups.size - 1 - first >= rule.min_cycles:
+    # … and the compared cycles span min_compare_time: an oscillation that has only just
+    # grown across the hysteresis (its first few cycles agree to a fraction of a per cent
+    # when a fast mode grows slowly per cycle) is not yet a limit cycle
+    if ups.size - 1 - first >= rule.min_cycles \
+            and float(ups[-1] - ups[first]) >= rule.min_compare_time:
         stats = []
         for a, b in zip(ups[first:-1], ups[first + 1:], strict=True):
             i0, i1 = np.searchsorted(t, [a, b])
@@ -380,7 +438,8 @@ def trace_verdict(time: object, speed: object, command_speed: float,
     outside = np.flatnonzero(np.abs(u) > rule.smooth_band)
     inside_from = float(t[outside[-1] + 1]) if outside.size and outside[-1] + 1 < t.size \
         else (float(t[0]) if not outside.size else math.inf)
-    if t_end - inside_from >= settle:
+    rising = t_end - inside_from >= settle and growing(t, u, t_end - settle, t_end, rule)
+    if t_end - inside_from >= settle and not rising:
         decided_at = inside_from + settle
         ripple, low, stick = describe(inside_from, t_end)
         return TraceVerdict(SMOOTH, None, ripple, low, stick, periods.size, decided_at,
@@ -390,4 +449,5 @@ def trace_verdict(time: object, speed: object, command_speed: float,
     ripple, low, stick = describe(a, t_end)
     seen = 1.0 / float(np.mean(periods[-rule.min_cycles:])) if periods.size >= 2 else None
     return TraceVerdict(UNDECIDED, seen, ripple, low, stick, periods.size, None,
+                        "inside the band but the deviation is growing" if rising else
                         "neither a repeating cycle nor decayed yet")

@@ -17,7 +17,7 @@ from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..parameters import DriveParameters, ParameterError
-from ..solvers import dopri5, switching
+from ..solvers import dopri5, modes, switching
 from . import budget
 from .result import Result, Run
 
@@ -189,6 +189,36 @@ class SolverOptions:
                 continue
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"options.{name}", v, "expected a finite value > 0")
+
+    def describe(self) -> str:
+        """The integrator in words, with the numbers it runs with: the method, its step cap
+        (read from the solver's constants, :data:`feeddrive.solvers.modes.H_LAMBDA` and
+        :data:`~feeddrive.solvers.modes.ZETA_LIGHT` for ``modal``), the tolerances and the
+        output interval.  Reports print it beside the numbers that rest on it.
+
+        Returns
+        -------
+        str
+            One sentence.
+        """
+        methods = {
+            "modal": "DOPRI5/RODAS4 switched on stiffness, every step capped at h·|λ| ≤ "
+                     f"{modes.H_LAMBDA:g} on each oscillatory mode of the Jacobian "
+                     f"with damping ratio < {modes.ZETA_LIGHT:g}",
+            "dopri5": "adaptive Dormand–Prince 5(4)",
+            "auto": "DOPRI5/RODAS4 switched on Hairer's stiffness test, no mode cap",
+            "rodas4": "Rosenbrock RODAS4",
+            "dopri5-dense": "adaptive Dormand–Prince 5(4), dense output",
+            "dopri5-fixed": f"Dormand–Prince 5 at a fixed step of {self.fixed_step:g} s",
+            "rodas4-fixed": f"RODAS4 at a fixed step of {self.fixed_step:g} s",
+        }
+        largest = self.largest_step
+        steps = (f"steps ≤ {largest:g} s, " if math.isfinite(largest)
+                 and not self.method.endswith("-fixed") else "")
+        return (f"{self.method} ({methods[self.method]}); {steps}rtol {self.rtol:g}, "
+                f"absolute tolerances {self.position_tolerance:g} m (positions), "
+                f"{self.speed_tolerance:g} m/s (speeds), {self.current_tolerance:g} A "
+                f"(currents); output every {self.output_interval:g} s")
 
     @property
     def largest_step(self) -> float:

@@ -13,7 +13,7 @@ from markdown_it import MarkdownIt
 from .. import __version__
 from ..analysis import protocol
 from ..analysis.critical import format_bands, format_critical_speed
-from ..engine.simulate import DriveSystem
+from ..engine.simulate import DriveSystem, SolverOptions
 from ..io.outputs import atomic_path
 from ..model.friction.lugre_parameters import LuGreParameters
 from ..model.friction.stribeck import negative_slope_band, passivity_margin, sliding_stability
@@ -483,6 +483,41 @@ def run_text(results: dict[str, Any]) -> str:
             f"{total - reused} computed in this run" + note)
 
 
+def header_text(results: dict[str, Any], when: str) -> str:
+    """The report's first paragraph: version, date, the run (:func:`run_text`), the paper
+    and the integrator (:func:`integrator_text`).
+
+    Parameters
+    ----------
+    results : dict
+        Every study's stored results (``wall_time_s``, ``studies_reused``,
+        ``studies_total``).
+    when : str
+        The report's date and time.
+
+    Returns
+    -------
+    str
+        The paragraph.
+    """
+    return (f"feeddrive {__version__}, {when}, {run_text(results)}. {wang2021.CITATION}.  "
+            f"{integrator_text()}")
+
+
+def integrator_text() -> str:
+    """The integrator every number of the report rests on: every study runs the default
+    :class:`~feeddrive.engine.simulate.SolverOptions` (none passes its own; a test holds
+    the package to that), described by the options themselves.
+
+    Returns
+    -------
+    str
+        One sentence: ``"Integrator of every run: "`` and
+        :meth:`SolverOptions.describe() <feeddrive.engine.simulate.SolverOptions.describe>`.
+    """
+    return f"Integrator of every run: {SolverOptions().describe()}."
+
+
 def settings_markdown(settings: StudySettings) -> str:
     """The study settings as a reader's list in mm/s and s (not a Python repr in SI).
 
@@ -507,6 +542,7 @@ def settings_markdown(settings: StudySettings) -> str:
         f"* Fig. 7: v_n = {fig7} × the CDFS critical speed",
         f"* Figs. 9–10: sine {settings.sine_frequency:g} Hz, {settings.sine_periods:g} periods, "
         f"hollow-motor amplitudes v_np = {vnp} mm/s",
+        f"* integrator: {SolverOptions().describe()}",
     ])
 
 
@@ -651,8 +687,7 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
     def caption(name: str) -> str:
         return figures_mod.CAPTIONS.get(name, ("", name))[1]
 
-    header = (f"feeddrive {__version__}, {when}, {run_text(results)}. "
-              f"{wang2021.CITATION}.")
+    header = header_text(results, when)
     md = [f"# feeddrive reproduction of Wang2021 — parameter set `{params.name}`", "",
           header, ""]
     for key, title, text, rows in sections:

@@ -1,0 +1,66 @@
+"""Issue 21: the reproduction report states the integrator its numbers rest on — method,
+tolerances and step cap — read from the code, not written as a literal."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+import feeddrive.reproduce as reproduce_pkg
+from feeddrive.engine.simulate import METHODS, SolverOptions
+from feeddrive.reproduce.report import header_text, integrator_text, settings_markdown
+from feeddrive.reproduce.studies import StudySettings
+from feeddrive.solvers import modes, switching
+
+
+def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
+    options = SolverOptions()
+    text = options.describe()
+    assert text.startswith(f"{options.method} (")
+    for piece in (f"h·|λ| ≤ {modes.H_LAMBDA:g}",
+                  f"damping ratio < {modes.ZETA_LIGHT:g}",
+                  f"rtol {options.rtol:g}", f"{options.position_tolerance:g} m (positions)",
+                  f"{options.speed_tolerance:g} m/s (speeds)",
+                  f"{options.current_tolerance:g} A (currents)",
+                  f"output every {options.output_interval:g} s"):
+        assert piece in text, piece
+    # the compiled dense driver takes its cap from the modes module, as the label does
+    source = "\n".join(switching.template_sources())
+    assert "ZETA_LIGHT as MODAL_ZETA_LIGHT" in source and "H_LAMBDA as MODAL_H_LAMBDA" in source
+    assert "from feeddrive.solvers.modes import" in source
+
+
+def test_the_label_follows_the_code(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(modes, "H_LAMBDA", 0.123)
+    assert "h·|λ| ≤ 0.123 " in integrator_text()
+    assert "rtol 1e-08" in SolverOptions(rtol=1e-8).describe()
+    assert "steps ≤ 0.001 s" in SolverOptions(method="dopri5").describe()
+    assert "steps ≤ 0.0005 s" in SolverOptions(method="modal", max_step=5e-4).describe()
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_every_method_is_described(method: str) -> None:
+    assert SolverOptions(method=method).describe().startswith(f"{method} (")
+
+
+def test_the_report_header_and_settings_state_it() -> None:
+    text = integrator_text()
+    assert text == f"Integrator of every run: {SolverOptions().describe()}."
+    results = {"wall_time_s": 12.0, "studies_reused": 0, "studies_total": 84}
+    assert header_text(results, "2026-12-02 01:00 UTC").endswith(text)
+    assert f"* integrator: {SolverOptions().describe()}" in settings_markdown(StudySettings())
+
+
+def test_no_study_runs_other_options() -> None:
+    # the label is the default's: it holds only while no study passes its own options
+    root = Path(reproduce_pkg.__file__).parent
+    for path in sorted(root.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.Call):
+                continue
+            assert not any(k.arg == "options" for k in node.keywords), (path.name, node.lineno)
+            name = getattr(node.func, "id", getattr(node.func, "attr", ""))
+            if name == "SolverOptions":
+                assert not node.args and not node.keywords, (path.name, node.lineno)
