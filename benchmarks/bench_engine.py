@@ -112,20 +112,31 @@ def tighter(options: SolverOptions, factor: float) -> SolverOptions:
                          current_tolerance=options.current_tolerance / factor)
 
 
+_OUTPUT: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+
 def engine_states(system: DriveSystem, model: Model, profile: ConstantSpeed, duration: float,
                   options: SolverOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """What ``simulate`` does with an assembled ``model``, without aux signals or the
-    Dataset (the model is built once, as the baselines' ``ReferenceModel``)."""
+    Dataset (the model is built once, as the baselines' ``ReferenceModel``).  The output is
+    written into buffers reused from run to run (``switching.integrate(out=...)``, as a caller
+    running many integrations does; issue 21: a fresh 12-MB array per 100-s call costs its page
+    faults), so the arrays returned are valid until the next call."""
     grid = sampling(system.parameters, options.output_interval, model)
-    t_end = int(round(duration / grid.base)) * grid.base
+    n_break = int(round(duration / grid.base))
+    t_end = n_break * grid.base
     atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
                                  options.current_tolerance)
     mode, _ = _DENSE_MODES[options.method]
+    n_out = n_break // grid.out_every + 1
+    out = _OUTPUT.get((id(model), n_out))
+    if out is None:
+        out = _OUTPUT[(id(model), n_out)] = switching.new_output(model, n_out)
     t, y, _, stats, _ = switching.integrate(
         model, system.initial_vector(model), t_end, grid.out_every, grid.base, grid.schedule,
         options.rtol, atol, rel, 1e-6, math.inf, 1,
         options.max_steps, mode, profile_breakpoints(profile, t_end, grid.base),
-        want_aux=False)
+        want_aux=False, out=out)
     if int(stats[0]) != 0:
         raise RuntimeError(f"engine failed: status {int(stats[0])}")
     return t, y, stats

@@ -17,6 +17,13 @@ Run from the repository root::
 3. Prints and records the ratio (scipy estimate / feeddrive).
 
 Writes ``benchmarks/results/bench_reproduce.json``.
+
+``--profile DIR``: instead, run the whole study once into an empty folder with every task
+of the pool profiled (cProfile per task, ``DIR/<n>.prof``) and counted: CPU and wall
+seconds, simulated seconds and calls of the compiled integrators per task, written to
+``DIR/tasks.json`` with a summary by part and the merged cProfile's top functions
+(``DIR/top.txt``).  ``--out FOLDER`` keeps the reproduce output there (for
+``benchmarks/diff_reproduce.py``).
 """
 
 from __future__ import annotations
@@ -49,7 +56,126 @@ PARTS = {"crit": "critical-speed searches (Table 3, Fig. 8, step-down)",
          "fig8_trace": "figure studies"}
 
 
+def _label(fn: object, args: tuple) -> str:
+    name = getattr(fn, "__name__", str(fn))
+    if name == "_critical_job":
+        _, drive, position, nut, _, start = args[0]
+        return f"crit {drive} a={position:g} vn={1e3 * nut:g} {start}"
+    if name == "run_variant":
+        return f"study {args[0][0]} / {args[0][3]}"
+    if name == "run" and isinstance(args[0], tuple):
+        drive, vn, a, th = args[0]
+        return f"forced {drive} vn={1e3 * vn:g} a={a:g} thresholds={len(th)}"
+    if name == "reading_figures":
+        return f"readingfig {args[0]}"
+    return name
+
+
+def profile(folder: Path, out: Path | None, use_cprofile: bool = True) -> None:
+    """Run the study with every pool task profiled (see the module docstring).
+
+    Parameters
+    ----------
+    folder : Path
+        Where the per-task profiles and ``tasks.json`` go.
+    out : Path or None
+        The reproduce output folder (a temporary one when None).
+    use_cprofile : bool, default True
+        Profile each task with cProfile (its overhead inflates Python-heavy tasks several
+        times: the CPU seconds of ``--no-cprofile`` are the ones to quote).
+    """
+    import cProfile
+    import pstats
+
+    from feeddrive.reproduce import runner
+    from feeddrive.solvers import dopri5, switching
+
+    folder.mkdir(parents=True, exist_ok=True)
+    counters = {"sim_s": 0.0, "calls": 0, "integrate_cpu": 0.0}
+
+    def counted(original):  # type: ignore[no-untyped-def]
+        def integrate(model, y0, t_end, out_every, base, *args, **kw):  # type: ignore
+            began = time.process_time()
+            try:
+                return original(model, y0, t_end, out_every, base, *args, **kw)
+            finally:
+                counters["integrate_cpu"] += time.process_time() - began
+                counters["sim_s"] += t_end - kw.get("start", 0) * base
+                counters["calls"] += 1
+        return integrate
+
+    switching.integrate = counted(switching.integrate)
+    dopri5.integrate = counted(dopri5.integrate)
+
+    def timed(fn, *args):  # type: ignore[no-untyped-def]
+        for k in counters:
+            counters[k] = 0 if k == "calls" else 0.0
+        prof = cProfile.Profile() if use_cprofile else None
+        began, wall = time.process_time(), time.perf_counter()
+        if prof is not None:
+            prof.enable()
+        value = fn(*args)
+        if prof is not None:
+            prof.disable()
+        cpu, wall = time.process_time() - began, time.perf_counter() - wall
+        label = _label(fn, args)
+        n = f"{os.getpid()}-{time.monotonic_ns()}"
+        if prof is not None:
+            prof.dump_stats(str(folder / f"{n}.prof"))
+        with open(folder / "tasks.jsonl", "a") as fh:
+            fh.write(json.dumps({"task": label, "cpu_s": cpu, "wall_s": wall,
+                                 "prof": f"{n}.prof", **counters}) + "\n")
+        return value, cpu
+
+    timed.__qualname__ = timed.__name__ = "_profiled_timed"
+    globals()["_profiled_timed"] = timed
+    runner._timed = timed
+    (folder / "tasks.jsonl").unlink(missing_ok=True)
+    params = fd.preset("wang2021")
+    simulate(DriveSystem(params, "ddfs", 0.4), ConstantSpeed(1e-3, 16e-3), 0.05)  # warm-up
+    cpu0 = os.times()
+    with tempfile.TemporaryDirectory() as tmp:
+        target = out if out is not None else Path(tmp)
+        started = time.perf_counter()
+        run(params, target, workers=2, study=True)
+        wall = time.perf_counter() - started
+    cpu1 = os.times()
+    tasks = [json.loads(line) for line in (folder / "tasks.jsonl").read_text().splitlines()]
+    parts: dict[str, dict[str, float]] = {}
+    for t in tasks:
+        part = t["task"].split(" ")[0]
+        agg = parts.setdefault(part, {"cpu_s": 0.0, "sim_s": 0.0, "integrate_cpu": 0.0,
+                                      "tasks": 0})
+        for k in ("cpu_s", "sim_s", "integrate_cpu"):
+            agg[k] += t[k]
+        agg["tasks"] += 1
+    summary = {"wall_s": wall,
+               "cpu_s_children": (cpu1.children_user + cpu1.children_system)
+               - (cpu0.children_user + cpu0.children_system),
+               "cpu_s_parent": (cpu1.user + cpu1.system) - (cpu0.user + cpu0.system),
+               "cpu_s_tasks": sum(t["cpu_s"] for t in tasks),
+               "sim_s_tasks": sum(t["sim_s"] for t in tasks),
+               "load_average": os.getloadavg(), "parts": parts,
+               "tasks": sorted(tasks, key=lambda t: -t["cpu_s"])}
+    (folder / "tasks.json").write_text(json.dumps(summary, indent=1) + "\n")
+    if use_cprofile:
+        stats = pstats.Stats(*[str(folder / t["prof"]) for t in tasks])
+        with open(folder / "top.txt", "w") as fh:
+            stats.stream = fh  # type: ignore[attr-defined]
+            stats.sort_stats("tottime").print_stats(40)
+            stats.sort_stats("cumulative").print_stats(60)
+    print(json.dumps({k: v for k, v in summary.items() if k != "tasks"}, indent=1))
+    for t in summary["tasks"][:25]:
+        print(f"{t['cpu_s']:7.2f} s CPU {t['wall_s']:7.2f} s wall {t['sim_s']:8.0f} sim-s "
+              f"{t['integrate_cpu']:7.2f} s integrating  {t['task']}")
+
+
 def main() -> None:
+    if "--profile" in sys.argv:
+        i = sys.argv.index("--profile")
+        out = Path(sys.argv[sys.argv.index("--out") + 1]) if "--out" in sys.argv else None
+        profile(Path(sys.argv[i + 1]), out, use_cprofile="--no-cprofile" not in sys.argv)
+        return
     params = fd.preset("wang2021")
     simulate(DriveSystem(params, "ddfs", 0.4), ConstantSpeed(1e-3, 16e-3), 0.05)  # warm-up
     with tempfile.TemporaryDirectory() as tmp:

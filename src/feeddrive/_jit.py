@@ -9,6 +9,8 @@ all kernel sources: any change to any of them starts a fresh cache.
 ``error_model="numpy"``: float division follows IEEE (no Python ZeroDivisionError checks),
 about 25 % faster per right-hand-side evaluation; non-finite states are caught by the solver.
 
+Loading from the cache skips numba's *refresh* of its compiler (:class:`_LoadingCache`).
+
 ``nogil=True``: a compiled call releases Python's global interpreter lock while it runs, so
 other threads of the process keep going during a long solver call (the explorer's server
 answers its page's polls while a run computes: issue 23; measured in
@@ -26,6 +28,8 @@ from typing import Any
 
 from numba import config as _numba_config
 from numba import njit
+from numba.core.caching import FunctionCache
+from numba.core.runtime import rtsys
 
 config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
 
@@ -65,12 +69,35 @@ CACHE_DIR = _cache_dir()
 _CACHE_DIR = CACHE_DIR
 
 
+class _LoadingCache(FunctionCache):
+    """numba's on-disk cache of one function, loading without refreshing the compiler.
+
+    Before numba loads a cached function it *refreshes* its target context: it imports
+    every lowering module it has (``numba.np.linalg``, which imports ``scipy.linalg``,
+    ``numba.typed`` …) and installs their implementations and typing templates — what a
+    compilation needs, not a load: the cached object code is linked already, and it needs
+    the runtime's symbols only (``rtsys.initialize``, as the refresh does first).  That
+    refresh cost a fresh process more than its import of numba (0.3–0.4 s CPU, issue 21
+    item 4).  A compilation still refreshes in full (numba's compiler does it first), so a
+    cache miss, or any later compilation, is unchanged.
+    """
+
+    def load_overload(self, sig: Any, target_context: Any) -> Any:
+        rtsys.initialize(target_context)
+        with self._guard_against_spurious_io_errors():
+            return self._load_overload(sig, target_context)
+
+
 def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     def decorate(fn: Callable[..., Any]) -> Any:
         previous = config.CACHE_DIR
         config.CACHE_DIR = _CACHE_DIR  # read once, when the dispatcher sets up its cache
         try:
-            return njit(cache=True, error_model="numpy", nogil=True, **options)(fn)
+            # cache=True, with the loading cache: what numba's enable_caching() does with its
+            # own class (one cache object, not numba's made and then replaced)
+            dispatcher = njit(error_model="numpy", nogil=True, **options)(fn)
+            dispatcher._cache = _LoadingCache(fn)
+            return dispatcher
         finally:
             config.CACHE_DIR = previous
 

@@ -136,3 +136,136 @@ def test_the_run_header_names_the_position_where_the_model_uses_it() -> None:
                          ("rack-pinion", False)):
         head = run_header(drive, "constant", None, 1.0, 0.0, 400.0, 2.0, "p")
         assert ("position 400 mm" in head) is shown, head
+
+
+# ---- the edges ask the topology (issue 19 item 3: no ``drive == "…"`` outside the parts)
+
+
+def test_the_acting_sites_are_the_declared_ones_less_a_held_nut() -> None:
+    """The explorer's friction curves (and anyone else) ask the topology which sites act:
+    the locked CDFS's nut does not; the rack-and-pinion's gearbox does, without an edit."""
+    def keys(drive: str, params: fd.DriveParameters, nut_hold: str = "locked") -> set[str]:
+        topology = fd.DriveSystem(params, drive, 0.4, nut_hold=nut_hold).topology()
+        return {s.parameters_key for s in topology.acting_sites()}
+
+    assert keys("cdfs", W) == {"screw", "guide"}
+    assert keys("cdfs", W, "servo") == {"screw", "nut", "guide"}
+    assert keys("ddfs", W) == {"screw", "nut", "guide"}
+    assert keys("linear-motor", LM) == {"guide"}
+    assert keys("rack-pinion", RP) == {"rack_pinion.gearbox_friction", "guide"}
+
+
+def test_the_explorer_s_friction_curves_follow_the_declared_sites() -> None:
+    from feeddrive.explore.compute import _sites
+    from feeddrive.explore.settings import check
+
+    checked = check({"drive": "rack-pinion", "preset": "rack-pinion-example"})
+    assert checked.errors == {}, checked.errors
+    sites = _sites(checked)
+    assert set(sites) == {"gearbox", "guide"}
+    assert sites["gearbox"] == ("rack_pinion.gearbox_friction", RP.section("rack_pinion")
+                                .gearbox_friction)
+    assert "nut_speed" in checked.disabled  # the topology follows no nut reference
+    assert "nut_speed" not in check({"drive": "ddfs"}).disabled
+    # the friction-scale knob scales every site, the gearbox's in its part's section too
+    scaled = check({"drive": "rack-pinion", "preset": "rack-pinion-example",
+                    "friction_scale": "0.5"})
+    assert scaled.errors == {}, scaled.errors
+    assert scaled.params is not None
+    gearbox = RP.section("rack_pinion").gearbox_friction
+    assert scaled.params.section("rack_pinion").gearbox_friction == gearbox.scaled(0.5)
+    assert scaled.params.friction.guide == RP.friction.guide.scaled(0.5)
+
+
+def test_which_axes_follow_a_nut_reference() -> None:
+    """The nut axis and whether it runs are the topology's: the DDFS drives its nut, the
+    CDFS holds it (on its servo the axis runs at zero command), the others have none."""
+    def topology(drive: str, params: fd.DriveParameters, nut_hold: str = "locked"):
+        return fd.DriveSystem(params, drive, 0.4, nut_hold=nut_hold).topology()
+
+    assert topology("ddfs", W).follows_nut_reference()
+    assert not topology("cdfs", W).follows_nut_reference()
+    assert topology("cdfs", W, "servo").live_axes() == ("screw", "nut")
+    assert not topology("cdfs", W, "servo").follows_nut_reference()
+    assert topology("cdfs", W).live_axes() == ("screw",)
+    for drive, params in (("linear-motor", LM), ("rack-pinion", RP)):
+        assert topology(drive, params).nut_axis == ""
+        assert not topology(drive, params).follows_nut_reference()
+        assert topology(drive, params).live_axes() == ("motor",)
+
+
+@pytest.mark.parametrize("drive, params, path, reason", [
+    ("cdfs", W, "linear_motor.force_constant", "the CDFS has no linear motor"),
+    ("ddfs", W, "rack_pinion.mesh_stiffness", "the DDFS has no rack and pinion"),
+    ("linear-motor", LM, "screw.lead", "a linear-motor drive has no ball screw"),
+    ("linear-motor", LM, "hollow_controller.velocity_gain",
+     "a linear-motor drive has no ball screw"),
+    ("rack-pinion", RP, "screw_motor.inertia", "a rack-pinion drive has no ball screw"),
+    ("rack-pinion", RP, "linear_motor.forcer_mass", "a rack-pinion drive has no linear motor"),
+    ("cdfs", W, "hollow_motor.inertia", "the CDFS holds the nut (hollow motor locked)"),
+    ("cdfs", W, "friction.nut.bristle_stiffness",
+     "the CDFS holds the nut (hollow motor locked)"),
+    ("cdfs", W, "friction.ball_nut_share", "the CDFS holds the nut (hollow motor locked)"),
+    ("ddfs", W, "hollow_motor.inertia", None),
+    ("rack-pinion", RP, "rack_pinion.mesh_stiffness", None),
+    ("rack-pinion", RP, "table.mass", None),
+])
+def test_a_fit_refuses_what_the_topology_does_not_have(drive, params, path, reason) -> None:
+    """The fit's "has no effect" rules come from the topologies' declarations (their own
+    sections, what they hold), so a new topology's sections are known without an edit."""
+    from feeddrive.analysis.fit import _no_effect
+
+    assert _no_effect(params, drive, path, []) == reason
+
+
+def test_the_fit_reads_the_table_motor_the_topology_names() -> None:
+    """``fit``'s torque-to-current constant and a synthetic record's current are those of
+    the motor that drives the table (``Mechanism.table_axis``)."""
+    from feeddrive.analysis.fit import synthetic_experiment
+    from feeddrive.cli.fit_cmd import _table_motor_constant
+
+    assert _table_motor_constant(W, "cdfs", 0.4) == W.screw_motor.torque_constant
+    assert _table_motor_constant(LM, "linear-motor", 0.4) == LM.linear_motor.force_constant
+    rp = RP.section("rack_pinion")
+    assert _table_motor_constant(RP, "rack-pinion", 0.4) == rp.motor.torque_constant
+    record = synthetic_experiment(RP, 5e-3, 0.05, drive="rack-pinion")
+    assert set(record.signals) == {"table_position", "motor_current"}
+
+
+def test_the_compensation_study_runs_on_the_drives_that_declare_a_compensator() -> None:
+    """``compensate`` asks the topologies: a drive with a compensator and no driven nut,
+    with the drive of its topology that drives the nut as the alternative."""
+    from feeddrive.analysis.compensation import default_cases, study_drives
+    from feeddrive.cli.compensate_cmd import STUDY_DRIVES
+
+    assert study_drives(W) == {"cdfs": "ddfs", "linear-motor": None}
+    assert STUDY_DRIVES.split("|") == list(study_drives(W))  # what --help lists
+    cases = default_cases(0.2, drive="linear-motor", alternative=None)
+    assert [c.drive for c in cases] == ["linear-motor"] * 7
+    assert cases[0].label == "LINEAR-MOTOR, no compensation"
+    paper = [c.label for c in default_cases(0.2)]
+    assert (paper[0], paper[-1]) == ("CDFS, no compensation", "DDFS, v_n = 16 mm/s")
+
+
+def test_the_result_title_names_the_position_where_the_model_uses_it() -> None:
+    from feeddrive.plots.result import run_title
+
+    for drive, params, shown in (("cdfs", W, True), ("rack-pinion", RP, False)):
+        run = fd.simulate(fd.DriveSystem(params, drive, 0.4), ConstantSpeed(1e-3), 0.01)
+        assert (", position 400 mm" in run_title(run)) is shown, run_title(run)
+
+
+def test_a_sweep_runs_any_registered_drive_and_asks_it_about_the_nut() -> None:
+    """A sweep's drive takes every registered drive; a drive that follows no nut speed (its
+    topology's ``nut_driven_drives``) shares one result across nut speeds."""
+    from feeddrive.sweep import parse_config
+
+    def keys(config: dict) -> int:
+        return len({p.key for p in parse_config(config, "study.toml").points()})
+
+    assert keys({"drive": "rack-pinion", "preset": "rack-pinion-example",
+                 "axes": {"nut_speed": [2, 10]}}) == 1
+    assert keys({"drive": "ddfs", "axes": {"nut_speed": [2, 10]}}) == 2
+    assert keys({"drive": "cdfs", "axes": {"nut_speed": [2, 10]}}) == 1
+    with pytest.raises(ParameterError, match="rack-pinion"):
+        parse_config({"axes": {"drive": ["gantry"]}}, "study.toml").points()

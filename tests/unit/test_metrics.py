@@ -202,3 +202,46 @@ def test_steady_window_skips_a_decaying_start_up_oscillation() -> None:
     stick_slip = np.where((t % 0.5) < 0.25, 0.0, 2 * v0)
     assert steady_window(t, stick_slip, v0) == steady_window(t, stick_slip, v0, persistence=0.0)
     assert creep_metrics(t, stick_slip, v0).verdict == "creeping"
+
+
+def _traces() -> list[tuple[np.ndarray, float]]:
+    """Traces of the kinds the creep window sees: noise, a ripple on a ramp, a random walk,
+    stick-slip with jitter; odd and even lengths, the engine's 1-ms grid and others."""
+    rng = np.random.default_rng(20261202)
+    out = []
+    for trial in range(120):
+        n = int(rng.integers(10, 6000))
+        dt = (1e-3, 2e-3, 5e-4, float(rng.uniform(1e-4, 1e-2)))[trial % 4]
+        t = np.arange(n) * dt
+        kind = trial % 4
+        if kind == 0:
+            x = rng.normal(size=n)
+        elif kind == 1:
+            x = (2e-3 + 1e-3 * np.sin(2 * np.pi * rng.uniform(0.5, 50) * t)
+                 + 1e-7 * rng.normal(size=n) + 1e-4 * t)
+        elif kind == 2:
+            x = np.cumsum(rng.normal(size=n)) * 1e-5
+        else:
+            x = (np.where(np.sin(2 * np.pi * rng.uniform(1, 20) * t) > 0.3, 0.0, 4e-3)
+                 + 1e-9 * rng.normal(size=n))
+        out.append((x, dt))
+    return out
+
+
+def test_hann_periodogram_is_scipys_bit_for_bit() -> None:
+    """The creep window's periodogram is computed with numpy so that a short `simulate` does not
+    import scipy.signal (issue 21 item 4); every reported stick-slip frequency must stay the
+    same to the last bit: scipy.signal.periodogram (window "hann", detrend "linear", the
+    padded FFT length the metrics use) is the reference."""
+    from scipy.signal import periodogram
+
+    from feeddrive.analysis.creep_window import hann_periodogram
+
+    for x, dt in _traces():
+        nfft = 1 << math.ceil(math.log2(8 * x.size))
+        for size in (nfft, nfft + 1):  # the metrics' power of two, and an odd length
+            f_ref, p_ref = periodogram(x, fs=1.0 / dt, window="hann", detrend="linear",
+                                       nfft=size)
+            f, p = hann_periodogram(x, 1.0 / dt, size)
+            assert np.array_equal(f, f_ref)
+            assert np.array_equal(p, p_ref)

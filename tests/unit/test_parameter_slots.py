@@ -117,7 +117,7 @@ def test_params_slots_prints_the_models_record():
     assert shown == [n for n in model.parameter_names if not n.startswith("profile[")]
     assert "table.mass" in shown and text[shown.index("table.mass")].endswith("[kg]")
     # the help lists the registered drives
-    assert params_cmd._DRIVES == "|".join(registry.names(registry.MECHANISMS))
+    assert params_cmd.ALL_DRIVES == "|".join(registry.names(registry.MECHANISMS))
 
 
 def test_the_reproduction_report_writes_the_models_slots():

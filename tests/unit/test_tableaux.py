@@ -154,16 +154,26 @@ def test_the_schedule_merges_clocks_as_breakpoint_counts() -> None:
 def test_the_drivers_have_the_step_written_in_and_the_fmu_calls_it() -> None:
     """dopri5's and the dense driver's text hold the DOPRI5 step's statements in place of the
     call (steps.inline_steps); the FMU's integrator, which the C translator reads, calls the
-    same step function."""
+    same step function.  All three are the one driver (feeddrive.solvers.driver) specialised:
+    the explicit-only uses hold none of the RODAS4 / eigen-analysis code."""
     from feeddrive.fmu import solver as fmu_solver
-    from feeddrive.solvers import dopri5, switching
+    from feeddrive.solvers import dopri5, driver, switching
 
-    stage = "yt[i] = y[i] + h_try * 0.2 * k1[i]"  # the first stage, h renamed to h_try
+    stage = "yt[i] = y[i] + h_try * 0.2 * f0[i]"  # the first stage, h renamed to h_try
     for text in (dopri5.template_sources()[2], switching.template_sources()[-1]):
         assert "_dp5_step(" not in text and "_dp5_error(" not in text
         assert "0.0012326388888888888" in text  # the first error weight, 71/57600
-    assert stage in dopri5.template_sources()[2]
-    assert stage.replace("k1", "f0") in switching.template_sources()[-1]
+        assert stage in text
     assert "_dp5_step(" in fmu_solver.template_source()
+    for use, text in (("integrate", dopri5.template_sources()[2]),
+                      ("integrate_dense", switching.template_sources()[-1]),
+                      ("advance", fmu_solver.template_source())):
+        assert f"def {use}(" in text and "driver_template specialised" in text
+    for text in (dopri5.template_sources()[2], fmu_solver.template_source()):
+        body = text.split('"""')[-1]  # after the docstring
+        for name in ("_r4_", "modal_step_cap", "stiff", "MODE_", "LAND", "DENSE", "COMM"):
+            assert name not in body, name
+    assert "_r4_rodas4_step(" in switching.template_sources()[-1]
+    assert "stops" not in driver.source("advance") and "t_out" not in driver.source("advance")
     with pytest.raises(ValueError, match="positional arguments"):
         steps.inline_steps("def f(h, k):\n    _dp5_error(h, k)\n")

@@ -16,11 +16,10 @@ import numpy as np
 
 from ..engine.simulate import DriveSystem, simulate
 from ..model.loops import Compensation
+from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters
-from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
 from .cycle_verdict import VerdictRule
-from .linear import stability_band
 
 
 @dataclass(frozen=True)
@@ -32,7 +31,7 @@ class Case:
     label : str
         The case's name in the report.
     drive : str
-        ``"cdfs"`` or ``"ddfs"``.
+        The drive (``"cdfs"``, or the alternative ``"ddfs"``).
     compensation : Compensation
         The compensator and its model mismatch.
     nut_speed : float, default 0.0
@@ -44,15 +43,22 @@ class Case:
     nut_speed: float = 0.0  # [m/s]
 
 
-def default_cases(mismatch: float = 0.2, nut_speed: float = 16e-3) -> list[Case]:
-    """None, exact, ±``mismatch`` on F_c, F_s and v_s, for both compensators; and the DDFS.
+def default_cases(mismatch: float = 0.2, nut_speed: float = 16e-3, *, drive: str = "cdfs",
+                  alternative: str | None = "ddfs") -> list[Case]:
+    """None, exact, ±``mismatch`` on F_c, F_s and v_s, for both compensators; and the
+    alternative with its nut driven (the DDFS).
 
     Parameters
     ----------
     mismatch : float, default 0.2
         Relative error of the compensator's F_c, F_s and v_s [-].
     nut_speed : float, default 0.016
-        Nut speed of the DDFS case [m/s].
+        Nut speed of the alternative's case [m/s].
+    drive : str, default "cdfs"
+        The drive compensated (one of :func:`study_drives`).
+    alternative : str or None, default "ddfs"
+        The drive of the same topology with its nut driven (:func:`study_drives`); None: no
+        such case.
 
     Returns
     -------
@@ -61,25 +67,69 @@ def default_cases(mismatch: float = 0.2, nut_speed: float = 16e-3) -> list[Case]
     """
     up, down = 1.0 + mismatch, 1.0 - mismatch
     pct = f"{100 * mismatch:g} %"
-    cases = [Case("CDFS, no compensation", "cdfs", Compensation())]
+    name = drive.upper()
+    cases = [Case(f"{name}, no compensation", drive, Compensation())]
     for mode in ("feedforward", "observer"):
-        cases.append(Case(f"CDFS + {mode}, exact model", "cdfs", Compensation(mode=mode)))
-        cases.append(Case(f"CDFS + {mode}, model +{pct}", "cdfs", Compensation(
+        cases.append(Case(f"{name} + {mode}, exact model", drive, Compensation(mode=mode)))
+        cases.append(Case(f"{name} + {mode}, model +{pct}", drive, Compensation(
             mode=mode, coulomb_scale=up, static_scale=up, stribeck_velocity_scale=up)))
-        cases.append(Case(f"CDFS + {mode}, model −{pct}", "cdfs", Compensation(
+        cases.append(Case(f"{name} + {mode}, model −{pct}", drive, Compensation(
             mode=mode, coulomb_scale=down, static_scale=down, stribeck_velocity_scale=down)))
-    cases.append(Case(f"DDFS, v_n = {1e3 * nut_speed:g} mm/s", "ddfs", Compensation(),
-                      nut_speed))
+    if alternative is not None:
+        cases.append(Case(f"{alternative.upper()}, v_n = {1e3 * nut_speed:g} mm/s",
+                          alternative, Compensation(), nut_speed))
     return cases
 
 
-def _with(params: DriveParameters, case: Case) -> DriveParameters:
+def study_drives(params: DriveParameters) -> dict[str, str | None]:
+    """The drives the study compensates, each with its alternative, as the topologies declare
+    them: a drive whose topology has a friction compensator (``Mechanism.compensation``) and
+    which drives no nut, and the drive of the same topology that drives its nut.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+
+    Returns
+    -------
+    dict of str to (str or None)
+        Drive → its alternative (None: its topology has no drive with a driven nut).
+    """
+    out: dict[str, str | None] = {}
+    for name in drive_names():
+        topology = mechanism(name)
+        if topology.compensation is Mechanism.compensation:
+            continue  # no compensator declared
+        if topology(params, name, 0.4, "locked").follows_nut_reference():
+            continue
+        out[name] = next((d for d in topology.drives
+                          if topology(params, d, 0.4, "locked").follows_nut_reference()), None)
+    return out
+
+
+def case_parameters(params: DriveParameters, case: Case) -> DriveParameters:
+    """The parameter set of one case: ``params`` with the case's compensator.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    case : Case
+        The case.
+
+    Returns
+    -------
+    DriveParameters
+        ``params`` with ``controller.compensation`` set to the case's.
+    """
     return params.replace_path("controller.compensation", case.compensation)
 
 
 def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4,
              tracking_speed: float = 1.0e-3, duration: float = 12.0,
-             search: bool = True, rule: VerdictRule | None = None) -> dict[str, Any]:
+             search: bool = True, rule: VerdictRule | None = None,
+             found: dict[str, Any] | None = None) -> dict[str, Any]:
     """One row of the study (SI inside, mm and µm in the keys' units).  The tracking run
     lasts ``duration`` [s]; its verdict and every critical-speed trial follow ``rule``.
 
@@ -99,6 +149,10 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         Also search the critical speed.
     rule : VerdictRule, optional
         The creep-verdict rule.
+    found : dict, optional
+        The case's critical-speed search already made elsewhere (``CriticalSpeed.to_dict``
+        of :func:`~feeddrive.analysis.critical.critical_speed_from_rest` on this case's system
+        and nut speed with the protocol's grid and ``rule``): used instead of searching again.
 
     Returns
     -------
@@ -106,7 +160,11 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         The case, its critical speed [mm/s], linear creep bands [mm/s], verdict at the
         tracking speed and rms following error [µm].
     """
-    system = DriveSystem(_with(params, case), case.drive, table_position)
+    system = DriveSystem(case_parameters(params, case), case.drive, table_position)
+    # imported here: `simulate` imports this module for observer_gain_warning alone
+    from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
+    from .linear import stability_band
+
     band = stability_band(system, case.nut_speed, points=25)
     trial = creep_trial(system, tracking_speed, nut_speed=case.nut_speed, rule=rule)
     run = simulate(system, ConstantSpeed(tracking_speed, case.nut_speed), duration)
@@ -123,14 +181,17 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         "following_error_peak_um": 1e6 * float(np.max(np.abs(err))),
     }
     if search:
-        crit = critical_speed_from_rest(system, nut_speed=case.nut_speed, rule=rule)
-        row["critical_speed_mm_s"] = format_critical_speed(crit.to_dict())
+        if found is None:
+            found = critical_speed_from_rest(system, nut_speed=case.nut_speed,
+                                             rule=rule).to_dict()
+        row["critical_speed_mm_s"] = format_critical_speed(found)
     return row
 
 
 def compensation_study(params: DriveParameters, cases: list[Case] | None = None, *,
                        search: bool = True,
                        progress: Callable[[int, int], None] | None = None,
+                       found: dict[int, dict[str, Any]] | None = None,
                        **kwargs: Any) -> list[dict[str, Any]]:
     """Evaluate every case of the friction-compensation study (:func:`evaluate`).
 
@@ -144,6 +205,8 @@ def compensation_study(params: DriveParameters, cases: list[Case] | None = None,
         Also search each case's critical speed.
     progress : callable, optional
         ``progress(done, total)`` after each case.
+    found : dict of int to dict, optional
+        Critical-speed searches already made, by case index (see :func:`evaluate`).
     **kwargs
         Passed to :func:`evaluate` (table position, tracking speed, duration, rule).
 
@@ -155,13 +218,15 @@ def compensation_study(params: DriveParameters, cases: list[Case] | None = None,
     cases = cases if cases is not None else default_cases()
     rows = []
     for k, case in enumerate(cases):
-        rows.append(evaluate(params, case, search=search, **kwargs))
+        rows.append(evaluate(params, case, search=search, found=(found or {}).get(k),
+                             **kwargs))
         if progress:
             progress(k + 1, len(cases))
     return rows
 
 
-__all__ = ["Case", "compensation_study", "default_cases", "evaluate"]
+__all__ = ["Case", "case_parameters", "compensation_study", "default_cases", "evaluate",
+           "study_drives"]
 
 
 def observer_gain_warning(system: DriveSystem, table_speed: float, nut_speed: float = 0.0

@@ -50,6 +50,7 @@ __all__ = [
     "CreepThresholds",
     "creep_metrics",
     "frequency_label",
+    "hann_periodogram",
     "steady_window",
 ]
 
@@ -346,6 +347,51 @@ def steady_window(
 
 
 
+def hann_periodogram(x: np.ndarray, fs: float, nfft: int) -> tuple[np.ndarray, np.ndarray]:
+    """One-sided power spectral density of a linearly detrended trace, periodic Hann window.
+
+    The same numbers, to the last bit, as ``scipy.signal.periodogram(x, fs=fs,
+    window="hann", detrend="linear", nfft=nfft)`` (scipy 1.17: its least-squares detrend,
+    the window scaled to unit power, the squared magnitude doubled except at zero and
+    Nyquist), computed with numpy alone: importing ``scipy.signal`` costs a short
+    ``feeddrive simulate`` more time than its run (issue 21 item 4;
+    tests/unit/test_metrics.py compares the two bit for bit).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Uniformly sampled trace, 1-D [any unit].
+    fs : float
+        Sampling frequency [Hz].
+    nfft : int
+        FFT length [-], ≥ ``x.size`` (the trace is zero-padded to it).
+
+    Returns
+    -------
+    freq : numpy.ndarray
+        Frequencies of the ``nfft // 2 + 1`` bins [Hz].
+    power : numpy.ndarray
+        Power spectral density at those frequencies [unit²/Hz].
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    # scipy.signal.detrend(type="linear"): the least-squares line over A = [k/n, 1]
+    basis = np.ones((n, 2))
+    basis[:, 0] = np.arange(1, n + 1, dtype=float) / n
+    column = x.reshape(n, 1)
+    coef = np.linalg.lstsq(basis, column, rcond=None)[0]
+    detrended = (column - basis @ coef).reshape(n)
+    # scipy.signal.get_window("hann", n): the symmetric window of n + 1 points, last dropped
+    window = (0.5 + 0.5 * np.cos(np.linspace(-np.pi, np.pi, n + 1)))[:-1]
+    period = 1 / fs
+    # scaled to unit power (scipy's ShortTimeFFT "psd" scaling; its sum is Python's, in order)
+    window = window * (1 / np.sqrt(sum(window**2) / period))
+    spectrum = np.fft.rfft(detrended * window, n=nfft)
+    power = spectrum.real**2 + spectrum.imag**2
+    power[1:-1 if nfft % 2 == 0 else None] *= 2
+    return np.fft.rfftfreq(nfft, period), power
+
+
 def _dominant_frequency(t: np.ndarray, s: np.ndarray, ripple_ratio: float,
                         thresholds: CreepThresholds) -> float | None:
     """Periodogram peak [Hz] of the linearly detrended speed, or None (see thresholds)."""
@@ -355,9 +401,7 @@ def _dominant_frequency(t: np.ndarray, s: np.ndarray, ripple_ratio: float,
     n = x.size
     pad = 8
     nfft = 1 << int(math.ceil(math.log2(pad * n)))
-    from scipy.signal import periodogram  # imported here: keeps `feeddrive --help` fast
-
-    freq, power = periodogram(x, fs=1.0 / dt, window="hann", detrend="linear", nfft=nfft)
+    freq, power = hann_periodogram(x, 1.0 / dt, nfft)
     span = n * dt
     usable = freq >= 2.0 / span  # a period must fit at least twice into the window
     total = float(np.sum(power[1:]))
@@ -385,6 +429,7 @@ def creep_metrics(
     *,
     thresholds: CreepThresholds | None = None,
     window: tuple[float, float] | None = None,
+    frequency: bool = True,
 ) -> CreepMetrics:
     """Creep metrics of a table-speed trace.
 
@@ -404,6 +449,9 @@ def creep_metrics(
         Verdict limits; :class:`CreepThresholds` defaults when None.
     window : tuple of float or None, default None
         (start, end) of the part to assess [s]; :func:`steady_window` when None.
+    frequency : bool, default True
+        Also find the ripple frequency (a padded periodogram, ~3 ms for 6 000 samples); with
+        False ``stick_slip_frequency`` is None and every other field is the same.
 
     Returns
     -------
@@ -439,7 +487,7 @@ def creep_metrics(
     min_ratio = float(np.min(along) / ref)
     max_ratio = float(np.max(along) / ref)
     stick = time_below(tw, along, th.stick_level * ref) / duration
-    freq = _dominant_frequency(tw, along, ripple, th)
+    freq = _dominant_frequency(tw, along, ripple, th) if frequency else None
     creeping = stick > th.max_stick_fraction or ripple > th.max_ripple_ratio
     peak = float(np.max(np.abs(vw))) / ref
     unstable = peak > th.max_speed_ratio or mean_speed / vc < -1.0

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from .. import units
-from ..engine.simulate import DriveSystem, Simulation, SolverOptions, simulate
+from ..engine.simulate import DriveSystem, Simulation, SolverOptions
 from ..model.reference import ConstantSpeed, _staircase
 from . import protocol
 from .cycle_verdict import TraceVerdict, VerdictRule, trace_verdict
@@ -704,12 +704,17 @@ def judge_staircase(time: np.ndarray, speed: np.ndarray, speeds: np.ndarray,
 
 def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_speed: float = 0.0,
               rule: VerdictRule | None = None, options: SolverOptions | None = None,
-              stop_after: int | None = None) -> tuple[list[CreepTrial], float]:
+              stop_after: int | None = None, runs: list[Simulation] | None = None,
+              ) -> tuple[list[CreepTrial], float]:
     """One continuous run from rest at ``speeds[0]`` stepping down through ``speeds`` [m/s],
     each step held until decided: its dwell doubles from ``rule.initial_duration`` up to
-    ``rule.max_duration``, and the run is re-simulated from the start with the longer dwell
-    (the history before the step is unchanged).  ``stop_after``: stop at the first step after
-    that index whose kind differs from that step's.  Returns (trials, simulated time [s]).
+    ``rule.max_duration``, and the run is simulated again with the longer dwell — not from the
+    start: the history before the step is unchanged, so the run continues from the state the
+    previous run had at its last chunk end before the profiles part
+    (:meth:`~feeddrive.engine.simulate.Simulation.resume`; bit-identical to a run from rest).
+    ``stop_after``: stop at the first step after that index whose kind differs from that
+    step's.  Returns (trials, simulated time [s]: the seconds integrated, the shared
+    beginnings counted once).
 
     Parameters
     ----------
@@ -725,6 +730,9 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
         The solver options.
     stop_after : int, optional
         Stop at the first step after this index whose kind differs from its own.
+    runs : list of Simulation, optional
+        Earlier staircase runs of this system to continue from where a profile begins as
+        theirs (the search's coarse walk for its fine walks); the walk's last run is added.
 
     Returns
     -------
@@ -746,12 +754,18 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
         return (stop_after is not None and len(trials) > stop_after + 1
                 and trials[-1].kind != trials[stop_after].kind)
 
+    earlier = list(runs or [])
+    last: Simulation | None = None
     while not done():
         dwell = [levels[i] for i in level]
         profile, starts = _staircase(sp, dwell, 0.0, nut_speed)
         duration = float(profile.time[-1])
-        result = simulate(system, profile, duration, options=options)
-        simulated += duration
+        sim = Simulation(system, profile, options)
+        sim.keep_checkpoints()
+        resumed = _resume(sim, [*earlier, *([last] if last is not None else [])])
+        result = sim.run(duration)
+        last = sim
+        simulated += duration - resumed
         if result.solver_stats.get("diverged"):  # every step from the divergence on
             reached = float(result.time[-1])
             for k in range(len(trials), len(sp)):
@@ -770,7 +784,20 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
             trials.append(steps[k])
             if done():
                 break
+    if runs is not None and last is not None:
+        runs.append(last)
     return trials, simulated
+
+
+def _resume(sim: Simulation, candidates: list[Simulation]) -> float:
+    """Resume ``sim`` from the candidate whose committed history it shares longest; the
+    time it resumes from [s] (0: from rest)."""
+    best, at = None, 0.0
+    for other in candidates:
+        t = sim.resumable_from(other)
+        if t > at:
+            best, at = other, t
+    return sim.resume(best) if best is not None else 0.0
 
 
 def critical_speed_stepdown(
@@ -819,8 +846,9 @@ def critical_speed_stepdown(
         raise ValueError(f"start_speed = {hi!r}: expected above lowest_speed = {lo!r} [m/s]")
     rule = rule or VerdictRule()
     coarse = _grid(lo, hi, coarse_step)[::-1]
+    runs: list[Simulation] = []  # the coarse walk's last run: the fine walks start from it
     coarse_trials, simulated = walk_down(system, coarse, nut_speed=nut_speed, rule=rule,
-                                         options=options)
+                                         options=options, runs=runs)
     found: dict[float, CreepTrial] = {round(t.speed, 12): t for t in coarse_trials}
     for i in range(len(coarse_trials) - 1):
         upper, lower = coarse_trials[i], coarse_trials[i + 1]
@@ -828,7 +856,8 @@ def critical_speed_stepdown(
             continue
         fine = np.round(np.arange(upper.speed - step, lower.speed - step / 2, -step), 12)
         fine_trials, t_fine = walk_down(system, [*coarse[:i + 1], *fine], nut_speed=nut_speed,
-                                        rule=rule, options=options, stop_after=i)
+                                        rule=rule, options=options, stop_after=i,
+                                        runs=runs[:1])
         simulated += t_fine
         # the fine walk's own steps, down to its first change of kind
         for tr in fine_trials[i + 1:]:

@@ -222,14 +222,10 @@ def _up_crossings(t: np.ndarray, u: np.ndarray, hysteresis: float) -> np.ndarray
     s = state[idx]
     events = idx[1:][(s[1:] == 1) & (s[:-1] == -1)]  # first sample above +h after −h
     zero_up = np.flatnonzero((u[:-1] <= 0.0) & (u[1:] > 0.0))
-    out = []
-    for e in events:
-        k = int(np.searchsorted(zero_up, e, side="left")) - 1
-        if k < 0:
-            continue
-        i = int(zero_up[k])
-        out.append(t[i] + (t[i + 1] - t[i]) * (-u[i]) / (u[i + 1] - u[i]))
-    return np.asarray(out, dtype=float)
+    # the last upward zero crossing before each event (events with none before are dropped)
+    k = np.searchsorted(zero_up, events, side="left") - 1
+    i = zero_up[k[k >= 0]]
+    return (t[i] + (t[i + 1] - t[i]) * (-u[i]) / (u[i + 1] - u[i])).astype(float)
 
 
 def _extremum(x: np.ndarray, i0: int, i1: int, sign: float) -> float:

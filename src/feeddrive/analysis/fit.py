@@ -346,20 +346,22 @@ def free_parameter_bounds(params: DriveParameters, path: str) -> tuple[float, fl
 def _no_effect(params: DriveParameters, drive: str, path: str,
                experiments: Sequence[Experiment]) -> str | None:
     """Why ``path`` cannot change the simulated traces, or None (checked before any run)."""
+    from ..model.mechanisms import drive_names, mechanism
+
     head = path.split(".")
     directions = set().union(*(e.direction() for e in experiments)) if experiments else set()
-    nut_driven = drive == "ddfs" and any(
+    # the topology as the fit builds it (nut locked); what it declares decides
+    topology = mechanism(drive)(params, drive, 0.4, "locked")
+    nut_driven = topology.follows_nut_reference() and any(
         e.nut_speed is not None and np.any(e.nut_speed != 0) for e in experiments)
-    if drive in ("cdfs", "ddfs") and head[0] == "linear_motor":
-        return f"the {drive.upper()} has no linear motor"
-    if drive == "linear-motor" and head[0] in ("screw", "coupling", "screw_motor",
-                                               "hollow_motor", "hollow_controller"):
-        return "a linear-motor drive has no ball screw"
-    if drive == "cdfs" and (head[0] in ("hollow_motor", "hollow_controller")
-                            or path == "screw.nut_inertia"
-                            or (head[:2] == ["friction", "nut"])
-                            or path == "friction.ball_nut_share"):
-        return "the CDFS holds the nut (hollow motor locked)"
+    if head[0] not in topology.own_sections:  # a section of another topology's parts
+        owner = next((m for m in map(mechanism, drive_names()) if head[0] in m.own_sections),
+                     None)
+        if owner is not None:
+            return f"{type(topology).drive_label(drive)} has no {owner.part_name}"
+    held, why = topology.held_parameters()
+    if any(path == p or path.startswith(p + ".") for p in held):
+        return why
     if len(head) >= 4 and head[0] == "friction" and head[2] in ("positive", "negative"):
         sign = 1 if head[2] == "positive" else -1
         if directions and sign not in directions and not (nut_driven and head[1] != "guide"):
@@ -1016,10 +1018,10 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
         if not meta.get("low_inclusive", False):
             lb[i] = lb[i] * (1 + 1e-9) if lb[i] > 0 else lb[i] + 1e-12
         units_.append(str(meta["unit"]))
+    system = DriveSystem(base, drive=drive, table_position=table_position)  # validates both
     for e in experiments:
-        if e.nut_speed is not None and drive != "ddfs":
+        if e.nut_speed is not None and not system.topology().follows_nut_reference():
             raise FitError(f"{e.source}: commands a nut speed; only the DDFS drives its nut")
-    DriveSystem(base, drive=drive, table_position=table_position)  # validates drive/position
     theta0 = np.ones(len(free))
 
     longest = max(e.span for e in experiments)
@@ -1250,7 +1252,7 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     x = np.asarray(result["table_position"])
     if position_quantum > 0:
         x = np.round(x / position_quantum) * position_quantum
-    cur_name = "motor_current" if drive == "linear-motor" else "screw_current"
+    cur_name = f"{system.topology().table_axis}_current"  # the table-driving motor's
     i = np.asarray(result[cur_name])
     i = i + current_noise * float(np.sqrt(np.mean(i ** 2))) * rng.standard_normal(i.size)
     ref = np.asarray(result["table_speed_reference"])

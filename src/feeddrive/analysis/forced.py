@@ -90,7 +90,8 @@ def ripple_point(system: DriveSystem, speed: float, nut_speed: float = 0.0, *,
         The ripple.
     """
     r = simulate(system, ConstantSpeed(speed, nut_speed), duration, options=options)
-    m = creep_metrics(r.time, r["table_speed"], speed, window=(duration / 2.0, duration))
+    m = creep_metrics(r.time, r["table_speed"], speed, window=(duration / 2.0, duration),
+                      frequency=False)  # the frequency is not part of the point
     return ForcedRipplePoint(speed, m.ripple_ratio, m.min_ratio, m.mean_speed / speed,
                              m.min_ratio <= 0.0)
 

@@ -45,14 +45,13 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
-from scipy import optimize
 
 from ..engine.simulate import DriveSystem
 from ..model.assemble import Model
 from ..model.disturbances import LeadError, TorqueRipple
 from ..model.friction.lugre_parameters import LuGreParameters
 from ..model.loops import INJ_CURRENT, INJ_SPEED
-from ..model.mechanisms import Mechanism, mechanism
+from ..model.mechanisms import mechanism
 from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
 from ..parameters import ParameterError, SiteParameters
 from . import protocol
@@ -210,10 +209,25 @@ def classify_poles(eigenvalues: np.ndarray) -> list[Pole]:
     return sorted(poles, key=lambda p: p.frequency_hz)
 
 
-def _mechanism(system: DriveSystem) -> Mechanism:
-    """The drive's topology, which declares its steady motion and what it holds still."""
-    return mechanism(system.drive)(system.parameters, system.drive, system.table_position,
-                                   system.nut_hold)
+def dominant_pole(poles: list[Pole]) -> Pole:
+    """The least-damped oscillatory pole pair of classified poles (:func:`classify_poles`):
+    the mode friction destabilises first; the rigid-body poles are never it; without an
+    oscillatory pole, the slowest real one.
+
+    Parameters
+    ----------
+    poles : list of Pole
+        The classified poles.
+
+    Returns
+    -------
+    Pole
+        The dominant pole (Im > 0 for a pair).
+    """
+    modes = [p for p in poles if not p.rigid_body] or list(poles)
+    osc = [p for p in modes if p.imag > 1e-6]
+    return min(osc, key=lambda p: p.damping_ratio) if osc else min(
+        modes, key=lambda p: -p.real)
 
 
 def _no_friction(site: Any) -> LuGreParameters:
@@ -249,7 +263,7 @@ def _check_continuous(system: DriveSystem) -> None:
 
 def _live_states(model: Model, system: DriveSystem) -> list[int]:
     """States that move: the states a drive holds still (the CDFS's locked nut) are dropped."""
-    frozen, _ = _mechanism(system).held()
+    frozen, _ = system.topology().held()
     return [k for k, name in enumerate(model.state_names) if not name.startswith(frozen)]
 
 
@@ -266,16 +280,20 @@ class _Evaluator:
         self.held = np.zeros(model.n_held)
         self.aux = np.zeros(len(model.aux))
         self.n = len(model.states)
+        self.P = self._continuous(model.P)  # the model's own, checked once
+
+    def _continuous(self, P: np.ndarray) -> np.ndarray:
+        if any(P[k] != 0.0 for _, k in self.model.clocks):  # the loops as continuous ones
+            P = P.copy()
+            for _, k in self.model.clocks:
+                P[k] = 0.0
+        return P
 
     def __call__(self, y: np.ndarray, P: np.ndarray | None = None) -> tuple[np.ndarray,
                                                                                np.ndarray]:
         dy = np.empty(self.n)
         aux = np.empty(len(self.model.aux))
-        P = self.model.P if P is None else P
-        if any(P[k] != 0.0 for _, k in self.model.clocks):  # the loops as continuous ones
-            P = P.copy()
-            for _, k in self.model.clocks:
-                P[k] = 0.0
+        P = self.P if P is None else self._continuous(P)
         self.model.module.rhs(_T0, np.ascontiguousarray(y, dtype=float), self.held, P,
                               self.model.T, dy, aux)
         return dy, aux
@@ -318,7 +336,7 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     y0 = np.zeros(n)
     # the drive's kinematics: position-like state -> (its rate state, the steady rate);
     # positions move with the reference, their rates are fixed
-    motion = {pos: pair for pos, pair in _mechanism(system).steady_motion(
+    motion = {pos: pair for pos, pair in system.topology().steady_motion(
         table_speed, nut_speed).items() if pos in names and pair[0] in names}
     kinematic = {pos: rate_state for pos, (rate_state, _) in motion.items()}
     for pos, (rate_state, rate) in motion.items():
@@ -329,21 +347,20 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     unknown = [k for k in live if k not in fixed_speed]
     scale = _scales(model)
 
+    # the equations: each unknown's own rate, except a kinematic position's (its rate is the
+    # fixed speed: the rate state's equation is used instead), in that order
+    rows = np.array([k for k in unknown if names[k] not in kinematic]
+                    + [names.index(rate) for name, rate in kinematic.items()
+                       if names.index(name) in unknown], dtype=np.intp)
+    row_scale = scale[rows]
+    at = np.array(unknown, dtype=np.intp)
+    at_scale = scale[at]
+
     def residual(u: np.ndarray) -> np.ndarray:
         y = y0.copy()
-        y[unknown] = u * scale[unknown]
+        y[at] = u * at_scale
         dy, _ = f(y)
-        r = []
-        for k in unknown:
-            name = names[k]
-            if name in kinematic:
-                # its rate is the fixed speed: use the rate state's equation instead
-                continue
-            r.append(dy[k] / scale[k])
-        for name, rate in kinematic.items():
-            if names.index(name) in unknown:
-                r.append(dy[names.index(rate)] / scale[names.index(rate)])
-        return np.array(r)
+        return dy[rows] / row_scale
 
     # Directions no equation holds (the common rotation of screw and nut under a hollow motor
     # on a speed loop, the table position with the position loop open) make the Jacobian
@@ -355,6 +372,8 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
 
     def regularised(u: np.ndarray) -> np.ndarray:
         return np.concatenate([residual(u), _PULL * (u - u0)])
+
+    from scipy import optimize  # here: `simulate` imports this module, not scipy (issue 21)
 
     sol = optimize.least_squares(regularised, u0, method="lm", xtol=1e-15, ftol=1e-15,
                                  gtol=1e-15)
@@ -446,6 +465,54 @@ def averaged(system: DriveSystem) -> tuple[DriveSystem, tuple[str, ...]]:
     return replace(system, parameters=params), (note,)
 
 
+def _state_steps(f: _Evaluator, y: np.ndarray, live: list[int], scale: np.ndarray) -> Any:
+    """The central differences of the state Jacobian, column by column: (column, step [SI],
+    (y + h, its rates, its aux), (y − h, its rates, its aux)) for each live state; the step
+    is a hundredth of the state's solver tolerance."""
+    for j, k in enumerate(live):
+        h = 1e-2 * scale[k]  # a hundredth of the state's solver tolerance
+        yp, ym = y.copy(), y.copy()
+        yp[k] += h
+        ym[k] -= h
+        dp, ap = f(yp)
+        dm, am = f(ym)
+        yield j, h, (yp, dp, ap), (ym, dm, am)
+
+
+def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0, *,
+                 frictionless: bool = False) -> np.ndarray:
+    """The A matrix of :func:`linearize` alone (the same steady state and the same
+    differences, bit for bit), without the inputs' and outputs' matrices it does not need:
+    what :func:`rightmost_pole` and :func:`stability_band` judge.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (continuous loops).
+    table_speed : float
+        Steady table speed of the operating point [m/s], non-zero.
+    nut_speed : float, default 0.0
+        Steady nut speed of the operating point [m/s] (DDFS).
+    frictionless : bool, default False
+        Linearise with every friction law set to "none" (then the speed may be 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        A over the live states [1/s and the states' unit ratios], as ``linearize(...).A``.
+    """
+    if table_speed == 0.0 and not frictionless:
+        raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
+    sys_, _ = averaged(_frictionless(system) if frictionless else system)
+    model, y = steady_state(sys_, table_speed, nut_speed)
+    f = _Evaluator(model)
+    live = _live_states(model, sys_)
+    A = np.empty((len(live), len(live)))
+    for j, h, (_, dp, _), (_, dm, _) in _state_steps(f, y, live, _scales(model)):
+        A[:, j] = (dp[live] - dm[live]) / (2 * h)
+    return A
+
+
 def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float = 0.0, *,
               frictionless: bool = False) -> LinearModel:
     """Linearise the closed loop of ``system`` at steady sliding.
@@ -482,7 +549,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     aux_names = [a.name for a in model.aux]
     st = model.state_names
     axes = [a.removesuffix("_speed_command") for a in aux_names if a.endswith("_speed_command")]
-    idle = _mechanism(sys_).held()[1]
+    idle = sys_.topology().held()[1]
     axes = [a for a in axes if a not in idle]
     pidx = model.parameter_names.index
     # inputs: (name, parameter slot)
@@ -505,7 +572,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         for a in axes:
             j = aux_names.index(f"{a}_{kind}")
             outs.append((f"{a}_{kind}", lambda yv, av, j=j: av[j]))
-    topology = _mechanism(sys_)
+    topology = sys_.topology()
     for a in axes:
         j = st.index(f"{a}_current")
         kt_name, torque_name = topology.motor_output(a)
@@ -517,13 +584,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         return np.array([fn(yv, aux) for _, fn in outs])
 
     C = np.empty((len(outs), n))
-    for j, k in enumerate(live):
-        h = 1e-2 * scale[k]  # a hundredth of the state's solver tolerance
-        yp, ym = y.copy(), y.copy()
-        yp[k] += h
-        ym[k] -= h
-        dp, ap = f(yp)
-        dm, am = f(ym)
+    for j, h, (yp, dp, ap), (ym, dm, am) in _state_steps(f, y, live, scale):
         A[:, j] = (dp[live] - dm[live]) / (2 * h)
         C[:, j] = (outputs(yp, ap) - outputs(ym, am)) / (2 * h)
     B = np.empty((n, len(ins)))
@@ -678,10 +739,7 @@ class LoopAnalysis:
         Pole
             The dominant pole (Im > 0 for a pair).
         """
-        modes = [p for p in self.poles if not p.rigid_body] or list(self.poles)
-        osc = [p for p in modes if p.imag > 1e-6]
-        return min(osc, key=lambda p: p.damping_ratio) if osc else min(
-            modes, key=lambda p: -p.real)
+        return dominant_pole(self.poles)
 
     def as_dict(self) -> dict[str, Any]:
         """The analysis for the JSON report (``feeddrive loops --json``).
@@ -1034,8 +1092,8 @@ def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
     frequency : float
         Its frequency |Im|/(2π) [Hz].
     """
-    lin = linearize(system, v, nut_speed)
-    live = [p for p in classify_poles(lin.poles()) if not p.rigid_body]
+    live = [p for p in classify_poles(np.linalg.eigvals(state_matrix(system, v, nut_speed)))
+            if not p.rigid_body]
     p = max(live, key=lambda q: q.real)
     return p.real, abs(p.imag) / (2 * np.pi)
 
@@ -1116,5 +1174,5 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
 
 __all__ = ["INPUT_UNITS", "MARGINAL", "NAMED_RESPONSES", "OUTPUT_UNITS", "FrequencyResponse",
            "LinearModel", "LoopAnalysis", "LoopResult", "Pole", "StabilityBand", "averaged",
-           "classify_poles", "frequency_response", "linearize", "loop_analysis",
-           "rightmost_pole", "stability_band", "steady_state", "unit_of"]
+           "classify_poles", "dominant_pole", "frequency_response", "linearize", "loop_analysis",
+           "rightmost_pole", "stability_band", "state_matrix", "steady_state", "unit_of"]

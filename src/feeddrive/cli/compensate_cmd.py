@@ -1,4 +1,5 @@
-"""`feeddrive compensate`: CDFS with friction compensation against the DDFS."""
+"""`feeddrive compensate`: the CDFS (or another drive) with friction compensation against
+the DDFS."""
 
 from __future__ import annotations
 
@@ -6,13 +7,18 @@ import typer
 
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 
+#: the drives the study compensates, for --help (feeddrive.analysis.compensation.study_drives
+#: asks the topologies; tests/unit/test_declarations.py checks this against it)
+STUDY_DRIVES = "cdfs|linear-motor"
+
 
 @app.command("compensate")
 @user_errors
 def compensate_command(
-    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs",
-                              help="cdfs (the drive compensated; the DDFS "
-                              "is added as the alternative)"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=STUDY_DRIVES,
+                              help="The drive compensated (one with friction compensation and "
+                              "no driven nut); for the CDFS the DDFS is added as the "
+                              "alternative."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     mismatch: float = typer.Option(20.0, "--mismatch", help="Model error of the mismatched "
                                    "cases on F_c, F_s and v_s [%]."),
@@ -31,15 +37,18 @@ def compensate_command(
     the DDFS: is the second motor worth it?"""
     from rich.progress import Progress
 
-    from ..analysis.compensation import compensation_study, default_cases
+    from ..analysis.compensation import compensation_study, default_cases, study_drives
     from ..parameters import ParameterError
 
-    if drive != "cdfs":
-        raise ParameterError("--drive", drive, "the study compensates the CDFS; expected cdfs")
     if not 0 <= mismatch < 100:
         raise ParameterError("--mismatch", mismatch, "expected 0 … 100 [%]")
     params = resolve_parameters(preset_name, params_file, drive)
-    cases = default_cases(mismatch / 100.0, nut_speed * MM_PER_S)
+    eligible = study_drives(params)  # what the topologies declare
+    if drive not in eligible:
+        raise ParameterError("--drive", drive, "the study compensates a drive with friction "
+                             f"compensation and no driven nut; expected {' or '.join(eligible)}")
+    cases = default_cases(mismatch / 100.0, nut_speed * MM_PER_S, drive=drive,
+                          alternative=eligible[drive])
     with Progress(console=console, transient=True, disable=as_json) as bar:
         task = bar.add_task("compensation study", total=len(cases))
         rows = compensation_study(params, cases, search=not no_search,

@@ -48,10 +48,14 @@ def fmu_command(
         raise ParameterError("--nut-hold", nut_hold, "expected locked or servo")
     v_t = _units.speed("--table-speed", table_speed)
     v_n = _units.speed("--nut-speed", nut_speed)
-    if v_n != 0.0 and (drive == "linear-motor" or (drive == "cdfs" and nut_hold == "locked")):
-        raise ParameterError("--nut-speed", nut_speed,
-                             f"the {drive} drive has no live nut axis; expected 0 [mm/s]")
     params = resolve_parameters(preset_name, params_file, drive)
+    if v_n != 0.0:
+        from ..model.mechanisms import mechanism
+
+        topology = mechanism(drive)(params, drive, 0.4, nut_hold)
+        if not topology.nut_axis or topology.nut_axis not in topology.live_axes():
+            raise ParameterError("--nut-speed", nut_speed,
+                                 f"the {drive} drive has no live nut axis; expected 0 [mm/s]")
     a = _units.position("--position", position, params, drive)
     result = export_fmu(params, drive, out, table_position=a, nut_hold=nut_hold, fmi=fmi,
                         kind=kind, table_speed=v_t, nut_speed=v_n, force=force)

@@ -11,8 +11,10 @@ from typing import Annotated
 import typer
 
 from ..io.outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
+from ..parameters import DriveParameters
 from . import _units
 from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
+from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
 def _say(text: str) -> None:
@@ -34,6 +36,18 @@ def _weights(items: list[str] | None) -> dict[str, float]:
     return out
 
 
+def _table_motor_constant(params: DriveParameters, drive: str, table_position: float) -> float:
+    """The torque (or force) constant of the motor that drives the table, from the slot the
+    topology names for it (``Mechanism.motor_output`` of its ``table_axis``) [N m/A or N/A]."""
+    from ..engine.simulate import DriveSystem
+    from ..model.reference import ConstantSpeed
+
+    system = DriveSystem(params, drive, table_position)
+    topology = system.topology()
+    slot, _ = topology.motor_output(topology.table_axis)
+    return system.model(ConstantSpeed(0.0)).parameter(slot)
+
+
 @app.command("fit")
 @user_errors
 def fit_command(
@@ -43,8 +57,8 @@ def fit_command(
     free: Annotated[list[str] | None, typer.Option(
         "--free", help="Dotted parameter path to fit (repeat for several), e.g. "
         "controller.velocity_integral_gain; bounds: the parameter's plausible range.")] = None,
-    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs|linear-motor",
-                              help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
+                              help=ALL_DRIVES_TEXT),
     preset_name: str | None = typer.Option(None, "--preset", help="Starting parameter set "
                                            "(default wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Starting parameters (TOML)."),
@@ -100,8 +114,7 @@ def fit_command(
     params = resolve_parameters(preset_name, params_file, drive)
     table_position = _units.position("--position", position, params, drive)
     speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
-    torque_constant = (params.linear_motor.force_constant if drive == "linear-motor"
-                       and params.linear_motor is not None else params.screw_motor.torque_constant)
+    torque_constant = _table_motor_constant(params, drive, table_position)
     reference = None
     if profile_file:
         from ..model.reference import from_csv

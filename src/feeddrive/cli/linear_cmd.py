@@ -7,14 +7,14 @@ import typer
 from ..analysis import protocol
 from ..io.outputs import PLOT_FORMATS, check_output_file
 from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
-from .simulate_cmd import ALL_DRIVES
+from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
 @app.command("loops")
 @user_errors
 def loops_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
-                              help="cdfs, ddfs, linear-motor or rack-pinion"),
+                              help=ALL_DRIVES_TEXT),
     table_speed: float = typer.Option(1.5, "--table-speed", help="Operating point: steady "
                                       "table speed [mm/s]."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
@@ -85,7 +85,7 @@ def loops_command(
 @user_errors
 def stability_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
-                              help="cdfs, ddfs, linear-motor or rack-pinion"),
+                              help=ALL_DRIVES_TEXT),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed [mm/s], DDFS."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     low: float = typer.Option(1e3 * protocol.LINEAR_SPEED_RANGE[0], "--low",

@@ -10,9 +10,9 @@ from ..io.outputs import shown
 from ..parameters import dumps, load, preset, to_dict
 from . import _units
 from ._common import app, console, print_json, resolve_parameters, user_errors
+from .simulate_cmd import ALL_DRIVES
 
 #: every drive topology, for --help (as `feeddrive simulate` lists them)
-_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
 
 params_app = typer.Typer(no_args_is_help=True, help="Show and check parameter sets.")
 app.add_typer(params_app, name="params")
@@ -47,7 +47,7 @@ def slots(
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
                                            "(default wang2021, or the drive's example set)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    drive: str = typer.Option("cdfs", "--drive", metavar=_DRIVES,
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
                               help="The drive whose model is assembled."),
     position: float = typer.Option(400.0, "--position", help="Table position on the screw "
                                    "[mm]."),

@@ -10,6 +10,7 @@ import typer
 from ..io.outputs import check_output_file, shown
 from . import _units
 from ._common import app, console, err_console, print_json, user_errors
+from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
 def _say(text: str) -> None:
@@ -19,8 +20,8 @@ def _say(text: str) -> None:
 @app.command("sensitivity")
 @user_errors
 def sensitivity_command(
-    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs|linear-motor",
-                              help="cdfs, ddfs or linear-motor"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
+                              help=ALL_DRIVES_TEXT),
     preset_name: str | None = typer.Option(None, "--preset", help="Parameter set (default "
                                            "wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import typer
@@ -22,6 +23,8 @@ from ._common import (
 #: every drive topology, for --help (the registry is not imported at start-up: it loads numba;
 #: tests/integration/test_cli_new_user3.py checks this against feeddrive.registry)
 ALL_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
+#: the same list as words, for help texts ("cdfs, ddfs, linear-motor or rack-pinion")
+ALL_DRIVES_TEXT = " or ".join(ALL_DRIVES.replace("|", ", ").rsplit(", ", 1))
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
 DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.engine.simulate.SolverOptions.max_steps
 DEFAULT_METHOD = "modal"  # as feeddrive.engine.simulate.SolverOptions.method (a test checks it)
@@ -172,18 +175,7 @@ def simulate_command(
         k_warning = observer_gain_warning(system, steady.get(profile, v_t), v_n)
         if k_warning:
             _units.warn(k_warning)
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
-    bar = Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.fields[t]}"),
-                   TimeRemainingColumn(), console=err_console, transient=True,
-                   disable=as_json)
-    task = bar.add_task("run", total=duration, t="")
-
-    def advance(t: float, t_end: float) -> None:
-        if not bar.live.is_started:  # only long runs (chunked) report progress
-            bar.start()
-        bar.update(task, completed=t, t=f"{t:.4g} / {t_end:.4g} s")
-
+    bar, advance = (None, None) if as_json else _progress_bar(duration)
     try:
         result = simulate(system, prof, duration, options=options,
                           output=output if streamed else None, progress=advance)
@@ -192,12 +184,14 @@ def simulate_command(
         err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
     except SimulationInterrupted as stop:
-        bar.stop()
+        if bar is not None:
+            bar.stop()
         err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
                           soft_wrap=True)
         raise interrupted() from None
     finally:
-        bar.stop()
+        if bar is not None:
+            bar.stop()
     summary = result.summary()
     summary["profile"] = profile
     if output and streamed:
@@ -220,6 +214,23 @@ def simulate_command(
                        position, duration, params.name, output)
     if summary.get("verdict") == "unstable":
         raise typer.Exit(code=EXIT_UNSTABLE)
+
+
+def _progress_bar(duration: float) -> tuple[Any, Callable[[float, float], None]]:
+    """The progress bar on stderr of a run without ``--json`` (whose JSON is all it prints:
+    no bar, and rich.progress is not imported), and the callback that moves it."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    bar = Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.fields[t]}"),
+                   TimeRemainingColumn(), console=err_console, transient=True)
+    task = bar.add_task("run", total=duration, t="")
+
+    def advance(t: float, t_end: float) -> None:
+        if not bar.live.is_started:  # only long runs (chunked) report progress
+            bar.start()
+        bar.update(task, completed=t, t=f"{t:.4g} / {t_end:.4g} s")
+
+    return bar, advance
 
 
 def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,

@@ -14,14 +14,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
-from ..io.results import save_result
 from ..model.slots import slot_table, slots_json
 from ..parameters import dumps
 from ..units import ENGINEERING as _ENGINEERING
 
 if TYPE_CHECKING:
+    import xarray as xr
+
     from ..analysis.creep_window import CreepMetrics, CreepThresholds
     from ..model.assemble import Model
     from ..model.reference import Profile
@@ -157,6 +157,8 @@ class Run:
         xarray.Dataset
             The signals in SI, the full attributes (:meth:`attrs`).
         """
+        import xarray as xr  # here: a summary needs no Dataset (issue 21 item 4)
+
         data_vars = {name: ("time", np.array(self.signal(name)),
                             {"units": unit, "long_name": desc})
                      for name, (unit, desc) in self.meta.items()}
@@ -399,7 +401,8 @@ class Result:
         from ..analysis.tracking import travel_warning
         from ..model.mechanisms import mechanism
 
-        attrs = self.dataset.attrs
+        # a run's own attributes: the Dataset is not built for them (xarray stays unimported)
+        attrs = self.dataset.attrs if self._run is None else {}
         drive = self._run.system.drive if self._run is not None else attrs.get("drive", "")
         try:
             path = mechanism(drive).travel_length
@@ -482,6 +485,8 @@ class Result:
         pathlib.Path
             The written file.
         """
+        from ..io.results import save_result
+
         return save_result(self.dataset, path)
 
 

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time as _time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -13,12 +14,17 @@ import numpy as np
 
 from ..model.assemble import Model, assemble
 from ..model.disturbances import LoadProfile
-from ..model.mechanisms import drive_names, mechanism
+from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..parameters import DriveParameters, ParameterError
 from ..solvers import dopri5, switching
 from . import budget
 from .result import Result, Run
+
+try:  # POSIX file locks (the compile lock); elsewhere processes may compile a model twice
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None  # type: ignore[assignment]
 
 DRIVES = drive_names()
 
@@ -62,6 +68,17 @@ class DriveSystem:
             if not (isinstance(value, int | float) and math.isfinite(value)):
                 raise ParameterError(f"initial_state.{name}", value, "expected a finite number "
                                      "in the state's SI unit")
+
+    def topology(self) -> Mechanism:
+        """The drive's topology, which declares its structure (axes, sites, what it holds).
+
+        Returns
+        -------
+        Mechanism
+            The registered mechanism of :attr:`drive`, built for this system.
+        """
+        return mechanism(self.drive)(self.parameters, self.drive, self.table_position,
+                                     self.nut_hold)
 
     def model(self, profile: Profile) -> Model:
         """The assembled model of this drive following ``profile``.
@@ -537,6 +554,110 @@ class Simulation:
         self._chunks: _Chunks | None = None
         self._running: _Chunks | None = None
 
+    def keep_checkpoints(self) -> None:
+        """Keep the carried state at every committed chunk end of the coming runs, so that a
+        later :class:`Simulation` of a profile with the same beginning can start there
+        (:meth:`resume`) instead of from rest."""
+        if self._chunks is None:
+            self._chunks = _Chunks(self, want_aux=False)
+        if self._chunks.checkpoints is None:
+            self._chunks.checkpoints = [] if self._chunks.start == 0 else None
+
+    def resume(self, previous: Simulation) -> float:
+        """Start this run where ``previous`` (run with :meth:`keep_checkpoints`) committed its
+        last chunk before the two profiles part: the result is bit-identical to a run from
+        rest, since the state carried at a chunk end (states, held controller values, the
+        integrator's memory, counters) is what the run from rest has there.
+
+        Only tabulated profiles (:class:`~feeddrive.model.reference.SampledSpeed`, e.g. the
+        step-down staircase) of the same system, options and grid are resumed; the profiles
+        agree up to the last sample both have equal (two samples are kept in hand: the
+        reference interpolates between neighbours).
+
+        Parameters
+        ----------
+        previous : Simulation
+            An earlier run of the same system with another profile.
+
+        Returns
+        -------
+        float
+            The time the run resumes from [s]; 0 when nothing is shared (a run from rest).
+        """
+        kept = self._shared(previous)
+        if not kept:
+            return 0.0
+        start, y, held, memory, totals, n_parts = kept[-1]
+        chunks = _Chunks(self, want_aux=False)
+        chunks.checkpoints = kept
+        chunks.start, chunks.y, chunks.held = start, y.copy(), held.copy()
+        chunks.memory = chunks.live = memory.copy()
+        chunks.totals = totals.copy()
+        chunks.parts = previous._chunks.parts[:n_parts] if previous._chunks else []
+        self._chunks = chunks
+        return start * self.grid.base
+
+    def resumable_from(self, previous: Simulation) -> float:
+        """The time [s] :meth:`resume` would start this run from (0: from rest), without
+        resuming.
+
+        Parameters
+        ----------
+        previous : Simulation
+            An earlier run of the same system with another profile.
+
+        Returns
+        -------
+        float
+            The time [s].
+        """
+        kept = self._shared(previous)
+        return kept[-1][0] * self.grid.base if kept else 0.0
+
+    def _shared(self, previous: Simulation) -> list[tuple[int, np.ndarray, np.ndarray,
+                                                          np.ndarray, np.ndarray, int]]:
+        """The checkpoints of ``previous`` this run's profile shares (empty: none)."""
+        prev = previous._chunks
+        if prev is None or not prev.checkpoints or not self._same_but_profile(previous):
+            return []
+        a, b = self.profile, previous.profile
+        assert isinstance(a, SampledSpeed) and isinstance(b, SampledSpeed)
+        n = min(len(a.time), len(b.time))
+        differ = np.flatnonzero(
+            (np.asarray(a.time[:n]) != np.asarray(b.time[:n]))
+            | (np.asarray(a.table_speed[:n]) != np.asarray(b.table_speed[:n]))
+            | (_nut(a)[:n] != _nut(b)[:n]))
+        same = int(differ[0]) if differ.size else n  # samples 0 … same − 1 agree
+        if same < 2:
+            return []
+        until = float(a.time[same - 2]) + 1e-12  # the run reads up to the next sample
+        return [c for c in prev.checkpoints if c[0] * self.grid.base <= until]
+
+    def _same_but_profile(self, other: Simulation) -> bool:
+        """Whether ``other`` integrates the same model, options and grid, and both profiles are
+        tables that are the model's only table (so they differ only in the profile's
+        numbers and its length slot)."""
+        a, b = self.profile, other.profile
+        if not (isinstance(a, SampledSpeed) and isinstance(b, SampledSpeed)
+                and a.hold == b.hold and self.system is other.system
+                and self.options == other.options and self.grid == other.grid
+                and self.model.source == other.model.source
+                and self.model.parameter_names == other.model.parameter_names):
+            return False
+        names = self.model.parameter_names
+        if "profile[6]" not in names:
+            return False
+        length = names.index("profile[6]")
+        if self.model.T.size != 4 * int(self.P[length]) \
+                or other.model.T.size != 4 * int(other.P[length]):
+            return False  # another table (a load record) shares T
+        mask = np.arange(self.P.size) != length
+        return bool(np.array_equal(self.P[mask], other.P[mask])
+                    and np.array_equal(self.atol, other.atol)
+                    and np.array_equal(self.rel, other.rel)
+                    and np.array_equal(self.y0, other.y0)
+                    and np.array_equal(self.bound, other.bound))
+
     def live_time(self) -> float:
         """The simulated time the solver has reached in the run going on now.
 
@@ -685,10 +806,24 @@ class _Chunks:
         self.start = 0
         self.diverged = False
         self.y = sim.y0
+        # (breakpoint, y, held, memory, totals, parts so far) at each committed chunk end,
+        # kept for Simulation.resume when Simulation.keep_checkpoints asked for them
+        self.checkpoints: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                     int]] | None = None
 
     def _call(self, y: np.ndarray, start: int, stop: int, held: np.ndarray,
               memory: np.ndarray, max_steps: int,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        sim, grid = self.sim, self.sim.grid
+        with _first_compile(sim.model.module, "integrate_dense" if self.dense else "integrate"):
+            t, yy, aa, stats = self._integrate(y, start, stop, held, memory, max_steps)
+        if start > 0 and t.size and t[0] <= start * grid.base:
+            t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
+        return t, yy, aa, stats
+
+    def _integrate(self, y: np.ndarray, start: int, stop: int, held: np.ndarray,
+                   memory: np.ndarray, max_steps: int,
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         sim, grid, options = self.sim, self.sim.grid, self.sim.options
         t_stop = stop * grid.base
         if self.dense:
@@ -703,8 +838,6 @@ class _Chunks:
                 sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive, max_steps,
                 start=start, held=held, memory=memory,
                 bound=sim.bound, P=sim.P)
-        if start > 0 and t.size and t[0] <= start * grid.base:
-            t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
         return t, yy, aa, stats
 
     def _add(self, stats: np.ndarray) -> np.ndarray:
@@ -775,6 +908,10 @@ class _Chunks:
                         kept -= self.parts.pop(0)[0].size
                     self.y = yy[-1].copy() if yy.shape[0] else self.y
                     self.start = stop
+                    if self.checkpoints is not None and writer is None:
+                        self.checkpoints.append((stop, self.y.copy(), self.held.copy(),
+                                                 self.memory.copy(), self.totals.copy(),
+                                                 len(self.parts)))
                 else:
                     tail.append((t, yy, aa))
                 if progress is not None:
@@ -810,6 +947,38 @@ class _Stopped(Exception):
                  joined: tuple[np.ndarray, np.ndarray, list[np.ndarray]]) -> None:
         super().__init__(t_reached)
         self.t_reached, self.joined = t_reached, joined
+
+
+@contextlib.contextmanager
+def _first_compile(module: Any, name: str) -> Iterator[None]:
+    """Around the first call of a generated module's integrator in this process: a lock on a
+    file beside the module, so that two processes (the ``reproduce`` pool's workers) that
+    need the same new model do not both compile it — the second waits and loads what the
+    first wrote to numba's cache (a compile is ~5–10 CPU s; measured in benchmarks/README).
+    Nothing is locked once compiled here, or where file locks are not available."""
+    fn = getattr(module, name, None)
+    path = getattr(module, "__file__", None)
+    if fcntl is None or fn is None or path is None or getattr(fn, "signatures", [None]):
+        yield
+        return
+    lock = Path(path).with_name(f".{Path(path).stem}.{name}.lock")
+    try:
+        fh = open(lock, "a")  # noqa: SIM115 (held across the yield)
+    except OSError:
+        yield
+        return
+    with fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+def _nut(profile: SampledSpeed) -> np.ndarray:
+    """A tabulated profile's nut speeds (zeros when it has none) [m/s]."""
+    t = np.asarray(profile.time)
+    return np.zeros(t.shape) if profile.nut_speed is None else np.asarray(profile.nut_speed)
 
 
 def _join(arrays: list[np.ndarray], columns: int | None) -> np.ndarray:

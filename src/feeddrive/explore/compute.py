@@ -117,13 +117,18 @@ def verdict_of(time: np.ndarray, speed: np.ndarray, command_speed: float) -> dic
             "decided_at_s": _f(v.decided_at), "ripple_ratio": _f(v.ripple_ratio)}
 
 
-def _sites(drive: str) -> tuple[str, ...]:
-    """The friction sites that act in ``drive`` (a held nut's friction does not)."""
-    from ..model import mechanism
-
-    if not mechanism(drive).has_lead_screw:
-        return ("guide",)
-    return ("screw", "nut", "guide") if drive == "ddfs" else ("screw", "guide")
+def _sites(checked: Checked) -> dict[str, tuple[str, Any]]:
+    """The friction sites that act in the checked drive, as the topology declares them (a
+    held nut's friction does not): label → (parameter path, the site's parameters).  A site
+    is labelled by the ``[friction]`` key of its parameters (the ball–nut contact shares the
+    screw's) or, for a part's own section, by its name."""
+    assert checked.system is not None and checked.params is not None
+    out: dict[str, tuple[str, Any]] = {}
+    for site in checked.system.topology().acting_sites():
+        key = site.parameters_key
+        label, path = (site.name, key) if "." in key else (key, f"friction.{key}")
+        out.setdefault(label, (path, site.parameters(checked.params)))
+    return out
 
 
 def friction_curves(checked: Checked, operating: dict[str, float] | None = None
@@ -149,12 +154,11 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
 
     params = checked.params
     assert params is not None
-    sites = _sites(checked.drive)
+    sites = _sites(checked)
     bands: dict[str, list[list[float]]] = {}
     top = 2e-3
-    for site in sites:
-        lugre = getattr(params.friction, site).require(LuGreParameters, f"friction.{site}",
-                                                       "the explorer's friction curves")
+    for site, (path, site_params) in sites.items():
+        lugre = site_params.require(LuGreParameters, path, "the explorer's friction curves")
         bands[site] = []
         for name, sign in (("positive", 1.0), ("negative", -1.0)):
             band = negative_slope_band(lugre.branch(name))
@@ -166,8 +170,7 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
         top = max(top, 1.25 * abs(speed) * 1e-3)
     v = np.linspace(-top, top, 801)
     curves = []
-    for site in sites:
-        lugre = getattr(params.friction, site)
+    for site, (_, lugre) in sites.items():
         curves.append({"site": site, "law": lugre.law, "speed_mm_s": _list(v, 1e3),
                        "force_n": _list(steady_friction(v, lugre)),
                        "negative_slope_mm_s": bands[site],
@@ -257,6 +260,8 @@ def run_simulation(checked: Checked, report: Report,
                                                          "wall_time_s")}
     return {
         "drive": checked.drive, "parameter_set": checked.params.name if checked.params else "",
+        # whether the drive follows the nut command (its topology says; the page shows it then)
+        "nut_driven": checked.system.topology().follows_nut_reference(),
         "table_speed_mm_s": 1e3 * checked.table_speed,
         "nut_speed_mm_s": 1e3 * checked.nut_speed, "duration_s": checked.duration,
         "samples": int(t.size), "samples_sent": int(idx.size),

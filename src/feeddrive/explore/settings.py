@@ -24,6 +24,7 @@ import base64
 import binascii
 import dataclasses
 import math
+import operator
 import re
 import threading
 import tomllib
@@ -477,7 +478,10 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
                                                  f"expected one of {', '.join(drive_names())}"))
         return out
     out.drive = drive
-    if drive != "ddfs":
+    # the explorer's system holds a nut locked (DriveSystem's default): the topology says
+    # whether the drive then follows a nut speed
+    drives_nut = mechanism(drive)(base, drive, 0.4, "locked").follows_nut_reference()
+    if not drives_nut:
         out.disabled.append("nut_speed")
     if not any(m.ripple for m in mechanism(drive).drive_motors):
         out.disabled += ["ripple_amplitude", "ripple_order"]
@@ -497,7 +501,7 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
 
     v_t = run_field("table_speed", _units.speed)
     out.table_speed = v_t if v_t is not None else 0.0
-    if drive == "ddfs":
+    if drives_nut:
         v_n = run_field("nut_speed", _units.speed)
         out.nut_speed = v_n if v_n is not None else 0.0
     position = run_field("position", lambda o, v: _units.position(o, v, base, drive))
@@ -545,8 +549,12 @@ def _apply(data: dict[str, Any], name: str, s: Mapping[str, str], own: Mapping[s
     """Put knob ``name`` into the nested parameter dict ``data`` (as a file would)."""
     if name == "friction_scale":
         k = check_quantity("friction_scale", _value(s[name]), dict(_FRICTION_SCALE))
-        for site in ("screw", "nut", "guide"):
-            data["friction"][site] = to_dict(getattr(base.friction, site).scaled(k))
+        for path in _friction_paths(base, s["drive"]):
+            *where, last = path.split(".")
+            node = data
+            for part in where:
+                node = node[part]
+            node[last] = to_dict(operator.attrgetter(path)(base).scaled(k))
     elif name.startswith("ripple"):
         ripple = base.disturbances.screw_motor_ripple
         data["disturbances"]["screw_motor_ripple"] = {
@@ -557,6 +565,24 @@ def _apply(data: dict[str, Any], name: str, s: Mapping[str, str], own: Mapping[s
     else:
         section, key = FIELD[name].path.split(".")
         data[section][key] = _value(s[name])
+
+
+def _friction_paths(base: DriveParameters, drive: str) -> list[str]:
+    """Every friction site of the set: the ``[friction]`` section's sites and those the
+    drive's topology places in a part's own section (the rack-and-pinion's gearbox)."""
+    from ..model import mechanism
+
+    paths = [f"friction.{f.name}" for f in dataclasses.fields(base.friction)
+             if hasattr(getattr(base.friction, f.name), "scaled")]
+    topology = mechanism(drive)
+    try:
+        topology.check(base, drive, 0.4)
+    except ParameterError:
+        return paths  # a set without the drive's parts: the system's check says so
+    for site in topology(base, drive, 0.4, "locked").acting_sites():
+        if "." in site.parameters_key and site.parameters_key not in paths:
+            paths.append(site.parameters_key)
+    return paths
 
 
 def _value(text: str) -> Any:

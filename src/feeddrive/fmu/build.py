@@ -1,9 +1,10 @@
 """Generate the FMU's C source, compile it with the machine's C compiler, zip the FMU.
 
 One translation unit ``fmu.c``: the model (:func:`feeddrive.backends.c_backend.c_model_source`),
-the integrator translated from :func:`feeddrive.fmu.solver.advance_template`, the variable
-tables (:mod:`feeddrive.fmu.description`) and the FMI functions (``wrapper.c``).  It needs
-only the C standard library and libm; the FMU carries it (with the FMI headers) under
+the integrator translated from the driver's ``COMM`` specialisation
+(:func:`feeddrive.fmu.solver.advance_function`), the variable tables
+(:mod:`feeddrive.fmu.description`) and the FMI functions (``wrapper.c``).  It needs only the C
+standard library and libm; the FMU carries it (with the FMI headers) under
 ``sources/`` so it can be rebuilt for another platform (docs/fmu.md).
 """
 
@@ -95,8 +96,9 @@ def library_suffix() -> str:
 def solver_c() -> str:
     """C text of the FMU's integrator (``fd_advance``), translated from the same Python the
     numba build compiles, with the model's ``fd_rhs`` / ``fd_sample_update`` as its ``rhs`` /
-    ``sample_update`` and the DOPRI5 step and error norm of :mod:`feeddrive.solvers.switching`
-    translated with it.
+    ``sample_update`` and the DOPRI5 step and error norm of :mod:`feeddrive.solvers.steps`
+    translated with it (the driver of :mod:`feeddrive.solvers.driver` specialised ``COMM``,
+    :func:`feeddrive.fmu.solver.advance_function`).
 
     Returns
     -------
@@ -115,14 +117,14 @@ def solver_c() -> str:
     shapes.update({"held": ("FD_N_HELD",), "held_prev": ("FD_N_HELD",), "aux": ("FD_N_AUX",),
                    "f_new": ("FD_N_STATE",), "memory": ("FD_MEMORY_SIZE",)})
     return translate_kernels(
-        [solver.advance_template], dict(solver.CONSTANTS), param_types=SOLVER_TYPES,
+        [solver.advance_function()], dict(solver.CONSTANTS), param_types=SOLVER_TYPES,
         bindings={"rhs": RHS, "sample_update": SAMPLE_UPDATE,
                   "_dp5_step": steps.function("_dp5_step"),
                   "_dp5_error": steps.function("_dp5_error"),
                   "_error_norm": steps.error_norm_template,
                   "_pi_factor": steps.pi_factor_template,
                   "_reject_factor": steps.reject_factor_template},
-        shapes=shapes, names={"advance_template": "fd_advance"})
+        shapes=shapes, names={"advance": "fd_advance"})
 
 
 def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: str) -> str:
@@ -158,7 +160,7 @@ def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: 
         "feeddrive.fmu: do not edit, export again. */",
         "/* ---- the model (feeddrive.backends.c_backend) */",
         c_model_source(fm.model),
-        "/* ---- the integrator (feeddrive.fmu.solver.advance_template, translated) */",
+        "/* ---- the integrator (feeddrive.solvers.driver, specialised COMM, translated) */",
         f"#define FD_MEMORY_SIZE {solver.MEMORY_SIZE}",
         memory,
         solver_c(),

@@ -21,6 +21,8 @@ import numpy as np
 
 from ..model.friction import friction_law
 from ..model.loops import AXIS_PARAMS
+from ..model.reference import INPUT_INSTANT
+from ..model.slots import slot_unit
 from ..parameters.components import unit_of
 from .model import FmuModel
 
@@ -75,33 +77,34 @@ _HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
            "controller.position_period", "controller.velocity_period",
            "controller.current_period")
 
-_SIMPLE = {
-    "screw.H": ("m/rad", "lead per radian H (transmission ratio)"),
-    "screw.J": ("kg m2", "screw motor and shaft inertia"),
-    "nut.J": ("kg m2", "hollow motor and nut inertia"),
-    "table.mass": ("kg", "table (and forcer) mass"),
-    "stiffness.axial_damping": ("N s/m", "screw–nut–table axial damping c_ax"),
-    "stiffness.k_fixed": ("N/m", "fixed equivalent stiffness K_eq (0: from the chain)"),
-    "stiffness.c0": ("m/N", "axial compliance of bearings, nut and (torsion) coupling"),
-    "stiffness.ea": ("N", "screw axial rigidity E·A"),
-    "stiffness.length": ("m", "screw length between supports"),
-    "stiffness.support": ("1", "screw support: 0 fixed–fixed, 1 fixed–free"),
-    "stiffness.x0": ("m", "nut position a at the start (distance from the motor support)"),
-    "nut.active": ("1", "1: the hollow motor and nut are live; 0: held"),
-    "screw_motor.torque_constant": ("N m/A", "screw motor torque constant K_t"),
-    "screw_motor.back_emf_constant": ("V s/rad", "screw motor back-EMF constant K_e"),
-    "screw_motor.inductance": ("H", "screw motor armature inductance L"),
-    "screw_motor.resistance": ("Ohm", "screw motor armature resistance R"),
-    "nut_motor.torque_constant": ("N m/A", "hollow motor torque constant K_t"),
-    "nut_motor.back_emf_constant": ("V s/rad", "hollow motor back-EMF constant K_e"),
-    "nut_motor.inductance": ("H", "hollow motor armature inductance L"),
-    "nut_motor.resistance": ("Ohm", "hollow motor armature resistance R"),
-    "motor.force_constant": ("N/A", "linear motor force constant K_f"),
-    "motor.back_emf_constant": ("V s/m", "linear motor back-EMF constant K_e"),
-    "motor.inductance": ("H", "linear motor inductance L"),
-    "motor.resistance": ("Ohm", "linear motor resistance R"),
-    "disturbances.load_start": ("s", "time from which the load_force input acts"),
-    "compensation.observer_gain": ("1/s", "friction observer gain (compensation)"),
+#: descriptions of the model's own slots (the unit is the model's: feeddrive.model.slots)
+_DESCRIPTIONS = {
+    "screw.H": "lead per radian H (transmission ratio)",
+    "screw.J": "screw motor and shaft inertia",
+    "nut.J": "hollow motor and nut inertia",
+    "table.mass": "table (and forcer) mass",
+    "stiffness.axial_damping": "screw–nut–table axial damping c_ax",
+    "stiffness.k_fixed": "fixed equivalent stiffness K_eq (0: from the chain)",
+    "stiffness.c0": "axial compliance of bearings, nut and (torsion) coupling",
+    "stiffness.ea": "screw axial rigidity E·A",
+    "stiffness.length": "screw length between supports",
+    "stiffness.support": "screw support: 0 fixed–fixed, 1 fixed–free",
+    "stiffness.x0": "nut position a at the start (distance from the motor support)",
+    "nut.active": "1: the hollow motor and nut are live; 0: held",
+    "screw_motor.torque_constant": "screw motor torque constant K_t",
+    "screw_motor.back_emf_constant": "screw motor back-EMF constant K_e",
+    "screw_motor.inductance": "screw motor armature inductance L",
+    "screw_motor.resistance": "screw motor armature resistance R",
+    "nut_motor.torque_constant": "hollow motor torque constant K_t",
+    "nut_motor.back_emf_constant": "hollow motor back-EMF constant K_e",
+    "nut_motor.inductance": "hollow motor armature inductance L",
+    "nut_motor.resistance": "hollow motor armature resistance R",
+    "motor.force_constant": "linear motor force constant K_f",
+    "motor.back_emf_constant": "linear motor back-EMF constant K_e",
+    "motor.inductance": "linear motor inductance L",
+    "motor.resistance": "linear motor resistance R",
+    "disturbances.load_start": "time from which the load_force input acts",
+    "compensation.observer_gain": "friction observer gain (compensation)",
 }
 
 
@@ -179,9 +182,9 @@ def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
     tuple of (str, str, str, bool)
         The FMU variable name, its unit, description and whether it is fixed.
     """
-    if name in _SIMPLE:
-        unit, text = _SIMPLE[name]
-        return name, unit, text, name.split(".")[-1] in _FIXED_PARAMETERS
+    if name in _DESCRIPTIONS:
+        unit = fmi_unit(slot_unit(fm.model, name))
+        return name, unit, _DESCRIPTIONS[name], name.split(".")[-1] in _FIXED_PARAMETERS
     match = re.fullmatch(r"controller\.(\w+)\.(\w+)", name)
     if match:
         axis, slot = match.groups()
@@ -229,7 +232,27 @@ def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
                 "phase": "rad"}[part]
         return (f"disturbances.{field}.{part}[{k + 1}]", unit,
                 f"{field.replace('_', ' ')}: harmonic {k + 1} {part}", False)
-    return name, "", "model parameter", False
+    return name, fmi_unit(slot_unit(fm.model, name)), "model parameter", False
+
+
+def fmi_unit(unit: str) -> str:
+    """A unit of the model's slot table (:func:`feeddrive.model.slots.slot_unit`) as the
+    FMU's unit definitions spell it: ``"-"`` → ``"1"``, ``"kg m^2"`` → ``"kg m2"``,
+    ``"ohm"`` → ``"Ohm"``.
+
+    Parameters
+    ----------
+    unit : str
+        The unit as the model declares it ("" for a slot of mixed meaning).
+
+    Returns
+    -------
+    str
+        The FMU's spelling (:func:`base_units` parses it).
+    """
+    if unit == "-":
+        return "1"
+    return " ".join("Ohm" if t == "ohm" else t for t in unit.replace("^", "").split(" "))
 
 
 def _outputs(fm: FmuModel) -> set[str]:
@@ -594,6 +617,7 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         f"#define N_SETTING {len(SETTINGS)}",
         f"#define PROFILE_OFFSET {fm.profile_offset}",
         f"#define TABLE_OFFSET {fm.table_offset}",
+        f"#define INPUT_INSTANT_SLOT {fm.profile_offset + INPUT_INSTANT}",
         f"#define LOAD_SLOT {fm.load_slot}",
         "#define MAX_STEPS_PER_CALL 50000000",
         *[f"#define IN_{k} {i}" for k, i in (("XT", IN_XT), ("VT", IN_VT), ("XN", IN_XN),

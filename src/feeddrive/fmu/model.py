@@ -20,7 +20,7 @@ import numpy as np
 from ..model.assemble import Model, assemble
 from ..model.codegen import compile_module
 from ..model.disturbances import LoadProfile
-from ..model.reference import REF_INPUT
+from ..model.reference import INPUT_INSTANT, KIND, REF_INPUT, TABLE_OFFSET
 from ..parameters import DriveParameters, ParameterError
 from ..solvers import schedule
 from . import solver
@@ -66,7 +66,7 @@ class InputReference:
         table = np.zeros((4, 2))
         table[1, 0] = self.table_speed
         table[3, 0] = self.nut_speed
-        return {0: REF_INPUT}, table
+        return {KIND: REF_INPUT}, table
 
 
 @dataclass(frozen=True)
@@ -149,7 +149,7 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
     nut_inputs = "controller.nut.kpp" in names and model.parameter("nut.active") > 0.5
     nut_position = nut_inputs and model.parameter("controller.nut.speed_mode") < 0.5
     return FmuModel(model=model, drive=drive, profile_offset=o,
-                    table_offset=int(model.P[o + 5]),
+                    table_offset=int(model.P[o + TABLE_OFFSET]),
                     load_slot=names.index("disturbances.load_force"),
                     nut_inputs=nut_inputs, nut_position_input=nut_position,
                     periods={"position_period": parameters.controller.position_period,
@@ -159,8 +159,9 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
 
 
 def numba_module(model: Model) -> ModuleType:
-    """The model's generated module with :func:`feeddrive.fmu.solver.advance_template` compiled
-    beside its kernels (``module.advance``): the numba build of the FMU's integrator.
+    """The model's generated module with the FMU's integrator
+    (:func:`feeddrive.fmu.solver.template_source`) compiled beside its kernels
+    (``module.advance``): the numba build of the FMU's integrator.
 
     Parameters
     ----------
@@ -263,7 +264,7 @@ class NumbaCoSimulation:
         T[to + 4] = self.x_int[1] if self.integrate else inputs.get("nut_position_reference",
                                                                      0.0)
         T[to + 6], T[to + 7] = vn, 0.0
-        self.P[fm.profile_offset + 4] = self.t
+        self.P[fm.profile_offset + INPUT_INSTANT] = self.t
         self.P[fm.load_slot] = inputs.get("load_force", 0.0)
 
     def do_step(self, h: float, inputs: dict[str, float]) -> None:

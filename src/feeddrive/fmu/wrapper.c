@@ -3,7 +3,7 @@
  * Compiled after the generated parts in one translation unit (feeddrive.fmu.build):
  *   - the model (feeddrive.model.c_backend): FD_N_STATE, FD_N_AUX, FD_N_HELD, FD_N_PARAM,
  *     FD_N_TABLE, fd_rhs(), fd_sample_update();
- *   - the integrator (feeddrive.fmu.solver.advance_template, translated): FD_ADVANCE();
+ *   - the integrator (feeddrive.solvers.driver specialised COMM, translated): FD_ADVANCE();
  *   - the variable tables (feeddrive.fmu.description): VR_KIND/VR_A/VR_B, start values.
  * Nothing here is physics: the wrapper moves values between the importer and the arrays the
  * generated code reads (states y, held controller values, parameters P, data table T).
@@ -98,7 +98,7 @@ static void fmu_write_inputs(Fmu *m, int with_rates) {
     m->T[TABLE_OFFSET + 4] = integrate ? m->y[FD_N_STATE + 1] : m->u[IN_XN];
     m->T[TABLE_OFFSET + 6] = m->u[IN_VN];
     m->T[TABLE_OFFSET + 7] = with_rates ? m->du[IN_VN] : 0.0;
-    m->P[PROFILE_OFFSET + 4] = m->t;
+    m->P[INPUT_INSTANT_SLOT] = m->t;
     m->P[LOAD_SLOT] = m->u[IN_LOAD];
 }
 

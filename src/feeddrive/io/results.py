@@ -20,17 +20,18 @@ import importlib.util
 from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
-import scipy.io
-import xarray as xr
 
 from .. import __version__
 from ..parameters import ParameterError
 from ..units import ENGINEERING
 from .outputs import atomic_path
+
+if TYPE_CHECKING:  # pandas, xarray and scipy.io are imported by the writers that use them
+    import pandas as pd
+    import xarray as xr
 
 FORMATS = (".csv", ".parquet", ".nc", ".mat")
 
@@ -223,6 +224,8 @@ def to_engineering_frame(dataset: xr.Dataset) -> pd.DataFrame:
     pandas.DataFrame
         One column per signal, in mm, mm/s, N/µm, otherwise SI.
     """
+    import pandas as pd
+
     return pd.DataFrame({f"{name} [{unit}]": values
                          for name, (values, unit, _) in _engineering_columns(dataset).items()})
 
@@ -290,6 +293,8 @@ def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
         signals["time"] = dataset["time"].values
         units = {name: var.attrs.get("units", "") for name, var in dataset.data_vars.items()}
         units["time"] = "s"
+        import scipy.io
+
         # oned_as="column": each signal an N×1 column vector, as MATLAB users index them
         scipy.io.savemat(p, {"feeddrive": {**signals, "units": units,
                                             "attrs": {k: str(v) for k, v in
@@ -363,6 +368,8 @@ class ChunkWriter:
             return
         cols = self._columns(t, y, aux)
         if self.ext == ".csv":
+            import pandas as pd
+
             frame = pd.DataFrame({f"{name} [{unit}]": values
                                   for name, (values, unit, _) in cols.items()})
             frame.to_csv(self._tmp, mode="w" if self._first else "a", header=self._first,

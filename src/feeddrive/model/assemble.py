@@ -9,21 +9,34 @@ go into the parameter vector, so one compiled model serves many parameter values
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import functools
+import json
+import os
+import tempfile
 from dataclasses import dataclass
+from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._jit import CACHE_DIR
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
 from .compensation import CompensationFootprint, emit_compensation
 from .disturbances import LoadProfile, TorqueRipple, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
-from .reference import PROFILE_PARAMS, REFERENCE_INPUTS, reference_with_inputs
+from .reference import (
+    NUT_SPEED,
+    PROFILE_PARAMS,
+    REFERENCE_INPUTS,
+    TABLE_COLUMNS,
+    TABLE_OFFSET,
+    reference_with_inputs,
+)
 
 if TYPE_CHECKING:
     from .reference import Profile
@@ -215,10 +228,10 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     block = np.zeros(len(PROFILE_PARAMS))
     for k, v in values.items():
         block[k] = v
-    mech.check_profile(float(block[2]), table[3])
+    mech.check_profile(float(block[NUT_SPEED]), table[3])
     table = np.ascontiguousarray(table, dtype=float)
-    block[5] = b.table(table)
-    block[6] = table.shape[1]
+    block[TABLE_OFFSET] = b.table(table)
+    block[TABLE_COLUMNS] = table.shape[1]
     o = b.params("profile", block)
     # the linearisation's reference inputs (feeddrive.analysis.linear), zero in a simulation
     oi = b.param(f"inputs.{REFERENCE_INPUTS[0]}", 0.0)
@@ -323,7 +336,50 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
 @functools.lru_cache(maxsize=64)
 def _assemble_cached(parameters: DriveParameters, drive: str, table_position: float,
                      nut_hold: str, profile: Profile, load: LoadProfile | None) -> Model:
-    return _assemble(parameters, drive, table_position, nut_hold, profile, load)
+    return _with_profile(parameters, drive, table_position, nut_hold, profile, load)
+
+
+#: models already built, by everything but the profile's numbers: (model, its mechanism,
+#: offset of the profile block in P); the newest last
+_TEMPLATES: collections.OrderedDict[tuple[Any, ...], tuple[Model, Any, int]] = \
+    collections.OrderedDict()
+_TEMPLATES_KEPT = 64
+
+
+def _with_profile(parameters: DriveParameters, drive: str, table_position: float,
+                  nut_hold: str, profile: Profile, load: LoadProfile | None) -> Model:
+    """The model of ``profile``: a model already built for another profile of the same type
+    (same parameters, drive, position, hold and load) with only the profile's slots of ``P``
+    and its table in ``T`` rewritten — the profile's numbers go into those slots only (the
+    generated source, the Jacobian pattern and every other slot do not depend on them), so
+    the result equals a full :func:`_assemble` (tested field by field) at ~1/50 of the cost
+    of building the model again (≈ 1.1 ms per creep trial and per linearisation)."""
+    key = (parameters, drive, table_position, nut_hold, type(profile), load)
+    entry = _TEMPLATES.get(key)
+    if entry is None:
+        model = _assemble(parameters, drive, table_position, nut_hold, profile, load)
+        mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
+        _TEMPLATES[key] = (model, mech, model.parameter_names.index("profile[0]"))
+        while len(_TEMPLATES) > _TEMPLATES_KEPT:
+            _TEMPLATES.popitem(last=False)
+        return model
+    _TEMPLATES.move_to_end(key)
+    model, mech, o = entry
+    values, table = profile.encode()
+    block = np.zeros(len(PROFILE_PARAMS))
+    for k, v in values.items():
+        block[k] = v
+    mech.check_profile(float(block[2]), table[3])
+    table = np.ascontiguousarray(table, dtype=float)
+    to, columns = int(model.P[o + 5]), int(model.P[o + 6])
+    if table.shape != (4, columns):  # another table size: the layout of T differs
+        return _assemble(parameters, drive, table_position, nut_hold, profile, load)
+    block[5], block[6] = to, columns
+    P = model.P.copy()
+    P[o:o + block.size] = block
+    T = model.T.copy()
+    T[to:to + table.size] = table.ravel()
+    return dataclasses.replace(model, P=P, T=T)
 
 
 def _assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
@@ -443,19 +499,40 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
 def solver_sources() -> list[str]:
     """The integrator templates pasted into every generated module.
 
-    DOPRI5 as in engine v1 and the dense-output DOPRI5 ⇄ RODAS4 driver; numba compiles each at
-    its first call, so a model only ever run with one method never compiles the other.  Cached:
-    reading template sources with ``inspect`` costs ~15 ms, more than a short simulation.
+    The one driver of :mod:`feeddrive.solvers.driver`, specialised as ``integrate`` (DOPRI5
+    landing on every breakpoint, as in engine v1) and ``integrate_dense`` (dense output,
+    DOPRI5 ⇄ RODAS4), beside the steps and Jacobian kernels they call; numba compiles each at
+    its first call, so a model only ever run with one method never compiles the other.  Cached
+    in memory and on disk, in the compile cache's folder (named after the hash of every
+    kernel source, the solvers' included: :mod:`feeddrive._jit`): reading and specialising the
+    templates with ``inspect`` and ``ast`` costs a fresh process 0.1–0.2 s, more than a short
+    simulation (issue 21 item 4).
 
     Returns
     -------
     list of str
         Python sources of the solver drivers.
     """
+    path = Path(CACHE_DIR) / "solver_sources.json"
+    try:
+        stored = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(stored, list) and all(isinstance(s, str) for s in stored):
+            return stored
+    except (OSError, ValueError):
+        pass
     from ..solvers import dopri5, rodas4, steps, switching
 
-    return (steps.template_sources() + rodas4.template_sources() + dopri5.template_sources()
-            + switching.template_sources())
+    sources = (steps.template_sources() + rodas4.template_sources()
+               + dopri5.template_sources() + switching.template_sources())
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".solver_sources.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(sources, fh)
+        os.replace(tmp, path)  # atomic: a concurrent process reads the old file or the new
+    except OSError:  # a read-only cache folder: the sources are rebuilt in each process
+        pass
+    return sources
 
 
 

@@ -19,6 +19,15 @@ from ..parameters import Component, ParameterError
 from ..parameters.validation import quantities, quantity
 from .codegen import Builder
 
+#: the load block ``disturbances.<name>``: constant force [N] and its start [s], the record's
+#: sample step [s], where its samples lie in ``T`` and how many there are
+LOAD_SLOTS = ("load_force", "load_start", "load_step", "load_offset", "load_points")
+LOAD, LOAD_START, LOAD_STEP, LOAD_OFFSET, LOAD_POINTS = range(len(LOAD_SLOTS))
+#: a harmonic series' block: its n orders, then n amplitudes, then n phases (sub-block k at
+#: ``o + k·n``)
+HARMONIC_FIELDS = ("orders", "amplitudes", "phases")
+ORDERS, AMPLITUDES, PHASES = range(len(HARMONIC_FIELDS))
+
 
 @kernel
 def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float]:
@@ -34,7 +43,8 @@ def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float
     P : numpy.ndarray
         The packed parameter vector [SI, per slot].
     o : int
-        Offset of the block in ``P``: n orders [-], n amplitudes [N m or m], n phases [rad].
+        Offset of the block in ``P``: n orders [-], n amplitudes [N m or m], n phases [rad]
+        (:data:`HARMONIC_FIELDS`).
     n : int
         Number of harmonics.
 
@@ -47,10 +57,13 @@ def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float
     """
     value = 0.0
     slope = 0.0
+    orders = o + ORDERS * n
+    amplitudes = o + AMPLITUDES * n
+    phases = o + PHASES * n
     for k in range(n):
-        arg = P[o + k] * theta + P[o + 2 * n + k]
-        value += P[o + n + k] * math.sin(arg)
-        slope += P[o + n + k] * P[o + k] * math.cos(arg)
+        arg = P[orders + k] * theta + P[phases + k]
+        value += P[amplitudes + k] * math.sin(arg)
+        slope += P[amplitudes + k] * P[orders + k] * math.cos(arg)
     return value, slope
 
 
@@ -58,8 +71,9 @@ def harmonics(theta: float, P: np.ndarray, o: int, n: int) -> tuple[float, float
 def load_force(t: float, P: np.ndarray, o: int, T: np.ndarray) -> float:
     """Table load force at time t: a constant step plus an optional sampled record.
 
-    The constant ``P[o]`` acts from ``P[o+1]`` on; the record (``P[o+4]`` points at
-    ``T[P[o+3]:]``, uniform step ``P[o+2]``) is interpolated linearly and its last value held.
+    The constant ``P[o + LOAD]`` acts from ``P[o + LOAD_START]`` on; the record
+    (``P[o + LOAD_POINTS]`` samples at ``T[P[o + LOAD_OFFSET]:]``, uniform step
+    ``P[o + LOAD_STEP]``) is interpolated linearly and its last value held.
 
     Parameters
     ----------
@@ -68,7 +82,7 @@ def load_force(t: float, P: np.ndarray, o: int, T: np.ndarray) -> float:
     P : numpy.ndarray
         The packed parameter vector [SI, per slot].
     o : int
-        Offset of the load block in ``P``.
+        Offset of the load block (:data:`LOAD_SLOTS`) in ``P``.
     T : numpy.ndarray
         The model's packed tables (the record's samples [N]).
 
@@ -77,11 +91,11 @@ def load_force(t: float, P: np.ndarray, o: int, T: np.ndarray) -> float:
     float
         Load force against positive table motion [N].
     """
-    f = P[o] if t >= P[o + 1] else 0.0
-    to = int(P[o + 3])
-    n = int(P[o + 4])
+    f = P[o + LOAD] if t >= P[o + LOAD_START] else 0.0
+    to = int(P[o + LOAD_OFFSET])
+    n = int(P[o + LOAD_POINTS])
     if n > 1:
-        u = t / P[o + 2]
+        u = t / P[o + LOAD_STEP]
         k = int(math.floor(u))
         if k >= n - 1:
             f += T[to + n - 1]
@@ -150,11 +164,9 @@ def emit_load(b: Builder, force: float, start: float, record: LoadProfile | None
     if force == 0.0 and record is None:
         return None
     step, values = record.encode() if record is not None else (1.0, np.zeros(1))
-    o = b.param("disturbances.load_force", force)
-    b.param("disturbances.load_start", start)
-    b.param("disturbances.load_step", step)
-    b.param("disturbances.load_offset", b.table(values) if record is not None else 0)
-    b.param("disturbances.load_points", values.size if record is not None else 0)
+    where = b.table(values) if record is not None else 0
+    o = b.named_params("disturbances", LOAD_SLOTS, np.array(
+        [force, start, step, where, values.size if record is not None else 0]))
     b.add_aux("load_force", "N", "load force on the table (against positive motion)")
     return f"{b.use(load_force)}(t, P, {o}, T)"
 
@@ -177,13 +189,11 @@ def emit_harmonics(b: Builder, name: str,
     tuple of (int, int) or None
         (offset of the block in ``P``, number of harmonics); None when every amplitude is 0.
     """
-    orders = tuple(ripple.orders)
-    amps = tuple(ripple.amplitudes)
-    phases = tuple(ripple.phases)
-    if not any(a != 0.0 for a in amps):
+    if not any(a != 0.0 for a in ripple.amplitudes):
         return None
-    o = b.params(f"disturbances.{name}", np.array(orders + amps + phases))
-    return o, len(orders)
+    series = [tuple(getattr(ripple, f)) for f in HARMONIC_FIELDS]  # the kernel's sub-blocks
+    o = b.params(f"disturbances.{name}", np.array(sum(series, ())))
+    return o, len(series[ORDERS])
 
 
 # ---- the disturbances' parameters: section [disturbances]

@@ -26,6 +26,11 @@ REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
 # and where its data table lies in T (offset, columns)
 PROFILE_PARAMS = ("kind", "table_speed", "nut_speed", "ramp_time", "frequency", "table_offset",
                   "table_columns")
+# the block's named offsets (a sine's amplitudes share the speed slots, a sampled profile's
+# hold flag the ramp slot, its sample step and an input's sample instant the frequency slot)
+KIND, TABLE_SPEED, NUT_SPEED, RAMP_TIME, FREQUENCY, TABLE_OFFSET, TABLE_COLUMNS = \
+    range(len(PROFILE_PARAMS))
+HOLD, SAMPLE_STEP, INPUT_INSTANT = RAMP_TIME, FREQUENCY, FREQUENCY
 
 
 @kernel
@@ -35,10 +40,10 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
 
     ``P[o:o+7]`` is the profile block (``PROFILE_PARAMS``); sampled profiles read a 4 × n
     table at ``T[to:]`` (rows: table position, table speed, nut position, nut speed), their
-    speeds interpolated linearly or, with ``P[o+3]`` = 1, held (zero-order hold).  An external
-    input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its host:
-    positions X (rows 0, 2) and speeds V with their rates A (rows 1, 3: [V, A]) at the instant
-    ``P[o+4]``, x = X + V·τ + A·τ²/2, v = V + A·τ, τ = t − ``P[o+4]``.
+    speeds interpolated linearly or, with ``P[o + HOLD]`` = 1, held (zero-order hold).  An
+    external input (``REF_INPUT``, :mod:`feeddrive.fmu`) reads a 4 × 2 table written by its
+    host: positions X (rows 0, 2) and speeds V with their rates A (rows 1, 3: [V, A]) at the
+    instant ``P[o + INPUT_INSTANT]``, x = X + V·τ + A·τ²/2, v = V + A·τ, τ = t − that instant.
 
     Parameters
     ----------
@@ -56,31 +61,32 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
     tuple of float
         Table position [m], table speed [m/s], nut position [m], nut speed [m/s].
     """
-    kind = int(P[o])
+    kind = int(P[o + KIND])
     if kind == REF_CONSTANT:
-        tr = P[o + 3]
-        vt = P[o + 1]
-        vn = P[o + 2]
+        tr = P[o + RAMP_TIME]
+        vt = P[o + TABLE_SPEED]
+        vn = P[o + NUT_SPEED]
         if tr > 0.0 and t < tr:
             f = t / tr
             return vt * t * f / 2.0, vt * f, vn * t * f / 2.0, vn * f
         shift = tr / 2.0 if tr > 0.0 else 0.0
         return vt * (t - shift), vt, vn * (t - shift), vn
     if kind == REF_SINE:
-        w = 2.0 * math.pi * P[o + 4]
+        w = 2.0 * math.pi * P[o + FREQUENCY]
         s = math.sin(w * t)
         c = math.cos(w * t)
-        return (P[o + 1] * (1.0 - c) / w, P[o + 1] * s, P[o + 2] * (1.0 - c) / w,
-                P[o + 2] * s)
-    to = int(P[o + 5])
+        a_t = P[o + TABLE_SPEED]
+        a_n = P[o + NUT_SPEED]
+        return a_t * (1.0 - c) / w, a_t * s, a_n * (1.0 - c) / w, a_n * s
+    to = int(P[o + TABLE_OFFSET])
     if kind == REF_INPUT:
-        tau = t - P[o + 4]
+        tau = t - P[o + INPUT_INSTANT]
         return (T[to] + (T[to + 2] + 0.5 * T[to + 3] * tau) * tau, T[to + 2] + T[to + 3] * tau,
                 T[to + 4] + (T[to + 6] + 0.5 * T[to + 7] * tau) * tau,
                 T[to + 6] + T[to + 7] * tau)
-    dt = P[o + 4]
-    n = int(P[o + 6])
-    hold = P[o + 3] > 0.5
+    dt = P[o + SAMPLE_STEP]
+    n = int(P[o + TABLE_COLUMNS])
+    hold = P[o + HOLD] > 0.5
     u = t / dt
     # held speeds jump at the samples: an instant within 1e-9 of a sample step belongs to the
     # new one (t = k·dt computed in floating point may land a hair before it)
@@ -110,6 +116,8 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
 #: :mod:`feeddrive.analysis.linear`), in the order ``reference_with_inputs`` reads them
 REFERENCE_INPUTS = ("table_position_reference", "table_speed_reference",
                     "nut_position_reference", "nut_speed_reference")
+TABLE_POSITION_INPUT, TABLE_SPEED_INPUT, NUT_POSITION_INPUT, NUT_SPEED_INPUT = \
+    range(len(REFERENCE_INPUTS))
 
 
 @kernel
@@ -139,7 +147,8 @@ def reference_with_inputs(t: float, P: np.ndarray, o: int, oi: int,
         Table position [m], table speed [m/s], nut position [m], nut speed [m/s].
     """
     x_t, v_t, x_n, v_n = reference_kernel(t, P, o, T)
-    return x_t + P[oi], v_t + P[oi + 1], x_n + P[oi + 2], v_n + P[oi + 3]
+    return (x_t + P[oi + TABLE_POSITION_INPUT], v_t + P[oi + TABLE_SPEED_INPUT],
+            x_n + P[oi + NUT_POSITION_INPUT], v_n + P[oi + NUT_SPEED_INPUT])
 
 
 @dataclass(frozen=True)
@@ -173,8 +182,8 @@ class ConstantSpeed:
         _finite("nut_speed", self.nut_speed, "m/s")
         if not (self.ramp_time >= 0.0 and math.isfinite(self.ramp_time)):
             raise ValueError(f"profile.ramp_time = {self.ramp_time!r}: expected ≥ 0 [s]")
-        return ({0: REF_CONSTANT, 1: self.table_speed,
-                 2: self.nut_speed, 3: self.ramp_time}, _EMPTY_TABLE)
+        return ({KIND: REF_CONSTANT, TABLE_SPEED: self.table_speed,
+                 NUT_SPEED: self.nut_speed, RAMP_TIME: self.ramp_time}, _EMPTY_TABLE)
 
 
 @dataclass(frozen=True)
@@ -214,8 +223,8 @@ class SineSpeed:
         _finite("nut_amplitude", self.nut_amplitude, "m/s")
         if not (self.frequency > 0.0 and math.isfinite(self.frequency)):
             raise ValueError(f"profile.frequency = {self.frequency!r}: expected > 0 [Hz]")
-        return ({0: REF_SINE, 1: self.table_amplitude,
-                 2: self.nut_amplitude, 4: self.frequency}, _EMPTY_TABLE)
+        return ({KIND: REF_SINE, TABLE_SPEED: self.table_amplitude,
+                 NUT_SPEED: self.nut_amplitude, FREQUENCY: self.frequency}, _EMPTY_TABLE)
 
 
 @dataclass(frozen=True)
@@ -269,7 +278,8 @@ class SampledSpeed:
             table[2 * j + 1] = v
             table[2 * j, 0] = 0.0
             table[2 * j, 1:] = np.cumsum((v[:-1] if self.hold else 0.5 * (v[1:] + v[:-1])) * dt)
-        return ({0: REF_SAMPLED, 3: 1.0 if self.hold else 0.0, 4: float(dt.mean())}, table)
+        return ({KIND: REF_SAMPLED, HOLD: 1.0 if self.hold else 0.0,
+                 SAMPLE_STEP: float(dt.mean())}, table)
 
     @classmethod
     def from_function(cls, table_speed: Callable[[np.ndarray], np.ndarray], duration: float,

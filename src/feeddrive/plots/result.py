@@ -33,10 +33,18 @@ def run_title(result: Result) -> str:
     what = {"ConstantSpeed": "constant", "SineSpeed": "sine amplitude",
             "SampledSpeed": "sampled profile, top speed"}.get(kind, kind)
     drive = str(attrs["drive"])
-    where = ("" if drive == "linear-motor"
-             else f", position {1e3 * float(attrs.get('table_start_position_m', 0.0)):g} mm")
+    where = (f", position {1e3 * float(attrs.get('table_start_position_m', 0.0)):g} mm"
+             if _uses_table_position(drive) else "")
     return (f"{drive.upper()}, {what} {1e3 * abs(result.command_speed):.4g} mm/s{where}, "
             f"{float(result.time[-1]):.4g} s — {attrs['parameter_set']}")
+
+
+def _uses_table_position(drive: str) -> bool:
+    """Whether the drive's topology depends on the table position (the header names it then);
+    a drive no longer registered (a record of a plug-in's run) is named with its position."""
+    from ..model.mechanisms import drive_names, mechanism
+
+    return mechanism(drive).uses_table_position if drive in drive_names() else True
 
 
 def _legend_above(ax: Any) -> None:

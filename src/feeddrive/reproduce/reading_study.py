@@ -46,9 +46,13 @@ def dominant_mode(params: DriveParameters, drive: str = "cdfs",
     damping : float
         Its damping ratio [-].
     """
-    from ..analysis.linear import loop_analysis
+    import numpy as np
 
-    d = loop_analysis(DriveSystem(params, drive, position), 0.0, frictionless=True).dominant()
+    from ..analysis.linear import classify_poles, dominant_pole, state_matrix
+
+    # the poles of loop_analysis(...).dominant(), without its loop transfers (not needed)
+    A = state_matrix(DriveSystem(params, drive, position), 0.0, frictionless=True)
+    d = dominant_pole(classify_poles(np.linalg.eigvals(A)))
     return d.frequency_hz, d.damping_ratio
 
 
@@ -207,6 +211,61 @@ def jobs() -> list[tuple[str, str, dict[str, Any], str, float]]:
             for drive, nut in (("cdfs", 0.0), ("ddfs", PAPER["ddfs_sim_nut_speed"]))]
 
 
+def variant_parameters(job: tuple[str, str, dict[str, Any], str, float]) -> DriveParameters:
+    """The parameter set of one job of the study: its preset with its changes.
+
+    Parameters
+    ----------
+    job : tuple of (str, str, dict, str, float)
+        One item of :func:`jobs`: (variant, preset, changes, drive, nut speed [m/s]).
+
+    Returns
+    -------
+    DriveParameters
+        The set the job's search runs on.
+    """
+    _, preset, changes, _, _ = job
+    p = parameters.preset(preset)
+    for path, value in changes.items():
+        if isinstance(value, dict):  # a component given by its fields (torque ripple)
+            from ..parameters import from_dict, to_dict
+
+            data = to_dict(p)
+            node = data
+            *parents, last = path.split(".")
+            for part in parents:
+                node = node[part]
+            node[last] = value
+            p = from_dict(data)
+            continue
+        p = p.replace_path(path, value)
+    return p
+
+
+def row_from_search(job: tuple[str, str, dict[str, Any], str, float],
+                    search: dict[str, Any]) -> dict[str, Any]:
+    """The study's row of a job from its critical-speed search (the same search as another
+    study's is shared: the Table 3 mid-screw CDFS and the Fig. 8 DDFS are the shipped
+    reading's rows).
+
+    Parameters
+    ----------
+    job : tuple of (str, str, dict, str, float)
+        One item of :func:`jobs`: (variant, preset, changes, drive, nut speed [m/s]).
+    search : dict
+        The job's search (:func:`~feeddrive.reproduce.studies.critical_speed`).
+
+    Returns
+    -------
+    dict
+        The row, as :func:`run_variant` gives it.
+    """
+    name, _, changes, drive, nut = job
+    return {"variant": name, "drive": drive, "nut_speed_mm_s": nut * 1e3, "changes": changes,
+            "critical_speed_mm_s": search["critical_speed_mm_s"], "status": search["status"],
+            "kind": search["kind"], "bands": search["bands"]}
+
+
 def run_variant(job: tuple[str, str, dict[str, Any], str, float],
                 settings: StudySettings | None = None) -> dict[str, Any]:
     """One row: the variant's critical speed [mm/s] for one drive (failures are rows too).
@@ -224,28 +283,13 @@ def run_variant(job: tuple[str, str, dict[str, Any], str, float],
         The variant, drive, nut speed [mm/s], critical speed [mm/s] (None when not found),
         status, kind and creeping bands.
     """
-    name, preset, changes, drive, nut = job
-    p = parameters.preset(preset)
-    for path, value in changes.items():
-        if isinstance(value, dict):  # a component given by its fields (torque ripple)
-            from ..parameters import from_dict, to_dict
-
-            data = to_dict(p)
-            node = data
-            *parents, last = path.split(".")
-            for part in parents:
-                node = node[part]
-            node[last] = value
-            p = from_dict(data)
-            continue
-        p = p.replace_path(path, value)
-    row: dict[str, Any] = {"variant": name, "drive": drive, "nut_speed_mm_s": nut * 1e3,
-                           "changes": changes}
+    name, _, changes, drive, nut = job
+    p = variant_parameters(job)
     try:
-        res = critical_speed(p, drive, MID, nut, settings or StudySettings())
-        row.update(critical_speed_mm_s=res["critical_speed_mm_s"], status=res["status"],
-                   kind=res["kind"], bands=res["bands"])
+        return row_from_search(job, critical_speed(p, drive, MID, nut,
+                                                   settings or StudySettings()))
     except SimulationError as err:
         # a variant the solver cannot finish is a finding, not a reason to lose the others
-        row.update(critical_speed_mm_s=None, status=f"solver failed: {err}")
-    return row
+        return {"variant": name, "drive": drive, "nut_speed_mm_s": nut * 1e3,
+                "changes": changes, "critical_speed_mm_s": None,
+                "status": f"solver failed: {err}"}

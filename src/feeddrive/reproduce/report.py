@@ -473,10 +473,14 @@ def run_text(results: dict[str, Any]) -> str:
     reused, total = results.get("studies_reused"), results.get("studies_total")
     if reused is None or total is None:
         return text
+    shared = results.get("studies_shared") or []
+    # rows taken from the identical search of another study (runner._shared_rows)
+    note = (f" ({len(shared)} model-reading rows, {', '.join(shared)}, are the searches of "
+            "Table 3's mid-screw CDFS and Fig. 8's DDFS, run once for both)") if shared else ""
     if reused == 0:
-        return text + f", all {total} studies computed in this run"
+        return text + f", all {total} studies computed in this run" + note
     return (text + f"; {reused} of {total} studies reused from an earlier run (OUT/data/), "
-            f"{total - reused} computed in this run")
+            f"{total - reused} computed in this run" + note)
 
 
 def settings_markdown(settings: StudySettings) -> str:

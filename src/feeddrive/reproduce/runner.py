@@ -85,10 +85,48 @@ def _critical_job(args: tuple[DriveParameters, str, float, float, StudySettings,
     return studies.critical_speed_running(params, drive, position, nut_speed, settings)
 
 
-def _compensation_job(params: DriveParameters, settings: StudySettings) -> dict[str, Any]:
+def _compensation_job(params: DriveParameters, settings: StudySettings,
+                      found: dict[int, dict[str, Any]] | None = None) -> dict[str, Any]:
     from ..analysis.compensation import compensation_study
 
-    return {"rows": compensation_study(params, rule=settings.rule())}
+    return {"rows": compensation_study(params, rule=settings.rule(), found=found)}
+
+
+def _shared_rows(study_jobs: dict[str, tuple[str, str, dict[str, Any], str, float]],
+                 jobs: dict[str, tuple[DriveParameters, str, float, float, StudySettings, str]]
+                 ) -> dict[str, str]:
+    """The model-reading study's rows whose search is one of the paper's ``jobs`` (same set,
+    drive, mid-screw, nut speed, from rest): study key → job key."""
+    out: dict[str, str] = {}
+    for k, job in study_jobs.items():
+        for key, (p, drive, position, nut, _, start) in jobs.items():
+            if start == "rest" and (drive, position, nut) == (job[3], MID, job[4]) \
+                    and reading_study.variant_parameters(job) == p:
+                out[k] = key
+                break
+    return out
+
+
+def _compensation_shares(params: DriveParameters, settings: StudySettings,
+                         jobs: dict[str, tuple[DriveParameters, str, float, float,
+                                               StudySettings, str]]) -> dict[int, str]:
+    """The compensation study's cases whose critical-speed search is one of ``jobs`` (the
+    uncompensated CDFS and the DDFS at 16 mm/s are Table 3's mid-screw CDFS and Fig. 8's
+    DDFS when the study runs on the protocol's grid): case index → job key."""
+    from ..analysis import protocol
+    from ..analysis.compensation import case_parameters, default_cases
+
+    if (settings.speed_range, settings.coarse_step, settings.resolution) != (
+            protocol.SPEED_RANGE, protocol.COARSE_STEP, protocol.RESOLUTION):
+        return {}
+    out: dict[int, str] = {}
+    for i, case in enumerate(default_cases()):
+        for key, (p, drive, position, nut, _, start) in jobs.items():
+            if (start == "rest" and drive == case.drive and position == MID
+                    and nut == case.nut_speed and case_parameters(params, case) == p):
+                out[i] = key
+                break
+    return out
 
 
 def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = None,
@@ -156,16 +194,23 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     done = sum(v is not None for v in found.values())
     if progress:
         progress("critical speeds", done, len(names))
-    # submitted roughly longest first, so that no long search starts last and runs alone:
-    # the step-down searches, the model-reading study (whose undecided readings run their
-    # trials to the longest duration), the rest, the paper's searches from rest
-    tasks: dict[str, tuple[Callable[..., Any], tuple[Any, ...]]] = {
-        k: (_critical_job, (v,)) for k, v in jobs.items() if v[5] != "rest"}
-    tasks.update({k: (reading_study.run_variant, (v, settings)) for k, v in study_jobs.items()})
-    tasks.update({k: (forced_study.run, (v,)) for k, v in forced_jobs.items()})
+    # a study row whose search is one of the paper's (the shipped reading at mid-screw is
+    # Table 3's CDFS and Fig. 8's DDFS): taken from that search, not searched twice
+    shared = _shared_rows(study_jobs, jobs)
+    comp_shares = _compensation_shares(params, settings, jobs) if study else {}
+    # submitted roughly longest first, so that no long study starts last and runs alone:
+    # the sensitivity (linearisations only), the step-down searches, the searches the other
+    # studies share, the model-reading study (whose undecided readings run their trials to
+    # the longest duration), the rest, the paper's other searches from rest
+    tasks: dict[str, tuple[Callable[..., Any], tuple[Any, ...]]] = {}
     if study:
-        tasks["compensation"] = (_compensation_job, (params, settings))
         tasks["sensitivity"] = (sensitivity_section.compute, (params,))
+    tasks.update({k: (_critical_job, (v,)) for k, v in jobs.items() if v[5] != "rest"})
+    tasks.update({k: (_critical_job, (jobs[k],))
+                  for k in dict.fromkeys([*shared.values(), *comp_shares.values()])})
+    tasks.update({k: (reading_study.run_variant, (v, settings)) for k, v in study_jobs.items()
+                  if k not in shared})
+    tasks.update({k: (forced_study.run, (v,)) for k, v in forced_jobs.items()})
     tasks.update({k: (forced_study.reading_figures, (i, settings))
                   for i, k in enumerate(figure_jobs)})
     tasks["fig6"] = (studies.fig6, (params, settings))
@@ -176,26 +221,41 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
         v = _entry(found, key)["critical_speed_mm_s"]
         return None if v is None else v * 1e-3
 
-    # figure studies that need a critical speed: submitted once it is known
+    # studies that need another's result: submitted once it is known
     cdfs_mid = f"crit-cdfs-{MID}"
-    after: dict[str, tuple[str, Callable[[], tuple[Callable[..., Any], tuple[Any, ...]]]]] = {
-        "fig7": (cdfs_mid, lambda: (studies.fig7, (
+    Task = tuple[Callable[..., Any], tuple[Any, ...]]
+    after: dict[str, tuple[tuple[str, ...], Callable[[], Task]]] = {
+        "fig7": ((cdfs_mid,), lambda: (studies.fig7, (
             params, speed(cdfs_mid) or PAPER["cdfs_critical_sim"], settings))),
-        "fig8_trace": ("crit-ddfs-fig8", lambda: (
+        "fig8_trace": (("crit-ddfs-fig8",), lambda: (
             _fig8_trace, (params, speed("crit-ddfs-fig8")))),
     }
+    if study:
+        after["compensation"] = (tuple(comp_shares.values()), lambda: (
+            _compensation_job, (params, settings,
+                                {i: found[key] for i, key in comp_shares.items()})))
     todo = {k: v for k, v in tasks.items() if found[k] is None}
     cpu_seconds: dict[str, float] = {}  # of each study computed in this run
-    if todo or any(found[k] is None for k in after):
+    if todo or any(found[k] is None for k in [*after, *shared]):
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
         # waits for its running searches took ~53 s to stop, issue 12 item 7)
         pool = multiprocessing.Pool(max(1, workers), initializer=_ignore_sigint)
         try:
             pending = {k: pool.apply_async(_timed, (fn, *args)) for k, (fn, args) in todo.items()}
-            waiting = {k: dep for k, (dep, _) in after.items() if found[k] is None}
-            while pending or waiting:
-                for k, dep in list(waiting.items()):
-                    if found[dep] is not None:
+            waiting = {k: deps for k, (deps, _) in after.items() if found[k] is None}
+            copies = {k: key for k, key in shared.items() if found[k] is None}
+            while pending or waiting or copies:
+                for k, key in list(copies.items()):
+                    if found[key] is not None:  # stored at once, as a computed study
+                        found[k] = store.put(k, reading_study.row_from_search(
+                            study_jobs[k], _entry(found, key)))
+                        cpu_seconds[k] = 0.0
+                        done += 1
+                        del copies[k]
+                        if progress:
+                            progress(k, done, len(names))
+                for k, deps in list(waiting.items()):
+                    if all(found[dep] is not None for dep in deps):
                         fn, args = after[k][1]()
                         pending[k] = pool.apply_async(_timed, (fn, *args))
                         del waiting[k]
@@ -247,6 +307,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     results["cpu_seconds"] = cpu_seconds
     results["studies_total"] = len(names)
     results["studies_reused"] = len(names) - len(cpu_seconds)
+    results["studies_shared"] = [k for k in shared if k in cpu_seconds]
     report.write(params, settings, results, out)
     return results
 

@@ -38,11 +38,11 @@ from __future__ import annotations
 
 import inspect
 import math
-from typing import Any
 
 import numpy as np
 
 from .._jit import kernel
+from .placeholders import rhs
 from .tableaux import RODAS4
 
 ORDER = 4  # of the main solution; the embedded solution is of order 3
@@ -62,29 +62,6 @@ R4_H21, R4_H22, R4_H23, R4_H24, R4_H25 = RODAS4.dense[0]
 R4_H31, R4_H32, R4_H33, R4_H34, R4_H35 = RODAS4.dense[1]
 
 TABLEAU = tuple(name for name in dir() if name.startswith("R4_"))
-
-# Placeholders: replaced by the assembled model's kernels in the generated module.
-N_AUX = 0
-N_HELD = 1
-
-
-def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
-    """Placeholder for the assembled model's right-hand side.
-
-    The generated module replaces it; calling it raises.
-
-    Parameters
-    ----------
-    *args : object
-        The model function's arguments.
-
-    Raises
-    ------
-    NotImplementedError
-        Always.
-    """
-    raise NotImplementedError("placeholder: the assembled model's right-hand side")
-
 
 @kernel
 def lu_factor(M: np.ndarray, piv: np.ndarray) -> bool:

@@ -1,4 +1,4 @@
-"""The event schedule of the drivers: the sample instants of any number of clocks, merged.
+"""The event schedule of the driver: the sample instants of any number of clocks, merged.
 
 A model declares a clock for each sampled part (the three loops, a feed-forward with its own
 rate …; :meth:`feeddrive.model.codegen.Builder.clock`), its period a parameter slot.  A run
@@ -12,7 +12,8 @@ with ``tick`` from :func:`due`: an instant is an exact breakpoint count, not a s
 so instants of different clocks that coincide are one event.
 
 Both kernels are compiled into the generated modules by import and translated to C with the
-FMU's integrator (:mod:`feeddrive.fmu.solver`).
+FMU's integrator (the driver of :mod:`feeddrive.solvers.driver` specialised for
+:mod:`feeddrive.fmu.solver`).
 """
 
 from __future__ import annotations

@@ -36,29 +36,12 @@ from typing import Any
 
 import numpy as np
 
+from . import placeholders
 from .rodas4 import lu_factor, lu_solve  # noqa: F401 - called by the Rosenbrock step
 from .tableaux import DOPRI5, RODAS4, ExplicitTableau, RosenbrockTableau
 
 # the model arguments of every right-hand-side call between the state and the outputs
 RHS_ARGS = "held, P, T"
-
-
-def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
-    """Placeholder for the assembled model's right-hand side.
-
-    The generated module replaces it; calling it raises.
-
-    Parameters
-    ----------
-    *args : object
-        The model function's arguments.
-
-    Raises
-    ------
-    NotImplementedError
-        Always.
-    """
-    raise NotImplementedError("placeholder: the assembled model's right-hand side")
 
 
 def error_norm_template(e: np.ndarray, y: np.ndarray, y_new: np.ndarray, rtol: float,
@@ -387,7 +370,7 @@ def _define(source: str, name: str, scope: dict[str, Any] | None = None) -> Any:
     _COUNTER[0] += 1
     filename = f"<feeddrive.solvers.steps:{name}:{_COUNTER[0]}>"
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
-    namespace = {**globals(), **(scope or {})}
+    namespace = {**globals(), "rhs": placeholders.rhs, **(scope or {})}
     local: dict[str, Any] = {}
     exec(compile(source, filename, "exec"), namespace, local)  # noqa: S102 - our own text
     fn = local[name]
@@ -497,6 +480,7 @@ _HAND_WRITTEN: dict[str, Any] = {"_error_norm": error_norm_template,
                                   "_reject_factor": reject_factor_template}
 
 
+@functools.cache
 def _norm_source(name: str = "_error_norm") -> str:
     fn = _HAND_WRITTEN[name]
     return inspect.getsource(fn).replace(f"def {fn.__name__}(", f"def {name}(", 1)
@@ -580,8 +564,8 @@ def inline_steps(source: str, names: tuple[str, ...] = INLINED) -> str:
 
 def template_sources() -> list[str]:
     """Text placed in each generated model module: the error norm and every step function
-    (the drivers have the explicit step written into their text, :func:`inline_steps`; the
-    FMU's integrator and the Rosenbrock branch call them).
+    (the driver's specialisations have the explicit step written into their text,
+    :func:`inline_steps`; the FMU's integrator and the Rosenbrock branch call them).
 
     Returns
     -------

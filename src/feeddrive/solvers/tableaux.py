@@ -2,9 +2,10 @@
 coefficient sets of Rosenbrock methods.
 
 A method here is only numbers; :mod:`feeddrive.solvers.steps` writes the one explicit
-embedded Runge–Kutta step and the one Rosenbrock step for any of them, and the drivers
-(:mod:`feeddrive.solvers.dopri5`, :mod:`feeddrive.solvers.switching`,
-:mod:`feeddrive.fmu.solver`) call the step so written.  Adding a method is adding a tableau.
+embedded Runge–Kutta step and the one Rosenbrock step for any of them, and the one driver
+(:mod:`feeddrive.solvers.driver`, specialised for :mod:`feeddrive.solvers.dopri5`,
+:mod:`feeddrive.solvers.switching` and :mod:`feeddrive.fmu.solver`) calls the step so written.
+Adding a method is adding a tableau.
 
 * :data:`DOPRI5`: Dormand–Prince 5(4), J. R. Dormand and P. J. Prince, "A family of embedded
   Runge–Kutta formulae", J. Comput. Appl. Math. 6 (1980) 19–26; the coefficients and the

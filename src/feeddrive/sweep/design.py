@@ -39,10 +39,22 @@ SPECIAL_AXES: dict[str, tuple[str, float]] = {
     "table_position": ("mm", units.MM), "nut_speed": ("mm/s", units.MM_PER_S),
     "table_speed": ("mm/s", units.MM_PER_S),
 }
-DRIVES = ("cdfs", "ddfs", "linear-motor")
-#: drives without a driven nut: their nut speed is 0 whatever an axis says (the CDFS holds
-#: the hollow motor), so those points share one stored result
-NO_NUT_DRIVES = ("cdfs", "linear-motor")
+def _drives() -> tuple[str, ...]:
+    """The registered drives (a sweep runs any topology)."""
+    from ..model.mechanisms import drive_names
+
+    return drive_names()
+
+
+def _no_nut(drive: str) -> bool:
+    """Whether ``drive`` follows no nut speed (its topology says: the CDFS holds its nut, a
+    linear motor has none): its nut speed is 0 whatever an axis says, so those points share
+    one stored result.  An unknown drive counts as driving none (it is refused later)."""
+    from ..model.mechanisms import drive_names, mechanism
+
+    return drive not in drive_names() or drive not in mechanism(drive).nut_driven_drives
+
+
 _TOP_KEYS = ("name", "preset", "params", "drive", "table_position", "nut_speed", "store",
              "design", "quantity", "axes", "map")
 _AXIS_KEYS = ("values", "low", "high", "points", "scale", "relative")
@@ -293,7 +305,7 @@ class SweepConfig:
         """
         drive = str(coords.get("drive", self.drive))
         return tuple(sorted((k, repr(v)) for k, v in coords.items()
-                            if not (k == "nut_speed" and drive in NO_NUT_DRIVES)))
+                            if not (k == "nut_speed" and _no_nut(drive))))
 
     def distinct_count(self) -> int:
         """How many distinct computations the design asks for, from the coordinates alone
@@ -377,7 +389,7 @@ class SweepConfig:
         params = self._base(base_name, cache)
         drive = str(coords.get("drive", self.drive))
         position = float(coords.get("table_position", self.table_position)) * units.MM
-        nut = 0.0 if drive in NO_NUT_DRIVES else \
+        nut = 0.0 if _no_nut(drive) else \
             float(coords.get("nut_speed", self.nut_speed)) * units.MM_PER_S
         quantity = self.quantity
         if "table_speed" in coords:
@@ -596,8 +608,9 @@ def _check_axis_name(axis: Axis, base: DriveParameters) -> None:
             raise _refuse(f"{axis.key}.relative", True, f"{axis.name} cannot be relative")
         if axis.name == "drive":
             for v in axis.values or ():
-                if v not in DRIVES:
-                    raise _refuse(f"{axis.key}.values", v, f"expected one of {', '.join(DRIVES)}")
+                if v not in _drives():
+                    raise _refuse(f"{axis.key}.values", v,
+                                  f"expected one of {', '.join(_drives())}")
         if axis.name in ("drive", "preset") and axis.values is None:
             raise _refuse(axis.key, axis.low, "expected values = [...] (names)")
         return
@@ -662,8 +675,8 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
         raise _refuse("params", base, "expected a .toml parameter file")
     base_params = _load_base(base, source)
     drive = data.get("drive", "cdfs")
-    if drive not in DRIVES:
-        raise _refuse("drive", drive, f"expected one of {', '.join(DRIVES)}")
+    if drive not in _drives():
+        raise _refuse("drive", drive, f"expected one of {', '.join(_drives())}")
     position = _number("table_position", data.get("table_position", 400.0))
     nut = _number("nut_speed", data.get("nut_speed", 0.0))
 
@@ -756,5 +769,5 @@ def load_config(path: str | os.PathLike[str]) -> SweepConfig:
         raise err.in_file(os.fspath(path)) from None
 
 
-__all__ = ["DESIGNS", "DRIVES", "MAX_POINTS", "Axis", "Point", "SweepConfig", "check_name",
+__all__ = ["DESIGNS", "MAX_POINTS", "Axis", "Point", "SweepConfig", "check_name",
            "load_config", "numeric_paths", "parse_config"]

@@ -391,7 +391,7 @@ function renderRun(res) {
   setVerdict(res.verdict);
   const s = res.summary;
   const what = `${res.drive.toUpperCase()} at ${fmt(res.table_speed_mm_s)} mm/s` +
-    (res.drive === "ddfs" ? `, hollow motor ${fmt(res.nut_speed_mm_s)} mm/s` : "");
+    (res.nut_driven ? `, hollow motor ${fmt(res.nut_speed_mm_s)} mm/s` : "");
   $("run-facts").textContent =
     `${what}, ${fmt(res.duration_s)} s simulated (${res.parameter_set}) · mean table speed ` +
     `${fmt(s.mean_table_speed_mm_s)} mm/s · following error max ` +
@@ -412,7 +412,7 @@ function renderRun(res) {
                   type: "scatter", mode: "lines", visible: "legendonly",
                   line: { color: COLORS.screw, width: 1 }, hovertemplate: hover("screw") });
   }
-  if (t.nut_linear_speed_mm_s && res.drive === "ddfs") {
+  if (t.nut_linear_speed_mm_s && res.nut_driven) {
     traces.push({ x: t.time_s, y: t.nut_linear_speed_mm_s, name: "hollow motor (× H)",
                   type: "scatter", mode: "lines", visible: "legendonly",
                   line: { color: COLORS.nut, width: 1 }, hovertemplate: hover("hollow") });

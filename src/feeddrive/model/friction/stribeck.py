@@ -23,7 +23,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..._jit import kernel
 from . import lugre
@@ -388,6 +387,8 @@ def negative_slope_band(branch: FrictionBranch) -> NegativeSlopeBand | None:
 
     def f(v: float) -> float:
         return _stribeck_slope(v, branch) - s2
+
+    from scipy.optimize import brentq  # here: a simulation never needs it (issue 21 item 4)
 
     lower = 0.0 if s2 == 0.0 else brentq(f, 0.0, v_peak, xtol=1e-15, rtol=1e-12)
     hi = v_peak

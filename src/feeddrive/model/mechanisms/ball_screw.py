@@ -30,8 +30,10 @@ from ..loops import ENC_Q, GRAT_Q, H_AX, V_FEEDBACK, Axis, Channel, axis_paramet
 from .ball_screw_stiffness import axial_stiffness, equivalent_stiffness, torsional_stiffness
 from .base import Body, DriveMotor, Mechanics, Mechanism, Site, register_mechanism
 
-# stiffness block: fixed K_eq (0 = from the chain), c0, EA, length, support, x0
-_STIFF = ("k_fixed", "c0", "ea", "length", "support", "x0")
+# stiffness block ``stiffness.<name>``: fixed K_eq (0 = from the chain), c0, EA, length,
+# support (0 fixed–fixed, 1 fixed–free), x0; the kernel reads it through the named offsets
+STIFFNESS_SLOTS = ("k_fixed", "c0", "ea", "length", "support", "x0")
+K_FIXED, C0, EA, LENGTH, SUPPORT, X0 = range(len(STIFFNESS_SLOTS))
 
 
 @kernel
@@ -51,7 +53,8 @@ def equivalent_stiffness_kernel(x_t: float, P: np.ndarray, o: int) -> float:
     P : numpy.ndarray
         The packed parameter vector [SI, per slot].
     o : int
-        Offset of the stiffness block (K_fixed, c0, EA, l, support, x0) in ``P``.
+        Offset of the stiffness block (:data:`STIFFNESS_SLOTS`: K_fixed, c0, EA, l, support,
+        x0) in ``P``.
 
     Returns
     -------
@@ -62,21 +65,21 @@ def equivalent_stiffness_kernel(x_t: float, P: np.ndarray, o: int) -> float:
     ----------
     .. [1] Wang2021 Eqs. (2)–(5).
     """
-    if P[o] > 0.0:
-        return P[o]
-    a = P[o + 5] + x_t
-    length = P[o + 3]
+    if P[o + K_FIXED] > 0.0:
+        return P[o + K_FIXED]
+    a = P[o + X0] + x_t
+    length = P[o + LENGTH]
     # keep the nut strictly between the supports (Eq. 4 diverges at the supports)
     lo = 1e-3 * length
     if a < lo:
         a = lo
     elif a > length - lo:
         a = length - lo
-    if P[o + 4] < 0.5:
-        c_screw = a * (length - a) / (P[o + 2] * length)
+    if P[o + SUPPORT] < 0.5:
+        c_screw = a * (length - a) / (P[o + EA] * length)
     else:
-        c_screw = a / P[o + 2]
-    return 1.0 / (P[o + 1] + c_screw)
+        c_screw = a / P[o + EA]
+    return 1.0 / (P[o + C0] + c_screw)
 
 
 @register_mechanism
@@ -109,6 +112,12 @@ class BallScrewDrive(Mechanism):
     travel_length = "screw.length"
     travel_ends = "the screw supports"
     uses_table_position = True
+    table_axis = "screw"
+    nut_axis = "nut"
+    nut_driven_drives = ("ddfs",)
+    part_name = "ball screw"
+    own_sections = ("screw", "coupling", "stiffness", "screw_motor", "hollow_motor",
+                    "hollow_controller")
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:
@@ -137,8 +146,38 @@ class BallScrewDrive(Mechanism):
             raise ParameterError("table_position", a,
                                  f"expected 0 < a < {length:g} [m] (between the supports)")
 
+    @classmethod
+    def drive_label(cls, drive: str) -> str:
+        """Parameters
+        ----------
+        drive : str
+            ``"cdfs"`` or ``"ddfs"``.
+
+        Returns
+        -------
+        str
+            ``"the CDFS"``, ``"the DDFS"``.
+        """
+        return f"the {drive.upper()}"
+
+    def held_parameters(self) -> tuple[tuple[str, ...], str]:
+        """The CDFS with its nut locked: the hollow motor, its loops, the nut's inertia and
+        friction and the ball–nut share do not act.
+
+        Returns
+        -------
+        paths : tuple of str
+            Parameter paths or section prefixes.
+        reason : str
+            Why, for messages.
+        """
+        if self.nut_active:
+            return (), ""
+        return (("hollow_motor", "hollow_controller", "screw.nut_inertia", "friction.nut",
+                 "friction.ball_nut_share"), "the CDFS holds the nut (hollow motor locked)")
+
     def check_profile(self, nut_speed: float, nut_table: Any) -> None:
-        if self.drive == "cdfs" and (nut_speed != 0.0 or np.any(nut_table != 0.0)):
+        if not self.follows_nut_reference() and (nut_speed != 0.0 or np.any(nut_table != 0.0)):
             raise ParameterError("nut_speed", nut_speed,
                                  "the CDFS holds the hollow motor; expected 0 [m/s]")
 
@@ -170,8 +209,7 @@ class BallScrewDrive(Mechanism):
             k_fixed = equivalent_stiffness(p, self.table_position)
         values = (k_fixed, c0, math.pi * s.diameter**2 / 4.0 * s.youngs_modulus, s.length,
                   0.0 if m.screw_support == "fixed-fixed" else 1.0, self.table_position)
-        for name, v in zip(_STIFF, values, strict=True):
-            b.param(f"stiffness.{name}", v)
+        b.named_params("stiffness", STIFFNESS_SLOTS, np.array(values))
         b.param("nut.active", 1.0 if self.nut_active else 0.0)
         for key, motor in (("screw", p.screw_motor), ("nut", p.hollow_motor)):
             b.param(f"{key}_motor.torque_constant", motor.torque_constant)
@@ -314,8 +352,8 @@ class BallScrewDrive(Mechanism):
         for ln in m.always:
             b.emit(ln)
         k_eq = b.use(equivalent_stiffness_kernel)
-        b.emit(f"k_eq = {k_eq}({b.y('table_position')}, P, "
-               f"{b.param_index['stiffness.k_fixed']})", writes="k_eq",
+        o_stiff = b.param_index[f"stiffness.{STIFFNESS_SLOTS[0]}"]  # the block's first slot
+        b.emit(f"k_eq = {k_eq}({b.y('table_position')}, P, {o_stiff})", writes="k_eq",
                reads="y:table_position")
         c_ax = b.p("stiffness.axial_damping")
         th_rel = f"({b.y('screw_angle')} - {b.y('nut_angle')})"

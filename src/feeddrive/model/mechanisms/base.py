@@ -233,6 +233,20 @@ class Mechanism:
     #: whether the model depends on the table's position (the ball screw's K_eq(a)); a run's
     #: header names the position only then
     uses_table_position = False
+    #: the controller axis whose motor drives the table (its current is ``<axis>_current``,
+    #: its torque constant the slot :meth:`motor_output` names)
+    table_axis: str = "motor"
+    #: the controller axis that follows the nut reference (a profile's nut speed, the
+    #: ``nut_*_reference`` inputs); "" = the topology has none
+    nut_axis: str = ""
+    #: the drives of this topology that follow a commanded nut speed (the DDFS; the CDFS holds
+    #: its nut, locked or on its servo at zero command)
+    nut_driven_drives: tuple[str, ...] = ()
+    #: what this topology's own parameter sections describe, for messages ("ball screw")
+    part_name: str = ""
+    #: the parameter-file sections only this topology reads (its parts beyond the table,
+    #: friction, controller and disturbances every drive has)
+    own_sections: tuple[str, ...] = ()
 
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:
@@ -259,6 +273,75 @@ class Mechanism:
         ParameterError
             One line naming the field, the value and what was expected.
         """
+
+    @classmethod
+    def drive_label(cls, drive: str) -> str:
+        """How messages name one of this topology's drives.
+
+        Parameters
+        ----------
+        drive : str
+            One of :attr:`drives`.
+
+        Returns
+        -------
+        str
+            E.g. ``"a linear-motor drive"`` (the default form).
+        """
+        return f"a {drive} drive"
+
+    def live_axes(self) -> tuple[str, ...]:
+        """The controller axes that run in this drive (the motors of :attr:`drive_motors`
+        less the idle axes of :meth:`held`).
+
+        Returns
+        -------
+        tuple of str
+            Axis names, in the order of :attr:`drive_motors`.
+        """
+        idle = self.held()[1]
+        return tuple(m.name for m in self.drive_motors if m.name not in idle)
+
+    def follows_nut_reference(self) -> bool:
+        """Whether this drive follows a commanded nut speed (a profile's nut speed ≠ 0).
+
+        Returns
+        -------
+        bool
+            True for the drives :attr:`nut_driven_drives` names.
+        """
+        return self.drive in self.nut_driven_drives
+
+    def held_parameters(self) -> tuple[tuple[str, ...], str]:
+        """The parameters that cannot act in this drive because a part is held still.
+
+        Returns
+        -------
+        paths : tuple of str
+            Dotted parameter paths or section prefixes (``"hollow_motor"``,
+            ``"friction.nut"``); empty by default.
+        reason : str
+            Why, for messages.
+        """
+        return (), ""
+
+    def acting_sites(self) -> list[Site]:
+        """The friction sites that act in this drive: :meth:`sites` as declared, less those
+        whose states :meth:`held` freezes.
+
+        Returns
+        -------
+        list of Site
+            The sites, in declaration order.
+        """
+        from ..codegen import Builder
+
+        b = Builder()
+        self.declare(b)
+        self.parameters(b)
+        frozen = self.held()[0]
+        return [s for s in self.sites(b)
+                if not any(f"{s.name}_".startswith(p) for p in frozen)]
 
     def declare(self, b: Builder) -> None:
         """Declare the mechanism's states (name, unit, meaning, tolerance class) to the builder.

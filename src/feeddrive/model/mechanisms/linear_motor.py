@@ -71,6 +71,8 @@ class LinearMotorDrive(Mechanism):
     example_preset = "linear-motor-example"
     single_motor = ("motor.force_constant", "motor_force")
     drive_motors = (DriveMotor("motor", "", "table"),)  # no torque ripple modelled
+    part_name = "linear motor"
+    own_sections = ("linear_motor",)
     published = False  # a generic direct drive, not a published model
 
     @classmethod

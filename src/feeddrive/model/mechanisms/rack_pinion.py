@@ -99,6 +99,8 @@ class RackPinionDrive(Mechanism):
     example_preset = "rack-pinion-example"
     single_motor = ("motor.torque_constant", "motor_torque")
     drive_motors = (DriveMotor("motor", "motor_angle", "motor"),)  # no torque ripple modelled
+    part_name = "rack and pinion"
+    own_sections = ("rack_pinion",)
     published = False  # a textbook topology, not one publication's model
 
     @classmethod

@@ -1,0 +1,1096 @@
+"""The one driver: step-size controller, event schedule and output handling, written once.
+
+:func:`driver_template` is the only integrator loop of the package.  It is written in the
+restricted Python of the kernels and *specialised* for each use by :func:`specialise`: the
+use's constant flags are folded into its text (``LAND``, ``DENSE``, ``COMM``; ``mode`` and
+``adaptive`` where the use fixes them), the branches they make unreachable are dropped, and the
+locals left with one constant value are folded too, so each use compiles only its own code:
+
+* ``integrate`` (:mod:`feeddrive.solvers.dopri5`, the ``dopri5`` method; ``LAND``): DOPRI5 that
+  lands on every breakpoint of the output grid (each breakpoint a step end, outputs there, no
+  interpolation), steps capped at ``h_max``, the step-size memory of the v1 engine;
+* ``integrate_dense`` (:mod:`feeddrive.solvers.switching`, ``modal``/``auto``/``rodas4``/
+  ``dopri5-dense``; ``DENSE``): steps not cut by the output grid, outputs interpolated from
+  the step's continuous extension, profile breakpoints as events, DOPRI5 ⇄ RODAS4 switching;
+* ``advance`` (:mod:`feeddrive.fmu.solver`, the FMU; ``COMM``): explicit DOPRI5 to a
+  communication point ``t_end`` from an arbitrary ``t``, the sample grid's origin ``t0``, the
+  caller's work space, no allocation — the text the C translator
+  (:mod:`feeddrive.backends.c_translate`) reads, free of the RODAS4 and eigen-analysis code
+  that lies outside its subset.
+
+Common to all: the sample instants of the schedule (:mod:`feeddrive.solvers.schedule`) are
+exact step ends where ``sample_update`` runs and the derivative is re-evaluated (the
+zero-order-hold outputs jump there; the "declare your discontinuities" lesson of diffrax,
+python-control issue #933); the explicit step is the one of :mod:`feeddrive.solvers.steps`
+for :data:`feeddrive.solvers.tableaux.DOPRI5` (written into the numba text by
+:func:`feeddrive.solvers.steps.inline_steps`), the error norm and Hairer's PI controller are
+the steps module's (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.4); divergence bounds,
+the stop request and the step limit end a run with a status.
+
+Each specialisation is bit-identical to the separate driver it replaced (the v1 regression,
+the long-run chunking tests and the FMU's C-versus-numba test pin it).  The flags keep the
+few places where the three historically differ: ``LAND``'s step is cut only when ``h`` reaches
+the breakpoint (no 1e-12 tolerance), its interval is done 1e-15 short of the breakpoint, and its
+PI memory takes every error (also 0).
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import inspect
+import linecache
+import math
+import operator
+import os
+import tempfile
+import textwrap
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._jit import CACHE_DIR
+from . import steps
+from .modes import H_LAMBDA as MODAL_H_LAMBDA
+from .modes import REFRESH as MODAL_REFRESH
+from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
+from .modes import jacobian_moved as modal_jacobian_moved
+from .modes import step_cap as modal_step_cap
+from .placeholders import N_AUX, rhs, sample_update
+from .schedule import due, next_instant
+
+STATUS_OK = 0
+STATUS_MAX_STEPS = 1
+STATUS_STEP_UNDERFLOW = 2
+STATUS_NON_FINITE = 3
+STATUS_STOPPED = 4  # another thread asked the running call to stop (the memory's stop slot)
+# a state beyond its divergence bound (feeddrive.engine.simulate.divergence_bounds): the run
+# stops early, the state there recorded as its last sample; not an error, the verdict is "unstable"
+STATUS_DIVERGED = 5
+STATUS_MESSAGES = {
+    STATUS_OK: "success",
+    STATUS_MAX_STEPS: "maximum number of steps reached",
+    STATUS_STEP_UNDERFLOW: "step size fell below its minimum",
+    STATUS_NON_FINITE: "state became non-finite (NaN or Inf)",
+    STATUS_STOPPED: "stopped on request",
+    STATUS_DIVERGED: "a state left its divergence bound (the loop diverges)",
+}
+STATUS_NAMES = ("STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW", "STATUS_NON_FINITE",
+                "STATUS_STOPPED", "STATUS_DIVERGED")
+
+MODE_DOPRI5, MODE_RODAS4, MODE_AUTO, MODE_MODAL = 0, 1, 2, 3
+
+# Switching thresholds of the dense driver (measured on the benchmark scenarios,
+# benchmarks/README.md; feeddrive.solvers.switching)
+STIFF_HLAMBDA = 3.25  # DOPRI5's stability boundary on the negative real axis is ≈ 3.3
+STIFF_STEPS = 15  # stiff verdicts (reset after 6 non-stiff steps in a row), dopri5.f
+NONSTIFF_HRHO = 3.0
+NONSTIFF_STEPS = 5
+POWER_ITERATIONS = 12
+# MODE_MODAL: RODAS4 steps capped on lightly damped modes
+MODAL_SWITCH_GAIN = 2.0  # switch to RODAS4 only if the capped step is ≥ this × DOPRI5's
+# DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
+# of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
+MODAL_RETRY = 500
+# RODAS4 steps between two eigen-analyses at least (the cap of the last one holds meanwhile)
+MODAL_EVERY = 10
+
+# The dense driver's memory: h, method, frozen states known, stiff and non-stiff counts,
+# DOPRI5 error memory, RODAS4 error, step and first/rejected flags, the modal step cap,
+# whether a reference Jacobian is kept, the step count until which a switch is refused and the
+# DOPRI5 steps since the last eigen-analysis; then one live flag per state and the modal
+# reference Jacobian (n × n), then the stop request and the live time
+MEMORY_SCALARS = 14
+
+# The specialisation flags: exactly one of LAND, DENSE, COMM is true in a specialisation
+# (the template's own values only make this module importable)
+LAND = False
+DENSE = True
+COMM = False
+
+
+# error_model="numpy" (feeddrive._jit): a division by zero gives inf/NaN (caught below as a
+# rejected step or STATUS_NON_FINITE) instead of Python's ZeroDivisionError check on every
+# division of the inlined right-hand side; bit-identical results, about 25 % less time.
+def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
+                    schedule: np.ndarray, P: np.ndarray, T: np.ndarray, rtol: float,
+                    atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
+                    adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
+                    want_aux: bool, S: np.ndarray, colour: np.ndarray, start: int,
+                    held: np.ndarray, memory: np.ndarray, bound: np.ndarray,
+                    t_buf: np.ndarray, y_buf: np.ndarray, aux_buf: np.ndarray, t: float,
+                    t0: float, n: int, y: np.ndarray, held_prev: np.ndarray,
+                    tick: np.ndarray, redo: int, f0: np.ndarray, k2: np.ndarray,
+                    k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
+                    f_new: np.ndarray, yt: np.ndarray, y_new: np.ndarray, e: np.ndarray,
+                    aux: np.ndarray) -> Any:
+    """The driver of every integration (module docstring); compiled only as one of its
+    specialisations (:func:`specialise`), whose signatures take a subset of these parameters.
+
+    Parameters
+    ----------
+    y0 : numpy.ndarray
+        State at t = start·base [SI, per state] (not ``COMM``).
+    t_end : float
+        End of the run; with ``COMM`` the communication point [s].
+    out_every : int
+        Output stride in breakpoints (not ``COMM``).
+    base : float
+        Breakpoint spacing, the sample grid's unit [s].
+    schedule : numpy.ndarray of int
+        Breakpoints between two instants of each clock; 0 = continuous
+        (:mod:`feeddrive.solvers.schedule`).
+    P : numpy.ndarray
+        Packed parameter vector [SI, per slot].
+    T : numpy.ndarray
+        Packed tables [SI].
+    rtol : float
+        Relative tolerance [-].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    rel_mask : numpy.ndarray
+        1 where the relative tolerance applies [-].
+    h_init : float
+        First step size [s] (``DENSE``).
+    h_max : float
+        Largest step [s].
+    adaptive : int
+        1 for error-controlled steps, 0 for a fixed step (used to verify the order).
+    max_steps : int
+        Step limit of the call.
+    mode : int
+        ``MODE_DOPRI5``, ``MODE_RODAS4``, ``MODE_AUTO`` or ``MODE_MODAL`` (``DENSE``; the
+        others are ``MODE_DOPRI5``).
+    stops : numpy.ndarray
+        Sorted profile breakpoints, exact step ends [s] (``DENSE``).
+    want_aux : bool
+        Evaluate the auxiliary signals at the outputs (``DENSE``).
+    S : numpy.ndarray of int
+        The Jacobian's sparsity pattern, (n, n + 1) (``DENSE``).
+    colour : numpy.ndarray of int
+        Its column groups (``DENSE``).
+    start : int
+        Breakpoint index the call starts from (not ``COMM``).
+    held : numpy.ndarray
+        Held controller values, read and left updated [SI, per value].
+    memory : numpy.ndarray
+        Driver memory carried between calls, read and left updated (the layout of each use:
+        :func:`feeddrive.solvers.dopri5.new_memory`,
+        :func:`feeddrive.solvers.switching.new_memory`, :func:`feeddrive.fmu.solver.new_memory`)
+        [mixed].
+    bound : numpy.ndarray
+        Largest |state| per state before the run stops as diverged [SI, per state] (not
+        ``COMM``).
+    t_buf, y_buf, aux_buf : numpy.ndarray
+        Output buffers (``DENSE``): if they hold the call's outputs (at least as many rows,
+        as many columns), the outputs are written into them and returned as views of their
+        first rows — no fresh array to fault in and fill per call; else new arrays [s; SI].
+    t : float
+        Start time of the call [s] (``COMM``).
+    t0 : float
+        Origin of the sample grid [s] (``COMM``).
+    n : int
+        Number of states (``COMM``).
+    y : numpy.ndarray
+        States, advanced in place [SI, per state] (``COMM``).
+    held_prev : numpy.ndarray
+        Held values before the last update, for ``redo`` [SI, per value] (``COMM``).
+    tick : numpy.ndarray of int
+        Work space, one per clock (``COMM``).
+    redo : int
+        1 when the inputs changed since the last call (``COMM``).
+    f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e : numpy.ndarray
+        Work space, length ``n`` [SI per second, per state] (``COMM``).
+    aux : numpy.ndarray
+        The auxiliary signals at the end [SI, per signal] (``COMM``).
+
+    Returns
+    -------
+    object
+        ``COMM``: the status; otherwise (t_out, y_out, aux_out, stats, held): output times [s],
+        states and auxiliary signals there [SI], the statistics (status, steps, rejected,
+        right-hand-side evaluations, time reached [s]; ``DENSE`` adds the entries of
+        :data:`feeddrive.solvers.switching.STAT_NAMES`) and the held values.
+
+    References
+    ----------
+    .. [1] J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput.
+       Appl. Math. 6 (1980) 19–26.
+    .. [2] E. Hairer, S. P. Nørsett, G. Wanner, Solving Ordinary Differential Equations I,
+       2nd ed., Springer, 1993, Sect. II.4–II.6.
+    .. [3] E. Hairer, G. Wanner, Solving Ordinary Differential Equations II, 2nd ed., Springer,
+       1996, Sect. IV.7 (RODAS4).
+    """
+    # ---- work space and outputs (COMM: the caller's)
+    if not COMM:
+        n = y0.size
+        n_break = int(round(t_end / base))
+        if DENSE:
+            t_end = n_break * base
+            o0 = start // out_every  # index of the first output on the whole run's grid
+            n_out = (n_break - start) // out_every + 1
+        else:
+            n_out = n_break // out_every - (start + out_every - 1) // out_every + 1
+        t = start * base
+        tick = np.empty(schedule.size, dtype=np.int64)
+        n_aux_out = n_out if want_aux else 0
+        if (DENSE and t_buf.shape[0] >= n_out and y_buf.shape[0] >= n_out
+                and y_buf.shape[1] == n and aux_buf.shape[0] >= n_aux_out
+                and aux_buf.shape[1] == N_AUX):
+            # the caller's buffers, reused from call to call (every row returned is written)
+            t_out = t_buf[:n_out]
+            y_out = y_buf[:n_out]
+            aux_out = aux_buf[:n_aux_out]
+        else:  # uninitialised: every row returned is written
+            t_out = np.empty(n_out)
+            y_out = np.empty((n_out, n))
+            aux_out = np.empty((n_aux_out, N_AUX))
+        y = y0.copy()
+        f0 = np.empty(n)
+        k2 = np.empty(n)
+        k3 = np.empty(n)
+        k4 = np.empty(n)
+        k5 = np.empty(n)
+        k6 = np.empty(n)
+        f_new = np.empty(n)
+        yt = np.empty(n)
+        y_new = np.empty(n)
+        e = np.empty(n)
+        aux = np.empty(N_AUX)
+    if DENSE:
+        q1 = np.empty(n)
+        q2 = np.empty(n)
+        q3 = np.empty(n)
+        J = np.zeros((n, n))
+        M = np.empty((n, n))
+        piv = np.zeros(n, dtype=np.int64)
+        ft = np.zeros(n)
+        yp = np.empty(n)
+        fp = np.empty(n)
+        v = np.empty(n)
+        w = np.empty(n)
+        live = np.ones(n, dtype=np.bool_)
+        all_live = np.ones(n, dtype=np.bool_)
+        J_ref = np.zeros((n, n))
+        n_out_rhs = 0
+        n_jac = 0
+        n_rodas = 0
+        switches = 0
+        n_eig = 0
+    steps = 0
+    rejected = 0
+    n_rhs = 0
+    status = STATUS_OK
+    h_min = 1e-14
+    # the method and the switching state (DENSE; the other uses are DOPRI5 throughout)
+    stiff = mode == MODE_RODAS4
+    jac_ok = False
+    frozen_known = False
+    stiff_count = 0
+    nonstiff_count = 0
+    rho = 0.0
+    switching = mode == MODE_AUTO or mode == MODE_MODAL
+    modal = mode == MODE_MODAL
+    h_osc = math.inf  # MODE_MODAL: the step cap of the lightly damped modes
+    have_ref = False
+    refuse_until = 0
+    since_eig = 0
+    dp_since_eig = MODAL_RETRY  # the first accepted DOPRI5 step is analysed
+    # step-size controller memory: DOPRI5's PI controller, Gustafsson's for RODAS4
+    err_old = 1e-4
+    beta = 0.04
+    alpha = 0.2 - 0.75 * beta
+    r4_err_old = 1e-2
+    r4_h_old = 0.0
+    r4_first = True
+    r4_rejected = False
+    i_stop = 0
+    i_out = 0
+    # ---- the start: the driver's state carried over, the update due at the first instant
+    if COMM:
+        kb = int(memory[2])  # the last sample instant applied (literal indices: see fmu.solver)
+        if redo == 1 and memory[3] > 0.5:  # redo that instant's update with the new inputs
+            for i in range(held.size):
+                held[i] = held_prev[i]
+            due(kb, schedule, tick)
+            sample_update(t, y, held, P, T, tick)
+        h = memory[0]
+        err_old = memory[1]
+    elif LAND:
+        kb = start
+        h = memory[0]
+        err_old = memory[1]
+        # with every loop continuous nothing jumps at a breakpoint: the last stage of the step
+        # that ended there, evaluated at exactly the breakpoint, is the derivative there
+        continuous = next_instant(0, schedule) < 0
+        # (a continued run applied the update at its first breakpoint in the previous call)
+        if due(start, schedule, tick) > 0 and start == 0:
+            sample_update(t, y, held, P, T, tick)
+    else:
+        kb = start  # index of the current sample instant
+        h = h_init
+        n_stops = stops.size
+        if memory[0] == 0.0:  # a new run
+            if due(0, schedule, tick) > 0:
+                sample_update(0.0, y, held, P, T, tick)
+        else:  # carried over from the call that ended at t
+            h = memory[0]
+            stiff = memory[1] != 0.0
+            frozen_known = memory[2] != 0.0
+            stiff_count = int(memory[3])
+            nonstiff_count = int(memory[4])
+            err_old = memory[5]
+            r4_err_old = memory[6]
+            r4_h_old = memory[7]
+            r4_first = memory[8] != 0.0
+            r4_rejected = memory[9] != 0.0
+            h_osc = memory[10]
+            have_ref = memory[11] != 0.0
+            refuse_until = int(memory[12])
+            dp_since_eig = int(memory[13])
+            for i in range(n):
+                live[i] = memory[MEMORY_SCALARS + i] != 0.0
+                for j in range(n):
+                    J_ref[i, j] = memory[MEMORY_SCALARS + n + i * n + j]
+    # the derivative at t (a continued continuous LAND run: the previous call's last stage,
+    # evaluated a hair off the breakpoint when that step was not cut to it)
+    rhs(t, y, held, P, T, f0, aux)
+    n_rhs += 1
+    if LAND and start > 0 and continuous:
+        for i in range(n):
+            f0[i] = memory[2 + i]
+    if COMM:
+        memory[3] = 0.0  # MEM_AT_SAMPLE
+    if LAND:
+        if start % out_every == 0 and i_out < n_out:
+            t_out[i_out] = t
+            y_out[i_out, :] = y
+            aux_out[i_out, :] = aux
+            i_out += 1
+    if DENSE:
+        t_out[0] = t
+        y_out[0, :] = y
+        if want_aux:
+            aux_out[0, :] = aux
+        i_out = 1
+    while (kb < n_break if LAND else t < t_end) and status == STATUS_OK:
+        # ---- the next event: LAND the next breakpoint; else the schedule's next instant,
+        # DENSE a profile breakpoint or (fixed step) an output point, the end
+        if LAND:
+            t = kb * base
+            t_ev = (kb + 1) * base
+        else:
+            t_ev = t_end
+            is_sample = False
+            kb_next = next_instant(kb, schedule)  # the schedule's next instant (-1: none)
+            if kb_next >= 0:
+                t_s = t0 + kb_next * base if COMM else kb_next * base
+                if t_s <= t_end + 1e-9 * base:  # an instant this close to the end is the end
+                    is_sample = True
+                    if t_s < t_end - 1e-9 * base:
+                        t_ev = t_s
+        if DENSE:
+            while i_stop < n_stops and stops[i_stop] <= t + 1e-12 * max(1.0, t):
+                i_stop += 1
+            is_stop = False
+            if i_stop < n_stops and stops[i_stop] < t_ev - 1e-12 * max(1.0, t_ev):
+                t_ev = stops[i_stop]
+                is_sample = False
+                is_stop = True
+            if adaptive == 0 and i_out < n_out:
+                t_grid = ((o0 + i_out) * out_every) * base
+                if t_grid < t_ev - 1e-12 * max(1.0, t_ev):
+                    t_ev = t_grid
+                    is_sample = False
+                    is_stop = False
+        # ---- steps up to t_ev
+        while (t < t_ev - 1e-15 * t_ev if LAND else t < t_ev) and status == STATUS_OK:
+            if stiff and not jac_ok:
+                calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J,
+                                        ft, yp, fp, aux, live if frozen_known else all_live,
+                                        S, colour)
+                if calls < 0:  # a state taken as frozen moved: difference every column
+                    n_rhs -= calls
+                    calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol,
+                                            J, ft, yp, fp, aux, all_live, S, colour)
+                    frozen_known = False
+                n_rhs += calls
+                n_jac += 1
+                if not frozen_known:
+                    _r4_frozen_states(J, f0, live)
+                    frozen_known = True
+                jac_ok = True
+                if switching:
+                    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                since_eig += 1
+                if modal and (not have_ref or (since_eig >= MODAL_EVERY and
+                                               modal_jacobian_moved(J, J_ref, MODAL_REFRESH))):
+                    since_eig = 0
+                    h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+                    n_eig += 1
+                    have_ref = True
+                    for i in range(n):
+                        for j in range(n):
+                            J_ref[i, j] = J[i, j]
+            last = False
+            if LAND:  # cut only when the step reaches the breakpoint (v1)
+                if h >= t_ev - t:
+                    h_try = t_ev - t
+                    last = True
+                else:
+                    h_try = h
+            else:
+                h_try = min(h, h_max)
+                if modal:  # both methods: DOPRI5 amplifies a mode at 1 < h|λ| < 3.3
+                    h_try = min(h_try, h_osc)
+                if t + h_try >= t_ev - 1e-12 * max(1.0, abs(t_ev)):
+                    h_try = t_ev - t
+                    last = True
+            err = 0.0
+            t_new = t_ev
+            while True:
+                t_new = t_ev if last else t + h_try
+                if stiff:
+                    calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, M, piv, k2, k3,
+                                            k4, k5, k6, e, yt, fp,
+                                            y_new, aux, live)
+                    if calls == -2:
+                        # a frozen state moved: retry with the full Jacobian
+                        n_rhs += 5
+                        frozen_known = False
+                        for i in range(n):
+                            live[i] = True
+                        calls = _r4_fd_jacobian(t, y, f0, held, P, T,
+                                                atol, J, ft, yp, fp, aux, all_live, S, colour)
+                        n_rhs += calls
+                        n_jac += 1
+                        continue
+                    steps += 1
+                    n_rodas += 1
+                    if calls < 0:
+                        err = 1e10  # singular matrix: shrink the step
+                    else:
+                        n_rhs += calls
+                        err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
+                else:
+                    _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4, k5, k6, f_new, yt, y_new,
+                              aux, t_new)
+                    n_rhs += 6
+                    steps += 1
+                    if adaptive == 0:
+                        err = 0.0
+                    else:
+                        _dp5_error(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                        err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
+                if adaptive == 0 or err <= 1.0:
+                    break
+                rejected += 1
+                if stiff:
+                    fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+                    h_try /= fac
+                    r4_rejected = True
+                else:
+                    fac = _reject_factor(err)
+                    h_try *= fac
+                last = False
+                if h_try < h_min:
+                    status = STATUS_STEP_UNDERFLOW
+                    break
+                if steps > max_steps:
+                    status = STATUS_MAX_STEPS
+                    break
+            if status != STATUS_OK:
+                break
+            used_rodas = stiff
+            if DENSE:
+                # ---- accepted: dense-output data of [t, t_new]
+                h_done = t_new - t
+                if stiff:
+                    rhs(t_new, y_new, held, P, T, f_new, aux)
+                    n_rhs += 1
+                    _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
+                else:
+                    for i in range(n):
+                        ydiff = y_new[i] - y[i]
+                        bspl = h_try * f0[i] - ydiff
+                        q1[i] = ydiff
+                        q2[i] = bspl
+                        q3[i] = ydiff - h_try * f_new[i] - bspl
+                    _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                # outputs strictly inside the step (an output at t_new that is an event time
+                # is written after the event below)
+                while i_out < n_out:
+                    t_grid = ((o0 + i_out) * out_every) * base
+                    if t_grid > t_new or (last and t_grid >= t_new - 1e-9 * base):
+                        break
+                    th = (t_grid - t) / h_done
+                    th1 = 1.0 - th
+                    for i in range(n):
+                        if stiff:
+                            yp[i] = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * q2[i]))
+                        else:
+                            yp[i] = y[i] + th * (q1[i] + th1 * (q2[i] + th * (q3[i]
+                                                                              + th1 * e[i])))
+                    t_out[i_out] = t_grid
+                    y_out[i_out, :] = yp
+                    if want_aux:
+                        rhs(t_grid, yp, held, P, T, fp, aux)
+                        n_out_rhs += 1
+                        aux_out[i_out, :] = aux
+                    i_out += 1
+                # ---- stiffness detection and switching
+                if switching:
+                    if stiff:
+                        if rho * h_done < NONSTIFF_HRHO:
+                            nonstiff_count += 1
+                            if nonstiff_count >= NONSTIFF_STEPS:
+                                stiff = False
+                                switches += 1
+                                stiff_count = 0
+                                nonstiff_count = 0
+                                err_old = 1e-4
+                        else:
+                            nonstiff_count = 0
+                    else:
+                        if modal:
+                            dp_since_eig += 1
+                        if modal and dp_since_eig >= MODAL_RETRY:
+                            # DOPRI5 too: its step on a lightly damped mode is capped as well
+                            dp_since_eig = 0
+                            calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, atol, J,
+                                                    ft, yp, fp, aux, all_live, S, colour)
+                            n_rhs += calls
+                            n_jac += 1
+                            h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
+                                                   MODAL_H_LAMBDA)
+                            n_eig += 1
+                            have_ref = True
+                            for i in range(n):
+                                for j in range(n):
+                                    J_ref[i, j] = J[i, j]
+                        num = 0.0
+                        den = 0.0
+                        for i in range(n):
+                            num += (f_new[i] - k6[i]) ** 2
+                            den += (y_new[i] - yt[i]) ** 2
+                        if steps < refuse_until:
+                            pass  # MODE_MODAL: a switch was refused recently
+                        elif den > 0.0 and h_done * math.sqrt(num / den) > STIFF_HLAMBDA:
+                            nonstiff_count = 0
+                            stiff_count += 1
+                            go = stiff_count >= STIFF_STEPS
+                            if go and modal:
+                                # would RODAS4, capped on the lightly damped modes, step further?
+                                calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, atol,
+                                                        J, ft, yp, fp, aux,
+                                                        all_live, S, colour)
+                                n_rhs += calls
+                                n_jac += 1
+                                h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
+                                                       MODAL_H_LAMBDA)
+                                n_eig += 1
+                                have_ref = True
+                                for i in range(n):
+                                    for j in range(n):
+                                        J_ref[i, j] = J[i, j]
+                                if h_osc < MODAL_SWITCH_GAIN * h_done:
+                                    go = False
+                                    stiff_count = 0
+                                    refuse_until = steps + MODAL_RETRY
+                            if go:
+                                stiff = True
+                                switches += 1
+                                stiff_count = 0
+                                r4_first = True
+                        else:
+                            nonstiff_count += 1
+                            if nonstiff_count >= 6:
+                                stiff_count = 0
+            # ---- step-size control for the next step
+            if adaptive == 1:
+                if used_rodas:
+                    fac = 0.2 if err == 0.0 else max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+                    if not r4_first and err > 0.0:
+                        facpred = (r4_h_old / h_try) * (err * err / r4_err_old) ** 0.25 / 0.9
+                        fac = max(fac, max(1.0 / 6.0, min(5.0, facpred)))
+                    h_new = h_try / fac
+                    if r4_rejected:
+                        h_new = min(h_new, h_try)
+                    r4_first = False
+                    r4_h_old = h_try
+                    r4_err_old = max(1e-2, err)
+                    r4_rejected = False
+                else:  # DOPRI5: the explicit steps' controller (feeddrive.solvers.steps)
+                    fac = _pi_factor(err, err_old, alpha, beta)
+                    if LAND or err != 0.0:  # LAND: v1 took every error, also 0
+                        err_old = max(err, 1e-4)
+                    h_new = h_try * fac
+                if not last or h_new < h:
+                    h = min(h_new, h_max)
+            for i in range(n):
+                y[i] = y_new[i]
+                f0[i] = f_new[i]
+            t = t_new
+            # the live time and stop slots (the memory's last two)
+            if not COMM and (memory.shape[0] > 3 + n if LAND
+                             else memory.shape[0] > MEMORY_SCALARS + n + n * n + 1):
+                memory[memory.shape[0] - 1] = t
+                if memory[memory.shape[0] - 2] != 0.0:
+                    status = STATUS_STOPPED
+                    break
+            jac_ok = False
+            if steps > max_steps:
+                status = STATUS_MAX_STEPS
+                break
+            finite = True
+            diverged = False
+            for i in range(n):
+                if not math.isfinite(y[i]):
+                    finite = False
+                elif not COMM and abs(y[i]) > bound[i]:
+                    diverged = True
+            if not finite:
+                status = STATUS_NON_FINITE
+                break
+            if diverged:  # that step end is the last output sample
+                status = STATUS_DIVERGED
+                if i_out < n_out:
+                    t_out[i_out] = t
+                    y_out[i_out, :] = y
+                    if LAND:  # the last rhs call was at (t, y): aux is that of y
+                        aux_out[i_out, :] = aux
+                    elif want_aux:
+                        rhs(t, y, held, P, T, fp, aux)
+                        n_out_rhs += 1
+                        aux_out[i_out, :] = aux
+                    i_out += 1
+                break
+        if status != STATUS_OK:
+            break
+        # ---- at the event t_ev
+        if LAND:
+            kb += 1
+            if due(kb, schedule, tick) > 0:
+                sample_update(t_ev, y, held, P, T, tick)
+                rhs(t_ev, y, held, P, T, f0, aux)
+                n_rhs += 1
+            if kb % out_every == 0 and i_out < n_out:
+                t_out[i_out] = t_ev
+                y_out[i_out, :] = y
+                aux_out[i_out, :] = aux
+                i_out += 1
+        else:
+            if is_sample:
+                kb = kb_next
+                if COMM and t_ev == t_end:  # an instant on the communication point
+                    for i in range(held.size):
+                        held_prev[i] = held[i]
+                    memory[3] = 1.0  # MEM_AT_SAMPLE
+                due(kb, schedule, tick)
+                sample_update(t, y, held, P, T, tick)
+                rhs(t, y, held, P, T, f0, aux)
+                n_rhs += 1
+        if DENSE:
+            if is_stop:
+                i_stop += 1
+            while i_out < n_out:
+                t_grid = ((o0 + i_out) * out_every) * base
+                if abs(t_grid - t) > 1e-9 * base:
+                    break
+                t_out[i_out] = t_grid
+                y_out[i_out, :] = y
+                if want_aux:
+                    rhs(t, y, held, P, T, fp, aux)
+                    n_out_rhs += 1
+                    aux_out[i_out, :] = aux
+                i_out += 1
+    # ---- the driver's state for the next call, the statistics
+    if COMM:
+        memory[0] = h  # MEM_H
+        memory[1] = err_old  # MEM_ERR
+        memory[2] = kb  # MEM_KB
+        memory[4] += steps  # MEM_STEPS
+        memory[5] += rejected  # MEM_REJECTED
+        memory[6] += n_rhs  # MEM_RHS
+        return status
+    if LAND:
+        memory[0] = h
+        memory[1] = err_old
+        for i in range(n):
+            memory[2 + i] = f0[i]
+        stats = np.array([float(status), float(steps), float(rejected), float(n_rhs), t])
+        return t_out[:i_out], y_out[:i_out], aux_out[:i_out], stats, held
+    if DENSE:
+        memory[0] = h
+        memory[1] = 1.0 if stiff else 0.0
+        memory[2] = 1.0 if frozen_known else 0.0
+        memory[3] = stiff_count
+        memory[4] = nonstiff_count
+        memory[5] = err_old
+        memory[6] = r4_err_old
+        memory[7] = r4_h_old
+        memory[8] = 1.0 if r4_first else 0.0
+        memory[9] = 1.0 if r4_rejected else 0.0
+        memory[10] = h_osc
+        memory[11] = 1.0 if have_ref else 0.0
+        memory[12] = refuse_until
+        memory[13] = dp_since_eig
+        for i in range(n):
+            memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
+            for j in range(n):
+                memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
+        stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
+                          t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
+                          float(n_eig)])
+        return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats,
+                held)
+    return None
+
+
+# the generated module's kernels the template calls (feeddrive.solvers.steps,
+# feeddrive.solvers.rodas4): placeholders that make this module importable on its own
+_dp5_step: Any = None
+_dp5_error: Any = None
+_dp5_dense: Any = None
+_error_norm: Any = None
+_pi_factor: Any = None
+_reject_factor: Any = None
+_r4_fd_jacobian: Any = None
+_r4_frozen_states: Any = None
+_r4_rodas4_step: Any = None
+_r4_rodas4_dense: Any = None
+_r4_spectral_radius: Any = None
+
+
+# ---------------------------------------------------------------- specialisation
+_COMPARE: dict[type, Any] = {ast.Eq: operator.eq, ast.NotEq: operator.ne, ast.Lt: operator.lt,
+                             ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge,
+                             ast.Is: operator.is_, ast.IsNot: operator.is_not}
+class _Fold(ast.NodeTransformer):
+    """Names of ``consts`` replaced by their values; comparisons, ``not``, ``and``/``or``,
+    conditional expressions, ``if`` and ``while`` on constants folded (the unreachable
+    branches dropped)."""
+
+    def __init__(self, consts: Mapping[str, Any]) -> None:
+        self.consts = consts
+
+    def visit_Name(self, node: ast.Name) -> ast.expr:
+        if isinstance(node.ctx, ast.Load) and node.id in self.consts:
+            return ast.copy_location(ast.Constant(self.consts[node.id]), node)
+        return node
+
+    def visit_Compare(self, node: ast.Compare) -> ast.expr:
+        self.generic_visit(node)
+        operands = [node.left, *node.comparators]
+        if not all(isinstance(o, ast.Constant) for o in operands):
+            return node
+        result = True
+        for op, a, b in zip(node.ops, operands, operands[1:], strict=False):
+            assert isinstance(a, ast.Constant) and isinstance(b, ast.Constant)
+            result = result and bool(_COMPARE[type(op)](a.value, b.value))
+        return ast.copy_location(ast.Constant(result), node)
+
+    def visit_UnaryOp(self, node: ast.UnaryOp) -> ast.expr:
+        self.generic_visit(node)
+        if isinstance(node.op, ast.Not) and isinstance(node.operand, ast.Constant):
+            return ast.copy_location(ast.Constant(not node.operand.value), node)
+        return node
+
+    def visit_BoolOp(self, node: ast.BoolOp) -> ast.expr:
+        self.generic_visit(node)
+        decisive = isinstance(node.op, ast.Or)  # the value that decides the whole
+        kept: list[ast.expr] = []
+        for value in node.values:
+            if isinstance(value, ast.Constant):
+                if bool(value.value) == decisive and not any(
+                        isinstance(n, ast.Call) for k in kept for n in ast.walk(k)):
+                    return ast.copy_location(ast.Constant(decisive), node)
+                if bool(value.value) != decisive:
+                    continue  # no effect on the result
+            kept.append(value)
+        if not kept:
+            return ast.copy_location(ast.Constant(not decisive), node)
+        if len(kept) == 1:
+            return kept[0]
+        node.values = kept
+        return node
+
+    def visit_IfExp(self, node: ast.IfExp) -> ast.expr:
+        self.generic_visit(node)
+        if isinstance(node.test, ast.Constant):
+            return node.body if node.test.value else node.orelse
+        return node
+
+    def visit_If(self, node: ast.If) -> Any:
+        self.generic_visit(node)
+        if isinstance(node.test, ast.Constant):
+            return (node.body if node.test.value else node.orelse) or None
+        if not node.body:
+            node.body = [ast.Pass()]
+        return node
+
+    def visit_While(self, node: ast.While) -> Any:
+        self.generic_visit(node)
+        if isinstance(node.test, ast.Constant) and not node.test.value:
+            return node.orelse or None
+        return node
+
+    def generic_visit(self, node: ast.AST) -> ast.AST:
+        super().generic_visit(node)
+        for field in ("body", "orelse"):
+            block = getattr(node, field, None)
+            if not isinstance(block, list):
+                continue
+            for k, stmt in enumerate(block):  # what follows a return is unreachable
+                if isinstance(stmt, ast.Return):
+                    del block[k + 1:]
+                    break
+            if field == "body" and not block and not isinstance(node, ast.Module):
+                block.append(ast.Pass())  # a block emptied by the folding
+        return node
+
+
+_PURE_CALLS = {"int", "float", "min", "max", "abs"}
+
+
+def _pure(node: ast.AST) -> bool:
+    """No call in ``node`` but numpy constructors and arithmetic builtins."""
+    for n in ast.walk(node):
+        if isinstance(n, ast.Call):
+            f = n.func
+            if not ((isinstance(f, ast.Name) and f.id in _PURE_CALLS)
+                    or (isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name)
+                        and f.value.id == "np")):
+                return False
+    return True
+
+
+def _scan(fn: ast.FunctionDef) -> tuple[dict[str, bool], set[str]]:
+    """(the locals of ``fn`` every assignment of which stores one and the same bool constant,
+    e.g. ``stiff`` where the method is DOPRI5 throughout; the locals never read whose every
+    store is a plain or augmented assignment of a value without side effects — what the
+    folding left of a flag's variables), in one walk."""
+    params = {a.arg for a in fn.args.args}
+    values: dict[str, set[Any]] = {}
+    other: set[str] = set(params)  # stored otherwise than as one bool constant
+    read: set[str] = set()
+    removable: dict[str, bool] = {}
+    for node in ast.walk(fn):
+        if isinstance(node, ast.Name):
+            if isinstance(node.ctx, ast.Load):
+                read.add(node.id)
+            continue
+        if not isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For)):
+            continue
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+        name = targets[0].id if len(targets) == 1 and isinstance(targets[0], ast.Name) else None
+        simple = (name is not None and isinstance(node, (ast.Assign, ast.AugAssign))
+                  and _pure(node.value))
+        if (name is not None and isinstance(node, ast.Assign)
+                and isinstance(node.value, ast.Constant) and isinstance(node.value.value, bool)):
+            values.setdefault(name, set()).add(node.value.value)
+        else:
+            for tgt in targets:
+                other.update(n.id for n in ast.walk(tgt) if isinstance(n, ast.Name))
+        for tgt in targets:
+            for n in ast.walk(tgt):
+                if isinstance(n, ast.Name):
+                    removable[n.id] = removable.get(n.id, True) and simple
+    constant = {name: next(iter(vals)) for name, vals in values.items()
+                if len(vals) == 1 and name not in other}
+    dead = {name for name, ok in removable.items()
+            if ok and name not in read and name not in params}
+    return constant, dead
+
+
+class _DropAssign(ast.NodeTransformer):
+    def __init__(self, names: set[str]) -> None:
+        self.names = names
+
+    def visit_Assign(self, node: ast.Assign) -> Any:
+        if (len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
+                and node.targets[0].id in self.names):
+            return None
+        return node
+
+    def visit_AugAssign(self, node: ast.AugAssign) -> Any:
+        if isinstance(node.target, ast.Name) and node.target.id in self.names:
+            return None
+        return node
+
+
+@functools.cache
+def _text_of(template: Any) -> str:
+    """The source of ``template``, read once per process (``inspect`` tokenises the file)."""
+    return textwrap.dedent(inspect.getsource(template))
+
+
+def specialise(template: Any, name: str, params: Sequence[str], constants: Mapping[str, Any],
+               doc: str, returns: str | None = None) -> str:
+    """The text of ``template`` specialised: named ``name``, taking ``params`` (a subset of
+    the template's parameters, in the caller's order), every name of ``constants`` replaced by
+    its value and folded, the branches so made unreachable removed, and the locals left with one
+    constant bool value folded as well (repeated until nothing changes).
+
+    Parameters
+    ----------
+    template : function
+        The template (:func:`driver_template`).
+    name : str
+        The specialisation's function name.
+    params : sequence of str
+        Its parameters, in order.
+    constants : mapping of str to object
+        Flags and parameters fixed by the use, by name.
+    doc : str
+        Its docstring.
+    returns : str, optional
+        Its return annotation (none by default).
+
+    Returns
+    -------
+    str
+        Python source of the specialised function.
+
+    Raises
+    ------
+    ValueError
+        A parameter the template does not have, or one the specialisation still reads but
+        neither takes nor assigns.
+    """
+    tree = ast.parse(_text_of(template))
+    fn = tree.body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    by_name = {a.arg: a for a in fn.args.args}
+    unknown = [p for p in params if p not in by_name]
+    if unknown:
+        raise ValueError(f"{name}: {unknown} are not parameters of {fn.name}")
+    fn.name = name
+    fn.args.args = [by_name[p] for p in params]
+    fn.body[0] = ast.Expr(ast.Constant(doc))  # the template's docstring
+    fn.returns = None if returns is None else ast.Name(returns, ast.Load())
+    consts = dict(constants)
+    while True:
+        tree = _Fold(consts).visit(tree)
+        fn = tree.body[0]
+        assert isinstance(fn, ast.FunctionDef)
+        folded, dead = _scan(fn)
+        if not folded and not dead:
+            break
+        tree = _DropAssign(set(folded) | dead).visit(tree)
+        consts = folded
+    assigned = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
+                and isinstance(n.ctx, ast.Store)}
+    dropped = {a for a in by_name if a not in params and a not in assigned}
+    read = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+    if read & dropped:
+        raise ValueError(f"{name}: reads {sorted(read & dropped)}, neither parameters nor "
+                         "assigned")
+    return ast.unparse(tree) + "\n"
+
+
+_COUNTER = [0]
+
+
+def define(source: str, name: str) -> Any:
+    """The function ``name`` defined by ``source`` in this module's namespace, its text
+    registered with :mod:`linecache` so that :mod:`inspect` (the C translator) reads it.
+
+    Parameters
+    ----------
+    source : str
+        Python source defining ``name``.
+    name : str
+        The function's name.
+
+    Returns
+    -------
+    function
+        The function.
+    """
+    _COUNTER[0] += 1
+    filename = f"<feeddrive.solvers.driver:{name}:{_COUNTER[0]}>"
+    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+    namespace = dict(globals())
+    exec(compile(source, filename, "exec"), namespace)  # noqa: S102 - our own text
+    fn = namespace[name]
+    fn.__module__ = __name__
+    return fn
+
+
+_LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
+                "rel_mask", "h_max", "adaptive", "max_steps", "start", "held", "memory", "bound")
+_DENSE_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
+                 "rel_mask", "h_init", "h_max", "adaptive", "max_steps", "mode", "stops",
+                 "want_aux", "S", "colour", "start", "held", "memory", "bound", "t_buf",
+                 "y_buf", "aux_buf")
+_COMM_PARAMS = ("t", "t_end", "t0", "n", "y", "held", "held_prev", "P", "T", "schedule",
+                "tick", "base", "rtol", "atol", "rel_mask", "h_max", "max_steps", "redo",
+                "memory", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e",
+                "aux")
+_FLAGS = ("LAND", "DENSE", "COMM")
+_MODES = {"MODE_DOPRI5": MODE_DOPRI5, "MODE_RODAS4": MODE_RODAS4, "MODE_AUTO": MODE_AUTO,
+          "MODE_MODAL": MODE_MODAL}
+USES: dict[str, tuple[tuple[str, ...], dict[str, Any], str]] = {
+    "integrate": (_LAND_PARAMS, {"LAND": True, "mode": MODE_DOPRI5, "want_aux": True},
+                  "The breakpoint driver (feeddrive.solvers.dopri5): "
+                  "feeddrive.solvers.driver.driver_template specialised (LAND)."),
+    "integrate_dense": (_DENSE_PARAMS, {"DENSE": True},
+                        "The dense-output driver (feeddrive.solvers.switching): "
+                        "feeddrive.solvers.driver.driver_template specialised (DENSE)."),
+    "advance": (_COMM_PARAMS, {"COMM": True, "mode": MODE_DOPRI5, "adaptive": 1},
+                "The FMU's driver (feeddrive.fmu.solver): "
+                "feeddrive.solvers.driver.driver_template specialised (COMM)."),
+}
+
+
+@functools.cache
+def source(use: str, inline: bool = True) -> str:
+    """The text of the driver specialised for ``use`` (a key of :data:`USES`), with the
+    explicit step written in (:func:`feeddrive.solvers.steps.inline_steps`) unless
+    ``inline`` is false (the C translation calls the step functions).
+
+    The text is kept in the compile cache's folder (named after the hash of every solver
+    source, :data:`feeddrive._jit.CACHE_DIR`): a fresh process reads it instead of
+    specialising again (~50 ms of a start-up); a file that is not the one function is
+    rebuilt.
+
+    Parameters
+    ----------
+    use : str
+        ``"integrate"``, ``"integrate_dense"`` or ``"advance"``.
+    inline : bool, default True
+        Write the step, error and controller functions into the text.
+
+    Returns
+    -------
+    str
+        Python source of the function ``use``.
+    """
+    if use not in USES:
+        raise KeyError(f"{use!r}: not a use of the driver ({', '.join(USES)})")
+    path = Path(CACHE_DIR) / "drivers" / f"{use}{'' if inline else '_calls'}.py"
+    try:
+        stored = path.read_text(encoding="utf-8")
+        tree = ast.parse(stored)  # a damaged file is rebuilt
+        if (len(tree.body) == 1 and isinstance(tree.body[0], ast.FunctionDef)
+                and tree.body[0].name == use):
+            return stored
+    except (OSError, SyntaxError, ValueError):
+        pass
+    params, fixed, doc = USES[use]
+    constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
+    text = specialise(driver_template, use, params, constants, doc,
+                      "int" if use == "advance" else None)
+    text = steps.inline_steps(text) if inline else text
+    try:  # atomic: a concurrent process never reads a half file
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        pass  # a read-only cache: specialised again next time
+    return text

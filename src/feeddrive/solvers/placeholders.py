@@ -1,0 +1,54 @@
+"""The model names the solver templates call, defined once.
+
+The solvers never import a model: their templates (the one driver of
+:mod:`feeddrive.solvers.driver`, the steps of :mod:`feeddrive.solvers.steps`, the Jacobian
+kernels of :mod:`feeddrive.solvers.rodas4`) are compiled into each assembled model's generated
+module (:func:`feeddrive.model.assemble.solver_sources`), where ``rhs``, ``sample_update``,
+``N_AUX`` and ``N_HELD`` are that model's.  These placeholders only make the template modules
+importable and checkable on their own; calling one raises.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+N_AUX = 0  # the model's number of auxiliary signals
+N_HELD = 1  # the model's number of held (sampled) values
+
+
+def rhs(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's right-hand side
+    ``rhs(t, y, held, P, T, dy, aux)``.
+
+    The generated module replaces it; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The model function's arguments.
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
+    raise NotImplementedError("placeholder: the assembled model's right-hand side")
+
+
+def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the generated module
+    """Placeholder for the assembled model's sampled-controller update
+    ``sample_update(t, y, held, P, T, tick)``.
+
+    The generated module replaces it; calling it raises.
+
+    Parameters
+    ----------
+    *args : object
+        The model function's arguments.
+
+    Raises
+    ------
+    NotImplementedError
+        Always.
+    """
+    raise NotImplementedError("placeholder: the assembled model's sampled-controller update")

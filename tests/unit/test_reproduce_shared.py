@@ -1,0 +1,51 @@
+"""Searches `reproduce` shares between studies instead of running them twice: the
+model-reading study's shipped reading at mid-screw is Table 3's CDFS search and Fig. 8's
+DDFS search, and the compensation study's uncompensated CDFS and its DDFS at 16 mm/s are
+the same two searches; a shared row is what the study computes from that search."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+import feeddrive as fd
+from feeddrive.reproduce import reading_study, runner
+from feeddrive.reproduce.studies import MID, PAPER, StudySettings
+
+
+def _paper_jobs(params: Any, settings: StudySettings) -> dict[str, Any]:
+    jobs = {f"crit-cdfs-{a}": (params, "cdfs", a, 0.0, settings, "rest")
+            for a in PAPER["positions"]}
+    jobs.update({f"crit-ddfs-{a}": (params, "ddfs", a, PAPER["experiment_nut_speed"],
+                                    settings, "rest") for a in PAPER["positions"]})
+    jobs["crit-ddfs-fig8"] = (params, "ddfs", MID, PAPER["ddfs_sim_nut_speed"], settings,
+                              "rest")
+    jobs["crit-cdfs-running"] = (params, "cdfs", MID, 0.0, settings, "running")
+    return jobs
+
+
+def test_the_shipped_reading_shares_the_paper_searches() -> None:
+    settings = StudySettings()
+    jobs = _paper_jobs(fd.preset("wang2021"), settings)
+    study = {f"study-{i}": job for i, job in enumerate(reading_study.jobs())}
+    shared = runner._shared_rows(study, jobs)
+    assert {study[k][0] for k in shared} == {"wang2021 (+ fitted velocity integral)"}
+    assert sorted(shared.values()) == [f"crit-cdfs-{MID}", "crit-ddfs-fig8"]
+    comp = runner._compensation_shares(fd.preset("wang2021"), settings, jobs)
+    assert sorted(comp.values()) == [f"crit-cdfs-{MID}", "crit-ddfs-fig8"]
+    # another parameter set shares nothing with the readings of the wang2021 presets
+    other = _paper_jobs(fd.preset("wang2021").replace_path("table.mass", 100.0), settings)
+    assert runner._shared_rows(study, other) == {}
+    # nor a study on another grid with the compensation study's protocol grid
+    assert runner._compensation_shares(fd.preset("wang2021"),
+                                       StudySettings(coarse_step=1e-4), jobs) == {}
+
+
+def test_a_shared_row_is_the_row_the_study_computes(monkeypatch: pytest.MonkeyPatch) -> None:
+    search = {"critical_speed_mm_s": 1.56, "status": "found", "kind": "oscillation",
+              "bands": [{"kind": "oscillation", "lower_mm_s": 1.2, "upper_mm_s": 1.55}],
+              "trials": [], "simulated_time_s": 1.0}
+    monkeypatch.setattr(reading_study, "critical_speed", lambda *a, **k: search)
+    job = reading_study.jobs()[8]
+    assert reading_study.run_variant(job) == reading_study.row_from_search(job, search)

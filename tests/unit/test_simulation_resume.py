@@ -1,0 +1,47 @@
+"""A staircase run continued from the checkpoint of an earlier run with the same beginning
+(`Simulation.resume`, what the step-down search does when it lengthens one step) is
+bit-identical to the run from rest: states, samples and solver counters."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import feeddrive as fd
+from feeddrive.engine.simulate import DriveSystem, Simulation, simulate
+from feeddrive.model.reference import _staircase
+
+SPEEDS = np.array([1.6e-3, 1.45e-3, 1.4e-3])
+
+
+def test_a_resumed_staircase_equals_the_run_from_rest() -> None:
+    system = DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    first, _ = _staircase(SPEEDS, [12.0, 12.0, 12.0], 0.0, 0.0)
+    longer, _ = _staircase(SPEEDS, [12.0, 24.0, 12.0], 0.0, 0.0)  # step 1 held longer
+    before = Simulation(system, first)
+    before.keep_checkpoints()
+    before.run(float(first.time[-1]))
+    again = Simulation(system, longer)
+    again.keep_checkpoints()
+    at = again.resume(before)
+    # the profiles part at 24 s (the old end of step 1): resumed from the chunk end before
+    assert at == 20.0
+    resumed = again.run(float(longer.time[-1]))
+    fresh = simulate(system, longer, float(longer.time[-1]))
+    assert np.array_equal(resumed.time, fresh.time)
+    for name in ("table_speed", "table_position", "screw_speed", "screw_current"):
+        assert np.array_equal(resumed[name], fresh[name]), name
+    for key in ("steps", "rejected_steps", "rhs_evaluations"):
+        assert resumed.solver_stats[key] == fresh.solver_stats[key]
+
+
+def test_nothing_is_resumed_from_another_system_or_a_profile_that_differs_at_once() -> None:
+    params = fd.preset("wang2021")
+    system = DriveSystem(params, "cdfs", 0.4)
+    first, _ = _staircase(SPEEDS, [12.0, 12.0, 12.0], 0.0, 0.0)
+    before = Simulation(system, first)
+    before.keep_checkpoints()
+    before.run(float(first.time[-1]))
+    other = Simulation(DriveSystem(params, "cdfs", 0.3), first)
+    assert other.resumable_from(before) == 0.0
+    lower, _ = _staircase(SPEEDS * 0.9, [12.0, 12.0, 12.0], 0.0, 0.0)
+    assert Simulation(system, lower).resumable_from(before) == 0.0
