@@ -28,9 +28,10 @@ def site(margin: float = 0.0, attraction: float = 1e5) -> GMSParameters:
                          element_stiffness=K, element_weight=ALPHA, slip_margin=margin)
 
 
-def presliding(params: GMSParameters, speed: float, amplitude: float
+def presliding(params: GMSParameters, speed: float, amplitude: float, method: str = "RK45"
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Force along a slow triangle x: 0 → +amplitude → −amplitude (speed [m/s])."""
+    """Force along a slow triangle x: 0 → +amplitude → −amplitude (speed [m/s]), integrated
+    by scipy's ``method`` at the same tolerances and step limit whatever the method."""
     law = friction_law("gms")
     P = law.pack(params)
     t_turn = amplitude / speed
@@ -46,7 +47,7 @@ def presliding(params: GMSParameters, speed: float, amplitude: float
     for j, (a, b) in enumerate(((0.0, t_turn), (t_turn, 3 * t_turn))):
         seg = (t >= a) & (t <= b)
         y0 = np.zeros(len(K)) if j == 0 else y[np.searchsorted(t, t_turn)]
-        sol = solve_ivp(rhs, (a, b), y0, t_eval=t[seg], method="RK45", rtol=1e-10,
+        sol = solve_ivp(rhs, (a, b), y0, t_eval=t[seg], method=method, rtol=1e-10,
                         atol=1e-16, max_step=(b - a) / 2000)
         y[seg] = sol.y.T
     x = np.where(t <= t_turn, speed * t, amplitude - speed * (t - t_turn))
@@ -80,8 +81,11 @@ def test_presliding_hysteresis_follows_the_closed_form():
 
 
 def test_the_slip_margin_bounds_the_deviation_from_the_closed_form():
+    """A slip margin makes the elements' ODE stiff: explicit RK45 needed ~30 s of steps for
+    it; LSODA (stiff-aware, same rtol/atol/max_step) gives the same forces to 2e-9 N
+    (measured against RK45 once, 2026-12-02), far below the 2e-2 N bound checked here."""
     amplitude = 1e-4
-    x, force, loading = presliding(site(margin=1e-3), 1e-6, amplitude)
+    x, force, loading = presliding(site(margin=1e-3), 1e-6, amplitude, method="LSODA")
     expected = closed_form(x, loading, amplitude, 20.0)
     assert np.max(np.abs(force - expected)) <= 1e-3 * 20.0
 
