@@ -233,10 +233,16 @@ def test_hann_periodogram_is_scipys_bit_for_bit() -> None:
     import scipy.signal (issue 21 item 4); every reported stick-slip frequency must stay the
     same to the last bit: scipy.signal.periodogram (window "hann", detrend "linear", the
     padded FFT length the metrics use) is the reference."""
+    import scipy
     from scipy.signal import periodogram
 
     from feeddrive.analysis.creep_window import hann_periodogram
 
+    # bit for bit against the scipy the function mirrors (its docstring: scipy 1.17's
+    # ShortTimeFFT-based periodogram); the minimum-versions job's scipy 1.11 sums in another
+    # order (measured: powers within 5.5e-15 of the peak, frequencies and peak bin equal), so
+    # there the same frequencies, the same peak bin and the powers to 1e-13 of the peak
+    exact = tuple(int(v) for v in scipy.__version__.split(".")[:2]) >= (1, 17)
     for x, dt in _traces():
         nfft = 1 << math.ceil(math.log2(8 * x.size))
         for size in (nfft, nfft + 1):  # the metrics' power of two, and an odd length
@@ -244,4 +250,8 @@ def test_hann_periodogram_is_scipys_bit_for_bit() -> None:
                                        nfft=size)
             f, p = hann_periodogram(x, 1.0 / dt, size)
             assert np.array_equal(f, f_ref)
-            assert np.array_equal(p, p_ref)
+            if exact:
+                assert np.array_equal(p, p_ref)
+            else:
+                assert int(np.argmax(p)) == int(np.argmax(p_ref))
+                assert np.max(np.abs(p - p_ref)) <= 1e-13 * np.max(p_ref)
