@@ -354,8 +354,8 @@ def hann_periodogram(x: np.ndarray, fs: float, nfft: int) -> tuple[np.ndarray, n
     window="hann", detrend="linear", nfft=nfft)`` (scipy 1.17: its least-squares detrend,
     the window scaled to unit power, the squared magnitude doubled except at zero and
     Nyquist; scipy 1.11, the declared minimum, sums in another order: powers within 5.5e-15
-    of the peak, same frequencies), computed with numpy alone: importing ``scipy.signal`` costs a short
-    ``feeddrive simulate`` more time than its run (issue 21 item 4;
+    of the peak, same frequencies), computed with numpy alone: importing ``scipy.signal``
+    costs a short ``feeddrive simulate`` more time than its run (issue 21 item 4;
     tests/unit/test_metrics.py compares the two bit for bit).
 
     Parameters
