@@ -37,8 +37,8 @@ def test_setup_commands_are_the_same_everywhere() -> None:
     ci_last = (ROOT / ".ci" / "run").read_text(encoding="utf-8").strip().splitlines()[-1]
     assert ci_last == readme[1]
     assert "sphinx-build -W --keep-going" in readme[1]
-    # the whole suite on both cores, the tests sharing the one reproduce run kept together
-    assert readme[1].endswith("-m pytest -n 2 --dist loadgroup")
+    # the whole suite on both cores (pytest-xdist)
+    assert readme[1].endswith("-m pytest -n 2")
 
 
 def _inventory() -> dict[str, set[str]]:

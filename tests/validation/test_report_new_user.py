@@ -16,11 +16,6 @@ from typer.testing import CliRunner
 
 from feeddrive.cli import app
 
-# the session's one `reproduce` run (conftest.full_reproduction) is shared by the tests of
-# this module and test_report_new_user/test_reproduction: under pytest-xdist (the README's
-# test command, --dist loadgroup) they run on one worker, so the run is made once
-pytestmark = pytest.mark.xdist_group("full_reproduction")
-
 runner = CliRunner()
 
 

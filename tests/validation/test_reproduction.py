@@ -12,11 +12,6 @@ from feeddrive.analysis.critical import critical_speed_from_rest
 from feeddrive.cli import app
 from feeddrive.engine.simulate import DriveSystem
 
-# the session's one `reproduce` run (conftest.full_reproduction) is shared by the tests of
-# this module and test_report_new_user/test_reproduction: under pytest-xdist (the README's
-# test command, --dist loadgroup) they run on one worker, so the run is made once
-pytestmark = pytest.mark.xdist_group("full_reproduction")
-
 runner = CliRunner()
 
 
