@@ -645,7 +645,9 @@ async function renderSignal() {
     api("GET", `/api/runs/${a.id}/signal?name=${encodeURIComponent(name)}`),
     b ? api("GET", `/api/runs/${b.id}/signal?name=${encodeURIComponent(name)}`) : null,
   ]);
-  if (ra.status !== 200 || $("signal").value !== name) return;
+  // a call overtaken by a newer choice of signal or of run B draws nothing: it would
+  // overwrite the newer plot and A/B settings line with the older ones
+  if (ra.status !== 200 || $("signal").value !== name || $("compare").value !== bId) return;
   const sig = ra.data;
   const hover = (who) => `${who}: t = %{x:.4f} s<br>${name} = %{y:.5g} ${sig.unit}<extra></extra>`;
   const traces = [{ x: sig.time_s, y: sig.values, type: "scatter", mode: "lines",
