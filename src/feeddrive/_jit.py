@@ -20,15 +20,22 @@ objects, so nothing else changes.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import importlib.util
 import os
-from collections.abc import Callable
+import sys
+import tempfile
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from numba import config as _numba_config
 from numba import njit
+from numba.core import sigutils
 from numba.core.caching import FunctionCache
+from numba.core.ccallback import CFunc
 from numba.core.runtime import rtsys
 
 config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
@@ -106,3 +113,131 @@ def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
 
 kernel = _compiled()
 inline_kernel = _compiled(inline="always")
+
+
+def first_class(fn: Callable[..., Any], signature: Any, name: str) -> Any:
+    """``fn`` compiled once more as a first-class function (a numba ``cfunc`` of
+    ``signature``), to be passed to compiled code that calls it through its address: the
+    solver drivers compiled once for every model (:mod:`feeddrive.solvers.shared`).
+
+    Cached on disk like a :data:`kernel`, under ``name`` (a qualified name of its own: numba
+    keys its cache index by file and qualified name, and ``fn`` may be cached as a kernel
+    too).
+
+    Parameters
+    ----------
+    fn : callable
+        The Python function (a kernel's ``py_func``).
+    signature : numba signature
+        Its argument and return types.
+    name : str
+        The qualified name its cache entry is kept under.
+
+    Returns
+    -------
+    numba.core.ccallback.CFunc
+        The compiled function.
+    """
+    import types
+
+    # numba's typing of a cfunc passed to compiled code (a full compiler refresh imports it;
+    # a load from the cache, :class:`_LoadingCache`, does not)
+    import numba.experimental.function_type  # noqa: F401
+
+    copy = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__,
+                              fn.__closure__)
+    copy.__qualname__ = name
+    copy.__module__ = fn.__module__
+    previous = config.CACHE_DIR
+    config.CACHE_DIR = _CACHE_DIR
+    try:
+        compiled = CFunc(copy, sigutils.normalize_signature(signature), locals={},
+                         options={"error_model": "numpy", "nogil": True})
+        compiled._cache = _LoadingCache(copy)
+    finally:
+        config.CACHE_DIR = previous
+    compiled.compile()
+    return compiled
+
+
+_LOADED: dict[str, ModuleType] = {}
+
+
+def import_generated(folder: str, stem: str, source: str) -> ModuleType:
+    """Write generated Python ``source`` to ``<cache>/<folder>/<stem>.py`` and import it, once
+    per process (numba's on-disk cache is per source file, so a generated module's compiled
+    functions are cached as a package module's are).
+
+    The file is written atomically (a concurrent process never imports a half file) and only
+    when it is missing or differs; ``stem`` should name a hash of ``source``.
+
+    Parameters
+    ----------
+    folder : str
+        Sub-folder of the compile cache.
+    stem : str
+        The module's file name without ``.py``.
+    source : str
+        Its text.
+
+    Returns
+    -------
+    module
+        The imported module.
+    """
+    if stem in _LOADED:
+        return _LOADED[stem]
+    where = Path(CACHE_DIR) / folder
+    where.mkdir(parents=True, exist_ok=True)
+    path = where / f"{stem}.py"
+    if not path.is_file() or path.read_text(encoding="utf-8") != source:
+        fd, tmp = tempfile.mkstemp(dir=where, prefix=f".{stem}.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(source)
+        os.replace(tmp, path)  # atomic: concurrent processes never import a half file
+    name = f"feeddrive_{stem}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    _LOADED[stem] = module
+    return module
+
+
+try:
+    import fcntl as _fcntl
+except ImportError:  # pragma: no cover - not on Windows
+    _fcntl = None  # type: ignore[assignment]
+
+
+@contextlib.contextmanager
+def compile_lock(path: str | os.PathLike[str], what: str) -> Iterator[None]:
+    """Around a first compilation in this process: a lock on a file beside ``path`` (the
+    generated module that holds ``what``), so that two processes (the ``reproduce`` pool's
+    workers) that need the same new function do not both compile it — the second waits and
+    loads what the first wrote to numba's cache.  Nothing is locked where file locks are not
+    available.
+
+    Parameters
+    ----------
+    path : path-like
+        The generated module's file.
+    what : str
+        The name of what is compiled (names the lock file).
+    """
+    if _fcntl is None:
+        yield
+        return
+    lock = Path(path).with_name(f".{Path(path).stem}.{what}.lock")
+    try:
+        fh = open(lock, "a")  # noqa: SIM115 (held across the yield)
+    except OSError:
+        yield
+        return
+    with fh:
+        _fcntl.flock(fh, _fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            _fcntl.flock(fh, _fcntl.LOCK_UN)

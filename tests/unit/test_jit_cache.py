@@ -69,14 +69,19 @@ def test_a_second_process_loads_the_assembled_model_from_disk(tmp_path) -> None:
             "from feeddrive.model.reference import ConstantSpeed\n"
             "s = fd.DriveSystem(fd.preset('linear-motor-example'), 'linear-motor')\n"
             "fd.simulate(s, ConstantSpeed(1e-3), 0.01)\n"
-            "st = s.model(ConstantSpeed(1e-3)).module.integrate_dense.stats\n"
-            "print(sum(st.cache_hits.values()), sum(st.cache_misses.values()))\n")
+            "from feeddrive.solvers import shared\n"
+            "st = shared._module()[0].integrate_dense.stats\n"
+            "rhs = s.model(ConstantSpeed(1e-3)).module._bound._model_values()['rhs']\n"
+            "print(sum(st.cache_hits.values()), sum(st.cache_misses.values()),"
+            " rhs._cache_hits)\n")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                            text=True, check=True, timeout=300).stdout.split()
             for _ in range(2)]
-    assert runs[0] == ["0", "1"]  # first process: compiled and stored
-    assert runs[1] == ["1", "0"]  # second process: loaded from disk
+    # the shared driver and the model's first-class right-hand side: the first process
+    # compiles and stores them, the second loads both from disk
+    assert runs[0] == ["0", "1", "0"]
+    assert runs[1] == ["1", "0", "1"]
     assert list(tmp_path.rglob("model_*.py"))
 
 
@@ -89,7 +94,7 @@ def test_solver_sources_read_from_the_cache_folder_are_the_templates(tmp_path,
 
     from feeddrive.solvers import dopri5, rodas4, steps, switching
 
-    assemble = importlib.import_module("feeddrive.model.assemble")  # the module, not the function
+    assemble = importlib.import_module("feeddrive.solvers.shared")
     built = (steps.template_sources() + rodas4.template_sources()
              + dopri5.template_sources() + switching.template_sources())
     monkeypatch.setattr(assemble, "CACHE_DIR", str(tmp_path))

@@ -116,7 +116,7 @@ def test_the_rosenbrock_step_has_each_tableau_s_order_on_a_linear_system(
 def test_the_model_modules_hold_the_written_steps() -> None:
     """The text every generated module gets is the steps written from the tableaux (one
     DOPRI5 step for the three drivers, one RODAS4 step)."""
-    from feeddrive.model.assemble import solver_sources
+    from feeddrive.solvers.shared import solver_sources
 
     text = "\n".join(solver_sources())
     for name in ("_dp5_step", "_dp5_error", "_dp5_dense", "_r4_rodas4_step",

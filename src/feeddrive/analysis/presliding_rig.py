@@ -40,7 +40,6 @@ from typing import Literal
 import numpy as np
 
 from ..model import codegen
-from ..model.assemble import solver_sources
 from ..model.disturbances import LoadProfile, emit_load
 from ..model.friction import friction_law
 from ..model.friction.lugre_parameters import LuGreParameters
@@ -105,7 +104,7 @@ def _rig() -> _Rig:
     b.emit(f"{b.dy('position')} = v", writes="dy:position", reads="v")
     b.emit(f"{b.dy('speed')} = (- f_load - f_site) / {b.p('mass')}", writes="dy:speed",
            reads=("f_load", "f_site"))
-    module = codegen.compile_module(codegen.module_source(b, solver_sources()),
+    module = codegen.compile_module(codegen.module_source(b),
                                     b.dynamic_sources)
     return _Rig(module=module, parameter_names=tuple(b.param_names), n_states=len(b.states),
                 bristle=first)

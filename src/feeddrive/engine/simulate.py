@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import contextlib
 import math
 import time as _time
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,11 +19,6 @@ from ..parameters import DriveParameters, ParameterError
 from ..solvers import dopri5, modes, switching
 from . import budget
 from .result import Result, Run
-
-try:  # POSIX file locks (the compile lock); elsewhere processes may compile a model twice
-    import fcntl
-except ImportError:  # pragma: no cover - Windows
-    fcntl = None  # type: ignore[assignment]
 
 DRIVES = drive_names()
 
@@ -844,9 +838,8 @@ class _Chunks:
     def _call(self, y: np.ndarray, start: int, stop: int, held: np.ndarray,
               memory: np.ndarray, max_steps: int,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        sim, grid = self.sim, self.sim.grid
-        with _first_compile(sim.model.module, "integrate_dense" if self.dense else "integrate"):
-            t, yy, aa, stats = self._integrate(y, start, stop, held, memory, max_steps)
+        grid = self.sim.grid
+        t, yy, aa, stats = self._integrate(y, start, stop, held, memory, max_steps)
         if start > 0 and t.size and t[0] <= start * grid.base:
             t, yy, aa = t[1:], yy[1:], aa[1:]  # the shared breakpoint, already kept
         return t, yy, aa, stats
@@ -977,32 +970,6 @@ class _Stopped(Exception):
                  joined: tuple[np.ndarray, np.ndarray, list[np.ndarray]]) -> None:
         super().__init__(t_reached)
         self.t_reached, self.joined = t_reached, joined
-
-
-@contextlib.contextmanager
-def _first_compile(module: Any, name: str) -> Iterator[None]:
-    """Around the first call of a generated module's integrator in this process: a lock on a
-    file beside the module, so that two processes (the ``reproduce`` pool's workers) that
-    need the same new model do not both compile it — the second waits and loads what the
-    first wrote to numba's cache (a compile is ~5–10 CPU s; measured in benchmarks/README).
-    Nothing is locked once compiled here, or where file locks are not available."""
-    fn = getattr(module, name, None)
-    path = getattr(module, "__file__", None)
-    if fcntl is None or fn is None or path is None or getattr(fn, "signatures", [None]):
-        yield
-        return
-    lock = Path(path).with_name(f".{Path(path).stem}.{name}.lock")
-    try:
-        fh = open(lock, "a")  # noqa: SIM115 (held across the yield)
-    except OSError:
-        yield
-        return
-    with fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def _nut(profile: SampledSpeed) -> np.ndarray:

@@ -22,7 +22,7 @@ from ..model.codegen import compile_module
 from ..model.disturbances import LoadProfile
 from ..model.reference import INPUT_INSTANT, KIND, REF_INPUT, TABLE_OFFSET
 from ..parameters import DriveParameters, ParameterError
-from ..solvers import schedule
+from ..solvers import schedule, steps
 from . import solver
 
 # the zero load record that makes the assembler emit the load-force slot
@@ -160,7 +160,8 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
 
 def numba_module(model: Model) -> ModuleType:
     """The model's generated module with the FMU's integrator
-    (:func:`feeddrive.fmu.solver.template_source`) compiled beside its kernels
+    (:func:`feeddrive.fmu.solver.template_source`) and the steps it calls
+    (:func:`feeddrive.solvers.steps.template_sources`) compiled beside its kernels
     (``module.advance``): the numba build of the FMU's integrator.
 
     Parameters
@@ -173,7 +174,8 @@ def numba_module(model: Model) -> ModuleType:
     module
         The compiled module, with ``advance``.
     """
-    return compile_module(model.source + "\n\n" + solver.template_source() + "\n", [])
+    return compile_module("\n\n".join([model.source, *steps.template_sources(),
+                                      solver.template_source()]) + "\n", [])
 
 
 class NumbaCoSimulation:

@@ -12,17 +12,12 @@ from __future__ import annotations
 import collections
 import dataclasses
 import functools
-import json
-import os
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._jit import CACHE_DIR
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
 from .compensation import CompensationFootprint, emit_compensation
@@ -479,7 +474,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     if load_aux:
         b.emit(f"{b.a('load_force')} = {load_code}", writes="aux:load_force", reads="t")
 
-    source = codegen.module_source(b, solver_sources())
+    source = codegen.module_source(b)
     module = codegen.compile_module(source, b.dynamic_sources)
     pattern = sparsity.declared_pattern([s.name for s in b.states], [a.name for a in b.aux],
                                         b.flows)
@@ -493,46 +488,6 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
         derived=tuple(b.derived), clocks=tuple(b.clocks),
         flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp)
-
-
-@functools.cache
-def solver_sources() -> list[str]:
-    """The integrator templates pasted into every generated module.
-
-    The one driver of :mod:`feeddrive.solvers.driver`, specialised as ``integrate`` (DOPRI5
-    landing on every breakpoint, as in engine v1) and ``integrate_dense`` (dense output,
-    DOPRI5 ⇄ RODAS4), beside the steps and Jacobian kernels they call; numba compiles each at
-    its first call, so a model only ever run with one method never compiles the other.  Cached
-    in memory and on disk, in the compile cache's folder (named after the hash of every
-    kernel source, the solvers' included: :mod:`feeddrive._jit`): reading and specialising the
-    templates with ``inspect`` and ``ast`` costs a fresh process 0.1–0.2 s, more than a short
-    simulation (issue 21 item 4).
-
-    Returns
-    -------
-    list of str
-        Python sources of the solver drivers.
-    """
-    path = Path(CACHE_DIR) / "solver_sources.json"
-    try:
-        stored = json.loads(path.read_text(encoding="utf-8"))
-        if isinstance(stored, list) and all(isinstance(s, str) for s in stored):
-            return stored
-    except (OSError, ValueError):
-        pass
-    from ..solvers import dopri5, rodas4, steps, switching
-
-    sources = (steps.template_sources() + rodas4.template_sources()
-               + dopri5.template_sources() + switching.template_sources())
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".solver_sources.", suffix=".tmp")
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(sources, fh)
-        os.replace(tmp, path)  # atomic: a concurrent process reads the old file or the new
-    except OSError:  # a read-only cache folder: the sources are rebuilt in each process
-        pass
-    return sources
 
 
 

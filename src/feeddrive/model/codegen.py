@@ -17,19 +17,15 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.util
 import inspect
-import os
-import sys
-import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import ModuleType
 from typing import Any
 
 import numpy as np
 
-from .._jit import CACHE_DIR, SOURCE_DIGEST
+from .._jit import SOURCE_DIGEST, import_generated
+from ..solvers.shared import binding_source
 
 # Tolerance classes of a state: how its absolute tolerance follows from the solver options.
 TOLERANCE_KINDS = ("position", "speed", "angle", "rotary_speed", "current", "current_integral",
@@ -616,16 +612,15 @@ def rhs_source(builder: Builder) -> str:
             + _indent(builder.rhs_lines or ["pass"]) + "\n")
 
 
-def module_source(builder: Builder, solver_sources: list[str]) -> str:
-    """The full text of the generated module: imports, sizes, ``rhs``, ``sample_update`` and the
-    solver templates.
+def module_source(builder: Builder) -> str:
+    """The full text of the generated module: imports, sizes, ``rhs``, ``sample_update`` and
+    the solver drivers bound to them (``integrate``, ``integrate_dense``, ``auxiliary``: the
+    drivers are compiled once for every model, :mod:`feeddrive.solvers.shared`).
 
     Parameters
     ----------
     builder : Builder
         The builder every part has declared to.
-    solver_sources : list of str
-        Source of the solver drivers pasted after the model's kernels.
 
     Returns
     -------
@@ -658,10 +653,7 @@ def module_source(builder: Builder, solver_sources: list[str]) -> str:
         _indent(builder.sample_lines or ["pass"]),
         "",
     ]
-    return "\n".join(head) + "\n\n" + "\n\n".join(solver_sources) + "\n"
-
-
-_LOADED: dict[str, ModuleType] = {}
+    return "\n".join(head) + "\n\n" + binding_source()
 
 
 def compile_module(source: str, extra_sources: list[str]) -> ModuleType:
@@ -687,22 +679,4 @@ def compile_module(source: str, extra_sources: list[str]) -> ModuleType:
     digest.update(SOURCE_DIGEST.encode())
     for s in extra_sources:
         digest.update(s.encode())
-    key = digest.hexdigest()[:20]
-    if key in _LOADED:
-        return _LOADED[key]
-    folder = Path(CACHE_DIR) / "models"
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"model_{key}.py"
-    if not path.is_file() or path.read_text(encoding="utf-8") != source:
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".model_{key}.", suffix=".tmp")
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(source)
-        os.replace(tmp, path)  # atomic: concurrent processes never import a half file
-    name = f"feeddrive_model_{key}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    _LOADED[key] = module
-    return module
+    return import_generated("models", f"model_{digest.hexdigest()[:20]}", source)

@@ -1,0 +1,246 @@
+"""The solver drivers compiled once for every model, the model's functions passed to them.
+
+The drivers (:mod:`feeddrive.solvers.driver` specialised as ``integrate`` and
+``integrate_dense``, the steps of :mod:`feeddrive.solvers.steps`, the Jacobian kernels of
+:mod:`feeddrive.solvers.rodas4` and ``auxiliary``) are written as templates that call the
+model's ``rhs`` and ``sample_update`` and read its sizes ``N_AUX``, ``N_HELD``.  Pasted into
+every generated model module, they were compiled again for each model (≈ 14 CPU s a model,
+most of a cold ``reproduce``: issue 21 item 3).  Here they are placed once in a generated
+module of their own, each function that reads a model name (directly or through a function
+it calls) taking those names as its first arguments; a model passes its ``rhs`` and
+``sample_update`` as *first-class functions* (numba ``cfunc``\\ s of :data:`RHS_SIGNATURE`
+and :data:`SAMPLE_SIGNATURE`, called through their address) and its sizes.  numba compiles
+the drivers once per signature — the same for every model — and caches them on disk; a new
+model compiles only its own two functions.
+
+Nothing is rounded differently: numba compiles without fast-math, so a call through an
+address computes what the inlined call did, bit for bit (tested against recorded
+trajectories, ``tests/regression``).
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from numba import types
+
+from .._jit import CACHE_DIR, SOURCE_DIGEST, compile_lock, first_class, import_generated
+
+_ARRAY = types.float64[::1]
+#: ``rhs(t, y, held, P, T, dy, aux)``
+RHS_SIGNATURE = types.void(types.float64, _ARRAY, _ARRAY, _ARRAY, _ARRAY, _ARRAY, _ARRAY)
+#: ``sample_update(t, y, held, P, T, tick)``
+SAMPLE_SIGNATURE = types.void(types.float64, _ARRAY, _ARRAY, _ARRAY, _ARRAY,
+                              types.int64[::1])
+#: the names a template reads from its model, in the order they are passed
+MODEL_NAMES = ("rhs", "sample_update", "N_STATE", "N_AUX", "N_HELD", "N_CLOCK")
+#: the drivers a model calls (the other functions of the module are theirs)
+ENTRY_POINTS = ("integrate", "integrate_dense", "auxiliary")
+
+
+@functools.cache
+def solver_sources() -> list[str]:
+    """The integrator templates, as they read in a model's module: the one driver of
+    :mod:`feeddrive.solvers.driver` specialised as ``integrate`` (DOPRI5 landing on every
+    breakpoint, as in engine v1) and ``integrate_dense`` (dense output, DOPRI5 ⇄ RODAS4),
+    beside the steps and Jacobian kernels they call and ``auxiliary``.
+
+    Kept in memory and on disk, in the compile cache's folder (named after the hash of every
+    kernel source, the solvers' included: :mod:`feeddrive._jit`): reading and specialising the
+    templates with ``inspect`` and ``ast`` costs a fresh process 0.1–0.2 s, more than a short
+    simulation (issue 21 item 4).
+
+    Returns
+    -------
+    list of str
+        Python sources of the solver functions.
+    """
+    path = Path(CACHE_DIR) / "solver_sources.json"
+    try:
+        stored = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(stored, list) and all(isinstance(s, str) for s in stored):
+            return stored
+    except (OSError, ValueError):
+        pass
+    from . import dopri5, rodas4, steps, switching
+
+    sources = (steps.template_sources() + rodas4.template_sources()
+               + dopri5.template_sources() + switching.template_sources())
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".solver_sources.", suffix=".tmp")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(sources, fh)
+        os.replace(tmp, path)  # atomic: a concurrent process reads the old file or the new
+    except OSError:  # a read-only cache folder: the sources are rebuilt in each process
+        pass
+    return sources
+
+
+def model_arguments(source: str) -> tuple[str, dict[str, tuple[str, ...]]]:
+    """``source`` (solver templates reading the model names of :data:`MODEL_NAMES` as
+    globals) rewritten so that each function reading one — directly or through a function of
+    ``source`` it calls — takes them as its first parameters, and passes them on.
+
+    Parameters
+    ----------
+    source : str
+        Python source of the templates.
+
+    Returns
+    -------
+    text : str
+        The rewritten source.
+    added : dict of str to tuple of str
+        Function name → the model names it now takes first, in :data:`MODEL_NAMES` order.
+    """
+    tree = ast.parse(source)
+    functions = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef)}
+    reads: dict[str, set[str]] = {}
+    calls: dict[str, set[str]] = {}
+    for name, fn in functions.items():
+        names = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)}
+        reads[name] = names & set(MODEL_NAMES)
+        calls[name] = {n.func.id for n in ast.walk(fn) if isinstance(n, ast.Call)
+                       and isinstance(n.func, ast.Name) and n.func.id in functions}
+    changed = True
+    while changed:  # what a function reads through the functions it calls
+        changed = False
+        for name in functions:
+            more = set().union(*(reads[c] for c in calls[name])) - reads[name] if calls[name] \
+                else set()
+            if more:
+                reads[name] |= more
+                changed = True
+    added = {name: tuple(m for m in MODEL_NAMES if m in reads[name]) for name in functions}
+    for name, fn in functions.items():
+        fn.args.args[:0] = [ast.arg(arg=m) for m in added[name]]
+        for node in ast.walk(fn):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                    and added.get(node.func.id)):
+                node.args[:0] = [ast.Name(id=m, ctx=ast.Load()) for m in added[node.func.id]]
+    return ast.unparse(ast.fix_missing_locations(tree)), {n: a for n, a in added.items() if a}
+
+
+@functools.cache
+def _module() -> tuple[ModuleType, dict[str, tuple[str, ...]]]:
+    """The shared drivers' module (generated once per kernel hash) and each entry point's
+    model arguments."""
+    text, added = model_arguments("\n\n\n".join(solver_sources()))
+    source = ('"""Generated by feeddrive.solvers.shared: the solver drivers of every model.  '
+              'Do not edit."""\nimport math\nimport numpy as np\n'
+              "from feeddrive._jit import kernel\n\n\n" + text + "\n")
+    digest = hashlib.sha256(source.encode())
+    digest.update(SOURCE_DIGEST.encode())
+    return import_generated("shared", f"drivers_{digest.hexdigest()[:20]}", source), added
+
+
+class Bound:
+    """One model's functions bound to the shared drivers: ``integrate``, ``integrate_dense``
+    and ``auxiliary`` take the arguments of the templates they are (without the model's).
+
+    The model's first-class ``rhs`` and ``sample_update`` are compiled (or loaded from the
+    cache) at the first driver call, a shared driver at its first call in the process; each
+    first compilation holds a file lock so that two processes needing it compile it once
+    (:func:`feeddrive._jit.compile_lock`).
+
+    Parameters
+    ----------
+    rhs, sample_update : numba dispatcher
+        The model's kernels.
+    sizes : dict of str to int
+        ``N_STATE``, ``N_AUX``, ``N_HELD``, ``N_CLOCK``.
+    path : str
+        The model module's file (beside which its compile lock is kept).
+    """
+
+    def __init__(self, rhs: Any, sample_update: Any, sizes: dict[str, int], path: str) -> None:
+        self._kernels = (rhs, sample_update)
+        self._sizes = sizes
+        self._path = path
+        self._values: dict[str, Any] | None = None
+
+    def _model_values(self) -> dict[str, Any]:
+        if self._values is None:
+            rhs, update = self._kernels
+            with compile_lock(self._path, "first_class"):
+                self._values = {"rhs": first_class(rhs.py_func, RHS_SIGNATURE, "rhs_fc"),
+                                "sample_update": first_class(update.py_func, SAMPLE_SIGNATURE,
+                                                             "sample_update_fc"),
+                                **self._sizes}
+        return self._values
+
+    def _call(self, name: str, args: tuple[Any, ...]) -> Any:
+        module, added = _module()
+        fn = getattr(module, name)
+        values = self._model_values()
+        head = [values[m] for m in added.get(name, ())]
+        if not fn.signatures:  # the first call in this process: compiled or loaded once
+            with compile_lock(module.__file__, name):
+                return fn(*head, *args)
+        return fn(*head, *args)
+
+    def function(self, name: str) -> Any:
+        """Any function of the shared drivers' module (a step, ``_r4_fd_jacobian`` …) with
+        this model's arguments put first: called with the template's own arguments.
+
+        Parameters
+        ----------
+        name : str
+            The function's name in the templates.
+
+        Returns
+        -------
+        callable
+            The function bound to this model.
+
+        Raises
+        ------
+        AttributeError
+            When the templates define no such function.
+        """
+        module, _ = _module()
+        if not callable(getattr(module, name, None)) or name.startswith("__"):
+            raise AttributeError(f"the solver drivers define no function {name!r}")
+        def bound(*args: Any) -> Any:
+            return self._call(name, args)
+
+        bound.__name__ = bound.__qualname__ = name
+        return bound
+
+    def integrate(self, *args: Any) -> Any:
+        """The breakpoint driver (:func:`feeddrive.solvers.dopri5.integrate`'s kernel)."""
+        return self._call("integrate", args)
+
+    def integrate_dense(self, *args: Any) -> Any:
+        """The dense-output driver (:func:`feeddrive.solvers.switching.integrate`'s kernel)."""
+        return self._call("integrate_dense", args)
+
+    def auxiliary(self, *args: Any) -> Any:
+        """The auxiliary signals at output samples (``auxiliary(t_out, y_out, P, T)``)."""
+        return self._call("auxiliary", args)
+
+
+def binding_source() -> str:
+    """The lines closing a generated model module: its ``rhs``, ``sample_update`` and sizes
+    bound to the shared drivers (``integrate``, ``integrate_dense``, ``auxiliary``; any other
+    function of theirs, ``module._r4_fd_jacobian`` say, through the module's ``__getattr__``).
+
+    Returns
+    -------
+    str
+        Python source.
+    """
+    sizes = ", ".join(f"{m!r}: {m}" for m in MODEL_NAMES[2:])
+    return ("from feeddrive.solvers.shared import Bound as _Bound\n"
+            f"_bound = _Bound(rhs, sample_update, {{{sizes}}}, __file__)\n"
+            + "".join(f"{name} = _bound.{name}\n" for name in ENTRY_POINTS)
+            + "__getattr__ = _bound.function\n")
