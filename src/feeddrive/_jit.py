@@ -153,7 +153,7 @@ def first_class(fn: Callable[..., Any], signature: Any, name: str) -> Any:
     try:
         compiled = CFunc(copy, sigutils.normalize_signature(signature), locals={},
                          options={"error_model": "numpy", "nogil": True})
-        compiled._cache = _LoadingCache(copy)
+        compiled._cache = _LoadingCache(copy)  # type: ignore[attr-defined]
     finally:
         config.CACHE_DIR = previous
     compiled.compile()

@@ -184,7 +184,7 @@ class Bound:
         values = self._model_values()
         head = [values[m] for m in added.get(name, ())]
         if not fn.signatures:  # the first call in this process: compiled or loaded once
-            with compile_lock(module.__file__, name):
+            with compile_lock(module.__file__ or name, name):
                 return fn(*head, *args)
         return fn(*head, *args)
 
@@ -217,15 +217,48 @@ class Bound:
         return bound
 
     def integrate(self, *args: Any) -> Any:
-        """The breakpoint driver (:func:`feeddrive.solvers.dopri5.integrate`'s kernel)."""
+        """The breakpoint driver (the kernel of :func:`feeddrive.solvers.dopri5.integrate`).
+
+        Parameters
+        ----------
+        *args : object
+            The template's own arguments (those after the model's).
+
+        Returns
+        -------
+        object
+            What the template returns.
+        """
         return self._call("integrate", args)
 
     def integrate_dense(self, *args: Any) -> Any:
-        """The dense-output driver (:func:`feeddrive.solvers.switching.integrate`'s kernel)."""
+        """The dense-output driver (the kernel of :func:`feeddrive.solvers.switching.integrate`).
+
+        Parameters
+        ----------
+        *args : object
+            The template's own arguments (those after the model's).
+
+        Returns
+        -------
+        object
+            What the template returns.
+        """
         return self._call("integrate_dense", args)
 
     def auxiliary(self, *args: Any) -> Any:
-        """The auxiliary signals at output samples (``auxiliary(t_out, y_out, P, T)``)."""
+        """The auxiliary signals at output samples (``auxiliary(t_out, y_out, P, T)``).
+
+        Parameters
+        ----------
+        *args : object
+            The template's own arguments (those after the model's).
+
+        Returns
+        -------
+        object
+            What the template returns.
+        """
         return self._call("auxiliary", args)
 
 
