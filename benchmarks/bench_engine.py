@@ -31,7 +31,8 @@ Contestants, each recording the 15 states on the same 1-ms grid:
 
 Accuracy: each one's largest table-position error on the grid against a tight engine run
 (DOPRI5, rtol 1e-10, 1e-14 m).  The engine starts at the default tolerances and is tightened
-10× per round until its error is no larger than the smaller of the two baselines'.
+10× per round until its error is no larger than the smaller of the two baselines' and than
+the target's 1e-6 of the largest |x_t| (the tolerances it ran at are recorded per row).
 
 Timing: CPU time (``time.process_time``), contestants interleaved round by round, medians of
 ``--runs`` rounds, each after a warm-up (compile or numba cache load).
@@ -185,7 +186,10 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
     y_ode, info = ode()
     err_lsoda = float(np.max(np.abs(sol.y[X_T] - truth)))
     err_odeint = float(np.max(np.abs(y_ode[:, X_T] - truth)))
-    target = min(err_lsoda, err_odeint)
+    # the engine at least as accurate as the better baseline and within the target's
+    # relative position error (the speed targets hold "at ≤ 1e-6 relative position error")
+    target = min(err_lsoda, err_odeint,
+                 TARGET_RELATIVE_ERROR * float(np.max(np.abs(truth))))
     options = SolverOptions()  # the default method
     for _ in range(4):
         t, y, stats = engine_states(system, model, profile, duration, options)
