@@ -1,0 +1,70 @@
+"""The solver drivers compiled once for every model (feeddrive.solvers.shared, issue 21
+item 3: a cold ``reproduce`` compiled the drivers again for each of its 8 models)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import feeddrive
+from feeddrive.model.reference import ConstantSpeed
+from feeddrive.solvers import shared
+
+
+def test_model_names_become_leading_arguments_passed_on_to_callees() -> None:
+    """A function reading a model name — itself or through a function it calls — takes it
+    first, and passes it on; the others are left as they are.  The rewritten text runs."""
+    source = (
+        "def inner(x):\n    return rhs(x) + N_AUX\n\n"
+        "def middle(x):\n    return inner(x) * 2\n\n"
+        "def outer(x):\n    return middle(x) + sample_update(x)\n\n"
+        "def alone(x):\n    return x + 1\n")
+    text, added = shared.model_arguments(source)
+    assert added == {"inner": ("rhs", "N_AUX"), "middle": ("rhs", "N_AUX"),
+                     "outer": ("rhs", "sample_update", "N_AUX")}
+    namespace: dict = {}
+    exec(compile(text, "<rewritten>", "exec"), namespace)  # noqa: S102 - the test's text
+    # no global rhs, sample_update or N_AUX: each comes in as an argument
+    assert namespace["outer"](lambda x: 10 * x, lambda x: 1000, 3, 2) == (20 + 3) * 2 + 1000
+    assert namespace["alone"](1) == 2
+
+
+def test_the_shared_module_text_is_kept_and_a_damaged_one_rewritten(tmp_path) -> None:
+    built = shared.module_source(tmp_path / "missing.py")
+    assert built.startswith(shared._HEADER) and "\nMODEL_ARGUMENTS = " in built
+    kept = tmp_path / "drivers.py"
+    kept.write_text(built)
+    assert shared.module_source(kept) == built
+    marked = built.replace("import math", "import math  # kept as it is", 1)
+    kept.write_text(marked)
+    assert shared.module_source(kept) == marked  # a file there is used, not rebuilt
+    for damaged in ("def broken(:\n", "VALUE = 1\n", built[:len(built) // 2]):
+        kept.write_text(damaged)
+        assert shared.module_source(kept) == built
+
+
+def test_two_model_structures_share_one_compiled_driver() -> None:
+    """Two generated modules (another structure: the motor torque ripple adds a part) run
+    through the same driver, compiled for one signature; their results are their own."""
+    plain = feeddrive.DriveSystem(feeddrive.preset("wang2021"), "cdfs", 0.4)
+    ripple = feeddrive.DriveSystem(feeddrive.preset("wang2021-ripple"), "cdfs", 0.4)
+    profile = ConstantSpeed(2e-3)
+    assert plain.model(profile).module is not ripple.model(profile).module
+    a = feeddrive.simulate(plain, profile, 0.3)
+    b = feeddrive.simulate(ripple, profile, 0.3)
+    driver = shared._module()[0].integrate_dense
+    assert len(driver.signatures) == 1
+    xa = np.asarray(a.dataset["table_speed"].values)
+    xb = np.asarray(b.dataset["table_speed"].values)
+    assert xa.shape == xb.shape and not np.array_equal(xa, xb)
+
+
+def test_a_model_module_offers_the_other_solver_functions_bound_to_it() -> None:
+    model = feeddrive.DriveSystem(feeddrive.preset("wang2021"), "cdfs", 0.4).model(
+        ConstantSpeed(1e-3))
+    n = len(model.states)
+    J = np.diag(np.arange(1.0, n + 1.0))
+    rho = model.module._r4_spectral_radius(J, np.ones(n), np.empty(n), np.empty(n), 60)
+    assert rho == pytest.approx(float(n), rel=1e-2)  # the largest eigenvalue, by power iteration
+    with pytest.raises(AttributeError, match="no function 'no_such_step'"):
+        model.module.no_such_step  # noqa: B018 - the attribute access is the test
