@@ -38,7 +38,8 @@ def test_the_shared_module_text_is_kept_and_a_damaged_one_rewritten(tmp_path) ->
     marked = built.replace("import math", "import math  # kept as it is", 1)
     kept.write_text(marked)
     assert shared.module_source(kept) == marked  # a file there is used, not rebuilt
-    for damaged in ("def broken(:\n", "VALUE = 1\n", built[:len(built) // 2]):
+    for damaged in ("def broken(:\n", "VALUE = 1\n", built[:len(built) // 2],
+                    built[len(built) // 2:]):
         kept.write_text(damaged)
         assert shared.module_source(kept) == built
 

@@ -153,13 +153,12 @@ def module_source(path: Path) -> str:
     str
         Python source.
     """
-    try:
+    try:  # written whole (atomically) or not at all: a file with both ends is the text
         source = path.read_text(encoding="utf-8")
-        ast.parse(source)
         if (source.startswith(_HEADER) and source.endswith(_TRAILER)
                 and "\nMODEL_ARGUMENTS = " in source):
             return source
-    except (OSError, SyntaxError, ValueError):
+    except (OSError, ValueError):
         pass
     text, added = model_arguments("\n\n\n".join(solver_sources()))
     return (_HEADER + "import math\nimport numpy as np\nfrom feeddrive._jit import kernel\n\n"
