@@ -84,29 +84,3 @@ def test_a_second_process_loads_the_assembled_model_from_disk(tmp_path) -> None:
     assert runs[1] == ["1", "0", "1"]
     assert list(tmp_path.rglob("model_*.py"))
 
-
-def test_solver_sources_read_from_the_cache_folder_are_the_templates(tmp_path,
-                                                                      monkeypatch) -> None:
-    """The solver templates are memoised in the compile cache's folder (issue 21 item 4: a
-    fresh process rebuilt them with inspect/ast for 0.04 s): what is read back is what is
-    built, and a damaged file is rebuilt, never used."""
-    import importlib
-
-    from feeddrive.solvers import dopri5, rodas4, steps, switching
-
-    assemble = importlib.import_module("feeddrive.solvers.shared")
-    built = (steps.template_sources() + rodas4.template_sources()
-             + dopri5.template_sources() + switching.template_sources())
-    monkeypatch.setattr(assemble, "CACHE_DIR", str(tmp_path))
-    stored = tmp_path / "solver_sources.json"
-    try:
-        assemble.solver_sources.cache_clear()
-        assert assemble.solver_sources() == built and stored.is_file()
-        assemble.solver_sources.cache_clear()
-        assert assemble.solver_sources() == built  # read back from the file
-        for damaged in ('{"not": "a list"}', "[1, 2]", "not json"):
-            stored.write_text(damaged)
-            assemble.solver_sources.cache_clear()
-            assert assemble.solver_sources() == built
-    finally:
-        assemble.solver_sources.cache_clear()

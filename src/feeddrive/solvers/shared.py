@@ -22,9 +22,6 @@ from __future__ import annotations
 
 import ast
 import functools
-import json
-import os
-import tempfile
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -52,36 +49,18 @@ def solver_sources() -> list[str]:
     breakpoint, as in engine v1) and ``integrate_dense`` (dense output, DOPRI5 ⇄ RODAS4),
     beside the steps and Jacobian kernels they call and ``auxiliary``.
 
-    Kept in memory and on disk, in the compile cache's folder (named after the hash of every
-    kernel source, the solvers' included: :mod:`feeddrive._jit`): reading and specialising the
-    templates with ``inspect`` and ``ast`` costs a fresh process 0.1–0.2 s, more than a short
-    simulation (issue 21 item 4).
+    Read and specialised with ``inspect`` and ``ast`` (≈ 0.1 s): only when the shared
+    drivers' module is not in the compile cache's folder yet (:func:`module_source`).
 
     Returns
     -------
     list of str
         Python sources of the solver functions.
     """
-    path = Path(CACHE_DIR) / "solver_sources.json"
-    try:
-        stored = json.loads(path.read_text(encoding="utf-8"))
-        if isinstance(stored, list) and all(isinstance(s, str) for s in stored):
-            return stored
-    except (OSError, ValueError):
-        pass
     from . import dopri5, rodas4, steps, switching
 
-    sources = (steps.template_sources() + rodas4.template_sources()
-               + dopri5.template_sources() + switching.template_sources())
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".solver_sources.", suffix=".tmp")
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(sources, fh)
-        os.replace(tmp, path)  # atomic: a concurrent process reads the old file or the new
-    except OSError:  # a read-only cache folder: the sources are rebuilt in each process
-        pass
-    return sources
+    return (steps.template_sources() + rodas4.template_sources()
+            + dopri5.template_sources() + switching.template_sources())
 
 
 def model_arguments(source: str) -> tuple[str, dict[str, tuple[str, ...]]]:
