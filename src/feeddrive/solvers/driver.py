@@ -42,16 +42,12 @@ import inspect
 import linecache
 import math
 import operator
-import os
-import tempfile
 import textwrap
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._jit import CACHE_DIR
 from . import steps
 from .modes import H_LAMBDA as MODAL_H_LAMBDA
 from .modes import REFRESH as MODAL_REFRESH
@@ -1052,10 +1048,8 @@ def source(use: str, inline: bool = True) -> str:
     explicit step written in (:func:`feeddrive.solvers.steps.inline_steps`) unless
     ``inline`` is false (the C translation calls the step functions).
 
-    The text is kept in the compile cache's folder (named after the hash of every solver
-    source, :data:`feeddrive._jit.CACHE_DIR`): a fresh process reads it instead of
-    specialising again (~50 ms of a start-up); a file that is not the one function is
-    rebuilt.
+    Specialising costs ≈ 50 ms; a process does it only when it builds the shared drivers'
+    module (:mod:`feeddrive.solvers.shared`, kept in the compile cache's folder) or an FMU.
 
     Parameters
     ----------
@@ -1071,26 +1065,8 @@ def source(use: str, inline: bool = True) -> str:
     """
     if use not in USES:
         raise KeyError(f"{use!r}: not a use of the driver ({', '.join(USES)})")
-    path = Path(CACHE_DIR) / "drivers" / f"{use}{'' if inline else '_calls'}.py"
-    try:
-        stored = path.read_text(encoding="utf-8")
-        tree = ast.parse(stored)  # a damaged file is rebuilt
-        if (len(tree.body) == 1 and isinstance(tree.body[0], ast.FunctionDef)
-                and tree.body[0].name == use):
-            return stored
-    except (OSError, SyntaxError, ValueError):
-        pass
     params, fixed, doc = USES[use]
     constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
     text = specialise(driver_template, use, params, constants, doc,
                       "int" if use == "advance" else None)
-    text = steps.inline_steps(text) if inline else text
-    try:  # atomic: a concurrent process never reads a half file
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except OSError:
-        pass  # a read-only cache: specialised again next time
-    return text
+    return steps.inline_steps(text) if inline else text
