@@ -674,7 +674,12 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         ("study", "Model-reading study", "How each unstated choice moves the critical speeds "
          "at mid-screw, from rest (variants of the wang2021 presets; 'below-range': smooth at "
          "every tested speed, 'above-range': creeps or oscillates at every tested speed). "
-         "Evidence for the targets above; docs/model-reading.md discusses it.",
+         "Evidence for the targets above; docs/model-reading.md discusses it.  Caveat: with "
+         "sampled, quantised loops a trial can hunt on a metastable limit cycle that it "
+         "leaves at a time set by the integration error (a count flipping earlier or later): "
+         "the sampled 1-kHz DDFS's upper oscillation band, and so its critical speed, is such "
+         "a case (measured at five tolerances and against two references: "
+         "docs/model-reading.md).",
          study_rows(results.get("reading_study", []))),
     ]
     placed = {key for key, *_ in sections}
