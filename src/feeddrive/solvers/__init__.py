@@ -14,7 +14,7 @@
   and :mod:`feeddrive.fmu.solver` (the FMU's integrator, also translated to C);
 * :mod:`~feeddrive.solvers.placeholders`: the model names the templates call.
 
-The driver and the steps are text placed in every generated model module
-(:func:`feeddrive.model.assemble.solver_sources`) and compiled there with the model's
-right-hand side.
+The driver and the steps are text, placed once in a generated module of their own
+(:mod:`~feeddrive.solvers.shared`) and compiled once for every model: each function that calls
+the model takes its right-hand side and sampled update as first-class functions.
 """

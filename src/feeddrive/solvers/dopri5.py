@@ -47,7 +47,7 @@ CONSTANTS = driver.STATUS_NAMES
 
 @functools.lru_cache(maxsize=1)
 def template_sources() -> list[str]:
-    """Text placed in each generated model module: the status codes and the driver of
+    """Text placed in the shared drivers' module: the status codes and the driver of
     :mod:`feeddrive.solvers.driver` specialised as ``integrate`` (its step, the one of
     :mod:`feeddrive.solvers.steps`, written in).
 

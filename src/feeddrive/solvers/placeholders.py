@@ -2,9 +2,10 @@
 
 The solvers never import a model: their templates (the one driver of
 :mod:`feeddrive.solvers.driver`, the steps of :mod:`feeddrive.solvers.steps`, the Jacobian
-kernels of :mod:`feeddrive.solvers.rodas4`) are compiled into each assembled model's generated
-module (:func:`feeddrive.model.assemble.solver_sources`), where ``rhs``, ``sample_update``,
-``N_AUX`` and ``N_HELD`` are that model's.  These placeholders only make the template modules
+kernels of :mod:`feeddrive.solvers.rodas4`) are compiled once, in the shared drivers' module
+(:mod:`feeddrive.solvers.shared`), where ``rhs``, ``sample_update``, ``N_AUX`` and ``N_HELD``
+become the arguments each model passes (and into the FMU's module, where they are that
+model's own).  These placeholders only make the template modules
 importable and checkable on their own; calling one raises.
 """
 

@@ -30,8 +30,8 @@ solve, so each stage would refactor — about 4× slower per step at 15 states (
 
 The coefficients are the tableau :data:`feeddrive.solvers.tableaux.RODAS4`; the step itself is
 the one Rosenbrock step of :mod:`feeddrive.solvers.steps` written for that tableau.  This file
-holds the model-free kernels (LU, Jacobian, frozen states, spectral radius), compiled into
-each generated model module beside the step (see :mod:`feeddrive.solvers.switching`).
+holds the model-free kernels (LU, Jacobian, frozen states, spectral radius), compiled beside
+the step in the shared drivers' module (see :mod:`feeddrive.solvers.shared`).
 """
 
 from __future__ import annotations
@@ -332,9 +332,9 @@ _TEMPLATES = (fd_jacobian_template, frozen_states_template, spectral_radius_temp
 
 
 def template_sources() -> list[str]:
-    """Text placed in each generated model module: the LU kernels and the Jacobian, frozen-state
-    and spectral-radius templates, renamed ``_r4_<name>`` (the module's own ``rhs`` is the one
-    they call).
+    """Text placed in the shared drivers' module (:mod:`feeddrive.solvers.shared`): the LU
+    kernels and the Jacobian, frozen-state and spectral-radius templates, renamed
+    ``_r4_<name>`` (the ``rhs`` they call is the model's, passed in).
 
     Returns
     -------

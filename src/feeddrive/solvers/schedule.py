@@ -11,7 +11,7 @@ schedule as ``steps``: clock c has its instants at the breakpoints k with k mod 
 with ``tick`` from :func:`due`: an instant is an exact breakpoint count, not a sum of floats,
 so instants of different clocks that coincide are one event.
 
-Both kernels are compiled into the generated modules by import and translated to C with the
+Both kernels are compiled into the generated driver modules by import and translated to C with the
 FMU's integrator (the driver of :mod:`feeddrive.solvers.driver` specialised for
 :mod:`feeddrive.fmu.solver`).
 """

@@ -3,8 +3,9 @@ for any tableau of :mod:`feeddrive.solvers.tableaux`, and the weighted error nor
 
 A step is written out from its tableau as a function in the restricted Python of the
 package's kernels (the loops unrolled over the stages, the coefficients inlined as literals),
-then compiled by numba into each model's generated module, next to that model's ``rhs``
-(:func:`template_sources`), and translated to C by :mod:`feeddrive.backends.c_translate` for
+then compiled by numba once, in the shared drivers' module (:func:`template_sources`,
+:mod:`feeddrive.solvers.shared`; an FMU's module has its own copy next to its ``rhs``), and
+translated to C by :mod:`feeddrive.backends.c_translate` for
 the FMU (:func:`explicit_step`, :func:`rosenbrock_step` return the Python function).  Writing
 it out — instead of looping over the tableau at run time — keeps the step as fast as a
 hand-written one (the stage count and every coefficient are compile-time constants) and its
@@ -563,7 +564,8 @@ def inline_steps(source: str, names: tuple[str, ...] = INLINED) -> str:
 
 
 def template_sources() -> list[str]:
-    """Text placed in each generated model module: the error norm and every step function
+    """Text placed in the shared drivers' module (and an FMU's): the error norm and every step
+    function
     (the driver's specialisations have the explicit step written into their text,
     :func:`inline_steps`; the FMU's integrator and the Rosenbrock branch call them).
 

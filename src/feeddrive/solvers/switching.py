@@ -1,7 +1,7 @@
 """Dense-output integration with automatic stiffness switching: DOPRI5 ⇄ RODAS4.
 
-The one driver of :mod:`feeddrive.solvers.driver`, specialised ``DENSE`` and placed in every
-generated model module as ``integrate_dense``, runs in four modes:
+The one driver of :mod:`feeddrive.solvers.driver`, specialised ``DENSE`` and placed in the
+shared drivers' module as ``integrate_dense``, runs in four modes:
 
 * ``MODE_DOPRI5``: Dormand–Prince 5(4) (the tableau :data:`feeddrive.solvers.tableaux.DOPRI5`
   through the one explicit step of :mod:`feeddrive.solvers.steps`) with its 4th-order
@@ -29,8 +29,9 @@ the profile breakpoints ``stops`` (kinks of the command: the Jacobian's f_t chan
 With ``adaptive = 0`` the chosen method runs at the fixed step ``h_init`` and the output grid
 points are step ends too (used to verify the order).
 
-The solver never imports a model: the driver is compiled into each model's generated module
-next to its ``rhs`` and ``sample_update`` (:func:`template_sources`).  The modes and switching
+The solver never imports a model: the driver is compiled once, in the shared drivers' module
+(:mod:`feeddrive.solvers.shared`), and each model passes its ``rhs`` and ``sample_update``
+(:func:`template_sources`).  The modes and switching
 thresholds are defined with the driver (:mod:`feeddrive.solvers.driver`) and read from here.
 """
 
@@ -231,7 +232,7 @@ def new_output(model: Model, n_out: int, want_aux: bool = False,
 
 
 def template_sources() -> list[str]:
-    """Text placed in each generated model module: the driver of
+    """Text placed in the shared drivers' module: the driver of
     :mod:`feeddrive.solvers.driver` specialised as ``integrate_dense`` (its steps are those
     of :mod:`feeddrive.solvers.steps`, its Jacobian kernels those of
     :mod:`feeddrive.solvers.rodas4`, placed beside it).  numba compiles a function at its
