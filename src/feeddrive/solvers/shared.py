@@ -154,8 +154,9 @@ def _module() -> tuple[ModuleType, dict[str, tuple[str, ...]]]:
 
 
 class Bound:
-    """One model's functions bound to the shared drivers: ``integrate``, ``integrate_dense``
-    and ``auxiliary`` take the arguments of the templates they are (without the model's).
+    """One model's functions bound to the shared drivers (:meth:`function`: ``integrate``,
+    ``integrate_dense``, ``auxiliary`` … take the arguments of the templates they are, without
+    the model's).
 
     The model's first-class ``rhs`` and ``sample_update`` are compiled (or loaded from the
     cache) at the first driver call, a shared driver at its first call in the process; each
@@ -217,59 +218,16 @@ class Bound:
         AttributeError
             When the templates define no such function.
         """
-        module, _ = _module()
-        if not callable(getattr(module, name, None)) or name.startswith("__"):
-            raise AttributeError(f"the solver drivers define no function {name!r}")
+        if name not in ENTRY_POINTS:  # (an entry point is there: no import at binding time)
+            module, _ = _module()
+            if not callable(getattr(module, name, None)) or name.startswith("__"):
+                raise AttributeError(f"the solver drivers define no function {name!r}")
+
         def bound(*args: Any) -> Any:
             return self._call(name, args)
 
         bound.__name__ = bound.__qualname__ = name
         return bound
-
-    def integrate(self, *args: Any) -> Any:
-        """The breakpoint driver (the kernel of :func:`feeddrive.solvers.dopri5.integrate`).
-
-        Parameters
-        ----------
-        *args : object
-            The template's own arguments (those after the model's).
-
-        Returns
-        -------
-        object
-            What the template returns.
-        """
-        return self._call("integrate", args)
-
-    def integrate_dense(self, *args: Any) -> Any:
-        """The dense-output driver (the kernel of :func:`feeddrive.solvers.switching.integrate`).
-
-        Parameters
-        ----------
-        *args : object
-            The template's own arguments (those after the model's).
-
-        Returns
-        -------
-        object
-            What the template returns.
-        """
-        return self._call("integrate_dense", args)
-
-    def auxiliary(self, *args: Any) -> Any:
-        """The auxiliary signals at output samples (``auxiliary(t_out, y_out, P, T)``).
-
-        Parameters
-        ----------
-        *args : object
-            The template's own arguments (those after the model's).
-
-        Returns
-        -------
-        object
-            What the template returns.
-        """
-        return self._call("auxiliary", args)
 
 
 def binding_source() -> str:
@@ -285,5 +243,5 @@ def binding_source() -> str:
     sizes = ", ".join(f"{m!r}: {m}" for m in MODEL_NAMES[2:])
     return ("from feeddrive.solvers.shared import Bound as _Bound\n"
             f"_bound = _Bound(rhs, sample_update, {{{sizes}}}, __file__)\n"
-            + "".join(f"{name} = _bound.{name}\n" for name in ENTRY_POINTS)
+            + "".join(f"{name} = _bound.function({name!r})\n" for name in ENTRY_POINTS)
             + "__getattr__ = _bound.function\n")
