@@ -69,3 +69,34 @@ def test_a_model_module_offers_the_other_solver_functions_bound_to_it() -> None:
     assert rho == pytest.approx(float(n), rel=1e-2)  # the largest eigenvalue, by power iteration
     with pytest.raises(AttributeError, match="no function 'no_such_step'"):
         model.module.no_such_step  # noqa: B018 - the attribute access is the test
+
+
+def test_threads_that_first_use_a_model_together_compile_its_functions_once(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The explorer runs jobs in threads: two that need a model's first-class functions at
+    once get the same ones, made once."""
+    import threading
+    import time
+
+    model = feeddrive.DriveSystem(feeddrive.preset("wang2021"), "ddfs", 0.3).model(
+        ConstantSpeed(1e-3, 16e-3))
+    bound = shared.Bound(*model.module._bound._kernels, model.module._bound._sizes,
+                         model.module.__file__)  # a fresh binding: nothing made yet
+    made: list[str] = []
+    real = shared.first_class
+
+    def slow(fn, signature, name):  # type: ignore[no-untyped-def]
+        made.append(name)
+        time.sleep(0.2)  # the other thread arrives meanwhile
+        return real(fn, signature, name)
+
+    monkeypatch.setattr(shared, "first_class", slow)
+    got: list[dict] = []
+    threads = [threading.Thread(target=lambda: got.append(bound._model_values()))
+               for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert sorted(made) == ["rhs_fc", "sample_update_fc"]
+    assert got[0] is got[1]

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import ast
 import functools
+import threading
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -144,12 +145,16 @@ def module_source(path: Path) -> str:
             f"MODEL_ARGUMENTS = {added!r}\n\n\n" + text + "\n" + _TRAILER)
 
 
+_FIRST_USE = threading.Lock()  # threads of one process (the explorer's jobs) build things once
+
+
 @functools.cache
 def _module() -> tuple[ModuleType, dict[str, tuple[str, ...]]]:
     """The shared drivers' module (imported once per process) and each function's model
     arguments."""
-    source = module_source(Path(CACHE_DIR) / "shared" / "drivers.py")
-    module = import_generated("shared", "drivers", source)
+    with _FIRST_USE:
+        source = module_source(Path(CACHE_DIR) / "shared" / "drivers.py")
+        module = import_generated("shared", "drivers", source)
     return module, module.MODEL_ARGUMENTS
 
 
@@ -182,7 +187,9 @@ class Bound:
     def _model_values(self) -> dict[str, Any]:
         if self._values is None:
             rhs, update = self._kernels
-            with compile_lock(self._path, "first_class"):
+            with _FIRST_USE, compile_lock(self._path, "first_class"):
+                if self._values is not None:  # another thread was first
+                    return self._values
                 self._values = {"rhs": first_class(rhs.py_func, RHS_SIGNATURE, "rhs_fc"),
                                 "sample_update": first_class(update.py_func, SAMPLE_SIGNATURE,
                                                              "sample_update_fc"),
