@@ -488,6 +488,3 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
         derived=tuple(b.derived), clocks=tuple(b.clocks),
         flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp)
-
-
-
