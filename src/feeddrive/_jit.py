@@ -95,18 +95,24 @@ class _LoadingCache(FunctionCache):
             return self._load_overload(sig, target_context)
 
 
+def _loading_cache(fn: Callable[..., Any]) -> _LoadingCache:
+    """The on-disk cache of ``fn`` in the package's cache folder (numba reads
+    ``CACHE_DIR`` once, when the cache object is made)."""
+    previous = config.CACHE_DIR
+    config.CACHE_DIR = _CACHE_DIR
+    try:
+        return _LoadingCache(fn)
+    finally:
+        config.CACHE_DIR = previous
+
+
 def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     def decorate(fn: Callable[..., Any]) -> Any:
-        previous = config.CACHE_DIR
-        config.CACHE_DIR = _CACHE_DIR  # read once, when the dispatcher sets up its cache
-        try:
-            # cache=True, with the loading cache: what numba's enable_caching() does with its
-            # own class (one cache object, not numba's made and then replaced)
-            dispatcher = njit(error_model="numpy", nogil=True, **options)(fn)
-            dispatcher._cache = _LoadingCache(fn)
-            return dispatcher
-        finally:
-            config.CACHE_DIR = previous
+        # cache=True, with the loading cache: what numba's enable_caching() does with its
+        # own class (one cache object, not numba's made and then replaced)
+        dispatcher = njit(error_model="numpy", nogil=True, **options)(fn)
+        dispatcher._cache = _loading_cache(fn)
+        return dispatcher
 
     return decorate
 
@@ -148,14 +154,9 @@ def first_class(fn: Callable[..., Any], signature: Any, name: str) -> Any:
                               fn.__closure__)
     copy.__qualname__ = name
     copy.__module__ = fn.__module__
-    previous = config.CACHE_DIR
-    config.CACHE_DIR = _CACHE_DIR
-    try:
-        compiled = CFunc(copy, sigutils.normalize_signature(signature), locals={},
-                         options={"error_model": "numpy", "nogil": True})
-        compiled._cache = _LoadingCache(copy)  # type: ignore[attr-defined]
-    finally:
-        config.CACHE_DIR = previous
+    compiled = CFunc(copy, sigutils.normalize_signature(signature), locals={},
+                     options={"error_model": "numpy", "nogil": True})
+    compiled._cache = _loading_cache(copy)  # type: ignore[attr-defined]
     compiled.compile()
     return compiled
 

@@ -15,7 +15,7 @@ model compiles only its own two functions.
 
 Nothing is rounded differently: numba compiles without fast-math, so a call through an
 address computes what the inlined call did, bit for bit (tested against recorded
-trajectories, ``tests/regression``).
+trajectories, ``tests/validation/test_engine_v1_regression.py``).
 """
 
 from __future__ import annotations
