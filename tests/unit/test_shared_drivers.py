@@ -100,3 +100,37 @@ def test_threads_that_first_use_a_model_together_compile_its_functions_once(
         t.join()
     assert sorted(made) == ["rhs_fc", "sample_update_fc"]
     assert got[0] is got[1]
+
+
+def test_the_linearisations_evaluations_are_the_kernels_own_to_the_bit() -> None:
+    """``feeddrive.solvers.evaluate`` through the shared drivers (issue 21, fifth round): the
+    rates and the state matrix are those of the model's own ``rhs`` kernel called from
+    Python, operation for operation — and after its first call ``compiled`` calls the entry
+    point, with the same result."""
+    from feeddrive.analysis import linear
+
+    system = feeddrive.DriveSystem(feeddrive.preset("wang2021"), "ddfs", 0.4)
+    model, y = linear.steady_state(system, 1.5e-3, 16e-3)
+    f = linear._Evaluator(model)
+    held, P, T = f.held, f.P, model.T
+    n, n_aux = y.size, len(model.aux)
+
+    def kernel(state: np.ndarray) -> np.ndarray:
+        dy, aux = np.empty(n), np.empty(n_aux)
+        model.module.rhs(linear._T0, state, held, P, T, dy, aux)
+        return dy
+
+    assert np.array_equal(f(y)[0], kernel(y))
+    live = linear._live_states(model, system)
+    scale = linear._scales(model)
+    expected = np.empty((len(live), len(live)))
+    for j, k in enumerate(live):
+        h = 1e-2 * scale[k]
+        yp, ym = y.copy(), y.copy()
+        yp[k] += h
+        ym[k] -= h
+        expected[:, j] = (kernel(yp)[live] - kernel(ym)[live]) / (2 * h)
+    assert np.array_equal(f.columns(y, live, scale), expected)
+    assert np.array_equal(linear.state_matrix(system, 1.5e-3, 16e-3), expected)
+    assert "_ev_central_columns" in model.module._bound._entries  # the entry point, used
+    assert np.array_equal(f.columns(y, live, scale), expected)

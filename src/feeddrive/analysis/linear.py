@@ -275,7 +275,10 @@ def _scales(model: Model) -> np.ndarray:
 
 
 class _Evaluator:
-    """Calls the compiled right-hand side at the operating-point time."""
+    """Calls the model's right-hand side at the operating-point time, through the shared
+    drivers (:mod:`feeddrive.solvers.evaluate`: no second compilation of the model's
+    ``rhs`` beside its first-class function), and its state Jacobian's central differences
+    (:meth:`columns`)."""
 
     def __init__(self, model: Model) -> None:
         self.model = model
@@ -283,6 +286,8 @@ class _Evaluator:
         self.aux = np.zeros(len(model.aux))
         self.n = len(model.states)
         self.P = self._continuous(model.P)  # the model's own, checked once
+        self._rates = model.module.compiled("_ev_rates")
+        self._columns = model.module.compiled("_ev_central_columns")
 
     def _continuous(self, P: np.ndarray) -> np.ndarray:
         if any(P[k] != 0.0 for _, k in self.model.clocks):  # the loops as continuous ones
@@ -295,10 +300,22 @@ class _Evaluator:
                                                                                np.ndarray]:
         dy = np.empty(self.n)
         aux = np.empty(len(self.model.aux))
-        P = self.P if P is None else self._continuous(P)
-        self.model.module.rhs(_T0, np.ascontiguousarray(y, dtype=float), self.held, P,
-                              self.model.T, dy, aux)
+        P = self.P if P is None else np.ascontiguousarray(self._continuous(P), dtype=float)
+        self._rates(_T0, np.ascontiguousarray(y, dtype=float), self.held, P, self.model.T,
+                    dy, aux)
         return dy, aux
+
+    def columns(self, y: np.ndarray, live: list[int], scale: np.ndarray) -> np.ndarray:
+        """The state Jacobian over ``live`` by central differences, each step a hundredth of
+        the state's solver tolerance: what :func:`_state_steps` gives, column by column, in
+        one compiled call."""
+        at = np.asarray(live, dtype=np.int64)
+        steps = 1e-2 * scale[at]  # a hundredth of the state's solver tolerance
+        A = np.empty((at.size, at.size))
+        self._columns(_T0, np.ascontiguousarray(y, dtype=float), self.held, self.P,
+                      self.model.T, at, steps, at, A, np.empty(self.n), np.empty(self.n),
+                      np.empty(self.n), np.empty(len(self.model.aux)))
+        return A
 
 
 def _solve_steady(model: Model, f: _Evaluator, y0: np.ndarray, at: np.ndarray,
@@ -311,7 +328,7 @@ def _solve_steady(model: Model, f: _Evaluator, y0: np.ndarray, at: np.ndarray,
     fifth round: ≈ 4× the time, the same point to ≈ 1e-10 of its scale).  Returns the
     unknowns, the method's word and the largest residual left."""
     n = y0.size
-    jac_fn = model.module._r4_fd_jacobian
+    jac_fn = model.module.compiled("_r4_fd_jacobian")
     J, ft, yp, fp = np.empty((n, n)), np.empty(n), np.empty(n), np.empty(n)
     aux = np.empty(len(model.aux))
     every = np.ones(n, dtype=np.bool_)
@@ -542,12 +559,7 @@ def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
         raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
     sys_, _ = averaged(_frictionless(system) if frictionless else system)
     model, y = steady_state(sys_, table_speed, nut_speed)
-    f = _Evaluator(model)
-    live = _live_states(model, sys_)
-    A = np.empty((len(live), len(live)))
-    for j, h, (_, dp, _), (_, dm, _) in _state_steps(f, y, live, _scales(model)):
-        A[:, j] = (dp[live] - dm[live]) / (2 * h)
-    return A
+    return _Evaluator(model).columns(y, _live_states(model, sys_), _scales(model))
 
 
 def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float = 0.0, *,

@@ -58,10 +58,11 @@ def solver_sources() -> list[str]:
     list of str
         Python sources of the solver functions.
     """
-    from . import dopri5, rodas4, steps, switching
+    from . import dopri5, evaluate, rodas4, steps, switching
 
     return (steps.template_sources() + rodas4.template_sources()
-            + dopri5.template_sources() + switching.template_sources())
+            + dopri5.template_sources() + switching.template_sources()
+            + evaluate.template_sources())
 
 
 def model_arguments(source: str) -> tuple[str, dict[str, tuple[str, ...]]]:
@@ -183,6 +184,7 @@ class Bound:
         self._sizes = sizes
         self._path = path
         self._values: dict[str, Any] | None = None
+        self._entries: dict[str, tuple[Any, list[Any]]] = {}  # name → (entry point, model's)
 
     def _model_values(self) -> dict[str, Any]:
         if self._values is None:
@@ -236,11 +238,48 @@ class Bound:
         bound.__name__ = bound.__qualname__ = name
         return bound
 
+    def compiled(self, name: str) -> Any:
+        """:meth:`function`, calling after its first call the compiled code directly, without
+        numba's per-call typing of the arguments (≈ 10–15 µs of a ≈ 20-µs call): for callers
+        that make thousands of calls with arguments of fixed types — float64 scalars and
+        C-contiguous float64 or integer arrays, always the same — such as the linearisations
+        (:mod:`feeddrive.analysis.linear`).  The types are not checked after the first call.
+
+        Parameters
+        ----------
+        name : str
+            The function's name in the templates.
+
+        Returns
+        -------
+        callable
+            The function bound to this model.
+        """
+        first = self.function(name)
+        entries = self._entries
+
+        def call(*args: Any) -> Any:
+            got = entries.get(name)
+            if got is not None:
+                return got[0](*got[1], *args)
+            out = first(*args)
+            module, added = _module()
+            overloads = getattr(module, name).overloads
+            if len(overloads) == 1:  # one signature: its compiled entry point
+                values = self._model_values()
+                entries[name] = (next(iter(overloads.values())).entry_point,
+                                 [values[m] for m in added.get(name, ())])
+            return out
+
+        call.__name__ = call.__qualname__ = name
+        return call
+
 
 def binding_source() -> str:
     """The lines closing a generated model module: its ``rhs``, ``sample_update`` and sizes
     bound to the shared drivers (``integrate``, ``integrate_dense``, ``auxiliary``; any other
-    function of theirs, ``module._r4_fd_jacobian`` say, through the module's ``__getattr__``).
+    function of theirs, ``module._r4_fd_jacobian`` say, through the module's ``__getattr__``,
+    and without per-call typing through ``module.compiled(name)``, :meth:`Bound.compiled`).
 
     Returns
     -------
@@ -251,4 +290,5 @@ def binding_source() -> str:
     return ("from feeddrive.solvers.shared import Bound as _Bound\n"
             f"_bound = _Bound(rhs, sample_update, {{{sizes}}}, __file__)\n"
             + "".join(f"{name} = _bound.function({name!r})\n" for name in ENTRY_POINTS)
+            + "compiled = _bound.compiled\n"
             + "__getattr__ = _bound.function\n")
