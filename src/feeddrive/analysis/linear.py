@@ -325,7 +325,7 @@ def _solve_steady(model: Model, f: _Evaluator, y0: np.ndarray, at: np.ndarray,
     Jacobian (:func:`feeddrive.analysis.newton.pulled_gauss_newton`; ≈ 3 Jacobians, one
     compiled call each), and, when that leaves a residual above the acceptance limit, scipy's
     Levenberg–Marquardt on finite differences from the start (the method before issue 21's
-    fifth round: ≈ 4× the time, the same point to ≈ 1e-10 of its scale).  Returns the
+    fifth round: 3–5× the time, the same point to ≈ 1e-10 of its scale).  Returns the
     unknowns, the method's word and the largest residual left."""
     n = y0.size
     jac_fn = model.module.compiled("_r4_fd_jacobian")
