@@ -134,3 +134,40 @@ def test_the_linearisations_evaluations_are_the_kernels_own_to_the_bit() -> None
     assert np.array_equal(linear.state_matrix(system, 1.5e-3, 16e-3), expected)
     assert "_ev_central_columns" in model.module._bound._entries  # the entry point, used
     assert np.array_equal(f.columns(y, live, scale), expected)
+
+
+def test_prepared_models_compile_a_models_functions_and_stop_at_its_first_driver_call() -> None:
+    """Inside ``prepared_models`` a run stops at its first driver call with the model's
+    first-class functions made (a cold ``reproduce``'s idle worker compiles the study's models
+    so, ``runner.prepare_models``); outside it the same run runs."""
+    from feeddrive.engine.simulate import Simulation
+
+    system = feeddrive.DriveSystem(feeddrive.preset("wang2021"), "cdfs", 0.3)
+    sim = Simulation(system, ConstantSpeed(1.5e-3), None)
+    bound = sim.model.module._bound
+    with shared.prepared_models():
+        sim.run(0.05)
+        pytest.fail("the run went past its first driver call")  # pragma: no cover
+    assert bound._values is not None and {"rhs", "sample_update"} <= set(bound._values)
+    result = Simulation(system, ConstantSpeed(1.5e-3), None).run(0.05)
+    assert result.time[-1] == pytest.approx(0.05)
+    assert not shared._DRY_RUN.on  # left: off again
+
+
+def test_prepare_models_goes_through_tasks_until_the_drivers_are_on_disk(monkeypatch) -> None:
+    from feeddrive.reproduce import runner
+
+    seen: list[int] = []
+
+    def task(k: int) -> None:
+        seen.append(k)
+        if k == 2:
+            raise ValueError("a task's own error: left to its real run")
+        system = feeddrive.DriveSystem(feeddrive.preset("wang2021"), "ddfs", 0.4)
+        feeddrive.simulate(system, ConstantSpeed(1e-3, 16e-3), 0.05)
+        seen.append(-k)  # not reached: stopped at the first driver call
+
+    on_disk = iter([False, False, False, True])
+    monkeypatch.setattr(shared, "drivers_on_disk", lambda: next(on_disk))
+    assert runner.prepare_models([(task, (1,)), (task, (2,)), (task, (3,)), (task, (4,))]) == 3
+    assert seen == [1, 2, 3]

@@ -147,6 +147,44 @@ def module_source(path: Path) -> str:
 
 
 _FIRST_USE = threading.Lock()  # threads of one process (the explorer's jobs) build things once
+_DRY_RUN = threading.local()  # set inside prepared_models(): stop at the first driver call
+
+
+class ModelPrepared(BaseException):  # noqa: N818 (a signal, not an error)
+    """Raised at a model's first driver call inside :func:`prepared_models`, once its
+    first-class functions are compiled (a ``BaseException``: no ``except Exception`` of the
+    code on the way swallows it)."""
+
+
+class prepared_models:  # noqa: N801 (a context manager, read as a phrase)
+    """Inside it, a model's first call of a shared driver compiles (or loads) the model's
+    first-class functions and raises :class:`ModelPrepared` instead of running the driver.
+
+    What it is for: a cold ``feeddrive reproduce`` compiles the drivers in one worker for
+    ≈ 20 CPU s, while the other has nothing to do but wait for them; run through the study's
+    tasks inside this, the other compiles every model those tasks build meanwhile
+    (:func:`feeddrive.reproduce.runner.prepare_models`).
+    """
+
+    def __enter__(self) -> prepared_models:
+        _DRY_RUN.on = True
+        return self
+
+    def __exit__(self, *exc: object) -> bool:
+        _DRY_RUN.on = False
+        return exc[0] is ModelPrepared
+
+
+def drivers_on_disk() -> bool:
+    """Whether the compile cache holds the dense-output driver (``integrate_dense``): false on
+    a cold cache, until the first process that needs it has compiled it.
+
+    Returns
+    -------
+    bool
+        True when its index file is in the cache folder.
+    """
+    return any(Path(CACHE_DIR).glob("shared_*/drivers.integrate_dense-*.nbi"))
 
 
 @functools.cache
@@ -202,6 +240,8 @@ class Bound:
         module, added = _module()
         fn = getattr(module, name)
         values = self._model_values()
+        if getattr(_DRY_RUN, "on", False):
+            raise ModelPrepared(name)
         head = [values[m] for m in added.get(name, ())]
         if not fn.signatures:  # the first call in this process: compiled or loaded once
             with compile_lock(module.__file__ or name, name):
