@@ -59,14 +59,16 @@ def pulled_gauss_newton(residual: Callable[[np.ndarray], np.ndarray],
     iterations = 1
     while cost > 0.0:
         step = np.linalg.lstsq(np.vstack([jac, eye]), -full, rcond=None)[0]
-        for halvings in range(max_halvings + 1):
+        halvings = 0
+        while True:
             trial = u + step
             got = np.concatenate([residual(trial), pull * (trial - u0)])
             trial_cost = float(got @ got)
-            if trial_cost < cost:
+            if trial_cost < cost or halvings == max_halvings:
                 break
             step = 0.5 * step
-        else:
+            halvings += 1
+        if not trial_cost < cost:
             break  # no step lowers it: the rounding floor
         u, previous, cost = trial, cost, trial_cost
         if (halvings == 0 and cost > stall * previous) or iterations >= max_iterations:

@@ -17,6 +17,8 @@ import inspect
 
 import numpy as np
 
+from .placeholders import rhs
+
 __all__ = ["template_sources"]
 
 
@@ -41,7 +43,7 @@ def rates_template(t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: 
     aux : numpy.ndarray
         Output: the auxiliary signals [SI, per signal].
     """
-    rhs(t, y, held, P, T, dy, aux)  # noqa: F821 (the model's, passed in)
+    rhs(t, y, held, P, T, dy, aux)  # the model's, passed in (shared.model_arguments)
 
 
 def central_columns_template(t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray,
@@ -75,9 +77,9 @@ def central_columns_template(t: float, y: np.ndarray, held: np.ndarray, P: np.nd
         k = columns[j]
         h = steps[j]
         yp[k] = y[k] + h
-        rhs(t, yp, held, P, T, dp, aux)  # noqa: F821
+        rhs(t, yp, held, P, T, dp, aux)
         yp[k] = y[k] - h
-        rhs(t, yp, held, P, T, dm, aux)  # noqa: F821
+        rhs(t, yp, held, P, T, dm, aux)
         yp[k] = y[k]
         for r in range(rows.size):
             A[r, j] = (dp[rows[r]] - dm[rows[r]]) / (2 * h)
