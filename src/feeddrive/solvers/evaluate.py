@@ -19,8 +19,6 @@ import numpy as np
 
 from .placeholders import rhs
 
-__all__ = ["template_sources"]
-
 
 def rates_template(t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
                    dy: np.ndarray, aux: np.ndarray) -> None:
