@@ -285,7 +285,10 @@ class _Evaluator:
         self.held = np.zeros(model.n_held)
         self.aux = np.zeros(len(model.aux))
         self.n = len(model.states)
-        self.P = self._continuous(model.P)  # the model's own, checked once
+        # C-contiguous float64, as the compiled entry points take them unchecked
+        # (shared.Bound.compiled)
+        self.P = np.ascontiguousarray(self._continuous(model.P), dtype=float)
+        self.T = np.ascontiguousarray(model.T, dtype=float)
         self._rates = model.module.compiled("_ev_rates")
         self._columns = model.module.compiled("_ev_central_columns")
 
@@ -301,7 +304,7 @@ class _Evaluator:
         dy = np.empty(self.n)
         aux = np.empty(len(self.model.aux))
         P = self.P if P is None else np.ascontiguousarray(self._continuous(P), dtype=float)
-        self._rates(_T0, np.ascontiguousarray(y, dtype=float), self.held, P, self.model.T,
+        self._rates(_T0, np.ascontiguousarray(y, dtype=float), self.held, P, self.T,
                     dy, aux)
         return dy, aux
 
@@ -313,7 +316,7 @@ class _Evaluator:
         steps = 1e-2 * scale[at]  # a hundredth of the state's solver tolerance
         A = np.empty((at.size, at.size))
         self._columns(_T0, np.ascontiguousarray(y, dtype=float), self.held, self.P,
-                      self.model.T, at, steps, at, A, np.empty(self.n), np.empty(self.n),
+                      self.T, at, steps, at, A, np.empty(self.n), np.empty(self.n),
                       np.empty(self.n), np.empty(len(self.model.aux)))
         return A
 
@@ -332,7 +335,9 @@ def _solve_steady(model: Model, f: _Evaluator, y0: np.ndarray, at: np.ndarray,
     J, ft, yp, fp = np.empty((n, n)), np.empty(n), np.empty(n), np.empty(n)
     aux = np.empty(len(model.aux))
     every = np.ones(n, dtype=np.bool_)
-    atol = _scales(model)
+    atol = np.ascontiguousarray(_scales(model), dtype=float)
+    pattern = np.ascontiguousarray(model.jacobian_pattern)  # (the dtype every model's is)
+    colours = np.ascontiguousarray(model.jacobian_colours)
     cols = np.ix_(rows, at)
     col_scale = at_scale / row_scale[:, None]
 
@@ -347,8 +352,8 @@ def _solve_steady(model: Model, f: _Evaluator, y0: np.ndarray, at: np.ndarray,
     def linearised(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         y = state(u)
         dy = f(y)[0]
-        jac_fn(_T0, y, dy, f.held, f.P, model.T, atol, J, ft, yp, fp, aux, every,
-               model.jacobian_pattern, model.jacobian_colours)
+        jac_fn(_T0, y, dy, f.held, f.P, f.T, atol, J, ft, yp, fp, aux, every,
+               pattern, colours)
         return dy[rows] / row_scale, J[cols] * col_scale
 
     u, _ = pulled_gauss_newton(residual, linearised, u0, _PULL)
