@@ -13,11 +13,9 @@ same to the bit.
 
 from __future__ import annotations
 
-import inspect
-
 import numpy as np
 
-from .placeholders import rhs
+from .placeholders import renamed_templates, rhs
 
 
 def rates_template(t: float, y: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
@@ -94,9 +92,4 @@ def template_sources() -> list[str]:
     list of str
         Python sources.
     """
-    out = []
-    for fn in _TEMPLATES:
-        name = fn.__name__.removesuffix("_template")
-        out.append("@kernel\n" + inspect.getsource(fn).replace(
-            f"def {fn.__name__}(", f"def _ev_{name}(", 1))
-    return out
+    return renamed_templates(_TEMPLATES, "_ev_")

@@ -11,6 +11,8 @@ importable and checkable on their own; calling one raises.
 
 from __future__ import annotations
 
+import inspect
+from collections.abc import Callable, Sequence
 from typing import Any
 
 N_AUX = 0  # the model's number of auxiliary signals
@@ -53,3 +55,31 @@ def sample_update(*args: Any) -> None:  # pragma: no cover - replaced in the gen
         Always.
     """
     raise NotImplementedError("placeholder: the assembled model's sampled-controller update")
+
+
+def renamed_templates(templates: Sequence[Callable[..., Any]], prefix: str) -> list[str]:
+    """The text of ``templates`` (functions named ``<name>_template``) as the shared drivers'
+    module holds it: each renamed ``<prefix><name>``, its calls of the others renamed too, and
+    marked ``@kernel``.
+
+    Parameters
+    ----------
+    templates : sequence of callable
+        The template functions.
+    prefix : str
+        The prefix of their names in the module (``"_r4_"``, ``"_ev_"``).
+
+    Returns
+    -------
+    list of str
+        Python sources, one per template.
+    """
+    out = []
+    for fn in templates:
+        name = fn.__name__.removesuffix("_template")
+        src = inspect.getsource(fn).replace(f"def {fn.__name__}(", f"def {prefix}{name}(", 1)
+        for other in templates:
+            short = other.__name__.removesuffix("_template")
+            src = src.replace(f"{other.__name__}(", f"{prefix}{short}(")
+        out.append("@kernel\n" + src)
+    return out

@@ -36,13 +36,12 @@ the step in the shared drivers' module (see :mod:`feeddrive.solvers.shared`).
 
 from __future__ import annotations
 
-import inspect
 import math
 
 import numpy as np
 
 from .._jit import kernel
-from .placeholders import rhs
+from .placeholders import renamed_templates, rhs
 from .tableaux import RODAS4
 
 ORDER = 4  # of the main solution; the embedded solution is of order 3
@@ -341,12 +340,5 @@ def template_sources() -> list[str]:
     list of str
         Python sources.
     """
-    out = ["from feeddrive.solvers.rodas4 import lu_factor, lu_solve"]
-    for fn in _TEMPLATES:
-        name = fn.__name__.removesuffix("_template")
-        src = inspect.getsource(fn).replace(f"def {fn.__name__}(", f"def _r4_{name}(", 1)
-        for other in _TEMPLATES:
-            short = other.__name__.removesuffix("_template")
-            src = src.replace(f"{other.__name__}(", f"_r4_{short}(")
-        out.append("@kernel\n" + src)
-    return out
+    return (["from feeddrive.solvers.rodas4 import lu_factor, lu_solve"]
+            + renamed_templates(_TEMPLATES, "_r4_"))
