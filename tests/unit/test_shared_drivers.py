@@ -152,6 +152,14 @@ def test_prepared_models_compile_a_models_functions_and_stop_at_its_first_driver
     result = Simulation(system, ConstantSpeed(1.5e-3), None).run(0.05)
     assert result.time[-1] == pytest.approx(0.05)
     assert not shared._DRY_RUN.on  # left: off again
+    # a function already called through its entry point (Bound.compiled) stops there too
+    from feeddrive.analysis import linear
+
+    linear.state_matrix(system, 1.5e-3)
+    assert sim.model.module._bound._entries
+    with shared.prepared_models():
+        linear.state_matrix(system, 1.5e-3)
+        pytest.fail("the linearisation went past its first driver call")  # pragma: no cover
 
 
 def test_prepare_models_goes_through_tasks_until_the_drivers_are_on_disk(monkeypatch) -> None:
