@@ -60,6 +60,7 @@ from .newton import pulled_gauss_newton
 _T0 = 1.0  # [s] operating-point time (after the reference's start ramp)
 _PULL = 1e-8  # weight of the operating point's pull to its start (free directions)
 _ACCEPT = 0.1  # largest accepted steady-state residual [rate / solver tolerance]
+_STATE_STEP = 1e-2  # central-difference step of a state [its solver tolerance]
 
 
 @dataclass(frozen=True)
@@ -313,7 +314,7 @@ class _Evaluator:
         the state's solver tolerance: what :func:`_state_steps` gives, column by column, in
         one compiled call."""
         at = np.asarray(live, dtype=np.int64)
-        steps = 1e-2 * scale[at]  # a hundredth of the state's solver tolerance
+        steps = _STATE_STEP * scale[at]
         A = np.empty((at.size, at.size))
         self._columns(_T0, np.ascontiguousarray(y, dtype=float), self.held, self.P,
                       self.T, at, steps, at, A, np.empty(self.n), np.empty(self.n),
@@ -529,7 +530,7 @@ def _state_steps(f: _Evaluator, y: np.ndarray, live: list[int], scale: np.ndarra
     (y + h, its rates, its aux), (y − h, its rates, its aux)) for each live state; the step
     is a hundredth of the state's solver tolerance."""
     for j, k in enumerate(live):
-        h = 1e-2 * scale[k]  # a hundredth of the state's solver tolerance
+        h = _STATE_STEP * scale[k]
         yp, ym = y.copy(), y.copy()
         yp[k] += h
         ym[k] -= h

@@ -78,9 +78,9 @@ def prepare_models(tasks: list[tuple[Callable[..., Any], tuple[Any, ...]]]) -> i
     each task run only up to its first driver call
     (:class:`feeddrive.solvers.shared.prepared_models`), until the drivers are on disk.
 
-    Submitted second on a cold cache, beside the first search, whose worker compiles the
-    drivers (≈ 20 CPU s) while this one has nothing else to do; each model it compiles is one
-    a later search loads instead.  Nothing it computes is kept.
+    Submitted third on a cold cache, after the sensitivity section and the first search, whose
+    worker compiles the drivers (≈ 20 CPU s) while this one has nothing else to do; each model
+    it compiles is one a later search loads instead.  Nothing it computes is kept.
 
     Parameters
     ----------
