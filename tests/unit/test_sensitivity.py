@@ -81,3 +81,34 @@ def test_report_section_answers_the_axial_rigidity_claim(tmp_path) -> None:
         assert "neither supports nor refutes" in answer
     png = sec.figure(data, tmp_path)
     assert png is not None and png.stat().st_size > 5000
+
+
+def test_in_process_points_use_the_set_their_task_reads_back() -> None:
+    """An in-process point is evaluated on the parameter set it was built from, not on its
+    TOML text read back (issue 21: ≈ 5 ms a point): the two give the same values."""
+    from feeddrive.parameters import dumps
+    from feeddrive.sweep.quantities import evaluate
+
+    params = fd.preset("wang2021").replace_path("controller.velocity_gain", 49.5)
+    task = {"parameters": dumps(params), "drive": "cdfs", "table_position": 0.4,
+            "nut_speed": 0.0, "quantity": {"kind": "linear-band", "low": 1e-5, "high": 5e-3,
+                                           "linear_points": 12}}
+    read, held = evaluate(task), evaluate(task, params)
+    assert "error" not in read
+    assert read["values"] == held["values"] and read["details"] == held["details"]
+
+
+def test_choosing_the_parameters_imports_no_fitting_library() -> None:
+    """`parameter_paths` (the sensitivity's first step, in the report's first task) uses the
+    fit module's light helpers only: scipy.optimize and scipy.stats (≈ 1 s to import) are
+    imported where the fits use them."""
+    import subprocess
+    import sys
+
+    code = ("import sys, feeddrive as fd\n"
+            "from feeddrive.analysis.sensitivity import parameter_paths\n"
+            "parameter_paths(fd.preset('wang2021'), 'cdfs')\n"
+            "print(sorted(m for m in ('scipy.optimize', 'scipy.stats') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"

@@ -43,9 +43,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy import stats
-from scipy.optimize import least_squares
 
+# scipy.optimize and scipy.stats are imported where used: ≈ 1 s of imports that the callers
+# of this module's light helpers (`_no_effect`, `Experiment`: the sensitivity) need not pay
 from ..parameters import DriveParameters, ParameterError, dumps
 from ..parameters.toml_io import toml_comment, toml_string
 from .fit_statistics import correlation, covariance, noise_level
@@ -867,6 +867,8 @@ def _profile(ev: _Evaluator, theta: np.ndarray, j: int, lb: np.ndarray, ub: np.n
             th[j] = value
             return ev.jacobian(th)[:, others]
 
+        from scipy.optimize import least_squares  # (imported where used: see the module's)
+
         res = least_squares(fun, start[others], jac=jac, bounds=(lb[others], ub[others]),
                             x_scale=np.maximum(np.abs(start[others]), 1e-3), max_nfev=20,
                             xtol=1e-6, ftol=1e-8)
@@ -1038,6 +1040,8 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
             stage = [e if e.span <= h else _cut(e, h) for e in experiments]
             ev = _Evaluator(base, drive, table_position, free, start, stage, weights, pool,
                             say, label=f"stage {k}/{len(stages)} (first {h:g} s)")
+            from scipy.optimize import least_squares  # (imported where used)
+
             try:
                 res = least_squares(ev.residual, theta, jac=lambda th, ev=ev: ev.jacobian(
                                         th, lb, ub),
@@ -1154,6 +1158,8 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
                                            if abs(vec[j]) >= 0.1}})
     cov_t = covariance(jac, ssr, dof)  # θ units
     corr = correlation(cov_t)
+    from scipy import stats  # (imported where used)
+
     tq = float(stats.t.ppf(0.5 + confidence / 2.0, dof))
     threshold = ssr * (1.0 + float(stats.f.ppf(confidence, 1, dof)) / dof)
     cov = cov_t * np.outer(start, start)

@@ -256,7 +256,9 @@ def _task(config: Any, params: DriveParameters) -> dict[str, Any]:
 
 
 def _points_for(config: Any, params: DriveParameters, path: str, value: float, h: float,
-                absolute: bool) -> list[Any] | None:
+                absolute: bool, sets: dict[str, DriveParameters]) -> list[Any] | None:
+    """The two points of ``path`` moved by ∓``h``, or None when the set refuses a step;
+    ``sets`` receives each point's parameter set by its key."""
     from ..sweep.design import Point
     from ..sweep.store import point_key
 
@@ -265,10 +267,12 @@ def _points_for(config: Any, params: DriveParameters, path: str, value: float, h
     for sign in (-1.0, 1.0):
         coords = {path: value + sign * delta}
         try:
-            task = _task(config, params.replace_path(path, value + sign * delta))
+            moved = params.replace_path(path, value + sign * delta)
+            task = _task(config, moved)
         except ParameterError:
             return None
         out.append(Point(index=0, coords=coords, task=task, key=point_key(task)))
+        sets[out[-1].key] = moved
     return out
 
 
@@ -350,6 +354,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
                          nut_speed=0.0, design="grid", samples=None, seed=0, axes=(),
                          quantity=settings, store=None, raw={"sensitivity": True})
     results: dict[str, dict[str, Any]] = {}
+    sets: dict[str, DriveParameters] = {}  # each point's set, as its task's TOML reads back
     count = 0
     rounds: list[str] = []
     where = "this process"
@@ -364,7 +369,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
             return
         if db is None:
             for k, p in enumerate(todo, start=1):
-                results[p.key] = evaluate(p.task)
+                results[p.key] = evaluate(p.task, sets.get(p.key))
                 say(f"{k}/{len(todo)} points")
         else:
             import dataclasses
@@ -393,6 +398,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
 
         base_task = _task(config, params)
         base_point = Point(index=0, coords={}, task=base_task, key=point_key(base_task))
+        sets[base_point.key] = params
         run([base_point])
         q0 = q(base_point)
         if not math.isfinite(q0) or q0 == 0:
@@ -407,7 +413,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
                 if st["done"]:
                     continue
                 value = float(_value(params, path))
-                pts = _points_for(config, params, path, value, h, value == 0.0)
+                pts = _points_for(config, params, path, value, h, value == 0.0, sets)
                 if pts is None:
                     st["done"] = True
                     st["note"] = f"a ±{h:g} step is refused by the set's checks"
@@ -433,7 +439,8 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
             st = state[path]
             if st.get("resolved"):
                 value = float(_value(params, path))
-                half = _points_for(config, params, path, value, st["h"] / 2, value == 0.0)
+                half = _points_for(config, params, path, value, st["h"] / 2, value == 0.0,
+                                   sets)
                 st["half"] = half
                 batch += half or []
         say(f"halving check: {len(batch)} points")

@@ -32,7 +32,7 @@ from typing import Any
 
 from .. import units
 from ..analysis import protocol
-from ..parameters import ParameterError
+from ..parameters import DriveParameters, ParameterError
 
 QUANTITIES = ("critical-speed", "creep-trial", "linear-band", "loop-margins")
 _KEYS = ("kind", "start", "low", "high", "coarse_step", "resolution", "initial_duration",
@@ -290,7 +290,7 @@ def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
     return {"values": values, "details": details}
 
 
-def evaluate(task: dict[str, Any]) -> dict[str, Any]:
+def evaluate(task: dict[str, Any], params: DriveParameters | None = None) -> dict[str, Any]:
     """Run one point (see the module).  Module-level and picklable: the function every
     executor runs, in a local process or on a Dask worker.
 
@@ -298,6 +298,9 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     ----------
     task : dict
         The point's task (``SweepConfig.task``).
+    params : DriveParameters, optional
+        The set ``task["parameters"]`` reads back, when the caller holds it (an in-process
+        run: no TOML parse, ≈ 5 ms a point; the written text reads back equal to the set).
 
     Returns
     -------
@@ -310,7 +313,8 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
 
     t0 = time.perf_counter()
     try:
-        params = loads(task["parameters"])
+        if params is None:
+            params = loads(task["parameters"])
         system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
         out = compute(system, task["nut_speed"], task["quantity"])
     except (SimulationError, ValueError, ArithmeticError) as err:
