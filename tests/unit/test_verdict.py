@@ -226,3 +226,39 @@ def test_an_irregular_envelope_that_shrinks_by_noise_only_is_sustained() -> None
     assert "irregular" in steady.reason
     # −2 % over 48 s: the widths fall by more than a tenth of the 5 % tolerance: decaying
     assert trace_verdict(t, _quasi_periodic(t, 2e-2), 1.0).kind == "undecided"
+
+
+def _extremum_one_by_one(x: np.ndarray, i0: int, i1: int, sign: float) -> float:
+    """The cycle statistic as the verdict computed it cycle by cycle until issue 21's sixth
+    round: the extreme sample (argmax: the first on a plateau), refined by a parabola through
+    it and its neighbours when they bend the right way."""
+    if i1 - i0 < 1:
+        return float(x[min(i0, x.size - 1)])
+    k = i0 + int(np.argmax(sign * x[i0:i1]))
+    if 0 < k < x.size - 1:
+        ym, y0, yp = x[k - 1], x[k], x[k + 1]
+        denom = ym - 2.0 * y0 + yp
+        if denom * sign < 0:
+            return float(y0 - 0.125 * (ym - yp) ** 2 / denom)
+    return float(x[k])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_cycle_extrema_at_once_equal_the_one_by_one_statistic(seed: int) -> None:
+    """All cycles' extrema in one vectorised pass are bit-for-bit those of the per-cycle
+    loop, on traces with plateaus (a stuck table: ties, the first sample counts), empty
+    stretches and extremes at the trace's ends."""
+    from feeddrive.analysis.cycle_verdict import _cycle_extrema
+
+    rng = np.random.default_rng(seed)
+    x = np.sin(np.linspace(0.0, 40.0 * np.pi, 4000)) + 0.01 * rng.standard_normal(4000)
+    x[500:900] = 0.0  # a stick: a plateau in several stretches
+    x[1200:1210] = x[1200:1210].max()  # a flat top
+    x[0], x[-1] = 5.0, -5.0  # extremes on the first and last samples
+    bounds = np.sort(np.concatenate([[0, 0, 4000, 4000], rng.integers(0, 4000, 60),
+                                     [700, 700, 1205, 1205]]))
+    for sign in (1.0, -1.0):
+        got = _cycle_extrema(x, bounds, sign)
+        want = [_extremum_one_by_one(x, int(a), int(b), sign)
+                for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        assert got.tolist() == want

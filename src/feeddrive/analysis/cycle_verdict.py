@@ -254,18 +254,39 @@ def _up_crossings(t: np.ndarray, u: np.ndarray, hysteresis: float) -> np.ndarray
     return (t[i] + (t[i + 1] - t[i]) * (-u[i]) / (u[i + 1] - u[i])).astype(float)
 
 
-def _extremum(x: np.ndarray, i0: int, i1: int, sign: float) -> float:
-    """Largest (sign 1) or smallest (−1) value of x[i0:i1], refined by a parabola through the
-    extreme sample and its neighbours (so the cycle-to-cycle drift is not sampling noise)."""
-    if i1 - i0 < 1:
-        return float(x[min(i0, x.size - 1)])
-    k = i0 + int(np.argmax(sign * x[i0:i1]))
-    if 0 < k < x.size - 1:
-        ym, y0, yp = x[k - 1], x[k], x[k + 1]
-        denom = ym - 2.0 * y0 + yp
-        if denom * sign < 0:
-            return float(y0 - 0.125 * (ym - yp) ** 2 / denom)
-    return float(x[k])
+def _cycle_extrema(x: np.ndarray, bounds: np.ndarray, sign: float) -> np.ndarray:
+    """Largest (sign 1) or smallest (−1) value of x over each stretch x[bounds[j]:bounds[j+1]]
+    (``bounds`` non-decreasing), refined by a parabola through the extreme sample — the first
+    one on a plateau — and its neighbours, so the cycle-to-cycle drift is not sampling noise;
+    an empty stretch gives x[bounds[j]].  All stretches at once: a 12-s trace of a 200-Hz
+    mode has 2 400 cycles (a Python call per cycle and extremum cost ≈ 1 s of the literal
+    readings' searches)."""
+    i0, i1 = bounds[:-1], bounds[1:]
+    out = np.empty(i0.size)
+    full = i1 > i0
+    empty = ~full
+    out[empty] = x[np.minimum(i0[empty], x.size - 1)]
+    if not full.any():
+        return out
+    # the full stretches tile x[b0:bn] (an empty one between two adds nothing)
+    b0, bn = int(i0[full][0]), int(i1[full][-1])
+    seg = sign * x[b0:bn]
+    starts = i0[full] - b0
+    best = np.maximum.reduceat(seg, starts)
+    positions = np.arange(seg.size)
+    lengths = (i1 - i0)[full]
+    first = np.minimum.reduceat(np.where(seg == np.repeat(best, lengths), positions,
+                                         seg.size), starts)
+    k = first + b0
+    value = x[k].astype(float)
+    inner = (k > 0) & (k < x.size - 1)
+    ki = k[inner]
+    ym, y0, yp = x[ki - 1], x[ki], x[ki + 1]
+    denom = ym - 2.0 * y0 + yp
+    with np.errstate(divide="ignore", invalid="ignore"):
+        value[inner] = np.where(denom * sign < 0, y0 - 0.125 * (ym - yp) ** 2 / denom, y0)
+    out[full] = value
+    return out
 
 
 def _converging(block: np.ndarray, scale: float, mean_period: float, floor: float) -> bool:
@@ -412,12 +433,10 @@ def trace_verdict(time: object, speed: object, command_speed: float,
     # when a fast mode grows slowly per cycle) is not yet a limit cycle
     if ups.size - 1 - first >= rule.min_cycles \
             and float(ups[-1] - ups[first]) >= rule.min_compare_time:
-        stats = []
-        for a, b in zip(ups[first:-1], ups[first + 1:], strict=True):
-            i0, i1 = np.searchsorted(t, [a, b])
-            stats.append((_extremum(along, int(i0), int(i1), 1.0),
-                          _extremum(along, int(i0), int(i1), -1.0), float(b - a)))
-        arr = np.asarray(stats)
+        bounds = np.searchsorted(t, ups[first:])
+        arr = np.column_stack([_cycle_extrema(along, bounds, 1.0),
+                               _cycle_extrema(along, bounds, -1.0),
+                               np.diff(ups[first:])])
         found = _repeating(arr, rule)
         if found is not None:
             used, multiplicity = found
