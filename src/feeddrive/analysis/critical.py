@@ -694,12 +694,17 @@ def judge_staircase(time: np.ndarray, speed: np.ndarray, speeds: np.ndarray,
         One per step.
     """
     dwells = np.broadcast_to(np.asarray(dwell, dtype=float), (len(speeds),))
-    out = []
-    for v, t0, d in zip(speeds, starts, dwells, strict=True):
-        sel = (time >= t0) & (time < t0 + d * (1.0 - 1e-6))
-        verdict = trace_verdict(time[sel], speed[sel], float(v), rule)
-        out.append(CreepTrial.from_verdict(float(v), verdict, float(d)))
-    return out
+    return [_judge_step(time, speed, float(v), float(t0), float(d), rule)
+            for v, t0, d in zip(speeds, starts, dwells, strict=True)]
+
+
+def _judge_step(time: np.ndarray, speed: np.ndarray, command: float, start: float,
+                dwell: float, rule: VerdictRule | None) -> CreepTrial:
+    """One step of a staircase judged on its samples alone, start ≤ t < start + dwell·(1 −
+    1e-6) (found by bisection of the sorted times: the same samples as the comparison)."""
+    a, b = np.searchsorted(time, [start, start + dwell * (1.0 - 1e-6)], side="left")
+    verdict = trace_verdict(time[a:b], speed[a:b], command, rule)
+    return CreepTrial.from_verdict(command, verdict, dwell)
 
 
 def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_speed: float = 0.0,
@@ -776,12 +781,13 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
                 trials.append(judge_staircase(result.time, result["table_speed"], sp[k:k + 1],
                                               starts[k:k + 1], dwell[k], rule)[0])
             break
-        steps = judge_staircase(result.time, result["table_speed"], sp, starts, dwell, rule)
-        for k in range(len(trials), len(sp)):
-            if steps[k].kind == UNDECIDED and level[k] + 1 < len(levels):
+        for k in range(len(trials), len(sp)):  # each step judged when it is reached
+            step = _judge_step(result.time, result["table_speed"], float(sp[k]),
+                               float(starts[k]), float(dwell[k]), rule)
+            if step.kind == UNDECIDED and level[k] + 1 < len(levels):
                 level[k] += 1
                 break
-            trials.append(steps[k])
+            trials.append(step)
             if done():
                 break
     if runs is not None and last is not None:

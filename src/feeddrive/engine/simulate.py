@@ -830,6 +830,10 @@ class _Chunks:
         self.start = 0
         self.diverged = False
         self.y = sim.y0
+        # the profile's kinks over the whole time axis, once (each chunk takes those before
+        # its end: a long staircase profile's ≈ 1 ms a chunk)
+        self.kinks = profile_breakpoints(sim.profile, math.inf, grid.base) if self.dense \
+            else np.zeros(0)
         # (breakpoint, y, held, memory, totals, parts so far) at each committed chunk end,
         # kept for Simulation.resume when Simulation.keep_checkpoints asked for them
         self.checkpoints: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -853,7 +857,7 @@ class _Chunks:
             t, yy, aa, stats, _ = switching.integrate(
                 sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule, options.rtol,
                 sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive, max_steps, self.mode,
-                profile_breakpoints(sim.profile, t_stop, grid.base), self.want_aux,
+                self.kinks[self.kinks < t_stop], self.want_aux,
                 start=start, held=held, memory=memory, bound=sim.bound, P=sim.P)
         else:
             t, yy, aa, stats, _ = dopri5.integrate(
