@@ -45,3 +45,20 @@ def test_the_friction_kernels_compile_once_for_every_offset(tmp_path) -> None:
     for line in out[1:]:
         name, count, literal = line.split()
         assert (count, literal) == ("1", "False"), line  # one int64 signature for both
+
+
+def test_a_kernel_source_is_read_once(monkeypatch) -> None:
+    """`codegen.source_of` caches what `inspect.getsource` reads (it re-reads the file each
+    time; an uncached assembly of a new parameter set took ≈ 3.5 ms instead of ≈ 1.7)."""
+    import inspect
+
+    from feeddrive.model import codegen
+    from feeddrive.model.friction import lugre
+
+    reads = []
+    real = inspect.getsource
+    monkeypatch.setattr(inspect, "getsource", lambda fn: reads.append(fn) or real(fn))
+    codegen.source_of.cache_clear()
+    first = codegen.source_of(lugre.force)
+    assert codegen.source_of(lugre.force) == first
+    assert len(reads) == 1

@@ -778,8 +778,8 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
                     trials.extend(_Diverged(result.time, result["table_speed"]).trial(float(v))
                                   for v in sp[k:])
                     break
-                trials.append(judge_staircase(result.time, result["table_speed"], sp[k:k + 1],
-                                              starts[k:k + 1], dwell[k], rule)[0])
+                trials.append(_judge_step(result.time, result["table_speed"], float(sp[k]),
+                                          float(starts[k]), float(dwell[k]), rule))
             break
         for k in range(len(trials), len(sp)):  # each step judged when it is reached
             step = _judge_step(result.time, result["table_speed"], float(sp[k]),

@@ -569,7 +569,6 @@ class Builder:
         return np.concatenate(self.tables)
 
 
-@functools.lru_cache(maxsize=256)
 def index(value: int) -> str:
     """An offset into ``P``, ``T`` or ``y`` as the generated code passes it to a package
     kernel: ``int(value)``.  numba types a bare constant argument as ``Literal[int]`` and
@@ -592,6 +591,7 @@ def index(value: int) -> str:
     return f"int({int(value)})"
 
 
+@functools.lru_cache(maxsize=256)
 def source_of(fn: Any) -> str:
     """Source text of a function, cached (``inspect.getsource`` re-reads the file each time).
 
