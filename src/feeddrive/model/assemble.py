@@ -232,8 +232,7 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     oi = b.param(f"inputs.{REFERENCE_INPUTS[0]}", 0.0)
     for name in REFERENCE_INPUTS[1:]:
         b.param(f"inputs.{name}", 0.0)
-    b.reference_call = (f"{b.use(reference_with_inputs)}(t, P, {codegen.index(o)}, "
-                        f"{codegen.index(oi)}, T)")
+    b.reference_call = f"{b.use(reference_with_inputs)}(t, P, {o}, {oi}, T)"
 
 
 def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
@@ -281,7 +280,7 @@ def _ripple(b: codegen.Builder, parameters: DriveParameters, mech: Any, drive: s
         b.add_aux(f"{key}_ripple_torque", "N m", f"{key} motor torque ripple")
         ripple[key] = f"rip_{key}"
         lines.append(f"rip_{key} = {b.use(harmonics)}({b.y(motor.angle)}, P, "
-                     f"{codegen.index(block[0])}, {codegen.index(block[1])})[0]")
+                     f"{block[0]}, {block[1]})[0]")
         lines.append(f"{b.a(key + '_ripple_torque')} = rip_{key}")
         b.flow(f"rip_{key}", f"y:{motor.angle}")
         b.flow(f"aux:{key}_ripple_torque", f"rip_{key}")

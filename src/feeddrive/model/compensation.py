@@ -15,7 +15,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..parameters import ParameterError
-from .codegen import Builder, index
+from .codegen import Builder
 from .friction.lugre import (
     SIGMA0,
     SIGMA1,
@@ -186,7 +186,7 @@ def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism, axis
             c.coulomb_scale, c.static_scale, c.stribeck_velocity_scale, c.viscous_scale)
         o = b.named_params(f"compensation.{key}", SLOTS, site.as_array())
         if c.mode == "feedforward":
-            b.emit(f"comp_{key} = {b.use(feedforward_force)}({ref_speed}, P, {index(o)})",
+            b.emit(f"comp_{key} = {b.use(feedforward_force)}({ref_speed}, P, {o})",
                    writes=f"comp_{key}", reads="reference")
             site_reads = ["reference"]
         else:
@@ -197,8 +197,7 @@ def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism, axis
             observer = b.use(observer_force)
             # the observer kernel reads and writes its own state y[k] only
             site_reads = [*meas_reads, "y:table_position", "reference", f"y:{name}"]
-            b.emit(f"comp_{key} = {observer}({meas_speed}, {err}, P[{gain}], y, {index(k)}, P, "
-                   f"{index(o)}, dy)",
+            b.emit(f"comp_{key} = {observer}({meas_speed}, {err}, P[{gain}], y, {k}, P, {o}, dy)",
                    writes=(f"comp_{key}", f"dy:{name}"), reads=tuple(site_reads))
             states.append(name)
         reads += site_reads

@@ -26,7 +26,7 @@ from .. import registry
 from .._jit import kernel
 from ..parameters import Component, ParameterError
 from ..parameters.validation import choice, flag, quantity
-from .codegen import Builder, index
+from .codegen import Builder
 
 # parameter block of one axis (offsets from the axis' first slot)
 # ``inj_speed`` [rad/s] and ``inj_current`` [A] are zero inputs added to the continuous speed
@@ -452,7 +452,7 @@ def _sampled_pi(error: str, law: str, integral: str, output: str, o: int, limit:
     """A sampled PI update with conditional anti-windup: error, unsaturated output, integral
     advanced by ``period``, saturated output held."""
     return [f"e = {error}",
-            f"{raw} = {law}(e, {integral}, P, {index(o)})",
+            f"{raw} = {law}(e, {integral}, P, {o})",
             f"{integral} += {period} * {rate}(e, {raw}, P[{o + limit}])",
             f"{output} = {sat}({raw}, P[{o + limit}])"]
 
@@ -474,7 +474,7 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
     out.append("else:")
     for ax, s in zip(axes, sc, strict=True):
         out.append(f"    {s} = {_speed_law(b, ax)}({ax.reference} - {ax.position}, "
-                   f"{ax.feedforward}, {P}, {index(ax.param_offset)}) + "
+                   f"{ax.feedforward}, {P}, {ax.param_offset}) + "
                    f"{P}[{ax.param_offset + INJ_SPEED}]")
     out.append(f"if {_period(b, 'velocity')} > 0.0:")
     for ax, c in zip(axes, ic, strict=True):
@@ -485,7 +485,7 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
     out.append("else:")
     for ax in axes:
         out.append(f"    e_{ax.name} = {verr}({target}[{b.aux_index[ax.name + '_speed_command']}], "
-                   f"{ax.speed}, {P}, {index(ax.param_offset)})")
+                   f"{ax.speed}, {P}, {ax.param_offset})")
     for ax, c in zip(axes, ic, strict=True):
         o = ax.param_offset
         # compensation is continuous-only (refused with sampled loops): right-hand side only
@@ -493,7 +493,7 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
         if ax.current_feedforward:
             extra += f" + {ax.current_feedforward}"
         out.append(f"    {c} = {sat}({ccmd}(e_{ax.name}, {b.y(ax.name + '_velocity_integral')}, "
-                   f"{P}, {index(o)}) + {P}[{o + INJ_CURRENT}]{extra}, {P}[{o + I_MAX}])")
+                   f"{P}, {o}) + {P}[{o + INJ_CURRENT}]{extra}, {P}[{o + I_MAX}])")
 
 
 def _declare_flows(b: Builder, axes: list[Axis]) -> None:
@@ -540,8 +540,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     for ax in axes:
         o = ax.param_offset
         lines += _guarded(ax, [
-            f"e_{ax.name} = {verr}({b.a(ax.name + '_speed_command')}, {ax.speed}, P, "
-            f"{index(o)})",
+            f"e_{ax.name} = {verr}({b.a(ax.name + '_speed_command')}, {ax.speed}, P, {o})",
             f"raw = P[{o + KVP}] * e_{ax.name} + P[{o + KVI}] * "
             f"{b.y(ax.name + '_velocity_integral')}",
             f"{b.dy(ax.name + '_velocity_integral')} = {rate}(e_{ax.name}, raw, "
@@ -561,7 +560,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
             f"    {b.dy(ic)} = 0.0",
             "else:",
             f"    e = {b.a(ax.name + '_current_command')} - {ax.current_state}",
-            f"    raw = {vcmd}(e, {b.y(ic)}, P, {index(o)})",
+            f"    raw = {vcmd}(e, {b.y(ic)}, P, {o})",
             f"    u = {sat}(raw, P[{o + U_MAX}])",
             f"    {b.dy(ic)} = {rate}(e, raw, P[{o + U_MAX}]) if P[{o + KII}] != 0.0 else 0.0",
             f"{b.a(ax.name + '_voltage')} = u",
@@ -578,7 +577,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
         body = [f"q_{ch.name} = {quant}({ch.state}, {ch.quantum})" for ch in channels
                 if f"q_{ch.name}" in ax.position_q]
         body.append(f"{b.h(ax.name + '.speed_command')} = {_speed_law(b, ax)}({ax.reference} - "
-                    f"{ax.position_q}, {ax.feedforward}, P, {index(ax.param_offset)})")
+                    f"{ax.position_q}, {ax.feedforward}, P, {ax.param_offset})")
         s += _guarded(ax, body)
     s.append(f"if {b.tick('controller.velocity_period')} >= 0:")
     s.append(f"    tv = {_period(b, 'velocity')}")
@@ -586,7 +585,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
         s.append(f"    w_cmd_{ax.name} = {b.h(ax.name + '.speed_command')} if "
                  f"{_period(b, 'position')} > 0.0 else "
                  f"{_speed_law(b, ax)}({ax.reference} - {ax.position}, {ax.feedforward}, P, "
-                 f"{index(ax.param_offset)})")
+                 f"{ax.param_offset})")
     for ch in channels:
         s.append(f"    q_{ch.name} = {quant}({ch.state}, {ch.quantum})")
     quanta = " or ".join(f"{ch.quantum} > 0.0" for ch in dict(
@@ -605,7 +604,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
         s.append(f"    {b.h('prev.' + ch.name)} = q_{ch.name}")
     for ax in axes:
         s += _guarded(ax, _sampled_pi(
-            f"{verr}(w_cmd_{ax.name}, {ax.speed_q}, P, {index(ax.param_offset)})", ccmd,
+            f"{verr}(w_cmd_{ax.name}, {ax.speed_q}, P, {ax.param_offset})", ccmd,
             b.h(ax.name + ".velocity_integral"), b.h(ax.name + ".current_command"),
             ax.param_offset, I_MAX, rate, sat, "tv", "i_raw"))
     s.append(f"if {b.tick('controller.current_period')} >= 0:")

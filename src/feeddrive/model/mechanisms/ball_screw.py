@@ -25,7 +25,7 @@ import numpy as np
 
 from ..._jit import kernel
 from ...parameters import DriveParameters, ParameterError
-from ..codegen import Builder, index
+from ..codegen import Builder
 from ..loops import ENC_Q, GRAT_Q, H_AX, V_FEEDBACK, Axis, Channel, axis_parameters
 from .ball_screw_stiffness import axial_stiffness, equivalent_stiffness, torsional_stiffness
 from .base import Body, DriveMotor, Mechanics, Mechanism, Site, register_mechanism
@@ -353,7 +353,7 @@ class BallScrewDrive(Mechanism):
             b.emit(ln)
         k_eq = b.use(equivalent_stiffness_kernel)
         o_stiff = b.param_index[f"stiffness.{STIFFNESS_SLOTS[0]}"]  # the block's first slot
-        b.emit(f"k_eq = {k_eq}({b.y('table_position')}, P, {index(o_stiff)})", writes="k_eq",
+        b.emit(f"k_eq = {k_eq}({b.y('table_position')}, P, {o_stiff})", writes="k_eq",
                reads="y:table_position")
         c_ax = b.p("stiffness.axial_damping")
         th_rel = f"({b.y('screw_angle')} - {b.y('nut_angle')})"
@@ -366,8 +366,7 @@ class BallScrewDrive(Mechanism):
             lever_reads: tuple[str, ...] = ()
         else:
             hh = b.use(harmonics)
-            b.emit(f"lead_dev, lead_slope = {hh}({th_rel}, P, {index(m.lead[0])}, "
-                   f"{index(m.lead[1])})",
+            b.emit(f"lead_dev, lead_slope = {hh}({th_rel}, P, {m.lead[0]}, {m.lead[1]})",
                    writes="lead", reads=("y:screw_angle", "y:nut_angle"))
             b.emit(f"f_d = (k_eq * ({H} * {th_rel} + lead_dev - {b.y('table_position')}) "
                    f"+ {c_ax} * (({H} + lead_slope) * (w_s - w_n) - v_t))", writes="f_d",
