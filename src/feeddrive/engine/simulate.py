@@ -160,6 +160,13 @@ class SolverOptions:
         Step of the fixed-step methods [s].
     max_steps : int, default 50 000 000
         A run that would need more steps is refused before it starts.
+    sample_steps : bool, default False
+        Dense-output methods: every sample of a
+        :class:`~feeddrive.model.reference.SampledSpeed` a step end, not only its kinks
+        (:func:`profile_breakpoints`), so that the steps always end on the profile's grid
+        and a run's step sequence moves little with its parameters — what a fit's
+        finite-difference Jacobian and its confidence intervals want (``feeddrive fit`` sets
+        it); the steps are then no longer than the profile's interval.
     """
 
     method: str = "modal"
@@ -171,6 +178,7 @@ class SolverOptions:
     max_step: float | None = None
     fixed_step: float = 1e-5
     max_steps: int = 50_000_000
+    sample_steps: bool = False
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -436,13 +444,17 @@ def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np
     return bound
 
 
-def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarray:
+def profile_breakpoints(profile: Profile, t_end: float, base: float, *,
+                        every_sample: bool = False) -> np.ndarray:
     """Instants where the command has a kink, declared to the dense-output integrator as step
     ends.
 
-    The end of a constant-speed start ramp; the grid of a sampled profile (piecewise-linear
-    speed) when it is no finer than ``base`` — a finer grid is left to the error control, as
-    the fixed-breakpoint integrator does.
+    The end of a constant-speed start ramp; the samples of a sampled profile where its speed
+    has a kink (interpolated: the slope on the two sides of the sample differs; held: the
+    value changes) or where its table ends, when its grid is no finer than ``base`` — a finer
+    grid is left to the error control, as the fixed-breakpoint integrator does.  A sample
+    inside a stretch of one speed or one slope (a staircase's dwell, a ramp whose differences
+    are equal) is no kink: the command is smooth there, and a step may pass it.
 
     Parameters
     ----------
@@ -452,6 +464,8 @@ def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarr
         End of the run [s].
     base : float
         The breakpoint unit (:class:`Sampling`) [s].
+    every_sample : bool, default False
+        Every sample of a sampled profile, kink or not (``SolverOptions.sample_steps``).
 
     Returns
     -------
@@ -464,8 +478,26 @@ def profile_breakpoints(profile: Profile, t_end: float, base: float) -> np.ndarr
     if isinstance(profile, SampledSpeed):
         times = np.asarray(profile.time, dtype=float)
         if times.size > 1 and float(np.mean(np.diff(times))) >= base * (1 - 1e-9):
-            return times[(times > 0.0) & (times < t_end)]
+            inside = (times > 0.0) & (times < t_end)
+            return times[inside if every_sample else inside & _sample_kinks(profile)]
     return np.zeros(0)
+
+
+def _sample_kinks(profile: SampledSpeed) -> np.ndarray:
+    """Per sample of ``profile``, whether the command is not smooth there: a change of the
+    slope (interpolated) or of the value (held) of the table or nut speed, compared exactly
+    (a rounding difference only adds a step end), and the table's last sample."""
+    kink = np.zeros(len(profile.time), dtype=bool)
+    kink[-1] = True
+    for speed in (profile.table_speed, profile.nut_speed):
+        if speed is None:
+            continue
+        step = np.diff(np.asarray(speed, dtype=float))
+        if profile.hold:
+            kink[1:] |= step != 0.0
+        else:
+            kink[1:-1] |= step[1:] != step[:-1]
+    return kink
 
 
 class SimulationInterrupted(KeyboardInterrupt):
@@ -832,7 +864,8 @@ class _Chunks:
         self.y = sim.y0
         # the profile's kinks over the whole time axis, once (each chunk takes those before
         # its end: a long staircase profile's ≈ 1 ms a chunk)
-        self.kinks = profile_breakpoints(sim.profile, math.inf, grid.base) if self.dense \
+        self.kinks = profile_breakpoints(sim.profile, math.inf, grid.base,
+                                         every_sample=options.sample_steps) if self.dense \
             else np.zeros(0)
         # (breakpoint, y, held, memory, totals, parts so far) at each committed chunk end,
         # kept for Simulation.resume when Simulation.keep_checkpoints asked for them
