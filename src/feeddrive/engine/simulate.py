@@ -163,7 +163,7 @@ class SolverOptions:
     sample_steps : bool, default False
         Dense-output methods: every sample of a
         :class:`~feeddrive.model.reference.SampledSpeed` a step end, not only its kinks
-        (:func:`profile_breakpoints`), so that the steps always end on the profile's grid
+        (``profile_breakpoints``), so that the steps always end on the profile's grid
         and a run's step sequence moves little with its parameters — what a fit's
         finite-difference Jacobian and its confidence intervals want (``feeddrive fit`` sets
         it); the steps are then no longer than the profile's interval.
