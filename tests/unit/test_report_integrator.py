@@ -38,6 +38,9 @@ def test_the_label_follows_the_code(monkeypatch: pytest.MonkeyPatch) -> None:
     assert "rtol 1e-08" in SolverOptions(rtol=1e-8).describe()
     assert "steps ≤ 0.001 s" in SolverOptions(method="dopri5").describe()
     assert "steps ≤ 0.0005 s" in SolverOptions(method="modal", max_step=5e-4).describe()
+    sampled = "every sample of a sampled profile a step end"
+    assert sampled in SolverOptions(sample_steps=True).describe()
+    assert sampled not in SolverOptions().describe()
 
 
 @pytest.mark.parametrize("method", METHODS)

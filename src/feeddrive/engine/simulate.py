@@ -217,6 +217,8 @@ class SolverOptions:
         largest = self.largest_step
         steps = (f"steps ≤ {largest:g} s, " if math.isfinite(largest)
                  and not self.method.endswith("-fixed") else "")
+        if self.sample_steps and self.method in _DENSE_MODES:
+            steps += "every sample of a sampled profile a step end, "
         return (f"{self.method} ({methods[self.method]}); {steps}rtol {self.rtol:g}, "
                 f"absolute tolerances {self.position_tolerance:g} m (positions), "
                 f"{self.speed_tolerance:g} m/s (speeds), {self.current_tolerance:g} A "
