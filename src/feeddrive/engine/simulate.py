@@ -491,9 +491,7 @@ def _sample_kinks(profile: SampledSpeed) -> np.ndarray:
     (a rounding difference only adds a step end), and the table's last sample."""
     kink = np.zeros(len(profile.time), dtype=bool)
     kink[-1] = True
-    for speed in (profile.table_speed, profile.nut_speed):
-        if speed is None:
-            continue
+    for speed in (profile.table_speed, _nut(profile)):
         step = np.diff(np.asarray(speed, dtype=float))
         if profile.hold:
             kink[1:] |= step != 0.0
