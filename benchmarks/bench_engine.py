@@ -73,6 +73,7 @@ import feeddrive as fd  # noqa: E402
 from feeddrive.engine.simulate import (  # noqa: E402
     _DENSE_MODES,
     DriveSystem,
+    Simulation,
     SolverOptions,
     profile_breakpoints,
     sampling,
@@ -109,10 +110,7 @@ DURATIONS = (10.0, 100.0)
 
 
 def tighter(options: SolverOptions, factor: float) -> SolverOptions:
-    return SolverOptions(method=options.method, rtol=options.rtol / factor,
-                         position_tolerance=options.position_tolerance / factor,
-                         speed_tolerance=options.speed_tolerance / factor,
-                         current_tolerance=options.current_tolerance / factor)
+    return SolverOptions(method=options.method, accuracy=options.accuracy / factor)
 
 
 _OUTPUT: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
@@ -128,8 +126,8 @@ def engine_states(system: DriveSystem, model: Model, profile: ConstantSpeed, dur
     grid = sampling(system.parameters, options.output_interval, model)
     n_break = int(round(duration / grid.base))
     t_end = n_break * grid.base
-    atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
-                                 options.current_tolerance)
+    sim = Simulation(system, profile, options)  # the run's resolved tolerances
+    atol, rel = sim.atol, sim.rel
     mode, _ = _DENSE_MODES[options.method]
     n_out = n_break // grid.out_every + 1
     out = _OUTPUT.get((id(model), n_out))
@@ -137,7 +135,7 @@ def engine_states(system: DriveSystem, model: Model, profile: ConstantSpeed, dur
         out = _OUTPUT[(id(model), n_out)] = switching.new_output(model, n_out)
     t, y, _, stats, _ = switching.integrate(
         model, system.initial_vector(model), t_end, grid.out_every, grid.base, grid.schedule,
-        options.rtol, atol, rel, 1e-6, math.inf, 1,
+        sim.tolerances.rtol, atol, rel, 1e-6, math.inf, 1,
         options.max_steps, mode, profile_breakpoints(profile, t_end, grid.base),
         want_aux=False, out=out)
     if int(stats[0]) != 0:
@@ -211,8 +209,8 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
         "scenario": name, "kind": kind, "duration_s": duration, "drive": drive,
         "screw_bristle_stiffness_factor": sigma0,
         "table_speed_mm_s": v_t * 1e3, "nut_speed_mm_s": v_n * 1e3,
-        "engine_options": {"method": options.method, "rtol": options.rtol,
-                           "position_tolerance": options.position_tolerance},
+        "engine_options": {"method": options.method, "accuracy": options.accuracy,
+                           **Simulation(system, profile, options).tolerances.as_dict()},
         "cpu_ms": {k: 1e3 * v for k, v in med.items()},
         "cpu_ms_all": {k: [1e3 * x for x in v] for k, v in times.items()},
         "ratio_lsoda": med["lsoda"] / med["engine"],

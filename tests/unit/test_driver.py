@@ -9,7 +9,13 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.engine.simulate import _DENSE_MODES, SolverOptions, profile_breakpoints, sampling
+from feeddrive.engine.simulate import (
+    _DENSE_MODES,
+    Simulation,
+    SolverOptions,
+    profile_breakpoints,
+    sampling,
+)
 from feeddrive.solvers import driver, switching
 
 W = fd.preset("wang2021")
@@ -71,15 +77,15 @@ def test_output_buffers_are_written_and_returned_as_views_bit_identical() -> Non
     grid = sampling(system.parameters, options.output_interval, model)
     n_break = int(round(0.5 / grid.base))
     t_end = n_break * grid.base
-    atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
-                                 options.current_tolerance)
+    sim = Simulation(system, profile, options)  # the run's resolved tolerances
+    atol, rel = sim.atol, sim.rel
     mode, _ = _DENSE_MODES[options.method]
 
     def run(out: tuple[np.ndarray, np.ndarray, np.ndarray] | None, want_aux: bool
             ) -> tuple[np.ndarray, ...]:
         return switching.integrate(
             model, system.initial_vector(model), t_end, grid.out_every, grid.base,
-            grid.schedule, options.rtol, atol, rel, 1e-6, math.inf, 1, options.max_steps,
+            grid.schedule, sim.tolerances.rtol, atol, rel, 1e-6, math.inf, 1, options.max_steps,
             mode, profile_breakpoints(profile, t_end, grid.base), want_aux, out=out)
 
     n_out = n_break // grid.out_every + 1

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 import feeddrive.reproduce as reproduce_pkg
+from feeddrive.engine import options as opt
 from feeddrive.engine.simulate import METHODS, SolverOptions
 from feeddrive.reproduce.report import header_text, integrator_text, settings_markdown
 from feeddrive.reproduce.studies import StudySettings
@@ -21,10 +22,12 @@ def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
     assert text.startswith(f"{options.method} (")
     for piece in (f"h·|λ| ≤ {modes.H_LAMBDA:g}",
                   f"damping ratio < {modes.ZETA_LIGHT:g}",
-                  f"rtol {options.rtol:g}", f"{options.position_tolerance:g} m (positions)",
-                  f"{options.speed_tolerance:g} m/s (speeds)",
-                  f"{options.current_tolerance:g} A (currents)",
-                  f"output every {options.output_interval:g} s"):
+                  f"rtol {opt.DEFAULT_RTOL:g}", f"positions {opt.POSITION_TIME:g} s × V",
+                  f"speeds {opt.SPEED_FRACTION:g} × V",
+                  f"currents {opt.CURRENT_FRACTION:g} × the current limit",
+                  f"deflections {opt.DEFLECTION_FRACTION:g} × their onset deflection",
+                  f"output every {options.output_interval:g} s",
+                  f"continuous extension of order {opt.DENSE_OUTPUT_ORDER['modal']}"):
         assert piece in text, piece
     # the compiled dense driver takes its cap from the modes module, as the label does
     source = "\n".join(switching.template_sources())

@@ -22,7 +22,7 @@ from reference.linear_model import augmented_matrix, exact_response  # noqa: E40
 from reference.scipy_model import STATE_NAMES  # noqa: E402
 
 import feeddrive  # noqa: E402
-from feeddrive.engine.simulate import DriveSystem, SolverOptions, sampling, simulate  # noqa: E402
+from feeddrive.engine.simulate import DriveSystem, Simulation, SolverOptions, sampling, simulate  # noqa: E402
 from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 from feeddrive.solvers import dopri5  # noqa: E402
@@ -115,11 +115,11 @@ def test_continuous_control_reuses_the_last_stage_at_breakpoints() -> None:
     system = DriveSystem(params, "cdfs", 0.4)
     model = system.model(profile)
     grid = sampling(params, options.output_interval)
-    atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
-                                 options.current_tolerance)
+    sim = Simulation(system, profile, options)  # the run's resolved tolerances
+    atol, rel = sim.atol, sim.rel
     t, y, aux, stats, held = dopri5.integrate(
         model, system.initial_vector(model), 0.5, grid.out_every, grid.base, grid.schedule,
-        options.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
+        sim.tolerances.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
     assert int(stats[3]) == 6 * int(stats[1]) + 1
     fresh = np.empty(len(model.aux))
     dy = np.empty(len(model.states))

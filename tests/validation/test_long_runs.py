@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 import feeddrive as fd
-from feeddrive.engine.simulate import SimulationInterrupted, SolverOptions, sampling
+from feeddrive.engine.simulate import Simulation, SimulationInterrupted, SolverOptions, sampling
 from feeddrive.model.reference import ConstantSpeed
 from feeddrive.solvers import dopri5
 
@@ -23,11 +23,11 @@ def _one_call(system: fd.DriveSystem, profile: ConstantSpeed, duration: float) -
     model = system.model(profile)
     options = SolverOptions()
     grid = sampling(system.parameters, options.output_interval)
-    atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
-                                 options.current_tolerance)
+    sim = Simulation(system, profile, options)  # the run's resolved tolerances
+    atol, rel = sim.atol, sim.rel
     _, y, _, stats, _ = dopri5.integrate(
         model, system.initial_vector(model), duration, grid.out_every, grid.base,
-        grid.schedule, options.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
+        grid.schedule, sim.tolerances.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
     assert int(stats[0]) == 0
     return y
 
@@ -134,11 +134,11 @@ def test_auxiliary_signals_evaluated_when_read_equal_the_recorded_ones() -> None
     assert r.solver_stats["output_rhs_evaluations"] == 0  # nothing evaluated for the record
     model = system.model(profile)
     grid = sampling(W, options.output_interval)
-    atol, rel = model.tolerances(options.position_tolerance, options.speed_tolerance,
-                                 options.current_tolerance)
+    sim = Simulation(system, profile, options)  # the run's resolved tolerances
+    atol, rel = sim.atol, sim.rel
     t, y, aux, _, _ = switching.integrate(
         model, system.initial_vector(model), 2.0, grid.out_every, grid.base, grid.schedule,
-        options.rtol, atol, rel, 1e-6, np.inf, 1, options.max_steps, switching.MODE_AUTO,
+        sim.tolerances.rtol, atol, rel, 1e-6, np.inf, 1, options.max_steps, switching.MODE_AUTO,
         sim_mod.profile_breakpoints(profile, 2.0, grid.base), want_aux=True)
     np.testing.assert_array_equal(r.time, t)
     for k, sig in enumerate(model.aux):

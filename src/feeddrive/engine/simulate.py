@@ -16,8 +16,12 @@ from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..parameters import DriveParameters, ParameterError
-from ..solvers import dopri5, modes, switching
+from ..solvers import dopri5, switching
 from . import budget
+from .options import DENSE_MODES as _DENSE_MODES
+from .options import METHODS as METHODS  # re-exported: the engine's public names
+from .options import RunScales
+from .options import SolverOptions as SolverOptions
 from .result import Result, Run
 
 DRIVES = drive_names()
@@ -108,130 +112,6 @@ class DriveSystem:
         for name, value in self.initial_state.items():
             y0[model.index(name)] = float(value)
         return y0
-
-
-METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed",
-           "rodas4-fixed")
-# method -> (driver mode, adaptive) of feeddrive.solvers.switching
-_DENSE_MODES = {"modal": (switching.MODE_MODAL, 1), "auto": (switching.MODE_AUTO, 1),
-                "rodas4": (switching.MODE_RODAS4, 1),
-                "dopri5-dense": (switching.MODE_DOPRI5, 1),
-                "rodas4-fixed": (switching.MODE_RODAS4, 0)}
-
-
-@dataclass(frozen=True)
-class SolverOptions:
-    """Integrator settings, echoed in the result.
-
-    Parameters
-    ----------
-    method : str, default "modal"
-        * ``"modal"`` (the default): DOPRI5 where the problem is not stiff, RODAS4 where it
-          is, with each Rosenbrock step capped so that every lightly damped, undamped or
-          growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.35 for damping
-          ratios below 0.02: :mod:`feeddrive.solvers.modes`), and no switch where that cap
-          leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
-          early (``divergence_bounds``);
-        * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps
-          at most ``max_step``, default 1 ms, and the output interval); the engine v1
-          behaviour, kept bit for bit;
-        * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
-          automatically on Hairer's stiffness test alone; dense output (steps not capped by
-          the output interval); at rtol 1e-6 its RODAS4 steps can damp a slowly growing mode;
-        * ``"rodas4"``: the Rosenbrock method RODAS4 throughout, dense output;
-        * ``"dopri5-dense"``: DOPRI5 throughout with dense output;
-        * ``"dopri5-fixed"``, ``"rodas4-fixed"``: fixed step ``fixed_step`` (order checks).
-
-        See :mod:`feeddrive.solvers.switching`.
-    rtol : float, default 1e-6
-        Relative tolerance on speeds and currents [-].
-    position_tolerance : float, default 1e-10
-        Absolute error target of positions [m] (angles scaled by H).
-    speed_tolerance : float, default 1e-8
-        Absolute error target of speeds [m/s] (rotary speeds scaled by H).
-    current_tolerance : float, default 1e-6
-        Absolute error target of motor currents [A].
-    output_interval : float, default 1e-3
-        Spacing of the recorded samples [s] (for ``dopri5`` also the breakpoint spacing under
-        continuous control).
-    max_step : float or None, default None
-        Largest step [s] (None: 1 ms for ``dopri5``, unlimited for the dense-output methods).
-    fixed_step : float, default 1e-5
-        Step of the fixed-step methods [s].
-    max_steps : int, default 50 000 000
-        A run that would need more steps is refused before it starts.
-    sample_steps : bool, default False
-        Dense-output methods: every sample of a
-        :class:`~feeddrive.model.reference.SampledSpeed` a step end, not only its kinks
-        (``profile_breakpoints``), so that the steps always end on the profile's grid
-        and a run's step sequence moves little with its parameters — what a fit's
-        finite-difference Jacobian and its confidence intervals want (``feeddrive fit`` sets
-        it); the steps are then no longer than the profile's interval.
-    """
-
-    method: str = "modal"
-    rtol: float = 1e-6
-    position_tolerance: float = 1e-10
-    speed_tolerance: float = 1e-8
-    current_tolerance: float = 1e-6
-    output_interval: float = 1e-3
-    max_step: float | None = None
-    fixed_step: float = 1e-5
-    max_steps: int = 50_000_000
-    sample_steps: bool = False
-
-    def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise ParameterError("options.method", self.method,
-                                 f"expected one of {', '.join(METHODS)}")
-        for name in ("rtol", "position_tolerance", "speed_tolerance", "current_tolerance",
-                     "output_interval", "max_step", "fixed_step"):
-            v = getattr(self, name)
-            if name == "max_step" and v is None:
-                continue
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-                raise ParameterError(f"options.{name}", v, "expected a finite value > 0")
-
-    def describe(self) -> str:
-        """The integrator in words, with the numbers it runs with: the method, its step cap
-        (read from the solver's constants, :data:`feeddrive.solvers.modes.H_LAMBDA` and
-        :data:`~feeddrive.solvers.modes.ZETA_LIGHT` for ``modal``), the tolerances and the
-        output interval.  Reports print it beside the numbers that rest on it.
-
-        Returns
-        -------
-        str
-            One sentence.
-        """
-        methods = {
-            "modal": "DOPRI5/RODAS4 switched on stiffness, every step capped at h·|λ| ≤ "
-                     f"{modes.H_LAMBDA:g} on each oscillatory mode of the Jacobian "
-                     f"with damping ratio < {modes.ZETA_LIGHT:g}",
-            "dopri5": "adaptive Dormand–Prince 5(4)",
-            "auto": "DOPRI5/RODAS4 switched on Hairer's stiffness test, no mode cap",
-            "rodas4": "Rosenbrock RODAS4",
-            "dopri5-dense": "adaptive Dormand–Prince 5(4), dense output",
-            "dopri5-fixed": f"Dormand–Prince 5 at a fixed step of {self.fixed_step:g} s",
-            "rodas4-fixed": f"RODAS4 at a fixed step of {self.fixed_step:g} s",
-        }
-        largest = self.largest_step
-        steps = (f"steps ≤ {largest:g} s, " if math.isfinite(largest)
-                 and not self.method.endswith("-fixed") else "")
-        if self.sample_steps and self.method in _DENSE_MODES:
-            steps += "every sample of a sampled profile a step end, "
-        return (f"{self.method} ({methods[self.method]}); {steps}rtol {self.rtol:g}, "
-                f"absolute tolerances {self.position_tolerance:g} m (positions), "
-                f"{self.speed_tolerance:g} m/s (speeds), {self.current_tolerance:g} A "
-                f"(currents); output every {self.output_interval:g} s")
-
-    @property
-    def largest_step(self) -> float:
-        """``max_step``, or its default: 1 ms for ``dopri5`` (and its fixed-step variant),
-        unlimited for the dense-output methods [s].
-        """
-        if self.max_step is not None:
-            return self.max_step
-        return math.inf if self.method in _DENSE_MODES else 1e-3
 
 
 class SimulationError(RuntimeError):
@@ -375,8 +255,8 @@ def sampling(params: DriveParameters, output_interval: float,
 
 def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: Sampling,
                      options: SolverOptions, y0: np.ndarray, t_end: float,
-                     adaptive: int, atol: np.ndarray, rel: np.ndarray, h_init: float,
-                     h_max: float, bound: np.ndarray) -> None:
+                     adaptive: int, rtol: float, atol: np.ndarray, rel: np.ndarray,
+                     h_init: float, h_max: float, bound: np.ndarray) -> None:
     """Refuse, before integrating with ``dopri5``, a run whose steps (projected from a short
     probe) exceed ``max_steps`` (feeddrive.engine.budget)."""
     t_probe = budget.probe_time(t_end, grid.base) if adaptive else 0.0
@@ -384,7 +264,7 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
         return
     allowed = int(options.max_steps * t_probe / t_end) + 1000
     _, _, _, stats, _ = dopri5.integrate(
-        model, y0.copy(), t_probe, grid.out_every, grid.base, grid.schedule, options.rtol,
+        model, y0.copy(), t_probe, grid.out_every, grid.base, grid.schedule, rtol,
         atol, rel, h_init, h_max, adaptive, allowed, bound=bound, P=grid.parameters(model))
     if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
         problem = budget.step_rate_problem(
@@ -409,6 +289,49 @@ def _peak(value: Any) -> float:
     return float(np.max(np.abs(np.asarray(value, dtype=float)), initial=0.0))
 
 
+def command_speed(system: DriveSystem, profile: Profile, *, table: bool = False) -> float:
+    """The largest speed the run is commanded to or starts with: the table's, nut's and sine
+    amplitudes' peaks summed (a DDFS's screw runs at table plus nut speed), or the largest
+    initial speed state, whichever is larger [m/s] (0 for a run at rest); ``table``: the
+    table's own (its command's and amplitude's peaks, its initial speed)."""
+    names = ("table_speed", "table_amplitude") if table else (
+        "table_speed", "nut_speed", "table_amplitude", "nut_amplitude")
+    command = sum(_peak(getattr(profile, name, None)) for name in names)
+    initial = max((abs(float(v)) for k, v in system.initial_state.items()
+                   if ("table_speed" in k if table else "speed" in k)), default=0.0)
+    return max(command, initial)
+
+
+def run_scales(system: DriveSystem, profile: Profile, model: Model) -> RunScales:
+    """The speed and current scales the run's default tolerances follow
+    (:mod:`feeddrive.engine.options`).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (its initial state and controller's current limit).
+    profile : Profile
+        The reference profile (its speeds).
+    model : Model
+        The assembled model (unused now; the scales of a machine's axes will read it).
+
+    Returns
+    -------
+    RunScales
+        Speed scales V (motors) and V_t (table) from :func:`command_speed`, each at least
+        ``SPEED_SCALE_FLOOR`` [m/s]; current scale: the current limit when below
+        ``NO_CURRENT_LIMIT``, else 1 A [A].
+    """
+    from . import options as opt
+
+    limit = float(system.parameters.controller.current_limit)
+    current = limit if 0.0 < limit < opt.NO_CURRENT_LIMIT else 1.0
+    return RunScales(
+        speed=max(command_speed(system, profile), opt.SPEED_SCALE_FLOOR),
+        table_speed=max(command_speed(system, profile, table=True), opt.SPEED_SCALE_FLOOR),
+        current=current)
+
+
 def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np.ndarray:
     """The largest |state| per state before a run stops as diverged.
 
@@ -431,11 +354,8 @@ def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np
     numpy.ndarray
         Bound per state [SI, per state]; ``inf`` where unbounded.
     """
-    command = sum(_peak(getattr(profile, name, None)) for name in (
-        "table_speed", "nut_speed", "table_amplitude", "nut_amplitude"))
-    initial = max((abs(float(v)) for k, v in system.initial_state.items() if "speed" in k),
-                  default=0.0)
-    limit = DIVERGENCE_SPEED_RATIO * max(command, initial, DIVERGENCE_SPEED_FLOOR)
+    limit = DIVERGENCE_SPEED_RATIO * max(command_speed(system, profile),
+                                         DIVERGENCE_SPEED_FLOOR)
     bound = np.full(len(model.states), np.inf)
     for i, (kind, scale) in enumerate(zip(model.tolerance_kinds, model.tolerance_scales,
                                           strict=True)):
@@ -603,8 +523,11 @@ class Simulation:
         self.model = system.model(profile)
         self.grid = sampling(system.parameters, options.output_interval, self.model)
         self.P = self.grid.parameters(self.model)  # the sample periods on the grid
+        self.scales = run_scales(system, profile, self.model)
+        self.tolerances = tol = options.resolve(self.scales)
         self.atol, self.rel = self.model.tolerances(
-            options.position_tolerance, options.speed_tolerance, options.current_tolerance)
+            tol.position, tol.speed, tol.current, tol.deflection,
+            motor_position=tol.motor_position, motor_speed=tol.motor_speed)
         self.y0 = system.initial_vector(self.model)
         self.bound = divergence_bounds(system, profile, self.model)
         self._chunks: _Chunks | None = None
@@ -770,7 +693,8 @@ class Simulation:
         self._running = chunks
         if not chunks.dense:
             _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
-                             chunks.adaptive, self.atol, self.rel, chunks.h_init, chunks.h_max,
+                             chunks.adaptive, self.tolerances.rtol, self.atol, self.rel,
+                             chunks.h_init, chunks.h_max,
                              self.bound)
         try:
             t, y, aux_parts, stats = chunks.advance(n_break, output, progress)
@@ -791,9 +715,9 @@ class Simulation:
                 f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
                 f"{int(stats[2])}); raise max_steps (--max-steps) or check the parameters")
         solver_stats = {
-            "method": options.method, "rtol": options.rtol,
-            "position_tolerance": options.position_tolerance,
-            "speed_tolerance": options.speed_tolerance,
+            "method": options.method, **self.tolerances.as_dict(),
+            "accuracy": options.accuracy, "speed_scale": self.scales.speed,
+            "current_scale": self.scales.current,
             "steps": int(stats[1]), "rejected_steps": int(stats[2]),
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
             "breakpoint_interval_s": grid.base,
@@ -884,19 +808,20 @@ class _Chunks:
     def _integrate(self, y: np.ndarray, start: int, stop: int, held: np.ndarray,
                    memory: np.ndarray, max_steps: int,
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        sim, grid, options = self.sim, self.sim.grid, self.sim.options
+        sim, grid = self.sim, self.sim.grid
         t_stop = stop * grid.base
         if self.dense:
             t, yy, aa, stats, _ = switching.integrate(
-                sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule, options.rtol,
-                sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive, max_steps, self.mode,
+                sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule,
+                sim.tolerances.rtol, sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive,
+                max_steps, self.mode,
                 self.kinks[self.kinks < t_stop], self.want_aux,
                 start=start, held=held, memory=memory, bound=sim.bound, P=sim.P)
         else:
             t, yy, aa, stats, _ = dopri5.integrate(
-                sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule, options.rtol,
-                sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive, max_steps,
-                start=start, held=held, memory=memory,
+                sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule,
+                sim.tolerances.rtol, sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive,
+                max_steps, start=start, held=held, memory=memory,
                 bound=sim.bound, P=sim.P)
         return t, yy, aa, stats
 

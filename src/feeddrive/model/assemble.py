@@ -183,12 +183,15 @@ class Model:
             raise ParameterError("parameter", name, "no such slot in this model; expected one "
                                  f"of {', '.join(near or self.parameter_names)}") from None
 
-    def tolerances(self, position: float, speed: float, current: float
-                   ) -> tuple[np.ndarray, np.ndarray]:
-        """Absolute tolerance and relative-tolerance mask of each state, from the solver options.
+    def tolerances(self, position: float, speed: float, current: float,
+                   deflection: float | None = None, *, motor_position: float | None = None,
+                   motor_speed: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Absolute tolerance and relative-tolerance mask of each state, from the solver's
+        resolved tolerances (:class:`feeddrive.engine.options.Tolerances`).
 
         Angles and rotary speeds divide the linear tolerances by their scale H; integrals follow
-        the position or current tolerance.
+        the motor position or current tolerance; friction deflections are ``deflection`` × their
+        own scale, or take the position tolerance when ``deflection`` is None.
 
         Parameters
         ----------
@@ -198,6 +201,14 @@ class Model:
             Absolute tolerance of speeds [m/s].
         current : float
             Absolute tolerance of currents [A].
+        deflection : float or None, default None
+            Fraction of each deflection state's scale [-]; None: the position tolerance.
+        motor_position : float or None, default None
+            Absolute tolerance of the motors' angles and the loops' velocity integrals in
+            table units [m] (÷ H per state); None: ``position``.
+        motor_speed : float or None, default None
+            Absolute tolerance of the motors' speeds in table units [m/s] (÷ H per state);
+            None: ``speed``.
 
         Returns
         -------
@@ -206,14 +217,19 @@ class Model:
         relative : numpy.ndarray
             1 for the states whose error is also weighed relative to their size, else 0.
         """
+        mx = position if motor_position is None else motor_position
+        mv = speed if motor_speed is None else motor_speed
         atol = np.empty(len(self.states))
         rel = np.zeros(len(self.states))
         for i, (kind, scale) in enumerate(zip(self.tolerance_kinds, self.tolerance_scales,
                                               strict=True)):
-            atol[i] = {"position": position, "speed": speed, "angle": position / scale,
-                       "rotary_speed": speed / scale, "current": current,
-                       "current_integral": current * 1e-3,
-                       "velocity_integral": position / scale, "none": position}[kind]
+            if kind == "deflection":
+                atol[i] = position if deflection is None else deflection * scale
+            else:
+                atol[i] = {"position": position, "speed": speed, "angle": mx / scale,
+                           "rotary_speed": mv / scale, "current": current,
+                           "current_integral": current * 1e-3,
+                           "velocity_integral": mx / scale, "none": position}[kind]
             rel[i] = 1.0 if kind in codegen.RELATIVE_KINDS else 0.0
         return atol, rel
 
@@ -391,10 +407,11 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         site_params = site.parameters(parameters)
         law = friction_law(site_params.law)
         first = len(b.states)
-        for state in law.states(site_params):
+        sizes = law.deflection_scales(site_params)
+        for state, size in zip(law.states(site_params), sizes, strict=True):
             b.state(f"{site.name}_{state}", law.state_unit,
                     f"{law.name} {state} state, {site.name.replace('_', '–')} friction",
-                    "position")
+                    "deflection", size)
         laws.append((site, law, first))
     mech.motors(b)
     axes, channels = mech.axes(b)

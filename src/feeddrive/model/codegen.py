@@ -28,8 +28,10 @@ from .._jit import SOURCE_DIGEST, import_generated
 from ..solvers.shared import binding_source
 
 # Tolerance classes of a state: how its absolute tolerance follows from the solver options.
+# "deflection": a friction law's internal state (a bristle, a GMS element, an observer's
+# state), scaled by its own size (its steady deflection at the onset of sliding).
 TOLERANCE_KINDS = ("position", "speed", "angle", "rotary_speed", "current", "current_integral",
-                   "velocity_integral", "none")
+                   "velocity_integral", "deflection", "none")
 # Kinds whose error is also weighed relative to the state's size.
 RELATIVE_KINDS = ("speed", "rotary_speed", "current")
 
@@ -141,7 +143,8 @@ class Builder:
             from the solver options).
         scale : float, default 1.0
             Converts the solver's position and speed tolerances for angles: the transmission ratio
-            H [m per state unit].
+            H [m per state unit]; for a ``"deflection"`` state its size, the steady deflection
+            at the onset of sliding [state unit].
 
         Returns
         -------

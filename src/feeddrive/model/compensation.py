@@ -16,6 +16,7 @@ import numpy as np
 from .._jit import kernel
 from ..parameters import ParameterError
 from .codegen import Builder
+from .friction.base import friction_law
 from .friction.lugre import (
     SIGMA0,
     SIGMA1,
@@ -191,8 +192,9 @@ def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism, axis
             site_reads = ["reference"]
         else:
             name = f"{key}_friction_observer"
+            size = float(friction_law("lugre").deflection_scales(site)[0])
             k = b.state(name, "m", f"LuGre observer state of the {key} friction "
-                        "(compensation)", "position")
+                        "(compensation)", "deflection", size)
             err = f"({b.y('table_position')} - ref_x)"
             observer = b.use(observer_force)
             # the observer kernel reads and writes its own state y[k] only

@@ -68,6 +68,13 @@ class LinearFriction:
     D: float  # [N s/m]
 
 
+#: the speed at which a law's states take their size (:meth:`FrictionLaw.deflection_scales`):
+#: far below any Stribeck speed, the onset of sliding [m/s]
+ONSET_SPEED = 1e-9
+#: the size of a state without a steady size at the onset of sliding [m]
+DEFAULT_DEFLECTION = 1e-6
+
+
 class FrictionLaw:
     """Base class of friction laws; subclasses set ``name``, ``kernel``, ``state_names``."""
 
@@ -155,6 +162,33 @@ class FrictionLaw:
             The states, in :meth:`states` order [state units]; zeros by default (a stateless law).
         """
         return np.zeros(len(self.states(site)))
+
+    def deflection_scales(self, site: Any) -> np.ndarray:
+        """The size of each internal state: its steady value at the onset of sliding, the
+        larger of the two directions (F_s/σ0 for a LuGre bristle), which the integrator's
+        default tolerance of the state follows (:mod:`feeddrive.engine.options`).
+
+        Read from :meth:`steady_state` at ±``ONSET_SPEED``; a state with no steady size there
+        (a zero-weight element, a zero stiffness) takes ``DEFAULT_DEFLECTION``.
+
+        Parameters
+        ----------
+        site : SiteParameters
+            The friction site's parameters.
+
+        Returns
+        -------
+        numpy.ndarray
+            One positive size per state, in :meth:`states` order [state units].
+        """
+        n = len(self.states(site))
+        if n == 0:
+            return np.zeros(0)
+        with np.errstate(all="ignore"):
+            up = np.abs(np.asarray(self.steady_state(ONSET_SPEED, site), dtype=float))
+            down = np.abs(np.asarray(self.steady_state(-ONSET_SPEED, site), dtype=float))
+            size = np.maximum(up, down)
+        return np.where(np.isfinite(size) & (size > 0.0), size, DEFAULT_DEFLECTION)
 
     def evaluate(self, v: float, states: np.ndarray, site: LuGreParameters,
                  packed: np.ndarray | None = None) -> tuple[float, np.ndarray]:

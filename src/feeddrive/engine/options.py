@@ -1,0 +1,516 @@
+"""Integrator settings (:class:`SolverOptions`) and how their tolerances follow the run.
+
+A feeddrive number is only as good as the integration under it.  The error of every method
+follows its absolute tolerances as much as ``rtol`` (the weight of a state's error is
+``atol + rtol·|y|``, and at the speeds of a feed drive at low speed the absolute part is the
+larger one), so fixed absolute tolerances made a 0.01-mm/s run a hundred times less accurate,
+relative to its signal, than a 1-mm/s run.  The defaults therefore scale with the run
+(:func:`run_scales`):
+
+* speeds: ``SPEED_FRACTION`` × the state's speed scale: for the table (linear states), V_t,
+  the largest commanded table speed (or initial speed); for the motors (angles and rotary
+  speeds, through the lead H), V, the largest commanded speed of any motor (table plus nut for
+  a DDFS: the screw's); each at least ``SPEED_SCALE_FLOOR``.  Each state is held relative to
+  its own signal: a DDFS table at 0.1 mm/s between motors at 16 mm/s is the difference of two
+  large angles, and its own tolerance is what keeps it accurate;
+* positions (the table; the motor angles and the loops' integrals through H):
+  ``POSITION_TIME`` × the same speed scales.  Not the stroke: a position error of the
+  screw–table pair is a spring force error (K_eq × error), and the stroke would loosen it with
+  the run's length;
+* friction deflections (LuGre bristles, GMS elements, an observer's state):
+  ``DEFLECTION_FRACTION`` × the state's own scale, its steady deflection at the onset of
+  sliding (F_s/σ0 for LuGre), declared by the friction law;
+* currents: ``CURRENT_FRACTION`` × the current scale, the controller's current limit when the
+  set gives one below ``NO_CURRENT_LIMIT`` (the drive's peak current), else 1 A;
+* ``rtol``: ``DEFAULT_RTOL``.
+
+``accuracy`` multiplies every tolerance left at its default; an explicit tolerance is used as
+given.  The constants were chosen by measurement (docs/model.md, "Integration accuracy";
+benchmarks/bench_accuracy.py): at ``accuracy = 1`` the frictionless step responses of the
+CDFS and DDFS stay within 1e-5 of their peak speed, and every method's error falls at least
+5× per decade of ``accuracy``.
+
+Where the settings come from, in order of precedence: the command line, the API (a
+:class:`SolverOptions` built in Python), a parameter file's ``[solver]`` table, the defaults
+(:func:`layered`); :meth:`SolverOptions.describe` says which one set each.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+from ..parameters import ParameterError
+from ..solvers import modes, switching
+
+METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed",
+           "rodas4-fixed")
+# method -> (driver mode, adaptive) of feeddrive.solvers.switching
+DENSE_MODES = {"modal": (switching.MODE_MODAL, 1), "auto": (switching.MODE_AUTO, 1),
+               "rodas4": (switching.MODE_RODAS4, 1),
+               "dopri5-dense": (switching.MODE_DOPRI5, 1),
+               "rodas4-fixed": (switching.MODE_RODAS4, 0)}
+#: the order of each method's continuous extension (outputs between step ends): DOPRI5's
+#: dense output (Hairer, Nørsett & Wanner I, Sect. II.6, ``contd5``) is of order 4, RODAS4's
+#: (Hairer & Wanner II, Sect. IV.7, ``contro``) of order 3; ``dopri5`` has every output a
+#: step end
+DENSE_OUTPUT_ORDER = {"modal": "4 (DOPRI5 steps) / 3 (RODAS4 steps)",
+                      "auto": "4 (DOPRI5 steps) / 3 (RODAS4 steps)", "rodas4": "3",
+                      "dopri5-dense": "4", "rodas4-fixed": "3",
+                      "dopri5": "none: every output a step end",
+                      "dopri5-fixed": "none: every output a step end"}
+
+DEFAULT_METHOD = "modal"
+DEFAULT_RTOL = 1e-6
+#: speed tolerance = SPEED_FRACTION × V [-]
+SPEED_FRACTION = 1e-5
+#: position tolerance = POSITION_TIME × V [s]
+POSITION_TIME = 1e-10
+#: deflection tolerance = DEFLECTION_FRACTION × the state's deflection scale [-]
+DEFLECTION_FRACTION = 1e-5
+#: current tolerance = CURRENT_FRACTION × the current scale [-]
+CURRENT_FRACTION = 1e-6
+#: the smallest speed scale V [m/s] (0.001 mm/s): a run commanded at rest
+SPEED_SCALE_FLOOR = 1e-6
+#: a current limit at or above this is "no limit" [A]; the current scale is then 1 A
+NO_CURRENT_LIMIT = 1000.0
+#: the smallest relative tolerance a setting may ask for (double precision's reach) [-]
+MIN_RELATIVE = 1e-14
+#: the largest relative tolerance and accuracy factor accepted [-]
+MAX_RTOL = 0.1
+MAX_ACCURACY = 1e4
+
+#: the tolerance settings: (field, unit, what it bounds)
+TOLERANCES = (("rtol", "-", "relative tolerance"),
+              ("position_tolerance", "m", "absolute tolerance of positions"),
+              ("speed_tolerance", "m/s", "absolute tolerance of speeds"),
+              ("current_tolerance", "A", "absolute tolerance of currents"))
+_TOLERANCE_NAMES = tuple(name for name, _, _ in TOLERANCES)
+#: the settings a [solver] table or the command line may give
+SETTINGS = ("method", *_TOLERANCE_NAMES, "accuracy", "output_interval", "max_step",
+            "max_steps")
+#: the defaults' source, as describe() names it
+DEFAULT_SOURCE = "default"
+API_SOURCE = "API"
+
+
+@dataclass(frozen=True)
+class RunScales:
+    """The sizes a run's default tolerances are scaled to.
+
+    Parameters
+    ----------
+    speed : float
+        Speed scale V of the motors: the largest commanded (or initial) speed of any motor,
+        table plus nut for a DDFS's screw, at least :data:`SPEED_SCALE_FLOOR` [m/s].
+    table_speed : float
+        Speed scale V_t of the table: its largest commanded (or initial) speed, at least
+        :data:`SPEED_SCALE_FLOOR` [m/s].
+    current : float
+        Current scale: the current limit, or 1 A [A].
+    """
+
+    speed: float
+    table_speed: float
+    current: float
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """The tolerances a run integrates with, resolved from :class:`SolverOptions` and the run's
+    :class:`RunScales`.
+
+    Parameters
+    ----------
+    rtol : float
+        Relative tolerance on speeds and currents [-].
+    position : float
+        Absolute tolerance of the table's (linear) positions [m].
+    speed : float
+        Absolute tolerance of the table's (linear) speeds [m/s].
+    current : float
+        Absolute tolerance of currents [A].
+    deflection : float or None
+        Fraction of each friction deflection state's own scale; None: deflections take the
+        position tolerance (an explicit ``position_tolerance``, as before scaled defaults).
+    motor_position : float
+        Absolute tolerance of the motors' angles and the loops' integrals, in table units
+        [m] (÷ H per state).
+    motor_speed : float
+        Absolute tolerance of the motors' speeds, in table units [m/s] (÷ H per state).
+    """
+
+    rtol: float
+    position: float
+    speed: float
+    current: float
+    deflection: float | None
+    motor_position: float
+    motor_speed: float
+
+    def as_dict(self) -> dict[str, float | None]:
+        """The values by their option names (the Result's ``solver_stats`` and the JSON).
+
+        Returns
+        -------
+        dict
+            ``rtol``, ``position_tolerance`` [m], ``speed_tolerance`` [m/s],
+            ``current_tolerance`` [A], ``deflection_fraction`` [-] (None: the position one),
+            ``motor_position_tolerance`` [m], ``motor_speed_tolerance`` [m/s].
+        """
+        return {"rtol": self.rtol, "position_tolerance": self.position,
+                "speed_tolerance": self.speed, "current_tolerance": self.current,
+                "deflection_fraction": self.deflection,
+                "motor_position_tolerance": self.motor_position,
+                "motor_speed_tolerance": self.motor_speed}
+
+
+def _check_positive(name: str, value: Any, unit: str, low: float = 0.0,
+                    high: float = math.inf) -> None:
+    if isinstance(value, bool) or not isinstance(value, int | float) \
+            or not math.isfinite(value) or value <= 0.0:
+        raise ParameterError(f"options.{name}", value, f"expected a finite value > 0 [{unit}]")
+    if not low <= value <= high:
+        raise ParameterError(f"options.{name}", value,
+                             f"expected {low:g} … {high:g} [{unit}]")
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Integrator settings, echoed in the result.
+
+    The tolerances left at None scale with the run (module docstring,
+    :mod:`feeddrive.engine.options`; docs/model.md, "Integration accuracy"), multiplied by
+    ``accuracy``; an explicit tolerance is used as given.
+
+    Parameters
+    ----------
+    method : str, default "modal"
+        * ``"modal"`` (the default): DOPRI5 where the problem is not stiff, RODAS4 where it
+          is, with each Rosenbrock step capped so that every lightly damped, undamped or
+          growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.35 for damping
+          ratios below 0.02: :mod:`feeddrive.solvers.modes`), and no switch where that cap
+          leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
+          early (``divergence_bounds``);
+        * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps
+          at most ``max_step``, default 1 ms, and the output interval); the engine v1
+          behaviour, kept bit for bit;
+        * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
+          automatically on Hairer's stiffness test alone; dense output (steps not capped by
+          the output interval);
+        * ``"rodas4"``: the Rosenbrock method RODAS4 throughout, dense output;
+        * ``"dopri5-dense"``: DOPRI5 throughout with dense output;
+        * ``"dopri5-fixed"``, ``"rodas4-fixed"``: fixed step ``fixed_step`` (order checks).
+
+        Outputs between step ends come from the method's own continuous extension
+        (:data:`DENSE_OUTPUT_ORDER`).  See :mod:`feeddrive.solvers.switching`.
+    rtol : float or None, default None
+        Relative tolerance on speeds and currents [-]; None: ``DEFAULT_RTOL`` × accuracy.
+    position_tolerance : float or None, default None
+        Absolute error target of positions [m] (angles scaled by H); None: scaled with the
+        run.  Given, it also holds for the friction deflections (as before scaled defaults).
+    speed_tolerance : float or None, default None
+        Absolute error target of speeds [m/s] (rotary speeds scaled by H); None: scaled.
+    current_tolerance : float or None, default None
+        Absolute error target of motor currents [A]; None: scaled.
+    accuracy : float, default 1.0
+        Factor on every tolerance left at its default (0.1: ten times tighter) [-].  Not
+        together with an explicit tolerance in one setting (ambiguous: refused).
+    output_interval : float, default 1e-3
+        Spacing of the recorded samples [s] (for ``dopri5`` also the breakpoint spacing under
+        continuous control).
+    max_step : float or None, default None
+        Largest step [s] (None: 1 ms for ``dopri5``, unlimited for the dense-output methods).
+    fixed_step : float, default 1e-5
+        Step of the fixed-step methods [s].
+    max_steps : int, default 50 000 000
+        A run that would need more steps is refused before it starts.
+    sample_steps : bool, default False
+        Dense-output methods: every sample of a
+        :class:`~feeddrive.model.reference.SampledSpeed` a step end, not only its kinks
+        (``profile_breakpoints``), so that the steps always end on the profile's grid
+        and a run's step sequence moves little with its parameters — what a fit's
+        finite-difference Jacobian and its confidence intervals want (``feeddrive fit`` sets
+        it); the steps are then no longer than the profile's interval.
+    origin : tuple of (str, str), default ()
+        Where each setting came from (``("rtol", "--rtol")``, ``("accuracy", "[solver] in
+        run.toml")``); a setting not listed was given in Python (API) or is a default.
+        Not compared: two options with the same settings are equal.
+    """
+
+    method: str = DEFAULT_METHOD
+    rtol: float | None = None
+    position_tolerance: float | None = None
+    speed_tolerance: float | None = None
+    current_tolerance: float | None = None
+    accuracy: float = 1.0
+    output_interval: float = 1e-3
+    max_step: float | None = None
+    fixed_step: float = 1e-5
+    max_steps: int = 50_000_000
+    sample_steps: bool = False
+    origin: tuple[tuple[str, str], ...] = field(default=(), compare=False)
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ParameterError("options.method", self.method,
+                                 f"expected one of {', '.join(METHODS)}")
+        if self.rtol is not None:
+            _check_positive("rtol", self.rtol, "-", MIN_RELATIVE, MAX_RTOL)
+        for name in ("position_tolerance", "speed_tolerance", "current_tolerance"):
+            value = getattr(self, name)
+            if value is not None:
+                _check_positive(name, value, dict((n, u) for n, u, _ in TOLERANCES)[name])
+        _check_positive("accuracy", self.accuracy, "-", MIN_RELATIVE / DEFAULT_RTOL,
+                        MAX_ACCURACY)
+        for name, unit in (("output_interval", "s"), ("max_step", "s"), ("fixed_step", "s")):
+            value = getattr(self, name)
+            if name == "max_step" and value is None:
+                continue
+            _check_positive(name, value, unit)
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) \
+                or self.max_steps < 1:
+            raise ParameterError("options.max_steps", self.max_steps,
+                                 "expected a whole number ≥ 1")
+        # an explicit tolerance and an accuracy factor given together, in one setting
+        sources = dict(self.origin)
+        if self.accuracy != 1.0:
+            where = sources.get("accuracy", API_SOURCE)
+            both = [n for n in _TOLERANCE_NAMES
+                    if getattr(self, n) is not None and sources.get(n, API_SOURCE) == where]
+            if both:
+                raise ParameterError("options.accuracy", self.accuracy,
+                                     f"given with {both[0]} in one setting ({where}): give "
+                                     "either accuracy (a factor on every default tolerance) "
+                                     "or explicit tolerances")
+
+    # ---- where each setting came from
+    def source(self, name: str) -> str:
+        """Where setting ``name`` came from: a command-line option, a file's ``[solver]``
+        table, ``"API"`` (given in Python) or ``"default"``.
+
+        Parameters
+        ----------
+        name : str
+            A field name.
+
+        Returns
+        -------
+        str
+            The source.
+        """
+        sources = dict(self.origin)
+        if name in sources:
+            return sources[name]
+        value = getattr(self, name)
+        default = next(f.default for f in fields(self) if f.name == name)
+        return DEFAULT_SOURCE if value == default else API_SOURCE
+
+    @property
+    def explicit_positions(self) -> bool:
+        """Whether ``position_tolerance`` was given (deflections then follow it)."""
+        return self.position_tolerance is not None
+
+    # ---- the tolerances of a run
+    def resolve(self, scales: RunScales) -> Tolerances:
+        """The tolerances of a run with ``scales``: each explicit one as given, each other the
+        scaled default × ``accuracy``.
+
+        Parameters
+        ----------
+        scales : RunScales
+            The run's speed and current scales.
+
+        Returns
+        -------
+        Tolerances
+            rtol [-], position [m], speed [m/s], current [A], deflection fraction [-].
+        """
+        a = self.accuracy
+
+        def given_or(value: float | None, default: float) -> float:
+            return value if value is not None else default * a
+
+        return Tolerances(
+            rtol=given_or(self.rtol, DEFAULT_RTOL),
+            position=given_or(self.position_tolerance, POSITION_TIME * scales.table_speed),
+            speed=given_or(self.speed_tolerance, SPEED_FRACTION * scales.table_speed),
+            current=given_or(self.current_tolerance, CURRENT_FRACTION * scales.current),
+            deflection=None if self.explicit_positions else DEFLECTION_FRACTION * a,
+            motor_position=given_or(self.position_tolerance, POSITION_TIME * scales.speed),
+            motor_speed=given_or(self.speed_tolerance, SPEED_FRACTION * scales.speed))
+
+    def describe(self, scales: RunScales | None = None) -> str:
+        """The integrator in words, with the numbers it runs with: the method, its step cap
+        (read from the solver's constants, :data:`feeddrive.solvers.modes.H_LAMBDA` and
+        :data:`~feeddrive.solvers.modes.ZETA_LIGHT` for ``modal``), the tolerances (with the
+        source of each setting that is not a default: the command line, a file's
+        ``[solver]`` table, the API), the output and its continuous extension.  Reports
+        print it beside the numbers that rest on it.
+
+        Parameters
+        ----------
+        scales : RunScales or None, default None
+            A run's scales: the tolerances are then given as numbers; None: as the rule.
+
+        Returns
+        -------
+        str
+            One sentence.
+        """
+        methods = {
+            "modal": "DOPRI5/RODAS4 switched on stiffness, every step capped at h·|λ| ≤ "
+                     f"{modes.H_LAMBDA:g} on each oscillatory mode of the Jacobian "
+                     f"with damping ratio < {modes.ZETA_LIGHT:g}",
+            "dopri5": "adaptive Dormand–Prince 5(4)",
+            "auto": "DOPRI5/RODAS4 switched on Hairer's stiffness test, no mode cap",
+            "rodas4": "Rosenbrock RODAS4",
+            "dopri5-dense": "adaptive Dormand–Prince 5(4), dense output",
+            "dopri5-fixed": f"Dormand–Prince 5 at a fixed step of {self.fixed_step:g} s",
+            "rodas4-fixed": f"RODAS4 at a fixed step of {self.fixed_step:g} s",
+        }
+        largest = self.largest_step
+        steps = (f"steps ≤ {largest:g} s, " if math.isfinite(largest)
+                 and not self.method.endswith("-fixed") else "")
+        if self.sample_steps and self.method in DENSE_MODES:
+            steps += "every sample of a sampled profile a step end, "
+        return (f"{self.method} ({methods[self.method]}){self._from('method')}; {steps}"
+                f"{self.describe_tolerances(scales)}; output every {self.output_interval:g} s"
+                f"{self._from('output_interval')} (continuous extension of order "
+                f"{DENSE_OUTPUT_ORDER[self.method]})")
+
+    def describe_tolerances(self, scales: RunScales | None = None) -> str:
+        """The tolerances in words (part of :meth:`describe`).
+
+        Parameters
+        ----------
+        scales : RunScales or None, default None
+            A run's scales (numbers) or None (the rule).
+
+        Returns
+        -------
+        str
+            A clause.
+        """
+        a = self.accuracy
+        acc = f" × accuracy {a:g}" if a != 1.0 else ""
+        acc_from = self._from("accuracy") if a != 1.0 else ""
+        if scales is not None:
+            tol = self.resolve(scales)
+            deflection = ("deflections as positions" if tol.deflection is None else
+                          f"deflections {tol.deflection:g} of their scale")
+            motors = ("" if (tol.motor_position, tol.motor_speed) == (tol.position, tol.speed)
+                      else f", motors {tol.motor_position:.3g} m and {tol.motor_speed:.3g} "
+                           "m/s in table units")
+            return (f"rtol {tol.rtol:g}{self._from('rtol')}, absolute tolerances "
+                    f"{tol.position:.3g} m (positions){self._from('position_tolerance')}, "
+                    f"{tol.speed:.3g} m/s (speeds){self._from('speed_tolerance')}{motors}, "
+                    f"{tol.current:.3g} A (currents){self._from('current_tolerance')}, "
+                    f"{deflection} (speed scales: table {scales.table_speed:.3g} m/s, motors "
+                    f"{scales.speed:.3g} m/s; current scale {scales.current:g} A{acc}"
+                    f"{acc_from})")
+        parts = [
+            f"rtol {self.rtol:g}{self._from('rtol')}" if self.rtol is not None
+            else f"rtol {DEFAULT_RTOL:g}{acc}",
+            f"positions {self.position_tolerance:g} m{self._from('position_tolerance')}"
+            if self.position_tolerance is not None
+            else f"positions {POSITION_TIME:g} s × V{acc}",
+            f"speeds {self.speed_tolerance:g} m/s{self._from('speed_tolerance')}"
+            if self.speed_tolerance is not None else f"speeds {SPEED_FRACTION:g} × V{acc}",
+            f"currents {self.current_tolerance:g} A{self._from('current_tolerance')}"
+            if self.current_tolerance is not None
+            else f"currents {CURRENT_FRACTION:g} × the current limit (or 1 A){acc}",
+            "friction deflections as positions" if self.position_tolerance is not None
+            else f"friction deflections {DEFLECTION_FRACTION:g} × their onset deflection{acc}",
+        ]
+        return (f"{parts[0]}, absolute tolerances {', '.join(parts[1:])} (V: the state's speed "
+                "scale, the table's largest command speed for the table, the largest motor "
+                f"command speed for the motors, at least {SPEED_SCALE_FLOOR:g} m/s){acc_from}")
+
+    def _from(self, name: str) -> str:
+        source = self.source(name)
+        return "" if source == DEFAULT_SOURCE else f" (from {source})"
+
+    @property
+    def largest_step(self) -> float:
+        """``max_step``, or its default: 1 ms for ``dopri5`` (and its fixed-step variant),
+        unlimited for the dense-output methods [s].
+        """
+        if self.max_step is not None:
+            return self.max_step
+        return math.inf if self.method in DENSE_MODES else 1e-3
+
+    def key(self) -> str:
+        """The settings as a stable text for cache and store keys (every field but
+        ``origin``).
+
+        Returns
+        -------
+        str
+            ``name=value`` pairs joined by ``;``.
+        """
+        return ";".join(f"{f.name}={getattr(self, f.name)!r}" for f in fields(self)
+                        if f.name != "origin")
+
+
+def layered(layers: Iterable[tuple[str, Mapping[str, Any]]],
+            base: SolverOptions | None = None) -> SolverOptions:
+    """Options from settings given in layers, each later layer over the earlier ones: e.g.
+    ``[("[solver] in run.toml", file_settings), ("API", api), ("command line", cli)]``.
+
+    A layer names its settings only (a setting it does not give is left to the layers
+    below); within one layer, ``accuracy`` and an explicit tolerance together are refused.
+
+    Parameters
+    ----------
+    layers : iterable of (str, mapping)
+        (source, settings) pairs, lowest precedence first; a setting's source is the
+        layer's name unless the mapping's key is ``(name, source)``-free and the source
+        names a command-line option per setting (``{"rtol": (1e-8, "--rtol")}``).
+    base : SolverOptions or None, default None
+        The options below every layer (None: the defaults).
+
+    Returns
+    -------
+    SolverOptions
+        The merged options, each setting's source in ``origin``.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown setting, a refused value, or accuracy with a tolerance in one layer.
+    """
+    base = base or SolverOptions()
+    values = {f.name: getattr(base, f.name) for f in fields(base) if f.name != "origin"}
+    origin = dict(base.origin)
+    for source, settings in layers:
+        given: dict[str, Any] = {}
+        names: dict[str, str] = {}
+        for name, value in settings.items():
+            if isinstance(value, tuple) and len(value) == 2 and isinstance(value[1], str):
+                value, where = value
+            else:
+                where = source
+            if value is None:
+                continue
+            if name not in SETTINGS:
+                raise ParameterError(f"{source}: {name}", value,
+                                     f"expected one of {', '.join(SETTINGS)}")
+            given[name] = value
+            names[name] = where
+        if "accuracy" in given:
+            both = [n for n in _TOLERANCE_NAMES if n in given]
+            if both:
+                raise ParameterError(names["accuracy"], given["accuracy"],
+                                     f"given with {names[both[0]]} ({source}): give either "
+                                     "an accuracy factor or explicit tolerances")
+            # a new accuracy factor replaces the explicit tolerances of the layers below
+            for n in _TOLERANCE_NAMES:
+                if values[n] is not None:
+                    values[n] = None
+                    origin.pop(n, None)
+        values.update(given)
+        origin.update(names)
+    return SolverOptions(**values, origin=tuple(sorted(origin.items())))
