@@ -209,8 +209,20 @@ def test_ddfs_at_half_a_mm_per_s_is_smooth_and_the_cdfs_creeps(server: ExplorerS
     assert set(sites) == {"screw", "nut", "guide"}
     assert sites["nut"]["operating_speed_mm_s"] == pytest.approx(16.0, rel=1e-3)
 
-    cdfs = run_job(server, "simulate", {"drive": "cdfs", "table_speed": "0.5"})
-    v = cdfs["result"]["verdict"]
+    # the CDFS's stick-slip at 0.5 mm/s is irregular: the limit-cycle rule's envelope test
+    # decides it at some lengths and not at others, moved by the integration error (10, 20,
+    # 24, 30 s at accuracy 1 … 0.001: creeping or undecided, measured 2026-12-04); an
+    # undecided run says "a longer simulated time decides", and the test follows that advice
+    # as the creep protocol does (doubling the length, feeddrive.analysis.critical.decide)
+    duration = 10.0
+    while True:
+        cdfs = run_job(server, "simulate", {"drive": "cdfs", "table_speed": "0.5",
+                                            "duration": f"{duration:g}"})
+        v = cdfs["result"]["verdict"]
+        if v["verdict"] != "undecided" or duration >= 80.0:
+            break
+        assert "a longer simulated time decides" in v["text"]
+        duration *= 2
     assert v["verdict"] == "creeping" and v["kind"] == "stick-slip"
     assert set(c["site"] for c in cdfs["result"]["friction"]["sites"]) == {"screw", "guide"}
 

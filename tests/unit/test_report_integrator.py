@@ -22,10 +22,11 @@ def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
     assert text.startswith(f"{options.method} (")
     for piece in (f"h·|λ| ≤ {modes.H_LAMBDA:g}",
                   f"damping ratio < {modes.ZETA_LIGHT:g}",
-                  f"rtol {opt.DEFAULT_RTOL:g}", f"positions {opt.POSITION_TIME:g} s × V",
-                  f"speeds {opt.SPEED_FRACTION:g} × V",
-                  f"currents {opt.CURRENT_FRACTION:g} × the current limit",
-                  f"deflections {opt.DEFLECTION_FRACTION:g} × their onset deflection",
+                  f"rtol {opt._num(opt.DEFAULT_RTOL)}",
+                  f"positions {opt._num(opt.POSITION_TIME)} s × V",
+                  f"speeds {opt._num(opt.SPEED_FRACTION)} × V",
+                  f"currents {opt._num(opt.CURRENT_FRACTION)} × the current limit",
+                  f"deflections {opt._num(opt.DEFLECTION_FRACTION)} × their onset deflection",
                   f"output every {options.output_interval:g} s",
                   f"continuous extension of order {opt.DENSE_OUTPUT_ORDER['modal']}"):
         assert piece in text, piece
@@ -38,7 +39,8 @@ def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
 def test_the_label_follows_the_code(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(modes, "H_LAMBDA", 0.123)
     assert "h·|λ| ≤ 0.123 " in integrator_text()
-    assert "rtol 1e-08" in SolverOptions(rtol=1e-8).describe()
+    assert "rtol 1e-8" in SolverOptions(rtol=1e-8).describe()
+    assert "every output a step end" in SolverOptions(method="dopri5").describe()
     assert "steps ≤ 0.001 s" in SolverOptions(method="dopri5").describe()
     assert "steps ≤ 0.0005 s" in SolverOptions(method="modal", max_step=5e-4).describe()
     sampled = "every sample of a sampled profile a step end"

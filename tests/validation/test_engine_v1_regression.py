@@ -22,6 +22,7 @@ if str(ROOT) not in sys.path:
 from reference.record_engine_v1 import cases  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
+from feeddrive.engine.options import LEGACY_TOLERANCES  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 
 DATA = np.load(ROOT / "tests" / "data" / "engine_v1_regression.npz")
@@ -32,9 +33,10 @@ CASES = cases()
 def test_share_zero_reproduces_the_v1_engine_bit_for_bit(name: str) -> None:
     system, profile, duration = CASES[name]
     assert system.parameters.friction.ball_nut_share == 0.0
-    # the v1 engine is dopri5; the default method (modal) is pinned out, not loosened in
+    # the v1 engine is dopri5 at the fixed tolerances of its time; the default method
+    # (modal) and the scaled default tolerances are pinned out, not loosened in
     result = fd.simulate(system, profile, duration,  # type: ignore[arg-type]
-                         options=fd.SolverOptions(method="dopri5"))
+                         options=fd.SolverOptions(method="dopri5", **LEGACY_TOLERANCES))
     compared = 0
     for key in DATA.files:
         case, var = key.split("/", 1)

@@ -242,9 +242,9 @@ def test_the_default_converges_with_order_5_on_the_exact_linear_response(
         drive: str, nut_speed: float) -> None:
     """The default method, adaptive, on the frictionless closed loop (linear: exact answer by
     a matrix exponential, reference/linear_model.py), 0.5 s from rest, all tolerances
-    tightened 10× at a time: the global error falls in proportion to the tolerance and as
-    the 5th power of the step count (Dormand–Prince 5 with its 4th-order error estimate,
-    RODAS4 steps where it switches; measured: slopes 1.00 and 4.8–4.9)."""
+    tightened 10× at a time (``accuracy``): the global error falls in proportion to the
+    tolerance and as the 5th power of the step count (Dormand–Prince 5 with its 4th-order
+    error estimate, RODAS4 steps where it switches; measured: slopes 1.00 and 4.8–4.9)."""
     import sys
     from pathlib import Path
     tests = Path(__file__).resolve().parents[1]
@@ -259,11 +259,7 @@ def test_the_default_converges_with_order_5_on_the_exact_linear_response(
     factors = np.array([1.0, 0.1, 0.01, 0.001])
     errors, steps, rodas = [], [], 0
     for f in factors:
-        d = SolverOptions()
-        options = SolverOptions(rtol=d.rtol * f, position_tolerance=d.position_tolerance * f,
-                                speed_tolerance=d.speed_tolerance * f,
-                                current_tolerance=d.current_tolerance * f,
-                                output_interval=BREAK)
+        options = SolverOptions(accuracy=f, output_interval=BREAK)
         r = simulate(DriveSystem(params, drive, 0.4), profile, 0.5, options=options)
         y = np.column_stack([r[name] if name in r.dataset else np.full(r.time.size, np.nan)
                              for name in STATE_NAMES])

@@ -390,7 +390,8 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     """Simulate one experiment at one parameter point and return the fitted signals on the
     measured times (SI).  Module-level and picklable: every executor runs it.  ``task``:
     ``parameters`` (TOML text), ``drive``, ``table_position`` [m], ``reference_time``,
-    ``table_speed``, ``nut_speed``, ``time``, ``signals`` (names).
+    ``table_speed``, ``nut_speed``, ``time``, ``signals`` (names), ``solver`` (the fit's
+    integrator settings, :meth:`~feeddrive.engine.options.SolverOptions.record`).
 
     Parameters
     ----------
@@ -403,10 +404,15 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
         ``{"signals": {name: values on the measured times}}`` [SI unit of each signal], or
         ``{"error": message}`` when the simulation failed.
     """
-    from ..engine.simulate import DriveSystem, SimulationError, SolverOptions, simulate
+    from dataclasses import replace
+
+    from ..engine.options import SolverOptions, current
+    from ..engine.simulate import DriveSystem, SimulationError, simulate
     from ..model.reference import SampledSpeed
     from ..parameters import loads
 
+    # the integrator settings of the fit (its --accuracy), carried to the worker
+    base = SolverOptions.from_record(task["solver"]) if "solver" in task else current()
     try:
         params = loads(task["parameters"])
         system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
@@ -417,11 +423,11 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
         t = np.asarray(task["time"])
         try:
             # every sample a step end: the residual moves smoothly with the parameters
-            opts = SolverOptions(output_interval=task["output_interval"], sample_steps=True)
+            opts = replace(base, output_interval=task["output_interval"], sample_steps=True)
             result = simulate(system, prof, float(t[-1]) + opts.output_interval, options=opts)
         except ParameterError:
             result = simulate(system, prof, float(t[-1]) + 1e-3,
-                              options=SolverOptions(sample_steps=True))
+                              options=replace(base, output_interval=1e-3, sample_steps=True))
         out = {}
         for name in task["signals"]:
             out[name] = np.interp(t, result.time, result[name])
@@ -460,15 +466,18 @@ class _Evaluator:
         return p
 
     def _tasks(self, theta: np.ndarray) -> list[dict[str, Any]] | None:
+        from ..engine.options import current
+
         try:
             text = dumps(self.parameters(theta))
         except ParameterError:
             return None
+        solver = current().record()
         return [{"parameters": text, "drive": self.drive, "table_position": self.position,
                  "reference_time": e.reference_time, "table_speed": e.table_speed,
                  "nut_speed": e.nut_speed, "time": e.time, "signals": list(e.signals),
                  "output_interval": _options_for(float(np.median(np.diff(e.time))))[
-                     "output_interval"]}
+                     "output_interval"], "solver": solver}
                 for e in self.experiments]
 
     def _residual(self, outs: list[dict[str, Any]] | None) -> np.ndarray:

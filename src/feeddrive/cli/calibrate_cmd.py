@@ -12,10 +12,12 @@ from ..io.outputs import check_output_file
 from ..parameters import ParameterError
 from . import _units
 from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
+from ._solver import accuracy_options
 
 
 @app.command("calibrate")
 @user_errors
+@accuracy_options
 def calibrate_command(
     unknown: str = typer.Option("controller.velocity_integral_gain", "--unknown",
                                 help="Dotted parameter path to fit."),
@@ -39,6 +41,7 @@ def calibrate_command(
     out: str | None = typer.Option(None, "--out", help="Write the fitted set to FILE.toml."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
+    solver: Any = None,
 ) -> None:
     """Fit one unknown so the drive's critical creeping speed matches a target: the drive
     creeps (stick-slip or sustained oscillation) 0.01 mm/s below the target and not at it.

@@ -2,17 +2,21 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import typer
 
 from ..analysis import protocol
 from . import _units
 from ._common import MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from ._solver import accuracy_options
 
 _LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
 
 
 @app.command("creep")
 @user_errors
+@accuracy_options
 def creep_command(
     drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs", help="cdfs or ddfs"),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
@@ -37,6 +41,7 @@ def creep_command(
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    solver: Any = None,
 ) -> None:
     """Critical creeping speed [mm/s]: the upper edge of the highest creeping band (the lowest
     tested speed above every stick-slip or sustained oscillation), resolution 0.01 mm/s, with

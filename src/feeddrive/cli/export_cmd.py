@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import typer
 
 from . import _units
 from ._common import app, console, print_json, resolve_parameters, user_errors
+from ._solver import accuracy_options
 
 export_app = typer.Typer(no_args_is_help=True,
                          help="Export a drive for other tools (FMU: docs/fmu.md).")
@@ -14,6 +17,7 @@ app.add_typer(export_app, name="export")
 
 @export_app.command("fmu")
 @user_errors
+@accuracy_options
 def fmu_command(
     drive: str = typer.Option(..., "--drive", help="cdfs, ddfs, linear-motor or another "
                               "registered drive (rack-pinion)"),
@@ -34,6 +38,7 @@ def fmu_command(
                                  "(nut frozen) or servo (its loop at zero command)."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
     as_json: bool = typer.Option(False, "--json", help="Print what was written as JSON."),
+    solver: Any = None,
 ) -> None:
     """Write the drive as an FMU (FMI 2.0 or 3.0, co-simulation or model exchange): a binary
     for this platform built with the machine's C compiler (needs only libc and libm) and its

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -14,6 +14,7 @@ from ..io.outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
 from ..parameters import DriveParameters
 from . import _units
 from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
+from ._solver import accuracy_options
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
@@ -50,6 +51,7 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
 
 @app.command("fit")
 @user_errors
+@accuracy_options
 def fit_command(
     traces: Annotated[list[str], typer.Argument(
         help="Trace CSV files (simulate --output files, or measured: docs/measured-data.md), "
@@ -92,6 +94,7 @@ def fit_command(
     plot: str | None = typer.Option(None, "--plot", help="Write residual plots to FILE.png."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
     force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
+    solver: Any = None,
 ) -> None:
     """Fit parameters of a whole drive to measured time traces by least squares (several
     experiments at once), with standard errors, correlations, identifiability (condition
@@ -185,6 +188,7 @@ def fit_command(
 
 @app.command("predict")
 @user_errors
+@accuracy_options
 def predict_command(
     fit_file: str = typer.Argument(..., help="A fitted file (feeddrive fit --out)."),
     samples: int = typer.Option(100, "--samples", help="Monte Carlo samples [-]."),
@@ -205,6 +209,7 @@ def predict_command(
                                     "FILE.png."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
+    solver: Any = None,
 ) -> None:
     """The critical creeping speed as a distribution: Monte Carlo over the fit's covariance
     (multivariate normal), each sample a critical-speed search from rest on the shared

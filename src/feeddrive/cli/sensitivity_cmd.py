@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from ..io.outputs import check_output_file, shown
 from . import _units
 from ._common import app, console, err_console, print_json, user_errors
+from ._solver import accuracy_options
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
@@ -19,6 +20,7 @@ def _say(text: str) -> None:
 
 @app.command("sensitivity")
 @user_errors
+@accuracy_options
 def sensitivity_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
                               help=ALL_DRIVES_TEXT),
@@ -43,6 +45,7 @@ def sensitivity_command(
     plot: str | None = typer.Option(None, "--plot", help="Tornado chart FILE.png."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
+    solver: Any = None,
 ) -> None:
     """Elasticity of the critical speed (or of the linear band's upper edge) to every nonzero
     numeric parameter (zero-valued ones with a stated scale: their derivative), by central

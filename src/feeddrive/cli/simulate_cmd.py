@@ -7,6 +7,7 @@ from typing import Any
 
 import typer
 
+from ..engine.options import layered
 from ..io.outputs import PLOT_FORMATS, check_output_file
 from . import _units
 from ._common import (
@@ -19,6 +20,7 @@ from ._common import (
     resolve_parameters,
     user_errors,
 )
+from ._solver import accuracy_options
 
 #: every drive topology, for --help (the registry is not imported at start-up: it loads numba;
 #: tests/integration/test_cli_new_user3.py checks this against feeddrive.registry)
@@ -38,6 +40,7 @@ def _say(text: str) -> None:
 
 @app.command("simulate")
 @user_errors
+@accuracy_options
 def simulate_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
                               help="cdfs, ddfs, linear-motor (a "
@@ -67,12 +70,12 @@ def simulate_command(
     profile_file: str | None = typer.Option(
         None, "--profile-file", help="csv: a CSV with columns time [s] and table_speed "
         "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
-    method: str = typer.Option(
-        DEFAULT_METHOD, "--method", help="Integrator: modal (the default: DOPRI5 and "
+    method: str | None = typer.Option(
+        None, "--method", help="Integrator: modal (the default: DOPRI5 and "
         "RODAS4 switched on stiffness, steps capped on lightly damped modes), dopri5 "
         "(every output instant a step end; the v1 engine), auto (switched on "
-        "stiffness alone: at the default tolerance it damps a slowly growing mode, see "
-        "docs/model.md), rodas4 or dopri5-dense."),
+        "stiffness alone), rodas4 or dopri5-dense; default: the parameter file's [solver] "
+        "method, else modal."),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
                                   help="Solver step limit [-]; a run that needs more is "
                                   "refused before it starts."),
@@ -85,6 +88,7 @@ def simulate_command(
     plot: str | None = typer.Option(None, "--plot", help="Write a PNG of the run."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
+    solver: Any = None,
 ) -> None:
     """Simulate a drive and print a summary: for constant, trapezoid and step-down commands
     the mean and ripple of table speed after the transient, stick fraction and verdict; for a
@@ -95,7 +99,6 @@ def simulate_command(
         DriveSystem,
         SimulationError,
         SimulationInterrupted,
-        SolverOptions,
         simulate,
     )
     from ..model import reference
@@ -110,8 +113,11 @@ def simulate_command(
         raise ParameterError("--profile-file", None, "required for --profile csv")
     if max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
-    if method not in CLI_METHODS:
+    if method is not None and method not in CLI_METHODS:
         raise ParameterError("--method", method, f"expected one of {', '.join(CLI_METHODS)}")
+    options = layered([("command line", {"method": (method, "--method"),
+                                         "max_steps": (max_steps, "--max-steps")})],
+                      base=solver)
     from ..io.results import check_format
 
     inputs = [params_file, profile_file]
@@ -147,7 +153,6 @@ def simulate_command(
     duration = 10.0 if duration is None else duration
     if not duration > 0:
         raise ParameterError("--duration", duration, "expected a time > 0 [s]")
-    options = SolverOptions(method=method, max_steps=max_steps)
     max_step = options.largest_step
     budget = run_budget(duration, max_step=max_step,
                         output_interval=options.output_interval, max_steps=max_steps)

@@ -11,6 +11,7 @@ import typer
 
 from ..io.outputs import PLOT_FORMATS, check_output_file, shown
 from ._common import app, console, err_console, interrupted, print_json, user_errors
+from ._solver import accuracy_options
 
 _PLOT_FORMATS = (".png", ".pdf", ".svg")
 _EXPORT_FORMATS = (".csv", ".parquet", ".nc")
@@ -72,6 +73,7 @@ def _stats_text(stats: dict[str, Any]) -> str:
 
 @app.command("sweep")
 @user_errors
+@accuracy_options
 def sweep_command(
     config: str = typer.Argument(..., help="Sweep configuration (TOML; docs/sweeps.md)."),
     store: str | None = typer.Option(None, "--store", help="Results store (SQLite file); "
@@ -95,6 +97,7 @@ def sweep_command(
                                       "[.csv, .parquet (mm, mm/s), .nc (SI)]."),
     force: bool = typer.Option(False, "--force", help="Replace existing --plot/--output."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    solver: Any = None,
 ) -> None:
     """Run a parameter study: a grid, random or Latin-hypercube design over any parameter by
     its dotted name, drive, preset, table position [mm], nut speed [mm/s]; at each point the

@@ -38,8 +38,11 @@ Where the settings come from, in order of precedence: the command line, the API 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 from typing import Any
 
 from ..parameters import ParameterError
@@ -59,8 +62,8 @@ DENSE_MODES = {"modal": (switching.MODE_MODAL, 1), "auto": (switching.MODE_AUTO,
 DENSE_OUTPUT_ORDER = {"modal": "4 (DOPRI5 steps) / 3 (RODAS4 steps)",
                       "auto": "4 (DOPRI5 steps) / 3 (RODAS4 steps)", "rodas4": "3",
                       "dopri5-dense": "4", "rodas4-fixed": "3",
-                      "dopri5": "none: every output a step end",
-                      "dopri5-fixed": "none: every output a step end"}
+                      "dopri5": "none (every output a step end)",
+                      "dopri5-fixed": "none (every output a step end)"}
 
 DEFAULT_METHOD = "modal"
 DEFAULT_RTOL = 1e-6
@@ -81,6 +84,12 @@ MIN_RELATIVE = 1e-14
 #: the largest relative tolerance and accuracy factor accepted [-]
 MAX_RTOL = 0.1
 MAX_ACCURACY = 1e4
+
+#: the fixed tolerances every method ran with before they scaled with the run (engine v1 and
+#: the defaults until 2026-12-04): ``SolverOptions(method="dopri5", **LEGACY_TOLERANCES)``
+#: reproduces a v1 trace bit for bit
+LEGACY_TOLERANCES = {"rtol": 1e-6, "position_tolerance": 1e-10, "speed_tolerance": 1e-8,
+                     "current_tolerance": 1e-6}
 
 #: the tolerance settings: (field, unit, what it bounds)
 TOLERANCES = (("rtol", "-", "relative tolerance"),
@@ -133,8 +142,8 @@ class Tolerances:
     current : float
         Absolute tolerance of currents [A].
     deflection : float or None
-        Fraction of each friction deflection state's own scale; None: deflections take the
-        position tolerance (an explicit ``position_tolerance``, as before scaled defaults).
+        Fraction of each friction deflection state's own scale [-]; None: deflections take
+        the position tolerance (an explicit ``position_tolerance``, as before scaled defaults).
     motor_position : float
         Absolute tolerance of the motors' angles and the loops' integrals, in table units
         [m] (÷ H per state).
@@ -167,14 +176,24 @@ class Tolerances:
                 "motor_speed_tolerance": self.motor_speed}
 
 
+def _num(x: float) -> str:
+    """A number as a short label: 3 significant digits, the exponent without a leading zero
+    (1e-5, not 1e-05)."""
+    text = f"{x:.3g}"
+    mantissa, _, exponent = text.partition("e")
+    if not exponent:
+        return text
+    sign = "-" if exponent.startswith("-") else ""
+    return f"{mantissa}e{sign}{exponent.lstrip('+-').lstrip('0') or '0'}"
+
+
 def _check_positive(name: str, value: Any, unit: str, low: float = 0.0,
                     high: float = math.inf) -> None:
+    span = f"{low:g} … {high:g}" if low > 0.0 or math.isfinite(high) else "> 0"
     if isinstance(value, bool) or not isinstance(value, int | float) \
-            or not math.isfinite(value) or value <= 0.0:
-        raise ParameterError(f"options.{name}", value, f"expected a finite value > 0 [{unit}]")
-    if not low <= value <= high:
-        raise ParameterError(f"options.{name}", value,
-                             f"expected {low:g} … {high:g} [{unit}]")
+            or not math.isfinite(value) or value <= 0.0 or not low <= value <= high:
+        raise ParameterError(f"options.{name}", value, f"expected a finite value {span} "
+                             f"[{unit}]")
 
 
 @dataclass(frozen=True)
@@ -362,24 +381,23 @@ class SolverOptions:
         """
         methods = {
             "modal": "DOPRI5/RODAS4 switched on stiffness, every step capped at h·|λ| ≤ "
-                     f"{modes.H_LAMBDA:g} on each oscillatory mode of the Jacobian "
-                     f"with damping ratio < {modes.ZETA_LIGHT:g}",
+                     f"{_num(modes.H_LAMBDA)} on each oscillatory mode of the Jacobian "
+                     f"with damping ratio < {_num(modes.ZETA_LIGHT)}",
             "dopri5": "adaptive Dormand–Prince 5(4)",
             "auto": "DOPRI5/RODAS4 switched on Hairer's stiffness test, no mode cap",
             "rodas4": "Rosenbrock RODAS4",
             "dopri5-dense": "adaptive Dormand–Prince 5(4), dense output",
-            "dopri5-fixed": f"Dormand–Prince 5 at a fixed step of {self.fixed_step:g} s",
-            "rodas4-fixed": f"RODAS4 at a fixed step of {self.fixed_step:g} s",
+            "dopri5-fixed": f"Dormand–Prince 5 at a fixed step of {_num(self.fixed_step)} s",
+            "rodas4-fixed": f"RODAS4 at a fixed step of {_num(self.fixed_step)} s",
         }
         largest = self.largest_step
-        steps = (f"steps ≤ {largest:g} s, " if math.isfinite(largest)
+        steps = (f"steps ≤ {_num(largest)} s, " if math.isfinite(largest)
                  and not self.method.endswith("-fixed") else "")
         if self.sample_steps and self.method in DENSE_MODES:
             steps += "every sample of a sampled profile a step end, "
         return (f"{self.method} ({methods[self.method]}){self._from('method')}; {steps}"
-                f"{self.describe_tolerances(scales)}; output every {self.output_interval:g} s"
-                f"{self._from('output_interval')} (continuous extension of order "
-                f"{DENSE_OUTPUT_ORDER[self.method]})")
+                f"{self.describe_tolerances(scales)}; output every {_num(self.output_interval)} s"
+                f"{self._from('output_interval')} ({self.output_text})")
 
     def describe_tolerances(self, scales: RunScales | None = None) -> str:
         """The tolerances in words (part of :meth:`describe`).
@@ -395,43 +413,53 @@ class SolverOptions:
             A clause.
         """
         a = self.accuracy
-        acc = f" × accuracy {a:g}" if a != 1.0 else ""
+        acc = f" × accuracy {_num(a)}" if a != 1.0 else ""
         acc_from = self._from("accuracy") if a != 1.0 else ""
         if scales is not None:
             tol = self.resolve(scales)
             deflection = ("deflections as positions" if tol.deflection is None else
-                          f"deflections {tol.deflection:g} of their scale")
+                          f"deflections {_num(tol.deflection)} of their scale")
             motors = ("" if (tol.motor_position, tol.motor_speed) == (tol.position, tol.speed)
-                      else f", motors {tol.motor_position:.3g} m and {tol.motor_speed:.3g} "
+                      else f", motors {_num(tol.motor_position)} m and {_num(tol.motor_speed)} "
                            "m/s in table units")
-            return (f"rtol {tol.rtol:g}{self._from('rtol')}, absolute tolerances "
-                    f"{tol.position:.3g} m (positions){self._from('position_tolerance')}, "
-                    f"{tol.speed:.3g} m/s (speeds){self._from('speed_tolerance')}{motors}, "
-                    f"{tol.current:.3g} A (currents){self._from('current_tolerance')}, "
-                    f"{deflection} (speed scales: table {scales.table_speed:.3g} m/s, motors "
-                    f"{scales.speed:.3g} m/s; current scale {scales.current:g} A{acc}"
+            return (f"rtol {_num(tol.rtol)}{self._from('rtol')}, absolute tolerances "
+                    f"{_num(tol.position)} m (positions){self._from('position_tolerance')}, "
+                    f"{_num(tol.speed)} m/s (speeds){self._from('speed_tolerance')}{motors}, "
+                    f"{_num(tol.current)} A (currents){self._from('current_tolerance')}, "
+                    f"{deflection} (speed scales: table {_num(scales.table_speed)} m/s, motors "
+                    f"{_num(scales.speed)} m/s; current scale {_num(scales.current)} A{acc}"
                     f"{acc_from})")
         parts = [
-            f"rtol {self.rtol:g}{self._from('rtol')}" if self.rtol is not None
-            else f"rtol {DEFAULT_RTOL:g}{acc}",
-            f"positions {self.position_tolerance:g} m{self._from('position_tolerance')}"
+            f"rtol {_num(self.rtol)}{self._from('rtol')}" if self.rtol is not None
+            else f"rtol {_num(DEFAULT_RTOL)}{acc}",
+            f"positions {_num(self.position_tolerance)} m{self._from('position_tolerance')}"
             if self.position_tolerance is not None
-            else f"positions {POSITION_TIME:g} s × V{acc}",
-            f"speeds {self.speed_tolerance:g} m/s{self._from('speed_tolerance')}"
-            if self.speed_tolerance is not None else f"speeds {SPEED_FRACTION:g} × V{acc}",
-            f"currents {self.current_tolerance:g} A{self._from('current_tolerance')}"
+            else f"positions {_num(POSITION_TIME)} s × V{acc}",
+            f"speeds {_num(self.speed_tolerance)} m/s{self._from('speed_tolerance')}"
+            if self.speed_tolerance is not None else f"speeds {_num(SPEED_FRACTION)} × V{acc}",
+            f"currents {_num(self.current_tolerance)} A{self._from('current_tolerance')}"
             if self.current_tolerance is not None
-            else f"currents {CURRENT_FRACTION:g} × the current limit (or 1 A){acc}",
+            else f"currents {_num(CURRENT_FRACTION)} × the current limit (or 1 A){acc}",
             "friction deflections as positions" if self.position_tolerance is not None
-            else f"friction deflections {DEFLECTION_FRACTION:g} × their onset deflection{acc}",
+            else f"friction deflections {_num(DEFLECTION_FRACTION)} × their onset deflection{acc}",
         ]
         return (f"{parts[0]}, absolute tolerances {', '.join(parts[1:])} (V: the state's speed "
                 "scale, the table's largest command speed for the table, the largest motor "
-                f"command speed for the motors, at least {SPEED_SCALE_FLOOR:g} m/s){acc_from}")
+                f"command speed for the motors, at least {_num(SPEED_SCALE_FLOOR)} m/s){acc_from}")
 
     def _from(self, name: str) -> str:
+        """Where a setting came from, when the command line or a file gave it."""
         source = self.source(name)
-        return "" if source == DEFAULT_SOURCE else f" (from {source})"
+        return "" if source in (DEFAULT_SOURCE, API_SOURCE) else f" (from {source})"
+
+    @property
+    def output_text(self) -> str:
+        """How outputs between step ends are made: the continuous extension and its order
+        (:data:`DENSE_OUTPUT_ORDER`), or every output a step end."""
+        order = DENSE_OUTPUT_ORDER[self.method]
+        if order.startswith("none"):
+            return "every output a step end"
+        return f"continuous extension of order {order}"
 
     @property
     def largest_step(self) -> float:
@@ -442,17 +470,112 @@ class SolverOptions:
             return self.max_step
         return math.inf if self.method in DENSE_MODES else 1e-3
 
-    def key(self) -> str:
-        """The settings as a stable text for cache and store keys (every field but
-        ``origin``).
+    def record(self) -> dict[str, Any]:
+        """The settings as plain values for cache and store keys and for a worker process:
+        every field but ``origin``, and the scaling rule's constants (a change of the
+        defaults changes the key).
 
         Returns
         -------
-        str
-            ``name=value`` pairs joined by ``;``.
+        dict
+            Field values, and ``rule``: the default tolerances' constants.
         """
-        return ";".join(f"{f.name}={getattr(self, f.name)!r}" for f in fields(self)
-                        if f.name != "origin")
+        out: dict[str, Any] = {f.name: getattr(self, f.name) for f in fields(self)
+                               if f.name != "origin"}
+        out["rule"] = {"rtol": DEFAULT_RTOL, "speed": SPEED_FRACTION,
+                       "position_time": POSITION_TIME, "deflection": DEFLECTION_FRACTION,
+                       "current": CURRENT_FRACTION, "floor": SPEED_SCALE_FLOOR}
+        return out
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> SolverOptions:
+        """The options a :meth:`record` holds (its ``rule`` is not read back: a worker runs
+        its own code's rule, which the record's key already named).
+
+        Parameters
+        ----------
+        record : mapping
+            A :meth:`record`.
+
+        Returns
+        -------
+        SolverOptions
+            The options.
+        """
+        names = {f.name for f in fields(cls)} - {"origin"}
+        return cls(**{k: v for k, v in record.items() if k in names})
+
+
+_CURRENT: ContextVar[SolverOptions | None] = ContextVar("feeddrive_solver_options",
+                                                        default=None)
+
+
+def current() -> SolverOptions:
+    """The options a run takes when none are passed: those of the innermost :func:`using`,
+    else the defaults.
+
+    Returns
+    -------
+    SolverOptions
+        The options in force.
+    """
+    return _CURRENT.get() or SolverOptions()
+
+
+@contextmanager
+def using(options: SolverOptions | None) -> Iterator[SolverOptions]:
+    """Run the block with ``options`` as the options of every run that is not given its own
+    (a command's ``--accuracy`` reaching the creep search, a fit's or a sweep's runs); None
+    leaves the options in force.
+
+    Parameters
+    ----------
+    options : SolverOptions or None
+        The options.
+
+    Yields
+    ------
+    SolverOptions
+        The options in force inside the block.
+    """
+    token = _CURRENT.set(options) if options is not None else None
+    try:
+        yield current()
+    finally:
+        if token is not None:
+            _CURRENT.reset(token)
+
+
+def file_settings(path: str | Path) -> dict[str, Any]:
+    """The ``[solver]`` table of a parameter (or sweep) file: the integrator settings stored
+    with the set (``method``, ``rtol``, the absolute tolerances, ``accuracy``,
+    ``output_interval``, ``max_step``, ``max_steps``), checked by name.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The TOML file.
+
+    Returns
+    -------
+    dict
+        The table's settings (empty without a table).
+
+    Raises
+    ------
+    ParameterError
+        For an unreadable file, a table that is not a table, or an unknown setting.
+    """
+    from ..parameters.toml_io import read_toml_file
+
+    table = read_toml_file(path).get("solver", {})
+    if not isinstance(table, dict):
+        raise ParameterError("solver", table, f"expected a table [solver] in {path}")
+    for name in table:
+        if name not in SETTINGS:
+            raise ParameterError(f"solver.{name}", table[name],
+                                 f"expected one of {', '.join(SETTINGS)} (in {path})")
+    return dict(table)
 
 
 def layered(layers: Iterable[tuple[str, Mapping[str, Any]]],
@@ -466,9 +589,10 @@ def layered(layers: Iterable[tuple[str, Mapping[str, Any]]],
     Parameters
     ----------
     layers : iterable of (str, mapping)
-        (source, settings) pairs, lowest precedence first; a setting's source is the
-        layer's name unless the mapping's key is ``(name, source)``-free and the source
-        names a command-line option per setting (``{"rtol": (1e-8, "--rtol")}``).
+        (source, settings) pairs, lowest precedence first.  A value may be a pair
+        ``(value, option)`` naming the command-line option it came from
+        (``{"rtol": (1e-8, "--rtol")}``), which then is its source; None values are not
+        given.
     base : SolverOptions or None, default None
         The options below every layer (None: the defaults).
 
@@ -513,4 +637,13 @@ def layered(layers: Iterable[tuple[str, Mapping[str, Any]]],
                     origin.pop(n, None)
         values.update(given)
         origin.update(names)
-    return SolverOptions(**values, origin=tuple(sorted(origin.items())))
+    try:
+        return SolverOptions(**values, origin=tuple(sorted(origin.items())))
+    except ParameterError as err:  # name the option or file the value came from
+        name = err.field.removeprefix("options.")
+        if name in origin and origin[name].startswith("--"):
+            raise ParameterError(origin[name], err.value, err.message) from None
+        if name in origin:
+            raise ParameterError(f"solver.{name}", err.value,
+                                 f"{err.message} ({origin[name]})") from None
+        raise

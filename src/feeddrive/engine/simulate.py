@@ -22,6 +22,7 @@ from .options import DENSE_MODES as _DENSE_MODES
 from .options import METHODS as METHODS  # re-exported: the engine's public names
 from .options import RunScales
 from .options import SolverOptions as SolverOptions
+from .options import current as current_options
 from .result import Result, Run
 
 DRIVES = drive_names()
@@ -292,8 +293,22 @@ def _peak(value: Any) -> float:
 def command_speed(system: DriveSystem, profile: Profile, *, table: bool = False) -> float:
     """The largest speed the run is commanded to or starts with: the table's, nut's and sine
     amplitudes' peaks summed (a DDFS's screw runs at table plus nut speed), or the largest
-    initial speed state, whichever is larger [m/s] (0 for a run at rest); ``table``: the
-    table's own (its command's and amplitude's peaks, its initial speed)."""
+    initial speed state, whichever is larger.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (its initial state).
+    profile : Profile
+        The reference profile (its speeds).
+    table : bool, default False
+        The table's own: its command's and amplitude's peaks and its initial speed.
+
+    Returns
+    -------
+    float
+        The speed [m/s]; 0 for a run at rest.
+    """
     names = ("table_speed", "table_amplitude") if table else (
         "table_speed", "nut_speed", "table_amplitude", "nut_amplitude")
     command = sum(_peak(getattr(profile, name, None)) for name in names)
@@ -519,7 +534,7 @@ class Simulation:
             raise ParameterError("profile", type(profile).__name__,
                                  "expected ConstantSpeed, SineSpeed or SampledSpeed")
         self.system, self.profile = system, profile
-        self.options = options = options or SolverOptions()
+        self.options = options = options or current_options()
         self.model = system.model(profile)
         self.grid = sampling(system.parameters, options.output_interval, self.model)
         self.P = self.grid.parameters(self.model)  # the sample periods on the grid

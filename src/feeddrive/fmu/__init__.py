@@ -12,11 +12,15 @@ Simulink.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .. import __version__
 from ..parameters import DriveParameters, ParameterError
+
+if TYPE_CHECKING:
+    from ..engine.options import SolverOptions
 
 FMI_VERSIONS = (2, 3)
 KINDS = ("cs", "me")
@@ -121,10 +125,54 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
     return path
 
 
+#: the speed scale of an export whose start speeds are both 0 [m/s] (1 mm/s): the FMU's inputs
+#: may change at run time, so its tolerances are set for a typical feed speed, not the floor
+FMU_SPEED_SCALE = 1e-3
+
+
+def solver_starts(parameters: DriveParameters, table_speed: float, nut_speed: float,
+                  options: SolverOptions | None = None) -> dict[str, float]:
+    """The start values of the FMU's solver settings: the tolerances of ``options`` (None:
+    those in force) resolved as :mod:`feeddrive.engine.options` does for a run at the export's
+    start speeds.  The embedded DOPRI5 has one position and one speed tolerance for every
+    state (the friction deflections take the position tolerance): the tighter of the table's
+    and the motors' is taken.
+
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The exported set (its current limit).
+    table_speed, nut_speed : float
+        The start values of the speed inputs [m/s].
+    options : SolverOptions or None, default None
+        The integrator settings.
+
+    Returns
+    -------
+    dict
+        ``solver.relative_tolerance`` [-], ``solver.position_tolerance`` [m],
+        ``solver.speed_tolerance`` [m/s], ``solver.current_tolerance`` [A].
+    """
+    from ..engine import options as opt
+
+    options = options or opt.current()
+    table = abs(table_speed) or FMU_SPEED_SCALE
+    limit = float(parameters.controller.current_limit)
+    scales = opt.RunScales(speed=max(abs(table_speed) + abs(nut_speed), table),
+                           table_speed=table,
+                           current=limit if 0.0 < limit < opt.NO_CURRENT_LIMIT else 1.0)
+    tol = options.resolve(scales)
+    return {"solver.relative_tolerance": tol.rtol,
+            "solver.position_tolerance": min(tol.position, tol.motor_position),
+            "solver.speed_tolerance": min(tol.speed, tol.motor_speed),
+            "solver.current_tolerance": tol.current}
+
+
 def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[str], *,
                table_position: float = 0.4, nut_hold: str = "locked", fmi: int = 2,
                kind: str = "cs", table_speed: float = 0.0, nut_speed: float = 0.0,
-               force: bool = False, identifier: str | None = None) -> ExportedFmu:
+               force: bool = False, identifier: str | None = None,
+               options: SolverOptions | None = None) -> ExportedFmu:
     """Write ``drive`` with ``parameters`` as an FMU to ``out``.
 
     ``table_position`` [m]: the nut's start position a (as ``DriveSystem``); ``table_speed``,
@@ -158,6 +206,11 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
         Replace an existing file.
     identifier : str, optional
         The model identifier; derived from the drive by default.
+    options : SolverOptions or None, default None
+        The integrator settings (None: those in force, :func:`feeddrive.engine.options.current`):
+        the start values of the embedded solver's tunable tolerances, resolved for the start
+        speeds (or, when both are 0, for :data:`FMU_SPEED_SCALE`) as a run of ``simulate``
+        would (:func:`solver_starts`).
 
     Returns
     -------
@@ -174,7 +227,8 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
     from .model import build
 
     path = check_request(drive, fmi, kind, out, force=force)
-    fm = build(parameters, drive, table_position, nut_hold, table_speed, nut_speed)
+    fm = replace(build(parameters, drive, table_position, nut_hold, table_speed, nut_speed),
+                 solver_starts=solver_starts(parameters, table_speed, nut_speed, options))
     vs = variables(fm, kind)
     ident = identifier or f"feeddrive_{drive.replace('-', '_')}"
     text = (f"feeddrive {drive} drive ({parameters.name}), a = {table_position:g} m; "
@@ -189,4 +243,5 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
         size_bytes=path.stat().st_size, sampled=sampled)
 
 
-__all__ = ["ExportedFmu", "export_fmu", "check_request", "FMI_VERSIONS", "KINDS"]
+__all__ = ["ExportedFmu", "export_fmu", "check_request", "solver_starts", "FMI_VERSIONS", "KINDS",
+           "FMU_SPEED_SCALE"]

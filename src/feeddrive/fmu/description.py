@@ -359,7 +359,8 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
                           "exact", float(m.P[k]), unit, text, fixed=fixed))
     # settings
     for i, (name, unit, text, start) in enumerate(SETTINGS):
-        value = start if start is not None else fm.periods[name.split(".")[1]]
+        value = (fm.solver_starts[name] if name in fm.solver_starts
+                 else start if start is not None else fm.periods[name.split(".")[1]])
         if name == "integrate_speed_reference":
             v.append(Variable(name, K_BOOLEAN, i, 0, "parameter", "fixed", "exact", value, "",
                               text, type="Boolean", fixed=True))

@@ -12,7 +12,7 @@ the model ``feeddrive.simulate`` integrates.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import ModuleType
 
 import numpy as np
@@ -97,6 +97,9 @@ class FmuModel:
         The nut's start position a [m].
     nut_hold : str, default "locked"
         How the CDFS holds its nut.
+    solver_starts : dict of str to float, default {}
+        Start values of the embedded solver's settings (:func:`feeddrive.fmu.solver_starts`);
+        a setting not listed starts at its value in ``description.SETTINGS``.
     """
 
     model: Model
@@ -110,6 +113,8 @@ class FmuModel:
     parameters: DriveParameters  # the exported set (units of the parameter slots)
     table_position: float = 0.4  # [m] the nut's start position a (ball-screw drives)
     nut_hold: str = "locked"
+    # start values of the solver settings (feeddrive.fmu.solver_starts); others: SETTINGS'
+    solver_starts: dict[str, float] = field(default_factory=dict)
 
 
 def build(parameters: DriveParameters, drive: str, table_position: float,

@@ -397,7 +397,9 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
     """Build a parameter set.  ``extends = "NAME"`` (a preset) or ``"FILE.toml"`` (relative to
     ``base_dir``) starts from that set; the other values replace its values.  A ``[fit]``
     table (written by ``feeddrive fit``: the data, free parameters and intervals of the fit
-    that made the set) is a record, not a parameter, and is not read here.
+    that made the set) is a record, not a parameter, and is not read here; nor is a
+    ``[solver]`` table (the integrator settings stored with the set:
+    :func:`feeddrive.engine.options.file_settings`).
 
     Parameters
     ----------
@@ -416,7 +418,7 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
     ParameterError
         For an unknown key or a refused value, naming its path.
     """
-    data = {k: v for k, v in data.items() if k != "fit"}
+    data = {k: v for k, v in data.items() if k not in ("fit", "solver")}
     if "extends" in data:
         parent_name = data["extends"]
         if not isinstance(parent_name, str):

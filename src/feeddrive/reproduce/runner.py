@@ -33,7 +33,8 @@ _STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "for
                     for name in ("critical", "cycle_verdict", "creep_window", "tracking",
                                  "trace_input", "verdict_words", "forced", "compensation",
                                  "sensitivity")),
-                  _HERE.parent / "engine" / "simulate.py", _HERE.parent / "engine" / "result.py",
+                  _HERE.parent / "engine" / "simulate.py", _HERE.parent / "engine" / "options.py",
+                  _HERE.parent / "engine" / "result.py",
                   _HERE.parent / "model" / "mechanisms" / "ball_screw_stiffness.py",
                   _HERE.parent / "analysis" / "protocol.py")
 
@@ -59,10 +60,11 @@ def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
         The store, keyed by the set, the settings and the code.
     """
     from .. import __version__
+    from ..engine.options import current
 
     key = store_key({"version": __version__, "kernel": KERNEL_HASH,
                      "code": code_hash(_STUDY_SOURCES), "parameters": dumps(params),
-                     "settings": asdict(settings)})
+                     "settings": asdict(settings), "solver": current().record()})
     return ResultStore(out / "data", key, notice=notice)
 
 

@@ -376,8 +376,9 @@ class SweepConfig:
         Returns
         -------
         dict
-            The full parameter set as TOML text, drive, table position [m], nut speed [m/s] and
-            the quantity settings.
+            The full parameter set as TOML text, drive, table position [m], nut speed [m/s],
+            the quantity settings and the integrator settings in force
+            (:meth:`~feeddrive.engine.options.SolverOptions.record`).
 
         Raises
         ------
@@ -415,8 +416,12 @@ class SweepConfig:
             key = {"table_position": _axis_or("table_position", self.axes),
                    "drive": _axis_or("drive", self.axes)}.get(err.field, err.field)
             raise _refuse(key, err.value, err.message) from None
+        from ..engine.options import current
+
+        # the integrator settings in force (a command's --accuracy): part of the point's key
         return {"parameters": dumps(params), "drive": drive, "table_position": position,
-                "nut_speed": nut, "quantity": quantity.to_dict()}
+                "nut_speed": nut, "quantity": quantity.to_dict(),
+                "solver": current().record()}
 
 
 def _check_count(count: int, design: str) -> None:

@@ -308,6 +308,7 @@ def evaluate(task: dict[str, Any], params: DriveParameters | None = None) -> dic
         The values and ``seconds`` (CPU time of the point [s]); ``error`` instead of the values
         when the simulation failed.
     """
+    from ..engine.options import SolverOptions, using
     from ..engine.simulate import DriveSystem, SimulationError
     from ..parameters import loads
 
@@ -316,7 +317,9 @@ def evaluate(task: dict[str, Any], params: DriveParameters | None = None) -> dic
         if params is None:
             params = loads(task["parameters"])
         system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
-        out = compute(system, task["nut_speed"], task["quantity"])
+        solver = task.get("solver")
+        with using(None if solver is None else SolverOptions.from_record(solver)):
+            out = compute(system, task["nut_speed"], task["quantity"])
     except (SimulationError, ValueError, ArithmeticError) as err:
         return {"error": f"{type(err).__name__}: {err}",
                 "seconds": time.perf_counter() - t0}

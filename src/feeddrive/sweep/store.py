@@ -61,7 +61,7 @@ _HERE = Path(__file__).resolve().parent.parent
 # the code that computes a point beyond the compiled kernels (KERNEL_HASH covers those)
 _SOURCES = ("sweep/quantities.py", "analysis/critical.py", "analysis/cycle_verdict.py",
             "analysis/creep_window.py", "analysis/trace_input.py", "analysis/verdict_words.py",
-            "analysis/linear.py", "engine/simulate.py", "model/reference.py",
+            "analysis/linear.py", "engine/simulate.py", "engine/options.py", "model/reference.py",
             "analysis/protocol.py", "parameters/components.py", "parameters/toml_io.py",
             "model/mechanisms/ball_screw_stiffness.py")
 

@@ -1,0 +1,87 @@
+"""The integrator settings every simulating command takes: ``--rtol``, the absolute
+tolerances, ``--accuracy`` (:mod:`feeddrive.engine.options`), layered over a parameter file's
+``[solver]`` table."""
+
+from __future__ import annotations
+
+import functools
+import inspect
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import typer
+
+from ..engine import options as opt
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+#: (parameter, option, help) of the settings added to a command; the numbers are the engine's
+#: (feeddrive.engine.options)
+OPTIONS = (
+    ("rtol", "--rtol", f"Relative tolerance of the integrator [-] (default "
+     f"{opt.DEFAULT_RTOL:g} × --accuracy; {opt.MIN_RELATIVE:g} … {opt.MAX_RTOL:g})."),
+    ("position_tolerance", "--position-tolerance",
+     f"Absolute tolerance of positions [m] (default: scaled with the run, "
+     f"{opt.POSITION_TIME:g} s × the speed scale, × --accuracy; docs/model.md)."),
+    ("speed_tolerance", "--speed-tolerance",
+     f"Absolute tolerance of speeds [m/s] (default: {opt.SPEED_FRACTION:g} × the speed "
+     "scale × --accuracy)."),
+    ("current_tolerance", "--current-tolerance",
+     f"Absolute tolerance of currents [A] (default: {opt.CURRENT_FRACTION:g} × the current "
+     "limit, or × 1 A, × --accuracy)."),
+    ("accuracy", "--accuracy",
+     f"Factor on every default tolerance [-] (0.1: ten times tighter; "
+     f"{opt.MIN_RELATIVE / opt.DEFAULT_RTOL:g} … {opt.MAX_ACCURACY:g}); not with an explicit "
+     "tolerance."),
+)
+
+
+def accuracy_options(fn: F) -> F:
+    """Add the integrator settings (:data:`OPTIONS`) to a command.
+
+    Before the command's body runs, the settings are merged over the ``[solver]`` table of its
+    ``--params`` file (:func:`solver_options`) and checked (a bad value is refused before any
+    work); the body runs with them in force (:func:`feeddrive.engine.options.using`: every
+    run it starts takes them, in this process and in the workers of a sweep, fit or
+    prediction), and receives them as its parameter ``solver``.
+    """
+    sig = inspect.signature(fn)
+    kept = [p for p in sig.parameters.values() if p.name != "solver"]
+    added = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
+                               default=typer.Option(None, flag, help=text),
+                               annotation=float | None)
+             for name, flag, text in OPTIONS]
+
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        cli = {name: (kwargs.pop(name, None), flag) for name, flag, _ in OPTIONS}
+        options = solver_options(cli, kwargs.get("params_file"))
+        with opt.using(options):
+            return fn(*args, solver=options, **kwargs)
+
+    wrapper.__signature__ = sig.replace(parameters=[*kept, *added])  # type: ignore[attr-defined]
+    return wrapper  # type: ignore[return-value]
+
+
+def solver_options(cli: dict[str, tuple[Any, str]], params_file: str | None = None) -> Any:
+    """The options of a command's runs: the defaults, under a parameter file's ``[solver]``
+    table, under the command line (:func:`feeddrive.engine.options.layered`); refused when a
+    value is out of range or ``--accuracy`` comes with a tolerance in one setting.
+
+    Parameters
+    ----------
+    cli : dict
+        ``{name: (value, option)}`` of the command line (value None: not given).
+    params_file : str or None, default None
+        The parameter file given with ``--params``.
+
+    Returns
+    -------
+    SolverOptions
+        The merged options, each setting's source recorded.
+    """
+    layers: list[tuple[str, dict[str, Any]]] = []
+    if params_file:
+        layers.append((f"[solver] in {params_file}", opt.file_settings(params_file)))
+    layers.append(("command line", cli))
+    return opt.layered(layers)
