@@ -1296,15 +1296,12 @@ def plot_residuals(result: FitResult, path: str | Path) -> Path:
     Path
         The file written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     rows = [(e, name, sim) for e, sims in zip(result.experiments, result.simulated,
                                               strict=True) for name, sim in sims.items()]
-    fig, axes = plt.subplots(len(rows), 3, figsize=(12, 2.4 * len(rows) + 0.6),
-                             squeeze=False, gridspec_kw={"width_ratios": [3, 3, 1]})
+    fig = Figure(figsize=(12, 2.4 * len(rows) + 0.6))
+    axes = fig.subplots(len(rows), 3, squeeze=False, gridspec_kw={"width_ratios": [3, 3, 1]})
     for (e, name, sim), ax in zip(rows, axes, strict=True):
         unit, k = EDGE_UNITS.get(name, ("SI", 1.0))
         meas = np.asarray(e.signals[name])
@@ -1337,6 +1334,4 @@ def plot_residuals(result: FitResult, path: str | Path) -> Path:
     fig.tight_layout()
     from ..io.outputs import save_figure
 
-    p = save_figure(fig, path, dpi=100)
-    plt.close(fig)
-    return p
+    return save_figure(fig, path, dpi=100)

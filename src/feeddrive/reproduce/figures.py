@@ -10,11 +10,9 @@ from pathlib import Path
 from typing import Any
 
 import matplotlib
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from ..analysis.tracking import reversal_overshoot_at  # noqa: E402
+from ..analysis.tracking import reversal_overshoot_at
 
 # file → (report section, caption: what it shows; what the paper shows)
 CAPTIONS: dict[str, tuple[str, str]] = {
@@ -55,7 +53,6 @@ def _save(fig: Any, path: Path) -> Path:
 
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, bbox_inches="tight")
-    plt.close(fig)
     return path
 
 
@@ -98,7 +95,8 @@ def build_fig6(data: dict[str, Any]) -> Any:
     ----------
     .. [1] Wang2021 Fig. 6.
     """
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.9), sharey=True, layout="constrained")
+    fig = Figure(figsize=(10, 3.9), layout="constrained")
+    axes = fig.subplots(1, 2, sharey=True)
     for ax, (key, d) in zip(axes, data.items(), strict=True):
         _speed_axes(ax, d["trace"], "table")
         _command(ax, d["trace"])
@@ -152,7 +150,7 @@ def trace_color(i: int, n: int) -> Any:
         RGBA colour.
     """
     lo, hi = TRACE_COLOR_RANGE
-    return plt.get_cmap("viridis")(lo + (hi - lo) * i / max(n - 1, 1))
+    return matplotlib.colormaps["viridis"](lo + (hi - lo) * i / max(n - 1, 1))
 
 
 def build_fig7(data: dict[str, Any]) -> Any:
@@ -174,7 +172,8 @@ def build_fig7(data: dict[str, Any]) -> Any:
     ----------
     .. [1] Wang2021 Fig. 7.
     """
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), layout="constrained")
+    fig = Figure(figsize=(11, 4.4), layout="constrained")
+    axes = fig.subplots(1, 2)
     traces = list(data["traces"].items())
     # v_n = 0 (the hollow motor held: the CDFS's behaviour) in grey beneath the others, the
     # DDFS's traces in viridis order
@@ -276,7 +275,8 @@ def build_fig8(trace: dict[str, Any], critical: dict[str, Any]) -> Any:
     ----------
     .. [1] Wang2021 Fig. 8.
     """
-    fig, ax = plt.subplots(figsize=(7, 3.6), layout="constrained")
+    fig = Figure(figsize=(7, 3.6), layout="constrained")
+    ax = fig.subplots()
     _speed_axes(ax, trace, "table")
     _command(ax, trace)
     ax.set_title(fig8_title(critical), fontsize=9)
@@ -334,8 +334,8 @@ def build_sine(data: dict[str, Any], amplitude_mm_s: float, figure: str) -> Any:
     """
     traces = [(k, t) for k, t in data["traces"].items()
               if abs(float(k.split("/")[0]) - amplitude_mm_s) < 1e-9]
-    fig, axes = plt.subplots(len(traces), 1, figsize=(8, 1.9 * len(traces) + 1.0),
-                             sharex=True, sharey=True, layout="constrained", squeeze=False)
+    fig = Figure(figsize=(8, 1.9 * len(traces) + 1.0), layout="constrained")
+    axes = fig.subplots(len(traces), 1, sharex=True, sharey=True, squeeze=False)
     for ax, (key, trace) in zip(axes[:, 0], traces, strict=True):
         vn = key.split("/")[1]
         _speed_axes(ax, trace, "table")
@@ -410,7 +410,8 @@ def build_fig14(rows: list[dict[str, Any]]) -> Any:
     ----------
     .. [1] Wang2021 Table 3, Fig. 14.
     """
-    fig, ax = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
+    fig = Figure(figsize=(7.5, 4.2), layout="constrained")
+    ax = fig.subplots()
     pos = [1e3 * r["position"] for r in rows]
 
     def mm(v: float | None) -> float:
