@@ -88,7 +88,7 @@ def test_pick_a_signal_overlay_two_runs_download_and_read_back(server: ExplorerS
                 page.click("#download-csv")
             csv = tmp_path / "run.csv"
             got.value.save_as(csv)
-            frame = pd.read_csv(csv)
+            frame = pd.read_csv(csv, comment="#")
             assert {"time [s]", "table_speed [mm/s]", "screw_current [A]"} <= set(frame.columns)
             assert frame["time [s]"].iloc[-1] == pytest.approx(2.0)
             tail = frame["table_speed [mm/s]"][frame["time [s]"] > 1.0]

@@ -125,7 +125,7 @@ def test_every_signal_of_the_run_and_the_downloads_read_back(server: ExplorerSer
     assert status == 200 and "attachment" in (resp.getheader("Content-Disposition") or "")
     path = tmp_path / "run.csv"
     path.write_bytes(body)
-    frame = pd.read_csv(path)
+    frame = pd.read_csv(path, comment="#")
     assert len(frame) == sig["samples"] and "following_error [mm]" in frame.columns
     trace = read_position_trace(path)  # as `feeddrive analyze` reads it
     assert trace.position_column == "table_position"

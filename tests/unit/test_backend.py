@@ -48,8 +48,11 @@ params = fd.preset("wang2021")
 run = fd.simulate(fd.DriveSystem(params, "cdfs", 0.4), fd.ConstantSpeed(1.5e-3), 0.05)
 from feeddrive.plots.result import plot_result, result_figure
 result_figure(run)
+run.plot()
 plot_result(run, out / "run.png")
 check("plots.result")
+if "matplotlib.pyplot" in sys.modules:  # (python-control, used below, imports it itself)
+    sys.exit("Result.plot or plot_result imported pyplot")
 
 from feeddrive.plots.stribeck import save_figure, stribeck_figure
 save_figure(stribeck_figure(params.friction.screw, title="screw"), out / "stribeck.png")
