@@ -31,7 +31,8 @@ _PUBLIC: dict[str, str] = {
     "CreepMetrics": "analysis.creep_window", "CreepThresholds": "analysis.creep_window",
     "creep_metrics": "analysis.creep_window",
     "ConstantSpeed": "model.reference", "SampledSpeed": "model.reference",
-    "SineSpeed": "model.reference",
+    "SineSpeed": "model.reference", "stepdown": "model.reference",
+    "trapezoid": "model.reference",
     "LoadProfile": "model", "register_friction_law": "model", "register_mechanism": "model",
     "DriveParameters": "parameters", "ParameterError": "parameters", "load": "parameters",
     "preset": "parameters", "save": "parameters",
@@ -62,7 +63,7 @@ if TYPE_CHECKING:
     from .engine.simulate import DriveSystem, Simulation, SimulationError, SolverOptions, simulate
     from .model import LoadProfile, register_friction_law, register_mechanism
     from .model.friction import stribeck as friction
-    from .model.reference import ConstantSpeed, SampledSpeed, SineSpeed
+    from .model.reference import ConstantSpeed, SampledSpeed, SineSpeed, stepdown, trapezoid
     from .parameters import DriveParameters, ParameterError, load, preset, save
 
 
@@ -104,5 +105,5 @@ __all__ = [
     "creep_metrics", "critical_speed_from_rest", "critical_speed_stepdown",
     "frequency_response", "friction", "linear", "linearize", "load", "loop_analysis", "model",
     "preset", "register_friction_law", "register_mechanism", "save", "simulate",
-    "stability_band",
+    "stability_band", "stepdown", "trapezoid",
 ]

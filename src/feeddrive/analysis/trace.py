@@ -720,6 +720,19 @@ def analyze_trace(
     ValueError
         For arrays of unequal length, a zero or non-finite command speed, a trace that
         :func:`estimate_speed` refuses, or no moving segment to analyse.
+
+    Examples
+    --------
+    A position record whose speed oscillates ±80 % about 1 mm/s:
+
+    >>> import numpy as np
+    >>> from feeddrive.analysis.trace import analyze_trace
+    >>> t = np.linspace(0.0, 20.0, 20001)
+    >>> position = 1e-3 * t - 0.8e-3 / (2 * np.pi * 2.0) * np.cos(2 * np.pi * 2.0 * t)
+    >>> segment = analyze_trace(t, position, command_speed=1e-3).segments[0]
+    >>> m = segment.metrics
+    >>> print(f"{1e3 * m.mean_speed:.2f} mm/s, ripple {m.ripple_ratio:.2f}, {m.verdict}")
+    1.00 mm/s, ripple 1.60, creeping
     """
     notes: list[str] = []
     t = np.asarray(time, dtype=float)

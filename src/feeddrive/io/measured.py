@@ -853,6 +853,20 @@ def read_position_trace(
     ------
     MeasuredDataError
         For missing columns, too few rows, bad cells or non-increasing time.
+
+    Examples
+    --------
+    A file with a comment line, time in seconds and position in millimetres:
+
+    >>> import pathlib, tempfile
+    >>> from feeddrive.io.measured import read_position_trace
+    >>> rows = "\\n".join(f"{0.01 * k:.2f},{0.015 * k:.3f}" for k in range(100))
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "trace.csv"
+    ...     _ = path.write_text(f"# rig 3, axis X\\ntime [s],position [mm]\\n{rows}\\n")
+    ...     trace = read_position_trace(path)
+    >>> print(f"{trace.time.size} samples, {1e3 * trace.position[-1]:.3f} mm")
+    100 samples, 1.485 mm
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
     _need_rows(table, 16, "position trace")

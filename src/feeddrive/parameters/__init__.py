@@ -70,6 +70,13 @@ def preset(name: str) -> DriveParameters:
     -------
     DriveParameters
         A new copy of the set.
+
+    Examples
+    --------
+    >>> import feeddrive as fd
+    >>> params = fd.preset("wang2021")
+    >>> params.controller.velocity_integral_gain  # the one fitted number
+    3925.28
     """
     if name not in PRESETS:
         raise ParameterError(

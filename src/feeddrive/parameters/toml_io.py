@@ -463,6 +463,19 @@ def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
     ------
     ParameterError
         For invalid TOML, an unknown key or a refused value.
+
+    Examples
+    --------
+    A set that changes one value of a preset:
+
+    >>> from feeddrive.parameters import loads
+    >>> params = loads('''
+    ... extends = "wang2021"
+    ... [controller]
+    ... velocity_gain = 50.0
+    ... ''')
+    >>> print(params.name, params.controller.velocity_gain)
+    wang2021+changes 50.0
     """
     return from_dict(parse_toml(text), base_dir=base_dir)
 

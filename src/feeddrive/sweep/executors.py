@@ -401,6 +401,23 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
     ------
     SweepInterrupted
         On Ctrl-C, after storing every result already returned.
+
+    Examples
+    --------
+    The CDFS's linearly unstable band at three table positions, in a store in a temporary folder:
+
+    >>> import pathlib, tempfile
+    >>> from feeddrive.sweep import SweepStore, parse_config, run_sweep, to_dataset
+    >>> config = parse_config({"preset": "wang2021", "drive": "cdfs",
+    ...                        "quantity": {"kind": "linear-band"},
+    ...                        "axes": {"table_position": [200, 400, 600]}}, "example.toml")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     store = SweepStore(pathlib.Path(folder) / "band.sqlite")
+    ...     summary = run_sweep(config, store, workers=1)
+    ...     upper = to_dataset(store, config.name)["linear_upper"]
+    ...     store.close()
+    >>> print(summary.computed, [round(1e3 * float(v), 2) for v in upper])
+    3 [1.4, 1.4, 1.4]
     """
     t0 = time.perf_counter()
     if design is None:
