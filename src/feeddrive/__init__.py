@@ -20,6 +20,8 @@ import sys
 import types
 from typing import TYPE_CHECKING, Any
 
+from . import _compat
+
 __version__ = "0.1.0"
 
 # public name → module that defines it ("" : the name is a submodule, see _SUBMODULES)
@@ -70,6 +72,8 @@ if TYPE_CHECKING:
 def __getattr__(name: str) -> Any:
     module = _PUBLIC.get(name)
     if module is None:
+        if f"{__name__}.{name}" in _compat.MOVED_MODULES:  # a module of 7831378 that moved
+            return importlib.import_module(f"{__name__}.{name}")
         raise AttributeError(f"module 'feeddrive' has no attribute {name!r}")
     if module == "":
         value = importlib.import_module(f".{_SUBMODULES[name]}", __name__)
@@ -91,10 +95,14 @@ class _Package(types.ModuleType):
     def __setattr__(self, name: str, value: Any) -> None:
         if isinstance(value, types.ModuleType) and _PUBLIC.get(name) not in (None, ""):
             return
+        if isinstance(value, _compat.MovedModule) and name in _PUBLIC:
+            return  # `import feeddrive.linear` keeps `feeddrive.linear` the module it names
         super().__setattr__(name, value)
 
 
 sys.modules[__name__].__class__ = _Package
+# the modules of 7831378 that moved stay importable until 0.3.0, with a warning (_compat)
+_compat.install()
 
 
 __all__ = [

@@ -24,6 +24,7 @@ parameter class lives with the part (registry group ``feeddrive.sections``):
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from typing import Any
 
 from .. import registry
 from .components import (
@@ -90,3 +91,11 @@ __all__ = [
     "SiteParameters", "composition", "dumps", "from_dict", "load", "loads", "preset", "save",
     "to_dict",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Names that moved from here before 0.2.0: importable until 0.3.0, with a
+    DeprecationWarning naming their new place (:mod:`feeddrive._compat`)."""
+    from .. import _compat
+
+    return _compat.moved(__name__, name)
