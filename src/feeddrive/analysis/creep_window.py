@@ -226,7 +226,11 @@ class CreepMetrics:
             "min_ratio": self.min_ratio,
             "max_ratio": self.max_ratio,
             "stick_fraction": self.stick_fraction,
-            "stick_slip_frequency": self.stick_slip_frequency,
+            # the dominant ripple frequency; under the stick-slip name only when the table
+            # sticks (issue 41 item 7, as frequency_label words it)
+            "oscillation_frequency": self.stick_slip_frequency,
+            "stick_slip_frequency": (self.stick_slip_frequency if self.stick_fraction > 0
+                                     else None),
             "verdict": self.verdict,
             "thresholds": asdict(self.thresholds),
         }

@@ -303,9 +303,11 @@ def _field_meta(params: DriveParameters, path: str) -> tuple[float, dict[str, An
             obj = sections[part]
             continue
         if part not in names:
+            from ..parameters.validation import did_you_mean
+
             where = ".".join(parts[:k]) or "the parameter set"
             raise FitError(f"--free {path}: unknown parameter ({part!r} is not a field of "
-                           f"{where})")
+                           f"{where}){did_you_mean(part, [*names, *sections])}")
         f = names[part]
         obj = getattr(obj, part)
         if k == len(parts) - 1:

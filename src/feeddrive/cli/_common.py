@@ -85,6 +85,22 @@ def _fail(message: str, code: int) -> typer.Exit:
     return typer.Exit(code=code)
 
 
+#: the API's SI fields the CLI takes as options in engineering units: a refusal of one is
+#: shown as the option the user typed, in its unit (issue 41 item 7: ``--nut-speed 16`` on
+#: the CDFS was answered "nut_speed = 0.016")
+_EDGE_FIELDS = {"nut_speed": ("--nut-speed", "mm/s", 1.0 / MM_PER_S)}
+
+
+def _refusal(err: ValueError | FileNotFoundError) -> str:
+    """The one-line message of a refused input, an API field as its CLI option."""
+    edge = _EDGE_FIELDS.get(getattr(err, "field", ""))
+    value = getattr(err, "value", None)
+    if edge is None or getattr(err, "source", None) or not isinstance(value, int | float):
+        return str(err)
+    option, unit, factor = edge
+    return f"{option} = {value * factor:g} [{unit}]: {err.message}"  # type: ignore[union-attr]
+
+
 def user_errors(fn: F) -> F:
     """Turn every expected failure into a one-line message on stderr, never a traceback.
 
@@ -98,7 +114,7 @@ def user_errors(fn: F) -> F:
         try:
             return fn(*args, **kwargs)
         except (ParameterError, ValueError, FileNotFoundError) as err:
-            raise _fail(str(err), EXIT_REFUSED) from None
+            raise _fail(_refusal(err), EXIT_REFUSED) from None
         except OSError as err:
             where = shown(os.fspath(err.filename)) if err.filename is not None else \
                 _files_of(kwargs) or "output"

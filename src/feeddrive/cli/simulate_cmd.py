@@ -308,7 +308,7 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
                                        f"of {s['reversals']} reversals"),
         ]
     else:
-        freq = s["stick_slip_frequency_hz"]
+        freq = s["oscillation_frequency_hz"]
         segments = s.get("segments") or []
         # a multi-level profile: the lines below are its first hold at the top speed; every
         # hold is summarised under "segments" (issue 24 item 6)
@@ -327,7 +327,7 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
             rows.append(("segments", f"{len(segments)} holds of one command speed, each "
                                      "judged over its own steady window:"))
             for i, g in enumerate(segments, start=1):
-                f = g["stick_slip_frequency_hz"]
+                f = g["oscillation_frequency_hz"]
                 at = "" if f is None else (f", {frequency_label(g['stick_fraction'])} "
                                            f"{n(f, 3)} Hz")
                 rows.append((f"  {i}: {n(g['command_speed_mm_s'])} mm/s",

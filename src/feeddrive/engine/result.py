@@ -369,7 +369,7 @@ class Result:
                 "ripple_ratio": m.ripple_ratio,
                 "min_ratio": m.min_ratio,
                 "stick_fraction": m.stick_fraction,
-                "stick_slip_frequency_hz": m.stick_slip_frequency,
+                **_frequencies(m),
                 "verdict": m.verdict,
                 # the rule behind the word (issue 24 item 4)
                 "verdict_rule": m.thresholds.describe(),
@@ -463,7 +463,7 @@ class Result:
                         "mean_table_speed_mm_s": 1e3 * m.mean_speed,
                         "ripple_ratio": m.ripple_ratio, "min_ratio": m.min_ratio,
                         "stick_fraction": m.stick_fraction,
-                        "stick_slip_frequency_hz": m.stick_slip_frequency,
+                        **_frequencies(m),
                         "verdict": m.verdict, "window_s": [m.window_start, m.window_end]})
         return out
 
@@ -587,6 +587,15 @@ class Result:
         from ..io.results import save_result
 
         return save_result(self.dataset, path)
+
+
+def _frequencies(m: CreepMetrics) -> dict[str, float | None]:
+    """The dominant ripple frequency [Hz] as ``oscillation_frequency_hz``, and as
+    ``stick_slip_frequency_hz`` only when the table sticks (else None): a run that never
+    sticks had a "stick-slip frequency" in its JSON (issue 41 item 7)."""
+    f = m.stick_slip_frequency
+    return {"oscillation_frequency_hz": f,
+            "stick_slip_frequency_hz": f if m.stick_fraction > 0 else None}
 
 
 def _fmt(value: Any) -> str:

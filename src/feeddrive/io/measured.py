@@ -672,6 +672,15 @@ def read_static_test(
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
     _need_rows(table, 1, "static friction test")
+    if not table.has(speed_column) and table.has("time"):
+        # a record over time given where one row per constant-speed test is expected
+        raise MeasuredDataError(table.source, table.header_line,
+                                f"no column {speed_column!r}, and a 'time' column: this looks "
+                                "like a time trace; a static friction test has one row per "
+                                "constant-speed test, columns speed [mm/s] and force [N] (or "
+                                "current [A]); for a trace of the table over time use "
+                                "`feeddrive analyze FILE` (creep) or `feeddrive identify "
+                                "dynamic` (pre-sliding)")
     speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit, default_unit="mm/s")
     if table.has(force_column) or not table.has(current_column):
         if not table.has(force_column):

@@ -78,7 +78,8 @@ def check_format(path: str | Path) -> str:
     p = Path(path)
     ext = p.suffix.lower()
     if ext not in FORMATS:
-        raise ParameterError("output", str(p), f"unknown extension; expected one of {FORMATS}")
+        raise ParameterError("output", str(p), "unknown extension; expected one of "
+                             + ", ".join(FORMATS))
     if ext == ".parquet" and importlib.util.find_spec("pyarrow") is None:
         raise ParameterError("output", str(p), PARQUET_HINT)
     return ext

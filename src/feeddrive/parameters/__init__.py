@@ -35,7 +35,7 @@ from .components import (
     composition,
 )
 from .toml_io import dumps, from_dict, load, loads, save, to_dict
-from .validation import ParameterError
+from .validation import ParameterError, did_you_mean
 
 
 class _Presets(Mapping[str, Callable[[], DriveParameters]]):
@@ -82,6 +82,7 @@ def preset(name: str) -> DriveParameters:
     if name not in PRESETS:
         raise ParameterError(
             "preset", name, f"unknown preset; expected one of {', '.join(PRESETS)}"
+            + did_you_mean(name, PRESETS)
         )
     return PRESETS[name]()
 

@@ -23,7 +23,7 @@ from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .. import registry
 from .components import DriveParameters, composition
-from .validation import ParameterError, resolved_unit
+from .validation import ParameterError, did_you_mean, resolved_unit
 
 
 def _is_component(tp: Any) -> bool:
@@ -341,7 +341,9 @@ def _build(cls: type, data: Any, path: str) -> Any:
     unknown = sorted(set(data) - names)
     if unknown:
         key = unknown[0]
-        raise ParameterError(f"{path}.{key}" if path else key, data[key], "unknown key")
+        hint = did_you_mean(key, [*names, *(registry.table(registry.SECTIONS)
+                                             if "sections" in names else ())])
+        raise ParameterError(f"{path}.{key}" if path else key, data[key], "unknown key" + hint)
     kwargs: dict[str, Any] = {}
     for f in dataclasses.fields(cls):
         sub = f"{path}.{f.name}" if path else f.name

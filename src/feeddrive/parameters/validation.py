@@ -44,6 +44,30 @@ def shown_value(value: object) -> str:
     return _cut(text)
 
 
+def did_you_mean(given: object, known: Any) -> str:
+    """The closest known name to a misspelt one, for a message: ``" (did you mean 'cdfs'?)"``,
+    or ``""`` when none is close (:func:`difflib.get_close_matches`, cutoff 0.6).
+
+    Parameters
+    ----------
+    given : object
+        What was given.
+    known : iterable of str
+        The names it should have been one of.
+
+    Returns
+    -------
+    str
+        The hint, with a leading space, or an empty string.
+    """
+    import difflib
+
+    if not isinstance(given, str) or len(given) > MAX_SHOWN:
+        return ""
+    close = difflib.get_close_matches(given, [str(k) for k in known], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
 def _cut(text: str) -> str:
     if len(text) <= MAX_SHOWN:
         return text
