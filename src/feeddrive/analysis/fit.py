@@ -1004,26 +1004,29 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     lb = np.empty(len(free))
     ub = np.empty(len(free))
     units_ = []
+    from ..parameters.validation import path_unit_label
+
     for i, path in enumerate(free):
         value, meta = _field_meta(base, path)
+        unit = path_unit_label(base, path)  # the label params show prints (issue 41 item 3)
         reason = _no_effect(base, drive, path, experiments)
         if reason:
             raise FitError(f"--free {path}: has no effect on these traces ({reason})")
         if value == 0.0:
-            raise FitError(f"--free {path}: starts at 0 [{meta['unit']}]; give a nonzero "
+            raise FitError(f"--free {path}: starts at 0 [{unit}]; give a nonzero "
                            "start value in the parameter file (the fit works in factors on "
                            "the start)")
         lo, hi = bounds.get(path, (meta["low"], meta["high"])) if bounds else \
             (meta["low"], meta["high"])
         if not lo < value < hi and not (lo <= value <= hi):
             raise FitError(f"--free {path}: start {value:g} outside its bounds {lo:g} … "
-                           f"{hi:g} [{meta['unit']}]")
+                           f"{hi:g} [{unit}]")
         start[i] = value
         lo_t, hi_t = lo / value, hi / value
         lb[i], ub[i] = min(lo_t, hi_t), max(lo_t, hi_t)
         if not meta.get("low_inclusive", False):
             lb[i] = lb[i] * (1 + 1e-9) if lb[i] > 0 else lb[i] + 1e-12
-        units_.append(str(meta["unit"]))
+        units_.append(unit)
     system = DriveSystem(base, drive=drive, table_position=table_position)  # validates both
     for e in experiments:
         if e.nut_speed is not None and not system.topology().follows_nut_reference():

@@ -297,6 +297,68 @@ def resolved_unit(obj: object, name: str) -> str:
     return _unit_in(meta, obj)
 
 
+#: what a unit label adds for a velocity-loop gain on the table basis
+TABLE_BASIS_NOTE = "per table speed"
+
+
+def unit_label(obj: object, name: str) -> str:
+    """The one unit label of field ``name`` of ``obj``, as every output shows it (``fit``,
+    fitted files, ``params show``, the explorer): :func:`resolved_unit`, the unit of the
+    model's slot, with :data:`TABLE_BASIS_NOTE` when the velocity-loop gain is per m/s of
+    table speed — the factor H ≈ 10⁻³ that decides whether anything creeps.
+
+    Parameters
+    ----------
+    obj : object
+        A parameter dataclass.
+    name : str
+        One of its fields.
+
+    Returns
+    -------
+    str
+        E.g. ``"A/m, per table speed"`` (wang2021) or ``"A/rad"`` (wang2021-literal).
+    """
+    meta = _metadata(obj, name)
+    unit = _unit_in(meta, obj)
+    return f"{unit}, {TABLE_BASIS_NOTE}" if unit != str(meta.get("unit", "")) else unit
+
+
+def path_unit_label(params: object, path: str) -> str:
+    """:func:`unit_label` of a parameter by its dotted path in a set (an index such as
+    ``amplitudes[0]`` names its list).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    path : str
+        E.g. ``"controller.velocity_integral_gain"``.
+
+    Returns
+    -------
+    str
+        The label.
+
+    Raises
+    ------
+    KeyError
+        When ``path`` names no field of a parameter dataclass in ``params``.
+    """
+    import re
+
+    parts = [re.sub(r"\[\d+\]$", "", p) for p in path.split(".")]
+    obj: Any = params
+    for part in parts[:-1]:
+        obj = getattr(obj, part, None)
+        if obj is None:
+            raise KeyError(path)
+    try:
+        return unit_label(obj, parts[-1])
+    except TypeError:  # not a dataclass
+        raise KeyError(path) from None
+
+
 def _metadata(obj: object, name: str) -> Any:
     for f in dataclasses.fields(obj):  # type: ignore[arg-type]
         if f.name == name:
