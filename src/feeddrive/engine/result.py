@@ -375,7 +375,9 @@ class Result:
                 "verdict_rule": m.thresholds.describe(),
             })
             if not constant:
-                out["segments"] = self._hold_segments()
+                out["segments"] = holds = self._hold_segments()
+                if len(holds) > 1:
+                    out.update(self._holds_headline(holds))
             if m.unstable:
                 warnings.append(f"unstable: the loop diverges (table speed peaks at "
                                 f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, "
@@ -466,6 +468,29 @@ class Result:
                         **_frequencies(m),
                         "verdict": m.verdict, "window_s": [m.window_start, m.window_end]})
         return out
+
+    def _holds_headline(self, holds: list[dict[str, Any]]) -> dict[str, Any]:
+        """What a run of several holds (a staircase) comes to: the critical speed per
+        direction as ``feeddrive analyze`` gives it (lowest smooth and first creeping hold,
+        :func:`feeddrive.analysis.trace.critical_of_holds`) and the following error over the
+        whole run — the first hold's alone read as the run's (issue 41 item 2)."""
+        from ..analysis.trace import critical_of_holds
+        from ..analysis.tracking import position_metrics
+
+        critical = critical_of_holds([(1e-3 * h["command_speed_mm_s"], h["verdict"] != "smooth")
+                                      for h in holds])
+        t = self.time
+        whole = (float(t[0]), float(t[-1]))
+        return {
+            "critical": [{"direction": c.direction,
+                          "lowest_smooth_mm_s": None if c.lowest_smooth is None
+                          else 1e3 * c.lowest_smooth,
+                          "first_creeping_mm_s": None if c.first_creeping is None
+                          else 1e3 * c.first_creeping,
+                          "monotonic": c.monotonic} for c in critical],
+            "run": {"window_s": list(whole),
+                    **position_metrics(t, self["following_error"], whole)},
+        }
 
     def _mean_mm_s(self, name: str, sel: np.ndarray) -> float | None:
         if name not in self:
