@@ -22,8 +22,21 @@ app = typer.Typer(
     rich_markup_mode=None,  # Rich markup would eat the units: "[mm/s]" (issue 12 item 1)
     help="feeddrive: low-speed simulation and analysis of ball-screw feed drives (Wang2021).",
 )
-console = Console()
-err_console = Console(stderr=True)
+#: the width rich lays tables out in when the output is not a terminal (a pipe, a file, a CI
+#: log): wide enough that nothing is folded; plain text is never wrapped there (soft wrap)
+PIPED_WIDTH = 1000
+
+
+def _console(*, stderr: bool = False) -> Console:
+    """A console that wraps for a terminal only: piped output is hard-wrapped at 80 columns
+    otherwise, mid-phrase (issue 41 item 6)."""
+    stream = sys.stderr if stderr else sys.stdout
+    piped = not (hasattr(stream, "isatty") and stream.isatty())
+    return Console(stderr=stderr, soft_wrap=piped, width=PIPED_WIDTH if piped else None)
+
+
+console = _console()
+err_console = _console(stderr=True)
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -42,6 +55,78 @@ EXIT_UNSTABLE = 3
 # the arguments that name files, in the order they are named in a message
 _FILE_ARGUMENTS = ("config", "store", "file", "fragments", "params_file", "static", "out", "output",
                    "plot")
+
+
+#: the longest a command's plain progress goes without a line when its output is not a
+#: terminal [s] (issue 41 item 6: `reproduce` piped printed nothing for minutes)
+PROGRESS_EVERY = 5.0
+
+
+class PlainProgress:
+    """Progress as plain lines, for output that is not a terminal (rich's live bar draws
+    nothing there): a line at each change of stage and, while the work goes on without one,
+    every :data:`PROGRESS_EVERY` seconds — ``reproduce: CDFS critical speed 3/14 (42 s)``.
+
+    Parameters
+    ----------
+    what : str
+        The command, first word of each line.
+    say : callable
+        Prints one line.
+    every : float, optional
+        The longest interval without a line [s].
+    """
+
+    def __init__(self, what: str, say: Callable[[str], None],
+                 every: float | None = None) -> None:
+        import threading
+        import time
+
+        self.what, self.say = what, say
+        self.every = PROGRESS_EVERY if every is None else every
+        self._clock = time.monotonic
+        self._start = self._last = self._clock()
+        self._state = ("starting", 0, 0)
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._beat, name="feeddrive-progress",
+                                        daemon=True)
+
+    def _line(self) -> None:
+        label, done, total = self._state
+        count = f" {done}/{total}" if total else ""
+        self.say(f"{self.what}: {label}{count} ({self._clock() - self._start:.0f} s)")
+        self._last = self._clock()
+
+    def _beat(self) -> None:
+        while not self._stop.wait(max(0.0, self.every - (self._clock() - self._last))):
+            with self._lock:
+                if self._clock() - self._last >= self.every:
+                    self._line()
+
+    def update(self, label: str, done: int, total: int) -> None:
+        """A new state of the work: printed when its stage changed, else at the next beat.
+
+        Parameters
+        ----------
+        label : str
+            The stage.
+        done, total : int
+            Work done of the stage's total (0 total: not counted).
+        """
+        with self._lock:
+            changed = label != self._state[0]
+            self._state = (label, done, total)
+            if changed:
+                self._line()
+
+    def __enter__(self) -> PlainProgress:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
 
 
 def _one_line(text: str) -> str:
