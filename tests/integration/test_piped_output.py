@@ -56,9 +56,10 @@ def test_plain_progress_prints_each_stage_and_a_line_while_nothing_changes() -> 
         plain.update("CDFS critical speed", 0, 14)
         plain.update("CDFS critical speed", 1, 14)  # the same stage: no line of its own
         assert beats.wait(30)  # the work goes on without a change: the beat prints
-    assert lines[0].startswith("reproduce: CDFS critical speed 0/14 (")
-    assert all(line.startswith("reproduce: CDFS critical speed ") for line in lines)
-    assert any(" 1/14 (" in line for line in lines[1:])
+    assert lines[0].startswith("reproduce: starting (")
+    assert lines[1].startswith("reproduce: CDFS critical speed 0/14 (")
+    assert all(line.startswith("reproduce: CDFS critical speed ") for line in lines[1:])
+    assert any(" 1/14 (" in line for line in lines[2:])
 
 
 def test_reproduce_not_on_a_terminal_prints_plain_progress(tmp_path: Path,
@@ -81,7 +82,8 @@ def test_reproduce_not_on_a_terminal_prints_plain_progress(tmp_path: Path,
     result = CliRunner().invoke(app, ["reproduce", "--out", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()
-    assert lines[0].startswith("reproduce: figures 0/3 (")
-    assert lines[1].startswith("reproduce: report 1/3 (")
+    assert lines[0] == "reproduce: starting (0 s)"
+    assert lines[1].startswith("reproduce: figures 0/3 (")
+    assert lines[2].startswith("reproduce: report 1/3 (")
     assert sum(line.startswith("reproduce: report ") for line in lines) >= 3
     assert lines[-1].startswith("wrote ")

@@ -121,6 +121,8 @@ class PlainProgress:
                 self._line()
 
     def __enter__(self) -> PlainProgress:
+        with self._lock:
+            self._line()  # "starting": the command is at work from its first second
         self._thread.start()
         return self
 
