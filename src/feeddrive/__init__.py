@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from . import _compat
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 # public name → module that defines it ("" : the name is a submodule, see _SUBMODULES)
 _PUBLIC: dict[str, str] = {
