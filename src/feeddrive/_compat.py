@@ -120,6 +120,24 @@ MOVED_MODULES: dict[str, tuple[str, dict[str, str]]] = {
         "stribeck_figure": "feeddrive.plots.stribeck",
     }),
 }
+#: the parts' parameter classes feeddrive.parameters re-exported at 7831378
+_PART_CLASSES: dict[str, str] = {
+    "BallScrew": "feeddrive.model.mechanisms.ball_screw_parameters",
+    "Compensation": "feeddrive.model.loops",
+    "Controller": "feeddrive.model.loops",
+    "Coupling": "feeddrive.model.mechanisms.ball_screw_parameters",
+    "Disturbances": "feeddrive.model.disturbances",
+    "FrictionBranch": "feeddrive.model.friction.lugre_parameters",
+    "FrictionSites": "feeddrive.model.mechanisms.ball_screw_parameters",
+    "LeadError": "feeddrive.model.disturbances",
+    "LinearMotor": "feeddrive.model.mechanisms.linear_motor",
+    "LuGreParameters": "feeddrive.model.friction.lugre_parameters",
+    "Motor": "feeddrive.model.mechanisms.shared",
+    "StiffnessModel": "feeddrive.model.mechanisms.ball_screw_parameters",
+    "Table": "feeddrive.model.mechanisms.shared",
+    "TorqueRipple": "feeddrive.model.disturbances",
+}
+
 #: a module that still exists → {moved name: new module[:new name]}
 MOVED_NAMES: dict[str, dict[str, str]] = {
     "feeddrive.analysis.critical": {
@@ -142,37 +160,9 @@ MOVED_NAMES: dict[str, dict[str, str]] = {
     "feeddrive.model.codegen": {
         "CACHE_DIR": "feeddrive._jit",
     },
-    "feeddrive.parameters": {
-        "BallScrew": "feeddrive.model.mechanisms.ball_screw_parameters",
-        "Compensation": "feeddrive.model.loops",
-        "Controller": "feeddrive.model.loops",
-        "Coupling": "feeddrive.model.mechanisms.ball_screw_parameters",
-        "Disturbances": "feeddrive.model.disturbances",
-        "FrictionBranch": "feeddrive.model.friction.lugre_parameters",
-        "FrictionSites": "feeddrive.model.mechanisms.ball_screw_parameters",
-        "LeadError": "feeddrive.model.disturbances",
-        "LinearMotor": "feeddrive.model.mechanisms.linear_motor",
-        "LuGreParameters": "feeddrive.model.friction.lugre_parameters",
-        "Motor": "feeddrive.model.mechanisms.shared",
-        "StiffnessModel": "feeddrive.model.mechanisms.ball_screw_parameters",
-        "Table": "feeddrive.model.mechanisms.shared",
-        "TorqueRipple": "feeddrive.model.disturbances",
-    },
+    "feeddrive.parameters": _PART_CLASSES,
     "feeddrive.parameters.components": {
-        "BallScrew": "feeddrive.model.mechanisms.ball_screw_parameters",
-        "Compensation": "feeddrive.model.loops",
-        "Controller": "feeddrive.model.loops",
-        "Coupling": "feeddrive.model.mechanisms.ball_screw_parameters",
-        "Disturbances": "feeddrive.model.disturbances",
-        "FrictionBranch": "feeddrive.model.friction.lugre_parameters",
-        "FrictionSites": "feeddrive.model.mechanisms.ball_screw_parameters",
-        "LeadError": "feeddrive.model.disturbances",
-        "LinearMotor": "feeddrive.model.mechanisms.linear_motor",
-        "LuGreParameters": "feeddrive.model.friction.lugre_parameters",
-        "Motor": "feeddrive.model.mechanisms.shared",
-        "StiffnessModel": "feeddrive.model.mechanisms.ball_screw_parameters",
-        "Table": "feeddrive.model.mechanisms.shared",
-        "TorqueRipple": "feeddrive.model.disturbances",
+        **_PART_CLASSES,
         "choice": "feeddrive.parameters.validation",
         "flag": "feeddrive.parameters.validation",
         "quantities": "feeddrive.parameters.validation",
