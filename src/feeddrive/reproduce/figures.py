@@ -252,13 +252,13 @@ def fig8_title(critical: dict[str, Any]) -> str:
     from ..analysis.critical import format_critical_speed
 
     c = critical["critical_speed_mm_s"]
+    head = f"DDFS, v_n = {critical['nut_speed_mm_s']:g} mm/s"
+    if c is not None:
+        return f"{head}, at its critical speed {c:.2f} mm/s\n(Wang2021 Fig. 8: 0.5 mm/s)"
     # the status in words, not the search's internal word "below-range" (issue 41 item 5)
     found = {"below-range": "smooth at every speed searched",
              "above-range": "creeps at every speed searched"}.get(critical["status"],
                                                                    str(critical["status"]))
-    head = f"DDFS, v_n = {critical['nut_speed_mm_s']:g} mm/s"
-    if c is not None:
-        return f"{head}, at its critical speed {c:.2f} mm/s\n(Wang2021 Fig. 8: 0.5 mm/s)"
     return (f"{head}: critical speed {format_critical_speed(critical)} mm/s ({found})\n"
             "shown at the paper's 0.5 mm/s (Wang2021 Fig. 8)")
 
