@@ -33,8 +33,8 @@ from .design import Point, SweepConfig
 from .quantities import evaluate, warm
 from .store import SweepStore
 
-__all__ = ["DASK_HINT", "Estimate", "SweepAborted", "SweepInterrupted", "SweepSummary",
-           "estimate", "executor", "run_sweep"]
+__all__ = ["DASK_HINT", "PROBE_DURATION", "Estimate", "SweepAborted", "SweepInterrupted",
+           "SweepSummary", "estimate", "executor", "run_sweep", "simulated_range"]
 
 DASK_HINT = "Dask executors need dask.distributed: pip install 'feeddrive[dask]'"
 # one thread per worker process: the parallelism is across points
@@ -544,10 +544,11 @@ class Estimate:
     A point's CPU is ``seconds_per_point`` when points were timed (the cheap linear
     quantities), else the range ``point_range`` from a probe run: the CPU per simulated
     second of a short run of the drive times the simulated time the quantity's protocol
-    takes at least and at most (:func:`simulated_range`).  A sweep also starts its workers —
-    each imports the package and loads the model kernels (``startup_seconds``, measured on
-    this process) — and compiles kernels not in the cache yet (``compile_seconds``, spent by
-    this dry run, once; issue 41 item 8: the estimate had left both out).
+    takes at least and at most (:func:`~feeddrive.sweep.executors.simulated_range`).  A
+    sweep also starts its workers — each imports the package and loads the model kernels
+    (``startup_seconds``, measured on this process) — and compiles kernels not in the cache
+    yet (``compile_seconds``, spent by this dry run, once; issue 41 item 8: the estimate had
+    left both out).
 
     Parameters
     ----------
@@ -670,8 +671,9 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
     (its keys at the timed points are the keys rebuilt here), else 0.  The kernels are
     loaded (or compiled, and that CPU reported) first; then the linear quantities time up to
     ``sample`` points (milliseconds each), and the simulation quantities one
-    :data:`PROBE_DURATION`-s run of the middle point's drive at the speed the quantity
-    searches around, scaled by :func:`simulated_range`.  One worker's start-up is this
+    :data:`~feeddrive.sweep.executors.PROBE_DURATION`-s run of the middle point's drive at
+    the speed the quantity searches around, scaled by
+    :func:`~feeddrive.sweep.executors.simulated_range`.  One worker's start-up is this
     process's CPU before the estimate (interpreter, imports) plus the kernels' loading.
 
     Parameters
@@ -770,9 +772,9 @@ def _cpu() -> float:
 
 
 def _probe_rate(task: dict[str, Any]) -> float:
-    """CPU seconds per simulated second of ``task``'s drive, from a :data:`PROBE_DURATION`-s
-    run at the speed its quantity searches around (a creep trial's speed, the middle of a
-    search's range)."""
+    """CPU seconds per simulated second of ``task``'s drive, from a
+    :data:`~feeddrive.sweep.executors.PROBE_DURATION`-s run at the speed its quantity
+    searches around (a creep trial's speed, the middle of a search's range)."""
     from ..engine.simulate import DriveSystem, simulate
     from ..model.reference import ConstantSpeed
     from ..parameters import loads
