@@ -118,13 +118,16 @@ html_theme = "pydata_sphinx_theme"
 html_title = f"feeddrive {release}"
 html_theme_options = {
     "navigation_with_keys": False,
-    "header_links_before_dropdown": 4,
+    # the top navigation: User guide, API, CLI, Examples, Project (issue 41 item 12: 19 flat
+    # entries, the API under "More")
+    "header_links_before_dropdown": 5,
     "show_toc_level": 2,
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
     "secondary_sidebar_items": ["page-toc"],
 }
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["feeddrive.css"]
 html_show_sourcelink = False
 html_copy_source = False
 

@@ -20,7 +20,9 @@ import sys
 import types
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from . import _compat
+
+__version__ = "0.2.0"
 
 # public name → module that defines it ("" : the name is a submodule, see _SUBMODULES)
 _PUBLIC: dict[str, str] = {
@@ -31,7 +33,8 @@ _PUBLIC: dict[str, str] = {
     "CreepMetrics": "analysis.creep_window", "CreepThresholds": "analysis.creep_window",
     "creep_metrics": "analysis.creep_window",
     "ConstantSpeed": "model.reference", "SampledSpeed": "model.reference",
-    "SineSpeed": "model.reference",
+    "SineSpeed": "model.reference", "stepdown": "model.reference",
+    "trapezoid": "model.reference",
     "LoadProfile": "model", "register_friction_law": "model", "register_mechanism": "model",
     "DriveParameters": "parameters", "ParameterError": "parameters", "load": "parameters",
     "preset": "parameters", "save": "parameters",
@@ -62,13 +65,15 @@ if TYPE_CHECKING:
     from .engine.simulate import DriveSystem, Simulation, SimulationError, SolverOptions, simulate
     from .model import LoadProfile, register_friction_law, register_mechanism
     from .model.friction import stribeck as friction
-    from .model.reference import ConstantSpeed, SampledSpeed, SineSpeed
+    from .model.reference import ConstantSpeed, SampledSpeed, SineSpeed, stepdown, trapezoid
     from .parameters import DriveParameters, ParameterError, load, preset, save
 
 
 def __getattr__(name: str) -> Any:
     module = _PUBLIC.get(name)
     if module is None:
+        if f"{__name__}.{name}" in _compat.MOVED_MODULES:  # a module of 7831378 that moved
+            return importlib.import_module(f"{__name__}.{name}")
         raise AttributeError(f"module 'feeddrive' has no attribute {name!r}")
     if module == "":
         value = importlib.import_module(f".{_SUBMODULES[name]}", __name__)
@@ -90,10 +95,14 @@ class _Package(types.ModuleType):
     def __setattr__(self, name: str, value: Any) -> None:
         if isinstance(value, types.ModuleType) and _PUBLIC.get(name) not in (None, ""):
             return
+        if isinstance(value, _compat.MovedModule) and name in _PUBLIC:
+            return  # `import feeddrive.linear` keeps `feeddrive.linear` the module it names
         super().__setattr__(name, value)
 
 
 sys.modules[__name__].__class__ = _Package
+# the modules of 7831378 that moved stay importable until 0.3.0, with a warning (_compat)
+_compat.install()
 
 
 __all__ = [
@@ -104,5 +113,5 @@ __all__ = [
     "creep_metrics", "critical_speed_from_rest", "critical_speed_stepdown",
     "frequency_response", "friction", "linear", "linearize", "load", "loop_analysis", "model",
     "preset", "register_friction_law", "register_mechanism", "save", "simulate",
-    "stability_band",
+    "stability_band", "stepdown", "trapezoid",
 ]

@@ -220,7 +220,7 @@ def test_existing_output_needs_force(inputs: dict[str, Path], tmp_path: Path) ->
     result = _invoke(["simulate", "--table-speed", "1", "--duration", "1", "--output",
                       str(out), "--force"])
     assert result.exit_code == 0, result.output
-    assert out.read_text(encoding="utf-8").startswith("time [s],")
+    assert out.read_text(encoding="utf-8").splitlines()[1].startswith("time [s],")
 
 
 def test_newline_in_a_data_file_name_cannot_reach_the_parameters(tmp_path: Path) -> None:

@@ -402,7 +402,7 @@ def test_trapezoid_profile_ramps_up_holds_and_stops(tmp_path: Path) -> None:
     assert summary["profile"] == "trapezoid" and summary["verdict"] == "smooth"
     lo, hi = summary["window_s"]
     assert 0.5 <= lo and hi <= 2.5  # judged on the hold, not on the ramps
-    ref = pd.read_csv(out)["table_speed_reference [mm/s]"].to_numpy()
+    ref = pd.read_csv(out, comment="#")["table_speed_reference [mm/s]"].to_numpy()
     assert ref.max() == pytest.approx(2.0)
     assert ref[0] == 0.0 and abs(ref[-1]) < 1e-9
 

@@ -143,7 +143,8 @@ def test_sweep_dry_run_says_what_it_does_and_times_cpu_not_wall(
     monkeypatch.setattr(executors.time, "perf_counter", lambda: float(next(clock)))
     res = run("sweep", str(cfg), "--dry-run", "--store", str(tmp_path / "lb.sqlite"))
     assert res.exit_code == 0, res.output
-    assert "dry run: compiling the model kernels, then timing 3 of the 3 points" in res.stderr
+    assert "dry run: loading the model kernels (compiling them if not cached), then timing 3 " \
+        "of the 3 points" in res.stderr
     assert "timing point 3 of 3" in res.stderr
     line = res.stdout.replace("\n", " ")
     assert "s CPU per point (3 timed:" in line and "longer on a loaded machine" in line

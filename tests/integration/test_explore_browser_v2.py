@@ -57,7 +57,8 @@ def test_pick_a_signal_overlay_two_runs_download_and_read_back(server: ExplorerS
             page.wait_for_selector("#plot-signal[data-signal='following_error']",
                                    timeout=60_000)
             # the knob units are the set's own: wang2021 works per m/s of table speed
-            assert page.inner_text("#row-velocity_gain .unit") == "[A s/m]"
+            assert page.inner_text("#row-velocity_gain .unit") == \
+                "[A s/m, per table speed]"
             options = page.eval_on_selector_all("#signal option", "els => els.map(e => e.value)")
             assert {"table_speed", "following_error", "screw_current", "drive_force"} <= \
                 set(options)
@@ -88,7 +89,7 @@ def test_pick_a_signal_overlay_two_runs_download_and_read_back(server: ExplorerS
                 page.click("#download-csv")
             csv = tmp_path / "run.csv"
             got.value.save_as(csv)
-            frame = pd.read_csv(csv)
+            frame = pd.read_csv(csv, comment="#")
             assert {"time [s]", "table_speed [mm/s]", "screw_current [A]"} <= set(frame.columns)
             assert frame["time [s]"].iloc[-1] == pytest.approx(2.0)
             tail = frame["table_speed [mm/s]"][frame["time [s]"] > 1.0]

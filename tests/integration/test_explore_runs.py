@@ -125,7 +125,7 @@ def test_every_signal_of_the_run_and_the_downloads_read_back(server: ExplorerSer
     assert status == 200 and "attachment" in (resp.getheader("Content-Disposition") or "")
     path = tmp_path / "run.csv"
     path.write_bytes(body)
-    frame = pd.read_csv(path)
+    frame = pd.read_csv(path, comment="#")
     assert len(frame) == sig["samples"] and "following_error [mm]" in frame.columns
     trace = read_position_trace(path)  # as `feeddrive analyze` reads it
     assert trace.position_column == "table_position"
@@ -159,13 +159,14 @@ def test_knob_units_come_from_the_parameters_metadata(server: ExplorerServer) ->
     not the A s/rad the page showed (a factor H ≈ 10⁻³)."""
     status, table, _ = request(server, "POST", "/api/check", {"settings": {}})
     assert status == 200
-    assert table["units"]["velocity_gain"] == "A s/m"
-    assert table["units"]["velocity_integral_gain"] == "A/m"
+    # the label every output shows (issue 41 item 3)
+    assert table["units"]["velocity_gain"] == "A s/m, per table speed"
+    assert table["units"]["velocity_integral_gain"] == "A/m, per table speed"
     _, motor, _ = request(server, "POST", "/api/check",
                           {"settings": {"preset": "wang2021-literal"}})
     assert motor["units"]["velocity_gain"] == "A s/rad"
     _, info, _ = request(server, "GET", "/api/info")
-    assert info["units"]["velocity_gain"] == "A s/m"
+    assert info["units"]["velocity_gain"] == "A s/m, per table speed"
 
 
 def test_the_linear_job_sends_the_bode_curves_and_classified_poles(

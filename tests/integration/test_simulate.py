@@ -111,7 +111,7 @@ def test_writers(params: fd.DriveParameters, tmp_path, ext: str) -> None:
     path = r.save(tmp_path / f"run{ext}")
     n = r.time.size
     if ext == ".csv":
-        df = pd.read_csv(path)
+        df = pd.read_csv(path, comment="#")
         assert df["table_speed [mm/s]"].to_numpy() == pytest.approx(1e3 * r["table_speed"])
         assert len(df) == n and df.columns[0] == "time [s]"
     elif ext == ".parquet":

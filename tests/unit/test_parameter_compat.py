@@ -97,7 +97,10 @@ def test_every_recorded_file_gives_the_same_packed_vectors(key: str):
                 mechanism(drive).check(params, drive, RECORD["table_position"])
                 assemble(params, drive, RECORD["table_position"], "locked",
                          ConstantSpeed(1e-3))
-            assert str(err.value) == rec["refused"]
+            # the same field refused for the same reason; the value shown changed on purpose
+            # ("linear_motor = None" read as a value, issue 41 item 7)
+            field, reason = rec["refused"].split(" = ", 1)[0], rec["refused"].split(": ", 1)[1]
+            assert err.value.field == field and err.value.message == reason
             continue
         mechanism(drive).check(params, drive, RECORD["table_position"])
         model = assemble(params, drive, RECORD["table_position"], "locked",

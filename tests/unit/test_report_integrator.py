@@ -11,7 +11,12 @@ import pytest
 import feeddrive.reproduce as reproduce_pkg
 from feeddrive.engine import options as opt
 from feeddrive.engine.simulate import METHODS, SolverOptions
-from feeddrive.reproduce.report import header_text, integrator_text, settings_markdown
+from feeddrive.reproduce.report import (
+    header_text,
+    integrator_text,
+    settings_markdown,
+    settings_section,
+)
 from feeddrive.reproduce.studies import StudySettings
 from feeddrive.solvers import modes, switching
 
@@ -53,11 +58,14 @@ def test_every_method_is_described(method: str) -> None:
     assert SolverOptions(method=method).describe().startswith(f"{method} (")
 
 
-def test_the_report_header_and_settings_state_it() -> None:
+def test_the_report_settings_state_it() -> None:
+    """Stated under Settings, moved there as it is from the report's top (issue 41 item 1:
+    the report opened with solver internals)."""
     text = integrator_text()
     assert text == f"Integrator of every run: {SolverOptions().describe()}."
     results = {"wall_time_s": 12.0, "studies_reused": 0, "studies_total": 84}
-    assert header_text(results, "2026-12-02 01:00 UTC").endswith(text)
+    assert "Integrator" not in header_text(results, "2026-12-02 01:00 UTC")
+    assert settings_section(StudySettings()).startswith(text + "\n\n")
     assert f"* integrator: {SolverOptions().describe()}" in settings_markdown(StudySettings())
 
 

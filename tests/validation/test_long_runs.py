@@ -118,7 +118,7 @@ def test_ctrl_c_between_chunks_keeps_what_was_computed(tmp_path, monkeypatch) ->
     stop = info.value
     assert 0 < stop.t_reached < 60.0 and stop.output == str(out)
     assert stop.result is not None and stop.result.time[-1] == pytest.approx(stop.t_reached)
-    written = pd.read_csv(out)
+    written = pd.read_csv(out, comment="#")
     assert written["time [s]"].iloc[-1] == pytest.approx(stop.t_reached)
 
 
@@ -202,7 +202,7 @@ def test_dense_run_streams_reports_progress_and_stops_on_ctrl_c(tmp_path, monkey
         fd.simulate(system, profile, 4.5, options=options, output=tmp_path / "cut.csv",
                     progress=interrupt)
     assert info.value.t_reached == pytest.approx(2.0)
-    assert pd.read_csv(tmp_path / "cut.csv")["time [s]"].iloc[-1] == pytest.approx(2.0)
+    assert pd.read_csv(tmp_path / "cut.csv", comment="#")["time [s]"].iloc[-1] == pytest.approx(2.0)
     partial = info.value.result
     assert partial is not None and partial.time[-1] == pytest.approx(2.0)
     for sig in system.model(profile).aux:  # evaluated on reading, one per sample

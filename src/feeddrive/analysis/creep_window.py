@@ -226,7 +226,11 @@ class CreepMetrics:
             "min_ratio": self.min_ratio,
             "max_ratio": self.max_ratio,
             "stick_fraction": self.stick_fraction,
-            "stick_slip_frequency": self.stick_slip_frequency,
+            # the dominant ripple frequency; under the stick-slip name only when the table
+            # sticks (issue 41 item 7, as frequency_label words it)
+            "oscillation_frequency": self.stick_slip_frequency,
+            "stick_slip_frequency": (self.stick_slip_frequency if self.stick_fraction > 0
+                                     else None),
             "verdict": self.verdict,
             "thresholds": asdict(self.thresholds),
         }
@@ -458,6 +462,18 @@ def creep_metrics(
     -------
     CreepMetrics
         Mean speed, ripple, stick fraction, ripple frequency and the verdict.
+
+    Examples
+    --------
+    A table speed oscillating ±80 % about its 1 mm/s command at 2 Hz creeps:
+
+    >>> import numpy as np
+    >>> import feeddrive as fd
+    >>> t = np.linspace(0.0, 20.0, 20001)
+    >>> speed = 1e-3 * (1.0 + 0.8 * np.sin(2 * np.pi * 2.0 * t))
+    >>> m = fd.creep_metrics(t, speed, 1e-3)
+    >>> print(f"ripple {m.ripple_ratio:.2f}, {m.stick_slip_frequency:.1f} Hz, {m.verdict}")
+    ripple 1.60, 2.0 Hz, creeping
     """
     t, v = as_trace(time, speed)
     vc = check_command(command_speed)

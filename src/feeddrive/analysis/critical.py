@@ -877,3 +877,11 @@ def critical_speed_stepdown(
                          status=status, resolution=step, speed_range=(lo, hi), trials=ordered,
                          simulated_time=simulated, kind=kind, bands=bands_of(ordered),
                          rule=rule)
+
+
+def __getattr__(name: str) -> Any:
+    """Names that moved from here before 0.2.0: importable until 0.3.0, with a
+    DeprecationWarning naming their new place (:mod:`feeddrive._compat`)."""
+    from .. import _compat
+
+    return _compat.moved(__name__, name)

@@ -303,9 +303,11 @@ def _field_meta(params: DriveParameters, path: str) -> tuple[float, dict[str, An
             obj = sections[part]
             continue
         if part not in names:
+            from ..parameters.validation import did_you_mean
+
             where = ".".join(parts[:k]) or "the parameter set"
             raise FitError(f"--free {path}: unknown parameter ({part!r} is not a field of "
-                           f"{where})")
+                           f"{where}){did_you_mean(part, [*names, *sections])}")
         f = names[part]
         obj = getattr(obj, part)
         if k == len(parts) - 1:
@@ -1011,26 +1013,29 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     lb = np.empty(len(free))
     ub = np.empty(len(free))
     units_ = []
+    from ..parameters.validation import path_unit_label
+
     for i, path in enumerate(free):
         value, meta = _field_meta(base, path)
+        unit = path_unit_label(base, path)  # the label params show prints (issue 41 item 3)
         reason = _no_effect(base, drive, path, experiments)
         if reason:
             raise FitError(f"--free {path}: has no effect on these traces ({reason})")
         if value == 0.0:
-            raise FitError(f"--free {path}: starts at 0 [{meta['unit']}]; give a nonzero "
+            raise FitError(f"--free {path}: starts at 0 [{unit}]; give a nonzero "
                            "start value in the parameter file (the fit works in factors on "
                            "the start)")
         lo, hi = bounds.get(path, (meta["low"], meta["high"])) if bounds else \
             (meta["low"], meta["high"])
         if not lo < value < hi and not (lo <= value <= hi):
             raise FitError(f"--free {path}: start {value:g} outside its bounds {lo:g} … "
-                           f"{hi:g} [{meta['unit']}]")
+                           f"{hi:g} [{unit}]")
         start[i] = value
         lo_t, hi_t = lo / value, hi / value
         lb[i], ub[i] = min(lo_t, hi_t), max(lo_t, hi_t)
         if not meta.get("low_inclusive", False):
             lb[i] = lb[i] * (1 + 1e-9) if lb[i] > 0 else lb[i] + 1e-12
-        units_.append(str(meta["unit"]))
+        units_.append(unit)
     system = DriveSystem(base, drive=drive, table_position=table_position)  # validates both
     for e in experiments:
         if e.nut_speed is not None and not system.topology().follows_nut_reference():
@@ -1305,15 +1310,12 @@ def plot_residuals(result: FitResult, path: str | Path) -> Path:
     Path
         The file written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     rows = [(e, name, sim) for e, sims in zip(result.experiments, result.simulated,
                                               strict=True) for name, sim in sims.items()]
-    fig, axes = plt.subplots(len(rows), 3, figsize=(12, 2.4 * len(rows) + 0.6),
-                             squeeze=False, gridspec_kw={"width_ratios": [3, 3, 1]})
+    fig = Figure(figsize=(12, 2.4 * len(rows) + 0.6))
+    axes = fig.subplots(len(rows), 3, squeeze=False, gridspec_kw={"width_ratios": [3, 3, 1]})
     for (e, name, sim), ax in zip(rows, axes, strict=True):
         unit, k = EDGE_UNITS.get(name, ("SI", 1.0))
         meas = np.asarray(e.signals[name])
@@ -1346,6 +1348,4 @@ def plot_residuals(result: FitResult, path: str | Path) -> Path:
     fig.tight_layout()
     from ..io.outputs import save_figure
 
-    p = save_figure(fig, path, dpi=100)
-    plt.close(fig)
-    return p
+    return save_figure(fig, path, dpi=100)

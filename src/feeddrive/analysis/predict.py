@@ -390,12 +390,10 @@ def plot_prediction(pred: Prediction, path: str | os.PathLike[str],
     Path
         The file written.
     """
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+    fig = Figure(figsize=(11, 4))
+    ax, ax2 = fig.subplots(1, 2)
     fin = pred.values[np.isfinite(pred.values)] * 1e3
     if fin.size:
         edges = np.arange(fin.min() - pred.resolution * 1e3, fin.max() + 2 * pred.resolution
@@ -422,6 +420,4 @@ def plot_prediction(pred: Prediction, path: str | os.PathLike[str],
     fig.tight_layout()
     from ..io.outputs import save_figure
 
-    p = save_figure(fig, path, dpi=100)
-    plt.close(fig)
-    return p
+    return save_figure(fig, path, dpi=100)

@@ -508,13 +508,11 @@ def plot_tornado(result: SensitivityResult, path: str | os.PathLike[str],
     Path
         The file written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     rows = [e for e in result.entries if e.resolved][:top]
-    fig, ax = plt.subplots(figsize=(9, 0.32 * max(len(rows), 3) + 1.4))
+    fig = Figure(figsize=(9, 0.32 * max(len(rows), 3) + 1.4))
+    ax = fig.subplots()
     y = np.arange(len(rows))[::-1]
     for yi, e in zip(y, rows, strict=True):
         lo = 100 * (e.q_minus / result.base - 1)
@@ -534,6 +532,4 @@ def plot_tornado(result: SensitivityResult, path: str | os.PathLike[str],
     fig.tight_layout()
     from ..io.outputs import save_figure
 
-    p = save_figure(fig, path, dpi=100)
-    plt.close(fig)
-    return p
+    return save_figure(fig, path, dpi=100)

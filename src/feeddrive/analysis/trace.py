@@ -45,6 +45,7 @@ Command speed
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -641,21 +642,63 @@ def _slope(t: np.ndarray, x: np.ndarray) -> float:
 
 
 def _critical(segments: list[TraceSegment]) -> list[CriticalSpeed]:
+    return critical_of_holds([(s.command_speed, s.metrics.creeping) for s in segments])
+
+
+def describe_critical(lowest_smooth: float | None, first_creeping: float | None,
+                      what: str = "segment") -> str:
+    """The critical speed in words, as ``analyze`` and ``simulate --profile stepdown`` print it.
+
+    Parameters
+    ----------
+    lowest_smooth : float or None
+        The lowest smooth command speed [m/s] (:class:`CriticalSpeed`).
+    first_creeping : float or None
+        The highest creeping command speed [m/s].
+    what : str, default "segment"
+        What a hold is called (``"segment"`` of a record, ``"hold"`` of a profile).
+
+    Returns
+    -------
+    str
+        E.g. ``"lowest smooth 1.42 mm/s; first creeping 1.4 mm/s"`` [mm/s].
+    """
+    smooth = (f"{1e3 * lowest_smooth:.4g} mm/s" if lowest_smooth is not None
+              else f"none (every {what} creeps)")
+    creep = (f"{1e3 * first_creeping:.4g} mm/s" if first_creeping is not None
+             else f"none (no {what} creeps)")
+    return f"lowest smooth {smooth}; first creeping {creep}"
+
+
+def critical_of_holds(holds: Sequence[tuple[float, bool]]) -> list[CriticalSpeed]:
+    """The critical speed per direction of a run of holds at constant command speeds (a
+    step-down record's segments, a staircase's steps): ``feeddrive analyze`` and ``simulate
+    --profile stepdown`` headline the same two numbers.
+
+    Parameters
+    ----------
+    holds : sequence of (float, bool)
+        Per hold: its command speed [m/s] (signed) and whether it creeps (not smooth).
+
+    Returns
+    -------
+    list of CriticalSpeed
+        One per direction with at least two holds.
+    """
     out = []
     for direction, sign in (("positive", 1.0), ("negative", -1.0)):
-        segs = [s for s in segments if s.command_speed * sign > 0]
+        segs = sorted(((abs(v), c) for v, c in holds if v * sign > 0), reverse=True)
         if len(segs) < 2:
             continue
-        segs.sort(key=lambda s: abs(s.command_speed), reverse=True)
         lowest_smooth = None
-        for s in segs:
-            if s.metrics.creeping:
+        for speed, creeps in segs:
+            if creeps:
                 break
-            lowest_smooth = abs(s.command_speed)
-        creeping = [abs(s.command_speed) for s in segs if s.metrics.creeping]
+            lowest_smooth = speed
+        creeping = [speed for speed, creeps in segs if creeps]
         first_creeping = max(creeping) if creeping else None
-        smooth_below = any(not s.metrics.creeping and first_creeping is not None
-                           and abs(s.command_speed) < first_creeping for s in segs)
+        smooth_below = any(not creeps and first_creeping is not None and speed < first_creeping
+                           for speed, creeps in segs)
         out.append(CriticalSpeed(direction=direction, lowest_smooth=lowest_smooth,
                                  first_creeping=first_creeping, monotonic=not smooth_below))
     return out
@@ -720,6 +763,19 @@ def analyze_trace(
     ValueError
         For arrays of unequal length, a zero or non-finite command speed, a trace that
         :func:`estimate_speed` refuses, or no moving segment to analyse.
+
+    Examples
+    --------
+    A position record whose speed oscillates ±80 % about 1 mm/s:
+
+    >>> import numpy as np
+    >>> from feeddrive.analysis.trace import analyze_trace
+    >>> t = np.linspace(0.0, 20.0, 20001)
+    >>> position = 1e-3 * t - 0.8e-3 / (2 * np.pi * 2.0) * np.cos(2 * np.pi * 2.0 * t)
+    >>> segment = analyze_trace(t, position, command_speed=1e-3).segments[0]
+    >>> m = segment.metrics
+    >>> print(f"{1e3 * m.mean_speed:.2f} mm/s, ripple {m.ripple_ratio:.2f}, {m.verdict}")
+    1.00 mm/s, ripple 1.60, creeping
     """
     notes: list[str] = []
     t = np.asarray(time, dtype=float)

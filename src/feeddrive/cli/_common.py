@@ -22,8 +22,21 @@ app = typer.Typer(
     rich_markup_mode=None,  # Rich markup would eat the units: "[mm/s]" (issue 12 item 1)
     help="feeddrive: low-speed simulation and analysis of ball-screw feed drives (Wang2021).",
 )
-console = Console()
-err_console = Console(stderr=True)
+#: the width rich lays tables out in when the output is not a terminal (a pipe, a file, a CI
+#: log): wide enough that nothing is folded; plain text is never wrapped there (soft wrap)
+PIPED_WIDTH = 1000
+
+
+def _console(*, stderr: bool = False) -> Console:
+    """A console that wraps for a terminal only: piped output is hard-wrapped at 80 columns
+    otherwise, mid-phrase (issue 41 item 6)."""
+    stream = sys.stderr if stderr else sys.stdout
+    piped = not (hasattr(stream, "isatty") and stream.isatty())
+    return Console(stderr=stderr, soft_wrap=piped, width=PIPED_WIDTH if piped else None)
+
+
+console = _console()
+err_console = _console(stderr=True)
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -42,6 +55,80 @@ EXIT_UNSTABLE = 3
 # the arguments that name files, in the order they are named in a message
 _FILE_ARGUMENTS = ("config", "store", "file", "fragments", "params_file", "static", "out", "output",
                    "plot")
+
+
+#: the longest a command's plain progress goes without a line when its output is not a
+#: terminal [s] (issue 41 item 6: `reproduce` piped printed nothing for minutes)
+PROGRESS_EVERY = 5.0
+
+
+class PlainProgress:
+    """Progress as plain lines, for output that is not a terminal (rich's live bar draws
+    nothing there): a line at each change of stage and, while the work goes on without one,
+    every :data:`PROGRESS_EVERY` seconds — ``reproduce: CDFS critical speed 3/14 (42 s)``.
+
+    Parameters
+    ----------
+    what : str
+        The command, first word of each line.
+    say : callable
+        Prints one line.
+    every : float, optional
+        The longest interval without a line [s].
+    """
+
+    def __init__(self, what: str, say: Callable[[str], None],
+                 every: float | None = None) -> None:
+        import threading
+        import time
+
+        self.what, self.say = what, say
+        self.every = PROGRESS_EVERY if every is None else every
+        self._clock = time.monotonic
+        self._start = self._last = self._clock()
+        self._state = ("starting", 0, 0)
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._beat, name="feeddrive-progress",
+                                        daemon=True)
+
+    def _line(self) -> None:
+        label, done, total = self._state
+        count = f" {done}/{total}" if total else ""
+        self.say(f"{self.what}: {label}{count} ({self._clock() - self._start:.0f} s)")
+        self._last = self._clock()
+
+    def _beat(self) -> None:
+        while not self._stop.wait(max(0.0, self.every - (self._clock() - self._last))):
+            with self._lock:
+                if self._clock() - self._last >= self.every:
+                    self._line()
+
+    def update(self, label: str, done: int, total: int) -> None:
+        """A new state of the work: printed when its stage changed, else at the next beat.
+
+        Parameters
+        ----------
+        label : str
+            The stage.
+        done, total : int
+            Work done of the stage's total (0 total: not counted).
+        """
+        with self._lock:
+            changed = label != self._state[0]
+            self._state = (label, done, total)
+            if changed:
+                self._line()
+
+    def __enter__(self) -> PlainProgress:
+        with self._lock:
+            self._line()  # "starting": the command is at work from its first second
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
 
 
 def _one_line(text: str) -> str:
@@ -85,6 +172,22 @@ def _fail(message: str, code: int) -> typer.Exit:
     return typer.Exit(code=code)
 
 
+#: the API's SI fields the CLI takes as options in engineering units: a refusal of one is
+#: shown as the option the user typed, in its unit (issue 41 item 7: ``--nut-speed 16`` on
+#: the CDFS was answered "nut_speed = 0.016")
+_EDGE_FIELDS = {"nut_speed": ("--nut-speed", "mm/s", 1.0 / MM_PER_S)}
+
+
+def _refusal(err: ValueError | FileNotFoundError) -> str:
+    """The one-line message of a refused input, an API field as its CLI option."""
+    edge = _EDGE_FIELDS.get(getattr(err, "field", ""))
+    value = getattr(err, "value", None)
+    if edge is None or getattr(err, "source", None) or not isinstance(value, int | float):
+        return str(err)
+    option, unit, factor = edge
+    return f"{option} = {value * factor:g} [{unit}]: {err.message}"  # type: ignore[union-attr]
+
+
 def user_errors(fn: F) -> F:
     """Turn every expected failure into a one-line message on stderr, never a traceback.
 
@@ -98,7 +201,7 @@ def user_errors(fn: F) -> F:
         try:
             return fn(*args, **kwargs)
         except (ParameterError, ValueError, FileNotFoundError) as err:
-            raise _fail(str(err), EXIT_REFUSED) from None
+            raise _fail(_refusal(err), EXIT_REFUSED) from None
         except OSError as err:
             where = shown(os.fspath(err.filename)) if err.filename is not None else \
                 _files_of(kwargs) or "output"

@@ -11,7 +11,7 @@ import math
 import typer
 
 from ..analysis.creep_window import CreepThresholds
-from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME
+from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, describe_critical
 from ..io.outputs import PLOT_FORMATS, check_output_file
 from ..parameters import ParameterError
 from ._common import MM_PER_S, app, console, print_json, user_errors
@@ -120,11 +120,7 @@ def analyze_command(
             f"min {m.min_ratio:.3g}, stick {m.stick_fraction:.3g}, {freq_word} {freq}")
     _say(f"  verdicts by the {thresholds.describe()}")
     for c in result.critical:
-        smooth = (f"{c.lowest_smooth / MM_PER_S:.4g} mm/s" if c.lowest_smooth is not None
-                  else "none (every segment creeps)")
-        creep = (f"{c.first_creeping / MM_PER_S:.4g} mm/s" if c.first_creeping is not None
-                 else "none (no segment creeps)")
-        _say(f"  critical speed ({c.direction}): lowest smooth {smooth}; first "
-                      f"creeping {creep}")
+        _say(f"  critical speed ({c.direction}): "
+             f"{describe_critical(c.lowest_smooth, c.first_creeping)}")
     if plot:
         _say(f"wrote plot {plot}")

@@ -60,9 +60,10 @@ def loops_command(
         print_json(data)
         return
     d = data["least_damped_mode"]
-    console.print(f"[bold]{drive.upper()}[/] ({params.name}), "
-                  f"{'frictionless' if not with_friction else 'with friction'}, "
-                  f"{table_speed:g} mm/s: least-damped mode {d['frequency_hz']:.3f} Hz, "
+    console.print(f"[bold]{drive.upper()}[/] ({params.name}), {table_speed:g} mm/s, "
+                  f"{data['friction']}"
+                  f"{'' if with_friction else ' (--with-friction: the explorer’s margins)'}"
+                  f": least-damped mode {d['frequency_hz']:.3f} Hz, "
                   f"ζ = {d['damping_ratio']:.4f}")
     for note in data["notes"]:
         console.print(f"  {note}", markup=False)
@@ -70,6 +71,18 @@ def loops_command(
     if rigid:
         console.print(f"  {rigid} rigid-body pole{'s' if rigid > 1 else ''} (a free motion no "
                       "loop holds; no damping ratio)")
+    # the poles the help promises, each pair once, least damped first
+    poles = sorted(data["poles"], key=lambda p: (p["kind"] == "rigid-body",
+                                                 p.get("damping_ratio", 0.0)))
+    console.print(f"  poles ({len(poles)}, each complex pair once, least damped first):",
+                  markup=False)
+    for p in poles:
+        if p["kind"] == "rigid-body":
+            console.print(f"    rigid-body   real {p['real_1_per_s']:.3g} 1/s", markup=False)
+        else:
+            console.print(f"    {p['kind']:12s} {p['frequency_hz']:10.4g} Hz  ζ = "
+                          f"{p['damping_ratio']:.4g}  (real {p['real_1_per_s']:.4g} 1/s)",
+                          markup=False)
     for lp in data["loops"]:
         def fmt(v: float | None, unit: str) -> str:
             return "—" if v is None else f"{v:.2f} {unit}"

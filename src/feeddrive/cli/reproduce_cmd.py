@@ -10,6 +10,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from ..io.outputs import check_output_dir, shown
 from ..parameters import ParameterError
 from ._common import (
+    PlainProgress,
     app,
     console,
     err_console,
@@ -39,21 +40,29 @@ def reproduce_command(
         raise ParameterError("--workers", workers, "expected a whole number ≥ 1")
     check_output_dir(out, option="--out")
     params = resolve_parameters(preset_name, params_file)
+    def notice(text: str) -> None:
+        err_console.print(f"notice: {shown(text)}", markup=False, highlight=False,
+                          soft_wrap=True)
+
     try:
-        with Progress(TextColumn("{task.description}"), BarColumn(),
-                      MofNCompleteColumn(), TimeElapsedColumn(),
-                      console=console) as bar:
-            task = bar.add_task("starting", total=None)
+        if console.is_terminal:
+            with Progress(TextColumn("{task.description}"), BarColumn(),
+                          MofNCompleteColumn(), TimeElapsedColumn(),
+                          console=console) as bar:
+                task = bar.add_task("starting", total=None)
 
-            def progress(label: str, done: int, total: int) -> None:
-                bar.update(task, description=label, completed=done, total=total)
+                def progress(label: str, done: int, total: int) -> None:
+                    bar.update(task, description=label, completed=done, total=total)
 
-            def notice(text: str) -> None:
-                err_console.print(f"notice: {shown(text)}", markup=False, highlight=False,
-                                  soft_wrap=True)
+                results = run(params, out, workers=workers, study=study, progress=progress,
+                              notice=notice)
+        else:  # a pipe, a file, a CI log: plain lines, one at least every few seconds
+            def say(text: str) -> None:
+                console.print(text, markup=False, highlight=False)
 
-            results = run(params, out, workers=workers, study=study, progress=progress,
-                          notice=notice)
+            with PlainProgress("reproduce", say) as plain:
+                results = run(params, out, workers=workers, study=study,
+                              progress=plain.update, notice=notice)
     except KeyboardInterrupt:
         err_console.print(f"interrupted: the studies finished so far are kept in "
                           f"{out / 'data'} and reused by a rerun", markup=False,

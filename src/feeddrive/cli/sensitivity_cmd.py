@@ -14,6 +14,14 @@ from ._solver import accuracy_options
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
+def _fit_table(path: str) -> dict:
+    """The ``[fit]`` table of a fitted file (its drive and table position [m]), or {}."""
+    from ..parameters.toml_io import read_toml_file
+
+    rec = read_toml_file(path, field="FIT.toml").get("fit")
+    return rec if isinstance(rec, dict) else {}
+
+
 def _say(text: str) -> None:
     console.print(text, markup=False, highlight=False, soft_wrap=True)
 
@@ -22,8 +30,13 @@ def _say(text: str) -> None:
 @user_errors
 @accuracy_options
 def sensitivity_command(
-    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
-                              help=ALL_DRIVES_TEXT),
+    fit_file: str | None = typer.Argument(
+        None, metavar="FIT.toml", help="A parameter file, e.g. a fitted file (feeddrive fit "
+        "--out), as `predict FIT.toml` takes it: the same as --params; a fitted file's drive "
+        "and table position are the defaults."),
+    drive: str | None = typer.Option(None, "--drive", metavar=ALL_DRIVES,
+                                     help=ALL_DRIVES_TEXT + " [default: a fitted file's "
+                                     "drive, else cdfs]"),
     preset_name: str | None = typer.Option(None, "--preset", help="Parameter set (default "
                                            "wang2021)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
@@ -33,7 +46,8 @@ def sensitivity_command(
     parameters: Annotated[list[str] | None, typer.Option(
         "--parameters", help="Only these dotted paths; * matches (repeat), e.g. "
         "'friction.screw.*'.")] = None,
-    position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
+    position: float | None = typer.Option(None, "--position", help="Table position [mm] "
+                                          "[default: a fitted file's, else 400]."),
     store: str | None = typer.Option(None, "--store", help="Results store (SQLite); a "
                                      "rerun resumes from it."),
     workers: int | None = typer.Option(None, "--workers", help="Local processes "
@@ -54,6 +68,11 @@ def sensitivity_command(
     from ..analysis.sensitivity import STEPS, plot_tornado, sensitivity
     from ..parameters import load, preset
 
+    if fit_file is not None:
+        if params_file is not None:
+            raise ValueError(f"{fit_file}: give the parameter file once, as FIT.toml or "
+                             "--params, not both")
+        params_file = fit_file
     if preset_name and params_file:
         raise ValueError("--params: give either --preset or --params, not both")
     if plot:
@@ -62,7 +81,12 @@ def sensitivity_command(
         raise ValueError(f"--workers = {workers}: expected ≥ 1")
     source = params_file or preset_name or "wang2021"
     params = load(source) if params_file else preset(source)
-    table_position = _units.position("--position", position, params, drive)
+    fitted = _fit_table(params_file) if params_file else {}
+    drive = drive or str(fitted.get("drive", "cdfs"))
+    table_position = (_units.position("--position", position, params, drive)
+                      if position is not None else
+                      float(fitted.get("table_position",
+                                       _units.position("--position", 400.0, params, drive))))
     from ..sweep.executors import SweepAborted
 
     try:

@@ -106,6 +106,7 @@ def sweep_command(
     interrupted sweep resumes where it stopped.  Everything is checked before the first
     simulation."""
     from ..sweep import SweepStore, estimate, export, load_config, to_dataset
+    from ..sweep.executors import PROBE_DURATION
 
     cfg = load_config(config)
     store_path = Path(store) if store is not None else (
@@ -134,24 +135,39 @@ def sweep_command(
                        lambda text: err_console.print(f"dry run: {text} …", markup=False,
                                                       highlight=False, soft_wrap=True))
         lo, hi = est.spread
-        total_range = ([est.seconds * lo / est.seconds_per_point,
-                        est.seconds * hi / est.seconds_per_point]
-                       if est.seconds_per_point > 0 else [0.0, 0.0])
+        total_range = list(est.seconds_range)
         out = {"sweep": cfg.name, "points": est.points, "distinct": est.distinct,
                "stored": est.stored, "to_compute": est.distinct - est.stored,
                "timed_points": est.timed, "seconds_per_point": est.seconds_per_point,
                "seconds_per_point_range": [lo, hi], "workers": n,
                "estimated_seconds": est.seconds,
                "estimated_seconds_range": total_range,
-               "timing": "CPU seconds of the timed points, one core per worker",
+               "worker_startup_seconds": est.startup_seconds,
+               "compile_seconds": est.compile_seconds,
+               "probe_cpu_per_simulated_second": est.probe_rate,
+               "timing": "CPU seconds, one core per worker; the range covers the workers' "
+                         "start (imports, kernel loading) and, for a simulated quantity, the "
+                         "least and most simulated time its protocol takes",
                "parameter_sets_built": est.built}
         if as_json:
             print_json(out)
             return
-        cost = (f"{est.seconds_per_point:.3g} s CPU per point ({est.timed} timed: "
-                f"{lo:.3g}–{hi:.3g} s) → about {est.seconds:.3g} s "
-                f"({total_range[0]:.3g}–{total_range[1]:.3g} s) on {n} workers with a free core "
-                "each; longer on a loaded machine" if est.timed else "nothing to time")
+        if est.distinct == est.stored:
+            cost = "nothing to compute"
+        elif est.timed:
+            cost = (f"{est.seconds_per_point:.3g} s CPU per point ({est.timed} timed: "
+                    f"{lo:.3g}–{hi:.3g} s)")
+        else:
+            cost = (f"{lo:.3g}–{hi:.3g} s CPU per point (a {PROBE_DURATION:g}-s probe: "
+                    f"{est.probe_rate:.3g} s CPU per simulated second, times the least and "
+                    "most simulated time of the quantity's protocol)")
+        if est.distinct > est.stored:
+            cost += (f" and {est.startup_seconds:.2g} s to start each worker → about "
+                     f"{total_range[0]:.3g}–{total_range[1]:.3g} s on {n} workers with a free "
+                     "core each; longer on a loaded machine")
+            if est.compile_seconds:
+                cost += (f"; the model kernels were compiled now ({est.compile_seconds:.3g} s "
+                         "CPU, once: the sweep finds them cached)")
         console.print(f"sweep {shown(cfg.name)}: {est.points} points ({est.distinct} distinct, "
                       f"{est.stored} already stored, {est.distinct - est.stored} to compute); "
                       + cost, markup=False, highlight=False, soft_wrap=True)

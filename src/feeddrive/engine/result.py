@@ -20,7 +20,9 @@ from ..parameters import dumps
 from ..units import ENGINEERING as _ENGINEERING
 
 if TYPE_CHECKING:
+    import pandas as pd
     import xarray as xr
+    from matplotlib.figure import Figure
 
     from ..analysis.creep_window import CreepMetrics, CreepThresholds
     from ..model.assemble import Model
@@ -29,7 +31,6 @@ if TYPE_CHECKING:
 
 # SI → engineering units at the edges (CSV, Parquet, CLI)
 ENGINEERING = _ENGINEERING
-
 
 class Run:
     """The raw output of one simulation and what names it, without copies.
@@ -368,13 +369,15 @@ class Result:
                 "ripple_ratio": m.ripple_ratio,
                 "min_ratio": m.min_ratio,
                 "stick_fraction": m.stick_fraction,
-                "stick_slip_frequency_hz": m.stick_slip_frequency,
+                **_frequencies(m),
                 "verdict": m.verdict,
                 # the rule behind the word (issue 24 item 4)
                 "verdict_rule": m.thresholds.describe(),
             })
             if not constant:
-                out["segments"] = self._hold_segments()
+                out["segments"] = holds = self._hold_segments()
+                if len(holds) > 1:
+                    out.update(self._holds_headline(holds))
             if m.unstable:
                 warnings.append(f"unstable: the loop diverges (table speed peaks at "
                                 f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, "
@@ -462,14 +465,135 @@ class Result:
                         "mean_table_speed_mm_s": 1e3 * m.mean_speed,
                         "ripple_ratio": m.ripple_ratio, "min_ratio": m.min_ratio,
                         "stick_fraction": m.stick_fraction,
-                        "stick_slip_frequency_hz": m.stick_slip_frequency,
+                        **_frequencies(m),
                         "verdict": m.verdict, "window_s": [m.window_start, m.window_end]})
         return out
+
+    def _holds_headline(self, holds: list[dict[str, Any]]) -> dict[str, Any]:
+        """What a run of several holds (a staircase) comes to: the critical speed per
+        direction as ``feeddrive analyze`` gives it (lowest smooth and first creeping hold,
+        :func:`feeddrive.analysis.trace.critical_of_holds`) and the following error over the
+        whole run — the first hold's alone read as the run's (issue 41 item 2)."""
+        from ..analysis.trace import critical_of_holds
+        from ..analysis.tracking import position_metrics
+
+        critical = critical_of_holds([(1e-3 * h["command_speed_mm_s"], h["verdict"] != "smooth")
+                                      for h in holds])
+        t = self.time
+        whole = (float(t[0]), float(t[-1]))
+        return {
+            "critical": [{"direction": c.direction,
+                          "lowest_smooth_mm_s": None if c.lowest_smooth is None
+                          else 1e3 * c.lowest_smooth,
+                          "first_creeping_mm_s": None if c.first_creeping is None
+                          else 1e3 * c.first_creeping,
+                          "monotonic": c.monotonic} for c in critical],
+            "run": {"window_s": list(whole),
+                    **position_metrics(t, self["following_error"], whole)},
+        }
 
     def _mean_mm_s(self, name: str, sel: np.ndarray) -> float | None:
         if name not in self:
             return None
         return 1e3 * float(np.mean(self[name][sel]))
+
+    def __repr__(self) -> str:
+        return f"<feeddrive.Result {self._title()}; {self.time.size} samples>"
+
+    def _title(self) -> str:
+        from ..plots.result import run_title
+
+        return run_title(self)
+
+    def _repr_html_(self) -> str:
+        """The run in a notebook: what ran, its summary and its signals with their units.
+
+        Never the samples: its size depends on the number of signals, not on the run's length.
+        """
+        from html import escape
+
+        summary = self.summary()
+        solver = summary.pop("solver", {})
+        segments = summary.pop("segments", None)
+        warnings = summary.pop("warnings", [])
+        rows = [(k, _fmt(v)) for k, v in summary.items() if not isinstance(v, dict)]
+        if segments is not None:
+            creeping = [s for s in segments if s["verdict"] != "smooth"]
+            rows.append(("holds", f"{len(segments)}, of which {len(creeping)} not smooth"))
+        rows.append(("solver", ", ".join(f"{k} {_fmt(v)}" for k, v in solver.items()
+                                         if not isinstance(v, dict | list))))
+        cells = "".join(f"<tr><th style='text-align:left'>{escape(k)}</th>"
+                        f"<td style='text-align:left'>{escape(v)}</td></tr>" for k, v in rows)
+        names = self._run.meta if self._run is not None else {
+            str(n): (v.attrs.get("units", ""), v.attrs.get("long_name", ""))
+            for n, v in self.dataset.data_vars.items()}
+        signals = ", ".join(f"<code>{escape(n)}</code> [{escape(u or '1')}]"
+                            for n, (u, _) in names.items())
+        notes = "".join(f"<p><b>warning:</b> {escape(w)}</p>" for w in warnings)
+        out = (f"<div><p><b>feeddrive.Result</b>: {escape(self._title())}, "
+               f"{self.time.size} samples (SI inside; summary in mm/s and µm)</p>{notes}"
+               f"<table>{cells}</table><p>signals ({len(names)}): {signals}</p>"
+               "<p><code>result.plot()</code>, <code>result.to_pandas()</code>, "
+               "<code>result.dataset</code>, <code>result.save(path)</code></p></div>")
+        return out
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The run's signals as a pandas DataFrame, SI, indexed by ``time`` [s].
+
+        ``df.attrs`` holds each column's unit (``df.attrs["units"]``) and description
+        (``"long_names"``) and the run's provenance (feeddrive version, drive, parameter set,
+        profile, solver); pandas keeps ``attrs`` through ``to_parquet`` / ``read_parquet``.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One column per signal [SI unit in ``df.attrs["units"]``].
+
+        Examples
+        --------
+        >>> import feeddrive as fd
+        >>> run = fd.simulate(fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4),
+        ...                   fd.ConstantSpeed(table_speed=2e-3), duration=0.5)
+        >>> df = run.to_pandas()
+        >>> df.attrs["units"]["table_speed"], df.index.name
+        ('m/s', 'time')
+        >>> print(f"{1e3 * df['table_speed_reference'].iloc[-1]:.1f} mm/s")
+        2.0 mm/s
+        """
+        import pandas as pd
+
+        from ..io.results import provenance
+
+        meta = self._run.meta if self._run is not None else {
+            str(n): (str(v.attrs.get("units", "")), str(v.attrs.get("long_name", "")))
+            for n, v in self.dataset.data_vars.items()}
+        df = pd.DataFrame({name: np.array(self[name]) for name in meta},
+                          index=pd.Index(np.array(self.time), name="time"))
+        df.attrs = {"units": {"time": "s", **{n: u for n, (u, _) in meta.items()}},
+                    "long_names": {n: d for n, (_, d) in meta.items()},
+                    **provenance(self.attrs)}
+        return df
+
+    def plot(self, title: str | None = None) -> Figure:
+        """The run's figure: table speed against its command, motor speeds, friction forces.
+
+        A :class:`matplotlib.figure.Figure`, drawn without pyplot (the notebook's backend is
+        left as it is; a notebook shows the returned figure).
+
+        Parameters
+        ----------
+        title : str, optional
+            The title; what ran (drive, profile, speed, duration, parameter set) by default.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Three stacked axes sharing time [s], speeds in mm/s, forces in N.
+        """
+        from ..plots.result import result_figure
+
+        fig: Figure = result_figure(self, title)
+        return fig
 
     def save(self, path: str | Path) -> Path:
         """Write the run to a file; the format follows the extension.
@@ -488,6 +612,24 @@ class Result:
         from ..io.results import save_result
 
         return save_result(self.dataset, path)
+
+
+def _frequencies(m: CreepMetrics) -> dict[str, float | None]:
+    """The dominant ripple frequency [Hz] as ``oscillation_frequency_hz``, and as
+    ``stick_slip_frequency_hz`` only when the table sticks (else None): a run that never
+    sticks had a "stick-slip frequency" in its JSON (issue 41 item 7)."""
+    f = m.stick_slip_frequency
+    return {"oscillation_frequency_hz": f,
+            "stick_slip_frequency_hz": f if m.stick_fraction > 0 else None}
+
+
+def _fmt(value: Any) -> str:
+    """A summary value as text: floats to four significant digits."""
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if isinstance(value, list | tuple):
+        return ", ".join(_fmt(v) for v in value)
+    return str(value)
 
 
 def _sine_frequency(profile: str) -> float | None:

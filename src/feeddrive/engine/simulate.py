@@ -473,17 +473,19 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     """Simulate ``system`` following ``profile`` for ``duration`` from rest.
 
     ``output`` (``.parquet`` or ``.csv``): every sample is written to that file as it is
-    computed, in chunks, and the Result keeps only the last :data:`KEEP_STREAMED` seconds, so
-    memory does not grow with the duration.  ``progress(t, t_end)`` is called after each chunk
-    of a long run (``dopri5``: about :data:`CHUNK_WALL_TIME` of work; the dense-output methods:
-    :data:`DENSE_CHUNK` simulated seconds); Ctrl-C acts between chunks.
+    computed, in chunks, and the Result keeps only the last minute of the run, so memory does
+    not grow with the duration.  ``progress(t, t_end)`` is called after each chunk of a long
+    run (a fraction of a second of work, or ten simulated seconds); Ctrl-C acts between
+    chunks.
 
     Parameters
     ----------
     system : DriveSystem
         The drive.
     profile : ConstantSpeed, SineSpeed or SampledSpeed
-        The reference the loops follow.
+        The reference the loops follow: a constant speed, a sine, or a tabulated profile such
+        as :func:`feeddrive.trapezoid` (ramp, hold, stop) and :func:`feeddrive.stepdown` (the
+        paper's staircase, Wang2021 Sect. 6).
     duration : float
         Simulated time [s].
     options : SolverOptions or None, default None
@@ -504,6 +506,29 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         If the integrator fails (a result is never NaN silently).
     SimulationInterrupted
         On Ctrl-C, holding the part of the run that was finished.
+
+    See Also
+    --------
+    Result.summary, Result.plot, Result.to_pandas, Result.save
+
+    Examples
+    --------
+    The CDFS at mid-screw commanded at 2 mm/s, above its critical speed (1.56 mm/s), runs
+    smoothly after its start-up transient:
+
+    >>> import feeddrive as fd
+    >>> system = fd.DriveSystem(fd.preset("wang2021"), drive="cdfs", table_position=0.4)
+    >>> result = fd.simulate(system, fd.ConstantSpeed(table_speed=2e-3), duration=3.0)
+    >>> s = result.summary()
+    >>> print(f"{s['mean_table_speed_mm_s']:.2f} mm/s, {s['verdict']}")
+    2.00 mm/s, smooth
+
+    A move that ramps up, holds 2 mm/s and stops:
+
+    >>> move = fd.trapezoid(2e-3, duration=2.0, ramp_time=0.5)
+    >>> result = fd.simulate(system, move, duration=2.0)
+    >>> print(f"{1e3 * result['table_position'][-1]:.2f} mm travelled")
+    3.00 mm travelled
     """
     return Simulation(system, profile, options).run(duration, output=output, progress=progress)
 
@@ -856,7 +881,8 @@ class _Chunks:
         sim, grid = self.sim, self.sim.grid
         every = grid.out_every
         t_end = n_break * grid.base
-        writer = ChunkWriter(output, sim.model, sim.system, Run) if output is not None else None
+        writer = (ChunkWriter(output, sim.model, sim.system, Run, sim.profile)
+                  if output is not None else None)
         kept = sum(p[0].size for p in self.parts)
         keep = int(KEEP_STREAMED / (every * grid.base)) + 1
         tail: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []

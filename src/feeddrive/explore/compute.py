@@ -357,6 +357,7 @@ def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
         "inside_band": inside,
         "table_speed_mm_s": 1e3 * v,
         "poles": d["poles"], "least_damped_mode": d["least_damped_mode"], "loops": d["loops"],
+        "friction": d["friction"],
     })
 
 

@@ -679,6 +679,19 @@ def serve_in_thread(port: int = 0, initial: dict[str, Any] | None = None, *,
     -------
     ExplorerServer
         The running server.
+
+    Examples
+    --------
+    >>> import json, urllib.request
+    >>> from feeddrive.explore import serve_in_thread
+    >>> server = serve_in_thread(warm_up=False)
+    >>> url = f"http://127.0.0.1:{server.server_address[1]}/api/info"
+    >>> with urllib.request.urlopen(url) as reply:
+    ...     info = json.load(reply)
+    >>> server.shutdown()
+    >>> server.server_close()
+    >>> print("wang2021" in info["presets"], info["max_duration_s"])
+    True 120.0
     """
     server = make_server(port, initial, warm_up=warm_up)
     threading.Thread(target=server.serve_forever, name="feeddrive-explore", daemon=True

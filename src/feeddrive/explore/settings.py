@@ -44,7 +44,7 @@ from ..parameters import (
     preset,
     to_dict,
 )
-from ..parameters.validation import check_quantity, resolved_unit
+from ..parameters.validation import check_quantity, unit_label
 
 #: longest simulated time the page runs [s]; `feeddrive simulate` runs longer ones
 MAX_DURATION = 120.0
@@ -780,7 +780,7 @@ def field_unit(f: Field, params: DriveParameters | None) -> str:
         if obj is None:
             return f.unit
     try:
-        unit = resolved_unit(obj, parts[-1])
+        unit = unit_label(obj, parts[-1])  # the one label of every output (issue 41 item 3)
     except (KeyError, TypeError):
         return f.unit
     if unit == "-" and f.unit not in ("", "-"):

@@ -221,6 +221,16 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
     ----------
     .. [1] Modelica Association, Functional Mock-up Interface 2.0.4 and 3.0,
        https://fmi-standard.org/.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import feeddrive as fd
+    >>> from feeddrive.fmu import export_fmu
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     fmu = export_fmu(fd.preset("wang2021"), "cdfs", pathlib.Path(folder) / "cdfs.fmu")
+    >>> print(fmu.fmi, fmu.kind, fmu.n_states, fmu.inputs[1])
+    2 cs 15 table_speed_reference
     """
     from .build import package
     from .description import new_token, variables

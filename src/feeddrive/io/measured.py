@@ -672,6 +672,15 @@ def read_static_test(
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
     _need_rows(table, 1, "static friction test")
+    if not table.has(speed_column) and table.has("time"):
+        # a record over time given where one row per constant-speed test is expected
+        raise MeasuredDataError(table.source, table.header_line,
+                                f"no column {speed_column!r}, and a 'time' column: this looks "
+                                "like a time trace; a static friction test has one row per "
+                                "constant-speed test, columns speed [mm/s] and force [N] (or "
+                                "current [A]); for a trace of the table over time use "
+                                "`feeddrive analyze FILE` (creep) or `feeddrive identify "
+                                "dynamic` (pre-sliding)")
     speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit, default_unit="mm/s")
     if table.has(force_column) or not table.has(current_column):
         if not table.has(force_column):
@@ -853,6 +862,20 @@ def read_position_trace(
     ------
     MeasuredDataError
         For missing columns, too few rows, bad cells or non-increasing time.
+
+    Examples
+    --------
+    A file with a comment line, time in seconds and position in millimetres:
+
+    >>> import pathlib, tempfile
+    >>> from feeddrive.io.measured import read_position_trace
+    >>> rows = "\\n".join(f"{0.01 * k:.2f},{0.015 * k:.3f}" for k in range(100))
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "trace.csv"
+    ...     _ = path.write_text(f"# rig 3, axis X\\ntime [s],position [mm]\\n{rows}\\n")
+    ...     trace = read_position_trace(path)
+    >>> print(f"{trace.time.size} samples, {1e3 * trace.position[-1]:.3f} mm")
+    100 samples, 1.485 mm
     """
     table = read_csv_table(path, sep=sep, decimal=decimal)
     _need_rows(table, 16, "position trace")

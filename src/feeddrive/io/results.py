@@ -1,9 +1,11 @@
 """Writers for simulation results: CSV, Parquet, NetCDF, MATLAB .mat (docs/outputs.md).
 
 * CSV: engineering units (mm, mm/s, N/µm), the unit in brackets in each column name, e.g.
-  ``table_position [mm]`` — a human reads it.
+  ``table_position [mm]`` — a human reads it; a first ``#`` line says what wrote it
+  (:func:`provenance_line`; feeddrive's readers skip ``#`` lines, pandas with ``comment="#"``).
 * Parquet: the same numbers and units as CSV, plain column names (``table_position``) and
-  each field's unit in the Arrow schema's field metadata (``unit``, ``long_name``).
+  each field's unit in the Arrow schema's field metadata (``unit``, ``long_name``); the units
+  and the run's :func:`provenance` also as pandas' ``df.attrs`` (``pandas.read_parquet``).
 * NetCDF: NetCDF4 (HDF5, h5netcdf engine), SI, with the CF-1.8 global attributes
   (``Conventions``, ``title``, ``source``, ``history``, ``references``) and each variable's
   ``units`` (UDUNITS spelling) and ``long_name``.
@@ -17,6 +19,7 @@ output's name.
 from __future__ import annotations
 
 import importlib.util
+import json
 from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
@@ -75,7 +78,8 @@ def check_format(path: str | Path) -> str:
     p = Path(path)
     ext = p.suffix.lower()
     if ext not in FORMATS:
-        raise ParameterError("output", str(p), f"unknown extension; expected one of {FORMATS}")
+        raise ParameterError("output", str(p), "unknown extension; expected one of "
+                             + ", ".join(FORMATS))
     if ext == ".parquet" and importlib.util.find_spec("pyarrow") is None:
         raise ParameterError("output", str(p), PARQUET_HINT)
     return ext
@@ -167,12 +171,69 @@ def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
     dataset.to_netcdf(path, engine="h5netcdf")
 
 
+#: the run attributes that say where its numbers come from (:func:`provenance`)
+PROVENANCE_KEYS = ("drive", "table_start_position_m", "parameter_set", "profile")
+
+
+def provenance(attrs: Mapping[str, Any]) -> dict[str, Any]:
+    """Where a run's numbers come from, as plain JSON values: feeddrive's version, the drive,
+    its start position [m], the parameter set, the profile, the friction laws and the solver's
+    statistics (those of ``attrs`` that are there).
+
+    Parameters
+    ----------
+    attrs : mapping
+        A run's attributes (``Result.attrs``; ``friction_laws`` and ``solver`` as JSON text).
+
+    Returns
+    -------
+    dict
+        ``feeddrive_version`` and the keys found.
+    """
+    out: dict[str, Any] = {"feeddrive_version": __version__}
+    for key in PROVENANCE_KEYS:
+        if key in attrs:
+            value = attrs[key]
+            out[key] = value.item() if isinstance(value, np.generic) else value
+    for key in ("friction_laws", "solver"):
+        if key in attrs:
+            value = attrs[key]
+            out[key] = json.loads(value) if isinstance(value, str) else value
+    return out
+
+
+def provenance_line(attrs: Mapping[str, Any]) -> str:
+    """The first line of a CSV export: a ``#`` comment saying what wrote the file.
+
+    Parameters
+    ----------
+    attrs : mapping
+        A run's attributes (:func:`provenance`).
+
+    Returns
+    -------
+    str
+        One line without its newline, e.g. ``# feeddrive 0.2.0: drive cdfs, table start
+        position 0.4 m, parameter set wang2021, …; units in the column names``.
+    """
+    p = provenance(attrs)
+    labels = {"drive": "drive {}", "table_start_position_m": "table start position {} m",
+              "parameter_set": "parameter set {}", "profile": "profile {}"}
+    words = [labels[key].format(p[key]) for key in PROVENANCE_KEYS if key in p]
+    if isinstance(p.get("solver"), dict) and "method" in p["solver"]:
+        words.append(f"solver {p['solver']['method']}")
+    text = ", ".join(words).replace("\n", " ")
+    return f"# feeddrive {__version__}: {text}; units in the column names"
+
+
 def arrow_table(columns: Mapping[str, tuple[np.ndarray, str, str]],
-                metadata: Mapping[str, str] | None = None) -> Any:
+                metadata: Mapping[str, str] | None = None,
+                attrs: Mapping[str, Any] | None = None) -> Any:
     """A pyarrow Table from named columns with their units and descriptions.
 
     Plain field names; each field's ``unit`` and ``long_name`` in its metadata, the package
-    version and unit convention in the schema's.
+    version and unit convention in the schema's; the units, descriptions and ``attrs`` again
+    as pandas' ``df.attrs`` (schema key ``PANDAS_ATTRS``, which ``pandas.read_parquet`` reads).
 
     Parameters
     ----------
@@ -180,6 +241,8 @@ def arrow_table(columns: Mapping[str, tuple[np.ndarray, str, str]],
         ``{name: (values, unit, long_name)}``, values in the stated unit [unit].
     metadata : mapping of str to str, optional
         Further schema metadata.
+    attrs : mapping, optional
+        Further entries of pandas' ``df.attrs`` (JSON values; the run's :func:`provenance`).
 
     Returns
     -------
@@ -194,9 +257,13 @@ def arrow_table(columns: Mapping[str, tuple[np.ndarray, str, str]],
         arrays.append(array)
         fields.append(pa.field(name, array.type, metadata={"unit": unit,
                                                              "long_name": long_name}))
+    pandas_attrs = {"units": {name: unit for name, (_, unit, _) in columns.items()},
+                    "long_names": {name: text for name, (_, _, text) in columns.items()},
+                    "feeddrive_version": __version__, **(attrs or {})}
     meta = {"feeddrive_version": __version__,
             "units": "as feeddrive's CSV: mm, mm/s, N/µm, otherwise SI; each field's unit "
-                     "in its metadata", **(metadata or {})}
+                     "in its metadata", **(metadata or {}),
+            "PANDAS_ATTRS": json.dumps(pandas_attrs)}
     return pa.Table.from_arrays(arrays, schema=pa.schema(fields, metadata=meta))
 
 
@@ -243,7 +310,7 @@ def to_arrow_table(dataset: xr.Dataset) -> Any:
     pyarrow.Table
         Plain field names, each field's unit in its metadata.
     """
-    return arrow_table(_engineering_columns(dataset))
+    return arrow_table(_engineering_columns(dataset), attrs=provenance(dataset.attrs))
 
 
 def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
@@ -278,7 +345,9 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
 
 def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
     if ext == ".csv":
-        to_engineering_frame(dataset).to_csv(p, index=False, float_format="%.10g")
+        with open(p, "w", encoding="utf-8", newline="") as f:
+            f.write(provenance_line(dataset.attrs) + "\n")
+            to_engineering_frame(dataset).to_csv(f, index=False, float_format="%.10g")
     elif ext == ".parquet":
         import pyarrow.parquet as pq
 
@@ -322,6 +391,9 @@ class ChunkWriter:
     run_type : type
         ``feeddrive.engine.result.Run``, passed in so that this writer does not import the
         results layer that imports it.
+    profile : Profile, optional
+        The run's profile, named in the CSV's first line (:func:`provenance_line`) and the
+        Parquet file's :func:`provenance`.
 
     Raises
     ------
@@ -329,13 +401,15 @@ class ChunkWriter:
         For another extension (``.nc`` and ``.mat`` hold the whole run).
     """
 
-    def __init__(self, path: str | Path, model: Any, system: Any, run_type: Any) -> None:
+    def __init__(self, path: str | Path, model: Any, system: Any, run_type: Any,
+                 profile: Any = None) -> None:
         self.path = Path(path)
         ext = self.path.suffix.lower()
         if ext not in (".parquet", ".csv"):
             raise ParameterError("output", str(self.path), "a streamed run is written as "
                                  ".parquet or .csv (.nc and .mat hold the whole run)")
         self.ext, self.model, self.system, self.run_type = ext, model, system, run_type
+        self.profile = profile
         self._writer: Any = None
         self._atomic: Any = None
         self._first = True
@@ -345,12 +419,20 @@ class ChunkWriter:
 
     def _columns(self, t: np.ndarray, y: np.ndarray,
                  aux: np.ndarray) -> dict[str, tuple[np.ndarray, str, str]]:
-        run = self.run_type(t, y, aux, self.model, self.system, None, {})
+        run = self.run_type(t, y, aux, self.model, self.system, self.profile, {})
         cols = {"time": (t, "s", TIME_LONG_NAME)}
         for name, (unit, description) in run.meta.items():
             eng_unit, factor = ENGINEERING.get(unit, (unit, 1.0))
             cols[name] = (run.signal(name) * factor, eng_unit, description)
         return cols
+
+    def _attrs(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> dict[str, Any]:
+        attrs: dict[str, Any] = self.run_type(t, y, aux, self.model, self.system, self.profile,
+                                              {}).attrs(full=False)
+        attrs.pop("solver", None)  # the statistics of a streamed run are not known yet
+        if self.profile is None:
+            attrs.pop("profile", None)
+        return attrs
 
     def write(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> None:
         """Append one chunk of samples.
@@ -372,12 +454,15 @@ class ChunkWriter:
 
             frame = pd.DataFrame({f"{name} [{unit}]": values
                                   for name, (values, unit, _) in cols.items()})
-            frame.to_csv(self._tmp, mode="w" if self._first else "a", header=self._first,
-                         index=False, float_format="%.10g")
+            with open(self._tmp, "w" if self._first else "a", encoding="utf-8",
+                      newline="") as f:
+                if self._first:
+                    f.write(provenance_line(self._attrs(t, y, aux)) + "\n")
+                frame.to_csv(f, header=self._first, index=False, float_format="%.10g")
         else:
             import pyarrow.parquet as pq
 
-            table = arrow_table(cols)
+            table = arrow_table(cols, attrs=provenance(self._attrs(t, y, aux)))
             if self._writer is None:
                 self._writer = pq.ParquetWriter(self._tmp, table.schema)
             self._writer.write_table(table)

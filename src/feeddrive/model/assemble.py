@@ -506,3 +506,11 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
         derived=tuple(b.derived), clocks=tuple(b.clocks),
         flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp)
+
+
+def __getattr__(name: str) -> Any:
+    """Names that moved from here before 0.2.0: importable until 0.3.0, with a
+    DeprecationWarning naming their new place (:mod:`feeddrive._compat`)."""
+    from .. import _compat
+
+    return _compat.moved(__name__, name)

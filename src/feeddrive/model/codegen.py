@@ -708,3 +708,11 @@ def compile_module(source: str, extra_sources: list[str]) -> ModuleType:
     for s in extra_sources:
         digest.update(s.encode())
     return import_generated("models", f"model_{digest.hexdigest()[:20]}", source)
+
+
+def __getattr__(name: str) -> Any:
+    """Names that moved from here before 0.2.0: importable until 0.3.0, with a
+    DeprecationWarning naming their new place (:mod:`feeddrive._compat`)."""
+    from .. import _compat
+
+    return _compat.moved(__name__, name)

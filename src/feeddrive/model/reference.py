@@ -356,6 +356,14 @@ def trapezoid(table_speed: float, duration: float, *, ramp_time: float = 0.5,
     ------
     ParameterError
         For a non-positive duration or ramp time, or ramps longer than the move.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import feeddrive as fd
+    >>> move = fd.trapezoid(2e-3, duration=2.0, ramp_time=0.5)
+    >>> [round(1e3 * float(np.interp(t, move.time, move.table_speed)), 3) for t in (0.25, 1, 2)]
+    [1.0, 2.0, 0.0]
     """
     duration = _positive("duration", duration, "s")
     ramp_time = _positive("ramp_time", ramp_time, "s")
@@ -408,6 +416,15 @@ def stepdown(start_speed: float, lowest_speed: float, *, step: float = 0.01e-3,
     References
     ----------
     .. [1] Wang2021 Sect. 6, Fig. 13.
+
+    Examples
+    --------
+    The staircase from 1.60 to 1.50 mm/s in the paper's 0.01-mm/s steps:
+
+    >>> import feeddrive as fd
+    >>> profile, speeds = fd.stepdown(1.60e-3, 1.50e-3)
+    >>> print(f"{speeds.size} steps, {profile.time[-1]:.0f} s")
+    11 steps, 50 s
     """
     for name, value in (("start_speed", start_speed), ("lowest_speed", lowest_speed),
                         ("step", step)):

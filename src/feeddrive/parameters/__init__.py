@@ -24,6 +24,7 @@ parameter class lives with the part (registry group ``feeddrive.sections``):
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from typing import Any
 
 from .. import registry
 from .components import (
@@ -34,7 +35,7 @@ from .components import (
     composition,
 )
 from .toml_io import dumps, from_dict, load, loads, save, to_dict
-from .validation import ParameterError
+from .validation import ParameterError, did_you_mean
 
 
 class _Presets(Mapping[str, Callable[[], DriveParameters]]):
@@ -70,10 +71,18 @@ def preset(name: str) -> DriveParameters:
     -------
     DriveParameters
         A new copy of the set.
+
+    Examples
+    --------
+    >>> import feeddrive as fd
+    >>> params = fd.preset("wang2021")
+    >>> params.controller.velocity_integral_gain  # the one fitted number
+    3925.28
     """
     if name not in PRESETS:
         raise ParameterError(
             "preset", name, f"unknown preset; expected one of {', '.join(PRESETS)}"
+            + did_you_mean(name, PRESETS)
         )
     return PRESETS[name]()
 
@@ -83,3 +92,11 @@ __all__ = [
     "SiteParameters", "composition", "dumps", "from_dict", "load", "loads", "preset", "save",
     "to_dict",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Names that moved from here before 0.2.0: importable until 0.3.0, with a
+    DeprecationWarning naming their new place (:mod:`feeddrive._compat`)."""
+    from .. import _compat
+
+    return _compat.moved(__name__, name)

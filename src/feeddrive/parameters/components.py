@@ -423,3 +423,11 @@ def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
             raise ParameterError(f"{prefix}.{local}" if prefix else local, err.value,
                                  err.message) from None
     return replace(obj, **{head: _replace_path(getattr(obj, head), parts[1:], value, full)})
+
+
+def __getattr__(name: str) -> Any:
+    """Names that moved from here before 0.2.0: importable until 0.3.0, with a
+    DeprecationWarning naming their new place (:mod:`feeddrive._compat`)."""
+    from .. import _compat
+
+    return _compat.moved(__name__, name)

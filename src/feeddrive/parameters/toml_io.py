@@ -23,7 +23,7 @@ from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .. import registry
 from .components import DriveParameters, composition
-from .validation import ParameterError, resolved_unit
+from .validation import ParameterError, did_you_mean, unit_label
 
 
 def _is_component(tp: Any) -> bool:
@@ -239,16 +239,6 @@ def _format_value(value: Any) -> str:
     raise TypeError(f"cannot write {value!r} to TOML")
 
 
-def _unit_label(obj: Any, name: str, unit: str) -> str:
-    """The unit a value is read in, from the field's own metadata resolved for the set's
-    ``velocity_gain_basis``: a gain on the table-speed basis is per m/s, not per rad/s
-    (issue 12 item 16, issue 23)."""
-    resolved = resolved_unit(obj, name)
-    if resolved != unit:
-        return f"{resolved}, per table speed (velocity_gain_basis = table)"
-    return unit
-
-
 def _limit_note(f: dataclasses.Field[Any], value: Any) -> str:
     """Says so when a limit sits at the top of its range: the value means "no limit"."""
     if f.name.endswith("_limit") and isinstance(value, float) and value >= f.metadata["high"]:
@@ -277,7 +267,7 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
             unit = f.metadata.get("unit")
             options = f.metadata.get("options")
             if unit:
-                comment = f"  # [{_unit_label(obj, f.name, unit)}]{_limit_note(f, value)}"
+                comment = f"  # [{unit_label(obj, f.name)}]{_limit_note(f, value)}"
             elif options:
                 comment = f"  # one of {', '.join(options)}"
             else:
@@ -341,7 +331,9 @@ def _build(cls: type, data: Any, path: str) -> Any:
     unknown = sorted(set(data) - names)
     if unknown:
         key = unknown[0]
-        raise ParameterError(f"{path}.{key}" if path else key, data[key], "unknown key")
+        hint = did_you_mean(key, [*names, *(registry.table(registry.SECTIONS)
+                                             if "sections" in names else ())])
+        raise ParameterError(f"{path}.{key}" if path else key, data[key], "unknown key" + hint)
     kwargs: dict[str, Any] = {}
     for f in dataclasses.fields(cls):
         sub = f"{path}.{f.name}" if path else f.name
@@ -465,6 +457,19 @@ def loads(text: str, *, base_dir: Path | None = None) -> DriveParameters:
     ------
     ParameterError
         For invalid TOML, an unknown key or a refused value.
+
+    Examples
+    --------
+    A set that changes one value of a preset:
+
+    >>> from feeddrive.parameters import loads
+    >>> params = loads('''
+    ... extends = "wang2021"
+    ... [controller]
+    ... velocity_gain = 50.0
+    ... ''')
+    >>> print(params.name, params.controller.velocity_gain)
+    wang2021+changes 50.0
     """
     return from_dict(parse_toml(text), base_dir=base_dir)
 

@@ -44,6 +44,30 @@ def shown_value(value: object) -> str:
     return _cut(text)
 
 
+def did_you_mean(given: object, known: Any) -> str:
+    """The closest known name to a misspelt one, for a message: ``" (did you mean 'cdfs'?)"``,
+    or ``""`` when none is close (:func:`difflib.get_close_matches`, cutoff 0.6).
+
+    Parameters
+    ----------
+    given : object
+        What was given.
+    known : iterable of str
+        The names it should have been one of.
+
+    Returns
+    -------
+    str
+        The hint, with a leading space, or an empty string.
+    """
+    import difflib
+
+    if not isinstance(given, str) or len(given) > MAX_SHOWN:
+        return ""
+    close = difflib.get_close_matches(given, [str(k) for k in known], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
 def _cut(text: str) -> str:
     if len(text) <= MAX_SHOWN:
         return text
@@ -271,6 +295,68 @@ def resolved_unit(obj: object, name: str) -> str:
     """
     meta = _metadata(obj, name)
     return _unit_in(meta, obj)
+
+
+#: what a unit label adds for a velocity-loop gain on the table basis
+TABLE_BASIS_NOTE = "per table speed"
+
+
+def unit_label(obj: object, name: str) -> str:
+    """The one unit label of field ``name`` of ``obj``, as every output shows it (``fit``,
+    fitted files, ``params show``, the explorer): :func:`resolved_unit`, the unit of the
+    model's slot, with :data:`TABLE_BASIS_NOTE` when the velocity-loop gain is per m/s of
+    table speed — the factor H ≈ 10⁻³ that decides whether anything creeps.
+
+    Parameters
+    ----------
+    obj : object
+        A parameter dataclass.
+    name : str
+        One of its fields.
+
+    Returns
+    -------
+    str
+        E.g. ``"A/m, per table speed"`` (wang2021) or ``"A/rad"`` (wang2021-literal).
+    """
+    meta = _metadata(obj, name)
+    unit = _unit_in(meta, obj)
+    return f"{unit}, {TABLE_BASIS_NOTE}" if unit != str(meta.get("unit", "")) else unit
+
+
+def path_unit_label(params: object, path: str) -> str:
+    """:func:`unit_label` of a parameter by its dotted path in a set (an index such as
+    ``amplitudes[0]`` names its list).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    path : str
+        E.g. ``"controller.velocity_integral_gain"``.
+
+    Returns
+    -------
+    str
+        The label.
+
+    Raises
+    ------
+    KeyError
+        When ``path`` names no field of a parameter dataclass in ``params``.
+    """
+    import re
+
+    parts = [re.sub(r"\[\d+\]$", "", p) for p in path.split(".")]
+    obj: Any = params
+    for part in parts[:-1]:
+        obj = getattr(obj, part, None)
+        if obj is None:
+            raise KeyError(path)
+    try:
+        return unit_label(obj, parts[-1])
+    except TypeError:  # not a dataclass
+        raise KeyError(path) from None
 
 
 def _metadata(obj: object, name: str) -> Any:

@@ -21,8 +21,7 @@ PLOT_KINDS = ("bode", "nyquist", "step")
 def _title(analysis: LoopAnalysis, what: str) -> str:
     d = analysis.dominant()
     lin = analysis.linear
-    return (f"{what}\nat {1e3 * lin.table_speed:g} mm/s"
-            f"{' (frictionless)' if lin.frictionless else ' (friction linearised)'}: "
+    return (f"{what}\nat {1e3 * lin.table_speed:g} mm/s, {analysis.friction}: "
             f"least-damped mode {d.frequency_hz:.2f} Hz, ζ = {d.damping_ratio:.3f}")
 
 

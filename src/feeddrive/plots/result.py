@@ -1,14 +1,12 @@
-"""Figures (matplotlib, Agg backend): engineering units on the axes."""
+"""Figures (matplotlib ``Figure`` objects, no pyplot: the user's backend is never touched):
+engineering units on the axes."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.figure import Figure
 
 if TYPE_CHECKING:
     from ..engine.result import Result
@@ -78,7 +76,6 @@ def plot_result(result: Result, path: str | Path, title: str | None = None) -> P
 
     with atomic_path(p) as tmp:
         fig.savefig(tmp, dpi=110)
-    plt.close(fig)
     return p
 
 
@@ -98,7 +95,8 @@ def result_figure(result: Result, title: str | None = None) -> Any:
         Three stacked axes sharing time [s], speeds in mm/s, forces in N.
     """
     t = result.time
-    fig, axes = plt.subplots(3, 1, figsize=(8, 8.6), sharex=True, layout="constrained")
+    fig = Figure(figsize=(8, 8.6), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
     ax = axes[0]
     ax.plot(t, 1e3 * result["table_speed"], lw=0.8, label="table")
     ax.plot(t, 1e3 * result["table_speed_reference"], "k--", lw=0.8, label="command")

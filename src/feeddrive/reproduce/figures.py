@@ -10,11 +10,9 @@ from pathlib import Path
 from typing import Any
 
 import matplotlib
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from ..analysis.tracking import reversal_overshoot_at  # noqa: E402
+from ..analysis.tracking import reversal_overshoot_at
 
 # file → (report section, caption: what it shows; what the paper shows)
 CAPTIONS: dict[str, tuple[str, str]] = {
@@ -55,7 +53,6 @@ def _save(fig: Any, path: Path) -> Path:
 
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, bbox_inches="tight")
-    plt.close(fig)
     return path
 
 
@@ -98,7 +95,8 @@ def build_fig6(data: dict[str, Any]) -> Any:
     ----------
     .. [1] Wang2021 Fig. 6.
     """
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.9), sharey=True, layout="constrained")
+    fig = Figure(figsize=(10, 3.9), layout="constrained")
+    axes = fig.subplots(1, 2, sharey=True)
     for ax, (key, d) in zip(axes, data.items(), strict=True):
         _speed_axes(ax, d["trace"], "table")
         _command(ax, d["trace"])
@@ -131,13 +129,15 @@ def fig6(data: dict[str, Any], out: Path) -> Path:
     return _save(build_fig6(data), out / "fig6_cdfs_1p55_1p56.png")
 
 
-#: the part of viridis a trace may use: its last fifth is yellow, invisible on white
-TRACE_COLOR_RANGE = (0.0, 0.8)
+#: the colours of overlaid traces, in order: matplotlib's qualitative "tab10" without its grey
+#: (the held nut's trace is grey) — neighbours of a sequential map (viridis) could not be told
+#: apart in Fig. 7's legend (issue 41 item 5), and its yellow end was invisible (issue 24)
+TRACE_COLORS = tuple(matplotlib.colormaps["tab10"](k) for k in range(10) if k != 7)
 
 
 def trace_color(i: int, n: int) -> Any:
-    """Colour of trace ``i`` of ``n`` overlaid traces in order: viridis, without its yellow
-    end (Fig. 7's seventh trace was invisible, issue 24 item 2).
+    """Colour of trace ``i`` of ``n`` overlaid traces: a distinct hue each (:data:`TRACE_COLORS`;
+    more traces than hues repeat them).
 
     Parameters
     ----------
@@ -149,10 +149,9 @@ def trace_color(i: int, n: int) -> Any:
     Returns
     -------
     tuple of float
-        RGBA colour.
+        RGB colour.
     """
-    lo, hi = TRACE_COLOR_RANGE
-    return plt.get_cmap("viridis")(lo + (hi - lo) * i / max(n - 1, 1))
+    return TRACE_COLORS[i % len(TRACE_COLORS)]
 
 
 def build_fig7(data: dict[str, Any]) -> Any:
@@ -174,10 +173,11 @@ def build_fig7(data: dict[str, Any]) -> Any:
     ----------
     .. [1] Wang2021 Fig. 7.
     """
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), layout="constrained")
+    fig = Figure(figsize=(11, 4.4), layout="constrained")
+    axes = fig.subplots(1, 2)
     traces = list(data["traces"].items())
     # v_n = 0 (the hollow motor held: the CDFS's behaviour) in grey beneath the others, the
-    # DDFS's traces in viridis order
+    # DDFS's traces a distinct hue each (TRACE_COLORS)
     ddfs = [(k, t) for k, t in traces if float(k) > 0]
     for key, trace in traces:
         if float(key) <= 0:
@@ -191,7 +191,8 @@ def build_fig7(data: dict[str, Any]) -> Any:
     # legend beside the axes took 40 % of the width (issue 24 item 2)
     axes[0].legend(title="v_n / v_crit,CDFS", fontsize=7, title_fontsize=7,
                    loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=4)
-    rows = [r for r in data["rows"] if r["multiple"] > 0]
+    # v_n = 0 (the nut held) too: the right panel started at 1× (issue 41 item 5)
+    rows = list(data["rows"])
     vn = [1e3 * r["nut_speed"] for r in rows]
     left = axes[1].plot(vn, [100 * r["overshoot"] for r in rows], "o-", color="C0",
                         label="overshoot [%] (left axis)")
@@ -251,10 +252,15 @@ def fig8_title(critical: dict[str, Any]) -> str:
     from ..analysis.critical import format_critical_speed
 
     c = critical["critical_speed_mm_s"]
-    where = (f"at its critical speed {c:.2f} mm/s" if c is not None else
-             f"critical speed {format_critical_speed(critical)} mm/s ({critical['status']}), "
-             "shown at the paper's 0.5 mm/s")
-    return f"DDFS, v_n = {critical['nut_speed_mm_s']:g} mm/s, {where} (Fig. 8: 0.5 mm/s)"
+    head = f"DDFS, v_n = {critical['nut_speed_mm_s']:g} mm/s"
+    if c is not None:
+        return f"{head}, at its critical speed {c:.2f} mm/s\n(Wang2021 Fig. 8: 0.5 mm/s)"
+    # the status in words, not the search's internal word "below-range" (issue 41 item 5)
+    found = {"below-range": "smooth at every speed searched",
+             "above-range": "creeps at every speed searched"}.get(critical["status"],
+                                                                   str(critical["status"]))
+    return (f"{head}: critical speed {format_critical_speed(critical)} mm/s ({found})\n"
+            "shown at the paper's 0.5 mm/s (Wang2021 Fig. 8)")
 
 
 def build_fig8(trace: dict[str, Any], critical: dict[str, Any]) -> Any:
@@ -276,10 +282,11 @@ def build_fig8(trace: dict[str, Any], critical: dict[str, Any]) -> Any:
     ----------
     .. [1] Wang2021 Fig. 8.
     """
-    fig, ax = plt.subplots(figsize=(7, 3.6), layout="constrained")
+    fig = Figure(figsize=(7, 3.6), layout="constrained")
+    ax = fig.subplots()
     _speed_axes(ax, trace, "table")
     _command(ax, trace)
-    ax.set_title(fig8_title(critical), fontsize=9)
+    ax.set_title(fig8_title(critical))
     ax.set_xlabel("time [s]")
     ax.set_ylabel("table speed [mm/s]")
     _legend_outside(fig, ax)
@@ -334,8 +341,8 @@ def build_sine(data: dict[str, Any], amplitude_mm_s: float, figure: str) -> Any:
     """
     traces = [(k, t) for k, t in data["traces"].items()
               if abs(float(k.split("/")[0]) - amplitude_mm_s) < 1e-9]
-    fig, axes = plt.subplots(len(traces), 1, figsize=(8, 1.9 * len(traces) + 1.0),
-                             sharex=True, sharey=True, layout="constrained", squeeze=False)
+    fig = Figure(figsize=(8, 1.9 * len(traces) + 1.0), layout="constrained")
+    axes = fig.subplots(len(traces), 1, sharex=True, sharey=True, squeeze=False)
     for ax, (key, trace) in zip(axes[:, 0], traces, strict=True):
         vn = key.split("/")[1]
         _speed_axes(ax, trace, "table")
@@ -410,7 +417,8 @@ def build_fig14(rows: list[dict[str, Any]]) -> Any:
     ----------
     .. [1] Wang2021 Table 3, Fig. 14.
     """
-    fig, ax = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
+    fig = Figure(figsize=(7.5, 4.2), layout="constrained")
+    ax = fig.subplots()
     pos = [1e3 * r["position"] for r in rows]
 
     def mm(v: float | None) -> float:

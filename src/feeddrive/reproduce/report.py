@@ -24,6 +24,7 @@ from ..parameters import DriveParameters
 from ..presets import wang2021
 from ..units import SITES
 from . import figures as figures_mod
+from .answer_section import answer_markdown
 from .beyond_section import (
     compensation_rows,
     position_rows,
@@ -32,7 +33,7 @@ from .beyond_section import (
     ripple_targets,
     summary_text,
 )
-from .linear_section import linear_rows
+from .linear_section import cdfs_linear, linear_rows
 from .sensitivity_section import sensitivity_rows
 from .studies import MID, PAPER, StudySettings, write_csv
 
@@ -250,6 +251,11 @@ def _position_trend(rows: list[dict[str, Any]]) -> str:
     parts = []
     for drive in ("cdfs", "ddfs"):
         vals = [r[drive] for r in rows]
+        if all(r.get(f"{drive}_status") == "below-range" for r in rows):
+            low = 1e3 * rows[0]["speed_range"][0]
+            parts.append(f"{drive.upper()}: no (smooth down to {low:.2f} mm/s at every "
+                         "position: no trend)")
+            continue
         if any(v is None for v in vals):
             parts.append(f"{drive.upper()}: search out of range at some positions")
             continue
@@ -412,12 +418,16 @@ def target_rows(results: dict[str, Any]) -> list[dict[str, str]]:
     t3 = results["table3"]
     for drive in ("cdfs", "ddfs"):
         vals = [r[drive] for r in t3]
+        searches = [crit[f"crit-{drive}-{a}"] for a in PAPER["positions"]]
         ok = None if any(v is None for v in vals) else (
             vals[2] > vals[1] > vals[0] and vals[2] > vals[3] > vals[4])
+        if all(s["status"] == "below-range" for s in searches):
+            ok = False  # smooth at every tested speed everywhere: no trend (issue 41 item 5)
         rows.append({"target": f"{drive.upper()} critical speed falls as k_sa rises (Table 3)",
-                     "required": "strictly", "feeddrive": " / ".join(_fmt(None if v is None
-                                                                             else 1e3 * v)
-                                                                        for v in vals),
+                     "required": "strictly",
+                     # the bound a search gives, as every other table shows it ("—" was a
+                     # blank row for the DDFS)
+                     "feeddrive": " / ".join(format_critical_speed(s) for s in searches),
                      "met": "—" if ok is None else ("yes" if ok else "no")})
     return rows
 
@@ -484,8 +494,8 @@ def run_text(results: dict[str, Any]) -> str:
 
 
 def header_text(results: dict[str, Any], when: str) -> str:
-    """The report's first paragraph: version, date, the run (:func:`run_text`), the paper
-    and the integrator (:func:`integrator_text`).
+    """The report's run paragraph: version, date, the run (:func:`run_text`) and the paper
+    (the integrator is stated under Settings, :func:`settings_section`).
 
     Parameters
     ----------
@@ -500,8 +510,7 @@ def header_text(results: dict[str, Any], when: str) -> str:
     str
         The paragraph.
     """
-    return (f"feeddrive {__version__}, {when}, {run_text(results)}. {wang2021.CITATION}.  "
-            f"{integrator_text()}")
+    return f"feeddrive {__version__}, {when}, {run_text(results)}. {wang2021.CITATION}."
 
 
 def integrator_text() -> str:
@@ -540,10 +549,49 @@ def settings_markdown(settings: StudySettings) -> str:
         f"* critical-speed search: {lo:g}–{hi:g} mm/s, scan step "
         f"{1e3 * settings.coarse_step:g} mm/s, resolution {1e3 * settings.resolution:g} mm/s",
         f"* Fig. 7: v_n = {fig7} × the CDFS critical speed",
-        f"* Figs. 9–10: sine {settings.sine_frequency:g} Hz, {settings.sine_periods:g} periods, "
+        f"* Figs. 9–10: sine {settings.sine_frequency:g} Hz, "
+        f"{settings.sine_duration * settings.sine_frequency:g} periods simulated "
+        f"({settings.sine_duration:g} s; the reversal overshoot judged after the first), "
         f"hollow-motor amplitudes v_np = {vnp} mm/s",
         f"* integrator: {SolverOptions().describe()}",
     ])
+
+
+def settings_section(settings: StudySettings) -> str:
+    """The report's Settings section: the integrator every run used (:func:`integrator_text`,
+    moved from the report's top, issue 41 item 1) and the study settings
+    (:func:`settings_markdown`).
+
+    Parameters
+    ----------
+    settings : StudySettings
+        The search settings.
+
+    Returns
+    -------
+    str
+        Markdown.
+    """
+    return f"{integrator_text()}\n\n{settings_markdown(settings)}"
+
+
+def github_slug(title: str) -> str:
+    """The anchor GitHub gives a Markdown heading (lower case, punctuation dropped, spaces
+    to hyphens), for report.md's contents list; report.html sets its own ids.
+
+    Parameters
+    ----------
+    title : str
+        The heading.
+
+    Returns
+    -------
+    str
+        The anchor, without ``#``.
+    """
+    import re
+
+    return re.sub(r"[^\w\- ]", "", title.lower()).replace(" ", "-")
 
 
 def parameter_slot_rows(params: DriveParameters) -> list[dict[str, Any]]:
@@ -611,15 +659,21 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
     f6 = results["fig6"]
     fig6 = [{"v [mm/s]": k, "verdict": d["verdict"],
              "settling [s]": _fmt(d.get("settling_time"), 1)} for k, d in f6.items()]
+    crit = results["critical"]
     table3 = [{"x_t [mm]": f"{1e3 * r['position']:.0f}",
                "k_sa [N/µm]": f"{1e-6 * r['k_sa']:.2f}",
                "k_sa Table 3": f"{1e-6 * r['k_sa_paper']:.2f}",
-               "CDFS [mm/s]": _fmt(None if r["cdfs"] is None else 1e3 * r["cdfs"]),
+               # a search out of range gives its bound ("< 0.02"), as the comparison table
+               # does: "—" here and "< 0.02" there were one result (issue 41 item 5)
+               "CDFS [mm/s]": format_critical_speed(crit[f"crit-cdfs-{a}"]),
                "CDFS Table 3": _fmt(1e3 * r["cdfs_paper"]),
-               "DDFS [mm/s]": _fmt(None if r["ddfs"] is None else 1e3 * r["ddfs"]),
-               "DDFS Table 3": _fmt(1e3 * r["ddfs_paper"])} for r in results["table3"]]
+               "DDFS [mm/s]": format_critical_speed(crit[f"crit-ddfs-{a}"]),
+               "DDFS Table 3": _fmt(1e3 * r["ddfs_paper"])}
+              for a, r in zip(PAPER["positions"], results["table3"], strict=True)]
     fig8_search = results["critical"]["crit-ddfs-fig8"]
-    linear_text, linear = linear_rows(params, results)
+    cdfs = cdfs_linear(params)
+    linear_text, linear = linear_rows(params, results, cdfs=cdfs)
+    answer = answer_markdown(params, results, cdfs)
     forced = results.get("forced_study") or []
     ripple_text, ripple = ripple_rows(forced)
     # (key, title, text, rows); figures go into the section CAPTIONS names (issue 12 item 20)
@@ -687,14 +741,17 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
                      == key] for key in placed}
     unplaced = [f for f in results["figures"] if figures_mod.CAPTIONS.get(f, ("",))[0]
                 not in placed]
-    settings_text = settings_markdown(settings)
+    settings_text = settings_section(settings)
 
     def caption(name: str) -> str:
         return figures_mod.CAPTIONS.get(name, ("", name))[1]
 
     header = header_text(results, when)
+    # the contents: every section, then Settings (issue 41 item 1: 19 sections, no links)
+    listed = [(key, title) for key, title, *_ in sections] + [("settings", "Settings")]
     md = [f"# feeddrive reproduction of Wang2021 — parameter set `{params.name}`", "",
-          header, ""]
+          "## The answer", "", answer, "", header, "", "## Contents", ""]
+    md += [f"* [{title}](#{github_slug(title)})" for _, title in listed] + [""]
     for key, title, text, rows in sections:
         md += [f"## {title}", "", text, "", _table_md(rows), ""]
         for name in figures[key]:
@@ -707,21 +764,27 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         tmp.write_text("\n".join(md), encoding="utf-8")
     name = html.escape(params.name)
     body = [f"<h1>feeddrive reproduction of Wang2021 — <code>{name}</code></h1>",
-            render_html(header)]
+            '<section class="answer" id="answer"><h2>The answer</h2>'
+            f"{render_html(answer)}</section>", render_html(header),
+            '<nav id="contents"><h2>Contents</h2><ol>'
+            + "".join(f'<li><a href="#{key}">{html.escape(title)}</a></li>'
+                      for key, title in listed) + "</ol></nav>"]
 
     def figure_html(name: str) -> str:
         return (f'<figure><img src="{html.escape(name)}" alt="{html.escape(caption(name))}">'
                 f"<figcaption>{html.escape(caption(name))}</figcaption></figure>")
 
     for key, title, text, rows in sections:
-        body += [f"<h2>{html.escape(title)}</h2>", render_html(text),
+        body += [f'<h2 id="{key}">{html.escape(title)}</h2>', render_html(text),
                  render_html(_table_md(rows))]
         body += [figure_html(f) for f in figures[key]]
     body += [figure_html(f) for f in unplaced]
-    body += ["<h2>Settings</h2>", render_html(settings_text)]
+    body += ['<h2 id="settings">Settings</h2>', render_html(settings_text)]
     style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto}"
              "table{border-collapse:collapse;font-size:0.9em}td,th{border:1px solid #ccc;"
-             "padding:3px 6px}img{max-width:100%}figcaption{font-size:0.9em;color:#333}")
+             "padding:3px 6px}img{max-width:100%}figcaption{font-size:0.9em;color:#333}"
+             ".answer{border:2px solid #1f6feb;border-radius:6px;padding:0.2em 1em;"
+             "background:#f3f8ff}")
     html_path = out / "report.html"
     with atomic_path(html_path) as tmp:
         tmp.write_text(f"<!doctype html><html><head><meta charset='utf-8'><title>feeddrive "

@@ -146,8 +146,11 @@ def sensitivity_rows(data: dict[str, Any] | None) -> tuple[str, list[dict[str, s
         else:
             value = f"|E| < {e['bound']:.2g}" if e["bound"] is not None else "—"
             check = e["note"]
+        step = e["step"]
         rows.append({"parameter": e["path"], "elasticity": value,
-                     "step": f"±{100 * e['step']:g} %", "check": check})
+                     # a step the set refused has none (it printed "±nan %", issue 41 item 5)
+                     "step": f"±{100 * step:g} %" if step is not None and math.isfinite(step)
+                     else "—", "check": check})
     text = (f"Elasticity E of the CDFS linear band's upper edge (mid-screw, base "
             f"{data['base_mm_s']:.3f} mm/s) to each numeric parameter of the set: central "
             f"differences, the step doubled from ±10 % until its effect is at least 10× the "

@@ -81,7 +81,8 @@ class StudySettings:
     sine_frequency : float, default 0.2
         Frequency of the Figs. 9–10 sine (not stated by the paper) [Hz].
     sine_periods : float, default 2.0
-        Periods simulated [-].
+        Periods judged, after one lead-in period that is simulated but not judged
+        (:attr:`sine_duration`) [-].
     sine_nut_amplitudes : tuple of float
         Hollow-motor amplitudes of Figs. 9–10 [m/s].
 
@@ -99,6 +100,12 @@ class StudySettings:
     sine_frequency: float = 0.2
     sine_periods: float = 2.0
     sine_nut_amplitudes: tuple[float, ...] = (0.0, 2e-3, 10e-3, 16e-3)
+
+    @property
+    def sine_duration(self) -> float:
+        """Simulated time of each Figs. 9–10 run: the lead-in period and the judged ones [s]."""
+        # (the expression of the runs stored so far: the same float, the same samples)
+        return self.sine_periods / self.sine_frequency + 1.0 / self.sine_frequency
 
     def rule(self) -> VerdictRule:
         """The creep-verdict rule of these settings' trial durations.
@@ -389,7 +396,7 @@ def figs9_10(params: DriveParameters, settings: StudySettings) -> dict[str, Any]
     """
     rows = []
     traces = {}
-    duration = settings.sine_periods / settings.sine_frequency + 1.0 / settings.sine_frequency
+    duration = settings.sine_duration
     for amp in (1.56e-3, 2e-3):
         for vn in settings.sine_nut_amplitudes:
             drive = "ddfs" if vn > 0 else "cdfs"

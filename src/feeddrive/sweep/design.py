@@ -776,3 +776,11 @@ def load_config(path: str | os.PathLike[str]) -> SweepConfig:
 
 __all__ = ["DESIGNS", "MAX_POINTS", "Axis", "Point", "SweepConfig", "check_name",
            "load_config", "numeric_paths", "parse_config"]
+
+
+def __getattr__(name: str) -> Any:
+    """Names that moved from here before 0.2.0: importable until 0.3.0, with a
+    DeprecationWarning naming their new place (:mod:`feeddrive._compat`)."""
+    from .. import _compat
+
+    return _compat.moved(__name__, name)

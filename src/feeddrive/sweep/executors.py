@@ -33,8 +33,8 @@ from .design import Point, SweepConfig
 from .quantities import evaluate, warm
 from .store import SweepStore
 
-__all__ = ["DASK_HINT", "Estimate", "SweepAborted", "SweepInterrupted", "SweepSummary",
-           "estimate", "executor", "run_sweep"]
+__all__ = ["DASK_HINT", "PROBE_DURATION", "Estimate", "SweepAborted", "SweepInterrupted",
+           "SweepSummary", "estimate", "executor", "run_sweep", "simulated_range"]
 
 DASK_HINT = "Dask executors need dask.distributed: pip install 'feeddrive[dask]'"
 # one thread per worker process: the parallelism is across points
@@ -401,6 +401,23 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
     ------
     SweepInterrupted
         On Ctrl-C, after storing every result already returned.
+
+    Examples
+    --------
+    The CDFS's linearly unstable band at three table positions, in a store in a temporary folder:
+
+    >>> import pathlib, tempfile
+    >>> from feeddrive.sweep import SweepStore, parse_config, run_sweep, to_dataset
+    >>> config = parse_config({"preset": "wang2021", "drive": "cdfs",
+    ...                        "quantity": {"kind": "linear-band"},
+    ...                        "axes": {"table_position": [200, 400, 600]}}, "example.toml")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     store = SweepStore(pathlib.Path(folder) / "band.sqlite")
+    ...     summary = run_sweep(config, store, workers=1)
+    ...     upper = to_dataset(store, config.name)["linear_upper"]
+    ...     store.close()
+    >>> print(summary.computed, [round(1e3 * float(v), 2) for v in upper])
+    3 [1.4, 1.4, 1.4]
     """
     t0 = time.perf_counter()
     if design is None:
@@ -521,9 +538,17 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
 
 @dataclass(frozen=True)
 class Estimate:
-    """A sweep's point count and cost.  ``seconds_per_point`` is the mean CPU time [s] of the
-    timed points (CPU, not wall: a loaded machine's wall time made the estimate vary 3.0–10.8 s
-    between runs of one config, issue 24 item 11); ``point_seconds`` each timed point's.
+    """A sweep's point count and its cost, in CPU seconds (not wall: a loaded machine's wall
+    time made the estimate vary 3.0–10.8 s between runs of one config, issue 24 item 11).
+
+    A point's CPU is ``seconds_per_point`` when points were timed (the cheap linear
+    quantities), else the range ``point_range`` from a probe run: the CPU per simulated
+    second of a short run of the drive times the simulated time the quantity's protocol
+    takes at least and at most (:func:`~feeddrive.sweep.executors.simulated_range`).  A
+    sweep also starts its workers — each imports the package and loads the model kernels
+    (``startup_seconds``, measured on this process) — and compiles kernels not in the cache
+    yet (``compile_seconds``, spent by this dry run, once; issue 41 item 8: the estimate had
+    left both out).
 
     Parameters
     ----------
@@ -534,15 +559,24 @@ class Estimate:
     stored : int
         Of them, already stored under this design.
     timed : int
-        Points timed for the estimate.
+        Points timed for the estimate (the linear quantities).
     seconds_per_point : float
-        Mean CPU time of a timed point [s].
+        Mean CPU time of a timed point, or the low end of ``point_range`` [s].
     workers : int
         Workers the estimate assumes.
     point_seconds : tuple of float, default ()
         CPU time of each timed point [s].
     built : int, default 0
         Parameter sets built for the estimate.
+    point_range : tuple of (float, float) or None, default None
+        (least, most) CPU of one point from the probe [s]; None when points were timed.
+    startup_seconds : float, default 0.0
+        CPU of one worker's start: imports and kernel loading [s].
+    compile_seconds : float, default 0.0
+        CPU this dry run spent compiling kernels not cached yet [s] (the sweep then finds
+        them compiled).
+    probe_rate : float or None, default None
+        CPU seconds per simulated second of the probe run [-].
     """
 
     points: int
@@ -552,34 +586,95 @@ class Estimate:
     seconds_per_point: float
     workers: int
     point_seconds: tuple[float, ...] = ()
+    built: int = 0  # parameter sets built for the estimate
+    point_range: tuple[float, float] | None = None
+    startup_seconds: float = 0.0
+    compile_seconds: float = 0.0
+    probe_rate: float | None = None
 
     @property
     def spread(self) -> tuple[float, float]:
-        """(fastest, slowest) timed point [s CPU]; the points of a sweep differ in cost."""
+        """(cheapest, costliest) point [s CPU]: the timed points', or the probe's range."""
+        if self.point_range is not None:
+            return self.point_range
         if not self.point_seconds:
             return (0.0, 0.0)
         return (min(self.point_seconds), max(self.point_seconds))
-    built: int = 0  # parameter sets built for the estimate
+
+    def _wall(self, per_point: float) -> float:
+        remaining = self.distinct - self.stored
+        if remaining <= 0:
+            return 0.0
+        workers = max(min(self.workers, remaining), 1)
+        return remaining * per_point / workers + self.startup_seconds
 
     @property
     def seconds(self) -> float:
-        """Estimated wall time [s] of the remaining points on ``workers`` workers."""
-        remaining = self.distinct - self.stored
-        return remaining * self.seconds_per_point / max(self.workers, 1)
+        """Estimated wall time [s] of the remaining points on ``workers`` workers with a free
+        core each, the workers' start included (the low end for a probed quantity)."""
+        return self._wall(self.seconds_per_point)
+
+    @property
+    def seconds_range(self) -> tuple[float, float]:
+        """(least, most) wall time [s] of the remaining points, the workers' start included."""
+        lo, hi = self.spread
+        return (self._wall(lo), self._wall(hi))
+
+
+#: simulated time of the probe run of a simulation quantity [s]
+PROBE_DURATION = 1.0
+
+
+def simulated_range(q: dict[str, Any]) -> tuple[float, float]:
+    """The least and most simulated time [s] one point of a simulation quantity takes, from
+    its protocol: a creep trial runs ``initial_duration``, doubled up to ``max_duration``
+    until decided; a critical-speed search from rest scans ``(high − low)/coarse_step + 1``
+    speeds, then bisects each change of verdict kind to ``resolution`` (none when nothing
+    creeps; counted here for up to four changes, the most the shipped sets show); a
+    step-down search holds each coarse step, then at most ``coarse_step/resolution`` fine
+    steps.
+
+    Parameters
+    ----------
+    q : dict
+        The quantity settings (:meth:`~feeddrive.sweep.quantities.QuantitySettings.to_dict`).
+
+    Returns
+    -------
+    tuple of (float, float)
+        (least, most) simulated seconds of one point [s].
+    """
+    import math
+
+    short, long = q["initial_duration"], q["max_duration"]
+    if q["kind"] == "creep-trial":
+        return short, long
+    coarse = min(q["coarse_step"], (q["high"] - q["low"]) / 2)
+    scan = math.floor((q["high"] - q["low"]) / coarse + 1e-9) + 1
+    fine = math.ceil(math.log2(max(coarse / q["resolution"], 1.0)))
+    if q["start"] == "rest":
+        return scan * short, (scan + 4 * fine) * long
+    return scan * short, (scan + math.ceil(coarse / q["resolution"])) * long
 
 
 def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
              sample: int = 3, points: list[Point] | None = None,
              progress: Callable[[str], None] | None = None) -> Estimate:
-    """Count the points and time up to ``sample`` of them here (kernels warmed first,
-    nothing written), in CPU seconds of this process, building only those ``sample``
-    parameter sets; ``progress`` is told what is being done.
+    """Count the points and estimate their cost cheaply (issue 41 item 8: the dry run of a
+    4-point grid had cost 2.8 CPU s against the sweep's 7.2): nothing is written, and at
+    most ``sample`` parameter sets are built.
 
     The counts come from the design alone
     (:meth:`feeddrive.sweep.design.SweepConfig.count`,
     :meth:`feeddrive.sweep.design.SweepConfig.distinct_count`); ``stored`` is how many of
     this sweep's points the store holds, when the design it registered there is this one
-    (its keys at the timed points are the keys rebuilt here), else 0.
+    (its keys at the timed points are the keys rebuilt here), else 0.  The kernels are
+    loaded (or compiled, and that CPU reported) first; then the linear quantities time up to
+    ``sample`` points (milliseconds each), and the simulation quantities one
+    :data:`~feeddrive.sweep.executors.PROBE_DURATION`-s run of the middle point's drive at
+    the speed the quantity searches around, scaled by
+    :func:`~feeddrive.sweep.executors.simulated_range`.  One worker's start-up is this
+    process's CPU before the estimate (interpreter, imports) plus the kernels' loading.
 
     Parameters
     ----------
@@ -590,7 +685,7 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
     workers : int
         Workers the estimate assumes.
     sample : int, default 3
-        Points to time.
+        Points to time (linear quantities).
     points : list of Point, optional
         Points already built.
     progress : callable, optional
@@ -601,10 +696,13 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
     Estimate
         The counts and the cost.
     """
+    started = _cpu()  # this process so far: the interpreter, the CLI and its imports
     count = config.count() if points is None else len(points)
     distinct = config.distinct_count() if points is None else len({p.key for p in points})
-    picks = sorted({round(i * (count - 1) / max(sample - 1, 1))
-                    for i in range(min(sample, count))})
+    simulates = config.quantity.kind in ("critical-speed", "creep-trial")
+    n = 1 if simulates else min(sample, count)
+    picks = (sorted({round(i * (count - 1) / max(n - 1, 1)) for i in range(n)}) if n > 1
+             else [count // 2])
     if points is not None:
         chosen = [points[i] for i in picks]
     else:
@@ -625,12 +723,32 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
         if registered and all(registered.get(p.index) == p.key for p in chosen):
             stored = store.stored_count(config.name)
     todo = [p for p in chosen if store is None or store.get(p.key) is None]
-    if progress is not None and todo:
-        progress(f"compiling the model kernels, then timing {len(todo)} of the "
-                 f"{distinct - stored} points to compute (each a full evaluation, nothing "
-                 "stored)")
-    for task in _structure_tasks(todo):
-        warm(task)
+    if not todo:
+        return Estimate(points=count, distinct=distinct, stored=stored, timed=0,
+                        seconds_per_point=0.0, workers=workers, built=len(chosen))
+    if progress is not None:
+        progress("loading the model kernels (compiling them if not cached), then "
+                 + (f"a {PROBE_DURATION:g}-s probe run of one point's drive" if simulates
+                    else f"timing {len(todo)} of the {distinct - stored} points to compute "
+                    "(each a full evaluation, nothing stored)"))
+    from numba.core.event import install_recorder
+
+    t = _cpu()
+    with install_recorder("numba:compile") as compiled:
+        for task in _structure_tasks(todo):
+            warm(task)
+    load = _cpu() - t
+    compile_seconds = load if compiled.buffer else 0.0
+    # a worker loads what this process compiled: its start is this process's imports and
+    # the loading (after a compile, the next dry run measures the loading)
+    startup = started + (0.0 if compiled.buffer else load)
+    if simulates:
+        rate = _probe_rate(todo[0].task)
+        lo, hi = simulated_range(todo[0].task["quantity"])
+        return Estimate(points=count, distinct=distinct, stored=stored, timed=0,
+                        seconds_per_point=lo * rate, workers=workers, built=len(chosen),
+                        point_range=(lo * rate, hi * rate), startup_seconds=startup,
+                        compile_seconds=compile_seconds, probe_rate=rate)
     seconds = []
     for i, p in enumerate(todo, start=1):
         if progress is not None:
@@ -638,7 +756,33 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
         t = time.process_time()
         evaluate(p.task)
         seconds.append(time.process_time() - t)
-    mean = sum(seconds) / len(seconds) if seconds else 0.0
+    mean = sum(seconds) / len(seconds)
     return Estimate(points=count, distinct=distinct, stored=stored, timed=len(seconds),
                     seconds_per_point=mean, workers=workers, point_seconds=tuple(seconds),
-                    built=len(chosen))
+                    built=len(chosen), startup_seconds=startup,
+                    compile_seconds=compile_seconds)
+
+
+def _cpu() -> float:
+    """CPU seconds (user + system) of this process so far."""
+    import resource
+
+    use = resource.getrusage(resource.RUSAGE_SELF)
+    return use.ru_utime + use.ru_stime
+
+
+def _probe_rate(task: dict[str, Any]) -> float:
+    """CPU seconds per simulated second of ``task``'s drive, from a
+    :data:`~feeddrive.sweep.executors.PROBE_DURATION`-s run at the speed its quantity
+    searches around (a creep trial's speed, the middle of a search's range)."""
+    from ..engine.simulate import DriveSystem, simulate
+    from ..model.reference import ConstantSpeed
+    from ..parameters import loads
+
+    q = task["quantity"]
+    speed = q["table_speed"] if q["kind"] == "creep-trial" else 0.5 * (q["low"] + q["high"])
+    system = DriveSystem(loads(task["parameters"]), drive=task["drive"],
+                         table_position=task["table_position"])
+    t = time.process_time()
+    simulate(system, ConstantSpeed(speed, task["nut_speed"]), PROBE_DURATION)
+    return (time.process_time() - t) / PROBE_DURATION

@@ -245,7 +245,7 @@ def export(store: SweepStore, sweep: str, path: str | Path) -> Path:
     p = Path(path)
     ext = p.suffix.lower()
     if ext not in (".nc", ".parquet", ".csv"):
-        raise ValueError(f"{p}: unknown extension; expected one of {EXPORT_FORMATS}")
+        raise ValueError(f"{p}: unknown extension; expected one of {', '.join(EXPORT_FORMATS)}")
     with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
         if ext == ".nc":
             ds = to_dataset(store, sweep)

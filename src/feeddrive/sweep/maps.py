@@ -18,16 +18,13 @@ import math
 from pathlib import Path
 from typing import Any
 
-import matplotlib
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from .. import units
 from ..io.outputs import atomic_path
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
 
 __all__ = ["DEFAULT_VALUE", "percentiles", "plot_histogram", "plot_map"]
 
@@ -107,8 +104,8 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
                          f"{MAX_PANELS}: export the sweep and plot a subset")
     ncol = min(len(combos), 3)
     nrow = math.ceil(len(combos) / ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.2 * nrow + 0.5),
-                             squeeze=False, layout="constrained")
+    fig = Figure(figsize=(5.2 * ncol, 4.2 * nrow + 0.5), layout="constrained")
+    axes = fig.subplots(nrow, ncol, squeeze=False)
     xs, _ = _eng(ds[x])
     ys, _ = _eng(ds[y])
     all_values, vunit = _eng(ds[value])
@@ -172,7 +169,6 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
     p = Path(path)
     with atomic_path(p) as tmp:
         fig.savefig(tmp, dpi=110, bbox_inches="tight")  # nothing cut off at the edges
-    plt.close(fig)
     return p
 
 
@@ -324,7 +320,8 @@ def plot_histogram(ds: xr.Dataset, path: str | Path, *, value: str | None = None
     v, unit = _eng(ds[value])
     v = v.ravel()
     v = v[np.isfinite(v)]
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig = Figure(figsize=(7, 4.5))
+    ax = fig.subplots()
     bins = max(5, min(40, int(math.sqrt(max(v.size, 1))) * 2))
     ax.hist(v, bins=bins, color="tab:blue", alpha=0.75, label=f"simulated {value}")
     if value == "critical_speed" and "linear_upper" in ds:
@@ -348,5 +345,4 @@ def plot_histogram(ds: xr.Dataset, path: str | Path, *, value: str | None = None
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110)
-    plt.close(fig)
     return stats

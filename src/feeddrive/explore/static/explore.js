@@ -507,12 +507,12 @@ function renderLinear(res) {
     customdata: poles.map((p) => [p.frequency_hz, p.damping_ratio]),
     hovertemplate: "Re = %{x:.4g} 1/s<br>Im/2π = %{y:.4g} Hz<br>|s|/2π = " +
       "%{customdata[0]:.4g} Hz, ζ = %{customdata[1]:.3g}<extra></extra>",
-  }], layout(`loop poles at ${fmt(res.table_speed_mm_s)} mm/s (friction linearised)`,
+  }], layout(`loop poles at ${fmt(res.table_speed_mm_s)} mm/s, ${res.friction}`,
              "real part [1/s]", "imaginary part / 2π [Hz]",
              { xaxis: { range: [lo - pad, hi + pad] }, uirevision: `poles-${ys.length}`,
                shapes: [{ type: "line", xref: "x", yref: "paper", x0: 0, x1: 0, y0: 0, y1: 1,
                           line: { color: "#888", width: 1 } }] }), plotConfig("poles"));
-  renderBode(res.bode || []);
+  renderBode(res.bode || [], res.friction);
   const d = res.least_damped_mode;
   const loops = res.loops.map((lp) => `${lp.loop}: phase margin ` +
     `${fmt(lp.phase_margin_deg, 3, "°")}, gain margin ${fmt(lp.gain_margin_db, 3, "dB")}`)
@@ -520,7 +520,8 @@ function renderLinear(res) {
   const notes = (res.notes || []).join(" · ");
   $("linear-facts").textContent =
     `Steady sliding at ${fmt(res.table_speed_mm_s)} mm/s is linearly ` +
-    `${res.inside_band ? "UNSTABLE (inside the band)" : "stable"}; least-damped mode ` +
+    `${res.inside_band ? "UNSTABLE (inside the band)" : "stable"}; ${res.friction} ` +
+    "(feeddrive loops: without friction unless --with-friction): least-damped mode " +
     `${fmt(d.frequency_hz, 3)} Hz, ζ = ${fmt(d.damping_ratio, 3)} · ${loops}` +
     (rigid.length ? ` · ${rigid.length} rigid-body pole(s), not a mode` : "") +
     (notes ? ` · ${notes}` : "");
@@ -529,7 +530,7 @@ function renderLinear(res) {
 
 // ------------------------------------------------------------------ loops: Bode plot
 
-function renderBode(bode) {
+function renderBode(bode, friction) {
   if (!bode.length) {
     Plotly.purge($("plot-bode"));
     return;
@@ -569,7 +570,8 @@ function renderBode(bode) {
       }
     }
   });
-  const l = layout("loop gains L(jω) (loop broken at its command; crossover dotted)",
+  const l = layout(`loop gains L(jω), ${friction} (loop broken at its command; crossover ` +
+                   "dotted)",
                    "frequency [Hz]", "|L| [dB]", { shapes, annotations, uirevision: "bode" });
   l.xaxis.type = "log";
   l.xaxis.anchor = "y2";

@@ -179,7 +179,8 @@ class BallScrewDrive(Mechanism):
     def check_profile(self, nut_speed: float, nut_table: Any) -> None:
         if not self.follows_nut_reference() and (nut_speed != 0.0 or np.any(nut_table != 0.0)):
             raise ParameterError("nut_speed", nut_speed,
-                                 "the CDFS holds the hollow motor; expected 0 [m/s]")
+                                 "the CDFS holds the hollow motor; expected 0 (a moving nut is "
+                                 "the DDFS: use drive 'ddfs', --drive ddfs)")
 
     def declare(self, b: Builder) -> None:
         H = self.params.screw.transmission_ratio

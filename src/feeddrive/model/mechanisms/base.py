@@ -577,8 +577,10 @@ def mechanism(drive: str) -> type[Mechanism]:
     table = registry.table(registry.MECHANISMS)
     if drive not in table:
         from ...parameters import ParameterError
+        from ...parameters.validation import did_you_mean
 
-        raise ParameterError("drive", drive, f"expected one of {', '.join(table)}")
+        raise ParameterError("drive", drive, f"expected one of {', '.join(table)}"
+                             + did_you_mean(drive, table))
     cls: type[Mechanism] = table[drive]
     return cls
 

@@ -92,14 +92,14 @@ class LinearMotorDrive(Mechanism):
             When the parameter set has no ``[linear_motor]`` section.
         """
         if params.linear_motor is None:
-            raise ParameterError("linear_motor", None,
+            raise ParameterError("linear_motor", f"no such section in {params.name}",
                                  "the linear-motor drive needs a [linear_motor] section "
                                  "(e.g. --preset linear-motor-example)")
 
     def check_profile(self, nut_speed: float, nut_table: Any) -> None:
         if nut_speed != 0.0 or np.any(nut_table != 0.0):
             raise ParameterError("nut_speed", nut_speed,
-                                 "a linear-motor drive has no nut; expected 0 [m/s]")
+                                 "a linear-motor drive has no nut; expected 0")
 
     def declare(self, b: Builder) -> None:
         b.state("table_position", "m", "table displacement from its start x_t", "position")

@@ -120,14 +120,14 @@ class RackPinionDrive(Mechanism):
             When the parameter set has no ``[rack_pinion]`` section.
         """
         if params.section("rack_pinion") is None:
-            raise ParameterError("rack_pinion", None,
+            raise ParameterError("rack_pinion", f"no such section in {params.name}",
                                  "the rack-pinion drive needs a [rack_pinion] section "
                                  "(e.g. --preset rack-pinion-example)")
 
     def check_profile(self, nut_speed: float, nut_table: Any) -> None:
         if nut_speed != 0.0 or np.any(nut_table != 0.0):
             raise ParameterError("nut_speed", nut_speed,
-                                 "a rack-pinion drive has no nut; expected 0 [m/s]")
+                                 "a rack-pinion drive has no nut; expected 0")
 
     @property
     def section(self) -> RackPinion:
