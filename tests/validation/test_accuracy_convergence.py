@@ -77,9 +77,11 @@ def errors(method: str, drive: str, speed: float) -> list[float]:
     return out
 
 
-def assert_converges(errs: list[float]) -> None:
+def assert_converges(errs: list[float], floor: float = 1e-12) -> None:
+    """Each decade of accuracy lowers the error 5× at least, unless it is at ``floor`` (of
+    the peak table speed) already."""
     for a, b in zip(errs, errs[1:], strict=False):
-        assert b <= a / 5.0 or b <= 1e-12, errs
+        assert b <= a / 5.0 or b <= floor, errs
 
 
 @pytest.mark.slow
@@ -87,7 +89,13 @@ def assert_converges(errs: list[float]) -> None:
 @pytest.mark.parametrize("method", [*DENSE, "dopri5"])
 def test_every_method_converges_with_accuracy(method: str, drive: str, speed: float) -> None:
     errs = errors(method, drive, speed)
-    assert_converges(errs)
+    # double precision's floor: 1e-12 of the signal's range.  A DDFS's table speed is the
+    # difference of the motors' motions (angles of the screw's travel at v + v_n): its
+    # states resolve it to about 1e-12 of the motors' speed, not of the table's own (at
+    # 0.1 mm/s between motors at 16 mm/s: rodas4 4.4e-10 -> 9.9e-11 -> 5.6e-11 at accuracy
+    # 1e-2, 1e-3, 1e-4, of the table's peak; measured 2026-12-04)
+    nut = NUT_SPEED if drive == "ddfs" else 0.0
+    assert_converges(errs, floor=1e-12 * (speed + nut) / speed)
     if method in DENSE:
         assert errs[0] <= 1e-5, errs  # the defaults
         assert errs[-1] <= 1e-8, errs  # accuracy = 0.001

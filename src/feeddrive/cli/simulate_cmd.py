@@ -87,6 +87,9 @@ def simulate_command(
     output: str | None = typer.Option(None, "--output", help="Write signals to "
                                       "FILE.csv|.parquet|.nc|.mat"),
     plot: str | None = typer.Option(None, "--plot", help="Write a PNG of the run."),
+    error_estimate: bool = typer.Option(
+        False, "--error-estimate", help="Also estimate the run's global integration error per "
+        "signal, from a second run with every tolerance 10× tighter (it costs that run)."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
     solver: Any = None,
@@ -184,7 +187,8 @@ def simulate_command(
     bar, advance = (None, None) if as_json else _progress_bar(duration)
     try:
         result = simulate(system, prof, duration, options=options,
-                          output=output if streamed else None, progress=advance)
+                          output=output if streamed else None, progress=advance,
+                          error_estimate=error_estimate)
     except SimulationError as err:
         message = str(err).replace("options.max_steps", "--max-steps")
         err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
@@ -363,7 +367,29 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
                                           f"{n(s['mean_nut_speed_mm_s'])} mm/s (× H)"))
     if "run" not in s:
         rows.append(("window", f"{n(a)}–{n(b)} s"))
+    rows.append(("integrator", integrator_line(s["solver"])))
+    estimate = s["solver"].get("error_estimate")
+    if estimate is not None:
+        sig = estimate["signals"]
+        rows.append(("integration error", "estimated: table position "
+                     f"{n(1e6 * sig['table_position']['absolute'], 3)} µm "
+                     f"({n(sig['table_position']['relative'], 3)} of its range), table speed "
+                     f"{n(1e3 * sig['table_speed']['absolute'], 3)} mm/s "
+                     f"({n(sig['table_speed']['relative'], 3)}); largest "
+                     f"{n(estimate['largest_relative']['relative'], 3)} of the range "
+                     f"({estimate['largest_relative']['signal']}); by the "
+                     f"{estimate['method']}"))
     return rows
+
+
+def integrator_line(stats: dict[str, Any]) -> str:
+    """The run's integrator settings in one line: method, the tolerances it ran at (SI) and
+    what they were scaled to."""
+    n = _units.number
+    return (f"{stats['method']}, rtol {n(stats['rtol'], 3)}, positions "
+            f"{n(stats['position_tolerance'], 3)} m, speeds {n(stats['speed_tolerance'], 3)} "
+            f"m/s, currents {n(stats['current_tolerance'], 3)} A (scaled to "
+            f"{n(1e3 * stats['speed_scale'], 3)} mm/s; accuracy {n(stats['accuracy'], 3)})")
 
 
 def _si(mm_s: float | None) -> float | None:

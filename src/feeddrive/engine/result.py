@@ -160,8 +160,16 @@ class Run:
         """
         import xarray as xr  # here: a summary needs no Dataset (issue 21 item 4)
 
-        data_vars = {name: ("time", np.array(self.signal(name)),
-                            {"units": unit, "long_name": desc})
+        estimate = self.solver_stats.get("error_estimate", {}).get("signals", {})
+
+        def var_attrs(name: str, unit: str, desc: str) -> dict[str, Any]:
+            out: dict[str, Any] = {"units": unit, "long_name": desc}
+            if name in estimate:  # the estimated global integration error (error_estimate)
+                out["integration_error_estimate"] = estimate[name]["absolute"]
+                out["integration_error_estimate_relative"] = estimate[name]["relative"]
+            return out
+
+        data_vars = {name: ("time", np.array(self.signal(name)), var_attrs(name, unit, desc))
                      for name, (unit, desc) in self.meta.items()}
         return xr.Dataset(data_vars, coords={"time": ("time", self.t, {"units": "s"})},
                           attrs=self.attrs(full=True))
@@ -270,6 +278,42 @@ class Result:
         if self._run is not None:
             return self._run.t
         return np.asarray(self.dataset["time"].values)
+
+    def signal_names(self) -> list[str]:
+        """The names of every recorded signal (states, auxiliary and derived outputs).
+
+        Returns
+        -------
+        list of str
+            In the record's order.
+        """
+        if self._run is not None:
+            return list(self._run.meta)
+        return [str(n) for n in self.dataset.data_vars]
+
+    def add_error_estimate(self, entry: dict[str, Any]) -> None:
+        """Attach an estimate of the run's global integration error
+        (:mod:`feeddrive.engine.error_estimate`): it joins :attr:`solver_stats` (the summary,
+        the JSON, the dataset's ``solver`` attribute) and each signal's attributes
+        (``integration_error_estimate`` [its unit], ``…_relative`` [-]).
+
+        Parameters
+        ----------
+        entry : dict
+            :func:`feeddrive.engine.error_estimate.summary_entry`.
+        """
+        if self._run is not None:
+            self._run.solver_stats["error_estimate"] = entry
+            self._dataset = None
+            return
+        stats = json.loads(self.dataset.attrs["solver"])
+        stats["error_estimate"] = entry
+        self.dataset.attrs["solver"] = json.dumps(stats)
+        for name, err in entry["signals"].items():
+            if name in self.dataset:
+                self.dataset[name].attrs["integration_error_estimate"] = err["absolute"]
+                self.dataset[name].attrs["integration_error_estimate_relative"] = \
+                    err["relative"]
 
     @property
     def solver_stats(self) -> dict[str, Any]:

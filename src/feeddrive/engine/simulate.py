@@ -18,6 +18,7 @@ from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..parameters import DriveParameters, ParameterError
 from ..solvers import dopri5, switching
 from . import budget
+from .error_estimate import signal_errors, summary_entry, tightened
 from .options import DENSE_MODES as _DENSE_MODES
 from .options import METHODS as METHODS  # re-exported: the engine's public names
 from .options import RunScales
@@ -469,7 +470,8 @@ KEEP_STREAMED = 60.0  # [s] of a streamed run kept in memory (its end) for the s
 
 def simulate(system: DriveSystem, profile: Profile, duration: float, *,
              options: SolverOptions | None = None, output: str | Path | None = None,
-             progress: Callable[[float, float], None] | None = None) -> Result:
+             progress: Callable[[float, float], None] | None = None,
+             error_estimate: bool = False) -> Result:
     """Simulate ``system`` following ``profile`` for ``duration`` from rest.
 
     ``output`` (``.parquet`` or ``.csv``): every sample is written to that file as it is
@@ -489,11 +491,18 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     duration : float
         Simulated time [s].
     options : SolverOptions or None, default None
-        Integrator settings (None: the defaults).
+        Integrator settings (None: those in force, :func:`feeddrive.engine.options.current`,
+        by default the defaults).
     output : str, pathlib.Path or None, default None
         Stream every sample to this ``.parquet`` or ``.csv`` file.
     progress : callable or None, default None
         Called as ``progress(t, t_end)`` [s] after each chunk.
+    error_estimate : bool, default False
+        Also estimate the run's global integration error per signal (largest absolute and
+        relative to the signal's range), from a second run with every tolerance ten times
+        tighter (:mod:`feeddrive.engine.error_estimate`; it costs that run): in
+        ``solver_stats["error_estimate"]``, the summary, the JSON and each signal's
+        attributes.
 
     Returns
     -------
@@ -530,7 +539,26 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     >>> print(f"{1e3 * result['table_position'][-1]:.2f} mm travelled")
     3.00 mm travelled
     """
-    return Simulation(system, profile, options).run(duration, output=output, progress=progress)
+    sim = Simulation(system, profile, options)
+    shadow_options = tightened(sim.options) if error_estimate else None  # refused before work
+    result = sim.run(duration, output=output, progress=progress)
+    if shadow_options is not None:
+        shadow = Simulation(system, profile, shadow_options).run(duration)
+        if shadow.time.size != result.time.size:  # a streamed run keeps its last part only
+            shadow = _tail(shadow, result.time)
+        errors = signal_errors(result, shadow)
+        result.add_error_estimate(summary_entry(errors, sim.options, shadow_options,
+                                                shadow.solver_stats))
+    return result
+
+
+def _tail(shadow: Result, times: np.ndarray) -> Result:
+    """``shadow``'s samples at ``times`` (a streamed run's kept part: the same output grid)."""
+    idx = np.searchsorted(shadow.time, times)
+    if idx.size == 0 or idx[-1] >= shadow.time.size \
+            or not np.array_equal(shadow.time[idx], times):
+        raise ValueError("the shadow run's output instants differ from the run's")
+    return Result(shadow.dataset.isel(time=idx))
 
 
 class Simulation:

@@ -1,0 +1,137 @@
+"""The global integration error of a run, estimated and stated beside its result.
+
+Every method here keeps its global error proportional to its tolerances: measured on the
+frictionless step responses of the CDFS and DDFS against their exact (matrix-exponential)
+response, each decade of ``accuracy`` lowers the error 9–11× for the dense-output methods
+(tests/validation/test_accuracy_convergence.py; benchmarks/results/bench_accuracy.md).  So the
+run is repeated with every tolerance ten times tighter (the *shadow*), and the difference of
+the two on the output grid estimates the error of the run itself: with errors e and e/10 of
+the same shape the difference is 0.9 e, with unrelated shapes √1.01 e — within 10 % either
+way, a factor 3 at worst where proportionality holds only roughly (stick–slip: the error is
+the drift of the slip instants, which a tighter run shortens in proportion too).  The cost is
+the shadow run: 1.6–2.5× the run (steps ∝ tolerance^(−1/5) for DOPRI5, ^(−1/4) for RODAS4).
+
+References
+----------
+.. [1] E. Hairer, S. P. Nørsett, G. Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+   Springer, 1993, Sect. II.4 ("tolerance proportionality", and global error estimation by
+   running at two tolerances).
+.. [2] L. F. Shampine, "Global error estimation with one-step methods", Comput. Math. Appl.
+   12A (1986) 885–894.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..parameters import ParameterError
+from . import options as opt
+
+if TYPE_CHECKING:
+    from .options import SolverOptions
+    from .result import Result
+
+#: the shadow run's tolerances: this many times tighter
+SHADOW_FACTOR = 10.0
+#: how the estimate was made, as a result states it
+METHOD_TEXT = (f"difference to a run with every tolerance {SHADOW_FACTOR:g}× tighter "
+               "(tolerance proportionality; feeddrive.engine.error_estimate)")
+
+
+def tightened(options: SolverOptions, factor: float = SHADOW_FACTOR) -> SolverOptions:
+    """``options`` with every tolerance ``factor`` times tighter: the explicit ones divided,
+    the defaults through ``accuracy``.
+
+    Parameters
+    ----------
+    options : SolverOptions
+        The run's options.
+    factor : float, default SHADOW_FACTOR
+        How much tighter [-].
+
+    Returns
+    -------
+    SolverOptions
+        The shadow run's options.
+
+    Raises
+    ------
+    ParameterError
+        When the tighter run would ask for less than ``MIN_RELATIVE`` relative (the run's
+        own settings are then at double precision's reach: no estimate is possible).
+    """
+    changes: dict[str, Any] = {}
+    for name, _, _ in opt.TOLERANCES:
+        value = getattr(options, name)
+        if value is not None:
+            changes[name] = value / factor
+    if any(getattr(options, n) is None for n, _, _ in opt.TOLERANCES):
+        changes["accuracy"] = options.accuracy / factor
+    rtol = changes.get("rtol", opt.DEFAULT_RTOL * changes.get("accuracy", 1.0))
+    if rtol < opt.MIN_RELATIVE:
+        raise ParameterError("error_estimate", True,
+                             f"needs a run {factor:g}× tighter than rtol "
+                             f"{rtol * factor:g}, below {opt.MIN_RELATIVE:g}: give a "
+                             "looser setting to estimate its error")
+    # the shadow's settings are one layer (its own), not the run's mixed sources
+    return replace(options, **changes, origin=())
+
+
+def signal_errors(result: Result, shadow: Result) -> dict[str, dict[str, float]]:
+    """Per signal of ``result``, the largest difference to ``shadow`` on the common output
+    grid, absolute and relative to the signal's range (its peak-to-peak; its largest |value|
+    when constant).
+
+    Parameters
+    ----------
+    result, shadow : Result
+        The run and its shadow (same output instants).
+
+    Returns
+    -------
+    dict
+        ``{signal: {"absolute": [SI], "relative": [-]}}``.
+    """
+    if result.time.shape != shadow.time.shape or not np.array_equal(result.time, shadow.time):
+        raise ValueError("the shadow run's output instants differ from the run's")
+    out: dict[str, dict[str, float]] = {}
+    for name in result.signal_names():
+        a, b = np.asarray(result[name], dtype=float), np.asarray(shadow[name], dtype=float)
+        diff = float(np.max(np.abs(a - b))) if a.size else 0.0
+        span = float(np.ptp(a)) if a.size else 0.0
+        if span == 0.0:
+            span = float(np.max(np.abs(a))) if a.size else 0.0
+        out[name] = {"absolute": diff, "relative": diff / span if span > 0.0 else 0.0}
+    return out
+
+
+def summary_entry(errors: dict[str, dict[str, float]], options: SolverOptions,
+                  shadow: SolverOptions, shadow_stats: dict[str, Any]) -> dict[str, Any]:
+    """The estimate as a run's ``solver_stats["error_estimate"]`` holds it.
+
+    Parameters
+    ----------
+    errors : dict
+        :func:`signal_errors`.
+    options, shadow : SolverOptions
+        The run's and the shadow's options.
+    shadow_stats : dict
+        The shadow run's solver statistics.
+
+    Returns
+    -------
+    dict
+        ``method`` (how), ``shadow`` (its tolerances and cost), ``signals`` (per signal),
+        ``largest_relative`` (signal and value).
+    """
+    worst = max(errors.items(), key=lambda kv: kv[1]["relative"]) if errors else ("", {})
+    return {"method": METHOD_TEXT,
+            "shadow": {"accuracy": shadow.accuracy, "rtol": shadow_stats.get("rtol"),
+                       "steps": shadow_stats.get("steps"),
+                       "rhs_evaluations": shadow_stats.get("rhs_evaluations")},
+            "signals": errors,
+            "largest_relative": {"signal": worst[0],
+                                 "relative": worst[1].get("relative", 0.0) if worst[1] else 0.0}}
