@@ -47,15 +47,17 @@ CASES = {"cdfs_2p0": ("cdfs", 2.0e-3, 0.0), "ddfs_0p5_vn16": ("ddfs", 0.5e-3, 16
 
 
 def radau(drive: str, table_speed: float, nut_speed: float, rtol: float,
-          atol_scale: float) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
-    """(time, states [15 × n], statistics) on the 1-ms grid."""
-    params = feeddrive.preset("wang2021")
+          atol_scale: float, *, params: Any = None,
+          duration: float = DURATION) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
+    """(time, states [15 × n], statistics) on the 1-ms grid (``params``: default the shipped
+    ``wang2021`` set)."""
+    params = params if params is not None else feeddrive.preset("wang2021")
     profile = ConstantSpeed(table_speed=table_speed, nut_speed=nut_speed)
     model = ReferenceModel(params, drive, 0.4, profile)
     atol = tolerances(model.H) * atol_scale
-    n = int(round(DURATION / OUTPUT_INTERVAL))
+    n = int(round(duration / OUTPUT_INTERVAL))
     grid = np.arange(n + 1) * OUTPUT_INTERVAL
-    cuts = [0.0, profile.ramp_time, DURATION]
+    cuts = [0.0, profile.ramp_time, duration]
     y0 = np.zeros(len(STATE_NAMES))
     ys, ts = [], []
     stats = {"nfev": 0.0, "njev": 0.0, "nlu": 0.0}
