@@ -413,8 +413,8 @@ class SolverOptions:
             A clause.
         """
         a = self.accuracy
-        acc = f" × accuracy {_num(a)}" if a != 1.0 else ""
-        acc_from = self._from("accuracy") if a != 1.0 else ""
+        acc = " × accuracy" if a != 1.0 else ""
+        acc_from = f"; accuracy {_num(a)}{self._from('accuracy')}" if a != 1.0 else ""
         if scales is not None:
             tol = self.resolve(scales)
             deflection = ("deflections as positions" if tol.deflection is None else
@@ -427,7 +427,7 @@ class SolverOptions:
                     f"{_num(tol.speed)} m/s (speeds){self._from('speed_tolerance')}{motors}, "
                     f"{_num(tol.current)} A (currents){self._from('current_tolerance')}, "
                     f"{deflection} (speed scales: table {_num(scales.table_speed)} m/s, motors "
-                    f"{_num(scales.speed)} m/s; current scale {_num(scales.current)} A{acc}"
+                    f"{_num(scales.speed)} m/s; current scale {_num(scales.current)} A"
                     f"{acc_from})")
         parts = [
             f"rtol {_num(self.rtol)}{self._from('rtol')}" if self.rtol is not None
@@ -445,7 +445,8 @@ class SolverOptions:
         ]
         return (f"{parts[0]}, absolute tolerances {', '.join(parts[1:])} (V: the state's speed "
                 "scale, the table's largest command speed for the table, the largest motor "
-                f"command speed for the motors, at least {_num(SPEED_SCALE_FLOOR)} m/s){acc_from}")
+                f"command speed for the motors, at least {_num(SPEED_SCALE_FLOOR)} m/s"
+                f"{acc_from})")
 
     def _from(self, name: str) -> str:
         """Where a setting came from, when the command line or a file gave it."""

@@ -1,0 +1,144 @@
+"""Issue 35 item 1: tolerances that act, everywhere — the command line, a parameter file's
+``[solver]`` table, the API; precedence, refusals before any work, keys."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+import feeddrive as fd
+from feeddrive.cli import app
+from feeddrive.cli._solver import OPTIONS
+from feeddrive.engine import options as opt
+from feeddrive.engine import simulate as sim_module
+from feeddrive.parameters import ParameterError
+
+runner = CliRunner()
+COMMANDS = (["simulate"], ["creep"], ["calibrate"], ["fit"], ["predict"], ["sensitivity"],
+            ["sweep"], ["export", "fmu"])
+
+
+@pytest.mark.parametrize("command", COMMANDS, ids=" ".join)
+def test_every_simulating_command_takes_the_settings(command: list[str]) -> None:
+    out = runner.invoke(app, [*command, "--help"], terminal_width=200).output
+    for _, flag, _ in OPTIONS:
+        assert flag in out, (command, flag)
+
+
+def _no_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a simulation started")
+
+    monkeypatch.setattr(sim_module.Simulation, "run", refuse)
+
+
+@pytest.mark.parametrize(("args", "named"), [
+    (["--rtol", "-1"], "--rtol"), (["--rtol", "0"], "--rtol"), (["--rtol", "nan"], "--rtol"),
+    (["--rtol", "1e-15"], "--rtol"), (["--speed-tolerance", "0"], "--speed-tolerance"),
+    (["--position-tolerance", "-1e-12"], "--position-tolerance"),
+    (["--current-tolerance", "inf"], "--current-tolerance"),
+    (["--accuracy", "1e-9"], "--accuracy"), (["--accuracy", "0"], "--accuracy"),
+    (["--rtol", "1e-8", "--accuracy", "0.1"], "--accuracy"),
+])
+def test_bad_settings_are_refused_in_one_line_before_any_work(
+        monkeypatch: pytest.MonkeyPatch, args: list[str], named: str) -> None:
+    _no_run(monkeypatch)
+    result = runner.invoke(app, ["simulate", "--table-speed", "1", *args])
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith(f"error: {named} = "), result.output
+    if "--accuracy" in args and "--rtol" in args:
+        assert "given with --rtol" in lines[0]
+    else:  # the range is named
+        assert "expected" in lines[0] and ("…" in lines[0] or "> 0" in lines[0])
+
+
+def _summary(args: list[str]) -> dict[str, object]:
+    result = runner.invoke(app, ["simulate", "--table-speed", "1", "--duration", "0.1",
+                                 "--json", *args])
+    assert result.exit_code == 0, result.output
+    data: dict[str, object] = json.loads(result.output)
+    return data
+
+
+def test_the_defaults_scale_with_the_command_speed() -> None:
+    slow = _summary(["--table-speed", "0.01"])["solver"]
+    fast = _summary([])["solver"]
+    assert isinstance(slow, dict) and isinstance(fast, dict)
+    # 100× slower: 100× tighter speed and position tolerances, the same relative accuracy
+    assert slow["speed_tolerance"] == pytest.approx(fast["speed_tolerance"] / 100)
+    assert slow["position_tolerance"] == pytest.approx(fast["position_tolerance"] / 100)
+    assert fast["speed_tolerance"] == pytest.approx(opt.SPEED_FRACTION * 1e-3)
+    assert fast["position_tolerance"] == pytest.approx(opt.POSITION_TIME * 1e-3)
+
+
+def test_precedence_cli_over_file_over_default(tmp_path: Path) -> None:
+    params = tmp_path / "set.toml"
+    params.write_text('extends = "wang2021"\n\n[solver]\naccuracy = 0.1\n'
+                      'speed_tolerance = 1e-9\n', encoding="utf-8")
+    with pytest.raises(ParameterError, match="given with"):  # both in one table
+        opt.layered([("[solver] in set.toml", opt.file_settings(params))])
+    params.write_text('extends = "wang2021"\n\n[solver]\naccuracy = 0.1\n', encoding="utf-8")
+    from_file = _summary(["--params", str(params)])["solver"]
+    assert isinstance(from_file, dict)
+    assert from_file["rtol"] == pytest.approx(1e-7)  # the file's accuracy
+    over = _summary(["--params", str(params), "--rtol", "1e-9"])["solver"]
+    assert isinstance(over, dict)
+    assert over["rtol"] == pytest.approx(1e-9)  # the command line's explicit rtol …
+    assert over["speed_tolerance"] == pytest.approx(from_file["speed_tolerance"])  # … file's
+    cli = _summary(["--params", str(params), "--accuracy", "0.5"])["solver"]
+    assert isinstance(cli, dict)
+    assert cli["rtol"] == pytest.approx(5e-7)  # the command line's accuracy replaces it
+    options = opt.layered([(f"[solver] in {params}", opt.file_settings(params)),
+                           ("command line", {"rtol": (1e-9, "--rtol")})])
+    text = options.describe()
+    assert "rtol 1e-9 (from --rtol)" in text and f"accuracy 0.1 (from [solver] in {params})" \
+        in text
+
+
+def test_a_bad_solver_table_names_its_key(tmp_path: Path) -> None:
+    params = tmp_path / "set.toml"
+    params.write_text('extends = "wang2021"\n\n[solver]\nrtoll = 1e-8\n', encoding="utf-8")
+    result = runner.invoke(app, ["simulate", "--table-speed", "1", "--params", str(params)])
+    assert result.exit_code == 2 and "solver.rtoll" in result.output, result.output
+    params.write_text('extends = "wang2021"\n\n[solver]\nrtol = -1.0\n', encoding="utf-8")
+    result = runner.invoke(app, ["simulate", "--table-speed", "1", "--params", str(params)])
+    assert result.exit_code == 2 and "solver.rtol" in result.output, result.output
+    # the parameter set itself ignores the table
+    assert fd.parameters.load(params) == fd.preset("wang2021").replace_path(
+        "name", fd.parameters.load(params).name)
+
+
+def test_the_settings_reach_the_runs_of_a_command() -> None:
+    with opt.using(fd.SolverOptions(accuracy=0.01)):
+        r = fd.simulate(fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4),
+                        fd.ConstantSpeed(1e-3), 0.05)
+    assert r.solver_stats["accuracy"] == pytest.approx(0.01)
+    assert opt.current() == fd.SolverOptions()
+
+
+def test_the_settings_are_part_of_the_sweep_and_reproduce_keys(tmp_path: Path) -> None:
+    from feeddrive.reproduce.runner import study_store
+    from feeddrive.reproduce.studies import StudySettings
+    from feeddrive.sweep.design import load_config
+    from feeddrive.sweep.store import point_key
+
+    config = tmp_path / "sweep.toml"
+    config.write_text('name = "k"\npreset = "wang2021"\ndrive = "cdfs"\n'
+                      '[design]\nkind = "grid"\n[quantity]\nkind = "linear-band"\n'
+                      '[axes]\n"controller.position_gain" = { values = [8.0, 10.0] }\n',
+                      encoding="utf-8")
+    sweep = load_config(config)
+    coords = sweep.points()[0].coords
+    plain = point_key(sweep.task(coords))
+    with opt.using(fd.SolverOptions(accuracy=0.1)):
+        tight = point_key(sweep.task(coords))
+    assert plain != tight
+    params = fd.preset("wang2021")
+    a = study_store(tmp_path / "a", params, StudySettings()).key
+    with opt.using(fd.SolverOptions(accuracy=0.1)):
+        b = study_store(tmp_path / "b", params, StudySettings()).key
+    assert a != b
