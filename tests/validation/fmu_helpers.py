@@ -115,3 +115,93 @@ def needed_libraries(fmu: Path, folder: Path) -> set[str]:
                          text=True, check=True).stdout
     return {line.split("[", 1)[1].split("]", 1)[0] for line in out.splitlines()
             if "(NEEDED)" in line}
+
+
+class Slave:
+    """A co-simulation FMU (FMI 2 or 3) driven step by step through fmpy, with the messages
+    its logger receives kept in ``log`` ([(status, text)]) and uniform get/set by name."""
+
+    def __init__(self, path: Path, folder: Path, name: str = "x") -> None:
+        from fmpy import extract, read_model_description
+
+        self.md = read_model_description(str(path))
+        self.fmi = int(self.md.fmiVersion[0])
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.log: list[tuple[int, str]] = []
+        unzipped = extract(str(path), unzipdir=str(folder / f"u-{name}"))
+        ident = self.md.coSimulation.modelIdentifier
+        if self.fmi == 2:
+            from ctypes import byref
+
+            from fmpy.fmi2 import (
+                FMU2Slave,
+                calloc,
+                fmi2CallbackAllocateMemoryTYPE,
+                fmi2CallbackFreeMemoryTYPE,
+                fmi2CallbackFunctions,
+                fmi2CallbackLoggerTYPE,
+                free,
+            )
+            from fmpy.logging import addLoggerProxy
+
+            def logger(env, inst, status, category, message):  # type: ignore[no-untyped-def]
+                self.log.append((int(status), message.decode("utf-8")))
+
+            cb = fmi2CallbackFunctions()
+            cb.logger = fmi2CallbackLoggerTYPE(logger)
+            cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+            addLoggerProxy(byref(cb))
+            self._callbacks = cb  # kept alive with the instance
+            self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=unzipped,
+                                 modelIdentifier=ident, instanceName=name)
+            self.fmu.instantiate(callbacks=cb)
+        else:
+            from fmpy.fmi3 import FMU3Slave
+
+            def log3(env, status, category, message):  # type: ignore[no-untyped-def]
+                self.log.append((int(status), message.decode("utf-8")))
+
+            self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=unzipped,
+                                 modelIdentifier=ident, instanceName=name)
+            self.fmu.instantiate(logMessage=log3)
+        self.t = 0.0
+
+    def set(self, name: str, value: float) -> None:
+        vr, kind = [self.vr[name]], self.types[name]
+        f = self.fmu
+        if kind in ("Integer", "Int64"):
+            (f.setInteger if self.fmi == 2 else f.setInt64)(vr, [int(value)])
+        elif kind == "Boolean":
+            f.setBoolean(vr, [bool(value)])
+        else:
+            (f.setReal if self.fmi == 2 else f.setFloat64)(vr, [float(value)])
+
+    def get(self, name: str) -> float:
+        vr, kind = [self.vr[name]], self.types[name]
+        f = self.fmu
+        if kind in ("Integer", "Int64"):
+            return float((f.getInteger if self.fmi == 2 else f.getInt64)(vr)[0])
+        return float((f.getReal if self.fmi == 2 else f.getFloat64)(vr)[0])
+
+    def initialize(self, start: float = 0.0) -> None:
+        if self.fmi == 2:
+            self.fmu.setupExperiment(startTime=start)
+            self.fmu.enterInitializationMode()
+        else:
+            self.fmu.enterInitializationMode(startTime=start)
+        self.fmu.exitInitializationMode()
+        self.t = start
+
+    def step(self, h: float) -> None:
+        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
+        self.t += h
+
+    def reset(self) -> None:
+        self.fmu.reset()
+        self.t = 0.0
+
+    def free(self) -> None:
+        self.fmu.terminate()
+        self.fmu.freeInstance()

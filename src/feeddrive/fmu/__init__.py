@@ -15,7 +15,6 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import __version__
 from ..parameters import DriveParameters, ParameterError
 
 FMI_VERSIONS = (2, 3)
@@ -169,7 +168,7 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
     .. [1] Modelica Association, Functional Mock-up Interface 2.0.4 and 3.0,
        https://fmi-standard.org/.
     """
-    from .build import package
+    from .build import package, provenance
     from .description import new_token, variables
     from .model import build
 
@@ -180,7 +179,7 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
     text = (f"feeddrive {drive} drive ({parameters.name}), a = {table_position:g} m; "
             f"reference and load force as inputs")
     package(path, fm, vs, fmi=fmi, kind=kind, identifier=ident, token=new_token(),
-            description=text, generation=f"feeddrive {__version__}")
+            description=text, provenance=provenance())
     sampled = any(v > 0 for v in fm.periods.values())
     return ExportedFmu(
         path=path, fmi=fmi, kind=kind, identifier=ident, n_variables=len(vs),

@@ -200,25 +200,51 @@ static int fmu_initialize(Fmu *m) {
 }
 
 static int fmu_do_step(Fmu *m, double t, double h) {
-    long status;
+    long status, max_steps = (long)m->s[S_MAX_STEPS];
     int redo, i;
-    double t_end = t + h;
-    char msg[300];
+    double t_end = t + h, instants;
+    char msg[400];
     if (!m->initialized || m->terminated) return ST_ERROR;
     if (fabs(t - m->t) > 1e-9 * (fabs(t) + 1.0)) {
         snprintf(msg, sizeof msg, "doStep at t = %.17g s, but the FMU is at t = %.17g s", t, m->t);
         fmu_log(m, ST_ERROR, msg);
         return ST_ERROR;
     }
-    if (!(h >= 0.0)) return ST_ERROR;
+    if (!(h >= 0.0) || !isfinite(h)) {
+        snprintf(msg, sizeof msg, "communicationStepSize = %g: expected a finite step >= 0 [s]",
+                 h);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
+    /* the sample instants in (t, t_end]: bounded before any work (solver.max_steps_per_call
+       bounds the integrator's steps below, inside the integrator) */
+    instants = m->sampled ? floor((t_end - m->t0) / m->base) - floor((t - m->t0) / m->base) : 0.0;
+    if (instants > (double)max_steps) {
+        snprintf(msg, sizeof msg, "solver.max_steps_per_call = %ld: the communication step "
+                 "[%.9g, %.9g] s holds %.0f sample instants of the %g-s controller grid; take "
+                 "shorter communication steps or raise solver.max_steps_per_call", max_steps,
+                 t, t_end, instants, m->base);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
     redo = m->inputs_changed;
     m->inputs_changed = 0;
     fmu_write_inputs(m, 1);
+    /* the integrator stops after more than its limit: max_steps - 1 lets it take at most
+       max_steps steps (accepted and rejected) */
     status = FD_ADVANCE(m->t, t_end, m->t0, (long)FD_N_STATE, m->y, m->held, m->held_prev, m->P,
                         m->T, m->steps, m->tick, m->base, m->s[S_RTOL], m->atol,
-                        m->rel, m->s[S_MAX_STEP], (long)MAX_STEPS_PER_CALL, (long)redo,
+                        m->rel, m->s[S_MAX_STEP], max_steps - 1, (long)redo,
                         m->memory, m->work[0], m->work[1], m->work[2], m->work[3], m->work[4],
                         m->work[5], m->work[6], m->work[7], m->work[8], m->work[9], m->aux);
+    if (status == 1) {
+        snprintf(msg, sizeof msg, "solver.max_steps_per_call = %ld: the communication step "
+                 "[%.9g, %.9g] s needs more integrator steps; take shorter communication steps "
+                 "or raise solver.max_steps_per_call (the parameters may make the drive too "
+                 "stiff or unstable)", max_steps, t, t_end);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
     if (status != 0) {
         snprintf(msg, sizeof msg, "integration stopped near t = %.9g s: %s", m->t,
                  STATUS_MESSAGES[status < 0 || status > 3 ? 0 : status]);
@@ -267,19 +293,47 @@ static double fmu_get(Fmu *m, int vr) {
     case K_AUX: fmu_evaluate(m); return m->aux[a];
     case K_PARAM: return m->P[a];
     case K_INPUT: return m->u[a];
-    case K_SETTING: return m->s[a];
+    case K_SETTING: case K_BOOLEAN: case K_INTEGER: return m->s[a];
     case K_PRODUCT: return m->P[a] * m->y[b];
     case K_ERROR: fmu_evaluate(m); return m->aux[a] - m->y[b];
+    case K_COUNTER: return m->memory[a];
     default: return 0.0;
     }
 }
 
+/* whether value lies in the variable's range (description.py: the parameter file's range of
+   the field it comes from; VR_RANGE bits: 1 low end excluded, 2 zero allowed, 4 integers) */
+static int fmu_in_range(int vr, double value) {
+    int flags = VR_RANGE[vr];
+    if (!isfinite(value)) return 0;
+    if ((flags & 2) && value == 0.0) return 1;
+    if ((flags & 4) && value != floor(value)) return 0;
+    if ((flags & 1) ? !(value > VR_LOW[vr]) : !(value >= VR_LOW[vr])) return 0;
+    return value <= VR_HIGH[vr];
+}
+
+/* set a variable: refused (Error, through the logger, naming it) when FMI does not let the
+   importer set it now (VR_SET: 0 never, 1 until initialised, 2 always) or when the value lies
+   outside its range */
 static int fmu_set(Fmu *m, int vr, double value) {
     int a = VR_A[vr];
+    char msg[400];
+    if (VR_SET[vr] == 0 || (VR_SET[vr] == 1 && m->initialized)) {
+        snprintf(msg, sizeof msg, "%s: %s", VR_NAME[vr], VR_SET[vr] == 0
+                 ? "computed by the FMU (an output or local variable), not settable"
+                 : "settable only before initialisation ends (a fixed parameter or a start "
+                   "value)");
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
+    if (!fmu_in_range(vr, value)) {
+        snprintf(msg, sizeof msg, "%s = %.9g: %s", VR_NAME[vr], value, VR_EXPECTED[vr]);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
     switch (VR_KIND[vr]) {
     case K_STATE: m->y[a] = value; m->dirty = 1; return ST_OK;
     case K_PARAM:
-        if (m->initialized && VR_FIXED[vr]) return ST_ERROR; /* a switch: before init only */
         m->P[a] = value;
         m->dirty = 1;
         return ST_OK;
@@ -288,18 +342,24 @@ static int fmu_set(Fmu *m, int vr, double value) {
         m->u[a] = value;
         m->dirty = 1;
         return ST_OK;
-    case K_SETTING:
-        if (m->initialized && VR_FIXED[vr]) return ST_ERROR;
+    case K_SETTING: case K_BOOLEAN: case K_INTEGER:
         m->s[a] = value;
         return ST_OK;
     default: return ST_ERROR;
     }
 }
 
-static int fmu_check_vr(Fmu *m, int vr, int boolean) {
-    if (vr < 0 || vr >= N_VR || (VR_KIND[vr] == K_BOOLEAN) != boolean) {
-        char msg[100];
+static int fmu_check_vr(Fmu *m, int vr, int type) {
+    static const char *const TYPE_NAMES[] = {"Real", "Boolean", "Integer"};
+    char msg[300];
+    if (vr < 0 || vr >= N_VR) {
         snprintf(msg, sizeof msg, "unknown value reference %d", vr);
+        fmu_log(m, ST_ERROR, msg);
+        return 0;
+    }
+    if (VR_TYPE[vr] != type) {
+        snprintf(msg, sizeof msg, "value reference %d (%s) is a %s variable, not %s", vr,
+                 VR_NAME[vr], TYPE_NAMES[VR_TYPE[vr]], TYPE_NAMES[type]);
         fmu_log(m, ST_ERROR, msg);
         return 0;
     }
@@ -362,57 +422,33 @@ fmi2Status fmi2Terminate(fmi2Component c) { ((Fmu *)c)->terminated = 1; return f
 
 fmi2Status fmi2Reset(fmi2Component c) { fmu_defaults((Fmu *)c); return fmi2OK; }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                       fmi2Real value[]) {
-    size_t i;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi2Error;
-        value[i] = fmu_get((Fmu *)c, (int)vr[i]);
+/* every typed get/set goes through fmu_get / fmu_set (checks, messages) */
+#define FMU2_ACCESS(NAME, CTYPE, TYPE, TO_FMI, FROM_FMI)                                  \
+    fmi2Status fmi2Get##NAME(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,  \
+                             CTYPE value[]) {                                             \
+        size_t i;                                                                         \
+        for (i = 0; i < nvr; i++) {                                                       \
+            double v;                                                                     \
+            if (!fmu_check_vr((Fmu *)c, (int)vr[i], TYPE)) return fmi2Error;              \
+            v = fmu_get((Fmu *)c, (int)vr[i]);                                            \
+            value[i] = TO_FMI;                                                            \
+        }                                                                                 \
+        return fmi2OK;                                                                    \
+    }                                                                                     \
+    fmi2Status fmi2Set##NAME(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,  \
+                             const CTYPE value[]) {                                       \
+        size_t i;                                                                         \
+        for (i = 0; i < nvr; i++) {                                                       \
+            if (!fmu_check_vr((Fmu *)c, (int)vr[i], TYPE)) return fmi2Error;              \
+            if (fmu_set((Fmu *)c, (int)vr[i], FROM_FMI) != ST_OK) return fmi2Error;       \
+        }                                                                                 \
+        return fmi2OK;                                                                    \
     }
-    return fmi2OK;
-}
-
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                       const fmi2Real value[]) {
-    size_t i;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi2Error;
-        if (fmu_set((Fmu *)c, (int)vr[i], value[i]) != ST_OK) return fmi2Error;
-    }
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Boolean value[]) {
-    size_t i;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi2Error;
-        value[i] = ((Fmu *)c)->s[VR_A[vr[i]]] > 0.5 ? fmi2True : fmi2False;
-    }
-    return fmi2OK;
-}
-
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Boolean value[]) {
-    size_t i;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi2Error;
-        if (((Fmu *)c)->initialized) return fmi2Error;
-        ((Fmu *)c)->s[VR_A[vr[i]]] = value[i] ? 1.0 : 0.0;
-    }
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Integer value[]) {
-    (void)c; (void)vr; (void)value;
-    return nvr == 0 ? fmi2OK : fmi2Error;
-}
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Integer value[]) {
-    (void)c; (void)vr; (void)value;
-    return nvr == 0 ? fmi2OK : fmi2Error;
-}
+FMU2_ACCESS(Real, fmi2Real, T_REAL, v, value[i])
+FMU2_ACCESS(Boolean, fmi2Boolean, T_BOOLEAN, v > 0.5 ? fmi2True : fmi2False,
+            value[i] ? 1.0 : 0.0)
+FMU2_ACCESS(Integer, fmi2Integer, T_INTEGER, v > 2147483647.0 ? 2147483647 : (fmi2Integer)v,
+            (double)value[i])
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[]) {
     (void)c; (void)vr; (void)value;
@@ -541,7 +577,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     Fmu *m = (Fmu *)c;
     size_t i;
     for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr(m, (int)vr[i], 0) || VR_KIND[vr[i]] != K_INPUT) return fmi2Error;
+        if (!fmu_check_vr(m, (int)vr[i], T_REAL) || VR_KIND[vr[i]] != K_INPUT) return fmi2Error;
         if (order[i] == 1) {
             if (m->du[VR_A[vr[i]]] != value[i]) m->inputs_changed = 1;
             m->du[VR_A[vr[i]]] = value[i];
@@ -678,47 +714,32 @@ fmi3Status fmi3EnterEventMode(fmi3Instance c) { (void)c; return fmi3OK; }
 fmi3Status fmi3Terminate(fmi3Instance c) { ((Fmu *)c)->terminated = 1; return fmi3OK; }
 fmi3Status fmi3Reset(fmi3Instance c) { fmu_defaults((Fmu *)c); return fmi3OK; }
 
-fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
-                          fmi3Float64 values[], size_t nValues) {
-    size_t i;
-    if (nValues < nvr) return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi3Error;
-        values[i] = fmu_get((Fmu *)c, (int)vr[i]);
+#define FMU3_ACCESS(NAME, CTYPE, TYPE, TO_FMI, FROM_FMI)                                  \
+    fmi3Status fmi3Get##NAME(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,   \
+                             CTYPE values[], size_t nValues) {                            \
+        size_t i;                                                                         \
+        if (nValues < nvr) return fmi3Error;                                              \
+        for (i = 0; i < nvr; i++) {                                                       \
+            double v;                                                                     \
+            if (!fmu_check_vr((Fmu *)c, (int)vr[i], TYPE)) return fmi3Error;              \
+            v = fmu_get((Fmu *)c, (int)vr[i]);                                            \
+            values[i] = TO_FMI;                                                           \
+        }                                                                                 \
+        return fmi3OK;                                                                    \
+    }                                                                                     \
+    fmi3Status fmi3Set##NAME(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,   \
+                             const CTYPE values[], size_t nValues) {                      \
+        size_t i;                                                                         \
+        if (nValues < nvr) return fmi3Error;                                              \
+        for (i = 0; i < nvr; i++) {                                                       \
+            if (!fmu_check_vr((Fmu *)c, (int)vr[i], TYPE)) return fmi3Error;              \
+            if (fmu_set((Fmu *)c, (int)vr[i], FROM_FMI) != ST_OK) return fmi3Error;       \
+        }                                                                                 \
+        return fmi3OK;                                                                    \
     }
-    return fmi3OK;
-}
-fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
-                          const fmi3Float64 values[], size_t nValues) {
-    size_t i;
-    if (nValues < nvr) return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi3Error;
-        if (fmu_set((Fmu *)c, (int)vr[i], values[i]) != ST_OK) return fmi3Error;
-    }
-    return fmi3OK;
-}
-fmi3Status fmi3GetBoolean(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
-                          fmi3Boolean values[], size_t nValues) {
-    size_t i;
-    if (nValues < nvr) return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi3Error;
-        values[i] = ((Fmu *)c)->s[VR_A[vr[i]]] > 0.5;
-    }
-    return fmi3OK;
-}
-fmi3Status fmi3SetBoolean(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
-                          const fmi3Boolean values[], size_t nValues) {
-    size_t i;
-    if (nValues < nvr) return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi3Error;
-        if (((Fmu *)c)->initialized) return fmi3Error;
-        ((Fmu *)c)->s[VR_A[vr[i]]] = values[i] ? 1.0 : 0.0;
-    }
-    return fmi3OK;
-}
+FMU3_ACCESS(Float64, fmi3Float64, T_REAL, v, values[i])
+FMU3_ACCESS(Boolean, fmi3Boolean, T_BOOLEAN, v > 0.5, values[i] ? 1.0 : 0.0)
+FMU3_ACCESS(Int64, fmi3Int64, T_INTEGER, (fmi3Int64)v, (double)values[i])
 
 #define FMU3_NO_TYPE(NAME, CTYPE)                                                         \
     fmi3Status fmi3Get##NAME(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,   \
@@ -738,7 +759,6 @@ FMU3_NO_TYPE(Int16, fmi3Int16)
 FMU3_NO_TYPE(UInt16, fmi3UInt16)
 FMU3_NO_TYPE(Int32, fmi3Int32)
 FMU3_NO_TYPE(UInt32, fmi3UInt32)
-FMU3_NO_TYPE(Int64, fmi3Int64)
 FMU3_NO_TYPE(UInt64, fmi3UInt64)
 FMU3_NO_TYPE(String, fmi3String)
 
