@@ -16,6 +16,7 @@ import subprocess
 import sys
 import tempfile
 import zipfile
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
@@ -26,9 +27,75 @@ from .model import FmuModel
 
 HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
            3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
-#: flags of the binary: C99, optimised, no fused multiply-add (numba rounds each operation),
-#: only the FMI functions exported (two FMUs in one process never bind each other's model)
-CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared", "-fvisibility=hidden")
+#: flags of every binary: C99, optimised, no fused multiply-add (numba rounds each operation)
+CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off")
+
+
+@dataclass(frozen=True)
+class Platform:
+    """A platform an FMU may carry a binary for.
+
+    Parameters
+    ----------
+    name : str
+        Its ``--platform`` name, the FMI 2.0 folder (``linux64``, ``win64``, ``darwin64``).
+    fmi3 : str
+        The FMI 3.0 folder (``x86_64-linux`` …).
+    system : str
+        ``sys.platform`` of a machine that runs it natively.
+    suffix : str
+        The shared library's extension.
+    flags : tuple of str
+        Compiler flags beside :data:`CFLAGS`: a shared library exporting only the FMI
+        functions (two FMUs in one process never bind each other's model), the C runtime
+        linked statically where it would be one more DLL.
+    libraries : tuple of str
+        Libraries linked after the source.
+    cross : tuple of str
+        Cross compilers looked for on PATH when this machine is not one (Debian's
+        ``mingw-w64``; osxcross for macOS).
+    """
+
+    name: str
+    fmi3: str
+    system: str
+    suffix: str
+    flags: tuple[str, ...]
+    libraries: tuple[str, ...]
+    cross: tuple[str, ...]
+
+    def folder(self, fmi: int) -> str:
+        """The ``binaries/`` folder of this platform in an FMI ``fmi`` FMU.
+
+        Parameters
+        ----------
+        fmi : int
+            FMI version, 2 or 3.
+
+        Returns
+        -------
+        str
+            E.g. ``"win64"`` (FMI 2) or ``"x86_64-windows"`` (FMI 3).
+        """
+        return self.name if fmi == 2 else self.fmi3
+
+    @property
+    def env(self) -> str:
+        """The environment variable naming this platform's compiler (``CC_WIN64``)."""
+        return f"CC_{self.name.upper()}"
+
+
+PLATFORMS = {
+    "linux64": Platform("linux64", "x86_64-linux", "linux", ".so",
+                        ("-fPIC", "-shared", "-fvisibility=hidden"), ("-lm",),
+                        ("x86_64-linux-gnu-gcc",)),
+    "win64": Platform("win64", "x86_64-windows", "win32", ".dll",
+                      ("-shared", "-static-libgcc"), (),
+                      ("x86_64-w64-mingw32-gcc", "x86_64-w64-mingw32-clang")),
+    "darwin64": Platform("darwin64", "x86_64-darwin", "darwin", ".dylib",
+                         ("-fPIC", "-dynamiclib", "-fvisibility=hidden"), (),
+                         ("o64-clang", "x86_64-apple-darwin-clang")),
+}
 
 
 class CompilerNotFound(RuntimeError):
@@ -59,8 +126,23 @@ def find_compiler() -> list[str]:
         raise CompilerNotFound(str(err)) from None
 
 
+def host_platform() -> Platform | None:
+    """The platform this machine runs natively, if it is one of :data:`PLATFORMS` (an x86-64
+    Linux, Windows or macOS).
+
+    Returns
+    -------
+    Platform or None
+        The platform.
+    """
+    machine = platform.machine().lower()
+    if machine not in ("x86_64", "amd64"):
+        return None
+    return next((p for p in PLATFORMS.values() if p.system == sys.platform), None)
+
+
 def platform_folder(fmi: int) -> str:
-    """The ``binaries/`` subfolder of this platform (FMI 2 and FMI 3 spell them differently).
+    """The ``binaries/`` subfolder of this machine (FMI 2 and FMI 3 spell them differently).
 
     Parameters
     ----------
@@ -83,7 +165,7 @@ def platform_folder(fmi: int) -> str:
 
 
 def library_suffix() -> str:
-    """The shared-library extension of this platform.
+    """The shared-library extension of this machine.
 
     Returns
     -------
@@ -91,6 +173,50 @@ def library_suffix() -> str:
         ``".dll"``, ``".dylib"`` or ``".so"``.
     """
     return {"win32": ".dll", "darwin": ".dylib"}.get(sys.platform, ".so")
+
+
+def platform_compiler(name: str) -> list[str]:
+    """The C compiler that builds the binary of the platform ``name``: this machine's
+    (:func:`find_compiler`) for its own platform, else ``$CC_<NAME>`` (``CC_WIN64``) or the
+    first of the platform's cross compilers on PATH.
+
+    Parameters
+    ----------
+    name : str
+        A platform of :data:`PLATFORMS`.
+
+    Returns
+    -------
+    list of str
+        The command and its fixed arguments.
+
+    Raises
+    ------
+    CompilerNotFound
+        When none is found, with one line naming what was looked for.
+    """
+    import os
+    import shlex
+
+    target = PLATFORMS[name]
+    if target == host_platform():
+        return find_compiler()
+    env = os.environ.get(target.env, "").strip()
+    if env:
+        cmd = shlex.split(env)
+        if shutil.which(cmd[0]) is None:
+            raise CompilerNotFound(f"{target.env} = {env!r}: {cmd[0]!r} is not an executable "
+                                   "on PATH")
+        return cmd
+    for cc in target.cross:
+        path = shutil.which(cc)
+        if path:
+            return [path]
+    hint = {"win64": "; Debian: apt-get install mingw-w64"}.get(name, "")
+    raise CompilerNotFound(
+        f"no C compiler for {name} on this machine (looked for ${target.env}, "
+        f"{', '.join(target.cross)} on PATH{hint}); build that binary on a {name} machine "
+        "from the FMU's sources (documentation/index.html)")
 
 
 def solver_c() -> str:
@@ -177,9 +303,10 @@ def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: 
 
 
 def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
-                    export_all: bool = False) -> Path:
-    """Compile ``source`` (with the FMI headers beside it) into ``folder/<identifier><ext>``;
-    ``export_all``: the model's and integrator's functions visible too (tests call them).
+                    export_all: bool = False, target: str | None = None) -> Path:
+    """Compile ``source`` (with the FMI headers beside it) into ``folder/<identifier><ext>``
+    for the platform ``target`` (this machine's by default); ``export_all``: the model's and
+    integrator's functions visible too (tests call them).
 
     Parameters
     ----------
@@ -193,6 +320,8 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
         The library's name.
     export_all : bool, default False
         Export every function, not only the FMI ones.
+    target : str, optional
+        A platform of :data:`PLATFORMS`; None: this machine's, with its compiler.
 
     Returns
     -------
@@ -202,11 +331,12 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
     Raises
     ------
     CompilerNotFound
-        Without a C compiler.
+        Without a C compiler for the platform.
     RuntimeError
         When the compiler fails (its output in the message).
     """
-    cc = find_compiler()
+    plat = PLATFORMS[target] if target else host_platform() or PLATFORMS["linux64"]
+    cc = platform_compiler(target) if target else find_compiler()
     folder.mkdir(parents=True, exist_ok=True)
     src = folder / "fmu.c"
     src.write_text(source, encoding="utf-8")
@@ -214,9 +344,11 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
     for name in HEADERS[fmi]:
         (folder / name).write_text(include.joinpath(name).read_text(encoding="utf-8"),
                                    encoding="utf-8")
-    lib = folder / f"{identifier}{library_suffix()}"
-    flags = [f for f in CFLAGS if not (export_all and f.startswith("-fvisibility"))]
-    cmd = [*cc, *flags, f"-I{folder}", "-o", str(lib), str(src), "-lm"]
+    suffix = plat.suffix if target else library_suffix()
+    lib = folder / f"{identifier}{suffix}"
+    flags = [f for f in (*CFLAGS, *plat.flags)
+             if not (export_all and f.startswith("-fvisibility"))]
+    cmd = [*cc, *flags, f"-I{folder}", "-o", str(lib), str(src), *plat.libraries]
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if proc.returncode != 0:
         raise RuntimeError(f"the C compiler failed ({' '.join(cmd)}):\n"
@@ -224,22 +356,28 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
     return lib
 
 
-BUILD_NOTE = """\
-Building this FMU's binary for another platform
-================================================
+def compile_line(target: str, identifier: str, cc: str = "gcc") -> str:
+    """The command line that builds the platform's binary from ``sources/`` (the flags
+    :func:`compile_library` uses), for the FMU's documentation.
 
-sources/fmu.c is one self-contained C99 file (the drive model, its integrator and the FMI
-{fmi}.0 functions); it needs only the C standard library and libm, and the FMI headers beside it.
+    Parameters
+    ----------
+    target : str
+        A platform of :data:`PLATFORMS`.
+    identifier : str
+        The model identifier.
+    cc : str, default "gcc"
+        The compiler's name in the line.
 
-Linux:    cc -std=c99 -O2 -ffp-contract=off -fPIC -shared -o {ident}.so fmu.c -lm
-macOS:    cc -std=c99 -O2 -ffp-contract=off -fPIC -dynamiclib -o {ident}.dylib fmu.c
-Windows:  cl /O2 /fp:precise /LD /Fe{ident}.dll fmu.c
-          (or MinGW: gcc -std=c99 -O2 -ffp-contract=off -shared -o {ident}.dll fmu.c)
-
-Put the library under binaries/{plat_example} (FMI {fmi}.0 platform folder names) and zip the
-folder again; or let the importing tool compile the source FMU (FMI 2: SourceFiles in
-modelDescription.xml; FMI 3: sources/buildDescription.xml).
-"""
+    Returns
+    -------
+    str
+        E.g. ``"gcc -std=c99 -O2 -ffp-contract=off -fPIC -shared -fvisibility=hidden -I. -o
+        feeddrive_cdfs.so fmu.c -lm"``.
+    """
+    plat = PLATFORMS[target]
+    return " ".join([cc, *CFLAGS, *plat.flags, "-I.", "-o", f"{identifier}{plat.suffix}",
+                     "fmu.c", *plat.libraries])
 
 
 def build_description(identifier: str) -> str:
@@ -349,9 +487,11 @@ def license_files() -> dict[str, str]:
 
 
 def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
-            identifier: str, token: str, description: str,
-            provenance: Provenance) -> Path:
-    """Write the FMU ``out`` (a zip): modelDescription.xml, binary, sources, build note.
+            identifier: str, token: str, description: str, provenance: Provenance,
+            platforms: tuple[str, ...] | None = None) -> Path:
+    """Write the FMU ``out`` (a zip): modelDescription.xml, a binary per platform, the
+    sources with their ``CMakeLists.txt``, ``documentation/index.html`` (how to rebuild) and
+    the licences.
 
     Parameters
     ----------
@@ -373,32 +513,44 @@ def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
         The model's description text.
     provenance : Provenance
         Author, version, copyright, licence, generation tool and time.
+    platforms : tuple of str, optional
+        Platforms of :data:`PLATFORMS` to build a binary for, each with its compiler
+        (:func:`platform_compiler`); None: this machine's, with its compiler.
 
     Returns
     -------
     Path
         ``out``.
     """
+    from .rebuild import cmake_lists, index_html
+
     source = fmu_source(fm, vs, fmi=fmi, kind=kind, token=token)
     xml = model_description(fm, vs, fmi=fmi, kind=kind, identifier=identifier, token=token,
                             description=description, provenance=provenance)
-    plat = platform_folder(fmi)
     with tempfile.TemporaryDirectory(prefix="feeddrive-fmu-") as tmp:
-        lib = compile_library(source, fmi, Path(tmp), identifier)
+        libs: list[tuple[str, Path]] = []
+        if platforms is None:
+            libs.append((platform_folder(fmi),
+                         compile_library(source, fmi, Path(tmp) / "host", identifier)))
+        else:
+            for name in platforms:
+                lib = compile_library(source, fmi, Path(tmp) / name, identifier, target=name)
+                libs.append((PLATFORMS[name].folder(fmi), lib))
         from ..io.outputs import atomic_path
 
         with atomic_path(out) as partial, \
                 zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
             zf.writestr("modelDescription.xml", xml)
-            zf.write(lib, f"binaries/{plat}/{lib.name}")
+            for folder, lib in libs:
+                zf.write(lib, f"binaries/{folder}/{lib.name}")
             zf.writestr("sources/fmu.c", source)
             for name in HEADERS[fmi]:
-                zf.write(Path(tmp) / name, f"sources/{name}")
+                zf.write(libs[0][1].parent / name, f"sources/{name}")
+            zf.writestr("sources/CMakeLists.txt", cmake_lists(identifier, fmi))
             if fmi == 3:
                 zf.writestr("sources/buildDescription.xml", build_description(identifier))
-            example = "win64/" if fmi == 2 else "x86_64-windows/"
-            zf.writestr("documentation/building.txt",
-                        BUILD_NOTE.format(fmi=fmi, ident=identifier, plat_example=example))
+            zf.writestr("documentation/index.html", index_html(
+                identifier, fmi, kind, description, [f for f, _ in libs], provenance.version))
             for name, text in license_files().items():
                 zf.writestr(name, text)
     return out
