@@ -81,6 +81,19 @@ def test_pathsim_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -
     t, (x,) = scope["scope"].read()
     assert t[-1] == pytest.approx(1.0)
     assert 0.4e-3 < x[-1] < 0.6e-3  # 0.5 mm/s for 1 s
+    # the docs: PathSim's record leads by one communication step (fmpy's run of the same FMU)
+    from fmpy import simulate_fmu
+
+    ref = simulate_fmu("ddfs.fmu", stop_time=1.1, output_interval=1e-3,
+                       start_values={"table_speed_reference": 0.5e-3,
+                                     "nut_speed_reference": 16e-3}, output=["table_position"])
+    xr = ref["table_position"]
+    n = len(x)
+    stroke = abs(xr[n - 1] - xr[0])
+    shifted = np.max(np.abs(x - xr[1:n + 1])) / stroke
+    unshifted = np.max(np.abs(x - xr[:n])) / stroke
+    assert shifted <= 1e-7  # docs: 5e-8
+    assert unshifted >= 1e-3  # docs: 2.7e-3
 
 
 @pytest.mark.slow
@@ -112,3 +125,34 @@ def test_parameter_study_example_runs_and_matches_feeddrive(
                      options=SolverOptions(method="dopri5"))
         e = np.asarray(r["following_error"])[np.asarray(r.time) >= 0.5 - 1e-12]
         assert shown[(mass, kvp)] == pytest.approx(np.max(np.abs(e)) * 1e6, abs=0.01)
+
+
+def test_agreement_table_is_the_benchmarks(tmp_path: Path) -> None:
+    """Each agreement figure of docs/fmu.md names the method and tolerances it holds for and
+    is benchmarks/results/bench_fmu.json's, to its two printed digits (bench_fmu.py)."""
+    import json
+
+    rows = json.loads((Path(__file__).parents[2] / "benchmarks" / "results" /
+                       "bench_fmu.json").read_text(encoding="utf-8"))["rows"]
+    by = {r["scenario"]: r for r in rows}
+    table = TEXT.split("| FMU at | feeddrive at |", 1)[1].split("\n\n", 1)[0]
+    keys = {("1000× tighter tolerances", "`dopri5`, 1000× tighter"): "dev_fmu_vs_dopri5_tight_rel",
+            ("1000× tighter tolerances", "`modal` (the default method), 1000× tighter"):
+                "dev_fmu_vs_modal_tight_rel",
+            ("default tolerances", "`modal`, 1000× tighter"): "dev_fmu_rel",
+            ("default tolerances", "`dopri5`, default tolerances"): "dev_fmu_vs_dopri5_default_rel",
+            ("default tolerances", "`modal`, default tolerances"): "dev_fmu_vs_modal_default_rel"}
+    seen = 0
+    for line in table.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if (cells[0], cells[1]) not in keys:
+            continue
+        key = keys[(cells[0], cells[1])]
+        for scenario, cell in zip(("cdfs-2", "cdfs-1.2", "ddfs-0.5-16"), cells[2:], strict=True):
+            shown = f"{by[scenario][key]:.1e}".replace("e-0", "e-")
+            assert cell == shown, (key, scenario)
+        seen += 1
+    assert seen == len(keys)
+    from feeddrive.engine.simulate import SolverOptions
+
+    assert all(r["default_method"] == SolverOptions().method == "modal" for r in rows)
