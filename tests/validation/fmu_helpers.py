@@ -117,6 +117,10 @@ def needed_libraries(fmu: Path, folder: Path) -> set[str]:
             if "(NEEDED)" in line}
 
 
+#: the logger callbacks of every Slave made (Slave: fmpy's proxy keeps the last one)
+_KEEP_ALIVE: list[object] = []
+
+
 class Slave:
     """A co-simulation FMU (FMI 2 or 3) driven step by step through fmpy, with the messages
     its logger receives kept in ``log`` ([(status, text)]) and uniform get/set by name."""
@@ -153,7 +157,11 @@ class Slave:
             cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
             cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
             addLoggerProxy(byref(cb))
-            self._callbacks = cb  # kept alive with the instance
+            # fmpy's native proxy keeps the last logger it wrapped in a global: every FMI 2
+            # instance made after this one (fmpy's default callbacks too) logs through it, so
+            # it must outlive this instance (else a later instance's message calls freed
+            # memory)
+            _KEEP_ALIVE.append(cb)
             self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=unzipped,
                                  modelIdentifier=ident, instanceName=name)
             self.fmu.instantiate(callbacks=cb)

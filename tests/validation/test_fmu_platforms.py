@@ -25,7 +25,7 @@ from typer.testing import CliRunner
 
 from feeddrive.cli import app
 from feeddrive.fmu import export_fmu
-from feeddrive.fmu.build import PLATFORMS, compile_line, find_compiler
+from feeddrive.fmu.platforms import PLATFORMS, compile_line, find_compiler
 from feeddrive.parameters import preset
 
 fmpy = pytest.importorskip("fmpy")

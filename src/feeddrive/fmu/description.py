@@ -30,7 +30,7 @@ from .model import FmuModel
 
 # value-reference kinds (wrapper.c)
 (K_TIME, K_STATE, K_DER, K_AUX, K_PARAM, K_INPUT, K_SETTING, K_PRODUCT, K_ERROR, K_BOOLEAN,
- K_INTEGER, K_COUNTER) = range(12)
+ K_INTEGER, K_COUNTER, K_EVALUATIONS) = range(13)
 # value types (wrapper.c VR_TYPE): FMI 2 Real/Boolean/Integer, FMI 3 Float64/Boolean/Int64
 T_REAL, T_BOOLEAN, T_INTEGER = range(3)
 _TYPES = {"Real": T_REAL, "Boolean": T_BOOLEAN, "Integer": T_INTEGER}
@@ -97,6 +97,12 @@ COUNTERS = (("solver.steps", "MEM_STEPS", "integrator steps taken since initiali
              "initialisation"),
             ("solver.rhs_evaluations", "MEM_RHS", "right-hand-side evaluations of the "
              "embedded integrator since initialisation"))
+#: what a model-exchange FMU evaluated for its importer (wrapper.c ``m->evaluations``): name,
+#: description
+EVALUATIONS = (("evaluations.derivatives", "evaluations of the model's right-hand side "
+                "(derivatives and signals) since instantiation or reset"),
+               ("evaluations.tangents", "evaluations of the model's tangent (one directional "
+                "derivative of every derivative and signal) since instantiation or reset"))
 
 _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
     "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
@@ -181,6 +187,9 @@ class Variable:
         Its nominal magnitude (continuous states) [its unit].
     display_unit : str, optional
         The unit an importer shows it in (:data:`feeddrive.units.DISPLAY_UNITS`).
+    dependencies : tuple of int, optional
+        Value references of the states and inputs a derivative depends on (the model's
+        declared sparsity; model exchange).
     """
 
     name: str
@@ -198,6 +207,7 @@ class Variable:
     range: SlotRange | None = None  # the values it may be set to (min/max, set-time check)
     nominal: float | None = None  # nominal magnitude (continuous states)
     display_unit: str | None = None  # the unit an importer shows it in
+    dependencies: tuple[int, ...] | None = None  # knowns a derivative depends on
 
     @property
     def settable(self) -> int:
@@ -423,12 +433,15 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
                           "m", text, nominal=float(nominal[n + j]),
                           display_unit=display_unit(name, "m")))
     if me:
+        deps = derivative_dependencies(fm, state_vr, {x.a: vr for vr, x in enumerate(v)
+                                                      if x.kind == K_INPUT})
         for i in range(n + len(ref_states)):
             sv = v[state_vr[i]]
             unit = _rate_unit(sv.unit)
             v.append(Variable(f"der({sv.name})", K_DER, i, 0, "local", "continuous",
                               "calculated", None, unit, f"rate of {sv.name}",
-                              derivative=state_vr[i], display_unit=display_unit("", unit)))
+                              derivative=state_vr[i], display_unit=display_unit("", unit),
+                              dependencies=deps[i]))
     # auxiliary signals
     for j, a in enumerate(m.aux):
         name = a.name if a.name not in input_names else f"model.{a.name}"
@@ -489,11 +502,53 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
         for name, slot, text in COUNTERS:
             v.append(Variable(name, K_COUNTER, CONSTANTS[slot], 0, "local", "discrete",
                               "calculated", None, "", text, type="Integer"))
+    else:
+        for k, (name, text) in enumerate(EVALUATIONS):
+            v.append(Variable(name, K_EVALUATIONS, k, 0, "local", "discrete", "calculated",
+                              None, "", text, type="Integer"))
     names = [x.name for x in v]
     if len(set(names)) != len(names):
         dup = sorted({x for x in names if names.count(x) > 1})
         raise ValueError(f"FMU variable names not unique: {', '.join(dup)}")
     return v
+
+
+def derivative_dependencies(fm: FmuModel, state_vr: dict[int, int], input_vr: dict[int, int]
+                            ) -> list[tuple[int, ...]]:
+    """The states and inputs each continuous state's derivative depends on (value
+    references), from the model's declared sparsity (:attr:`Model.jacobian_pattern`, the
+    parts' declarations): model state j where the pattern says so; the reference integrals and
+    the inputs where it depends on time (the reference and the load reach the model through
+    t); a reference integral's rate on its speed input.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model.
+    state_vr : dict of int to int
+        Continuous state index → value reference (the model's states, then the two reference
+        integrals).
+    input_vr : dict of int to int
+        Input slot (:data:`INPUTS` index) → value reference, for the inputs present.
+
+    Returns
+    -------
+    list of tuple of int
+        Per continuous state, the value references of what its derivative depends on.
+    """
+    S = fm.model.jacobian_pattern
+    n = S.shape[0]
+    refs = (state_vr[n], state_vr[n + 1])
+    inputs = tuple(sorted(input_vr.values()))
+    out = []
+    for i in range(n):
+        deps = [state_vr[j] for j in range(n) if S[i, j]]
+        if S[i, n]:  # time: the reference (inputs, integrals) and the load force
+            deps += [*refs, *inputs]
+        out.append(tuple(sorted(deps)))
+    for slot in (IN_VT, IN_VN):
+        out.append((input_vr[slot],) if slot in input_vr else ())
+    return out
 
 
 def _rate_unit(unit: str) -> str:
@@ -649,7 +704,8 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
         if me:
             lines.append("  <ModelExchange " + _attrs(
                 modelIdentifier=identifier, canGetAndSetFMUstate="true",
-                canSerializeFMUstate="true", canNotUseMemoryManagementFunctions="true") + ">")
+                canSerializeFMUstate="true", canNotUseMemoryManagementFunctions="true",
+                providesDirectionalDerivative="true") + ">")
             lines.append('    <SourceFiles><File name="fmu.c"/></SourceFiles>')
             lines.append("  </ModelExchange>")
         else:
@@ -667,7 +723,7 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
         if me:
             lines.append("  <ModelExchange " + _attrs(
                 modelIdentifier=identifier, canGetAndSetFMUState="true",
-                canSerializeFMUState="true") + "/>")
+                canSerializeFMUState="true", providesDirectionalDerivatives="true") + "/>")
         else:
             lines.append("  <CoSimulation " + _attrs(
                 modelIdentifier=identifier, canHandleVariableCommunicationStepSize="true",
@@ -717,16 +773,24 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
                if (x.causality == "output" and x.initial in ("approx", "calculated"))
                or (me and (x.derivative is not None or (x.kind == K_STATE
                                                           and x.initial == "calculated")))]
+    def deps(vr: int, fmi2: bool) -> str:
+        d = vs[vr].dependencies
+        if d is None:
+            return ""
+        return f' dependencies="{" ".join(str(index[k] if fmi2 else k) for k in d)}"'
+
     if fmi == 2:
         for tag, vrs in (("Outputs", outputs), ("Derivatives", ders),
                          ("InitialUnknowns", initial)):
             if vrs:
                 lines.append(f"    <{tag}>")
-                lines += [f'      <Unknown index="{index[vr]}"/>' for vr in vrs]
+                lines += [f'      <Unknown index="{index[vr]}"'
+                          f'{deps(vr, True) if tag == "Derivatives" else ""}/>' for vr in vrs]
                 lines.append(f"    </{tag}>")
     else:
         lines += [f'    <Output valueReference="{vr}"/>' for vr in outputs]
-        lines += [f'    <ContinuousStateDerivative valueReference="{vr}"/>' for vr in ders]
+        lines += [f'    <ContinuousStateDerivative valueReference="{vr}"{deps(vr, False)}/>'
+                  for vr in ders]
         lines += [f'    <InitialUnknown valueReference="{vr}"/>' for vr in initial]
     lines.append("  </ModelStructure>")
     lines.append("</fmiModelDescription>")
@@ -779,6 +843,7 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         C text.
     """
     m = fm.model
+    n_colours = int(m.jacobian_colours[:len(m.states)].max()) + 1
     pos, _ = m.tolerances(1.0, 0.0, 0.0)
     spd, _ = m.tolerances(0.0, 1.0, 0.0)
     cur, rel = m.tolerances(0.0, 0.0, 1.0)
@@ -821,7 +886,8 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
             ("K_TIME", K_TIME), ("K_STATE", K_STATE), ("K_DER", K_DER), ("K_AUX", K_AUX),
             ("K_PARAM", K_PARAM), ("K_INPUT", K_INPUT), ("K_SETTING", K_SETTING),
             ("K_PRODUCT", K_PRODUCT), ("K_ERROR", K_ERROR), ("K_BOOLEAN", K_BOOLEAN),
-            ("K_INTEGER", K_INTEGER), ("K_COUNTER", K_COUNTER), ("T_REAL", T_REAL),
+            ("K_INTEGER", K_INTEGER), ("K_COUNTER", K_COUNTER),
+            ("K_EVALUATIONS", K_EVALUATIONS), ("T_REAL", T_REAL),
             ("T_BOOLEAN", T_BOOLEAN), ("T_INTEGER", T_INTEGER))],
         _c_array("int", "VR_KIND", [x.kind for x in vs]),
         _c_array("int", "VR_A", [x.a for x in vs]),
@@ -848,6 +914,13 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         _c_array("double", "REL_MASK", rel),
         # nominal magnitudes of the continuous states (model exchange; state_nominals)
         _c_array("double", "NOMINAL", state_nominals(fm)),
+        # the Jacobian's declared pattern and its column groups (model exchange: the
+        # directional derivatives, wrapper.c fmu_jacobian): the model's colouring, each
+        # reference integral a group of its own
+        _c_array("int", "JAC_PATTERN", m.jacobian_pattern[:, :len(m.states)].ravel()),
+        _c_array("int", "JAC_GROUP", [*m.jacobian_colours[:len(m.states)], n_colours,
+                                      n_colours + 1]),
+        f"#define JAC_N_GROUPS {n_colours + 2}",
         "static const char *const SETTING_NAMES[] = {"
         + ", ".join(quote_c(s[0]) for s in SETTINGS) + "};",
         'static const char *const PERIOD_NAMES[] = {"controller.position_period", '
