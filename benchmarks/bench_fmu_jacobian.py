@@ -23,43 +23,26 @@ import argparse
 import ctypes
 import json
 import platform
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from feeddrive.fmu import export_fmu
-from feeddrive.parameters import preset
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "validation"))
+RESULTS = ROOT / "benchmarks" / "results" / "bench_fmu_jacobian.json"
 
-RESULTS = Path(__file__).resolve().parent / "results" / "bench_fmu_jacobian.json"
+from fmu_helpers import pathsim_model_exchange  # noqa: E402
+
+from feeddrive.fmu import export_fmu  # noqa: E402
+from feeddrive.parameters import preset  # noqa: E402
 
 
 def pathsim_run(path: Path, duration: float, use_them: bool) -> dict:
-    from pathsim import Connection, Simulation
-    from pathsim.blocks import Constant, Scope
-    from pathsim.solvers import ESDIRK4
-    from pathsim_fmi import ModelExchangeFMU
-
-    fmu = ModelExchangeFMU(str(path))
-    if not use_them:
-        fmu.op_dyn._jac_x = None  # PathSim differences the Jacobian itself
-    v_t, v_n = Constant(0.5e-3), Constant(16e-3)
-    scope = Scope(labels=["table_position"])
-    sim = Simulation([v_t, v_n, fmu, scope],
-                     [Connection(v_t, fmu["table_speed_reference"]),
-                      Connection(v_n, fmu["nut_speed_reference"]),
-                      Connection(fmu["table_position"], scope)],
-                     dt=1e-4, Solver=ESDIRK4, tolerance_fpi=1e-12, log=False)
-    t0 = time.process_time()
-    sim.run(duration)
-    cpu = time.process_time() - t0
-    w = fmu.fmu_wrapper
-    vr = {v.name: v.valueReference for v in w.model_description.modelVariables}
-    rhs, tangents = w.fmu.getInteger([vr["evaluations.derivatives"],
-                                      vr["evaluations.tangents"]])
-    _, (x,) = scope.read()
-    return {"cpu_s": cpu, "derivatives": int(rhs), "tangents": int(tangents), "x": x}
+    (rhs, tangents), _, x, cpu = pathsim_model_exchange(path, duration, use_them)
+    return {"cpu_s": cpu, "derivatives": rhs, "tangents": tangents, "x": x}
 
 
 def cvode_run(path: Path, table_speed: float, nut_speed: float, duration: float,

@@ -9,16 +9,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmu_helpers import require_c_compiler
 
 from feeddrive.fmu import export_fmu
 from feeddrive.parameters import preset
 
 fmpy = pytest.importorskip("fmpy")
-CC = pytest.importorskip("feeddrive.backends.c_backend")
-try:
-    CC.find_compiler()
-except CC.CompilerNotFound:  # pragma: no cover - CI has a compiler
-    pytest.skip("no C compiler", allow_module_level=True)
+require_c_compiler()
 
 CYCLES = 2000
 #: 1 s of the CDFS at 2 mm/s after a 0.1-s ramp, inputs and outputs every 1 ms

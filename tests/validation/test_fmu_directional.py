@@ -12,16 +12,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmu_helpers import require_c_compiler
 
 from feeddrive.fmu import export_fmu
 from feeddrive.parameters import load, loads, preset
 
 fmpy = pytest.importorskip("fmpy")
-CC = pytest.importorskip("feeddrive.backends.c_backend")
-try:
-    CC.find_compiler()
-except CC.CompilerNotFound:  # pragma: no cover - CI has a compiler
-    pytest.skip("no C compiler", allow_module_level=True)
+require_c_compiler()
 
 GMS_FILE = Path(__file__).parents[2] / "examples" / "gms_guide.toml"
 #: a set with the compensator's observer, torque ripple and lead error (every kernel kind)
@@ -318,35 +315,12 @@ def test_pathsim_model_exchange_needs_far_fewer_derivative_evaluations(tmp_path:
     evaluations, 3× the derivative ones, not counted as derivatives), the same trace to 1e-9
     of the stroke (measured 1e-10)."""
     pytest.importorskip("pathsim_fmi")
-    from pathsim import Connection, Simulation
-    from pathsim.blocks import Constant, Scope
-    from pathsim.solvers import ESDIRK4
-    from pathsim_fmi import ModelExchangeFMU
+    from fmu_helpers import pathsim_model_exchange
 
     path = tmp_path / "ddfs-me.fmu"
     export_fmu(preset("wang2021"), "ddfs", path, kind="me")
-
-    def run(use_them: bool):  # type: ignore[no-untyped-def]
-        fmu = ModelExchangeFMU(str(path))
-        assert fmu.op_dyn._jac_x is not None  # it reads providesDirectionalDerivative
-        if not use_them:
-            fmu.op_dyn._jac_x = None
-        v_t, v_n = Constant(0.5e-3), Constant(16e-3)
-        scope = Scope(labels=["table_position"])
-        sim = Simulation([v_t, v_n, fmu, scope],
-                         [Connection(v_t, fmu["table_speed_reference"]),
-                          Connection(v_n, fmu["nut_speed_reference"]),
-                          Connection(fmu["table_position"], scope)],
-                         dt=1e-4, Solver=ESDIRK4, tolerance_fpi=1e-12, log=False)
-        sim.run(0.03)
-        w = fmu.fmu_wrapper
-        vr = {v.name: v.valueReference for v in w.model_description.modelVariables}
-        counts = w.fmu.getInteger([vr["evaluations.derivatives"], vr["evaluations.tangents"]])
-        t, (x,) = scope.read()
-        return counts, np.asarray(t), np.asarray(x)
-
-    (rhs_without, tan_without), t0, x0 = run(False)
-    (rhs_with, tan_with), t1, x1 = run(True)
+    (rhs_without, tan_without), t0, x0, _ = pathsim_model_exchange(path, 0.03, False)
+    (rhs_with, tan_with), t1, x1, _ = pathsim_model_exchange(path, 0.03, True)
     assert tan_without == 0 and tan_with > 0
     assert rhs_with <= 0.5 * rhs_without
     assert np.array_equal(t0, t1)

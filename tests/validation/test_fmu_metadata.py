@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmu_helpers import require_c_compiler
 
 from feeddrive import __version__
 from feeddrive.fmu import export_fmu
@@ -22,11 +23,7 @@ from feeddrive.parameters import preset
 from feeddrive.units import ENGINEERING
 
 fmpy = pytest.importorskip("fmpy")
-CC = pytest.importorskip("feeddrive.backends.c_backend")
-try:
-    CC.find_compiler()
-except CC.CompilerNotFound:  # pragma: no cover - CI has a compiler
-    pytest.skip("no C compiler", allow_module_level=True)
+require_c_compiler()
 
 ROOT = Path(__file__).resolve().parents[2]
 

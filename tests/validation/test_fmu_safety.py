@@ -13,7 +13,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from fmu_helpers import Slave
+from fmu_helpers import Slave, require_c_compiler
 
 from feeddrive.fmu import export_fmu
 from feeddrive.fmu.description import MAX_STEPS_PER_CALL, variables
@@ -23,11 +23,7 @@ from feeddrive.model.slot_ranges import slot_range
 from feeddrive.parameters import preset
 
 pytest.importorskip("fmpy")
-CC = pytest.importorskip("feeddrive.backends.c_backend")
-try:
-    CC.find_compiler()
-except CC.CompilerNotFound:  # pragma: no cover - CI has a compiler
-    pytest.skip("no C compiler", allow_module_level=True)
+require_c_compiler()
 
 #: the issue's acceptance bound on the integrator steps before Error
 MAX_STEPS = 10_000
