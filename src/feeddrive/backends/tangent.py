@@ -1,6 +1,7 @@
 """Forward-mode derivatives of the package's kernels: the tangent of a kernel, as a kernel.
 
-Source transformation of the restricted Python the kernels are written in (the subset of
+Source transformation (the tangent mode of algorithmic differentiation [1]_, as tools such as
+Tapenade apply it to source code [2]_) of the restricted Python the kernels are written in (the subset of
 :mod:`feeddrive.backends.c_translate`, docs/c-backend.md): for a function ``f`` and every
 kernel it calls, transitively, a function ``f__tangent`` that computes what ``f`` computes
 and, beside every float value, its directional derivative — for a seed ``ẏ`` of the states
@@ -99,6 +100,8 @@ def _div(a: ast.expr | None, b: ast.expr) -> ast.expr | None:
 
 
 #: derivative of each one-argument math function at x (AST of f'(x)), applied to x's tangent
+#:
+#: :meta hide-value:
 RULES: dict[str, Callable[[ast.expr], ast.expr]] = {
     "exp": lambda x: _m("exp", x),
     "expm1": lambda x: _m("exp", x),

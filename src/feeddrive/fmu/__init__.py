@@ -91,7 +91,7 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
         The option named in messages.
     platforms : str or tuple of str, optional
         Platforms to build a binary for (``"linux64,win64"`` or a tuple; names of
-        :data:`feeddrive.fmu.platforms.PLATFORMS`); None: this machine's.
+        ``feeddrive.fmu.platforms.PLATFORMS``); None: this machine's.
 
     Returns
     -------
@@ -182,7 +182,7 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
         The model identifier; derived from the drive by default.
     platforms : str or tuple of str, optional
         Platforms to build a binary for, each with a compiler found for it
-        (``"linux64,win64"``; :data:`feeddrive.fmu.platforms.PLATFORMS`); None: this machine's.
+        (``"linux64,win64"``; ``feeddrive.fmu.platforms.PLATFORMS``); None: this machine's.
 
     Returns
     -------

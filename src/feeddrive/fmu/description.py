@@ -186,7 +186,7 @@ class Variable:
     nominal : float, optional
         Its nominal magnitude (continuous states) [its unit].
     display_unit : str, optional
-        The unit an importer shows it in (:data:`feeddrive.units.DISPLAY_UNITS`).
+        The unit an importer shows it in (``feeddrive.units.DISPLAY_UNITS``).
     dependencies : tuple of int, optional
         Value references of the states and inputs a derivative depends on (the model's
         declared sparsity; model exchange).
@@ -335,7 +335,7 @@ def _outputs(fm: FmuModel) -> set[str]:
 
 def display_unit(name: str, unit: str) -> str | None:
     """The unit an importer shows the variable ``name`` of SI ``unit`` in: the CLI's
-    (:data:`feeddrive.units.DISPLAY_UNITS`: mm, mm/s, rpm, N/µm; µm for the following error,
+    (``feeddrive.units.DISPLAY_UNITS``: mm, mm/s, rpm, N/µm; µm for the following error,
     the scale resolution and the lead error's amplitudes).
 
     Parameters

@@ -2,7 +2,7 @@
 ``documentation/index.html``.
 
 Both are written from the compiler flags the export itself uses
-(:data:`feeddrive.fmu.platforms.CFLAGS`, :data:`feeddrive.fmu.platforms.PLATFORMS`), so a binary
+(``feeddrive.fmu.platforms.CFLAGS``, ``feeddrive.fmu.platforms.PLATFORMS``), so a binary
 rebuilt by CMake, by the command lines of the page, by MATLAB's
 ``fmudialog.compileFMUSources`` or by fmpy's ``build_platform_binary`` computes what the
 exported one computes (tested for CMake and fmpy on linux64, for MinGW-w64 under Wine).
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from html import escape
 
-from .platforms import CFLAGS, HEADERS, PLATFORMS, compile_line
+from .platforms import CFLAGS, HEADERS, compile_line
 
 #: the CMake steps in the unzipped FMU (the header of sources/CMakeLists.txt says the same)
 CMAKE_STEPS = ("cmake -S sources -B build\n"
@@ -220,4 +220,4 @@ an importer that compiles source FMUs (OpenModelica, Dymola) builds the binary i
 """
 
 
-__all__ = ["cmake_lists", "index_html", "PLATFORMS"]
+__all__ = ["cmake_lists", "index_html"]
