@@ -1,10 +1,10 @@
 """Forward-mode derivatives of the package's kernels: the tangent of a kernel, as a kernel.
 
 Source transformation (the tangent mode of algorithmic differentiation [1]_, as tools such as
-Tapenade apply it to source code [2]_) of the restricted Python the kernels are written in (the subset of
-:mod:`feeddrive.backends.c_translate`, docs/c-backend.md): for a function ``f`` and every
-kernel it calls, transitively, a function ``f__tangent`` that computes what ``f`` computes
-and, beside every float value, its directional derivative — for a seed ``ẏ`` of the states
+Tapenade apply it to source code [2]_) of the restricted Python the kernels are written in
+(the subset of :mod:`feeddrive.backends.c_translate`, docs/c-backend.md): for a function ``f``
+and every kernel it calls, transitively, a function ``f__tangent`` that computes what ``f``
+computes and, beside every float value, its directional derivative — for a seed ``ẏ`` of the states
 (and of the parameters ``Ṗ``, tables ``Ṫ``), ``dy__d = (∂f/∂y)·ẏ + (∂f/∂P)·Ṗ + …`` exactly, up
 to rounding (no step size: the chain rule applied to every operation).  The result is itself a
 kernel in the same subset: the C translator turns it into C (the FMU's
