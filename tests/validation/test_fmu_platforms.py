@@ -269,3 +269,19 @@ def test_the_documentation_names_every_rebuild_route(tmp_path: Path) -> None:
         assert text in page, text
     assert f"add_library({ident} SHARED fmu.c)" in cmake
     assert "-O2 -ffp-contract=off" in cmake and "/fp:precise" in cmake
+
+
+@pytest.mark.parametrize(("fmi", "kind"), [(2, "cs"), (3, "me")])
+def test_the_sources_compile_without_a_warning(tmp_path: Path, fmi: int, kind: str) -> None:
+    """sources/fmu.c under -std=c99 -Wall -Wextra -pedantic -Werror with this machine's
+    compiler and, where installed, MinGW-w64: no warning (the model exchange source carries
+    the model's tangent)."""
+    path = tmp_path / "d.fmu"
+    export_fmu(preset("wang2021"), "ddfs", path, fmi=fmi, kind=kind)
+    src = _unzip(path, tmp_path / "u") / "sources"
+    strict = ["-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror", "-shared"]
+    for cc, out in (([*find_compiler(), "-fPIC"], "x.so"),
+                    *((([str(MINGW)], "x.dll"),) if MINGW else ())):
+        proc = subprocess.run([*cc, *strict, "-o", out, "fmu.c", "-lm"], cwd=src,
+                              capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr[-3000:]

@@ -917,10 +917,10 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         # the Jacobian's declared pattern and its column groups (model exchange: the
         # directional derivatives, wrapper.c fmu_jacobian): the model's colouring, each
         # reference integral a group of its own
-        _c_array("int", "JAC_PATTERN", m.jacobian_pattern[:, :len(m.states)].ravel()),
-        _c_array("int", "JAC_GROUP", [*m.jacobian_colours[:len(m.states)], n_colours,
-                                      n_colours + 1]),
-        f"#define JAC_N_GROUPS {n_colours + 2}",
+        *([_c_array("int", "JAC_PATTERN", m.jacobian_pattern[:, :len(m.states)].ravel()),
+           _c_array("int", "JAC_GROUP", [*m.jacobian_colours[:len(m.states)], n_colours,
+                                         n_colours + 1]),
+           f"#define JAC_N_GROUPS {n_colours + 2}"] if kind == "me" else []),
         "static const char *const SETTING_NAMES[] = {"
         + ", ".join(quote_c(s[0]) for s in SETTINGS) + "};",
         'static const char *const PERIOD_NAMES[] = {"controller.position_period", '

@@ -232,7 +232,7 @@ static int fmu_directional(Fmu *m, const unsigned int *unknowns, size_t n_unknow
                            const unsigned int *knowns, size_t n_known, const double *seed,
                            double *out) {
     size_t k;
-    int j, only_derivatives = 1, only_states = 1;
+    int only_derivatives = 1, only_states = 1;
     char msg[300];
     if (!m->initialized) {
         fmu_log(m, ST_ERROR, "directional derivatives are defined after initialisation");
