@@ -6,8 +6,11 @@ ramp sampled at the communication step h = 1 ms and held over each step): CDFS 2
 
 * **FMU cs**: ``fmpy.simulate_fmu`` of the FMI 2.0 co-simulation FMU (its embedded DOPRI5 at
   feeddrive's default tolerances), the reference as an input table, outputs every 1 ms;
-* **feeddrive**: ``feeddrive.simulate`` (method ``dopri5``, default tolerances) driven by the
-  same held reference, ``SampledSpeed(hold=True)``;
+* **feeddrive**: ``feeddrive.simulate`` (its default method, default tolerances) driven by
+  the same held reference, ``SampledSpeed(hold=True)``;
+* agreement of the FMU with each method it is compared to (issue 38 item 6): ``dopri5`` (the
+  FMU's own integrator) and the default method, each at the default tolerances and at 1000×
+  tighter ones;
 * **FMU me**: the model-exchange FMU in fmpy (its SUNDIALS CVODE integrates the FMU's
   derivatives; relative tolerance 1e-8) with the speeds constant from t = 0 — the measurement
   behind the co-simulation integrator's choice (an embedded DOPRI5 generated from feeddrive's
@@ -67,6 +70,9 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--duration", type=float, default=10.0)
     args = ap.parse_args()
+    from feeddrive.engine.simulate import SolverOptions
+
+    default_method = SolverOptions().method
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, (drive, vt, vn) in SCENARIOS.items():
@@ -89,6 +95,17 @@ def main() -> None:
             dev_fd = float(np.max(np.abs(res["table_position"] - x)))
             rec_t = run_fmu(cs, ref, start_values=FMU_TIGHT)
             dev_tight = float(np.max(np.abs(on_grid(rec_t, tight.time, "table_position") - x)))
+            # the FMU against each method: the same DOPRI5 (default tolerances; both tight)
+            # and feeddrive's default method (default tolerances; both tight)
+            agree = {}
+            for method in ("dopri5", default_method):
+                for label, fmu_rec, opts in (("default", rec, {}),
+                                             ("tight", rec_t, dict(TIGHT))):
+                    other = run_feeddrive(drive, ref, method=method, **opts)
+                    d = float(np.max(np.abs(on_grid(fmu_rec, other.time, "table_position")
+                                            - other["table_position"])))
+                    agree[f"dev_fmu_vs_{method}_{label}_m"] = d
+                    agree[f"dev_fmu_vs_{method}_{label}_rel"] = d / stroke
             const = Reference.ramp(vt, vn, args.duration, ramp=0.0)
             me_cpu, me_rec = _cpu(lambda: run_fmu(me, const,  # noqa: B023
                                                   relative_tolerance=1e-8), 1)
@@ -116,7 +133,7 @@ def main() -> None:
                 "fmu_me_cvode_cpu_s": me_cpu, "dev_fmu_me_m": dev_me,
                 "fmu_cs_constant_cpu_s": cs_const_cpu, "dev_fmu_cs_constant_m": dev_cs_c,
                 "fmu_cs_bytes": cs.stat().st_size, "fmu_me_bytes": me.stat().st_size,
-                "export_s": export_s})
+                "export_s": export_s, "default_method": default_method, **agree})
             print(json.dumps(rows[-1]), flush=True)
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps({"machine": platform.processor() or platform.machine(),

@@ -3,6 +3,8 @@ Parquet, report), and the names of the friction sites."""
 
 from __future__ import annotations
 
+import math
+
 MM = 1e-3  # m per mm
 MM_PER_S = 1e-3  # m/s per mm/s
 UM = 1e-6  # m per µm
@@ -10,6 +12,13 @@ N_PER_UM = 1e6  # N/m per N/µm
 
 # SI unit → (engineering unit, factor) for exports and printing
 ENGINEERING = {"m": ("mm", 1e3), "m/s": ("mm/s", 1e3), "N/m": ("N/µm", 1e-6)}
+
+# SI unit → the units a tool may display it in, the first its default (display value =
+# factor × SI value): the engineering units above, µm for small lengths (following error,
+# resolutions), rpm for motor speeds
+DISPLAY_UNITS: dict[str, tuple[tuple[str, float], ...]] = {
+    "m": (ENGINEERING["m"], ("µm", 1e6)), "m/s": (ENGINEERING["m/s"],),
+    "N/m": (ENGINEERING["N/m"],), "rad/s": (("rpm", 60.0 / (2.0 * math.pi)),)}
 
 # the friction sites of Wang2021 Sect. 4 (Table 1), in the parameter file's order
 SITES = ("screw", "nut", "guide")

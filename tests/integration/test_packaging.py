@@ -33,7 +33,7 @@ def test_citation_cff_is_valid_cff_1_2_and_cites_wang2021() -> None:
     jsonschema.validate(cff, schema)
     assert cff["cff-version"] == "1.2.0"
     assert cff["version"] == feeddrive.__version__
-    assert cff["license"] == _project()["project"]["license"]
+    assert " AND ".join(cff["license"]) == _project()["project"]["license"]
     (paper,) = [r for r in cff["references"] if r.get("doi") == "10.5194/ms-12-791-2021"]
     assert [a["family-names"] for a in paper["authors"]] == ["Wang", "Feng", "Yang", "Jin"]
     assert (paper["journal"], paper["volume"], paper["start"], paper["end"], paper["year"]) \
@@ -56,9 +56,18 @@ def test_cff_schema_refuses_a_broken_file() -> None:
 def test_pep639_license_and_metadata() -> None:
     project = _project()
     meta = project["project"]
-    assert meta["license"] == "MIT"  # an SPDX expression, PEP 639
-    assert meta["license-files"] == ["LICENSE"]
+    # an SPDX expression, PEP 639: the package's MIT and the BSD-2-Clause of the FMI
+    # standard's headers it ships (src/feeddrive/fmu/include, copied into every FMU)
+    assert meta["license"] == "MIT AND BSD-2-Clause"
+    assert meta["license-files"] == ["LICENSE", "src/feeddrive/fmu/include/LICENSE.txt"]
     assert (ROOT / "LICENSE").read_text(encoding="utf-8").startswith("MIT License")
+    headers = ROOT / "src" / "feeddrive" / "fmu" / "include"
+    bsd = (headers / "LICENSE.txt").read_text(encoding="utf-8")
+    for header in headers.glob("*.h"):  # each header states the licence the file names
+        text = header.read_text(encoding="utf-8")
+        assert "2-Clause BSD License" in text and header.name in bsd, header.name
+        body = text.split("Redistribution and use", 1)[1].split("----", 1)[0]
+        assert " ".join(("Redistribution and use" + body).split()) in " ".join(bsd.split())
     # setuptools reads PEP 639 metadata from version 77 on
     (setuptools,) = [r for r in project["build-system"]["requires"]
                      if r.startswith("setuptools")]

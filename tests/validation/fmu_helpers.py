@@ -115,3 +115,149 @@ def needed_libraries(fmu: Path, folder: Path) -> set[str]:
                          text=True, check=True).stdout
     return {line.split("[", 1)[1].split("]", 1)[0] for line in out.splitlines()
             if "(NEEDED)" in line}
+
+
+#: the logger callbacks of every Slave made (Slave: fmpy's proxy keeps the last one)
+_KEEP_ALIVE: list[object] = []
+
+
+class Slave:
+    """A co-simulation FMU (FMI 2 or 3) driven step by step through fmpy, with the messages
+    its logger receives kept in ``log`` ([(status, text)]) and uniform get/set by name."""
+
+    def __init__(self, path: Path, folder: Path, name: str = "x") -> None:
+        from fmpy import extract, read_model_description
+
+        self.md = read_model_description(str(path))
+        self.fmi = int(self.md.fmiVersion[0])
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.log: list[tuple[int, str]] = []
+        unzipped = extract(str(path), unzipdir=str(folder / f"u-{name}"))
+        ident = self.md.coSimulation.modelIdentifier
+        if self.fmi == 2:
+            from ctypes import byref
+
+            from fmpy.fmi2 import (
+                FMU2Slave,
+                calloc,
+                fmi2CallbackAllocateMemoryTYPE,
+                fmi2CallbackFreeMemoryTYPE,
+                fmi2CallbackFunctions,
+                fmi2CallbackLoggerTYPE,
+                free,
+            )
+            from fmpy.logging import addLoggerProxy
+
+            def logger(env, inst, status, category, message):  # type: ignore[no-untyped-def]
+                self.log.append((int(status), message.decode("utf-8")))
+
+            cb = fmi2CallbackFunctions()
+            cb.logger = fmi2CallbackLoggerTYPE(logger)
+            cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+            addLoggerProxy(byref(cb))
+            # fmpy's native proxy keeps the last logger it wrapped in a global: every FMI 2
+            # instance made after this one (fmpy's default callbacks too) logs through it, so
+            # it must outlive this instance (else a later instance's message calls freed
+            # memory)
+            _KEEP_ALIVE.append(cb)
+            self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=unzipped,
+                                 modelIdentifier=ident, instanceName=name)
+            self.fmu.instantiate(callbacks=cb)
+        else:
+            from fmpy.fmi3 import FMU3Slave
+
+            def log3(env, status, category, message):  # type: ignore[no-untyped-def]
+                self.log.append((int(status), message.decode("utf-8")))
+
+            self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=unzipped,
+                                 modelIdentifier=ident, instanceName=name)
+            self.fmu.instantiate(logMessage=log3)
+        self.t = 0.0
+
+    def set(self, name: str, value: float) -> None:
+        vr, kind = [self.vr[name]], self.types[name]
+        f = self.fmu
+        if kind in ("Integer", "Int64"):
+            (f.setInteger if self.fmi == 2 else f.setInt64)(vr, [int(value)])
+        elif kind == "Boolean":
+            f.setBoolean(vr, [bool(value)])
+        else:
+            (f.setReal if self.fmi == 2 else f.setFloat64)(vr, [float(value)])
+
+    def get(self, name: str) -> float:
+        vr, kind = [self.vr[name]], self.types[name]
+        f = self.fmu
+        if kind in ("Integer", "Int64"):
+            return float((f.getInteger if self.fmi == 2 else f.getInt64)(vr)[0])
+        return float((f.getReal if self.fmi == 2 else f.getFloat64)(vr)[0])
+
+    def initialize(self, start: float = 0.0) -> None:
+        if self.fmi == 2:
+            self.fmu.setupExperiment(startTime=start)
+            self.fmu.enterInitializationMode()
+        else:
+            self.fmu.enterInitializationMode(startTime=start)
+        self.fmu.exitInitializationMode()
+        self.t = start
+
+    def step(self, h: float) -> None:
+        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
+        self.t += h
+
+    def reset(self) -> None:
+        self.fmu.reset()
+        self.t = 0.0
+
+    def free(self) -> None:
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+def require_c_compiler() -> None:
+    """Skip the calling test module when this machine has no C compiler (CI has one)."""
+    import pytest
+
+    from feeddrive.backends.c_backend import CompilerNotFound, find_compiler
+
+    try:
+        find_compiler()
+    except CompilerNotFound:  # pragma: no cover - CI has a compiler
+        pytest.skip("no C compiler", allow_module_level=True)
+
+
+def pathsim_model_exchange(path: Path, duration: float, use_them: bool
+                           ) -> tuple[tuple[int, int], np.ndarray, np.ndarray, float]:
+    """The DDFS model-exchange FMU ``path`` in PathSim (pathsim-fmi's ModelExchangeFMU,
+    ESDIRK4 at a fixed 0.1-ms step, fixed-point tolerance 1e-12, 0.5 mm/s with v_n = 16 mm/s
+    from rest) for ``duration`` [s], with the FMU's directional derivatives (``use_them``) or
+    with PathSim's own central differences.  Returns the FMU's counters (derivative and
+    tangent evaluations), the recorded time and table position, and the CPU time [s]."""
+    import time
+
+    from pathsim import Connection, Simulation
+    from pathsim.blocks import Constant, Scope
+    from pathsim.solvers import ESDIRK4
+    from pathsim_fmi import ModelExchangeFMU
+
+    fmu = ModelExchangeFMU(str(path))
+    assert fmu.op_dyn._jac_x is not None  # it reads providesDirectionalDerivative
+    if not use_them:
+        fmu.op_dyn._jac_x = None
+    v_t, v_n = Constant(0.5e-3), Constant(16e-3)
+    scope = Scope(labels=["table_position"])
+    sim = Simulation([v_t, v_n, fmu, scope],
+                     [Connection(v_t, fmu["table_speed_reference"]),
+                      Connection(v_n, fmu["nut_speed_reference"]),
+                      Connection(fmu["table_position"], scope)],
+                     dt=1e-4, Solver=ESDIRK4, tolerance_fpi=1e-12, log=False)
+    t0 = time.process_time()
+    sim.run(duration)
+    cpu = time.process_time() - t0
+    w = fmu.fmu_wrapper
+    vr = {v.name: v.valueReference for v in w.model_description.modelVariables}
+    rhs, tangents = w.fmu.getInteger([vr["evaluations.derivatives"],
+                                      vr["evaluations.tangents"]])
+    t, (x,) = scope.read()
+    return (int(rhs), int(tangents)), np.asarray(t), np.asarray(x), cpu

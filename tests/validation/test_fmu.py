@@ -66,7 +66,8 @@ def test_fmpy_validate_finds_no_problem(folder: Path, fmi: int, kind: str) -> No
     assert validate_fmu(str(path)) == []
     with zipfile.ZipFile(path) as zf:
         names = set(zf.namelist())
-    assert "sources/fmu.c" in names and "documentation/building.txt" in names
+    assert "sources/fmu.c" in names and "documentation/index.html" in names
+    assert "sources/CMakeLists.txt" in names
     assert (fmi == 3) == ("sources/buildDescription.xml" in names)
 
 

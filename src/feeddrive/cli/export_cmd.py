@@ -36,19 +36,25 @@ def fmu_command(
                                     "nut_speed_reference input [mm/s] (DDFS)."),
     nut_hold: str = typer.Option("locked", "--nut-hold", help="CDFS hollow motor: locked "
                                  "(nut frozen) or servo (its loop at zero command)."),
+    platform: str | None = typer.Option(None, "--platform", help="Comma-separated platforms "
+                                        "to build a binary for, each with a C compiler found "
+                                        "for it: linux64, win64 (MinGW-w64), darwin64 "
+                                        "(default: this machine's)."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
     as_json: bool = typer.Option(False, "--json", help="Print what was written as JSON."),
     solver: Any = None,
 ) -> None:
     """Write the drive as an FMU (FMI 2.0 or 3.0, co-simulation or model exchange): a binary
-    for this platform built with the machine's C compiler (needs only libc and libm) and its
-    C sources.  Inputs: the position/speed references and a table load force; outputs: table
-    position and speed, motor angles, speeds, currents and torques, friction forces, following
-    error; every model parameter tunable."""
+    for this platform (or each --platform) built with a C compiler found for it (needs only
+    libc and libm) and its C sources with their CMakeLists.txt.  Inputs: the position/speed
+    references and a table load force; outputs: table position and speed, motor angles,
+    speeds, currents and torques, friction forces, following error; every model parameter
+    tunable, checked against its parameter-file range when set."""
     from ..fmu import check_request, export_fmu
     from ..parameters import ParameterError
 
-    check_request(drive, fmi, kind, out, force=force, inputs=(params_file,))
+    check_request(drive, fmi, kind, out, force=force, inputs=(params_file,),
+                  platforms=platform)
     if nut_hold not in ("locked", "servo"):
         raise ParameterError("--nut-hold", nut_hold, "expected locked or servo")
     v_t = _units.speed("--table-speed", table_speed)
@@ -63,19 +69,21 @@ def fmu_command(
                                  f"the {drive} drive has no live nut axis; expected 0 [mm/s]")
     a = _units.position("--position", position, params, drive)
     result = export_fmu(params, drive, out, table_position=a, nut_hold=nut_hold, fmi=fmi,
-                        kind=kind, table_speed=v_t, nut_speed=v_n, force=force)
+                        kind=kind, table_speed=v_t, nut_speed=v_n, force=force,
+                        platforms=platform)
     data = {"fmu": str(result.path), "fmi_version": f"{fmi}.0",
             "kind": "co-simulation" if kind == "cs" else "model exchange",
             "model_identifier": result.identifier, "size_bytes": result.size_bytes,
             "variables": result.n_variables, "states": result.n_states,
-            "sampled_loops": result.sampled, "inputs": list(result.inputs),
+            "sampled_loops": result.sampled, "binaries": list(result.binaries),
+            "inputs": list(result.inputs),
             "outputs": list(result.outputs)}
     if as_json:
         print_json(data)
         return
     console.print(f"wrote {result.path} ({result.size_bytes / 1024:.0f} kB): FMI {fmi}.0 "
                   f"{data['kind']}, {drive} ({params.name}), {result.n_states} states, "
-                  f"{result.n_variables} variables"
+                  f"{result.n_variables} variables, binaries {', '.join(result.binaries)}"
                   f"{_sampling_note(kind) if result.sampled else ''}",
                   markup=False, highlight=False, soft_wrap=True)
     console.print(f"  inputs:  {', '.join(result.inputs)}", markup=False, highlight=False,

@@ -16,7 +16,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .. import __version__
 from ..parameters import DriveParameters, ParameterError
 
 if TYPE_CHECKING:
@@ -52,6 +51,8 @@ class ExportedFmu:
         Size of the file [bytes].
     sampled : bool
         Whether any loop is sampled (events in the FMU).
+    binaries : tuple of str
+        The ``binaries/`` folders written (one per platform).
     """
 
     path: Path
@@ -64,14 +65,17 @@ class ExportedFmu:
     outputs: tuple[str, ...]
     size_bytes: int
     sampled: bool
+    binaries: tuple[str, ...] = ()
 
 
 def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], *,
                   force: bool = False, inputs: tuple[str | None, ...] = (),
-                  option: str = "--out") -> Path:
+                  option: str = "--out", platforms: str | tuple[str, ...] | None = None
+                  ) -> tuple[Path, tuple[str, ...] | None]:
     """Refuse a request that cannot succeed, before any work: unknown drive, FMI version or
     kind, an output that is not a writable new ``.fmu`` file (an existing one only with
-    ``force``; never one of ``inputs``), no C compiler.  One-line errors name what to change.
+    ``force``; never one of ``inputs``), an unknown platform or one without a C compiler on
+    this machine.  One-line errors name what to change.
 
     Parameters
     ----------
@@ -89,11 +93,16 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
         Files the command reads, which the output may never replace.
     option : str, default "--out"
         The option named in messages.
+    platforms : str or tuple of str, optional
+        Platforms to build a binary for (``"linux64,win64"`` or a tuple; names of
+        ``feeddrive.fmu.platforms.PLATFORMS``); None: this machine's.
 
     Returns
     -------
-    Path
+    path : Path
         The output path.
+    platforms : tuple of str or None
+        The platforms, parsed (None: this machine's).
 
     Raises
     ------
@@ -102,11 +111,11 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
     OutputError
         For an output that cannot be written.
     ValueError
-        Without a C compiler (the compiler search's message).
+        Without a C compiler for a platform (the compiler search's message).
     """
     from ..io.outputs import check_output_file
     from ..model.mechanisms import drive_names
-    from .build import CompilerNotFound, find_compiler
+    from .platforms import PLATFORMS, CompilerNotFound, find_compiler, platform_compiler
 
     if drive not in drive_names():
         raise ParameterError("--drive", drive, f"expected one of {', '.join(drive_names())}")
@@ -117,12 +126,24 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
                              "expected cs (co-simulation) or me (model exchange)")
     if Path(out).suffix.lower() != ".fmu":
         raise ParameterError(option, os.fspath(out), "expected a file name ending in .fmu")
+    names: tuple[str, ...] | None = None
+    if platforms is not None:
+        given = platforms.split(",") if isinstance(platforms, str) else list(platforms)
+        names = tuple(dict.fromkeys(n.strip() for n in given))
+        bad = [n for n in names if n not in PLATFORMS]
+        if bad or not names:
+            raise ParameterError("--platform", ",".join(given),
+                                 f"expected a comma-separated list of {', '.join(PLATFORMS)}")
     path = check_output_file(out, option=option, inputs=inputs, force=force)
     try:
-        find_compiler()
+        if names is None:
+            find_compiler()
+        for name in names or ():
+            platform_compiler(name)
     except CompilerNotFound as err:
-        raise ValueError(str(err)) from None
-    return path
+        where = "" if names is None else "--platform: "
+        raise ValueError(f"{where}{err}") from None
+    return path, names
 
 
 #: the speed scale of an export whose start speeds are both 0 [m/s] (1 mm/s): the FMU's inputs
@@ -172,6 +193,7 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
                table_position: float = 0.4, nut_hold: str = "locked", fmi: int = 2,
                kind: str = "cs", table_speed: float = 0.0, nut_speed: float = 0.0,
                force: bool = False, identifier: str | None = None,
+               platforms: str | tuple[str, ...] | None = None,
                options: SolverOptions | None = None) -> ExportedFmu:
     """Write ``drive`` with ``parameters`` as an FMU to ``out``.
 
@@ -206,6 +228,9 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
         Replace an existing file.
     identifier : str, optional
         The model identifier; derived from the drive by default.
+    platforms : str or tuple of str, optional
+        Platforms to build a binary for, each with a compiler found for it
+        (``"linux64,win64"``; ``feeddrive.fmu.platforms.PLATFORMS``); None: this machine's.
     options : SolverOptions or None, default None
         The integrator settings (None: those in force, :func:`feeddrive.engine.options.current`):
         the start values of the embedded solver's tunable tolerances, resolved for the start
@@ -232,11 +257,11 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
     >>> print(fmu.fmi, fmu.kind, fmu.n_states, fmu.inputs[1])
     2 cs 15 table_speed_reference
     """
-    from .build import package
+    from .build import package, provenance
     from .description import new_token, variables
     from .model import build
 
-    path = check_request(drive, fmi, kind, out, force=force)
+    path, names = check_request(drive, fmi, kind, out, force=force, platforms=platforms)
     fm = replace(build(parameters, drive, table_position, nut_hold, table_speed, nut_speed),
                  solver_starts=solver_starts(parameters, table_speed, nut_speed, options))
     vs = variables(fm, kind)
@@ -244,13 +269,21 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
     text = (f"feeddrive {drive} drive ({parameters.name}), a = {table_position:g} m; "
             f"reference and load force as inputs")
     package(path, fm, vs, fmi=fmi, kind=kind, identifier=ident, token=new_token(),
-            description=text, generation=f"feeddrive {__version__}")
+            description=text, provenance=provenance(), platforms=names)
     sampled = any(v > 0 for v in fm.periods.values())
     return ExportedFmu(
         path=path, fmi=fmi, kind=kind, identifier=ident, n_variables=len(vs),
         n_states=len(fm.model.states), inputs=tuple(v.name for v in vs if v.causality == "input"),
         outputs=tuple(v.name for v in vs if v.causality == "output"),
-        size_bytes=path.stat().st_size, sampled=sampled)
+        size_bytes=path.stat().st_size, sampled=sampled, binaries=_binaries(path))
+
+
+def _binaries(path: Path) -> tuple[str, ...]:
+    import zipfile
+
+    with zipfile.ZipFile(path) as zf:
+        return tuple(sorted({n.split("/")[1] for n in zf.namelist()
+                             if n.startswith("binaries/") and n.count("/") >= 2}))
 
 
 __all__ = ["ExportedFmu", "export_fmu", "check_request", "solver_starts", "FMI_VERSIONS", "KINDS",

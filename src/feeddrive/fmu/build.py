@@ -10,10 +10,8 @@ standard library and libm; the FMU carries it (with the FMI headers) under
 
 from __future__ import annotations
 
-import platform
 import shutil
 import subprocess
-import sys
 import tempfile
 import zipfile
 from importlib import resources
@@ -21,76 +19,21 @@ from pathlib import Path
 
 from ..solvers import schedule, steps
 from . import solver
-from .description import Variable, c_tables, model_description
+from .description import Provenance, Variable, c_tables, model_description
 from .model import FmuModel
-
-HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
-           3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
-#: flags of the binary: C99, optimised, no fused multiply-add (numba rounds each operation),
-#: only the FMI functions exported (two FMUs in one process never bind each other's model)
-CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared", "-fvisibility=hidden")
-
-
-class CompilerNotFound(RuntimeError):
-    """No C compiler: set $CC or install gcc or clang."""
-
-
-def find_compiler() -> list[str]:
-    """The C compiler command (``$CC``, else cc, gcc or clang on PATH).
-
-    Returns
-    -------
-    list of str
-        The command and its fixed arguments.
-
-    Raises
-    ------
-    CompilerNotFound
-        When no compiler is found.
-    """
-    try:
-        from ..backends.c_backend import CompilerNotFound as _NotFound
-        from ..backends.c_backend import find_compiler as _find
-    except ImportError:  # pragma: no cover - the C backend is part of the package
-        raise CompilerNotFound("the C backend (feeddrive.backends.c_backend) is missing") from None
-    try:
-        return _find()
-    except _NotFound as err:
-        raise CompilerNotFound(str(err)) from None
-
-
-def platform_folder(fmi: int) -> str:
-    """The ``binaries/`` subfolder of this platform (FMI 2 and FMI 3 spell them differently).
-
-    Parameters
-    ----------
-    fmi : int
-        FMI version, 2 or 3.
-
-    Returns
-    -------
-    str
-        E.g. ``"linux64"`` (FMI 2) or ``"x86_64-linux"`` (FMI 3).
-    """
-    machine = platform.machine().lower()
-    arch = {"amd64": "x86_64", "arm64": "aarch64"}.get(machine, machine)
-    system = {"linux": "linux", "darwin": "darwin", "win32": "windows"}.get(sys.platform,
-                                                                           sys.platform)
-    if fmi == 3:
-        return f"{arch}-{system}"
-    bits = "64" if arch in ("x86_64", "aarch64") else "32"
-    return {"linux": "linux", "darwin": "darwin", "windows": "win"}[system] + bits
-
-
-def library_suffix() -> str:
-    """The shared-library extension of this platform.
-
-    Returns
-    -------
-    str
-        ``".dll"``, ``".dylib"`` or ``".so"``.
-    """
-    return {"win32": ".dll", "darwin": ".dylib"}.get(sys.platform, ".so")
+from .platforms import (  # noqa: F401 - the compiler search, re-exported for its callers
+    CFLAGS,
+    HEADERS,
+    PLATFORMS,
+    CompilerNotFound,
+    Platform,
+    compile_line,
+    find_compiler,
+    host_platform,
+    library_suffix,
+    platform_compiler,
+    platform_folder,
+)
 
 
 def solver_c() -> str:
@@ -125,6 +68,42 @@ def solver_c() -> str:
                   "_pi_factor": steps.pi_factor_template,
                   "_reject_factor": steps.reject_factor_template},
         shapes=shapes, names={"advance": "fd_advance"})
+
+
+#: activity of the generated rhs's parameters in its tangents (feeddrive.backends.tangent):
+#: the states vary, and the reference block of T (the inputs); the held controller values and
+#: the parameters are constants of a Jacobian — but for the load force, a slot of P, in the
+#: second tangent
+TANGENT_KINDS = {"t": "c", "y": "a", "held": "ca", "P": "ca", "T": "a", "dy": "a", "aux": "a"}
+
+
+def tangent_c(fm: FmuModel) -> str:
+    """C text of the model's tangents (model exchange): ``fd_rhs_tangent(t, y, held, P, T,
+    dy, aux, y_d, T_d, dy_d, aux_d)`` — the derivatives' and signals' directional derivatives
+    for a seed of the states and of the reference block of T — and ``fd_rhs_tangent_all``,
+    which takes a seed of P too (``…, y_d, P_d, T_d, dy_d, aux_d``: the load-force input).
+    Both generated from the model's own kernels (:func:`feeddrive.backends.tangent.tangent`)
+    and translated to C with them.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model.
+
+    Returns
+    -------
+    str
+        The C text.
+    """
+    from ..backends.c_translate import translate_kernels
+    from ..backends.tangent import tangent
+
+    rhs = fm.model.module.rhs.py_func
+    states_and_inputs, _ = tangent(rhs, TANGENT_KINDS)
+    with_parameters, _ = tangent(rhs, {**TANGENT_KINDS, "P": "a"})
+    return translate_kernels([states_and_inputs, with_parameters],
+                             names={states_and_inputs.__name__: "fd_rhs_tangent",
+                                    with_parameters.__name__: "fd_rhs_tangent_all"})
 
 
 def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: str) -> str:
@@ -168,6 +147,8 @@ def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: 
         # the schedule's kernels, translated with the integrator (it calls them)
         f"#define FD_DUE {_mangle(schedule.due.py_func)}",
         f"#define FD_NEXT_INSTANT {_mangle(schedule.next_instant.py_func)}",
+        *(["/* ---- the model's tangent (feeddrive.backends.tangent): directional "
+           "derivatives */", tangent_c(fm)] if kind == "me" else []),
         "/* ---- variables and start values (feeddrive.fmu.description) */",
         c_tables(fm, vs, fmi=fmi, kind=kind, token=token),
         "/* ---- the FMI functions */",
@@ -177,9 +158,10 @@ def fmu_source(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: 
 
 
 def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
-                    export_all: bool = False) -> Path:
-    """Compile ``source`` (with the FMI headers beside it) into ``folder/<identifier><ext>``;
-    ``export_all``: the model's and integrator's functions visible too (tests call them).
+                    export_all: bool = False, target: str | None = None) -> Path:
+    """Compile ``source`` (with the FMI headers beside it) into ``folder/<identifier><ext>``
+    for the platform ``target`` (this machine's by default); ``export_all``: the model's and
+    integrator's functions visible too (tests call them).
 
     Parameters
     ----------
@@ -193,6 +175,8 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
         The library's name.
     export_all : bool, default False
         Export every function, not only the FMI ones.
+    target : str, optional
+        A platform of :data:`PLATFORMS`; None: this machine's, with its compiler.
 
     Returns
     -------
@@ -202,11 +186,12 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
     Raises
     ------
     CompilerNotFound
-        Without a C compiler.
+        Without a C compiler for the platform.
     RuntimeError
         When the compiler fails (its output in the message).
     """
-    cc = find_compiler()
+    plat = PLATFORMS[target] if target else host_platform() or PLATFORMS["linux64"]
+    cc = platform_compiler(target) if target else find_compiler()
     folder.mkdir(parents=True, exist_ok=True)
     src = folder / "fmu.c"
     src.write_text(source, encoding="utf-8")
@@ -214,32 +199,16 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
     for name in HEADERS[fmi]:
         (folder / name).write_text(include.joinpath(name).read_text(encoding="utf-8"),
                                    encoding="utf-8")
-    lib = folder / f"{identifier}{library_suffix()}"
-    flags = [f for f in CFLAGS if not (export_all and f.startswith("-fvisibility"))]
-    cmd = [*cc, *flags, f"-I{folder}", "-o", str(lib), str(src), "-lm"]
+    suffix = plat.suffix if target else library_suffix()
+    lib = folder / f"{identifier}{suffix}"
+    flags = [f for f in (*CFLAGS, *plat.flags)
+             if not (export_all and f.startswith("-fvisibility"))]
+    cmd = [*cc, *flags, f"-I{folder}", "-o", str(lib), str(src), *plat.libraries]
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if proc.returncode != 0:
         raise RuntimeError(f"the C compiler failed ({' '.join(cmd)}):\n"
                            f"{(proc.stderr or proc.stdout).strip()[:4000]}")
     return lib
-
-
-BUILD_NOTE = """\
-Building this FMU's binary for another platform
-================================================
-
-sources/fmu.c is one self-contained C99 file (the drive model, its integrator and the FMI
-{fmi}.0 functions); it needs only the C standard library and libm, and the FMI headers beside it.
-
-Linux:    cc -std=c99 -O2 -ffp-contract=off -fPIC -shared -o {ident}.so fmu.c -lm
-macOS:    cc -std=c99 -O2 -ffp-contract=off -fPIC -dynamiclib -o {ident}.dylib fmu.c
-Windows:  cl /O2 /fp:precise /LD /Fe{ident}.dll fmu.c
-          (or MinGW: gcc -std=c99 -O2 -ffp-contract=off -shared -o {ident}.dll fmu.c)
-
-Put the library under binaries/{plat_example} (FMI {fmi}.0 platform folder names) and zip the
-folder again; or let the importing tool compile the source FMU (FMI 2: SourceFiles in
-modelDescription.xml; FMI 3: sources/buildDescription.xml).
-"""
 
 
 def build_description(identifier: str) -> str:
@@ -265,9 +234,95 @@ def build_description(identifier: str) -> str:
             '</fmiBuildDescription>\n')
 
 
+#: the FMU's licence folder (FMI 3.0 Sect. 2.5: ``documentation/licenses``, entry point
+#: ``license.txt``; the same place in an FMI 2.0 FMU)
+LICENSES = "documentation/licenses"
+FMI_HEADERS_LICENSE = "FMI-headers-BSD-2-Clause.txt"
+PACKAGE_LICENSE = "feeddrive-MIT.txt"
+
+
+def package_license() -> str:
+    """The package's own licence text (its distribution's ``licenses/LICENSE``; the source
+    tree's ``LICENSE`` when run from a checkout).
+
+    Returns
+    -------
+    str
+        The text.
+    """
+    from importlib import metadata
+
+    try:
+        text = metadata.distribution("feeddrive").read_text("licenses/LICENSE")
+    except metadata.PackageNotFoundError:  # pragma: no cover - always installed
+        text = None
+    if text is None:  # pragma: no cover - an install without PEP 639 licence files
+        text = (Path(__file__).resolve().parents[3] / "LICENSE").read_text(encoding="utf-8")
+    return text
+
+
+def provenance() -> Provenance:
+    """Author, version, copyright and licence of an FMU written now (the package's metadata,
+    its licence and that of the FMI headers the FMU carries).
+
+    Returns
+    -------
+    Provenance
+        The attributes of ``modelDescription.xml``.
+    """
+    import datetime
+    import os
+    from importlib import metadata
+
+    from .. import __version__
+
+    try:
+        author = metadata.metadata("feeddrive")["Author"] or "the feeddrive maintainers"
+    except metadata.PackageNotFoundError:  # pragma: no cover - always installed
+        author = "the feeddrive maintainers"
+    own = next(line.strip() for line in package_license().splitlines()
+               if line.startswith("Copyright"))
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    now = (datetime.datetime.fromtimestamp(int(epoch), datetime.UTC) if epoch
+           else datetime.datetime.now(datetime.UTC))
+    return Provenance(
+        author=author, version=__version__,
+        copyright=(f"{own} (model and integrator code); FMI headers: Copyright (C) 2008-2011 "
+                   "MODELISAR consortium, 2012-2023 Modelica Association Project \"FMI\""),
+        license=(f"MIT (feeddrive, {LICENSES}/{PACKAGE_LICENSE}) AND BSD-2-Clause (the FMI "
+                 f"headers in sources/, {LICENSES}/{FMI_HEADERS_LICENSE})"),
+        generation_tool=f"feeddrive {__version__}",
+        generation_time=now.strftime("%Y-%m-%dT%H:%M:%SZ"))
+
+
+def license_files() -> dict[str, str]:
+    """The files of the FMU's licence folder: the entry point ``license.txt``, the package's
+    MIT licence and the FMI headers' BSD-2-Clause licence.
+
+    Returns
+    -------
+    dict of str to str
+        Path in the FMU → text.
+    """
+    fmi = resources.files(__package__).joinpath("include", "LICENSE.txt").read_text(
+        encoding="utf-8")
+    entry = (
+        "Licences of this FMU\n====================\n\n"
+        "The model, its integrator and the FMI functions (sources/fmu.c and the binaries\n"
+        f"built from it) were generated by feeddrive: MIT licence, {PACKAGE_LICENSE}.\n\n"
+        "The FMI headers in sources/ (fmi2*.h or fmi3*.h) are the Functional Mock-up\n"
+        "Interface standard's: 2-Clause BSD licence (SPDX BSD-2-Clause),\n"
+        f"{FMI_HEADERS_LICENSE}.\n")
+    return {f"{LICENSES}/license.txt": entry, f"{LICENSES}/{PACKAGE_LICENSE}": package_license(),
+            f"{LICENSES}/{FMI_HEADERS_LICENSE}": fmi}
+
+
 def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
-            identifier: str, token: str, description: str, generation: str) -> Path:
-    """Write the FMU ``out`` (a zip): modelDescription.xml, binary, sources, build note.
+            identifier: str, token: str, description: str, provenance: Provenance,
+            platforms: tuple[str, ...] | None = None) -> Path:
+    """Write the FMU ``out`` (a zip): modelDescription.xml, a binary per platform, the
+    sources with their ``CMakeLists.txt``, ``documentation/index.html`` (how to rebuild) and
+    the licences.
 
     Parameters
     ----------
@@ -287,34 +342,48 @@ def package(out: Path, fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
         The instantiation token (GUID).
     description : str
         The model's description text.
-    generation : str
-        The generation tool text.
+    provenance : Provenance
+        Author, version, copyright, licence, generation tool and time.
+    platforms : tuple of str, optional
+        Platforms of :data:`PLATFORMS` to build a binary for, each with its compiler
+        (:func:`platform_compiler`); None: this machine's, with its compiler.
 
     Returns
     -------
     Path
         ``out``.
     """
+    from .rebuild import cmake_lists, index_html
+
     source = fmu_source(fm, vs, fmi=fmi, kind=kind, token=token)
     xml = model_description(fm, vs, fmi=fmi, kind=kind, identifier=identifier, token=token,
-                            description=description, generation=generation)
-    plat = platform_folder(fmi)
+                            description=description, provenance=provenance)
     with tempfile.TemporaryDirectory(prefix="feeddrive-fmu-") as tmp:
-        lib = compile_library(source, fmi, Path(tmp), identifier)
+        libs: list[tuple[str, Path]] = []
+        if platforms is None:
+            libs.append((platform_folder(fmi),
+                         compile_library(source, fmi, Path(tmp) / "host", identifier)))
+        else:
+            for name in platforms:
+                lib = compile_library(source, fmi, Path(tmp) / name, identifier, target=name)
+                libs.append((PLATFORMS[name].folder(fmi), lib))
         from ..io.outputs import atomic_path
 
         with atomic_path(out) as partial, \
                 zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
             zf.writestr("modelDescription.xml", xml)
-            zf.write(lib, f"binaries/{plat}/{lib.name}")
+            for folder, lib in libs:
+                zf.write(lib, f"binaries/{folder}/{lib.name}")
             zf.writestr("sources/fmu.c", source)
             for name in HEADERS[fmi]:
-                zf.write(Path(tmp) / name, f"sources/{name}")
+                zf.write(libs[0][1].parent / name, f"sources/{name}")
+            zf.writestr("sources/CMakeLists.txt", cmake_lists(identifier, fmi))
             if fmi == 3:
                 zf.writestr("sources/buildDescription.xml", build_description(identifier))
-            example = "win64/" if fmi == 2 else "x86_64-windows/"
-            zf.writestr("documentation/building.txt",
-                        BUILD_NOTE.format(fmi=fmi, ident=identifier, plat_example=example))
+            zf.writestr("documentation/index.html", index_html(
+                identifier, fmi, kind, description, [f for f, _ in libs], provenance.version))
+            for name, text in license_files().items():
+                zf.writestr(name, text)
     return out
 
 

@@ -22,13 +22,18 @@ import numpy as np
 from ..model.friction import friction_law
 from ..model.loops import AXIS_PARAMS
 from ..model.reference import INPUT_INSTANT
+from ..model.slot_ranges import FINITE, SlotRange, controller_range, slot_range
 from ..model.slots import slot_unit
 from ..parameters.components import unit_of
+from ..units import DISPLAY_UNITS
 from .model import FmuModel
 
 # value-reference kinds (wrapper.c)
-K_TIME, K_STATE, K_DER, K_AUX, K_PARAM, K_INPUT, K_SETTING, K_PRODUCT, K_ERROR, K_BOOLEAN = \
-    range(10)
+(K_TIME, K_STATE, K_DER, K_AUX, K_PARAM, K_INPUT, K_SETTING, K_PRODUCT, K_ERROR, K_BOOLEAN,
+ K_INTEGER, K_COUNTER, K_EVALUATIONS) = range(13)
+# value types (wrapper.c VR_TYPE): FMI 2 Real/Boolean/Integer, FMI 3 Float64/Boolean/Int64
+T_REAL, T_BOOLEAN, T_INTEGER = range(3)
+_TYPES = {"Real": T_REAL, "Boolean": T_BOOLEAN, "Integer": T_INTEGER}
 
 # input slots u[...] of the wrapper
 INPUTS = ("table_position_reference", "table_speed_reference", "nut_position_reference",
@@ -47,28 +52,63 @@ INPUT_INFO = {
                    "disturbances.load_start on"),
 }
 
-# wrapper settings s[...]: (name, unit, description, start or None: from the parameters)
-SETTINGS = (
+#: the default bound on integrator steps and on sample instants in one communication step
+#: (``solver.max_steps_per_call``): ≈ 1.2 s of the 8-kHz sampled drive (wang2021-drive,
+#: ~8000 steps per second) or 2–5 s of the continuous ones in one step; a host whose step
+#: would take longer gets Error naming the setting instead of a frozen call
+MAX_STEPS_PER_CALL = 10_000
+#: the solver settings' range: SolverOptions refuses a tolerance or step that is not a finite
+#: value > 0
+_POSITIVE = SlotRange(0.0, math.inf, low_inclusive=False)
+_STEP_COUNT = SlotRange(1.0, 2.0**31 - 1.0, integer=True)  # an FMI 2 Integer
+
+# wrapper settings s[...]: (name, unit, description, start or None: from the parameters,
+# range)
+SETTINGS: tuple[tuple[str, str, str, float | None, SlotRange | None], ...] = (
     ("solver.relative_tolerance", "1", "relative error target of the embedded DOPRI5 "
-     "(speeds and currents)", 1e-6),
+     "(speeds and currents)", 1e-6, _POSITIVE),
     ("solver.position_tolerance", "m", "absolute error target on positions (angles: ÷ H)",
-     1e-10),
-    ("solver.speed_tolerance", "m/s", "absolute error target on speeds (angular: ÷ H)", 1e-8),
-    ("solver.current_tolerance", "A", "absolute error target on currents", 1e-6),
-    ("solver.max_step", "s", "largest integrator step", 1e-3),
-    ("controller.position_period", "s", "position-loop sample period (0: continuous)", None),
-    ("controller.velocity_period", "s", "velocity-loop sample period (0: continuous)", None),
-    ("controller.current_period", "s", "current-loop sample period (0: continuous)", None),
+     1e-10, _POSITIVE),
+    ("solver.speed_tolerance", "m/s", "absolute error target on speeds (angular: ÷ H)", 1e-8,
+     _POSITIVE),
+    ("solver.current_tolerance", "A", "absolute error target on currents", 1e-6, _POSITIVE),
+    ("solver.max_step", "s", "largest integrator step", 1e-3, _POSITIVE),
+    ("controller.position_period", "s", "position-loop sample period (0: continuous)", None,
+     controller_range("position_period")),
+    ("controller.velocity_period", "s", "velocity-loop sample period (0: continuous)", None,
+     controller_range("velocity_period")),
+    ("controller.current_period", "s", "current-loop sample period (0: continuous)", None,
+     controller_range("current_period")),
     ("integrate_speed_reference", "", "true: the commanded positions are the integrals of the "
      "speed-reference inputs from the start (the position inputs give their start values); "
      "false: the position-reference inputs are the commanded positions, advanced within a "
-     "step by the speed references", 1.0),
+     "step by the speed references", 1.0, None),
+    ("solver.max_steps_per_call", "", "most integrator steps (accepted and rejected) and most "
+     f"sample instants in one communication step (default {MAX_STEPS_PER_CALL}); a step "
+     "that needs more returns Error naming this setting (co-simulation)",
+     float(MAX_STEPS_PER_CALL), _STEP_COUNT),
 )
 S_INDEX = {name: i for i, (name, *_rest) in enumerate(SETTINGS)}
+#: the embedded integrator's counters (co-simulation): name, memory slot
+#: (feeddrive.fmu.solver MEM_*), description
+COUNTERS = (("solver.steps", "MEM_STEPS", "integrator steps taken since initialisation "
+             "(accepted and rejected)"),
+            ("solver.rejected_steps", "MEM_REJECTED", "rejected integrator steps since "
+             "initialisation"),
+            ("solver.rhs_evaluations", "MEM_RHS", "right-hand-side evaluations of the "
+             "embedded integrator since initialisation"))
+#: what a model-exchange FMU evaluated for its importer (wrapper.c ``m->evaluations``): name,
+#: description
+EVALUATIONS = (("evaluations.derivatives", "evaluations of the model's right-hand side "
+                "(derivatives and signals) since instantiation or reset"),
+               ("evaluations.tangents", "evaluations of the model's tangent (one directional "
+                "derivative of every derivative and signal) since instantiation or reset"))
 
 _FIXED_PARAMETERS = {  # enumerations and switches: settable before initialisation only
     "stiffness.support", "nut.active", "kv_place", "v_basis", "v_feedback", "ff",
     "speed_mode"}
+# (the slots of the model's clocks are fixed too: the sample schedule is set at
+# initialisation, wrapper.c fmu_sampling)
 # "inputs.": the linearisation's zero-valued reference and load slots (feeddrive.analysis.linear);
 # the FMU's own inputs carry those signals
 _HIDDEN = ("profile[", "disturbances.load_force", "disturbances.load_step",
@@ -136,11 +176,20 @@ class Variable:
     description : str
         Its description.
     type : str, default "Real"
-        ``"Real"`` or ``"Boolean"``.
+        ``"Real"``, ``"Boolean"`` or ``"Integer"`` (FMI 3: ``Float64``, ``Boolean``,
+        ``Int64``).
     derivative : int, optional
         Value reference of the state a ``der(…)`` variable belongs to.
-    fixed : bool, default False
-        A setting that may not change after initialisation.
+    range : SlotRange, optional
+        The values it may be set to (declared as ``min``/``max``, checked when set); None:
+        not settable, or no bound.
+    nominal : float, optional
+        Its nominal magnitude (continuous states) [its unit].
+    display_unit : str, optional
+        The unit an importer shows it in (``feeddrive.units.DISPLAY_UNITS``).
+    dependencies : tuple of int, optional
+        Value references of the states and inputs a derivative depends on (the model's
+        declared sparsity; model exchange).
     """
 
     name: str
@@ -153,9 +202,26 @@ class Variable:
     start: float | None
     unit: str
     description: str
-    type: str = "Real"  # or "Boolean"
+    type: str = "Real"  # or "Boolean", "Integer"
     derivative: int | None = None  # value reference of the state (der variables)
-    fixed: bool = False  # a setting that may not change after initialisation
+    range: SlotRange | None = None  # the values it may be set to (min/max, set-time check)
+    nominal: float | None = None  # nominal magnitude (continuous states)
+    display_unit: str | None = None  # the unit an importer shows it in
+    dependencies: tuple[int, ...] | None = None  # knowns a derivative depends on
+
+    @property
+    def settable(self) -> int:
+        """When the importer may set it (FMI 2.0.4 Sect. 4.2.4, FMI 3.0 Sect. 3.2.3): 0 never
+        (outputs, locals computed by the FMU, time), 1 until the end of initialisation
+        (fixed parameters, start values ``initial = "exact"``), 2 at any time (inputs,
+        tunable parameters)."""
+        if self.causality == "input" or (self.causality == "parameter"
+                                         and self.variability == "tunable"):
+            return 2
+        if self.causality == "parameter" or (self.causality == "local"
+                                             and self.initial == "exact"):
+            return 1
+        return 0
 
 
 def _axis_units(fm: FmuModel, axis: str) -> tuple[str, str]:
@@ -184,7 +250,7 @@ def parameter_info(fm: FmuModel, name: str) -> tuple[str, str, str, bool]:
     """
     if name in _DESCRIPTIONS:
         unit = fmi_unit(slot_unit(fm.model, name))
-        return name, unit, _DESCRIPTIONS[name], name.split(".")[-1] in _FIXED_PARAMETERS
+        return name, unit, _DESCRIPTIONS[name], name in _FIXED_PARAMETERS
     match = re.fullmatch(r"controller\.(\w+)\.(\w+)", name)
     if match:
         axis, slot = match.groups()
@@ -267,6 +333,51 @@ def _outputs(fm: FmuModel) -> set[str]:
     return names
 
 
+def display_unit(name: str, unit: str) -> str | None:
+    """The unit an importer shows the variable ``name`` of SI ``unit`` in: the CLI's
+    (``feeddrive.units.DISPLAY_UNITS``: mm, mm/s, rpm, N/µm; µm for the following error,
+    the scale resolution and the lead error's amplitudes).
+
+    Parameters
+    ----------
+    name : str
+        The variable's name.
+    unit : str
+        Its SI unit.
+
+    Returns
+    -------
+    str or None
+        The display unit, None when it is shown in its own unit.
+    """
+    options = DISPLAY_UNITS.get(unit)
+    if not options:
+        return None
+    if unit == "m" and (name == "following_error" or name.endswith(".grat_q")
+                        or name.startswith("disturbances.lead_error.amplitude")):
+        return next(u for u, _ in options if u == "µm")
+    return options[0][0]
+
+
+def state_nominals(fm: FmuModel) -> np.ndarray:
+    """Nominal magnitudes of the continuous states (the model's, then the two reference
+    integrals) [their units]: feeddrive's default absolute tolerances over its relative
+    tolerance, so an importer that takes atol = rtol·nominal weighs errors as
+    ``feeddrive.simulate`` does.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model.
+
+    Returns
+    -------
+    numpy.ndarray
+        One nominal per continuous state.
+    """
+    return np.array([*(fm.model.tolerances(1e-10, 1e-8, 1e-6)[0] / 1e-6), 1e-4, 1e-4])
+
+
 def variables(fm: FmuModel, kind: str) -> list[Variable]:
     """Every variable of the FMU (value reference = position in the list).
 
@@ -298,15 +409,19 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
     for name in present:
         unit, text = INPUT_INFO[name]
         v.append(Variable(name, K_INPUT, INPUTS.index(name), 0, "input", "continuous", None,
-                          starts.get(name, 0.0), unit, text))
+                          starts.get(name, 0.0), unit, text, range=FINITE.with_unit(unit),
+                          display_unit=display_unit(name, unit)))
     input_names = set(present)
-    # states
+    # states: outputs are computed (not settable, FMI); the others take start values
+    nominal = state_nominals(fm)
     state_vr: dict[int, int] = {}
     for i, s in enumerate(m.states):
         out = s.name in out_names
         state_vr[i] = len(v)
         v.append(Variable(s.name, K_STATE, i, 0, "output" if out else "local", "continuous",
-                          "exact", 0.0, s.unit, s.description))
+                          "calculated" if out else "exact", None if out else 0.0, s.unit,
+                          s.description, range=None if out else FINITE.with_unit(s.unit),
+                          nominal=float(nominal[i]), display_unit=display_unit(s.name, s.unit)))
     n = len(m.states)
     ref_states = [("reference.table_position", "integral of table_speed_reference (the "
                    "commanded table position when integrate_speed_reference)")]
@@ -315,19 +430,24 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
     for j, (name, text) in enumerate(ref_states):
         state_vr[n + j] = len(v)
         v.append(Variable(name, K_STATE, n + j, 0, "local", "continuous", "calculated", None,
-                          "m", text))
+                          "m", text, nominal=float(nominal[n + j]),
+                          display_unit=display_unit(name, "m")))
     if me:
+        deps = derivative_dependencies(fm, state_vr, {x.a: vr for vr, x in enumerate(v)
+                                                      if x.kind == K_INPUT})
         for i in range(n + len(ref_states)):
             sv = v[state_vr[i]]
             unit = _rate_unit(sv.unit)
             v.append(Variable(f"der({sv.name})", K_DER, i, 0, "local", "continuous",
                               "calculated", None, unit, f"rate of {sv.name}",
-                              derivative=state_vr[i]))
+                              derivative=state_vr[i], display_unit=display_unit("", unit),
+                              dependencies=deps[i]))
     # auxiliary signals
     for j, a in enumerate(m.aux):
         name = a.name if a.name not in input_names else f"model.{a.name}"
         v.append(Variable(name, K_AUX, j, 0, "output" if a.name in out_names else "local",
-                          "continuous", "calculated", None, a.unit, a.description))
+                          "continuous", "calculated", None, a.unit, a.description,
+                          display_unit=display_unit(name, a.unit)))
     # derived outputs: each live motor's torque (or force), the following error; where the
     # motor turns current into torque the topology says (Mechanism.motor_output)
     from ..model.mechanisms import mechanism
@@ -349,29 +469,87 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
     aux_names = [a.name for a in m.aux]
     v.append(Variable("following_error", K_ERROR, aux_names.index("table_position_reference"),
                       m.index("table_position"), "output", "continuous", "calculated", None,
-                      "m", "commanded minus actual table position"))
-    # parameters
+                      "m", "commanded minus actual table position",
+                      display_unit=display_unit("following_error", "m")))
+    # parameters: the range of the parameter-file field each slot is filled from
+    clocks = {k for _, k in m.clocks}
     for k, pname in enumerate(m.parameter_names):
         if pname.startswith(_HIDDEN):
             continue
         name, unit, text, fixed = parameter_info(fm, pname)
+        fixed = fixed or k in clocks  # the sample schedule is set at initialisation
         v.append(Variable(name, K_PARAM, k, 0, "parameter", "fixed" if fixed else "tunable",
-                          "exact", float(m.P[k]), unit, text, fixed=fixed))
+                          "exact", float(m.P[k]), unit, text,
+                          range=slot_range(m, pname).with_unit(unit),
+                          display_unit=display_unit(name, unit)))
     # settings
-    for i, (name, unit, text, start) in enumerate(SETTINGS):
+    for i, (name, unit, text, start, bounds) in enumerate(SETTINGS):
         value = (fm.solver_starts[name] if name in fm.solver_starts
                  else start if start is not None else fm.periods[name.split(".")[1]])
         if name == "integrate_speed_reference":
             v.append(Variable(name, K_BOOLEAN, i, 0, "parameter", "fixed", "exact", value, "",
-                              text, type="Boolean", fixed=True))
+                              text, type="Boolean"))
+        elif name == "solver.max_steps_per_call":
+            if not me:
+                v.append(Variable(name, K_INTEGER, i, 0, "parameter", "tunable", "exact",
+                                  value, "", text, type="Integer", range=bounds))
         else:
+            assert bounds is not None
             v.append(Variable(name, K_SETTING, i, 0, "parameter", "fixed", "exact", value, unit,
-                              text, fixed=True))
+                              text, range=bounds.with_unit(unit)))
+    if not me:
+        from .solver import CONSTANTS
+
+        for name, slot, text in COUNTERS:
+            v.append(Variable(name, K_COUNTER, CONSTANTS[slot], 0, "local", "discrete",
+                              "calculated", None, "", text, type="Integer"))
+    else:
+        for k, (name, text) in enumerate(EVALUATIONS):
+            v.append(Variable(name, K_EVALUATIONS, k, 0, "local", "discrete", "calculated",
+                              None, "", text, type="Integer"))
     names = [x.name for x in v]
     if len(set(names)) != len(names):
         dup = sorted({x for x in names if names.count(x) > 1})
         raise ValueError(f"FMU variable names not unique: {', '.join(dup)}")
     return v
+
+
+def derivative_dependencies(fm: FmuModel, state_vr: dict[int, int], input_vr: dict[int, int]
+                            ) -> list[tuple[int, ...]]:
+    """The states and inputs each continuous state's derivative depends on (value
+    references), from the model's declared sparsity (:attr:`Model.jacobian_pattern`, the
+    parts' declarations): model state j where the pattern says so; the reference integrals and
+    the inputs where it depends on time (the reference and the load reach the model through
+    t); a reference integral's rate on its speed input.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model.
+    state_vr : dict of int to int
+        Continuous state index → value reference (the model's states, then the two reference
+        integrals).
+    input_vr : dict of int to int
+        Input slot (:data:`INPUTS` index) → value reference, for the inputs present.
+
+    Returns
+    -------
+    list of tuple of int
+        Per continuous state, the value references of what its derivative depends on.
+    """
+    S = fm.model.jacobian_pattern
+    n = S.shape[0]
+    refs = (state_vr[n], state_vr[n + 1])
+    inputs = tuple(sorted(input_vr.values()))
+    out = []
+    for i in range(n):
+        deps = [state_vr[j] for j in range(n) if S[i, j]]
+        if S[i, n]:  # time: the reference (inputs, integrals) and the load force
+            deps += [*refs, *inputs]
+        out.append(tuple(sorted(deps)))
+    for slot in (IN_VT, IN_VN):
+        out.append((input_vr[slot],) if slot in input_vr else ())
+    return out
 
 
 def _rate_unit(unit: str) -> str:
@@ -432,15 +610,56 @@ def _attrs(**kw: object) -> str:
     return " ".join(f"{k}={quoteattr(str(val))}" for k, val in kw.items() if val is not None)
 
 
+@dataclass(frozen=True)
+class Provenance:
+    """Who made the FMU and under which licence (the attributes ``author``, ``version``,
+    ``copyright``, ``license``, ``generationTool`` and ``generationDateAndTime`` of
+    ``modelDescription.xml``).
+
+    Parameters
+    ----------
+    author : str
+        The package's authors (its metadata).
+    version : str
+        The package's version (the model's version: it is generated by that release).
+    copyright : str
+        The copyright lines of the package and of the FMI headers the FMU carries.
+    license : str
+        The licences (SPDX), pointing at ``documentation/licenses/``.
+    generation_tool : str
+        ``"feeddrive <version>"``.
+    generation_time : str
+        UTC time of the export, ISO 8601 (``SOURCE_DATE_EPOCH`` when set, for reproducible
+        builds).
+    """
+
+    author: str
+    version: str
+    copyright: str
+    license: str
+    generation_tool: str
+    generation_time: str
+
+
 def _number(x: float) -> str:
     if not math.isfinite(x):
         raise ValueError(f"start value {x!r} is not finite")
     return repr(float(x))
 
 
+def _bounds(x: Variable) -> dict[str, str | None]:
+    """min/max attributes: the nearest inclusive bounds of the variable's range."""
+    r = x.range
+    if r is None:
+        return {"min": None, "max": None}
+    fmt = (lambda y: str(int(y))) if x.type == "Integer" else _number
+    return {"min": fmt(r.minimum) if math.isfinite(r.minimum) else None,
+            "max": fmt(r.maximum) if math.isfinite(r.maximum) else None}
+
+
 def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
                       identifier: str, token: str, description: str,
-                      generation: str) -> str:
+                      provenance: Provenance) -> str:
     """The text of ``modelDescription.xml`` (FMI 2.0 or 3.0).
 
     Parameters
@@ -459,8 +678,8 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
         The instantiation token (GUID).
     description : str
         The model's description text.
-    generation : str
-        The generation tool text.
+    provenance : Provenance
+        Author, version, copyright, licence, generation tool and time.
 
     Returns
     -------
@@ -474,16 +693,20 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
     """
     units = sorted({x.unit for x in vs if x.unit})
     me = kind == "me"
+    pv = provenance
+    who = {"author": pv.author, "version": pv.version, "copyright": pv.copyright,
+           "license": pv.license, "generationTool": pv.generation_tool,
+           "generationDateAndTime": pv.generation_time}
     lines = ['<?xml version="1.0" encoding="UTF-8"?>']
     if fmi == 2:
         lines.append("<fmiModelDescription " + _attrs(
             fmiVersion="2.0", modelName=identifier, guid=token, description=description,
-            generationTool=generation, variableNamingConvention="structured",
-            numberOfEventIndicators=0) + ">")
+            **who, variableNamingConvention="structured", numberOfEventIndicators=0) + ">")
         if me:
             lines.append("  <ModelExchange " + _attrs(
                 modelIdentifier=identifier, canGetAndSetFMUstate="true",
-                canSerializeFMUstate="true", canNotUseMemoryManagementFunctions="true") + ">")
+                canSerializeFMUstate="true", canNotUseMemoryManagementFunctions="true",
+                providesDirectionalDerivative="true") + ">")
             lines.append('    <SourceFiles><File name="fmu.c"/></SourceFiles>')
             lines.append("  </ModelExchange>")
         else:
@@ -497,22 +720,26 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
     else:
         lines.append("<fmiModelDescription " + _attrs(
             fmiVersion="3.0", modelName=identifier, instantiationToken=token,
-            description=description, generationTool=generation,
-            variableNamingConvention="structured") + ">")
+            description=description, **who, variableNamingConvention="structured") + ">")
         if me:
             lines.append("  <ModelExchange " + _attrs(
                 modelIdentifier=identifier, canGetAndSetFMUState="true",
-                canSerializeFMUState="true") + "/>")
+                canSerializeFMUState="true", providesDirectionalDerivatives="true") + "/>")
         else:
             lines.append("  <CoSimulation " + _attrs(
                 modelIdentifier=identifier, canHandleVariableCommunicationStepSize="true",
                 canGetAndSetFMUState="true", canSerializeFMUState="true",
                 hasEventMode="false") + "/>")
     lines.append("  <UnitDefinitions>")
+    shown = {(x.unit, x.display_unit) for x in vs if x.display_unit}
     for u in units:
         base = base_units(u)
+        display = "".join(
+            "<DisplayUnit " + _attrs(name=name, factor=_number(factor)) + "/>"
+            for name, factor in DISPLAY_UNITS.get(u, ()) if (u, name) in shown)
         lines.append(f"    <Unit name={quoteattr(u)}><BaseUnit "
-                     + _attrs(**{k: base[k] for k in _BASE if k in base}) + "/></Unit>")
+                     + _attrs(**{k: base[k] for k in _BASE if k in base}) + "/>"
+                     + display + "</Unit>")
     lines.append("  </UnitDefinitions>")
     lines.append("  <DefaultExperiment " + _attrs(startTime="0.0", stopTime="10.0",
                                                   stepSize="0.001") + "/>")
@@ -524,15 +751,20 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
                         causality=x.causality, variability=x.variability, initial=x.initial)
         start = None
         if x.start is not None:
-            start = ("true" if x.start else "false") if x.type == "Boolean" else _number(
-                x.start)
+            start = (("true" if x.start else "false") if x.type == "Boolean"
+                     else str(int(x.start)) if x.type == "Integer" else _number(x.start))
+        real = x.type == "Real"
+        extra = {"unit": x.unit or None, "displayUnit": x.display_unit,
+                 **(_bounds(x) if x.type != "Boolean" else {}),
+                 "nominal": _number(x.nominal) if real and x.nominal is not None else None,
+                 "start": start}
         if fmi == 2:
-            inner = _attrs(unit=x.unit or None, start=start,
+            inner = _attrs(**extra,
                            derivative=None if x.derivative is None else x.derivative + 1)
             lines.append(f"    <ScalarVariable {common}><{x.type} {inner}/></ScalarVariable>")
         else:
-            tag = "Float64" if x.type == "Real" else "Boolean"
-            inner = _attrs(unit=x.unit or None, start=start, derivative=x.derivative)
+            tag = {"Real": "Float64", "Integer": "Int64"}.get(x.type, x.type)
+            inner = _attrs(**extra, derivative=x.derivative)
             lines.append(f"    <{tag} {common} {inner}/>".replace("  /", " /"))
     lines.append("  </ModelVariables>")
     lines.append("  <ModelStructure>")
@@ -542,16 +774,24 @@ def model_description(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str,
                if (x.causality == "output" and x.initial in ("approx", "calculated"))
                or (me and (x.derivative is not None or (x.kind == K_STATE
                                                           and x.initial == "calculated")))]
+    def deps(vr: int, fmi2: bool) -> str:
+        d = vs[vr].dependencies
+        if d is None:
+            return ""
+        return f' dependencies="{" ".join(str(index[k] if fmi2 else k) for k in d)}"'
+
     if fmi == 2:
         for tag, vrs in (("Outputs", outputs), ("Derivatives", ders),
                          ("InitialUnknowns", initial)):
             if vrs:
                 lines.append(f"    <{tag}>")
-                lines += [f'      <Unknown index="{index[vr]}"/>' for vr in vrs]
+                lines += [f'      <Unknown index="{index[vr]}"'
+                          f'{deps(vr, True) if tag == "Derivatives" else ""}/>' for vr in vrs]
                 lines.append(f"    </{tag}>")
     else:
         lines += [f'    <Output valueReference="{vr}"/>' for vr in outputs]
-        lines += [f'    <ContinuousStateDerivative valueReference="{vr}"/>' for vr in ders]
+        lines += [f'    <ContinuousStateDerivative valueReference="{vr}"{deps(vr, False)}/>'
+                  for vr in ders]
         lines += [f'    <InitialUnknown valueReference="{vr}"/>' for vr in initial]
     lines.append("  </ModelStructure>")
     lines.append("</fmiModelDescription>")
@@ -570,8 +810,14 @@ def new_token() -> str:
 
 
 # ---------------------------------------------------------------- C tables
+def _c_double(x: float) -> str:
+    if math.isinf(x):
+        return "HUGE_VAL" if x > 0 else "-HUGE_VAL"
+    return repr(float(x))
+
+
 def _c_array(ctype: str, name: str, values: list[float] | list[int] | np.ndarray) -> str:
-    items = [repr(float(x)) if ctype == "double" else str(int(x)) for x in values] or ["0"]
+    items = [_c_double(x) if ctype == "double" else str(int(x)) for x in values] or ["0"]
     rows = [", ".join(items[i:i + 8]) for i in range(0, len(items), 8)]
     return f"static const {ctype} {name}[] = {{\n    " + ",\n    ".join(rows) + "\n};"
 
@@ -598,6 +844,7 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         C text.
     """
     m = fm.model
+    n_colours = int(m.jacobian_colours[:len(m.states)].max()) + 1
     pos, _ = m.tolerances(1.0, 0.0, 0.0)
     spd, _ = m.tolerances(0.0, 1.0, 0.0)
     cur, rel = m.tolerances(0.0, 0.0, 1.0)
@@ -605,9 +852,10 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
     for x in vs:
         if x.kind == K_INPUT:
             u_start[x.a] = float(x.start or 0.0)
-    s_start = [0.0] * len(SETTINGS)
+    s_start = [start if start is not None else fm.periods[name.split(".")[1]]
+               for name, _, _, start, _ in SETTINGS]
     for x in vs:
-        if x.kind in (K_SETTING, K_BOOLEAN):
+        if x.kind in (K_SETTING, K_BOOLEAN, K_INTEGER):
             s_start[x.a] = float(x.start or 0.0)
     out = [
         f"#define FMU_FMI_VERSION {fmi}",
@@ -620,7 +868,6 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         f"#define TABLE_OFFSET {fm.table_offset}",
         f"#define INPUT_INSTANT_SLOT {fm.profile_offset + INPUT_INSTANT}",
         f"#define LOAD_SLOT {fm.load_slot}",
-        "#define MAX_STEPS_PER_CALL 50000000",
         *[f"#define IN_{k} {i}" for k, i in (("XT", IN_XT), ("VT", IN_VT), ("XN", IN_XN),
                                              ("VN", IN_VN), ("LOAD", IN_LOAD))],
         *[f"#define {n} {i}" for n, i in (
@@ -633,16 +880,30 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
             ("S_VELOCITY_PERIOD", S_INDEX["controller.velocity_period"]),
             ("S_CURRENT_PERIOD", S_INDEX["controller.current_period"]),
             ("S_INTEGRATE", S_INDEX["integrate_speed_reference"]),
+            ("S_MAX_STEPS", S_INDEX["solver.max_steps_per_call"]),
             *((f"P_{k.upper()}", m.parameter_names.index(f"controller.{k}"))
               for k in ("position_period", "velocity_period", "current_period")))],
         *[f"#define {name} {value}" for name, value in (
             ("K_TIME", K_TIME), ("K_STATE", K_STATE), ("K_DER", K_DER), ("K_AUX", K_AUX),
             ("K_PARAM", K_PARAM), ("K_INPUT", K_INPUT), ("K_SETTING", K_SETTING),
-            ("K_PRODUCT", K_PRODUCT), ("K_ERROR", K_ERROR), ("K_BOOLEAN", K_BOOLEAN))],
+            ("K_PRODUCT", K_PRODUCT), ("K_ERROR", K_ERROR), ("K_BOOLEAN", K_BOOLEAN),
+            ("K_INTEGER", K_INTEGER), ("K_COUNTER", K_COUNTER),
+            ("K_EVALUATIONS", K_EVALUATIONS), ("T_REAL", T_REAL),
+            ("T_BOOLEAN", T_BOOLEAN), ("T_INTEGER", T_INTEGER))],
         _c_array("int", "VR_KIND", [x.kind for x in vs]),
         _c_array("int", "VR_A", [x.a for x in vs]),
         _c_array("int", "VR_B", [x.b for x in vs]),
-        _c_array("int", "VR_FIXED", [1 if x.fixed else 0 for x in vs]),
+        _c_array("int", "VR_TYPE", [_TYPES[x.type] for x in vs]),
+        # when the importer may set it: 0 never, 1 until initialised, 2 always
+        _c_array("int", "VR_SET", [x.settable for x in vs]),
+        # the range a set value is checked against (wrapper.c fmu_check_range)
+        _c_array("double", "VR_LOW", [x.range.low if x.range else -math.inf for x in vs]),
+        _c_array("double", "VR_HIGH", [x.range.high if x.range else math.inf for x in vs]),
+        _c_array("int", "VR_RANGE", [_range_flags(x.range) for x in vs]),
+        "static const char *const VR_NAME[] = {\n    "
+        + ",\n    ".join(quote_c(x.name) for x in vs) + "};",
+        "static const char *const VR_EXPECTED[] = {\n    "
+        + ",\n    ".join(quote_c(x.range.expected() if x.range else "") for x in vs) + "};",
         _c_array("double", "Y_START", [0.0] * len(m.states)),
         _c_array("double", "P_START", m.P),
         _c_array("double", "T_START", m.T),
@@ -652,11 +913,15 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         _c_array("double", "ATOL_SPEED", spd),
         _c_array("double", "ATOL_CURRENT", cur),
         _c_array("double", "REL_MASK", rel),
-        # nominal magnitudes of the continuous states (model exchange): the absolute
-        # tolerances of feeddrive's defaults over its relative tolerance, so an importer
-        # that takes atol = rtol·nominal weighs errors as feeddrive.simulate does
-        _c_array("double", "NOMINAL", [*(m.tolerances(1e-10, 1e-8, 1e-6)[0] / 1e-6),
-                                       1e-4, 1e-4]),
+        # nominal magnitudes of the continuous states (model exchange; state_nominals)
+        _c_array("double", "NOMINAL", state_nominals(fm)),
+        # the Jacobian's declared pattern and its column groups (model exchange: the
+        # directional derivatives, wrapper.c fmu_jacobian): the model's colouring, each
+        # reference integral a group of its own
+        *([_c_array("int", "JAC_PATTERN", m.jacobian_pattern[:, :len(m.states)].ravel()),
+           _c_array("int", "JAC_GROUP", [*m.jacobian_colours[:len(m.states)], n_colours,
+                                         n_colours + 1]),
+           f"#define JAC_N_GROUPS {n_colours + 2}"] if kind == "me" else []),
         "static const char *const SETTING_NAMES[] = {"
         + ", ".join(quote_c(s[0]) for s in SETTINGS) + "};",
         'static const char *const PERIOD_NAMES[] = {"controller.position_period", '
@@ -671,6 +936,13 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
     return "\n".join(out) + "\n"
 
 
+def _range_flags(r: SlotRange | None) -> int:
+    """VR_RANGE bits: 1 the low end excluded, 2 zero allowed besides, 4 integers only."""
+    if r is None:
+        return 0
+    return (0 if r.low_inclusive else 1) | (2 if r.zero else 0) | (4 if r.integer else 0)
+
+
 def _status_messages() -> list[str]:
     from .solver import STATUS_MESSAGES
 
@@ -678,7 +950,8 @@ def _status_messages() -> list[str]:
 
 
 def quote_c(text: str) -> str:
-    """A C string literal (ASCII, escapes for the rest).
+    """A C string literal of ``text`` in UTF-8 (printable ASCII as is, other bytes as octal
+    escapes).
 
     Parameters
     ----------
@@ -690,8 +963,16 @@ def quote_c(text: str) -> str:
     str
         The literal, with its quotes.
     """
-    body = text.encode("ascii", "backslashreplace").decode("ascii")
-    return '"' + body.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    out = []
+    for byte in text.encode("utf-8"):
+        c = chr(byte)
+        if c in ('"', "\\"):
+            out.append("\\" + c)
+        elif 32 <= byte < 127 and c != "?":  # "?": no trigraphs
+            out.append(c)
+        else:  # UTF-8 bytes as octal escapes: the logger gets the text as written
+            out.append(f"\\{byte:03o}")
+    return '"' + "".join(out) + '"'
 
 
 def xml_text(text: str) -> str:

@@ -19,6 +19,12 @@
 #include "fmi3Functions.h"
 #endif
 
+/* a change of time, state, input or parameter: the cached Jacobian is stale */
+#if FMU_KIND_ME
+#define FMU_TOUCH(m) ((m)->jac_valid = 0)
+#else
+#define FMU_TOUCH(m) ((void)(m))
+#endif
 #define N_REF_STATES 2
 #define N_CSTATES (FD_N_STATE + N_REF_STATES)
 #define N_WORK 10
@@ -38,6 +44,15 @@ typedef struct {
     double memory[FD_MEMORY_SIZE];
     double base, next_event;
     long steps[FD_N_CLOCK], tick[FD_N_CLOCK], k_event;
+    double evaluations[2];  /* fd_rhs and tangent evaluations (model exchange counters) */
+#if FMU_KIND_ME
+    /* directional derivatives: the tangent's seeds and results, the Jacobian of the
+       derivatives by the states at the current point (valid while jac_valid) */
+    double y_d[N_CSTATES], u_d[N_INPUT], dy_d[N_CSTATES], aux_d[FD_N_AUX];
+    double P_d[FD_N_PARAM], T_d[FD_N_TABLE], dy_s[N_CSTATES], aux_s[FD_N_AUX];
+    double jac[N_CSTATES][N_CSTATES];
+    int jac_valid, warned_swap;
+#endif
     int sampled, inputs_changed, dirty, initialized, terminated, logging, model_exchange;
     char name[256];
 #if FMU_FMI_VERSION == 2
@@ -81,11 +96,12 @@ static void fmu_defaults(Fmu *m) {
     memcpy(m->u, U_START, sizeof(m->u));
     memset(m->du, 0, sizeof(m->du));
     memcpy(m->s, S_START, sizeof(m->s));
+    m->evaluations[0] = m->evaluations[1] = 0.0;
     m->t = 0.0;
     m->t0 = 0.0;
     m->initialized = 0;
     m->terminated = 0;
-    m->dirty = 1;
+    m->dirty = 1; FMU_TOUCH(m);
 }
 
 /* the reference block of T (feeddrive.model.reference.REF_INPUT) and the load slot, from the inputs;
@@ -107,10 +123,163 @@ static void fmu_evaluate(Fmu *m) {
     if (!m->dirty) return;
     if (m->model_exchange) fmu_write_inputs(m, 0);
     fd_rhs(m->t, m->y, m->held, m->P, m->T, m->dy, m->aux);
+    m->evaluations[0] += 1.0;
     m->dy[FD_N_STATE] = m->u[IN_VT];
     m->dy[FD_N_STATE + 1] = m->u[IN_VN];
     m->dirty = 0;
 }
+
+#if FMU_KIND_ME
+/* ---- directional derivatives (model exchange): the model's tangent, generated from its
+   kernels (feeddrive.backends.tangent), evaluated at the current point for the seeds
+   m->y_d (continuous states) and m->u_d (inputs); the inputs reach the model through the
+   reference block of T and the load slot of P, as fmu_write_inputs puts them there */
+static void fmu_tangent(Fmu *m) {
+    int integrate = m->s[S_INTEGRATE] > 0.5;
+    fmu_evaluate(m);  /* P and T hold the current inputs */
+    memset(m->T_d, 0, sizeof(m->T_d));
+    m->T_d[TABLE_OFFSET + 0] = integrate ? m->y_d[FD_N_STATE] : m->u_d[IN_XT];
+    m->T_d[TABLE_OFFSET + 2] = m->u_d[IN_VT];
+    m->T_d[TABLE_OFFSET + 4] = integrate ? m->y_d[FD_N_STATE + 1] : m->u_d[IN_XN];
+    m->T_d[TABLE_OFFSET + 6] = m->u_d[IN_VN];
+    if (m->u_d[IN_LOAD] != 0.0) {  /* the load force is a parameter slot: P varies too */
+        memset(m->P_d, 0, sizeof(m->P_d));
+        m->P_d[LOAD_SLOT] = m->u_d[IN_LOAD];
+        fd_rhs_tangent_all(m->t, m->y, m->held, m->P, m->T, m->dy_s, m->aux_s, m->y_d,
+                           m->P_d, m->T_d, m->dy_d, m->aux_d);
+    } else {
+        fd_rhs_tangent(m->t, m->y, m->held, m->P, m->T, m->dy_s, m->aux_s, m->y_d, m->T_d,
+                       m->dy_d, m->aux_d);
+    }
+    m->dy_d[FD_N_STATE] = m->u_d[IN_VT];
+    m->dy_d[FD_N_STATE + 1] = m->u_d[IN_VN];
+    m->evaluations[1] += 1.0;
+}
+
+/* the Jacobian of the derivatives by the continuous states at the current point: one tangent
+   evaluation per group of columns that share no row of the declared pattern (JAC_GROUP, the
+   model's colouring), each entry taken from its column's group */
+static void fmu_jacobian(Fmu *m) {
+    int g, i, j, members;
+    if (m->jac_valid) return;
+    memset(m->u_d, 0, sizeof(m->u_d));
+    for (g = 0; g < JAC_N_GROUPS; g++) {
+        members = 0;
+        for (j = 0; j < N_CSTATES; j++) {
+            m->y_d[j] = JAC_GROUP[j] == g ? 1.0 : 0.0;
+            members += JAC_GROUP[j] == g;
+        }
+        if (members == 0) continue;
+        fmu_tangent(m);
+        for (j = 0; j < N_CSTATES; j++) {
+            if (JAC_GROUP[j] != g) continue;
+            for (i = 0; i < N_CSTATES; i++) {
+                int declared = members == 1 ||
+                               (i < FD_N_STATE && j < FD_N_STATE && JAC_PATTERN[i * FD_N_STATE + j]);
+                m->jac[i][j] = declared ? m->dy_d[i] : 0.0;
+            }
+        }
+    }
+    m->jac_valid = 1;
+}
+
+/* out = J·seed for the derivatives `rows` by the continuous states `columns` (with their
+   seeds), from the cached Jacobian; a row or column is the state index VR_A of its value
+   reference (a derivative's or a state's alike: fmu_swapped) */
+static int fmu_jacobian_product(Fmu *m, const unsigned int *rows, size_t n_rows,
+                                const unsigned int *columns, size_t n_columns,
+                                const double *seed, double *out) {
+    double seed_y[N_CSTATES];
+    size_t k;
+    int j;
+    memset(seed_y, 0, sizeof(seed_y));
+    for (k = 0; k < n_columns; k++) seed_y[VR_A[columns[k]]] += seed[k];
+    fmu_jacobian(m);
+    for (k = 0; k < n_rows; k++) {
+        double sum = 0.0;
+        int i = VR_A[rows[k]];
+        for (j = 0; j < N_CSTATES; j++) sum += m->jac[i][j] * seed_y[j];
+        out[k] = sum;
+    }
+    return ST_OK;
+}
+
+/* A request with every unknown a continuous state and every known a derivative has no FMI
+   meaning (a state is not a function of its rate); pathsim-fmi 0.1.1 asks its state Jacobian
+   so (it reads fmpy's `derivative` attribute the wrong way round).  The only sensible answer
+   is the Jacobian of those states' derivatives by the states whose rates it names: given, with
+   a warning once per instance, so that importer gets the Jacobian it means. */
+static int fmu_swapped(Fmu *m, const unsigned int *unknowns, size_t n_unknown,
+                       const unsigned int *knowns, size_t n_known) {
+    size_t k;
+    if (n_unknown == 0 || n_known == 0) return 0;
+    for (k = 0; k < n_unknown; k++)
+        if ((int)unknowns[k] >= N_VR || VR_KIND[unknowns[k]] != K_STATE) return 0;
+    for (k = 0; k < n_known; k++)
+        if ((int)knowns[k] >= N_VR || VR_KIND[knowns[k]] != K_DER) return 0;
+    if (!m->warned_swap) {
+        fmu_log(m, ST_WARNING, "directional derivative of continuous states by derivatives: "
+                "answered as the derivatives' Jacobian by the states (unknowns and knowns "
+                "swapped, as pathsim-fmi 0.1.1 asks)");
+        m->warned_swap = 1;
+    }
+    return 1;
+}
+
+/* FMI directional derivative: unknowns (derivatives, states, signals, outputs) by knowns
+   (continuous states, inputs) along seed */
+static int fmu_directional(Fmu *m, const unsigned int *unknowns, size_t n_unknown,
+                           const unsigned int *knowns, size_t n_known, const double *seed,
+                           double *out) {
+    size_t k;
+    int only_derivatives = 1, only_states = 1;
+    char msg[300];
+    if (!m->initialized) {
+        fmu_log(m, ST_ERROR, "directional derivatives are defined after initialisation");
+        return ST_ERROR;
+    }
+    if (fmu_swapped(m, unknowns, n_unknown, knowns, n_known))
+        return fmu_jacobian_product(m, unknowns, n_unknown, knowns, n_known, seed, out);
+    memset(m->y_d, 0, sizeof(m->y_d));
+    memset(m->u_d, 0, sizeof(m->u_d));
+    for (k = 0; k < n_known; k++) {
+        int vr = (int)knowns[k];
+        if (vr < 0 || vr >= N_VR || (VR_KIND[vr] != K_STATE && VR_KIND[vr] != K_INPUT)) {
+            snprintf(msg, sizeof msg, "directional derivative by value reference %d: expected "
+                     "a continuous state or an input", vr);
+            fmu_log(m, ST_ERROR, msg);
+            return ST_ERROR;
+        }
+        if (VR_KIND[vr] == K_STATE) m->y_d[VR_A[vr]] += seed[k];
+        else { m->u_d[VR_A[vr]] += seed[k]; only_states = 0; }
+    }
+    for (k = 0; k < n_unknown; k++) {
+        int vr = (int)unknowns[k], kind = vr >= 0 && vr < N_VR ? VR_KIND[vr] : -1;
+        if (kind != K_DER && kind != K_STATE && kind != K_AUX && kind != K_PRODUCT &&
+            kind != K_ERROR) {
+            snprintf(msg, sizeof msg, "directional derivative of value reference %d: expected "
+                     "a derivative, state, signal or output", vr);
+            fmu_log(m, ST_ERROR, msg);
+            return ST_ERROR;
+        }
+        only_derivatives &= kind == K_DER;
+    }
+    if (only_derivatives && only_states)  /* the importer's Jacobian: from the cache */
+        return fmu_jacobian_product(m, unknowns, n_unknown, knowns, n_known, seed, out);
+    fmu_tangent(m);
+    for (k = 0; k < n_unknown; k++) {
+        int vr = (int)unknowns[k], a = VR_A[vr], b = VR_B[vr];
+        switch (VR_KIND[vr]) {
+        case K_DER: out[k] = m->dy_d[a]; break;
+        case K_STATE: out[k] = m->y_d[a]; break;
+        case K_AUX: out[k] = m->aux_d[a]; break;
+        case K_PRODUCT: out[k] = m->P[a] * m->y_d[b]; break;
+        default: out[k] = m->aux_d[a] - m->y_d[b]; break;  /* K_ERROR */
+        }
+    }
+    return ST_OK;
+}
+#endif
 
 /* the sample schedule (feeddrive.solvers.schedule): the loop periods of the settings go into
    their parameter slots, then every clock of the model (CLOCK_SLOT) is put on one grid */
@@ -193,32 +362,58 @@ static int fmu_initialize(Fmu *m) {
     m->k_event = 0;
     m->next_event = m->t0 + (m->sampled ? FD_NEXT_INSTANT(0, m->steps) : 1) * m->base;
     m->inputs_changed = 0;
-    m->dirty = 1;
+    m->dirty = 1; FMU_TOUCH(m);
     fmu_evaluate(m);
     m->initialized = 1;
     return ST_OK;
 }
 
 static int fmu_do_step(Fmu *m, double t, double h) {
-    long status;
+    long status, max_steps = (long)m->s[S_MAX_STEPS];
     int redo, i;
-    double t_end = t + h;
-    char msg[300];
+    double t_end = t + h, instants;
+    char msg[400];
     if (!m->initialized || m->terminated) return ST_ERROR;
     if (fabs(t - m->t) > 1e-9 * (fabs(t) + 1.0)) {
         snprintf(msg, sizeof msg, "doStep at t = %.17g s, but the FMU is at t = %.17g s", t, m->t);
         fmu_log(m, ST_ERROR, msg);
         return ST_ERROR;
     }
-    if (!(h >= 0.0)) return ST_ERROR;
+    if (!(h >= 0.0) || !isfinite(h)) {
+        snprintf(msg, sizeof msg, "communicationStepSize = %g: expected a finite step >= 0 [s]",
+                 h);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
+    /* the sample instants in (t, t_end]: bounded before any work (solver.max_steps_per_call
+       bounds the integrator's steps below, inside the integrator) */
+    instants = m->sampled ? floor((t_end - m->t0) / m->base) - floor((t - m->t0) / m->base) : 0.0;
+    if (instants > (double)max_steps) {
+        snprintf(msg, sizeof msg, "solver.max_steps_per_call = %ld: the communication step "
+                 "[%.9g, %.9g] s holds %.0f sample instants of the %g-s controller grid; take "
+                 "shorter communication steps or raise solver.max_steps_per_call", max_steps,
+                 t, t_end, instants, m->base);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
     redo = m->inputs_changed;
     m->inputs_changed = 0;
     fmu_write_inputs(m, 1);
+    /* the integrator stops after more than its limit: max_steps - 1 lets it take at most
+       max_steps steps (accepted and rejected) */
     status = FD_ADVANCE(m->t, t_end, m->t0, (long)FD_N_STATE, m->y, m->held, m->held_prev, m->P,
                         m->T, m->steps, m->tick, m->base, m->s[S_RTOL], m->atol,
-                        m->rel, m->s[S_MAX_STEP], (long)MAX_STEPS_PER_CALL, (long)redo,
+                        m->rel, m->s[S_MAX_STEP], max_steps - 1, (long)redo,
                         m->memory, m->work[0], m->work[1], m->work[2], m->work[3], m->work[4],
                         m->work[5], m->work[6], m->work[7], m->work[8], m->work[9], m->aux);
+    if (status == 1) {
+        snprintf(msg, sizeof msg, "solver.max_steps_per_call = %ld: the communication step "
+                 "[%.9g, %.9g] s needs more integrator steps; take shorter communication steps "
+                 "or raise solver.max_steps_per_call (the parameters may make the drive too "
+                 "stiff or unstable)", max_steps, t, t_end);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
     if (status != 0) {
         snprintf(msg, sizeof msg, "integration stopped near t = %.9g s: %s", m->t,
                  STATUS_MESSAGES[status < 0 || status > 3 ? 0 : status]);
@@ -247,7 +442,7 @@ static void fmu_event_update(Fmu *m, int *next_defined, double *next_time) {
             FD_DUE(m->k_event, m->steps, m->tick);
             fd_sample_update(m->t, m->y, m->held, m->P, m->T, m->tick);
             m->next_event = m->t0 + FD_NEXT_INSTANT(m->k_event, m->steps) * m->base;
-            m->dirty = 1;
+            m->dirty = 1; FMU_TOUCH(m);
         }
         *next_defined = 1;
         *next_time = m->next_event;
@@ -267,39 +462,74 @@ static double fmu_get(Fmu *m, int vr) {
     case K_AUX: fmu_evaluate(m); return m->aux[a];
     case K_PARAM: return m->P[a];
     case K_INPUT: return m->u[a];
-    case K_SETTING: return m->s[a];
+    case K_SETTING: case K_BOOLEAN: case K_INTEGER: return m->s[a];
     case K_PRODUCT: return m->P[a] * m->y[b];
     case K_ERROR: fmu_evaluate(m); return m->aux[a] - m->y[b];
+    case K_COUNTER: return m->memory[a];
+    case K_EVALUATIONS: return m->evaluations[a];
     default: return 0.0;
     }
 }
 
+/* whether value lies in the variable's range (description.py: the parameter file's range of
+   the field it comes from; VR_RANGE bits: 1 low end excluded, 2 zero allowed, 4 integers) */
+static int fmu_in_range(int vr, double value) {
+    int flags = VR_RANGE[vr];
+    if (!isfinite(value)) return 0;
+    if ((flags & 2) && value == 0.0) return 1;
+    if ((flags & 4) && value != floor(value)) return 0;
+    if ((flags & 1) ? !(value > VR_LOW[vr]) : !(value >= VR_LOW[vr])) return 0;
+    return value <= VR_HIGH[vr];
+}
+
+/* set a variable: refused (Error, through the logger, naming it) when FMI does not let the
+   importer set it now (VR_SET: 0 never, 1 until initialised, 2 always) or when the value lies
+   outside its range */
 static int fmu_set(Fmu *m, int vr, double value) {
     int a = VR_A[vr];
+    char msg[400];
+    if (VR_SET[vr] == 0 || (VR_SET[vr] == 1 && m->initialized)) {
+        snprintf(msg, sizeof msg, "%s: %s", VR_NAME[vr], VR_SET[vr] == 0
+                 ? "computed by the FMU (an output or local variable), not settable"
+                 : "settable only before initialisation ends (a fixed parameter or a start "
+                   "value)");
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
+    if (!fmu_in_range(vr, value)) {
+        snprintf(msg, sizeof msg, "%s = %.9g: %s", VR_NAME[vr], value, VR_EXPECTED[vr]);
+        fmu_log(m, ST_ERROR, msg);
+        return ST_ERROR;
+    }
     switch (VR_KIND[vr]) {
-    case K_STATE: m->y[a] = value; m->dirty = 1; return ST_OK;
+    case K_STATE: m->y[a] = value; m->dirty = 1; FMU_TOUCH(m); return ST_OK;
     case K_PARAM:
-        if (m->initialized && VR_FIXED[vr]) return ST_ERROR; /* a switch: before init only */
         m->P[a] = value;
-        m->dirty = 1;
+        m->dirty = 1; FMU_TOUCH(m);
         return ST_OK;
     case K_INPUT:
         if (m->u[a] != value) m->inputs_changed = 1;
         m->u[a] = value;
-        m->dirty = 1;
+        m->dirty = 1; FMU_TOUCH(m);
         return ST_OK;
-    case K_SETTING:
-        if (m->initialized && VR_FIXED[vr]) return ST_ERROR;
+    case K_SETTING: case K_BOOLEAN: case K_INTEGER:
         m->s[a] = value;
         return ST_OK;
     default: return ST_ERROR;
     }
 }
 
-static int fmu_check_vr(Fmu *m, int vr, int boolean) {
-    if (vr < 0 || vr >= N_VR || (VR_KIND[vr] == K_BOOLEAN) != boolean) {
-        char msg[100];
+static int fmu_check_vr(Fmu *m, int vr, int type) {
+    static const char *const TYPE_NAMES[] = {"Real", "Boolean", "Integer"};
+    char msg[300];
+    if (vr < 0 || vr >= N_VR) {
         snprintf(msg, sizeof msg, "unknown value reference %d", vr);
+        fmu_log(m, ST_ERROR, msg);
+        return 0;
+    }
+    if (VR_TYPE[vr] != type) {
+        snprintf(msg, sizeof msg, "value reference %d (%s) is a %s variable, not %s", vr,
+                 VR_NAME[vr], TYPE_NAMES[VR_TYPE[vr]], TYPE_NAMES[type]);
         fmu_log(m, ST_ERROR, msg);
         return 0;
     }
@@ -362,57 +592,33 @@ fmi2Status fmi2Terminate(fmi2Component c) { ((Fmu *)c)->terminated = 1; return f
 
 fmi2Status fmi2Reset(fmi2Component c) { fmu_defaults((Fmu *)c); return fmi2OK; }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                       fmi2Real value[]) {
-    size_t i;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi2Error;
-        value[i] = fmu_get((Fmu *)c, (int)vr[i]);
+/* every typed get/set goes through fmu_get / fmu_set (checks, messages) */
+#define FMU2_ACCESS(NAME, CTYPE, TYPE, TO_FMI, FROM_FMI)                                  \
+    fmi2Status fmi2Get##NAME(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,  \
+                             CTYPE value[]) {                                             \
+        size_t i;                                                                         \
+        for (i = 0; i < nvr; i++) {                                                       \
+            double v;                                                                     \
+            if (!fmu_check_vr((Fmu *)c, (int)vr[i], TYPE)) return fmi2Error;              \
+            v = fmu_get((Fmu *)c, (int)vr[i]);                                            \
+            value[i] = TO_FMI;                                                            \
+        }                                                                                 \
+        return fmi2OK;                                                                    \
+    }                                                                                     \
+    fmi2Status fmi2Set##NAME(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,  \
+                             const CTYPE value[]) {                                       \
+        size_t i;                                                                         \
+        for (i = 0; i < nvr; i++) {                                                       \
+            if (!fmu_check_vr((Fmu *)c, (int)vr[i], TYPE)) return fmi2Error;              \
+            if (fmu_set((Fmu *)c, (int)vr[i], FROM_FMI) != ST_OK) return fmi2Error;       \
+        }                                                                                 \
+        return fmi2OK;                                                                    \
     }
-    return fmi2OK;
-}
-
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                       const fmi2Real value[]) {
-    size_t i;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi2Error;
-        if (fmu_set((Fmu *)c, (int)vr[i], value[i]) != ST_OK) return fmi2Error;
-    }
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Boolean value[]) {
-    size_t i;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi2Error;
-        value[i] = ((Fmu *)c)->s[VR_A[vr[i]]] > 0.5 ? fmi2True : fmi2False;
-    }
-    return fmi2OK;
-}
-
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Boolean value[]) {
-    size_t i;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi2Error;
-        if (((Fmu *)c)->initialized) return fmi2Error;
-        ((Fmu *)c)->s[VR_A[vr[i]]] = value[i] ? 1.0 : 0.0;
-    }
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Integer value[]) {
-    (void)c; (void)vr; (void)value;
-    return nvr == 0 ? fmi2OK : fmi2Error;
-}
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Integer value[]) {
-    (void)c; (void)vr; (void)value;
-    return nvr == 0 ? fmi2OK : fmi2Error;
-}
+FMU2_ACCESS(Real, fmi2Real, T_REAL, v, value[i])
+FMU2_ACCESS(Boolean, fmi2Boolean, T_BOOLEAN, v > 0.5 ? fmi2True : fmi2False,
+            value[i] ? 1.0 : 0.0)
+FMU2_ACCESS(Integer, fmi2Integer, T_INTEGER, v > 2147483647.0 ? 2147483647 : (fmi2Integer)v,
+            (double)value[i])
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[]) {
     (void)c; (void)vr; (void)value;
@@ -467,8 +673,13 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte data[], size_
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[],
                                         size_t nu, const fmi2ValueReference z[], size_t nz,
                                         const fmi2Real dv[], fmi2Real dz[]) {
-    (void)c; (void)u; (void)nu; (void)z; (void)nz; (void)dv; (void)dz;
+#if FMU_KIND_ME
+    return fmu_directional((Fmu *)c, u, nu, z, nz, dv, dz) == ST_OK ? fmi2OK : fmi2Error;
+#else
+    (void)u; (void)nu; (void)z; (void)nz; (void)dv; (void)dz;
+    fmu_log((Fmu *)c, ST_ERROR, "directional derivatives: model exchange only");
     return fmi2Error;
+#endif
 }
 
 /* model exchange */
@@ -496,7 +707,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 }
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     ((Fmu *)c)->t = time;
-    ((Fmu *)c)->dirty = 1;
+    ((Fmu *)c)->dirty = 1; FMU_TOUCH((Fmu *)c);
     return fmi2OK;
 }
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
@@ -504,7 +715,7 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
     size_t i;
     if (nx != N_CSTATES) return fmi2Error;
     for (i = 0; i < nx; i++) m->y[i] = x[i];
-    m->dirty = 1;
+    m->dirty = 1; FMU_TOUCH(m);
     return fmi2OK;
 }
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
@@ -541,7 +752,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     Fmu *m = (Fmu *)c;
     size_t i;
     for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr(m, (int)vr[i], 0) || VR_KIND[vr[i]] != K_INPUT) return fmi2Error;
+        if (!fmu_check_vr(m, (int)vr[i], T_REAL) || VR_KIND[vr[i]] != K_INPUT) return fmi2Error;
         if (order[i] == 1) {
             if (m->du[VR_A[vr[i]]] != value[i]) m->inputs_changed = 1;
             m->du[VR_A[vr[i]]] = value[i];
@@ -678,47 +889,32 @@ fmi3Status fmi3EnterEventMode(fmi3Instance c) { (void)c; return fmi3OK; }
 fmi3Status fmi3Terminate(fmi3Instance c) { ((Fmu *)c)->terminated = 1; return fmi3OK; }
 fmi3Status fmi3Reset(fmi3Instance c) { fmu_defaults((Fmu *)c); return fmi3OK; }
 
-fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
-                          fmi3Float64 values[], size_t nValues) {
-    size_t i;
-    if (nValues < nvr) return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi3Error;
-        values[i] = fmu_get((Fmu *)c, (int)vr[i]);
+#define FMU3_ACCESS(NAME, CTYPE, TYPE, TO_FMI, FROM_FMI)                                  \
+    fmi3Status fmi3Get##NAME(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,   \
+                             CTYPE values[], size_t nValues) {                            \
+        size_t i;                                                                         \
+        if (nValues < nvr) return fmi3Error;                                              \
+        for (i = 0; i < nvr; i++) {                                                       \
+            double v;                                                                     \
+            if (!fmu_check_vr((Fmu *)c, (int)vr[i], TYPE)) return fmi3Error;              \
+            v = fmu_get((Fmu *)c, (int)vr[i]);                                            \
+            values[i] = TO_FMI;                                                           \
+        }                                                                                 \
+        return fmi3OK;                                                                    \
+    }                                                                                     \
+    fmi3Status fmi3Set##NAME(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,   \
+                             const CTYPE values[], size_t nValues) {                      \
+        size_t i;                                                                         \
+        if (nValues < nvr) return fmi3Error;                                              \
+        for (i = 0; i < nvr; i++) {                                                       \
+            if (!fmu_check_vr((Fmu *)c, (int)vr[i], TYPE)) return fmi3Error;              \
+            if (fmu_set((Fmu *)c, (int)vr[i], FROM_FMI) != ST_OK) return fmi3Error;       \
+        }                                                                                 \
+        return fmi3OK;                                                                    \
     }
-    return fmi3OK;
-}
-fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
-                          const fmi3Float64 values[], size_t nValues) {
-    size_t i;
-    if (nValues < nvr) return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 0)) return fmi3Error;
-        if (fmu_set((Fmu *)c, (int)vr[i], values[i]) != ST_OK) return fmi3Error;
-    }
-    return fmi3OK;
-}
-fmi3Status fmi3GetBoolean(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
-                          fmi3Boolean values[], size_t nValues) {
-    size_t i;
-    if (nValues < nvr) return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi3Error;
-        values[i] = ((Fmu *)c)->s[VR_A[vr[i]]] > 0.5;
-    }
-    return fmi3OK;
-}
-fmi3Status fmi3SetBoolean(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
-                          const fmi3Boolean values[], size_t nValues) {
-    size_t i;
-    if (nValues < nvr) return fmi3Error;
-    for (i = 0; i < nvr; i++) {
-        if (!fmu_check_vr((Fmu *)c, (int)vr[i], 1)) return fmi3Error;
-        if (((Fmu *)c)->initialized) return fmi3Error;
-        ((Fmu *)c)->s[VR_A[vr[i]]] = values[i] ? 1.0 : 0.0;
-    }
-    return fmi3OK;
-}
+FMU3_ACCESS(Float64, fmi3Float64, T_REAL, v, values[i])
+FMU3_ACCESS(Boolean, fmi3Boolean, T_BOOLEAN, v > 0.5, values[i] ? 1.0 : 0.0)
+FMU3_ACCESS(Int64, fmi3Int64, T_INTEGER, (fmi3Int64)v, (double)values[i])
 
 #define FMU3_NO_TYPE(NAME, CTYPE)                                                         \
     fmi3Status fmi3Get##NAME(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,   \
@@ -738,7 +934,6 @@ FMU3_NO_TYPE(Int16, fmi3Int16)
 FMU3_NO_TYPE(UInt16, fmi3UInt16)
 FMU3_NO_TYPE(Int32, fmi3Int32)
 FMU3_NO_TYPE(UInt32, fmi3UInt32)
-FMU3_NO_TYPE(Int64, fmi3Int64)
 FMU3_NO_TYPE(UInt64, fmi3UInt64)
 FMU3_NO_TYPE(String, fmi3String)
 
@@ -821,9 +1016,15 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference
                                         size_t nUnknowns, const fmi3ValueReference knowns[],
                                         size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
                                         fmi3Float64 sensitivity[], size_t nSensitivity) {
-    (void)c; (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed;
-    (void)nSeed; (void)sensitivity; (void)nSensitivity;
+    if (nSeed != nKnowns || nSensitivity != nUnknowns) return fmi3Error;
+#if FMU_KIND_ME
+    return fmu_directional((Fmu *)c, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity)
+               == ST_OK ? fmi3OK : fmi3Error;
+#else
+    (void)unknowns; (void)knowns; (void)seed; (void)sensitivity;
+    fmu_log((Fmu *)c, ST_ERROR, "directional derivatives: model exchange only");
     return fmi3Error;
+#endif
 }
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unknowns[],
                                     size_t nUnknowns, const fmi3ValueReference knowns[],
@@ -907,7 +1108,7 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c,
 }
 fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64 time) {
     ((Fmu *)c)->t = time;
-    ((Fmu *)c)->dirty = 1;
+    ((Fmu *)c)->dirty = 1; FMU_TOUCH((Fmu *)c);
     return fmi3OK;
 }
 fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t nx) {
@@ -915,7 +1116,7 @@ fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t
     size_t i;
     if (nx != N_CSTATES) return fmi3Error;
     for (i = 0; i < nx; i++) m->y[i] = x[i];
-    m->dirty = 1;
+    m->dirty = 1; FMU_TOUCH(m);
     return fmi3OK;
 }
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], size_t nx) {

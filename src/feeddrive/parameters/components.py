@@ -15,7 +15,7 @@ Ranges are plausibility bounds for machine-tool feed drives; they exist to catch
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any, Self
 
@@ -378,6 +378,29 @@ def unit_of(component: type, path: str) -> str | None:
         The unit of the field's metadata (``"-"`` for dimensionless), None when the path
         names no quantity of the class.
     """
+    meta = field_metadata(component, path)
+    unit = None if meta is None else meta.get("unit")
+    return None if unit is None else str(unit)
+
+
+def field_metadata(component: type, path: str) -> Mapping[str, Any] | None:
+    """The declaration (:func:`~feeddrive.parameters.validation.quantity` metadata: unit,
+    ``low``, ``high``, ``low_inclusive``, hint) of the quantity a dotted path names below a
+    parameter class: what a parameter file's value at that path is checked against.
+
+    Parameters
+    ----------
+    component : type
+        A parameter component class (e.g. ``LuGreParameters``, ``DriveParameters``).
+    path : str
+        Dotted path, entries of a tuple field with ``[i]``
+        (``"positive.coulomb_force"``, ``"element_stiffness[2]"``, ``"table.mass"``).
+
+    Returns
+    -------
+    Mapping or None
+        The field's metadata, None when the path names no quantity of the class.
+    """
     import typing
 
     for i, part in enumerate(path.split(".")):
@@ -395,8 +418,9 @@ def unit_of(component: type, path: str) -> str | None:
         if isinstance(hint, type) and hasattr(hint, "__dataclass_fields__"):
             component = hint
             continue
-        unit = found.metadata.get("unit")
-        return str(unit) if unit is not None and i == path.count(".") else None
+        if "unit" not in found.metadata or i != path.count("."):
+            return None
+        return found.metadata
     return None
 
 
