@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["PLOT_FORMATS", "OutputError", "atomic_path", "check_output_dir",
-           "check_output_file", "cut", "save_figure", "shown"]
+           "check_output_file", "cut", "save_figure", "shown", "write_bytes"]
 
 #: the figure formats every ``--plot`` option takes (matplotlib writes each)
 PLOT_FORMATS = (".png", ".pdf", ".svg")
@@ -133,6 +133,38 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
             os.unlink(tmp)
         raise
 
+
+def _write_fd(fd: int, data: memoryview) -> int:
+    return os.write(fd, data)
+
+
+def write_bytes(path: str | os.PathLike[str], data: bytes | memoryview) -> None:
+    """Write ``data`` to ``path`` with plain file I/O, 1 MiB at a time.
+
+    For a file a library builds in memory (NetCDF4): a failed write (a full disk) is then an
+    ordinary ``OSError`` here, not the library's failure deep inside its own I/O.  The
+    caller makes it atomic (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, created or truncated.
+    data : bytes or memoryview
+        Its contents.
+
+    Raises
+    ------
+    OSError
+        When a write fails (``ENOSPC``, ``EFBIG``), without the file name: the caller knows
+        which output it is.
+    """
+    view = memoryview(data).cast("B")
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+    try:
+        while view.nbytes:
+            view = view[_write_fd(fd, view[:1 << 20]):]
+    finally:
+        os.close(fd)
 
 
 def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int,

@@ -27,7 +27,7 @@ import numpy as np
 from .. import __version__
 from ..parameters import ParameterError
 from ..units import ENGINEERING
-from .outputs import atomic_path
+from .outputs import atomic_path, write_bytes
 
 if TYPE_CHECKING:  # pandas, xarray and scipy.io are imported by the writers that use them
     import pandas as pd
@@ -157,6 +157,13 @@ def cf_attributes(dataset: xr.Dataset, *, title: str, action: str) -> xr.Dataset
 def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
     """Write a dataset as a NetCDF4 file (h5netcdf engine).
 
+    The file is built in memory, then written with plain file I/O
+    (:func:`~feeddrive.io.outputs.write_bytes`): when HDF5 writes a file itself and a write
+    fails (a full disk), its close fails too and h5py crashes the process (SIGSEGV, h5py
+    3.16 / HDF5 1.14, issue 39 item 1); now a full disk is an ordinary ``OSError``.  The
+    memory this takes (one copy of the file) is within the output budget
+    (:func:`~feeddrive.engine.budget.check_output_memory` counts two copies of the record).
+
     Parameters
     ----------
     dataset : xarray.Dataset
@@ -164,7 +171,7 @@ def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
     path : str or Path
         The file to write.
     """
-    dataset.to_netcdf(path, engine="h5netcdf")
+    write_bytes(path, dataset.to_netcdf(engine="h5netcdf"))
 
 
 def arrow_table(columns: Mapping[str, tuple[np.ndarray, str, str]],
