@@ -451,7 +451,7 @@ def _scan_lines(data: np.ndarray, first_line: int, sep: str | None
 
 
 def read_csv_table(path: str | Path, *, sep: str | None = None,
-                   decimal: str = ".") -> CsvTable:
+                   decimal: str = ".", source: str | None = None) -> CsvTable:
     """Scan a delimited text file with one header row.
 
     The file is scanned in chunks (line numbers of the data rows, cells per row) with numpy;
@@ -468,6 +468,9 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
     decimal : str, default "."
         Decimal mark (``","`` for a European locale; the separator must then not be a
         comma).
+    source : str, optional
+        The file's name in messages; the path's last part by default (the explorer reads an
+        upload from a file of its own name and names it as the page sent it).
 
     Returns
     -------
@@ -482,7 +485,7 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
         For an unknown ``sep`` or ``decimal``.
     """
     p = Path(path)
-    source = p.name
+    source = p.name if source is None else source
     check_text_file(p)
     if decimal not in (".", ","):
         raise ValueError(f"decimal = {decimal!r}: expected '.' or ','")
@@ -817,6 +820,7 @@ def read_position_trace(
     speed_unit: str | None = None,
     sep: str | None = None,
     decimal: str = ".",
+    source: str | None = None,
 ) -> PositionTrace:
     """Read time and table position; default columns ``time`` [s] and ``position`` [mm].
 
@@ -843,6 +847,8 @@ def read_position_trace(
         Column separator; detected from the header when omitted.
     decimal : str, default "."
         Decimal mark (``","`` for a European locale).
+    source : str, optional
+        The file's name in messages (:func:`read_csv_table`).
 
     Returns
     -------
@@ -854,7 +860,7 @@ def read_position_trace(
     MeasuredDataError
         For missing columns, too few rows, bad cells or non-increasing time.
     """
-    table = read_csv_table(path, sep=sep, decimal=decimal)
+    table = read_csv_table(path, sep=sep, decimal=decimal, source=source)
     _need_rows(table, 16, "position trace")
     time, tname, _ = table.quantity([time_column], "time", unit=time_unit, default_unit="s")
     check_increasing(table, time, tname)
