@@ -108,3 +108,68 @@ def test_an_enospc_injected_into_the_netcdf_writer_is_one_line_and_rc_1(
     line = _one_line(result, "run.nc", "No space left on device")
     assert result.exit_code == 1 and "partial" not in line
     assert not list(tmp_path.glob("*run*"))
+
+
+# ------------------------------------------------------------------ "before any work"
+
+
+class WorkStarted(AssertionError):
+    """Raised by the fakes below: a simulation, a model build or a pool was started."""
+
+
+@pytest.fixture()
+def no_work(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fail the command the moment it starts work: a simulation, a compiled model's warm-up,
+    a process pool, a Dask cluster or an FMU build."""
+    import concurrent.futures as cf
+
+    from feeddrive.engine import simulate as engine
+    from feeddrive.sweep import executors, quantities
+
+    def fail(*args: Any, **kw: Any) -> Any:
+        raise WorkStarted("work started before the request was checked")
+
+    monkeypatch.setattr(engine.Simulation, "__init__", fail)
+    monkeypatch.setattr(cf.ProcessPoolExecutor, "__init__", fail)
+    monkeypatch.setattr(executors, "executor", fail)
+    monkeypatch.setattr(executors, "warm", fail)
+    monkeypatch.setattr(quantities, "warm", fail)
+    monkeypatch.setattr("feeddrive.fmu.build.compile_library", fail)
+    try:
+        import distributed
+    except ImportError:
+        return
+    monkeypatch.setattr(distributed, "LocalCluster", fail)
+
+
+# ------------------------------------------------------------------ item 3: fit on a gap
+
+
+def _trace(path: Path, *, gap_at: float | None = None, rows: int = 2001,
+           cell: str | None = None) -> Path:
+    """A 2-s CDFS-like record at 1 kHz (table position, current, command), optionally one
+    more row at ``gap_at`` [s] or one position cell replaced by ``cell``."""
+    lines = ["time [s],table_position [mm],screw_current [A],table_speed_reference [mm/s]"]
+    for k in range(rows):
+        t = k * 1e-3
+        lines.append(f"{t:.3f},{min(t, 1.9) * 0.9:.6f},{0.1 + 0.01 * (k % 7):.4f},1")
+    if cell is not None:
+        first = lines[5].split(",")
+        lines[5] = ",".join([first[0], cell, *first[2:]])
+    if gap_at is not None:
+        lines.append(f"{gap_at:g},1.8,0.1,1")
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_fit_refuses_a_gap_in_a_trace_before_any_work_as_analyze_does(
+        tmp_path: Path, no_work: None) -> None:
+    """One row at t = 1e6 s after a 2-s record: rc 1 "out of memory" after trying to
+    allocate the grid; now the rule of ``analyze`` (trace_input.resample_size), line named."""
+    gap = _trace(tmp_path / "gap.csv", gap_at=1e6)
+    fit = runner.invoke(app, ["fit", str(gap), "--free", "controller.velocity_integral_gain"])
+    line = _one_line(fit, "gap.csv", "time: a gap of", "before line 2003", "split the record")
+    assert fit.exit_code == 2, line
+    analyze = runner.invoke(app, ["analyze", str(gap)])
+    assert analyze.exit_code == 2
+    assert line.split("gap.csv", 1)[1] == _one_line(analyze).split("gap.csv", 1)[1]

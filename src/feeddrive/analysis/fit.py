@@ -203,8 +203,12 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     ------
     FitError
         For a trace that cannot be fitted (no signal, no reference, bad cells).
+    ValueError
+        For a gap in the record (the rule of ``analyze``:
+        :func:`~feeddrive.analysis.trace_input.resample_size`), naming its line.
     """
     from ..io.measured import COMMAND_COLUMNS, check_increasing, read_csv_table
+    from .trace_input import resample_size
 
     table = read_csv_table(path, sep=None)
     src = table.source
@@ -215,6 +219,9 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
         raise table._missing(["time"])
     t_raw, _, _ = table.quantity(["time"], "time", unit=None, default_unit="s")
     check_increasing(table, t_raw, "time")
+    # a gap (one row at 1e6 s after a 2-s record) would make the reference grid huge:
+    # refused as `analyze` refuses it, naming the line, before any work (issue 39 item 3)
+    resample_size(t_raw, float(np.median(np.diff(t_raw))), lines=table.lines, source=src)
     t0 = float(t_raw[0])
     if not (math.isfinite(record_start) and record_start >= 0):
         raise FitError(f"--record-start {record_start!r}: expected a time ≥ 0 [s]")
