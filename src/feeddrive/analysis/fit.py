@@ -72,6 +72,12 @@ PROFILE_ABOVE = 0.25
 MAX_RELATIVE_HALF_WIDTH = 0.5
 #: relative forward-difference step of the Jacobian
 JACOBIAN_STEP = 1e-3
+#: the range of a signal's weight [-]: its residuals are already divided by the data's own
+#: noise level, so a factor of 10⁶ either way is already extreme; 1e308 overflowed the sum of
+#: squares to inf and the fit to NaN (issue 39 item 5)
+WEIGHT_RANGE = (1e-6, 1e6)
+#: most residual evaluations per stage (each simulates every trace)
+MAX_EVALUATIONS = 100_000
 
 _TORQUE_UNITS = {"N m": 1.0, "Nm": 1.0, "N·m": 1.0, "mN m": 1e-3}
 
@@ -253,7 +259,9 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
             if not torque_constant:
                 raise FitError(f"{src}: column {col!r}: a torque needs the motor torque "
                                "constant to compare with the model's current")
-            values = table.numbers(col) * _TORQUE_UNITS[unit] / torque_constant
+            torque = table.numbers(col) * _TORQUE_UNITS[unit]
+            table.check_magnitude(table.find(col) or 0, torque, "torque", unit)
+            values = torque / torque_constant
             name = "screw_current"
         else:
             values, _, _ = table.quantity([col], dim, unit=None, default_unit=default)
@@ -1001,10 +1009,18 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
         if name not in MEASURABLE:
             raise FitError(f"--weight {name}: not a measurable signal; expected one of "
                            f"{', '.join(MEASURABLE)}")
-        if not (math.isfinite(w) and w > 0):
-            raise FitError(f"--weight {name}={w!r}: expected a weight > 0")
+        if not (math.isfinite(w) and WEIGHT_RANGE[0] <= w <= WEIGHT_RANGE[1]):
+            raise FitError(f"--weight {name}={w!r}: expected a weight in "
+                           f"[{WEIGHT_RANGE[0]:g}, {WEIGHT_RANGE[1]:g}]")
     if not (0 < confidence < 1):
         raise FitError(f"confidence = {confidence!r}: expected a fraction in (0, 1)")
+    if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, int) or \
+            not 1 <= max_evaluations <= MAX_EVALUATIONS:
+        raise FitError(f"--max-evaluations {max_evaluations!r}: expected a whole number in "
+                       f"[1, {MAX_EVALUATIONS}]")
+    from ..sweep.executors import check_executor
+
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     start = np.empty(len(free))
     lb = np.empty(len(free))
     ub = np.empty(len(free))

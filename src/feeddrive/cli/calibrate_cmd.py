@@ -8,14 +8,22 @@ from typing import Any
 import typer
 
 from ..analysis import protocol
-from ..io.outputs import check_output_file
 from ..parameters import ParameterError
 from . import _units
-from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
+from ._common import (
+    app,
+    console,
+    err_console,
+    outputs,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 
 
 @app.command("calibrate")
 @user_errors
+@outputs(out=(".toml",))
 def calibrate_command(
     unknown: str = typer.Option("controller.velocity_integral_gain", "--unknown",
                                 help="Dotted parameter path to fit."),
@@ -54,9 +62,6 @@ def calibrate_command(
     if not (math.isfinite(high) and high > low):
         raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
                                              f"{unknown}]")
-    if out:
-        check_output_file(out, option="--out", inputs=[params_file], force=force,
-                          formats=(".toml",))
     params = resolve_parameters(preset_name, params_file)
     rule = VerdictRule(max_duration=max_duration)
     result = calibrate(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from . import _units
-from ._common import app, console, print_json, resolve_parameters, user_errors
+from ._common import app, console, outputs, print_json, resolve_parameters, user_errors
 
 export_app = typer.Typer(no_args_is_help=True,
                          help="Export a drive for other tools (FMU: docs/fmu.md).")
@@ -14,6 +14,7 @@ app.add_typer(export_app, name="export")
 
 @export_app.command("fmu")
 @user_errors
+@outputs(out=(".fmu",))
 def fmu_command(
     drive: str = typer.Option(..., "--drive", help="cdfs, ddfs, linear-motor or another "
                               "registered drive (rack-pinion)"),

@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from ..units import LARGEST_SPEED
+
 __all__ = [
     "COMMAND_COLUMNS",
     "CURRENT_UNITS",
@@ -56,6 +58,13 @@ _DIMENSIONS = {
     "force": FORCE_UNITS,
     "current": CURRENT_UNITS,
 }
+
+#: the largest magnitude a measured value of each dimension may have [SI]: far beyond any
+#: feed drive (speed and force as ``static_fit``'s test limits), so that a larger one is a
+#: wrong unit or a damaged file, refused naming its line; a 1e308 cell overflowed the fit's
+#: sums to inf and NaN (issue 39 item 5).  Time allows absolute clocks (Unix seconds).
+LARGEST_MAGNITUDE = {"length": 1e3, "time": 1e15, "speed": LARGEST_SPEED, "force": 1e7,
+                     "current": 1e5, "torque": 1e6}
 
 #: command-speed columns looked for in a position trace, in this order
 COMMAND_COLUMNS = ("command_speed", "table_speed_reference")
@@ -348,8 +357,39 @@ class CsvTable:
                         f"unit option says {unit!r}; drop one of them")
             used = unit if unit is not None else header_unit or default_unit
             factor = unit_factor(used, dimension, what=what)
-            return self.numbers(name) * factor, self.names[i], used
+            values = self.numbers(name) * factor
+            self.check_magnitude(i, values, dimension, used)
+            return values, self.names[i], used
         raise self._missing(names)
+
+    def check_magnitude(self, i: int, values: np.ndarray, dimension: str,
+                        unit: str) -> None:
+        """Refuse a value beyond :data:`LARGEST_MAGNITUDE` of its dimension, naming its line.
+
+        Parameters
+        ----------
+        i : int
+            The column index.
+        values : numpy.ndarray
+            The column in SI [SI unit of the dimension].
+        dimension : str
+            A key of :data:`LARGEST_MAGNITUDE`.
+        unit : str
+            The unit the file gives, for the message.
+
+        Raises
+        ------
+        MeasuredDataError
+            At the first value too large.
+        """
+        limit = LARGEST_MAGNITUDE[dimension]
+        big = np.flatnonzero(np.abs(values) > limit)
+        if big.size:
+            k = int(big[0])
+            raise MeasuredDataError(
+                self.source, int(self.lines[k]),
+                f"column {self.names[i]!r}: {self.cell(i, k)} [{unit}] is beyond any feed "
+                f"drive (|{dimension}| ≤ {limit:g} in SI units); check the file's unit")
 
 
 def _detect_separator(header: str) -> str | None:

@@ -27,13 +27,13 @@ import numpy as np
 from .. import __version__
 from ..parameters import ParameterError
 from ..units import ENGINEERING
-from .outputs import atomic_path, write_bytes
+from .outputs import PARQUET_HINT, RESULT_FORMATS, atomic_path, write_bytes
 
 if TYPE_CHECKING:  # pandas, xarray and scipy.io are imported by the writers that use them
     import pandas as pd
     import xarray as xr
 
-FORMATS = (".csv", ".parquet", ".nc", ".mat")
+FORMATS = RESULT_FORMATS
 
 #: the CF version the NetCDF exports follow (global attribute ``Conventions``)
 CF_CONVENTIONS = "CF-1.8"
@@ -50,8 +50,6 @@ TIME_LONG_NAME = "time since the start of the run"
 # UDUNITS spellings of the units that differ from the package's (µ is not UDUNITS)
 _UDUNITS = {"": "1", "N/µm": "N/um", "µm": "um", "µs": "us"}
 
-#: how to get Parquet support (pyarrow is an optional dependency: docs/outputs.md)
-PARQUET_HINT = "Parquet output needs pyarrow: pip install 'feeddrive[parquet]'"
 
 
 def check_format(path: str | Path) -> str:

@@ -34,7 +34,7 @@ from .quantities import evaluate, warm
 from .store import SweepStore
 
 __all__ = ["DASK_HINT", "Estimate", "SweepAborted", "SweepInterrupted", "SweepSummary",
-           "estimate", "executor", "run_sweep"]
+           "check_executor", "estimate", "executor", "run_sweep"]
 
 DASK_HINT = "Dask executors need dask.distributed: pip install 'feeddrive[dask]'"
 # one thread per worker process: the parallelism is across points
@@ -135,6 +135,36 @@ def _dask() -> Any:
     return distributed
 
 
+def check_executor(*, workers: int | None = None, scheduler: str | None = None,
+                   dask_workers: int | None = None) -> None:
+    """Refuse an executor request before any work: a worker count < 1, both a scheduler and
+    a local cluster, Dask without ``dask.distributed``.  Every command that fans out
+    (``sweep``, ``fit``, ``predict``, ``sensitivity``) calls it first (``fit --workers 0``
+    meant every core, issue 39 item 5).
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local worker processes.
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    dask_workers : int, optional
+        Workers of a local Dask cluster.
+
+    Raises
+    ------
+    ValueError
+        Naming the option.
+    """
+    for option, n in (("--workers", workers), ("--dask-workers", dask_workers)):
+        if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+            raise ValueError(f"{option} = {n!r}: expected a whole number ≥ 1")
+    if scheduler is not None and dask_workers is not None:
+        raise ValueError("--scheduler and --dask-workers: give one, not both")
+    if scheduler is not None or dask_workers is not None:
+        _dask()
+
+
 def _warm_worker(tasks: list[dict[str, Any]]) -> None:
     for task in tasks:
         warm(task)
@@ -167,8 +197,7 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
     ValueError
         For both ``scheduler`` and ``dask_workers``, or a scheduler that cannot be reached.
     """
-    if scheduler is not None and dask_workers is not None:
-        raise ValueError("--scheduler and --dask-workers: give one, not both")
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if scheduler is not None or dask_workers is not None:
         distributed = _dask()
         cluster = None
@@ -181,8 +210,6 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
                                      f"({err})") from None
             else:
                 assert dask_workers is not None
-                if dask_workers < 1:
-                    raise ValueError(f"--dask-workers = {dask_workers}: expected ≥ 1")
                 stack.enter_context(_single_threaded_children())
                 cluster = distributed.LocalCluster(
                     n_workers=dask_workers, threads_per_worker=1, processes=True,
@@ -198,8 +225,6 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
             yield pool, n, f"dask ({where}, {n} workers)"
         return
     n = workers or os.cpu_count() or 1
-    if n < 1:
-        raise ValueError(f"--workers = {n}: expected ≥ 1")
     # the pool starts its processes on demand (spawn): keep the setting for its lifetime
     with _single_threaded_children():
         pool = cf.ProcessPoolExecutor(max_workers=n,
@@ -403,6 +428,7 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
         On Ctrl-C, after storing every result already returned.
     """
     t0 = time.perf_counter()
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if design is None:
         design = check_design(config, points=points, checked=checked)
     keys, structures = design.keys, design.structures
