@@ -30,8 +30,8 @@ def check_search(*, low: float, high: float, coarse_step: float, resolution: flo
     """Refuse a critical-speed search whose work is not bounded, before it starts.
 
     At most :data:`MAX_SEARCH_STEPS` speeds on the coarse scan of [low, high] and fine steps
-    per coarse step (a step-down staircase runs every one), a resolution of at least
-    :data:`SMALLEST_RESOLUTION` and at most the coarse step.
+    per coarse step (a step-down staircase runs every one), and a resolution of at least
+    :data:`SMALLEST_RESOLUTION`.
 
     Parameters
     ----------
@@ -59,9 +59,6 @@ def check_search(*, low: float, high: float, coarse_step: float, resolution: flo
 
     if not resolution >= SMALLEST_RESOLUTION:
         raise refuse("resolution", resolution, f"expected ≥ {SMALLEST_RESOLUTION * 1e3:g}")
-    if resolution > coarse_step:
-        raise refuse("resolution", resolution, f"expected ≤ the coarse step "
-                                               f"{coarse_step * 1e3:g}")
     if (high - low) / coarse_step > MAX_SEARCH_STEPS:
         raise refuse("coarse_step", coarse_step, f"expected ≥ {(high - low) * 1e3:g} / "
                                                  f"{MAX_SEARCH_STEPS} (speeds on the scan)")
