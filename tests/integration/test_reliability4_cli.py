@@ -470,3 +470,71 @@ def test_docs_outputs_md_lists_every_output_option_the_cli_declares() -> None:
     assert documented == set(_output_options())
     for command, option in documented:  # and each is declared to the one check
         assert _declared(command, option)
+
+
+# ------------------------------------------------------------------ item 7: smaller
+
+
+@pytest.mark.parametrize("schema", [
+    "CREATE TABLE results (id INTEGER PRIMARY KEY, value TEXT)",  # a name of ours
+    "CREATE TABLE points (x REAL); CREATE TABLE other (y TEXT)",
+    "CREATE TABLE inventory (item TEXT, count INTEGER)",
+])
+@pytest.mark.parametrize("command", ["sweep", "map", "predict", "sensitivity"])
+def test_a_foreign_sqlite_file_as_a_store_is_refused_and_left_untouched(
+        tmp_path: Path, no_work: None, schema: str, command: str) -> None:
+    """Was rc 1 ``no such column: key`` after switching the file to WAL."""
+    import sqlite3
+
+    foreign = tmp_path / "other.sqlite"
+    db = sqlite3.connect(foreign)
+    db.executescript(schema)
+    db.commit()
+    db.close()
+    before = foreign.read_bytes()
+    (tmp_path / "fit.toml").write_text(FIT_RECORD.format(variance="1e4"))
+    (tmp_path / "sweep.toml").write_text(SWEEP)
+    args = {"sweep": ["sweep", str(tmp_path / "sweep.toml"), "--store", str(foreign)],
+            "map": ["map", str(foreign)],
+            "predict": ["predict", str(tmp_path / "fit.toml"), "--store", str(foreign)],
+            "sensitivity": ["sensitivity", "--quantity", "linear-band", "--store",
+                            str(foreign)]}[command]
+    result = runner.invoke(app, args)
+    line = _one_line(result, "other.sqlite", "not a feeddrive sweep store")
+    assert result.exit_code == 2, line
+    assert foreign.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir() if "other" in p.name) == ["other.sqlite"]
+
+
+def test_analyze_says_how_short_a_window_it_judged(tmp_path: Path) -> None:
+    """A 16-sample record with a given command got a verdict with nothing about its length
+    (the command column's runs shorter than --min-segment are skipped, saying so)."""
+    rows = ["time [s],position [mm]"] + [f"{k * 1e-3:.3f},{k * 1e-3:.6f}" for k in range(16)]
+    (tmp_path / "s16.csv").write_text("\n".join(rows) + "\n")
+    result = runner.invoke(app, ["analyze", str(tmp_path / "s16.csv"), "--command-speed", "1",
+                                 "--smoothing", "5", "--json"])
+    assert result.exit_code == 0, result.output
+    import json
+
+    notes = json.loads(result.stdout)["notes"]
+    short = [n for n in notes if "shorter than --min-segment 1 s" in n]
+    assert len(short) == 1, notes
+    assert "16 samples (0.015 s)" in short[0] and "steady window of" in short[0]
+
+
+#: table position [mm] at 1.979 … 1.994 s of ``feeddrive simulate --table-speed 1 --duration 2
+#: --output t.csv`` (CDFS, wang2021): still accelerating to 1.9 mm/s
+ACCELERATING = [1.9170081, 1.918829118, 1.920662428, 1.92250742, 1.92436359, 1.926229825,
+                1.928104443, 1.929986149, 1.931874435, 1.933768699, 1.935667677, 1.937569705,
+                1.939473514, 1.941378609, 1.943284411, 1.945189511]
+
+
+def test_a_window_too_short_for_the_metrics_names_the_file(tmp_path: Path) -> None:
+    """Was ``error: window: only 7 samples …`` without the file."""
+    rows = ["time [s],position [mm]"] + [f"{1.979 + k * 1e-3:.3f},{x!r}"
+                                         for k, x in enumerate(ACCELERATING)]
+    (tmp_path / "s16.csv").write_text("\n".join(rows) + "\n")
+    result = runner.invoke(app, ["analyze", str(tmp_path / "s16.csv"), "--command-speed", "1",
+                                 "--smoothing", "5"])
+    line = _one_line(result, "s16.csv", "samples between", "1.979–1.994 s")
+    assert result.exit_code == 2, line

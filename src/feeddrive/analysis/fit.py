@@ -260,7 +260,8 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
                 raise FitError(f"{src}: column {col!r}: a torque needs the motor torque "
                                "constant to compare with the model's current")
             torque = table.numbers(col) * _TORQUE_UNITS[unit]
-            table.check_magnitude(table.find(col) or 0, torque, "torque", unit)
+            table.check_magnitude(table.find(col) or 0, torque, "torque", unit,
+                                  _TORQUE_UNITS[unit])
             values = torque / torque_constant
             name = "screw_current"
         else:

@@ -358,12 +358,12 @@ class CsvTable:
             used = unit if unit is not None else header_unit or default_unit
             factor = unit_factor(used, dimension, what=what)
             values = self.numbers(name) * factor
-            self.check_magnitude(i, values, dimension, used)
+            self.check_magnitude(i, values, dimension, used, factor)
             return values, self.names[i], used
         raise self._missing(names)
 
     def check_magnitude(self, i: int, values: np.ndarray, dimension: str,
-                        unit: str) -> None:
+                        unit: str, factor: float) -> None:
         """Refuse a value beyond :data:`LARGEST_MAGNITUDE` of its dimension, naming its line.
 
         Parameters
@@ -376,6 +376,8 @@ class CsvTable:
             A key of :data:`LARGEST_MAGNITUDE`.
         unit : str
             The unit the file gives, for the message.
+        factor : float
+            SI value of one ``unit``.
 
         Raises
         ------
@@ -389,7 +391,7 @@ class CsvTable:
             raise MeasuredDataError(
                 self.source, int(self.lines[k]),
                 f"column {self.names[i]!r}: {self.cell(i, k)} [{unit}] is beyond any feed "
-                f"drive (|{dimension}| ≤ {limit:g} in SI units); check the file's unit")
+                f"drive (|{dimension}| ≤ {limit / factor:g} {unit}); check the file's unit")
 
 
 def _detect_separator(header: str) -> str | None:
