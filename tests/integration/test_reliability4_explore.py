@@ -258,3 +258,98 @@ def test_a_seeded_fuzz_of_300_requests_over_every_route_never_answers_500(
     assert len(statuses) >= 300 and statuses.count(0) == 0  # every request answered
     assert {200, 404, 422} <= set(statuses)
     _no_traceback(capfd)
+
+
+# ------------------------------------------------------------------ item 7: half-open sockets
+
+
+@pytest.fixture()
+def patient_server(monkeypatch: pytest.MonkeyPatch) -> Iterator[ExplorerServer]:
+    """A server whose read timeout is far longer than any wait below: what frees a slot
+    there is the explorer's own doing, not a timeout."""
+    monkeypatch.setattr(srv_mod.Handler, "timeout", 120.0)
+    monkeypatch.setattr(srv_mod, "MAX_CONNECTIONS", CONNECTIONS)
+    srv = serve_in_thread(0, warm_up=False)
+    yield srv
+    srv.shutdown()
+    srv.server_close()
+
+
+def _hold(srv: ExplorerServer, n: int, partial: bool) -> list[socket.socket]:
+    """``n`` connections that send nothing (or half a request line) and stay open."""
+    held = []
+    for _ in range(n):
+        s = socket.create_connection(("127.0.0.1", srv.port), timeout=30)
+        if partial:
+            s.sendall(b"GET /api/info HTTP/1.1\r\nHost: 127.0.0.1\r\n")
+        held.append(s)
+    deadline = time.monotonic() + 10
+    while srv._slots._value > 0 and time.monotonic() < deadline:  # all accepted
+        time.sleep(0.01)
+    return held
+
+
+def test_half_open_sockets_cannot_hold_the_explorer(
+        patient_server: ExplorerServer, capfd: pytest.CaptureFixture[str]) -> None:
+    """A local process that keeps every slot with idle connections (and opens them again)
+    was answered 503 for every real request until its sockets timed out; now a connection
+    waiting for its request gives its slot to a new one, oldest first."""
+    srv = patient_server
+    info = (f"GET /api/info HTTP/1.1\r\nHost: 127.0.0.1:{srv.port}\r\n"
+            "Connection: close\r\n\r\n").encode()
+    held: list[socket.socket] = []
+    try:
+        for round_ in range(3):  # the process reconnects what it lost
+            held += _hold(srv, CONNECTIONS, partial=round_ % 2 == 1)
+            status, _ = raw(srv, info)
+            assert status == 200, round_
+        closed = 0
+        for s in held:
+            s.settimeout(0.5)
+            try:
+                closed += s.recv(65536) == b""
+            except (TimeoutError, ConnectionResetError):
+                pass
+        assert closed >= 3  # evicted, oldest first; the rest still held
+    finally:
+        for s in held:
+            s.close()
+    _no_traceback(capfd)
+
+
+def test_connections_busy_with_requests_are_never_evicted(
+        patient_server: ExplorerServer, monkeypatch: pytest.MonkeyPatch,
+        capfd: pytest.CaptureFixture[str]) -> None:
+    """Only a connection waiting for its request gives way: with every slot computing an
+    answer, one more connection is answered 503 at once, and every busy one is answered."""
+    import threading
+
+    srv = patient_server
+    release = threading.Event()
+    entered = threading.Semaphore(0)
+    original = srv_mod.check
+
+    def slow_check(settings: Any) -> Any:
+        entered.release()
+        release.wait(60)
+        return original(settings)
+
+    monkeypatch.setattr(srv_mod, "check", slow_check)
+    answers: list[int] = []
+
+    def busy() -> None:
+        answers.append(request(srv, "POST", "/api/check", {"settings": {}})[0])
+
+    threads = [threading.Thread(target=busy) for _ in range(CONNECTIONS)]
+    for t in threads:
+        t.start()
+    for _ in range(CONNECTIONS):
+        assert entered.acquire(timeout=30)
+    status, body = raw(srv, f"GET /api/info HTTP/1.1\r\nHost: 127.0.0.1:{srv.port}\r\n"
+                       "Connection: close\r\n\r\n".encode())
+    assert status == 503 and b"too many connections" in body
+    release.set()
+    for t in threads:
+        t.join(60)
+    assert answers == [200] * CONNECTIONS
+    _no_traceback(capfd)
