@@ -453,8 +453,10 @@ class _Evaluator:
     def __init__(self, base: DriveParameters, drive: str, table_position: float,
                  paths: Sequence[str], start: np.ndarray, experiments: Sequence[Experiment],
                  weights: Mapping[str, float], pool: cf.Executor | None,
-                 progress: Callable[[str], None] | None, label: str = "") -> None:
+                 progress: Callable[[str], None] | None, label: str = "",
+                 ctrl_c: Any = None) -> None:
         self.label = label
+        self.ctrl_c = ctrl_c  # sweep.executors.CtrlC: nothing handed out after a Ctrl-C
         self.base, self.drive, self.position = base, drive, table_position
         self.paths, self.start = list(paths), start
         self.experiments = list(experiments)
@@ -463,6 +465,7 @@ class _Evaluator:
         self.scale = []
         self.evaluations = 0
         self.best: tuple[float, np.ndarray] | None = None
+        self.best_residual: np.ndarray | None = None
         for e in self.experiments:
             for name in e.signals:
                 self.scale.append(weights.get(name, 1.0) / e.noise[name])
@@ -506,9 +509,16 @@ class _Evaluator:
         todo = list({k: th for k, th in todo}.items())
         tasks = [(k, self._tasks(np.asarray(th, dtype=float))) for k, th in todo]
         flat = [(k, i, t) for k, ts in tasks if ts is not None for i, t in enumerate(ts)]
+        if self.ctrl_c is not None and flat:
+            self.ctrl_c.check()  # nothing new is simulated after a Ctrl-C
         if self.pool is not None and len(flat) > 1:
             futures = [self.pool.submit(simulate_experiment, t) for _, _, t in flat]
-            results = [f.result() for f in futures]
+            try:
+                results = [f.result() for f in futures]
+            except BaseException:  # Ctrl-C: what has not started never starts
+                for f in futures:
+                    f.cancel()
+                raise
         else:
             results = [simulate_experiment(t) for _, _, t in flat]
         by_key: dict[bytes, list[dict[str, Any]]] = {}
@@ -521,11 +531,18 @@ class _Evaluator:
             cost = 0.5 * float(r @ r)
             if self.best is None or cost < self.best[0]:
                 self.best = (cost, np.asarray(th, dtype=float).copy())
+                self.best_residual = r
         if len(self._cache) > 256:
             for k in list(self._cache)[:128]:
                 self._cache.pop(k)
         return [self._cache[k] if k in self._cache else self.batch([th])[0]
                 for k, th in zip(keys, thetas, strict=True)]
+
+    def remember(self, theta: np.ndarray, residual: np.ndarray | None) -> None:
+        """Keep a residual vector already computed at ``theta`` (the best point's), so that
+        reading it again simulates nothing."""
+        if residual is not None:
+            self._cache[np.asarray(theta, dtype=float).tobytes()] = residual
 
     def residual(self, theta: np.ndarray) -> np.ndarray:
         r = self.batch([theta])[0]
@@ -1055,17 +1072,19 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     longest = max(e.span for e in experiments)
     stages = horizons(longest) if horizon_continuation else [longest]
 
-    def run(pool: cf.Executor | None) -> FitResult:
+    def run(pool: cf.Executor | None, ctrl_c: Any = None) -> FitResult:
         theta = theta0
         interrupted = False
         message = ""
         evaluations = 0
         t0 = _time.perf_counter()
         ev = None
+        done: tuple[_Evaluator, list[Experiment], float] | None = None  # last stage run
         for k, h in enumerate(stages, start=1):
             stage = [e if e.span <= h else _cut(e, h) for e in experiments]
             ev = _Evaluator(base, drive, table_position, free, start, stage, weights, pool,
-                            say, label=f"stage {k}/{len(stages)} (first {h:g} s)")
+                            say, label=f"stage {k}/{len(stages)} (first {h:g} s)",
+                            ctrl_c=ctrl_c)
             from scipy.optimize import least_squares  # (imported where used)
 
             try:
@@ -1077,47 +1096,72 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
                 theta = np.clip(res.x, lb, ub)
                 message = str(res.message)
             except KeyboardInterrupt:
-                interrupted = True
-                if ev.best is None and k == 1:
-                    raise
-                if ev.best is not None:
-                    theta = ev.best[1]
+                interrupted = True  # (_summarise counts the reported stage's evaluations)
+                if ev.best is None:  # nothing evaluated in this stage: the last one's best
+                    if done is None:
+                        raise
+                    ev, stage, h = done
+                    evaluations -= ev.evaluations  # counted when that stage ended
+                assert ev.best is not None
+                theta = ev.best[1]
+                ev.remember(theta, ev.best_residual)
                 message = (f"interrupted (Ctrl-C) in stage {k} of {len(stages)}: the best "
-                           "point so far")
-            evaluations += ev.evaluations
-            if interrupted:
+                           f"point so far, its residuals over the first {h:g} s")
+                reported = stage
                 break
+            done = (ev, stage, h)
+            evaluations += ev.evaluations
         assert ev is not None
-        final = ev if not interrupted and stages[-1] >= longest else _Evaluator(
+        # after a Ctrl-C nothing more is simulated: the stage's own best point and residuals
+        final = ev if interrupted or stages[-1] >= longest else _Evaluator(
             base, drive, table_position, free, start, experiments, weights, pool, say,
             label="final")
+        if not interrupted:
+            reported = list(experiments)
         say(f"search done: {evaluations} evaluations in {_time.perf_counter() - t0:.1f} s")
         try:
-            return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
+            return _summarise(final, theta, start, lb, ub, units_, reported, base, drive,
                               table_position, confidence, interrupted, message, profile, say,
                               evaluations)
         except KeyboardInterrupt:  # during the intervals: the estimates without them
-            if final.best is not None and final.best[0] < 0.5 * float(
-                    final.batch([theta])[0] @ final.batch([theta])[0]):
-                theta = final.best[1]
-            return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
+            if final.best is not None and final.best_residual is not None:
+                theta = final.best[1]  # evaluated already: nothing more is simulated
+                final.remember(theta, final.best_residual)
+            return _summarise(final, theta, start, lb, ub, units_, reported, base, drive,
                               table_position, confidence, True,
                               "interrupted (Ctrl-C) while computing the intervals",
                               profile, say, evaluations)
 
+    from ..sweep.executors import CtrlC, executor
+
     if workers is None and dask_workers is None and scheduler is None:
-        return run(None)
-    from ..sweep.executors import executor
+        with CtrlC() as ctrl_c:
+            return run(None, ctrl_c)
     from ..sweep.quantities import warm
 
     warm_task = {"parameters": dumps(base), "drive": drive, "table_position": table_position,
                  "nut_speed": 0.0, "quantity": {"kind": "creep-trial", "table_speed": 1e-3,
                                                 "linear": False}}
     warm(warm_task)
-    with executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers,
-                  warm_tasks=[warm_task]) as (pool, n, where):
-        say(f"Jacobian columns on {where}")
-        return run(pool)
+    try:
+        with CtrlC() as ctrl_c, executor(workers=workers, scheduler=scheduler,
+                                         dask_workers=dask_workers,
+                                         warm_tasks=[warm_task]) as (pool, n, where):
+            say(f"Jacobian columns on {where}")
+            result = run(pool, ctrl_c)
+            if result.interrupted:  # leave the pool by an exception: its workers are stopped
+                raise _Interrupted(result)  # at once, not left to finish what was queued
+            return result
+    except _Interrupted as stop:
+        return stop.result
+
+
+class _Interrupted(Exception):
+    """Carries an interrupted fit's result out of its executor (which stops its workers)."""
+
+    def __init__(self, result: FitResult) -> None:
+        super().__init__("interrupted")
+        self.result = result
 
 
 def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndarray,

@@ -163,13 +163,32 @@ def _fail(message: str, code: int) -> typer.Exit:
     return typer.Exit(code=code)
 
 
+def _from_ctrl_c(err: BaseException) -> bool:
+    """Whether ``err`` is a Ctrl-C in disguise: numba reports a ``KeyboardInterrupt`` raised
+    while compiled code calls back into Python as a ``SystemError`` caused by it."""
+    seen: set[int] = set()
+    cause: BaseException | None = err
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
+
+
+def _stopped() -> typer.Exit:
+    err_console.print("interrupted (Ctrl-C)", markup=False, highlight=False, soft_wrap=True)
+    return interrupted()
+
+
 def user_errors(fn: F) -> F:
     """Turn every expected failure into a one-line message on stderr, never a traceback.
 
     The output options declared with :func:`outputs` are checked first, before any work.
     Refused input or output destination: exit status 2.  Work that could not finish
     (simulation failure, out of memory, nesting too deep, an I/O error): exit status 1.
-    The message names the file involved.
+    The message names the file involved.  A Ctrl-C that the command does not report itself is
+    one line and exit status 130 (Typer ended such a command with 130 and no word).
     """
 
     @functools.wraps(fn)
@@ -191,7 +210,11 @@ def user_errors(fn: F) -> F:
             files = _files_of(kwargs)
             raise _fail(f"{files + ': ' if files else ''}nested too deeply to process",
                         EXIT_REFUSED) from None
+        except KeyboardInterrupt:
+            raise _stopped() from None
         except Exception as err:
+            if _from_ctrl_c(err):
+                raise _stopped() from None
             # SimulationError and sqlite3.Error, checked without importing either at start-up
             simulate = sys.modules.get("feeddrive.engine.simulate")
             if simulate is not None and isinstance(err, simulate.SimulationError):
