@@ -12,6 +12,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -225,3 +226,112 @@ def test_a_ctrl_c_a_command_does_not_report_is_one_line_and_130(
     result = runner.invoke(app, ["params", "check", str(tmp_path / "p.toml")])
     assert result.exit_code == 130
     assert result.stderr.strip().splitlines() == ["interrupted (Ctrl-C)"]
+
+
+SLOW_SWEEP = """
+name = "slow"
+drive = "cdfs"
+[quantity]
+kind = "creep-trial"
+initial_duration = 60.0
+max_duration = 60.0
+linear = false
+[axes]
+table_speed = [0.5, 1.0, 1.5, 2.0, 2.5, 3.0]
+table_position = [250, 300, 350, 400, 450, 500, 550, 600]
+"""
+
+FIT_RECORD = """extends = "wang2021"
+name = "fitted"
+[fit]
+drive = "cdfs"
+table_position = 0.4
+free = ["controller.velocity_integral_gain"]
+estimates = [3925.28]
+covariance = [[40000.0]]
+interrupted = false
+"""
+
+
+def _stored(path: Path) -> int:
+    import sqlite3
+
+    try:
+        db = sqlite3.connect(path, timeout=30)
+        try:
+            return int(db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
+        finally:
+            db.close()
+    except sqlite3.Error:
+        return 0
+
+
+def _descendants(pid: int) -> set[int]:
+    parents: dict[int, int] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+                cmd = (entry / "cmdline").read_bytes()
+            except OSError:
+                continue
+            if b"resource_tracker" not in cmd:
+                parents[int(entry.name)] = int(stat.rsplit(")", 1)[1].split()[1])
+    out: set[int] = set()
+    frontier = {pid}
+    while frontier:
+        frontier = {p for p, pp in parents.items() if pp in frontier} - out
+        out |= frontier
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", ["sweep", "predict"])
+@pytest.mark.parametrize("pool", ["--workers", "--dask-workers"])
+def test_ctrl_c_on_a_running_sweep_or_prediction_stops_at_once_and_keeps_every_result(
+        tmp_path: Path, command: str, pool: str) -> None:
+    """Ctrl-C to the parent alone, points in flight on 2 workers (a local pool or a Dask
+    LocalCluster): status 130 in one line, every reported point in the store, at most one
+    point per worker stored after the signal (one that had returned), none after the exit,
+    and no worker left (a Dask cluster's workers are killed, not waited for: its close took
+    1.5–4 s while they finished their compiled points)."""
+    if pool == "--dask-workers":
+        pytest.importorskip("distributed")
+    store = tmp_path / "s.sqlite"
+    if command == "sweep":
+        (tmp_path / "c.toml").write_text(SLOW_SWEEP)
+        args = ["sweep", "c.toml", "--store", str(store), pool, "2"]
+    else:
+        (tmp_path / "fit.toml").write_text(FIT_RECORD)
+        args = ["predict", "fit.toml", "--samples", "12", "--store", str(store), pool, "2"]
+    proc = subprocess.Popen([sys.executable, "-m", "feeddrive", *args], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and proc.poll() is None and _stored(store) < 1:
+        time.sleep(0.05)
+    assert proc.poll() is None, proc.communicate()
+    workers = _descendants(proc.pid)
+    assert len(workers) >= 2
+    at_signal = _stored(store)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("interrupted"), err
+    at_exit = _stored(store)
+    assert at_exit - at_signal <= 2  # one returned point per worker at most
+    if command == "sweep":
+        (kept,) = re.findall(r"\((\d+) computed this run", err)
+        assert at_exit == int(kept)
+    time.sleep(1.0)
+    assert not [p for p in workers if _alive(p)]
+    assert _stored(store) == at_exit  # nothing computes on after the exit

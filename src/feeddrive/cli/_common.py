@@ -172,7 +172,7 @@ def _from_ctrl_c(err: BaseException) -> bool:
         if isinstance(cause, KeyboardInterrupt):
             return True
         seen.add(id(cause))
-        cause = cause.__cause__ or cause.__context__
+        cause = cause.__cause__ or (None if cause.__suppress_context__ else cause.__context__)
     return False
 
 
@@ -213,7 +213,7 @@ def user_errors(fn: F) -> F:
         except KeyboardInterrupt:
             raise _stopped() from None
         except Exception as err:
-            if _from_ctrl_c(err):
+            if not isinstance(err, typer.Exit) and _from_ctrl_c(err):
                 raise _stopped() from None
             # SimulationError and sqlite3.Error, checked without importing either at start-up
             simulate = sys.modules.get("feeddrive.engine.simulate")
