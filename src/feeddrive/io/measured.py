@@ -377,7 +377,7 @@ class CsvTable:
         unit : str
             The unit the file gives, for the message.
         factor : float
-            SI value of one ``unit``.
+            SI value of one ``unit`` [SI unit of the dimension].
 
         Raises
         ------
