@@ -29,9 +29,9 @@ def check_search(*, low: float, high: float, coarse_step: float, resolution: flo
                  names: dict[str, str] | None = None) -> None:
     """Refuse a critical-speed search whose work is not bounded, before it starts.
 
-    At most :data:`MAX_SEARCH_STEPS` speeds on the coarse scan of [low, high] and fine steps
+    At most ``MAX_SEARCH_STEPS`` speeds on the coarse scan of [low, high] and fine steps
     per coarse step (a step-down staircase runs every one), and a resolution of at least
-    :data:`SMALLEST_RESOLUTION`.
+    ``SMALLEST_RESOLUTION``.
 
     Parameters
     ----------

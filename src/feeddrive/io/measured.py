@@ -364,7 +364,7 @@ class CsvTable:
 
     def check_magnitude(self, i: int, values: np.ndarray, dimension: str,
                         unit: str, factor: float) -> None:
-        """Refuse a value beyond :data:`LARGEST_MAGNITUDE` of its dimension, naming its line.
+        """Refuse a value beyond ``LARGEST_MAGNITUDE`` of its dimension, naming its line.
 
         Parameters
         ----------
@@ -373,7 +373,7 @@ class CsvTable:
         values : numpy.ndarray
             The column in SI [SI unit of the dimension].
         dimension : str
-            A key of :data:`LARGEST_MAGNITUDE`.
+            A key of ``LARGEST_MAGNITUDE``.
         unit : str
             The unit the file gives, for the message.
         factor : float

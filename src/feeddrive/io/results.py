@@ -160,7 +160,7 @@ def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
     fails (a full disk), its close fails too and h5py crashes the process (SIGSEGV, h5py
     3.16 / HDF5 1.14, issue 39 item 1); now a full disk is an ordinary ``OSError``.  The
     memory this takes (one copy of the file) is within the output budget
-    (:func:`~feeddrive.engine.budget.check_output_memory` counts two copies of the record).
+    (``feeddrive.engine.budget.check_output_memory`` counts two copies of the record).
 
     Parameters
     ----------
