@@ -10,6 +10,10 @@ MM_PER_S = 1e-3  # m/s per mm/s
 UM = 1e-6  # m per µm
 N_PER_UM = 1e6  # N/m per N/µm
 
+#: the largest speed any input may have [m/s]: no feed drive is faster, so a larger one is
+#: a wrong unit or a damaged file (measured data, CLI speeds; issue 39 items 4 and 5)
+LARGEST_SPEED = 100.0
+
 # SI unit → (engineering unit, factor) for exports and printing
 ENGINEERING = {"m": ("mm", 1e3), "m/s": ("mm/s", 1e3), "N/m": ("N/µm", 1e-6)}
 

@@ -152,7 +152,10 @@ def test_slow_clients_are_timed_out_and_connections_capped(
     while server._slots._value > 0 and time.monotonic() < deadline:  # all accepted
         time.sleep(0.01)
     status, body = raw(server, b"GET /api/info HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
-    assert status == 503 and b"too many connections" in body  # over the cap, at once
+    # over the cap, the slow connection that waited longest gives way and this one is served
+    # at once (issue 39 item 7: a 503 here let such clients hold the server until their
+    # timeout; with every slot busy computing it is still a 503, test_reliability4_explore)
+    assert status == 200, body
     started = time.monotonic()
     for s in slow:  # each is closed by the server after its read timeout
         s.settimeout(READ_TIMEOUT + 5)

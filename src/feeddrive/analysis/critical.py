@@ -555,6 +555,8 @@ def critical_speed_from_rest(
         raise ValueError(f"speed_range = {speed_range!r}: expected low < high [m/s]")
     _check_speed("resolution", resolution)
     _check_speed("coarse_step", coarse_step)
+    protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=resolution,
+                          names={"low": "speed_range[0]", "high": "speed_range[1]"})
     rule = rule or VerdictRule()
     simulated = 0.0
 
@@ -850,6 +852,10 @@ def critical_speed_stepdown(
     _check_speed("step", step)
     if hi <= lo:
         raise ValueError(f"start_speed = {hi!r}: expected above lowest_speed = {lo!r} [m/s]")
+    _check_speed("coarse_step", coarse_step)
+    protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=step,
+                          names={"low": "lowest_speed", "high": "start_speed",
+                                 "resolution": "step"})
     rule = rule or VerdictRule()
     coarse = _grid(lo, hi, coarse_step)[::-1]
     runs: list[Simulation] = []  # the coarse walk's last run: the fine walks start from it

@@ -72,6 +72,12 @@ PROFILE_ABOVE = 0.25
 MAX_RELATIVE_HALF_WIDTH = 0.5
 #: relative forward-difference step of the Jacobian
 JACOBIAN_STEP = 1e-3
+#: the range of a signal's weight [-]: its residuals are already divided by the data's own
+#: noise level, so a factor of 10⁶ either way is already extreme; 1e308 overflowed the sum of
+#: squares to inf and the fit to NaN (issue 39 item 5)
+WEIGHT_RANGE = (1e-6, 1e6)
+#: most residual evaluations per stage (each simulates every trace)
+MAX_EVALUATIONS = 100_000
 
 _TORQUE_UNITS = {"N m": 1.0, "Nm": 1.0, "N·m": 1.0, "mN m": 1e-3}
 
@@ -203,8 +209,12 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     ------
     FitError
         For a trace that cannot be fitted (no signal, no reference, bad cells).
+    ValueError
+        For a gap in the record (the rule of ``analyze``:
+        :func:`~feeddrive.analysis.trace_input.resample_size`), naming its line.
     """
     from ..io.measured import COMMAND_COLUMNS, check_increasing, read_csv_table
+    from .trace_input import resample_size
 
     table = read_csv_table(path, sep=None)
     src = table.source
@@ -215,6 +225,9 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
         raise table._missing(["time"])
     t_raw, _, _ = table.quantity(["time"], "time", unit=None, default_unit="s")
     check_increasing(table, t_raw, "time")
+    # a gap (one row at 1e6 s after a 2-s record) would make the reference grid huge:
+    # refused as `analyze` refuses it, naming the line, before any work (issue 39 item 3)
+    resample_size(t_raw, float(np.median(np.diff(t_raw))), lines=table.lines, source=src)
     t0 = float(t_raw[0])
     if not (math.isfinite(record_start) and record_start >= 0):
         raise FitError(f"--record-start {record_start!r}: expected a time ≥ 0 [s]")
@@ -246,7 +259,10 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
             if not torque_constant:
                 raise FitError(f"{src}: column {col!r}: a torque needs the motor torque "
                                "constant to compare with the model's current")
-            values = table.numbers(col) * _TORQUE_UNITS[unit] / torque_constant
+            torque = table.numbers(col) * _TORQUE_UNITS[unit]
+            table.check_magnitude(table.find(col) or 0, torque, "torque", unit,
+                                  _TORQUE_UNITS[unit])
+            values = torque / torque_constant
             name = "screw_current"
         else:
             values, _, _ = table.quantity([col], dim, unit=None, default_unit=default)
@@ -445,8 +461,10 @@ class _Evaluator:
     def __init__(self, base: DriveParameters, drive: str, table_position: float,
                  paths: Sequence[str], start: np.ndarray, experiments: Sequence[Experiment],
                  weights: Mapping[str, float], pool: cf.Executor | None,
-                 progress: Callable[[str], None] | None, label: str = "") -> None:
+                 progress: Callable[[str], None] | None, label: str = "",
+                 ctrl_c: Any = None) -> None:
         self.label = label
+        self.ctrl_c = ctrl_c  # sweep.executors.CtrlC: nothing handed out after a Ctrl-C
         self.base, self.drive, self.position = base, drive, table_position
         self.paths, self.start = list(paths), start
         self.experiments = list(experiments)
@@ -455,6 +473,7 @@ class _Evaluator:
         self.scale = []
         self.evaluations = 0
         self.best: tuple[float, np.ndarray] | None = None
+        self.best_residual: np.ndarray | None = None
         for e in self.experiments:
             for name in e.signals:
                 self.scale.append(weights.get(name, 1.0) / e.noise[name])
@@ -501,9 +520,16 @@ class _Evaluator:
         todo = list({k: th for k, th in todo}.items())
         tasks = [(k, self._tasks(np.asarray(th, dtype=float))) for k, th in todo]
         flat = [(k, i, t) for k, ts in tasks if ts is not None for i, t in enumerate(ts)]
+        if self.ctrl_c is not None and flat:
+            self.ctrl_c.check()  # nothing new is simulated after a Ctrl-C
         if self.pool is not None and len(flat) > 1:
             futures = [self.pool.submit(simulate_experiment, t) for _, _, t in flat]
-            results = [f.result() for f in futures]
+            try:
+                results = [f.result() for f in futures]
+            except BaseException:  # Ctrl-C: what has not started never starts
+                for f in futures:
+                    f.cancel()
+                raise
         else:
             results = [simulate_experiment(t) for _, _, t in flat]
         by_key: dict[bytes, list[dict[str, Any]]] = {}
@@ -516,11 +542,18 @@ class _Evaluator:
             cost = 0.5 * float(r @ r)
             if self.best is None or cost < self.best[0]:
                 self.best = (cost, np.asarray(th, dtype=float).copy())
+                self.best_residual = r
         if len(self._cache) > 256:
             for k in list(self._cache)[:128]:
                 self._cache.pop(k)
         return [self._cache[k] if k in self._cache else self.batch([th])[0]
                 for k, th in zip(keys, thetas, strict=True)]
+
+    def remember(self, theta: np.ndarray, residual: np.ndarray | None) -> None:
+        """Keep a residual vector already computed at ``theta`` (the best point's), so that
+        reading it again simulates nothing."""
+        if residual is not None:
+            self._cache[np.asarray(theta, dtype=float).tobytes()] = residual
 
     def residual(self, theta: np.ndarray) -> np.ndarray:
         r = self.batch([theta])[0]
@@ -1005,10 +1038,18 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
         if name not in MEASURABLE:
             raise FitError(f"--weight {name}: not a measurable signal; expected one of "
                            f"{', '.join(MEASURABLE)}")
-        if not (math.isfinite(w) and w > 0):
-            raise FitError(f"--weight {name}={w!r}: expected a weight > 0")
+        if not (math.isfinite(w) and WEIGHT_RANGE[0] <= w <= WEIGHT_RANGE[1]):
+            raise FitError(f"--weight {name}={w!r}: expected a weight in "
+                           f"[{WEIGHT_RANGE[0]:g}, {WEIGHT_RANGE[1]:g}]")
     if not (0 < confidence < 1):
         raise FitError(f"confidence = {confidence!r}: expected a fraction in (0, 1)")
+    if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, int) or \
+            not 1 <= max_evaluations <= MAX_EVALUATIONS:
+        raise FitError(f"--max-evaluations {max_evaluations!r}: expected a whole number in "
+                       f"[1, {MAX_EVALUATIONS}]")
+    from ..sweep.executors import check_executor
+
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     start = np.empty(len(free))
     lb = np.empty(len(free))
     ub = np.empty(len(free))
@@ -1045,17 +1086,19 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     longest = max(e.span for e in experiments)
     stages = horizons(longest) if horizon_continuation else [longest]
 
-    def run(pool: cf.Executor | None) -> FitResult:
+    def run(pool: cf.Executor | None, ctrl_c: Any = None) -> FitResult:
         theta = theta0
         interrupted = False
         message = ""
         evaluations = 0
         t0 = _time.perf_counter()
         ev = None
+        done: tuple[_Evaluator, list[Experiment], float] | None = None  # last stage run
         for k, h in enumerate(stages, start=1):
             stage = [e if e.span <= h else _cut(e, h) for e in experiments]
             ev = _Evaluator(base, drive, table_position, free, start, stage, weights, pool,
-                            say, label=f"stage {k}/{len(stages)} (first {h:g} s)")
+                            say, label=f"stage {k}/{len(stages)} (first {h:g} s)",
+                            ctrl_c=ctrl_c)
             from scipy.optimize import least_squares  # (imported where used)
 
             try:
@@ -1067,47 +1110,72 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
                 theta = np.clip(res.x, lb, ub)
                 message = str(res.message)
             except KeyboardInterrupt:
-                interrupted = True
-                if ev.best is None and k == 1:
-                    raise
-                if ev.best is not None:
-                    theta = ev.best[1]
+                interrupted = True  # (_summarise counts the reported stage's evaluations)
+                if ev.best is None:  # nothing evaluated in this stage: the last one's best
+                    if done is None:
+                        raise
+                    ev, stage, h = done
+                    evaluations -= ev.evaluations  # counted when that stage ended
+                assert ev.best is not None
+                theta = ev.best[1]
+                ev.remember(theta, ev.best_residual)
                 message = (f"interrupted (Ctrl-C) in stage {k} of {len(stages)}: the best "
-                           "point so far")
-            evaluations += ev.evaluations
-            if interrupted:
+                           f"point so far, its residuals over the first {h:g} s")
+                reported = stage
                 break
+            done = (ev, stage, h)
+            evaluations += ev.evaluations
         assert ev is not None
-        final = ev if not interrupted and stages[-1] >= longest else _Evaluator(
+        # after a Ctrl-C nothing more is simulated: the stage's own best point and residuals
+        final = ev if interrupted or stages[-1] >= longest else _Evaluator(
             base, drive, table_position, free, start, experiments, weights, pool, say,
             label="final")
+        if not interrupted:
+            reported = list(experiments)
         say(f"search done: {evaluations} evaluations in {_time.perf_counter() - t0:.1f} s")
         try:
-            return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
+            return _summarise(final, theta, start, lb, ub, units_, reported, base, drive,
                               table_position, confidence, interrupted, message, profile, say,
                               evaluations)
         except KeyboardInterrupt:  # during the intervals: the estimates without them
-            if final.best is not None and final.best[0] < 0.5 * float(
-                    final.batch([theta])[0] @ final.batch([theta])[0]):
-                theta = final.best[1]
-            return _summarise(final, theta, start, lb, ub, units_, experiments, base, drive,
+            if final.best is not None and final.best_residual is not None:
+                theta = final.best[1]  # evaluated already: nothing more is simulated
+                final.remember(theta, final.best_residual)
+            return _summarise(final, theta, start, lb, ub, units_, reported, base, drive,
                               table_position, confidence, True,
                               "interrupted (Ctrl-C) while computing the intervals",
                               profile, say, evaluations)
 
+    from ..sweep.executors import CtrlC, executor
+
     if workers is None and dask_workers is None and scheduler is None:
-        return run(None)
-    from ..sweep.executors import executor
+        with CtrlC() as ctrl_c:
+            return run(None, ctrl_c)
     from ..sweep.quantities import warm
 
     warm_task = {"parameters": dumps(base), "drive": drive, "table_position": table_position,
                  "nut_speed": 0.0, "quantity": {"kind": "creep-trial", "table_speed": 1e-3,
                                                 "linear": False}}
     warm(warm_task)
-    with executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers,
-                  warm_tasks=[warm_task]) as (pool, n, where):
-        say(f"Jacobian columns on {where}")
-        return run(pool)
+    try:
+        with CtrlC() as ctrl_c, executor(workers=workers, scheduler=scheduler,
+                                         dask_workers=dask_workers,
+                                         warm_tasks=[warm_task]) as (pool, n, where):
+            say(f"Jacobian columns on {where}")
+            result = run(pool, ctrl_c)
+            if result.interrupted:  # leave the pool by an exception: its workers are stopped
+                raise _Interrupted(result)  # at once, not left to finish what was queued
+            return result
+    except _Interrupted as stop:
+        return stop.result
+
+
+class _Interrupted(Exception):
+    """Carries an interrupted fit's result out of its executor (which stops its workers)."""
+
+    def __init__(self, result: FitResult) -> None:
+        super().__init__("interrupted")
+        self.result = result
 
 
 def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndarray,

@@ -79,7 +79,8 @@ def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
     ------
     ParameterError
         For a file without a ``[fit]`` table, a missing key, a covariance that does not match
-        the estimates or is not finite, or an interrupted fit.
+        the estimates, is not finite or is no covariance matrix (a negative variance), or an
+        interrupted fit.
     """
     p = Path(path)
     data = read_toml_file(p, field="FIT")
@@ -100,6 +101,7 @@ def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
     if not np.all(np.isfinite(cov)) or np.any(np.abs(cov) >= 1e299):
         raise ParameterError("fit.covariance", str(p), "not finite: a parameter was not "
                              "determined by the fit; fix it or fit better data first")
+    _check_covariance(cov, free, p)
     if rec.get("interrupted") is True:
         raise ParameterError("fit.interrupted", True, f"{p}: the fit was interrupted; its "
                              "covariance is not available")
@@ -107,6 +109,25 @@ def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
     return FitRecord(path=p, parameters=params, drive=str(rec["drive"]),
                      table_position=float(rec["table_position"]), free=tuple(free),
                      estimates=est, covariance=cov)
+
+
+def _check_covariance(cov: np.ndarray, free: list[str], path: Path) -> None:
+    """A covariance is symmetric and positive semi-definite: a negative variance (or a
+    negative eigenvalue beyond round-off) means nothing and was drawn from silently, clipped
+    to zero (issue 39 item 5)."""
+    scale = float(np.max(np.abs(np.diag(cov)))) if cov.size else 0.0
+    for k, name in enumerate(free):
+        if cov[k, k] < 0:
+            raise ParameterError("fit.covariance", float(cov[k, k]),
+                                 f"{path}: the variance of {name} is negative; expected a "
+                                 "covariance matrix (variances ≥ 0)")
+    if not np.allclose(cov, cov.T, rtol=1e-9, atol=1e-12 * scale):
+        raise ParameterError("fit.covariance", str(path), "not symmetric; expected a "
+                             "covariance matrix")
+    lowest = float(np.min(np.linalg.eigvalsh(cov))) if cov.size else 0.0
+    if lowest < -1e-9 * scale:
+        raise ParameterError("fit.covariance", str(path), f"not positive semi-definite "
+                             f"(an eigenvalue {lowest:.3g}); expected a covariance matrix")
 
 
 def _draw(record: FitRecord, samples: int, seed: int) -> tuple[list[dict[str, float]], int]:
@@ -308,15 +329,20 @@ def predict(fit_file: str | os.PathLike[str], *, samples: int = 100, seed: int =
         The percentiles and every draw's critical speed.
     """
     from ..sweep import SweepStore
-    from ..sweep.design import Axis, Point, SweepConfig
-    from ..sweep.executors import run_sweep
+    from ..sweep.design import MAX_POINTS, Axis, Point, SweepConfig
+    from ..sweep.executors import check_executor, run_sweep
     from ..sweep.quantities import QuantitySettings
     from ..sweep.store import point_key
     from . import protocol
 
-    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
-        raise ParameterError("--samples", samples, "expected a whole number ≥ 1")
-    record = read_fit_record(fit_file)
+    # everything is checked before the record is drawn from or a pool started (issue 39)
+    if isinstance(samples, bool) or not isinstance(samples, int) or \
+            not 1 <= samples <= MAX_POINTS:
+        raise ParameterError("--samples", samples, f"expected a whole number in [1, "
+                                                   f"{MAX_POINTS}] (as a sweep's design)")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ParameterError("--seed", seed, "expected a whole number ≥ 0")
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     spec: dict[str, Any] = {"kind": "critical-speed", "linear": False}
     if resolution is not None:
         spec["resolution"] = resolution * 1e3
@@ -324,7 +350,9 @@ def predict(fit_file: str | os.PathLike[str], *, samples: int = 100, seed: int =
     spec["low"], spec["high"] = lo * 1e3, hi * 1e3
     if max_duration is not None:
         spec["max_duration"] = max_duration
-    quantity = QuantitySettings.parse(spec)
+    quantity = QuantitySettings.parse(spec, names={"resolution": "--resolution",
+                                                   "low": "--low", "high": "--high"})
+    record = read_fit_record(fit_file)
     draws, refused = _draw(record, samples, seed)
     from .fit import free_parameter_bounds
 

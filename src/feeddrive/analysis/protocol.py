@@ -19,6 +19,52 @@ TRIAL_MAX_DURATION = 240.0  # [s] longest trial; still undecided then: 'undecide
 # item 8: the command scanned 0.01–5 mm/s and the sweep 0.02–3.02 mm/s)
 LINEAR_SPEED_RANGE = (0.01e-3, 5e-3)  # [m/s] log-spaced scan, edges bisected
 LINEAR_POINTS = 40  # [-] scan points
+# a search's work is bounded before it starts (issue 39 item 4): `predict --resolution
+# 1e-300` bisected forever (its speeds are rounded to 1e-12 m/s, so the bisection stalled)
+SMALLEST_RESOLUTION = RESOLUTION / 100  # [m/s] a hundredth of the paper's step
+MAX_SEARCH_STEPS = 2000  # [-] speeds on a coarse scan; fine steps per coarse step
+
+
+def check_search(*, low: float, high: float, coarse_step: float, resolution: float,
+                 names: dict[str, str] | None = None) -> None:
+    """Refuse a critical-speed search whose work is not bounded, before it starts.
+
+    At most ``MAX_SEARCH_STEPS`` speeds on the coarse scan of [low, high] and fine steps
+    per coarse step (a step-down staircase runs every one), and a resolution of at least
+    ``SMALLEST_RESOLUTION``.
+
+    Parameters
+    ----------
+    low, high : float
+        The speeds searched [m/s].
+    coarse_step : float
+        Step of the coarse scan [m/s].
+    resolution : float
+        Resolution of the bisection or fine staircase [m/s].
+    names : dict of str to str, optional
+        The name each of ``low``, ``high``, ``coarse_step``, ``resolution`` has in messages
+        (``--resolution``, ``quantity.resolution``); the keyword by default.
+
+    Raises
+    ------
+    ParameterError
+        Naming the setting, its value and the bound [mm/s].
+    """
+    from ..parameters import ParameterError
+
+    name = {k: k for k in ("low", "high", "coarse_step", "resolution")} | (names or {})
+
+    def refuse(key: str, value: float, expected: str) -> ParameterError:
+        return ParameterError(name[key], value * 1e3, f"{expected} [mm/s]")
+
+    if not resolution >= SMALLEST_RESOLUTION:
+        raise refuse("resolution", resolution, f"expected ≥ {SMALLEST_RESOLUTION * 1e3:g}")
+    if (high - low) / coarse_step > MAX_SEARCH_STEPS:
+        raise refuse("coarse_step", coarse_step, f"expected ≥ {(high - low) * 1e3:g} / "
+                                                 f"{MAX_SEARCH_STEPS} (speeds on the scan)")
+    if coarse_step / resolution > MAX_SEARCH_STEPS:
+        raise refuse("resolution", resolution, f"expected ≥ the coarse step "
+                                               f"{coarse_step * 1e3:g} / {MAX_SEARCH_STEPS}")
 
 
 def describe(start: str) -> str:

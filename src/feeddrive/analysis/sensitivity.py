@@ -323,10 +323,11 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     """
     from ..sweep import SweepStore
     from ..sweep.design import SweepConfig, _load_base
-    from ..sweep.executors import run_sweep
+    from ..sweep.executors import check_executor, run_sweep
     from ..sweep.quantities import QuantitySettings, evaluate
 
     say = progress or (lambda _t: None)
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if quantity not in ("critical-speed", "linear-band"):
         raise ParameterError("--quantity", quantity, "expected critical-speed or linear-band")
     if isinstance(params_source, DriveParameters):

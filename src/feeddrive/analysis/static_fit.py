@@ -19,6 +19,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
+from ..units import LARGEST_SPEED
 from .fit_statistics import (
     Estimate,
     correlation,
@@ -367,7 +368,7 @@ def fit_branch(speed: object, force: object, *, direction: str = "positive",
 
 
 #: largest |speed| [m/s] a friction test can hold (far above any feed drive)
-MAX_TEST_SPEED = 100.0
+MAX_TEST_SPEED = LARGEST_SPEED
 #: largest |force| [N] a friction test can hold
 MAX_TEST_FORCE = 1e7
 

@@ -878,7 +878,19 @@ def analyze_trace(
             c = _slope(ts[ts >= start], xs[ts >= start])
         else:
             c = given
-        m = creep_metrics(ts, vs, c, thresholds=thresholds)
+        where = f"{source + ': ' if source else ''}segment {ts[0]:.3f}–{ts[-1]:.3f} s"
+        try:
+            m = creep_metrics(ts, vs, c, thresholds=thresholds)
+        except ValueError as err:  # a steady window too short to judge: name the file
+            raise ValueError(f"{where}: {err}") from None
+        span = float(ts[-1] - ts[0])
+        if span < min_segment_time:  # only a given command judges a run this short
+            notes.append(
+                f"segment {ts[0]:.3f}–{ts[-1]:.3f} s: {ts.size} samples ({span:.3g} s), "
+                f"shorter than --min-segment {min_segment_time:g} s: its verdict rests on a "
+                f"steady window of {m.window_samples} samples "
+                f"({m.window_end - m.window_start:.3g} s) and misses any slower stick-slip "
+                "cycle; record longer for a reliable verdict")
         segments.append(TraceSegment(start=float(ts[0]), end=float(ts[-1]), command_speed=c,
                                      command_from=origin, metrics=m))
     if (len(segments) >= 2 and segments[0].command_from == "estimated"

@@ -55,6 +55,84 @@ EXIT_UNSTABLE = 3
 # the arguments that name files, in the order they are named in a message
 _FILE_ARGUMENTS = ("config", "store", "file", "fragments", "params_file", "static", "out", "output",
                    "plot")
+#: the arguments that name a command's inputs, which none of its outputs may replace
+_INPUT_ARGUMENTS = ("traces", "file", "fragments", "config", "store", "fit_file",
+                    "params_file", "profile_file", "static")
+#: an output option that names a folder (``reproduce --out``)
+FOLDER = "folder"
+#: an output option that names a store a rerun resumes from: an existing one is reopened,
+#: not replaced (``--store``)
+STORE = "store"
+_OUTPUTS = "feeddrive_outputs"
+
+
+def outputs(**declared: tuple[str, ...] | str) -> Callable[[F], F]:
+    """Declare a command's output options: the one output check (issue 39 item 4).
+
+    :func:`user_errors` checks every declared option that is given before the command's body
+    runs (:func:`~feeddrive.io.outputs.check_output_file`, or ``check_output_dir`` for a
+    folder): its format, its length (and that of the temporary name it is written under),
+    its folder, that it is no input of the command (:data:`_INPUT_ARGUMENTS`, and the outputs
+    declared before it), an existing file only with ``--force``, that it can be written.
+
+    Parameters
+    ----------
+    **declared : tuple of str or str
+        Parameter name → the extensions it takes (``PLOT_FORMATS``), :data:`FOLDER` or
+        :data:`STORE`; the option is ``--`` and the name (``_`` as ``-``).
+
+    Returns
+    -------
+    callable
+        The decorator; it records the declaration on the command function.
+    """
+    def declare(fn: F) -> F:
+        fn.__dict__[_OUTPUTS] = dict(declared)
+        return fn
+
+    return declare
+
+
+def declared_outputs(fn: Callable[..., Any]) -> dict[str, tuple[str, ...] | str]:
+    """A command's output options as :func:`outputs` declared them, by option (``--plot``).
+
+    Parameters
+    ----------
+    fn : callable
+        The command function (or a wrapper of it: the declaration travels with
+        ``functools.wraps``).
+
+    Returns
+    -------
+    dict of str to (tuple of str or str)
+        Option → formats, :data:`FOLDER` or :data:`STORE`.
+    """
+    return {f"--{name.replace('_', '-')}": kind
+            for name, kind in getattr(fn, _OUTPUTS, {}).items()}
+
+
+def _check_outputs(fn: Callable[..., Any], kwargs: dict[str, Any]) -> None:
+    from ..io.outputs import check_output_dir, check_output_file
+
+    declared = getattr(fn, _OUTPUTS, {})
+    inputs: list[Any] = []
+    for name in _INPUT_ARGUMENTS:
+        value = kwargs.get(name)
+        if name not in declared and value is not None:
+            inputs.extend(value if isinstance(value, list | tuple) else [value])
+    for name, kind in declared.items():
+        value = kwargs.get(name)
+        if value is None:
+            continue
+        option = f"--{name.replace('_', '-')}"
+        if kind == FOLDER:
+            check_output_dir(value, option=option)
+        elif kind == STORE:
+            check_output_file(value, option=option, inputs=inputs, force=True, formats=None)
+        else:
+            check_output_file(value, option=option, inputs=inputs,
+                              force=bool(kwargs.get("force", False)), formats=kind)
+        inputs.append(value)
 
 
 #: the longest a command's plain progress goes without a line when its output is not a
@@ -186,19 +264,38 @@ def _refusal(err: ValueError | FileNotFoundError) -> str:
         return str(err)
     option, unit, factor = edge
     return f"{option} = {value * factor:g} [{unit}]: {err.message}"  # type: ignore[union-attr]
+def _from_ctrl_c(err: BaseException) -> bool:
+    """Whether ``err`` is a Ctrl-C in disguise: numba reports a ``KeyboardInterrupt`` raised
+    while compiled code calls back into Python as a ``SystemError`` caused by it."""
+    seen: set[int] = set()
+    cause: BaseException | None = err
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or (None if cause.__suppress_context__ else cause.__context__)
+    return False
+
+
+def _stopped() -> typer.Exit:
+    err_console.print("interrupted (Ctrl-C)", markup=False, highlight=False, soft_wrap=True)
+    return interrupted()
 
 
 def user_errors(fn: F) -> F:
     """Turn every expected failure into a one-line message on stderr, never a traceback.
 
+    The output options declared with :func:`outputs` are checked first, before any work.
     Refused input or output destination: exit status 2.  Work that could not finish
     (simulation failure, out of memory, nesting too deep, an I/O error): exit status 1.
-    The message names the file involved.
+    The message names the file involved.  A Ctrl-C that the command does not report itself is
+    one line and exit status 130 (Typer ended such a command with 130 and no word).
     """
 
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
+            _check_outputs(fn, kwargs)
             return fn(*args, **kwargs)
         except (ParameterError, ValueError, FileNotFoundError) as err:
             raise _fail(_refusal(err), EXIT_REFUSED) from None
@@ -214,7 +311,11 @@ def user_errors(fn: F) -> F:
             files = _files_of(kwargs)
             raise _fail(f"{files + ': ' if files else ''}nested too deeply to process",
                         EXIT_REFUSED) from None
+        except KeyboardInterrupt:
+            raise _stopped() from None
         except Exception as err:
+            if not isinstance(err, typer.Exit) and _from_ctrl_c(err):
+                raise _stopped() from None
             # SimulationError and sqlite3.Error, checked without importing either at start-up
             simulate = sys.modules.get("feeddrive.engine.simulate")
             if simulate is not None and isinstance(err, simulate.SimulationError):

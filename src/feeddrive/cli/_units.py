@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+from .. import units
 from ..parameters import DriveParameters, ParameterError
 from ._common import MM, MM_PER_S, err_console
 
@@ -17,6 +18,9 @@ from ._common import MM, MM_PER_S, err_console
 # option looks like: 0.0005 meant 0.5 mm/s, 0.4 meant 400 mm.
 SMALLEST_PLAUSIBLE_SPEED_MM_S = 0.01
 SMALLEST_PLAUSIBLE_POSITION_MM = 1.0
+# A speed above 100 m/s is no feed drive's (the measured-data limit, io.measured): refused,
+# not exported or simulated (`export fmu --table-speed 1e300` was exported; issue 39 item 4)
+LARGEST_SPEED_MM_S = units.LARGEST_SPEED / MM_PER_S
 
 
 def warn(text: str) -> None:
@@ -29,12 +33,18 @@ def _finite(option: str, value: float, unit: str) -> float:
     return value
 
 
-def speed(option: str, value: float, *, positive: bool = False) -> float:
-    """``value`` [mm/s] → [m/s]; a non-zero magnitude below 0.01 mm/s draws a warning."""
+def speed(option: str, value: float, *, positive: bool = False, warn_small: bool = True
+          ) -> float:
+    """``value`` [mm/s] → [m/s]; a non-zero magnitude below 0.01 mm/s draws a warning (unless
+    ``warn_small`` is False: a resolution is small by nature), one above
+    :data:`LARGEST_SPEED_MM_S` is refused."""
     _finite(option, value, "mm/s")
     if positive and value <= 0.0:
         raise ParameterError(option, value, "expected a speed > 0 [mm/s]")
-    if 0.0 < abs(value) < SMALLEST_PLAUSIBLE_SPEED_MM_S:
+    if abs(value) > LARGEST_SPEED_MM_S:
+        raise ParameterError(option, value, f"expected |speed| ≤ {LARGEST_SPEED_MM_S:g} [mm/s] "
+                                            "(no feed drive is faster)")
+    if warn_small and 0.0 < abs(value) < SMALLEST_PLAUSIBLE_SPEED_MM_S:
         warn(f"{option} = {value:g} mm/s looks like a value in m/s "
              f"({value * 1e3:g} mm/s?); the CLI takes mm/s")
     return value * MM_PER_S

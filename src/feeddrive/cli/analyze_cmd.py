@@ -12,9 +12,9 @@ import typer
 
 from ..analysis.creep_window import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, describe_critical
-from ..io.outputs import PLOT_FORMATS, check_output_file
+from ..io.outputs import PLOT_FORMATS
 from ..parameters import ParameterError
-from ._common import MM_PER_S, app, console, print_json, user_errors
+from ._common import MM_PER_S, app, console, outputs, print_json, user_errors
 
 
 def _say(text: str) -> None:
@@ -26,6 +26,7 @@ _DEFAULTS = CreepThresholds()
 
 @app.command("analyze")
 @user_errors
+@outputs(plot=PLOT_FORMATS)
 def analyze_command(
     file: str = typer.Argument(..., help="CSV with time and table position."),
     command_speed: float | None = typer.Option(
@@ -76,9 +77,6 @@ def analyze_command(
                                 ("--min-segment", min_segment, "s")):
         if not (math.isfinite(value) and value > 0):
             raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
-    if plot:
-        check_output_file(plot, option="--plot", inputs=[file], force=force,
-                          formats=PLOT_FORMATS)
     thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,
                                  max_ripple_ratio=max_ripple_ratio)
     trace = read_position_trace(file, time_column=time_column, position_column=position_column,

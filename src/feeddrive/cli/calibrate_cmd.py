@@ -8,15 +8,23 @@ from typing import Any
 import typer
 
 from ..analysis import protocol
-from ..io.outputs import check_output_file
 from ..parameters import ParameterError
 from . import _units
-from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
+from ._common import (
+    app,
+    console,
+    err_console,
+    outputs,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 from ._solver import accuracy_options
 
 
 @app.command("calibrate")
 @user_errors
+@outputs(out=(".toml",))
 @accuracy_options
 def calibrate_command(
     unknown: str = typer.Option("controller.velocity_integral_gain", "--unknown",
@@ -57,9 +65,6 @@ def calibrate_command(
     if not (math.isfinite(high) and high > low):
         raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
                                              f"{unknown}]")
-    if out:
-        check_output_file(out, option="--out", inputs=[params_file], force=force,
-                          formats=(".toml",))
     params = resolve_parameters(preset_name, params_file)
     rule = VerdictRule(max_duration=max_duration)
     result = calibrate(

@@ -7,7 +7,7 @@ from typing import Any
 import typer
 
 from . import _units
-from ._common import app, console, print_json, resolve_parameters, user_errors
+from ._common import app, console, outputs, print_json, resolve_parameters, user_errors
 from ._solver import accuracy_options
 
 export_app = typer.Typer(no_args_is_help=True,
@@ -17,6 +17,7 @@ app.add_typer(export_app, name="export")
 
 @export_app.command("fmu")
 @user_errors
+@outputs(out=(".fmu",))
 @accuracy_options
 def fmu_command(
     drive: str = typer.Option(..., "--drive", help="cdfs, ddfs, linear-motor or another "

@@ -10,10 +10,19 @@ from typing import Annotated, Any
 
 import typer
 
-from ..io.outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
+from ..io.outputs import PLOT_FORMATS, atomic_path, shown
 from ..parameters import DriveParameters
 from . import _units
-from ._common import app, console, err_console, print_json, resolve_parameters, user_errors
+from ._common import (
+    STORE,
+    app,
+    console,
+    err_console,
+    outputs,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 from ._solver import accuracy_options
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
@@ -23,15 +32,16 @@ def _say(text: str) -> None:
 
 
 def _weights(items: list[str] | None) -> dict[str, float]:
+    """``SIGNAL=W`` parsed (fit_drive checks the signal and the weight's range)."""
     out: dict[str, float] = {}
     for item in items or []:
         name, sep, value = item.partition("=")
         try:
             w = float(value)
         except ValueError:
-            w = math.nan
-        if not sep or not name.strip() or not (math.isfinite(w) and w > 0):
-            raise ValueError(f"--weight {item!r}: expected SIGNAL=W with a weight W > 0 "
+            sep = ""
+        if not sep or not name.strip():
+            raise ValueError(f"--weight {item!r}: expected SIGNAL=W with a number W "
                              "(e.g. table_position=2)")
         out[name.strip()] = w
     return out
@@ -51,6 +61,7 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
 
 @app.command("fit")
 @user_errors
+@outputs(out=(".toml",), plot=PLOT_FORMATS)
 @accuracy_options
 def fit_command(
     traces: Annotated[list[str], typer.Argument(
@@ -108,12 +119,6 @@ def fit_command(
         raise ValueError(f"--confidence {confidence!r}: expected a fraction in (0, 1)")
     if profile_file and command_speed is not None:
         raise ValueError("--profile: give either --profile or --command-speed, not both")
-    inputs = [*traces, params_file, profile_file]
-    if out:
-        check_output_file(out, option="--out", inputs=inputs, force=force)
-    if plot:
-        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force,
-                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     table_position = _units.position("--position", position, params, drive)
     speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
@@ -188,6 +193,7 @@ def fit_command(
 
 @app.command("predict")
 @user_errors
+@outputs(store=STORE, plot=PLOT_FORMATS)
 @accuracy_options
 def predict_command(
     fit_file: str = typer.Argument(..., help="A fitted file (feeddrive fit --out)."),
@@ -218,11 +224,6 @@ def predict_command(
     from ..analysis.predict import plot_prediction, predict
     from ..analysis.protocol import SPEED_RANGE
 
-    if plot:
-        check_output_file(plot, option="--plot", inputs=[fit_file, store], force=force,
-                          formats=PLOT_FORMATS)
-    if workers is not None and workers < 1:
-        raise ValueError(f"--workers = {workers}: expected ≥ 1")
     rng = None
     if low is not None or high is not None:
         lo = _units.speed("--low", low, positive=True) if low is not None else SPEED_RANGE[0]
@@ -231,7 +232,7 @@ def predict_command(
             raise ValueError(f"--high {hi * 1e3:g}: expected > --low {lo * 1e3:g} [mm/s]")
         rng = (lo, hi)
     res = None if resolution is None else _units.speed("--resolution", resolution,
-                                                        positive=True)
+                                                        positive=True, warn_small=False)
 
     def started(todo: int, where: str) -> None:
         if not as_json:

@@ -10,13 +10,14 @@ from rich.markup import escape
 from rich.table import Table
 
 from .. import units
-from ..io.outputs import PLOT_FORMATS, check_output_file
+from ..io.outputs import PLOT_FORMATS
 from ..parameters import DriveParameters, ParameterError
 from ._common import (
     MM_PER_S,
     N_PER_UM,
     app,
     console,
+    outputs,
     print_json,
     resolve_parameters,
     user_errors,
@@ -63,6 +64,7 @@ def _mm_s(speed: float) -> float:
 
 @app.command("friction")
 @user_errors
+@outputs(plot=PLOT_FORMATS)
 def friction_command(
     site: str = typer.Option("screw", "--site", help="Friction site: screw, nut or guide."),
     plot: str | None = typer.Option(
@@ -104,9 +106,6 @@ def friction_command(
 
     if site not in SITES:
         raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
-    if plot:
-        check_output_file(plot, option="--plot", inputs=[params_file], force=force,
-                          formats=PLOT_FORMATS)
     from ..model.friction.lugre_parameters import LuGreParameters  # numba: at use only
 
     params = resolve_parameters(preset_name, params_file)

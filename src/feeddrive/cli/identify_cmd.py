@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..io.outputs import PLOT_FORMATS, atomic_path, check_output_file, shown
+from ..io.outputs import PLOT_FORMATS, atomic_path, shown
 from ..parameters import DriveParameters, ParameterError, save
 
 if TYPE_CHECKING:
@@ -26,6 +26,7 @@ from ._common import (
     app,
     console,
     err_console,
+    outputs,
     print_json,
     resolve_parameters,
     user_errors,
@@ -59,15 +60,6 @@ def _base(preset_name: str | None, params_file: str | None,
     for frag in fragments or []:
         params = merge_fragment(params, Path(frag))
     return params
-
-
-def _check_outputs(out: str | None, plot: str | None, inputs: list[str | None],
-                   force: bool) -> None:
-    if out:
-        check_output_file(out, option="--out", inputs=inputs, force=force, formats=(".toml",))
-    if plot:
-        check_output_file(plot, option="--plot", inputs=[*inputs, out], force=force,
-                          formats=PLOT_FORMATS)
 
 
 def _fmt(est: Estimate, scale: float = 1.0, digits: int = 4) -> str:
@@ -147,6 +139,7 @@ def _print_dynamic(fit: DynamicFit) -> None:
 
 @identify_app.command("static")
 @user_errors
+@outputs(out=(".toml",), plot=PLOT_FORMATS)
 def static_command(
     file: str = typer.Argument(..., help="CSV of constant-speed tests (speed, force)."),
     site: str = typer.Option("screw", "--site", help=_SITE_HELP),
@@ -181,7 +174,6 @@ def static_command(
     from ..io.measured import read_static_test
 
     site = _site(site)
-    _check_outputs(out, plot, [file, params_file], force)
     params = _base(preset_name, params_file)
     motor = params.hollow_motor if site == "nut" else params.screw_motor
     kt = torque_constant if torque_constant is not None else motor.torque_constant
@@ -217,6 +209,7 @@ def static_command(
 
 @identify_app.command("dynamic")
 @user_errors
+@outputs(out=(".toml",), plot=PLOT_FORMATS)
 def dynamic_command(
     file: str = typer.Argument(..., help="CSV of a pre-sliding test (time, force, position)."),
     site: str = typer.Option("screw", "--site", help=_SITE_HELP),
@@ -255,7 +248,6 @@ def dynamic_command(
         raise ValueError(f"--model = {model!r}: expected lugre or linear")
     if not (0.5 <= confidence < 1.0):
         raise ValueError(f"--confidence = {confidence!r}: expected a level in [0.5, 1)")
-    _check_outputs(out, plot, [file, params_file, *(static or [])], force)
     from ..model.friction.lugre_parameters import LuGreParameters  # numba: at use only
 
     params = _base(preset_name, params_file, static)
@@ -293,6 +285,7 @@ def dynamic_command(
 
 @identify_app.command("merge")
 @user_errors
+@outputs(out=(".toml",))
 def merge_command(
     fragments: Annotated[list[str], typer.Argument(help="TOML fragment(s), merged in order.")],
     out: str = typer.Option(..., "--out", help="Write the merged parameter set here."),
@@ -301,8 +294,6 @@ def merge_command(
     force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
 ) -> None:
     """Merge identified fragments into a parameter set and validate the result."""
-    check_output_file(out, option="--out", inputs=[*fragments, params_file], force=force,
-                      formats=(".toml",))
     params = _base(preset_name, params_file, fragments)
     names = ", ".join(Path(f).name for f in fragments)
     params = params.with_values(name=f"{params.name}-identified",

@@ -5,13 +5,23 @@ from __future__ import annotations
 import typer
 
 from ..analysis import protocol
-from ..io.outputs import PLOT_FORMATS, check_output_file
-from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from ..io.outputs import PLOT_FORMATS
+from ._common import (
+    MM,
+    MM_PER_S,
+    app,
+    console,
+    outputs,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
 @app.command("loops")
 @user_errors
+@outputs(plot=PLOT_FORMATS)
 def loops_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
                               help=ALL_DRIVES_TEXT),
@@ -37,15 +47,11 @@ def loops_command(
     linearised at steady sliding."""
     from ..analysis.linear import loop_analysis
     from ..engine.simulate import DriveSystem
-    from ..io.outputs import check_output_file
     from ..parameters import ParameterError
     from ..plots.linear import PLOT_KINDS
 
     if plot_kind not in PLOT_KINDS:
         raise ParameterError("--plot-kind", plot_kind, f"expected {', '.join(PLOT_KINDS)}")
-    if plot:
-        check_output_file(plot, option="--plot", inputs=[params_file], force=force,
-                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, position * MM)
     result = loop_analysis(system, table_speed * MM_PER_S, nut_speed * MM_PER_S,
@@ -96,6 +102,7 @@ def loops_command(
 
 @app.command("stability")
 @user_errors
+@outputs(plot=PLOT_FORMATS)
 def stability_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
                               help=ALL_DRIVES_TEXT),
@@ -120,9 +127,6 @@ def stability_command(
     from ..analysis.linear import stability_band
     from ..engine.simulate import DriveSystem
 
-    if plot:  # before any work
-        check_output_file(plot, option="--plot", inputs=[params_file], force=force,
-                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, position * MM)
     band = stability_band(system, nut_speed * MM_PER_S, low=low * MM_PER_S,

@@ -7,14 +7,16 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..io.outputs import check_output_dir, shown
+from ..io.outputs import shown
 from ..parameters import ParameterError
 from ._common import (
+    FOLDER,
     PlainProgress,
     app,
     console,
     err_console,
     interrupted,
+    outputs,
     resolve_parameters,
     user_errors,
 )
@@ -22,6 +24,7 @@ from ._common import (
 
 @app.command("reproduce")
 @user_errors
+@outputs(out=FOLDER)
 def reproduce_command(
     out: Path = typer.Option("reproduce-out", "--out", help="Output folder."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
@@ -38,7 +41,6 @@ def reproduce_command(
 
     if workers < 1:
         raise ParameterError("--workers", workers, "expected a whole number ≥ 1")
-    check_output_dir(out, option="--out")
     params = resolve_parameters(preset_name, params_file)
     def notice(text: str) -> None:
         err_console.print(f"notice: {shown(text)}", markup=False, highlight=False,

@@ -7,9 +7,9 @@ from typing import Annotated, Any
 
 import typer
 
-from ..io.outputs import check_output_file, shown
+from ..io.outputs import PLOT_FORMATS, shown
 from . import _units
-from ._common import app, console, err_console, print_json, user_errors
+from ._common import STORE, app, console, err_console, outputs, print_json, user_errors
 from ._solver import accuracy_options
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
@@ -28,6 +28,7 @@ def _say(text: str) -> None:
 
 @app.command("sensitivity")
 @user_errors
+@outputs(store=STORE, plot=PLOT_FORMATS)
 @accuracy_options
 def sensitivity_command(
     fit_file: str | None = typer.Argument(
@@ -75,10 +76,6 @@ def sensitivity_command(
         params_file = fit_file
     if preset_name and params_file:
         raise ValueError("--params: give either --preset or --params, not both")
-    if plot:
-        check_output_file(plot, option="--plot", inputs=[params_file, store], force=force)
-    if workers is not None and workers < 1:
-        raise ValueError(f"--workers = {workers}: expected ≥ 1")
     source = params_file or preset_name or "wang2021"
     params = load(source) if params_file else preset(source)
     fitted = _fit_table(params_file) if params_file else {}

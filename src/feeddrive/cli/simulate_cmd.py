@@ -8,7 +8,7 @@ from typing import Any
 import typer
 
 from ..engine.options import layered
-from ..io.outputs import PLOT_FORMATS, check_output_file
+from ..io.outputs import PLOT_FORMATS, RESULT_FORMATS
 from . import _units
 from ._common import (
     EXIT_UNSTABLE,
@@ -17,6 +17,7 @@ from ._common import (
     console,
     err_console,
     interrupted,
+    outputs,
     print_json,
     resolve_parameters,
     user_errors,
@@ -41,6 +42,7 @@ def _say(text: str) -> None:
 
 @app.command("simulate")
 @user_errors
+@outputs(output=RESULT_FORMATS, plot=PLOT_FORMATS)
 @accuracy_options
 def simulate_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
@@ -122,15 +124,6 @@ def simulate_command(
     options = layered([("command line", {"method": (method, "--method"),
                                          "max_steps": (max_steps, "--max-steps")})],
                       base=solver)
-    from ..io.results import check_format
-
-    inputs = [params_file, profile_file]
-    if output:
-        check_format(output)
-        check_output_file(output, option="--output", inputs=inputs, force=force)
-    if plot:
-        check_output_file(plot, option="--plot", inputs=[*inputs, output], force=force,
-                          formats=PLOT_FORMATS)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive,
                          table_position=_units.position("--position", position, params, drive))

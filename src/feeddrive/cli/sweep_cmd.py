@@ -9,35 +9,18 @@ from typing import Any
 
 import typer
 
-from ..io.outputs import PLOT_FORMATS, check_output_file, shown
-from ._common import app, console, err_console, interrupted, print_json, user_errors
+from ..io.outputs import PLOT_FORMATS, SWEEP_EXPORT_FORMATS, is_same_file, shown
+from ._common import (
+    STORE,
+    app,
+    console,
+    err_console,
+    interrupted,
+    outputs,
+    print_json,
+    user_errors,
+)
 from ._solver import accuracy_options
-
-_PLOT_FORMATS = (".png", ".pdf", ".svg")
-_EXPORT_FORMATS = (".csv", ".parquet", ".nc")
-
-
-def _check_outputs(plot: str | None, output: str | None, inputs: list[str], force: bool
-                   ) -> None:
-    """Every output refused before any work: format, folder, existing file, writability."""
-    from ..io.results import PARQUET_HINT
-
-    if plot is not None:
-        if Path(plot).suffix.lower() not in _PLOT_FORMATS:
-            raise ValueError(f"--plot {shown(plot)}: expected one of {', '.join(_PLOT_FORMATS)}")
-        check_output_file(plot, option="--plot", inputs=inputs, force=force,
-                          formats=PLOT_FORMATS)
-    if output is not None:
-        ext = Path(output).suffix.lower()
-        if ext not in _EXPORT_FORMATS:
-            raise ValueError(f"--output {shown(output)}: expected one of "
-                             f"{', '.join(_EXPORT_FORMATS)}")
-        if ext == ".parquet":
-            import importlib.util
-
-            if importlib.util.find_spec("pyarrow") is None:
-                raise ValueError(f"--output {shown(output)}: {PARQUET_HINT}")
-        check_output_file(output, option="--output", inputs=inputs, force=force)
 
 
 def _speed_column(rate: float) -> str:
@@ -73,6 +56,7 @@ def _stats_text(stats: dict[str, Any]) -> str:
 
 @app.command("sweep")
 @user_errors
+@outputs(store=STORE, plot=PLOT_FORMATS, output=SWEEP_EXPORT_FORMATS)
 @accuracy_options
 def sweep_command(
     config: str = typer.Argument(..., help="Sweep configuration (TOML; docs/sweeps.md)."),
@@ -113,19 +97,15 @@ def sweep_command(
         cfg.store if cfg.store is not None else Path(f"{cfg.name}.sqlite"))
     option = "--store" if store is not None else (
         f"{config}: store" if cfg.store is not None else "store")
-    _check_outputs(plot, output, [config, os.fspath(store_path)], force)
+    for option, path in (("--plot", plot), ("--output", output)):
+        if path is not None and store is None and is_same_file(path, store_path):
+            raise ValueError(f"{option} {shown(path)}: is the sweep's store; refusing to "
+                             "overwrite it")
     if dry_run and (plot or output):
         raise ValueError("--dry-run: stores nothing, so --plot and --output have nothing to show")
-    if scheduler is not None and dask_workers is not None:
-        raise ValueError("--scheduler and --dask-workers: give one, not both")
-    if scheduler is not None or dask_workers is not None:
-        from ..sweep.executors import _dask
+    from ..sweep.executors import check_executor
 
-        _dask()
-    if workers is not None and workers < 1:
-        raise ValueError(f"--workers = {workers}: expected ≥ 1")
-    if dask_workers is not None and dask_workers < 1:
-        raise ValueError(f"--dask-workers = {dask_workers}: expected ≥ 1")
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if dry_run:  # counts from the design; only the timed points are built
         db = SweepStore(store_path, option=option, create=False) if store_path.exists() \
             else None
@@ -271,6 +251,7 @@ def _run(cfg: Any, open_store: Any, workers: int | None, scheduler: str | None,
 
 @app.command("map")
 @user_errors
+@outputs(plot=PLOT_FORMATS, output=SWEEP_EXPORT_FORMATS)
 def map_command(
     store: str = typer.Argument(..., help="Results store of a sweep (SQLite file)."),
     sweep: str | None = typer.Option(None, "--sweep", help="Sweep name (default: the only "
@@ -294,7 +275,6 @@ def map_command(
     histogram and 5/50/95 % percentiles (Monte Carlo).  Reads the store only."""
     from ..sweep import SweepStore, export, percentiles, plot_histogram, plot_map, to_dataset
 
-    _check_outputs(plot, output, [store], force)
     if (x is None) != (y is None):
         raise ValueError("--x and --y: give both (a map) or neither")
     with SweepStore(store, option="STORE", create=False, notice=_notice) as db:

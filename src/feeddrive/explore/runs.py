@@ -175,7 +175,8 @@ def measured_trace(text: str, name: str = "measured.csv") -> dict[str, Any]:
     text : str
         The CSV text.
     name : str, default "measured.csv"
-        The file's name, for messages.
+        The file's name as the page sent it: shown in messages and the answer (its last
+        part, control characters escaped, cut), never used in a path.
 
     Returns
     -------
@@ -190,24 +191,26 @@ def measured_trace(text: str, name: str = "measured.csv") -> dict[str, Any]:
     ValueError
         For a file larger than the page accepts.
     """
-    from ..io.measured import read_position_trace
+    from ..io import measured
+    from ..io.outputs import shown
 
+    # the page's name is only ever shown: never part of a path (".." was a folder, issue 39)
+    label = shown(name.rsplit("/", 1)[-1].strip() or "measured.csv")
     if len(text.encode("utf-8")) > MAX_MEASURED:
-        raise ValueError(f"{name}: larger than {MAX_MEASURED // 1024 // 1024} MB")
-    safe = "".join(c if c.isalnum() or c in "-_." else "-" for c in Path(name).name)[:60]
+        raise ValueError(f"{label}: larger than {MAX_MEASURED // 1024 // 1024} MB")
     with tempfile.TemporaryDirectory(prefix="feeddrive-measured-") as folder:
-        path = Path(folder) / (safe or "measured.csv")
+        path = Path(folder) / "measured.csv"
         path.write_text(text, encoding="utf-8")
         try:
             has_speed = _has_column(text, "table_speed")
-            trace = read_position_trace(path, speed_column="table_speed" if has_speed
-                                        else None)
+            trace = measured.read_position_trace(
+                path, speed_column="table_speed" if has_speed else None, source=label)
         finally:
             os.unlink(path)
     t = trace.time
     speed = trace.speed if trace.speed is not None else np.gradient(trace.position, t)
     idx = decimate(t.size, speed)
-    return {"name": Path(name).name, "samples": int(t.size), "time_s": _list(t[idx]),
+    return {"name": label, "samples": int(t.size), "time_s": _list(t[idx]),
             "position_mm": _list(trace.position[idx], 1e3),
             "speed_mm_s": _list(speed[idx], 1e3),
             "speed_from": "table_speed column" if trace.speed is not None

@@ -266,6 +266,12 @@ class ExplorerServer(ThreadingHTTPServer):
     """One thread per connection, at most ``MAX_CONNECTIONS`` at once; each connection
     is closed after ``READ_TIMEOUT`` s without a byte (``Handler.timeout``).
 
+    A connection over the cap takes the slot of the connection that has waited longest for
+    its next request (idle, or still sending its request line, headers or body), which is
+    closed; only when every slot is busy computing an answer is it answered 503.  A local
+    process holding every slot with half-open sockets, reconnected as they time out, kept
+    every real request out (issue 39 item 7).
+
     Parameters
     ----------
     port : int
@@ -284,12 +290,45 @@ class ExplorerServer(ThreadingHTTPServer):
     def __init__(self, port: int, explorer: Explorer, host: str = "127.0.0.1") -> None:
         self.explorer = explorer
         self._slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
+        self._waiting: dict[Any, float] = {}  # connection → since when it waits [monotonic s]
+        self._waiting_lock = threading.Lock()
         super().__init__((host, port), Handler)
+
+    def waiting(self, connection: Any, waits: bool) -> None:
+        """Mark a connection as waiting for its client (it may give its slot away) or as
+        busy with a request (it may not).
+
+        Parameters
+        ----------
+        connection : socket.socket
+            The connection.
+        waits : bool
+            Whether it now waits for its client.
+        """
+        with self._waiting_lock:
+            if waits:
+                self._waiting.setdefault(connection, time.monotonic())
+            else:
+                self._waiting.pop(connection, None)
+
+    def _evict_oldest_waiting(self) -> bool:
+        """Close the connection that has waited longest for its client; False if none."""
+        with self._waiting_lock:
+            if not self._waiting:
+                return False
+            oldest = min(self._waiting, key=self._waiting.__getitem__)
+            del self._waiting[oldest]
+        try:
+            oldest.shutdown(socket.SHUT_RDWR)  # its thread's read returns: it ends
+        except OSError:
+            pass
+        return True
 
     def process_request(self, request: Any, client_address: Any) -> None:
         if not self._slots.acquire(blocking=False):
-            _refuse_connection(request)
-            return
+            if not (self._evict_oldest_waiting() and self._slots.acquire(timeout=2.0)):
+                _refuse_connection(request)
+                return
         try:
             super().process_request(request, client_address)
         except BaseException:
@@ -300,6 +339,7 @@ class ExplorerServer(ThreadingHTTPServer):
         try:
             super().process_request_thread(request, client_address)
         finally:
+            self.waiting(request, False)
             self._slots.release()
 
     @property
@@ -387,6 +427,17 @@ class Handler(BaseHTTPRequestHandler):
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002  (base signature)
         """Quiet: the terminal shows the address and errors, not every poll."""
 
+    def handle_one_request(self) -> None:
+        """One request; while its request line and headers are awaited, the connection may
+        give its slot to a new one (:class:`ExplorerServer`)."""
+        self.server.waiting(self.connection, True)
+        super().handle_one_request()
+
+    def parse_request(self) -> bool:
+        ok = super().parse_request()  # the headers are read: the request is being served
+        self.server.waiting(self.connection, False)
+        return ok
+
     # ------------------------------------------------------------ plumbing
 
     def _send(self, status: int, body: bytes, content_type: str,
@@ -433,7 +484,9 @@ class Handler(BaseHTTPRequestHandler):
             raise _HttpError(HTTPStatus.REQUEST_ENTITY_TOO_LARGE,
                              f"request larger than {MAX_BODY // 1024 // 1024} MB")
         try:
+            self.server.waiting(self.connection, True)  # a body that stalls may be evicted
             raw = self.rfile.read(length)
+            self.server.waiting(self.connection, False)
         except TimeoutError:
             self.close_connection = True
             raise _HttpError(HTTPStatus.REQUEST_TIMEOUT, f"the request body did not arrive "

@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from ..units import LARGEST_SPEED
+
 __all__ = [
     "COMMAND_COLUMNS",
     "CURRENT_UNITS",
@@ -56,6 +58,13 @@ _DIMENSIONS = {
     "force": FORCE_UNITS,
     "current": CURRENT_UNITS,
 }
+
+#: the largest magnitude a measured value of each dimension may have [SI]: far beyond any
+#: feed drive (speed and force as ``static_fit``'s test limits), so that a larger one is a
+#: wrong unit or a damaged file, refused naming its line; a 1e308 cell overflowed the fit's
+#: sums to inf and NaN (issue 39 item 5).  Time allows absolute clocks (Unix seconds).
+LARGEST_MAGNITUDE = {"length": 1e3, "time": 1e15, "speed": LARGEST_SPEED, "force": 1e7,
+                     "current": 1e5, "torque": 1e6}
 
 #: command-speed columns looked for in a position trace, in this order
 COMMAND_COLUMNS = ("command_speed", "table_speed_reference")
@@ -348,8 +357,41 @@ class CsvTable:
                         f"unit option says {unit!r}; drop one of them")
             used = unit if unit is not None else header_unit or default_unit
             factor = unit_factor(used, dimension, what=what)
-            return self.numbers(name) * factor, self.names[i], used
+            values = self.numbers(name) * factor
+            self.check_magnitude(i, values, dimension, used, factor)
+            return values, self.names[i], used
         raise self._missing(names)
+
+    def check_magnitude(self, i: int, values: np.ndarray, dimension: str,
+                        unit: str, factor: float) -> None:
+        """Refuse a value beyond ``LARGEST_MAGNITUDE`` of its dimension, naming its line.
+
+        Parameters
+        ----------
+        i : int
+            The column index.
+        values : numpy.ndarray
+            The column in SI [SI unit of the dimension].
+        dimension : str
+            A key of ``LARGEST_MAGNITUDE``.
+        unit : str
+            The unit the file gives, for the message.
+        factor : float
+            SI value of one ``unit`` [SI unit of the dimension].
+
+        Raises
+        ------
+        MeasuredDataError
+            At the first value too large.
+        """
+        limit = LARGEST_MAGNITUDE[dimension]
+        big = np.flatnonzero(np.abs(values) > limit)
+        if big.size:
+            k = int(big[0])
+            raise MeasuredDataError(
+                self.source, int(self.lines[k]),
+                f"column {self.names[i]!r}: {self.cell(i, k)} [{unit}] is beyond any feed "
+                f"drive (|{dimension}| ≤ {limit / factor:g} {unit}); check the file's unit")
 
 
 def _detect_separator(header: str) -> str | None:
@@ -451,7 +493,7 @@ def _scan_lines(data: np.ndarray, first_line: int, sep: str | None
 
 
 def read_csv_table(path: str | Path, *, sep: str | None = None,
-                   decimal: str = ".") -> CsvTable:
+                   decimal: str = ".", source: str | None = None) -> CsvTable:
     """Scan a delimited text file with one header row.
 
     The file is scanned in chunks (line numbers of the data rows, cells per row) with numpy;
@@ -468,6 +510,9 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
     decimal : str, default "."
         Decimal mark (``","`` for a European locale; the separator must then not be a
         comma).
+    source : str, optional
+        The file's name in messages; the path's last part by default (the explorer reads an
+        upload from a file of its own name and names it as the page sent it).
 
     Returns
     -------
@@ -482,7 +527,7 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
         For an unknown ``sep`` or ``decimal``.
     """
     p = Path(path)
-    source = p.name
+    source = p.name if source is None else source
     check_text_file(p)
     if decimal not in (".", ","):
         raise ValueError(f"decimal = {decimal!r}: expected '.' or ','")
@@ -826,6 +871,7 @@ def read_position_trace(
     speed_unit: str | None = None,
     sep: str | None = None,
     decimal: str = ".",
+    source: str | None = None,
 ) -> PositionTrace:
     """Read time and table position; default columns ``time`` [s] and ``position`` [mm].
 
@@ -852,6 +898,8 @@ def read_position_trace(
         Column separator; detected from the header when omitted.
     decimal : str, default "."
         Decimal mark (``","`` for a European locale).
+    source : str, optional
+        The file's name in messages (:func:`read_csv_table`).
 
     Returns
     -------
@@ -877,7 +925,7 @@ def read_position_trace(
     >>> print(f"{trace.time.size} samples, {1e3 * trace.position[-1]:.3f} mm")
     100 samples, 1.485 mm
     """
-    table = read_csv_table(path, sep=sep, decimal=decimal)
+    table = read_csv_table(path, sep=sep, decimal=decimal, source=source)
     _need_rows(table, 16, "position trace")
     time, tname, _ = table.quantity([time_column], "time", unit=time_unit, default_unit="s")
     check_increasing(table, time, tname)

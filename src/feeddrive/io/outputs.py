@@ -9,8 +9,9 @@ Rules (docs/outputs.md):
   fragment): that is refused even with ``force``;
 * an existing output file is replaced only with ``force`` (``--force`` on the CLI);
 * the destination must be writable: probed by opening it (an existing file for update
-  without truncating it, a new name by creating and removing it), so a read-only folder, a
-  read-only mount or a name under a file is refused before a simulation or fit runs;
+  without truncating it) and by creating and removing the temporary name it is written under
+  (:func:`atomic_path`), so a read-only folder, a read-only mount, a name under a file or a
+  name too long for the file system is refused before a simulation or fit runs;
 * its format (the extension) is checked with the rest, before any work, where the option
   takes a fixed set of formats (``--plot``: :data:`PLOT_FORMATS`);
 * nothing partial is ever left under an output's name: every writer writes through
@@ -30,13 +31,20 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["PLOT_FORMATS", "OutputError", "atomic_path", "check_output_dir",
-           "check_output_file", "cut", "save_figure", "shown"]
+__all__ = ["PARQUET_HINT", "PLOT_FORMATS", "RESULT_FORMATS", "SWEEP_EXPORT_FORMATS",
+           "OutputError", "atomic_path", "check_output_dir", "check_output_file", "cut",
+           "is_same_file", "save_figure", "shown", "write_bytes"]
 
 #: the figure formats every ``--plot`` option takes (matplotlib writes each)
 PLOT_FORMATS = (".png", ".pdf", ".svg")
 #: longest user text echoed in a one-line message [characters]; longer text is cut
 MAX_SHOWN = 200
+#: the formats a run's samples are written in (``simulate --output``, ``Result.save``)
+RESULT_FORMATS = (".csv", ".parquet", ".nc", ".mat")
+#: the formats a sweep is exported in (``sweep``/``map --output``)
+SWEEP_EXPORT_FORMATS = (".csv", ".parquet", ".nc")
+#: how to get Parquet support (pyarrow is an optional dependency: docs/outputs.md)
+PARQUET_HINT = "Parquet output needs pyarrow: pip install 'feeddrive[parquet]'"
 
 
 class OutputError(ValueError):
@@ -92,6 +100,11 @@ def cut(text: str, limit: int | None = MAX_SHOWN) -> str:
     return f"{text[:limit]}… ({len(text)} characters)"
 
 
+def _partial(p: Path) -> Path:
+    """A temporary name for ``p`` in its folder, as :func:`atomic_path` writes under."""
+    return p.with_name(f".{p.stem}.{secrets.token_hex(4)}.partial{p.suffix}")
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """A temporary name to write ``path`` under, renamed over it when the block ends.
@@ -114,7 +127,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """
     p = Path(path)
     while True:
-        tmp = p.with_name(f".{p.stem}.{secrets.token_hex(4)}.partial{p.suffix}")
+        tmp = _partial(p)
         try:
             os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
             break
@@ -133,6 +146,38 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
             os.unlink(tmp)
         raise
 
+
+def _write_fd(fd: int, data: memoryview) -> int:
+    return os.write(fd, data)
+
+
+def write_bytes(path: str | os.PathLike[str], data: bytes | memoryview) -> None:
+    """Write ``data`` to ``path`` with plain file I/O, 1 MiB at a time.
+
+    For a file a library builds in memory (NetCDF4): a failed write (a full disk) is then an
+    ordinary ``OSError`` here, not the library's failure deep inside its own I/O.  The
+    caller makes it atomic (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, created or truncated.
+    data : bytes or memoryview
+        Its contents.
+
+    Raises
+    ------
+    OSError
+        When a write fails (``ENOSPC``, ``EFBIG``), without the file name: the caller knows
+        which output it is.
+    """
+    view = memoryview(data).cast("B")
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+    try:
+        while view.nbytes:
+            view = view[_write_fd(fd, view[:1 << 20]):]
+    finally:
+        os.close(fd)
 
 
 def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int,
@@ -160,11 +205,26 @@ def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int,
         fig.savefig(tmp, dpi=dpi, **({"bbox_inches": "tight"} if tight else {}))
     return Path(path)
 
-def _same_file(a: Path, b: Path) -> bool:
+def is_same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether two names are one file: the same file now, or the same resolved path.
+
+    Parameters
+    ----------
+    a, b : str or os.PathLike
+        The names.
+
+    Returns
+    -------
+    bool
+        True when writing ``a`` would replace ``b``.
+    """
+    pa, pb = Path(a), Path(b)
     try:
-        return a.exists() and b.exists() and os.path.samefile(a, b)
+        if pa.exists() and pb.exists() and os.path.samefile(pa, pb):
+            return True
     except OSError:
-        return False
+        pass
+    return pa.resolve() == pb.resolve()
 
 
 def _check_folder(option: str, p: Path, folder: Path) -> None:
@@ -182,16 +242,17 @@ def _check_folder(option: str, p: Path, folder: Path) -> None:
 
 
 def _probe_writable(option: str, p: Path, probe: Path | None = None) -> None:
-    """Open ``p`` for update (it exists) or create and remove ``probe`` (default ``p``)."""
+    """Open ``p`` for update (it exists), and create and remove ``probe`` (default: the
+    temporary name :func:`atomic_path` would write ``p`` under, 18 characters longer, so a
+    name the file system cannot hold is refused now, not after the work)."""
     try:
         if probe is None and p.exists():
             with open(p, "r+b"):
                 pass
-        else:
-            target = probe or p
-            fd = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
-            os.close(fd)
-            os.unlink(target)
+        target = probe or _partial(p)
+        fd = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        os.close(fd)
+        os.unlink(target)
     except OSError as err:
         raise OutputError(f"{option} {shown(p)}: cannot write here "
                           f"({err.strerror or err})") from None
@@ -228,7 +289,16 @@ def check_output_file(path: str | os.PathLike[str], *, option: str,
     OutputError
         One line naming the option, the path and the problem.
     """
-    text = os.fspath(path)
+    try:
+        return _check_output_file(os.fspath(path), option=option, inputs=inputs, force=force,
+                                  formats=formats)
+    except OSError as err:  # a name the file system refuses to look up (too long, a loop)
+        raise OutputError(f"{option} {shown(path)}: {err.strerror or err}") from None
+
+
+def _check_output_file(text: str, *, option: str,
+                       inputs: Iterable[str | os.PathLike[str] | None], force: bool,
+                       formats: Iterable[str] | None) -> Path:
     if not text.strip():
         raise OutputError(f"{option} {text!r}: empty file name")
     p = Path(text)
@@ -238,7 +308,7 @@ def check_output_file(path: str | os.PathLike[str], *, option: str,
     for inp in inputs:
         if inp is None:
             continue
-        if _same_file(p, Path(inp)) or p.resolve() == Path(inp).resolve():
+        if is_same_file(p, inp):
             raise OutputError(f"{option} {shown(p)}: is an input of this command; refusing to "
                               "overwrite it")
     if formats is not None:
@@ -247,6 +317,11 @@ def check_output_file(path: str | os.PathLike[str], *, option: str,
             names = allowed[0] if len(allowed) == 1 else \
                 f"{', '.join(allowed[:-1])} or {allowed[-1]}"
             raise OutputError(f"{option} {shown(p)}: expected a {names} file name")
+    if p.suffix.lower() == ".parquet":
+        import importlib.util
+
+        if importlib.util.find_spec("pyarrow") is None:
+            raise OutputError(f"{option} {shown(p)}: {PARQUET_HINT}")
     if p.exists() and not force:
         raise OutputError(f"{option} {shown(p)}: exists; pass --force to replace it")
     _probe_writable(option, p)
@@ -276,7 +351,13 @@ def check_output_dir(path: str | os.PathLike[str], *, option: str) -> Path:
     OutputError
         For an empty name, a file, a missing parent or a folder that cannot be written.
     """
-    text = os.fspath(path)
+    try:
+        return _check_output_dir(os.fspath(path), option=option)
+    except OSError as err:  # a name the file system refuses to look up (too long, a loop)
+        raise OutputError(f"{option} {shown(path)}: {err.strerror or err}") from None
+
+
+def _check_output_dir(text: str, *, option: str) -> Path:
     if not text.strip():
         raise OutputError(f"{option} {text!r}: empty folder name")
     p = Path(text)
@@ -284,6 +365,12 @@ def check_output_dir(path: str | os.PathLike[str], *, option: str) -> Path:
         raise OutputError(f"{option} {shown(p)}: is a file; expected a folder")
     if not p.exists():
         _check_folder(option, p, p.parent)
+        try:  # a name the file system cannot hold is refused now (the folder is made later)
+            os.mkdir(p)
+            os.rmdir(p)
+        except OSError as err:
+            raise OutputError(f"{option} {shown(p)}: cannot write here "
+                              f"({err.strerror or err})") from None
     folder = p if p.exists() else p.parent
     _probe_writable(option, p, folder / f".feeddrive-write-probe-{os.getpid()}")
     return p

@@ -30,13 +30,13 @@ import numpy as np
 from .. import __version__
 from ..parameters import ParameterError
 from ..units import ENGINEERING
-from .outputs import atomic_path
+from .outputs import PARQUET_HINT, RESULT_FORMATS, atomic_path, write_bytes
 
 if TYPE_CHECKING:  # pandas, xarray and scipy.io are imported by the writers that use them
     import pandas as pd
     import xarray as xr
 
-FORMATS = (".csv", ".parquet", ".nc", ".mat")
+FORMATS = RESULT_FORMATS
 
 #: the CF version the NetCDF exports follow (global attribute ``Conventions``)
 CF_CONVENTIONS = "CF-1.8"
@@ -53,8 +53,6 @@ TIME_LONG_NAME = "time since the start of the run"
 # UDUNITS spellings of the units that differ from the package's (µ is not UDUNITS)
 _UDUNITS = {"": "1", "N/µm": "N/um", "µm": "um", "µs": "us"}
 
-#: how to get Parquet support (pyarrow is an optional dependency: docs/outputs.md)
-PARQUET_HINT = "Parquet output needs pyarrow: pip install 'feeddrive[parquet]'"
 
 
 def check_format(path: str | Path) -> str:
@@ -161,6 +159,13 @@ def cf_attributes(dataset: xr.Dataset, *, title: str, action: str) -> xr.Dataset
 def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
     """Write a dataset as a NetCDF4 file (h5netcdf engine).
 
+    The file is built in memory, then written with plain file I/O
+    (:func:`~feeddrive.io.outputs.write_bytes`): when HDF5 writes a file itself and a write
+    fails (a full disk), its close fails too and h5py crashes the process (SIGSEGV, h5py
+    3.16 / HDF5 1.14, issue 39 item 1); now a full disk is an ordinary ``OSError``.  The
+    memory this takes (one copy of the file) is within the output budget
+    (``feeddrive.engine.budget.check_output_memory`` counts two copies of the record).
+
     Parameters
     ----------
     dataset : xarray.Dataset
@@ -168,7 +173,7 @@ def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
     path : str or Path
         The file to write.
     """
-    dataset.to_netcdf(path, engine="h5netcdf")
+    write_bytes(path, dataset.to_netcdf(engine="h5netcdf"))
 
 
 #: the run attributes that say where its numbers come from (:func:`provenance`)

@@ -33,8 +33,9 @@ from .design import Point, SweepConfig
 from .quantities import evaluate, warm
 from .store import SweepStore
 
-__all__ = ["DASK_HINT", "PROBE_DURATION", "Estimate", "SweepAborted", "SweepInterrupted",
-           "SweepSummary", "estimate", "executor", "run_sweep", "simulated_range"]
+__all__ = ["DASK_HINT", "PROBE_DURATION", "CtrlC", "Estimate", "SweepAborted",
+           "SweepInterrupted", "SweepSummary", "check_executor", "estimate", "executor",
+           "run_sweep", "simulated_range"]
 
 DASK_HINT = "Dask executors need dask.distributed: pip install 'feeddrive[dask]'"
 # one thread per worker process: the parallelism is across points
@@ -135,6 +136,116 @@ def _dask() -> Any:
     return distributed
 
 
+def check_executor(*, workers: int | None = None, scheduler: str | None = None,
+                   dask_workers: int | None = None) -> None:
+    """Refuse an executor request before any work: a worker count < 1, both a scheduler and
+    a local cluster, Dask without ``dask.distributed``.  Every command that fans out
+    (``sweep``, ``fit``, ``predict``, ``sensitivity``) calls it first (``fit --workers 0``
+    meant every core, issue 39 item 5).
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local worker processes.
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    dask_workers : int, optional
+        Workers of a local Dask cluster.
+
+    Raises
+    ------
+    ValueError
+        Naming the option.
+    """
+    for option, n in (("--workers", workers), ("--dask-workers", dask_workers)):
+        if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+            raise ValueError(f"{option} = {n!r}: expected a whole number ≥ 1")
+    if scheduler is not None and dask_workers is not None:
+        raise ValueError("--scheduler and --dask-workers: give one, not both")
+    if scheduler is not None or dask_workers is not None:
+        _dask()
+
+
+class CtrlC:
+    """Ctrl-C seen while work is handed out, so that none is handed out after it.
+
+    As a context manager (in the main thread, while Ctrl-C acts) it installs a SIGINT
+    handler that notes the signal and raises ``KeyboardInterrupt`` as Python's own does.  A
+    ``KeyboardInterrupt`` raised where it is swallowed (inside a finaliser, a library's
+    callback: seen once as a fit that ran on to exit status 0 after its Ctrl-C, issue 39
+    item 6) is then not lost: :meth:`check`, called before each work item is handed out,
+    raises it again.
+    """
+
+    def __init__(self) -> None:
+        self.fired: float | None = None  # time.monotonic() of the first Ctrl-C
+        self._previous: Any = None
+        self._installed = False
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        if self.fired is None:
+            self.fired = time.monotonic()
+        raise KeyboardInterrupt
+
+    def __enter__(self) -> CtrlC:
+        if threading.current_thread() is threading.main_thread() and \
+                signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            self._previous = signal.signal(signal.SIGINT, self._handler)
+            self._installed = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._installed:
+            signal.signal(signal.SIGINT, self._previous)
+            self._installed = False
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if a Ctrl-C was seen.
+
+        Raises
+        ------
+        KeyboardInterrupt
+            After a Ctrl-C.
+        """
+        if self.fired is not None:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _sigint_held() -> Iterator[None]:
+    """Hold a Ctrl-C that arrives inside the block until it ends, then raise it.
+
+    For starting a Dask cluster: a ``KeyboardInterrupt`` inside ``LocalCluster(...)`` leaves
+    a cluster half started that nobody can close, and distributed's own clean-up at exit
+    then fails on a worker still starting (``AssertionError: Status.init``, issue 39 item 6).
+    Held, the Ctrl-C is raised once the cluster and its client exist, and the caller's exit
+    closes both.  Only in the main thread (where signals arrive), and not when Ctrl-C is
+    ignored."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) in (signal.SIG_IGN, signal.SIG_DFL, None):
+        yield
+        return
+    held: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: held.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if held:
+        raise KeyboardInterrupt
+
+
+def _kill_workers(cluster: Any) -> None:
+    """Kill a local Dask cluster's worker processes at once (their points in flight are
+    lost, not stored, as a local pool's): closing the cluster otherwise waits for each worker
+    to finish its compiled point, 1.5–4 s measured (benchmarks/bench_interrupt4.py)."""
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        pid = getattr(getattr(getattr(nanny, "process", None), "process", None), "pid", None)
+        if pid:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+
+
 def _warm_worker(tasks: list[dict[str, Any]]) -> None:
     for task in tasks:
         warm(task)
@@ -167,39 +278,43 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
     ValueError
         For both ``scheduler`` and ``dask_workers``, or a scheduler that cannot be reached.
     """
-    if scheduler is not None and dask_workers is not None:
-        raise ValueError("--scheduler and --dask-workers: give one, not both")
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if scheduler is not None or dask_workers is not None:
         distributed = _dask()
         cluster = None
         with contextlib.ExitStack() as stack:
-            if scheduler is not None:
-                try:
-                    client = distributed.Client(scheduler, timeout="20s")
-                except OSError as err:
-                    raise ValueError(f"--scheduler = {scheduler!r}: cannot connect "
-                                     f"({err})") from None
-            else:
-                assert dask_workers is not None
-                if dask_workers < 1:
-                    raise ValueError(f"--dask-workers = {dask_workers}: expected ≥ 1")
-                stack.enter_context(_single_threaded_children())
-                cluster = distributed.LocalCluster(
-                    n_workers=dask_workers, threads_per_worker=1, processes=True,
-                    dashboard_address=None, silence_logs=40)
-                stack.callback(cluster.close)
-                client = distributed.Client(cluster)
-            stack.callback(client.close)
+            with _sigint_held():  # started whole, so that it can be closed whole
+                if scheduler is not None:
+                    try:
+                        client = distributed.Client(scheduler, timeout="20s")
+                    except OSError as err:
+                        raise ValueError(f"--scheduler = {scheduler!r}: cannot connect "
+                                         f"({err})") from None
+                else:
+                    assert dask_workers is not None
+                    stack.enter_context(_single_threaded_children())
+                    cluster = distributed.LocalCluster(
+                        n_workers=dask_workers, threads_per_worker=1, processes=True,
+                        # CRITICAL only: a worker's ERROR log of its heartbeat failing as a
+                        # Ctrl-C closes the cluster is noise; real failures reach the parent
+                        # as exceptions (SweepAborted, a point's error)
+                        dashboard_address=None, silence_logs=50)
+                    stack.callback(cluster.close)
+                    client = distributed.Client(cluster)
+                stack.callback(client.close)
             n = len(client.scheduler_info()["workers"])
             if warm_tasks:
                 client.run(_warm_worker, warm_tasks)
             where = scheduler if scheduler is not None else "LocalCluster"
             pool = client.get_executor(pure=False)
-            yield pool, n, f"dask ({where}, {n} workers)"
+            try:
+                yield pool, n, f"dask ({where}, {n} workers)"
+            except BaseException:
+                if cluster is not None:  # Ctrl-C or an error: stop our workers now
+                    _kill_workers(cluster)
+                raise
         return
     n = workers or os.cpu_count() or 1
-    if n < 1:
-        raise ValueError(f"--workers = {n}: expected ≥ 1")
     # the pool starts its processes on demand (spawn): keep the setting for its lifetime
     with _single_threaded_children():
         pool = cf.ProcessPoolExecutor(max_workers=n,
@@ -420,6 +535,7 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
     3 [1.4, 1.4, 1.4]
     """
     t0 = time.perf_counter()
+    check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if design is None:
         design = check_design(config, points=points, checked=checked)
     keys, structures = design.keys, design.structures
@@ -449,8 +565,9 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
         for task in structures.values():
             warm(task)
         try:
-            with executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers,
-                          warm_tasks=list(structures.values())) as (pool, n_workers, where):
+            with CtrlC() as ctrl_c, \
+                    executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers,
+                             warm_tasks=list(structures.values())) as (pool, n_workers, where):
                 if started is not None:
                     started(len(todo), where)
                 limit = max(1, IN_FLIGHT_PER_WORKER * n_workers)
@@ -496,6 +613,7 @@ def run_sweep(config: SweepConfig, store: SweepStore, *, workers: int | None = N
                         elif state == "busy":
                             waiting.add(i)
                         else:
+                            ctrl_c.check()  # nothing is handed out after a Ctrl-C
                             inflight[pool.submit(evaluate, task)] = keys[i]
                     return True
 

@@ -21,7 +21,7 @@ import pandas as pd
 import xarray as xr
 
 from .. import units
-from ..io.outputs import atomic_path
+from ..io.outputs import SWEEP_EXPORT_FORMATS, atomic_path
 from ..io.results import arrow_table, cf_attributes, write_netcdf
 from .design import SPECIAL_AXES
 from .quantities import UNITS
@@ -29,7 +29,7 @@ from .store import SweepStore
 
 __all__ = ["EXPORT_FORMATS", "export", "to_dataset", "to_frame", "to_table"]
 
-EXPORT_FORMATS = (".csv", ".parquet", ".nc")
+EXPORT_FORMATS = SWEEP_EXPORT_FORMATS
 
 
 def _axis_si(name: str, unit: str, value: Any) -> Any:

@@ -92,13 +92,19 @@ class QuantitySettings:
     linear_points: int = 40
 
     @classmethod
-    def parse(cls, spec: Any) -> QuantitySettings:
+    def parse(cls, spec: Any, names: dict[str, str] | None = None) -> QuantitySettings:
         """The settings from a ``[quantity]`` table, speeds converted from mm/s.
+
+        A critical-speed search whose work is not bounded is refused
+        (:func:`feeddrive.analysis.protocol.check_search`).
 
         Parameters
         ----------
         spec : dict
             The parsed table.
+        names : dict of str to str, optional
+            The name a search setting has in messages (``{"resolution": "--resolution"}``);
+            ``quantity.<key>`` by default.
 
         Returns
         -------
@@ -157,7 +163,21 @@ class QuantitySettings:
         if out.max_duration < out.initial_duration:
             raise ParameterError("quantity.max_duration", out.max_duration,
                                  f"expected ≥ initial_duration = {out.initial_duration:g} [s]")
+        if kind == "critical-speed":
+            protocol.check_search(
+                low=out.low, high=out.high, coarse_step=out.search_coarse_step,
+                resolution=out.resolution,
+                names={k: f"quantity.{k}" for k in ("low", "high", "coarse_step",
+                                                    "resolution")} | (names or {}))
         return out
+
+    @property
+    def search_coarse_step(self) -> float:
+        """The coarse step the critical-speed search scans with [m/s] (from rest: at most
+        half the range)."""
+        if self.start == "rest":
+            return min(self.coarse_step, (self.high - self.low) / 2)
+        return self.coarse_step
 
     def with_table_speed(self, speed: float) -> QuantitySettings:
         """These settings with another table speed (a ``table_speed`` axis).
@@ -269,7 +289,7 @@ def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
     if q["start"] == "rest":
         search = critical_speed_from_rest(
             system, nut_speed=nut_speed, speed_range=(q["low"], q["high"]),
-            coarse_step=min(q["coarse_step"], (q["high"] - q["low"]) / 2),
+            coarse_step=QuantitySettings(**q).search_coarse_step,
             resolution=q["resolution"], rule=rule)
     else:
         search = critical_speed_stepdown(

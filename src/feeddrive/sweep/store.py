@@ -82,6 +82,18 @@ CREATE TABLE IF NOT EXISTS claims (
 """
 
 
+@functools.cache
+def _schema_columns() -> dict[str, tuple[str, ...]]:
+    """Each table of :data:`_SCHEMA` → its column names (read from the schema itself)."""
+    db = sqlite3.connect(":memory:")
+    try:
+        db.executescript(_SCHEMA)
+        names = [r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
+        return {n: tuple(r[1] for r in db.execute(f"PRAGMA table_info({n})")) for n in names}
+    finally:
+        db.close()
+
+
 class StoreError(OutputError):
     """The store cannot be used (not writable, not a store, another format)."""
 
@@ -193,6 +205,7 @@ class SweepStore:
         try:
             self._db = sqlite3.connect(self.path, timeout=120.0, isolation_level=None)
             self._db.execute("PRAGMA busy_timeout = 120000")
+            self._check_ours()  # before anything is written to it (WAL, the schema)
             mode = self._db.execute("PRAGMA journal_mode = WAL").fetchone()[0]
             self._db.execute("PRAGMA synchronous = FULL")
             self._write(lambda db: db.executescript(_SCHEMA) and None, script=True)
@@ -213,6 +226,22 @@ class SweepStore:
 
     def _error(self, text: str) -> StoreError:
         return StoreError(f"{self.option} {shown(self.path)}: {text}")
+
+    def _check_ours(self) -> None:
+        """Refuse an SQLite file of something else: a table that is not the store's, or one
+        of its names with other columns (``no such column: key`` was exit status 1, after
+        the file had been switched to WAL; issue 39 item 7)."""
+        ours = _schema_columns()
+        tables = [r[0] for r in self._db.execute(
+            "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'")]
+        for name in tables:
+            quoted = name.replace('"', '""')
+            columns = tuple(r[1] for r in self._db.execute(f'PRAGMA table_info("{quoted}")'))
+            if ours.get(name) != columns:
+                self._db.close()
+                listed = ", ".join(sorted(tables)[:5])
+                raise self._error(f"not a feeddrive sweep store (an SQLite file with the "
+                                  f"tables {shown(listed, 100)})")
 
     def _check_writable(self, create: bool) -> None:
         p = self.path
