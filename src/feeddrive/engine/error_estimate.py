@@ -10,6 +10,8 @@ the same shape the difference is 0.9 e, with unrelated shapes √1.01 e — with
 way, a factor 3 at worst where proportionality holds only roughly (stick–slip: the error is
 the drift of the slip instants, which a tighter run shortens in proportion too).  The cost is
 the shadow run: 1.6–2.5× the run (steps ∝ tolerance^(−1/5) for DOPRI5, ^(−1/4) for RODAS4).
+Tolerance proportionality and running at two tolerances: Hairer, Nørsett & Wanner [1]_;
+global error estimation with one-step methods: Shampine [2]_.
 
 References
 ----------
@@ -33,6 +35,8 @@ from . import options as opt
 if TYPE_CHECKING:
     from .options import SolverOptions
     from .result import Result
+
+__all__ = ["SHADOW_FACTOR", "signal_errors", "summary_entry", "tightened"]
 
 #: the shadow run's tolerances: this many times tighter
 SHADOW_FACTOR = 10.0

@@ -5,7 +5,7 @@ follows its absolute tolerances as much as ``rtol`` (the weight of a state's err
 ``atol + rtol·|y|``, and at the speeds of a feed drive at low speed the absolute part is the
 larger one), so fixed absolute tolerances made a 0.01-mm/s run a hundred times less accurate,
 relative to its signal, than a 1-mm/s run.  The defaults therefore scale with the run
-(:func:`run_scales`):
+(``feeddrive.engine.simulate.run_scales``):
 
 * speeds: ``SPEED_FRACTION`` × the state's speed scale: for the table (linear states), V_t,
   the largest commanded table speed (or initial speed); for the motors (angles and rotary
@@ -32,7 +32,7 @@ CDFS and DDFS stay within 1e-5 of their peak speed, and every method's error fal
 
 Where the settings come from, in order of precedence: the command line, the API (a
 :class:`SolverOptions` built in Python), a parameter file's ``[solver]`` table, the defaults
-(:func:`layered`); :meth:`SolverOptions.describe` says which one set each.
+(:func:`layered`); :meth:`feeddrive.SolverOptions.describe` says which one set each.
 """
 
 from __future__ import annotations
@@ -48,6 +48,12 @@ from typing import Any
 from ..parameters import ParameterError
 from ..solvers import modes, switching
 
+__all__ = ["CURRENT_FRACTION", "DEFAULT_RTOL", "DEFLECTION_FRACTION", "DENSE_OUTPUT_ORDER",
+           "LEGACY_TOLERANCES", "METHODS", "POSITION_TIME", "SPEED_FRACTION",
+           "SPEED_SCALE_FLOOR", "RunScales", "SolverOptions", "Tolerances", "current",
+           "file_settings", "layered", "using"]
+
+#: the methods :class:`SolverOptions` takes
 METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed",
            "rodas4-fixed")
 # method -> (driver mode, adaptive) of feeddrive.solvers.switching
@@ -224,7 +230,8 @@ class SolverOptions:
         * ``"dopri5-fixed"``, ``"rodas4-fixed"``: fixed step ``fixed_step`` (order checks).
 
         Outputs between step ends come from the method's own continuous extension
-        (:data:`DENSE_OUTPUT_ORDER`).  See :mod:`feeddrive.solvers.switching`.
+        (:data:`~feeddrive.engine.options.DENSE_OUTPUT_ORDER`).  See
+        :mod:`feeddrive.solvers.switching`.
     rtol : float or None, default None
         Relative tolerance on speeds and currents [-]; None: ``DEFAULT_RTOL`` × accuracy.
     position_tolerance : float or None, default None
@@ -456,7 +463,7 @@ class SolverOptions:
     @property
     def output_text(self) -> str:
         """How outputs between step ends are made: the continuous extension and its order
-        (:data:`DENSE_OUTPUT_ORDER`), or every output a step end."""
+        (:data:`~feeddrive.engine.options.DENSE_OUTPUT_ORDER`), or every output a step end."""
         order = DENSE_OUTPUT_ORDER[self.method]
         if order.startswith("none"):
             return "every output a step end"
