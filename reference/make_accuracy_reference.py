@@ -21,12 +21,10 @@ the largest difference between the two: what a comparison against the reference 
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
@@ -35,7 +33,8 @@ if str(ROOT) not in sys.path:
 import feeddrive  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 from feeddrive.parameters import dumps  # noqa: E402
-from reference.scipy_model import STATE_NAMES, ReferenceModel, tolerances  # noqa: E402
+from reference.make_radau_reference import radau_states  # noqa: E402
+from reference.scipy_model import STATE_NAMES  # noqa: E402
 
 DATA = ROOT / "tests" / "data"
 SETTINGS = {"reference": (1e-11, 1e-4), "check": (1e-12, 1e-5)}  # (rtol, × former atol)
@@ -50,32 +49,10 @@ def radau(drive: str, table_speed: float, nut_speed: float, rtol: float,
           atol_scale: float, *, params: Any = None,
           duration: float = DURATION) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
     """(time, states [15 × n], statistics) on the 1-ms grid (``params``: default the shipped
-    ``wang2021`` set)."""
+    ``wang2021`` set), by :func:`reference.make_radau_reference.radau_states`."""
     params = params if params is not None else feeddrive.preset("wang2021")
     profile = ConstantSpeed(table_speed=table_speed, nut_speed=nut_speed)
-    model = ReferenceModel(params, drive, 0.4, profile)
-    atol = tolerances(model.H) * atol_scale
-    n = int(round(duration / OUTPUT_INTERVAL))
-    grid = np.arange(n + 1) * OUTPUT_INTERVAL
-    cuts = [0.0, profile.ramp_time, duration]
-    y0 = np.zeros(len(STATE_NAMES))
-    ys, ts = [], []
-    stats = {"nfev": 0.0, "njev": 0.0, "nlu": 0.0}
-    started = time.perf_counter()
-    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
-        last = b == cuts[-1]
-        sel = (grid >= a - 1e-12) & ((grid < b - 1e-12) | last)
-        sol = solve_ivp(model, (a, b), y0, method="Radau", rtol=rtol, atol=atol,
-                        jac=model.jacobian, t_eval=grid[sel], dense_output=True)
-        if sol.status != 0:
-            raise RuntimeError(f"Radau failed at t = {sol.t[-1]:g} s: {sol.message}")
-        ts.append(sol.t)
-        ys.append(sol.y)
-        y0 = sol.sol(b)
-        for k in stats:
-            stats[k] += float(getattr(sol, k))
-    stats["wall_time_s"] = time.perf_counter() - started
-    return np.concatenate(ts), np.concatenate(ys, axis=1), stats
+    return radau_states(params, drive, profile, duration, rtol, atol_scale)
 
 
 def make(name: str) -> Path:

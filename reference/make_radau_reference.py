@@ -77,18 +77,17 @@ def stick_slip_figures(time_s: np.ndarray, speed: np.ndarray,
             "cycles": float(max(len(crossings) - 1, 0))}
 
 
-def radau_run(case: Case, rtol: float = RTOL,
-              atol_scale: float = ATOL_SCALE) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
-    """(time, states [15 × n], statistics) of ``case`` on the 1-ms grid."""
-    params = case.parameters()
-    profile = case.profile()
-    model = ReferenceModel(params, case.drive, 0.4, profile)
+def radau_states(params: Any, drive: str, profile: Any, duration: float, rtol: float,
+                 atol_scale: float) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
+    """(time, states [15 × n], statistics) of ``drive`` with ``params`` following
+    ``profile`` from rest on the 1-ms grid, split at the end of the start ramp (where the
+    reference speed has a kink); absolute tolerances ``atol_scale`` × the former fixed
+    defaults."""
+    model = ReferenceModel(params, drive, 0.4, profile)
     atol = tolerances(model.H) * atol_scale
-    n = int(round(case.duration / OUTPUT_INTERVAL))
+    n = int(round(duration / OUTPUT_INTERVAL))
     grid = np.arange(n + 1) * OUTPUT_INTERVAL
-    # split at the end of the start ramp: the reference speed has a kink there
-    cuts = [0.0, profile.ramp_time, case.duration] if profile.ramp_time > 0 else [0.0,
-                                                                                 case.duration]
+    cuts = [0.0, profile.ramp_time, duration] if profile.ramp_time > 0 else [0.0, duration]
     y0 = np.zeros(len(STATE_NAMES))
     ys, ts = [], []
     stats = {"nfev": 0.0, "njev": 0.0, "nlu": 0.0}
@@ -99,7 +98,7 @@ def radau_run(case: Case, rtol: float = RTOL,
         sol = solve_ivp(model, (a, b), y0, method="Radau", rtol=rtol, atol=atol,
                         jac=model.jacobian, t_eval=grid[sel], dense_output=True)
         if sol.status != 0:
-            raise RuntimeError(f"{case.name}: Radau failed at t = {sol.t[-1]:g} s: {sol.message}")
+            raise RuntimeError(f"Radau failed at t = {sol.t[-1]:g} s: {sol.message}")
         ts.append(sol.t)
         ys.append(sol.y)
         y0 = sol.sol(b)
@@ -107,6 +106,16 @@ def radau_run(case: Case, rtol: float = RTOL,
             stats[k] += float(getattr(sol, k))
     stats["wall_time_s"] = time.perf_counter() - started
     return np.concatenate(ts), np.concatenate(ys, axis=1), stats
+
+
+def radau_run(case: Case, rtol: float = RTOL,
+              atol_scale: float = ATOL_SCALE) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
+    """(time, states [15 × n], statistics) of ``case`` on the 1-ms grid."""
+    try:
+        return radau_states(case.parameters(), case.drive, case.profile(), case.duration,
+                            rtol, atol_scale)
+    except RuntimeError as err:
+        raise RuntimeError(f"{case.name}: {err}") from None
 
 
 def make(case: Case) -> Path:
