@@ -376,8 +376,19 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
 
 
 def integrator_line(stats: dict[str, Any]) -> str:
-    """The run's integrator settings in one line: method, the tolerances it ran at (SI) and
-    what they were scaled to."""
+    """The run's integrator settings in one line.
+
+    Parameters
+    ----------
+    stats : dict
+        A run's ``solver_stats``.
+
+    Returns
+    -------
+    str
+        The method, the tolerances it ran at [SI] and the speed scale they were scaled to
+        [mm/s], and the accuracy factor.
+    """
     n = _units.number
     return (f"{stats['method']}, rtol {n(stats['rtol'], 3)}, positions "
             f"{n(stats['position_tolerance'], 3)} m, speeds {n(stats['speed_tolerance'], 3)} "

@@ -72,6 +72,7 @@ DENSE_OUTPUT_ORDER = {"modal": "4 (DOPRI5 steps) / 3 (RODAS4 steps)",
                       "dopri5-fixed": "none (every output a step end)"}
 
 DEFAULT_METHOD = "modal"
+#: rtol of a run that is not given one, × ``accuracy`` [-]
 DEFAULT_RTOL = 1e-6
 #: speed tolerance = SPEED_FRACTION × V [-]
 SPEED_FRACTION = 1e-5
