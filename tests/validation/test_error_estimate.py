@@ -110,3 +110,6 @@ def test_tightened_divides_every_tolerance() -> None:
     assert (shadow.rtol, shadow.position_tolerance, shadow.speed_tolerance,
             shadow.current_tolerance) == pytest.approx((1e-8, 1e-13, 1e-10, 1e-8))
     assert tightened(fd.SolverOptions(accuracy=0.5)).accuracy == pytest.approx(0.05)
+    # an explicit rtol with the other tolerances at their defaults: both tightened
+    mixed = tightened(fd.SolverOptions(rtol=1e-7))
+    assert (mixed.rtol, mixed.accuracy) == pytest.approx((1e-8, 0.1))

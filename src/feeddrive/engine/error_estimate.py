@@ -80,8 +80,10 @@ def tightened(options: SolverOptions, factor: float = SHADOW_FACTOR) -> SolverOp
                              f"needs a run {factor:g}× tighter than rtol "
                              f"{rtol * factor:g}, below {opt.MIN_RELATIVE:g}: give a "
                              "looser setting to estimate its error")
-    # the shadow's settings are one layer (its own), not the run's mixed sources
-    return replace(options, **changes, origin=())
+    # the tightened accuracy is the estimate's own setting, apart from the run's explicit
+    # tolerances (which it divides): not the two in one setting that SolverOptions refuses
+    origin = (("accuracy", "error estimate"),) if "accuracy" in changes else ()
+    return replace(options, **changes, origin=origin)
 
 
 def signal_errors(result: Result, shadow: Result) -> dict[str, dict[str, float]]:
