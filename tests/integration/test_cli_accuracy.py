@@ -142,3 +142,13 @@ def test_the_settings_are_part_of_the_sweep_and_reproduce_keys(tmp_path: Path) -
     with opt.using(fd.SolverOptions(accuracy=0.1)):
         b = study_store(tmp_path / "b", params, StudySettings()).key
     assert a != b
+
+
+def test_a_search_states_the_integrator_it_ran_with() -> None:
+    result = runner.invoke(app, ["creep", "--drive", "cdfs", "--method", "bisect", "--low",
+                                 "1.6", "--high", "1.7", "--json", "--accuracy", "0.5"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    assert data["integrator"] == opt.layered(
+        [("command line", {"accuracy": (0.5, "--accuracy")})]).describe()
+    assert "accuracy 0.5 (from --accuracy)" in data["integrator"]

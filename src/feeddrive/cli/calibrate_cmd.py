@@ -84,13 +84,14 @@ def calibrate_command(
             "tolerance": tolerance, "interval": list(result.interval),
             "reached": result.reached, "reason": result.reason() or None,
             "evaluations": result.evaluations, "verdict_rule": rule.to_dict(),
-            "written": written}
+            "integrator": solver.describe(), "written": written}
     if as_json:
         print_json(data)
     else:
         console.print(f"{unknown} = {result.value:.6g} → {drive.upper()} critical speed "
                       f"{achieved['display']} (target {target:g} mm/s), {result.evaluations} "
                       "evaluations", markup=False, highlight=False)
+        console.print(f"Integrator: {solver.describe()}", markup=False, highlight=False)
         if written:
             console.print(f"wrote {written}", markup=False, highlight=False)
     if not result.reached:

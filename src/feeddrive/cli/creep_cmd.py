@@ -76,7 +76,8 @@ def creep_command(
                                        speed_range=(lo, hi),
                                        coarse_step=min(protocol.COARSE_STEP, (hi - lo) / 2),
                                        resolution=protocol.RESOLUTION)
-        res.update(parameter_set=params.name, table_position_mm=position)
+        res.update(parameter_set=params.name, table_position_mm=position,
+                   integrator=solver.describe())
         if as_json:
             print_json(res)
             return
@@ -85,6 +86,7 @@ def creep_command(
         console.print(f"{drive.upper()} at {position:g} mm, v_n = {nut_speed:g} mm/s: "
                       f"critical speed {shown}", markup=False, highlight=False)
         console.print(f"Rule: {res['rule']}", markup=False, highlight=False)
+        console.print(f"Integrator: {solver.describe()}", markup=False, highlight=False)
         return
     results = []
     if method in ("bisect", "both"):
@@ -102,7 +104,7 @@ def creep_command(
            "critical_speed_mm_s": searches[0]["critical_speed_mm_s"],
            "status": searches[0]["status"], "kind": searches[0]["kind"],
            "bands": searches[0]["bands"], "verdict_rule": rule.to_dict(),
-           "searches": searches}
+           "integrator": solver.describe(), "searches": searches}
     if len(results) == 2:
         a, b = (r.critical_speed for r in results)
         out["start_condition_matters"] = a != b
@@ -118,3 +120,4 @@ def creep_command(
             console.print(f"  protocol {protocol.describe(r.start)}", markup=False,
                           highlight=False)
     console.print(f"Verdict rule: {rule.describe()}", markup=False, highlight=False)
+    console.print(f"Integrator: {solver.describe()}", markup=False, highlight=False)

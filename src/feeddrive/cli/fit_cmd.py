@@ -154,12 +154,14 @@ def fit_command(
     data = result.to_dict()
     data["written"] = written
     data["plot"] = plot
+    data["integrator"] = solver.describe()
     if as_json:
         print_json(data)
         return
     level = f"{100 * confidence:.0f} %"
     _say(f"fit of {len(free)} parameter(s) to {len(traces)} trace(s), {drive.upper()}: "
          f"{result.evaluations} evaluations; {result.message}")
+    _say(f"  integrator: {solver.describe()}")
     for e in result.estimates:
         if math.isfinite(e.low) and math.isfinite(e.high):
             ci = (f"{level} CI {e.low:.6g} … {e.high:.6g} (±{100 * e.relative_half_width:.2g} "
@@ -261,9 +263,11 @@ def predict_command(
         plot_prediction(pred, plot)
     data = pred.to_dict()
     data["plot"] = plot
+    data["integrator"] = solver.describe()
     if as_json:
         print_json(data)
         return
+    _say(f"integrator: {solver.describe()}")
     _say(f"{pred.record.drive.upper()} critical speed from rest over {', '.join(pred.record.free)}"
          f": {samples} samples (seed {seed}), {pred.computed} computed now, store "
          f"{shown(pred.store)}")

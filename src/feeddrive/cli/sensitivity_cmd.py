@@ -103,9 +103,11 @@ def sensitivity_command(
         plot_tornado(result, plot)
     data = result.to_dict()
     data["plot"] = plot
+    data["integrator"] = solver.describe()
     if as_json:
         print_json(data)
         return
+    _say(f"integrator: {solver.describe()}")
     what = "critical speed" if result.quantity == "critical_speed" else \
         "linear band's upper edge"
     steps = ", ±".join(f"{h:g}" for h in STEPS)

@@ -164,7 +164,7 @@ def sweep_command(
            "computed": summary.computed, "failed": summary.failed,
            "seconds": summary.seconds, "points_per_second": summary.rate,
            "executor": summary.executor, "computed_elsewhere": summary.elsewhere,
-           "plot": plot, "output": output}
+           "plot": plot, "output": output, "integrator": solver.describe()}
     if as_json:
         out["points_per_second"] = None if summary.computed == 0 else summary.rate
         print_json(out)
@@ -177,6 +177,7 @@ def sweep_command(
                   + f" in {summary.seconds:.1f} s"
                   + (f", {_speed_column(summary.rate)} on {summary.executor}"
                      if summary.computed else ""), markup=False, highlight=False)
+    console.print(f"integrator: {solver.describe()}", markup=False, highlight=False)
     if plot:
         console.print(f"{shown(plot)}: {shown_plot}", markup=False, highlight=False)
     if output:
