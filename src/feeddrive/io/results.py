@@ -19,6 +19,7 @@ output's name.
 from __future__ import annotations
 
 import importlib.util
+import io
 import json
 from collections.abc import Mapping
 from datetime import UTC, datetime
@@ -173,7 +174,26 @@ def write_netcdf(dataset: xr.Dataset, path: str | Path) -> None:
     path : str or Path
         The file to write.
     """
-    write_bytes(path, dataset.to_netcdf(engine="h5netcdf"))
+    write_bytes(path, _netcdf_bytes(dataset))
+
+
+class _KeptBuffer(io.BytesIO):
+    """An in-memory file whose contents outlive its close (xarray < 2024.3 closes the
+    file object it writes a NetCDF4 file into, and refuses to return bytes for h5netcdf)."""
+
+    kept = b""
+
+    def close(self) -> None:
+        if not self.closed:
+            self.kept = self.getvalue()
+        super().close()
+
+
+def _netcdf_bytes(dataset: Any) -> bytes:
+    """The NetCDF4 (h5netcdf) file of ``dataset`` as bytes, built in memory."""
+    buffer = _KeptBuffer()
+    dataset.to_netcdf(buffer, engine="h5netcdf")
+    return buffer.kept if buffer.closed else buffer.getvalue()
 
 
 #: the run attributes that say where its numbers come from (:func:`provenance`)
