@@ -409,7 +409,7 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     measured times (SI).  Module-level and picklable: every executor runs it.  ``task``:
     ``parameters`` (TOML text), ``drive``, ``table_position`` [m], ``reference_time``,
     ``table_speed``, ``nut_speed``, ``time``, ``signals`` (names), ``solver`` (the fit's
-    integrator settings, :meth:`~feeddrive.engine.options.SolverOptions.record`).
+    integrator settings, :meth:`feeddrive.SolverOptions.record`).
 
     Parameters
     ----------

@@ -378,7 +378,7 @@ class SweepConfig:
         dict
             The full parameter set as TOML text, drive, table position [m], nut speed [m/s],
             the quantity settings and the integrator settings in force
-            (:meth:`~feeddrive.engine.options.SolverOptions.record`).
+            (:meth:`feeddrive.SolverOptions.record`).
 
         Raises
         ------
