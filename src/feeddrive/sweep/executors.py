@@ -19,6 +19,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import ctypes
+import logging
 import multiprocessing
 import os
 import signal
@@ -311,6 +312,11 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
                 yield pool, n, f"dask ({where}, {n} workers)"
             except BaseException:
                 if cluster is not None:  # Ctrl-C or an error: stop our workers now
+                    # the client's comms to the killed workers fail as they close (a
+                    # CommClosedError logged with its traceback by distributed.batched):
+                    # expected now, so this process's distributed logs go quiet first
+                    for name in ("distributed", "distributed.batched", "distributed.client"):
+                        logging.getLogger(name).setLevel(logging.CRITICAL)
                     _kill_workers(cluster)
                 raise
         return
