@@ -176,13 +176,27 @@ def fit_command(
         _say(f"  poorly determined combination (singular value {c['singular_value_ratio']:.2g}"
              f" of the largest): {combo}")
     for r in result.residuals:
+        error = (f"; integration error {r.integration_error:.3g} "
+                 f"({r.integration_error / r.noise:.2g}× the noise)"
+                 if math.isfinite(r.integration_error) else "")
+        structure = f"; {r.diagnostics.describe()}" if r.diagnostics is not None else ""
         _say(f"  residual {shown(Path(r.source).name)} {r.signal}: rms {r.rms:.4g}, "
-             f"{r.ratio:.2f}× the data's noise {r.noise:.3g} [SI]")
-    if not result.residual_ok:
-        err_console.print("warning: poor fit: a residual exceeds 2× the data's own noise; "
-                          "the model does not explain the data, and no parameter is "
-                          "reported determined", markup=False, highlight=False,
-                          soft_wrap=True)
+             f"{r.ratio:.2f}× the data's noise {r.noise:.3g} [SI]{error}{structure}")
+    check = result.integration
+    if check is not None:
+        _say(f"  integrator accuracy {check.accuracy:g} ({check.steps} tightening(s)): "
+             + ("estimated integration error ≤ "
+                f"{data['integration_check']['limit_fraction_of_noise']:g}× every signal's "
+                "noise" if check.met else f"intervals withheld: {check.reason}"))
+    if result.hac is not None:
+        bands = ", ".join(f"{b:.3g}" for b in result.hac.bandwidths)
+        _say(f"  covariance: HAC sandwich (Newey–West, Bartlett kernel), bandwidth per "
+             f"record {bands} samples (Andrews 1991); "
+             + ("stable at half and double the bandwidth" if result.hac.stable else
+                "NOT stable at half and double the bandwidth: the widest used"))
+    if result.inadequate:
+        err_console.print(f"warning: {result.inadequate}; intervals withheld", markup=False,
+                          highlight=False, soft_wrap=True)
     if written:
         _say(f"wrote {shown(written)}")
     if plot:
