@@ -66,7 +66,7 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
 def fit_command(
     traces: Annotated[list[str], typer.Argument(
         help="Trace CSV files (simulate --output files, or measured: docs/measured-data.md), "
-        "one experiment each, fitted together.")],
+        "or MATLAB .mat records with --map; one experiment each, fitted together.")],
     free: Annotated[list[str] | None, typer.Option(
         "--free", help="Dotted parameter path to fit (repeat for several), e.g. "
         "controller.velocity_integral_gain; bounds: the parameter's plausible range.")] = None,
@@ -88,6 +88,12 @@ def fit_command(
     profile_file: str | None = typer.Option(
         None, "--profile", help="Reference of every trace from a CSV (time [s], table_speed "
         "[mm/s], as simulate --profile-file), on the traces' clock; it must cover them."),
+    record_map: Annotated[list[str] | None, typer.Option(
+        "--map", help="MATLAB .mat records (v5; v7.3 through h5py): ROLE=VARIABLE, repeat or "
+        "quote several, e.g. --map 'time=t position=qm reference=qg force=vir'. Roles: "
+        "time [s], reference (position reference [m]) or speed_reference [m/s], and the "
+        "fitted position [m], speed [m/s], current [A], force [N] (SI; docs/fitting.md).")
+    ] = None,
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     confidence: float = typer.Option(0.95, "--confidence", help="Interval level [fraction]."),
     max_evaluations: int = typer.Option(200, "--max-evaluations",
@@ -129,8 +135,24 @@ def fit_command(
 
         prof = from_csv(profile_file)
         reference = (prof.time, prof.table_speed)
-    experiments = [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
-                                   torque_constant=torque_constant) for t in traces]
+    if record_map:
+        from ..analysis.rig_record import parse_map, read_rig_record
+
+        if signal or speed is not None or reference is not None:
+            raise ValueError("--map: the roles choose the signals and the reference; not with "
+                             "--signal, --command-speed or --profile")
+        roles = parse_map(record_map)
+        records = [read_rig_record(t, roles, params, drive=drive,
+                                   table_position=table_position) for t in traces]
+        experiments = [r.experiment for r in records]
+        notes = [n for r in records for n in r.notes]
+        for note in notes if not as_json else []:
+            _say(f"  {note}")
+    else:
+        notes = []
+        experiments = [read_experiment(t, signals=signal, command_speed=speed,
+                                       profile=reference, torque_constant=torque_constant)
+                       for t in traces]
     progress = None if as_json else (lambda msg: console.print(f"  {msg}", markup=False,
                                                                highlight=False))
     result = fit_drive(params, experiments, free, drive=drive, table_position=table_position,
@@ -154,6 +176,7 @@ def fit_command(
     data = result.to_dict()
     data["written"] = written
     data["plot"] = plot
+    data["record_notes"] = notes
     if as_json:
         print_json(data)
         return
