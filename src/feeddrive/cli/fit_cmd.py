@@ -59,6 +59,49 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
     return system.model(ConstantSpeed(0.0)).parameter(slot)
 
 
+def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_position: float,
+                 signal: list[str] | None, command_speed: float | None,
+                 profile_file: str | None, record_map: list[str] | None,
+                 as_json: bool) -> tuple[list[Any], list[str]]:
+    """The records of ``fit`` and ``validate``: CSV traces (``read_experiment``) or, with
+    ``--map``, MATLAB records (``read_rig_record``); and the cleaning notes (printed unless
+    JSON)."""
+    from ..analysis.fit import read_experiment
+
+    if profile_file and command_speed is not None:
+        raise ValueError("--profile: give either --profile or --command-speed, not both")
+    speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
+    if record_map:
+        from ..analysis.rig_record import parse_map, read_rig_record
+
+        if signal or speed is not None or profile_file:
+            raise ValueError("--map: the roles choose the signals and the reference; not with "
+                             "--signal, --command-speed or --profile")
+        roles = parse_map(record_map)
+        records = [read_rig_record(t, roles, params, drive=drive,
+                                   table_position=table_position) for t in traces]
+        notes = [n for r in records for n in r.notes]
+        for note in notes if not as_json else []:
+            _say(f"  {note}")
+        return [r.experiment for r in records], notes
+    reference = None
+    if profile_file:
+        from ..model.reference import from_csv
+
+        prof = from_csv(profile_file)
+        reference = (prof.time, prof.table_speed)
+    torque_constant = _table_motor_constant(params, drive, table_position)
+    return [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
+                            torque_constant=torque_constant) for t in traces], []
+
+
+#: the --map option of fit and validate
+_MAP_HELP = ("MATLAB .mat records (v5; v7.3 through h5py): ROLE=VARIABLE, repeat or quote "
+             "several, e.g. --map 'time=t position=qm reference=qg force=vir'. Roles: time "
+             "[s], reference (position reference [m]) or speed_reference [m/s], and the fitted "
+             "position [m], speed [m/s], current [A], force [N] (SI; docs/fitting.md).")
+
+
 @app.command("fit")
 @user_errors
 @outputs(out=(".toml",), plot=PLOT_FORMATS)
@@ -88,12 +131,7 @@ def fit_command(
     profile_file: str | None = typer.Option(
         None, "--profile", help="Reference of every trace from a CSV (time [s], table_speed "
         "[mm/s], as simulate --profile-file), on the traces' clock; it must cover them."),
-    record_map: Annotated[list[str] | None, typer.Option(
-        "--map", help="MATLAB .mat records (v5; v7.3 through h5py): ROLE=VARIABLE, repeat or "
-        "quote several, e.g. --map 'time=t position=qm reference=qg force=vir'. Roles: "
-        "time [s], reference (position reference [m]) or speed_reference [m/s], and the "
-        "fitted position [m], speed [m/s], current [A], force [N] (SI; docs/fitting.md).")
-    ] = None,
+    record_map: Annotated[list[str] | None, typer.Option("--map", help=_MAP_HELP)] = None,
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     confidence: float = typer.Option(0.95, "--confidence", help="Interval level [fraction]."),
     max_evaluations: int = typer.Option(200, "--max-evaluations",
@@ -117,42 +155,16 @@ def fit_command(
     experiments at once), with standard errors, correlations, identifiability (condition
     number, poorly determined combinations), profile-likelihood intervals where the linear
     one is not credible, and a residual check. Values are in the parameter file's SI units."""
-    from ..analysis.fit import fit_drive, plot_residuals, read_experiment
+    from ..analysis.fit import fit_drive, plot_residuals
 
     if not free:
         raise ValueError("--free: give at least one parameter path to fit")
     if not (0 < confidence < 1):
         raise ValueError(f"--confidence {confidence!r}: expected a fraction in (0, 1)")
-    if profile_file and command_speed is not None:
-        raise ValueError("--profile: give either --profile or --command-speed, not both")
     params = resolve_parameters(preset_name, params_file, drive)
     table_position = _units.position("--position", position, params, drive)
-    speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
-    torque_constant = _table_motor_constant(params, drive, table_position)
-    reference = None
-    if profile_file:
-        from ..model.reference import from_csv
-
-        prof = from_csv(profile_file)
-        reference = (prof.time, prof.table_speed)
-    if record_map:
-        from ..analysis.rig_record import parse_map, read_rig_record
-
-        if signal or speed is not None or reference is not None:
-            raise ValueError("--map: the roles choose the signals and the reference; not with "
-                             "--signal, --command-speed or --profile")
-        roles = parse_map(record_map)
-        records = [read_rig_record(t, roles, params, drive=drive,
-                                   table_position=table_position) for t in traces]
-        experiments = [r.experiment for r in records]
-        notes = [n for r in records for n in r.notes]
-        for note in notes if not as_json else []:
-            _say(f"  {note}")
-    else:
-        notes = []
-        experiments = [read_experiment(t, signals=signal, command_speed=speed,
-                                       profile=reference, torque_constant=torque_constant)
-                       for t in traces]
+    experiments, notes = _read_traces(traces, params, drive, table_position, signal,
+                                      command_speed, profile_file, record_map, as_json)
     progress = None if as_json else (lambda msg: console.print(f"  {msg}", markup=False,
                                                                highlight=False))
     result = fit_drive(params, experiments, free, drive=drive, table_position=table_position,
@@ -316,5 +328,64 @@ def predict_command(
          f"{data['speed_range_mm_s'][0]:g}–{data['speed_range_mm_s'][1]:g} mm/s; "
          f"{data['below_range']} below, {data['above_range']} above the range, "
          f"{data['failed']} failed; {data['refused_draws']} draws refused (invalid sets)")
+    if plot:
+        _say(f"wrote {shown(plot)}")
+
+
+@app.command("validate")
+@user_errors
+@outputs(plot=PLOT_FORMATS)
+@accuracy_options
+def validate_command(
+    fit_file: str = typer.Argument(..., help="A fitted file (feeddrive fit --out)."),
+    traces: Annotated[list[str], typer.Argument(
+        help="Held-out records (not used in the fit): trace CSV files, or MATLAB .mat "
+        "records with --map.")] = ...,  # type: ignore[assignment]
+    drive: str | None = typer.Option(None, "--drive", metavar=ALL_DRIVES,
+                                     help="The records' drive (default: the fit's); a fit "
+                                     "made for another drive is refused."),
+    signal: Annotated[list[str] | None, typer.Option(
+        "--signal", help="Measured signal to compare (repeat), as fit --signal.")] = None,
+    command_speed: float | None = typer.Option(
+        None, "--command-speed", help="Reference of records without a command column: "
+        "constant table speed [mm/s] after a 0.1-s ramp."),
+    profile_file: str | None = typer.Option(
+        None, "--profile", help="Reference of every record from a CSV (time [s], "
+        "table_speed [mm/s]), as fit --profile."),
+    record_map: Annotated[list[str] | None, typer.Option("--map", help=_MAP_HELP)] = None,
+    level: float = typer.Option(0.95, "--level", help="Level of the prediction band "
+                                "[fraction]."),
+    plot: str | None = typer.Option(None, "--plot", help="Write measured, predicted and "
+                                    "band per signal to FILE.png."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
+    solver: Any = None,
+) -> None:
+    """Simulate held-out records with a fitted set: per signal the fit % of the
+    system-identification benchmarks (100·(1 − ‖y − ŷ‖/‖y − ȳ‖)), the NRMSE (rms error over
+    the signal's range) and the fraction of the measured samples inside the prediction band
+    the fit's covariance and the record's noise give (docs/fitting.md)."""
+    from ..analysis.predict import read_fit_record
+    from ..analysis.validate import plot_validation, validate
+
+    record = read_fit_record(fit_file)
+    experiments, notes = _read_traces(traces, record.parameters, record.drive,
+                                      record.table_position, signal, command_speed,
+                                      profile_file, record_map, as_json)
+    result = validate(fit_file, experiments, drive=drive, level=level)
+    if plot:
+        plot_validation(result, plot)
+    data = result.to_dict()
+    data["record_notes"] = notes
+    data["plot"] = plot
+    if as_json:
+        print_json(data)
+        return
+    _say(f"{Path(fit_file).name} ({record.drive.upper()}, free: {', '.join(record.free)}) on "
+         f"{len(experiments)} held-out record(s):")
+    for s in result.signals:
+        _say(f"  {shown(Path(s.source).name)} {s.signal}: fit {s.fit_percent:.2f} %, NRMSE "
+             f"{s.nrmse:.3g}, {100 * s.inside_band:.1f} % inside the {100 * level:.0f} % "
+             "prediction band")
     if plot:
         _say(f"wrote {shown(plot)}")
