@@ -33,14 +33,15 @@ errors; else the intervals are withheld (:class:`IntegrationCheck`).
 Uncertainty.  The covariance is the HAC sandwich of
 :mod:`~feeddrive.analysis.fit_residuals` (the white-noise s²(JᵀJ)⁻¹ kept for comparison);
 a residual above ``MAX_RESIDUAL_RATIO`` × its noise: "model inadequate", intervals withheld.
-Formerly: covariance s²(JᵀJ)⁻¹ (s² = SSR/dof) from the Jacobian at the optimum (forward
-differences, each column one batch of simulations, run in parallel through the sweep
-executors when asked), correlation matrix, the condition number of J with columns scaled by
-the parameter values, and the poorly determined combinations: the right singular vectors
-whose singular value is below 1/``MAX_CONDITION`` of the largest.  A parameter whose
+The Jacobian at the optimum: forward differences, each column one batch of simulations,
+run in parallel through the sweep executors when asked.  Also: the correlation matrix, the
+condition number of J with columns scaled by the parameter values, and the poorly
+determined combinations: the right singular vectors whose singular value is below
+1/``MAX_CONDITION`` of the largest.  A parameter whose
 linear interval is not credible (half-width above ``PROFILE_ABOVE`` of its value, or
 reaching a bound) gets a profile-likelihood interval: it is fixed on a grid and the others
-refitted; the interval keeps the values whose SSR stays below SSR·(1 + F(1, dof)/dof).
+refitted; the interval keeps the values whose SSR stays below SSR·(1 + κ·F(1, dof)/dof), κ
+its HAC-to-white variance ratio (at least 1).
 """
 
 from __future__ import annotations
