@@ -33,35 +33,20 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from reference.fit_traces import measured, radau_trace  # noqa: E402
+from reference.fit_traces import FACTORS as FREE  # noqa: E402
+from reference.fit_traces import SPEEDS, calibration_truth, measured, radau_trace  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.analysis.fit import fit_drive  # noqa: E402
 
-FREE = {"controller.velocity_integral_gain": 1.2,
-        "friction.screw.positive.viscous_coefficient": 0.8,
-        "friction.screw.positive.static_force": 1.1}
-SPEEDS = (1.0e-3, 2.0e-3, 5.0e-3)  # [m/s]
 QUANTUM = 0.05e-6  # [m]
 CURRENT_NOISE = 0.01  # [-] of the current's rms
-
-
-def truth_set() -> tuple[fd.DriveParameters, dict[str, float]]:
-    base = fd.preset("wang2021")
-    p, values = base, {}
-    for path, factor in FREE.items():
-        value: Any = base
-        for part in path.split("."):
-            value = getattr(value, part)
-        values[path] = float(value) * factor
-        p = p.replace_path(path, values[path])
-    return p, values
 
 
 def calibrate(seeds: int, duration: float, noise_scale: float = 1.0,
               say: Any = print) -> dict[str, Any]:
     """Fit ``seeds`` noisy measurements of the Radau traces; the figures per parameter."""
-    truth, values = truth_set()
+    truth, values = calibration_truth()
     traces = [radau_trace(truth, v, duration) for v in SPEEDS]
     base = fd.preset("wang2021")
     rows: dict[str, list[dict[str, float]]] = {p: [] for p in FREE}

@@ -31,6 +31,12 @@ from feeddrive.parameters import DriveParameters  # noqa: E402
 from reference.make_radau_reference import radau_states  # noqa: E402
 from reference.scipy_model import STATE_NAMES  # noqa: E402
 
+#: the calibration's truth: wang2021 with these factors (issue 22's Acceptance)
+FACTORS = {"controller.velocity_integral_gain": 1.2,
+           "friction.screw.positive.viscous_coefficient": 0.8,
+           "friction.screw.positive.static_force": 1.1}
+SPEEDS = (1.0e-3, 2.0e-3, 5.0e-3)  # [m/s]
+
 RTOL = 1e-9
 ATOL_SCALE = 1e-2
 RAMP_TIME = 0.1  # [s], as synthetic_experiment and `simulate`
@@ -77,3 +83,18 @@ def measured(trace: Trace, seed: int, *, position_quantum: float = 0.05e-6,
     return Experiment(source=f"radau {trace.speed * 1e3:g} mm/s (seed {seed})", time=t,
                       signals=signals, reference_time=t, table_speed=ref,
                       noise={k: noise_level(v) for k, v in signals.items()})
+
+
+def calibration_truth() -> tuple[DriveParameters, dict[str, float]]:
+    """``wang2021`` with :data:`FACTORS` applied, and the true values by path [SI]."""
+    import feeddrive as fd
+
+    base = fd.preset("wang2021")
+    p, values = base, {}
+    for path, factor in FACTORS.items():
+        value: object = base
+        for part in path.split("."):
+            value = getattr(value, part)
+        values[path] = float(value) * factor  # type: ignore[arg-type]
+        p = p.replace_path(path, values[path])
+    return p, values
