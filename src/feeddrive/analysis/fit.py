@@ -767,7 +767,7 @@ class SignalResidual:
 @dataclass(frozen=True)
 class IntegrationCheck:
     """How the fit chose its integrator accuracy: the forward model's estimated integration
-    error at the optimum against :data:`ERROR_TO_NOISE` × each fitted signal's noise.
+    error at the optimum against ``ERROR_TO_NOISE`` × each fitted signal's noise.
 
     Parameters
     ----------
@@ -778,7 +778,7 @@ class IntegrationCheck:
     rtol : float or None
         Their explicit relative tolerance (None: the default × ``accuracy``) [-].
     steps : int
-        Tightenings made (each ×1/:data:`ACCURACY_STEP`).
+        Tightenings made (each ×1/``ACCURACY_STEP``).
     history : tuple of dict
         Per attempt: ``accuracy``, ``rtol``, ``worst_ratio`` (error / noise, the largest) and
         ``signals`` (source, signal, error [SI], noise [SI], ratio).
@@ -1142,8 +1142,8 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
         Run the search on growing record lengths (``horizons``).
     accuracy_check : bool, default True
         At the optimum, estimate the forward model's integration error per fitted signal
-        and tighten the integrator (``accuracy`` × 0.1, at most :data:`MAX_ACCURACY_STEPS`
-        times, refitting each time) until it is at most :data:`ERROR_TO_NOISE` × the
+        and tighten the integrator (``accuracy`` × 0.1, at most ``MAX_ACCURACY_STEPS``
+        times, refitting each time) until it is at most ``ERROR_TO_NOISE`` × the
         signal's noise; no intervals when that is not reached.
     workers : int, optional
         Local worker processes for the Jacobian columns.
@@ -1372,8 +1372,8 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
                      ) -> tuple[np.ndarray, _Evaluator, Any, IntegrationCheck, int]:
     """Numerical error below the noise (issue 36 item 1): at the optimum, the estimated
     global integration error of every fitted signal (``simulate(error_estimate=True)``,
-    :mod:`feeddrive.engine.error_estimate`) against :data:`ERROR_TO_NOISE` × its noise;
-    while above, every tolerance ÷ :data:`ACCURACY_STEP`
+    :mod:`feeddrive.engine.error_estimate`) against ``ERROR_TO_NOISE`` × its noise;
+    while above, every tolerance ÷ ``ACCURACY_STEP``
     (:func:`~feeddrive.engine.error_estimate.tightened`: ``accuracy`` for the defaults, the
     explicit ones divided) and the search resumed from the optimum on the whole records.
 

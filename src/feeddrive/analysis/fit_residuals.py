@@ -172,7 +172,7 @@ def andrews_bandwidth(scores: np.ndarray) -> float:
 
         α̂(1) = Σ 4ρ²σ⁴/((1−ρ)⁶(1+ρ)²) / Σ σ⁴/(1−ρ)⁴,   b = 1.1447 (α̂(1) T)^{1/3},
 
-    at least 1 and at most :data:`MAX_BANDWIDTH_FRACTION` of T.
+    at least 1 and at most ``MAX_BANDWIDTH_FRACTION`` of T.
 
     Parameters
     ----------

@@ -11,10 +11,11 @@ record's instants):
 * **NRMSE** = rms(y − ŷ) / (max y − min y), the error relative to the signal's range;
 * the **fraction inside the prediction band**: ŷ ± z·√(var_θ + σ²), z the normal quantile
   of ``level``, var_θ the fit's parameter covariance carried to the output through the
-  output's sensitivities (forward differences, step :data:`~feeddrive.analysis.fit.JACOBIAN_STEP`
-  of each value; the delta method) and σ the record's own noise (estimated from the data, as
-  the fit weighs it).  With a right model and a calibrated covariance about ``level`` of the
-  samples lie inside; far fewer says the model or the intervals do not carry to this record.
+  output's sensitivities (forward differences, step ``JACOBIAN_STEP`` of
+  :mod:`~feeddrive.analysis.fit` times each value; the delta method) and σ the record's own
+  noise (estimated from the data, as the fit weighs it).  With a right model and a
+  calibrated covariance about ``level`` of the samples lie inside; far fewer says the model
+  or the intervals do not carry to this record.
 
 A fitted file made for another drive than the one asked for, or whose free parameters these
 records cannot show (a negative-direction branch on records that move positive only, …),
