@@ -105,6 +105,7 @@ COMMANDS: dict[str, Callable[[str, Path], list[str]]] = {
     "fit": lambda f, out: ["fit", f, "--free", "table.mass", "--out", str(out / "m.toml")],
     "fit --params": lambda f, out: ["fit", f, "--free", "table.mass", "--params", f],
     "predict": lambda f, out: ["predict", f],
+    "validate": lambda f, out: ["validate", f, f],
     "sensitivity --params": lambda f, out: ["sensitivity", "--params", f],
 }
 

@@ -17,8 +17,8 @@ from feeddrive.engine import simulate as sim_module
 from feeddrive.parameters import ParameterError
 
 runner = CliRunner()
-COMMANDS = (["simulate"], ["creep"], ["calibrate"], ["fit"], ["predict"], ["sensitivity"],
-            ["sweep"], ["export", "fmu"])
+COMMANDS = (["simulate"], ["creep"], ["calibrate"], ["fit"], ["predict"], ["validate"],
+            ["sensitivity"], ["sweep"], ["export", "fmu"])
 
 
 @pytest.mark.parametrize("command", COMMANDS, ids=" ".join)

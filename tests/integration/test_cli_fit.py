@@ -219,3 +219,32 @@ def test_profile_that_does_not_cover_the_trace_is_refused(tmp_path: Path) -> Non
     assert done.returncode == 2, done.stderr
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "non-overlapping times" in lines[0]
+
+
+def test_fit_a_mat_record_with_map_and_refuse_a_bad_map(tmp_path: Path) -> None:
+    """Issue 36 item 5 on the command line: an EMPS-layout .mat record (position reference as
+    the input, force fitted) with --map, the cleaning stated; a --map variable that is absent
+    refused in one line, exit status 2."""
+    from feeddrive.analysis.rig_record import emps_layout
+
+    base = fd.preset("linear-motor-example")
+    truth = base.replace_path("table.mass", 24.0)
+    emps_layout(tmp_path / "est.mat", truth, drive="linear-motor", duration=1.2)
+    import scipy.io as sio
+
+    d = sio.loadmat(tmp_path / "est.mat")
+    d["qm"][50:53] = np.nan
+    sio.savemat(tmp_path / "est.mat", {k: d[k] for k in ("t", "qg", "qm", "vir")})
+    args = ["fit", "est.mat", "--drive", "linear-motor", "--preset", "linear-motor-example",
+            "--free", "table.mass", "--map", "time=t position=qm reference=qg force=vir"]
+    res = _run(*args, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "1 run(s) of NaN or infinite samples (3 samples) dropped" in res.stdout
+    assert "covariance: HAC sandwich" in res.stdout
+    data = json.loads(_run(*args, "--json", cwd=tmp_path).stdout)
+    (mass,) = data["estimates"]
+    assert mass["ci_low"] <= 24.0 <= mass["ci_high"]
+    assert data["record_notes"] and data["integration_check"]["met"]
+    bad = _run(*args[:-1], "time=t position=qm reference=qg force=vire", cwd=tmp_path)
+    assert bad.returncode == 2
+    assert bad.stderr.strip().count("\n") == 0 and "vire" in bad.stderr

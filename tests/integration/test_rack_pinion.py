@@ -60,3 +60,19 @@ def test_gearbox_friction_is_a_site_of_its_own():
         fd.ConstantSpeed(1e-3))
     assert dict(model.sites) == {"gearbox": "lugre", "guide": "lugre"}
     assert model.parameter("friction.gearbox.positive.coulomb_force") == 30.0
+
+
+def test_gear_ratio_one_is_accepted():
+    """Issue 36 item 5 (a direct-drive rack and pinion, as on the public rig): gear ratio 1 was
+    refused while the message stated the range "1 … 1000"; it is a valid set and simulates,
+    and below 1 is still refused naming the field."""
+    import dataclasses
+
+    p = fd.preset("rack-pinion-example")
+    direct = p.replace_path("rack_pinion.gear_ratio", 1.0)
+    assert direct.rack_pinion.gear_ratio == 1.0
+    system = fd.DriveSystem(direct, drive="rack-pinion", table_position=0.4)
+    result = fd.simulate(system, fd.ConstantSpeed(10e-3), 0.5)
+    assert math.isfinite(float(result["table_speed"][-1]))
+    with pytest.raises(ParameterError, match="gear_ratio"):
+        dataclasses.replace(p.rack_pinion, gear_ratio=0.99)

@@ -45,7 +45,9 @@ def accuracy_options(fn: F) -> F:
     run it starts takes them, in this process and in the workers of a sweep, fit or
     prediction), and receives them as its parameter ``solver``.
     """
-    sig = inspect.signature(fn)
+    # annotations evaluated: a string "Annotated[..., typer.Option(...)]" in the signature
+    # given to typer would lose its option (the --free, --weight and --signal help texts did)
+    sig = inspect.signature(fn, eval_str=True)
     kept = [p for p in sig.parameters.values() if p.name != "solver"]
     added = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
                                default=typer.Option(None, flag, help=text),

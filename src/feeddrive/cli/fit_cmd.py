@@ -59,6 +59,49 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
     return system.model(ConstantSpeed(0.0)).parameter(slot)
 
 
+def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_position: float,
+                 signal: list[str] | None, command_speed: float | None,
+                 profile_file: str | None, record_map: list[str] | None,
+                 as_json: bool) -> tuple[list[Any], list[str]]:
+    """The records of ``fit`` and ``validate``: CSV traces (``read_experiment``) or, with
+    ``--map``, MATLAB records (``read_rig_record``); and the cleaning notes (printed unless
+    JSON)."""
+    from ..analysis.fit import read_experiment
+
+    if profile_file and command_speed is not None:
+        raise ValueError("--profile: give either --profile or --command-speed, not both")
+    speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
+    if record_map:
+        from ..analysis.rig_record import parse_map, read_rig_record
+
+        if signal or speed is not None or profile_file:
+            raise ValueError("--map: the roles choose the signals and the reference; not with "
+                             "--signal, --command-speed or --profile")
+        roles = parse_map(record_map)
+        records = [read_rig_record(t, roles, params, drive=drive,
+                                   table_position=table_position) for t in traces]
+        notes = [n for r in records for n in r.notes]
+        for note in notes if not as_json else []:
+            _say(f"  {note}")
+        return [r.experiment for r in records], notes
+    reference = None
+    if profile_file:
+        from ..model.reference import from_csv
+
+        prof = from_csv(profile_file)
+        reference = (prof.time, prof.table_speed)
+    torque_constant = _table_motor_constant(params, drive, table_position)
+    return [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
+                            torque_constant=torque_constant) for t in traces], []
+
+
+#: the --map option of fit and validate
+_MAP_HELP = ("MATLAB .mat records (v5; v7.3 through h5py): ROLE=VARIABLE, repeat or quote "
+             "several, e.g. --map 'time=t position=qm reference=qg force=vir'. Roles: time "
+             "[s], reference (position reference [m]) or speed_reference [m/s], and the fitted "
+             "position [m], speed [m/s], current [A], force [N] (SI; docs/fitting.md).")
+
+
 @app.command("fit")
 @user_errors
 @outputs(out=(".toml",), plot=PLOT_FORMATS)
@@ -66,7 +109,7 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
 def fit_command(
     traces: Annotated[list[str], typer.Argument(
         help="Trace CSV files (simulate --output files, or measured: docs/measured-data.md), "
-        "one experiment each, fitted together.")],
+        "or MATLAB .mat records with --map; one experiment each, fitted together.")],
     free: Annotated[list[str] | None, typer.Option(
         "--free", help="Dotted parameter path to fit (repeat for several), e.g. "
         "controller.velocity_integral_gain; bounds: the parameter's plausible range.")] = None,
@@ -88,6 +131,7 @@ def fit_command(
     profile_file: str | None = typer.Option(
         None, "--profile", help="Reference of every trace from a CSV (time [s], table_speed "
         "[mm/s], as simulate --profile-file), on the traces' clock; it must cover them."),
+    record_map: Annotated[list[str] | None, typer.Option("--map", help=_MAP_HELP)] = None,
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     confidence: float = typer.Option(0.95, "--confidence", help="Interval level [fraction]."),
     max_evaluations: int = typer.Option(200, "--max-evaluations",
@@ -111,26 +155,16 @@ def fit_command(
     experiments at once), with standard errors, correlations, identifiability (condition
     number, poorly determined combinations), profile-likelihood intervals where the linear
     one is not credible, and a residual check. Values are in the parameter file's SI units."""
-    from ..analysis.fit import fit_drive, plot_residuals, read_experiment
+    from ..analysis.fit import fit_drive, plot_residuals
 
     if not free:
         raise ValueError("--free: give at least one parameter path to fit")
     if not (0 < confidence < 1):
         raise ValueError(f"--confidence {confidence!r}: expected a fraction in (0, 1)")
-    if profile_file and command_speed is not None:
-        raise ValueError("--profile: give either --profile or --command-speed, not both")
     params = resolve_parameters(preset_name, params_file, drive)
     table_position = _units.position("--position", position, params, drive)
-    speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
-    torque_constant = _table_motor_constant(params, drive, table_position)
-    reference = None
-    if profile_file:
-        from ..model.reference import from_csv
-
-        prof = from_csv(profile_file)
-        reference = (prof.time, prof.table_speed)
-    experiments = [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
-                                   torque_constant=torque_constant) for t in traces]
+    experiments, notes = _read_traces(traces, params, drive, table_position, signal,
+                                      command_speed, profile_file, record_map, as_json)
     progress = None if as_json else (lambda msg: console.print(f"  {msg}", markup=False,
                                                                highlight=False))
     result = fit_drive(params, experiments, free, drive=drive, table_position=table_position,
@@ -154,14 +188,17 @@ def fit_command(
     data = result.to_dict()
     data["written"] = written
     data["plot"] = plot
+    # the settings the fit started with; those it ended with: integration_check
     data["integrator"] = solver.describe()
+    data["record_notes"] = notes
     if as_json:
         print_json(data)
         return
     level = f"{100 * confidence:.0f} %"
     _say(f"fit of {len(free)} parameter(s) to {len(traces)} trace(s), {drive.upper()}: "
          f"{result.evaluations} evaluations; {result.message}")
-    _say(f"  integrator: {solver.describe()}")
+    _say(f"  integrator as started (the accuracy check below may tighten it): "
+         f"{solver.describe()}")
     for e in result.estimates:
         if math.isfinite(e.low) and math.isfinite(e.high):
             ci = (f"{level} CI {e.low:.6g} … {e.high:.6g} (±{100 * e.relative_half_width:.2g} "
@@ -178,13 +215,30 @@ def fit_command(
         _say(f"  poorly determined combination (singular value {c['singular_value_ratio']:.2g}"
              f" of the largest): {combo}")
     for r in result.residuals:
+        error = (f"; integration error {r.integration_error:.3g} "
+                 f"({r.integration_error / r.noise:.2g}× the noise)"
+                 if math.isfinite(r.integration_error) else "")
+        structure = f"; {r.diagnostics.describe()}" if r.diagnostics is not None else ""
         _say(f"  residual {shown(Path(r.source).name)} {r.signal}: rms {r.rms:.4g}, "
-             f"{r.ratio:.2f}× the data's noise {r.noise:.3g} [SI]")
-    if not result.residual_ok:
-        err_console.print("warning: poor fit: a residual exceeds 2× the data's own noise; "
-                          "the model does not explain the data, and no parameter is "
-                          "reported determined", markup=False, highlight=False,
-                          soft_wrap=True)
+             f"{r.ratio:.2f}× the data's noise {r.noise:.3g} [SI]{error}{structure}")
+    check = result.integration
+    if check is not None:
+        shift = check.history[-1].get("estimate_shift_stderr") if check.history else None
+        _say(f"  integrator accuracy {check.accuracy:g} ({check.steps} tightening(s)): "
+             + ("estimated integration error ≤ "
+                f"{data['integration_check']['limit_fraction_of_noise']:g}× every signal's "
+                f"noise; the estimates move by {shift:.2g} standard errors with it ten times "
+                "tighter" if check.met and shift is not None
+                else f"intervals withheld: {check.reason}"))
+    if result.hac is not None:
+        bands = ", ".join(f"{b:.3g}" for b in result.hac.bandwidths)
+        _say(f"  covariance: HAC sandwich (Newey–West, Bartlett kernel), bandwidth per "
+             f"record {bands} samples (Andrews 1991); "
+             + ("stable at half and double the bandwidth" if result.hac.stable else
+                "NOT stable at half and double the bandwidth: the widest used"))
+    if result.inadequate:
+        err_console.print(f"warning: {result.inadequate}; intervals withheld", markup=False,
+                          highlight=False, soft_wrap=True)
     if written:
         _say(f"wrote {shown(written)}")
     if plot:
@@ -283,5 +337,64 @@ def predict_command(
          f"{data['speed_range_mm_s'][0]:g}–{data['speed_range_mm_s'][1]:g} mm/s; "
          f"{data['below_range']} below, {data['above_range']} above the range, "
          f"{data['failed']} failed; {data['refused_draws']} draws refused (invalid sets)")
+    if plot:
+        _say(f"wrote {shown(plot)}")
+
+
+@app.command("validate")
+@user_errors
+@outputs(plot=PLOT_FORMATS)
+@accuracy_options
+def validate_command(
+    fit_file: str = typer.Argument(..., help="A fitted file (feeddrive fit --out)."),
+    traces: Annotated[list[str], typer.Argument(
+        help="Held-out records (not used in the fit): trace CSV files, or MATLAB .mat "
+        "records with --map.")] = ...,  # type: ignore[assignment]
+    drive: str | None = typer.Option(None, "--drive", metavar=ALL_DRIVES,
+                                     help="The records' drive (default: the fit's); a fit "
+                                     "made for another drive is refused."),
+    signal: Annotated[list[str] | None, typer.Option(
+        "--signal", help="Measured signal to compare (repeat), as fit --signal.")] = None,
+    command_speed: float | None = typer.Option(
+        None, "--command-speed", help="Reference of records without a command column: "
+        "constant table speed [mm/s] after a 0.1-s ramp."),
+    profile_file: str | None = typer.Option(
+        None, "--profile", help="Reference of every record from a CSV (time [s], "
+        "table_speed [mm/s]), as fit --profile."),
+    record_map: Annotated[list[str] | None, typer.Option("--map", help=_MAP_HELP)] = None,
+    level: float = typer.Option(0.95, "--level", help="Level of the prediction band "
+                                "[fraction]."),
+    plot: str | None = typer.Option(None, "--plot", help="Write measured, predicted and "
+                                    "band per signal to FILE.png."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
+    solver: Any = None,
+) -> None:
+    """Simulate held-out records with a fitted set: per signal the fit % of the
+    system-identification benchmarks (100·(1 − ‖y − ŷ‖/‖y − ȳ‖)), the NRMSE (rms error over
+    the signal's range) and the fraction of the measured samples inside the prediction band
+    the fit's covariance and the record's noise give (docs/fitting.md)."""
+    from ..analysis.predict import read_fit_record
+    from ..analysis.validate import plot_validation, validate
+
+    record = read_fit_record(fit_file)
+    experiments, notes = _read_traces(traces, record.parameters, record.drive,
+                                      record.table_position, signal, command_speed,
+                                      profile_file, record_map, as_json)
+    result = validate(fit_file, experiments, drive=drive, level=level)
+    if plot:
+        plot_validation(result, plot)
+    data = result.to_dict()
+    data["record_notes"] = notes
+    data["plot"] = plot
+    if as_json:
+        print_json(data)
+        return
+    _say(f"{Path(fit_file).name} ({record.drive.upper()}, free: {', '.join(record.free)}) on "
+         f"{len(experiments)} held-out record(s):")
+    for s in result.signals:
+        _say(f"  {shown(Path(s.source).name)} {s.signal}: fit {s.fit_percent:.2f} %, NRMSE "
+             f"{s.nrmse:.3g}, {100 * s.inside_band:.1f} % inside the {100 * level:.0f} % "
+             "prediction band")
     if plot:
         _say(f"wrote {shown(plot)}")

@@ -60,7 +60,8 @@ class RackPinion(Component):
 
     motor: Motor
     gearbox_friction: SiteParameters
-    gear_ratio: float = quantity("-", low=1, high=1000, hint="motor turns per pinion turn")
+    gear_ratio: float = quantity("-", low=1, high=1000, low_inclusive=True,
+                                 hint="motor turns per pinion turn (1: direct drive)")
     pinion_radius: float = quantity("m", low=1e-3, high=1.0, hint="30 mm = 0.03 m")
     mesh_stiffness: float = quantity("N/m", low=1e4, high=1e11, hint="1 N/µm = 1e6 N/m")
     mesh_damping: float = quantity("N s/m", low=0, high=1e8, low_inclusive=True)

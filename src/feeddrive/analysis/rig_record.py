@@ -1,0 +1,388 @@
+"""Real rig records for ``feeddrive fit``: MATLAB ``.mat`` files with the variables named by
+the user (``--map time=t position=qm reference=qg force=vir``), SI units.
+
+The layout is that of the EMPS benchmark (Janot, Gautier & Brunot [1]_: a ball-screw axis in
+closed loop; time ``t`` [s], position reference ``qg`` [m], measured position ``qm`` [m],
+motor force ``vir`` [N]), but any names do.  What each role is (:data:`ROLES`):
+
+* ``time`` — sample times [s]; the record's first sample is t = 0, the drive at rest;
+* the reference that drives the model, one of ``reference`` (a table *position* reference
+  [m]: its rate, by central differences, is the speed reference, so the drive's own speed
+  feed-forward and position loop follow it, ∫v = reference − its first value) or
+  ``speed_reference`` [m/s];
+* fitted signals, any of ``position`` [m] (relative to its first sample), ``speed`` [m/s],
+  ``current`` [A] (the current of the motor that drives the table) and ``force`` [N] (that
+  motor's force at the table, compared as its current: F / (K·ω/v), K the motor's torque or
+  force constant and ω/v its rate per table speed from the drive's kinematics).
+
+Cleaning, each step stated in one line (:attr:`RigRecord.notes`): samples where a mapped
+variable is NaN or infinite are dropped (the runs of them counted and located); duplicated
+time stamps keep their first sample; irregular steps are kept (the model is compared at the
+measured instants) and the reference is resampled on a uniform grid of the median step.  A
+time that goes backwards is refused.
+
+MATLAB v7.3 files are HDF5 and ``scipy.io.loadmat`` cannot read them: they are read through
+h5py when it is installed, else refused in one line.
+
+References
+----------
+.. [1] A. Janot, M. Gautier, M. Brunot, "Data set and reference models of EMPS",
+   Nonlinear System Identification Benchmarks workshop, Eindhoven, 2019.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..parameters import DriveParameters
+from .fit import Experiment, FitError, _uniform_reference
+from .fit_statistics import noise_level
+
+__all__ = ["FITTED_ROLES", "REFERENCE_ROLES", "ROLES", "RigRecord", "emps_layout",
+           "parse_map", "read_rig_record", "table_motor_force_per_current"]
+
+#: role → what it is [SI unit]
+ROLES: dict[str, str] = {
+    "time": "sample times [s]",
+    "reference": "table position reference [m] (drives the model)",
+    "speed_reference": "table speed reference [m/s] (drives the model)",
+    "position": "measured table position [m] (fitted)",
+    "speed": "measured table speed [m/s] (fitted)",
+    "current": "measured current of the motor driving the table [A] (fitted)",
+    "force": "measured force of the motor driving the table [N] (fitted as its current)",
+}
+REFERENCE_ROLES = ("reference", "speed_reference")
+FITTED_ROLES = ("position", "speed", "current", "force")
+
+
+def parse_map(items: Sequence[str]) -> dict[str, str]:
+    """``ROLE=VARIABLE`` items (each may hold several, separated by spaces or commas) as
+    {role: variable}; one-line refusals for an unknown role, a role given twice, a variable
+    given two roles, or no time, no reference or no fitted signal.
+
+    Parameters
+    ----------
+    items : sequence of str
+        The ``--map`` values.
+
+    Returns
+    -------
+    dict
+        Role → variable name.
+
+    Raises
+    ------
+    FitError
+        Naming the item.
+    """
+    out: dict[str, str] = {}
+    for item in items:
+        for part in item.replace(",", " ").split():
+            role, sep, var = part.partition("=")
+            role, var = role.strip(), var.strip()
+            if not sep or not role or not var:
+                raise FitError(f"--map {part!r}: expected ROLE=VARIABLE (e.g. time=t)")
+            if role not in ROLES:
+                raise FitError(f"--map {part}: unknown role {role!r}; expected one of "
+                               f"{', '.join(ROLES)}")
+            if role in out:
+                raise FitError(f"--map {part}: role {role!r} given twice ({role}="
+                               f"{out[role]})")
+            other = next((r for r, v in out.items() if v == var), None)
+            if other is not None:
+                raise FitError(f"--map {part}: variable {var!r} given two roles ({other} and "
+                               f"{role})")
+            out[role] = var
+    if "time" not in out:
+        raise FitError("--map: no time=VARIABLE given")
+    refs = [r for r in REFERENCE_ROLES if r in out]
+    if len(refs) != 1:
+        raise FitError("--map: give exactly one of reference=VARIABLE (a position reference "
+                       "[m]) or speed_reference=VARIABLE [m/s]" +
+                       (f"; got {' and '.join(refs)}" if refs else ""))
+    if not any(r in out for r in FITTED_ROLES):
+        raise FitError(f"--map: no measured signal to fit; give one or more of "
+                       f"{', '.join(f'{r}=VARIABLE' for r in FITTED_ROLES)}")
+    return out
+
+
+def _load_mat(path: Path, names: Sequence[str]) -> dict[str, np.ndarray]:
+    """The variables ``names`` of a MATLAB file (v5/v7 by scipy.io, v7.3 by h5py)."""
+    from scipy.io import loadmat
+
+    src = str(path)
+    if not path.is_file():
+        raise FitError(f"{src}: no such file")
+    try:
+        raw: dict[str, Any] = loadmat(path, variable_names=list(names))
+        held = sorted(k for k in _mat_names(path) if not k.startswith("__"))
+    except NotImplementedError:  # scipy: "Please use HDF reader for matlab v7.3 files"
+        if importlib.util.find_spec("h5py") is None:
+            raise FitError(f"{src}: a MATLAB v7.3 (HDF5) file; install h5py to read it, or "
+                           "save it in MATLAB with save(..., '-v7')") from None
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            held = sorted(k for k in f.keys() if not k.startswith("#"))
+            raw = {k: np.asarray(f[k]).T for k in names if k in f}
+    except (ValueError, TypeError, OSError) as err:
+        raise FitError(f"{src}: not a readable MATLAB file ({err})") from None
+    return {k: v for k, v in raw.items() if k in names} | {"__held__": np.array(held)}
+
+
+def _mat_names(path: Path) -> list[str]:
+    from scipy.io import whosmat
+
+    return [name for name, _, _ in whosmat(path)]
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last) index of each run of True in ``mask``."""
+    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True))
+
+
+@dataclass(frozen=True)
+class RigRecord:
+    """A rig record read for the fit, and what was done to it.
+
+    Parameters
+    ----------
+    experiment : Experiment
+        The record as the fit takes it (SI).
+    notes : tuple of str
+        One line per cleaning step taken.
+    mapping : dict
+        Role → variable.
+    """
+
+    experiment: Experiment
+    notes: tuple[str, ...] = ()
+    mapping: Mapping[str, str] = field(default_factory=dict)
+
+
+def table_motor_force_per_current(params: DriveParameters, drive: str,
+                                  table_position: float) -> tuple[str, float]:
+    """The current signal of the motor that drives the table and its force at the table per
+    ampere: K × (its rate per table speed) [N/A] (a linear motor: its force constant).
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The set.
+    drive : str
+        The drive.
+    table_position : float
+        Table position [m].
+
+    Returns
+    -------
+    tuple of (str, float)
+        The current signal's name and the force per ampere [N/A].
+
+    Raises
+    ------
+    FitError
+        For a drive whose table is driven by more than one motor (no single motor force).
+    """
+    from ..engine.simulate import DriveSystem
+    from ..model.reference import ConstantSpeed
+
+    system = DriveSystem(params, drive, table_position)
+    topology = system.topology()
+    axes = topology.live_axes()
+    if len(axes) != 1:
+        raise FitError(f"--map force: the {drive.upper()} drives its table with "
+                       f"{len(axes)} motors ({', '.join(axes)}); a single force is not "
+                       "one of its signals: map each motor's current instead")
+    axis = topology.table_axis
+    slot, _ = topology.motor_output(axis)
+    constant = float(system.model(ConstantSpeed(0.0)).parameter(slot))
+    rates = topology.steady_motion(1.0, 0.0)
+    ratio = float(rates[f"{axis}_angle"][1]) if f"{axis}_angle" in rates else 1.0
+    return f"{axis}_current", constant * ratio
+
+
+def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveParameters,
+                    *, drive: str = "cdfs", table_position: float = 0.4) -> RigRecord:
+    """Read one ``.mat`` rig record with its variables mapped to roles (module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.mat`` file.
+    mapping : mapping of str to str
+        Role → variable (:func:`parse_map`).
+    params : DriveParameters
+        The set the record will be fitted with (for a force's conversion to current).
+    drive : str, default "cdfs"
+        The drive.
+    table_position : float, default 0.4
+        Table position [m].
+
+    Returns
+    -------
+    RigRecord
+        The experiment and the cleaning notes.
+
+    Raises
+    ------
+    FitError
+        A missing variable, variables of different lengths, a time that goes backwards, too
+        few samples, a reference that never moves; one line each, before any simulation.
+    """
+    p = Path(path)
+    src = str(p)
+    if p.suffix.lower() != ".mat":
+        raise FitError(f"{src}: --map reads MATLAB .mat records; expected a .mat file")
+    data = _load_mat(p, list(mapping.values()))
+    held = [str(x) for x in data.pop("__held__")]
+    columns: dict[str, np.ndarray] = {}
+    for role, var in mapping.items():
+        if var not in data:
+            raise FitError(f"--map {role}={var}: no variable {var!r} in {src} (it holds: "
+                           f"{', '.join(held) or 'nothing'})")
+        a = np.asarray(data[var])
+        if a.dtype.kind not in "fiub" or a.squeeze().ndim != 1:
+            raise FitError(f"--map {role}={var}: {var!r} in {src} is not a numeric vector "
+                           f"(shape {a.shape})")
+        columns[role] = a.astype(float).ravel()
+    sizes = {r: c.size for r, c in columns.items()}
+    if len(set(sizes.values())) > 1:
+        raise FitError(f"{src}: the mapped variables differ in length ("
+                       + ", ".join(f"{mapping[r]} {n}" for r, n in sizes.items()) + ")")
+    notes: list[str] = []
+    if "force" in columns:
+        current_name, per_amp = table_motor_force_per_current(params, drive, table_position)
+        if "current" in columns:
+            raise FitError("--map force and current: the same motor's current twice; give one")
+    bad = ~np.all(np.isfinite(np.vstack(list(columns.values()))), axis=0)
+    if bad.any():
+        runs = _runs(bad)
+        t_all = columns["time"]
+        where = ", ".join(f"{t_all[a]:.6g} s" if a == b else f"{t_all[a]:.6g}–{t_all[b]:.6g} s"
+                          for a, b in runs[:5]) + (" …" if len(runs) > 5 else "")
+        notes.append(f"{src}: {len(runs)} run(s) of NaN or infinite samples ({int(bad.sum())} "
+                     f"samples) dropped, at {where}")
+        columns = {r: c[~bad] for r, c in columns.items()}
+    t_raw = columns["time"]
+    if t_raw.size < 16:
+        raise FitError(f"{src}: {t_raw.size} usable samples; a record needs at least 16")
+    steps = np.diff(t_raw)
+    if np.any(steps < 0):
+        i = int(np.flatnonzero(steps < 0)[0]) + 1
+        raise FitError(f"--map time={mapping['time']}: the time goes backwards at sample "
+                       f"{i} ({t_raw[i - 1]:.6g} → {t_raw[i]:.6g} s)")
+    dup = np.concatenate([[False], steps == 0])
+    if dup.any():
+        notes.append(f"{src}: {int(dup.sum())} duplicated time stamp(s); the first sample of "
+                     "each kept")
+        columns = {r: c[~dup] for r, c in columns.items()}
+        t_raw = columns["time"]
+        steps = np.diff(t_raw)
+    dt = float(np.median(steps))
+    if float(steps.max() - steps.min()) > 0.01 * dt:
+        notes.append(f"{src}: irregular sample steps ({1e3 * steps.min():.4g} … "
+                     f"{1e3 * steps.max():.4g} ms): the model is compared at the measured "
+                     f"instants, the reference resampled every {1e3 * dt:.4g} ms")
+    t = t_raw - t_raw[0]
+    if "reference" in columns:
+        ref = columns["reference"] - columns["reference"][0]
+        speed_ref = np.gradient(ref, t)
+    else:
+        speed_ref = columns["speed_reference"]
+    ref_t, ref_v = _uniform_reference(t, speed_ref)
+    if not np.any(ref_v != 0.0):
+        raise FitError(f"{src}: the reference never moves: nothing to fit")
+    signals: dict[str, np.ndarray] = {}
+    if "position" in columns:
+        signals["table_position"] = columns["position"] - columns["position"][0]
+    if "speed" in columns:
+        signals["table_speed"] = columns["speed"]
+    if "current" in columns:
+        signals[_current_name(params, drive, table_position)] = columns["current"]
+    if "force" in columns:
+        signals[current_name] = columns["force"] / per_amp
+        notes.append(f"{src}: force {mapping['force']} compared as the {current_name}: "
+                     f"F / {per_amp:.6g} N/A")
+    for name, v in signals.items():
+        if float(np.ptp(v)) == 0.0:
+            raise FitError(f"{src}: signal {name!r} is constant: no usable information")
+    exp = Experiment(source=src, time=t, signals=signals, reference_time=ref_t,
+                     table_speed=ref_v, noise={k: noise_level(v) for k, v in signals.items()})
+    return RigRecord(experiment=exp, notes=tuple(notes), mapping=dict(mapping))
+
+
+def _current_name(params: DriveParameters, drive: str, table_position: float) -> str:
+    from ..model.mechanisms import mechanism
+
+    topology = mechanism(drive)(params, drive, table_position, "locked")
+    return f"{topology.table_axis}_current"
+
+
+def emps_layout(path: str | Path, truth: DriveParameters, *, drive: str = "linear-motor",
+                table_position: float = 0.4, seed: int = 0, duration: float = 1.6,
+                stroke: float = 0.2, offset: float = 0.01, force_noise: float = 0.5,
+                encoder: float = 1e-6) -> Path:
+    """A closed-loop point-to-point record in the EMPS layout, made by simulating ``truth``
+    with feeddrive (for tests and docs/fitting.md; not a calibration truth, which must come
+    from an independent integrator): a minimum-jerk position reference ``qg`` (0 →
+    ``stroke`` in 1 s from 0.05 s), the measured position ``qm`` in ``encoder`` counts, both
+    shifted by ``offset``, and the table motor's force ``vir`` with white noise (seeded),
+    sampled at 1 kHz, column vectors as MATLAB writes them (v5 file).
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.mat`` file written.
+    truth : DriveParameters
+        The generating set.
+    drive : str, default "linear-motor"
+        The drive (one motor driving the table).
+    table_position : float, default 0.4
+        Table position [m].
+    seed : int, default 0
+        Seed of the force noise.
+    duration : float, default 1.6
+        Record length [s].
+    stroke : float, default 0.2
+        Length of the move [m].
+    offset : float, default 0.01
+        Position offset of ``qg`` and ``qm`` [m].
+    force_noise : float, default 0.5
+        σ of the force noise [N].
+    encoder : float, default 1e-6
+        Count size of ``qm`` [m].
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    import scipy.io as sio
+
+    from ..engine.options import SolverOptions
+    from ..engine.simulate import DriveSystem, simulate
+    from ..model.reference import SampledSpeed
+
+    dt = 1e-3
+    t = np.arange(0.0, duration, dt)
+    tau = np.clip((t - 0.05) / 1.0, 0.0, 1.0)
+    qg = stroke * (10 * tau ** 3 - 15 * tau ** 4 + 6 * tau ** 5)
+    system = DriveSystem(truth, drive=drive, table_position=table_position)
+    run = simulate(system, SampledSpeed(time=t, table_speed=np.gradient(qg, t)), t[-1] + dt,
+                   options=SolverOptions(output_interval=dt, sample_steps=True))
+    name, per_amp = table_motor_force_per_current(truth, drive, table_position)
+    rng = np.random.default_rng(seed)
+    qm = np.round(np.interp(t, run.time, run["table_position"]) / encoder) * encoder
+    vir = np.interp(t, run.time, run[name]) * per_amp + force_noise * rng.standard_normal(t.size)
+    out = Path(path)
+    sio.savemat(out, {"t": t[:, None], "qg": (qg + offset)[:, None],
+                      "qm": (qm + offset)[:, None], "vir": vir[:, None]})
+    return out
