@@ -213,7 +213,8 @@ def _inputs(folder: Path) -> dict[str, list[str]]:
         "analyze": ["analyze", str(trace)], "calibrate": ["calibrate"],
         "simulate": ["simulate", "--table-speed", "1"],
         "fit": ["fit", str(trace), "--free", "controller.velocity_integral_gain"],
-        "predict": ["predict", str(folder / "fit.toml")], "loops": ["loops"],
+        "predict": ["predict", str(folder / "fit.toml")],
+        "validate": ["validate", str(folder / "fit.toml"), str(trace)], "loops": ["loops"],
         "stability": ["stability"], "reproduce": ["reproduce"],
         "sensitivity": ["sensitivity", "--quantity", "linear-band"],
         "sweep": ["sweep", str(folder / "sweep.toml")], "map": ["map", str(folder / "s.sq")],
@@ -247,7 +248,8 @@ def test_the_output_options_are_the_ones_this_test_knows() -> None:
     assert len(found) >= 20  # 23 at be498e0
 
 
-_COMMANDS = ("analyze", "calibrate", "simulate", "fit", "predict", "loops", "stability",
+_COMMANDS = ("analyze", "calibrate", "simulate", "fit", "predict", "validate", "loops",
+             "stability",
              "reproduce", "sensitivity", "sweep", "map", "friction", "export fmu",
              "identify static", "identify dynamic", "identify merge")
 

@@ -57,7 +57,9 @@ ROLES: dict[str, str] = {
     "current": "measured current of the motor driving the table [A] (fitted)",
     "force": "measured force of the motor driving the table [N] (fitted as its current)",
 }
+#: the roles a record's reference may take: a position or a speed reference
 REFERENCE_ROLES = ("reference", "speed_reference")
+#: the roles a record's measured, fitted channels may take
 FITTED_ROLES = ("position", "speed", "current", "force")
 
 

@@ -34,6 +34,7 @@ COMMAND_MODULES: dict[str, str] = {
     "export": "export_cmd",
     "fit": "fit_cmd",
     "predict": "fit_cmd",
+    "validate": "fit_cmd",
     "identify": "identify_cmd",
     "loops": "linear_cmd",
     "stability": "linear_cmd",
