@@ -164,3 +164,22 @@ def test_bad_requests() -> None:
         circular_test(t, x, y, radius=0.5, centre=CENTRE)
     with pytest.raises(ValueError, match="full revolution"):
         circular_test(t[:1000], x[:1000], y[:1000], radius=R, centre=CENTRE)
+
+
+def test_polar_plot_overlays_cw_and_ccw(tmp_path) -> None:
+    from feeddrive.plots.acceptance import circular_figure, save
+
+    res = analyse(squareness=10e-6, spike=5e-6)
+    fig = circular_figure(res, magnification=2000.0)
+    ax = fig.axes[0]
+    assert ax.name == "polar"
+    labels = [line.get_label() for line in ax.get_lines()]
+    assert "CCW" in labels and "CW" in labels and "nominal circle" in labels
+    assert "×2000" in ax.get_title()
+    assert f"G(b) {res.bidirectional_circular_deviation * 1e6:.2f} µm" in ax.get_title()
+    # the drawn radius is 0.6 + k·δ/R·0.6: the CCW trace's span is the magnified G about the
+    # same centre
+    ccw = next(line for line in ax.get_lines() if line.get_label() == "CCW")
+    drawn = np.ptp(ccw.get_ydata()) / 0.6 * R / 2000.0
+    assert drawn == pytest.approx(res.bidirectional_circular_deviation, rel=0.35)
+    assert save(fig, tmp_path / "polar.png").stat().st_size > 0
