@@ -420,8 +420,9 @@ def _spike(residual: np.ndarray, travel: np.ndarray, radius: float
     return peak, math.degrees(width), width * radius, math.degrees(float(travel[k])), 0, end
 
 
-def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float,
-                  centre: tuple[float, float], pitch: float | None = None) -> CircularTest:
+def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float | None,
+                  centre: tuple[float, float] | None, pitch: float | None = None
+                  ) -> CircularTest:
     """ISO 230-4 quantities and the ballbar diagnostics of a circular-test trace.
 
     Parameters
@@ -431,10 +432,11 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float,
     x, y : array_like
         Measured (or simulated) positions of the two axes [m]; one CCW and/or one CW
         revolution of at least 360° each, lead-in and lead-out arcs allowed.
-    radius : float
-        Nominal radius R [m].
-    centre : tuple of float
-        Nominal centre (x, y) [m].
+    radius : float or None
+        Nominal radius R [m]; None: the least-squares radius of the whole record (the mean
+        radius deviation is then about 0 by construction; a note says so).
+    centre : tuple of float or None
+        Nominal centre (x, y) [m]; None: the least-squares centre of the whole record (noted).
     pitch : float, optional
         Period of the cyclic error looked for (the screw's lead) [m]; None: not fitted.
 
@@ -479,9 +481,10 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float,
     >>> print(f"G(CCW) = {res.circular_deviation['CCW'] * 1e6:.3f} µm")
     G(CCW) = 0.000 µm
     """
-    if not (math.isfinite(radius) and radius > 0.0):
+    if radius is not None and not (math.isfinite(radius) and radius > 0.0):
         raise ParameterError("radius", radius, "expected a radius > 0 [m]")
-    if len(centre) != 2 or not all(math.isfinite(c) for c in centre):
+    if centre is not None and (len(centre) != 2
+                               or not all(math.isfinite(c) for c in centre)):
         raise ParameterError("centre", centre, "expected two finite coordinates [m]")
     if pitch is not None and not (math.isfinite(pitch) and pitch > 0.0):
         raise ParameterError("pitch", pitch, "expected a period > 0 [m]")
@@ -493,8 +496,21 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float,
     if t.size < 16 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(px))
                            and np.all(np.isfinite(py))):
         raise ValueError("time, x, y: expected at least 16 finite samples")
+    inferred: list[str] = []
+    if centre is None or radius is None:
+        fx, fy, fr = fit_circle(px, py)
+        if centre is None:
+            centre = (fx, fy)
+            inferred.append(f"centre ({fx * 1e3:.6g}, {fy * 1e3:.6g}) mm inferred: the "
+                            "least-squares centre of the record")
+        if radius is None:
+            radius = fr
+            inferred.append(f"radius {fr * 1e3:.6g} mm inferred: the least-squares radius of "
+                            "the record, so the mean radius deviation is about 0 by "
+                            "construction")
     cx0, cy0 = float(centre[0]), float(centre[1])
     runs, notes = split_runs(t, px, py, (cx0, cy0))
+    notes = inferred + notes
     r_nominal = np.concatenate([np.hypot(r.x - cx0, r.y - cy0) for r in runs])
     if np.max(np.abs(r_nominal - radius)) > 0.2 * radius:
         raise ParameterError("radius", radius, f"the trace lies {r_nominal.min():.6g} … "

@@ -46,8 +46,8 @@ from numpy.typing import ArrayLike
 
 from ..parameters import ParameterError
 
-__all__ = ["MIN_CYCLES", "PositioningTest", "Stop", "positioning_test", "read_approaches",
-           "positioning_cycle"]
+__all__ = ["MIN_CYCLES", "PositioningTest", "Stop", "describe", "positioning_cycle",
+           "positioning_test", "read_approaches"]
 
 #: fewest approaches per target and direction (ISO 230-2: five)
 MIN_CYCLES = 5
@@ -367,3 +367,35 @@ def read_approaches(time: ArrayLike, position: ArrayLike, stops: Sequence[Stop],
         (up if s.direction > 0 else down)[s.target, s.cycle] = float(np.mean(x[window])) \
             - p[s.target]
     return up, down
+
+
+def describe(result: PositioningTest) -> list[str]:
+    """The result as text lines (mm, µm), as ``feeddrive positioning`` and ``analyze
+    --positioning`` print it.
+
+    Parameters
+    ----------
+    result : PositioningTest
+        The evaluation.
+
+    Returns
+    -------
+    list of str
+        A table per target, then one line per quantity of the axis
+        (:attr:`PositioningTest.AXIS_QUANTITIES`).
+    """
+    um = 1e6
+    lines = ["ISO 230-2, per target [µm]: x̄↑ x̄↓ x̄ B_i s↑ s↓ R↑ R↓ R_i",
+             f"  {'P_i [mm]':>12} {'x̄↑':>9} {'x̄↓':>9} {'x̄':>9} {'B_i':>9} {'s↑':>9} "
+             f"{'s↓':>9} {'R↑':>9} {'R↓':>9} {'R_i':>9}"]
+    for i, p in enumerate(result.targets):
+        values = (result.mean_up[i], result.mean_down[i], result.mean[i],
+                  result.reversal_at[i], result.s_up[i], result.s_down[i],
+                  result.repeatability_up_at[i], result.repeatability_down_at[i],
+                  result.repeatability_at[i])
+        lines.append(f"  {p * 1e3:12.6g} " + " ".join(f"{v * um:9.4f}" for v in values))
+    lines.append(f"ISO 230-2, the axis ({result.deviation_up.shape[1]} approaches per target "
+                 "and direction)")
+    for name, (symbol, label) in result.AXIS_QUANTITIES.items():
+        lines.append(f"  {symbol:<3} {float(getattr(result, name)) * um:10.4f} µm  {label}")
+    return lines

@@ -1,7 +1,10 @@
-"""`feeddrive analyze`: creep analysis of a measured (or exported) position trace.
+"""`feeddrive analyze`: creep analysis of a measured (or exported) position trace; with
+``--circular`` the ISO 230-4 circular test of an XY trace, with ``--positioning`` the ISO 230-2
+evaluation of a positioning record.
 
-File format: docs/measured-data.md.  The logic lives in feeddrive.analysis.trace and
-feeddrive.io.measured.
+File formats: docs/measured-data.md, docs/acceptance-tests.md.  The logic lives in
+feeddrive.analysis.trace, feeddrive.analysis.circular, feeddrive.analysis.positioning and
+feeddrive.io.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from ..analysis.creep_window import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, describe_critical
 from ..io.outputs import PLOT_FORMATS
 from ..parameters import ParameterError
-from ._common import MM_PER_S, app, console, outputs, print_json, user_errors
+from ._common import MM, MM_PER_S, app, console, outputs, print_json, user_errors
 
 
 def _say(text: str) -> None:
@@ -28,7 +31,26 @@ _DEFAULTS = CreepThresholds()
 @user_errors
 @outputs(plot=PLOT_FORMATS)
 def analyze_command(
-    file: str = typer.Argument(..., help="CSV with time and table position."),
+    file: str = typer.Argument(..., help="CSV with time and table position; with --circular "
+                               "time, x and y; with --positioning an ISO 230-2 record."),
+    circular: bool = typer.Option(False, "--circular", help="ISO 230-4 circular test of an XY "
+                                  "trace (columns time, x, y; docs/acceptance-tests.md)."),
+    positioning: bool = typer.Option(False, "--positioning", help="ISO 230-2 evaluation of a "
+                                     "record of approaches (columns target, direction, "
+                                     "position or deviation)."),
+    radius: float | None = typer.Option(None, "--radius", help="--circular: nominal radius "
+                                        "[mm] (default: the least-squares radius, stated)."),
+    centre: str | None = typer.Option(None, "--centre", help="--circular: nominal centre X,Y "
+                                      "[mm] (default: the least-squares centre, stated)."),
+    pitch: float | None = typer.Option(None, "--pitch", help="--circular: period of the cyclic "
+                                       "error looked for, the screw's lead [mm]."),
+    magnification: float | None = typer.Option(
+        None, "--magnification", help="--circular --plot: deviation magnification [-] "
+        "(default: the largest deviation fills the outer 40 % of the plot)."),
+    x_column: str | None = typer.Option(None, "--x-column", help="--circular: default x, "
+                                        "x_position or x.table_position."),
+    y_column: str | None = typer.Option(None, "--y-column", help="--circular: default y, "
+                                        "y_position or y.table_position."),
     command_speed: float | None = typer.Option(
         None, "--command-speed", help="Commanded speed [mm/s] of the whole trace (else from a "
         "command column, else estimated per segment)."),
@@ -67,7 +89,19 @@ def analyze_command(
     force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
 ) -> None:
     """Creep metrics of a position trace (per segment of a step-down run) and the critical
-    creeping speed."""
+    creeping speed; or an ISO 230-4 circular test (--circular) or an ISO 230-2 positioning
+    test (--positioning)."""
+    if circular and positioning:
+        raise ParameterError("--circular", True, "expected one of --circular, --positioning")
+    if circular:
+        _circular(file, radius=radius, centre=centre, pitch=pitch, magnification=magnification,
+                  time_column=time_column, x_column=x_column, y_column=y_column,
+                  time_unit=time_unit, position_unit=position_unit, sep=sep, decimal=decimal,
+                  as_json=as_json, plot=plot)
+        return
+    if positioning:
+        _positioning(file, sep=sep, decimal=decimal, as_json=as_json, plot=plot)
+        return
     from ..analysis.trace import analyze_trace
     from ..io.measured import read_position_trace
 
@@ -120,5 +154,89 @@ def analyze_command(
     for c in result.critical:
         _say(f"  critical speed ({c.direction}): "
              f"{describe_critical(c.lowest_smooth, c.first_creeping)}")
+    if plot:
+        _say(f"wrote plot {plot}")
+
+
+def parse_point_mm(option: str, text: str) -> tuple[float, float]:
+    """``"X,Y"`` [mm] → (x, y) [m], naming the option when it is not two numbers.
+
+    Parameters
+    ----------
+    option : str
+        The option, for messages.
+    text : str
+        E.g. ``"200,150"`` [mm].
+
+    Returns
+    -------
+    tuple of float
+        The point [m].
+    """
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != 2 or not all(math.isfinite(v) for v in values):
+        raise ParameterError(option, text, "expected two numbers X,Y [mm], e.g. 200,150")
+    return values[0] * MM, values[1] * MM
+
+
+def _circular(file: str, *, radius: float | None, centre: str | None, pitch: float | None,
+              magnification: float | None, time_column: str, x_column: str | None,
+              y_column: str | None, time_unit: str | None, position_unit: str | None,
+              sep: str | None, decimal: str, as_json: bool, plot: str | None) -> None:
+    from ..analysis.circular import circular_test, describe
+    from ..io.acceptance import read_xy_trace
+
+    for option, value in (("--radius", radius), ("--pitch", pitch),
+                          ("--magnification", magnification)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            unit = "-" if option == "--magnification" else "mm"
+            raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
+    point = None if centre is None else parse_point_mm("--centre", centre)
+    trace = read_xy_trace(file, time_column=time_column, x_column=x_column, y_column=y_column,
+                          time_unit=time_unit, position_unit=position_unit, sep=sep,
+                          decimal=decimal)
+    result = circular_test(trace.time, trace.x, trace.y,
+                           radius=None if radius is None else radius * MM, centre=point,
+                           pitch=None if pitch is None else pitch * MM)
+    if plot:
+        from ..plots.acceptance import circular_figure, save
+
+        save(circular_figure(result, magnification=magnification), plot)
+    if as_json:
+        print_json({**result.to_dict(), "source": trace.source,
+                    "columns": list(trace.columns), "plot": plot})
+        return
+    _say(f"{trace.source}: {trace.time.size} samples, x from {trace.columns[0]!r}, y from "
+         f"{trace.columns[1]!r}")
+    for note in result.notes:
+        _say(f"  {note}")
+    for line in describe(result):
+        _say(line)
+    if plot:
+        _say(f"wrote plot {plot}")
+
+
+def _positioning(file: str, *, sep: str | None, decimal: str, as_json: bool,
+                 plot: str | None) -> None:
+    from ..analysis.positioning import describe, positioning_test
+    from ..io.acceptance import read_positioning_record
+
+    record = read_positioning_record(file, sep=sep, decimal=decimal)
+    result = positioning_test(record.targets, record.deviation_up, record.deviation_down)
+    if plot:
+        from ..plots.acceptance import positioning_figure, save
+
+        save(positioning_figure(result), plot)
+    if as_json:
+        print_json({**result.to_dict(), "source": record.source, "plot": plot})
+        return
+    _say(f"{record.source}: {record.targets.size} targets × {record.deviation_up.shape[1]} "
+         "approaches each way")
+    for line in describe(result):
+        _say(line)
     if plot:
         _say(f"wrote plot {plot}")
