@@ -91,3 +91,84 @@ def test_analyze_help_names_the_acceptance_options_with_units() -> None:
     for text in ("--circular", "--positioning", "nominal radius [mm]", "nominal centre X,Y [mm]",
                  "the screw's lead [mm]", "deviation magnification [-]"):
         assert text in shown, text
+
+
+FRICTIONLESS = """extends = "wang2021"
+[friction.screw]
+law = "none"
+[friction.nut]
+law = "none"
+[friction.guide]
+law = "none"
+"""
+
+
+def test_positioning_output_analysed_gives_the_same_metrics(tmp_path: Path) -> None:
+    params = tmp_path / "frictionless.toml"
+    params.write_text(FRICTIONLESS)
+    record, chart = tmp_path / "record.csv", tmp_path / "chart.png"
+    r = invoke("positioning", "--params", str(params), "--count", "3", "--span", "100,120",
+               "--dwell", "0.5", "--overshoot", "1", "--output", str(record), "--plot",
+               str(chart), "--json")
+    assert r.exit_code == 0, r.output
+    run = json.loads(r.stdout)
+    assert [t["target_mm"] for t in run["targets"]] == pytest.approx([100, 110, 120])
+    a = invoke("analyze", "--positioning", str(record), "--json")
+    assert a.exit_code == 0, a.output
+    again = json.loads(a.stdout)
+    assert set(run["axis"]) == set(again["axis"]) and len(run["axis"]) == 12
+    for key, value in run["axis"].items():
+        assert again["axis"][key] == pytest.approx(value, abs=1e-9), key  # µm
+    for mine, theirs in zip(run["targets"], again["targets"], strict=True):
+        for key, value in mine.items():
+            assert theirs[key] == pytest.approx(value, abs=1e-9), key
+    assert chart.stat().st_size > 0
+    text = invoke("analyze", "--positioning", str(record)).stdout
+    for symbol in ("A ", "A↑", "A↓", "R ", "R↑", "R↓", "B ", "B̄", "E ", "E↑", "E↓", "M "):
+        assert f"  {symbol}" in text, symbol
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (("--targets", "100,110", "--cycles", "4"), "--cycles = 4: expected at least 5"),
+    (("--targets", "100,900"), "--targets = '100,900': the test reaches 98 … 902 mm"),
+    (("--targets", "100,110", "--feed", "2000", "--params", "SLOW"), "speed limit"),
+    (("--count", "1", "--span", "1,2"), "--count = 1"),
+    (("--targets", "100,110", "--cycle", "zigzag"), "--cycle = 'zigzag'"),
+])
+def test_positioning_refuses_bad_requests_in_one_line(tmp_path: Path, monkeypatch,
+                                                      args: tuple[str, ...], words: str) -> None:
+    import feeddrive.engine.simulate as engine
+
+    def no_run(*a: object, **k: object) -> None:
+        raise AssertionError("simulated a refused request")
+
+    monkeypatch.setattr(engine, "simulate", no_run)
+    slow = tmp_path / "slow.toml"
+    slow.write_text('extends = "wang2021"\n[controller]\nvoltage_limit = 300.0\n')
+    r = invoke("positioning", *[str(slow) if a == "SLOW" else a for a in args])
+    assert r.exit_code == 2, r.output
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0], r.stderr
+
+
+def test_analyze_positioning_refuses_an_unequal_record(tmp_path: Path) -> None:
+    path = tmp_path / "record.csv"
+    head = "target [mm],direction,cycle,position [mm]\n"
+    rows = [f"{p},{d},{j},{p}" for p in (100, 110, 120) for d in (1, -1) for j in range(5)]
+    path.write_text(head + "\n".join(rows[:-1]) + "\n")
+    r = invoke("analyze", "--positioning", str(path))
+    assert r.exit_code == 2
+    assert "approached 4 times in the negative direction" in r.stderr
+    rows = [f"{p},{d},{j},{p}" for p in (100, 110, 120) for d in (1, -1) for j in range(4)]
+    path.write_text(head + "\n".join(rows) + "\n")
+    r = invoke("analyze", "--positioning", str(path))
+    assert r.exit_code == 2 and "cycles = 4: expected at least 5" in r.stderr, r.stderr
+
+
+def test_positioning_help_names_units_and_the_standard() -> None:
+    shown = " ".join(invoke("positioning", "--help").stdout.split())
+    for text in ("Target positions on the axis [mm]", "ISO 230-2: at least 5",
+                 "Speed of the moves [mm/s]", "[mm/s²]", "Rest at each stop [s]",
+                 "axis reverses [mm]", "linear (the standard cycle) or pilgrim",
+                 "analyze --positioning reads it"):
+        assert text in shown, text

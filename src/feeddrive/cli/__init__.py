@@ -39,6 +39,7 @@ COMMAND_MODULES: dict[str, str] = {
     "loops": "linear_cmd",
     "stability": "linear_cmd",
     "params": "params_cmd",
+    "positioning": "positioning_cmd",
     "reproduce": "reproduce_cmd",
     "sensitivity": "sensitivity_cmd",
     "simulate": "simulate_cmd",

@@ -155,8 +155,8 @@ def write_positioning_record(path: str | Path, targets: Sequence[float] | np.nda
         for i in range(p.size):
             for j in range(dev.shape[1]):
                 # the position as the sum the reader subtracts again: x_ij = P_ij − P_i
-                rows.append(f"{p[i] * 1e3!r},{direction},{j + 1},"
-                            f"{(p[i] + dev[i, j]) * 1e3!r}")
+                rows.append(f"{float(p[i] * 1e3)!r},{direction},{j + 1},"
+                            f"{float((p[i] + dev[i, j]) * 1e3)!r}")
     text = "".join(f"# {line}\n" for line in comment.splitlines() if line)
     text += ",".join(POSITIONING_COLUMNS) + "\n" + "\n".join(rows) + "\n"
     with atomic_path(path) as tmp:
