@@ -566,6 +566,9 @@ README_COMMANDS_BAD_FILE = [
     ["identify", "static", "{bad}"],
     ["identify", "dynamic", "{bad}"],
     ["analyze", "{bad}"],
+    ["analyze", "--circular", "{bad}"],
+    ["analyze", "--positioning", "{bad}"],
+    ["positioning", "--targets", "100,110", "--params", "{bad}"],
     ["export", "fmu", "--drive", "ddfs", "--out", "{bad}.fmu", "--params", "{bad}"],
 ]
 README_COMMANDS_BAD_VALUE = [
@@ -583,6 +586,9 @@ README_COMMANDS_BAD_VALUE = [
     ["identify", "static", "x.csv", "--site", "wheel"],
     ["identify", "dynamic", "x.csv", "--confidence", "2"],
     ["analyze", "x.csv", "--smoothing", "-5"],
+    ["analyze", "--circular", "x.csv", "--radius", "-5"],
+    ["positioning", "--targets", "abc"],
+    ["positioning", "--targets", "100,110", "--cycles", "3"],
     ["export", "fmu", "--drive", "xdfs", "--out", "x.fmu"],
 ]
 
