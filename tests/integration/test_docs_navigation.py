@@ -15,7 +15,8 @@ ROOT = Path(__file__).resolve().parents[2]
 HTML = ROOT / "docs" / "_build" / "html"
 TOP = ["User guide", "API", "CLI", "Examples", "Project"]
 GUIDE = ["getting-started", "model", "model-reading", "parameters", "extending", "linear",
-         "measured-data", "fitting", "sweeps", "explore", "fmu", "c-backend", "outputs"]
+         "measured-data", "acceptance-tests", "fitting", "sweeps", "explore", "fmu", "c-backend",
+         "outputs"]
 
 
 class _Links(HTMLParser):

@@ -1,7 +1,7 @@
 """ISO 230-4 circular test: circular deviations and the ballbar diagnostics of an XY trace.  SI.
 
 A circular test drives two axes round a circle, once counter-clockwise (CCW) and once
-clockwise (CW), and reads the path's deviation from the nominal circle (ISO 230-4:2005).
+clockwise (CW), and reads the path's deviation from the nominal circle (ISO 230-4:2005 [1]_).
 This module takes a measured or simulated trace (time, x, y), finds its full revolutions,
 and computes
 
@@ -25,8 +25,9 @@ of the X axis and e_y of the Y axis the radial deviation at the path angle θ is
 References
 ----------
 .. [1] ISO 230-4:2005, Test code for machine tools — Part 4: Circular tests for numerically
-       controlled machine tools, Clause 3 (terms and definitions) and Clause 5 (test
-       procedure: CW and CCW runs, feed, radius, the lead-in and lead-out arcs left out).
+       controlled machine tools, Clause 3 (terms and definitions), and its test procedure
+       (CW and CCW runs, feed, radius, the lead-in and lead-out arcs left out; that clause's
+       number not checked here).
 .. [2] Renishaw plc, QC20-W ballbar system, Ballbar 20 software help (2009): the diagnostics
        squareness [µm/m], scale mismatch [µm], servo mismatch [ms], backlash [µm], lateral play
        [µm], cyclic error [µm] and reversal spikes [µm]; cited in Jiang & Cripps (2013),
@@ -291,8 +292,8 @@ def split_runs(time: ArrayLike, x: ArrayLike, y: ArrayLike, centre: tuple[float,
     """The full revolutions of a trace: one per stretch of one turning direction.
 
     A stretch turning one way about the centre for at least 360° gives one run: its middle
-    360° (the lead-in and lead-out arcs of ISO 230-4:2005 Clause 5 are left out equally at both
-    ends).
+    360° (the lead-in and lead-out arcs of the ISO 230-4 test procedure are left out equally
+    at both ends).
 
     Parameters
     ----------
@@ -345,7 +346,7 @@ def split_runs(time: ArrayLike, x: ArrayLike, y: ArrayLike, centre: tuple[float,
                                           angle=phi[sl])
             if lead > 1e-6:
                 notes.append(f"{direction}: {math.degrees(lead):.3g}° of lead-in and of "
-                             "lead-out left out (ISO 230-4:2005 Clause 5)")
+                             "lead-out left out (ISO 230-4 test procedure)")
         elif span >= 2.0 * math.pi * (1.0 - 1e-9):
             notes.append(f"a further {direction} revolution at t = {t[k]:.4g} s left out")
         k = j
@@ -456,7 +457,8 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
     -----
     G is the radial span about the least-squares circle (:func:`fit_circle`): of each run
     for G(CW), G(CCW); of both runs' points together for G(b) (ISO 230-4:2005, Clause 3).
-    The diagnostics are the least-squares amplitudes of the signatures of
+    The quantities are those of ISO 230-4 [1]_; the diagnostics, named as the ballbar
+    software names them [2]_, are the least-squares amplitudes of the signatures of
     docs/acceptance-tests.md in the radial deviation about the least-squares centre of both
     runs; a reversal spike is the residual's signed peak within 45° after the reversal, its
     width the angle over which it stays above half its peak, and while a spike stands out of

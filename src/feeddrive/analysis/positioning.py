@@ -3,23 +3,20 @@
 The axis is sent to m target positions P_i, each approached n ≥ 5 times in the positive
 (↑) and in the negative (↓) direction; at each stop the actual position P_ij is read and the
 positional deviation x_ij = P_ij − P_i kept.  :func:`positioning_test` evaluates them with the
-formulas of ISO 230-2 (written out with their numbers in docs/acceptance-tests.md):
+formulas of ISO 230-2 [1]_ (written out with their numbers in docs/acceptance-tests.md):
 
-========================================  ====================================================
-x̄_i↑ = (1/n) Σ_j x_ij↑                    mean unidirectional positional deviation at P_i
-x̄_i = (x̄_i↑ + x̄_i↓)/2                     mean bidirectional positional deviation at P_i
-B_i = x̄_i↑ − x̄_i↓                          reversal value at P_i
-B = max |B_i|,  B̄ = (1/m) Σ B_i           reversal value, mean reversal value of the axis
-s_i↑ = √(Σ_j (x_ij↑ − x̄_i↑)² / (n − 1))   estimator of the unidirectional repeatability
-R_i↑ = 4 s_i↑                              unidirectional repeatability at P_i
-R_i = max(2s_i↑ + 2s_i↓ + |B_i|; R_i↑; R_i↓)  bidirectional repeatability at P_i
-R↑ = max R_i↑,  R = max R_i                repeatability of the axis
-E↑ = max x̄_i↑ − min x̄_i↑                  unidirectional systematic positional deviation
-E = max(x̄_i↑; x̄_i↓) − min(x̄_i↑; x̄_i↓)     bidirectional systematic positional deviation
-M = max x̄_i − min x̄_i                      range of the mean bidirectional deviation
-A↑ = max(x̄_i↑ + 2s_i↑) − min(x̄_i↑ − 2s_i↑)  unidirectional accuracy
-A = max(x̄_i↑ + 2s_i↑; x̄_i↓ + 2s_i↓) − min(x̄_i↑ − 2s_i↑; x̄_i↓ − 2s_i↓)  accuracy
-========================================  ====================================================
+- x̄_i↑ = (1/n) Σ_j x_ij↑: mean unidirectional positional deviation at P_i (x̄_i↓ alike);
+- x̄_i = (x̄_i↑ + x̄_i↓)/2: mean bidirectional positional deviation at P_i;
+- B_i = x̄_i↑ − x̄_i↓: reversal value at P_i; B = max │B_i│ and B̄ = (1/m) Σ B_i: the
+  reversal value and the mean reversal value of the axis;
+- s_i↑ = √(Σ_j (x_ij↑ − x̄_i↑)² / (n − 1)): estimator of the unidirectional repeatability;
+- R_i↑ = 4 s_i↑: unidirectional repeatability at P_i; R_i = max(2s_i↑ + 2s_i↓ + │B_i│;
+  R_i↑; R_i↓): bidirectional repeatability at P_i; R↑ = max R_i↑, R = max R_i: of the axis;
+- E↑ = max x̄_i↑ − min x̄_i↑, E = max(x̄_i↑; x̄_i↓) − min(x̄_i↑; x̄_i↓): unidirectional and
+  bidirectional systematic positional deviation;
+- M = max x̄_i − min x̄_i: range of the mean bidirectional positional deviation;
+- A↑ = max(x̄_i↑ + 2s_i↑) − min(x̄_i↑ − 2s_i↑), A = max(x̄_i↑ + 2s_i↑; x̄_i↓ + 2s_i↓) −
+  min(x̄_i↑ − 2s_i↑; x̄_i↓ − 2s_i↓): unidirectional and bidirectional accuracy.
 
 :func:`positioning_cycle` lays out the stops of the standard's linear test cycle or of its
 pilgrim-step cycle; :func:`read_approaches` takes the actual positions from a recorded (or
@@ -29,7 +26,7 @@ References
 ----------
 .. [1] ISO 230-2:2014, Test code for machine tools — Part 2: Determination of accuracy and
        repeatability of positioning of numerically controlled axes; the definitions of
-       Clause 3 and the test cycles of Clause 5 (the formulas are those of the 2006 edition,
+       Clause 3 and its test cycles (the formulas are those of the 2006 edition,
        whose definitions are numbered 2.10–2.24 as cited in public implementations; the
        2014 clause numbers could not be checked here).
 """
@@ -166,7 +163,7 @@ def positioning_test(targets: ArrayLike, deviation_up: ArrayLike, deviation_down
     Returns
     -------
     PositioningTest
-        Every quantity of the table in the module's docstring.
+        Every quantity of the list in the module's docstring (ISO 230-2, Clause 3 [1]_).
 
     Raises
     ------
@@ -323,7 +320,7 @@ def read_approaches(time: ArrayLike, position: ArrayLike, stops: Sequence[Stop],
     """The deviations x_ij↑, x_ij↓ of a run of :func:`positioning_cycle` from its position trace.
 
     At each stop the actual position is the mean of the trace over the last
-    :data:`READ_FRACTION` of the dwell (the axis at rest, as the standard reads it).
+    ``READ_FRACTION`` (a quarter) of the dwell (the axis at rest, as the standard reads it).
 
     Parameters
     ----------

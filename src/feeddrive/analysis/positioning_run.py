@@ -1,8 +1,9 @@
 """The ISO 230-2 positioning test run on a simulated axis: cycle → reference → simulate →
 approaches → quantities.  SI.
 
-:func:`run_positioning_test` lays out the cycle (:func:`~feeddrive.analysis.positioning.
-positioning_cycle`), turns its stops into a reference that rests at each
+:func:`run_positioning_test` lays out the cycle
+(:func:`~feeddrive.analysis.positioning.positioning_cycle`), turns its stops into a
+reference that rests at each
 (:func:`~feeddrive.model.positioning_profile.stops_profile`), simulates the drive from rest at
 the first stop, reads the actual position at the end of each dwell and evaluates the
 approaches (:func:`~feeddrive.analysis.positioning.positioning_test`).  A request the axis

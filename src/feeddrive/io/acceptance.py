@@ -20,8 +20,9 @@ from .measured import MeasuredDataError, _need_rows, check_increasing, read_csv_
 __all__ = ["POSITIONING_COLUMNS", "X_COLUMNS", "Y_COLUMNS", "PositioningRecord", "XYTrace",
            "read_positioning_record", "read_xy_trace", "write_positioning_record"]
 
-#: x and y columns looked for, in this order (a machine run names them ``<axis>.<signal>``)
+#: x columns looked for, in this order (a machine run names them ``<axis>.<signal>``)
 X_COLUMNS = ("x", "x_position", "x.table_position")
+#: y columns looked for, in this order
 Y_COLUMNS = ("y", "y_position", "y.table_position")
 #: the columns of a positioning record, as :func:`write_positioning_record` writes them
 POSITIONING_COLUMNS = ("target [mm]", "direction", "cycle", "position [mm]")
@@ -63,8 +64,7 @@ def read_xy_trace(path: str | Path, *, time_column: str = "time", x_column: str 
     time_column : str, default "time"
         The time column.
     x_column, y_column : str, optional
-        The position columns; by default the first of :data:`X_COLUMNS` (:data:`Y_COLUMNS`)
-        present.
+        The position columns; by default the first of ``X_COLUMNS`` (``Y_COLUMNS``) present.
     time_unit, position_unit : str, optional
         Units overriding the header's.
     sep : str, optional
