@@ -167,8 +167,11 @@ def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[
     ------
     ParameterError
         Before the run: fewer than 5 cycles, a stop outside the travel, a feed beyond
-        :func:`axis_speed_limit`, or bad settings.
+        :func:`axis_speed_limit`, a test longer than the solver's step limit allows, or bad
+        settings.
     """
+    from ..engine.budget import run_budget
+    from ..engine.options import current as current_options
     from ..engine.simulate import DriveSystem, simulate
     from ..model.positioning_profile import stops_profile
 
@@ -193,6 +196,14 @@ def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[
     profile, ends = stops_profile([s.position - start for s in stops[1:]], feed=feed,
                                   acceleration=acceleration, dwell=dwell)
     duration = float(profile.time[-1])
+    solver = options if options is not None else current_options()
+    budget = run_budget(duration, max_step=solver.largest_step,
+                        output_interval=solver.output_interval, max_steps=solver.max_steps)
+    if budget.steps_exceeded:
+        raise ParameterError("max_steps", solver.max_steps,
+                             f"the test lasts {duration:.6g} s and needs at least "
+                             f"{budget.min_steps:.3g} solver steps; fewer targets or cycles, a "
+                             "shorter dwell or a higher feed, or raise --max-steps")
     system = DriveSystem(params, drive=drive, table_position=start)
     result = simulate(system, profile, duration, options=options, progress=progress)
     measured = list(stops[1:])

@@ -26,7 +26,7 @@ from ._common import (
     user_errors,
 )
 from ._solver import accuracy_options
-from .simulate_cmd import ALL_DRIVES
+from .simulate_cmd import ALL_DRIVES, DEFAULT_MAX_STEPS
 
 
 def _say(text: str) -> None:
@@ -104,6 +104,9 @@ def positioning_command(
                                            "(default wang2021; linear-motor-example for "
                                            "--drive linear-motor)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
+    max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
+                                  help="Solver step limit [-]; a test that needs more is "
+                                  "refused before it starts."),
     output: str | None = typer.Option(None, "--output", help="Write the record of approaches "
                                       "to FILE.csv (analyze --positioning reads it)."),
     plot: str | None = typer.Option(None, "--plot", help="Write the ISO 230-2 chart."),
@@ -116,6 +119,7 @@ def positioning_command(
     target and mean), systematic deviation E and mean deviation M [µm]."""
     from ..analysis.positioning import describe
     from ..analysis.positioning_run import run_positioning_test
+    from ..engine.options import layered
     from ..engine.simulate import SimulationError, SimulationInterrupted
     from ..io.acceptance import write_positioning_record
 
@@ -128,14 +132,19 @@ def positioning_command(
                                 ("--dwell", dwell, "s"), ("--overshoot", overshoot, "mm")):
         if not (math.isfinite(value) and value > 0):
             raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
+    if max_steps < 1:
+        raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
+    options = layered([("command line", {"max_steps": (max_steps, "--max-steps")})],
+                      base=solver)
     params = resolve_parameters(preset_name, params_file, drive)
     try:
         run = run_positioning_test(params, drive, points, cycles=cycles, kind=cycle,
                                    feed=feed * MM_PER_S, acceleration=acceleration * MM,
-                                   dwell=dwell, overshoot=overshoot * MM)
+                                   dwell=dwell, overshoot=overshoot * MM, options=options)
     except ParameterError as err:  # the API names its arguments; the user typed options
         option = {"feed": "--feed", "targets": "--targets", "kind": "--cycle",
-                  "cycles": "--cycles"}.get(err.field, err.field)
+                  "cycles": "--cycles",
+                  "max_steps": "--max-steps"}.get(err.field, err.field)
         raise ParameterError(option, _in_mm(err.field, err.value), err.message) from None
     except SimulationError as err:
         err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
