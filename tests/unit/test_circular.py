@@ -39,7 +39,8 @@ def spike_shape(after: np.ndarray, width: float) -> np.ndarray:
 
 def trace(*, squareness: float = 0.0, scale: tuple[float, float] = (0.0, 0.0),
           spike: float = 0.0, spike_width: float = math.radians(2.0), backlash: float = 0.0,
-          lag: tuple[float, float] = (0.0, 0.0)) -> tuple[np.ndarray, ...]:
+          lag: tuple[float, float] = (0.0, 0.0), lateral_play: float = 0.0,
+          cyclic: tuple[float, float] = (0.0, 0.005)) -> tuple[np.ndarray, ...]:
     """CCW then CW, with the errors applied to the machine axes (X, Y measured from zero)."""
     ts, xs, ys = [], [], []
     t0 = 0.0
@@ -54,6 +55,10 @@ def trace(*, squareness: float = 0.0, scale: tuple[float, float] = (0.0, 0.0),
         # lost motion: the axis trails its command by b/2 in its direction of motion
         x = x - np.sign(vx) * backlash / 2.0
         y = y - np.sign(vy) * backlash / 2.0
+        # lateral play of X: the Y position shifts with the sign of X's motion
+        y = y + np.sign(vx) * lateral_play / 2.0
+        # cyclic error of the X screw: amplitude, pitch
+        x = x + cyclic[0] * np.sin(2 * math.pi * x_cmd / cyclic[1] + 0.4)
         # reversal spike: the reversing axis overshoots outward after each reversal
         for q in range(4):
             base = q * math.pi / 2.0
@@ -139,6 +144,16 @@ def test_backlash_and_servo_mismatch() -> None:
     assert res.backlash["y"] * 1e6 == pytest.approx(4.0, abs=0.04)
     # servo mismatch is the lag difference: 1 ms; squareness is told apart (same in CW, CCW)
     assert res.servo_mismatch * 1e3 == pytest.approx(1.0, rel=0.01)
+    assert res.squareness * 1e6 == pytest.approx(10.0, abs=0.1)
+
+
+def test_lateral_play_and_cyclic_error() -> None:
+    t, x, y = trace(lateral_play=3e-6, cyclic=(1e-6, 0.005), squareness=10e-6)
+    res = circular_test(t, x, y, radius=R, centre=CENTRE, pitch=0.005)
+    assert res.lateral_play["x"] * 1e6 == pytest.approx(3.0, abs=0.03)
+    assert abs(res.lateral_play["y"]) < 0.03e-6
+    assert res.cyclic_error["x"] * 1e6 == pytest.approx(1.0, abs=0.01)
+    assert res.cyclic_error["y"] < 0.01e-6
     assert res.squareness * 1e6 == pytest.approx(10.0, abs=0.1)
 
 

@@ -63,3 +63,13 @@ def test_requests_refused_before_the_run(monkeypatch) -> None:
     assert "voltage limit" in why
     with pytest.raises(ParameterError, match="speed limit"):
         run_positioning_test(slow, "cdfs", [0.1, 0.2], feed=1.1 * limit)
+
+
+def test_pilgrim_cycle_run_rests_on_every_stop() -> None:
+    run = run_positioning_test(frictionless(), "cdfs", [0.1, 0.105], kind="pilgrim",
+                               feed=0.02, acceleration=0.5, dwell=0.2, overshoot=1e-3)
+    r = run.result
+    ref = run.start + np.interp(run.dwell_ends, r.time, np.asarray(r["table_position_reference"]))
+    assert ref == pytest.approx([s.position for s in run.stops[1:]], abs=1e-12)
+    assert [s.direction for s in run.stops if s.target == 0] == [1] * 5 + [-1] * 5
+    assert run.test.deviation_down.shape == (2, 5)
