@@ -83,7 +83,12 @@ def circular_figure(result: CircularTest, *, magnification: float | None = None)
         if abs(s.height) > 0.1 * span:
             a = math.radians(s.angle + (s.peak_angle if s.direction == "CCW"
                                         else -s.peak_angle))
+            # CCW labels above-left of their peak, CW below-right: the two runs' spikes at one
+            # reversal lie a few degrees apart
+            ccw = s.direction == "CCW"
             ax.annotate(f"{s.height * 1e6:+.2f} µm", (a, 0.6 + scale * magnification * s.height),
+                        xytext=(-6 if ccw else 6, 6 if ccw else -12),
+                        textcoords="offset points", ha="right" if ccw else "left",
                         fontsize=7, color=_COLOURS.get(s.direction, "k"))
     ax.set_ylim(0.0, 1.05)  # the radial axis of a polar projection
     ax.set_yticks([])
