@@ -165,6 +165,22 @@ def test_one_run_says_what_it_cannot_give() -> None:
     assert any("one run" in n for n in res.notes)
 
 
+def test_a_radial_approach_from_the_centre_is_left_out() -> None:
+    t, x, y = trace(squareness=10e-6)
+    k = 200  # a straight approach from the centre to the start of the first run
+    xs = np.linspace(CENTRE[0], x[0], k, endpoint=False)
+    ys = np.linspace(CENTRE[1], y[0], k, endpoint=False)
+    t = np.concatenate([np.arange(k) * 1e-3, t + k * 1e-3])
+    res = circular_test(t, np.concatenate([xs, x]), np.concatenate([ys, y]), radius=None,
+                        centre=None)
+    assert res.squareness * 1e6 == pytest.approx(10.0, abs=0.1)
+    # the centre the circle alone gives (the squareness shifts it by α·y_c = 1.5 µm); the
+    # approach's last samples, within 1 % of R, move it by less than 0.5 µm
+    assert res.centre == pytest.approx(fit_circle(x, y)[:2], abs=0.5e-6)
+    assert any("left out (a radial lead-in" in n for n in res.notes)
+    assert any("centre (200" in n and "inferred" in n for n in res.notes)
+
+
 def test_fit_circle_recovers_centre_and_radius() -> None:
     a = np.linspace(0.0, 2 * np.pi, 721)
     cx, cy, r = fit_circle(0.3 + 0.04 * np.cos(a), -0.1 + 0.04 * np.sin(a))

@@ -53,6 +53,9 @@ __all__ = ["CircularRun", "CircularTest", "ReversalSpike", "circular_test", "des
 SPIKE_WINDOW = math.radians(45.0)
 #: a spike's excluded region ends where its residual has fallen below this fraction of its peak
 SPIKE_TAIL = 0.02
+#: samples farther than this fraction of R from the nominal circle are no part of the test
+#: (a radial approach); a deviation of a circular test is micrometres on tens of millimetres
+ON_CIRCLE = 0.01
 #: smallest spike height [m] that excludes its region from the fit (below: measurement noise)
 SPIKE_FLOOR = 1e-9
 _AXIS_OF_REVERSAL = ("x", "y", "x", "y")  # axis reversing at θ = 0°, 90°, 180°, 270°
@@ -500,7 +503,13 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
         raise ValueError("time, x, y: expected at least 16 finite samples")
     inferred: list[str] = []
     if centre is None or radius is None:
-        fx, fy, fr = fit_circle(px, py)
+        # fitted to the samples near the circle: a radial approach from the centre left out
+        d = np.hypot(px - np.mean(px), py - np.mean(py))
+        near = np.abs(d - np.median(d)) <= 0.2 * np.median(d)
+        fx, fy, fr = fit_circle(px[near], py[near])
+        for _ in range(3):  # then those within ON_CIRCLE of the fitted circle
+            near = np.abs(np.hypot(px - fx, py - fy) - fr) <= ON_CIRCLE * fr
+            fx, fy, fr = fit_circle(px[near], py[near], start=(fx, fy))
         if centre is None:
             centre = (fx, fy)
             inferred.append(f"centre ({fx * 1e3:.6g}, {fy * 1e3:.6g}) mm inferred: the "
@@ -511,13 +520,20 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
                             "the record, so the mean radius deviation is about 0 by "
                             "construction")
     cx0, cy0 = float(centre[0]), float(centre[1])
+    r_all = np.hypot(px - cx0, py - cy0)
+    on = np.abs(r_all - radius) <= ON_CIRCLE * radius
+    if np.count_nonzero(on) < max(16, t.size // 2):
+        raise ParameterError("radius", radius, f"the trace lies {r_all.min():.6g} … "
+                             f"{r_all.max():.6g} m from the centre, mostly not within "
+                             f"{ON_CIRCLE:.0%} of that radius; check --radius, --centre and "
+                             "the units")
+    if not on.all():
+        inferred.append(f"{t.size - np.count_nonzero(on)} samples farther than "
+                        f"{ON_CIRCLE:.0%} of R from the circle left out (a radial lead-in or "
+                        "lead-out)")
+        t, px, py = t[on], px[on], py[on]
     runs, notes = split_runs(t, px, py, (cx0, cy0))
     notes = inferred + notes
-    r_nominal = np.concatenate([np.hypot(r.x - cx0, r.y - cy0) for r in runs])
-    if np.max(np.abs(r_nominal - radius)) > 0.2 * radius:
-        raise ParameterError("radius", radius, f"the trace lies {r_nominal.min():.6g} … "
-                             f"{r_nominal.max():.6g} m from the centre, not on a circle of "
-                             "that radius; check --radius, --centre and the units")
     gee: dict[str, float] = {}
     dr: dict[str, float] = {}
     for r in runs:
