@@ -129,7 +129,8 @@ class PositioningTest:
         Returns
         -------
         dict
-            ``axis`` (the quantities of the axis, ``<name>_um``) and ``targets`` (per target).
+            ``axis`` (the quantities of the axis, ``<name>_um``), ``targets`` (per target: the
+            means, s, B_i, R_i and every approach's deviation) and ``cycles``.
         """
         um = 1e6
         axis = {f"{k}_um": float(getattr(self, k)) * um for k in self.AXIS_QUANTITIES}
@@ -142,7 +143,9 @@ class PositioningTest:
              "reversal_um": float(self.reversal_at[i]) * um,
              "repeatability_up_um": float(self.repeatability_up_at[i]) * um,
              "repeatability_down_um": float(self.repeatability_down_at[i]) * um,
-             "repeatability_um": float(self.repeatability_at[i]) * um}
+             "repeatability_um": float(self.repeatability_at[i]) * um,
+             "deviations_up_um": [float(v) * um for v in self.deviation_up[i]],
+             "deviations_down_um": [float(v) * um for v in self.deviation_down[i]]}
             for i, p in enumerate(self.targets)]
         return {"axis": axis, "targets": per_target,
                 "cycles": int(self.deviation_up.shape[1])}
