@@ -172,3 +172,20 @@ def test_positioning_help_names_units_and_the_standard() -> None:
                  "axis reverses [mm]", "linear (the standard cycle) or pilgrim",
                  "analyze --positioning reads it"):
         assert text in shown, text
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (("--circular", "{csv}", "--smoothing", "5"),
+     "--smoothing = 5.0: applies to the creep analysis, not to --circular"),
+    (("{csv}", "--radius", "50"), "--radius = 50.0: applies to --circular, not to the creep"),
+    (("--positioning", "{csv}", "--time-unit", "ms"),
+     "--time-unit = 'ms': applies to the creep analysis or --circular, not to --positioning"),
+    (("--circular", "--positioning", "{csv}"), "expected one of --circular, --positioning"),
+])
+def test_analyze_refuses_an_option_of_another_analysis(circle_csv, args: tuple[str, ...],
+                                                       words: str) -> None:
+    path, _ = circle_csv
+    r = invoke("analyze", *[str(path) if a == "{csv}" else a for a in args])
+    assert r.exit_code == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0], r.stderr

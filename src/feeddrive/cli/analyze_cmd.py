@@ -93,6 +93,39 @@ def analyze_command(
     test (--positioning)."""
     if circular and positioning:
         raise ParameterError("--circular", True, "expected one of --circular, --positioning")
+    mode = "--circular" if circular else "--positioning" if positioning else "creep"
+    # an option of another analysis would be ignored: refused, naming the analyses it serves
+    creep, both = ("creep",), ("creep", "--circular")
+    # option: (its value, whether it was given, the analyses it serves)
+    given: dict[str, tuple[object, bool, tuple[str, ...]]] = {
+        "--radius": (radius, radius is not None, ("--circular",)),
+        "--centre": (centre, centre is not None, ("--circular",)),
+        "--pitch": (pitch, pitch is not None, ("--circular",)),
+        "--magnification": (magnification, magnification is not None, ("--circular",)),
+        "--x-column": (x_column, x_column is not None, ("--circular",)),
+        "--y-column": (y_column, y_column is not None, ("--circular",)),
+        "--time-column": (time_column, time_column != "time", both),
+        "--time-unit": (time_unit, time_unit is not None, both),
+        "--position-unit": (position_unit, position_unit is not None, both),
+        "--command-speed": (command_speed, command_speed is not None, creep),
+        "--position-column": (position_column, position_column is not None, creep),
+        "--command-column": (command_column, command_column is not None, creep),
+        "--speed-column": (speed_column, speed_column is not None, creep),
+        "--smoothing": (smoothing, smoothing is not None, creep),
+        "--no-segments": (True, not segments, creep),
+        "--min-step": (min_step, min_step != 0.005, creep),
+        "--min-segment": (min_segment, min_segment != DEFAULT_MIN_SEGMENT_TIME, creep),
+        "--stick-level": (stick_level, stick_level != _DEFAULTS.stick_level, creep),
+        "--max-stick-fraction": (max_stick_fraction,
+                                 max_stick_fraction != _DEFAULTS.max_stick_fraction, creep),
+        "--max-ripple-ratio": (max_ripple_ratio,
+                               max_ripple_ratio != _DEFAULTS.max_ripple_ratio, creep),
+    }
+    for option, (value, is_given, modes) in given.items():
+        if is_given and mode not in modes:
+            served = " or ".join("the creep analysis" if m == "creep" else m for m in modes)
+            raise ParameterError(option, value, f"applies to {served}, not to "
+                                 f"{'the creep analysis' if mode == 'creep' else mode}")
     if circular:
         _circular(file, radius=radius, centre=centre, pitch=pitch, magnification=magnification,
                   time_column=time_column, x_column=x_column, y_column=y_column,
