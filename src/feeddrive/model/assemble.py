@@ -262,7 +262,7 @@ def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
     if not site.reads:
         raise ValueError(f"friction site {site.name!r}: its mechanism declares no reads of "
                          "its sliding speed (Site.reads)")
-    own = [b.states[k].name for k in range(y_offset, y_offset + len(law.states(params)))]
+    own = [f"{site.name}_{state}" for state in law.states(params)]
     b.flow((f"f_{site.name}", *(f"dy:{s}" for s in own)),
            (*site.reads, *(f"y:{s}" for s in own)))
     return (f"f_{site.name} = {alias}({site.speed}, y, {codegen.index(y_offset)}, P, "
@@ -276,7 +276,7 @@ def _ripple(b: codegen.Builder, parameters: DriveParameters, mech: Any, drive: s
     dist = parameters.disturbances
     claimed = {m.ripple: m for m in mech.drive_motors if m.ripple}
     for m in claimed.values():
-        if m.angle not in b.state_index:
+        if b.q(m.angle) not in b.state_index:
             raise ValueError(f"motor {m.name!r}: its ripple needs its rotor-angle state; "
                              f"{m.angle!r} is no state of the {drive} model")
     for f in dataclasses.fields(dist):
@@ -398,6 +398,35 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
               profile: Profile, load: LoadProfile | None) -> Model:
     b = codegen.Builder()
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
+    laws, comp = declare_drive(b, parameters, drive, table_position, nut_hold, profile, load)
+    return package(b, drive, laws, comp)
+
+
+def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
+                  table_position: float, nut_hold: str, profile: Profile,
+                  load: LoadProfile | None, *, load_input: str = ""
+                  ) -> tuple[list[tuple[Site, FrictionLaw, int]], CompensationFootprint | None]:
+    """Declare one drive's parts to ``b`` and write their code: the whole of a single-axis
+    model, or one axis of a machine inside :meth:`Builder.scope
+    <feeddrive.model.codegen.Builder.scope>`.
+
+    Parameters
+    ----------
+    b : Builder
+        The model being assembled.
+    parameters, drive, table_position, nut_hold, profile, load
+        As :func:`assemble`.
+    load_input : str, default ""
+        Code of a further load force on the table [N] (a machine's coupling part writes it
+        into a signal of this axis, ``aux[…]``); empty for none.
+
+    Returns
+    -------
+    laws : list of (Site, FrictionLaw, int)
+        Each friction site, its law and its first state's index.
+    compensation : CompensationFootprint or None
+        The compensator's footprint.
+    """
     mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
     mech.declare(b)
     mech.parameters(b)
@@ -417,7 +446,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     axes, channels = mech.axes(b)
     loops.declare_states(b, axes)
     for ax in axes:
-        b.tol_scale[f"{ax.name}_velocity_integral"] = b.param_values[ax.param_offset
+        b.tol_scale[b.q(f"{ax.name}_velocity_integral")] = b.param_values[ax.param_offset
                                                                      + loops.H_AX]
     loops.declare_signals(b, axes)
     for site, law, _ in laws:
@@ -438,6 +467,8 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     # the linearisation's load-force input [N] (feeddrive.analysis.linear), zero in a simulation
     o_load = b.param("inputs.load_force", 0.0)
     load_code = f"P[{o_load}]" if load_code is None else f"({load_code} + P[{o_load}])"
+    if load_input:
+        load_code = f"({load_code} + {load_input})"
     ripple, ripple_lines, ripple_reads = _ripple(b, parameters, mech, drive)
     lead = emit_harmonics(b, "lead_error", dist.lead_error)
     if lead is not None and not mech.has_lead_screw:
@@ -491,7 +522,29 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     b.emit(f"{b.a('drive_force')} = f_d", writes="aux:drive_force", reads="f_d")
     if load_aux:
         b.emit(f"{b.a('load_force')} = {load_code}", writes="aux:load_force", reads="t")
+    return laws, comp
 
+
+def package(b: codegen.Builder, drive: str, laws: list[tuple[Site, FrictionLaw, int]],
+            comp: CompensationFootprint | None) -> Model:
+    """Compile what every part declared to ``b`` into a :class:`Model`.
+
+    Parameters
+    ----------
+    b : Builder
+        The builder every part has declared to.
+    drive : str
+        The drive (or machine) name the model is built for.
+    laws : list of (Site, FrictionLaw, int)
+        Each friction site (its model-wide name), its law and first state's index.
+    comp : CompensationFootprint or None
+        The compensator's footprint.
+
+    Returns
+    -------
+    Model
+        The assembled model.
+    """
     source = codegen.module_source(b)
     module = codegen.compile_module(source, b.dynamic_sources)
     pattern = sparsity.declared_pattern([s.name for s in b.states], [a.name for a in b.aux],

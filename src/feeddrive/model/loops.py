@@ -465,8 +465,8 @@ def _speed_law(b: Builder, ax: Axis) -> str:
 def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) -> None:
     """Speed and current commands of every axis into ``target`` (aux array expression)."""
     P = "P"
-    sc = [f"{target}[{b.aux_index[f'{ax.name}_speed_command']}]" for ax in axes]
-    ic = [f"{target}[{b.aux_index[f'{ax.name}_current_command']}]" for ax in axes]
+    sc = [f"{target}[{b.aux_index[b.q(f'{ax.name}_speed_command')]}]" for ax in axes]
+    ic = [f"{target}[{b.aux_index[b.q(f'{ax.name}_current_command')]}]" for ax in axes]
     verr, sat, ccmd = b.use(velocity_error), b.use(saturate), b.use(current_command)
     out.append(f"if {_period(b, 'position')} > 0.0:")
     for ax, s in zip(axes, sc, strict=True):
@@ -483,9 +483,8 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
                    f"{P}[{ax.param_offset + I_MAX}])" if ax.current_feedforward
                    else f"    {c} = {held}")
     out.append("else:")
-    for ax in axes:
-        out.append(f"    e_{ax.name} = {verr}({target}[{b.aux_index[ax.name + '_speed_command']}], "
-                   f"{ax.speed}, {P}, {ax.param_offset})")
+    for ax, s in zip(axes, sc, strict=True):
+        out.append(f"    e_{ax.name} = {verr}({s}, {ax.speed}, {P}, {ax.param_offset})")
     for ax, c in zip(axes, ic, strict=True):
         o = ax.param_offset
         # compensation is continuous-only (refused with sampled loops): right-hand side only
@@ -615,7 +614,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     s += ["    " + ln for ln in cmd_lines]
     for ax in axes:
         s += _guarded(ax, _sampled_pi(
-            f"cmd[{b.aux_index[ax.name + '_current_command']}] - {ax.current_state}", vcmd,
+            f"cmd[{b.aux_index[b.q(ax.name + '_current_command')]}] - {ax.current_state}", vcmd,
             b.h(ax.name + ".current_integral"), b.h(ax.name + ".voltage"), ax.param_offset,
             U_MAX, rate, sat, "tc", "u_raw"))
     for ln in s:
