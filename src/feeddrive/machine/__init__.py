@@ -1,0 +1,440 @@
+"""A machine of axes: several drives, each any registered topology with its own parameter set,
+assembled into one model whose names are ``<axis>.<signal>``.
+
+A machine file (TOML)::
+
+    name = "my-xy"
+    extends = "xy-table"           # optional: a built-in machine (MACHINES) to start from
+
+    [axes.x]
+    extends = "wang2021"           # the axis' parameter set, as a parameter file gives it
+    drive = "cdfs"                 # its topology (default: the set's example drive)
+    table_position = 0.4           # [m], where the ball-screw nut starts (default 0.4)
+
+    [axes.y]
+    drive = "linear-motor"         # without extends: the drive's example set
+    [axes.y.table]
+    mass = 30.0
+
+Each axis is declared inside a :meth:`Builder.scope <feeddrive.model.codegen.Builder.scope>`
+of its name, so its states, signals, parameters and clocks are ``x.table_speed``,
+``x.controller.position_period`` …, and its code runs in a function of its own.  The machine
+is simulated by the one engine (:func:`simulate_machine`), following a :mod:`contour
+<feeddrive.machine.contour>`, and the run carries every axis' signals and the contour error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..model.reference import SampledSpeed
+from ..parameters import DriveParameters, ParameterError
+from .contour import Circle, Contour, Line, Polyline, corner, from_csv
+
+__all__ = ["MACHINES", "Circle", "Contour", "Line", "Machine", "MachineAxis", "MachineProfile",
+           "MachineSystem", "Polyline", "assemble_machine", "check_machine", "corner",
+           "from_csv", "load_machine", "machine_from_dict", "simulate_machine"]
+
+#: built-in machines: name → the machine file's content
+MACHINES: dict[str, dict[str, Any]] = {
+    # two independent wang2021 CDFS axes at right angles (issue 40's XY table)
+    "xy-table": {"name": "xy-table", "axes": {
+        "x": {"extends": "wang2021", "drive": "cdfs"},
+        "y": {"extends": "wang2021", "drive": "cdfs"}}},
+}
+
+_AXIS_KEYS = ("drive", "table_position", "nut_hold")
+
+
+@dataclass(frozen=True)
+class MachineAxis:
+    """One axis of a machine: a drive with its own parameter set.
+
+    Parameters
+    ----------
+    name : str
+        The axis' name, an identifier (``"x"``); its signals are ``<name>.<signal>``.
+    parameters : DriveParameters
+        Its parameter set [SI].
+    drive : str
+        A registered topology (``"cdfs"``, ``"linear-motor"`` …).
+    table_position : float, default 0.4
+        Start position of a ball-screw nut from the motor-side support [m].
+    nut_hold : str, default "locked"
+        How a CDFS holds its nut (``"locked"`` or ``"servo"``).
+    """
+
+    name: str
+    parameters: DriveParameters
+    drive: str
+    table_position: float = 0.4
+    nut_hold: str = "locked"
+
+
+@dataclass(frozen=True)
+class Machine:
+    """Several axes, each assembled into one model under its own name.
+
+    Parameters
+    ----------
+    name : str
+        The machine's name.
+    axes : tuple of MachineAxis
+        Its axes, in the order they are assembled.
+    """
+
+    name: str
+    axes: tuple[MachineAxis, ...]
+
+    def axis(self, name: str) -> MachineAxis:
+        """The axis called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            An axis name.
+
+        Returns
+        -------
+        MachineAxis
+            The axis.
+
+        Raises
+        ------
+        ParameterError
+            For a name the machine has no axis of.
+        """
+        for ax in self.axes:
+            if ax.name == name:
+                return ax
+        raise ParameterError("axes", name, "no such axis; expected one of "
+                             + ", ".join(a.name for a in self.axes))
+
+
+def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
+    """One ``[axes.<name>]`` table → its axis; every error names ``axes.<name>.…``."""
+    from ..model.mechanisms import drive_names, mechanism
+    from ..parameters.toml_io import from_dict
+
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ParameterError(f"axes.{name}", name, "expected an identifier as the axis' name "
+                             "(letters, digits, _)")
+    if not isinstance(table, Mapping):
+        raise ParameterError(f"axes.{name}", table, "expected a table")
+    data = dict(table)
+    drive = data.pop("drive", None)
+    position = data.pop("table_position", 0.4)
+    hold = data.pop("nut_hold", "locked")
+    if drive is not None and drive not in drive_names():
+        raise ParameterError(f"axes.{name}.drive", drive,
+                             f"expected one of {', '.join(drive_names())}")
+    if "extends" not in data:
+        data["extends"] = mechanism(drive or "cdfs").example_preset
+    try:
+        params = from_dict(data, base_dir=base_dir)
+    except ParameterError as err:
+        raise ParameterError(f"axes.{name}.{err.field}", err.value, err.message) from None
+    if drive is None:
+        drive = next((d for d in drive_names()
+                      if mechanism(d).example_preset == data["extends"]), "cdfs")
+    if not (isinstance(position, int | float) and math.isfinite(position)):
+        raise ParameterError(f"axes.{name}.table_position", position, "expected a number [m]")
+    try:
+        mechanism(drive).check(params, drive, float(position))
+    except ParameterError as err:
+        raise ParameterError(f"axes.{name}.{err.field}", err.value, err.message) from None
+    if hold not in ("locked", "servo"):
+        raise ParameterError(f"axes.{name}.nut_hold", hold, "expected locked or servo")
+    return MachineAxis(name, params, drive, float(position), hold)
+
+
+def _merged(data: Mapping[str, Any]) -> dict[str, Any]:
+    """A machine file with its built-in parent (``extends``) merged in, axis by axis."""
+    data = dict(data)
+    parent = data.pop("extends", None)
+    if parent is None:
+        return data
+    if parent not in MACHINES:
+        raise ParameterError("extends", parent,
+                             f"expected a built-in machine: {', '.join(MACHINES)}")
+    base = MACHINES[parent]
+    axes = {k: dict(v) for k, v in base["axes"].items()}
+    given = data.get("axes", {})
+    for k, v in (given.items() if isinstance(given, Mapping) else ()):
+        axes[k] = {**axes.get(k, {}), **dict(v)} if isinstance(v, Mapping) else v
+    return {**base, **data, "axes": axes}
+
+
+def _axis_tables(data: Mapping[str, Any]) -> Mapping[str, Any]:
+    unknown = sorted(set(data) - {"name", "axes"})
+    if unknown:
+        raise ParameterError(unknown[0], data[unknown[0]],
+                             "unknown key of a machine file; expected name, extends, axes")
+    tables = data.get("axes")
+    if not isinstance(tables, Mapping) or not tables:
+        raise ParameterError("axes", tables, "expected one or more [axes.<name>] tables")
+    return tables
+
+
+def machine_from_dict(data: Mapping[str, Any], *, base_dir: Path | None = None) -> Machine:
+    """Build a machine from a parsed machine file.
+
+    Parameters
+    ----------
+    data : mapping
+        The file's content: ``name``, optionally ``extends`` (a built-in machine of
+        :data:`MACHINES`), ``[axes.<name>]`` tables.
+    base_dir : Path, optional
+        Folder relative ``extends`` files of the axes are read from.
+
+    Returns
+    -------
+    Machine
+        The machine.
+
+    Raises
+    ------
+    ParameterError
+        The first error, naming the axis (``axes.y.table.mass``) or the key.
+    """
+    data = _merged(data)
+    tables = _axis_tables(data)
+    axes = tuple(_axis(k, v, base_dir) for k, v in tables.items())
+    return Machine(str(data.get("name", "machine")), axes)
+
+
+def check_machine(data: Mapping[str, Any], *, base_dir: Path | None = None) -> list[str]:
+    """Every error of a machine file, one line each, naming the axis (``params check``).
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed machine file.
+    base_dir : Path, optional
+        Folder relative ``extends`` files are read from.
+
+    Returns
+    -------
+    list of str
+        One line per error; empty for a valid file.
+    """
+    try:
+        tables = _axis_tables(_merged(data))
+    except ParameterError as err:
+        return [str(err)]
+    errors = []
+    for name, table in tables.items():
+        try:
+            _axis(name, table, base_dir)
+        except ParameterError as err:
+            errors.append(str(err))
+    return errors
+
+
+def load_machine(path: str | Path) -> Machine:
+    """Read a machine file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file, or the name of a built-in machine (:data:`MACHINES`).
+
+    Returns
+    -------
+    Machine
+        The machine.
+
+    Raises
+    ------
+    ParameterError
+        For a file that cannot be read or a refused value, naming the axis.
+    """
+    from ..parameters.toml_io import read_toml_file
+
+    if str(path) in MACHINES:
+        return machine_from_dict(MACHINES[str(path)])
+    data = read_toml_file(path, field="machine")
+    return machine_from_dict(data, base_dir=Path(path).parent)
+
+
+@dataclass(frozen=True)
+class MachineProfile(SampledSpeed):
+    """The references of a machine's axes on one time grid.
+
+    As a :class:`~feeddrive.model.reference.SampledSpeed` it is the path speed (the engine's
+    speed scales and step ends read it); ``axes`` holds each axis' own reference.
+
+    Parameters
+    ----------
+    axes : tuple of (str, SampledSpeed), default ()
+        Axis name → its reference.
+    contour : Contour or None, default None
+        The path the references follow (its contour error), if any.
+    """
+
+    axes: tuple[tuple[str, SampledSpeed], ...] = ()
+    contour: Contour | None = None
+
+    @classmethod
+    def from_contour(cls, contour: Contour, machine: Machine,
+                     interval: float | None = None) -> MachineProfile:
+        """The references of a contour; axes the contour does not move stand still.
+
+        Parameters
+        ----------
+        contour : Contour
+            The path.
+        machine : Machine
+            The machine (its axes).
+        interval : float, optional
+            Grid spacing [s] (default :data:`feeddrive.machine.contour.INTERVAL`).
+
+        Returns
+        -------
+        MachineProfile
+            The references.
+        """
+        from .contour import INTERVAL
+
+        for name in contour.axes:
+            machine.axis(name)
+        refs = contour.references(interval or INTERVAL)
+        t = next(iter(refs.values())).time
+        zero = SampledSpeed(time=t, table_speed=np.zeros_like(t))
+        return cls(time=t, table_speed=contour.path_speed(t),
+                   axes=tuple((ax.name, refs.get(ax.name, zero)) for ax in machine.axes),
+                   contour=contour)
+
+    def axis(self, name: str) -> SampledSpeed:
+        """The reference of axis ``name``."""
+        return dict(self.axes)[name]
+
+
+def assemble_machine(machine: Machine, profile: MachineProfile) -> Any:
+    """Build the one compiled model of a machine: every axis inside a scope of its name.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine.
+    profile : MachineProfile
+        Each axis' reference.
+
+    Returns
+    -------
+    Model
+        The assembled model; its names are ``<axis>.<name>``.
+    """
+    from ..model import codegen
+    from ..model.assemble import declare_drive, package
+
+    b = codegen.Builder()
+    b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
+    laws = []
+    for ax in machine.axes:
+        with b.scope(ax.name):
+            axis_laws, _ = declare_drive(b, ax.parameters, ax.drive, ax.table_position,
+                                         ax.nut_hold, profile.axis(ax.name), None)
+        laws += [(dataclasses.replace(site, name=f"{ax.name}.{site.name}"), law, first)
+                 for site, law, first in axis_laws]
+    return package(b, machine.name, laws, None)
+
+
+@dataclass(frozen=True)
+class MachineSystem:
+    """A machine as the engine simulates it (the role :class:`~feeddrive.DriveSystem` has for
+    one drive).
+
+    The engine reads its first axis' parameter set where it needs one set (the controller's
+    current limit for the tolerance scale, quantisation settings, the run's attributes).
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine.
+    initial_state : mapping of str to float, default {}
+        States by name (``"x.table_speed"``) [SI].
+    """
+
+    machine: Machine
+    initial_state: Mapping[str, float] = field(default_factory=dict)
+    load: None = None
+
+    @property
+    def parameters(self) -> DriveParameters:
+        """The first axis' parameter set."""
+        return self.machine.axes[0].parameters
+
+    @property
+    def drive(self) -> str:
+        """The machine's name (a run's ``drive`` attribute)."""
+        return self.machine.name
+
+    @property
+    def table_position(self) -> float:
+        """The first axis' start position [m]."""
+        return self.machine.axes[0].table_position
+
+    @property
+    def nut_hold(self) -> str:
+        """The first axis' nut hold."""
+        return self.machine.axes[0].nut_hold
+
+    def model(self, profile: MachineProfile) -> Any:
+        """The machine's assembled model following ``profile``."""
+        if not isinstance(profile, MachineProfile):
+            raise ParameterError("profile", type(profile).__name__,
+                                 "a machine follows a MachineProfile (a contour's references)")
+        return assemble_machine(self.machine, profile)
+
+    def initial_vector(self, model: Any) -> np.ndarray:
+        """Zeros except the states named in ``initial_state`` [SI per state]."""
+        y0 = np.zeros(len(model.state_names))
+        for name, value in self.initial_state.items():
+            y0[model.index(name)] = float(value)
+        return y0
+
+
+def simulate_machine(machine: Machine, contour: Contour, duration: float | None = None, *,
+                     options: Any = None, interval: float | None = None) -> Any:
+    """Simulate a machine following a contour.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine.
+    contour : Contour
+        The path (its axes name two of the machine's).
+    duration : float, optional
+        Simulated time [s]; default the contour's duration.
+    options : SolverOptions, optional
+        Integrator settings.
+    interval : float, optional
+        Grid spacing of the references [s].
+
+    Returns
+    -------
+    Result
+        Every axis' states and signals as ``<axis>.<name>``, and ``contour_error`` [m]
+        (signed normal distance of the actual point to the path).
+    """
+    from ..engine.result import Result
+    from ..engine.simulate import simulate
+
+    profile = MachineProfile.from_contour(contour, machine, interval)
+    t_end = contour.duration if duration is None else float(duration)
+    result = simulate(MachineSystem(machine), profile, t_end, options=options)  # type: ignore[arg-type]
+    ds = result.dataset
+    a, b = contour.axes
+    err = contour.contour_error(np.asarray(ds[f"{a}.table_position"]),
+                                np.asarray(ds[f"{b}.table_position"]))
+    ds["contour_error"] = ("time", err, {"units": "m", "long_name": "contour error (signed "
+                                         "normal distance of the actual point to the path)"})
+    return Result(ds)
