@@ -25,8 +25,8 @@ is simulated by the one engine (:func:`simulate_machine`), following a :mod:`con
 
 from __future__ import annotations
 
-import dataclasses
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +37,7 @@ import numpy as np
 from ..model.reference import SampledSpeed
 from ..parameters import DriveParameters, ParameterError
 from .contour import Circle, Contour, Line, Polyline, corner, from_csv
+from .couplings import AXIS_INPUTS, Coupling, coupling
 
 __all__ = ["MACHINES", "Circle", "Contour", "Line", "Machine", "MachineAxis", "MachineProfile",
            "MachineSystem", "Polyline", "assemble_machine", "check_machine", "corner",
@@ -87,11 +88,15 @@ class Machine:
     name : str
         The machine's name.
     axes : tuple of MachineAxis
-        Its axes, in the order they are assembled.
+        Its axes.
+    couplings : tuple of Coupling, default ()
+        Its coupling parts (:mod:`feeddrive.machine.couplings`), joined to the axes by
+        named signals.
     """
 
     name: str
     axes: tuple[MachineAxis, ...]
+    couplings: tuple[Coupling, ...] = ()
 
     def axis(self, name: str) -> MachineAxis:
         """The axis called ``name``.
@@ -172,11 +177,28 @@ def _merged(data: Mapping[str, Any]) -> dict[str, Any]:
     return {**base, **data, "axes": axes}
 
 
+def _couplings(data: Mapping[str, Any]) -> tuple[Coupling, ...]:
+    tables = data.get("couplings", {})
+    if not isinstance(tables, Mapping):
+        raise ParameterError("couplings", tables, "expected [couplings.<name>] tables")
+    out = []
+    for name, table in tables.items():
+        if not isinstance(table, Mapping) or "part" not in table:
+            raise ParameterError(f"couplings.{name}", table, "expected a table with part = "
+                                 "\"<a registered coupling part>\"")
+        try:
+            cls = coupling(table["part"])
+        except ParameterError as err:
+            raise ParameterError(f"couplings.{name}.part", err.value, err.message) from None
+        out.append(cls.from_table(name, {k: v for k, v in table.items() if k != "part"}))
+    return tuple(out)
+
+
 def _axis_tables(data: Mapping[str, Any]) -> Mapping[str, Any]:
-    unknown = sorted(set(data) - {"name", "axes"})
+    unknown = sorted(set(data) - {"name", "axes", "couplings"})
     if unknown:
-        raise ParameterError(unknown[0], data[unknown[0]],
-                             "unknown key of a machine file; expected name, extends, axes")
+        raise ParameterError(unknown[0], data[unknown[0]], "unknown key of a machine file; "
+                             "expected name, extends, axes, couplings")
     tables = data.get("axes")
     if not isinstance(tables, Mapping) or not tables:
         raise ParameterError("axes", tables, "expected one or more [axes.<name>] tables")
@@ -207,7 +229,9 @@ def machine_from_dict(data: Mapping[str, Any], *, base_dir: Path | None = None) 
     data = _merged(data)
     tables = _axis_tables(data)
     axes = tuple(_axis(k, v, base_dir) for k, v in tables.items())
-    return Machine(str(data.get("name", "machine")), axes)
+    machine = Machine(str(data.get("name", "machine")), axes, _couplings(data))
+    plan(machine)  # the signals connect: refused here, before any work
+    return machine
 
 
 def check_machine(data: Mapping[str, Any], *, base_dir: Path | None = None) -> list[str]:
@@ -230,9 +254,19 @@ def check_machine(data: Mapping[str, Any], *, base_dir: Path | None = None) -> l
     except ParameterError as err:
         return [str(err)]
     errors = []
+    axes = []
     for name, table in tables.items():
         try:
-            _axis(name, table, base_dir)
+            axes.append(_axis(name, table, base_dir))
+        except ParameterError as err:
+            errors.append(str(err))
+    try:
+        couplings = _couplings(_merged(data))
+    except ParameterError as err:
+        return [*errors, str(err)]
+    if not errors:
+        try:
+            plan(Machine("check", tuple(axes), couplings))
         except ParameterError as err:
             errors.append(str(err))
     return errors
@@ -317,8 +351,153 @@ class MachineProfile(SampledSpeed):
         return dict(self.axes)[name]
 
 
+@dataclass(frozen=True)
+class Plan:
+    """How a machine's parts connect: the order their code runs in and each coupling's reads.
+
+    Parameters
+    ----------
+    order : tuple of str
+        Axis names and ``couplings.<name>`` in the order their code runs (each value computed
+        before it is read).
+    inputs : tuple of str
+        The axes' input signals some part writes (``y.external_force``).
+    """
+
+    order: tuple[str, ...]
+    inputs: tuple[str, ...]
+
+
+def _declare_axes(b: Any, machine: Machine, profile: MachineProfile | None,
+                  inputs: set[str], order: tuple[str, ...]) -> list[Any]:
+    """Declare each axis in a scope of its name, in ``order`` (its rhs runs in that order)."""
+    import dataclasses as dc
+
+    from ..model.assemble import declare_drive
+    from ..model.reference import ConstantSpeed
+
+    laws: list[Any] = []
+    for name in order:
+        ax = machine.axis(name)
+        ref = profile.axis(name) if profile is not None else ConstantSpeed(0.0)
+        with b.scope(name):
+            axis_laws, _ = declare_drive(b, ax.parameters, ax.drive, ax.table_position,
+                                         ax.nut_hold, ref, None,
+                                         external_force=f"{name}.external_force" in inputs)
+        laws += [(dc.replace(site, name=f"{name}.{site.name}"), law, first)
+                 for site, law, first in axis_laws]
+    return laws
+
+
+def plan(machine: Machine) -> Plan:
+    """Connect a machine's coupling parts to its axes by signal name, and order them.
+
+    Every refusal is one line naming the signal or the part: a read no axis or part writes,
+    a signal two parts write, a write to no axis input, an algebraic cycle.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine.
+
+    Returns
+    -------
+    Plan
+        The order and the written inputs.
+
+    Raises
+    ------
+    ParameterError
+        When the signals do not connect.
+    """
+    from ..model import codegen
+
+    axis_names = [ax.name for ax in machine.axes]
+    if len(set(axis_names)) != len(axis_names):
+        raise ParameterError("axes", axis_names, "expected each axis name once")
+    writer: dict[str, str] = {}
+    for c in machine.couplings:
+        for signal in c.writes():
+            axis, _, port = signal.partition(".")
+            if axis not in axis_names or port not in AXIS_INPUTS:
+                raise ParameterError(f"couplings.{c.name}", signal,
+                                     "writes no axis input; expected <axis>."
+                                     f"{{{', '.join(AXIS_INPUTS)}}} of an axis of the machine")
+            if signal in writer:
+                raise ParameterError(signal, f"{writer[signal]}, couplings.{c.name}",
+                                     "a signal written by two parts")
+            writer[signal] = f"couplings.{c.name}"
+    # declare the axes once (no code is compiled) to know their states and signals
+    b = codegen.Builder()
+    _declare_axes(b, machine, None, set(writer), tuple(axis_names))
+    after: dict[str, set[str]] = {n: set() for n in axis_names}
+    after.update({f"couplings.{c.name}": set() for c in machine.couplings})
+    for signal, part in writer.items():
+        after[signal.partition(".")[0]].add(part)
+    for c in machine.couplings:
+        me = f"couplings.{c.name}"
+        for name in c.reads():
+            rate = re.fullmatch(r"der\((.+)\)", name)
+            target = rate.group(1) if rate else name
+            if rate and target in b.state_index or target in writer:
+                after[me].add(writer.get(target, target.partition(".")[0]))
+            elif target in b.state_index:
+                continue  # a state: known at the start of a call, no algebraic dependency
+            elif target in b.aux_index:
+                after[me].add(target.partition(".")[0])
+            else:
+                raise ParameterError(f"couplings.{c.name}", name,
+                                     "a signal read that no axis or part writes")
+    order: list[str] = []
+    pending = dict(after)
+    while pending:
+        ready = [n for n, deps in pending.items() if deps <= set(order)]
+        if not ready:
+            loop = ", ".join(f"{n} after {' and '.join(sorted(d - set(order)))}"
+                             for n, d in pending.items())
+            raise ParameterError("couplings", sorted(writer),
+                                 f"a cycle of algebraic signals: {loop}")
+        order += ready
+        for n in ready:
+            del pending[n]
+    return Plan(tuple(order), tuple(writer))
+
+
+def _signal_code(b: Any, name: str) -> tuple[str, str]:
+    """(code, flow name) of a signal a coupling reads, at the machine level."""
+    rate = re.fullmatch(r"der\((.+)\)", name)
+    if rate:
+        return b.dy(rate.group(1)), f"dy:{rate.group(1)}"
+    if name in b.state_index:
+        return b.y(name), f"y:{name}"
+    return b.a(name), f"aux:{name}"
+
+
+def _emit_coupling(b: Any, step: str, c: Coupling) -> None:
+    """A coupling part's equations at the machine level: its parameters as slots
+    ``couplings.<name>.<field>``, each braced name replaced by the code of its slot."""
+    slots = {}
+    for key, value in c.parameters().items():
+        b.param(f"{step}.{key}", value)
+        slots[key] = b.p(f"{step}.{key}")
+    for signal, expression in c.equations().items():
+        if signal not in b.aux_index:  # an axis input, declared by its writer
+            b.add_aux(signal, *AXIS_INPUTS[signal.partition(".")[2]])
+        reads: list[str] = []
+        parts = re.split(r"\{([^{}]+)\}", expression)
+        for k in range(1, len(parts), 2):  # the braced names
+            if parts[k] in slots:
+                parts[k] = slots[parts[k]]
+            else:
+                parts[k], flow = _signal_code(b, parts[k])
+                reads.append(flow)
+        b.emit(f"{b.a(signal)} = {''.join(parts)}", writes=f"aux:{signal}",
+               reads=tuple(reads))
+
+
 def assemble_machine(machine: Machine, profile: MachineProfile) -> Any:
-    """Build the one compiled model of a machine: every axis inside a scope of its name.
+    """Build the one compiled model of a machine: every axis inside a scope of its name, the
+    coupling parts between them in the order :func:`plan` finds.
 
     Parameters
     ----------
@@ -333,17 +512,18 @@ def assemble_machine(machine: Machine, profile: MachineProfile) -> Any:
         The assembled model; its names are ``<axis>.<name>``.
     """
     from ..model import codegen
-    from ..model.assemble import declare_drive, package
+    from ..model.assemble import package
 
+    steps = plan(machine)
     b = codegen.Builder()
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
-    laws = []
-    for ax in machine.axes:
-        with b.scope(ax.name):
-            axis_laws, _ = declare_drive(b, ax.parameters, ax.drive, ax.table_position,
-                                         ax.nut_hold, profile.axis(ax.name), None)
-        laws += [(dataclasses.replace(site, name=f"{ax.name}.{site.name}"), law, first)
-                 for site, law, first in axis_laws]
+    laws: list[Any] = []
+    parts = {f"couplings.{c.name}": c for c in machine.couplings}
+    for step in steps.order:
+        if step not in parts:
+            laws += _declare_axes(b, machine, profile, set(steps.inputs), (step,))
+            continue
+        _emit_coupling(b, step, parts[step])
     return package(b, machine.name, laws, None)
 
 

@@ -404,7 +404,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
 
 def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
                   table_position: float, nut_hold: str, profile: Profile,
-                  load: LoadProfile | None, *, load_input: str = ""
+                  load: LoadProfile | None, *, external_force: bool = False
                   ) -> tuple[list[tuple[Site, FrictionLaw, int]], CompensationFootprint | None]:
     """Declare one drive's parts to ``b`` and write their code: the whole of a single-axis
     model, or one axis of a machine inside :meth:`Builder.scope
@@ -416,9 +416,9 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
         The model being assembled.
     parameters, drive, table_position, nut_hold, profile, load
         As :func:`assemble`.
-    load_input : str, default ""
-        Code of a further load force on the table [N] (a machine's coupling part writes it
-        into a signal of this axis, ``aux[…]``); empty for none.
+    external_force : bool, default False
+        Declare the input signal ``external_force`` [N], a force on the table that a
+        machine's coupling part writes (added to the load force).
 
     Returns
     -------
@@ -467,8 +467,13 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     # the linearisation's load-force input [N] (feeddrive.analysis.linear), zero in a simulation
     o_load = b.param("inputs.load_force", 0.0)
     load_code = f"P[{o_load}]" if load_code is None else f"({load_code} + P[{o_load}])"
-    if load_input:
-        load_code = f"({load_code} + {load_input})"
+    load_reads: tuple[str, ...] = ("t",) if load_aux else ()
+    if external_force:
+        if b.q("external_force") not in b.aux_index:  # or declared by the part writing it
+            b.add_aux("external_force", "N",
+                      "force on the table from the machine's coupling parts")
+        load_code = f"({load_code} + {b.a('external_force')})"
+        load_reads += ("aux:external_force",)
     ripple, ripple_lines, ripple_reads = _ripple(b, parameters, mech, drive)
     lead = emit_harmonics(b, "lead_error", dist.lead_error)
     if lead is not None and not mech.has_lead_screw:
@@ -501,7 +506,7 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
         b.emit(ln)
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
                   load=load_code, torque_off=parameters.controller.mode == "torque_off",
-                  reads=ripple_reads, load_reads=("t",) if load_aux else ())
+                  reads=ripple_reads, load_reads=load_reads)
     for site, law, first in laws:
         code = _site_code(b, site, law, site.parameters(parameters), first)
         for body, factor in site.bodies:

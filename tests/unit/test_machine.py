@@ -1,0 +1,123 @@
+"""A machine of axes (issue 40): machine files, named signals, coupling parts, contours."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from feeddrive.machine import (
+    Circle,
+    Line,
+    check_machine,
+    corner,
+    from_csv,
+    load_machine,
+    machine_from_dict,
+    simulate_machine,
+)
+from feeddrive.parameters import ParameterError
+
+CARRY = {"part": "inertial", "source": "x", "target": "y", "mass": 30.0, "factor": 0.5}
+
+
+def test_each_axis_is_any_topology_and_its_signals_are_named_axis_dot_signal() -> None:
+    machine = machine_from_dict({"name": "mixed", "axes": {
+        "x": {"extends": "wang2021", "drive": "cdfs"},
+        "y": {"drive": "linear-motor", "table": {"mass": 30.0}}}})
+    assert [(a.name, a.drive) for a in machine.axes] == [("x", "cdfs"), ("y", "linear-motor")]
+    assert machine.axis("y").parameters.table.mass == 30.0
+    result = simulate_machine(machine, Line(feed=0.01, acceleration=0.5, distance=0.002,
+                                            angle=math.pi / 4), 0.2)
+    ds = result.dataset
+    assert ds["x.table_position"].attrs["units"] == "m"
+    assert ds["y.motor_current"].attrs["units"] == "A"
+    assert ds["contour_error"].attrs["units"] == "m"
+    # both axes follow the 45° line: each moved 0.2 s of its own reference
+    for axis in "xy":
+        assert abs(ds[f"{axis}.table_position"].values[-1]
+                   - ds[f"{axis}.table_position_reference"].values[-1]) < 1e-4
+    assert all(name.split(".")[0] in ("x", "y") for name in ds.data_vars
+               if name != "contour_error")
+
+
+@pytest.mark.parametrize(("data", "line"), [
+    ({"axes": {"x": {"extends": "nope"}}}, "axes.x.extends = 'nope'"),
+    ({"axes": {"x": {"drive": "linear-motor", "table": {"mass": -1}}}},
+     "axes.x.table.mass = -1"),
+    ({"axes": {"x": {"drive": "warp"}}}, "axes.x.drive = 'warp'"),
+    ({"extends": "xy-table", "couplings": {"a": {**CARRY}, "b": {**CARRY}}},
+     "y.external_force = 'couplings.a, couplings.b': a signal written by two parts"),
+    ({"extends": "xy-table", "couplings": {"a": {**CARRY, "source": "z"}}},
+     "couplings.a = 'der(z.table_speed)': a signal read that no axis or part writes"),
+    ({"extends": "xy-table", "couplings": {
+        "a": CARRY, "b": {**CARRY, "source": "y", "target": "x"}}},
+     "a cycle of algebraic signals"),
+    ({"extends": "xy-table", "couplings": {"a": {"part": "magic"}}},
+     "couplings.a.part = 'magic'"),
+])
+def test_bad_machine_files_are_refused_in_one_line_naming_the_signal_or_part(
+        data: dict, line: str) -> None:
+    with pytest.raises(ParameterError) as info:
+        machine_from_dict({"name": "bad", **data})
+    assert line in str(info.value)
+    assert "\n" not in str(info.value)
+    assert line in "\n".join(check_machine({"name": "bad", **data}))
+
+
+def test_check_lists_every_axis_error_one_line_each() -> None:
+    errors = check_machine({"name": "bad", "axes": {
+        "x": {"extends": "nope"}, "y": {"drive": "linear-motor", "table": {"mass": -1}}}})
+    assert len(errors) == 2
+    assert errors[0].startswith("axes.x.") and errors[1].startswith("axes.y.")
+
+
+def test_xy_table_is_built_in() -> None:
+    machine = load_machine("xy-table")
+    assert [a.name for a in machine.axes] == ["x", "y"]
+
+
+def test_inertial_coupling_writes_the_target_force_from_the_source_acceleration() -> None:
+    """F_y = −κ·m·ẍ (feeddrive.machine.couplings.inertial): compared with the central
+    difference of x's recorded speed (its O(Δt²) error is below 1 % of the peak here)."""
+    machine = machine_from_dict({"name": "carry", "extends": "xy-table",
+                                 "couplings": {"carry": CARRY}})
+    result = simulate_machine(machine, Line(feed=0.05, acceleration=0.5, distance=0.02), 0.3)
+    force = result["y.external_force"]
+    accel = np.gradient(result["x.table_speed"], result.time)
+    assert np.max(np.abs(force)) > 5.0  # 0.5 × 30 kg × ≥ 0.5 m/s²
+    assert np.max(np.abs(force + 0.5 * 30.0 * accel)) < 0.01 * np.max(np.abs(force))
+    # the force moves the y table, which is commanded to stay
+    assert np.max(np.abs(result["y.following_error"])) > 1e-8
+
+
+def test_contours_trace_their_paths() -> None:
+    circle = Circle(feed=0.05, acceleration=1.0, radius=0.02, start_angle=0.3, clockwise=True)
+    refs = circle.references()
+    x, y = (refs[a].encode()[1][0] for a in "xy")  # the exact integrals of the speeds
+    assert np.max(np.abs(circle.contour_error(x, y))) < 1e-9
+    # the polyline distance (vertices every 0.1 mm) agrees with the exact radius error off
+    # the path within the chords' sagitta Δs²/(8R) = 6.25e-8 m
+    s = np.linspace(0.0, circle.length, 50)
+    p = circle.point(s) * 1.001 - 0.001 * np.array(circle.centre)[:, None]
+    from feeddrive.machine import Contour
+
+    np.testing.assert_allclose(Contour.contour_error(circle, p[0], p[1]),
+                               circle.contour_error(p[0], p[1]), atol=6.3e-8)
+    path = corner(feed=0.05, acceleration=1.0, leg=0.03, angle=90.0, radius=0.005)
+    assert path.length == pytest.approx(0.06 + math.pi / 2 * 0.005, rel=1e-6)
+    end = path.point(np.array([path.length]))[:, 0]
+    np.testing.assert_allclose(end, [0.035, 0.035], atol=1e-12)
+    assert circle.duration == pytest.approx(circle.length / 0.05 + 0.05 / 1.0)
+
+
+def test_csv_path_and_refusals(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    f = tmp_path / "path.csv"
+    f.write_text("x_mm,y_mm\n10,10\n40,10\n40,30\n")
+    path = from_csv(f, feed=0.02, acceleration=1.0)
+    assert path.length == pytest.approx(0.05)
+    with pytest.raises(ParameterError, match="contour.acceleration"):
+        Circle(feed=1.0, acceleration=0.1, radius=0.01)
+    with pytest.raises(ParameterError, match="contour.radius"):
+        Circle(feed=0.01, acceleration=1.0, radius=-1.0)
