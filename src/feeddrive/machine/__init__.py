@@ -25,6 +25,7 @@ is simulated by the one engine (:func:`simulate_machine`), following a :mod:`con
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from collections.abc import Mapping
@@ -39,9 +40,10 @@ from ..parameters import DriveParameters, ParameterError
 from .contour import Circle, Contour, Line, Polyline, corner, from_csv
 from .couplings import AXIS_INPUTS, Coupling, coupling
 
-__all__ = ["MACHINES", "Circle", "Contour", "Line", "Machine", "MachineAxis", "MachineProfile",
-           "MachineSystem", "Polyline", "assemble_machine", "check_machine", "corner",
-           "from_csv", "load_machine", "machine_from_dict", "simulate_machine"]
+__all__ = ["CONTOURS", "MACHINES", "Circle", "Contour", "Line", "Machine", "MachineAxis",
+           "MachineProfile", "MachineSystem", "Polyline", "assemble_machine", "check_machine",
+           "corner", "from_csv", "load_machine", "machine_from_dict", "machine_summary",
+           "machine_toml", "make_contour", "plan", "simulate_machine"]
 
 #: built-in machines: name → the machine file's content
 MACHINES: dict[str, dict[str, Any]] = {
@@ -142,6 +144,8 @@ def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
                              f"expected one of {', '.join(drive_names())}")
     if "extends" not in data:
         data["extends"] = mechanism(drive or "cdfs").example_preset
+    if set(data) == {"extends"}:  # the set itself, unchanged: its own name
+        data["name"] = data["extends"]
     try:
         params = from_dict(data, base_dir=base_dir)
     except ParameterError as err:
@@ -617,4 +621,145 @@ def simulate_machine(machine: Machine, contour: Contour, duration: float | None 
                                 np.asarray(ds[f"{b}.table_position"]))
     ds["contour_error"] = ("time", err, {"units": "m", "long_name": "contour error (signed "
                                          "normal distance of the actual point to the path)"})
+    ds.attrs.update(parameter_set=machine.name, profile=(
+        f"{type(contour).__name__}(length={contour.length:g} m, feed={contour.feed:g} m/s)"),
+        axes=json.dumps({
+        ax.name: {"drive": ax.drive, "parameter_set": ax.parameters.name,
+                  "table_start_position_m": ax.table_position} for ax in machine.axes}))
     return Result(ds)
+
+
+#: the contour kinds :func:`make_contour` builds
+CONTOURS = ("circle", "line", "corner", "csv")
+
+
+def make_contour(kind: str, *, feed: float, acceleration: float, radius: float = 0.05,
+                 clockwise: bool = False, start_angle: float = 0.0, turns: float = 1.0,
+                 length: float = 0.1, angle: float = 0.0, path_file: str | None = None,
+                 axes: tuple[str, str] = ("x", "y")) -> Contour:
+    """A contour by kind, from SI values (what ``simulate --machine`` passes on).
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`CONTOURS`.
+    feed : float
+        Path speed [m/s].
+    acceleration : float
+        Tangential acceleration of the lead-in and lead-out [m/s^2].
+    radius : float, default 0.05
+        Circle radius; corner blend radius [m].
+    clockwise : bool, default False
+        Circle sense.
+    start_angle : float, default 0.0
+        Circle start angle [rad].
+    turns : float, default 1.0
+        Circle revolutions [-].
+    length : float, default 0.1
+        Line length; corner leg length [m].
+    angle : float, default 0.0
+        Line direction [rad]; corner turn [rad] (0: 90°).
+    path_file : str, optional
+        CSV path file (x, y in mm).
+    axes : tuple of str, default ("x", "y")
+        The two axes.
+
+    Returns
+    -------
+    Contour
+        The path.
+    """
+    if kind == "circle":
+        return Circle(feed=feed, acceleration=acceleration, axes=axes, radius=radius,
+                      clockwise=clockwise, start_angle=start_angle, turns=turns)
+    if kind == "line":
+        return Line(feed=feed, acceleration=acceleration, axes=axes, distance=length,
+                    angle=angle)
+    if kind == "corner":
+        return corner(feed=feed, acceleration=acceleration, axes=axes, leg=length,
+                      radius=radius, angle=math.degrees(angle) if angle else 90.0)
+    if kind == "csv":
+        if path_file is None:
+            raise ParameterError("contour.csv", None, "a CSV path file is needed (x, y [mm])")
+        return from_csv(path_file, feed=feed, acceleration=acceleration, axes=axes)
+    raise ParameterError("contour", kind, f"expected one of {', '.join(CONTOURS)}")
+
+
+def machine_summary(result: Any, machine: Machine, contour: Contour) -> dict[str, Any]:
+    """The figures ``simulate --machine`` prints: per axis the largest following error, and
+    the contour error's extremes (for a circle the mean radius and roundness after the
+    lead-in) [SI].
+
+    Parameters
+    ----------
+    result : Result
+        A run of :func:`simulate_machine`.
+    machine : Machine
+        The machine.
+    contour : Contour
+        The path it followed.
+
+    Returns
+    -------
+    dict
+        ``machine``, ``axes`` (name → drive, set, largest |following error| [m]),
+        ``contour_error_max``, ``contour_error_min`` [m]; for a circle ``mean_radius``,
+        ``radius_reduction`` and ``roundness`` [m] over the cruise after the lead-in.
+    """
+    t = result.time
+    err = np.asarray(result["contour_error"])
+    out: dict[str, Any] = {
+        "machine": machine.name, "contour": type(contour).__name__.lower(),
+        "axes": {ax.name: {"drive": ax.drive, "parameter_set": ax.parameters.name,
+                           "following_error_max": float(np.max(np.abs(
+                               result[f"{ax.name}.following_error"])))}
+                 for ax in machine.axes},
+        "contour_error_max": float(np.max(err)), "contour_error_min": float(np.min(err)),
+    }
+    if isinstance(contour, Circle):
+        cruise = (t >= contour.lead_in) & (t <= contour.length / contour.feed)
+        if np.any(cruise):
+            radius = contour.radius + err[cruise]
+            out.update(mean_radius=float(np.mean(radius)),
+                       radius_reduction=float(contour.radius - np.mean(radius)),
+                       roundness=float(np.ptp(radius)))
+    return out
+
+
+def machine_toml(machine: Machine) -> str:
+    """The machine as a machine file: each axis' drive, start position and whole resolved
+    parameter set under ``[axes.<name>]``, each coupling part under ``[couplings.<name>]``
+    (SI units; read back by :func:`machine_from_dict` to the same machine).
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine.
+
+    Returns
+    -------
+    str
+        TOML text.
+    """
+    from ..parameters import dumps
+
+    out = ["# feeddrive machine file. SI units throughout (docs/machine.md).",
+           f"name = {json.dumps(machine.name)}", ""]
+    for ax in machine.axes:
+        out += [f"[axes.{ax.name}]", f"drive = {json.dumps(ax.drive)}",
+                f"table_position = {ax.table_position!r}  # [m]",
+                f"nut_hold = {json.dumps(ax.nut_hold)}"]
+        for line in dumps(ax.parameters).splitlines():
+            if line.startswith("#"):
+                continue
+            out.append(re.sub(r"^\[(.+)\]$", rf"[axes.{ax.name}.\1]", line))
+        out.append("")
+    for c in machine.couplings:
+        out += [f"[couplings.{c.name}]", f"part = {json.dumps(c.part)}"]
+        for f in c.__dataclass_fields__:
+            if f != "name":
+                value = getattr(c, f)
+                unit = f"  # [{c.units[f]}]" if f in c.units else ""
+                out.append(f"{f} = {json.dumps(value)}{unit}")
+        out.append("")
+    return "\n".join(out)

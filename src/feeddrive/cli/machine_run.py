@@ -1,0 +1,77 @@
+"""`feeddrive simulate --machine FILE`: a machine of axes following a contour."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import typer
+
+from ._common import console, err_console, interrupted, print_json
+
+#: the contour kinds (feeddrive.machine.CONTOURS; the machine package loads numba)
+CONTOURS = ("circle", "line", "corner", "csv")
+MM_PER_MIN = 1e-3 / 60.0  # [m/s] per mm/min
+
+
+def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
+                acceleration: float, clockwise: bool, start_angle: float, turns: float,
+                length: float, angle: float, contour_file: str | None,
+                duration: float | None, options: Any, output: str | None,
+                plot: str | None, as_json: bool) -> None:
+    """Parse the contour options (mm, mm/min, mm/s², degrees), run, save and print."""
+    from ..engine.simulate import SimulationError, SimulationInterrupted
+    from ..machine import load_machine, machine_summary, make_contour, simulate_machine
+    from ..parameters import ParameterError
+
+    for option, value, unit in (("--radius", radius, "mm"), ("--feed", feed, "mm/min"),
+                                ("--acceleration", acceleration, "mm/s^2"),
+                                ("--turns", turns, "-"), ("--length", length, "mm")):
+        if not (math.isfinite(value) and value > 0):
+            raise ParameterError(option, value, f"expected a positive number [{unit}]")
+    if contour not in CONTOURS:
+        raise ParameterError("--contour", contour, f"expected one of {', '.join(CONTOURS)}")
+    machine = load_machine(machine_file)
+    path = make_contour(contour, feed=feed * MM_PER_MIN, acceleration=acceleration * 1e-3,
+                        radius=radius * 1e-3, clockwise=clockwise,
+                        start_angle=math.radians(start_angle), turns=turns,
+                        length=length * 1e-3, angle=math.radians(angle),
+                        path_file=contour_file)
+    if duration is not None and not duration > 0:
+        raise ParameterError("--duration", duration, "expected a time > 0 [s]")
+    try:
+        result = simulate_machine(machine, path, duration, options=options)
+    except SimulationError as err:
+        err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    except SimulationInterrupted as stop:
+        err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
+                          soft_wrap=True)
+        raise interrupted() from None
+    summary = machine_summary(result, machine, path)
+    if output:
+        summary["output"] = str(result.save(output))
+    if plot:
+        from ..plots.machine import plot_machine
+
+        summary["plot"] = str(plot_machine(result, path, plot, title=(
+            f"{machine.name}: {contour}, F = {feed:g} mm/min")))
+    if as_json:
+        print_json(summary)
+        return
+    um = 1e6
+    lines = [f"machine {machine.name}: {contour} at {feed:g} mm/min, "
+             f"{result.time[-1]:g} s simulated"]
+    for name, ax in summary["axes"].items():
+        lines.append(f"  axis {name} ({ax['drive']}, {ax['parameter_set']}): largest "
+                     f"following error {ax['following_error_max'] * um:.4g} µm")
+    lines.append(f"  contour error {summary['contour_error_min'] * um:.4g} … "
+                 f"{summary['contour_error_max'] * um:.4g} µm")
+    if "roundness" in summary:
+        lines.append(f"  mean radius reduction {summary['radius_reduction'] * um:.4g} µm, "
+                     f"roundness {summary['roundness'] * um:.4g} µm (after the lead-in)")
+    for key in ("output", "plot"):
+        if key in summary:
+            lines.append(f"  {key}: {summary[key]}")
+    for ln in lines:
+        console.print(ln, markup=False, highlight=False, soft_wrap=True)
