@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import pytest
@@ -17,6 +19,7 @@ from feeddrive.machine import (
     machine_from_dict,
     simulate_machine,
 )
+from feeddrive.machine.couplings import Coupling, register_coupling
 from feeddrive.parameters import ParameterError
 
 CARRY = {"part": "inertial", "source": "x", "target": "y", "mass": 30.0, "factor": 0.5}
@@ -121,3 +124,27 @@ def test_csv_path_and_refusals(tmp_path) -> None:  # type: ignore[no-untyped-def
         Circle(feed=1.0, acceleration=0.1, radius=0.01)
     with pytest.raises(ParameterError, match="contour.radius"):
         Circle(feed=0.01, acceleration=1.0, radius=-1.0)
+
+
+def test_a_coupling_part_defined_outside_the_package_runs() -> None:
+    """A part is one class: registered from a test file, it is assembled, ordered and
+    simulated with no edit elsewhere (docs/machine.md, "Adding one")."""
+    @register_coupling
+    @dataclass(frozen=True)
+    class TableSpring(Coupling):
+        stiffness: float = 0.0
+        part: ClassVar[str] = "test_table_spring"
+        units: ClassVar[dict[str, str]] = {"stiffness": "N/m"}
+
+        def equations(self) -> dict[str, str]:
+            return {"y.external_force": "{stiffness} * ({x.table_position} - "
+                    "{y.table_position})"}
+
+    machine = machine_from_dict({"name": "spring", "extends": "xy-table", "couplings": {
+        "k": {"part": "test_table_spring", "stiffness": 1e5}}})
+    result = simulate_machine(machine, Line(feed=0.05, acceleration=0.5, distance=0.01), 0.2)
+    np.testing.assert_allclose(
+        result["y.external_force"],
+        1e5 * (result["x.table_position"] - result["y.table_position"]), rtol=1e-12,
+        atol=1e-12)
+    assert np.max(np.abs(result["y.external_force"])) > 100.0  # ≈ 1e5 N/m × 5 mm

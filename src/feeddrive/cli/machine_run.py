@@ -19,7 +19,43 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
                 length: float, angle: float, contour_file: str | None,
                 duration: float | None, options: Any, output: str | None,
                 plot: str | None, as_json: bool) -> None:
-    """Parse the contour options (mm, mm/min, mm/s², degrees), run, save and print."""
+    """Parse the contour options (mm, mm/min, mm/s², degrees), run, save and print.
+
+    Parameters
+    ----------
+    machine_file : str
+        A machine file or built-in machine name.
+    contour : str
+        circle, line, corner or csv.
+    radius : float
+        Circle (corner blend) radius [mm].
+    feed : float
+        Path feed [mm/min].
+    acceleration : float
+        Lead-in and lead-out acceleration [mm/s^2].
+    clockwise : bool
+        Circle sense.
+    start_angle : float
+        Circle start angle [deg].
+    turns : float
+        Circle revolutions [-].
+    length : float
+        Line (corner leg) length [mm].
+    angle : float
+        Line direction, corner turn [deg].
+    contour_file : str or None
+        CSV path file.
+    duration : float or None
+        Simulated time [s]; None: the contour's.
+    options : SolverOptions
+        Integrator settings.
+    output : str or None
+        Result file.
+    plot : str or None
+        Figure file.
+    as_json : bool
+        Print the summary as JSON.
+    """
     from ..engine.simulate import SimulationError, SimulationInterrupted
     from ..machine import load_machine, machine_summary, make_contour, simulate_machine
     from ..parameters import ParameterError

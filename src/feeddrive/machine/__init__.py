@@ -311,6 +311,14 @@ class MachineProfile(SampledSpeed):
 
     Parameters
     ----------
+    time : numpy.ndarray
+        Uniform sample instants from 0 [s].
+    table_speed : numpy.ndarray
+        The path speed at each instant [m/s].
+    nut_speed : numpy.ndarray or None, default None
+        Unused (zero) [m/s].
+    hold : bool, default False
+        Hold each sample (zero-order hold) instead of interpolating.
     axes : tuple of (str, SampledSpeed), default ()
         Axis name → its reference.
     contour : Contour or None, default None
@@ -351,7 +359,18 @@ class MachineProfile(SampledSpeed):
                    contour=contour)
 
     def axis(self, name: str) -> SampledSpeed:
-        """The reference of axis ``name``."""
+        """The reference of one axis.
+
+        Parameters
+        ----------
+        name : str
+            The axis' name.
+
+        Returns
+        -------
+        SampledSpeed
+            Its reference [m/s].
+        """
         return dict(self.axes)[name]
 
 
@@ -374,7 +393,7 @@ class Plan:
 
 def _declare_axes(b: Any, machine: Machine, profile: MachineProfile | None,
                   inputs: set[str], order: tuple[str, ...]) -> list[Any]:
-    """Declare each axis in a scope of its name, in ``order`` (its rhs runs in that order)."""
+    """Declare each axis in a scope of its name (its functions called where the caller says)."""
     import dataclasses as dc
 
     from ..model.assemble import declare_drive
@@ -384,7 +403,7 @@ def _declare_axes(b: Any, machine: Machine, profile: MachineProfile | None,
     for name in order:
         ax = machine.axis(name)
         ref = profile.axis(name) if profile is not None else ConstantSpeed(0.0)
-        with b.scope(name):
+        with b.scope(name, call=False):
             axis_laws, _ = declare_drive(b, ax.parameters, ax.drive, ax.table_position,
                                          ax.nut_hold, ref, None,
                                          external_force=f"{name}.external_force" in inputs)
@@ -521,13 +540,14 @@ def assemble_machine(machine: Machine, profile: MachineProfile) -> Any:
     steps = plan(machine)
     b = codegen.Builder()
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
-    laws: list[Any] = []
+    laws = _declare_axes(b, machine, profile, set(steps.inputs),
+                         tuple(ax.name for ax in machine.axes))
     parts = {f"couplings.{c.name}": c for c in machine.couplings}
     for step in steps.order:
-        if step not in parts:
-            laws += _declare_axes(b, machine, profile, set(steps.inputs), (step,))
-            continue
-        _emit_coupling(b, step, parts[step])
+        if step in parts:
+            _emit_coupling(b, step, parts[step])
+        else:
+            b.call_scope(step)
     return package(b, machine.name, laws, None)
 
 
@@ -545,6 +565,8 @@ class MachineSystem:
         The machine.
     initial_state : mapping of str to float, default {}
         States by name (``"x.table_speed"``) [SI].
+    load : None, default None
+        No load record (the axes' loads come from their parameter sets and coupling parts).
     """
 
     machine: Machine
@@ -572,14 +594,36 @@ class MachineSystem:
         return self.machine.axes[0].nut_hold
 
     def model(self, profile: MachineProfile) -> Any:
-        """The machine's assembled model following ``profile``."""
+        """The machine's assembled model following ``profile``.
+
+        Parameters
+        ----------
+        profile : MachineProfile
+            Each axis' reference.
+
+        Returns
+        -------
+        Model
+            The model (:func:`assemble_machine`).
+        """
         if not isinstance(profile, MachineProfile):
             raise ParameterError("profile", type(profile).__name__,
                                  "a machine follows a MachineProfile (a contour's references)")
         return assemble_machine(self.machine, profile)
 
     def initial_vector(self, model: Any) -> np.ndarray:
-        """Zeros except the states named in ``initial_state`` [SI per state]."""
+        """Zeros except the states named in ``initial_state``.
+
+        Parameters
+        ----------
+        model : Model
+            The assembled model (its state order).
+
+        Returns
+        -------
+        numpy.ndarray
+            One value per state [SI, per state].
+        """
         y0 = np.zeros(len(model.state_names))
         for name, value in self.initial_state.items():
             y0[model.index(name)] = float(value)

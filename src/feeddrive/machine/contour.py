@@ -84,11 +84,33 @@ class Contour:
         raise NotImplementedError
 
     def point(self, s: np.ndarray) -> np.ndarray:
-        """Points at arc lengths ``s`` [m], relative to the start: shape (2, n) [m]."""
+        """Points of the path, relative to the start.
+
+        Parameters
+        ----------
+        s : numpy.ndarray
+            Arc lengths [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (2, n): the two coordinates [m].
+        """
         raise NotImplementedError
 
     def tangent(self, s: np.ndarray) -> np.ndarray:
-        """Unit tangents at arc lengths ``s`` [m]: shape (2, n) [-]."""
+        """Unit tangents of the path.
+
+        Parameters
+        ----------
+        s : numpy.ndarray
+            Arc lengths [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (2, n): dx/ds and dy/ds [-].
+        """
         raise NotImplementedError
 
     @property
@@ -102,14 +124,36 @@ class Contour:
         return self.feed / self.acceleration
 
     def path_speed(self, t: np.ndarray) -> np.ndarray:
-        """ṡ(t): the trapezoidal feed profile [m/s] at times ``t`` [s]."""
+        """ṡ(t): the trapezoidal feed profile.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times [s].
+
+        Returns
+        -------
+        numpy.ndarray
+            Path speed [m/s].
+        """
         t = np.asarray(t, dtype=float)
         ramp = self.lead_in
         cruise_end = self.length / self.feed
         return np.clip(np.minimum(t / ramp, (cruise_end + ramp - t) / ramp), 0.0, 1.0) * self.feed
 
     def arc_length(self, t: np.ndarray) -> np.ndarray:
-        """s(t), the integral of :meth:`path_speed` [m] at times ``t`` [s]."""
+        """s(t), the integral of :meth:`path_speed`.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times [s].
+
+        Returns
+        -------
+        numpy.ndarray
+            Arc length travelled [m].
+        """
         t = np.asarray(t, dtype=float)
         a, F, ramp = self.acceleration, self.feed, self.lead_in
         end = self.length / F + ramp  # the instant the path ends
@@ -178,6 +222,14 @@ class Line(Contour):
 
     Parameters
     ----------
+    feed : float
+        Path speed F [m/s].
+    acceleration : float
+        Tangential acceleration of the lead-in and lead-out [m/s^2].
+    axes : tuple of str, default ("x", "y")
+        The machine axes of the path's first and second coordinate.
+    dwell : float, default 0.0
+        Time at rest after the lead-out [s].
     distance : float, default 0.1
         Its length [m].
     angle : float, default 0.0
@@ -212,6 +264,14 @@ class Circle(Contour):
 
     Parameters
     ----------
+    feed : float
+        Path speed F [m/s].
+    acceleration : float
+        Tangential acceleration of the lead-in and lead-out [m/s^2].
+    axes : tuple of str, default ("x", "y")
+        The machine axes of the path's first and second coordinate.
+    dwell : float, default 0.0
+        Time at rest after the lead-out [s].
     radius : float, default 0.05
         R [m].
     clockwise : bool, default False
@@ -279,6 +339,14 @@ class Polyline(Contour):
 
     Parameters
     ----------
+    feed : float
+        Path speed F [m/s].
+    acceleration : float
+        Tangential acceleration of the lead-in and lead-out [m/s^2].
+    axes : tuple of str, default ("x", "y")
+        The machine axes of the path's first and second coordinate.
+    dwell : float, default 0.0
+        Time at rest after the lead-out [s].
     points : tuple of (float, float), default ()
         The vertices relative to the start, the first (0, 0) [m].
     """

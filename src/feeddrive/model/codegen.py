@@ -155,8 +155,19 @@ class Builder:
             return f"{kind}:{self.q(rest)}"
         return self.q(name)
 
+    def call_scope(self, name: str) -> None:
+        """Run scope ``name``'s functions here, in the right-hand side and the sampled update.
+
+        Parameters
+        ----------
+        name : str
+            A scope declared with ``scope(name, call=False)``.
+        """
+        self.rhs_lines.append(f"_rhs_{name}(t, y, held, P, T, dy, aux)")
+        self.sample_lines.append(f"_sample_{name}(t, y, held, P, T, tick)")
+
     @contextlib.contextmanager
-    def scope(self, name: str) -> Iterator[None]:
+    def scope(self, name: str, *, call: bool = True) -> Iterator[None]:
         """Declare one part of a machine (an axis): inside, every name is qualified
         ``<name>.…`` (:meth:`q`) and the code lines go into the scope's own functions
         ``_rhs_<name>`` and ``_sample_<name>``, called where the scope opens (their local
@@ -166,6 +177,9 @@ class Builder:
         ----------
         name : str
             The scope's name, an identifier (``"x"``).
+        call : bool, default True
+            Call its functions where the scope opens; False: where :meth:`call_scope` says
+            (a machine declares every axis first and runs them in the order its parts need).
 
         Raises
         ------
@@ -174,8 +188,8 @@ class Builder:
         """
         if not name.isidentifier() or self.namespace or name in self.scoped_rhs:
             raise ValueError(f"scope {name!r}: expected a new identifier outside any scope")
-        self.rhs_lines.append(f"_rhs_{name}(t, y, held, P, T, dy, aux)")
-        self.sample_lines.append(f"_sample_{name}(t, y, held, P, T, tick)")
+        if call:
+            self.call_scope(name)
         self.scoped_rhs[name], self.scoped_sample[name] = [], []
         saved = self.reference_call
         self.namespace = name

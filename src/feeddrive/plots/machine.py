@@ -28,7 +28,7 @@ def machine_figure(result: Result, contour: Contour, title: str | None = None,
         The figure's title.
     magnify : float, optional
         Factor the contour error is drawn magnified by on the path (default: the largest
-        error shown as 5 % of the path's extent).
+        error shown as 5 % of the path's extent) [-].
 
     Returns
     -------

@@ -75,13 +75,25 @@ class Coupling:
         raise NotImplementedError
 
     def reads(self) -> tuple[str, ...]:
-        """The signals the expressions read (every braced name that is no parameter)."""
+        """The signals the expressions read (every braced name that is no parameter).
+
+        Returns
+        -------
+        tuple of str
+            Signal names, in order of first use.
+        """
         own = self.parameters()
         names = [n for expr in self.equations().values() for n in _NAME.findall(expr)]
         return tuple(dict.fromkeys(n for n in names if n not in own))
 
     def writes(self) -> tuple[str, ...]:
-        """The signals the part writes."""
+        """The signals the part writes (the keys of :meth:`equations`).
+
+        Returns
+        -------
+        tuple of str
+            Signal names.
+        """
         return tuple(self.equations())
 
     @classmethod
@@ -124,21 +136,21 @@ class Coupling:
                                  f"the {cls.part} part needs {', '.join(missing)}") from None
 
 
-def register_coupling(cls: type[Coupling]) -> type[Coupling]:
+def register_coupling(part_class: type[Coupling]) -> type[Coupling]:
     """Register a coupling part under its :attr:`Coupling.part` name (a class decorator).
 
     Parameters
     ----------
-    cls : type
+    part_class : type
         The part's class.
 
     Returns
     -------
     type
-        ``cls``.
+        The class, unchanged.
     """
-    registry.register(registry.COUPLINGS, cls.part, cls)
-    return cls
+    registry.register(registry.COUPLINGS, part_class.part, part_class)
+    return part_class
 
 
 def coupling(part: str) -> type[Coupling]:

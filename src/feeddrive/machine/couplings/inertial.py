@@ -58,6 +58,13 @@ class InertialCoupling(Coupling):
                                  "expected −1 … 1 [-]")
 
     def equations(self) -> dict[str, str]:
-        """``target.external_force = −factor · mass · der(source.table_speed)``."""
+        """The one equation, ``target.external_force = −factor · mass ·
+        der(source.table_speed)``.
+
+        Returns
+        -------
+        dict of str to str
+            Written signal → expression.
+        """
         return {f"{self.target}.external_force":
                 f"-{{factor}} * {{mass}} * {{der({self.source}.table_speed)}}"}
