@@ -96,3 +96,24 @@ def test_params_check_and_show_a_machine_file(tmp_path: Path) -> None:
     lines = [ln for ln in r.output.splitlines() if ln.strip()]
     assert len(lines) == 2, r.output
     assert "axes.x.extends" in lines[0] and "axes.y.table.mass" in lines[1]
+
+
+def test_loops_machine_gives_each_axis_and_the_mimo_loop_with_its_coupling() -> None:
+    r = runner.invoke(app, ["loops", "--machine", "xy-table", "--json"])
+    assert r.exit_code == 0, r.output
+    plain = json.loads(r.output)
+    assert set(plain["axes"]) == {"x", "y"}
+    assert plain["mimo"]["cross_coupling_peak"] == {"x -> y": 0.0, "y -> x": 0.0}
+
+
+def test_loops_machine_shows_a_coupling_part(tmp_path: Path) -> None:
+    machine = tmp_path / "machine.toml"
+    machine.write_text('name = "c"\nextends = "xy-table"\n[couplings.carry]\n'
+                       'part = "inertial"\nmass = 30.0\n')
+    r = runner.invoke(app, ["loops", "--machine", str(machine), "--json"])
+    assert r.exit_code == 0, r.output
+    mimo = json.loads(r.output)["mimo"]
+    # x's acceleration pushes y: a command of x moves y, not the other way round
+    assert mimo["cross_coupling_peak"]["x -> y"] > 1e-4
+    assert mimo["cross_coupling_peak"]["y -> x"] < 1e-9  # rounding of the linear solve
+    assert mimo["notes"]

@@ -95,3 +95,20 @@ def test_frictionless_xy_circle_matches_the_cascade_tracking_response() -> None:
     assert reduction >= 1e-6
     assert np.ptp(radius) < 0.01 * reduction
     assert abs(reduction / expected - 1.0) < 1e-3
+
+
+def test_the_machine_mimo_loop_has_each_axis_cascade_on_its_diagonal() -> None:
+    """`loops --machine`'s MIMO StateSpace: x_ref → x equals the hand-built cascade's T(jω)
+    at every frequency tried, and x_ref → y is 0 for the independent XY table."""
+    from feeddrive.machine.linear import cross_coupling, linearize_machine
+
+    machine = machine_from_dict({"name": "xy", "axes": {"x": AXIS, "y": AXIS}})
+    ss = linearize_machine(machine).to_control()
+    assert ss.input_labels == ["x:table_position_reference", "x:load_force",
+                               "y:table_position_reference", "y:load_force"]
+    T = tracking_loop(machine.axes[0].parameters)
+    for w in (0.5, FEED / RADIUS, 30.0, 300.0):
+        got = complex(ss(1j * w)[ss.output_labels.index("x:table_position"), 0])
+        want = complex(np.squeeze(T(1j * w)))
+        assert abs(got - want) < 1e-6 * abs(want)
+    assert cross_coupling(linearize_machine(machine)) == {"x -> y": 0.0, "y -> x": 0.0}

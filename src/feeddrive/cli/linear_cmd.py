@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import typer
 
 from ..analysis import protocol
@@ -41,10 +43,20 @@ def loops_command(
                                   "(closed-loop responses to a reference and a load step)."),
     force: bool = typer.Option(False, "--force", help="Replace an existing plot file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    machine: str | None = typer.Option(
+        None, "--machine", help="A machine file or built-in machine (docs/machine.md): "
+        "each axis' loops, and the MIMO closed loop of the whole machine (every axis at "
+        "--table-speed; the drive options are not used)."),
 ) -> None:
     """Poles (frequency, damping ratio; rigid-body poles listed as such) and the velocity-
     and position-loop margins and bandwidths of every motor axis, from the closed loop
     linearised at steady sliding."""
+    if machine is not None:
+        from .machine_run import run_machine_loops
+
+        run_machine_loops(machine, table_speed=table_speed, with_friction=with_friction,
+                          as_json=as_json)
+        return
     from ..analysis.linear import loop_analysis
     from ..engine.simulate import DriveSystem
     from ..parameters import ParameterError
@@ -65,8 +77,30 @@ def loops_command(
     if as_json:
         print_json(data)
         return
+    print_loops(f"{drive.upper()}", params.name, table_speed, with_friction, data)
+    if plot:
+        console.print(f"  wrote {data['plot']}")
+
+
+def print_loops(title: str, set_name: str, table_speed: float, with_friction: bool,
+                data: dict[str, Any]) -> None:
+    """Print one drive's loop analysis (``LoopAnalysis.as_dict``) as `loops` does.
+
+    Parameters
+    ----------
+    title : str
+        The drive (or axis) shown first.
+    set_name : str
+        Its parameter set's name.
+    table_speed : float
+        The operating point [mm/s].
+    with_friction : bool
+        Whether it was linearised with friction.
+    data : dict
+        The analysis.
+    """
     d = data["least_damped_mode"]
-    console.print(f"[bold]{drive.upper()}[/] ({params.name}), {table_speed:g} mm/s, "
+    console.print(f"[bold]{title}[/] ({set_name}), {table_speed:g} mm/s, "
                   f"{data['friction']}"
                   f"{'' if with_friction else ' (--with-friction: the explorer’s margins)'}"
                   f": least-damped mode {d['frequency_hz']:.3f} Hz, "
@@ -96,8 +130,6 @@ def loops_command(
                       f"phase margin {fmt(lp['phase_margin_deg'], '°'):>9s}  gain margin "
                       f"{fmt(lp['gain_margin_db'], 'dB'):>9s}  bandwidth "
                       f"{fmt(lp['closed_loop_bandwidth_hz'], 'Hz')}")
-    if plot:
-        console.print(f"  wrote {data['plot']}")
 
 
 @app.command("stability")

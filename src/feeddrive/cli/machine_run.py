@@ -111,3 +111,55 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
             lines.append(f"  {key}: {summary[key]}")
     for ln in lines:
         console.print(ln, markup=False, highlight=False, soft_wrap=True)
+
+
+def run_machine_loops(machine_file: str, *, table_speed: float, with_friction: bool,
+                      as_json: bool) -> None:
+    """`loops --machine`: each axis' loops, then the MIMO loop's size, poles and coupling.
+
+    Parameters
+    ----------
+    machine_file : str
+        A machine file or built-in machine name.
+    table_speed : float
+        Operating point of every axis [mm/s].
+    with_friction : bool
+        Linearise with the friction laws at steady sliding.
+    as_json : bool
+        Print JSON.
+    """
+    from ..analysis.linear import classify_poles
+    from ..machine import load_machine
+    from ..machine.linear import axis_loops, cross_coupling, linearize_machine
+    from .linear_cmd import print_loops
+
+    machine = load_machine(machine_file)
+    v = table_speed * 1e-3
+    per_axis = {name: r.as_dict() for name, r in
+                axis_loops(machine, v, frictionless=not with_friction).items()}
+    lin = linearize_machine(machine, {ax.name: v for ax in machine.axes},
+                            frictionless=not with_friction)
+    mimo_poles = [p.as_dict() for p in classify_poles(lin.poles())]
+    coupling = cross_coupling(lin)
+    mimo = {"inputs": list(lin.inputs), "outputs": list(lin.outputs),
+            "states": len(lin.states), "notes": list(lin.notes), "poles": mimo_poles,
+            "cross_coupling_peak": coupling}
+    if as_json:
+        print_json({"machine": machine.name, "axes": per_axis, "mimo": mimo})
+        return
+    for ax in machine.axes:
+        print_loops(f"axis {ax.name} ({ax.drive})", ax.parameters.name, table_speed,
+                    with_friction, per_axis[ax.name])
+    say = lambda text: console.print(text, markup=False, highlight=False,  # noqa: E731
+                                     soft_wrap=True)
+    say(f"MIMO loop of {machine.name}: {len(lin.states)} states, inputs "
+        f"{', '.join(lin.inputs)}; outputs {', '.join(lin.outputs)}")
+    for note in lin.notes:
+        say(f"  {note}")
+    damped = sorted((p for p in mimo_poles  # each complex pair once
+                     if p["kind"] != "rigid-body" and p["imag_rad_per_s"] >= 0.0),
+                    key=lambda p: p["damping_ratio"])[:3]
+    for p in damped:
+        say(f"  {p['kind']:12s} {p['frequency_hz']:10.4g} Hz  ζ = {p['damping_ratio']:.4g}")
+    for pair, gain in coupling.items():
+        say(f"  cross-coupling {pair}: peak |position/reference| {gain:.3g}")
