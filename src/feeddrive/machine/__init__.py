@@ -51,6 +51,12 @@ MACHINES: dict[str, dict[str, Any]] = {
     "xy-table": {"name": "xy-table", "axes": {
         "x": {"extends": "wang2021", "drive": "cdfs"},
         "y": {"extends": "wang2021", "drive": "cdfs"}}},
+    # two wang2021 CDFS axes carrying one beam (feeddrive.machine.couplings.gantry); add a
+    # synchronisation part ([couplings.sync] part = "master_slave" or "cross_coupled")
+    "gantry": {"name": "gantry", "axes": {
+        "x1": {"extends": "wang2021", "drive": "cdfs"},
+        "x2": {"extends": "wang2021", "drive": "cdfs"}},
+        "couplings": {"beam": {"part": "gantry_beam", "a": "x1", "b": "x2"}}},
 }
 
 _AXIS_KEYS = ("drive", "table_position", "nut_hold")
@@ -178,7 +184,11 @@ def _merged(data: Mapping[str, Any]) -> dict[str, Any]:
     given = data.get("axes", {})
     for k, v in (given.items() if isinstance(given, Mapping) else ()):
         axes[k] = {**axes.get(k, {}), **dict(v)} if isinstance(v, Mapping) else v
-    return {**base, **data, "axes": axes}
+    couplings = {k: dict(v) for k, v in base.get("couplings", {}).items()}
+    given = data.get("couplings", {})
+    for k, v in (given.items() if isinstance(given, Mapping) else ()):
+        couplings[k] = {**couplings.get(k, {}), **dict(v)} if isinstance(v, Mapping) else v
+    return {**base, **data, "axes": axes, "couplings": couplings}
 
 
 def _couplings(data: Mapping[str, Any]) -> tuple[Coupling, ...]:
@@ -358,6 +368,25 @@ class MachineProfile(SampledSpeed):
                    axes=tuple((ax.name, refs.get(ax.name, zero)) for ax in machine.axes),
                    contour=contour)
 
+    @classmethod
+    def common(cls, machine: Machine, reference: SampledSpeed) -> MachineProfile:
+        """Every axis following one reference (a gantry's two carriages).
+
+        Parameters
+        ----------
+        machine : Machine
+            The machine.
+        reference : SampledSpeed
+            The table speed every axis follows [m/s].
+
+        Returns
+        -------
+        MachineProfile
+            The references.
+        """
+        return cls(time=reference.time, table_speed=reference.table_speed,
+                   axes=tuple((ax.name, reference) for ax in machine.axes))
+
     def axis(self, name: str) -> SampledSpeed:
         """The reference of one axis.
 
@@ -406,7 +435,8 @@ def _declare_axes(b: Any, machine: Machine, profile: MachineProfile | None,
         with b.scope(name, call=False):
             axis_laws, _ = declare_drive(b, ax.parameters, ax.drive, ax.table_position,
                                          ax.nut_hold, ref, None,
-                                         external_force=f"{name}.external_force" in inputs)
+                                         external_force=f"{name}.external_force" in inputs,
+                                         speed_correction=f"{name}.speed_correction" in inputs)
         laws += [(dc.replace(site, name=f"{name}.{site.name}"), law, first)
                  for site, law, first in axis_laws]
     return laws
@@ -440,7 +470,13 @@ def plan(machine: Machine) -> Plan:
         raise ParameterError("axes", axis_names, "expected each axis name once")
     writer: dict[str, str] = {}
     for c in machine.couplings:
+        if c.name in axis_names:
+            raise ParameterError(f"couplings.{c.name}", c.name,
+                                 "a part named as an axis; expected another name")
         for signal in c.writes():
+            own = re.fullmatch(rf"der\({re.escape(c.name)}\.(.+)\)", signal)
+            if own and own.group(1) in c.states():
+                continue  # the rate of its own state
             axis, _, port = signal.partition(".")
             if axis not in axis_names or port not in AXIS_INPUTS:
                 raise ParameterError(f"couplings.{c.name}", signal,
@@ -453,6 +489,7 @@ def plan(machine: Machine) -> Plan:
     # declare the axes once (no code is compiled) to know their states and signals
     b = codegen.Builder()
     _declare_axes(b, machine, None, set(writer), tuple(axis_names))
+    _declare_part_states(b, machine)
     after: dict[str, set[str]] = {n: set() for n in axis_names}
     after.update({f"couplings.{c.name}": set() for c in machine.couplings})
     for signal, part in writer.items():
@@ -486,6 +523,13 @@ def plan(machine: Machine) -> Plan:
     return Plan(tuple(order), tuple(writer))
 
 
+def _declare_part_states(b: Any, machine: Machine) -> None:
+    """Every coupling part's own states, ``<part>.<state>``."""
+    for c in machine.couplings:
+        for state, (unit, kind, description, scale) in c.states().items():
+            b.state(f"{c.name}.{state}", unit, description, kind, scale)
+
+
 def _signal_code(b: Any, name: str) -> tuple[str, str]:
     """(code, flow name) of a signal a coupling reads, at the machine level."""
     rate = re.fullmatch(r"der\((.+)\)", name)
@@ -504,7 +548,8 @@ def _emit_coupling(b: Any, step: str, c: Coupling) -> None:
         b.param(f"{step}.{key}", value)
         slots[key] = b.p(f"{step}.{key}")
     for signal, expression in c.equations().items():
-        if signal not in b.aux_index:  # an axis input, declared by its writer
+        rate = re.fullmatch(r"der\((.+)\)", signal)
+        if not rate and signal not in b.aux_index:  # an axis input, declared by its writer
             b.add_aux(signal, *AXIS_INPUTS[signal.partition(".")[2]])
         reads: list[str] = []
         parts = re.split(r"\{([^{}]+)\}", expression)
@@ -514,8 +559,12 @@ def _emit_coupling(b: Any, step: str, c: Coupling) -> None:
             else:
                 parts[k], flow = _signal_code(b, parts[k])
                 reads.append(flow)
-        b.emit(f"{b.a(signal)} = {''.join(parts)}", writes=f"aux:{signal}",
-               reads=tuple(reads))
+        if rate:  # the rate of the part's own state
+            b.emit(f"{b.dy(rate.group(1))} = {''.join(parts)}", writes=f"dy:{rate.group(1)}",
+                   reads=tuple(reads))
+        else:
+            b.emit(f"{b.a(signal)} = {''.join(parts)}", writes=f"aux:{signal}",
+                   reads=tuple(reads))
 
 
 def assemble_machine(machine: Machine, profile: MachineProfile) -> Any:
@@ -542,6 +591,7 @@ def assemble_machine(machine: Machine, profile: MachineProfile) -> Any:
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
     laws = _declare_axes(b, machine, profile, set(steps.inputs),
                          tuple(ax.name for ax in machine.axes))
+    _declare_part_states(b, machine)
     parts = {f"couplings.{c.name}": c for c in machine.couplings}
     for step in steps.order:
         if step in parts:
@@ -630,18 +680,20 @@ class MachineSystem:
         return y0
 
 
-def simulate_machine(machine: Machine, contour: Contour, duration: float | None = None, *,
-                     options: Any = None, interval: float | None = None) -> Any:
-    """Simulate a machine following a contour.
+def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
+                     duration: float | None = None, *, options: Any = None,
+                     interval: float | None = None) -> Any:
+    """Simulate a machine following a contour (or given references).
 
     Parameters
     ----------
     machine : Machine
         The machine.
-    contour : Contour
-        The path (its axes name two of the machine's).
+    contour : Contour or MachineProfile
+        The path (its axes name two of the machine's), or each axis' reference (no contour
+        error then).
     duration : float, optional
-        Simulated time [s]; default the contour's duration.
+        Simulated time [s]; default the contour's duration (the references' length).
     options : SolverOptions, optional
         Integrator settings.
     interval : float, optional
@@ -656,6 +708,10 @@ def simulate_machine(machine: Machine, contour: Contour, duration: float | None 
     from ..engine.result import Result
     from ..engine.simulate import simulate
 
+    if isinstance(contour, MachineProfile):
+        t_end = float(contour.time[-1]) if duration is None else float(duration)
+        result = simulate(MachineSystem(machine), contour, t_end, options=options)  # type: ignore[arg-type]
+        return result
     profile = MachineProfile.from_contour(contour, machine, interval)
     t_end = contour.duration if duration is None else float(duration)
     result = simulate(MachineSystem(machine), profile, t_end, options=options)  # type: ignore[arg-type]

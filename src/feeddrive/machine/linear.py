@@ -159,7 +159,9 @@ def linearize_machine(machine: Machine, table_speeds: Mapping[str, float] | None
         for ax in machine.axes))
     model = assemble_machine(flat, profile)
     names = model.state_names
-    y = np.array([points[n] for n in names])
+    # the coupling parts' own states (a beam, a controller's integral) start at 0
+    live_names += [f"{c.name}.{state}" for c in machine.couplings for state in c.states()]
+    y = np.array([points.get(n, 0.0) for n in names])
     live = [names.index(n) for n in live_names]
     f = _Evaluator(model)
     scale = _scales(model)
@@ -196,7 +198,7 @@ def linearize_machine(machine: Machine, table_speeds: Mapping[str, float] | None
         B[:, j] = (dp[live] - dm[live]) / (2 * h)
         D[:, j] = (outputs(y, ap) - outputs(y, am)) / (2 * h)
     notes = (("the coupling parts are evaluated at the axes' own steady states, not solved "
-              "for with them",) if machine.couplings else ())
+              "for with them, their own states at 0",) if machine.couplings else ())
     return MachineLinearModel(A=A, B=B, C=C, D=D, states=tuple(names[k] for k in live),
                        inputs=tuple(name for name, _, _ in ins),
                        outputs=tuple(name for name, _ in outs),

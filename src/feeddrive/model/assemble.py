@@ -404,7 +404,8 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
 
 def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
                   table_position: float, nut_hold: str, profile: Profile,
-                  load: LoadProfile | None, *, external_force: bool = False
+                  load: LoadProfile | None, *, external_force: bool = False,
+                  speed_correction: bool = False
                   ) -> tuple[list[tuple[Site, FrictionLaw, int]], CompensationFootprint | None]:
     """Declare one drive's parts to ``b`` and write their code: the whole of a single-axis
     model, or one axis of a machine inside :meth:`Builder.scope
@@ -417,8 +418,12 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     parameters, drive, table_position, nut_hold, profile, load
         As :func:`assemble`.
     external_force : bool, default False
-        Declare the input signal ``external_force`` [N], a force on the table that a
-        machine's coupling part writes (added to the load force).
+        Declare the input signal ``external_force`` [N], a load on the table that a
+        machine's coupling part writes (added to the load force: positive opposes positive
+        motion).
+    speed_correction : bool, default False
+        Declare the input signal ``speed_correction`` [m/s], a table speed a machine's
+        synchronisation part adds to the first axis' continuous speed command.
 
     Returns
     -------
@@ -490,6 +495,19 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
            writes="aux:table_position_reference", reads="reference")
     b.emit(f"{b.a('table_speed_reference')} = ref_v", writes="aux:table_speed_reference",
            reads="reference")
+    if speed_correction:
+        if parameters.controller.position_period > 0:
+            raise ParameterError("controller.position_period",
+                                 parameters.controller.position_period,
+                                 "a synchronisation part corrects a continuous position "
+                                 "loop; expected 0 [s]")
+        if b.q("speed_correction") not in b.aux_index:
+            b.add_aux("speed_correction", "m/s", "table speed added to the speed command by "
+                      "the machine's synchronisation part")
+        h_ax = f"P[{axes[0].param_offset + loops.H_AX}]"
+        axes[0] = dataclasses.replace(
+            axes[0], speed_correction=f"{b.a('speed_correction')} / {h_ax}",
+            speed_correction_reads=("aux:speed_correction",))
     comp = emit_compensation(b, parameters, mech, axes[0].name)
     if comp is not None:
         axes[0] = dataclasses.replace(axes[0], extra_current=comp.current,

@@ -300,6 +300,11 @@ class Axis:
     current_feedforward : str, default ""
         Code of a current added to the command in every loop configuration (a feed-forward
         part), saturated with it [A].
+    speed_correction : str, default ""
+        Code of a speed added to the continuous speed command (a machine's synchronisation
+        part) [rad/s].
+    speed_correction_reads : tuple of str, default ()
+        What ``speed_correction`` is computed from (``Builder.flow`` names).
     position_reads : tuple of str, default ()
         What the continuous ``position`` code is computed from (``Builder.flow`` names).
     speed_reads : tuple of str, default ()
@@ -330,6 +335,10 @@ class Axis:
     speed_reads: tuple[str, ...] = ()
     current_reads: tuple[str, ...] = ()
     extra_reads: tuple[str, ...] = ()  # of extra_current (current_feedforward: held only)
+    # code of a speed [rad/s] added to the continuous speed command (a machine's
+    # synchronisation part writes it) and what it is computed from
+    speed_correction: str = ""
+    speed_correction_reads: tuple[str, ...] = ()
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
@@ -473,9 +482,10 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
         out.append(f"    {s} = {b.h(ax.name + '.speed_command')}")
     out.append("else:")
     for ax, s in zip(axes, sc, strict=True):
+        extra = f" + {ax.speed_correction}" if ax.speed_correction and target == "aux" else ""
         out.append(f"    {s} = {_speed_law(b, ax)}({ax.reference} - {ax.position}, "
                    f"{ax.feedforward}, {P}, {ax.param_offset}) + "
-                   f"{P}[{ax.param_offset + INJ_SPEED}]")
+                   f"{P}[{ax.param_offset + INJ_SPEED}]{extra}")
     out.append(f"if {_period(b, 'velocity')} > 0.0:")
     for ax, c in zip(axes, ic, strict=True):
         held = b.h(ax.name + '.current_command')
@@ -505,7 +515,8 @@ def _declare_flows(b: Builder, axes: list[Axis]) -> None:
         if ax.extra_current and not ax.extra_reads:
             raise ValueError(f"axis {ax.name!r}: extra_current without extra_reads")
         n = ax.name
-        b.flow(f"aux:{n}_speed_command", ("reference", *ax.position_reads))
+        b.flow(f"aux:{n}_speed_command",
+               ("reference", *ax.position_reads, *ax.speed_correction_reads))
         b.flow(f"dy:{n}_velocity_integral",
                (f"aux:{n}_speed_command", *ax.speed_reads, f"y:{n}_velocity_integral"))
         b.flow(f"aux:{n}_current_command",

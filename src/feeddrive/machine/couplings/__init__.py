@@ -15,8 +15,11 @@ before any work, with one line naming the signal or the part:
 
 Names a part may read: an axis' state (``x.table_position``: no algebraic dependency), the
 rate of a state (``der(x.table_speed)``: x's acceleration), an axis' signal
-(``x.drive_force``) or a signal another part writes.  It may write an axis' input:
-``<axis>.external_force`` [N], a force on the table.
+(``x.drive_force``), a signal another part writes or a part's own state.  It may write an
+axis' input — ``<axis>.external_force`` [N], a load on the table (positive opposes positive
+motion, as the load force), ``<axis>.speed_correction`` [m/s], added to the axis' continuous
+speed command — and the rates of its own states, ``der(<part>.<state>)`` (:meth:`Coupling.
+states`: a beam's position and yaw, a controller's integral).
 """
 
 from __future__ import annotations
@@ -30,7 +33,12 @@ from ... import registry
 from ...parameters import ParameterError
 
 #: the inputs an axis offers its machine's parts: name → (unit, description)
-AXIS_INPUTS = {"external_force": ("N", "force on the table from the machine's coupling parts")}
+AXIS_INPUTS = {
+    "external_force": ("N", "load on the table from the machine's coupling parts (as the "
+                            "load force: positive opposes positive motion)"),
+    "speed_correction": ("m/s", "table speed added to the speed command by the machine's "
+                                "synchronisation part"),
+}
 
 _NAME = re.compile(r"\{([^{}]+)\}")
 
@@ -63,6 +71,18 @@ class Coupling:
             Field → value.
         """
         return {k: float(getattr(self, k)) for k in self.units}
+
+    def states(self) -> dict[str, tuple[str, str, str, float]]:
+        """The part's own states, named ``<part>.<state>`` in the model: state →
+        (unit, tolerance kind, description, tolerance scale); none by default.
+
+        Returns
+        -------
+        dict of str to tuple
+            E.g. ``{"yaw": ("rad", "angle", "beam yaw", 0.5)}`` (an angle's scale: metres per
+            radian, :meth:`feeddrive.model.codegen.Builder.state`).
+        """
+        return {}
 
     def equations(self) -> dict[str, str]:
         """Each written signal → its expression, signals and parameters named in braces.
