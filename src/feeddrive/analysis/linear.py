@@ -539,6 +539,24 @@ def _state_steps(f: _Evaluator, y: np.ndarray, live: list[int], scale: np.ndarra
         yield j, h, (yp, dp, ap), (ym, dm, am)
 
 
+def _input_columns(f: _Evaluator, model: Model, y: np.ndarray, live: list[int],
+                   outputs: Any, inputs: list[tuple[int, float]]
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """B and D by central differences: each input a parameter slot stepped by ±h [SI];
+    ``outputs(y, aux)`` the output vector."""
+    B = np.empty((len(live), len(inputs)))
+    D = np.empty((len(outputs(y, f(y)[1])), len(inputs)))
+    for j, (slot, h) in enumerate(inputs):
+        Pp, Pm = model.P.copy(), model.P.copy()
+        Pp[slot] += h
+        Pm[slot] -= h
+        dp, ap = f(y, Pp)
+        dm, am = f(y, Pm)
+        B[:, j] = (dp[live] - dm[live]) / (2 * h)
+        D[:, j] = (outputs(y, ap) - outputs(y, am)) / (2 * h)
+    return B, D
+
+
 def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0, *,
                  frictionless: bool = False) -> np.ndarray:
     """The A matrix of :func:`linearize` alone (the same steady state and the same
@@ -642,18 +660,9 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     for j, h, (yp, dp, ap), (ym, dm, am) in _state_steps(f, y, live, scale):
         A[:, j] = (dp[live] - dm[live]) / (2 * h)
         C[:, j] = (outputs(yp, ap) - outputs(ym, am)) / (2 * h)
-    B = np.empty((n, len(ins)))
-    D = np.empty((len(outs), len(ins)))
+    B, D = _input_columns(f, model, y, live, outputs,
+                          [(slot, _INPUT_STEP[unit_of(name)]) for name, slot in ins])
     in_names = tuple(name for name, _ in ins)
-    for j, (name, slot) in enumerate(ins):
-        h = _INPUT_STEP[unit_of(name)]
-        Pp, Pm = model.P.copy(), model.P.copy()
-        Pp[slot] += h
-        Pm[slot] -= h
-        dp, ap = f(y, Pp)
-        dm, am = f(y, Pm)
-        B[:, j] = (dp[live] - dm[live]) / (2 * h)
-        D[:, j] = (outputs(y, ap) - outputs(y, am)) / (2 * h)
     names = tuple(model.state_names[k] for k in live)
     return LinearModel(A=A, B=B, C=C, D=D, states=names, inputs=in_names,
                        outputs=tuple(name for name, _ in outs),

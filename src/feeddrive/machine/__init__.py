@@ -674,10 +674,10 @@ class MachineSystem:
         numpy.ndarray
             One value per state [SI, per state].
         """
-        y0 = np.zeros(len(model.state_names))
-        for name, value in self.initial_state.items():
-            y0[model.index(name)] = float(value)
-        return y0
+        from ..engine.simulate import DriveSystem
+
+        # the drive's own rule (it reads initial_state only)
+        return DriveSystem.initial_vector(self, model)  # type: ignore[arg-type]
 
 
 def simulate_machine(machine: Machine, contour: Contour | MachineProfile,

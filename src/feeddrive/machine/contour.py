@@ -9,7 +9,7 @@ to F at the tangential acceleration a, stays at F, and falls back to 0 at the en
 exact integrals).  Positions are relative to the start point, as an axis' table position is.
 
 The contour error of a run is the signed normal distance of the actual point to the path
-(:meth:`Contour.contour_error`): outside a circle positive, left of a line positive.
+(:meth:`Contour.contour_error`) [1]_: outside a circle positive, left of a line positive.
 
 References
 ----------

@@ -1,13 +1,13 @@
 """The loops of a machine: each axis' own, and the MIMO closed loop of the whole machine.
 
-Per axis, :func:`axis_loops` is the single-drive :func:`~feeddrive.analysis.linear.
-loop_analysis` of that axis (its coupling parts left out).  :func:`linearize_machine`
-linearises the one assembled model of the machine — every axis and coupling part — at the
-axes' steady sliding states, by central differences of its right-hand side (the method of
-:func:`~feeddrive.analysis.linear.linearize`): a python-control ``StateSpace``
-(:meth:`LinearModel.to_control <feeddrive.analysis.linear.LinearModel.to_control>`) whose
-inputs are every axis' ``<axis>.table_position_reference`` and ``<axis>.load_force`` and
-whose outputs are every axis' ``<axis>.table_position`` and ``<axis>.following_error``.
+Per axis, :func:`axis_loops` is the single-drive
+:func:`~feeddrive.analysis.linear.loop_analysis` of that axis (its coupling parts left
+out).  :func:`linearize_machine` linearises the one assembled model of the machine — every
+axis and coupling part — at the axes' steady sliding states, by central differences of its
+right-hand side (the method of :func:`~feeddrive.analysis.linear.linearize`): a
+python-control ``StateSpace`` (:meth:`MachineLinearModel.to_control`) whose inputs are every
+axis' ``<axis>.table_position_reference`` and ``<axis>.load_force`` and whose outputs are
+every axis' ``<axis>.table_position`` and ``<axis>.following_error``.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from ..analysis.linear import (
     LoopAnalysis,
     _Evaluator,
     _frictionless,
+    _input_columns,
     _live_states,
     _scales,
     _state_steps,
@@ -186,17 +187,8 @@ def linearize_machine(machine: Machine, table_speeds: Mapping[str, float] | None
     ins = [(f"{ax.name}.{name}", model.parameter_names.index(f"{ax.name}.inputs.{name}"), unit)
            for ax in machine.axes
            for name, unit in (("table_position_reference", "m"), ("load_force", "N"))]
-    B = np.empty((n, len(ins)))
-    D = np.empty((len(outs), len(ins)))
-    for j, (_, slot, unit) in enumerate(ins):
-        h = _INPUT_STEP[unit]
-        Pp, Pm = model.P.copy(), model.P.copy()
-        Pp[slot] += h
-        Pm[slot] -= h
-        dp, ap = f(y, Pp)
-        dm, am = f(y, Pm)
-        B[:, j] = (dp[live] - dm[live]) / (2 * h)
-        D[:, j] = (outputs(y, ap) - outputs(y, am)) / (2 * h)
+    B, D = _input_columns(f, model, y, live, outputs,
+                          [(slot, _INPUT_STEP[unit]) for _, slot, unit in ins])
     notes = (("the coupling parts are evaluated at the axes' own steady states, not solved "
               "for with them, their own states at 0",) if machine.couplings else ())
     return MachineLinearModel(A=A, B=B, C=C, D=D, states=tuple(names[k] for k in live),

@@ -18,8 +18,8 @@ rate of a state (``der(x.table_speed)``: x's acceleration), an axis' signal
 (``x.drive_force``), a signal another part writes or a part's own state.  It may write an
 axis' input — ``<axis>.external_force`` [N], a load on the table (positive opposes positive
 motion, as the load force), ``<axis>.speed_correction`` [m/s], added to the axis' continuous
-speed command — and the rates of its own states, ``der(<part>.<state>)`` (:meth:`Coupling.
-states`: a beam's position and yaw, a controller's integral).
+speed command — and the rates of its own states, ``der(<part>.<state>)``
+(:meth:`Coupling.states`: a beam's position and yaw, a controller's integral).
 """
 
 from __future__ import annotations

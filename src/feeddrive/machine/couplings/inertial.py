@@ -3,7 +3,7 @@
 An axis ``target`` (say y, mounted on x) carries a mass m that x accelerates across y's
 guide; the guide's preload turns a share of that into a force along y:
 F_y = −κ·m·ẍ, κ the cross-coupling factor (an assembly's squareness or a guide's
-compliance; 0 ≤ κ ≤ 1).  It reads x's acceleration ``der(x.table_speed)`` and writes
+compliance; 0 ≤ κ ≤ 1) [1]_.  It reads x's acceleration ``der(x.table_speed)`` and writes
 ``y.external_force``: the example of docs/machine.md and of issue 40's acceptance (a part
 that reads one axis' acceleration and writes another's load force).
 
