@@ -131,7 +131,7 @@ def run_machine_loops(machine_file: str, *, table_speed: float, with_friction: b
     from ..analysis.linear import classify_poles
     from ..machine import load_machine
     from ..machine.linear import axis_loops, cross_coupling, linearize_machine
-    from .linear_cmd import print_loops
+    from ._loops_text import print_loops
 
     machine = load_machine(machine_file)
     v = table_speed * 1e-3
