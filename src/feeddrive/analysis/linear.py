@@ -621,18 +621,18 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     A = np.empty((n, n))
     aux_names = [a.name for a in model.aux]
     st = model.state_names
-    axes = [a.removesuffix("_speed_command") for a in aux_names if a.endswith("_speed_command")]
+    # the controller axes as their loops declared them (model.control_axes)
     idle = sys_.topology().held()[1]
-    axes = [a for a in axes if a not in idle]
+    control = [a for a in model.control_axes if a.name not in idle]
+    axes = [a.name for a in control]
     pidx = model.parameter_names.index
     # inputs: (name, parameter slot)
     refs = [r for r in REFERENCE_INPUTS if not r.startswith("nut_") or "nut" in axes]
     ins: list[tuple[str, int]] = [(r, pidx(f"inputs.{r}")) for r in refs]
     ins.append(("load_force", pidx("inputs.load_force")))
-    for a in axes:
-        first = pidx(f"controller.{a}.kpp")
-        ins += [(f"{a}_speed_command_disturbance", first + INJ_SPEED),
-                (f"{a}_current_command_disturbance", first + INJ_CURRENT)]
+    for c in control:
+        ins += [(f"{c.name}_speed_command_disturbance", c.block + INJ_SPEED),
+                (f"{c.name}_current_command_disturbance", c.block + INJ_CURRENT)]
     # outputs: (name, function of (state vector, aux vector))
     k_x, k_v = st.index("table_position"), st.index("table_speed")
     k_ref = aux_names.index("table_position_reference")
@@ -642,15 +642,15 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         ("following_error", lambda yv, av: av[k_ref] - yv[k_x]),
     ]
     for kind in ("speed_command", "current_command"):
-        for a in axes:
-            j = aux_names.index(f"{a}_{kind}")
-            outs.append((f"{a}_{kind}", lambda yv, av, j=j: av[j]))
+        for c in control:
+            j = aux_names.index(getattr(c, kind))
+            outs.append((f"{c.name}_{kind}", lambda yv, av, j=j: av[j]))
     topology = sys_.topology()
-    for a in axes:
-        j = st.index(f"{a}_current")
-        kt_name, torque_name = topology.motor_output(a)
+    for c in control:
+        j = st.index(c.current)
+        kt_name, torque_name = topology.motor_output(c.name)
         kt = model.parameter(kt_name)
-        outs.append((f"{a}_current", lambda yv, av, j=j: yv[j]))
+        outs.append((f"{c.name}_current", lambda yv, av, j=j: yv[j]))
         outs.append((torque_name, lambda yv, av, j=j, kt=kt: kt * yv[j]))
 
     def outputs(yv: np.ndarray, aux: np.ndarray) -> np.ndarray:

@@ -598,7 +598,7 @@ def assemble_machine(machine: Machine, profile: MachineProfile) -> Any:
             _emit_coupling(b, step, parts[step])
         else:
             b.call_scope(step)
-    return package(b, machine.name, laws, None)
+    return package(b, machine.name, laws, None, b.control_axes)
 
 
 @dataclass(frozen=True)

@@ -77,6 +77,9 @@ class Model:
         What the compensator reads and adds; None without compensation.
     clocks : tuple of (str, int), default ()
         The sample schedule: each clock's period slot and its index in ``P``.
+    control_axes : tuple of ControlAxis, default ()
+        Each controller axis' signals and parameter block, as its loops declared them
+        (:class:`feeddrive.model.loops.ControlAxis`).
     derived : tuple of (Signal, str, float), default ()
         Signals a part declares as factor × a state or signal: (signal, source, factor
         [signal unit per source unit]).
@@ -104,6 +107,8 @@ class Model:
     compensation: CompensationFootprint | None = None  # the compensator's reads and adds
     # the sample schedule: (name, index in P of its period [s]) per clock (Builder.clock)
     clocks: tuple[tuple[str, int], ...] = ()
+    # each controller axis' signals and parameter block (loops.ControlAxis)
+    control_axes: tuple[loops.ControlAxis, ...] = ()
 
     @property
     def n_held(self) -> int:
@@ -399,7 +404,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     b = codegen.Builder()
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
     laws, comp = declare_drive(b, parameters, drive, table_position, nut_hold, profile, load)
-    return package(b, drive, laws, comp)
+    return package(b, drive, laws, comp, b.control_axes)
 
 
 def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
@@ -454,6 +459,7 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
         b.tol_scale[b.q(f"{ax.name}_velocity_integral")] = b.param_values[ax.param_offset
                                                                      + loops.H_AX]
     loops.declare_signals(b, axes)
+    b.control_axes += loops.control_axes(b, axes)
     for site, law, _ in laws:
         b.add_aux(f"{site.name}_friction", "N",
                   f"{site.name.replace('_', '–')} friction ({law.name}"
@@ -549,7 +555,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
 
 
 def package(b: codegen.Builder, drive: str, laws: list[tuple[Site, FrictionLaw, int]],
-            comp: CompensationFootprint | None) -> Model:
+            comp: CompensationFootprint | None,
+            control: tuple[loops.ControlAxis, ...] = ()) -> Model:
     """Compile what every part declared to ``b`` into a :class:`Model`.
 
     Parameters
@@ -562,6 +569,8 @@ def package(b: codegen.Builder, drive: str, laws: list[tuple[Site, FrictionLaw, 
         Each friction site (its model-wide name), its law and first state's index.
     comp : CompensationFootprint or None
         The compensator's footprint.
+    control : tuple of ControlAxis, default ()
+        Each controller axis' declarations.
 
     Returns
     -------
@@ -581,7 +590,8 @@ def package(b: codegen.Builder, drive: str, laws: list[tuple[Site, FrictionLaw, 
         sites=tuple((site.name, law.name) for site, law, _ in laws),
         jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
         derived=tuple(b.derived), clocks=tuple(b.clocks),
-        flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp)
+        flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp,
+        control_axes=tuple(control))
 
 
 def __getattr__(name: str) -> Any:

@@ -129,6 +129,8 @@ class Builder:
     # the part of a machine being declared (``scope``): its names are qualified
     # ``<scope>.<name>`` and its code goes into functions of its own
     namespace: str = ""
+    # the controller axes' declarations (feeddrive.model.loops.ControlAxis), model-wide names
+    control_axes: tuple[Any, ...] = ()
     scoped_rhs: dict[str, list[str]] = field(default_factory=dict)
     scoped_sample: dict[str, list[str]] = field(default_factory=dict)
 

@@ -426,6 +426,58 @@ def declare_states(b: Builder, axes: list[Axis]) -> None:
                 "current_integral")
 
 
+@dataclass(frozen=True)
+class ControlAxis:
+    """What a controller axis declares to its consumers (the linearisation, the FMU): the
+    names of its signals and where its parameter block starts — read from the model, never
+    rebuilt from a naming rule.
+
+    Parameters
+    ----------
+    name : str
+        The axis' name (``"screw"``, ``"motor"``).
+    speed_command : str
+        Its speed-command signal (auxiliary output) [rad/s or m/s].
+    current_command : str
+        Its current-command signal [A].
+    current : str
+        The motor-current state it drives [A].
+    block : int
+        Offset of its parameter block (:data:`AXIS_PARAMS`) in ``P``; ``block + INJ_SPEED``
+        and ``block + INJ_CURRENT`` are the linearisation's injection slots.
+    """
+
+    name: str
+    speed_command: str
+    current_command: str
+    current: str
+    block: int
+
+
+def control_axes(b: Builder, axes: list[Axis]) -> tuple[ControlAxis, ...]:
+    """The declarations of every axis (after :func:`declare_signals`), model-wide names.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    axes : list of Axis
+        The mechanism's axes.
+
+    Returns
+    -------
+    tuple of ControlAxis
+        One per axis, in order.
+    """
+    out = []
+    for ax in axes:
+        current = [r.removeprefix("y:") for r in ax.current_reads if r.startswith("y:")]
+        out.append(ControlAxis(ax.name, b.q(f"{ax.name}_speed_command"),
+                               b.q(f"{ax.name}_current_command"), b.q(current[0]),
+                               ax.param_offset))
+    return tuple(out)
+
+
 def declare_signals(b: Builder, axes: list[Axis]) -> None:
     """Declare the cascade's outputs (speed and current commands, voltages) and the values a
     sampled loop holds between its updates.
