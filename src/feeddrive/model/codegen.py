@@ -102,6 +102,12 @@ class Builder:
         Declared clocks: period slot and its index in ``P`` (:meth:`clock`).
     state_index, aux_index, param_index : dict of str to int
         Name → index in ``y``, ``aux`` and ``P``.
+    namespace : str
+        The scope being declared (:meth:`scope`); empty outside any.
+    control_axes : tuple of ControlAxis
+        The controller axes' declarations (:class:`feeddrive.model.loops.ControlAxis`).
+    scoped_rhs, scoped_sample : dict of str to list of str
+        Each scope's own right-hand-side and sampled-update lines.
     """
 
     states: list[Signal] = field(default_factory=list)
