@@ -117,3 +117,14 @@ def test_loops_machine_shows_a_coupling_part(tmp_path: Path) -> None:
     assert mimo["cross_coupling_peak"]["x -> y"] > 1e-4
     assert mimo["cross_coupling_peak"]["y -> x"] < 1e-9  # rounding of the linear solve
     assert mimo["notes"]
+
+
+def test_work_beyond_the_bounds_is_refused_before_any_step() -> None:
+    for args, field in ((["--turns", "1e6"], "duration"),
+                        (["--turns", "100"], "contour.duration"),
+                        (["--feed", "-5"], "--feed"),
+                        (["--contour", "spiral"], "--contour")):
+        r = runner.invoke(app, ["simulate", "--machine", "xy-table", *args])
+        assert r.exit_code == 2, r.output
+        lines = [ln for ln in r.output.splitlines() if ln.strip()]
+        assert len(lines) == 1 and f"{field} = " in lines[0], r.output

@@ -31,6 +31,8 @@ from ..parameters import ParameterError
 
 #: grid spacing of the axis references [s]
 INTERVAL = 1e-4
+#: the most samples an axis reference may hold (500 s at INTERVAL; 8 bytes × 4 rows each)
+MAX_REFERENCE_SAMPLES = 5_000_000
 
 
 def _positive(field: str, value: float, unit: str) -> float:
@@ -174,7 +176,14 @@ class Contour:
         dict of str to SampledSpeed
             Axis name → its tabulated speed [m/s].
         """
+        _positive("contour.interval", interval, "s")
         n = int(math.ceil(self.duration / interval)) + 2
+        if n > MAX_REFERENCE_SAMPLES:  # refused before the table is built
+            raise ParameterError("contour.duration", round(self.duration, 6),
+                                 f"the references would hold {n:.3g} samples every "
+                                 f"{interval:g} s; expected ≤ "
+                                 f"{MAX_REFERENCE_SAMPLES * interval:g} [s] (fewer turns, a "
+                                 "shorter path or a higher feed)")
         t = np.arange(n) * interval
         v = self.tangent(self.arc_length(t)) * self.path_speed(t)
         return {axis: SampledSpeed(time=t, table_speed=v[i]) for i, axis in enumerate(self.axes)}
