@@ -173,3 +173,16 @@ def test_independent_axes_of_a_machine_move_as_each_drive_alone() -> None:
         assert np.max(np.abs(alone["table_position"] - result[f"{ax.name}.table_position"])
                       ) < 1e-10
         assert np.max(np.abs(alone["table_position"])) > 1e-3
+
+
+def test_params_show_text_reads_back_to_the_same_machine() -> None:
+    import tomllib
+
+    from feeddrive.machine import machine_toml
+
+    machine = machine_from_dict({"name": "g", "extends": "gantry", "couplings": {
+        "sync": {"part": "cross_coupled", "gain": 1.5}}})
+    assert machine_from_dict(tomllib.loads(machine_toml(machine))) == machine
+    with pytest.raises(ParameterError, match="couplings.sync.citation"):
+        machine_from_dict({"name": "g", "extends": "gantry", "couplings": {
+            "sync": {"part": "cross_coupled", "citation": "x"}}})

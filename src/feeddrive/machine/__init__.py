@@ -856,10 +856,8 @@ def machine_toml(machine: Machine) -> str:
         out.append("")
     for c in machine.couplings:
         out += [f"[couplings.{c.name}]", f"part = {json.dumps(c.part)}"]
-        for f in c.__dataclass_fields__:
-            if f != "name":
-                value = getattr(c, f)
-                unit = f"  # [{c.units[f]}]" if f in c.units else ""
-                out.append(f"{f} = {json.dumps(value)}{unit}")
+        for f in c.fields():
+            unit = f"  # [{c.units[f]}]" if f in c.units else ""
+            out.append(f"{f} = {json.dumps(getattr(c, f))}{unit}")
         out.append("")
     return "\n".join(out)

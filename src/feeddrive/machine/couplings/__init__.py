@@ -24,6 +24,7 @@ speed command — and the rates of its own states, ``der(<part>.<state>)``
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -117,6 +118,18 @@ class Coupling:
         return tuple(self.equations())
 
     @classmethod
+    def fields(cls) -> tuple[str, ...]:
+        """The fields a machine file may give (besides ``part``): every dataclass field but
+        ``name``.
+
+        Returns
+        -------
+        tuple of str
+            Field names.
+        """
+        return tuple(f.name for f in dataclasses.fields(cls) if f.name != "name")
+
+    @classmethod
     def from_table(cls, name: str, table: dict[str, Any]) -> Coupling:
         """Build the part from its machine-file table; errors name ``couplings.<name>.…``.
 
@@ -140,18 +153,18 @@ class Coupling:
                         and math.isfinite(value)):
                     raise ParameterError(field, value, f"expected a number [{cls.units[key]}]")
                 values[key] = float(value)
-            elif key in {f for f in cls.__dataclass_fields__ if f != "name"}:
+            elif key in cls.fields():
                 if not isinstance(value, str) or not value.isidentifier():
                     raise ParameterError(field, value, "expected an axis name")
                 values[key] = value
             else:
-                known = [f for f in cls.__dataclass_fields__ if f != "name"]
+                known = list(cls.fields())
                 raise ParameterError(field, value, f"unknown key of the {cls.part} part; "
                                      f"expected {', '.join(['part', *known])}")
         try:
             return cls(name=name, **values)
         except TypeError:
-            missing = [f for f in cls.__dataclass_fields__ if f not in values and f != "name"]
+            missing = [f for f in cls.fields() if f not in values]
             raise ParameterError(f"couplings.{name}", sorted(table),
                                  f"the {cls.part} part needs {', '.join(missing)}") from None
 
