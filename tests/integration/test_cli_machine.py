@@ -128,3 +128,12 @@ def test_work_beyond_the_bounds_is_refused_before_any_step() -> None:
         assert r.exit_code == 2, r.output
         lines = [ln for ln in r.output.splitlines() if ln.strip()]
         assert len(lines) == 1 and f"{field} = " in lines[0], r.output
+
+
+def test_the_gantry_moves_its_carriages_together() -> None:
+    r = runner.invoke(app, ["simulate", "--machine", "gantry", "--contour", "together",
+                            "--length", "5", "--feed", "600", "--json"])
+    assert r.exit_code == 0, r.output
+    summary = json.loads(r.output)
+    assert set(summary["axes"]) == {"x1", "x2"} and "contour_error_max" not in summary
+    assert 0 < summary["axes"]["x1"]["following_error_max"] < 1e-3

@@ -10,7 +10,7 @@ import typer
 from ._common import console, err_console, interrupted, print_json
 
 #: the contour kinds (feeddrive.machine.CONTOURS; the machine package loads numba)
-CONTOURS = ("circle", "line", "corner", "csv")
+CONTOURS = ("circle", "line", "corner", "csv", "together")
 MM_PER_MIN = 1e-3 / 60.0  # [m/s] per mm/min
 
 
@@ -98,6 +98,9 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
     summary = machine_summary(result, machine, path)
     if output:
         summary["output"] = str(result.save(output))
+    if plot and contour == "together":
+        raise ParameterError("--plot", plot, "no XY path to draw for --contour together "
+                             "(write --output and plot its signals)")
     if plot:
         from ..plots.machine import plot_machine
 
@@ -112,8 +115,9 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
     for name, ax in summary["axes"].items():
         lines.append(f"  axis {name} ({ax['drive']}, {ax['parameter_set']}): largest "
                      f"following error {ax['following_error_max'] * um:.4g} µm")
-    lines.append(f"  contour error {summary['contour_error_min'] * um:.4g} … "
-                 f"{summary['contour_error_max'] * um:.4g} µm")
+    if contour != "together":
+        lines.append(f"  contour error {summary['contour_error_min'] * um:.4g} … "
+                     f"{summary['contour_error_max'] * um:.4g} µm")
     if "roundness" in summary:
         lines.append(f"  mean radius reduction {summary['radius_reduction'] * um:.4g} µm, "
                      f"roundness {summary['roundness'] * um:.4g} µm (after the lead-in)")

@@ -97,8 +97,10 @@ def simulate_command(
     machine: str | None = typer.Option(
         None, "--machine", help="A machine file (TOML, docs/machine.md) or a built-in machine "
         "(xy-table): simulate its axes following --contour; the drive options are not used."),
-    contour: str = typer.Option("circle", "--contour", metavar="circle|line|corner|csv",
-                                help="--machine: the path (default circle)."),
+    contour: str = typer.Option("circle", "--contour",
+                                metavar="circle|line|corner|csv|together",
+                                help="--machine: the path (default circle); together: every "
+                                "axis moves --length at once (a gantry)."),
     radius: float = typer.Option(50.0, "--radius", help="--machine: circle radius, corner "
                                  "blend radius [mm]."),
     feed: float = typer.Option(1000.0, "--feed", help="--machine: path feed F [mm/min]."),
@@ -110,7 +112,7 @@ def simulate_command(
                                       "angle [deg]."),
     turns: float = typer.Option(1.0, "--turns", help="--machine: circle revolutions."),
     length: float = typer.Option(100.0, "--length", help="--machine: line length, corner "
-                                 "leg length [mm]."),
+                                 "leg length, travel of --contour together [mm]."),
     angle: float = typer.Option(0.0, "--angle", help="--machine: line direction, corner "
                                 "turn (0: 90) [deg]."),
     contour_file: str | None = typer.Option(None, "--contour-file", help="--machine: a CSV "

@@ -37,11 +37,12 @@ import numpy as np
 
 from ..model.reference import SampledSpeed
 from ..parameters import DriveParameters, ParameterError
-from .contour import Circle, Contour, Line, Polyline, corner, from_csv
+from .contour import Circle, Contour, Line, Polyline, Together, corner, from_csv
 from .couplings import AXIS_INPUTS, Coupling, coupling
 
 __all__ = ["CONTOURS", "MACHINES", "Circle", "Contour", "Line", "Machine", "MachineAxis",
-           "MachineProfile", "MachineSystem", "Polyline", "assemble_machine", "check_machine",
+           "MachineProfile", "MachineSystem", "Polyline", "Together", "assemble_machine",
+           "check_machine",
            "corner", "from_csv", "load_machine", "machine_from_dict", "machine_summary",
            "machine_toml", "make_contour", "plan", "simulate_machine"]
 
@@ -359,6 +360,12 @@ class MachineProfile(SampledSpeed):
         """
         from .contour import INTERVAL
 
+        if isinstance(contour, Together):  # every axis along the path's length
+            refs = contour.references(interval or INTERVAL)
+            t = next(iter(refs.values())).time
+            common = SampledSpeed(time=t, table_speed=contour.path_speed(t))
+            return cls(time=t, table_speed=common.table_speed,
+                       axes=tuple((ax.name, common) for ax in machine.axes), contour=contour)
         for name in contour.axes:
             machine.axis(name)
         refs = contour.references(interval or INTERVAL)
@@ -715,6 +722,8 @@ def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
     profile = MachineProfile.from_contour(contour, machine, interval)
     t_end = contour.duration if duration is None else float(duration)
     result = simulate(MachineSystem(machine), profile, t_end, options=options)  # type: ignore[arg-type]
+    if isinstance(contour, Together):  # no path in a plane: no contour error
+        return result
     ds = result.dataset
     a, b = contour.axes
     err = contour.contour_error(np.asarray(ds[f"{a}.table_position"]),
@@ -730,7 +739,7 @@ def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
 
 
 #: the contour kinds :func:`make_contour` builds
-CONTOURS = ("circle", "line", "corner", "csv")
+CONTOURS = ("circle", "line", "corner", "csv", "together")
 
 
 def make_contour(kind: str, *, feed: float, acceleration: float, radius: float = 0.05,
@@ -742,7 +751,8 @@ def make_contour(kind: str, *, feed: float, acceleration: float, radius: float =
     Parameters
     ----------
     kind : str
-        One of :data:`CONTOURS`.
+        One of :data:`CONTOURS` (``together``: every axis moves ``length`` at once, a
+        gantry's carriages).
     feed : float
         Path speed [m/s].
     acceleration : float
@@ -772,6 +782,8 @@ def make_contour(kind: str, *, feed: float, acceleration: float, radius: float =
     if kind == "circle":
         return Circle(feed=feed, acceleration=acceleration, axes=axes, radius=radius,
                       clockwise=clockwise, start_angle=start_angle, turns=turns)
+    if kind == "together":
+        return Together(feed=feed, acceleration=acceleration, axes=axes, distance=length)
     if kind == "line":
         return Line(feed=feed, acceleration=acceleration, axes=axes, distance=length,
                     angle=angle)
@@ -803,19 +815,22 @@ def machine_summary(result: Any, machine: Machine, contour: Contour) -> dict[str
     -------
     dict
         ``machine``, ``axes`` (name → drive, set, largest |following error| [m]),
-        ``contour_error_max``, ``contour_error_min`` [m]; for a circle ``mean_radius``,
+        ``contour_error_max``, ``contour_error_min`` [m] (not for ``Together``); for a
+        circle ``mean_radius``,
         ``radius_reduction`` and ``roundness`` [m] over the cruise after the lead-in.
     """
     t = result.time
-    err = np.asarray(result["contour_error"])
     out: dict[str, Any] = {
         "machine": machine.name, "contour": type(contour).__name__.lower(),
         "axes": {ax.name: {"drive": ax.drive, "parameter_set": ax.parameters.name,
                            "following_error_max": float(np.max(np.abs(
                                result[f"{ax.name}.following_error"])))}
                  for ax in machine.axes},
-        "contour_error_max": float(np.max(err)), "contour_error_min": float(np.min(err)),
     }
+    if "contour_error" not in result:  # every axis together: no path in a plane
+        return out
+    err = np.asarray(result["contour_error"])
+    out.update(contour_error_max=float(np.max(err)), contour_error_min=float(np.min(err)))
     if isinstance(contour, Circle):
         cruise = (t >= contour.lead_in) & (t <= contour.length / contour.feed)
         if np.any(cruise):

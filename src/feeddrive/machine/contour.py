@@ -266,6 +266,28 @@ class Line(Contour):
 
 
 @dataclass(frozen=True)
+class Together(Line):
+    """Every axis of the machine moving ``distance`` together at the feed (a gantry's
+    carriages): no path in a plane, so no contour error; ``axes`` is not used.
+
+    Parameters
+    ----------
+    feed : float
+        Speed of every axis at the top of the move [m/s].
+    acceleration : float
+        Acceleration of the ramps [m/s^2].
+    axes : tuple of str, default ("x", "y")
+        Not used.
+    dwell : float, default 0.0
+        Time at rest after the move [s].
+    distance : float, default 0.1
+        Travel of every axis [m].
+    angle : float, default 0.0
+        Not used.
+    """
+
+
+@dataclass(frozen=True)
 class Circle(Contour):
     """A circle of ``radius`` started at ``start_angle``, run ``turns`` times.
 
