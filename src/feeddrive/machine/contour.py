@@ -283,7 +283,7 @@ class Together(Line):
     distance : float, default 0.1
         Travel of every axis [m].
     angle : float, default 0.0
-        Not used.
+        Not used [rad].
     """
 
 
