@@ -94,6 +94,10 @@ class LinearModel:
         Whether the friction sites were left out.
     notes : tuple of str, default ()
         Warnings, e.g. the averaged model's (:func:`averaged`).
+    axes : tuple of str, default ()
+        The live controller axes, as the model declares them (``Model.control_axes``):
+        each has the inputs ``<axis>_speed_command_disturbance`` and
+        ``<axis>_current_command_disturbance``; the first drives the table.
     """
 
     A: np.ndarray
@@ -108,6 +112,7 @@ class LinearModel:
     nut_speed: float  # [m/s]
     frictionless: bool
     notes: tuple[str, ...] = field(default=())
+    axes: tuple[str, ...] = field(default=())
 
     def poles(self) -> np.ndarray:
         """Eigenvalues of ``A``: the closed loop's poles at the operating point.
@@ -668,7 +673,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
                        outputs=tuple(name for name, _ in outs),
                        operating_point={model.state_names[k]: float(y[k]) for k in live},
                        table_speed=table_speed, nut_speed=nut_speed, frictionless=frictionless,
-                       notes=notes)
+                       notes=notes, axes=tuple(axes))
 
 
 # ---------------------------------------------------------------- loops
@@ -890,16 +895,15 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
         "controller.position_gain", 0.0))
     lin_v = linearize(open_pos, table_speed, nut_speed, frictionless=frictionless)
     loops = []
-    for inp in lin.inputs:
-        axis = inp.split("_", 1)[0]
-        if inp.endswith("_current_command_disturbance"):
-            S = _freq_response(lin_v, inp, f"{axis}_current_command", w)
-            loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop"))
-        elif inp.endswith("_speed_command_disturbance"):
-            if _speed_loop_only(system, axis, table_speed, nut_speed):
-                continue  # e.g. a hollow motor on a speed loop: no position loop
-            S = _freq_response(lin, inp, f"{axis}_speed_command", w)
+    for axis in lin.axes:  # the controller axes the model declares, in order
+        # a hollow motor on a speed loop (say) has no position loop
+        if not _speed_loop_only(system, axis, table_speed, nut_speed):
+            S = _freq_response(lin, f"{axis}_speed_command_disturbance",
+                               f"{axis}_speed_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} position loop"))
+        S = _freq_response(lin_v, f"{axis}_current_command_disturbance",
+                           f"{axis}_current_command", w)
+        loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop"))
     return LoopAnalysis(poles=classify_poles(lin.poles()), loops=loops, linear=lin)
 
 
@@ -989,11 +993,9 @@ class FrequencyResponse:
 def _axis_name(lin: LinearModel) -> str:
     """The table-driving motor axis: the mechanism's first axis (the screw motor, a linear
     motor, the rack-and-pinion's motor), the first whose inputs the linear model has."""
-    suffix = "_current_command_disturbance"
-    for name in lin.inputs:
-        if name.endswith(suffix):
-            return name.removesuffix(suffix)
-    raise ValueError("the linear model has no table-driving motor axis")
+    if not lin.axes:
+        raise ValueError("the linear model has no table-driving motor axis")
+    return lin.axes[0]
 
 
 def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A002
@@ -1093,8 +1095,7 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
 
 
 def _axes(lin: LinearModel) -> list[str]:
-    return [i.removesuffix("_current_command_disturbance") for i in lin.inputs
-            if i.endswith("_current_command_disturbance")]
+    return list(lin.axes)
 
 
 # ---------------------------------------------------------------- stability band

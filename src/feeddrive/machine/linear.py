@@ -62,6 +62,8 @@ class MachineLinearModel(LinearModel):
         Whether the friction sites were left out.
     notes : tuple of str, default ()
         Warnings.
+    axes : tuple of str, default ()
+        Unused (the machine's inputs and outputs are named per axis).
     """
 
     def to_control(self) -> Any:
