@@ -186,3 +186,27 @@ def test_params_show_text_reads_back_to_the_same_machine() -> None:
     with pytest.raises(ParameterError, match="couplings.sync.citation"):
         machine_from_dict({"name": "g", "extends": "gantry", "couplings": {
             "sync": {"part": "cross_coupled", "citation": "x"}}})
+
+
+def test_a_machine_model_translates_to_c_and_agrees_with_numba(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """The C backend takes a machine's model (its axes' functions _rhs_<axis>,
+    _sample_<axis>): the gantry's rates and signals at random states agree with numba's
+    to 1e-12 relative (docs/c-backend.md's bound for one model)."""
+    from feeddrive.backends.c_backend import c_model_source, compile_shared, load_shared
+    from feeddrive.machine import MachineProfile, Together, assemble_machine
+
+    machine = load_machine("gantry")
+    model = assemble_machine(machine, MachineProfile.from_contour(
+        Together(feed=0.01, acceleration=1.0, distance=0.01), machine))
+    lib = load_shared(compile_shared(c_model_source(model), tmp_path, name="gantry"))
+    rng = np.random.default_rng(40)
+    n, n_aux = len(model.states), len(model.aux)
+    for _ in range(5):
+        y = rng.normal(size=n) * 1e-3
+        out = {}
+        for key, backend in (("numba", model.module), ("c", lib)):
+            dy, aux = np.empty(n), np.empty(n_aux)
+            backend.rhs(0.3, y, np.zeros(model.n_held), model.P, model.T, dy, aux)
+            out[key] = np.concatenate([dy, aux])
+        scale = np.maximum(np.abs(out["numba"]), 1e-300)
+        assert np.max(np.abs(out["c"] - out["numba"]) / scale) < 1e-12
