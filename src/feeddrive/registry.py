@@ -13,8 +13,10 @@ that provide them sit above it).  A group's providers are
   = a friction-law instance), ``feeddrive.presets`` (name = set name, value = a function
   returning the parameter set), ``feeddrive.sections`` (name = a parameter-file section
   such as ``screw``, ``controller`` or ``rack_pinion``, value = the part's parameter class)
-  and ``feeddrive.mechanism_kinds`` (name = a parameter file's ``mechanism`` kind such as
-  ``ball-screw``, value = a :class:`feeddrive.parameters.Composition` naming its parts).
+  , ``feeddrive.mechanism_kinds`` (name = a parameter file's ``mechanism`` kind such as
+  ``ball-screw``, value = a :class:`feeddrive.parameters.Composition` naming its parts)
+  and ``feeddrive.couplings`` (name = a machine file's coupling ``part``, value = a
+  :class:`feeddrive.machine.couplings.Coupling` subclass).
 
 Both are imported only when a group is first read, so that ``import feeddrive.parameters``
 stays cheap and a broken third-party plug-in cannot stop the package from importing.
@@ -38,6 +40,7 @@ FRICTION_LAWS = "feeddrive.friction_laws"
 PRESETS = "feeddrive.presets"
 SECTIONS = "feeddrive.sections"
 MECHANISM_KINDS = "feeddrive.mechanism_kinds"
+COUPLINGS = "feeddrive.couplings"
 
 #: The package's own providers of each group (modules that register on import).
 BUILTIN_PROVIDERS: dict[str, tuple[str, ...]] = {
@@ -50,6 +53,9 @@ BUILTIN_PROVIDERS: dict[str, tuple[str, ...]] = {
                "feeddrive.model.loops", "feeddrive.model.disturbances"),
     # a parameter file's ``mechanism`` kind: the parts it is composed of
     MECHANISM_KINDS: ("feeddrive.model.mechanisms.*",),
+    # a machine's coupling parts (``[couplings.<name>] part = "…"``): parts joined to the
+    # axes by named signals (feeddrive.machine.couplings)
+    COUPLINGS: ("feeddrive.machine.couplings.*",),
 }
 
 _TABLES: dict[str, dict[str, Any]] = {group: {} for group in BUILTIN_PROVIDERS}

@@ -94,6 +94,10 @@ class LinearModel:
         Whether the friction sites were left out.
     notes : tuple of str, default ()
         Warnings, e.g. the averaged model's (:func:`averaged`).
+    axes : tuple of str, default ()
+        The live controller axes, as the model declares them (``Model.control_axes``):
+        each has the inputs ``<axis>_speed_command_disturbance`` and
+        ``<axis>_current_command_disturbance``; the first drives the table.
     """
 
     A: np.ndarray
@@ -108,6 +112,7 @@ class LinearModel:
     nut_speed: float  # [m/s]
     frictionless: bool
     notes: tuple[str, ...] = field(default=())
+    axes: tuple[str, ...] = field(default=())
 
     def poles(self) -> np.ndarray:
         """Eigenvalues of ``A``: the closed loop's poles at the operating point.
@@ -539,6 +544,24 @@ def _state_steps(f: _Evaluator, y: np.ndarray, live: list[int], scale: np.ndarra
         yield j, h, (yp, dp, ap), (ym, dm, am)
 
 
+def _input_columns(f: _Evaluator, model: Model, y: np.ndarray, live: list[int],
+                   outputs: Any, inputs: list[tuple[int, float]]
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """B and D by central differences: each input a parameter slot stepped by ±h [SI];
+    ``outputs(y, aux)`` the output vector."""
+    B = np.empty((len(live), len(inputs)))
+    D = np.empty((len(outputs(y, f(y)[1])), len(inputs)))
+    for j, (slot, h) in enumerate(inputs):
+        Pp, Pm = model.P.copy(), model.P.copy()
+        Pp[slot] += h
+        Pm[slot] -= h
+        dp, ap = f(y, Pp)
+        dm, am = f(y, Pm)
+        B[:, j] = (dp[live] - dm[live]) / (2 * h)
+        D[:, j] = (outputs(y, ap) - outputs(y, am)) / (2 * h)
+    return B, D
+
+
 def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0, *,
                  frictionless: bool = False) -> np.ndarray:
     """The A matrix of :func:`linearize` alone (the same steady state and the same
@@ -603,18 +626,18 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     A = np.empty((n, n))
     aux_names = [a.name for a in model.aux]
     st = model.state_names
-    axes = [a.removesuffix("_speed_command") for a in aux_names if a.endswith("_speed_command")]
+    # the controller axes as their loops declared them (model.control_axes)
     idle = sys_.topology().held()[1]
-    axes = [a for a in axes if a not in idle]
+    control = [a for a in model.control_axes if a.name not in idle]
+    axes = [a.name for a in control]
     pidx = model.parameter_names.index
     # inputs: (name, parameter slot)
     refs = [r for r in REFERENCE_INPUTS if not r.startswith("nut_") or "nut" in axes]
     ins: list[tuple[str, int]] = [(r, pidx(f"inputs.{r}")) for r in refs]
     ins.append(("load_force", pidx("inputs.load_force")))
-    for a in axes:
-        first = pidx(f"controller.{a}.kpp")
-        ins += [(f"{a}_speed_command_disturbance", first + INJ_SPEED),
-                (f"{a}_current_command_disturbance", first + INJ_CURRENT)]
+    for c in control:
+        ins += [(f"{c.name}_speed_command_disturbance", c.block + INJ_SPEED),
+                (f"{c.name}_current_command_disturbance", c.block + INJ_CURRENT)]
     # outputs: (name, function of (state vector, aux vector))
     k_x, k_v = st.index("table_position"), st.index("table_speed")
     k_ref = aux_names.index("table_position_reference")
@@ -624,15 +647,15 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         ("following_error", lambda yv, av: av[k_ref] - yv[k_x]),
     ]
     for kind in ("speed_command", "current_command"):
-        for a in axes:
-            j = aux_names.index(f"{a}_{kind}")
-            outs.append((f"{a}_{kind}", lambda yv, av, j=j: av[j]))
+        for c in control:
+            j = aux_names.index(getattr(c, kind))
+            outs.append((f"{c.name}_{kind}", lambda yv, av, j=j: av[j]))
     topology = sys_.topology()
-    for a in axes:
-        j = st.index(f"{a}_current")
-        kt_name, torque_name = topology.motor_output(a)
+    for c in control:
+        j = st.index(c.current)
+        kt_name, torque_name = topology.motor_output(c.name)
         kt = model.parameter(kt_name)
-        outs.append((f"{a}_current", lambda yv, av, j=j: yv[j]))
+        outs.append((f"{c.name}_current", lambda yv, av, j=j: yv[j]))
         outs.append((torque_name, lambda yv, av, j=j, kt=kt: kt * yv[j]))
 
     def outputs(yv: np.ndarray, aux: np.ndarray) -> np.ndarray:
@@ -642,24 +665,15 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     for j, h, (yp, dp, ap), (ym, dm, am) in _state_steps(f, y, live, scale):
         A[:, j] = (dp[live] - dm[live]) / (2 * h)
         C[:, j] = (outputs(yp, ap) - outputs(ym, am)) / (2 * h)
-    B = np.empty((n, len(ins)))
-    D = np.empty((len(outs), len(ins)))
+    B, D = _input_columns(f, model, y, live, outputs,
+                          [(slot, _INPUT_STEP[unit_of(name)]) for name, slot in ins])
     in_names = tuple(name for name, _ in ins)
-    for j, (name, slot) in enumerate(ins):
-        h = _INPUT_STEP[unit_of(name)]
-        Pp, Pm = model.P.copy(), model.P.copy()
-        Pp[slot] += h
-        Pm[slot] -= h
-        dp, ap = f(y, Pp)
-        dm, am = f(y, Pm)
-        B[:, j] = (dp[live] - dm[live]) / (2 * h)
-        D[:, j] = (outputs(y, ap) - outputs(y, am)) / (2 * h)
     names = tuple(model.state_names[k] for k in live)
     return LinearModel(A=A, B=B, C=C, D=D, states=names, inputs=in_names,
                        outputs=tuple(name for name, _ in outs),
                        operating_point={model.state_names[k]: float(y[k]) for k in live},
                        table_speed=table_speed, nut_speed=nut_speed, frictionless=frictionless,
-                       notes=notes)
+                       notes=notes, axes=tuple(axes))
 
 
 # ---------------------------------------------------------------- loops
@@ -881,16 +895,15 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
         "controller.position_gain", 0.0))
     lin_v = linearize(open_pos, table_speed, nut_speed, frictionless=frictionless)
     loops = []
-    for inp in lin.inputs:
-        axis = inp.split("_", 1)[0]
-        if inp.endswith("_current_command_disturbance"):
-            S = _freq_response(lin_v, inp, f"{axis}_current_command", w)
-            loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop"))
-        elif inp.endswith("_speed_command_disturbance"):
-            if _speed_loop_only(system, axis, table_speed, nut_speed):
-                continue  # e.g. a hollow motor on a speed loop: no position loop
-            S = _freq_response(lin, inp, f"{axis}_speed_command", w)
+    for axis in lin.axes:  # the controller axes the model declares, in order
+        # a hollow motor on a speed loop (say) has no position loop
+        if not _speed_loop_only(system, axis, table_speed, nut_speed):
+            S = _freq_response(lin, f"{axis}_speed_command_disturbance",
+                               f"{axis}_speed_command", w)
             loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} position loop"))
+        S = _freq_response(lin_v, f"{axis}_current_command_disturbance",
+                           f"{axis}_current_command", w)
+        loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop"))
     return LoopAnalysis(poles=classify_poles(lin.poles()), loops=loops, linear=lin)
 
 
@@ -980,11 +993,9 @@ class FrequencyResponse:
 def _axis_name(lin: LinearModel) -> str:
     """The table-driving motor axis: the mechanism's first axis (the screw motor, a linear
     motor, the rack-and-pinion's motor), the first whose inputs the linear model has."""
-    suffix = "_current_command_disturbance"
-    for name in lin.inputs:
-        if name.endswith(suffix):
-            return name.removesuffix(suffix)
-    raise ValueError("the linear model has no table-driving motor axis")
+    if not lin.axes:
+        raise ValueError("the linear model has no table-driving motor axis")
+    return lin.axes[0]
 
 
 def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A002
@@ -1084,8 +1095,7 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
 
 
 def _axes(lin: LinearModel) -> list[str]:
-    return [i.removesuffix("_current_command_disturbance") for i in lin.inputs
-            if i.endswith("_current_command_disturbance")]
+    return list(lin.axes)
 
 
 # ---------------------------------------------------------------- stability band

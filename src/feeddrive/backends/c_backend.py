@@ -103,7 +103,15 @@ def c_model_source(model: Model, *, data: bool = True) -> str:
         A kernel of the model uses a construct outside the C backend's subset.
     """
     module = model.module
-    unit = _Unit(constants={}, bindings={}, shapes={}, param_types=_GENERATED_TYPES)
+    # a machine's axes run in functions of their own (Builder.scope): _rhs_<axis> and
+    # _sample_<axis> take the arguments of rhs and sample_update
+    types = dict(_GENERATED_TYPES)
+    for name in vars(module):
+        for prefix, entry in (("_rhs_", "rhs."), ("_sample_", "sample_update.")):
+            if name.startswith(prefix):
+                types.update({f"{name}.{k.removeprefix(entry)}": v
+                              for k, v in _GENERATED_TYPES.items() if k.startswith(entry)})
+    unit = _Unit(constants={}, bindings={}, shapes={}, param_types=types)
     rhs = unit.function(module.rhs.py_func, "fd_model_rhs")
     upd = unit.function(module.sample_update.py_func, "fd_model_sample_update")
     n_state, n_aux, n_held = len(model.states), len(model.aux), int(module.N_HELD)

@@ -16,6 +16,7 @@ from ._common import (
     resolve_parameters,
     user_errors,
 )
+from ._loops_text import print_loops
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
@@ -41,10 +42,20 @@ def loops_command(
                                   "(closed-loop responses to a reference and a load step)."),
     force: bool = typer.Option(False, "--force", help="Replace an existing plot file."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    machine: str | None = typer.Option(
+        None, "--machine", help="A machine file or built-in machine (docs/machine.md): "
+        "each axis' loops, and the MIMO closed loop of the whole machine (every axis at "
+        "--table-speed; the drive options are not used)."),
 ) -> None:
     """Poles (frequency, damping ratio; rigid-body poles listed as such) and the velocity-
     and position-loop margins and bandwidths of every motor axis, from the closed loop
     linearised at steady sliding."""
+    if machine is not None:
+        from .machine_run import run_machine_loops
+
+        run_machine_loops(machine, table_speed=table_speed, with_friction=with_friction,
+                          as_json=as_json)
+        return
     from ..analysis.linear import loop_analysis
     from ..engine.simulate import DriveSystem
     from ..parameters import ParameterError
@@ -65,37 +76,7 @@ def loops_command(
     if as_json:
         print_json(data)
         return
-    d = data["least_damped_mode"]
-    console.print(f"[bold]{drive.upper()}[/] ({params.name}), {table_speed:g} mm/s, "
-                  f"{data['friction']}"
-                  f"{'' if with_friction else ' (--with-friction: the explorer’s margins)'}"
-                  f": least-damped mode {d['frequency_hz']:.3f} Hz, "
-                  f"ζ = {d['damping_ratio']:.4f}")
-    for note in data["notes"]:
-        console.print(f"  {note}", markup=False)
-    rigid = sum(p["kind"] == "rigid-body" for p in data["poles"])
-    if rigid:
-        console.print(f"  {rigid} rigid-body pole{'s' if rigid > 1 else ''} (a free motion no "
-                      "loop holds; no damping ratio)")
-    # the poles the help promises, each pair once, least damped first
-    poles = sorted(data["poles"], key=lambda p: (p["kind"] == "rigid-body",
-                                                 p.get("damping_ratio", 0.0)))
-    console.print(f"  poles ({len(poles)}, each complex pair once, least damped first):",
-                  markup=False)
-    for p in poles:
-        if p["kind"] == "rigid-body":
-            console.print(f"    rigid-body   real {p['real_1_per_s']:.3g} 1/s", markup=False)
-        else:
-            console.print(f"    {p['kind']:12s} {p['frequency_hz']:10.4g} Hz  ζ = "
-                          f"{p['damping_ratio']:.4g}  (real {p['real_1_per_s']:.4g} 1/s)",
-                          markup=False)
-    for lp in data["loops"]:
-        def fmt(v: float | None, unit: str) -> str:
-            return "—" if v is None else f"{v:.2f} {unit}"
-        console.print(f"  {lp['loop']:22s} crossover {fmt(lp['crossover_hz'], 'Hz'):>10s}  "
-                      f"phase margin {fmt(lp['phase_margin_deg'], '°'):>9s}  gain margin "
-                      f"{fmt(lp['gain_margin_db'], 'dB'):>9s}  bandwidth "
-                      f"{fmt(lp['closed_loop_bandwidth_hz'], 'Hz')}")
+    print_loops(f"{drive.upper()}", params.name, table_speed, with_friction, data)
     if plot:
         console.print(f"  wrote {data['plot']}")
 

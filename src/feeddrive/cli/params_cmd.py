@@ -3,13 +3,22 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import typer
 
 from ..io.outputs import shown
 from ..parameters import dumps, load, preset, to_dict
 from . import _units
-from ._common import app, console, print_json, resolve_parameters, user_errors
+from ._common import (
+    EXIT_REFUSED,
+    app,
+    console,
+    err_console,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 from .simulate_cmd import ALL_DRIVES
 
 #: every drive topology, for --help (as `feeddrive simulate` lists them)
@@ -27,9 +36,17 @@ def show(
         None, "--params", help="Parameter file (TOML): print the whole set it resolves to, "
         "with everything its `extends` brings in."),
     fmt: str = typer.Option("toml", "--format", help="toml or json"),
+    machine_file: str | None = typer.Option(
+        None, "--machine", help="A machine file (docs/machine.md) or built-in machine: print "
+        "each axis' drive and whole resolved set, and the coupling parts (TOML)."),
 ) -> None:
     """Print a parameter set (SI units) as TOML or JSON: a preset, or the resolved set of a
-    parameter file."""
+    parameter file; or a machine file resolved (--machine)."""
+    if machine_file is not None:
+        from ..machine import load_machine, machine_toml
+
+        typer.echo(machine_toml(load_machine(machine_file)))
+        return
     if preset_name is not None and params_file is not None:
         raise ValueError("--preset and --params: give one, not both")
     params = load(params_file) if params_file is not None else preset(preset_name or "wang2021")
@@ -77,8 +94,28 @@ def slots(
 
 @params_app.command("check")
 @user_errors
-def check(file: str = typer.Argument(..., help="Parameter file (TOML).")) -> None:
-    """Validate a parameter file; exit non-zero with the offending field if it is refused."""
+def check(file: str | None = typer.Argument(None, help="Parameter file (TOML)."),
+          machine_file: str | None = typer.Option(
+              None, "--machine", help="Check a machine file instead: one line per error, "
+              "naming the axis or coupling part.")) -> None:
+    """Validate a parameter file (or a machine file); exit non-zero with the offending field
+    (every error of a machine file, one line each) if it is refused."""
+    if machine_file is not None:
+        from ..machine import check_machine
+        from ..parameters.toml_io import read_toml_file
+
+        errors = check_machine(read_toml_file(machine_file, field="--machine"),
+                               base_dir=Path(machine_file).parent)
+        for line in errors:
+            err_console.print(f"error: {line}", markup=False, highlight=False,
+                              soft_wrap=True)
+        if errors:
+            raise typer.Exit(code=EXIT_REFUSED)
+        console.print(f"ok: {shown(machine_file)} is a valid machine file", markup=False,
+                      highlight=False, soft_wrap=True)
+        return
+    if file is None:
+        raise ValueError("FILE: give a parameter file, or --machine FILE")
     params = load(file)
     console.print(f"ok: {shown(file)} is a valid parameter set ({shown(params.name)})",
                   markup=False, highlight=False, soft_wrap=True)

@@ -94,6 +94,29 @@ def simulate_command(
         "signal, from a second run with every tolerance 10× tighter (it costs that run)."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
+    machine: str | None = typer.Option(
+        None, "--machine", help="A machine file (TOML, docs/machine.md) or a built-in machine "
+        "(xy-table): simulate its axes following --contour; the drive options are not used."),
+    contour: str = typer.Option("circle", "--contour",
+                                metavar="circle|line|corner|csv|together",
+                                help="--machine: the path (default circle); together: every "
+                                "axis moves --length at once (a gantry)."),
+    radius: float = typer.Option(50.0, "--radius", help="--machine: circle radius, corner "
+                                 "blend radius [mm]."),
+    feed: float = typer.Option(1000.0, "--feed", help="--machine: path feed F [mm/min]."),
+    acceleration: float = typer.Option(1000.0, "--acceleration", help="--machine: lead-in "
+                                       "and lead-out acceleration [mm/s^2]."),
+    clockwise: bool = typer.Option(False, "--clockwise", help="--machine: run the circle "
+                                   "clockwise (G02)."),
+    start_angle: float = typer.Option(0.0, "--start-angle", help="--machine: circle start "
+                                      "angle [deg]."),
+    turns: float = typer.Option(1.0, "--turns", help="--machine: circle revolutions."),
+    length: float = typer.Option(100.0, "--length", help="--machine: line length, corner "
+                                 "leg length, travel of --contour together [mm]."),
+    angle: float = typer.Option(0.0, "--angle", help="--machine: line direction, corner "
+                                "turn (0: 90) [deg]."),
+    contour_file: str | None = typer.Option(None, "--contour-file", help="--machine: a CSV "
+                                            "path, columns x and y [mm]."),
     solver: Any = None,
 ) -> None:
     """Simulate a drive and print a summary: for constant, trapezoid and step-down commands
@@ -111,6 +134,17 @@ def simulate_command(
     from ..model.reference import ConstantSpeed, SampledSpeed, SineSpeed
     from ..parameters import ParameterError
 
+    if machine is not None:
+        from .machine_run import run_machine
+
+        run_machine(machine, contour=contour, radius=radius, feed=feed,
+                    acceleration=acceleration, clockwise=clockwise, start_angle=start_angle,
+                    turns=turns, length=length, angle=angle, contour_file=contour_file,
+                    duration=duration, options=layered(
+                        [("command line", {"method": (method, "--method"),
+                                           "max_steps": (max_steps, "--max-steps")})],
+                        base=solver), output=output, plot=plot, as_json=as_json)
+        return
     if profile not in PROFILES:
         raise ParameterError("--profile", profile, f"expected one of {', '.join(PROFILES)}")
     if profile != "csv" and table_speed is None:

@@ -71,7 +71,14 @@ class Run:
         self.derived = {sig.name: (source, factor) for sig, source, factor in model.derived}
         for sig, _, _ in model.derived:
             self.meta[sig.name] = (sig.unit, sig.description)
-        self.meta["following_error"] = ("m", "commanded − table position")
+        # the following error of every table: one, or one per axis of a machine
+        # (``x.following_error``, from ``x.table_position_reference`` − ``x.table_position``)
+        self.following: dict[str, str] = {}
+        for sig in model.aux:
+            prefix = sig.name.removesuffix("table_position_reference")
+            if prefix != sig.name and f"{prefix}table_position" in self.columns:
+                self.following[f"{prefix}following_error"] = prefix
+                self.meta[f"{prefix}following_error"] = ("m", "commanded − table position")
 
     def defer_aux(self, compute: Callable[[], np.ndarray]) -> None:
         """Mark the auxiliary signals as not recorded: ``compute()`` gives them when first read.
@@ -114,8 +121,10 @@ class Run:
         if name in self.derived:
             source, factor = self.derived[name]
             return factor * self.signal(source)
-        if name == "following_error":
-            return self.signal("table_position_reference") - self.signal("table_position")
+        if name in self.following:
+            prefix = self.following[name]
+            return (self.signal(f"{prefix}table_position_reference")
+                    - self.signal(f"{prefix}table_position"))
         raise KeyError(name)
 
     def attrs(self, *, full: bool) -> dict[str, Any]:

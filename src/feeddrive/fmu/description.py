@@ -227,7 +227,8 @@ class Variable:
 def _axis_units(fm: FmuModel, axis: str) -> tuple[str, str]:
     """(speed unit of the axis' commands, unit of its velocity-loop error)."""
     m = fm.model
-    speed_unit = next(a.unit for a in m.aux if a.name == f"{axis}_speed_command")
+    command = next(c.speed_command for c in m.control_axes if c.name == axis)
+    speed_unit = next(a.unit for a in m.aux if a.name == command)
     basis = m.parameter(f"controller.{axis}.v_basis")
     err = "m/s" if basis > 0.5 else speed_unit
     return speed_unit, err
@@ -453,16 +454,16 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
     from ..model.mechanisms import mechanism
 
     mech = mechanism(fm.drive)(fm.parameters, fm.drive, fm.table_position, fm.nut_hold)
-    for a in m.aux:
-        axis = a.name.removesuffix("_speed_command")
-        if axis == a.name or f"{axis}_current" not in m.state_names:
+    for c in m.control_axes:  # the controller axes as their loops declared them
+        axis = c.name
+        if c.current not in m.state_names:
             continue
         if axis == "nut" and not fm.nut_inputs:
             continue
         slot, product = mech.motor_output(axis)
         unit = "N" if product.endswith("_force") else "N m"
         v.append(Variable(product, K_PRODUCT, m.parameter_names.index(slot),
-                          m.index(f"{axis}_current"), "output", "continuous", "calculated",
+                          m.index(c.current), "output", "continuous", "calculated",
                           None, unit,
                           f"{axis} motor {'force' if unit == 'N' else 'torque'} "
                           f"({slot.rsplit('.', 1)[-1].replace('_', ' ')} × current)"))

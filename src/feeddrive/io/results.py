@@ -383,9 +383,13 @@ def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
             title += f", parameter set {dataset.attrs['parameter_set']}"
         write_netcdf(cf_attributes(dataset, title=title, action="simulate"), p)
     else:
-        signals = {name: var.values for name, var in dataset.data_vars.items()}
+        signals: dict[str, Any] = {}
+        units: dict[str, Any] = {}
+        for name, var in dataset.data_vars.items():
+            # a machine's <axis>.<signal>: a struct per axis (MATLAB reads s.x.table_position)
+            _nest(signals, str(name), var.values)
+            _nest(units, str(name), var.attrs.get("units", ""))
         signals["time"] = dataset["time"].values
-        units = {name: var.attrs.get("units", "") for name, var in dataset.data_vars.items()}
         units["time"] = "s"
         import scipy.io
 
@@ -394,6 +398,14 @@ def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
                                             "attrs": {k: str(v) for k, v in
                                                       dataset.attrs.items()}}},
                          long_field_names=True, do_compression=True, oned_as="column")
+
+
+def _nest(tree: dict[str, Any], name: str, value: Any) -> None:
+    """``tree[a][b] = value`` for the dotted name ``a.b`` (a .mat struct of structs)."""
+    *path, leaf = name.split(".")
+    for key in path:
+        tree = tree.setdefault(key, {})
+    tree[leaf] = value
 
 
 class ChunkWriter:

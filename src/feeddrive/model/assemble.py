@@ -77,6 +77,9 @@ class Model:
         What the compensator reads and adds; None without compensation.
     clocks : tuple of (str, int), default ()
         The sample schedule: each clock's period slot and its index in ``P``.
+    control_axes : tuple of ControlAxis, default ()
+        Each controller axis' signals and parameter block, as its loops declared them
+        (:class:`feeddrive.model.loops.ControlAxis`).
     derived : tuple of (Signal, str, float), default ()
         Signals a part declares as factor × a state or signal: (signal, source, factor
         [signal unit per source unit]).
@@ -104,6 +107,8 @@ class Model:
     compensation: CompensationFootprint | None = None  # the compensator's reads and adds
     # the sample schedule: (name, index in P of its period [s]) per clock (Builder.clock)
     clocks: tuple[tuple[str, int], ...] = ()
+    # each controller axis' signals and parameter block (loops.ControlAxis)
+    control_axes: tuple[loops.ControlAxis, ...] = ()
 
     @property
     def n_held(self) -> int:
@@ -262,7 +267,7 @@ def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
     if not site.reads:
         raise ValueError(f"friction site {site.name!r}: its mechanism declares no reads of "
                          "its sliding speed (Site.reads)")
-    own = [b.states[k].name for k in range(y_offset, y_offset + len(law.states(params)))]
+    own = [f"{site.name}_{state}" for state in law.states(params)]
     b.flow((f"f_{site.name}", *(f"dy:{s}" for s in own)),
            (*site.reads, *(f"y:{s}" for s in own)))
     return (f"f_{site.name} = {alias}({site.speed}, y, {codegen.index(y_offset)}, P, "
@@ -276,7 +281,7 @@ def _ripple(b: codegen.Builder, parameters: DriveParameters, mech: Any, drive: s
     dist = parameters.disturbances
     claimed = {m.ripple: m for m in mech.drive_motors if m.ripple}
     for m in claimed.values():
-        if m.angle not in b.state_index:
+        if b.q(m.angle) not in b.state_index:
             raise ValueError(f"motor {m.name!r}: its ripple needs its rotor-angle state; "
                              f"{m.angle!r} is no state of the {drive} model")
     for f in dataclasses.fields(dist):
@@ -398,6 +403,40 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
               profile: Profile, load: LoadProfile | None) -> Model:
     b = codegen.Builder()
     b.imports["_friction_law"] = "feeddrive.model.friction:friction_law"
+    laws, comp = declare_drive(b, parameters, drive, table_position, nut_hold, profile, load)
+    return package(b, drive, laws, comp, b.control_axes)
+
+
+def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
+                  table_position: float, nut_hold: str, profile: Profile,
+                  load: LoadProfile | None, *, external_force: bool = False,
+                  speed_correction: bool = False
+                  ) -> tuple[list[tuple[Site, FrictionLaw, int]], CompensationFootprint | None]:
+    """Declare one drive's parts to ``b`` and write their code: the whole of a single-axis
+    model, or one axis of a machine inside :meth:`Builder.scope
+    <feeddrive.model.codegen.Builder.scope>`.
+
+    Parameters
+    ----------
+    b : Builder
+        The model being assembled.
+    parameters, drive, table_position, nut_hold, profile, load
+        As :func:`assemble`.
+    external_force : bool, default False
+        Declare the input signal ``external_force`` [N], a load on the table that a
+        machine's coupling part writes (added to the load force: positive opposes positive
+        motion).
+    speed_correction : bool, default False
+        Declare the input signal ``speed_correction`` [m/s], a table speed a machine's
+        synchronisation part adds to the first axis' continuous speed command.
+
+    Returns
+    -------
+    laws : list of (Site, FrictionLaw, int)
+        Each friction site, its law and its first state's index.
+    compensation : CompensationFootprint or None
+        The compensator's footprint.
+    """
     mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
     mech.declare(b)
     mech.parameters(b)
@@ -417,9 +456,10 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     axes, channels = mech.axes(b)
     loops.declare_states(b, axes)
     for ax in axes:
-        b.tol_scale[f"{ax.name}_velocity_integral"] = b.param_values[ax.param_offset
+        b.tol_scale[b.q(f"{ax.name}_velocity_integral")] = b.param_values[ax.param_offset
                                                                      + loops.H_AX]
     loops.declare_signals(b, axes)
+    b.control_axes += loops.control_axes(b, axes)
     for site, law, _ in laws:
         b.add_aux(f"{site.name}_friction", "N",
                   f"{site.name.replace('_', '–')} friction ({law.name}"
@@ -438,6 +478,13 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     # the linearisation's load-force input [N] (feeddrive.analysis.linear), zero in a simulation
     o_load = b.param("inputs.load_force", 0.0)
     load_code = f"P[{o_load}]" if load_code is None else f"({load_code} + P[{o_load}])"
+    load_reads: tuple[str, ...] = ("t",) if load_aux else ()
+    if external_force:
+        if b.q("external_force") not in b.aux_index:  # or declared by the part writing it
+            b.add_aux("external_force", "N",
+                      "force on the table from the machine's coupling parts")
+        load_code = f"({load_code} + {b.a('external_force')})"
+        load_reads += ("aux:external_force",)
     ripple, ripple_lines, ripple_reads = _ripple(b, parameters, mech, drive)
     lead = emit_harmonics(b, "lead_error", dist.lead_error)
     if lead is not None and not mech.has_lead_screw:
@@ -454,6 +501,19 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
            writes="aux:table_position_reference", reads="reference")
     b.emit(f"{b.a('table_speed_reference')} = ref_v", writes="aux:table_speed_reference",
            reads="reference")
+    if speed_correction:
+        if parameters.controller.position_period > 0:
+            raise ParameterError("controller.position_period",
+                                 parameters.controller.position_period,
+                                 "a synchronisation part corrects a continuous position "
+                                 "loop; expected 0 [s]")
+        if b.q("speed_correction") not in b.aux_index:
+            b.add_aux("speed_correction", "m/s", "table speed added to the speed command by "
+                      "the machine's synchronisation part")
+        h_ax = f"P[{axes[0].param_offset + loops.H_AX}]"
+        axes[0] = dataclasses.replace(
+            axes[0], speed_correction=f"{b.a('speed_correction')} / {h_ax}",
+            speed_correction_reads=("aux:speed_correction",))
     comp = emit_compensation(b, parameters, mech, axes[0].name)
     if comp is not None:
         axes[0] = dataclasses.replace(axes[0], extra_current=comp.current,
@@ -470,7 +530,7 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         b.emit(ln)
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
                   load=load_code, torque_off=parameters.controller.mode == "torque_off",
-                  reads=ripple_reads, load_reads=("t",) if load_aux else ())
+                  reads=ripple_reads, load_reads=load_reads)
     for site, law, first in laws:
         code = _site_code(b, site, law, site.parameters(parameters), first)
         for body, factor in site.bodies:
@@ -491,7 +551,32 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
     b.emit(f"{b.a('drive_force')} = f_d", writes="aux:drive_force", reads="f_d")
     if load_aux:
         b.emit(f"{b.a('load_force')} = {load_code}", writes="aux:load_force", reads="t")
+    return laws, comp
 
+
+def package(b: codegen.Builder, drive: str, laws: list[tuple[Site, FrictionLaw, int]],
+            comp: CompensationFootprint | None,
+            control: tuple[loops.ControlAxis, ...] = ()) -> Model:
+    """Compile what every part declared to ``b`` into a :class:`Model`.
+
+    Parameters
+    ----------
+    b : Builder
+        The builder every part has declared to.
+    drive : str
+        The drive (or machine) name the model is built for.
+    laws : list of (Site, FrictionLaw, int)
+        Each friction site (its model-wide name), its law and first state's index.
+    comp : CompensationFootprint or None
+        The compensator's footprint.
+    control : tuple of ControlAxis, default ()
+        Each controller axis' declarations.
+
+    Returns
+    -------
+    Model
+        The assembled model.
+    """
     source = codegen.module_source(b)
     module = codegen.compile_module(source, b.dynamic_sources)
     pattern = sparsity.declared_pattern([s.name for s in b.states], [a.name for a in b.aux],
@@ -505,7 +590,8 @@ def _assemble(parameters: DriveParameters, drive: str, table_position: float, nu
         sites=tuple((site.name, law.name) for site, law, _ in laws),
         jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
         derived=tuple(b.derived), clocks=tuple(b.clocks),
-        flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp)
+        flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp,
+        control_axes=tuple(control))
 
 
 def __getattr__(name: str) -> Any:

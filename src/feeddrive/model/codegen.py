@@ -15,9 +15,11 @@ process loads it without compiling, and a change in any part's kernel gives a ne
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import inspect
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from types import ModuleType
 from typing import Any
@@ -100,6 +102,12 @@ class Builder:
         Declared clocks: period slot and its index in ``P`` (:meth:`clock`).
     state_index, aux_index, param_index : dict of str to int
         Name → index in ``y``, ``aux`` and ``P``.
+    namespace : str
+        The scope being declared (:meth:`scope`); empty outside any.
+    control_axes : tuple of ControlAxis
+        The controller axes' declarations (:class:`feeddrive.model.loops.ControlAxis`).
+    scoped_rhs, scoped_sample : dict of str to list of str
+        Each scope's own right-hand-side and sampled-update lines.
     """
 
     states: list[Signal] = field(default_factory=list)
@@ -124,6 +132,80 @@ class Builder:
     state_index: dict[str, int] = field(default_factory=dict)
     aux_index: dict[str, int] = field(default_factory=dict)
     param_index: dict[str, int] = field(default_factory=dict)
+    # the part of a machine being declared (``scope``): its names are qualified
+    # ``<scope>.<name>`` and its code goes into functions of its own
+    namespace: str = ""
+    # the controller axes' declarations (feeddrive.model.loops.ControlAxis), model-wide names
+    control_axes: tuple[Any, ...] = ()
+    scoped_rhs: dict[str, list[str]] = field(default_factory=dict)
+    scoped_sample: dict[str, list[str]] = field(default_factory=dict)
+
+    # ---- names
+    def q(self, name: str) -> str:
+        """The model-wide name of ``name`` as the part being declared calls it: itself
+        outside a :meth:`scope`, ``<scope>.<name>`` inside one (``"x.table_speed"``).
+
+        Parameters
+        ----------
+        name : str
+            A state, signal, parameter, held value or part-level name.
+
+        Returns
+        -------
+        str
+            The qualified name.
+        """
+        return f"{self.namespace}.{name}" if self.namespace and name != "t" else name
+
+    def _qflow(self, name: str) -> str:
+        kind, sep, rest = name.partition(":")
+        if sep and kind in ("y", "dy", "aux"):
+            return f"{kind}:{self.q(rest)}"
+        return self.q(name)
+
+    def call_scope(self, name: str) -> None:
+        """Run scope ``name``'s functions here, in the right-hand side and the sampled update.
+
+        Parameters
+        ----------
+        name : str
+            A scope declared with ``scope(name, call=False)``.
+        """
+        self.rhs_lines.append(f"_rhs_{name}(t, y, held, P, T, dy, aux)")
+        self.sample_lines.append(f"_sample_{name}(t, y, held, P, T, tick)")
+
+    @contextlib.contextmanager
+    def scope(self, name: str, *, call: bool = True) -> Iterator[None]:
+        """Declare one part of a machine (an axis): inside, every name is qualified
+        ``<name>.…`` (:meth:`q`) and the code lines go into the scope's own functions
+        ``_rhs_<name>`` and ``_sample_<name>``, called where the scope opens (their local
+        variables — ``ref_x``, ``f_d`` … — stay the axis' own).
+
+        Parameters
+        ----------
+        name : str
+            The scope's name, an identifier (``"x"``).
+        call : bool, default True
+            Call its functions where the scope opens; False: where :meth:`call_scope` says
+            (a machine declares every axis first and runs them in the order its parts need).
+
+        Raises
+        ------
+        ValueError
+            For a name that is no identifier, a scope opened twice or inside another.
+        """
+        if not name.isidentifier() or self.namespace or name in self.scoped_rhs:
+            raise ValueError(f"scope {name!r}: expected a new identifier outside any scope")
+        if call:
+            self.call_scope(name)
+        self.scoped_rhs[name], self.scoped_sample[name] = [], []
+        saved = self.reference_call
+        self.namespace = name
+        try:
+            yield
+        finally:
+            self.namespace = ""
+            self.reference_call = saved
 
     # ---- slots
     def state(self, name: str, unit: str, description: str, kind: str,
@@ -156,6 +238,7 @@ class Builder:
         ValueError
             When the name is declared twice or the kind is unknown.
         """
+        name = self.q(name)
         self.tol_scale[name] = scale
         if name in self.state_index:
             raise ValueError(f"state {name!r} declared twice")
@@ -178,7 +261,7 @@ class Builder:
         str
             The index expression, e.g. ``"y[4]"``.
         """
-        return f"y[{self.state_index[name]}]"
+        return f"y[{self.state_index[self.q(name)]}]"
 
     def dy(self, name: str) -> str:
         """Code that reads the rate of state ``name`` in the generated kernels.
@@ -195,7 +278,7 @@ class Builder:
         str
             The index expression, e.g. ``"dy[4]"``.
         """
-        return f"dy[{self.state_index[name]}]"
+        return f"dy[{self.state_index[self.q(name)]}]"
 
     def param(self, name: str, value: float) -> int:
         """Register a named parameter.
@@ -217,6 +300,7 @@ class Builder:
         ValueError
             When the name is declared twice.
         """
+        name = self.q(name)
         if name in self.param_index:
             raise ValueError(f"parameter {name!r} declared twice")
         self.param_index[name] = len(self.param_values)
@@ -289,7 +373,7 @@ class Builder:
         str
             The index expression, e.g. ``"P[4]"``.
         """
-        return f"P[{self.param_index[name]}]"
+        return f"P[{self.param_index[self.q(name)]}]"
 
     def add_aux(self, name: str, unit: str, description: str) -> int:
         """Declare an auxiliary output (a signal the right-hand side computes and the run records).
@@ -313,6 +397,7 @@ class Builder:
         ValueError
             When the name is declared twice.
         """
+        name = self.q(name)
         if name in self.aux_index:
             raise ValueError(f"auxiliary signal {name!r} declared twice")
         self.aux_index[name] = len(self.aux)
@@ -343,6 +428,7 @@ class Builder:
         ValueError
             When the name is already a state or signal.
         """
+        name, source = self.q(name), self.q(source)
         if name in self.aux_index or name in self.state_index:
             raise ValueError(f"derived signal {name!r} is already a state or signal")
         self.derived.append((Signal(name, unit, description), source, float(factor)))
@@ -360,7 +446,7 @@ class Builder:
         str
             The index expression, e.g. ``"aux[4]"``.
         """
-        return f"aux[{self.aux_index[name]}]"
+        return f"aux[{self.aux_index[self.q(name)]}]"
 
     def add_held(self, name: str) -> str:
         """Declare a value a sampled controller holds between its updates.
@@ -375,7 +461,7 @@ class Builder:
         str
             The index expression in ``held``, e.g. ``"held[2]"``.
         """
-        self.held.append(name)
+        self.held.append(self.q(name))
         return f"held[{len(self.held) - 1}]"
 
     def h(self, name: str) -> str:
@@ -391,7 +477,7 @@ class Builder:
         str
             The index expression, e.g. ``"held[4]"``.
         """
-        return f"held[{self.held.index(name)}]"
+        return f"held[{self.held.index(self.q(name))}]"
 
     def clock(self, name: str) -> int:
         """Declare a sampled part's clock, its period [s] the parameter slot ``name`` (0: the
@@ -418,6 +504,7 @@ class Builder:
         ValueError
             When the clock is declared twice.
         """
+        name = self.q(name)
         if any(n == name for n, _ in self.clocks):
             raise ValueError(f"clock {name!r} declared twice")
         self.clocks.append((name, self.param_index[name]))
@@ -436,7 +523,7 @@ class Builder:
         str
             E.g. ``"tick[1]"``.
         """
-        return f"tick[{[n for n, _ in self.clocks].index(name)}]"
+        return f"tick[{[n for n, _ in self.clocks].index(self.q(name))}]"
 
     def table(self, values: np.ndarray) -> int:
         """Append a flat data table (tabulated profile, load record) to ``T``.
@@ -519,8 +606,8 @@ class Builder:
             ``"t"``, ``"aux:<signal>"`` or a part-level name that some part writes.  Parameters,
             held (sampled) values and tables are constants of a call and are not listed.
         """
-        ws = (writes,) if isinstance(writes, str) else tuple(writes)
-        rs = (reads,) if isinstance(reads, str) else tuple(reads)
+        ws = tuple(self._qflow(w) for w in ((writes,) if isinstance(writes, str) else writes))
+        rs = tuple(self._qflow(r) for r in ((reads,) if isinstance(reads, str) else reads))
         for w in ws:
             if w == "t" or w.startswith("y:"):
                 raise ValueError(f"flow: {w!r} is an input of the right-hand side, not written")
@@ -542,7 +629,11 @@ class Builder:
         reads : str or sequence of str, optional
             What those values are computed from.
         """
-        (self.sample_lines if sampled else self.rhs_lines).append(line)
+        if self.namespace:
+            scoped = self.scoped_sample if sampled else self.scoped_rhs
+            scoped[self.namespace].append(line)
+        else:
+            (self.sample_lines if sampled else self.rhs_lines).append(line)
         if writes:
             self.flow(writes, reads)
         elif reads:
@@ -673,6 +764,21 @@ def module_source(builder: Builder) -> str:
         f"N_CLOCK = {max(1, len(builder.clocks))}",
         "",
         "",
+    ]
+    for name in builder.scoped_rhs:  # a machine's parts, each in functions of its own
+        head += [
+            "@kernel",
+            f"def _rhs_{name}(t, y, held, P, T, dy, aux):",
+            _indent(builder.scoped_rhs[name] or ["pass"]),
+            "",
+            "",
+            "@kernel",
+            f"def _sample_{name}(t, y, held, P, T, tick):",
+            _indent(builder.scoped_sample[name] or ["pass"]),
+            "",
+            "",
+        ]
+    head += [
         "@kernel",
         rhs_source(builder),
         "",

@@ -300,6 +300,11 @@ class Axis:
     current_feedforward : str, default ""
         Code of a current added to the command in every loop configuration (a feed-forward
         part), saturated with it [A].
+    speed_correction : str, default ""
+        Code of a speed added to the continuous speed command (a machine's synchronisation
+        part) [rad/s].
+    speed_correction_reads : tuple of str, default ()
+        What ``speed_correction`` is computed from (``Builder.flow`` names).
     position_reads : tuple of str, default ()
         What the continuous ``position`` code is computed from (``Builder.flow`` names).
     speed_reads : tuple of str, default ()
@@ -330,6 +335,10 @@ class Axis:
     speed_reads: tuple[str, ...] = ()
     current_reads: tuple[str, ...] = ()
     extra_reads: tuple[str, ...] = ()  # of extra_current (current_feedforward: held only)
+    # code of a speed [rad/s] added to the continuous speed command (a machine's
+    # synchronisation part writes it) and what it is computed from
+    speed_correction: str = ""
+    speed_correction_reads: tuple[str, ...] = ()
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
@@ -417,6 +426,58 @@ def declare_states(b: Builder, axes: list[Axis]) -> None:
                 "current_integral")
 
 
+@dataclass(frozen=True)
+class ControlAxis:
+    """What a controller axis declares to its consumers (the linearisation, the FMU): the
+    names of its signals and where its parameter block starts — read from the model, never
+    rebuilt from a naming rule.
+
+    Parameters
+    ----------
+    name : str
+        The axis' name (``"screw"``, ``"motor"``).
+    speed_command : str
+        Its speed-command signal (auxiliary output) [rad/s or m/s].
+    current_command : str
+        Its current-command signal [A].
+    current : str
+        The motor-current state it drives [A].
+    block : int
+        Offset of its parameter block (:data:`AXIS_PARAMS`) in ``P``; ``block + INJ_SPEED``
+        and ``block + INJ_CURRENT`` are the linearisation's injection slots.
+    """
+
+    name: str
+    speed_command: str
+    current_command: str
+    current: str
+    block: int
+
+
+def control_axes(b: Builder, axes: list[Axis]) -> tuple[ControlAxis, ...]:
+    """The declarations of every axis (after :func:`declare_signals`), model-wide names.
+
+    Parameters
+    ----------
+    b : Builder
+        The model builder.
+    axes : list of Axis
+        The mechanism's axes.
+
+    Returns
+    -------
+    tuple of ControlAxis
+        One per axis, in order.
+    """
+    out = []
+    for ax in axes:
+        current = [r.removeprefix("y:") for r in ax.current_reads if r.startswith("y:")]
+        out.append(ControlAxis(ax.name, b.q(f"{ax.name}_speed_command"),
+                               b.q(f"{ax.name}_current_command"), b.q(current[0]),
+                               ax.param_offset))
+    return tuple(out)
+
+
 def declare_signals(b: Builder, axes: list[Axis]) -> None:
     """Declare the cascade's outputs (speed and current commands, voltages) and the values a
     sampled loop holds between its updates.
@@ -465,17 +526,18 @@ def _speed_law(b: Builder, ax: Axis) -> str:
 def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) -> None:
     """Speed and current commands of every axis into ``target`` (aux array expression)."""
     P = "P"
-    sc = [f"{target}[{b.aux_index[f'{ax.name}_speed_command']}]" for ax in axes]
-    ic = [f"{target}[{b.aux_index[f'{ax.name}_current_command']}]" for ax in axes]
+    sc = [f"{target}[{b.aux_index[b.q(f'{ax.name}_speed_command')]}]" for ax in axes]
+    ic = [f"{target}[{b.aux_index[b.q(f'{ax.name}_current_command')]}]" for ax in axes]
     verr, sat, ccmd = b.use(velocity_error), b.use(saturate), b.use(current_command)
     out.append(f"if {_period(b, 'position')} > 0.0:")
     for ax, s in zip(axes, sc, strict=True):
         out.append(f"    {s} = {b.h(ax.name + '.speed_command')}")
     out.append("else:")
     for ax, s in zip(axes, sc, strict=True):
+        extra = f" + {ax.speed_correction}" if ax.speed_correction and target == "aux" else ""
         out.append(f"    {s} = {_speed_law(b, ax)}({ax.reference} - {ax.position}, "
                    f"{ax.feedforward}, {P}, {ax.param_offset}) + "
-                   f"{P}[{ax.param_offset + INJ_SPEED}]")
+                   f"{P}[{ax.param_offset + INJ_SPEED}]{extra}")
     out.append(f"if {_period(b, 'velocity')} > 0.0:")
     for ax, c in zip(axes, ic, strict=True):
         held = b.h(ax.name + '.current_command')
@@ -483,9 +545,8 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
                    f"{P}[{ax.param_offset + I_MAX}])" if ax.current_feedforward
                    else f"    {c} = {held}")
     out.append("else:")
-    for ax in axes:
-        out.append(f"    e_{ax.name} = {verr}({target}[{b.aux_index[ax.name + '_speed_command']}], "
-                   f"{ax.speed}, {P}, {ax.param_offset})")
+    for ax, s in zip(axes, sc, strict=True):
+        out.append(f"    e_{ax.name} = {verr}({s}, {ax.speed}, {P}, {ax.param_offset})")
     for ax, c in zip(axes, ic, strict=True):
         o = ax.param_offset
         # compensation is continuous-only (refused with sampled loops): right-hand side only
@@ -506,7 +567,8 @@ def _declare_flows(b: Builder, axes: list[Axis]) -> None:
         if ax.extra_current and not ax.extra_reads:
             raise ValueError(f"axis {ax.name!r}: extra_current without extra_reads")
         n = ax.name
-        b.flow(f"aux:{n}_speed_command", ("reference", *ax.position_reads))
+        b.flow(f"aux:{n}_speed_command",
+               ("reference", *ax.position_reads, *ax.speed_correction_reads))
         b.flow(f"dy:{n}_velocity_integral",
                (f"aux:{n}_speed_command", *ax.speed_reads, f"y:{n}_velocity_integral"))
         b.flow(f"aux:{n}_current_command",
@@ -615,7 +677,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     s += ["    " + ln for ln in cmd_lines]
     for ax in axes:
         s += _guarded(ax, _sampled_pi(
-            f"cmd[{b.aux_index[ax.name + '_current_command']}] - {ax.current_state}", vcmd,
+            f"cmd[{b.aux_index[b.q(ax.name + '_current_command')]}] - {ax.current_state}", vcmd,
             b.h(ax.name + ".current_integral"), b.h(ax.name + ".voltage"), ax.param_offset,
             U_MAX, rate, sat, "tc", "u_raw"))
     for ln in s:

@@ -115,7 +115,8 @@ def slot_unit(model: Model, name: str) -> str:
 def _axis_unit(model: Model, axis: str, slot: str) -> str:
     if slot in AXIS_SLOT_UNITS:
         return AXIS_SLOT_UNITS[slot]
-    speed = next((s.unit for s in model.aux if s.name == f"{axis}_speed_command"), "rad/s")
+    command = next((c.speed_command for c in model.control_axes if c.name == axis), "")
+    speed = next((s.unit for s in model.aux if s.name == command), "rad/s")
     if slot == "inj_speed":
         return speed
     if slot == "H":

@@ -353,7 +353,7 @@ class BallScrewDrive(Mechanism):
         for ln in m.always:
             b.emit(ln)
         k_eq = b.use(equivalent_stiffness_kernel)
-        o_stiff = b.param_index[f"stiffness.{STIFFNESS_SLOTS[0]}"]  # the block's first slot
+        o_stiff = b.param_index[b.q(f"stiffness.{STIFFNESS_SLOTS[0]}")]  # the block's first slot
         b.emit(f"k_eq = {k_eq}({b.y('table_position')}, P, {o_stiff})", writes="k_eq",
                reads="y:table_position")
         c_ax = b.p("stiffness.axial_damping")

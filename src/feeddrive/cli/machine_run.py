@@ -1,0 +1,180 @@
+"""`feeddrive simulate --machine FILE`: a machine of axes following a contour."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import typer
+
+from ._common import console, err_console, interrupted, print_json
+
+#: the contour kinds (feeddrive.machine.CONTOURS; the machine package loads numba)
+CONTOURS = ("circle", "line", "corner", "csv", "together")
+MM_PER_MIN = 1e-3 / 60.0  # [m/s] per mm/min
+
+
+def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
+                acceleration: float, clockwise: bool, start_angle: float, turns: float,
+                length: float, angle: float, contour_file: str | None,
+                duration: float | None, options: Any, output: str | None,
+                plot: str | None, as_json: bool) -> None:
+    """Parse the contour options (mm, mm/min, mm/s², degrees), run, save and print.
+
+    Parameters
+    ----------
+    machine_file : str
+        A machine file or built-in machine name.
+    contour : str
+        circle, line, corner or csv.
+    radius : float
+        Circle (corner blend) radius [mm].
+    feed : float
+        Path feed [mm/min].
+    acceleration : float
+        Lead-in and lead-out acceleration [mm/s^2].
+    clockwise : bool
+        Circle sense.
+    start_angle : float
+        Circle start angle [deg].
+    turns : float
+        Circle revolutions [-].
+    length : float
+        Line (corner leg) length [mm].
+    angle : float
+        Line direction, corner turn [deg].
+    contour_file : str or None
+        CSV path file.
+    duration : float or None
+        Simulated time [s]; None: the contour's.
+    options : SolverOptions
+        Integrator settings.
+    output : str or None
+        Result file.
+    plot : str or None
+        Figure file.
+    as_json : bool
+        Print the summary as JSON.
+    """
+    from ..engine.simulate import SimulationError, SimulationInterrupted
+    from ..machine import load_machine, machine_summary, make_contour, simulate_machine
+    from ..parameters import ParameterError
+
+    for option, value, unit in (("--radius", radius, "mm"), ("--feed", feed, "mm/min"),
+                                ("--acceleration", acceleration, "mm/s^2"),
+                                ("--turns", turns, "-"), ("--length", length, "mm")):
+        if not (math.isfinite(value) and value > 0):
+            raise ParameterError(option, value, f"expected a positive number [{unit}]")
+    if contour not in CONTOURS:
+        raise ParameterError("--contour", contour, f"expected one of {', '.join(CONTOURS)}")
+    machine = load_machine(machine_file)
+    path = make_contour(contour, feed=feed * MM_PER_MIN, acceleration=acceleration * 1e-3,
+                        radius=radius * 1e-3, clockwise=clockwise,
+                        start_angle=math.radians(start_angle), turns=turns,
+                        length=length * 1e-3, angle=math.radians(angle),
+                        path_file=contour_file)
+    if duration is not None and not duration > 0:
+        raise ParameterError("--duration", duration, "expected a time > 0 [s]")
+    from ..engine.budget import check_output_memory, run_budget
+
+    # bounded work, as for one drive: refused before any step when the steps cannot fit
+    t_end = path.duration if duration is None else duration
+    budget = run_budget(t_end, max_step=options.largest_step,
+                        output_interval=options.output_interval, max_steps=options.max_steps)
+    if budget.steps_exceeded:
+        raise ParameterError("--duration", t_end, f"needs at least {budget.min_steps:.3g} "
+                             f"solver steps, more than --max-steps = {options.max_steps:.3g}; "
+                             f"expected ≤ {budget.longest_duration:g} [s]")
+    check_output_memory(t_end, options.output_interval)
+    try:
+        result = simulate_machine(machine, path, duration, options=options)
+    except SimulationError as err:
+        err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    except SimulationInterrupted as stop:
+        err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
+                          soft_wrap=True)
+        raise interrupted() from None
+    summary = machine_summary(result, machine, path)
+    if output:
+        summary["output"] = str(result.save(output))
+    if plot and contour == "together":
+        raise ParameterError("--plot", plot, "no XY path to draw for --contour together "
+                             "(write --output and plot its signals)")
+    if plot:
+        from ..plots.machine import plot_machine
+
+        summary["plot"] = str(plot_machine(result, path, plot, title=(
+            f"{machine.name}: {contour}, F = {feed:g} mm/min")))
+    if as_json:
+        print_json(summary)
+        return
+    um = 1e6
+    lines = [f"machine {machine.name}: {contour} at {feed:g} mm/min, "
+             f"{result.time[-1]:g} s simulated"]
+    for name, ax in summary["axes"].items():
+        lines.append(f"  axis {name} ({ax['drive']}, {ax['parameter_set']}): largest "
+                     f"following error {ax['following_error_max'] * um:.4g} µm")
+    if contour != "together":
+        lines.append(f"  contour error {summary['contour_error_min'] * um:.4g} … "
+                     f"{summary['contour_error_max'] * um:.4g} µm")
+    if "roundness" in summary:
+        lines.append(f"  mean radius reduction {summary['radius_reduction'] * um:.4g} µm, "
+                     f"roundness {summary['roundness'] * um:.4g} µm (after the lead-in)")
+    for key in ("output", "plot"):
+        if key in summary:
+            lines.append(f"  {key}: {summary[key]}")
+    for ln in lines:
+        console.print(ln, markup=False, highlight=False, soft_wrap=True)
+
+
+def run_machine_loops(machine_file: str, *, table_speed: float, with_friction: bool,
+                      as_json: bool) -> None:
+    """`loops --machine`: each axis' loops, then the MIMO loop's size, poles and coupling.
+
+    Parameters
+    ----------
+    machine_file : str
+        A machine file or built-in machine name.
+    table_speed : float
+        Operating point of every axis [mm/s].
+    with_friction : bool
+        Linearise with the friction laws at steady sliding.
+    as_json : bool
+        Print JSON.
+    """
+    from ..analysis.linear import classify_poles
+    from ..machine import load_machine
+    from ..machine.linear import axis_loops, cross_coupling, linearize_machine
+    from ._loops_text import print_loops
+
+    machine = load_machine(machine_file)
+    v = table_speed * 1e-3
+    per_axis = {name: r.as_dict() for name, r in
+                axis_loops(machine, v, frictionless=not with_friction).items()}
+    lin = linearize_machine(machine, {ax.name: v for ax in machine.axes},
+                            frictionless=not with_friction)
+    mimo_poles = [p.as_dict() for p in classify_poles(lin.poles())]
+    coupling = cross_coupling(lin)
+    mimo = {"inputs": list(lin.inputs), "outputs": list(lin.outputs),
+            "states": len(lin.states), "notes": list(lin.notes), "poles": mimo_poles,
+            "cross_coupling_peak": coupling}
+    if as_json:
+        print_json({"machine": machine.name, "axes": per_axis, "mimo": mimo})
+        return
+    for ax in machine.axes:
+        print_loops(f"axis {ax.name} ({ax.drive})", ax.parameters.name, table_speed,
+                    with_friction, per_axis[ax.name])
+    say = lambda text: console.print(text, markup=False, highlight=False,  # noqa: E731
+                                     soft_wrap=True)
+    say(f"MIMO loop of {machine.name}: {len(lin.states)} states, inputs "
+        f"{', '.join(lin.inputs)}; outputs {', '.join(lin.outputs)}")
+    for note in lin.notes:
+        say(f"  {note}")
+    damped = sorted((p for p in mimo_poles  # each complex pair once
+                     if p["kind"] != "rigid-body" and p["imag_rad_per_s"] >= 0.0),
+                    key=lambda p: p["damping_ratio"])[:3]
+    for p in damped:
+        say(f"  {p['kind']:12s} {p['frequency_hz']:10.4g} Hz  ζ = {p['damping_ratio']:.4g}")
+    for pair, gain in coupling.items():
+        say(f"  cross-coupling {pair}: peak |position/reference| {gain:.3g}")

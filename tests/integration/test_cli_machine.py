@@ -1,0 +1,139 @@
+"""`feeddrive simulate --machine` and `params show|check` on a machine file (issue 40)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import scipy.io
+import xarray as xr
+from typer.testing import CliRunner
+
+from feeddrive.cli import app
+
+runner = CliRunner()
+
+MACHINE = """\
+name = "xy-carry"
+extends = "xy-table"
+
+[axes.y]
+drive = "linear-motor"
+extends = "linear-motor-example"
+
+[couplings.carry]
+part = "inertial"
+source = "x"
+target = "y"
+mass = 20.0
+"""
+
+
+def test_a_machine_run_is_saved_in_all_four_formats_with_axis_dot_signal_names(
+        tmp_path: Path) -> None:
+    machine = tmp_path / "machine.toml"
+    machine.write_text(MACHINE)
+    args = ["simulate", "--machine", str(machine), "--contour", "line", "--length", "5",
+            "--feed", "3000", "--angle", "30", "--duration", "0.2"]
+    r = runner.invoke(app, [*args, "--json", "--output", str(tmp_path / "run.nc"),
+                            "--plot", str(tmp_path / "run.png")])
+    assert r.exit_code == 0, r.output
+    summary = json.loads(r.output)
+    assert summary["axes"]["y"]["drive"] == "linear-motor"
+    assert (tmp_path / "run.png").stat().st_size > 0
+    ds = xr.open_dataset(tmp_path / "run.nc")
+    assert ds["x.table_position"].attrs["units"] == "m"
+    assert ds["y.external_force"].attrs["units"] == "N"
+    assert ds["contour_error"].attrs["units"] == "m"
+    assert json.loads(ds.attrs["axes"])["y"]["drive"] == "linear-motor"
+    for ext in (".csv", ".parquet", ".mat"):
+        out = tmp_path / f"run{ext}"
+        r = runner.invoke(app, [*args, "--output", str(out)])
+        assert r.exit_code == 0, r.output
+        if ext == ".mat":  # SI, a units struct beside the signals
+            mat = scipy.io.loadmat(out, squeeze_me=True, simplify_cells=True)["feeddrive"]
+            # a struct per axis: MATLAB reads feeddrive.x.table_position
+            np.testing.assert_allclose(mat["x"]["table_position"],
+                                       ds["x.table_position"].to_numpy())
+            assert mat["units"]["x"]["table_position"] == "m"
+            continue
+        if ext == ".csv":  # mm, the unit in each column name
+            frame = pd.read_csv(out, comment="#")
+            column = "x.table_position [mm]"
+        else:  # mm, plain names, the unit in the schema (pandas' attrs)
+            frame = pd.read_parquet(out)
+            column = "x.table_position"
+            assert "contour_error" in frame.columns
+        np.testing.assert_allclose(frame[column].to_numpy(),
+                                   ds["x.table_position"].to_numpy() * 1e3, rtol=1e-6,
+                                   atol=1e-9)
+
+
+def test_a_bad_machine_file_is_refused_in_one_line_with_exit_2(tmp_path: Path) -> None:
+    machine = tmp_path / "bad.toml"
+    machine.write_text(MACHINE.replace('source = "x"', 'source = "z"'))
+    r = runner.invoke(app, ["simulate", "--machine", str(machine)])
+    assert r.exit_code == 2
+    lines = [ln for ln in r.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "der(z.table_speed)" in lines[0], r.output
+
+
+def test_params_check_and_show_a_machine_file(tmp_path: Path) -> None:
+    machine = tmp_path / "machine.toml"
+    machine.write_text(MACHINE)
+    r = runner.invoke(app, ["params", "check", "--machine", str(machine)])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["params", "show", "--machine", str(machine)])
+    assert r.exit_code == 0, r.output
+    assert "[axes.x]" in r.output and "[axes.y]" in r.output and "carry" in r.output
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "b"\n[axes.x]\nextends = "nope"\n[axes.y]\ndrive = "linear-motor"\n'
+                   '[axes.y.table]\nmass = -1\n')
+    r = runner.invoke(app, ["params", "check", "--machine", str(bad)])
+    assert r.exit_code == 2
+    lines = [ln for ln in r.output.splitlines() if ln.strip()]
+    assert len(lines) == 2, r.output
+    assert "axes.x.extends" in lines[0] and "axes.y.table.mass" in lines[1]
+
+
+def test_loops_machine_gives_each_axis_and_the_mimo_loop_with_its_coupling() -> None:
+    r = runner.invoke(app, ["loops", "--machine", "xy-table", "--json"])
+    assert r.exit_code == 0, r.output
+    plain = json.loads(r.output)
+    assert set(plain["axes"]) == {"x", "y"}
+    assert plain["mimo"]["cross_coupling_peak"] == {"x -> y": 0.0, "y -> x": 0.0}
+
+
+def test_loops_machine_shows_a_coupling_part(tmp_path: Path) -> None:
+    machine = tmp_path / "machine.toml"
+    machine.write_text('name = "c"\nextends = "xy-table"\n[couplings.carry]\n'
+                       'part = "inertial"\nmass = 30.0\n')
+    r = runner.invoke(app, ["loops", "--machine", str(machine), "--json"])
+    assert r.exit_code == 0, r.output
+    mimo = json.loads(r.output)["mimo"]
+    # x's acceleration pushes y: a command of x moves y, not the other way round
+    assert mimo["cross_coupling_peak"]["x -> y"] > 1e-4
+    assert mimo["cross_coupling_peak"]["y -> x"] < 1e-9  # rounding of the linear solve
+    assert mimo["notes"]
+
+
+def test_work_beyond_the_bounds_is_refused_before_any_step() -> None:
+    for args, field in ((["--turns", "1e6"], "duration"),
+                        (["--turns", "100"], "contour.duration"),
+                        (["--feed", "-5"], "--feed"),
+                        (["--contour", "spiral"], "--contour")):
+        r = runner.invoke(app, ["simulate", "--machine", "xy-table", *args])
+        assert r.exit_code == 2, r.output
+        lines = [ln for ln in r.output.splitlines() if ln.strip()]
+        assert len(lines) == 1 and f"{field} = " in lines[0], r.output
+
+
+def test_the_gantry_moves_its_carriages_together() -> None:
+    r = runner.invoke(app, ["simulate", "--machine", "gantry", "--contour", "together",
+                            "--length", "5", "--feed", "600", "--json"])
+    assert r.exit_code == 0, r.output
+    summary = json.loads(r.output)
+    assert set(summary["axes"]) == {"x1", "x2"} and "contour_error_max" not in summary
+    assert 0 < summary["axes"]["x1"]["following_error_max"] < 1e-3
