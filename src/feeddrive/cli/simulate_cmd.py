@@ -110,7 +110,7 @@ def simulate_command(
                                    "clockwise (G02)."),
     start_angle: float = typer.Option(0.0, "--start-angle", help="--machine: circle start "
                                       "angle [deg]."),
-    turns: float = typer.Option(1.0, "--turns", help="--machine: circle revolutions."),
+    turns: float = typer.Option(1.0, "--turns", help="--machine: circle revolutions [rev]."),
     length: float = typer.Option(100.0, "--length", help="--machine: line length, corner "
                                  "leg length, travel of --contour together [mm]."),
     angle: float = typer.Option(0.0, "--angle", help="--machine: line direction, corner "
