@@ -91,7 +91,8 @@ def radau_states(params: Any, drive: str, profile: Any, duration: float, rtol: f
     atol = (tolerances(model.H) if default else model.tolerances()) * atol_scale
     n = int(round(duration / OUTPUT_INTERVAL))
     grid = np.arange(n + 1) * OUTPUT_INTERVAL
-    cuts = [0.0, profile.ramp_time, duration] if profile.ramp_time > 0 else [0.0, duration]
+    ramp = getattr(profile, "ramp_time", 0.0)  # a SineSpeed has no kink
+    cuts = [0.0, ramp, duration] if ramp > 0 else [0.0, duration]
     y0 = np.zeros(model.n_state)
     ys, ts = [], []
     stats = {"nfev": 0.0, "njev": 0.0, "nlu": 0.0}

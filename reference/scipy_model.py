@@ -15,8 +15,8 @@ read.  It serves as
 
 Scope: now covers
 
-* the three topologies: CDFS and DDFS (ball screw; CDFS nut ``locked`` or on its ``servo``)
-  and the linear-motor direct drive;
+* the topologies: CDFS and DDFS (ball screw; CDFS nut ``locked`` or on its ``servo``),
+  the linear-motor direct drive and the rack and pinion (continuous loops);
 * per friction site the laws ``lugre``, ``stribeck`` (smoothed static), ``dahl``,
   ``gms`` (generalized Maxwell slip, Al-Bender, Lampaert & Swevers 2005) and ``none``; the
   ball–nut share f of the screw-shaft friction; and, for truths the fit's model lacks, a
@@ -127,7 +127,7 @@ STATE_NAMES = (
 )
 N_STATE = len(STATE_NAMES)
 
-DRIVES = ("cdfs", "ddfs", "linear-motor")
+DRIVES = ("cdfs", "ddfs", "linear-motor", "rack-pinion")
 
 
 # ---------------------------------------------------------------- friction laws
@@ -525,6 +525,7 @@ class ReferenceModel:
         # per LuGre site name, a Stribeck exponent other than 2 (a truth the fit lacks)
         self.stribeck_exponents = dict(stribeck_exponents or {})
         self.linear = drive == "linear-motor"
+        self.rack = drive == "rack-pinion"
         self.nut_active = drive == "ddfs" or nut_hold == "servo"
         c = params.controller
         self.c = c
@@ -542,6 +543,8 @@ class ReferenceModel:
         names: list[str] = []
         if self.linear:
             self._linear_motor(params, names)
+        elif self.rack:
+            self._rack_pinion(params, names)
         else:
             self._ball_screw(params, names)
         self.state_names = tuple(names)
@@ -659,6 +662,39 @@ class ReferenceModel:
                           n, n + 1, n + 2)]
         self.channels = {"table": (0, 1)}
 
+    def _rack_pinion(self, params: DriveParameters, names: list[str]) -> None:
+        """Motor → gearbox → pinion → rack on the table, from the equations of
+        ``feeddrive.model.mechanisms.rack_pinion``'s docstring: a tooth-mesh spring
+        k_m·(H·θ_m − x_t) + c_m·(H·ω_m − v_t) between the pinion's pitch line and the table,
+        H = r_p/G; the gearbox friction a site at the motor shaft evaluated at H·ω_m and
+        acting as torque H·F; one axis (position from the table, speed from the motor or,
+        ``velocity_feedback = "table"``, v_t/H); continuous loops only."""
+        rp = params.section("rack_pinion")
+        if rp is None:
+            raise ValueError("the rack-pinion drive needs a [rack_pinion] section")
+        for label, series in (("screw_motor_ripple", self.screw_ripple),
+                              ("hollow_motor_ripple", self.nut_ripple),
+                              ("lead_error", self.lead_error)):
+            if series is not None:
+                raise ValueError(f"disturbances.{label}: the rack-pinion drive has none")
+        c = params.controller
+        if max(c.position_period, c.velocity_period, c.current_period) > 0.0:
+            raise ValueError("the reference's rack and pinion has continuous loops only")
+        self.H = rp.pinion_radius / rp.gear_ratio
+        self.J_m = rp.motor.inertia + rp.gearbox_inertia + rp.pinion_inertia / rp.gear_ratio ** 2
+        self.m_t = params.table.mass
+        self.rack_section = rp
+        names += ["motor_angle", "motor_speed", "table_position", "table_speed"]
+        self.gearbox_site, self.guide_site = self._friction_sites(
+            params, names, [("gearbox", rp.gearbox_friction, 1.0),
+                            ("guide", params.friction.guide, 1.0)])
+        n = len(names)
+        names += ["motor_current", "motor_velocity_integral", "motor_current_integral"]
+        speed = ((3, 1.0 / self.H),) if c.velocity_feedback == "table" else ((1, 1.0),)
+        self.axes = [Axis("motor", self.H, False, (2, 1.0), 0, (1.0, 0.0), speed,
+                          n, n + 1, n + 2)]
+        self.channels = {"motor_angle": (0, 1), "table": (2, 3)}
+
     # ------------------------------------------------------------ pieces
 
     def _chain(self, a: float) -> float:
@@ -767,6 +803,8 @@ class ReferenceModel:
         u = self._controller(t, values, dy)
         if self.linear:
             self._linear_motor_rhs(t, values, u, dy)
+        elif self.rack:
+            self._rack_pinion_rhs(t, values, u, dy)
         else:
             self._ball_screw_rhs(t, values, u, dy)
         return dy
@@ -828,6 +866,25 @@ class ReferenceModel:
         dy[ix["table_speed"]] = (F_m - F_g - F_load) / self.m_t
         if not self.torque_off:
             dy[k] = (u[0] - lm.resistance * i - lm.back_emf_constant * v_t) / lm.inductance
+
+    def _rack_pinion_rhs(self, t: float, y: Any, u: list[float], dy: np.ndarray) -> None:
+        rp = self.rack_section
+        H = self.H
+        th_m, w_m, x_t, v_t = y[:4]
+        k = self.axes[0].current
+        i = y[k]
+        F_gb = _site_force(self.gearbox_site, H * w_m, y, dy)
+        F_g = _site_force(self.guide_site, v_t, y, dy)
+        F_mesh = rp.mesh_stiffness * (H * th_m - x_t) + rp.mesh_damping * (H * w_m - v_t)
+        T_m = 0.0 if self.torque_off else rp.motor.torque_constant * i
+        F_load = 0.0 if self.load is None else self.load(t)
+        dy[0] = w_m
+        dy[1] = (T_m - H * F_gb - H * F_mesh) / self.J_m
+        dy[2] = v_t
+        dy[3] = (F_mesh - F_g - F_load) / self.m_t
+        if not self.torque_off:
+            dy[k] = (u[0] - rp.motor.resistance * i - rp.motor.back_emf_constant * w_m) \
+                / rp.motor.inductance
 
     # ------------------------------------------------------------ for solvers
 

@@ -85,6 +85,10 @@ MAX_CONDITION = 1e3
 PROFILE_ABOVE = 0.25
 #: relative half-width above which a parameter is reported poorly determined
 MAX_RELATIVE_HALF_WIDTH = 0.5
+#: the sum of squares at a linear interval's end may rise by this factor more or less than
+#: the linearisation says; beyond, the problem is nonlinear there and the interval is a
+#: profile-likelihood one (Bates & Watts 1988, Ch. 6: the profile t plots)
+NONLINEARITY_LIMIT = 1.5
 #: relative forward-difference step of the Jacobian (the search's)
 JACOBIAN_STEP = 1e-3
 #: relative central-difference step of the Jacobian the intervals use, and of the Gauss–Newton
@@ -720,6 +724,12 @@ class ParameterEstimate:
     stderr_white : float, default nan
         The standard error white residuals would give, s²(JᵀJ)⁻¹ [unit]; ``stderr`` is the
         HAC one (:mod:`~feeddrive.analysis.fit_residuals`).
+    linearity : tuple of float, default (nan, nan)
+        At the linear interval's lower and upper end (the others at their conditional
+        optimum of the linearised model), the actual rise of the sum of squares over the
+        rise the linearisation predicts [-]: 1 where the problem is linear over the interval;
+        outside 1/:data:`NONLINEARITY_LIMIT` … :data:`NONLINEARITY_LIMIT` the interval is a
+        profile-likelihood one.
     """
 
     path: str
@@ -733,6 +743,7 @@ class ParameterEstimate:
     determined: bool
     issue: str | None = None
     stderr_white: float = math.nan
+    linearity: tuple[float, float] = (math.nan, math.nan)
 
     @property
     def relative_half_width(self) -> float:
@@ -756,6 +767,7 @@ class ParameterEstimate:
                 "stderr": fin(self.stderr), "stderr_white_noise": fin(self.stderr_white),
                 "ci_low": fin(self.low), "ci_high": fin(self.high),
                 "interval": self.interval, "relative_half_width": fin(self.relative_half_width),
+                "linearity": [fin(x) for x in self.linearity],
                 "determined": self.determined, "issue": self.issue}
 
 
@@ -1075,6 +1087,38 @@ def _cut(e: Experiment, h: float) -> Experiment:
                                reference_time=e.reference_time[keep],
                                table_speed=e.table_speed[keep],
                                nut_speed=None if e.nut_speed is None else e.nut_speed[keep])
+
+
+def _linearity(ev: _Evaluator, theta: np.ndarray, white: np.ndarray, cov: np.ndarray,
+               ssr: float, tq: float, wanted: bool) -> list[tuple[float, float]]:
+    """Per parameter, at each end θ_j ± t·se_j of its linear interval with the others at
+    their conditional optimum in the linearised model (θ + δ·W[:, j]/W[j, j], W ∝ (JᵀJ)⁻¹),
+    the actual rise of the sum of squares over the predicted δ²·s²/W[j, j]: one batch of 2p
+    simulations.  NaN where not computed (no intervals wanted, an infinite s.e., an end
+    outside the bounds: profiled anyway)."""
+    p = theta.size
+    out = [(math.nan, math.nan)] * p
+    if not wanted:
+        return out
+    s2 = ssr / max(ev.n_residuals - p, 1)
+    points, where = [], []
+    for j in range(p):
+        if not (math.isfinite(cov[j, j]) and math.isfinite(white[j, j]) and cov[j, j] > 0
+                and white[j, j] > 0):
+            continue
+        delta = tq * math.sqrt(cov[j, j])
+        for sign in (-1.0, 1.0):
+            points.append(theta + sign * delta * white[:, j] / white[j, j])
+            where.append((j, sign, delta * delta * s2 / white[j, j]))
+    if not points:
+        return out
+    rs = ev.batch(points)
+    ratios: dict[int, list[float]] = {}
+    for (j, _, predicted), r in zip(where, rs, strict=True):
+        ratios.setdefault(j, []).append((float(r @ r) - ssr) / predicted)
+    for j, (lo, hi) in ratios.items():
+        out[j] = (lo, hi)
+    return out
 
 
 def _profile(ev: _Evaluator, theta: np.ndarray, j: int, lb: np.ndarray, ub: np.ndarray,
@@ -1623,6 +1667,7 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
     f_quantile = float(stats.f.ppf(confidence, 1, dof))
     cov = cov_t * np.outer(start, start)
     numerical = integration is not None and not integration.met
+    linearity = _linearity(ev, theta, white_t, cov_t, ssr, tq, ok and not numerical)
     ests: list[ParameterEstimate] = []
     for j, path in enumerate(ev.paths):
         se_t = math.sqrt(cov_t[j, j]) if math.isfinite(cov_t[j, j]) and cov_t[j, j] >= 0 \
@@ -1631,9 +1676,11 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
             white_t[j, j] >= 0 else math.inf
         lo_t, hi_t = theta[j] - tq * se_t, theta[j] + tq * se_t
         how = "linear"
+        nonlinear = any(not (1.0 / NONLINEARITY_LIMIT <= q <= NONLINEARITY_LIMIT)
+                        for q in linearity[j] if not math.isnan(q))
         if profile and ok and not numerical and (
                 not math.isfinite(se_t) or tq * se_t > PROFILE_ABOVE * abs(theta[j])
-                or lo_t < lb[j] or hi_t > ub[j]):
+                or lo_t < lb[j] or hi_t > ub[j] or nonlinear):
             # the likelihood-ratio threshold scaled by the HAC-to-white variance ratio of
             # this parameter, so that the profile interval carries the residual's correlation
             # (at least the white-noise threshold)
@@ -1665,7 +1712,8 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
         ests.append(ParameterEstimate(path=path, unit=units_[j], start=float(start[j]),
                                       value=value, stderr=se_t * abs(start[j]), low=lo, high=hi,
                                       interval=how, determined=issue is None, issue=issue,
-                                      stderr_white=se_w * abs(start[j])))
+                                      stderr_white=se_w * abs(start[j]),
+                                      linearity=linearity[j]))
     del s2
     return FitResult(parameters=params, base_name=base.name, drive=drive,
                      table_position=table_position,
