@@ -379,12 +379,15 @@ def _profile_kind(profile: Any) -> str:
         return "constant"
     if all(hasattr(profile, a) for a in ("table_amplitude", "nut_amplitude", "frequency")):
         return "sine"
+    if callable(getattr(profile, "signals", None)):
+        return "custom"
     raise ValueError(f"profile {type(profile).__name__}: the reference model handles "
-                     "ConstantSpeed and SineSpeed only")
+                     "ConstantSpeed, SineSpeed and profiles with signals(t) only")
 
 
 def reference_signals(profile: Any, t: float) -> tuple[float, float, float, float]:
-    """(x_ref, v_ref, x_n,ref, v_n,ref) [m, m/s] of a ConstantSpeed or SineSpeed profile.
+    """(x_ref, v_ref, x_n,ref, v_n,ref) [m, m/s] of a ConstantSpeed or SineSpeed profile, or
+    of any profile with a ``signals(t)`` method that returns them.
 
     Constant speed: the speed rises linearly over ``ramp_time`` then stays; positions are
     its integral.  Sine: v = A·sin(2πft), x = A·(1 − cos 2πft)/(2πf).  ``None``: at rest.
@@ -392,6 +395,8 @@ def reference_signals(profile: Any, t: float) -> tuple[float, float, float, floa
     kind = _profile_kind(profile)
     if kind == "rest":
         return 0.0, 0.0, 0.0, 0.0
+    if kind == "custom":  # e.g. reference.emps_record.MinimumJerk
+        return tuple(profile.signals(t))  # type: ignore[return-value]
     if kind == "constant":
         vt, vn, tr = profile.table_speed, profile.nut_speed, profile.ramp_time
         if tr > 0.0 and t < tr:
