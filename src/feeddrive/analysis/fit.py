@@ -728,7 +728,7 @@ class ParameterEstimate:
         At the linear interval's lower and upper end (the others at their conditional
         optimum of the linearised model), the actual rise of the sum of squares over the
         rise the linearisation predicts [-]: 1 where the problem is linear over the interval;
-        outside 1/:data:`NONLINEARITY_LIMIT` … :data:`NONLINEARITY_LIMIT` the interval is a
+        outside 1/``NONLINEARITY_LIMIT`` … ``NONLINEARITY_LIMIT`` (1.5) the interval is a
         profile-likelihood one.
     """
 

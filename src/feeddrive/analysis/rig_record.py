@@ -47,7 +47,7 @@ from .fit import Experiment, FitError, _uniform_reference
 from .fit_statistics import noise_level
 
 __all__ = ["FITTED_ROLES", "REFERENCE_ROLES", "ROLES", "RigRecord", "emps_layout",
-           "parse_map", "read_rig_record", "table_motor_force_per_current"]
+           "parse_map", "read_rig_record", "reference_rate", "table_motor_force_per_current"]
 
 #: role → what it is [SI unit]
 ROLES: dict[str, str] = {
