@@ -127,7 +127,9 @@ def test_rack_pinion_move_fitted_from_force_and_speed(fitted) -> None:
         assert not e.determined, name
         # the F_s–v_s valley is nonlinear: the linear interval is replaced by a profile one
         # (F_s's linear interval was "determined" and excluded the truth before the
-        # linearity check); unbounded on one side.  Not determined is not calibrated: on
-        # this seed F_s's profile interval is 30.3 … ∞ N against 24.75 N (docs/fitting.md)
+        # linearity check), unbounded on one side, and it holds the truth (F_s's lower end
+        # was 30.3 N against 24.75 N while a value the set refuses, F_s < F_c, counted as a
+        # rise of the likelihood: now the last admissible value, 17.8 N ≈ F_c)
         assert e.interval == "profile"
         assert not (math.isfinite(e.low) and math.isfinite(e.high)), (name, e.low, e.high)
+        assert e.low <= values[e.path] <= e.high, (name, e.low, e.high, values[e.path])

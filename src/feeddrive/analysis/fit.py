@@ -1158,6 +1158,7 @@ def _profile(ev: _Evaluator, theta: np.ndarray, j: int, lb: np.ndarray, ub: np.n
         return 2.0 * float(res.cost), th
 
     ends = []
+    refused = 1e11 * ev.n_residuals  # the residual of a refused set is 1e6 per sample
     step = max(se, 0.02 * abs(theta[j]), 1e-6) if math.isfinite(se) else 0.1 * abs(theta[j])
     for sign in (-1.0, 1.0):
         prev_v, prev_s = theta[j], ssr
@@ -1170,7 +1171,26 @@ def _profile(ev: _Evaluator, theta: np.ndarray, j: int, lb: np.ndarray, ub: np.n
             if (sign < 0 and v <= bound) or (sign > 0 and v >= bound):
                 v = bound
             say(f"profile {ev.paths[j]}: {'lower' if sign < 0 else 'upper'} side, point {k + 1}")
-            s, start = refit(v, start)
+            s, start_v = refit(v, start)
+            if s >= refused:
+                # the set's own checks refuse this value (F_s below F_c, …): not a rise of
+                # the likelihood; bisect for the last admissible value, the end if the
+                # profile is still below the threshold there
+                good_v, good_s, bad_v = prev_v, prev_s, v
+                for _ in range(8):
+                    mid = 0.5 * (good_v + bad_v)
+                    s_mid, start_mid = refit(mid, start)
+                    if s_mid >= refused:
+                        bad_v = mid
+                        continue
+                    if s_mid > threshold:
+                        found = float(np.interp(threshold, [good_s, s_mid], [good_v, mid]))
+                        break
+                    good_v, good_s, start = mid, s_mid, start_mid
+                else:
+                    found = good_v
+                break
+            start = start_v
             if s > threshold:
                 found = float(np.interp(threshold, [prev_s, s], [prev_v, v]))
                 break
