@@ -33,15 +33,20 @@ errors; else the intervals are withheld (:class:`IntegrationCheck`).
 Uncertainty.  The covariance is the HAC sandwich of
 :mod:`~feeddrive.analysis.fit_residuals` (the white-noise s²(JᵀJ)⁻¹ kept for comparison);
 a residual above ``MAX_RESIDUAL_RATIO`` × its noise: "model inadequate", intervals withheld.
-The Jacobian at the optimum: forward differences, each column one batch of simulations,
-run in parallel through the sweep executors when asked.  Also: the correlation matrix, the
+The search's Jacobian: forward differences (``JACOBIAN_STEP``), each column one batch of
+simulations, run in parallel through the sweep executors when asked; its optimum is then
+polished by Gauss–Newton steps with central differences (``TANGENT_STEP``), the Jacobian the
+intervals use (the forward secant is not the tangent where an interval is far narrower
+than its step).  Also: the correlation matrix, the
 condition number of J with columns scaled by the parameter values, and the poorly
 determined combinations: the right singular vectors whose singular value is below
 1/``MAX_CONDITION`` of the largest.  A parameter whose
 linear interval is not credible (half-width above ``PROFILE_ABOVE`` of its value, or
-reaching a bound) gets a profile-likelihood interval: it is fixed on a grid and the others
-refitted; the interval keeps the values whose SSR stays below SSR·(1 + κ·F(1, dof)/dof), κ
-its HAC-to-white variance ratio (at least 1).
+reaching a bound) or over which the problem is nonlinear (the sum of squares at the
+interval's ends off the linearisation by more than ``NONLINEARITY_LIMIT``×) gets a
+profile-likelihood interval: it is fixed on a grid and the others refitted; the interval
+keeps the values whose SSR stays below SSR·(1 + κ·F(1, dof)/dof), κ its HAC-to-white
+variance ratio (at least 1); a value the set refuses ends it at the last admissible one.
 """
 
 from __future__ import annotations
@@ -1687,7 +1692,7 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
     f_quantile = float(stats.f.ppf(confidence, 1, dof))
     cov = cov_t * np.outer(start, start)
     numerical = integration is not None and not integration.met
-    linearity = _linearity(ev, theta, white_t, cov_t, ssr, tq, ok and not numerical)
+    linearity = _linearity(ev, theta, white_t, cov_t, ssr, tq, profile and ok and not numerical)
     ests: list[ParameterEstimate] = []
     for j, path in enumerate(ev.paths):
         se_t = math.sqrt(cov_t[j, j]) if math.isfinite(cov_t[j, j]) and cov_t[j, j] >= 0 \
