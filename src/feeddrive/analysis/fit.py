@@ -43,7 +43,7 @@ determined combinations: the right singular vectors whose singular value is belo
 1/``MAX_CONDITION`` of the largest.  A parameter whose
 linear interval is not credible (half-width above ``PROFILE_ABOVE`` of its value, or
 reaching a bound) or over which the problem is nonlinear (the sum of squares at the
-interval's ends off the linearisation by more than ``NONLINEARITY_LIMIT``×) gets a
+interval's ends off the linearisation by a factor above ``NONLINEARITY_LIMIT``) gets a
 profile-likelihood interval: it is fixed on a grid and the others refitted; the interval
 keeps the values whose SSR stays below SSR·(1 + κ·F(1, dof)/dof), κ its HAC-to-white
 variance ratio (at least 1); a value the set refuses ends it at the last admissible one.
