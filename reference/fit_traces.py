@@ -29,7 +29,7 @@ from feeddrive.analysis.fit_statistics import noise_level  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 from feeddrive.parameters import DriveParameters  # noqa: E402
 from reference.make_radau_reference import radau_states  # noqa: E402
-from reference.scipy_model import STATE_NAMES  # noqa: E402
+from reference.scipy_model import ReferenceModel  # noqa: E402
 
 #: the calibration's truth: wang2021 with these factors (issue 22's Acceptance)
 FACTORS = {"controller.velocity_integral_gain": 1.2,
@@ -53,13 +53,18 @@ class Trace:
 
 
 def radau_trace(truth: DriveParameters, speed: float, duration: float, *,
-                rtol: float = RTOL, atol_scale: float = ATOL_SCALE) -> Trace:
+                rtol: float = RTOL, atol_scale: float = ATOL_SCALE,
+                stribeck_exponents: dict[str, float] | None = None) -> Trace:
     """The CDFS at mid-screw (0.4 m) commanded at ``speed`` [m/s] after a 0.1-s ramp,
-    integrated by Radau on the plain-Python model."""
+    integrated by Radau on the plain-Python model (any friction law it implements, GMS
+    included; ``stribeck_exponents`` per site name: a Stribeck curve exp(−|v/v_s|^δ) with
+    another exponent than LuGre's 2)."""
+    options = {"stribeck_exponents": stribeck_exponents} if stribeck_exponents else {}
     t, y, _ = radau_states(truth, "cdfs", ConstantSpeed(speed, ramp_time=RAMP_TIME), duration,
-                           rtol, atol_scale)
-    return Trace(speed=speed, time=t, table_position=y[STATE_NAMES.index("table_position")],
-                 screw_current=y[STATE_NAMES.index("screw_current")])
+                           rtol, atol_scale, **options)
+    names = ReferenceModel(truth, "cdfs", 0.4, None, **options).state_names
+    return Trace(speed=speed, time=t, table_position=y[names.index("table_position")],
+                 screw_current=y[names.index("screw_current")])
 
 
 def measured(trace: Trace, seed: int, *, position_quantum: float = 0.05e-6,

@@ -78,17 +78,22 @@ def stick_slip_figures(time_s: np.ndarray, speed: np.ndarray,
 
 
 def radau_states(params: Any, drive: str, profile: Any, duration: float, rtol: float,
-                 atol_scale: float) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
-    """(time, states [15 × n], statistics) of ``drive`` with ``params`` following
+                 atol_scale: float, **model_options: Any
+                 ) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
+    """(time, states [n_state × n], statistics) of ``drive`` with ``params`` following
     ``profile`` from rest on the 1-ms grid, split at the end of the start ramp (where the
     reference speed has a kink); absolute tolerances ``atol_scale`` × the former fixed
-    defaults."""
-    model = ReferenceModel(params, drive, 0.4, profile)
-    atol = tolerances(model.H) * atol_scale
+    defaults.  ``model_options`` go to :class:`ReferenceModel` (e.g. ``stribeck_exponents``);
+    the states are then in ``ReferenceModel(...).state_names`` order (15, ``STATE_NAMES``,
+    for the default layout)."""
+    model = ReferenceModel(params, drive, 0.4, profile, **model_options)
+    default = model.state_names == STATE_NAMES
+    atol = (tolerances(model.H) if default else model.tolerances()) * atol_scale
     n = int(round(duration / OUTPUT_INTERVAL))
     grid = np.arange(n + 1) * OUTPUT_INTERVAL
-    cuts = [0.0, profile.ramp_time, duration] if profile.ramp_time > 0 else [0.0, duration]
-    y0 = np.zeros(len(STATE_NAMES))
+    ramp = getattr(profile, "ramp_time", 0.0)  # a SineSpeed has no kink
+    cuts = [0.0, ramp, duration] if ramp > 0 else [0.0, duration]
+    y0 = np.zeros(model.n_state)
     ys, ts = [], []
     stats = {"nfev": 0.0, "njev": 0.0, "nlu": 0.0}
     started = time.perf_counter()
