@@ -205,3 +205,21 @@ def test_a_temporary_folder_of_someone_else_is_not_used(tmp_path: Path,
     assert chosen != taken and chosen.parent == tmp_path
     taken.chmod(0o700)
     assert c_cache.fallback_folder() == taken
+
+
+def test_the_documentation_states_the_folder_flags_and_key(monkeypatch: pytest.MonkeyPatch,
+                                                           tmp_path: Path) -> None:
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "c-backend.md").read_text(
+        encoding="utf-8")
+    section = doc.split("## The compiled-object cache", 1)[1].split("\n## ", 1)[0]
+    assert f"`${c_cache.CACHE_ENV}`" in section
+    assert f"`{' '.join(c_cache.LIBRARY_FLAGS)}`" in section and "`-lm`" in section
+    monkeypatch.delenv(c_cache.CACHE_ENV, raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert c_cache.cache_folder() == tmp_path / "feeddrive" / "c"
+    assert "`$XDG_CACHE_HOME/feeddrive/c`" in section and "`~/.cache/feeddrive/c`" in section
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    assert c_cache.cache_folder() == Path.home() / ".cache" / "feeddrive" / "c"
+    for word in ("SHA-256", "`--version`", "`sysconfig.get_platform()`", "`fcntl.flock`",
+                 "`os.replace`", "feeddrive-c-<user id>", "mode 0700", "`compile_c`"):
+        assert word in section, word
