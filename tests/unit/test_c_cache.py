@@ -223,3 +223,17 @@ def test_the_documentation_states_the_folder_flags_and_key(monkeypatch: pytest.M
     for word in ("SHA-256", "`--version`", "`sysconfig.get_platform()`", "`fcntl.flock`",
                  "`os.replace`", "feeddrive-c-<user id>", "mode 0700", "`compile_c`"):
         assert word in section, word
+
+
+@needs_cc
+def test_the_c_backend_and_the_fmu_report_a_failure_the_same_way(tmp_path: Path) -> None:
+    """compile_shared and the FMU's compile_library run the compiler through compile_c."""
+    from feeddrive.backends.c_backend import compile_shared
+    from feeddrive.fmu.build import compile_library
+
+    for build in (lambda: compile_shared("int broken = ;\n", tmp_path / "a"),
+                  lambda: compile_library("int broken = ;\n", 2, tmp_path / "b", "bad")):
+        with pytest.raises(CompileError) as err:
+            build()
+        assert "\n" not in str(err.value) and "error" in str(err.value)
+        assert isinstance(err.value, RuntimeError)  # what callers caught before
