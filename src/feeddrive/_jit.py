@@ -38,6 +38,8 @@ from numba.core.caching import FunctionCache
 from numba.core.ccallback import CFunc
 from numba.core.runtime import rtsys
 
+from ._disk import file_lock, user_cache_root
+
 config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
 
 _HERE = Path(__file__).resolve().parent
@@ -67,8 +69,7 @@ KERNEL_HASH = SOURCE_DIGEST
 
 
 def _cache_dir() -> str:
-    root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache"), "feeddrive")
+    root = os.environ.get("NUMBA_CACHE_DIR") or str(user_cache_root())
     return os.path.join(root, f"numba-{SOURCE_DIGEST}")
 
 
@@ -206,19 +207,13 @@ def import_generated(folder: str, stem: str, source: str) -> ModuleType:
     return module
 
 
-try:
-    import fcntl as _fcntl
-except ImportError:  # pragma: no cover - not on Windows
-    _fcntl = None  # type: ignore[assignment]
-
-
 @contextlib.contextmanager
 def compile_lock(path: str | os.PathLike[str], what: str) -> Iterator[None]:
     """Around a first compilation in this process: a lock on a file beside ``path`` (the
     generated module that holds ``what``), so that two processes (the ``reproduce`` pool's
     workers) that need the same new function do not both compile it — the second waits and
     loads what the first wrote to numba's cache.  Nothing is locked where file locks are not
-    available.
+    available (:func:`feeddrive._disk.file_lock`).
 
     Parameters
     ----------
@@ -227,18 +222,5 @@ def compile_lock(path: str | os.PathLike[str], what: str) -> Iterator[None]:
     what : str
         The name of what is compiled (names the lock file).
     """
-    if _fcntl is None:
+    with file_lock(Path(path).with_name(f".{Path(path).stem}.{what}.lock")):
         yield
-        return
-    lock = Path(path).with_name(f".{Path(path).stem}.{what}.lock")
-    try:
-        fh = open(lock, "a")  # noqa: SIM115 (held across the yield)
-    except OSError:
-        yield
-        return
-    with fh:
-        _fcntl.flock(fh, _fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            _fcntl.flock(fh, _fcntl.LOCK_UN)

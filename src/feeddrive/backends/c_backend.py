@@ -23,31 +23,30 @@ with the arguments of the numba ``model.module.rhs`` / ``sample_update`` (a samp
 its period from ``P``; ``tick``: per clock of the model's sample schedule, the count of its
 instant now or −1, :mod:`feeddrive.solvers.schedule`).
 :func:`compile_shared` builds a shared library with the system's C compiler and
-:func:`load_shared` wraps it with ctypes (used by the tests).
+:func:`load_shared` wraps it with ctypes (used by the tests); :func:`load_cached` does both
+through the compiled-object cache (:mod:`feeddrive.backends.c_cache`).
 """
 
 from __future__ import annotations
 
 import ctypes
 import os
-import shlex
-import shutil
-import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .c_cache import CompileError, CompilerNotFound, cached_library, compile_c, find_compiler
 from .c_translate import CFunction, TranslationError, _Unit, c_text, translate_kernels
 
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
-__all__ = ["RHS", "SAMPLE_UPDATE", "CFunction", "CLibrary", "CompilerNotFound", "SOLVER_SHAPES",
-           "SOLVER_TYPES", "TranslationError",
+__all__ = ["RHS", "SAMPLE_UPDATE", "CFunction", "CLibrary", "CompileError", "CompilerNotFound",
+           "SOLVER_SHAPES", "SOLVER_TYPES", "TranslationError",
            "c_model_source", "c_solver_source", "solver_kernels",
-           "compile_shared", "find_compiler", "load_shared", "translate_kernels",
+           "compile_shared", "find_compiler", "load_cached", "load_shared", "translate_kernels",
            "STRICT_FLAGS"]
 
 #: the warnings the generated C is compiled clean with (tests compile with them)
@@ -237,38 +236,6 @@ def c_solver_source(names: tuple[str, ...] | None = None) -> str:
                              names={kernels[n].__name__: n for n in chosen})
 
 
-class CompilerNotFound(RuntimeError):
-    """No C compiler: set $CC or install gcc/clang."""
-
-
-def find_compiler() -> list[str]:
-    """The C compiler command.
-
-    Returns
-    -------
-    list of str
-        ``$CC`` split into words (it may hold options), else the first of ``cc``, ``gcc``,
-        ``clang`` found on PATH.
-
-    Raises
-    ------
-    CompilerNotFound
-        None of them is there.
-    """
-    env = os.environ.get("CC", "").strip()
-    if env:
-        cmd = shlex.split(env)
-        if shutil.which(cmd[0]) is None:
-            raise CompilerNotFound(f"CC = {env!r}: {cmd[0]!r} is not an executable on PATH")
-        return cmd
-    for name in ("cc", "gcc", "clang"):
-        path = shutil.which(name)
-        if path:
-            return [path]
-    raise CompilerNotFound("no C compiler found: set CC or install gcc or clang "
-                           "(looked for cc, gcc, clang on PATH)")
-
-
 def compile_shared(c_text: str, folder: str | os.PathLike[str], *, name: str = "fd_model",
                    strict: bool = True, optimise: str = "-O1") -> Path:
     """Compile ``c_text`` into a shared library ``folder/<name>.so`` (``.dll`` on Windows)
@@ -297,23 +264,15 @@ def compile_shared(c_text: str, folder: str | os.PathLike[str], *, name: str = "
     ------
     CompilerNotFound
         No C compiler (see :func:`find_compiler`).
-    RuntimeError
-        The compiler failed; the message holds its output.
+    CompileError
+        The compiler failed (a RuntimeError; one line with its first error line, its whole
+        output in ``output``).
     """
-    cc = find_compiler()
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
-    src = out / f"{name}.c"
-    src.write_text(c_text, encoding="utf-8")
-    lib = out / (f"{name}.dll" if os.name == "nt" else f"{name}.so")
     flags = [*(STRICT_FLAGS if strict else ("-std=c99",)), optimise, "-ffp-contract=off",
              "-fPIC", "-shared"]
-    proc = subprocess.run([*cc, *flags, "-o", str(lib), str(src), "-lm"], capture_output=True,
-                          text=True, check=False)
-    if proc.returncode != 0:
-        raise RuntimeError(f"C compiler failed on {src} ({' '.join(cc + flags)}):\n"
-                           f"{proc.stderr.strip() or proc.stdout.strip()}")
-    return lib
+    return compile_c({f"{name}.c": c_text}, folder,
+                     f"{name}.dll" if os.name == "nt" else f"{name}.so", find_compiler(), flags,
+                     ("-lm",))
 
 
 _DP = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
@@ -427,3 +386,28 @@ def load_shared(path: str | os.PathLike[str]) -> CLibrary:
     lib.fd_aux.argtypes = [D, _DP, _DP, _DP, _DP, _DP]
     lib.fd_aux.restype = None
     return CLibrary(lib=lib, path=Path(path))
+
+
+def load_cached(c_text: str) -> CLibrary:
+    """Load the library of ``c_text`` (:func:`c_model_source`) from the compiled-object cache,
+    compiling it there on first use (:func:`feeddrive.backends.c_cache.cached_library`, with
+    its default flags).
+
+    Parameters
+    ----------
+    c_text : str
+        C99 source exporting ``fd_rhs``, ``fd_sample_update`` and ``fd_aux``.
+
+    Returns
+    -------
+    CLibrary
+        The loaded library (:func:`load_shared`).
+
+    Raises
+    ------
+    CompilerNotFound
+        Without a C compiler.
+    CompileError
+        When the compiler fails.
+    """
+    return load_shared(cached_library(c_text))

@@ -11,12 +11,12 @@ standard library and libm; the FMU carries it (with the FMI headers) under
 from __future__ import annotations
 
 import shutil
-import subprocess
 import tempfile
 import zipfile
 from importlib import resources
 from pathlib import Path
 
+from ..backends.c_cache import CompileError, compile_c  # noqa: F401 (CompileError: its error)
 from ..solvers import schedule, steps
 from . import solver
 from .description import Provenance, Variable, c_tables, model_description
@@ -187,28 +187,19 @@ def compile_library(source: str, fmi: int, folder: Path, identifier: str, *,
     ------
     CompilerNotFound
         Without a C compiler for the platform.
-    RuntimeError
-        When the compiler fails (its output in the message).
+    CompileError
+        When the compiler fails (a RuntimeError: one line with its first error line).
     """
     plat = PLATFORMS[target] if target else host_platform() or PLATFORMS["linux64"]
     cc = platform_compiler(target) if target else find_compiler()
-    folder.mkdir(parents=True, exist_ok=True)
-    src = folder / "fmu.c"
-    src.write_text(source, encoding="utf-8")
     include = resources.files(__package__).joinpath("include")
-    for name in HEADERS[fmi]:
-        (folder / name).write_text(include.joinpath(name).read_text(encoding="utf-8"),
-                                   encoding="utf-8")
+    files = {"fmu.c": source, **{name: include.joinpath(name).read_text(encoding="utf-8")
+                                 for name in HEADERS[fmi]}}
     suffix = plat.suffix if target else library_suffix()
-    lib = folder / f"{identifier}{suffix}"
     flags = [f for f in (*CFLAGS, *plat.flags)
              if not (export_all and f.startswith("-fvisibility"))]
-    cmd = [*cc, *flags, f"-I{folder}", "-o", str(lib), str(src), *plat.libraries]
-    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    if proc.returncode != 0:
-        raise RuntimeError(f"the C compiler failed ({' '.join(cmd)}):\n"
-                           f"{(proc.stderr or proc.stdout).strip()[:4000]}")
-    return lib
+    return compile_c(files, folder, f"{identifier}{suffix}", cc, [*flags, f"-I{folder}"],
+                     plat.libraries)
 
 
 def build_description(identifier: str) -> str:

@@ -16,6 +16,12 @@ import shutil
 import sys
 from dataclasses import dataclass
 
+from ..backends.c_cache import (  # noqa: F401 - the host's compiler search, re-exported
+    CompilerNotFound,
+    find_compiler,
+    library_suffix,
+)
+
 HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
            3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
 #: flags of every binary: C99, optimised, no fused multiply-add (numba rounds each operation)
@@ -89,34 +95,6 @@ PLATFORMS = {
 }
 
 
-class CompilerNotFound(RuntimeError):
-    """No C compiler: set $CC or install gcc or clang."""
-
-
-def find_compiler() -> list[str]:
-    """The C compiler command (``$CC``, else cc, gcc or clang on PATH).
-
-    Returns
-    -------
-    list of str
-        The command and its fixed arguments.
-
-    Raises
-    ------
-    CompilerNotFound
-        When no compiler is found.
-    """
-    try:
-        from ..backends.c_backend import CompilerNotFound as _NotFound
-        from ..backends.c_backend import find_compiler as _find
-    except ImportError:  # pragma: no cover - the C backend is part of the package
-        raise CompilerNotFound("the C backend (feeddrive.backends.c_backend) is missing") from None
-    try:
-        return _find()
-    except _NotFound as err:
-        raise CompilerNotFound(str(err)) from None
-
-
 def host_platform() -> Platform | None:
     """The platform this machine runs natively, if it is one of :data:`PLATFORMS` (an x86-64
     Linux, Windows or macOS).
@@ -153,17 +131,6 @@ def platform_folder(fmi: int) -> str:
         return f"{arch}-{system}"
     bits = "64" if arch in ("x86_64", "aarch64") else "32"
     return {"linux": "linux", "darwin": "darwin", "windows": "win"}[system] + bits
-
-
-def library_suffix() -> str:
-    """The shared-library extension of this machine.
-
-    Returns
-    -------
-    str
-        ``".dll"``, ``".dylib"`` or ``".so"``.
-    """
-    return {"win32": ".dll", "darwin": ".dylib"}.get(sys.platform, ".so")
 
 
 def platform_compiler(name: str) -> list[str]:

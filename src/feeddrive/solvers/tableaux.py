@@ -5,7 +5,9 @@ A method here is only numbers; :mod:`feeddrive.solvers.steps` writes the one exp
 embedded Runge–Kutta step and the one Rosenbrock step for any of them, and the one driver
 (:mod:`feeddrive.solvers.driver`, specialised for :mod:`feeddrive.solvers.dopri5`,
 :mod:`feeddrive.solvers.switching` and :mod:`feeddrive.fmu.solver`) calls the step so written.
-Adding a method is adding a tableau.
+Adding a method is adding a tableau.  A tableau checks its order conditions when it is built
+(:mod:`feeddrive.solvers.order_conditions`): a wrong coefficient raises
+:class:`~feeddrive.solvers.order_conditions.OrderConditionError` at import.
 
 * :data:`DOPRI5`: Dormand–Prince 5(4), J. R. Dormand and P. J. Prince, "A family of embedded
   Runge–Kutta formulae", J. Comput. Appl. Math. 6 (1980) 19–26; the coefficients and the
@@ -27,6 +29,8 @@ Adding a method is adding a tableau.
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+from .order_conditions import check_explicit, check_rosenbrock
 
 
 @dataclass(frozen=True)
@@ -80,6 +84,7 @@ class ExplicitTableau:
                              f"{'and the new point' if self.fsal else ''}")
         if self.dense and len(self.dense) != len(self.e):
             raise ValueError(f"{self.name}: dense coefficients over the stages of e")
+        check_explicit(self)
 
     @property
     def stages(self) -> int:
@@ -143,6 +148,9 @@ class RosenbrockTableau:
         if tuple(self.a[-1]) != (*self.a[-2], 1.0):
             raise ValueError(f"{self.name}: the step supports stiffly accurate methods with "
                              "a_S = (a_{S-1}, 1) only")
+        if self.dense and len(self.dense) != 2:
+            raise ValueError(f"{self.name}: dense holds the two vectors q_1, q_2")
+        check_rosenbrock(self)
 
     @property
     def stages(self) -> int:

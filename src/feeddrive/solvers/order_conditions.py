@@ -1,0 +1,216 @@
+"""Order conditions of the methods in :mod:`feeddrive.solvers.tableaux`, checked when a tableau
+is built: a mistyped coefficient raises :class:`OrderConditionError` naming the condition,
+instead of silently lowering the method's order.
+
+* Explicit Runge–Kutta: for every rooted tree t with ρ(t) ≤ p nodes, Σ_i b_i Φ_i(t) = 1/γ(t)
+  (Butcher's conditions, E. Hairer, S. P. Nørsett and G. Wanner, *Solving Ordinary
+  Differential Equations I*, 2nd ed., Springer (1993), Sect. II.2, Theorem 2.13), for the
+  solution (order p), the embedded solution (its order; with ``fsal`` over the stages and the
+  new point, whose row is b) and the continuous extension (Sect. II.6: Σ_i b_i(θ) Φ_i(t) =
+  θ^ρ(t)/γ(t) for ρ(t) ≤ its order, at several θ), and c_i = Σ_j a_ij.
+* Rosenbrock: the conditions of Hairer and Wanner, *Solving Ordinary Differential Equations
+  II*, 2nd ed., Springer (1996), Sect. IV.7, Table 7.1 (order ≤ 4), in the method's standard
+  form (α_ij, γ_ij, b_i; β_ij = α_ij + γ_ij, β'_i = Σ_{j<i} β_ij, α_i = Σ_j α_ij), obtained
+  from the increment form (7.25) by Γ = (I/γ − C)^{-1}, α = A Γ, b = m Γ (7.26); also
+  c_i = α_i and d_i = Σ_j γ_ij (the non-autonomous terms, (7.4')), and for the dense output
+  the conditions up to order 3 with b_i(θ) and the right-hand sides θ, θ²/2 − γθ, θ³/3,
+  θ³/6 − γθ² + γ²θ (Sect. IV.7, "Dense output").
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .tableaux import ExplicitTableau, RosenbrockTableau
+
+__all__ = ["OrderConditionError", "TOLERANCE", "THETAS", "check_explicit", "check_rosenbrock",
+           "trees"]
+
+#: largest residual accepted (relative to max(1, |right-hand side|)): the coefficients are
+#: rationals or 16-digit decimals rounded to double precision; the tableaux here leave at most
+#: 2.0e-15 (RODAS4; DOPRI5 2.5e-16), so a coefficient wrong in its 13th digit or earlier fails
+TOLERANCE = 1e-13
+#: the points θ of the step at which a continuous extension is checked (more than its degree,
+#: so a polynomial identity holding at all of them holds for every θ)
+THETAS = (0.1, 0.25, 0.4, 0.5, 0.6, 0.75, 0.9, 1.0)
+
+Tree = tuple["Tree", ...]  # a rooted tree: the sorted tuple of its root's subtrees
+
+
+class OrderConditionError(ValueError):
+    """A tableau's coefficients miss one of its order conditions."""
+
+
+def _canonical(tree: Tree) -> Tree:
+    return tuple(sorted(_canonical(child) for child in tree))
+
+
+def _grow(tree: Tree) -> set[Tree]:
+    """Every tree made by adding one leaf to a node of ``tree``."""
+    out = {_canonical((*tree, ()))}
+    for k, child in enumerate(tree):
+        for grown in _grow(child):
+            out.add(_canonical((*tree[:k], grown, *tree[k + 1:])))
+    return out
+
+
+@functools.cache
+def trees(order: int) -> tuple[Tree, ...]:
+    """The rooted trees with ``order`` nodes (1, 1, 2, 4, 9, 20 … of them).
+
+    Parameters
+    ----------
+    order : int
+        The number of nodes ρ(t), ≥ 1.
+
+    Returns
+    -------
+    tuple of Tree
+        Each tree as the sorted tuple of its root's subtrees (the leaf is ``()``).
+    """
+    if order == 1:
+        return ((),)
+    return tuple(sorted({g for t in trees(order - 1) for g in _grow(t)}))
+
+
+def _size(tree: Tree) -> int:
+    return 1 + sum(_size(child) for child in tree)
+
+
+def _density(tree: Tree) -> int:
+    """γ(t) = ρ(t) · Π γ(subtrees)."""
+    return _size(tree) * int(np.prod([_density(child) for child in tree]))
+
+
+def _weights(tree: Tree, a: np.ndarray) -> np.ndarray:
+    """Φ(t) over the stages: Π over the subtrees of A Φ(subtree) (ones for the leaf)."""
+    phi = np.ones(a.shape[0])
+    for child in tree:
+        phi = phi * (a @ _weights(child, a))
+    return phi
+
+
+def _fail(name: str, what: str, got: float, want: float) -> None:
+    if not abs(got - want) <= TOLERANCE * max(1.0, abs(want)):
+        raise OrderConditionError(f"{name}: {what} = {got!r}, expected {want!r} "
+                                  "(a coefficient or the stated order is wrong: "
+                                  "feeddrive.solvers.order_conditions)")
+
+
+def _lower(rows: tuple[tuple[float, ...], ...], size: int) -> np.ndarray:
+    m = np.zeros((size, size))
+    for i, row in enumerate(rows):
+        m[i, :len(row)] = row
+    return m
+
+
+def _check_trees(name: str, what: str, weights: np.ndarray, a: np.ndarray, order: int,
+                 theta: float = 1.0) -> None:
+    for rho in range(1, order + 1):
+        for k, tree in enumerate(trees(rho)):
+            _fail(name, f"{what}: Σ b_i Φ_i(t) for tree {k + 1} of order {rho}"
+                  + ("" if theta == 1.0 else f" at θ = {theta}"),
+                  float(weights @ _weights(tree, a)), theta ** rho / _density(tree))
+
+
+def check_explicit(tab: ExplicitTableau) -> None:
+    """Check an explicit embedded pair's order conditions (the module's description).
+
+    Parameters
+    ----------
+    tab : ExplicitTableau
+        The tableau.
+
+    Raises
+    ------
+    OrderConditionError
+        At the first condition missed, naming it.
+    """
+    s = len(tab.c)
+    n = s + (1 if tab.fsal else 0)
+    a = _lower(tab.a, n)
+    b = np.zeros(n)
+    b[:s] = tab.b
+    if tab.fsal:
+        a[s, :s] = tab.b  # the stage at the new point (c = 1)
+    c = (*tab.c, 1.0) if tab.fsal else tab.c
+    for i in range(n):
+        _fail(tab.name, f"row sum of a in stage {i + 1} (c_{i + 1})", float(a[i].sum()), c[i])
+    _check_trees(tab.name, "solution", b, a, tab.order)
+    e = np.zeros(n)
+    e[:len(tab.e)] = tab.e
+    _check_trees(tab.name, "embedded solution", b - e, a, tab.embedded_order)
+    if tab.dense:
+        # y(θ) = y0 + θ(q1 + (1−θ)(q2 + θ(q3 + (1−θ) h Σ d_i k_i))) with q1 = h Σ b_i k_i,
+        # q2 = h k_1 − q1, q3 = q1 − h k_new − q2 (dopri5.f CONTD5; the driver's dense output)
+        first, new, d = np.eye(n)[0], np.eye(n)[s], np.zeros(n)
+        d[:len(tab.dense)] = tab.dense
+        for th in THETAS:
+            w = th * (b + (1 - th) * ((first - b) + th * ((2 * b - first - new)
+                                                          + (1 - th) * d)))
+            _check_trees(tab.name, "continuous extension", w, a, tab.order - 1, th)
+
+
+def check_rosenbrock(tab: RosenbrockTableau) -> None:
+    """Check a Rosenbrock method's order conditions (the module's description; its order ≤ 4).
+
+    Parameters
+    ----------
+    tab : RosenbrockTableau
+        The tableau (stiffly accurate: y_1 = the last stage argument + u_S, the embedded
+        solution the last stage argument).
+
+    Raises
+    ------
+    OrderConditionError
+        At the first condition missed, naming it.
+    """
+    if tab.order > 4:
+        raise OrderConditionError(f"{tab.name}: order {tab.order}: the conditions of order "
+                                  "above 4 are not written here (Hairer & Wanner II, Table 7.1)")
+    s, g = len(tab.c), tab.gamma
+    gam = np.linalg.inv(np.eye(s) / g - _lower(tab.cc, s))
+    alpha = _lower(tab.a, s) @ gam
+    beta = alpha + gam - np.diag(np.diag(gam))  # β_ij = α_ij + γ_ij, j < i
+    bp = beta.sum(axis=1)
+    al = alpha.sum(axis=1)
+    for i in range(s):
+        _fail(tab.name, f"α_{i + 1} (c_{i + 1})", float(al[i]), tab.c[i])
+        _fail(tab.name, f"Σ_j γ_{i + 1}j (d_{i + 1})", float(gam[i].sum()), tab.d[i])
+    m = np.zeros(s)
+    m[:s - 1] = tab.a[-1]
+    m_hat = m.copy()
+    m[s - 1] = 1.0
+
+    def conditions(w: np.ndarray, th: float) -> list[tuple[str, float, float]]:
+        rows = [("Σ b_i", float(w.sum()), th),
+                ("Σ b_i β'_i", float(w @ bp), th ** 2 / 2 - g * th),
+                ("Σ b_i α_i²", float(w @ al ** 2), th ** 3 / 3),
+                ("Σ b_i β_ij β'_j", float(w @ beta @ bp), th ** 3 / 6 - g * th ** 2
+                 + g ** 2 * th)]
+        if th == 1.0:
+            rows += [("Σ b_i α_i³", float(w @ al ** 3), 1 / 4),
+                     ("Σ b_i α_i α_ij β'_j", float((w * al) @ alpha @ bp), 1 / 8 - g / 3),
+                     ("Σ b_i β_ij α_j²", float(w @ beta @ al ** 2), 1 / 12 - g / 3),
+                     ("Σ b_i β_ij β_jk β'_k", float(w @ beta @ beta @ bp),
+                      1 / 24 - g / 2 + 1.5 * g ** 2 - g ** 3)]
+        return rows
+
+    counts = (1, 2, 4, 8)  # conditions of order ≤ 1, 2, 3, 4 (Table 7.1)
+    for what, weights, order in (("solution", m, tab.order),
+                                 ("embedded solution", m_hat, tab.embedded_order)):
+        for cond, got, want in conditions(weights @ gam, 1.0)[:counts[order - 1]]:
+            _fail(tab.name, f"{what}: {cond}", got, want)
+    if tab.dense:
+        # y(θ) = (1−θ) y0 + θ (y1 + (1−θ)(q1 + θ q2)), q_r = Σ_j dense[r][j] u_j
+        q = [np.zeros(s) for _ in tab.dense]
+        for r, row in enumerate(tab.dense):
+            q[r][:len(row)] = row
+        for th in THETAS:
+            w = th * (m + (1 - th) * (q[0] + th * q[1]))
+            for cond, got, want in conditions(w @ gam, th)[:4]:
+                _fail(tab.name, f"dense output at θ = {th}: {cond}", got, want)
