@@ -280,6 +280,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         switches = 0
         n_eig = 0
         n_switch = 0
+        sw_last = -1  # the surface the last accepted step landed on (-1: none)
+        sw_next = -1
     steps = 0
     rejected = 0
     n_rhs = 0
@@ -525,13 +527,17 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     # speed through zero: a kink of the right-hand side): the step is thrown
                     # away and the crossing, located on its continuous extension, becomes the
                     # event the next step lands on (feeddrive.solvers.events)
-                    th_sw = switch_crossing(switch_rows, y, y_new, q1, q2, q3, e, stiff)
+                    th_sw, k_sw = switch_crossing(switch_rows, y, y_new, q1, q2, q3, e, stiff)
                     if th_sw > 0.0:
                         t_ev = t + th_sw * h_done
                         is_sample = False
                         is_stop = False
-                        n_switch += 1
+                        if k_sw != sw_last:  # a crossing, not a second landing on it
+                            n_switch += 1
+                        sw_next = k_sw
                         continue
+                    sw_last = sw_next
+                    sw_next = -1
                 # outputs strictly inside the step (an output at t_new that is an event time
                 # is written after the event below)
                 while i_out < n_out:

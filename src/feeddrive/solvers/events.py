@@ -49,10 +49,11 @@ def _dense_value(row: np.ndarray, th: float, stiff: bool, y: np.ndarray, y_new: 
 
 @kernel
 def first_crossing(W: np.ndarray, y: np.ndarray, y_new: np.ndarray, q1: np.ndarray,
-                   q2: np.ndarray, q3: np.ndarray, e: np.ndarray, stiff: bool) -> float:
+                   q2: np.ndarray, q3: np.ndarray, e: np.ndarray,
+                   stiff: bool) -> tuple[float, int]:
     """The fraction θ ∈ (0, 1) of the step at which the first surface W[k]·y changes sign,
-    located on the step's continuous extension; −1 when none does, or only within
-    :data:`THETA_MIN` of the step's ends.
+    located on the step's continuous extension, and k; (−1, −1) when none does, or only
+    within :data:`THETA_MIN` of the step's ends.
 
     Parameters
     ----------
@@ -67,8 +68,10 @@ def first_crossing(W: np.ndarray, y: np.ndarray, y_new: np.ndarray, q1: np.ndarr
 
     Returns
     -------
-    float
+    theta : float
         θ [-], or −1.
+    k : int
+        The surface, or −1.
 
     Notes
     -----
@@ -78,6 +81,7 @@ def first_crossing(W: np.ndarray, y: np.ndarray, y_new: np.ndarray, q1: np.ndarr
     the step.
     """
     best = -1.0
+    which = -1
     n = y.size
     for k in range(W.shape[0]):
         g0 = 0.0
@@ -110,4 +114,5 @@ def first_crossing(W: np.ndarray, y: np.ndarray, y_new: np.ndarray, q1: np.ndarr
                 break
         if THETA_MIN < th < 1.0 - THETA_MIN and (best < 0.0 or th < best):
             best = th
-    return best
+            which = k
+    return best, which
