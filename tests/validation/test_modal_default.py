@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.analysis.critical import creep_trial
 import feeddrive.engine.simulate as sim_mod
+from feeddrive.analysis.critical import creep_trial
 from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate
 from feeddrive.model.reference import ConstantSpeed
 from feeddrive.solvers import modes, rodas4

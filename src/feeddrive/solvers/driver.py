@@ -49,12 +49,12 @@ from typing import Any
 import numpy as np
 
 from . import steps
+from .events import first_crossing as switch_crossing
 from .modes import H_LAMBDA as MODAL_H_LAMBDA
 from .modes import REFRESH as MODAL_REFRESH
 from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
 from .modes import jacobian_moved as modal_jacobian_moved
 from .modes import step_cap as modal_step_cap
-from .events import first_crossing as switch_crossing
 from .placeholders import N_AUX, rhs, sample_update
 from .schedule import due, next_instant
 
