@@ -528,7 +528,12 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     # away and the crossing, located on its continuous extension, becomes the
                     # event the next step lands on (feeddrive.solvers.events)
                     th_sw, k_sw = switch_crossing(switch_rows, y, y_new, q1, q2, q3, e, stiff)
-                    if th_sw > 0.0:
+                    # a crossing closer to t than the event resolution is left inside (a
+                    # landing there would not advance t: the speed dithering about zero)
+                    if th_sw > 0.0 and th_sw * h_done > 1e-12 * max(1.0, t):
+                        if steps > max_steps:
+                            status = STATUS_MAX_STEPS
+                            break
                         t_ev = t + th_sw * h_done
                         is_sample = False
                         is_stop = False
