@@ -204,7 +204,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         The auxiliary signals at the end [SI, per signal] (``COMM``).
     switch_rows : numpy.ndarray
         (m, n) switching surfaces W·y whose zero crossings are located and made step ends
-        (:mod:`feeddrive.solvers.events`); (0, n) for none (``DENSE``).
+        (:mod:`feeddrive.solvers.events`); (0, n) for none [state units → m/s] (``DENSE``).
 
     Returns
     -------

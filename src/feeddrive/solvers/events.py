@@ -62,7 +62,8 @@ def first_crossing(W: np.ndarray, y: np.ndarray, y_new: np.ndarray, q1: np.ndarr
     y, y_new : numpy.ndarray
         States at the step's start and end [SI, per state].
     q1, q2, q3, e : numpy.ndarray
-        The step's dense-output coefficients (DOPRI5: q1, q2, q3, e; RODAS4: q1, q2).
+        The step's dense-output coefficients (DOPRI5: q1, q2, q3, e; RODAS4: q1, q2)
+        [SI, per state].
     stiff : bool
         The step was a RODAS4 step.
 
