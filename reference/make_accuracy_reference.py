@@ -10,6 +10,13 @@ Cases (the shipped ``wang2021`` set, LuGre at the three sites, table at mid-scre
 with the default 0.1-s start ramp, 3 s): the CDFS at 2.0 mm/s and the DDFS at 0.5 mm/s with
 the hollow motor at 16 mm/s — both smooth (Wang2021 Sect. 5.2, Fig. 8).
 
+``--check-reversals``: the DDFS's table reverses eight times in its start (its guide's
+LuGre law has a kink at v = 0); the case is integrated again with Radau split exactly at
+each reversal (``solve_ivp`` events, the guide's direction branch held on each side) at the
+reference's and two tighter settings, and the largest differences to the stored reference
+are printed — the check that the reference is not what kept the engine's error from
+converging (docs/model.md, "Friction reversals are events": ≤ 1.3e-14 m).
+
 Each is integrated twice with ``solve_ivp(method="Radau")`` on
 ``reference.scipy_model.ReferenceModel``, split at the end of the start ramp: at rtol 1e-11
 with absolute tolerances 1e-4 × the engine's former fixed defaults (1e-14 m, 1e-12 m/s,
@@ -75,7 +82,83 @@ def make(name: str) -> Path:
     return path
 
 
+class _HeldBranch:
+    """A LuGre site with its direction branch held (``sign``): smooth on either side of a
+    reversal, so that Radau, split at the reversals, never steps across the kink."""
+
+    states = ("bristle",)
+
+    def __init__(self, law: Any) -> None:
+        self.law, self.sign = law, 1.0
+
+    def force_and_rate(self, v: float, z: float) -> tuple[float, float]:
+        law, b = self.law, 0 if self.sign > 0 else 1
+        G = law.coulomb[b] + (law.static[b] - law.coulomb[b]) * np.exp(-(v / law.stribeck[b]) ** 2)
+        zdot = v - law.sigma0 * self.sign * v * z / G
+        return law.sigma0 * z + law.sigma1 * zdot + law.viscous[b] * v, zdot
+
+
+def radau_split_at_reversals(name: str, rtol: float,
+                             atol_scale: float) -> tuple[np.ndarray, np.ndarray, list[float]]:
+    """(time, states, reversal instants) of case ``name`` by Radau with an event at every
+    zero crossing of the table speed and the guide's branch switched there."""
+    from scipy.integrate import solve_ivp
+
+    from reference.scipy_model import ReferenceModel, _Site
+
+    drive, v_t, v_n = CASES[name]
+    profile = ConstantSpeed(table_speed=v_t, nut_speed=v_n)
+    model = ReferenceModel(feeddrive.preset("wang2021"), drive, 0.4, profile)
+    g = model.guide_site
+    held = _HeldBranch(g.law)
+    model.guide_site = _Site(g.name, held, g.scale, g.index)
+    atol = model.tolerances() * atol_scale
+    grid = np.arange(int(round(DURATION / OUTPUT_INTERVAL)) + 1) * OUTPUT_INTERVAL
+    y0 = np.zeros(model.n_state)
+    ts, ys, reversals = [], [], []
+    for a, b in ((0.0, profile.ramp_time), (profile.ramp_time, DURATION)):
+        t0 = a
+        while True:
+            sel = (grid >= t0 - 1e-12) & ((grid < b - 1e-12) | (b == DURATION))
+
+            def crossing(t: float, y: np.ndarray) -> float:
+                return float(y[V_T])
+
+            crossing.terminal = True  # type: ignore[attr-defined]
+            crossing.direction = -held.sign  # type: ignore[attr-defined]
+            sol = solve_ivp(model, (t0, b), y0, method="Radau", rtol=rtol, atol=atol,
+                            jac=model.jacobian, t_eval=grid[sel], dense_output=True,
+                            events=[crossing])
+            if sol.status < 0:
+                raise RuntimeError(f"Radau failed at t = {sol.t[-1]:g} s: {sol.message}")
+            ts.append(sol.t)
+            ys.append(sol.y)
+            if sol.status == 1:
+                t0 = float(sol.t_events[0][0])
+                y0 = sol.y_events[0][0].copy()
+                y0[V_T] = 0.0
+                reversals.append(t0)
+                held.sign = -held.sign
+                continue
+            y0 = sol.sol(b)
+            break
+    return np.concatenate(ts), np.concatenate(ys, axis=1), reversals
+
+
+def check_reversals(name: str = "ddfs_0p5_vn16") -> None:
+    with np.load(DATA / f"accuracy_{name}.npz") as f:
+        x_ref, v_ref = f["table_position"], f["table_speed"]
+    for rtol, scale in ((1e-11, 1e-4), (1e-12, 1e-5), (1e-13, 1e-6)):
+        _, y, reversals = radau_split_at_reversals(name, rtol, scale)
+        print(f"{name} split at {len(reversals)} reversals, rtol {rtol:g}: x_t "
+              f"{np.max(np.abs(y[X_T] - x_ref)):.2e} m, v_t {np.max(np.abs(y[V_T] - v_ref)):.2e}"
+              f" m/s from the stored reference", flush=True)
+
+
 def main(argv: list[str]) -> None:
+    if "--check-reversals" in argv:
+        check_reversals()
+        return
     chosen = [n for n in CASES if not argv or n in argv]
     if not chosen:
         raise SystemExit(f"unknown case; expected one of {list(CASES)}")

@@ -334,7 +334,10 @@ NOT_TRANSLATED = {"feeddrive.model.friction.stribeck._map1": "return annotation"
                   # refusal's message
                   "feeddrive.solvers.modes.step_cap": "complex128",
                   "feeddrive.solvers.modes.real_eigenvalues": "the size of array 'A'",
-                  "feeddrive.solvers.modes.jacobian_moved": "2 indices of a 1-D array"}
+                  "feeddrive.solvers.modes.jacobian_moved": "2 indices of a 1-D array",
+                  # the dense driver's switching surfaces (issue 35): a 2-D row matrix; the
+                  # FMU's embedded solver (COMM) does not locate crossings
+                  "feeddrive.solvers.events.first_crossing": "2 indices of a 1-D array"}
 
 
 def _package_kernels() -> dict[str, Any]:

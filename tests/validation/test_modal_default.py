@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
+import feeddrive.engine.simulate as sim_mod
 from feeddrive.analysis.critical import creep_trial
 from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate
 from feeddrive.model.reference import ConstantSpeed
@@ -276,12 +277,20 @@ def test_the_default_converges_with_order_5_on_the_exact_linear_response(
 @pytest.mark.parametrize(("drive", "table_speed", "nut_speed"),
                          [("cdfs", 1.0e-3, 0.0), ("ddfs", 0.5e-3, 16e-3)])
 def test_sampled_control_results_are_unchanged_by_the_default(
-        drive: str, table_speed: float, nut_speed: float) -> None:
+        drive: str, table_speed: float, nut_speed: float,
+        monkeypatch: pytest.MonkeyPatch) -> None:
     """Wang2021-like digital loops (position 1 ms, velocity 0.5 ms, current 0.125 ms; 10000
     counts, 0.1-µm grating): every sample instant is a step end under either method, so the
     default reproduces the v1 engine (``dopri5``) to rounding — measured ≤ 4e-11 of the
     largest table speed over 2 s — and with the same summary verdict.  The held-output
-    reference test (test_reference_sampled.py) runs the default at tight tolerances."""
+    reference test (test_reference_sampled.py) runs the default at tight tolerances.
+
+    Since 2026-12-05 the dense methods also land on the table's speed reversals (the guide
+    friction's kink, feeddrive.solvers.events) where ``dopri5`` steps across them: both runs
+    reverse (9 and 14 crossings located), and the default then differs from ``dopri5`` by
+    ``dopri5``'s error at the kinks (1.5e-6 and 1.9e-7 of the peak speed; docs/model.md,
+    "Friction reversals are events").  The sample-instant claim is checked with the
+    crossings not located."""
     p = fd.preset("wang2021")
     for path, value in {"controller.position_period": 1e-3,
                         "controller.velocity_period": 5e-4,
@@ -291,7 +300,11 @@ def test_sampled_control_results_are_unchanged_by_the_default(
         p = p.replace_path(path, value)
     system = DriveSystem(p, drive, 0.4)
     profile = ConstantSpeed(table_speed, nut_speed, ramp_time=0.1)
+    assert simulate(system, profile, 1.0).solver_stats["switch_crossings"] > 0
+    monkeypatch.setattr(sim_mod, "switching_rows",
+                        lambda model, P: np.zeros((0, len(model.states))))
     new = simulate(system, profile, 1.0)
+    assert new.solver_stats["switch_crossings"] == 0
     old = simulate(system, profile, 1.0, options=SolverOptions(method="dopri5"))
     assert new.solver_stats["method"] == "modal"
     np.testing.assert_array_equal(new.time, old.time)

@@ -382,6 +382,68 @@ def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np
     return bound
 
 
+def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
+    """The friction sites' sliding speeds as switching surfaces W·y of the dense-output
+    integrator: their zero crossings, where a law with a direction branch has a kink, become
+    step ends (:mod:`feeddrive.solvers.events`).
+
+    A site whose law declares ``kink_at_zero_speed`` (LuGre, Dahl: ż = v − σ0·|v|·z/…) gives
+    one row: the rate of its first state with every state zero but one is the sliding speed
+    that one state makes, so n + 1 evaluations of the right-hand side read off the
+    coefficients.  A row is kept only if the speed is linear in the state (checked at a
+    second, mixed state to 1e-9) and not zero (a site that does not act, such as the held nut
+    of a CDFS).
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+    P : numpy.ndarray
+        Its parameter vector [SI, per slot].
+
+    Returns
+    -------
+    numpy.ndarray
+        (m, n) rows, one per switching site [state units → m/s]; (0, n) when none.
+    """
+    from ..model.friction import friction_law
+
+    n = len(model.states)
+    firsts = []
+    for site, law_name in model.sites:
+        law = friction_law(law_name)
+        if law.kink_at_zero_speed and law.state_names:
+            firsts.append(model.index(f"{site}_{law.state_names[0]}"))
+    if not firsts:
+        return np.zeros((0, n))
+    rates = model.module.compiled("_ev_rates")
+    held, dy, aux = np.zeros(model.n_held), np.empty(n), np.empty(len(model.aux))
+    P = np.ascontiguousarray(P, dtype=float)
+    T = np.ascontiguousarray(model.T, dtype=float)
+
+    def speeds(y: np.ndarray) -> np.ndarray:
+        rates(0.0, np.ascontiguousarray(y, dtype=float), held, P, T, dy, aux)
+        return dy[firsts].copy()
+
+    scale = np.array(model.tolerance_scales, dtype=float)
+    scale = np.where(np.isfinite(scale) & (scale > 0.0), scale, 1.0)
+    base = speeds(np.zeros(n))
+    W = np.zeros((len(firsts), n))
+    for j in range(n):
+        y = np.zeros(n)
+        y[j] = scale[j]
+        W[:, j] = (speeds(y) - base) / scale[j]
+    for k in firsts:  # a friction state is not a speed
+        W[:, k] = 0.0
+    mixed = np.zeros(n)
+    mixed[:] = scale * np.linspace(0.3, 1.7, n)
+    mixed[firsts] = 0.0
+    probe = speeds(mixed) - base
+    keep = (np.abs(W).max(axis=1) > 0.0) & (np.abs(base) == 0.0) & (
+        np.abs(probe - W @ mixed) <= 1e-9 * np.maximum(np.abs(W) @ np.abs(mixed), 1e-300))
+    return np.ascontiguousarray(W[keep])
+
+
 def profile_breakpoints(profile: Profile, t_end: float, base: float, *,
                         every_sample: bool = False) -> np.ndarray:
     """Instants where the command has a kink, declared to the dense-output integrator as step
@@ -598,6 +660,8 @@ class Simulation:
             motor_position=tol.motor_position, motor_speed=tol.motor_speed)
         self.y0 = system.initial_vector(self.model)
         self.bound = divergence_bounds(system, profile, self.model)
+        self.switch_rows = (switching_rows(self.model, self.P)
+                            if options.method in _DENSE_MODES else None)
         self._chunks: _Chunks | None = None
         self._running: _Chunks | None = None
 
@@ -797,7 +861,7 @@ class Simulation:
             solver_stats.update({
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
                 "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8]),
-                "eigen_analyses": int(stats[9])})
+                "eigen_analyses": int(stats[9]), "switch_crossings": int(stats[10])})
         return self._result(t, y, aux_parts, solver_stats)
 
     def _result(self, t: np.ndarray, y: np.ndarray, aux_parts: list[np.ndarray],
@@ -884,7 +948,8 @@ class _Chunks:
                 sim.tolerances.rtol, sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive,
                 max_steps, self.mode,
                 self.kinks[self.kinks < t_stop], self.want_aux,
-                start=start, held=held, memory=memory, bound=sim.bound, P=sim.P)
+                start=start, held=held, memory=memory, bound=sim.bound, P=sim.P,
+                switch_rows=sim.switch_rows)
         else:
             t, yy, aa, stats, _ = dopri5.integrate(
                 sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule,

@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from . import steps
+from .events import first_crossing as switch_crossing
 from .modes import H_LAMBDA as MODAL_H_LAMBDA
 from .modes import REFRESH as MODAL_REFRESH
 from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
@@ -121,7 +122,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     tick: np.ndarray, redo: int, f0: np.ndarray, k2: np.ndarray,
                     k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
                     f_new: np.ndarray, yt: np.ndarray, y_new: np.ndarray, e: np.ndarray,
-                    aux: np.ndarray) -> Any:
+                    aux: np.ndarray, switch_rows: np.ndarray) -> Any:
     """The driver of every integration (module docstring); compiled only as one of its
     specialisations (:func:`specialise`), whose signatures take a subset of these parameters.
 
@@ -201,6 +202,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         Work space, length ``n`` [SI per second, per state] (``COMM``).
     aux : numpy.ndarray
         The auxiliary signals at the end [SI, per signal] (``COMM``).
+    switch_rows : numpy.ndarray
+        (m, n) switching surfaces W·y whose zero crossings are located and made step ends
+        (:mod:`feeddrive.solvers.events`); (0, n) for none [state units → m/s] (``DENSE``).
 
     Returns
     -------
@@ -275,6 +279,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         n_rodas = 0
         switches = 0
         n_eig = 0
+        n_switch = 0
+        sw_last = -1  # the surface the last accepted step landed on (-1: none)
+        sw_next = -1
     steps = 0
     rejected = 0
     n_rhs = 0
@@ -515,6 +522,27 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                         q2[i] = bspl
                         q3[i] = ydiff - h_try * f_new[i] - bspl
                     _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                if switch_rows.shape[0] > 0:
+                    # a switching surface crossed inside the step (a friction site's sliding
+                    # speed through zero: a kink of the right-hand side): the step is thrown
+                    # away and the crossing, located on its continuous extension, becomes the
+                    # event the next step lands on (feeddrive.solvers.events)
+                    th_sw, k_sw = switch_crossing(switch_rows, y, y_new, q1, q2, q3, e, stiff)
+                    # a crossing closer to t than the event resolution is left inside (a
+                    # landing there would not advance t: the speed dithering about zero)
+                    if th_sw > 0.0 and th_sw * h_done > 1e-12 * max(1.0, t):
+                        if steps > max_steps:
+                            status = STATUS_MAX_STEPS
+                            break
+                        t_ev = t + th_sw * h_done
+                        is_sample = False
+                        is_stop = False
+                        if k_sw != sw_last:  # a crossing, not a second landing on it
+                            n_switch += 1
+                        sw_next = k_sw
+                        continue
+                    sw_last = sw_next
+                    sw_next = -1
                 # outputs strictly inside the step (an output at t_new that is an event time
                 # is written after the event below)
                 while i_out < n_out:
@@ -739,7 +767,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
                           t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
-                          float(n_eig)])
+                          float(n_eig), float(n_switch)])
         return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats,
                 held)
     return None
@@ -1021,7 +1049,7 @@ _LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol"
 _DENSE_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                  "rel_mask", "h_init", "h_max", "adaptive", "max_steps", "mode", "stops",
                  "want_aux", "S", "colour", "start", "held", "memory", "bound", "t_buf",
-                 "y_buf", "aux_buf")
+                 "y_buf", "aux_buf", "switch_rows")
 _COMM_PARAMS = ("t", "t_end", "t0", "n", "y", "held", "held_prev", "P", "T", "schedule",
                 "tick", "base", "rtol", "atol", "rel_mask", "h_max", "max_steps", "redo",
                 "memory", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e",

@@ -62,7 +62,8 @@ if TYPE_CHECKING:
     from ..model.assemble import Model
 
 STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "jacobians",
-              "rosenbrock_steps", "switches", "output_rhs_evaluations", "eigen_analyses")
+              "rosenbrock_steps", "switches", "output_rhs_evaluations", "eigen_analyses",
+              "switch_crossings")
 
 CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_MODAL",
              "STIFF_HLAMBDA", "STIFF_STEPS",
@@ -99,6 +100,7 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
               memory: np.ndarray | None = None, bound: np.ndarray | None = None,
               P: np.ndarray | None = None,
               out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+              switch_rows: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``; a multiple
     of ``out_every``) to ``t_end`` (the driver
@@ -161,6 +163,10 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
         views of their first rows, valid until the buffers' next use (a caller that runs many
         integrations and keeps none of their arrays saves a fresh array's page faults per
         call: ~3 ms for a 100-s run's 12 MB); new arrays by default [s; SI].
+    switch_rows : numpy.ndarray, optional
+        (m, n) switching surfaces W·y (a friction site's sliding speed) whose zero crossings
+        are located on the continuous extension and made step ends
+        (:mod:`feeddrive.solvers.events`); none by default [state units → m/s].
 
     Returns
     -------
@@ -200,7 +206,9 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
             adaptive, max_steps, mode,
             np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
             model.jacobian_pattern, model.jacobian_colours, start, held, memory, bound,
-            *(_NO_OUTPUT if out is None else out)))
+            *(_NO_OUTPUT if out is None else out),
+            np.zeros((0, len(model.states))) if switch_rows is None
+            else np.ascontiguousarray(switch_rows, dtype=np.float64)))
     return result
 
 
@@ -246,6 +254,7 @@ def template_sources() -> list[str]:
     src = driver.source("integrate_dense")
     return [f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})",
             "from feeddrive.solvers.schedule import due, next_instant",
+            "from feeddrive.solvers.events import first_crossing as switch_crossing",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
             "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
             "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH",

@@ -88,6 +88,11 @@ class FrictionLaw:
     parameters_class: type = _LuGreParameters
     published: bool = True  # a published model: its docstring has a References section
     kernel: Any = None
+    #: the law has a kink at zero sliding speed (|v|, the direction branch) and its first
+    #: state's rate is the sliding speed when its states are zero (ż = v − …·|v|·z): the
+    #: dense-output integrator makes the speed's zero crossings step ends
+    #: (:mod:`feeddrive.solvers.events`)
+    kink_at_zero_speed: bool = False
 
     @property
     def compiled(self) -> Any:

@@ -77,6 +77,7 @@ class Dahl(FrictionLaw):
     state_names = ("bristle",)
     citation = "Dahl 1968; Olsson et al., Eur. J. Control 4 (1998) 176-195, Eq. (9)"
     kernel = dahl_kernel
+    kink_at_zero_speed = True
 
     def steady_state(self, v: float, site):
         """Bristle deflection in steady sliding, z = sgn(v)·F_c/σ0.

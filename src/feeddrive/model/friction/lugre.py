@@ -195,6 +195,7 @@ class LuGre(FrictionLaw):
     citation = ("Canudas de Wit, Olsson, Åström, Lischinsky, IEEE TAC 40 (1995) 419-425; "
                 "Wang2021 Eqs. (9)-(11)")
     kernel = lugre_kernel
+    kink_at_zero_speed = True
 
     def steady_state(self, v: float, site):
         """Bristle deflection in steady sliding, z = sgn(v)·σ0·g(v)/σ0.

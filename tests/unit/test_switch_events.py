@@ -1,0 +1,92 @@
+"""The zero crossings of a friction site's sliding speed are located and made step ends of
+the dense-output driver (issue 35 item 2: the DDFS's table reverses eight times in its start
+transient, and a step across the guide friction's kink at v = 0 kept the error from falling
+with the tolerance; feeddrive.solvers.events)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import feeddrive as fd
+from feeddrive.engine.simulate import Simulation, switching_rows
+from feeddrive.solvers.events import THETA_MIN, first_crossing
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def test_the_rows_are_the_sliding_speeds_of_the_acting_sites() -> None:
+    H = fd.preset("wang2021").screw.lead / (2 * np.pi)
+    ddfs = Simulation(fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4),
+                      fd.ConstantSpeed(0.5e-3, 16e-3))
+    names = ddfs.model.state_names
+    W = switching_rows(ddfs.model, ddfs.P)
+    expected = np.zeros((3, len(names)))
+    expected[0, names.index("screw_speed")] = H  # screw site: H·ω_s
+    expected[1, names.index("nut_speed")] = H  # nut site: H·ω_n
+    expected[2, names.index("table_speed")] = 1.0  # guide: v_t
+    np.testing.assert_allclose(W, expected, rtol=1e-12, atol=0)
+    # the CDFS's held nut does not act: no row for it
+    cdfs = Simulation(fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4),
+                      fd.ConstantSpeed(1e-3))
+    assert switching_rows(cdfs.model, cdfs.P).shape == (2, len(names))
+
+
+def test_a_law_without_a_kink_gives_no_row() -> None:
+    p = fd.preset("wang2021")
+    for site in ("screw", "nut", "guide"):
+        p = p.replace_path(f"friction.{site}.law", "stribeck")  # tanh-smoothed: no kink
+    sim = Simulation(fd.DriveSystem(p, "ddfs", 0.4), fd.ConstantSpeed(0.5e-3, 16e-3))
+    assert switching_rows(sim.model, sim.P).shape[0] == 0
+
+
+def test_first_crossing_finds_the_root_on_the_continuous_extension() -> None:
+    # DOPRI5's extension with q2 = q3 = e = 0 is y + θ·q1: g = 1 − 4θ crosses at θ = 0.25
+    y, y_new = np.array([1.0, 5.0]), np.array([-3.0, 5.0])
+    q1, zero = y_new - y, np.zeros(2)
+    W = np.array([[1.0, 0.0]])
+    th = first_crossing(W, y, y_new, q1, zero, zero, zero, False)[0]
+    assert th == pytest.approx(0.25, abs=1e-12)
+    # a quadratic extension: y(θ) = y + θ(q1 + (1 − θ) q2) with g = 1 − 3θ + (1 − θ)θ·q2
+    q2 = np.array([2.0, 0.0])
+    y_new = np.array([-2.0, 5.0])
+    th = first_crossing(W, y, y_new, y_new - y, q2, zero, zero, False)[0]
+    # root of 1 − 3θ + 2θ(1 − θ) = 1 − θ − 2θ²: θ = 0.5
+    assert th == pytest.approx(0.5, abs=1e-12)
+    # no sign change, or one within THETA_MIN of an end: none
+    assert first_crossing(W, y, np.array([0.5, 5.0]), np.array([-0.5, 0.0]), zero, zero,
+                          zero, False)[0] == -1.0
+    y_end = np.array([-THETA_MIN / 10, 0.0])
+    assert first_crossing(W, np.array([1.0, 0.0]), y_end, y_end - np.array([1.0, 0.0]),
+                          zero, zero, zero, False)[0] == -1.0
+
+
+def test_the_ddfs_start_lands_on_every_reversal_of_the_reference() -> None:
+    """The engine lands on every reversal of the table speed of the Radau reference
+    (reference/make_accuracy_reference.py): eight, after a start from zero speed (a start,
+    not a crossing); the screw and nut never reverse.  A crossing located from a large step
+    may take a second landing close to it (counted when another step came between)."""
+    with np.load(DATA / "accuracy_ddfs_0p5_vn16.npz") as f:
+        t, v = f["time"], f["table_speed"]
+    k = np.flatnonzero(v[1:-1] * v[2:] < 0.0) + 1  # sign changes after the start
+    reversals = t[k] - v[k] / (v[k + 1] - v[k]) * (t[k + 1] - t[k])
+    assert reversals.size == 8
+    r = fd.simulate(fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4),
+                    fd.ConstantSpeed(0.5e-3, 16e-3), float(t[-1]))
+    assert reversals.size <= r.solver_stats["switch_crossings"] <= reversals.size + 2
+
+
+def test_a_speed_dithering_about_zero_does_not_stall_the_run() -> None:
+    """The bug this guards: the torque-ripple DDFS at 0.05 mm/s (hollow motor 30 mm/s; a
+    trial of reproduce's forced study) sticks, its table speed dithering about zero, and a
+    crossing located closer to t than t's resolution was landed on without advancing t —
+    the driver looped for good.  Measured with the guard: 51 190 steps, 741 crossings (48 039
+    steps without crossing location)."""
+    system = fd.DriveSystem(fd.preset("wang2021-ripple"), "ddfs", 0.4)
+    r = fd.simulate(system, fd.ConstantSpeed(0.05e-3, 30e-3), 12.0,
+                    options=fd.SolverOptions(max_steps=200_000))
+    assert r.time[-1] == pytest.approx(12.0)
+    assert r.solver_stats["switch_crossings"] > 100
+    assert r.solver_stats["steps"] < 70_000
