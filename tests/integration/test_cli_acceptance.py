@@ -232,6 +232,7 @@ def test_circular_output_analysed_gives_the_same_metrics(tmp_path: Path) -> None
     (("--feed", "50000", "--acceleration", "10"), "--lead-arc = 90.0: the feed ramp"),
     (("--lead-arc", "180"), "--lead-arc = 180.0: expected below π (180°)"),
     (("--radius", "0"), "--radius = 0.0: expected a value > 0 [mm]"),
+    (("--nut-speed", "100"), "--nut-speed = 100.0: no axis of the test drives its nut"),
 ])
 def test_circular_refuses_bad_requests_in_one_line(tmp_path: Path, monkeypatch,
                                                    args: tuple[str, ...], words: str) -> None:
@@ -254,5 +255,6 @@ def test_circular_help_names_units() -> None:
     shown = " ".join(invoke("circular", "--help").stdout.split())
     for text in ("Circle radius R [mm]", "Path feed F [mm/min]", "[mm/s²]",
                  "lead-out arc of each run [°]", "the screw's lead [mm]",
+                 "Nut speed of the DDFS axes [mm/s]",
                  "analyze --circular reads it", "ISO 230-4"):
         assert text in shown, text

@@ -34,6 +34,8 @@ __all__ = ["CircularRunTrace", "circular_start_angles", "run_circular_test"]
 
 #: where each run's measured revolution starts and ends, halfway between reversals [rad]
 MEASURE_START = math.radians(45.0)
+#: rest after a DDFS nut has reached its speed, before the path starts [s]
+NUT_SETTLE = 0.5
 
 
 def circular_start_angles(lead_arc: float) -> dict[str, float]:
@@ -70,8 +72,14 @@ class CircularRunTrace:
         The circle's centre [m].
     radius, feed, acceleration, lead_arc : float
         The test's settings [m, m/s, m/s², rad].
+    nut_speed : float
+        The DDFS axes' nut speed [m/s] (0: none).
+    start_time : float
+        When the path starts in each run (after the nuts' spin-up) [s].
     results : dict
         ``"CCW"`` and ``"CW"`` → the machine's simulation of that run.
+    offsets : dict
+        ``"CCW"`` and ``"CW"`` → where that run's time 0 lies in the joined trace [s].
     """
 
     test: CircularTest
@@ -84,7 +92,41 @@ class CircularRunTrace:
     feed: float
     acceleration: float
     lead_arc: float
+    nut_speed: float
+    start_time: float
     results: dict[str, Any]
+    offsets: dict[str, float] = dataclasses.field(default_factory=dict)
+
+    def reversing_sites(self) -> dict[str, dict[str, int]]:
+        """How often each friction site's force changes sign within the measured revolutions.
+
+        A friction force changes sign when its site's sliding speed reverses: in a CDFS every
+        site reverses with the table, in a DDFS whose nut runs faster than the table only the
+        sites sliding at the table's speed (the guide, and the ball–nut share at the relative
+        screw–nut speed) do.
+
+        Returns
+        -------
+        dict
+            Axis → site (``screw``, ``nut``, ``guide`` …) → sign changes over both runs'
+            measured revolutions [-].
+        """
+        out: dict[str, dict[str, int]] = {}
+        for run in self.test.runs:
+            result = self.results[run.direction]
+            t = np.asarray(result.time, dtype=float) + self.offsets[run.direction]
+            inside = (t >= run.time[0]) & (t <= run.time[-1])
+            for name in self.axes:
+                prefix = f"{name}."
+                for var in result.dataset.data_vars:
+                    if not (var.startswith(prefix) and var.endswith("_friction")):
+                        continue
+                    force = np.asarray(result[var], dtype=float)[inside]
+                    sign = np.sign(force[force != 0.0])
+                    site = var[len(prefix):-len("_friction")]
+                    changes = int(np.count_nonzero(np.diff(sign)))
+                    out.setdefault(name, {})[site] = out.get(name, {}).get(site, 0) + changes
+        return out
 
 
 def _check_request(machine: Machine, axes: tuple[str, str], centre: tuple[float, float],
@@ -106,6 +148,44 @@ def _check_request(machine: Machine, axes: tuple[str, str], centre: tuple[float,
                                  f"{length * 1e3:.6g} mm ({name}.{path})")
 
 
+def _nut_driven(machine: Machine, axes: tuple[str, str], nut_speed: float) -> tuple[str, ...]:
+    """The axes whose nut follows ``nut_speed`` (a DDFS); refused when there is none."""
+    from ..model.mechanisms import mechanism
+
+    if not (isinstance(nut_speed, int | float) and math.isfinite(nut_speed) and nut_speed >= 0):
+        raise ParameterError("nut_speed", nut_speed, "expected a speed ≥ 0 [m/s]")
+    if nut_speed == 0.0:
+        return ()
+    driven = tuple(name for name in axes
+                   if machine.axis(name).drive in mechanism(machine.axis(name).drive)
+                   .nut_driven_drives)
+    if not driven:
+        raise ParameterError("nut_speed", nut_speed, "no axis of the test drives its nut (a "
+                             "DDFS); expected 0")
+    return driven
+
+
+def _profile(machine: Machine, contour: Any, nut_driven: tuple[str, ...], nut_speed: float,
+             acceleration: float, start_time: float) -> Any:
+    """The contour's references, after a rest of ``start_time`` in which the nuts spin up."""
+    from ..machine import MachineProfile
+    from ..model.reference import SampledSpeed
+
+    profile = MachineProfile.from_contour(contour, machine)
+    if not nut_driven:
+        return profile
+    step = float(profile.time[1] - profile.time[0])
+    before = int(round(start_time / step))
+    t = np.arange(before + profile.time.size) * step
+    rest = np.zeros(before)
+    vn = np.minimum(acceleration * t, nut_speed)
+    axes = tuple((name, SampledSpeed(time=t, table_speed=np.concatenate([rest, r.table_speed]),
+                                     nut_speed=vn if name in nut_driven else None))
+                 for name, r in profile.axes)
+    return MachineProfile(time=t, table_speed=np.concatenate([rest, profile.table_speed]),
+                          axes=axes, contour=contour)
+
+
 def _check_budget(duration: float, options: SolverOptions | None) -> None:
     from ..engine.budget import check_output_memory, run_budget
     from ..engine.options import current
@@ -123,7 +203,8 @@ def _check_budget(duration: float, options: SolverOptions | None) -> None:
 
 def run_circular_test(machine: Machine, *, radius: float, feed: float,
                       axes: tuple[str, str] | None = None, acceleration: float = 1.0,
-                      lead_arc: float = math.radians(90.0), pitch: float | None = None,
+                      lead_arc: float = math.radians(90.0), nut_speed: float = 0.0,
+                      pitch: float | None = None,
                       options: SolverOptions | None = None,
                       progress: Callable[[float, float], None] | None = None
                       ) -> CircularRunTrace:
@@ -144,6 +225,11 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
     lead_arc : float, default π/2
         The lead-in arc and the lead-out arc of each run [rad]; the feed ramp must end
         within it.
+    nut_speed : float, default 0.0
+        Speed of the nut of every axis that drives its nut (the DDFS) [m/s]: it rises at
+        ``acceleration`` from rest and runs :data:`NUT_SETTLE` s at speed before the path
+        starts, and keeps its speed to the end (the table moves at the screw's speed minus the
+        nut's, Wang2021 Sect. 2).
     pitch : float, optional
         Period of the cyclic error looked for [m].
     options : SolverOptions, optional
@@ -162,7 +248,8 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         Before any run: a machine with fewer than two axes or an unknown axis, a circle beyond
         an axis' travel, a feed beyond an axis' speed limit
         (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`), a lead arc shorter
-        than the feed ramp or not below 180°, runs needing more solver steps than the
+        than the feed ramp or not below 180°, a nut speed with no axis that drives its nut,
+        runs needing more solver steps than the
         options allow.
     """
     from ..machine import Circle, simulate_machine
@@ -183,6 +270,8 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         raise ParameterError("lead_arc", lead_arc, "expected below π (180°) [rad]")
     centre = (machine.axis(axes[0]).table_position, machine.axis(axes[1]).table_position)
     _check_request(machine, axes, centre, radius, feed)
+    nut_driven = _nut_driven(machine, axes, nut_speed)
+    start_time = nut_speed / acceleration + NUT_SETTLE if nut_driven else 0.0
     ramp = feed ** 2 / (2.0 * acceleration)
     if ramp >= radius * lead_arc:
         raise ParameterError("lead_arc", lead_arc, f"the feed ramp F²/2a = {ramp * 1e3:.6g} mm"
@@ -190,8 +279,9 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
                              f" {radius * lead_arc * 1e3:.6g} mm; expected a longer lead arc or "
                              "a higher acceleration")
     turns = 1.0 + lead_arc / math.pi
-    _check_budget(2.0 * math.pi * radius * turns / feed + feed / acceleration, options)
-    times, xs, ys, results = [], [], [], {}
+    _check_budget(start_time + 2.0 * math.pi * radius * turns / feed + feed / acceleration,
+                  options)
+    times, xs, ys, results, offsets = [], [], [], {}, {}
     offset = 0.0
     for direction, start in circular_start_angles(lead_arc).items():
         # each run's axes start at rest on the circle at its start angle
@@ -201,8 +291,10 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
             if ax.name in axes else ax for ax in machine.axes))
         contour = Circle(feed=feed, acceleration=acceleration, axes=axes, radius=radius,
                          clockwise=direction == "CW", start_angle=start, turns=turns)
-        result = simulate_machine(placed, contour, options=options)
+        result = simulate_machine(placed, _profile(placed, contour, nut_driven, nut_speed,
+                                                   acceleration, start_time), options=options)
         results[direction] = result
+        offsets[direction] = offset
         t = np.asarray(result.time, dtype=float)
         times.append(t + offset)
         xs.append(start_xy[0] + np.asarray(result[f"{axes[0]}.table_position"], dtype=float))
@@ -217,4 +309,5 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
     return CircularRunTrace(test=test, time=time, x=x, y=y, axes=(axes[0], axes[1]),
                             centre=centre, radius=float(radius), feed=float(feed),
                             acceleration=float(acceleration), lead_arc=float(lead_arc),
-                            results=results)
+                            nut_speed=float(nut_speed), start_time=float(start_time),
+                            results=results, offsets=offsets)

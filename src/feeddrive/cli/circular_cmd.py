@@ -70,6 +70,9 @@ def circular_command(
                                        "lead-in and lead-out [mm/s²]."),
     lead_arc: float = typer.Option(90.0, "--lead-arc", help="Lead-in arc and lead-out arc of "
                                    "each run [°]."),
+    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed of the DDFS axes "
+                                    "[mm/s]: spun up before the path starts, kept to the "
+                                    "end."),
     pitch: float | None = typer.Option(None, "--pitch", help="Period of the cyclic error to "
                                        "fit, the screw's lead [mm]."),
     magnification: float | None = typer.Option(None, "--magnification", help="--plot: "
@@ -107,6 +110,8 @@ def circular_command(
         if given is not None and not (math.isfinite(given) and given > 0):
             raise ParameterError(option, given, "expected a value > 0 ["
                                  + ("mm" if option == "--pitch" else "-") + "]")
+    if not (math.isfinite(nut_speed) and nut_speed >= 0):
+        raise ParameterError("--nut-speed", nut_speed, "expected a speed ≥ 0 [mm/s]")
     if max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
     pair = parse_axes(axes)
@@ -116,7 +121,7 @@ def circular_command(
     try:
         run = run_circular_test(built, radius=radius * MM, feed=feed * MM_PER_MIN, axes=pair,
                                 acceleration=acceleration * MM,
-                                lead_arc=math.radians(lead_arc),
+                                lead_arc=math.radians(lead_arc), nut_speed=nut_speed * MM,
                                 pitch=None if pitch is None else pitch * MM, options=options)
     except ParameterError as err:  # the API names its arguments; the user typed options
         raise ParameterError(*_as_option(err.field, err.value), err.message) from None
@@ -141,11 +146,13 @@ def circular_command(
     if as_json:
         print_json({**test.to_dict(), "machine": built.name, "axes": list(run.axes),
                     "acceleration_mm_s2": acceleration, "lead_arc_deg": lead_arc,
+                    "nut_speed_mm_s": nut_speed,
                     "duration_s": float(run.time[-1]), "output": output, "plot": plot})
         return
     _say(f"ISO 230-4 circular test: machine {built.name}, axes {run.axes[0]} (X) and "
          f"{run.axes[1]} (Y), R {radius:g} mm, feed {feed:g} mm/min, lead-in and lead-out "
-         f"arcs {lead_arc:g}°; {float(run.time[-1]):.4g} s simulated")
+         f"arcs {lead_arc:g}°" + (f", DDFS nut speed {nut_speed:g} mm/s" if nut_speed else "")
+         + f"; {float(run.time[-1]):.4g} s simulated")
     for note in test.notes:
         _say(f"  {note}")
     for line in describe(test):
@@ -159,8 +166,9 @@ def circular_command(
 
 def _as_option(field: str, value: Any) -> tuple[str, Any]:
     """An API argument [m, m/s, rad] as the option the user typed [mm, mm/min, °]."""
-    if field in ("radius", "feed", "acceleration", "lead_arc") and isinstance(value, float):
+    if (field in ("radius", "feed", "acceleration", "lead_arc", "nut_speed")
+            and isinstance(value, float)):
         scale = {"radius": 1e3, "feed": 6e4, "acceleration": 1e3,
-                 "lead_arc": 180.0 / math.pi}[field]
+                 "lead_arc": 180.0 / math.pi, "nut_speed": 1e3}[field]
         return f"--{field.replace('_', '-')}", float(f"{value * scale:.12g}")
     return {"max_steps": "--max-steps", "axes": "--axes"}.get(field, field), value
