@@ -189,3 +189,72 @@ def test_analyze_refuses_an_option_of_another_analysis(circle_csv, args: tuple[s
     assert r.exit_code == 2
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and words in lines[0], r.stderr
+
+
+def test_circular_output_analysed_gives_the_same_metrics(tmp_path: Path) -> None:
+    """Issue 37 acceptance: `feeddrive circular --output` read back by `analyze --circular`
+    gives the command's numbers to 1e-9 (µm, µm/m, ms)."""
+    trace_file, polar = tmp_path / "circle.csv", tmp_path / "polar.png"
+    r = invoke("circular", "--radius", "50", "--feed", "5000", "--output", str(trace_file),
+               "--plot", str(polar), "--json")
+    assert r.exit_code == 0, r.output
+    run = json.loads(r.stdout)
+    assert run["runs"] == ["CCW", "CW"] and run["axes"] == ["x", "y"]
+    assert run["centre_mm"] == [400.0, 400.0]  # the xy-table's axes start at 0.4 m
+    a = invoke("analyze", "--circular", str(trace_file), "--radius", "50", "--centre",
+               "400,400", "--json")
+    assert a.exit_code == 0, a.output
+    again = json.loads(a.stdout)
+    for key in ("bidirectional_circular_deviation_um", "mean_radius_deviation_um",
+                "radial_deviation_max_um", "radial_deviation_min_um", "squareness_um_per_m",
+                "scale_mismatch_um", "servo_mismatch_ms", "residual_rms_um", "feed_mm_min"):
+        assert again[key] == pytest.approx(run[key], abs=1e-9), key
+    for key in ("circular_deviation_um", "radius_deviation_um", "backlash_um",
+                "lateral_play_um"):
+        assert set(again[key]) == set(run[key]), key
+        for name, value in run[key].items():
+            assert again[key][name] == pytest.approx(value, abs=1e-9), (key, name)
+    assert len(run["reversal_spikes"]) == 8
+    for mine, theirs in zip(run["reversal_spikes"], again["reversal_spikes"], strict=True):
+        assert theirs["height_um"] == pytest.approx(mine["height_um"], abs=1e-9)
+    assert polar.stat().st_size > 0
+    assert trace_file.read_text().splitlines()[1] == (
+        "# nominal circle: --radius 50.0 --centre 400.0,400.0")
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (("--radius", "500"), "--radius = 500.0: axis x would run -100 … 900 mm about its centre "
+     "400 mm; expected within its travel 0 … 800 mm (x.screw.length)"),
+    (("--feed", "2e5", "--machine", "SLOW"), "--feed = 200000.0: expected ≤ 95493 mm/min, "
+     "axis x's speed limit"),
+    (("--axes", "x,z"), "--axes = 'z': no such axis"),
+    (("--axes", "x"), "--axes = 'x': expected two different axis names"),
+    (("--feed", "50000", "--acceleration", "10"), "--lead-arc = 90.0: the feed ramp"),
+    (("--lead-arc", "180"), "--lead-arc = 180.0: expected below π (180°)"),
+    (("--radius", "0"), "--radius = 0.0: expected a value > 0 [mm]"),
+    (("--nut-speed", "100"), "--nut-speed = 100.0: no axis of the test drives its nut"),
+])
+def test_circular_refuses_bad_requests_in_one_line(tmp_path: Path, monkeypatch,
+                                                   args: tuple[str, ...], words: str) -> None:
+    import feeddrive.engine.simulate as engine
+
+    def no_run(*a: object, **k: object) -> None:
+        raise AssertionError("simulated a refused request")
+
+    monkeypatch.setattr(engine, "simulate", no_run)
+    slow = tmp_path / "slow.toml"  # 300 V / 0.15 V s/rad × 5 mm/2π = 1591.5 mm/s = 95493 mm/min
+    slow.write_text('extends = "xy-table"\n[axes.x]\nextends = "wang2021"\n'
+                    '[axes.x.controller]\nvoltage_limit = 300.0\n')
+    r = invoke("circular", *[str(slow) if a == "SLOW" else a for a in args])
+    assert r.exit_code == 2, r.output
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0], r.stderr
+
+
+def test_circular_help_names_units() -> None:
+    shown = " ".join(invoke("circular", "--help").stdout.split())
+    for text in ("Circle radius R [mm]", "Path feed F [mm/min]", "[mm/s²]",
+                 "lead-out arc of each run [°]", "the screw's lead [mm]",
+                 "Nut speed of the DDFS axes [mm/s]",
+                 "analyze --circular reads it", "ISO 230-4"):
+        assert text in shown, text

@@ -223,6 +223,7 @@ def _inputs(folder: Path) -> dict[str, list[str]]:
         "identify dynamic": ["identify", "dynamic", str(trace)],
         "identify merge": ["identify", "merge", str(folder / "fragment.toml")],
         "positioning": ["positioning", "--targets", "100,110"],
+        "circular": ["circular"],
     }
 
 
@@ -252,7 +253,8 @@ def test_the_output_options_are_the_ones_this_test_knows() -> None:
 _COMMANDS = ("analyze", "calibrate", "simulate", "fit", "predict", "validate", "loops",
              "stability",
              "reproduce", "sensitivity", "sweep", "map", "friction", "export fmu",
-             "identify static", "identify dynamic", "identify merge", "positioning")
+             "identify static", "identify dynamic", "identify merge", "positioning",
+             "circular")
 
 
 def _declared(command: str, option: str) -> Any:

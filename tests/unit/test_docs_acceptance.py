@@ -42,13 +42,15 @@ def test_columns_and_options_named_exist() -> None:
         assert f"`{name}`" in DOC
     assert ",".join(POSITIONING_COLUMNS) in DOC
     runner = CliRunner()
-    for command in ("analyze", "positioning"):
+    circular, positioning = DOC.split("## ISO 230-2 positioning test")
+    on_record, on_machine = circular.split("### `feeddrive circular`")
+    sections = {"analyze": on_record, "circular": on_machine,
+                "positioning": positioning.split("### `feeddrive positioning`")[1]}
+    for command, section in sections.items():
         shown = runner.invoke(app, [command, "--help"], env={"COLUMNS": "200"}).stdout
-        circular, positioning = DOC.split("## ISO 230-2 positioning test")
-        section = circular if command == "analyze" else positioning.split(
-            "### `feeddrive positioning`")[1]
         for option in set(re.findall(r"`(--[a-z][a-z-]*)", section)):
-            if command == "positioning" and option in ("--positioning",):
+            if (command, option) in (("positioning", "--positioning"),
+                                     ("circular", "--circular"), ("circular", "--centre")):
                 continue
             assert option in shown, (command, option)
 
@@ -60,6 +62,9 @@ def test_columns_and_options_named_exist() -> None:
     (["positioning", "--targets", "100,900"],
      "error: --targets = '100,900': the test reaches 98 … 902 mm (targets ∓ the overshoot); "
      "expected within the travel 0 … 800 mm (screw.length)"),
+    (["circular", "--radius", "500"],
+     "error: --radius = 500.0: axis x would run -100 … 900 mm about its centre 400 mm; "
+     "expected within its travel 0 … 800 mm (x.screw.length)"),
 ])
 def test_quoted_refusals_are_the_cli_s(args: list[str], quoted: str) -> None:
     assert quoted in FLAT

@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 COMMAND_MODULES: dict[str, str] = {
     "analyze": "analyze_cmd",
     "calibrate": "calibrate_cmd",
+    "circular": "circular_cmd",
     "compensate": "compensate_cmd",
     "creep": "creep_cmd",
     "explore": "explore_cmd",

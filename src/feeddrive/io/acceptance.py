@@ -17,13 +17,16 @@ import numpy as np
 
 from .measured import MeasuredDataError, _need_rows, check_increasing, read_csv_table
 
-__all__ = ["POSITIONING_COLUMNS", "X_COLUMNS", "Y_COLUMNS", "PositioningRecord", "XYTrace",
-           "read_positioning_record", "read_xy_trace", "write_positioning_record"]
+__all__ = ["POSITIONING_COLUMNS", "X_COLUMNS", "XY_COLUMNS", "Y_COLUMNS", "PositioningRecord",
+           "XYTrace", "read_positioning_record", "read_xy_trace", "write_positioning_record",
+           "write_xy_trace"]
 
 #: x columns looked for, in this order (a machine run names them ``<axis>.<signal>``)
 X_COLUMNS = ("x", "x_position", "x.table_position")
 #: y columns looked for, in this order
 Y_COLUMNS = ("y", "y_position", "y.table_position")
+#: the columns of a circular test's record, as :func:`write_xy_trace` writes them
+XY_COLUMNS = ("time [s]", "x [mm]", "y [mm]")
 #: the columns of a positioning record, as :func:`write_positioning_record` writes them
 POSITIONING_COLUMNS = ("target [mm]", "direction", "cycle", "position [mm]")
 
@@ -101,6 +104,41 @@ def read_xy_trace(path: str | Path, *, time_column: str = "time", x_column: str 
     x, xname, _ = table.quantity(names["x"], "length", unit=position_unit, default_unit="mm")
     y, yname, _ = table.quantity(names["y"], "length", unit=position_unit, default_unit="mm")
     return XYTrace(time=time, x=x, y=y, source=table.source, columns=(xname, yname))
+
+
+def write_xy_trace(path: str | Path, time: np.ndarray, x: np.ndarray, y: np.ndarray, *,
+                   comment: str = "") -> Path:
+    """Write a circular test's trace: time [s], x [mm], y [mm].
+
+    Written atomically with 17 significant digits, so that :func:`read_xy_trace` gives the
+    same numbers back (positions as x·1e3 [mm], read back times 1e-3).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    time : numpy.ndarray
+        Sample times [s].
+    x, y : numpy.ndarray
+        Positions [m].
+    comment : str, default ""
+        ``#`` lines written first (what produced the record).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    from .outputs import atomic_path
+
+    rows = [f"{float(t)!r},{float(a * 1e3)!r},{float(b * 1e3)!r}"
+            for t, a, b in zip(np.asarray(time, dtype=float), np.asarray(x, dtype=float),
+                               np.asarray(y, dtype=float), strict=True)]
+    text = "".join(f"# {line}\n" for line in comment.splitlines() if line)
+    text += ",".join(XY_COLUMNS) + "\n" + "\n".join(rows) + "\n"
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
+    return Path(path)
 
 
 @dataclass(frozen=True)

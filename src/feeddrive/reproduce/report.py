@@ -34,6 +34,7 @@ from .beyond_section import (
     summary_text,
 )
 from .linear_section import cdfs_linear, linear_rows
+from .quadrant_study import section as quadrant_section
 from .sensitivity_section import sensitivity_rows
 from .studies import MID, PAPER, StudySettings, write_csv
 
@@ -723,6 +724,8 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
          "Wit et al. 1995), with the exact model and ±20 % error on F_c, F_s and v_s, against "
          "the DDFS (`feeddrive compensate`).  Critical speeds from rest by the verdict rule.",
          compensation_rows(results.get("compensation"))),
+        ("quadrant", "Beyond the paper: does the DDFS remove the quadrant glitch?",
+         *quadrant_section(results.get("quadrant"))),
         ("readings", "Stiffness chain readings", "K_eq at mid-screw under readings of "
          "Eqs. (2)–(5); the paper states 21.6 N/µm.", readings),
         ("study", "Model-reading study", "How each unstated choice moves the critical speeds "
@@ -747,7 +750,7 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
         return figures_mod.CAPTIONS.get(name, ("", name))[1]
 
     header = header_text(results, when)
-    # the contents: every section, then Settings (issue 41 item 1: 19 sections, no links)
+    # the contents: every section, then Settings (issue 41 item 1: no links)
     listed = [(key, title) for key, title, *_ in sections] + [("settings", "Settings")]
     md = [f"# feeddrive reproduction of Wang2021 — parameter set `{params.name}`", "",
           "## The answer", "", answer, "", header, "", "## Contents", ""]

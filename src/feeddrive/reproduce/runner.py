@@ -23,16 +23,27 @@ from ..engine.simulate import DriveSystem, simulate
 from ..io.json_store import ResultStore, code_hash, store_key
 from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters, dumps
-from . import figures, forced_study, reading_study, report, sensitivity_section, studies
+from . import (
+    figures,
+    forced_study,
+    quadrant_study,
+    reading_study,
+    report,
+    sensitivity_section,
+    studies,
+)
 from .studies import MID, PAPER, StudySettings, write_csv
 
 _HERE = Path(__file__).resolve().parent
 # the code that computes the stored studies (beyond the compiled kernels)
 _STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "forced_study.py",
+                  _HERE / "quadrant_study.py",
+                  *(_HERE.parent / "machine" / f"{name}.py" for name in ("__init__", "contour")),
                   *(_HERE.parent / "analysis" / f"{name}.py"
                     for name in ("critical", "cycle_verdict", "creep_window", "tracking",
                                  "trace_input", "verdict_words", "forced", "compensation",
-                                 "sensitivity")),
+                                 "sensitivity", "circular", "circular_run",
+                                 "positioning_run")),
                   _HERE.parent / "engine" / "simulate.py", _HERE.parent / "engine" / "options.py",
                   _HERE.parent / "engine" / "result.py",
                   _HERE.parent / "model" / "mechanisms" / "ball_screw_stiffness.py",
@@ -275,7 +286,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
         else {}
     figure_jobs = [f"readingfig-{i}" for i in range(len(forced_study.FIGURE_READINGS))] \
         if study else []
-    extra = [*(["compensation", "sensitivity"] if study else []), *figure_jobs]
+    extra = [*(["compensation", "sensitivity", "quadrant"] if study else []), *figure_jobs]
     figure_studies = ["fig6", "figs9_10", "fig7", "fig8_trace"]
     names = [*jobs, *study_jobs, *forced_jobs, *extra, *figure_studies]
     found = {k: store.get(k) for k in names}
@@ -293,6 +304,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     tasks: dict[str, tuple[Callable[..., Any], tuple[Any, ...]]] = {}
     if study:
         tasks["sensitivity"] = (sensitivity_section.compute, (params,))
+        tasks["quadrant"] = (quadrant_study.run, (params,))
     tasks.update({k: (_critical_job, (v,)) for k, v in jobs.items() if v[5] != "rest"})
     tasks.update({k: (_critical_job, (jobs[k],))
                   for k in dict.fromkeys([*shared.values(), *comp_shares.values()])})
@@ -381,6 +393,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     results["forced_study"] = [row for k in forced_jobs for row in _entry(found, k)["rows"]]
     results["compensation"] = found["compensation"] if study else None
     results["sensitivity"] = found["sensitivity"] if study else None
+    results["quadrant"] = found["quadrant"] if study else None
     results["reading_figures"] = [found[k] for k in figure_jobs]
     for name in figure_studies:
         results[name] = found[name]

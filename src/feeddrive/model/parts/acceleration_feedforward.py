@@ -92,7 +92,9 @@ class AccelerationFeedforward(Component):
                writes=f"aux:{self._label}_current")  # a held value: no state
         i = names.index(target)
         axes = list(axes)
-        axes[i] = dataclasses.replace(axes[i], current_feedforward=current)
+        before = axes[i].current_feedforward  # another part's feed-forward: both add
+        axes[i] = dataclasses.replace(axes[i], current_feedforward=(
+            f"({before} + {current})" if before else current))
         return axes
 
     def emit_part(self, b: Any) -> None:

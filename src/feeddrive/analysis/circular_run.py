@@ -1,0 +1,313 @@
+"""The ISO 230-4 circular test run on a simulated machine: circle → two runs → trace →
+quantities.  SI.
+
+:func:`run_circular_test` drives two axes of a machine (:mod:`feeddrive.machine`) round a
+circle about the axes' start positions, once counter-clockwise and once clockwise, each run
+with a lead-in and a lead-out arc (ISO 230-4:2005 test procedure: the data taken over 360°
+between arcs that let the feed settle), joins the two runs into one trace (time, x, y) and
+evaluates it with :func:`~feeddrive.analysis.circular.circular_test`.  The CCW run starts at
+45° − the lead arc and ends where the CW run starts, 45° + the lead arc, so that both runs'
+measured revolutions start and end at 45°, halfway between axis reversals, and the trace is
+one continuous path.  A request the machine cannot make (a circle beyond an axis' travel, a
+feed beyond an axis' speed limit) is refused before any run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..parameters import ParameterError
+from .circular import CircularTest, circular_test
+from .positioning_run import axis_speed_limit, axis_travel
+
+if TYPE_CHECKING:
+    from ..engine.options import SolverOptions
+    from ..machine import Machine
+
+__all__ = ["CircularRunTrace", "circular_start_angles", "run_circular_test"]
+
+#: where each run's measured revolution starts and ends, halfway between reversals [rad]
+MEASURE_START = math.radians(45.0)
+#: rest after a DDFS nut has reached its speed, before the path starts [s]
+NUT_SETTLE = 0.5
+
+
+def circular_start_angles(lead_arc: float) -> dict[str, float]:
+    """The start angle of each run about the centre for a lead arc.
+
+    Parameters
+    ----------
+    lead_arc : float
+        The lead-in arc, equal to the lead-out arc [rad].
+
+    Returns
+    -------
+    dict
+        ``"CCW"`` and ``"CW"`` → start angle [rad]; the CCW run ends where the CW run starts.
+    """
+    return {"CCW": MEASURE_START - lead_arc, "CW": MEASURE_START + lead_arc}
+
+
+@dataclass(frozen=True)
+class CircularRunTrace:
+    """A simulated circular test.
+
+    Parameters
+    ----------
+    test : CircularTest
+        The ISO 230-4 quantities and the diagnostics.
+    time : numpy.ndarray
+        The joined trace's times, CCW run then CW run [s].
+    x, y : numpy.ndarray
+        The two axes' positions on the machine (the axes' ``table_position`` frame) [m].
+    axes : tuple of str
+        The machine axes used as X and Y.
+    centre : tuple of float
+        The circle's centre [m].
+    radius, feed, acceleration, lead_arc : float
+        The test's settings [m, m/s, m/s², rad].
+    nut_speed : float
+        The DDFS axes' nut speed [m/s] (0: none).
+    start_time : float
+        When the path starts in each run (after the nuts' spin-up) [s].
+    results : dict
+        ``"CCW"`` and ``"CW"`` → the machine's simulation of that run.
+    offsets : dict
+        ``"CCW"`` and ``"CW"`` → where that run's time 0 lies in the joined trace [s].
+    """
+
+    test: CircularTest
+    time: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    axes: tuple[str, str]
+    centre: tuple[float, float]
+    radius: float
+    feed: float
+    acceleration: float
+    lead_arc: float
+    nut_speed: float
+    start_time: float
+    results: dict[str, Any]
+    offsets: dict[str, float] = dataclasses.field(default_factory=dict)
+
+    def reversing_sites(self) -> dict[str, dict[str, int]]:
+        """How often each friction site's force changes sign within the measured revolutions.
+
+        A friction force changes sign when its site's sliding speed reverses: in a CDFS every
+        site reverses with the table, in a DDFS whose nut runs faster than the table only the
+        sites sliding at the table's speed (the guide, and the ball–nut share at the relative
+        screw–nut speed) do.
+
+        Returns
+        -------
+        dict
+            Axis → site (``screw``, ``nut``, ``guide`` …) → sign changes over both runs'
+            measured revolutions [-].
+        """
+        out: dict[str, dict[str, int]] = {}
+        for run in self.test.runs:
+            result = self.results[run.direction]
+            t = np.asarray(result.time, dtype=float) + self.offsets[run.direction]
+            inside = (t >= run.time[0]) & (t <= run.time[-1])
+            for name in self.axes:
+                prefix = f"{name}."
+                for var in result.dataset.data_vars:
+                    if not (var.startswith(prefix) and var.endswith("_friction")):
+                        continue
+                    force = np.asarray(result[var], dtype=float)[inside]
+                    sign = np.sign(force[force != 0.0])
+                    site = var[len(prefix):-len("_friction")]
+                    changes = int(np.count_nonzero(np.diff(sign)))
+                    out.setdefault(name, {})[site] = out.get(name, {}).get(site, 0) + changes
+        return out
+
+
+def _check_request(machine: Machine, axes: tuple[str, str], centre: tuple[float, float],
+                   radius: float, feed: float) -> None:
+    for name, c in zip(axes, centre, strict=True):
+        ax = machine.axis(name)
+        limit, why = axis_speed_limit(ax.parameters, ax.drive)
+        if feed > limit:
+            raise ParameterError("feed", feed, f"expected ≤ {limit * 6e4:.6g} mm/min, axis "
+                                 f"{name}'s speed limit ({why})")
+        travel = axis_travel(ax.parameters, ax.drive)
+        if travel is None:
+            continue
+        length, path = travel
+        if not (c - radius > 0.0 and c + radius < length):
+            raise ParameterError("radius", radius, f"axis {name} would run {(c - radius) * 1e3:.6g}"
+                                 f" … {(c + radius) * 1e3:.6g} mm about its centre "
+                                 f"{c * 1e3:.6g} mm; expected within its travel 0 … "
+                                 f"{length * 1e3:.6g} mm ({name}.{path})")
+
+
+def _nut_driven(machine: Machine, axes: tuple[str, str], nut_speed: float) -> tuple[str, ...]:
+    """The axes whose nut follows ``nut_speed`` (a DDFS); refused when there is none."""
+    from ..model.mechanisms import mechanism
+
+    if not (isinstance(nut_speed, int | float) and math.isfinite(nut_speed) and nut_speed >= 0):
+        raise ParameterError("nut_speed", nut_speed, "expected a speed ≥ 0 [m/s]")
+    if nut_speed == 0.0:
+        return ()
+    driven = tuple(name for name in axes
+                   if machine.axis(name).drive in mechanism(machine.axis(name).drive)
+                   .nut_driven_drives)
+    if not driven:
+        raise ParameterError("nut_speed", nut_speed, "no axis of the test drives its nut (a "
+                             "DDFS); expected 0")
+    return driven
+
+
+def _profile(machine: Machine, contour: Any, nut_driven: tuple[str, ...], nut_speed: float,
+             acceleration: float, start_time: float) -> Any:
+    """The contour's references, after a rest of ``start_time`` in which the nuts spin up."""
+    from ..machine import MachineProfile
+    from ..model.reference import SampledSpeed
+
+    profile = MachineProfile.from_contour(contour, machine)
+    if not nut_driven:
+        return profile
+    step = float(profile.time[1] - profile.time[0])
+    before = int(round(start_time / step))
+    t = np.arange(before + profile.time.size) * step
+    rest = np.zeros(before)
+    vn = np.minimum(acceleration * t, nut_speed)
+    axes = tuple((name, SampledSpeed(time=t, table_speed=np.concatenate([rest, r.table_speed]),
+                                     nut_speed=vn if name in nut_driven else None))
+                 for name, r in profile.axes)
+    return MachineProfile(time=t, table_speed=np.concatenate([rest, profile.table_speed]),
+                          axes=axes, contour=contour)
+
+
+def _check_budget(duration: float, options: SolverOptions | None) -> None:
+    from ..engine.budget import check_output_memory, run_budget
+    from ..engine.options import current
+
+    solver = options if options is not None else current()
+    budget = run_budget(duration, max_step=solver.largest_step,
+                        output_interval=solver.output_interval, max_steps=solver.max_steps)
+    if budget.steps_exceeded:
+        raise ParameterError("max_steps", solver.max_steps,
+                             f"each run lasts {duration:.6g} s and needs at least "
+                             f"{budget.min_steps:.3g} solver steps; a smaller radius or a "
+                             "higher feed, or raise --max-steps")
+    check_output_memory(2.0 * duration, solver.output_interval)
+
+
+def run_circular_test(machine: Machine, *, radius: float, feed: float,
+                      axes: tuple[str, str] | None = None, acceleration: float = 1.0,
+                      lead_arc: float = math.radians(90.0), nut_speed: float = 0.0,
+                      pitch: float | None = None,
+                      options: SolverOptions | None = None,
+                      progress: Callable[[float, float], None] | None = None
+                      ) -> CircularRunTrace:
+    """Simulate an ISO 230-4 circular test (CCW then CW) on two axes of a machine.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine; the circle's centre is at its two axes' ``table_position``.
+    radius : float
+        R [m].
+    feed : float
+        Path feed F [m/s].
+    axes : tuple of str, optional
+        The machine axes used as X and Y; default its first two.
+    acceleration : float, default 1.0
+        Tangential acceleration of the lead-in and lead-out ramps [m/s²].
+    lead_arc : float, default π/2
+        The lead-in arc and the lead-out arc of each run [rad]; the feed ramp must end
+        within it.
+    nut_speed : float, default 0.0
+        Speed of the nut of every axis that drives its nut (the DDFS) [m/s]: it rises at
+        ``acceleration`` from rest and runs :data:`NUT_SETTLE` s at speed before the path
+        starts, and keeps its speed to the end (the table moves at the screw's speed minus the
+        nut's, Wang2021 Sect. 2).
+    pitch : float, optional
+        Period of the cyclic error looked for [m].
+    options : SolverOptions, optional
+        Integrator settings.
+    progress : callable, optional
+        ``progress(t, t_end)`` during each run.
+
+    Returns
+    -------
+    CircularRunTrace
+        The quantities, the joined trace and both runs' simulations.
+
+    Raises
+    ------
+    ParameterError
+        Before any run: a machine with fewer than two axes or an unknown axis, a circle beyond
+        an axis' travel, a feed beyond an axis' speed limit
+        (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`), a lead arc shorter
+        than the feed ramp or not below 180°, a nut speed with no axis that drives its nut,
+        runs needing more solver steps than the
+        options allow.
+    """
+    from ..machine import Circle, simulate_machine
+
+    if axes is None:
+        if len(machine.axes) < 2:
+            raise ParameterError("axes", [a.name for a in machine.axes],
+                                 "a circular test needs two axes")
+        axes = (machine.axes[0].name, machine.axes[1].name)
+    if len(axes) != 2 or axes[0] == axes[1]:
+        raise ParameterError("axes", list(axes), "expected two different axes, e.g. x,y")
+    for value, name, unit in ((radius, "radius", "m"), (feed, "feed", "m/s"),
+                              (acceleration, "acceleration", "m/s²"),
+                              (lead_arc, "lead_arc", "rad")):
+        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            raise ParameterError(name, value, f"expected a value > 0 [{unit}]")
+    if lead_arc >= math.pi:
+        raise ParameterError("lead_arc", lead_arc, "expected below π (180°) [rad]")
+    centre = (machine.axis(axes[0]).table_position, machine.axis(axes[1]).table_position)
+    _check_request(machine, axes, centre, radius, feed)
+    nut_driven = _nut_driven(machine, axes, nut_speed)
+    start_time = nut_speed / acceleration + NUT_SETTLE if nut_driven else 0.0
+    ramp = feed ** 2 / (2.0 * acceleration)
+    if ramp >= radius * lead_arc:
+        raise ParameterError("lead_arc", lead_arc, f"the feed ramp F²/2a = {ramp * 1e3:.6g} mm"
+                             f" does not end within the lead arc R·{math.degrees(lead_arc):g}° ="
+                             f" {radius * lead_arc * 1e3:.6g} mm; expected a longer lead arc or "
+                             "a higher acceleration")
+    turns = 1.0 + lead_arc / math.pi
+    _check_budget(start_time + 2.0 * math.pi * radius * turns / feed + feed / acceleration,
+                  options)
+    times, xs, ys, results, offsets = [], [], [], {}, {}
+    offset = 0.0
+    for direction, start in circular_start_angles(lead_arc).items():
+        # each run's axes start at rest on the circle at its start angle
+        start_xy = (centre[0] + radius * math.cos(start), centre[1] + radius * math.sin(start))
+        placed = dataclasses.replace(machine, axes=tuple(
+            dataclasses.replace(ax, table_position=start_xy[axes.index(ax.name)])
+            if ax.name in axes else ax for ax in machine.axes))
+        contour = Circle(feed=feed, acceleration=acceleration, axes=axes, radius=radius,
+                         clockwise=direction == "CW", start_angle=start, turns=turns)
+        result = simulate_machine(placed, _profile(placed, contour, nut_driven, nut_speed,
+                                                   acceleration, start_time), options=options)
+        results[direction] = result
+        offsets[direction] = offset
+        t = np.asarray(result.time, dtype=float)
+        times.append(t + offset)
+        xs.append(start_xy[0] + np.asarray(result[f"{axes[0]}.table_position"], dtype=float))
+        ys.append(start_xy[1] + np.asarray(result[f"{axes[1]}.table_position"], dtype=float))
+        # the CW run follows the CCW run one output interval after its end
+        offset += float(t[-1]) + float(t[1] - t[0])
+    # the trace as a record holds it (mm, 17 digits: read back exactly, io.acceptance)
+    time = np.concatenate(times)
+    x = np.concatenate(xs) * 1e3 * 1e-3
+    y = np.concatenate(ys) * 1e3 * 1e-3
+    test = circular_test(time, x, y, radius=radius, centre=centre, pitch=pitch)
+    return CircularRunTrace(test=test, time=time, x=x, y=y, axes=(axes[0], axes[1]),
+                            centre=centre, radius=float(radius), feed=float(feed),
+                            acceleration=float(acceleration), lead_arc=float(lead_arc),
+                            nut_speed=float(nut_speed), start_time=float(start_time),
+                            results=results, offsets=offsets)

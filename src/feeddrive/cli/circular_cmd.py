@@ -1,0 +1,174 @@
+"""`feeddrive circular`: the ISO 230-4 circular test on a simulated machine.
+
+The logic lives in feeddrive.analysis.circular_run (circle, runs, trace),
+feeddrive.analysis.circular (the quantities) and feeddrive.io.acceptance (the record).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import typer
+
+from ..io.outputs import PLOT_FORMATS
+from ..parameters import ParameterError
+from ._common import (
+    MM,
+    app,
+    console,
+    err_console,
+    interrupted,
+    outputs,
+    print_json,
+    user_errors,
+)
+from ._solver import accuracy_options
+from .simulate_cmd import DEFAULT_MAX_STEPS
+
+MM_PER_MIN = 1e-3 / 60.0  # [m/s] per mm/min
+
+
+def _say(text: str) -> None:
+    console.print(text, markup=False, highlight=False, soft_wrap=True)
+
+
+def parse_axes(text: str | None) -> tuple[str, str] | None:
+    """``--axes X,Y`` → the two axis names (None: the machine's first two).
+
+    Parameters
+    ----------
+    text : str or None
+        E.g. ``"x,y"``.
+
+    Returns
+    -------
+    tuple of str or None
+        The names.
+    """
+    if text is None:
+        return None
+    names = [n.strip() for n in text.split(",")]
+    if len(names) != 2 or not all(names) or names[0] == names[1]:
+        raise ParameterError("--axes", text, "expected two different axis names X,Y, e.g. x,y")
+    return names[0], names[1]
+
+
+@app.command("circular")
+@user_errors
+@outputs(output=(".csv",), plot=PLOT_FORMATS)
+@accuracy_options
+def circular_command(
+    machine: str = typer.Option("xy-table", "--machine", help="A machine file (TOML, "
+                                "docs/machine.md) or a built-in machine (xy-table); the "
+                                "circle's centre is at its axes' table_position."),
+    axes: str | None = typer.Option(None, "--axes", help="The two axes as X,Y, e.g. x,y "
+                                    "(default the machine's first two)."),
+    radius: float = typer.Option(50.0, "--radius", help="Circle radius R [mm]."),
+    feed: float = typer.Option(1000.0, "--feed", help="Path feed F [mm/min]."),
+    acceleration: float = typer.Option(1000.0, "--acceleration", help="Feed ramp of the "
+                                       "lead-in and lead-out [mm/s²]."),
+    lead_arc: float = typer.Option(90.0, "--lead-arc", help="Lead-in arc and lead-out arc of "
+                                   "each run [°]."),
+    nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed of the DDFS axes "
+                                    "[mm/s]: spun up before the path starts, kept to the "
+                                    "end."),
+    pitch: float | None = typer.Option(None, "--pitch", help="Period of the cyclic error to "
+                                       "fit, the screw's lead [mm]."),
+    magnification: float | None = typer.Option(None, "--magnification", help="--plot: "
+                                               "deviation magnification [-] (default: "
+                                               "automatic)."),
+    max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
+                                  help="Solver step limit per run [-]; a test that needs more "
+                                  "is refused before it starts."),
+    output: str | None = typer.Option(None, "--output", help="Write the trace (time [s], "
+                                      "x [mm], y [mm]) to FILE.csv (analyze --circular reads "
+                                      "it)."),
+    plot: str | None = typer.Option(None, "--plot", help="Write the polar plot, CW and CCW "
+                                    "overlaid."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
+    solver: Any = None,
+) -> None:
+    """ISO 230-4 circular test of two axes of a machine: a CCW and a CW run with lead-in and
+    lead-out arcs; circular deviations G(CCW), G(CW), G(b), mean radius deviation and radial
+    deviation F [µm], and the ballbar diagnostics (squareness, scale and servo mismatch,
+    backlash, lateral play, reversal spikes)."""
+    from ..analysis.circular import describe
+    from ..analysis.circular_run import run_circular_test
+    from ..engine.options import layered
+    from ..engine.simulate import SimulationError, SimulationInterrupted
+    from ..io.acceptance import write_xy_trace
+    from ..machine import load_machine
+
+    for option, value, unit in (("--radius", radius, "mm"), ("--feed", feed, "mm/min"),
+                                ("--acceleration", acceleration, "mm/s²"),
+                                ("--lead-arc", lead_arc, "°")):
+        if not (math.isfinite(value) and value > 0):
+            raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
+    for option, given in (("--pitch", pitch), ("--magnification", magnification)):
+        if given is not None and not (math.isfinite(given) and given > 0):
+            raise ParameterError(option, given, "expected a value > 0 ["
+                                 + ("mm" if option == "--pitch" else "-") + "]")
+    if not (math.isfinite(nut_speed) and nut_speed >= 0):
+        raise ParameterError("--nut-speed", nut_speed, "expected a speed ≥ 0 [mm/s]")
+    if max_steps < 1:
+        raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
+    pair = parse_axes(axes)
+    options = layered([("command line", {"max_steps": (max_steps, "--max-steps")})],
+                      base=solver)
+    built = load_machine(machine)
+    try:
+        run = run_circular_test(built, radius=radius * MM, feed=feed * MM_PER_MIN, axes=pair,
+                                acceleration=acceleration * MM,
+                                lead_arc=math.radians(lead_arc), nut_speed=nut_speed * MM,
+                                pitch=None if pitch is None else pitch * MM, options=options)
+    except ParameterError as err:  # the API names its arguments; the user typed options
+        raise ParameterError(*_as_option(err.field, err.value), err.message) from None
+    except SimulationError as err:
+        err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    except SimulationInterrupted as stop:
+        err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
+                          soft_wrap=True)
+        raise interrupted() from None
+    test = run.test
+    centre_mm = f"{run.centre[0] * 1e3!r},{run.centre[1] * 1e3!r}"
+    if output:
+        write_xy_trace(output, run.time, run.x, run.y, comment=(
+            f"feeddrive circular --machine {machine}, axes {run.axes[0]},{run.axes[1]}, "
+            f"R {radius:g} mm, feed {feed:g} mm/min, lead arc {lead_arc:g}°\n"
+            f"nominal circle: --radius {radius!r} --centre {centre_mm}"))
+    if plot:
+        from ..plots.acceptance import circular_figure, save
+
+        save(circular_figure(test, magnification=magnification), plot)
+    if as_json:
+        print_json({**test.to_dict(), "machine": built.name, "axes": list(run.axes),
+                    "acceleration_mm_s2": acceleration, "lead_arc_deg": lead_arc,
+                    "nut_speed_mm_s": nut_speed,
+                    "duration_s": float(run.time[-1]), "output": output, "plot": plot})
+        return
+    _say(f"ISO 230-4 circular test: machine {built.name}, axes {run.axes[0]} (X) and "
+         f"{run.axes[1]} (Y), R {radius:g} mm, feed {feed:g} mm/min, lead-in and lead-out "
+         f"arcs {lead_arc:g}°" + (f", DDFS nut speed {nut_speed:g} mm/s" if nut_speed else "")
+         + f"; {float(run.time[-1]):.4g} s simulated")
+    for note in test.notes:
+        _say(f"  {note}")
+    for line in describe(test):
+        _say(line)
+    if output:
+        _say(f"wrote trace {output} (feeddrive analyze --circular {output} --radius "
+             f"{radius:g} --centre {centre_mm})")
+    if plot:
+        _say(f"wrote plot {plot}")
+
+
+def _as_option(field: str, value: Any) -> tuple[str, Any]:
+    """An API argument [m, m/s, rad] as the option the user typed [mm, mm/min, °]."""
+    if (field in ("radius", "feed", "acceleration", "lead_arc", "nut_speed")
+            and isinstance(value, float)):
+        scale = {"radius": 1e3, "feed": 6e4, "acceleration": 1e3,
+                 "lead_arc": 180.0 / math.pi, "nut_speed": 1e3}[field]
+        return f"--{field.replace('_', '-')}", float(f"{value * scale:.12g}")
+    return {"max_steps": "--max-steps", "axes": "--axes"}.get(field, field), value

@@ -1,0 +1,40 @@
+"""The report section "does the DDFS remove the quadrant glitch?" (issue 37 item 5): its
+sentences carry the rows' numbers (what the rows come from is tested in
+tests/unit/test_circular_run.py; the study itself runs in the reproduction,
+tests/validation)."""
+
+from __future__ import annotations
+
+from feeddrive.reproduce.quadrant_study import CASES, section
+
+
+def _row(case: str, drive: str, vn: float, spike: float, variant: bool,
+         sites: list[str]) -> dict[str, object]:
+    return {"case": case, "drive": drive, "nut_speed_mm_s": vn, "variant": variant,
+            "spike_max_um": spike, "spike_mean_um": spike / 2,
+            "bidirectional_circular_deviation_um": 100.0 + spike, "reversing_sites": sites}
+
+
+def test_section_reads_its_answer_from_the_rows() -> None:
+    rows = [_row("CDFS", "cdfs", 0.0, 50.0, False, ["screw", "guide"]),
+            _row("DDFS, v_n = 20 mm/s", "ddfs", 20.0, 30.0, False, ["guide"]),
+            _row("DDFS, v_n = 100 mm/s", "ddfs", 100.0, 20.0, False, ["guide"]),
+            _row("DDFS, v_n = 20 mm/s, guide friction ×2", "ddfs", 20.0, 40.0, True,
+                 ["guide"])]
+    text, table = section({"radius_mm": 10.0, "feed_mm_min": 1000.0, "rows": rows})
+    assert "Largest spike: CDFS 50 µm; DDFS 30 µm at v_n = 20 mm/s, 20 µm at v_n = 100 mm/s" \
+        in text
+    assert "at 100 mm/s the DDFS leaves 40% of the CDFS's largest spike" in text
+    assert "Mean spike at v_n = 20 mm/s: 15 µm; guide friction ×2: 20 µm." in text
+    assert [r["reverse"] for r in table] == ["screw, guide", "guide", "guide", "guide"]
+    assert table[0]["G(b) [µm]"] == "150"
+
+
+def test_section_without_the_study_says_so() -> None:
+    assert section(None) == ("Not run (`reproduce --no-study`).", [])
+
+
+def test_cases_name_their_drive_and_nut_speed() -> None:
+    for label, drive, nut_speed, _ in CASES:
+        assert label.startswith(drive.upper())
+        assert (f"v_n = {nut_speed * 1e3:g} mm/s" in label) == (nut_speed > 0)
