@@ -13,15 +13,18 @@ friction doubled, each at a gain chosen by a stated rule, not from the yaw it gi
 * the cross-coupled controller at K_c = K_c,max / 2, half the gain at which the machine's
   linearised closed loop (frictionless, both axes at 10 mm/s) loses stability
   (``feeddrive.machine.linear.gain_limit``): a 6-dB gain margin on the coupling loop.
-  K_c,max = 1.78 1/s, so K_c = 0.89 1/s (the former default, 2 1/s, was beyond the limit).
+  K_c,max = 1.78 1/s, so K_c = 0.89 1/s (the former default, 2 1/s, was beyond the limit;
+  linearised with the friction at 10 mm/s sliding the limit is 2.61 1/s).
 
 Measured (dopri5 defaults), peak beam yaw: master–slave 69.0 µrad, no synchronisation
 37.1 µrad, cross-coupled 35.8 µrad (36.1 and 35.4 at 0.75 and 1.25 × K_c).  The ratio
-cross-coupled / master–slave is 0.519 (0.523 … 0.514 over ±25 % of K_c; 0.501 at K_c,max
-itself), so the issue's "≤ 0.5 ×" is not met by a stable, rule-designed gain and is not
-asserted.  Master–slave is worse than no synchronisation because the slave is driven by the
-master's ringing at the lightly damped 5.5-Hz velocity-loop mode, which it amplifies:
-the machine's least damping ratio falls from 0.031 (independent axes) to 0.020.
+cross-coupled / master–slave is 0.519 (0.523 … 0.514 over ±25 % of K_c; 0.510 at half the
+with-friction limit; 0.501 at the frictionless limit, 0.485 at the with-friction one): the
+issue's "≤ 0.5 ×" needs K_c ≳ 1.85 1/s, beyond the frictionless limit and within 3 dB of the
+with-friction one, so it is not met by a rule-designed gain and is not asserted.
+Master–slave is worse than no synchronisation because the slave is driven by the master's
+ringing at the lightly damped 5.5-Hz velocity-loop mode, which it amplifies: the machine's
+least damping ratio falls from 0.031 (independent axes) to 0.020.
 """
 
 from __future__ import annotations
@@ -76,8 +79,9 @@ def _peak_yaw(sync: dict | None) -> float:  # type: ignore[type-arg]
 _MOVE_SPEEDS = {"x1": 10e-3, "x2": 10e-3}
 
 
-def _damping(sync: dict | None) -> float:  # type: ignore[type-arg]
-    pole = spectral_abscissa(linearize_machine(_machine(sync), _MOVE_SPEEDS))
+def _damping(sync: dict | None, frictionless: bool = True) -> float:  # type: ignore[type-arg]
+    pole = spectral_abscissa(linearize_machine(_machine(sync), _MOVE_SPEEDS,
+                                               frictionless=frictionless))
     return -pole.real / abs(pole)
 
 
@@ -90,11 +94,15 @@ def test_master_slave_lowers_the_damping_of_the_velocity_loop_mode() -> None:
     assert master_slave < 0.75 * independent
 
 
-def test_the_gain_limit_is_where_the_linearised_machine_loses_stability() -> None:
+@pytest.mark.parametrize("frictionless", [True, False])
+def test_the_gain_limit_is_where_the_linearised_machine_loses_stability(
+        frictionless: bool) -> None:
+    # measured: 1.78 1/s frictionless, 2.61 1/s with the friction at 10 mm/s sliding
     sync = {"part": "cross_coupled"}
-    limit = gain_limit(_machine(sync), "sync", table_speeds=_MOVE_SPEEDS)
-    below = _damping({**sync, "gain": 0.98 * limit})
-    above = _damping({**sync, "gain": 1.02 * limit})
+    limit = gain_limit(_machine(sync), "sync", table_speeds=_MOVE_SPEEDS,
+                       frictionless=frictionless)
+    below = _damping({**sync, "gain": 0.98 * limit}, frictionless)
+    above = _damping({**sync, "gain": 1.02 * limit}, frictionless)
     assert below > 0.0 > above
 
 

@@ -260,10 +260,10 @@ def spectral_abscissa(lin: LinearModel) -> complex:
 
 def gain_limit(machine: Machine, part: str, field: str = "gain",
                table_speeds: Mapping[str, float] | None = None, *,
-               rtol: float = 1e-3) -> float:
+               frictionless: bool = True, rtol: float = 1e-3) -> float:
     """The largest value of a coupling part's gain for which the machine's linearised closed
     loop is stable: bisection on the real part of its least-damped pole
-    (:func:`spectral_abscissa` of :func:`linearize_machine`, frictionless).
+    (:func:`spectral_abscissa` of :func:`linearize_machine`).
 
     A gain is designed from it by a stated margin: ``gain_limit(...) / 2`` is the classical
     6-dB gain margin on that loop (docs/machine.md, the gantry's cross-coupled controller).
@@ -278,6 +278,10 @@ def gain_limit(machine: Machine, part: str, field: str = "gain",
         The parameter varied.
     table_speeds : mapping of str to float, optional
         Steady table speed per axis [m/s] (:func:`linearize_machine`).
+    frictionless : bool, default True
+        Linearise without friction (the conservative loop: friction at sliding adds damping
+        that vanishes as the speed falls); False: with the friction laws at steady sliding
+        (needs a non-zero speed for every axis).
     rtol : float, default 1e-3
         Relative width of the final bracket [-].
 
@@ -306,7 +310,8 @@ def gain_limit(machine: Machine, part: str, field: str = "gain",
         c = replace(parts[part], **changes)
         m = replace(machine, couplings=tuple(c if x.name == part else x
                                              for x in machine.couplings))
-        return spectral_abscissa(linearize_machine(m, table_speeds)).real
+        return spectral_abscissa(linearize_machine(m, table_speeds,
+                                                   frictionless=frictionless)).real
 
     if growth(0.0) >= 0.0:
         raise ParameterError(f"couplings.{part}.{field}", 0.0,
