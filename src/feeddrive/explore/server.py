@@ -25,7 +25,7 @@ elsewhere cannot reach the server through a rebound DNS name; POST bodies must b
 ``POST /api/measured``     ``{"csv", "name"}`` → a measured position trace to overlay
 ``POST /api/machine``      ``{"machine", "radius", "feed", "acceleration"}`` → a job: a
                            machine's XY circle, its path and contour error
-                           (:mod:`feeddrive.explore.machine_path`)
+                           (``feeddrive.explore.machine_path``)
 =========================  ===========================================================
 """
 
@@ -210,7 +210,7 @@ class Explorer:
         return job, checked.as_dict()
 
     def start_machine(self, body: dict[str, Any]) -> Job:
-        """Check a machine request (:func:`feeddrive.explore.machine_path.check_request`) and
+        """Check a machine request (``feeddrive.explore.machine_path.check_request``) and
         start a job that simulates its XY circle.
 
         Parameters
@@ -247,7 +247,7 @@ class Explorer:
             compensation modes, the fields' units, the starting settings and defaults, the
             longest duration [s], the critical search's trial count, whether the solver is
             ready, the built-in machines and the machine panel's defaults
-            (:mod:`feeddrive.explore.machine_path`).
+            (``feeddrive.explore.machine_path``).
         """
         from ..machine import MACHINES
         from ..model import drive_names
