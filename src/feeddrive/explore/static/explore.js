@@ -893,6 +893,11 @@ async function start() {
   }
   machineForm(info);
   $("machine-run").addEventListener("click", runMachine);
+  for (const id of ["machine-radius", "machine-feed"]) {
+    $(id).addEventListener("keydown", (e) => {  // Enter runs the circle, not the drive
+      if (e.key === "Enter") { e.preventDefault(); runMachine(); }
+    });
+  }
   $("machine-cancel").addEventListener("click", () => {
     cancelJob(state.machineJob);
     state.machineSeq++;
