@@ -162,7 +162,7 @@ def record(case: Case) -> dict[str, Any]:
     from feeddrive.model.reference import ConstantSpeed
 
     system = fd.DriveSystem(case.parameters, case.drive, 0.4)
-    nut = NUT_SPEED if system.topology().follows_nut_reference() else 0.0
+    nut = NUT_SPEED if system.topology().follows("nut") else 0.0
     profile = ConstantSpeed(TABLE_SPEED, nut)
     model = system.model(profile)
     rng = np.random.default_rng(40)

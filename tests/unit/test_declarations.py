@@ -183,15 +183,25 @@ def test_which_axes_follow_a_nut_reference() -> None:
     def topology(drive: str, params: fd.DriveParameters, nut_hold: str = "locked"):
         return fd.DriveSystem(params, drive, 0.4, nut_hold=nut_hold).topology()
 
-    assert topology("ddfs", W).follows_nut_reference()
-    assert not topology("cdfs", W).follows_nut_reference()
+    assert topology("ddfs", W).follows("nut")
+    assert not topology("cdfs", W).follows("nut")
+    assert topology("cdfs", W).reference_axes == {"nut": "nut"}
     assert topology("cdfs", W, "servo").live_axes() == ("screw", "nut")
-    assert not topology("cdfs", W, "servo").follows_nut_reference()
+    assert not topology("cdfs", W, "servo").follows("nut")
     assert topology("cdfs", W).live_axes() == ("screw",)
     for drive, params in (("linear-motor", LM), ("rack-pinion", RP)):
-        assert topology(drive, params).nut_axis == ""
-        assert not topology(drive, params).follows_nut_reference()
+        assert topology(drive, params).reference_axes == {}
+        assert not topology(drive, params).follows("nut")
         assert topology(drive, params).live_axes() == ("motor",)
+
+
+def test_the_mechanism_base_class_speaks_no_nut() -> None:
+    """Issue 40 item 1: the DDFS's nut is its own declared reference signal
+    (``BallScrew.reference_axes``), not vocabulary of every topology's base class."""
+    from feeddrive.model.mechanisms.base import Mechanism
+
+    assert [name for name in vars(Mechanism) if "nut" in name.lower()] == []
+    assert Mechanism.reference_axes == {}
 
 
 @pytest.mark.parametrize("drive, params, path, reason", [
@@ -257,7 +267,7 @@ def test_the_result_title_names_the_position_where_the_model_uses_it() -> None:
 
 def test_a_sweep_runs_any_registered_drive_and_asks_it_about_the_nut() -> None:
     """A sweep's drive takes every registered drive; a drive that follows no nut speed (its
-    topology's ``nut_driven_drives``) shares one result across nut speeds."""
+    topology's ``followed_references``) shares one result across nut speeds."""
     from feeddrive.sweep import parse_config
 
     def keys(config: dict) -> int:

@@ -101,10 +101,10 @@ def study_drives(params: DriveParameters) -> dict[str, str | None]:
         topology = mechanism(name)
         if topology.compensation is Mechanism.compensation:
             continue  # no compensator declared
-        if topology(params, name, 0.4, "locked").follows_nut_reference():
+        if topology(params, name, 0.4, "locked").follows("nut"):
             continue
         out[name] = next((d for d in topology.drives
-                          if topology(params, d, 0.4, "locked").follows_nut_reference()), None)
+                          if topology(params, d, 0.4, "locked").follows("nut")), None)
     return out
 
 

@@ -418,7 +418,7 @@ def _no_effect(params: DriveParameters, drive: str, path: str,
     directions = set().union(*(e.direction() for e in experiments)) if experiments else set()
     # the topology as the fit builds it (nut locked); what it declares decides
     topology = mechanism(drive)(params, drive, 0.4, "locked")
-    nut_driven = topology.follows_nut_reference() and any(
+    nut_driven = topology.follows("nut") and any(
         e.nut_speed is not None and np.any(e.nut_speed != 0) for e in experiments)
     if head[0] not in topology.own_sections:  # a section of another topology's parts
         owner = next((m for m in map(mechanism, drive_names()) if head[0] in m.own_sections),
@@ -1343,7 +1343,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
         units_.append(unit)
     system = DriveSystem(base, drive=drive, table_position=table_position)  # validates both
     for e in experiments:
-        if e.nut_speed is not None and not system.topology().follows_nut_reference():
+        if e.nut_speed is not None and not system.topology().follows("nut"):
             raise FitError(f"{e.source}: commands a nut speed; only the DDFS drives its nut")
     theta0 = np.ones(len(free))
 

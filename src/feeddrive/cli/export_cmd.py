@@ -65,7 +65,8 @@ def fmu_command(
         from ..model.mechanisms import mechanism
 
         topology = mechanism(drive)(params, drive, 0.4, nut_hold)
-        if not topology.nut_axis or topology.nut_axis not in topology.live_axes():
+        axis = topology.reference_axes.get("nut")
+        if axis is None or axis not in topology.live_axes():
             raise ParameterError("--nut-speed", nut_speed,
                                  f"the {drive} drive has no live nut axis; expected 0 [mm/s]")
     a = _units.position("--position", position, params, drive)

@@ -261,7 +261,7 @@ def run_simulation(checked: Checked, report: Report,
     return {
         "drive": checked.drive, "parameter_set": checked.params.name if checked.params else "",
         # whether the drive follows the nut command (its topology says; the page shows it then)
-        "nut_driven": checked.system.topology().follows_nut_reference(),
+        "nut_driven": checked.system.topology().follows("nut"),
         "table_speed_mm_s": 1e3 * checked.table_speed,
         "nut_speed_mm_s": 1e3 * checked.nut_speed, "duration_s": checked.duration,
         "samples": int(t.size), "samples_sent": int(idx.size),

@@ -23,6 +23,9 @@ elsewhere cannot reach the server through a rebound DNS name; POST bodies must b
 ``GET /api/runs/ID/signal?name=N``  one signal, engineering units, peaks kept
 ``GET /api/runs/ID/data.csv``, ``data.mat``  the run's every sample (download)
 ``POST /api/measured``     ``{"csv", "name"}`` → a measured position trace to overlay
+``POST /api/machine``      ``{"machine", "radius", "feed", "acceleration"}`` → a job: a
+                           machine's XY circle, its path and contour error
+                           (``feeddrive.explore.machine_path``)
 =========================  ===========================================================
 """
 
@@ -206,6 +209,34 @@ class Explorer:
             raise ParameterError("kind", kind, "expected simulate, linear or critical")
         return job, checked.as_dict()
 
+    def start_machine(self, body: dict[str, Any]) -> Job:
+        """Check a machine request (``feeddrive.explore.machine_path.check_request``) and
+        start a job that simulates its XY circle.
+
+        Parameters
+        ----------
+        body : dict
+            ``machine`` (a built-in name or a machine file's TOML text), ``radius`` [mm],
+            ``feed`` [mm/min], ``acceleration`` [mm/s^2].
+
+        Returns
+        -------
+        Job
+            The started job (kind ``"machine"``).
+
+        Raises
+        ------
+        ParameterError
+            For a refused field, naming it (before any work).
+        """
+        from .machine_path import check_request, run_machine_path
+
+        machine, contour = check_request(body)
+        return self.jobs.start(
+            "machine", lambda j: run_machine_path(machine, contour, j.report), _error_field,
+            text=f"simulating {contour.duration:.3g} s of {machine.name}",
+            total=contour.duration)
+
     def info(self) -> dict[str, Any]:
         """What the page needs to build its form.
 
@@ -214,13 +245,17 @@ class Explorer:
         dict
             Version, presets, drives, fields (name, label, unit, group, option, path, help),
             compensation modes, the fields' units, the starting settings and defaults, the
-            longest duration [s], the critical search's trial count and whether the solver is
-            ready.
+            longest duration [s], the critical search's trial count, whether the solver is
+            ready, the built-in machines and the machine panel's defaults
+            (``feeddrive.explore.machine_path``).
         """
+        from ..machine import MACHINES
         from ..model import drive_names
+        from .machine_path import DEFAULTS as MACHINE_DEFAULTS
 
         return {
             "version": __version__, "presets": list(PRESETS), "drives": list(drive_names()),
+            "machines": list(MACHINES), "machine_defaults": MACHINE_DEFAULTS,
             "fields": [{"name": f.name, "label": f.label, "unit": f.unit, "group": f.group,
                         "option": f.option, "path": f.path, "help": f.help} for f in FIELDS],
             "compensation_modes": list(compensation_modes()),
@@ -588,6 +623,19 @@ class Handler(BaseHTTPRequestHandler):
                 self._json(HTTPStatus.UNPROCESSABLE_ENTITY, checked)
             else:
                 self._json(HTTPStatus.ACCEPTED, {**job.as_dict(), "check": checked})
+        elif path == "/api/machine":
+            if not isinstance(body, dict):
+                raise _HttpError(HTTPStatus.BAD_REQUEST, "expected a JSON object")
+            try:
+                job = ex.start_machine(body)
+            except Busy as err:
+                raise _HttpError(HTTPStatus.TOO_MANY_REQUESTS, str(err)) from None
+            except ParameterError as err:
+                field = err.field if err.field in ("radius", "feed", "acceleration") \
+                    else "machine"
+                self._json(HTTPStatus.UNPROCESSABLE_ENTITY, {"errors": {field: str(err)}})
+                return
+            self._json(HTTPStatus.ACCEPTED, job.as_dict())
         elif path.startswith("/api/jobs/") and path.endswith("/cancel"):
             job = ex.jobs.cancel(path.split("/")[3])
             if job is None:

@@ -480,7 +480,7 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
     out.drive = drive
     # the explorer's system holds a nut locked (DriveSystem's default): the topology says
     # whether the drive then follows a nut speed
-    drives_nut = mechanism(drive)(base, drive, 0.4, "locked").follows_nut_reference()
+    drives_nut = mechanism(drive)(base, drive, 0.4, "locked").follows("nut")
     if not drives_nut:
         out.disabled.append("nut_speed")
     if not any(m.ripple for m in mechanism(drive).drive_motors):

@@ -28,7 +28,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -689,7 +689,8 @@ class MachineSystem:
 
 def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
                      duration: float | None = None, *, options: Any = None,
-                     interval: float | None = None) -> Any:
+                     interval: float | None = None,
+                     progress: Callable[[float, float], None] | None = None) -> Any:
     """Simulate a machine following a contour (or given references).
 
     Parameters
@@ -705,6 +706,9 @@ def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
         Integrator settings.
     interval : float, optional
         Grid spacing of the references [s].
+    progress : callable, optional
+        ``progress(t, t_end)`` after each chunk of the run (as
+        :func:`feeddrive.simulate`); an exception it raises stops the run.
 
     Returns
     -------
@@ -717,11 +721,13 @@ def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
 
     if isinstance(contour, MachineProfile):
         t_end = float(contour.time[-1]) if duration is None else float(duration)
-        result = simulate(MachineSystem(machine), contour, t_end, options=options)  # type: ignore[arg-type]
+        result = simulate(MachineSystem(machine), contour, t_end, options=options,  # type: ignore[arg-type]
+                          progress=progress)
         return result
     profile = MachineProfile.from_contour(contour, machine, interval)
     t_end = contour.duration if duration is None else float(duration)
-    result = simulate(MachineSystem(machine), profile, t_end, options=options)  # type: ignore[arg-type]
+    result = simulate(MachineSystem(machine), profile, t_end, options=options,  # type: ignore[arg-type]
+                      progress=progress)
     if isinstance(contour, Together):  # no path in a plane: no contour error
         return result
     ds = result.dataset

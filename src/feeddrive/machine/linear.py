@@ -35,7 +35,8 @@ from ..engine.simulate import DriveSystem
 from ..model.reference import ConstantSpeed
 from . import Machine, MachineAxis, MachineProfile, assemble_machine
 
-__all__ = ["MachineLinearModel", "axis_loops", "cross_coupling", "linearize_machine"]
+__all__ = ["MachineLinearModel", "axis_loops", "cross_coupling", "gain_limit", "linearize_machine",
+           "spectral_abscissa"]
 
 
 class MachineLinearModel(LinearModel):
@@ -234,3 +235,93 @@ def cross_coupling(lin: MachineLinearModel, frequencies: np.ndarray | None = Non
                  for z in s]
             out[f"{a} -> {b}"] = float(max(g))
     return out
+
+
+def spectral_abscissa(lin: LinearModel) -> complex:
+    """The least-damped closed-loop pole: the eigenvalue of ``A`` with the largest real part.
+
+    An eigenvalue at 0 to rounding (an integrator nothing reads: a cross-coupled
+    controller's integral at ``integral_gain = 0``) is left out; it neither grows nor decays.
+
+    Parameters
+    ----------
+    lin : LinearModel
+        A linearised closed loop.
+
+    Returns
+    -------
+    complex
+        The pole [1/s] (its real part < 0: stable).
+    """
+    ev = np.linalg.eigvals(lin.A)
+    ev = ev[np.abs(ev) > 1e-9 * max(1.0, float(np.max(np.abs(ev))))]
+    return complex(ev[np.argmax(ev.real)])
+
+
+def gain_limit(machine: Machine, part: str, field: str = "gain",
+               table_speeds: Mapping[str, float] | None = None, *,
+               frictionless: bool = True, rtol: float = 1e-3) -> float:
+    """The largest value of a coupling part's gain for which the machine's linearised closed
+    loop is stable: bisection on the real part of its least-damped pole
+    (:func:`spectral_abscissa` of :func:`linearize_machine`).
+
+    A gain is designed from it by a stated margin: ``gain_limit(...) / 2`` is the classical
+    6-dB gain margin on that loop (docs/machine.md, the gantry's cross-coupled controller).
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine (continuous loops).
+    part : str
+        The coupling part's name (``[couplings.<part>]``).
+    field : str, default "gain"
+        The parameter varied.
+    table_speeds : mapping of str to float, optional
+        Steady table speed per axis [m/s] (:func:`linearize_machine`).
+    frictionless : bool, default True
+        Linearise without friction (the conservative loop: friction at sliding adds damping
+        that vanishes as the speed falls); False: with the friction laws at steady sliding
+        (needs a non-zero speed for every axis).
+    rtol : float, default 1e-3
+        Relative width of the final bracket [-].
+
+    Returns
+    -------
+    float
+        The limit [the field's unit]; ``inf`` when no value up to 1e6 destabilises the loop.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown part or field, or a loop that is unstable at 0.
+    """
+    from ..parameters import ParameterError
+
+    parts = {c.name: c for c in machine.couplings}
+    if part not in parts:
+        raise ParameterError("part", part, f"expected one of the machine's coupling parts: "
+                             f"{', '.join(parts) or '(none)'}")
+    if field not in parts[part].units:
+        raise ParameterError("field", field, f"expected a parameter of couplings.{part}: "
+                             f"{', '.join(parts[part].units)}")
+
+    def growth(value: float) -> float:
+        changes: dict[str, Any] = {field: value}
+        c = replace(parts[part], **changes)
+        m = replace(machine, couplings=tuple(c if x.name == part else x
+                                             for x in machine.couplings))
+        return spectral_abscissa(linearize_machine(m, table_speeds,
+                                                   frictionless=frictionless)).real
+
+    if growth(0.0) >= 0.0:
+        raise ParameterError(f"couplings.{part}.{field}", 0.0,
+                             "the machine is unstable with this gain at 0: no limit to find")
+    lo, hi = 0.0, 1.0
+    while growth(hi) < 0.0:
+        lo, hi = hi, 2.0 * hi
+        if hi > 1e6:
+            return float("inf")
+    while hi - lo > rtol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if growth(mid) < 0.0 else (lo, mid)
+    return 0.5 * (lo + hi)

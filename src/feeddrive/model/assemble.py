@@ -25,11 +25,11 @@ from .disturbances import LoadProfile, TorqueRipple, emit_harmonics, emit_load, 
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
 from .reference import (
-    NUT_SPEED,
     PROFILE_PARAMS,
     REFERENCE_INPUTS,
     TABLE_COLUMNS,
     TABLE_OFFSET,
+    commanded_references,
     reference_with_inputs,
 )
 
@@ -244,7 +244,7 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     block = np.zeros(len(PROFILE_PARAMS))
     for k, v in values.items():
         block[k] = v
-    mech.check_profile(float(block[NUT_SPEED]), table[3])
+    mech.check_profile(commanded_references(block, table))
     table = np.ascontiguousarray(table, dtype=float)
     block[TABLE_OFFSET] = b.table(table)
     block[TABLE_COLUMNS] = table.shape[1]
@@ -386,7 +386,7 @@ def _with_profile(parameters: DriveParameters, drive: str, table_position: float
     block = np.zeros(len(PROFILE_PARAMS))
     for k, v in values.items():
         block[k] = v
-    mech.check_profile(float(block[2]), table[3])
+    mech.check_profile(commanded_references(block, table))
     table = np.ascontiguousarray(table, dtype=float)
     to, columns = int(model.P[o + 5]), int(model.P[o + 6])
     if table.shape != (4, columns):  # another table size: the layout of T differs

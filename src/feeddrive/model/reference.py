@@ -33,6 +33,28 @@ KIND, TABLE_SPEED, NUT_SPEED, RAMP_TIME, FREQUENCY, TABLE_OFFSET, TABLE_COLUMNS 
 HOLD, SAMPLE_STEP, INPUT_INSTANT = RAMP_TIME, FREQUENCY, FREQUENCY
 
 
+def commanded_references(block: np.ndarray, table: np.ndarray
+                         ) -> dict[str, tuple[float, np.ndarray]]:
+    """The reference signals beyond the table's that an encoded profile commands, for the
+    drive's topology to refuse those it does not follow
+    (:meth:`feeddrive.model.mechanisms.Mechanism.check_profile`).
+
+    Parameters
+    ----------
+    block : numpy.ndarray
+        The profile's parameter block (``PROFILE_PARAMS``) [SI, per slot].
+    table : numpy.ndarray
+        Its 4-row data table (rows: table position, table speed, nut position, nut speed)
+        [m, m/s].
+
+    Returns
+    -------
+    dict of str to (float, numpy.ndarray)
+        Signal → (constant speed, tabulated speed) [m/s]: the nut's.
+    """
+    return {"nut": (float(block[NUT_SPEED]), table[3])}
+
+
 @kernel
 def reference_kernel(t: float, P: np.ndarray, o: int,
                      T: np.ndarray) -> tuple[float, float, float, float]:

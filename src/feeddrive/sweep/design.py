@@ -52,7 +52,7 @@ def _no_nut(drive: str) -> bool:
     one stored result.  An unknown drive counts as driving none (it is refused later)."""
     from ..model.mechanisms import drive_names, mechanism
 
-    return drive not in drive_names() or drive not in mechanism(drive).nut_driven_drives
+    return drive not in drive_names() or "nut" not in mechanism(drive).followed_references(drive)
 
 
 _TOP_KEYS = ("name", "preset", "params", "drive", "table_position", "nut_speed", "store",

@@ -25,6 +25,7 @@ const state = {
   info: null, fields: {}, params: null, baseName: null, preset: "wang2021",
   checkSeq: 0, runSeq: 0, checkTimer: null, simJob: null, linJob: null, critJob: null,
   lastRun: null, runs: [], signal: DEFAULT_SIGNAL, measured: null, units: {},
+  machineJob: null, machineSeq: 0, machineText: "",
 };
 
 // ------------------------------------------------------------------ plumbing
@@ -773,6 +774,84 @@ async function copyLink() {
   }
 }
 
+// ------------------------------------------------------------------ machine: XY path
+
+const MACHINE_FILE = "__file__";
+
+function machineForm(info) {
+  const select = $("machine-name");
+  select.replaceChildren(...info.machines.map((name) => new Option(name, name)));
+  select.value = info.machine_defaults.machine;
+  $("machine-radius").value = info.machine_defaults.radius;
+  $("machine-feed").value = info.machine_defaults.feed;
+}
+
+async function loadMachineFile(file) {
+  state.machineText = await file.text();
+  const select = $("machine-name");
+  let opt = select.querySelector(`option[value="${MACHINE_FILE}"]`);
+  if (!opt) {
+    opt = new Option("", MACHINE_FILE);
+    select.add(opt);
+  }
+  opt.textContent = `file: ${file.name}`;
+  select.value = MACHINE_FILE;
+  status(`machine file ${file.name} loaded`);
+}
+
+async function runMachine() {
+  const name = $("machine-name").value;
+  const body = {
+    machine: name === MACHINE_FILE ? state.machineText : name,
+    radius: $("machine-radius").value, feed: $("machine-feed").value,
+  };
+  $("msg-machine").textContent = "";
+  cancelJob(state.machineJob);
+  const seq = ++state.machineSeq;
+  const r = await api("POST", "/api/machine", body);
+  if (seq !== state.machineSeq) return;
+  if (r.status !== 202) {
+    $("msg-machine").textContent =
+      (r.data.errors && Object.values(r.data.errors).join("; ")) || r.data.error ||
+      `the run was refused (${r.status})`;
+    return;
+  }
+  state.machineJob = r.data.id;
+  const job = await poll(r.data.id, $("machine-progress"), () => seq !== state.machineSeq);
+  if (!job) return;
+  if (job.state === "done") renderMachine(job.result);
+  else if (job.state === "failed") $("msg-machine").textContent = job.error;
+}
+
+function renderMachine(res) {
+  const p = res.path;
+  const s = res.summary;
+  const [a, b] = res.axes;
+  const parts = res.couplings.length ? `, parts ${res.couplings.join(", ")}` : "";
+  $("machine-facts").textContent =
+    `machine ${res.machine} (axes ${a}, ${b}${parts}), ${fmt(res.duration_s)} s simulated · ` +
+    `contour error ${fmt(s.contour_error_min_um)} … ${fmt(s.contour_error_max_um)} µm · ` +
+    `mean radius reduction ${fmt(s.radius_reduction_um)} µm · roundness ` +
+    `${fmt(s.roundness_um)} µm`;
+  const xy = [
+    { x: p.x_reference_mm, y: p.y_reference_mm, name: "command", type: "scatter",
+      mode: "lines", line: { color: "#1d2330", dash: "dash", width: 1.2 } },
+    { x: p.x_mm, y: p.y_mm, name: "actual", type: "scatter", mode: "lines",
+      line: { color: "#1f6feb", width: 1.5 } },
+  ];
+  Plotly.react($("plot-xy"), xy,
+               layout(`XY path: ${res.machine}`, `${a} [mm]`, `${b} [mm]`,
+                      { yaxis: { scaleanchor: "x" }, uirevision: "xy" }),
+               plotConfig("xy-path"));
+  const err = [{ x: p.time_s, y: p.contour_error_um, name: "contour error", type: "scatter",
+                 mode: "lines", line: { color: "#cf222e", width: 1.2 },
+                 hovertemplate: "t = %{x:.4f} s<br>e = %{y:.4g} µm<extra></extra>" }];
+  Plotly.react($("plot-contour"), err,
+               layout("contour error (positive outside the path)", "time [s]",
+                      "contour error [µm]", { uirevision: "contour" }),
+               plotConfig("contour-error"));
+}
+
 // ------------------------------------------------------------------ start
 
 async function waitReady() {
@@ -812,6 +891,22 @@ async function start() {
   } else {
     status("ready");
   }
+  machineForm(info);
+  $("machine-run").addEventListener("click", runMachine);
+  for (const id of ["machine-radius", "machine-feed"]) {
+    $(id).addEventListener("keydown", (e) => {  // Enter runs the circle, not the drive
+      if (e.key === "Enter") { e.preventDefault(); runMachine(); }
+    });
+  }
+  $("machine-cancel").addEventListener("click", () => {
+    cancelJob(state.machineJob);
+    state.machineSeq++;
+    $("machine-progress").hidden = true;
+  });
+  $("machine-file").addEventListener("change", (e) => {
+    if (e.target.files.length) loadMachineFile(e.target.files[0]);
+    e.target.value = "";
+  });
   $("controls").addEventListener("submit", (e) => { e.preventDefault(); run(); });
   $("run-cancel").addEventListener("click", () => {
     state.runSeq++;

@@ -199,9 +199,12 @@ class CrossCoupled(Coupling):
         The instance's name; its state ``<name>.integral`` is ∫ε [m s].
     a, b : str, default "x1", "x2"
         The two axes.
-    gain : float, default 2.0
-        K_c [1/s].  On two wang2021 CDFS axes (velocity loop ζ = 0.034 at 5.5 Hz) the
-        coupled loop is unstable from about 5 1/s (tests/validation/test_gantry.py).
+    gain : float, default 0.9
+        K_c [1/s].  Designed by a stated rule, half the gain at which the machine's
+        linearised loop loses stability (:func:`feeddrive.machine.linear.gain_limit`, a
+        6-dB gain margin): on the built-in gantry (two wang2021 CDFS axes, velocity loop
+        ζ = 0.034 at 5.5 Hz) the limit is 1.78 1/s at 10 mm/s, hence 0.9
+        (tests/validation/test_gantry.py).
     integral_gain : float, default 0.0
         K_i [1/s^2].
 
@@ -213,7 +216,7 @@ class CrossCoupled(Coupling):
 
     a: str = "x1"
     b: str = "x2"
-    gain: float = 2.0
+    gain: float = 0.9
     integral_gain: float = 0.0
     part: ClassVar[str] = "cross_coupled"
     citation: ClassVar[str] = "Koren 1980, ASME JDSMC 102, 265-272; Sun 2003, Automatica 39"

@@ -19,7 +19,6 @@ the relative speed (f), whose reaction acts on the nut.
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
@@ -113,8 +112,8 @@ class BallScrewDrive(Mechanism):
     travel_ends = "the screw supports"
     uses_table_position = True
     table_axis = "screw"
-    nut_axis = "nut"
-    nut_driven_drives = ("ddfs",)
+    #: the hollow motor's axis follows the nut reference (a profile's nut speed)
+    reference_axes = {"nut": "nut"}
     part_name = "ball screw"
     own_sections = ("screw", "coupling", "stiffness", "screw_motor", "hollow_motor",
                     "hollow_controller")
@@ -176,11 +175,26 @@ class BallScrewDrive(Mechanism):
         return (("hollow_motor", "hollow_controller", "screw.nut_inertia", "friction.nut",
                  "friction.ball_nut_share"), "the CDFS holds the nut (hollow motor locked)")
 
-    def check_profile(self, nut_speed: float, nut_table: Any) -> None:
-        if not self.follows_nut_reference() and (nut_speed != 0.0 or np.any(nut_table != 0.0)):
-            raise ParameterError("nut_speed", nut_speed,
-                                 "the CDFS holds the hollow motor; expected 0 (a moving nut is "
-                                 "the DDFS: use drive 'ddfs', --drive ddfs)")
+    @classmethod
+    def followed_references(cls, drive: str) -> tuple[str, ...]:
+        """The DDFS follows a commanded nut speed; the CDFS holds its nut (locked, or on its
+        servo at zero command).
+
+        Parameters
+        ----------
+        drive : str
+            ``"cdfs"`` or ``"ddfs"``.
+
+        Returns
+        -------
+        tuple of str
+            ``("nut",)`` for the DDFS, ``()`` for the CDFS.
+        """
+        return ("nut",) if drive == "ddfs" else ()
+
+    def unfollowed(self, signal: str) -> str:
+        return ("the CDFS holds the hollow motor; expected 0 (a moving nut is the DDFS: use "
+                "drive 'ddfs', --drive ddfs)")
 
     def declare(self, b: Builder) -> None:
         H = self.params.screw.transmission_ratio

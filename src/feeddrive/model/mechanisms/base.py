@@ -12,6 +12,7 @@ on the table position.  The interface is :class:`Mechanism`.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -236,12 +237,10 @@ class Mechanism:
     #: the controller axis whose motor drives the table (its current is ``<axis>_current``,
     #: its torque constant the slot :meth:`motor_output` names)
     table_axis: str = "motor"
-    #: the controller axis that follows the nut reference (a profile's nut speed, the
-    #: ``nut_*_reference`` inputs); "" = the topology has none
-    nut_axis: str = ""
-    #: the drives of this topology that follow a commanded nut speed (the DDFS; the CDFS holds
-    #: its nut, locked or on its servo at zero command)
-    nut_driven_drives: tuple[str, ...] = ()
+    #: the reference signals beyond the table's that this topology's controller axes can
+    #: follow, each with its axis (a profile's ``<signal>_speed``, an FMU's
+    #: ``<signal>_*_reference`` inputs); none by default (:meth:`followed_references`)
+    reference_axes: dict[str, str] = {}
     #: what this topology's own parameter sections describe, for messages ("ball screw")
     part_name: str = ""
     #: the parameter-file sections only this topology reads (its parts beyond the table,
@@ -302,15 +301,37 @@ class Mechanism:
         idle = self.held()[1]
         return tuple(m.name for m in self.drive_motors if m.name not in idle)
 
-    def follows_nut_reference(self) -> bool:
-        """Whether this drive follows a commanded nut speed (a profile's nut speed ≠ 0).
+    @classmethod
+    def followed_references(cls, drive: str) -> tuple[str, ...]:
+        """The reference signals of :attr:`reference_axes` that ``drive`` follows when a
+        profile commands them (a signal not listed must be commanded 0: :meth:`check_profile`).
+
+        Parameters
+        ----------
+        drive : str
+            One of :attr:`drives`.
+
+        Returns
+        -------
+        tuple of str
+            Signal names; by default every signal of :attr:`reference_axes`.
+        """
+        return tuple(cls.reference_axes)
+
+    def follows(self, signal: str) -> bool:
+        """Whether this drive follows the reference ``signal`` (:meth:`followed_references`).
+
+        Parameters
+        ----------
+        signal : str
+            A reference signal's name.
 
         Returns
         -------
         bool
-            True for the drives :attr:`nut_driven_drives` names.
+            True when a profile may command it.
         """
-        return self.drive in self.nut_driven_drives
+        return signal in self.followed_references(self.drive)
 
     def held_parameters(self) -> tuple[tuple[str, ...], str]:
         """The parameters that cannot act in this drive because a part is held still.
@@ -414,21 +435,45 @@ class Mechanism:
             The model builder the mechanism declares to and writes code through.
         """
 
-    def check_profile(self, nut_speed: float, nut_table: Any) -> None:
-        """Refuse a reference this topology cannot follow.
+    def check_profile(self, commanded: Mapping[str, tuple[float, Any]]) -> None:
+        """Refuse a reference this drive cannot follow: a profile that commands a signal the
+        drive does not follow (:meth:`follows`) at a speed other than 0.
 
         Parameters
         ----------
-        nut_speed : float
-            Commanded constant nut speed [m/s].
-        nut_table : numpy.ndarray
-            Tabulated nut-speed reference, if any [m/s].
+        commanded : mapping of str to (float, numpy.ndarray)
+            The reference signals beyond the table's a profile commands
+            (:func:`feeddrive.model.reference.commanded_references`): signal → (constant
+            speed, tabulated speed) [m/s].
 
         Raises
         ------
         ParameterError
-            One line naming the field, the value and what was expected.
+            One line naming the field (``<signal>_speed``), the value and what was expected
+            (:meth:`unfollowed`).
         """
+        import numpy as np
+
+        from ...parameters import ParameterError
+
+        for signal, (speed, table) in commanded.items():
+            if not self.follows(signal) and (speed != 0.0 or np.any(table != 0.0)):
+                raise ParameterError(f"{signal}_speed", speed, self.unfollowed(signal))
+
+    def unfollowed(self, signal: str) -> str:
+        """What a message says of a commanded reference ``signal`` this drive does not follow.
+
+        Parameters
+        ----------
+        signal : str
+            The reference signal.
+
+        Returns
+        -------
+        str
+            E.g. ``"a linear-motor drive has no nut; expected 0"``.
+        """
+        return f"{self.drive_label(self.drive)} has no {signal}; expected 0"
 
     def compensation(self, b: Builder
                      ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:

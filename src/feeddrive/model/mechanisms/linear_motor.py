@@ -9,9 +9,6 @@ gains act on m/s (transmission 1).  Needs the ``[linear_motor]`` parameter secti
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
-
-import numpy as np
 
 from ... import registry
 from ...parameters import Component, DriveParameters, ParameterError
@@ -95,11 +92,6 @@ class LinearMotorDrive(Mechanism):
             raise ParameterError("linear_motor", f"no such section in {params.name}",
                                  "the linear-motor drive needs a [linear_motor] section "
                                  "(e.g. --preset linear-motor-example)")
-
-    def check_profile(self, nut_speed: float, nut_table: Any) -> None:
-        if nut_speed != 0.0 or np.any(nut_table != 0.0):
-            raise ParameterError("nut_speed", nut_speed,
-                                 "a linear-motor drive has no nut; expected 0")
 
     def declare(self, b: Builder) -> None:
         b.state("table_position", "m", "table displacement from its start x_t", "position")

@@ -19,9 +19,6 @@ friction are the file's ``[table]`` and ``[friction.guide]``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
-
-import numpy as np
 
 from ... import registry
 from ...parameters import Component, DriveParameters, ParameterError, SiteParameters
@@ -124,11 +121,6 @@ class RackPinionDrive(Mechanism):
             raise ParameterError("rack_pinion", f"no such section in {params.name}",
                                  "the rack-pinion drive needs a [rack_pinion] section "
                                  "(e.g. --preset rack-pinion-example)")
-
-    def check_profile(self, nut_speed: float, nut_table: Any) -> None:
-        if nut_speed != 0.0 or np.any(nut_table != 0.0):
-            raise ParameterError("nut_speed", nut_speed,
-                                 "a rack-pinion drive has no nut; expected 0")
 
     @property
     def section(self) -> RackPinion:
