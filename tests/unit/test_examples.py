@@ -30,6 +30,7 @@ MAIN = {
     "sweep": ["feeddrive.sweep.executors.run_sweep"],
     "apps": ["feeddrive.explore.server.serve_in_thread"],
     "export": ["feeddrive.fmu.export_fmu"],
+    "machine": ["feeddrive.machine.machine_from_dict"],
 }
 
 

@@ -240,6 +240,20 @@ def machine_from_dict(data: Mapping[str, Any], *, base_dir: Path | None = None) 
     ------
     ParameterError
         The first error, naming the axis (``axes.y.table.mass``) or the key.
+
+    Examples
+    --------
+    The built-in XY table, and the circle of docs/machine.md (R 50 mm, F 5000 mm/min) it
+    would follow: one revolution at the feed (2πR/F = 3.770 s) plus the lead-in and lead-out
+    ramps at 1 m/s² (F/a = 0.083 s in all):
+
+    >>> from feeddrive.machine import machine_from_dict, make_contour
+    >>> machine = machine_from_dict({"extends": "xy-table"})
+    >>> [axis.name for axis in machine.axes]
+    ['x', 'y']
+    >>> circle = make_contour("circle", feed=5000 / 60e3, acceleration=1.0, radius=0.05)
+    >>> print(f"{circle.duration:.4f} s")
+    3.8532 s
     """
     data = _merged(data)
     tables = _axis_tables(data)
