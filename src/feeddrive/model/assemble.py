@@ -24,6 +24,7 @@ from .compensation import CompensationFootprint, emit_compensation
 from .disturbances import LoadProfile, TorqueRipple, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
+from .replay import Replay, declare_replay, emit_replay_rates, emit_replay_value
 from .reference import (
     NUT_SPEED,
     PROFILE_PARAMS,
@@ -438,6 +439,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
         The compensator's footprint.
     """
     mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
+    # an open-loop replay imposes one state: set before any part writes code that reads it
+    replayed = declare_replay(b, profile, mech) if isinstance(profile, Replay) else None
     mech.declare(b)
     mech.parameters(b)
     sites = mech.sites(b)
@@ -469,6 +472,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     b.add_aux("table_speed_reference", "m/s", "commanded table speed")
     mech.signals(b)
     _profile(b, profile, mech)
+    if replayed is not None:
+        emit_replay_value(b, profile, mech, replayed[1], b.param_index[b.q("profile[0]")])
     for ch in channels:
         b.add_held(f"prev.{ch.name}")
 
@@ -545,6 +550,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
         else:
             m.always.append(code)
     mech.emit(b, m)
+    if replayed is not None:
+        emit_replay_rates(b, *replayed)
     for site, _, _ in laws:
         b.emit(f"{b.a(site.name + '_friction')} = f_{site.name}",
                writes=f"aux:{site.name}_friction", reads=f"f_{site.name}")
