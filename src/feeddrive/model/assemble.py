@@ -24,7 +24,6 @@ from .compensation import CompensationFootprint, emit_compensation
 from .disturbances import LoadProfile, TorqueRipple, emit_harmonics, emit_load, harmonics
 from .friction import FrictionLaw, friction_law
 from .mechanisms import Mechanics, Site, mechanism
-from .replay import Replay, declare_replay, emit_replay_rates, emit_replay_value
 from .reference import (
     NUT_SPEED,
     PROFILE_PARAMS,
@@ -33,6 +32,7 @@ from .reference import (
     TABLE_OFFSET,
     reference_with_inputs,
 )
+from .replay import Replay, declare_replay, emit_replay_rates, emit_replay_value
 
 if TYPE_CHECKING:
     from .reference import Profile
