@@ -440,7 +440,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     """
     mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
     # an open-loop replay imposes one state: set before any part writes code that reads it
-    replayed = declare_replay(b, profile, mech) if isinstance(profile, Replay) else None
+    replay = profile if isinstance(profile, Replay) else None
+    replayed = declare_replay(b, replay, mech) if replay is not None else None
     mech.declare(b)
     mech.parameters(b)
     sites = mech.sites(b)
@@ -472,8 +473,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     b.add_aux("table_speed_reference", "m/s", "commanded table speed")
     mech.signals(b)
     _profile(b, profile, mech)
-    if replayed is not None:
-        emit_replay_value(b, profile, mech, replayed[1], b.param_index[b.q("profile[0]")])
+    if replay is not None and replayed is not None:
+        emit_replay_value(b, replay, mech, replayed[1], b.param_index[b.q("profile[0]")])
     for ch in channels:
         b.add_held(f"prev.{ch.name}")
 
