@@ -31,6 +31,7 @@ ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from reference.fit_traces import calibration_truth  # noqa: E402
 from reference.replay_truth import force_driven, speed_driven  # noqa: E402
 
 #: the truth: the preset with these factors
@@ -40,15 +41,7 @@ SEEDS = range(5)
 
 
 def _truth(preset: str) -> tuple[fd.DriveParameters, dict[str, float]]:
-    base = fd.preset(preset)
-    p, values = base, {}
-    for path, factor in FACTORS.items():
-        value: object = base
-        for part in path.split("."):
-            value = getattr(value, part)
-        values[path] = float(value) * factor  # type: ignore[arg-type]
-        p = p.replace_path(path, values[path])
-    return p, values
+    return calibration_truth(preset, FACTORS)
 
 
 def _covered(base: fd.DriveParameters, drive: str, records: list[Experiment],

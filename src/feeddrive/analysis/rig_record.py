@@ -15,7 +15,11 @@ motor force ``vir`` [N]), but any names do.  What each role is (:data:`ROLES`):
 * fitted signals, any of ``position`` [m] (relative to its first sample), ``speed`` [m/s],
   ``current`` [A] (the current of the motor that drives the table) and ``force`` [N] (that
   motor's force at the table, compared as its current: F / (K·ω/v), K the motor's torque or
-  force constant and ω/v its rate per table speed from the drive's kinematics).
+  force constant and ω/v its rate per table speed from the drive's kinematics), and
+  ``drive_force`` [N] (the force on the table from the drive, a load cell between them);
+* with ``--input`` (an open-loop replay, :mod:`feeddrive.model.replay`), instead of a
+  reference: the replayed ``current`` [A], ``torque`` [N m], ``force`` [N] or
+  ``motor_speed`` [rad/s] (:data:`INPUT_ROLES`), which is then not fitted.
 
 Cleaning, each step stated in one line (:attr:`RigRecord.notes`): samples where a mapped
 variable is NaN or infinite are dropped (the runs of them counted and located); duplicated
