@@ -189,19 +189,55 @@ class Replay:
         return f"{axes[0]}_current", axes[0]
 
     def scale_code(self, b: Any, mech: Any, axis: str) -> str:
-        """Code of the factor that turns the replayed value into the imposed state [SI]."""
+        """Code of the factor that turns the replayed value into the imposed state.
+
+        Parameters
+        ----------
+        b : Builder
+            The model builder (the factor reads parameter slots, so a fitted K_t or H
+            moves it).
+        mech : Mechanism
+            The drive's topology.
+        axis : str
+            The motor axis.
+
+        Returns
+        -------
+        str
+            The code [SI: imposed state per replayed unit]; ``"1.0"`` for a current or speed.
+        """
         return "1.0"
 
 
 class CurrentReplay(Replay):
-    """The measured motor current [A] drives the model (module docstring)."""
+    """The measured motor current [A] drives the model (module docstring).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Increasing sample instants from 0 [s].
+    value : numpy.ndarray
+        The signal at each instant [A].
+    speed_scale : float, default 0.0
+        The largest table speed the run is expected to reach [m/s] (:class:`Replay`).
+    """
 
     role = "current"
     unit = "A"
 
 
 class TorqueReplay(Replay):
-    """The measured motor torque [N m] (a linear motor's force [N]) drives the model."""
+    """The measured motor torque [N m] (a linear motor's force [N]) drives the model.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Increasing sample instants from 0 [s].
+    value : numpy.ndarray
+        The signal at each instant [N m].
+    speed_scale : float, default 0.0
+        The largest table speed the run is expected to reach [m/s] (:class:`Replay`).
+    """
 
     role = "torque"
     unit = "N m"
@@ -211,7 +247,17 @@ class TorqueReplay(Replay):
 
 
 class ForceReplay(Replay):
-    """The motor's force referred to the table [N] drives the model: i = F·H/K_t."""
+    """The motor's force referred to the table [N] drives the model: i = F·H/K_t.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Increasing sample instants from 0 [s].
+    value : numpy.ndarray
+        The signal at each instant [N].
+    speed_scale : float, default 0.0
+        The largest table speed the run is expected to reach [m/s] (:class:`Replay`).
+    """
 
     role = "force"
     unit = "N"
@@ -221,13 +267,40 @@ class ForceReplay(Replay):
 
 
 class MotorSpeedReplay(Replay):
-    """The measured motor speed [rad/s] drives the mechanism (the motor side kinematic)."""
+    """The measured motor speed [rad/s] drives the mechanism (the motor side kinematic).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Increasing sample instants from 0 [s].
+    value : numpy.ndarray
+        The signal at each instant [rad/s].
+    speed_scale : float, default 0.0
+        The largest table speed the run is expected to reach [m/s] (:class:`Replay`).
+    """
 
     role = "speed"
     unit = "rad/s"
 
     @classmethod
     def imposed(cls, mech: Any) -> tuple[str, str]:
+        """The motor's speed state (the rate state of its angle) and its axis.
+
+        Parameters
+        ----------
+        mech : Mechanism
+            The drive's topology.
+
+        Returns
+        -------
+        tuple of (str, str)
+            (state name, axis name).
+
+        Raises
+        ------
+        ParameterError
+            For a drive whose motor has no shaft apart from the table.
+        """
         _, axis = super().imposed(mech)
         motor = next((m for m in mech.drive_motors if m.name == axis), None)
         rates = mech.steady_motion(0.0, 0.0)
