@@ -184,5 +184,16 @@ def test_fit_refuses_a_replay_before_any_simulation(monkeypatch: pytest.MonkeyPa
     assert words in str(err.value) and "\n" not in str(err.value)
 
 
+def test_fit_refuses_a_loop_gain_of_a_replay(monkeypatch: pytest.MonkeyPatch) -> None:
+    import feeddrive.analysis.fit as fit
+
+    monkeypatch.setattr(fit, "simulate_experiment", None)  # any simulation would fail
+    e = _experiment("force", {"table_position": np.linspace(0, 1e-3, 50)})
+    with pytest.raises(FitError, match="controller.velocity_gain: has no effect .*"
+                                       "open-loop replay"):
+        fit_drive(fd.preset("linear-motor-example"), [e], ["controller.velocity_gain"],
+                  drive="linear-motor", table_position=0.0)
+
+
 def test_every_role_is_registered() -> None:
     assert set(REPLAYS) == {"current", "torque", "force", "speed"}

@@ -512,6 +512,9 @@ def _no_effect(params: DriveParameters, drive: str, path: str,
     held, why = topology.held_parameters()
     if any(path == p or path.startswith(p + ".") for p in held):
         return why
+    if head[0] in ("controller", "hollow_controller") and experiments and \
+            all(e.input for e in experiments):
+        return "every record is an open-loop replay (--input): the loops are bypassed"
     if len(head) >= 4 and head[0] == "friction" and head[2] in ("positive", "negative"):
         sign = 1 if head[2] == "positive" else -1
         if directions and sign not in directions and not (nut_driven and head[1] != "guide"):
