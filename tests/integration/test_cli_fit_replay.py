@@ -57,7 +57,8 @@ BASE = ["fit", "rig.mat", "--drive", "rack-pinion", "--preset", "rack-pinion-exa
 
 
 def test_fit_a_speed_replay_from_the_command_line(record: Path) -> None:
-    args = [*BASE, "--input", "speed", "--map", "time=t motor_speed=w drive_force=f", "--json"]
+    roles = ["--input", "speed", "--map", "time=t motor_speed=w drive_force=f"]
+    args = [*BASE, *roles, "--json", "--out", "fit.toml", "--force"]
     res = _run(*args, cwd=record)
     assert res.returncode == 0, res.stderr
     data = json.loads(res.stdout)
@@ -66,6 +67,11 @@ def test_fit_a_speed_replay_from_the_command_line(record: Path) -> None:
     assert mass["ci_high"] - mass["ci_low"] < 0.05 * MASS
     assert any("motor_speed w drives the model open-loop (--input speed)" in n
                for n in data["record_notes"])
+    # validate replays the record too (here the same one: the wiring, not a held-out check)
+    val = _run("validate", "fit.toml", "rig.mat", *roles, cwd=record)
+    assert val.returncode == 0, val.stderr
+    fit_percent = re.search(r"drive_force: fit ([0-9.]+) %", val.stdout)
+    assert fit_percent is not None and float(fit_percent.group(1)) > 95.0, val.stdout
 
 
 @pytest.mark.parametrize(("extra", "words"), [
