@@ -301,11 +301,44 @@ def _uniform_reference(t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.nda
     return grid, vv
 
 
+#: ``--input`` of a CSV trace → (dimension, default unit, the columns looked for)
+INPUT_COLUMNS: dict[str, tuple[str, str, tuple[str, ...]]] = {
+    "current": ("current", "A", ("motor_current", "screw_current", "current")),
+    "torque": ("torque", "N m", ("motor_torque", "screw_torque", "torque")),
+    "force": ("force", "N", ("motor_force", "force")),
+    "speed": ("rotary_speed", "rad/s", ("motor_speed", "screw_speed")),
+}
+_ROTARY_SPEED_UNITS = {"rad/s": 1.0, "rpm": 2.0 * math.pi / 60.0,
+                       "rev/min": 2.0 * math.pi / 60.0}
+
+
+def _replayed_column(table: Any, src: str, input: str) -> np.ndarray:
+    """The ``--input`` column of a CSV trace in SI (:data:`INPUT_COLUMNS`)."""
+    dim, default, aliases = INPUT_COLUMNS[input]
+    col = next((a for a in aliases if table.has(a)), None)
+    if col is None:
+        raise FitError(f"{src}: --input {input}: no column for it (looked for "
+                       f"{', '.join(aliases)}; columns: {', '.join(table.names)})")
+    if dim in ("current", "force"):
+        return np.asarray(table.quantity([col], dim, unit=None, default_unit=default)[0])
+    i = table.find(col)
+    unit = table.units[i] if i is not None and table.units[i] else default
+    units = _TORQUE_UNITS if dim == "torque" else _ROTARY_SPEED_UNITS
+    if unit not in units:
+        raise FitError(f"{src}: column {col!r}: unit {unit!r}; expected one of "
+                       f"{', '.join(units)}")
+    values = table.numbers(col) * units[unit]
+    if dim == "torque":
+        table.check_magnitude(i or 0, values, "torque", unit, units[unit])
+    return np.asarray(values, dtype=float)
+
+
 def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
                     command_speed: float | None = None,
                     profile: tuple[np.ndarray, np.ndarray] | None = None,
                     torque_constant: float | None = None,
-                    record_start: float = 0.0) -> Experiment:
+                    record_start: float = 0.0, input: str | None = None,
+                    speed_ratio: float = 1.0) -> Experiment:
     """Read one trace file (docs/measured-data.md rules; ``simulate --output X.csv`` files).
 
     ``signals``: the measured signals to fit (:data:`MEASURABLE` names); default every one
@@ -331,6 +364,14 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
         K_t [N m/A], to turn a measured torque into current.
     record_start : float, default 0.0
         Time of the first sample after the start from rest [s].
+    input : str, optional
+        An open-loop replay (:class:`Experiment`): the column of this role
+        (:data:`INPUT_COLUMNS`; current [A], torque [N m], force [N], motor speed [rad/s or
+        rpm]) drives the model on the record's own instants; no reference is then read, and
+        the default fitted signals are the table position and speed and the drive force.
+    speed_ratio : float, default 1.0
+        Table travel per motor radian [m/rad], for the speed scale of a motor-speed replay
+        of a trace without a table position or speed.
 
     Returns
     -------
@@ -367,8 +408,15 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
         raise FitError(f"--record-start {record_start:g}: needs --command-speed (the reference "
                        "before the record is otherwise unknown)")
     t = t_raw - t0 + record_start
-    wanted = list(signals) if signals else ["table_position", "screw_current",
-                                            "screw_torque", "motor_current"]
+    if input is not None:
+        if input not in INPUT_COLUMNS:
+            raise FitError(f"--input {input!r}: expected one of {', '.join(INPUT_COLUMNS)}")
+        if command_speed is not None or profile is not None or record_start > 0:
+            raise FitError(f"--input {input}: the loops are bypassed and no reference drives "
+                           "the model; not with --command-speed, --profile or --record-start")
+    wanted = list(signals) if signals else (
+        ["table_position", "table_speed", "drive_force"] if input is not None else
+        ["table_position", "screw_current", "screw_torque", "motor_current"])
     for name in wanted:
         if name not in MEASURABLE:
             raise FitError(f"--signal {name!r}: not a measurable signal; expected one of "
@@ -407,6 +455,18 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     if not measured:
         raise FitError(f"{src}: no usable measured signal (looked for "
                        f"{', '.join(wanted)}; columns: {', '.join(table.names)})")
+    if input is not None:
+        value = _replayed_column(table, src, input)
+        if "table_speed" in measured:
+            speed = measured["table_speed"]
+        elif "table_position" in measured:
+            speed = np.gradient(measured["table_position"], t)
+        else:
+            speed = value * speed_ratio if input == "speed" else np.zeros_like(t)
+        return Experiment(source=src, time=t, signals=measured, reference_time=t,
+                          table_speed=speed, noise={k: noise_level(v)
+                                                    for k, v in measured.items()},
+                          input=input, input_value=value)
     nut = None
     if profile is not None:
         pt, pv = (np.asarray(a, dtype=float) for a in profile)

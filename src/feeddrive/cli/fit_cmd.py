@@ -68,9 +68,6 @@ def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_p
     cleaning notes (printed unless JSON)."""
     from ..analysis.fit import read_experiment
 
-    if replay is not None and not record_map:
-        raise ValueError(f"--input {replay}: replays a variable of a .mat record; give the "
-                         "record's roles with --map")
 
     if profile_file and command_speed is not None:
         raise ValueError("--profile: give either --profile or --command-speed, not both")
@@ -96,8 +93,16 @@ def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_p
         prof = from_csv(profile_file)
         reference = (prof.time, prof.table_speed)
     torque_constant = _table_motor_constant(params, drive, table_position)
+    ratio = 1.0
+    if replay == "speed":
+        from ..analysis.rig_record import _axis_ratio
+        from ..engine.simulate import DriveSystem
+
+        axis = DriveSystem(params, drive, table_position).topology().table_axis
+        ratio = _axis_ratio(params, drive, table_position, axis)
     return [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
-                            torque_constant=torque_constant) for t in traces], []
+                            torque_constant=torque_constant, input=replay, speed_ratio=ratio)
+            for t in traces], []
 
 
 #: the --map option of fit and validate
@@ -108,10 +113,12 @@ _MAP_HELP = ("MATLAB .mat records (v5; v7.3 through h5py): ROLE=VARIABLE, repeat
              "drive_force [N] (force on the table from the drive); with --input also torque "
              "[N m] or motor_speed [rad/s] (SI; docs/fitting.md).")
 #: the --input option of fit and validate
-_INPUT_HELP = ("Open-loop replay: the mapped current [A], torque [N m], force [N] (the motor's "
-               "force at the table) or motor speed [rad/s] (role motor_speed) drives the "
-               "model, interpolated linearly between the record's samples, the loops bypassed "
-               "(no reference); one of current, torque, force, speed. Needs --map.")
+_INPUT_HELP = ("Open-loop replay: the record's motor current [A], torque [N m], force [N] (the "
+               "motor's force at the table) or motor speed [rad/s] (a CSV column "
+               "motor_current, motor_torque, motor_force or motor_speed; with --map the roles "
+               "current, torque, force, motor_speed) drives the model, interpolated linearly "
+               "between the record's samples, the loops bypassed (no reference); one of "
+               "current, torque, force, speed.")
 
 
 @app.command("fit")
