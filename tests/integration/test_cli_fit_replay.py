@@ -20,6 +20,7 @@ import pytest
 from scipy.io import savemat
 
 import feeddrive as fd
+from feeddrive.analysis.fit import INPUT_COLUMNS
 from feeddrive.analysis.rig_record import INPUT_ROLES
 from feeddrive.model.replay import REPLAYS
 
@@ -141,6 +142,8 @@ def test_input_help_names_every_replay_role() -> None:
     res = _run("fit", "--help", cwd=ROOT)
     text = re.sub(r"\s+", " ", res.stdout)
     assert "--input current|torque|force|speed" in text
-    assert set(INPUT_ROLES) == set(REPLAYS)  # the help's list is the model's
-    for role in INPUT_ROLES.values():
+    assert set(INPUT_ROLES) == set(REPLAYS) == set(INPUT_COLUMNS)  # the help's list
+    for role in INPUT_ROLES.values():  # the --map roles it names
         assert role in text
+    for _, _, columns in INPUT_COLUMNS.values():  # the CSV column it names first
+        assert columns[0] in text
