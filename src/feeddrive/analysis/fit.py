@@ -69,7 +69,7 @@ from ..parameters.toml_io import toml_comment, toml_string
 from .fit_residuals import HacCovariance, ResidualDiagnostics, diagnose, hac_covariance
 from .fit_statistics import correlation, covariance, noise_level
 
-__all__ = ["MEASURABLE", "Experiment", "FitError", "FitResult", "IntegrationCheck",
+__all__ = ["INPUT_COLUMNS", "MEASURABLE", "Experiment", "FitError", "FitResult", "IntegrationCheck",
            "ParameterEstimate",
            "fit_drive", "free_parameter_bounds", "read_experiment"]
 
