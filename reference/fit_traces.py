@@ -90,13 +90,15 @@ def measured(trace: Trace, seed: int, *, position_quantum: float = 0.05e-6,
                       noise={k: noise_level(v) for k, v in signals.items()})
 
 
-def calibration_truth() -> tuple[DriveParameters, dict[str, float]]:
-    """``wang2021`` with :data:`FACTORS` applied, and the true values by path [SI]."""
+def calibration_truth(preset: str = "wang2021", factors: dict[str, float] | None = None
+                      ) -> tuple[DriveParameters, dict[str, float]]:
+    """``preset`` (``wang2021``) with ``factors`` (:data:`FACTORS`) applied, and the true
+    values by path [SI]."""
     import feeddrive as fd
 
-    base = fd.preset("wang2021")
+    base = fd.preset(preset)
     p, values = base, {}
-    for path, factor in FACTORS.items():
+    for path, factor in (FACTORS if factors is None else factors).items():
         value: object = base
         for part in path.split("."):
             value = getattr(value, part)

@@ -110,7 +110,9 @@ def test_v73_read_through_h5py_or_refused_in_one_line(tmp_path, monkeypatch) -> 
 @pytest.mark.parametrize("items, words", [
     (["time=t position=qm reference=qg force=vire"], "no variable 'vire'"),
     (["time=t position=qm reference=qm"], "given two roles"),
-    (["time=t position=qm torque=vir reference=qg"], "unknown role 'torque'"),
+    (["time=t position=qm voltage=vir reference=qg"], "unknown role 'voltage'"),
+    # a torque is a role since the open-loop replay, and only as its input
+    (["time=t position=qm torque=vir reference=qg"], "replayed only with --input torque"),
     (["time=t position=qm"], "exactly one of reference"),
     (["time=t position=qm reference=qg", "speed_reference=vir"], "exactly one of reference"),
     (["time=t reference=qg"], "no measured signal"),

@@ -69,7 +69,7 @@ from ..parameters.toml_io import toml_comment, toml_string
 from .fit_residuals import HacCovariance, ResidualDiagnostics, diagnose, hac_covariance
 from .fit_statistics import correlation, covariance, noise_level
 
-__all__ = ["MEASURABLE", "Experiment", "FitError", "FitResult", "IntegrationCheck",
+__all__ = ["INPUT_COLUMNS", "MEASURABLE", "Experiment", "FitError", "FitResult", "IntegrationCheck",
            "ParameterEstimate",
            "fit_drive", "free_parameter_bounds", "read_experiment"]
 
@@ -81,6 +81,7 @@ MEASURABLE: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "nut_current": ("current", "A", ("nut_current", "hollow_motor_current")),
     "screw_torque": ("torque", "N m", ("screw_torque", "screw_motor_torque", "torque")),
     "motor_current": ("current", "A", ("motor_current",)),
+    "drive_force": ("force", "N", ("drive_force",)),
 }
 #: a residual rms above this multiple of the data's own noise level: a poor fit
 MAX_RESIDUAL_RATIO = 2.0
@@ -158,15 +159,27 @@ class Experiment:
         Commanded nut speed on ``reference_time`` [m/s].
     noise : mapping of str to float, optional
         Noise σ per signal, from the data alone [SI unit of the signal].
+    input : str, optional
+        ``""``: the reference drives the loops.  Otherwise the role of a measured signal that
+        drives the model open-loop (:data:`feeddrive.model.replay.REPLAYS`: ``"current"``
+        [A], ``"torque"`` [N m], ``"force"`` [N], ``"speed"`` [rad/s of the motor]); its
+        samples are ``input_value`` on ``reference_time`` (the record's instants from 0, a
+        piecewise-linear table with them as breakpoints), and ``table_speed`` is then the
+        table speed the record shows on those instants (its directions and the run's speed
+        scale), not a command.
+    input_value : numpy.ndarray, optional
+        The replayed signal on ``reference_time`` [SI unit of the role].
     """
 
     source: str
     time: np.ndarray
     signals: Mapping[str, np.ndarray]
-    reference_time: np.ndarray  # uniform grid from 0 [s]
+    reference_time: np.ndarray  # uniform grid from 0 [s] (a replay: the record's instants)
     table_speed: np.ndarray  # [m/s] commanded table speed on reference_time
     nut_speed: np.ndarray | None = None  # [m/s]
     noise: Mapping[str, float] = field(default_factory=dict)  # σ per signal (SI)
+    input: str = ""
+    input_value: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
@@ -179,17 +192,16 @@ class Experiment:
         return float(self.time[-1] - self.time[0])
 
     def profile(self) -> Any:
-        """The reference as a profile the simulator follows.
+        """The reference as a profile the simulator follows, or the replay that drives it.
 
         Returns
         -------
-        SampledSpeed
-            ``reference_time``, ``table_speed`` and ``nut_speed`` [SI].
+        SampledSpeed or Replay
+            ``reference_time``, ``table_speed`` and ``nut_speed`` [SI]; with an ``input``, its
+            :class:`~feeddrive.model.replay.Replay` of ``input_value``.
         """
-        from ..model.reference import SampledSpeed
-
-        return SampledSpeed(time=self.reference_time, table_speed=self.table_speed,
-                            nut_speed=self.nut_speed)
+        return experiment_profile(self.reference_time, self.table_speed, self.nut_speed,
+                                  self.input, self.input_value)
 
     def direction(self) -> set[int]:
         """Signs of the commanded table speed during the record.
@@ -208,6 +220,78 @@ class Experiment:
         return out
 
 
+def experiment_profile(reference_time: np.ndarray, table_speed: np.ndarray,
+                       nut_speed: np.ndarray | None, input: str = "",
+                       input_value: np.ndarray | None = None) -> Any:
+    """The profile an experiment is simulated with (:meth:`Experiment.profile`; the fit's
+    workers call it with the task's arrays).
+
+    Parameters
+    ----------
+    reference_time : numpy.ndarray
+        Sample instants from 0 [s].
+    table_speed : numpy.ndarray
+        Commanded table speed (a replay: the record's table speed) [m/s].
+    nut_speed : numpy.ndarray or None
+        Commanded nut speed [m/s].
+    input : str, default ""
+        The replayed role (:class:`Experiment`); "" for none.
+    input_value : numpy.ndarray or None, default None
+        The replayed signal [SI unit of the role].
+
+    Returns
+    -------
+    SampledSpeed or Replay
+        The profile.
+    """
+    from ..model.reference import SampledSpeed
+    from ..model.replay import REPLAYS
+
+    if input:
+        return REPLAYS[input](time=np.asarray(reference_time, dtype=float),
+                              value=np.asarray(input_value, dtype=float),
+                              speed_scale=float(np.max(np.abs(table_speed), initial=0.0)))
+    return SampledSpeed(time=np.asarray(reference_time, dtype=float),
+                        table_speed=np.asarray(table_speed, dtype=float),
+                        nut_speed=None if nut_speed is None else np.asarray(nut_speed, float))
+
+
+def check_replay(topology: Any, experiment: Experiment) -> None:
+    """Refuse, before any simulation, a replayed input the drive cannot take or a record
+    that also fits the input it replays.
+
+    Parameters
+    ----------
+    topology : Mechanism
+        The drive's topology.
+    experiment : Experiment
+        A record with an ``input``.
+
+    Raises
+    ------
+    FitError
+        One line naming the input and the drive.
+    """
+    from ..model.replay import REPLAYS
+
+    role, src = experiment.input, experiment.source
+    if role not in REPLAYS:
+        raise FitError(f"--input {role!r}: expected one of {', '.join(REPLAYS)}")
+    if experiment.input_value is None or \
+            np.shape(experiment.input_value) != np.shape(experiment.reference_time):
+        raise FitError(f"{src}: --input {role}: no samples of the replayed {role} on the "
+                       "record's instants")
+    try:
+        state, axis = REPLAYS[role].imposed(topology)
+    except ParameterError as err:
+        raise FitError(f"{src}: {err}") from None
+    replayed = {state, f"{axis}_current"} if role != "speed" else {state}
+    both = sorted(replayed & set(experiment.signals))
+    if both:
+        raise FitError(f"{src}: --input {role} drives {state}; it cannot also be a fitted "
+                       f"signal ({both[0]})")
+
+
 def _uniform_reference(t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The command on a uniform grid from 0 (the record's median step)."""
     dt = float(np.median(np.diff(t)))
@@ -217,11 +301,44 @@ def _uniform_reference(t: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.nda
     return grid, vv
 
 
+#: ``--input`` of a CSV trace → (dimension, default unit, the columns looked for)
+INPUT_COLUMNS: dict[str, tuple[str, str, tuple[str, ...]]] = {
+    "current": ("current", "A", ("motor_current", "screw_current", "current")),
+    "torque": ("torque", "N m", ("motor_torque", "screw_torque", "torque")),
+    "force": ("force", "N", ("motor_force", "force")),
+    "speed": ("rotary_speed", "rad/s", ("motor_speed", "screw_speed")),
+}
+_ROTARY_SPEED_UNITS = {"rad/s": 1.0, "rpm": 2.0 * math.pi / 60.0,
+                       "rev/min": 2.0 * math.pi / 60.0}
+
+
+def _replayed_column(table: Any, src: str, input: str) -> np.ndarray:
+    """The ``--input`` column of a CSV trace in SI (:data:`INPUT_COLUMNS`)."""
+    dim, default, aliases = INPUT_COLUMNS[input]
+    col = next((a for a in aliases if table.has(a)), None)
+    if col is None:
+        raise FitError(f"{src}: --input {input}: no column for it (looked for "
+                       f"{', '.join(aliases)}; columns: {', '.join(table.names)})")
+    if dim in ("current", "force"):
+        return np.asarray(table.quantity([col], dim, unit=None, default_unit=default)[0])
+    i = table.find(col)
+    unit = table.units[i] if i is not None and table.units[i] else default
+    units = _TORQUE_UNITS if dim == "torque" else _ROTARY_SPEED_UNITS
+    if unit not in units:
+        raise FitError(f"{src}: column {col!r}: unit {unit!r}; expected one of "
+                       f"{', '.join(units)}")
+    values = table.numbers(col) * units[unit]
+    if dim == "torque":
+        table.check_magnitude(i or 0, values, "torque", unit, units[unit])
+    return np.asarray(values, dtype=float)
+
+
 def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
                     command_speed: float | None = None,
                     profile: tuple[np.ndarray, np.ndarray] | None = None,
                     torque_constant: float | None = None,
-                    record_start: float = 0.0) -> Experiment:
+                    record_start: float = 0.0, input: str | None = None,
+                    speed_ratio: float = 1.0) -> Experiment:
     """Read one trace file (docs/measured-data.md rules; ``simulate --output X.csv`` files).
 
     ``signals``: the measured signals to fit (:data:`MEASURABLE` names); default every one
@@ -247,6 +364,14 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
         K_t [N m/A], to turn a measured torque into current.
     record_start : float, default 0.0
         Time of the first sample after the start from rest [s].
+    input : str, optional
+        An open-loop replay (:class:`Experiment`): the column of this role
+        (:data:`INPUT_COLUMNS`; current [A], torque [N m], force [N], motor speed [rad/s or
+        rpm]) drives the model on the record's own instants; no reference is then read, and
+        the default fitted signals are the table position and speed and the drive force.
+    speed_ratio : float, default 1.0
+        Table travel per motor radian [m/rad], for the speed scale of a motor-speed replay
+        of a trace without a table position or speed.
 
     Returns
     -------
@@ -283,8 +408,15 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
         raise FitError(f"--record-start {record_start:g}: needs --command-speed (the reference "
                        "before the record is otherwise unknown)")
     t = t_raw - t0 + record_start
-    wanted = list(signals) if signals else ["table_position", "screw_current",
-                                            "screw_torque", "motor_current"]
+    if input is not None:
+        if input not in INPUT_COLUMNS:
+            raise FitError(f"--input {input!r}: expected one of {', '.join(INPUT_COLUMNS)}")
+        if command_speed is not None or profile is not None or record_start > 0:
+            raise FitError(f"--input {input}: the loops are bypassed and no reference drives "
+                           "the model; not with --command-speed, --profile or --record-start")
+    wanted = list(signals) if signals else (
+        ["table_position", "table_speed", "drive_force"] if input is not None else
+        ["table_position", "screw_current", "screw_torque", "motor_current"])
     for name in wanted:
         if name not in MEASURABLE:
             raise FitError(f"--signal {name!r}: not a measurable signal; expected one of "
@@ -323,6 +455,18 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     if not measured:
         raise FitError(f"{src}: no usable measured signal (looked for "
                        f"{', '.join(wanted)}; columns: {', '.join(table.names)})")
+    if input is not None:
+        value = _replayed_column(table, src, input)
+        if "table_speed" in measured:
+            speed = measured["table_speed"]
+        elif "table_position" in measured:
+            speed = np.gradient(measured["table_position"], t)
+        else:
+            speed = value * speed_ratio if input == "speed" else np.zeros_like(t)
+        return Experiment(source=src, time=t, signals=measured, reference_time=t,
+                          table_speed=speed, noise={k: noise_level(v)
+                                                    for k, v in measured.items()},
+                          input=input, input_value=value)
     nut = None
     if profile is not None:
         pt, pv = (np.asarray(a, dtype=float) for a in profile)
@@ -428,6 +572,9 @@ def _no_effect(params: DriveParameters, drive: str, path: str,
     held, why = topology.held_parameters()
     if any(path == p or path.startswith(p + ".") for p in held):
         return why
+    if head[0] in ("controller", "hollow_controller") and experiments and \
+            all(e.input for e in experiments):
+        return "every record is an open-loop replay (--input): the loops are bypassed"
     if len(head) >= 4 and head[0] == "friction" and head[2] in ("positive", "negative"):
         sign = 1 if head[2] == "positive" else -1
         if directions and sign not in directions and not (nut_driven and head[1] != "guide"):
@@ -456,7 +603,8 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     """Simulate one experiment at one parameter point and return the fitted signals on the
     measured times (SI).  Module-level and picklable: every executor runs it.  ``task``:
     ``parameters`` (TOML text), ``drive``, ``table_position`` [m], ``reference_time``,
-    ``table_speed``, ``nut_speed``, ``time``, ``signals`` (names), ``solver`` (the fit's
+    ``table_speed``, ``nut_speed``, ``input`` and ``input_value`` (a replay,
+    :class:`Experiment`), ``time``, ``signals`` (names), ``solver`` (the fit's
     integrator settings, :meth:`feeddrive.SolverOptions.record`).
 
     Parameters
@@ -474,7 +622,6 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
 
     from ..engine.options import SolverOptions, current
     from ..engine.simulate import DriveSystem, SimulationError, simulate
-    from ..model.reference import SampledSpeed
     from ..parameters import loads
 
     # the integrator settings of the fit (its --accuracy), carried to the worker
@@ -482,10 +629,9 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     try:
         params = loads(task["parameters"])
         system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
-        prof = SampledSpeed(time=np.asarray(task["reference_time"]),
-                            table_speed=np.asarray(task["table_speed"]),
-                            nut_speed=None if task["nut_speed"] is None
-                            else np.asarray(task["nut_speed"]))
+        prof = experiment_profile(task["reference_time"], task["table_speed"],
+                                  task["nut_speed"], task.get("input", ""),
+                                  task.get("input_value"))
         t = np.asarray(task["time"])
         estimate = bool(task.get("error_estimate", False))
         try:
@@ -553,7 +699,8 @@ class _Evaluator:
         solver = current().record()
         return [{"parameters": text, "drive": self.drive, "table_position": self.position,
                  "reference_time": e.reference_time, "table_speed": e.table_speed,
-                 "nut_speed": e.nut_speed, "time": e.time, "signals": list(e.signals),
+                 "nut_speed": e.nut_speed, "input": e.input, "input_value": e.input_value,
+                 "time": e.time, "signals": list(e.signals),
                  "output_interval": _options_for(float(np.median(np.diff(e.time))))[
                      "output_interval"], "solver": solver}
                 for e in self.experiments]
@@ -1091,7 +1238,9 @@ def _cut(e: Experiment, h: float) -> Experiment:
                                                            e.signals.items()},
                                reference_time=e.reference_time[keep],
                                table_speed=e.table_speed[keep],
-                               nut_speed=None if e.nut_speed is None else e.nut_speed[keep])
+                               nut_speed=None if e.nut_speed is None else e.nut_speed[keep],
+                               input_value=None if e.input_value is None
+                               else e.input_value[keep])
 
 
 def _linearity(ev: _Evaluator, theta: np.ndarray, white: np.ndarray, cov: np.ndarray,
@@ -1345,6 +1494,8 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     for e in experiments:
         if e.nut_speed is not None and not system.topology().follows("nut"):
             raise FitError(f"{e.source}: commands a nut speed; only the DDFS drives its nut")
+        if e.input:
+            check_replay(system.topology(), e)
     theta0 = np.ones(len(free))
 
     longest = max(e.span for e in experiments)
@@ -1823,7 +1974,7 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
 #: signal → (engineering unit, factor from SI) for plots and the CLI
 EDGE_UNITS = {"table_position": ("µm", 1e6), "table_speed": ("mm/s", 1e3),
               "screw_current": ("A", 1.0), "nut_current": ("A", 1.0),
-              "motor_current": ("A", 1.0)}
+              "motor_current": ("A", 1.0), "drive_force": ("N", 1.0)}
 
 
 def plot_residuals(result: FitResult, path: str | Path) -> Path:

@@ -15,7 +15,11 @@ motor force ``vir`` [N]), but any names do.  What each role is (:data:`ROLES`):
 * fitted signals, any of ``position`` [m] (relative to its first sample), ``speed`` [m/s],
   ``current`` [A] (the current of the motor that drives the table) and ``force`` [N] (that
   motor's force at the table, compared as its current: F / (K·ω/v), K the motor's torque or
-  force constant and ω/v its rate per table speed from the drive's kinematics).
+  force constant and ω/v its rate per table speed from the drive's kinematics), and
+  ``drive_force`` [N] (the force on the table from the drive, a load cell between them);
+* with ``--input`` (an open-loop replay, :mod:`feeddrive.model.replay`), instead of a
+  reference: the replayed ``current`` [A], ``torque`` [N m], ``force`` [N] or
+  ``motor_speed`` [rad/s] (:data:`INPUT_ROLES`), which is then not fitted.
 
 Cleaning, each step stated in one line (:attr:`RigRecord.notes`): samples where a mapped
 variable is NaN or infinite are dropped (the runs of them counted and located); duplicated
@@ -46,7 +50,7 @@ from ..parameters import DriveParameters
 from .fit import Experiment, FitError, _uniform_reference
 from .fit_statistics import noise_level
 
-__all__ = ["FITTED_ROLES", "REFERENCE_ROLES", "ROLES", "RigRecord", "emps_layout",
+__all__ = ["FITTED_ROLES", "INPUT_ROLES", "REFERENCE_ROLES", "ROLES", "RigRecord", "emps_layout",
            "parse_map", "read_rig_record", "reference_rate", "table_motor_force_per_current"]
 
 #: role → what it is [SI unit]
@@ -58,22 +62,33 @@ ROLES: dict[str, str] = {
     "speed": "measured table speed [m/s] (fitted)",
     "current": "measured current of the motor driving the table [A] (fitted)",
     "force": "measured force of the motor driving the table [N] (fitted as its current)",
+    "drive_force": "measured force on the table from the drive [N] (screw–nut or mesh force, "
+                   "a load cell between drive and table; fitted as drive_force)",
+    "torque": "measured motor torque [N m] (with --input torque)",
+    "motor_speed": "measured motor speed [rad/s] (with --input speed)",
 }
 #: the roles a record's reference may take: a position or a speed reference
 REFERENCE_ROLES = ("reference", "speed_reference")
 #: the roles a record's measured, fitted channels may take
-FITTED_ROLES = ("position", "speed", "current", "force")
+FITTED_ROLES = ("position", "speed", "current", "force", "drive_force")
+#: ``--input`` (an open-loop replay, :mod:`feeddrive.model.replay`) → the role it replays
+INPUT_ROLES = {"current": "current", "torque": "torque", "force": "force",
+               "speed": "motor_speed"}
 
 
-def parse_map(items: Sequence[str]) -> dict[str, str]:
+def parse_map(items: Sequence[str], input: str | None = None) -> dict[str, str]:
     """``ROLE=VARIABLE`` items (each may hold several, separated by spaces or commas) as
     {role: variable}; one-line refusals for an unknown role, a role given twice, a variable
-    given two roles, or no time, no reference or no fitted signal.
+    given two roles, or no time, no reference or no fitted signal.  With ``input`` (an
+    open-loop replay) the record needs that input's role (:data:`INPUT_ROLES`) and no
+    reference: the loops are bypassed.
 
     Parameters
     ----------
     items : sequence of str
         The ``--map`` values.
+    input : str or None, default None
+        ``--input``: ``"current"``, ``"torque"``, ``"force"`` or ``"speed"``.
 
     Returns
     -------
@@ -106,6 +121,31 @@ def parse_map(items: Sequence[str]) -> dict[str, str]:
     if "time" not in out:
         raise FitError("--map: no time=VARIABLE given")
     refs = [r for r in REFERENCE_ROLES if r in out]
+    if input is not None:
+        if input not in INPUT_ROLES:
+            raise FitError(f"--input {input!r}: expected one of {', '.join(INPUT_ROLES)}")
+        role = INPUT_ROLES[input]
+        if role not in out:
+            raise FitError(f"--input {input}: no {role}=VARIABLE in --map (the replayed "
+                           "signal)")
+        if refs:
+            raise FitError(f"--map {refs[0]}={out[refs[0]]}: with --input {input} the loops "
+                           "are bypassed and a reference drives nothing; leave it out")
+        extra = [r for r in INPUT_ROLES.values() if r in out and r != role
+                 and r not in FITTED_ROLES]
+        if extra:
+            needs = next(k for k, v in INPUT_ROLES.items() if v == extra[0])
+            raise FitError(f"--map {extra[0]}={out[extra[0]]}: a {extra[0]} is replayed only "
+                           f"with --input {needs}")
+        if not any(r in out for r in FITTED_ROLES if r != role):
+            raise FitError(f"--map: no measured signal to fit besides the replayed {role}; "
+                           "give one or more of "
+                           f"{', '.join(f'{r}=VARIABLE' for r in FITTED_ROLES if r != role)}")
+        return out
+    for role in ("torque", "motor_speed"):
+        if role in out:
+            raise FitError(f"--map {role}={out[role]}: a {role} is replayed only with --input "
+                           f"{next(k for k, v in INPUT_ROLES.items() if v == role)}")
     if len(refs) != 1:
         raise FitError("--map: give exactly one of reference=VARIABLE (a position reference "
                        "[m]) or speed_reference=VARIABLE [m/s]" +
@@ -214,7 +254,8 @@ def table_motor_force_per_current(params: DriveParameters, drive: str,
 
 
 def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveParameters,
-                    *, drive: str = "cdfs", table_position: float = 0.4) -> RigRecord:
+                    *, drive: str = "cdfs", table_position: float = 0.4,
+                    input: str | None = None) -> RigRecord:
     """Read one ``.mat`` rig record with its variables mapped to roles (module docstring).
 
     Parameters
@@ -229,6 +270,10 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
         The drive.
     table_position : float, default 0.4
         Table position [m].
+    input : str or None, default None
+        ``--input``: the mapped signal of that role (:data:`INPUT_ROLES`) drives the model
+        open-loop on the record's own instants (:mod:`feeddrive.model.replay`) instead of a
+        reference; it is then not a fitted signal.
 
     Returns
     -------
@@ -262,7 +307,8 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
         raise FitError(f"{src}: the mapped variables differ in length ("
                        + ", ".join(f"{mapping[r]} {n}" for r, n in sizes.items()) + ")")
     notes: list[str] = []
-    if "force" in columns:
+    replayed = INPUT_ROLES[input] if input is not None else ""
+    if "force" in columns and replayed != "force":
         current_name, per_amp = table_motor_force_per_current(params, drive, table_position)
         if "current" in columns:
             raise FitError("--map force and current: the same motor's current twice; give one")
@@ -296,6 +342,9 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
                      f"{1e3 * steps.max():.4g} ms): the model is compared at the measured "
                      f"instants, the reference resampled every {1e3 * dt:.4g} ms")
     t = t_raw - t_raw[0]
+    if replayed:
+        return _replay_record(src, t, columns, mapping, params, drive, table_position,
+                              str(input), notes)
     if "reference" in columns:
         ref = columns["reference"] - columns["reference"][0]
         speed_ref, exact = reference_rate(ref, t)
@@ -325,6 +374,54 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
     exp = Experiment(source=src, time=t, signals=signals, reference_time=ref_t,
                      table_speed=ref_v, noise={k: noise_level(v) for k, v in signals.items()})
     return RigRecord(experiment=exp, notes=tuple(notes), mapping=dict(mapping))
+
+
+def _replay_record(src: str, t: np.ndarray, columns: Mapping[str, np.ndarray],
+                   mapping: Mapping[str, str], params: DriveParameters, drive: str,
+                   table_position: float, input: str, notes: list[str]) -> RigRecord:
+    """The experiment of a record whose ``input`` signal drives the model (open loop)."""
+    role = INPUT_ROLES[input]
+    signals: dict[str, np.ndarray] = {}
+    if "position" in columns:
+        signals["table_position"] = columns["position"] - columns["position"][0]
+    if "speed" in columns:
+        signals["table_speed"] = columns["speed"]
+    if "current" in columns and role != "current":
+        signals[_current_name(params, drive, table_position)] = columns["current"]
+    if "force" in columns and role != "force":
+        current_name, per_amp = table_motor_force_per_current(params, drive, table_position)
+        signals[current_name] = columns["force"] / per_amp
+    if "drive_force" in columns:
+        signals["drive_force"] = columns["drive_force"]
+    for name, v in signals.items():
+        if float(np.ptp(v)) == 0.0:
+            raise FitError(f"{src}: signal {name!r} is constant: no usable information")
+    # the run's speed scale (tolerances, divergence bound): the table speed the record shows
+    if "speed" in columns:
+        speed = columns["speed"]
+    elif "position" in columns:
+        speed = np.gradient(columns["position"], t)
+    elif role == "motor_speed":
+        from ..engine.simulate import DriveSystem
+
+        axis = DriveSystem(params, drive, table_position).topology().table_axis
+        speed = columns[role] * _axis_ratio(params, drive, table_position, axis)
+    else:
+        speed = np.zeros_like(t)
+    notes.append(f"{src}: {role} {mapping[role]} drives the model open-loop (--input "
+                 f"{input}), interpolated linearly between its {t.size} samples")
+    exp = Experiment(source=src, time=t, signals=signals, reference_time=t, table_speed=speed,
+                     noise={k: noise_level(v) for k, v in signals.items()}, input=input,
+                     input_value=np.asarray(columns[role], dtype=float))
+    return RigRecord(experiment=exp, notes=tuple(notes), mapping=dict(mapping))
+
+
+def _axis_ratio(params: DriveParameters, drive: str, table_position: float, axis: str) -> float:
+    """Table travel per radian of ``axis``' motor [m/rad] (1 without a motor shaft)."""
+    from ..engine.simulate import DriveSystem
+
+    rates = DriveSystem(params, drive, table_position).topology().steady_motion(1.0, 0.0)
+    return 1.0 / float(rates[f"{axis}_angle"][1]) if f"{axis}_angle" in rates else 1.0
 
 
 def reference_rate(reference: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, bool]:

@@ -180,7 +180,8 @@ def validate(fit_file: str | Path, experiments: Sequence[Experiment], *,
             task = {"parameters": text, "drive": rec.drive,
                     "table_position": rec.table_position,
                     "reference_time": e.reference_time, "table_speed": e.table_speed,
-                    "nut_speed": e.nut_speed, "time": e.time, "signals": list(e.signals),
+                    "nut_speed": e.nut_speed, "input": e.input, "input_value": e.input_value,
+                    "time": e.time, "signals": list(e.signals),
                     "output_interval": min(1e-3, float(np.median(np.diff(e.time)))),
                     "solver": solver}
             out = simulate_experiment(task)

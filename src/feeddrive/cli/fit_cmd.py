@@ -62,11 +62,12 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
 def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_position: float,
                  signal: list[str] | None, command_speed: float | None,
                  profile_file: str | None, record_map: list[str] | None,
-                 as_json: bool) -> tuple[list[Any], list[str]]:
+                 as_json: bool, replay: str | None = None) -> tuple[list[Any], list[str]]:
     """The records of ``fit`` and ``validate``: CSV traces (``read_experiment``) or, with
-    ``--map``, MATLAB records (``read_rig_record``); and the cleaning notes (printed unless
-    JSON)."""
+    ``--map``, MATLAB records (``read_rig_record``, ``replay``: its ``--input``); and the
+    cleaning notes (printed unless JSON)."""
     from ..analysis.fit import read_experiment
+
 
     if profile_file and command_speed is not None:
         raise ValueError("--profile: give either --profile or --command-speed, not both")
@@ -77,9 +78,10 @@ def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_p
         if signal or speed is not None or profile_file:
             raise ValueError("--map: the roles choose the signals and the reference; not with "
                              "--signal, --command-speed or --profile")
-        roles = parse_map(record_map)
+        roles = parse_map(record_map, replay)
         records = [read_rig_record(t, roles, params, drive=drive,
-                                   table_position=table_position) for t in traces]
+                                   table_position=table_position, input=replay)
+                   for t in traces]
         notes = [n for r in records for n in r.notes]
         for note in notes if not as_json else []:
             _say(f"  {note}")
@@ -91,15 +93,32 @@ def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_p
         prof = from_csv(profile_file)
         reference = (prof.time, prof.table_speed)
     torque_constant = _table_motor_constant(params, drive, table_position)
+    ratio = 1.0
+    if replay == "speed":
+        from ..analysis.rig_record import _axis_ratio
+        from ..engine.simulate import DriveSystem
+
+        axis = DriveSystem(params, drive, table_position).topology().table_axis
+        ratio = _axis_ratio(params, drive, table_position, axis)
     return [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
-                            torque_constant=torque_constant) for t in traces], []
+                            torque_constant=torque_constant, input=replay, speed_ratio=ratio)
+            for t in traces], []
 
 
 #: the --map option of fit and validate
 _MAP_HELP = ("MATLAB .mat records (v5; v7.3 through h5py): ROLE=VARIABLE, repeat or quote "
              "several, e.g. --map 'time=t position=qm reference=qg force=vir'. Roles: time "
              "[s], reference (position reference [m]) or speed_reference [m/s], and the fitted "
-             "position [m], speed [m/s], current [A], force [N] (SI; docs/fitting.md).")
+             "position [m], speed [m/s], current [A], force [N] (motor force at the table), "
+             "drive_force [N] (force on the table from the drive); with --input also torque "
+             "[N m] or motor_speed [rad/s] (SI; docs/fitting.md).")
+#: the --input option of fit and validate
+_INPUT_HELP = ("Open-loop replay: the record's motor current [A], torque [N m], force [N] (the "
+               "motor's force at the table) or motor speed [rad/s] (a CSV column "
+               "motor_current, motor_torque, motor_force or motor_speed; with --map the roles "
+               "current, torque, force, motor_speed) drives the model, interpolated linearly "
+               "between the record's samples, the loops bypassed (no reference); one of "
+               "current, torque, force, speed.")
 
 
 @app.command("fit")
@@ -132,6 +151,8 @@ def fit_command(
         None, "--profile", help="Reference of every trace from a CSV (time [s], table_speed "
         "[mm/s], as simulate --profile-file), on the traces' clock; it must cover them."),
     record_map: Annotated[list[str] | None, typer.Option("--map", help=_MAP_HELP)] = None,
+    replay: str | None = typer.Option(None, "--input", metavar="current|torque|force|speed",
+                                      help=_INPUT_HELP),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     confidence: float = typer.Option(0.95, "--confidence", help="Interval level [fraction]."),
     max_evaluations: int = typer.Option(200, "--max-evaluations",
@@ -164,7 +185,7 @@ def fit_command(
     params = resolve_parameters(preset_name, params_file, drive)
     table_position = _units.position("--position", position, params, drive)
     experiments, notes = _read_traces(traces, params, drive, table_position, signal,
-                                      command_speed, profile_file, record_map, as_json)
+                                      command_speed, profile_file, record_map, as_json, replay)
     progress = None if as_json else (lambda msg: console.print(f"  {msg}", markup=False,
                                                                highlight=False))
     result = fit_drive(params, experiments, free, drive=drive, table_position=table_position,
@@ -362,6 +383,8 @@ def validate_command(
         None, "--profile", help="Reference of every record from a CSV (time [s], "
         "table_speed [mm/s]), as fit --profile."),
     record_map: Annotated[list[str] | None, typer.Option("--map", help=_MAP_HELP)] = None,
+    replay: str | None = typer.Option(None, "--input", metavar="current|torque|force|speed",
+                                      help=_INPUT_HELP),
     level: float = typer.Option(0.95, "--level", help="Level of the prediction band "
                                 "[fraction]."),
     plot: str | None = typer.Option(None, "--plot", help="Write measured, predicted and "
@@ -380,7 +403,7 @@ def validate_command(
     record = read_fit_record(fit_file)
     experiments, notes = _read_traces(traces, record.parameters, record.drive,
                                       record.table_position, signal, command_speed,
-                                      profile_file, record_map, as_json)
+                                      profile_file, record_map, as_json, replay)
     result = validate(fit_file, experiments, drive=drive, level=level)
     if plot:
         plot_validation(result, plot)

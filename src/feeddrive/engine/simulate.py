@@ -15,6 +15,7 @@ from ..model.assemble import Model, assemble
 from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
+from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
 from ..solvers import dopri5, switching
 from . import budget
@@ -472,6 +473,8 @@ def profile_breakpoints(profile: Profile, t_end: float, base: float, *,
     numpy.ndarray
         The instants in (0, t_end) [s]; empty when there are none.
     """
+    if isinstance(profile, Replay):  # an open-loop replay: its sample instants
+        return profile.breakpoints(t_end)
     if isinstance(profile, ConstantSpeed):
         stops = [profile.ramp_time] if 0.0 < profile.ramp_time < t_end else []
         return np.array(stops, dtype=float)
@@ -645,9 +648,9 @@ class Simulation:
 
     def __init__(self, system: DriveSystem, profile: Profile,
                  options: SolverOptions | None = None) -> None:
-        if not isinstance(profile, ConstantSpeed | SineSpeed | SampledSpeed):
+        if not isinstance(profile, ConstantSpeed | SineSpeed | SampledSpeed | Replay):
             raise ParameterError("profile", type(profile).__name__,
-                                 "expected ConstantSpeed, SineSpeed or SampledSpeed")
+                                 "expected ConstantSpeed, SineSpeed, SampledSpeed or a Replay")
         self.system, self.profile = system, profile
         self.options = options = options or current_options()
         self.model = system.model(profile)

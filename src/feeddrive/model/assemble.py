@@ -32,6 +32,7 @@ from .reference import (
     commanded_references,
     reference_with_inputs,
 )
+from .replay import Replay, declare_replay, emit_replay_rates, emit_replay_value
 
 if TYPE_CHECKING:
     from .reference import Profile
@@ -438,6 +439,9 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
         The compensator's footprint.
     """
     mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
+    # an open-loop replay imposes one state: set before any part writes code that reads it
+    replay = profile if isinstance(profile, Replay) else None
+    replayed = declare_replay(b, replay, mech) if replay is not None else None
     mech.declare(b)
     mech.parameters(b)
     sites = mech.sites(b)
@@ -469,6 +473,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     b.add_aux("table_speed_reference", "m/s", "commanded table speed")
     mech.signals(b)
     _profile(b, profile, mech)
+    if replay is not None and replayed is not None:
+        emit_replay_value(b, replay, mech, replayed[1], b.param_index[b.q("profile[0]")])
     for ch in channels:
         b.add_held(f"prev.{ch.name}")
 
@@ -545,6 +551,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
         else:
             m.always.append(code)
     mech.emit(b, m)
+    if replayed is not None:
+        emit_replay_rates(b, *replayed)
     for site, _, _ in laws:
         b.emit(f"{b.a(site.name + '_friction')} = f_{site.name}",
                writes=f"aux:{site.name}_friction", reads=f"f_{site.name}")

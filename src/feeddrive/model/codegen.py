@@ -108,6 +108,9 @@ class Builder:
         The controller axes' declarations (:class:`feeddrive.model.loops.ControlAxis`).
     scoped_rhs, scoped_sample : dict of str to list of str
         Each scope's own right-hand-side and sampled-update lines.
+    imposed : dict of str to str
+        State name → the code its reads give instead of ``y[k]`` (an open-loop replay's
+        imposed state, :mod:`feeddrive.model.replay`).
     """
 
     states: list[Signal] = field(default_factory=list)
@@ -139,6 +142,9 @@ class Builder:
     control_axes: tuple[Any, ...] = ()
     scoped_rhs: dict[str, list[str]] = field(default_factory=dict)
     scoped_sample: dict[str, list[str]] = field(default_factory=dict)
+    # state name -> code every read of it gives instead of ``y[k]`` (an open-loop replay's
+    # imposed state, feeddrive.model.replay)
+    imposed: dict[str, str] = field(default_factory=dict)
 
     # ---- names
     def q(self, name: str) -> str:
@@ -259,9 +265,11 @@ class Builder:
         Returns
         -------
         str
-            The index expression, e.g. ``"y[4]"``.
+            The index expression, e.g. ``"y[4]"``, or the code of the value imposed on it
+            (:attr:`imposed`).
         """
-        return f"y[{self.state_index[self.q(name)]}]"
+        q = self.q(name)
+        return self.imposed.get(q) or f"y[{self.state_index[q]}]"
 
     def dy(self, name: str) -> str:
         """Code that reads the rate of state ``name`` in the generated kernels.
