@@ -157,8 +157,8 @@ def _nut_driven(machine: Machine, axes: tuple[str, str], nut_speed: float) -> tu
     if nut_speed == 0.0:
         return ()
     driven = tuple(name for name in axes
-                   if machine.axis(name).drive in mechanism(machine.axis(name).drive)
-                   .nut_driven_drives)
+                   if "nut" in mechanism(machine.axis(name).drive)
+                   .followed_references(machine.axis(name).drive))
     if not driven:
         raise ParameterError("nut_speed", nut_speed, "no axis of the test drives its nut (a "
                              "DDFS); expected 0")
