@@ -88,3 +88,25 @@ def test_motor_feedback_refused_without_a_lead() -> None:
         fd.simulate(fd.DriveSystem(params, "linear-motor"), fd.ConstantSpeed(1e-3), 1e-3)
     with pytest.raises(ParameterError, match="controller.position_feedback"):
         fd.preset("wang2021").replace_path("controller.position_feedback", "encoder")
+
+
+def test_docs_describe_the_part() -> None:
+    """docs/acceptance-tests.md's [backlash] block loads as the part with its defaults;
+    docs/extending.md names every field and both gap behaviours."""
+    import dataclasses
+    import re
+    from pathlib import Path
+
+    from feeddrive.parameters.toml_io import parse_toml
+
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    text = (docs / "acceptance-tests.md").read_text(encoding="utf-8")
+    block = re.search(r"```toml\n(\[backlash\].*?)```", text, re.S)
+    assert block is not None
+    given = parse_toml(block.group(1))["backlash"]
+    assert Backlash(**given) == Backlash(gap=1e-5)
+    extending = (docs / "extending.md").read_text(encoding="utf-8")
+    for f in dataclasses.fields(Backlash):
+        assert f"`{f.name}`" in extending
+    for option in ("friction", "inertia", "coupling"):
+        assert f'"{option}"' in extending
