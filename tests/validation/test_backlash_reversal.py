@@ -11,6 +11,9 @@ B/b = 1.00044 with 3-s dwells, 1.000003 with 5-s dwells (the slow pole settling)
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 
 import feeddrive as fd
@@ -21,6 +24,7 @@ GAP = 10e-6  # [m]
 
 
 def axis(feedback: str) -> fd.DriveParameters:
+    """The same axis as :data:`PARAMS`, built in Python."""
     params = fd.preset("wang2021")
     for site in ("screw", "nut", "guide"):
         params = params.replace_path(f"friction.{site}.law", "none")
@@ -39,12 +43,40 @@ def reversal(feedback: str) -> tuple[float, float]:
     return run.test.reversal, run.test.mean_reversal
 
 
-def test_semi_closed_loop_reversal_value_is_the_gap() -> None:
-    b, mean_b = reversal("motor")
-    assert b == pytest.approx(GAP, rel=0.01)
+PARAMS = """extends = "wang2021"
+[friction.screw]
+law = "none"
+[friction.nut]
+law = "none"
+[friction.guide]
+law = "none"
+[controller]
+position_feedback = "motor"
+velocity_integral_gain = 0.0
+velocity_feedforward = false
+position_gain = 3.0
+[backlash]
+gap = 1e-5
+"""
+
+
+def test_semi_closed_loop_reversal_value_is_the_gap(tmp_path: Path) -> None:
+    """Through ``feeddrive positioning --params``: the file's [backlash] and controller."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    params = tmp_path / "backlash.toml"
+    params.write_text(PARAMS)
+    r = CliRunner().invoke(app, ["positioning", "--params", str(params), "--targets",
+                                 "100,100.2", "--feed", "0.2", "--acceleration", "10",
+                                 "--dwell", "3", "--overshoot", "0.1", "--json"])
+    assert r.exit_code == 0, r.output
+    run = json.loads(r.stdout)["axis"]
+    assert run["reversal_um"] == pytest.approx(GAP * 1e6, rel=0.01)
     # approached from below the table lags the motor by b/2, from above it leads: B̄ = −b
     # (ISO 230-2 B = x̄↑ − x̄↓ of the deviations)
-    assert mean_b == pytest.approx(-GAP, rel=0.01)
+    assert run["mean_reversal_um"] == pytest.approx(-GAP * 1e6, rel=0.01)
 
 
 def test_closed_loop_scale_removes_the_gap() -> None:
