@@ -110,3 +110,12 @@ def test_docs_describe_the_part() -> None:
         assert f"`{f.name}`" in extending
     for option in ("friction", "inertia", "coupling"):
         assert f'"{option}"' in extending
+
+
+def test_hollow_controller_position_feedback_refused() -> None:
+    """The option is the table axis' ([controller]); the hollow motor reads its encoder."""
+    params = fd.preset("wang2021")
+    params = params.replace_path("hollow_controller",
+                                 params.controller.with_values(position_feedback="motor"))
+    with pytest.raises(ParameterError, match="hollow_controller.position_feedback"):
+        fd.simulate(fd.DriveSystem(params, "ddfs", 0.4), fd.ConstantSpeed(1e-3, 8e-3), 1e-3)

@@ -244,6 +244,11 @@ class BallScrewDrive(Mechanism):
         H = self.params.screw.transmission_ratio
         o_s = axis_parameters(b, "screw", c, H, speed_mode=False)
         cn = self.params.hollow_controller or c  # per-axis loops: the hollow motor's own
+        if cn is not c and cn.position_feedback != "table":
+            raise ParameterError("hollow_controller.position_feedback", cn.position_feedback,
+                                 "the hollow motor's loop always reads its own encoder; "
+                                 "expected 'table' (the option is the table axis', "
+                                 "[controller])")
         o_n = axis_parameters(b, "nut", cn, H, speed_mode=cn.nut_loop == "speed")
         Hp = f"P[{o_s + H_AX}]"
         channels = [
