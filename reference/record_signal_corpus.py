@@ -23,6 +23,10 @@ tree before the change (commit d4dd4b5)::
 
 ``tests/validation/test_signal_corpus.py`` rebuilds the same cases with the current tree and
 compares: bit for bit, except where an operation order had to move (listed in that test).
+
+Cases a later option or part adds are recorded at that commit into a supplement that holds only
+them (``python reference/record_signal_corpus.py SUPPLEMENT.npz BASE.npz …``), listed in the
+test beside the base record.
 """
 
 from __future__ import annotations
@@ -192,12 +196,19 @@ def record(case: Case) -> dict[str, Any]:
     }
 
 
-def main(out: str) -> None:
+def main(out: str, *base: str) -> None:
+    """Record every case into ``out``; with ``base`` records given, only the cases none of them
+    holds (a supplement for cases a later option or part adds, recorded at its own commit)."""
     import feeddrive as fd
 
+    known: set[str] = set()
+    for path in base:
+        known.update(json.loads(str(np.load(path)["structure"])))
     arrays: dict[str, np.ndarray] = {}
     structure: dict[str, Any] = {}
     for case in cases():
+        if case.name in known:
+            continue
         print(case.name, flush=True)
         try:
             rec = record(case)
@@ -212,4 +223,4 @@ def main(out: str) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(*sys.argv[1:])

@@ -41,6 +41,7 @@ from feeddrive.model import reference as profiles
 from feeddrive.model.assemble import Model
 from feeddrive.model.disturbances import LeadError, TorqueRipple
 from feeddrive.model.loops import Compensation
+from feeddrive.model.parts.backlash import Backlash
 from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
 from feeddrive.solvers.schedule import due
 
@@ -169,6 +170,11 @@ CASES: dict[str, Callable[[], tuple[fd.DriveSystem, Any]]] = {
     "sampled-quantised-linear-motor": lambda: (
         fd.DriveSystem(_changes(LM, SAMPLED | {"controller.grating_resolution": 1e-7}),
                        "linear-motor", 0.4), ConstantSpeed(2e-3)),
+    "sampled-quantised-motor-feedback-backlash-cdfs": lambda: (
+        fd.DriveSystem(fd.DriveParameters(W.name, W.description, W.mechanism, sections={
+            **dict(_changes(W, SAMPLED | QUANTISED | {"controller.position_feedback": "motor"})
+                   .sections), "backlash": Backlash(gap=1e-6)}), "cdfs", 0.4),
+        ConstantSpeed(2e-3)),
     "sine-ddfs": lambda: (fd.DriveSystem(W, "ddfs", 0.4), SineSpeed(2e-3, 8e-3, 0.5)),
     "trapezoid-cdfs": lambda: (fd.DriveSystem(W, "cdfs", 0.4),
                                profiles.trapezoid(2e-3, 2.0, ramp_time=0.5)),

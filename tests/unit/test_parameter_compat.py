@@ -36,6 +36,10 @@ RECORD = json.loads((ROOT / "tests" / "data" / "parameter_vectors_ec220f9.json")
 SETS: dict[str, Any] = RECORD["sets"]
 
 
+#: fields a file gained after the record, each with its default (the recorded behaviour)
+ADDED_FIELDS = {f"{section}.position_feedback": "table"
+                for section in ("controller", "hollow_controller")}
+
 #: slots the model gained after the record, each with the parameter path it is packed from
 ADDED_SLOTS = {f"controller.{loop}_period": f"controller.{loop}_period"
                for loop in ("position", "velocity", "current")}
@@ -83,9 +87,14 @@ def test_every_recorded_file_gives_the_same_values(key: str):
     values = _flat(to_dict(_load(key)), "", {})
     recorded = SETS[key]["values"]
     assert {k: values.get(k) for k in recorded} == recorded
-    # the one new value: the mechanism kind every file before the composition describes
-    assert set(values) - set(recorded) == {"mechanism"}
-    assert values["mechanism"] == "ball-screw"
+    # the new values: the mechanism kind every file before the composition describes, and
+    # fields added since the record at their defaults, which keep the old behaviour
+    # (controller.position_feedback, issue 37 item 3: the table scale, as before)
+    added = set(values) - set(recorded)
+    assert added - {"mechanism"} <= set(ADDED_FIELDS)
+    assert "mechanism" in added and values["mechanism"] == "ball-screw"
+    for path in added - {"mechanism"}:
+        assert values[path] == ADDED_FIELDS[path], path
 
 
 @pytest.mark.parametrize("key", sorted(SETS))

@@ -497,6 +497,10 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
         raise ParameterError("disturbances.lead_error", dist.lead_error.amplitudes,
                              f"the {drive} drive has no lead screw")
 
+    if parameters.controller.position_feedback == "motor" and not mech.has_lead_screw:
+        raise ParameterError("controller.position_feedback", "motor",
+                             f"the {drive} drive has no motor encoder referred through a lead; "
+                             "expected 'table'")
     # the sample schedule: the loops' clocks (the parts' own join in declare_part)
     loops.declare_clocks(b, parameters.controller)
 

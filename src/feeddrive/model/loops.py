@@ -769,6 +769,11 @@ class Controller(Component):
         Velocity gains on rad/s of the motor or m/s of the table (``"table"``).
     velocity_feedback : str, default "motor"
         Velocity feedback from the motor encoder or the table scale.
+    position_feedback : str, default "table"
+        Position feedback of a ball-screw drive's table axis: the linear scale on the table
+        (``"table"``, closed loop) or the motor encoders referred to the table through the
+        lead, H·(θ_s − θ_n) (``"motor"``, semi-closed loop: lost motion at the nut is outside
+        the loop).
     velocity_feedforward : bool, default True
         Feed the commanded speed forward.
     nut_loop : str, default "position"
@@ -812,6 +817,7 @@ class Controller(Component):
     kv_placement: str = choice(("none", "position_output", "velocity_error"), default="none")
     velocity_gain_basis: str = choice(("motor", "table"), default="motor")
     velocity_feedback: str = choice(("motor", "table"), default="motor")
+    position_feedback: str = choice(("table", "motor"), default="table")
     velocity_feedforward: bool = flag(default=True)
     nut_loop: str = choice(("position", "speed"), default="position")
     mode: str = choice(("cascade", "torque_off"), default="cascade")

@@ -258,6 +258,11 @@ class BallScrewDrive(Mechanism):
         H = self.params.screw.transmission_ratio
         o_s = axis_parameters(b, "screw", c, H, speed_mode=False)
         cn = self.params.hollow_controller or c  # per-axis loops: the hollow motor's own
+        if cn is not c and cn.position_feedback != "table":
+            raise ParameterError("hollow_controller.position_feedback", cn.position_feedback,
+                                 "the hollow motor's loop always reads its own encoder; "
+                                 "expected 'table' (the option is the table axis', "
+                                 "[controller])")
         o_n = axis_parameters(b, "nut", cn, H, speed_mode=cn.nut_loop == "speed")
         Hp = f"P[{o_s + H_AX}]"
         channels = [
@@ -266,13 +271,19 @@ class BallScrewDrive(Mechanism):
             Channel("table", b.y("table_position"), b.y("table_speed"), f"P[{o_s + GRAT_Q}]"),
         ]
         fb = f"int(P[{o_s + V_FEEDBACK}]) == 1"
+        position, position_q = b.y("table_position"), "q_table"
+        position_reads: tuple[str, ...] = ("y:table_position",)
+        if c.position_feedback == "motor":  # semi-closed loop: the encoders through the lead
+            position = f"{Hp} * ({b.y('screw_angle')} - {b.y('nut_angle')})"
+            position_q = f"{Hp} * (q_screw_angle - q_nut_angle)"
+            position_reads = ("y:screw_angle", "y:nut_angle")
         screw = Axis(
             name="screw", param_offset=o_s, reference="ref_x", feedforward="(ref_v + ref_vn)",
-            position=b.y("table_position"), position_q="q_table",
+            position=position, position_q=position_q,
             speed=(f"(({b.y('table_speed')} + {Hp} * {b.y('nut_speed')}) / {Hp} if {fb} "
                    f"else {b.y('screw_speed')})"),
             speed_q=f"((s_table + {Hp} * s_nut_angle) / {Hp} if {fb} else s_screw_angle)",
-            current_state=b.y("screw_current"), position_reads=("y:table_position",),
+            current_state=b.y("screw_current"), position_reads=position_reads,
             speed_reads=("y:table_speed", "y:nut_speed", "y:screw_speed"),
             current_reads=("y:screw_current",))
         nut = Axis(
@@ -374,11 +385,16 @@ class BallScrewDrive(Mechanism):
         th_rel = f"({b.y('screw_angle')} - {b.y('nut_angle')})"
         stretch = ("k_eq", "y:screw_angle", "y:nut_angle", "y:table_position", "w_s", "w_n",
                    "v_t")
-        if m.lead is None:
+        gap = self.params.section("backlash")
+        if gap is not None:  # a dead-zone spring at the nut (model/parts/backlash.py)
+            self._emit_gap(b, m, th_rel, stretch, c_ax)
+            lever = H
+            lever_reads: tuple[str, ...] = ()
+        elif m.lead is None:
             b.emit(f"f_d = (k_eq * ({H} * {th_rel} - {b.y('table_position')}) "
                    f"+ {c_ax} * ({H} * (w_s - w_n) - v_t))", writes="f_d", reads=stretch)
             lever = H
-            lever_reads: tuple[str, ...] = ()
+            lever_reads = ()
         else:
             hh = b.use(harmonics)
             b.emit(f"lead_dev, lead_slope = {hh}({th_rel}, P, {m.lead[0]}, {m.lead[1]})",
@@ -392,12 +408,17 @@ class BallScrewDrive(Mechanism):
         table = Body(drive=["f_d"], external=list(m.forces.get("table", [])))
         if m.load is not None:
             table.external.append(f"- {m.load}")
+        table_reads: tuple[str, ...] = ()
+        if gap is not None:
+            table.external.append("+ f_hold")
+            table_reads = ("f_hold",)
         b.emit(f"{b.dy('screw_angle')} = w_s", writes="dy:screw_angle", reads="w_s")
         b.emit(f"{b.dy('screw_speed')} = ({screw.expression()}) / {b.p('screw.J')}",
                writes="dy:screw_speed", reads=self._shaft_reads("screw", m, lever_reads))
         b.emit(f"{b.dy('table_position')} = v_t", writes="dy:table_position", reads="v_t")
         b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}",
-               writes="dy:table_speed", reads=("f_d", *m.body_reads("table"), *m.load_reads))
+               writes="dy:table_speed", reads=("f_d", *m.body_reads("table"), *m.load_reads,
+                                                  *table_reads))
         self._current(b, "screw", "w_s", m.torque_off)
         # the hollow motor and nut: live in the DDFS (or with the CDFS nut on its servo)
         b.emit(f"if {b.p('nut.active')} > 0.5:")
@@ -415,6 +436,25 @@ class BallScrewDrive(Mechanism):
             b.emit(f"    {b.dy(name)} = 0.0")
         b.emit(f"{b.a('equivalent_stiffness')} = k_eq", writes="aux:equivalent_stiffness",
                reads="k_eq")
+
+    def _emit_gap(self, b: Builder, m: Mechanics, th_rel: str, stretch: tuple[str, ...],
+                  c_ax: str) -> None:
+        """f_d through the backlash's dead-zone spring and the friction-dominated hold f_hold
+        on the table (:mod:`feeddrive.model.parts.backlash`)."""
+        from ..parts.backlash import gap_force, gap_hold
+
+        if m.lead is not None:
+            raise ParameterError("backlash.gap", self.params.section("backlash").gap,
+                                 "a backlash with a lead error is not modelled; remove "
+                                 "[disturbances.lead_error] or the [backlash] section")
+        H = b.p("screw.H")
+        half, hold = b.p("backlash.half_gap"), b.p("backlash.hold_time")
+        e = f"({H} * {th_rel} - {b.y('table_position')})"
+        b.emit(f"gap_e = {e}", writes="gap_e", reads=stretch)
+        b.emit(f"f_d = {b.use(gap_force)}(gap_e, {H} * (w_s - w_n) - v_t, k_eq, {c_ax}, {half})",
+               writes="f_d", reads=("gap_e", "k_eq", "w_s", "w_n", "v_t"))
+        b.emit(f"f_hold = {b.use(gap_hold)}(gap_e, v_t, {half}, {b.p('table.mass')}, {hold})",
+               writes="f_hold", reads=("gap_e", "v_t"))
 
     def _shaft(self, b: Builder, key: str, m: Mechanics, reaction: str) -> Body:
         shaft = Body(drive=[] if m.torque_off else
