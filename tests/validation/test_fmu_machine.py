@@ -149,3 +149,32 @@ def test_machine_fmu_in_fmpy_follows_simulate_machine(tmp_path: Path, machine: s
         assert np.max(np.abs(base["y.table_position"] - rec["y.table_position"])) > 1e-6
         assert "y.external_force" in {v.name for v in fmpy.read_model_description(
             str(path)).modelVariables if v.causality == "output"}
+
+
+def test_cli_exports_a_machine_and_refuses_single_drive_options(tmp_path: Path) -> None:
+    """``export fmu --machine`` writes the FMU the API writes (its inputs listed); options of
+    one drive and model exchange are refused in one line, exit status 2, before any work."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    runner = CliRunner()
+    out = tmp_path / "xy.fmu"
+    res = runner.invoke(app, ["export", "fmu", "--machine", "xy-table", "--out", str(out),
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.output)["inputs"] == [
+        f"{a}.{k}" for a in "xy"
+        for k in ("table_position_reference", "table_speed_reference", "load_force")]
+    for extra, option in ((["--kind", "me"], "--kind"), (["--drive", "cdfs"], "--drive"),
+                          (["--preset", "wang2021"], "--preset"),
+                          (["--table-speed", "5"], "--table-speed")):
+        bad = tmp_path / f"bad{option}.fmu"
+        res = runner.invoke(app, ["export", "fmu", "--machine", "xy-table", *extra, "--out",
+                                  str(bad)])
+        assert res.exit_code == 2, res.output
+        assert res.output.strip().startswith(f"error: {option} = ")
+        assert len(res.output.strip().splitlines()) == 1
+        assert not bad.exists()

@@ -61,9 +61,14 @@ def fmu_command(
     from ..parameters import ParameterError
 
     if machine is not None:
-        if drive is not None:
-            raise ParameterError("--drive", drive, "not with --machine (its axes name their "
-                                 "drives)")
+        for option, value, default in (
+                ("--drive", drive, None), ("--preset", preset_name, None),
+                ("--params", params_file, None), ("--position", position, 400.0),
+                ("--table-speed", table_speed, 0.0), ("--nut-speed", nut_speed, 0.0),
+                ("--nut-hold", nut_hold, "locked")):
+            if value != default:
+                raise ParameterError(option, value, "not with --machine (its axes are set in "
+                                     "the machine file; the references are inputs)")
         _export_machine(machine, out, fmi=fmi, kind=kind, force=force, platform=platform,
                         as_json=as_json)
         return
