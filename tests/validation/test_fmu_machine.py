@@ -35,6 +35,12 @@ except CC.CompilerNotFound:  # pragma: no cover - CI has a compiler
 INERTIAL = {"name": "xy-inertial", "extends": "xy-table",
             "couplings": {"carried": {"part": "inertial", "source": "x", "target": "y",
                                       "mass": 40.0, "factor": 1.0}}}
+#: an XY table of sampled axes (wang2021-drive: 8/4/2-kHz current/velocity/position loops),
+#: each axis' periods a setting of its own
+SAMPLED = {"name": "xy-sampled", "axes": {
+    "x": {"extends": "wang2021-drive", "drive": "cdfs"},
+    "y": {"extends": "wang2021-drive", "drive": "cdfs"}}}
+MACHINES = {"xy-table": None, "inertial": INERTIAL, "sampled": SAMPLED}
 
 
 def _circle_profile(machine):  # type: ignore[no-untyped-def]
@@ -123,16 +129,18 @@ def test_axis_parameter_is_range_checked_when_set(tmp_path: Path,
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("machine", ["xy-table", "inertial"])
+@pytest.mark.parametrize("machine", list(MACHINES))
 def test_machine_fmu_in_fmpy_follows_simulate_machine(tmp_path: Path, machine: str) -> None:
-    """A quarter circle (R = 50 mm, F = 5000 mm/min) on the XY table, and on the XY table
-    with the inertial cross-axis part: each axis' speed reference fed to the FMU on the
+    """A quarter circle (R = 50 mm, F = 5000 mm/min) on the XY table, on the XY table with
+    the inertial cross-axis part, and on an XY table of sampled axes (the loops' instants
+    inside each communication step): each axis' speed reference fed to the FMU on the
     1-ms communication grid (integrated inside), ``simulate_machine`` driven by the same
     held references; both integrators at the tight tolerances of tests/validation/
     fmu_helpers.py (TIGHT, FMU_TIGHT).  Table positions agree within 1e-8 m (measured
-    0.9e-9 m on the XY table).  The inertial part acts in the FMU: y's trace moves by more
-    than 100× that tolerance against the plain table."""
-    m = load_machine("xy-table") if machine == "xy-table" else machine_from_dict(INERTIAL)
+    0.9e-9 m on the XY table, 0.9e-11 m on the sampled one).  The inertial part acts in
+    the FMU: y's trace moves by more than 100× that tolerance against the plain table."""
+    data = MACHINES[machine]
+    m = load_machine(machine) if data is None else machine_from_dict(data)
     profile = _circle_profile(m)
     path = tmp_path / "m.fmu"
     export_machine_fmu(m, path)
