@@ -20,8 +20,13 @@ app.add_typer(export_app, name="export")
 @outputs(out=(".fmu",))
 @accuracy_options
 def fmu_command(
-    drive: str = typer.Option(..., "--drive", help="cdfs, ddfs, linear-motor or another "
-                              "registered drive (rack-pinion)"),
+    drive: str | None = typer.Option(None, "--drive", help="cdfs, ddfs, linear-motor or "
+                                     "another registered drive (rack-pinion)"),
+    machine: str | None = typer.Option(None, "--machine", help="A machine file (TOML, "
+                                       "docs/machine.md) or a built-in machine (xy-table, "
+                                       "gantry) instead of --drive: one co-simulation FMU, "
+                                       "each axis' references and load force as inputs "
+                                       "<axis>.<name>."),
     out: str = typer.Option(..., "--out", help="The FMU file to write (DRIVE.fmu)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
@@ -50,9 +55,25 @@ def fmu_command(
     libc and libm) and its C sources with their CMakeLists.txt.  Inputs: the position/speed
     references and a table load force; outputs: table position and speed, motor angles,
     speeds, currents and torques, friction forces, following error; every model parameter
-    tunable, checked against its parameter-file range when set."""
+    tunable, checked against its parameter-file range when set.  With --machine: one
+    co-simulation FMU of every axis, its variables named <axis>.<name>."""
     from ..fmu import check_request, export_fmu
     from ..parameters import ParameterError
+
+    if machine is not None:
+        for option, value, default in (
+                ("--drive", drive, None), ("--preset", preset_name, None),
+                ("--params", params_file, None), ("--position", position, 400.0),
+                ("--table-speed", table_speed, 0.0), ("--nut-speed", nut_speed, 0.0),
+                ("--nut-hold", nut_hold, "locked")):
+            if value != default:
+                raise ParameterError(option, value, "not with --machine (its axes are set in "
+                                     "the machine file; the references are inputs)")
+        _export_machine(machine, out, fmi=fmi, kind=kind, force=force, platform=platform,
+                        as_json=as_json)
+        return
+    if drive is None:
+        raise ParameterError("--drive", "", "expected a drive name, or --machine FILE")
 
     check_request(drive, fmi, kind, out, force=force, inputs=(params_file,),
                   platforms=platform)
@@ -85,6 +106,34 @@ def fmu_command(
         return
     console.print(f"wrote {result.path} ({result.size_bytes / 1024:.0f} kB): FMI {fmi}.0 "
                   f"{data['kind']}, {drive} ({params.name}), {result.n_states} states, "
+                  f"{result.n_variables} variables, binaries {', '.join(result.binaries)}"
+                  f"{_sampling_note(kind) if result.sampled else ''}",
+                  markup=False, highlight=False, soft_wrap=True)
+    console.print(f"  inputs:  {', '.join(result.inputs)}", markup=False, highlight=False,
+                  soft_wrap=True)
+    console.print(f"  outputs: {', '.join(result.outputs)}", markup=False, highlight=False,
+                  soft_wrap=True)
+
+
+def _export_machine(machine: str, out: str, *, fmi: int, kind: str, force: bool,
+                    platform: str | None, as_json: bool) -> None:
+    from ..fmu import export_machine_fmu
+    from ..fmu.machine import check_machine_kind
+    from ..machine import load_machine
+
+    check_machine_kind(kind)
+    result = export_machine_fmu(load_machine(machine), out, fmi=fmi, kind=kind, force=force,
+                                platforms=platform, inputs=(machine,))
+    data = {"fmu": str(result.path), "fmi_version": f"{fmi}.0", "kind": "co-simulation",
+            "model_identifier": result.identifier, "size_bytes": result.size_bytes,
+            "variables": result.n_variables, "states": result.n_states,
+            "sampled_loops": result.sampled, "binaries": list(result.binaries),
+            "inputs": list(result.inputs), "outputs": list(result.outputs)}
+    if as_json:
+        print_json(data)
+        return
+    console.print(f"wrote {result.path} ({result.size_bytes / 1024:.0f} kB): FMI {fmi}.0 "
+                  f"co-simulation, machine {machine}, {result.n_states} states, "
                   f"{result.n_variables} variables, binaries {', '.join(result.binaries)}"
                   f"{_sampling_note(kind) if result.sampled else ''}",
                   markup=False, highlight=False, soft_wrap=True)

@@ -20,6 +20,7 @@ from ..parameters import DriveParameters, ParameterError
 
 if TYPE_CHECKING:
     from ..engine.options import SolverOptions
+    from ..machine import Machine
 
 FMI_VERSIONS = (2, 3)
 KINDS = ("cs", "me")
@@ -68,7 +69,7 @@ class ExportedFmu:
     binaries: tuple[str, ...] = ()
 
 
-def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], *,
+def check_request(drive: str | None, fmi: int, kind: str, out: str | os.PathLike[str], *,
                   force: bool = False, inputs: tuple[str | None, ...] = (),
                   option: str = "--out", platforms: str | tuple[str, ...] | None = None
                   ) -> tuple[Path, tuple[str, ...] | None]:
@@ -79,8 +80,8 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
 
     Parameters
     ----------
-    drive : str
-        The drive name.
+    drive : str or None
+        The drive name (None: a machine, whose axes name theirs).
     fmi : int
         FMI version, 2 or 3.
     kind : str
@@ -117,7 +118,7 @@ def check_request(drive: str, fmi: int, kind: str, out: str | os.PathLike[str], 
     from ..model.mechanisms import drive_names
     from .platforms import PLATFORMS, CompilerNotFound, find_compiler, platform_compiler
 
-    if drive not in drive_names():
+    if drive is not None and drive not in drive_names():
         raise ParameterError("--drive", drive, f"expected one of {', '.join(drive_names())}")
     if fmi not in FMI_VERSIONS:
         raise ParameterError("--fmi", fmi, "expected 2 or 3 (FMI 2.0 or 3.0)")
@@ -278,6 +279,76 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
         size_bytes=path.stat().st_size, sampled=sampled, binaries=_binaries(path))
 
 
+def export_machine_fmu(machine: Machine, out: str | os.PathLike[str], *, fmi: int = 2,
+                       kind: str = "cs", force: bool = False, identifier: str | None = None,
+                       platforms: str | tuple[str, ...] | None = None,
+                       options: SolverOptions | None = None,
+                       inputs: tuple[str | None, ...] = ()) -> ExportedFmu:
+    """Write a machine of axes as one co-simulation FMU to ``out``.
+
+    Each axis has the inputs, outputs, parameters and loop-period settings of its
+    single-drive FMU, named ``<axis>.<name>`` (its load force acts from t = 0); the coupling
+    parts' states and written signals are outputs, their parameters fixed at export
+    (:mod:`feeddrive.fmu.machine`).  Model exchange is refused in one line.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine (:func:`feeddrive.machine.load_machine`).
+    out : str or os.PathLike
+        The ``.fmu`` file.
+    fmi : int, default 2
+        FMI version, 2 or 3.
+    kind : str, default "cs"
+        ``"cs"`` only.
+    force : bool, default False
+        Replace an existing file.
+    identifier : str, optional
+        The model identifier; derived from the machine's name by default.
+    platforms : str or tuple of str, optional
+        As :func:`export_fmu`.
+    options : SolverOptions or None, default None
+        The integrator settings whose tolerances start the embedded solver's (as
+        :func:`export_fmu`, resolved with the first axis' parameter set).
+    inputs : tuple of (str or None), default ()
+        Files the command reads, which ``out`` may never replace.
+
+    Returns
+    -------
+    ExportedFmu
+        What was written.
+
+    Raises
+    ------
+    ParameterError
+        For model exchange or a bad request, before any work.
+    """
+    import re
+
+    from .build import package, provenance
+    from .description import new_token
+    from .machine import build_machine, check_machine_kind, machine_variables
+
+    check_machine_kind(kind)
+    path, names = check_request(None, fmi, kind, out, force=force, platforms=platforms,
+                                inputs=inputs)
+    fm, axes = build_machine(machine)
+    fm = replace(fm, solver_starts=solver_starts(fm.parameters, 0.0, 0.0, options))
+    vs = machine_variables(fm, axes)
+    ident = identifier or "feeddrive_" + re.sub(r"\W", "_", machine.name)
+    text = (f"feeddrive machine {machine.name}: axes "
+            + ", ".join(f"{ax.name} ({ax.drive}, {ax.parameters.name})" for ax in machine.axes)
+            + "; each axis' reference and load force as inputs")
+    package(path, fm, vs, fmi=fmi, kind=kind, identifier=ident, token=new_token(),
+            description=text, provenance=provenance(), platforms=names)
+    return ExportedFmu(
+        path=path, fmi=fmi, kind=kind, identifier=ident, n_variables=len(vs),
+        n_states=len(fm.model.states), inputs=tuple(v.name for v in vs if v.causality == "input"),
+        outputs=tuple(v.name for v in vs if v.causality == "output"),
+        size_bytes=path.stat().st_size, sampled=any(v > 0 for v in fm.periods.values()),
+        binaries=_binaries(path))
+
+
 def _binaries(path: Path) -> tuple[str, ...]:
     import zipfile
 
@@ -286,5 +357,6 @@ def _binaries(path: Path) -> tuple[str, ...]:
                              if n.startswith("binaries/") and n.count("/") >= 2}))
 
 
-__all__ = ["ExportedFmu", "export_fmu", "check_request", "solver_starts", "FMI_VERSIONS", "KINDS",
+__all__ = ["ExportedFmu", "export_fmu", "export_machine_fmu", "check_request", "solver_starts",
+           "FMI_VERSIONS", "KINDS",
            "FMU_SPEED_SCALE"]

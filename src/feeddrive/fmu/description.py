@@ -21,7 +21,6 @@ import numpy as np
 
 from ..model.friction import friction_law
 from ..model.loops import AXIS_PARAMS
-from ..model.reference import INPUT_INSTANT
 from ..model.slot_ranges import FINITE, SlotRange, controller_range, slot_range
 from ..model.slots import slot_unit
 from ..parameters.components import unit_of
@@ -89,6 +88,56 @@ SETTINGS: tuple[tuple[str, str, str, float | None, SlotRange | None], ...] = (
      float(MAX_STEPS_PER_CALL), _STEP_COUNT),
 )
 S_INDEX = {name: i for i, (name, *_rest) in enumerate(SETTINGS)}
+_PERIODS = ("controller.position_period", "controller.velocity_period",
+            "controller.current_period")
+
+
+def fmu_settings(fm: FmuModel) -> tuple[tuple[str, str, str, float | None, SlotRange | None],
+                                        ...]:
+    """The wrapper's settings ``s[...]`` of ``fm``: :data:`SETTINGS` for one drive; on a
+    machine each loop-period setting once per axis, named ``<axis>.controller.<loop>_period``.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model.
+
+    Returns
+    -------
+    tuple
+        (name, unit, description, start or None: from the parameters, range) per setting.
+    """
+    if not fm.blocks:
+        return SETTINGS
+    out: list[tuple[str, str, str, float | None, SlotRange | None]] = []
+    for entry in SETTINGS:
+        if entry[0] == _PERIODS[0]:
+            for block in fm.blocks:
+                out += [(f"{block.prefix}{name}", unit, f"{block.prefix[:-1]} axis: {text}",
+                         start, bounds)
+                        for name, unit, text, start, bounds in SETTINGS
+                        if name in _PERIODS]
+        elif entry[0] not in _PERIODS:
+            out.append(entry)
+    return tuple(out)
+
+
+def period_start(fm: FmuModel, name: str) -> float:
+    """The start value of the loop-period setting ``name`` [s] (the exported parameters').
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model.
+    name : str
+        The setting (``controller.position_period``, or ``x.controller.position_period``).
+
+    Returns
+    -------
+    float
+        The period [s] (0: continuous).
+    """
+    return fm.periods[name] if name in fm.periods else fm.periods[name.split(".")[1]]
 #: the embedded integrator's counters (co-simulation): name, memory slot
 #: (feeddrive.fmu.solver MEM_*), description
 COUNTERS = (("solver.steps", "MEM_STEPS", "integrator steps taken since initialisation "
@@ -376,7 +425,8 @@ def state_nominals(fm: FmuModel) -> np.ndarray:
     numpy.ndarray
         One nominal per continuous state.
     """
-    return np.array([*(fm.model.tolerances(1e-10, 1e-8, 1e-6)[0] / 1e-6), 1e-4, 1e-4])
+    return np.array([*(fm.model.tolerances(1e-10, 1e-8, 1e-6)[0] / 1e-6),
+                     *[1e-4] * (2 * len(fm.input_blocks))])
 
 
 def variables(fm: FmuModel, kind: str) -> list[Variable]:
@@ -483,10 +533,56 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
                           "exact", float(m.P[k]), unit, text,
                           range=slot_range(m, pname).with_unit(unit),
                           display_unit=display_unit(name, unit)))
-    # settings
-    for i, (name, unit, text, start, bounds) in enumerate(SETTINGS):
+    v += setting_variables(fm, kind)
+    return check_unique(v)
+
+
+def check_unique(v: list[Variable]) -> list[Variable]:
+    """``v``, checked for a name declared twice.
+
+    Parameters
+    ----------
+    v : list of Variable
+        The variables.
+
+    Returns
+    -------
+    list of Variable
+        ``v``.
+
+    Raises
+    ------
+    ValueError
+        Naming the duplicated names.
+    """
+    names = [x.name for x in v]
+    if len(set(names)) != len(names):
+        dup = sorted({x for x in names if names.count(x) > 1})
+        raise ValueError(f"FMU variable names not unique: {', '.join(dup)}")
+    return v
+
+
+def setting_variables(fm: FmuModel, kind: str) -> list[Variable]:
+    """The FMU's own settings (:func:`fmu_settings`) and the embedded solver's counters
+    (co-simulation) or the evaluation counters (model exchange).
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model.
+    kind : str
+        ``"cs"`` or ``"me"``.
+
+    Returns
+    -------
+    list of Variable
+        The variables.
+    """
+    me = kind == "me"
+    v: list[Variable] = []
+    for i, (name, unit, text, start, bounds) in enumerate(fmu_settings(fm)):
         value = (fm.solver_starts[name] if name in fm.solver_starts
-                 else start if start is not None else fm.periods[name.split(".")[1]])
+                 else start if start is not None else period_start(fm, name))
         if name == "integrate_speed_reference":
             v.append(Variable(name, K_BOOLEAN, i, 0, "parameter", "fixed", "exact", value, "",
                               text, type="Boolean"))
@@ -508,10 +604,6 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
         for k, (name, text) in enumerate(EVALUATIONS):
             v.append(Variable(name, K_EVALUATIONS, k, 0, "local", "discrete", "calculated",
                               None, "", text, type="Integer"))
-    names = [x.name for x in v]
-    if len(set(names)) != len(names):
-        dup = sorted({x for x in names if names.count(x) > 1})
-        raise ValueError(f"FMU variable names not unique: {', '.join(dup)}")
     return v
 
 
@@ -849,12 +941,16 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
     pos, _ = m.tolerances(1.0, 0.0, 0.0)
     spd, _ = m.tolerances(0.0, 1.0, 0.0)
     cur, rel = m.tolerances(0.0, 0.0, 1.0)
-    u_start = [0.0] * len(INPUTS)
+    blocks = fm.input_blocks
+    settings = fmu_settings(fm)
+    index = {name: i for i, (name, *_rest) in enumerate(settings)}
+    periods = [f"{b.prefix}{slot}" for b in blocks for slot in b.periods]
+    u_start = [0.0] * (len(INPUTS) * len(blocks))
     for x in vs:
         if x.kind == K_INPUT:
             u_start[x.a] = float(x.start or 0.0)
-    s_start = [start if start is not None else fm.periods[name.split(".")[1]]
-               for name, _, _, start, _ in SETTINGS]
+    s_start = [start if start is not None else period_start(fm, name)
+               for name, _, _, start, _ in settings]
     for x in vs:
         if x.kind in (K_SETTING, K_BOOLEAN, K_INTEGER):
             s_start[x.a] = float(x.start or 0.0)
@@ -863,27 +959,32 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         f"#define FMU_KIND_ME {1 if kind == 'me' else 0}",
         f"#define INSTANTIATION_TOKEN {quote_c(token)}",
         f"#define N_VR {len(vs)}",
-        f"#define N_INPUT {len(INPUTS)}",
-        f"#define N_SETTING {len(SETTINGS)}",
-        f"#define PROFILE_OFFSET {fm.profile_offset}",
-        f"#define TABLE_OFFSET {fm.table_offset}",
-        f"#define INPUT_INSTANT_SLOT {fm.profile_offset + INPUT_INSTANT}",
-        f"#define LOAD_SLOT {fm.load_slot}",
+        f"#define N_IN_BLOCK {len(INPUTS)}",
+        f"#define N_BLOCK {len(blocks)}",
+        f"#define N_INPUT {len(INPUTS) * len(blocks)}",
+        f"#define N_SETTING {len(settings)}",
+        f"#define N_PERIOD {len(periods)}",
+        # each input block (one drive, or each axis of a machine): its reference block in T,
+        # the slots of its input instant and load force in P (wrapper.c fmu_write_inputs)
+        _c_array("int", "BLOCK_TABLE", [b.table_offset for b in blocks]),
+        _c_array("int", "BLOCK_INSTANT", [b.instant_slot for b in blocks]),
+        _c_array("int", "BLOCK_LOAD", [b.load_slot for b in blocks]),
+        # the loop periods: their settings and parameter slots (wrapper.c fmu_sampling)
+        _c_array("int", "PERIOD_SETTING", [index[name] for name in periods]),
+        _c_array("int", "PERIOD_SLOT", [m.parameter_names.index(name) for name in periods]),
+        _c_array("int", "IS_PERIOD_SETTING", [int(name in periods) for name, *_r in settings]),
+        "static const char *const PERIOD_NAMES[] = {"
+        + ", ".join(quote_c(name) for name in periods) + "};",
         *[f"#define IN_{k} {i}" for k, i in (("XT", IN_XT), ("VT", IN_VT), ("XN", IN_XN),
                                              ("VN", IN_VN), ("LOAD", IN_LOAD))],
         *[f"#define {n} {i}" for n, i in (
-            ("S_RTOL", S_INDEX["solver.relative_tolerance"]),
-            ("S_POSITION_TOL", S_INDEX["solver.position_tolerance"]),
-            ("S_SPEED_TOL", S_INDEX["solver.speed_tolerance"]),
-            ("S_CURRENT_TOL", S_INDEX["solver.current_tolerance"]),
-            ("S_MAX_STEP", S_INDEX["solver.max_step"]),
-            ("S_POSITION_PERIOD", S_INDEX["controller.position_period"]),
-            ("S_VELOCITY_PERIOD", S_INDEX["controller.velocity_period"]),
-            ("S_CURRENT_PERIOD", S_INDEX["controller.current_period"]),
-            ("S_INTEGRATE", S_INDEX["integrate_speed_reference"]),
-            ("S_MAX_STEPS", S_INDEX["solver.max_steps_per_call"]),
-            *((f"P_{k.upper()}", m.parameter_names.index(f"controller.{k}"))
-              for k in ("position_period", "velocity_period", "current_period")))],
+            ("S_RTOL", index["solver.relative_tolerance"]),
+            ("S_POSITION_TOL", index["solver.position_tolerance"]),
+            ("S_SPEED_TOL", index["solver.speed_tolerance"]),
+            ("S_CURRENT_TOL", index["solver.current_tolerance"]),
+            ("S_MAX_STEP", index["solver.max_step"]),
+            ("S_INTEGRATE", index["integrate_speed_reference"]),
+            ("S_MAX_STEPS", index["solver.max_steps_per_call"]))],
         *[f"#define {name} {value}" for name, value in (
             ("K_TIME", K_TIME), ("K_STATE", K_STATE), ("K_DER", K_DER), ("K_AUX", K_AUX),
             ("K_PARAM", K_PARAM), ("K_INPUT", K_INPUT), ("K_SETTING", K_SETTING),
@@ -924,9 +1025,7 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
                                          n_colours + 1]),
            f"#define JAC_N_GROUPS {n_colours + 2}"] if kind == "me" else []),
         "static const char *const SETTING_NAMES[] = {"
-        + ", ".join(quote_c(s[0]) for s in SETTINGS) + "};",
-        'static const char *const PERIOD_NAMES[] = {"controller.position_period", '
-        '"controller.velocity_period", "controller.current_period"};',
+        + ", ".join(quote_c(s[0]) for s in settings) + "};",
         # the sample schedule: the parameter slot of every clock's period (C fmu_sampling)
         _c_array("int", "CLOCK_SLOT", [k for _, k in m.clocks]),
         "static const char *const CLOCK_NAMES[] = {"

@@ -100,6 +100,10 @@ class FmuModel:
     solver_starts : dict of str to float, default {}
         Start values of the embedded solver's settings (:func:`feeddrive.fmu.solver_starts`);
         a setting not listed starts at its value in ``description.SETTINGS``.
+    blocks : tuple of InputBlock, default ()
+        One input block per axis of a machine (:func:`feeddrive.fmu.machine.build_machine`);
+        empty for one drive, whose block is ``profile_offset``, ``table_offset`` and
+        ``load_slot`` (:attr:`input_blocks`).
     """
 
     model: Model
@@ -115,6 +119,41 @@ class FmuModel:
     nut_hold: str = "locked"
     # start values of the solver settings (feeddrive.fmu.solver_starts); others: SETTINGS'
     solver_starts: dict[str, float] = field(default_factory=dict)
+    blocks: tuple[InputBlock, ...] = ()
+
+    @property
+    def input_blocks(self) -> tuple[InputBlock, ...]:
+        """Where each block of inputs lives: the drive's one, or one per machine axis."""
+        if self.blocks:
+            return self.blocks
+        return (InputBlock("", self.table_offset, self.profile_offset + INPUT_INSTANT,
+                           self.load_slot, tuple(f"controller.{k}" for k in self.periods)),)
+
+
+@dataclass(frozen=True)
+class InputBlock:
+    """One drive's (or machine axis') inputs in the model's arrays (``wrapper.c`` BLOCK_*).
+
+    Parameters
+    ----------
+    prefix : str
+        Prefix of its variables' names: ``""`` for one drive, ``"<axis>."`` on a machine.
+    table_offset : int
+        First slot of its reference block in ``T``.
+    instant_slot : int
+        ``P`` index of the instant its inputs were last written.
+    load_slot : int
+        ``P`` index its load-force input is written to.
+    periods : tuple of str
+        The parameter slots of its loops' sample periods (each a setting of the FMU, named
+        as the slot).
+    """
+
+    prefix: str
+    table_offset: int
+    instant_slot: int
+    load_slot: int
+    periods: tuple[str, ...]
 
 
 def build(parameters: DriveParameters, drive: str, table_position: float,

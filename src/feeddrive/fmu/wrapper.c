@@ -25,7 +25,9 @@
 #else
 #define FMU_TOUCH(m) ((void)(m))
 #endif
-#define N_REF_STATES 2
+/* one input block per drive or machine axis (BLOCK_*): its commanded positions and speeds,
+   its load force, and two reference integrals (table, nut) */
+#define N_REF_STATES (2 * N_BLOCK)
 #define N_CSTATES (FD_N_STATE + N_REF_STATES)
 #define N_WORK 10
 
@@ -107,15 +109,29 @@ static void fmu_defaults(Fmu *m) {
 /* the reference block of T (feeddrive.model.reference.REF_INPUT) and the load slot, from the inputs;
    the commanded positions are the inputs or the integrals of the speed references */
 static void fmu_write_inputs(Fmu *m, int with_rates) {
-    int integrate = m->s[S_INTEGRATE] > 0.5;
-    m->T[TABLE_OFFSET + 0] = integrate ? m->y[FD_N_STATE] : m->u[IN_XT];
-    m->T[TABLE_OFFSET + 2] = m->u[IN_VT];
-    m->T[TABLE_OFFSET + 3] = with_rates ? m->du[IN_VT] : 0.0;
-    m->T[TABLE_OFFSET + 4] = integrate ? m->y[FD_N_STATE + 1] : m->u[IN_XN];
-    m->T[TABLE_OFFSET + 6] = m->u[IN_VN];
-    m->T[TABLE_OFFSET + 7] = with_rates ? m->du[IN_VN] : 0.0;
-    m->P[INPUT_INSTANT_SLOT] = m->t;
-    m->P[LOAD_SLOT] = m->u[IN_LOAD];
+    int integrate = m->s[S_INTEGRATE] > 0.5, k;
+    for (k = 0; k < N_BLOCK; k++) {
+        const double *u = m->u + k * N_IN_BLOCK, *du = m->du + k * N_IN_BLOCK;
+        const double *x = m->y + FD_N_STATE + 2 * k;
+        double *T = m->T + BLOCK_TABLE[k];
+        T[0] = integrate ? x[0] : u[IN_XT];
+        T[2] = u[IN_VT];
+        T[3] = with_rates ? du[IN_VT] : 0.0;
+        T[4] = integrate ? x[1] : u[IN_XN];
+        T[6] = u[IN_VN];
+        T[7] = with_rates ? du[IN_VN] : 0.0;
+        m->P[BLOCK_INSTANT[k]] = m->t;
+        m->P[BLOCK_LOAD[k]] = u[IN_LOAD];
+    }
+}
+
+/* the rates of the reference integrals: the speed inputs */
+static void fmu_reference_rates(double *dy, const double *u) {
+    int k;
+    for (k = 0; k < N_BLOCK; k++) {
+        dy[FD_N_STATE + 2 * k] = u[k * N_IN_BLOCK + IN_VT];
+        dy[FD_N_STATE + 2 * k + 1] = u[k * N_IN_BLOCK + IN_VN];
+    }
 }
 
 /* derivatives and signals at (t, y) (model exchange; co-simulation after a step) */
@@ -124,8 +140,7 @@ static void fmu_evaluate(Fmu *m) {
     if (m->model_exchange) fmu_write_inputs(m, 0);
     fd_rhs(m->t, m->y, m->held, m->P, m->T, m->dy, m->aux);
     m->evaluations[0] += 1.0;
-    m->dy[FD_N_STATE] = m->u[IN_VT];
-    m->dy[FD_N_STATE + 1] = m->u[IN_VN];
+    fmu_reference_rates(m->dy, m->u);
     m->dirty = 0;
 }
 
@@ -135,24 +150,29 @@ static void fmu_evaluate(Fmu *m) {
    m->y_d (continuous states) and m->u_d (inputs); the inputs reach the model through the
    reference block of T and the load slot of P, as fmu_write_inputs puts them there */
 static void fmu_tangent(Fmu *m) {
-    int integrate = m->s[S_INTEGRATE] > 0.5;
+    int integrate = m->s[S_INTEGRATE] > 0.5, k, load = 0;
     fmu_evaluate(m);  /* P and T hold the current inputs */
     memset(m->T_d, 0, sizeof(m->T_d));
-    m->T_d[TABLE_OFFSET + 0] = integrate ? m->y_d[FD_N_STATE] : m->u_d[IN_XT];
-    m->T_d[TABLE_OFFSET + 2] = m->u_d[IN_VT];
-    m->T_d[TABLE_OFFSET + 4] = integrate ? m->y_d[FD_N_STATE + 1] : m->u_d[IN_XN];
-    m->T_d[TABLE_OFFSET + 6] = m->u_d[IN_VN];
-    if (m->u_d[IN_LOAD] != 0.0) {  /* the load force is a parameter slot: P varies too */
+    for (k = 0; k < N_BLOCK; k++) {
+        const double *u_d = m->u_d + k * N_IN_BLOCK, *x_d = m->y_d + FD_N_STATE + 2 * k;
+        double *T_d = m->T_d + BLOCK_TABLE[k];
+        T_d[0] = integrate ? x_d[0] : u_d[IN_XT];
+        T_d[2] = u_d[IN_VT];
+        T_d[4] = integrate ? x_d[1] : u_d[IN_XN];
+        T_d[6] = u_d[IN_VN];
+        load |= u_d[IN_LOAD] != 0.0;
+    }
+    if (load) {  /* the load forces are parameter slots: P varies too */
         memset(m->P_d, 0, sizeof(m->P_d));
-        m->P_d[LOAD_SLOT] = m->u_d[IN_LOAD];
+        for (k = 0; k < N_BLOCK; k++)
+            m->P_d[BLOCK_LOAD[k]] = m->u_d[k * N_IN_BLOCK + IN_LOAD];
         fd_rhs_tangent_all(m->t, m->y, m->held, m->P, m->T, m->dy_s, m->aux_s, m->y_d,
                            m->P_d, m->T_d, m->dy_d, m->aux_d);
     } else {
         fd_rhs_tangent(m->t, m->y, m->held, m->P, m->T, m->dy_s, m->aux_s, m->y_d, m->T_d,
                        m->dy_d, m->aux_d);
     }
-    m->dy_d[FD_N_STATE] = m->u_d[IN_VT];
-    m->dy_d[FD_N_STATE + 1] = m->u_d[IN_VN];
+    fmu_reference_rates(m->dy_d, m->u_d);
     m->evaluations[1] += 1.0;
 }
 
@@ -284,20 +304,18 @@ static int fmu_directional(Fmu *m, const unsigned int *unknowns, size_t n_unknow
 /* the sample schedule (feeddrive.solvers.schedule): the loop periods of the settings go into
    their parameter slots, then every clock of the model (CLOCK_SLOT) is put on one grid */
 static int fmu_sampling(Fmu *m) {
-    static const int settings[3] = {S_POSITION_PERIOD, S_VELOCITY_PERIOD, S_CURRENT_PERIOD};
-    static const int slots[3] = {P_POSITION_PERIOD, P_VELOCITY_PERIOD, P_CURRENT_PERIOD};
     double base = 0.0, period;
     int i;
     char msg[200];
-    for (i = 0; i < 3; i++) {
-        period = m->s[settings[i]];
+    for (i = 0; i < N_PERIOD; i++) {  /* each loop's period setting (PERIOD_SETTING) */
+        period = m->s[PERIOD_SETTING[i]];
         if (!(period >= 0.0) || !isfinite(period)) {
             snprintf(msg, sizeof msg, "%s = %g: expected a period >= 0 [s]", PERIOD_NAMES[i],
                      period);
             fmu_log(m, ST_ERROR, msg);
             return ST_ERROR;
         }
-        m->P[slots[i]] = period;
+        m->P[PERIOD_SLOT[i]] = period;
     }
     for (i = 0; i < FD_N_CLOCK; i++) {
         period = m->P[CLOCK_SLOT[i]];
@@ -326,8 +344,7 @@ static int fmu_check_settings(Fmu *m) {
     int i;
     char msg[200];
     for (i = 0; i < N_SETTING; i++) {
-        if (i == S_POSITION_PERIOD || i == S_VELOCITY_PERIOD || i == S_CURRENT_PERIOD ||
-            i == S_INTEGRATE)
+        if (IS_PERIOD_SETTING[i] || i == S_INTEGRATE)
             continue;
         if (!(m->s[i] > 0.0) || !isfinite(m->s[i])) {
             snprintf(msg, sizeof msg, "%s = %g: expected a finite value > 0", SETTING_NAMES[i],
@@ -351,8 +368,10 @@ static int fmu_initialize(Fmu *m) {
     for (i = 0; i < FD_MEMORY_SIZE; i++) m->memory[i] = 0.0;
     m->memory[FD_MEM_H] = 1e-6;
     m->memory[FD_MEM_ERR] = 1e-4;
-    m->y[FD_N_STATE] = m->u[IN_XT];  /* the speed integrals start at the position inputs */
-    m->y[FD_N_STATE + 1] = m->u[IN_XN];
+    for (i = 0; i < N_BLOCK; i++) {  /* the speed integrals start at the position inputs */
+        m->y[FD_N_STATE + 2 * i] = m->u[i * N_IN_BLOCK + IN_XT];
+        m->y[FD_N_STATE + 2 * i + 1] = m->u[i * N_IN_BLOCK + IN_XN];
+    }
     m->t = m->t0;
     fmu_write_inputs(m, !m->model_exchange);
     memcpy(m->held_prev, m->held, sizeof(m->held));
@@ -421,14 +440,13 @@ static int fmu_do_step(Fmu *m, double t, double h) {
         return ST_ERROR;
     }
     /* the speed integrals: exact for speeds held (and ramped at their input rates) */
-    for (i = 0; i < 2; i++) {
-        int v = i == 0 ? IN_VT : IN_VN;
+    for (i = 0; i < N_REF_STATES; i++) {
+        int v = (i / 2) * N_IN_BLOCK + (i % 2 == 0 ? IN_VT : IN_VN);
         m->y[FD_N_STATE + i] += m->u[v] * h + 0.5 * m->du[v] * h * h;
     }
     m->t = t_end;
     for (i = 0; i < FD_N_STATE; i++) m->dy[i] = m->work[0][i]; /* f at t_end */
-    m->dy[FD_N_STATE] = m->u[IN_VT];
-    m->dy[FD_N_STATE + 1] = m->u[IN_VN];
+    fmu_reference_rates(m->dy, m->u);
     m->dirty = 0;
     return ST_OK;
 }

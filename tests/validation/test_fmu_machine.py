@@ -1,0 +1,188 @@
+"""A machine of axes as one co-simulation FMU (issue 40, item 4): its variables named
+``<axis>.<name>`` with units, fmpy's validation, and the FMU in fmpy following
+``simulate_machine`` of the same machine driven by the same references."""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmu_helpers import FMU_TIGHT, STEP, TIGHT
+
+from feeddrive.engine.options import SolverOptions
+from feeddrive.fmu import export_machine_fmu
+from feeddrive.machine import (
+    MachineProfile,
+    load_machine,
+    machine_from_dict,
+    make_contour,
+    simulate_machine,
+)
+from feeddrive.parameters import ParameterError
+
+fmpy = pytest.importorskip("fmpy")
+pytest.importorskip("fmpy.validation")
+CC = pytest.importorskip("feeddrive.backends.c_backend")
+try:
+    CC.find_compiler()
+except CC.CompilerNotFound:  # pragma: no cover - CI has a compiler
+    pytest.skip("no C compiler", allow_module_level=True)
+
+#: an XY table whose x axis carries a 40-kg mass guided by y (feeddrive.machine.couplings.
+#: inertial): y's load force is −mass·(x's table acceleration)
+INERTIAL = {"name": "xy-inertial", "extends": "xy-table",
+            "couplings": {"carried": {"part": "inertial", "source": "x", "target": "y",
+                                      "mass": 40.0, "factor": 1.0}}}
+#: an XY table of sampled axes (wang2021-drive: 8/4/2-kHz current/velocity/position loops),
+#: each axis' periods a setting of its own
+SAMPLED = {"name": "xy-sampled", "axes": {
+    "x": {"extends": "wang2021-drive", "drive": "cdfs"},
+    "y": {"extends": "wang2021-drive", "drive": "cdfs"}}}
+MACHINES = {"xy-table": None, "inertial": INERTIAL, "sampled": SAMPLED}
+
+
+def _circle_profile(machine):  # type: ignore[no-untyped-def]
+    """A quarter of the R = 50 mm, F = 5000 mm/min circle (lead-in at 1 m/s²), each axis'
+    speed held over the communication step (SampledSpeed(hold=True)), as the FMU holds its
+    inputs."""
+    contour = make_contour("circle", feed=5000 / 60e3, acceleration=1.0, radius=0.05,
+                           turns=0.25)
+    profile = MachineProfile.from_contour(contour, machine, interval=STEP)
+    return dc.replace(profile, axes=tuple((n, dc.replace(r, hold=True))
+                                          for n, r in profile.axes))
+
+
+def _run_fmu(path: Path, profile: MachineProfile, outputs: list[str]) -> np.ndarray:
+    axes = [n for n, _ in profile.axes]
+    columns = [(f"{n}.{k}", float) for n in axes
+               for k in ("table_position_reference", "table_speed_reference", "load_force")]
+    table = np.zeros(len(profile.time), dtype=[("time", float), *columns])
+    table["time"] = profile.time
+    for n in axes:
+        table[f"{n}.table_speed_reference"] = profile.axis(n).table_speed
+    return fmpy.simulate_fmu(str(path), start_time=0.0, stop_time=float(profile.time[-1]),
+                             output_interval=STEP, input=table, start_values=FMU_TIGHT,
+                             output=outputs)
+
+
+def _deviation(rec: np.ndarray, ds, name: str) -> float:  # type: ignore[no-untyped-def]
+    t = np.asarray(ds["time"])
+    idx = np.searchsorted(rec["time"], t + 1e-9 * STEP, side="right") - 1
+    return float(np.max(np.abs(rec[name][idx] - np.asarray(ds[name]))))
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_machine_fmu_declares_each_axis_and_validates(tmp_path: Path, fmi: int) -> None:
+    """One FMU for the XY table: per axis the reference and load inputs, the outputs and the
+    tunable parameters of its single-drive FMU, named ``<axis>.<name>`` with units; the
+    loop periods a setting per axis; fmpy's validation finds no problem."""
+    from fmpy.validation import validate_fmu
+
+    path = tmp_path / "xy.fmu"
+    fmu = export_machine_fmu(load_machine("xy-table"), path, fmi=fmi)
+    assert validate_fmu(str(path)) == []
+    assert fmu.inputs == tuple(f"{a}.{k}" for a in "xy" for k in (
+        "table_position_reference", "table_speed_reference", "load_force"))
+    md = fmpy.read_model_description(str(path))
+    vs = {v.name: v for v in md.modelVariables}
+    for a in "xy":
+        assert vs[f"{a}.table_position"].causality == "output"
+        assert vs[f"{a}.table_position"].unit == "m"
+        assert vs[f"{a}.screw_motor_torque"].unit == "N m"
+        assert vs[f"{a}.load_force"].unit == "N"
+        assert vs[f"{a}.table.mass"].variability == "tunable"
+        assert vs[f"{a}.table.mass"].unit == "kg"
+        assert vs[f"{a}.controller.position_period"].causality == "parameter"
+    assert "controller.position_period" not in vs
+    assert fmu.n_states == 30  # 15 per wang2021 CDFS axis (its single-drive FMU's count)
+
+
+def test_machine_model_exchange_is_refused_in_one_line(tmp_path: Path) -> None:
+    with pytest.raises(ParameterError, match="co-simulation only") as err:
+        export_machine_fmu(load_machine("xy-table"), tmp_path / "xy.fmu", kind="me")
+    assert "\n" not in str(err.value)
+    assert not (tmp_path / "xy.fmu").exists()
+
+
+def test_axis_parameter_is_range_checked_when_set(tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    """A tunable ``<axis>.<path>`` parameter keeps its single-drive range check: a negative
+    table mass is refused by the FMU when set."""
+    from fmpy import extract, instantiate_fmu
+
+    path = tmp_path / "xy.fmu"
+    export_machine_fmu(load_machine("xy-table"), path)
+    md = fmpy.read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = instantiate_fmu(extract(str(path)), md)
+    try:
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.setReal([vr["y.table.mass"]], [12.0])
+        with pytest.raises(Exception, match="status 3"):
+            fmu.setReal([vr["x.table.mass"]], [-1.0])
+    finally:
+        fmu.freeInstance()
+    assert "x.table.mass = -1: expected 0.01 … 100000 [kg]" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("machine", list(MACHINES))
+def test_machine_fmu_in_fmpy_follows_simulate_machine(tmp_path: Path, machine: str) -> None:
+    """A quarter circle (R = 50 mm, F = 5000 mm/min) on the XY table, on the XY table with
+    the inertial cross-axis part, and on an XY table of sampled axes (the loops' instants
+    inside each communication step): each axis' speed reference fed to the FMU on the
+    1-ms communication grid (integrated inside), ``simulate_machine`` driven by the same
+    held references; both integrators at the tight tolerances of tests/validation/
+    fmu_helpers.py (TIGHT, FMU_TIGHT).  Table positions agree within 1e-8 m (measured
+    0.9e-9 m on the XY table, 0.9e-11 m on the sampled one).  The inertial part acts in
+    the FMU: y's trace moves by more than 100× that tolerance against the plain table."""
+    data = MACHINES[machine]
+    m = load_machine(machine) if data is None else machine_from_dict(data)
+    profile = _circle_profile(m)
+    path = tmp_path / "m.fmu"
+    export_machine_fmu(m, path)
+    outputs = ["x.table_position", "y.table_position"]
+    rec = _run_fmu(path, profile, outputs)
+    ds = simulate_machine(m, profile, float(profile.time[-1]),
+                          options=SolverOptions(**TIGHT)).dataset  # type: ignore[arg-type]
+    for name in outputs:
+        assert _deviation(rec, ds, name) <= 1e-8, name
+    if machine == "inertial":
+        plain = tmp_path / "plain.fmu"
+        export_machine_fmu(load_machine("xy-table"), plain)
+        base = _run_fmu(plain, profile, outputs)
+        assert np.max(np.abs(base["y.table_position"] - rec["y.table_position"])) > 1e-6
+        assert "y.external_force" in {v.name for v in fmpy.read_model_description(
+            str(path)).modelVariables if v.causality == "output"}
+
+
+def test_cli_exports_a_machine_and_refuses_single_drive_options(tmp_path: Path) -> None:
+    """``export fmu --machine`` writes the FMU the API writes (its inputs listed); options of
+    one drive and model exchange are refused in one line, exit status 2, before any work."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    runner = CliRunner()
+    out = tmp_path / "xy.fmu"
+    res = runner.invoke(app, ["export", "fmu", "--machine", "xy-table", "--out", str(out),
+                              "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.output)["inputs"] == [
+        f"{a}.{k}" for a in "xy"
+        for k in ("table_position_reference", "table_speed_reference", "load_force")]
+    for extra, option in ((["--kind", "me"], "--kind"), (["--drive", "cdfs"], "--drive"),
+                          (["--preset", "wang2021"], "--preset"),
+                          (["--table-speed", "5"], "--table-speed")):
+        bad = tmp_path / f"bad{option}.fmu"
+        res = runner.invoke(app, ["export", "fmu", "--machine", "xy-table", *extra, "--out",
+                                  str(bad)])
+        assert res.exit_code == 2, res.output
+        assert res.output.strip().startswith(f"error: {option} = ")
+        assert len(res.output.strip().splitlines()) == 1
+        assert not bad.exists()
