@@ -1,0 +1,130 @@
+"""Reset integrator: the velocity loop's integral reset at the zero crossings of the position
+error, so that the integral wound up while the table sticks does not carry it through the set
+point and back (the hunting limit cycle of a PID-type loop with Stribeck friction).
+
+    x_i⁺ = γ · x_i    when e_k · e_(k−1) ≤ 0, e_(k−1) ≠ 0 and x_i · e_(k−1) > 0,
+    e_k = x_ref(t_k) − x̂(t_k)
+
+checked at every instant t_k of the *sampled* velocity loop, before its PI update, on the
+axis' quantised measured position x̂ (the table scale for the screw motor and a linear motor):
+the sampled-data version of the reset at e = 0 of Beerens et al. [1]_ [2]_ (the state jumps at
+the first sampling instant at or after the crossing, not at the exact crossing; a continuous
+velocity loop is refused).  γ = 0 is their reset to zero; γ ∈ (0, 1) keeps a fraction.
+The integral is reset only while it still pushes the old way (x_i of the sign of the error
+before the crossing: their sector condition on e·u_i).  Their minimum dwell time between
+resets is not modelled: the loop's sample period bounds the reset rate.  Measured on
+``wang2021-drive`` (8/4/2-kHz loops, 0.05-µm scale) with K_pp = 30 1/s and
+K_vi = 15000 A/m, a 10-µm move: without the part the table settles 0.37 counts past the target
+and does not hunt; with it (180 resets in 4 s) it wanders −3.7 … +1.7 counts over 2–4 s — the
+issue's acceptance setting (a hunting baseline) was not found.  The file's ``[reset_integrator]``
+section gives it::
+
+    [reset_integrator]
+    fraction = 0.0     # [-] kept at a reset
+
+References
+----------
+.. [1] R. Beerens, A. Bisoffi, L. Zaccarian, W. P. M. H. Heemels, H. Nijmeijer,
+   N. van de Wouw, "Reset integral control for improved settling of PID-based motion systems
+   with friction", Automatica 107 (2019) 483–492.
+.. [2] R. Beerens, A. Bisoffi, L. Zaccarian, H. Nijmeijer, W. P. M. H. Heemels,
+   N. van de Wouw, "Reset PID design for motion systems with Stribeck friction", IEEE Trans.
+   Control Syst. Technol. 30 (2022) 294–310 (early access 2021).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ... import registry
+from ...parameters import Component, ParameterError
+from ...parameters.validation import quantity
+
+
+@dataclass(frozen=True)
+class ResetIntegrator(Component):
+    """Velocity-loop integral reset at the position error's zero crossings
+    (``[reset_integrator]``).
+
+    Parameters
+    ----------
+    fraction : float, default 0.0
+        The fraction γ of the integral kept at a reset [-] (0: reset to zero, Beerens et al.).
+    axis : str, default ""
+        The controller axis reset (``"screw"``, ``"motor"``, …; "" = the table-driving axis,
+        the drive's first).
+    """
+
+    fraction: float = quantity("-", low=0, high=1, low_inclusive=True, default=0.0)
+    axis: str = ""
+    _label = "reset_integrator"
+
+    def declare_part(self, b: Any, axes: list[Any]) -> list[Any]:
+        """Register the part's slots and put the reset before the chosen axis' velocity update.
+
+        Parameters
+        ----------
+        b : Builder
+            The model being assembled.
+        axes : list of Axis
+            The mechanism's controller axes.
+
+        Returns
+        -------
+        list of Axis
+            The axes, the chosen one with the reset as its velocity-loop prelude.
+
+        Raises
+        ------
+        ParameterError
+            For an unknown axis, or a continuous velocity loop (its integral is a state that
+            would need a reset event of the integrator).
+        """
+        names = [ax.name for ax in axes]
+        target = self.axis or names[0]
+        if target not in names:
+            raise ParameterError(f"{self._label}.axis", self.axis,
+                                 f"expected one of {', '.join(names)}")
+        period = b.param_values[b.param_index[b.q("controller.velocity_period")]]
+        if period <= 0.0:
+            raise ParameterError("controller.velocity_period", period,
+                                 "the reset integrator acts on a sampled velocity loop; "
+                                 "expected 1e-6 … 0.1 [s]")
+        b.named_params(self._label, ("fraction",), np.array([self.fraction]))
+        previous = b.add_held(f"{self._label}.previous_error")
+        b.add_held(f"{self._label}.count")
+        count = b.h(f"{self._label}.count")
+        i = names.index(target)
+        ax = axes[i]
+        integral = b.h(f"{ax.name}.velocity_integral")
+        fraction = b.p(f"{self._label}.fraction")
+        # a crossing (or arrival at zero) of the quantised error while the integral still
+        # pushes the old way: the reset of [1]_ restricted to e·x_i ≤ 0 after the crossing
+        prelude = (f"e_reset = {ax.reference} - {ax.position_q}",
+                   f"if {previous} != 0.0 and e_reset * {previous} <= 0.0 and "
+                   f"{integral} * {previous} > 0.0:",
+                   f"    {integral} = {fraction} * {integral}",
+                   f"    {count} += 1.0",
+                   f"{previous} = e_reset")
+        axes = list(axes)
+        axes[i] = dataclasses.replace(ax, velocity_prelude=(*ax.velocity_prelude, *prelude))
+        b.add_aux(f"{self._label}_count", "-", "resets of the velocity-loop integral so far")
+        b.emit(f"{b.a(self._label + '_count')} = {count}",
+               writes=f"aux:{self._label}_count")  # a held value: no state
+        return axes
+
+    def emit_part(self, b: Any) -> None:
+        """Nothing more to write: the reset runs in the velocity loop's update (its prelude).
+
+        Parameters
+        ----------
+        b : Builder
+            The model being assembled.
+        """
+
+
+registry.register(registry.SECTIONS, "reset_integrator", ResetIntegrator)
