@@ -23,9 +23,9 @@ at the set point releases it and the table springs back.  Measured on ``wang2021
 (8/4/2-kHz loops, 0.05-µm scale), a 10-µm move, 10 s: with K_pp = 60 1/s and K_vi = 15000 A/m
 the plain loop keeps a 22-Hz cycle of −2.3 … +3.3 counts from 2 s to 10 s; the reset (γ = 0,
 464 resets) widens it to −7.7 … +7.9 counts, γ = 0.5 to −3.7 … +4.5 (with friction off
-the same gains diverge: that cycle is a linear instability bounded by friction, not hunting); with K_vi = 8000 A/m the
-plain loop settles within one count and the reset loop wanders (−5.5 … +1.4 counts over
-2–4 s).  The issue's acceptance (the reset within one count from 2 s) is not met in this model.
+the same gains diverge: that cycle is a linear instability bounded by friction, not
+hunting); with K_vi = 8000 A/m the plain loop settles within one count and the reset loop
+wanders (−5.5 … +1.4 counts over 2–4 s).  The issue's acceptance (the reset within one count from 2 s) is not met in this model.
 The file's ``[reset_integrator]`` section gives it::
 
     [reset_integrator]
