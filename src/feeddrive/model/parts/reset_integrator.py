@@ -25,8 +25,8 @@ the plain loop keeps a 22-Hz cycle of −2.3 … +3.3 counts from 2 s to 10 s; t
 464 resets) widens it to −7.7 … +7.9 counts, γ = 0.5 to −3.7 … +4.5 (with friction off
 the same gains diverge: that cycle is a linear instability bounded by friction, not
 hunting); with K_vi = 8000 A/m the plain loop settles within one count and the reset loop
-wanders (−5.5 … +1.4 counts over 2–4 s).  The issue's acceptance (the reset within one count from 2 s) is not met in this model.
-The file's ``[reset_integrator]`` section gives it::
+wanders (−5.5 … +1.4 counts over 2–4 s).  The issue's acceptance (the reset within one count
+from 2 s) is not met in this model.  The file's ``[reset_integrator]`` section gives it::
 
     [reset_integrator]
     fraction = 0.0     # [-] kept at a reset
