@@ -17,16 +17,16 @@ condition on e·u_i).  Not modelled: their minimum dwell time between resets (th
 sample period bounds the reset rate), and J ignores the instants where the anti-windup stops
 the integration.
 
-Their analysis assumes friction without presliding memory (a set-valued Stribeck law), where
-the table at rest needs no force.  A LuGre contact at rest holds its bristles' force: a reset
-at the set point releases it and the table springs back.  Measured on ``wang2021-drive``
-(8/4/2-kHz loops, 0.05-µm scale), a 10-µm move, 10 s: with K_pp = 60 1/s and K_vi = 15000 A/m
-the plain loop keeps a 22-Hz cycle of −2.3 … +3.3 counts from 2 s to 10 s; the reset (γ = 0,
-464 resets) widens it to −7.7 … +7.9 counts, γ = 0.5 to −3.7 … +4.5 (with friction off
-the same gains diverge: that cycle is a linear instability bounded by friction, not
-hunting); with K_vi = 8000 A/m the plain loop settles within one count and the reset loop
-wanders (−5.5 … +1.4 counts over 2–4 s).  The issue's acceptance (the reset within one count
-from 2 s) is not met in this model.  The file's ``[reset_integrator]`` section gives it::
+Measured on ``wang2021-drive`` (its own gains: P position, PI velocity, 8/4/2-kHz loops,
+0.05-µm scale), a 10-µm move (tests/unit/test_reset_integrator.py).  With the static Stribeck
+law at both sites (no presliding memory, the friction of [1]_) and v_ε = 10 µm/s the plain
+loop hunts, −113 … +136 counts at 0.215 Hz, and the reset loop stays within one count from
+2 s to 10 s; at the law's default v_ε = 1 µm/s the hunting (±58 counts, 0.099 Hz) narrows
+from 117 to 12.6 counts peak to peak over 2–10 s but does not hold one count.  With Wang2021's
+LuGre law the plain loop does not hunt: its presliding range F_s/σ0 ≈ 2.6 µm makes the last
+micrometres an elastic creep, and a reset at the set point releases the bristles' force
+(K_pp = 60 1/s, K_vi = 15000 A/m: a 22-Hz cycle of −2.3 … +3.3 counts widened to −7.7 … +7.9;
+with friction off these gains diverge).  The file's ``[reset_integrator]`` section gives it::
 
     [reset_integrator]
     fraction = 0.0     # [-] kept at a reset
