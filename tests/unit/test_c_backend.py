@@ -43,6 +43,7 @@ from feeddrive.model.disturbances import LeadError, TorqueRipple
 from feeddrive.model.loops import Compensation
 from feeddrive.model.parts.backlash import Backlash
 from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
+from feeddrive.parameters import loads
 from feeddrive.solvers.schedule import due
 
 try:
@@ -167,6 +168,12 @@ CASES: dict[str, Callable[[], tuple[fd.DriveSystem, Any]]] = {
     "sampled-current-only-ddfs": lambda: (
         fd.DriveSystem(_changes(W, {"controller.current_period": 1.25e-4}), "ddfs", 0.4),
         ConstantSpeed(2e-3, 16e-3)),
+    # the compensation parts that run in the velocity loop's update (issue 37 item 4)
+    "sampled-quantised-dob-reset-cdfs": lambda: (
+        fd.DriveSystem(loads('extends = "wang2021-drive"\nname = "parts"\n'
+                                "[disturbance_observer]\nbandwidth = 300.0\n"
+                                "inertia_gain = 2.6e-3\n[reset_integrator]\nfraction = 0.2\n"),
+                       "cdfs", 0.4), ConstantSpeed(2e-3)),
     "sampled-quantised-linear-motor": lambda: (
         fd.DriveSystem(_changes(LM, SAMPLED | {"controller.grating_resolution": 1e-7}),
                        "linear-motor", 0.4), ConstantSpeed(2e-3)),

@@ -305,6 +305,9 @@ class Axis:
         part) [rad/s].
     speed_correction_reads : tuple of str, default ()
         What ``speed_correction`` is computed from (``Builder.flow`` names).
+    velocity_prelude : tuple of str, default ()
+        Sampled code run at each velocity-loop instant just before its PI update; it may read
+        ``ref_x`` and the quantised positions and change the held integral (a reset part).
     position_reads : tuple of str, default ()
         What the continuous ``position`` code is computed from (``Builder.flow`` names).
     speed_reads : tuple of str, default ()
@@ -339,6 +342,9 @@ class Axis:
     # synchronisation part writes it) and what it is computed from
     speed_correction: str = ""
     speed_correction_reads: tuple[str, ...] = ()
+    # sampled code run at the velocity loop's instants just before its PI update, where the
+    # quantised positions (``q_<channel>``) and ``ref_x`` are known (a reset-integrator part)
+    velocity_prelude: tuple[str, ...] = ()
 
 
 def axis_parameters(b: Builder, axis: str, c: object, H: float, *, speed_mode: bool) -> int:
@@ -665,6 +671,8 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     for ch in channels:
         s.append(f"    {b.h('prev.' + ch.name)} = q_{ch.name}")
     for ax in axes:
+        if ax.velocity_prelude:
+            s += _guarded(ax, list(ax.velocity_prelude))
         s += _guarded(ax, _sampled_pi(
             f"{verr}(w_cmd_{ax.name}, {ax.speed_q}, P, {ax.param_offset})", ccmd,
             b.h(ax.name + ".velocity_integral"), b.h(ax.name + ".current_command"),

@@ -16,6 +16,9 @@ parameter class lives with the part (registry group ``feeddrive.sections``):
   (:mod:`feeddrive.model.disturbances`);
 * ``acceleration_feedforward``: ``AccelerationFeedforward``
   (``feeddrive.model.parts.acceleration_feedforward``);
+* ``reset_integrator``: ``ResetIntegrator`` (``feeddrive.model.parts.reset_integrator``);
+* ``disturbance_observer``: ``DisturbanceObserver``
+  (``feeddrive.model.parts.disturbance_observer``);
 * ``friction.<site>``, by the site's law: ``LuGreParameters`` and ``FrictionBranch``
   (:mod:`feeddrive.model.friction.lugre_parameters`), ``GMSParameters``
   (:mod:`feeddrive.model.friction.gms`).
