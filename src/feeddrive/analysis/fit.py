@@ -1854,9 +1854,9 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
         how = "linear"
         nonlinear = any(not (1.0 / NONLINEARITY_LIMIT <= q <= NONLINEARITY_LIMIT)
                         for q in linearity[j] if not math.isnan(q))
-        if profile and ok and not numerical and (
-                not math.isfinite(se_t) or tq * se_t > PROFILE_ABOVE * abs(theta[j])
-                or lo_t < lb[j] or hi_t > ub[j] or nonlinear):
+        credible = (math.isfinite(se_t) and tq * se_t <= PROFILE_ABOVE * abs(theta[j])
+                    and lo_t >= lb[j] and hi_t <= ub[j])
+        if profile and ok and not numerical and (not credible or nonlinear):
             # the likelihood-ratio threshold scaled by the HAC-to-white variance ratio of
             # this parameter, so that the profile interval carries the residual's correlation
             # (at least the white-noise threshold)
@@ -1865,16 +1865,15 @@ def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndar
             threshold = ssr * (1.0 + max(inflation, 1.0) * f_quantile / dof)
             lo_p, hi_p = _profile(ev, theta, j, lb, ub, ssr, threshold, se_t, say)
             how = "profile"
-            if math.isfinite(se_t):
-                # a profile widens the linearised interval, never narrows it: a sum of
-                # squares rising faster than predicted within one standard error is, on
-                # these problems, the simulated signals' non-smoothness at the integration
-                # error's scale (a 1-µm encoder without other noise: profile ends 1000x
-                # inside the s.e., missing the truth), not the likelihood's shape
-                lo_l, hi_l = max(lo_t, lb[j]), min(hi_t, ub[j])
-                if lo_p >= lo_l and hi_p <= hi_l:
+            if credible:
+                # sent to the profile by the linearity check alone: the profile widens the
+                # linearised interval, never narrows it.  A sum of squares rising faster than
+                # predicted within one standard error is, on these problems, the simulated
+                # signals' non-smoothness at the integration error's scale (a 1-µm encoder
+                # without other noise: profile ends 1000x inside the s.e., missing the truth)
+                if lo_p >= lo_t and hi_p <= hi_t:
                     how = "linear"
-                lo_t, hi_t = min(lo_p, lo_l), max(hi_p, hi_l)
+                lo_t, hi_t = min(lo_p, lo_t), max(hi_p, hi_t)
             else:
                 lo_t, hi_t = lo_p, hi_p
         value = float(theta[j] * start[j])
