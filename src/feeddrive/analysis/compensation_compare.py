@@ -15,9 +15,14 @@ derived from the drive's parameters where the docs give a rule; none is tuned he
 * reversal feed-forward: I_r = F_c·H/K_t (the screw's and the guide's Coulomb friction as motor
   current), v_w = 2 mm/s, at the velocity loop's period.
 
-The disturbance observer and the reset integrator refuse a continuous velocity loop, so every
-row runs on one parameter set with sampled loops (by default ``wang2021-drive``: 8/4/2 kHz,
-0.05-µm scale); the rows differ only in their compensation.
+The disturbance observer and the reset integrator refuse a continuous velocity loop, while the
+static feed-forward and the LuGre observer are modelled with continuous current and velocity
+loops only.  So the rows rest on one parameter set with sampled loops (by default
+``wang2021-drive``: 8/4/2 kHz, 0.05-µm scale): ``none``, the disturbance observer, the reset
+integrator and the reversal feed-forward run on it as it is; ``none-continuous``, the static
+feed-forward and the LuGre observer on it with continuous loops and exact feedback (all three
+periods, ``encoder_counts`` and ``grating_resolution`` set to 0: the model refuses
+quantisation without sampled loops), limits kept.  Each row states its loops.
 """
 
 from __future__ import annotations
@@ -34,8 +39,12 @@ from ..model.loops import Compensation
 from ..parameters import DriveParameters, ParameterError
 
 #: the schemes in the order of the table
-SCHEMES = ("none", "feedforward", "observer", "disturbance-observer", "reset-integrator",
-           "reversal-feedforward")
+SCHEMES = ("none", "none-continuous", "feedforward", "observer", "disturbance-observer",
+           "reset-integrator", "reversal-feedforward")
+#: the schemes that run with continuous current and velocity loops (the static feed-forward
+#: and the LuGre observer are modelled with continuous loops only); ``none-continuous`` is
+#: their baseline
+CONTINUOUS = ("none-continuous", "feedforward", "observer")
 #: the quantities of a row, in the order of the table
 METRICS = ("critical", "spike", "reversal", "settling")
 #: the disturbance observer's Q-filter bandwidth [rad/s] (docs/extending.md's measured figure)
@@ -61,6 +70,13 @@ POSITIONING_TARGETS = (-1e-3, 1e-3)
 POSITIONING_FEED = 5e-3
 POSITIONING_DWELL = 0.3
 POSITIONING_OVERSHOOT = 0.5e-3
+
+
+#: the table's columns: (key of a row, heading with its unit)
+COLUMNS = (("critical_speed_mm_s", "critical speed [mm/s]"),
+           ("largest_spike_um", "largest reversal spike [µm]"),
+           ("reversal_value_B_um", "ISO 230-2 B [µm]"),
+           ("settling_time_s", "settling time [s]"))
 
 
 @dataclass(frozen=True)
@@ -174,12 +190,22 @@ def schemes(params: DriveParameters, names: Sequence[str] = SCHEMES, *,
     if unknown:
         raise ParameterError("schemes", unknown, f"expected some of {', '.join(SCHEMES)}")
     base = params.replace_path("controller.compensation", Compensation())
+    c = params.controller
+    continuous = base.replace_path("controller", base.controller.with_values(
+        current_period=0.0, velocity_period=0.0, position_period=0.0, encoder_counts=0.0,
+        grating_resolution=0.0))
+    sampled_loops = (f"sampled: current {c.current_period:g} s, velocity "
+                     f"{c.velocity_period:g} s, position {c.position_period:g} s")
+    continuous_loops = "continuous loops, no quantisation (the feedback exact)"
     out = []
+    s: dict[str, Any]
     for name in names:
         if name == "none":
             p, s = base, {"compensation": "none"}
+        elif name == "none-continuous":
+            p, s = continuous, {"compensation": "none"}
         elif name in ("feedforward", "observer"):
-            p = params.replace_path("controller.compensation", Compensation(mode=name))
+            p = continuous.replace_path("controller.compensation", Compensation(mode=name))
             s = {"compensation": name, "model": "exact (scales 1)", "observer_gain_1_s": 0.0}
             if name == "feedforward":
                 del s["observer_gain_1_s"]
@@ -199,6 +225,7 @@ def schemes(params: DriveParameters, names: Sequence[str] = SCHEMES, *,
                 current=current, width=REVERSAL_WIDTH, period=period))
             s = {"current_A": current, "width_mm_s": 1e3 * REVERSAL_WIDTH,
                  "period_s": period, "rule": "I_r = F_c·H/K_t (screw + guide)"}
+        s["loops"] = continuous_loops if name in CONTINUOUS else sampled_loops
         out.append(Scheme(name, p, s))
     return out
 
@@ -377,5 +404,32 @@ def compare_compensations(params: DriveParameters, *, drive: str = "cdfs",
     return rows
 
 
-__all__ = ["METRICS", "SCHEMES", "Scheme", "check_sampled", "compare_compensations",
-           "coulomb_current", "measure", "motor_inertia_gain", "schemes", "settling_time"]
+def comparison_csv(rows: Sequence[dict[str, Any]]) -> str:
+    """The table as CSV text: the scheme, every :data:`COLUMNS` value a row has (empty when
+    not measured), the settling band [µm] and the scheme's settings.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        Rows of :func:`compare_compensations`.
+
+    Returns
+    -------
+    str
+        CSV text with a header line.
+    """
+    head = ["scheme", *(key for key, _ in COLUMNS), "settling_band_um", "parameter_set",
+            "settings"]
+    lines = [",".join(head)]
+    for r in rows:
+        cells = [r["scheme"], *(repr(r[k]) if isinstance(r.get(k), float) else
+                                str(r.get(k, "")) for k, _ in COLUMNS),
+                 str(r.get("settling_band_um", "")), r["parameter_set"],
+                 '"' + "; ".join(f"{k}={v}" for k, v in r["settings"].items()) + '"']
+        lines.append(",".join(cells))
+    return "\n".join(lines) + "\n"
+
+
+__all__ = ["COLUMNS", "CONTINUOUS", "METRICS", "SCHEMES", "Scheme", "check_sampled",
+           "compare_compensations", "comparison_csv", "coulomb_current", "measure",
+           "motor_inertia_gain", "schemes", "settling_time"]
