@@ -31,8 +31,8 @@ COMPARE_SCHEMES = ("none,none-continuous,feedforward,observer,disturbance-observ
 
 
 @app.command("compensate")
-@outputs(output=(".csv",), plot=PLOT_FORMATS)
 @user_errors
+@outputs(output=(".csv",), plot=PLOT_FORMATS)
 def compensate_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=STUDY_DRIVES,
                               help="The drive compensated (one with friction compensation and "
