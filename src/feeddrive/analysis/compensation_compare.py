@@ -136,6 +136,12 @@ def motor_inertia_gain(params: DriveParameters) -> float:
     -------
     float
         J_n/K_t [A s²/rad].
+
+    References
+    ----------
+    .. [1] Wang2021 Tables 1–2.
+    .. [2] Umeno, T., Hori, Y. (1991). Robust speed control of DC servomotors using modern two
+       degrees-of-freedom controller design. IEEE Trans. Ind. Electron. 38(5), 363–368.
     """
     h = params.screw.lead / (2.0 * math.pi)
     inertia = (params.screw_motor.inertia + params.screw.shaft_inertia
@@ -156,6 +162,10 @@ def coulomb_current(params: DriveParameters) -> float:
     -------
     float
         I_r [A].
+
+    References
+    ----------
+    .. [1] Wang2021 Table 1 (F_c of the screw and the guide).
     """
     h = params.screw.lead / (2.0 * math.pi)
     force = (params.friction.screw.positive.coulomb_force
