@@ -151,3 +151,17 @@ def test_help_and_docs_name_what_the_code_does():
     assert f"bisected to {1e3 * cc.CRITICAL_RESOLUTION:g} mm/s" in FLAT
     assert f"R = {1e3 * cc.CIRCLE_RADIUS:g} mm, F = {1e3 * cc.CIRCLE_FEED:g} mm/s" in FLAT
     assert f"{cc.DOB_BANDWIDTH:g} rad/s" in FLAT and "`error_after_settling_um`" in FLAT
+
+
+def test_the_circular_and_positioning_rows_are_the_baselines_at_zero_reversal_current():
+    """The spike (ISO 230-4 on an XY table of two such axes) and B (ISO 230-2) of each row
+    come from its own runs: I_r = 0 gives the uncompensated numbers, I_r = F_c·H/K_t others."""
+    names = ["none", "reversal-feedforward"]
+    zero = cc.compare_compensations(DRIVE, names=names, metrics=["spike", "reversal"],
+                                    reversal_current=0.0)
+    assert zero[1]["largest_spike_um"] == zero[0]["largest_spike_um"] > 0.0
+    assert zero[1]["reversal_value_B_um"] == zero[0]["reversal_value_B_um"] > 0.0
+    assert zero[0]["spikes_found"] == 8  # four quadrant reversals, CCW and CW
+    on = cc.compare_compensations(DRIVE, names=names[1:], metrics=["spike", "reversal"])[0]
+    assert on["largest_spike_um"] != zero[0]["largest_spike_um"]
+    assert on["reversal_value_B_um"] != zero[0]["reversal_value_B_um"]
