@@ -165,3 +165,15 @@ def test_the_circular_and_positioning_rows_are_the_baselines_at_zero_reversal_cu
     on = cc.compare_compensations(DRIVE, names=names[1:], metrics=["spike", "reversal"])[0]
     assert on["largest_spike_um"] != zero[0]["largest_spike_um"]
     assert on["reversal_value_B_um"] != zero[0]["reversal_value_B_um"]
+
+
+def test_the_figure_has_a_panel_per_column_and_writes_a_bound():
+    from feeddrive.plots.acceptance import compensation_figure
+
+    rows = [{"scheme": "none", "critical_speed_mm_s": "< 0.20", "settling_time_s": 0.5},
+            {"scheme": "observer", "critical_speed_mm_s": "1.75", "settling_time_s": 0.3}]
+    fig = compensation_figure(rows)
+    assert [ax.get_ylabel() for ax in fig.axes] == [h for _, h in cc.COLUMNS]
+    assert [t.get_text() for t in fig.axes[0].texts] == ["< 0.20"]
+    heights = [p.get_height() for p in fig.axes[3].patches]
+    assert heights == [0.5, 0.3]

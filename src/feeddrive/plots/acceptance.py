@@ -166,7 +166,7 @@ def save(fig: Figure, path: str | Path) -> Path:
 def compensation_figure(rows: list[dict[str, Any]]) -> Figure:
     """The friction-compensation comparison: one bar panel per quantity, one bar per scheme
     (issue 37 item 4; rows of
-    :func:`feeddrive.analysis.compensation_compare.compare_compensations`).
+    ``feeddrive.analysis.compensation_compare.compare_compensations``).
 
     Parameters
     ----------
@@ -176,8 +176,8 @@ def compensation_figure(rows: list[dict[str, Any]]) -> Figure:
     Returns
     -------
     matplotlib.figure.Figure
-        The figure; a quantity a row lacks (not measured, or a critical speed given as a
-        bound) is left without its bar.
+        The figure; a quantity a row lacks is left without its bar, and a critical speed given
+        as a bound or a word (``< 0.20``, ``undecided``) is written where its bar would be.
     """
     from ..analysis.compensation_compare import COLUMNS
 
@@ -185,13 +185,19 @@ def compensation_figure(rows: list[dict[str, Any]]) -> Figure:
     names = [r["scheme"] for r in rows]
     for k, (key, heading) in enumerate(COLUMNS):
         ax = fig.add_subplot(2, 2, k + 1)
-        values = []
+        values, words = [], []
         for r in rows:
             try:
                 values.append(float(r.get(key, math.nan)))
-            except (TypeError, ValueError):  # "<0.2", "undecided"
+                words.append("")
+            except (TypeError, ValueError):  # "< 0.20", "undecided": written, not drawn
                 values.append(math.nan)
+                words.append(str(r[key]))
         ax.bar(range(len(rows)), values, color="tab:blue")
+        for i, word in enumerate(words):
+            if word:
+                ax.annotate(word, (i, 0.0), ha="center", va="bottom", fontsize=8,
+                            rotation=90, xytext=(0, 3), textcoords="offset points")
         ax.set_xticks(range(len(rows)), names, rotation=30, ha="right", fontsize=8)
         ax.set_ylabel(heading)
         ax.grid(True, axis="y", alpha=0.3)
