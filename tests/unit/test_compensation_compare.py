@@ -131,6 +131,8 @@ def test_the_cli_refuses_in_one_line_before_any_work(tmp_path):
     assert r.exit_code == 2 and existing.read_text() == "keep"
     r = runner.invoke(app, ["compensate", "--compare", "--plot", str(tmp_path / "f.txt")])
     assert r.exit_code == 2
+    r = runner.invoke(app, ["compensate", "--compare", "--no-search"])
+    assert r.exit_code == 2 and "--no-search" in r.output
     r = runner.invoke(app, ["compensate", "--output", str(tmp_path / "n.csv")])
     assert r.exit_code == 2 and "--compare" in r.output
 

@@ -75,6 +75,13 @@ def compensate_command(
     from rich.progress import Progress
 
     if compare:
+        study_only = {"--mismatch": mismatch != 20.0, "--nut-speed": nut_speed != 16.0,
+                      "--tracking-speed": tracking_speed != 1.0, "--no-search": no_search}
+        given = [name for name, changed in study_only.items() if changed]
+        if given:
+            from ..parameters import ParameterError
+
+            raise ParameterError(given[0], "given", "an option of the study, which --compare does not use")
         _compare(drive, position, schemes, metrics, band, preset_name, params_file, as_json,
                  output, plot)
         return
