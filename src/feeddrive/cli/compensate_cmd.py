@@ -3,17 +3,36 @@ the DDFS."""
 
 from __future__ import annotations
 
+import math
+
 import typer
 
-from ._common import MM, MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from ..io.outputs import PLOT_FORMATS
+from ._common import (
+    MM,
+    MM_PER_S,
+    app,
+    console,
+    outputs,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 
 #: the drives the study compensates, for --help (feeddrive.analysis.compensation.study_drives
 #: asks the topologies; tests/unit/test_declarations.py checks this against it)
 STUDY_DRIVES = "cdfs|linear-motor"
 
 
+#: the schemes of --compare, for --help (tests/unit/test_compensation_compare.py checks this
+#: against feeddrive.analysis.compensation_compare.SCHEMES)
+COMPARE_SCHEMES = ("none,none-continuous,feedforward,observer,disturbance-observer,"
+                   "reset-integrator,reversal-feedforward")
+
+
 @app.command("compensate")
 @user_errors
+@outputs(output=(".csv",), plot=PLOT_FORMATS)
 def compensate_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=STUDY_DRIVES,
                               help="The drive compensated (one with friction compensation and "
@@ -31,11 +50,46 @@ def compensate_command(
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    compare: bool = typer.Option(False, "--compare", help="Compare every compensation scheme "
+                                 "(none, static feed-forward, LuGre observer, disturbance "
+                                 "observer, reset integrator, reversal feed-forward) from one "
+                                 "sampled drive (default preset wang2021-drive; feed-forward "
+                                 "and observer on its continuous-loop version): critical "
+                                 "speed, largest circular-test reversal spike, ISO 230-2 B, "
+                                 "settling time."),
+    schemes: str = typer.Option(COMPARE_SCHEMES, "--schemes", help="--compare: the schemes, "
+                                "comma-separated."),
+    metrics: str = typer.Option("critical,spike,reversal,settling", "--metrics",
+                                help="--compare: the quantities, comma-separated."),
+    band: float = typer.Option(1.0, "--band", help="--compare: settling band, ± [µm]."),
+    output: str | None = typer.Option(None, "--output", help="--compare: write the table "
+                                      "(CSV)."),
+    plot: str | None = typer.Option(None, "--plot", help="--compare: write the figure."),
+    force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot "
+                               "files."),
 ) -> None:
     """Critical speed, linear creep band and tracking error of the CDFS without and with
     friction compensation (static feed-forward, LuGre observer; exact and ±mismatch), and of
-    the DDFS: is the second motor worth it?"""
+    the DDFS: is the second motor worth it?  With --compare: every compensation scheme side
+    by side on a sampled drive."""
     from rich.progress import Progress
+
+    if compare:
+        study_only = {"--mismatch": mismatch != 20.0, "--nut-speed": nut_speed != 16.0,
+                      "--tracking-speed": tracking_speed != 1.0, "--no-search": no_search}
+        given = [name for name, changed in study_only.items() if changed]
+        if given:
+            from ..parameters import ParameterError
+
+            raise ParameterError(given[0], "given", "an option of the study, which --compare does not use")
+        _compare(drive, position, schemes, metrics, band, preset_name, params_file, as_json,
+                 output, plot)
+        return
+    if output or plot:
+        from ..parameters import ParameterError
+
+        raise ParameterError("--output" if output else "--plot", output or plot,
+                             "written by --compare only")
 
     from ..analysis.compensation import compensation_study, default_cases, study_drives
     from ..parameters import ParameterError
@@ -67,6 +121,70 @@ def compensate_command(
                       f"{with_unit(bands or 'none'):>18s}  "
                       f"{r['verdict_at_tracking_speed']:11s} "
                       f"error rms {r['following_error_rms_um']:.2f} µm", markup=False)
+
+
+def _compare(drive: str, position: float, schemes: str, metrics: str, band: float,
+             preset_name: str | None, params_file: str | None, as_json: bool,
+             output: str | None, plot: str | None) -> None:
+    """`feeddrive compensate --compare`: parse, call compare_compensations, print."""
+    from rich.progress import Progress
+
+    from ..analysis.compensation_compare import (
+        COLUMNS,
+        check_sampled,
+        compare_compensations,
+        comparison_csv,
+    )
+
+    names = [n.strip() for n in schemes.split(",") if n.strip()]
+    wanted = [m.strip() for m in metrics.split(",") if m.strip()]
+    if not math.isfinite(band) or band <= 0:
+        from ..parameters import ParameterError
+
+        raise ParameterError("--band", band, "expected a band > 0 [µm]")
+    if preset_name is None and params_file is None:
+        preset_name = "wang2021-drive"
+    params = resolve_parameters(preset_name, params_file, drive)
+    check_sampled(params)
+    with Progress(console=console, transient=True, disable=as_json) as bar:
+        task = bar.add_task("compensation comparison", total=None)
+
+        def progress(done: int, total: int, label: str) -> None:
+            bar.update(task, completed=done, total=total, description=label)
+
+        rows = compare_compensations(params, drive=drive, table_position=position * MM,
+                                     names=names, metrics=wanted, band=band * 1e-6,
+                                     progress=progress)
+    if output:
+        from ..io.outputs import atomic_path
+
+        with atomic_path(output) as tmp:
+            tmp.write_text(comparison_csv(rows), encoding="utf-8")
+    if plot:
+        from ..plots.acceptance import compensation_figure, save
+
+        save(compensation_figure(rows), plot)
+    if as_json:
+        print_json({"parameter_set": params.name, "drive": drive, "position_mm": position,
+                    "rows": rows, "output": output, "plot": plot})
+        return
+    console.print(f"[bold]Friction compensation compared[/] ({params.name}, {drive}, "
+                  f"{position:g} mm; settling band ±{band:g} µm)")
+    console.print("  " + f"{'scheme':22s}" + "".join(f"{h:>30s}" for _, h in COLUMNS),
+                  markup=False)
+    for r in rows:
+        cells = []
+        for key, _ in COLUMNS:
+            v = r.get(key, "—")
+            cells.append(f"{v:>30.4g}" if isinstance(v, float) else f"{v!s:>30s}")
+        console.print(f"  {r['scheme']:22s}" + "".join(cells), markup=False)
+    for r in rows:
+        console.print(f"  {r['scheme']}: " + "; ".join(f"{k} = {v}" for k, v in
+                                                      r["settings"].items()), markup=False)
+    if output:
+        console.print(f"wrote table {output}", markup=False)
+    if plot:
+        console.print(f"wrote figure {plot}", markup=False)
 
 
 def with_unit(text: str) -> str:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from ..analysis.circular import CircularTest
     from ..analysis.positioning import PositioningTest
 
-__all__ = ["circular_figure", "positioning_figure", "save"]
+__all__ = ["circular_figure", "compensation_figure", "positioning_figure", "save"]
 
 _COLOURS = {"CCW": "tab:blue", "CW": "tab:red"}
 
@@ -161,3 +161,45 @@ def save(fig: Figure, path: str | Path) -> Path:
     from ..io.outputs import save_figure
 
     return save_figure(fig, path, dpi=120)
+
+
+def compensation_figure(rows: list[dict[str, Any]]) -> Figure:
+    """The friction-compensation comparison: one bar panel per quantity, one bar per scheme
+    (issue 37 item 4; rows of
+    ``feeddrive.analysis.compensation_compare.compare_compensations``).
+
+    Parameters
+    ----------
+    rows : list of dict
+        The comparison's rows.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure; a quantity a row lacks is left without its bar, and a critical speed given
+        as a bound or a word (``< 0.20``, ``undecided``) is written where its bar would be.
+    """
+    from ..analysis.compensation_compare import COLUMNS
+
+    fig = Figure(figsize=(10.0, 6.5), layout="constrained")
+    names = [r["scheme"] for r in rows]
+    for k, (key, heading) in enumerate(COLUMNS):
+        ax = fig.add_subplot(2, 2, k + 1)
+        values, words = [], []
+        for r in rows:
+            try:
+                values.append(float(r.get(key, math.nan)))
+                words.append("")
+            except (TypeError, ValueError):  # "< 0.20", "undecided": written, not drawn
+                values.append(math.nan)
+                words.append(str(r[key]))
+        ax.bar(range(len(rows)), values, color="tab:blue")
+        for i, word in enumerate(words):
+            if word:
+                ax.annotate(word, (i, 0.0), ha="center", va="bottom", fontsize=8,
+                            rotation=90, xytext=(0, 3), textcoords="offset points")
+        ax.set_xticks(range(len(rows)), names, rotation=30, ha="right", fontsize=8)
+        ax.set_ylabel(heading)
+        ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle("Friction compensation compared")
+    return fig
