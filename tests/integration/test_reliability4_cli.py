@@ -224,6 +224,7 @@ def _inputs(folder: Path) -> dict[str, list[str]]:
         "identify merge": ["identify", "merge", str(folder / "fragment.toml")],
         "positioning": ["positioning", "--targets", "100,110"],
         "circular": ["circular"],
+        "compensate": ["compensate", "--compare"],
     }
 
 
@@ -254,7 +255,7 @@ _COMMANDS = ("analyze", "calibrate", "simulate", "fit", "predict", "validate", "
              "stability",
              "reproduce", "sensitivity", "sweep", "map", "friction", "export fmu",
              "identify static", "identify dynamic", "identify merge", "positioning",
-             "circular")
+             "circular", "compensate")
 
 
 def _declared(command: str, option: str) -> Any:

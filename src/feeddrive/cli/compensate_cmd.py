@@ -81,7 +81,8 @@ def compensate_command(
         if given:
             from ..parameters import ParameterError
 
-            raise ParameterError(given[0], "given", "an option of the study, which --compare does not use")
+            raise ParameterError(given[0], "given",
+                                 "an option of the study, which --compare does not use")
         _compare(drive, position, schemes, metrics, band, preset_name, params_file, as_json,
                  output, plot)
         return
