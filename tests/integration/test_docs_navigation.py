@@ -14,7 +14,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 HTML = ROOT / "docs" / "_build" / "html"
 TOP = ["User guide", "API", "CLI", "Examples", "Project"]
-GUIDE = ["getting-started", "model", "model-reading", "parameters", "extending", "linear",
+GUIDE = ["getting-started", "model", "model-reading", "parameters", "extending", "machine",
+         "linear",
          "measured-data", "acceptance-tests", "fitting", "sweeps", "explore", "fmu", "c-backend",
          "outputs"]
 

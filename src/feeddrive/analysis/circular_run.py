@@ -227,7 +227,7 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         within it.
     nut_speed : float, default 0.0
         Speed of the nut of every axis that drives its nut (the DDFS) [m/s]: it rises at
-        ``acceleration`` from rest and runs :data:`NUT_SETTLE` s at speed before the path
+        ``acceleration`` from rest and runs ``NUT_SETTLE`` (0.5) s at speed before the path
         starts, and keeps its speed to the end (the table moves at the screw's speed minus the
         nut's, Wang2021 Sect. 2).
     pitch : float, optional

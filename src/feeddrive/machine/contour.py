@@ -29,6 +29,8 @@ import numpy as np
 from ..model.reference import SampledSpeed
 from ..parameters import ParameterError
 
+__all__ = ["INTERVAL", "Circle", "Contour", "Line", "Polyline", "Together", "corner", "from_csv"]
+
 #: grid spacing of the axis references [s]
 INTERVAL = 1e-4
 #: the most samples an axis reference may hold (500 s at INTERVAL; 8 bytes × 4 rows each)

@@ -27,6 +27,7 @@ __all__ = ["CASES", "FEED", "RADIUS", "run"]
 
 #: the circle: R [m] and feed F [m/s] (1000 mm/min; below the DDFS nut speeds but the second)
 RADIUS = 0.01
+#: the feed F [m/s] (1000 mm/min)
 FEED = 1000.0 / 6e4
 ACCELERATION = 1.0  # [m/s^2]
 
