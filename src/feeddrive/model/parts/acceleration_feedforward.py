@@ -28,8 +28,9 @@ from typing import Any
 import numpy as np
 
 from ... import registry
-from ...parameters import Component, ParameterError
+from ...parameters import Component
 from ...parameters.validation import quantity
+from . import added_feedforward, axis_index
 
 
 @dataclass(frozen=True)
@@ -77,11 +78,7 @@ class AccelerationFeedforward(Component):
         list of Axis
             The axes, the chosen one with the feed-forward current added.
         """
-        names = [ax.name for ax in axes]
-        target = self.axis or names[0]
-        if target not in names:
-            raise ParameterError(f"{self._label}.axis", self.axis,
-                                 f"expected one of {', '.join(names)}")
+        i = axis_index(self._label, self.axis, axes)
         b.named_params(self._label, ("gain", "period"), np.array([self.gain, self.period]))
         b.clock(f"{self._label}.period")
         current = b.add_held(f"{self._label}.current")
@@ -90,11 +87,9 @@ class AccelerationFeedforward(Component):
                   f"acceleration feed-forward current (updated every {self.period:g} s)")
         b.emit(f"{b.a(self._label + '_current')} = {current}",
                writes=f"aux:{self._label}_current")  # a held value: no state
-        i = names.index(target)
         axes = list(axes)
-        before = axes[i].current_feedforward  # another part's feed-forward: both add
-        axes[i] = dataclasses.replace(axes[i], current_feedforward=(
-            f"({before} + {current})" if before else current))
+        axes[i] = dataclasses.replace(axes[i],
+                                      current_feedforward=added_feedforward(axes[i], current))
         return axes
 
     def emit_part(self, b: Any) -> None:

@@ -37,6 +37,7 @@ import numpy as np
 from ... import registry
 from ...parameters import Component, ParameterError
 from ...parameters.validation import quantity
+from . import added_feedforward, axis_index
 
 
 @dataclass(frozen=True)
@@ -82,11 +83,7 @@ class DisturbanceObserver(Component):
         ParameterError
             For an unknown axis or a continuous velocity loop.
         """
-        names = [ax.name for ax in axes]
-        target = self.axis or names[0]
-        if target not in names:
-            raise ParameterError(f"{self._label}.axis", self.axis,
-                                 f"expected one of {', '.join(names)}")
+        i = axis_index(self._label, self.axis, axes)
         period = b.param_values[b.param_index[b.q("controller.velocity_period")]]
         if period <= 0.0:
             raise ParameterError("controller.velocity_period", period,
@@ -98,7 +95,6 @@ class DisturbanceObserver(Component):
         b.add_held(f"{self._label}.filter")
         w = b.h(f"{self._label}.filter")
         g, jg = b.p(f"{self._label}.bandwidth"), b.p(f"{self._label}.inertia_gain")
-        i = names.index(target)
         ax = axes[i]
         held_command = b.h(f"{ax.name}.current_command")
         # the current applied over the last period: the loop's held command and this estimate
@@ -111,10 +107,9 @@ class DisturbanceObserver(Component):
         b.emit(f"{b.a(self._label + '_current')} = {estimate}",
                writes=f"aux:{self._label}_current")  # a held value: no state
         axes = list(axes)
-        before = ax.current_feedforward
         axes[i] = dataclasses.replace(
             ax, velocity_prelude=(*ax.velocity_prelude, *prelude),
-            current_feedforward=f"({before} + {estimate})" if before else estimate)
+            current_feedforward=added_feedforward(ax, estimate))
         return axes
 
     def emit_part(self, b: Any) -> None:

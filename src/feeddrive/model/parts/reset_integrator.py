@@ -53,6 +53,7 @@ from ... import registry
 from ...parameters import Component, ParameterError
 from ...parameters.validation import quantity
 from .. import loops
+from . import axis_index
 
 
 @dataclass(frozen=True)
@@ -94,11 +95,7 @@ class ResetIntegrator(Component):
             For an unknown axis, or a continuous velocity loop (its integral is a state that
             would need a reset event of the integrator).
         """
-        names = [ax.name for ax in axes]
-        target = self.axis or names[0]
-        if target not in names:
-            raise ParameterError(f"{self._label}.axis", self.axis,
-                                 f"expected one of {', '.join(names)}")
+        i = axis_index(self._label, self.axis, axes)
         period = b.param_values[b.param_index[b.q("controller.velocity_period")]]
         if period <= 0.0:
             raise ParameterError("controller.velocity_period", period,
@@ -109,7 +106,6 @@ class ResetIntegrator(Component):
         b.add_held(f"{self._label}.error_integral")
         b.add_held(f"{self._label}.count")
         count, part = b.h(f"{self._label}.count"), b.h(f"{self._label}.error_integral")
-        i = names.index(target)
         ax = axes[i]
         o = ax.param_offset
         integral = b.h(f"{ax.name}.velocity_integral")

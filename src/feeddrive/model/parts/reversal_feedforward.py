@@ -40,8 +40,9 @@ from typing import Any
 import numpy as np
 
 from ... import registry
-from ...parameters import Component, ParameterError
+from ...parameters import Component
 from ...parameters.validation import quantity
+from . import added_feedforward, axis_index
 
 
 @dataclass(frozen=True)
@@ -92,11 +93,7 @@ class ReversalFeedforward(Component):
         list of Axis
             The axes, the chosen one with the reversal current added to its feed-forward.
         """
-        names = [ax.name for ax in axes]
-        target = self.axis or names[0]
-        if target not in names:
-            raise ParameterError(f"{self._label}.axis", self.axis,
-                                 f"expected one of {', '.join(names)}")
+        i = axis_index(self._label, self.axis, axes)
         b.named_params(self._label, ("current", "width", "period"),
                        np.array([self.current, self.width, self.period]))
         b.clock(f"{self._label}.period")
@@ -105,11 +102,9 @@ class ReversalFeedforward(Component):
                   f"reversal feed-forward current (updated every {self.period:g} s)")
         b.emit(f"{b.a(self._label + '_current')} = {held}",
                writes=f"aux:{self._label}_current")  # a held value: no state
-        i = names.index(target)
         axes = list(axes)
-        before = axes[i].current_feedforward
-        axes[i] = dataclasses.replace(axes[i], current_feedforward=(
-            f"({before} + {held})" if before else held))
+        axes[i] = dataclasses.replace(axes[i],
+                                      current_feedforward=added_feedforward(axes[i], held))
         return axes
 
     def emit_part(self, b: Any) -> None:
