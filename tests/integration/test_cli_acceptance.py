@@ -113,6 +113,7 @@ def test_positioning_output_analysed_gives_the_same_metrics(tmp_path: Path) -> N
     assert r.exit_code == 0, r.output
     run = json.loads(r.stdout)
     assert [t["target_mm"] for t in run["targets"]] == pytest.approx([100, 110, 120])
+    assert 0.0 <= run["reading_motion_um"] < 1e3  # how far from rest the readings were
     a = invoke("analyze", "--positioning", str(record), "--json")
     assert a.exit_code == 0, a.output
     again = json.loads(a.stdout)

@@ -179,3 +179,52 @@ def test_the_figure_has_a_panel_per_column_and_writes_a_bound():
     assert [t.get_text() for t in fig.axes[0].texts] == ["< 0.20"]
     heights = [p.get_height() for p in fig.axes[3].patches]
     assert heights == [0.5, 0.3]
+
+
+def test_b_is_read_at_rest_or_not_given(monkeypatch):
+    """Guards the observer's B of 273 µm (docs/linear.md before issue 37 item 1): at a 0.3-s
+    dwell the LuGre-observer axis still rang in its 5.5-Hz servo mode (the friction that
+    damps it when sticking is compensated) and the reading windows saw hundreds of µm of
+    motion; B was the ringing's phase.  Such a reading is now "not at rest"; at the
+    comparison's dwell every window is within the 1-µm band and B is a number."""
+    from feeddrive.analysis.positioning_run import run_positioning_test
+
+    observer = cc.schemes(DRIVE, ["observer"])[0]
+    targets = [0.4 + t for t in cc.POSITIONING_TARGETS]
+    short = run_positioning_test(observer.parameters, "cdfs", targets,
+                                 feed=cc.POSITIONING_FEED, dwell=0.3,
+                                 overshoot=cc.POSITIONING_OVERSHOOT)
+    assert short.reading_motion > 100e-6 and short.test.reversal > 100e-6
+    row = cc.measure(observer, "cdfs", 0.4, ["reversal"], band=1e-6)
+    assert row["reversal_reading_motion_um"] <= 1.0
+    assert isinstance(row["reversal_value_B_um"], float) and row["reversal_value_B_um"] < 1.0
+    monkeypatch.setattr(cc, "POSITIONING_DWELL", 0.3)
+    row = cc.measure(observer, "cdfs", 0.4, ["reversal"], band=1e-6)
+    assert row["reversal_value_B_um"].startswith("not at rest (")
+    assert row["reversal_reading_motion_um"] > 100.0
+
+
+def test_the_reset_integrators_missing_critical_speed_is_its_own_cycle():
+    """The reset integrator's "> 3.20 mm/s" (docs/linear.md before issue 37 item 1): at
+    3.2 mm/s the loop without resets slides smoothly, with them the table never sticks but
+    oscillates, two resets per period — the resets drive the cycle, not friction (measured:
+    6.1 Hz, 12 resets/s)."""
+    from feeddrive.analysis.critical import creep_trial
+    from feeddrive.engine.simulate import DriveSystem
+
+    top = cc.CRITICAL_RANGE[1]
+    none, reset = cc.schemes(DRIVE, ["none", "reset-integrator"])
+    assert creep_trial(DriveSystem(none.parameters, "cdfs", 0.4), top).kind == "smooth"
+    system = DriveSystem(reset.parameters, "cdfs", 0.4)
+    trial = creep_trial(system, top)
+    assert trial.kind == "oscillation" and trial.stick_fraction == 0.0
+    rate = cc.reset_rate(system, top)
+    assert rate == pytest.approx(2.0 * trial.stick_slip_frequency, rel=0.05)
+    # γ = 1 keeps the integral (crossings counted, not acted on): the loop tracks smoothly
+    # with its error at zero, crossing it hundreds of times a second — a set-point reset law
+    # finds a crossing to act on all the time while the table moves
+    kept = DriveSystem(dataclasses.replace(reset.parameters, sections=tuple(
+        (k, dataclasses.replace(v, fraction=1.0)) if k == "reset_integrator" else (k, v)
+        for k, v in reset.parameters.sections)), "cdfs", 0.4)
+    assert creep_trial(kept, top).kind == "smooth"
+    assert cc.reset_rate(kept, top) > 10.0 * rate

@@ -16,6 +16,7 @@ from feeddrive.analysis.positioning import (
     positioning_cycle,
     positioning_test,
     read_approaches,
+    reading_motion,
 )
 from feeddrive.parameters import ParameterError
 
@@ -132,3 +133,19 @@ def test_chart_shows_both_directions_and_bands(tmp_path) -> None:
     assert band.get_ydata() == pytest.approx((res.mean_up + 2 * res.s_up) * 1e6)
     assert f"A = {res.accuracy * 1e6:.3f} µm" in ax.get_title()
     assert save(fig, tmp_path / "chart.svg").stat().st_size > 0
+
+
+def test_reading_motion_is_the_largest_swing_inside_a_reading_window() -> None:
+    """Two measured stops and an overshoot stop (target −1, not read): a 3-µm sine inside the
+    second window's last quarter of a 1-s dwell, a 50-µm swing at the overshoot stop and one
+    before the first window — only the 6-µm peak-to-peak inside a window counts."""
+    t = np.linspace(0.0, 3.0, 30001)
+    x = np.zeros_like(t)
+    x[(t > 0.2) & (t < 0.5)] = 50e-6  # before the first window (0.75 … 1 s)
+    inside = (t >= 1.8) & (t <= 2.0)
+    x[inside] = 3e-6 * np.sin(2 * np.pi * 10.0 * t[inside])
+    x[(t > 2.8)] = 50e-6  # the overshoot stop's window: not a reading
+    stops = [Stop(0.0, 0, 1, 0), Stop(0.0, 0, -1, 0), Stop(-1e-3, -1, 1, 0)]
+    got = reading_motion(t, x, stops, [1.0, 2.0, 3.0], 1.0)
+    assert got == pytest.approx(6e-6, rel=1e-3)
+    assert reading_motion(t, x, stops[:1], [1.0], 1.0) == 0.0

@@ -44,7 +44,7 @@ from numpy.typing import ArrayLike
 from ..parameters import ParameterError
 
 __all__ = ["MIN_CYCLES", "PositioningTest", "Stop", "describe", "positioning_cycle",
-           "positioning_test", "read_approaches"]
+           "positioning_test", "read_approaches", "reading_motion"]
 
 #: fewest approaches per target and direction (ISO 230-2: five)
 MIN_CYCLES = 5
@@ -360,13 +360,53 @@ def read_approaches(time: ArrayLike, position: ArrayLike, stops: Sequence[Stop],
     for s, end in zip(stops, ends, strict=True):
         if s.target < 0:
             continue
-        window = (t >= end - READ_FRACTION * dwell - 1e-12) & (t <= end + 1e-12)
-        if not window.any():
-            raise ValueError(f"no sample in the reading window {end - READ_FRACTION * dwell:g}"
-                             f" … {end:g} s of the stop at {s.position * 1e3:g} mm")
+        window = _reading_window(t, s, end, dwell)
         (up if s.direction > 0 else down)[s.target, s.cycle] = float(np.mean(x[window])) \
             - p[s.target]
     return up, down
+
+
+def _reading_window(t: np.ndarray, stop: Stop, end: float, dwell: float) -> np.ndarray:
+    window = (t >= end - READ_FRACTION * dwell - 1e-12) & (t <= end + 1e-12)
+    if not window.any():
+        raise ValueError(f"no sample in the reading window {end - READ_FRACTION * dwell:g}"
+                         f" … {end:g} s of the stop at {stop.position * 1e3:g} mm")
+    return window
+
+
+def reading_motion(time: ArrayLike, position: ArrayLike, stops: Sequence[Stop],
+                   stop_times: ArrayLike, dwell: float) -> float:
+    """The largest peak-to-peak motion of the axis within a reading window of
+    :func:`read_approaches`: how far the axis is from rest while it is read.
+
+    ISO 230-2 reads each target with the axis at rest; a reading taken while the axis still
+    rings after the move measures the ringing's phase, not the position (issue 37: a 0.3-s
+    dwell on ``wang2021-drive`` read a 5.5-Hz servo mode mid-swing and gave B = 273 µm).
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times of the trace [s].
+    position : array_like
+        Actual position [m].
+    stops : sequence of Stop
+        The cycle's stops.
+    stop_times : array_like
+        When each stop's dwell ends [s].
+    dwell : float
+        The dwell at each stop [s].
+
+    Returns
+    -------
+    float
+        max over the measured stops of (max − min) of the position in the window [m].
+    """
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(position, dtype=float)
+    motion = [float(np.ptp(x[_reading_window(t, s, end, dwell)]))
+              for s, end in zip(stops, np.asarray(stop_times, dtype=float), strict=True)
+              if s.target >= 0]
+    return max(motion, default=0.0)
 
 
 def describe(result: PositioningTest) -> list[str]:

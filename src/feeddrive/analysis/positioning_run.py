@@ -22,7 +22,14 @@ import numpy as np
 
 from .. import units
 from ..parameters import DriveParameters, ParameterError
-from .positioning import PositioningTest, Stop, positioning_cycle, positioning_test, read_approaches
+from .positioning import (
+    PositioningTest,
+    Stop,
+    positioning_cycle,
+    positioning_test,
+    read_approaches,
+    reading_motion,
+)
 
 if TYPE_CHECKING:
     from ..engine.options import SolverOptions
@@ -123,6 +130,14 @@ class PositioningRun:
     acceleration: float
     dwell: float
     overshoot: float
+
+    @property
+    def reading_motion(self) -> float:
+        """The largest peak-to-peak motion within a reading window [m]
+        (:func:`~feeddrive.analysis.positioning.reading_motion`): 0 when every reading is
+        taken at rest."""
+        return reading_motion(self.result.time, np.asarray(self.result["table_position"]),
+                              self.stops[1:], self.dwell_ends, self.dwell)
 
 
 def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[float], *,

@@ -166,6 +166,7 @@ def positioning_command(
         print_json({**test.to_dict(), "drive": drive, "parameters": params.name,
                     "cycle": run.kind, "feed_mm_s": feed, "acceleration_mm_s2": acceleration,
                     "dwell_s": dwell, "overshoot_mm": overshoot,
+                    "reading_motion_um": 1e6 * run.reading_motion,
                     "duration_s": float(run.result.time[-1]), "output": output, "plot": plot})
         return
     _say(f"ISO 230-2 positioning test: {drive} ({params.name}), {len(points)} targets × "
@@ -174,6 +175,9 @@ def positioning_command(
          "simulated")
     for line in describe(test):
         _say(line)
+    _say(f"largest motion within a reading window (the last quarter of a dwell): "
+         f"{1e6 * run.reading_motion:.3g} µm — ISO 230-2 reads the axis at rest; a motion "
+         "comparable to B means a longer --dwell")
     if output:
         _say(f"wrote record {output}")
     if plot:
