@@ -153,6 +153,12 @@ def test_help_and_docs_name_what_the_code_does():
     assert f"bisected to {1e3 * cc.CRITICAL_RESOLUTION:g} mm/s" in FLAT
     assert f"R = {1e3 * cc.CIRCLE_RADIUS:g} mm, F = {1e3 * cc.CIRCLE_FEED:g} mm/s" in FLAT
     assert f"{cc.DOB_BANDWIDTH:g} rad/s" in FLAT and "`error_after_settling_um`" in FLAT
+    assert f"{cc.POSITIONING_OVERSHOOT * 1e3:g}-mm overshoot, {cc.POSITIONING_DWELL:g}-s dwell" \
+        in FLAT
+    for key in ("`reversal_reading_motion_um`", "`resets_per_s_at_top_speed`",
+                "`critical_speed_bands`", "`not at rest (… µm moving)`",
+                f"`none smooth ≤ {1e3 * cc.CRITICAL_RANGE[1]:.2f}: reset cycle`"):
+        assert key in FLAT, key
 
 
 def test_the_circular_and_positioning_rows_are_the_baselines_at_zero_reversal_current():
