@@ -33,12 +33,15 @@ the guides' racking k_θ) the velocity loop's error becomes
 * K_c only raises the difference mode's *position* gain K_p → K_p + 2K_c.  The yaw of a
   move comes from a force difference (one screw's friction ×2), which the position gain
   barely resists — a force reaches the position through the velocity loop, whose PI
-  absorbs it — and the lightly damped 5.5-Hz velocity-loop mode (ζ = 0.03) goes unstable
-  at K_p + 2K_c ≈ 11.6 1/s (K_c,max = 1.78 1/s): tests/validation/test_gantry.py.
+  absorbs it — and the difference mode's lightly damped 5.6-Hz velocity-loop pair
+  (ζ = 0.04) goes unstable at K_p + 2K_c ≈ 11.6 1/s (K_c,max = 1.78 1/s); at half that it
+  doubles the peak compliance from a force on one carriage to ε
+  (tests/validation/test_gantry.py).
 * K_d multiplies the difference mode's *velocity*-loop gain by 1 + 2K_d: it stiffens the
   gantry against the force difference where the yaw is made and damps the difference mode
-  (its 5.6-Hz pair, ζ = 0.04, becomes two modes at 31 and 37 Hz with ζ 0.94 and 0.61 at
-  the default K_d).  This is the yaw-rate damping of gantry practice.
+  (its 5.6-Hz pair, ζ = 0.04, becomes two modes at 32 and 36 Hz with ζ 0.93 and 0.59 at
+  the default gains; peak compliance 18× lower than with no synchronisation).  This is the
+  yaw-rate damping of gantry practice.
 * K_i adds nothing static: a constant force difference leaves no static ε because each
   axis' velocity PI integrates it away; and the static yaw of an off-centre load sits in
   the joints at ε = 0 (the balance above), where no controller acting on the carriages'
