@@ -94,6 +94,30 @@ def test_a_constant_argument_calls_the_kernel_itself() -> None:
     assert math.isfinite(r_d)
 
 
+def _scope(t, y, P, dy):  # type: ignore[no-untyped-def]
+    dy[0] = P[0] * y[0] * y[1] + t
+
+
+def _machine_rhs(t, y, P, dy):  # type: ignore[no-untyped-def]
+    dy[1] = y[0] - y[1]
+    _scope(t, y, P, dy)
+
+
+def test_an_unannotated_callee_takes_its_arguments_activity() -> None:
+    """The bug it guards: a machine's rhs calls each axis' generated scope function, whose
+    parameters carry no annotations, as the rhs's own; they were taken for integers, the
+    call kept as it is, and the axes' derivatives left out of the tangent (a machine's
+    model-exchange FMU was refused for it)."""
+    tan, sources = tangent(_machine_rhs, {"t": "c", "y": "a", "P": "ca", "dy": "a"})
+    assert any(n.startswith("_scope__") for n in sources)
+    y, P = np.array([0.7, -0.4]), np.array([1.3])
+    dy, dy_d = np.zeros(2), np.zeros(2)
+    tan(0.2, y, P, dy, np.array([1.0, 0.0]), dy_d)
+    # d/dy0 of (P0 y0 y1 + t, y0 − y1): (P0 y1, 1)
+    assert dy_d[0] == pytest.approx(1.3 * -0.4, rel=1e-15)
+    assert dy_d[1] == 1.0
+
+
 def _bad_keyword(x: float) -> float:
     return round(x, ndigits=2)
 

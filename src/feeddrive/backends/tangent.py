@@ -591,6 +591,12 @@ class _Transform:
         tang: list[ast.expr] = []
         kinds: list[tuple[str, str]] = []
         for a, (pname, k) in zip(e.args, sig.params, strict=True):
+            if k == "?":  # unannotated (a machine axis' scope function): as its argument
+                known = self.kind.get(a.id) if isinstance(a, ast.Name) else None
+                if known is None:
+                    raise self.error(e, f"argument {ast.unparse(a)!r} for the unannotated "
+                                        f"parameter {pname!r} (pass a name of known type)")
+                k = "a" if known in ("a", "ca") else "f" if known in ("f", "c") else "i"
             if k == "a":
                 if not isinstance(a, ast.Name) or self.kind.get(a.id) not in ("a", "ca"):
                     raise self.error(e, f"argument {ast.unparse(a)!r} for the array "

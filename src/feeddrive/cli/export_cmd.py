@@ -24,8 +24,8 @@ def fmu_command(
                                      "another registered drive (rack-pinion)"),
     machine: str | None = typer.Option(None, "--machine", help="A machine file (TOML, "
                                        "docs/machine.md) or a built-in machine (xy-table, "
-                                       "gantry) instead of --drive: one co-simulation FMU, "
-                                       "each axis' references and load force as inputs "
+                                       "gantry) instead of --drive: one FMU (--kind cs or "
+                                       "me), each axis' references and load force as inputs "
                                        "<axis>.<name>."),
     out: str = typer.Option(..., "--out", help="The FMU file to write (DRIVE.fmu)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
@@ -55,8 +55,8 @@ def fmu_command(
     libc and libm) and its C sources with their CMakeLists.txt.  Inputs: the position/speed
     references and a table load force; outputs: table position and speed, motor angles,
     speeds, currents and torques, friction forces, following error; every model parameter
-    tunable, checked against its parameter-file range when set.  With --machine: one
-    co-simulation FMU of every axis, its variables named <axis>.<name>."""
+    tunable, checked against its parameter-file range when set.  With --machine: one FMU
+    of every axis, its variables named <axis>.<name>."""
     from ..fmu import check_request, export_fmu
     from ..parameters import ParameterError
 
@@ -118,13 +118,12 @@ def fmu_command(
 def _export_machine(machine: str, out: str, *, fmi: int, kind: str, force: bool,
                     platform: str | None, as_json: bool) -> None:
     from ..fmu import export_machine_fmu
-    from ..fmu.machine import check_machine_kind
     from ..machine import load_machine
 
-    check_machine_kind(kind)
     result = export_machine_fmu(load_machine(machine), out, fmi=fmi, kind=kind, force=force,
                                 platforms=platform, inputs=(machine,))
-    data = {"fmu": str(result.path), "fmi_version": f"{fmi}.0", "kind": "co-simulation",
+    data = {"fmu": str(result.path), "fmi_version": f"{fmi}.0",
+            "kind": "co-simulation" if kind == "cs" else "model exchange",
             "model_identifier": result.identifier, "size_bytes": result.size_bytes,
             "variables": result.n_variables, "states": result.n_states,
             "sampled_loops": result.sampled, "binaries": list(result.binaries),
@@ -133,7 +132,7 @@ def _export_machine(machine: str, out: str, *, fmi: int, kind: str, force: bool,
         print_json(data)
         return
     console.print(f"wrote {result.path} ({result.size_bytes / 1024:.0f} kB): FMI {fmi}.0 "
-                  f"co-simulation, machine {machine}, {result.n_states} states, "
+                  f"{data['kind']}, machine {machine}, {result.n_states} states, "
                   f"{result.n_variables} variables, binaries {', '.join(result.binaries)}"
                   f"{_sampling_note(kind) if result.sampled else ''}",
                   markup=False, highlight=False, soft_wrap=True)

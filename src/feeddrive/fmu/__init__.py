@@ -284,12 +284,13 @@ def export_machine_fmu(machine: Machine, out: str | os.PathLike[str], *, fmi: in
                        platforms: str | tuple[str, ...] | None = None,
                        options: SolverOptions | None = None,
                        inputs: tuple[str | None, ...] = ()) -> ExportedFmu:
-    """Write a machine of axes as one co-simulation FMU to ``out``.
+    """Write a machine of axes as one FMU (co-simulation or model exchange) to ``out``.
 
     Each axis has the inputs, outputs, parameters and loop-period settings of its
     single-drive FMU, named ``<axis>.<name>`` (its load force acts from t = 0); the coupling
     parts' states and written signals are outputs, their parameters fixed at export
-    (:mod:`feeddrive.fmu.machine`).  Model exchange is refused in one line.
+    (:mod:`feeddrive.fmu.machine`).  Model exchange adds every continuous state's rate and
+    the directional derivatives of the machine's right-hand side.
 
     Parameters
     ----------
@@ -300,7 +301,7 @@ def export_machine_fmu(machine: Machine, out: str | os.PathLike[str], *, fmi: in
     fmi : int, default 2
         FMI version, 2 or 3.
     kind : str, default "cs"
-        ``"cs"`` only.
+        ``"cs"`` (co-simulation) or ``"me"`` (model exchange), as :func:`export_fmu`.
     force : bool, default False
         Replace an existing file.
     identifier : str, optional
@@ -321,20 +322,19 @@ def export_machine_fmu(machine: Machine, out: str | os.PathLike[str], *, fmi: in
     Raises
     ------
     ParameterError
-        For model exchange or a bad request, before any work.
+        For a bad request, before any work.
     """
     import re
 
     from .build import package, provenance
     from .description import new_token
-    from .machine import build_machine, check_machine_kind, machine_variables
+    from .machine import build_machine, machine_variables
 
-    check_machine_kind(kind)
     path, names = check_request(None, fmi, kind, out, force=force, platforms=platforms,
                                 inputs=inputs)
     fm, axes = build_machine(machine)
     fm = replace(fm, solver_starts=solver_starts(fm.parameters, 0.0, 0.0, options))
-    vs = machine_variables(fm, axes)
+    vs = machine_variables(fm, axes, kind)
     ident = identifier or "feeddrive_" + re.sub(r"\W", "_", machine.name)
     text = (f"feeddrive machine {machine.name}: axes "
             + ", ".join(f"{ax.name} ({ax.drive}, {ax.parameters.name})" for ax in machine.axes)

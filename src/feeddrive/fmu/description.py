@@ -465,10 +465,8 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
     input_names = set(present)
     # states: outputs are computed (not settable, FMI); the others take start values
     nominal = state_nominals(fm)
-    state_vr: dict[int, int] = {}
     for i, s in enumerate(m.states):
         out = s.name in out_names
-        state_vr[i] = len(v)
         v.append(Variable(s.name, K_STATE, i, 0, "output" if out else "local", "continuous",
                           "calculated" if out else "exact", None if out else 0.0, s.unit,
                           s.description, range=None if out else FINITE.with_unit(s.unit),
@@ -479,20 +477,11 @@ def variables(fm: FmuModel, kind: str) -> list[Variable]:
     ref_states.append(("reference.nut_position", "integral of nut_speed_reference (the "
                        "commanded nut position when integrate_speed_reference)"))
     for j, (name, text) in enumerate(ref_states):
-        state_vr[n + j] = len(v)
         v.append(Variable(name, K_STATE, n + j, 0, "local", "continuous", "calculated", None,
                           "m", text, nominal=float(nominal[n + j]),
                           display_unit=display_unit(name, "m")))
     if me:
-        deps = derivative_dependencies(fm, state_vr, {x.a: vr for vr, x in enumerate(v)
-                                                      if x.kind == K_INPUT})
-        for i in range(n + len(ref_states)):
-            sv = v[state_vr[i]]
-            unit = _rate_unit(sv.unit)
-            v.append(Variable(f"der({sv.name})", K_DER, i, 0, "local", "continuous",
-                              "calculated", None, unit, f"rate of {sv.name}",
-                              derivative=state_vr[i], display_unit=display_unit("", unit),
-                              dependencies=deps[i]))
+        v += rate_variables(fm, v)
     # auxiliary signals
     for j, a in enumerate(m.aux):
         name = a.name if a.name not in input_names else f"model.{a.name}"
@@ -607,6 +596,38 @@ def setting_variables(fm: FmuModel, kind: str) -> list[Variable]:
     return v
 
 
+def rate_variables(fm: FmuModel, v: list[Variable]) -> list[Variable]:
+    """``der(<state>)`` of every continuous state (the model's, then the two reference
+    integrals of each input block) for a model-exchange FMU, with the dependencies
+    :func:`derivative_dependencies` declares.
+
+    Parameters
+    ----------
+    fm : FmuModel
+        The assembled model (one drive or a machine).
+    v : list of Variable
+        The variables so far, every continuous state and input among them; the rates'
+        value references continue it.
+
+    Returns
+    -------
+    list of Variable
+        One rate per continuous state, in state order.
+    """
+    state_vr = {x.a: vr for vr, x in enumerate(v) if x.kind == K_STATE}
+    deps = derivative_dependencies(fm, state_vr, {x.a: vr for vr, x in enumerate(v)
+                                                  if x.kind == K_INPUT})
+    out = []
+    for i in range(len(fm.model.states) + 2 * len(fm.input_blocks)):
+        sv = v[state_vr[i]]
+        unit = rate_unit(sv.unit)
+        out.append(Variable(f"der({sv.name})", K_DER, i, 0, "local", "continuous",
+                            "calculated", None, unit, f"rate of {sv.name}",
+                            derivative=state_vr[i], display_unit=display_unit("", unit),
+                            dependencies=deps[i]))
+    return out
+
+
 def derivative_dependencies(fm: FmuModel, state_vr: dict[int, int], input_vr: dict[int, int]
                             ) -> list[tuple[int, ...]]:
     """The states and inputs each continuous state's derivative depends on (value
@@ -621,9 +642,10 @@ def derivative_dependencies(fm: FmuModel, state_vr: dict[int, int], input_vr: di
         The assembled model.
     state_vr : dict of int to int
         Continuous state index → value reference (the model's states, then the two reference
-        integrals).
+        integrals of each input block).
     input_vr : dict of int to int
-        Input slot (:data:`INPUTS` index) → value reference, for the inputs present.
+        Input slot (block · len(:data:`INPUTS`) + :data:`INPUTS` index) → value reference,
+        for the inputs present.
 
     Returns
     -------
@@ -632,7 +654,8 @@ def derivative_dependencies(fm: FmuModel, state_vr: dict[int, int], input_vr: di
     """
     S = fm.model.jacobian_pattern
     n = S.shape[0]
-    refs = (state_vr[n], state_vr[n + 1])
+    blocks = len(fm.input_blocks)
+    refs = tuple(state_vr[n + j] for j in range(2 * blocks))
     inputs = tuple(sorted(input_vr.values()))
     out = []
     for i in range(n):
@@ -640,18 +663,33 @@ def derivative_dependencies(fm: FmuModel, state_vr: dict[int, int], input_vr: di
         if S[i, n]:  # time: the reference (inputs, integrals) and the load force
             deps += [*refs, *inputs]
         out.append(tuple(sorted(deps)))
-    for slot in (IN_VT, IN_VN):
-        out.append((input_vr[slot],) if slot in input_vr else ())
+    for k in range(blocks):  # each input block's two reference integrals (a machine's axes)
+        for slot in (IN_VT, IN_VN):
+            a = k * len(INPUTS) + slot
+            out.append((input_vr[a],) if a in input_vr else ())
     return out
 
 
-def _rate_unit(unit: str) -> str:
+def rate_unit(unit: str) -> str:
+    """The unit of a state's rate (FMI spelling): ``"m"`` → ``"m/s"``, ``"m/s"`` →
+    ``"m/s2"``, ``"A s"`` → ``"A"``, ``"m s"`` → ``"m"``.
+
+    Parameters
+    ----------
+    unit : str
+        The state's unit.
+
+    Returns
+    -------
+    str
+        Its rate's unit.
+    """
     if unit in ("", "1"):
         return "1/s"
     if unit.endswith("/s"):
         return unit[:-2] + "/s2"
-    if unit == "A s":
-        return "A"
+    if unit.endswith(" s"):  # a loop's integral (A s, m s): its integrand's unit
+        return unit[:-2]
     return f"{unit}/s"
 
 
@@ -1019,11 +1057,11 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
         _c_array("double", "NOMINAL", state_nominals(fm)),
         # the Jacobian's declared pattern and its column groups (model exchange: the
         # directional derivatives, wrapper.c fmu_jacobian): the model's colouring, each
-        # reference integral a group of its own
+        # reference integral (two per input block) a group of its own
         *([_c_array("int", "JAC_PATTERN", m.jacobian_pattern[:, :len(m.states)].ravel()),
-           _c_array("int", "JAC_GROUP", [*m.jacobian_colours[:len(m.states)], n_colours,
-                                         n_colours + 1]),
-           f"#define JAC_N_GROUPS {n_colours + 2}"] if kind == "me" else []),
+           _c_array("int", "JAC_GROUP", [*m.jacobian_colours[:len(m.states)],
+                                         *range(n_colours, n_colours + 2 * len(blocks))]),
+           f"#define JAC_N_GROUPS {n_colours + 2 * len(blocks)}"] if kind == "me" else []),
         "static const char *const SETTING_NAMES[] = {"
         + ", ".join(quote_c(s[0]) for s in settings) + "};",
         # the sample schedule: the parameter slot of every clock's period (C fmu_sampling)

@@ -1,4 +1,4 @@
-"""A machine of axes as one co-simulation FMU.
+"""A machine of axes as one FMU, co-simulation or model exchange.
 
 The machine's model (:func:`feeddrive.machine.assemble_machine`) is assembled with each axis'
 reference read from inputs (:class:`~feeddrive.fmu.model.InputReference`, one reference block
@@ -7,7 +7,10 @@ Every axis contributes the variables its single-drive FMU has (:func:`feeddrive.
 description.variables` of the axis alone, same parameter set), renamed ``<axis>.<name>`` and
 pointed at the machine's arrays: inputs, outputs, tunable parameters with their set-time range
 checks, and its loop-period settings.  The coupling parts' own states and the signals they
-write become outputs; their parameters are fixed at export (set in the machine file).
+write become outputs; their parameters are fixed at export (set in the machine file).  A
+model-exchange FMU adds the rate of every continuous state; its directional derivatives are
+the tangent of the machine's right-hand side (:func:`feeddrive.fmu.build.tangent_c`),
+through each axis' scope function and the coupling parts' code between them.
 """
 
 from __future__ import annotations
@@ -15,7 +18,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.reference import INPUT_INSTANT, TABLE_OFFSET
-from ..parameters import ParameterError
 from .description import (
     INPUTS,
     K_AUX,
@@ -28,6 +30,7 @@ from .description import (
     Variable,
     check_unique,
     display_unit,
+    rate_variables,
     setting_variables,
     variables,
 )
@@ -84,8 +87,9 @@ def build_machine(machine: object) -> tuple[FmuModel, dict[str, FmuModel]]:
     return fm, axes
 
 
-def machine_variables(fm: FmuModel, axes: dict[str, FmuModel]) -> list[Variable]:
-    """Every variable of a machine's co-simulation FMU (value reference = position).
+def machine_variables(fm: FmuModel, axes: dict[str, FmuModel], kind: str = "cs"
+                      ) -> list[Variable]:
+    """Every variable of a machine's FMU (value reference = position).
 
     Parameters
     ----------
@@ -93,12 +97,16 @@ def machine_variables(fm: FmuModel, axes: dict[str, FmuModel]) -> list[Variable]
         The machine's model (:func:`build_machine`).
     axes : dict of str to FmuModel
         Each axis alone (:func:`build_machine`).
+    kind : str, default "cs"
+        ``"cs"`` (co-simulation) or ``"me"`` (model exchange: the rate ``der(<state>)`` of
+        every continuous state, with its dependencies from the machine model's declared
+        sparsity, and the evaluation counters instead of the solver's).
 
     Returns
     -------
     list of Variable
-        The variables: time, each axis' own (``<axis>.<name>``), the coupling parts' states
-        and signals, the settings.
+        The variables: time, each axis' own (``<axis>.<name>``), the coupling parts' states,
+        the states' rates (model exchange), the coupling parts' signals, the settings.
     """
     from dataclasses import replace
 
@@ -147,29 +155,12 @@ def machine_variables(fm: FmuModel, axes: dict[str, FmuModel]) -> list[Variable]
             v.append(Variable(s.name, K_STATE, i, 0, "output", "continuous", "calculated",
                               None, s.unit, s.description,
                               display_unit=display_unit(s.name, s.unit)))
+    if kind == "me":
+        v += rate_variables(fm, v)
     for j, sig in enumerate(m.aux):  # the signals the coupling parts write
         if j not in covered_aux:
             v.append(Variable(sig.name, K_AUX, j, 0, "output", "continuous", "calculated", None,
                               sig.unit, sig.description,
                               display_unit=display_unit(sig.name, sig.unit)))
-    v += setting_variables(fm, "cs")
+    v += setting_variables(fm, kind)
     return check_unique(v)
-
-
-def check_machine_kind(kind: str) -> None:
-    """Refuse model exchange for a machine in one line.
-
-    Parameters
-    ----------
-    kind : str
-        ``"cs"`` or ``"me"``.
-
-    Raises
-    ------
-    ParameterError
-        For ``"me"``.
-    """
-    if kind == "me":
-        raise ParameterError("--kind", kind, "a machine exports as co-simulation only "
-                             "(cs): its model-exchange tangent through the axes is not "
-                             "built yet (docs/fmu.md)")

@@ -18,8 +18,41 @@ In a static balance with both carriages held at one position,
 **Master–slave** (``part = "master_slave"``) commands the slave's position loop with the
 master's actual position instead of the reference: a speed correction
 K·(x_master − x_ref) on the slave (K the slave's position gain).  **Cross-coupled**
-(``part = "cross_coupled"``) feeds the synchronisation error ε = x_a − x_b back to both
-axes, −(K_c ε + K_i ∫ε) on a and +(K_c ε + K_i ∫ε) on b [1]_, [2]_.
+(``part = "cross_coupled"``) is Koren's cross-coupled controller [1]_, [3]_: the
+synchronisation error ε = x_a − x_b goes through a PID compensator
+C_c(s) = K_c + K_i/s + K_d s, whose output u = K_c ε + K_i ∫ε + K_d ε̇ (ε̇ = v_a − v_b) is
+subtracted from a's speed command and added to b's [1]_, [2]_.
+
+Why the proportional term alone is weak, and what the derivative term does.  The correction
+enters each axis' speed command (the position loop's output), so for the difference mode
+(ε, with the beam's yaw θ ≈ ε/L: the joints, k L²/2 = 5e6 N m/rad, are 50× stiffer than
+the guides' racking k_θ) the velocity loop's error becomes
+
+    e_v = −(K_p + 2K_c) ε − (1 + 2K_d) ε̇ − 2K_i ∫ε .
+
+* K_c only raises the difference mode's *position* gain K_p → K_p + 2K_c.  The yaw of a
+  move comes from a force difference (one screw's friction ×2), which the position gain
+  barely resists — a force reaches the position through the velocity loop, whose PI
+  absorbs it — and the difference mode's lightly damped 5.6-Hz velocity-loop pair
+  (ζ = 0.04) goes unstable at K_p + 2K_c ≈ 11.6 1/s (K_c,max = 1.78 1/s); at half that it
+  doubles the peak compliance from a force on one carriage to ε
+  (tests/validation/test_gantry.py).
+* K_d multiplies the difference mode's *velocity*-loop gain by 1 + 2K_d: it stiffens the
+  gantry against the force difference where the yaw is made and damps the difference mode
+  (its 5.6-Hz pair, ζ = 0.04, becomes two modes at 32 and 36 Hz with ζ 0.93 and 0.59 at
+  the default gains; peak compliance 18× lower than with no synchronisation).  This is the
+  yaw-rate damping of gantry practice.
+* K_i adds nothing static: a constant force difference leaves no static ε because each
+  axis' velocity PI integrates it away; and the static yaw of an off-centre load sits in
+  the joints at ε = 0 (the balance above), where no controller acting on the carriages'
+  error can reach it — only a measured beam yaw could.  Its default is 0.
+
+The defaults are set by a stated rule, not from the yaw they give: K_d half the value at
+which the machine's linearised closed loop loses stability with K_c = K_i = 0
+(:func:`feeddrive.machine.linear.gain_limit`, a 6-dB gain margin; 15.4 on the built-in
+gantry at 10 mm/s), and K_c = K_p·K_d, the compensator's zero at the axes' own position
+gain K_p (C_c = K_d (s + K_p)), so the difference mode is the axes' own cascade with its
+velocity gain ×(1 + 2K_d).
 
 References
 ----------
@@ -27,6 +60,8 @@ References
    Dyn. Syst. Meas. Control 102 (1980) 265–272.
 .. [2] D. Sun, "Position synchronization of multiple motion axes with adaptive coupling
    control", Automatica 39 (2003) 997–1005.
+.. [3] Y. Koren, C. C. Lo, "Variable-gain cross-coupling controller for contouring", CIRP
+   Annals 40 (1991) 371–374.
 """
 
 from __future__ import annotations
@@ -191,7 +226,8 @@ class MasterSlave(Coupling):
 @register_coupling
 @dataclass(frozen=True)
 class CrossCoupled(Coupling):
-    """Cross-coupled synchronisation: ∓(K_c ε + K_i ∫ε) on axes a and b, ε = x_a − x_b.
+    """Koren's cross-coupled controller: ∓(K_c ε + K_i ∫ε + K_d ε̇) on axes a and b,
+    ε = x_a − x_b.
 
     Parameters
     ----------
@@ -199,32 +235,40 @@ class CrossCoupled(Coupling):
         The instance's name; its state ``<name>.integral`` is ∫ε [m s].
     a, b : str, default "x1", "x2"
         The two axes.
-    gain : float, default 0.9
-        K_c [1/s].  Designed by a stated rule, half the gain at which the machine's
-        linearised loop loses stability (:func:`feeddrive.machine.linear.gain_limit`, a
-        6-dB gain margin): on the built-in gantry (two wang2021 CDFS axes, velocity loop
-        ζ = 0.034 at 5.5 Hz) the limit is 1.78 1/s at 10 mm/s, hence 0.9
-        (tests/validation/test_gantry.py).
+    gain : float, default 61.6
+        K_c [1/s].  By the module's rule, K_p·K_d (the compensator's zero at the axes' own
+        position gain, wang2021: 8 1/s).
     integral_gain : float, default 0.0
-        K_i [1/s^2].
+        K_i [1/s^2] (module docstring: it adds nothing static).
+    derivative_gain : float, default 7.7
+        K_d [-], on the synchronisation rate ε̇ = v_a − v_b (the tables' speeds).  By the
+        module's rule, half the value at which the machine's linearised loop loses
+        stability (:func:`feeddrive.machine.linear.gain_limit`, a 6-dB gain margin): 15.4 on
+        the built-in gantry (two wang2021 CDFS axes) at 10 mm/s
+        (tests/validation/test_gantry.py).
 
     References
     ----------
     .. [1] Y. Koren, ASME J. Dyn. Syst. Meas. Control 102 (1980) 265–272.
-    .. [2] D. Sun, Automatica 39 (2003) 997–1005.
+    .. [2] Y. Koren, C. C. Lo, CIRP Annals 40 (1991) 371–374.
+    .. [3] D. Sun, Automatica 39 (2003) 997–1005.
     """
 
     a: str = "x1"
     b: str = "x2"
-    gain: float = 0.9
+    gain: float = 61.6
     integral_gain: float = 0.0
+    derivative_gain: float = 7.7
     part: ClassVar[str] = "cross_coupled"
-    citation: ClassVar[str] = "Koren 1980, ASME JDSMC 102, 265-272; Sun 2003, Automatica 39"
-    units: ClassVar[dict[str, str]] = {"gain": "1/s", "integral_gain": "1/s^2"}
+    citation: ClassVar[str] = ("Koren 1980, ASME JDSMC 102, 265-272; Koren & Lo 1991, CIRP "
+                               "Annals 40; Sun 2003, Automatica 39")
+    units: ClassVar[dict[str, str]] = {"gain": "1/s", "integral_gain": "1/s^2",
+                                       "derivative_gain": "-"}
 
     def __post_init__(self) -> None:
         _positive(self, "gain", self.gain, "1/s", zero=True)
         _positive(self, "integral_gain", self.integral_gain, "1/s^2", zero=True)
+        _positive(self, "derivative_gain", self.derivative_gain, "-", zero=True)
 
     def states(self) -> dict[str, tuple[str, str, str, float]]:
         """The integral of the synchronisation error.
@@ -237,7 +281,8 @@ class CrossCoupled(Coupling):
         return {"integral": ("m s", "none", "integral of the synchronisation error", 1.0)}
 
     def equations(self) -> dict[str, str]:
-        """The two corrections and the integral's rate.
+        """The two corrections (the PID of ε, its rate from the tables' speeds) and the
+        integral's rate.
 
         Returns
         -------
@@ -246,6 +291,8 @@ class CrossCoupled(Coupling):
         """
         a, b, n = self.a, self.b, self.name
         eps = f"({{{a}.table_position}} - {{{b}.table_position}})"
-        u = f"({{gain}} * {eps} + {{integral_gain}} * {{{n}.integral}})"
+        rate = f"({{{a}.table_speed}} - {{{b}.table_speed}})"
+        u = (f"({{gain}} * {eps} + {{integral_gain}} * {{{n}.integral}} "
+             f"+ {{derivative_gain}} * {rate})")
         return {f"{a}.speed_correction": f"-{u}", f"{b}.speed_correction": u,
                 f"der({n}.integral)": eps}
