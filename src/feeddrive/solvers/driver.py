@@ -567,7 +567,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 # ---- stiffness detection and switching
                 if switching:
                     if stiff:
-                        if rho * h_done < NONSTIFF_HRHO:
+                        # back to DOPRI5 when its stable step would do: this step's, or
+                        # (MODE_MODAL) when the cap leaves RODAS4 less than MODAL_SWITCH_GAIN ×
+                        # that step, the test that refuses the switch the other way
+                        if rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
                             nonstiff_count += 1
                             if nonstiff_count >= NONSTIFF_STEPS:
                                 stiff = False
