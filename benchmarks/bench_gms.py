@@ -30,7 +30,6 @@ import json
 import math
 import os
 import platform
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -119,7 +118,7 @@ def main() -> None:
     last: dict[tuple[str, str], fd.Result] = {}
     for method in METHODS:
         options = fd.SolverOptions(method=method)
-        for name, system in systems.items():  # warm-up: compile or load the cache
+        for system in systems.values():  # warm-up: compile or load the cache
             fd.simulate(system, profile, 0.05, options=options)
         for _ in range(args.runs):
             for name, system in systems.items():
