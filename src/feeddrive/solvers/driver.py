@@ -87,7 +87,8 @@ NONSTIFF_HRHO = 3.0
 NONSTIFF_STEPS = 5
 POWER_ITERATIONS = 12
 # MODE_MODAL: RODAS4 steps capped on lightly damped modes
-MODAL_SWITCH_GAIN = 2.0  # switch to RODAS4 only if the capped step is ≥ this × DOPRI5's
+# switch to RODAS4 only if the capped step is ≥ this × DOPRI5's, and back when it is not
+MODAL_SWITCH_GAIN = 2.0
 # DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
 # of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
 MODAL_RETRY = 500
