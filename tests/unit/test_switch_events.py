@@ -14,7 +14,8 @@ import feeddrive as fd
 from feeddrive.engine.simulate import Simulation, switching_rows
 from feeddrive.solvers.events import THETA_MIN, first_crossing
 
-DATA = Path(__file__).resolve().parents[1] / "data"
+ROOT = Path(__file__).resolve().parents[2]
+DATA = ROOT / "tests" / "data"
 
 
 def test_the_rows_are_the_sliding_speeds_of_the_acting_sites() -> None:
@@ -90,3 +91,31 @@ def test_a_speed_dithering_about_zero_does_not_stall_the_run() -> None:
     assert r.time[-1] == pytest.approx(12.0)
     assert r.solver_stats["switch_crossings"] > 100
     assert r.solver_stats["steps"] < 70_000
+
+
+def test_a_gms_site_declares_its_reversals() -> None:
+    """GMS switches every slipping element to sticking at v = 0 (its rate jumps to 0) and
+    changes its direction branch there: it declares ``kink_at_zero_speed``, its guide gives
+    the table speed as a row, and the GMS-guide DDFS at 0.5 mm/s (hollow motor 16 mm/s),
+    whose table reverses in its start transient, lands on every reversal (measured: 12 on the
+    1-ms output grid, 12 crossings).  The bug this guards: the law did not declare it and its
+    first state has no fixed name (``element0`` … per site), so the guide had no row and
+    every step crossed the reversals."""
+    from feeddrive.model.friction import friction_law
+
+    assert friction_law("gms").kink_at_zero_speed
+    assert friction_law("gms").first_state == "element0"
+    system = fd.DriveSystem(fd.load(ROOT / "examples" / "gms_guide.toml"), "ddfs", 0.4)
+    profile = fd.ConstantSpeed(0.5e-3, 16e-3)
+    sim = Simulation(system, profile)
+    names = sim.model.state_names
+    W = switching_rows(sim.model, sim.P)
+    assert W.shape == (3, len(names))
+    guide = np.zeros(len(names))
+    guide[names.index("table_speed")] = 1.0
+    np.testing.assert_allclose(W[2], guide, rtol=1e-12, atol=0)
+    r = fd.simulate(system, profile, 1.0)
+    v = np.asarray(r["table_speed"])
+    reversals = int(np.sum(v[1:-1] * v[2:] < 0.0))  # after the start from rest
+    assert reversals >= 8
+    assert reversals <= r.solver_stats["switch_crossings"] <= reversals + 2

@@ -388,7 +388,8 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
     integrator: their zero crossings, where a law with a direction branch has a kink, become
     step ends (:mod:`feeddrive.solvers.events`).
 
-    A site whose law declares ``kink_at_zero_speed`` (LuGre, Dahl: ż = v − σ0·|v|·z/…) gives
+    A site whose law declares ``kink_at_zero_speed`` (LuGre, Dahl: ż = v − σ0·|v|·z/…; GMS:
+    a sticking element's dδ/dt = v) gives
     one row: the rate of its first state with every state zero but one is the sliding speed
     that one state makes, so n + 1 evaluations of the right-hand side read off the
     coefficients.  A row is kept only if the speed is linear in the state (checked at a
@@ -413,8 +414,8 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
     firsts = []
     for site, law_name in model.sites:
         law = friction_law(law_name)
-        if law.kink_at_zero_speed and law.state_names:
-            firsts.append(model.index(f"{site}_{law.state_names[0]}"))
+        if law.kink_at_zero_speed and law.first_state:
+            firsts.append(model.index(f"{site}_{law.first_state}"))
     if not firsts:
         return np.zeros((0, n))
     rates = model.module.compiled("_ev_rates")

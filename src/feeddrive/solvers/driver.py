@@ -87,7 +87,8 @@ NONSTIFF_HRHO = 3.0
 NONSTIFF_STEPS = 5
 POWER_ITERATIONS = 12
 # MODE_MODAL: RODAS4 steps capped on lightly damped modes
-MODAL_SWITCH_GAIN = 2.0  # switch to RODAS4 only if the capped step is ≥ this × DOPRI5's
+# switch to RODAS4 only if the capped step is ≥ this × DOPRI5's, and back when it is not
+MODAL_SWITCH_GAIN = 2.0
 # DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
 # of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
 MODAL_RETRY = 500
@@ -567,7 +568,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 # ---- stiffness detection and switching
                 if switching:
                     if stiff:
-                        if rho * h_done < NONSTIFF_HRHO:
+                        # back to DOPRI5 when its stable step would do: this step's, or
+                        # (MODE_MODAL) when the cap leaves RODAS4 less than MODAL_SWITCH_GAIN ×
+                        # that step, the test that refuses the switch the other way
+                        if rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
                             nonstiff_count += 1
                             if nonstiff_count >= NONSTIFF_STEPS:
                                 stiff = False

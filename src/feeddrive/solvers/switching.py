@@ -18,7 +18,9 @@ shared drivers' module as ``integrate_dense``, runs in four modes:
   (an explicit step of that size would be stable, and costs 6 right-hand sides instead of
   6 + one per group of Jacobian columns);
 * ``MODE_MODAL``: ``MODE_AUTO`` with the steps capped on lightly damped modes
-  (:mod:`feeddrive.solvers.modes`).
+  (:mod:`feeddrive.solvers.modes`); the switch to RODAS4 is refused, and a Rosenbrock
+  stretch ends, where the cap leaves RODAS4 less than ``MODAL_SWITCH_GAIN`` × DOPRI5's step
+  (from RODAS4: its stable step ``NONSTIFF_HRHO``/ρ).
 
 Dense output: the step is not capped by the output interval.  Outputs on the grid
 t_i = i·out_every·base are interpolated inside the step that contains them.  Event times are

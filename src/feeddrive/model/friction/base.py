@@ -88,11 +88,20 @@ class FrictionLaw:
     parameters_class: type = _LuGreParameters
     published: bool = True  # a published model: its docstring has a References section
     kernel: Any = None
-    #: the law has a kink at zero sliding speed (|v|, the direction branch) and its first
-    #: state's rate is the sliding speed when its states are zero (ż = v − …·|v|·z): the
-    #: dense-output integrator makes the speed's zero crossings step ends
+    #: the law has a kink at zero sliding speed (|v|, the direction branch, GMS's stick/slip
+    #: switch) and its first state's rate is the sliding speed when its states are zero
+    #: (ż = v − …·|v|·z; a sticking GMS element's dδ/dt = v): the dense-output integrator
+    #: makes the speed's zero crossings step ends
     #: (:mod:`feeddrive.solvers.events`)
     kink_at_zero_speed: bool = False
+
+    @property
+    def first_state(self) -> str:
+        """Name of the law's first internal state at any site, the one whose rate is the
+        sliding speed when the states are zero (``kink_at_zero_speed``); "" for a stateless
+        law.  ``state_names[0]`` by default; a law whose state count depends on its
+        parameters (GMS) overrides it."""
+        return self.state_names[0] if self.state_names else ""
 
     @property
     def compiled(self) -> Any:

@@ -19,7 +19,11 @@ F = F_r − Σ min(k_i·|x − x_r|, 2α_i·F_s)·sgn(x_r − x) (Al-Bender et a
 
 The element states are the deflections (position tolerance, like the LuGre bristle).  The
 right-hand side switches at each element's slip limit; an integrator with error control steps
-onto it, as onto the sampled controller's breakpoints.
+onto it, as onto the sampled controller's breakpoints.  At v = 0 it switches for every element
+at once: a slipping element's rate jumps from sgn(v)·C·(α_i − F_i/s(v))/k_i to 0 and the
+direction branch (F_c, F_s, v_s, σ2) changes, so the law declares ``kink_at_zero_speed`` and
+the dense-output methods land on each reversal (:mod:`feeddrive.solvers.events`); a sticking
+element's rate is the sliding speed (dδ_i/dt = v at δ = 0), the row those events read.
 """
 
 from __future__ import annotations
@@ -189,6 +193,12 @@ class GMS(FrictionLaw):
     citation = "Al-Bender, Lampaert, Swevers, IEEE TAC 50 (2005) 1883-1887"
     kernel = gms_kernel
     parameters_class = GMSParameters
+    kink_at_zero_speed = True
+
+    @property
+    def first_state(self) -> str:
+        """``element0``: every GMS site has at least one element (:class:`GMSParameters`)."""
+        return "element0"
 
     def states(self, site: Any) -> tuple[str, ...]:
         """One deflection state per slip element.
