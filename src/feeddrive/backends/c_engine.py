@@ -1,0 +1,403 @@
+"""The C build of the engine: the one driver of :mod:`feeddrive.solvers.driver`, translated
+with the model's kernels into one C unit per model structure, compiled once, called by ctypes.
+
+Every method runs through the driver's two specialisations (``integrate``: ``dopri5`` and its
+fixed-step variant; ``integrate_dense``: ``modal``, ``auto``, ``rodas4``, ``dopri5-dense`` and
+theirs).  Their text (:func:`feeddrive.solvers.driver.source` with ``inline=False``) is read as
+it is, whatever its authors change, and *lowered* at the boundary between Python and C alone
+(:func:`lowered_source`): the output arrays the numba driver allocates are the caller's
+buffers, the statistics array is written into a caller's array and the driver returns the
+number of outputs.  Everything else — the steps, the RODAS4 Jacobian and linear solves, the
+event location, the eigen-analysis of the modal step cap (:mod:`feeddrive.solvers.modes`, in
+real arithmetic: no LAPACK) — is translated by :mod:`feeddrive.backends.c_translate` from the
+same Python numba compiles.  The unit is compiled through the compiled-object cache
+(:mod:`feeddrive.backends.c_cache`, keyed by source hash, compiler, flags and platform) and
+called with ctypes, which releases the GIL for the call.
+
+The build registers itself as the engine ``"c"`` (:data:`feeddrive.registry.ENGINES`);
+:mod:`feeddrive.solvers.builds` chooses between it and numba.
+
+One difference from the numba build is known and cannot be removed without LAPACK: where the
+real QR iteration of the eigen-analysis does not converge (:func:`step_cap_real
+<feeddrive.solvers.modes.step_cap_real>` returns NaN), numba falls back to LAPACK's ``zgeev``
+and the C build goes without the step cap until the next analysis.
+"""
+
+from __future__ import annotations
+
+import ast
+import ctypes
+import functools
+import hashlib
+import threading
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import registry
+from .c_backend import RHS, SAMPLE_UPDATE, SOLVER_SHAPES, SOLVER_TYPES, c_model_source
+from .c_cache import CompilerNotFound, available_compiler, cached_library, find_compiler
+from .c_translate import DYNAMIC, TranslationError, translate_kernels
+
+if TYPE_CHECKING:
+    from ..model.assemble import Model
+
+__all__ = ["USES", "CEngine", "engine_source", "lowered_source"]
+
+#: the driver's uses the engine calls, by name of the numba function they replace
+USES = ("integrate", "integrate_dense")
+#: the numba driver's output arrays → the caller's buffers the C driver writes
+OUTPUTS = {"t_out": "t_buf", "y_out": "y_buf", "aux_out": "aux_buf"}
+STATS = "stats"  # the statistics array the numba driver returns
+STATS_OUT = "stats_out"
+
+
+class _Lower(ast.NodeTransformer):
+    """The driver text lowered to what C can take and give (module docstring)."""
+
+    def __init__(self) -> None:
+        self.n_stats = 0
+        self.count: ast.expr | None = None
+
+    def visit_Assign(self, node: ast.Assign) -> Any:
+        tgt = node.targets[0] if len(node.targets) == 1 else None
+        if isinstance(tgt, ast.Name) and tgt.id in OUTPUTS:
+            return None  # the caller's buffer
+        if isinstance(tgt, ast.Name) and tgt.id == STATS:
+            value = node.value
+            if not (isinstance(value, ast.Call) and ast.unparse(value.func) == "np.array"
+                    and len(value.args) == 1 and isinstance(value.args[0], ast.List)):
+                raise TranslationError(f"{ast.unparse(node)!r}: the driver's statistics are "
+                                       "not an np.array([...]) (lowered_source needs updating)")
+            items = value.args[0].elts
+            self.n_stats = len(items)
+            return [ast.Assign([ast.Subscript(ast.Name(STATS_OUT, ast.Load()), ast.Constant(k),
+                                              ast.Store())], item, lineno=node.lineno)
+                    for k, item in enumerate(items)]
+        self.generic_visit(node)
+        return node
+
+    def visit_Name(self, node: ast.Name) -> ast.Name:
+        if node.id in OUTPUTS:
+            return ast.copy_location(ast.Name(OUTPUTS[node.id], node.ctx), node)
+        return node
+
+    def visit_If(self, node: ast.If) -> Any:
+        self.generic_visit(node)
+        empty = all(isinstance(s, ast.Pass) for s in node.body + node.orelse)
+        if empty and not any(isinstance(n, ast.Call) for n in ast.walk(node.test)
+                             if not (isinstance(n, ast.Call) and isinstance(n.func, ast.Name)
+                                     and n.func.id in ("min", "max", "int", "float"))):
+            return None  # the choice between the caller's buffers and new arrays
+        if not node.body:
+            node.body = [ast.Pass()]
+        return node
+
+    def visit_Return(self, node: ast.Return) -> Any:
+        value = node.value
+        if value is None or (isinstance(value, ast.Constant) and value.value is None):
+            return node
+        first = value.elts[0] if isinstance(value, ast.Tuple) and value.elts else None
+        if not (isinstance(first, ast.Subscript) and isinstance(first.slice, ast.Slice)
+                and first.slice.lower is None and first.slice.upper is not None
+                and isinstance(first.value, ast.Name) and first.value.id == "t_out"):
+            raise TranslationError(f"{ast.unparse(node)!r}: the driver's result is not "
+                                   "(t_out[:count], ...) (lowered_source needs updating)")
+        self.count = first.slice.upper
+        return ast.copy_location(ast.Return(first.slice.upper), node)
+
+    def generic_visit(self, node: ast.AST) -> ast.AST:
+        super().generic_visit(node)
+        for name in ("body", "orelse"):
+            block = getattr(node, name, None)
+            if (name == "body" and isinstance(block, list) and not block
+                    and not isinstance(node, ast.Module)):
+                block.append(ast.Pass())
+        return node
+
+
+def _array_arg(name: str) -> ast.arg:
+    return ast.arg(arg=name, annotation=ast.Attribute(ast.Name("np", ast.Load()), "ndarray",
+                                                      ast.Load()))
+
+
+@functools.cache
+def lowered_source(use: str) -> tuple[str, int]:
+    """The driver specialised for ``use`` (:data:`USES`) as the C build takes it: its outputs
+    written into the caller's ``t_buf``, ``y_buf``, ``aux_buf`` (added as parameters where the
+    use has none), its statistics into ``stats_out`` (a last parameter), its result the number
+    of outputs written.
+
+    Parameters
+    ----------
+    use : str
+        ``"integrate"`` or ``"integrate_dense"``.
+
+    Returns
+    -------
+    source : str
+        Python source of the function ``use``.
+    n_stats : int
+        The length of the statistics.
+    """
+    from ..solvers import driver
+
+    if use not in USES:
+        raise KeyError(f"{use!r}: not a use of the C engine ({', '.join(USES)})")
+    tree = ast.parse(driver.source(use, inline=False))
+    fn = tree.body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    have = {a.arg for a in fn.args.args}
+    fn.args.args += [_array_arg(b) for b in OUTPUTS.values() if b not in have]
+    fn.args.args.append(_array_arg(STATS_OUT))
+    fn.returns = None
+    lower = _Lower()
+    tree = ast.fix_missing_locations(lower.visit(tree))
+    if lower.count is None or not lower.n_stats:
+        raise TranslationError(f"{use}: no statistics or result found in the driver's text "
+                               "(lowered_source needs updating)")
+    return ast.unparse(tree) + "\n", lower.n_stats
+
+
+def _bindings() -> dict[str, Any]:
+    from ..solvers import modes, rodas4, steps
+
+    return {"rhs": RHS, "sample_update": SAMPLE_UPDATE,
+            **{name: steps.function(name) for name in steps.sources()},
+            "_error_norm": steps.error_norm_template,
+            "_pi_factor": steps.pi_factor_template,
+            "_reject_factor": steps.reject_factor_template,
+            "_r4_fd_jacobian": rodas4.fd_jacobian_template,
+            "_r4_frozen_states": rodas4.frozen_states_template,
+            "_r4_spectral_radius": rodas4.spectral_radius_template,
+            "modal_step_cap": modes.step_cap_real}
+
+
+#: array sizes of the driver and what it calls (``"?"``: passed at run time)
+SHAPES: dict[str, tuple[str, ...]] = {
+    **SOLVER_SHAPES,
+    **{name: ("FD_N_STATE",) for name in ("y0", "bound", "v", "w", "scale")},
+    "J_ref": ("FD_N_STATE", "FD_N_STATE"), "held": ("FD_N_HELD",),
+    **{name: (DYNAMIC,) for name in ("stops", "memory", "t_buf", STATS_OUT, "wr", "wi")},
+    "y_buf": (DYNAMIC, "FD_N_STATE"), "aux_buf": (DYNAMIC, "FD_N_AUX"),
+    "switch_rows": (DYNAMIC, "FD_N_STATE"), "W": (DYNAMIC, "FD_N_STATE"),
+    "A": (DYNAMIC, DYNAMIC), "row": ("FD_N_STATE",),
+}
+
+
+@functools.cache
+def driver_c(use: str) -> str:
+    """C text of the driver ``use`` (:func:`lowered_source`), exported as ``fd_<use>``, with
+    every solver function it calls; it calls the model file's ``fd_rhs`` and
+    ``fd_sample_update`` (:func:`feeddrive.backends.c_backend.c_model_source`).
+
+    Parameters
+    ----------
+    use : str
+        ``"integrate"`` or ``"integrate_dense"``.
+
+    Returns
+    -------
+    str
+        C99 source.
+    """
+    from ..solvers import driver
+
+    fn = driver.define(lowered_source(use)[0], use)
+    return translate_kernels([fn], {"N_AUX": "FD_N_AUX"}, bindings=_bindings(),
+                             shapes=SHAPES, param_types=SOLVER_TYPES, names={use: f"fd_{use}"})
+
+
+def engine_source(model: Model) -> str:
+    """One C unit of ``model``'s structure: its kernels (parameters and tables passed at run
+    time) and both drivers.
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+
+    Returns
+    -------
+    str
+        C99 source.
+    """
+    return (c_model_source(model, data=False) + "\n/* ---- the drivers "
+            "(feeddrive.solvers.driver, lowered by feeddrive.backends.c_engine) */\n"
+            + "\n".join(driver_c(use) for use in USES))
+
+
+_D = ctypes.POINTER(ctypes.c_double)
+_L = ctypes.POINTER(ctypes.c_long)
+_B = ctypes.POINTER(ctypes.c_ubyte)
+_ELEM = {"double*": (_D, np.float64), "long*": (_L, np.int64), "bool*": (_B, np.bool_)}
+
+
+def _c_params(use: str) -> list[tuple[str, str]]:
+    """(name, kind) of the C entry's parameters in order: kind "double", "long", "int" or an
+    array type of :data:`_ELEM`, then its run-time sizes as ("name#k", "size")."""
+    source, _ = lowered_source(use)
+    fn = ast.parse(source).body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    out: list[tuple[str, str]] = []
+    for a in fn.args.args:
+        spec = SOLVER_TYPES.get(a.arg) or (ast.unparse(a.annotation) if a.annotation else "")
+        if spec in ("np.ndarray", "double*", "long*", "bool*"):
+            out.append((a.arg, "double*" if spec == "np.ndarray" else spec))
+            out += [(f"{a.arg}#{k}", "size") for k, d in enumerate(SHAPES.get(a.arg, ()))
+                    if d == DYNAMIC]
+        else:
+            out.append((a.arg, {"float": "double", "int": "long", "bool": "int"}[spec]))
+    return out
+
+
+class _Entry:
+    """One exported driver of a loaded library, called with numpy arrays."""
+
+    def __init__(self, lib: ctypes.CDLL, use: str) -> None:
+        self.params = _c_params(use)
+        self.n_stats = lowered_source(use)[1]
+        self.fn = getattr(lib, f"fd_{use}")
+        self.fn.restype = ctypes.c_long
+        self.fn.argtypes = [_ELEM[k][0] if k in _ELEM else
+                            {"double": ctypes.c_double, "int": ctypes.c_int}.get(k, ctypes.c_long)
+                            for _, k in self.params]
+
+    def __call__(self, values: dict[str, Any]) -> int:
+        args: list[Any] = []
+        keep = []
+        for name, kind in self.params:
+            if kind == "size":
+                base, k = name.split("#")
+                args.append(int(values[base].shape[int(k)]))
+            elif kind in _ELEM:
+                ptr, dtype = _ELEM[kind]
+                a = values[name]
+                if (a.dtype != dtype and a.dtype.itemsize != np.dtype(dtype).itemsize
+                        and a.dtype.kind not in "biu") or not a.flags.c_contiguous:
+                    raise TypeError(f"{name}: a C-contiguous {np.dtype(dtype).name} array is "
+                                    f"expected, not {a.dtype} {a.shape}")
+                keep.append(a)
+                args.append(a.ctypes.data_as(ptr))
+            elif kind == "double":
+                args.append(float(values[name]))
+            else:
+                args.append(int(values[name]))
+        return int(self.fn(*args))
+
+
+class CEngine:
+    """The C build: per model structure one library (:func:`engine_source`), its drivers
+    called with the arguments, in the order, of the numba ones
+    (:mod:`feeddrive.solvers.shared`) and giving the same results."""
+
+    name = "c"
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._libraries: dict[str, ctypes.CDLL] = {}
+        self._entries: dict[tuple[int, str], _Entry] = {}
+
+    def available(self, required: bool = False) -> bool:
+        """Whether a C compiler is found (without one, :data:`~feeddrive.backends.c_cache.
+        NO_COMPILER` is said once per process).
+
+        Parameters
+        ----------
+        required : bool, default False
+            ``FEEDDRIVE_ENGINE=c``: no compiler is an error.
+
+        Returns
+        -------
+        bool
+            True with a compiler.
+
+        Raises
+        ------
+        CompilerNotFound
+            With ``required`` and no compiler: one line saying how to get one.
+        """
+        if required:
+            try:
+                find_compiler()
+            except CompilerNotFound as err:
+                raise CompilerNotFound(f"FEEDDRIVE_ENGINE = 'c': {err}; or unset it to use "
+                                       "numba") from None
+            return True
+        return available_compiler() is not None
+
+    def _library(self, model: Model) -> ctypes.CDLL:
+        module = model.module
+        lib: ctypes.CDLL | None = getattr(module, "_fd_c_engine", None)
+        if lib is not None:
+            return lib
+        with self._lock:
+            lib = getattr(module, "_fd_c_engine", None)
+            if lib is None:
+                text = engine_source(model)
+                key = hashlib.sha256(text.encode()).hexdigest()
+                lib = self._libraries.get(key)
+                if lib is None:
+                    lib = ctypes.CDLL(str(cached_library(text)))
+                    self._libraries[key] = lib
+                setattr(module, "_fd_c_engine", lib)  # noqa: B010 (a generated module)
+        return lib
+
+    def _entry(self, model: Model, use: str) -> _Entry:
+        lib = self._library(model)
+        key = (id(lib), use)
+        entry = self._entries.get(key)
+        if entry is None:
+            entry = self._entries[key] = _Entry(lib, use)
+        return entry
+
+    def driver(self, model: Model, use: str) -> Callable[..., Any]:
+        """The C driver ``use`` of ``model``, taking the numba driver's arguments and
+        returning what it returns: ``(t_out, y_out, aux_out, stats, held)``.
+
+        Parameters
+        ----------
+        model : Model
+            The assembled model.
+        use : str
+            ``"integrate"`` or ``"integrate_dense"``.
+
+        Returns
+        -------
+        callable
+            The driver.
+        """
+        from ..solvers import driver as template
+        from ..solvers import shared
+
+        entry = self._entry(model, use)
+        if shared.preparing():  # inside prepared_models: the library built, nothing run
+            raise shared.ModelPrepared(use)
+        names = template.USES[use][0]
+        n_state, n_aux = len(model.states), len(model.aux)
+
+        def call(*args: Any) -> tuple[np.ndarray, ...]:
+            values = dict(zip(names, args, strict=True))
+            n_break = int(round(values["t_end"] / values["base"]))
+            n_out = max(0, (n_break - values["start"]) // values["out_every"] + 1)
+            n_aux_out = n_out if values.get("want_aux", True) else 0
+            t_buf, y_buf, aux_buf = (values.get(b) for b in OUTPUTS.values())
+            if not (t_buf is not None and y_buf is not None and aux_buf is not None
+                    and t_buf.shape[0] >= n_out and y_buf.shape[0] >= n_out
+                    and y_buf.shape[1] == n_state and aux_buf.shape[0] >= n_aux_out
+                    and aux_buf.shape[1] == n_aux):
+                t_buf = np.empty(n_out)
+                y_buf = np.empty((n_out, n_state))
+                aux_buf = np.empty((n_aux_out, n_aux))
+            values.update(t_buf=t_buf, y_buf=y_buf, aux_buf=aux_buf)
+            stats = np.zeros(entry.n_stats)
+            values[STATS_OUT] = stats
+            count = entry(values)
+            return (t_buf[:count], y_buf[:count], aux_buf[:min(count, aux_buf.shape[0])],
+                    stats, values["held"])
+
+        return call
+
+
+registry.register(registry.ENGINES, CEngine.name, CEngine())
