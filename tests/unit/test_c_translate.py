@@ -329,15 +329,10 @@ def test_the_docs_list_the_subset_the_code_supports() -> None:
 #: kernels outside the subset by design, with the reason: they return arrays (analysis-side
 #: helpers called from Python; no model calls them)
 NOT_TRANSLATED = {"feeddrive.model.friction.stribeck._map1": "return annotation",
-                  # the modal method's eigen-analysis (issue 21): complex LAPACK eigenvalues
-                  # and 2-D Jacobians; the FMU's embedded solver does not use it.  Value: the
+                  # the modal method's eigen-analysis with its LAPACK fallback (complex
+                  # eigenvalues); the C engine calls step_cap_real instead.  Value: the
                   # refusal's message
-                  "feeddrive.solvers.modes.step_cap": "complex128",
-                  "feeddrive.solvers.modes.real_eigenvalues": "the size of array 'A'",
-                  "feeddrive.solvers.modes.jacobian_moved": "2 indices of a 1-D array",
-                  # the dense driver's switching surfaces (issue 35): a 2-D row matrix; the
-                  # FMU's embedded solver (COMM) does not locate crossings
-                  "feeddrive.solvers.events.first_crossing": "2 indices of a 1-D array"}
+                  "feeddrive.solvers.modes.step_cap": "complex128"}
 
 
 def _package_kernels() -> dict[str, Any]:
@@ -364,7 +359,8 @@ def test_every_kernel_of_the_package_translates_and_compiles(tmp_path: Path) -> 
     translate — with the solver shapes where they need sizes — and the concatenation of their
     translations compiles with the strict warning set (the ``#ifndef`` guards let shared
     callees and helpers appear once)."""
-    from feeddrive.backends.c_backend import SOLVER_SHAPES, SOLVER_TYPES
+    from feeddrive.backends.c_backend import SOLVER_TYPES
+    from feeddrive.backends.c_engine import SHAPES as SOLVER_SHAPES  # the engine's: all sizes
 
     kernels = _package_kernels()
     assert len(kernels) >= 25 and set(NOT_TRANSLATED) <= set(kernels)

@@ -17,7 +17,7 @@ from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
-from ..solvers import dopri5, switching
+from ..solvers import builds, dopri5, switching
 from . import budget
 from .error_estimate import signal_errors, summary_entry, tightened
 from .options import DENSE_MODES as _DENSE_MODES
@@ -855,7 +855,7 @@ class Simulation:
             "current_scale": self.scales.current,
             "steps": int(stats[1]), "rejected_steps": int(stats[2]),
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
-            "breakpoint_interval_s": grid.base,
+            "breakpoint_interval_s": grid.base, "engine": builds.engine_name(),
         }
         if diverged:  # stopped early: the Result ends where a speed left its bound
             solver_stats.update({"diverged": True, "diverged_at_s": float(stats[4]),
