@@ -716,7 +716,6 @@ class _Function:
             if it == "double":
                 raise self.error(node, f"float index {ast.unparse(arg.slice)!r}")
             shape = self.shape_of(arg.value.id, node)
-            self.stmt_reads.add(arg.value.id)
             return (f"({self.cvar(arg.value.id)} + ({i}) * ({shape[1]}))", [arg.value.id],
                     (shape[1],))
         if not (isinstance(arg, ast.Name) and isinstance(self.locals.get(arg.id), Arr)):
