@@ -19,7 +19,7 @@ import feeddrive as fd
 from feeddrive.backends import c_cache, c_engine
 from feeddrive.backends.c_backend import STRICT_FLAGS
 from feeddrive.model.reference import ConstantSpeed
-from feeddrive.solvers import builds, driver, dopri5, switching
+from feeddrive.solvers import builds, dopri5, driver, switching
 
 HAVE_CC = any(shutil.which(c) for c in ("cc", "gcc", "clang"))
 needs_cc = pytest.mark.skipif(not HAVE_CC, reason="no C compiler (cc, gcc, clang) on PATH")
