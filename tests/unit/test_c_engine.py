@@ -149,3 +149,38 @@ def test_every_method_gives_numbas_results_in_chunks_and_when_stopped(
             np.testing.assert_array_equal(a, b)
         status = runs["c"][3][0]
         assert status == (driver.STATUS_STOPPED if stop else driver.STATUS_OK)
+
+
+@needs_cc
+def test_the_linearisations_and_auxiliary_functions_give_numbas_results(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The shared module's other functions the C unit holds (the rates, central-difference
+    columns, grouped Jacobian of the linearisations and steady states, the deferred auxiliary
+    signals): bit for bit at random states."""
+    model = SYSTEM.model(PROFILE)
+    n, n_aux = len(model.states), len(model.aux)
+    rng = np.random.default_rng(42)
+    y = rng.normal(size=n) * np.array(model.tolerance_scales) * 1e3
+    held = np.zeros(model.n_held)
+    P, T = np.ascontiguousarray(model.P), np.ascontiguousarray(model.T)
+    got: dict[str, list[np.ndarray]] = {}
+    for engine in ("numba", "c"):
+        monkeypatch.setenv("FEEDDRIVE_ENGINE", engine)
+        dy, aux = np.empty(n), np.empty(n_aux)
+        builds.compiled(model, "_ev_rates")(0.01, y, held, P, T, dy, aux)
+        cols = np.arange(n, dtype=np.int64)
+        A = np.empty((n, n))
+        builds.compiled(model, "_ev_central_columns")(
+            0.01, y, held, P, T, cols, np.full(n, 1e-7), cols, A, np.empty(n), np.empty(n),
+            np.empty(n), np.empty(n_aux))
+        J, ft, f0 = np.empty((n, n)), np.empty(n), dy.copy()
+        calls = builds.compiled(model, "_r4_fd_jacobian")(
+            0.01, y, f0, held, P, T, np.full(n, 1e-9), J, ft, np.empty(n), np.empty(n),
+            np.empty(n_aux), np.ones(n, dtype=np.bool_),
+            np.ascontiguousarray(model.jacobian_pattern), model.jacobian_colours)
+        out = builds.compiled(model, "auxiliary")(np.array([0.0, 0.01]), np.stack([y, 2 * y]),
+                                                  P, T)
+        got[engine] = [dy, aux, A, J, ft, np.array([calls]), out]
+    for a, b in zip(got["numba"], got["c"], strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert got["c"][5][0] > 0 and got["c"][6].shape == (2, n_aux)

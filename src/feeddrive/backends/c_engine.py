@@ -199,10 +199,94 @@ SHAPES: dict[str, tuple[str, ...]] = {
 def _translated(use: str) -> dict[str, Any]:
     from ..solvers import driver
 
+    if use == "functions":
+        return _functions_unit()
     fn = driver.define(lowered_source(use)[0], use)
     text = translate_kernels([fn], {"N_AUX": "FD_N_AUX"}, bindings=_bindings(),
                              shapes=SHAPES, param_types=SOLVER_TYPES, names={use: f"fd_{use}"})
     return {"c": text, "n_stats": lowered_source(use)[1], "params": _c_params(use)}
+
+
+#: the shared module's functions other than the drivers that the C unit holds too
+#: (``model.module.compiled(name)``, :func:`feeddrive.solvers.builds.compiled`): name →
+#: (template, exported C name, sizes, element types)
+FUNCTIONS: dict[str, tuple[str, str, dict[str, tuple[str, ...]], dict[str, str]]] = {
+    "_ev_rates": ("feeddrive.solvers.evaluate:rates_template", "fd_ev_rates",
+                  {**SOLVER_SHAPES, "held": ("FD_N_HELD",), "dy": ("FD_N_STATE",)}, {}),
+    "_ev_central_columns": (
+        "feeddrive.solvers.evaluate:central_columns_template", "fd_ev_central_columns",
+        {**SOLVER_SHAPES, "held": ("FD_N_HELD",), "dp": ("FD_N_STATE",),
+         "dm": ("FD_N_STATE",), "columns": (DYNAMIC,), "steps": (DYNAMIC,),
+         "rows": (DYNAMIC,), "A": (DYNAMIC, DYNAMIC)},
+        {"columns": "long*", "rows": "long*", "steps": "double*"}),
+    "_r4_fd_jacobian": ("feeddrive.solvers.rodas4:fd_jacobian_template", "fd_r4_fd_jacobian",
+                        {**SOLVER_SHAPES, "held": ("FD_N_HELD",)}, dict(SOLVER_TYPES)),
+    "auxiliary": ("feeddrive.solvers.dopri5:auxiliary_template", "fd_auxiliary",
+                  {"t_out": (DYNAMIC,), "y_out": (DYNAMIC, "FD_N_STATE"),
+                   "out": (DYNAMIC, "FD_N_AUX")}, {}),
+}
+
+
+def _template(name: str) -> Any:
+    import importlib
+
+    module, attr = FUNCTIONS[name][0].split(":")
+    return getattr(importlib.import_module(module), attr)
+
+
+def _returned_array(fn: ast.FunctionDef) -> str | None:
+    """The local array a template allocates and returns (``auxiliary``), if any."""
+    last = fn.body[-1]
+    if isinstance(last, ast.Return) and isinstance(last.value, ast.Name):
+        return last.value.id
+    return None
+
+
+def function_source(name: str) -> str:
+    """The text of the template behind ``name`` (:data:`FUNCTIONS`), renamed as in the shared
+    module; an array it allocates and returns becomes its caller's last argument.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`FUNCTIONS`.
+
+    Returns
+    -------
+    str
+        Python source.
+    """
+    import inspect
+    import textwrap
+
+    fn = ast.parse(textwrap.dedent(inspect.getsource(_template(name)))).body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    fn.name = name
+    result = _returned_array(fn)
+    if result is not None:
+        fn.body = [st for st in fn.body[:-1] if not (
+            isinstance(st, ast.Assign) and len(st.targets) == 1
+            and isinstance(st.targets[0], ast.Name) and st.targets[0].id == result)]
+        fn.args.args.append(_array_arg(result))
+        fn.returns = None
+    return ast.unparse(ast.fix_missing_locations(fn)) + "\n"
+
+
+def _functions_unit() -> dict[str, Any]:
+    from ..solvers import driver
+
+    texts, params = [], {}
+    for name, (_, cname, shapes, types) in FUNCTIONS.items():
+        source = function_source(name)
+        fn = driver.define(source, name)
+        fn.__globals__.update(vars(__import__(_template(name).__module__, fromlist=["_"])))
+        texts.append(translate_kernels([fn], {"N_AUX": "FD_N_AUX", "N_HELD": "FD_N_HELD"},
+                                       bindings={"rhs": RHS}, shapes=shapes,
+                                       param_types=types, names={name: cname}))
+        node = ast.parse(source).body[0]
+        assert isinstance(node, ast.FunctionDef)
+        params[name] = _params_of(node, shapes, types)
+    return {"c": "\n".join(texts), "n_stats": 0, "params": params}
 
 
 def _sources_digest() -> str:
@@ -242,7 +326,10 @@ def driver_unit(use: str) -> dict[str, Any]:
     try:
         kept = json.loads(path.read_text(encoding="utf-8"))
         if isinstance(kept, dict) and set(kept) == {"c", "n_stats", "params"}:
-            kept["params"] = [tuple(p) for p in kept["params"]]
+            if isinstance(kept["params"], dict):
+                kept["params"] = {k: [tuple(p) for p in v] for k, v in kept["params"].items()}
+            else:
+                kept["params"] = [tuple(p) for p in kept["params"]]
             return kept
     except (OSError, ValueError):
         pass
@@ -274,13 +361,14 @@ def engine_source(model: Model) -> str:
     """
     return (c_model_source(model, data=False) + "\n/* ---- the drivers "
             "(feeddrive.solvers.driver, lowered by feeddrive.backends.c_engine) */\n"
-            + "\n".join(driver_unit(use)["c"] for use in USES))
+            + "\n".join(driver_unit(use)["c"] for use in (*USES, "functions")))
 
 
 _D = ctypes.POINTER(ctypes.c_double)
 _L = ctypes.POINTER(ctypes.c_long)
 _B = ctypes.POINTER(ctypes.c_ubyte)
 _ELEM = {"double*": (_D, np.float64), "long*": (_L, np.int64), "bool*": (_B, np.bool_)}
+_KINDS = {"double*": "f", "long*": "iu", "bool*": "biu"}  # element kinds of that size taken
 
 
 def _c_params(use: str) -> list[tuple[str, str]]:
@@ -289,12 +377,18 @@ def _c_params(use: str) -> list[tuple[str, str]]:
     source, _ = lowered_source(use)
     fn = ast.parse(source).body[0]
     assert isinstance(fn, ast.FunctionDef)
+    return _params_of(fn, SHAPES, SOLVER_TYPES)
+
+
+def _params_of(fn: ast.FunctionDef, shapes: dict[str, tuple[str, ...]],
+               types: dict[str, str]) -> list[tuple[str, str]]:
     out: list[tuple[str, str]] = []
     for a in fn.args.args:
-        spec = SOLVER_TYPES.get(a.arg) or (ast.unparse(a.annotation) if a.annotation else "")
+        spec = (types.get(f"{fn.name}.{a.arg}") or types.get(a.arg)
+                or (ast.unparse(a.annotation) if a.annotation else ""))
         if spec in ("np.ndarray", "double*", "long*", "bool*"):
             out.append((a.arg, "double*" if spec == "np.ndarray" else spec))
-            out += [(f"{a.arg}#{k}", "size") for k, d in enumerate(SHAPES.get(a.arg, ()))
+            out += [(f"{a.arg}#{k}", "size") for k, d in enumerate(shapes.get(a.arg, ()))
                     if d == DYNAMIC]
         else:
             out.append((a.arg, {"float": "double", "int": "long", "bool": "int"}[spec]))
@@ -305,10 +399,15 @@ class _Entry:
     """One exported driver of a loaded library, called with numpy arrays."""
 
     def __init__(self, lib: ctypes.CDLL, use: str) -> None:
-        unit = driver_unit(use)
-        self.params = unit["params"]
-        self.n_stats = unit["n_stats"]
-        self.fn = getattr(lib, f"fd_{use}")
+        if use in FUNCTIONS:
+            self.params = driver_unit("functions")["params"][use]
+            self.n_stats = 0
+            self.fn = getattr(lib, FUNCTIONS[use][1])
+        else:
+            unit = driver_unit(use)
+            self.params = unit["params"]
+            self.n_stats = unit["n_stats"]
+            self.fn = getattr(lib, f"fd_{use}")
         self.fn.restype = ctypes.c_long
         self.fn.argtypes = [_ELEM[k][0] if k in _ELEM else
                             {"double": ctypes.c_double, "int": ctypes.c_int}.get(k, ctypes.c_long)
@@ -324,8 +423,9 @@ class _Entry:
             elif kind in _ELEM:
                 ptr, dtype = _ELEM[kind]
                 a = values[name]
-                if (a.dtype != dtype and a.dtype.itemsize != np.dtype(dtype).itemsize
-                        and a.dtype.kind not in "biu") or not a.flags.c_contiguous:
+                if not (a.flags.c_contiguous and (a.dtype == dtype or (
+                        a.dtype.itemsize == np.dtype(dtype).itemsize
+                        and a.dtype.kind in _KINDS[kind]))):
                     raise TypeError(f"{name}: a C-contiguous {np.dtype(dtype).name} array is "
                                     f"expected, not {a.dtype} {a.shape}")
                 keep.append(a)
@@ -401,6 +501,49 @@ class CEngine:
         if entry is None:
             entry = self._entries[key] = _Entry(lib, use)
         return entry
+
+    def function(self, model: Model, name: str) -> Callable[..., Any] | None:
+        """The C function ``name`` of ``model`` (a key of :data:`FUNCTIONS`), taking the
+        arguments of ``model.module.compiled(name)`` and returning what it returns; None for
+        a function the C unit does not hold.
+
+        Parameters
+        ----------
+        model : Model
+            The assembled model.
+        name : str
+            A function of the shared drivers' module.
+
+        Returns
+        -------
+        callable or None
+            The function.
+        """
+        if name not in FUNCTIONS:
+            return None
+        entry = self._entry(model, name)
+        names = [p for p, kind in entry.params if kind != "size"]
+        import inspect
+        import textwrap
+
+        template = ast.parse(textwrap.dedent(inspect.getsource(_template(name)))).body[0]
+        assert isinstance(template, ast.FunctionDef)
+        result = _returned_array(template)
+        n_aux = len(model.aux)
+        if result is not None:
+            names = names[:-1]
+        returns = str(_template(name).__annotations__.get("return")) not in ("None", "")
+
+        def call(*args: Any) -> Any:
+            values = dict(zip(names, args, strict=True))
+            if result is not None:  # auxiliary: (samples, N_AUX)
+                values[result] = np.empty((len(args[0]), n_aux))
+                entry(values)
+                return values[result]
+            value = entry(values)
+            return value if returns else None
+
+        return call
 
     def driver(self, model: Model, use: str) -> Callable[..., Any]:
         """The C driver ``use`` of ``model``, taking the numba driver's arguments and

@@ -689,6 +689,20 @@ class _Function:
             return (f"fd_round({a})", "long") if t == "double" else (a, "long")
         raise self.error(node, f"built-in {name}()")
 
+    def array_type(self, arg: ast.expr) -> Arr | None:
+        """The type of ``arg`` as an array argument (a name, a row ``M[i]``, ``a if c else
+        b``), None if it is not one."""
+        if isinstance(arg, ast.Name):
+            t = self.locals.get(arg.id)
+            return t if isinstance(t, Arr) else None
+        if (isinstance(arg, ast.Subscript) and isinstance(arg.value, ast.Name)
+                and not isinstance(arg.slice, (ast.Tuple, ast.Slice))):
+            t = self.locals.get(arg.value.id)
+            return Arr(t.elem, 1) if isinstance(t, Arr) and t.ndim == 2 else None
+        if isinstance(arg, ast.IfExp):
+            return self.array_type(arg.body)
+        return None
+
     def array_argument(self, node: ast.Call, arg: ast.expr, pname: str, ptype: Arr
                        ) -> tuple[str, list[str], tuple[str, ...]]:
         """(C code, the arrays it refers to, its C shape) of an argument for array parameter
@@ -774,10 +788,8 @@ class _Function:
     def external_call(self, node: ast.Call, target: CFunction) -> tuple[str, Any]:
         params: list[tuple[str, str | Arr]] = []
         for i, arg in enumerate(node.args):
-            if isinstance(arg, ast.Name) and isinstance(self.locals.get(arg.id), Arr):
-                params.append((f"arg{i}", self.locals[arg.id]))
-            else:
-                params.append((f"arg{i}", self.scalar(arg)[1]))
+            at = self.array_type(arg)
+            params.append((f"arg{i}", at if at is not None else self.scalar(arg)[1]))
         written = None if target.writes is None else {f"arg{i}" for i in target.writes}
         args = self.call_args(node, params, written)
         self.calls_total += 1

@@ -417,7 +417,7 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
             firsts.append(model.index(f"{site}_{law.state_names[0]}"))
     if not firsts:
         return np.zeros((0, n))
-    rates = model.module.compiled("_ev_rates")
+    rates = builds.compiled(model, "_ev_rates")
     held, dy, aux = np.zeros(model.n_held), np.empty(n), np.empty(len(model.aux))
     P = np.ascontiguousarray(P, dtype=float)
     T = np.ascontiguousarray(model.T, dtype=float)
@@ -875,7 +875,7 @@ class Simulation:
         if sum(a.shape[0] for a in aux_parts) == t.shape[0]:  # recorded: joined when read
             run.defer_aux(lambda: _join(aux_parts, len(model.aux)))
         else:  # not recorded (continuous loops, dense output): evaluated when read
-            run.defer_aux(lambda: model.module.auxiliary(t, y, model.P, model.T))
+            run.defer_aux(lambda: builds.compiled(model, "auxiliary")(t, y, model.P, model.T))
         return Result.from_run(run)
 
 

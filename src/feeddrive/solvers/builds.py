@@ -86,3 +86,28 @@ def driver(model: Model, use: str) -> Any:
     if engine_name() == "numba":
         return getattr(model.module, use)
     return registry.table(registry.ENGINES)["c"].driver(model, use)
+
+
+def compiled(model: Model, name: str) -> Any:
+    """``model``'s function ``name`` of the shared drivers' module (``_ev_rates``,
+    ``_ev_central_columns``, ``_r4_fd_jacobian``, ``auxiliary`` …) in the build of
+    :func:`engine_name`, taking and returning what ``model.module.compiled(name)`` does; a
+    function the C build does not hold is numba's.
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+    name : str
+        The function.
+
+    Returns
+    -------
+    callable
+        The function.
+    """
+    if engine_name() == "c":
+        fn = registry.table(registry.ENGINES)["c"].function(model, name)
+        if fn is not None:
+            return fn
+    return model.module.compiled(name)
