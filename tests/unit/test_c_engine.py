@@ -184,3 +184,29 @@ def test_the_linearisations_and_auxiliary_functions_give_numbas_results(
     for a, b in zip(got["numba"], got["c"], strict=True):
         np.testing.assert_array_equal(a, b)
     assert got["c"][5][0] > 0 and got["c"][6].shape == (2, n_aux)
+
+
+@needs_cc
+def test_a_function_called_again_reads_and_writes_the_arrays_of_that_call(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The linearisations' functions keep the arrays of the last call with their addresses;
+    a call with other arrays (or the same array changed in place) uses those."""
+    model = SYSTEM.model(PROFILE)
+    n, n_aux = len(model.states), len(model.aux)
+    held, P, T = np.zeros(model.n_held), np.ascontiguousarray(model.P), model.T
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "c")
+    rates = builds.compiled(model, "_ev_rates")
+    y, dy, aux = np.full(n, 1e-4), np.empty(n), np.empty(n_aux)
+    rates(0.0, y, held, P, T, dy, aux)
+    first = dy.copy()
+    y[:] = 2e-4  # the same array, changed in place
+    rates(0.0, y, held, P, T, dy, aux)
+    other_dy = np.empty(n)
+    rates(0.0, np.full(n, 1e-4), held, P, T, other_dy, aux)  # new arrays
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "numba")
+    reference = builds.compiled(model, "_ev_rates")
+    expected = np.empty(n)
+    reference(0.0, np.full(n, 2e-4), held, P, T, expected, np.empty(n_aux))
+    np.testing.assert_array_equal(dy, expected)
+    np.testing.assert_array_equal(other_dy, first)
+    assert not np.array_equal(first, expected)

@@ -33,7 +33,7 @@ import json
 import os
 import tempfile
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -242,6 +242,19 @@ def _returned_array(fn: ast.FunctionDef) -> str | None:
     return None
 
 
+@functools.cache
+def _template_result(name: str) -> tuple[str | None, bool]:
+    """(the array the template behind ``name`` allocates and returns, or None; whether it
+    returns a number)."""
+    import inspect
+    import textwrap
+
+    template = ast.parse(textwrap.dedent(inspect.getsource(_template(name)))).body[0]
+    assert isinstance(template, ast.FunctionDef)
+    returns = str(_template(name).__annotations__.get("return")) not in ("None", "")
+    return _returned_array(template), returns
+
+
 def function_source(name: str) -> str:
     """The text of the template behind ``name`` (:data:`FUNCTIONS`), renamed as in the shared
     module; an array it allocates and returns becomes its caller's last argument.
@@ -395,8 +408,13 @@ def _params_of(fn: ast.FunctionDef, shapes: dict[str, tuple[str, ...]],
     return out
 
 
+_ARRAY, _SIZE, _DOUBLE, _INT = range(4)
+
+
 class _Entry:
-    """One exported driver of a loaded library, called with numpy arrays."""
+    """One exported function of a loaded library, called with numpy arrays: each array
+    passed by its address (``c_void_p``; ≈ 3 µs an array, where ``data_as`` costs 5),
+    checked to be C-contiguous with elements of the C type's kind and size."""
 
     def __init__(self, lib: ctypes.CDLL, use: str) -> None:
         if use in FUNCTIONS:
@@ -409,32 +427,75 @@ class _Entry:
             self.n_stats = unit["n_stats"]
             self.fn = getattr(lib, f"fd_{use}")
         self.fn.restype = ctypes.c_long
-        self.fn.argtypes = [_ELEM[k][0] if k in _ELEM else
-                            {"double": ctypes.c_double, "int": ctypes.c_int}.get(k, ctypes.c_long)
-                            for _, k in self.params]
-
-    def __call__(self, values: dict[str, Any]) -> int:
-        args: list[Any] = []
-        keep = []
+        self.names = [name for name, kind in self.params if kind != "size"]
+        where = {name: i for i, name in enumerate(self.names)}
+        # (what, which argument, dimension or accepted element type)
+        self.plan: list[tuple[int, int, Any]] = []
+        argtypes: list[Any] = []
         for name, kind in self.params:
             if kind == "size":
                 base, k = name.split("#")
-                args.append(int(values[base].shape[int(k)]))
+                self.plan.append((_SIZE, where[base], int(k)))
+                argtypes.append(ctypes.c_long)
             elif kind in _ELEM:
-                ptr, dtype = _ELEM[kind]
-                a = values[name]
-                if not (a.flags.c_contiguous and (a.dtype == dtype or (
-                        a.dtype.itemsize == np.dtype(dtype).itemsize
-                        and a.dtype.kind in _KINDS[kind]))):
-                    raise TypeError(f"{name}: a C-contiguous {np.dtype(dtype).name} array is "
-                                    f"expected, not {a.dtype} {a.shape}")
-                keep.append(a)
-                args.append(a.ctypes.data_as(ptr))
+                self.plan.append((_ARRAY, where[name], kind))
+                argtypes.append(ctypes.c_void_p)
             elif kind == "double":
-                args.append(float(values[name]))
+                self.plan.append((_DOUBLE, where[name], None))
+                argtypes.append(ctypes.c_double)
             else:
-                args.append(int(values[name]))
-        return int(self.fn(*args))
+                self.plan.append((_INT, where[name], None))
+                argtypes.append(ctypes.c_int if kind == "int" else ctypes.c_long)
+        self.fn.argtypes = argtypes
+        self._accepted: dict[tuple[np.dtype[Any], str], bool] = {}
+        self._last: list[tuple[Any, int] | None] = [None] * len(self.names)
+        self.keep = use in FUNCTIONS and use != "auxiliary"
+
+    def _check(self, a: Any, kind: str, position: int) -> None:
+        key = (a.dtype, kind)
+        ok = self._accepted.get(key)
+        if ok is None:
+            dtype = np.dtype(_ELEM[kind][1])
+            ok = self._accepted[key] = a.dtype == dtype or (
+                a.dtype.itemsize == dtype.itemsize and a.dtype.kind in _KINDS[kind])
+        if not (ok and a.flags.c_contiguous):
+            raise TypeError(f"{self.names[position]}: a C-contiguous "
+                            f"{np.dtype(_ELEM[kind][1]).name} array is expected, not "
+                            f"{a.dtype} {a.shape}")
+
+    def positional(self, args: Sequence[Any]) -> int:
+        """Call with the arguments in the order of :attr:`names`.
+
+        With :attr:`keep` (the linearisations' functions, whose arrays are small), the
+        array passed last at each position is kept with its address: a caller that passes
+        the same arrays call after call (thousands of calls) pays the address and the check
+        once.  Kept, an array cannot be freed, so no other array can take its place under
+        the same identity.  The drivers and ``auxiliary`` keep nothing (their output arrays
+        are the run's, megabytes), their calls being few."""
+        out: list[Any] = []
+        last = self._last
+        for what, i, extra in self.plan:
+            a = args[i]
+            if what == _ARRAY:
+                seen = last[i]
+                if seen is not None and seen[0] is a:
+                    out.append(seen[1])
+                    continue
+                self._check(a, extra, i)
+                address = a.ctypes.data
+                if self.keep:
+                    last[i] = (a, address)
+                out.append(address)
+            elif what == _SIZE:
+                out.append(a.shape[extra])
+            elif what == _DOUBLE:
+                out.append(float(a))
+            else:
+                out.append(int(a))
+        return int(self.fn(*out))
+
+    def __call__(self, values: dict[str, Any]) -> int:
+        return self.positional([values[name] for name in self.names])
 
 
 class CEngine:
@@ -448,6 +509,8 @@ class CEngine:
         self._lock = threading.Lock()
         self._libraries: dict[str, ctypes.CDLL] = {}
         self._entries: dict[tuple[int, str], _Entry] = {}
+        self._functions: dict[tuple[int, str], Callable[..., Any]] = {}
+        self._compiler: dict[tuple[str | None, str | None], bool] = {}
 
     def available(self, required: bool = False) -> bool:
         """Whether a C compiler is found (without one, :data:`~feeddrive.backends.c_cache.
@@ -468,6 +531,7 @@ class CEngine:
         CompilerNotFound
             With ``required`` and no compiler: one line saying how to get one.
         """
+        where = (os.environ.get("CC"), os.environ.get("PATH"))  # asked once per setting
         if required:
             try:
                 find_compiler()
@@ -475,7 +539,10 @@ class CEngine:
                 raise CompilerNotFound(f"FEEDDRIVE_ENGINE = 'c': {err}; or unset it to use "
                                        "numba") from None
             return True
-        return available_compiler() is not None
+        found = self._compiler.get(where)
+        if found is None:
+            found = self._compiler[where] = available_compiler() is not None
+        return found
 
     def _library(self, model: Model) -> ctypes.CDLL:
         module = model.module
@@ -522,27 +589,26 @@ class CEngine:
         if name not in FUNCTIONS:
             return None
         entry = self._entry(model, name)
-        names = [p for p, kind in entry.params if kind != "size"]
-        import inspect
-        import textwrap
-
-        template = ast.parse(textwrap.dedent(inspect.getsource(_template(name)))).body[0]
-        assert isinstance(template, ast.FunctionDef)
-        result = _returned_array(template)
+        key = (id(entry), name)
+        done = self._functions.get(key)
+        if done is not None:
+            return done
+        result, returns = _template_result(name)
         n_aux = len(model.aux)
-        if result is not None:
-            names = names[:-1]
-        returns = str(_template(name).__annotations__.get("return")) not in ("None", "")
+        positional = entry.positional
 
-        def call(*args: Any) -> Any:
-            values = dict(zip(names, args, strict=True))
-            if result is not None:  # auxiliary: (samples, N_AUX)
-                values[result] = np.empty((len(args[0]), n_aux))
-                entry(values)
-                return values[result]
-            value = entry(values)
-            return value if returns else None
-
+        if result is not None:  # auxiliary: the (samples, N_AUX) array it returns
+            def call(*args: Any) -> Any:
+                out = np.empty((len(args[0]), n_aux))
+                positional([*args, out])
+                return out
+        elif returns:
+            def call(*args: Any) -> Any:
+                return positional(args)
+        else:
+            def call(*args: Any) -> Any:
+                positional(args)
+        self._functions[key] = call
         return call
 
     def driver(self, model: Model, use: str) -> Callable[..., Any]:
