@@ -41,6 +41,9 @@ PRESETS = "feeddrive.presets"
 SECTIONS = "feeddrive.sections"
 MECHANISM_KINDS = "feeddrive.mechanism_kinds"
 COUPLINGS = "feeddrive.couplings"
+#: builds of the engine other than numba (name → an object with ``driver(model, use)``,
+#: :mod:`feeddrive.solvers.builds`): the C build registers itself as ``"c"``
+ENGINES = "feeddrive.engines"
 
 #: The package's own providers of each group (modules that register on import).
 BUILTIN_PROVIDERS: dict[str, tuple[str, ...]] = {
@@ -56,6 +59,9 @@ BUILTIN_PROVIDERS: dict[str, tuple[str, ...]] = {
     # a machine's coupling parts (``[couplings.<name>] part = "…"``): parts joined to the
     # axes by named signals (feeddrive.machine.couplings)
     COUPLINGS: ("feeddrive.machine.couplings.*",),
+    # the C build of the drivers (feeddrive.backends.c_engine), read only when a run asks
+    # for a build: the core never imports the code generators
+    ENGINES: ("feeddrive.backends.c_engine",),
 }
 
 _TABLES: dict[str, dict[str, Any]] = {group: {} for group in BUILTIN_PROVIDERS}

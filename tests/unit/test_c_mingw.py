@@ -68,3 +68,14 @@ def test_the_fmu_translation_unit_compiles_with_mingw_pedantic(drive: str,
                                  token="{00000000-0000-0000-0000-000000000042}"),
              **{h: include.joinpath(h).read_text(encoding="utf-8") for h in HEADERS[fmi]}}
     _compile(tmp_path, files)
+
+
+@pytest.mark.parametrize("drive", drive_names())
+def test_the_engine_unit_compiles_with_mingw_pedantic(drive: str, tmp_path: Path) -> None:
+    """The C build of the engine (issue 42 items 1–2): the model's kernels with every method's
+    driver, the event location, the eigen-analysis and the linearisations' functions."""
+    from feeddrive.backends.c_engine import engine_source
+
+    parameters = fd.preset(mechanism(drive).example_preset)
+    model = fd.DriveSystem(parameters, drive, 0.4).model(fd.ConstantSpeed(*_speeds(drive)))
+    _compile(tmp_path, {"engine.c": engine_source(model)})

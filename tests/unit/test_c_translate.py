@@ -150,6 +150,45 @@ def k_ternary(x: float, n: int) -> float:
     return (x if x > y else -x) + y + float(n) + abs(n) + n ** 2.0
 
 
+def _row_sum(g: np.ndarray) -> float:
+    s = 0.0
+    for j in range(g.size):  # a size known at run time only (shapes "?")
+        s += g[j] * (j + 1)
+    return s
+
+
+def _total(G: np.ndarray) -> float:
+    s = 0.0
+    for i in range(G.shape[0]):
+        for j in range(G.shape[1]):
+            s += G[i, j] * (i + 1)
+    return s
+
+
+def _scale(g: np.ndarray, f: float) -> None:
+    for j in range(g.size):
+        g[j] *= f
+
+
+def k_rows(n: int) -> float:
+    """Rows: M[i, :] = v, a row M[i] as an argument (read and written), a conditional
+    between two arrays as an argument, a.copy(), a = b = value, run-time array sizes."""
+    M = np.zeros((n, 3))
+    v = np.empty(3)
+    for i in range(n):
+        for j in range(3):
+            v[j] = i * 1.5 + j
+        M[i, :] = v
+    w = v.copy()
+    v[0] = -7.0
+    a = b = 0.5
+    _scale(M[n - 1], 2.0)
+    s = _row_sum(M[n - 1])
+    s += _total(M)
+    s += _row_sum(M[0] if n > 2 else w)
+    return s + a + b + w[0] + 10.0 * w[2] + v[0]
+
+
 SCALAR = {"int": ctypes.c_long, "float": ctypes.c_double, "bool": ctypes.c_int}
 CASES: dict[Any, list[tuple[Any, ...]]] = {
     k_mod: [(a, b) for a, b in itertools.product((-7, -6, -1, 0, 1, 6, 7), (-3, -1, 2, 5))],
@@ -172,14 +211,17 @@ CASES: dict[Any, list[tuple[Any, ...]]] = {
     k_arrays: [(x,) for x in (-2.0, 0.0, 0.7, 3.0)],
     k_local_kinds: [(n,) for n in (1, 2, 3, 7)],
     k_ternary: [(x, n) for x, n in itertools.product((-3.0, 0.5, 9.0), (-2, 0, 3))],
+    k_rows: [(n,) for n in (1, 2, 3, 6)],
 }
+#: sizes of the kernels' array parameters: "?", passed at run time
+SHAPES = {"g": ("?",), "G": ("?", "?")}
 
 
 @pytest.fixture(scope="module")
 def lib(tmp_path_factory: pytest.TempPathFactory) -> Any:
     if not HAVE_CC:
         pytest.skip("no C compiler (set CC)")
-    text = translate_kernels(list(CASES))
+    text = translate_kernels(list(CASES), shapes=SHAPES)
     return ctypes.CDLL(str(compile_shared(text, tmp_path_factory.mktemp("c_translate"),
                                           name="semantics")))
 
@@ -204,6 +246,8 @@ def test_c_keeps_python_semantics(lib: Any, fn: Any) -> None:
     cfn.argtypes = [SCALAR[hints[p]] for p in list(hints)[:-1]]
     cfn.restype = SCALAR[hints["return"]]
     jitted = njit(error_model="numpy")(fn)
+    if fn is k_rows:  # its callees, compiled as the package's kernels are
+        jitted = njit(error_model="numpy")(_with_jitted_callees(fn))
     for args in CASES[fn]:
         reference = jitted(*args)
         got = cfn(*args)
@@ -213,6 +257,23 @@ def test_c_keeps_python_semantics(lib: Any, fn: Any) -> None:
         if fn not in NUMBA_DIFFERS:
             python = fn(*args)
             assert _same(python, got), f"{fn.__name__}{args}: Python {python!r}, C {got!r}"
+
+
+def _with_jitted_callees(fn: Any) -> Any:
+    import types
+
+    scope = dict(fn.__globals__)
+    scope.update({f.__name__: njit(error_model="numpy")(f) for f in (_row_sum, _total, _scale)})
+    return types.FunctionType(fn.__code__, scope, fn.__name__)
+
+
+def test_run_time_sizes_are_hidden_parameters() -> None:
+    """A "?" of ``shapes`` makes a ``long`` parameter after the array; callers pass their
+    argument's size (a row of a 2-D array: its row length)."""
+    text = translate_kernels([k_rows], shapes=SHAPES)
+    assert re.search(r"double fdk_\w+__total\(const double \*G, long G_n0, long G_n1\)", text)
+    assert re.search(r"fdk_\w+__row_sum\(\(M \+ \(\(?n - 1\)?\) \* \(3\)\), \(long\)\(3\)\)",
+                     text)
 
 
 def test_module_constants_are_inlined_with_repr_precision() -> None:
@@ -329,15 +390,10 @@ def test_the_docs_list_the_subset_the_code_supports() -> None:
 #: kernels outside the subset by design, with the reason: they return arrays (analysis-side
 #: helpers called from Python; no model calls them)
 NOT_TRANSLATED = {"feeddrive.model.friction.stribeck._map1": "return annotation",
-                  # the modal method's eigen-analysis (issue 21): complex LAPACK eigenvalues
-                  # and 2-D Jacobians; the FMU's embedded solver does not use it.  Value: the
+                  # the modal method's eigen-analysis with its LAPACK fallback (complex
+                  # eigenvalues); the C engine calls step_cap_real instead.  Value: the
                   # refusal's message
-                  "feeddrive.solvers.modes.step_cap": "complex128",
-                  "feeddrive.solvers.modes.real_eigenvalues": "the size of array 'A'",
-                  "feeddrive.solvers.modes.jacobian_moved": "2 indices of a 1-D array",
-                  # the dense driver's switching surfaces (issue 35): a 2-D row matrix; the
-                  # FMU's embedded solver (COMM) does not locate crossings
-                  "feeddrive.solvers.events.first_crossing": "2 indices of a 1-D array"}
+                  "feeddrive.solvers.modes.step_cap": "complex128"}
 
 
 def _package_kernels() -> dict[str, Any]:
@@ -364,7 +420,8 @@ def test_every_kernel_of_the_package_translates_and_compiles(tmp_path: Path) -> 
     translate — with the solver shapes where they need sizes — and the concatenation of their
     translations compiles with the strict warning set (the ``#ifndef`` guards let shared
     callees and helpers appear once)."""
-    from feeddrive.backends.c_backend import SOLVER_SHAPES, SOLVER_TYPES
+    from feeddrive.backends.c_backend import SOLVER_TYPES
+    from feeddrive.backends.c_engine import SHAPES as SOLVER_SHAPES  # the engine's: all sizes
 
     kernels = _package_kernels()
     assert len(kernels) >= 25 and set(NOT_TRANSLATED) <= set(kernels)

@@ -74,7 +74,8 @@ def test_a_second_process_loads_the_assembled_model_from_disk(tmp_path) -> None:
             "rhs = s.model(ConstantSpeed(1e-3)).module._bound._model_values()['rhs']\n"
             "print(sum(st.cache_hits.values()), sum(st.cache_misses.values()),"
             " rhs._cache_hits)\n")
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    # the numba build's cache (feeddrive.solvers.builds chooses C where a compiler is found)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), FEEDDRIVE_ENGINE="numba")
     runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                            text=True, check=True, timeout=300).stdout.split()
             for _ in range(2)]

@@ -11,6 +11,13 @@ from feeddrive.model.reference import ConstantSpeed
 from feeddrive.solvers import shared
 
 
+@pytest.fixture(autouse=True)
+def _numba_build(monkeypatch: pytest.MonkeyPatch) -> None:
+    """These tests are of the numba build (feeddrive.solvers.builds chooses C where a compiler
+    is found)."""
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "numba")
+
+
 def test_model_names_become_leading_arguments_passed_on_to_callees() -> None:
     """A function reading a model name — itself or through a function it calls — takes it
     first, and passes it on; the others are left as they are.  The rewritten text runs."""

@@ -54,6 +54,7 @@ from ..model.loops import INJ_CURRENT, INJ_SPEED
 from ..model.mechanisms import mechanism
 from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
 from ..parameters import ParameterError, SiteParameters
+from ..solvers import builds
 from . import protocol
 from .newton import pulled_gauss_newton
 
@@ -295,8 +296,8 @@ class _Evaluator:
         # (shared.Bound.compiled)
         self.P = np.ascontiguousarray(self._continuous(model.P), dtype=float)
         self.T = np.ascontiguousarray(model.T, dtype=float)
-        self._rates = model.module.compiled("_ev_rates")
-        self._columns = model.module.compiled("_ev_central_columns")
+        self._rates = builds.compiled(model, "_ev_rates")
+        self._columns = builds.compiled(model, "_ev_central_columns")
 
     def _continuous(self, P: np.ndarray) -> np.ndarray:
         if any(P[k] != 0.0 for _, k in self.model.clocks):  # the loops as continuous ones
@@ -337,7 +338,7 @@ def _solve_steady(model: Model, f: _Evaluator, y0: np.ndarray, at: np.ndarray,
     fifth round: 3–5× the time, the same point to ≈ 1e-10 of its scale).  Returns the
     unknowns, the method's word and the largest residual left."""
     n = y0.size
-    jac_fn = model.module.compiled("_r4_fd_jacobian")
+    jac_fn = builds.compiled(model, "_r4_fd_jacobian")
     J, ft, yp, fp = np.empty((n, n)), np.empty(n), np.empty(n), np.empty(n)
     aux = np.empty(len(model.aux))
     every = np.ones(n, dtype=np.bool_)

@@ -130,6 +130,9 @@ BUILTINS = ("abs", "min", "max", "float", "int", "bool", "round", "len", "range"
 _CONSTANTS = {"pi": math.pi, "e": math.e, "tau": math.tau, "inf": math.inf, "nan": math.nan}
 #: local-array constructors (numpy)
 ARRAY_CONSTRUCTORS = ("empty", "zeros", "ones")
+#: a dimension given so in ``shapes`` is known only at run time: the function takes it as a
+#: hidden ``long`` parameter ``<array>_n<k>`` after the array, and callers pass their own
+DYNAMIC = "?"
 
 HELPERS = r"""
 #ifndef FD_TRANSLATE_HELPERS
@@ -232,6 +235,9 @@ class _Signature:
     returns: str | Tup | None
     written: set[str]
     shapes: dict[str, tuple[str, ...]]
+    #: array parameter → its dimensions given as ``"?"`` in ``shapes``, passed as hidden
+    #: ``long`` parameters after it (the caller's sizes of its argument)
+    dynamic: dict[str, tuple[int, ...]] = field(default_factory=dict)
 
 
 @dataclass
@@ -460,7 +466,15 @@ class _Function:
             raise self.error(node, f"the size of array {name!r} is not known (pass "
                                    f"shapes={{{name!r}: (...)}} with C expressions)",
                              missing=True)
+        if name in getattr(self, "params", ()) or name not in self.locals:
+            return tuple(self.size_param(name, k) if str(d) == DYNAMIC else str(d)
+                         for k, d in enumerate(shape))
         return tuple(str(s) for s in shape)
+
+    def size_param(self, name: str, k: int) -> str:
+        """The C name of the hidden parameter holding dimension ``k`` of array parameter
+        ``name`` (a ``"?"`` of ``shapes``)."""
+        return f"{self.cvar(name)}_n{k}"
 
     def e_Subscript(self, node: ast.Subscript) -> tuple[str, Any]:
         # M.shape[k]
@@ -675,28 +689,85 @@ class _Function:
             return (f"fd_round({a})", "long") if t == "double" else (a, "long")
         raise self.error(node, f"built-in {name}()")
 
+    def array_type(self, arg: ast.expr) -> Arr | None:
+        """The type of ``arg`` as an array argument (a name, a row ``M[i]``, ``a if c else
+        b``), None if it is not one."""
+        if isinstance(arg, ast.Name):
+            t = self.locals.get(arg.id)
+            return t if isinstance(t, Arr) else None
+        if (isinstance(arg, ast.Subscript) and isinstance(arg.value, ast.Name)
+                and not isinstance(arg.slice, (ast.Tuple, ast.Slice))):
+            t = self.locals.get(arg.value.id)
+            return Arr(t.elem, 1) if isinstance(t, Arr) and t.ndim == 2 else None
+        if isinstance(arg, ast.IfExp):
+            return self.array_type(arg.body)
+        return None
+
+    def array_argument(self, node: ast.Call, arg: ast.expr, pname: str, ptype: Arr
+                       ) -> tuple[str, list[str], tuple[str, ...]]:
+        """(C code, the arrays it refers to, its C shape) of an argument for array parameter
+        ``pname``: an array name, a row ``M[i]`` of a 2-D array (a pointer into it), or
+        ``a if c else b`` of two such (one pointer or the other)."""
+        if isinstance(arg, ast.IfExp):
+            c, _ = self.scalar(arg.test, test=True)
+            a, na, sa = self.array_argument(node, arg.body, pname, ptype)
+            b, nb, sb = self.array_argument(node, arg.orelse, pname, ptype)
+            if sa != sb:
+                raise self.error(node, f"{ast.unparse(arg)!r}: arrays of different sizes")
+            return f"({c} ? {a} : {b})", na + nb, sa
+        if (isinstance(arg, ast.Subscript) and isinstance(arg.value, ast.Name)
+                and not isinstance(arg.slice, (ast.Tuple, ast.Slice))
+                and isinstance(self.locals.get(arg.value.id), Arr)):
+            at = self.locals[arg.value.id]
+            assert isinstance(at, Arr)
+            if at.ndim != 2 or ptype != Arr(at.elem, 1):
+                raise self.error(node, f"argument {ast.unparse(arg)!r} for array parameter "
+                                       f"{pname!r} (a row of a 2-D array of its element type)")
+            if isinstance(arg.slice, ast.UnaryOp) and isinstance(arg.slice.op, ast.USub):
+                raise self.error(node, f"negative index {ast.unparse(arg)!r} (no wrap-around "
+                                       f"in C)")
+            i, it = self.scalar(arg.slice)
+            if it == "double":
+                raise self.error(node, f"float index {ast.unparse(arg.slice)!r}")
+            shape = self.shape_of(arg.value.id, node)
+            return (f"({self.cvar(arg.value.id)} + ({i}) * ({shape[1]}))", [arg.value.id],
+                    (shape[1],))
+        if not (isinstance(arg, ast.Name) and isinstance(self.locals.get(arg.id), Arr)):
+            if self.inferring and isinstance(arg, ast.Name) and arg.id in self.assigned:
+                raise _Unknown(arg.id)
+            raise self.error(node, f"argument {ast.unparse(arg)!r} for array "
+                                   f"parameter {pname!r} (pass an array name)")
+        at = self.locals[arg.id]
+        assert isinstance(at, Arr)
+        if at != ptype:
+            raise self.error(node, f"array {arg.id!r} ({at.elem}, {at.ndim}-D) passed "
+                                   f"for {pname!r} ({ptype.elem}, {ptype.ndim}-D)")
+        try:
+            shape = self.shape_of(arg.id, node)
+        except TranslationError:
+            shape = ()
+        return self.cvar(arg.id), [arg.id], shape
+
     def call_args(self, node: ast.Call, params: list[tuple[str, str | Arr]],
-                  written: set[str] | None) -> list[str]:
+                  written: set[str] | None,
+                  dynamic: Mapping[str, tuple[int, ...]] | None = None) -> list[str]:
         if len(node.args) != len(params):
             raise self.error(node, f"call with {len(node.args)} arguments of a function of "
                                    f"{len(params)}")
         out = []
+        dynamic = dynamic or {}
         for arg, (pname, ptype) in zip(node.args, params, strict=True):
             if isinstance(ptype, Arr):
-                if not (isinstance(arg, ast.Name) and isinstance(self.locals.get(arg.id), Arr)):
-                    if self.inferring and isinstance(arg, ast.Name) and arg.id in self.assigned:
-                        raise _Unknown(arg.id)
-                    raise self.error(node, f"argument {ast.unparse(arg)!r} for array "
-                                           f"parameter {pname!r} (pass an array name)")
-                at = self.locals[arg.id]
-                assert isinstance(at, Arr)
-                if at != ptype:
-                    raise self.error(node, f"array {arg.id!r} ({at.elem}, {at.ndim}-D) passed "
-                                           f"for {pname!r} ({ptype.elem}, {ptype.ndim}-D)")
+                code, names, shape = self.array_argument(node, arg, pname, ptype)
                 if written is None or pname in written:
-                    self.written.add(arg.id)
-                    self.stmt_writes.add(arg.id)
-                out.append(self.cvar(arg.id))
+                    self.written.update(names)
+                    self.stmt_writes.update(names)
+                out.append(code)
+                for k in dynamic.get(pname, ()):
+                    if len(shape) <= k:
+                        raise self.error(node, f"the size of {ast.unparse(arg)!r} is not known "
+                                               f"(pass shapes=)", missing=True)
+                    out.append(f"(long)({shape[k]})")
             else:
                 c, t = self.scalar(arg)
                 out.append(f"({_C_SCALAR[ptype]})({c})" if t != ptype else c)
@@ -706,7 +777,7 @@ class _Function:
         fn = _py_function(target)
         assert fn is not None
         sig = self.unit.function(fn)
-        args = self.call_args(node, sig.params, sig.written)
+        args = self.call_args(node, sig.params, sig.written, sig.dynamic)
         self.calls_total += 1
         if sig.written:
             self.calls_with_writes += 1
@@ -717,10 +788,8 @@ class _Function:
     def external_call(self, node: ast.Call, target: CFunction) -> tuple[str, Any]:
         params: list[tuple[str, str | Arr]] = []
         for i, arg in enumerate(node.args):
-            if isinstance(arg, ast.Name) and isinstance(self.locals.get(arg.id), Arr):
-                params.append((f"arg{i}", self.locals[arg.id]))
-            else:
-                params.append((f"arg{i}", self.scalar(arg)[1]))
+            at = self.array_type(arg)
+            params.append((f"arg{i}", at if at is not None else self.scalar(arg)[1]))
         written = None if target.writes is None else {f"arg{i}" for i in target.writes}
         args = self.call_args(node, params, written)
         self.calls_total += 1
@@ -781,6 +850,9 @@ class _Function:
                 if n.target.id not in self.locals:
                     return []
                 return [(n.target.id, self.expr(fake)[1])]
+            if isinstance(n, ast.Assign) and len(n.targets) > 1:  # a = b = value
+                t = self.expr(n.value)[1]
+                return [(e.id, t) for e in n.targets if isinstance(e, ast.Name)]
             if not isinstance(n, ast.Assign) or len(n.targets) != 1:
                 return []
             tgt = n.targets[0]
@@ -804,7 +876,17 @@ class _Function:
         return []
 
     def array_constructor(self, value: ast.expr) -> tuple[Arr, tuple[str, ...], str] | None:
-        """(type, C shape, constructor) of ``np.empty/zeros/ones(shape[, dtype])``."""
+        """(type, C shape, constructor) of ``np.empty/zeros/ones(shape[, dtype])``, or of
+        ``a.copy()`` of an array ``a`` (constructor ``"copy:a"``)."""
+        if (isinstance(value, ast.Call) and isinstance(value.func, ast.Attribute)
+                and value.func.attr == "copy" and isinstance(value.func.value, ast.Name)
+                and isinstance(self.locals.get(value.func.value.id), Arr)):
+            if value.args or value.keywords:
+                raise self.error(value, f"{ast.unparse(value)!r} with arguments")
+            src = value.func.value.id
+            at = self.locals[src]
+            assert isinstance(at, Arr)
+            return at, self.shape_of(src, value), f"copy:{src}"
         if not (isinstance(value, ast.Call) and isinstance(value.func, ast.Attribute)
                 and isinstance(value.func.value, ast.Name)
                 and value.func.attr in ARRAY_CONSTRUCTORS
@@ -916,7 +998,7 @@ class _Function:
 
     def s_Assign(self, s: ast.Assign, level: int, pad: str) -> list[str]:
         if len(s.targets) != 1:
-            raise self.error(s, "chained assignment a = b = ...")
+            return self.chained(s, pad)
         tgt = s.targets[0]
         if isinstance(tgt, ast.Name):
             arr = self.array_constructor(s.value)
@@ -950,6 +1032,9 @@ class _Function:
             for i, e in enumerate(names):
                 lines.append(f"{pad}    {self.store(e)[0]} = {tmp}.v{i};")
             return lines + [f"{pad}}}"]
+        row = self.row_store(s, tgt, pad)
+        if row is not None:
+            return row
         code, t = self.expr(s.value)
         if not isinstance(t, str):
             raise self.error(s, f"assigning {ast.unparse(s.value)!r} (not a number)")
@@ -957,6 +1042,53 @@ class _Function:
         if lt == "long" and t == "double":
             raise self.error(s, f"a float stored in integer {ast.unparse(tgt)!r}")
         return [f"{pad}{lhs} = {code};"]
+
+    def chained(self, s: ast.Assign, pad: str) -> list[str]:
+        """``a = b = ... = value`` of a number: the value once, then each target from left to
+        right (Python's order)."""
+        if not all(isinstance(t, ast.Name) for t in s.targets):
+            raise self.error(s, "a chained assignment to anything but names")
+        code, t = self.scalar(s.value)
+        self.tmp += 1
+        tmp = f"fd_t{self.tmp}"
+        lines = [f"{pad}{{", f"{pad}    {_C_SCALAR[t]} {tmp} = {code};"]
+        for tgt in s.targets:
+            lhs, lt = self.store(tgt)
+            if lt == "long" and t == "double":
+                raise self.error(s, f"a float stored in integer {ast.unparse(tgt)!r}")
+            lines.append(f"{pad}    {lhs} = {tmp};")
+        return lines + [f"{pad}}}"]
+
+    def row_store(self, s: ast.Assign, tgt: ast.expr, pad: str) -> list[str] | None:
+        """``M[i, :] = v``: row i of a 2-D array given the elements of a 1-D array of its
+        length (a loop over the row); None for any other assignment."""
+        if not (isinstance(tgt, ast.Subscript) and isinstance(tgt.value, ast.Name)
+                and isinstance(tgt.slice, ast.Tuple) and len(tgt.slice.elts) == 2
+                and isinstance(tgt.slice.elts[1], ast.Slice)):
+            return None
+        whole = tgt.slice.elts[1]
+        assert isinstance(whole, ast.Slice)
+        base, value = tgt.value.id, s.value
+        bt = self.locals.get(base)
+        if (whole.lower is not None or whole.upper is not None or whole.step is not None
+                or not isinstance(bt, Arr) or bt.ndim != 2 or not isinstance(value, ast.Name)
+                or self.locals.get(value.id) != Arr(bt.elem, 1)):
+            raise self.error(s, f"slice {ast.unparse(tgt)!r} (only M[i, :] = v, v a 1-D "
+                                f"array of M's element type)")
+        if isinstance(tgt.slice.elts[0], ast.UnaryOp) \
+                and isinstance(tgt.slice.elts[0].op, ast.USub):
+            raise self.error(s, f"negative index {ast.unparse(tgt)!r} (no wrap-around in C)")
+        i, it = self.scalar(tgt.slice.elts[0])
+        if it == "double":
+            raise self.error(s, f"float index {ast.unparse(tgt.slice.elts[0])!r}")
+        shape = self.shape_of(base, s)
+        self.written.add(base)
+        self.stmt_reads.add(value.id)
+        self.tmp += 1
+        j = f"fd_i{self.tmp}"
+        m = self.cvar(base)
+        return [f"{pad}for (long {j} = 0; {j} < ({shape[1]}); ++{j}) "
+                f"{m}[({i}) * ({shape[1]}) + {j}] = {self.cvar(value.id)}[{j}];"]
 
     def local_array(self, s: ast.Assign, name: str, arr: tuple[Arr, tuple[str, ...], str],
                     pad: str) -> list[str]:
@@ -979,7 +1111,14 @@ class _Function:
             self.array_decl[name] = shape
             lines.append(f"{pad}{elem} {self.cvar(name)}[{count}];")
         n = " * ".join(f"({d})" for d in self.array_decl[name])
-        if kind in ("zeros", "ones"):
+        if kind.startswith("copy:"):
+            src = kind.removeprefix("copy:")
+            self.stmt_reads.add(src)
+            self.tmp += 1
+            i = f"fd_i{self.tmp}"
+            lines.append(f"{pad}for (long {i} = 0; {i} < {n}; ++{i}) {self.cvar(name)}[{i}] = "
+                         f"{self.cvar(src)}[{i}];")
+        elif kind in ("zeros", "ones"):
             self.tmp += 1
             i = f"fd_i{self.tmp}"
             one = {"double": "1.0", "long": "1", "bool": "1"}[t.elem] if kind == "ones" else "0"
@@ -1122,6 +1261,10 @@ class _Function:
             raise self.error(self.node, "default, keyword-only or variable arguments")
         self.params = [arg.arg for arg in a.args]
         ptypes = {arg.arg: self._param_type(arg) for arg in a.args}
+        dynamic = {name: tuple(k for k, d in enumerate(self.unit.shapes.get(name, ()))
+                               if str(d) == DYNAMIC)
+                   for name in self.params if isinstance(ptypes[name], Arr)}
+        dynamic = {name: dims for name, dims in dynamic.items() if dims}
         self.locals.update(ptypes)
         declared = self._return_type()
         self.infer()
@@ -1131,11 +1274,15 @@ class _Function:
             self.unit.tuples[self.returns.cname] = self.returns
         # the written set decides const-ness; callers' own writes were added during the body
         params_c = []
+        hidden: list[str] = []
         for name in self.params:
             t = ptypes[name]
             if isinstance(t, Arr):
                 const = "" if name in self.written else "const "
                 params_c.append(f"{const}{_C_ELEM[t.elem]} *{self.cvar(name)}")
+                for k in dynamic.get(name, ()):
+                    hidden.append(self.size_param(name, k))
+                    params_c.append(f"long {hidden[-1]}")
             else:
                 params_c.append(f"{_C_SCALAR[t]} {self.cvar(name)}")
         ret = ("void" if self.returns is None else self.returns.cname
@@ -1163,6 +1310,7 @@ class _Function:
                    and isinstance(n.value, ast.Name)}
         decls += [f"    (void){self.cvar(name)};" for name in self.locals
                   if name not in loaded]
+        decls += [f"    (void){name};" for name in hidden]
         guard = f"FDK_DEF_{self.cname}"
         self.unit.prototypes.append(f"#ifndef {guard}\n{head};\n#endif")
         self.unit.chunks.append(
@@ -1172,7 +1320,7 @@ class _Function:
         return _Signature(self.cname, [(n, ptypes[n]) for n in self.params], self.returns,
                           {n for n in self.params if n in self.written},
                           {n: self.shape_of(n, self.node) for n in self.params
-                           if isinstance(ptypes[n], Arr) and n in self.unit.shapes})
+                           if isinstance(ptypes[n], Arr) and n in self.unit.shapes}, dynamic)
 
 
 def _structs(tuples: Mapping[str, Tup]) -> str:

@@ -17,7 +17,7 @@ from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
-from ..solvers import dopri5, switching
+from ..solvers import builds, dopri5, switching
 from . import budget
 from .error_estimate import signal_errors, summary_entry, tightened
 from .options import DENSE_MODES as _DENSE_MODES
@@ -418,7 +418,7 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
             firsts.append(model.index(f"{site}_{law.first_state}"))
     if not firsts:
         return np.zeros((0, n))
-    rates = model.module.compiled("_ev_rates")
+    rates = builds.compiled(model, "_ev_rates")
     held, dy, aux = np.zeros(model.n_held), np.empty(n), np.empty(len(model.aux))
     P = np.ascontiguousarray(P, dtype=float)
     T = np.ascontiguousarray(model.T, dtype=float)
@@ -856,7 +856,7 @@ class Simulation:
             "current_scale": self.scales.current,
             "steps": int(stats[1]), "rejected_steps": int(stats[2]),
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
-            "breakpoint_interval_s": grid.base,
+            "breakpoint_interval_s": grid.base, "engine": builds.engine_name(),
         }
         if diverged:  # stopped early: the Result ends where a speed left its bound
             solver_stats.update({"diverged": True, "diverged_at_s": float(stats[4]),
@@ -876,7 +876,7 @@ class Simulation:
         if sum(a.shape[0] for a in aux_parts) == t.shape[0]:  # recorded: joined when read
             run.defer_aux(lambda: _join(aux_parts, len(model.aux)))
         else:  # not recorded (continuous loops, dense output): evaluated when read
-            run.defer_aux(lambda: model.module.auxiliary(t, y, model.P, model.T))
+            run.defer_aux(lambda: builds.compiled(model, "auxiliary")(t, y, model.P, model.T))
         return Result.from_run(run)
 
 

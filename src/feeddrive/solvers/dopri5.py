@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import driver
+from . import builds, driver
 from .driver import (  # noqa: F401 - the status codes, read from here by the engine
     STATUS_DIVERGED,
     STATUS_MAX_STEPS,
@@ -206,7 +206,7 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     memory = new_memory(len(model.states), h_init) if memory is None else memory
     bound = np.full(len(model.states), np.inf) if bound is None else bound
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
-        model.module.integrate(y0, t_end, out_every, base,
+        builds.driver(model, 'integrate')(y0, t_end, out_every, base,
                                np.ascontiguousarray(schedule, dtype=np.int64),
                                model.P if P is None else P, model.T,
                                rtol, atol, rel_mask, h_max, adaptive, max_steps, start, held,

@@ -269,13 +269,88 @@ def real_eigenvalues(A: np.ndarray, wr: np.ndarray, wi: np.ndarray) -> bool:
 
 
 @kernel
+def step_cap_real(J: np.ndarray, live: np.ndarray, zeta_light: float, h_lambda: float
+                  ) -> float:
+    """:func:`step_cap` in real arithmetic alone: NaN where the QR iteration of
+    :func:`real_eigenvalues` does not converge (no LAPACK; the C build of the driver calls
+    this, docs/c-backend.md).
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        n × n Jacobian of the right-hand side [1/s].
+    live : numpy.ndarray
+        n flags: the states that take part [-].
+    zeta_light : float
+        Damping ratio below which a mode counts as lightly damped [-].
+    h_lambda : float
+        Largest h·|λ| allowed on such a mode [-].
+
+    Returns
+    -------
+    float
+        The step cap [s]; inf if there is no such mode (or J is not finite); NaN if the
+        eigenvalues did not converge.
+    """
+    n = J.shape[0]
+    m = 0
+    for i in range(n):
+        if live[i]:
+            m += 1
+    if m == 0:
+        return math.inf
+    A = np.zeros((m + 1, m + 1))
+    if not _live_block(J, live, A):
+        return math.inf
+    wr = np.zeros(m + 1)
+    wi = np.zeros(m + 1)
+    if not real_eigenvalues(A, wr, wi):
+        return math.nan
+    return _light_cap(wr, wi, m, zeta_light, h_lambda)
+
+
+@kernel
+def _live_block(J: np.ndarray, live: np.ndarray, A: np.ndarray) -> bool:
+    """A[1:, 1:] = J's rows and columns of the live states; False if one is not finite."""
+    n = J.shape[0]
+    r = 1
+    for i in range(n):
+        if not live[i]:
+            continue
+        c = 1
+        for j in range(n):
+            if not live[j]:
+                continue
+            if not math.isfinite(J[i, j]):
+                return False
+            A[r, c] = J[i, j]
+            c += 1
+        r += 1
+    return True
+
+
+@kernel
+def _light_cap(wr: np.ndarray, wi: np.ndarray, m: int, zeta_light: float, h_lambda: float
+               ) -> float:
+    """The smallest h_lambda/|λ| over the lightly damped eigenvalues wr[1:] + i·wi[1:]."""
+    cap = math.inf
+    for k in range(1, m + 1):
+        a = math.hypot(wr[k], wi[k])
+        if a == 0.0 or abs(wi[k]) <= 1e-9 * a:
+            continue
+        if -wr[k] / a < zeta_light:
+            cap = min(cap, h_lambda / a)
+    return cap
+
+
+@kernel
 def step_cap(J: np.ndarray, live: np.ndarray, zeta_light: float, h_lambda: float) -> float:
     """The largest step that resolves every lightly damped mode of J (see the module).
 
     The minimum over eigenvalues λ with Im λ ≠ 0 and −Re λ/|λ| < ``zeta_light`` of
     ``h_lambda``/|λ|.  The eigenvalues in real arithmetic (:func:`real_eigenvalues`, ≈ 5×
-    faster than LAPACK's complex ``zgeev`` on these sizes); should that not converge, by
-    ``zgeev``.
+    faster than LAPACK's complex ``zgeev`` on these sizes, :func:`step_cap_real`); should that
+    not converge, by ``zgeev``.
 
     Parameters
     ----------
@@ -293,46 +368,26 @@ def step_cap(J: np.ndarray, live: np.ndarray, zeta_light: float, h_lambda: float
     float
         The step cap [s]; inf if there is no such mode (or J is not finite).
     """
-    n = J.shape[0]
+    cap = step_cap_real(J, live, zeta_light, h_lambda)
+    if not math.isnan(cap):
+        return cap
     m = 0
-    for i in range(n):
+    for i in range(J.shape[0]):
         if live[i]:
             m += 1
-    if m == 0:
-        return math.inf
     A = np.zeros((m + 1, m + 1))
-    r = 1
-    for i in range(n):
-        if not live[i]:
-            continue
-        c = 1
-        for j in range(n):
-            if not live[j]:
-                continue
-            if not math.isfinite(J[i, j]):
-                return math.inf
-            A[r, c] = J[i, j]
-            c += 1
-        r += 1
+    _live_block(J, live, A)
+    Z = np.empty((m, m), dtype=np.complex128)
+    for i in range(m):
+        for j in range(m):
+            Z[i, j] = A[i + 1, j + 1]
+    ev = np.linalg.eigvals(Z)
     wr = np.zeros(m + 1)
     wi = np.zeros(m + 1)
-    if not real_eigenvalues(A.copy(), wr, wi):
-        Z = np.empty((m, m), dtype=np.complex128)
-        for i in range(m):
-            for j in range(m):
-                Z[i, j] = A[i + 1, j + 1]
-        ev = np.linalg.eigvals(Z)
-        for k in range(m):
-            wr[k + 1] = ev[k].real
-            wi[k + 1] = ev[k].imag
-    cap = math.inf
-    for k in range(1, m + 1):
-        a = math.hypot(wr[k], wi[k])
-        if a == 0.0 or abs(wi[k]) <= 1e-9 * a:
-            continue
-        if -wr[k] / a < zeta_light:
-            cap = min(cap, h_lambda / a)
-    return cap
+    for k in range(m):
+        wr[k + 1] = ev[k].real
+        wi[k + 1] = ev[k].imag
+    return _light_cap(wr, wi, m, zeta_light, h_lambda)
 
 
 @kernel

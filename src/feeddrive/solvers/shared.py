@@ -175,6 +175,17 @@ class prepared_models:  # noqa: N801 (a context manager, read as a phrase)
         return exc[0] is ModelPrepared
 
 
+def preparing() -> bool:
+    """Whether this thread runs inside :class:`prepared_models`.
+
+    Returns
+    -------
+    bool
+        True inside it.
+    """
+    return bool(getattr(_DRY_RUN, "on", False))
+
+
 def drivers_on_disk() -> bool:
     """Whether the compile cache holds the dense-output driver (``integrate_dense``): false on
     a cold cache, until the first process that needs it has compiled it.

@@ -1,0 +1,662 @@
+"""The C build of the engine: the one driver of :mod:`feeddrive.solvers.driver`, translated
+with the model's kernels into one C unit per model structure, compiled once, called by ctypes.
+
+Every method runs through the driver's two specialisations (``integrate``: ``dopri5`` and its
+fixed-step variant; ``integrate_dense``: ``modal``, ``auto``, ``rodas4``, ``dopri5-dense`` and
+theirs).  Their text (:func:`feeddrive.solvers.driver.source` with ``inline=False``) is read as
+it is, whatever its authors change, and *lowered* at the boundary between Python and C alone
+(:func:`lowered_source`): the output arrays the numba driver allocates are the caller's
+buffers, the statistics array is written into a caller's array and the driver returns the
+number of outputs.  Everything else — the steps, the RODAS4 Jacobian and linear solves, the
+event location, the eigen-analysis of the modal step cap (:mod:`feeddrive.solvers.modes`, in
+real arithmetic: no LAPACK) — is translated by :mod:`feeddrive.backends.c_translate` from the
+same Python numba compiles.  The unit is compiled through the compiled-object cache
+(:mod:`feeddrive.backends.c_cache`, keyed by source hash, compiler, flags and platform) and
+called with ctypes, which releases the GIL for the call.
+
+The build registers itself as the engine ``"c"`` (:data:`feeddrive.registry.ENGINES`);
+:mod:`feeddrive.solvers.builds` chooses between it and numba.
+
+One difference from the numba build is known and cannot be removed without LAPACK: where the
+real QR iteration of the eigen-analysis does not converge (:func:`step_cap_real
+<feeddrive.solvers.modes.step_cap_real>` returns NaN), numba falls back to LAPACK's ``zgeev``
+and the C build goes without the step cap until the next analysis.
+"""
+
+from __future__ import annotations
+
+import ast
+import ctypes
+import functools
+import hashlib
+import json
+import os
+import tempfile
+import threading
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import registry
+from .c_backend import RHS, SAMPLE_UPDATE, SOLVER_SHAPES, SOLVER_TYPES, c_model_source
+from .c_cache import (
+    CompilerNotFound,
+    available_compiler,
+    cache_folder,
+    cached_library,
+    find_compiler,
+)
+from .c_translate import DYNAMIC, TranslationError, translate_kernels
+
+if TYPE_CHECKING:
+    from ..model.assemble import Model
+
+__all__ = ["USES", "CEngine", "engine_source", "lowered_source"]
+
+#: the driver's uses the engine calls, by name of the numba function they replace
+USES = ("integrate", "integrate_dense")
+#: the numba driver's output arrays → the caller's buffers the C driver writes
+OUTPUTS = {"t_out": "t_buf", "y_out": "y_buf", "aux_out": "aux_buf"}
+STATS = "stats"  # the statistics array the numba driver returns
+STATS_OUT = "stats_out"
+
+
+class _Lower(ast.NodeTransformer):
+    """The driver text lowered to what C can take and give (module docstring)."""
+
+    def __init__(self) -> None:
+        self.n_stats = 0
+        self.count: ast.expr | None = None
+
+    def visit_Assign(self, node: ast.Assign) -> Any:
+        tgt = node.targets[0] if len(node.targets) == 1 else None
+        if isinstance(tgt, ast.Name) and tgt.id in OUTPUTS:
+            return None  # the caller's buffer
+        if isinstance(tgt, ast.Name) and tgt.id == STATS:
+            value = node.value
+            if not (isinstance(value, ast.Call) and ast.unparse(value.func) == "np.array"
+                    and len(value.args) == 1 and isinstance(value.args[0], ast.List)):
+                raise TranslationError(f"{ast.unparse(node)!r}: the driver's statistics are "
+                                       "not an np.array([...]) (lowered_source needs updating)")
+            items = value.args[0].elts
+            self.n_stats = len(items)
+            return [ast.Assign([ast.Subscript(ast.Name(STATS_OUT, ast.Load()), ast.Constant(k),
+                                              ast.Store())], item, lineno=node.lineno)
+                    for k, item in enumerate(items)]
+        self.generic_visit(node)
+        return node
+
+    def visit_Name(self, node: ast.Name) -> ast.Name:
+        if node.id in OUTPUTS:
+            return ast.copy_location(ast.Name(OUTPUTS[node.id], node.ctx), node)
+        return node
+
+    def visit_If(self, node: ast.If) -> Any:
+        self.generic_visit(node)
+        empty = all(isinstance(s, ast.Pass) for s in node.body + node.orelse)
+        if empty and not any(isinstance(n, ast.Call) for n in ast.walk(node.test)
+                             if not (isinstance(n, ast.Call) and isinstance(n.func, ast.Name)
+                                     and n.func.id in ("min", "max", "int", "float"))):
+            return None  # the choice between the caller's buffers and new arrays
+        if not node.body:
+            node.body = [ast.Pass()]
+        return node
+
+    def visit_Return(self, node: ast.Return) -> Any:
+        value = node.value
+        if value is None or (isinstance(value, ast.Constant) and value.value is None):
+            return node
+        first = value.elts[0] if isinstance(value, ast.Tuple) and value.elts else None
+        if not (isinstance(first, ast.Subscript) and isinstance(first.slice, ast.Slice)
+                and first.slice.lower is None and first.slice.upper is not None
+                and isinstance(first.value, ast.Name) and first.value.id == "t_out"):
+            raise TranslationError(f"{ast.unparse(node)!r}: the driver's result is not "
+                                   "(t_out[:count], ...) (lowered_source needs updating)")
+        self.count = first.slice.upper
+        return ast.copy_location(ast.Return(first.slice.upper), node)
+
+    def generic_visit(self, node: ast.AST) -> ast.AST:
+        super().generic_visit(node)
+        for name in ("body", "orelse"):
+            block = getattr(node, name, None)
+            if (name == "body" and isinstance(block, list) and not block
+                    and not isinstance(node, ast.Module)):
+                block.append(ast.Pass())
+        return node
+
+
+def _array_arg(name: str) -> ast.arg:
+    return ast.arg(arg=name, annotation=ast.Attribute(ast.Name("np", ast.Load()), "ndarray",
+                                                      ast.Load()))
+
+
+@functools.cache
+def lowered_source(use: str) -> tuple[str, int]:
+    """The driver specialised for ``use`` (:data:`USES`) as the C build takes it: its outputs
+    written into the caller's ``t_buf``, ``y_buf``, ``aux_buf`` (added as parameters where the
+    use has none), its statistics into ``stats_out`` (a last parameter), its result the number
+    of outputs written.
+
+    Parameters
+    ----------
+    use : str
+        ``"integrate"`` or ``"integrate_dense"``.
+
+    Returns
+    -------
+    source : str
+        Python source of the function ``use``.
+    n_stats : int
+        The length of the statistics.
+    """
+    from ..solvers import driver
+
+    if use not in USES:
+        raise KeyError(f"{use!r}: not a use of the C engine ({', '.join(USES)})")
+    tree = ast.parse(driver.source(use, inline=False))
+    fn = tree.body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    have = {a.arg for a in fn.args.args}
+    fn.args.args += [_array_arg(b) for b in OUTPUTS.values() if b not in have]
+    fn.args.args.append(_array_arg(STATS_OUT))
+    fn.returns = None
+    lower = _Lower()
+    tree = ast.fix_missing_locations(lower.visit(tree))
+    if lower.count is None or not lower.n_stats:
+        raise TranslationError(f"{use}: no statistics or result found in the driver's text "
+                               "(lowered_source needs updating)")
+    return ast.unparse(tree) + "\n", lower.n_stats
+
+
+def _bindings() -> dict[str, Any]:
+    from ..solvers import modes, rodas4, steps
+
+    return {"rhs": RHS, "sample_update": SAMPLE_UPDATE,
+            **{name: steps.function(name) for name in steps.sources()},
+            "_error_norm": steps.error_norm_template,
+            "_pi_factor": steps.pi_factor_template,
+            "_reject_factor": steps.reject_factor_template,
+            "_r4_fd_jacobian": rodas4.fd_jacobian_template,
+            "_r4_frozen_states": rodas4.frozen_states_template,
+            "_r4_spectral_radius": rodas4.spectral_radius_template,
+            "modal_step_cap": modes.step_cap_real}
+
+
+#: array sizes of the driver and what it calls (``"?"``: passed at run time)
+SHAPES: dict[str, tuple[str, ...]] = {
+    **SOLVER_SHAPES,
+    **{name: ("FD_N_STATE",) for name in ("y0", "bound", "v", "w", "scale")},
+    "J_ref": ("FD_N_STATE", "FD_N_STATE"), "held": ("FD_N_HELD",),
+    **{name: (DYNAMIC,) for name in ("stops", "memory", "t_buf", STATS_OUT, "wr", "wi")},
+    "y_buf": (DYNAMIC, "FD_N_STATE"), "aux_buf": (DYNAMIC, "FD_N_AUX"),
+    "switch_rows": (DYNAMIC, "FD_N_STATE"), "W": (DYNAMIC, "FD_N_STATE"),
+    "A": (DYNAMIC, DYNAMIC), "row": ("FD_N_STATE",),
+}
+
+
+def _translated(use: str) -> dict[str, Any]:
+    from ..solvers import driver
+
+    if use == "functions":
+        return _functions_unit()
+    fn = driver.define(lowered_source(use)[0], use)
+    text = translate_kernels([fn], {"N_AUX": "FD_N_AUX"}, bindings=_bindings(),
+                             shapes=SHAPES, param_types=SOLVER_TYPES, names={use: f"fd_{use}"})
+    return {"c": text, "n_stats": lowered_source(use)[1], "params": _c_params(use)}
+
+
+#: the shared module's functions other than the drivers that the C unit holds too
+#: (``model.module.compiled(name)``, :func:`feeddrive.solvers.builds.compiled`): name →
+#: (template, exported C name, sizes, element types)
+FUNCTIONS: dict[str, tuple[str, str, dict[str, tuple[str, ...]], dict[str, str]]] = {
+    "_ev_rates": ("feeddrive.solvers.evaluate:rates_template", "fd_ev_rates",
+                  {**SOLVER_SHAPES, "held": ("FD_N_HELD",), "dy": ("FD_N_STATE",)}, {}),
+    "_ev_central_columns": (
+        "feeddrive.solvers.evaluate:central_columns_template", "fd_ev_central_columns",
+        {**SOLVER_SHAPES, "held": ("FD_N_HELD",), "dp": ("FD_N_STATE",),
+         "dm": ("FD_N_STATE",), "columns": (DYNAMIC,), "steps": (DYNAMIC,),
+         "rows": (DYNAMIC,), "A": (DYNAMIC, DYNAMIC)},
+        {"columns": "long*", "rows": "long*", "steps": "double*"}),
+    "_r4_fd_jacobian": ("feeddrive.solvers.rodas4:fd_jacobian_template", "fd_r4_fd_jacobian",
+                        {**SOLVER_SHAPES, "held": ("FD_N_HELD",)}, dict(SOLVER_TYPES)),
+    "auxiliary": ("feeddrive.solvers.dopri5:auxiliary_template", "fd_auxiliary",
+                  {"t_out": (DYNAMIC,), "y_out": (DYNAMIC, "FD_N_STATE"),
+                   "out": (DYNAMIC, "FD_N_AUX")}, {}),
+}
+
+
+def _template(name: str) -> Any:
+    import importlib
+
+    module, attr = FUNCTIONS[name][0].split(":")
+    return getattr(importlib.import_module(module), attr)
+
+
+def _returned_array(fn: ast.FunctionDef) -> str | None:
+    """The local array a template allocates and returns (``auxiliary``), if any."""
+    last = fn.body[-1]
+    if isinstance(last, ast.Return) and isinstance(last.value, ast.Name):
+        return last.value.id
+    return None
+
+
+@functools.cache
+def _template_result(name: str) -> tuple[str | None, bool]:
+    """(the array the template behind ``name`` allocates and returns, or None; whether it
+    returns a number)."""
+    import inspect
+    import textwrap
+
+    template = ast.parse(textwrap.dedent(inspect.getsource(_template(name)))).body[0]
+    assert isinstance(template, ast.FunctionDef)
+    returns = str(_template(name).__annotations__.get("return")) not in ("None", "")
+    return _returned_array(template), returns
+
+
+def function_source(name: str) -> str:
+    """The text of the template behind ``name`` (:data:`FUNCTIONS`), renamed as in the shared
+    module; an array it allocates and returns becomes its caller's last argument.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`FUNCTIONS`.
+
+    Returns
+    -------
+    str
+        Python source.
+    """
+    import inspect
+    import textwrap
+
+    fn = ast.parse(textwrap.dedent(inspect.getsource(_template(name)))).body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    fn.name = name
+    result = _returned_array(fn)
+    if result is not None:
+        fn.body = [st for st in fn.body[:-1] if not (
+            isinstance(st, ast.Assign) and len(st.targets) == 1
+            and isinstance(st.targets[0], ast.Name) and st.targets[0].id == result)]
+        fn.args.args.append(_array_arg(result))
+        fn.returns = None
+    return ast.unparse(ast.fix_missing_locations(fn)) + "\n"
+
+
+def _functions_unit() -> dict[str, Any]:
+    from ..solvers import driver
+
+    texts, params = [], {}
+    for name, (_, cname, shapes, types) in FUNCTIONS.items():
+        source = function_source(name)
+        fn = driver.define(source, name)
+        fn.__globals__.update(vars(__import__(_template(name).__module__, fromlist=["_"])))
+        texts.append(translate_kernels([fn], {"N_AUX": "FD_N_AUX", "N_HELD": "FD_N_HELD"},
+                                       bindings={"rhs": RHS}, shapes=shapes,
+                                       param_types=types, names={name: cname}))
+        node = ast.parse(source).body[0]
+        assert isinstance(node, ast.FunctionDef)
+        params[name] = _params_of(node, shapes, types)
+    return {"c": "\n".join(texts), "n_stats": 0, "params": params}
+
+
+def _sources_digest() -> str:
+    """The hash of everything the drivers' C text is made from: the solver templates and
+    kernels (:data:`feeddrive._jit.SOURCE_DIGEST`) and the translator's own files."""
+    from .. import _jit
+
+    digest = hashlib.sha256(_jit.SOURCE_DIGEST.encode())
+    here = Path(__file__).resolve().parent
+    for name in ("c_translate.py", "c_backend.py", "c_engine.py"):
+        digest.update((here / name).read_bytes())
+    return digest.hexdigest()[:20]
+
+
+@functools.cache
+def driver_unit(use: str) -> dict[str, Any]:
+    """The driver ``use`` (:func:`lowered_source`) in C, exported as ``fd_<use>``, with every
+    solver function it calls (it calls the model file's ``fd_rhs`` and ``fd_sample_update``,
+    :func:`feeddrive.backends.c_backend.c_model_source`); with the entry's parameters.
+
+    Specialising and translating the driver costs ≈ 0.7 CPU s, the same for every model: the
+    result is kept in the C cache's folder under the hash of its sources
+    (:func:`_sources_digest`), written whole (a temporary file renamed) or not at all.
+
+    Parameters
+    ----------
+    use : str
+        ``"integrate"`` or ``"integrate_dense"``.
+
+    Returns
+    -------
+    dict
+        ``"c"``: the C99 text; ``"n_stats"``: the statistics' length; ``"params"``: the
+        entry's parameters as (name, kind) pairs (:func:`_c_params`).
+    """
+    path = cache_folder() / f"driver-{use}-{_sources_digest()}.json"
+    try:
+        kept = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(kept, dict) and set(kept) == {"c", "n_stats", "params"}:
+            if isinstance(kept["params"], dict):
+                kept["params"] = {k: [tuple(p) for p in v] for k, v in kept["params"].items()}
+            else:
+                kept["params"] = [tuple(p) for p in kept["params"]]
+            return kept
+    except (OSError, ValueError):
+        pass
+    unit = _translated(use)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=".driver-", suffix=".json")
+        with os.fdopen(handle, "w", encoding="utf-8") as out:
+            json.dump(unit, out)
+        os.replace(tmp, path)
+    except OSError:  # a read-only cache: translated again by the next process
+        pass
+    return unit
+
+
+def engine_source(model: Model) -> str:
+    """One C unit of ``model``'s structure: its kernels (parameters and tables passed at run
+    time) and both drivers.
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+
+    Returns
+    -------
+    str
+        C99 source.
+    """
+    return (c_model_source(model, data=False) + "\n/* ---- the drivers "
+            "(feeddrive.solvers.driver, lowered by feeddrive.backends.c_engine) */\n"
+            + "\n".join(driver_unit(use)["c"] for use in (*USES, "functions")))
+
+
+_D = ctypes.POINTER(ctypes.c_double)
+_L = ctypes.POINTER(ctypes.c_long)
+_B = ctypes.POINTER(ctypes.c_ubyte)
+_ELEM = {"double*": (_D, np.float64), "long*": (_L, np.int64), "bool*": (_B, np.bool_)}
+_KINDS = {"double*": "f", "long*": "iu", "bool*": "biu"}  # element kinds of that size taken
+
+
+def _c_params(use: str) -> list[tuple[str, str]]:
+    """(name, kind) of the C entry's parameters in order: kind "double", "long", "int" or an
+    array type of :data:`_ELEM`, then its run-time sizes as ("name#k", "size")."""
+    source, _ = lowered_source(use)
+    fn = ast.parse(source).body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    return _params_of(fn, SHAPES, SOLVER_TYPES)
+
+
+def _params_of(fn: ast.FunctionDef, shapes: dict[str, tuple[str, ...]],
+               types: dict[str, str]) -> list[tuple[str, str]]:
+    out: list[tuple[str, str]] = []
+    for a in fn.args.args:
+        spec = (types.get(f"{fn.name}.{a.arg}") or types.get(a.arg)
+                or (ast.unparse(a.annotation) if a.annotation else ""))
+        if spec in ("np.ndarray", "double*", "long*", "bool*"):
+            out.append((a.arg, "double*" if spec == "np.ndarray" else spec))
+            out += [(f"{a.arg}#{k}", "size") for k, d in enumerate(shapes.get(a.arg, ()))
+                    if d == DYNAMIC]
+        else:
+            out.append((a.arg, {"float": "double", "int": "long", "bool": "int"}[spec]))
+    return out
+
+
+_ARRAY, _SIZE, _DOUBLE, _INT = range(4)
+
+
+class _Entry:
+    """One exported function of a loaded library, called with numpy arrays: each array
+    passed by its address (``c_void_p``; ≈ 3 µs an array, where ``data_as`` costs 5),
+    checked to be C-contiguous with elements of the C type's kind and size."""
+
+    def __init__(self, lib: ctypes.CDLL, use: str) -> None:
+        if use in FUNCTIONS:
+            self.params = driver_unit("functions")["params"][use]
+            self.n_stats = 0
+            self.fn = getattr(lib, FUNCTIONS[use][1])
+        else:
+            unit = driver_unit(use)
+            self.params = unit["params"]
+            self.n_stats = unit["n_stats"]
+            self.fn = getattr(lib, f"fd_{use}")
+        self.fn.restype = ctypes.c_long
+        self.names = [name for name, kind in self.params if kind != "size"]
+        where = {name: i for i, name in enumerate(self.names)}
+        # (what, which argument, dimension or accepted element type)
+        self.plan: list[tuple[int, int, Any]] = []
+        argtypes: list[Any] = []
+        for name, kind in self.params:
+            if kind == "size":
+                base, k = name.split("#")
+                self.plan.append((_SIZE, where[base], int(k)))
+                argtypes.append(ctypes.c_long)
+            elif kind in _ELEM:
+                self.plan.append((_ARRAY, where[name], kind))
+                argtypes.append(ctypes.c_void_p)
+            elif kind == "double":
+                self.plan.append((_DOUBLE, where[name], None))
+                argtypes.append(ctypes.c_double)
+            else:
+                self.plan.append((_INT, where[name], None))
+                argtypes.append(ctypes.c_int if kind == "int" else ctypes.c_long)
+        self.fn.argtypes = argtypes
+        self._accepted: dict[tuple[np.dtype[Any], str], bool] = {}
+        self._last: list[tuple[Any, int] | None] = [None] * len(self.names)
+        self.keep = use in FUNCTIONS and use != "auxiliary"
+
+    def _check(self, a: Any, kind: str, position: int) -> None:
+        key = (a.dtype, kind)
+        ok = self._accepted.get(key)
+        if ok is None:
+            dtype = np.dtype(_ELEM[kind][1])
+            ok = self._accepted[key] = a.dtype == dtype or (
+                a.dtype.itemsize == dtype.itemsize and a.dtype.kind in _KINDS[kind])
+        if not (ok and a.flags.c_contiguous):
+            raise TypeError(f"{self.names[position]}: a C-contiguous "
+                            f"{np.dtype(_ELEM[kind][1]).name} array is expected, not "
+                            f"{a.dtype} {a.shape}")
+
+    def positional(self, args: Sequence[Any]) -> int:
+        """Call with the arguments in the order of :attr:`names`.
+
+        With :attr:`keep` (the linearisations' functions, whose arrays are small), the
+        array passed last at each position is kept with its address: a caller that passes
+        the same arrays call after call (thousands of calls) pays the address and the check
+        once.  Kept, an array cannot be freed, so no other array can take its place under
+        the same identity.  The drivers and ``auxiliary`` keep nothing (their output arrays
+        are the run's, megabytes), their calls being few."""
+        out: list[Any] = []
+        last = self._last
+        for what, i, extra in self.plan:
+            a = args[i]
+            if what == _ARRAY:
+                seen = last[i]
+                if seen is not None and seen[0] is a:
+                    out.append(seen[1])
+                    continue
+                self._check(a, extra, i)
+                address = a.ctypes.data
+                if self.keep:
+                    last[i] = (a, address)
+                out.append(address)
+            elif what == _SIZE:
+                out.append(a.shape[extra])
+            elif what == _DOUBLE:
+                out.append(float(a))
+            else:
+                out.append(int(a))
+        return int(self.fn(*out))
+
+    def __call__(self, values: dict[str, Any]) -> int:
+        return self.positional([values[name] for name in self.names])
+
+
+class CEngine:
+    """The C build: per model structure one library (:func:`engine_source`), its drivers
+    called with the arguments, in the order, of the numba ones
+    (:mod:`feeddrive.solvers.shared`) and giving the same results."""
+
+    name = "c"
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._libraries: dict[str, ctypes.CDLL] = {}
+        self._entries: dict[tuple[int, str], _Entry] = {}
+        self._functions: dict[tuple[int, str], Callable[..., Any]] = {}
+        self._compiler: dict[tuple[str | None, str | None], bool] = {}
+
+    def available(self, required: bool = False) -> bool:
+        """Whether a C compiler is found (without one, :data:`~feeddrive.backends.c_cache.
+        NO_COMPILER` is said once per process).
+
+        Parameters
+        ----------
+        required : bool, default False
+            ``FEEDDRIVE_ENGINE=c``: no compiler is an error.
+
+        Returns
+        -------
+        bool
+            True with a compiler.
+
+        Raises
+        ------
+        CompilerNotFound
+            With ``required`` and no compiler: one line saying how to get one.
+        """
+        where = (os.environ.get("CC"), os.environ.get("PATH"))  # asked once per setting
+        if required:
+            try:
+                find_compiler()
+            except CompilerNotFound as err:
+                raise CompilerNotFound(f"FEEDDRIVE_ENGINE = 'c': {err}; or unset it to use "
+                                       "numba") from None
+            return True
+        found = self._compiler.get(where)
+        if found is None:
+            found = self._compiler[where] = available_compiler() is not None
+        return found
+
+    def _library(self, model: Model) -> ctypes.CDLL:
+        module = model.module
+        lib: ctypes.CDLL | None = getattr(module, "_fd_c_engine", None)
+        if lib is not None:
+            return lib
+        with self._lock:
+            lib = getattr(module, "_fd_c_engine", None)
+            if lib is None:
+                text = engine_source(model)
+                key = hashlib.sha256(text.encode()).hexdigest()
+                lib = self._libraries.get(key)
+                if lib is None:
+                    lib = ctypes.CDLL(str(cached_library(text)))
+                    self._libraries[key] = lib
+                setattr(module, "_fd_c_engine", lib)  # noqa: B010 (a generated module)
+        return lib
+
+    def _entry(self, model: Model, use: str) -> _Entry:
+        lib = self._library(model)
+        key = (id(lib), use)
+        entry = self._entries.get(key)
+        if entry is None:
+            entry = self._entries[key] = _Entry(lib, use)
+        return entry
+
+    def function(self, model: Model, name: str) -> Callable[..., Any] | None:
+        """The C function ``name`` of ``model`` (a key of :data:`FUNCTIONS`), taking the
+        arguments of ``model.module.compiled(name)`` and returning what it returns; None for
+        a function the C unit does not hold.
+
+        Parameters
+        ----------
+        model : Model
+            The assembled model.
+        name : str
+            A function of the shared drivers' module.
+
+        Returns
+        -------
+        callable or None
+            The function.
+        """
+        if name not in FUNCTIONS:
+            return None
+        entry = self._entry(model, name)
+        key = (id(entry), name)
+        done = self._functions.get(key)
+        if done is not None:
+            return done
+        result, returns = _template_result(name)
+        n_aux = len(model.aux)
+        positional = entry.positional
+
+        if result is not None:  # auxiliary: the (samples, N_AUX) array it returns
+            def call(*args: Any) -> Any:
+                out = np.empty((len(args[0]), n_aux))
+                positional([*args, out])
+                return out
+        elif returns:
+            def call(*args: Any) -> Any:
+                return positional(args)
+        else:
+            def call(*args: Any) -> Any:
+                positional(args)
+        self._functions[key] = call
+        return call
+
+    def driver(self, model: Model, use: str) -> Callable[..., Any]:
+        """The C driver ``use`` of ``model``, taking the numba driver's arguments and
+        returning what it returns: ``(t_out, y_out, aux_out, stats, held)``.
+
+        Parameters
+        ----------
+        model : Model
+            The assembled model.
+        use : str
+            ``"integrate"`` or ``"integrate_dense"``.
+
+        Returns
+        -------
+        callable
+            The driver.
+        """
+        from ..solvers import driver as template
+        from ..solvers import shared
+
+        entry = self._entry(model, use)
+        if shared.preparing():  # inside prepared_models: the library built, nothing run
+            raise shared.ModelPrepared(use)
+        names = template.USES[use][0]
+        n_state, n_aux = len(model.states), len(model.aux)
+
+        def call(*args: Any) -> tuple[np.ndarray, ...]:
+            values = dict(zip(names, args, strict=True))
+            n_break = int(round(values["t_end"] / values["base"]))
+            n_out = max(0, (n_break - values["start"]) // values["out_every"] + 1)
+            n_aux_out = n_out if values.get("want_aux", True) else 0
+            t_buf, y_buf, aux_buf = (values.get(b) for b in OUTPUTS.values())
+            if not (t_buf is not None and y_buf is not None and aux_buf is not None
+                    and t_buf.shape[0] >= n_out and y_buf.shape[0] >= n_out
+                    and y_buf.shape[1] == n_state and aux_buf.shape[0] >= n_aux_out
+                    and aux_buf.shape[1] == n_aux):
+                t_buf = np.empty(n_out)
+                y_buf = np.empty((n_out, n_state))
+                aux_buf = np.empty((n_aux_out, n_aux))
+            values.update(t_buf=t_buf, y_buf=y_buf, aux_buf=aux_buf)
+            stats = np.zeros(entry.n_stats)
+            values[STATS_OUT] = stats
+            count = entry(values)
+            return (t_buf[:count], y_buf[:count], aux_buf[:min(count, aux_buf.shape[0])],
+                    stats, values["held"])
+
+        return call
+
+
+registry.register(registry.ENGINES, CEngine.name, CEngine())

@@ -1,0 +1,113 @@
+"""Which build of the engine runs a model's drivers: C where a compiler is found, else numba.
+
+The drivers (:mod:`feeddrive.solvers.driver`) exist in two builds from one text: numba's
+(:mod:`feeddrive.solvers.shared`) and the C build (:mod:`feeddrive.backends.c_engine`, a
+plug-in of the group :data:`feeddrive.registry.ENGINES`: the core does not import the code
+generators).  :func:`driver` picks one per call:
+
+* ``FEEDDRIVE_ENGINE=numba``: numba;
+* ``FEEDDRIVE_ENGINE=c``: C, an error without a compiler;
+* unset (or ``auto``): C where a compiler is found; else numba, said once per process in one
+  line on standard error (:data:`feeddrive.backends.c_cache.NO_COMPILER`).
+
+Both give the same results (the regression corpus, docs/c-backend.md "The engine build").
+"""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING, Any
+
+from .. import registry
+
+if TYPE_CHECKING:
+    from ..model.assemble import Model
+
+#: the environment variable that forces a build
+ENGINE_ENV = "FEEDDRIVE_ENGINE"
+#: its values: "auto" (the default), "c" and "numba"
+CHOICES = ("auto", "c", "numba")
+
+
+def chosen() -> str:
+    """The build ``FEEDDRIVE_ENGINE`` asks for.
+
+    Returns
+    -------
+    str
+        ``"auto"``, ``"c"`` or ``"numba"``.
+
+    Raises
+    ------
+    ValueError
+        One line naming the variable, its value and the choices.
+    """
+    raw = os.environ.get(ENGINE_ENV, "")
+    value = raw.strip().lower() or "auto"
+    if value not in CHOICES:
+        raise ValueError(f"{ENGINE_ENV} = {raw!r}: expected one of {', '.join(CHOICES)} "
+                         "(unset: auto, C where a compiler is found)")
+    return value
+
+
+def engine_name() -> str:
+    """The build that runs the drivers in this process now: ``"c"`` or ``"numba"``.
+
+    Returns
+    -------
+    str
+        The build's name.
+    """
+    choice = chosen()
+    if choice == "numba":
+        return "numba"
+    engine = registry.table(registry.ENGINES).get("c")
+    if engine is None or not engine.available(required=choice == "c"):
+        return "numba"
+    return "c"
+
+
+def driver(model: Model, use: str) -> Any:
+    """``model``'s driver ``use`` (``"integrate"`` or ``"integrate_dense"``) in the build of
+    :func:`engine_name`, taking and returning what the numba one does.
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+    use : str
+        The driver.
+
+    Returns
+    -------
+    callable
+        The driver.
+    """
+    if engine_name() == "numba":
+        return getattr(model.module, use)
+    return registry.table(registry.ENGINES)["c"].driver(model, use)
+
+
+def compiled(model: Model, name: str) -> Any:
+    """``model``'s function ``name`` of the shared drivers' module (``_ev_rates``,
+    ``_ev_central_columns``, ``_r4_fd_jacobian``, ``auxiliary`` …) in the build of
+    :func:`engine_name`, taking and returning what ``model.module.compiled(name)`` does; a
+    function the C build does not hold is numba's.
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+    name : str
+        The function.
+
+    Returns
+    -------
+    callable
+        The function.
+    """
+    if engine_name() == "c":
+        fn = registry.table(registry.ENGINES)["c"].function(model, name)
+        if fn is not None:
+            return fn
+    return model.module.compiled(name)

@@ -1,0 +1,212 @@
+"""The C build of the engine (issue 42 items 1–2, :mod:`feeddrive.backends.c_engine`): the
+choice of build (``FEEDDRIVE_ENGINE``), the driver's text lowered only at the Python/C
+boundary, the unit compiled with the strict warning set, and every method of the driver
+giving numba's results — split into chunks with the memory carried over, and stopped by the
+memory's stop slot with the same status.  The whole regression corpus through both builds:
+tests/validation/test_engine_builds.py."""
+
+from __future__ import annotations
+
+import ast
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import feeddrive as fd
+from feeddrive.backends import c_cache, c_engine
+from feeddrive.backends.c_backend import STRICT_FLAGS
+from feeddrive.model.reference import ConstantSpeed
+from feeddrive.solvers import builds, dopri5, driver, switching
+
+HAVE_CC = any(shutil.which(c) for c in ("cc", "gcc", "clang"))
+needs_cc = pytest.mark.skipif(not HAVE_CC, reason="no C compiler (cc, gcc, clang) on PATH")
+
+
+def test_the_build_is_chosen_by_feeddrive_engine(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "numba")
+    assert builds.engine_name() == "numba"
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", " Fortran ")
+    with pytest.raises(ValueError) as info:
+        builds.engine_name()
+    message = str(info.value)
+    assert "\n" not in message
+    assert "FEEDDRIVE_ENGINE = ' Fortran '" in message and "auto, c, numba" in message
+
+
+def _no_compiler(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.delenv("CC", raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path))  # an empty folder: no cc, gcc, clang
+    monkeypatch.setattr(c_cache, "_SAID", [])
+
+
+def test_without_a_compiler_numba_runs_said_once_in_one_line(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+        ) -> None:
+    _no_compiler(monkeypatch, tmp_path)
+    monkeypatch.delenv("FEEDDRIVE_ENGINE", raising=False)
+    assert builds.engine_name() == "numba"
+    assert builds.engine_name() == "numba"
+    err = capsys.readouterr().err
+    assert err == c_cache.NO_COMPILER + "\n"  # once, one line, how to get either
+
+
+def test_forcing_c_without_a_compiler_is_a_one_line_error(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    _no_compiler(monkeypatch, tmp_path)
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "c")
+    with pytest.raises(c_cache.CompilerNotFound) as info:
+        builds.engine_name()
+    assert "\n" not in str(info.value) and "FEEDDRIVE_ENGINE = 'c'" in str(info.value)
+
+
+@pytest.mark.parametrize("use", c_engine.USES)
+def test_the_driver_is_lowered_at_the_boundary_only(use: str) -> None:
+    """The outputs become the caller's buffers, the statistics a caller's array, the result
+    the count; every other statement of the driver's text is kept."""
+    text, n_stats = c_engine.lowered_source(use)
+    fn = ast.parse(text).body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    names = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)}
+    assert not names & set(c_engine.OUTPUTS) and "stats" not in names
+    assert [a.arg for a in fn.args.args][-1] == c_engine.STATS_OUT
+    assert n_stats == (len(switching.STAT_NAMES) if use == "integrate_dense" else 5)
+    original = ast.parse(driver.source(use, inline=False)).body[0]
+    assert isinstance(original, ast.FunctionDef)
+    def calls(tree: ast.AST) -> list[str]:
+        returned = {id(n) for r in ast.walk(tree) if isinstance(r, ast.Return)
+                    for n in ast.walk(r)}  # the result (its slices) is what changes
+        return sorted(ast.unparse(n.func) for n in ast.walk(tree) if isinstance(n, ast.Call)
+                      and id(n) not in returned and not ast.unparse(n.func).startswith("np."))
+
+    # every step, Jacobian, event and eigen-analysis call is there
+    assert calls(fn) == calls(original)
+
+
+SYSTEM = fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+PROFILE = ConstantSpeed(0.5e-3, 16e-3)
+
+
+@needs_cc
+def test_the_engine_unit_compiles_with_the_strict_warning_set(tmp_path: Path) -> None:
+    source = tmp_path / "engine.c"
+    source.write_text(c_engine.engine_source(SYSTEM.model(PROFILE)))
+    cc = c_cache.find_compiler()
+    out = subprocess.run([*cc, *STRICT_FLAGS, "-c", str(source), "-o", str(tmp_path / "e.o")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+
+
+def _halves(model: fd.Model, use: str, mode: int, stop: bool = False) -> list[np.ndarray]:
+    """A 0.2-s run in two calls (the memory carried over), or one call stopped at once."""
+    n = len(model.states)
+    atol = np.full(n, 1e-9)
+    rel = np.ones(n)
+    sched = np.zeros(len(model.clocks), dtype=np.int64)
+    y0 = np.zeros(n)
+    held = np.zeros(model.n_held)
+    out: list[np.ndarray] = []
+    if use == "integrate":
+        memory = np.zeros(4 + n + 2)
+        memory[0], memory[1] = 1e-6, 1e-4
+    else:
+        memory = switching.new_memory(n)
+    if stop:
+        memory[-2] = 1.0
+    y, start = y0, 0
+    for t_end in ((0.2,) if stop else (0.1, 0.2)):
+        if use == "integrate":
+            t, yy, aa, stats, _ = dopri5.integrate(model, y, t_end, 10, 1e-3, sched, 1e-6,
+                                                   atol, rel, 1e-6, 1e-3, 1, 10**6,
+                                                   start=start, held=held, memory=memory)
+        else:
+            t, yy, aa, stats, _ = switching.integrate(model, y, t_end, 10, 1e-3, sched, 1e-6,
+                                                      atol, rel, 1e-6, np.inf, 1, 10**6, mode,
+                                                      np.zeros(0), start=start, held=held,
+                                                      memory=memory)
+        out += [t.copy(), yy.copy(), aa.copy(), stats.copy()]
+        y, start = yy[-1].copy(), int(round(t_end / 1e-3))
+    return [*out, held, memory]
+
+
+@needs_cc
+@pytest.mark.parametrize("use, mode", [("integrate", 0), ("integrate_dense", 0),
+                                       ("integrate_dense", 1), ("integrate_dense", 2),
+                                       ("integrate_dense", 3)],
+                         ids=["dopri5", "dopri5-dense", "rodas4", "auto", "modal"])
+def test_every_method_gives_numbas_results_in_chunks_and_when_stopped(
+        use: str, mode: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Bit for bit: the same operations in the same order (gcc without contraction)."""
+    model = SYSTEM.model(PROFILE)
+    for stop in (False, True):
+        runs = {}
+        for engine in ("numba", "c"):
+            monkeypatch.setenv("FEEDDRIVE_ENGINE", engine)
+            runs[engine] = _halves(model, use, mode, stop)
+        for a, b in zip(runs["numba"], runs["c"], strict=True):
+            np.testing.assert_array_equal(a, b)
+        status = runs["c"][3][0]
+        assert status == (driver.STATUS_STOPPED if stop else driver.STATUS_OK)
+
+
+@needs_cc
+def test_the_linearisations_and_auxiliary_functions_give_numbas_results(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The shared module's other functions the C unit holds (the rates, central-difference
+    columns, grouped Jacobian of the linearisations and steady states, the deferred auxiliary
+    signals): bit for bit at random states."""
+    model = SYSTEM.model(PROFILE)
+    n, n_aux = len(model.states), len(model.aux)
+    rng = np.random.default_rng(42)
+    y = rng.normal(size=n) * np.array(model.tolerance_scales) * 1e3
+    held = np.zeros(model.n_held)
+    P, T = np.ascontiguousarray(model.P), np.ascontiguousarray(model.T)
+    got: dict[str, list[np.ndarray]] = {}
+    for engine in ("numba", "c"):
+        monkeypatch.setenv("FEEDDRIVE_ENGINE", engine)
+        dy, aux = np.empty(n), np.empty(n_aux)
+        builds.compiled(model, "_ev_rates")(0.01, y, held, P, T, dy, aux)
+        cols = np.arange(n, dtype=np.int64)
+        A = np.empty((n, n))
+        builds.compiled(model, "_ev_central_columns")(
+            0.01, y, held, P, T, cols, np.full(n, 1e-7), cols, A, np.empty(n), np.empty(n),
+            np.empty(n), np.empty(n_aux))
+        J, ft, f0 = np.empty((n, n)), np.empty(n), dy.copy()
+        calls = builds.compiled(model, "_r4_fd_jacobian")(
+            0.01, y, f0, held, P, T, np.full(n, 1e-9), J, ft, np.empty(n), np.empty(n),
+            np.empty(n_aux), np.ones(n, dtype=np.bool_),
+            np.ascontiguousarray(model.jacobian_pattern), model.jacobian_colours)
+        out = builds.compiled(model, "auxiliary")(np.array([0.0, 0.01]), np.stack([y, 2 * y]),
+                                                  P, T)
+        got[engine] = [dy, aux, A, J, ft, np.array([calls]), out]
+    for a, b in zip(got["numba"], got["c"], strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert got["c"][5][0] > 0 and got["c"][6].shape == (2, n_aux)
+
+
+@needs_cc
+def test_a_function_called_again_reads_and_writes_the_arrays_of_that_call(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The linearisations' functions keep the arrays of the last call with their addresses;
+    a call with other arrays (or the same array changed in place) uses those."""
+    model = SYSTEM.model(PROFILE)
+    n, n_aux = len(model.states), len(model.aux)
+    held, P, T = np.zeros(model.n_held), np.ascontiguousarray(model.P), model.T
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "c")
+    rates = builds.compiled(model, "_ev_rates")
+    y, dy, aux = np.full(n, 1e-4), np.empty(n), np.empty(n_aux)
+    rates(0.0, y, held, P, T, dy, aux)
+    first = dy.copy()
+    y[:] = 2e-4  # the same array, changed in place
+    rates(0.0, y, held, P, T, dy, aux)
+    other_dy = np.empty(n)
+    rates(0.0, np.full(n, 1e-4), held, P, T, other_dy, aux)  # new arrays
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "numba")
+    reference = builds.compiled(model, "_ev_rates")
+    expected = np.empty(n)
+    reference(0.0, np.full(n, 2e-4), held, P, T, expected, np.empty(n_aux))
+    np.testing.assert_array_equal(dy, expected)
+    np.testing.assert_array_equal(other_dy, first)
+    assert not np.array_equal(first, expected)
