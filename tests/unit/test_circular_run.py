@@ -56,5 +56,7 @@ def test_refusals_come_before_any_run(monkeypatch) -> None:
         run_circular_test(xy, radius=0.05, feed=FEED, nut_speed=0.1)
     with pytest.raises(ParameterError, match="axes = "):
         run_circular_test(xy, radius=0.05, feed=FEED, axes=("x", "x"))
-    with pytest.raises(ParameterError, match="lead_arc"):
-        run_circular_test(xy, radius=0.05, feed=FEED, lead_arc=math.pi)
+    with pytest.raises(ParameterError, match="lead_arc = 0.05: the feed ramp"):
+        run_circular_test(xy, radius=0.05, feed=FEED, lead_arc=0.05)
+    with pytest.raises(ParameterError, match="lead_arc = -1.0: expected a value > 0"):
+        run_circular_test(xy, radius=0.05, feed=FEED, lead_arc=-1.0)
