@@ -83,13 +83,15 @@ class LeadIn:
 
     def describe(self) -> str:
         """One line stating the lead arc and the rule's choice (summary, record, report)."""
-        rule = (f"the settling rule's {math.degrees(self.rule_arc):.4g}°: the feed ramp, then "
-                f"the slowest closed-loop mode (axis {self.axis}, {self.frequency:.3g} Hz, "
-                f"decaying at {self.decay_rate:.3g} 1/s) down to {self.fraction:.1%}"
-                if math.isfinite(self.rule_arc) else "the settling rule not computed")
-        if self.given:
-            return f"lead arcs {math.degrees(self.arc):.4g}° as given ({rule})"
-        return f"lead arcs {math.degrees(self.arc):.4g}°, {rule}"
+        how = (f"the feed ramp, then the slowest closed-loop mode (axis {self.axis}, "
+               f"{self.frequency:.3g} Hz, decaying at {self.decay_rate:.3g} 1/s) down to "
+               f"{self.fraction:.1%}")
+        arc = f"lead arcs {math.degrees(self.arc):.4g}°"
+        if not self.given:
+            return f"{arc} by the settling rule: {how}"
+        if not math.isfinite(self.rule_arc):
+            return f"{arc} as given (the settling rule not computed)"
+        return f"{arc} as given (the settling rule's {math.degrees(self.rule_arc):.4g}°: {how})"
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form [°, 1/s, Hz]."""
