@@ -15,6 +15,7 @@ about 50 µm, 1 % of R (measured: G(b) 69.67 µm, spikes 53.1–53.7 µm)."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,6 +31,8 @@ from feeddrive.analysis.circular_run import (
 from feeddrive.machine import Machine, MachineAxis, load_machine
 from feeddrive.parameters import preset
 
+DOC = " ".join((Path(__file__).resolve().parents[2] / "docs" / "acceptance-tests.md")
+               .read_text(encoding="utf-8").split())
 DRIVE = preset("wang2021-drive")
 XY = Machine(name="xy", axes=(MachineAxis("x", DRIVE, "cdfs", 0.4),
                               MachineAxis("y", DRIVE, "cdfs", 0.4)))
@@ -109,6 +112,10 @@ def test_doubling_the_rules_lead_arc_moves_g_and_the_spikes_by_under_1_percent(r
     base = _numbers(run.test)
     assert longer[0] == pytest.approx(base[0], rel=0.005)
     assert longer[1:] == pytest.approx(base[1:], rel=0.015)
+    # the docs quote this run's figures
+    row = (f"| the comparison's, R = 5 mm, F = 5 mm/s | {math.degrees(lead.arc):.1f}° | "
+           f"{base[0] * 1e6:.2f} µm | {longer[0] * 1e6:.2f} µm")
+    assert row in DOC, row
 
 
 def test_a_45_degree_lead_arc_is_too_short_for_this_loop(run) -> None:
@@ -130,6 +137,11 @@ def test_the_rule_makes_the_xy_tables_g_stable_to_doubling_the_lead() -> None:
                              .test) for k in (1.0, 2.0))
     assert longer[0] == pytest.approx(base[0], rel=0.005)
     assert longer[1:] == pytest.approx(base[1:], rel=0.01)
+    row = (f"| `xy-table`, R = 50 mm, F = 5000 mm/min | {math.degrees(lead.arc):.1f}° | "
+           f"{base[0] * 1e6:.1f} µm | {longer[0] * 1e6:.1f} µm")
+    assert row in DOC, row
+    assert f"{SETTLE_FRACTION * 100:g} % of its start (`SETTLE_FRACTION`)" in DOC
+    assert f"σ = {lead.decay_rate:.2f} 1/s ({lead.frequency:.2f} Hz)" in DOC
     assert base[0] < 0.3 * _numbers(run_circular_test(xy, radius=0.05, feed=feed,
                                                       lead_arc=math.radians(90.0)).test)[0]
 
