@@ -292,7 +292,7 @@ def settling_lead(machine: Machine, axes: tuple[str, str], *, radius: float, fee
         raise ParameterError("lead_arc", None, f"axis {name}'s closed loop at the feed "
                              f"{feed * 6e4:.6g} mm/min has a pole at {-rate:.3g} 1/s "
                              f"({frequency:.3g} Hz) that does not decay; no lead-in lets it "
-                             "settle; expected a lead arc given [rad]")
+                             "settle; expected the lead arc given")
     settle = feed * math.log(1.0 / fraction) / rate
     arc = (feed ** 2 / (2.0 * acceleration) + settle) / radius
     return LeadIn(arc=arc, rule_arc=arc, given=False, axis=name, decay_rate=rate,

@@ -179,4 +179,5 @@ def _as_option(field: str, value: Any) -> tuple[str, Any]:
         scale = {"radius": 1e3, "feed": 6e4, "acceleration": 1e3,
                  "lead_arc": 180.0 / math.pi, "nut_speed": 1e3}[field]
         return f"--{field.replace('_', '-')}", float(f"{value * scale:.12g}")
-    return {"max_steps": "--max-steps", "axes": "--axes"}.get(field, field), value
+    return {"max_steps": "--max-steps", "axes": "--axes",
+            "lead_arc": "--lead-arc"}.get(field, field), value
