@@ -377,11 +377,12 @@ def _lead_in(machine: Machine, axes: tuple[str, str], radius: float, feed: float
     try:
         rule = settling_lead(machine, axes, radius=radius, feed=feed,
                              acceleration=acceleration, nut_speed=nut_speed)
-    except ParameterError as err:
+    except (ParameterError, ValueError) as err:  # a given arc does not need the rule
         if given is None:
             raise
+        said = err.message if isinstance(err, ParameterError) else str(err)
         return LeadIn(arc=float(given), rule_arc=math.nan, given=True,
-                      notes=(f"the settling rule: {err.message}",))
+                      notes=(f"the settling rule: {said}",))
     if given is None:
         return rule
     return dataclasses.replace(rule, arc=float(given), given=True)
