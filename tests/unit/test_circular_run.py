@@ -89,6 +89,10 @@ def test_a_loop_that_does_not_settle_has_no_rule_lead_and_is_refused_before_any_
     given = _lead_in(hunting, ("x", "y"), 0.05, FEED, 1.0, 0.0, math.radians(90.0))
     assert given.given and math.isnan(given.rule_arc)
     assert given.describe() == "lead arcs 90° as given (the settling rule not computed)"
+    # the JSON names what was not computed as null (print_json refuses NaN)
+    shown = given.to_dict()
+    assert shown["rule_lead_arc_deg"] is None and shown["slowest_mode_decay_1_s"] is None
+    assert "does not decay" in shown["notes"][0]
 
 
 def test_a_given_lead_arc_carries_the_rules_beside_it() -> None:

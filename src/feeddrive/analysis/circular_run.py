@@ -94,11 +94,15 @@ class LeadIn:
         return f"{arc} as given (the settling rule's {math.degrees(self.rule_arc):.4g}°: {how})"
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form [°, 1/s, Hz]."""
+        """The JSON form [°, 1/s, Hz]; what the rule could not compute is null."""
+        def known(x: float) -> float | None:
+            return x if math.isfinite(x) else None
+
         return {"lead_arc_deg": math.degrees(self.arc), "given": self.given,
-                "rule_lead_arc_deg": math.degrees(self.rule_arc), "slowest_mode_axis": self.axis,
-                "slowest_mode_decay_1_s": self.decay_rate,
-                "slowest_mode_frequency_hz": self.frequency,
+                "rule_lead_arc_deg": known(math.degrees(self.rule_arc)),
+                "slowest_mode_axis": self.axis or None,
+                "slowest_mode_decay_1_s": known(self.decay_rate),
+                "slowest_mode_frequency_hz": known(self.frequency),
                 "settle_fraction": self.fraction, "notes": list(self.notes)}
 
 
