@@ -276,6 +276,21 @@ def test_circular_refuses_bad_requests_in_one_line(tmp_path: Path, monkeypatch,
     assert len(lines) == 1 and words in lines[0], r.stderr
 
 
+def test_circular_refuses_a_loop_with_no_settling_lead_in(tmp_path: Path) -> None:
+    """The settling rule needs a decaying mode (tests/unit/test_circular_run.py): refused in
+    one line, exit status 2, the option to give named."""
+    hunting = tmp_path / "hunting.toml"
+    hunting.write_text('extends = "xy-table"\n[axes.x]\nextends = "wang2021"\n'
+                       '[axes.x.controller]\nvelocity_integral_gain = 15000.0\n')
+    r = invoke("circular", "--machine", str(hunting))
+    assert r.exit_code == 2, r.output
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: --lead-arc = None: axis x's closed "
+                                                   "loop at the feed 1000 mm/min"), r.stderr
+    assert lines[0].endswith("does not decay; no lead-in lets it settle; expected the lead "
+                             "arc given")
+
+
 def test_circular_help_names_units() -> None:
     shown = " ".join(invoke("circular", "--help").stdout.split())
     for text in ("Circle radius R [mm]", "Path feed F [mm/min]", "[mm/s²]",
