@@ -8,6 +8,7 @@ name the options' units.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -16,6 +17,7 @@ import pytest
 from typer.testing import CliRunner
 
 from feeddrive.analysis.circular import circular_test
+from feeddrive.analysis.circular_run import SETTLE_FRACTION
 from feeddrive.cli import app
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "unit"))
@@ -221,6 +223,27 @@ def test_circular_output_analysed_gives_the_same_metrics(tmp_path: Path) -> None
     assert polar.stat().st_size > 0
     assert trace_file.read_text().splitlines()[1] == (
         "# nominal circle: --radius 50.0 --centre 400.0,400.0")
+    # the lead arc is the settling rule's, stated beside the numbers
+    from feeddrive.analysis.circular_run import settling_lead
+    from feeddrive.machine import load_machine
+
+    rule = settling_lead(load_machine("xy-table"), ("x", "y"), radius=0.05, feed=5000 / 6e4,
+                         acceleration=1.0)
+    assert run["lead_in"]["given"] is False
+    # (the CLI's feed 5000·1e-3/60 m/s differs from 5000/6e4 in the last bit; the
+    # linearisation's differences carry that to ~1e-9)
+    assert run["lead_in"]["lead_arc_deg"] == pytest.approx(math.degrees(rule.arc), rel=1e-6)
+    assert run["lead_in"]["rule_lead_arc_deg"] == run["lead_in"]["lead_arc_deg"]
+    assert rule.describe() in trace_file.read_text().splitlines()[0]
+
+
+def test_circular_states_a_given_lead_arc_beside_the_rules() -> None:
+    """`--lead-arc` overrides the settling rule; the summary says so and names the rule's
+    arc (issue 37: a number must not depend on an unstated choice)."""
+    r = invoke("circular", "--radius", "50", "--feed", "5000", "--lead-arc", "90")
+    assert r.exit_code == 0, r.output
+    line = next(x for x in r.stdout.splitlines() if "lead arcs" in x)
+    assert "lead arcs 90° as given (the settling rule's 372.9°" in line, line
 
 
 @pytest.mark.parametrize(("args", "words"), [
@@ -230,8 +253,9 @@ def test_circular_output_analysed_gives_the_same_metrics(tmp_path: Path) -> None
      "axis x's speed limit"),
     (("--axes", "x,z"), "--axes = 'z': no such axis"),
     (("--axes", "x"), "--axes = 'x': expected two different axis names"),
-    (("--feed", "50000", "--acceleration", "10"), "--lead-arc = 90.0: the feed ramp"),
-    (("--lead-arc", "180"), "--lead-arc = 180.0: expected below π (180°)"),
+    (("--feed", "50000", "--acceleration", "10", "--lead-arc", "90"),
+     "--lead-arc = 90.0: the feed ramp"),
+    (("--lead-arc", "-5"), "--lead-arc = -5.0: expected a value > 0 [°]"),
     (("--radius", "0"), "--radius = 0.0: expected a value > 0 [mm]"),
     (("--nut-speed", "100"), "--nut-speed = 100.0: no axis of the test drives its nut"),
 ])
@@ -252,10 +276,26 @@ def test_circular_refuses_bad_requests_in_one_line(tmp_path: Path, monkeypatch,
     assert len(lines) == 1 and words in lines[0], r.stderr
 
 
+def test_circular_refuses_a_loop_with_no_settling_lead_in(tmp_path: Path) -> None:
+    """The settling rule needs a decaying mode (tests/unit/test_circular_run.py): refused in
+    one line, exit status 2, the option to give named."""
+    hunting = tmp_path / "hunting.toml"
+    hunting.write_text('extends = "xy-table"\n[axes.x]\nextends = "wang2021"\n'
+                       '[axes.x.controller]\nvelocity_integral_gain = 15000.0\n')
+    r = invoke("circular", "--machine", str(hunting))
+    assert r.exit_code == 2, r.output
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: --lead-arc = None: axis x's closed "
+                                                   "loop at the feed 1000 mm/min"), r.stderr
+    assert lines[0].endswith("does not decay; no lead-in lets it settle; expected the lead "
+                             "arc given")
+
+
 def test_circular_help_names_units() -> None:
     shown = " ".join(invoke("circular", "--help").stdout.split())
     for text in ("Circle radius R [mm]", "Path feed F [mm/min]", "[mm/s²]",
                  "lead-out arc of each run [°]", "the screw's lead [mm]",
+                 f"has decayed to {SETTLE_FRACTION * 100:g} %",
                  "Nut speed of the DDFS axes [mm/s]",
                  "analyze --circular reads it", "ISO 230-4"):
         assert text in shown, text

@@ -157,6 +157,7 @@ def test_help_and_docs_name_what_the_code_does():
         in FLAT
     for key in ("`reversal_reading_motion_um`", "`resets_per_s_at_top_speed`",
                 "`critical_speed_bands`", "`not at rest (… µm moving)`",
+                "`spike_lead_arc_deg`",
                 f"`none smooth ≤ {1e3 * cc.CRITICAL_RANGE[1]:.2f}: reset cycle`"):
         assert key in FLAT, key
 
@@ -170,6 +171,9 @@ def test_the_circular_and_positioning_rows_are_the_baselines_at_zero_reversal_cu
     assert zero[1]["largest_spike_um"] == zero[0]["largest_spike_um"] > 0.0
     assert zero[1]["reversal_value_B_um"] == zero[0]["reversal_value_B_um"] > 0.0
     assert zero[0]["spikes_found"] == 8  # four quadrant reversals, CCW and CW
+    # the circle's lead arcs are the settling rule's (the sampled loops linearised as
+    # continuous: the rule's 221.6°, tests/unit/test_circular_stability.py)
+    assert zero[0]["spike_lead_arc_deg"] == pytest.approx(221.6, abs=0.05)
     on = cc.compare_compensations(DRIVE, names=names[1:], metrics=["spike", "reversal"])[0]
     assert on["largest_spike_um"] != zero[0]["largest_spike_um"]
     assert on["reversal_value_B_um"] != zero[0]["reversal_value_B_um"]

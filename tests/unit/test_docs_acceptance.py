@@ -37,6 +37,13 @@ def test_every_json_key_of_the_circular_test_is_named() -> None:
         assert f"`{key}`" in DOC, key
 
 
+def test_every_json_key_of_the_lead_in_is_named() -> None:
+    from feeddrive.analysis.circular_run import LeadIn
+
+    for key in LeadIn(arc=1.0, rule_arc=1.0, given=False).to_dict():
+        assert f"`{key}`" in DOC, key
+
+
 def test_columns_and_options_named_exist() -> None:
     for name in (*X_COLUMNS, *Y_COLUMNS):
         assert f"`{name}`" in DOC

@@ -5,6 +5,7 @@ tests/validation)."""
 
 from __future__ import annotations
 
+from feeddrive.analysis.circular_run import SETTLE_FRACTION
 from feeddrive.reproduce.quadrant_study import CASES, section
 
 
@@ -28,6 +29,16 @@ def test_section_reads_its_answer_from_the_rows() -> None:
     assert "Mean spike at v_n = 20 mm/s: 15 µm; guide friction ×2: 20 µm." in text
     assert [r["reverse"] for r in table] == ["screw, guide", "guide", "guide", "guide"]
     assert table[0]["G(b) [µm]"] == "150"
+    assert table[0]["lead arc [°]"] == "—"  # a stored study from before the settling rule
+
+
+def test_section_states_each_cases_lead_arc_and_the_rule() -> None:
+    rows = [{**_row("CDFS", "cdfs", 0.0, 50.0, False, ["screw"]), "lead_arc_deg": 372.94},
+            {**_row("DDFS, v_n = 20 mm/s", "ddfs", 20.0, 30.0, False, ["guide"]),
+             "lead_arc_deg": 300.0}]
+    text, table = section({"radius_mm": 10.0, "feed_mm_min": 1000.0, "rows": rows})
+    assert [r["lead arc [°]"] for r in table] == ["372.9", "300"]
+    assert f"has decayed to {SETTLE_FRACTION:.1%}" in text
 
 
 def test_section_without_the_study_says_so() -> None:

@@ -10,6 +10,12 @@ evaluates it with :func:`~feeddrive.analysis.circular.circular_test`.  The CCW r
 measured revolutions start and end at 45°, halfway between axis reversals, and the trace is
 one continuous path.  A request the machine cannot make (a circle beyond an axis' travel, a
 feed beyond an axis' speed limit) is refused before any run.
+
+The lead arc is chosen by a stated rule (:func:`settling_lead`) unless it is given: the
+lead-in holds the feed ramp and then lasts until the slowest closed-loop mode of the test's
+axes, linearised at the circle's feed, has decayed to ``SETTLE_FRACTION`` (0.1 %) of its
+start — the start-up transient is then no part of the measured revolution (issue 37: at a
+fixed 90° lead the xy-table's G(b) at R = 50 mm, F = 5000 mm/min was mostly the transient's).
 """
 
 from __future__ import annotations
@@ -30,12 +36,74 @@ if TYPE_CHECKING:
     from ..engine.options import SolverOptions
     from ..machine import Machine
 
-__all__ = ["CircularRunTrace", "circular_start_angles", "run_circular_test"]
+__all__ = ["SETTLE_FRACTION", "CircularRunTrace", "LeadIn", "circular_start_angles",
+           "run_circular_test", "settling_lead"]
 
 #: where each run's measured revolution starts and ends, halfway between reversals [rad]
 MEASURE_START = math.radians(45.0)
 #: rest after a DDFS nut has reached its speed, before the path starts [s]
 NUT_SETTLE = 0.5
+#: what is left of the slowest closed-loop mode's start-up transient when the measured
+#: revolution starts, by the lead-in rule (:func:`settling_lead`) [-]
+SETTLE_FRACTION = 1e-3
+
+
+@dataclass(frozen=True)
+class LeadIn:
+    """The lead arc of a circular test and why.
+
+    Parameters
+    ----------
+    arc : float
+        The lead-in arc, equal to the lead-out arc [rad].
+    rule_arc : float
+        The arc the settling rule gives [rad] (``nan`` when it could not be computed).
+    given : bool
+        Whether ``arc`` was given (an override) rather than the rule's.
+    axis : str
+        The axis whose mode is the slowest ("" when not computed).
+    decay_rate : float
+        That mode's decay rate −Re(s) [1/s].
+    frequency : float
+        That mode's frequency |Im(s)|/2π [Hz].
+    fraction : float
+        ``SETTLE_FRACTION`` [-].
+    notes : tuple of str
+        What the linearisation left out.
+    """
+
+    arc: float
+    rule_arc: float
+    given: bool
+    axis: str = ""
+    decay_rate: float = math.nan
+    frequency: float = math.nan
+    fraction: float = SETTLE_FRACTION
+    notes: tuple[str, ...] = ()
+
+    def describe(self) -> str:
+        """One line stating the lead arc and the rule's choice (summary, record, report)."""
+        how = (f"the feed ramp, then the slowest closed-loop mode (axis {self.axis}, "
+               f"{self.frequency:.3g} Hz, decaying at {self.decay_rate:.3g} 1/s) down to "
+               f"{self.fraction:.1%}")
+        arc = f"lead arcs {math.degrees(self.arc):.4g}°"
+        if not self.given:
+            return f"{arc} by the settling rule: {how}"
+        if not math.isfinite(self.rule_arc):
+            return f"{arc} as given (the settling rule not computed)"
+        return f"{arc} as given (the settling rule's {math.degrees(self.rule_arc):.4g}°: {how})"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form [°, 1/s, Hz]; what the rule could not compute is null."""
+        def known(x: float) -> float | None:
+            return x if math.isfinite(x) else None
+
+        return {"lead_arc_deg": math.degrees(self.arc), "given": self.given,
+                "rule_lead_arc_deg": known(math.degrees(self.rule_arc)),
+                "slowest_mode_axis": self.axis or None,
+                "slowest_mode_decay_1_s": known(self.decay_rate),
+                "slowest_mode_frequency_hz": known(self.frequency),
+                "settle_fraction": self.fraction, "notes": list(self.notes)}
 
 
 def circular_start_angles(lead_arc: float) -> dict[str, float]:
@@ -80,6 +148,8 @@ class CircularRunTrace:
         ``"CCW"`` and ``"CW"`` → the machine's simulation of that run.
     offsets : dict
         ``"CCW"`` and ``"CW"`` → where that run's time 0 lies in the joined trace [s].
+    lead_in : LeadIn, optional
+        The lead arc, whether given, and the settling rule's choice beside it.
     """
 
     test: CircularTest
@@ -96,6 +166,7 @@ class CircularRunTrace:
     start_time: float
     results: dict[str, Any]
     offsets: dict[str, float] = dataclasses.field(default_factory=dict)
+    lead_in: LeadIn | None = None
 
     def reversing_sites(self) -> dict[str, dict[str, int]]:
         """How often each friction site's force changes sign within the measured revolutions.
@@ -127,6 +198,109 @@ class CircularRunTrace:
                     changes = int(np.count_nonzero(np.diff(sign)))
                     out.setdefault(name, {})[site] = out.get(name, {}).get(site, 0) + changes
         return out
+
+
+def _continuous_loops(params: Any) -> tuple[Any, tuple[str, ...]]:
+    """The set with continuous loops and exact feedback, for the linearisation; a note when
+    its loops were sampled (their 2–8 kHz periods move a few-Hz mode by little)."""
+    c = params.controller
+    periods = (c.current_period, c.velocity_period, c.position_period)
+    if not any(periods):
+        return params, ()
+    flat = params.replace_path("controller", c.with_values(
+        current_period=0.0, velocity_period=0.0, position_period=0.0, encoder_counts=0.0,
+        grating_resolution=0.0))
+    return flat, ("sampled loops linearised as continuous loops with exact feedback",)
+
+
+def _slowest_mode(axis: Any, speed: float, nut_speed: float
+                  ) -> tuple[float, float, tuple[str, ...]]:
+    """The axis' rightmost closed-loop pole at steady sliding at ``speed``: (decay rate
+    [1/s], frequency [Hz], notes).  Parts that act at sampled instants only (a disturbance
+    observer, a reset integrator) refuse continuous loops: the loops are linearised without
+    the parts beyond the mechanism kind's own, and a note names them."""
+    from ..engine.simulate import DriveSystem
+    from ..parameters import composition
+    from .linear import rightmost_pole
+
+    params, notes = _continuous_loops(axis.parameters)
+
+    def pole(p: Any) -> tuple[float, float]:
+        return rightmost_pole(DriveSystem(p, axis.drive, axis.table_position, axis.nut_hold),
+                              speed, nut_speed)
+
+    try:
+        real, frequency = pole(params)
+    except ParameterError:
+        own = set(composition(params.mechanism).order())
+        extra = tuple(name for name, _ in params.sections if name not in own)
+        if not extra:
+            raise
+        kept = tuple((k, v) for k, v in params.sections if k in own)
+        real, frequency = pole(dataclasses.replace(params, sections=kept))
+        notes += (f"axis {axis.name} linearised without {', '.join(extra)} (sampled "
+                  "instants only)",)
+    return -real, frequency, notes
+
+
+def settling_lead(machine: Machine, axes: tuple[str, str], *, radius: float, feed: float,
+                  acceleration: float, nut_speed: float = 0.0,
+                  fraction: float = SETTLE_FRACTION) -> LeadIn:
+    """The lead arc by the settling rule: the feed ramp, then the time in which the slowest
+    closed-loop mode of the two axes decays to ``fraction`` of its start.
+
+    ``arc = (F²/2a + F·ln(1/fraction)/σ) / R``, with σ the smallest decay rate −Re(s) of the
+    rightmost pole of either axis' closed loop linearised at steady sliding at the feed F
+    (:func:`~feeddrive.analysis.linear.rightmost_pole`, friction included; a DDFS axis at its
+    nut speed).  Its coupling parts are left out; sampled loops are linearised as continuous.
+    ISO 230-4:2005 asks that the data be taken over 360° between arcs that let the feed
+    settle and names no length; this makes "settle" a stated quantity.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine.
+    axes : tuple of str
+        The test's X and Y axes.
+    radius, feed, acceleration : float
+        R [m], F [m/s], the ramp's a [m/s²].
+    nut_speed : float, default 0.0
+        The DDFS axes' nut speed [m/s].
+    fraction : float, default SETTLE_FRACTION
+        What is left of the mode's start when the measured revolution starts [-].
+
+    Returns
+    -------
+    LeadIn
+        The rule's arc, the mode it rests on, the notes.
+
+    Raises
+    ------
+    ParameterError
+        When the slowest mode does not decay (an axis unstable at the feed): no lead-in lets
+        it settle; give the lead arc.
+    """
+    nut_driven = _nut_driven(machine, axes, nut_speed)
+    slowest: tuple[float, float, str] | None = None
+    notes: tuple[str, ...] = ()
+    for name in axes:
+        ax = machine.axis(name)
+        rate, frequency, said = _slowest_mode(ax, feed, nut_speed if name in nut_driven
+                                              else 0.0)
+        notes += tuple(n for n in said if n not in notes)
+        if slowest is None or rate < slowest[0]:
+            slowest = (rate, frequency, name)
+    assert slowest is not None
+    rate, frequency, name = slowest
+    if not rate > 0.0:
+        raise ParameterError("lead_arc", None, f"axis {name}'s closed loop at the feed "
+                             f"{feed * 6e4:.6g} mm/min has a pole at {-rate:.3g} 1/s "
+                             f"({frequency:.3g} Hz) that does not decay; no lead-in lets it "
+                             "settle; expected the lead arc given")
+    settle = feed * math.log(1.0 / fraction) / rate
+    arc = (feed ** 2 / (2.0 * acceleration) + settle) / radius
+    return LeadIn(arc=arc, rule_arc=arc, given=False, axis=name, decay_rate=rate,
+                  frequency=frequency, fraction=fraction, notes=notes)
 
 
 def _check_request(machine: Machine, axes: tuple[str, str], centre: tuple[float, float],
@@ -201,9 +375,26 @@ def _check_budget(duration: float, options: SolverOptions | None) -> None:
     check_output_memory(2.0 * duration, solver.output_interval)
 
 
+def _lead_in(machine: Machine, axes: tuple[str, str], radius: float, feed: float,
+             acceleration: float, nut_speed: float, given: float | None) -> LeadIn:
+    """The rule's lead arc, or the one given with the rule's stated beside it."""
+    try:
+        rule = settling_lead(machine, axes, radius=radius, feed=feed,
+                             acceleration=acceleration, nut_speed=nut_speed)
+    except (ParameterError, ValueError) as err:  # a given arc does not need the rule
+        if given is None:
+            raise
+        said = err.message if isinstance(err, ParameterError) else str(err)
+        return LeadIn(arc=float(given), rule_arc=math.nan, given=True,
+                      notes=(f"the settling rule: {said}",))
+    if given is None:
+        return rule
+    return dataclasses.replace(rule, arc=float(given), given=True)
+
+
 def run_circular_test(machine: Machine, *, radius: float, feed: float,
                       axes: tuple[str, str] | None = None, acceleration: float = 1.0,
-                      lead_arc: float = math.radians(90.0), nut_speed: float = 0.0,
+                      lead_arc: float | None = None, nut_speed: float = 0.0,
                       pitch: float | None = None,
                       options: SolverOptions | None = None,
                       progress: Callable[[float, float], None] | None = None
@@ -222,9 +413,9 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         The machine axes used as X and Y; default its first two.
     acceleration : float, default 1.0
         Tangential acceleration of the lead-in and lead-out ramps [m/s²].
-    lead_arc : float, default π/2
-        The lead-in arc and the lead-out arc of each run [rad]; the feed ramp must end
-        within it.
+    lead_arc : float, optional
+        The lead-in arc and the lead-out arc of each run [rad], an override of the settling
+        rule's (:func:`settling_lead`, the default); the feed ramp must end within it.
     nut_speed : float, default 0.0
         Speed of the nut of every axis that drives its nut (the DDFS) [m/s]: it rises at
         ``acceleration`` from rest and runs ``NUT_SETTLE`` (0.5) s at speed before the path
@@ -247,8 +438,8 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
     ParameterError
         Before any run: a machine with fewer than two axes or an unknown axis, a circle beyond
         an axis' travel, a feed beyond an axis' speed limit
-        (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`), a lead arc shorter
-        than the feed ramp or not below 180°, a nut speed with no axis that drives its nut,
+        (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`), a lead arc given
+        shorter than the feed ramp, a nut speed with no axis that drives its nut,
         runs needing more solver steps than the
         options allow.
     """
@@ -263,15 +454,16 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         raise ParameterError("axes", list(axes), "expected two different axes, e.g. x,y")
     for value, name, unit in ((radius, "radius", "m"), (feed, "feed", "m/s"),
                               (acceleration, "acceleration", "m/s²"),
-                              (lead_arc, "lead_arc", "rad")):
+                              (1.0 if lead_arc is None else lead_arc, "lead_arc", "rad")):
         if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
             raise ParameterError(name, value, f"expected a value > 0 [{unit}]")
-    if lead_arc >= math.pi:
-        raise ParameterError("lead_arc", lead_arc, "expected below π (180°) [rad]")
     centre = (machine.axis(axes[0]).table_position, machine.axis(axes[1]).table_position)
     _check_request(machine, axes, centre, radius, feed)
     nut_driven = _nut_driven(machine, axes, nut_speed)
     start_time = nut_speed / acceleration + NUT_SETTLE if nut_driven else 0.0
+    lead = _lead_in(machine, (axes[0], axes[1]), radius, feed, acceleration, nut_speed,
+                    lead_arc)
+    lead_arc = lead.arc
     ramp = feed ** 2 / (2.0 * acceleration)
     if ramp >= radius * lead_arc:
         raise ParameterError("lead_arc", lead_arc, f"the feed ramp F²/2a = {ramp * 1e3:.6g} mm"
@@ -310,4 +502,4 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
                             centre=centre, radius=float(radius), feed=float(feed),
                             acceleration=float(acceleration), lead_arc=float(lead_arc),
                             nut_speed=float(nut_speed), start_time=float(start_time),
-                            results=results, offsets=offsets)
+                            results=results, offsets=offsets, lead_in=lead)

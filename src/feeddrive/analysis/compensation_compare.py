@@ -385,6 +385,8 @@ def measure(scheme: Scheme, drive: str, table_position: float, metrics: Sequence
         heights = [abs(s.height) for s in run.test.spikes]
         row["largest_spike_um"] = 1e6 * max(heights) if heights else 0.0
         row["spikes_found"] = len(heights)
+        assert run.lead_in is not None
+        row["spike_lead_arc_deg"] = math.degrees(run.lead_in.arc)  # the settling rule's
     if "reversal" in metrics:
         if progress:
             progress("reversal")

@@ -68,8 +68,10 @@ def circular_command(
     feed: float = typer.Option(1000.0, "--feed", help="Path feed F [mm/min]."),
     acceleration: float = typer.Option(1000.0, "--acceleration", help="Feed ramp of the "
                                        "lead-in and lead-out [mm/s²]."),
-    lead_arc: float = typer.Option(90.0, "--lead-arc", help="Lead-in arc and lead-out arc of "
-                                   "each run [°]."),
+    lead_arc: float | None = typer.Option(None, "--lead-arc", help="Lead-in arc and "
+                                          "lead-out arc of each run [°] (default: the "
+                                          "settling rule's — the feed ramp, then until the "
+                                          "slowest closed-loop mode has decayed to 0.1 %)."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Nut speed of the DDFS axes "
                                     "[mm/s]: spun up before the path starts, kept to the "
                                     "end."),
@@ -103,7 +105,7 @@ def circular_command(
 
     for option, value, unit in (("--radius", radius, "mm"), ("--feed", feed, "mm/min"),
                                 ("--acceleration", acceleration, "mm/s²"),
-                                ("--lead-arc", lead_arc, "°")):
+                                ("--lead-arc", 1.0 if lead_arc is None else lead_arc, "°")):
         if not (math.isfinite(value) and value > 0):
             raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
     for option, given in (("--pitch", pitch), ("--magnification", magnification)):
@@ -121,7 +123,8 @@ def circular_command(
     try:
         run = run_circular_test(built, radius=radius * MM, feed=feed * MM_PER_MIN, axes=pair,
                                 acceleration=acceleration * MM,
-                                lead_arc=math.radians(lead_arc), nut_speed=nut_speed * MM,
+                                lead_arc=None if lead_arc is None else math.radians(lead_arc),
+                                nut_speed=nut_speed * MM,
                                 pitch=None if pitch is None else pitch * MM, options=options)
     except ParameterError as err:  # the API names its arguments; the user typed options
         raise ParameterError(*_as_option(err.field, err.value), err.message) from None
@@ -133,11 +136,13 @@ def circular_command(
                           soft_wrap=True)
         raise interrupted() from None
     test = run.test
+    lead = run.lead_in
+    assert lead is not None
     centre_mm = f"{run.centre[0] * 1e3!r},{run.centre[1] * 1e3!r}"
     if output:
         write_xy_trace(output, run.time, run.x, run.y, comment=(
             f"feeddrive circular --machine {machine}, axes {run.axes[0]},{run.axes[1]}, "
-            f"R {radius:g} mm, feed {feed:g} mm/min, lead arc {lead_arc:g}°\n"
+            f"R {radius:g} mm, feed {feed:g} mm/min, {lead.describe()}\n"
             f"nominal circle: --radius {radius!r} --centre {centre_mm}"))
     if plot:
         from ..plots.acceptance import circular_figure, save
@@ -145,14 +150,17 @@ def circular_command(
         save(circular_figure(test, magnification=magnification), plot)
     if as_json:
         print_json({**test.to_dict(), "machine": built.name, "axes": list(run.axes),
-                    "acceleration_mm_s2": acceleration, "lead_arc_deg": lead_arc,
+                    "acceleration_mm_s2": acceleration, "lead_in": lead.to_dict(),
                     "nut_speed_mm_s": nut_speed,
                     "duration_s": float(run.time[-1]), "output": output, "plot": plot})
         return
     _say(f"ISO 230-4 circular test: machine {built.name}, axes {run.axes[0]} (X) and "
-         f"{run.axes[1]} (Y), R {radius:g} mm, feed {feed:g} mm/min, lead-in and lead-out "
-         f"arcs {lead_arc:g}°" + (f", DDFS nut speed {nut_speed:g} mm/s" if nut_speed else "")
+         f"{run.axes[1]} (Y), R {radius:g} mm, feed {feed:g} mm/min"
+         + (f", DDFS nut speed {nut_speed:g} mm/s" if nut_speed else "")
          + f"; {float(run.time[-1]):.4g} s simulated")
+    _say(f"  {lead.describe()}")
+    for note in lead.notes:
+        _say(f"  lead-in rule: {note}")
     for note in test.notes:
         _say(f"  {note}")
     for line in describe(test):
@@ -171,4 +179,5 @@ def _as_option(field: str, value: Any) -> tuple[str, Any]:
         scale = {"radius": 1e3, "feed": 6e4, "acceleration": 1e3,
                  "lead_arc": 180.0 / math.pi, "nut_speed": 1e3}[field]
         return f"--{field.replace('_', '-')}", float(f"{value * scale:.12g}")
-    return {"max_steps": "--max-steps", "axes": "--axes"}.get(field, field), value
+    return {"max_steps": "--max-steps", "axes": "--axes",
+            "lead_arc": "--lead-arc"}.get(field, field), value

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ..analysis.circular_run import SETTLE_FRACTION
 from ..parameters import DriveParameters
 
 __all__ = ["CASES", "FEED", "RADIUS", "run"]
@@ -78,8 +79,9 @@ def run(params: DriveParameters) -> dict[str, Any]:
     dict
         ``radius_mm``, ``feed_mm_min`` and ``rows``: per case its label, drive, nut speed
         [mm/s], the largest and the mean reversal spike [µm] over the eight reversals, G(b)
-        [µm] and the friction sites of the X axis whose force changes sign in the measured
-        revolutions.
+        [µm], the friction sites of the X axis whose force changes sign in the measured
+        revolutions and the lead arc of its runs [°] (the settling rule's,
+        :func:`~feeddrive.analysis.circular_run.settling_lead`).
 
     References
     ----------
@@ -105,7 +107,8 @@ def run(params: DriveParameters) -> dict[str, Any]:
                      "spike_mean_um": float(np.mean(heights)) * 1e6,
                      "bidirectional_circular_deviation_um": float(
                          test.test.bidirectional_circular_deviation or math.nan) * 1e6,
-                     "reversing_sites": [s for s, n in sites.items() if n > 0]})
+                     "reversing_sites": [s for s, n in sites.items() if n > 0],
+                     "lead_arc_deg": math.degrees(test.lead_arc)})
     return {"radius_mm": RADIUS * 1e3, "feed_mm_min": FEED * 6e4, "rows": rows}
 
 
@@ -139,7 +142,11 @@ def section(study: dict[str, Any] | None) -> tuple[str, list[dict[str, str]]]:
             f"{study['feed_mm_min']:g} mm/min, CCW and CW, `feeddrive circular`) on two "
             "axes of this set; 'reverse' lists the X axis' friction sites whose force changes "
             "sign in the measured revolutions, the spikes are the magnitudes of the eight "
-            f"reversal spikes.  Largest spike: CDFS {cdfs:.3g} µm; DDFS "
+            "reversal spikes.  Each case's lead-in and lead-out arcs are the settling "
+            "rule's (the feed ramp, then until the slowest closed-loop mode of the axes at "
+            f"the feed has decayed to {SETTLE_FRACTION:.1%}; column 'lead arc'), so that the "
+            "start-up transient is no part of the numbers.  "
+            f"Largest spike: CDFS {cdfs:.3g} µm; DDFS "
             + ", ".join(f"{ddfs[v]:.3g} µm at v_n = {v:g} mm/s" for v in sorted(ddfs))
             + f": at {fastest:g} mm/s the DDFS leaves {ddfs[fastest] / cdfs:.0%} of the "
             "CDFS's largest spike.  Only the sites that slide with the table still reverse "
@@ -153,5 +160,7 @@ def section(study: dict[str, Any] | None) -> tuple[str, list[dict[str, str]]]:
     table = [{"case": r["case"], "largest spike [µm]": f"{r['spike_max_um']:.3g}",
               "mean spike [µm]": f"{r['spike_mean_um']:.3g}",
               "G(b) [µm]": f"{r['bidirectional_circular_deviation_um']:.4g}",
-              "reverse": ", ".join(r["reversing_sites"]) or "—"} for r in rows]
+              "reverse": ", ".join(r["reversing_sites"]) or "—",
+              "lead arc [°]": (f"{r['lead_arc_deg']:.4g}" if "lead_arc_deg" in r else "—")}
+             for r in rows]
     return text, table
