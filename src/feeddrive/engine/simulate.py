@@ -19,7 +19,7 @@ from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
 from ..solvers import dopri5, switching
 from . import budget
-from .error_estimate import signal_errors, summary_entry, tightened
+from .error_estimate import embedded_entry, signal_errors, summary_entry, tightened
 from .options import DENSE_MODES as _DENSE_MODES
 from .options import METHODS as METHODS  # re-exported: the engine's public names
 from .options import RunScales
@@ -644,15 +644,22 @@ class Simulation:
         The reference the loops follow.
     options : SolverOptions or None, default None
         Integrator settings (None: the defaults).
+    embedded_estimate : bool, default False
+        Carry the embedded global-error estimate along the integration
+        (:mod:`feeddrive.solvers.global_error`; dense-output methods): each Result's
+        ``solver_stats["embedded_error_estimate"]`` (:func:`~.error_estimate.embedded_entry`).
+        The run itself is bit-identical with or without it.
     """
 
     def __init__(self, system: DriveSystem, profile: Profile,
-                 options: SolverOptions | None = None) -> None:
+                 options: SolverOptions | None = None, *,
+                 embedded_estimate: bool = False) -> None:
         if not isinstance(profile, ConstantSpeed | SineSpeed | SampledSpeed | Replay):
             raise ParameterError("profile", type(profile).__name__,
                                  "expected ConstantSpeed, SineSpeed, SampledSpeed or a Replay")
         self.system, self.profile = system, profile
         self.options = options = options or current_options()
+        self.embedded_estimate = embedded_estimate and options.method in _DENSE_MODES
         self.model = system.model(profile)
         self.grid = sampling(system.parameters, options.output_interval, self.model)
         self.P = self.grid.parameters(self.model)  # the sample periods on the grid
@@ -754,7 +761,8 @@ class Simulation:
         a, b = self.profile, other.profile
         if not (isinstance(a, SampledSpeed) and isinstance(b, SampledSpeed)
                 and a.hold == b.hold and self.system is other.system
-                and self.options == other.options and self.grid == other.grid
+                and self.options == other.options
+                and self.embedded_estimate == other.embedded_estimate and self.grid == other.grid
                 and self.model.source == other.model.source
                 and self.model.parameter_names == other.model.parameter_names):
             return False
@@ -849,7 +857,7 @@ class Simulation:
                 f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
                 f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
                 f"{int(stats[2])}); raise max_steps (--max-steps) or check the parameters")
-        solver_stats = {
+        solver_stats: dict[str, Any] = {
             "method": options.method, **self.tolerances.as_dict(),
             "accuracy": options.accuracy, "speed_scale": self.scales.speed,
             "current_scale": self.scales.current,
@@ -865,6 +873,10 @@ class Simulation:
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
                 "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8]),
                 "eigen_analyses": int(stats[9]), "switch_crossings": int(stats[10])})
+            carried = switching.error_estimate(chunks.live, len(model.states))
+            if carried is not None:  # the memory of the call that ended the run
+                solver_stats["embedded_error_estimate"] = embedded_entry(
+                    [s.name for s in model.states], carried[1])
         return self._result(t, y, aux_parts, solver_stats)
 
     def _result(self, t: np.ndarray, y: np.ndarray, aux_parts: list[np.ndarray],
@@ -911,7 +923,7 @@ class _Chunks:
             cap, first = min(options.largest_step, grid.base), FIRST_CHUNK
         self.h_init = 1e-6 if self.adaptive else options.fixed_step
         self.h_max = cap if self.adaptive else options.fixed_step
-        self.memory = (switching.new_memory(n) if self.dense
+        self.memory = (switching.new_memory(n, sim.embedded_estimate) if self.dense
                        else dopri5.new_memory(n, self.h_init))
         self.live = self.memory  # the memory of the solver call going on (live_time)
         self.stop_requested = False  # Simulation.request_stop
