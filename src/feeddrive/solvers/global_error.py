@@ -81,8 +81,8 @@ def keep_local(e: np.ndarray, d: np.ndarray) -> None:
 
 
 @kernel
-def exponential(J: np.ndarray, H: float, Phi: np.ndarray, A: np.ndarray,
-                B: np.ndarray, scale: np.ndarray) -> None:
+def exponential(J: np.ndarray, H: float, Phi: np.ndarray, Phi_a: np.ndarray,
+                Phi_b: np.ndarray, scale: np.ndarray) -> None:
     """Phi = exp(H J) = D exp(H D⁻¹ J D) D⁻¹ with D = diag(``scale``) (the states' units
     differ by orders of magnitude: the scaled matrix's norm is near its spectral radius): A =
     H D⁻¹ J D / 2^s with ‖A‖₁ ≤ 1/2, the Taylor polynomial of degree :data:`TAYLOR_DEGREE`
@@ -96,7 +96,7 @@ def exponential(J: np.ndarray, H: float, Phi: np.ndarray, A: np.ndarray,
         The interval [s].
     Phi : numpy.ndarray
         Receives exp(H J) (n × n) [-].
-    A, B : numpy.ndarray
+    Phi_a, Phi_b : numpy.ndarray
         Work space (n × n).
     scale : numpy.ndarray
         The states' scales D, e.g. their absolute tolerances [SI, per state].
@@ -110,12 +110,15 @@ def exponential(J: np.ndarray, H: float, Phi: np.ndarray, A: np.ndarray,
         norm = max(norm, col)
     norm *= H
     s = 0
-    if norm > 0.5 and math.isfinite(norm):
-        s = int(math.ceil(math.log2(norm / 0.5)))
-    factor = H / 2.0 ** s
+    factor = H
+    if math.isfinite(norm):
+        while norm > 0.5:
+            norm *= 0.5
+            factor *= 0.5
+            s += 1
     for i in range(n):
         for j in range(n):
-            A[i, j] = factor * J[i, j] * scale[j] / scale[i]
+            Phi_a[i, j] = factor * J[i, j] * scale[j] / scale[i]
             Phi[i, j] = 0.0
         Phi[i, i] = 1.0
     for k in range(TAYLOR_DEGREE, 0, -1):  # Phi ← I + A Phi / k
@@ -123,11 +126,11 @@ def exponential(J: np.ndarray, H: float, Phi: np.ndarray, A: np.ndarray,
             for j in range(n):
                 v = 0.0
                 for m in range(n):
-                    v += A[i, m] * Phi[m, j]
-                B[i, j] = v / k
+                    v += Phi_a[i, m] * Phi[m, j]
+                Phi_b[i, j] = v / k
         for i in range(n):
             for j in range(n):
-                Phi[i, j] = B[i, j]
+                Phi[i, j] = Phi_b[i, j]
             Phi[i, i] += 1.0
     for _ in range(s):
         for i in range(n):
@@ -135,10 +138,10 @@ def exponential(J: np.ndarray, H: float, Phi: np.ndarray, A: np.ndarray,
                 v = 0.0
                 for m in range(n):
                     v += Phi[i, m] * Phi[m, j]
-                B[i, j] = v
+                Phi_b[i, j] = v
         for i in range(n):
             for j in range(n):
-                Phi[i, j] = B[i, j]
+                Phi[i, j] = Phi_b[i, j]
     for i in range(n):
         for j in range(n):
             Phi[i, j] *= scale[i] / scale[j]
