@@ -172,3 +172,19 @@ def test_a_creep_trial_carries_it_and_the_search_states_it() -> None:
     bare = CriticalSpeed(**{**search.__dict__, "trials": (plain, below)})
     assert bare.speed_error is None and "speed_error_mm_s" not in bare.to_dict()
     assert math.isfinite(carried.speed_error)
+
+
+def test_simulate_states_it_in_the_summary_and_refuses_what_it_cannot() -> None:
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    r = fd.simulate(system, fd.ConstantSpeed(2e-3), 0.5, error_estimate="embedded")
+    entry = r.solver_stats["error_estimate"]
+    assert entry["method"] == r.solver_stats["embedded_error_estimate"]["method"]
+    assert set(entry["signals"]) == set(STATE_NAMES)
+    speed = entry["signals"]["table_speed"]
+    assert speed["relative"] == pytest.approx(speed["absolute"] / np.ptp(r["table_speed"]))
+    assert r.dataset["table_speed"].attrs["integration_error_estimate"] == speed["absolute"]
+    with pytest.raises(fd.parameters.ParameterError, match="error_estimate.*dense-output"):
+        fd.simulate(system, fd.ConstantSpeed(2e-3), 0.1,
+                    options=fd.SolverOptions(method="dopri5"), error_estimate="embedded")
+    with pytest.raises(fd.parameters.ParameterError, match="error_estimate.*'embedded'"):
+        fd.simulate(system, fd.ConstantSpeed(2e-3), 0.1, error_estimate="cheap")
