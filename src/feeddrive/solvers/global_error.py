@@ -16,7 +16,7 @@ formula of the Runge–Kutta family).  Here:
 * The propagation runs on a fixed grid of :data:`INTERVAL`: the local errors of the steps
   within one interval are summed, and at each grid instant E ← Φ (E + Σδ) with Φ = exp(H J),
   the exact propagator of the linearised error equation over H for the Jacobian J
-  (:func:`exponential`: scaling and squaring of a Taylor polynomial).  J is the step's own on
+  (:func:`exponential`: scaling and squaring of a Taylor polynomial [4]_).  J is the step's own on
   a RODAS4 step, else taken by the grouped differences of the Rosenbrock steps; Φ is formed
   again every :data:`REFRESH_STEPS` accepted steps.  Whatever J, Φ is stable where the
   linearisation is: a Jacobian that has gone stale (a start-up ramp, a friction site's
@@ -25,8 +25,9 @@ formula of the Runge–Kutta family).  Here:
   error's phase by at most H|λ| (not its amplitude) and leaves out the decay of a component
   that decays within H (an error that matters least).
 
-What the driver keeps, in its memory between calls (:func:`feeddrive.solvers.switching
-.new_memory`): E, the largest |E + Σδ| so far and Σδ, per state.
+What the driver keeps, in its memory between calls
+(:func:`feeddrive.solvers.switching.new_memory`): E, the largest |E + Σδ| so far and Σδ, per
+state.
 
 Limits: the held values of sampled loops are not states, so a sampled controller's feedback
 on the error is not propagated (with continuous loops it is: their integrators are states);
@@ -86,7 +87,7 @@ def exponential(J: np.ndarray, H: float, Phi: np.ndarray, Phi_a: np.ndarray,
     """Phi = exp(H J) = D exp(H D⁻¹ J D) D⁻¹ with D = diag(``scale``) (the states' units
     differ by orders of magnitude: the scaled matrix's norm is near its spectral radius): A =
     H D⁻¹ J D / 2^s with ‖A‖₁ ≤ 1/2, the Taylor polynomial of degree :data:`TAYLOR_DEGREE`
-    (Horner), squared s times (Higham [4]_ of the module).
+    (Horner), squared s times (Higham 2005, the module's reference 4).
 
     Parameters
     ----------
@@ -97,7 +98,7 @@ def exponential(J: np.ndarray, H: float, Phi: np.ndarray, Phi_a: np.ndarray,
     Phi : numpy.ndarray
         Receives exp(H J) (n × n) [-].
     Phi_a, Phi_b : numpy.ndarray
-        Work space (n × n).
+        Work space (n × n) [-].
     scale : numpy.ndarray
         The states' scales D, e.g. their absolute tolerances [SI, per state].
     """
@@ -168,7 +169,7 @@ def advance(t: float, t_new: float, Phi: np.ndarray, memory: np.ndarray, at: int
     H : float
         The interval [s].
     w : numpy.ndarray
-        Work space, length n.
+        Work space, length n [SI, per state].
     d : numpy.ndarray
         The step's local error (:func:`keep_local`) [SI, per state].
     """

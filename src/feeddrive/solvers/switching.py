@@ -107,7 +107,7 @@ def error_estimate(memory: np.ndarray, n_states: int) -> tuple[np.ndarray, np.nd
     Parameters
     ----------
     memory : numpy.ndarray
-        The driver's memory after a call.
+        The driver's memory after a call [mixed, see :func:`new_memory`].
     n_states : int
         Number of states.
 
