@@ -44,10 +44,14 @@ from test_accuracy_convergence import (  # noqa: E402
 from test_accuracy_friction import reference  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
-from feeddrive.analysis.critical import CreepTrial, CriticalSpeed, creep_trial  # noqa: E402
+from feeddrive.analysis.critical import (  # noqa: E402
+    CreepTrial,
+    CriticalSpeed,
+    creep_trial,
+    format_integration_error,
+)
 from feeddrive.analysis.cycle_verdict import VerdictRule  # noqa: E402
 from feeddrive.engine.simulate import Simulation  # noqa: E402
-from feeddrive.reproduce.report import integration_error_text  # noqa: E402
 from feeddrive.solvers import global_error, switching  # noqa: E402
 
 
@@ -165,9 +169,9 @@ def test_a_creep_trial_carries_it_and_the_search_states_it() -> None:
     assert search.speed_error == max(3e-8, carried.speed_error)
     stored = search.to_dict()
     assert stored["speed_error_mm_s"] == pytest.approx(1e3 * search.speed_error)
-    assert integration_error_text(stored) == (
+    assert format_integration_error(stored) == (
         f" [integration error ≤ {stored['speed_error_mm_s']:.1e} mm/s]")
-    assert integration_error_text({"critical_speed_mm_s": 1.56}) == ""
+    assert format_integration_error({"critical_speed_mm_s": 1.56}) == ""
     # a search whose deciding trial carried none states none
     bare = CriticalSpeed(**{**search.__dict__, "trials": (plain, below)})
     assert bare.speed_error is None and "speed_error_mm_s" not in bare.to_dict()

@@ -390,6 +390,28 @@ def format_critical_speed(search: dict[str, Any]) -> str:
     return f"< {low:.2f}" if search["status"] == "below-range" else f"> {high:.2f}"
 
 
+def format_integration_error(search: dict[str, Any]) -> str:
+    """What a search's deciding runs carried as integration error (as
+    :meth:`CriticalSpeed.to_dict` stores it), written after the speed by the report and
+    ``feeddrive creep``: the embedded estimate of their table-speed error
+    (``speed_error_mm_s``, :attr:`CriticalSpeed.speed_error`; an estimate of the error of each
+    step's embedded lower-order solution carried along the run,
+    :mod:`feeddrive.solvers.global_error`), or nothing for a search without it.
+
+    Parameters
+    ----------
+    search : dict
+        A search as ``CriticalSpeed.to_dict`` gives it.
+
+    Returns
+    -------
+    str
+        E.g. ``" [integration error ≤ 2.4e-05 mm/s]"``; empty without an estimate.
+    """
+    error = search.get("speed_error_mm_s")
+    return "" if error is None else f" [integration error ≤ {error:.1e} mm/s]"
+
+
 def format_bands(search: dict[str, Any]) -> str:
     """The creeping bands of a search in mm/s, e.g. "0.25–1.24 stick-slip; 1.25–1.55
     oscillation" ("none" when there is none).

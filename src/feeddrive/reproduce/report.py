@@ -12,7 +12,7 @@ from markdown_it import MarkdownIt
 
 from .. import __version__
 from ..analysis import protocol
-from ..analysis.critical import format_bands, format_critical_speed
+from ..analysis.critical import format_bands, format_critical_speed, format_integration_error
 from ..engine.simulate import DriveSystem, SolverOptions
 from ..io.outputs import atomic_path
 from ..model.friction.lugre_parameters import LuGreParameters
@@ -74,27 +74,6 @@ def critical_ratio(cdfs: dict[str, Any], ddfs: dict[str, Any]) -> tuple[float | 
     return None, "—"
 
 
-def integration_error_text(search: dict[str, Any]) -> str:
-    """What a stored critical-speed search's deciding runs carried as integration error, as
-    the report writes it after the speed: the embedded estimate of their table-speed error
-    (``speed_error_mm_s``, :attr:`feeddrive.analysis.critical.CriticalSpeed.speed_error`;
-    an estimate of the error of each step's embedded lower-order solution carried along the
-    run, :mod:`feeddrive.solvers.global_error`), or nothing for a search without it.
-
-    Parameters
-    ----------
-    search : dict
-        A search as ``CriticalSpeed.to_dict`` stores it.
-
-    Returns
-    -------
-    str
-        E.g. ``" [integration error ≤ 2.4e-05 mm/s]"``; empty without an estimate.
-    """
-    error = search.get("speed_error_mm_s")
-    return "" if error is None else f" [integration error ≤ {error:.1e} mm/s]"
-
-
 def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[dict[str, str]]:
     """The report's main table: each quantity the paper reports beside feeddrive's, with its
     source, the difference and whether it was fitted or predicted.
@@ -147,7 +126,7 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
             else:
                 shown += f" ({crit[key]['kind']} below; creeping bands {bands})"
                 shown_bands[drive] = bands
-        shown += integration_error_text(crit[key])
+        shown += format_integration_error(crit[key])
         add(item, source, paper, c(key), "mm/s", kind, shown=shown)
 
     add_critical("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56,
