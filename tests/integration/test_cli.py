@@ -290,6 +290,7 @@ def test_creep_text_names_the_bands_and_the_rule() -> None:
                               "--high", "1.60"])
     assert res.exit_code == 0, res.output
     assert "creeping bands" in res.output and "Verdict rule:" in res.output
+    assert "[integration error ≤ " in res.output  # the embedded estimate (issue 35 item 3)
 
 
 def test_creep_rejects_a_maximum_below_the_first_trial() -> None:

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -74,6 +74,10 @@ class CreepTrial:
         Simulated length that decided it [s].
     decided_at : float, optional
         When the outcome was first decided [s].
+    speed_error : float, optional
+        The run's largest table-speed integration error, the embedded estimate
+        (:mod:`feeddrive.solvers.global_error`; an upper estimate) when the search carried it
+        [m/s].
     """
 
     speed: float
@@ -84,6 +88,7 @@ class CreepTrial:
     min_ratio: float = math.nan
     duration: float = 0.0
     decided_at: float | None = None
+    speed_error: float | None = None
 
     @property
     def creeping(self) -> bool:
@@ -118,9 +123,14 @@ class CreepTrial:
         Returns
         -------
         dict
-            The fields, ``speed`` in mm/s, and ``creeping``.
+            The fields, ``speed`` in mm/s, ``speed_error`` as ``speed_error_mm_s`` (only when
+            estimated), and ``creeping``.
         """
-        return {**asdict(self), "speed": self.speed / MM_S, "creeping": self.creeping}
+        out = {**asdict(self), "speed": self.speed / MM_S, "creeping": self.creeping}
+        error = out.pop("speed_error")
+        if error is not None:
+            out["speed_error_mm_s"] = error / MM_S
+        return out
 
 
 @dataclass(frozen=True)
@@ -289,6 +299,22 @@ class CriticalSpeed:
     bands: tuple[CreepBand, ...] = field(default_factory=tuple)
     rule: VerdictRule = field(default_factory=VerdictRule)
 
+    @property
+    def speed_error(self) -> float | None:
+        """The integration error the critical speed's runs carried: the larger embedded
+        estimate of the table speed's error (:mod:`feeddrive.solvers.global_error`; an upper
+        estimate) of the two trials that decide it — the lowest smooth speed above the highest
+        creeping band and that band's top — or of the top tested speed out of range; None
+        when the search carried no estimate [m/s]."""
+        creeping = [t for t in self.trials if t.kind in NON_SMOOTH]
+        top = creeping[-1] if creeping else None
+        above = [t for t in self.trials if top is None or t.speed > top.speed]
+        deciding = [t for t in (top, above[0] if above else None) if t is not None]
+        errors = [t.speed_error for t in deciding]
+        if not errors or any(e is None for e in errors):
+            return None
+        return max(e for e in errors if e is not None)
+
     def display(self) -> str:
         """The result in mm/s as a user reads it, with the bound when out of range.
 
@@ -335,6 +361,8 @@ class CriticalSpeed:
             "verdict_rule": self.rule.to_dict(),
             "trials": [t.to_dict() for t in self.trials],
             "simulated_time_s": self.simulated_time,
+            **({} if self.speed_error is None
+               else {"speed_error_mm_s": self.speed_error / MM_S}),
         }
 
 
@@ -360,6 +388,28 @@ def format_critical_speed(search: dict[str, Any]) -> str:
     if search["status"] == UNDECIDED:
         return UNDECIDED
     return f"< {low:.2f}" if search["status"] == "below-range" else f"> {high:.2f}"
+
+
+def format_integration_error(search: dict[str, Any]) -> str:
+    """What a search's deciding runs carried as integration error (as
+    :meth:`CriticalSpeed.to_dict` stores it), written after the speed by the report and
+    ``feeddrive creep``: the embedded estimate of their table-speed error
+    (``speed_error_mm_s``, :attr:`CriticalSpeed.speed_error`; an estimate of the error of each
+    step's embedded lower-order solution carried along the run,
+    :mod:`feeddrive.solvers.global_error`), or nothing for a search without it.
+
+    Parameters
+    ----------
+    search : dict
+        A search as ``CriticalSpeed.to_dict`` gives it.
+
+    Returns
+    -------
+    str
+        E.g. ``" [integration error ≤ 2.4e-05 mm/s]"``; empty without an estimate.
+    """
+    error = search.get("speed_error_mm_s")
+    return "" if error is None else f" [integration error ≤ {error:.1e} mm/s]"
 
 
 def format_bands(search: dict[str, Any]) -> str:
@@ -449,7 +499,8 @@ def judge_trial(time: np.ndarray, speed: np.ndarray, command_speed: float,
 
 def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
                 rule: VerdictRule | None = None,
-                options: SolverOptions | None = None) -> CreepTrial:
+                options: SolverOptions | None = None,
+                error_estimate: bool = False) -> CreepTrial:
     """Start the table from rest at ``speed`` [m/s] (nut at ``nut_speed``) and run until the
     verdict is decided (:func:`decide`); a longer trial continues the shorter one
     (:class:`~feeddrive.engine.simulate.Simulation`), so an undecided trial is not repeated.
@@ -466,16 +517,22 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
         The creep-verdict rule (trial durations); the protocol's default when omitted.
     options : SolverOptions, optional
         The solver options.
+    error_estimate : bool, default False
+        Carry the embedded global-error estimate (:mod:`feeddrive.solvers.global_error`)
+        along the trial's run: the trial's ``speed_error``.
 
     Returns
     -------
     CreepTrial
         The verdict.
     """
-    sim = Simulation(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), options)
+    sim = Simulation(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), options,
+                     embedded_estimate=error_estimate)
+    error: list[float | None] = [None]
 
     def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
         result = sim.run(duration)
+        error[0] = speed_error(result.solver_stats)
         if result.solver_stats.get("diverged"):
             raise _Diverged(result.time, result["table_speed"])
         return result.time, result["table_speed"]
@@ -483,8 +540,27 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
     try:
         verdict, duration = decide(run, speed, rule)
     except _Diverged as stop:
-        return stop.trial(speed)
-    return CreepTrial.from_verdict(speed, verdict, duration)
+        return replace(stop.trial(speed), speed_error=error[0])
+    return replace(CreepTrial.from_verdict(speed, verdict, duration), speed_error=error[0])
+
+
+def speed_error(solver_stats: dict[str, Any]) -> float | None:
+    """The table-speed entry of a run's embedded error estimate (None without one) [m/s].
+
+    Parameters
+    ----------
+    solver_stats : dict
+        A Result's solver statistics.
+
+    Returns
+    -------
+    float or None
+        The largest estimated table-speed error of the run [m/s].
+    """
+    entry = solver_stats.get("embedded_error_estimate")
+    if entry is None or "table_speed" not in entry["signals"]:
+        return None
+    return float(entry["signals"]["table_speed"]["absolute"])
 
 
 class _Diverged(Exception):
@@ -513,7 +589,7 @@ def critical_speed_from_rest(
     speed_range: tuple[float, float] = protocol.SPEED_RANGE,
     coarse_step: float = protocol.COARSE_STEP, resolution: float = protocol.RESOLUTION,
     rule: VerdictRule | None = None, options: SolverOptions | None = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[int, int], None] | None = None, error_estimate: bool = False,
 ) -> CriticalSpeed:
     """Critical creeping speed by a coarse scan plus bisection, every trial from rest.
 
@@ -539,6 +615,10 @@ def critical_speed_from_rest(
         Integrator settings of the trials.
     progress : callable or None, default None
         Called as ``progress(done, total)`` after each trial.
+    error_estimate : bool, default False
+        Carry the embedded global-error estimate along every trial
+        (:mod:`feeddrive.solvers.global_error`): each trial's ``speed_error`` and the
+        result's :attr:`CriticalSpeed.speed_error`.
 
     Returns
     -------
@@ -562,7 +642,8 @@ def critical_speed_from_rest(
 
     def judge(v: float) -> str:
         nonlocal simulated
-        trial = creep_trial(system, v, nut_speed=nut_speed, rule=rule, options=options)
+        trial = creep_trial(system, v, nut_speed=nut_speed, rule=rule, options=options,
+                            error_estimate=error_estimate)
         simulated += trial.duration  # the trial is continued, not repeated
         trials[v] = trial
         if progress:

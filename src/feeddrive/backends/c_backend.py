@@ -171,8 +171,11 @@ SOLVER_SHAPES: dict[str, tuple[str, ...]] = {
     **{name: ("FD_N_STATE",) for name in (
         "y", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "yt", "y_new", "e", "atol", "rel_mask",
         "f0", "ft", "yp", "fp", "live", "piv", "b", "u1", "u2", "u3", "u4", "u5", "u6", "fs",
-        "q1", "q2", "out")},
+        "q1", "q2", "out", "d", "w", "scale")},
     "J": ("FD_N_STATE", "FD_N_STATE"), "M": ("FD_N_STATE", "FD_N_STATE"),
+    # the embedded global-error estimate's (feeddrive.solvers.global_error)
+    "Phi": ("FD_N_STATE", "FD_N_STATE"), "Phi_a": ("FD_N_STATE", "FD_N_STATE"),
+    "Phi_b": ("FD_N_STATE", "FD_N_STATE"),
     "S": ("FD_N_STATE", "FD_N_STATE + 1"), "colour": ("FD_N_STATE + 1",), "aux": ("FD_N_AUX",),
     "steps": ("FD_N_CLOCK",), "schedule": ("FD_N_CLOCK",), "tick": ("FD_N_CLOCK",),
 }

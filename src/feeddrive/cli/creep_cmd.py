@@ -48,11 +48,13 @@ def creep_command(
     every creeping band found and its kind.  Each trial runs until decided (smooth, stick-slip,
     oscillation) or answers 'undecided'.  With --method both, the answers from rest and from a
     running table are shown.  The protocol (speed grid, steps) is the one `reproduce` uses,
-    so both give one number."""
+    so both give one number.  The search from rest states the table-speed integration error
+    its deciding trials carried (an embedded estimate, an order of magnitude: docs/model.md)."""
     from ..analysis.critical import (
         critical_speed_from_rest,
         critical_speed_stepdown,
         format_bands,
+        format_integration_error,
     )
     from ..analysis.cycle_verdict import VerdictRule
     from ..engine.simulate import DriveSystem
@@ -93,7 +95,7 @@ def creep_command(
         results.append(critical_speed_from_rest(
             system, nut_speed=v_n, speed_range=(lo, hi),
             coarse_step=min(protocol.COARSE_STEP, (hi - lo) / 2),
-            resolution=protocol.RESOLUTION, rule=rule))
+            resolution=protocol.RESOLUTION, rule=rule, error_estimate=True))
     if method in ("stepdown", "both"):
         results.append(critical_speed_stepdown(
             system, nut_speed=v_n, start_speed=hi, lowest_speed=lo, step=protocol.RESOLUTION,
@@ -114,8 +116,9 @@ def creep_command(
     default_grid = (low, high) == (_LOW, _HIGH)
     for r, d in zip(results, searches, strict=True):
         console.print(f"{drive.upper()} at {position:g} mm, start from {r.start}: critical "
-                      f"creeping speed {r.display()} ({len(r.trials)} trials); creeping bands "
-                      f"[mm/s]: {format_bands(d)}", markup=False, highlight=False)
+                      f"creeping speed {r.display()}{format_integration_error(d)} "
+                      f"({len(r.trials)} trials); creeping bands [mm/s]: {format_bands(d)}",
+                      markup=False, highlight=False)
         if default_grid:
             console.print(f"  protocol {protocol.describe(r.start)}", markup=False,
                           highlight=False)

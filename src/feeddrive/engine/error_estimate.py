@@ -36,13 +36,15 @@ if TYPE_CHECKING:
     from .options import SolverOptions
     from .result import Result
 
-__all__ = ["SHADOW_FACTOR", "signal_errors", "summary_entry", "tightened"]
+__all__ = ["SHADOW_FACTOR", "embedded_entry", "signal_errors", "summary_entry", "tightened"]
 
 #: the shadow run's tolerances: this many times tighter
 SHADOW_FACTOR = 10.0
 #: how the estimate was made, as a result states it
 METHOD_TEXT = (f"difference to a run with every tolerance {SHADOW_FACTOR:g}× tighter "
                "(tolerance proportionality; feeddrive.engine.error_estimate)")
+EMBEDDED_TEXT = ("local error estimates of the accepted steps propagated along the run by "
+                 "each step's own linearised propagator (feeddrive.solvers.global_error)")
 
 
 def tightened(options: SolverOptions, factor: float = SHADOW_FACTOR) -> SolverOptions:
@@ -107,11 +109,56 @@ def signal_errors(result: Result, shadow: Result) -> dict[str, dict[str, float]]
     for name in result.signal_names():
         a, b = np.asarray(result[name], dtype=float), np.asarray(shadow[name], dtype=float)
         diff = float(np.max(np.abs(a - b))) if a.size else 0.0
-        span = float(np.ptp(a)) if a.size else 0.0
-        if span == 0.0:
-            span = float(np.max(np.abs(a))) if a.size else 0.0
-        out[name] = {"absolute": diff, "relative": diff / span if span > 0.0 else 0.0}
+        out[name] = _entry(diff, a)
     return out
+
+
+def _entry(error: float, signal: np.ndarray) -> dict[str, float]:
+    """``error`` absolute and relative to ``signal``'s range (its peak-to-peak; its largest
+    |value| when constant; 0 relative for a signal that is 0 throughout)."""
+    span = float(np.ptp(signal)) if signal.size else 0.0
+    if span == 0.0:
+        span = float(np.max(np.abs(signal))) if signal.size else 0.0
+    return {"absolute": error, "relative": error / span if span > 0.0 else 0.0}
+
+
+def _largest(errors: dict[str, dict[str, float]]) -> dict[str, Any]:
+    worst = max(errors.items(), key=lambda kv: kv[1]["relative"]) if errors else ("", {})
+    return {"signal": worst[0],
+            "relative": worst[1].get("relative", 0.0) if worst[1] else 0.0}
+
+
+def embedded_entry(names: list[str], largest: np.ndarray,
+                   states: np.ndarray | None = None) -> dict[str, Any]:
+    """The embedded estimate (:mod:`feeddrive.solvers.global_error`) as a run's
+    ``solver_stats["embedded_error_estimate"]`` holds it: per state, the largest propagated
+    error over the run, absolute and (with ``states``) relative to the state's range on the
+    output grid.
+
+    Parameters
+    ----------
+    names : list of str
+        The model's state names.
+    largest : numpy.ndarray
+        The largest |E| over the run per state [SI, per state].
+    states : numpy.ndarray, optional
+        The run's states on its output grid, (samples, states) [SI]: without them (a creep
+        trial reads its table speed's absolute error only) no ``relative`` entries — the
+        ranges of a long run's states cost more than the estimate.
+
+    Returns
+    -------
+    dict
+        ``method`` (how), ``signals`` (``{state: {"absolute": [SI], "relative": [-]}}``),
+        ``largest_relative`` (signal and value; with ``states``).
+    """
+    if states is None:
+        return {"method": EMBEDDED_TEXT,
+                "signals": {name: {"absolute": float(largest[k])}
+                            for k, name in enumerate(names)}}
+    signals = {name: _entry(float(largest[k]), np.asarray(states[:, k], dtype=float))
+               for k, name in enumerate(names)}
+    return {"method": EMBEDDED_TEXT, "signals": signals, "largest_relative": _largest(signals)}
 
 
 def summary_entry(errors: dict[str, dict[str, float]], options: SolverOptions,
@@ -133,11 +180,9 @@ def summary_entry(errors: dict[str, dict[str, float]], options: SolverOptions,
         ``method`` (how), ``shadow`` (its tolerances and cost), ``signals`` (per signal),
         ``largest_relative`` (signal and value).
     """
-    worst = max(errors.items(), key=lambda kv: kv[1]["relative"]) if errors else ("", {})
     return {"method": METHOD_TEXT,
             "shadow": {"accuracy": shadow.accuracy, "rtol": shadow_stats.get("rtol"),
                        "steps": shadow_stats.get("steps"),
                        "rhs_evaluations": shadow_stats.get("rhs_evaluations")},
             "signals": errors,
-            "largest_relative": {"signal": worst[0],
-                                 "relative": worst[1].get("relative", 0.0) if worst[1] else 0.0}}
+            "largest_relative": _largest(errors)}

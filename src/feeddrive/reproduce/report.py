@@ -12,7 +12,7 @@ from markdown_it import MarkdownIt
 
 from .. import __version__
 from ..analysis import protocol
-from ..analysis.critical import format_bands, format_critical_speed
+from ..analysis.critical import format_bands, format_critical_speed, format_integration_error
 from ..engine.simulate import DriveSystem, SolverOptions
 from ..io.outputs import atomic_path
 from ..model.friction.lugre_parameters import LuGreParameters
@@ -126,6 +126,7 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
             else:
                 shown += f" ({crit[key]['kind']} below; creeping bands {bands})"
                 shown_bands[drive] = bands
+        shown += format_integration_error(crit[key])
         add(item, source, paper, c(key), "mm/s", kind, shown=shown)
 
     add_critical("CDFS critical speed, mid-screw, simulated", "Sect. 5.2, Fig. 6", 1.56,

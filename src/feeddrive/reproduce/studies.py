@@ -140,12 +140,15 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
     -------
     dict
         The search's result in engineering units (``CriticalSpeed.to_dict``: the speed
-        [mm/s], or the bound of an out-of-range search, its kind, bands and trials).
+        [mm/s], or the bound of an out-of-range search, its kind, bands and trials, each
+        trial's and the critical speed's table-speed integration error ``speed_error_mm_s``:
+        the embedded estimate carried along every trial, :mod:`feeddrive.solvers.global_error`,
+        ≈ 3–5 % more CPU, benchmarks/results/bench_error_estimate.json).
     """
     res = critical_speed_from_rest(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
         speed_range=settings.speed_range, coarse_step=settings.coarse_step,
-        resolution=settings.resolution, rule=settings.rule())
+        resolution=settings.resolution, rule=settings.rule(), error_estimate=True)
     return res.to_dict()
 
 

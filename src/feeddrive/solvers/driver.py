@@ -50,6 +50,11 @@ import numpy as np
 
 from . import steps
 from .events import first_crossing as switch_crossing
+from .global_error import INTERVAL as GE_INTERVAL
+from .global_error import REFRESH_STEPS as GE_REFRESH
+from .global_error import advance as ge_advance
+from .global_error import exponential as ge_exponential
+from .global_error import keep_local as ge_keep
 from .modes import H_LAMBDA as MODAL_H_LAMBDA
 from .modes import REFRESH as MODAL_REFRESH
 from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
@@ -99,7 +104,9 @@ MODAL_EVERY = 10
 # DOPRI5 error memory, RODAS4 error, step and first/rejected flags, the modal step cap,
 # whether a reference Jacobian is kept, the step count until which a switch is refused and the
 # DOPRI5 steps since the last eigen-analysis; then one live flag per state and the modal
-# reference Jacobian (n × n), then the stop request and the live time
+# reference Jacobian (n × n), then (with the embedded global-error estimate,
+# feeddrive.solvers.global_error) the propagated error and its largest magnitude per state,
+# then the stop request and the live time
 MEMORY_SCALARS = 14
 
 # The specialisation flags: exactly one of LAND, DENSE, COMM is true in a specialisation
@@ -283,6 +290,19 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         n_switch = 0
         sw_last = -1  # the surface the last accepted step landed on (-1: none)
         sw_next = -1
+        # the embedded global-error estimate (feeddrive.solvers.global_error), when the
+        # memory has its slots: E, the largest |E|, the local errors of the interval
+        ge_at = MEMORY_SCALARS + n + n * n
+        ge = memory.shape[0] == ge_at + 3 * n + 2
+        ng = n if ge else 0
+        ge_J = np.zeros((ng, ng))
+        ge_Phi = np.zeros((ng, ng))
+        ge_A = np.zeros((ng, ng))
+        ge_B = np.zeros((ng, ng))
+        ge_w = np.zeros(ng)
+        ge_d = np.zeros(ng)
+        ge_since = GE_REFRESH  # accepted steps since the propagator was formed (none yet)
+        ge_aux = np.empty(N_AUX)
     steps = 0
     rejected = 0
     n_rhs = 0
@@ -508,6 +528,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             if status != STATUS_OK:
                 break
             used_rodas = stiff
+            if DENSE and ge:
+                ge_keep(e, ge_d)  # the accepted step's local error (e is reused below)
             if DENSE:
                 # ---- accepted: dense-output data of [t, t_new]
                 h_done = t_new - t
@@ -657,6 +679,19 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     h_new = h_try * fac
                 if not last or h_new < h:
                     h = min(h_new, h_max)
+            if DENSE and ge:  # the embedded global-error estimate carried over the step
+                if ge_since >= GE_REFRESH:
+                    if used_rodas:  # the step's own Jacobian
+                        ge_exponential(J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
+                    else:
+                        calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, ge_J, ft, yp, fp,
+                                                ge_aux, all_live, S, colour)
+                        n_rhs += calls
+                        n_jac += 1
+                        ge_exponential(ge_J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
+                    ge_since = 0
+                ge_since += 1
+                ge_advance(t, t_new, ge_Phi, memory, ge_at, GE_INTERVAL, ge_w, ge_d)
             for i in range(n):
                 y[i] = y_new[i]
                 f0[i] = f_new[i]

@@ -73,7 +73,7 @@ CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_
              "MODAL_RETRY", "MODAL_EVERY")
 
 
-def new_memory(n_states: int) -> np.ndarray:
+def new_memory(n_states: int, error_estimate: bool = False) -> np.ndarray:
     """The carried-over state of a run that has not started (the ``memory`` of
     :func:`feeddrive.solvers.driver.driver_template`).  Its last two slots are a *stop request*
     (non-zero: the call ends after its current step with STATUS_STOPPED) and the *live time*
@@ -81,17 +81,47 @@ def new_memory(n_states: int) -> np.ndarray:
     a long call's progress and stops it while it runs (the kernels release the GIL;
     feeddrive.engine.simulate.Simulation.live_time and request_stop).
 
+    With ``error_estimate``, ``3 n_states`` slots before those two carry the embedded
+    global-error estimate (:mod:`feeddrive.solvers.global_error`): the propagated error E,
+    the largest |E| so far and the local errors of the current interval, per state
+    (:func:`error_estimate`); the run's own arithmetic is the same with or without them.
+
     Parameters
     ----------
     n_states : int
         Number of states.
+    error_estimate : bool, default False
+        Carry the embedded global-error estimate.
 
     Returns
     -------
     numpy.ndarray
         Zeros [mixed, see :func:`feeddrive.solvers.driver.driver_template`].
     """
-    return np.zeros(MEMORY_SCALARS + n_states + n_states * n_states + 2)
+    extra = 3 * n_states if error_estimate else 0
+    return np.zeros(MEMORY_SCALARS + n_states + n_states * n_states + extra + 2)
+
+
+def error_estimate(memory: np.ndarray, n_states: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """The embedded global-error estimate a memory of :func:`new_memory` carries: (E at the
+    last accepted step, the largest |E| so far) per state, or None without the estimate.
+
+    Parameters
+    ----------
+    memory : numpy.ndarray
+        The driver's memory after a call [mixed, see :func:`new_memory`].
+    n_states : int
+        Number of states.
+
+    Returns
+    -------
+    tuple of numpy.ndarray or None
+        E and the largest |E| [SI, per state] (copies).
+    """
+    at = MEMORY_SCALARS + n_states + n_states * n_states
+    if memory.shape[0] != at + 3 * n_states + 2:
+        return None
+    return memory[at:at + n_states].copy(), memory[at + n_states:at + 2 * n_states].copy()
 
 
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
@@ -257,6 +287,9 @@ def template_sources() -> list[str]:
     return [f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})",
             "from feeddrive.solvers.schedule import due, next_instant",
             "from feeddrive.solvers.events import first_crossing as switch_crossing",
+            "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
+            "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, "
+            "exponential as ge_exponential, keep_local as ge_keep",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
             "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
             "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH",

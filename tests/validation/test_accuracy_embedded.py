@@ -1,0 +1,194 @@
+"""Issue 35 item 3, inside the creep search and ``reproduce``: the embedded global-error
+estimate (:mod:`feeddrive.solvers.global_error`), carried along the one integration.
+
+Checked against truths feeddrive did not make: the frictionless step responses' exact solution
+(the hand-written matrix exponential of ``reference/linear_model.py``, as in
+test_accuracy_convergence.py) and the smooth LuGre runs' scipy Radau references
+(``reference/make_accuracy_reference.py``, as in test_accuracy_friction.py).
+
+What it reaches (measured 2026-12-05, table speed, estimate over true error): on the
+frictionless steps at the defaults 0.12–0.28 (``modal``, ``dopri5-dense``) and 0.37–2.7
+(``rodas4``), at ``accuracy`` 0.01 0.5–13; on the smooth LuGre runs at the defaults 6.3 (CDFS
+2 mm/s) and 186 (DDFS 0.5 mm/s, hollow motor 16 mm/s) with ``modal``, 9–40 with ``rodas4``.
+Not the factor 3 of the shadow estimate (test_error_estimate.py): it estimates the error of
+each step's *embedded* lower-order solution carried along (an overestimate where the steps
+resolve the solution well), at the step ends only and on a 5-ms grid (the underestimates of
+the frictionless steps: the dense output's interpolation error between the steps is not in
+it, and the grid shifts an oscillation's phase; the two causes were not separated).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+ROOT = Path(__file__).resolve().parents[2]
+for folder in (ROOT, Path(__file__).resolve().parent):
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
+
+from reference.scipy_model import STATE_NAMES  # noqa: E402
+from test_accuracy_convergence import (  # noqa: E402
+    DURATION,
+    NUT_SPEED,
+    augmented_matrix,
+    equivalent_stiffness,
+    exact_response,
+    frictionless,
+)
+from test_accuracy_friction import reference  # noqa: E402
+
+import feeddrive as fd  # noqa: E402
+from feeddrive.analysis.critical import (  # noqa: E402
+    CreepTrial,
+    CriticalSpeed,
+    creep_trial,
+    format_integration_error,
+)
+from feeddrive.analysis.cycle_verdict import VerdictRule  # noqa: E402
+from feeddrive.engine.simulate import Simulation  # noqa: E402
+from feeddrive.solvers import global_error, switching  # noqa: E402
+
+
+def embedded(system: fd.DriveSystem, profile: fd.ConstantSpeed, duration: float,
+             options: fd.SolverOptions | None = None) -> fd.Result:
+    return Simulation(system, profile, options, embedded_estimate=True).run(duration)
+
+
+def step_ratio(method: str, drive: str, accuracy: float = 1.0) -> float:
+    """Embedded table-speed estimate over the true error, 1 mm/s velocity step."""
+    params = frictionless()
+    nut = NUT_SPEED if drive == "ddfs" else 0.0
+    profile = fd.ConstantSpeed(table_speed=1e-3, nut_speed=nut, ramp_time=0.0)
+    A = augmented_matrix(params, drive, 1e-3, nut, equivalent_stiffness(params, 0.4))
+    r = embedded(fd.DriveSystem(params, drive, 0.4), profile, DURATION,
+                 fd.SolverOptions(method=method, accuracy=accuracy, output_interval=1e-3))
+    exact = exact_response(A, r.time)[:, STATE_NAMES.index("table_speed")]
+    true = float(np.max(np.abs(r["table_speed"] - exact)))
+    estimate = r.solver_stats["embedded_error_estimate"]["signals"]["table_speed"]["absolute"]
+    return float(estimate / true)
+
+
+@pytest.mark.parametrize(("drive", "speed", "nut"), [("cdfs", 2e-3, 0.0),
+                                                      ("ddfs", 0.5e-3, 16e-3)])
+def test_a_run_is_bit_identical_with_the_estimate(drive: str, speed: float,
+                                                   nut: float) -> None:
+    system = fd.DriveSystem(fd.preset("wang2021"), drive, 0.4)
+    profile = fd.ConstantSpeed(speed, nut)
+    plain = Simulation(system, profile).run(1.0)
+    carried = embedded(system, profile, 1.0)
+    for name in STATE_NAMES:
+        assert np.array_equal(plain[name], carried[name]), name
+    a, b = plain.solver_stats, carried.solver_stats
+    assert (a["steps"], a["rejected_steps"]) == (b["steps"], b["rejected_steps"])
+    assert "embedded_error_estimate" not in a
+    # the estimate's own Jacobians: counted, and only those
+    assert b["rhs_evaluations"] > a["rhs_evaluations"]
+
+
+def test_the_exponential_is_scipys() -> None:
+    # a stiff, badly scaled matrix (states in m, m/s and A): scaled by those units
+    rng = np.random.default_rng(7)
+    scale = np.array([1e-10, 1e-8, 1e-6, 1e-10])
+    B = rng.normal(size=(4, 4)) * 50.0 - np.diag([2e3, 10.0, 5e4, 1.0])
+    J = B * scale[:, None] / scale[None, :]
+    Phi, W1, W2 = (np.zeros((4, 4)) for _ in range(3))
+    global_error.exponential(J, 5e-3, Phi, W1, W2, scale)
+    expected = scipy.linalg.expm(5e-3 * J)
+    scaled = (Phi - expected) * scale[None, :] / scale[:, None]
+    assert np.max(np.abs(scaled)) <= 1e-6 * max(1.0, np.max(np.abs(
+        expected * scale[None, :] / scale[:, None])))
+
+
+def test_advance_sums_within_an_interval_and_carries_at_its_end() -> None:
+    n, H = 2, global_error.INTERVAL
+    Phi = np.array([[0.5, 0.0], [1.0, 2.0]])
+    memory = switching.new_memory(n, error_estimate=True)
+    at = switching.MEMORY_SCALARS + n + n * n
+    memory[at:at + n] = [1.0, -1.0]  # E
+    w = np.zeros(n)
+    global_error.advance(0.2 * H, 0.6 * H, Phi, memory, at, H, w, np.array([0.1, 0.2]))
+    assert memory[at:at + n].tolist() == [1.0, -1.0]  # inside the interval: summed only
+    assert memory[at + 2 * n:at + 3 * n].tolist() == [0.1, 0.2]
+    global_error.advance(0.6 * H, 2.5 * H, Phi, memory, at, H, w, np.array([0.3, 0.0]))
+    first = Phi @ np.array([1.4, -0.8])  # at H: E + Σδ carried
+    np.testing.assert_allclose(memory[at:at + n], Phi @ first, rtol=1e-15)  # and at 2H
+    assert memory[at + 2 * n:at + 3 * n].tolist() == [0.0, 0.0]
+    E, largest = switching.error_estimate(memory, n)  # type: ignore[misc]
+    np.testing.assert_allclose(largest, np.maximum([1.1, 0.8], np.abs(Phi @ first)))
+    assert switching.error_estimate(switching.new_memory(n), n) is None
+
+
+@pytest.mark.parametrize("method", ["modal", "rodas4"])
+@pytest.mark.parametrize("drive", ["cdfs", "ddfs"])
+def test_the_estimate_is_within_a_factor_10_of_the_exact_step_response(method: str,
+                                                                       drive: str) -> None:
+    # measured: modal 0.17 (CDFS), 0.20 (DDFS); rodas4 0.81, 0.64
+    assert 0.1 <= step_ratio(method, drive) <= 10.0
+
+
+@pytest.mark.xfail(strict=True, reason="the embedded estimate misses the factor 3 of the "
+                   "shadow estimate: 0.17 of the true error here (see the module)")
+def test_the_estimate_is_within_a_factor_3_like_the_shadow() -> None:
+    assert 1 / 3 <= step_ratio("modal", "cdfs") <= 3
+
+
+@pytest.mark.parametrize("name", ["cdfs_2p0", "ddfs_0p5_vn16"])
+def test_with_friction_on_it_is_above_the_true_error(name: str) -> None:
+    # measured with modal at the defaults: 6.3× (CDFS), 186× (DDFS) the Radau distance
+    ref = reference(name)
+    system = fd.DriveSystem(fd.preset("wang2021"), str(ref["drive"]), 0.4)
+    profile = fd.ConstantSpeed(float(ref["table_speed_command"]),
+                               float(ref["nut_speed_command"]))
+    r = embedded(system, profile, float(ref["time"][-1]))
+    np.testing.assert_allclose(r.time, ref["time"], rtol=0, atol=1e-12)
+    true = float(np.max(np.abs(r["table_speed"] - ref["table_speed"])))
+    estimate = r.solver_stats["embedded_error_estimate"]["signals"]["table_speed"]["absolute"]
+    assert true < estimate <= 1e3 * true
+
+
+def test_a_creep_trial_carries_it_and_the_search_states_it() -> None:
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    rule = VerdictRule(initial_duration=6.0, max_duration=12.0)
+    plain = creep_trial(system, 2e-3, rule=rule)
+    carried = creep_trial(system, 2e-3, rule=rule, error_estimate=True)
+    assert plain.speed_error is None and "speed_error_mm_s" not in plain.to_dict()
+    assert carried.kind == plain.kind and carried.ripple_ratio == plain.ripple_ratio
+    assert carried.speed_error is not None and 0.0 < carried.speed_error < 1e-3 * 2e-3
+    assert carried.to_dict()["speed_error_mm_s"] == pytest.approx(1e3 * carried.speed_error)
+    below = CreepTrial(speed=1.5e-3, kind="stick-slip", ripple_ratio=1.0, stick_fraction=0.5,
+                       stick_slip_frequency=1.0, speed_error=3e-8)
+    search = CriticalSpeed(drive="cdfs", table_position=0.4, nut_speed=0.0, start="rest",
+                           critical_speed=2e-3, status="found", resolution=1e-5,
+                           speed_range=(1e-3, 3e-3), trials=(below, carried))
+    assert search.speed_error == max(3e-8, carried.speed_error)
+    stored = search.to_dict()
+    assert stored["speed_error_mm_s"] == pytest.approx(1e3 * search.speed_error)
+    assert format_integration_error(stored) == (
+        f" [integration error ≤ {stored['speed_error_mm_s']:.1e} mm/s]")
+    assert format_integration_error({"critical_speed_mm_s": 1.56}) == ""
+    # a search whose deciding trial carried none states none
+    bare = CriticalSpeed(**{**search.__dict__, "trials": (plain, below)})
+    assert bare.speed_error is None and "speed_error_mm_s" not in bare.to_dict()
+    assert math.isfinite(carried.speed_error)
+
+
+def test_simulate_states_it_in_the_summary_and_refuses_what_it_cannot() -> None:
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    r = fd.simulate(system, fd.ConstantSpeed(2e-3), 0.5, error_estimate="embedded")
+    entry = r.solver_stats["error_estimate"]
+    assert entry["method"] == r.solver_stats["embedded_error_estimate"]["method"]
+    assert set(entry["signals"]) == set(STATE_NAMES)
+    speed = entry["signals"]["table_speed"]
+    assert speed["relative"] == pytest.approx(speed["absolute"] / np.ptp(r["table_speed"]))
+    assert r.dataset["table_speed"].attrs["integration_error_estimate"] == speed["absolute"]
+    with pytest.raises(fd.parameters.ParameterError, match="error_estimate.*dense-output"):
+        fd.simulate(system, fd.ConstantSpeed(2e-3), 0.1,
+                    options=fd.SolverOptions(method="dopri5"), error_estimate="embedded")
+    with pytest.raises(fd.parameters.ParameterError, match="error_estimate.*'embedded'"):
+        fd.simulate(system, fd.ConstantSpeed(2e-3), 0.1, error_estimate="cheap")
