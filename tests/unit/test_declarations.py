@@ -67,7 +67,8 @@ def test_the_averaged_note_names_the_declared_motor() -> None:
 
 def test_the_observer_s_footprint() -> None:
     """The LuGre observer on the CDFS: it adds to the screw axis, compensates the screw and
-    guide sites, reads the two measured speeds, the table position and the reference, and
+    guide sites, reads the two measured speeds, the table position and the commanded position
+    (as its code reads them: the footprint is derived from the text), and
     owns one state per site; the pattern's rows of those states use nothing else."""
     comp = Compensation(mode="observer", observer_gain=50.0)
     model = fd.DriveSystem(W.replace_path("controller.compensation", comp), "cdfs",
@@ -76,8 +77,7 @@ def test_the_observer_s_footprint() -> None:
     assert fp is not None
     assert (fp.mode, fp.axis, fp.sites) == ("observer", "screw", ("screw", "guide"))
     assert fp.states == ("screw_friction_observer", "guide_friction_observer")
-    assert set(fp.reads) == {"y:screw_speed", "y:table_speed", "y:table_position",
-                             "reference"}
+    assert set(fp.reads) == {"y:screw_speed", "y:table_speed", "y:table_position", "ref_x"}
     assert fp.force == "compensation_force"
     names = model.state_names
     allowed = {names.index(r[2:]) for r in fp.reads if r.startswith("y:")}
@@ -91,7 +91,8 @@ def test_the_feedforward_footprint_reads_the_reference_only() -> None:
     model = fd.DriveSystem(W.replace_path("controller.compensation", comp), "ddfs",
                            0.4).model(ConstantSpeed(1e-3))
     fp = model.compensation
-    assert fp is not None and (fp.reads, fp.states) == (("reference",), ())
+    # the screw's commanded speed is the table's plus the nut's (ref_v + ref_vn)
+    assert fp is not None and (fp.reads, fp.states) == (("ref_v", "ref_vn"), ())
     plain = fd.DriveSystem(W, "ddfs", 0.4).model(ConstantSpeed(1e-3))
     assert plain.compensation is None
 
