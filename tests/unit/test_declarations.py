@@ -91,10 +91,24 @@ def test_the_feedforward_footprint_reads_the_reference_only() -> None:
     model = fd.DriveSystem(W.replace_path("controller.compensation", comp), "ddfs",
                            0.4).model(ConstantSpeed(1e-3))
     fp = model.compensation
-    # the screw's commanded speed is the table's plus the nut's (ref_v + ref_vn)
-    assert fp is not None and (fp.reads, fp.states) == (("ref_v", "ref_vn"), ())
+    # the DDFS screw's commanded speed is the table's plus the nut's reference
+    assert fp is not None and (fp.reads, fp.states) == (("ref_v", "ref_v_nut"), ())
     plain = fd.DriveSystem(W, "ddfs", 0.4).model(ConstantSpeed(1e-3))
     assert plain.compensation is None
+
+
+def test_only_a_drive_that_follows_the_nut_reference_reads_it() -> None:
+    """Issue 40 item 2: the reference is a set of named signals a topology asks for — the
+    DDFS (``followed_references``) reads the nut's, the CDFS, which holds its nut, never
+    does: no value of its model is computed from it, no line of its code calls for it."""
+    for drive, follows in (("ddfs", True), ("cdfs", False)):
+        model = fd.DriveSystem(W, drive, 0.4).model(ConstantSpeed(1e-3))
+        values = {w for w, _ in model.flows}
+        reads = {r for _, rs in model.flows for r in rs}
+        assert ({"ref_x_nut", "ref_v_nut"} <= values) is follows, drive
+        assert ({"ref_x_nut", "ref_v_nut"} & reads != set()) is follows, drive
+        assert ("ref_x_nut" in model.source) is follows, drive
+        assert {"ref_x", "ref_v"} <= values, drive  # the table's, every drive's
 
 
 def test_the_travel_is_the_mechanism_s() -> None:

@@ -27,10 +27,11 @@ from .mechanisms import Mechanics, Site, mechanism
 from .reference import (
     PROFILE_PARAMS,
     REFERENCE_INPUTS,
+    REFERENCE_SIGNALS,
     TABLE_COLUMNS,
     TABLE_OFFSET,
     commanded_references,
-    reference_with_inputs,
+    reference_signal,
 )
 from .replay import Replay, declare_replay, emit_replay_rates, emit_replay_value
 
@@ -254,7 +255,13 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     oi = b.param(f"inputs.{REFERENCE_INPUTS[0]}", 0.0)
     for name in REFERENCE_INPUTS[1:]:
         b.param(f"inputs.{name}", 0.0)
-    b.reference_call = f"{b.use(reference_with_inputs)}({{t}}, P, {o}, {oi}, T)"
+    # the table's reference, and each further one the topology follows: named values
+    # ``ref_x``, ``ref_v`` (the table's), ``ref_x_<signal>``, ``ref_v_<signal>``
+    call = f"{b.use(reference_signal)}({{t}}, P, {o}, {oi}, T"
+    b.references = [f"{{ref_x}}, {{ref_v}} = {call}, 0)"]
+    for signal in mech.followed_references(mech.drive):
+        b.references.append(f"{{ref_x_{signal}}}, {{ref_v_{signal}}} = {call}, "
+                            f"{REFERENCE_SIGNALS.index(signal)})")
 
 
 def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
@@ -497,7 +504,8 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     loops.declare_clocks(b, parameters.controller)
 
     # ---- right-hand side
-    b.emit(f"{{ref_x}}, {{ref_v}}, {{ref_xn}}, {{ref_vn}} = {b.reference_call}")
+    for line in b.references:
+        b.emit(line)
     b.emit("{table_position_reference} = {ref_x}")
     b.emit("{table_speed_reference} = {ref_v}")
     if speed_correction:

@@ -154,8 +154,10 @@ class Builder:
         Written quantity → what it reads (:meth:`flow`); the Jacobian's pattern comes from it.
     table_size : int
         Total length of ``T`` so far.
-    reference_call : str
-        Code of the reference-profile call, returning (x, v, x_n, v_n).
+    references : list of str
+        The reference lines: each writes one reference signal the model follows, its
+        position and speed values (``{ref_x}, {ref_v} = …``; the table's first, then those
+        the topology asks for), at the head of the right-hand side and of the sampled update.
     tol_scale : dict of str to float
         State → its tolerance scale [m per state unit].
     derived : list of (Signal, str, float)
@@ -195,7 +197,7 @@ class Builder:
     # the sample schedule: (name, index in P of its period [s]) of every sampled part
     clocks: list[tuple[str, int]] = field(default_factory=list)
     table_size: int = 0
-    reference_call: str = "(0.0, 0.0, 0.0, 0.0)"
+    references: list[str] = field(default_factory=list)
     tol_scale: dict[str, float] = field(default_factory=dict)
     derived: list[tuple[Signal, str, float]] = field(default_factory=list)
     state_index: dict[str, int] = field(default_factory=dict)
@@ -277,13 +279,13 @@ class Builder:
         if call:
             self.call_scope(name)
         self.scoped_rhs[name], self.scoped_sample[name] = [], []
-        saved = self.reference_call
+        saved = list(self.references)
         self.namespace = name
         try:
             yield
         finally:
             self.namespace = ""
-            self.reference_call = saved
+            self.references = saved
 
     # ---- slots
     def state(self, name: str, unit: str, description: str, kind: str,

@@ -615,7 +615,7 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
         b.emit(ln)
 
     # ---- sampled update
-    s: list[str] = [f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}"]
+    s: list[str] = list(b.references)
     s.append(f"if {b.tick('controller.position_period')} >= 0:")
     for ax in axes:
         body = [f"q_{ch.name} = {quant}({ch.state}, {ch.quantum})" for ch in channels

@@ -274,15 +274,19 @@ class BallScrewDrive(Mechanism):
         if c.position_feedback == "motor":  # semi-closed loop: the encoders through the lead
             position = f"{Hp} * ({{screw_angle}} - {{nut_angle}})"
             position_q = f"{Hp} * (q_screw_angle - q_nut_angle)"
+        # the DDFS follows a nut reference (followed_references); the CDFS holds its nut at 0
+        nut_ref = self.follows("nut")
         screw = Axis(
             name="screw", param_offset=o_s, reference="{ref_x}",
-            feedforward="({ref_v} + {ref_vn})", position=position, position_q=position_q,
+            feedforward="({ref_v} + {ref_v_nut})" if nut_ref else "{ref_v}",
+            position=position, position_q=position_q,
             speed=(f"(({{table_speed}} + {Hp} * {{nut_speed}}) / {Hp} if {fb} "
                    "else {screw_speed})"),
             speed_q=f"((s_table + {Hp} * s_nut_angle) / {Hp} if {fb} else s_screw_angle)",
             current_state="{screw_current}")
         nut = Axis(
-            name="nut", param_offset=o_n, reference="{ref_xn}", feedforward="{ref_vn}",
+            name="nut", param_offset=o_n, reference="{ref_x_nut}" if nut_ref else "0.0",
+            feedforward="{ref_v_nut}" if nut_ref else "0.0",
             position=f"{Hp} * {{nut_angle}}", position_q=f"{Hp} * q_nut_angle",
             speed="{nut_speed}", speed_q="s_nut_angle", current_state="{nut_current}",
             active=f"{b.p('nut.active')} > 0.5", speed_law="speed")
@@ -291,7 +295,8 @@ class BallScrewDrive(Mechanism):
     def compensation(self, b: Builder
                      ) -> tuple[list[tuple[str, str, str]], str]:
         H = b.p("screw.H")
-        return ([("screw", "({ref_v} + {ref_vn})", f"{H} * {{screw_speed}}"),
+        screw = "({ref_v} + {ref_v_nut})" if self.follows("nut") else "{ref_v}"
+        return ([("screw", screw, f"{H} * {{screw_speed}}"),
                  ("guide", "{ref_v}", "{table_speed}")],
                 f"{H} / {b.p('screw_motor.torque_constant')}")
 
@@ -360,8 +365,9 @@ class BallScrewDrive(Mechanism):
         from ..disturbances import harmonics
 
         H = b.p("screw.H")
-        b.emit("{nut_position_reference} = {ref_xn}")
-        b.emit("{nut_speed_reference} = {ref_vn}")
+        nut_ref = self.follows("nut")  # the CDFS commands its held nut 0
+        b.emit(f"{{nut_position_reference}} = {'{ref_x_nut}' if nut_ref else '0.0'}")
+        b.emit(f"{{nut_speed_reference}} = {'{ref_v_nut}' if nut_ref else '0.0'}")
         b.emit("{w_s} = {screw_speed}")
         b.emit("{w_n} = {nut_speed}")
         b.emit("{v_t} = {table_speed}")
