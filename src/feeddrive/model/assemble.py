@@ -103,8 +103,8 @@ class Model:
     jacobian_colours: np.ndarray  # (n + 1,) group of each column in the grouped FD Jacobian
     # signals a part declares as factor × a state or signal: (signal, source name, factor)
     derived: tuple[tuple[codegen.Signal, str, float], ...] = ()
-    # what each right-hand-side quantity is computed from, as the parts declared it
-    # (``Builder.flow``; the Jacobian pattern follows from it)
+    # what each right-hand-side quantity is computed from, as the parts' code text says it
+    # (``Builder.emit``; the Jacobian pattern follows from it)
     flows: tuple[tuple[str, tuple[str, ...]], ...] = ()
     compensation: CompensationFootprint | None = None  # the compensator's reads and adds
     # the sample schedule: (name, index in P of its period [s]) per clock (Builder.clock)

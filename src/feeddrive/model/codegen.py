@@ -151,7 +151,8 @@ class Builder:
     dynamic_sources : list of str
         Sources of those kernels (they enter the module's hash).
     flows : dict of str to set of str
-        Written quantity → what it reads (:meth:`flow`); the Jacobian's pattern comes from it.
+        Written quantity → what it reads, derived from the code's text (:meth:`emit`); the
+        Jacobian's pattern comes from it.
     table_size : int
         Total length of ``T`` so far.
     references : list of str
@@ -218,7 +219,7 @@ class Builder:
     # per code stream (scope): the right-hand side's unbraced locals → what they are computed
     # from, and the ``if`` blocks open at the line being emitted
     _locals: dict[str, tuple[dict[str, frozenset[str]], list[_Frame]]] = field(
-        default_factory=dict)
+        default_factory=dict, init=False, repr=False)
 
     # ---- names
     def q(self, name: str) -> str:
@@ -671,29 +672,6 @@ class Builder:
         self.dynamic[alias] = expression
         self.dynamic_sources.append(source_of(getattr(kernel, "py_func", kernel)))
         return alias
-
-    def flow(self, writes: str | tuple[str, ...] | list[str],
-             reads: str | tuple[str, ...] | list[str] = ()) -> None:
-        """Declare that the code a part emits computes ``writes`` from ``reads``, the
-        quantities of one right-hand-side call (:mod:`feeddrive.model.sparsity` assembles the
-        Jacobian's pattern from these declarations).
-
-        Parameters
-        ----------
-        writes : str or sequence of str
-            What the code sets: ``"dy:<state>"`` (a state's derivative), ``"aux:<signal>"``
-            (an auxiliary output) or a part-level name (e.g. ``"f_d"``, ``"reference"``).
-        reads : str or sequence of str
-            What those values may depend on (each of its branches counted): ``"y:<state>"``,
-            ``"t"``, ``"aux:<signal>"`` or a part-level name that some part writes.  Parameters,
-            held (sampled) values and tables are constants of a call and are not listed.
-        """
-        ws = tuple(self._qflow(w) for w in ((writes,) if isinstance(writes, str) else writes))
-        rs = tuple(self._qflow(r) for r in ((reads,) if isinstance(reads, str) else reads))
-        for w in ws:
-            if w == "t" or w.startswith("y:"):
-                raise ValueError(f"flow: {w!r} is an input of the right-hand side, not written")
-            self.flows.setdefault(w, set()).update(rs)
 
     def signal(self, name: str, *, write: bool = False) -> tuple[str, str]:
         """The code and the flow name of a signal a part names in braces in its code.
