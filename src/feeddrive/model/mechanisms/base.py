@@ -144,8 +144,6 @@ class DriveMotor:
 class Mechanics:
     """What the assembler hands a mechanism to write its equations with.
 
-    Parameters
-    ----------
     Code is written with its signals in braces (:meth:`Builder.emit
     <feeddrive.model.codegen.Builder.emit>`), so what it reads travels with it.
 
