@@ -67,7 +67,8 @@ def test_the_averaged_note_names_the_declared_motor() -> None:
 
 def test_the_observer_s_footprint() -> None:
     """The LuGre observer on the CDFS: it adds to the screw axis, compensates the screw and
-    guide sites, reads the two measured speeds, the table position and the reference, and
+    guide sites, reads the two measured speeds, the table position and the commanded position
+    (as its code reads them: the footprint is derived from the text), and
     owns one state per site; the pattern's rows of those states use nothing else."""
     comp = Compensation(mode="observer", observer_gain=50.0)
     model = fd.DriveSystem(W.replace_path("controller.compensation", comp), "cdfs",
@@ -76,8 +77,7 @@ def test_the_observer_s_footprint() -> None:
     assert fp is not None
     assert (fp.mode, fp.axis, fp.sites) == ("observer", "screw", ("screw", "guide"))
     assert fp.states == ("screw_friction_observer", "guide_friction_observer")
-    assert set(fp.reads) == {"y:screw_speed", "y:table_speed", "y:table_position",
-                             "reference"}
+    assert set(fp.reads) == {"y:screw_speed", "y:table_speed", "y:table_position", "ref_x"}
     assert fp.force == "compensation_force"
     names = model.state_names
     allowed = {names.index(r[2:]) for r in fp.reads if r.startswith("y:")}
@@ -91,9 +91,24 @@ def test_the_feedforward_footprint_reads_the_reference_only() -> None:
     model = fd.DriveSystem(W.replace_path("controller.compensation", comp), "ddfs",
                            0.4).model(ConstantSpeed(1e-3))
     fp = model.compensation
-    assert fp is not None and (fp.reads, fp.states) == (("reference",), ())
+    # the DDFS screw's commanded speed is the table's plus the nut's reference
+    assert fp is not None and (fp.reads, fp.states) == (("ref_v", "ref_v_nut"), ())
     plain = fd.DriveSystem(W, "ddfs", 0.4).model(ConstantSpeed(1e-3))
     assert plain.compensation is None
+
+
+def test_only_a_drive_that_follows_the_nut_reference_reads_it() -> None:
+    """Issue 40 item 2: the reference is a set of named signals a topology asks for — the
+    DDFS (``followed_references``) reads the nut's, the CDFS, which holds its nut, never
+    does: no value of its model is computed from it, no line of its code calls for it."""
+    for drive, follows in (("ddfs", True), ("cdfs", False)):
+        model = fd.DriveSystem(W, drive, 0.4).model(ConstantSpeed(1e-3))
+        values = {w for w, _ in model.flows}
+        reads = {r for _, rs in model.flows for r in rs}
+        assert ({"ref_x_nut", "ref_v_nut"} <= values) is follows, drive
+        assert ({"ref_x_nut", "ref_v_nut"} & reads != set()) is follows, drive
+        assert ("ref_x_nut" in model.source) is follows, drive
+        assert {"ref_x", "ref_v"} <= values, drive  # the table's, every drive's
 
 
 def test_the_travel_is_the_mechanism_s() -> None:

@@ -219,16 +219,17 @@ def test_incomplete_declarations_are_refused(flows: dict[str, set[str]], message
         declared_pattern(STATES, ("u",), flows)
 
 
-def test_a_site_without_declared_reads_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A mechanism that places a friction site without saying what its speed reads cannot
-    drop out of the pattern silently."""
+def test_a_site_whose_speed_reads_a_state_by_index_is_refused(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A mechanism that writes a friction site's speed as ``y[k]`` code instead of naming the
+    state in braces would drop the read from the derived flows: refused, naming the read."""
     import dataclasses
 
     from feeddrive.model.mechanisms.linear_motor import LinearMotorDrive
 
     plain = LinearMotorDrive.sites
     monkeypatch.setattr(LinearMotorDrive, "sites", lambda self, b: [
-        dataclasses.replace(s, reads=()) for s in plain(self, b)])
+        dataclasses.replace(s, speed=b.y("table_speed")) for s in plain(self, b)])
     system = fd.DriveSystem(fd.preset("linear-motor-example"), "linear-motor", 0.33)
-    with pytest.raises(ValueError, match="guide.*Site.reads"):
+    with pytest.raises(ValueError, match=r"f_guide.*reads y\[.*in braces"):
         system.model(ConstantSpeed(1.7e-3))

@@ -633,7 +633,8 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
     axes = [a.name for a in control]
     pidx = model.parameter_names.index
     # inputs: (name, parameter slot)
-    refs = [r for r in REFERENCE_INPUTS if not r.startswith("nut_") or "nut" in axes]
+    refs = [r for r in REFERENCE_INPUTS
+            if not r.startswith("nut_") or sys_.topology().follows("nut")]
     ins: list[tuple[str, int]] = [(r, pidx(f"inputs.{r}")) for r in refs]
     ins.append(("load_force", pidx("inputs.load_force")))
     for c in control:

@@ -96,14 +96,15 @@ def _rig() -> _Rig:
     alias = b.use_dynamic(f"_law_{law.name}", f"_friction_law({law.name!r}).compiled",
                           law.compiled)
     own = tuple(f"site_{state}" for state in law.states(site))
-    b.emit(f"v = {b.y('speed')}", writes="v", reads="y:speed")
-    b.emit(f"f_site = {alias}(v, y, {first}, P, {o}, dy)",
-           writes=("f_site", *(f"dy:{s}" for s in own)), reads=("v", *(f"y:{s}" for s in own)))
-    b.emit(f"f_load = {load}", writes="f_load", reads="t")
-    b.emit(f"{b.a('load_force')} = f_load", writes="aux:load_force", reads="f_load")
-    b.emit(f"{b.dy('position')} = v", writes="dy:position", reads="v")
-    b.emit(f"{b.dy('speed')} = (- f_load - f_site) / {b.p('mass')}", writes="dy:speed",
-           reads=("f_load", "f_site"))
+    b.emit("{v} = {speed}")
+    # the law's kernel reads and writes its own states y[first:] (beside its text)
+    b.emit(codegen.Line(f"{{f_site}} = {alias}({{v}}, y, {first}, P, {o}, dy)",
+                        writes=tuple(f"dy:{s}" for s in own),
+                        reads=tuple(f"y:{s}" for s in own)))
+    b.emit(f"{{f_load}} = {load}")
+    b.emit("{load_force} = {f_load}")
+    b.emit("{der(position)} = {v}")
+    b.emit(f"{{der(speed)}} = (- {{f_load}} - {{f_site}}) / {b.p('mass')}")
     module = codegen.compile_module(codegen.module_source(b),
                                     b.dynamic_sources)
     return _Rig(module=module, parameter_names=tuple(b.param_names), n_states=len(b.states),

@@ -551,19 +551,13 @@ def _declare_part_states(b: Any, machine: Machine) -> None:
             b.state(f"{c.name}.{state}", unit, description, kind, scale)
 
 
-def _signal_code(b: Any, name: str) -> tuple[str, str]:
-    """(code, flow name) of a signal a coupling reads, at the machine level."""
-    rate = re.fullmatch(r"der\((.+)\)", name)
-    if rate:
-        return b.dy(rate.group(1)), f"dy:{rate.group(1)}"
-    if name in b.state_index:
-        return b.y(name), f"y:{name}"
-    return b.a(name), f"aux:{name}"
-
-
 def _emit_coupling(b: Any, step: str, c: Coupling) -> None:
     """A coupling part's equations at the machine level: its parameters as slots
-    ``couplings.<name>.<field>``, each braced name replaced by the code of its slot."""
+    ``couplings.<name>.<field>`` (their braced names replaced by the slots' code), every
+    other braced name a signal the builder resolves and derives the flows from
+    (:meth:`Builder.emit <feeddrive.model.codegen.Builder.emit>`)."""
+    from ..model.codegen import SIGNAL
+
     slots = {}
     for key, value in c.parameters().items():
         b.param(f"{step}.{key}", value)
@@ -572,20 +566,8 @@ def _emit_coupling(b: Any, step: str, c: Coupling) -> None:
         rate = re.fullmatch(r"der\((.+)\)", signal)
         if not rate and signal not in b.aux_index:  # an axis input, declared by its writer
             b.add_aux(signal, *AXIS_INPUTS[signal.partition(".")[2]])
-        reads: list[str] = []
-        parts = re.split(r"\{([^{}]+)\}", expression)
-        for k in range(1, len(parts), 2):  # the braced names
-            if parts[k] in slots:
-                parts[k] = slots[parts[k]]
-            else:
-                parts[k], flow = _signal_code(b, parts[k])
-                reads.append(flow)
-        if rate:  # the rate of the part's own state
-            b.emit(f"{b.dy(rate.group(1))} = {''.join(parts)}", writes=f"dy:{rate.group(1)}",
-                   reads=tuple(reads))
-        else:
-            b.emit(f"{b.a(signal)} = {''.join(parts)}", writes=f"aux:{signal}",
-                   reads=tuple(reads))
+        code = SIGNAL.sub(lambda m: slots.get(m.group(1), m.group(0)), expression)
+        b.emit(f"{{{signal}}} = {code}")
 
 
 def assemble_machine(machine: Machine, profile: MachineProfile) -> Any:

@@ -27,10 +27,11 @@ from .mechanisms import Mechanics, Site, mechanism
 from .reference import (
     PROFILE_PARAMS,
     REFERENCE_INPUTS,
+    REFERENCE_SIGNALS,
     TABLE_COLUMNS,
     TABLE_OFFSET,
     commanded_references,
-    reference_with_inputs,
+    reference_signal,
 )
 from .replay import Replay, declare_replay, emit_replay_rates, emit_replay_value
 
@@ -102,8 +103,8 @@ class Model:
     jacobian_colours: np.ndarray  # (n + 1,) group of each column in the grouped FD Jacobian
     # signals a part declares as factor × a state or signal: (signal, source name, factor)
     derived: tuple[tuple[codegen.Signal, str, float], ...] = ()
-    # what each right-hand-side quantity is computed from, as the parts declared it
-    # (``Builder.flow``; the Jacobian pattern follows from it)
+    # what each right-hand-side quantity is computed from, as the parts' code text says it
+    # (``Builder.emit``; the Jacobian pattern follows from it)
     flows: tuple[tuple[str, tuple[str, ...]], ...] = ()
     compensation: CompensationFootprint | None = None  # the compensator's reads and adds
     # the sample schedule: (name, index in P of its period [s]) per clock (Builder.clock)
@@ -254,31 +255,35 @@ def _profile(b: codegen.Builder, profile: Profile, mech: Any) -> None:
     oi = b.param(f"inputs.{REFERENCE_INPUTS[0]}", 0.0)
     for name in REFERENCE_INPUTS[1:]:
         b.param(f"inputs.{name}", 0.0)
-    b.reference_call = f"{b.use(reference_with_inputs)}(t, P, {o}, {oi}, T)"
+    # the table's reference, and each further one the topology follows: named values
+    # ``ref_x``, ``ref_v`` (the table's), ``ref_x_<signal>``, ``ref_v_<signal>``
+    call = f"{b.use(reference_signal)}({{t}}, P, {o}, {oi}, T"
+    b.references = [f"{{ref_x}}, {{ref_v}} = {call}, 0)"]
+    for signal in mech.followed_references(mech.drive):
+        b.references.append(f"{{ref_x_{signal}}}, {{ref_v_{signal}}} = {call}, "
+                            f"{REFERENCE_SIGNALS.index(signal)})")
 
 
 def _site_code(b: codegen.Builder, site: Site, law: FrictionLaw, params: Any,
-               y_offset: int) -> str:
+               y_offset: int) -> codegen.Line:
     packed = law.pack(params.scaled(site.scale) if site.scale != 1.0 else params)
     o = b.named_params(f"friction.{site.name}", law.site_slots(params), packed)
     alias = b.use_dynamic(f"_law_{law.name.replace('-', '_')}",
                           f"_friction_law({law.name!r}).compiled", law.compiled)
     # the friction-law interface: the kernel reads its sliding speed and its own states
-    # y[k : k + m] only, and writes dy at exactly those places
-    if not site.reads:
-        raise ValueError(f"friction site {site.name!r}: its mechanism declares no reads of "
-                         "its sliding speed (Site.reads)")
+    # y[k : k + m] only, and writes dy at exactly those places — the one thing its text
+    # (``y, k, …, dy``) cannot show, so the line carries it
     own = [f"{site.name}_{state}" for state in law.states(params)]
-    b.flow((f"f_{site.name}", *(f"dy:{s}" for s in own)),
-           (*site.reads, *(f"y:{s}" for s in own)))
-    return (f"f_{site.name} = {alias}({site.speed}, y, {codegen.index(y_offset)}, P, "
-            f"{codegen.index(o)}, dy)")
+    return codegen.Line(f"{{f_{site.name}}} = {alias}({site.speed}, y, "
+                        f"{codegen.index(y_offset)}, P, {codegen.index(o)}, dy)",
+                        writes=tuple(f"dy:{s}" for s in own),
+                        reads=tuple(f"y:{s}" for s in own))
 
 
 def _ripple(b: codegen.Builder, parameters: DriveParameters, mech: Any, drive: str
-            ) -> tuple[dict[str, str], list[str], dict[str, list[str]]]:
+            ) -> tuple[dict[str, str], list[str]]:
     """Torque ripple of the motors the mechanism declares (:attr:`Mechanism.drive_motors`):
-    (ripple code per motor name, its lines, the ripple names read per body)."""
+    (ripple code per motor name, its lines)."""
     dist = parameters.disturbances
     claimed = {m.ripple: m for m in mech.drive_motors if m.ripple}
     for m in claimed.values():
@@ -293,21 +298,17 @@ def _ripple(b: codegen.Builder, parameters: DriveParameters, mech: Any, drive: s
                                  f"the {drive} drive has no such motor")
     ripple: dict[str, str] = {}
     lines: list[str] = []
-    reads: dict[str, list[str]] = {}
     for motor in claimed.values():
         block = emit_harmonics(b, motor.ripple, getattr(dist, motor.ripple))
         if block is None:
             continue
         key = motor.name
         b.add_aux(f"{key}_ripple_torque", "N m", f"{key} motor torque ripple")
-        ripple[key] = f"rip_{key}"
-        lines.append(f"rip_{key} = {b.use(harmonics)}({b.y(motor.angle)}, P, "
+        ripple[key] = f"{{rip_{key}}}"
+        lines.append(f"{{rip_{key}}} = {b.use(harmonics)}({{{motor.angle}}}, P, "
                      f"{block[0]}, {block[1]})[0]")
-        lines.append(f"{b.a(key + '_ripple_torque')} = rip_{key}")
-        b.flow(f"rip_{key}", f"y:{motor.angle}")
-        b.flow(f"aux:{key}_ripple_torque", f"rip_{key}")
-        reads.setdefault(motor.body, []).append(f"rip_{key}")
-    return ripple, lines, reads
+        lines.append(f"{{{key}_ripple_torque}} = {{rip_{key}}}")
+    return ripple, lines
 
 
 def assemble(parameters: DriveParameters, drive: str, table_position: float, nut_hold: str,
@@ -484,14 +485,12 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     # the linearisation's load-force input [N] (feeddrive.analysis.linear), zero in a simulation
     o_load = b.param("inputs.load_force", 0.0)
     load_code = f"P[{o_load}]" if load_code is None else f"({load_code} + P[{o_load}])"
-    load_reads: tuple[str, ...] = ("t",) if load_aux else ()
     if external_force:
         if b.q("external_force") not in b.aux_index:  # or declared by the part writing it
             b.add_aux("external_force", "N",
                       "force on the table from the machine's coupling parts")
-        load_code = f"({load_code} + {b.a('external_force')})"
-        load_reads += ("aux:external_force",)
-    ripple, ripple_lines, ripple_reads = _ripple(b, parameters, mech, drive)
+        load_code = f"({load_code} + {{external_force}})"
+    ripple, ripple_lines = _ripple(b, parameters, mech, drive)
     lead = emit_harmonics(b, "lead_error", dist.lead_error)
     if lead is not None and not mech.has_lead_screw:
         raise ParameterError("disturbances.lead_error", dist.lead_error.amplitudes,
@@ -505,12 +504,10 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     loops.declare_clocks(b, parameters.controller)
 
     # ---- right-hand side
-    b.emit(f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}", writes="reference",
-           reads="t")
-    b.emit(f"{b.a('table_position_reference')} = ref_x",
-           writes="aux:table_position_reference", reads="reference")
-    b.emit(f"{b.a('table_speed_reference')} = ref_v", writes="aux:table_speed_reference",
-           reads="reference")
+    for line in b.references:
+        b.emit(line)
+    b.emit("{table_position_reference} = {ref_x}")
+    b.emit("{table_speed_reference} = {ref_v}")
     if speed_correction:
         if parameters.controller.position_period > 0:
             raise ParameterError("controller.position_period",
@@ -522,12 +519,10 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
                       "the machine's synchronisation part")
         h_ax = f"P[{axes[0].param_offset + loops.H_AX}]"
         axes[0] = dataclasses.replace(
-            axes[0], speed_correction=f"{b.a('speed_correction')} / {h_ax}",
-            speed_correction_reads=("aux:speed_correction",))
+            axes[0], speed_correction=f"{{speed_correction}} / {h_ax}")
     comp = emit_compensation(b, parameters, mech, axes[0].name)
     if comp is not None:
-        axes[0] = dataclasses.replace(axes[0], extra_current=comp.current,
-                                      extra_reads=(f"aux:{comp.force}",))
+        axes[0] = dataclasses.replace(axes[0], extra_current=comp.current)
     # parts of the model given as sections of their own (model/parts/): they declare their
     # slots and may wire into the axes before the cascade, then write their sampled updates
     parts = [s for _, s in parameters.sections if hasattr(s, "declare_part")]
@@ -539,18 +534,17 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     for ln in ripple_lines:
         b.emit(ln)
     m = Mechanics(forces={}, always=[], gated=[], frozen=[], ripple=ripple, lead=lead,
-                  load=load_code, torque_off=parameters.controller.mode == "torque_off",
-                  reads=ripple_reads, load_reads=load_reads)
+                  load=load_code, torque_off=parameters.controller.mode == "torque_off")
     for site, law, first in laws:
         code = _site_code(b, site, law, site.parameters(parameters), first)
         for body, factor in site.bodies:
-            term = f"- f_{site.name}" if factor == "1.0" else f"- {factor} * f_{site.name}"
+            term = (f"- {{f_{site.name}}}" if factor == "1.0"
+                    else f"- {factor} * {{f_{site.name}}}")
             m.forces.setdefault(body, []).append(term)
-            m.reads.setdefault(body, []).append(f"f_{site.name}")
         if site.active:
             m.gated.append(code)
-            m.frozen.append(f"f_{site.name} = 0.0")
-            m.frozen += [f"{b.dy(f'{site.name}_{s}')} = 0.0"
+            m.frozen.append(f"{{f_{site.name}}} = 0.0")
+            m.frozen += [f"{{der({site.name}_{s})}} = 0.0"
                          for s in law.states(site.parameters(parameters))]
         else:
             m.always.append(code)
@@ -558,11 +552,10 @@ def declare_drive(b: codegen.Builder, parameters: DriveParameters, drive: str,
     if replayed is not None:
         emit_replay_rates(b, *replayed)
     for site, _, _ in laws:
-        b.emit(f"{b.a(site.name + '_friction')} = f_{site.name}",
-               writes=f"aux:{site.name}_friction", reads=f"f_{site.name}")
-    b.emit(f"{b.a('drive_force')} = f_d", writes="aux:drive_force", reads="f_d")
+        b.emit(f"{{{site.name}_friction}} = {{f_{site.name}}}")
+    b.emit("{drive_force} = {f_d}")
     if load_aux:
-        b.emit(f"{b.a('load_force')} = {load_code}", writes="aux:load_force", reads="t")
+        b.emit(f"{{load_force}} = {load_code}")
     return laws, comp
 
 

@@ -19,6 +19,7 @@ import contextlib
 import functools
 import hashlib
 import inspect
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from types import ModuleType
@@ -36,6 +37,68 @@ TOLERANCE_KINDS = ("position", "speed", "angle", "rotary_speed", "current", "cur
                    "velocity_integral", "deflection", "none")
 # Kinds whose error is also weighed relative to the state's size.
 RELATIVE_KINDS = ("speed", "rotary_speed", "current")
+
+
+#: a signal named in a part's code: ``{table_speed}``, ``{der(table_speed)}``, ``{f_d}``
+SIGNAL = re.compile(r"\{([^{}]+)\}")
+_RATE = re.compile(r"der\((.+)\)")
+# an identifier of the code outside braces (not an attribute, not a number's exponent)
+_IDENT = re.compile(r"(?<![\w.])[A-Za-z_]\w*")
+# a state, rate or signal slot read by index instead of by its braced name
+_HIDDEN = re.compile(r"(?<![\w.])(?:y|dy|aux)\s*\[")
+# ``targets = value`` or ``target op= value``, the targets before the first lone ``=``
+_ASSIGN = re.compile(r"^(?P<lhs>[^=]+?)\s*(?P<op>[-+*/]?)=(?!=)\s*(?P<rhs>.*)$")
+
+
+@dataclass
+class _Frame:
+    """An ``if`` block of emitted right-hand-side code (:meth:`Builder.emit`): its header's
+    indent, the local values before it, each finished branch's, and what its condition
+    reads."""
+
+    indent: int
+    entry: dict[str, frozenset[str]]
+    condition: frozenset[str]
+    branches: list[dict[str, frozenset[str]]] = field(default_factory=list)
+    has_else: bool = False
+
+
+@dataclass(frozen=True)
+class Line:
+    """A line of right-hand-side code with what its text cannot show: the states of a block
+    a kernel receives whole (``y``, ``dy`` and an offset — a friction law's or an observer's
+    own states).  Everything the text names in braces is derived from it
+    (:meth:`Builder.emit`); these are added to it.
+
+    Parameters
+    ----------
+    text : str
+        The code, signals named in braces.
+    writes : tuple of str, default ()
+        The further quantities the line sets (``"dy:<state>"``), computed from what its
+        text reads and ``reads``.
+    reads : tuple of str, default ()
+        The further quantities it reads (``"y:<state>"``), for every value it sets.
+    """
+
+    text: str
+    writes: tuple[str, ...] = ()
+    reads: tuple[str, ...] = ()
+
+    def indented(self, pad: str) -> Line:
+        """The same line behind ``pad``.
+
+        Parameters
+        ----------
+        pad : str
+            The indentation to add.
+
+        Returns
+        -------
+        Line
+            The indented line.
+        """
+        return Line(pad + self.text, self.writes, self.reads)
 
 
 @dataclass(frozen=True)
@@ -88,11 +151,14 @@ class Builder:
     dynamic_sources : list of str
         Sources of those kernels (they enter the module's hash).
     flows : dict of str to set of str
-        Written quantity → what it reads (:meth:`flow`); the Jacobian's pattern comes from it.
+        Written quantity → what it reads, derived from the code's text (:meth:`emit`); the
+        Jacobian's pattern comes from it.
     table_size : int
         Total length of ``T`` so far.
-    reference_call : str
-        Code of the reference-profile call, returning (x, v, x_n, v_n).
+    references : list of str
+        The reference lines: each writes one reference signal the model follows, its
+        position and speed values (``{ref_x}, {ref_v} = …``; the table's first, then those
+        the topology asks for), at the head of the right-hand side and of the sampled update.
     tol_scale : dict of str to float
         State → its tolerance scale [m per state unit].
     derived : list of (Signal, str, float)
@@ -111,6 +177,9 @@ class Builder:
     imposed : dict of str to str
         State name → the code its reads give instead of ``y[k]`` (an open-loop replay's
         imposed state, :mod:`feeddrive.model.replay`).
+    values : set of str
+        The named values parts have written with a braced target (``{f_d} = …``), model-wide
+        names: the flow nodes other parts read as ``{f_d}``.
     """
 
     states: list[Signal] = field(default_factory=list)
@@ -129,7 +198,7 @@ class Builder:
     # the sample schedule: (name, index in P of its period [s]) of every sampled part
     clocks: list[tuple[str, int]] = field(default_factory=list)
     table_size: int = 0
-    reference_call: str = "(0.0, 0.0, 0.0, 0.0)"
+    references: list[str] = field(default_factory=list)
     tol_scale: dict[str, float] = field(default_factory=dict)
     derived: list[tuple[Signal, str, float]] = field(default_factory=list)
     state_index: dict[str, int] = field(default_factory=dict)
@@ -145,6 +214,12 @@ class Builder:
     # state name -> code every read of it gives instead of ``y[k]`` (an open-loop replay's
     # imposed state, feeddrive.model.replay)
     imposed: dict[str, str] = field(default_factory=dict)
+    # named values written by a braced target (``{f_d} = …``), model-wide names
+    values: set[str] = field(default_factory=set)
+    # per code stream (scope): the right-hand side's unbraced locals → what they are computed
+    # from, and the ``if`` blocks open at the line being emitted
+    _locals: dict[str, tuple[dict[str, frozenset[str]], list[_Frame]]] = field(
+        default_factory=dict, init=False, repr=False)
 
     # ---- names
     def q(self, name: str) -> str:
@@ -205,13 +280,13 @@ class Builder:
         if call:
             self.call_scope(name)
         self.scoped_rhs[name], self.scoped_sample[name] = [], []
-        saved = self.reference_call
+        saved = list(self.references)
         self.namespace = name
         try:
             yield
         finally:
             self.namespace = ""
-            self.reference_call = saved
+            self.references = saved
 
     # ---- slots
     def state(self, name: str, unit: str, description: str, kind: str,
@@ -598,54 +673,180 @@ class Builder:
         self.dynamic_sources.append(source_of(getattr(kernel, "py_func", kernel)))
         return alias
 
-    def flow(self, writes: str | tuple[str, ...] | list[str],
-             reads: str | tuple[str, ...] | list[str] = ()) -> None:
-        """Declare that the code a part emits computes ``writes`` from ``reads``, the
-        quantities of one right-hand-side call (:mod:`feeddrive.model.sparsity` assembles the
-        Jacobian's pattern from these declarations).
+    def signal(self, name: str, *, write: bool = False) -> tuple[str, str]:
+        """The code and the flow name of a signal a part names in braces in its code.
+
+        ``t`` is the time; ``der(<state>)`` a state's rate (``dy[k]``, ``dy:<state>``); a
+        state reads ``y[k]`` (``y:<state>``); an auxiliary output ``aux[k]``
+        (``aux:<signal>``); any other name is a value a part writes with a braced target
+        (``{f_d} = …``: the local ``f_d``, flow name ``f_d``).  Names are the part's own
+        (:meth:`q` qualifies them inside a :meth:`scope`).
 
         Parameters
         ----------
-        writes : str or sequence of str
-            What the code sets: ``"dy:<state>"`` (a state's derivative), ``"aux:<signal>"``
-            (an auxiliary output) or a part-level name (e.g. ``"f_d"``, ``"reference"``).
-        reads : str or sequence of str
-            What those values may depend on (each of its branches counted): ``"y:<state>"``,
-            ``"t"``, ``"aux:<signal>"`` or a part-level name that some part writes.  Parameters,
-            held (sampled) values and tables are constants of a call and are not listed.
-        """
-        ws = tuple(self._qflow(w) for w in ((writes,) if isinstance(writes, str) else writes))
-        rs = tuple(self._qflow(r) for r in ((reads,) if isinstance(reads, str) else reads))
-        for w in ws:
-            if w == "t" or w.startswith("y:"):
-                raise ValueError(f"flow: {w!r} is an input of the right-hand side, not written")
-            self.flows.setdefault(w, set()).update(rs)
+        name : str
+            The braced name.
+        write : bool, default False
+            The name is written (a rate, an auxiliary output or a new named value), not read.
 
-    def emit(self, line: str, *, sampled: bool = False,
-             writes: str | tuple[str, ...] | list[str] = (),
-             reads: str | tuple[str, ...] | list[str] = ()) -> None:
+        Returns
+        -------
+        code : str
+            Its code in the generated kernels.
+        flow : str
+            Its name in :attr:`flows`.
+
+        Raises
+        ------
+        ValueError
+            For a read of a name nothing writes, or a write to a state or the time.
+        """
+        rate = _RATE.fullmatch(name)
+        if rate:
+            q = self.q(rate.group(1))
+            if q not in self.state_index:
+                raise ValueError(f"{{{name}}}: {rate.group(1)!r} is no state of the model")
+            return f"dy[{self.state_index[q]}]", f"dy:{q}"
+        q = self.q(name)
+        if name == "t" or q in self.state_index:
+            if write:
+                raise ValueError(f"{{{name}}}: a state or the time is read, not written; "
+                                 f"write its rate {{der({name})}}")
+            return ("t", "t") if name == "t" else (self.y(name), f"y:{q}")
+        if q in self.aux_index:
+            return self.a(name), f"aux:{q}"
+        if write and name.isidentifier():
+            self.values.add(q)
+        if q not in self.values:
+            raise ValueError(f"{{{name}}}: read but no part writes it (expected a state, "
+                             "der(<state>), an auxiliary signal, t or a value written as "
+                             f"{{{name}}} = …)")
+        return name, q
+
+    def resolve(self, text: str) -> tuple[str, list[str]]:
+        """Replace every braced name of ``text`` by its code (:meth:`signal`).
+
+        Parameters
+        ----------
+        text : str
+            Code with signals named in braces (``"{v_t} * {table.mass}"`` is not: parameters
+            are written as ``b.p(...)`` code).
+
+        Returns
+        -------
+        code : str
+            The code.
+        reads : list of str
+            The flow names of the braced names, in order.
+        """
+        reads: list[str] = []
+
+        def one(match: re.Match[str]) -> str:
+            code, flow = self.signal(match.group(1))
+            reads.append(flow)
+            return code
+
+        return SIGNAL.sub(one, text), reads
+
+    def _track(self, line: str, hidden: Line | None = None) -> str:
+        """The code of one right-hand-side line, its flows recorded from its text.
+
+        A braced target is a node of :attr:`flows` (a rate, an auxiliary output, a named
+        value) and is computed from the braced names the line reads, the unbraced locals it
+        reads standing for what they were computed from at that line (the last value in
+        straight-line code, the union of the branches after an ``if``/``else``), and the
+        conditions of the ``if`` blocks the line is in."""
+        env, frames = self._locals.setdefault(self.namespace, ({}, []))
+        indent = len(line) - len(line.lstrip(" "))
+        body = line.strip()
+
+        def expanded(template: str) -> tuple[str, frozenset[str]]:
+            code, reads = self.resolve(template)
+            found = set(reads)
+            bare = SIGNAL.sub(" ", template)
+            hidden = _HIDDEN.search(bare)
+            if hidden:  # a slot read its text does not name: it would miss from the flows
+                raise ValueError(f"emit: {body!r} reads {hidden.group(0)}…]; name the state "
+                                 "or signal in braces ({<state>}, {der(<state>)}, {<signal>})")
+            for name in _IDENT.findall(bare):
+                found |= env.get(name, frozenset())
+            return code, frozenset(found)
+
+        branch = body == "else:" or body.startswith("elif ")
+        while frames and indent <= frames[-1].indent:
+            top = frames[-1]
+            if indent == top.indent and branch:
+                break
+            frames.pop()
+            ends = [*top.branches, dict(env), *(() if top.has_else else (top.entry,))]
+            env.clear()
+            for branch_env in ends:
+                for name, reads in branch_env.items():
+                    env[name] = env.get(name, frozenset()) | reads
+        outer = frames[-1].condition if frames else frozenset()
+        if branch:
+            if not frames or frames[-1].indent != indent:
+                raise ValueError(f"emit: {body!r} without its if")
+            top = frames[-1]
+            top.branches.append(dict(env))
+            env.clear()
+            env.update(top.entry)
+            top.has_else = body == "else:"
+            top.condition = top.condition | expanded(body)[1]
+            return self.resolve(line)[0]
+        if body.startswith("if ") and body.endswith(":"):
+            frames.append(_Frame(indent, dict(env), outer | expanded(body)[1]))
+            return self.resolve(line)[0]
+        match = _ASSIGN.match(body)
+        if body == "pass":
+            return line
+        if match is None:
+            raise ValueError(f"emit: {body!r} is no assignment and no if/else")
+        reads = expanded(match.group("rhs"))[1] | outer
+        if hidden is not None:  # a kernel's own block: read and written beside the text
+            reads |= {self._qflow(r) for r in hidden.reads}
+            for w in hidden.writes:
+                self.flows.setdefault(self._qflow(w), set()).update(reads)
+        for target in (t.strip() for t in match.group("lhs").split(",")):
+            braced = SIGNAL.fullmatch(target)
+            if braced:
+                flow = self.signal(braced.group(1), write=True)[1]
+                if match.group("op"):
+                    reads |= {flow}
+                if flow == "t" or flow.startswith("y:"):
+                    raise ValueError(f"emit: {body!r} writes {target}")
+                self.flows.setdefault(flow, set()).update(reads)
+            elif target.isidentifier():
+                env[target] = reads | (env.get(target, frozenset()) if match.group("op")
+                                       else frozenset())
+            else:
+                raise ValueError(f"emit: {body!r}: write {target!r} through a braced name "
+                                 "({der(<state>)}, {<signal>}, {<value>}) or to a local")
+        return self.resolve(line)[0]
+
+    def emit(self, line: str | Line, *, sampled: bool = False) -> None:
         """Append a line of code to the right-hand side or to the sampled-controller update.
 
+        Signals are named in braces (:meth:`signal`): ``{der(table_position)} = {v_t}``.  In
+        the right-hand side, what each braced target is computed from follows from the text
+        (:meth:`_track`) and enters :attr:`flows`, from which the Jacobian's pattern follows —
+        a part declares nothing beside its code.
+
         Parameters
         ----------
-        line : str
-            The code, without the function body's indentation.
+        line : str or Line
+            The code, without the function body's indentation; a :class:`Line` adds what
+            its text cannot show (a kernel's own block of states).
         sampled : bool, default False
             Append to the sampled-controller update instead of the right-hand side.
-        writes : str or sequence of str, optional
-            What the line sets, declared as a :meth:`flow` (right-hand side only).
-        reads : str or sequence of str, optional
-            What those values are computed from.
         """
+        text, hidden = (line.text, line) if isinstance(line, Line) else (line, None)
+        code = self.resolve(text)[0] if sampled else self._track(text, hidden)
         if self.namespace:
             scoped = self.scoped_sample if sampled else self.scoped_rhs
-            scoped[self.namespace].append(line)
+            scoped[self.namespace].append(code)
         else:
-            (self.sample_lines if sampled else self.rhs_lines).append(line)
-        if writes:
-            self.flow(writes, reads)
-        elif reads:
-            raise ValueError(f"emit: reads {reads!r} declared without what they compute")
+            (self.sample_lines if sampled else self.rhs_lines).append(code)
 
     # ---- packing
     def packed_parameters(self) -> np.ndarray:

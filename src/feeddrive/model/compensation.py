@@ -15,7 +15,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..parameters import ParameterError
-from .codegen import Builder
+from .codegen import Builder, Line
 from .friction.base import friction_law
 from .friction.lugre import (
     SIGMA0,
@@ -122,15 +122,16 @@ class CompensationFootprint:
     sites : tuple of str
         The friction sites it compensates (keys below ``friction.``).
     reads : tuple of str
-        The states and signals its force is computed from (``Builder.flow`` names:
-        ``"y:<state>"``, ``"reference"`` for the commanded motion).
+        The states and values its force is computed from, as its code reads them
+        (:attr:`Builder.flows <feeddrive.model.codegen.Builder.flows>` names: ``"y:<state>"``,
+        ``"ref_x"`` … for the commanded motion).
     states : tuple of str
         Its own states (the observer's ẑ per site; none for the feed-forward).
     force : str
         The signal of the compensating force [N] (``"compensation_force"``).
     current : str
-        Code of the current [A] it adds to ``axis``' command (the force × the mechanism's
-        factor H/K_t or 1/K_f).
+        Code of the current [A] it adds to ``axis``' command, its signal in braces (the force ×
+        the mechanism's factor H/K_t or 1/K_f).
     """
 
     mode: str
@@ -178,37 +179,33 @@ def emit_compensation(b: Builder, params: DriveParameters, mech: Mechanism, axis
                              "loops only (set their periods to 0 [s])")
     sites, factor = mech.compensation(b)
     terms = []
-    reads: list[str] = []
     states: list[str] = []
     gain = b.param("compensation.observer_gain", c.observer_gain)
-    for key, ref_speed, meas_speed, meas_reads in sites:
+    for key, ref_speed, meas_speed in sites:
         site = getattr(params.friction, key).require(
             LuGreParameters, f"friction.{key}", "friction compensation").mismatched(
             c.coulomb_scale, c.static_scale, c.stribeck_velocity_scale, c.viscous_scale)
         o = b.named_params(f"compensation.{key}", SLOTS, site.as_array())
         if c.mode == "feedforward":
-            b.emit(f"comp_{key} = {b.use(feedforward_force)}({ref_speed}, P, {o})",
-                   writes=f"comp_{key}", reads="reference")
-            site_reads = ["reference"]
+            b.emit(f"{{comp_{key}}} = {b.use(feedforward_force)}({ref_speed}, P, {o})")
         else:
             name = f"{key}_friction_observer"
             size = float(friction_law("lugre").deflection_scales(site)[0])
             k = b.state(name, "m", f"LuGre observer state of the {key} friction "
                         "(compensation)", "deflection", size)
-            err = f"({b.y('table_position')} - ref_x)"
             observer = b.use(observer_force)
-            # the observer kernel reads and writes its own state y[k] only
-            site_reads = [*meas_reads, "y:table_position", "reference", f"y:{name}"]
-            b.emit(f"comp_{key} = {observer}({meas_speed}, {err}, P[{gain}], y, {k}, P, {o}, dy)",
-                   writes=(f"comp_{key}", f"dy:{name}"), reads=tuple(site_reads))
+            # the observer kernel reads and writes its own state y[k] only: the one thing its
+            # text (``y, k, …, dy``) cannot show, so the line carries it
+            b.emit(Line(f"{{comp_{key}}} = {observer}({meas_speed}, ({{table_position}} - "
+                        f"{{ref_x}}), P[{gain}], y, {k}, P, {o}, dy)",
+                        writes=(f"dy:{name}",), reads=(f"y:{name}",)))
             states.append(name)
-        reads += site_reads
-        terms.append(f"comp_{key}")
+        terms.append(f"{{comp_{key}}}")
     b.add_aux("compensation_force", "N", f"friction compensation force ({c.mode})")
-    b.emit(f"{b.a('compensation_force')} = {' + '.join(terms)}",
-           writes="aux:compensation_force", reads=tuple(terms))
+    b.emit(f"{{compensation_force}} = {' + '.join(terms)}")
+    own = {f"y:{b.q(s)}" for s in states}
+    reads = sorted({r for key, *_ in sites for r in b.flows[b.q(f"comp_{key}")]} - own)
     return CompensationFootprint(
         mode=c.mode, axis=axis, sites=tuple(key for key, *_ in sites),
-        reads=tuple(r for r in dict.fromkeys(reads) if r.removeprefix("y:") not in states),
-        states=tuple(states), force="compensation_force",
-        current=f"{factor} * {b.a('compensation_force')}")
+        reads=tuple(reads), states=tuple(states), force="compensation_force",
+        current=f"{factor} * {{compensation_force}}")

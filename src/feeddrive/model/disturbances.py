@@ -168,7 +168,7 @@ def emit_load(b: Builder, force: float, start: float, record: LoadProfile | None
     o = b.named_params("disturbances", LOAD_SLOTS, np.array(
         [force, start, step, where, values.size if record is not None else 0]))
     b.add_aux("load_force", "N", "load force on the table (against positive motion)")
-    return f"{b.use(load_force)}(t, P, {o}, T)"
+    return f"{b.use(load_force)}({{t}}, P, {o}, T)"
 
 
 def emit_harmonics(b: Builder, name: str,

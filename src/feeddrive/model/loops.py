@@ -26,7 +26,7 @@ from .. import registry
 from .._jit import kernel
 from ..parameters import Component, ParameterError
 from ..parameters.validation import choice, flag, quantity
-from .codegen import Builder
+from .codegen import SIGNAL, Builder
 
 # parameter block of one axis (offsets from the axis' first slot)
 # ``inj_speed`` [rad/s] and ``inj_current`` [A] are zero inputs added to the continuous speed
@@ -269,6 +269,10 @@ class Channel:
 class Axis:
     """One motor's cascade as the mechanism wires it: its references, feedback and current.
 
+    The continuous fields are code with their signals in braces (``"{table_position}"``,
+    ``"({ref_v} + {ref_vn})"``, :meth:`Builder.emit <feeddrive.model.codegen.Builder.emit>`):
+    what the loops read follows from that text.
+
     Parameters
     ----------
     name : str
@@ -288,7 +292,8 @@ class Axis:
     speed_q : str
         The same from sampled channel speeds (``s_<channel>``) [rad/s].
     current_state : str
-        Code of the motor current state [A].
+        Code of the motor current state, the state named in braces (``"{screw_current}"``)
+        [A].
     active : str, default ""
         Code of the condition under which the axis runs; empty for always.
     speed_unit : str, default "rad/s"
@@ -303,19 +308,9 @@ class Axis:
     speed_correction : str, default ""
         Code of a speed added to the continuous speed command (a machine's synchronisation
         part) [rad/s].
-    speed_correction_reads : tuple of str, default ()
-        What ``speed_correction`` is computed from (``Builder.flow`` names).
     velocity_prelude : tuple of str, default ()
         Sampled code run at each velocity-loop instant just before its PI update; it may read
         ``ref_x`` and the quantised positions and change the held integral (a reset part).
-    position_reads : tuple of str, default ()
-        What the continuous ``position`` code is computed from (``Builder.flow`` names).
-    speed_reads : tuple of str, default ()
-        What the ``speed`` code is computed from.
-    current_reads : tuple of str, default ()
-        What the ``current_state`` code is computed from.
-    extra_reads : tuple of str, default ()
-        What the ``extra_current`` code is computed from.
     """
 
     name: str
@@ -334,14 +329,9 @@ class Axis:
     # code of a current [A] added to the current command in every loop configuration,
     # sampled or continuous (a feed-forward part); saturated with the command
     current_feedforward: str = ""
-    position_reads: tuple[str, ...] = ()
-    speed_reads: tuple[str, ...] = ()
-    current_reads: tuple[str, ...] = ()
-    extra_reads: tuple[str, ...] = ()  # of extra_current (current_feedforward: held only)
     # code of a speed [rad/s] added to the continuous speed command (a machine's
-    # synchronisation part writes it) and what it is computed from
+    # synchronisation part writes it)
     speed_correction: str = ""
-    speed_correction_reads: tuple[str, ...] = ()
     # sampled code run at the velocity loop's instants just before its PI update, where the
     # quantised positions (``q_<channel>``) and ``ref_x`` are known (a reset-integrator part)
     velocity_prelude: tuple[str, ...] = ()
@@ -477,7 +467,10 @@ def control_axes(b: Builder, axes: list[Axis]) -> tuple[ControlAxis, ...]:
     """
     out = []
     for ax in axes:
-        current = [r.removeprefix("y:") for r in ax.current_reads if r.startswith("y:")]
+        current = [n for n in SIGNAL.findall(ax.current_state) if b.q(n) in b.state_index]
+        if len(current) != 1:
+            raise ValueError(f"axis {ax.name!r}: its current_state {ax.current_state!r} "
+                             "names no one state in braces")
         out.append(ControlAxis(ax.name, b.q(f"{ax.name}_speed_command"),
                                b.q(f"{ax.name}_current_command"), b.q(current[0]),
                                ax.param_offset))
@@ -530,10 +523,15 @@ def _speed_law(b: Builder, ax: Axis) -> str:
 
 
 def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) -> None:
-    """Speed and current commands of every axis into ``target`` (aux array expression)."""
+    """Speed and current commands of every axis into ``target``: ``"aux"``, the signals
+    (right-hand side), or a local array of the sampled update."""
     P = "P"
-    sc = [f"{target}[{b.aux_index[b.q(f'{ax.name}_speed_command')]}]" for ax in axes]
-    ic = [f"{target}[{b.aux_index[b.q(f'{ax.name}_current_command')]}]" for ax in axes]
+    if target == "aux":
+        sc = [f"{{{ax.name}_speed_command}}" for ax in axes]
+        ic = [f"{{{ax.name}_current_command}}" for ax in axes]
+    else:
+        sc = [f"{target}[{b.aux_index[b.q(f'{ax.name}_speed_command')]}]" for ax in axes]
+        ic = [f"{target}[{b.aux_index[b.q(f'{ax.name}_current_command')]}]" for ax in axes]
     verr, sat, ccmd = b.use(velocity_error), b.use(saturate), b.use(current_command)
     out.append(f"if {_period(b, 'position')} > 0.0:")
     for ax, s in zip(axes, sc, strict=True):
@@ -559,29 +557,8 @@ def _emit_commands(b: Builder, axes: list[Axis], out: list[str], target: str) ->
         extra = f" + {ax.extra_current}" if ax.extra_current and target == "aux" else ""
         if ax.current_feedforward:
             extra += f" + {ax.current_feedforward}"
-        out.append(f"    {c} = {sat}({ccmd}(e_{ax.name}, {b.y(ax.name + '_velocity_integral')}, "
+        out.append(f"    {c} = {sat}({ccmd}(e_{ax.name}, {{{ax.name}_velocity_integral}}, "
                    f"{P}, {o}) + {P}[{o + INJ_CURRENT}]{extra}, {P}[{o + I_MAX}])")
-
-
-def _declare_flows(b: Builder, axes: list[Axis]) -> None:
-    """What each axis' continuous loop signals and integrator rates are computed from (both
-    branches of the sampled/continuous switches: the held values carry nothing)."""
-    for ax in axes:
-        if not (ax.position_reads and ax.speed_reads and ax.current_reads):
-            raise ValueError(f"axis {ax.name!r}: its mechanism declares no reads of its "
-                             "position, speed or current (Axis.*_reads)")
-        if ax.extra_current and not ax.extra_reads:
-            raise ValueError(f"axis {ax.name!r}: extra_current without extra_reads")
-        n = ax.name
-        b.flow(f"aux:{n}_speed_command",
-               ("reference", *ax.position_reads, *ax.speed_correction_reads))
-        b.flow(f"dy:{n}_velocity_integral",
-               (f"aux:{n}_speed_command", *ax.speed_reads, f"y:{n}_velocity_integral"))
-        b.flow(f"aux:{n}_current_command",
-               (f"aux:{n}_speed_command", *ax.speed_reads, f"y:{n}_velocity_integral",
-                *ax.extra_reads))
-        b.flow((f"aux:{n}_voltage", f"dy:{n}_current_integral"),
-               (f"aux:{n}_current_command", *ax.current_reads, f"y:{n}_current_integral"))
 
 
 def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
@@ -599,7 +576,6 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     """
     rate, sat, vcmd = b.use(integrator_rate), b.use(saturate), b.use(voltage_command)
     verr, ccmd, quant = b.use(velocity_error), b.use(current_command), b.use(quantise)
-    _declare_flows(b, axes)
 
     # ---- right-hand side: commands, continuous integrators, current loops
     lines: list[str] = []
@@ -607,39 +583,39 @@ def emit_cascade(b: Builder, axes: list[Axis], channels: list[Channel]) -> None:
     lines.append(f"if {_period(b, 'velocity')} == 0.0 and P[{axes[0].param_offset + KVI}] != 0.0:")
     for ax in axes:
         o = ax.param_offset
+        vi = f"{ax.name}_velocity_integral"
         lines += _guarded(ax, [
-            f"e_{ax.name} = {verr}({b.a(ax.name + '_speed_command')}, {ax.speed}, P, {o})",
-            f"raw = P[{o + KVP}] * e_{ax.name} + P[{o + KVI}] * "
-            f"{b.y(ax.name + '_velocity_integral')}",
-            f"{b.dy(ax.name + '_velocity_integral')} = {rate}(e_{ax.name}, raw, "
-            f"P[{o + I_MAX}])"])
+            f"e_{ax.name} = {verr}({{{ax.name}_speed_command}}, {ax.speed}, P, {o})",
+            f"raw = P[{o + KVP}] * e_{ax.name} + P[{o + KVI}] * {{{vi}}}",
+            f"{{der({vi})}} = {rate}(e_{ax.name}, raw, P[{o + I_MAX}])"])
         if ax.active:
             lines.append("    else:")
-            lines.append(f"        {b.dy(ax.name + '_velocity_integral')} = 0.0")
+            lines.append(f"        {{der({vi})}} = 0.0")
     lines.append("else:")
     for ax in axes:
-        lines.append(f"    {b.dy(ax.name + '_velocity_integral')} = 0.0")
+        lines.append(f"    {{der({ax.name}_velocity_integral)}} = 0.0")
     for ax in axes:
         o = ax.param_offset
         ic = ax.name + "_current_integral"
         lines += [
             f"if {_period(b, 'current')} > 0.0:",
             f"    u = {b.h(ax.name + '.voltage')}",
-            f"    {b.dy(ic)} = 0.0",
+            f"    {{der({ic})}} = 0.0",
             "else:",
-            f"    e = {b.a(ax.name + '_current_command')} - {ax.current_state}",
-            f"    raw = {vcmd}(e, {b.y(ic)}, P, {o})",
+            f"    e = {{{ax.name}_current_command}} - {ax.current_state}",
+            f"    raw = {vcmd}(e, {{{ic}}}, P, {o})",
             f"    u = {sat}(raw, P[{o + U_MAX}])",
-            f"    {b.dy(ic)} = {rate}(e, raw, P[{o + U_MAX}]) if P[{o + KII}] != 0.0 else 0.0",
-            f"{b.a(ax.name + '_voltage')} = u",
+            f"    {{der({ic})}} = {rate}(e, raw, P[{o + U_MAX}]) if P[{o + KII}] != 0.0 "
+            "else 0.0",
+            f"{{{ax.name}_voltage}} = u",
         ]
         if ax.active:  # a held axis (the CDFS nut) freezes its current integral too
-            lines += [f"if not ({ax.active}):", f"    {b.dy(ic)} = 0.0"]
+            lines += [f"if not ({ax.active}):", f"    {{der({ic})}} = 0.0"]
     for ln in lines:
         b.emit(ln)
 
     # ---- sampled update
-    s: list[str] = [f"ref_x, ref_v, ref_xn, ref_vn = {b.reference_call}"]
+    s: list[str] = list(b.references)
     s.append(f"if {b.tick('controller.position_period')} >= 0:")
     for ax in axes:
         body = [f"q_{ch.name} = {quant}({ch.state}, {ch.quantum})" for ch in channels

@@ -135,20 +135,24 @@ def reference_kernel(t: float, P: np.ndarray, o: int,
 
 
 #: zero-valued inputs added to the profile's reference (the linearisation's reference inputs,
-#: :mod:`feeddrive.analysis.linear`), in the order ``reference_with_inputs`` reads them
+#: :mod:`feeddrive.analysis.linear`), in the order ``reference_signal`` reads them
 REFERENCE_INPUTS = ("table_position_reference", "table_speed_reference",
                     "nut_position_reference", "nut_speed_reference")
 TABLE_POSITION_INPUT, TABLE_SPEED_INPUT, NUT_POSITION_INPUT, NUT_SPEED_INPUT = \
     range(len(REFERENCE_INPUTS))
 
 
-@kernel
-def reference_with_inputs(t: float, P: np.ndarray, o: int, oi: int,
-                          T: np.ndarray) -> tuple[float, float, float, float]:
-    """:func:`reference_kernel` plus the linearisation's reference inputs.
+#: the reference signals a profile encodes, in the order of its data table's row pairs
+#: (position, speed) and of the linearisation's inputs (:data:`REFERENCE_INPUTS`); the table's
+#: is every drive's, the others a topology follows when it says so
+#: (:meth:`feeddrive.model.mechanisms.Mechanism.followed_references`)
+REFERENCE_SIGNALS = ("table", "nut")
 
-    ``P[oi:oi+4]`` (:data:`REFERENCE_INPUTS`, zero in a simulation) are added to the four
-    commanded values.
+
+@kernel
+def reference_signal(t: float, P: np.ndarray, o: int, oi: int, T: np.ndarray,
+                     k: int) -> tuple[float, float]:
+    """One reference signal's commanded position and speed, the linearisation's inputs added.
 
     Parameters
     ----------
@@ -159,18 +163,21 @@ def reference_with_inputs(t: float, P: np.ndarray, o: int, oi: int,
     o : int
         Offset of the profile block in ``P``.
     oi : int
-        Offset of the reference inputs in ``P``.
+        Offset of the reference inputs (:data:`REFERENCE_INPUTS`, zero in a simulation).
     T : numpy.ndarray
         The packed tables [SI].
+    k : int
+        The signal's index in :data:`REFERENCE_SIGNALS`.
 
     Returns
     -------
     tuple of float
-        Table position [m], table speed [m/s], nut position [m], nut speed [m/s].
+        Its position [m] and speed [m/s].
     """
     x_t, v_t, x_n, v_n = reference_kernel(t, P, o, T)
-    return (x_t + P[oi + TABLE_POSITION_INPUT], v_t + P[oi + TABLE_SPEED_INPUT],
-            x_n + P[oi + NUT_POSITION_INPUT], v_n + P[oi + NUT_SPEED_INPUT])
+    if k == 0:
+        return x_t + P[oi + TABLE_POSITION_INPUT], v_t + P[oi + TABLE_SPEED_INPUT]
+    return x_n + P[oi + NUT_POSITION_INPUT], v_n + P[oi + NUT_SPEED_INPUT]
 
 
 @dataclass(frozen=True)

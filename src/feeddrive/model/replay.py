@@ -361,11 +361,11 @@ def emit_replay_value(b: Any, replay: Replay, mech: Any, axis: str, profile_offs
     profile_offset : int
         Offset of the profile block in ``P``.
     """
-    value = f"{b.use(replay_value)}(t, P, {profile_offset}, T)"
-    line = f"{REPLAY_VARIABLE} = {replay.scale_code(b, mech, axis)} * {value}"
-    b.emit(line, writes="replay", reads="t")
+    value = f"{b.use(replay_value)}({{t}}, P, {profile_offset}, T)"
+    line = f"{{{REPLAY_VARIABLE}}} = {replay.scale_code(b, mech, axis)} * {value}"
+    b.emit(line)
     b.emit(line, sampled=True)
-    b.emit(f"{b.a('replay_input')} = {value}", writes="aux:replay_input", reads="t")
+    b.emit(f"{{replay_input}} = {value}")
 
 
 def emit_replay_rates(b: Any, state: str, axis: str) -> None:
@@ -383,4 +383,4 @@ def emit_replay_rates(b: Any, state: str, axis: str) -> None:
     """
     for name in dict.fromkeys((state, f"{axis}_current", f"{axis}_velocity_integral",
                                f"{axis}_current_integral")):
-        b.emit(f"{b.dy(name)} = 0.0", writes=f"dy:{name}")
+        b.emit(f"{{der({name})}} = 0.0")

@@ -2,17 +2,17 @@
 model, from what its parts declare, and a column colouring for a grouped finite-difference
 Jacobian.
 
-Every part declares, as it emits its code, what it computes from what
-(:meth:`feeddrive.model.codegen.Builder.flow`): ``dy:<state>`` and ``aux:<signal>`` and its own
-part-level names (``f_d``, ``f_screw``, ``reference``) written from ``y:<state>``, ``t`` and
-other written names.  Parameters, held (sampled) values and tables are constants of one
-Jacobian and are not declared.  :func:`declared_pattern` follows these declarations to the
-states and t every derivative depends on; a name written in several places (the two branches
-of a gated site) depends on the union.  A declaration that names a state, signal or value no
-part writes, or a state whose derivative nobody writes, is refused, so a part cannot drop out
-of the pattern silently; the pattern is checked against dense finite-difference Jacobians of
-every kind of model in ``tests/unit/test_jacobian_pattern.py`` (an under-estimate there is a
-wrong Jacobian).
+Every part's code says what it computes from what, its signals named in braces
+(:meth:`feeddrive.model.codegen.Builder.emit` derives the flows from that text): ``dy:<state>``
+and ``aux:<signal>`` and its own named values (``f_d``, ``f_screw``, ``ref_x``) written from
+``y:<state>``, ``t`` and other written names. Parameters, held (sampled) values and tables are
+constants of one Jacobian and are not declared. :func:`declared_pattern` follows these flows to
+the states and t every derivative depends on; a name written in several places (the two
+branches of a gated site) depends on the union. A declaration that names a state, signal or
+value no part writes, or a state whose derivative nobody writes, is refused, so a part cannot
+drop out of the pattern silently; the pattern is checked against dense finite-difference
+Jacobians of every kind of model in ``tests/unit/test_jacobian_pattern.py`` (an under-estimate
+there is a wrong Jacobian).
 """
 
 from __future__ import annotations

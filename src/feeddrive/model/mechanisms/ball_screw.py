@@ -242,15 +242,14 @@ class BallScrewDrive(Mechanism):
         share = self.params.friction.ball_nut_share
         out = []
         if share < 1.0:
-            out.append(Site("screw", "screw", f"{H} * w_s", (("screw", H),), 1.0 - share,
-                            reads=("w_s",), rotary=True))
-        out.append(Site("nut", "nut", f"{H} * w_n", (("nut", H),), 1.0, nut_on,
-                        reads=("w_n",), rotary=True))
-        out.append(Site("guide", "guide", "v_t", (("table", "1.0"),), reads=("v_t",)))
-        if share > 0.0:
-            out.append(Site("ball_nut", "screw", f"{H} * (w_s - w_n)",
-                            (("screw", H), ("nut", f"(-{H})")), share, reads=("w_s", "w_n"),
+            out.append(Site("screw", "screw", f"{H} * {{w_s}}", (("screw", H),), 1.0 - share,
                             rotary=True))
+        out.append(Site("nut", "nut", f"{H} * {{w_n}}", (("nut", H),), 1.0, nut_on,
+                        rotary=True))
+        out.append(Site("guide", "guide", "{v_t}", (("table", "1.0"),)))
+        if share > 0.0:
+            out.append(Site("ball_nut", "screw", f"{H} * ({{w_s}} - {{w_n}})",
+                            (("screw", H), ("nut", f"(-{H})")), share, rotary=True))
         return out
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
@@ -271,36 +270,34 @@ class BallScrewDrive(Mechanism):
             Channel("table", b.y("table_position"), b.y("table_speed"), f"P[{o_s + GRAT_Q}]"),
         ]
         fb = f"int(P[{o_s + V_FEEDBACK}]) == 1"
-        position, position_q = b.y("table_position"), "q_table"
-        position_reads: tuple[str, ...] = ("y:table_position",)
+        position, position_q = "{table_position}", "q_table"
         if c.position_feedback == "motor":  # semi-closed loop: the encoders through the lead
-            position = f"{Hp} * ({b.y('screw_angle')} - {b.y('nut_angle')})"
+            position = f"{Hp} * ({{screw_angle}} - {{nut_angle}})"
             position_q = f"{Hp} * (q_screw_angle - q_nut_angle)"
-            position_reads = ("y:screw_angle", "y:nut_angle")
+        # the DDFS follows a nut reference (followed_references); the CDFS holds its nut at 0
+        nut_ref = self.follows("nut")
         screw = Axis(
-            name="screw", param_offset=o_s, reference="ref_x", feedforward="(ref_v + ref_vn)",
+            name="screw", param_offset=o_s, reference="{ref_x}",
+            feedforward="({ref_v} + {ref_v_nut})" if nut_ref else "{ref_v}",
             position=position, position_q=position_q,
-            speed=(f"(({b.y('table_speed')} + {Hp} * {b.y('nut_speed')}) / {Hp} if {fb} "
-                   f"else {b.y('screw_speed')})"),
+            speed=(f"(({{table_speed}} + {Hp} * {{nut_speed}}) / {Hp} if {fb} "
+                   "else {screw_speed})"),
             speed_q=f"((s_table + {Hp} * s_nut_angle) / {Hp} if {fb} else s_screw_angle)",
-            current_state=b.y("screw_current"), position_reads=position_reads,
-            speed_reads=("y:table_speed", "y:nut_speed", "y:screw_speed"),
-            current_reads=("y:screw_current",))
+            current_state="{screw_current}")
         nut = Axis(
-            name="nut", param_offset=o_n, reference="ref_xn", feedforward="ref_vn",
-            position=f"{Hp} * {b.y('nut_angle')}", position_q=f"{Hp} * q_nut_angle",
-            speed=b.y("nut_speed"), speed_q="s_nut_angle", current_state=b.y("nut_current"),
-            active=f"{b.p('nut.active')} > 0.5", speed_law="speed",
-            position_reads=("y:nut_angle",), speed_reads=("y:nut_speed",),
-            current_reads=("y:nut_current",))
+            name="nut", param_offset=o_n, reference="{ref_x_nut}" if nut_ref else "0.0",
+            feedforward="{ref_v_nut}" if nut_ref else "0.0",
+            position=f"{Hp} * {{nut_angle}}", position_q=f"{Hp} * q_nut_angle",
+            speed="{nut_speed}", speed_q="s_nut_angle", current_state="{nut_current}",
+            active=f"{b.p('nut.active')} > 0.5", speed_law="speed")
         return [screw, nut], channels
 
     def compensation(self, b: Builder
-                     ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:
+                     ) -> tuple[list[tuple[str, str, str]], str]:
         H = b.p("screw.H")
-        return ([("screw", "(ref_v + ref_vn)", f"{H} * {b.y('screw_speed')}",
-                  ("y:screw_speed",)),
-                 ("guide", "ref_v", b.y("table_speed"), ("y:table_speed",))],
+        screw = "({ref_v} + {ref_v_nut})" if self.follows("nut") else "{ref_v}"
+        return ([("screw", screw, f"{H} * {{screw_speed}}"),
+                 ("guide", "{ref_v}", "{table_speed}")],
                 f"{H} / {b.p('screw_motor.torque_constant')}")
 
     def steady_motion(self, table_speed: float, nut_speed: float
@@ -368,77 +365,61 @@ class BallScrewDrive(Mechanism):
         from ..disturbances import harmonics
 
         H = b.p("screw.H")
-        b.emit(f"{b.a('nut_position_reference')} = ref_xn",
-               writes="aux:nut_position_reference", reads="reference")
-        b.emit(f"{b.a('nut_speed_reference')} = ref_vn", writes="aux:nut_speed_reference",
-               reads="reference")
-        b.emit(f"w_s = {b.y('screw_speed')}", writes="w_s", reads="y:screw_speed")
-        b.emit(f"w_n = {b.y('nut_speed')}", writes="w_n", reads="y:nut_speed")
-        b.emit(f"v_t = {b.y('table_speed')}", writes="v_t", reads="y:table_speed")
+        nut_ref = self.follows("nut")  # the CDFS commands its held nut 0
+        b.emit(f"{{nut_position_reference}} = {'{ref_x_nut}' if nut_ref else '0.0'}")
+        b.emit(f"{{nut_speed_reference}} = {'{ref_v_nut}' if nut_ref else '0.0'}")
+        b.emit("{w_s} = {screw_speed}")
+        b.emit("{w_n} = {nut_speed}")
+        b.emit("{v_t} = {table_speed}")
         for ln in m.always:
             b.emit(ln)
         k_eq = b.use(equivalent_stiffness_kernel)
         o_stiff = b.param_index[b.q(f"stiffness.{STIFFNESS_SLOTS[0]}")]  # the block's first slot
-        b.emit(f"k_eq = {k_eq}({b.y('table_position')}, P, {o_stiff})", writes="k_eq",
-               reads="y:table_position")
+        b.emit(f"{{k_eq}} = {k_eq}({{table_position}}, P, {o_stiff})")
         c_ax = b.p("stiffness.axial_damping")
-        th_rel = f"({b.y('screw_angle')} - {b.y('nut_angle')})"
-        stretch = ("k_eq", "y:screw_angle", "y:nut_angle", "y:table_position", "w_s", "w_n",
-                   "v_t")
+        th_rel = "({screw_angle} - {nut_angle})"
         gap = self.params.section("backlash")
         if gap is not None:  # a dead-zone spring at the nut (model/parts/backlash.py)
-            self._emit_gap(b, m, th_rel, stretch, c_ax)
+            self._emit_gap(b, m, th_rel, c_ax)
             lever = H
-            lever_reads: tuple[str, ...] = ()
         elif m.lead is None:
-            b.emit(f"f_d = (k_eq * ({H} * {th_rel} - {b.y('table_position')}) "
-                   f"+ {c_ax} * ({H} * (w_s - w_n) - v_t))", writes="f_d", reads=stretch)
+            b.emit(f"{{f_d}} = ({{k_eq}} * ({H} * {th_rel} - {{table_position}}) "
+                   f"+ {c_ax} * ({H} * ({{w_s}} - {{w_n}}) - {{v_t}}))")
             lever = H
-            lever_reads = ()
         else:
             hh = b.use(harmonics)
-            b.emit(f"lead_dev, lead_slope = {hh}({th_rel}, P, {m.lead[0]}, {m.lead[1]})",
-                   writes="lead", reads=("y:screw_angle", "y:nut_angle"))
-            b.emit(f"f_d = (k_eq * ({H} * {th_rel} + lead_dev - {b.y('table_position')}) "
-                   f"+ {c_ax} * (({H} + lead_slope) * (w_s - w_n) - v_t))", writes="f_d",
-                   reads=(*stretch, "lead"))
-            lever = f"({H} + lead_slope)"
-            lever_reads = ("lead",)
-        screw = self._shaft(b, "screw", m, f"- {lever} * f_d")
-        table = Body(drive=["f_d"], external=list(m.forces.get("table", [])))
+            b.emit(f"{{lead_dev}}, {{lead_slope}} = {hh}({th_rel}, P, {m.lead[0]}, "
+                   f"{m.lead[1]})")
+            b.emit(f"{{f_d}} = ({{k_eq}} * ({H} * {th_rel} + {{lead_dev}} - {{table_position}}) "
+                   f"+ {c_ax} * (({H} + {{lead_slope}}) * ({{w_s}} - {{w_n}}) - {{v_t}}))")
+            lever = f"({H} + {{lead_slope}})"
+        screw = self._shaft(b, "screw", m, f"- {lever} * {{f_d}}")
+        table = Body(drive=["{f_d}"], external=list(m.forces.get("table", [])))
         if m.load is not None:
             table.external.append(f"- {m.load}")
-        table_reads: tuple[str, ...] = ()
         if gap is not None:
-            table.external.append("+ f_hold")
-            table_reads = ("f_hold",)
-        b.emit(f"{b.dy('screw_angle')} = w_s", writes="dy:screw_angle", reads="w_s")
-        b.emit(f"{b.dy('screw_speed')} = ({screw.expression()}) / {b.p('screw.J')}",
-               writes="dy:screw_speed", reads=self._shaft_reads("screw", m, lever_reads))
-        b.emit(f"{b.dy('table_position')} = v_t", writes="dy:table_position", reads="v_t")
-        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}",
-               writes="dy:table_speed", reads=("f_d", *m.body_reads("table"), *m.load_reads,
-                                                  *table_reads))
-        self._current(b, "screw", "w_s", m.torque_off)
+            table.external.append("+ {f_hold}")
+        b.emit("{der(screw_angle)} = {w_s}")
+        b.emit(f"{{der(screw_speed)}} = ({screw.expression()}) / {b.p('screw.J')}")
+        b.emit("{der(table_position)} = {v_t}")
+        b.emit(f"{{der(table_speed)}} = ({table.expression()}) / {b.p('table.mass')}")
+        self._current(b, "screw", "{w_s}", m.torque_off)
         # the hollow motor and nut: live in the DDFS (or with the CDFS nut on its servo)
         b.emit(f"if {b.p('nut.active')} > 0.5:")
         for ln in m.gated:
-            b.emit("    " + ln)
-        nut = self._shaft(b, "nut", m, f"+ {lever} * f_d")
-        b.emit(f"    {b.dy('nut_angle')} = w_n", writes="dy:nut_angle", reads="w_n")
-        b.emit(f"    {b.dy('nut_speed')} = ({nut.expression()}) / {b.p('nut.J')}",
-               writes="dy:nut_speed", reads=self._shaft_reads("nut", m, lever_reads))
-        self._current(b, "nut", "w_n", m.torque_off, indent="    ")
+            b.emit(ln.indented("    "))
+        nut = self._shaft(b, "nut", m, f"+ {lever} * {{f_d}}")
+        b.emit("    {der(nut_angle)} = {w_n}")
+        b.emit(f"    {{der(nut_speed)}} = ({nut.expression()}) / {b.p('nut.J')}")
+        self._current(b, "nut", "{w_n}", m.torque_off, indent="    ")
         b.emit("else:")
-        for ln in m.frozen:  # their values (0) carry no state: nothing to declare
-            b.emit("    " + ln)
+        for text in m.frozen:
+            b.emit("    " + text)
         for name in ("nut_angle", "nut_speed", "nut_current"):
-            b.emit(f"    {b.dy(name)} = 0.0")
-        b.emit(f"{b.a('equivalent_stiffness')} = k_eq", writes="aux:equivalent_stiffness",
-               reads="k_eq")
+            b.emit(f"    {{der({name})}} = 0.0")
+        b.emit("{equivalent_stiffness} = {k_eq}")
 
-    def _emit_gap(self, b: Builder, m: Mechanics, th_rel: str, stretch: tuple[str, ...],
-                  c_ax: str) -> None:
+    def _emit_gap(self, b: Builder, m: Mechanics, th_rel: str, c_ax: str) -> None:
         """f_d through the backlash's dead-zone spring and the friction-dominated hold f_hold
         on the table (:mod:`feeddrive.model.parts.backlash`)."""
         from ..parts.backlash import gap_force, gap_hold
@@ -449,35 +430,28 @@ class BallScrewDrive(Mechanism):
                                  "[disturbances.lead_error] or the [backlash] section")
         H = b.p("screw.H")
         half, hold = b.p("backlash.half_gap"), b.p("backlash.hold_time")
-        e = f"({H} * {th_rel} - {b.y('table_position')})"
-        b.emit(f"gap_e = {e}", writes="gap_e", reads=stretch)
-        b.emit(f"f_d = {b.use(gap_force)}(gap_e, {H} * (w_s - w_n) - v_t, k_eq, {c_ax}, {half})",
-               writes="f_d", reads=("gap_e", "k_eq", "w_s", "w_n", "v_t"))
-        b.emit(f"f_hold = {b.use(gap_hold)}(gap_e, v_t, {half}, {b.p('table.mass')}, {hold})",
-               writes="f_hold", reads=("gap_e", "v_t"))
+        b.emit(f"{{gap_e}} = ({H} * {th_rel} - {{table_position}})")
+        b.emit(f"{{f_d}} = {b.use(gap_force)}({{gap_e}}, {H} * ({{w_s}} - {{w_n}}) - {{v_t}}, "
+               f"{{k_eq}}, {c_ax}, {half})")
+        b.emit(f"{{f_hold}} = {b.use(gap_hold)}({{gap_e}}, {{v_t}}, {half}, "
+               f"{b.p('table.mass')}, {hold})")
 
     def _shaft(self, b: Builder, key: str, m: Mechanics, reaction: str) -> Body:
         shaft = Body(drive=[] if m.torque_off else
-                     [f"{b.p(key + '_motor.torque_constant')} * {b.y(key + '_current')}"])
+                     [f"{b.p(key + '_motor.torque_constant')} * {{{key}_current}}"])
         if key in m.ripple:
             shaft.drive.append(f"+ {m.ripple[key]}")
         shaft.external = list(m.forces.get(key, []))
         shaft.reaction = [reaction]
         return shaft
 
-    def _shaft_reads(self, key: str, m: Mechanics, lever: tuple[str, ...]) -> tuple[str, ...]:
-        """What a shaft's equation (:meth:`_shaft`) is computed from."""
-        motor = () if m.torque_off else (f"y:{key}_current",)
-        return (*motor, *m.body_reads(key), "f_d", *lever)
-
     def _current(self, b: Builder, key: str, speed: str, torque_off: bool,
                  indent: str = "") -> None:
         i = f"{key}_current"
         if torque_off:
-            b.emit(f"{indent}{b.dy(i)} = 0.0", writes=f"dy:{i}")
+            b.emit(f"{indent}{{der({i})}} = 0.0")
             return
         mot = f"{key}_motor"
-        b.emit(f"{indent}{b.dy(i)} = ({b.a(key + '_voltage')} - {b.p(mot + '.resistance')} * "
-               f"{b.y(i)} - {b.p(mot + '.back_emf_constant')} * {speed}) / "
-               f"{b.p(mot + '.inductance')}", writes=f"dy:{i}",
-               reads=(f"aux:{key}_voltage", f"y:{i}", speed))
+        b.emit(f"{indent}{{der({i})}} = ({{{key}_voltage}} - {b.p(mot + '.resistance')} * "
+               f"{{{i}}} - {b.p(mot + '.back_emf_constant')} * {speed}) / "
+               f"{b.p(mot + '.inductance')}")

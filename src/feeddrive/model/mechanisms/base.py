@@ -3,11 +3,12 @@
 A mechanism is registered by drive name (``"cdfs"``, ``"ddfs"``, ``"linear-motor"``).  It
 declares its states, parameters, friction sites, motors and controller axes to a
 :class:`~feeddrive.model.codegen.Builder`, and writes its equations with the friction and
-disturbance terms the assembler hands it per body — each with what it is computed from
-(``Builder.emit(..., writes=, reads=)``; ``Site.reads``, the ``Axis`` ``*_reads``), from which
-the Jacobian's pattern is assembled.  Class attributes declare the rest of its structure: its
-motors (:class:`DriveMotor`, for torque ripple), the table's travel, whether the model depends
-on the table position.  The interface is :class:`Mechanism`.
+disturbance terms the assembler hands it per body.  Its code names the signals it reads and
+writes in braces (``{der(table_position)} = {v_t}``, :meth:`Builder.emit
+<feeddrive.model.codegen.Builder.emit>`); the assembler derives from that text alone what each
+value is computed from, and the Jacobian's pattern from that.  Class attributes declare the
+rest of its structure: its motors (:class:`DriveMotor`, for torque ripple), the table's travel,
+whether the model depends on the table position.  The interface is :class:`Mechanism`.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from ... import registry
 
 if TYPE_CHECKING:
     from ...parameters import DriveParameters
-    from ..codegen import Builder
+    from ..codegen import Builder, Line
     from ..loops import Axis, Channel
 
 
@@ -73,15 +74,14 @@ class Site:
         ``friction.<key>`` of the parameter set, or a dotted path to a part's own section
         (``rack_pinion.gearbox_friction``).
     speed : str
-        Code of the sliding speed at the site [m/s] (linear-equivalent for rotary sites).
+        Code of the sliding speed at the site, signals in braces (``"P[3] * {w_s}"``) [m/s]
+        (linear-equivalent for rotary sites).
     bodies : tuple of (str, str)
         (body, factor code) pairs: each body's equation gets the term −factor·F.
     scale : float, default 1.0
         Share of the site's friction acting here [-] (the ball–nut split).
     active : str, default ""
         Code of the condition under which the site acts; empty for always.
-    reads : tuple of str, default ()
-        What the sliding speed is computed from (``Builder.flow`` names).
     rotary : bool, default False
         On a shaft: its torque stored as force at the lever (torque ÷ H).
     """
@@ -92,8 +92,6 @@ class Site:
     bodies: tuple[tuple[str, str], ...]  # (body, factor code) pairs: term = − factor·F
     scale: float = 1.0  # share of the site's friction (ball–nut split)
     active: str = ""  # condition under which the site acts ("" = always)
-    # what ``speed`` is computed from (``Builder.flow`` names, e.g. "y:screw_speed")
-    reads: tuple[str, ...] = ()
     rotary: bool = False  # on a shaft, its torque stored as force at the lever (torque ÷ H)
 
     def parameters(self, params: DriveParameters) -> Any:
@@ -146,13 +144,16 @@ class DriveMotor:
 class Mechanics:
     """What the assembler hands a mechanism to write its equations with.
 
+    Code is written with its signals in braces (:meth:`Builder.emit
+    <feeddrive.model.codegen.Builder.emit>`), so what it reads travels with it.
+
     Parameters
     ----------
     forces : dict of str to list of str
         Per body, the external force terms (friction, disturbances) [N or N m].
-    always : list of str
+    always : list of Line
         Code lines of the friction sites that always act.
-    gated : list of str
+    gated : list of Line
         Code lines of the sites gated by their ``active`` condition.
     frozen : list of str
         Code lines that freeze the states of gated sites while they are off.
@@ -164,37 +165,16 @@ class Mechanics:
         Code of the external load force on the table [N], if any.
     torque_off : bool
         Whether the motor torque is switched off (free-running studies).
-    reads : dict of str to list of str, optional
-        Per body, what its external terms are computed from (``Builder.flow`` names).
-    load_reads : tuple of str, default ()
-        What the load force is computed from.
     """
 
     forces: dict[str, list[str]]
-    always: list[str]
-    gated: list[str]
+    always: list[Line]
+    gated: list[Line]
     frozen: list[str]
     ripple: dict[str, str]
     lead: tuple[int, int] | None
     load: str | None
     torque_off: bool
-    reads: dict[str, list[str]] = field(default_factory=dict)  # body -> its terms' inputs
-    load_reads: tuple[str, ...] = ()
-
-    def body_reads(self, body: str) -> list[str]:
-        """What the external terms of a body (friction, ripple) are computed from.
-
-        Parameters
-        ----------
-        body : str
-            The body.
-
-        Returns
-        -------
-        list of str
-            ``Builder.flow`` names; empty for a body without external terms.
-        """
-        return list(self.reads.get(body, ()))
 
 
 class Mechanism:
@@ -476,7 +456,7 @@ class Mechanism:
         return f"{self.drive_label(self.drive)} has no {signal}; expected 0"
 
     def compensation(self, b: Builder
-                     ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:
+                     ) -> tuple[list[tuple[str, str, str]], str]:
         """The friction sites a compensator on the table-driving motor models.
 
         Parameters
@@ -486,9 +466,9 @@ class Mechanism:
 
         Returns
         -------
-        sites : list of (str, str, str, tuple of str)
-            (parameter key, commanded speed code, measured speed code, the states that measured
-            speed reads as ``Builder.flow`` names) per compensated site.
+        sites : list of (str, str, str)
+            (parameter key, commanded speed code, measured speed code) per compensated site,
+            signals in braces (``"{ref_v}"``, ``"{table_speed}"``).
         factor : str
             Code of the factor from force [N] to that motor's current [A].
 

@@ -110,23 +110,21 @@ class LinearMotorDrive(Mechanism):
         b.state("motor_current", "A", "linear motor current", "current")
 
     def sites(self, b: Builder) -> list[Site]:
-        return [Site("guide", "guide", "v_t", (("table", "1.0"),), reads=("v_t",))]
+        return [Site("guide", "guide", "{v_t}", (("table", "1.0"),))]
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
         o = axis_parameters(b, "motor", self.params.controller, 1.0, speed_mode=False)
         channels = [Channel("table", b.y("table_position"), b.y("table_speed"),
                             f"P[{o + GRAT_Q}]")]
-        motor = Axis(name="motor", param_offset=o, reference="ref_x", feedforward="ref_v",
-                     position=b.y("table_position"), position_q="q_table",
-                     speed=b.y("table_speed"), speed_q="s_table",
-                     current_state=b.y("motor_current"), speed_unit="m/s",
-                     position_reads=("y:table_position",), speed_reads=("y:table_speed",),
-                     current_reads=("y:motor_current",))
+        motor = Axis(name="motor", param_offset=o, reference="{ref_x}", feedforward="{ref_v}",
+                     position="{table_position}", position_q="q_table",
+                     speed="{table_speed}", speed_q="s_table",
+                     current_state="{motor_current}", speed_unit="m/s")
         return [motor], channels
 
     def compensation(self, b: Builder
-                     ) -> tuple[list[tuple[str, str, str, tuple[str, ...]]], str]:
-        return ([("guide", "ref_v", b.y("table_speed"), ("y:table_speed",))],
+                     ) -> tuple[list[tuple[str, str, str]], str]:
+        return ([("guide", "{ref_v}", "{table_speed}")],
                 f"1.0 / {b.p('motor.force_constant')}")
 
     def site_masses(self) -> dict[str, float]:
@@ -143,24 +141,19 @@ class LinearMotorDrive(Mechanism):
         return {"guide": self.params.table.mass + lm.forcer_mass}
 
     def emit(self, b: Builder, m: Mechanics) -> None:
-        b.emit(f"v_t = {b.y('table_speed')}", writes="v_t", reads="y:table_speed")
+        b.emit("{v_t} = {table_speed}")
         for ln in m.always:
             b.emit(ln)
-        drive = "0.0" if m.torque_off else (
-            f"{b.p('motor.force_constant')} * {b.y('motor_current')}")
-        b.emit(f"f_d = {drive}", writes="f_d",
-               reads=() if m.torque_off else ("y:motor_current",))
-        table = Body(drive=["f_d"], external=list(m.forces.get("table", [])))
+        drive = "0.0" if m.torque_off else f"{b.p('motor.force_constant')} * {{motor_current}}"
+        b.emit(f"{{f_d}} = {drive}")
+        table = Body(drive=["{f_d}"], external=list(m.forces.get("table", [])))
         if m.load is not None:
             table.external.append(f"- {m.load}")
-        b.emit(f"{b.dy('table_position')} = v_t", writes="dy:table_position", reads="v_t")
-        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}",
-               writes="dy:table_speed", reads=("f_d", *m.body_reads("table"), *m.load_reads))
+        b.emit("{der(table_position)} = {v_t}")
+        b.emit(f"{{der(table_speed)}} = ({table.expression()}) / {b.p('table.mass')}")
         if m.torque_off:
-            b.emit(f"{b.dy('motor_current')} = 0.0", writes="dy:motor_current")
+            b.emit("{der(motor_current)} = 0.0")
         else:
-            b.emit(f"{b.dy('motor_current')} = ({b.a('motor_voltage')} - "
-                   f"{b.p('motor.resistance')} * {b.y('motor_current')} - "
-                   f"{b.p('motor.back_emf_constant')} * v_t) / {b.p('motor.inductance')}",
-                   writes="dy:motor_current",
-                   reads=("aux:motor_voltage", "y:motor_current", "v_t"))
+            b.emit(f"{{der(motor_current)}} = ({{motor_voltage}} - "
+                   f"{b.p('motor.resistance')} * {{motor_current}} - "
+                   f"{b.p('motor.back_emf_constant')} * {{v_t}}) / {b.p('motor.inductance')}")

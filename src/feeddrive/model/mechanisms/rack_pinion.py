@@ -152,9 +152,9 @@ class RackPinionDrive(Mechanism):
 
     def sites(self, b: Builder) -> list[Site]:
         H = b.p("rack_pinion.H")
-        return [Site("gearbox", "rack_pinion.gearbox_friction", f"{H} * w_m", (("motor", H),),
-                     reads=("w_m",), rotary=True),
-                Site("guide", "guide", "v_t", (("table", "1.0"),), reads=("v_t",))]
+        return [Site("gearbox", "rack_pinion.gearbox_friction", f"{H} * {{w_m}}",
+                     (("motor", H),), rotary=True),
+                Site("guide", "guide", "{v_t}", (("table", "1.0"),))]
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
         o = axis_parameters(b, "motor", self.params.controller, self.section.transmission_ratio,
@@ -165,14 +165,11 @@ class RackPinionDrive(Mechanism):
             Channel("motor_angle", b.y("motor_angle"), b.y("motor_speed"), f"P[{o + ENC_Q}]"),
             Channel("table", b.y("table_position"), b.y("table_speed"), f"P[{o + GRAT_Q}]"),
         ]
-        motor = Axis(name="motor", param_offset=o, reference="ref_x", feedforward="ref_v",
-                     position=b.y("table_position"), position_q="q_table",
-                     speed=f"({b.y('table_speed')} / {Hp} if {fb} else {b.y('motor_speed')})",
+        motor = Axis(name="motor", param_offset=o, reference="{ref_x}", feedforward="{ref_v}",
+                     position="{table_position}", position_q="q_table",
+                     speed=f"({{table_speed}} / {Hp} if {fb} else {{motor_speed}})",
                      speed_q=f"(s_table / {Hp} if {fb} else s_motor_angle)",
-                     current_state=b.y("motor_current"),
-                     position_reads=("y:table_position",),
-                     speed_reads=("y:table_speed", "y:motor_speed"),
-                     current_reads=("y:motor_current",))
+                     current_state="{motor_current}")
         return [motor], channels
 
     def steady_motion(self, table_speed: float, nut_speed: float
@@ -210,33 +207,26 @@ class RackPinionDrive(Mechanism):
 
     def emit(self, b: Builder, m: Mechanics) -> None:
         H = b.p("rack_pinion.H")
-        b.emit(f"w_m = {b.y('motor_speed')}", writes="w_m", reads="y:motor_speed")
-        b.emit(f"v_t = {b.y('table_speed')}", writes="v_t", reads="y:table_speed")
+        b.emit("{w_m} = {motor_speed}")
+        b.emit("{v_t} = {table_speed}")
         for ln in m.always:
             b.emit(ln)
-        b.emit(f"f_d = ({b.p('rack_pinion.mesh_stiffness')} * ({H} * {b.y('motor_angle')} - "
-               f"{b.y('table_position')}) + {b.p('rack_pinion.mesh_damping')} * "
-               f"({H} * w_m - v_t))", writes="f_d",
-               reads=("y:motor_angle", "y:table_position", "w_m", "v_t"))
+        b.emit(f"{{f_d}} = ({b.p('rack_pinion.mesh_stiffness')} * ({H} * {{motor_angle}} - "
+               f"{{table_position}}) + {b.p('rack_pinion.mesh_damping')} * "
+               f"({H} * {{w_m}} - {{v_t}}))")
         motor = Body(drive=[] if m.torque_off else
-                     [f"{b.p('motor.torque_constant')} * {b.y('motor_current')}"],
-                     external=list(m.forces.get("motor", [])), reaction=[f"- {H} * f_d"])
-        table = Body(drive=["f_d"], external=list(m.forces.get("table", [])))
+                     [f"{b.p('motor.torque_constant')} * {{motor_current}}"],
+                     external=list(m.forces.get("motor", [])), reaction=[f"- {H} * {{f_d}}"])
+        table = Body(drive=["{f_d}"], external=list(m.forces.get("table", [])))
         if m.load is not None:
             table.external.append(f"- {m.load}")
-        b.emit(f"{b.dy('motor_angle')} = w_m", writes="dy:motor_angle", reads="w_m")
-        b.emit(f"{b.dy('motor_speed')} = ({motor.expression()}) / {b.p('rack_pinion.J')}",
-               writes="dy:motor_speed",
-               reads=(*(() if m.torque_off else ("y:motor_current",)),
-                      *m.body_reads("motor"), "f_d"))
-        b.emit(f"{b.dy('table_position')} = v_t", writes="dy:table_position", reads="v_t")
-        b.emit(f"{b.dy('table_speed')} = ({table.expression()}) / {b.p('table.mass')}",
-               writes="dy:table_speed", reads=("f_d", *m.body_reads("table"), *m.load_reads))
+        b.emit("{der(motor_angle)} = {w_m}")
+        b.emit(f"{{der(motor_speed)}} = ({motor.expression()}) / {b.p('rack_pinion.J')}")
+        b.emit("{der(table_position)} = {v_t}")
+        b.emit(f"{{der(table_speed)}} = ({table.expression()}) / {b.p('table.mass')}")
         if m.torque_off:
-            b.emit(f"{b.dy('motor_current')} = 0.0", writes="dy:motor_current")
+            b.emit("{der(motor_current)} = 0.0")
         else:
-            b.emit(f"{b.dy('motor_current')} = ({b.a('motor_voltage')} - "
-                   f"{b.p('motor.resistance')} * {b.y('motor_current')} - "
-                   f"{b.p('motor.back_emf_constant')} * w_m) / {b.p('motor.inductance')}",
-                   writes="dy:motor_current",
-                   reads=("aux:motor_voltage", "y:motor_current", "w_m"))
+            b.emit(f"{{der(motor_current)}} = ({{motor_voltage}} - "
+                   f"{b.p('motor.resistance')} * {{motor_current}} - "
+                   f"{b.p('motor.back_emf_constant')} * {{w_m}}) / {b.p('motor.inductance')}")

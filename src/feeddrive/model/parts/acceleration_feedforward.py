@@ -85,8 +85,7 @@ class AccelerationFeedforward(Component):
         b.add_held(f"{self._label}.previous_speed")
         b.add_aux(f"{self._label}_current", "A",
                   f"acceleration feed-forward current (updated every {self.period:g} s)")
-        b.emit(f"{b.a(self._label + '_current')} = {current}",
-               writes=f"aux:{self._label}_current")  # a held value: no state
+        b.emit(f"{{{self._label}_current}} = {current}")  # a held value: no state
         axes = list(axes)
         axes[i] = dataclasses.replace(axes[i],
                                       current_feedforward=added_feedforward(axes[i], current))

@@ -104,8 +104,7 @@ class DisturbanceObserver(Component):
                    f"{estimate} = {w} - w_dob")
         b.add_aux(f"{self._label}_current", "A",
                   "disturbance-observer current (updated at the velocity loop's instants)")
-        b.emit(f"{b.a(self._label + '_current')} = {estimate}",
-               writes=f"aux:{self._label}_current")  # a held value: no state
+        b.emit(f"{{{self._label}_current}} = {estimate}")  # a held value: no state
         axes = list(axes)
         axes[i] = dataclasses.replace(
             ax, velocity_prelude=(*ax.velocity_prelude, *prelude),

@@ -127,8 +127,7 @@ class ResetIntegrator(Component):
         axes = list(axes)
         axes[i] = dataclasses.replace(ax, velocity_prelude=(*ax.velocity_prelude, *prelude))
         b.add_aux(f"{self._label}_count", "-", "resets of the velocity-loop integral so far")
-        b.emit(f"{b.a(self._label + '_count')} = {count}",
-               writes=f"aux:{self._label}_count")  # a held value: no state
+        b.emit(f"{{{self._label}_count}} = {count}")  # a held value: no state
         return axes
 
     def emit_part(self, b: Any) -> None:

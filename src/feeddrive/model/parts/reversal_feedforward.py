@@ -100,8 +100,7 @@ class ReversalFeedforward(Component):
         held = b.add_held(f"{self._label}.current")
         b.add_aux(f"{self._label}_current", "A",
                   f"reversal feed-forward current (updated every {self.period:g} s)")
-        b.emit(f"{b.a(self._label + '_current')} = {held}",
-               writes=f"aux:{self._label}_current")  # a held value: no state
+        b.emit(f"{{{self._label}_current}} = {held}")  # a held value: no state
         axes = list(axes)
         axes[i] = dataclasses.replace(axes[i],
                                       current_feedforward=added_feedforward(axes[i], held))
