@@ -429,6 +429,8 @@ class SolverOptions:
                  and not self.method.endswith("-fixed") else "")
         if self.sample_steps and self.method in DENSE_MODES:
             steps += "every sample of a sampled profile a step end, "
+        if not self.locate_reversals and self.method in REVERSAL_METHODS:
+            steps += "friction reversals stepped across (locate_reversals off), "
         return (f"{self.method} ({methods[self.method]}){self._from('method')}; {steps}"
                 f"{self.describe_tolerances(scales)}; output every {_num(self.output_interval)} s"
                 f"{self._from('output_interval')} ({self.output_text})")
