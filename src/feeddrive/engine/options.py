@@ -68,8 +68,9 @@ DENSE_MODES = {"modal": (switching.MODE_MODAL, 1), "auto": (switching.MODE_AUTO,
 #: the fixed-step DOPRI5 of the order checks
 REVERSAL_METHODS = (*DENSE_MODES, "dopri5")
 #: the default largest step of ``dopri5`` at ``accuracy`` 1 [s], × accuracy^(1/5) otherwise
-#: (:attr:`SolverOptions.largest_step`): where the cap binds, DOPRI5's global error goes as
-#: h^5, so a cap that stayed put would leave the error there deaf to ``accuracy``
+#: (:attr:`feeddrive.SolverOptions.largest_step`): where the cap binds, DOPRI5's global
+#: error goes as h^5, so a cap that stayed put would leave the error there deaf to
+#: ``accuracy``
 DOPRI5_STEP = 1e-3
 #: the order of each method's continuous extension (outputs between step ends): DOPRI5's
 #: dense output (Hairer, Nørsett & Wanner I, Sect. II.6, ``contd5``) is of order 4, RODAS4's
@@ -277,7 +278,8 @@ class SolverOptions:
     locate_reversals : bool, default True
         Friction reversals (a site's sliding speed through zero, where a LuGre or Dahl law has
         a kink) located on each step's continuous extension and made step ends
-        (:mod:`feeddrive.solvers.events`), by every method of :data:`REVERSAL_METHODS`.
+        (:mod:`feeddrive.solvers.events`), by every method of
+        :data:`~feeddrive.engine.options.REVERSAL_METHODS`.
         False: the steps cross them, as the engine v1 did
         (``SolverOptions(method="dopri5", locate_reversals=False, **LEGACY_TOLERANCES)``
         reproduces a v1 trace bit for bit); its error then stops following the tolerances
@@ -500,10 +502,11 @@ class SolverOptions:
 
     @property
     def largest_step(self) -> float:
-        """``max_step``, or its default: for ``dopri5`` :data:`DOPRI5_STEP` (1 ms) ×
-        accuracy^(1/5) (the method's order: where the cap binds, the global error falls
-        with ``accuracy`` as where the tolerances bind), 1 ms for ``dopri5-fixed``,
-        unlimited for the dense-output methods [s].
+        """``max_step``, or its default: for ``dopri5``
+        :data:`~feeddrive.engine.options.DOPRI5_STEP` (1 ms) × accuracy^(1/5) (the method's
+        order: where the cap binds, the global error falls with ``accuracy`` as where the
+        tolerances bind), 1 ms for ``dopri5-fixed``, unlimited for the dense-output methods
+        [s].
         """
         if self.max_step is not None:
             return self.max_step
