@@ -47,6 +47,11 @@ def test_the_label_follows_the_code(monkeypatch: pytest.MonkeyPatch) -> None:
     assert "rtol 1e-8" in SolverOptions(rtol=1e-8).describe()
     assert "every output a step end" in SolverOptions(method="dopri5").describe()
     assert "steps ≤ 0.001 s" in SolverOptions(method="dopri5").describe()
+    # dopri5's cap follows the accuracy (1 ms × accuracy^(1/5) = 0.631 ms at 0.1)
+    assert "steps ≤ 0.000631 s" in SolverOptions(method="dopri5", accuracy=0.1).describe()
+    across = "friction reversals stepped across (locate_reversals off)"
+    assert across in SolverOptions(method="dopri5", locate_reversals=False).describe()
+    assert across not in SolverOptions(method="dopri5").describe()
     assert "steps ≤ 0.0005 s" in SolverOptions(method="modal", max_step=5e-4).describe()
     sampled = "every sample of a sampled profile a step end"
     assert sampled in SolverOptions(sample_steps=True).describe()

@@ -119,3 +119,48 @@ def test_a_gms_site_declares_its_reversals() -> None:
     reversals = int(np.sum(v[1:-1] * v[2:] < 0.0))  # after the start from rest
     assert reversals >= 8
     assert reversals <= r.solver_stats["switch_crossings"] <= reversals + 2
+
+
+def test_dopri5_locates_the_ddfs_reversals_on_its_steps_extension() -> None:
+    """The bug this guards: ``dopri5`` (every output instant a step end) stepped across the
+    guide friction's kink at the DDFS table's eight reversals, its table position error
+    against the Radau reference (reference/make_accuracy_reference.py) then 2.6e-8 of the
+    stroke at accuracy 1 and 5.5e-10 at 0.001.  Located on each step's continuous extension
+    (as the dense driver does) it is 9.7e-11 at accuracy 1 (measured); with
+    ``locate_reversals=False`` the v1 steps come back."""
+    with np.load(DATA / "accuracy_ddfs_0p5_vn16.npz") as f:
+        t, x = f["time"], f["table_position"]
+    system = fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+    errors = {}
+    for locate in (True, False):
+        r = fd.simulate(system, fd.ConstantSpeed(0.5e-3, 16e-3), float(t[-1]),
+                        options=fd.SolverOptions(method="dopri5", locate_reversals=locate))
+        errors[locate] = float(np.max(np.abs(r["table_position"] - x))) / float(np.ptp(x))
+    assert errors[True] <= 2e-10, errors
+    assert errors[False] >= 100 * errors[True], errors
+
+
+def test_the_dopri5_step_cap_follows_the_accuracy() -> None:
+    """1 ms × accuracy^(1/5): where the cap binds DOPRI5's global error goes as h⁵, so it
+    falls ten times per decade of accuracy as where the tolerances bind (with the fixed 1-ms
+    cap the CDFS's table speed error fell 4.2× in the second decade); 1 ms exactly at
+    accuracy 1 (the v1 engine); an explicit max_step as given; dense methods uncapped."""
+    assert fd.SolverOptions(method="dopri5").largest_step == 1e-3
+    for accuracy in (0.1, 0.001, 10.0):
+        cap = fd.SolverOptions(method="dopri5", accuracy=accuracy).largest_step
+        assert cap == pytest.approx(1e-3 * accuracy ** 0.2, rel=1e-12)
+    assert fd.SolverOptions(method="dopri5", accuracy=0.1, max_step=2e-3).largest_step == 2e-3
+    assert fd.SolverOptions(method="dopri5-dense", accuracy=0.1).largest_step == np.inf
+    assert fd.SolverOptions(method="dopri5-fixed", accuracy=0.1).largest_step == 1e-3
+    sim = Simulation(fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4),
+                     fd.ConstantSpeed(2e-3),
+                     fd.SolverOptions(method="dopri5", accuracy=0.01))
+    from feeddrive.engine.simulate import _Chunks
+
+    assert _Chunks(sim, want_aux=False).h_max == pytest.approx(1e-3 * 0.01 ** 0.2, rel=1e-12)
+
+
+@pytest.mark.parametrize("value", ["yes", 1, None])
+def test_locate_reversals_must_be_true_or_false(value: object) -> None:
+    with pytest.raises(fd.ParameterError, match=r"options\.locate_reversals.*True or False"):
+        fd.SolverOptions(locate_reversals=value)  # type: ignore[arg-type]

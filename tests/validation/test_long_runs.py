@@ -27,7 +27,8 @@ def _one_call(system: fd.DriveSystem, profile: ConstantSpeed, duration: float) -
     atol, rel = sim.atol, sim.rel
     _, y, _, stats, _ = dopri5.integrate(
         model, system.initial_vector(model), duration, grid.out_every, grid.base,
-        grid.schedule, sim.tolerances.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps)
+        grid.schedule, sim.tolerances.rtol, atol, rel, 1e-6, grid.base, 1, options.max_steps,
+        switch_rows=sim.switch_rows)
     assert int(stats[0]) == 0
     return y
 

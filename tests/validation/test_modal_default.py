@@ -285,12 +285,12 @@ def test_sampled_control_results_are_unchanged_by_the_default(
     largest table speed over 2 s — and with the same summary verdict.  The held-output
     reference test (test_reference_sampled.py) runs the default at tight tolerances.
 
-    Since 2026-12-05 the dense methods also land on the table's speed reversals (the guide
-    friction's kink, feeddrive.solvers.events) where ``dopri5`` steps across them: both runs
-    reverse (9 and 14 crossings located), and the default then differs from ``dopri5`` by
-    ``dopri5``'s error at the kinks (1.5e-6 and 1.9e-7 of the peak speed; docs/model.md,
-    "Friction reversals are events").  The sample-instant claim is checked with the
-    crossings not located."""
+    Since 2026-12-05 every adaptive method lands on the table's speed reversals (the guide
+    friction's kink, feeddrive.solvers.events; ``dopri5`` too since issue 35's last step):
+    both runs reverse (9 and 14 crossings located), and where only one method located them
+    the two differed by the other's error at the kinks (1.5e-6 and 1.9e-7 of the peak speed;
+    docs/model.md, "Friction reversals are events").  The sample-instant claim is checked
+    with the crossings located by neither."""
     p = fd.preset("wang2021")
     for path, value in {"controller.position_period": 1e-3,
                         "controller.velocity_period": 5e-4,

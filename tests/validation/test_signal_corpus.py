@@ -5,7 +5,8 @@
 topology × friction law, × loop configuration, every preset, every optional part).  Each case
 is rebuilt here and compared bit for bit: its structure (names, Jacobian pattern, clocks,
 declared flows), its packed parameters, its right-hand side at a random state and a short
-``dopri5`` run at the legacy fixed tolerances.
+``dopri5`` run at the legacy fixed tolerances, stepping across the friction reversals
+(``locate_reversals=False``: the corpus predates their location by ``dopri5``).
 
 Operation orders that had to move, with the bound they are held to instead: none so far.
 

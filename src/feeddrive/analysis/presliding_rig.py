@@ -136,7 +136,8 @@ def _integrate(step: float, force: np.ndarray, mass: float, packed: np.ndarray,
     t_end = (force.size - 1) * step
     _, y, _, stats, _ = rig.module.integrate(
         y0, t_end, 1, step, no_schedule(1), P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
-        substeps * force.size + 10, 0, np.zeros(1), new_memory(n, h), np.full(n, math.inf))
+        substeps * force.size + 10, 0, np.zeros(1), new_memory(n, h), np.full(n, math.inf),
+        np.zeros((0, n)))
     status = int(stats[0])
     if status != STATUS_OK or y.shape[0] != force.size:
         raise ValueError(f"pre-sliding simulation: {STATUS_MESSAGES.get(status, status)} at "

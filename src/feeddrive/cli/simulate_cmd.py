@@ -76,7 +76,8 @@ def simulate_command(
     method: str | None = typer.Option(
         None, "--method", help="Integrator: modal (the default: DOPRI5 and "
         "RODAS4 switched on stiffness, steps capped on lightly damped modes), dopri5 "
-        "(every output instant a step end; the v1 engine), auto (switched on "
+        "(every output instant a step end, as the v1 engine; friction reversals located), "
+        "auto (switched on "
         "stiffness alone), rodas4 or dopri5-dense; default: the parameter file's [solver] "
         "method, else modal."),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",

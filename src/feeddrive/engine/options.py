@@ -47,11 +47,12 @@ from typing import Any
 
 from ..parameters import ParameterError
 from ..solvers import modes, switching
+from ..solvers.tableaux import DOPRI5
 
 __all__ = ["CURRENT_FRACTION", "DEFAULT_RTOL", "DEFLECTION_FRACTION", "DENSE_OUTPUT_ORDER",
-           "LEGACY_TOLERANCES", "METHODS", "POSITION_TIME", "SPEED_FRACTION",
-           "SPEED_SCALE_FLOOR", "RunScales", "SolverOptions", "Tolerances", "current",
-           "file_settings", "layered", "using"]
+           "DOPRI5_STEP", "LEGACY_TOLERANCES", "METHODS", "POSITION_TIME", "REVERSAL_METHODS",
+           "SPEED_FRACTION", "SPEED_SCALE_FLOOR", "RunScales", "SolverOptions", "Tolerances",
+           "current", "file_settings", "layered", "using"]
 
 #: the methods :class:`SolverOptions` takes
 METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed",
@@ -61,6 +62,16 @@ DENSE_MODES = {"modal": (switching.MODE_MODAL, 1), "auto": (switching.MODE_AUTO,
                "rodas4": (switching.MODE_RODAS4, 1),
                "dopri5-dense": (switching.MODE_DOPRI5, 1),
                "rodas4-fixed": (switching.MODE_RODAS4, 0)}
+#: the methods that locate friction reversals (a site's sliding speed through zero, where its
+#: law has a kink) on their steps' continuous extension and make them step ends
+#: (:mod:`feeddrive.solvers.events`) unless ``locate_reversals`` is false: every method but
+#: the fixed-step DOPRI5 of the order checks
+REVERSAL_METHODS = (*DENSE_MODES, "dopri5")
+#: the default largest step of ``dopri5`` at ``accuracy`` 1 [s], × accuracy^(1/5) otherwise
+#: (:attr:`feeddrive.SolverOptions.largest_step`): where the cap binds, DOPRI5's global
+#: error goes as h^5, so a cap that stayed put would leave the error there deaf to
+#: ``accuracy``
+DOPRI5_STEP = 1e-3
 #: the order of each method's continuous extension (outputs between step ends): DOPRI5's
 #: dense output (Hairer, Nørsett & Wanner I, Sect. II.6, ``contd5``) is of order 4, RODAS4's
 #: (Hairer & Wanner II, Sect. IV.7, ``contro``) of order 3; ``dopri5`` has every output a
@@ -93,8 +104,8 @@ MAX_RTOL = 0.1
 MAX_ACCURACY = 1e4
 
 #: the fixed tolerances every method ran with before they scaled with the run (engine v1 and
-#: the defaults until 2026-12-04): ``SolverOptions(method="dopri5", **LEGACY_TOLERANCES)``
-#: reproduces a v1 trace bit for bit
+#: the defaults until 2026-12-04): ``SolverOptions(method="dopri5", locate_reversals=False,
+#: **LEGACY_TOLERANCES)`` reproduces a v1 trace bit for bit
 LEGACY_TOLERANCES = {"rtol": 1e-6, "position_tolerance": 1e-10, "speed_tolerance": 1e-8,
                      "current_tolerance": 1e-6}
 
@@ -221,8 +232,10 @@ class SolverOptions:
           leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
           early (``divergence_bounds``);
         * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps
-          at most ``max_step``, default 1 ms, and the output interval); the engine v1
-          behaviour, kept bit for bit;
+          at most ``max_step``, default 1 ms × accuracy^(1/5), and the output interval),
+          friction reversals located on each step's continuous extension and made step ends
+          (``locate_reversals``); with ``locate_reversals=False`` at ``accuracy`` 1 the engine
+          v1 behaviour, bit for bit;
         * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
           automatically on Hairer's stiffness test alone; dense output (steps not capped by
           the output interval);
@@ -249,7 +262,8 @@ class SolverOptions:
         Spacing of the recorded samples [s] (for ``dopri5`` also the breakpoint spacing under
         continuous control).
     max_step : float or None, default None
-        Largest step [s] (None: 1 ms for ``dopri5``, unlimited for the dense-output methods).
+        Largest step [s] (None: 1 ms × accuracy^(1/5) for ``dopri5``, unlimited for the
+        dense-output methods).
     fixed_step : float, default 1e-5
         Step of the fixed-step methods [s].
     max_steps : int, default 50 000 000
@@ -261,6 +275,15 @@ class SolverOptions:
         and a run's step sequence moves little with its parameters — what a fit's
         finite-difference Jacobian and its confidence intervals want (``feeddrive fit`` sets
         it); the steps are then no longer than the profile's interval.
+    locate_reversals : bool, default True
+        Friction reversals (a site's sliding speed through zero, where a LuGre or Dahl law has
+        a kink) located on each step's continuous extension and made step ends
+        (:mod:`feeddrive.solvers.events`), by every method of
+        :data:`~feeddrive.engine.options.REVERSAL_METHODS`.
+        False: the steps cross them, as the engine v1 did
+        (``SolverOptions(method="dopri5", locate_reversals=False, **LEGACY_TOLERANCES)``
+        reproduces a v1 trace bit for bit); its error then stops following the tolerances
+        at the reversals.
     origin : tuple of (str, str), default ()
         Where each setting came from (``("rtol", "--rtol")``, ``("accuracy", "[solver] in
         run.toml")``); a setting not listed was given in Python (API) or is a default.
@@ -278,6 +301,7 @@ class SolverOptions:
     fixed_step: float = 1e-5
     max_steps: int = 50_000_000
     sample_steps: bool = False
+    locate_reversals: bool = True
     origin: tuple[tuple[str, str], ...] = field(default=(), compare=False)
 
     def __post_init__(self) -> None:
@@ -297,6 +321,10 @@ class SolverOptions:
             if name == "max_step" and value is None:
                 continue
             _check_positive(name, value, unit)
+        for name in ("sample_steps", "locate_reversals"):
+            if not isinstance(getattr(self, name), bool):
+                raise ParameterError(f"options.{name}", getattr(self, name),
+                                     "expected True or False")
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) \
                 or self.max_steps < 1:
             raise ParameterError("options.max_steps", self.max_steps,
@@ -403,6 +431,8 @@ class SolverOptions:
                  and not self.method.endswith("-fixed") else "")
         if self.sample_steps and self.method in DENSE_MODES:
             steps += "every sample of a sampled profile a step end, "
+        if not self.locate_reversals and self.method in REVERSAL_METHODS:
+            steps += "friction reversals stepped across (locate_reversals off), "
         return (f"{self.method} ({methods[self.method]}){self._from('method')}; {steps}"
                 f"{self.describe_tolerances(scales)}; output every {_num(self.output_interval)} s"
                 f"{self._from('output_interval')} ({self.output_text})")
@@ -472,12 +502,19 @@ class SolverOptions:
 
     @property
     def largest_step(self) -> float:
-        """``max_step``, or its default: 1 ms for ``dopri5`` (and its fixed-step variant),
-        unlimited for the dense-output methods [s].
+        """``max_step``, or its default: for ``dopri5``
+        :data:`~feeddrive.engine.options.DOPRI5_STEP` (1 ms) × accuracy^(1/5) (the method's
+        order: where the cap binds, the global error falls with ``accuracy`` as where the
+        tolerances bind), 1 ms for ``dopri5-fixed``, unlimited for the dense-output methods
+        [s].
         """
         if self.max_step is not None:
             return self.max_step
-        return math.inf if self.method in DENSE_MODES else 1e-3
+        if self.method in DENSE_MODES:
+            return math.inf
+        if self.method == "dopri5" and self.accuracy != 1.0:
+            return DOPRI5_STEP * self.accuracy ** (1.0 / DOPRI5.order)
+        return DOPRI5_STEP
 
     def record(self) -> dict[str, Any]:
         """The settings as plain values for cache and store keys and for a worker process:

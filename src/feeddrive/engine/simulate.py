@@ -22,6 +22,7 @@ from . import budget
 from .error_estimate import embedded_entry, signal_errors, summary_entry, tightened
 from .options import DENSE_MODES as _DENSE_MODES
 from .options import METHODS as METHODS  # re-exported: the engine's public names
+from .options import REVERSAL_METHODS as _REVERSAL_METHODS
 from .options import RunScales
 from .options import SolverOptions as SolverOptions
 from .options import current as current_options
@@ -259,7 +260,8 @@ def sampling(params: DriveParameters, output_interval: float,
 def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: Sampling,
                      options: SolverOptions, y0: np.ndarray, t_end: float,
                      adaptive: int, rtol: float, atol: np.ndarray, rel: np.ndarray,
-                     h_init: float, h_max: float, bound: np.ndarray) -> None:
+                     h_init: float, h_max: float, bound: np.ndarray,
+                     switch_rows: np.ndarray | None) -> None:
     """Refuse, before integrating with ``dopri5``, a run whose steps (projected from a short
     probe) exceed ``max_steps`` (feeddrive.engine.budget)."""
     t_probe = budget.probe_time(t_end, grid.base) if adaptive else 0.0
@@ -268,7 +270,8 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
     allowed = int(options.max_steps * t_probe / t_end) + 1000
     _, _, _, stats, _ = dopri5.integrate(
         model, y0.copy(), t_probe, grid.out_every, grid.base, grid.schedule, rtol,
-        atol, rel, h_init, h_max, adaptive, allowed, bound=bound, P=grid.parameters(model))
+        atol, rel, h_init, h_max, adaptive, allowed, bound=bound, P=grid.parameters(model),
+        switch_rows=switch_rows)
     if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
         problem = budget.step_rate_problem(
             steps=int(stats[1]), probe_time=float(stats[4]), duration=t_end,
@@ -692,8 +695,11 @@ class Simulation:
             motor_position=tol.motor_position, motor_speed=tol.motor_speed)
         self.y0 = system.initial_vector(self.model)
         self.bound = divergence_bounds(system, profile, self.model)
+        # the friction reversals every adaptive method locates (not the fixed-step order
+        # checks; not with locate_reversals=False, the v1 engine's dopri5)
         self.switch_rows = (switching_rows(self.model, self.P)
-                            if options.method in _DENSE_MODES else None)
+                            if options.locate_reversals and options.method in _REVERSAL_METHODS
+                            else None)
         self._chunks: _Chunks | None = None
         self._running: _Chunks | None = None
 
@@ -860,7 +866,7 @@ class Simulation:
             _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
                              chunks.adaptive, self.tolerances.rtol, self.atol, self.rel,
                              chunks.h_init, chunks.h_max,
-                             self.bound)
+                             self.bound, self.switch_rows)
         try:
             t, y, aux_parts, stats = chunks.advance(n_break, output, progress)
         except _Stopped as stop:
@@ -992,7 +998,7 @@ class _Chunks:
                 sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule,
                 sim.tolerances.rtol, sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive,
                 max_steps, start=start, held=held, memory=memory,
-                bound=sim.bound, P=sim.P)
+                bound=sim.bound, P=sim.P, switch_rows=sim.switch_rows)
         return t, yy, aa, stats
 
     def _add(self, stats: np.ndarray) -> np.ndarray:

@@ -10,6 +10,11 @@ integrator is the one driver of :mod:`feeddrive.solvers.driver` specialised for 
 one explicit step of :mod:`feeddrive.solvers.steps` for the tableau
 :data:`feeddrive.solvers.tableaux.DOPRI5`.
 
+Friction reversals (a site's sliding speed through zero, where a LuGre or Dahl law has a kink)
+are located on the step's continuous extension and made step ends, as in the dense driver
+(:mod:`feeddrive.solvers.events`), although the outputs are step ends; without the rows
+(``SolverOptions(locate_reversals=False)``) the steps cross them, as the v1 engine's did.
+
 Error control: mixed absolute/relative weights per state; states whose absolute size carries no
 meaning (shaft angles, positions) use absolute tolerance only.  Step-size control is Hairer's
 PI controller (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.4).  With ``adaptive = 0`` the
@@ -61,7 +66,9 @@ def template_sources() -> list[str]:
     aux = inspect.getsource(auxiliary_template).replace("def auxiliary_template(",
                                                         "def auxiliary(", 1)
     return [f"from feeddrive.solvers.driver import ({names})",
-            "from feeddrive.solvers.schedule import due, next_instant", "@kernel\n" + src,
+            "from feeddrive.solvers.schedule import due, next_instant",
+            "from feeddrive.solvers.events import first_crossing as switch_crossing",
+            "@kernel\n" + src,
             "@kernel\n" + aux]
 
 
@@ -128,7 +135,7 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
               max_steps: int, *, start: int = 0, held: np.ndarray | None = None,
               memory: np.ndarray | None = None, bound: np.ndarray | None = None,
-              P: np.ndarray | None = None,
+              P: np.ndarray | None = None, switch_rows: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``model`` from breakpoint ``start`` (t = start·base, state ``y0``) to
     ``t_end`` (the driver :func:`feeddrive.solvers.driver.driver_template`, specialised
@@ -138,7 +145,9 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     from where a previous call stopped is bit-identical to one call over the whole span.
     ``bound``: the largest |state| per state before the run stops as diverged (None: none);
     ``P``: the parameter vector (None: the model's; a run passes the periods on its grid,
-    :meth:`feeddrive.engine.simulate.Sampling.parameters`).
+    :meth:`feeddrive.engine.simulate.Sampling.parameters`); ``switch_rows``: the friction
+    reversals located and made step ends (:mod:`feeddrive.solvers.events`; None: none, the v1
+    engine).
 
     Parameters
     ----------
@@ -180,6 +189,11 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
         default.
     P : numpy.ndarray, optional
         The parameter vector; the model's by default [SI, per slot].
+    switch_rows : numpy.ndarray, optional
+        (m, n) switching surfaces W·y (a friction site's sliding speed) whose zero crossings
+        are located on the step's continuous extension and made step ends
+        (:func:`feeddrive.engine.simulate.switching_rows`); none by default
+        [state units → m/s].
 
     Returns
     -------
@@ -210,5 +224,7 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
                                np.ascontiguousarray(schedule, dtype=np.int64),
                                model.P if P is None else P, model.T,
                                rtol, atol, rel_mask, h_max, adaptive, max_steps, start, held,
-                               memory, bound))
+                               memory, bound,
+                               np.zeros((0, len(model.states))) if switch_rows is None
+                               else np.ascontiguousarray(switch_rows, dtype=np.float64)))
     return result

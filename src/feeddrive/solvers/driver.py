@@ -405,6 +405,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         if LAND:
             t = kb * base
             t_ev = (kb + 1) * base
+            t_bp = t_ev  # the breakpoint; t_ev moves to a located reversal before it
         else:
             t_ev = t_end
             is_sample = False
@@ -530,6 +531,26 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             used_rodas = stiff
             if DENSE and ge:
                 ge_keep(e, ge_d)  # the accepted step's local error (e is reused below)
+            if LAND and switch_rows.shape[0] > 0:
+                # a friction reversal inside the step (feeddrive.solvers.events): located on
+                # the DOPRI5 step's continuous extension, the step thrown away and the
+                # crossing made a step end, as in the dense driver; the outputs stay at the
+                # breakpoints.  The stages are free once the fifth coefficient is formed:
+                # k2, k3, k4 hold the other three
+                _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                for i in range(n):
+                    ydiff = y_new[i] - y[i]
+                    bspl = h_try * f0[i] - ydiff
+                    k2[i] = ydiff
+                    k3[i] = bspl
+                    k4[i] = ydiff - h_try * f_new[i] - bspl
+                th_sw, k_sw = switch_crossing(switch_rows, y, y_new, k2, k3, k4, e, False)
+                if th_sw > 0.0 and th_sw * (t_new - t) > 1e-12 * max(1.0, t):
+                    if steps > max_steps:
+                        status = STATUS_MAX_STEPS
+                        break
+                    t_ev = t + th_sw * (t_new - t)
+                    continue
             if DENSE:
                 # ---- accepted: dense-output data of [t, t_new]
                 h_done = t_new - t
@@ -696,6 +717,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 y[i] = y_new[i]
                 f0[i] = f_new[i]
             t = t_new
+            if LAND and t_ev < t_bp and t >= t_ev:  # on the reversal: on to the breakpoint
+                t_ev = t_bp
             # the live time and stop slots (the memory's last two)
             if not COMM and (memory.shape[0] > 3 + n if LAND
                              else memory.shape[0] > MEMORY_SCALARS + n + n * n + 1):
@@ -1084,7 +1107,8 @@ def define(source: str, name: str) -> Any:
 
 
 _LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
-                "rel_mask", "h_max", "adaptive", "max_steps", "start", "held", "memory", "bound")
+                "rel_mask", "h_max", "adaptive", "max_steps", "start", "held", "memory", "bound",
+                "switch_rows")
 _DENSE_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                  "rel_mask", "h_init", "h_max", "adaptive", "max_steps", "mode", "stops",
                  "want_aux", "S", "colour", "start", "held", "memory", "bound", "t_buf",
