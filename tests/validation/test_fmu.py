@@ -404,7 +404,8 @@ GMS_FILE = Path(__file__).parents[2] / "examples" / "gms_guide.toml"
     ("rack-pinion", "rack-pinion-example", "locked")])
 def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
                                        hold: str) -> None:
-    """The linear motor, the CDFS with its hollow motor on the servo (nut inputs live), the
+    """The linear motor, the CDFS with its hollow motor on the servo (held at 0: no nut
+    input, as the drive follows no nut reference — issue 40's named references), the
     CDFS with GMS friction on the guide (examples/gms_guide.toml) and the DDFS whose hollow
     motor runs a position loop (the nut_position_reference input, positions given as
     inputs), 1 s with the ramp, as co-simulation FMUs in fmpy."""
@@ -424,6 +425,7 @@ def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
     if not path.exists():
         result_ = export_fmu(p, drive, path, nut_hold=hold)
         assert ("nut_position_reference" in result_.inputs) == (params == "nut-position-loop")
+        assert ("nut_speed_reference" in result_.inputs) == (drive == "ddfs")
     rec = run_fmu(path, ref, start_values=FMU_TIGHT,
                   with_positions=params == "nut-position-loop")
     result = simulate(DriveSystem(p, drive, 0.4, nut_hold=hold),

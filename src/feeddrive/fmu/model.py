@@ -183,14 +183,17 @@ def build(parameters: DriveParameters, drive: str, table_position: float,
     """
     from ..engine.simulate import DriveSystem
 
-    DriveSystem(parameters, drive, table_position, nut_hold)  # the same checks as simulate
+    system = DriveSystem(parameters, drive, table_position, nut_hold)  # simulate's checks
     profile = InputReference(table_speed, nut_speed)
     # assemble reads only a profile's encode(): InputReference is one (not a simulate profile)
     model = assemble(parameters, drive, table_position, nut_hold,
                      profile, _NO_LOAD)  # type: ignore[arg-type]
     names = model.parameter_names
     o = names.index("profile[0]")
-    nut_inputs = "controller.nut.kpp" in names and model.parameter("nut.active") > 0.5
+    # the nut's reference inputs exist where the drive follows a nut reference (the DDFS); a
+    # CDFS with its nut on the servo commands the held nut 0 and reads no nut input
+    nut_inputs = ("controller.nut.kpp" in names and model.parameter("nut.active") > 0.5
+                  and system.topology().follows("nut"))
     nut_position = nut_inputs and model.parameter("controller.nut.speed_mode") < 0.5
     return FmuModel(model=model, drive=drive, profile_offset=o,
                     table_offset=int(model.P[o + TABLE_OFFSET]),
