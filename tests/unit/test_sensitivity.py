@@ -151,6 +151,12 @@ def test_upper_edge_is_the_bands_top_edge_with_fewer_linearisations(
     assert len(seen) < full / 2
     if position == 0.4:
         assert (full, len(seen)) == (37, 15)
+        from pathlib import Path
+
+        doc = " ".join((Path(__file__).resolve().parents[2] / "docs" / "linear.md")
+                       .read_text(encoding="utf-8").split())
+        assert f"({len(seen)} linearisations instead of {full} for the CDFS at mid-screw on " \
+               f"a {LINEAR_POINTS}-point grid)" in doc
 
 
 def test_upper_edge_of_a_band_reaching_the_top_or_of_none(monkeypatch) -> None:
