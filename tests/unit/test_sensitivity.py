@@ -112,3 +112,90 @@ def test_choosing_the_parameters_imports_no_fitting_library() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout
     assert out.strip() == "[]"
+
+
+def _count_linearisations(monkeypatch: pytest.MonkeyPatch) -> list[float]:
+    """Every operating point :func:`feeddrive.analysis.linear.rightmost_pole` linearises."""
+    from feeddrive.analysis import linear
+
+    seen: list[float] = []
+    original = linear.rightmost_pole
+
+    def counted(system, v, nut_speed=0.0):  # type: ignore[no-untyped-def]
+        seen.append(v)
+        return original(system, v, nut_speed)
+
+    monkeypatch.setattr(linear, "rightmost_pole", counted)
+    return seen
+
+
+@pytest.mark.parametrize("position", [0.4, 0.2])
+def test_upper_edge_is_the_bands_top_edge_with_fewer_linearisations(
+        monkeypatch: pytest.MonkeyPatch, position: float) -> None:
+    """issue 42 item 5: the report's sensitivity reads only the band's upper edge; scanning
+    down from the top and bisecting that one change gives stability_band's number bit for
+    bit (the same grid and midpoints) at 15 of its 37 linearisations on the report's
+    20-point grid (CDFS: the top unstable scan point is the 5th from the top, then 10
+    halvings to 1e-6 m/s; the full band adds the other 15 scan points, the lower edge's 6
+    halvings and the mode frequency)."""
+    from feeddrive.analysis.linear import upper_band_edge
+    from feeddrive.reproduce.sensitivity_section import LINEAR_POINTS
+
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", position)
+    seen = _count_linearisations(monkeypatch)
+    band = stability_band(system, points=LINEAR_POINTS)
+    full = len(seen)
+    seen.clear()
+    edge = upper_band_edge(system, points=LINEAR_POINTS)
+    assert band.intervals and edge == band.intervals[-1][1]
+    assert len(seen) < full / 2
+    if position == 0.4:
+        assert (full, len(seen)) == (37, 15)
+        from pathlib import Path
+
+        doc = " ".join((Path(__file__).resolve().parents[2] / "docs" / "linear.md")
+                       .read_text(encoding="utf-8").split())
+        assert f"({len(seen)} linearisations instead of {full} for the CDFS at mid-screw on " \
+               f"a {LINEAR_POINTS}-point grid)" in doc
+
+
+def test_upper_edge_of_a_band_reaching_the_top_or_of_none(monkeypatch) -> None:
+    """The two ends of the rule: unstable at the highest scanned speed → that speed (one
+    linearisation); stable everywhere → NaN, as stability_band has no interval."""
+    from feeddrive.analysis.linear import upper_band_edge
+
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    seen = _count_linearisations(monkeypatch)
+    # wang2021's CDFS band is 0.17–1.40 mm/s (linear.stability_band's example)
+    assert upper_band_edge(system, low=0.3e-3, high=1.0e-3, points=5) == 1.0e-3
+    assert len(seen) == 1
+    band = stability_band(system, low=2e-3, high=5e-3, points=4)
+    assert not band.intervals
+    assert math.isnan(upper_band_edge(system, low=2e-3, high=5e-3, points=4))
+
+
+def test_in_process_sensitivity_counts_its_linearisations(monkeypatch) -> None:
+    """The in-process points (the report's section) linearise for the upper edge only, and
+    give the elasticity the store's full bands give."""
+    from feeddrive.analysis.sensitivity import _linear_upper
+    from feeddrive.parameters import dumps
+    from feeddrive.sweep.quantities import evaluate
+
+    params = fd.preset("wang2021")
+    task = {"parameters": dumps(params), "drive": "cdfs", "table_position": 0.4,
+            "nut_speed": 0.0, "quantity": {"kind": "linear-band", "low": 1e-5, "high": 5e-3,
+                                           "linear_points": 20}}
+    seen = _count_linearisations(monkeypatch)
+    full = evaluate(task, params)
+    n_full = len(seen)
+    seen.clear()
+    upper = _linear_upper(task, params)
+    assert upper["values"]["linear_upper"] == full["values"]["linear_upper"]
+    assert (n_full, len(seen)) == (37, 15)
+    seen.clear()
+    result = sensitivity(params, quantity="linear-band", in_process=True, linear_points=20,
+                         patterns=["controller.velocity_gain"])
+    # base, ±10 %, the halving check's ±5 %: five points of at most 20 + 10 linearisations
+    assert result.evaluations == 5 and len(seen) <= 5 * 15
+    bad = {**task, "quantity": {**task["quantity"], "low": 6e-3}}
+    assert "low" in _linear_upper(bad, params)["error"]

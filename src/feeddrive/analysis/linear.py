@@ -1189,6 +1189,24 @@ def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
     return p.real, abs(p.imag) / (2 * np.pi)
 
 
+def _check_range(low: float, high: float) -> None:
+    if not (0 < low < high):
+        raise ParameterError("low", low * 1e3, f"expected 0 < low < high = {high * 1e3} [mm/s]")
+
+
+def _bisect_edge(system: DriveSystem, nut_speed: float, a: float, b: float, unstable_a: bool,
+                 tolerance: float) -> float:
+    """The speed between ``a`` and ``b`` [m/s] where steady sliding changes from
+    ``unstable_a`` to its opposite, bisected to ``tolerance`` [m/s]."""
+    while b - a > tolerance:
+        m = 0.5 * (a + b)
+        if (rightmost_pole(system, m, nut_speed)[0] > 0) == unstable_a:
+            a = m
+        else:
+            b = m
+    return 0.5 * (a + b)
+
+
 def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
                    low: float = protocol.LINEAR_SPEED_RANGE[0],
                    high: float = protocol.LINEAR_SPEED_RANGE[1],
@@ -1231,8 +1249,7 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     >>> [(round(1e3 * lo, 2), round(1e3 * hi, 2)) for lo, hi in band.intervals]
     [(0.17, 1.4)]
     """
-    if not (0 < low < high):
-        raise ParameterError("low", low * 1e3, f"expected 0 < low < high = {high * 1e3} [mm/s]")
+    _check_range(low, high)
     speeds = np.geomspace(low, high, points)
     re = np.empty(points)
     fr = np.empty(points)
@@ -1244,15 +1261,8 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     edges: list[float] = []
     for k in range(points - 1):
         if unstable[k] != unstable[k + 1]:
-            a, b = float(speeds[k]), float(speeds[k + 1])
-            ua = unstable[k]
-            while b - a > tolerance:
-                m = 0.5 * (a + b)
-                if (rightmost_pole(system, m, nut_speed)[0] > 0) == ua:
-                    a = m
-                else:
-                    b = m
-            edges.append(0.5 * (a + b))
+            edges.append(_bisect_edge(system, nut_speed, float(speeds[k]), float(speeds[k + 1]),
+                                      bool(unstable[k]), tolerance))
     intervals: list[tuple[float, float]] = []
     start = float(speeds[0]) if unstable[0] else None
     it = iter(edges)
@@ -1272,7 +1282,55 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
                          nut_speed=nut_speed, notes=averaged(system)[1])
 
 
+def upper_band_edge(system: DriveSystem, nut_speed: float = 0.0, *,
+                    low: float = protocol.LINEAR_SPEED_RANGE[0],
+                    high: float = protocol.LINEAR_SPEED_RANGE[1],
+                    points: int = protocol.LINEAR_POINTS, tolerance: float = 1e-6) -> float:
+    """The upper edge of the highest linearly unstable band: ``stability_band(...)``'s
+    ``intervals[-1][1]``, bit for bit, with the operating points that edge needs only.
+
+    The scan goes down from ``high`` over the same grid and stops at its first unstable speed;
+    only the band's top change is bisected (the same midpoints), and no lower edge or mode
+    frequency is computed: on the report's sensitivity grid 15 linearisations instead of 37.
+    A steady state not found at a speed below the top band, which makes
+    :func:`stability_band` raise, is not looked for here.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (continuous loops).
+    nut_speed : float, default 0
+        Nut speed of every operating point [m/s] (DDFS).
+    low : float, default 1e-5
+        Lowest table speed scanned [m/s].
+    high : float, default 5e-3
+        Highest table speed scanned [m/s].
+    points : int, default 40
+        Number of scanned speeds.
+    tolerance : float, default 1e-6
+        Resolution of the bisected edge [m/s].
+
+    Returns
+    -------
+    float
+        The edge [m/s]; ``high`` when steady sliding is unstable there, NaN when it is stable
+        at every scanned speed.
+    """
+    _check_range(low, high)
+    speeds = np.geomspace(low, high, points)
+    for k in range(points - 1, -1, -1):
+        if rightmost_pole(system, float(speeds[k]), nut_speed)[0] > 0:
+            break
+    else:
+        return math.nan
+    if k == points - 1:
+        return float(speeds[-1])
+    return _bisect_edge(system, nut_speed, float(speeds[k]), float(speeds[k + 1]), True,
+                        tolerance)
+
+
 __all__ = ["INPUT_UNITS", "MARGINAL", "NAMED_RESPONSES", "OUTPUT_UNITS", "FrequencyResponse",
            "LinearModel", "LoopAnalysis", "LoopResult", "Pole", "StabilityBand", "averaged",
            "classify_poles", "dominant_pole", "frequency_response", "linearize", "loop_analysis",
-           "rightmost_pole", "stability_band", "state_matrix", "steady_state", "unit_of"]
+           "rightmost_pole", "stability_band", "state_matrix", "steady_state", "unit_of",
+           "upper_band_edge"]

@@ -255,6 +255,26 @@ def _task(config: Any, params: DriveParameters) -> dict[str, Any]:
             "nut_speed": 0.0, "quantity": config.quantity.to_dict()}
 
 
+def _linear_upper(task: dict[str, Any], params: DriveParameters | None) -> dict[str, Any]:
+    """The linear band's upper edge of one in-process point, the only value the elasticities
+    read: :func:`feeddrive.analysis.linear.upper_band_edge` (the edge
+    :func:`feeddrive.sweep.quantities.evaluate` stores, bit for bit, at 15 of its 37
+    linearisations on the report's grid); ``error`` as ``evaluate`` gives it."""
+    from ..analysis.linear import upper_band_edge
+    from ..engine.simulate import DriveSystem, SimulationError
+    from ..parameters import loads
+
+    q = task["quantity"]
+    try:
+        system = DriveSystem(params if params is not None else loads(task["parameters"]),
+                             drive=task["drive"], table_position=task["table_position"])
+        edge = upper_band_edge(system, task["nut_speed"], low=q["low"], high=q["high"],
+                               points=q["linear_points"])
+    except (SimulationError, ValueError, ArithmeticError) as err:
+        return {"error": f"{type(err).__name__}: {err}"}
+    return {"values": {"linear_upper": edge}}
+
+
 def _points_for(config: Any, params: DriveParameters, path: str, value: float, h: float,
                 absolute: bool, sets: dict[str, DriveParameters]) -> list[Any] | None:
     """The two points of ``path`` moved by ∓``h``, or None when the set refuses a step;
@@ -287,7 +307,9 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     """Elasticities of ``quantity`` (``critical-speed`` or ``linear-band``) of the set
     ``params_source`` (a preset name or a .toml file) on ``drive`` (see the module).  Points
     run through :func:`feeddrive.sweep.run_sweep` (store, local pool or Dask), or, with
-    ``in_process``, through the same :func:`feeddrive.sweep.quantities.evaluate` here.
+    ``in_process``, through the same :func:`feeddrive.sweep.quantities.evaluate` here (the
+    ``linear-band`` edge through :func:`feeddrive.analysis.linear.upper_band_edge`: the same
+    number with the operating points it needs only).
 
     Parameters
     ----------
@@ -369,8 +391,9 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
         if not todo:
             return
         if db is None:
+            one = _linear_upper if quantity == "linear-band" else evaluate
             for k, p in enumerate(todo, start=1):
-                results[p.key] = evaluate(p.task, sets.get(p.key))
+                results[p.key] = one(p.task, sets.get(p.key))
                 say(f"{k}/{len(todo)} points")
         else:
             import dataclasses
