@@ -82,7 +82,13 @@ class LeadIn:
     notes: tuple[str, ...] = ()
 
     def describe(self) -> str:
-        """One line stating the lead arc and the rule's choice (summary, record, report)."""
+        """One line stating the lead arc and the rule's choice (summary, record, report).
+
+        Returns
+        -------
+        str
+            The line.
+        """
         how = (f"the feed ramp, then the slowest closed-loop mode (axis {self.axis}, "
                f"{self.frequency:.3g} Hz, decaying at {self.decay_rate:.3g} 1/s) down to "
                f"{self.fraction:.1%}")
@@ -94,7 +100,13 @@ class LeadIn:
         return f"{arc} as given (the settling rule's {math.degrees(self.rule_arc):.4g}°: {how})"
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form [°, 1/s, Hz]; what the rule could not compute is null."""
+        """The JSON form [°, 1/s, Hz]; what the rule could not compute is null.
+
+        Returns
+        -------
+        dict
+            The lead in, JSON-ready.
+        """
         def known(x: float) -> float | None:
             return x if math.isfinite(x) else None
 

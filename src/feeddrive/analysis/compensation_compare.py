@@ -284,7 +284,7 @@ def reset_rate(system: Any, speed: float, *, duration: float = RESET_CHECK_DURAT
     constant ``speed``, over the second half of a ``duration`` run from rest.
 
     The critical creeping speed presumes a loop that runs smoothly once friction lets it; a
-    reset integrator (set-point control, Beerens et al.) that keeps resetting at constant
+    reset integrator (set-point control, Beerens et al. [1]_) that keeps resetting at constant
     speed throws away the friction current its integral holds at every zero crossing of the
     tracking error, and drives a cycle of its own: on ``wang2021-drive`` 12 resets/s, two per
     period of a 6.1-Hz speed oscillation at 3.2 mm/s, where the same loop without resets is
@@ -305,6 +305,12 @@ def reset_rate(system: Any, speed: float, *, duration: float = RESET_CHECK_DURAT
     -------
     float
         Resets per second [1/s] (0: the integral is no longer reset once moving).
+
+    References
+    ----------
+    .. [1] R. Beerens, A. Bisoffi, L. Zaccarian, W. P. M. H. Heemels, H. Nijmeijer,
+       N. van de Wouw, "Reset integral control for improved settling of PID-based motion
+       systems with friction", Automatica 107 (2019) 483–492.
     """
     from ..engine.simulate import simulate
     from ..model.reference import ConstantSpeed
