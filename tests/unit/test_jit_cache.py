@@ -35,14 +35,21 @@ def test_cache_folder_follows_the_sources(monkeypatch, tmp_path) -> None:
     assert _jit._source_digest() != before
 
 
-def test_one_generated_module_serves_cdfs_ddfs_and_parameter_changes() -> None:
-    """Numbers live in the parameter vector: the drive, gains and profile length do not
-    create new compiled modules (each costs seconds to compile)."""
+def test_one_generated_module_serves_a_topology_and_parameter_changes() -> None:
+    """Numbers live in the parameter vector: the table position, gains and profile length do
+    not create new compiled modules (each costs seconds to compile).  The topology does since
+    the reference became the named signals a topology follows (issue 40 item 2): the DDFS reads
+    the nut's reference, the CDFS's code never sees it."""
     w = feeddrive.preset("wang2021")
     a = feeddrive.DriveSystem(w, "cdfs", 0.3).model(ConstantSpeed(1e-3))
-    b = feeddrive.DriveSystem(w.replace_path("controller.position_gain", 3.0), "ddfs",
-                              0.5).model(ConstantSpeed(1e-3, 16e-3))
+    b = feeddrive.DriveSystem(w.replace_path("controller.position_gain", 3.0), "cdfs",
+                              0.5).model(ConstantSpeed(2e-3))
     assert a.module is b.module
+    d1 = feeddrive.DriveSystem(w, "ddfs", 0.3).model(ConstantSpeed(1e-3, 16e-3))
+    d2 = feeddrive.DriveSystem(w.replace_path("controller.position_gain", 3.0), "ddfs",
+                               0.5).model(ConstantSpeed(1e-3, 8e-3))
+    assert d1.module is d2.module
+    assert d1.module is not a.module
     c = feeddrive.DriveSystem(w.replace_path("friction.guide.law", "stribeck"), "cdfs",
                               0.4).model(ConstantSpeed(1e-3))
     assert c.module is not a.module

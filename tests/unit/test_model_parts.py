@@ -39,6 +39,35 @@ def test_a_friction_law_defined_outside_the_package_simulates() -> None:
     assert result["table_position"][-1] > 0.5e-3  # it moved: 2 mm/s for 0.5 s after the ramp
 
 
+def test_a_law_outside_the_c_subset_runs_in_numba_said_once(
+        capfd: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """The toy law's kernel has no type annotations, so the C translator refuses it: the C
+    build (the default where a compiler is found) hands that model to numba, says so once in
+    one line, and ``FEEDDRIVE_ENGINE=c`` makes it an error naming the kernel."""
+    from feeddrive.backends.c_cache import available_compiler
+    from feeddrive.backends.c_translate import TranslationError
+
+    if available_compiler() is None:
+        pytest.skip("no C compiler: every model runs in numba")
+    register_friction_law(ToyViscous())
+    params = fd.preset("wang2021").replace_path("friction.guide.law", "toy_viscous")
+    system = fd.DriveSystem(params, "cdfs", 0.3)
+    monkeypatch.delenv("FEEDDRIVE_ENGINE", raising=False)
+    capfd.readouterr()
+    first = fd.simulate(system, ConstantSpeed(2e-3), 0.05)
+    second = fd.simulate(system, ConstantSpeed(1e-3), 0.05)
+    said = [line for line in capfd.readouterr().err.splitlines() if "numba build" in line]
+    assert first.solver_stats["engine"] == second.solver_stats["engine"] == "numba"
+    assert len(said) <= 1  # once per model structure (an earlier test may have said it)
+    assert all("_toy_viscous_kernel" in line for line in said)
+    plain = fd.simulate(fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.3), ConstantSpeed(2e-3),
+                        0.05)
+    assert plain.solver_stats["engine"] == "c"
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "c")
+    with pytest.raises(TranslationError, match="_toy_viscous_kernel"):
+        fd.simulate(fd.DriveSystem(params, "cdfs", 0.35), ConstantSpeed(2e-3), 0.05)
+
+
 def test_unknown_law_is_refused_with_the_field_named() -> None:
     with pytest.raises(ParameterError, match=r"friction\.nut\.law.*unknown friction law"):
         fd.preset("wang2021").replace_path("friction.nut.law", "coulomb-ish")

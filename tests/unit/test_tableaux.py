@@ -159,21 +159,28 @@ def test_the_drivers_have_the_step_written_in_and_the_fmu_calls_it() -> None:
     from feeddrive.fmu import solver as fmu_solver
     from feeddrive.solvers import dopri5, driver, switching
 
+    def driver_text(sources: list[str], use: str) -> str:
+        """The one source of ``sources`` that defines ``use`` (the imports sit beside it)."""
+        (text,) = [t for t in sources if f"def {use}(" in t]
+        return text
+
+    integrate = driver_text(dopri5.template_sources(), "integrate")
+    dense = driver_text(switching.template_sources(), "integrate_dense")
     stage = "yt[i] = y[i] + h_try * 0.2 * f0[i]"  # the first stage, h renamed to h_try
-    for text in (dopri5.template_sources()[2], switching.template_sources()[-1]):
+    for text in (integrate, dense):
         assert "_dp5_step(" not in text and "_dp5_error(" not in text
         assert "0.0012326388888888888" in text  # the first error weight, 71/57600
         assert stage in text
     assert "_dp5_step(" in fmu_solver.template_source()
-    for use, text in (("integrate", dopri5.template_sources()[2]),
-                      ("integrate_dense", switching.template_sources()[-1]),
+    for use, text in (("integrate", integrate),
+                      ("integrate_dense", dense),
                       ("advance", fmu_solver.template_source())):
         assert f"def {use}(" in text and "driver_template specialised" in text
-    for text in (dopri5.template_sources()[2], fmu_solver.template_source()):
+    for text in (integrate, fmu_solver.template_source()):
         body = text.split('"""')[-1]  # after the docstring
         for name in ("_r4_", "modal_step_cap", "stiff", "MODE_", "LAND", "DENSE", "COMM"):
             assert name not in body, name
-    assert "_r4_rodas4_step(" in switching.template_sources()[-1]
+    assert "_r4_rodas4_step(" in dense
     assert "stops" not in driver.source("advance") and "t_out" not in driver.source("advance")
     with pytest.raises(ValueError, match="positional arguments"):
         steps.inline_steps("def f(h, k):\n    _dp5_error(h, k)\n")

@@ -31,6 +31,7 @@ import functools
 import hashlib
 import json
 import os
+import sys
 import tempfile
 import threading
 from collections.abc import Callable, Sequence
@@ -543,6 +544,45 @@ class CEngine:
         if found is None:
             found = self._compiler[where] = available_compiler() is not None
         return found
+
+    def translates(self, model: Model, required: bool = False) -> bool:
+        """Whether ``model``'s kernels are inside the C subset (a friction law or part defined
+        outside the package may not be: docs/c-backend.md); if not, numba runs that model,
+        said once per model structure in one line on standard error.
+
+        Parameters
+        ----------
+        model : Model
+            The assembled model.
+        required : bool, default False
+            ``FEEDDRIVE_ENGINE=c``: a kernel outside the subset is an error.
+
+        Returns
+        -------
+        bool
+            True when the C build runs it.
+
+        Raises
+        ------
+        TranslationError
+            With ``required``: the kernel, file, line and construct, in one line.
+        """
+        module = model.module
+        refused = getattr(module, "_fd_c_refused", None)
+        if refused is None:
+            try:
+                self._library(model)
+                refused = ""
+            except TranslationError as err:
+                if required:
+                    raise
+                refused = str(err).splitlines()[0]
+                print(f"feeddrive: this model runs in the numba build ({refused})",
+                      file=sys.stderr)
+            setattr(module, "_fd_c_refused", refused)  # noqa: B010 (a generated module)
+        if refused and required:
+            raise TranslationError(refused)
+        return not refused
 
     def _library(self, model: Model) -> ctypes.CDLL:
         module = model.module

@@ -891,7 +891,7 @@ class Simulation:
             "current_scale": self.scales.current,
             "steps": int(stats[1]), "rejected_steps": int(stats[2]),
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
-            "breakpoint_interval_s": grid.base, "engine": builds.engine_name(),
+            "breakpoint_interval_s": grid.base, "engine": builds.engine_of(model),
         }
         if diverged:  # stopped early: the Result ends where a speed left its bound
             solver_stats.update({"diverged": True, "diverged_at_s": float(stats[4]),

@@ -8,7 +8,9 @@ generators).  :func:`driver` picks one per call:
 * ``FEEDDRIVE_ENGINE=numba``: numba;
 * ``FEEDDRIVE_ENGINE=c``: C, an error without a compiler;
 * unset (or ``auto``): C where a compiler is found; else numba, said once per process in one
-  line on standard error (:data:`feeddrive.backends.c_cache.NO_COMPILER`).
+  line on standard error (:data:`feeddrive.backends.c_cache.NO_COMPILER`).  A model whose
+  kernels fall outside the C subset (a friction law or part written outside the package
+  without type annotations) runs in numba, said once per model structure.
 
 Both give the same results (the regression corpus, docs/c-backend.md "The engine build").
 """
@@ -83,9 +85,34 @@ def driver(model: Model, use: str) -> Any:
     callable
         The driver.
     """
-    if engine_name() == "numba":
+    if not _in_c(model):
         return getattr(model.module, use)
     return registry.table(registry.ENGINES)["c"].driver(model, use)
+
+
+def engine_of(model: Model) -> str:
+    """The build that runs ``model``'s drivers: ``"c"`` or ``"numba"``.
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+
+    Returns
+    -------
+    str
+        The build's name.
+    """
+    return "c" if _in_c(model) else "numba"
+
+
+def _in_c(model: Model) -> bool:
+    """Whether the C build runs ``model``: :func:`engine_name` is C and the model's kernels
+    translate (else numba runs it, said once; an error with ``FEEDDRIVE_ENGINE=c``)."""
+    if engine_name() != "c":
+        return False
+    return bool(registry.table(registry.ENGINES)["c"].translates(model,
+                                                                required=chosen() == "c"))
 
 
 def compiled(model: Model, name: str) -> Any:
@@ -106,7 +133,7 @@ def compiled(model: Model, name: str) -> Any:
     callable
         The function.
     """
-    if engine_name() == "c":
+    if _in_c(model):
         fn = registry.table(registry.ENGINES)["c"].function(model, name)
         if fn is not None:
             return fn
