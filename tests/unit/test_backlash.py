@@ -73,7 +73,7 @@ def test_bad_backlash_refused() -> None:
     with pytest.raises(ParameterError, match="backlash.gap"):
         Backlash(gap=-1e-6)
     with pytest.raises(ParameterError, match="backlash.location"):
-        Backlash(gap=1e-5, location="coupling")
+        Backlash(gap=1e-5, location="gear")
     with pytest.raises(ParameterError, match="backlash.gap_behaviour"):
         Backlash(gap=1e-5, gap_behaviour="sticky")
     params = with_backlash(fd.preset("linear-motor-example"), Backlash(gap=1e-5))
