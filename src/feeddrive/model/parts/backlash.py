@@ -1,4 +1,5 @@
-"""Backlash (lost motion) at the ball nut: a dead-zone spring, and its describing function.
+"""Backlash (lost motion) at the ball nut or the coupling: a dead-zone spring, and its
+describing function.
 
 The screw–nut–table stretch e = H·θ_rel − x_t (``model/mechanisms/ball_screw.py``) passes a
 gap of full width b (``gap``, lost motion b, ±b/2 about the centre) before the stiffness law
@@ -244,7 +245,8 @@ class Backlash(Component):
 
     def declare_part(self, b: Any, axes: list[Any]) -> list[Any]:
         """Register the part's slots (``backlash.half_gap``, ``backlash.hold_time``) that the
-        ball-screw mechanism's stretch reads; refuse a drive without a ball nut.
+        ball-screw mechanism's stretch (at the nut or the coupling, ``location``) reads;
+        refuse a drive without a ball nut.
 
         Parameters
         ----------
