@@ -21,11 +21,12 @@ rotor, with states (θ_sh, ω_sh), only when that part is present:
 
     F_c       = gap_force(H(θ_s − θ_sh), H(ω_s − ω_sh); η·K_c/H², c_c, b/2)
     J_m ω̇_s   = K_t i_s − H·F_c
-    J_sh ω̇_sh = H·F_c − H·F_screw − H·F_d + H·F_hold,sh
+    J_sh ω̇_sh = H·F_c − H·F_screw − H·F_d
 
 with F_d, the screw-shaft and ball–nut friction at ω_sh and the coupling out of the torsion
 term of K_eq (Eq. 5 keeps the screw's own torsion).  η·K_c/H² is Eq. (5)'s reflection of the
-coupling's torsion, so with b = 0 the series chain is the lumped model's K_eq.
+coupling's torsion, so with b = 0 the series chain is the lumped model's K_eq.  The
+friction-dominated hold acts on the table while the coupling gap is open.
 """
 
 from __future__ import annotations
@@ -465,16 +466,15 @@ class BallScrewDrive(Mechanism):
             b.emit(f"{{f_d}} = ({{k_eq}} * ({H} * {th_rel} + {{lead_dev}} - {{table_position}}) "
                    f"+ {c_ax} * (({H} + {{lead_slope}}) * ({w} - {{w_n}}) - {{v_t}}))")
             lever = f"({H} + {{lead_slope}})"
-        if cg:  # the same dead-zone spring between rotor and shaft, written at the table
-            shaft_mass = f"{b.p('shaft.J')} / ({H} * {H})"
+        if cg:  # the same dead-zone spring between rotor and shaft, written at the table; the
+            # friction-dominated hold stops the table (the light shaft rests on it via K_eq)
             self._emit_gap(b, "coupling_gap_e", f"{H} * ({{screw_angle}} - {{shaft_angle}})",
                            f"{H} * ({{w_s}} - {{w_sh}})", b.p("coupling.stiffness"),
                            b.p("coupling.contact_damping"), "f_c",
-                           [("f_hold", "{v_t}", b.p("table.mass")),
-                            ("f_shaft_hold", f"{H} * {{w_sh}}", shaft_mass)])
+                           [("f_hold", "{v_t}", b.p("table.mass"))])
             screw = self._shaft(b, "screw", m, f"- {H} * {{f_c}}")
             shaft = Body(drive=[f"{H} * {{f_c}}"], external=list(m.forces.get("shaft", [])),
-                         reaction=[f"+ {H} * {{f_shaft_hold}}", f"- {lever} * {{f_d}}"])
+                         reaction=[f"- {lever} * {{f_d}}"])
         else:
             screw = self._shaft(b, "screw", m, f"- {lever} * {{f_d}}")
         table = Body(drive=["{f_d}"], external=list(m.forces.get("table", [])))

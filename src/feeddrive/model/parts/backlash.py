@@ -36,8 +36,11 @@ neglected as wang2021 does).  The coupling contact's damping is c_c = 2ζ·sqrt(
 (J_red = J_m·J_sh/(J_m + J_sh), the two-inertia mode across the coupling), ζ =
 ``contact_damping_ratio``: default 5 %, the structural damping ratio wang2021 gives the table
 mode (its ASSUMPTIONS ``axial-damping-shipped``), since no source gives a coupling's.  The
-friction-dominated hold acts on the whole driven side — screw shaft and table — while the
-coupling gap is open.
+friction-dominated hold acts on the table while the coupling gap is open: the table, whose
+guide friction dominates the driven side, stops where contact was lost, and the light shaft
+rests against it through the nut's spring.  (Holding the shaft as well drags the motor at each
+of the stiff coupling's re-contacts: the semi-closed P loop then stops short, B/b = 1.14 with
+the acceptance test's 3-s dwells.)
 
 The file's ``[backlash]`` section::
 
