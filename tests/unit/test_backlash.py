@@ -73,7 +73,7 @@ def test_bad_backlash_refused() -> None:
     with pytest.raises(ParameterError, match="backlash.gap"):
         Backlash(gap=-1e-6)
     with pytest.raises(ParameterError, match="backlash.location"):
-        Backlash(gap=1e-5, location="coupling")
+        Backlash(gap=1e-5, location="gear")
     with pytest.raises(ParameterError, match="backlash.gap_behaviour"):
         Backlash(gap=1e-5, gap_behaviour="sticky")
     params = with_backlash(fd.preset("linear-motor-example"), Backlash(gap=1e-5))
@@ -119,3 +119,25 @@ def test_hollow_controller_position_feedback_refused() -> None:
                                  params.controller.with_values(position_feedback="motor"))
     with pytest.raises(ParameterError, match="hollow_controller.position_feedback"):
         fd.simulate(fd.DriveSystem(params, "ddfs", 0.4), fd.ConstantSpeed(1e-3, 8e-3), 1e-3)
+
+
+def test_coupling_gap_gives_the_shaft_its_own_body() -> None:
+    """Only a gap at the coupling adds the shaft's states; a shaft without inertia beyond it
+    is refused with one line naming the field."""
+    from feeddrive.model.mechanisms.ball_screw import BallScrewDrive
+
+    params = fd.preset("wang2021")
+    gap = with_backlash(params, Backlash(gap=1e-5, location="coupling"))
+    run = fd.simulate(fd.DriveSystem(gap, "cdfs", 0.4), fd.ConstantSpeed(1e-3), 1e-3)
+    assert "shaft_angle" in run.signal_names() and "shaft_speed" in run.signal_names()
+    nut = with_backlash(params, Backlash(gap=1e-5))
+    run = fd.simulate(fd.DriveSystem(nut, "cdfs", 0.4), fd.ConstantSpeed(1e-3), 1e-3)
+    assert "shaft_angle" not in run.signal_names()
+    steady = BallScrewDrive(gap, "cdfs", 0.4, "locked").steady_motion(1e-3, 0.0)
+    assert steady["shaft_angle"] == ("shaft_speed", steady["screw_angle"][1])
+    massless = with_backlash(params.replace_path("screw.shaft_inertia", 0.0),
+                             Backlash(gap=1e-5, location="coupling"))
+    with pytest.raises(ParameterError, match="screw.shaft_inertia"):
+        fd.simulate(fd.DriveSystem(massless, "cdfs", 0.4), fd.ConstantSpeed(1e-3), 1e-3)
+    with pytest.raises(ParameterError, match="backlash.motor_side_share"):
+        Backlash(gap=1e-5, location="coupling", motor_side_share=1.0)

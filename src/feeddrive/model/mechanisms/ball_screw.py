@@ -14,6 +14,19 @@ The CDFS is this mechanism with the hollow motor held (Sect. 2.1): the nut's sta
 error δ(θ) the stretch is H·θ_rel + δ(θ_rel) − x_t and the lever (H + δ').  With a ball–nut
 share f the screw-shaft friction is split between ground (1 − f) and the ball–nut contact at
 the relative speed (f), whose reaction acts on the nut.
+
+A gap at the coupling (``[backlash] location = "coupling"``,
+:mod:`feeddrive.model.parts.backlash`) makes the screw shaft a body of its own beyond the
+rotor, with states (θ_sh, ω_sh), only when that part is present:
+
+    F_c       = gap_force(H(θ_s − θ_sh), H(ω_s − ω_sh); η·K_c/H², c_c, b/2)
+    J_m ω̇_s   = K_t i_s − H·F_c
+    J_sh ω̇_sh = H·F_c − H·F_screw − H·F_d
+
+with F_d, the screw-shaft and ball–nut friction at ω_sh and the coupling out of the torsion
+term of K_eq (Eq. 5 keeps the screw's own torsion).  η·K_c/H² is Eq. (5)'s reflection of the
+coupling's torsion, so with b = 0 the series chain is the lumped model's K_eq.  The
+friction-dominated hold acts on the table while the coupling gap is open.
 """
 
 from __future__ import annotations
@@ -122,6 +135,9 @@ class BallScrewDrive(Mechanism):
                  nut_hold: str) -> None:
         super().__init__(params, drive, table_position, nut_hold)
         self.nut_active = drive == "ddfs" or nut_hold == "servo"
+        gap = params.section("backlash")
+        #: a gap at the coupling: the screw shaft is a body of its own (θ_sh, ω_sh)
+        self.coupling_gap = gap is not None and gap.location == "coupling"
 
     @classmethod
     def check(cls, params: DriveParameters, drive: str, table_position: float) -> None:
@@ -204,26 +220,36 @@ class BallScrewDrive(Mechanism):
         b.state("nut_speed", "rad/s", "hollow motor speed", "rotary_speed", H)
         b.state("table_position", "m", "table displacement from its start x_t", "position")
         b.state("table_speed", "m/s", "table speed", "speed")
+        if self.coupling_gap:
+            b.state("shaft_angle", "rad", "screw shaft angle θ_sh beyond the coupling gap",
+                    "angle", H)
+            b.state("shaft_speed", "rad/s", "screw shaft speed beyond the coupling gap",
+                    "rotary_speed", H)
 
     def parameters(self, b: Builder) -> None:
         p = self.params
         s, m = p.screw, p.stiffness
         H = s.transmission_ratio
         b.param("screw.H", H)
-        b.param("screw.J", p.screw_motor.inertia + s.shaft_inertia)
+        j_motor, j_shaft = self._inertias()
+        b.param("screw.J", j_motor if self.coupling_gap else j_motor + j_shaft)
         b.param("nut.J", p.hollow_motor.inertia + s.nut_inertia)
         b.param("table.mass", p.table.mass)
         b.param("stiffness.axial_damping", m.axial_damping)
         c0 = float(1.0 / axial_stiffness(np.inf, s, m.support_bearing_count))
-        if m.include_torsion:
-            c0 += H**2 / s.efficiency / torsional_stiffness(p.coupling, s)
+        if m.include_torsion:  # a coupling gap takes the coupling out of the chain (its own)
+            k_torsion = (s.torsional_stiffness if self.coupling_gap
+                         else torsional_stiffness(p.coupling, s))
+            c0 += H**2 / s.efficiency / k_torsion
         k_fixed = 0.0
         if m.equivalent_stiffness > 0:
             k_fixed = m.equivalent_stiffness
-        elif not m.position_dependent:
+        elif not m.position_dependent and not self.coupling_gap:
             k_fixed = equivalent_stiffness(p, self.table_position)
-        values = (k_fixed, c0, math.pi * s.diameter**2 / 4.0 * s.youngs_modulus, s.length,
-                  0.0 if m.screw_support == "fixed-fixed" else 1.0, self.table_position)
+        values = [k_fixed, c0, math.pi * s.diameter**2 / 4.0 * s.youngs_modulus, s.length,
+                  0.0 if m.screw_support == "fixed-fixed" else 1.0, self.table_position]
+        if self.coupling_gap and k_fixed == 0.0 and not m.position_dependent:
+            values[K_FIXED] = equivalent_stiffness_kernel(0.0, np.array(values), 0)
         b.named_params("stiffness", STIFFNESS_SLOTS, np.array(values))
         b.param("nut.active", 1.0 if self.nut_active else 0.0)
         for key, motor in (("screw", p.screw_motor), ("nut", p.hollow_motor)):
@@ -231,6 +257,36 @@ class BallScrewDrive(Mechanism):
             b.param(f"{key}_motor.back_emf_constant", motor.back_emf_constant)
             b.param(f"{key}_motor.inductance", motor.inductance)
             b.param(f"{key}_motor.resistance", motor.resistance)
+        if self.coupling_gap:
+            part = p.section("backlash")
+            k_c = s.efficiency * p.coupling.torsional_stiffness / H**2  # Eq. (5)'s reflection
+            m_red = j_motor * j_shaft / (j_motor + j_shaft) / H**2
+            b.param("shaft.J", j_shaft)
+            b.param("coupling.stiffness", k_c)
+            b.param("coupling.contact_damping",
+                    2.0 * part.contact_damping_ratio * math.sqrt(k_c * m_red))
+
+    def _inertias(self) -> tuple[float, float]:
+        """The screw motor's side and the screw shaft's side of the shaft line [kg m^2].
+
+        Without a coupling gap the two turn as one (their sum is ``screw.J``).  With one, the
+        part's ``motor_side_share`` s of ``screw.shaft_inertia`` turns with the rotor.
+
+        Raises
+        ------
+        ParameterError
+            When a coupling gap leaves the shaft no inertia.
+        """
+        p = self.params
+        j_motor, j_shaft = p.screw_motor.inertia, p.screw.shaft_inertia
+        if not self.coupling_gap:
+            return j_motor, j_shaft
+        share = p.section("backlash").motor_side_share
+        if not j_shaft > 0.0:
+            raise ParameterError("screw.shaft_inertia", j_shaft,
+                                 "expected > 0 [kg m^2] with a gap at the coupling (the "
+                                 "screw shaft beyond it is a body of its own)")
+        return j_motor + share * j_shaft, (1.0 - share) * j_shaft
 
     def motors(self, b: Builder) -> None:
         b.state("screw_current", "A", "screw motor current", "current")
@@ -241,15 +297,17 @@ class BallScrewDrive(Mechanism):
         nut_on = f"{b.p('nut.active')} > 0.5"
         share = self.params.friction.ball_nut_share
         out = []
+        # beyond a coupling gap the shaft is its own body: its friction acts there
+        w, shaft = ("{w_sh}", "shaft") if self.coupling_gap else ("{w_s}", "screw")
         if share < 1.0:
-            out.append(Site("screw", "screw", f"{H} * {{w_s}}", (("screw", H),), 1.0 - share,
+            out.append(Site("screw", "screw", f"{H} * {w}", ((shaft, H),), 1.0 - share,
                             rotary=True))
         out.append(Site("nut", "nut", f"{H} * {{w_n}}", (("nut", H),), 1.0, nut_on,
                         rotary=True))
         out.append(Site("guide", "guide", "{v_t}", (("table", "1.0"),)))
         if share > 0.0:
-            out.append(Site("ball_nut", "screw", f"{H} * ({{w_s}} - {{w_n}})",
-                            (("screw", H), ("nut", f"(-{H})")), share, rotary=True))
+            out.append(Site("ball_nut", "screw", f"{H} * ({w} - {{w_n}})",
+                            ((shaft, H), ("nut", f"(-{H})")), share, rotary=True))
         return out
 
     def axes(self, b: Builder) -> tuple[list[Axis], list[Channel]]:
@@ -302,7 +360,8 @@ class BallScrewDrive(Mechanism):
 
     def steady_motion(self, table_speed: float, nut_speed: float
                       ) -> dict[str, tuple[str, float]]:
-        """Screw at (v_t + v_n)/H, nut at v_n/H (0 when held), table at v_t (Eq. 8).
+        """Screw (and a shaft beyond a coupling gap) at (v_t + v_n)/H, nut at v_n/H (0 when
+        held), table at v_t (Eq. 8).
 
         Parameters
         ----------
@@ -318,9 +377,12 @@ class BallScrewDrive(Mechanism):
         """
         H = self.params.screw.transmission_ratio
         v_n = nut_speed if self.nut_active else 0.0
-        return {"screw_angle": ("screw_speed", (table_speed + v_n) / H),
-                "nut_angle": ("nut_speed", v_n / H),
-                "table_position": ("table_speed", table_speed)}
+        out = {"screw_angle": ("screw_speed", (table_speed + v_n) / H),
+               "nut_angle": ("nut_speed", v_n / H),
+               "table_position": ("table_speed", table_speed)}
+        if self.coupling_gap:
+            out["shaft_angle"] = ("shaft_speed", (table_speed + v_n) / H)
+        return out
 
     def held(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
         """The CDFS with its nut locked: the nut's states and the hollow motor's axis.
@@ -371,29 +433,50 @@ class BallScrewDrive(Mechanism):
         b.emit("{w_s} = {screw_speed}")
         b.emit("{w_n} = {nut_speed}")
         b.emit("{v_t} = {table_speed}")
+        if self.coupling_gap:
+            b.emit("{w_sh} = {shaft_speed}")
         for ln in m.always:
             b.emit(ln)
         k_eq = b.use(equivalent_stiffness_kernel)
         o_stiff = b.param_index[b.q(f"stiffness.{STIFFNESS_SLOTS[0]}")]  # the block's first slot
         b.emit(f"{{k_eq}} = {k_eq}({{table_position}}, P, {o_stiff})")
         c_ax = b.p("stiffness.axial_damping")
-        th_rel = "({screw_angle} - {nut_angle})"
+        cg = self.coupling_gap
+        w = "{w_sh}" if cg else "{w_s}"  # the shaft the nut turns on
+        th_rel = "({shaft_angle} - {nut_angle})" if cg else "({screw_angle} - {nut_angle})"
         gap = self.params.section("backlash")
-        if gap is not None:  # a dead-zone spring at the nut (model/parts/backlash.py)
-            self._emit_gap(b, m, th_rel, c_ax)
+        if gap is not None and not cg:  # a dead-zone spring at the nut (model/parts/backlash)
+            if m.lead is not None:
+                raise ParameterError("backlash.gap", gap.gap,
+                                     "a backlash at the nut with a lead error is not "
+                                     "modelled; remove [disturbances.lead_error] or the "
+                                     "[backlash] section")
+            self._emit_gap(b, "gap_e", f"{H} * {th_rel} - {{table_position}}",
+                           f"{H} * ({{w_s}} - {{w_n}}) - {{v_t}}", "{k_eq}", c_ax, "f_d",
+                           [("f_hold", "{v_t}", b.p("table.mass"))])
             lever = H
         elif m.lead is None:
             b.emit(f"{{f_d}} = ({{k_eq}} * ({H} * {th_rel} - {{table_position}}) "
-                   f"+ {c_ax} * ({H} * ({{w_s}} - {{w_n}}) - {{v_t}}))")
+                   f"+ {c_ax} * ({H} * ({w} - {{w_n}}) - {{v_t}}))")
             lever = H
         else:
             hh = b.use(harmonics)
             b.emit(f"{{lead_dev}}, {{lead_slope}} = {hh}({th_rel}, P, {m.lead[0]}, "
                    f"{m.lead[1]})")
             b.emit(f"{{f_d}} = ({{k_eq}} * ({H} * {th_rel} + {{lead_dev}} - {{table_position}}) "
-                   f"+ {c_ax} * (({H} + {{lead_slope}}) * ({{w_s}} - {{w_n}}) - {{v_t}}))")
+                   f"+ {c_ax} * (({H} + {{lead_slope}}) * ({w} - {{w_n}}) - {{v_t}}))")
             lever = f"({H} + {{lead_slope}})"
-        screw = self._shaft(b, "screw", m, f"- {lever} * {{f_d}}")
+        if cg:  # the same dead-zone spring between rotor and shaft, written at the table; the
+            # friction-dominated hold stops the table (the light shaft rests on it via K_eq)
+            self._emit_gap(b, "coupling_gap_e", f"{H} * ({{screw_angle}} - {{shaft_angle}})",
+                           f"{H} * ({{w_s}} - {{w_sh}})", b.p("coupling.stiffness"),
+                           b.p("coupling.contact_damping"), "f_c",
+                           [("f_hold", "{v_t}", b.p("table.mass"))])
+            screw = self._shaft(b, "screw", m, f"- {H} * {{f_c}}")
+            shaft = Body(drive=[f"{H} * {{f_c}}"], external=list(m.forces.get("shaft", [])),
+                         reaction=[f"- {lever} * {{f_d}}"])
+        else:
+            screw = self._shaft(b, "screw", m, f"- {lever} * {{f_d}}")
         table = Body(drive=["{f_d}"], external=list(m.forces.get("table", [])))
         if m.load is not None:
             table.external.append(f"- {m.load}")
@@ -401,6 +484,9 @@ class BallScrewDrive(Mechanism):
             table.external.append("+ {f_hold}")
         b.emit("{der(screw_angle)} = {w_s}")
         b.emit(f"{{der(screw_speed)}} = ({screw.expression()}) / {b.p('screw.J')}")
+        if cg:
+            b.emit("{der(shaft_angle)} = {w_sh}")
+            b.emit(f"{{der(shaft_speed)}} = ({shaft.expression()}) / {b.p('shaft.J')}")
         b.emit("{der(table_position)} = {v_t}")
         b.emit(f"{{der(table_speed)}} = ({table.expression()}) / {b.p('table.mass')}")
         self._current(b, "screw", "{w_s}", m.torque_off)
@@ -419,22 +505,36 @@ class BallScrewDrive(Mechanism):
             b.emit(f"    {{der({name})}} = 0.0")
         b.emit("{equivalent_stiffness} = {k_eq}")
 
-    def _emit_gap(self, b: Builder, m: Mechanics, th_rel: str, c_ax: str) -> None:
-        """f_d through the backlash's dead-zone spring and the friction-dominated hold f_hold
-        on the table (:mod:`feeddrive.model.parts.backlash`)."""
+    def _emit_gap(self, b: Builder, stretch_name: str, stretch: str, rate: str, k: str,
+                  c: str, force: str, held: list[tuple[str, str, str]]) -> None:
+        """A gap of the backlash part (:mod:`feeddrive.model.parts.backlash`) at one site:
+        the force ``force`` through its dead-zone spring (:func:`gap_force`) and the
+        friction-dominated hold (:func:`gap_hold`) on each body of the driven side.
+
+        Parameters
+        ----------
+        b : Builder
+            The model being assembled.
+        stretch_name : str
+            The signal of the stretch across spring and gap.
+        stretch, rate : str
+            Code of the stretch [m] and its rate [m/s] at the table.
+        k, c : str
+            Code of the stiffness [N/m] and the contact damping [N s/m] at the table.
+        force : str
+            The signal of the transmitted force [N].
+        held : list of (str, str, str)
+            (hold force signal, driven speed code [m/s], driven mass code [kg]) per body.
+        """
         from ..parts.backlash import gap_force, gap_hold
 
-        if m.lead is not None:
-            raise ParameterError("backlash.gap", self.params.section("backlash").gap,
-                                 "a backlash with a lead error is not modelled; remove "
-                                 "[disturbances.lead_error] or the [backlash] section")
-        H = b.p("screw.H")
         half, hold = b.p("backlash.half_gap"), b.p("backlash.hold_time")
-        b.emit(f"{{gap_e}} = ({H} * {th_rel} - {{table_position}})")
-        b.emit(f"{{f_d}} = {b.use(gap_force)}({{gap_e}}, {H} * ({{w_s}} - {{w_n}}) - {{v_t}}, "
-               f"{{k_eq}}, {c_ax}, {half})")
-        b.emit(f"{{f_hold}} = {b.use(gap_hold)}({{gap_e}}, {{v_t}}, {half}, "
-               f"{b.p('table.mass')}, {hold})")
+        b.emit(f"{{{stretch_name}}} = ({stretch})")
+        b.emit(f"{{{force}}} = {b.use(gap_force)}({{{stretch_name}}}, {rate}, {k}, {c}, "
+               f"{half})")
+        for signal, speed, mass in held:
+            b.emit(f"{{{signal}}} = {b.use(gap_hold)}({{{stretch_name}}}, {speed}, {half}, "
+                   f"{mass}, {hold})")
 
     def _shaft(self, b: Builder, key: str, m: Mechanics, reaction: str) -> Body:
         shaft = Body(drive=[] if m.torque_off else
