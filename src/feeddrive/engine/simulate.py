@@ -864,7 +864,8 @@ class Simulation:
             solver_stats.update({
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
                 "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8]),
-                "eigen_analyses": int(stats[9]), "switch_crossings": int(stats[10])})
+                "eigen_analyses": int(stats[9]), "switch_crossings": int(stats[10]),
+                "spectral_radii": int(stats[11])})
         return self._result(t, y, aux_parts, solver_stats)
 
     def _result(self, t: np.ndarray, y: np.ndarray, aux_parts: list[np.ndarray],

@@ -279,6 +279,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         n_rodas = 0
         switches = 0
         n_eig = 0
+        n_rho = 0  # spectral-radius estimates (power iterations)
         n_switch = 0
         sw_last = -1  # the surface the last accepted step landed on (-1: none)
         sw_next = -1
@@ -425,13 +426,19 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     _r4_frozen_states(J, f0, live)
                     frozen_known = True
                 jac_ok = True
-                if switching:
+                if switching and not modal:
                     rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                    n_rho += 1
                 since_eig += 1
                 if modal and (not have_ref or (since_eig >= MODAL_EVERY and
                                                modal_jacobian_moved(J, J_ref, MODAL_REFRESH))):
                     since_eig = 0
                     h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+                    # MODE_MODAL: the spectral radius of the switch back to DOPRI5 is that
+                    # of the reference Jacobian, as the step cap is (both redone when a row
+                    # of J moves by MODAL_REFRESH)
+                    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                    n_rho += 1
                     n_eig += 1
                     have_ref = True
                     for i in range(n):
@@ -589,6 +596,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                             n_jac += 1
                             h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
                                                    MODAL_H_LAMBDA)
+                            rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                            n_rho += 1
                             n_eig += 1
                             have_ref = True
                             for i in range(n):
@@ -614,6 +623,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                                 n_jac += 1
                                 h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
                                                        MODAL_H_LAMBDA)
+                                rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                                n_rho += 1
                                 n_eig += 1
                                 have_ref = True
                                 for i in range(n):
@@ -767,7 +778,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
                           t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
-                          float(n_eig), float(n_switch)])
+                          float(n_eig), float(n_switch), float(n_rho)])
         return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats,
                 held)
     return None

@@ -1,0 +1,38 @@
+"""Issues 35 (item 4) and 42: what the default ``modal`` method spends on the DDFS, by count.
+
+The default run of benchmarks/bench_engine.py's ``ddfs_0p5_vn16`` scenario (``wang2021`` DDFS
+at mid-screw, table 0.5 mm/s, hollow motor 16 mm/s, 10 s), measured 2026-12-05: 3 444 steps
+(185 rejected), 2 601 RODAS4 steps, 2 439 Jacobians, 40 010 right-hand sides, 131
+eigen-analyses.  Until then every Jacobian also got a spectral-radius estimate (12 dense
+power iterations, ≈ 1.5 µs each at 15 states, ≈ 15 % of the run's CPU): 2 439 of them.
+``modal`` now takes the spectral radius of the switch back to DOPRI5 with the step cap's
+eigen-analysis, from the same reference Jacobian (both redone when a row of J moves by
+``modes.REFRESH``), so it makes as many estimates as eigen-analyses.
+"""
+
+from __future__ import annotations
+
+import feeddrive as fd
+from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate
+from feeddrive.model.reference import ConstantSpeed
+
+
+def test_modal_takes_one_spectral_radius_per_eigen_analysis_on_the_ddfs() -> None:
+    system = DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+    stats = simulate(system, ConstantSpeed(0.5e-3, 16e-3), 10.0,
+                     options=SolverOptions()).solver_stats
+    # measured 131 and 131; the tree before took 2 439 estimates, one per Jacobian
+    assert stats["spectral_radii"] == stats["eigen_analyses"]
+    assert stats["spectral_radii"] <= 200
+    # the counts the change leaves as they were (measured 2 439 and 40 010; +10 % margin)
+    assert stats["jacobians"] <= 2700
+    assert stats["rhs_evaluations"] - stats["output_rhs_evaluations"] <= 44000
+
+
+def test_auto_still_estimates_the_spectral_radius_at_every_jacobian() -> None:
+    # ``auto`` has no eigen-analysis: its switch back needs the estimate of each Jacobian
+    system = DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+    stats = simulate(system, ConstantSpeed(0.5e-3, 16e-3), 1.0,
+                     options=SolverOptions(method="auto")).solver_stats
+    assert stats["eigen_analyses"] == 0
+    assert stats["spectral_radii"] == stats["jacobians"] > 0
