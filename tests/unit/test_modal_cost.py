@@ -36,3 +36,37 @@ def test_auto_still_estimates_the_spectral_radius_at_every_jacobian() -> None:
                      options=SolverOptions(method="auto")).solver_stats
     assert stats["eigen_analyses"] == 0
     assert stats["spectral_radii"] == stats["jacobians"] > 0
+
+
+def test_a_continued_modal_run_keeps_its_spectral_radius() -> None:
+    # the estimate is carried in the driver's memory: a DDFS run continued at 1 s is bit for
+    # bit the one-call run with a step end there (with the estimate lost at the call, the
+    # continued run switched to DOPRI5 and back in every later call)
+    import math
+
+    import numpy as np
+
+    from feeddrive.engine.simulate import Simulation, profile_breakpoints
+    from feeddrive.solvers import switching
+
+    system = DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+    profile = ConstantSpeed(0.5e-3, 16e-3)
+    sim = Simulation(system, profile, SolverOptions())
+    model, grid = sim.model, sim.grid
+    stops = np.sort(np.append(profile_breakpoints(profile, 2.0, grid.base), 1.0))
+
+    def run(start: int, end: float, y0: np.ndarray, held: np.ndarray,
+            memory: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        _, y, _, stats, _ = switching.integrate(
+            model, y0, end, grid.out_every, grid.base, grid.schedule, sim.tolerances.rtol,
+            sim.atol, sim.rel, 1e-6, math.inf, 1, 10 ** 6, switching.MODE_MODAL, stops,
+            want_aux=False, start=start, held=held, memory=memory)
+        return y, stats
+
+    n = len(model.states)
+    whole, stats = run(0, 2.0, sim.y0, np.zeros(model.n_held), switching.new_memory(n))
+    held, memory = np.zeros(model.n_held), switching.new_memory(n)
+    first, s1 = run(0, 1.0, sim.y0, held, memory)
+    second, s2 = run(int(round(1.0 / grid.base)), 2.0, first[-1].copy(), held, memory)
+    assert np.array_equal(np.vstack([first, second[1:]]), whole)
+    assert s1[7] + s2[7] == stats[7]  # the method switches

@@ -97,9 +97,10 @@ MODAL_EVERY = 10
 # The dense driver's memory: h, method, frozen states known, stiff and non-stiff counts,
 # DOPRI5 error memory, RODAS4 error, step and first/rejected flags, the modal step cap,
 # whether a reference Jacobian is kept, the step count until which a switch is refused and the
-# DOPRI5 steps since the last eigen-analysis; then one live flag per state and the modal
+# DOPRI5 steps since the last eigen-analysis, the spectral radius of the switch back to
+# DOPRI5 (MODE_MODAL: the reference Jacobian's); then one live flag per state and the modal
 # reference Jacobian (n × n), then the stop request and the live time
-MEMORY_SCALARS = 14
+MEMORY_SCALARS = 15
 
 # The specialisation flags: exactly one of LAND, DENSE, COMM is true in a specialisation
 # (the template's own values only make this module importable)
@@ -354,6 +355,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             have_ref = memory[11] != 0.0
             refuse_until = int(memory[12])
             dp_since_eig = int(memory[13])
+            rho = memory[14]
             for i in range(n):
                 live[i] = memory[MEMORY_SCALARS + i] != 0.0
                 for j in range(n):
@@ -772,6 +774,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         memory[11] = 1.0 if have_ref else 0.0
         memory[12] = refuse_until
         memory[13] = dp_since_eig
+        memory[14] = rho
         for i in range(n):
             memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
             for j in range(n):
