@@ -98,9 +98,10 @@ MODAL_EVERY = 10
 # DOPRI5 error memory, RODAS4 error, step and first/rejected flags, the modal step cap,
 # whether a reference Jacobian is kept, the step count until which a switch is refused and the
 # DOPRI5 steps since the last eigen-analysis, the spectral radius of the switch back to
-# DOPRI5 (MODE_MODAL: the reference Jacobian's); then one live flag per state and the modal
-# reference Jacobian (n × n), then the stop request and the live time
-MEMORY_SCALARS = 15
+# DOPRI5 (MODE_MODAL: the reference Jacobian's), the Jacobians since the last eigen-analysis
+# and whether the last moved test found the Jacobian quiet; then one live flag per state and
+# the modal reference Jacobian (n × n), then the stop request and the live time
+MEMORY_SCALARS = 17
 
 # The specialisation flags: exactly one of LAND, DENSE, COMM is true in a specialisation
 # (the template's own values only make this module importable)
@@ -292,6 +293,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     # the method and the switching state (DENSE; the other uses are DOPRI5 throughout)
     stiff = mode == MODE_RODAS4
     jac_ok = False
+    jac_age = 0
+    quiet = False
+    stale = False
     frozen_known = False
     stiff_count = 0
     nonstiff_count = 0
@@ -356,6 +360,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             refuse_until = int(memory[12])
             dp_since_eig = int(memory[13])
             rho = memory[14]
+            since_eig = int(memory[15])
+            quiet = memory[16] != 0.0
             for i in range(n):
                 live[i] = memory[MEMORY_SCALARS + i] != 0.0
                 for j in range(n):
@@ -428,12 +434,19 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     _r4_frozen_states(J, f0, live)
                     frozen_known = True
                 jac_ok = True
+                jac_age = 0
                 if switching and not modal:
                     rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
                     n_rho += 1
                 since_eig += 1
-                if modal and (not have_ref or (since_eig >= MODAL_EVERY and
-                                               modal_jacobian_moved(J, J_ref, MODAL_REFRESH))):
+                # MODE_MODAL: a Jacobian found within MODAL_REFRESH of the reference by the
+                # moved test is "quiet" and kept for up to MODAL_EVERY RODAS4 steps (below)
+                moved = not have_ref
+                if modal and have_ref and since_eig >= MODAL_EVERY:
+                    moved = modal_jacobian_moved(J, J_ref, MODAL_REFRESH)
+                    quiet = not moved
+                if modal and moved:
+                    quiet = False
                     since_eig = 0
                     h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
                     # MODE_MODAL: the spectral radius of the switch back to DOPRI5 is that
@@ -503,6 +516,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
                     h_try /= fac
                     r4_rejected = True
+                    if jac_age > 0:  # a kept Jacobian: the retry takes a fresh one
+                        stale = True
                 else:
                     fac = _reject_factor(err)
                     h_try *= fac
@@ -513,8 +528,15 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if steps > max_steps:
                     status = STATUS_MAX_STEPS
                     break
+                if stale:
+                    break
             if status != STATUS_OK:
                 break
+            if stale:
+                stale = False
+                jac_ok = False
+                h = h_try
+                continue
             used_rodas = stiff
             if DENSE:
                 # ---- accepted: dense-output data of [t, t_new]
@@ -677,7 +699,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if memory[memory.shape[0] - 2] != 0.0:
                     status = STATUS_STOPPED
                     break
-            jac_ok = False
+            # the Jacobian is taken afresh at the next step, unless quiet (MODE_MODAL)
+            jac_age += 1
+            if not (quiet and used_rodas and stiff and jac_age < MODAL_EVERY):
+                jac_ok = False
             if steps > max_steps:
                 status = STATUS_MAX_STEPS
                 break
@@ -706,6 +731,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 break
         if status != STATUS_OK:
             break
+        jac_ok = False  # an event (a jump of the right-hand side): a fresh Jacobian after it
         # ---- at the event t_ev
         if LAND:
             kb += 1
@@ -775,6 +801,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         memory[12] = refuse_until
         memory[13] = dp_since_eig
         memory[14] = rho
+        memory[15] = since_eig
+        memory[16] = 1.0 if quiet else 0.0
         for i in range(n):
             memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
             for j in range(n):
