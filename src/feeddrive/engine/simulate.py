@@ -900,7 +900,8 @@ class Simulation:
             solver_stats.update({
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),
                 "method_switches": int(stats[7]), "output_rhs_evaluations": int(stats[8]),
-                "eigen_analyses": int(stats[9]), "switch_crossings": int(stats[10])})
+                "eigen_analyses": int(stats[9]), "switch_crossings": int(stats[10]),
+                "spectral_radii": int(stats[11])})
             carried = switching.error_estimate(chunks.live, len(model.states))
             if carried is not None:  # the memory of the call that ended the run
                 solver_stats["embedded_error_estimate"] = embedded_entry(

@@ -103,11 +103,13 @@ MODAL_EVERY = 10
 # The dense driver's memory: h, method, frozen states known, stiff and non-stiff counts,
 # DOPRI5 error memory, RODAS4 error, step and first/rejected flags, the modal step cap,
 # whether a reference Jacobian is kept, the step count until which a switch is refused and the
-# DOPRI5 steps since the last eigen-analysis; then one live flag per state and the modal
-# reference Jacobian (n × n), then (with the embedded global-error estimate,
+# DOPRI5 steps since the last eigen-analysis, the spectral radius of the switch back to
+# DOPRI5 (MODE_MODAL: the reference Jacobian's), the Jacobians since the last eigen-analysis
+# and whether the last moved test found the Jacobian quiet; then one live flag per state and
+# the modal reference Jacobian (n × n), then (with the embedded global-error estimate,
 # feeddrive.solvers.global_error) the propagated error and its largest magnitude per state,
 # then the stop request and the live time
-MEMORY_SCALARS = 14
+MEMORY_SCALARS = 17
 
 # The specialisation flags: exactly one of LAND, DENSE, COMM is true in a specialisation
 # (the template's own values only make this module importable)
@@ -287,6 +289,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         n_rodas = 0
         switches = 0
         n_eig = 0
+        n_rho = 0  # spectral-radius estimates (power iterations)
         n_switch = 0
         sw_last = -1  # the surface the last accepted step landed on (-1: none)
         sw_next = -1
@@ -311,6 +314,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     # the method and the switching state (DENSE; the other uses are DOPRI5 throughout)
     stiff = mode == MODE_RODAS4
     jac_ok = False
+    jac_age = 0
+    quiet = False
+    stale = False
     frozen_known = False
     stiff_count = 0
     nonstiff_count = 0
@@ -374,6 +380,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             have_ref = memory[11] != 0.0
             refuse_until = int(memory[12])
             dp_since_eig = int(memory[13])
+            rho = memory[14]
+            since_eig = int(memory[15])
+            quiet = memory[16] != 0.0
             for i in range(n):
                 live[i] = memory[MEMORY_SCALARS + i] != 0.0
                 for j in range(n):
@@ -447,13 +456,26 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     _r4_frozen_states(J, f0, live)
                     frozen_known = True
                 jac_ok = True
-                if switching:
+                jac_age = 0
+                if switching and not modal:
                     rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                    n_rho += 1
                 since_eig += 1
-                if modal and (not have_ref or (since_eig >= MODAL_EVERY and
-                                               modal_jacobian_moved(J, J_ref, MODAL_REFRESH))):
+                # MODE_MODAL: a Jacobian found within MODAL_REFRESH of the reference by the
+                # moved test is "quiet" and kept for up to MODAL_EVERY RODAS4 steps (below)
+                moved = not have_ref
+                if modal and have_ref and since_eig >= MODAL_EVERY:
+                    moved = modal_jacobian_moved(J, J_ref, MODAL_REFRESH)
+                    quiet = not moved
+                if modal and moved:
+                    quiet = False
                     since_eig = 0
                     h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+                    # MODE_MODAL: the spectral radius of the switch back to DOPRI5 is that
+                    # of the reference Jacobian, as the step cap is (both redone when a row
+                    # of J moves by MODAL_REFRESH)
+                    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                    n_rho += 1
                     n_eig += 1
                     have_ref = True
                     for i in range(n):
@@ -516,6 +538,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
                     h_try /= fac
                     r4_rejected = True
+                    if jac_age > 0:  # a kept Jacobian: the retry takes a fresh one
+                        stale = True
                 else:
                     fac = _reject_factor(err)
                     h_try *= fac
@@ -526,8 +550,15 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if steps > max_steps:
                     status = STATUS_MAX_STEPS
                     break
+                if stale:
+                    break
             if status != STATUS_OK:
                 break
+            if stale:
+                stale = False
+                jac_ok = False
+                h = h_try
+                continue
             used_rodas = stiff
             if DENSE and ge:
                 ge_keep(e, ge_d)  # the accepted step's local error (e is reused below)
@@ -636,6 +667,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                             n_jac += 1
                             h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
                                                    MODAL_H_LAMBDA)
+                            rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                            n_rho += 1
                             n_eig += 1
                             have_ref = True
                             for i in range(n):
@@ -661,6 +694,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                                 n_jac += 1
                                 h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
                                                        MODAL_H_LAMBDA)
+                                rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                                n_rho += 1
                                 n_eig += 1
                                 have_ref = True
                                 for i in range(n):
@@ -726,7 +761,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if memory[memory.shape[0] - 2] != 0.0:
                     status = STATUS_STOPPED
                     break
-            jac_ok = False
+            # the Jacobian is taken afresh at the next step, unless quiet (MODE_MODAL)
+            jac_age += 1
+            if not (quiet and used_rodas and stiff and jac_age < MODAL_EVERY):
+                jac_ok = False
             if steps > max_steps:
                 status = STATUS_MAX_STEPS
                 break
@@ -755,6 +793,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 break
         if status != STATUS_OK:
             break
+        jac_ok = False  # an event (a jump of the right-hand side): a fresh Jacobian after it
         # ---- at the event t_ev
         if LAND:
             kb += 1
@@ -823,13 +862,16 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         memory[11] = 1.0 if have_ref else 0.0
         memory[12] = refuse_until
         memory[13] = dp_since_eig
+        memory[14] = rho
+        memory[15] = since_eig
+        memory[16] = 1.0 if quiet else 0.0
         for i in range(n):
             memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
             for j in range(n):
                 memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
                           t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
-                          float(n_eig), float(n_switch)])
+                          float(n_eig), float(n_switch), float(n_rho)])
         return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats,
                 held)
     return None

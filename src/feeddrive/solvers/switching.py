@@ -65,7 +65,7 @@ if TYPE_CHECKING:
 
 STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "jacobians",
               "rosenbrock_steps", "switches", "output_rhs_evaluations", "eigen_analyses",
-              "switch_crossings")
+              "switch_crossings", "spectral_radii")
 
 CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_MODAL",
              "STIFF_HLAMBDA", "STIFF_STEPS",
