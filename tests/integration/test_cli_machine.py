@@ -3,7 +3,15 @@
 from __future__ import annotations
 
 import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -137,3 +145,48 @@ def test_the_gantry_moves_its_carriages_together() -> None:
     summary = json.loads(r.output)
     assert set(summary["axes"]) == {"x1", "x2"} and "contour_error_max" not in summary
     assert 0 < summary["axes"]["x1"]["following_error_max"] < 1e-3
+
+
+def test_ctrl_c_on_a_machine_run_stops_it_in_one_line_and_writes_nothing(
+        tmp_path: Path, interruptible: dict[str, Any]) -> None:
+    """Issue 40 item 4: progress and Ctrl-C on a machine as on one axis.  A 25-turn circle
+    (471 s simulated) shows the progress bar on stderr (``TTY_COMPATIBLE=1``: rich draws it
+    as on a terminal); the interrupt, sent once the bar shows the integration under way, gives
+    exit status 130, one line saying where the run stopped, no traceback, no half-written
+    output file."""
+    out = tmp_path / "run.nc"
+    proc = subprocess.Popen([sys.executable, "-m", "feeddrive", "simulate", "--machine",
+                             "xy-table", "--contour", "circle", "--radius", "50", "--feed",
+                             "1000", "--turns", "25", "--output", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env={**os.environ, "TTY_COMPATIBLE": "1"}, **interruptible)
+    assert proc.stderr is not None
+    seen = bytearray()
+    fd = proc.stderr.fileno()
+
+    def read() -> None:
+        while chunk := os.read(fd, 4096):
+            seen.extend(chunk)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    deadline = time.monotonic() + 300  # a hang guard only
+    while b" / 471.3 s" not in seen:  # the bar counts the contour's simulated seconds
+        assert proc.poll() is None, (proc.stdout.read() if proc.stdout else "", bytes(seen))
+        assert time.monotonic() < deadline, "no progress shown in 300 s"
+        time.sleep(0.02)
+    assert b"simulating" in seen
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=300)  # a hang guard, not a speed bound
+    reader.join(timeout=60)  # the pipe's end
+    stdout = proc.stdout.read() if proc.stdout else b""
+    for pipe in (proc.stdout, proc.stderr):
+        if pipe is not None:
+            pipe.close()
+    stderr = bytes(seen).decode()
+    assert proc.returncode == 130, (stdout, stderr)
+    assert "Traceback" not in stderr and not stdout
+    # one line after the bar: where the run stopped
+    assert re.search(r"interrupted: simulation interrupted at t = [0-9.]+ s\n?$", stderr)
+    assert not out.exists()
+    assert not list(tmp_path.glob("*.partial*"))

@@ -350,3 +350,32 @@ def resolve_parameters(preset_name: str | None, params_file: str | None,
 
 def print_json(data: Any) -> None:
     sys.stdout.write(json.dumps(data, indent=2, allow_nan=False) + "\n")
+
+
+def progress_bar(duration: float) -> tuple[Any, Callable[[float, float], None]]:
+    """The progress bar on stderr of a run without ``--json`` (whose JSON is all it prints:
+    no bar, and rich.progress is not imported), and the callback that moves it: a drive's
+    ``simulate`` and a machine's.
+
+    Parameters
+    ----------
+    duration : float
+        The run's simulated time [s].
+
+    Returns
+    -------
+    tuple
+        The ``rich`` progress bar (stop it when the run ends) and ``advance(t, t_end)``.
+    """
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    bar = Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.fields[t]}"),
+                   TimeRemainingColumn(), console=err_console, transient=True)
+    task = bar.add_task("run", total=duration, t="")
+
+    def advance(t: float, t_end: float) -> None:
+        if not bar.live.is_started:  # only long runs (chunked) report progress
+            bar.start()
+        bar.update(task, completed=t, t=f"{t:.4g} / {t_end:.4g} s")
+
+    return bar, advance

@@ -7,7 +7,7 @@ from typing import Any
 
 import typer
 
-from ._common import console, err_console, interrupted, print_json
+from ._common import console, err_console, interrupted, print_json, progress_bar
 
 #: the contour kinds (feeddrive.machine.CONTOURS; the machine package loads numba)
 CONTOURS = ("circle", "line", "corner", "csv", "together")
@@ -86,15 +86,21 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
                              f"solver steps, more than --max-steps = {options.max_steps:.3g}; "
                              f"expected ≤ {budget.longest_duration:g} [s]")
     check_output_memory(t_end, options.output_interval)
+    bar, advance = (None, None) if as_json else progress_bar(t_end)
     try:
-        result = simulate_machine(machine, path, duration, options=options)
+        result = simulate_machine(machine, path, duration, options=options, progress=advance)
     except SimulationError as err:
         err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
     except SimulationInterrupted as stop:
+        if bar is not None:
+            bar.stop()
         err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
                           soft_wrap=True)
         raise interrupted() from None
+    finally:
+        if bar is not None:
+            bar.stop()
     summary = machine_summary(result, machine, path)
     if output:
         summary["output"] = str(result.save(output))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import typer
@@ -19,6 +18,7 @@ from ._common import (
     interrupted,
     outputs,
     print_json,
+    progress_bar,
     resolve_parameters,
     user_errors,
 )
@@ -212,7 +212,7 @@ def simulate_command(
         k_warning = observer_gain_warning(system, steady.get(profile, v_t), v_n)
         if k_warning:
             _units.warn(k_warning)
-    bar, advance = (None, None) if as_json else _progress_bar(duration)
+    bar, advance = (None, None) if as_json else progress_bar(duration)
     try:
         result = simulate(system, prof, duration, options=options,
                           output=output if streamed else None, progress=advance,
@@ -252,23 +252,6 @@ def simulate_command(
                        position, duration, params.name, output)
     if summary.get("verdict") == "unstable":
         raise typer.Exit(code=EXIT_UNSTABLE)
-
-
-def _progress_bar(duration: float) -> tuple[Any, Callable[[float, float], None]]:
-    """The progress bar on stderr of a run without ``--json`` (whose JSON is all it prints:
-    no bar, and rich.progress is not imported), and the callback that moves it."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
-    bar = Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.fields[t]}"),
-                   TimeRemainingColumn(), console=err_console, transient=True)
-    task = bar.add_task("run", total=duration, t="")
-
-    def advance(t: float, t_end: float) -> None:
-        if not bar.live.is_started:  # only long runs (chunked) report progress
-            bar.start()
-        bar.update(task, completed=t, t=f"{t:.4g} / {t_end:.4g} s")
-
-    return bar, advance
 
 
 def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,
