@@ -408,13 +408,13 @@ def format_integration_error(search: dict[str, Any]) -> str:
     Returns
     -------
     str
-        E.g. ``" [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.7–61× the
+        E.g. ``" [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–600× the
         true error)]"``; empty without an estimate.
 
     Examples
     --------
     >>> format_integration_error({"speed_error_mm_s": 2.4e-5})
-    ' [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.7–61× the true error)]'
+    ' [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–600× the true error)]'
     >>> format_integration_error({"critical_speed_mm_s": 1.56})
     ''
     """

@@ -193,7 +193,6 @@ SHAPES: dict[str, tuple[str, ...]] = {
     **{name: (DYNAMIC,) for name in ("stops", "memory", "t_buf", STATS_OUT, "wr", "wi")},
     "y_buf": (DYNAMIC, "FD_N_STATE"), "aux_buf": (DYNAMIC, "FD_N_AUX"),
     "switch_rows": (DYNAMIC, "FD_N_STATE"), "W": (DYNAMIC, "FD_N_STATE"),
-    "Phi_k": (DYNAMIC, "FD_N_STATE"),  # the global-error estimate's propagators
     "A": (DYNAMIC, DYNAMIC), "row": ("FD_N_STATE",),
 }
 

@@ -50,15 +50,11 @@ import numpy as np
 
 from . import steps
 from .events import first_crossing as switch_crossing
-from .global_error import CHECK_MIN as GE_CHECK_MIN
-from .global_error import CHECK_STEPS as GE_CHECK
-from .global_error import MOVED as GE_MOVED
-from .global_error import POWERS as GE_POWERS
-from .global_error import SPAN as GE_SPAN
+from .global_error import INTERVAL as GE_INTERVAL
+from .global_error import REFRESH_STEPS as GE_REFRESH
 from .global_error import advance as ge_advance
-from .global_error import copy as ge_copy
+from .global_error import exponential as ge_exponential
 from .global_error import keep_local as ge_keep
-from .global_error import propagators as ge_propagators
 from .modes import H_LAMBDA as MODAL_H_LAMBDA
 from .modes import REFRESH as MODAL_REFRESH
 from .modes import ZETA_LIGHT as MODAL_ZETA_LIGHT
@@ -303,19 +299,12 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         ge = memory.shape[0] == ge_at + 3 * n + 2
         ng = n if ge else 0
         ge_J = np.zeros((ng, ng))
-        ge_J_formed = np.zeros((ng, ng))  # the Jacobian the propagators were formed from
         ge_Phi = np.zeros((ng, ng))
-        ge_Phi_k = np.zeros((GE_POWERS * ng, ng))
-        ge_K = 0
-        ge_h = 0.0  # the step the propagators were formed at
-        ge_h_seen = 0.0  # the step the Jacobian was last looked at
-        ge_eig = -1  # the eigen-analysis count then (MODE_MODAL: a new one, a new Jacobian)
         ge_A = np.zeros((ng, ng))
         ge_B = np.zeros((ng, ng))
         ge_w = np.zeros(ng)
         ge_d = np.zeros(ng)
-        ge_since = GE_CHECK  # accepted steps since the Jacobian was looked at (never yet)
-        ge_every = GE_CHECK_MIN  # and between two looks (halved when it had moved, else doubled)
+        ge_since = GE_REFRESH  # accepted steps since the propagator was formed (none yet)
         ge_aux = np.empty(N_AUX)
     steps = 0
     rejected = 0
@@ -747,32 +736,18 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if not last or h_new < h:
                     h = min(h_new, h_max)
             if DENSE and ge:  # the embedded global-error estimate carried over the step
-                if (ge_since >= ge_every or n_eig != ge_eig or h_done > 2.0 * ge_h_seen
-                        or 2.0 * h_done < ge_h_seen):
+                if ge_since >= GE_REFRESH:
                     if used_rodas:  # the step's own Jacobian
-                        ge_copy(J, ge_J)
-                    elif n_eig != ge_eig and have_ref:  # the modal method's newest one
-                        ge_copy(J_ref, ge_J)
+                        ge_exponential(J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
                     else:
                         calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, ge_J, ft, yp, fp,
                                                 ge_aux, all_live, S, colour)
                         n_rhs += calls
                         n_jac += 1
-                    if modal_jacobian_moved(ge_J, ge_J_formed, GE_MOVED):
-                        ge_every = max(GE_CHECK_MIN, ge_every // 2)  # looked too seldom
-                    else:
-                        ge_every = min(GE_CHECK, 2 * ge_every)
-                    if (h_done > GE_SPAN * ge_h
-                            or modal_jacobian_moved(ge_J, ge_J_formed, GE_MOVED)):
-                        ge_K = ge_propagators(ge_J, h_done, ge_Phi_k, ge_Phi, ge_A, ge_B,
-                                              atol, memory, ge_at)
-                        ge_copy(ge_J, ge_J_formed)
-                        ge_h = h_done
+                        ge_exponential(ge_J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
                     ge_since = 0
-                    ge_eig = n_eig
-                    ge_h_seen = h_done
                 ge_since += 1
-                ge_advance(t_new, ge_Phi_k, ge_K, memory, ge_at, ge_w, ge_d)
+                ge_advance(t, t_new, ge_Phi, memory, ge_at, GE_INTERVAL, ge_w, ge_d)
             for i in range(n):
                 y[i] = y_new[i]
                 f0[i] = f_new[i]

@@ -287,11 +287,9 @@ def template_sources() -> list[str]:
     return [f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})",
             "from feeddrive.solvers.schedule import due, next_instant",
             "from feeddrive.solvers.events import first_crossing as switch_crossing",
-            "from feeddrive.solvers.global_error import POWERS as GE_POWERS, "
-            "CHECK_STEPS as GE_CHECK, CHECK_MIN as GE_CHECK_MIN, MOVED as GE_MOVED, "
-            "SPAN as GE_SPAN, copy as ge_copy, "
-            "advance as ge_advance, "
-            "propagators as ge_propagators, keep_local as ge_keep",
+            "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
+            "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, "
+            "exponential as ge_exponential, keep_local as ge_keep",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
             "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
             "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH",
