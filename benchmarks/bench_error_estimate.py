@@ -9,7 +9,8 @@ The trials of ``reproduce``'s critical-speed searches from rest (the study's set
 :class:`feeddrive.reproduce.studies.StudySettings`): the CDFS at mid-screw (Table 3's row) and
 the DDFS at mid-screw with the hollow motor at the paper's simulated speed (Fig. 8's search),
 each searched with and without ``error_estimate`` in the same process, alternating, the
-compiled drivers loaded first.  Records per search the CPU seconds of each (the smallest of
+compiled drivers loaded first.  Records the machine's load average before and after, and per
+search the CPU seconds of each (the smallest of
 the repeats), their ratio, the critical speeds (which must agree: the runs are bit-identical)
 and the speed error the estimate states for each.
 
@@ -56,6 +57,7 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
+    load_before = list(os.getloadavg())
     params = fd.preset("wang2021")
     for estimate in (False, True):  # compile / load both paths before timing
         Simulation(DriveSystem(params, "ddfs", MID), ConstantSpeed(1e-3, 16e-3),
@@ -85,11 +87,14 @@ def main() -> None:
         rows.append(row)
         print(f"{drive} vn={1e3 * nut:g} mm/s: {row['trials']} trials, CPU {off:.2f} s → "
               f"{on:.2f} s with the estimate (×{on / off:.3f}); critical "
-              f"{row['critical_speed_mm_s']} mm/s, speed error ≤ "
+              f"{row['critical_speed_mm_s']} mm/s, speed error estimate "
               f"{row['speed_error_mm_s']} mm/s; same verdicts: {same}", flush=True)
     total_off = sum(r["cpu_s_without"] for r in rows)
     total_on = sum(r["cpu_s_with"] for r in rows)
-    out = {"machine": {"nproc": os.cpu_count(), "python": sys.version.split()[0]},
+    out = {"machine": {"nproc": os.cpu_count(), "python": sys.version.split()[0],
+                       "load_average_before": load_before,
+                       "load_average_after": list(os.getloadavg())},
+           "recorded": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
            "target_cpu_ratio": 1.10, "repeats": args.repeats, "searches": rows,
            "cpu_ratio_total": total_on / total_off}
     print(f"total CPU ratio ×{total_on / total_off:.3f} (target ≤ 1.10)")

@@ -13,6 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from feeddrive.cli import app
+from feeddrive.solvers.global_error import MEASURED_RATIO
 
 runner = CliRunner()
 
@@ -290,7 +291,11 @@ def test_creep_text_names_the_bands_and_the_rule() -> None:
                               "--high", "1.60"])
     assert res.exit_code == 0, res.output
     assert "creeping bands" in res.output and "Verdict rule:" in res.output
-    assert "[integration error ≤ " in res.output  # the embedded estimate (issue 35 item 3)
+    # the embedded estimate (issue 35 item 3), said to be one, with its measured worth
+    assert "[integration error estimated " in res.output
+    low, high = MEASURED_RATIO
+    assert f"(embedded estimate: {low:.2g}–{high:.3g}× the true error)]" in res.output
+    assert "integration error ≤" not in res.output
 
 
 def test_creep_rejects_a_maximum_below_the_first_trial() -> None:

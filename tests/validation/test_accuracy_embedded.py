@@ -6,15 +6,30 @@ Checked against truths feeddrive did not make: the frictionless step responses' 
 test_accuracy_convergence.py) and the smooth LuGre runs' scipy Radau references
 (``reference/make_accuracy_reference.py``, as in test_accuracy_friction.py).
 
-What it reaches (measured 2026-12-05, table speed, estimate over true error): on the
-frictionless steps at the defaults 0.12–0.28 (``modal``, ``dopri5-dense``) and 0.37–2.7
-(``rodas4``), at ``accuracy`` 0.01 0.5–13; on the smooth LuGre runs at the defaults 6.3 (CDFS
-2 mm/s) and 186 (DDFS 0.5 mm/s, hollow motor 16 mm/s) with ``modal``, 9–40 with ``rodas4``.
-Not the factor 3 of the shadow estimate (test_error_estimate.py): it estimates the error of
-each step's *embedded* lower-order solution carried along (an overestimate where the steps
-resolve the solution well), at the step ends only and on a 5-ms grid (the underestimates of
-the frictionless steps: the dense output's interpolation error between the steps is not in
-it, and the grid shifts an oscillation's phase; the two causes were not separated).
+What it reaches (measured 2026-12-05, table speed, estimate over true error; every case in
+``test_the_ratio_stated_beside_the_number_is_the_measured_one``): on the frictionless steps
+0.16–0.20 at the defaults (``modal``, ``dopri5-dense``, ``auto``; ``rodas4`` 0.64–0.81),
+0.55–0.71 at ``accuracy`` 0.01 (``rodas4`` 4–5); on the smooth LuGre runs with ``modal`` at
+the defaults 6.3 (CDFS 2 mm/s) and 186 (DDFS 0.5/16 mm/s), 595 with ``dopri5-dense``, 9–70
+with ``rodas4``.  Not the factor 3 of the shadow estimate (test_error_estimate.py).  The causes,
+separated (benchmarks/embedded_estimate_causes.py, benchmarks/README.md; docs/model.md):
+
+1. the 5-ms grid: the CDFS table mode (1276 rad/s) turns 6.4 rad in an interval, and the local
+   errors summed over it cancel — carried step by step the same local errors give 1.6× (CDFS)
+   and 1.9× (DDFS) the true error, on the grid 0.17× and 0.16× (the frictionless
+   underestimate);
+2. the Jacobian taken at rest and kept 500 steps through the start: on the LuGre runs alone
+   the difference between 6.6× and 0.73× (CDFS), 188× and 3.5× (DDFS) (the LuGre
+   overestimate);
+3. the embedded lower-order solution's local error carried instead of the propagated
+   solution's: 1.6–1.9× at the defaults, 5× at ``accuracy`` 0.01 (RODAS4's 3rd-order: up to
+   60×); with the propagated solution's true local errors the carried estimate is 0.98–1.01×;
+4. the dense output's interpolation error between the steps: 12–14 % of the true error at the
+   1-ms outputs — not a cause that matters here.
+
+Curing 1 and 2 (commit 2b26ba4, reverted in the next) gave 0.72–60× (``modal`` at the defaults
+0.73–3.5×) at ×1.26–2.63 the searches' CPU, against the 10 % allowed; 3 needs more evaluations
+of the right-hand side.  So the strict xfail stays.
 """
 
 from __future__ import annotations
@@ -74,6 +89,33 @@ def step_ratio(method: str, drive: str, accuracy: float = 1.0) -> float:
     return float(estimate / true)
 
 
+def lugre_ratio(name: str, method: str = "modal", accuracy: float = 1.0) -> float:
+    """Embedded table-speed estimate over the distance to the Radau reference, smooth LuGre
+    run ``name`` (``reference/make_accuracy_reference.py``)."""
+    ref = reference(name)
+    system = fd.DriveSystem(fd.preset("wang2021"), str(ref["drive"]), 0.4)
+    profile = fd.ConstantSpeed(float(ref["table_speed_command"]),
+                               float(ref["nut_speed_command"]))
+    r = embedded(system, profile, float(ref["time"][-1]),
+                 fd.SolverOptions(method=method, accuracy=accuracy))
+    np.testing.assert_allclose(r.time, ref["time"], rtol=0, atol=1e-12)
+    true = float(np.max(np.abs(r["table_speed"] - ref["table_speed"])))
+    estimate = r.solver_stats["embedded_error_estimate"]["signals"]["table_speed"]["absolute"]
+    return float(estimate / true)
+
+
+@pytest.mark.parametrize("accuracy", [1.0, 0.1, 0.01])
+@pytest.mark.parametrize("method", ["modal", "dopri5-dense", "rodas4", "auto"])
+def test_the_ratio_stated_beside_the_number_is_the_measured_one(method: str,
+                                                               accuracy: float) -> None:
+    # what format_integration_error writes beside a critical speed (MEASURED_RATIO) covers
+    # every case measured here, so the label says what the number is worth
+    low, high = global_error.MEASURED_RATIO
+    ratios = [step_ratio(method, drive, accuracy) for drive in ("cdfs", "ddfs")]
+    ratios += [lugre_ratio(name, method, accuracy) for name in ("cdfs_2p0", "ddfs_0p5_vn16")]
+    assert all(low <= r <= high for r in ratios), ratios
+
+
 @pytest.mark.parametrize(("drive", "speed", "nut"), [("cdfs", 2e-3, 0.0),
                                                       ("ddfs", 0.5e-3, 16e-3)])
 def test_a_run_is_bit_identical_with_the_estimate(drive: str, speed: float,
@@ -128,12 +170,13 @@ def test_advance_sums_within_an_interval_and_carries_at_its_end() -> None:
 @pytest.mark.parametrize("drive", ["cdfs", "ddfs"])
 def test_the_estimate_is_within_a_factor_10_of_the_exact_step_response(method: str,
                                                                        drive: str) -> None:
-    # measured: modal 0.17 (CDFS), 0.20 (DDFS); rodas4 0.81, 0.64
+    # measured 2026-12-05: modal 0.16 (CDFS), 0.20 (DDFS); rodas4 0.81, 0.64
     assert 0.1 <= step_ratio(method, drive) <= 10.0
 
 
 @pytest.mark.xfail(strict=True, reason="the embedded estimate misses the factor 3 of the "
-                   "shadow estimate: 0.17 of the true error here (see the module)")
+                   "shadow estimate: 0.16 of the true error here, the 5-ms grid's phase loss "
+                   "(see the module)")
 def test_the_estimate_is_within_a_factor_3_like_the_shadow() -> None:
     assert 1 / 3 <= step_ratio("modal", "cdfs") <= 3
 
@@ -141,15 +184,7 @@ def test_the_estimate_is_within_a_factor_3_like_the_shadow() -> None:
 @pytest.mark.parametrize("name", ["cdfs_2p0", "ddfs_0p5_vn16"])
 def test_with_friction_on_it_is_above_the_true_error(name: str) -> None:
     # measured with modal at the defaults: 6.3× (CDFS), 186× (DDFS) the Radau distance
-    ref = reference(name)
-    system = fd.DriveSystem(fd.preset("wang2021"), str(ref["drive"]), 0.4)
-    profile = fd.ConstantSpeed(float(ref["table_speed_command"]),
-                               float(ref["nut_speed_command"]))
-    r = embedded(system, profile, float(ref["time"][-1]))
-    np.testing.assert_allclose(r.time, ref["time"], rtol=0, atol=1e-12)
-    true = float(np.max(np.abs(r["table_speed"] - ref["table_speed"])))
-    estimate = r.solver_stats["embedded_error_estimate"]["signals"]["table_speed"]["absolute"]
-    assert true < estimate <= 1e3 * true
+    assert 1.0 < lugre_ratio(name) <= 1e3
 
 
 def test_a_creep_trial_carries_it_and_the_search_states_it() -> None:
@@ -169,8 +204,12 @@ def test_a_creep_trial_carries_it_and_the_search_states_it() -> None:
     assert search.speed_error == max(3e-8, carried.speed_error)
     stored = search.to_dict()
     assert stored["speed_error_mm_s"] == pytest.approx(1e3 * search.speed_error)
-    assert format_integration_error(stored) == (
-        f" [integration error ≤ {stored['speed_error_mm_s']:.1e} mm/s]")
+    # what the number is: an estimate (never "≤", it is no bound) with its measured ratio
+    low, high = global_error.MEASURED_RATIO
+    label = format_integration_error(stored)
+    assert label == (f" [integration error estimated {stored['speed_error_mm_s']:.1e} mm/s "
+                     f"(embedded estimate: {low:.2g}–{high:.3g}× the true error)]")
+    assert "≤" not in label and "<" not in label
     assert format_integration_error({"critical_speed_mm_s": 1.56}) == ""
     # a search whose deciding trial carried none states none
     bare = CriticalSpeed(**{**search.__dict__, "trials": (plain, below)})

@@ -76,8 +76,8 @@ class CreepTrial:
         When the outcome was first decided [s].
     speed_error : float, optional
         The run's largest table-speed integration error, the embedded estimate
-        (:mod:`feeddrive.solvers.global_error`; an upper estimate) when the search carried it
-        [m/s].
+        (:mod:`feeddrive.solvers.global_error`; an estimate, not a bound: its measured ratio
+        to the true error is ``MEASURED_RATIO`` there) when the search carried it [m/s].
     """
 
     speed: float
@@ -302,10 +302,10 @@ class CriticalSpeed:
     @property
     def speed_error(self) -> float | None:
         """The integration error the critical speed's runs carried: the larger embedded
-        estimate of the table speed's error (:mod:`feeddrive.solvers.global_error`; an upper
-        estimate) of the two trials that decide it — the lowest smooth speed above the highest
-        creeping band and that band's top — or of the top tested speed out of range; None
-        when the search carried no estimate [m/s]."""
+        estimate of the table speed's error (:mod:`feeddrive.solvers.global_error`; an
+        estimate, not a bound) of the two trials that decide it — the lowest smooth speed
+        above the highest creeping band and that band's top — or of the top tested speed out
+        of range; None when the search carried no estimate [m/s]."""
         creeping = [t for t in self.trials if t.kind in NON_SMOOTH]
         top = creeping[-1] if creeping else None
         above = [t for t in self.trials if top is None or t.speed > top.speed]
@@ -394,9 +394,11 @@ def format_integration_error(search: dict[str, Any]) -> str:
     """What a search's deciding runs carried as integration error (as
     :meth:`CriticalSpeed.to_dict` stores it), written after the speed by the report and
     ``feeddrive creep``: the embedded estimate of their table-speed error
-    (``speed_error_mm_s``, :attr:`CriticalSpeed.speed_error`; an estimate of the error of each
-    step's embedded lower-order solution carried along the run,
-    :mod:`feeddrive.solvers.global_error`), or nothing for a search without it.
+    (``speed_error_mm_s``, :attr:`CriticalSpeed.speed_error`,
+    :mod:`feeddrive.solvers.global_error`) with what it is worth — an estimate, not a bound:
+    the measured range of its ratio to the true error
+    (:data:`feeddrive.solvers.global_error.MEASURED_RATIO`) — or nothing for a search without
+    it.
 
     Parameters
     ----------
@@ -406,10 +408,24 @@ def format_integration_error(search: dict[str, Any]) -> str:
     Returns
     -------
     str
-        E.g. ``" [integration error ≤ 2.4e-05 mm/s]"``; empty without an estimate.
+        E.g. ``" [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–600× the
+        true error)]"``; empty without an estimate.
+
+    Examples
+    --------
+    >>> format_integration_error({"speed_error_mm_s": 2.4e-5})
+    ' [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–600× the true error)]'
+    >>> format_integration_error({"critical_speed_mm_s": 1.56})
+    ''
     """
+    from ..solvers.global_error import MEASURED_RATIO
+
     error = search.get("speed_error_mm_s")
-    return "" if error is None else f" [integration error ≤ {error:.1e} mm/s]"
+    if error is None:
+        return ""
+    low, high = MEASURED_RATIO
+    return (f" [integration error estimated {error:.1e} mm/s (embedded estimate: "
+            f"{low:.2g}–{high:.3g}× the true error)]")
 
 
 def format_bands(search: dict[str, Any]) -> str:

@@ -49,7 +49,8 @@ def creep_command(
     oscillation) or answers 'undecided'.  With --method both, the answers from rest and from a
     running table are shown.  The protocol (speed grid, steps) is the one `reproduce` uses,
     so both give one number.  The search from rest states the table-speed integration error
-    its deciding trials carried (an embedded estimate, an order of magnitude: docs/model.md)."""
+    its deciding trials carried: an embedded estimate, not a bound, written with the measured
+    range of its ratio to the true error (docs/model.md)."""
     from ..analysis.critical import (
         critical_speed_from_rest,
         critical_speed_stepdown,

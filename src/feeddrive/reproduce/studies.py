@@ -142,8 +142,9 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
         The search's result in engineering units (``CriticalSpeed.to_dict``: the speed
         [mm/s], or the bound of an out-of-range search, its kind, bands and trials, each
         trial's and the critical speed's table-speed integration error ``speed_error_mm_s``:
-        the embedded estimate carried along every trial, :mod:`feeddrive.solvers.global_error`,
-        ≈ 3–5 % more CPU, benchmarks/results/bench_error_estimate.json).
+        the embedded estimate carried along every trial — an estimate, not a bound,
+        :data:`feeddrive.solvers.global_error.MEASURED_RATIO` — 1–7 % more CPU,
+        benchmarks/results/bench_error_estimate.json).
     """
     res = critical_speed_from_rest(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,

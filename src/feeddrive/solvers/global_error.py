@@ -10,8 +10,8 @@ formula of the Runge–Kutta family).  Here:
 * δ_n is the step's own embedded error estimate — DOPRI5's h·Σ e_j k_j, RODAS4's u_6: the
   local error of the *lower-order* solution of each pair.  The run propagates the higher-order
   one (local extrapolation), whose local error is smaller, so the sum estimates the global
-  error of the embedded solution: an upper estimate of the run's error, by how much depending
-  on how well the steps resolve the solution (measured against exact and independent references
+  error of the embedded solution, not of the run: an estimate, not a bound, 0.15–600× the
+  run's true error (:data:`MEASURED_RATIO`; measured against exact and independent references
   in tests/validation/test_accuracy_embedded.py; stated in docs/model.md).
 * The propagation runs on a fixed grid of :data:`INTERVAL`: the local errors of the steps
   within one interval are summed, and at each grid instant E ← Φ (E + Σδ) with Φ = exp(H J),
@@ -22,8 +22,17 @@ formula of the Runge–Kutta family).  Here:
   linearisation is: a Jacobian that has gone stale (a start-up ramp, a friction site's
   stiction) cannot make the estimate blow up, as the method's own propagator R(hJ) can when
   h·λ(J) leaves its stability region.  Summing within an interval shifts an oscillatory
-  error's phase by at most H|λ| (not its amplitude) and leaves out the decay of a component
-  that decays within H (an error that matters least).
+  error's phase by up to H|λ| (not its amplitude) and leaves out the decay of a component
+  that decays within H.
+
+Why it misses the true error (measured 2026-12-05; benchmarks/embedded_estimate_causes.py,
+tests/validation/test_accuracy_embedded.py, docs/model.md): (1) the grid — H|λ| is 6.4 rad for
+the CDFS table mode, the local errors summed in an interval cancel, and the estimate is
+0.16–0.20× the true error on the frictionless steps (carried step by step: 1.6–1.9×); (2) the
+Jacobian taken at rest and kept through the start: 6.3–595× on the smooth LuGre runs (looked
+at adaptively: 0.73–3.5×); (3) the lower-order solution's local error: 1.6–5× (RODAS4 up to
+60×).  Curing (1) and (2) needs at least one n × n product with a vector per step, ×1.26–2.63
+the creep searches' CPU (commit 2b26ba4, reverted): over the 10 % allowed, so not done.
 
 What the driver keeps, in its memory between calls
 (:func:`feeddrive.solvers.switching.new_memory`): E, the largest |E + Σδ| so far and Σδ, per
@@ -54,12 +63,21 @@ import numpy as np
 from .._jit import kernel
 
 #: the propagation grid [s]: the local errors within one interval are summed and carried on
-#: by exp(H J) at its end (1 ms: the table modes of the shipped drives turn by ≤ 1.3 rad in it)
+#: by exp(H J) at its end (the CDFS table mode, 1276 rad/s, turns 6.4 rad in it: cause (1) of
+#: the module's underestimate; at 1 ms it would turn 1.3 rad, at five times the matrix-vector
+#: products)
 INTERVAL = 5e-3
 #: accepted steps between two propagators exp(H J) (a Jacobian costs a call of the
 #: right-hand side per column group, 8 for a 15-state drive, the exponential ≈ 15 matrix
 #: products: together ≈ 3 % of 100 DOPRI5 steps)
 REFRESH_STEPS = 500
+#: what the estimate is worth: the measured range of its ratio to the true table-speed error
+#: over the cases of tests/validation/test_accuracy_embedded.py (which checks each lies in it:
+#: frictionless CDFS/DDFS 1-mm/s steps against the matrix exponential, smooth LuGre CDFS 2 mm/s
+#: and DDFS 0.5/16 mm/s against scipy's Radau; methods modal, dopri5-dense, rodas4, auto at
+#: accuracy 1, 0.1, 0.01; measured 2026-12-05: 0.155–595), written beside the number wherever
+#: it is shown (``feeddrive.analysis.critical.format_integration_error``)
+MEASURED_RATIO = (0.15, 600.0)
 #: the Taylor degree of the exponential after scaling ‖A/2^s‖₁ ≤ 1/2 (remainder ≤ 2e-7
 #: relative: an estimate needs no more)
 TAYLOR_DEGREE = 6
