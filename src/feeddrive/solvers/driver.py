@@ -361,7 +361,6 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     else:
         kb = start  # index of the current sample instant
         h = h_init
-        n_stops = stops.size
         if memory[0] == 0.0:  # a new run
             if due(0, schedule, tick) > 0:
                 sample_update(0.0, y, held, P, T, tick)
@@ -415,46 +414,28 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             t = kb * base
             t_ev = (kb + 1) * base
             t_bp = t_ev  # the breakpoint; t_ev moves to a located reversal before it
-        else:
+        elif COMM:  # the schedule's next instant on the grid from t0 (as next_event's)
             t_ev = t_end
             is_sample = False
             kb_next = next_instant(kb, schedule)  # the schedule's next instant (-1: none)
             if kb_next >= 0:
-                t_s = t0 + kb_next * base if COMM else kb_next * base
+                t_s = t0 + kb_next * base
                 if t_s <= t_end + 1e-9 * base:  # an instant this close to the end is the end
                     is_sample = True
                     if t_s < t_end - 1e-9 * base:
                         t_ev = t_s
-        if DENSE:
-            while i_stop < n_stops and stops[i_stop] <= t + 1e-12 * max(1.0, t):
-                i_stop += 1
-            is_stop = False
-            if i_stop < n_stops and stops[i_stop] < t_ev - 1e-12 * max(1.0, t_ev):
-                t_ev = stops[i_stop]
-                is_sample = False
-                is_stop = True
-            if adaptive == 0 and i_out < n_out:
-                t_grid = ((o0 + i_out) * out_every) * base
-                if t_grid < t_ev - 1e-12 * max(1.0, t_ev):
-                    t_ev = t_grid
-                    is_sample = False
-                    is_stop = False
+        else:
+            t_ev, is_sample, is_stop, kb_next, i_stop = next_event(
+                t, t_end, kb, schedule, base, stops, i_stop, adaptive, i_out, n_out, o0,
+                out_every)
         # ---- steps up to t_ev
         while (t < t_ev - 1e-15 * t_ev if LAND else t < t_ev) and status == STATUS_OK:
             if stiff and not jac_ok:
-                calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J,
-                                        ft, yp, fp, aux, live if frozen_known else all_live,
-                                        S, colour)
-                if calls < 0:  # a state taken as frozen moved: difference every column
-                    n_rhs -= calls
-                    calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol,
-                                            J, ft, yp, fp, aux, all_live, S, colour)
-                    frozen_known = False
+                calls, frozen_known = jacobian_fresh(t, y, f0, held, P, T, atol, J, ft, yp, fp,
+                                                     aux, live, all_live, frozen_known, S,
+                                                     colour)
                 n_rhs += calls
                 n_jac += 1
-                if not frozen_known:
-                    _r4_frozen_states(J, f0, live)
-                    frozen_known = True
                 jac_ok = True
                 jac_age = 0
                 if switching and not modal:
@@ -470,17 +451,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if modal and moved:
                     quiet = False
                     since_eig = 0
-                    h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
-                    # MODE_MODAL: the spectral radius of the switch back to DOPRI5 is that
-                    # of the reference Jacobian, as the step cap is (both redone when a row
-                    # of J moves by MODAL_REFRESH)
-                    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                    h_osc, rho = modal_reference(J, J_ref, live, atol, v, w)
                     n_rho += 1
                     n_eig += 1
                     have_ref = True
-                    for i in range(n):
-                        for j in range(n):
-                            J_ref[i, j] = J[i, j]
             last = False
             if LAND:  # cut only when the step reaches the breakpoint (v1)
                 if h >= t_ev - t:
@@ -568,13 +542,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 # crossing made a step end, as in the dense driver; the outputs stay at the
                 # breakpoints.  The stages are free once the fifth coefficient is formed:
                 # k2, k3, k4 hold the other three
-                _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
-                for i in range(n):
-                    ydiff = y_new[i] - y[i]
-                    bspl = h_try * f0[i] - ydiff
-                    k2[i] = ydiff
-                    k3[i] = bspl
-                    k4[i] = ydiff - h_try * f_new[i] - bspl
+                dense_coefficients(False, h_try, y, y_new, f0, k2, k3, k4, k5, k6, f_new, e, k2,
+                                   k3, k4)
                 th_sw, k_sw = switch_crossing(switch_rows, y, y_new, k2, k3, k4, e, False)
                 if th_sw > 0.0 and th_sw * (t_new - t) > 1e-12 * max(1.0, t):
                     if steps > max_steps:
@@ -588,15 +557,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if stiff:
                     rhs(t_new, y_new, held, P, T, f_new, aux)
                     n_rhs += 1
-                    _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
-                else:
-                    for i in range(n):
-                        ydiff = y_new[i] - y[i]
-                        bspl = h_try * f0[i] - ydiff
-                        q1[i] = ydiff
-                        q2[i] = bspl
-                        q3[i] = ydiff - h_try * f_new[i] - bspl
-                    _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                dense_coefficients(stiff, h_try, y, y_new, f0, k2, k3, k4, k5, k6, f_new, e,
+                                   q1, q2, q3)
                 if switch_rows.shape[0] > 0:
                     # a switching surface crossed inside the step (a friction site's sliding
                     # speed through zero: a kink of the right-hand side): the step is thrown
@@ -620,25 +582,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     sw_next = -1
                 # outputs strictly inside the step (an output at t_new that is an event time
                 # is written after the event below)
-                while i_out < n_out:
-                    t_grid = ((o0 + i_out) * out_every) * base
-                    if t_grid > t_new or (last and t_grid >= t_new - 1e-9 * base):
-                        break
-                    th = (t_grid - t) / h_done
-                    th1 = 1.0 - th
-                    for i in range(n):
-                        if stiff:
-                            yp[i] = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * q2[i]))
-                        else:
-                            yp[i] = y[i] + th * (q1[i] + th1 * (q2[i] + th * (q3[i]
-                                                                              + th1 * e[i])))
-                    t_out[i_out] = t_grid
-                    y_out[i_out, :] = yp
-                    if want_aux:
-                        rhs(t_grid, yp, held, P, T, fp, aux)
-                        n_out_rhs += 1
-                        aux_out[i_out, :] = aux
-                    i_out += 1
+                i_out, calls = outputs_inside(t, t_new, last, stiff, y, y_new, q1, q2, q3, e,
+                                              yp, fp, held, P, T, aux, want_aux, t_out, y_out,
+                                              aux_out, i_out, n_out, o0, out_every, base)
+                n_out_rhs += calls
                 # ---- stiffness detection and switching
                 if switching:
                     if stiff:
@@ -661,46 +608,31 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                         if modal and dp_since_eig >= MODAL_RETRY:
                             # DOPRI5 too: its step on a lightly damped mode is capped as well
                             dp_since_eig = 0
-                            calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, atol, J,
-                                                    ft, yp, fp, aux, all_live, S, colour)
+                            calls, h_osc, rho = modal_refresh(t_new, y_new, f_new, held, P, T,
+                                                              atol, J, ft, yp, fp, aux, all_live,
+                                                              S, colour, J_ref, v, w)
                             n_rhs += calls
                             n_jac += 1
-                            h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
-                                                   MODAL_H_LAMBDA)
-                            rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
                             n_rho += 1
                             n_eig += 1
                             have_ref = True
-                            for i in range(n):
-                                for j in range(n):
-                                    J_ref[i, j] = J[i, j]
-                        num = 0.0
-                        den = 0.0
-                        for i in range(n):
-                            num += (f_new[i] - k6[i]) ** 2
-                            den += (y_new[i] - yt[i]) ** 2
                         if steps < refuse_until:
                             pass  # MODE_MODAL: a switch was refused recently
-                        elif den > 0.0 and h_done * math.sqrt(num / den) > STIFF_HLAMBDA:
+                        elif stiffness_estimate(h_done, f_new, k6, y_new, yt) > STIFF_HLAMBDA:
                             nonstiff_count = 0
                             stiff_count += 1
                             go = stiff_count >= STIFF_STEPS
                             if go and modal:
                                 # would RODAS4, capped on the lightly damped modes, step further?
-                                calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, atol,
-                                                        J, ft, yp, fp, aux,
-                                                        all_live, S, colour)
+                                calls, h_osc, rho = modal_refresh(t_new, y_new, f_new, held, P,
+                                                                  T, atol, J, ft, yp, fp, aux,
+                                                                  all_live, S, colour, J_ref,
+                                                                  v, w)
                                 n_rhs += calls
                                 n_jac += 1
-                                h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
-                                                       MODAL_H_LAMBDA)
-                                rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
                                 n_rho += 1
                                 n_eig += 1
                                 have_ref = True
-                                for i in range(n):
-                                    for j in range(n):
-                                        J_ref[i, j] = J[i, j]
                                 if h_osc < MODAL_SWITCH_GAIN * h_done:
                                     go = False
                                     stiff_count = 0
@@ -715,26 +647,17 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                             if nonstiff_count >= 6:
                                 stiff_count = 0
             # ---- step-size control for the next step
-            if adaptive == 1:
-                if used_rodas:
-                    fac = 0.2 if err == 0.0 else max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
-                    if not r4_first and err > 0.0:
-                        facpred = (r4_h_old / h_try) * (err * err / r4_err_old) ** 0.25 / 0.9
-                        fac = max(fac, max(1.0 / 6.0, min(5.0, facpred)))
-                    h_new = h_try / fac
-                    if r4_rejected:
-                        h_new = min(h_new, h_try)
-                    r4_first = False
-                    r4_h_old = h_try
-                    r4_err_old = max(1e-2, err)
-                    r4_rejected = False
-                else:  # DOPRI5: the explicit steps' controller (feeddrive.solvers.steps)
-                    fac = _pi_factor(err, err_old, alpha, beta)
-                    if LAND or err != 0.0:  # LAND: v1 took every error, also 0
-                        err_old = max(err, 1e-4)
-                    h_new = h_try * fac
+            if adaptive == 1 and COMM:  # the FMU's: DOPRI5's PI controller, as step_size's
+                fac = _pi_factor(err, err_old, alpha, beta)
+                if err != 0.0:
+                    err_old = max(err, 1e-4)
+                h_new = h_try * fac
                 if not last or h_new < h:
                     h = min(h_new, h_max)
+            elif adaptive == 1:  # LAND: v1 took every error, also 0, into DOPRI5's memory
+                h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected = step_size(
+                    used_rodas, err, h_try, h, h_max, last, err_old, alpha, beta, r4_first,
+                    r4_h_old, r4_err_old, r4_rejected, LAND)
             if DENSE and ge:  # the embedded global-error estimate carried over the step
                 if ge_since >= GE_REFRESH:
                     if used_rodas:  # the step's own Jacobian
@@ -768,17 +691,17 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             if steps > max_steps:
                 status = STATUS_MAX_STEPS
                 break
-            finite = True
-            diverged = False
-            for i in range(n):
-                if not math.isfinite(y[i]):
-                    finite = False
-                elif not COMM and abs(y[i]) > bound[i]:
-                    diverged = True
-            if not finite:
+            if COMM:  # the FMU has no divergence bounds
+                check = STATUS_OK
+                for i in range(n):
+                    if not math.isfinite(y[i]):
+                        check = STATUS_NON_FINITE
+            else:
+                check = bounds_status(y, bound)
+            if check == STATUS_NON_FINITE:
                 status = STATUS_NON_FINITE
                 break
-            if diverged:  # that step end is the last output sample
+            if not COMM and check == STATUS_DIVERGED:  # that step end is the last output
                 status = STATUS_DIVERGED
                 if i_out < n_out:
                     t_out[i_out] = t
@@ -820,17 +743,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         if DENSE:
             if is_stop:
                 i_stop += 1
-            while i_out < n_out:
-                t_grid = ((o0 + i_out) * out_every) * base
-                if abs(t_grid - t) > 1e-9 * base:
-                    break
-                t_out[i_out] = t_grid
-                y_out[i_out, :] = y
-                if want_aux:
-                    rhs(t, y, held, P, T, fp, aux)
-                    n_out_rhs += 1
-                    aux_out[i_out, :] = aux
-                i_out += 1
+            i_out, calls = outputs_at(t, y, fp, held, P, T, aux, want_aux, t_out, y_out,
+                                      aux_out, i_out, n_out, o0, out_every, base)
+            n_out_rhs += calls
     # ---- the driver's state for the next call, the statistics
     if COMM:
         memory[0] = h  # MEM_H
@@ -875,6 +790,494 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats,
                 held)
     return None
+
+
+# ---------------------------------------------------------------- the driver's pieces
+# Each a kernel of its own, called by driver_template, compiled beside it in both builds
+# (numba inlines them, ``inline="always"``; the C translation calls them): the Jacobian and
+# the modal method's eigen-analysis, the stiffness test, the step-size controller, the dense
+# output and the output samples (issue 42 item 3: "a driver you can read").
+def jacobian_fresh(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray, P: np.ndarray,
+                   T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                   yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, live: np.ndarray,
+                   all_live: np.ndarray, frozen_known: bool, S: np.ndarray,
+                   colour: np.ndarray) -> tuple[int, bool]:
+    """The RODAS4 step's Jacobian at (t, y) into ``J``: the columns of the states not known
+    to be frozen differenced (:func:`feeddrive.solvers.rodas4.fd_jacobian_template`), all of
+    them when a state taken as frozen moved; the frozen states found afresh when unknown.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y, f0 : numpy.ndarray
+        State and its derivative [SI; SI/s, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    J : numpy.ndarray
+        The Jacobian, written (n, n) [1/s in SI units].
+    ft, yp, fp, aux : numpy.ndarray
+        Work space [SI].
+    live : numpy.ndarray of bool
+        The states not frozen; written when ``frozen_known`` is false.
+    all_live : numpy.ndarray of bool
+        All true.
+    frozen_known : bool
+        Whether ``live`` holds the frozen states.
+    S, colour : numpy.ndarray of int
+        Sparsity pattern and column groups.
+
+    Returns
+    -------
+    calls : int
+        Right-hand-side evaluations made.
+    frozen_known : bool
+        True: ``live`` holds the frozen states.
+    """
+    calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux,
+                            live if frozen_known else all_live, S, colour)
+    total = 0
+    if calls < 0:  # a state taken as frozen moved: difference every column
+        total -= calls
+        calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux, all_live, S,
+                                colour)
+        frozen_known = False
+    total += calls
+    if not frozen_known:
+        _r4_frozen_states(J, f0, live)
+        frozen_known = True
+    return total, frozen_known
+
+
+def modal_reference(J: np.ndarray, J_ref: np.ndarray, live: np.ndarray, atol: np.ndarray,
+                    v: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """``MODE_MODAL``'s eigen-analysis of ``J``, kept as the reference Jacobian ``J_ref``:
+    the step cap of the lightly damped modes (:func:`feeddrive.solvers.modes.step_cap`) and
+    the spectral radius of the switch back to DOPRI5 (both redone when a row of J moves by
+    ``MODAL_REFRESH``).
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        The Jacobian [1/s in SI units].
+    J_ref : numpy.ndarray
+        The reference Jacobian, written (a copy of J).
+    live : numpy.ndarray of bool
+        The states not frozen.
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    v, w : numpy.ndarray
+        Work space.
+
+    Returns
+    -------
+    h_osc : float
+        The step cap [s].
+    rho : float
+        The spectral radius estimate [1/s].
+    """
+    h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+    n = J.shape[0]
+    for i in range(n):
+        for j in range(n):
+            J_ref[i, j] = J[i, j]
+    return h_osc, rho
+
+
+def modal_refresh(t: float, y: np.ndarray, f: np.ndarray, held: np.ndarray, P: np.ndarray,
+                  T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                  yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, all_live: np.ndarray,
+                  S: np.ndarray, colour: np.ndarray, J_ref: np.ndarray, v: np.ndarray,
+                  w: np.ndarray) -> tuple[int, float, float]:
+    """The Jacobian at (t, y) with every column differenced and its :func:`modal_reference`
+    (``MODE_MODAL`` on DOPRI5 steps: the periodic analysis and the test of a switch).
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y, f : numpy.ndarray
+        State and its derivative [SI; SI/s, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    J : numpy.ndarray
+        The Jacobian, written [1/s in SI units].
+    ft, yp, fp, aux : numpy.ndarray
+        Work space [SI].
+    all_live : numpy.ndarray of bool
+        All true.
+    S, colour : numpy.ndarray of int
+        Sparsity pattern and column groups.
+    J_ref : numpy.ndarray
+        The reference Jacobian, written.
+    v, w : numpy.ndarray
+        Work space.
+
+    Returns
+    -------
+    calls : int
+        Right-hand-side evaluations made.
+    h_osc : float
+        The step cap [s].
+    rho : float
+        The spectral radius estimate [1/s].
+    """
+    calls = _r4_fd_jacobian(t, y, f, held, P, T, atol, J, ft, yp, fp, aux, all_live, S, colour)
+    h_osc, rho = modal_reference(J, J_ref, all_live, atol, v, w)
+    return calls, h_osc, rho
+
+
+def stiffness_estimate(h: float, f_new: np.ndarray, k6: np.ndarray, y_new: np.ndarray,
+                       yt: np.ndarray) -> float:
+    """h·|λ| of the DOPRI5 step just taken, ‖f(y_new) − k6‖/‖y_new − yt‖ (the last two stages
+    evaluated at nearby points; Hairer, Nørsett & Wanner, Solving ODEs I, Sect. IV.2,
+    dopri5.f); 0 where the two points coincide.
+
+    Parameters
+    ----------
+    h : float
+        The step [s].
+    f_new, k6 : numpy.ndarray
+        The derivatives at the step's end and at its sixth stage [SI/s, per state].
+    y_new, yt : numpy.ndarray
+        The states there [SI, per state].
+
+    Returns
+    -------
+    float
+        The estimate [-].
+    """
+    num = 0.0
+    den = 0.0
+    for i in range(f_new.size):
+        num += (f_new[i] - k6[i]) ** 2
+        den += (y_new[i] - yt[i]) ** 2
+    if den > 0.0:
+        return h * math.sqrt(num / den)
+    return 0.0
+
+
+def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float, last: bool,
+              err_old: float, alpha: float, beta: float, r4_first: bool, r4_h_old: float,
+              r4_err_old: float, r4_rejected: bool,
+              every_error: bool) -> tuple[float, float, bool, float, float, bool]:
+    """The step-size controller after an accepted step: Hairer's PI controller for DOPRI5
+    (:func:`feeddrive.solvers.steps.pi_factor_template`), Gustafsson's predictive controller
+    for RODAS4 (Hairer & Wanner, Solving ODEs II, Sect. IV.8, Eq. (8.21)); a last step cut
+    to an event only shrinks the next one.
+
+    Parameters
+    ----------
+    used_rodas : bool
+        The step was a RODAS4 step.
+    err : float
+        Its error norm [-].
+    h_try : float
+        Its size [s].
+    h : float
+        The step size the controller proposed before it [s].
+    h_max : float
+        Largest step [s].
+    last : bool
+        The step was cut to land on an event.
+    err_old : float
+        DOPRI5's error memory [-].
+    alpha, beta : float
+        The PI controller's exponents [-].
+    r4_first, r4_h_old, r4_err_old, r4_rejected : bool, float, float, bool
+        RODAS4's memory: no accepted step yet, the last accepted step [s] and its error [-],
+        a rejection since.
+    every_error : bool
+        DOPRI5's memory takes every error, also 0 (the breakpoint driver, v1).
+
+    Returns
+    -------
+    tuple
+        (h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected) updated.
+    """
+    if used_rodas:
+        fac = 0.2 if err == 0.0 else max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+        if not r4_first and err > 0.0:
+            facpred = (r4_h_old / h_try) * (err * err / r4_err_old) ** 0.25 / 0.9
+            fac = max(fac, max(1.0 / 6.0, min(5.0, facpred)))
+        h_new = h_try / fac
+        if r4_rejected:
+            h_new = min(h_new, h_try)
+        r4_first = False
+        r4_h_old = h_try
+        r4_err_old = max(1e-2, err)
+        r4_rejected = False
+    else:  # DOPRI5: the explicit steps' controller (feeddrive.solvers.steps)
+        fac = _pi_factor(err, err_old, alpha, beta)
+        if every_error or err != 0.0:
+            err_old = max(err, 1e-4)
+        h_new = h_try * fac
+    if not last or h_new < h:
+        h = min(h_new, h_max)
+    return h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected
+
+
+def dense_coefficients(stiff: bool, h: float, y: np.ndarray, y_new: np.ndarray,
+                       f0: np.ndarray, k2: np.ndarray, k3: np.ndarray, k4: np.ndarray,
+                       k5: np.ndarray, k6: np.ndarray, f_new: np.ndarray, e: np.ndarray,
+                       q1: np.ndarray, q2: np.ndarray, q3: np.ndarray) -> None:
+    """The continuous extension of the step just accepted: RODAS4's two vectors into q1, q2;
+    DOPRI5's (Hairer's contd5) into q1, q2, q3 and e (the stages are read before q1 … q3 are
+    written: they may be k2, k3, k4).
+
+    Parameters
+    ----------
+    stiff : bool
+        A RODAS4 step.
+    h : float
+        Its size [s].
+    y, y_new : numpy.ndarray
+        The states at its start and end [SI, per state].
+    f0, k2, k3, k4, k5, k6, f_new : numpy.ndarray
+        Its stages (DOPRI5), its increments (RODAS4).
+    e : numpy.ndarray
+        DOPRI5: the fifth coefficient, written.
+    q1, q2, q3 : numpy.ndarray
+        The coefficients, written.
+    """
+    if stiff:
+        _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
+    else:
+        _dp5_dense(h, f0, k2, k3, k4, k5, k6, f_new, e)
+        for i in range(y.size):
+            ydiff = y_new[i] - y[i]
+            bspl = h * f0[i] - ydiff
+            q1[i] = ydiff
+            q2[i] = bspl
+            q3[i] = ydiff - h * f_new[i] - bspl
+
+
+def outputs_inside(t: float, t_new: float, last: bool, stiff: bool, y: np.ndarray,
+                   y_new: np.ndarray, q1: np.ndarray, q2: np.ndarray, q3: np.ndarray,
+                   e: np.ndarray, yp: np.ndarray, fp: np.ndarray, held: np.ndarray,
+                   P: np.ndarray, T: np.ndarray, aux: np.ndarray, want_aux: bool,
+                   t_out: np.ndarray, y_out: np.ndarray, aux_out: np.ndarray, i_out: int,
+                   n_out: int, o0: int, out_every: int, base: float) -> tuple[int, int]:
+    """The output samples strictly inside the step [t, t_new] (one at t_new that is an event
+    time is written after the event), interpolated on its continuous extension
+    (:func:`dense_coefficients`), with the auxiliary signals there if wanted.
+
+    Parameters
+    ----------
+    t, t_new : float
+        The step [s].
+    last : bool
+        It ends on an event.
+    stiff : bool
+        A RODAS4 step.
+    y, y_new : numpy.ndarray
+        The states at its ends [SI, per state].
+    q1, q2, q3, e : numpy.ndarray
+        Its continuous extension.
+    yp, fp : numpy.ndarray
+        Work space.
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    aux : numpy.ndarray
+        The auxiliary signals, work space [SI].
+    want_aux : bool
+        Write the auxiliary signals.
+    t_out, y_out, aux_out : numpy.ndarray
+        The outputs [s; SI].
+    i_out, n_out : int
+        The next output's index, the number of outputs.
+    o0 : int
+        The index of the call's first output on the whole run's grid.
+    out_every : int
+        Output stride in breakpoints.
+    base : float
+        Breakpoint spacing [s].
+
+    Returns
+    -------
+    i_out : int
+        The next output's index.
+    calls : int
+        Right-hand-side evaluations made.
+    """
+    h_done = t_new - t
+    calls = 0
+    while i_out < n_out:
+        t_grid = ((o0 + i_out) * out_every) * base
+        if t_grid > t_new or (last and t_grid >= t_new - 1e-9 * base):
+            break
+        th = (t_grid - t) / h_done
+        th1 = 1.0 - th
+        for i in range(y.size):
+            if stiff:
+                yp[i] = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * q2[i]))
+            else:
+                yp[i] = y[i] + th * (q1[i] + th1 * (q2[i] + th * (q3[i] + th1 * e[i])))
+        t_out[i_out] = t_grid
+        y_out[i_out, :] = yp
+        if want_aux:
+            rhs(t_grid, yp, held, P, T, fp, aux)
+            calls += 1
+            aux_out[i_out, :] = aux
+        i_out += 1
+    return i_out, calls
+
+
+def outputs_at(t: float, y: np.ndarray, fp: np.ndarray, held: np.ndarray, P: np.ndarray,
+               T: np.ndarray, aux: np.ndarray, want_aux: bool, t_out: np.ndarray,
+               y_out: np.ndarray, aux_out: np.ndarray, i_out: int, n_out: int, o0: int,
+               out_every: int, base: float) -> tuple[int, int]:
+    """The output samples at the event time t (within 1e-9 of the breakpoint spacing).
+
+    Parameters
+    ----------
+    t : float
+        The event [s].
+    y : numpy.ndarray
+        The state there [SI, per state].
+    fp : numpy.ndarray
+        Work space.
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    aux : numpy.ndarray
+        The auxiliary signals, work space [SI].
+    want_aux : bool
+        Write the auxiliary signals.
+    t_out, y_out, aux_out : numpy.ndarray
+        The outputs [s; SI].
+    i_out, n_out : int
+        The next output's index, the number of outputs.
+    o0 : int
+        The index of the call's first output on the whole run's grid.
+    out_every : int
+        Output stride in breakpoints.
+    base : float
+        Breakpoint spacing [s].
+
+    Returns
+    -------
+    i_out : int
+        The next output's index.
+    calls : int
+        Right-hand-side evaluations made.
+    """
+    calls = 0
+    while i_out < n_out:
+        t_grid = ((o0 + i_out) * out_every) * base
+        if abs(t_grid - t) > 1e-9 * base:
+            break
+        t_out[i_out] = t_grid
+        y_out[i_out, :] = y
+        if want_aux:
+            rhs(t, y, held, P, T, fp, aux)
+            calls += 1
+            aux_out[i_out, :] = aux
+        i_out += 1
+    return i_out, calls
+
+
+def bounds_status(y: np.ndarray, bound: np.ndarray) -> int:
+    """The state's check after a step: ``STATUS_NON_FINITE`` if a component is not finite,
+    else ``STATUS_DIVERGED`` if one is beyond its divergence bound, else ``STATUS_OK``.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The state [SI, per state].
+    bound : numpy.ndarray
+        Largest |state| per state [SI, per state].
+
+    Returns
+    -------
+    int
+        The status.
+    """
+    finite = True
+    diverged = False
+    for i in range(y.size):
+        if not math.isfinite(y[i]):
+            finite = False
+        elif abs(y[i]) > bound[i]:
+            diverged = True
+    if not finite:
+        return STATUS_NON_FINITE
+    if diverged:
+        return STATUS_DIVERGED
+    return STATUS_OK
+
+
+
+def next_event(t: float, t_end: float, kb: int, schedule: np.ndarray, base: float,
+               stops: np.ndarray, i_stop: int, adaptive: int, i_out: int, n_out: int, o0: int,
+               out_every: int) -> tuple[float, bool, bool, int, int]:
+    """The event the dense driver's steps land on next: the schedule's next sample instant
+    (:func:`feeddrive.solvers.schedule.next_instant`; one this close to the end is the end), a
+    profile breakpoint before it, with fixed steps an output point before those, else the end.
+
+    Parameters
+    ----------
+    t, t_end : float
+        Now and the end of the call [s].
+    kb : int
+        The current sample instant's breakpoint index.
+    schedule : numpy.ndarray of int
+        The schedule (:mod:`feeddrive.solvers.schedule`).
+    base : float
+        Breakpoint spacing [s].
+    stops : numpy.ndarray
+        Sorted profile breakpoints [s].
+    i_stop : int
+        The first of them not yet passed.
+    adaptive : int
+        0: fixed steps, which land on the output points.
+    i_out, n_out : int
+        The next output's index, the number of outputs.
+    o0 : int
+        The index of the call's first output on the whole run's grid.
+    out_every : int
+        Output stride in breakpoints.
+
+    Returns
+    -------
+    tuple
+        (t_ev [s], a sample instant, a profile breakpoint, the instant's breakpoint index
+        (-1: none), ``i_stop`` moved past the breakpoints passed).
+    """
+    t_ev = t_end
+    is_sample = False
+    kb_next = next_instant(kb, schedule)  # the schedule's next instant (-1: none)
+    if kb_next >= 0:
+        t_s = kb_next * base
+        if t_s <= t_end + 1e-9 * base:  # an instant this close to the end is the end
+            is_sample = True
+            if t_s < t_end - 1e-9 * base:
+                t_ev = t_s
+    n_stops = stops.size
+    while i_stop < n_stops and stops[i_stop] <= t + 1e-12 * max(1.0, t):
+        i_stop += 1
+    is_stop = False
+    if i_stop < n_stops and stops[i_stop] < t_ev - 1e-12 * max(1.0, t_ev):
+        t_ev = stops[i_stop]
+        is_sample = False
+        is_stop = True
+    if adaptive == 0 and i_out < n_out:
+        t_grid = ((o0 + i_out) * out_every) * base
+        if t_grid < t_ev - 1e-12 * max(1.0, t_ev):
+            t_ev = t_grid
+            is_sample = False
+            is_stop = False
+    return t_ev, is_sample, is_stop, kb_next, i_stop
+
+
+#: the pieces, in the order they are placed in the compiled module
+PIECES = ("jacobian_fresh", "modal_reference", "modal_refresh", "stiffness_estimate",
+          "step_size", "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
+          "next_event")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
@@ -1203,3 +1606,45 @@ def source(use: str, inline: bool = True) -> str:
     text = specialise(driver_template, use, params, constants, doc,
                       "int" if use == "advance" else None)
     return steps.inline_steps(text) if inline else text
+
+
+@functools.cache
+def piece_source(name: str, inline: bool = True) -> str:
+    """The text of the driver's piece ``name`` (:data:`PIECES`), with the explicit step's
+    functions written in (:func:`feeddrive.solvers.steps.inline_steps`) unless ``inline`` is
+    false (the C translation calls them).
+
+    Parameters
+    ----------
+    name : str
+        A piece.
+    inline : bool, default True
+        Write the step, error and controller functions into the text.
+
+    Returns
+    -------
+    str
+        Python source of the function ``name``.
+    """
+    if name not in PIECES:
+        raise KeyError(f"{name!r}: not a piece of the driver ({', '.join(PIECES)})")
+    text = _text_of(globals()[name])
+    return steps.inline_steps(text) if inline else text
+
+
+def template_sources() -> list[str]:
+    """Text placed in the shared drivers' module before the drivers: the pieces they call
+    (:data:`PIECES`), which numba inlines into them (``inline="always"``).
+
+    Returns
+    -------
+    list of str
+        Python sources.
+    """
+    return ["from feeddrive._jit import inline_kernel",
+            f"from feeddrive.solvers.driver import ({', '.join(STATUS_NAMES)})",
+            "from feeddrive.solvers.schedule import next_instant",
+            "from feeddrive.solvers.driver import POWER_ITERATIONS",
+            "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
+            "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA",
+            *("@inline_kernel\n" + piece_source(name) for name in PIECES)]
