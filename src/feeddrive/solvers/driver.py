@@ -542,8 +542,13 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 # crossing made a step end, as in the dense driver; the outputs stay at the
                 # breakpoints.  The stages are free once the fifth coefficient is formed:
                 # k2, k3, k4 hold the other three
-                dense_coefficients(False, h_try, y, y_new, f0, k2, k3, k4, k5, k6, f_new, e, k2,
-                                   k3, k4)
+                _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                for i in range(n):
+                    ydiff = y_new[i] - y[i]
+                    bspl = h_try * f0[i] - ydiff
+                    k2[i] = ydiff
+                    k3[i] = bspl
+                    k4[i] = ydiff - h_try * f_new[i] - bspl
                 th_sw, k_sw = switch_crossing(switch_rows, y, y_new, k2, k3, k4, e, False)
                 if th_sw > 0.0 and th_sw * (t_new - t) > 1e-12 * max(1.0, t):
                     if steps > max_steps:
@@ -863,13 +868,13 @@ def modal_reference(J: np.ndarray, J_ref: np.ndarray, live: np.ndarray, atol: np
     J : numpy.ndarray
         The Jacobian [1/s in SI units].
     J_ref : numpy.ndarray
-        The reference Jacobian, written (a copy of J).
+        The reference Jacobian, written (a copy of J) [1/s in SI units].
     live : numpy.ndarray of bool
         The states not frozen.
     atol : numpy.ndarray
         Absolute tolerance per state [SI, per state].
     v, w : numpy.ndarray
-        Work space.
+        Work space [-].
 
     Returns
     -------
@@ -914,9 +919,9 @@ def modal_refresh(t: float, y: np.ndarray, f: np.ndarray, held: np.ndarray, P: n
     S, colour : numpy.ndarray of int
         Sparsity pattern and column groups.
     J_ref : numpy.ndarray
-        The reference Jacobian, written.
+        The reference Jacobian, written [1/s in SI units].
     v, w : numpy.ndarray
-        Work space.
+        Work space [-].
 
     Returns
     -------
@@ -1027,8 +1032,7 @@ def dense_coefficients(stiff: bool, h: float, y: np.ndarray, y_new: np.ndarray,
                        k5: np.ndarray, k6: np.ndarray, f_new: np.ndarray, e: np.ndarray,
                        q1: np.ndarray, q2: np.ndarray, q3: np.ndarray) -> None:
     """The continuous extension of the step just accepted: RODAS4's two vectors into q1, q2;
-    DOPRI5's (Hairer's contd5) into q1, q2, q3 and e (the stages are read before q1 … q3 are
-    written: they may be k2, k3, k4).
+    DOPRI5's (Hairer's contd5) into q1, q2, q3 and e.
 
     Parameters
     ----------
@@ -1039,22 +1043,22 @@ def dense_coefficients(stiff: bool, h: float, y: np.ndarray, y_new: np.ndarray,
     y, y_new : numpy.ndarray
         The states at its start and end [SI, per state].
     f0, k2, k3, k4, k5, k6, f_new : numpy.ndarray
-        Its stages (DOPRI5), its increments (RODAS4).
+        Its stages (DOPRI5) [SI/s, per state], its increments (RODAS4) [SI, per state].
     e : numpy.ndarray
-        DOPRI5: the fifth coefficient, written.
+        DOPRI5: the fifth coefficient, written [SI, per state].
     q1, q2, q3 : numpy.ndarray
-        The coefficients, written.
+        The coefficients, written [SI, per state].
     """
     if stiff:
         _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
     else:
-        _dp5_dense(h, f0, k2, k3, k4, k5, k6, f_new, e)
         for i in range(y.size):
             ydiff = y_new[i] - y[i]
             bspl = h * f0[i] - ydiff
             q1[i] = ydiff
             q2[i] = bspl
             q3[i] = ydiff - h * f_new[i] - bspl
+        _dp5_dense(h, f0, k2, k3, k4, k5, k6, f_new, e)
 
 
 def outputs_inside(t: float, t_new: float, last: bool, stiff: bool, y: np.ndarray,
@@ -1078,9 +1082,9 @@ def outputs_inside(t: float, t_new: float, last: bool, stiff: bool, y: np.ndarra
     y, y_new : numpy.ndarray
         The states at its ends [SI, per state].
     q1, q2, q3, e : numpy.ndarray
-        Its continuous extension.
+        Its continuous extension [SI, per state].
     yp, fp : numpy.ndarray
-        Work space.
+        Work space [SI, per state].
     held, P, T : numpy.ndarray
         Held values, parameters, tables [SI].
     aux : numpy.ndarray
@@ -1141,7 +1145,7 @@ def outputs_at(t: float, y: np.ndarray, fp: np.ndarray, held: np.ndarray, P: np.
     y : numpy.ndarray
         The state there [SI, per state].
     fp : numpy.ndarray
-        Work space.
+        Work space [SI/s, per state].
     held, P, T : numpy.ndarray
         Held values, parameters, tables [SI].
     aux : numpy.ndarray
@@ -1605,7 +1609,65 @@ def source(use: str, inline: bool = True) -> str:
     constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
     text = specialise(driver_template, use, params, constants, doc,
                       "int" if use == "advance" else None)
-    return steps.inline_steps(text) if inline else text
+    return steps.inline_steps(inline_pieces(text)) if inline else text
+
+
+#: the pieces numba's text has written in, as it has the steps
+#: (:func:`feeddrive.solvers.steps.inline_steps`): numba's own inlining of
+#: ``dense_coefficients`` (``inline="always"``) cost 10–18 % of a ``modal`` run
+#: (benchmarks/README.md, "the driver split"); written in, the run costs what it did
+NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside")
+
+
+def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str:
+    """``source`` (a driver's function text) with every call statement of the pieces
+    ``names`` — ``name(args)`` or ``target = name(args)`` — replaced by the piece's body, its
+    parameters renamed to the arguments (a final ``return x`` becomes ``target = x``; the
+    pieces so written in have no other return, and their locals mean in the driver what they
+    mean in the piece).
+
+    Parameters
+    ----------
+    source : str
+        The driver's function text.
+    names : tuple of str, default NUMBA_WRITTEN_IN
+        The pieces to write in.
+
+    Returns
+    -------
+    str
+        The text with the calls replaced by the pieces' bodies.
+    """
+    lines = source.splitlines()
+    tree = ast.parse(textwrap.dedent(source))
+    found: list[tuple[int, int, int, list[str]]] = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.stmt):
+            continue
+        value, target = None, None
+        if isinstance(node, ast.Expr):
+            value = node.value
+        elif isinstance(node, ast.Assign) and len(node.targets) == 1:
+            value, target = node.value, node.targets[0]
+        if (isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
+                and value.func.id in names):
+            fn = ast.parse(_text_of(globals()[value.func.id])).body[0]
+            assert isinstance(fn, ast.FunctionDef) and node.end_lineno is not None
+            params = [a.arg for a in fn.args.args]
+            rename = steps._Rename(dict(zip(params, value.args, strict=True)))
+            out = []
+            for stmt in fn.body:
+                if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
+                    continue  # the docstring
+                if isinstance(stmt, ast.Return):
+                    if target is None or stmt.value is None:
+                        raise ValueError(f"{value.func.id}: a returned value needs a target")
+                    stmt = ast.Assign(targets=[target], value=stmt.value, lineno=0)
+                out += ast.unparse(rename.visit(stmt)).splitlines()
+            found.append((node.lineno, node.end_lineno, node.col_offset, out))
+    for start, end, col, body in sorted(found, reverse=True):
+        lines[start - 1:end] = [" " * col + ln for ln in body]
+    return "\n".join(lines) + "\n"
 
 
 @functools.cache
