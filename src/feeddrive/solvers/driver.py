@@ -365,27 +365,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             if due(0, schedule, tick) > 0:
                 sample_update(0.0, y, held, P, T, tick)
         else:  # carried over from the call that ended at t
-            h = memory[0]
-            stiff = memory[1] != 0.0
-            frozen_known = memory[2] != 0.0
-            stiff_count = int(memory[3])
-            nonstiff_count = int(memory[4])
-            err_old = memory[5]
-            r4_err_old = memory[6]
-            r4_h_old = memory[7]
-            r4_first = memory[8] != 0.0
-            r4_rejected = memory[9] != 0.0
-            h_osc = memory[10]
-            have_ref = memory[11] != 0.0
-            refuse_until = int(memory[12])
-            dp_since_eig = int(memory[13])
-            rho = memory[14]
-            since_eig = int(memory[15])
-            quiet = memory[16] != 0.0
-            for i in range(n):
-                live[i] = memory[MEMORY_SCALARS + i] != 0.0
-                for j in range(n):
-                    J_ref[i, j] = memory[MEMORY_SCALARS + n + i * n + j]
+            (h, stiff, frozen_known, stiff_count, nonstiff_count, err_old, r4_err_old, r4_h_old,
+             r4_first, r4_rejected, h_osc, have_ref, refuse_until, dp_since_eig, rho,
+             since_eig, quiet) = memory_load(memory, live, J_ref)
     # the derivative at t (a continued continuous LAND run: the previous call's last stage,
     # evaluated a hair off the breakpoint when that step was not cut to it)
     rhs(t, y, held, P, T, f0, aux)
@@ -768,27 +750,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs), t])
         return t_out[:i_out], y_out[:i_out], aux_out[:i_out], stats, held
     if DENSE:
-        memory[0] = h
-        memory[1] = 1.0 if stiff else 0.0
-        memory[2] = 1.0 if frozen_known else 0.0
-        memory[3] = stiff_count
-        memory[4] = nonstiff_count
-        memory[5] = err_old
-        memory[6] = r4_err_old
-        memory[7] = r4_h_old
-        memory[8] = 1.0 if r4_first else 0.0
-        memory[9] = 1.0 if r4_rejected else 0.0
-        memory[10] = h_osc
-        memory[11] = 1.0 if have_ref else 0.0
-        memory[12] = refuse_until
-        memory[13] = dp_since_eig
-        memory[14] = rho
-        memory[15] = since_eig
-        memory[16] = 1.0 if quiet else 0.0
-        for i in range(n):
-            memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
-            for j in range(n):
-                memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
+        memory_save(memory, live, J_ref, h, stiff, frozen_known, stiff_count, nonstiff_count,
+                    err_old, r4_err_old, r4_h_old, r4_first, r4_rejected, h_osc, have_ref,
+                    refuse_until, dp_since_eig, rho, since_eig, quiet)
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
                           t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
                           float(n_eig), float(n_switch), float(n_rho)])
@@ -1278,10 +1242,111 @@ def next_event(t: float, t_end: float, kb: int, schedule: np.ndarray, base: floa
     return t_ev, is_sample, is_stop, kb_next, i_stop
 
 
+def memory_load(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray
+                ) -> tuple[float, bool, bool, int, int, float, float, float, bool, bool, float,
+                           bool, int, int, float, int, bool]:
+    """The dense driver's state carried over from the call that ended where this one starts
+    (the layout of :func:`feeddrive.solvers.switching.new_memory`, ``MEMORY_SCALARS`` values,
+    the live flags, the modal reference Jacobian).
+
+    Parameters
+    ----------
+    memory : numpy.ndarray
+        The driver's memory [mixed].
+    live : numpy.ndarray of bool
+        The states not frozen, written.
+    J_ref : numpy.ndarray
+        The modal reference Jacobian, written [1/s in SI units].
+
+    Returns
+    -------
+    tuple
+        (h [s], stiff, frozen states known, stiff and non-stiff counts, DOPRI5's error
+        memory, RODAS4's error and step [s], its first and rejected flags, the modal step cap
+        [s], a reference Jacobian kept, the step count until which a switch is refused, the
+        DOPRI5 steps since the last eigen-analysis, the spectral radius [1/s], the Jacobians
+        since the last eigen-analysis, the last moved test found the Jacobian quiet).
+    """
+    n = live.size
+    for i in range(n):
+        live[i] = memory[MEMORY_SCALARS + i] != 0.0
+        for j in range(n):
+            J_ref[i, j] = memory[MEMORY_SCALARS + n + i * n + j]
+    return (memory[0], memory[1] != 0.0, memory[2] != 0.0, int(memory[3]), int(memory[4]),
+            memory[5], memory[6], memory[7], memory[8] != 0.0, memory[9] != 0.0, memory[10],
+            memory[11] != 0.0, int(memory[12]), int(memory[13]), memory[14], int(memory[15]),
+            memory[16] != 0.0)
+
+
+def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: float,
+                stiff: bool, frozen_known: bool, stiff_count: int, nonstiff_count: int,
+                err_old: float, r4_err_old: float, r4_h_old: float, r4_first: bool,
+                r4_rejected: bool, h_osc: float, have_ref: bool, refuse_until: int,
+                dp_since_eig: int, rho: float, since_eig: int, quiet: bool) -> None:
+    """The dense driver's state kept for the next call (:func:`memory_load`'s inverse).
+
+    Parameters
+    ----------
+    memory : numpy.ndarray
+        The driver's memory, written [mixed].
+    live : numpy.ndarray of bool
+        The states not frozen.
+    J_ref : numpy.ndarray
+        The modal reference Jacobian [1/s in SI units].
+    h : float
+        The next step size [s].
+    stiff, frozen_known : bool
+        RODAS4 steps; the frozen states known.
+    stiff_count, nonstiff_count : int
+        The stiffness test's counts.
+    err_old, r4_err_old : float
+        DOPRI5's and RODAS4's error memory [-].
+    r4_h_old : float
+        RODAS4's last step [s].
+    r4_first, r4_rejected : bool
+        RODAS4's first-step and rejected flags.
+    h_osc : float
+        The modal step cap [s].
+    have_ref : bool
+        A reference Jacobian is kept.
+    refuse_until, dp_since_eig : int
+        The step count until which a switch is refused; DOPRI5 steps since the last
+        eigen-analysis.
+    rho : float
+        The spectral radius [1/s].
+    since_eig : int
+        Jacobians since the last eigen-analysis.
+    quiet : bool
+        The last moved test found the Jacobian quiet.
+    """
+    memory[0] = h
+    memory[1] = 1.0 if stiff else 0.0
+    memory[2] = 1.0 if frozen_known else 0.0
+    memory[3] = stiff_count
+    memory[4] = nonstiff_count
+    memory[5] = err_old
+    memory[6] = r4_err_old
+    memory[7] = r4_h_old
+    memory[8] = 1.0 if r4_first else 0.0
+    memory[9] = 1.0 if r4_rejected else 0.0
+    memory[10] = h_osc
+    memory[11] = 1.0 if have_ref else 0.0
+    memory[12] = refuse_until
+    memory[13] = dp_since_eig
+    memory[14] = rho
+    memory[15] = since_eig
+    memory[16] = 1.0 if quiet else 0.0
+    n = live.size
+    for i in range(n):
+        memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
+        for j in range(n):
+            memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
+
+
 #: the pieces, in the order they are placed in the compiled module
 PIECES = ("jacobian_fresh", "modal_reference", "modal_refresh", "stiffness_estimate",
           "step_size", "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
-          "next_event")
+          "next_event", "memory_load", "memory_save")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
@@ -1706,7 +1771,7 @@ def template_sources() -> list[str]:
     return ["from feeddrive._jit import inline_kernel",
             f"from feeddrive.solvers.driver import ({', '.join(STATUS_NAMES)})",
             "from feeddrive.solvers.schedule import next_instant",
-            "from feeddrive.solvers.driver import POWER_ITERATIONS",
+            "from feeddrive.solvers.driver import POWER_ITERATIONS, MEMORY_SCALARS",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
             "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA",
             *("@inline_kernel\n" + piece_source(name) for name in PIECES)]
