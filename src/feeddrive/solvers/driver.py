@@ -27,6 +27,14 @@ for :data:`feeddrive.solvers.tableaux.DOPRI5` (written into the numba text by
 the steps module's (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.4); divergence bounds,
 the stop request and the step limit end a run with a status.
 
+The template calls its pieces, each a kernel of its own of at most 150 lines (:data:`PIECES`,
+below the template: the Jacobian and the modal method's eigen-analysis, the stiffness estimate,
+the step-size controller, the dense output and the output samples, the bound checks, the dense
+driver's next event and the memory it carries between calls), as diffrax separates controller,
+solver and driver.  The C build calls them; numba inlines them (``inline="always"``) but for
+:data:`NUMBA_WRITTEN_IN`, whose bodies its text has written in (:func:`inline_pieces`), as it
+has the explicit step's.
+
 Each specialisation is bit-identical to the separate driver it replaced (the v1 regression,
 the long-run chunking tests and the FMU's C-versus-numba test pin it).  The flags keep the
 few places where the three historically differ: ``LAND``'s step is cut only when ``h`` reaches
