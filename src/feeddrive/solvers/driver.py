@@ -28,12 +28,12 @@ the steps module's (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.4); dive
 the stop request and the step limit end a run with a status.
 
 The template calls its pieces, each a kernel of its own of at most 150 lines (:data:`PIECES`,
-below the template: the Jacobian and the modal method's eigen-analysis, the stiffness estimate,
-the step-size controller, the dense output and the output samples, the bound checks, the dense
-driver's next event and the memory it carries between calls), as diffrax separates controller,
-solver and driver.  The C build calls them; numba inlines them (``inline="always"``) but for
-:data:`NUMBA_WRITTEN_IN`, whose bodies its text has written in (:func:`inline_pieces`), as it
-has the explicit step's.
+below the template: the Jacobian and the modal method's eigen-analysis, the stiffness estimate
+and the method switching, the step-size controller, the dense output and the output samples,
+the bound checks, the dense driver's next event and the memory it carries between calls), as
+diffrax separates controller, solver and driver.  The C build calls them; numba inlines them
+(``inline="always"``) but for :data:`NUMBA_WRITTEN_IN`, whose bodies its text has written in
+(:func:`inline_pieces`), as it has the explicit step's.
 
 Each specialisation is bit-identical to the separate driver it replaced (the v1 regression,
 the long-run chunking tests and the FMU's C-versus-numba test pin it).  The flags keep the
@@ -583,64 +583,17 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 n_out_rhs += calls
                 # ---- stiffness detection and switching
                 if switching:
-                    if stiff:
-                        # back to DOPRI5 when its stable step would do: this step's, or
-                        # (MODE_MODAL) when the cap leaves RODAS4 less than MODAL_SWITCH_GAIN ×
-                        # that step, the test that refuses the switch the other way
-                        if rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
-                            nonstiff_count += 1
-                            if nonstiff_count >= NONSTIFF_STEPS:
-                                stiff = False
-                                switches += 1
-                                stiff_count = 0
-                                nonstiff_count = 0
-                                err_old = 1e-4
-                        else:
-                            nonstiff_count = 0
-                    else:
-                        if modal:
-                            dp_since_eig += 1
-                        if modal and dp_since_eig >= MODAL_RETRY:
-                            # DOPRI5 too: its step on a lightly damped mode is capped as well
-                            dp_since_eig = 0
-                            calls, h_osc, rho = modal_refresh(t_new, y_new, f_new, held, P, T,
-                                                              atol, J, ft, yp, fp, aux, all_live,
-                                                              S, colour, J_ref, v, w)
-                            n_rhs += calls
-                            n_jac += 1
-                            n_rho += 1
-                            n_eig += 1
-                            have_ref = True
-                        if steps < refuse_until:
-                            pass  # MODE_MODAL: a switch was refused recently
-                        elif stiffness_estimate(h_done, f_new, k6, y_new, yt) > STIFF_HLAMBDA:
-                            nonstiff_count = 0
-                            stiff_count += 1
-                            go = stiff_count >= STIFF_STEPS
-                            if go and modal:
-                                # would RODAS4, capped on the lightly damped modes, step further?
-                                calls, h_osc, rho = modal_refresh(t_new, y_new, f_new, held, P,
-                                                                  T, atol, J, ft, yp, fp, aux,
-                                                                  all_live, S, colour, J_ref,
-                                                                  v, w)
-                                n_rhs += calls
-                                n_jac += 1
-                                n_rho += 1
-                                n_eig += 1
-                                have_ref = True
-                                if h_osc < MODAL_SWITCH_GAIN * h_done:
-                                    go = False
-                                    stiff_count = 0
-                                    refuse_until = steps + MODAL_RETRY
-                            if go:
-                                stiff = True
-                                switches += 1
-                                stiff_count = 0
-                                r4_first = True
-                        else:
-                            nonstiff_count += 1
-                            if nonstiff_count >= 6:
-                                stiff_count = 0
+                    (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old,
+                     dp_since_eig, refuse_until, r4_first, have_ref, calls,
+                     analyses) = switch_method(stiff, modal, rho, h_done, h_osc, stiff_count,
+                                               nonstiff_count, switches, err_old, dp_since_eig,
+                                               refuse_until, steps, r4_first, have_ref, t_new,
+                                               y_new, f_new, k6, yt, held, P, T, atol, J, ft,
+                                               yp, fp, aux, all_live, S, colour, J_ref, v, w)
+                    n_rhs += calls
+                    n_jac += analyses
+                    n_rho += analyses
+                    n_eig += analyses
             # ---- step-size control for the next step
             if adaptive == 1 and COMM:  # the FMU's: DOPRI5's PI controller, as step_size's
                 fac = _pi_factor(err, err_old, alpha, beta)
@@ -1351,10 +1304,135 @@ def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: floa
             memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
 
 
+def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: float,
+                  stiff_count: int, nonstiff_count: int, switches: int, err_old: float,
+                  dp_since_eig: int, refuse_until: int, n_steps: int, r4_first: bool,
+                  have_ref: bool, t_new: float, y_new: np.ndarray, f_new: np.ndarray,
+                  k6: np.ndarray, yt: np.ndarray, held: np.ndarray, P: np.ndarray,
+                  T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                  yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, all_live: np.ndarray,
+                  S: np.ndarray, colour: np.ndarray, J_ref: np.ndarray, v: np.ndarray,
+                  w: np.ndarray) -> tuple[bool, float, float, int, int, int, float, int, int,
+                                          bool, bool, int, int]:
+    """The stiffness detection and method switching after an accepted step (``MODE_AUTO``,
+    ``MODE_MODAL``).  From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps whose size
+    DOPRI5 would take stably (ρ·h < ``NONSTIFF_HRHO``; ``MODE_MODAL``: or the cap leaves
+    RODAS4 less than ``MODAL_SWITCH_GAIN`` × that step).  From DOPRI5, to RODAS4 after
+    ``STIFF_STEPS`` stiff verdicts (:func:`stiffness_estimate` > ``STIFF_HLAMBDA``; reset
+    after 6 non-stiff steps in a row), unless (``MODE_MODAL``) the cap on the lightly damped
+    modes would not let RODAS4 step ``MODAL_SWITCH_GAIN`` × further: then the switch is
+    refused for ``MODAL_RETRY`` steps.  ``MODE_MODAL`` analyses DOPRI5's Jacobian every
+    ``MODAL_RETRY`` steps too (:func:`modal_refresh`).
+
+    Parameters
+    ----------
+    stiff, modal : bool
+        The step was RODAS4's; the method is ``MODE_MODAL``.
+    rho : float
+        The spectral radius estimate [1/s].
+    h_done : float
+        The step [s].
+    h_osc : float
+        The modal step cap [s].
+    stiff_count, nonstiff_count, switches : int
+        The test's counts, the switches so far.
+    err_old : float
+        DOPRI5's error memory [-].
+    dp_since_eig, refuse_until, n_steps : int
+        DOPRI5 steps since the last eigen-analysis; the step count until which a switch is
+        refused; the steps so far.
+    r4_first, have_ref : bool
+        RODAS4's first-step flag; a reference Jacobian kept.
+    t_new : float
+        The step's end [s].
+    y_new, f_new : numpy.ndarray
+        The state and its derivative there [SI; SI/s, per state].
+    k6, yt : numpy.ndarray
+        DOPRI5's sixth stage and the state it was evaluated at [SI/s; SI, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    J, J_ref : numpy.ndarray
+        The Jacobian and the modal reference Jacobian, written by an analysis [1/s in SI
+        units].
+    ft, yp, fp, aux : numpy.ndarray
+        Work space [SI].
+    all_live : numpy.ndarray of bool
+        All true.
+    S, colour : numpy.ndarray of int
+        Sparsity pattern and column groups.
+    v, w : numpy.ndarray
+        Work space [-].
+
+    Returns
+    -------
+    tuple
+        (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old, dp_since_eig,
+        refuse_until, r4_first, have_ref) updated, the right-hand-side evaluations made and
+        the eigen-analyses made (each with a Jacobian and a spectral radius).
+    """
+    calls = 0
+    analyses = 0
+    if stiff:
+        # back to DOPRI5 when its stable step would do: this step's, or (MODE_MODAL) when
+        # the cap leaves RODAS4 less than MODAL_SWITCH_GAIN × that step, the test that
+        # refuses the switch the other way
+        if rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
+            nonstiff_count += 1
+            if nonstiff_count >= NONSTIFF_STEPS:
+                stiff = False
+                switches += 1
+                stiff_count = 0
+                nonstiff_count = 0
+                err_old = 1e-4
+        else:
+            nonstiff_count = 0
+    else:
+        if modal:
+            dp_since_eig += 1
+        if modal and dp_since_eig >= MODAL_RETRY:
+            # DOPRI5 too: its step on a lightly damped mode is capped as well
+            dp_since_eig = 0
+            more, h_osc, rho = modal_refresh(t_new, y_new, f_new, held, P, T, atol, J, ft, yp,
+                                             fp, aux, all_live, S, colour, J_ref, v, w)
+            calls += more
+            analyses += 1
+            have_ref = True
+        if n_steps < refuse_until:
+            pass  # MODE_MODAL: a switch was refused recently
+        elif stiffness_estimate(h_done, f_new, k6, y_new, yt) > STIFF_HLAMBDA:
+            nonstiff_count = 0
+            stiff_count += 1
+            go = stiff_count >= STIFF_STEPS
+            if go and modal:
+                # would RODAS4, capped on the lightly damped modes, step further?
+                more, h_osc, rho = modal_refresh(t_new, y_new, f_new, held, P, T, atol, J, ft,
+                                                 yp, fp, aux, all_live, S, colour, J_ref, v, w)
+                calls += more
+                analyses += 1
+                have_ref = True
+                if h_osc < MODAL_SWITCH_GAIN * h_done:
+                    go = False
+                    stiff_count = 0
+                    refuse_until = n_steps + MODAL_RETRY
+            if go:
+                stiff = True
+                switches += 1
+                stiff_count = 0
+                r4_first = True
+        else:
+            nonstiff_count += 1
+            if nonstiff_count >= 6:
+                stiff_count = 0
+    return (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old, dp_since_eig,
+            refuse_until, r4_first, have_ref, calls, analyses)
+
+
 #: the pieces, in the order they are placed in the compiled module
 PIECES = ("jacobian_fresh", "modal_reference", "modal_refresh", "stiffness_estimate",
           "step_size", "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
-          "next_event", "memory_load", "memory_save")
+          "next_event", "memory_load", "memory_save", "switch_method")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
@@ -1686,10 +1764,12 @@ def source(use: str, inline: bool = True) -> str:
 
 
 #: the pieces numba's text has written in, as it has the steps
-#: (:func:`feeddrive.solvers.steps.inline_steps`): numba's own inlining of
-#: ``dense_coefficients`` (``inline="always"``) cost 10–18 % of a ``modal`` run
-#: (benchmarks/README.md, "the driver split"); written in, the run costs what it did
-NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside")
+#: (:func:`feeddrive.solvers.steps.inline_steps`): numba's own inlining
+#: (``inline="always"``) of ``dense_coefficients`` and ``outputs_inside``, called at every
+#: step with a dozen arrays each, cost 10–20 % of a ``modal`` run (benchmarks/README.md,
+#: "the driver split"); written in, the run costs what it did.  ``switch_method`` takes more
+#: than 30 arguments, which Python passes as ``*args``, which numba cannot inline
+NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method")
 
 
 def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str:
@@ -1727,6 +1807,13 @@ def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str
             fn = ast.parse(_text_of(globals()[value.func.id])).body[0]
             assert isinstance(fn, ast.FunctionDef) and node.end_lineno is not None
             params = [a.arg for a in fn.args.args]
+            stored = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
+                      and isinstance(n.ctx, ast.Store)}
+            for param, arg in zip(params, value.args, strict=True):
+                if param in stored and not (isinstance(arg, ast.Name) and arg.id == param):
+                    # written in, the assignment would reach the caller's variable
+                    raise ValueError(f"{value.func.id}: parameter {param!r} is assigned; it "
+                                     f"can be written in only when passed as itself")
             rename = steps._Rename(dict(zip(params, value.args, strict=True)))
             out = []
             for stmt in fn.body:
@@ -1779,7 +1866,9 @@ def template_sources() -> list[str]:
     return ["from feeddrive._jit import inline_kernel",
             f"from feeddrive.solvers.driver import ({', '.join(STATUS_NAMES)})",
             "from feeddrive.solvers.schedule import next_instant",
-            "from feeddrive.solvers.driver import POWER_ITERATIONS, MEMORY_SCALARS",
+            "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
+            "MODAL_SWITCH_GAIN, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, STIFF_HLAMBDA, "
+            "STIFF_STEPS)",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
             "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA",
             *("@inline_kernel\n" + piece_source(name) for name in PIECES)]
