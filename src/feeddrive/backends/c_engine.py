@@ -196,6 +196,8 @@ SHAPES: dict[str, tuple[str, ...]] = {
     "y_buf": (DYNAMIC, "FD_N_STATE"), "aux_buf": (DYNAMIC, "FD_N_AUX"),
     # the outputs as the driver's pieces take them (feeddrive.solvers.driver.PIECES)
     "t_out": (DYNAMIC,), "y_out": (DYNAMIC, "FD_N_STATE"), "aux_out": (DYNAMIC, "FD_N_AUX"),
+    **{name: ("FD_N_STATE", "FD_N_STATE") for name in ("ge_J", "ge_Phi", "ge_A", "ge_B")},
+    "ge_w": ("FD_N_STATE",), "ge_d": ("FD_N_STATE",), "ge_aux": ("FD_N_AUX",),
     "switch_rows": (DYNAMIC, "FD_N_STATE"), "W": (DYNAMIC, "FD_N_STATE"),
     "A": (DYNAMIC, DYNAMIC), "row": ("FD_N_STATE",),
 }

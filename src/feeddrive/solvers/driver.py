@@ -30,7 +30,8 @@ the stop request and the step limit end a run with a status.
 The template calls its pieces, each a kernel of its own of at most 150 lines (:data:`PIECES`,
 below the template: the Jacobian and the modal method's eigen-analysis, the stiffness estimate
 and the method switching, the step-size controller, the dense output and the output samples,
-the bound checks, the dense driver's next event and the memory it carries between calls), as
+the bound checks, the dense driver's next event, the memory it carries between calls and the
+embedded global-error estimate), as
 diffrax separates controller, solver and driver.  The C build calls them; numba inlines them
 (``inline="always"``) but for :data:`NUMBA_WRITTEN_IN`, whose bodies its text has written in
 (:func:`inline_pieces`), as it has the explicit step's.
@@ -607,18 +608,11 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     used_rodas, err, h_try, h, h_max, last, err_old, alpha, beta, r4_first,
                     r4_h_old, r4_err_old, r4_rejected, LAND)
             if DENSE and ge:  # the embedded global-error estimate carried over the step
-                if ge_since >= GE_REFRESH:
-                    if used_rodas:  # the step's own Jacobian
-                        ge_exponential(J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
-                    else:
-                        calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, ge_J, ft, yp, fp,
-                                                ge_aux, all_live, S, colour)
-                        n_rhs += calls
-                        n_jac += 1
-                        ge_exponential(ge_J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
-                    ge_since = 0
-                ge_since += 1
-                ge_advance(t, t_new, ge_Phi, memory, ge_at, GE_INTERVAL, ge_w, ge_d)
+                calls, jacobians, ge_since = error_estimate_step(
+                    used_rodas, ge_since, t, t_new, y, f0, held, P, T, atol, J, ge_J, ft, yp, fp,
+                    ge_aux, all_live, S, colour, ge_Phi, ge_A, ge_B, memory, ge_at, ge_w, ge_d)
+                n_rhs += calls
+                n_jac += jacobians
             for i in range(n):
                 y[i] = y_new[i]
                 f0[i] = f_new[i]
@@ -1429,10 +1423,82 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
             refuse_until, r4_first, have_ref, calls, analyses)
 
 
+def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
+                        y: np.ndarray, f0: np.ndarray, held: np.ndarray, P: np.ndarray,
+                        T: np.ndarray, atol: np.ndarray, J: np.ndarray, ge_J: np.ndarray,
+                        ft: np.ndarray, yp: np.ndarray, fp: np.ndarray, ge_aux: np.ndarray,
+                        all_live: np.ndarray, S: np.ndarray, colour: np.ndarray,
+                        ge_Phi: np.ndarray, ge_A: np.ndarray, ge_B: np.ndarray,
+                        memory: np.ndarray, ge_at: int, ge_w: np.ndarray,
+                        ge_d: np.ndarray) -> tuple[int, int, int]:
+    """The embedded global-error estimate (:mod:`feeddrive.solvers.global_error`) carried
+    over the accepted step [t, t_new]: the propagator exp(H J) formed afresh every
+    ``GE_REFRESH`` steps (from the RODAS4 step's own Jacobian, else from one taken at (t, y)),
+    then the step's local error added and propagated.
+
+    Parameters
+    ----------
+    used_rodas : bool
+        The step was RODAS4's (``J`` is its Jacobian).
+    ge_since : int
+        Accepted steps since the propagator was formed.
+    t, t_new : float
+        The step [s].
+    y, f0 : numpy.ndarray
+        The state at t and its derivative [SI; SI/s, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state, the scaling of the exponential [SI, per state].
+    J, ge_J : numpy.ndarray
+        The step's Jacobian; the estimate's own, written [1/s in SI units].
+    ft, yp, fp, ge_aux : numpy.ndarray
+        Work space [SI].
+    all_live : numpy.ndarray of bool
+        All true.
+    S, colour : numpy.ndarray of int
+        Sparsity pattern and column groups.
+    ge_Phi, ge_A, ge_B : numpy.ndarray
+        The propagator, written, and work space [-].
+    memory : numpy.ndarray
+        The driver's memory, whose slots from ``ge_at`` hold the estimate [mixed].
+    ge_at : int
+        Where those slots start.
+    ge_w : numpy.ndarray
+        Work space [SI, per state].
+    ge_d : numpy.ndarray
+        The step's local error estimate [SI, per state].
+
+    Returns
+    -------
+    calls : int
+        Right-hand-side evaluations made.
+    jacobians : int
+        Jacobians taken.
+    ge_since : int
+        Updated.
+    """
+    calls = 0
+    jacobians = 0
+    if ge_since >= GE_REFRESH:
+        if used_rodas:  # the step's own Jacobian
+            ge_exponential(J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
+        else:
+            calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, ge_J, ft, yp, fp, ge_aux,
+                                    all_live, S, colour)
+            jacobians = 1
+            ge_exponential(ge_J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
+        ge_since = 0
+    ge_since += 1
+    ge_advance(t, t_new, ge_Phi, memory, ge_at, GE_INTERVAL, ge_w, ge_d)
+    return calls, jacobians, ge_since
+
+
 #: the pieces, in the order they are placed in the compiled module
 PIECES = ("jacobian_fresh", "modal_reference", "modal_refresh", "stiffness_estimate",
           "step_size", "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
-          "next_event", "memory_load", "memory_save", "switch_method")
+          "next_event", "memory_load", "memory_save", "switch_method",
+          "error_estimate_step")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
@@ -1869,6 +1935,8 @@ def template_sources() -> list[str]:
             "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
             "MODAL_SWITCH_GAIN, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, STIFF_HLAMBDA, "
             "STIFF_STEPS)",
+            "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
+            "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, exponential as ge_exponential",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
             "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA",
             *("@inline_kernel\n" + piece_source(name) for name in PIECES)]
