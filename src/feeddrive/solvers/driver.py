@@ -31,10 +31,9 @@ The template calls its pieces, each a kernel of its own of at most 150 lines (:d
 below the template: the Jacobian and the modal method's eigen-analysis, the stiffness estimate
 and the method switching, the step-size controller, the dense output and the output samples,
 the bound checks, the dense driver's next event, the memory it carries between calls and the
-embedded global-error estimate), as
-diffrax separates controller, solver and driver.  The C build calls them; numba inlines them
-(``inline="always"``) but for :data:`NUMBA_WRITTEN_IN`, whose bodies its text has written in
-(:func:`inline_pieces`), as it has the explicit step's.
+embedded global-error estimate), as diffrax separates controller, solver and driver.  The C
+build calls them; numba inlines them (``inline="always"``) but for :data:`NUMBA_WRITTEN_IN`,
+whose bodies its text has written in (:func:`inline_pieces`), as it has the explicit step's.
 
 Each specialisation is bit-identical to the separate driver it replaced (the v1 regression,
 the long-run chunking tests and the FMU's C-versus-numba test pin it).  The flags keep the
