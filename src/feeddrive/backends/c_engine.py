@@ -172,7 +172,7 @@ def lowered_source(use: str) -> tuple[str, int]:
 
 
 def _bindings() -> dict[str, Any]:
-    from ..solvers import modes, rodas4, steps
+    from ..solvers import driver, modes, rodas4, steps
 
     return {"rhs": RHS, "sample_update": SAMPLE_UPDATE,
             **{name: steps.function(name) for name in steps.sources()},
@@ -182,16 +182,22 @@ def _bindings() -> dict[str, Any]:
             "_r4_fd_jacobian": rodas4.fd_jacobian_template,
             "_r4_frozen_states": rodas4.frozen_states_template,
             "_r4_spectral_radius": rodas4.spectral_radius_template,
-            "modal_step_cap": modes.step_cap_real}
+            "modal_step_cap": modes.step_cap_real,
+            **{name: getattr(driver, name) for name in driver.PIECES}}
 
 
 #: array sizes of the driver and what it calls (``"?"``: passed at run time)
 SHAPES: dict[str, tuple[str, ...]] = {
     **SOLVER_SHAPES,
-    **{name: ("FD_N_STATE",) for name in ("y0", "bound", "v", "w", "scale")},
+    **{name: ("FD_N_STATE",) for name in ("y0", "bound", "v", "w", "scale", "all_live", "f",
+                                          "f_new", "q3")},
     "J_ref": ("FD_N_STATE", "FD_N_STATE"), "held": ("FD_N_HELD",),
     **{name: (DYNAMIC,) for name in ("stops", "memory", "t_buf", STATS_OUT, "wr", "wi")},
     "y_buf": (DYNAMIC, "FD_N_STATE"), "aux_buf": (DYNAMIC, "FD_N_AUX"),
+    # the outputs as the driver's pieces take them (feeddrive.solvers.driver.PIECES)
+    "t_out": (DYNAMIC,), "y_out": (DYNAMIC, "FD_N_STATE"), "aux_out": (DYNAMIC, "FD_N_AUX"),
+    **{name: ("FD_N_STATE", "FD_N_STATE") for name in ("ge_J", "ge_Phi", "ge_A", "ge_B")},
+    "ge_w": ("FD_N_STATE",), "ge_d": ("FD_N_STATE",), "ge_aux": ("FD_N_AUX",),
     "switch_rows": (DYNAMIC, "FD_N_STATE"), "W": (DYNAMIC, "FD_N_STATE"),
     "A": (DYNAMIC, DYNAMIC), "row": ("FD_N_STATE",),
 }
@@ -204,7 +210,8 @@ def _translated(use: str) -> dict[str, Any]:
         return _functions_unit()
     fn = driver.define(lowered_source(use)[0], use)
     text = translate_kernels([fn], {"N_AUX": "FD_N_AUX"}, bindings=_bindings(),
-                             shapes=SHAPES, param_types=SOLVER_TYPES, names={use: f"fd_{use}"})
+                             shapes=SHAPES, param_types={**SOLVER_TYPES, "all_live": "bool*"},
+                             names={use: f"fd_{use}"})
     return {"c": text, "n_stats": lowered_source(use)[1], "params": _c_params(use)}
 
 

@@ -27,6 +27,14 @@ for :data:`feeddrive.solvers.tableaux.DOPRI5` (written into the numba text by
 the steps module's (Hairer, Nørsett & Wanner, Solving ODEs I, Sect. II.4); divergence bounds,
 the stop request and the step limit end a run with a status.
 
+The template calls its pieces, each a kernel of its own of at most 150 lines (:data:`PIECES`,
+below the template: the Jacobian and the modal method's eigen-analysis, the stiffness estimate
+and the method switching, the step-size controller, the dense output and the output samples,
+the bound checks, the dense driver's next event, the memory it carries between calls and the
+embedded global-error estimate), as diffrax separates controller, solver and driver.  The C
+build calls them; numba inlines them (``inline="always"``) but for :data:`NUMBA_WRITTEN_IN`,
+whose bodies its text has written in (:func:`inline_pieces`), as it has the explicit step's.
+
 Each specialisation is bit-identical to the separate driver it replaced (the v1 regression,
 the long-run chunking tests and the FMU's C-versus-numba test pin it).  The flags keep the
 few places where the three historically differ: ``LAND``'s step is cut only when ``h`` reaches
@@ -361,32 +369,13 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     else:
         kb = start  # index of the current sample instant
         h = h_init
-        n_stops = stops.size
         if memory[0] == 0.0:  # a new run
             if due(0, schedule, tick) > 0:
                 sample_update(0.0, y, held, P, T, tick)
         else:  # carried over from the call that ended at t
-            h = memory[0]
-            stiff = memory[1] != 0.0
-            frozen_known = memory[2] != 0.0
-            stiff_count = int(memory[3])
-            nonstiff_count = int(memory[4])
-            err_old = memory[5]
-            r4_err_old = memory[6]
-            r4_h_old = memory[7]
-            r4_first = memory[8] != 0.0
-            r4_rejected = memory[9] != 0.0
-            h_osc = memory[10]
-            have_ref = memory[11] != 0.0
-            refuse_until = int(memory[12])
-            dp_since_eig = int(memory[13])
-            rho = memory[14]
-            since_eig = int(memory[15])
-            quiet = memory[16] != 0.0
-            for i in range(n):
-                live[i] = memory[MEMORY_SCALARS + i] != 0.0
-                for j in range(n):
-                    J_ref[i, j] = memory[MEMORY_SCALARS + n + i * n + j]
+            (h, stiff, frozen_known, stiff_count, nonstiff_count, err_old, r4_err_old, r4_h_old,
+             r4_first, r4_rejected, h_osc, have_ref, refuse_until, dp_since_eig, rho,
+             since_eig, quiet) = memory_load(memory, live, J_ref)
     # the derivative at t (a continued continuous LAND run: the previous call's last stage,
     # evaluated a hair off the breakpoint when that step was not cut to it)
     rhs(t, y, held, P, T, f0, aux)
@@ -415,46 +404,28 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             t = kb * base
             t_ev = (kb + 1) * base
             t_bp = t_ev  # the breakpoint; t_ev moves to a located reversal before it
-        else:
+        elif COMM:  # the schedule's next instant on the grid from t0 (as next_event's)
             t_ev = t_end
             is_sample = False
             kb_next = next_instant(kb, schedule)  # the schedule's next instant (-1: none)
             if kb_next >= 0:
-                t_s = t0 + kb_next * base if COMM else kb_next * base
+                t_s = t0 + kb_next * base
                 if t_s <= t_end + 1e-9 * base:  # an instant this close to the end is the end
                     is_sample = True
                     if t_s < t_end - 1e-9 * base:
                         t_ev = t_s
-        if DENSE:
-            while i_stop < n_stops and stops[i_stop] <= t + 1e-12 * max(1.0, t):
-                i_stop += 1
-            is_stop = False
-            if i_stop < n_stops and stops[i_stop] < t_ev - 1e-12 * max(1.0, t_ev):
-                t_ev = stops[i_stop]
-                is_sample = False
-                is_stop = True
-            if adaptive == 0 and i_out < n_out:
-                t_grid = ((o0 + i_out) * out_every) * base
-                if t_grid < t_ev - 1e-12 * max(1.0, t_ev):
-                    t_ev = t_grid
-                    is_sample = False
-                    is_stop = False
+        else:
+            t_ev, is_sample, is_stop, kb_next, i_stop = next_event(
+                t, t_end, kb, schedule, base, stops, i_stop, adaptive, i_out, n_out, o0,
+                out_every)
         # ---- steps up to t_ev
         while (t < t_ev - 1e-15 * t_ev if LAND else t < t_ev) and status == STATUS_OK:
             if stiff and not jac_ok:
-                calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J,
-                                        ft, yp, fp, aux, live if frozen_known else all_live,
-                                        S, colour)
-                if calls < 0:  # a state taken as frozen moved: difference every column
-                    n_rhs -= calls
-                    calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol,
-                                            J, ft, yp, fp, aux, all_live, S, colour)
-                    frozen_known = False
+                calls, frozen_known = jacobian_fresh(t, y, f0, held, P, T, atol, J, ft, yp, fp,
+                                                     aux, live, all_live, frozen_known, S,
+                                                     colour)
                 n_rhs += calls
                 n_jac += 1
-                if not frozen_known:
-                    _r4_frozen_states(J, f0, live)
-                    frozen_known = True
                 jac_ok = True
                 jac_age = 0
                 if switching and not modal:
@@ -470,17 +441,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if modal and moved:
                     quiet = False
                     since_eig = 0
-                    h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
-                    # MODE_MODAL: the spectral radius of the switch back to DOPRI5 is that
-                    # of the reference Jacobian, as the step cap is (both redone when a row
-                    # of J moves by MODAL_REFRESH)
-                    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+                    h_osc, rho = modal_reference(J, J_ref, live, atol, v, w)
                     n_rho += 1
                     n_eig += 1
                     have_ref = True
-                    for i in range(n):
-                        for j in range(n):
-                            J_ref[i, j] = J[i, j]
             last = False
             if LAND:  # cut only when the step reaches the breakpoint (v1)
                 if h >= t_ev - t:
@@ -588,15 +552,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if stiff:
                     rhs(t_new, y_new, held, P, T, f_new, aux)
                     n_rhs += 1
-                    _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
-                else:
-                    for i in range(n):
-                        ydiff = y_new[i] - y[i]
-                        bspl = h_try * f0[i] - ydiff
-                        q1[i] = ydiff
-                        q2[i] = bspl
-                        q3[i] = ydiff - h_try * f_new[i] - bspl
-                    _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                dense_coefficients(stiff, h_try, y, y_new, f0, k2, k3, k4, k5, k6, f_new, e,
+                                   q1, q2, q3)
                 if switch_rows.shape[0] > 0:
                     # a switching surface crossed inside the step (a friction site's sliding
                     # speed through zero: a kink of the right-hand side): the step is thrown
@@ -620,134 +577,41 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     sw_next = -1
                 # outputs strictly inside the step (an output at t_new that is an event time
                 # is written after the event below)
-                while i_out < n_out:
-                    t_grid = ((o0 + i_out) * out_every) * base
-                    if t_grid > t_new or (last and t_grid >= t_new - 1e-9 * base):
-                        break
-                    th = (t_grid - t) / h_done
-                    th1 = 1.0 - th
-                    for i in range(n):
-                        if stiff:
-                            yp[i] = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * q2[i]))
-                        else:
-                            yp[i] = y[i] + th * (q1[i] + th1 * (q2[i] + th * (q3[i]
-                                                                              + th1 * e[i])))
-                    t_out[i_out] = t_grid
-                    y_out[i_out, :] = yp
-                    if want_aux:
-                        rhs(t_grid, yp, held, P, T, fp, aux)
-                        n_out_rhs += 1
-                        aux_out[i_out, :] = aux
-                    i_out += 1
+                i_out, calls = outputs_inside(t, t_new, last, stiff, y, y_new, q1, q2, q3, e,
+                                              yp, fp, held, P, T, aux, want_aux, t_out, y_out,
+                                              aux_out, i_out, n_out, o0, out_every, base)
+                n_out_rhs += calls
                 # ---- stiffness detection and switching
                 if switching:
-                    if stiff:
-                        # back to DOPRI5 when its stable step would do: this step's, or
-                        # (MODE_MODAL) when the cap leaves RODAS4 less than MODAL_SWITCH_GAIN ×
-                        # that step, the test that refuses the switch the other way
-                        if rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
-                            nonstiff_count += 1
-                            if nonstiff_count >= NONSTIFF_STEPS:
-                                stiff = False
-                                switches += 1
-                                stiff_count = 0
-                                nonstiff_count = 0
-                                err_old = 1e-4
-                        else:
-                            nonstiff_count = 0
-                    else:
-                        if modal:
-                            dp_since_eig += 1
-                        if modal and dp_since_eig >= MODAL_RETRY:
-                            # DOPRI5 too: its step on a lightly damped mode is capped as well
-                            dp_since_eig = 0
-                            calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, atol, J,
-                                                    ft, yp, fp, aux, all_live, S, colour)
-                            n_rhs += calls
-                            n_jac += 1
-                            h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
-                                                   MODAL_H_LAMBDA)
-                            rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
-                            n_rho += 1
-                            n_eig += 1
-                            have_ref = True
-                            for i in range(n):
-                                for j in range(n):
-                                    J_ref[i, j] = J[i, j]
-                        num = 0.0
-                        den = 0.0
-                        for i in range(n):
-                            num += (f_new[i] - k6[i]) ** 2
-                            den += (y_new[i] - yt[i]) ** 2
-                        if steps < refuse_until:
-                            pass  # MODE_MODAL: a switch was refused recently
-                        elif den > 0.0 and h_done * math.sqrt(num / den) > STIFF_HLAMBDA:
-                            nonstiff_count = 0
-                            stiff_count += 1
-                            go = stiff_count >= STIFF_STEPS
-                            if go and modal:
-                                # would RODAS4, capped on the lightly damped modes, step further?
-                                calls = _r4_fd_jacobian(t_new, y_new, f_new, held, P, T, atol,
-                                                        J, ft, yp, fp, aux,
-                                                        all_live, S, colour)
-                                n_rhs += calls
-                                n_jac += 1
-                                h_osc = modal_step_cap(J, all_live, MODAL_ZETA_LIGHT,
-                                                       MODAL_H_LAMBDA)
-                                rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
-                                n_rho += 1
-                                n_eig += 1
-                                have_ref = True
-                                for i in range(n):
-                                    for j in range(n):
-                                        J_ref[i, j] = J[i, j]
-                                if h_osc < MODAL_SWITCH_GAIN * h_done:
-                                    go = False
-                                    stiff_count = 0
-                                    refuse_until = steps + MODAL_RETRY
-                            if go:
-                                stiff = True
-                                switches += 1
-                                stiff_count = 0
-                                r4_first = True
-                        else:
-                            nonstiff_count += 1
-                            if nonstiff_count >= 6:
-                                stiff_count = 0
+                    (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old,
+                     dp_since_eig, refuse_until, r4_first, have_ref, calls,
+                     analyses) = switch_method(stiff, modal, rho, h_done, h_osc, stiff_count,
+                                               nonstiff_count, switches, err_old, dp_since_eig,
+                                               refuse_until, steps, r4_first, have_ref, t_new,
+                                               y_new, f_new, k6, yt, held, P, T, atol, J, ft,
+                                               yp, fp, aux, all_live, S, colour, J_ref, v, w)
+                    n_rhs += calls
+                    n_jac += analyses
+                    n_rho += analyses
+                    n_eig += analyses
             # ---- step-size control for the next step
-            if adaptive == 1:
-                if used_rodas:
-                    fac = 0.2 if err == 0.0 else max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
-                    if not r4_first and err > 0.0:
-                        facpred = (r4_h_old / h_try) * (err * err / r4_err_old) ** 0.25 / 0.9
-                        fac = max(fac, max(1.0 / 6.0, min(5.0, facpred)))
-                    h_new = h_try / fac
-                    if r4_rejected:
-                        h_new = min(h_new, h_try)
-                    r4_first = False
-                    r4_h_old = h_try
-                    r4_err_old = max(1e-2, err)
-                    r4_rejected = False
-                else:  # DOPRI5: the explicit steps' controller (feeddrive.solvers.steps)
-                    fac = _pi_factor(err, err_old, alpha, beta)
-                    if LAND or err != 0.0:  # LAND: v1 took every error, also 0
-                        err_old = max(err, 1e-4)
-                    h_new = h_try * fac
+            if adaptive == 1 and COMM:  # the FMU's: DOPRI5's PI controller, as step_size's
+                fac = _pi_factor(err, err_old, alpha, beta)
+                if err != 0.0:
+                    err_old = max(err, 1e-4)
+                h_new = h_try * fac
                 if not last or h_new < h:
                     h = min(h_new, h_max)
+            elif adaptive == 1:  # LAND: v1 took every error, also 0, into DOPRI5's memory
+                h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected = step_size(
+                    used_rodas, err, h_try, h, h_max, last, err_old, alpha, beta, r4_first,
+                    r4_h_old, r4_err_old, r4_rejected, LAND)
             if DENSE and ge:  # the embedded global-error estimate carried over the step
-                if ge_since >= GE_REFRESH:
-                    if used_rodas:  # the step's own Jacobian
-                        ge_exponential(J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
-                    else:
-                        calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, ge_J, ft, yp, fp,
-                                                ge_aux, all_live, S, colour)
-                        n_rhs += calls
-                        n_jac += 1
-                        ge_exponential(ge_J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
-                    ge_since = 0
-                ge_since += 1
-                ge_advance(t, t_new, ge_Phi, memory, ge_at, GE_INTERVAL, ge_w, ge_d)
+                calls, jacobians, ge_since = error_estimate_step(
+                    used_rodas, ge_since, t, t_new, y, f0, held, P, T, atol, J, ge_J, ft, yp, fp,
+                    ge_aux, all_live, S, colour, ge_Phi, ge_A, ge_B, memory, ge_at, ge_w, ge_d)
+                n_rhs += calls
+                n_jac += jacobians
             for i in range(n):
                 y[i] = y_new[i]
                 f0[i] = f_new[i]
@@ -768,17 +632,17 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             if steps > max_steps:
                 status = STATUS_MAX_STEPS
                 break
-            finite = True
-            diverged = False
-            for i in range(n):
-                if not math.isfinite(y[i]):
-                    finite = False
-                elif not COMM and abs(y[i]) > bound[i]:
-                    diverged = True
-            if not finite:
+            if COMM:  # the FMU has no divergence bounds
+                check = STATUS_OK
+                for i in range(n):
+                    if not math.isfinite(y[i]):
+                        check = STATUS_NON_FINITE
+            else:
+                check = bounds_status(y, bound)
+            if check == STATUS_NON_FINITE:
                 status = STATUS_NON_FINITE
                 break
-            if diverged:  # that step end is the last output sample
+            if not COMM and check == STATUS_DIVERGED:  # that step end is the last output
                 status = STATUS_DIVERGED
                 if i_out < n_out:
                     t_out[i_out] = t
@@ -820,17 +684,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         if DENSE:
             if is_stop:
                 i_stop += 1
-            while i_out < n_out:
-                t_grid = ((o0 + i_out) * out_every) * base
-                if abs(t_grid - t) > 1e-9 * base:
-                    break
-                t_out[i_out] = t_grid
-                y_out[i_out, :] = y
-                if want_aux:
-                    rhs(t, y, held, P, T, fp, aux)
-                    n_out_rhs += 1
-                    aux_out[i_out, :] = aux
-                i_out += 1
+            i_out, calls = outputs_at(t, y, fp, held, P, T, aux, want_aux, t_out, y_out,
+                                      aux_out, i_out, n_out, o0, out_every, base)
+            n_out_rhs += calls
     # ---- the driver's state for the next call, the statistics
     if COMM:
         memory[0] = h  # MEM_H
@@ -848,33 +704,800 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs), t])
         return t_out[:i_out], y_out[:i_out], aux_out[:i_out], stats, held
     if DENSE:
-        memory[0] = h
-        memory[1] = 1.0 if stiff else 0.0
-        memory[2] = 1.0 if frozen_known else 0.0
-        memory[3] = stiff_count
-        memory[4] = nonstiff_count
-        memory[5] = err_old
-        memory[6] = r4_err_old
-        memory[7] = r4_h_old
-        memory[8] = 1.0 if r4_first else 0.0
-        memory[9] = 1.0 if r4_rejected else 0.0
-        memory[10] = h_osc
-        memory[11] = 1.0 if have_ref else 0.0
-        memory[12] = refuse_until
-        memory[13] = dp_since_eig
-        memory[14] = rho
-        memory[15] = since_eig
-        memory[16] = 1.0 if quiet else 0.0
-        for i in range(n):
-            memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
-            for j in range(n):
-                memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
+        memory_save(memory, live, J_ref, h, stiff, frozen_known, stiff_count, nonstiff_count,
+                    err_old, r4_err_old, r4_h_old, r4_first, r4_rejected, h_osc, have_ref,
+                    refuse_until, dp_since_eig, rho, since_eig, quiet)
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
                           t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
                           float(n_eig), float(n_switch), float(n_rho)])
         return (t_out[:i_out], y_out[:i_out], aux_out[:min(i_out, aux_out.shape[0])], stats,
                 held)
     return None
+
+
+# ---------------------------------------------------------------- the driver's pieces
+# Each a kernel of its own, called by driver_template, compiled beside it in both builds
+# (numba inlines them, ``inline="always"``; the C translation calls them): the Jacobian and
+# the modal method's eigen-analysis, the stiffness test, the step-size controller, the dense
+# output and the output samples (issue 42 item 3: "a driver you can read").
+def jacobian_fresh(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray, P: np.ndarray,
+                   T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                   yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, live: np.ndarray,
+                   all_live: np.ndarray, frozen_known: bool, S: np.ndarray,
+                   colour: np.ndarray) -> tuple[int, bool]:
+    """The RODAS4 step's Jacobian at (t, y) into ``J``: the columns of the states not known
+    to be frozen differenced (:func:`feeddrive.solvers.rodas4.fd_jacobian_template`), all of
+    them when a state taken as frozen moved; the frozen states found afresh when unknown.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y, f0 : numpy.ndarray
+        State and its derivative [SI; SI/s, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    J : numpy.ndarray
+        The Jacobian, written (n, n) [1/s in SI units].
+    ft, yp, fp, aux : numpy.ndarray
+        Work space [SI].
+    live : numpy.ndarray of bool
+        The states not frozen; written when ``frozen_known`` is false.
+    all_live : numpy.ndarray of bool
+        All true.
+    frozen_known : bool
+        Whether ``live`` holds the frozen states.
+    S, colour : numpy.ndarray of int
+        Sparsity pattern and column groups.
+
+    Returns
+    -------
+    calls : int
+        Right-hand-side evaluations made.
+    frozen_known : bool
+        True: ``live`` holds the frozen states.
+    """
+    calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux,
+                            live if frozen_known else all_live, S, colour)
+    total = 0
+    if calls < 0:  # a state taken as frozen moved: difference every column
+        total -= calls
+        calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux, all_live, S,
+                                colour)
+        frozen_known = False
+    total += calls
+    if not frozen_known:
+        _r4_frozen_states(J, f0, live)
+        frozen_known = True
+    return total, frozen_known
+
+
+def modal_reference(J: np.ndarray, J_ref: np.ndarray, live: np.ndarray, atol: np.ndarray,
+                    v: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """``MODE_MODAL``'s eigen-analysis of ``J``, kept as the reference Jacobian ``J_ref``:
+    the step cap of the lightly damped modes (:func:`feeddrive.solvers.modes.step_cap`) and
+    the spectral radius of the switch back to DOPRI5 (both redone when a row of J moves by
+    ``MODAL_REFRESH``).
+
+    Parameters
+    ----------
+    J : numpy.ndarray
+        The Jacobian [1/s in SI units].
+    J_ref : numpy.ndarray
+        The reference Jacobian, written (a copy of J) [1/s in SI units].
+    live : numpy.ndarray of bool
+        The states not frozen.
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    v, w : numpy.ndarray
+        Work space [-].
+
+    Returns
+    -------
+    h_osc : float
+        The step cap [s].
+    rho : float
+        The spectral radius estimate [1/s].
+    """
+    h_osc = modal_step_cap(J, live, MODAL_ZETA_LIGHT, MODAL_H_LAMBDA)
+    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+    n = J.shape[0]
+    for i in range(n):
+        for j in range(n):
+            J_ref[i, j] = J[i, j]
+    return h_osc, rho
+
+
+def modal_refresh(t: float, y: np.ndarray, f: np.ndarray, held: np.ndarray, P: np.ndarray,
+                  T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                  yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, all_live: np.ndarray,
+                  S: np.ndarray, colour: np.ndarray, J_ref: np.ndarray, v: np.ndarray,
+                  w: np.ndarray) -> tuple[int, float, float]:
+    """The Jacobian at (t, y) with every column differenced and its :func:`modal_reference`
+    (``MODE_MODAL`` on DOPRI5 steps: the periodic analysis and the test of a switch).
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y, f : numpy.ndarray
+        State and its derivative [SI; SI/s, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    J : numpy.ndarray
+        The Jacobian, written [1/s in SI units].
+    ft, yp, fp, aux : numpy.ndarray
+        Work space [SI].
+    all_live : numpy.ndarray of bool
+        All true.
+    S, colour : numpy.ndarray of int
+        Sparsity pattern and column groups.
+    J_ref : numpy.ndarray
+        The reference Jacobian, written [1/s in SI units].
+    v, w : numpy.ndarray
+        Work space [-].
+
+    Returns
+    -------
+    calls : int
+        Right-hand-side evaluations made.
+    h_osc : float
+        The step cap [s].
+    rho : float
+        The spectral radius estimate [1/s].
+    """
+    calls = _r4_fd_jacobian(t, y, f, held, P, T, atol, J, ft, yp, fp, aux, all_live, S, colour)
+    h_osc, rho = modal_reference(J, J_ref, all_live, atol, v, w)
+    return calls, h_osc, rho
+
+
+def stiffness_estimate(h: float, f_new: np.ndarray, k6: np.ndarray, y_new: np.ndarray,
+                       yt: np.ndarray) -> float:
+    """h·|λ| of the DOPRI5 step just taken, ‖f(y_new) − k6‖/‖y_new − yt‖ (the last two stages
+    evaluated at nearby points; Hairer, Nørsett & Wanner, Solving ODEs I, Sect. IV.2,
+    dopri5.f); 0 where the two points coincide.
+
+    Parameters
+    ----------
+    h : float
+        The step [s].
+    f_new, k6 : numpy.ndarray
+        The derivatives at the step's end and at its sixth stage [SI/s, per state].
+    y_new, yt : numpy.ndarray
+        The states there [SI, per state].
+
+    Returns
+    -------
+    float
+        The estimate [-].
+    """
+    num = 0.0
+    den = 0.0
+    for i in range(f_new.size):
+        num += (f_new[i] - k6[i]) ** 2
+        den += (y_new[i] - yt[i]) ** 2
+    if den > 0.0:
+        return h * math.sqrt(num / den)
+    return 0.0
+
+
+def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float, last: bool,
+              err_old: float, alpha: float, beta: float, r4_first: bool, r4_h_old: float,
+              r4_err_old: float, r4_rejected: bool,
+              every_error: bool) -> tuple[float, float, bool, float, float, bool]:
+    """The step-size controller after an accepted step: Hairer's PI controller for DOPRI5
+    (:func:`feeddrive.solvers.steps.pi_factor_template`), Gustafsson's predictive controller
+    for RODAS4 (Hairer & Wanner, Solving ODEs II, Sect. IV.8, Eq. (8.21)); a last step cut
+    to an event only shrinks the next one.
+
+    Parameters
+    ----------
+    used_rodas : bool
+        The step was a RODAS4 step.
+    err : float
+        Its error norm [-].
+    h_try : float
+        Its size [s].
+    h : float
+        The step size the controller proposed before it [s].
+    h_max : float
+        Largest step [s].
+    last : bool
+        The step was cut to land on an event.
+    err_old : float
+        DOPRI5's error memory [-].
+    alpha, beta : float
+        The PI controller's exponents [-].
+    r4_first, r4_h_old, r4_err_old, r4_rejected : bool, float, float, bool
+        RODAS4's memory: no accepted step yet, the last accepted step [s] and its error [-],
+        a rejection since.
+    every_error : bool
+        DOPRI5's memory takes every error, also 0 (the breakpoint driver, v1).
+
+    Returns
+    -------
+    tuple
+        (h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected) updated.
+    """
+    if used_rodas:
+        fac = 0.2 if err == 0.0 else max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+        if not r4_first and err > 0.0:
+            facpred = (r4_h_old / h_try) * (err * err / r4_err_old) ** 0.25 / 0.9
+            fac = max(fac, max(1.0 / 6.0, min(5.0, facpred)))
+        h_new = h_try / fac
+        if r4_rejected:
+            h_new = min(h_new, h_try)
+        r4_first = False
+        r4_h_old = h_try
+        r4_err_old = max(1e-2, err)
+        r4_rejected = False
+    else:  # DOPRI5: the explicit steps' controller (feeddrive.solvers.steps)
+        fac = _pi_factor(err, err_old, alpha, beta)
+        if every_error or err != 0.0:
+            err_old = max(err, 1e-4)
+        h_new = h_try * fac
+    if not last or h_new < h:
+        h = min(h_new, h_max)
+    return h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected
+
+
+def dense_coefficients(stiff: bool, h: float, y: np.ndarray, y_new: np.ndarray,
+                       f0: np.ndarray, k2: np.ndarray, k3: np.ndarray, k4: np.ndarray,
+                       k5: np.ndarray, k6: np.ndarray, f_new: np.ndarray, e: np.ndarray,
+                       q1: np.ndarray, q2: np.ndarray, q3: np.ndarray) -> None:
+    """The continuous extension of the step just accepted: RODAS4's two vectors into q1, q2;
+    DOPRI5's (Hairer's contd5) into q1, q2, q3 and e.
+
+    Parameters
+    ----------
+    stiff : bool
+        A RODAS4 step.
+    h : float
+        Its size [s].
+    y, y_new : numpy.ndarray
+        The states at its start and end [SI, per state].
+    f0, k2, k3, k4, k5, k6, f_new : numpy.ndarray
+        Its stages (DOPRI5) [SI/s, per state], its increments (RODAS4) [SI, per state].
+    e : numpy.ndarray
+        DOPRI5: the fifth coefficient, written [SI, per state].
+    q1, q2, q3 : numpy.ndarray
+        The coefficients, written [SI, per state].
+    """
+    if stiff:
+        _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
+    else:
+        for i in range(y.size):
+            ydiff = y_new[i] - y[i]
+            bspl = h * f0[i] - ydiff
+            q1[i] = ydiff
+            q2[i] = bspl
+            q3[i] = ydiff - h * f_new[i] - bspl
+        _dp5_dense(h, f0, k2, k3, k4, k5, k6, f_new, e)
+
+
+def outputs_inside(t: float, t_new: float, last: bool, stiff: bool, y: np.ndarray,
+                   y_new: np.ndarray, q1: np.ndarray, q2: np.ndarray, q3: np.ndarray,
+                   e: np.ndarray, yp: np.ndarray, fp: np.ndarray, held: np.ndarray,
+                   P: np.ndarray, T: np.ndarray, aux: np.ndarray, want_aux: bool,
+                   t_out: np.ndarray, y_out: np.ndarray, aux_out: np.ndarray, i_out: int,
+                   n_out: int, o0: int, out_every: int, base: float) -> tuple[int, int]:
+    """The output samples strictly inside the step [t, t_new] (one at t_new that is an event
+    time is written after the event), interpolated on its continuous extension
+    (:func:`dense_coefficients`), with the auxiliary signals there if wanted.
+
+    Parameters
+    ----------
+    t, t_new : float
+        The step [s].
+    last : bool
+        It ends on an event.
+    stiff : bool
+        A RODAS4 step.
+    y, y_new : numpy.ndarray
+        The states at its ends [SI, per state].
+    q1, q2, q3, e : numpy.ndarray
+        Its continuous extension [SI, per state].
+    yp, fp : numpy.ndarray
+        Work space [SI, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    aux : numpy.ndarray
+        The auxiliary signals, work space [SI].
+    want_aux : bool
+        Write the auxiliary signals.
+    t_out, y_out, aux_out : numpy.ndarray
+        The outputs [s; SI].
+    i_out, n_out : int
+        The next output's index, the number of outputs.
+    o0 : int
+        The index of the call's first output on the whole run's grid.
+    out_every : int
+        Output stride in breakpoints.
+    base : float
+        Breakpoint spacing [s].
+
+    Returns
+    -------
+    i_out : int
+        The next output's index.
+    calls : int
+        Right-hand-side evaluations made.
+    """
+    h_done = t_new - t
+    calls = 0
+    while i_out < n_out:
+        t_grid = ((o0 + i_out) * out_every) * base
+        if t_grid > t_new or (last and t_grid >= t_new - 1e-9 * base):
+            break
+        th = (t_grid - t) / h_done
+        th1 = 1.0 - th
+        for i in range(y.size):
+            if stiff:
+                yp[i] = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * q2[i]))
+            else:
+                yp[i] = y[i] + th * (q1[i] + th1 * (q2[i] + th * (q3[i] + th1 * e[i])))
+        t_out[i_out] = t_grid
+        y_out[i_out, :] = yp
+        if want_aux:
+            rhs(t_grid, yp, held, P, T, fp, aux)
+            calls += 1
+            aux_out[i_out, :] = aux
+        i_out += 1
+    return i_out, calls
+
+
+def outputs_at(t: float, y: np.ndarray, fp: np.ndarray, held: np.ndarray, P: np.ndarray,
+               T: np.ndarray, aux: np.ndarray, want_aux: bool, t_out: np.ndarray,
+               y_out: np.ndarray, aux_out: np.ndarray, i_out: int, n_out: int, o0: int,
+               out_every: int, base: float) -> tuple[int, int]:
+    """The output samples at the event time t (within 1e-9 of the breakpoint spacing).
+
+    Parameters
+    ----------
+    t : float
+        The event [s].
+    y : numpy.ndarray
+        The state there [SI, per state].
+    fp : numpy.ndarray
+        Work space [SI/s, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    aux : numpy.ndarray
+        The auxiliary signals, work space [SI].
+    want_aux : bool
+        Write the auxiliary signals.
+    t_out, y_out, aux_out : numpy.ndarray
+        The outputs [s; SI].
+    i_out, n_out : int
+        The next output's index, the number of outputs.
+    o0 : int
+        The index of the call's first output on the whole run's grid.
+    out_every : int
+        Output stride in breakpoints.
+    base : float
+        Breakpoint spacing [s].
+
+    Returns
+    -------
+    i_out : int
+        The next output's index.
+    calls : int
+        Right-hand-side evaluations made.
+    """
+    calls = 0
+    while i_out < n_out:
+        t_grid = ((o0 + i_out) * out_every) * base
+        if abs(t_grid - t) > 1e-9 * base:
+            break
+        t_out[i_out] = t_grid
+        y_out[i_out, :] = y
+        if want_aux:
+            rhs(t, y, held, P, T, fp, aux)
+            calls += 1
+            aux_out[i_out, :] = aux
+        i_out += 1
+    return i_out, calls
+
+
+def bounds_status(y: np.ndarray, bound: np.ndarray) -> int:
+    """The state's check after a step: ``STATUS_NON_FINITE`` if a component is not finite,
+    else ``STATUS_DIVERGED`` if one is beyond its divergence bound, else ``STATUS_OK``.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The state [SI, per state].
+    bound : numpy.ndarray
+        Largest |state| per state [SI, per state].
+
+    Returns
+    -------
+    int
+        The status.
+    """
+    finite = True
+    diverged = False
+    for i in range(y.size):
+        if not math.isfinite(y[i]):
+            finite = False
+        elif abs(y[i]) > bound[i]:
+            diverged = True
+    if not finite:
+        return STATUS_NON_FINITE
+    if diverged:
+        return STATUS_DIVERGED
+    return STATUS_OK
+
+
+
+def next_event(t: float, t_end: float, kb: int, schedule: np.ndarray, base: float,
+               stops: np.ndarray, i_stop: int, adaptive: int, i_out: int, n_out: int, o0: int,
+               out_every: int) -> tuple[float, bool, bool, int, int]:
+    """The event the dense driver's steps land on next: the schedule's next sample instant
+    (:func:`feeddrive.solvers.schedule.next_instant`; one this close to the end is the end), a
+    profile breakpoint before it, with fixed steps an output point before those, else the end.
+
+    Parameters
+    ----------
+    t, t_end : float
+        Now and the end of the call [s].
+    kb : int
+        The current sample instant's breakpoint index.
+    schedule : numpy.ndarray of int
+        The schedule (:mod:`feeddrive.solvers.schedule`).
+    base : float
+        Breakpoint spacing [s].
+    stops : numpy.ndarray
+        Sorted profile breakpoints [s].
+    i_stop : int
+        The first of them not yet passed.
+    adaptive : int
+        0: fixed steps, which land on the output points.
+    i_out, n_out : int
+        The next output's index, the number of outputs.
+    o0 : int
+        The index of the call's first output on the whole run's grid.
+    out_every : int
+        Output stride in breakpoints.
+
+    Returns
+    -------
+    tuple
+        (t_ev [s], a sample instant, a profile breakpoint, the instant's breakpoint index
+        (-1: none), ``i_stop`` moved past the breakpoints passed).
+    """
+    t_ev = t_end
+    is_sample = False
+    kb_next = next_instant(kb, schedule)  # the schedule's next instant (-1: none)
+    if kb_next >= 0:
+        t_s = kb_next * base
+        if t_s <= t_end + 1e-9 * base:  # an instant this close to the end is the end
+            is_sample = True
+            if t_s < t_end - 1e-9 * base:
+                t_ev = t_s
+    n_stops = stops.size
+    while i_stop < n_stops and stops[i_stop] <= t + 1e-12 * max(1.0, t):
+        i_stop += 1
+    is_stop = False
+    if i_stop < n_stops and stops[i_stop] < t_ev - 1e-12 * max(1.0, t_ev):
+        t_ev = stops[i_stop]
+        is_sample = False
+        is_stop = True
+    if adaptive == 0 and i_out < n_out:
+        t_grid = ((o0 + i_out) * out_every) * base
+        if t_grid < t_ev - 1e-12 * max(1.0, t_ev):
+            t_ev = t_grid
+            is_sample = False
+            is_stop = False
+    return t_ev, is_sample, is_stop, kb_next, i_stop
+
+
+def memory_load(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray
+                ) -> tuple[float, bool, bool, int, int, float, float, float, bool, bool, float,
+                           bool, int, int, float, int, bool]:
+    """The dense driver's state carried over from the call that ended where this one starts
+    (the layout of :func:`feeddrive.solvers.switching.new_memory`, ``MEMORY_SCALARS`` values,
+    the live flags, the modal reference Jacobian).
+
+    Parameters
+    ----------
+    memory : numpy.ndarray
+        The driver's memory [mixed].
+    live : numpy.ndarray of bool
+        The states not frozen, written.
+    J_ref : numpy.ndarray
+        The modal reference Jacobian, written [1/s in SI units].
+
+    Returns
+    -------
+    tuple
+        (h [s], stiff, frozen states known, stiff and non-stiff counts, DOPRI5's error
+        memory, RODAS4's error and step [s], its first and rejected flags, the modal step cap
+        [s], a reference Jacobian kept, the step count until which a switch is refused, the
+        DOPRI5 steps since the last eigen-analysis, the spectral radius [1/s], the Jacobians
+        since the last eigen-analysis, the last moved test found the Jacobian quiet).
+    """
+    n = live.size
+    for i in range(n):
+        live[i] = memory[MEMORY_SCALARS + i] != 0.0
+        for j in range(n):
+            J_ref[i, j] = memory[MEMORY_SCALARS + n + i * n + j]
+    return (memory[0], memory[1] != 0.0, memory[2] != 0.0, int(memory[3]), int(memory[4]),
+            memory[5], memory[6], memory[7], memory[8] != 0.0, memory[9] != 0.0, memory[10],
+            memory[11] != 0.0, int(memory[12]), int(memory[13]), memory[14], int(memory[15]),
+            memory[16] != 0.0)
+
+
+def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: float,
+                stiff: bool, frozen_known: bool, stiff_count: int, nonstiff_count: int,
+                err_old: float, r4_err_old: float, r4_h_old: float, r4_first: bool,
+                r4_rejected: bool, h_osc: float, have_ref: bool, refuse_until: int,
+                dp_since_eig: int, rho: float, since_eig: int, quiet: bool) -> None:
+    """The dense driver's state kept for the next call (:func:`memory_load`'s inverse).
+
+    Parameters
+    ----------
+    memory : numpy.ndarray
+        The driver's memory, written [mixed].
+    live : numpy.ndarray of bool
+        The states not frozen.
+    J_ref : numpy.ndarray
+        The modal reference Jacobian [1/s in SI units].
+    h : float
+        The next step size [s].
+    stiff, frozen_known : bool
+        RODAS4 steps; the frozen states known.
+    stiff_count, nonstiff_count : int
+        The stiffness test's counts.
+    err_old, r4_err_old : float
+        DOPRI5's and RODAS4's error memory [-].
+    r4_h_old : float
+        RODAS4's last step [s].
+    r4_first, r4_rejected : bool
+        RODAS4's first-step and rejected flags.
+    h_osc : float
+        The modal step cap [s].
+    have_ref : bool
+        A reference Jacobian is kept.
+    refuse_until, dp_since_eig : int
+        The step count until which a switch is refused; DOPRI5 steps since the last
+        eigen-analysis.
+    rho : float
+        The spectral radius [1/s].
+    since_eig : int
+        Jacobians since the last eigen-analysis.
+    quiet : bool
+        The last moved test found the Jacobian quiet.
+    """
+    memory[0] = h
+    memory[1] = 1.0 if stiff else 0.0
+    memory[2] = 1.0 if frozen_known else 0.0
+    memory[3] = stiff_count
+    memory[4] = nonstiff_count
+    memory[5] = err_old
+    memory[6] = r4_err_old
+    memory[7] = r4_h_old
+    memory[8] = 1.0 if r4_first else 0.0
+    memory[9] = 1.0 if r4_rejected else 0.0
+    memory[10] = h_osc
+    memory[11] = 1.0 if have_ref else 0.0
+    memory[12] = refuse_until
+    memory[13] = dp_since_eig
+    memory[14] = rho
+    memory[15] = since_eig
+    memory[16] = 1.0 if quiet else 0.0
+    n = live.size
+    for i in range(n):
+        memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
+        for j in range(n):
+            memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
+
+
+def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: float,
+                  stiff_count: int, nonstiff_count: int, switches: int, err_old: float,
+                  dp_since_eig: int, refuse_until: int, n_steps: int, r4_first: bool,
+                  have_ref: bool, t_new: float, y_new: np.ndarray, f_new: np.ndarray,
+                  k6: np.ndarray, yt: np.ndarray, held: np.ndarray, P: np.ndarray,
+                  T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                  yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, all_live: np.ndarray,
+                  S: np.ndarray, colour: np.ndarray, J_ref: np.ndarray, v: np.ndarray,
+                  w: np.ndarray) -> tuple[bool, float, float, int, int, int, float, int, int,
+                                          bool, bool, int, int]:
+    """The stiffness detection and method switching after an accepted step (``MODE_AUTO``,
+    ``MODE_MODAL``).  From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps whose size
+    DOPRI5 would take stably (ρ·h < ``NONSTIFF_HRHO``; ``MODE_MODAL``: or the cap leaves
+    RODAS4 less than ``MODAL_SWITCH_GAIN`` × that step).  From DOPRI5, to RODAS4 after
+    ``STIFF_STEPS`` stiff verdicts (:func:`stiffness_estimate` > ``STIFF_HLAMBDA``; reset
+    after 6 non-stiff steps in a row), unless (``MODE_MODAL``) the cap on the lightly damped
+    modes would not let RODAS4 step ``MODAL_SWITCH_GAIN`` × further: then the switch is
+    refused for ``MODAL_RETRY`` steps.  ``MODE_MODAL`` analyses DOPRI5's Jacobian every
+    ``MODAL_RETRY`` steps too (:func:`modal_refresh`).
+
+    Parameters
+    ----------
+    stiff, modal : bool
+        The step was RODAS4's; the method is ``MODE_MODAL``.
+    rho : float
+        The spectral radius estimate [1/s].
+    h_done : float
+        The step [s].
+    h_osc : float
+        The modal step cap [s].
+    stiff_count, nonstiff_count, switches : int
+        The test's counts, the switches so far.
+    err_old : float
+        DOPRI5's error memory [-].
+    dp_since_eig, refuse_until, n_steps : int
+        DOPRI5 steps since the last eigen-analysis; the step count until which a switch is
+        refused; the steps so far.
+    r4_first, have_ref : bool
+        RODAS4's first-step flag; a reference Jacobian kept.
+    t_new : float
+        The step's end [s].
+    y_new, f_new : numpy.ndarray
+        The state and its derivative there [SI; SI/s, per state].
+    k6, yt : numpy.ndarray
+        DOPRI5's sixth stage and the state it was evaluated at [SI/s; SI, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    J, J_ref : numpy.ndarray
+        The Jacobian and the modal reference Jacobian, written by an analysis [1/s in SI
+        units].
+    ft, yp, fp, aux : numpy.ndarray
+        Work space [SI].
+    all_live : numpy.ndarray of bool
+        All true.
+    S, colour : numpy.ndarray of int
+        Sparsity pattern and column groups.
+    v, w : numpy.ndarray
+        Work space [-].
+
+    Returns
+    -------
+    tuple
+        (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old, dp_since_eig,
+        refuse_until, r4_first, have_ref) updated, the right-hand-side evaluations made and
+        the eigen-analyses made (each with a Jacobian and a spectral radius).
+    """
+    calls = 0
+    analyses = 0
+    if stiff:
+        # back to DOPRI5 when its stable step would do: this step's, or (MODE_MODAL) when
+        # the cap leaves RODAS4 less than MODAL_SWITCH_GAIN × that step, the test that
+        # refuses the switch the other way
+        if rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
+            nonstiff_count += 1
+            if nonstiff_count >= NONSTIFF_STEPS:
+                stiff = False
+                switches += 1
+                stiff_count = 0
+                nonstiff_count = 0
+                err_old = 1e-4
+        else:
+            nonstiff_count = 0
+    else:
+        if modal:
+            dp_since_eig += 1
+        if modal and dp_since_eig >= MODAL_RETRY:
+            # DOPRI5 too: its step on a lightly damped mode is capped as well
+            dp_since_eig = 0
+            more, h_osc, rho = modal_refresh(t_new, y_new, f_new, held, P, T, atol, J, ft, yp,
+                                             fp, aux, all_live, S, colour, J_ref, v, w)
+            calls += more
+            analyses += 1
+            have_ref = True
+        if n_steps < refuse_until:
+            pass  # MODE_MODAL: a switch was refused recently
+        elif stiffness_estimate(h_done, f_new, k6, y_new, yt) > STIFF_HLAMBDA:
+            nonstiff_count = 0
+            stiff_count += 1
+            go = stiff_count >= STIFF_STEPS
+            if go and modal:
+                # would RODAS4, capped on the lightly damped modes, step further?
+                more, h_osc, rho = modal_refresh(t_new, y_new, f_new, held, P, T, atol, J, ft,
+                                                 yp, fp, aux, all_live, S, colour, J_ref, v, w)
+                calls += more
+                analyses += 1
+                have_ref = True
+                if h_osc < MODAL_SWITCH_GAIN * h_done:
+                    go = False
+                    stiff_count = 0
+                    refuse_until = n_steps + MODAL_RETRY
+            if go:
+                stiff = True
+                switches += 1
+                stiff_count = 0
+                r4_first = True
+        else:
+            nonstiff_count += 1
+            if nonstiff_count >= 6:
+                stiff_count = 0
+    return (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old, dp_since_eig,
+            refuse_until, r4_first, have_ref, calls, analyses)
+
+
+def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
+                        y: np.ndarray, f0: np.ndarray, held: np.ndarray, P: np.ndarray,
+                        T: np.ndarray, atol: np.ndarray, J: np.ndarray, ge_J: np.ndarray,
+                        ft: np.ndarray, yp: np.ndarray, fp: np.ndarray, ge_aux: np.ndarray,
+                        all_live: np.ndarray, S: np.ndarray, colour: np.ndarray,
+                        ge_Phi: np.ndarray, ge_A: np.ndarray, ge_B: np.ndarray,
+                        memory: np.ndarray, ge_at: int, ge_w: np.ndarray,
+                        ge_d: np.ndarray) -> tuple[int, int, int]:
+    """The embedded global-error estimate (:mod:`feeddrive.solvers.global_error`) carried
+    over the accepted step [t, t_new]: the propagator exp(H J) formed afresh every
+    ``GE_REFRESH`` steps (from the RODAS4 step's own Jacobian, else from one taken at (t, y)),
+    then the step's local error added and propagated.
+
+    Parameters
+    ----------
+    used_rodas : bool
+        The step was RODAS4's (``J`` is its Jacobian).
+    ge_since : int
+        Accepted steps since the propagator was formed.
+    t, t_new : float
+        The step [s].
+    y, f0 : numpy.ndarray
+        The state at t and its derivative [SI; SI/s, per state].
+    held, P, T : numpy.ndarray
+        Held values, parameters, tables [SI].
+    atol : numpy.ndarray
+        Absolute tolerance per state, the scaling of the exponential [SI, per state].
+    J, ge_J : numpy.ndarray
+        The step's Jacobian; the estimate's own, written [1/s in SI units].
+    ft, yp, fp, ge_aux : numpy.ndarray
+        Work space [SI].
+    all_live : numpy.ndarray of bool
+        All true.
+    S, colour : numpy.ndarray of int
+        Sparsity pattern and column groups.
+    ge_Phi, ge_A, ge_B : numpy.ndarray
+        The propagator, written, and work space [-].
+    memory : numpy.ndarray
+        The driver's memory, whose slots from ``ge_at`` hold the estimate [mixed].
+    ge_at : int
+        Where those slots start.
+    ge_w : numpy.ndarray
+        Work space [SI, per state].
+    ge_d : numpy.ndarray
+        The step's local error estimate [SI, per state].
+
+    Returns
+    -------
+    calls : int
+        Right-hand-side evaluations made.
+    jacobians : int
+        Jacobians taken.
+    ge_since : int
+        Updated.
+    """
+    calls = 0
+    jacobians = 0
+    if ge_since >= GE_REFRESH:
+        if used_rodas:  # the step's own Jacobian
+            ge_exponential(J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
+        else:
+            calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, ge_J, ft, yp, fp, ge_aux,
+                                    all_live, S, colour)
+            jacobians = 1
+            ge_exponential(ge_J, GE_INTERVAL, ge_Phi, ge_A, ge_B, atol)
+        ge_since = 0
+    ge_since += 1
+    ge_advance(t, t_new, ge_Phi, memory, ge_at, GE_INTERVAL, ge_w, ge_d)
+    return calls, jacobians, ge_since
+
+
+#: the pieces, in the order they are placed in the compiled module
+PIECES = ("jacobian_fresh", "modal_reference", "modal_refresh", "stiffness_estimate",
+          "step_size", "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
+          "next_event", "memory_load", "memory_save", "switch_method",
+          "error_estimate_step")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
@@ -1202,4 +1825,117 @@ def source(use: str, inline: bool = True) -> str:
     constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
     text = specialise(driver_template, use, params, constants, doc,
                       "int" if use == "advance" else None)
+    return steps.inline_steps(inline_pieces(text)) if inline else text
+
+
+#: the pieces numba's text has written in, as it has the steps
+#: (:func:`feeddrive.solvers.steps.inline_steps`): numba's own inlining
+#: (``inline="always"``) of ``dense_coefficients`` and ``outputs_inside``, called at every
+#: step with a dozen arrays each, cost 10–20 % of a ``modal`` run (benchmarks/README.md,
+#: "the driver split"); written in, the run costs what it did.  ``switch_method`` takes more
+#: than 30 arguments, which Python passes as ``*args``, which numba cannot inline
+NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method")
+
+
+def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str:
+    """``source`` (a driver's function text) with every call statement of the pieces
+    ``names`` — ``name(args)`` or ``target = name(args)`` — replaced by the piece's body, its
+    parameters renamed to the arguments (a final ``return x`` becomes ``target = x``; the
+    pieces so written in have no other return, and their locals mean in the driver what they
+    mean in the piece).
+
+    Parameters
+    ----------
+    source : str
+        The driver's function text.
+    names : tuple of str, default NUMBA_WRITTEN_IN
+        The pieces to write in.
+
+    Returns
+    -------
+    str
+        The text with the calls replaced by the pieces' bodies.
+    """
+    lines = source.splitlines()
+    tree = ast.parse(textwrap.dedent(source))
+    found: list[tuple[int, int, int, list[str]]] = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.stmt):
+            continue
+        value, target = None, None
+        if isinstance(node, ast.Expr):
+            value = node.value
+        elif isinstance(node, ast.Assign) and len(node.targets) == 1:
+            value, target = node.value, node.targets[0]
+        if (isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
+                and value.func.id in names):
+            fn = ast.parse(_text_of(globals()[value.func.id])).body[0]
+            assert isinstance(fn, ast.FunctionDef) and node.end_lineno is not None
+            params = [a.arg for a in fn.args.args]
+            stored = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
+                      and isinstance(n.ctx, ast.Store)}
+            for param, arg in zip(params, value.args, strict=True):
+                if param in stored and not (isinstance(arg, ast.Name) and arg.id == param):
+                    # written in, the assignment would reach the caller's variable
+                    raise ValueError(f"{value.func.id}: parameter {param!r} is assigned; it "
+                                     f"can be written in only when passed as itself")
+            rename = steps._Rename(dict(zip(params, value.args, strict=True)))
+            out = []
+            for stmt in fn.body:
+                if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
+                    continue  # the docstring
+                if isinstance(stmt, ast.Return):
+                    if target is None or stmt.value is None:
+                        raise ValueError(f"{value.func.id}: a returned value needs a target")
+                    stmt = ast.Assign(targets=[target], value=stmt.value, lineno=0)
+                out += ast.unparse(rename.visit(stmt)).splitlines()
+            found.append((node.lineno, node.end_lineno, node.col_offset, out))
+    for start, end, col, body in sorted(found, reverse=True):
+        lines[start - 1:end] = [" " * col + ln for ln in body]
+    return "\n".join(lines) + "\n"
+
+
+@functools.cache
+def piece_source(name: str, inline: bool = True) -> str:
+    """The text of the driver's piece ``name`` (:data:`PIECES`), with the explicit step's
+    functions written in (:func:`feeddrive.solvers.steps.inline_steps`) unless ``inline`` is
+    false (the C translation calls them).
+
+    Parameters
+    ----------
+    name : str
+        A piece.
+    inline : bool, default True
+        Write the step, error and controller functions into the text.
+
+    Returns
+    -------
+    str
+        Python source of the function ``name``.
+    """
+    if name not in PIECES:
+        raise KeyError(f"{name!r}: not a piece of the driver ({', '.join(PIECES)})")
+    text = _text_of(globals()[name])
     return steps.inline_steps(text) if inline else text
+
+
+def template_sources() -> list[str]:
+    """Text placed in the shared drivers' module before the drivers: the pieces they call
+    (:data:`PIECES`), which numba inlines into them (``inline="always"``).
+
+    Returns
+    -------
+    list of str
+        Python sources.
+    """
+    return ["from feeddrive._jit import inline_kernel",
+            f"from feeddrive.solvers.driver import ({', '.join(STATUS_NAMES)})",
+            "from feeddrive.solvers.schedule import next_instant",
+            "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
+            "MODAL_SWITCH_GAIN, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, STIFF_HLAMBDA, "
+            "STIFF_STEPS)",
+            "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
+            "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, exponential as ge_exponential",
+            "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
+            "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA",
+            *("@inline_kernel\n" + piece_source(name) for name in PIECES)]

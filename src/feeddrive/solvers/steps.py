@@ -488,6 +488,8 @@ def _norm_source(name: str = "_error_norm") -> str:
 
 
 class _Rename(ast.NodeTransformer):
+    """Names replaced by expressions (a function's parameters by a call's arguments)."""
+
     def __init__(self, names: dict[str, ast.expr]) -> None:
         self.names = names
 
