@@ -11,6 +11,11 @@ about 25 % faster per right-hand-side evaluation; non-finite states are caught b
 
 Loading from the cache skips numba's *refresh* of its compiler (:class:`_LoadingCache`).
 
+numba is optional (the install extra ``feeddrive[numba]``, :data:`HAVE_NUMBA`): without it
+every kernel is its plain Python function (with ``py_func``, itself), and whatever runs per
+step — the integrators, the linearisations' rate and Jacobian functions, the model's
+auxiliary signals — runs in the engine's C build (:mod:`feeddrive.solvers.builds`).
+
 ``nogil=True``: a compiled call releases Python's global interpreter lock while it runs, so
 other threads of the process keep going during a long solver call (the explorer's server
 answers its page's polls while a run computes: issue 23; measured in
@@ -31,16 +36,25 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from numba import config as _numba_config
-from numba import njit
-from numba.core import sigutils
-from numba.core.caching import FunctionCache
-from numba.core.ccallback import CFunc
-from numba.core.runtime import rtsys
-
 from ._disk import file_lock, user_cache_root
 
-config: Any = _numba_config  # CACHE_DIR is set dynamically by numba; untyped
+try:
+    from numba import config as _numba_config
+    from numba import njit
+    from numba.core import sigutils
+    from numba.core.caching import FunctionCache
+    from numba.core.ccallback import CFunc
+    from numba.core.runtime import rtsys
+except ImportError:  # the optional extra feeddrive[numba] is not installed
+    #: whether numba is installed (``pip install 'feeddrive[numba]'``): without it every
+    #: kernel is its plain Python function and the engine runs in C
+    #: (:mod:`feeddrive.solvers.builds`)
+    HAVE_NUMBA = False
+    FunctionCache = object
+else:
+    HAVE_NUMBA = True
+
+config: Any = _numba_config if HAVE_NUMBA else None  # CACHE_DIR is set dynamically; untyped
 
 _HERE = Path(__file__).resolve().parent
 _KERNEL_SOURCES = ("_jit.py",)  # model/ holds friction, reference
@@ -107,7 +121,17 @@ def _loading_cache(fn: Callable[..., Any]) -> _LoadingCache:
         config.CACHE_DIR = previous
 
 
+def _plain(fn: Callable[..., Any]) -> Any:
+    """Without numba: the kernel is its Python function, with numba's ``py_func`` (itself),
+    so that the C translator and the code generators read it as they read a dispatcher."""
+    fn.py_func = fn  # type: ignore[attr-defined]
+    return fn
+
+
 def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
+    if not HAVE_NUMBA:
+        return _plain
+
     def decorate(fn: Callable[..., Any]) -> Any:
         # cache=True, with the loading cache: what numba's enable_caching() does with its
         # own class (one cache object, not numba's made and then replaced)
@@ -147,6 +171,8 @@ def first_class(fn: Callable[..., Any], signature: Any, name: str) -> Any:
     """
     import types
 
+    if not HAVE_NUMBA:  # the Python function (cold callers only: the engine runs in C)
+        return fn
     # numba's typing of a cfunc passed to compiled code (a full compiler refresh imports it;
     # a load from the cache, :class:`_LoadingCache`, does not)
     import numba.experimental.function_type  # noqa: F401
@@ -157,7 +183,7 @@ def first_class(fn: Callable[..., Any], signature: Any, name: str) -> Any:
     copy.__module__ = fn.__module__
     compiled = CFunc(copy, sigutils.normalize_signature(signature), locals={},
                      options={"error_model": "numpy", "nogil": True})
-    compiled._cache = _loading_cache(copy)  # type: ignore[attr-defined]
+    setattr(compiled, "_cache", _loading_cache(copy))  # noqa: B010 (numba has no stubs)
     compiled.compile()
     return compiled
 

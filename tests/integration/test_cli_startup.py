@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from feeddrive._jit import HAVE_NUMBA
 from feeddrive.cli import COMMAND_MODULES
 
 #: modules a short simulate must not import: none of them is on its path (each cost a fresh
@@ -156,6 +157,8 @@ print(value, hits, refreshed, det)
 """
 
 
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed (the optional extra "
+                    "feeddrive[numba]): this is a test of its cache; .ci/min-versions runs it")
 def test_a_cache_load_skips_the_refresh_and_later_compiles_still_work(tmp_path: Path) -> None:
     """feeddrive._jit loads cached kernels without numba's refresh of its compiler (every
     lowering module imported: 0.3–0.4 s of a fresh process); the second process must load

@@ -85,12 +85,23 @@ def test_a_real_points_simulated_time_lies_in_the_protocols_range(tmp_path: Path
     assert lo <= out["values"]["duration"] <= hi, (lo, out["values"]["duration"], hi)
 
 
-def test_compiling_in_the_dry_run_is_reported(tmp_path: Path, monkeypatch) -> None:
+@pytest.mark.parametrize("build", ["numba", "c"])
+def test_compiling_in_the_dry_run_is_reported(tmp_path: Path, monkeypatch, build: str) -> None:
     """A kernel compiled while the dry run loads them is reported as compilation (numba's
-    compile events), not counted as a worker's start."""
-    import numba
+    compile events, or a library the C build compiled), not counted as a worker's start."""
+    from feeddrive._jit import HAVE_NUMBA
+    from feeddrive.backends import c_cache
+
+    if build == "numba" and not HAVE_NUMBA:
+        pytest.skip("numba is not installed (the optional extra feeddrive[numba]); "
+                    ".ci/min-versions installs it")
 
     def compile_something(task: dict[str, Any]) -> None:
+        if build == "c":  # what c_cache.cached_library counts when it compiles a library
+            monkeypatch.setitem(c_cache.STATS, "compiles", c_cache.STATS["compiles"] + 1)
+            return
+        import numba
+
         numba.njit(lambda x: x + 1.5)(1.0)  # a new function: numba compiles it now
 
     monkeypatch.setattr(executors, "warm", compile_something)

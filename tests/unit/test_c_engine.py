@@ -11,6 +11,7 @@ import ast
 import shutil
 import subprocess
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -23,11 +24,20 @@ from feeddrive.solvers import builds, dopri5, driver, switching
 
 HAVE_CC = any(shutil.which(c) for c in ("cc", "gcc", "clang"))
 needs_cc = pytest.mark.skipif(not HAVE_CC, reason="no C compiler (cc, gcc, clang) on PATH")
+needs_numba = pytest.mark.skipif(
+    not builds.HAVE_NUMBA, reason="numba is not installed (the optional extra "
+    "feeddrive[numba]); .ci/min-versions installs it and runs this numba-versus-C comparison")
 
 
 def test_the_build_is_chosen_by_feeddrive_engine(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("FEEDDRIVE_ENGINE", "numba")
-    assert builds.engine_name() == "numba"
+    if builds.HAVE_NUMBA:
+        assert builds.engine_name() == "numba"
+    else:  # asked for a build that is not installed: one line saying how to get it
+        with pytest.raises(builds.NoEngine) as absent:
+            builds.engine_name()
+        assert "\n" not in str(absent.value)
+        assert "pip install 'feeddrive[numba]'" in str(absent.value)
     monkeypatch.setenv("FEEDDRIVE_ENGINE", " Fortran ")
     with pytest.raises(ValueError) as info:
         builds.engine_name()
@@ -42,6 +52,7 @@ def _no_compiler(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setattr(c_cache, "_SAID", [])
 
 
+@needs_numba
 def test_without_a_compiler_numba_runs_said_once_in_one_line(
         monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
         ) -> None:
@@ -57,9 +68,26 @@ def test_forcing_c_without_a_compiler_is_a_one_line_error(
         monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     _no_compiler(monkeypatch, tmp_path)
     monkeypatch.setenv("FEEDDRIVE_ENGINE", "c")
-    with pytest.raises(c_cache.CompilerNotFound) as info:
+    expected = c_cache.CompilerNotFound if builds.HAVE_NUMBA else builds.NoEngine
+    with pytest.raises(expected) as info:
         builds.engine_name()
     assert "\n" not in str(info.value) and "FEEDDRIVE_ENGINE = 'c'" in str(info.value)
+
+
+@pytest.mark.parametrize("engine", ["auto", "c"])
+def test_without_a_compiler_and_without_numba_one_line_says_how_to_get_either(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path, engine: str) -> None:
+    """Neither build can run (issue 42's acceptance): one line naming both ways out, not a
+    fallback to the drivers in plain Python."""
+    _no_compiler(monkeypatch, tmp_path)
+    monkeypatch.setattr(builds, "HAVE_NUMBA", False)
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", engine)
+    with pytest.raises(builds.NoEngine) as info:
+        builds.engine_name()
+    message = str(info.value)
+    assert "\n" not in message
+    assert "C compiler" in message and "apt-get install gcc" in message
+    assert "pip install 'feeddrive[numba]'" in message
 
 
 @pytest.mark.parametrize("use", c_engine.USES)
@@ -136,6 +164,7 @@ def _halves(model: fd.Model, use: str, mode: int, stop: bool = False) -> list[np
                                        ("integrate_dense", 1), ("integrate_dense", 2),
                                        ("integrate_dense", 3)],
                          ids=["dopri5", "dopri5-dense", "rodas4", "auto", "modal"])
+@needs_numba
 def test_every_method_gives_numbas_results_in_chunks_and_when_stopped(
         use: str, mode: int, monkeypatch: pytest.MonkeyPatch) -> None:
     """Bit for bit: the same operations in the same order (gcc without contraction)."""
@@ -156,7 +185,8 @@ def test_the_linearisations_and_auxiliary_functions_give_numbas_results(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """The shared module's other functions the C unit holds (the rates, central-difference
     columns, grouped Jacobian of the linearisations and steady states, the deferred auxiliary
-    signals): bit for bit at random states."""
+    signals): bit for bit at random states with the shared module's own (numba's, or without
+    numba the same text run by Python)."""
     model = SYSTEM.model(PROFILE)
     n, n_aux = len(model.states), len(model.aux)
     rng = np.random.default_rng(42)
@@ -164,24 +194,27 @@ def test_the_linearisations_and_auxiliary_functions_give_numbas_results(
     held = np.zeros(model.n_held)
     P, T = np.ascontiguousarray(model.P), np.ascontiguousarray(model.T)
     got: dict[str, list[np.ndarray]] = {}
-    for engine in ("numba", "c"):
-        monkeypatch.setenv("FEEDDRIVE_ENGINE", engine)
+    monkeypatch.setenv("FEEDDRIVE_ENGINE", "c")
+    for engine in ("shared", "c"):
+        def fn(name: str, engine: str = engine) -> Any:
+            return model.module.compiled(name) if engine == "shared" else \
+                builds.compiled(model, name)
+
         dy, aux = np.empty(n), np.empty(n_aux)
-        builds.compiled(model, "_ev_rates")(0.01, y, held, P, T, dy, aux)
+        fn("_ev_rates")(0.01, y, held, P, T, dy, aux)
         cols = np.arange(n, dtype=np.int64)
         A = np.empty((n, n))
-        builds.compiled(model, "_ev_central_columns")(
+        fn("_ev_central_columns")(
             0.01, y, held, P, T, cols, np.full(n, 1e-7), cols, A, np.empty(n), np.empty(n),
             np.empty(n), np.empty(n_aux))
         J, ft, f0 = np.empty((n, n)), np.empty(n), dy.copy()
-        calls = builds.compiled(model, "_r4_fd_jacobian")(
+        calls = fn("_r4_fd_jacobian")(
             0.01, y, f0, held, P, T, np.full(n, 1e-9), J, ft, np.empty(n), np.empty(n),
             np.empty(n_aux), np.ones(n, dtype=np.bool_),
             np.ascontiguousarray(model.jacobian_pattern), model.jacobian_colours)
-        out = builds.compiled(model, "auxiliary")(np.array([0.0, 0.01]), np.stack([y, 2 * y]),
-                                                  P, T)
+        out = fn("auxiliary")(np.array([0.0, 0.01]), np.stack([y, 2 * y]), P, T)
         got[engine] = [dy, aux, A, J, ft, np.array([calls]), out]
-    for a, b in zip(got["numba"], got["c"], strict=True):
+    for a, b in zip(got["shared"], got["c"], strict=True):
         np.testing.assert_array_equal(a, b)
     assert got["c"][5][0] > 0 and got["c"][6].shape == (2, n_aux)
 
@@ -203,8 +236,7 @@ def test_a_function_called_again_reads_and_writes_the_arrays_of_that_call(
     rates(0.0, y, held, P, T, dy, aux)
     other_dy = np.empty(n)
     rates(0.0, np.full(n, 1e-4), held, P, T, other_dy, aux)  # new arrays
-    monkeypatch.setenv("FEEDDRIVE_ENGINE", "numba")
-    reference = builds.compiled(model, "_ev_rates")
+    reference = model.module.compiled("_ev_rates")  # numba's, or Python's without numba
     expected = np.empty(n)
     reference(0.0, np.full(n, 2e-4), held, P, T, expected, np.empty(n_aux))
     np.testing.assert_array_equal(dy, expected)

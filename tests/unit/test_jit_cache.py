@@ -8,10 +8,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 import feeddrive
 from feeddrive import _jit
+from feeddrive._jit import HAVE_NUMBA
 from feeddrive.model import codegen
 from feeddrive.model.reference import ConstantSpeed
+
+needs_numba = pytest.mark.skipif(
+    not HAVE_NUMBA, reason="numba is not installed (the optional extra feeddrive[numba]); "
+    ".ci/min-versions installs it and runs this test of the numba build")
+
 
 PKG = Path(feeddrive.__file__).resolve().parent
 
@@ -65,6 +73,7 @@ def test_generated_module_file_is_named_after_its_text(tmp_path) -> None:
     assert other is not first and Path(other.__file__).name != Path(first.__file__).name
 
 
+@needs_numba
 def test_a_second_process_loads_the_assembled_model_from_disk(tmp_path) -> None:
     """The claim of docs/extending.md: per assembled model, numba's disk cache is hit in a new
     process (no recompilation)."""

@@ -9,7 +9,14 @@ import os
 import subprocess
 import sys
 
+import pytest
+
+from feeddrive._jit import HAVE_NUMBA
 from feeddrive.model.codegen import index
+
+needs_numba = pytest.mark.skipif(
+    not HAVE_NUMBA, reason="numba is not installed (the optional extra feeddrive[numba]); "
+    ".ci/min-versions installs it and runs this test of the numba build")
 
 # two structures whose friction sites sit at different offsets of P (the ripple adds slots
 # before them), each simulated briefly; then the LuGre kernels' compiled signatures
@@ -36,6 +43,7 @@ def test_an_offset_is_typed_int64_in_the_generated_source() -> None:
     assert index(71) == "int(71)"
 
 
+@needs_numba
 def test_the_friction_kernels_compile_once_for_every_offset(tmp_path) -> None:
     # an empty compile cache: the kernels are compiled, not loaded, so their signatures show
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}

@@ -12,6 +12,8 @@ from feeddrive.model.disturbances import LeadError, TorqueRipple
 from feeddrive.model.friction import FrictionLaw, friction_law, register_friction_law
 from feeddrive.model.reference import ConstantSpeed
 from feeddrive.parameters import ParameterError, loads
+from feeddrive.solvers import builds
+from feeddrive.solvers.builds import HAVE_NUMBA
 
 # ---------------------------------------------------------------- a toy law in this file only
 
@@ -27,9 +29,28 @@ class ToyViscous(FrictionLaw):
     kernel = _toy_viscous_kernel
 
 
-def test_a_friction_law_defined_outside_the_package_simulates() -> None:
-    register_friction_law(ToyViscous())
-    params = fd.preset("wang2021").replace_path("friction.guide.law", "toy_viscous")
+@fd.model.kernel
+def _toy_viscous_typed_kernel(v: float, y: np.ndarray, k: int, P: np.ndarray, o: int,
+                              dy: np.ndarray) -> float:
+    """The same law with type annotations: inside the C subset, so it runs without numba."""
+    return (P[o + 3] if v >= 0.0 else P[o + 7]) * v
+
+
+class ToyViscousTyped(FrictionLaw):
+    name = "toy_viscous_typed"
+    kernel = _toy_viscous_typed_kernel
+
+
+needs_numba = pytest.mark.skipif(
+    not HAVE_NUMBA, reason="numba is not installed (the optional extra feeddrive[numba]): a "
+    "kernel without type annotations runs in the numba build only")
+
+
+@pytest.mark.parametrize("law", [pytest.param(ToyViscous, marks=needs_numba), ToyViscousTyped],
+                         ids=["untyped", "typed"])
+def test_a_friction_law_defined_outside_the_package_simulates(law: type[FrictionLaw]) -> None:
+    register_friction_law(law())
+    params = fd.preset("wang2021").replace_path("friction.guide.law", law.name)
     result = fd.simulate(fd.DriveSystem(params, "cdfs", 0.4), ConstantSpeed(2e-3), 0.5)
     v = result["table_speed"]
     sigma2 = np.where(v >= 0, params.friction.guide.positive.viscous_coefficient,
@@ -53,6 +74,13 @@ def test_a_law_outside_the_c_subset_runs_in_numba_said_once(
     params = fd.preset("wang2021").replace_path("friction.guide.law", "toy_viscous")
     system = fd.DriveSystem(params, "cdfs", 0.3)
     monkeypatch.delenv("FEEDDRIVE_ENGINE", raising=False)
+    if not HAVE_NUMBA:  # neither build can run it: one line naming the kernel and the extra
+        with pytest.raises(builds.NoEngine) as absent:
+            fd.simulate(system, ConstantSpeed(2e-3), 0.05)
+        message = str(absent.value)
+        assert "\n" not in message and "_toy_viscous_kernel" in message
+        assert "pip install 'feeddrive[numba]'" in message
+        return
     capfd.readouterr()
     first = fd.simulate(system, ConstantSpeed(2e-3), 0.05)
     second = fd.simulate(system, ConstantSpeed(1e-3), 0.05)

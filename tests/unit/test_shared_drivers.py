@@ -7,8 +7,14 @@ import numpy as np
 import pytest
 
 import feeddrive
+from feeddrive._jit import HAVE_NUMBA
 from feeddrive.model.reference import ConstantSpeed
 from feeddrive.solvers import shared
+
+needs_numba = pytest.mark.skipif(
+    not HAVE_NUMBA, reason="numba is not installed (the optional extra feeddrive[numba]); "
+    ".ci/min-versions installs it and runs this test of the numba build")
+
 
 
 @pytest.fixture(autouse=True)
@@ -51,6 +57,7 @@ def test_the_shared_module_text_is_kept_and_a_damaged_one_rewritten(tmp_path) ->
         assert shared.module_source(kept) == built
 
 
+@needs_numba
 def test_two_model_structures_share_one_compiled_driver() -> None:
     """Two generated modules (another structure: the motor torque ripple adds a part) run
     through the same driver, compiled for one signature; their results are their own."""
@@ -109,6 +116,7 @@ def test_threads_that_first_use_a_model_together_compile_its_functions_once(
     assert got[0] is got[1]
 
 
+@needs_numba
 def test_the_linearisations_evaluations_are_the_kernels_own_to_the_bit() -> None:
     """``feeddrive.solvers.evaluate`` through the shared drivers (issue 21, fifth round): the
     rates and the state matrix are those of the model's own ``rhs`` kernel called from
@@ -143,6 +151,7 @@ def test_the_linearisations_evaluations_are_the_kernels_own_to_the_bit() -> None
     assert np.array_equal(f.columns(y, live, scale), expected)
 
 
+@needs_numba
 def test_prepared_models_compile_a_models_functions_and_stop_at_its_first_driver_call() -> None:
     """Inside ``prepared_models`` a run stops at its first driver call with the model's
     first-class functions made (a cold ``reproduce``'s idle worker compiles the study's models

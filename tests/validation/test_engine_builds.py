@@ -26,12 +26,17 @@ if str(ROOT) not in sys.path:
 from reference.record_signal_corpus import NUT_SPEED, TABLE_SPEED, cases  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
+from feeddrive._jit import HAVE_NUMBA  # noqa: E402
 from feeddrive.engine.options import METHODS  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 
 HAVE_CC = any(shutil.which(c) for c in ("cc", "gcc", "clang"))
-pytestmark = pytest.mark.skipif(not HAVE_CC, reason="no C compiler (cc, gcc, clang) on PATH: "
-                                                    "the C build cannot be built here")
+pytestmark = [
+    pytest.mark.skipif(not HAVE_CC, reason="no C compiler (cc, gcc, clang) on PATH: "
+                                           "the C build cannot be built here"),
+    pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed (the optional extra "
+                       "feeddrive[numba]): .ci/min-versions installs it and runs this file"),
+]
 CASES = cases()
 DURATION = 0.3  # [s]: the start transient and the first stick-slip cycles of the slow cases
 

@@ -43,6 +43,7 @@ from ..model import codegen
 from ..model.disturbances import LoadProfile, emit_load
 from ..model.friction import friction_law
 from ..model.friction.lugre_parameters import LuGreParameters
+from ..solvers import builds
 from ..solvers.dopri5 import STATUS_MESSAGES, STATUS_OK, new_memory
 from ..solvers.schedule import no_schedule
 
@@ -67,10 +68,22 @@ _SITE = "friction.site"
 
 @dataclass(frozen=True)
 class _Rig:
+    """The rig's generated module and what the engine's builds read of a model
+    (:func:`feeddrive.solvers.builds.driver`: the C build translates the module's kernels)."""
+
     module: ModuleType
     parameter_names: tuple[str, ...]
     n_states: int
     bristle: int  # index of the bristle state
+    states: tuple[codegen.Signal, ...]
+    aux: tuple[codegen.Signal, ...]
+    P: np.ndarray
+    T: np.ndarray
+    drive: str = "presliding-rig"
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.states)
 
     def slot(self, name: str) -> int:
         return self.parameter_names.index(name)
@@ -78,7 +91,8 @@ class _Rig:
 
 @functools.cache
 def _rig() -> _Rig:
-    """The compiled test rig (built once per process; numba caches it on disk)."""
+    """The test rig (built once per process; compiled by the engine's build, C or numba,
+    at its first run)."""
     law = friction_law(_LAW)
     site = None  # the LuGre law's slots and states do not depend on the values
     b = codegen.Builder()
@@ -108,7 +122,8 @@ def _rig() -> _Rig:
     module = codegen.compile_module(codegen.module_source(b),
                                     b.dynamic_sources)
     return _Rig(module=module, parameter_names=tuple(b.param_names), n_states=len(b.states),
-                bristle=first)
+                bristle=first, states=tuple(b.states), aux=tuple(b.aux),
+                P=b.packed_parameters(), T=b.packed_tables())
 
 
 def _integrate(step: float, force: np.ndarray, mass: float, packed: np.ndarray,
@@ -134,7 +149,9 @@ def _integrate(step: float, force: np.ndarray, mass: float, packed: np.ndarray,
     y0[0] = y0[rig.bristle] = force[0] / sigma0
     n = rig.n_states
     t_end = (force.size - 1) * step
-    _, y, _, stats, _ = rig.module.integrate(
+    # the build of the engine (C, or numba without a compiler) of every model
+    integrate = builds.driver(rig, "integrate")  # type: ignore[arg-type]
+    _, y, _, stats, _ = integrate(
         y0, t_end, 1, step, no_schedule(1), P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
         substeps * force.size + 10, 0, np.zeros(1), new_memory(n, h), np.full(n, math.inf),
         np.zeros((0, n)))

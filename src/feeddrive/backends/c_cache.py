@@ -49,7 +49,7 @@ LIBRARY_FLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared")
 #: what is said, once per process, when no C compiler is found (:func:`available_compiler`)
 NO_COMPILER = ("feeddrive: no C compiler found, so the numba build is used; to compile C, "
                "install gcc or clang (Debian: apt-get install gcc; macOS: xcode-select "
-               "--install) or set CC; without numba either: pip install numba")
+               "--install) or set CC; without numba either: pip install 'feeddrive[numba]'")
 #: this process's counts: ``compiles`` (libraries this process compiled into a cache) and
 #: ``hits`` (libraries found there)
 STATS = {"compiles": 0, "hits": 0}

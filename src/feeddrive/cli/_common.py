@@ -320,6 +320,9 @@ def user_errors(fn: F) -> F:
             simulate = sys.modules.get("feeddrive.engine.simulate")
             if simulate is not None and isinstance(err, simulate.SimulationError):
                 raise _fail(f"simulation failed: {err}", EXIT_FAILED) from None
+            builds = sys.modules.get("feeddrive.solvers.builds")  # neither C nor numba
+            if builds is not None and isinstance(err, builds.NoEngine):
+                raise _fail(str(err), EXIT_FAILED) from None
             sqlite3 = sys.modules.get("sqlite3")
             if sqlite3 is not None and isinstance(err, sqlite3.Error):
                 files = _files_of(kwargs)

@@ -6,7 +6,8 @@
 * :mod:`~feeddrive.model.disturbances` — load force, torque ripple, lead error;
 * ``feeddrive.model.reference`` — reference profiles (what the table is commanded to do);
 * :mod:`~feeddrive.model.assemble` — parts → :class:`Model` (names, packed vectors, kernels);
-* :mod:`~feeddrive.model.codegen` — the builder and the per-model numba-cached module.
+* :mod:`~feeddrive.model.codegen` — the builder and the per-model generated module (numba-cached
+  where numba is installed; its kernels translated to C for the engine).
 
 See docs/extending.md for adding a part.
 """

@@ -12,6 +12,11 @@ generators).  :func:`driver` picks one per call:
   kernels fall outside the C subset (a friction law or part written outside the package
   without type annotations) runs in numba, said once per model structure.
 
+numba is an optional install (``pip install 'feeddrive[numba]'``,
+:data:`feeddrive._jit.HAVE_NUMBA`).  Without it the C build runs everything per step, and
+where it cannot — no C compiler, ``FEEDDRIVE_ENGINE=numba``, or a model outside the C subset —
+:class:`NoEngine` says in one line how to get either build (:data:`NO_ENGINE`).
+
 Both give the same results (the regression corpus, docs/c-backend.md "The engine build").
 """
 
@@ -21,6 +26,7 @@ import os
 from typing import TYPE_CHECKING, Any
 
 from .. import registry
+from .._jit import HAVE_NUMBA
 
 if TYPE_CHECKING:
     from ..model.assemble import Model
@@ -29,6 +35,15 @@ if TYPE_CHECKING:
 ENGINE_ENV = "FEEDDRIVE_ENGINE"
 #: its values: "auto" (the default), "c" and "numba"
 CHOICES = ("auto", "c", "numba")
+#: what is said when neither build can run: no C compiler and numba not installed
+NO_ENGINE = ("no C compiler found and numba is not installed; install a C compiler "
+             "(Debian: apt-get install gcc; macOS: xcode-select --install; or set CC) or "
+             "install numba: pip install 'feeddrive[numba]'")
+
+
+class NoEngine(RuntimeError):
+    """Neither build can run a model: no C compiler (or a model outside the C subset) and numba
+    not installed.  The message is one line saying how to get either."""
 
 
 def chosen() -> str:
@@ -59,11 +74,26 @@ def engine_name() -> str:
     -------
     str
         The build's name.
+
+    Raises
+    ------
+    NoEngine
+        Without numba: no C compiler found, or ``FEEDDRIVE_ENGINE=numba``.
     """
     choice = chosen()
     if choice == "numba":
+        if not HAVE_NUMBA:
+            raise NoEngine(f"{ENGINE_ENV} = 'numba' but numba is not installed: "
+                           "pip install 'feeddrive[numba]', or unset it to use C")
         return "numba"
     engine = registry.table(registry.ENGINES).get("c")
+    if not HAVE_NUMBA:
+        try:
+            if engine is not None and engine.available(required=True):
+                return "c"
+        except RuntimeError:  # CompilerNotFound (the core does not import the backends)
+            pass
+        raise NoEngine((f"{ENGINE_ENV} = 'c': " if choice == "c" else "") + NO_ENGINE)
     if engine is None or not engine.available(required=choice == "c"):
         return "numba"
     return "c"
@@ -111,6 +141,12 @@ def _in_c(model: Model) -> bool:
     translate (else numba runs it, said once; an error with ``FEEDDRIVE_ENGINE=c``)."""
     if engine_name() != "c":
         return False
+    if not HAVE_NUMBA:
+        try:
+            return bool(registry.table(registry.ENGINES)["c"].translates(model, required=True))
+        except ValueError as err:  # TranslationError: outside the C subset
+            raise NoEngine(f"{str(err).splitlines()[0]}; this model needs the numba build: "
+                           "pip install 'feeddrive[numba]'") from None
     return bool(registry.table(registry.ENGINES)["c"].translates(model,
                                                                 required=chosen() == "c"))
 

@@ -27,16 +27,19 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from numba import types
+from .._jit import CACHE_DIR, HAVE_NUMBA, compile_lock, first_class, import_generated
 
-from .._jit import CACHE_DIR, compile_lock, first_class, import_generated
+RHS_SIGNATURE: Any = None
+SAMPLE_SIGNATURE: Any = None
+if HAVE_NUMBA:
+    from numba import types
 
-_ARRAY = types.float64[::1]
-#: ``rhs(t, y, held, P, T, dy, aux)``
-RHS_SIGNATURE = types.void(types.float64, _ARRAY, _ARRAY, _ARRAY, _ARRAY, _ARRAY, _ARRAY)
-#: ``sample_update(t, y, held, P, T, tick)``
-SAMPLE_SIGNATURE = types.void(types.float64, _ARRAY, _ARRAY, _ARRAY, _ARRAY,
-                              types.int64[::1])
+    _ARRAY = types.float64[::1]
+    #: ``rhs(t, y, held, P, T, dy, aux)``
+    RHS_SIGNATURE = types.void(types.float64, _ARRAY, _ARRAY, _ARRAY, _ARRAY, _ARRAY, _ARRAY)
+    #: ``sample_update(t, y, held, P, T, tick)``
+    SAMPLE_SIGNATURE = types.void(types.float64, _ARRAY, _ARRAY, _ARRAY, _ARRAY,
+                                  types.int64[::1])
 #: the names a template reads from its model, in the order they are passed
 MODEL_NAMES = ("rhs", "sample_update", "N_STATE", "N_AUX", "N_HELD", "N_CLOCK")
 #: the drivers a model calls (the other functions of the module are theirs)
@@ -254,6 +257,8 @@ class Bound:
         if getattr(_DRY_RUN, "on", False):
             raise ModelPrepared(name)
         head = [values[m] for m in added.get(name, ())]
+        if not HAVE_NUMBA:  # plain Python (cold callers; the engine runs in C)
+            return fn(*head, *args)
         if not fn.signatures:  # the first call in this process: compiled or loaded once
             with compile_lock(module.__file__ or name, name):
                 return fn(*head, *args)
@@ -314,6 +319,8 @@ class Bound:
             if got is not None and not getattr(_DRY_RUN, "on", False):
                 return got[0](*got[1], *args)
             out = first(*args)
+            if not HAVE_NUMBA:
+                return out
             module, added = _module()
             overloads = getattr(module, name).overloads
             if len(overloads) == 1:  # one signature: its compiled entry point

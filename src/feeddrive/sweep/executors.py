@@ -781,6 +781,27 @@ def simulated_range(q: dict[str, Any]) -> tuple[float, float]:
     return scan * short, (scan + math.ceil(coarse / q["resolution"])) * long
 
 
+
+def _c_compiles() -> int:
+    """The C libraries this process has compiled so far (the C build's count, read where its
+    module is loaded: the sweep does not import the code generators)."""
+    c_cache = sys.modules.get("feeddrive.backends.c_cache")
+    return int(c_cache.STATS["compiles"]) if c_cache is not None else 0
+
+
+@contextlib.contextmanager
+def _numba_compiles() -> Iterator[list[Any]]:
+    """The numba compilations made inside it (an empty list without numba)."""
+    from .._jit import HAVE_NUMBA
+
+    if not HAVE_NUMBA:
+        yield []
+        return
+    from numba.core.event import install_recorder
+
+    with install_recorder("numba:compile") as recorder:
+        yield recorder.buffer
+
 def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
              sample: int = 3, points: list[Point] | None = None,
              progress: Callable[[str], None] | None = None) -> Estimate:
@@ -855,17 +876,17 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
                  + (f"a {PROBE_DURATION:g}-s probe run of one point's drive" if simulates
                     else f"timing {len(todo)} of the {distinct - stored} points to compute "
                     "(each a full evaluation, nothing stored)"))
-    from numba.core.event import install_recorder
-
     t = _cpu()
-    with install_recorder("numba:compile") as compiled:
+    c_compiles = _c_compiles()
+    with _numba_compiles() as numba_compiled:
         for task in _structure_tasks(todo):
             warm(task)
     load = _cpu() - t
-    compile_seconds = load if compiled.buffer else 0.0
+    compiled = bool(numba_compiled) or _c_compiles() > c_compiles
+    compile_seconds = load if compiled else 0.0
     # a worker loads what this process compiled: its start is this process's imports and
     # the loading (after a compile, the next dry run measures the loading)
-    startup = started + (0.0 if compiled.buffer else load)
+    startup = started + (0.0 if compiled else load)
     if simulates:
         rate = _probe_rate(todo[0].task)
         lo, hi = simulated_range(todo[0].task["quantity"])

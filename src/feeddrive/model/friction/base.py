@@ -3,11 +3,13 @@
 A friction law is a small object (the python-control ``descfcn`` idea: a nonlinearity that
 carries its own analytic description):
 
-* ``kernel(v, y, k, P, o, dy) -> force`` — numba-compiled.  ``v`` [m/s] is the sliding speed
-  (linear-equivalent; rotary sites are in Table 1's ÷H form), the law's internal states are
-  ``y[k : k + len(state_names)]`` and it writes their rates to ``dy`` at the same places; its
-  parameters are ``P[o : o + n]`` as packed by :meth:`FrictionLaw.pack`.  Returns the friction
-  force [N] with the sign of the sliding speed.
+* ``kernel(v, y, k, P, o, dy) -> force`` — a ``@kernel`` (translated to C for the engine;
+  numba-compiled where numba is installed, plain Python otherwise).  ``v`` [m/s] is the
+  sliding speed (linear-equivalent; rotary sites are in Table 1's ÷H form), the law's
+  internal states are ``y[k : k + len(state_names)]`` and it writes their rates to ``dy`` at
+  the same places; its parameters are ``P[o : o + n]`` as packed by
+  :meth:`FrictionLaw.pack`.  Returns the friction force [N] with the sign of the sliding
+  speed.
 * ``pack(site)`` — the parameter vector from a site's
   :class:`~feeddrive.model.friction.lugre_parameters.LuGreParameters` (every law reads the
   same cited fields: F_c, F_s, v_s, σ2 per direction, σ0, σ1).

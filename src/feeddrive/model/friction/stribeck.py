@@ -8,8 +8,9 @@ torques by H = p_h/2π
 (:attr:`feeddrive.model.mechanisms.ball_screw_parameters.BallScrew.transmission_ratio`):
 T = H·F, ω = v/H.
 
-The scalar kernels (``*_kernel``) are numba-compiled and shared with the simulation engine,
-so the physics exists once.  ``p`` is the float64[10] vector of
+The scalar kernels (``*_kernel``) are shared with the simulation engine (which runs them in
+C), so the physics exists once; called from Python here, they are numba-compiled where numba
+is installed and plain Python otherwise.  ``p`` is the float64[10] vector of
 :meth:`feeddrive.model.friction.lugre_parameters.LuGreParameters.as_array`:
 (F_c+, F_s+, v_s+, σ2+, F_c−, F_s−, v_s−, σ2−, σ0, σ1).
 
