@@ -42,7 +42,7 @@ try:
     from numba import config as _numba_config
     from numba import njit
     from numba.core import sigutils
-    from numba.core.caching import FunctionCache
+    from numba.core.caching import FunctionCache as _NumbaFunctionCache
     from numba.core.ccallback import CFunc
     from numba.core.runtime import rtsys
 except ImportError:  # the optional extra feeddrive[numba] is not installed
@@ -50,9 +50,11 @@ except ImportError:  # the optional extra feeddrive[numba] is not installed
     #: kernel is its plain Python function and the engine runs in C
     #: (:mod:`feeddrive.solvers.builds`)
     HAVE_NUMBA = False
-    FunctionCache = object
 else:
     HAVE_NUMBA = True
+
+#: the base of the loading cache below (numba's FunctionCache; a placeholder without numba)
+FunctionCache: Any = _NumbaFunctionCache if HAVE_NUMBA else object
 
 config: Any = _numba_config if HAVE_NUMBA else None  # CACHE_DIR is set dynamically; untyped
 

@@ -264,13 +264,13 @@ def _template_result(name: str) -> tuple[str | None, bool]:
 
 
 def function_source(name: str) -> str:
-    """The text of the template behind ``name`` (:data:`FUNCTIONS`), renamed as in the shared
+    """The text of the template behind ``name`` (``FUNCTIONS``), renamed as in the shared
     module; an array it allocates and returns becomes its caller's last argument.
 
     Parameters
     ----------
     name : str
-        A key of :data:`FUNCTIONS`.
+        A key of ``FUNCTIONS``.
 
     Returns
     -------
@@ -521,8 +521,8 @@ class CEngine:
         self._compiler: dict[tuple[str | None, str | None], bool] = {}
 
     def available(self, required: bool = False) -> bool:
-        """Whether a C compiler is found (without one, :data:`~feeddrive.backends.c_cache.
-        NO_COMPILER` is said once per process).
+        """Whether a C compiler is found (without one,
+        :data:`~feeddrive.backends.c_cache.NO_COMPILER` is said once per process).
 
         Parameters
         ----------
@@ -617,7 +617,7 @@ class CEngine:
         return entry
 
     def function(self, model: Model, name: str) -> Callable[..., Any] | None:
-        """The C function ``name`` of ``model`` (a key of :data:`FUNCTIONS`), taking the
+        """The C function ``name`` of ``model`` (a key of ``FUNCTIONS``), taking the
         arguments of ``model.module.compiled(name)`` and returning what it returns; None for
         a function the C unit does not hold.
 
