@@ -385,18 +385,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             f0[i] = memory[2 + i]
     if COMM:
         memory[3] = 0.0  # MEM_AT_SAMPLE
-    if LAND:
-        if start % out_every == 0 and i_out < n_out:
-            t_out[i_out] = t
-            y_out[i_out, :] = y
-            aux_out[i_out, :] = aux
-            i_out += 1
-    if DENSE:
-        t_out[0] = t
-        y_out[0, :] = y
-        if want_aux:
-            aux_out[0, :] = aux
-        i_out = 1
+    if DENSE or (LAND and start % out_every == 0 and i_out < n_out):
+        i_out = output_row(t, y, aux, want_aux, t_out, y_out, aux_out, i_out)
     while (kb < n_break if LAND else t < t_end) and status == STATUS_OK:
         # ---- the next event: LAND the next breakpoint; else the schedule's next instant,
         # DENSE a profile breakpoint or (fixed step) an output point, the end
@@ -445,14 +435,11 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     n_rho += 1
                     n_eig += 1
                     have_ref = True
-            last = False
             if LAND:  # cut only when the step reaches the breakpoint (v1)
-                if h >= t_ev - t:
-                    h_try = t_ev - t
-                    last = True
-                else:
-                    h_try = h
+                last = h >= t_ev - t
+                h_try = t_ev - t if last else h
             else:
+                last = False
                 h_try = min(h, h_max)
                 if modal:  # both methods: DOPRI5 amplifies a mode at 1 < h|λ| < 3.3
                     h_try = min(h_try, h_osc)
@@ -530,16 +517,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 # a friction reversal inside the step (feeddrive.solvers.events): located on
                 # the DOPRI5 step's continuous extension, the step thrown away and the
                 # crossing made a step end, as in the dense driver; the outputs stay at the
-                # breakpoints.  The stages are free once the fifth coefficient is formed:
-                # k2, k3, k4 hold the other three
-                _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
-                for i in range(n):
-                    ydiff = y_new[i] - y[i]
-                    bspl = h_try * f0[i] - ydiff
-                    k2[i] = ydiff
-                    k3[i] = bspl
-                    k4[i] = ydiff - h_try * f_new[i] - bspl
-                th_sw, k_sw = switch_crossing(switch_rows, y, y_new, k2, k3, k4, e, False)
+                # breakpoints
+                th_sw, k_sw = land_crossing(h_try, y, y_new, f0, k2, k3, k4, k5, k6, f_new, e,
+                                            switch_rows)
                 if th_sw > 0.0 and th_sw * (t_new - t) > 1e-12 * max(1.0, t):
                     if steps > max_steps:
                         status = STATUS_MAX_STEPS
@@ -618,43 +598,31 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             t = t_new
             if LAND and t_ev < t_bp and t >= t_ev:  # on the reversal: on to the breakpoint
                 t_ev = t_bp
-            # the live time and stop slots (the memory's last two)
-            if not COMM and (memory.shape[0] > 3 + n if LAND
-                             else memory.shape[0] > MEMORY_SCALARS + n + n * n + 1):
-                memory[memory.shape[0] - 1] = t
-                if memory[memory.shape[0] - 2] != 0.0:
-                    status = STATUS_STOPPED
-                    break
             # the Jacobian is taken afresh at the next step, unless quiet (MODE_MODAL)
             jac_age += 1
             if not (quiet and used_rodas and stiff and jac_age < MODAL_EVERY):
                 jac_ok = False
-            if steps > max_steps:
-                status = STATUS_MAX_STEPS
-                break
-            if COMM:  # the FMU has no divergence bounds
+            if COMM:  # the FMU has no stop slot and no divergence bounds
+                if steps > max_steps:
+                    status = STATUS_MAX_STEPS
+                    break
                 check = STATUS_OK
                 for i in range(n):
                     if not math.isfinite(y[i]):
                         check = STATUS_NON_FINITE
-            else:
-                check = bounds_status(y, bound)
-            if check == STATUS_NON_FINITE:
-                status = STATUS_NON_FINITE
-                break
-            if not COMM and check == STATUS_DIVERGED:  # that step end is the last output
-                status = STATUS_DIVERGED
-                if i_out < n_out:
-                    t_out[i_out] = t
-                    y_out[i_out, :] = y
-                    if LAND:  # the last rhs call was at (t, y): aux is that of y
-                        aux_out[i_out, :] = aux
-                    elif want_aux:
+                if check == STATUS_NON_FINITE:
+                    status = STATUS_NON_FINITE
+                    break
+            else:  # the stop request, the step limit, the state's bounds
+                status = step_end_status(memory, 3 + n if LAND else MEMORY_SCALARS + n + n * n
+                                         + 1, t, steps, max_steps, y, bound)
+                if status == STATUS_DIVERGED and i_out < n_out:  # the last output
+                    if DENSE and want_aux:  # (LAND's last rhs call was at (t, y))
                         rhs(t, y, held, P, T, fp, aux)
                         n_out_rhs += 1
-                        aux_out[i_out, :] = aux
-                    i_out += 1
-                break
+                    i_out = output_row(t, y, aux, want_aux, t_out, y_out, aux_out, i_out)
+                if status != STATUS_OK:
+                    break
         if status != STATUS_OK:
             break
         jac_ok = False  # an event (a jump of the right-hand side): a fresh Jacobian after it
@@ -666,10 +634,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 rhs(t_ev, y, held, P, T, f0, aux)
                 n_rhs += 1
             if kb % out_every == 0 and i_out < n_out:
-                t_out[i_out] = t_ev
-                y_out[i_out, :] = y
-                aux_out[i_out, :] = aux
-                i_out += 1
+                i_out = output_row(t_ev, y, aux, want_aux, t_out, y_out, aux_out, i_out)
         else:
             if is_sample:
                 kb = kb_next
@@ -1134,6 +1099,111 @@ def bounds_status(y: np.ndarray, bound: np.ndarray) -> int:
 
 
 
+def step_end_status(memory: np.ndarray, stop_at: int, t: float, taken: int, max_steps: int,
+                    y: np.ndarray, bound: np.ndarray) -> int:
+    """The run's status after an accepted step (not the FMU's): the live time written and the
+    stop request read where the memory has their slots (its last two, beyond ``stop_at``),
+    then the step limit, then the state's check (:func:`bounds_status`).
+
+    Parameters
+    ----------
+    memory : numpy.ndarray
+        The driver's memory [mixed].
+    stop_at : int
+        The memory's length without the two slots.
+    t : float
+        The step's end [s].
+    taken, max_steps : int
+        Steps taken, the call's step limit.
+    y : numpy.ndarray
+        The state at t [SI, per state].
+    bound : numpy.ndarray
+        Largest |state| per state [SI, per state].
+
+    Returns
+    -------
+    int
+        ``STATUS_STOPPED``, ``STATUS_MAX_STEPS``, ``STATUS_NON_FINITE``, ``STATUS_DIVERGED``
+        or ``STATUS_OK``.
+    """
+    if memory.shape[0] > stop_at:
+        memory[memory.shape[0] - 1] = t
+        if memory[memory.shape[0] - 2] != 0.0:
+            return STATUS_STOPPED
+    if taken > max_steps:
+        return STATUS_MAX_STEPS
+    return bounds_status(y, bound)
+
+
+def output_row(t: float, y: np.ndarray, aux: np.ndarray, with_aux: bool, t_out: np.ndarray,
+               y_out: np.ndarray, aux_out: np.ndarray, i_out: int) -> int:
+    """One output sample written: t, the state and (``with_aux``) the auxiliary signals.
+
+    Parameters
+    ----------
+    t : float
+        The output's time [s].
+    y, aux : numpy.ndarray
+        The state and the auxiliary signals there [SI].
+    with_aux : bool
+        Write the auxiliary signals.
+    t_out, y_out, aux_out : numpy.ndarray
+        The outputs [s; SI].
+    i_out : int
+        The output's index.
+
+    Returns
+    -------
+    int
+        The next output's index.
+    """
+    t_out[i_out] = t
+    y_out[i_out, :] = y
+    if with_aux:
+        aux_out[i_out, :] = aux
+    return i_out + 1
+
+
+def land_crossing(h_try: float, y: np.ndarray, y_new: np.ndarray, f0: np.ndarray,
+                  k2: np.ndarray, k3: np.ndarray, k4: np.ndarray, k5: np.ndarray,
+                  k6: np.ndarray, f_new: np.ndarray, e: np.ndarray, switch_rows: np.ndarray
+                  ) -> tuple[float, int]:
+    """The first switching surface crossed inside the breakpoint driver's DOPRI5 step,
+    located on the step's continuous extension (:mod:`feeddrive.solvers.events`).  The stages
+    are free once the fifth coefficient is formed: ``k2``, ``k3``, ``k4`` take the other three
+    (overwritten), ``e`` the fifth.
+
+    Parameters
+    ----------
+    h_try : float
+        The step [s].
+    y, y_new : numpy.ndarray
+        The state at its start and end [SI, per state].
+    f0, k2, k3, k4, k5, k6, f_new : numpy.ndarray
+        The step's stages [SI/s, per state].
+    e : numpy.ndarray
+        Work space [SI, per state].
+    switch_rows : numpy.ndarray
+        (m, n) switching surfaces W·y [state units → m/s].
+
+    Returns
+    -------
+    theta : float
+        The crossing's fraction of the step (not in (0, 1]: none).
+    k : int
+        The surface crossed.
+    """
+    _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+    for i in range(y.size):
+        ydiff = y_new[i] - y[i]
+        bspl = h_try * f0[i] - ydiff
+        k2[i] = ydiff
+        k3[i] = bspl
+        k4[i] = ydiff - h_try * f_new[i] - bspl
+    theta, k = switch_crossing(switch_rows, y, y_new, k2, k3, k4, e, False)
+    return theta, k
+
+
 def next_event(t: float, t_end: float, kb: int, schedule: np.ndarray, base: float,
                stops: np.ndarray, i_stop: int, adaptive: int, i_out: int, n_out: int, o0: int,
                out_every: int) -> tuple[float, bool, bool, int, int]:
@@ -1497,7 +1567,7 @@ def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
 PIECES = ("jacobian_fresh", "modal_reference", "modal_refresh", "stiffness_estimate",
           "step_size", "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
           "next_event", "memory_load", "memory_save", "switch_method",
-          "error_estimate_step")
+          "error_estimate_step", "step_end_status", "output_row", "land_crossing")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
