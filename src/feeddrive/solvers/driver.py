@@ -292,13 +292,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         live = np.ones(n, dtype=np.bool_)
         all_live = np.ones(n, dtype=np.bool_)
         J_ref = np.zeros((n, n))
-        n_out_rhs = 0
-        n_jac = 0
-        n_rodas = 0
-        switches = 0
-        n_eig = 0
-        n_rho = 0  # spectral-radius estimates (power iterations)
-        n_switch = 0
+        # the statistics: output rhs calls, Jacobians, RODAS4 steps, method switches,
+        # eigen-analyses, spectral-radius estimates (power iterations), surfaces crossed
+        n_out_rhs = n_jac = n_rodas = switches = n_eig = n_rho = n_switch = 0
         sw_last = -1  # the surface the last accepted step landed on (-1: none)
         sw_next = -1
         # the embedded global-error estimate (feeddrive.solvers.global_error), when the
@@ -410,31 +406,17 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 out_every)
         # ---- steps up to t_ev
         while (t < t_ev - 1e-15 * t_ev if LAND else t < t_ev) and status == STATUS_OK:
-            if stiff and not jac_ok:
-                calls, frozen_known = jacobian_fresh(t, y, f0, held, P, T, atol, J, ft, yp, fp,
-                                                     aux, live, all_live, frozen_known, S,
-                                                     colour)
+            if stiff and not jac_ok:  # a fresh Jacobian, its analyses
+                (calls, frozen_known, rho, h_osc, have_ref, since_eig, quiet, estimates,
+                 analyses) = jacobian_update(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux, live,
+                                             all_live, frozen_known, S, colour, switching, modal,
+                                             have_ref, since_eig, quiet, rho, h_osc, J_ref, v, w)
                 n_rhs += calls
                 n_jac += 1
+                n_rho += estimates
+                n_eig += analyses
                 jac_ok = True
                 jac_age = 0
-                if switching and not modal:
-                    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
-                    n_rho += 1
-                since_eig += 1
-                # MODE_MODAL: a Jacobian found within MODAL_REFRESH of the reference by the
-                # moved test is "quiet" and kept for up to MODAL_EVERY RODAS4 steps (below)
-                moved = not have_ref
-                if modal and have_ref and since_eig >= MODAL_EVERY:
-                    moved = modal_jacobian_moved(J, J_ref, MODAL_REFRESH)
-                    quiet = not moved
-                if modal and moved:
-                    quiet = False
-                    since_eig = 0
-                    h_osc, rho = modal_reference(J, J_ref, live, atol, v, w)
-                    n_rho += 1
-                    n_eig += 1
-                    have_ref = True
             if LAND:  # cut only when the step reaches the breakpoint (v1)
                 last = h >= t_ev - t
                 h_try = t_ev - t if last else h
@@ -737,6 +719,67 @@ def jacobian_fresh(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray, P:
         _r4_frozen_states(J, f0, live)
         frozen_known = True
     return total, frozen_known
+
+
+def jacobian_update(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray, P: np.ndarray,
+                    T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                    yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, live: np.ndarray,
+                    all_live: np.ndarray, frozen_known: bool, S: np.ndarray,
+                    colour: np.ndarray, switching: bool, modal: bool, have_ref: bool,
+                    since_eig: int, quiet: bool, rho: float, h_osc: float, J_ref: np.ndarray,
+                    v: np.ndarray, w: np.ndarray
+                    ) -> tuple[int, bool, float, float, bool, int, bool, int, int]:
+    """The Jacobian of a RODAS4 step taken afresh (:func:`jacobian_fresh`) and what the
+    switching methods derive from it: ``MODE_AUTO`` its spectral radius; ``MODE_MODAL`` the
+    moved test against the reference Jacobian (a Jacobian within ``MODAL_REFRESH`` of it is
+    "quiet" and kept for up to ``MODAL_EVERY`` RODAS4 steps by the driver) and, when it moved
+    or there is none, a new reference (:func:`modal_reference`).
+
+    Parameters
+    ----------
+    t, y, f0, held, P, T, atol, J, ft, yp, fp, aux, live, all_live, frozen_known, S, colour
+        As :func:`jacobian_fresh`'s.
+    switching, modal : bool
+        ``MODE_AUTO`` or ``MODE_MODAL``; ``MODE_MODAL``.
+    have_ref : bool
+        A reference Jacobian is kept.
+    since_eig : int
+        Jacobians since the last eigen-analysis.
+    quiet : bool
+        The last moved test found the Jacobian quiet.
+    rho, h_osc : float
+        The spectral radius [1/s] and the modal step cap [s] so far.
+    J_ref : numpy.ndarray
+        The reference Jacobian, written on a new reference [1/s in SI units].
+    v, w : numpy.ndarray
+        Work space [-].
+
+    Returns
+    -------
+    tuple
+        (calls, frozen_known, rho, h_osc, have_ref, since_eig, quiet, spectral-radius
+        estimates made, eigen-analyses made).
+    """
+    calls, frozen_known = jacobian_fresh(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux, live,
+                                         all_live, frozen_known, S, colour)
+    estimates = 0
+    analyses = 0
+    if switching and not modal:
+        rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+        estimates += 1
+    since_eig += 1
+    moved = not have_ref
+    if modal and have_ref and since_eig >= MODAL_EVERY:
+        moved = modal_jacobian_moved(J, J_ref, MODAL_REFRESH)
+        quiet = not moved
+    if modal and moved:
+        quiet = False
+        since_eig = 0
+        h_osc, rho = modal_reference(J, J_ref, live, atol, v, w)
+        estimates += 1
+        analyses += 1
+        have_ref = True
+    return calls, frozen_known, rho, h_osc, have_ref, since_eig, quiet, estimates, analyses
 
 
 def modal_reference(J: np.ndarray, J_ref: np.ndarray, live: np.ndarray, atol: np.ndarray,
@@ -1126,13 +1169,16 @@ def step_end_status(memory: np.ndarray, stop_at: int, t: float, taken: int, max_
         ``STATUS_STOPPED``, ``STATUS_MAX_STEPS``, ``STATUS_NON_FINITE``, ``STATUS_DIVERGED``
         or ``STATUS_OK``.
     """
+    status = STATUS_OK
     if memory.shape[0] > stop_at:
         memory[memory.shape[0] - 1] = t
         if memory[memory.shape[0] - 2] != 0.0:
-            return STATUS_STOPPED
-    if taken > max_steps:
-        return STATUS_MAX_STEPS
-    return bounds_status(y, bound)
+            status = STATUS_STOPPED
+    if status == STATUS_OK and taken > max_steps:
+        status = STATUS_MAX_STEPS
+    if status == STATUS_OK:
+        status = bounds_status(y, bound)
+    return status
 
 
 def output_row(t: float, y: np.ndarray, aux: np.ndarray, with_aux: bool, t_out: np.ndarray,
@@ -1564,8 +1610,9 @@ def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
 
 
 #: the pieces, in the order they are placed in the compiled module
-PIECES = ("jacobian_fresh", "modal_reference", "modal_refresh", "stiffness_estimate",
-          "step_size", "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
+PIECES = ("jacobian_fresh", "modal_reference", "jacobian_update", "modal_refresh",
+          "stiffness_estimate", "step_size", "dense_coefficients", "outputs_inside", "outputs_at",
+          "bounds_status",
           "next_event", "memory_load", "memory_save", "switch_method",
           "error_estimate_step", "step_end_status", "output_row", "land_crossing")
 
@@ -1904,7 +1951,8 @@ def source(use: str, inline: bool = True) -> str:
 #: step with a dozen arrays each, cost 10–20 % of a ``modal`` run (benchmarks/README.md,
 #: "the driver split"); written in, the run costs what it did.  ``switch_method`` takes more
 #: than 30 arguments, which Python passes as ``*args``, which numba cannot inline
-NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method")
+NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
+                    "land_crossing", "step_end_status")
 
 
 def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str:
@@ -1950,7 +1998,7 @@ def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str
                     raise ValueError(f"{value.func.id}: parameter {param!r} is assigned; it "
                                      f"can be written in only when passed as itself")
             rename = steps._Rename(dict(zip(params, value.args, strict=True)))
-            out = []
+            body: list[ast.stmt] = []
             for stmt in fn.body:
                 if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
                     continue  # the docstring
@@ -1958,10 +2006,18 @@ def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str
                     if target is None or stmt.value is None:
                         raise ValueError(f"{value.func.id}: a returned value needs a target")
                     stmt = ast.Assign(targets=[target], value=stmt.value, lineno=0)
-                out += ast.unparse(rename.visit(stmt)).splitlines()
+                body.append(rename.visit(stmt))
+            # a constant argument's branches folded (``if True:``), ``x = x`` dropped
+            folded = _Fold({}).visit(ast.Module(body=body, type_ignores=[]))
+            out: list[str] = []
+            for stmt in folded.body:
+                if not (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
+                        and ast.dump(stmt.targets[0]).replace("Store", "Load")
+                        == ast.dump(stmt.value)):
+                    out += ast.unparse(stmt).splitlines()
             found.append((node.lineno, node.end_lineno, node.col_offset, out))
-    for start, end, col, body in sorted(found, reverse=True):
-        lines[start - 1:end] = [" " * col + ln for ln in body]
+    for start, end, col, text in sorted(found, reverse=True):
+        lines[start - 1:end] = [" " * col + ln for ln in text]
     return "\n".join(lines) + "\n"
 
 
@@ -2003,9 +2059,10 @@ def template_sources() -> list[str]:
             "from feeddrive.solvers.schedule import next_instant",
             "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
             "MODAL_SWITCH_GAIN, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, STIFF_HLAMBDA, "
-            "STIFF_STEPS)",
+            "STIFF_STEPS, MODAL_EVERY)",
             "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
             "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, exponential as ge_exponential",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
-            "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA",
+            "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA, "
+            "REFRESH as MODAL_REFRESH, jacobian_moved as modal_jacobian_moved",
             *("@inline_kernel\n" + piece_source(name) for name in PIECES)]
