@@ -1948,9 +1948,11 @@ def source(use: str, inline: bool = True) -> str:
 #: the pieces numba's text has written in, as it has the steps
 #: (:func:`feeddrive.solvers.steps.inline_steps`): numba's own inlining
 #: (``inline="always"``) of ``dense_coefficients`` and ``outputs_inside``, called at every
-#: step with a dozen arrays each, cost 10–20 % of a ``modal`` run (benchmarks/README.md,
-#: "the driver split"); written in, the run costs what it did.  ``switch_method`` takes more
-#: than 30 arguments, which Python passes as ``*args``, which numba cannot inline
+#: step with a dozen arrays each, cost 10–20 % of a ``modal`` run, and that of
+#: ``output_row``, ``land_crossing`` and ``step_end_status`` (at every step or breakpoint of
+#: the breakpoint driver) 4–8 % of a ``dopri5`` run (benchmarks/README.md, "the driver
+#: split"); written in, the runs cost what they did.  ``switch_method`` takes more than 30
+#: arguments, which Python passes as ``*args``, which numba cannot inline
 NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
                     "land_crossing", "step_end_status")
 
