@@ -3,7 +3,7 @@ split, per build and method, in one session.
 
 Run from the repository root::
 
-    python benchmarks/bench_driver_split.py BEFORE_SRC [--rounds 3]
+    python benchmarks/bench_driver_split.py BEFORE_SRC [--rounds 3] [--after SRC] [--out NAME.json]
 
 ``BEFORE_SRC`` is the ``src`` folder of a tree at the commit before the split (e.g.
 ``git archive b27e7de src | tar -x -C /tmp/before``).  Each round runs, in fresh processes
@@ -12,7 +12,8 @@ alternating between the two trees, the bench_engine scenarios ``cdfs_2p0``, ``cd
 the C and the numba build: each process warms up (compile or cache load) and then times one
 ``simulate`` per case five times (CPU s, ``time.process_time``, their median).  Ratios
 after/before of the median over rounds; the load average before and after is recorded.  Writes
-``benchmarks/results/bench_driver_split.json``.
+``benchmarks/results/bench_driver_split.json`` (``--out``: another name there; the second
+round of the split, the drivers' own lines, is ``bench_driver_split2.json``).
 """
 
 from __future__ import annotations
@@ -68,8 +69,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("before", help="the src folder of the tree before the split")
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--after", default=str(ROOT / "src"),
+                        help="the src folder of the tree after (default: this tree's)")
+    parser.add_argument("--out", default="bench_driver_split.json",
+                        help="the results file's name in benchmarks/results/")
     args = parser.parse_args()
-    trees = {"before": str(Path(args.before).resolve()), "after": str(ROOT / "src")}
+    trees = {"before": str(Path(args.before).resolve()), "after": str(Path(args.after).resolve())}
     load0 = os.getloadavg()
     t0 = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     times: dict[str, dict[str, list[float]]] = {}
@@ -92,7 +97,7 @@ def main() -> None:
               f"ratio {a / b:5.3f}  steps equal {rows[-1]['steps_equal']}")
     record = {"recorded": t0, "load_before": load0, "load_after": load1,
               "rounds": args.rounds, "rows": rows}
-    out = ROOT / "benchmarks" / "results" / "bench_driver_split.json"
+    out = ROOT / "benchmarks" / "results" / args.out
     out.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     print("load average", load0, "→", load1)
 

@@ -292,13 +292,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         live = np.ones(n, dtype=np.bool_)
         all_live = np.ones(n, dtype=np.bool_)
         J_ref = np.zeros((n, n))
-        n_out_rhs = 0
-        n_jac = 0
-        n_rodas = 0
-        switches = 0
-        n_eig = 0
-        n_rho = 0  # spectral-radius estimates (power iterations)
-        n_switch = 0
+        # the statistics: output rhs calls, Jacobians, RODAS4 steps, method switches,
+        # eigen-analyses, spectral-radius estimates (power iterations), surfaces crossed
+        n_out_rhs = n_jac = n_rodas = switches = n_eig = n_rho = n_switch = 0
         sw_last = -1  # the surface the last accepted step landed on (-1: none)
         sw_next = -1
         # the embedded global-error estimate (feeddrive.solvers.global_error), when the
@@ -385,18 +381,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             f0[i] = memory[2 + i]
     if COMM:
         memory[3] = 0.0  # MEM_AT_SAMPLE
-    if LAND:
-        if start % out_every == 0 and i_out < n_out:
-            t_out[i_out] = t
-            y_out[i_out, :] = y
-            aux_out[i_out, :] = aux
-            i_out += 1
-    if DENSE:
-        t_out[0] = t
-        y_out[0, :] = y
-        if want_aux:
-            aux_out[0, :] = aux
-        i_out = 1
+    if DENSE or (LAND and start % out_every == 0 and i_out < n_out):
+        i_out = output_row(t, y, aux, want_aux, t_out, y_out, aux_out, i_out)
     while (kb < n_break if LAND else t < t_end) and status == STATUS_OK:
         # ---- the next event: LAND the next breakpoint; else the schedule's next instant,
         # DENSE a profile breakpoint or (fixed step) an output point, the end
@@ -420,39 +406,22 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 out_every)
         # ---- steps up to t_ev
         while (t < t_ev - 1e-15 * t_ev if LAND else t < t_ev) and status == STATUS_OK:
-            if stiff and not jac_ok:
-                calls, frozen_known = jacobian_fresh(t, y, f0, held, P, T, atol, J, ft, yp, fp,
-                                                     aux, live, all_live, frozen_known, S,
-                                                     colour)
+            if stiff and not jac_ok:  # a fresh Jacobian, its analyses
+                (calls, frozen_known, rho, h_osc, have_ref, since_eig, quiet, estimates,
+                 analyses) = jacobian_update(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux, live,
+                                             all_live, frozen_known, S, colour, switching, modal,
+                                             have_ref, since_eig, quiet, rho, h_osc, J_ref, v, w)
                 n_rhs += calls
                 n_jac += 1
+                n_rho += estimates
+                n_eig += analyses
                 jac_ok = True
                 jac_age = 0
-                if switching and not modal:
-                    rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
-                    n_rho += 1
-                since_eig += 1
-                # MODE_MODAL: a Jacobian found within MODAL_REFRESH of the reference by the
-                # moved test is "quiet" and kept for up to MODAL_EVERY RODAS4 steps (below)
-                moved = not have_ref
-                if modal and have_ref and since_eig >= MODAL_EVERY:
-                    moved = modal_jacobian_moved(J, J_ref, MODAL_REFRESH)
-                    quiet = not moved
-                if modal and moved:
-                    quiet = False
-                    since_eig = 0
-                    h_osc, rho = modal_reference(J, J_ref, live, atol, v, w)
-                    n_rho += 1
-                    n_eig += 1
-                    have_ref = True
-            last = False
             if LAND:  # cut only when the step reaches the breakpoint (v1)
-                if h >= t_ev - t:
-                    h_try = t_ev - t
-                    last = True
-                else:
-                    h_try = h
+                last = h >= t_ev - t
+                h_try = t_ev - t if last else h
             else:
+                last = False
                 h_try = min(h, h_max)
                 if modal:  # both methods: DOPRI5 amplifies a mode at 1 < h|λ| < 3.3
                     h_try = min(h_try, h_osc)
@@ -530,16 +499,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 # a friction reversal inside the step (feeddrive.solvers.events): located on
                 # the DOPRI5 step's continuous extension, the step thrown away and the
                 # crossing made a step end, as in the dense driver; the outputs stay at the
-                # breakpoints.  The stages are free once the fifth coefficient is formed:
-                # k2, k3, k4 hold the other three
-                _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
-                for i in range(n):
-                    ydiff = y_new[i] - y[i]
-                    bspl = h_try * f0[i] - ydiff
-                    k2[i] = ydiff
-                    k3[i] = bspl
-                    k4[i] = ydiff - h_try * f_new[i] - bspl
-                th_sw, k_sw = switch_crossing(switch_rows, y, y_new, k2, k3, k4, e, False)
+                # breakpoints
+                th_sw, k_sw = land_crossing(h_try, y, y_new, f0, k2, k3, k4, k5, k6, f_new, e,
+                                            switch_rows)
                 if th_sw > 0.0 and th_sw * (t_new - t) > 1e-12 * max(1.0, t):
                     if steps > max_steps:
                         status = STATUS_MAX_STEPS
@@ -618,43 +580,31 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             t = t_new
             if LAND and t_ev < t_bp and t >= t_ev:  # on the reversal: on to the breakpoint
                 t_ev = t_bp
-            # the live time and stop slots (the memory's last two)
-            if not COMM and (memory.shape[0] > 3 + n if LAND
-                             else memory.shape[0] > MEMORY_SCALARS + n + n * n + 1):
-                memory[memory.shape[0] - 1] = t
-                if memory[memory.shape[0] - 2] != 0.0:
-                    status = STATUS_STOPPED
-                    break
             # the Jacobian is taken afresh at the next step, unless quiet (MODE_MODAL)
             jac_age += 1
             if not (quiet and used_rodas and stiff and jac_age < MODAL_EVERY):
                 jac_ok = False
-            if steps > max_steps:
-                status = STATUS_MAX_STEPS
-                break
-            if COMM:  # the FMU has no divergence bounds
+            if COMM:  # the FMU has no stop slot and no divergence bounds
+                if steps > max_steps:
+                    status = STATUS_MAX_STEPS
+                    break
                 check = STATUS_OK
                 for i in range(n):
                     if not math.isfinite(y[i]):
                         check = STATUS_NON_FINITE
-            else:
-                check = bounds_status(y, bound)
-            if check == STATUS_NON_FINITE:
-                status = STATUS_NON_FINITE
-                break
-            if not COMM and check == STATUS_DIVERGED:  # that step end is the last output
-                status = STATUS_DIVERGED
-                if i_out < n_out:
-                    t_out[i_out] = t
-                    y_out[i_out, :] = y
-                    if LAND:  # the last rhs call was at (t, y): aux is that of y
-                        aux_out[i_out, :] = aux
-                    elif want_aux:
+                if check == STATUS_NON_FINITE:
+                    status = STATUS_NON_FINITE
+                    break
+            else:  # the stop request, the step limit, the state's bounds
+                status = step_end_status(memory, 3 + n if LAND else MEMORY_SCALARS + n + n * n
+                                         + 1, t, steps, max_steps, y, bound)
+                if status == STATUS_DIVERGED and i_out < n_out:  # the last output
+                    if DENSE and want_aux:  # (LAND's last rhs call was at (t, y))
                         rhs(t, y, held, P, T, fp, aux)
                         n_out_rhs += 1
-                        aux_out[i_out, :] = aux
-                    i_out += 1
-                break
+                    i_out = output_row(t, y, aux, want_aux, t_out, y_out, aux_out, i_out)
+                if status != STATUS_OK:
+                    break
         if status != STATUS_OK:
             break
         jac_ok = False  # an event (a jump of the right-hand side): a fresh Jacobian after it
@@ -666,10 +616,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 rhs(t_ev, y, held, P, T, f0, aux)
                 n_rhs += 1
             if kb % out_every == 0 and i_out < n_out:
-                t_out[i_out] = t_ev
-                y_out[i_out, :] = y
-                aux_out[i_out, :] = aux
-                i_out += 1
+                i_out = output_row(t_ev, y, aux, want_aux, t_out, y_out, aux_out, i_out)
         else:
             if is_sample:
                 kb = kb_next
@@ -772,6 +719,67 @@ def jacobian_fresh(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray, P:
         _r4_frozen_states(J, f0, live)
         frozen_known = True
     return total, frozen_known
+
+
+def jacobian_update(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray, P: np.ndarray,
+                    T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                    yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, live: np.ndarray,
+                    all_live: np.ndarray, frozen_known: bool, S: np.ndarray,
+                    colour: np.ndarray, switching: bool, modal: bool, have_ref: bool,
+                    since_eig: int, quiet: bool, rho: float, h_osc: float, J_ref: np.ndarray,
+                    v: np.ndarray, w: np.ndarray
+                    ) -> tuple[int, bool, float, float, bool, int, bool, int, int]:
+    """The Jacobian of a RODAS4 step taken afresh (:func:`jacobian_fresh`) and what the
+    switching methods derive from it: ``MODE_AUTO`` its spectral radius; ``MODE_MODAL`` the
+    moved test against the reference Jacobian (a Jacobian within ``MODAL_REFRESH`` of it is
+    "quiet" and kept for up to ``MODAL_EVERY`` RODAS4 steps by the driver) and, when it moved
+    or there is none, a new reference (:func:`modal_reference`).
+
+    Parameters
+    ----------
+    t, y, f0, held, P, T, atol, J, ft, yp, fp, aux, live, all_live, frozen_known, S, colour
+        As :func:`jacobian_fresh`'s.
+    switching, modal : bool
+        ``MODE_AUTO`` or ``MODE_MODAL``; ``MODE_MODAL``.
+    have_ref : bool
+        A reference Jacobian is kept.
+    since_eig : int
+        Jacobians since the last eigen-analysis.
+    quiet : bool
+        The last moved test found the Jacobian quiet.
+    rho, h_osc : float
+        The spectral radius [1/s] and the modal step cap [s] so far.
+    J_ref : numpy.ndarray
+        The reference Jacobian, written on a new reference [1/s in SI units].
+    v, w : numpy.ndarray
+        Work space [-].
+
+    Returns
+    -------
+    tuple
+        (calls, frozen_known, rho, h_osc, have_ref, since_eig, quiet, spectral-radius
+        estimates made, eigen-analyses made).
+    """
+    calls, frozen_known = jacobian_fresh(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux, live,
+                                         all_live, frozen_known, S, colour)
+    estimates = 0
+    analyses = 0
+    if switching and not modal:
+        rho = _r4_spectral_radius(J, atol, v, w, POWER_ITERATIONS)
+        estimates += 1
+    since_eig += 1
+    moved = not have_ref
+    if modal and have_ref and since_eig >= MODAL_EVERY:
+        moved = modal_jacobian_moved(J, J_ref, MODAL_REFRESH)
+        quiet = not moved
+    if modal and moved:
+        quiet = False
+        since_eig = 0
+        h_osc, rho = modal_reference(J, J_ref, live, atol, v, w)
+        estimates += 1
+        analyses += 1
+        have_ref = True
+    return calls, frozen_known, rho, h_osc, have_ref, since_eig, quiet, estimates, analyses
 
 
 def modal_reference(J: np.ndarray, J_ref: np.ndarray, live: np.ndarray, atol: np.ndarray,
@@ -1134,6 +1142,114 @@ def bounds_status(y: np.ndarray, bound: np.ndarray) -> int:
 
 
 
+def step_end_status(memory: np.ndarray, stop_at: int, t: float, taken: int, max_steps: int,
+                    y: np.ndarray, bound: np.ndarray) -> int:
+    """The run's status after an accepted step (not the FMU's): the live time written and the
+    stop request read where the memory has their slots (its last two, beyond ``stop_at``),
+    then the step limit, then the state's check (:func:`bounds_status`).
+
+    Parameters
+    ----------
+    memory : numpy.ndarray
+        The driver's memory [mixed].
+    stop_at : int
+        The memory's length without the two slots.
+    t : float
+        The step's end [s].
+    taken, max_steps : int
+        Steps taken, the call's step limit.
+    y : numpy.ndarray
+        The state at t [SI, per state].
+    bound : numpy.ndarray
+        Largest |state| per state [SI, per state].
+
+    Returns
+    -------
+    int
+        ``STATUS_STOPPED``, ``STATUS_MAX_STEPS``, ``STATUS_NON_FINITE``, ``STATUS_DIVERGED``
+        or ``STATUS_OK``.
+    """
+    status = STATUS_OK
+    if memory.shape[0] > stop_at:
+        memory[memory.shape[0] - 1] = t
+        if memory[memory.shape[0] - 2] != 0.0:
+            status = STATUS_STOPPED
+    if status == STATUS_OK and taken > max_steps:
+        status = STATUS_MAX_STEPS
+    if status == STATUS_OK:
+        status = bounds_status(y, bound)
+    return status
+
+
+def output_row(t: float, y: np.ndarray, aux: np.ndarray, with_aux: bool, t_out: np.ndarray,
+               y_out: np.ndarray, aux_out: np.ndarray, i_out: int) -> int:
+    """One output sample written: t, the state and (``with_aux``) the auxiliary signals.
+
+    Parameters
+    ----------
+    t : float
+        The output's time [s].
+    y, aux : numpy.ndarray
+        The state and the auxiliary signals there [SI].
+    with_aux : bool
+        Write the auxiliary signals.
+    t_out, y_out, aux_out : numpy.ndarray
+        The outputs [s; SI].
+    i_out : int
+        The output's index.
+
+    Returns
+    -------
+    int
+        The next output's index.
+    """
+    t_out[i_out] = t
+    y_out[i_out, :] = y
+    if with_aux:
+        aux_out[i_out, :] = aux
+    return i_out + 1
+
+
+def land_crossing(h_try: float, y: np.ndarray, y_new: np.ndarray, f0: np.ndarray,
+                  k2: np.ndarray, k3: np.ndarray, k4: np.ndarray, k5: np.ndarray,
+                  k6: np.ndarray, f_new: np.ndarray, e: np.ndarray, switch_rows: np.ndarray
+                  ) -> tuple[float, int]:
+    """The first switching surface crossed inside the breakpoint driver's DOPRI5 step,
+    located on the step's continuous extension (:mod:`feeddrive.solvers.events`).  The stages
+    are free once the fifth coefficient is formed: ``k2``, ``k3``, ``k4`` take the other three
+    (overwritten), ``e`` the fifth.
+
+    Parameters
+    ----------
+    h_try : float
+        The step [s].
+    y, y_new : numpy.ndarray
+        The state at its start and end [SI, per state].
+    f0, k2, k3, k4, k5, k6, f_new : numpy.ndarray
+        The step's stages [SI/s, per state].
+    e : numpy.ndarray
+        Work space [SI, per state].
+    switch_rows : numpy.ndarray
+        (m, n) switching surfaces W·y [state units → m/s].
+
+    Returns
+    -------
+    theta : float
+        The crossing's fraction of the step (not in (0, 1]: none).
+    k : int
+        The surface crossed.
+    """
+    _dp5_dense(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+    for i in range(y.size):
+        ydiff = y_new[i] - y[i]
+        bspl = h_try * f0[i] - ydiff
+        k2[i] = ydiff
+        k3[i] = bspl
+        k4[i] = ydiff - h_try * f_new[i] - bspl
+    theta, k = switch_crossing(switch_rows, y, y_new, k2, k3, k4, e, False)
+    return theta, k
+
+
 def next_event(t: float, t_end: float, kb: int, schedule: np.ndarray, base: float,
                stops: np.ndarray, i_stop: int, adaptive: int, i_out: int, n_out: int, o0: int,
                out_every: int) -> tuple[float, bool, bool, int, int]:
@@ -1494,10 +1610,11 @@ def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
 
 
 #: the pieces, in the order they are placed in the compiled module
-PIECES = ("jacobian_fresh", "modal_reference", "modal_refresh", "stiffness_estimate",
-          "step_size", "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
+PIECES = ("jacobian_fresh", "modal_reference", "jacobian_update", "modal_refresh",
+          "stiffness_estimate", "step_size", "dense_coefficients", "outputs_inside", "outputs_at",
+          "bounds_status",
           "next_event", "memory_load", "memory_save", "switch_method",
-          "error_estimate_step")
+          "error_estimate_step", "step_end_status", "output_row", "land_crossing")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
@@ -1831,10 +1948,13 @@ def source(use: str, inline: bool = True) -> str:
 #: the pieces numba's text has written in, as it has the steps
 #: (:func:`feeddrive.solvers.steps.inline_steps`): numba's own inlining
 #: (``inline="always"``) of ``dense_coefficients`` and ``outputs_inside``, called at every
-#: step with a dozen arrays each, cost 10–20 % of a ``modal`` run (benchmarks/README.md,
-#: "the driver split"); written in, the run costs what it did.  ``switch_method`` takes more
-#: than 30 arguments, which Python passes as ``*args``, which numba cannot inline
-NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method")
+#: step with a dozen arrays each, cost 10–20 % of a ``modal`` run, and that of
+#: ``output_row``, ``land_crossing`` and ``step_end_status`` (at every step or breakpoint of
+#: the breakpoint driver) 4–8 % of a ``dopri5`` run (benchmarks/README.md, "the driver
+#: split"); written in, the runs cost what they did.  ``switch_method`` takes more than 30
+#: arguments, which Python passes as ``*args``, which numba cannot inline
+NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
+                    "land_crossing", "step_end_status")
 
 
 def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str:
@@ -1880,7 +2000,7 @@ def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str
                     raise ValueError(f"{value.func.id}: parameter {param!r} is assigned; it "
                                      f"can be written in only when passed as itself")
             rename = steps._Rename(dict(zip(params, value.args, strict=True)))
-            out = []
+            body: list[ast.stmt] = []
             for stmt in fn.body:
                 if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
                     continue  # the docstring
@@ -1888,10 +2008,18 @@ def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str
                     if target is None or stmt.value is None:
                         raise ValueError(f"{value.func.id}: a returned value needs a target")
                     stmt = ast.Assign(targets=[target], value=stmt.value, lineno=0)
-                out += ast.unparse(rename.visit(stmt)).splitlines()
+                body.append(rename.visit(stmt))
+            # a constant argument's branches folded (``if True:``), ``x = x`` dropped
+            folded = _Fold({}).visit(ast.Module(body=body, type_ignores=[]))
+            out: list[str] = []
+            for stmt in folded.body:
+                if not (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
+                        and ast.dump(stmt.targets[0]).replace("Store", "Load")
+                        == ast.dump(stmt.value)):
+                    out += ast.unparse(stmt).splitlines()
             found.append((node.lineno, node.end_lineno, node.col_offset, out))
-    for start, end, col, body in sorted(found, reverse=True):
-        lines[start - 1:end] = [" " * col + ln for ln in body]
+    for start, end, col, text in sorted(found, reverse=True):
+        lines[start - 1:end] = [" " * col + ln for ln in text]
     return "\n".join(lines) + "\n"
 
 
@@ -1933,9 +2061,10 @@ def template_sources() -> list[str]:
             "from feeddrive.solvers.schedule import next_instant",
             "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
             "MODAL_SWITCH_GAIN, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, STIFF_HLAMBDA, "
-            "STIFF_STEPS)",
+            "STIFF_STEPS, MODAL_EVERY)",
             "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
             "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, exponential as ge_exponential",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
-            "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA",
+            "ZETA_LIGHT as MODAL_ZETA_LIGHT, H_LAMBDA as MODAL_H_LAMBDA, "
+            "REFRESH as MODAL_REFRESH, jacobian_moved as modal_jacobian_moved",
             *("@inline_kernel\n" + piece_source(name) for name in PIECES)]
