@@ -26,11 +26,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from ... import registry
+from ...model.codegen import SIGNAL
 from ...parameters import ParameterError
 
 #: the inputs an axis offers its machine's parts: name → (unit, description)
@@ -40,8 +40,6 @@ AXIS_INPUTS = {
     "speed_correction": ("m/s", "table speed added to the speed command by the machine's "
                                 "synchronisation part"),
 }
-
-_NAME = re.compile(r"\{([^{}]+)\}")
 
 
 @dataclass(frozen=True)
@@ -104,7 +102,7 @@ class Coupling:
             Signal names, in order of first use.
         """
         own = self.parameters()
-        names = [n for expr in self.equations().values() for n in _NAME.findall(expr)]
+        names = [n for expr in self.equations().values() for n in SIGNAL.findall(expr)]
         return tuple(dict.fromkeys(n for n in names if n not in own))
 
     def writes(self) -> tuple[str, ...]:
