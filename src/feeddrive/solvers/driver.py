@@ -1957,6 +1957,31 @@ NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method", "ou
                     "land_crossing", "step_end_status")
 
 
+def _piece_body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
+    """The piece ``name`` written in for ``call`` (:func:`feeddrive.solvers.steps.
+    renamed_body`): a parameter it assigns must be passed as itself (else the assignment
+    would reach another of the caller's variables), a constant argument's branches folded
+    (``if True:``), ``x = x`` dropped."""
+    fn = ast.parse(_text_of(globals()[name])).body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    stored = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
+              and isinstance(n.ctx, ast.Store)}
+    params = [a.arg for a in fn.args.args]
+    body = steps.renamed_body(name, fn, call, target)
+    for param, arg in zip(params, call.args, strict=True):
+        if param in stored and not (isinstance(arg, ast.Name) and arg.id == param):
+            raise ValueError(f"{name}: parameter {param!r} is assigned; it "
+                             f"can be written in only when passed as itself")
+    folded = _Fold({}).visit(ast.Module(body=body, type_ignores=[]))
+    out: list[str] = []
+    for stmt in folded.body:
+        if not (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
+                and ast.dump(stmt.targets[0]).replace("Store", "Load")
+                == ast.dump(stmt.value)):
+            out += ast.unparse(stmt).splitlines()
+    return out
+
+
 def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str:
     """``source`` (a driver's function text) with every call statement of the pieces
     ``names`` — ``name(args)`` or ``target = name(args)`` — replaced by the piece's body, its
@@ -1976,51 +2001,7 @@ def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str
     str
         The text with the calls replaced by the pieces' bodies.
     """
-    lines = source.splitlines()
-    tree = ast.parse(textwrap.dedent(source))
-    found: list[tuple[int, int, int, list[str]]] = []
-    for node in ast.walk(tree):
-        if not isinstance(node, ast.stmt):
-            continue
-        value, target = None, None
-        if isinstance(node, ast.Expr):
-            value = node.value
-        elif isinstance(node, ast.Assign) and len(node.targets) == 1:
-            value, target = node.value, node.targets[0]
-        if (isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
-                and value.func.id in names):
-            fn = ast.parse(_text_of(globals()[value.func.id])).body[0]
-            assert isinstance(fn, ast.FunctionDef) and node.end_lineno is not None
-            params = [a.arg for a in fn.args.args]
-            stored = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
-                      and isinstance(n.ctx, ast.Store)}
-            for param, arg in zip(params, value.args, strict=True):
-                if param in stored and not (isinstance(arg, ast.Name) and arg.id == param):
-                    # written in, the assignment would reach the caller's variable
-                    raise ValueError(f"{value.func.id}: parameter {param!r} is assigned; it "
-                                     f"can be written in only when passed as itself")
-            rename = steps._Rename(dict(zip(params, value.args, strict=True)))
-            body: list[ast.stmt] = []
-            for stmt in fn.body:
-                if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
-                    continue  # the docstring
-                if isinstance(stmt, ast.Return):
-                    if target is None or stmt.value is None:
-                        raise ValueError(f"{value.func.id}: a returned value needs a target")
-                    stmt = ast.Assign(targets=[target], value=stmt.value, lineno=0)
-                body.append(rename.visit(stmt))
-            # a constant argument's branches folded (``if True:``), ``x = x`` dropped
-            folded = _Fold({}).visit(ast.Module(body=body, type_ignores=[]))
-            out: list[str] = []
-            for stmt in folded.body:
-                if not (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
-                        and ast.dump(stmt.targets[0]).replace("Store", "Load")
-                        == ast.dump(stmt.value)):
-                    out += ast.unparse(stmt).splitlines()
-            found.append((node.lineno, node.end_lineno, node.col_offset, out))
-    for start, end, col, text in sorted(found, reverse=True):
-        lines[start - 1:end] = [" " * col + ln for ln in text]
-    return "\n".join(lines) + "\n"
+    return steps.write_in(source, names, _piece_body)
 
 
 @functools.cache

@@ -33,6 +33,7 @@ import inspect
 import linecache
 import math
 import textwrap
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -497,18 +498,39 @@ class _Rename(ast.NodeTransformer):
         return self.names.get(node.id, node)
 
 
-def _body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
-    """The statements of step function ``name`` with its parameters renamed to the argument
-    expressions of ``call``; a final ``return x`` becomes ``target = x``."""
-    source = _norm_source(name) if name in _HAND_WRITTEN else sources()[name]
-    fn = ast.parse(source).body[0]
-    assert isinstance(fn, ast.FunctionDef)
+def renamed_body(name: str, fn: ast.FunctionDef, call: ast.Call,
+                 target: ast.expr | None) -> list[ast.stmt]:
+    """The statements of ``fn`` (the function ``name``) with its parameters renamed to the
+    argument expressions of ``call``, its docstring left out and a final ``return x`` made
+    ``target = x``: what a call statement becomes when the function is written in.
+
+    Parameters
+    ----------
+    name : str
+        The function's name (for the messages).
+    fn : ast.FunctionDef
+        Its definition.
+    call : ast.Call
+        The call written over.
+    target : ast.expr or None
+        The call statement's assignment target.
+
+    Returns
+    -------
+    list of ast.stmt
+        The statements.
+
+    Raises
+    ------
+    ValueError
+        Arguments other than one positional per parameter; a returned value with no target.
+    """
     params = [a.arg for a in fn.args.args]
     if len(call.args) != len(params) or call.keywords:
         raise ValueError(f"{name}: called with {len(call.args)} positional arguments for "
                          f"{len(params)} parameters")
     rename = _Rename(dict(zip(params, call.args, strict=True)))
-    out = []
+    out: list[ast.stmt] = []
     for stmt in fn.body:
         if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant):
             continue  # the docstring
@@ -516,8 +538,59 @@ def _body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
             if target is None or stmt.value is None:
                 raise ValueError(f"{name}: a returned value needs an assignment target")
             stmt = ast.Assign(targets=[target], value=stmt.value, lineno=0)
-        out += ast.unparse(rename.visit(stmt)).splitlines()
+        out.append(rename.visit(stmt))
     return out
+
+
+def _body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
+    """The statements of step function ``name`` written in for ``call``
+    (:func:`renamed_body`), as text."""
+    source = _norm_source(name) if name in _HAND_WRITTEN else sources()[name]
+    fn = ast.parse(source).body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    return [line for stmt in renamed_body(name, fn, call, target)
+            for line in ast.unparse(stmt).splitlines()]
+
+
+def write_in(source: str, names: tuple[str, ...],
+             body: Callable[[str, ast.Call, ast.expr | None], list[str]]) -> str:
+    """``source`` (a function's text) with every call statement of the functions ``names``
+    — ``name(args)`` or ``target = name(args)`` — replaced by ``body(name, call, target)``,
+    indented as the statement was.
+
+    Parameters
+    ----------
+    source : str
+        The function's text.
+    names : tuple of str
+        The functions whose calls are written over.
+    body : callable
+        The lines that replace a call statement.
+
+    Returns
+    -------
+    str
+        The text with the calls replaced.
+    """
+    lines = source.splitlines()
+    tree = ast.parse(textwrap.dedent(source))
+    found: list[tuple[int, int, int, list[str]]] = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.stmt):
+            continue
+        value, target = None, None
+        if isinstance(node, ast.Expr):
+            value = node.value
+        elif isinstance(node, ast.Assign) and len(node.targets) == 1:
+            value, target = node.value, node.targets[0]
+        if (isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
+                and value.func.id in names):
+            assert node.end_lineno is not None
+            found.append((node.lineno, node.end_lineno, node.col_offset,
+                          body(value.func.id, value, target)))
+    for start, end, col, text in sorted(found, reverse=True):
+        lines[start - 1:end] = [" " * col + ln for ln in text]
+    return "\n".join(lines) + "\n"
 
 
 INLINED = ("_dp5_step", "_dp5_error", "_dp5_dense", "_error_norm", "_pi_factor",
@@ -544,25 +617,7 @@ def inline_steps(source: str, names: tuple[str, ...] = INLINED) -> str:
     str
         The text with the step calls replaced by their bodies.
     """
-    lines = source.splitlines()
-    tree = ast.parse(textwrap.dedent(source))
-    found: list[tuple[int, int, int, list[str]]] = []
-    for node in ast.walk(tree):
-        if not isinstance(node, ast.stmt):
-            continue
-        value, target = None, None
-        if isinstance(node, ast.Expr):
-            value = node.value
-        elif isinstance(node, ast.Assign) and len(node.targets) == 1:
-            value, target = node.value, node.targets[0]
-        if (isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
-                and value.func.id in names):
-            assert node.end_lineno is not None
-            found.append((node.lineno, node.end_lineno, node.col_offset,
-                          _body(value.func.id, value, target)))
-    for start, end, col, body in sorted(found, reverse=True):
-        lines[start - 1:end] = [" " * col + ln for ln in body]
-    return "\n".join(lines) + "\n"
+    return write_in(source, names, _body)
 
 
 def template_sources() -> list[str]:
