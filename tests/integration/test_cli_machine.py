@@ -190,3 +190,18 @@ def test_ctrl_c_on_a_machine_run_stops_it_in_one_line_and_writes_nothing(
     assert re.search(r"interrupted: simulation interrupted at t = [0-9.]+ s\n?$", stderr)
     assert not out.exists()
     assert not list(tmp_path.glob("*.partial*"))
+
+
+def test_the_help_names_every_built_in_machine() -> None:
+    """`simulate --help` and `export fmu --help` list the built-in machines
+    (feeddrive.machine.MACHINES) for --machine."""
+    from feeddrive.machine import MACHINES
+
+    for command in (["simulate"], ["export", "fmu"]):
+        r = runner.invoke(app, [*command, "--help"], env={"COLUMNS": "200"})
+        assert r.exit_code == 0, r.output
+        text = " ".join(r.output.split())
+        option = text[re.search(r"--machine <\w+>", text).start():]  # type: ignore[union-attr]
+        option = option[:option.index(" --", 1)]  # the option's own help, to the next option
+        for name in MACHINES:
+            assert name in option, (command, name, option)

@@ -97,7 +97,8 @@ def simulate_command(
     force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
     machine: str | None = typer.Option(
         None, "--machine", help="A machine file (TOML, docs/machine.md) or a built-in machine "
-        "(xy-table): simulate its axes following --contour; the drive options are not used."),
+        "(xy-table, gantry): simulate its axes following --contour; the drive options are not "
+        "used."),
     contour: str = typer.Option("circle", "--contour",
                                 metavar="circle|line|corner|csv|together",
                                 help="--machine: the path (default circle); together: every "
