@@ -448,3 +448,16 @@ def test_the_statements_of_docs_outputs_md_are_the_codes(tmp_path: Path) -> None
     assert loops.MIN_PERIOD == 1e-6 and "at least 1 µs" in doc
     assert loops.MIN_GRATING == 1e-9 and "at least 1 nm" in doc
     assert "`stribeck_velocity_scale` at least 0.001" in doc
+
+
+def test_a_write_interrupted_after_its_begin_does_not_block_the_next(tmp_path: Path) -> None:
+    """Ctrl-C can land between a write's BEGIN IMMEDIATE and its try (CI, 2026-12-05: the
+    sweep's Ctrl-C test exited 1 with "SQLite: cannot start a transaction within a
+    transaction" instead of 130).  That state, made here by hand: the next write rolls the
+    uncommitted one back and goes on."""
+    with SweepStore(tmp_path / "s.sqlite") as store:
+        store.put("kept", {"values": {"x": 1.0}})
+        store._db.execute("BEGIN IMMEDIATE")  # the interrupted write's open transaction
+        store.put("next", {"values": {"x": 2.0}})
+        assert store.get("kept") is not None and store.get("next") is not None
+        assert not store._db.in_transaction

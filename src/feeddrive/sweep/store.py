@@ -268,11 +268,17 @@ class SweepStore:
         """Run ``fn`` in one write transaction (taken at once: BEGIN IMMEDIATE)."""
         if script:  # executescript commits by itself
             return fn(self._db)
+        if self._db.in_transaction:
+            # a write that Ctrl-C interrupted after its BEGIN and before its try (or inside
+            # its ROLLBACK): nothing of it was committed; undone here, or this BEGIN fails
+            # with "cannot start a transaction within a transaction"
+            self._db.execute("ROLLBACK")
         self._db.execute("BEGIN IMMEDIATE")
         try:
             out = fn(self._db)
         except BaseException:
-            self._db.execute("ROLLBACK")
+            if self._db.in_transaction:
+                self._db.execute("ROLLBACK")
             raise
         self._db.execute("COMMIT")
         return out
