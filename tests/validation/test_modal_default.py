@@ -37,10 +37,12 @@ def test_literal_cdfs_at_0p2_creeps_under_the_default() -> None:
     system = DriveSystem(fd.preset("wang2021-literal"), "cdfs", 0.4)
     default = creep_trial(system, 0.2e-3)
     dopri = creep_trial(system, 0.2e-3, options=SolverOptions(method="dopri5"))
-    auto = creep_trial(system, 0.2e-3, options=SolverOptions(method="auto"))
+    rodas = creep_trial(system, 0.2e-3, options=SolverOptions(method="rodas4"))
     assert default.kind == dopri.kind == "stick-slip"
     assert default.ripple_ratio == pytest.approx(dopri.ripple_ratio, rel=0.02)
-    assert auto.kind == "smooth"  # what the modal cap is for
+    # what the modal cap is for: uncapped RODAS4 steps damp the growing mode (``auto`` took
+    # them too until its switch back weighed the costs: test_stiff_switching.py)
+    assert rodas.kind == "smooth"
 
 
 def _stiff_ddfs(factor: float) -> DriveSystem:
@@ -244,8 +246,13 @@ def test_the_default_converges_with_order_5_on_the_exact_linear_response(
     """The default method, adaptive, on the frictionless closed loop (linear: exact answer by
     a matrix exponential, reference/linear_model.py), 0.5 s from rest, all tolerances
     tightened 10× at a time (``accuracy``): the global error falls in proportion to the
-    tolerance and as the 5th power of the step count (Dormand–Prince 5 with its 4th-order
-    error estimate, RODAS4 steps where it switches; measured: slopes 1.00 and 4.8–4.9)."""
+    tolerance and at least as the 5th power of the step count (Dormand–Prince 5 with its
+    4th-order error estimate, RODAS4 steps where it switches).  Measured: slopes 1.00 and
+    4.8–4.9 until 2026-12-05; since the cost-weighted switch back to DOPRI5
+    (``driver.RODAS4_COST``) 1.00–1.02 and 6.1–6.2: the loosest runs now hold DOPRI5 at its
+    stable step where RODAS4's steps would not pay, a step count that does not shrink with
+    the tolerance, so the error falls faster than the 5th power of the count (never slower,
+    which would be a lost order)."""
     import sys
     from pathlib import Path
     tests = Path(__file__).resolve().parents[1]
@@ -271,7 +278,7 @@ def test_the_default_converges_with_order_5_on_the_exact_linear_response(
     proportional = np.polyfit(np.log(factors), np.log(errors), 1)[0]
     order = -np.polyfit(np.log(steps), np.log(errors), 1)[0]
     assert proportional == pytest.approx(1.0, abs=0.15), errors
-    assert order == pytest.approx(5.0, abs=0.5), (steps, errors)
+    assert order >= 4.5, (steps, errors)
 
 
 @pytest.mark.parametrize(("drive", "table_speed", "nut_speed"),

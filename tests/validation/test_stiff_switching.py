@@ -65,9 +65,14 @@ def test_auto_switches_to_rodas4_on_the_stiff_ddfs_and_agrees_with_dopri5() -> N
     auto = simulate(system, profile, 2.0, options=replace(legacy, method="auto"))
     dp = simulate(system, profile, 2.0, options=replace(legacy, method="dopri5"))
     stats = auto.solver_stats
-    assert stats["method_switches"] >= 1 and stats["rosenbrock_steps"] > stats["steps"] / 2
-    # far fewer steps than the stability-bound explicit method
-    assert stats["steps"] < dp.solver_stats["steps"] / 10
+    # measured 2026-12-05: 5 switches, 261 RODAS4 of 1 081 steps and 8 410 right-hand sides
+    # against dopri5's 6 260 steps and 37 561 calls (before the cost-weighted switch back,
+    # RODAS4 took most of the steps: it now leaves the stretches where its steps are not
+    # RODAS4_COST × DOPRI5's stable step)
+    assert stats["method_switches"] >= 1 and stats["rosenbrock_steps"] > 0
+    # far fewer steps and calls than the stability-bound explicit method
+    assert stats["steps"] < dp.solver_stats["steps"] / 4
+    assert stats["rhs_evaluations"] < dp.solver_stats["rhs_evaluations"] / 3
     np.testing.assert_allclose(auto.time, dp.time, atol=1e-12)
     assert np.max(np.abs(auto["table_position"] - dp["table_position"])) < 1e-8
     assert np.max(np.abs(auto["table_speed"] - dp["table_speed"])) < 2e-3 * np.ptp(
@@ -163,13 +168,15 @@ def test_sampled_profile_follows_dopri5() -> None:
     assert np.max(np.abs(auto["table_position"] - dp["table_position"])) < 1e-8
 
 
-def test_auto_at_the_default_tolerance_damps_an_undamped_table_mode() -> None:
-    """Why the default is ``modal`` and not ``auto`` (docs/model.md): on the
-    ``wang2021-literal`` CDFS (no axial damping) at 0.2 mm/s, DOPRI5 at rtol 1e-6 and both
-    methods at rtol 1e-8 (absolute tolerances tightened alike) see stick-slip (ripple ≈ 2.2 ×
-    the command); ``auto``'s RODAS4 steps at rtol 1e-6 damp the growing table mode
-    numerically and the trial settles "smooth" (``modal`` caps those steps:
-    tests/validation/test_modal_default.py)."""
+def test_uncapped_rosenbrock_steps_damp_an_undamped_table_mode() -> None:
+    """Why the default is ``modal`` (docs/model.md): on the ``wang2021-literal`` CDFS (no axial
+    damping) at 0.2 mm/s, DOPRI5 sees stick-slip (ripple ≈ 2.2 × the command); RODAS4 steps
+    taken over the growing table mode damp it numerically and the trial settles "smooth", at
+    rtol 1e-6 and at 1e-8 (absolute tolerances tightened alike).  ``auto`` took such steps
+    until its switch back to DOPRI5 weighed the methods' costs (``RODAS4_COST``, 2026-12-05);
+    it now runs this trial on DOPRI5 and sees the stick-slip too, but only because RODAS4's
+    steps do not pay there — ``modal`` caps them whatever the switch decides
+    (tests/validation/test_modal_default.py)."""
     from feeddrive.analysis.critical import creep_trial
 
     system = DriveSystem(fd.preset("wang2021-literal"), "cdfs", 0.4)
@@ -180,7 +187,9 @@ def test_auto_at_the_default_tolerance_damps_an_undamped_table_mode() -> None:
         trial = creep_trial(system, 0.2e-3, options=options)
         return trial.kind, trial.ripple_ratio
 
-    dopri, auto, auto_tight = kind("dopri5", 1e-6), kind("auto", 1e-6), kind("auto", 1e-8)
-    assert dopri[0] == auto_tight[0] == "stick-slip"
-    assert auto_tight[1] == pytest.approx(dopri[1], rel=0.01)
-    assert auto[0] == "smooth" and auto[1] < 0.05 * dopri[1]
+    dopri = kind("dopri5", 1e-6)
+    assert dopri[0] == "stick-slip"
+    for rtol in (1e-6, 1e-8):
+        auto, rodas = kind("auto", rtol), kind("rodas4", rtol)
+        assert auto[0] == "stick-slip" and auto[1] == pytest.approx(dopri[1], rel=0.01)
+        assert rodas[0] == "smooth" and rodas[1] < 0.05 * dopri[1]

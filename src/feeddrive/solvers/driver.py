@@ -102,6 +102,13 @@ POWER_ITERATIONS = 12
 # MODE_MODAL: RODAS4 steps capped on lightly damped modes
 # switch to RODAS4 only if the capped step is ≥ this × DOPRI5's, and back when it is not
 MODAL_SWITCH_GAIN = 2.0
+# what a RODAS4 step costs in DOPRI5 steps (its Jacobian share, LU and six solves against six
+# cheap right-hand sides; measured 5.4-5.7 in the C build on the DDFS and ripple scenarios,
+# benchmarks/bench_switch_cost.py): a Rosenbrock stretch returns to DOPRI5 when its steps are
+# not this much longer than DOPRI5's stable step, the method-switch test of LSODA
+# (L. Petzold, SIAM J. Sci. Stat. Comput. 4 (1983) 136-148: each method's step weighed by
+# its cost); the switch to RODAS4 is then refused for MODAL_RETRY steps
+RODAS4_COST = 5.0
 # DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
 # of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
 MODAL_RETRY = 500
@@ -653,7 +660,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     if DENSE:
         memory_save(memory, live, J_ref, h, stiff, frozen_known, stiff_count, nonstiff_count,
                     err_old, r4_err_old, r4_h_old, r4_first, r4_rejected, h_osc, have_ref,
-                    refuse_until, dp_since_eig, rho, since_eig, quiet)
+                    refuse_until - steps, dp_since_eig, rho, since_eig, quiet)
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
                           t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
                           float(n_eig), float(n_switch), float(n_rho)])
@@ -1380,8 +1387,8 @@ def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: floa
     have_ref : bool
         A reference Jacobian is kept.
     refuse_until, dp_since_eig : int
-        The step count until which a switch is refused; DOPRI5 steps since the last
-        eigen-analysis.
+        The steps for which a switch is still refused, counted from the next call's first
+        (each call counts its steps from 0); DOPRI5 steps since the last eigen-analysis.
     rho : float
         The spectral radius [1/s].
     since_eig : int
@@ -1424,9 +1431,11 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
                   w: np.ndarray) -> tuple[bool, float, float, int, int, int, float, int, int,
                                           bool, bool, int, int]:
     """The stiffness detection and method switching after an accepted step (``MODE_AUTO``,
-    ``MODE_MODAL``).  From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps whose size
-    DOPRI5 would take stably (ρ·h < ``NONSTIFF_HRHO``; ``MODE_MODAL``: or the cap leaves
-    RODAS4 less than ``MODAL_SWITCH_GAIN`` × that step).  From DOPRI5, to RODAS4 after
+    ``MODE_MODAL``).  From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps not
+    ``RODAS4_COST`` × longer than DOPRI5's stable step ``NONSTIFF_HRHO``/ρ (``MODE_MODAL``: or
+    where the cap leaves RODAS4 less than ``MODAL_SWITCH_GAIN`` × that step); when DOPRI5 is
+    not stable at the Rosenbrock step itself (only cheaper), the switch to RODAS4 is then
+    refused for ``MODAL_RETRY`` steps.  From DOPRI5, to RODAS4 after
     ``STIFF_STEPS`` stiff verdicts (:func:`stiffness_estimate` > ``STIFF_HLAMBDA``; reset
     after 6 non-stiff steps in a row), unless (``MODE_MODAL``) the cap on the lightly damped
     modes would not let RODAS4 step ``MODAL_SWITCH_GAIN`` × further: then the switch is
@@ -1487,7 +1496,7 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
         # back to DOPRI5 when its stable step would do: this step's, or (MODE_MODAL) when
         # the cap leaves RODAS4 less than MODAL_SWITCH_GAIN × that step, the test that
         # refuses the switch the other way
-        if rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
+        if rho * min(h_done / RODAS4_COST, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
             nonstiff_count += 1
             if nonstiff_count >= NONSTIFF_STEPS:
                 stiff = False
@@ -1495,6 +1504,9 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
                 stiff_count = 0
                 nonstiff_count = 0
                 err_old = 1e-4
+                if rho * h_done >= NONSTIFF_HRHO:
+                    # DOPRI5 is not stable at RODAS4's step, only cheaper: not straight back
+                    refuse_until = n_steps + MODAL_RETRY
         else:
             nonstiff_count = 0
     else:
@@ -2041,8 +2053,8 @@ def template_sources() -> list[str]:
             f"from feeddrive.solvers.driver import ({', '.join(STATUS_NAMES)})",
             "from feeddrive.solvers.schedule import next_instant",
             "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
-            "MODAL_SWITCH_GAIN, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, STIFF_HLAMBDA, "
-            "STIFF_STEPS, MODAL_EVERY)",
+            "MODAL_SWITCH_GAIN, RODAS4_COST, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, "
+            "STIFF_HLAMBDA, STIFF_STEPS, MODAL_EVERY)",
             "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
             "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, exponential as ge_exponential",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "

@@ -14,9 +14,12 @@ shared drivers' module as ``integrate_dense``, runs in four modes:
   the step is held by stability — h·‖k7 − k6‖/‖y7 − y6‖ > 3.25, the estimate of h|λ| from the
   last two stages, in ``STIFF_STEPS`` of the recent accepted steps (``dopri5.f``, ``NSTIFF``
   test) — and back to DOPRI5 when the Rosenbrock step h times the power-iteration estimate of
-  the Jacobian's spectral radius stays below ``NONSTIFF_HRHO`` for ``NONSTIFF_STEPS`` steps
-  (an explicit step of that size would be stable, and costs 6 right-hand sides instead of
-  6 + one per group of Jacobian columns);
+  the Jacobian's spectral radius stays below ``RODAS4_COST`` × ``NONSTIFF_HRHO`` for
+  ``NONSTIFF_STEPS`` steps: RODAS4's step is not ``RODAS4_COST`` times DOPRI5's stable step
+  (``NONSTIFF_HRHO``/ρ), what a Rosenbrock step costs against an explicit one (a share of a
+  Jacobian, an LU and six solves against six right-hand sides; LSODA's cost-weighted switch).
+  Where DOPRI5 would not be stable at the Rosenbrock step itself, the switch to RODAS4 is
+  then refused for ``MODAL_RETRY`` steps;
 * ``MODE_MODAL``: ``MODE_AUTO`` with the steps capped on lightly damped modes
   (:mod:`feeddrive.solvers.modes`); the switch to RODAS4 is refused, and a Rosenbrock
   stretch ends, where the cap leaves RODAS4 less than ``MODAL_SWITCH_GAIN`` × DOPRI5's step
@@ -56,6 +59,7 @@ from .driver import (  # noqa: F401 - the modes and thresholds, read from here
     NONSTIFF_HRHO,
     NONSTIFF_STEPS,
     POWER_ITERATIONS,
+    RODAS4_COST,
     STIFF_HLAMBDA,
     STIFF_STEPS,
 )
@@ -70,6 +74,7 @@ STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "ja
 CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_MODAL",
              "STIFF_HLAMBDA", "STIFF_STEPS",
              "NONSTIFF_HRHO", "NONSTIFF_STEPS", "POWER_ITERATIONS", "MODAL_SWITCH_GAIN",
+             "RODAS4_COST",
              "MODAL_RETRY", "MODAL_EVERY")
 
 

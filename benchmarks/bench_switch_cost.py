@@ -1,0 +1,143 @@
+"""Benchmark (issues 35 item 4, 42): what a RODAS4 step costs against a DOPRI5 step, and what
+the cost-aware switch back to DOPRI5 (``feeddrive.solvers.driver.RODAS4_COST``) saves.
+
+Run from the repository root::
+
+    python benchmarks/bench_switch_cost.py [--runs 3]
+
+1. Per scenario and build (C, and numba when it is installed): CPU seconds per attempted step
+   (accepted + rejected) of ``rodas4`` and of ``dopri5-dense`` run alone, 10 s simulated at
+   the defaults, and their ratio — the number ``RODAS4_COST`` stands for.
+2. The default ``modal`` method with ``RODAS4_COST`` = 1 (the switch back only where DOPRI5 is
+   stable at RODAS4's step: the rule before 2026-12-05), 2, 3, 4 and the shipped value (how
+   much the choice matters): CPU per run,
+   steps, RODAS4 steps, right-hand-side calls; C build.  Each setting runs in a fresh process
+   (the C text carries the constant's value, so each has its own compiled library).
+
+Scenarios: the ``bench_engine`` ones (``wang2021`` CDFS 2.0 mm/s; DDFS 0.5 mm/s with the hollow
+motor at 16 mm/s), the torque-ripple DDFS of ``reproduce``'s forced study (``wang2021-ripple``,
+1 mm/s, hollow motor 30 mm/s: its steps are held by the ripple, not by stiffness) and the GMS
+guide (``examples/gms_guide.toml``, CDFS 2 mm/s).  Medians of ``--runs`` rounds after a warm-up
+call; the load average is recorded beside the figures.  Writes
+``benchmarks/results/bench_switch_cost.json`` and ``.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = {
+    "cdfs_2p0": ("wang2021", "cdfs", 2.0e-3, 0.0),
+    "ddfs_0p5_vn16": ("wang2021", "ddfs", 0.5e-3, 16e-3),
+    "ripple_ddfs_1p0_vn30": ("wang2021-ripple", "ddfs", 1.0e-3, 30e-3),
+    "gms_cdfs_2p0": ("examples/gms_guide.toml", "cdfs", 2.0e-3, 0.0),
+}
+DURATION = 10.0
+
+CHILD = r"""
+import json, statistics, sys, time
+import feeddrive as fd
+from feeddrive.solvers import driver, switching
+cost, runs, spec = float(sys.argv[1]), int(sys.argv[2]), json.loads(sys.argv[3])
+if cost > 0:  # before the first build: the generated driver reads it from switching
+    driver.RODAS4_COST = switching.RODAS4_COST = cost
+from feeddrive.engine.simulate import DriveSystem, simulate
+from feeddrive.model.reference import ConstantSpeed
+out = {}
+for name, (source, drive, vt, vn) in spec["scenarios"].items():
+    params = fd.load(source) if source.endswith(".toml") else fd.preset(source)
+    system = DriveSystem(params, drive, 0.4)
+    profile = ConstantSpeed(vt, vn)
+    for method in spec["methods"]:
+        options = fd.SolverOptions(method=method)
+        r = simulate(system, profile, spec["duration"], options=options)
+        cpu = []
+        for _ in range(runs):
+            t0 = time.process_time()
+            r = simulate(system, profile, spec["duration"], options=options)
+            cpu.append(time.process_time() - t0)
+        s = r.solver_stats
+        out[f"{name}/{method}"] = {
+            "cpu_s": statistics.median(cpu), "steps": s["steps"],
+            "rejected": s["rejected_steps"], "rhs": s["rhs_evaluations"],
+            "rosenbrock_steps": s.get("rosenbrock_steps", 0), "engine": s["engine"]}
+print(json.dumps(out))
+"""
+
+
+def child(cost: float, runs: int, methods: list[str], build: str) -> dict:
+    spec = {"scenarios": SCENARIOS, "methods": methods, "duration": DURATION}
+    # an empty C cache of its own: the translated driver is cached by the hash of the
+    # sources, which a constant set at run time does not change
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, FEEDDRIVE_ENGINE=build, FEEDDRIVE_C_CACHE=cache)
+        done = subprocess.run([sys.executable, "-c", CHILD, str(cost), str(runs),
+                               json.dumps(spec)], cwd=ROOT, env=env, capture_output=True,
+                              text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=3)
+    args = ap.parse_args()
+    sys.path.insert(0, str(ROOT / "src"))
+    from feeddrive.solvers import driver
+    try:
+        import numba  # noqa: F401
+        builds = ["c", "numba"]
+    except ImportError:
+        builds = ["c"]
+    load0 = os.getloadavg()[0]
+    record: dict = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                    "duration_s": DURATION, "runs": args.runs, "shipped": driver.RODAS4_COST,
+                    "per_step": {}, "modal": {}}
+    for build in builds:
+        rows = child(0.0, args.runs, ["rodas4", "dopri5-dense"], build)
+        for name in SCENARIOS:
+            r4, dp = rows[f"{name}/rodas4"], rows[f"{name}/dopri5-dense"]
+            per_r4 = r4["cpu_s"] / (r4["steps"] + r4["rejected"])
+            per_dp = dp["cpu_s"] / (dp["steps"] + dp["rejected"])
+            record["per_step"][f"{build}/{name}"] = {
+                "rodas4_us": 1e6 * per_r4, "dopri5_us": 1e6 * per_dp, "ratio": per_r4 / per_dp,
+                "engine": r4["engine"]}
+        if build != "c":
+            continue  # numba's cache does not see the constant change (its text names it)
+        for cost in sorted({1.0, 2.0, 3.0, 4.0, driver.RODAS4_COST}):
+            rows = child(cost, args.runs, ["modal"], build)
+            for name in SCENARIOS:
+                record["modal"][f"{build}/{name}/cost={cost:g}"] = rows[f"{name}/modal"]
+    record["load"] = [load0, os.getloadavg()[0]]
+    out = ROOT / "benchmarks" / "results"
+    (out / "bench_switch_cost.json").write_text(json.dumps(record, indent=1) + "\n",
+                                                encoding="utf-8")
+    lines = [f"# RODAS4 step against DOPRI5 step, and the cost-aware switch ({record['date']}, "
+             f"load {record['load'][0]:.1f} → {record['load'][1]:.1f} on 2 CPUs)", "",
+             f"{DURATION:g} s simulated per run, default settings, medians of {args.runs} "
+             "rounds, CPU seconds.", "",
+             "| build / scenario | RODAS4 µs/step | DOPRI5 µs/step | ratio |",
+             "| --- | ---: | ---: | ---: |"]
+    for key, v in record["per_step"].items():
+        lines.append(f"| {key} | {v['rodas4_us']:.2f} | {v['dopri5_us']:.2f} | "
+                     f"{v['ratio']:.2f} |")
+    lines += ["", "`modal` with RODAS4_COST = 1 (the rule before), 2, 3, 4 and "
+              f"{driver.RODAS4_COST:g} (shipped):", "",
+              "| build / scenario / setting | CPU ms | steps | RODAS4 steps | RHS calls |",
+              "| --- | ---: | ---: | ---: | ---: |"]
+    for key, v in record["modal"].items():
+        lines.append(f"| {key} | {1e3 * v['cpu_s']:.2f} | {v['steps']} | "
+                     f"{v['rosenbrock_steps']} | {v['rhs']} |")
+    (out / "bench_switch_cost.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
