@@ -6,8 +6,8 @@ Run from the repository root::
     python benchmarks/bench_switch_cost.py [--runs 3]
 
 1. Per scenario and build (C, and numba when it is installed): CPU seconds per attempted step
-   (accepted + rejected) of ``rodas4`` and of ``dopri5-dense`` run alone, 10 s simulated at
-   the defaults, and their ratio — the number ``RODAS4_COST`` stands for.
+   (accepted + rejected) of ``rodas4`` and of ``dopri5-dense`` run alone at the defaults,
+   and their ratio — the number ``RODAS4_COST`` stands for.
 2. The default ``modal`` method with ``RODAS4_COST`` = 1 (the switch back only where DOPRI5 is
    stable at RODAS4's step: the rule before 2026-12-05), 2, 3, 4 and the shipped value (how
    much the choice matters): CPU per run,
@@ -34,35 +34,38 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+# name -> (parameter set, drive, table speed [m/s], nut speed [m/s], simulated time [s])
 SCENARIOS = {
-    "cdfs_2p0": ("wang2021", "cdfs", 2.0e-3, 0.0),
-    "ddfs_0p5_vn16": ("wang2021", "ddfs", 0.5e-3, 16e-3),
-    "ripple_ddfs_1p0_vn30": ("wang2021-ripple", "ddfs", 1.0e-3, 30e-3),
-    "gms_cdfs_2p0": ("examples/gms_guide.toml", "cdfs", 2.0e-3, 0.0),
+    "cdfs_2p0": ("wang2021", "cdfs", 2.0e-3, 0.0, 10.0),
+    "cdfs_2p0_100s": ("wang2021", "cdfs", 2.0e-3, 0.0, 100.0),
+    "ddfs_0p5_vn16": ("wang2021", "ddfs", 0.5e-3, 16e-3, 10.0),
+    "ddfs_0p5_vn16_100s": ("wang2021", "ddfs", 0.5e-3, 16e-3, 100.0),
+    "ripple_ddfs_1p0_vn30": ("wang2021-ripple", "ddfs", 1.0e-3, 30e-3, 10.0),
+    "gms_cdfs_2p0": ("examples/gms_guide.toml", "cdfs", 2.0e-3, 0.0, 10.0),
 }
-DURATION = 10.0
 
 CHILD = r"""
 import json, statistics, sys, time
 import feeddrive as fd
 from feeddrive.solvers import driver, switching
-cost, runs, spec = float(sys.argv[1]), int(sys.argv[2]), json.loads(sys.argv[3])
-if cost > 0:  # before the first build: the generated driver reads it from switching
-    driver.RODAS4_COST = switching.RODAS4_COST = cost
+constants, runs, spec = json.loads(sys.argv[1]), int(sys.argv[2]), json.loads(sys.argv[3])
+for name, value in constants.items():  # before the first build: the driver reads switching's
+    setattr(driver, name, value)
+    setattr(switching, name, value)
 from feeddrive.engine.simulate import DriveSystem, simulate
 from feeddrive.model.reference import ConstantSpeed
 out = {}
-for name, (source, drive, vt, vn) in spec["scenarios"].items():
+for name, (source, drive, vt, vn, duration) in spec["scenarios"].items():
     params = fd.load(source) if source.endswith(".toml") else fd.preset(source)
     system = DriveSystem(params, drive, 0.4)
     profile = ConstantSpeed(vt, vn)
     for method in spec["methods"]:
         options = fd.SolverOptions(method=method)
-        r = simulate(system, profile, spec["duration"], options=options)
+        r = simulate(system, profile, duration, options=options)
         cpu = []
         for _ in range(runs):
             t0 = time.process_time()
-            r = simulate(system, profile, spec["duration"], options=options)
+            r = simulate(system, profile, duration, options=options)
             cpu.append(time.process_time() - t0)
         s = r.solver_stats
         out[f"{name}/{method}"] = {
@@ -73,13 +76,13 @@ print(json.dumps(out))
 """
 
 
-def child(cost: float, runs: int, methods: list[str], build: str) -> dict:
-    spec = {"scenarios": SCENARIOS, "methods": methods, "duration": DURATION}
+def child(constants: dict, runs: int, methods: list[str], build: str) -> dict:
+    spec = {"scenarios": SCENARIOS, "methods": methods}
     # an empty C cache of its own: the translated driver is cached by the hash of the
     # sources, which a constant set at run time does not change
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, FEEDDRIVE_ENGINE=build, FEEDDRIVE_C_CACHE=cache)
-        done = subprocess.run([sys.executable, "-c", CHILD, str(cost), str(runs),
+        done = subprocess.run([sys.executable, "-c", CHILD, json.dumps(constants), str(runs),
                                json.dumps(spec)], cwd=ROOT, env=env, capture_output=True,
                               text=True, check=True)
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -98,10 +101,10 @@ def main() -> None:
         builds = ["c"]
     load0 = os.getloadavg()[0]
     record: dict = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-                    "duration_s": DURATION, "runs": args.runs, "shipped": driver.RODAS4_COST,
+                    "runs": args.runs, "shipped": driver.RODAS4_COST,
                     "per_step": {}, "modal": {}}
     for build in builds:
-        rows = child(0.0, args.runs, ["rodas4", "dopri5-dense"], build)
+        rows = child({}, args.runs, ["rodas4", "dopri5-dense"], build)
         for name in SCENARIOS:
             r4, dp = rows[f"{name}/rodas4"], rows[f"{name}/dopri5-dense"]
             per_r4 = r4["cpu_s"] / (r4["steps"] + r4["rejected"])
@@ -111,18 +114,20 @@ def main() -> None:
                 "engine": r4["engine"]}
         if build != "c":
             continue  # numba's cache does not see the constant change (its text names it)
-        for cost in sorted({1.0, 2.0, 3.0, 4.0, driver.RODAS4_COST}):
-            rows = child(cost, args.runs, ["modal"], build)
+        settings = [{"RODAS4_COST": c} for c in sorted({1.0, 2.0, 3.0, 4.0, driver.RODAS4_COST})]
+        for constants in settings:
+            rows = child(constants, args.runs, ["modal"], build)
+            label = ",".join(f"{k}={v:g}" for k, v in constants.items())
             for name in SCENARIOS:
-                record["modal"][f"{build}/{name}/cost={cost:g}"] = rows[f"{name}/modal"]
+                record["modal"][f"{build}/{name}/{label}"] = rows[f"{name}/modal"]
     record["load"] = [load0, os.getloadavg()[0]]
     out = ROOT / "benchmarks" / "results"
     (out / "bench_switch_cost.json").write_text(json.dumps(record, indent=1) + "\n",
                                                 encoding="utf-8")
     lines = [f"# RODAS4 step against DOPRI5 step, and the cost-aware switch ({record['date']}, "
              f"load {record['load'][0]:.1f} → {record['load'][1]:.1f} on 2 CPUs)", "",
-             f"{DURATION:g} s simulated per run, default settings, medians of {args.runs} "
-             "rounds, CPU seconds.", "",
+             "10 s simulated per run (100 s where the name says so), default settings, "
+             f"medians of {args.runs} rounds, CPU seconds.", "",
              "| build / scenario | RODAS4 µs/step | DOPRI5 µs/step | ratio |",
              "| --- | ---: | ---: | ---: |"]
     for key, v in record["per_step"].items():

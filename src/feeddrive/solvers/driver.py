@@ -103,11 +103,11 @@ POWER_ITERATIONS = 12
 # switch to RODAS4 only if the capped step is ≥ this × DOPRI5's, and back when it is not
 MODAL_SWITCH_GAIN = 2.0
 # what a RODAS4 step costs in DOPRI5 steps (its Jacobian share, LU and six solves against six
-# cheap right-hand sides; measured 5.4-5.7 in the C build on the DDFS and ripple scenarios,
+# cheap right-hand sides; measured 4.9-6.9 in the C build, 3.8-4.8 in numba's,
 # benchmarks/bench_switch_cost.py): a Rosenbrock stretch returns to DOPRI5 when its steps are
-# not this much longer than DOPRI5's stable step, the method-switch test of LSODA
-# (L. Petzold, SIAM J. Sci. Stat. Comput. 4 (1983) 136-148: each method's step weighed by
-# its cost); the switch to RODAS4 is then refused for MODAL_RETRY steps
+# not this much longer than the step DOPRI5 took when it handed over, the method-switch test
+# of LSODA (L. Petzold, SIAM J. Sci. Stat. Comput. 4 (1983) 136-148: each method's step
+# weighed by its cost); the switch to RODAS4 is then refused for MODAL_RETRY steps
 RODAS4_COST = 5.0
 # DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
 # of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
@@ -124,7 +124,7 @@ MODAL_EVERY = 10
 # the modal reference Jacobian (n × n), then (with the embedded global-error estimate,
 # feeddrive.solvers.global_error) the propagated error and its largest magnitude per state,
 # then the stop request and the live time
-MEMORY_SCALARS = 17
+MEMORY_SCALARS = 18
 
 # The specialisation flags: exactly one of LAND, DENSE, COMM is true in a specialisation
 # (the template's own values only make this module importable)
@@ -327,6 +327,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     jac_ok = False
     jac_age = 0
     quiet = False
+    h_dp = 0.0  # DOPRI5's step when it last handed over to RODAS4 [s]
     stale = False
     frozen_known = False
     stiff_count = 0
@@ -378,7 +379,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         else:  # carried over from the call that ended at t
             (h, stiff, frozen_known, stiff_count, nonstiff_count, err_old, r4_err_old, r4_h_old,
              r4_first, r4_rejected, h_osc, have_ref, refuse_until, dp_since_eig, rho,
-             since_eig, quiet) = memory_load(memory, live, J_ref)
+             since_eig, quiet, h_dp) = memory_load(memory, live, J_ref)
     # the derivative at t (a continued continuous LAND run: the previous call's last stage,
     # evaluated a hair off the breakpoint when that step was not cut to it)
     rhs(t, y, held, P, T, f0, aux)
@@ -554,8 +555,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if switching:
                     (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old,
                      dp_since_eig, refuse_until, r4_first, have_ref, calls,
-                     analyses) = switch_method(stiff, modal, rho, h_done, h_osc, stiff_count,
-                                               nonstiff_count, switches, err_old, dp_since_eig,
+                     analyses, h_dp) = switch_method(stiff, modal, rho, h_done, h_osc,
+                                                     r4_h_old, r4_rejected, h_dp, stiff_count,
+                                                     nonstiff_count, switches, err_old,
+                                                     dp_since_eig,
                                                refuse_until, steps, r4_first, have_ref, t_new,
                                                y_new, f_new, k6, yt, held, P, T, atol, J, ft,
                                                yp, fp, aux, all_live, S, colour, J_ref, v, w)
@@ -660,7 +663,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     if DENSE:
         memory_save(memory, live, J_ref, h, stiff, frozen_known, stiff_count, nonstiff_count,
                     err_old, r4_err_old, r4_h_old, r4_first, r4_rejected, h_osc, have_ref,
-                    refuse_until - steps, dp_since_eig, rho, since_eig, quiet)
+                    refuse_until - steps, dp_since_eig, rho, since_eig, quiet, h_dp)
         stats = np.array([float(status), float(steps), float(rejected), float(n_rhs + n_out_rhs),
                           t, float(n_jac), float(n_rodas), float(switches), float(n_out_rhs),
                           float(n_eig), float(n_switch), float(n_rho)])
@@ -1321,7 +1324,7 @@ def next_event(t: float, t_end: float, kb: int, schedule: np.ndarray, base: floa
 
 def memory_load(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray
                 ) -> tuple[float, bool, bool, int, int, float, float, float, bool, bool, float,
-                           bool, int, int, float, int, bool]:
+                           bool, int, int, float, int, bool, float]:
     """The dense driver's state carried over from the call that ended where this one starts
     (the layout of :func:`feeddrive.solvers.switching.new_memory`, ``MEMORY_SCALARS`` values,
     the live flags, the modal reference Jacobian).
@@ -1342,7 +1345,8 @@ def memory_load(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray
         memory, RODAS4's error and step [s], its first and rejected flags, the modal step cap
         [s], a reference Jacobian kept, the step count until which a switch is refused, the
         DOPRI5 steps since the last eigen-analysis, the spectral radius [1/s], the Jacobians
-        since the last eigen-analysis, the last moved test found the Jacobian quiet).
+        since the last eigen-analysis, the last moved test found the Jacobian quiet, DOPRI5's
+        step when it last handed over to RODAS4 [s]).
     """
     n = live.size
     for i in range(n):
@@ -1352,14 +1356,15 @@ def memory_load(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray
     return (memory[0], memory[1] != 0.0, memory[2] != 0.0, int(memory[3]), int(memory[4]),
             memory[5], memory[6], memory[7], memory[8] != 0.0, memory[9] != 0.0, memory[10],
             memory[11] != 0.0, int(memory[12]), int(memory[13]), memory[14], int(memory[15]),
-            memory[16] != 0.0)
+            memory[16] != 0.0, memory[17])
 
 
 def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: float,
                 stiff: bool, frozen_known: bool, stiff_count: int, nonstiff_count: int,
                 err_old: float, r4_err_old: float, r4_h_old: float, r4_first: bool,
                 r4_rejected: bool, h_osc: float, have_ref: bool, refuse_until: int,
-                dp_since_eig: int, rho: float, since_eig: int, quiet: bool) -> None:
+                dp_since_eig: int, rho: float, since_eig: int, quiet: bool, h_dp: float
+                ) -> None:
     """The dense driver's state kept for the next call (:func:`memory_load`'s inverse).
 
     Parameters
@@ -1395,6 +1400,8 @@ def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: floa
         Jacobians since the last eigen-analysis.
     quiet : bool
         The last moved test found the Jacobian quiet.
+    h_dp : float
+        DOPRI5's step when it last handed over to RODAS4 [s].
     """
     memory[0] = h
     memory[1] = 1.0 if stiff else 0.0
@@ -1413,6 +1420,7 @@ def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: floa
     memory[14] = rho
     memory[15] = since_eig
     memory[16] = 1.0 if quiet else 0.0
+    memory[17] = h_dp
     n = live.size
     for i in range(n):
         memory[MEMORY_SCALARS + i] = 1.0 if live[i] else 0.0
@@ -1421,20 +1429,23 @@ def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: floa
 
 
 def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: float,
-                  stiff_count: int, nonstiff_count: int, switches: int, err_old: float,
-                  dp_since_eig: int, refuse_until: int, n_steps: int, r4_first: bool,
-                  have_ref: bool, t_new: float, y_new: np.ndarray, f_new: np.ndarray,
-                  k6: np.ndarray, yt: np.ndarray, held: np.ndarray, P: np.ndarray,
-                  T: np.ndarray, atol: np.ndarray, J: np.ndarray, ft: np.ndarray,
-                  yp: np.ndarray, fp: np.ndarray, aux: np.ndarray, all_live: np.ndarray,
-                  S: np.ndarray, colour: np.ndarray, J_ref: np.ndarray, v: np.ndarray,
-                  w: np.ndarray) -> tuple[bool, float, float, int, int, int, float, int, int,
-                                          bool, bool, int, int]:
+                  r4_h_old: float, r4_rejected: bool, h_dp: float, stiff_count: int,
+                  nonstiff_count: int, switches: int, err_old: float, dp_since_eig: int,
+                  refuse_until: int, n_steps: int, r4_first: bool, have_ref: bool,
+                  t_new: float, y_new: np.ndarray, f_new: np.ndarray, k6: np.ndarray,
+                  yt: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray,
+                  atol: np.ndarray, J: np.ndarray, ft: np.ndarray, yp: np.ndarray,
+                  fp: np.ndarray, aux: np.ndarray, all_live: np.ndarray, S: np.ndarray,
+                  colour: np.ndarray, J_ref: np.ndarray, v: np.ndarray, w: np.ndarray
+                  ) -> tuple[bool, float, float, int, int, int, float, int, int, bool, bool,
+                             int, int, float]:
     """The stiffness detection and method switching after an accepted step (``MODE_AUTO``,
-    ``MODE_MODAL``).  From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps not
-    ``RODAS4_COST`` × longer than DOPRI5's stable step ``NONSTIFF_HRHO``/ρ (``MODE_MODAL``: or
-    where the cap leaves RODAS4 less than ``MODAL_SWITCH_GAIN`` × that step); when DOPRI5 is
-    not stable at the Rosenbrock step itself (only cheaper), the switch to RODAS4 is then
+    ``MODE_MODAL``).  From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps that DOPRI5
+    would take stably (ρ·h < ``NONSTIFF_HRHO``; ``MODE_MODAL``: or the cap leaves RODAS4 less
+    than ``MODAL_SWITCH_GAIN`` × that step) or that are not ``RODAS4_COST`` × the step DOPRI5
+    took when it handed over (``h_dp``): a RODAS4 step costs about that many DOPRI5 steps.  A
+    short step longer than the one before, or the first after a rejection, is not counted
+    (the step is growing back), and after a switch for cost alone the switch to RODAS4 is
     refused for ``MODAL_RETRY`` steps.  From DOPRI5, to RODAS4 after
     ``STIFF_STEPS`` stiff verdicts (:func:`stiffness_estimate` > ``STIFF_HLAMBDA``; reset
     after 6 non-stiff steps in a row), unless (``MODE_MODAL``) the cap on the lightly damped
@@ -1452,6 +1463,14 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
         The step [s].
     h_osc : float
         The modal step cap [s].
+    r4_h_old : float
+        The RODAS4 step before this one [s] (a stretch still growing its step back from
+        DOPRI5's is not judged on cost).
+    r4_rejected : bool
+        This RODAS4 step followed a rejected one (a stretch growing back from a rejection is
+        not judged on cost either).
+    h_dp : float
+        DOPRI5's step when it last handed over to RODAS4 [s] (0: none yet).
     stiff_count, nonstiff_count, switches : int
         The test's counts, the switches so far.
     err_old : float
@@ -1487,8 +1506,8 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
     -------
     tuple
         (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old, dp_since_eig,
-        refuse_until, r4_first, have_ref) updated, the right-hand-side evaluations made and
-        the eigen-analyses made (each with a Jacobian and a spectral radius).
+        refuse_until, r4_first, have_ref) updated, the right-hand-side evaluations made, the
+        eigen-analyses made (each with a Jacobian and a spectral radius) and h_dp updated.
     """
     calls = 0
     analyses = 0
@@ -1496,7 +1515,11 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
         # back to DOPRI5 when its stable step would do: this step's, or (MODE_MODAL) when
         # the cap leaves RODAS4 less than MODAL_SWITCH_GAIN × that step, the test that
         # refuses the switch the other way
-        if rho * min(h_done / RODAS4_COST, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO:
+        stable = rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO
+        short = h_done < RODAS4_COST * h_dp
+        if not stable and short and (h_done > r4_h_old or r4_rejected):
+            pass  # growing back from DOPRI5's step or from a rejection: not judged yet
+        elif stable or short:
             nonstiff_count += 1
             if nonstiff_count >= NONSTIFF_STEPS:
                 stiff = False
@@ -1504,7 +1527,7 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
                 stiff_count = 0
                 nonstiff_count = 0
                 err_old = 1e-4
-                if rho * h_done >= NONSTIFF_HRHO:
+                if not stable:
                     # DOPRI5 is not stable at RODAS4's step, only cheaper: not straight back
                     refuse_until = n_steps + MODAL_RETRY
         else:
@@ -1542,12 +1565,13 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
                 switches += 1
                 stiff_count = 0
                 r4_first = True
+                h_dp = h_done
         else:
             nonstiff_count += 1
             if nonstiff_count >= 6:
                 stiff_count = 0
     return (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old, dp_since_eig,
-            refuse_until, r4_first, have_ref, calls, analyses)
+            refuse_until, r4_first, have_ref, calls, analyses, h_dp)
 
 
 def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,

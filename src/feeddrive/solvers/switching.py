@@ -13,13 +13,13 @@ shared drivers' module as ``integrate_dense``, runs in four modes:
 * ``MODE_AUTO``: starts with DOPRI5 and switches to RODAS4 when Hairer's stiffness test says
   the step is held by stability — h·‖k7 − k6‖/‖y7 − y6‖ > 3.25, the estimate of h|λ| from the
   last two stages, in ``STIFF_STEPS`` of the recent accepted steps (``dopri5.f``, ``NSTIFF``
-  test) — and back to DOPRI5 when the Rosenbrock step h times the power-iteration estimate of
-  the Jacobian's spectral radius stays below ``RODAS4_COST`` × ``NONSTIFF_HRHO`` for
-  ``NONSTIFF_STEPS`` steps: RODAS4's step is not ``RODAS4_COST`` times DOPRI5's stable step
-  (``NONSTIFF_HRHO``/ρ), what a Rosenbrock step costs against an explicit one (a share of a
-  Jacobian, an LU and six solves against six right-hand sides; LSODA's cost-weighted switch).
-  Where DOPRI5 would not be stable at the Rosenbrock step itself, the switch to RODAS4 is
-  then refused for ``MODAL_RETRY`` steps;
+  test) — and back to DOPRI5 after ``NONSTIFF_STEPS`` Rosenbrock steps that an explicit
+  step of that size would take stably (h times the power-iteration estimate of the
+  Jacobian's spectral radius below ``NONSTIFF_HRHO``) or that are not ``RODAS4_COST`` times
+  the step DOPRI5 took when it handed over — what a Rosenbrock step costs against an explicit
+  one (a share of a Jacobian, an LU and six solves against six right-hand sides; LSODA's
+  cost-weighted switch).  Steps growing back from a switch or a rejection are not counted;
+  after a switch for cost alone the switch to RODAS4 is refused for ``MODAL_RETRY`` steps;
 * ``MODE_MODAL``: ``MODE_AUTO`` with the steps capped on lightly damped modes
   (:mod:`feeddrive.solvers.modes`); the switch to RODAS4 is refused, and a Rosenbrock
   stretch ends, where the cap leaves RODAS4 less than ``MODAL_SWITCH_GAIN`` × DOPRI5's step
