@@ -83,9 +83,11 @@ class _Lower(ast.NodeTransformer):
                                        "not an np.array([...]) (lowered_source needs updating)")
             items = value.args[0].elts
             self.n_stats = len(items)
-            return [ast.Assign([ast.Subscript(ast.Name(STATS_OUT, ast.Load()), ast.Constant(k),
-                                              ast.Store())], item, lineno=node.lineno)
-                    for k, item in enumerate(items)]
+            # one statement, as numba's np.array([...]): stats_out[0], ... = a, ...
+            return ast.Assign([ast.Tuple([ast.Subscript(ast.Name(STATS_OUT, ast.Load()),
+                                                        ast.Constant(k), ast.Store())
+                                          for k in range(len(items))], ast.Store())],
+                              ast.Tuple(items, ast.Load()), lineno=node.lineno)
         self.generic_visit(node)
         return node
 
@@ -203,6 +205,11 @@ SHAPES: dict[str, tuple[str, ...]] = {
 }
 
 
+#: element types of the driver's and its pieces' arrays other than double (and the count
+#: ``steps`` of step_attempt, not the schedule's ``steps`` of SOLVER_TYPES)
+PARAM_TYPES = {**SOLVER_TYPES, "all_live": "bool*", "step_attempt.steps": "int"}
+
+
 def _translated(use: str) -> dict[str, Any]:
     from ..solvers import driver
 
@@ -210,7 +217,7 @@ def _translated(use: str) -> dict[str, Any]:
         return _functions_unit()
     fn = driver.define(lowered_source(use)[0], use)
     text = translate_kernels([fn], {"N_AUX": "FD_N_AUX"}, bindings=_bindings(),
-                             shapes=SHAPES, param_types={**SOLVER_TYPES, "all_live": "bool*"},
+                             shapes=SHAPES, param_types=PARAM_TYPES,
                              names={use: f"fd_{use}"})
     return {"c": text, "n_stats": lowered_source(use)[1], "params": _c_params(use)}
 
@@ -398,7 +405,7 @@ def _c_params(use: str) -> list[tuple[str, str]]:
     source, _ = lowered_source(use)
     fn = ast.parse(source).body[0]
     assert isinstance(fn, ast.FunctionDef)
-    return _params_of(fn, SHAPES, SOLVER_TYPES)
+    return _params_of(fn, SHAPES, PARAM_TYPES)
 
 
 def _params_of(fn: ast.FunctionDef, shapes: dict[str, tuple[str, ...]],

@@ -147,7 +147,13 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     tick: np.ndarray, redo: int, f0: np.ndarray, k2: np.ndarray,
                     k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
                     f_new: np.ndarray, yt: np.ndarray, y_new: np.ndarray, e: np.ndarray,
-                    aux: np.ndarray, switch_rows: np.ndarray) -> Any:
+                    aux: np.ndarray, switch_rows: np.ndarray, q1: np.ndarray,
+                    q2: np.ndarray, q3: np.ndarray, ft: np.ndarray, yp: np.ndarray,
+                    fp: np.ndarray, v: np.ndarray, w: np.ndarray, J: np.ndarray,
+                    M: np.ndarray, J_ref: np.ndarray, piv: np.ndarray, live: np.ndarray,
+                    all_live: np.ndarray, ge_J: np.ndarray, ge_Phi: np.ndarray,
+                    ge_A: np.ndarray, ge_B: np.ndarray, ge_w: np.ndarray, ge_d: np.ndarray,
+                    ge_aux: np.ndarray) -> Any:
     """The driver of every integration (module docstring); compiled only as one of its
     specialisations (:func:`specialise`), whose signatures take a subset of these parameters.
 
@@ -220,16 +226,20 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     held_prev : numpy.ndarray
         Held values before the last update, for ``redo`` [SI, per value] (``COMM``).
     tick : numpy.ndarray of int
-        Work space, one per clock (``COMM``).
+        Work space, one per clock (``COMM``, ``DENSE``).
     redo : int
         1 when the inputs changed since the last call (``COMM``).
     f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e : numpy.ndarray
-        Work space, length ``n`` [SI per second, per state] (``COMM``).
+        Work space, length ``n`` [SI per second, per state] (``COMM``, ``DENSE``).
     aux : numpy.ndarray
-        The auxiliary signals at the end [SI, per signal] (``COMM``).
+        The auxiliary signals at the end [SI, per signal] (``COMM``; ``DENSE``: work space).
     switch_rows : numpy.ndarray
         (m, n) switching surfaces W·y whose zero crossings are located and made step ends
         (:mod:`feeddrive.solvers.events`); (0, n) for none [state units → m/s] (``DENSE``).
+    q1, q2, q3, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live, ge_J, ge_Phi, ge_A, ge_B, \
+ge_w, ge_d, ge_aux : numpy.ndarray
+        The dense driver's work space (``DENSE``), made by its caller (:func:`work_space`:
+        a piece cannot allocate in the C subset, and the driver is shorter without).
 
     Returns
     -------
@@ -259,7 +269,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         else:
             n_out = n_break // out_every - (start + out_every - 1) // out_every + 1
         t = start * base
-        tick = np.empty(schedule.size, dtype=np.int64)
+        if LAND:
+            tick = np.empty(schedule.size, dtype=np.int64)
         n_aux_out = n_out if want_aux else 0
         if (DENSE and t_buf.shape[0] >= n_out and y_buf.shape[0] >= n_out
                 and y_buf.shape[1] == n and aux_buf.shape[0] >= n_aux_out
@@ -273,6 +284,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             y_out = np.empty((n_out, n))
             aux_out = np.empty((n_aux_out, N_AUX))
         y = y0.copy()
+    if LAND:
         f0 = np.empty(n)
         k2 = np.empty(n)
         k3 = np.empty(n)
@@ -284,21 +296,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         y_new = np.empty(n)
         e = np.empty(n)
         aux = np.empty(N_AUX)
-    if DENSE:
-        q1 = np.empty(n)
-        q2 = np.empty(n)
-        q3 = np.empty(n)
-        J = np.zeros((n, n))
-        M = np.empty((n, n))
-        piv = np.zeros(n, dtype=np.int64)
-        ft = np.zeros(n)
-        yp = np.empty(n)
-        fp = np.empty(n)
-        v = np.empty(n)
-        w = np.empty(n)
-        live = np.ones(n, dtype=np.bool_)
-        all_live = np.ones(n, dtype=np.bool_)
-        J_ref = np.zeros((n, n))
+    if DENSE:  # the work space is the caller's (work_space)
         # the statistics: output rhs calls, Jacobians, RODAS4 steps, method switches,
         # eigen-analyses, spectral-radius estimates (power iterations), surfaces crossed
         n_out_rhs = n_jac = n_rodas = switches = n_eig = n_rho = n_switch = 0
@@ -308,15 +306,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         # memory has its slots: E, the largest |E|, the local errors of the interval
         ge_at = MEMORY_SCALARS + n + n * n
         ge = memory.shape[0] == ge_at + 3 * n + 2
-        ng = n if ge else 0
-        ge_J = np.zeros((ng, ng))
-        ge_Phi = np.zeros((ng, ng))
-        ge_A = np.zeros((ng, ng))
-        ge_B = np.zeros((ng, ng))
-        ge_w = np.zeros(ng)
-        ge_d = np.zeros(ng)
         ge_since = GE_REFRESH  # accepted steps since the propagator was formed (none yet)
-        ge_aux = np.empty(N_AUX)
     steps = 0
     rejected = 0
     n_rhs = 0
@@ -435,35 +425,20 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if t + h_try >= t_ev - 1e-12 * max(1.0, abs(t_ev)):
                     h_try = t_ev - t
                     last = True
-            err = 0.0
-            t_new = t_ev
-            while True:
-                t_new = t_ev if last else t + h_try
-                if stiff:
-                    calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, M, piv, k2, k3,
-                                            k4, k5, k6, e, yt, fp,
-                                            y_new, aux, live)
-                    if calls == -2:
-                        # a frozen state moved: retry with the full Jacobian
-                        n_rhs += 5
-                        frozen_known = False
-                        for i in range(n):
-                            live[i] = True
-                        calls = _r4_fd_jacobian(t, y, f0, held, P, T,
-                                                atol, J, ft, yp, fp, aux, all_live, S, colour)
-                        n_rhs += calls
-                        n_jac += 1
-                        continue
-                    steps += 1
-                    n_rodas += 1
-                    if calls < 0:
-                        err = 1e10  # singular matrix: shrink the step
-                    else:
-                        n_rhs += calls
-                        err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
-                else:
-                    _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4, k5, k6, f_new, yt, y_new,
-                              aux, t_new)
+            if DENSE:  # either method (step_attempt); the others' DOPRI5 attempt below
+                (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps,
+                 rejected, n_rhs, n_jac, n_rodas) = step_attempt(
+                    stiff, adaptive, t, t_ev, h_try, last, h_min, y, f0, held, P, T, rtol,
+                    atol, rel_mask, J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt, yp, fp,
+                    y_new, aux, live, all_live, S, colour, frozen_known, r4_rejected, jac_age,
+                    steps, max_steps, rejected, n_rhs, n_jac, n_rodas)
+            else:
+                err = 0.0
+                t_new = t_ev
+                while True:
+                    t_new = t_ev if last else t + h_try
+                    _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4, k5, k6, f_new, yt,
+                              y_new, aux, t_new)
                     n_rhs += 6
                     steps += 1
                     if adaptive == 0:
@@ -471,27 +446,18 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     else:
                         _dp5_error(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
                         err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
-                if adaptive == 0 or err <= 1.0:
-                    break
-                rejected += 1
-                if stiff:
-                    fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
-                    h_try /= fac
-                    r4_rejected = True
-                    if jac_age > 0:  # a kept Jacobian: the retry takes a fresh one
-                        stale = True
-                else:
+                    if adaptive == 0 or err <= 1.0:
+                        break
+                    rejected += 1
                     fac = _reject_factor(err)
                     h_try *= fac
-                last = False
-                if h_try < h_min:
-                    status = STATUS_STEP_UNDERFLOW
-                    break
-                if steps > max_steps:
-                    status = STATUS_MAX_STEPS
-                    break
-                if stale:
-                    break
+                    last = False
+                    if h_try < h_min:
+                        status = STATUS_STEP_UNDERFLOW
+                        break
+                    if steps > max_steps:
+                        status = STATUS_MAX_STEPS
+                        break
             if status != STATUS_OK:
                 break
             if stale:
@@ -1621,12 +1587,123 @@ def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
     return calls, jacobians, ge_since
 
 
+def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h_try: float, last: bool,
+                 h_min: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray, P: np.ndarray,
+                 T: np.ndarray, rtol: float, atol: np.ndarray, rel_mask: np.ndarray,
+                 J: np.ndarray, ft: np.ndarray, M: np.ndarray, piv: np.ndarray, k2: np.ndarray,
+                 k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
+                 f_new: np.ndarray, e: np.ndarray, yt: np.ndarray, yp: np.ndarray,
+                 fp: np.ndarray, y_new: np.ndarray, aux: np.ndarray, live: np.ndarray,
+                 all_live: np.ndarray, S: np.ndarray, colour: np.ndarray, frozen_known: bool,
+                 r4_rejected: bool, jac_age: int, steps: int, max_steps: int, rejected: int,
+                 n_rhs: int, n_jac: int, n_rodas: int
+                 ) -> tuple[float, float, float, bool, int, bool, bool, bool, int, int, int,
+                            int, int]:
+    """The dense driver's step from ``t``, tried until accepted: RODAS4 (``stiff``; a frozen
+    state that moved retakes the whole Jacobian, a rejection with a kept Jacobian ends the
+    attempt as ``stale``) or DOPRI5, each shrunk on rejection by its own rule (Hairer & Wanner
+    II, Sect. IV.7; Hairer, Nørsett & Wanner I, Sect. II.4).  The breakpoint driver and the
+    FMU's try their DOPRI5 step in the template's text.
+
+    Parameters
+    ----------
+    stiff, adaptive : bool, int
+        RODAS4 (else DOPRI5); 1 for error-controlled steps, 0 for a fixed step.
+    t, t_ev, h_try, last, h_min : float, float, float, bool, float
+        The step's start, the next event, the step to try, whether it lands on ``t_ev``, the
+        smallest step [s].
+    y, f0, held, P, T : numpy.ndarray
+        The state and its derivative at t, held values, parameters, tables [SI].
+    rtol, atol, rel_mask : float, numpy.ndarray
+        Tolerances [-; SI, per state; -].
+    J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt, yp, fp, y_new, aux : numpy.ndarray
+        The Jacobian (retaken on a moved frozen state), work space, the step's end [mixed].
+    live, all_live, S, colour : numpy.ndarray
+        The states the Jacobian is taken for, all, its sparsity pattern and column groups.
+    frozen_known, r4_rejected, jac_age : bool, bool, int
+        Frozen states known; a RODAS4 rejection since the last accepted step; the
+        Jacobian's age in accepted steps.
+    steps, max_steps, rejected, n_rhs, n_jac, n_rodas : int
+        Counts so far (the step limit).
+
+    Returns
+    -------
+    tuple
+        (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps, rejected,
+        n_rhs, n_jac, n_rodas): the accepted step's error norm, end and size, whether it
+        lands on ``t_ev``, the status, whether the Jacobian is to be retaken first, and the
+        flags and counts updated.
+    """
+    err = 0.0
+    t_new = t_ev
+    status = STATUS_OK
+    stale = False
+    while True:
+        t_new = t_ev if last else t + h_try
+        if stiff:
+            calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, M, piv, k2, k3,
+                                    k4, k5, k6, e, yt, fp,
+                                    y_new, aux, live)
+            if calls == -2:
+                # a frozen state moved: retry with the full Jacobian
+                n_rhs += 5
+                frozen_known = False
+                for i in range(y.size):
+                    live[i] = True
+                calls = _r4_fd_jacobian(t, y, f0, held, P, T,
+                                        atol, J, ft, yp, fp, aux, all_live, S, colour)
+                n_rhs += calls
+                n_jac += 1
+                continue
+            steps += 1
+            n_rodas += 1
+            if calls < 0:
+                err = 1e10  # singular matrix: shrink the step
+            else:
+                n_rhs += calls
+                err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
+        else:
+            _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4, k5, k6, f_new, yt, y_new,
+                      aux, t_new)
+            n_rhs += 6
+            steps += 1
+            if adaptive == 0:
+                err = 0.0
+            else:
+                _dp5_error(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
+        if adaptive == 0 or err <= 1.0:
+            break
+        rejected += 1
+        if stiff:
+            fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+            h_try /= fac
+            r4_rejected = True
+            if jac_age > 0:  # a kept Jacobian: the retry takes a fresh one
+                stale = True
+        else:
+            fac = _reject_factor(err)
+            h_try *= fac
+        last = False
+        if h_try < h_min:
+            status = STATUS_STEP_UNDERFLOW
+            break
+        if steps > max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        if stale:
+            break
+    return (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps,
+            rejected, n_rhs, n_jac, n_rodas)
+
+
 #: the pieces, in the order they are placed in the compiled module
 PIECES = ("jacobian_fresh", "modal_reference", "jacobian_update", "modal_refresh",
           "stiffness_estimate", "step_size", "dense_coefficients", "outputs_inside", "outputs_at",
           "bounds_status",
           "next_event", "memory_load", "memory_save", "switch_method",
-          "error_estimate_step", "step_end_status", "output_row", "land_crossing")
+          "error_estimate_step", "step_end_status", "output_row", "land_crossing",
+          "step_attempt")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
@@ -1903,10 +1980,58 @@ def define(source: str, name: str) -> Any:
 _LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                 "rel_mask", "h_max", "adaptive", "max_steps", "start", "held", "memory", "bound",
                 "switch_rows")
+#: the dense driver's work space beyond the explicit step's (made by :func:`work_space`)
+DENSE_WORK = ("q1", "q2", "q3", "ft", "yp", "fp", "v", "w", "J", "M", "J_ref", "piv", "live",
+              "all_live", "ge_J", "ge_Phi", "ge_A", "ge_B", "ge_w", "ge_d", "ge_aux")
+
+
+def work_space(n: int, n_aux: int, n_clock: int, memory: np.ndarray
+               ) -> tuple[np.ndarray, ...]:
+    """The dense driver's (``integrate_dense``'s) work arrays, made by its caller (the C
+    subset cannot allocate in a piece; the driver's text is shorter without them): ``tick``,
+    the explicit step's ``f0`` … ``e`` and ``aux``, then :data:`DENSE_WORK`, in the order of
+    its parameters.  The floating-point arrays are views of one zeroed block, the Jacobians
+    ``J``, ``J_ref`` zero and ``live``, ``all_live`` true as the driver expects them; the
+    global-error estimate's have ``n`` rows where ``memory`` has its slots, else none.
+
+    Parameters
+    ----------
+    n : int
+        Number of states.
+    n_aux : int
+        Number of auxiliary signals.
+    n_clock : int
+        Number of clocks of the sample schedule.
+    memory : numpy.ndarray
+        The driver's memory (its length says whether the error estimate runs) [mixed].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The arrays.
+    """
+    ng = n if memory.shape[0] == MEMORY_SCALARS + n + n * n + 3 * n + 2 else 0
+    shapes = {**{name: (n,) for name in _DENSE_PARAMS[_DENSE_PARAMS.index("f0"):]},
+              "aux": (n_aux,), "ge_aux": (n_aux,), "ge_w": (ng,), "ge_d": (ng,),
+              **{name: (n, n) for name in ("J", "M", "J_ref")},
+              **{name: (ng, ng) for name in ("ge_J", "ge_Phi", "ge_A", "ge_B")}}
+    del shapes["piv"], shapes["live"], shapes["all_live"]
+    block = np.zeros(sum(math.prod(shape) for shape in shapes.values()))
+    arrays = {"piv": np.zeros(n, dtype=np.int64), "live": np.ones(n, dtype=np.bool_),
+              "all_live": np.ones(n, dtype=np.bool_)}
+    at = 0
+    for name, shape in shapes.items():
+        arrays[name] = block[at:at + math.prod(shape)].reshape(shape)
+        at += math.prod(shape)
+    return (np.empty(n_clock, dtype=np.int64),
+            *(arrays[name] for name in _DENSE_PARAMS[_DENSE_PARAMS.index("f0"):]))
+
+
 _DENSE_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                  "rel_mask", "h_init", "h_max", "adaptive", "max_steps", "mode", "stops",
                  "want_aux", "S", "colour", "start", "held", "memory", "bound", "t_buf",
-                 "y_buf", "aux_buf", "switch_rows")
+                 "y_buf", "aux_buf", "switch_rows", "tick", "f0", "k2", "k3", "k4", "k5", "k6",
+                 "f_new", "yt", "y_new", "e", "aux", *DENSE_WORK)
 _COMM_PARAMS = ("t", "t_end", "t0", "n", "y", "held", "held_prev", "P", "T", "schedule",
                 "tick", "base", "rtol", "atol", "rel_mask", "h_max", "max_steps", "redo",
                 "memory", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e",
@@ -1966,7 +2091,7 @@ def source(use: str, inline: bool = True) -> str:
 #: split"); written in, the runs cost what they did.  ``switch_method`` takes more than 30
 #: arguments, which Python passes as ``*args``, which numba cannot inline
 NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
-                    "land_crossing", "step_end_status")
+                    "land_crossing", "step_end_status", "step_attempt")
 
 
 def _piece_body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:

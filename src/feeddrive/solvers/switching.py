@@ -236,16 +236,18 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states)) if memory is None else memory
     bound = np.full(len(model.states), np.inf) if bound is None else bound
+    schedule = np.ascontiguousarray(schedule, dtype=np.int64)
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         builds.driver(model, 'integrate_dense')(
-            y0, t_end, out_every, base, np.ascontiguousarray(schedule, dtype=np.int64),
+            y0, t_end, out_every, base, schedule,
             model.P if P is None else P, model.T, rtol, atol, rel_mask, h_init, h_max,
             adaptive, max_steps, mode,
             np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
             model.jacobian_pattern, model.jacobian_colours, start, held, memory, bound,
             *(_NO_OUTPUT if out is None else out),
             np.zeros((0, len(model.states))) if switch_rows is None
-            else np.ascontiguousarray(switch_rows, dtype=np.float64)))
+            else np.ascontiguousarray(switch_rows, dtype=np.float64),
+            *driver.work_space(len(model.states), len(model.aux), schedule.size, memory)))
     return result
 
 
