@@ -82,4 +82,5 @@ def _not_yet(reason: str) -> pytest.MarkDecorator:
 ])
 def test_the_drivers_are_at_most_150_lines(use: str, build: str) -> None:
     text = driver.source(use) if build == "numba" else c_engine.lowered_source(use)[0]
-    assert lengths(text)[use] <= LIMIT
+    # C: the dense driver's entry, which makes its work arrays, and the driver it calls
+    assert lengths(text)[use] <= LIMIT and max(lengths(text).values()) <= LIMIT

@@ -7,7 +7,9 @@ theirs).  Their text (:func:`feeddrive.solvers.driver.source` with ``inline=Fals
 it is, whatever its authors change, and *lowered* at the boundary between Python and C alone
 (:func:`lowered_source`): the output arrays the numba driver allocates are the caller's
 buffers, the statistics array is written into a caller's array and the driver returns the
-number of outputs.  Everything else — the steps, the RODAS4 Jacobian and linear solves, the
+number of outputs; the dense driver, which takes its work arrays from its caller
+(:func:`feeddrive.solvers.driver.work_space`), is called by an entry that makes them.
+Everything else — the steps, the RODAS4 Jacobian and linear solves, the
 event location, the eigen-analysis of the modal step cap (:mod:`feeddrive.solvers.modes`, in
 real arithmetic: no LAPACK) — is translated by :mod:`feeddrive.backends.c_translate` from the
 same Python numba compiles.  The unit is compiled through the compiled-object cache
@@ -170,7 +172,43 @@ def lowered_source(use: str) -> tuple[str, int]:
     if lower.count is None or not lower.n_stats:
         raise TranslationError(f"{use}: no statistics or result found in the driver's text "
                                "(lowered_source needs updating)")
-    return ast.unparse(tree) + "\n", lower.n_stats
+    fn = tree.body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    tree.body = _allocating_entry(fn)
+    return ast.unparse(ast.fix_missing_locations(tree)) + "\n", lower.n_stats
+
+
+class _AuxCount(ast.NodeTransformer):
+    def visit_Name(self, node: ast.Name) -> ast.Name:
+        return ast.Name("N_AUX", node.ctx) if node.id == "n_aux" else node
+
+
+def _allocating_entry(fn: ast.FunctionDef) -> list[ast.stmt]:
+    """``fn`` and, where it takes the work arrays of
+    :func:`feeddrive.solvers.driver.work_space` (the dense driver), the entry that makes them
+    as that function does — on the stack, as C99 arrays — and calls it renamed
+    ``<name>_loop``: the C build's caller is C, no array passed through ctypes for them."""
+    from ..solvers import driver
+
+    work = ast.parse(driver._text_of(driver.work_space)).body[0]
+    assert isinstance(work, ast.FunctionDef)
+    result = work.body[-1]
+    assert isinstance(result, ast.Return) and isinstance(result.value, ast.Tuple)
+    made = {e.id for e in result.value.elts if isinstance(e, ast.Name)}
+    params = [a.arg for a in fn.args.args]
+    if not made <= set(params):
+        return [fn]
+    entry = ast.FunctionDef(
+        name=fn.name, args=ast.arguments(posonlyargs=[], args=[
+            a for a in fn.args.args if a.arg not in made], kwonlyargs=[], kw_defaults=[],
+            defaults=[]), decorator_list=[], returns=None,
+        body=[ast.Expr(ast.Constant(f"{fn.name}'s entry: its work arrays "
+                                    "(feeddrive.solvers.driver.work_space), then the driver.")),
+              *(_AuxCount().visit(st) for st in work.body[1:-1]),
+              ast.Return(ast.Call(ast.Name(f"{fn.name}_loop", ast.Load()),
+                                  [ast.Name(p, ast.Load()) for p in params], []))])
+    fn.name = f"{fn.name}_loop"
+    return [entry, fn]
 
 
 def _bindings() -> dict[str, Any]:
@@ -403,8 +441,8 @@ def _c_params(use: str) -> list[tuple[str, str]]:
     """(name, kind) of the C entry's parameters in order: kind "double", "long", "int" or an
     array type of :data:`_ELEM`, then its run-time sizes as ("name#k", "size")."""
     source, _ = lowered_source(use)
-    fn = ast.parse(source).body[0]
-    assert isinstance(fn, ast.FunctionDef)
+    fn = ast.parse(source).body[0]  # the entry
+    assert isinstance(fn, ast.FunctionDef) and fn.name == use
     return _params_of(fn, SHAPES, PARAM_TYPES)
 
 

@@ -1985,46 +1985,69 @@ DENSE_WORK = ("q1", "q2", "q3", "ft", "yp", "fp", "v", "w", "J", "M", "J_ref", "
               "all_live", "ge_J", "ge_Phi", "ge_A", "ge_B", "ge_w", "ge_d", "ge_aux")
 
 
-def work_space(n: int, n_aux: int, n_clock: int, memory: np.ndarray
+def work_space(y0: np.ndarray, schedule: np.ndarray, memory: np.ndarray, n_aux: int
                ) -> tuple[np.ndarray, ...]:
-    """The dense driver's (``integrate_dense``'s) work arrays, made by its caller (the C
-    subset cannot allocate in a piece; the driver's text is shorter without them): ``tick``,
-    the explicit step's ``f0`` … ``e`` and ``aux``, then :data:`DENSE_WORK`, in the order of
-    its parameters.  The floating-point arrays are views of one zeroed block, the Jacobians
-    ``J``, ``J_ref`` zero and ``live``, ``all_live`` true as the driver expects them; the
-    global-error estimate's have ``n`` rows where ``memory`` has its slots, else none.
+    """The dense driver's (``integrate_dense``'s) work arrays, made by its caller (a piece
+    cannot allocate in the C subset; the driver reads shorter without them): ``tick``, the
+    explicit step's ``f0`` … ``e`` and ``aux``, then :data:`DENSE_WORK`, in the order of its
+    parameters, as the driver made them before; the global-error estimate's have ``n`` rows
+    where ``memory`` has its slots, else none.  numba's caller
+    (:func:`feeddrive.solvers.switching.integrate`) calls it; the C build's entry runs its
+    text (:func:`feeddrive.backends.c_engine.lowered_source`: arrays on the stack).
 
     Parameters
     ----------
-    n : int
-        Number of states.
-    n_aux : int
-        Number of auxiliary signals.
-    n_clock : int
-        Number of clocks of the sample schedule.
+    y0 : numpy.ndarray
+        The state [SI, per state].
+    schedule : numpy.ndarray of int
+        The sample schedule, one entry per clock.
     memory : numpy.ndarray
         The driver's memory (its length says whether the error estimate runs) [mixed].
+    n_aux : int
+        Number of auxiliary signals.
 
     Returns
     -------
     tuple of numpy.ndarray
         The arrays.
     """
+    n = y0.size
     ng = n if memory.shape[0] == MEMORY_SCALARS + n + n * n + 3 * n + 2 else 0
-    shapes = {**{name: (n,) for name in _DENSE_PARAMS[_DENSE_PARAMS.index("f0"):]},
-              "aux": (n_aux,), "ge_aux": (n_aux,), "ge_w": (ng,), "ge_d": (ng,),
-              **{name: (n, n) for name in ("J", "M", "J_ref")},
-              **{name: (ng, ng) for name in ("ge_J", "ge_Phi", "ge_A", "ge_B")}}
-    del shapes["piv"], shapes["live"], shapes["all_live"]
-    block = np.zeros(sum(math.prod(shape) for shape in shapes.values()))
-    arrays = {"piv": np.zeros(n, dtype=np.int64), "live": np.ones(n, dtype=np.bool_),
-              "all_live": np.ones(n, dtype=np.bool_)}
-    at = 0
-    for name, shape in shapes.items():
-        arrays[name] = block[at:at + math.prod(shape)].reshape(shape)
-        at += math.prod(shape)
-    return (np.empty(n_clock, dtype=np.int64),
-            *(arrays[name] for name in _DENSE_PARAMS[_DENSE_PARAMS.index("f0"):]))
+    tick = np.empty(schedule.size, dtype=np.int64)
+    f0 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    k5 = np.empty(n)
+    k6 = np.empty(n)
+    f_new = np.empty(n)
+    yt = np.empty(n)
+    y_new = np.empty(n)
+    e = np.empty(n)
+    aux = np.empty(n_aux)
+    q1 = np.empty(n)
+    q2 = np.empty(n)
+    q3 = np.empty(n)
+    ft = np.zeros(n)
+    yp = np.empty(n)
+    fp = np.empty(n)
+    v = np.empty(n)
+    w = np.empty(n)
+    J = np.zeros((n, n))
+    M = np.empty((n, n))
+    J_ref = np.zeros((n, n))
+    piv = np.zeros(n, dtype=np.int64)
+    live = np.ones(n, dtype=np.bool_)
+    all_live = np.ones(n, dtype=np.bool_)
+    ge_J = np.zeros((ng, ng))
+    ge_Phi = np.zeros((ng, ng))
+    ge_A = np.zeros((ng, ng))
+    ge_B = np.zeros((ng, ng))
+    ge_w = np.zeros(ng)
+    ge_d = np.zeros(ng)
+    ge_aux = np.empty(n_aux)
+    return (tick, f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e, aux, q1, q2, q3, ft, yp, fp, v,
+            w, J, M, J_ref, piv, live, all_live, ge_J, ge_Phi, ge_A, ge_B, ge_w, ge_d, ge_aux)
 
 
 _DENSE_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",

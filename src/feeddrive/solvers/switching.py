@@ -247,7 +247,7 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
             *(_NO_OUTPUT if out is None else out),
             np.zeros((0, len(model.states))) if switch_rows is None
             else np.ascontiguousarray(switch_rows, dtype=np.float64),
-            *driver.work_space(len(model.states), len(model.aux), schedule.size, memory)))
+            *driver.work_space(y0, schedule, memory, len(model.aux))))
     return result
 
 
