@@ -271,18 +271,14 @@ ge_w, ge_d, ge_aux : numpy.ndarray
         t = start * base
         if LAND:
             tick = np.empty(schedule.size, dtype=np.int64)
-        n_aux_out = n_out if want_aux else 0
-        if (DENSE and t_buf.shape[0] >= n_out and y_buf.shape[0] >= n_out
-                and y_buf.shape[1] == n and aux_buf.shape[0] >= n_aux_out
-                and aux_buf.shape[1] == N_AUX):
-            # the caller's buffers, reused from call to call (every row returned is written)
-            t_out = t_buf[:n_out]
-            y_out = y_buf[:n_out]
-            aux_out = aux_buf[:n_aux_out]
+        if DENSE:  # the caller's buffers, one row per output (switching.integrate)
+            t_out = t_buf
+            y_out = y_buf
+            aux_out = aux_buf
         else:  # uninitialised: every row returned is written
             t_out = np.empty(n_out)
             y_out = np.empty((n_out, n))
-            aux_out = np.empty((n_aux_out, N_AUX))
+            aux_out = np.empty((n_out if want_aux else 0, N_AUX))
         y = y0.copy()
     if LAND:
         f0 = np.empty(n)
@@ -417,21 +413,19 @@ ge_w, ge_d, ge_aux : numpy.ndarray
             if LAND:  # cut only when the step reaches the breakpoint (v1)
                 last = h >= t_ev - t
                 h_try = t_ev - t if last else h
-            else:
+            elif COMM:  # as step_attempt's
                 last = False
                 h_try = min(h, h_max)
-                if modal:  # both methods: DOPRI5 amplifies a mode at 1 < h|λ| < 3.3
-                    h_try = min(h_try, h_osc)
                 if t + h_try >= t_ev - 1e-12 * max(1.0, abs(t_ev)):
                     h_try = t_ev - t
                     last = True
-            if DENSE:  # either method (step_attempt); the others' DOPRI5 attempt below
+            if DENSE:  # the step chosen and tried with either method (step_attempt)
                 (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps,
                  rejected, n_rhs, n_jac, n_rodas) = step_attempt(
-                    stiff, adaptive, t, t_ev, h_try, last, h_min, y, f0, held, P, T, rtol,
-                    atol, rel_mask, J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt, yp, fp,
-                    y_new, aux, live, all_live, S, colour, frozen_known, r4_rejected, jac_age,
-                    steps, max_steps, rejected, n_rhs, n_jac, n_rodas)
+                    stiff, adaptive, t, t_ev, h, h_max, modal, h_osc, h_min, y, f0, held, P,
+                    T, rtol, atol, rel_mask, J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt,
+                    yp, fp, y_new, aux, live, all_live, S, colour, frozen_known, r4_rejected,
+                    jac_age, steps, max_steps, rejected, n_rhs, n_jac, n_rodas)
             else:
                 err = 0.0
                 t_new = t_ev
@@ -1587,9 +1581,10 @@ def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
     return calls, jacobians, ge_since
 
 
-def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h_try: float, last: bool,
-                 h_min: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray, P: np.ndarray,
-                 T: np.ndarray, rtol: float, atol: np.ndarray, rel_mask: np.ndarray,
+def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h: float, h_max: float,
+                 modal: bool, h_osc: float, h_min: float, y: np.ndarray, f0: np.ndarray,
+                 held: np.ndarray, P: np.ndarray, T: np.ndarray, rtol: float,
+                 atol: np.ndarray, rel_mask: np.ndarray,
                  J: np.ndarray, ft: np.ndarray, M: np.ndarray, piv: np.ndarray, k2: np.ndarray,
                  k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
                  f_new: np.ndarray, e: np.ndarray, yt: np.ndarray, yp: np.ndarray,
@@ -1599,30 +1594,27 @@ def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h_try: float
                  n_rhs: int, n_jac: int, n_rodas: int
                  ) -> tuple[float, float, float, bool, int, bool, bool, bool, int, int, int,
                             int, int]:
-    """The dense driver's step from ``t``, tried until accepted: RODAS4 (``stiff``; a frozen
-    state that moved retakes the whole Jacobian, a rejection with a kept Jacobian ends the
-    attempt as ``stale``) or DOPRI5, each shrunk on rejection by its own rule (Hairer & Wanner
-    II, Sect. IV.7; Hairer, Nørsett & Wanner I, Sect. II.4).  The breakpoint driver and the
-    FMU's try their DOPRI5 step in the template's text.
+    """The dense driver's step from ``t``, chosen (``h`` capped by ``h_max``, by ``h_osc``
+    with ``modal``, cut to land on ``t_ev``) and tried until accepted: RODAS4 (``stiff``; a
+    frozen state that moved retakes the whole Jacobian, a rejection with a kept Jacobian ends
+    the attempt as ``stale``) or DOPRI5, each shrunk on rejection by its own rule (Hairer &
+    Wanner II, Sect. IV.7; Hairer, Nørsett & Wanner I, Sect. II.4).
 
     Parameters
     ----------
-    stiff, adaptive : bool, int
-        RODAS4 (else DOPRI5); 1 for error-controlled steps, 0 for a fixed step.
-    t, t_ev, h_try, last, h_min : float, float, float, bool, float
-        The step's start, the next event, the step to try, whether it lands on ``t_ev``, the
-        smallest step [s].
-    y, f0, held, P, T : numpy.ndarray
-        The state and its derivative at t, held values, parameters, tables [SI].
-    rtol, atol, rel_mask : float, numpy.ndarray
-        Tolerances [-; SI, per state; -].
+    stiff, adaptive, modal : bool, int, bool
+        RODAS4 (else DOPRI5); 1 for error-controlled steps, 0 for a fixed step; the cap.
+    t, t_ev, h, h_max, h_osc, h_min : float
+        The step's start, the next event, the step size, its largest, the modal cap (DOPRI5
+        amplifies a mode at 1 < h|λ| < 3.3), the smallest step [s].
+    y, f0, held, P, T, rtol, atol, rel_mask : numpy.ndarray, float
+        The state and its derivative at t, held values, parameters, tables, tolerances [SI].
     J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt, yp, fp, y_new, aux : numpy.ndarray
         The Jacobian (retaken on a moved frozen state), work space, the step's end [mixed].
     live, all_live, S, colour : numpy.ndarray
         The states the Jacobian is taken for, all, its sparsity pattern and column groups.
     frozen_known, r4_rejected, jac_age : bool, bool, int
-        Frozen states known; a RODAS4 rejection since the last accepted step; the
-        Jacobian's age in accepted steps.
+        Frozen states known; a RODAS4 rejection since the last step; the Jacobian's age.
     steps, max_steps, rejected, n_rhs, n_jac, n_rodas : int
         Counts so far (the step limit).
 
@@ -1630,10 +1622,16 @@ def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h_try: float
     -------
     tuple
         (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps, rejected,
-        n_rhs, n_jac, n_rodas): the accepted step's error norm, end and size, whether it
-        lands on ``t_ev``, the status, whether the Jacobian is to be retaken first, and the
-        flags and counts updated.
+        n_rhs, n_jac, n_rodas): the accepted step's error norm, end, size and landing, the
+        status, whether the Jacobian is to be retaken first, the flags and counts updated.
     """
+    last = False
+    h_try = min(h, h_max)
+    if modal:
+        h_try = min(h_try, h_osc)
+    if t + h_try >= t_ev - 1e-12 * max(1.0, abs(t_ev)):
+        h_try = t_ev - t
+        last = True
     err = 0.0
     t_new = t_ev
     status = STATUS_OK
