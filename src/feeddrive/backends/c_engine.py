@@ -185,26 +185,34 @@ class _AuxCount(ast.NodeTransformer):
 
 def _allocating_entry(fn: ast.FunctionDef) -> list[ast.stmt]:
     """``fn`` and, where it takes the work arrays of
-    :func:`feeddrive.solvers.driver.work_space` (the dense driver), the entry that makes them
-    as that function does — on the stack, as C99 arrays — and calls it renamed
-    ``<name>_loop``: the C build's caller is C, no array passed through ctypes for them."""
+    :func:`feeddrive.solvers.driver.step_space` (and of ``work_space``: the dense driver),
+    the entry that makes them as those functions do — on the stack, as C99 arrays — and calls
+    it renamed ``<name>_loop``: the C build's caller is C, no array passed through ctypes for
+    them."""
     from ..solvers import driver
 
-    work = ast.parse(driver._text_of(driver.work_space)).body[0]
-    assert isinstance(work, ast.FunctionDef)
-    result = work.body[-1]
-    assert isinstance(result, ast.Return) and isinstance(result.value, ast.Tuple)
-    made = {e.id for e in result.value.elts if isinstance(e, ast.Name)}
     params = [a.arg for a in fn.args.args]
-    if not made <= set(params):
+    made: set[str] = set()
+    statements: list[ast.stmt] = []
+    for maker in (driver.step_space, driver.work_space):
+        work = ast.parse(driver._text_of(maker)).body[0]
+        assert isinstance(work, ast.FunctionDef)
+        result = work.body[-1]
+        assert isinstance(result, ast.Return) and isinstance(result.value, ast.Tuple)
+        names = {e.id for e in result.value.elts if isinstance(e, ast.Name)}
+        if names <= set(params):
+            made |= names
+            seen = {ast.dump(st) for st in statements}  # n = y0.size once
+            statements += [st for st in work.body[1:-1] if ast.dump(st) not in seen]
+    if not made:
         return [fn]
     entry = ast.FunctionDef(
         name=fn.name, args=ast.arguments(posonlyargs=[], args=[
             a for a in fn.args.args if a.arg not in made], kwonlyargs=[], kw_defaults=[],
             defaults=[]), decorator_list=[], returns=None,
-        body=[ast.Expr(ast.Constant(f"{fn.name}'s entry: its work arrays "
-                                    "(feeddrive.solvers.driver.work_space), then the driver.")),
-              *(_AuxCount().visit(st) for st in work.body[1:-1]),
+        body=[ast.Expr(ast.Constant(f"{fn.name}'s entry: its work arrays (feeddrive.solvers."
+                                    "driver.step_space, work_space), then the driver.")),
+              *(_AuxCount().visit(st) for st in statements),
               ast.Return(ast.Call(ast.Name(f"{fn.name}_loop", ast.Load()),
                                   [ast.Name(p, ast.Load()) for p in params], []))])
     fn.name = f"{fn.name}_loop"

@@ -269,8 +269,6 @@ ge_w, ge_d, ge_aux : numpy.ndarray
         else:
             n_out = n_break // out_every - (start + out_every - 1) // out_every + 1
         t = start * base
-        if LAND:
-            tick = np.empty(schedule.size, dtype=np.int64)
         if DENSE:  # the caller's buffers, one row per output (switching.integrate)
             t_out = t_buf
             y_out = y_buf
@@ -280,19 +278,7 @@ ge_w, ge_d, ge_aux : numpy.ndarray
             y_out = np.empty((n_out, n))
             aux_out = np.empty((n_out if want_aux else 0, N_AUX))
         y = y0.copy()
-    if LAND:
-        f0 = np.empty(n)
-        k2 = np.empty(n)
-        k3 = np.empty(n)
-        k4 = np.empty(n)
-        k5 = np.empty(n)
-        k6 = np.empty(n)
-        f_new = np.empty(n)
-        yt = np.empty(n)
-        y_new = np.empty(n)
-        e = np.empty(n)
-        aux = np.empty(N_AUX)
-    if DENSE:  # the work space is the caller's (work_space)
+    if DENSE:  # the work space is the caller's (step_space, work_space)
         # the statistics: output rhs calls, Jacobians, RODAS4 steps, method switches,
         # eigen-analyses, spectral-radius estimates (power iterations), surfaces crossed
         n_out_rhs = n_jac = n_rodas = switches = n_eig = n_rho = n_switch = 0
@@ -349,9 +335,6 @@ ge_w, ge_d, ge_aux : numpy.ndarray
         kb = start
         h = memory[0]
         err_old = memory[1]
-        # with every loop continuous nothing jumps at a breakpoint: the last stage of the step
-        # that ended there, evaluated at exactly the breakpoint, is the derivative there
-        continuous = next_instant(0, schedule) < 0
         # (a continued run applied the update at its first breakpoint in the previous call)
         if due(start, schedule, tick) > 0 and start == 0:
             sample_update(t, y, held, P, T, tick)
@@ -365,11 +348,12 @@ ge_w, ge_d, ge_aux : numpy.ndarray
             (h, stiff, frozen_known, stiff_count, nonstiff_count, err_old, r4_err_old, r4_h_old,
              r4_first, r4_rejected, h_osc, have_ref, refuse_until, dp_since_eig, rho,
              since_eig, quiet) = memory_load(memory, live, J_ref)
-    # the derivative at t (a continued continuous LAND run: the previous call's last stage,
-    # evaluated a hair off the breakpoint when that step was not cut to it)
+    # the derivative at t (a continued LAND run with every loop continuous, nothing jumping at
+    # a breakpoint: the previous call's last stage, evaluated at exactly the breakpoint, or a
+    # hair off it when that step was not cut to it)
     rhs(t, y, held, P, T, f0, aux)
     n_rhs += 1
-    if LAND and start > 0 and continuous:
+    if LAND and start > 0 and next_instant(0, schedule) < 0:
         for i in range(n):
             f0[i] = memory[2 + i]
     if COMM:
@@ -1975,23 +1959,23 @@ def define(source: str, name: str) -> Any:
     return fn
 
 
+#: the explicit step's work arrays, the drivers' parameters (made by :func:`step_space`)
+STEP_WORK = ("tick", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e", "aux")
 _LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                 "rel_mask", "h_max", "adaptive", "max_steps", "start", "held", "memory", "bound",
-                "switch_rows")
+                "switch_rows", *STEP_WORK)
 #: the dense driver's work space beyond the explicit step's (made by :func:`work_space`)
 DENSE_WORK = ("q1", "q2", "q3", "ft", "yp", "fp", "v", "w", "J", "M", "J_ref", "piv", "live",
               "all_live", "ge_J", "ge_Phi", "ge_A", "ge_B", "ge_w", "ge_d", "ge_aux")
 
 
-def work_space(y0: np.ndarray, schedule: np.ndarray, memory: np.ndarray, n_aux: int
-               ) -> tuple[np.ndarray, ...]:
-    """The dense driver's (``integrate_dense``'s) work arrays, made by its caller (a piece
-    cannot allocate in the C subset; the driver reads shorter without them): ``tick``, the
-    explicit step's ``f0`` … ``e`` and ``aux``, then :data:`DENSE_WORK`, in the order of its
-    parameters, as the driver made them before; the global-error estimate's have ``n`` rows
-    where ``memory`` has its slots, else none.  numba's caller
-    (:func:`feeddrive.solvers.switching.integrate`) calls it; the C build's entry runs its
-    text (:func:`feeddrive.backends.c_engine.lowered_source`: arrays on the stack).
+def step_space(y0: np.ndarray, schedule: np.ndarray, n_aux: int) -> tuple[np.ndarray, ...]:
+    """The drivers' (``integrate``'s, ``integrate_dense``'s) work arrays of the explicit step,
+    made by their caller (a piece cannot allocate in the C subset; the drivers read shorter
+    without them): ``tick`` and ``f0`` … ``e``, ``aux``, in the order of their parameters.
+    numba's callers (:func:`feeddrive.solvers.dopri5.integrate`,
+    :func:`feeddrive.solvers.switching.integrate`) call it; the C build's entries run its text
+    (:func:`feeddrive.backends.c_engine.lowered_source`: arrays on the stack).
 
     Parameters
     ----------
@@ -1999,8 +1983,6 @@ def work_space(y0: np.ndarray, schedule: np.ndarray, memory: np.ndarray, n_aux: 
         The state [SI, per state].
     schedule : numpy.ndarray of int
         The sample schedule, one entry per clock.
-    memory : numpy.ndarray
-        The driver's memory (its length says whether the error estimate runs) [mixed].
     n_aux : int
         Number of auxiliary signals.
 
@@ -2010,7 +1992,6 @@ def work_space(y0: np.ndarray, schedule: np.ndarray, memory: np.ndarray, n_aux: 
         The arrays.
     """
     n = y0.size
-    ng = n if memory.shape[0] == MEMORY_SCALARS + n + n * n + 3 * n + 2 else 0
     tick = np.empty(schedule.size, dtype=np.int64)
     f0 = np.empty(n)
     k2 = np.empty(n)
@@ -2023,6 +2004,30 @@ def work_space(y0: np.ndarray, schedule: np.ndarray, memory: np.ndarray, n_aux: 
     y_new = np.empty(n)
     e = np.empty(n)
     aux = np.empty(n_aux)
+    return (tick, f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e, aux)
+
+
+def work_space(y0: np.ndarray, memory: np.ndarray, n_aux: int) -> tuple[np.ndarray, ...]:
+    """The dense driver's (``integrate_dense``'s) other work arrays (:data:`DENSE_WORK`, in
+    the order of its parameters), made by its caller as :func:`step_space`'s are; the
+    global-error estimate's have ``n`` rows where ``memory`` has its slots, else none.
+
+    Parameters
+    ----------
+    y0 : numpy.ndarray
+        The state [SI, per state].
+    memory : numpy.ndarray
+        The driver's memory (its length says whether the error estimate runs) [mixed].
+    n_aux : int
+        Number of auxiliary signals.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The arrays.
+    """
+    n = y0.size
+    ng = n if memory.shape[0] == MEMORY_SCALARS + n + n * n + 3 * n + 2 else 0
     q1 = np.empty(n)
     q2 = np.empty(n)
     q3 = np.empty(n)
@@ -2044,15 +2049,16 @@ def work_space(y0: np.ndarray, schedule: np.ndarray, memory: np.ndarray, n_aux: 
     ge_w = np.zeros(ng)
     ge_d = np.zeros(ng)
     ge_aux = np.empty(n_aux)
-    return (tick, f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e, aux, q1, q2, q3, ft, yp, fp, v,
-            w, J, M, J_ref, piv, live, all_live, ge_J, ge_Phi, ge_A, ge_B, ge_w, ge_d, ge_aux)
+    return (q1, q2, q3, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live, ge_J, ge_Phi, ge_A,
+            ge_B, ge_w, ge_d, ge_aux)
+
+
 
 
 _DENSE_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                  "rel_mask", "h_init", "h_max", "adaptive", "max_steps", "mode", "stops",
                  "want_aux", "S", "colour", "start", "held", "memory", "bound", "t_buf",
-                 "y_buf", "aux_buf", "switch_rows", "tick", "f0", "k2", "k3", "k4", "k5", "k6",
-                 "f_new", "yt", "y_new", "e", "aux", *DENSE_WORK)
+                 "y_buf", "aux_buf", "switch_rows", *STEP_WORK, *DENSE_WORK)
 _COMM_PARAMS = ("t", "t_end", "t0", "n", "y", "held", "held_prev", "P", "T", "schedule",
                 "tick", "base", "rtol", "atol", "rel_mask", "h_max", "max_steps", "redo",
                 "memory", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e",
@@ -2100,19 +2106,26 @@ def source(use: str, inline: bool = True) -> str:
     constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
     text = specialise(driver_template, use, params, constants, doc,
                       "int" if use == "advance" else None)
-    return steps.inline_steps(inline_pieces(text)) if inline else text
+    return steps.inline_steps(inline_pieces(text, NUMBA_WRITTEN_IN[use])) if inline else text
 
 
-#: the pieces numba's text has written in, as it has the steps
-#: (:func:`feeddrive.solvers.steps.inline_steps`): numba's own inlining
-#: (``inline="always"``) of ``dense_coefficients`` and ``outputs_inside``, called at every
-#: step with a dozen arrays each, cost 10–20 % of a ``modal`` run, and that of
-#: ``output_row``, ``land_crossing`` and ``step_end_status`` (at every step or breakpoint of
-#: the breakpoint driver) 4–8 % of a ``dopri5`` run (benchmarks/README.md, "the driver
-#: split"); written in, the runs cost what they did.  ``switch_method`` takes more than 30
-#: arguments, which Python passes as ``*args``, which numba cannot inline
-NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
-                    "land_crossing", "step_end_status", "step_attempt")
+#: per use, the pieces numba's text has written in, as it has the steps
+#: (:func:`feeddrive.solvers.steps.inline_steps`).  The dense driver's has the six it
+#: calls at steps and outputs: numba's own inlining (``inline="always"``) of
+#: ``dense_coefficients`` and ``outputs_inside``, called at every step with a dozen arrays
+#: each, cost 10–20 % of a ``modal`` run; ``switch_method`` and ``step_attempt`` take more
+#: than 29 arguments, which CPython passes as ``*args``, which numba's inliner refuses, and
+#: called instead of written in they made a ``modal`` run 1.7–1.8 × (benchmarks/README.md,
+#: "the driver split", "third round").  The breakpoint driver's has two, ``land_crossing``
+#: and ``step_end_status`` (called at every step), and numba inlines ``output_row`` (at the
+#: outputs): its text is then 150 lines, its work arrays its caller's (:func:`step_space`),
+#: at 2–5 % of a ``dopri5`` run in numba; with none written in, 5–10 % (the C build, the
+#: default, calls them all at no cost)
+NUMBA_WRITTEN_IN: dict[str, tuple[str, ...]] = {
+    "integrate": ("land_crossing", "step_end_status"),
+    "integrate_dense": ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
+                        "step_end_status", "step_attempt"),
+    "advance": ()}
 
 
 def _piece_body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
@@ -2140,7 +2153,7 @@ def _piece_body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]
     return out
 
 
-def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str:
+def inline_pieces(source: str, names: tuple[str, ...]) -> str:
     """``source`` (a driver's function text) with every call statement of the pieces
     ``names`` — ``name(args)`` or ``target = name(args)`` — replaced by the piece's body, its
     parameters renamed to the arguments (a final ``return x`` becomes ``target = x``; the
@@ -2151,8 +2164,8 @@ def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str
     ----------
     source : str
         The driver's function text.
-    names : tuple of str, default NUMBA_WRITTEN_IN
-        The pieces to write in.
+    names : tuple of str
+        The pieces to write in (:data:`NUMBA_WRITTEN_IN`).
 
     Returns
     -------

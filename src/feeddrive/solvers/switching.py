@@ -254,7 +254,8 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
             t_buf[:n_out], y_buf[:n_out], aux_buf[:n_aux_out],
             np.zeros((0, len(model.states))) if switch_rows is None
             else np.ascontiguousarray(switch_rows, dtype=np.float64),
-            *driver.work_space(y0, schedule, memory, len(model.aux))))
+            *driver.step_space(y0, schedule, len(model.aux)),
+            *driver.work_space(y0, memory, len(model.aux))))
     return result
 
 
