@@ -7,8 +7,9 @@ theirs).  Their text (:func:`feeddrive.solvers.driver.source` with ``inline=Fals
 it is, whatever its authors change, and *lowered* at the boundary between Python and C alone
 (:func:`lowered_source`): the output arrays the numba driver allocates are the caller's
 buffers, the statistics array is written into a caller's array and the driver returns the
-number of outputs; the dense driver, which takes its work arrays from its caller
-(:func:`feeddrive.solvers.driver.work_space`), is called by an entry that makes them.
+number of outputs; the drivers, which take their work arrays from their caller
+(:func:`feeddrive.solvers.driver.step_space`, ``work_space``), are called by an entry that
+makes them.
 Everything else — the steps, the RODAS4 Jacobian and linear solves, the
 event location, the eigen-analysis of the modal step cap (:mod:`feeddrive.solvers.modes`, in
 real arithmetic: no LAPACK) — is translated by :mod:`feeddrive.backends.c_translate` from the
