@@ -212,9 +212,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         Largest |state| per state before the run stops as diverged [SI, per state] (not
         ``COMM``).
     t_buf, y_buf, aux_buf : numpy.ndarray
-        Output buffers (``DENSE``): if they hold the call's outputs (at least as many rows,
-        as many columns), the outputs are written into them and returned as views of their
-        first rows — no fresh array to fault in and fill per call; else new arrays [s; SI].
+        Output buffers (``DENSE``), one row per output of the call, chosen by the caller
+        (:func:`feeddrive.solvers.switching.integrate`: the caller's own, reused from call
+        to call, or new ones); the outputs are returned as views of their first rows [s; SI].
     t : float
         Start time of the call [s] (``COMM``).
     t0 : float
@@ -226,20 +226,22 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     held_prev : numpy.ndarray
         Held values before the last update, for ``redo`` [SI, per value] (``COMM``).
     tick : numpy.ndarray of int
-        Work space, one per clock (``COMM``, ``DENSE``).
+        Work space, one per clock (made by the caller: :func:`step_space`).
     redo : int
         1 when the inputs changed since the last call (``COMM``).
     f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e : numpy.ndarray
-        Work space, length ``n`` [SI per second, per state] (``COMM``, ``DENSE``).
+        Work space, length ``n`` [SI per second, per state] (:func:`step_space`).
     aux : numpy.ndarray
-        The auxiliary signals at the end [SI, per signal] (``COMM``; ``DENSE``: work space).
+        The auxiliary signals at the end [SI, per signal] (``COMM``; else work space).
     switch_rows : numpy.ndarray
         (m, n) switching surfaces W·y whose zero crossings are located and made step ends
         (:mod:`feeddrive.solvers.events`); (0, n) for none [state units → m/s] (``DENSE``).
-    q1, q2, q3, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live, ge_J, ge_Phi, ge_A, ge_B, \
-ge_w, ge_d, ge_aux : numpy.ndarray
+    q1, q2, q3, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live : numpy.ndarray
         The dense driver's work space (``DENSE``), made by its caller (:func:`work_space`:
-        a piece cannot allocate in the C subset, and the driver is shorter without).
+        a piece cannot allocate in the C subset, and the driver is shorter without) [mixed].
+    ge_J, ge_Phi, ge_A, ge_B, ge_w, ge_d, ge_aux : numpy.ndarray
+        The embedded global-error estimate's work space (``DENSE``; :func:`work_space`)
+        [mixed].
 
     Returns
     -------
@@ -1596,7 +1598,7 @@ def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h: float, h_
     J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt, yp, fp, y_new, aux : numpy.ndarray
         The Jacobian (retaken on a moved frozen state), work space, the step's end [mixed].
     live, all_live, S, colour : numpy.ndarray
-        The states the Jacobian is taken for, all, its sparsity pattern and column groups.
+        The states the Jacobian is taken for, all, its sparsity pattern, column groups [-].
     frozen_known, r4_rejected, jac_age : bool, bool, int
         Frozen states known; a RODAS4 rejection since the last step; the Jacobian's age.
     steps, max_steps, rejected, n_rhs, n_jac, n_rodas : int
