@@ -5,16 +5,16 @@ Run from the repository root::
 
     python benchmarks/bench_driver_split.py BEFORE_SRC [--rounds 3] [--after SRC] [--out NAME.json]
 
-``BEFORE_SRC`` is the ``src`` folder of a tree at the commit before the split (e.g.
-``git archive b27e7de src | tar -x -C /tmp/before``).  Each round runs, in fresh processes
-alternating between the two trees, the bench_engine scenarios ``cdfs_2p0``, ``cdfs_1p2`` and
-``ddfs_0p5_vn16`` (wang2021, mid-screw, 10 s) with ``modal`` (the default) and ``dopri5`` in
-the C and the numba build: each process warms up (compile or cache load) and then times one
-``simulate`` per case five times (CPU s, ``time.process_time``, their median).  Ratios
-after/before of the median over rounds; the load average before and after is recorded.  Writes
-``benchmarks/results/bench_driver_split.json`` (``--out``: another name there; the second
-round of the split, the drivers' own lines, is ``bench_driver_split2.json``).
-"""
+``BEFORE_SRC`` is the ``src`` folder of a tree at the commit before the split (e.g. ``git
+archive b27e7de src | tar -x -C /tmp/before``). Each round runs, in fresh processes alternating
+between the two trees, the bench_engine scenarios ``cdfs_2p0``, ``cdfs_1p2`` and
+``ddfs_0p5_vn16`` (wang2021, mid-screw, 10 s) with ``modal`` (the default) and ``dopri5`` in the
+C and the numba build (the trees' order alternating from round to round): each process warms up
+(compile or cache load) and then times one ``simulate`` per case five times (CPU s,
+``time.process_time``, their median). Ratios after/before of the median over rounds; the load
+average before and after is recorded. Writes ``benchmarks/results/bench_driver_split.json``
+(``--out``: another name there; the second round of the split, the drivers' own lines, is
+``bench_driver_split2.json``; the third, ``bench_driver_split3*.json``). """
 
 from __future__ import annotations
 
@@ -79,9 +79,10 @@ def main() -> None:
     t0 = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     times: dict[str, dict[str, list[float]]] = {}
     steps: dict[str, dict[str, int]] = {}
-    for _ in range(args.rounds):
-        for engine in ENGINES:
-            for tree, src in trees.items():
+    for k in range(args.rounds):
+        for engine in ENGINES:  # the trees' order alternates from round to round
+            for tree, src in (list(trees.items()) if k % 2 == 0 else
+                              list(trees.items())[::-1]):
                 for case, (cpu, n, ran) in run(src, engine).items():
                     key = f"{case}|{engine}"
                     times.setdefault(key, {}).setdefault(tree, []).append(cpu)

@@ -8,6 +8,7 @@ tests/validation/test_engine_builds.py."""
 from __future__ import annotations
 
 import ast
+import inspect
 import shutil
 import subprocess
 from pathlib import Path
@@ -93,13 +94,20 @@ def test_without_a_compiler_and_without_numba_one_line_says_how_to_get_either(
 @pytest.mark.parametrize("use", c_engine.USES)
 def test_the_driver_is_lowered_at_the_boundary_only(use: str) -> None:
     """The outputs become the caller's buffers, the statistics a caller's array, the result
-    the count; every other statement of the driver's text is kept."""
+    the count; every other statement of the driver's text is kept.  The dense driver, which
+    takes its work arrays (driver.work_space), is called by an entry that makes them."""
     text, n_stats = c_engine.lowered_source(use)
-    fn = ast.parse(text).body[0]
-    assert isinstance(fn, ast.FunctionDef)
+    functions = {f.name: f for f in ast.parse(text).body if isinstance(f, ast.FunctionDef)}
+    entry = functions[use]
+    fn = functions.get(f"{use}_loop", entry)
     names = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)}
     assert not names & set(c_engine.OUTPUTS) and "stats" not in names
     assert [a.arg for a in fn.args.args][-1] == c_engine.STATS_OUT
+    assert [a.arg for a in entry.args.args][-1] == c_engine.STATS_OUT
+    if fn is not entry:  # the entry takes the rest, makes these
+        made = {e.id for maker in (driver.step_space, driver.work_space) for e in ast.parse(
+            inspect.getsource(maker)).body[0].body[-1].value.elts}
+        assert {a.arg for a in fn.args.args} - {a.arg for a in entry.args.args} <= made
     assert n_stats == (len(switching.STAT_NAMES) if use == "integrate_dense" else 5)
     original = ast.parse(driver.source(use, inline=False)).body[0]
     assert isinstance(original, ast.FunctionDef)

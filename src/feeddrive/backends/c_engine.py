@@ -7,7 +7,10 @@ theirs).  Their text (:func:`feeddrive.solvers.driver.source` with ``inline=Fals
 it is, whatever its authors change, and *lowered* at the boundary between Python and C alone
 (:func:`lowered_source`): the output arrays the numba driver allocates are the caller's
 buffers, the statistics array is written into a caller's array and the driver returns the
-number of outputs.  Everything else — the steps, the RODAS4 Jacobian and linear solves, the
+number of outputs; the drivers, which take their work arrays from their caller
+(:func:`feeddrive.solvers.driver.step_space`, ``work_space``), are called by an entry that
+makes them.
+Everything else — the steps, the RODAS4 Jacobian and linear solves, the
 event location, the eigen-analysis of the modal step cap (:mod:`feeddrive.solvers.modes`, in
 real arithmetic: no LAPACK) — is translated by :mod:`feeddrive.backends.c_translate` from the
 same Python numba compiles.  The unit is compiled through the compiled-object cache
@@ -83,9 +86,11 @@ class _Lower(ast.NodeTransformer):
                                        "not an np.array([...]) (lowered_source needs updating)")
             items = value.args[0].elts
             self.n_stats = len(items)
-            return [ast.Assign([ast.Subscript(ast.Name(STATS_OUT, ast.Load()), ast.Constant(k),
-                                              ast.Store())], item, lineno=node.lineno)
-                    for k, item in enumerate(items)]
+            # one statement, as numba's np.array([...]): stats_out[0], ... = a, ...
+            return ast.Assign([ast.Tuple([ast.Subscript(ast.Name(STATS_OUT, ast.Load()),
+                                                        ast.Constant(k), ast.Store())
+                                          for k in range(len(items))], ast.Store())],
+                              ast.Tuple(items, ast.Load()), lineno=node.lineno)
         self.generic_visit(node)
         return node
 
@@ -168,7 +173,51 @@ def lowered_source(use: str) -> tuple[str, int]:
     if lower.count is None or not lower.n_stats:
         raise TranslationError(f"{use}: no statistics or result found in the driver's text "
                                "(lowered_source needs updating)")
-    return ast.unparse(tree) + "\n", lower.n_stats
+    fn = tree.body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    tree.body = _allocating_entry(fn)
+    return ast.unparse(ast.fix_missing_locations(tree)) + "\n", lower.n_stats
+
+
+class _AuxCount(ast.NodeTransformer):
+    def visit_Name(self, node: ast.Name) -> ast.Name:
+        return ast.Name("N_AUX", node.ctx) if node.id == "n_aux" else node
+
+
+def _allocating_entry(fn: ast.FunctionDef) -> list[ast.stmt]:
+    """``fn`` and, where it takes the work arrays of
+    :func:`feeddrive.solvers.driver.step_space` (and of ``work_space``: the dense driver),
+    the entry that makes them as those functions do — on the stack, as C99 arrays — and calls
+    it renamed ``<name>_loop``: the C build's caller is C, no array passed through ctypes for
+    them."""
+    from ..solvers import driver
+
+    params = [a.arg for a in fn.args.args]
+    made: set[str] = set()
+    statements: list[ast.stmt] = []
+    for maker in (driver.step_space, driver.work_space):
+        work = ast.parse(driver._text_of(maker)).body[0]
+        assert isinstance(work, ast.FunctionDef)
+        result = work.body[-1]
+        assert isinstance(result, ast.Return) and isinstance(result.value, ast.Tuple)
+        names = {e.id for e in result.value.elts if isinstance(e, ast.Name)}
+        if names <= set(params):
+            made |= names
+            seen = {ast.dump(st) for st in statements}  # n = y0.size once
+            statements += [st for st in work.body[1:-1] if ast.dump(st) not in seen]
+    if not made:
+        return [fn]
+    entry = ast.FunctionDef(
+        name=fn.name, args=ast.arguments(posonlyargs=[], args=[
+            a for a in fn.args.args if a.arg not in made], kwonlyargs=[], kw_defaults=[],
+            defaults=[]), decorator_list=[], returns=None,
+        body=[ast.Expr(ast.Constant(f"{fn.name}'s entry: its work arrays (feeddrive.solvers."
+                                    "driver.step_space, work_space), then the driver.")),
+              *(_AuxCount().visit(st) for st in statements),
+              ast.Return(ast.Call(ast.Name(f"{fn.name}_loop", ast.Load()),
+                                  [ast.Name(p, ast.Load()) for p in params], []))])
+    fn.name = f"{fn.name}_loop"
+    return [entry, fn]
 
 
 def _bindings() -> dict[str, Any]:
@@ -203,6 +252,11 @@ SHAPES: dict[str, tuple[str, ...]] = {
 }
 
 
+#: element types of the driver's and its pieces' arrays other than double (and the count
+#: ``steps`` of step_attempt, not the schedule's ``steps`` of SOLVER_TYPES)
+PARAM_TYPES = {**SOLVER_TYPES, "all_live": "bool*", "step_attempt.steps": "int"}
+
+
 def _translated(use: str) -> dict[str, Any]:
     from ..solvers import driver
 
@@ -210,7 +264,7 @@ def _translated(use: str) -> dict[str, Any]:
         return _functions_unit()
     fn = driver.define(lowered_source(use)[0], use)
     text = translate_kernels([fn], {"N_AUX": "FD_N_AUX"}, bindings=_bindings(),
-                             shapes=SHAPES, param_types={**SOLVER_TYPES, "all_live": "bool*"},
+                             shapes=SHAPES, param_types=PARAM_TYPES,
                              names={use: f"fd_{use}"})
     return {"c": text, "n_stats": lowered_source(use)[1], "params": _c_params(use)}
 
@@ -396,9 +450,9 @@ def _c_params(use: str) -> list[tuple[str, str]]:
     """(name, kind) of the C entry's parameters in order: kind "double", "long", "int" or an
     array type of :data:`_ELEM`, then its run-time sizes as ("name#k", "size")."""
     source, _ = lowered_source(use)
-    fn = ast.parse(source).body[0]
-    assert isinstance(fn, ast.FunctionDef)
-    return _params_of(fn, SHAPES, SOLVER_TYPES)
+    fn = ast.parse(source).body[0]  # the entry
+    assert isinstance(fn, ast.FunctionDef) and fn.name == use
+    return _params_of(fn, SHAPES, PARAM_TYPES)
 
 
 def _params_of(fn: ast.FunctionDef, shapes: dict[str, tuple[str, ...]],

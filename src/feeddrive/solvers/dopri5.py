@@ -219,12 +219,13 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states), h_init) if memory is None else memory
     bound = np.full(len(model.states), np.inf) if bound is None else bound
+    schedule = np.ascontiguousarray(schedule, dtype=np.int64)
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
-        builds.driver(model, 'integrate')(y0, t_end, out_every, base,
-                               np.ascontiguousarray(schedule, dtype=np.int64),
+        builds.driver(model, 'integrate')(y0, t_end, out_every, base, schedule,
                                model.P if P is None else P, model.T,
                                rtol, atol, rel_mask, h_max, adaptive, max_steps, start, held,
                                memory, bound,
                                np.zeros((0, len(model.states))) if switch_rows is None
-                               else np.ascontiguousarray(switch_rows, dtype=np.float64)))
+                               else np.ascontiguousarray(switch_rows, dtype=np.float64),
+                               *driver.step_space(y0, schedule, len(model.aux))))
     return result

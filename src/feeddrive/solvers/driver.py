@@ -147,7 +147,13 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     tick: np.ndarray, redo: int, f0: np.ndarray, k2: np.ndarray,
                     k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
                     f_new: np.ndarray, yt: np.ndarray, y_new: np.ndarray, e: np.ndarray,
-                    aux: np.ndarray, switch_rows: np.ndarray) -> Any:
+                    aux: np.ndarray, switch_rows: np.ndarray, q1: np.ndarray,
+                    q2: np.ndarray, q3: np.ndarray, ft: np.ndarray, yp: np.ndarray,
+                    fp: np.ndarray, v: np.ndarray, w: np.ndarray, J: np.ndarray,
+                    M: np.ndarray, J_ref: np.ndarray, piv: np.ndarray, live: np.ndarray,
+                    all_live: np.ndarray, ge_J: np.ndarray, ge_Phi: np.ndarray,
+                    ge_A: np.ndarray, ge_B: np.ndarray, ge_w: np.ndarray, ge_d: np.ndarray,
+                    ge_aux: np.ndarray) -> Any:
     """The driver of every integration (module docstring); compiled only as one of its
     specialisations (:func:`specialise`), whose signatures take a subset of these parameters.
 
@@ -206,9 +212,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         Largest |state| per state before the run stops as diverged [SI, per state] (not
         ``COMM``).
     t_buf, y_buf, aux_buf : numpy.ndarray
-        Output buffers (``DENSE``): if they hold the call's outputs (at least as many rows,
-        as many columns), the outputs are written into them and returned as views of their
-        first rows — no fresh array to fault in and fill per call; else new arrays [s; SI].
+        Output buffers (``DENSE``), one row per output of the call, chosen by the caller
+        (:func:`feeddrive.solvers.switching.integrate`: the caller's own, reused from call
+        to call, or new ones); the outputs are returned as views of their first rows [s; SI].
     t : float
         Start time of the call [s] (``COMM``).
     t0 : float
@@ -220,16 +226,22 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     held_prev : numpy.ndarray
         Held values before the last update, for ``redo`` [SI, per value] (``COMM``).
     tick : numpy.ndarray of int
-        Work space, one per clock (``COMM``).
+        Work space, one per clock (made by the caller: :func:`step_space`).
     redo : int
         1 when the inputs changed since the last call (``COMM``).
     f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e : numpy.ndarray
-        Work space, length ``n`` [SI per second, per state] (``COMM``).
+        Work space, length ``n`` [SI per second, per state] (:func:`step_space`).
     aux : numpy.ndarray
-        The auxiliary signals at the end [SI, per signal] (``COMM``).
+        The auxiliary signals at the end [SI, per signal] (``COMM``; else work space).
     switch_rows : numpy.ndarray
         (m, n) switching surfaces W·y whose zero crossings are located and made step ends
         (:mod:`feeddrive.solvers.events`); (0, n) for none [state units → m/s] (``DENSE``).
+    q1, q2, q3, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live : numpy.ndarray
+        The dense driver's work space (``DENSE``), made by its caller (:func:`work_space`:
+        a piece cannot allocate in the C subset, and the driver is shorter without) [mixed].
+    ge_J, ge_Phi, ge_A, ge_B, ge_w, ge_d, ge_aux : numpy.ndarray
+        The embedded global-error estimate's work space (``DENSE``; :func:`work_space`)
+        [mixed].
 
     Returns
     -------
@@ -259,46 +271,16 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         else:
             n_out = n_break // out_every - (start + out_every - 1) // out_every + 1
         t = start * base
-        tick = np.empty(schedule.size, dtype=np.int64)
-        n_aux_out = n_out if want_aux else 0
-        if (DENSE and t_buf.shape[0] >= n_out and y_buf.shape[0] >= n_out
-                and y_buf.shape[1] == n and aux_buf.shape[0] >= n_aux_out
-                and aux_buf.shape[1] == N_AUX):
-            # the caller's buffers, reused from call to call (every row returned is written)
-            t_out = t_buf[:n_out]
-            y_out = y_buf[:n_out]
-            aux_out = aux_buf[:n_aux_out]
+        if DENSE:  # the caller's buffers, one row per output (switching.integrate)
+            t_out = t_buf
+            y_out = y_buf
+            aux_out = aux_buf
         else:  # uninitialised: every row returned is written
             t_out = np.empty(n_out)
             y_out = np.empty((n_out, n))
-            aux_out = np.empty((n_aux_out, N_AUX))
+            aux_out = np.empty((n_out if want_aux else 0, N_AUX))
         y = y0.copy()
-        f0 = np.empty(n)
-        k2 = np.empty(n)
-        k3 = np.empty(n)
-        k4 = np.empty(n)
-        k5 = np.empty(n)
-        k6 = np.empty(n)
-        f_new = np.empty(n)
-        yt = np.empty(n)
-        y_new = np.empty(n)
-        e = np.empty(n)
-        aux = np.empty(N_AUX)
-    if DENSE:
-        q1 = np.empty(n)
-        q2 = np.empty(n)
-        q3 = np.empty(n)
-        J = np.zeros((n, n))
-        M = np.empty((n, n))
-        piv = np.zeros(n, dtype=np.int64)
-        ft = np.zeros(n)
-        yp = np.empty(n)
-        fp = np.empty(n)
-        v = np.empty(n)
-        w = np.empty(n)
-        live = np.ones(n, dtype=np.bool_)
-        all_live = np.ones(n, dtype=np.bool_)
-        J_ref = np.zeros((n, n))
+    if DENSE:  # the work space is the caller's (step_space, work_space)
         # the statistics: output rhs calls, Jacobians, RODAS4 steps, method switches,
         # eigen-analyses, spectral-radius estimates (power iterations), surfaces crossed
         n_out_rhs = n_jac = n_rodas = switches = n_eig = n_rho = n_switch = 0
@@ -308,15 +290,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         # memory has its slots: E, the largest |E|, the local errors of the interval
         ge_at = MEMORY_SCALARS + n + n * n
         ge = memory.shape[0] == ge_at + 3 * n + 2
-        ng = n if ge else 0
-        ge_J = np.zeros((ng, ng))
-        ge_Phi = np.zeros((ng, ng))
-        ge_A = np.zeros((ng, ng))
-        ge_B = np.zeros((ng, ng))
-        ge_w = np.zeros(ng)
-        ge_d = np.zeros(ng)
         ge_since = GE_REFRESH  # accepted steps since the propagator was formed (none yet)
-        ge_aux = np.empty(N_AUX)
     steps = 0
     rejected = 0
     n_rhs = 0
@@ -364,9 +338,6 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         kb = start
         h = memory[0]
         err_old = memory[1]
-        # with every loop continuous nothing jumps at a breakpoint: the last stage of the step
-        # that ended there, evaluated at exactly the breakpoint, is the derivative there
-        continuous = next_instant(0, schedule) < 0
         # (a continued run applied the update at its first breakpoint in the previous call)
         if due(start, schedule, tick) > 0 and start == 0:
             sample_update(t, y, held, P, T, tick)
@@ -380,11 +351,12 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             (h, stiff, frozen_known, stiff_count, nonstiff_count, err_old, r4_err_old, r4_h_old,
              r4_first, r4_rejected, h_osc, have_ref, refuse_until, dp_since_eig, rho,
              since_eig, quiet, h_dp) = memory_load(memory, live, J_ref)
-    # the derivative at t (a continued continuous LAND run: the previous call's last stage,
-    # evaluated a hair off the breakpoint when that step was not cut to it)
+    # the derivative at t (a continued LAND run with every loop continuous, nothing jumping at
+    # a breakpoint: the previous call's last stage, evaluated at exactly the breakpoint, or a
+    # hair off it when that step was not cut to it)
     rhs(t, y, held, P, T, f0, aux)
     n_rhs += 1
-    if LAND and start > 0 and continuous:
+    if LAND and start > 0 and next_instant(0, schedule) < 0:
         for i in range(n):
             f0[i] = memory[2 + i]
     if COMM:
@@ -428,43 +400,26 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             if LAND:  # cut only when the step reaches the breakpoint (v1)
                 last = h >= t_ev - t
                 h_try = t_ev - t if last else h
-            else:
+            elif COMM:  # as step_attempt's
                 last = False
                 h_try = min(h, h_max)
-                if modal:  # both methods: DOPRI5 amplifies a mode at 1 < h|λ| < 3.3
-                    h_try = min(h_try, h_osc)
                 if t + h_try >= t_ev - 1e-12 * max(1.0, abs(t_ev)):
                     h_try = t_ev - t
                     last = True
-            err = 0.0
-            t_new = t_ev
-            while True:
-                t_new = t_ev if last else t + h_try
-                if stiff:
-                    calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, M, piv, k2, k3,
-                                            k4, k5, k6, e, yt, fp,
-                                            y_new, aux, live)
-                    if calls == -2:
-                        # a frozen state moved: retry with the full Jacobian
-                        n_rhs += 5
-                        frozen_known = False
-                        for i in range(n):
-                            live[i] = True
-                        calls = _r4_fd_jacobian(t, y, f0, held, P, T,
-                                                atol, J, ft, yp, fp, aux, all_live, S, colour)
-                        n_rhs += calls
-                        n_jac += 1
-                        continue
-                    steps += 1
-                    n_rodas += 1
-                    if calls < 0:
-                        err = 1e10  # singular matrix: shrink the step
-                    else:
-                        n_rhs += calls
-                        err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
-                else:
-                    _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4, k5, k6, f_new, yt, y_new,
-                              aux, t_new)
+            if DENSE:  # the step chosen and tried with either method (step_attempt)
+                (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps,
+                 rejected, n_rhs, n_jac, n_rodas) = step_attempt(
+                    stiff, adaptive, t, t_ev, h, h_max, modal, h_osc, h_min, y, f0, held, P,
+                    T, rtol, atol, rel_mask, J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt,
+                    yp, fp, y_new, aux, live, all_live, S, colour, frozen_known, r4_rejected,
+                    jac_age, steps, max_steps, rejected, n_rhs, n_jac, n_rodas)
+            else:
+                err = 0.0
+                t_new = t_ev
+                while True:
+                    t_new = t_ev if last else t + h_try
+                    _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4, k5, k6, f_new, yt,
+                              y_new, aux, t_new)
                     n_rhs += 6
                     steps += 1
                     if adaptive == 0:
@@ -472,27 +427,18 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     else:
                         _dp5_error(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
                         err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
-                if adaptive == 0 or err <= 1.0:
-                    break
-                rejected += 1
-                if stiff:
-                    fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
-                    h_try /= fac
-                    r4_rejected = True
-                    if jac_age > 0:  # a kept Jacobian: the retry takes a fresh one
-                        stale = True
-                else:
+                    if adaptive == 0 or err <= 1.0:
+                        break
+                    rejected += 1
                     fac = _reject_factor(err)
                     h_try *= fac
-                last = False
-                if h_try < h_min:
-                    status = STATUS_STEP_UNDERFLOW
-                    break
-                if steps > max_steps:
-                    status = STATUS_MAX_STEPS
-                    break
-                if stale:
-                    break
+                    last = False
+                    if h_try < h_min:
+                        status = STATUS_STEP_UNDERFLOW
+                        break
+                    if steps > max_steps:
+                        status = STATUS_MAX_STEPS
+                        break
             if status != STATUS_OK:
                 break
             if stale:
@@ -1645,12 +1591,127 @@ def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
     return calls, jacobians, ge_since
 
 
+def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h: float, h_max: float,
+                 modal: bool, h_osc: float, h_min: float, y: np.ndarray, f0: np.ndarray,
+                 held: np.ndarray, P: np.ndarray, T: np.ndarray, rtol: float,
+                 atol: np.ndarray, rel_mask: np.ndarray,
+                 J: np.ndarray, ft: np.ndarray, M: np.ndarray, piv: np.ndarray, k2: np.ndarray,
+                 k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
+                 f_new: np.ndarray, e: np.ndarray, yt: np.ndarray, yp: np.ndarray,
+                 fp: np.ndarray, y_new: np.ndarray, aux: np.ndarray, live: np.ndarray,
+                 all_live: np.ndarray, S: np.ndarray, colour: np.ndarray, frozen_known: bool,
+                 r4_rejected: bool, jac_age: int, steps: int, max_steps: int, rejected: int,
+                 n_rhs: int, n_jac: int, n_rodas: int
+                 ) -> tuple[float, float, float, bool, int, bool, bool, bool, int, int, int,
+                            int, int]:
+    """The dense driver's step from ``t``, chosen (``h`` capped by ``h_max``, by ``h_osc``
+    with ``modal``, cut to land on ``t_ev``) and tried until accepted: RODAS4 (``stiff``; a
+    frozen state that moved retakes the whole Jacobian, a rejection with a kept Jacobian ends
+    the attempt as ``stale``) or DOPRI5, each shrunk on rejection by its own rule (Hairer &
+    Wanner II, Sect. IV.7; Hairer, Nørsett & Wanner I, Sect. II.4).
+
+    Parameters
+    ----------
+    stiff, adaptive, modal : bool, int, bool
+        RODAS4 (else DOPRI5); 1 for error-controlled steps, 0 for a fixed step; the cap.
+    t, t_ev, h, h_max, h_osc, h_min : float
+        The step's start, the next event, the step size, its largest, the modal cap (DOPRI5
+        amplifies a mode at 1 < h|λ| < 3.3), the smallest step [s].
+    y, f0, held, P, T, rtol, atol, rel_mask : numpy.ndarray, float
+        The state and its derivative at t, held values, parameters, tables, tolerances [SI].
+    J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt, yp, fp, y_new, aux : numpy.ndarray
+        The Jacobian (retaken on a moved frozen state), work space, the step's end [mixed].
+    live, all_live, S, colour : numpy.ndarray
+        The states the Jacobian is taken for, all, its sparsity pattern, column groups [-].
+    frozen_known, r4_rejected, jac_age : bool, bool, int
+        Frozen states known; a RODAS4 rejection since the last step; the Jacobian's age.
+    steps, max_steps, rejected, n_rhs, n_jac, n_rodas : int
+        Counts so far (the step limit).
+
+    Returns
+    -------
+    tuple
+        (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps, rejected,
+        n_rhs, n_jac, n_rodas): the accepted step's error norm, end, size and landing, the
+        status, whether the Jacobian is to be retaken first, the flags and counts updated.
+    """
+    last = False
+    h_try = min(h, h_max)
+    if modal:
+        h_try = min(h_try, h_osc)
+    if t + h_try >= t_ev - 1e-12 * max(1.0, abs(t_ev)):
+        h_try = t_ev - t
+        last = True
+    err = 0.0
+    t_new = t_ev
+    status = STATUS_OK
+    stale = False
+    while True:
+        t_new = t_ev if last else t + h_try
+        if stiff:
+            calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, M, piv, k2, k3,
+                                    k4, k5, k6, e, yt, fp,
+                                    y_new, aux, live)
+            if calls == -2:
+                # a frozen state moved: retry with the full Jacobian
+                n_rhs += 5
+                frozen_known = False
+                for i in range(y.size):
+                    live[i] = True
+                calls = _r4_fd_jacobian(t, y, f0, held, P, T,
+                                        atol, J, ft, yp, fp, aux, all_live, S, colour)
+                n_rhs += calls
+                n_jac += 1
+                continue
+            steps += 1
+            n_rodas += 1
+            if calls < 0:
+                err = 1e10  # singular matrix: shrink the step
+            else:
+                n_rhs += calls
+                err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
+        else:
+            _dp5_step(t, h_try, y, f0, held, P, T, k2, k3, k4, k5, k6, f_new, yt, y_new,
+                      aux, t_new)
+            n_rhs += 6
+            steps += 1
+            if adaptive == 0:
+                err = 0.0
+            else:
+                _dp5_error(h_try, f0, k2, k3, k4, k5, k6, f_new, e)
+                err = _error_norm(e, y, y_new, rtol, atol, rel_mask)
+        if adaptive == 0 or err <= 1.0:
+            break
+        rejected += 1
+        if stiff:
+            fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+            h_try /= fac
+            r4_rejected = True
+            if jac_age > 0:  # a kept Jacobian: the retry takes a fresh one
+                stale = True
+        else:
+            fac = _reject_factor(err)
+            h_try *= fac
+        last = False
+        if h_try < h_min:
+            status = STATUS_STEP_UNDERFLOW
+            break
+        if steps > max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        if stale:
+            break
+    return (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps,
+            rejected, n_rhs, n_jac, n_rodas)
+
+
 #: the pieces, in the order they are placed in the compiled module
 PIECES = ("jacobian_fresh", "modal_reference", "jacobian_update", "modal_refresh",
           "stiffness_estimate", "step_size", "dense_coefficients", "outputs_inside", "outputs_at",
           "bounds_status",
           "next_event", "memory_load", "memory_save", "switch_method",
-          "error_estimate_step", "step_end_status", "output_row", "land_crossing")
+          "error_estimate_step", "step_end_status", "output_row", "land_crossing",
+          "step_attempt")
 
 
 # the generated module's kernels the template calls (feeddrive.solvers.steps,
@@ -1924,13 +1985,106 @@ def define(source: str, name: str) -> Any:
     return fn
 
 
+#: the explicit step's work arrays, the drivers' parameters (made by :func:`step_space`)
+STEP_WORK = ("tick", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e", "aux")
 _LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                 "rel_mask", "h_max", "adaptive", "max_steps", "start", "held", "memory", "bound",
-                "switch_rows")
+                "switch_rows", *STEP_WORK)
+#: the dense driver's work space beyond the explicit step's (made by :func:`work_space`)
+DENSE_WORK = ("q1", "q2", "q3", "ft", "yp", "fp", "v", "w", "J", "M", "J_ref", "piv", "live",
+              "all_live", "ge_J", "ge_Phi", "ge_A", "ge_B", "ge_w", "ge_d", "ge_aux")
+
+
+def step_space(y0: np.ndarray, schedule: np.ndarray, n_aux: int) -> tuple[np.ndarray, ...]:
+    """The drivers' (``integrate``'s, ``integrate_dense``'s) work arrays of the explicit step,
+    made by their caller (a piece cannot allocate in the C subset; the drivers read shorter
+    without them): ``tick`` and ``f0`` … ``e``, ``aux``, in the order of their parameters.
+    numba's callers (:func:`feeddrive.solvers.dopri5.integrate`,
+    :func:`feeddrive.solvers.switching.integrate`) call it; the C build's entries run its text
+    (:func:`feeddrive.backends.c_engine.lowered_source`: arrays on the stack).
+
+    Parameters
+    ----------
+    y0 : numpy.ndarray
+        The state [SI, per state].
+    schedule : numpy.ndarray of int
+        The sample schedule, one entry per clock.
+    n_aux : int
+        Number of auxiliary signals.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The arrays.
+    """
+    n = y0.size
+    tick = np.empty(schedule.size, dtype=np.int64)
+    f0 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    k5 = np.empty(n)
+    k6 = np.empty(n)
+    f_new = np.empty(n)
+    yt = np.empty(n)
+    y_new = np.empty(n)
+    e = np.empty(n)
+    aux = np.empty(n_aux)
+    return (tick, f0, k2, k3, k4, k5, k6, f_new, yt, y_new, e, aux)
+
+
+def work_space(y0: np.ndarray, memory: np.ndarray, n_aux: int) -> tuple[np.ndarray, ...]:
+    """The dense driver's (``integrate_dense``'s) other work arrays (:data:`DENSE_WORK`, in
+    the order of its parameters), made by its caller as :func:`step_space`'s are; the
+    global-error estimate's have ``n`` rows where ``memory`` has its slots, else none.
+
+    Parameters
+    ----------
+    y0 : numpy.ndarray
+        The state [SI, per state].
+    memory : numpy.ndarray
+        The driver's memory (its length says whether the error estimate runs) [mixed].
+    n_aux : int
+        Number of auxiliary signals.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The arrays.
+    """
+    n = y0.size
+    ng = n if memory.shape[0] == MEMORY_SCALARS + n + n * n + 3 * n + 2 else 0
+    q1 = np.empty(n)
+    q2 = np.empty(n)
+    q3 = np.empty(n)
+    ft = np.zeros(n)
+    yp = np.empty(n)
+    fp = np.empty(n)
+    v = np.empty(n)
+    w = np.empty(n)
+    J = np.zeros((n, n))
+    M = np.empty((n, n))
+    J_ref = np.zeros((n, n))
+    piv = np.zeros(n, dtype=np.int64)
+    live = np.ones(n, dtype=np.bool_)
+    all_live = np.ones(n, dtype=np.bool_)
+    ge_J = np.zeros((ng, ng))
+    ge_Phi = np.zeros((ng, ng))
+    ge_A = np.zeros((ng, ng))
+    ge_B = np.zeros((ng, ng))
+    ge_w = np.zeros(ng)
+    ge_d = np.zeros(ng)
+    ge_aux = np.empty(n_aux)
+    return (q1, q2, q3, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live, ge_J, ge_Phi, ge_A,
+            ge_B, ge_w, ge_d, ge_aux)
+
+
+
+
 _DENSE_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
                  "rel_mask", "h_init", "h_max", "adaptive", "max_steps", "mode", "stops",
                  "want_aux", "S", "colour", "start", "held", "memory", "bound", "t_buf",
-                 "y_buf", "aux_buf", "switch_rows")
+                 "y_buf", "aux_buf", "switch_rows", *STEP_WORK, *DENSE_WORK)
 _COMM_PARAMS = ("t", "t_end", "t0", "n", "y", "held", "held_prev", "P", "T", "schedule",
                 "tick", "base", "rtol", "atol", "rel_mask", "h_max", "max_steps", "redo",
                 "memory", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e",
@@ -1978,19 +2132,26 @@ def source(use: str, inline: bool = True) -> str:
     constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
     text = specialise(driver_template, use, params, constants, doc,
                       "int" if use == "advance" else None)
-    return steps.inline_steps(inline_pieces(text)) if inline else text
+    return steps.inline_steps(inline_pieces(text, NUMBA_WRITTEN_IN[use])) if inline else text
 
 
-#: the pieces numba's text has written in, as it has the steps
-#: (:func:`feeddrive.solvers.steps.inline_steps`): numba's own inlining
-#: (``inline="always"``) of ``dense_coefficients`` and ``outputs_inside``, called at every
-#: step with a dozen arrays each, cost 10–20 % of a ``modal`` run, and that of
-#: ``output_row``, ``land_crossing`` and ``step_end_status`` (at every step or breakpoint of
-#: the breakpoint driver) 4–8 % of a ``dopri5`` run (benchmarks/README.md, "the driver
-#: split"); written in, the runs cost what they did.  ``switch_method`` takes more than 30
-#: arguments, which Python passes as ``*args``, which numba cannot inline
-NUMBA_WRITTEN_IN = ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
-                    "land_crossing", "step_end_status")
+#: per use, the pieces numba's text has written in, as it has the steps
+#: (:func:`feeddrive.solvers.steps.inline_steps`).  The dense driver's has the six it
+#: calls at steps and outputs: numba's own inlining (``inline="always"``) of
+#: ``dense_coefficients`` and ``outputs_inside``, called at every step with a dozen arrays
+#: each, cost 10–20 % of a ``modal`` run; ``switch_method`` and ``step_attempt`` take more
+#: than 29 arguments, which CPython passes as ``*args``, which numba's inliner refuses, and
+#: called instead of written in they made a ``modal`` run 1.7–1.8 × (benchmarks/README.md,
+#: "the driver split", "third round").  The breakpoint driver's has two, ``land_crossing``
+#: and ``step_end_status`` (called at every step), and numba inlines ``output_row`` (at the
+#: outputs): its text is then 150 lines, its work arrays its caller's (:func:`step_space`),
+#: at 2–5 % of a ``dopri5`` run in numba; with none written in, 5–10 % (the C build, the
+#: default, calls them all at no cost)
+NUMBA_WRITTEN_IN: dict[str, tuple[str, ...]] = {
+    "integrate": ("land_crossing", "step_end_status"),
+    "integrate_dense": ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
+                        "step_end_status", "step_attempt"),
+    "advance": ()}
 
 
 def _piece_body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
@@ -2018,7 +2179,7 @@ def _piece_body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]
     return out
 
 
-def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str:
+def inline_pieces(source: str, names: tuple[str, ...]) -> str:
     """``source`` (a driver's function text) with every call statement of the pieces
     ``names`` — ``name(args)`` or ``target = name(args)`` — replaced by the piece's body, its
     parameters renamed to the arguments (a final ``return x`` becomes ``target = x``; the
@@ -2029,8 +2190,8 @@ def inline_pieces(source: str, names: tuple[str, ...] = NUMBA_WRITTEN_IN) -> str
     ----------
     source : str
         The driver's function text.
-    names : tuple of str, default NUMBA_WRITTEN_IN
-        The pieces to write in.
+    names : tuple of str
+        The pieces to write in (:data:`NUMBA_WRITTEN_IN`).
 
     Returns
     -------

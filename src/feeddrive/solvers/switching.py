@@ -236,16 +236,26 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     held = np.zeros(model.n_held) if held is None else held
     memory = new_memory(len(model.states)) if memory is None else memory
     bound = np.full(len(model.states), np.inf) if bound is None else bound
+    schedule = np.ascontiguousarray(schedule, dtype=np.int64)
+    n_out = max(0, (int(round(t_end / base)) - start) // out_every + 1)
+    n_aux_out = n_out if want_aux else 0
+    t_buf, y_buf, aux_buf = _NO_OUTPUT if out is None else out
+    if not (t_buf.shape[0] >= n_out and y_buf.shape[0] >= n_out
+            and y_buf.shape[1] == len(model.states) and aux_buf.shape[0] >= n_aux_out
+            and aux_buf.shape[1] == len(model.aux)):  # new: every row returned is written
+        t_buf, y_buf, aux_buf = new_output(model, n_out, want_aux)
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         builds.driver(model, 'integrate_dense')(
-            y0, t_end, out_every, base, np.ascontiguousarray(schedule, dtype=np.int64),
+            y0, t_end, out_every, base, schedule,
             model.P if P is None else P, model.T, rtol, atol, rel_mask, h_init, h_max,
             adaptive, max_steps, mode,
             np.ascontiguousarray(stops, dtype=np.float64), bool(want_aux),
             model.jacobian_pattern, model.jacobian_colours, start, held, memory, bound,
-            *(_NO_OUTPUT if out is None else out),
+            t_buf[:n_out], y_buf[:n_out], aux_buf[:n_aux_out],
             np.zeros((0, len(model.states))) if switch_rows is None
-            else np.ascontiguousarray(switch_rows, dtype=np.float64)))
+            else np.ascontiguousarray(switch_rows, dtype=np.float64),
+            *driver.step_space(y0, schedule, len(model.aux)),
+            *driver.work_space(y0, memory, len(model.aux))))
     return result
 
 
