@@ -193,3 +193,16 @@ def test_uncapped_rosenbrock_steps_damp_an_undamped_table_mode() -> None:
         modal, rodas = kind("modal", rtol), kind("rodas4", rtol)
         assert modal[0] == "stick-slip" and modal[1] == pytest.approx(dopri[1], rel=0.01)
         assert rodas[0] == "smooth" and rodas[1] < 0.05 * dopri[1]
+
+
+def test_the_docs_state_the_switch_back_rule_of_the_code() -> None:
+    """docs/model.md says when a Rosenbrock stretch returns to DOPRI5 with the driver's own
+    constants (``RODAS4_COST``, ``NONSTIFF_STEPS``, ``MODAL_RETRY``)."""
+    from feeddrive.solvers import driver
+
+    text = " ".join((ROOT / "docs" / "model.md").read_text(encoding="utf-8").split())
+    assert (f"back after {driver.NONSTIFF_STEPS} Rosenbrock steps that DOPRI5 would take "
+            "stably") in text
+    assert (f"that are not {driver.RODAS4_COST:g} times the step DOPRI5 took when it handed "
+            "over") in text
+    assert f"the switch to RODAS4 is refused for {driver.MODAL_RETRY} steps" in text
