@@ -45,6 +45,7 @@ from ..model.friction import friction_law
 from ..model.friction.lugre_parameters import LuGreParameters
 from ..solvers import builds
 from ..solvers.dopri5 import STATUS_MESSAGES, STATUS_OK, new_memory
+from ..solvers.driver import step_space
 from ..solvers.schedule import no_schedule
 
 __all__ = ["LINEAR_BREAKAWAY", "MIN_STEPS", "STEP_RATE", "UNIFORM_JITTER", "simulate_presliding"]
@@ -151,10 +152,11 @@ def _integrate(step: float, force: np.ndarray, mass: float, packed: np.ndarray,
     t_end = (force.size - 1) * step
     # the build of the engine (C, or numba without a compiler) of every model
     integrate = builds.driver(rig, "integrate")  # type: ignore[arg-type]
+    schedule = no_schedule(1)
     _, y, _, stats, _ = integrate(
-        y0, t_end, 1, step, no_schedule(1), P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
+        y0, t_end, 1, step, schedule, P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
         substeps * force.size + 10, 0, np.zeros(1), new_memory(n, h), np.full(n, math.inf),
-        np.zeros((0, n)))
+        np.zeros((0, n)), *step_space(y0, schedule, len(rig.aux)))
     status = int(stats[0])
     if status != STATUS_OK or y.shape[0] != force.size:
         raise ValueError(f"pre-sliding simulation: {STATUS_MESSAGES.get(status, status)} at "
