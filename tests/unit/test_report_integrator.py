@@ -27,6 +27,7 @@ def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
     assert text.startswith(f"{options.method} (")
     for piece in (f"h·|λ| ≤ {modes.H_LAMBDA:g}",
                   f"damping ratio < {modes.ZETA_LIGHT:g}",
+                  f"a RODAS4 step counted as {switching.RODAS4_COST:g} DOPRI5 steps",
                   f"rtol {opt._num(opt.DEFAULT_RTOL)}",
                   f"positions {opt._num(opt.POSITION_TIME)} s × V",
                   f"speeds {opt._num(opt.SPEED_FRACTION)} × V",
@@ -44,6 +45,8 @@ def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
 def test_the_label_follows_the_code(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(modes, "H_LAMBDA", 0.123)
     assert "h·|λ| ≤ 0.123 " in integrator_text()
+    monkeypatch.setattr(switching, "RODAS4_COST", 4.0)
+    assert "counted as 4 DOPRI5 steps" in integrator_text()
     assert "rtol 1e-8" in SolverOptions(rtol=1e-8).describe()
     assert "every output a step end" in SolverOptions(method="dopri5").describe()
     assert "steps ≤ 0.001 s" in SolverOptions(method="dopri5").describe()

@@ -75,11 +75,10 @@ def simulate_command(
         "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
     method: str | None = typer.Option(
         None, "--method", help="Integrator: modal (the default: DOPRI5 and "
-        "RODAS4 switched on stiffness, steps capped on lightly damped modes), dopri5 "
+        "RODAS4 switched on stiffness and cost, steps capped on lightly damped modes), dopri5 "
         "(every output instant a step end, as the v1 engine; friction reversals located), "
-        "auto (switched on "
-        "stiffness alone), rodas4 or dopri5-dense; default: the parameter file's [solver] "
-        "method, else modal."),
+        "auto (switched on stiffness and cost, no cap), rodas4 or dopri5-dense; default: the "
+        "parameter file's [solver] method, else modal."),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
                                   help="Solver step limit [-]; a run that needs more is "
                                   "refused before it starts."),

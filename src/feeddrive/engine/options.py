@@ -416,11 +416,13 @@ class SolverOptions:
             One sentence.
         """
         methods = {
-            "modal": "DOPRI5/RODAS4 switched on stiffness, every step capped at h·|λ| ≤ "
-                     f"{_num(modes.H_LAMBDA)} on each oscillatory mode of the Jacobian "
-                     f"with damping ratio < {_num(modes.ZETA_LIGHT)}",
+            "modal": "DOPRI5/RODAS4 switched on stiffness and on the steps' cost (a RODAS4 "
+                     f"step counted as {_num(switching.RODAS4_COST)} DOPRI5 steps), every step "
+                     f"capped at h·|λ| ≤ {_num(modes.H_LAMBDA)} on each oscillatory mode of "
+                     f"the Jacobian with damping ratio < {_num(modes.ZETA_LIGHT)}",
             "dopri5": "adaptive Dormand–Prince 5(4)",
-            "auto": "DOPRI5/RODAS4 switched on Hairer's stiffness test, no mode cap",
+            "auto": "DOPRI5/RODAS4 switched on Hairer's stiffness test and on the steps' "
+                    "cost, no mode cap",
             "rodas4": "Rosenbrock RODAS4",
             "dopri5-dense": "adaptive Dormand–Prince 5(4), dense output",
             "dopri5-fixed": f"Dormand–Prince 5 at a fixed step of {_num(self.fixed_step)} s",
