@@ -36,7 +36,6 @@ import argparse
 import json
 import os
 import platform
-import resource
 import statistics
 import subprocess
 import sys
@@ -44,6 +43,8 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+from bench_startup import fresh_process  # the benchmarks' folder is the script's
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "bench_nonumba.json"
@@ -66,16 +67,7 @@ def _without_wall_time(data: Any) -> Any:
 
 def _run(args: list[str], env: dict[str, str]) -> tuple[float, float, Any, str]:
     """CPU [s] of the process tree, wall [s], the JSON output and the engine's stderr."""
-    cmd = [sys.executable, "-m", "feeddrive", *args]
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, cwd=ROOT, env=env, check=False)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if proc.returncode != 0:
-        raise SystemExit(f"{' '.join(args)} failed ({proc.returncode}): "
-                         f"{proc.stderr.decode()[-2000:]}")
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    wall, cpu, proc = fresh_process([sys.executable, "-m", "feeddrive", *args], env)
     return cpu, wall, json.loads(proc.stdout), proc.stderr.decode()
 
 

@@ -66,9 +66,11 @@ def _feeddrive_command() -> list[str]:
     return [found] if found else [sys.executable, "-m", "feeddrive"]
 
 
-def _run(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float, float, bytes]:
-    """Wall [s], CPU (user + system of the child) [s] and standard output of one fresh
-    process."""
+def fresh_process(cmd: list[str], env: dict[str, str] | None = None
+                  ) -> tuple[float, float, subprocess.CompletedProcess[bytes]]:
+    """Wall [s], CPU (user + system of the child) [s] and the finished process (its output
+    captured) of one fresh process run from the repository root; a failure ends the
+    benchmark with the end of its standard error (bench_nonumba.py uses it too)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, cwd=ROOT, check=False, env=env)
@@ -78,7 +80,7 @@ def _run(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float, floa
         raise SystemExit(f"{' '.join(cmd)} failed ({proc.returncode}): "
                          f"{proc.stderr.decode()[-2000:]}")
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return wall, cpu, proc.stdout
+    return wall, cpu, proc
 
 
 def _normalised(out: bytes) -> bytes:
@@ -128,8 +130,8 @@ def components(runs: int, env: dict[str, str]) -> dict[str, float]:
     for name, (base, code) in COMPONENTS.items():
         diffs = []
         for _ in range(runs):
-            diffs.append(_run([sys.executable, "-c", code], env)[1]
-                         - _run([sys.executable, "-c", base], env)[1])
+            diffs.append(fresh_process([sys.executable, "-c", code], env)[1]
+                         - fresh_process([sys.executable, "-c", base], env)[1])
         out[name] = round(statistics.median(diffs), 4)
         print(f"  {name:70s} {out[name]:.3f} s CPU")
     return out
@@ -162,7 +164,7 @@ def main() -> None:
     floor = {"python -c pass": [sys.executable, "-c", "pass"],
              "python -c 'import numpy'": [sys.executable, "-c", "import numpy"]}
     for venv in variants.values():
-        _run(simulate, venv)  # warm-up: the compile caches filled, files in the page cache
+        fresh_process(simulate, venv)  # warm-up: the compile caches filled, files in the page cache
     load_before = os.getloadavg()
     names = [f"simulate [{v}]" for v in variants] + list(floor)
     samples: dict[str, dict[str, list[float]]] = {
@@ -170,12 +172,12 @@ def main() -> None:
     outputs: dict[str, set[bytes]] = {v: set() for v in variants}
     for _ in range(args.runs):  # interleaved: every command sees the same load
         for variant, venv in variants.items():
-            wall, cpu, out = _run(simulate, venv)
+            wall, cpu, proc = fresh_process(simulate, venv)
             samples[f"simulate [{variant}]"]["wall_s"].append(wall)
             samples[f"simulate [{variant}]"]["cpu_s"].append(cpu)
-            outputs[variant].add(_normalised(out))
+            outputs[variant].add(_normalised(proc.stdout))
         for name, cmd in floor.items():
-            wall, cpu, _ = _run(cmd, env)
+            wall, cpu, _ = fresh_process(cmd, env)
             samples[name]["wall_s"].append(wall)
             samples[name]["cpu_s"].append(cpu)
     parts = components(args.runs, env) if args.components else None
