@@ -1458,9 +1458,10 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
     calls = 0
     analyses = 0
     if stiff:
-        # back to DOPRI5 when its stable step would do: this step's, or (MODE_MODAL) when
+        # back to DOPRI5 when its stable step would do (this step's, or (MODE_MODAL) when
         # the cap leaves RODAS4 less than MODAL_SWITCH_GAIN × that step, the test that
-        # refuses the switch the other way
+        # refuses the switch the other way) or when RODAS4's steps do not pay for their cost
+        # against the step DOPRI5 took when it handed over (h_dp)
         stable = rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO
         short = h_done < RODAS4_COST * h_dp
         if not stable and short and (h_done > r4_h_old or r4_rejected):
