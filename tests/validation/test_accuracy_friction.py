@@ -76,27 +76,21 @@ def test_the_references_are_the_current_parameter_set() -> None:
 #: 1-ms cap and steps across the reversals: ``locate_reversals=False`` at accuracy 1,
 #: test_engine_v1_regression).  With the fixed cap the CDFS's table speed fell only 4.2× in the
 #: second decade (1.28e-7, 1.20e-8, 2.87e-9: the error where the cap binds is the cap's, deaf
-#: to the tolerances; with a 10-ms cap the same solver converges 12×, 17×, 20×); it now falls
-#: 1.28e-7, 6.9e-9, 8.2e-10 (below the floor).  The DDFS at 0.5/16 mm/s still falls only 4.7×
-#: (table speed 1.17e-7 → 2.47e-8) and 4.2× (position 9.7e-11 → 2.3e-11) in the first decade:
-#: at accuracy 0.1 its largest error is the 200-Hz ring each reversal leaves (t ≈ 0.6 s), the
-#: truncation error of steps bounded by DOPRI5's stability, not by the tolerances, which it
-#: meets there 12× over (the same ring at accuracy 1 and 0.1 in ``dopri5-dense``, whose step
-#: count moves 7377 → 7462; ∝ h⁵ under a step cap: 1.06e-8 at 0.3 ms, 1.35e-9 at 0.2 ms).
-#: ``dopri5-dense`` passes only because its start transient, which the 1-ms landing resolves
-#: in ``dopri5``, dominates its error at accuracy 1.  Kept as a strict expected failure.
-LAND_ONLY = {("dopri5", "ddfs_0p5_vn16")}
-
+#: to the tolerances).  The DDFS at 0.5/16 mm/s then fell only 4.7× (table speed 1.17e-7 →
+#: 2.47e-8) and 4.2× (position 9.7e-11 → 2.3e-11) in the first decade: its largest error was
+#: the ring each reversal leaves (t ≈ 0.6 s), at steps bounded by DOPRI5's stability, not by
+#: the tolerances (met 12× over there).  Below accuracy 1 each step is now also capped at
+#: accuracy^(1/5) × DOPRI5's stability bound 3.3/ρ (ρ: the error-weighted stiffness estimate
+#: of the step before; SolverOptions.stability_share), and the DDFS's table speed falls
+#: 1.17e-7, 1.92e-8, 3.11e-9, 7.6e-10 (6.1×, 6.2×, the last below the floor), its position
+#: 9.7e-11, 1.8e-11, 5.2e-12 (5.3×, then below the floor), at 56 408 right-hand sides at
+#: accuracy 0.1 against 58 256 without the cap (fewer rejected steps); the CDFS's table speed
+#: 1.28e-7, 6.35e-9, 7.5e-10, 2.2e-10 (measured 2026-12-05).
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", SMOOTH)
 @pytest.mark.parametrize("method", METHODS)
-def test_smooth_lugre_runs_converge_with_accuracy(method: str, name: str,
-                                                  request: pytest.FixtureRequest) -> None:
-    if (method, name) in LAND_ONLY:
-        request.applymarker(pytest.mark.xfail(strict=True, reason="dopri5 on the DDFS: the "
-                                              "reversals' ring at DOPRI5's stability-bound "
-                                              "steps, not tolerance-bound, at accuracy 0.1"))
+def test_smooth_lugre_runs_converge_with_accuracy(method: str, name: str) -> None:
     errs = [relative_errors(name, run(name, method, a)) for a in ACCURACIES]
     for signal in ("table_position", "table_speed"):
         series = [e[signal] for e in errs]

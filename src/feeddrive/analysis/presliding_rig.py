@@ -154,7 +154,7 @@ def _integrate(step: float, force: np.ndarray, mass: float, packed: np.ndarray,
     integrate = builds.driver(rig, "integrate")  # type: ignore[arg-type]
     schedule = no_schedule(1)
     _, y, _, stats, _ = integrate(
-        y0, t_end, 1, step, schedule, P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 0,
+        y0, t_end, 1, step, schedule, P, T, 1e-6, np.ones(n), np.zeros(n), math.inf, 1.0, 0,
         substeps * force.size + 10, 0, np.zeros(1), new_memory(n, h), np.full(n, math.inf),
         np.zeros((0, n)), *step_space(y0, schedule, len(rig.aux)))
     status = int(stats[0])

@@ -232,7 +232,8 @@ class SolverOptions:
           leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
           early (``divergence_bounds``);
         * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps
-          at most ``max_step``, default 1 ms × accuracy^(1/5), and the output interval),
+          at most ``max_step``, default 1 ms × accuracy^(1/5), and the output interval;
+          below ``accuracy`` 1 also ``stability_share`` × DOPRI5's stability bound),
           friction reversals located on each step's continuous extension and made step ends
           (``locate_reversals``); with ``locate_reversals=False`` at ``accuracy`` 1 the engine
           v1 behaviour, bit for bit;
@@ -431,6 +432,9 @@ class SolverOptions:
         largest = self.largest_step
         steps = (f"steps ≤ {_num(largest)} s, " if math.isfinite(largest)
                  and not self.method.endswith("-fixed") else "")
+        if self.stability_share < 1.0:
+            steps = (f"{steps[:-2]} and ≤ {_num(self.stability_share)} × DOPRI5's stability "
+                     "bound 3.3/ρ (ρ estimated on each step), ")
         if self.sample_steps and self.method in DENSE_MODES:
             steps += "every sample of a sampled profile a step end, "
         if not self.locate_reversals and self.method in REVERSAL_METHODS:
@@ -517,6 +521,19 @@ class SolverOptions:
         if self.method == "dopri5" and self.accuracy != 1.0:
             return DOPRI5_STEP * self.accuracy ** (1.0 / DOPRI5.order)
         return DOPRI5_STEP
+
+    @property
+    def stability_share(self) -> float:
+        """For ``dopri5`` at ``accuracy`` < 1, accuracy^(1/5): each step is also capped at that
+        share of DOPRI5's stability bound 3.3/ρ (ρ estimated on the step before, as dopri5.f
+        detects stiffness).  Where a stiff mode holds the steps at that bound the tolerances
+        do not shorten them, and the error of a lightly damped mode resolved there (the ring a
+        friction reversal leaves in the DDFS) stays what the bound makes it; capped, it falls
+        with ``accuracy`` as where the tolerances bind.  1 otherwise (no cap) [-].
+        """
+        if self.method == "dopri5" and self.accuracy < 1.0:
+            return self.accuracy ** (1.0 / DOPRI5.order)
+        return 1.0
 
     def record(self) -> dict[str, Any]:
         """The settings as plain values for cache and store keys and for a worker process:

@@ -270,8 +270,8 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
     allowed = int(options.max_steps * t_probe / t_end) + 1000
     _, _, _, stats, _ = dopri5.integrate(
         model, y0.copy(), t_probe, grid.out_every, grid.base, grid.schedule, rtol,
-        atol, rel, h_init, h_max, adaptive, allowed, bound=bound, P=grid.parameters(model),
-        switch_rows=switch_rows)
+        atol, rel, h_init, h_max, adaptive, allowed, stability_share=options.stability_share,
+        bound=bound, P=grid.parameters(model), switch_rows=switch_rows)
     if int(stats[0]) in (dopri5.STATUS_OK, dopri5.STATUS_MAX_STEPS) and stats[4] > 0:
         problem = budget.step_rate_problem(
             steps=int(stats[1]), probe_time=float(stats[4]), duration=t_end,
@@ -998,8 +998,9 @@ class _Chunks:
             t, yy, aa, stats, _ = dopri5.integrate(
                 sim.model, y, t_stop, grid.out_every, grid.base, grid.schedule,
                 sim.tolerances.rtol, sim.atol, sim.rel, self.h_init, self.h_max, self.adaptive,
-                max_steps, start=start, held=held, memory=memory,
-                bound=sim.bound, P=sim.P, switch_rows=sim.switch_rows)
+                max_steps, stability_share=sim.options.stability_share, start=start,
+                held=held, memory=memory, bound=sim.bound, P=sim.P,
+                switch_rows=sim.switch_rows)
         return t, yy, aa, stats
 
     def _add(self, stats: np.ndarray) -> np.ndarray:

@@ -133,7 +133,8 @@ def new_memory(n_states: int, h_init: float) -> np.ndarray:
 def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: float,
               schedule: np.ndarray, rtol: float, atol: np.ndarray,
               rel_mask: np.ndarray, h_init: float, h_max: float, adaptive: int,
-              max_steps: int, *, start: int = 0, held: np.ndarray | None = None,
+              max_steps: int, *, stability_share: float = 1.0, start: int = 0,
+              held: np.ndarray | None = None,
               memory: np.ndarray | None = None, bound: np.ndarray | None = None,
               P: np.ndarray | None = None, switch_rows: np.ndarray | None = None,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -178,6 +179,10 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
         1 for error-controlled steps, 0 for a fixed step (used to verify the order).
     max_steps : int
         Step limit of the call.
+    stability_share : float, default 1
+        Below 1, each step is also capped at this share of DOPRI5's stability bound
+        estimated on the step before (the driver's ``stability_share``;
+        :attr:`feeddrive.engine.options.SolverOptions.stability_share`) [-].
     start : int, default 0
         Breakpoint index the call starts from.
     held : numpy.ndarray, optional
@@ -223,7 +228,8 @@ def integrate(model: Model, y0: np.ndarray, t_end: float, out_every: int, base: 
     result: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = (
         builds.driver(model, 'integrate')(y0, t_end, out_every, base, schedule,
                                model.P if P is None else P, model.T,
-                               rtol, atol, rel_mask, h_max, adaptive, max_steps, start, held,
+                               rtol, atol, rel_mask, h_max, stability_share, adaptive,
+                               max_steps, start, held,
                                memory, bound,
                                np.zeros((0, len(model.states))) if switch_rows is None
                                else np.ascontiguousarray(switch_rows, dtype=np.float64),

@@ -95,6 +95,10 @@ MODE_DOPRI5, MODE_RODAS4, MODE_AUTO, MODE_MODAL = 0, 1, 2, 3
 # Switching thresholds of the dense driver (measured on the benchmark scenarios,
 # benchmarks/README.md; feeddrive.solvers.switching)
 STIFF_HLAMBDA = 3.25  # DOPRI5's stability boundary on the negative real axis is ≈ 3.3
+# that boundary (|R(z)| = 1 at z ≈ -3.31; dopri5.f's stiffness test, Hairer & Wanner, Solving
+# ODEs II, Sect. IV.2): the ``dopri5`` method's steps at accuracy < 1 are also capped at a
+# share of DOPRI5_STABILITY / ρ (SolverOptions.stability_share)
+DOPRI5_STABILITY = 3.3
 STIFF_STEPS = 15  # stiff verdicts (reset after 6 non-stiff steps in a row), dopri5.f
 NONSTIFF_HRHO = 3.0
 NONSTIFF_STEPS = 5
@@ -139,7 +143,8 @@ COMM = False
 def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     schedule: np.ndarray, P: np.ndarray, T: np.ndarray, rtol: float,
                     atol: np.ndarray, rel_mask: np.ndarray, h_init: float, h_max: float,
-                    adaptive: int, max_steps: int, mode: int, stops: np.ndarray,
+                    stability_share: float, adaptive: int, max_steps: int, mode: int,
+                    stops: np.ndarray,
                     want_aux: bool, S: np.ndarray, colour: np.ndarray, start: int,
                     held: np.ndarray, memory: np.ndarray, bound: np.ndarray,
                     t_buf: np.ndarray, y_buf: np.ndarray, aux_buf: np.ndarray, t: float,
@@ -184,6 +189,12 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         First step size [s] (``DENSE``).
     h_max : float
         Largest step [s].
+    stability_share : float
+        ``LAND``: below 1, each step is also capped at this share of DOPRI5's stability bound,
+        :data:`DOPRI5_STABILITY` / ρ with ρ the stiffness estimate of the step before
+        (:func:`stiffness_estimate`): where the steps are bound by stability, not by the
+        tolerances, the error then still falls with the accuracy asked for
+        (:attr:`feeddrive.engine.options.SolverOptions.stability_share`) [-].
     adaptive : int
         1 for error-controlled steps, 0 for a fixed step (used to verify the order).
     max_steps : int
@@ -523,7 +534,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             elif adaptive == 1:  # LAND: v1 took every error, also 0, into DOPRI5's memory
                 h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected = step_size(
                     used_rodas, err, h_try, h, h_max, last, err_old, alpha, beta, r4_first,
-                    r4_h_old, r4_err_old, r4_rejected, LAND)
+                    r4_h_old, r4_err_old, r4_rejected, LAND, stability_share if LAND else 1.0,
+                    f_new, k6, y, y_new, yt, rtol, atol, rel_mask)
             if DENSE and ge:  # the embedded global-error estimate carried over the step
                 calls, jacobians, ge_since = error_estimate_step(
                     used_rodas, ge_since, t, t_new, y, f0, held, P, T, atol, J, ge_J, ft, yp, fp,
@@ -849,10 +861,52 @@ def stiffness_estimate(h: float, f_new: np.ndarray, k6: np.ndarray, y_new: np.nd
     return 0.0
 
 
+def weighted_stiffness_estimate(h: float, f_new: np.ndarray, k6: np.ndarray, y: np.ndarray,
+                                y_new: np.ndarray, yt: np.ndarray, rtol: float,
+                                atol: np.ndarray, rel_mask: np.ndarray) -> float:
+    """h·|λ| as :func:`stiffness_estimate`, each state's difference weighted as the error norm
+    weighs it (atol + rtol·max(|y|, |y_new|)): the stiff mode the step-size controller sees,
+    whatever the states' units; 0 where the two points coincide.
+
+    Parameters
+    ----------
+    h : float
+        The step [s].
+    f_new, k6 : numpy.ndarray
+        The derivatives at the step's end and at its sixth stage [SI/s, per state].
+    y : numpy.ndarray
+        The state at the step's start [SI, per state].
+    y_new, yt : numpy.ndarray
+        The states at its end and at its sixth stage [SI, per state].
+    rtol : float
+        Relative tolerance [-].
+    atol : numpy.ndarray
+        Absolute tolerance per state [SI, per state].
+    rel_mask : numpy.ndarray
+        1 where the relative tolerance applies [-].
+
+    Returns
+    -------
+    float
+        The estimate [-].
+    """
+    num = 0.0
+    den = 0.0
+    for i in range(f_new.size):
+        scale = atol[i] + rtol * rel_mask[i] * max(abs(y[i]), abs(y_new[i]))
+        num += ((f_new[i] - k6[i]) / scale) ** 2
+        den += ((y_new[i] - yt[i]) / scale) ** 2
+    if den > 0.0:
+        return h * math.sqrt(num / den)
+    return 0.0
+
+
 def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float, last: bool,
               err_old: float, alpha: float, beta: float, r4_first: bool, r4_h_old: float,
-              r4_err_old: float, r4_rejected: bool,
-              every_error: bool) -> tuple[float, float, bool, float, float, bool]:
+              r4_err_old: float, r4_rejected: bool, every_error: bool,
+              stability_share: float, f_new: np.ndarray, k6: np.ndarray, y: np.ndarray,
+              y_new: np.ndarray, yt: np.ndarray, rtol: float, atol: np.ndarray,
+              rel_mask: np.ndarray) -> tuple[float, float, bool, float, float, bool]:
     """The step-size controller after an accepted step: Hairer's PI controller for DOPRI5
     (:func:`feeddrive.solvers.steps.pi_factor_template`), Gustafsson's predictive controller
     for RODAS4 (Hairer & Wanner, Solving ODEs II, Sect. IV.8, Eq. (8.21)); a last step cut
@@ -881,6 +935,12 @@ def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float
         a rejection since.
     every_error : bool
         DOPRI5's memory takes every error, also 0 (the breakpoint driver, v1).
+    stability_share : float
+        Below 1 (the breakpoint driver's ``stability_share``), a DOPRI5 step is also capped at
+        this share of :data:`DOPRI5_STABILITY` / ρ, ρ from
+        :func:`weighted_stiffness_estimate` on the step just taken [-].
+    f_new, k6, y, y_new, yt, rtol, atol, rel_mask
+        That step's last stages, states and the tolerances (:func:`weighted_stiffness_estimate`).
 
     Returns
     -------
@@ -906,6 +966,11 @@ def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float
         h_new = h_try * fac
     if not last or h_new < h:
         h = min(h_new, h_max)
+    if stability_share < 1.0 and not used_rodas:  # a share of DOPRI5's stability bound
+        h_lambda = weighted_stiffness_estimate(h_try, f_new, k6, y, y_new, yt, rtol, atol,
+                                               rel_mask)
+        if h_lambda > 0.0:
+            h = min(h, stability_share * DOPRI5_STABILITY * h_try / h_lambda)
     return h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected
 
 
@@ -1708,8 +1773,8 @@ def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h: float, h_
 
 #: the pieces, in the order they are placed in the compiled module
 PIECES = ("jacobian_fresh", "modal_reference", "jacobian_update", "modal_refresh",
-          "stiffness_estimate", "step_size", "dense_coefficients", "outputs_inside", "outputs_at",
-          "bounds_status",
+          "stiffness_estimate", "weighted_stiffness_estimate", "step_size",
+          "dense_coefficients", "outputs_inside", "outputs_at", "bounds_status",
           "next_event", "memory_load", "memory_save", "switch_method",
           "error_estimate_step", "step_end_status", "output_row", "land_crossing",
           "step_attempt")
@@ -1989,8 +2054,8 @@ def define(source: str, name: str) -> Any:
 #: the explicit step's work arrays, the drivers' parameters (made by :func:`step_space`)
 STEP_WORK = ("tick", "f0", "k2", "k3", "k4", "k5", "k6", "f_new", "yt", "y_new", "e", "aux")
 _LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol", "atol",
-                "rel_mask", "h_max", "adaptive", "max_steps", "start", "held", "memory", "bound",
-                "switch_rows", *STEP_WORK)
+                "rel_mask", "h_max", "stability_share", "adaptive", "max_steps", "start", "held",
+                "memory", "bound", "switch_rows", *STEP_WORK)
 #: the dense driver's work space beyond the explicit step's (made by :func:`work_space`)
 DENSE_WORK = ("q1", "q2", "q3", "ft", "yp", "fp", "v", "w", "J", "M", "J_ref", "piv", "live",
               "all_live", "ge_J", "ge_Phi", "ge_A", "ge_B", "ge_w", "ge_d", "ge_aux")
