@@ -71,6 +71,62 @@ def _label(fn: object, args: tuple) -> str:
     return name
 
 
+_PROFILE_DIR = "FEEDDRIVE_BENCH_PROFILE_DIR"
+_PROFILE_CPROFILE = "FEEDDRIVE_BENCH_PROFILE_CPROFILE"
+_COUNTERS: dict[str, float] = {}
+
+
+def _count_integrations() -> None:
+    """Wrap this process's integrators so that each task's simulated seconds, calls and
+    CPU seconds inside them are counted (once per worker)."""
+    from feeddrive.solvers import dopri5, switching
+
+    if _COUNTERS:
+        return
+    _COUNTERS.update({"sim_s": 0.0, "calls": 0, "integrate_cpu": 0.0})
+
+    def counted(original):  # type: ignore[no-untyped-def]
+        def integrate(model, y0, t_end, out_every, base, *args, **kw):  # type: ignore
+            began = time.process_time()
+            try:
+                return original(model, y0, t_end, out_every, base, *args, **kw)
+            finally:
+                _COUNTERS["integrate_cpu"] += time.process_time() - began
+                _COUNTERS["sim_s"] += t_end - kw.get("start", 0) * base
+                _COUNTERS["calls"] += 1
+        return integrate
+
+    switching.integrate = counted(switching.integrate)
+    dopri5.integrate = counted(dopri5.integrate)
+
+
+def _profiled_timed(fn, *args):  # type: ignore[no-untyped-def]
+    """The pool's task wrapper in ``--profile`` (reproduce's ``runner._timed``): the task's
+    CPU and wall seconds, its integrators' counts and (optionally) its cProfile, appended
+    to ``tasks.jsonl`` of the folder named in the environment."""
+    import cProfile
+
+    _count_integrations()
+    folder = Path(os.environ[_PROFILE_DIR])
+    for k in _COUNTERS:
+        _COUNTERS[k] = 0 if k == "calls" else 0.0
+    prof = cProfile.Profile() if os.environ.get(_PROFILE_CPROFILE) == "1" else None
+    began, wall = time.process_time(), time.perf_counter()
+    if prof is not None:
+        prof.enable()
+    value = fn(*args)
+    if prof is not None:
+        prof.disable()
+    cpu, wall = time.process_time() - began, time.perf_counter() - wall
+    n = f"{os.getpid()}-{time.monotonic_ns()}"
+    if prof is not None:
+        prof.dump_stats(str(folder / f"{n}.prof"))
+    with open(folder / "tasks.jsonl", "a") as fh:
+        fh.write(json.dumps({"task": _label(fn, args), "cpu_s": cpu, "wall_s": wall,
+                             "prof": f"{n}.prof", **_COUNTERS}) + "\n")
+    return value, cpu
+
+
 def profile(folder: Path, out: Path | None, use_cprofile: bool = True) -> None:
     """Run the study with every pool task profiled (see the module docstring).
 
@@ -84,52 +140,16 @@ def profile(folder: Path, out: Path | None, use_cprofile: bool = True) -> None:
         Profile each task with cProfile (its overhead inflates Python-heavy tasks several
         times: the CPU seconds of ``--no-cprofile`` are the ones to quote).
     """
-    import cProfile
     import pstats
 
     from feeddrive.reproduce import runner
-    from feeddrive.solvers import dopri5, switching
 
     folder.mkdir(parents=True, exist_ok=True)
-    counters = {"sim_s": 0.0, "calls": 0, "integrate_cpu": 0.0}
-
-    def counted(original):  # type: ignore[no-untyped-def]
-        def integrate(model, y0, t_end, out_every, base, *args, **kw):  # type: ignore
-            began = time.process_time()
-            try:
-                return original(model, y0, t_end, out_every, base, *args, **kw)
-            finally:
-                counters["integrate_cpu"] += time.process_time() - began
-                counters["sim_s"] += t_end - kw.get("start", 0) * base
-                counters["calls"] += 1
-        return integrate
-
-    switching.integrate = counted(switching.integrate)
-    dopri5.integrate = counted(dopri5.integrate)
-
-    def timed(fn, *args):  # type: ignore[no-untyped-def]
-        for k in counters:
-            counters[k] = 0 if k == "calls" else 0.0
-        prof = cProfile.Profile() if use_cprofile else None
-        began, wall = time.process_time(), time.perf_counter()
-        if prof is not None:
-            prof.enable()
-        value = fn(*args)
-        if prof is not None:
-            prof.disable()
-        cpu, wall = time.process_time() - began, time.perf_counter() - wall
-        label = _label(fn, args)
-        n = f"{os.getpid()}-{time.monotonic_ns()}"
-        if prof is not None:
-            prof.dump_stats(str(folder / f"{n}.prof"))
-        with open(folder / "tasks.jsonl", "a") as fh:
-            fh.write(json.dumps({"task": label, "cpu_s": cpu, "wall_s": wall,
-                                 "prof": f"{n}.prof", **counters}) + "\n")
-        return value, cpu
-
-    timed.__qualname__ = timed.__name__ = "_profiled_timed"
-    globals()["_profiled_timed"] = timed
-    runner._timed = timed
+    # the pool's workers are spawned: they read the settings from the environment and count
+    # in their own process (_profiled_timed, importable from this module as __mp_main__)
+    os.environ[_PROFILE_DIR] = str(folder)
+    os.environ[_PROFILE_CPROFILE] = "1" if use_cprofile else "0"
+    runner._timed = _profiled_timed
     (folder / "tasks.jsonl").unlink(missing_ok=True)
     params = fd.preset("wang2021")
     simulate(DriveSystem(params, "ddfs", 0.4), ConstantSpeed(1e-3, 16e-3), 0.05)  # warm-up

@@ -23,6 +23,7 @@ from ..engine.simulate import DriveSystem, simulate
 from ..io.json_store import ResultStore, code_hash, store_key
 from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters, dumps
+from ..sweep.executors import single_threaded_children
 from . import (
     figures,
     forced_study,
@@ -338,8 +339,13 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     cpu_seconds: dict[str, float] = {}  # of each study computed in this run
     if todo or any(found[k] is None for k in [*after, *shared]):
         # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
-        # waits for its running searches took ~53 s to stop, issue 12 item 7)
-        pool = multiprocessing.Pool(max(1, workers), initializer=_ignore_sigint)
+        # waits for its running searches took ~53 s to stop, issue 12 item 7).  Started by
+        # spawn with one BLAS thread each: forked, they inherited the parent's OpenBLAS
+        # threads, which busy-waited beside them (60.7 against 48.8 CPU s of the workers,
+        # benchmarks/README.md)
+        with single_threaded_children():
+            pool = multiprocessing.get_context("spawn").Pool(max(1, workers),
+                                                             initializer=_ignore_sigint)
         try:
             from ..solvers.shared import drivers_on_disk
 

@@ -116,7 +116,12 @@ class SweepSummary:
 
 
 @contextlib.contextmanager
-def _single_threaded_children() -> Iterator[None]:
+def single_threaded_children() -> Iterator[None]:
+    """While it lasts, processes started get one thread per numerical library (OpenMP,
+    OpenBLAS, MKL, numba): a pool of single-core workers whose BLAS threads would otherwise
+    busy-wait beside them on the same cores (reproduce's workers: 60.7 → 48.8 CPU s,
+    benchmarks/README.md).  Only processes *started* meanwhile see it (``spawn``: a forked
+    child inherits its parent's already started BLAS)."""
     saved = {k: os.environ.get(k) for k in _THREAD_ENV}
     os.environ.update({k: "1" for k in _THREAD_ENV})
     try:
@@ -293,7 +298,7 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
                                          f"({err})") from None
                 else:
                     assert dask_workers is not None
-                    stack.enter_context(_single_threaded_children())
+                    stack.enter_context(single_threaded_children())
                     cluster = distributed.LocalCluster(
                         n_workers=dask_workers, threads_per_worker=1, processes=True,
                         # CRITICAL only: a worker's ERROR log of its heartbeat failing as a
@@ -322,7 +327,7 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
         return
     n = workers or os.cpu_count() or 1
     # the pool starts its processes on demand (spawn): keep the setting for its lifetime
-    with _single_threaded_children():
+    with single_threaded_children():
         pool = cf.ProcessPoolExecutor(max_workers=n,
                                       mp_context=multiprocessing.get_context("spawn"),
                                       initializer=_worker_start, initargs=(os.getpid(),))
