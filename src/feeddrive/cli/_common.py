@@ -320,6 +320,9 @@ def user_errors(fn: F) -> F:
             simulate = sys.modules.get("feeddrive.engine.simulate")
             if simulate is not None and isinstance(err, simulate.SimulationError):
                 raise _fail(f"simulation failed: {err}", EXIT_FAILED) from None
+            runner = sys.modules.get("feeddrive.reproduce.runner")  # a pool worker died
+            if runner is not None and isinstance(err, runner.WorkerLost):
+                raise _fail(str(err), EXIT_FAILED) from None
             builds = sys.modules.get("feeddrive.solvers.builds")  # neither C nor numba
             if builds is not None and isinstance(err, builds.NoEngine):
                 raise _fail(str(err), EXIT_FAILED) from None

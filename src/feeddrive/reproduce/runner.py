@@ -10,6 +10,7 @@ Critical-speed searches run in a process pool (2 workers by default).
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import multiprocessing
 import signal
 import time
@@ -23,7 +24,7 @@ from ..engine.simulate import DriveSystem, simulate
 from ..io.json_store import ResultStore, code_hash, store_key
 from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters, dumps
-from ..sweep.executors import single_threaded_children
+from ..sweep.executors import single_threaded_children, stop_workers
 from . import (
     figures,
     forced_study,
@@ -78,6 +79,17 @@ def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
                      "code": code_hash(_STUDY_SOURCES), "parameters": dumps(params),
                      "settings": asdict(settings), "solver": current().record()})
     return ResultStore(out / "data", key, notice=notice)
+
+
+class WorkerLost(RuntimeError):
+    """A worker process of the pool ended while computing a study (killed, out of memory, a
+    crash in compiled code): the run stops; the studies stored so far are kept."""
+
+
+def _lost(what: str, handle: cf.Future[Any], out: Path) -> WorkerLost:
+    return WorkerLost(f"a worker process ended unexpectedly while computing {what} "
+                      f"({handle.exception()}); the studies finished so far are kept in "
+                      f"{out / 'data'} and reused by a rerun")
 
 
 def _timed(fn: Callable[..., Any], *args: Any) -> tuple[Any, float]:
@@ -338,61 +350,67 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     todo = {k: v for k, v in tasks.items() if found[k] is None}
     cpu_seconds: dict[str, float] = {}  # of each study computed in this run
     if todo or any(found[k] is None for k in [*after, *shared]):
-        # workers ignore SIGINT; on Ctrl-C the parent terminates them at once (a pool that
-        # waits for its running searches took ~53 s to stop, issue 12 item 7).  Started by
-        # spawn with one BLAS thread each: forked, they inherited the parent's OpenBLAS
-        # threads, which busy-waited beside them (60.7 against 48.8 CPU s of the workers,
-        # benchmarks/README.md)
-        with single_threaded_children():
-            pool = multiprocessing.get_context("spawn").Pool(max(1, workers),
-                                                             initializer=_ignore_sigint)
-        try:
-            from ..solvers.shared import drivers_on_disk
+        # workers ignore SIGINT; on Ctrl-C the parent stops them at once (a pool that waits
+        # for its running searches took ~53 s to stop, issue 12 item 7).  Started by spawn
+        # with one BLAS thread each: forked, they inherited the parent's OpenBLAS threads,
+        # which busy-waited beside them (60.7 against 52.5 CPU s of the workers,
+        # benchmarks/README.md).  A worker that dies (killed, a crash in compiled code) breaks
+        # the pool, and the run ends with WorkerLost instead of waiting for it for ever.
+        with single_threaded_children():  # for the pool's life: it starts workers on demand
+            pool = cf.ProcessPoolExecutor(max(1, workers),
+                                          mp_context=multiprocessing.get_context("spawn"),
+                                          initializer=_ignore_sigint)
+            try:
+                from ..solvers.shared import drivers_on_disk
 
-            queue = TaskQueue(todo.items(), slots=max(1, workers) + 1)
-            if len(todo) > 2 and workers > 1 and not drivers_on_disk():
-                # third in the queue: the first free worker's while the one that took
-                # the second task compiles the drivers (its result is not kept)
-                queue.items.insert(2, (None, (prepare_models, ([*todo.values()][2:],))))
-            pending: dict[str, Any] = {}
-            preparing: list[Any] = []
-            waiting = {k: deps for k, (deps, _) in after.items() if found[k] is None}
-            copies = {k: key for k, key in shared.items() if found[k] is None}
-            while pending or waiting or copies or queue.items:
-                preparing = [h for h in preparing if not h.ready()]
-                for k, (fn, args) in queue.take(len(pending) + len(preparing)):
-                    if k is None:
-                        preparing.append(pool.apply_async(fn, args))
-                    else:
-                        pending[k] = pool.apply_async(_timed, (fn, *args))
-                for k, key in list(copies.items()):
-                    if found[key] is not None:  # stored at once, as a computed study
-                        found[k] = store.put(k, reading_study.row_from_search(
-                            study_jobs[k], _entry(found, key)))
-                        cpu_seconds[k] = 0.0
+                queue = TaskQueue(todo.items(), slots=max(1, workers) + 1)
+                if len(todo) > 2 and workers > 1 and not drivers_on_disk():
+                    # third in the queue: the first free worker's while the one that took
+                    # the second task compiles the drivers (its result is not kept)
+                    queue.items.insert(2, (None, (prepare_models, ([*todo.values()][2:],))))
+                pending: dict[str, cf.Future[Any]] = {}
+                preparing: list[cf.Future[Any]] = []
+                waiting = {k: deps for k, (deps, _) in after.items() if found[k] is None}
+                copies = {k: key for k, key in shared.items() if found[k] is None}
+                while pending or waiting or copies or queue.items:
+                    for h in preparing:
+                        if h.done() and isinstance(h.exception(), cf.process.BrokenProcessPool):
+                            raise _lost("preparing the compiled models", h, out)
+                    preparing = [h for h in preparing if not h.done()]
+                    for k, (fn, args) in queue.take(len(pending) + len(preparing)):
+                        if k is None:
+                            preparing.append(pool.submit(fn, *args))
+                        else:
+                            pending[k] = pool.submit(_timed, fn, *args)
+                    for k, key in list(copies.items()):
+                        if found[key] is not None:  # stored at once, as a computed study
+                            found[k] = store.put(k, reading_study.row_from_search(
+                                study_jobs[k], _entry(found, key)))
+                            cpu_seconds[k] = 0.0
+                            done += 1
+                            del copies[k]
+                            if progress:
+                                progress(k, done, len(names))
+                    for k, deps in list(waiting.items()):
+                        if all(found[dep] is not None for dep in deps):
+                            queue.first(k, after[k][1]())
+                            del waiting[k]
+                    finished = [k for k, handle in pending.items() if handle.done()]
+                    for k in finished:  # each finished study is on disk at once
+                        handle = pending.pop(k)
+                        if isinstance(handle.exception(), cf.process.BrokenProcessPool):
+                            raise _lost(k, handle, out)
+                        value, cpu_seconds[k] = handle.result()
+                        found[k] = store.put(k, value)
                         done += 1
-                        del copies[k]
                         if progress:
                             progress(k, done, len(names))
-                for k, deps in list(waiting.items()):
-                    if all(found[dep] is not None for dep in deps):
-                        queue.first(k, after[k][1]())
-                        del waiting[k]
-                finished = [k for k, handle in pending.items() if handle.ready()]
-                for k in finished:  # each finished study is on disk at once
-                    value, cpu_seconds[k] = pending.pop(k).get()
-                    found[k] = store.put(k, value)
-                    done += 1
-                    if progress:
-                        progress(k, done, len(names))
-                if not finished:
-                    time.sleep(0.02)
-            pool.close()
-        except BaseException:
-            pool.terminate()
-            raise
-        finally:
-            pool.join()
+                    if not finished:
+                        time.sleep(0.02)
+            except BaseException:
+                stop_workers(pool)
+                raise
+            pool.shutdown(wait=True)
     crit: dict[str, Any] = {k: found[k] for k in jobs}
     results["critical"] = crit
     results["reading_study"] = [found[k] for k in study_jobs]

@@ -334,7 +334,7 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
         try:
             yield pool, n, f"local ({n} processes)"
         except BaseException:
-            _stop_workers(pool)  # Ctrl-C or an error: do not wait for the points in flight
+            stop_workers(pool)  # Ctrl-C or an error: do not wait for the points in flight
             raise
         pool.shutdown(wait=True)
 
@@ -362,7 +362,7 @@ def _worker_start(parent: int) -> None:
     threading.Thread(target=watch, name="feeddrive-parent-watch", daemon=True).start()
 
 
-def _stop_workers(pool: cf.ProcessPoolExecutor) -> None:
+def stop_workers(pool: cf.ProcessPoolExecutor) -> None:
     """Cancel what is queued and stop the worker processes now (their points in flight are
     lost, not stored: a rerun computes them)."""
     processes = list((getattr(pool, "_processes", None) or {}).values())
