@@ -2305,7 +2305,7 @@ def template_sources() -> list[str]:
             "from feeddrive.solvers.schedule import next_instant",
             "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
             "MODAL_SWITCH_GAIN, RODAS4_COST, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, "
-            "STIFF_HLAMBDA, STIFF_STEPS, MODAL_EVERY)",
+            "STIFF_HLAMBDA, STIFF_STEPS, MODAL_EVERY, DOPRI5_STABILITY)",
             "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
             "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, exponential as ge_exponential",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "

@@ -364,7 +364,13 @@ def _worker_start(parent: int) -> None:
 
 def stop_workers(pool: cf.ProcessPoolExecutor) -> None:
     """Cancel what is queued and stop the worker processes now (their points in flight are
-    lost, not stored: a rerun computes them)."""
+    lost, not stored: a rerun computes them).
+
+    Parameters
+    ----------
+    pool : concurrent.futures.ProcessPoolExecutor
+        The pool (a sweep's, ``reproduce``'s).
+    """
     processes = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     for proc in processes:
