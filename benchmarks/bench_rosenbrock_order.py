@@ -53,7 +53,8 @@ reversal in it: feeddrive's runs to 1 s and to 3 s locate the same 11 crossings)
    R(z) → 0 at z = −1e8 and |R(iy)| ≤ 1 (L-stable).
 5. DOPRI5 on the same stretch: the same prototype (feeddrive's DOPRI5 tableau, its PI
    controller α = 0.17, β = 0.04, limits 0.2 … 5, the same norm), and feeddrive's own counts
-   from runs to 1 s and to 3 s (``dopri5-dense``, ``modal``, ``rodas4``; C build).
+   from runs to 1 s and to 3 s (``dopri5-dense``, ``modal``, ``rodas4``; C build), and
+   ``modal``'s over 3 … 10 s (runs to 3 and 10 s) for comparison.
 
 Cost in DOPRI5-step equivalents: a RODAS4 step = 5 DOPRI5 steps (feeddrive's measured
 ``RODAS4_COST``, ``benchmarks/bench_switch_cost.py``), a RODAS5 step = 5 × 8/6 (assumption: the
@@ -70,7 +71,7 @@ import math
 import os
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -186,6 +187,8 @@ class Counts:
     stage_rhs: int = 0  # right-hand sides of the stages (and f(t, y) of each new step)
     jacobian_rhs: int = 0  # of the Jacobians and f_t
     lu: int = 0
+    # per state, the accepted steps whose weighted error it dominated
+    dominant: dict[str, int] = field(default_factory=dict)
 
 
 def integrate_rosenbrock(m: Rosenbrock, model: ReferenceModel, y0: np.ndarray, t0: float,
@@ -219,6 +222,9 @@ def integrate_rosenbrock(m: Rosenbrock, model: ReferenceModel, y0: np.ndarray, t
         err = error_norm(e, y, y_new, rtol, atol, rel)
         if err <= 1.0:
             cnt.accepted += 1
+            scale = atol + rtol * rel * np.maximum(np.abs(y), np.abs(y_new))
+            top = model.state_names[int(np.argmax(np.abs(e) / scale))]
+            cnt.dominant[top] = cnt.dominant.get(top, 0) + 1
             if controller == "standard":
                 fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.9 * err ** (-1.0 / q)))
                 if rejected_last:
@@ -367,6 +373,10 @@ def convergence(m: Rosenbrock) -> dict[str, Any]:
 
     out["R_at_-1e8"] = abs(R(-1e8))
     out["max_R_imaginary_axis"] = max(abs(R(1j * y)) for y in np.geomspace(1e-3, 1e4, 200))
+    # numerical damping ratio ζ_num = −ln|R(iy)|/y at the modal cap h|λ| = 0.35
+    # (feeddrive.solvers.modes.H_LAMBDA; RODAS4's 4.4e-7 there) and at 0.7
+    for y in (0.35, 0.7):
+        out[f"zeta_num_{y}"] = -math.log(abs(R(1j * y))) / y
     return out
 
 
@@ -424,16 +434,17 @@ def radau_pieces(model: ReferenceModel, rtol: float, atol_scale: float
 
 
 def feeddrive_counts(methods: tuple[str, ...] = ("dopri5-dense", "modal", "rodas4"),
+                     span: tuple[float, float] = (T0, T1),
                      **options: Any) -> dict[str, dict[str, int]]:
-    """Accepted/rejected steps of feeddrive's methods over [1, 3] s (runs to 1 and 3 s)."""
+    """Accepted/rejected steps of feeddrive's methods over ``span`` (runs to its two ends)."""
     params = fd.preset("wang2021")
     system = fd.DriveSystem(params, "ddfs", 0.4)
     profile = fd.ConstantSpeed(0.5e-3, 16e-3)
     out = {}
     for method in methods:
         opts = fd.SolverOptions(method=method, **options)
-        s1 = fd.simulate(system, profile, T0, options=opts).solver_stats
-        s3 = fd.simulate(system, profile, T1, options=opts).solver_stats
+        s1 = fd.simulate(system, profile, span[0], options=opts).solver_stats
+        s3 = fd.simulate(system, profile, span[1], options=opts).solver_stats
         out[method] = {k: int(s3[k] - s1[k]) for k in
                        ("steps", "rejected_steps", "rosenbrock_steps", "rhs_evaluations",
                         "jacobians", "switch_crossings")}
@@ -503,6 +514,7 @@ def main(argv: list[str] | None = None) -> None:
                    "stage_rhs": cnt.stage_rhs, "jacobian_rhs": cnt.jacobian_rhs, "lu": cnt.lu,
                    "error_table_position": float(abs(y[ix] - y3[ix])),
                    "error_table_speed": float(abs(y[iv] - y3[iv])),
+                   "dominant_state": dict(sorted(cnt.dominant.items(), key=lambda kv: -kv[1])),
                    "wall_s": time.perf_counter() - tick}
             rows.append(row)
             print(f"{label:40s} {name:6s} {ctl:10s} {cnt.accepted:5d} + {cnt.rejected:3d} rej, "
@@ -513,7 +525,8 @@ def main(argv: list[str] | None = None) -> None:
         "default": feeddrive_counts(),
         "accuracy 0.1": feeddrive_counts(accuracy=0.1),
         "position_tolerance 5e-12 (diagnostic)": feeddrive_counts(("rodas4",),
-                                                                  position_tolerance=5e-12)}
+                                                                  position_tolerance=5e-12),
+        "default, t = 3 … 10 s": feeddrive_counts(("modal",), (T1, 10.0))}
     record["total_wall_s"] = time.perf_counter() - started
     record["load"] = [load0[0], os.getloadavg()[0]]
     RESULTS.mkdir(parents=True, exist_ok=True)
@@ -545,6 +558,13 @@ def markdown(record: dict[str, Any]) -> str:
                      f"{r['rejected']} | {r['stage_rhs']} | {r['lu']} | {equiv:.0f} | "
                      f"{r['error_table_position'] / rng['table_position']:.1e} | "
                      f"{r['error_table_speed'] / rng['table_speed']:.1e} |")
+    lines += ["", "The state whose weighted error is largest, share of the accepted steps "
+              "(Rosenbrock runs):", ""]
+    for r in record["runs"]:
+        if r["dominant_state"]:
+            top = ", ".join(f"{k} {v / r['accepted']:.0%}"
+                            for k, v in list(r["dominant_state"].items())[:3])
+            lines.append(f"* {r['setting']}, {r['method']} {r['controller']}: {top}")
     lines += ["", "DOPRI5-step equivalents: attempted steps × 1 (DOPRI5), × 5 (RODAS4, "
               "feeddrive's RODAS4_COST), × 5·8/6 = 6.67 (RODAS5, assumed).", "",
               "feeddrive's own counts over [1, 3] s (runs to 1 s and to 3 s, C build):", "",
@@ -554,7 +574,10 @@ def markdown(record: dict[str, Any]) -> str:
         for method, c in per.items():
             lines.append(f"| {acc} | {method} | {c['steps']} | {c['rejected_steps']} | "
                          f"{c['rosenbrock_steps']} | {c['jacobians']} |")
-    lines += ["", "RODAS4 / RODAS5 accepted steps:", ""]
+    lines[-1] = lines[-1].replace("| default, t = 3 … 10 s | modal", "| default, t = 3 … 10 s (!) "
+                                  "| modal")
+    lines += ["", "(!) the stretch after this one, for comparison.", "",
+              "RODAS4 / RODAS5 accepted steps:", ""]
     for setting in dict.fromkeys(r["setting"] for r in record["runs"]):
         for ctl in ("standard", "gustafsson"):
             r4 = _steps(record, setting, "RODAS4", ctl)["accepted"]
@@ -567,7 +590,9 @@ def markdown(record: dict[str, Any]) -> str:
                      f"{c['nonstiff_embedded_slope']:.2f}; stiff linear (λ = −0.5 ± 4i, −1e6) "
                      f"{c['stiff_main_slope']:.2f} / {c['stiff_embedded_slope']:.2f}; "
                      f"|R(−1e8)| = {c['R_at_-1e8']:.1e}, max |R(iy)| = "
-                     f"{c['max_R_imaginary_axis']:.6f}")
+                     f"{c['max_R_imaginary_axis']:.6f}; numerical damping ratio "
+                     f"−ln|R(iy)|/y at y = 0.35 (the modal cap): {c['zeta_num_0.35']:.2e}, "
+                     f"at 0.7: {c['zeta_num_0.7']:.2e}")
     if "reference_error" in record:
         e = record["reference_error"]
         lines += ["", f"Radau reference vs its check (rtol 1e-12, 1e-5 × atol) at t = 3: x_t "
