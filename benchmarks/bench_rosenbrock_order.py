@@ -40,9 +40,9 @@ reversal in it: feeddrive's runs to 1 s and to 3 s locate the same 11 crossings)
      1/6, 5), the predictive factor (h_old/h)·(err²/err_old)^(1/q)/0.9 when larger, h/fac.
 
    RODAS4: the numbers of ``feeddrive.solvers.tableaux.RODAS4`` (Hairer & Wanner, rodas.f).
-   RODAS5: G. Di Marzo, "RODAS5(4) — Méthodes de Rosenbrock d'ordre 5(4) adaptées aux
-   problèmes différentiels-algébriques", MSc thesis, Univ. Genève (1993), the numbers as in
-   OrdinaryDiffEq.jl ``src/tableaus/rosenbrock_tableaus.jl`` (``Rodas5Tableau``; its stage
+   RODAS5: G. Di Marzo's RODAS5(4) (1993; the method of OrdinaryDiffEq.jl's ``Rodas5``), the
+   numbers as in OrdinaryDiffEq.jl ``src/tableaus/rosenbrock_tableaus.jl`` (as stored at commit
+   03e19047a644; ``Rodas5Tableau``; its stage
    equations use the same u-form and signs, as its RODAS4 numbers equal rodas.f's), 8 stages,
    γ = 0.19, a_7 = (a_6, 1), a_8 = (a_7, 1), c_6 = c_7 = c_8 = 1, d_6 = d_7 = d_8 = 0.
 4. The tableaux are verified before use (asserted): feeddrive's order-condition check
