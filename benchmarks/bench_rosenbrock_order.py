@@ -1,6 +1,6 @@
-"""Feasibility study: would a 5th-order Rosenbrock method (RODAS5) take materially fewer steps
-than RODAS4 on the DDFS's stiff settling stretch?  A plain-Python prototype (numpy/scipy on
-``reference.scipy_model.ReferenceModel``), not a change to feeddrive's engine.
+"""Feasibility study: would a 5th-order Rosenbrock method (RODAS5, RODAS5P) take materially
+fewer steps than RODAS4 on the DDFS's stiff settling stretch?  A plain-Python prototype
+(numpy/scipy on ``reference.scipy_model.ReferenceModel``), not a change to feeddrive's engine.
 
 Run from the repository root::
 
@@ -8,14 +8,15 @@ Run from the repository root::
 
 The run: ``wang2021`` DDFS, table at 0.4 m, ``ConstantSpeed(0.5e-3, 16e-3)`` (table 0.5 mm/s,
 hollow motor 16 mm/s), the stretch t = 1 … 3 s (a lightly damped 4.5-Hz settling; no friction
-reversal in it: feeddrive's runs to 1 s and to 3 s locate the same 11 crossings).
+reversal in it: feeddrive's runs to 1 s and to 3 s locate the same 11 crossings), and the
+stretch after it, t = 3 … 10 s (where feeddrive's ``modal`` runs all-RODAS4).
 
 1. Start state y(1) and reference end state y(3): scipy ``solve_ivp(method="Radau")`` on the
    reference model with the settings of ``reference/make_accuracy_reference.py`` (rtol 1e-11,
    absolute tolerances 1e-4 × ``ReferenceModel.tolerances()``: 1e-14 m, 1e-12 m/s, 1e-10 A),
-   in pieces [0, 0.1] (the start ramp), [0.1, 1], [1, 3], so that y(1) and y(3) are step
-   ends, not interpolated.  A check run at rtol 1e-12 and 1e-5 × bounds the reference's own
-   error at t = 3.
+   in pieces [0, 0.1] (the start ramp), [0.1, 1], [1, 3], [3, 10], so that y(1), y(3) and
+   y(10) are step ends, not interpolated.  A check run at rtol 1e-12 and 1e-5 × bounds the
+   reference's own error at t = 3 and 10 and over both stretches.
 2. Tolerances: feeddrive's default per-state absolute tolerances and relative mask for this
    run (``feeddrive.engine.simulate.Simulation(...).atol``, ``.rel``; rtol 1e-6), mapped by
    state name onto the reference model (the two models name their 15 states alike; the
@@ -45,22 +46,33 @@ reversal in it: feeddrive's runs to 1 s and to 3 s locate the same 11 crossings)
    03e19047a644; ``Rodas5Tableau``; its stage
    equations use the same u-form and signs, as its RODAS4 numbers equal rodas.f's), 8 stages,
    γ = 0.19, a_7 = (a_6, 1), a_8 = (a_7, 1), c_6 = c_7 = c_8 = 1, d_6 = d_7 = d_8 = 0.
+   RODAS5P: G. Steinebach's Rodas5P (BIT 63:27, 2023), the numbers as in OrdinaryDiffEq.jl
+   ``lib/OrdinaryDiffEqRosenbrock/src/rosenbrock_tableaus.jl`` (as stored at commit
+   0054db222947; ``Rodas5PTableau``), the same structure (8 stages, order 5, embedded 4,
+   γ = 0.2119…), and three dense-output rows h_2j, h_3j, h_4j evaluated in the form of
+   OrdinaryDiffEq.jl's ``rosenbrock_interpolants.jl`` (our code):
+   y(t + θh) = (1 − θ) y0 + θ (y1 + (1 − θ)(k1 + θ (k2 + θ k3))), k_i = Σ_j h_(i+1)j u_j.
 4. The tableaux are verified before use (asserted): feeddrive's order-condition check
    (``check_rosenbrock``, conditions of order ≤ 4, also c_i and d_i against the matrices)
-   on RODAS5; fixed-step convergence on a smooth non-stiff, non-autonomous problem (slopes ≈ 5
-   main, ≈ 4 embedded for RODAS5; 4 and 3 for RODAS4) and on a stiff linear system with
-   eigenvalues −0.5 ± 4i and −1e6 (slope ≈ 5 / 4 on the smooth part); the stability function
-   R(z) → 0 at z = −1e8 and |R(iy)| ≤ 1 (L-stable).
+   on RODAS5 and RODAS5P; fixed-step convergence on a smooth non-stiff, non-autonomous problem
+   (slopes ≈ 5 main, ≈ 4 embedded for RODAS5 and RODAS5P; 4 and 3 for RODAS4) and on a stiff
+   linear system with eigenvalues −0.5 ± 4i and −1e6 (main: the order of R(z) against e^z, 4,
+   5 and 6 — RODAS5P's R − e^z = O(z^7); embedded ≈ 4 / 3); the stability function
+   R(z) → 0 at z = −1e8 and |R(iy)| ≤ 1 (L-stable).  RODAS5P's dense output: the largest
+   error over θ = 0.05 … 0.95 on the smooth problem falls with slope 5 locally (each step
+   from the exact solution; a continuous extension of order 4 has local error O(h^5)) and
+   globally (min(p, 4 + 1) = 5).
 5. DOPRI5 on the same stretch: the same prototype (feeddrive's DOPRI5 tableau, its PI
    controller α = 0.17, β = 0.04, limits 0.2 … 5, the same norm), and feeddrive's own counts
    from runs to 1 s and to 3 s (``dopri5-dense``, ``modal``, ``rodas4``; C build), and
-   ``modal``'s over 3 … 10 s (runs to 3 and 10 s) for comparison.
+   ``modal``'s and ``rodas4``'s over 3 … 10 s (runs to 3 and 10 s).
 
 Cost in DOPRI5-step equivalents: a RODAS4 step = 5 DOPRI5 steps (feeddrive's measured
 ``RODAS4_COST``, ``benchmarks/bench_switch_cost.py``), a RODAS5 step = 5 × 8/6 (assumption: the
 cost scales with the stages — 8 right-hand sides and 8 triangular solves against 6; the
 Jacobian and the LU, the same for both, are part of the measured 5, so the true ratio is
-below 8/6).  Writes ``benchmarks/results/bench_rosenbrock_order.json`` and ``.md``.
+below 8/6); RODAS5P the same (8 stages).  Writes
+``benchmarks/results/bench_rosenbrock_order.json`` and ``.md``.
 """
 
 from __future__ import annotations
