@@ -72,10 +72,13 @@ def test_the_share_is_the_orders_rule_for_dopri5_below_accuracy_1(
         pytest.approx(share, rel=1e-12)
 
 
-def test_the_label_states_the_cap() -> None:
+def test_the_label_states_the_cap(monkeypatch: pytest.MonkeyPatch) -> None:
     text = SolverOptions(method="dopri5", accuracy=0.1).describe()
     assert f"≤ {0.1 ** 0.2:.3g} × DOPRI5's stability bound {driver.DOPRI5_STABILITY:g}/ρ" in text
+    assert "steps ≤ 0.000631 s and ≤ 0.631 × " in text
     assert "stability bound" not in SolverOptions(method="dopri5").describe()
+    monkeypatch.setattr(driver, "DOPRI5_STABILITY", 2.9)  # the label follows the constant
+    assert "stability bound 2.9/ρ" in SolverOptions(method="dopri5", accuracy=0.1).describe()
 
 
 def test_the_cap_binds_only_below_accuracy_1(monkeypatch: pytest.MonkeyPatch) -> None:

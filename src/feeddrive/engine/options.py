@@ -46,7 +46,7 @@ from pathlib import Path
 from typing import Any
 
 from ..parameters import ParameterError
-from ..solvers import modes, switching
+from ..solvers import driver, modes, switching
 from ..solvers.tableaux import DOPRI5
 
 __all__ = ["CURRENT_FRACTION", "DEFAULT_RTOL", "DEFLECTION_FRACTION", "DENSE_OUTPUT_ORDER",
@@ -430,11 +430,12 @@ class SolverOptions:
             "rodas4-fixed": f"RODAS4 at a fixed step of {_num(self.fixed_step)} s",
         }
         largest = self.largest_step
-        steps = (f"steps ≤ {_num(largest)} s, " if math.isfinite(largest)
-                 and not self.method.endswith("-fixed") else "")
+        caps = [f"≤ {_num(largest)} s"] if math.isfinite(largest) and \
+            not self.method.endswith("-fixed") else []
         if self.stability_share < 1.0:
-            steps = (f"{steps[:-2]} and ≤ {_num(self.stability_share)} × DOPRI5's stability "
-                     "bound 3.3/ρ (ρ estimated on each step), ")
+            caps.append(f"≤ {_num(self.stability_share)} × DOPRI5's stability bound "
+                        f"{_num(driver.DOPRI5_STABILITY)}/ρ (ρ estimated on each step)")
+        steps = f"steps {' and '.join(caps)}, " if caps else ""
         if self.sample_steps and self.method in DENSE_MODES:
             steps += "every sample of a sampled profile a step end, "
         if not self.locate_reversals and self.method in REVERSAL_METHODS:

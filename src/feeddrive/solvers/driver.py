@@ -192,7 +192,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     stability_share : float
         ``LAND``: below 1, each step is also capped at this share of DOPRI5's stability bound,
         :data:`DOPRI5_STABILITY` / ρ with ρ the stiffness estimate of the step before
-        (:func:`stiffness_estimate`): where the steps are bound by stability, not by the
+        (:func:`weighted_stiffness_estimate`): where the steps are bound by stability, not by the
         tolerances, the error then still falls with the accuracy asked for
         (:attr:`feeddrive.engine.options.SolverOptions.stability_share`) [-].
     adaptive : int

@@ -119,7 +119,7 @@ class SweepSummary:
 def single_threaded_children() -> Iterator[None]:
     """While it lasts, processes started get one thread per numerical library (OpenMP,
     OpenBLAS, MKL, numba): a pool of single-core workers whose BLAS threads would otherwise
-    busy-wait beside them on the same cores (reproduce's workers: 60.7 → 48.8 CPU s,
+    busy-wait beside them on the same cores (reproduce's workers: 60.7 → 52.5 CPU s,
     benchmarks/README.md).  Only processes *started* meanwhile see it (``spawn``: a forked
     child inherits its parent's already started BLAS)."""
     saved = {k: os.environ.get(k) for k in _THREAD_ENV}
