@@ -24,6 +24,14 @@ Adding a method is adding a tableau.  A tableau checks its order conditions when
 * :data:`RODAS4`: E. Hairer and G. Wanner, *Solving Ordinary Differential Equations II*, 2nd
   ed., Springer (1996), Sect. IV.7, as in their ``rodas.f`` (``ROCOE``, ``METH = 1``, with the
   dense-output coefficients ``D21 … D35``).
+* :data:`RODAS5P`: G. Steinebach, "Construction of Rosenbrock–Wanner method Rodas5P and
+  numerical benchmarks within the Julia Differential Equations package", BIT Numer. Math. 63
+  (2023) 27: order 5(4), eight stages, stiffly accurate like RODAS4, with a continuous
+  extension of order 4 (three rows over the eight increments); the numbers as in
+  OrdinaryDiffEq.jl (``lib/OrdinaryDiffEqRosenbrock/src/rosenbrock_tableaus.jl``,
+  ``Rodas5PTableau``: A, C, c, d and H in the same increment form).  The stiff method of
+  ``modal`` and ``auto`` by default (:attr:`feeddrive.engine.options.SolverOptions.rosenbrock`;
+  benchmarks/README.md, "RODAS5P in the engine").
 """
 
 from __future__ import annotations
@@ -115,8 +123,10 @@ class RosenbrockTableau:
     d : tuple of float
         d_s, the weight of h·f_t in stage s (Hairer & Wanner's γ_s) [-].
     dense : tuple of tuple of float
-        Rows (empty: none) of the dense-output vectors q_r = Σ_j dense[r][j] u_j over the
-        first S − 1 increments: y(θ) = (1 − θ)·y_0 + θ·(y_1 + (1 − θ)·(q_1 + θ·q_2)) [-].
+        Two or three rows (empty: none) of the dense-output vectors q_r = Σ_j dense[r][j] u_j
+        over the first S − 1 or all S increments:
+        y(θ) = (1 − θ)·y_0 + θ·(y_1 + (1 − θ)·(q_1 + θ·(q_2 + θ·q_3))), q_3 = 0 with two rows;
+        its order is :attr:`dense_order` [-].
     reference : str
         Where the numbers come from.
 
@@ -148,14 +158,27 @@ class RosenbrockTableau:
         if tuple(self.a[-1]) != (*self.a[-2], 1.0):
             raise ValueError(f"{self.name}: the step supports stiffly accurate methods with "
                              "a_S = (a_{S-1}, 1) only")
-        if self.dense and len(self.dense) != 2:
-            raise ValueError(f"{self.name}: dense holds the two vectors q_1, q_2")
+        if self.dense and (len(self.dense) not in (2, 3) or len({len(r) for r in self.dense}) != 1
+                           or len(self.dense[0]) not in (s - 1, s)):
+            raise ValueError(f"{self.name}: dense holds two or three vectors q_r over the first "
+                             f"{s - 1} or all {s} increments")
         check_rosenbrock(self)
 
     @property
     def stages(self) -> int:
         """Right-hand-side evaluations per step (the first stage's is the caller's f0)."""
         return len(self.c) - 1
+
+    @property
+    def dense_order(self) -> int:
+        """Order of the continuous extension (one below the method's) [-]."""
+        return self.order - 1
+
+    @property
+    def step_exponent(self) -> float:
+        """The step-size controller's exponent 1/(q + 1), q the embedded order: the local
+        error estimate u_S is O(h^(q+1)) (rodas.f: 0.25 for RODAS4) [-]."""
+        return 1.0 / (self.embedded_order + 1)
 
 
 DOPRI5 = ExplicitTableau(
@@ -220,5 +243,41 @@ RODAS3 = RosenbrockTableau(
     dense=(),
     reference="Sandu et al., Atmos. Environ. 31 (1997) 3459-3472; KPP Rodas3")
 
+# Steinebach (2023): the sixth row of a, shared by the last two (stiffly accurate)
+_A6P = (-7.502846399306121, 2.561846144803919, -11.627539656261098, -0.18268767659942256,
+        0.030198172008377946)
+RODAS5P = RosenbrockTableau(
+    name="rodas5p", order=5, embedded_order=4, gamma=0.21193756319429014,
+    c=(0.0, 0.6358126895828704, 0.4095798393397535, 0.9769306725060716, 0.4288403609558664,
+       1.0, 1.0, 1.0),
+    a=((),
+       (3.0,),
+       (2.849394379747939, 0.45842242204463923),
+       (-6.954028509809101, 2.489845061869568, -10.358996098473584),
+       (2.8029986275628964, 0.5072464736228206, -0.3988312541770524, -0.04721187230404641),
+       _A6P,
+       (*_A6P, 1.0),
+       (*_A6P, 1.0, 1.0)),
+    cc=((),
+        (-14.155112264123755,),
+        (-17.97296035885952, -2.859693295451294),
+        (147.12150275711716, -1.41221402718213, 71.68940251302358),
+        (165.43517024871676, -0.4592823456491126, 42.90938336958603, -5.961986721573306),
+        (24.854864614690072, -3.0009227002832186, 47.4931110020768, 5.5814197821558125,
+         -0.6610691825249471),
+        (30.91273214028599, -3.1208243349937974, 77.79954646070892, 34.28646028294783,
+         -19.097331116725623, -28.087943162872662),
+        (37.80277123390563, -3.2571969029072276, 112.26918849496327, 66.9347231244047,
+         -40.06618937091002, -54.66780262877968, -9.48861652309627)),
+    d=(0.21193756319429014, -0.42387512638858027, -0.3384627126235924, 1.8046452872882734,
+       2.325825639765069, 0.0, 0.0, 0.0),
+    dense=((25.948786856663858, -2.5579724845846235, 10.433815404888879, -2.3679251022685204,
+            0.524948541321073, 1.1241088310450404, 0.4272876194431874, -0.17202221070155493),
+           (-9.91568850695171, -0.9689944594115154, 3.0438037242978453, -24.495224566215796,
+            20.176138334709044, 15.98066361424651, -6.789040303419874, -6.710236069923372),
+           (11.419903575922262, 2.8879645146136994, 72.92137995996029, 80.12511834622643,
+            -52.072871366152654, -59.78993625266729, -0.15582684282751913, 4.883087185713722)),
+    reference="Steinebach, BIT Numer. Math. 63 (2023) 27; OrdinaryDiffEq.jl Rodas5PTableau")
+
 EXPLICIT = {t.name: t for t in (DOPRI5, BS3)}
-ROSENBROCK = {t.name: t for t in (RODAS4, RODAS3)}
+ROSENBROCK = {t.name: t for t in (RODAS4, RODAS3, RODAS5P)}
