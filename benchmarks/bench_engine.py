@@ -51,6 +51,7 @@ missed, to ``benchmarks/results/bench_engine.md``.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -77,7 +78,6 @@ from scipy.integrate import odeint, solve_ivp  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.engine.simulate import (  # noqa: E402
-    _DENSE_MODES,
     DriveSystem,
     Simulation,
     SolverOptions,
@@ -110,8 +110,12 @@ SCENARIOS = {
 DURATIONS = (10.0, 100.0)
 
 
+# the engine's SolverOptions.rosenbrock when --rosenbrock is given
+ROSENBROCK: list[str] = []
+
+
 def tighter(options: SolverOptions, factor: float) -> SolverOptions:
-    return SolverOptions(method=options.method, accuracy=options.accuracy / factor)
+    return dataclasses.replace(options, accuracy=options.accuracy / factor)
 
 
 _OUTPUT: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
@@ -129,7 +133,7 @@ def engine_states(system: DriveSystem, model: Model, profile: ConstantSpeed, dur
     t_end = n_break * grid.base
     sim = Simulation(system, profile, options)  # the run's resolved tolerances
     atol, rel = sim.atol, sim.rel
-    mode, _ = _DENSE_MODES[options.method]
+    mode, _ = options.driver_mode
     n_out = n_break // grid.out_every + 1
     out = _OUTPUT.get((id(model), n_out))
     if out is None:
@@ -192,7 +196,7 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
     # relative position error (the speed targets hold "at ≤ 1e-6 relative position error")
     target = min(err_lsoda, err_odeint,
                  TARGET_RELATIVE_ERROR * float(np.max(np.abs(truth))))
-    options = SolverOptions()  # the default method
+    options = SolverOptions(**({"rosenbrock": ROSENBROCK[0]} if ROSENBROCK else {}))
     for _ in range(4):
         t, y, stats = engine_states(system, model, profile, duration, options)
         err_engine = float(np.max(np.abs(y[:, X_T] - truth)))
@@ -309,7 +313,11 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=5, help="interleaved rounds (median)")
     parser.add_argument("--no-compile", action="store_true", help="skip the compile times")
     parser.add_argument("--only", default="", help="comma-separated scenario names")
+    parser.add_argument("--rosenbrock", default="", help="the engine's SolverOptions.rosenbrock "
+                        "(default: the default's)")
     args = parser.parse_args()
+    if args.rosenbrock:
+        ROSENBROCK.append(args.rosenbrock)
     names = [n for n in SCENARIOS if not args.only or n in args.only.split(",")]
     rows = []
     for name in names:

@@ -1,6 +1,6 @@
 """The integrator settings every simulating command takes: ``--rtol``, the absolute
-tolerances, ``--accuracy`` (:mod:`feeddrive.engine.options`), layered over a parameter file's
-``[solver]`` table."""
+tolerances, ``--accuracy``, ``--rosenbrock`` (:mod:`feeddrive.engine.options`), layered over a
+parameter file's ``[solver]`` table."""
 
 from __future__ import annotations
 
@@ -33,7 +33,12 @@ OPTIONS = (
      f"Factor on every default tolerance [-] (0.1: ten times tighter; "
      f"{opt.MIN_RELATIVE / opt.DEFAULT_RTOL:g} … {opt.MAX_ACCURACY:g}); not with an explicit "
      "tolerance."),
+    ("rosenbrock", "--rosenbrock",
+     f"The Rosenbrock method of modal and auto where the run is stiff: "
+     f"{' or '.join(opt.ROSENBROCKS)} (default {opt.DEFAULT_ROSENBROCK}; docs/model.md)."),
 )
+#: the settings that are not numbers
+_TEXT = ("rosenbrock",)
 
 
 def accuracy_options(fn: F) -> F:
@@ -51,7 +56,7 @@ def accuracy_options(fn: F) -> F:
     kept = [p for p in sig.parameters.values() if p.name != "solver"]
     added = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
                                default=typer.Option(None, flag, help=text),
-                               annotation=float | None)
+                               annotation=str | None if name in _TEXT else float | None)
              for name, flag, text in OPTIONS]
 
     @functools.wraps(fn)

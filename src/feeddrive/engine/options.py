@@ -67,6 +67,13 @@ DENSE_MODES = {"modal": (switching.MODE_MODAL, 1), "auto": (switching.MODE_AUTO,
 #: (:mod:`feeddrive.solvers.events`) unless ``locate_reversals`` is false: every method but
 #: the fixed-step DOPRI5 of the order checks
 REVERSAL_METHODS = (*DENSE_MODES, "dopri5")
+#: the Rosenbrock methods ``modal`` and ``auto`` can take where the run is stiff
+#: (``SolverOptions.rosenbrock``), by name → what the driver's mode adds
+#: (:data:`feeddrive.solvers.driver.ROSENBROCK_5`)
+ROSENBROCKS = {"rodas4": 0, "rodas5p": switching.ROSENBROCK_5}
+#: their names in labels
+ROSENBROCK_NAMES = {"rodas4": "RODAS4", "rodas5p": "RODAS5P"}
+DEFAULT_ROSENBROCK = "rodas4"
 #: the default largest step of ``dopri5`` at ``accuracy`` 1 [s], × accuracy^(1/5) otherwise
 #: (:attr:`feeddrive.SolverOptions.largest_step`): where the cap binds, DOPRI5's global
 #: error goes as h^5, so a cap that stayed put would leave the error there deaf to
@@ -117,7 +124,7 @@ TOLERANCES = (("rtol", "-", "relative tolerance"),
 _TOLERANCE_NAMES = tuple(name for name, _, _ in TOLERANCES)
 #: the settings a [solver] table or the command line may give
 SETTINGS = ("method", *_TOLERANCE_NAMES, "accuracy", "output_interval", "max_step",
-            "max_steps")
+            "max_steps", "rosenbrock")
 #: the defaults' source, as describe() names it
 DEFAULT_SOURCE = "default"
 API_SOURCE = "API"
@@ -225,19 +232,19 @@ class SolverOptions:
     Parameters
     ----------
     method : str, default "modal"
-        * ``"modal"`` (the default): DOPRI5 where the problem is not stiff, RODAS4 where it
-          is, with each Rosenbrock step capped so that every lightly damped, undamped or
-          growing oscillatory mode of the Jacobian is resolved (h|λ| ≤ 0.35 for damping
-          ratios below 0.02: :mod:`feeddrive.solvers.modes`), and no switch where that cap
-          leaves RODAS4 no longer a step than DOPRI5's; dense output.  A diverging run stops
-          early (``divergence_bounds``);
+        * ``"modal"`` (the default): DOPRI5 where the problem is not stiff, the Rosenbrock
+          method ``rosenbrock`` where it is, with each Rosenbrock step capped so that every
+          lightly damped, undamped or growing oscillatory mode of the Jacobian is resolved
+          (h|λ| ≤ 0.35 for damping ratios below 0.02: :mod:`feeddrive.solvers.modes`), and
+          no switch where that cap leaves the Rosenbrock method no longer a step than
+          DOPRI5's; dense output.  A diverging run stops early (``divergence_bounds``);
         * ``"dopri5"``: adaptive Dormand–Prince 5(4), every output instant a step end (steps
           at most ``max_step``, default 1 ms × accuracy^(1/5), and the output interval;
           below ``accuracy`` 1 also ``stability_share`` × DOPRI5's stability bound),
           friction reversals located on each step's continuous extension and made step ends
           (``locate_reversals``); with ``locate_reversals=False`` at ``accuracy`` 1 the engine
           v1 behaviour, bit for bit;
-        * ``"auto"``: DOPRI5 where the problem is not stiff, RODAS4 where it is, switched
+        * ``"auto"``: DOPRI5 where the problem is not stiff, ``rosenbrock`` where it is, switched
           automatically on Hairer's stiffness test alone; dense output (steps not capped by
           the output interval);
         * ``"rodas4"``: the Rosenbrock method RODAS4 throughout, dense output;
@@ -285,6 +292,12 @@ class SolverOptions:
         (``SolverOptions(method="dopri5", locate_reversals=False, **LEGACY_TOLERANCES)``
         reproduces a v1 trace bit for bit); its error then stops following the tolerances
         at the reversals.
+    rosenbrock : str, default "rodas4"
+        The Rosenbrock method of ``modal`` and ``auto`` where the run is stiff: ``"rodas4"``
+        (Hairer & Wanner, order 4(3), continuous extension of order 3) or ``"rodas5p"``
+        (Steinebach 2023, order 5(4), eight stages, continuous extension of order 4:
+        :data:`feeddrive.solvers.tableaux.RODAS5P`).  The ``rodas4`` methods are RODAS4
+        whatever it says.
     origin : tuple of (str, str), default ()
         Where each setting came from (``("rtol", "--rtol")``, ``("accuracy", "[solver] in
         run.toml")``); a setting not listed was given in Python (API) or is a default.
@@ -303,6 +316,7 @@ class SolverOptions:
     max_steps: int = 50_000_000
     sample_steps: bool = False
     locate_reversals: bool = True
+    rosenbrock: str = DEFAULT_ROSENBROCK
     origin: tuple[tuple[str, str], ...] = field(default=(), compare=False)
 
     def __post_init__(self) -> None:
@@ -326,6 +340,9 @@ class SolverOptions:
             if not isinstance(getattr(self, name), bool):
                 raise ParameterError(f"options.{name}", getattr(self, name),
                                      "expected True or False")
+        if self.rosenbrock not in ROSENBROCKS:
+            raise ParameterError("options.rosenbrock", self.rosenbrock,
+                                 f"expected one of {', '.join(ROSENBROCKS)}")
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) \
                 or self.max_steps < 1:
             raise ParameterError("options.max_steps", self.max_steps,
@@ -363,6 +380,23 @@ class SolverOptions:
         value = getattr(self, name)
         default = next(f.default for f in fields(self) if f.name == name)
         return DEFAULT_SOURCE if value == default else API_SOURCE
+
+    @property
+    def driver_mode(self) -> tuple[int, int]:
+        """The dense driver's (mode, adaptive) of a method of :data:`DENSE_MODES`: ``modal``
+        and ``auto`` with the Rosenbrock steps of ``rosenbrock``
+        (:mod:`feeddrive.solvers.switching`)."""
+        mode, adaptive = DENSE_MODES[self.method]
+        if self.method in ("modal", "auto"):
+            mode += ROSENBROCKS[self.rosenbrock]
+        return mode, adaptive
+
+    @property
+    def rosenbrock_cost(self) -> float:
+        """What one step of ``rosenbrock`` counts as in DOPRI5 steps when ``modal`` and
+        ``auto`` weigh a switch back to DOPRI5 (:data:`feeddrive.solvers.driver.RODAS4_COST`,
+        :data:`~feeddrive.solvers.driver.RODAS5P_COST`) [-]."""
+        return switching.RODAS5P_COST if self.rosenbrock == "rodas5p" else switching.RODAS4_COST
 
     @property
     def explicit_positions(self) -> bool:
@@ -416,13 +450,14 @@ class SolverOptions:
         str
             One sentence.
         """
+        rb = ROSENBROCK_NAMES[self.rosenbrock]
         methods = {
-            "modal": "DOPRI5/RODAS4 switched on stiffness and on the steps' cost (a RODAS4 "
-                     f"step counted as {_num(switching.RODAS4_COST)} DOPRI5 steps), every step "
+            "modal": f"DOPRI5/{rb} switched on stiffness and on the steps' cost (a {rb} "
+                     f"step counted as {_num(self.rosenbrock_cost)} DOPRI5 steps), every step "
                      f"capped at h·|λ| ≤ {_num(modes.H_LAMBDA)} on each oscillatory mode of "
                      f"the Jacobian with damping ratio < {_num(modes.ZETA_LIGHT)}",
             "dopri5": "adaptive Dormand–Prince 5(4)",
-            "auto": "DOPRI5/RODAS4 switched on Hairer's stiffness test and on the steps' "
+            "auto": f"DOPRI5/{rb} switched on Hairer's stiffness test and on the steps' "
                     "cost, no mode cap",
             "rodas4": "Rosenbrock RODAS4",
             "dopri5-dense": "adaptive Dormand–Prince 5(4), dense output",
@@ -503,6 +538,8 @@ class SolverOptions:
         """How outputs between step ends are made: the continuous extension and its order
         (:data:`~feeddrive.engine.options.DENSE_OUTPUT_ORDER`), or every output a step end."""
         order = DENSE_OUTPUT_ORDER[self.method]
+        if self.method in ("modal", "auto") and self.rosenbrock != "rodas4":
+            order = order.replace("3 (RODAS4 steps)", "4 (RODAS5P steps)")
         if order.startswith("none"):
             return "every output a step end"
         return f"continuous extension of order {order}"
@@ -615,7 +652,7 @@ def using(options: SolverOptions | None) -> Iterator[SolverOptions]:
 def file_settings(path: str | Path) -> dict[str, Any]:
     """The ``[solver]`` table of a parameter (or sweep) file: the integrator settings stored
     with the set (``method``, ``rtol``, the absolute tolerances, ``accuracy``,
-    ``output_interval``, ``max_step``, ``max_steps``), checked by name.
+    ``output_interval``, ``max_step``, ``max_steps``, ``rosenbrock``), checked by name.
 
     Parameters
     ----------

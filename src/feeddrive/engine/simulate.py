@@ -944,7 +944,7 @@ class _Chunks:
         n = len(model.states)
         self.held = np.zeros(model.n_held)
         if self.dense:
-            self.mode, self.adaptive = _DENSE_MODES[options.method]
+            self.mode, self.adaptive = options.driver_mode
             cap, first = options.largest_step, DENSE_CHUNK
             self.want_aux = want_aux or grid.sampled
         else:  # every breakpoint a step end

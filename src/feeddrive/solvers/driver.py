@@ -70,6 +70,7 @@ from .modes import jacobian_moved as modal_jacobian_moved
 from .modes import step_cap as modal_step_cap
 from .placeholders import N_AUX, rhs, sample_update
 from .schedule import due, next_instant
+from .tableaux import RODAS4, RODAS5P
 
 STATUS_OK = 0
 STATUS_MAX_STEPS = 1
@@ -91,6 +92,10 @@ STATUS_NAMES = ("STATUS_OK", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW", "STATU
                 "STATUS_STOPPED", "STATUS_DIVERGED")
 
 MODE_DOPRI5, MODE_RODAS4, MODE_AUTO, MODE_MODAL = 0, 1, 2, 3
+# added to MODE_RODAS4, MODE_AUTO or MODE_MODAL: the Rosenbrock steps are RODAS5P's
+# (feeddrive.solvers.tableaux.RODAS5P, order 5(4), dense output of order 4) instead of
+# RODAS4's (SolverOptions.rosenbrock)
+ROSENBROCK_5 = 4
 
 # Switching thresholds of the dense driver (measured on the benchmark scenarios,
 # benchmarks/README.md; feeddrive.solvers.switching)
@@ -113,6 +118,13 @@ MODAL_SWITCH_GAIN = 2.0
 # of LSODA (L. Petzold, SIAM J. Sci. Stat. Comput. 4 (1983) 136-148: each method's step
 # weighed by its cost); the switch to RODAS4 is then refused for MODAL_RETRY steps
 RODAS4_COST = 5.0
+# the same for a RODAS5P step: 7 stage right-hand sides and 8 solves against RODAS4's 5 and 6
+# (measured: benchmarks/README.md, "RODAS5P in the engine")
+RODAS5P_COST = 6.5
+# the Rosenbrock step-size controller's exponents 1/(q + 1), q the embedded order (rodas.f:
+# 0.25 for RODAS4)
+R4_EXPONENT = RODAS4.step_exponent
+R5_EXPONENT = RODAS5P.step_exponent
 # DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
 # of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
 MODAL_RETRY = 500
@@ -153,7 +165,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
                     f_new: np.ndarray, yt: np.ndarray, y_new: np.ndarray, e: np.ndarray,
                     aux: np.ndarray, switch_rows: np.ndarray, q1: np.ndarray,
-                    q2: np.ndarray, q3: np.ndarray, ft: np.ndarray, yp: np.ndarray,
+                    q2: np.ndarray, q3: np.ndarray, u6: np.ndarray, u7: np.ndarray,
+                    ft: np.ndarray, yp: np.ndarray,
                     fp: np.ndarray, v: np.ndarray, w: np.ndarray, J: np.ndarray,
                     M: np.ndarray, J_ref: np.ndarray, piv: np.ndarray, live: np.ndarray,
                     all_live: np.ndarray, ge_J: np.ndarray, ge_Phi: np.ndarray,
@@ -201,7 +214,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
         Step limit of the call.
     mode : int
         ``MODE_DOPRI5``, ``MODE_RODAS4``, ``MODE_AUTO`` or ``MODE_MODAL`` (``DENSE``; the
-        others are ``MODE_DOPRI5``).
+        others are ``MODE_DOPRI5``); ``ROSENBROCK_5`` added: RODAS5P's Rosenbrock steps.
     stops : numpy.ndarray
         Sorted profile breakpoints, exact step ends [s] (``DENSE``).
     want_aux : bool
@@ -247,9 +260,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     switch_rows : numpy.ndarray
         (m, n) switching surfaces W·y whose zero crossings are located and made step ends
         (:mod:`feeddrive.solvers.events`); (0, n) for none [state units → m/s] (``DENSE``).
-    q1, q2, q3, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live : numpy.ndarray
-        The dense driver's work space (``DENSE``), made by its caller (:func:`work_space`:
-        a piece cannot allocate in the C subset, and the driver is shorter without) [mixed].
+    q1, q2, q3, u6, u7, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live : numpy.ndarray
+        The dense driver's work space (``DENSE``; u6, u7: RODAS5P's sixth and seventh
+        increments), made by its caller (:func:`work_space`: a piece cannot allocate in the C
+        subset, and the driver is shorter without) [mixed].
     ge_J, ge_Phi, ge_A, ge_B, ge_w, ge_d, ge_aux : numpy.ndarray
         The embedded global-error estimate's work space (``DENSE``; :func:`work_space`)
         [mixed].
@@ -308,7 +322,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     status = STATUS_OK
     h_min = 1e-14
     # the method and the switching state (DENSE; the other uses are DOPRI5 throughout)
-    stiff = mode == MODE_RODAS4
+    r5 = mode >= ROSENBROCK_5  # RODAS5P's Rosenbrock steps, else RODAS4's
+    r_cost = RODAS5P_COST if r5 else RODAS4_COST
+    stiff = mode % ROSENBROCK_5 == MODE_RODAS4
     jac_ok = False
     jac_age = 0
     quiet = False
@@ -318,8 +334,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
     stiff_count = 0
     nonstiff_count = 0
     rho = 0.0
-    switching = mode == MODE_AUTO or mode == MODE_MODAL
-    modal = mode == MODE_MODAL
+    switching = mode % ROSENBROCK_5 == MODE_AUTO or mode % ROSENBROCK_5 == MODE_MODAL
+    modal = mode % ROSENBROCK_5 == MODE_MODAL
     h_osc = math.inf  # MODE_MODAL: the step cap of the lightly damped modes
     have_ref = False
     refuse_until = 0
@@ -420,9 +436,10 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
             if DENSE:  # the step chosen and tried with either method (step_attempt)
                 (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps,
                  rejected, n_rhs, n_jac, n_rodas) = step_attempt(
-                    stiff, adaptive, t, t_ev, h, h_max, modal, h_osc, h_min, y, f0, held, P,
-                    T, rtol, atol, rel_mask, J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt,
-                    yp, fp, y_new, aux, live, all_live, S, colour, frozen_known, r4_rejected,
+                    stiff, r5, adaptive, t, t_ev, h, h_max, modal, h_osc, h_min, y, f0,
+                    held, P, T, rtol, atol, rel_mask, J, ft, M, piv, k2, k3, k4, k5, k6, u6, u7,
+                    f_new, e, yt, yp, fp, y_new, aux, live, all_live, S, colour, frozen_known,
+                    r4_rejected,
                     jac_age, steps, max_steps, rejected, n_rhs, n_jac, n_rodas)
             else:
                 err = 0.0
@@ -479,8 +496,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if stiff:
                     rhs(t_new, y_new, held, P, T, f_new, aux)
                     n_rhs += 1
-                dense_coefficients(stiff, h_try, y, y_new, f0, k2, k3, k4, k5, k6, f_new, e,
-                                   q1, q2, q3)
+                dense_coefficients(stiff, r5, h_try, y, y_new, f0, k2, k3, k4, k5, k6, u6, u7,
+                                   f_new, e, q1, q2, q3)
                 if switch_rows.shape[0] > 0:
                     # a switching surface crossed inside the step (a friction site's sliding
                     # speed through zero: a kink of the right-hand side): the step is thrown
@@ -512,7 +529,7 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                 if switching:
                     (stiff, rho, h_osc, stiff_count, nonstiff_count, switches, err_old,
                      dp_since_eig, refuse_until, r4_first, have_ref, calls,
-                     analyses, h_dp) = switch_method(stiff, modal, rho, h_done, h_osc,
+                     analyses, h_dp) = switch_method(stiff, modal, r_cost, rho, h_done, h_osc,
                                                      r4_h_old, r4_rejected, h_dp, stiff_count,
                                                      nonstiff_count, switches, err_old,
                                                      dp_since_eig,
@@ -533,8 +550,9 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     h = min(h_new, h_max)
             elif adaptive == 1:  # LAND: v1 took every error, also 0, into DOPRI5's memory
                 h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected = step_size(
-                    used_rodas, err, h_try, h, h_max, last, err_old, alpha, beta, r4_first,
-                    r4_h_old, r4_err_old, r4_rejected, LAND, stability_share if LAND else 1.0,
+                    used_rodas, r5, err, h_try, h, h_max, last, err_old, alpha, beta,
+                    r4_first, r4_h_old, r4_err_old, r4_rejected, LAND,
+                    stability_share if LAND else 1.0,
                     f_new, k6, y, y_new, yt, rtol, atol, rel_mask)
             if DENSE and ge:  # the embedded global-error estimate carried over the step
                 calls, jacobians, ge_since = error_estimate_step(
@@ -901,7 +919,8 @@ def weighted_stiffness_estimate(h: float, f_new: np.ndarray, k6: np.ndarray, y: 
     return 0.0
 
 
-def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float, last: bool,
+def step_size(used_rodas: bool, r5: bool, err: float, h_try: float, h: float,
+              h_max: float, last: bool,
               err_old: float, alpha: float, beta: float, r4_first: bool, r4_h_old: float,
               r4_err_old: float, r4_rejected: bool, every_error: bool,
               stability_share: float, f_new: np.ndarray, k6: np.ndarray, y: np.ndarray,
@@ -915,7 +934,10 @@ def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float
     Parameters
     ----------
     used_rodas : bool
-        The step was a RODAS4 step.
+        The step was a Rosenbrock step.
+    r5 : bool
+        RODAS5P's (else RODAS4's): the controller's exponent 1/(q + 1), q the embedded order
+        (:data:`R5_EXPONENT`, :data:`R4_EXPONENT`).
     err : float
         Its error norm [-].
     h_try : float
@@ -948,9 +970,10 @@ def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float
         (h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected) updated.
     """
     if used_rodas:
-        fac = 0.2 if err == 0.0 else max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+        r_exp = R5_EXPONENT if r5 else R4_EXPONENT
+        fac = 0.2 if err == 0.0 else max(1.0 / 6.0, min(5.0, err ** r_exp / 0.9))
         if not r4_first and err > 0.0:
-            facpred = (r4_h_old / h_try) * (err * err / r4_err_old) ** 0.25 / 0.9
+            facpred = (r4_h_old / h_try) * (err * err / r4_err_old) ** r_exp / 0.9
             fac = max(fac, max(1.0 / 6.0, min(5.0, facpred)))
         h_new = h_try / fac
         if r4_rejected:
@@ -974,30 +997,39 @@ def step_size(used_rodas: bool, err: float, h_try: float, h: float, h_max: float
     return h, err_old, r4_first, r4_h_old, r4_err_old, r4_rejected
 
 
-def dense_coefficients(stiff: bool, h: float, y: np.ndarray, y_new: np.ndarray,
+def dense_coefficients(stiff: bool, r5: bool, h: float, y: np.ndarray, y_new: np.ndarray,
                        f0: np.ndarray, k2: np.ndarray, k3: np.ndarray, k4: np.ndarray,
-                       k5: np.ndarray, k6: np.ndarray, f_new: np.ndarray, e: np.ndarray,
-                       q1: np.ndarray, q2: np.ndarray, q3: np.ndarray) -> None:
-    """The continuous extension of the step just accepted: RODAS4's two vectors into q1, q2;
-    DOPRI5's (Hairer's contd5) into q1, q2, q3 and e.
+                       k5: np.ndarray, k6: np.ndarray, u6: np.ndarray, u7: np.ndarray,
+                       f_new: np.ndarray, e: np.ndarray, q1: np.ndarray, q2: np.ndarray,
+                       q3: np.ndarray) -> None:
+    """The continuous extension of the step just accepted: a Rosenbrock step's vectors into
+    q1, q2, q3 (RODAS5P's three; RODAS4's two and q3 = 0); DOPRI5's (Hairer's contd5) into q1,
+    q2, q3 and e.
 
     Parameters
     ----------
     stiff : bool
-        A RODAS4 step.
+        A Rosenbrock step.
+    r5 : bool
+        RODAS5P's (else RODAS4's).
     h : float
         Its size [s].
     y, y_new : numpy.ndarray
         The states at its start and end [SI, per state].
-    f0, k2, k3, k4, k5, k6, f_new : numpy.ndarray
-        Its stages (DOPRI5) [SI/s, per state], its increments (RODAS4) [SI, per state].
+    f0, k2, k3, k4, k5, k6, u6, u7, f_new : numpy.ndarray
+        Its stages (DOPRI5) [SI/s, per state], its increments (Rosenbrock: k2 … k6, u6, u7
+        and e the error estimate) [SI, per state].
     e : numpy.ndarray
         DOPRI5: the fifth coefficient, written [SI, per state].
     q1, q2, q3 : numpy.ndarray
         The coefficients, written [SI, per state].
     """
-    if stiff:
+    if stiff and r5:
+        _r5_rodas5p_dense(k2, k3, k4, k5, k6, u6, u7, e, q1, q2, q3)
+    elif stiff:
         _r4_rodas4_dense(k2, k3, k4, k5, k6, q1, q2)
+        for i in range(y.size):
+            q3[i] = 0.0
     else:
         for i in range(y.size):
             ydiff = y_new[i] - y[i]
@@ -1066,7 +1098,8 @@ def outputs_inside(t: float, t_new: float, last: bool, stiff: bool, y: np.ndarra
         th1 = 1.0 - th
         for i in range(y.size):
             if stiff:
-                yp[i] = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * q2[i]))
+                yp[i] = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * (q2[i]
+                                                                          + th * q3[i])))
             else:
                 yp[i] = y[i] + th * (q1[i] + th1 * (q2[i] + th * (q3[i] + th1 * e[i])))
         t_out[i_out] = t_grid
@@ -1439,7 +1472,8 @@ def memory_save(memory: np.ndarray, live: np.ndarray, J_ref: np.ndarray, h: floa
             memory[MEMORY_SCALARS + n + i * n + j] = J_ref[i, j]
 
 
-def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: float,
+def switch_method(stiff: bool, modal: bool, r_cost: float, rho: float, h_done: float,
+                  h_osc: float,
                   r4_h_old: float, r4_rejected: bool, h_dp: float, stiff_count: int,
                   nonstiff_count: int, switches: int, err_old: float, dp_since_eig: int,
                   refuse_until: int, n_steps: int, r4_first: bool, have_ref: bool,
@@ -1453,7 +1487,7 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
     """The stiffness detection and method switching after an accepted step (``MODE_AUTO``,
     ``MODE_MODAL``).  From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps that DOPRI5
     would take stably (ρ·h < ``NONSTIFF_HRHO``; ``MODE_MODAL``: or the cap leaves RODAS4 less
-    than ``MODAL_SWITCH_GAIN`` × that step) or that are not ``RODAS4_COST`` × the step DOPRI5
+    than ``MODAL_SWITCH_GAIN`` × that step) or that are not ``r_cost`` × the step DOPRI5
     took when it handed over (``h_dp``): a RODAS4 step costs about that many DOPRI5 steps.  A
     short step longer than the one before, or the first after a rejection, is not counted
     (the step is growing back), and after a switch for cost alone the switch to RODAS4 is
@@ -1468,6 +1502,9 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
     ----------
     stiff, modal : bool
         The step was RODAS4's; the method is ``MODE_MODAL``.
+    r_cost : float
+        What a Rosenbrock step costs in DOPRI5 steps (``RODAS4_COST`` or ``RODAS5P_COST``)
+        [-].
     rho : float
         The spectral radius estimate [1/s].
     h_done : float
@@ -1528,7 +1565,7 @@ def switch_method(stiff: bool, modal: bool, rho: float, h_done: float, h_osc: fl
         # refuses the switch the other way) or when RODAS4's steps do not pay for their cost
         # against the step DOPRI5 took when it handed over (h_dp)
         stable = rho * min(h_done, h_osc / MODAL_SWITCH_GAIN) < NONSTIFF_HRHO
-        short = h_done < RODAS4_COST * h_dp
+        short = h_done < r_cost * h_dp
         if not stable and short and (h_done > r4_h_old or r4_rejected):
             pass  # growing back from DOPRI5's step or from a rejection: not judged yet
         elif stable or short:
@@ -1657,40 +1694,39 @@ def error_estimate_step(used_rodas: bool, ge_since: int, t: float, t_new: float,
     return calls, jacobians, ge_since
 
 
-def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h: float, h_max: float,
-                 modal: bool, h_osc: float, h_min: float, y: np.ndarray, f0: np.ndarray,
-                 held: np.ndarray, P: np.ndarray, T: np.ndarray, rtol: float,
-                 atol: np.ndarray, rel_mask: np.ndarray,
-                 J: np.ndarray, ft: np.ndarray, M: np.ndarray, piv: np.ndarray, k2: np.ndarray,
-                 k3: np.ndarray, k4: np.ndarray, k5: np.ndarray, k6: np.ndarray,
+def step_attempt(stiff: bool, r5: bool, adaptive: int, t: float, t_ev: float, h: float,
+                 h_max: float, modal: bool, h_osc: float, h_min: float, y: np.ndarray,
+                 f0: np.ndarray, held: np.ndarray, P: np.ndarray, T: np.ndarray, rtol: float,
+                 atol: np.ndarray, rel_mask: np.ndarray, J: np.ndarray, ft: np.ndarray,
+                 M: np.ndarray, piv: np.ndarray, k2: np.ndarray, k3: np.ndarray, k4: np.ndarray,
+                 k5: np.ndarray, k6: np.ndarray, u6: np.ndarray, u7: np.ndarray,
                  f_new: np.ndarray, e: np.ndarray, yt: np.ndarray, yp: np.ndarray,
                  fp: np.ndarray, y_new: np.ndarray, aux: np.ndarray, live: np.ndarray,
                  all_live: np.ndarray, S: np.ndarray, colour: np.ndarray, frozen_known: bool,
                  r4_rejected: bool, jac_age: int, steps: int, max_steps: int, rejected: int,
-                 n_rhs: int, n_jac: int, n_rodas: int
-                 ) -> tuple[float, float, float, bool, int, bool, bool, bool, int, int, int,
-                            int, int]:
-    """The dense driver's step from ``t``, chosen (``h`` capped by ``h_max``, by ``h_osc``
-    with ``modal``, cut to land on ``t_ev``) and tried until accepted: RODAS4 (``stiff``; a
-    frozen state that moved retakes the whole Jacobian, a rejection with a kept Jacobian ends
-    the attempt as ``stale``) or DOPRI5, each shrunk on rejection by its own rule (Hairer &
-    Wanner II, Sect. IV.7; Hairer, Nørsett & Wanner I, Sect. II.4).
+                 n_rhs: int, n_jac: int, n_rodas: int) -> tuple[
+                     float, float, float, bool, int, bool, bool, bool, int, int, int, int, int]:
+    """The dense driver's step from ``t`` (``h`` capped by ``h_max`` and, ``modal``, ``h_osc``,
+    cut to land on ``t_ev``) tried until accepted: Rosenbrock (``stiff``; a moved frozen state
+    retakes the Jacobian; a rejection with a kept one ends as ``stale``) or DOPRI5, each shrunk
+    on rejection by its rule (Hairer & Wanner II, IV.7; Hairer, Nørsett & Wanner I, II.4).
 
     Parameters
     ----------
-    stiff, adaptive, modal : bool, int, bool
-        RODAS4 (else DOPRI5); 1 for error-controlled steps, 0 for a fixed step; the cap.
+    stiff, r5, adaptive, modal : bool, bool, int, bool
+        Rosenbrock (else DOPRI5); RODAS5P's (else RODAS4's); 1 for error-controlled steps, 0
+        for a fixed step; the cap.
     t, t_ev, h, h_max, h_osc, h_min : float
         The step's start, the next event, the step size, its largest, the modal cap (DOPRI5
         amplifies a mode at 1 < h|λ| < 3.3), the smallest step [s].
     y, f0, held, P, T, rtol, atol, rel_mask : numpy.ndarray, float
         The state and its derivative at t, held values, parameters, tables, tolerances [SI].
-    J, ft, M, piv, k2, k3, k4, k5, k6, f_new, e, yt, yp, fp, y_new, aux : numpy.ndarray
+    J, ft, M, piv, k2, k3, k4, k5, k6, u6, u7, f_new, e, yt, yp, fp, y_new, aux : numpy.ndarray
         The Jacobian (retaken on a moved frozen state), work space, the step's end [mixed].
     live, all_live, S, colour : numpy.ndarray
         The states the Jacobian is taken for, all, its sparsity pattern, column groups [-].
     frozen_known, r4_rejected, jac_age : bool, bool, int
-        Frozen states known; a RODAS4 rejection since the last step; the Jacobian's age.
+        Frozen states known; a Rosenbrock rejection since the last step; the Jacobian's age.
     steps, max_steps, rejected, n_rhs, n_jac, n_rodas : int
         Counts so far (the step limit).
 
@@ -1698,8 +1734,8 @@ def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h: float, h_
     -------
     tuple
         (err, t_new, h_try, last, status, stale, r4_rejected, frozen_known, steps, rejected,
-        n_rhs, n_jac, n_rodas): the accepted step's error norm, end, size and landing, the
-        status, whether the Jacobian is to be retaken first, the flags and counts updated.
+        n_rhs, n_jac, n_rodas): the accepted step's error norm, end, size, landing, status,
+        whether to retake the Jacobian first, the flags and counts updated.
     """
     last = False
     h_try = min(h, h_max)
@@ -1714,18 +1750,20 @@ def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h: float, h_
     stale = False
     while True:
         t_new = t_ev if last else t + h_try
-        if stiff:
+        if stiff and r5:
+            calls = _r5_rodas5p_step(t, h_try, y, f0, J, ft, held, P, T, M, piv, k2, k3,
+                                     k4, k5, k6, u6, u7, e, yt, fp, y_new, aux, live)
+        elif stiff:
             calls = _r4_rodas4_step(t, h_try, y, f0, J, ft, held, P, T, M, piv, k2, k3,
-                                    k4, k5, k6, e, yt, fp,
-                                    y_new, aux, live)
-            if calls == -2:
-                # a frozen state moved: retry with the full Jacobian
-                n_rhs += 5
+                                    k4, k5, k6, e, yt, fp, y_new, aux, live)
+        if stiff:
+            if calls == -2:  # a frozen state moved: retry with the full Jacobian
+                n_rhs += 7 if r5 else 5
                 frozen_known = False
                 for i in range(y.size):
                     live[i] = True
-                calls = _r4_fd_jacobian(t, y, f0, held, P, T,
-                                        atol, J, ft, yp, fp, aux, all_live, S, colour)
+                calls = _r4_fd_jacobian(t, y, f0, held, P, T, atol, J, ft, yp, fp, aux,
+                                        all_live, S, colour)
                 n_rhs += calls
                 n_jac += 1
                 continue
@@ -1750,7 +1788,7 @@ def step_attempt(stiff: bool, adaptive: int, t: float, t_ev: float, h: float, h_
             break
         rejected += 1
         if stiff:
-            fac = max(1.0 / 6.0, min(5.0, err ** 0.25 / 0.9))
+            fac = max(1.0 / 6.0, min(5.0, err ** (R5_EXPONENT if r5 else R4_EXPONENT) / 0.9))
             h_try /= fac
             r4_rejected = True
             if jac_age > 0:  # a kept Jacobian: the retry takes a fresh one
@@ -1792,6 +1830,8 @@ _r4_fd_jacobian: Any = None
 _r4_frozen_states: Any = None
 _r4_rodas4_step: Any = None
 _r4_rodas4_dense: Any = None
+_r5_rodas5p_step: Any = None
+_r5_rodas5p_dense: Any = None
 _r4_spectral_radius: Any = None
 
 
@@ -1799,8 +1839,13 @@ _r4_spectral_radius: Any = None
 _COMPARE: dict[type, Any] = {ast.Eq: operator.eq, ast.NotEq: operator.ne, ast.Lt: operator.lt,
                              ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge,
                              ast.Is: operator.is_, ast.IsNot: operator.is_not}
+_ARITHMETIC: dict[type, Any] = {ast.Add: operator.add, ast.Sub: operator.sub,
+                               ast.Mod: operator.mod}
+
+
 class _Fold(ast.NodeTransformer):
-    """Names of ``consts`` replaced by their values; comparisons, ``not``, ``and``/``or``,
+    """Names of ``consts`` replaced by their values; ``+``, ``-``, ``%`` of constants,
+    comparisons, ``not``, ``and``/``or``,
     conditional expressions, ``if`` and ``while`` on constants folded (the unreachable
     branches dropped)."""
 
@@ -1822,6 +1867,14 @@ class _Fold(ast.NodeTransformer):
             assert isinstance(a, ast.Constant) and isinstance(b, ast.Constant)
             result = result and bool(_COMPARE[type(op)](a.value, b.value))
         return ast.copy_location(ast.Constant(result), node)
+
+    def visit_BinOp(self, node: ast.BinOp) -> ast.expr:
+        self.generic_visit(node)
+        if (isinstance(node.left, ast.Constant) and isinstance(node.right, ast.Constant)
+                and type(node.op) in _ARITHMETIC):
+            value = _ARITHMETIC[type(node.op)](node.left.value, node.right.value)
+            return ast.copy_location(ast.Constant(value), node)
+        return node
 
     def visit_UnaryOp(self, node: ast.UnaryOp) -> ast.expr:
         self.generic_visit(node)
@@ -2057,8 +2110,8 @@ _LAND_PARAMS = ("y0", "t_end", "out_every", "base", "schedule", "P", "T", "rtol"
                 "rel_mask", "h_max", "stability_share", "adaptive", "max_steps", "start", "held",
                 "memory", "bound", "switch_rows", *STEP_WORK)
 #: the dense driver's work space beyond the explicit step's (made by :func:`work_space`)
-DENSE_WORK = ("q1", "q2", "q3", "ft", "yp", "fp", "v", "w", "J", "M", "J_ref", "piv", "live",
-              "all_live", "ge_J", "ge_Phi", "ge_A", "ge_B", "ge_w", "ge_d", "ge_aux")
+DENSE_WORK = ("q1", "q2", "q3", "u6", "u7", "ft", "yp", "fp", "v", "w", "J", "M", "J_ref",
+              "piv", "live", "all_live", "ge_J", "ge_Phi", "ge_A", "ge_B", "ge_w", "ge_d", "ge_aux")
 
 
 def step_space(y0: np.ndarray, schedule: np.ndarray, n_aux: int) -> tuple[np.ndarray, ...]:
@@ -2123,6 +2176,8 @@ def work_space(y0: np.ndarray, memory: np.ndarray, n_aux: int) -> tuple[np.ndarr
     q1 = np.empty(n)
     q2 = np.empty(n)
     q3 = np.empty(n)
+    u6 = np.empty(n)
+    u7 = np.empty(n)
     ft = np.zeros(n)
     yp = np.empty(n)
     fp = np.empty(n)
@@ -2141,8 +2196,8 @@ def work_space(y0: np.ndarray, memory: np.ndarray, n_aux: int) -> tuple[np.ndarr
     ge_w = np.zeros(ng)
     ge_d = np.zeros(ng)
     ge_aux = np.empty(n_aux)
-    return (q1, q2, q3, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live, ge_J, ge_Phi, ge_A,
-            ge_B, ge_w, ge_d, ge_aux)
+    return (q1, q2, q3, u6, u7, ft, yp, fp, v, w, J, M, J_ref, piv, live, all_live, ge_J,
+            ge_Phi, ge_A, ge_B, ge_w, ge_d, ge_aux)
 
 
 
@@ -2157,7 +2212,7 @@ _COMM_PARAMS = ("t", "t_end", "t0", "n", "y", "held", "held_prev", "P", "T", "sc
                 "aux")
 _FLAGS = ("LAND", "DENSE", "COMM")
 _MODES = {"MODE_DOPRI5": MODE_DOPRI5, "MODE_RODAS4": MODE_RODAS4, "MODE_AUTO": MODE_AUTO,
-          "MODE_MODAL": MODE_MODAL}
+          "MODE_MODAL": MODE_MODAL, "ROSENBROCK_5": ROSENBROCK_5}
 USES: dict[str, tuple[tuple[str, ...], dict[str, Any], str]] = {
     "integrate": (_LAND_PARAMS, {"LAND": True, "mode": MODE_DOPRI5, "want_aux": True},
                   "The breakpoint driver (feeddrive.solvers.dopri5): "
@@ -2305,7 +2360,8 @@ def template_sources() -> list[str]:
             "from feeddrive.solvers.schedule import next_instant",
             "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
             "MODAL_SWITCH_GAIN, RODAS4_COST, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, "
-            "STIFF_HLAMBDA, STIFF_STEPS, MODAL_EVERY, DOPRI5_STABILITY)",
+            "STIFF_HLAMBDA, STIFF_STEPS, MODAL_EVERY, DOPRI5_STABILITY, R4_EXPONENT, "
+            "R5_EXPONENT)",
             "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
             "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, exponential as ge_exponential",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "

@@ -40,7 +40,7 @@ def _dense_value(row: np.ndarray, th: float, stiff: bool, y: np.ndarray, y_new: 
     for i in range(y.size):
         if row[i] != 0.0:
             if stiff:
-                yp = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * q2[i]))
+                yp = th1 * y[i] + th * (y_new[i] + th1 * (q1[i] + th * (q2[i] + th * q3[i])))
             else:
                 yp = y[i] + th * (q1[i] + th1 * (q2[i] + th * (q3[i] + th1 * e[i])))
             g += row[i] * yp
@@ -62,7 +62,7 @@ def first_crossing(W: np.ndarray, y: np.ndarray, y_new: np.ndarray, q1: np.ndarr
     y, y_new : numpy.ndarray
         States at the step's start and end [SI, per state].
     q1, q2, q3, e : numpy.ndarray
-        The step's dense-output coefficients (DOPRI5: q1, q2, q3, e; RODAS4: q1, q2)
+        The step's dense-output coefficients (DOPRI5: q1, q2, q3, e; Rosenbrock: q1, q2, q3)
         [SI, per state].
     stiff : bool
         The step was a RODAS4 step.

@@ -40,7 +40,7 @@ import numpy as np
 
 from . import placeholders
 from .rodas4 import lu_factor, lu_solve  # noqa: F401 - called by the Rosenbrock step
-from .tableaux import DOPRI5, RODAS4, ExplicitTableau, RosenbrockTableau
+from .tableaux import DOPRI5, RODAS4, RODAS5P, ExplicitTableau, RosenbrockTableau
 
 # the model arguments of every right-hand-side call between the state and the outputs
 RHS_ARGS = "held, P, T"
@@ -339,7 +339,8 @@ def rosenbrock_step_source(tab: RosenbrockTableau, name: str) -> str:
 
 
 def rosenbrock_dense_source(tab: RosenbrockTableau, name: str) -> str:
-    """``name(u1, …, u(S−1), q1, q2)``: the dense-output vectors of the step just taken.
+    """``name(u1, …, u(S−1) or uS, q1, q2[, q3])``: the dense-output vectors of the step just
+    taken (over the increments and rows the tableau's ``dense`` holds).
 
     Parameters
     ----------
@@ -353,7 +354,7 @@ def rosenbrock_dense_source(tab: RosenbrockTableau, name: str) -> str:
     str
         Python source of the function (annotated, for the C translator).
     """
-    us = [f"u{s + 1}" for s in range(len(tab.c) - 1)]
+    us = [f"u{s + 1}" for s in range(len(tab.dense[0]))]
     qs = [f"q{r + 1}" for r in range(len(tab.dense))]
     body = [f"        {q}[i] = {_sum([(w, f'{u}[i]') for w, u in zip(row, us, strict=True)])}"
             for q, row in zip(qs, tab.dense, strict=True)]
@@ -383,7 +384,8 @@ def _define(source: str, name: str, scope: dict[str, Any] | None = None) -> Any:
 # The Python functions of the project's steps (the C translator and the tests read them);
 # their text is what template_sources places in the generated modules.
 STEP_NAMES = {"dp5_step": "_dp5_step", "dp5_error": "_dp5_error", "dp5_dense": "_dp5_dense",
-              "rodas4_step": "_r4_rodas4_step", "rodas4_dense": "_r4_rodas4_dense"}
+              "rodas4_step": "_r4_rodas4_step", "rodas4_dense": "_r4_rodas4_dense",
+              "rodas5p_step": "_r5_rodas5p_step", "rodas5p_dense": "_r5_rodas5p_dense"}
 
 
 @functools.cache
@@ -401,6 +403,8 @@ def sources() -> dict[str, str]:
         "_dp5_dense": explicit_combination_source(DOPRI5, DOPRI5.dense, "_dp5_dense"),
         "_r4_rodas4_step": rosenbrock_step_source(RODAS4, "_r4_rodas4_step"),
         "_r4_rodas4_dense": rosenbrock_dense_source(RODAS4, "_r4_rodas4_dense"),
+        "_r5_rodas5p_step": rosenbrock_step_source(RODAS5P, "_r5_rodas5p_step"),
+        "_r5_rodas5p_dense": rosenbrock_dense_source(RODAS5P, "_r5_rodas5p_dense"),
     }
 
 

@@ -60,6 +60,8 @@ from .driver import (  # noqa: F401 - the modes and thresholds, read from here
     NONSTIFF_STEPS,
     POWER_ITERATIONS,
     RODAS4_COST,
+    RODAS5P_COST,
+    ROSENBROCK_5,
     STIFF_HLAMBDA,
     STIFF_STEPS,
 )
@@ -74,7 +76,7 @@ STAT_NAMES = ("status", "steps", "rejected", "rhs_evaluations", "t_reached", "ja
 CONSTANTS = ("MEMORY_SCALARS", "MODE_DOPRI5", "MODE_RODAS4", "MODE_AUTO", "MODE_MODAL",
              "STIFF_HLAMBDA", "STIFF_STEPS",
              "NONSTIFF_HRHO", "NONSTIFF_STEPS", "POWER_ITERATIONS", "MODAL_SWITCH_GAIN",
-             "RODAS4_COST",
+             "RODAS4_COST", "RODAS5P_COST", "ROSENBROCK_5",
              "MODAL_RETRY", "MODAL_EVERY")
 
 
