@@ -170,8 +170,10 @@ def _halves(model: fd.Model, use: str, mode: int, stop: bool = False) -> list[np
 @needs_cc
 @pytest.mark.parametrize("use, mode", [("integrate", 0), ("integrate_dense", 0),
                                        ("integrate_dense", 1), ("integrate_dense", 2),
-                                       ("integrate_dense", 3)],
-                         ids=["dopri5", "dopri5-dense", "rodas4", "auto", "modal"])
+                                       ("integrate_dense", 3), ("integrate_dense", 5),
+                                       ("integrate_dense", 6), ("integrate_dense", 7)],
+                         ids=["dopri5", "dopri5-dense", "rodas4", "auto", "modal",
+                              "rodas5p", "auto-rodas5p", "modal-rodas5p"])
 @needs_numba
 def test_every_method_gives_numbas_results_in_chunks_and_when_stopped(
         use: str, mode: int, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -10,7 +10,6 @@ import pytest
 
 import feeddrive as fd
 from feeddrive.engine.simulate import (
-    _DENSE_MODES,
     Simulation,
     SolverOptions,
     profile_breakpoints,
@@ -79,7 +78,7 @@ def test_output_buffers_are_written_and_returned_as_views_bit_identical() -> Non
     t_end = n_break * grid.base
     sim = Simulation(system, profile, options)  # the run's resolved tolerances
     atol, rel = sim.atol, sim.rel
-    mode, _ = _DENSE_MODES[options.method]
+    mode, _ = options.driver_mode
 
     def run(out: tuple[np.ndarray, np.ndarray, np.ndarray] | None, want_aux: bool
             ) -> tuple[np.ndarray, ...]:

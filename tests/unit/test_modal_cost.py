@@ -69,7 +69,8 @@ def test_a_continued_modal_run_keeps_its_spectral_radius() -> None:
             memory: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         _, y, _, stats, _ = switching.integrate(
             model, y0, end, grid.out_every, grid.base, grid.schedule, sim.tolerances.rtol,
-            sim.atol, sim.rel, 1e-6, math.inf, 1, 10 ** 6, switching.MODE_MODAL, stops,
+            sim.atol, sim.rel, 1e-6, math.inf, 1, 10 ** 6, sim.options.driver_mode[0],
+            stops,
             want_aux=False, start=start, held=held, memory=memory)
         return y, stats
 

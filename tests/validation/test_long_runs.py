@@ -139,7 +139,8 @@ def test_auxiliary_signals_evaluated_when_read_equal_the_recorded_ones() -> None
     atol, rel = sim.atol, sim.rel
     t, y, aux, _, _ = switching.integrate(
         model, system.initial_vector(model), 2.0, grid.out_every, grid.base, grid.schedule,
-        sim.tolerances.rtol, atol, rel, 1e-6, np.inf, 1, options.max_steps, switching.MODE_AUTO,
+        sim.tolerances.rtol, atol, rel, 1e-6, np.inf, 1, options.max_steps,
+        options.driver_mode[0],
         sim_mod.profile_breakpoints(profile, 2.0, grid.base), want_aux=True,
         switch_rows=sim.switch_rows)
     np.testing.assert_array_equal(r.time, t)

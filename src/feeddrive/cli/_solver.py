@@ -41,33 +41,44 @@ OPTIONS = (
 _TEXT = ("rosenbrock",)
 
 
-def accuracy_options(fn: F) -> F:
-    """Add the integrator settings (:data:`OPTIONS`) to a command.
+def _settings_options(settings: tuple[tuple[str, str, str], ...]) -> Callable[[F], F]:
+    """The decorator adding ``settings`` (entries of :data:`OPTIONS`) to a command
+    (:func:`accuracy_options`)."""
 
-    Before the command's body runs, the settings are merged over the ``[solver]`` table of its
-    ``--params`` file (:func:`solver_options`) and checked (a bad value is refused before any
-    work); the body runs with them in force (:func:`feeddrive.engine.options.using`: every
-    run it starts takes them, in this process and in the workers of a sweep, fit or
-    prediction), and receives them as its parameter ``solver``.
-    """
-    # annotations evaluated: a string "Annotated[..., typer.Option(...)]" in the signature
-    # given to typer would lose its option (the --free, --weight and --signal help texts did)
-    sig = inspect.signature(fn, eval_str=True)
-    kept = [p for p in sig.parameters.values() if p.name != "solver"]
-    added = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
-                               default=typer.Option(None, flag, help=text),
-                               annotation=str | None if name in _TEXT else float | None)
-             for name, flag, text in OPTIONS]
+    def decorate(fn: F) -> F:
+        # annotations evaluated: a string "Annotated[..., typer.Option(...)]" in the
+        # signature given to typer would lose its option (the --free, --weight and --signal
+        # help texts did)
+        sig = inspect.signature(fn, eval_str=True)
+        kept = [p for p in sig.parameters.values() if p.name != "solver"]
+        added = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
+                                   default=typer.Option(None, flag, help=text),
+                                   annotation=str | None if name in _TEXT else float | None)
+                 for name, flag, text in settings]
 
-    @functools.wraps(fn)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        cli = {name: (kwargs.pop(name, None), flag) for name, flag, _ in OPTIONS}
-        options = solver_options(cli, kwargs.get("params_file"))
-        with opt.using(options):
-            return fn(*args, solver=options, **kwargs)
+        @functools.wraps(fn)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            cli = {name: (kwargs.pop(name, None), flag) for name, flag, _ in settings}
+            options = solver_options(cli, kwargs.get("params_file"))
+            with opt.using(options):
+                return fn(*args, solver=options, **kwargs)
 
-    wrapper.__signature__ = sig.replace(parameters=[*kept, *added])  # type: ignore[attr-defined]
-    return wrapper  # type: ignore[return-value]
+        wrapper.__signature__ = sig.replace(  # type: ignore[attr-defined]
+            parameters=[*kept, *added])
+        return wrapper  # type: ignore[return-value]
+
+    return decorate
+
+
+#: Add the integrator settings (:data:`OPTIONS`) to a command.  Before the command's body runs,
+#: the settings are merged over the ``[solver]`` table of its ``--params`` file
+#: (:func:`solver_options`) and checked (a bad value is refused before any work); the body runs
+#: with them in force (:func:`feeddrive.engine.options.using`: every run it starts takes them,
+#: in this process and in the workers of a sweep, fit or prediction), and receives them as its
+#: parameter ``solver``.
+accuracy_options = _settings_options(OPTIONS)
+#: the same without ``--rosenbrock``: ``export fmu`` (the FMU's embedded solver is DOPRI5)
+tolerance_options = _settings_options(tuple(o for o in OPTIONS if o[0] not in _TEXT))
 
 
 def solver_options(cli: dict[str, tuple[Any, str]], params_file: str | None = None) -> Any:

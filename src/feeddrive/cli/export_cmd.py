@@ -8,7 +8,7 @@ import typer
 
 from . import _units
 from ._common import app, console, outputs, print_json, resolve_parameters, user_errors
-from ._solver import accuracy_options
+from ._solver import tolerance_options
 
 export_app = typer.Typer(no_args_is_help=True,
                          help="Export a drive for other tools (FMU: docs/fmu.md).")
@@ -18,7 +18,7 @@ app.add_typer(export_app, name="export")
 @export_app.command("fmu")
 @user_errors
 @outputs(out=(".fmu",))
-@accuracy_options
+@tolerance_options
 def fmu_command(
     drive: str | None = typer.Option(None, "--drive", help="cdfs, ddfs, linear-motor or "
                                      "another registered drive (rack-pinion)"),

@@ -893,6 +893,8 @@ class Simulation:
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
             "breakpoint_interval_s": grid.base, "engine": builds.engine_of(model),
         }
+        if options.method in ("modal", "auto"):
+            solver_stats["rosenbrock"] = options.rosenbrock
         if diverged:  # stopped early: the Result ends where a speed left its bound
             solver_stats.update({"diverged": True, "diverged_at_s": float(stats[4]),
                                  "divergence_speed_ratio": DIVERGENCE_SPEED_RATIO})

@@ -11,25 +11,24 @@ mode that grows slowly (the ``wang2021-literal`` CDFS at 0.2 mm/s: λ = 3.0 ± 1
 estimate never sees it: the run settles "smooth" where the exact solution creeps.
 
 The cure used here: from the Jacobian the Rosenbrock step already needs, the eigenvalues
-(:func:`real_eigenvalues`; states with a zero derivative and a zero Jacobian row
-contribute a zero eigenvalue and are left out), and for every complex eigenvalue whose
-damping ratio ζ = −Re λ/|λ| is below :data:`ZETA_LIGHT` — lightly damped, undamped or growing
-— the step is capped at h|λ| ≤ :data:`H_LAMBDA` (RODAS4's ζ_num ≤ 4.4e-7 there, DOPRI5's
-≤ 1.3e-6: a mode growing with ζ = −1e-5 still grows, and a mode decaying with ζ = 3e-4 decays
-within 0.5 % of its rate).  The cap was 0.7 (ζ_num 1.25e-5 and 2.2e-5) until the verdict
-corpus (benchmarks/bench_verdicts.py) found a trial it decided wrongly: the ball–nut share 0.2
-DDFS at 0.48 mm/s, whose 5.4-Hz oscillation decays with ζ ≈ 3.2e-4 and enters the ±2 % band just
-before the 240-s limit: at 0.7 the extra numerical damping (4–7 % of its rate) called it
-"smooth" at 239.3 s; Radau at rtol 1e-10, ``dopri5`` and the cap 0.35 say "undecided".  The
-explicit DOPRI5 steps are capped alike: on the imaginary axis DOPRI5's |R(iy)| exceeds 1 for
-1 < y < 3.3, so at its stability limit it amplifies a lightly damped mode into a false
-instability.  Stiff *decaying*
-components (real eigenvalues, heavily damped pairs) do not cap the step: there the L-stable
-step is what makes the method fast.  The idea of telling the two apart from the spectrum is
-Shampine's (L. F. Shampine, "Stiffness and nonstiff differential equation solvers, II:
-detecting stiffness with Runge–Kutta methods",
-ACM TOMS 3 (1977) 44–53) and Hairer–Wanner's ``dopri5.f`` stiffness test, which estimates
-h|λ| of the dominant mode only; the eigen-decomposition gives every mode with its damping.
+(:func:`real_eigenvalues`; states with a zero derivative and a zero Jacobian row contribute a
+zero eigenvalue and are left out), and for every complex eigenvalue whose damping ratio ζ = −Re
+λ/|λ| is below :data:`ZETA_LIGHT` — lightly damped, undamped or growing — the step is capped at
+h|λ| ≤ :data:`H_LAMBDA` (RODAS4's ζ_num ≤ 4.4e-7 there, RODAS5P's ≤ 7.8e-9, DOPRI5's ≤ 1.3e-6: a
+mode growing with ζ = −1e-5 still grows, and a mode decaying with ζ = 3e-4 decays within 0.5 %
+of its rate). The cap was 0.7 (ζ_num 1.25e-5 and 2.2e-5) until the verdict corpus
+(benchmarks/bench_verdicts.py) found a trial it decided wrongly: the ball–nut share 0.2 DDFS at
+0.48 mm/s, whose 5.4-Hz oscillation decays with ζ ≈ 3.2e-4 and enters the ±2 % band just before
+the 240-s limit: at 0.7 the extra numerical damping (4–7 % of its rate) called it "smooth" at
+239.3 s; Radau at rtol 1e-10, ``dopri5`` and the cap 0.35 say "undecided". The explicit DOPRI5
+steps are capped alike: on the imaginary axis DOPRI5's |R(iy)| exceeds 1 for 1 < y < 3.3, so at
+its stability limit it amplifies a lightly damped mode into a false instability. Stiff
+*decaying* components (real eigenvalues, heavily damped pairs) do not cap the step: there the
+L-stable step is what makes the method fast. The idea of telling the two apart from the spectrum
+is Shampine's (L. F. Shampine, "Stiffness and nonstiff differential equation solvers, II:
+detecting stiffness with Runge–Kutta methods", ACM TOMS 3 (1977) 44–53) and Hairer–Wanner's
+``dopri5.f`` stiffness test, which estimates h|λ| of the dominant mode only; the
+eigen-decomposition gives every mode with its damping.
 """
 
 from __future__ import annotations

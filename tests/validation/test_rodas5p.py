@@ -1,0 +1,132 @@
+"""RODAS5P as the Rosenbrock method of ``modal`` and ``auto``
+(``SolverOptions(rosenbrock="rodas5p")``, ``--rosenbrock rodas5p``; opt-in, docs/model.md
+"RODAS5P"), on references feeddrive did not make.
+
+* Frictionless velocity steps, as tests/validation/test_accuracy_convergence.py: the exact
+  linear response (``reference/linear_model.py``'s matrix exponential, written from the
+  equations), CDFS and DDFS at 0.1, 1 and 10 mm/s; every decade of ``accuracy`` lowers the
+  table-speed error 5× (or it is at double precision's floor), ≤ 1e-8 of the peak at
+  ``accuracy = 0.001`` and ≤ 1e-5 at the defaults — but one case: the CDFS at 0.1 mm/s is
+  2.09e-5 of its peak at the defaults (RODAS4: 5.16e-6), from one RODAS5P step of more than
+  8 ms across the table mode (λ = −50 ± 1275i 1/s, ζ = 0.040: above ``ZETA_LIGHT``, so not
+  capped; h|λ| ≈ 10–20); with steps ≤ 8 ms 5.11e-6, at ``accuracy`` 0.5 2.56e-6 (measured
+  2026-12-05).  That miss is why RODAS5P is not the default; it is a strict xfail here, so
+  that it shows when it is cured.
+* Smooth LuGre runs against scipy Radau (``reference/make_accuracy_reference.py``, as
+  test_accuracy_friction.py): converging with ``accuracy`` and within 5e-7 of the stroke at
+  the defaults (issue 35 item 4's bound).
+* The DDFS of benchmarks/bench_engine.py (0.5/16 mm/s, 10 s): what it saves, by count.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+for folder in (ROOT, Path(__file__).resolve().parent):
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
+
+from test_accuracy_convergence import (  # noqa: E402
+    ACCURACIES,
+    CASES,
+    DURATION,
+    NUT_SPEED,
+    TABLE_SPEED,
+    assert_converges,
+    augmented_matrix,
+    equivalent_stiffness,
+    exact_response,
+    frictionless,
+)
+from test_accuracy_friction import SMOOTH, reference, relative_errors  # noqa: E402
+
+import feeddrive as fd  # noqa: E402
+
+METHODS = ("modal", "auto")
+
+
+def step_errors(method: str, drive: str, speed: float) -> list[float]:
+    """The largest table-speed error over the peak table speed, per accuracy (RODAS5P)."""
+    params = frictionless()
+    nut = NUT_SPEED if drive == "ddfs" else 0.0
+    profile = fd.ConstantSpeed(table_speed=speed, nut_speed=nut, ramp_time=0.0)
+    A = augmented_matrix(params, drive, speed, nut, equivalent_stiffness(params, 0.4))
+    out = []
+    for acc in ACCURACIES:
+        options = fd.SolverOptions(method=method, accuracy=acc, rosenbrock="rodas5p")
+        r = fd.simulate(fd.DriveSystem(params, drive, 0.4), profile, DURATION, options=options)
+        assert r.solver_stats["rosenbrock"] == "rodas5p"
+        exact = exact_response(A, r.time)[:, TABLE_SPEED]
+        out.append(float(np.max(np.abs(r["table_speed"] - exact)) / np.max(np.abs(exact))))
+    return out
+
+
+#: the one frictionless case RODAS5P misses at the defaults (module docstring)
+MISSED = ("cdfs", 1e-4)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("drive", "speed"), CASES)
+@pytest.mark.parametrize("method", METHODS)
+def test_rodas5p_converges_on_the_frictionless_steps(method: str, drive: str,
+                                                     speed: float) -> None:
+    errs = step_errors(method, drive, speed)
+    nut = NUT_SPEED if drive == "ddfs" else 0.0
+    assert_converges(errs, floor=1e-12 * (speed + nut) / speed)
+    assert errs[-1] <= 1e-8, errs  # accuracy = 0.001
+    if (drive, speed) != MISSED:
+        assert errs[0] <= 1e-5, errs  # the defaults
+
+
+@pytest.mark.xfail(strict=True, reason="RODAS5P's default miss: 2.09e-5 of the peak on the "
+                   "CDFS's 0.1-mm/s step (one step of more than 8 ms across the table mode, "
+                   "zeta 0.040, not capped); RODAS4 5.16e-6 (module docstring)")
+@pytest.mark.parametrize("method", METHODS)
+def test_rodas5p_holds_1e_5_of_the_peak_at_the_defaults_on_the_slow_cdfs_step(
+        method: str) -> None:
+    assert step_errors(method, *MISSED)[0] <= 1e-5
+
+
+def _run(name: str, method: str, accuracy: float) -> fd.Result:
+    ref = reference(name)
+    system = fd.DriveSystem(fd.preset("wang2021"), str(ref["drive"]), 0.4)
+    profile = fd.ConstantSpeed(float(ref["table_speed_command"]),
+                               float(ref["nut_speed_command"]))
+    return fd.simulate(system, profile, float(ref["time"][-1]),
+                       options=fd.SolverOptions(method=method, accuracy=accuracy,
+                                                rosenbrock="rodas5p"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", SMOOTH)
+@pytest.mark.parametrize("method", METHODS)
+def test_rodas5p_converges_on_the_smooth_lugre_runs(method: str, name: str) -> None:
+    errs = [relative_errors(name, _run(name, method, a)) for a in ACCURACIES]
+    assert errs[0]["table_position"] <= 5e-7  # issue 35 item 4's bound, at the defaults
+    for signal in ("table_position", "table_speed"):
+        series = [e[signal] for e in errs]
+        floor = errs[0][f"{signal}_floor"]
+        for a, b in zip(series, series[1:], strict=False):
+            assert b <= a / 5.0 or b <= floor, (signal, series, floor)
+
+
+def test_rodas5p_takes_less_than_half_rodas4s_right_hand_sides_on_the_ddfs() -> None:
+    # bench_engine's ddfs_0p5_vn16, 10 s (measured 2026-12-05): RODAS4 7 398 steps (1 206
+    # Rosenbrock), 267 Jacobians, 46 408 right-hand sides; RODAS5P 2 351 steps (894
+    # Rosenbrock), 460 Jacobians, 19 459 right-hand sides — fewer, longer Rosenbrock steps
+    # that keep DOPRI5 out of the settling stretch; the kept Jacobian goes stale sooner
+    # across a longer step, hence more Jacobians.  Bounds: the measured counts + 10 %
+    system = fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+    profile = fd.ConstantSpeed(0.5e-3, 16e-3)
+    stats = {rb: fd.simulate(system, profile, 10.0,
+                             options=fd.SolverOptions(rosenbrock=rb)).solver_stats
+             for rb in ("rodas4", "rodas5p")}
+    r4, r5 = stats["rodas4"], stats["rodas5p"]
+    assert r5["rhs_evaluations"] <= r4["rhs_evaluations"] / 2
+    assert r5["steps"] <= 2590 and r5["rosenbrock_steps"] <= 985
+    assert r5["jacobians"] <= 506 and r5["rhs_evaluations"] <= 21400
