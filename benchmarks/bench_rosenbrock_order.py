@@ -48,12 +48,14 @@ stretch after it, t = 3 … 10 s (where feeddrive's ``modal`` runs all-RODAS4).
    γ = 0.19, a_7 = (a_6, 1), a_8 = (a_7, 1), c_6 = c_7 = c_8 = 1, d_6 = d_7 = d_8 = 0.
    RODAS5P: G. Steinebach's Rodas5P (BIT 63:27, 2023), the numbers as in OrdinaryDiffEq.jl
    ``lib/OrdinaryDiffEqRosenbrock/src/rosenbrock_tableaus.jl`` (as stored at commit
-   0054db222947; ``Rodas5PTableau``), the same structure (8 stages, order 5, embedded 4,
+   0054db222947; ``Rodas5PTableau``; since 2026-12-05 read from the engine's
+   ``feeddrive.solvers.tableaux.RODAS5P``), the same structure (8 stages, order 5, embedded 4,
    γ = 0.2119…), and three dense-output rows h_2j, h_3j, h_4j evaluated in the form of
    OrdinaryDiffEq.jl's ``rosenbrock_interpolants.jl`` (our code):
    y(t + θh) = (1 − θ) y0 + θ (y1 + (1 − θ)(k1 + θ (k2 + θ k3))), k_i = Σ_j h_(i+1)j u_j.
 4. The tableaux are verified before use (asserted): feeddrive's order-condition check
-   (``check_rosenbrock``, conditions of order ≤ 4, also c_i and d_i against the matrices)
+   (``check_rosenbrock``, every rooted tree to the stated orders, also c_i and d_i against
+   the matrices)
    on RODAS5 and RODAS5P; fixed-step convergence on a smooth non-stiff, non-autonomous problem
    (slopes ≈ 5 main, ≈ 4 embedded for RODAS5 and RODAS5P; 4 and 3 for RODAS4) and on a stiff
    linear system with eigenvalues −0.5 ± 4i and −1e6 (main: the order of R(z) against e^z, 4,
@@ -166,43 +168,13 @@ RODAS5 = Rosenbrock(
 
 
 # G. Steinebach (2023), "Construction of Rosenbrock-Wanner method Rodas5P and numerical
-# benchmarks within the Julia Differential Equations package", BIT 63:27.  The numbers as in
-# OrdinaryDiffEq.jl lib/OrdinaryDiffEqRosenbrock/src/rosenbrock_tableaus.jl (as stored at commit
-# 0054db222947; ``Rodas5PTableau``: A, C, c, d, H; they equal the older src/tableaus version's
-# a_ij, C_ij, c_i, d_i, h_ij), the same u-form as Rodas5Tableau's.
-_A6P = (-7.502846399306121, 2.561846144803919, -11.627539656261098, -0.18268767659942256,
-        0.030198172008377946)
-RODAS5P = Rosenbrock(
-    "RODAS5P", 5, 4, 0.21193756319429014,
-    c=(0.0, 0.6358126895828704, 0.4095798393397535, 0.9769306725060716, 0.4288403609558664,
-       1.0, 1.0, 1.0),
-    a=((),
-       (3.0,),
-       (2.849394379747939, 0.45842242204463923),
-       (-6.954028509809101, 2.489845061869568, -10.358996098473584),
-       (2.8029986275628964, 0.5072464736228206, -0.3988312541770524, -0.04721187230404641),
-       _A6P,
-       (*_A6P, 1.0),
-       (*_A6P, 1.0, 1.0)),
-    cc=((),
-        (-14.155112264123755,),
-        (-17.97296035885952, -2.859693295451294),
-        (147.12150275711716, -1.41221402718213, 71.68940251302358),
-        (165.43517024871676, -0.4592823456491126, 42.90938336958603, -5.961986721573306),
-        (24.854864614690072, -3.0009227002832186, 47.4931110020768, 5.5814197821558125,
-         -0.6610691825249471),
-        (30.91273214028599, -3.1208243349937974, 77.79954646070892, 34.28646028294783,
-         -19.097331116725623, -28.087943162872662),
-        (37.80277123390563, -3.2571969029072276, 112.26918849496327, 66.9347231244047,
-         -40.06618937091002, -54.66780262877968, -9.48861652309627)),
-    d=(0.21193756319429014, -0.42387512638858027, -0.3384627126235924, 1.8046452872882734,
-       2.325825639765069, 0.0, 0.0, 0.0),
-    dense=((25.948786856663858, -2.5579724845846235, 10.433815404888879, -2.3679251022685204,
-            0.524948541321073, 1.1241088310450404, 0.4272876194431874, -0.17202221070155493),
-           (-9.91568850695171, -0.9689944594115154, 3.0438037242978453, -24.495224566215796,
-            20.176138334709044, 15.98066361424651, -6.789040303419874, -6.710236069923372),
-           (11.419903575922262, 2.8879645146136994, 72.92137995996029, 80.12511834622643,
-            -52.072871366152654, -59.78993625266729, -0.15582684282751913, 4.883087185713722)))
+# benchmarks within the Julia Differential Equations package", BIT 63:27: since 2026-12-05 the
+# engine's own tableau (feeddrive.solvers.tableaux.RODAS5P, the numbers of OrdinaryDiffEq.jl's
+# Rodas5PTableau, its order conditions checked when built), read here as RODAS4's is.
+R5P = tableaux.RODAS5P
+RODAS5P = Rosenbrock("RODAS5P", R5P.order, R5P.embedded_order, R5P.gamma, tuple(R5P.c),
+                     tuple(tuple(r) for r in R5P.a), tuple(tuple(r) for r in R5P.cc),
+                     tuple(R5P.d), tuple(tuple(r) for r in R5P.dense))
 METHODS = (RODAS4, RODAS5, RODAS5P)
 
 
@@ -491,10 +463,10 @@ def convergence(m: Rosenbrock) -> dict[str, Any]:
 
 def verify(m: Rosenbrock) -> dict[str, Any]:
     """Assert the tableau's orders; returns the figures."""
-    # feeddrive's checker: c_i, d_i against the matrices and the conditions of order ≤ 4 for
-    # both solutions (it writes no order-5 conditions; the convergence slopes cover those)
+    # feeddrive's checker: c_i, d_i against the matrices and every rooted tree's condition to
+    # each solution's order (order 5 for RODAS5 and RODAS5P since 2026-12-05)
     check_rosenbrock(tableaux.RosenbrockTableau(
-        name=m.name.lower(), order=min(m.order, 4), embedded_order=min(m.embedded_order, 4),
+        name=m.name.lower(), order=m.order, embedded_order=m.embedded_order,
         gamma=m.gamma, c=m.c, a=m.a, cc=m.cc, d=m.d, dense=()))
     conv = convergence(m)
     p, q = m.order, m.embedded_order

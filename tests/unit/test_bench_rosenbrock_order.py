@@ -4,7 +4,8 @@
 they claim, checked independently of the benchmark's run on the DDFS.
 
 * feeddrive's order-condition check (``check_rosenbrock``: c_i and d_i against the matrices,
-  the conditions of order ≤ 4, Hairer & Wanner II, Table 7.1) accepts RODAS5;
+  every rooted tree's condition to the stated orders, 5 and 4) accepts RODAS5 (RODAS5P is the
+  engine's tableau, checked when it is built);
 * fixed-step convergence slopes on a smooth non-autonomous problem (reference: scipy DOP853 at
   rtol 1e-13) and on a stiff linear system (eigenvalues −0.5 ± 4i and −1e6; reference: the
   matrix exponential): 5 for RODAS5's and RODAS5P's solutions, 4 for their embedded ones;
