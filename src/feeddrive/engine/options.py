@@ -383,7 +383,7 @@ class SolverOptions:
 
     @property
     def driver_mode(self) -> tuple[int, int]:
-        """The dense driver's (mode, adaptive) of a method of :data:`DENSE_MODES`: ``modal``
+        """The dense driver's (mode, adaptive) of a method of ``DENSE_MODES``: ``modal``
         and ``auto`` with the Rosenbrock steps of ``rosenbrock``
         (:mod:`feeddrive.solvers.switching`)."""
         mode, adaptive = DENSE_MODES[self.method]
