@@ -51,10 +51,12 @@ def _settings_options(settings: tuple[tuple[str, str, str], ...]) -> Callable[[F
         # help texts did)
         sig = inspect.signature(fn, eval_str=True)
         kept = [p for p in sig.parameters.values() if p.name != "solver"]
-        added = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
-                                   default=typer.Option(None, flag, help=text),
-                                   annotation=str | None if name in _TEXT else float | None)
-                 for name, flag, text in settings]
+        added = [inspect.Parameter(
+            name, inspect.Parameter.KEYWORD_ONLY,
+            default=typer.Option(None, flag, help=text,
+                                 metavar="|".join(opt.ROSENBROCKS) if name in _TEXT else None),
+            annotation=str | None if name in _TEXT else float | None)
+            for name, flag, text in settings]
 
         @functools.wraps(fn)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
