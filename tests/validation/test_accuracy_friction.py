@@ -41,13 +41,15 @@ def reference(name: str) -> dict[str, np.ndarray]:
 
 
 def run(name: str, method: str, accuracy: float, *,
-        error_estimate: bool = False) -> fd.Result:
+        error_estimate: bool = False, **options: str) -> fd.Result:
+    """The run of reference ``name`` with ``method`` at ``accuracy`` (``options``: other
+    :class:`~feeddrive.SolverOptions` settings, e.g. ``rosenbrock``)."""
     ref = reference(name)
     system = fd.DriveSystem(fd.preset("wang2021"), str(ref["drive"]), 0.4)
     profile = fd.ConstantSpeed(float(ref["table_speed_command"]),
                                float(ref["nut_speed_command"]))
     return fd.simulate(system, profile, float(ref["time"][-1]),
-                       options=fd.SolverOptions(method=method, accuracy=accuracy),
+                       options=fd.SolverOptions(method=method, accuracy=accuracy, **options),
                        error_estimate=error_estimate)
 
 

@@ -43,7 +43,7 @@ from test_accuracy_convergence import (  # noqa: E402
     exact_response,
     frictionless,
 )
-from test_accuracy_friction import SMOOTH, reference, relative_errors  # noqa: E402
+from test_accuracy_friction import SMOOTH, relative_errors, run  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 
@@ -92,21 +92,12 @@ def test_rodas5p_holds_1e_5_of_the_peak_at_the_defaults_on_the_slow_cdfs_step(
     assert step_errors(method, *MISSED)[0] <= 1e-5
 
 
-def _run(name: str, method: str, accuracy: float) -> fd.Result:
-    ref = reference(name)
-    system = fd.DriveSystem(fd.preset("wang2021"), str(ref["drive"]), 0.4)
-    profile = fd.ConstantSpeed(float(ref["table_speed_command"]),
-                               float(ref["nut_speed_command"]))
-    return fd.simulate(system, profile, float(ref["time"][-1]),
-                       options=fd.SolverOptions(method=method, accuracy=accuracy,
-                                                rosenbrock="rodas5p"))
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("name", SMOOTH)
 @pytest.mark.parametrize("method", METHODS)
 def test_rodas5p_converges_on_the_smooth_lugre_runs(method: str, name: str) -> None:
-    errs = [relative_errors(name, _run(name, method, a)) for a in ACCURACIES]
+    errs = [relative_errors(name, run(name, method, a, rosenbrock="rodas5p"))
+            for a in ACCURACIES]
     assert errs[0]["table_position"] <= 5e-7  # issue 35 item 4's bound, at the defaults
     for signal in ("table_position", "table_speed"):
         series = [e[signal] for e in errs]
