@@ -17,7 +17,8 @@ Cases:
   stroke, with the floor the reference resolves.
 
 For each method (``modal``, ``auto``, ``rodas4``, ``dopri5-dense``; ``dopri5`` with a 10-ms
-output, its step cap) and ``accuracy`` 1, 0.1, 0.01, 0.001: the error, the steps and the
+output, its step cap; ``modal`` and ``auto`` with RODAS5P, opt-in) and ``accuracy`` 1, 0.1,
+0.01, 0.001: the error, the steps and the
 right-hand-side calls; and the legacy fixed tolerances (1e-10 m, 1e-8 m/s, 1e-6 A, rtol 1e-6)
 for comparison.  Writes ``benchmarks/results/bench_accuracy.json`` and ``.md``.
 """
@@ -45,7 +46,12 @@ from feeddrive.model.mechanisms.ball_screw_stiffness import equivalent_stiffness
 
 RESULTS = ROOT / "benchmarks" / "results"
 DATA = ROOT / "tests" / "data"
-METHODS = ("modal", "auto", "rodas4", "dopri5-dense", "dopri5")
+#: the rows: label → the SolverOptions settings besides the tolerances (RODAS5P, opt-in, as the
+#: Rosenbrock method of modal and auto: docs/model.md, "RODAS5P")
+METHODS: dict[str, dict[str, str]] = {
+    **{m: {"method": m} for m in ("modal", "auto", "rodas4", "dopri5-dense", "dopri5")},
+    "modal, rodas5p": {"method": "modal", "rosenbrock": "rodas5p"},
+    "auto, rodas5p": {"method": "auto", "rosenbrock": "rodas5p"}}
 SETTINGS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("legacy", dict(LEGACY_TOLERANCES)),
     *((f"accuracy {a:g}", {"accuracy": a}) for a in (1.0, 0.1, 0.01, 0.001)))
@@ -67,9 +73,9 @@ def step_case(drive: str, speed: float) -> list[dict[str, Any]]:
     A = augmented_matrix(params, drive, speed, nut, equivalent_stiffness(params, 0.4))
     k = STATE_NAMES.index("table_speed")
     rows = []
-    for method in METHODS:
+    for method, chosen in METHODS.items():
         for label, settings in SETTINGS:
-            options = fd.SolverOptions(method=method, **settings,
+            options = fd.SolverOptions(**chosen, **settings,
                                        output_interval=1e-2 if method == "dopri5" else 1e-3)
             started = time.process_time()
             r = fd.simulate(fd.DriveSystem(params, drive, 0.4), profile, 1.0, options=options)
@@ -92,11 +98,11 @@ def lugre_case(name: str) -> list[dict[str, Any]]:
                                float(ref["nut_speed_command"]))
     span = float(np.ptp(ref["table_position"]))
     rows = []
-    for method in METHODS:
+    for method, chosen in METHODS.items():
         for label, settings in SETTINGS:
             started = time.process_time()
             r = fd.simulate(system, profile, float(ref["time"][-1]),
-                            options=fd.SolverOptions(method=method, **settings))
+                            options=fd.SolverOptions(**chosen, **settings))
             cpu = time.process_time() - started
             rows.append({"case": f"LuGre {name}", "method": method, "setting": label,
                          "error": float(np.max(np.abs(r["table_position"]
@@ -112,7 +118,7 @@ def markdown(rows: list[dict[str, Any]]) -> str:
     lines = ["| case | method | " + " | ".join(labels) + " |",
              "| --- | --- | " + " | ".join("---" for _ in labels) + " |"]
     keys = sorted({(r["case"], r["method"]) for r in rows},
-                  key=lambda k: (k[0], METHODS.index(k[1])))
+                  key=lambda k: (k[0], list(METHODS).index(k[1])))
     for case, method in keys:
         cells = []
         for label in labels:

@@ -79,8 +79,8 @@ def _not_yet(reason: str) -> pytest.MarkDecorator:
 @pytest.mark.parametrize(("use", "build"), [
     ("integrate", "c"), ("integrate", "numba"), ("integrate_dense", "c"),
     pytest.param("integrate_dense", "numba", marks=_not_yet(
-        "335 lines: the six pieces numba has written in (called, step_attempt and "
-        "switch_method, beyond numba's inliner, made a modal run 1.7-1.8 x)")),
+        "350 lines (335 before RODAS5P): the six pieces numba has written in (called, "
+        "step_attempt and switch_method, beyond numba's inliner, made a modal run 1.7-1.8 x)")),
 ])
 def test_the_drivers_are_at_most_150_lines(use: str, build: str) -> None:
     text = driver.source(use) if build == "numba" else c_engine.lowered_source(use)[0]
