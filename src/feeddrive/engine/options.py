@@ -43,11 +43,11 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from ..parameters import ParameterError
 from ..solvers import driver, modes, switching
-from ..solvers.tableaux import DOPRI5
+from ..solvers.tableaux import DOPRI5, RODAS4, RODAS5P, RosenbrockTableau
 
 __all__ = ["CURRENT_FRACTION", "DEFAULT_RTOL", "DEFLECTION_FRACTION", "DENSE_OUTPUT_ORDER",
            "DOPRI5_STEP", "LEGACY_TOLERANCES", "METHODS", "POSITION_TIME", "REVERSAL_METHODS",
@@ -67,12 +67,33 @@ DENSE_MODES = {"modal": (switching.MODE_MODAL, 1), "auto": (switching.MODE_AUTO,
 #: (:mod:`feeddrive.solvers.events`) unless ``locate_reversals`` is false: every method but
 #: the fixed-step DOPRI5 of the order checks
 REVERSAL_METHODS = (*DENSE_MODES, "dopri5")
-#: the Rosenbrock methods ``modal`` and ``auto`` can take where the run is stiff
-#: (``SolverOptions.rosenbrock``), by name → what the driver's mode adds
-#: (:data:`feeddrive.solvers.driver.ROSENBROCK_5`)
-ROSENBROCKS = {"rodas4": 0, "rodas5p": switching.ROSENBROCK_5}
-#: their names in labels
-ROSENBROCK_NAMES = {"rodas4": "RODAS4", "rodas5p": "RODAS5P"}
+class Rosenbrock(NamedTuple):
+    """A Rosenbrock method ``modal`` and ``auto`` can take where the run is stiff.
+
+    Parameters
+    ----------
+    label : str
+        Its name in labels (``RODAS4``).
+    mode : int
+        What it adds to the driver's mode (:data:`feeddrive.solvers.driver.ROSENBROCK_5`).
+    tableau : RosenbrockTableau
+        Its coefficients (:mod:`feeddrive.solvers.tableaux`).
+    """
+
+    label: str
+    mode: int
+    tableau: RosenbrockTableau
+
+    @property
+    def cost(self) -> float:
+        """One step counted in DOPRI5 steps by the switch back to DOPRI5, the driver's
+        ``<LABEL>_COST`` as it stands (:data:`feeddrive.solvers.driver.RODAS4_COST`) [-]."""
+        return float(getattr(switching, f"{self.label}_COST"))
+
+
+#: the Rosenbrock methods of ``SolverOptions.rosenbrock``, by name
+ROSENBROCKS = {"rodas4": Rosenbrock("RODAS4", 0, RODAS4),
+               "rodas5p": Rosenbrock("RODAS5P", switching.ROSENBROCK_5, RODAS5P)}
 DEFAULT_ROSENBROCK = "rodas4"
 #: the default largest step of ``dopri5`` at ``accuracy`` 1 [s], × accuracy^(1/5) otherwise
 #: (:attr:`feeddrive.SolverOptions.largest_step`): where the cap binds, DOPRI5's global
@@ -388,15 +409,8 @@ class SolverOptions:
         (:mod:`feeddrive.solvers.switching`)."""
         mode, adaptive = DENSE_MODES[self.method]
         if self.method in ("modal", "auto"):
-            mode += ROSENBROCKS[self.rosenbrock]
+            mode += ROSENBROCKS[self.rosenbrock].mode
         return mode, adaptive
-
-    @property
-    def rosenbrock_cost(self) -> float:
-        """What one step of ``rosenbrock`` counts as in DOPRI5 steps when ``modal`` and
-        ``auto`` weigh a switch back to DOPRI5 (:data:`feeddrive.solvers.driver.RODAS4_COST`,
-        :data:`~feeddrive.solvers.driver.RODAS5P_COST`) [-]."""
-        return switching.RODAS5P_COST if self.rosenbrock == "rodas5p" else switching.RODAS4_COST
 
     @property
     def explicit_positions(self) -> bool:
@@ -450,10 +464,11 @@ class SolverOptions:
         str
             One sentence.
         """
-        rb = ROSENBROCK_NAMES[self.rosenbrock]
+        stiff = ROSENBROCKS[self.rosenbrock]
+        rb = stiff.label
         methods = {
             "modal": f"DOPRI5/{rb} switched on stiffness and on the steps' cost (a {rb} "
-                     f"step counted as {_num(self.rosenbrock_cost)} DOPRI5 steps), every step "
+                     f"step counted as {_num(stiff.cost)} DOPRI5 steps), every step "
                      f"capped at h·|λ| ≤ {_num(modes.H_LAMBDA)} on each oscillatory mode of "
                      f"the Jacobian with damping ratio < {_num(modes.ZETA_LIGHT)}",
             "dopri5": "adaptive Dormand–Prince 5(4)",
@@ -538,8 +553,10 @@ class SolverOptions:
         """How outputs between step ends are made: the continuous extension and its order
         (:data:`~feeddrive.engine.options.DENSE_OUTPUT_ORDER`), or every output a step end."""
         order = DENSE_OUTPUT_ORDER[self.method]
-        if self.method in ("modal", "auto") and self.rosenbrock != "rodas4":
-            order = order.replace("3 (RODAS4 steps)", "4 (RODAS5P steps)")
+        if self.method in ("modal", "auto"):
+            rb = ROSENBROCKS[self.rosenbrock]
+            order = (f"{DOPRI5.order - 1} (DOPRI5 steps) / {rb.tableau.dense_order} "
+                     f"({rb.label} steps)")
         if order.startswith("none"):
             return "every output a step end"
         return f"continuous extension of order {order}"

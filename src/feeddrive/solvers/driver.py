@@ -122,9 +122,11 @@ RODAS4_COST = 5.0
 # (measured: benchmarks/README.md, "RODAS5P in the engine")
 RODAS5P_COST = 6.5
 # the Rosenbrock step-size controller's exponents 1/(q + 1), q the embedded order (rodas.f:
-# 0.25 for RODAS4)
+# 0.25 for RODAS4), and the right-hand sides of a step (its stages but the caller's f0)
 R4_EXPONENT = RODAS4.step_exponent
 R5_EXPONENT = RODAS5P.step_exponent
+R4_STAGES = RODAS4.stages
+R5_STAGES = RODAS5P.stages
 # DOPRI5 steps before a refused switch is considered again, and between two eigen-analyses
 # of DOPRI5 steps (their cap too: DOPRI5's |R(iy)| > 1 for 1 < y < 3.3)
 MODAL_RETRY = 500
@@ -1758,7 +1760,7 @@ def step_attempt(stiff: bool, r5: bool, adaptive: int, t: float, t_ev: float, h:
                                     k4, k5, k6, e, yt, fp, y_new, aux, live)
         if stiff:
             if calls == -2:  # a frozen state moved: retry with the full Jacobian
-                n_rhs += 7 if r5 else 5
+                n_rhs += R5_STAGES if r5 else R4_STAGES
                 frozen_known = False
                 for i in range(y.size):
                     live[i] = True
@@ -2361,7 +2363,7 @@ def template_sources() -> list[str]:
             "from feeddrive.solvers.driver import (POWER_ITERATIONS, MEMORY_SCALARS, "
             "MODAL_SWITCH_GAIN, RODAS4_COST, NONSTIFF_HRHO, NONSTIFF_STEPS, MODAL_RETRY, "
             "STIFF_HLAMBDA, STIFF_STEPS, MODAL_EVERY, DOPRI5_STABILITY, R4_EXPONENT, "
-            "R5_EXPONENT)",
+            "R5_EXPONENT, R4_STAGES, R5_STAGES)",
             "from feeddrive.solvers.global_error import INTERVAL as GE_INTERVAL, "
             "REFRESH_STEPS as GE_REFRESH, advance as ge_advance, exponential as ge_exponential",
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
