@@ -556,6 +556,8 @@ def driver_template(y0: np.ndarray, t_end: float, out_every: int, base: float,
                     r4_first, r4_h_old, r4_err_old, r4_rejected, LAND,
                     stability_share if LAND else 1.0,
                     f_new, k6, y, y_new, yt, rtol, atol, rel_mask)
+                if DENSE and used_rodas and not stiff and h_dp > 0.0:
+                    h = min(h, h_dp)  # back to DOPRI5: from the step it handed over with
             if DENSE and ge:  # the embedded global-error estimate carried over the step
                 calls, jacobians, ge_since = error_estimate_step(
                     used_rodas, ge_since, t, t_new, y, f0, held, P, T, atol, J, ge_J, ft, yp, fp,
