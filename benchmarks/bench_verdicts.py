@@ -39,6 +39,7 @@ import json
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -301,11 +302,13 @@ def reference_trial(case: tuple[str, str, float, float, float]) -> dict[str, Any
             "rule": RULE}
 
 
-def engine_trial(case: tuple[str, str, float, float, float], method: str | None
-                 ) -> dict[str, Any]:
+def engine_trial(case: tuple[str, str, float, float, float], method: str | None,
+                 rosenbrock: str | None = None) -> dict[str, Any]:
     preset, drive, a, v, vn = case
     system = DriveSystem(_variant(preset), drive, a)
     options = SolverOptions() if method is None else SolverOptions(method=method)
+    if rosenbrock is not None:
+        options = replace(options, rosenbrock=rosenbrock)
     started = time.process_time()
     trial = creep_trial(system, v * 1e-3, nut_speed=vn * 1e-3, options=options)
     return {"kind": trial.kind, "ripple_ratio": trial.ripple_ratio,
@@ -316,6 +319,9 @@ def engine_trial(case: tuple[str, str, float, float, float], method: str | None
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--only", default="", help="comma-separated substrings of case keys")
+    parser.add_argument("--rosenbrock", default=None,
+                        help="the engine's SolverOptions.rosenbrock (default: the default's); "
+                             "writes results/bench_verdicts_<rosenbrock>.json instead")
     parser.add_argument("--reference-only", action="store_true")
     parser.add_argument("--available", action="store_true",
                         help="judge only the cases whose reference is already kept")
@@ -405,7 +411,7 @@ def main() -> None:
         ref = refs.get(key(c))
         row: dict[str, Any] = {"case": key(c), "reference": ref}
         for m in methods:
-            row[m] = engine_trial(c, None if m == default else m)
+            row[m] = engine_trial(c, None if m == default else m, args.rosenbrock)
             row[m]["agrees"] = None if ref is None else row[m]["kind"] == ref["kind"]
         rows.append(row)
         print(f"{key(c):45s} ref {ref['kind'] if ref else '(none)':11s} "
@@ -414,8 +420,10 @@ def main() -> None:
                           for m in methods), flush=True)
     summary = summarise(rows, methods)
     print(json.dumps(summary, indent=1))
-    RESULTS.write_text(json.dumps({"default_method": default, "summary": summary,
-                                   "rows": rows}, indent=1) + "\n")
+    out = RESULTS if args.rosenbrock is None else RESULTS.with_name(
+        f"{RESULTS.stem}_{args.rosenbrock}.json")
+    out.write_text(json.dumps({"default_method": default, "rosenbrock": args.rosenbrock,
+                               "summary": summary, "rows": rows}, indent=1) + "\n")
 
 
 def summarise(rows: list[dict[str, Any]], methods: list[str]) -> dict[str, Any]:
