@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ast
 import inspect
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -126,13 +127,34 @@ PROFILE = ConstantSpeed(0.5e-3, 16e-3)
 
 
 @needs_cc
-def test_the_engine_unit_compiles_with_the_strict_warning_set(tmp_path: Path) -> None:
-    source = tmp_path / "engine.c"
-    source.write_text(c_engine.engine_source(SYSTEM.model(PROFILE)))
+@pytest.mark.parametrize("unit", ["driver", "model"])
+def test_the_engine_units_compile_with_the_strict_warning_set(unit: str, tmp_path: Path
+                                                               ) -> None:
+    """The driver library's unit (every model's) and a model library's unit."""
+    source = tmp_path / f"{unit}.c"
+    source.write_text(c_engine.driver_source() if unit == "driver"
+                      else c_engine.model_source(SYSTEM.model(PROFILE)))
     cc = c_cache.find_compiler()
     out = subprocess.run([*cc, *STRICT_FLAGS, "-c", str(source), "-o", str(tmp_path / "e.o")],
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
+
+
+def test_the_driver_unit_does_not_depend_on_the_model() -> None:
+    """One driver text for every model (issue 42's compile target): no size is a constant of
+    it and no model function is called by name; the models of different sizes reach it
+    through their tables."""
+    text = c_engine.driver_source()
+    assert "#define FD_N_STATE (fd_m->n_state)" in text
+    assert not re.search(r"#define FD_N_\w+ \d", text)
+    assert not re.search(r"\bfd_rhs\(|\bfd_sample_update\(", text)
+    for drive, nut in (("cdfs", 0.0), ("ddfs", 16e-3)):
+        model = fd.DriveSystem(fd.preset("wang2021"), drive, 0.4).model(
+            ConstantSpeed(0.5e-3, nut))
+        unit = c_engine.model_source(model)
+        assert f"#define FD_N_STATE {len(model.states)}\n" in unit
+        assert "const fd_model fd_model_table = {FD_N_STATE, FD_N_AUX," in unit
+        assert "fd_integrate" not in unit
 
 
 def _halves(model: fd.Model, use: str, mode: int, stop: bool = False) -> list[np.ndarray]:
