@@ -274,3 +274,46 @@ def test_a_function_called_again_reads_and_writes_the_arrays_of_that_call(
     np.testing.assert_array_equal(dy, expected)
     np.testing.assert_array_equal(other_dy, first)
     assert not np.array_equal(first, expected)
+
+
+_THREE_MODELS = r"""
+import json, sys
+from pathlib import Path
+import feeddrive as fd
+from feeddrive.backends import c_cache
+from feeddrive.model.reference import ConstantSpeed
+from feeddrive.parameters.toml_io import load
+runs = [(fd.preset("wang2021"), "cdfs", 0.0), (fd.preset("wang2021"), "ddfs", 16e-3),
+        (load(sys.argv[1]), "cdfs", 0.0)]
+sizes = []
+for params, drive, nut in runs:
+    system = fd.DriveSystem(params, drive, 0.4)
+    for method in ("modal", "dopri5"):
+        r = fd.simulate(system, ConstantSpeed(2e-3, nut), 0.05,
+                        options=fd.SolverOptions(method=method))
+        assert r.solver_stats["engine"] == "c"
+    sizes.append(len(system.model(ConstantSpeed(2e-3, nut)).states))
+folder = c_cache.cache_folder()
+print(json.dumps({"compiles": c_cache.STATS["compiles"], "sizes": sizes,
+                  "libraries": len(list(folder.glob("*" + c_cache.library_suffix())))}))
+"""
+
+
+@needs_cc
+def test_the_drivers_are_compiled_once_for_models_of_every_size(tmp_path: Path) -> None:
+    """Issue 42's compile target: a fresh process with an empty C cache runs three model
+    structures (15, 15 and 18 states) with two methods each and compiles four libraries —
+    the drivers' once, and each model's kernels."""
+    import json
+    import os
+    import sys
+
+    env = dict(os.environ, FEEDDRIVE_ENGINE="c", FEEDDRIVE_C_CACHE=str(tmp_path / "c"))
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-c", _THREE_MODELS,
+                           str(root / "examples" / "gms_guide.toml")], env=env,
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout.strip().splitlines()[-1])
+    assert got["sizes"] == [15, 15, 18]
+    assert got["compiles"] == 4 and got["libraries"] == 4
