@@ -113,7 +113,8 @@ def _env(tree: Path, cache: str, **more: str) -> dict[str, str]:
     return env
 
 
-def run_time(trees: dict[str, Path], rounds: int, repeat: int, work: Path) -> dict[str, Any]:
+def run_time(trees: dict[str, Path], rounds: int, repeat: int, work: Path,
+             scenarios: dict[str, Any]) -> dict[str, Any]:
     caches = {label: str(work / f"cache-{label}") for label in trees}
     for label, tree in trees.items():  # fill each tree's C cache
         subprocess.run([sys.executable, "-c", _CHILD, str(tree), json.dumps(
@@ -126,7 +127,7 @@ def run_time(trees: dict[str, Path], rounds: int, repeat: int, work: Path) -> di
         for label in (order if k % 2 == 0 else order[::-1]):
             before = os.getloadavg()
             done = subprocess.run([sys.executable, "-c", _CHILD, str(trees[label]),
-                                   json.dumps(SCENARIOS), str(repeat)],
+                                   json.dumps(scenarios), str(repeat)],
                                   env=_env(trees[label], caches[label]), cwd=trees[label],
                                   check=True, capture_output=True, text=True)
             loads.append((label, k, before, os.getloadavg()))
@@ -239,6 +240,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=4)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--reproduce", action="store_true")
+    parser.add_argument("--scenarios", default=",".join(SCENARIOS))
     parser.add_argument("--no-run-time", action="store_true")
     parser.add_argument("--out", type=Path,
                         default=ROOT / "benchmarks" / "results" / "bench_driver_once.json")
@@ -254,7 +256,8 @@ def main() -> None:
         if args.reproduce:
             data["reproduce"] = reproduce(trees, work)
         if not args.no_run_time:
-            data["run_time"] = run_time(trees, args.rounds, args.repeat, work)
+            data["run_time"] = run_time(trees, args.rounds, args.repeat, work,
+                                        {k: SCENARIOS[k] for k in args.scenarios.split(",")})
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(data, indent=1, default=list) + "\n")
     args.out.with_suffix(".md").write_text(markdown(data))

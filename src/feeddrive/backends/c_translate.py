@@ -258,6 +258,9 @@ class _Unit:
     #: "fd_m")`` — what the C expressions of ``constants``, ``shapes`` and ``bindings`` may
     #: refer to (a driver compiled once for every model, the model reached through it)
     context: tuple[str, str] | None = None
+    #: C statements at the start of every function's body (with ``context``: the values read
+    #: through it into constants, e.g. ``const long fd_n_state = fd_m->n_state;``)
+    prologue: str = ""
 
     def function(self, fn: Callable[..., Any], cname: str | None = None,
                  exported: bool = False) -> _Signature:
@@ -1299,7 +1302,7 @@ class _Function:
                if isinstance(self.returns, Tup) else _C_SCALAR[self.returns])
         head = (f"{'' if self.exported else 'static '}{ret} {self.cname}"
                 f"({', '.join(params_c) or 'void'})")
-        decls = []
+        decls = [f"    {line}" for line in self.unit.prologue.splitlines() if line.strip()]
         for name, t in self.locals.items():
             if name in self.params:
                 continue
@@ -1347,7 +1350,7 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
                       shapes: Mapping[str, Sequence[str | int]] | None = None,
                       param_types: Mapping[str, str] | None = None,
                       names: Mapping[str, str] | None = None,
-                      context: tuple[str, str] | None = None) -> str:
+                      context: tuple[str, str] | None = None, prologue: str = "") -> str:
     """C99 text of ``functions`` and of every kernel they call, transitively.
 
     Parameters
@@ -1386,6 +1389,10 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
         ``("const fd_model *", "fd_m")``.  The C expressions of ``constants``, ``shapes``
         and ``bindings`` may refer to it (``"fd_m->n_state"``, a binding ``"fd_m->rhs"``):
         then the text does not depend on the sizes or functions it reaches through it.
+    prologue
+        C statements put at the start of every translated function's body, one a line (with
+        ``context``: what is read through it once per call, e.g.
+        ``const long fd_n_state = fd_m->n_state; (void)fd_n_state;``).
 
     Returns
     -------
@@ -1401,7 +1408,7 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
     """
     unit = _Unit(constants=dict(constants or {}), bindings=dict(bindings or {}),
                  shapes=dict(shapes or {}), param_types=dict(param_types or {}),
-                 context=context)
+                 context=context, prologue=prologue)
     names = dict(names or {})
     for obj in functions:
         fn = _py_function(obj)
