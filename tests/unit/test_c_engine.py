@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ast
 import inspect
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -126,13 +127,35 @@ PROFILE = ConstantSpeed(0.5e-3, 16e-3)
 
 
 @needs_cc
-def test_the_engine_unit_compiles_with_the_strict_warning_set(tmp_path: Path) -> None:
-    source = tmp_path / "engine.c"
-    source.write_text(c_engine.engine_source(SYSTEM.model(PROFILE)))
+@pytest.mark.parametrize("unit", ["driver", "model"])
+def test_the_engine_units_compile_with_the_strict_warning_set(unit: str, tmp_path: Path
+                                                               ) -> None:
+    """The driver library's unit (every model's) and a model library's unit."""
+    source = tmp_path / f"{unit}.c"
+    source.write_text(c_engine.driver_source() if unit == "driver"
+                      else c_engine.model_source(SYSTEM.model(PROFILE)))
     cc = c_cache.find_compiler()
     out = subprocess.run([*cc, *STRICT_FLAGS, "-c", str(source), "-o", str(tmp_path / "e.o")],
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
+
+
+def test_the_driver_unit_does_not_depend_on_the_model() -> None:
+    """One driver text for every model (issue 42's compile target): no size is a constant of
+    it and no model function is called by name; the models of different sizes reach it
+    through their tables."""
+    text = c_engine.driver_source()
+    assert "#define FD_N_STATE fd_n_state" in text
+    assert text.count("const long fd_n_state = fd_m->n_state;") > 50  # in every function
+    assert not re.search(r"#define FD_N_\w+ \d", text)
+    assert not re.search(r"\bfd_rhs\(|\bfd_sample_update\(", text)
+    for drive, nut in (("cdfs", 0.0), ("ddfs", 16e-3)):
+        model = fd.DriveSystem(fd.preset("wang2021"), drive, 0.4).model(
+            ConstantSpeed(0.5e-3, nut))
+        unit = c_engine.model_source(model)
+        assert f"#define FD_N_STATE {len(model.states)}\n" in unit
+        assert "const fd_model fd_model_table = {FD_N_STATE, FD_N_AUX," in unit
+        assert "fd_integrate" not in unit
 
 
 def _halves(model: fd.Model, use: str, mode: int, stop: bool = False) -> list[np.ndarray]:
@@ -252,3 +275,46 @@ def test_a_function_called_again_reads_and_writes_the_arrays_of_that_call(
     np.testing.assert_array_equal(dy, expected)
     np.testing.assert_array_equal(other_dy, first)
     assert not np.array_equal(first, expected)
+
+
+_THREE_MODELS = r"""
+import json, sys
+from pathlib import Path
+import feeddrive as fd
+from feeddrive.backends import c_cache
+from feeddrive.model.reference import ConstantSpeed
+from feeddrive.parameters.toml_io import load
+runs = [(fd.preset("wang2021"), "cdfs", 0.0), (fd.preset("wang2021"), "ddfs", 16e-3),
+        (load(sys.argv[1]), "cdfs", 0.0)]
+sizes = []
+for params, drive, nut in runs:
+    system = fd.DriveSystem(params, drive, 0.4)
+    for method in ("modal", "dopri5"):
+        r = fd.simulate(system, ConstantSpeed(2e-3, nut), 0.05,
+                        options=fd.SolverOptions(method=method))
+        assert r.solver_stats["engine"] == "c"
+    sizes.append(len(system.model(ConstantSpeed(2e-3, nut)).states))
+folder = c_cache.cache_folder()
+print(json.dumps({"compiles": c_cache.STATS["compiles"], "sizes": sizes,
+                  "libraries": len(list(folder.glob("*" + c_cache.library_suffix())))}))
+"""
+
+
+@needs_cc
+def test_the_drivers_are_compiled_once_for_models_of_every_size(tmp_path: Path) -> None:
+    """Issue 42's compile target: a fresh process with an empty C cache runs three model
+    structures (15, 15 and 18 states) with two methods each and compiles four libraries —
+    the drivers' once, and each model's kernels."""
+    import json
+    import os
+    import sys
+
+    env = dict(os.environ, FEEDDRIVE_ENGINE="c", FEEDDRIVE_C_CACHE=str(tmp_path / "c"))
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-c", _THREE_MODELS,
+                           str(root / "examples" / "gms_guide.toml")], env=env,
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout.strip().splitlines()[-1])
+    assert got["sizes"] == [15, 15, 18]
+    assert got["compiles"] == 4 and got["libraries"] == 4

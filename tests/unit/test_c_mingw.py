@@ -70,12 +70,20 @@ def test_the_fmu_translation_unit_compiles_with_mingw_pedantic(drive: str,
     _compile(tmp_path, files)
 
 
+def test_the_engine_driver_unit_compiles_with_mingw_pedantic(tmp_path: Path) -> None:
+    """The C build of the engine (issue 42 items 1–2): every method's driver, the event
+    location, the eigen-analysis and the linearisations' functions — one unit for every
+    model, which it reaches through its table."""
+    from feeddrive.backends.c_engine import driver_source
+
+    _compile(tmp_path, {"drivers.c": driver_source()})
+
+
 @pytest.mark.parametrize("drive", drive_names())
-def test_the_engine_unit_compiles_with_mingw_pedantic(drive: str, tmp_path: Path) -> None:
-    """The C build of the engine (issue 42 items 1–2): the model's kernels with every method's
-    driver, the event location, the eigen-analysis and the linearisations' functions."""
-    from feeddrive.backends.c_engine import engine_source
+def test_the_engine_model_unit_compiles_with_mingw_pedantic(drive: str, tmp_path: Path) -> None:
+    """A model's unit of the C engine: its kernels and the table the driver unit takes."""
+    from feeddrive.backends.c_engine import model_source
 
     parameters = fd.preset(mechanism(drive).example_preset)
     model = fd.DriveSystem(parameters, drive, 0.4).model(fd.ConstantSpeed(*_speeds(drive)))
-    _compile(tmp_path, {"engine.c": engine_source(model)})
+    _compile(tmp_path, {"model.c": model_source(model)})

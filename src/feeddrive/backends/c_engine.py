@@ -1,5 +1,6 @@
 """The C build of the engine: the one driver of :mod:`feeddrive.solvers.driver`, translated
-with the model's kernels into one C unit per model structure, compiled once, called by ctypes.
+into one C library for every model (compiled once per machine), and per model structure a
+small library of its kernels, which the drivers reach through a table; called by ctypes.
 
 Every method runs through the driver's two specialisations (``integrate``: ``dopri5`` and its
 fixed-step variant; ``integrate_dense``: ``modal``, ``auto``, ``rodas4``, ``dopri5-dense`` and
@@ -13,9 +14,23 @@ makes them.
 Everything else — the steps, the RODAS4 Jacobian and linear solves, the
 event location, the eigen-analysis of the modal step cap (:mod:`feeddrive.solvers.modes`, in
 real arithmetic: no LAPACK) — is translated by :mod:`feeddrive.backends.c_translate` from the
-same Python numba compiles.  The unit is compiled through the compiled-object cache
-(:mod:`feeddrive.backends.c_cache`, keyed by source hash, compiler, flags and platform) and
-called with ctypes, which releases the GIL for the call.
+same Python numba compiles.
+
+Two libraries, each compiled through the compiled-object cache
+(:mod:`feeddrive.backends.c_cache`, keyed by source hash, compiler, flags and platform):
+
+* the **driver library** (:func:`driver_source`): both drivers and the shared module's other
+  functions (:data:`FUNCTIONS`), the same text for every model, so compiled once.  Every one
+  of its functions takes the model's table (:data:`MODEL_STRUCT`) as a hidden first parameter
+  (the translator's ``context``): the sizes ``FD_N_STATE`` … are read from it — the work
+  arrays are C99 variable-length arrays — and the model's right-hand side and sampled update
+  are called through its function pointers;
+* a **model library** per model structure (:func:`model_source`): the model's kernels
+  (:func:`feeddrive.backends.c_backend.c_model_source`, its sizes constants) and its table
+  ``fd_model_table``.
+
+Both are loaded with ctypes; each call of an entry of the driver library passes the address of
+the model's table first, and ctypes releases the GIL for the call.
 
 The build registers itself as the engine ``"c"`` (:data:`feeddrive.registry.ENGINES`);
 :mod:`feeddrive.solvers.builds` chooses between it and numba.
@@ -44,7 +59,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import registry
-from .c_backend import RHS, SAMPLE_UPDATE, SOLVER_SHAPES, SOLVER_TYPES, c_model_source
+from .c_backend import SOLVER_SHAPES, SOLVER_TYPES, CFunction, c_model_source
 from .c_cache import (
     CompilerNotFound,
     available_compiler,
@@ -57,7 +72,7 @@ from .c_translate import DYNAMIC, TranslationError, translate_kernels
 if TYPE_CHECKING:
     from ..model.assemble import Model
 
-__all__ = ["USES", "CEngine", "engine_source", "lowered_source"]
+__all__ = ["USES", "CEngine", "driver_source", "lowered_source", "model_source"]
 
 #: the driver's uses the engine calls, by name of the numba function they replace
 USES = ("integrate", "integrate_dense")
@@ -65,6 +80,49 @@ USES = ("integrate", "integrate_dense")
 OUTPUTS = {"t_out": "t_buf", "y_out": "y_buf", "aux_out": "aux_buf"}
 STATS = "stats"  # the statistics array the numba driver returns
 STATS_OUT = "stats_out"
+
+#: how the driver library reaches a model: its sizes and its two functions, one table per
+#: model library (``fd_model_table``, :func:`model_source`), passed to every entry of the
+#: driver library (:func:`driver_source`) as its first argument
+MODEL_STRUCT = r"""
+#ifndef FD_MODEL_STRUCT
+#define FD_MODEL_STRUCT
+/* A model as the engine's driver library reaches it (feeddrive.backends.c_engine): its sizes
+   and its right-hand side and sampled update (fd_rhs, fd_sample_update of its library). */
+typedef void (*fd_rhs_fn)(double t, const double *y, double *held, const double *P,
+                          const double *T, double *dy, double *aux);
+typedef void (*fd_sample_update_fn)(double t, double *y, double *held, const double *P,
+                                    const double *T, const long *tick);
+typedef struct fd_model {
+    long n_state, n_aux, n_held, n_clock, n_param, n_table;
+    fd_rhs_fn rhs;
+    fd_sample_update_fn sample_update;
+} fd_model;
+#endif
+"""
+#: the hidden first parameter of every function of the driver library (the translator's
+#: ``context``), and the sizes read through it where the model library has constants
+CONTEXT = ("const fd_model *", "fd_m")
+SIZES = {"FD_N_STATE": "n_state", "FD_N_AUX": "n_aux", "FD_N_HELD": "n_held",
+         "FD_N_CLOCK": "n_clock", "FD_N_PARAM": "n_param", "FD_N_TABLE": "n_table"}
+#: the sizes the drivers use, read from the table once per call of each function into a
+#: local constant (``fd_n_state`` …), which the compiler keeps across the model's calls
+LOCAL_SIZES = ("FD_N_STATE", "FD_N_AUX", "FD_N_HELD", "FD_N_CLOCK")
+PROLOGUE = "\n".join(f"const long fd_{SIZES[m]} = {CONTEXT[1]}->{SIZES[m]}; "
+                     f"(void)fd_{SIZES[m]};" for m in LOCAL_SIZES)
+#: the model's functions as the driver library calls them (through the table)
+RHS = CFunction(f"{CONTEXT[1]}->rhs", None, (2, 5, 6))
+SAMPLE_UPDATE = CFunction(f"{CONTEXT[1]}->sample_update", None, (1, 2))
+#: the table's name in a model library
+TABLE = "fd_model_table"
+
+
+class ModelTable(ctypes.Structure):
+    """``fd_model`` (:data:`MODEL_STRUCT`) as ctypes reads it: the sizes a model library was
+    compiled with, checked against the model before its first run."""
+
+    _fields_ = [*((name, ctypes.c_long) for name in SIZES.values()),
+                ("rhs", ctypes.c_void_p), ("sample_update", ctypes.c_void_p)]
 
 
 class _Lower(ast.NodeTransformer):
@@ -265,7 +323,8 @@ def _translated(use: str) -> dict[str, Any]:
     fn = driver.define(lowered_source(use)[0], use)
     text = translate_kernels([fn], {"N_AUX": "FD_N_AUX"}, bindings=_bindings(),
                              shapes=SHAPES, param_types=PARAM_TYPES,
-                             names={use: f"fd_{use}"})
+                             names={use: f"fd_{use}"}, context=CONTEXT,
+                             prologue=PROLOGUE)
     return {"c": text, "n_stats": lowered_source(use)[1], "params": _c_params(use)}
 
 
@@ -357,7 +416,8 @@ def _functions_unit() -> dict[str, Any]:
         fn.__globals__.update(vars(__import__(_template(name).__module__, fromlist=["_"])))
         texts.append(translate_kernels([fn], {"N_AUX": "FD_N_AUX", "N_HELD": "FD_N_HELD"},
                                        bindings={"rhs": RHS}, shapes=shapes,
-                                       param_types=types, names={name: cname}))
+                                       param_types=types, names={name: cname},
+                                       context=CONTEXT, prologue=PROLOGUE))
         node = ast.parse(source).body[0]
         assert isinstance(node, ast.FunctionDef)
         params[name] = _params_of(node, shapes, types)
@@ -379,8 +439,10 @@ def _sources_digest() -> str:
 @functools.cache
 def driver_unit(use: str) -> dict[str, Any]:
     """The driver ``use`` (:func:`lowered_source`) in C, exported as ``fd_<use>``, with every
-    solver function it calls (it calls the model file's ``fd_rhs`` and ``fd_sample_update``,
-    :func:`feeddrive.backends.c_backend.c_model_source`); with the entry's parameters.
+    solver function it calls; every function takes the model's table (:data:`MODEL_STRUCT`)
+    as its first parameter, reads the model's sizes from it and calls the model's ``fd_rhs``
+    and ``fd_sample_update`` through it; with the entry's parameters (the table not among
+    them).
 
     Specialising and translating the driver costs ≈ 0.7 CPU s, the same for every model: the
     result is kept in the C cache's folder under the hash of its sources
@@ -420,9 +482,37 @@ def driver_unit(use: str) -> dict[str, Any]:
     return unit
 
 
-def engine_source(model: Model) -> str:
-    """One C unit of ``model``'s structure: its kernels (parameters and tables passed at run
-    time) and both drivers.
+@functools.cache
+def driver_source() -> str:
+    """The driver library's C unit: both drivers and the shared module's other functions
+    (:data:`FUNCTIONS`), the same text for every model — compiled once per machine (per
+    compiler, flags and platform) through the compiled-object cache.
+
+    A model is reached at run time through its table (:data:`MODEL_STRUCT`), every function's
+    first parameter: the sizes (``FD_N_STATE`` … are read from it, the local work arrays are
+    C99 variable-length arrays) and the right-hand side and sampled update (called through
+    its function pointers).
+
+    Returns
+    -------
+    str
+        C99 source.
+    """
+    sizes = "\n".join(f"#define {macro} fd_{field}" if macro in LOCAL_SIZES else
+                      f"#define {macro} ({CONTEXT[1]}->{field})"
+                      for macro, field in SIZES.items())
+    return ("/* Generated by feeddrive.backends.c_engine: the engine's drivers for every model "
+            "(feeddrive.solvers.driver, lowered and translated).  Do not edit: regenerate. */"
+            "\n#include <math.h>\n" + MODEL_STRUCT + "/* the model's sizes, read from its "
+            "table (every function's first parameter) */\n" + sizes + "\n"
+            + "\n".join(driver_unit(use)["c"] for use in (*USES, "functions")))
+
+
+def model_source(model: Model) -> str:
+    """The model library's C unit: ``model``'s kernels (parameters and tables passed at run
+    time; :func:`feeddrive.backends.c_backend.c_model_source`) and its table
+    ``fd_model_table`` (:data:`MODEL_STRUCT`: its sizes, ``fd_rhs``, ``fd_sample_update``),
+    which the driver library's entries take.
 
     Parameters
     ----------
@@ -434,9 +524,10 @@ def engine_source(model: Model) -> str:
     str
         C99 source.
     """
-    return (c_model_source(model, data=False) + "\n/* ---- the drivers "
-            "(feeddrive.solvers.driver, lowered by feeddrive.backends.c_engine) */\n"
-            + "\n".join(driver_unit(use)["c"] for use in (*USES, "functions")))
+    fields = ", ".join(SIZES)
+    return (c_model_source(model, data=False) + MODEL_STRUCT
+            + f"/* the model as the driver library (feeddrive.backends.c_engine) reaches it */"
+            f"\nconst fd_model {TABLE} = {{{fields}, fd_rhs, fd_sample_update}};\n")
 
 
 _D = ctypes.POINTER(ctypes.c_double)
@@ -474,11 +565,12 @@ _ARRAY, _SIZE, _DOUBLE, _INT = range(4)
 
 
 class _Entry:
-    """One exported function of a loaded library, called with numpy arrays: each array
-    passed by its address (``c_void_p``; ≈ 3 µs an array, where ``data_as`` costs 5),
-    checked to be C-contiguous with elements of the C type's kind and size."""
+    """One exported function of the driver library for one model, called with numpy arrays:
+    the model's table first (its address), then each array passed by its address
+    (``c_void_p``; ≈ 3 µs an array, where ``data_as`` costs 5), checked to be C-contiguous
+    with elements of the C type's kind and size."""
 
-    def __init__(self, lib: ctypes.CDLL, use: str) -> None:
+    def __init__(self, lib: ctypes.CDLL, use: str, table: int) -> None:
         if use in FUNCTIONS:
             self.params = driver_unit("functions")["params"][use]
             self.n_stats = 0
@@ -489,11 +581,12 @@ class _Entry:
             self.n_stats = unit["n_stats"]
             self.fn = getattr(lib, f"fd_{use}")
         self.fn.restype = ctypes.c_long
+        self.table = table
         self.names = [name for name, kind in self.params if kind != "size"]
         where = {name: i for i, name in enumerate(self.names)}
         # (what, which argument, dimension or accepted element type)
         self.plan: list[tuple[int, int, Any]] = []
-        argtypes: list[Any] = []
+        argtypes: list[Any] = [ctypes.c_void_p]  # the model's table
         for name, kind in self.params:
             if kind == "size":
                 base, k = name.split("#")
@@ -534,7 +627,7 @@ class _Entry:
         once.  Kept, an array cannot be freed, so no other array can take its place under
         the same identity.  The drivers and ``auxiliary`` keep nothing (their output arrays
         are the run's, megabytes), their calls being few."""
-        out: list[Any] = []
+        out: list[Any] = [self.table]
         last = self._last
         for what, i, extra in self.plan:
             a = args[i]
@@ -561,15 +654,18 @@ class _Entry:
 
 
 class CEngine:
-    """The C build: per model structure one library (:func:`engine_source`), its drivers
-    called with the arguments, in the order, of the numba ones
+    """The C build: one driver library for every model (:func:`driver_source`) and per model
+    structure one library of its kernels (:func:`model_source`); the drivers called with the
+    model's table and the arguments, in the order, of the numba ones
     (:mod:`feeddrive.solvers.shared`) and giving the same results."""
 
     name = "c"
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
-        self._libraries: dict[str, ctypes.CDLL] = {}
+        self._driver_lock = threading.Lock()
+        self._drivers: ctypes.CDLL | None = None
+        self._libraries: dict[str, tuple[ctypes.CDLL, int]] = {}
         self._entries: dict[tuple[int, str], _Entry] = {}
         self._functions: dict[tuple[int, str], Callable[..., Any]] = {}
         self._compiler: dict[tuple[str | None, str | None], bool] = {}
@@ -645,29 +741,51 @@ class CEngine:
             raise TranslationError(refused)
         return not refused
 
-    def _library(self, model: Model) -> ctypes.CDLL:
-        module = model.module
-        lib: ctypes.CDLL | None = getattr(module, "_fd_c_engine", None)
-        if lib is not None:
-            return lib
-        with self._lock:
-            lib = getattr(module, "_fd_c_engine", None)
-            if lib is None:
-                text = engine_source(model)
-                key = hashlib.sha256(text.encode()).hexdigest()
-                lib = self._libraries.get(key)
+    def _driver_library(self) -> ctypes.CDLL:
+        """The driver library (:func:`driver_source`), the same for every model: compiled
+        once per machine, loaded once per process."""
+        lib = self._drivers
+        if lib is None:
+            with self._driver_lock:
+                lib = self._drivers
                 if lib is None:
-                    lib = ctypes.CDLL(str(cached_library(text)))
-                    self._libraries[key] = lib
-                setattr(module, "_fd_c_engine", lib)  # noqa: B010 (a generated module)
+                    lib = self._drivers = ctypes.CDLL(str(cached_library(driver_source())))
         return lib
 
+    def _library(self, model: Model) -> tuple[ctypes.CDLL, int]:
+        """``model``'s library (:func:`model_source`) and the address of its table, the
+        driver library loaded too; the table's sizes checked against the model's."""
+        module = model.module
+        found: tuple[ctypes.CDLL, int] | None = getattr(module, "_fd_c_engine", None)
+        if found is not None:
+            return found
+        self._driver_library()
+        with self._lock:
+            found = getattr(module, "_fd_c_engine", None)
+            if found is None:
+                text = model_source(model)
+                key = hashlib.sha256(text.encode()).hexdigest()
+                found = self._libraries.get(key)
+                if found is None:
+                    lib = ctypes.CDLL(str(cached_library(text)))
+                    table = ModelTable.in_dll(lib, TABLE)
+                    expected = (len(model.states), len(model.aux), int(module.N_HELD),
+                                int(module.N_CLOCK))
+                    got = (table.n_state, table.n_aux, table.n_held, table.n_clock)
+                    if got != expected:
+                        raise RuntimeError(f"the C library of this model has the sizes {got} "
+                                           f"(states, auxiliary signals, held values, clocks)"
+                                           f", not the model's {expected}")
+                    found = self._libraries[key] = (lib, ctypes.addressof(table))
+                setattr(module, "_fd_c_engine", found)  # noqa: B010 (a generated module)
+        return found
+
     def _entry(self, model: Model, use: str) -> _Entry:
-        lib = self._library(model)
+        lib, table = self._library(model)
         key = (id(lib), use)
         entry = self._entries.get(key)
         if entry is None:
-            entry = self._entries[key] = _Entry(lib, use)
+            entry = self._entries[key] = _Entry(self._driver_library(), use, table)
         return entry
 
     def function(self, model: Model, name: str) -> Callable[..., Any] | None:

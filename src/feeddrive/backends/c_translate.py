@@ -253,6 +253,14 @@ class _Unit:
     chunks: list[str] = field(default_factory=list)
     prototypes: list[str] = field(default_factory=list)
     tuples: dict[str, Tup] = field(default_factory=dict)
+    #: a hidden first parameter of every function of the translation, passed on by every
+    #: call between them: (its C declaration, its C name), e.g. ``("const fd_model *",
+    #: "fd_m")`` — what the C expressions of ``constants``, ``shapes`` and ``bindings`` may
+    #: refer to (a driver compiled once for every model, the model reached through it)
+    context: tuple[str, str] | None = None
+    #: C statements at the start of every function's body (with ``context``: the values read
+    #: through it into constants, e.g. ``const long fd_n_state = fd_m->n_state;``)
+    prologue: str = ""
 
     def function(self, fn: Callable[..., Any], cname: str | None = None,
                  exported: bool = False) -> _Signature:
@@ -778,6 +786,8 @@ class _Function:
         assert fn is not None
         sig = self.unit.function(fn)
         args = self.call_args(node, sig.params, sig.written, sig.dynamic)
+        if self.unit.context is not None:
+            args.insert(0, self.unit.context[1])
         self.calls_total += 1
         if sig.written:
             self.calls_with_writes += 1
@@ -1285,11 +1295,14 @@ class _Function:
                     params_c.append(f"long {hidden[-1]}")
             else:
                 params_c.append(f"{_C_SCALAR[t]} {self.cvar(name)}")
+        if self.unit.context is not None:
+            params_c.insert(0, f"{self.unit.context[0]}{self.unit.context[1]}")
+            hidden.append(self.unit.context[1])
         ret = ("void" if self.returns is None else self.returns.cname
                if isinstance(self.returns, Tup) else _C_SCALAR[self.returns])
         head = (f"{'' if self.exported else 'static '}{ret} {self.cname}"
                 f"({', '.join(params_c) or 'void'})")
-        decls = []
+        decls = [f"    {line}" for line in self.unit.prologue.splitlines() if line.strip()]
         for name, t in self.locals.items():
             if name in self.params:
                 continue
@@ -1336,7 +1349,8 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
                       bindings: Mapping[str, Any] | None = None,
                       shapes: Mapping[str, Sequence[str | int]] | None = None,
                       param_types: Mapping[str, str] | None = None,
-                      names: Mapping[str, str] | None = None) -> str:
+                      names: Mapping[str, str] | None = None,
+                      context: tuple[str, str] | None = None, prologue: str = "") -> str:
     """C99 text of ``functions`` and of every kernel they call, transitively.
 
     Parameters
@@ -1369,6 +1383,16 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
         ``bool_``/``uint8``).
     names
         Exported C names by Python function name (default ``fd_<name>``).
+    context
+        A hidden first parameter of every translated function, exported ones included, which
+        every call between them passes on: (C declaration, C name), e.g.
+        ``("const fd_model *", "fd_m")``.  The C expressions of ``constants``, ``shapes``
+        and ``bindings`` may refer to it (``"fd_m->n_state"``, a binding ``"fd_m->rhs"``):
+        then the text does not depend on the sizes or functions it reaches through it.
+    prologue
+        C statements put at the start of every translated function's body, one a line (with
+        ``context``: what is read through it once per call, e.g.
+        ``const long fd_n_state = fd_m->n_state; (void)fd_n_state;``).
 
     Returns
     -------
@@ -1383,7 +1407,8 @@ def translate_kernels(functions: Iterable[Any], constants: Mapping[str, Any] | N
         A construct outside the subset, naming the function, file, line and construct.
     """
     unit = _Unit(constants=dict(constants or {}), bindings=dict(bindings or {}),
-                 shapes=dict(shapes or {}), param_types=dict(param_types or {}))
+                 shapes=dict(shapes or {}), param_types=dict(param_types or {}),
+                 context=context, prologue=prologue)
     names = dict(names or {})
     for obj in functions:
         fn = _py_function(obj)
