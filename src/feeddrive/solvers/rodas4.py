@@ -125,11 +125,10 @@ def lu_solve(M: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
             tmp = b[k]
             b[k] = b[p]
             b[p] = tmp
-    for i in range(n):
-        s = b[i]
-        for j in range(i):
-            s -= M[i, j] * b[j]
-        b[i] = s
+    for j in range(n):  # by columns: each b[i] takes its terms in the row order, j rising
+        bj = b[j]
+        for i in range(j + 1, n):
+            b[i] -= M[i, j] * bj
     for i in range(n - 1, -1, -1):
         s = b[i]
         for j in range(i + 1, n):
