@@ -237,3 +237,29 @@ def test_the_c_backend_and_the_fmu_report_a_failure_the_same_way(tmp_path: Path)
             build()
         assert "\n" not in str(err.value) and "error" in str(err.value)
         assert isinstance(err.value, RuntimeError)  # what callers caught before
+
+
+
+def test_the_driver_library_is_compiled_with_the_documented_flags(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """docs/c-backend.md, "The driver library at -O3": the flags it states are the ones the
+    engine passes when it builds the driver library; the model libraries keep the default."""
+    from feeddrive.backends import c_engine
+
+    if c_cache.available_compiler() is None:
+        pytest.skip("no C compiler")
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "c-backend.md").read_text(
+        encoding="utf-8")
+    assert f"`{' '.join(c_engine.DRIVER_FLAGS)}`" in " ".join(doc.split())
+    assert c_engine.DRIVER_FLAGS == tuple("-O3" if f == "-O2" else f
+                                          for f in c_cache.LIBRARY_FLAGS)
+    seen: list[tuple[str, ...]] = []
+    real = c_engine.cached_library
+
+    def recording(source: str, **kwargs: object) -> Path:
+        seen.append(tuple(kwargs.get("flags", c_cache.LIBRARY_FLAGS)))  # type: ignore[arg-type]
+        return real(source, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(c_engine, "cached_library", recording)
+    c_engine.CEngine()._driver_library()
+    assert seen == [c_engine.DRIVER_FLAGS]
