@@ -45,3 +45,26 @@ def test_nothing_is_resumed_from_another_system_or_a_profile_that_differs_at_onc
     assert other.resumable_from(before) == 0.0
     lower, _ = _staircase(SPEEDS * 0.9, [12.0, 12.0, 12.0], 0.0, 0.0)
     assert Simulation(system, lower).resumable_from(before) == 0.0
+
+
+def test_a_continued_runs_states_are_joined_column_by_column_when_read() -> None:
+    """A run continued past two DENSE_CHUNK ends keeps its states as parts
+    (``Run.defer_states``); each state read is the one-shot run's, bit for bit, and so is the
+    whole Dataset."""
+    from feeddrive.engine.simulate import DENSE_CHUNK
+
+    system = DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    profile = fd.ConstantSpeed(1.2e-3, ramp_time=0.1)
+    sim = Simulation(system, profile)
+    sim.run(6.0)
+    continued = sim.run(2.5 * DENSE_CHUNK)
+    fresh = simulate(system, profile, 2.5 * DENSE_CHUNK)
+    run = continued._run
+    assert run is not None and run._state_parts is not None and len(run._state_parts) == 3
+    assert not run._state_columns  # nothing joined before a signal is read
+    assert np.array_equal(continued["table_speed"], fresh["table_speed"])
+    assert list(run._state_columns) == [[s.name for s in run.model.states].index(
+        "table_speed")]  # that column alone
+    for name in fresh.signal_names():
+        assert np.array_equal(continued[name], fresh[name]), name
+    assert continued.dataset.equals(fresh.dataset)

@@ -61,6 +61,8 @@ class Run:
         self.t, self.y, self.aux, self.model = t, y, aux, model
         self.system, self.profile, self.solver_stats = system, profile, solver_stats
         self._deferred: Callable[[], np.ndarray] | None = None
+        self._state_parts: list[np.ndarray] | None = None
+        self._state_columns: dict[int, np.ndarray] = {}
         self.columns: dict[str, tuple[np.ndarray, int]] = {}
         for k, sig in enumerate(model.states):
             self.columns[sig.name] = (y, k)
@@ -90,6 +92,18 @@ class Run:
         """
         self._deferred = compute
 
+    def defer_states(self, parts: list[np.ndarray]) -> None:
+        """Give the states as consecutive parts of the run (a run integrated in chunks): a
+        state is joined when first read, its own column only (a creep trial reads one signal of
+        ≈ 20).
+
+        Parameters
+        ----------
+        parts : list of numpy.ndarray
+            (samples, states) arrays, in time order [SI, per state].
+        """
+        self._state_parts = parts
+
     def signal(self, name: str) -> np.ndarray:
         """One signal of the run by name: a state, an auxiliary output, a derived signal or the
         following error.
@@ -117,6 +131,12 @@ class Run:
                 for j, sig in enumerate(self.model.aux):
                     self.columns[sig.name] = (self.aux, j)
                 arr = self.aux
+            if arr is self.y and self._state_parts is not None:
+                column = self._state_columns.get(k)
+                if column is None:
+                    column = self._state_columns[k] = np.concatenate(
+                        [part[:, k] for part in self._state_parts])
+                return column
             return arr[:, k]
         if name in self.derived:
             source, factor = self.derived[name]

@@ -868,7 +868,7 @@ class Simulation:
                              chunks.h_init, chunks.h_max,
                              self.bound, self.switch_rows)
         try:
-            t, y, aux_parts, stats = chunks.advance(n_break, output, progress)
+            t, y_parts, aux_parts, stats = chunks.advance(n_break, output, progress)
         except _Stopped as stop:
             if chunks.stop_requested:  # request_stop: not continued from
                 self._chunks = None
@@ -908,17 +908,22 @@ class Simulation:
             if carried is not None:  # the memory of the call that ended the run
                 solver_stats["embedded_error_estimate"] = embedded_entry(
                     [s.name for s in model.states], carried[1])
-        return self._result(t, y, aux_parts, solver_stats)
+        return self._result(t, y_parts, aux_parts, solver_stats)
 
-    def _result(self, t: np.ndarray, y: np.ndarray, aux_parts: list[np.ndarray],
+    def _result(self, t: np.ndarray, y_parts: list[np.ndarray], aux_parts: list[np.ndarray],
                 solver_stats: dict[str, Any]) -> Result:
         model = self.model
+        n = len(model.states)
+        y = y_parts[0] if len(y_parts) == 1 else np.zeros((0, n))
         run = Run(t, y, np.zeros((0, len(model.aux))), model, self.system, self.profile,
                   solver_stats)
+        if len(y_parts) > 1:  # a state's parts are joined when it is read
+            run.defer_states(y_parts)
         if sum(a.shape[0] for a in aux_parts) == t.shape[0]:  # recorded: joined when read
             run.defer_aux(lambda: _join(aux_parts, len(model.aux)))
         else:  # not recorded (continuous loops, dense output): evaluated when read
-            run.defer_aux(lambda: builds.compiled(model, "auxiliary")(t, y, model.P, model.T))
+            run.defer_aux(lambda: builds.compiled(model, "auxiliary")(
+                t, _join(y_parts, n), model.P, model.T))
         return Result.from_run(run)
 
 
@@ -1013,9 +1018,10 @@ class _Chunks:
 
     def advance(self, n_break: int, output: str | Path | None,
                 progress: Callable[[float, float], None] | None,
-                ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], np.ndarray]:
-        """Integrate on to breakpoint ``n_break``; (t, y, the auxiliary signals' parts, stats)
-        from t = 0 (the parts are joined only if a signal among them is read)."""
+                ) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray], np.ndarray]:
+        """Integrate on to breakpoint ``n_break``; (t, the states' parts, the auxiliary
+        signals' parts, stats) from t = 0 (the parts are joined only where a signal among them
+        is read)."""
         from ..io.results import ChunkWriter
 
         sim, grid = self.sim, self.sim.grid
@@ -1101,16 +1107,16 @@ class _Chunks:
         return (*self._joined([*self.parts, *tail]), stats)
 
     def _joined(self, parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
-                ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-        """(t, y) of ``parts`` end to end, and their auxiliary arrays as a list."""
-        n = len(self.sim.model.states)
-        return (_join([p[0] for p in parts], None), _join([p[1] for p in parts], n),
+                ) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
+        """t of ``parts`` end to end, their states' and auxiliary arrays as lists (joined
+        when read: :meth:`~feeddrive.engine.result.Run.defer_states`)."""
+        return (_join([p[0] for p in parts], None), [p[1] for p in parts],
                 [p[2] for p in parts])
 
 
 class _Stopped(Exception):
     def __init__(self, t_reached: float,
-                 joined: tuple[np.ndarray, np.ndarray, list[np.ndarray]]) -> None:
+                 joined: tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]) -> None:
         super().__init__(t_reached)
         self.t_reached, self.joined = t_reached, joined
 
