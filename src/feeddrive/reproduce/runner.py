@@ -20,17 +20,18 @@ from pathlib import Path
 from typing import Any
 
 from .._jit import KERNEL_HASH
+from .._workers import single_threaded_children, stop_workers
 from ..engine.simulate import DriveSystem, simulate
 from ..io.json_store import ResultStore, code_hash, store_key
 from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters, dumps
-from ..sweep.executors import single_threaded_children, stop_workers
+
+# figures and report (matplotlib, the report's writers) are imported where the parent uses
+# them, so that a pool worker, which imports this module to find its job, does not (≈ 0.3 s)
 from . import (
-    figures,
     forced_study,
     quadrant_study,
     reading_study,
-    report,
     sensitivity_section,
     studies,
 )
@@ -423,6 +424,8 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
         results[name] = found[name]
 
     # --- tables and figures
+    from . import figures, report
+
     table3 = []
     for i, (a, row) in enumerate(zip(PAPER["positions"], studies.stiffness_rows(params),
                                      strict=True)):

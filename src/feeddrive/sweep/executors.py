@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
-import ctypes
 import logging
 import multiprocessing
 import os
@@ -30,6 +29,7 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from .._workers import single_threaded_children, stop_workers, worker_start
 from .design import Point, SweepConfig
 from .quantities import evaluate, warm
 from .store import SweepStore
@@ -39,9 +39,6 @@ __all__ = ["DASK_HINT", "PROBE_DURATION", "CtrlC", "Estimate", "SweepAborted",
            "run_sweep", "simulated_range"]
 
 DASK_HINT = "Dask executors need dask.distributed: pip install 'feeddrive[dask]'"
-# one thread per worker process: the parallelism is across points
-_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
-
 #: progress callback: (points done, points to do, seconds of the last point)
 Progress = Callable[[int, int], None]
 
@@ -113,25 +110,6 @@ class SweepSummary:
     def rate(self) -> float:
         """Computed points per second of wall time."""
         return self.computed / self.seconds if self.seconds > 0 else float("nan")
-
-
-@contextlib.contextmanager
-def single_threaded_children() -> Iterator[None]:
-    """While it lasts, processes started get one thread per numerical library (OpenMP,
-    OpenBLAS, MKL, numba): a pool of single-core workers whose BLAS threads would otherwise
-    busy-wait beside them on the same cores (reproduce's workers: 60.7 → 52.5 CPU s,
-    benchmarks/README.md).  Only processes *started* meanwhile see it (``spawn``: a forked
-    child inherits its parent's already started BLAS)."""
-    saved = {k: os.environ.get(k) for k in _THREAD_ENV}
-    os.environ.update({k: "1" for k in _THREAD_ENV})
-    try:
-        yield
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
 
 
 def _dask() -> Any:
@@ -330,57 +308,13 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
     with single_threaded_children():
         pool = cf.ProcessPoolExecutor(max_workers=n,
                                       mp_context=multiprocessing.get_context("spawn"),
-                                      initializer=_worker_start, initargs=(os.getpid(),))
+                                      initializer=worker_start, initargs=(os.getpid(),))
         try:
             yield pool, n, f"local ({n} processes)"
         except BaseException:
             stop_workers(pool)  # Ctrl-C or an error: do not wait for the points in flight
             raise
         pool.shutdown(wait=True)
-
-
-def _worker_start(parent: int) -> None:
-    """Set up one local worker process: Ctrl-C is the parent's to handle (it stops the
-    workers itself), and the worker exits when its parent dies (``SIGKILL`` of the sweep
-    leaves no orphan): Linux's parent-death signal, and on every system a thread that
-    checks the parent once a second."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if sys.platform.startswith("linux"):
-        try:
-            ctypes.CDLL(None).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
-        except (OSError, AttributeError):
-            pass
-    if os.getppid() != parent:  # the parent died before this line
-        os._exit(1)
-
-    def watch() -> None:
-        while True:
-            time.sleep(1.0)
-            if os.getppid() != parent:
-                os._exit(1)
-
-    threading.Thread(target=watch, name="feeddrive-parent-watch", daemon=True).start()
-
-
-def stop_workers(pool: cf.ProcessPoolExecutor) -> None:
-    """Cancel what is queued and stop the worker processes now (their points in flight are
-    lost, not stored: a rerun computes them).
-
-    Parameters
-    ----------
-    pool : concurrent.futures.ProcessPoolExecutor
-        The pool (a sweep's, ``reproduce``'s).
-    """
-    processes = list((getattr(pool, "_processes", None) or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for proc in processes:
-        with contextlib.suppress(Exception):
-            proc.terminate()
-    for proc in processes:
-        with contextlib.suppress(Exception):
-            proc.join(2.0)
-            if proc.is_alive():
-                proc.kill()
 
 
 def _structure(task: dict[str, Any], coords: dict[str, Any]) -> tuple[Any, ...]:
