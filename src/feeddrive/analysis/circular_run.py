@@ -201,7 +201,7 @@ class CircularRunTrace:
             inside = (t >= run.time[0]) & (t <= run.time[-1])
             for name in self.axes:
                 prefix = f"{name}."
-                for var in result.dataset.data_vars:
+                for var in result.signal_names():  # no Dataset built to read names
                     if not (var.startswith(prefix) and var.endswith("_friction")):
                         continue
                     force = np.asarray(result[var], dtype=float)[inside]

@@ -15,10 +15,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
-
-import pandas as pd
-import xarray as xr
+from typing import TYPE_CHECKING, Any
 
 from .. import units
 from ..io.outputs import SWEEP_EXPORT_FORMATS, atomic_path
@@ -26,6 +23,10 @@ from ..io.results import arrow_table, cf_attributes, write_netcdf
 from .design import SPECIAL_AXES
 from .quantities import UNITS
 from .store import SweepStore
+
+if TYPE_CHECKING:  # pandas and xarray are imported where a sweep is exported (a pool worker
+    import pandas as pd  # imports this package without exporting: ≈ 0.5 s each time)
+    import xarray as xr
 
 __all__ = ["EXPORT_FORMATS", "export", "to_dataset", "to_frame", "to_table"]
 
@@ -117,6 +118,9 @@ def to_dataset(store: SweepStore, sweep: str) -> xr.Dataset:
     xarray.Dataset
         The quantity's values per point, in SI.
     """
+    import pandas as pd
+    import xarray as xr
+
     desc, records = _records(store, sweep)
     axes = [a["name"] for a in desc["axes"]]
     values = _value_columns(records, axes)
@@ -156,6 +160,8 @@ def to_dataset(store: SweepStore, sweep: str) -> xr.Dataset:
 def _engineering(store: SweepStore, sweep: str
                  ) -> tuple[pd.DataFrame, dict[str, tuple[str, str]]]:
     """The rows in engineering units, plain names; each column's (unit, description)."""
+    import pandas as pd
+
     desc, records = _records(store, sweep)
     axes = {a["name"]: a for a in desc["axes"]}
     frame = pd.DataFrame.from_records(records).set_index("index")

@@ -16,15 +16,15 @@ from __future__ import annotations
 import itertools
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
-from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
 
 from .. import units
 from ..io.outputs import atomic_path
+
+if TYPE_CHECKING:  # matplotlib and xarray are imported where a map is drawn (a pool worker
+    import xarray as xr  # imports this package without drawing: ≈ 0.5 s each time)
 
 __all__ = ["DEFAULT_VALUE", "percentiles", "plot_histogram", "plot_map"]
 
@@ -104,6 +104,9 @@ def plot_map(ds: xr.Dataset, x: str, y: str, path: str | Path, *, value: str | N
                          f"{MAX_PANELS}: export the sweep and plot a subset")
     ncol = min(len(combos), 3)
     nrow = math.ceil(len(combos) / ncol)
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
     fig = Figure(figsize=(5.2 * ncol, 4.2 * nrow + 0.5), layout="constrained")
     axes = fig.subplots(nrow, ncol, squeeze=False)
     xs, _ = _eng(ds[x])
@@ -320,6 +323,8 @@ def plot_histogram(ds: xr.Dataset, path: str | Path, *, value: str | None = None
     v, unit = _eng(ds[value])
     v = v.ravel()
     v = v[np.isfinite(v)]
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(7, 4.5))
     ax = fig.subplots()
     bins = max(5, min(40, int(math.sqrt(max(v.size, 1))) * 2))
