@@ -318,3 +318,37 @@ def test_the_drivers_are_compiled_once_for_models_of_every_size(tmp_path: Path) 
     got = json.loads(done.stdout.strip().splitlines()[-1])
     assert got["sizes"] == [15, 15, 18]
     assert got["compiles"] == 4 and got["libraries"] == 4
+
+
+@needs_cc
+def test_a_models_c_text_is_translated_once_and_read_back_from_the_cache(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """``c_engine._model_text``: the first use of a model structure writes its translated C
+    text to the cache folder (``model-<hash>.c``); a later process (a fresh engine) reads it
+    back without translating, and the library it loads is the same text's; a read-only cache
+    translates again and still runs."""
+    monkeypatch.setenv(c_cache.CACHE_ENV, str(tmp_path / "c"))
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs")
+    model = system.model(ConstantSpeed(1e-3))
+    text = c_engine._model_text(model)
+    assert text == c_engine.model_source(model)
+    kept = sorted((tmp_path / "c").glob("model-*.c"))
+    assert len(kept) == 1 and kept[0].read_text(encoding="utf-8") == text
+
+    def refuse(_: Any) -> str:
+        raise AssertionError("translated again")
+
+    monkeypatch.setattr(c_engine, "model_source", refuse)
+    assert c_engine._model_text(model) == text  # read back
+    other = fd.DriveSystem(fd.preset("wang2021"), "ddfs").model(ConstantSpeed(1e-3, 16e-3))
+    with pytest.raises(AssertionError, match="translated again"):
+        c_engine._model_text(other)  # another structure, another key
+    monkeypatch.undo()
+    monkeypatch.setenv(c_cache.CACHE_ENV, str(tmp_path / "c"))
+
+    def read_only(*_: Any, **__: Any) -> Any:
+        raise PermissionError("read-only file system")
+
+    monkeypatch.setattr(c_engine.tempfile, "mkstemp", read_only)  # a cache that cannot be written
+    assert c_engine._model_text(other) == c_engine.model_source(other)
+    assert len(list((tmp_path / "c").glob("model-*.c"))) == 1  # nothing written
