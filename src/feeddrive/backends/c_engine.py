@@ -44,6 +44,7 @@ and the C build goes without the step cap until the next analysis.
 from __future__ import annotations
 
 import ast
+import contextlib
 import ctypes
 import functools
 import hashlib
@@ -444,6 +445,24 @@ def _sources_digest() -> str:
     return digest.hexdigest()[:20]
 
 
+def _keep(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` whole (a temporary file beside it, renamed) or not at all:
+    a read-only cache is left as it is, and what it would have kept is made again by the next
+    process."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+    except OSError:
+        return
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as out:
+            out.write(text)
+        os.replace(tmp, path)
+    except OSError:  # a full disk: no half file left behind
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+
+
 @functools.cache
 def driver_unit(use: str) -> dict[str, Any]:
     """The driver ``use`` (:func:`lowered_source`) in C, exported as ``fd_<use>``, with every
@@ -479,14 +498,7 @@ def driver_unit(use: str) -> dict[str, Any]:
     except (OSError, ValueError):
         pass
     unit = _translated(use)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=".driver-", suffix=".json")
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            json.dump(unit, out)
-        os.replace(tmp, path)
-    except OSError:  # a read-only cache: translated again by the next process
-        pass
+    _keep(path, json.dumps(unit))
     return unit
 
 
@@ -564,14 +576,7 @@ def _model_text(model: Model) -> str:
     except (OSError, ValueError):
         pass
     text = model_source(model)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=".model-", suffix=".c")
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(tmp, path)
-    except OSError:  # a read-only cache: translated again by the next process
-        pass
+    _keep(path, text)
     return text
 
 
