@@ -2,8 +2,8 @@
 tied to their parent, stopped at once.
 
 A module of its own, outside :mod:`feeddrive.sweep`, so that a spawned worker of
-``reproduce``, which imports its job's module, does not import the sweep package's maps and
-exports (matplotlib, pandas: ≈ 0.5 CPU s per worker).
+``reproduce``, which imports its job's module, need not import the sweep package (whose maps
+and exports imported matplotlib and pandas when it was imported: ≈ 0.5 CPU s per worker).
 """
 
 from __future__ import annotations
