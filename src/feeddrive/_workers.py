@@ -18,8 +18,6 @@ import threading
 import time
 from collections.abc import Iterator
 
-__all__ = ["single_threaded_children", "stop_workers", "worker_start"]
-
 # one thread per worker process: the parallelism is across points
 _THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 
