@@ -324,9 +324,9 @@ def test_the_drivers_are_compiled_once_for_models_of_every_size(tmp_path: Path) 
 def test_a_models_c_text_is_translated_once_and_read_back_from_the_cache(
         monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """``c_engine._model_text``: the first use of a model structure writes its translated C
-    text to the cache folder (``model-<hash>.c``); a later process (a fresh engine) reads it
-    back without translating, and the library it loads is the same text's; a read-only cache
-    translates again and still runs."""
+    text to the cache folder (``model-<hash>.c``); a later call reads it back without
+    translating (as a later process does), another structure has a key of its own, and a
+    cache that cannot be written is left as it is, the text translated again."""
     monkeypatch.setenv(c_cache.CACHE_ENV, str(tmp_path / "c"))
     system = fd.DriveSystem(fd.preset("wang2021"), "cdfs")
     model = system.model(ConstantSpeed(1e-3))

@@ -67,4 +67,7 @@ def test_a_continued_runs_states_are_joined_column_by_column_when_read() -> None
         "table_speed")]  # that column alone
     for name in fresh.signal_names():
         assert np.array_equal(continued[name], fresh[name]), name
+    # the auxiliary signals (continuous loops: computed from every state) joined the parts
+    # once, and the states are read from that array since
+    assert run._state_parts is None and run.y.shape == (fresh.time.size, len(run.model.states))
     assert continued.dataset.equals(fresh.dataset)

@@ -104,6 +104,17 @@ class Run:
         """
         self._state_parts = parts
 
+    def states(self) -> np.ndarray:
+        """Every state as one (samples, states) array [SI, per state]: the parts joined once,
+        and the states read from it from then on (what computes every auxiliary signal
+        needs them all)."""
+        if self._state_parts is not None:
+            self.y = np.concatenate(self._state_parts)
+            for k, sig in enumerate(self.model.states):
+                self.columns[sig.name] = (self.y, k)
+            self._state_parts, self._state_columns = None, {}
+        return self.y
+
     def signal(self, name: str) -> np.ndarray:
         """One signal of the run by name: a state, an auxiliary output, a derived signal or the
         following error.

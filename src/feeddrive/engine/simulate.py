@@ -923,7 +923,7 @@ class Simulation:
             run.defer_aux(lambda: _join(aux_parts, len(model.aux)))
         else:  # not recorded (continuous loops, dense output): evaluated when read
             run.defer_aux(lambda: builds.compiled(model, "auxiliary")(
-                t, _join(y_parts, n), model.P, model.T))
+                t, run.states(), model.P, model.T))
         return Result.from_run(run)
 
 
