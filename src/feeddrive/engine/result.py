@@ -105,9 +105,14 @@ class Run:
         self._state_parts = parts
 
     def states(self) -> np.ndarray:
-        """Every state as one (samples, states) array [SI, per state]: the parts joined once,
-        and the states read from it from then on (what computes every auxiliary signal
-        needs them all)."""
+        """Every state as one array: the parts joined once, and the states read from it from
+        then on (what computes every auxiliary signal needs them all).
+
+        Returns
+        -------
+        numpy.ndarray
+            (samples, states) [SI, per state].
+        """
         if self._state_parts is not None:
             self.y = np.concatenate(self._state_parts)
             for k, sig in enumerate(self.model.states):
