@@ -8,8 +8,9 @@ from a start drawn within a count, 1 % current noise). This checks the numerical
 intervals (integration error, quantised records), not the model's structure.
 Acceptance (issue 36): each 95 % interval covers the truth in ≥ 16 of 20 seeds (met: 20,
 20, 17), the mean (estimate − truth)/s.e. lies within ±0.5 (met) and its mean |…| within
-0.6–1.4 (the gain's 0.58 on these 20 seeds, just below: marked xfail with the measured
-values; met over 100 seeds); "model inadequate" in ≤ 5 % of the seeds (met).
+0.6–1.4 (met by the other two, 0.73 and 0.93; the gain's 0.58 on these 20 seeds, just
+below: a strict xfail with the measured value; met over 100 seeds); "model inadequate" in
+≤ 5 % of the seeds (met).
 """
 
 from __future__ import annotations
@@ -71,11 +72,19 @@ def test_no_one_signed_bias(calibration) -> None:
         assert abs(float(z[path].mean())) <= 0.5, (path, z[path].mean())
 
 
+#: the gain's mean |(estimate - truth)/s.e.| on these 20 seeds is 0.58, just below the window
+#: (over 100 seeds 0.62: met; docs/fitting.md, Calibration): a strict expected failure, so
+#: that it shows the day it moves into the window
+_GAIN_BELOW = pytest.mark.xfail(strict=True, reason="the gain's mean |z| 0.58 on these 20 "
+                                "seeds, just below 0.6-1.4 (0.62 over 100 seeds)")
+
+
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason="borderline on these 20 seeds: mean |(estimate - "
-                   "truth)/s.e.| 0.58, 0.73, 0.93, the gain's just below 0.6-1.4 (over 100 "
-                   "seeds 0.62, 0.72, 0.84: met; docs/fitting.md, Calibration)")
-def test_intervals_are_calibrated_not_only_wide(calibration) -> None:
+@pytest.mark.parametrize("path", [pytest.param(p, marks=_GAIN_BELOW)
+                                  if p == "controller.velocity_integral_gain" else p
+                                  for p in FREE])
+def test_intervals_are_calibrated_not_only_wide(calibration, path: str) -> None:
+    """Mean |(estimate − truth)/s.e.| within 0.6–1.4 per parameter (issue 36; measured on
+    these 20 seeds 0.58, 0.73, 0.93)."""
     z, _, _ = calibration
-    for path in FREE:
-        assert 0.6 <= float(np.abs(z[path]).mean()) <= 1.4, (path, np.abs(z[path]).mean())
+    assert 0.6 <= float(np.abs(z[path]).mean()) <= 1.4, (path, np.abs(z[path]).mean())
