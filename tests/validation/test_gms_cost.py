@@ -2,9 +2,10 @@
 Al-Bender, Lampaert & Swevers 2005) against the LuGre guide of ``wang2021``, 10 s at 2 mm/s
 with the default settings.
 
-Measured (benchmarks/bench_gms.py, benchmarks/results/bench_gms.md): the GMS run takes ≈ 9×
-the LuGre run's right-hand-side evaluations (19× before the modal method went back to DOPRI5
-where its cap leaves RODAS4 no gain).  It is not a stiffness test that misses the elements:
+Measured (benchmarks/bench_gms.py, benchmarks/results/bench_gms.md, 2026-12-05 20:54 UTC):
+the GMS run takes 7× the LuGre run's right-hand-side evaluations and 4.8× its CPU (19× the
+evaluations before the modal method went back to DOPRI5 where its cap leaves RODAS4 no
+gain); without the cap (``auto``) 1.94× the evaluations but 3.6× the CPU (docs/model.md).  It is not a stiffness test that misses the elements:
 the elements' stiff eigenvalues (≈ −1.26e4 1/s, C/|s(v)|) do hold DOPRI5 at its stability
 limit, h ≈ 3.3/1.26e4 s, and the stiffness test sees it.  What keeps RODAS4 from stepping over
 them is the ``modal`` method's cap (feeddrive.solvers.modes): the table's 202-Hz mode,
@@ -100,7 +101,7 @@ def test_the_modal_cap_on_the_table_mode_is_what_a_gms_guide_pays() -> None:
 
 @pytest.mark.xfail(strict=True, reason="issue 42 item 4 not met: the modal method resolves the "
                    "GMS guide's lightly damped table mode (ζ ≈ 0.009 < ZETA_LIGHT), 0.275-ms "
-                   "steps; measured 9× the LuGre guide's evaluations (module docstring)")
+                   "steps; measured 7× the LuGre guide's evaluations (module docstring)")
 def test_a_gms_guide_costs_at_most_twice_the_lugre_guide() -> None:
     """Issue 42 item 4's acceptance, on counts: the GMS-guide CDFS 10-s run's right-hand-side
     evaluations ≤ 2× the LuGre-guide run's, both at the default settings."""
