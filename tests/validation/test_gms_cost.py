@@ -5,9 +5,12 @@ with the default settings.
 Measured (benchmarks/bench_gms.py, benchmarks/results/bench_gms.md, 2026-12-05 20:54 UTC):
 the GMS run takes 7× the LuGre run's right-hand-side evaluations and 4.8× its CPU (19× the
 evaluations before the modal method went back to DOPRI5 where its cap leaves RODAS4 no
-gain); without the cap (``auto``) 1.94× the evaluations but 3.6× the CPU (docs/model.md).  It is not a stiffness test that misses the elements:
-the elements' stiff eigenvalues (≈ −1.26e4 1/s, C/|s(v)|) do hold DOPRI5 at its stability
-limit, h ≈ 3.3/1.26e4 s, and the stiffness test sees it.  What keeps RODAS4 from stepping over
+gain); without the cap (``auto``) 1.94× the evaluations but 3.6× the CPU (docs/model.md).
+It is not chiefly a stiffness test that misses the elements: the elements' stiff eigenvalues
+(≈ −1.26e4 1/s, C/|s(v)|) hold DOPRI5 at its stability limit, h ≈ 3.3/1.26e4 s; the test
+sees it at 1.3 s, and weighted as the error norm (which sees the elements) at 0.25 s, but
+while the start's ring lasts RODAS4 does not pay for itself (tried: benchmarks/README.md).
+What keeps RODAS4 from stepping over
 them is the ``modal`` method's cap (feeddrive.solvers.modes): the table's 202-Hz mode,
 λ ≈ −11 ± 1271i 1/s, has a damping ratio of 0.009 with the GMS guide — below ``ZETA_LIGHT`` =
 0.02, so every step is capped at h·|λ| ≤ ``H_LAMBDA`` = 0.35, 0.275 ms, about DOPRI5's stable
