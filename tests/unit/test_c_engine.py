@@ -21,6 +21,7 @@ import pytest
 import feeddrive as fd
 from feeddrive.backends import c_cache, c_engine
 from feeddrive.backends.c_backend import STRICT_FLAGS
+from feeddrive.model.mechanisms.base import drive_names, mechanism
 from feeddrive.model.reference import ConstantSpeed
 from feeddrive.solvers import builds, dopri5, driver, switching
 
@@ -352,3 +353,17 @@ def test_a_models_c_text_is_translated_once_and_read_back_from_the_cache(
     monkeypatch.setattr(c_engine.tempfile, "mkstemp", read_only)  # a cache that cannot be written
     assert c_engine._model_text(other) == c_engine.model_source(other)
     assert len(list((tmp_path / "c").glob("model-*.c"))) == 1  # nothing written
+
+
+@needs_cc
+@pytest.mark.parametrize("drive", drive_names())
+def test_every_packaged_drive_runs_in_c(drive: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every drive of the registry, on its example preset, translates whole to C: no kernel
+    of the package (a solver piece, a law, a part) falls outside the C subset, where with
+    numba installed the model would run in the numba build silently (said once on standard
+    error) and without it not at all."""
+    monkeypatch.delenv(builds.ENGINE_ENV, raising=False)
+    parameters = fd.preset(mechanism(drive).example_preset)
+    nut = 16e-3 if drive == "ddfs" else 0.0
+    model = fd.DriveSystem(parameters, drive, 0.4).model(ConstantSpeed(0.5e-3, nut))
+    assert builds.engine_of(model) == "c"

@@ -141,29 +141,38 @@ def exponential(J: np.ndarray, H: float, Phi: np.ndarray, Phi_a: np.ndarray,
             Phi[i, j] = 0.0
         Phi[i, i] = 1.0
     for k in range(TAYLOR_DEGREE, 0, -1):  # Phi ← I + A Phi / k
+        _product(Phi_a, Phi, Phi_b)
         for i in range(n):
             for j in range(n):
-                v = 0.0
-                for m in range(n):
-                    v += Phi_a[i, m] * Phi[m, j]
-                Phi_b[i, j] = v / k
-        for i in range(n):
-            for j in range(n):
-                Phi[i, j] = Phi_b[i, j]
+                Phi[i, j] = Phi_b[i, j] / k
             Phi[i, i] += 1.0
     for _ in range(s):
-        for i in range(n):
-            for j in range(n):
-                v = 0.0
-                for m in range(n):
-                    v += Phi[i, m] * Phi[m, j]
-                Phi_b[i, j] = v
+        _product(Phi, Phi, Phi_b)
         for i in range(n):
             for j in range(n):
                 Phi[i, j] = Phi_b[i, j]
     for i in range(n):
         for j in range(n):
             Phi[i, j] *= scale[i] / scale[j]
+
+
+@kernel
+def _product(Phi_a: np.ndarray, Phi: np.ndarray, Phi_b: np.ndarray) -> None:
+    """Phi_b = Phi_a Phi (n × n), each entry summed over m rising as the plain triple loop
+    sums it, the rows of Phi added to Phi_b's row i in turn and a zero Phi_a[i, m] skipped: a
+    sum that starts at +0 and takes a zero's product (of finite numbers) stays what it was,
+    so Phi_b is the plain loop's bit for bit, at the cost of Phi_a's nonzeros (a drive's scaled
+    Jacobian keeps 14–22 % of its entries; the squarings' Φ fewer zeros).  (The parameters
+    are named as the C backend knows their shapes.)"""
+    n = Phi_a.shape[0]
+    for i in range(n):
+        for j in range(n):
+            Phi_b[i, j] = 0.0
+        for m in range(n):
+            a = Phi_a[i, m]
+            if a != 0.0:
+                for j in range(n):
+                    Phi_b[i, j] += a * Phi[m, j]
 
 
 @kernel
