@@ -350,7 +350,9 @@ def test_a_models_c_text_is_translated_once_and_read_back_from_the_cache(
     def read_only(*_: Any, **__: Any) -> Any:
         raise PermissionError("read-only file system")
 
-    monkeypatch.setattr(c_engine.tempfile, "mkstemp", read_only)  # a cache that cannot be written
+    from feeddrive.io import outputs
+
+    monkeypatch.setattr(outputs, "atomic_path", read_only)  # a cache that cannot be written
     assert c_engine._model_text(other) == c_engine.model_source(other)
     assert len(list((tmp_path / "c").glob("model-*.c"))) == 1  # nothing written
 

@@ -51,7 +51,6 @@ import hashlib
 import json
 import os
 import sys
-import tempfile
 import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -446,21 +445,15 @@ def _sources_digest() -> str:
 
 
 def _keep(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` whole (a temporary file beside it, renamed) or not at all:
-    a read-only cache is left as it is, and what it would have kept is made again by the next
-    process."""
-    try:
+    """Write ``text`` to ``path`` whole or not at all (:func:`feeddrive.io.outputs.
+    atomic_path`, which leaves no half file behind): a read-only cache or a full disk is
+    left as it is, and what it would have kept is made again by the next process."""
+    from ..io.outputs import atomic_path
+
+    with contextlib.suppress(OSError):
         path.parent.mkdir(parents=True, exist_ok=True)
-        handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
-    except OSError:
-        return
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(tmp, path)
-    except OSError:  # a full disk: no half file left behind
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        with atomic_path(path) as tmp:
+            tmp.write_text(text, encoding="utf-8")
 
 
 @functools.cache
