@@ -20,6 +20,8 @@ from feeddrive.reproduce.report import (
 from feeddrive.reproduce.studies import StudySettings
 from feeddrive.solvers import modes, switching
 
+_DEFAULT = opt.ROSENBROCKS[opt.DEFAULT_ROSENBROCK]
+
 
 def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
     options = SolverOptions()
@@ -27,14 +29,16 @@ def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
     assert text.startswith(f"{options.method} (")
     for piece in (f"h·|λ| ≤ {modes.H_LAMBDA:g}",
                   f"damping ratio < {modes.ZETA_LIGHT:g}",
-                  f"a RODAS4 step counted as {switching.RODAS4_COST:g} DOPRI5 steps",
+                  f"a {_DEFAULT.label} step counted as {_DEFAULT.cost:g} DOPRI5 steps",
                   f"rtol {opt._num(opt.DEFAULT_RTOL)}",
                   f"positions {opt._num(opt.POSITION_TIME)} s × V",
                   f"speeds {opt._num(opt.SPEED_FRACTION)} × V",
                   f"currents {opt._num(opt.CURRENT_FRACTION)} × the current limit",
                   f"deflections {opt._num(opt.DEFLECTION_FRACTION)} × their onset deflection",
                   f"output every {options.output_interval:g} s",
-                  f"continuous extension of order {opt.DENSE_OUTPUT_ORDER['modal']}"):
+                  # DOPRI5's continuous extension, order 4; RODAS4's 3, RODAS5P's 4
+                  f"continuous extension of order 4 (DOPRI5 steps) / "
+                  f"{ {'RODAS4': 3, 'RODAS5P': 4}[_DEFAULT.label]} ({_DEFAULT.label} steps)"):
         assert piece in text, piece
     # the compiled dense driver takes its cap from the modes module, as the label does
     source = "\n".join(switching.template_sources())
@@ -45,8 +49,9 @@ def test_the_default_label_names_the_method_its_cap_and_tolerances() -> None:
 def test_the_label_follows_the_code(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(modes, "H_LAMBDA", 0.123)
     assert "h·|λ| ≤ 0.123 " in integrator_text()
-    monkeypatch.setattr(switching, "RODAS4_COST", 4.0)
-    assert "counted as 4 DOPRI5 steps" in integrator_text()
+    # the default Rosenbrock method's cost constant (RODAS5P_COST since 2026-12-05)
+    monkeypatch.setattr(switching, f"{_DEFAULT.label}_COST", 4.0)
+    assert f"a {_DEFAULT.label} step counted as 4 DOPRI5 steps" in integrator_text()
     assert "rtol 1e-8" in SolverOptions(rtol=1e-8).describe()
     assert "every output a step end" in SolverOptions(method="dopri5").describe()
     assert "steps ≤ 0.001 s" in SolverOptions(method="dopri5").describe()

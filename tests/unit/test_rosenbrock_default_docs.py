@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def test_model_md_names_the_default_rosenbrock_method() -> None:
     text = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
-    paragraph = text[text.index("**RODAS5P, an opt-in Rosenbrock method**"):]
+    paragraph = text[text.index("**RODAS5P, the default Rosenbrock method**"):]
     paragraph = paragraph[:paragraph.index("\n\n")]
     assert f'default `"{options.DEFAULT_ROSENBROCK}"`' in paragraph
 

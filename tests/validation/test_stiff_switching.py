@@ -212,7 +212,11 @@ def test_the_docs_state_the_switch_back_rule_of_the_code() -> None:
 _COST_RUN = r"""
 import json, sys
 from feeddrive.solvers import driver, switching
-driver.RODAS4_COST = switching.RODAS4_COST = float(sys.argv[1])  # before the first build
+from feeddrive.engine.options import DEFAULT_ROSENBROCK, ROSENBROCKS
+# the default Rosenbrock method's constant, before the first build
+name = ROSENBROCKS[DEFAULT_ROSENBROCK].label + "_COST"
+setattr(driver, name, float(sys.argv[1]))
+setattr(switching, name, float(sys.argv[1]))
 import feeddrive as fd
 from feeddrive.analysis.critical import creep_trial
 out = {}
@@ -231,14 +235,17 @@ print(json.dumps(out))
 
 
 def test_the_verdicts_do_not_hinge_on_the_cost_constant(tmp_path: Path) -> None:
-    """``RODAS4_COST`` is a measured ratio (4.8–6.9 in C, 3.7–4.9 in numba:
-    benchmarks/bench_switch_cost.py), not a tuned one: at 2 and at 8 the creep trials on both
+    """The default Rosenbrock method's cost constant (``RODAS5P_COST`` since 2026-12-05, 6.5;
+    ``RODAS4_COST`` 5 before) is a measured ratio (RODAS5P 5.7–8.1 in C, 4.3–5.0 in numba;
+    RODAS4 4.8–6.9 and 3.7–4.9: benchmarks/bench_switch_cost.py), not a tuned one: at 2 and
+    at 8 the creep trials on both
     sides of the CDFS's band edges (1.41/1.42 and 1.55/1.56 mm/s) and the DDFS at 0.5 mm/s
     (hollow motor 16 mm/s) get the verdicts of the Radau references
     (benchmarks/results/bench_verdicts_reference.json) and ripple ratios within 2 % of each
     other, and so does the forced study's ripple point (``wang2021-ripple`` DDFS, 1 mm/s,
     hollow motor 30 mm/s: the run the rule changed most), while the DDFS run's method mix
-    differs (the constant acts; measured 1 828 RODAS4 steps at 2, 998 at 8).  Each setting
+    differs (the constant acts; measured under RODAS5P 1 188 Rosenbrock steps at 2, 827 at 8;
+    under RODAS4 1 828 and 998).  Each setting
     runs in a process of its own with a C cache of its own (the constant is part of the
     driver's text)."""
     import json

@@ -28,7 +28,8 @@ Numerical error.  At the optimum the forward model's integration error is estima
 fitted signal (``simulate(error_estimate=True)``) and the integrator tightened (×0.1 of every
 tolerance, the search resumed) until it is ≤ ``ERROR_TO_NOISE`` × every signal's noise and a
 ten-times-tighter integrator moves no estimate by more than ``ESTIMATE_SHIFT`` standard
-errors; else the intervals are withheld (:class:`IntegrationCheck`).
+errors and changes the standard error of no linear interval by more than ``STDERR_SHIFT`` of
+itself; else the intervals are withheld (:class:`IntegrationCheck`).
 
 Uncertainty.  The covariance is the HAC sandwich of
 :mod:`~feeddrive.analysis.fit_residuals` (the white-noise s²(JᵀJ)⁻¹ kept for comparison);
@@ -123,6 +124,12 @@ MAX_ACCURACY_STEPS = 3
 #: and the estimates may move by at most this many standard errors when the integrator is
 #: ten times tighter (the error's effect on the estimates, not only on the signals)
 ESTIMATE_SHIFT = 0.1
+#: and the standard error of every linear interval may change by at most this fraction when
+#: the integrator is ten times tighter (the error's effect on the intervals: a Jacobian
+#: column of a weakly determined parameter is a difference of two runs, and where that
+#: difference is of the integration error's size the covariance is the integrator's; a
+#: standard error 10 % too small leaves a nominal 95 % interval covering 93 %)
+STDERR_SHIFT = 0.1
 #: signals compared up to a constant per record: a position reading starts in an unknown
 #: place within an encoder count (or from an arbitrary zero), a nuisance offset profiled out
 #: (its mean removed from the residual; variable projection, Golub & Pereyra 1973)
@@ -976,7 +983,9 @@ class SignalResidual:
 @dataclass(frozen=True)
 class IntegrationCheck:
     """How the fit chose its integrator accuracy: the forward model's estimated integration
-    error at the optimum against ``ERROR_TO_NOISE`` × each fitted signal's noise.
+    error at the optimum against ``ERROR_TO_NOISE`` × each fitted signal's noise, the
+    estimates' shift and the standard errors' change with the integrator ten times tighter
+    against ``ESTIMATE_SHIFT`` and ``STDERR_SHIFT``.
 
     Parameters
     ----------
@@ -989,8 +998,10 @@ class IntegrationCheck:
     steps : int
         Tightenings made (each ×1/``ACCURACY_STEP``).
     history : tuple of dict
-        Per attempt: ``accuracy``, ``rtol``, ``worst_ratio`` (error / noise, the largest) and
-        ``signals`` (source, signal, error [SI], noise [SI], ratio).
+        Per attempt: ``accuracy``, ``rtol``, ``worst_ratio`` (error / noise, the largest),
+        ``signals`` (source, signal, error [SI], noise [SI], ratio) and, once the signals
+        pass, ``estimate_shift_stderr`` (:func:`_estimate_shift`) and, once that passes,
+        ``stderr_shift`` (:func:`_stderr_shift`).
     reason : str, optional
         Why the limit was not reached.
     """
@@ -1011,6 +1022,8 @@ class IntegrationCheck:
             The fields, with the limit.
         """
         return {"met": self.met, "limit_fraction_of_noise": ERROR_TO_NOISE,
+                "limit_estimate_shift_stderr": ESTIMATE_SHIFT,
+                "limit_stderr_shift": STDERR_SHIFT,
                 "accuracy": self.accuracy, "rtol": self.rtol, "steps": self.steps,
                 "history": list(self.history), "reason": self.reason}
 
@@ -1555,7 +1568,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
             settings = current()
             if accuracy_check and not interrupted:
                 theta, final, settings, check, more = _settle_accuracy(
-                    final, theta, lb, ub, max_evaluations, say)
+                    final, theta, lb, ub, max_evaluations, say, confidence)
                 evaluations += more
             with using(settings):
                 tangent = None
@@ -1635,6 +1648,64 @@ def _estimate_shift(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.nd
     return float(np.max(ratio)) if ratio.size else 0.0
 
 
+def _fraction(x: float) -> str:
+    """A relative change as a percentage (``inf``: an interval's kind changes)."""
+    return f"{100 * x:.3g} %" if math.isfinite(x) else "a change of interval kind"
+
+
+def _stderr_shift(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
+                  settings: Any, confidence: float) -> tuple[float, str]:
+    """How much the linear intervals' standard errors change when the integrator is ten
+    times tighter: the HAC standard errors from the tangent Jacobian (central differences,
+    :meth:`_Evaluator.tangent`, the one the intervals use) at ``settings`` and at ten times
+    tighter, both at ``theta``.
+
+    A parameter counts where its linear interval is credible (as :func:`_summarise` judges:
+    half-width at most ``PROFILE_ABOVE`` of the value, within the bounds) at either setting:
+    its relative change |s.e./s.e.(tighter) − 1|, or inf where the interval is credible at
+    one setting and not at the other (the tighter one profiles it or calls it undetermined,
+    the looser one would report it).  Parameters credible at neither are profiled either way
+    and do not count.
+
+    Returns
+    -------
+    tuple
+        (the largest change [-], the parameter it is at and both standard errors, or "").
+    """
+    from scipy import stats  # (imported where used: see the module's)
+
+    from ..engine.error_estimate import tightened
+    from ..engine.options import using
+
+    try:
+        tight = tightened(settings, ACCURACY_STEP)
+    except ParameterError:
+        return math.inf, "the integrator cannot be tightened further"
+    ses, credible = [], []
+    for s, evaluator in ((settings, ev), (tight, ev.fresh("standard errors, tighter"))):
+        with using(s):
+            r = evaluator.batch([theta])[0]
+            jac = evaluator.tangent(theta, lb, ub)
+        dof = max(r.size - theta.size, 1)
+        tq = float(stats.t.ppf(0.5 + confidence / 2.0, dof))
+        with np.errstate(all="ignore"):
+            se = np.sqrt(np.abs(np.diag(hac_covariance(jac, r, ev.records()).covariance)))
+        ses.append(se)
+        credible.append(np.isfinite(se) & (tq * se <= PROFILE_ABOVE * np.abs(theta))
+                        & (theta - tq * se >= lb) & (theta + tq * se <= ub))
+    worst, which = 0.0, ""
+    for j, path in enumerate(ev.paths):
+        if not (credible[0][j] or credible[1][j]):
+            continue
+        change = (abs(ses[0][j] / ses[1][j] - 1.0) if credible[0][j] and credible[1][j]
+                  else math.inf)
+        if change > worst or not which:
+            unit = ev.start[j]
+            worst, which = change, (f"{path}: {abs(ses[0][j] * unit):.3g} against "
+                                    f"{abs(ses[1][j] * unit):.3g}")
+    return float(worst), which
+
+
 def _polish(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
             say: Callable[[str], None]) -> tuple[np.ndarray, np.ndarray]:
     """Gauss–Newton steps with the central-difference Jacobian (:meth:`_Evaluator.tangent`)
@@ -1668,12 +1739,14 @@ def _polish(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
 
 
 def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-                     max_evaluations: int, say: Callable[[str], None]
+                     max_evaluations: int, say: Callable[[str], None], confidence: float
                      ) -> tuple[np.ndarray, _Evaluator, Any, IntegrationCheck, int]:
     """Numerical error below the noise (issue 36 item 1): at the optimum, the estimated
     global integration error of every fitted signal (``simulate(error_estimate=True)``,
-    :mod:`feeddrive.engine.error_estimate`) against ``ERROR_TO_NOISE`` × its noise;
-    while above, every tolerance ÷ ``ACCURACY_STEP``
+    :mod:`feeddrive.engine.error_estimate`) against ``ERROR_TO_NOISE`` × its noise, the
+    estimates' shift (:func:`_estimate_shift`) against ``ESTIMATE_SHIFT`` and the standard
+    errors' change (:func:`_stderr_shift`) against ``STDERR_SHIFT``, each with the
+    integrator ten times tighter; while above, every tolerance ÷ ``ACCURACY_STEP``
     (:func:`~feeddrive.engine.error_estimate.tightened`: ``accuracy`` for the defaults, the
     explicit ones divided) and the search resumed from the optimum on the whole records.
 
@@ -1713,21 +1786,30 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
         say(f"integration error at accuracy {settings.accuracy:g}: up to {worst:.3g}× the "
             f"noise (limit {ERROR_TO_NOISE:g})" + ("; a signal's estimate is exactly 0 "
                                                    "(not estimable)" if blind else ""))
-        shift = math.nan
+        shift = spread = math.nan
+        which = ""
         if worst <= ERROR_TO_NOISE and not blind:
             shift = _estimate_shift(ev, theta, lb, ub, settings)
             history[-1]["estimate_shift_stderr"] = shift
             say(f"estimates move by up to {shift:.3g} standard errors with the integrator "
                 f"ten times tighter (limit {ESTIMATE_SHIFT:g})")
             if shift <= ESTIMATE_SHIFT:
-                break
+                spread, which = _stderr_shift(ev, theta, lb, ub, settings, confidence)
+                history[-1]["stderr_shift"] = spread
+                say(f"standard errors change by up to {_fraction(spread)} with the "
+                    f"integrator ten times tighter (limit {_fraction(STDERR_SHIFT)}"
+                    + (f"; {which}" if which else "") + ")")
+                if spread <= STDERR_SHIFT:
+                    break
         if steps == MAX_ACCURACY_STEPS:
             reason = ((f"the integration error is still {worst:.3g}× the noise"
                        if worst > ERROR_TO_NOISE and not blind else
-                       f"the integration error still moves the estimates by {shift:.3g} "
-                       "standard errors" if not blind else
                        "the integration error is not estimable (the run and its shadow agree "
-                       "exactly)") +
+                       "exactly)" if blind else
+                       f"the integration error still moves the estimates by {shift:.3g} "
+                       "standard errors" if shift > ESTIMATE_SHIFT else
+                       f"the integration error still changes the standard errors by "
+                       f"{_fraction(spread)} ({which})") +
                       f" after {steps} tightenings (accuracy {settings.accuracy:g}); limit "
                       f"{ERROR_TO_NOISE:g}× the noise")
             break

@@ -244,12 +244,14 @@ def fit_command(
              f"{r.ratio:.2f}× the data's noise {r.noise:.3g} [SI]{error}{structure}")
     check = result.integration
     if check is not None:
-        shift = check.history[-1].get("estimate_shift_stderr") if check.history else None
+        last = check.history[-1] if check.history else {}
+        shift, spread = last.get("estimate_shift_stderr"), last.get("stderr_shift")
         _say(f"  integrator accuracy {check.accuracy:g} ({check.steps} tightening(s)): "
              + ("estimated integration error ≤ "
                 f"{data['integration_check']['limit_fraction_of_noise']:g}× every signal's "
-                f"noise; the estimates move by {shift:.2g} standard errors with it ten times "
-                "tighter" if check.met and shift is not None
+                f"noise; the estimates move by {shift:.2g} standard errors and the standard "
+                f"errors by {100 * spread:.2g} % with it ten times tighter"
+                if check.met and shift is not None and spread is not None
                 else f"intervals withheld: {check.reason}"))
     if result.hac is not None:
         bands = ", ".join(f"{b:.3g}" for b in result.hac.bandwidths)

@@ -94,7 +94,7 @@ class Rosenbrock(NamedTuple):
 #: the Rosenbrock methods of ``SolverOptions.rosenbrock``, by name
 ROSENBROCKS = {"rodas4": Rosenbrock("RODAS4", 0, RODAS4),
                "rodas5p": Rosenbrock("RODAS5P", switching.ROSENBROCK_5, RODAS5P)}
-DEFAULT_ROSENBROCK = "rodas4"
+DEFAULT_ROSENBROCK = "rodas5p"
 #: the default largest step of ``dopri5`` at ``accuracy`` 1 [s], × accuracy^(1/5) otherwise
 #: (:attr:`feeddrive.SolverOptions.largest_step`): where the cap binds, DOPRI5's global
 #: error goes as h^5, so a cap that stayed put would leave the error there deaf to
@@ -104,8 +104,9 @@ DOPRI5_STEP = 1e-3
 #: dense output (Hairer, Nørsett & Wanner I, Sect. II.6, ``contd5``) is of order 4, RODAS4's
 #: (Hairer & Wanner II, Sect. IV.7, ``contro``) of order 3; ``dopri5`` has every output a
 #: step end
-DENSE_OUTPUT_ORDER = {"modal": "4 (DOPRI5 steps) / 3 (RODAS4 steps)",
-                      "auto": "4 (DOPRI5 steps) / 3 (RODAS4 steps)", "rodas4": "3",
+DENSE_OUTPUT_ORDER = {"modal": "4 (DOPRI5 steps) / 3 (RODAS4 steps) or 4 (RODAS5P steps)",
+                      "auto": "4 (DOPRI5 steps) / 3 (RODAS4 steps) or 4 (RODAS5P steps)",
+                      "rodas4": "3",
                       "dopri5-dense": "4", "rodas4-fixed": "3",
                       "dopri5": "none (every output a step end)",
                       "dopri5-fixed": "none (every output a step end)"}
@@ -313,10 +314,10 @@ class SolverOptions:
         (``SolverOptions(method="dopri5", locate_reversals=False, **LEGACY_TOLERANCES)``
         reproduces a v1 trace bit for bit); its error then stops following the tolerances
         at the reversals.
-    rosenbrock : str, default "rodas4"
-        The Rosenbrock method of ``modal`` and ``auto`` where the run is stiff: ``"rodas4"``
-        (Hairer & Wanner, order 4(3), continuous extension of order 3) or ``"rodas5p"``
-        (Steinebach 2023, order 5(4), eight stages, continuous extension of order 4:
+    rosenbrock : str, default "rodas5p"
+        The Rosenbrock method of ``modal`` and ``auto`` where the run is stiff
+        (``DEFAULT_ROSENBROCK``, since 2026-12-05; RODAS4 before): ``"rodas4"`` (Hairer &
+        Wanner, order 4(3), continuous extension of order 3) or ``"rodas5p"`` (Steinebach 2023, order 5(4), eight stages, continuous extension of order 4:
         :data:`feeddrive.solvers.tableaux.RODAS5P`).  The ``rodas4`` methods are RODAS4
         whatever it says.
     origin : tuple of (str, str), default ()

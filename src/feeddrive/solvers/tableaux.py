@@ -30,8 +30,9 @@ Adding a method is adding a tableau.  A tableau checks its order conditions when
   extension of order 4 (three rows over the eight increments); the numbers as in
   OrdinaryDiffEq.jl (``lib/OrdinaryDiffEqRosenbrock/src/rosenbrock_tableaus.jl``,
   ``Rodas5PTableau``: A, C, c, d and H in the same increment form).  The stiff method of
-  ``modal`` and ``auto`` on request (:attr:`feeddrive.engine.options.SolverOptions.rosenbrock`,
-  default RODAS4; docs/model.md, "RODAS5P, an opt-in Rosenbrock method").
+  ``modal`` and ``auto`` (:attr:`feeddrive.engine.options.SolverOptions.rosenbrock`,
+  default RODAS5P since 2026-12-05; docs/model.md, "RODAS5P, the default Rosenbrock
+  method").
 """
 
 from __future__ import annotations
