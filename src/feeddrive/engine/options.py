@@ -317,7 +317,8 @@ class SolverOptions:
     rosenbrock : str, default "rodas5p"
         The Rosenbrock method of ``modal`` and ``auto`` where the run is stiff
         (``DEFAULT_ROSENBROCK``, since 2026-12-05; RODAS4 before): ``"rodas4"`` (Hairer &
-        Wanner, order 4(3), continuous extension of order 3) or ``"rodas5p"`` (Steinebach 2023, order 5(4), eight stages, continuous extension of order 4:
+        Wanner, order 4(3), continuous extension of order 3) or ``"rodas5p"`` (Steinebach
+        2023, order 5(4), eight stages, continuous extension of order 4:
         :data:`feeddrive.solvers.tableaux.RODAS5P`).  The ``rodas4`` methods are RODAS4
         whatever it says.
     origin : tuple of (str, str), default ()
