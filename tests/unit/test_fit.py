@@ -210,6 +210,7 @@ def test_fit_tightens_the_integrator_until_its_error_is_below_a_tenth_of_the_noi
     assert check.steps >= 1 and check.accuracy == pytest.approx(0.1 ** check.steps)
     assert check.history[-1]["worst_ratio"] <= fitmod.ERROR_TO_NOISE
     assert check.history[-1]["estimate_shift_stderr"] <= fitmod.ESTIMATE_SHIFT
+    assert check.history[-1]["stderr_shift"] <= fitmod.STDERR_SHIFT
     for r in result.residuals:
         assert 0 < r.integration_error <= fitmod.ERROR_TO_NOISE * r.noise
     data = result.to_dict()
