@@ -1697,8 +1697,10 @@ def _stderr_shift(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndar
     for j, path in enumerate(ev.paths):
         if not (credible[0][j] or credible[1][j]):
             continue
-        change = (abs(ses[0][j] / ses[1][j] - 1.0) if credible[0][j] and credible[1][j]
-                  else math.inf)
+        with np.errstate(all="ignore"):  # (a zero standard error: an infinite change)
+            change = (float(abs(ses[0][j] / ses[1][j] - 1.0))
+                      if credible[0][j] and credible[1][j] else math.inf)
+        change = change if math.isfinite(change) else math.inf
         if change > worst or not which:
             unit = ev.start[j]
             worst, which = change, (f"{path}: {abs(ses[0][j] * unit):.3g} against "
