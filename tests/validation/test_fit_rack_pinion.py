@@ -154,5 +154,7 @@ def test_the_intervals_do_not_hinge_on_the_integrator(fitted) -> None:
     first, last = check.history[0], check.history[-1]
     assert first["accuracy"] == 1.0 and first["worst_ratio"] <= fitmod.ERROR_TO_NOISE
     assert first["estimate_shift_stderr"] <= fitmod.ESTIMATE_SHIFT
-    assert first["stderr_shift"] > fitmod.STDERR_SHIFT
-    assert check.steps >= 1 and last["stderr_shift"] <= fitmod.STDERR_SHIFT
+    # the same decisions for any limit from half to five times STDERR_SHIFT (measured: a
+    # change of interval kind, inf, at accuracy 1; 1.3 % (RODAS5P) and 2.3 % (RODAS4) at 0.1)
+    assert first["stderr_shift"] > 5 * fitmod.STDERR_SHIFT
+    assert check.steps >= 1 and last["stderr_shift"] <= 0.5 * fitmod.STDERR_SHIFT
