@@ -1618,31 +1618,42 @@ class _Interrupted(Exception):
         self.result = result
 
 
-def _estimate_shift(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-                    settings: Any) -> float:
-    """How far the estimates move, in standard errors, when the integrator is ten times
-    tighter: δθ = J⁺ (r − r_shadow), against the HAC standard errors; the largest over the
-    parameters (the linearised effect of the integration error on the estimate)."""
+def _hac_stderr(ev: _Evaluator, jac: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """The HAC standard errors of θ from the Jacobian ``jac`` and residual ``r`` (the
+    records as :meth:`_Evaluator.records` splits them) [θ units]."""
+    with np.errstate(all="ignore"):
+        return np.sqrt(np.abs(np.diag(hac_covariance(jac, r, ev.records()).covariance)))
+
+
+def _shadow(ev: _Evaluator, settings: Any) -> tuple[Any, _Evaluator] | None:
+    """The settings ten times tighter and an evaluator of its own for them (shared by the
+    checks of one attempt, so that a point they both evaluate is run once); None where the
+    integrator cannot be tightened further."""
     from ..engine.error_estimate import tightened
+
+    try:
+        return tightened(settings, ACCURACY_STEP), ev.fresh("ten times tighter")
+    except ParameterError:
+        return None
+
+
+def _estimate_shift(ev: _Evaluator, shadow: tuple[Any, _Evaluator] | None, theta: np.ndarray,
+                    lb: np.ndarray, ub: np.ndarray, settings: Any) -> float:
+    """How far the estimates move, in standard errors, when the integrator is ten times
+    tighter (``shadow``, :func:`_shadow`): δθ = J⁺ (r − r_shadow), against the HAC standard
+    errors; the largest over the parameters (the linearised effect of the integration error
+    on the estimate)."""
     from ..engine.options import using
 
     with using(settings):
         r = ev.batch([theta])[0]
         jac = ev.jacobian(theta, lb, ub)
-    try:
-        shadow_settings = tightened(settings, ACCURACY_STEP)
-    except ParameterError:
+    if shadow is None:
         return math.inf
-    with using(shadow_settings):
-        r_shadow = ev.fresh("shadow").batch([theta])[0]
+    with using(shadow[0]):
+        r_shadow = shadow[1].batch([theta])[0]
     delta, *_ = np.linalg.lstsq(jac, r - r_shadow, rcond=None)
-    records, offset = [], 0
-    for e in ev.experiments:
-        m = e.time.size
-        records.append([slice(offset + k * m, offset + (k + 1) * m)
-                        for k in range(len(e.signals))])
-        offset += m * len(e.signals)
-    se = np.sqrt(np.abs(np.diag(hac_covariance(jac, r, records).covariance)))
+    se = _hac_stderr(ev, jac, r)
     with np.errstate(all="ignore"):
         ratio = np.where(se > 0, np.abs(delta) / se, math.inf)
     return float(np.max(ratio)) if ratio.size else 0.0
@@ -1653,12 +1664,13 @@ def _fraction(x: float) -> str:
     return f"{100 * x:.3g} %" if math.isfinite(x) else "a change of interval kind"
 
 
-def _stderr_shift(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-                  settings: Any, confidence: float) -> tuple[float, str]:
+def _stderr_shift(ev: _Evaluator, shadow: tuple[Any, _Evaluator] | None, theta: np.ndarray,
+                  lb: np.ndarray, ub: np.ndarray, settings: Any, confidence: float
+                  ) -> tuple[float, str]:
     """How much the linear intervals' standard errors change when the integrator is ten
     times tighter: the HAC standard errors from the tangent Jacobian (central differences,
     :meth:`_Evaluator.tangent`, the one the intervals use) at ``settings`` and at ten times
-    tighter, both at ``theta``.
+    tighter (``shadow``, :func:`_shadow`), both at ``theta``.
 
     A parameter counts where its linear interval is credible (as :func:`_summarise` judges:
     half-width at most ``PROFILE_ABOVE`` of the value, within the bounds) at either setting:
@@ -1674,22 +1686,18 @@ def _stderr_shift(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndar
     """
     from scipy import stats  # (imported where used: see the module's)
 
-    from ..engine.error_estimate import tightened
     from ..engine.options import using
 
-    try:
-        tight = tightened(settings, ACCURACY_STEP)
-    except ParameterError:
+    if shadow is None:
         return math.inf, "the integrator cannot be tightened further"
     ses, credible = [], []
-    for s, evaluator in ((settings, ev), (tight, ev.fresh("standard errors, tighter"))):
+    for s, evaluator in ((settings, ev), shadow):
         with using(s):
             r = evaluator.batch([theta])[0]
             jac = evaluator.tangent(theta, lb, ub)
         dof = max(r.size - theta.size, 1)
         tq = float(stats.t.ppf(0.5 + confidence / 2.0, dof))
-        with np.errstate(all="ignore"):
-            se = np.sqrt(np.abs(np.diag(hac_covariance(jac, r, ev.records()).covariance)))
+        se = _hac_stderr(ev, jac, r)
         ses.append(se)
         credible.append(np.isfinite(se) & (tq * se <= PROFILE_ABOVE * np.abs(theta))
                         & (theta - tq * se >= lb) & (theta + tq * se <= ub))
@@ -1791,12 +1799,14 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
         shift = spread = math.nan
         which = ""
         if worst <= ERROR_TO_NOISE and not blind:
-            shift = _estimate_shift(ev, theta, lb, ub, settings)
+            shadow = _shadow(ev, settings)
+            shift = _estimate_shift(ev, shadow, theta, lb, ub, settings)
             history[-1]["estimate_shift_stderr"] = shift
             say(f"estimates move by up to {shift:.3g} standard errors with the integrator "
                 f"ten times tighter (limit {ESTIMATE_SHIFT:g})")
             if shift <= ESTIMATE_SHIFT:
-                spread, which = _stderr_shift(ev, theta, lb, ub, settings, confidence)
+                spread, which = _stderr_shift(ev, shadow, theta, lb, ub, settings,
+                                              confidence)
                 history[-1]["stderr_shift"] = spread
                 say(f"standard errors change by up to {_fraction(spread)} with the "
                     f"integrator ten times tighter (limit {_fraction(STDERR_SHIFT)}"
