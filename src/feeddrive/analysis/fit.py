@@ -1001,7 +1001,8 @@ class IntegrationCheck:
         Per attempt: ``accuracy``, ``rtol``, ``worst_ratio`` (error / noise, the largest),
         ``signals`` (source, signal, error [SI], noise [SI], ratio) and, once the signals
         pass, ``estimate_shift_stderr`` (:func:`_estimate_shift`) and, once that passes,
-        ``stderr_shift`` (:func:`_stderr_shift`).
+        ``stderr_shift`` (:func:`_stderr_shift`) with ``stderr_shift_at`` (the parameter
+        and its two standard errors; empty: no credible linear interval to compare).
     reason : str, optional
         Why the limit was not reached.
     """
@@ -1808,9 +1809,11 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
                 spread, which = _stderr_shift(ev, shadow, theta, lb, ub, settings,
                                               confidence)
                 history[-1]["stderr_shift"] = spread
+                history[-1]["stderr_shift_at"] = which
                 say(f"standard errors change by up to {_fraction(spread)} with the "
-                    f"integrator ten times tighter (limit {_fraction(STDERR_SHIFT)}"
-                    + (f"; {which}" if which else "") + ")")
+                    f"integrator ten times tighter (limit {_fraction(STDERR_SHIFT)}; "
+                    + (which or "no parameter has a credible linear interval to compare")
+                    + ")")
                 if spread <= STDERR_SHIFT:
                     break
         if steps == MAX_ACCURACY_STEPS:

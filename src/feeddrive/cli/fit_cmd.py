@@ -246,11 +246,14 @@ def fit_command(
     if check is not None:
         last = check.history[-1] if check.history else {}
         shift, spread = last.get("estimate_shift_stderr"), last.get("stderr_shift")
+        spread_text = (f"the standard errors by {100 * spread:.2g} %"
+                       if spread is not None and last.get("stderr_shift_at")
+                       else "no credible linear interval's standard error to compare")
         _say(f"  integrator accuracy {check.accuracy:g} ({check.steps} tightening(s)): "
              + ("estimated integration error ≤ "
                 f"{data['integration_check']['limit_fraction_of_noise']:g}× every signal's "
-                f"noise; the estimates move by {shift:.2g} standard errors and the standard "
-                f"errors by {100 * spread:.2g} % with it ten times tighter"
+                f"noise; the estimates move by {shift:.2g} standard errors and "
+                f"{spread_text} with it ten times tighter"
                 if check.met and shift is not None and spread is not None
                 else f"intervals withheld: {check.reason}"))
     if result.hac is not None:
