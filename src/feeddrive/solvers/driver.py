@@ -1489,19 +1489,18 @@ def switch_method(stiff: bool, modal: bool, r_cost: float, rho: float, h_done: f
                   ) -> tuple[bool, float, float, int, int, int, float, int, int, bool, bool,
                              int, int, float]:
     """The stiffness detection and method switching after an accepted step (``MODE_AUTO``,
-    ``MODE_MODAL``). From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps that DOPRI5
+    ``MODE_MODAL``).  From RODAS4, back to DOPRI5 after ``NONSTIFF_STEPS`` steps that DOPRI5
     would take stably (ρ·h < ``NONSTIFF_HRHO``; ``MODE_MODAL``: or the cap leaves RODAS4 less
-    than ``MODAL_SWITCH_GAIN`` × that step) or that are not ``r_cost`` × the step DOPRI5 took
-    when it handed over (``h_dp``): a RODAS4 step costs about that many DOPRI5 steps. A short
-    step longer than the one before, or the first after a rejection, is not counted (the step is
-    growing back), and after a switch for cost alone the switch to RODAS4 is refused for
-    ``MODAL_RETRY`` × (1 − h/(``r_cost``·``h_dp``)) steps (a futile retry loses ≈ ``r_cost`` ×
-    that shortfall a step: its share of a run is as at a full shortfall). From DOPRI5, to RODAS4
-    after ``STIFF_STEPS`` stiff verdicts (:func:`stiffness_estimate` > ``STIFF_HLAMBDA``; reset
+    than ``MODAL_SWITCH_GAIN`` × that step) or that are not ``r_cost`` × the step DOPRI5
+    took when it handed over (``h_dp``): a RODAS4 step costs about that many DOPRI5 steps.  A
+    short step longer than the one before, or the first after a rejection, is not counted
+    (the step is growing back), and after a switch for cost alone the switch to RODAS4 is
+    refused for ``MODAL_RETRY`` steps.  From DOPRI5, to RODAS4 after
+    ``STIFF_STEPS`` stiff verdicts (:func:`stiffness_estimate` > ``STIFF_HLAMBDA``; reset
     after 6 non-stiff steps in a row), unless (``MODE_MODAL``) the cap on the lightly damped
-    modes would not let RODAS4 step ``MODAL_SWITCH_GAIN`` × further: then the switch is refused
-    for ``MODAL_RETRY`` steps. ``MODE_MODAL`` analyses DOPRI5's Jacobian every ``MODAL_RETRY``
-    steps too (:func:`modal_refresh`).
+    modes would not let RODAS4 step ``MODAL_SWITCH_GAIN`` × further: then the switch is
+    refused for ``MODAL_RETRY`` steps.  ``MODE_MODAL`` analyses DOPRI5's Jacobian every
+    ``MODAL_RETRY`` steps too (:func:`modal_refresh`).
 
     Parameters
     ----------
@@ -1582,8 +1581,8 @@ def switch_method(stiff: bool, modal: bool, r_cost: float, rho: float, h_done: f
                 nonstiff_count = 0
                 err_old = 1e-4
                 if not stable:
-                    # only cheaper: not straight back (the sooner, the nearer it came to paying)
-                    refuse_until = n_steps + int(MODAL_RETRY * (1.0 - h_done / (r_cost * h_dp)))
+                    # DOPRI5 is not stable at RODAS4's step, only cheaper: not straight back
+                    refuse_until = n_steps + MODAL_RETRY
         else:
             nonstiff_count = 0
     else:

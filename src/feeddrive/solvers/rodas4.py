@@ -67,17 +67,10 @@ def lu_factor(M: np.ndarray, piv: np.ndarray) -> bool:
     """In-place LU factorisation with partial pivoting (rows swapped whole, as LAPACK getrf).
     Returns False if a pivot is exactly zero.
 
-    U's diagonal is stored as its reciprocals, 1/u_kk — the factor the elimination multiplies
-    by anyway — so that :func:`lu_solve` multiplies where it divided: a Rosenbrock step makes
-    six to eight solves per factorisation, and the division at the end of each row of the back
-    substitution was the longest link of its dependent chain (9–12 % of a Rosenbrock-bound
-    run, benchmarks/README.md, "Reciprocal pivots").  Each entry of the solution moves by at
-    most one unit in the last place against the division.
-
     Parameters
     ----------
     M : numpy.ndarray
-        The square matrix, overwritten by its LU factors, U's diagonal as 1/u_kk [SI].
+        The square matrix, overwritten by its LU factors [SI].
     piv : numpy.ndarray of int
         Output: the row permutation.
 
@@ -109,7 +102,6 @@ def lu_factor(M: np.ndarray, piv: np.ndarray) -> bool:
             if m != 0.0:
                 for j in range(k + 1, n):
                     M[i, j] -= m * M[k, j]
-        M[k, k] = inv  # read by no later row of the elimination
     return True
 
 
@@ -127,7 +119,7 @@ def lu_solve(M: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
     Parameters
     ----------
     M : numpy.ndarray
-        LU factors from :func:`lu_factor`, U's diagonal as its reciprocals [SI].
+        LU factors from :func:`lu_factor` [SI].
     piv : numpy.ndarray of int
         Their row permutation.
     b : numpy.ndarray
@@ -150,7 +142,7 @@ def lu_solve(M: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
         for j in range(i + 1, n):
             if M[i, j] != 0.0:
                 s -= M[i, j] * b[j]
-        b[i] = s * M[i, i]  # M[i, i] = 1/u_ii (lu_factor)
+        b[i] = s / M[i, i]
 
 
 def fd_jacobian_template(t: float, y: np.ndarray, f0: np.ndarray, held: np.ndarray,

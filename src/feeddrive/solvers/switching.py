@@ -19,8 +19,7 @@ shared drivers' module as ``integrate_dense``, runs in four modes:
   the step DOPRI5 took when it handed over — what a Rosenbrock step costs against an explicit
   one (a share of a Jacobian, an LU and six solves against six right-hand sides; LSODA's
   cost-weighted switch).  Steps growing back from a switch or a rejection are not counted;
-  after a switch for cost alone the switch to RODAS4 is refused for ``MODAL_RETRY`` steps
-  times the share by which the Rosenbrock step fell short of paying for itself;
+  after a switch for cost alone the switch to RODAS4 is refused for ``MODAL_RETRY`` steps;
   DOPRI5 resumes with at most the step it handed over with (a Rosenbrock step can lie outside
   its stability region: docs/model.md, "DOPRI5 resumes from its own step");
 * ``MODE_MODAL``: ``MODE_AUTO`` with the steps capped on lightly damped modes
