@@ -285,7 +285,7 @@ def test_circular_refuses_a_loop_with_no_settling_lead_in(tmp_path: Path) -> Non
     r = invoke("circular", "--machine", str(hunting))
     assert r.exit_code == 2, r.output
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: --lead-arc = None: axis x's closed "
+    assert len(lines) == 1 and lines[0].startswith("error: --lead-arc: axis x's closed "
                                                    "loop at the feed 1000 mm/min"), r.stderr
     assert lines[0].endswith("does not decay; no lead-in lets it settle; expected the lead "
                              "arc given")

@@ -23,6 +23,7 @@ from feeddrive.parameters import (
     save,
     to_dict,
 )
+from feeddrive.parameters.validation import MISSING
 
 
 def numeric_leaves(obj: Any, prefix: str = "") -> list[tuple[str, dict[str, Any]]]:
@@ -142,9 +143,24 @@ def test_bad_input_raises_parameter_error_naming_the_field(data: dict[str, Any],
         from_dict(data)
     assert info.value.field == field
     message = str(info.value)
-    assert message.startswith(f"{field} = ")
+    if text == "missing field":  # nothing was given: no value shown (not "= None")
+        assert info.value.value is MISSING
+        assert message.startswith(f"{field}: missing field")
+    else:
+        assert message.startswith(f"{field} = ")
     assert text in message
     assert "\n" not in message
+
+
+def test_a_missing_value_is_one_object_that_shows_no_value() -> None:
+    import pickle
+
+    err = ParameterError("--table-speed", MISSING, "required for --profile constant [mm/s]")
+    assert str(err) == "--table-speed: required for --profile constant [mm/s]"
+    assert pickle.loads(pickle.dumps(MISSING)) is MISSING
+    # None given is a value given, and shown as one
+    assert str(ParameterError("rtol", None, "expected a number")) == (
+        "rtol = None: expected a number")
 
 
 @settings(max_examples=120, deadline=None)

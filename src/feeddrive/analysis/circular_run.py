@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..parameters import ParameterError
+from ..parameters.validation import MISSING
 from .circular import CircularTest, circular_test
 from .positioning_run import axis_speed_limit, axis_travel
 
@@ -305,7 +306,7 @@ def settling_lead(machine: Machine, axes: tuple[str, str], *, radius: float, fee
     assert slowest is not None
     rate, frequency, name = slowest
     if not rate > 0.0:
-        raise ParameterError("lead_arc", None, f"axis {name}'s closed loop at the feed "
+        raise ParameterError("lead_arc", MISSING, f"axis {name}'s closed loop at the feed "
                              f"{feed * 6e4:.6g} mm/min has a pole at {-rate:.3g} 1/s "
                              f"({frequency:.3g} Hz) that does not decay; no lead-in lets it "
                              "settle; expected the lead arc given")

@@ -26,6 +26,7 @@ from scipy import stats
 
 from ..parameters import DriveParameters, ParameterError, load
 from ..parameters.toml_io import read_toml_file
+from ..parameters.validation import MISSING
 
 __all__ = ["FitRecord", "Prediction", "plot_prediction", "predict", "read_fit_record"]
 
@@ -90,7 +91,7 @@ def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
                              "feeddrive fit --out")
     for key in ("free", "estimates", "covariance", "drive", "table_position"):
         if key not in rec:
-            raise ParameterError(f"fit.{key}", None, f"missing in {p}")
+            raise ParameterError(f"fit.{key}", MISSING, f"missing in {p}")
     free = rec["free"]
     est = np.asarray(rec["estimates"], dtype=float)
     cov = np.asarray(rec["covariance"], dtype=float)

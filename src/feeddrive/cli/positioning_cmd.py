@@ -13,6 +13,7 @@ import typer
 
 from ..io.outputs import PLOT_FORMATS
 from ..parameters import ParameterError
+from ..parameters.validation import MISSING
 from ._common import (
     MM,
     MM_PER_S,
@@ -63,7 +64,7 @@ def parse_targets_mm(targets: str | None, count: int | None, span: str | None) -
             raise ParameterError("--targets", targets, "expected at least 2 positions [mm]")
         return [v * MM for v in values]
     if count is None or span is None:
-        raise ParameterError("--targets", None, "give --targets LIST [mm], or --count N with "
+        raise ParameterError("--targets", MISSING, "give --targets LIST [mm], or --count N with "
                              "--span FROM,TO [mm]")
     if count < 2:
         raise ParameterError("--count", count, "expected at least 2 targets")

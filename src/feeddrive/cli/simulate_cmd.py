@@ -134,6 +134,7 @@ def simulate_command(
     from ..model import reference
     from ..model.reference import ConstantSpeed, SampledSpeed, SineSpeed
     from ..parameters import ParameterError
+    from ..parameters.validation import MISSING
 
     if machine is not None:
         from .machine_run import run_machine
@@ -149,9 +150,9 @@ def simulate_command(
     if profile not in PROFILES:
         raise ParameterError("--profile", profile, f"expected one of {', '.join(PROFILES)}")
     if profile != "csv" and table_speed is None:
-        raise ParameterError("--table-speed", None, f"required for --profile {profile} [mm/s]")
+        raise ParameterError("--table-speed", MISSING, f"required for --profile {profile} [mm/s]")
     if profile == "csv" and profile_file is None:
-        raise ParameterError("--profile-file", None, "required for --profile csv")
+        raise ParameterError("--profile-file", MISSING, "required for --profile csv")
     if max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
     if method is not None and method not in CLI_METHODS:

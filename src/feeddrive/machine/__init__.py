@@ -37,6 +37,7 @@ import numpy as np
 
 from ..model.reference import SampledSpeed
 from ..parameters import DriveParameters, ParameterError
+from ..parameters.validation import MISSING
 from .contour import Circle, Contour, Line, Polyline, Together, corner, from_csv
 from .couplings import AXIS_INPUTS, Coupling, coupling
 
@@ -794,7 +795,7 @@ def make_contour(kind: str, *, feed: float, acceleration: float, radius: float =
                       radius=radius, angle=math.degrees(angle) if angle else 90.0)
     if kind == "csv":
         if path_file is None:
-            raise ParameterError("contour.csv", None, "a CSV path file is needed (x, y [mm])")
+            raise ParameterError("contour.csv", MISSING, "a CSV path file is needed (x, y [mm])")
         return from_csv(path_file, feed=feed, acceleration=acceleration, axes=axes)
     raise ParameterError("contour", kind, f"expected one of {', '.join(CONTOURS)}")
 

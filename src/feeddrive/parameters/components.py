@@ -20,7 +20,7 @@ from dataclasses import dataclass, fields, replace
 from typing import Any, Self
 
 from .. import registry
-from .validation import ParameterError, validate
+from .validation import MISSING, ParameterError, validate
 
 #: the mechanism kind of a file that names none: every parameter file before the
 #: composition (v2) describes the ball-screw drive's parts
@@ -285,7 +285,7 @@ class DriveParameters(_Component):
         given = {name for name, _ in self.sections}
         for name in composition(self.mechanism).required:
             if name not in given:
-                raise ParameterError(name, None, 'missing field (a partial file starts with '
+                raise ParameterError(name, MISSING, 'missing field (a partial file starts with '
                                      'extends = "wang2021" or another preset)')
 
     def ordered_sections(self) -> list[tuple[str, Any]]:

@@ -23,7 +23,7 @@ from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .. import registry
 from .components import DriveParameters, composition
-from .validation import ParameterError, did_you_mean, unit_label
+from .validation import MISSING, ParameterError, did_you_mean, unit_label
 
 
 def _is_component(tp: Any) -> bool:
@@ -345,7 +345,7 @@ def _build(cls: type, data: Any, path: str) -> Any:
                 continue
             hint = (' (a partial file starts with extends = "wang2021" or another preset)'
                     if not path or "." not in path else "")
-            raise ParameterError(sub, None, "missing field" + hint)
+            raise ParameterError(sub, MISSING, "missing field" + hint)
         comp = _component_type(hints[f.name])
         if comp is not None and hasattr(comp, "class_for"):  # chosen by the table (its law)
             comp = comp.class_for(data[f.name], sub)

@@ -25,6 +25,24 @@ _REPR.maxdict = 10
 _REPR.maxlevel = 4
 
 
+class _Missing:
+    """The value of a field or option that was not given at all (:data:`MISSING`)."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return "MISSING"
+
+    def __reduce__(self) -> str:
+        return "MISSING"  # one object, across pickling too
+
+
+#: what :class:`ParameterError` carries as the value of a field or option that was not
+#: given: its message then reads ``field: missing field`` instead of showing a value the
+#: user never wrote (``= None``)
+MISSING = _Missing()
+
+
 def shown_value(value: object) -> str:
     """``repr(value)`` for a message: long text and deep or long lists cut (``...``).
 
@@ -86,7 +104,7 @@ class ParameterError(ValueError):
     field : str
         Dotted name of the refused field (e.g. ``"table.mass"``).
     value : object
-        The refused value.
+        The refused value; :data:`MISSING` when none was given (the message shows none).
     message : str
         What was expected, with its unit.
     source : str or None, default None
@@ -100,7 +118,8 @@ class ParameterError(ValueError):
         self.message = message
         self.source = source
         where = f"{_cut(source)}: " if source else ""
-        super().__init__(f"{where}{_cut(str(field))} = {shown_value(value)}: {message}")
+        shown = "" if value is MISSING else f" = {shown_value(value)}"
+        super().__init__(f"{where}{_cut(str(field))}{shown}: {message}")
 
     def in_file(self, source: str) -> ParameterError:
         """The same refusal, naming the file it came from.
