@@ -104,7 +104,8 @@ class ParameterError(ValueError):
     field : str
         Dotted name of the refused field (e.g. ``"table.mass"``).
     value : object
-        The refused value; :data:`MISSING` when none was given (the message shows none).
+        The refused value; ``feeddrive.parameters.validation.MISSING`` when none was given
+        (the message then shows none).
     message : str
         What was expected, with its unit.
     source : str or None, default None
