@@ -31,6 +31,7 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -39,7 +40,7 @@ from .._disk import file_lock, user_cache_root
 __all__ = ["CACHE_ENV", "CompileError", "CompilerNotFound", "LIBRARY_FLAGS", "NO_COMPILER",
            "STATS", "available_compiler", "cache_folder", "cache_key", "cached_library",
            "compile_c", "compiler_identity", "fallback_folder", "find_compiler",
-           "library_suffix"]
+           "library_suffix", "mark_used"]
 
 #: environment variable naming the cache folder (instead of the user's cache)
 CACHE_ENV = "FEEDDRIVE_C_CACHE"
@@ -296,6 +297,23 @@ def _writable(folder: Path) -> bool:
     return True
 
 
+def mark_used(path: Path) -> None:
+    """Set a cached file's modification time to now if it is more than a day old: what
+    ``feeddrive cache --prune`` (:func:`feeddrive.caches.prune`) reads as its last use.  A
+    cache that cannot be written is left as it is.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    """
+    try:
+        if time.time() - path.stat().st_mtime > 86400.0:
+            os.utime(path)
+    except OSError:
+        pass
+
+
 def cached_library(source: str, *, flags: Sequence[str] = LIBRARY_FLAGS,
                    libraries: Sequence[str] = ("-lm",),
                    cc: Sequence[str] | None = None) -> Path:
@@ -331,11 +349,13 @@ def cached_library(source: str, *, flags: Sequence[str] = LIBRARY_FLAGS,
     folder = cache_folder()
     if (folder / name).is_file():
         STATS["hits"] += 1
+        mark_used(folder / name)
         return folder / name
     if not _writable(folder):
         folder = fallback_folder()
         if (folder / name).is_file():
             STATS["hits"] += 1
+            mark_used(folder / name)
             return folder / name
     lib = folder / name
     with file_lock(folder / f"{key}.lock"):

@@ -67,6 +67,7 @@ from .c_cache import (
     cache_folder,
     cached_library,
     find_compiler,
+    mark_used,
 )
 from .c_translate import DYNAMIC, TranslationError, translate_kernels
 
@@ -482,6 +483,7 @@ def driver_unit(use: str) -> dict[str, Any]:
     path = cache_folder() / f"driver-{use}-{_sources_digest()}.json"
     try:
         kept = json.loads(path.read_text(encoding="utf-8"))
+        mark_used(path)
         if isinstance(kept, dict) and set(kept) == {"c", "n_stats", "params"}:
             if isinstance(kept["params"], dict):
                 kept["params"] = {k: [tuple(p) for p in v] for k, v in kept["params"].items()}
@@ -565,7 +567,9 @@ def _model_text(model: Model) -> str:
     key = hashlib.sha256(repr(what).encode()).hexdigest()[:24]
     path = cache_folder() / f"model-{key}.c"
     try:
-        return path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8")
+        mark_used(path)
+        return text
     except (OSError, ValueError):
         pass
     text = model_source(model)

@@ -48,6 +48,7 @@ COMMAND_MODULES: dict[str, str] = {
     "map": "sweep_cmd",
     "friction": "friction_cmd",
     "stiffness": "stiffness_cmd",
+    "cache": "cache_cmd",
 }
 
 

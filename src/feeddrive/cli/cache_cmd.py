@@ -1,0 +1,60 @@
+"""`feeddrive cache`: what the package keeps in the user's cache, and pruning it
+(:mod:`feeddrive.caches`)."""
+
+from __future__ import annotations
+
+import typer
+
+from ._common import app, console, print_json, user_errors
+
+#: bytes in a MB, as the sizes are printed
+MB = 1e6
+
+
+@app.command("cache")
+@user_errors
+def cache(
+    prune: bool = typer.Option(False, "--prune", help="Remove what has not been used for "
+                               "--older-than days: numba caches of other feeddrive versions, "
+                               "C libraries and texts (compiled again, ≈ 0.4 s each, when "
+                               "needed), unfinished compilations older than an hour. The "
+                               "running version's numba cache is kept."),
+    older_than: float = typer.Option(30.0, "--older-than", help="Age for --prune [days]; 0 "
+                                     "prunes everything it may."),
+    dry_run: bool = typer.Option(False, "--dry-run", help="With --prune: only list what "
+                                 "would be removed."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+) -> None:
+    """Where feeddrive's compile caches are and how large (numba's, one folder per version of
+    its kernels; the C build's libraries), and, with --prune, remove the unused."""
+    from ..caches import prune as prune_caches
+    from ..caches import usage
+    from ..parameters import ParameterError
+
+    if dry_run and not prune:
+        raise ValueError("--dry-run: give it with --prune")
+    try:
+        report = prune_caches(older_than, dry_run=dry_run) if prune else None
+    except ParameterError as err:  # the option the user typed
+        raise ParameterError("--older-than", err.value, err.message) from None
+    parts = usage()
+    if as_json:
+        data: dict[str, object] = {"parts": [
+            {"name": p.name, "folder": str(p.folder), "entries": p.entries,
+             "size_mb": p.size / MB} for p in parts]}
+        if report is not None:
+            data["pruned"] = {"dry_run": report.dry_run, "older_than_days": older_than,
+                              "removed": [str(p) for p in report.removed],
+                              "freed_mb": report.freed / MB}
+        print_json(data)
+        return
+    if report is not None:
+        verb = "would remove" if report.dry_run else "removed"
+        for path in report.removed if report.dry_run else ():
+            console.print(f"  {path}", markup=False, highlight=False)
+        console.print(f"{verb} {len(report.removed)} entries not used for {older_than:g} days, "
+                      f"{report.freed / MB:.1f} MB", markup=False, highlight=False)
+    for p in parts:
+        entries = "1 entry" if p.entries == 1 else f"{p.entries} entries"
+        console.print(f"{p.name}: {entries}, {p.size / MB:.1f} MB in {p.folder}",
+                      markup=False, highlight=False)
