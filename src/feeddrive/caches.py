@@ -41,7 +41,7 @@ UNFINISHED_AGE = 3600.0
 class CachePart:
     """One part of the caches: what it is, where, and how much.
 
-    Attributes
+    Parameters
     ----------
     name : str
         ``"numba, this version"``, ``"numba, other versions"``, ``"C libraries and texts"``
@@ -64,7 +64,7 @@ class CachePart:
 class CacheReport:
     """What :func:`prune` removed (or, with ``dry_run``, would remove).
 
-    Attributes
+    Parameters
     ----------
     removed : tuple of Path
         The folders and files.
