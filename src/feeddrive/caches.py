@@ -29,10 +29,13 @@ from pathlib import Path
 
 from ._disk import user_cache_root
 
-__all__ = ["CacheReport", "CachePart", "DAY", "UNFINISHED_AGE", "numba_root", "prune", "usage"]
+__all__ = ["CacheReport", "CachePart", "DAY", "DEFAULT_AGE", "UNFINISHED_AGE", "numba_root",
+           "prune", "usage"]
 
 #: a day [s]
 DAY = 86400.0
+#: what :func:`prune` removes by default: not used for this many days [days]
+DEFAULT_AGE = 30.0
 #: a compilation's temporary folder older than this is one that was killed [s]
 UNFINISHED_AGE = 3600.0
 
@@ -148,7 +151,7 @@ def usage() -> list[CachePart]:
             for name, entries in _listing().items()]
 
 
-def prune(older_than: float = 30.0, *, dry_run: bool = False) -> CacheReport:
+def prune(older_than: float = DEFAULT_AGE, *, dry_run: bool = False) -> CacheReport:
     """Remove what the caches hold that has not been used for ``older_than`` days (see the
     module): numba folders of other kernel versions, C libraries and texts, and unfinished
     compilations older than :data:`UNFINISHED_AGE` (whatever ``older_than``: a compilation
@@ -156,7 +159,7 @@ def prune(older_than: float = 30.0, *, dry_run: bool = False) -> CacheReport:
 
     Parameters
     ----------
-    older_than : float, default 30
+    older_than : float, default :data:`DEFAULT_AGE`
         Age [days] (0: everything but the running version's numba folder); ≥ 0.
     dry_run : bool, default False
         Only say what would be removed.

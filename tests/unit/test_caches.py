@@ -127,7 +127,17 @@ def test_the_command_shows_prunes_and_refuses(tree: dict[str, Path]) -> None:
     assert not tree["old_library"].exists() and tree["current"].exists()
     for args, message in ((["--prune", "--older-than", "-1"],
                            "--older-than = -1.0: expected a number of days ≥ 0"),
-                          (["--dry-run"], "--dry-run: give it with --prune")):
+                          (["--dry-run"], "--dry-run: give it with --prune"),
+                          (["--older-than", "5"], "--older-than: give it with --prune")):
         r = runner.invoke(app, ["cache", *args])
         assert r.exit_code == 2
         assert message in r.output and len(r.output.strip().splitlines()) == 1
+
+
+def test_the_commands_default_age_is_the_modules() -> None:
+    from feeddrive.cli import cache_cmd
+
+    assert cache_cmd.DEFAULT_AGE == caches.DEFAULT_AGE
+    assert caches.prune.__defaults__ == (caches.DEFAULT_AGE,)
+    text = " ".join(CliRunner().invoke(app, ["cache", "--help"]).output.split())
+    assert f"Age for --prune [days], {caches.DEFAULT_AGE:g} if not given" in text

@@ -9,6 +9,8 @@ from ._common import app, console, print_json, user_errors
 
 #: bytes in a MB, as the sizes are printed
 MB = 1e6
+#: :data:`feeddrive.caches.DEFAULT_AGE`, here so that --help does not import the module
+DEFAULT_AGE = 30.0
 
 
 @app.command("cache")
@@ -19,8 +21,9 @@ def cache(
                                "C libraries and texts (compiled again, ≈ 0.4 s each, when "
                                "needed), unfinished compilations older than an hour. The "
                                "running version's numba cache is kept."),
-    older_than: float = typer.Option(30.0, "--older-than", help="Age for --prune [days]; 0 "
-                                     "prunes everything it may."),
+    older_than: float | None = typer.Option(None, "--older-than", help="Age for --prune "
+                                            f"[days], {DEFAULT_AGE:g} if not given; 0 prunes "
+                                            "everything it may."),
     dry_run: bool = typer.Option(False, "--dry-run", help="With --prune: only list what "
                                  "would be removed."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
@@ -31,10 +34,12 @@ def cache(
     from ..caches import usage
     from ..parameters import ParameterError
 
-    if dry_run and not prune:
-        raise ValueError("--dry-run: give it with --prune")
+    for given, option in ((dry_run, "--dry-run"), (older_than is not None, "--older-than")):
+        if given and not prune:
+            raise ValueError(f"{option}: give it with --prune")
+    days = DEFAULT_AGE if older_than is None else older_than
     try:
-        report = prune_caches(older_than, dry_run=dry_run) if prune else None
+        report = prune_caches(days, dry_run=dry_run) if prune else None
     except ParameterError as err:  # the option the user typed
         raise ParameterError("--older-than", err.value, err.message) from None
     parts = usage()
@@ -43,7 +48,7 @@ def cache(
             {"name": p.name, "folder": str(p.folder), "entries": p.entries,
              "size_mb": p.size / MB} for p in parts]}
         if report is not None:
-            data["pruned"] = {"dry_run": report.dry_run, "older_than_days": older_than,
+            data["pruned"] = {"dry_run": report.dry_run, "older_than_days": days,
                               "removed": [str(p) for p in report.removed],
                               "freed_mb": report.freed / MB}
         print_json(data)
@@ -52,7 +57,7 @@ def cache(
         verb = "would remove" if report.dry_run else "removed"
         for path in report.removed if report.dry_run else ():
             console.print(f"  {path}", markup=False, highlight=False)
-        console.print(f"{verb} {len(report.removed)} entries not used for {older_than:g} days, "
+        console.print(f"{verb} {len(report.removed)} entries not used for {days:g} days, "
                       f"{report.freed / MB:.1f} MB", markup=False, highlight=False)
     for p in parts:
         entries = "1 entry" if p.entries == 1 else f"{p.entries} entries"
