@@ -16,6 +16,9 @@ except ImportError:  # pragma: no cover - not on Windows
 
 #: whether :func:`file_lock` locks (POSIX ``fcntl.flock``); elsewhere it does nothing
 LOCKS = _fcntl is not None
+#: a day [s]: a cached file loaded this long after its last mark is marked used again
+#: (:func:`feeddrive.backends.c_cache.mark_used`), and the unit of ``feeddrive cache --prune``
+DAY = 86400.0
 
 
 def user_cache_root() -> Path:

@@ -27,13 +27,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ._disk import user_cache_root
+from ._disk import DAY, user_cache_root
 
-__all__ = ["CacheReport", "CachePart", "DAY", "DEFAULT_AGE", "UNFINISHED_AGE", "numba_root",
+__all__ = ["CacheReport", "CachePart", "DEFAULT_AGE", "UNFINISHED_AGE", "numba_root",
            "prune", "usage"]
 
-#: a day [s]
-DAY = 86400.0
 #: what :func:`prune` removes by default: not used for this many days [days]
 DEFAULT_AGE = 30.0
 #: a compilation's temporary folder older than this is one that was killed [s]

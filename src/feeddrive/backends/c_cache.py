@@ -35,7 +35,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from .._disk import file_lock, user_cache_root
+from .._disk import DAY, file_lock, user_cache_root
 
 __all__ = ["CACHE_ENV", "CompileError", "CompilerNotFound", "LIBRARY_FLAGS", "NO_COMPILER",
            "STATS", "available_compiler", "cache_folder", "cache_key", "cached_library",
@@ -308,7 +308,7 @@ def mark_used(path: Path) -> None:
         The file.
     """
     try:
-        if time.time() - path.stat().st_mtime > 86400.0:
+        if time.time() - path.stat().st_mtime > DAY:
             os.utime(path)
     except OSError:
         pass

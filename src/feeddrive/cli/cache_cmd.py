@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import typer
 
+from ..caches import DEFAULT_AGE
 from ._common import app, console, print_json, user_errors
 
 #: bytes in a MB, as the sizes are printed
 MB = 1e6
-#: :data:`feeddrive.caches.DEFAULT_AGE`, here so that --help does not import the module
-DEFAULT_AGE = 30.0
 
 
 @app.command("cache")
