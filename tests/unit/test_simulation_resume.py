@@ -71,3 +71,36 @@ def test_a_continued_runs_states_are_joined_column_by_column_when_read() -> None
     # once, and the states are read from that array since
     assert run._state_parts is None and run.y.shape == (fresh.time.size, len(run.model.states))
     assert continued.dataset.equals(fresh.dataset)
+
+
+def test_a_finished_run_and_its_simulation_are_freed_without_the_cyclic_collector() -> None:
+    """No reference cycle between a Simulation, its chunks and its Result: with the cyclic
+    garbage collector off, dropping the last references frees them (a step-down search keeps
+    ≈ 20 staircase runs; in cycles their output arrays waited for Python's next cyclic
+    collection, 621 MB at the running CDFS search's peak against 255 MB freed at once)."""
+    import gc
+    import weakref
+
+    system = DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    first, _ = _staircase(SPEEDS, [12.0, 12.0, 12.0], 0.0, 0.0)
+    longer, _ = _staircase(SPEEDS, [12.0, 24.0, 12.0], 0.0, 0.0)
+    was_enabled = gc.isenabled()
+    gc.collect()
+    gc.disable()
+    try:
+        before = Simulation(system, first)
+        before.keep_checkpoints()
+        r1 = before.run(float(first.time[-1]))
+        again = Simulation(system, longer)
+        again.keep_checkpoints()
+        assert again.resume(before) == 20.0
+        r2 = again.run(float(longer.time[-1]))
+        for r in (r1, r2):  # a state, and the auxiliary signals evaluated when read
+            for name in ("table_speed", "guide_friction"):
+                assert np.all(np.isfinite(r[name])), name
+        probes = [weakref.ref(x) for x in (before, again, r1, r2, r1.time, r2.time)]
+        del before, again, r1, r2, r
+        assert [p() for p in probes] == [None] * len(probes)
+    finally:
+        if was_enabled:
+            gc.enable()

@@ -60,7 +60,7 @@ class Run:
                  system: DriveSystem, profile: Profile, solver_stats: dict[str, Any]) -> None:
         self.t, self.y, self.aux, self.model = t, y, aux, model
         self.system, self.profile, self.solver_stats = system, profile, solver_stats
-        self._deferred: Callable[[], np.ndarray] | None = None
+        self._deferred: Callable[[Run], np.ndarray] | None = None
         self._state_parts: list[np.ndarray] | None = None
         self._state_columns: dict[int, np.ndarray] = {}
         self.columns: dict[str, tuple[np.ndarray, int]] = {}
@@ -82,13 +82,15 @@ class Run:
                 self.following[f"{prefix}following_error"] = prefix
                 self.meta[f"{prefix}following_error"] = ("m", "commanded − table position")
 
-    def defer_aux(self, compute: Callable[[], np.ndarray]) -> None:
-        """Mark the auxiliary signals as not recorded: ``compute()`` gives them when first read.
+    def defer_aux(self, compute: Callable[[Run], np.ndarray]) -> None:
+        """Mark the auxiliary signals as not recorded: ``compute(run)`` gives them when first
+        read (given the run rather than closing over it, so that no reference cycle keeps a
+        finished run's arrays alive until Python's next cyclic collection).
 
         Parameters
         ----------
         compute : callable
-            Returns the (samples, outputs) auxiliary array [SI, per output].
+            This run → the (samples, outputs) auxiliary array [SI, per output].
         """
         self._deferred = compute
 
@@ -142,7 +144,7 @@ class Run:
         if name in self.columns:
             arr, k = self.columns[name]
             if arr is self.aux and self._deferred is not None:
-                self.aux = self._deferred()
+                self.aux = self._deferred(self)
                 self._deferred = None
                 for j, sig in enumerate(self.model.aux):
                     self.columns[sig.name] = (self.aux, j)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time as _time
+import weakref
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -920,10 +921,10 @@ class Simulation:
         if len(y_parts) > 1:  # a state's parts are joined when it is read
             run.defer_states(y_parts)
         if sum(a.shape[0] for a in aux_parts) == t.shape[0]:  # recorded: joined when read
-            run.defer_aux(lambda: _join(aux_parts, len(model.aux)))
+            run.defer_aux(lambda _: _join(aux_parts, len(model.aux)))
         else:  # not recorded (continuous loops, dense output): evaluated when read
-            run.defer_aux(lambda: builds.compiled(model, "auxiliary")(
-                t, run.states(), model.P, model.T))
+            run.defer_aux(lambda r: builds.compiled(r.model, "auxiliary")(
+                r.t, r.states(), r.model.P, r.model.T))
         return Result.from_run(run)
 
 
@@ -943,9 +944,19 @@ class _Chunks:
     integrated from a copy of the carried state and integrated again when the run is continued.
     """
 
+    @property
+    def sim(self) -> Simulation:
+        """The simulation these chunks belong to (alive while they are used)."""
+        sim = self._sim()
+        assert sim is not None, "a run's chunks outlived their Simulation"
+        return sim
+
     def __init__(self, sim: Simulation, *, want_aux: bool) -> None:
         options, grid, model = sim.options, sim.grid, sim.model
-        self.sim = sim
+        # weakly: the simulation holds its chunks (``_chunks``, ``_running``), and a cycle
+        # would keep a finished run's output parts until Python's next cyclic collection
+        # (a step-down search's 16 staircase runs: ≈ 600 MB at its peak)
+        self._sim = weakref.ref(sim)
         self.dense = options.method in _DENSE_MODES
         every = grid.out_every
         n = len(model.states)
