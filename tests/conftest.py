@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 
 from feeddrive import registry
+
+#: the rounding-level perturbations of :func:`ddfs_counts`: table positions 0.4·(1 + k·1e-12) m
+PERTURBATIONS = tuple(range(-3, 4))
 
 
 def _home(obj: object) -> str:
@@ -28,3 +32,24 @@ def _registry_left_as_found() -> Iterator[None]:
                 del tab[name]
         for name, obj in before[group].items():
             tab[name] = obj
+
+
+@pytest.fixture(scope="session")
+def ddfs_counts() -> dict[str, list[dict[str, Any]]]:
+    """``solver_stats`` of bench_engine.py's ``ddfs_0p5_vn16`` run (``wang2021`` DDFS, table
+    0.5 mm/s, hollow motor 16 mm/s, 10 s, the default settings but the Rosenbrock method) at
+    table positions 0.4·(1 + k·1e-12) m, k in :data:`PERTURBATIONS`, per Rosenbrock method.
+
+    A DDFS run's counts are not a property of the method alone: where a run hands over between
+    DOPRI5 and the Rosenbrock method moves with the last bits of its arithmetic.  Measured on
+    the tree of 41936bc (2026-12-06): RODAS5P's right-hand sides 19 248–26 101 and steps
+    2 275–3 562 over these seven positions, RODAS4's 46 265–49 044 and 7 343–7 880, while the
+    work weighed as the switch weighs it (steps + 5.5 × Rosenbrock steps) stayed within
+    7 309–8 226.  So the tests that bound counts bound their medians over these runs."""
+    import feeddrive as fd
+
+    profile = fd.ConstantSpeed(0.5e-3, 16e-3)
+    return {rb: [fd.simulate(fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4 * (1 + k * 1e-12)),
+                             profile, 10.0, options=fd.SolverOptions(rosenbrock=rb)).solver_stats
+                 for k in PERTURBATIONS]
+            for rb in ("rodas4", "rodas5p")}

@@ -16,34 +16,42 @@ Radau reference (1.66e-11 m; benchmarks/README.md).
 
 from __future__ import annotations
 
+from statistics import median
+from typing import Any
+
 import pytest
 
 import feeddrive as fd
 from feeddrive.engine.simulate import DriveSystem, SolverOptions, simulate
 from feeddrive.model.reference import ConstantSpeed
 
-# measured on this run, 2026-12-05 (bounds +10 %): RODAS4 31 eigen-analyses, 252 Jacobians,
-# 1 166 Rosenbrock steps of 7 549, 47 197 right-hand sides; RODAS5P (the default since
-# 2026-12-05) 48, 524, 938 of 2 331, 19 914
-BOUNDS = {"rodas4": (295, 1330, 51000), "rodas5p": (577, 1032, 21900)}
+# medians over the seven rounding-level perturbations of the ``ddfs_counts`` fixture
+# (tests/conftest.py: one run's counts move by up to ±13 %, its steps by up to +40 %), measured
+# on the tree before the back substitution took the reference BLAS order (41936bc,
+# 2026-12-06), bounds +10 %: RODAS4 261 Jacobians, 1 175 Rosenbrock steps, 47 197 right-hand
+# sides; RODAS5P (the default since 2026-12-05) 466, 897, 20 473.  (Single runs at the
+# unperturbed position, 2026-12-05: RODAS4 31 eigen-analyses, 252 Jacobians, 1 166
+# Rosenbrock steps of 7 549, 47 197 right-hand sides; RODAS5P 48, 524, 938 of 2 331, 19 914.)
+BOUNDS = {"rodas4": (287, 1293, 51917), "rodas5p": (513, 987, 22520)}
 
 
 @pytest.mark.parametrize("rosenbrock", sorted(BOUNDS))
-def test_modal_takes_one_spectral_radius_per_eigen_analysis_on_the_ddfs(rosenbrock: str) -> None:
-    system = DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
-    stats = simulate(system, ConstantSpeed(0.5e-3, 16e-3), 10.0,
-                     options=SolverOptions(rosenbrock=rosenbrock)).solver_stats
-    # RODAS4: measured 131 and 131 once; the tree before took 2 439 estimates, one per Jacobian
-    assert stats["spectral_radii"] == stats["eigen_analyses"]
-    assert stats["spectral_radii"] <= 200
+def test_modal_takes_one_spectral_radius_per_eigen_analysis_on_the_ddfs(
+        rosenbrock: str, ddfs_counts: dict[str, list[dict[str, Any]]]) -> None:
+    runs = ddfs_counts[rosenbrock]
+    for stats in runs:
+        # RODAS4: measured 131 and 131 once; the tree before took 2 439 estimates, one per
+        # Jacobian
+        assert stats["spectral_radii"] == stats["eigen_analyses"]
+        assert stats["spectral_radii"] <= 200
     # RODAS4: measured 1 493 Jacobians and 33 715 right-hand sides; the tree before: 2 439 and
     # 40 010, a Jacobian at every RODAS4 step.  Since the cost-weighted switch back to DOPRI5
     # (driver.RODAS4_COST, 2026-12-05) more calls, each DOPRI5 step ≈ 5× cheaper than a RODAS4
-    # step (benchmarks/bench_switch_cost.py): BOUNDS
+    # step (benchmarks/bench_switch_cost.py): BOUNDS, on the medians
     jacobians, rosenbrock_steps, calls = BOUNDS[rosenbrock]
-    assert stats["jacobians"] <= jacobians
-    assert stats["rosenbrock_steps"] <= rosenbrock_steps
-    assert stats["rhs_evaluations"] - stats["output_rhs_evaluations"] <= calls
+    assert median(s["jacobians"] for s in runs) <= jacobians
+    assert median(s["rosenbrock_steps"] for s in runs) <= rosenbrock_steps
+    assert median(s["rhs_evaluations"] - s["output_rhs_evaluations"] for s in runs) <= calls
 
 
 def test_auto_still_estimates_the_spectral_radius_at_every_jacobian() -> None:

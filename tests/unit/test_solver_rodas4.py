@@ -144,20 +144,20 @@ def test_lu_kernels_solve_like_numpy() -> None:
 
 
 def _dense_substitution(M: np.ndarray, piv: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The triangular solves with every term subtracted, zeros too, in lu_solve's order (the
-    text lu_solve had before it skipped the factors' zeros), written here as the reference."""
+    """The triangular solves with every term subtracted, zeros too, written here as the
+    reference: the loops of the reference BLAS ``dtrsv`` (Netlib), by columns — L unit lower,
+    j rising; U upper, j falling, x_j divided by u_jj before its column is subtracted."""
     x = b.copy()
     n = M.shape[0]
     for k in range(n):
         x[k], x[piv[k]] = x[piv[k]], x[k]
     for j in range(n):
         for i in range(j + 1, n):
-            x[i] -= M[i, j] * x[j]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for j in range(i + 1, n):
-            s -= M[i, j] * x[j]
-        x[i] = s / M[i, i]
+            x[i] -= x[j] * M[i, j]
+    for j in range(n - 1, -1, -1):
+        x[j] = x[j] / M[j, j]
+        for i in range(j - 1, -1, -1):
+            x[i] -= x[j] * M[i, j]
     return x
 
 

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from statistics import median
+from typing import Any
 
 import numpy as np
 import pytest
@@ -107,19 +109,21 @@ def test_rodas5p_converges_on_the_smooth_lugre_runs(method: str, name: str) -> N
             assert b <= a / 5.0 or b <= floor, (signal, series, floor)
 
 
-def test_rodas5p_takes_less_than_half_rodas4s_right_hand_sides_on_the_ddfs() -> None:
+def test_rodas5p_takes_less_than_half_rodas4s_right_hand_sides_on_the_ddfs(
+        ddfs_counts: dict[str, list[dict[str, Any]]]) -> None:
     # bench_engine's ddfs_0p5_vn16, 10 s (measured 2026-12-05, DOPRI5 resuming from its
     # handover step): RODAS4 7 549 steps (1 166 Rosenbrock), 252 Jacobians, 47 197
     # right-hand sides; RODAS5P 2 331 steps (938 Rosenbrock), 524 Jacobians, 19 914
     # right-hand sides — fewer, longer Rosenbrock steps that keep DOPRI5 out of the settling
     # stretch; the kept Jacobian goes stale sooner across a longer step, hence more
-    # Jacobians.  Bounds: the measured counts + 10 %
-    system = fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
-    profile = fd.ConstantSpeed(0.5e-3, 16e-3)
-    stats = {rb: fd.simulate(system, profile, 10.0,
-                             options=fd.SolverOptions(rosenbrock=rb)).solver_stats
-             for rb in ("rodas4", "rodas5p")}
-    r4, r5 = stats["rodas4"], stats["rodas5p"]
+    # Jacobians.  One run's counts move by up to ±13 % (steps +40 %) with the last bits of its
+    # arithmetic (tests/conftest.py, ``ddfs_counts``), so the counts are medians over seven
+    # rounding-level perturbations of the table position; bounds: the medians of the tree
+    # before the back substitution took the reference BLAS order (41936bc, 2026-12-06) + 10 %
+    # (RODAS5P 2 514 steps, 897 Rosenbrock, 466 Jacobians, 20 473 right-hand sides)
+    r4 = {k: median(s[k] for s in ddfs_counts["rodas4"]) for k in ddfs_counts["rodas4"][0]
+          if isinstance(ddfs_counts["rodas4"][0][k], int | float)}
+    r5 = {k: median(s[k] for s in ddfs_counts["rodas5p"]) for k in r4}
     assert r5["rhs_evaluations"] <= r4["rhs_evaluations"] / 2
-    assert r5["steps"] <= 2565 and r5["rosenbrock_steps"] <= 1032
-    assert r5["jacobians"] <= 577 and r5["rhs_evaluations"] <= 21906
+    assert r5["steps"] <= 2765 and r5["rosenbrock_steps"] <= 987
+    assert r5["jacobians"] <= 513 and r5["rhs_evaluations"] <= 22520
