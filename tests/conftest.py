@@ -42,7 +42,7 @@ def ddfs_counts() -> dict[str, list[dict[str, Any]]]:
 
     A DDFS run's counts are not a property of the method alone: where a run hands over between
     DOPRI5 and the Rosenbrock method moves with the last bits of its arithmetic.  Measured on
-    the tree of 41936bc (2026-12-06): RODAS5P's right-hand sides 19 248–26 101 and steps
+    the tree of f191cdd (2026-12-06): RODAS5P's right-hand sides 19 248–26 101 and steps
     2 275–3 562 over these seven positions, RODAS4's 46 265–49 044 and 7 343–7 880, while the
     work weighed as the switch weighs it (steps + 5.5 × Rosenbrock steps) stayed within
     7 309–8 226.  So the tests that bound counts bound their medians over these runs."""

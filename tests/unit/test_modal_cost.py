@@ -27,7 +27,7 @@ from feeddrive.model.reference import ConstantSpeed
 
 # medians over the seven rounding-level perturbations of the ``ddfs_counts`` fixture
 # (tests/conftest.py: one run's counts move by up to ±13 %, its steps by up to +40 %), measured
-# on the tree before the back substitution took the reference BLAS order (41936bc,
+# on the tree before the back substitution took the reference BLAS order (f191cdd,
 # 2026-12-06), bounds +10 %: RODAS4 261 Jacobians, 1 175 Rosenbrock steps, 47 197 right-hand
 # sides; RODAS5P (the default since 2026-12-05) 466, 897, 20 473.  (Single runs at the
 # unperturbed position, 2026-12-05: RODAS4 31 eigen-analyses, 252 Jacobians, 1 166

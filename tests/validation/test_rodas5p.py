@@ -119,7 +119,7 @@ def test_rodas5p_takes_less_than_half_rodas4s_right_hand_sides_on_the_ddfs(
     # Jacobians.  One run's counts move by up to ±13 % (steps +40 %) with the last bits of its
     # arithmetic (tests/conftest.py, ``ddfs_counts``), so the counts are medians over seven
     # rounding-level perturbations of the table position; bounds: the medians of the tree
-    # before the back substitution took the reference BLAS order (41936bc, 2026-12-06) + 10 %
+    # before the back substitution took the reference BLAS order (f191cdd, 2026-12-06) + 10 %
     # (RODAS5P 2 514 steps, 897 Rosenbrock, 466 Jacobians, 20 473 right-hand sides)
     r4 = {k: median(s[k] for s in ddfs_counts["rodas4"]) for k in ddfs_counts["rodas4"][0]
           if isinstance(ddfs_counts["rodas4"][0][k], int | float)}
