@@ -92,20 +92,19 @@ def numba_root() -> Path:
     return Path(os.environ.get("NUMBA_CACHE_DIR") or user_cache_root())
 
 
-def _size(path: Path) -> int:
-    """Bytes of a file, or of every file under a folder (links not followed)."""
+def _footprint(path: Path) -> tuple[int, float]:
+    """(bytes, newest modification time [s since epoch]) of a file, or of every file under a
+    folder and the folder itself, in one walk (links not followed)."""
+    stat = path.lstat()
     if not path.is_dir() or path.is_symlink():
-        return path.lstat().st_size
-    return sum(p.lstat().st_size for p in path.rglob("*") if not p.is_dir())
-
-
-def _last_written(path: Path) -> float:
-    """The newest modification time of a file or of anything under a folder [s since epoch]."""
-    newest = path.lstat().st_mtime
-    if path.is_dir() and not path.is_symlink():
-        for p in path.rglob("*"):
-            newest = max(newest, p.lstat().st_mtime)
-    return newest
+        return stat.st_size, stat.st_mtime
+    size, newest = 0, stat.st_mtime
+    for p in path.rglob("*"):
+        stat = p.lstat()
+        newest = max(newest, stat.st_mtime)
+        if not p.is_dir():
+            size += stat.st_size
+    return size, newest
 
 
 def _current_numba() -> str:
@@ -145,7 +144,7 @@ def usage() -> list[CachePart]:
     """
     root, c_folder = numba_root(), _c_folder()
     return [CachePart(name, root if name.startswith("numba") else c_folder, len(entries),
-                      sum(_size(p) for p in entries))
+                      sum(_footprint(p)[0] for p in entries))
             for name, entries in _listing().items()]
 
 
@@ -180,22 +179,25 @@ def prune(older_than: float = DEFAULT_AGE, *, dry_run: bool = False) -> CacheRep
     now = time.time()
     limit = now - older_than * DAY
     parts = _listing()
-    chosen = [p for p in parts["numba, other versions"] if _last_written(p) <= limit]
-    chosen += [p for p in parts["C libraries and texts"] if p.lstat().st_mtime <= limit]
-    chosen += [p for p in parts["unfinished compilations"]
-               if _last_written(p) <= now - UNFINISHED_AGE]  # whatever older_than says
+    # the last write before which an entry goes (unfinished compilations by their own age,
+    # whatever older_than says); each entry walked once for its size and its last write
+    cutoff = {"numba, other versions": limit, "C libraries and texts": limit,
+              "unfinished compilations": now - UNFINISHED_AGE}
     removed: list[Path] = []
     freed = 0
-    for path in chosen:
-        try:
-            size = _size(path)
-            if not dry_run:
-                if path.is_dir() and not path.is_symlink():
-                    shutil.rmtree(path)
-                else:
-                    path.unlink()
-        except FileNotFoundError:  # another process removed it meanwhile
-            continue
-        removed.append(path)
-        freed += size
+    for part, before in cutoff.items():
+        for path in parts[part]:
+            try:
+                size, written = _footprint(path)
+                if written > before:
+                    continue
+                if not dry_run:
+                    if path.is_dir() and not path.is_symlink():
+                        shutil.rmtree(path)
+                    else:
+                        path.unlink()
+            except FileNotFoundError:  # another process removed it meanwhile
+                continue
+            removed.append(path)
+            freed += size
     return CacheReport(tuple(removed), freed, dry_run)
