@@ -52,7 +52,7 @@ def _save(fig: Any, path: Path) -> Path:
     from ..io.outputs import atomic_path
 
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, bbox_inches="tight")
+        fig.savefig(tmp, dpi=110)
     return path
 
 
