@@ -1189,9 +1189,12 @@ def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
     return p.real, abs(p.imag) / (2 * np.pi)
 
 
-def _check_range(low: float, high: float) -> None:
+def _check_range(low: float, high: float, points: int) -> None:
     if not (0 < low < high):
         raise ParameterError("low", low * 1e3, f"expected 0 < low < high = {high * 1e3} [mm/s]")
+    if not (isinstance(points, (int, np.integer)) and points >= 2):
+        raise ParameterError("points", points, "expected a whole number ≥ 2 (a scan needs two "
+                             "speeds to see a change)")
 
 
 def _bisect_edge(system: DriveSystem, nut_speed: float, a: float, b: float, unstable_a: bool,
@@ -1229,7 +1232,7 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     high : float, default 5e-3
         Highest table speed scanned [m/s].
     points : int, default 40
-        Number of scanned speeds.
+        Number of scanned speeds (at least 2).
     tolerance : float, default 1e-6
         Resolution of the bisected band edges [m/s].
     progress : callable or None, default None
@@ -1249,7 +1252,7 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     >>> [(round(1e3 * lo, 2), round(1e3 * hi, 2)) for lo, hi in band.intervals]
     [(0.17, 1.4)]
     """
-    _check_range(low, high)
+    _check_range(low, high, points)
     speeds = np.geomspace(low, high, points)
     re = np.empty(points)
     fr = np.empty(points)
@@ -1306,7 +1309,7 @@ def upper_band_edge(system: DriveSystem, nut_speed: float = 0.0, *,
     high : float, default 5e-3
         Highest table speed scanned [m/s].
     points : int, default 40
-        Number of scanned speeds.
+        Number of scanned speeds (at least 2).
     tolerance : float, default 1e-6
         Resolution of the bisected edge [m/s].
 
@@ -1316,7 +1319,7 @@ def upper_band_edge(system: DriveSystem, nut_speed: float = 0.0, *,
         The edge [m/s]; ``high`` when steady sliding is unstable there, NaN when it is stable
         at every scanned speed.
     """
-    _check_range(low, high)
+    _check_range(low, high, points)
     speeds = np.geomspace(low, high, points)
     for k in range(points - 1, -1, -1):
         if rightmost_pole(system, float(speeds[k]), nut_speed)[0] > 0:

@@ -8,9 +8,8 @@ import math
 import typer
 
 from ..io.outputs import PLOT_FORMATS
+from . import _units
 from ._common import (
-    MM,
-    MM_PER_S,
     app,
     console,
     outputs,
@@ -102,13 +101,18 @@ def compensate_command(
     if drive not in eligible:
         raise ParameterError("--drive", drive, "the study compensates a drive with friction "
                              f"compensation and no driven nut; expected {' or '.join(eligible)}")
-    cases = default_cases(mismatch / 100.0, nut_speed * MM_PER_S, drive=drive,
-                          alternative=eligible[drive])
+    table_position = _units.position("--position", position, params, drive)
+    v_track = _units.speed("--tracking-speed", tracking_speed)
+    if v_track == 0.0:
+        raise ParameterError("--tracking-speed", tracking_speed,
+                             "expected a non-zero speed [mm/s]")
+    cases = default_cases(mismatch / 100.0, _units.speed("--nut-speed", nut_speed),
+                          drive=drive, alternative=eligible[drive])
     with Progress(console=console, transient=True, disable=as_json) as bar:
         task = bar.add_task("compensation study", total=len(cases))
         rows = compensation_study(params, cases, search=not no_search,
-                                  table_position=position * MM,
-                                  tracking_speed=tracking_speed * MM_PER_S,
+                                  table_position=table_position,
+                                  tracking_speed=v_track,
                                   progress=lambda done, total: bar.update(task, completed=done))
     if as_json:
         print_json({"parameter_set": params.name, "rows": rows})
@@ -147,13 +151,14 @@ def _compare(drive: str, position: float, schemes: str, metrics: str, band: floa
         preset_name = "wang2021-drive"
     params = resolve_parameters(preset_name, params_file, drive)
     check_sampled(params)
+    table_position = _units.position("--position", position, params, drive)
     with Progress(console=console, transient=True, disable=as_json) as bar:
         task = bar.add_task("compensation comparison", total=None)
 
         def progress(done: int, total: int, label: str) -> None:
             bar.update(task, completed=done, total=total, description=label)
 
-        rows = compare_compensations(params, drive=drive, table_position=position * MM,
+        rows = compare_compensations(params, drive=drive, table_position=table_position,
                                      names=names, metrics=wanted, band=band * 1e-6,
                                      progress=progress)
     if output:

@@ -6,9 +6,8 @@ import typer
 
 from ..analysis import protocol
 from ..io.outputs import PLOT_FORMATS
+from . import _units
 from ._common import (
-    MM,
-    MM_PER_S,
     app,
     console,
     outputs,
@@ -64,8 +63,9 @@ def loops_command(
     if plot_kind not in PLOT_KINDS:
         raise ParameterError("--plot-kind", plot_kind, f"expected {', '.join(PLOT_KINDS)}")
     params = resolve_parameters(preset_name, params_file, drive)
-    system = DriveSystem(params, drive, position * MM)
-    result = loop_analysis(system, table_speed * MM_PER_S, nut_speed * MM_PER_S,
+    system = DriveSystem(params, drive, _units.position("--position", position, params, drive))
+    result = loop_analysis(system, _units.speed("--table-speed", table_speed),
+                           _units.speed("--nut-speed", nut_speed),
                            frictionless=not with_friction)
     data = result.as_dict()
     if plot:
@@ -95,8 +95,8 @@ def stability_command(
     high: float = typer.Option(1e3 * protocol.LINEAR_SPEED_RANGE[1], "--high",
                                help="Highest table speed scanned [mm/s]."),
     points: int = typer.Option(protocol.LINEAR_POINTS, "--points",
-                               help="Log-spaced scan points (edges are then bisected to "
-                               "0.001 mm/s)."),
+                               help="Log-spaced scan points, at least 2 (edges are then "
+                               "bisected to 0.001 mm/s)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     plot: str | None = typer.Option(None, "--plot", help="Write the scan [.png, .pdf, .svg]."),
@@ -107,11 +107,16 @@ def stability_command(
     site and bristle state), with the unstable mode's frequency."""
     from ..analysis.linear import stability_band
     from ..engine.simulate import DriveSystem
+    from ..parameters import ParameterError
 
+    if points < 2:
+        raise ParameterError("--points", points, "expected a whole number ≥ 2 (a scan needs "
+                             "two speeds to see a change)")
     params = resolve_parameters(preset_name, params_file, drive)
-    system = DriveSystem(params, drive, position * MM)
-    band = stability_band(system, nut_speed * MM_PER_S, low=low * MM_PER_S,
-                          high=high * MM_PER_S, points=points)
+    system = DriveSystem(params, drive, _units.position("--position", position, params, drive))
+    lo, hi = _units.speed_range("--low", low, "--high", high)
+    band = stability_band(system, _units.speed("--nut-speed", nut_speed), low=lo, high=hi,
+                          points=points)
     data = band.as_dict()
     if plot:
         from ..plots.linear import plot_band

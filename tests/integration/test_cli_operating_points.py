@@ -1,0 +1,69 @@
+"""`loops`, `stability` and `compensate` read their operating point as `simulate` and `creep`
+do (``feeddrive.cli._units``): a speed or position the drive cannot have is refused before any
+linearisation, in one line naming the option as typed and its CLI unit.
+
+Before 2026-12-06 these three passed the values on in SI: ``stability --points 0`` ended in an
+IndexError traceback, ``--points 1`` reported "stable at every speed scanned" from one speed,
+``--nut-speed 1e6`` (1000 m/s) reached the steady-state solver ("no steady sliding state
+found"), and ``--position -5`` was answered as ``table_position = -0.005 … [m]``."""
+
+from __future__ import annotations
+
+import pytest
+from typer.testing import CliRunner
+
+import feeddrive as fd
+from feeddrive.analysis.linear import stability_band, upper_band_edge
+from feeddrive.cli import app
+from feeddrive.parameters import ParameterError
+
+runner = CliRunner()
+
+REFUSED = [
+    (["stability", "--points", "0"], "--points = 0", "≥ 2"),
+    (["stability", "--points", "1"], "--points = 1", "≥ 2"),
+    (["stability", "--low", "3", "--high", "1"], "--high = 1.0", "[mm/s]"),
+    (["stability", "--low", "-1"], "--low = -1.0", "[mm/s]"),
+    (["stability", "--drive", "ddfs", "--nut-speed", "1e6"], "--nut-speed = 1000000.0",
+     "[mm/s]"),
+    (["stability", "--position", "0"], "--position = 0.0", "[mm]"),
+    (["loops", "--position", "5000"], "--position = 5000.0", "[mm]"),
+    (["loops", "--table-speed", "1e9"], "--table-speed = 1000000000.0", "[mm/s]"),
+    (["loops", "--table-speed", "nan"], "--table-speed = nan", "[mm/s]"),
+    (["loops", "--drive", "ddfs", "--nut-speed", "1e7"], "--nut-speed = 10000000.0", "[mm/s]"),
+    (["compensate", "--no-search", "--nut-speed", "1e7"], "--nut-speed = 10000000.0",
+     "[mm/s]"),
+    (["compensate", "--no-search", "--tracking-speed", "0"], "--tracking-speed = 0.0",
+     "[mm/s]"),
+    (["compensate", "--no-search", "--position", "-5"], "--position = -5.0", "[mm]"),
+    (["compensate", "--compare", "--position", "900"], "--position = 900.0", "[mm]"),
+]
+
+
+@pytest.mark.parametrize(("args", "named", "unit"), REFUSED,
+                         ids=[" ".join(a) for a, _, _ in REFUSED])
+def test_an_impossible_operating_point_is_refused_in_one_line(args: list[str], named: str,
+                                                              unit: str) -> None:
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {named}:"), result.stderr
+    assert unit in lines[0]
+
+
+def test_the_smallest_scan_still_finds_the_band() -> None:
+    """``--points 2`` is allowed; on wang2021's CDFS at mid-screw the band of the 40-point
+    default (0.17–1.40 mm/s, the docstring of ``stability_band``) is found from three scan
+    points too: the edges are bisected, not read off the scan."""
+    result = runner.invoke(app, ["stability", "--points", "3"])
+    assert result.exit_code == 0, result.output
+    assert "unstable from 0.172 to 1.398 mm/s" in result.output
+
+
+@pytest.mark.parametrize("points", [0, 1, 2.5])
+def test_the_library_refuses_a_scan_of_fewer_than_two_speeds(points: object) -> None:
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    for scan in (stability_band, upper_band_edge):
+        with pytest.raises(ParameterError, match=r"points = .*expected a whole number ≥ 2"):
+            scan(system, points=points)  # type: ignore[arg-type]
