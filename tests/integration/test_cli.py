@@ -301,7 +301,9 @@ def test_creep_text_names_the_bands_and_the_rule() -> None:
 def test_creep_rejects_a_maximum_below_the_first_trial() -> None:
     res = runner.invoke(app, ["creep", "--max-duration", "5"])
     assert res.exit_code == 2
-    assert "max_duration" in res.output and len(res.output.strip().splitlines()) == 1
+    # the option as typed and the first trial's length (protocol.TRIAL_DURATION, 12 s)
+    assert "--max-duration = 5.0: expected ≥ 12 [s]" in res.output
+    assert len(res.output.strip().splitlines()) == 1
 
 
 def test_documented_keq_recipe_works_as_written(tmp_path: Path) -> None:

@@ -5,7 +5,9 @@ linearisation, in one line naming the option as typed and its CLI unit.
 Before 2026-12-06 these three passed the values on in SI: ``stability --points 0`` ended in an
 IndexError traceback, ``--points 1`` reported "stable at every speed scanned" from one speed,
 ``--nut-speed 1e6`` (1000 m/s) reached the steady-state solver ("no steady sliding state
-found"), and ``--position -5`` was answered as ``table_position = -0.005 … [m]``."""
+found"), and ``--position -5`` was answered as ``table_position = -0.005 … [m]``.  The trial
+lengths of `creep` and `calibrate` likewise: ``--initial-duration 1e-9`` ended in "time: 0
+samples; need at least 16", ``--max-duration 5`` under the rule's field names."""
 
 from __future__ import annotations
 
@@ -37,6 +39,16 @@ REFUSED = [
      "[mm/s]"),
     (["compensate", "--no-search", "--position", "-5"], "--position = -5.0", "[mm]"),
     (["compensate", "--compare", "--position", "900"], "--position = 900.0", "[mm]"),
+    # trial lengths (the rule's settle time 2 s; the first trial 12 s, cycle_verdict.VerdictRule)
+    (["creep", "--initial-duration", "0"], "--initial-duration = 0.0", "≥ 2 [s]"),
+    (["creep", "--initial-duration", "1e-9", "--max-duration", "1e-9"],
+     "--max-duration = 1e-09", "≥ 2 [s]"),
+    (["creep", "--initial-duration", "10", "--max-duration", "5"], "--max-duration = 5.0",
+     "≥ 10 [s]"),
+    (["creep", "--max-duration", "nan"], "--max-duration = nan", "[s]"),
+    (["calibrate", "--target", "1.5", "--max-duration", "5"], "--max-duration = 5.0",
+     "≥ 12 [s]"),
+    (["calibrate", "--target", "1.5", "--max-duration", "inf"], "--max-duration = inf", "[s]"),
 ]
 
 

@@ -8,10 +8,15 @@ lead of 5.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from .. import units
+from ..analysis import protocol
 from ..parameters import DriveParameters, ParameterError
 from ._common import MM, MM_PER_S, err_console
+
+if TYPE_CHECKING:
+    from ..analysis.cycle_verdict import VerdictRule
 
 # A table speed below 0.01 mm/s (the CLI's resolution for critical speeds) or a table
 # position below 1 mm (the nut itself is longer) is what an SI value typed into an mm
@@ -85,6 +90,32 @@ def position(option: str, value: float, params: DriveParameters,
         warn(f"{option} = {value:g} mm looks like a value in metres "
              f"({value * 1e3:g} mm?); the CLI takes mm")
     return value * MM
+
+
+def trial_rule(max_duration: float, initial_duration: float | None = None) -> VerdictRule:
+    """The creep-verdict rule with the trial lengths of ``--max-duration`` and
+    ``--initial-duration`` [s] (the protocol's first length when the command has no
+    ``--initial-duration``): each finite and at least the rule's ``settle_time`` (a shorter
+    trial can never be judged), the longest not below the first."""
+    from ..analysis.cycle_verdict import VerdictRule
+
+    shortest = VerdictRule().settle_time
+    given = {"--max-duration": max_duration}
+    if initial_duration is not None:
+        given["--initial-duration"] = initial_duration
+    for option, value in given.items():
+        _finite(option, value, "s")
+        if value < shortest:
+            raise ParameterError(option, value, f"expected ≥ {shortest:g} [s] (the verdict "
+                                                "rule's settle time: a shorter trial cannot be "
+                                                "judged)")
+    first = protocol.TRIAL_DURATION if initial_duration is None else initial_duration
+    if max_duration < first:
+        raise ParameterError("--max-duration", max_duration,
+                             f"expected ≥ {first:g} [s], the first trial's length"
+                             + (" (--initial-duration)" if initial_duration is not None
+                                else ""))
+    return VerdictRule(initial_duration=first, max_duration=max_duration)
 
 
 def number(value: object, digits: int = 4) -> str:

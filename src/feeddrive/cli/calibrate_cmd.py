@@ -55,7 +55,6 @@ def calibrate_command(
     creeps (stick-slip or sustained oscillation) 0.01 mm/s below the target and not at it.
     The fit is the geometric mean of the two values where those verdicts switch."""
     from ..analysis.calibrate import Target, Unknown, calibrate
-    from ..analysis.cycle_verdict import VerdictRule
     from ..parameters import save
 
     if not (0 < tolerance < 1):
@@ -66,7 +65,7 @@ def calibrate_command(
         raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
                                              f"{unknown}]")
     params = resolve_parameters(preset_name, params_file)
-    rule = VerdictRule(max_duration=max_duration)
+    rule = _units.trial_rule(max_duration)
     result = calibrate(
         params, Target(drive=drive, critical_speed=_units.speed("--target", target, positive=True),
                        table_position=_units.position("--position", position, params),

@@ -57,12 +57,11 @@ def creep_command(
         format_bands,
         format_integration_error,
     )
-    from ..analysis.cycle_verdict import VerdictRule
     from ..engine.simulate import DriveSystem
 
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")
-    rule = VerdictRule(initial_duration=initial_duration, max_duration=max_duration)
+    rule = _units.trial_rule(max_duration, initial_duration)
     params = resolve_parameters(preset_name, params_file)
     system = DriveSystem(params, drive=drive,
                          table_position=_units.position("--position", position, params))
