@@ -259,7 +259,7 @@ def test_analyze_bad_files(tmp_path: Path, text: str, fragments: list[str]) -> N
 def test_analyze_zero_command_speed(tmp_path: Path) -> None:
     t, x, _ = stepdown_positions([False], [1.6])
     p = write_csv(tmp_path / "ok.csv", "time,position", [t, x])
-    one_line_error(run("analyze", p, "--command-speed", "0"), "command_speed")
+    one_line_error(run("analyze", p, "--command-speed", "0"), "--command-speed = 0.0", "[mm/s]")
 
 
 def test_identify_static_one_direction_record(tmp_path: Path) -> None:

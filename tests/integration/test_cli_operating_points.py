@@ -11,6 +11,9 @@ samples; need at least 16", ``--max-duration 5`` under the rule's field names.""
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -49,14 +52,26 @@ REFUSED = [
     (["calibrate", "--target", "1.5", "--max-duration", "5"], "--max-duration = 5.0",
      "≥ 12 [s]"),
     (["calibrate", "--target", "1.5", "--max-duration", "inf"], "--max-duration = inf", "[s]"),
+    # analyze: the window rule's thresholds (creep_window.CreepThresholds) and the command
+    (["analyze", "{trace}", "--command-speed", "0"], "--command-speed = 0.0", "[mm/s]"),
+    (["analyze", "{trace}", "--command-speed", "1e9"], "--command-speed = 1000000000.0",
+     "[mm/s]"),
+    (["analyze", "{trace}", "--stick-level", "2"], "--stick-level = 2.0", "< 1 [-]"),
+    (["analyze", "{trace}", "--max-stick-fraction", "-1"], "--max-stick-fraction = -1.0",
+     "≥ 0 [-]"),
+    (["analyze", "{trace}", "--max-ripple-ratio", "nan"], "--max-ripple-ratio = nan", "[-]"),
 ]
 
 
 @pytest.mark.parametrize(("args", "named", "unit"), REFUSED,
                          ids=[" ".join(a) for a, _, _ in REFUSED])
 def test_an_impossible_operating_point_is_refused_in_one_line(args: list[str], named: str,
-                                                              unit: str) -> None:
-    result = runner.invoke(app, args)
+                                                              unit: str, tmp_path: Path) -> None:
+    trace = tmp_path / "trace.csv"  # 5 s of a table at 1 mm/s with a 3-Hz ripple [s, mm]
+    t = np.arange(0.0, 5.0, 1e-3)
+    np.savetxt(trace, np.c_[t, t + 0.05 * np.sin(6 * np.pi * t)], delimiter=",",
+               header="time,position", comments="")
+    result = runner.invoke(app, [a.format(trace=trace) for a in args])
     assert result.exit_code == 2, result.output
     assert "Traceback" not in result.output
     lines = result.stderr.strip().splitlines()

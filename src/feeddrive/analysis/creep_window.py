@@ -33,6 +33,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..parameters.validation import ParameterError
 from .cycle_verdict import VerdictRule
 from .trace_input import (
     MIN_WINDOW_SAMPLES,
@@ -96,12 +97,17 @@ class CreepThresholds:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float) \
                     or not math.isfinite(value) or value < 0:
-                raise ValueError(f"thresholds.{name} = {value!r}: expected a finite number ≥ 0")
+                raise ParameterError(f"thresholds.{name}", value,
+                                     "expected a finite number ≥ 0 [-]")
         if self.stick_level >= 1.0:
-            raise ValueError(f"thresholds.stick_level = {self.stick_level!r}: expected < 1 "
-                             "(a fraction of the command speed)")
-        if self.max_stick_fraction >= 1.0 or self.min_peak_share > 1.0:
-            raise ValueError("thresholds: max_stick_fraction must be < 1 and min_peak_share ≤ 1")
+            raise ParameterError("thresholds.stick_level", self.stick_level,
+                                 "expected < 1 [-] (a fraction of the command speed)")
+        if self.max_stick_fraction >= 1.0:
+            raise ParameterError("thresholds.max_stick_fraction", self.max_stick_fraction,
+                                 "expected < 1 [-] (a fraction of the window)")
+        if self.min_peak_share > 1.0:
+            raise ParameterError("thresholds.min_peak_share", self.min_peak_share,
+                                 "expected ≤ 1 [-] (a share of the spectrum's peak)")
 
 
     def describe(self) -> str:

@@ -17,6 +17,7 @@ from ..analysis.creep_window import CreepThresholds
 from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, describe_critical
 from ..io.outputs import PLOT_FORMATS
 from ..parameters import ParameterError
+from . import _units
 from ._common import MM, MM_PER_S, app, console, outputs, print_json, user_errors
 
 
@@ -144,15 +145,26 @@ def analyze_command(
                                 ("--min-segment", min_segment, "s")):
         if not (math.isfinite(value) and value > 0):
             raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
-    thresholds = CreepThresholds(stick_level=stick_level, max_stick_fraction=max_stick_fraction,
-                                 max_ripple_ratio=max_ripple_ratio)
+    try:
+        thresholds = CreepThresholds(stick_level=stick_level,
+                                     max_stick_fraction=max_stick_fraction,
+                                     max_ripple_ratio=max_ripple_ratio)
+    except ParameterError as err:  # the rule's field, named as the option that set it
+        option = "--" + err.field.removeprefix("thresholds.").replace("_", "-")
+        raise ParameterError(option, err.value, err.message) from None
+    v_cmd = None
+    if command_speed is not None:
+        v_cmd = _units.speed("--command-speed", command_speed)
+        if v_cmd == 0.0:
+            raise ParameterError("--command-speed", command_speed,
+                                 "expected a non-zero speed [mm/s]")
     trace = read_position_trace(file, time_column=time_column, position_column=position_column,
                                 command_column=command_column, speed_column=speed_column,
                                 time_unit=time_unit, position_unit=position_unit, sep=sep,
                                 decimal=decimal)
     result = analyze_trace(
         trace.time, trace.position,
-        command_speed=None if command_speed is None else command_speed * MM_PER_S,
+        command_speed=v_cmd,
         command=trace.command_speed, speed=trace.speed, thresholds=thresholds,
         smoothing_time=None if smoothing is None else smoothing * 1e-3,
         segment=segments, min_step=min_step * MM_PER_S, min_segment_time=min_segment,
