@@ -60,6 +60,10 @@ REFUSED = [
     (["analyze", "{trace}", "--max-stick-fraction", "-1"], "--max-stick-fraction = -1.0",
      "≥ 0 [-]"),
     (["analyze", "{trace}", "--max-ripple-ratio", "nan"], "--max-ripple-ratio = nan", "[-]"),
+    # friction's oscillator scan (friction_cmd.MAX_POINTS)
+    (["friction", "--speed-max", "1e9"], "--speed-max = 1000000000.0", "[mm/s]"),
+    (["friction", "--speed-min", "0"], "--speed-min = 0.0", "[mm/s]"),
+    (["friction", "--points", "100001"], "--points = 100001", "2 … 100000"),
 ]
 
 

@@ -38,14 +38,16 @@ def _finite(option: str, value: float, unit: str) -> float:
     return value
 
 
-def speed(option: str, value: float, *, positive: bool = False, warn_small: bool = True
-          ) -> float:
+def speed(option: str, value: float, *, positive: bool = False, nonzero: bool = False,
+          warn_small: bool = True) -> float:
     """``value`` [mm/s] → [m/s]; a non-zero magnitude below 0.01 mm/s draws a warning (unless
     ``warn_small`` is False: a resolution is small by nature), one above
-    :data:`LARGEST_SPEED_MM_S` is refused."""
+    :data:`LARGEST_SPEED_MM_S` is refused, and with ``positive`` (``nonzero``) one ≤ 0 (= 0)."""
     _finite(option, value, "mm/s")
     if positive and value <= 0.0:
         raise ParameterError(option, value, "expected a speed > 0 [mm/s]")
+    if nonzero and value == 0.0:
+        raise ParameterError(option, value, "expected a non-zero speed [mm/s]")
     if abs(value) > LARGEST_SPEED_MM_S:
         raise ParameterError(option, value, f"expected |speed| ≤ {LARGEST_SPEED_MM_S:g} [mm/s] "
                                             "(no feed drive is faster)")

@@ -152,12 +152,8 @@ def analyze_command(
     except ParameterError as err:  # the rule's field, named as the option that set it
         option = "--" + err.field.removeprefix("thresholds.").replace("_", "-")
         raise ParameterError(option, err.value, err.message) from None
-    v_cmd = None
-    if command_speed is not None:
-        v_cmd = _units.speed("--command-speed", command_speed)
-        if v_cmd == 0.0:
-            raise ParameterError("--command-speed", command_speed,
-                                 "expected a non-zero speed [mm/s]")
+    v_cmd = (None if command_speed is None
+             else _units.speed("--command-speed", command_speed, nonzero=True))
     trace = read_position_trace(file, time_column=time_column, position_column=position_column,
                                 command_column=command_column, speed_column=speed_column,
                                 time_unit=time_unit, position_unit=position_unit, sep=sep,

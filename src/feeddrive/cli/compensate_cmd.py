@@ -102,10 +102,7 @@ def compensate_command(
         raise ParameterError("--drive", drive, "the study compensates a drive with friction "
                              f"compensation and no driven nut; expected {' or '.join(eligible)}")
     table_position = _units.position("--position", position, params, drive)
-    v_track = _units.speed("--tracking-speed", tracking_speed)
-    if v_track == 0.0:
-        raise ParameterError("--tracking-speed", tracking_speed,
-                             "expected a non-zero speed [mm/s]")
+    v_track = _units.speed("--tracking-speed", tracking_speed, nonzero=True)
     cases = default_cases(mismatch / 100.0, _units.speed("--nut-speed", nut_speed),
                           drive=drive, alternative=eligible[drive])
     with Progress(console=console, transient=True, disable=as_json) as bar:

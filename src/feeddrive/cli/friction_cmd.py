@@ -12,6 +12,7 @@ from rich.table import Table
 from .. import units
 from ..io.outputs import PLOT_FORMATS
 from ..parameters import DriveParameters, ParameterError
+from . import _units
 from ._common import (
     MM_PER_S,
     N_PER_UM,
@@ -25,6 +26,8 @@ from ._common import (
 
 SITES = units.SITES
 BRANCHES = ("positive", "negative")
+#: the most speeds a scan takes (the whole command at 1e5: ≈ 7 CPU s, 2026-12-06)
+MAX_POINTS = 100_000
 
 SCAN_LIMITATION = (
     "The scan linearises one mass pulled at constant speed through a spring and a damper "
@@ -87,7 +90,8 @@ def friction_command(
              "0 for wang2021-literal: the paper gives no structural damping)."),
     speed_min: float = typer.Option(0.05, "--speed-min", help="Scan: lowest speed [mm/s]."),
     speed_max: float = typer.Option(5.0, "--speed-max", help="Scan: highest speed [mm/s]."),
-    points: int = typer.Option(400, "--points", help="Scan: number of speeds, log-spaced [-]."),
+    points: int = typer.Option(400, "--points", help="Scan: number of speeds, log-spaced, "
+                               "2 … 100000 [-]."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --plot file."),
 ) -> None:
     """Friction parameters of one site (Wang2021 Table 1) and analytic indicators of its law.
@@ -112,13 +116,10 @@ def friction_command(
     lugre: LuGreParameters = getattr(params.friction, site).require(
         LuGreParameters, f"friction.{site}", "feeddrive friction")
     m, k, c = _scan_setup(params, mass, stiffness_n_per_um, damping)
-    _positive("--speed-min", speed_min, "mm/s")
-    if not (math.isfinite(speed_max) and speed_max > speed_min):
-        raise ParameterError("--speed-max", speed_max, f"expected > --speed-min = {speed_min:g} "
-                                                       "[mm/s]")
-    if points < 2:
-        raise ParameterError("--points", points, "expected at least 2")
-    speeds = np.geomspace(speed_min, speed_max, points) * MM_PER_S
+    lo, hi = _units.speed_range("--speed-min", speed_min, "--speed-max", speed_max)
+    if not 2 <= points <= MAX_POINTS:
+        raise ParameterError("--points", points, f"expected 2 … {MAX_POINTS} scan speeds")
+    speeds = np.geomspace(lo, hi, points)
 
     from ..model.friction import indicators as site_indicators
 
