@@ -209,6 +209,27 @@ def test_params_check_refuses_edited_files(tmp_path: Path, old: str, new: str,
     assert line.startswith(f"error: {path}: {field} = ")  # the file, then the field (issue 13)
 
 
+@pytest.mark.parametrize(("table", "refused"), [
+    ("rtol = -1", "solver.rtol = -1: expected a finite value 1e-14 … 0.1 [-]"),
+    ('method = "euler"', "solver.method = 'euler': expected one of modal"),
+    ("accuracy = 0.1\nrtol = 1e-8", "solver.accuracy = 0.1: given with solver.rtol"),
+    ("colour = 1", "solver.colour = 1: expected one of method"),
+])
+def test_params_check_reads_the_solver_table_as_a_run_does(tmp_path: Path, table: str,
+                                                           refused: str) -> None:
+    """2026-12-06: ``params check`` said "ok" for a [solver] table every run with --params
+    refused; it reads it as they do (cli._solver.solver_options)."""
+    path = tmp_path / "solver.toml"
+    path.write_text(f'extends = "wang2021"\n\n[solver]\n{table}\n', encoding="utf-8")
+    check = one_line_error(run("params", "check", str(path)))
+    assert refused in check
+    simulate = one_line_error(run("simulate", "--params", str(path), "--table-speed", "1",
+                                  "--duration", "0.1"))
+    assert simulate == check
+    path.write_text('extends = "wang2021"\n\n[solver]\nrtol = 1e-8\n', encoding="utf-8")
+    assert run("params", "check", str(path)).exit_code == 0
+
+
 def test_params_check_missing_file() -> None:
     line = one_line_error(run("params", "check", "/nonexistent/p.toml"))
     assert "no such file" in line

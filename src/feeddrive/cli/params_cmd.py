@@ -117,5 +117,8 @@ def check(file: str | None = typer.Argument(None, help="Parameter file (TOML).")
     if file is None:
         raise ValueError("FILE: give a parameter file, or --machine FILE")
     params = load(file)
+    from ._solver import solver_options
+
+    solver_options({}, file)  # its [solver] table, as a run with --params reads it
     console.print(f"ok: {shown(file)} is a valid parameter set ({shown(params.name)})",
                   markup=False, highlight=False, soft_wrap=True)

@@ -748,10 +748,12 @@ def layered(layers: Iterable[tuple[str, Mapping[str, Any]]],
             names[name] = where
         if "accuracy" in given:
             both = [n for n in _TOLERANCE_NAMES if n in given]
-            if both:
-                raise ParameterError(names["accuracy"], given["accuracy"],
-                                     f"given with {names[both[0]]} ({source}): give either "
-                                     "an accuracy factor or explicit tolerances")
+            if both:  # named by its option, or as a setting of the layer's table
+                first, other = (names[n] if names[n] != source else f"solver.{n}"
+                                for n in ("accuracy", both[0]))
+                raise ParameterError(first, given["accuracy"],
+                                     f"given with {other} ({source}): give either an "
+                                     "accuracy factor or explicit tolerances")
             # a new accuracy factor replaces the explicit tolerances of the layers below
             for n in _TOLERANCE_NAMES:
                 if values[n] is not None:
