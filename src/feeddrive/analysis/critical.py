@@ -315,6 +315,12 @@ class CriticalSpeed:
             return None
         return max(e for e in errors if e is not None)
 
+    def __repr__(self) -> str:
+        return (f"<feeddrive CriticalSpeed {self.drive} at {1e3 * self.table_position:g} mm, "
+                f"v_n {1e3 * self.nut_speed:g} mm/s, from {self.start}: {self.display()}; "
+                f"{len(self.trials)} trials, {len(self.bands)} bands; .trials .bands, "
+                ".to_dict()>")
+
     def display(self) -> str:
         """The result in mm/s as a user reads it, with the bound when out of range.
 

@@ -115,6 +115,12 @@ class LinearModel:
     notes: tuple[str, ...] = field(default=())
     axes: tuple[str, ...] = field(default=())
 
+    def __repr__(self) -> str:
+        return (f"<feeddrive LinearModel: {len(self.states)} states, {len(self.inputs)} "
+                f"inputs, {len(self.outputs)} outputs; at {_mm_s(self.table_speed)} table, "
+                f"v_n {_mm_s(self.nut_speed)}, {FRICTION_WORDS[self.frictionless]}; .A .B .C "
+                ".D, .poles(), .to_control()>")
+
     def poles(self) -> np.ndarray:
         """Eigenvalues of ``A``: the closed loop's poles at the operating point.
 
@@ -191,6 +197,20 @@ class Pole:
 # give real poles at 0 that finite differences place at ±1e-9…1e-6 1/s; real poles smaller
 # than this fraction of the fastest pole are treated as those marginal modes.
 MARGINAL = 1e-7
+
+
+def _mm_s(speed: float) -> str:
+    """A speed [m/s] as a repr shows it [mm/s]."""
+    return f"{1e3 * speed:.4g} mm/s"
+
+
+def _margins_text(loop: LoopResult) -> str:
+    """A loop's crossover and margins in a repr (— where the loop has none)."""
+    def shown(value: float | None, fmt: str) -> str:
+        return "—" if value is None else format(value, fmt)
+
+    return (f"crossover {shown(loop.crossover_hz, '.3g')} Hz, GM "
+            f"{shown(loop.gain_margin_db, '.3g')} dB, PM {shown(loop.phase_margin_deg, '.3g')}°")
 
 
 def classify_poles(eigenvalues: np.ndarray) -> list[Pole]:
@@ -714,6 +734,9 @@ class LoopResult:
     crossover_hz: float | None
     bandwidth_hz: float | None  # closed loop −3 dB
 
+    def __repr__(self) -> str:
+        return f"<feeddrive LoopResult {self.name}: {_margins_text(self)}>"
+
     def as_dict(self) -> dict[str, Any]:
         """The loop's margins for the JSON report.
 
@@ -823,6 +846,13 @@ class LoopAnalysis:
         its plots, the explorer): their margins differ by it — the CDFS at 1.5 mm/s has a
         3.02-dB gain margin without friction and 1.34 dB with it (issue 41 item 4)."""
         return FRICTION_WORDS[self.linear.frictionless]
+
+    def __repr__(self) -> str:
+        p = self.dominant()
+        loops = "; ".join(f"{r.name} {_margins_text(r)}" for r in self.loops)
+        return (f"<feeddrive LoopAnalysis at {_mm_s(self.linear.table_speed)}, "
+                f"{self.friction}: least-damped mode {p.frequency_hz:.4g} Hz, "
+                f"ζ {p.damping_ratio:.3g}; {loops}; .poles .loops .linear, .as_dict()>")
 
     def as_dict(self) -> dict[str, Any]:
         """The analysis for the JSON report (``feeddrive loops --json``).
@@ -962,6 +992,12 @@ class FrequencyResponse:
     description: str = ""
     notes: tuple[str, ...] = ()
 
+    def __repr__(self) -> str:
+        f = self.frequency_hz
+        return (f"<feeddrive FrequencyResponse {self.name}: {self.input} → {self.output} "
+                f"[{self.unit}], {f.size} frequencies {f[0]:.3g}–{f[-1]:.4g} Hz; "
+                ".response .magnitude_db .phase_deg>")
+
     @property
     def magnitude(self) -> np.ndarray:
         """|G(jω)| at each frequency, in :attr:`unit`."""
@@ -1033,6 +1069,14 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
     FrequencyResponse
         Complex response, magnitude [dB] and phase [deg] over ``frequency_hz``, with its units.
     """
+    if not isinstance(input, str):
+        raise ParameterError("input", input, "expected a name (str): a response of "
+                             "NAMED_RESPONSES, a loop gain '<axis>_position_loop' or an input "
+                             "of the linear model; the operating point is a keyword, "
+                             "frequency_response(system, 'tracking', table_speed=1.5e-3) [m/s]")
+    if not (output is None or isinstance(output, str)):
+        raise ParameterError("output", output, "expected None or the name (str) of an output "
+                             "of the linear model")
     freq = (np.logspace(-1, 3, 200) if frequency_hz is None
             else np.asarray(frequency_hz, dtype=float))
     if freq.ndim != 1 or freq.size == 0 or not np.all(freq > 0):
@@ -1135,6 +1179,14 @@ class StabilityBand:
     tolerance: float  # [m/s] bisection tolerance of the edges
     nut_speed: float
     notes: tuple[str, ...] = ()  # e.g. the averaged model's warning (:func:`averaged`)
+
+    def __repr__(self) -> str:
+        bands = "; ".join(f"unstable {1e3 * lo:.3f}–{1e3 * hi:.3f} mm/s (mode {fr:.3g} Hz)"
+                          for (lo, hi), fr in zip(self.intervals, self.mode_frequency_hz,
+                                                  strict=True)) or "stable at every speed"
+        return (f"<feeddrive StabilityBand: {bands}; {self.speeds.size} speeds "
+                f"{1e3 * self.speeds[0]:.3g}–{1e3 * self.speeds[-1]:.3g} mm/s scanned, "
+                f"v_n {_mm_s(self.nut_speed)}; .intervals [m/s], .as_dict()>")
 
     def as_dict(self) -> dict[str, Any]:
         """The band for the JSON report (``feeddrive stability --json``).

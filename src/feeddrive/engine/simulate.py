@@ -72,6 +72,13 @@ class DriveSystem:
                 raise ParameterError(f"initial_state.{name}", value, "expected a finite number "
                                      "in the state's SI unit")
 
+    def __repr__(self) -> str:
+        more = "".join(f", {k}={v!r}" for k, v in (("initial_state", dict(self.initial_state)),
+                                                   ("load", self.load)) if v)
+        return (f"DriveSystem(parameters=<DriveParameters {self.parameters.name!r}>, "
+                f"drive={self.drive!r}, "
+                f"table_position={self.table_position!r}, nut_hold={self.nut_hold!r}{more})")
+
     def topology(self) -> Mechanism:
         """The drive's topology, which declares its structure (axes, sites, what it holds).
 

@@ -271,6 +271,14 @@ class DriveParameters(_Component):
         object.__setattr__(self, "sections", tuple(sorted(merged.items())))
         self.__post_init__()
 
+    def __repr__(self) -> str:
+        first = self.description.split(". ")[0].rstrip(".")
+        if len(first) > 80:
+            first = first[:79] + "…"
+        names = ", ".join(name for name, _ in self.ordered_sections())
+        return (f"<feeddrive DriveParameters {self.name!r}: {first}; sections {names}; "
+                "feeddrive.parameters.dumps(p) prints every field>")
+
     def _check(self) -> None:
         _check_text("name", self.name, MAX_NAME, lines=False)
         _check_text("description", self.description, MAX_DESCRIPTION, lines=True)
