@@ -71,3 +71,13 @@ def test_a_speed_passed_where_a_response_name_goes_is_refused(system: fd.DriveSy
         fd.frequency_response(system, 1.5e-3)  # type: ignore[arg-type]
     with pytest.raises(ParameterError, match=r"^output = 3: expected None or the name"):
         fd.frequency_response(system, "load_force", 3)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("speed", ["1", None, True, float("nan")])
+def test_a_speed_that_is_not_a_number_is_refused_naming_the_field(system: fd.DriveSystem,
+                                                                   speed: object) -> None:
+    """``loop_analysis(system, "1")`` ended in ``TypeError: must be real number, not str``
+    from inside the profile's check (2026-12-06)."""
+    with pytest.raises(ParameterError, match=r"^profile\.table_speed = .*: expected a finite "
+                                             r"speed \[m/s\]$"):
+        fd.loop_analysis(system, speed)  # type: ignore[arg-type]

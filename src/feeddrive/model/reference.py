@@ -344,8 +344,9 @@ _EMPTY_TABLE = np.zeros((4, 2))
 
 
 def _finite(name: str, value: float, unit: str) -> None:
-    if not math.isfinite(value):
-        raise ValueError(f"profile.{name} = {value!r}: expected a finite speed [{unit}]")
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
+            or not math.isfinite(value):
+        raise ParameterError(f"profile.{name}", value, f"expected a finite speed [{unit}]")
 
 
 # ---------------------------------------------------------------- profiles built on SampledSpeed
