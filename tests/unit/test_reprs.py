@@ -81,3 +81,21 @@ def test_a_speed_that_is_not_a_number_is_refused_naming_the_field(system: fd.Dri
     with pytest.raises(ParameterError, match=r"^profile\.table_speed = .*: expected a finite "
                                              r"speed \[m/s\]$"):
         fd.loop_analysis(system, speed)  # type: ignore[arg-type]
+
+
+def test_a_new_users_first_mistakes_are_named(system: fd.DriveSystem) -> None:
+    """A parameter set where the drive goes, a dict where SolverOptions go, a signal name that
+    is not there: each ended in an AttributeError or a bare KeyError (2026-12-06)."""
+    params = system.parameters
+    with pytest.raises(ParameterError, match=r"^system = 'DriveParameters': expected a "
+                                             r"DriveSystem, e\.g\. DriveSystem\(params"):
+        fd.simulate(params, fd.ConstantSpeed(1e-3), 0.1)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"^options = 'dict': expected SolverOptions"):
+        fd.simulate(system, fd.ConstantSpeed(1e-3), 0.1,
+                    options={"rtol": 1e-8})  # type: ignore[arg-type]
+    result = fd.simulate(system, fd.ConstantSpeed(1e-3), 0.1)
+    with pytest.raises(KeyError, match=r"'nope': no such signal in this run; its signals: "
+                                       r"screw_angle, "):
+        result["nope"]
+    # every listed name is readable, the derived and following-error signals too
+    assert all(result[name].shape == result.time.shape for name in result.signal_names())

@@ -315,6 +315,9 @@ class Result:
         return name in self.dataset
 
     def __getitem__(self, name: str) -> np.ndarray:
+        if name not in self:
+            raise KeyError(f"{name!r}: no such signal in this run; its signals: "
+                           f"{', '.join(self.signal_names())}")
         if self._run is not None:
             return self._run.signal(name)
         return np.asarray(self.dataset[name].values)

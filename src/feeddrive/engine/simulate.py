@@ -687,9 +687,15 @@ class Simulation:
     def __init__(self, system: DriveSystem, profile: Profile,
                  options: SolverOptions | None = None, *,
                  embedded_estimate: bool = False) -> None:
+        if isinstance(system, DriveParameters) or not callable(getattr(system, "model", None)):
+            raise ParameterError("system", type(system).__name__, "expected a DriveSystem, "
+                                 "e.g. DriveSystem(params, drive='cdfs', table_position=0.4)")
         if not isinstance(profile, ConstantSpeed | SineSpeed | SampledSpeed | Replay):
             raise ParameterError("profile", type(profile).__name__,
                                  "expected ConstantSpeed, SineSpeed, SampledSpeed or a Replay")
+        if options is not None and not isinstance(options, SolverOptions):
+            raise ParameterError("options", type(options).__name__, "expected SolverOptions, "
+                                 "e.g. SolverOptions(rtol=1e-8)")
         self.system, self.profile = system, profile
         self.options = options = options or current_options()
         self.embedded_estimate = embedded_estimate and options.method in _DENSE_MODES
