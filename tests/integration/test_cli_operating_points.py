@@ -98,3 +98,13 @@ def test_the_library_refuses_a_scan_of_fewer_than_two_speeds(points: object) -> 
     for scan in (stability_band, upper_band_edge):
         with pytest.raises(ParameterError, match=r"points = .*expected a whole number ≥ 2"):
             scan(system, points=points)  # type: ignore[arg-type]
+
+
+def test_the_help_states_the_shortest_trial_the_code_enforces() -> None:
+    from feeddrive.analysis.cycle_verdict import VerdictRule
+
+    shortest = VerdictRule().settle_time
+    text = " ".join(runner.invoke(app, ["creep", "--help"]).output.split())
+    assert f"First trial length [s], at least {shortest:g} (the rule's settle time)" in text
+    refused = runner.invoke(app, ["creep", "--initial-duration", f"{0.99 * shortest:g}"])
+    assert f"expected ≥ {shortest:g} [s]" in refused.stderr

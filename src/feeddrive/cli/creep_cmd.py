@@ -28,8 +28,9 @@ def creep_command(
     high: float = typer.Option(_HIGH, "--high", help="Highest speed tested, where the "
                                "step-down starts [mm/s] (as `reproduce`)."),
     initial_duration: float = typer.Option(protocol.TRIAL_DURATION, "--initial-duration",
-                                           help="First trial length [s]; doubled until the "
-                                           "verdict is decided."),
+                                           help="First trial length [s], at least 2 (the "
+                                           "rule's settle time); doubled until the verdict "
+                                           "is decided."),
     max_duration: float = typer.Option(protocol.TRIAL_MAX_DURATION, "--max-duration",
                                        help="Longest trial [s]; still undecided then: "
                                        "'undecided'."),
