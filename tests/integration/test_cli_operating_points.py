@@ -108,3 +108,14 @@ def test_the_help_states_the_shortest_trial_the_code_enforces() -> None:
     assert f"First trial length [s], at least {shortest:g} (the rule's settle time)" in text
     refused = runner.invoke(app, ["creep", "--initial-duration", f"{0.99 * shortest:g}"])
     assert f"expected ≥ {shortest:g} [s]" in refused.stderr
+
+
+def test_creep_takes_a_drives_example_set_as_simulate_does() -> None:
+    """``creep --drive linear-motor`` read wang2021 (no [linear_motor] section) where
+    ``simulate``, ``loops`` and ``stability`` take the drive's example set."""
+    import json
+
+    result = runner.invoke(app, ["creep", "--drive", "linear-motor", "--method", "bisect",
+                                 "--low", "1", "--high", "1.2", "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["parameter_set"] == "linear-motor-example"

@@ -10,6 +10,7 @@ from ..analysis import protocol
 from . import _units
 from ._common import MM_PER_S, app, console, print_json, resolve_parameters, user_errors
 from ._solver import accuracy_options
+from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 _LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
 
@@ -18,7 +19,7 @@ _LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
 @user_errors
 @accuracy_options
 def creep_command(
-    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs", help="cdfs or ddfs"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES, help=ALL_DRIVES_TEXT),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Hollow-motor speed [mm/s] (DDFS)."),
     method: str = typer.Option("both", "--method", help="bisect (from rest), stepdown (the "
@@ -63,9 +64,9 @@ def creep_command(
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")
     rule = _units.trial_rule(max_duration, initial_duration)
-    params = resolve_parameters(preset_name, params_file)
+    params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive,
-                         table_position=_units.position("--position", position, params))
+                         table_position=_units.position("--position", position, params, drive))
     v_n = _units.speed("--nut-speed", nut_speed)
     lo, hi = _units.speed_range("--low", low, "--high", high)
     if ripple_threshold is not None:
