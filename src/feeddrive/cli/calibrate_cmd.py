@@ -20,6 +20,7 @@ from ._common import (
     user_errors,
 )
 from ._solver import accuracy_options
+from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 
 @app.command("calibrate")
@@ -39,7 +40,7 @@ def calibrate_command(
     max_duration: float = typer.Option(protocol.TRIAL_MAX_DURATION, "--max-duration",
                                        help="Longest creep trial [s]; the default is the "
                                        "protocol of `feeddrive creep` and `reproduce`."),
-    drive: str = typer.Option("cdfs", "--drive", metavar="cdfs|ddfs", help="cdfs or ddfs"),
+    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES, help=ALL_DRIVES_TEXT),
     target: float = typer.Option(1.56, "--target", help="Target critical speed [mm/s] "
                                  "(default: Wang2021 Sect. 5.2, CDFS simulated)."),
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
@@ -64,11 +65,11 @@ def calibrate_command(
     if not (math.isfinite(high) and high > low):
         raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
                                              f"{unknown}]")
-    params = resolve_parameters(preset_name, params_file)
+    params = resolve_parameters(preset_name, params_file, drive)
     rule = _units.trial_rule(max_duration)
     result = calibrate(
         params, Target(drive=drive, critical_speed=_units.speed("--target", target, positive=True),
-                       table_position=_units.position("--position", position, params),
+                       table_position=_units.position("--position", position, params, drive),
                        nut_speed=_units.speed("--nut-speed", nut_speed)),
         Unknown(path=unknown, low=low, high=high), relative_tolerance=tolerance, rule=rule,
         progress=None if as_json else (lambda msg: console.print(f"  {msg}")))
