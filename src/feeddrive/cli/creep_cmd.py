@@ -69,6 +69,9 @@ def creep_command(
                          table_position=_units.position("--position", position, params, drive))
     v_n = _units.speed("--nut-speed", nut_speed)
     lo, hi = _units.speed_range("--low", low, "--high", high)
+    # the drive, and where its table is when that matters (not for a linear motor)
+    where = drive.upper() + (f" at {position:g} mm" if system.topology().uses_table_position
+                             else "")
     if ripple_threshold is not None:
         from ..analysis.forced import threshold_critical_speed
         from ..parameters import ParameterError
@@ -87,8 +90,8 @@ def creep_command(
             return
         shown = (f"{res['critical_speed_mm_s']:.2f} mm/s ({res['kind']} below it)"
                  if res["critical_speed_mm_s"] is not None else res["status"])
-        console.print(f"{drive.upper()} at {position:g} mm, v_n = {nut_speed:g} mm/s: "
-                      f"critical speed {shown}", markup=False, highlight=False)
+        console.print(f"{where}, v_n = {nut_speed:g} mm/s: critical speed {shown}",
+                      markup=False, highlight=False)
         console.print(f"Rule: {res['rule']}", markup=False, highlight=False)
         console.print(f"Integrator: {solver.describe()}", markup=False, highlight=False)
         return
@@ -117,7 +120,7 @@ def creep_command(
         return
     default_grid = (low, high) == (_LOW, _HIGH)
     for r, d in zip(results, searches, strict=True):
-        console.print(f"{drive.upper()} at {position:g} mm, start from {r.start}: critical "
+        console.print(f"{where}, start from {r.start}: critical "
                       f"creeping speed {r.display()}{format_integration_error(d)} "
                       f"({len(r.trials)} trials); creeping bands [mm/s]: {format_bands(d)}",
                       markup=False, highlight=False)
