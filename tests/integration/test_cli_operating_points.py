@@ -52,6 +52,11 @@ REFUSED = [
     (["calibrate", "--target", "1.5", "--max-duration", "5"], "--max-duration = 5.0",
      "≥ 12 [s]"),
     (["calibrate", "--target", "1.5", "--max-duration", "inf"], "--max-duration = inf", "[s]"),
+    # the unknown and its bracket, before any trial (was "nope = 1.0: unknown field 'nope'")
+    (["calibrate", "--target", "1.5", "--unknown", "nope"], "--unknown = 'nope'",
+     "params show"),
+    (["calibrate", "--target", "1.5", "--unknown", "table.mass", "--low", "1e-9", "--high", "2"],
+     "table.mass = 1e-09", "[kg]"),
     # analyze: the window rule's thresholds (creep_window.CreepThresholds) and the command
     (["analyze", "{trace}", "--command-speed", "0"], "--command-speed = 0.0", "[mm/s]"),
     (["analyze", "{trace}", "--command-speed", "1e9"], "--command-speed = 1000000000.0",

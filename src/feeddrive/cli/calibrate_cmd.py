@@ -66,6 +66,14 @@ def calibrate_command(
         raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
                                              f"{unknown}]")
     params = resolve_parameters(preset_name, params_file, drive)
+    for value in (low, high):  # the bracket's ends, checked as fields before any trial
+        try:
+            params.replace_path(unknown, value)
+        except ParameterError as err:
+            if err.field == unknown and err.message.startswith("unknown field"):
+                raise ParameterError("--unknown", unknown, f"{err.message}; `feeddrive params "
+                                     "show` prints the set's fields") from None
+            raise
     rule = _units.trial_rule(max_duration)
     result = calibrate(
         params, Target(drive=drive, critical_speed=_units.speed("--target", target, positive=True),
