@@ -32,7 +32,8 @@ def test_nut_speed_on_the_cdfs_is_answered_in_mm_s_and_points_to_the_ddfs() -> N
 
 
 def test_a_drive_without_its_section_does_not_print_none() -> None:
-    line = _error("creep", "--drive", "linear-motor")
+    # wang2021 named: by default `creep` takes the drive's example set (2026-12-06)
+    line = _error("creep", "--drive", "linear-motor", "--preset", "wang2021")
     assert "None" not in line and "wang2021" in line
     assert "needs a [linear_motor] section (e.g. --preset linear-motor-example)" in line
 
