@@ -99,3 +99,11 @@ def test_a_new_users_first_mistakes_are_named(system: fd.DriveSystem) -> None:
         result["nope"]
     # every listed name is readable, the derived and following-error signals too
     assert all(result[name].shape == result.time.shape for name in result.signal_names())
+
+
+def test_a_short_sine_run_is_titled_with_its_amplitude(system: fd.DriveSystem) -> None:
+    """A 0.1-s run of a 1-mm/s, 0.2-Hz sine reaches 0.125 mm/s; its title said "sine amplitude
+    0.1253 mm/s" (the largest reference reached) before 2026-12-06."""
+    short = fd.simulate(system, fd.SineSpeed(1e-3), 0.1)
+    assert float(abs(short["table_speed_reference"]).max()) < 0.13e-3
+    assert "sine amplitude 1 mm/s, position 400 mm, 0.1 s" in repr(short)

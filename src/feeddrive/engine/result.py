@@ -436,7 +436,7 @@ class Result:
 
         warnings: list[str] = []
         attrs = self.attrs
-        frequency = _sine_frequency(attrs.get("profile", ""))
+        frequency = sine_field(attrs.get("profile", ""), "frequency")
         out: dict[str, Any] = {"drive": attrs["drive"]}
         if frequency is not None:
             s = sine_metrics(self.time, self["table_speed"], self["table_speed_reference"],
@@ -726,9 +726,23 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
-def _sine_frequency(profile: str) -> float | None:
-    """The frequency [Hz] of a ``SineSpeed`` profile from its repr in the attrs, else None."""
+def sine_field(profile: str, name: str) -> float | None:
+    """A field of a ``SineSpeed`` profile (``frequency`` [Hz], ``table_amplitude`` [m/s] …)
+    read from its repr in a run's attributes; None for another profile.
+
+    Parameters
+    ----------
+    profile : str
+        The ``profile`` attribute of a run.
+    name : str
+        The field.
+
+    Returns
+    -------
+    float or None
+        Its value [SI].
+    """
     import re
 
-    found = re.match(r"SineSpeed\(.*frequency=([0-9.eE+-]+)", profile)
+    found = re.match(rf"SineSpeed\(.*\b{name}=([0-9.eE+-]+)", profile)
     return float(found.group(1)) if found else None

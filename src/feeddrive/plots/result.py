@@ -33,7 +33,12 @@ def run_title(result: Result) -> str:
     drive = str(attrs["drive"])
     where = (f", position {1e3 * float(attrs.get('table_start_position_m', 0.0)):g} mm"
              if _uses_table_position(drive) else "")
-    return (f"{drive.upper()}, {what} {1e3 * abs(result.command_speed):.4g} mm/s{where}, "
+    # a sine's stated amplitude (a run shorter than a quarter period never reaches it)
+    from ..engine.result import sine_field
+
+    amplitude = sine_field(str(attrs.get("profile", "")), "table_amplitude")
+    speed = abs(result.command_speed if amplitude is None else amplitude)
+    return (f"{drive.upper()}, {what} {1e3 * speed:.4g} mm/s{where}, "
             f"{float(result.time[-1]):.4g} s — {attrs['parameter_set']}")
 
 
