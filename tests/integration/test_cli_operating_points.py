@@ -124,3 +124,11 @@ def test_creep_takes_a_drives_example_set_as_simulate_does() -> None:
                                  "--low", "1", "--high", "1.2", "--json"])
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout)["parameter_set"] == "linear-motor-example"
+
+
+@pytest.mark.parametrize("command", [["analyze"], ["identify", "static"]])
+def test_a_device_is_not_called_a_missing_file(command: list[str]) -> None:
+    """``analyze /dev/null`` said "no such file" of a path that exists (2026-12-06)."""
+    result = runner.invoke(app, [*command, "/dev/null"])
+    assert result.exit_code == 2
+    assert result.stderr.strip() == "error: null: is not a regular file; expected a CSV file"

@@ -434,6 +434,8 @@ def check_text_file(path: str | Path) -> None:
     if p.is_dir():
         raise MeasuredDataError(p.name, None, "is a directory; expected a CSV file")
     if not p.is_file():
+        if p.exists():  # a device, a pipe, a socket: nothing a CSV reader may wait on
+            raise MeasuredDataError(p.name, None, "is not a regular file; expected a CSV file")
         raise FileNotFoundError(f"{path}: no such file")
     with p.open("rb") as stream:
         head = stream.read(4096)
