@@ -207,3 +207,14 @@ def test_map_refuses_unknown_axes_and_missing_stores(tmp_path: Path) -> None:
                               "nut_speed", "--plot", str(tmp_path / "m.png")])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "m.png").exists()
+
+
+def test_a_position_off_the_screw_is_shown_as_the_configuration_gives_it() -> None:
+    """The configuration's positions are in mm; the refusal showed the metres the drive
+    checks (``axes.table_position = 5.0: expected 0 < a < 0.8 [m]``) before 2026-12-06."""
+    with pytest.raises(ParameterError) as err:
+        parse_config({**BASE, "axes": {"table_position": [200, 5000]}},
+                     "/tmp/cfg.toml").points()
+    text = str(err.value)
+    assert text.startswith("axes.table_position = 5000")
+    assert text.endswith("; the configuration's positions are in mm")

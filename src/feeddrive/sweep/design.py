@@ -415,7 +415,11 @@ class SweepConfig:
         except ParameterError as err:
             key = {"table_position": _axis_or("table_position", self.axes),
                    "drive": _axis_or("drive", self.axes)}.get(err.field, err.field)
-            raise _refuse(key, err.value, err.message) from None
+            value, message = err.value, err.message
+            if err.field == "table_position":  # shown as the configuration gives it [mm]
+                value = float(coords.get("table_position", self.table_position))
+                message += "; the configuration's positions are in mm"
+            raise _refuse(key, value, message) from None
         from ..engine.options import current
 
         # the integrator settings in force (a command's --accuracy): part of the point's key
