@@ -436,6 +436,8 @@ class Result:
 
         warnings: list[str] = []
         attrs = self.attrs
+        from ..model.reference import sine_field
+
         frequency = sine_field(attrs.get("profile", ""), "frequency")
         out: dict[str, Any] = {"drive": attrs["drive"]}
         if frequency is not None:
@@ -726,23 +728,3 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
-def sine_field(profile: str, name: str) -> float | None:
-    """A field of a ``SineSpeed`` profile (``frequency`` [Hz], ``table_amplitude`` [m/s] …)
-    read from its repr in a run's attributes; None for another profile.
-
-    Parameters
-    ----------
-    profile : str
-        The ``profile`` attribute of a run.
-    name : str
-        The field.
-
-    Returns
-    -------
-    float or None
-        Its value [SI].
-    """
-    import re
-
-    found = re.match(rf"SineSpeed\(.*\b{name}=([0-9.eE+-]+)", profile)
-    return float(found.group(1)) if found else None

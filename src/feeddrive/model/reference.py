@@ -340,6 +340,30 @@ class SampledSpeed:
 
 
 Profile = ConstantSpeed | SineSpeed | SampledSpeed
+
+
+def sine_field(profile: str, name: str) -> float | None:
+    """A field of a ``SineSpeed`` profile (``frequency`` [Hz], ``table_amplitude`` [m/s] …)
+    read from its repr in a run's attributes; None for another profile.
+
+    Parameters
+    ----------
+    profile : str
+        The ``profile`` attribute of a run.
+    name : str
+        The field.
+
+    Returns
+    -------
+    float or None
+        Its value [SI].
+    """
+    import re
+
+    found = re.match(rf"SineSpeed\(.*\b{name}=([0-9.eE+-]+)", profile)
+    return float(found.group(1)) if found else None
+
+
 _EMPTY_TABLE = np.zeros((4, 2))
 
 

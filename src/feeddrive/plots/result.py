@@ -34,7 +34,7 @@ def run_title(result: Result) -> str:
     where = (f", position {1e3 * float(attrs.get('table_start_position_m', 0.0)):g} mm"
              if _uses_table_position(drive) else "")
     # a sine's stated amplitude (a run shorter than a quarter period never reaches it)
-    from ..engine.result import sine_field
+    from ..model.reference import sine_field
 
     amplitude = sine_field(str(attrs.get("profile", "")), "table_amplitude")
     speed = abs(result.command_speed if amplitude is None else amplitude)
