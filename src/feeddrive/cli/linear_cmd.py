@@ -109,14 +109,16 @@ def stability_command(
     from ..engine.simulate import DriveSystem
     from ..parameters import ParameterError
 
-    if points < 2:
-        raise ParameterError("--points", points, "expected a whole number ≥ 2 (a scan needs "
-                             "two speeds to see a change)")
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, _units.position("--position", position, params, drive))
     lo, hi = _units.speed_range("--low", low, "--high", high)
-    band = stability_band(system, _units.speed("--nut-speed", nut_speed), low=lo, high=hi,
-                          points=points)
+    try:  # the scan's own check, before any linearisation, named as the option
+        band = stability_band(system, _units.speed("--nut-speed", nut_speed), low=lo, high=hi,
+                              points=points)
+    except ParameterError as err:
+        if err.field != "points":
+            raise
+        raise ParameterError("--points", err.value, err.message) from None
     data = band.as_dict()
     if plot:
         from ..plots.linear import plot_band

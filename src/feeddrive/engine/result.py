@@ -315,12 +315,15 @@ class Result:
         return name in self.dataset
 
     def __getitem__(self, name: str) -> np.ndarray:
-        if name not in self:
+        try:
+            if self._run is not None:
+                return self._run.signal(name)
+            return np.asarray(self.dataset[name].values)
+        except KeyError:  # named with the run's signals (looked up only when one is missing)
+            if name in self:
+                raise
             raise KeyError(f"{name!r}: no such signal in this run; its signals: "
-                           f"{', '.join(self.signal_names())}")
-        if self._run is not None:
-            return self._run.signal(name)
-        return np.asarray(self.dataset[name].values)
+                           f"{', '.join(self.signal_names())}") from None
 
     @property
     def time(self) -> np.ndarray:
