@@ -25,6 +25,7 @@ for comparison.  Writes ``benchmarks/results/bench_accuracy.json`` and ``.md``.
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 import time
@@ -135,6 +136,7 @@ def markdown(rows: list[dict[str, Any]]) -> str:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     rows: list[dict[str, Any]] = []
     for drive in ("cdfs", "ddfs"):
         for speed in (1e-4, 1e-3, 1e-2):

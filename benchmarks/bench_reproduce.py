@@ -28,6 +28,7 @@ seconds, simulated seconds and calls of the compiled integrators per task, writt
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import sys
@@ -191,10 +192,18 @@ def profile(folder: Path, out: Path | None, use_cprofile: bool = True) -> None:
 
 
 def main() -> None:
-    if "--profile" in sys.argv:
-        i = sys.argv.index("--profile")
-        out = Path(sys.argv[sys.argv.index("--out") + 1]) if "--out" in sys.argv else None
-        profile(Path(sys.argv[i + 1]), out, use_cprofile="--no-cprofile" not in sys.argv)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--profile", type=Path, metavar="DIR",
+                        help="profile every task of the pool into DIR instead (see the module)")
+    parser.add_argument("--no-cprofile", action="store_true",
+                        help="with --profile: count CPU and calls only, no cProfile")
+    parser.add_argument("--out", type=Path, metavar="FOLDER",
+                        help="with --profile: keep the reproduce output in FOLDER")
+    args = parser.parse_args()
+    if args.out is not None and args.profile is None:
+        parser.error("--out goes with --profile")
+    if args.profile is not None:
+        profile(args.profile, args.out, use_cprofile=not args.no_cprofile)
         return
     params = fd.preset("wang2021")
     simulate(DriveSystem(params, "ddfs", 0.4), ConstantSpeed(1e-3, 16e-3), 0.05)  # warm-up

@@ -17,6 +17,7 @@ identical.  Writes ``benchmarks/results/bench_sensitivity_section.json``.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import sys
@@ -28,6 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     import feeddrive as fd
     from feeddrive.analysis import linear
     from feeddrive.analysis import sensitivity as sens

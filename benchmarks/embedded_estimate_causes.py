@@ -28,6 +28,7 @@ feeddrive).  Writes ``benchmarks/results/embedded_estimate_causes.json``.
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 from pathlib import Path
@@ -159,6 +160,7 @@ def case(drive: str, accuracy: float) -> dict:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     rows = []
     for accuracy in (1.0, 0.01):
         for drive in ("cdfs", "ddfs"):

@@ -21,6 +21,7 @@ or declared ⊉ observed.  Run from the repository root::
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import importlib.util
 import inspect
@@ -166,6 +167,7 @@ def observed_pattern(model: Model, seed: int) -> np.ndarray:
 
 
 def main() -> int:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     old = _old_sparsity()
     bad = 0
     print(f"{'model':48s} {'n':>3s} {'declared':>8s} {'parsed':>6s} {'observed':>8s}  "
