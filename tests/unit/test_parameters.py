@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -246,3 +247,19 @@ def test_refusal_message_survives_a_value_containing_colon_space() -> None:
     with pytest.raises(ParameterError) as info:
         preset("wang2021").replace_path("table.mass", "20: kg")
     assert str(info.value) == "table.mass = '20: kg': expected a number [kg]"
+
+
+@pytest.mark.parametrize("name", ["set.json", "set.yaml", "set", "set.toml.bak"])
+def test_save_refuses_a_name_that_is_not_toml_before_writing(tmp_path: Path, name: str) -> None:
+    """A set is TOML whatever the name says: ``x.json`` was written as TOML under a JSON name."""
+    with pytest.raises(ParameterError, match=r"path = .*expected a \.toml file name"):
+        save(preset("wang2021"), tmp_path / name)
+    assert not (tmp_path / name).exists()
+
+
+def test_the_json_the_save_message_points_to_round_trips(tmp_path: Path) -> None:
+    import json
+
+    params = preset("wang2021")
+    text = json.dumps(to_dict(params))
+    assert from_dict(json.loads(text)) == params

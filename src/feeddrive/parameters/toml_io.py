@@ -308,10 +308,20 @@ def save(params: DriveParameters, path: str | Path) -> None:
     params : DriveParameters
         The set to write.
     path : str or pathlib.Path
-        The file to write.
+        The file to write: a ``.toml`` name (the format :func:`load` and ``--params`` read).
+
+    Raises
+    ------
+    ParameterError
+        For another file name (``x.json``): the set is TOML whatever the name says;
+        :func:`to_dict` gives a dict for ``json.dump``.
     """
     from ..io.outputs import atomic_path
 
+    if Path(path).suffix.lower() != ".toml":
+        raise ParameterError("path", str(path), "expected a .toml file name: a parameter set "
+                             "is written as TOML (for JSON: json.dump(feeddrive.parameters."
+                             "to_dict(params), file))")
     with atomic_path(path) as tmp:  # nothing partial under the name (a full disk)
         tmp.write_text(dumps(params), encoding="utf-8")
 
