@@ -132,3 +132,26 @@ def test_a_device_is_not_called_a_missing_file(command: list[str]) -> None:
     result = runner.invoke(app, [*command, "/dev/null"])
     assert result.exit_code == 2
     assert result.stderr.strip() == "error: null: is not a regular file; expected a CSV file"
+
+
+def _help(command: str) -> str:
+    return " ".join(runner.invoke(app, [command, "--help"], terminal_width=200).output.split())
+
+
+def test_the_trial_length_floors_the_help_states_are_those_enforced() -> None:
+    """`calibrate --help` states the first trial's length as --max-duration's floor and `creep
+    --help` the settle time as --initial-duration's: both the numbers the checks refuse by
+    (protocol.TRIAL_DURATION, VerdictRule().settle_time)."""
+    from feeddrive.analysis import protocol
+    from feeddrive.analysis.cycle_verdict import VerdictRule
+
+    first, settle = protocol.TRIAL_DURATION, VerdictRule().settle_time
+    assert f"at least the first trial's {first:g} s" in _help("calibrate")
+    assert f"at least {settle:g} (the rule's settle time)" in _help("creep")
+    assert "at least the first (--initial-duration)" in _help("creep")
+    below = runner.invoke(app, ["calibrate", "--max-duration", f"{first - 0.5:g}"])
+    assert f"expected ≥ {first:g} [s], the first trial's length" in below.output
+    below = runner.invoke(app, ["creep", "--initial-duration", f"{settle - 0.5:g}"])
+    assert f"expected ≥ {settle:g} [s]" in below.output
+    below = runner.invoke(app, ["creep", "--initial-duration", "20", "--max-duration", "15"])
+    assert "--max-duration = 15.0: expected ≥ 20 [s]" in below.output

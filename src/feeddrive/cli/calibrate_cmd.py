@@ -38,8 +38,10 @@ def calibrate_command(
                                     help="Relative width of the final bracket of the fit "
                                     "[fraction]."),
     max_duration: float = typer.Option(protocol.TRIAL_MAX_DURATION, "--max-duration",
-                                       help="Longest creep trial [s]; the default is the "
-                                       "protocol of `feeddrive creep` and `reproduce`."),
+                                       help="Longest creep trial [s], at least the "
+                                       f"first trial's {protocol.TRIAL_DURATION:g} s; the "
+                                       "default is the protocol of `feeddrive creep` and "
+                                       "`reproduce`."),
     drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES, help=ALL_DRIVES_TEXT),
     target: float = typer.Option(1.56, "--target", help="Target critical speed [mm/s] "
                                  "(default: Wang2021 Sect. 5.2, CDFS simulated)."),

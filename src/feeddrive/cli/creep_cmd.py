@@ -33,7 +33,8 @@ def creep_command(
                                            "rule's settle time); doubled until the verdict "
                                            "is decided."),
     max_duration: float = typer.Option(protocol.TRIAL_MAX_DURATION, "--max-duration",
-                                       help="Longest trial [s]; still undecided then: "
+                                       help="Longest trial [s], at least the first "
+                                       "(--initial-duration); still undecided then: "
                                        "'undecided'."),
     ripple_threshold: float | None = typer.Option(
         None, "--ripple-threshold", help="Define the critical speed by a ripple threshold "
