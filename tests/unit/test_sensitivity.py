@@ -40,6 +40,10 @@ def test_elasticity_matches_direct_central_difference() -> None:
     assert kv.elasticity < 0  # a stiffer velocity loop narrows the unstable band
     # the rule: a resolved effect is ≥ 10 resolutions; an unresolved one states its bound
     assert abs(kv.q_plus - kv.q_minus) >= MIN_EFFECT_RESOLUTIONS * result.resolution
+    # the JSON states Q in mm/s beside its base (before: q_minus in m/s beside base_mm_s)
+    shown = {d["path"]: d for d in result.to_dict()["entries"]}["controller.velocity_gain"]
+    assert shown["q_plus_mm_s"] == 1e3 * kv.q_plus and shown["q_minus_mm_s"] == 1e3 * kv.q_minus
+    assert 0.5 < shown["q_plus_mm_s"] / result.to_dict()["base_mm_s"] < 2.0
     e = by["screw.youngs_modulus"]
     if not e.resolved:
         assert e.step == 0.4 and math.isfinite(e.bound)
@@ -79,6 +83,12 @@ def test_report_section_answers_the_axial_rigidity_claim(tmp_path) -> None:
     axial = [e for e in data["entries"] if e["path"] in sec.AXIAL]
     if not any(e["resolved"] for e in axial):
         assert "neither supports nor refutes" in answer
+        # the number it rests on: the largest move of the edge, from the SI entries
+        result = {e.path: e for e in sensitivity(
+            fd.preset("wang2021"), quantity="linear-band", in_process=True,
+            linear_points=sec.LINEAR_POINTS, patterns=list(sec.AXIAL)).entries}
+        largest = max(abs(e.q_plus - e.q_minus) for e in result.values()) * 1e3
+        assert f"by at most {largest:.3g} mm/s" in answer
     png = sec.figure(data, tmp_path)
     assert png is not None and png.stat().st_size > 5000
 

@@ -176,14 +176,17 @@ class Entry:
         Returns
         -------
         dict
-            The fields, non-finite numbers as None.
+            The fields, non-finite numbers as None: Q at the two steps in mm/s
+            (``q_minus_mm_s``, ``q_plus_mm_s``, beside the result's ``base_mm_s``), the parameter's
+            value in its SI unit, and ``elasticity`` [-] — for ``kind = "derivative"`` (a
+            zero-valued parameter) dQ/dp in m/s per SI unit of the parameter.
         """
         def fin(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
 
         return {"path": self.path, "value": self.value, "kind": "derivative" if self.absolute
-                else "elasticity", "step": self.step, "q_minus": fin(self.q_minus),
-                "q_plus": fin(self.q_plus), "elasticity": fin(self.elasticity),
+                else "elasticity", "step": self.step, "q_minus_mm_s": fin(1e3 * self.q_minus),
+                "q_plus_mm_s": fin(1e3 * self.q_plus), "elasticity": fin(self.elasticity),
                 "bound": fin(self.bound), "resolved": self.resolved,
                 "elasticity_half_step": fin(self.halved),
                 "halving_consistent": self.consistent, "note": self.note}

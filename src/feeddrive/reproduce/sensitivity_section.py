@@ -61,7 +61,8 @@ def figure(data: dict[str, Any] | None, out: Path) -> Path | None:
     from ..analysis.sensitivity import Entry, SensitivityResult, plot_tornado
 
     entries = tuple(Entry(path=e["path"], value=e["value"], absolute=e["kind"] == "derivative",
-                          step=e["step"], q_minus=_num(e["q_minus"]), q_plus=_num(e["q_plus"]),
+                          step=e["step"], q_minus=1e-3 * _num(e["q_minus_mm_s"]),
+                          q_plus=1e-3 * _num(e["q_plus_mm_s"]),
                           elasticity=_num(e["elasticity"]), bound=_num(e["bound"]),
                           resolved=e["resolved"], halved=_num(e["elasticity_half_step"]),
                           consistent=e["halving_consistent"], note=e["note"])
@@ -110,7 +111,7 @@ def axial_rigidity_answer(data: dict[str, Any]) -> str:
             "Greater axial rigidity lowers the linear band's upper edge, as the paper says."
             if lower else "Greater axial rigidity does not lower the linear band's upper edge "
             "for every part of the chain: the linear analysis does not support the claim."))
-    largest = max(abs(_num(e["q_plus"]) - _num(e["q_minus"])) for e in rows.values()) * 1e3
+    largest = max(abs(_num(e["q_plus_mm_s"]) - _num(e["q_minus_mm_s"])) for e in rows.values())
     bound = max(_num(e["bound"]) for e in rows.values())
     return (f"Stiffness rows ({', '.join(rows)}): ±40 % moves the linear band's upper edge by "
             f"at most {largest:.3g} mm/s (|E| < {bound:.2g}, below 10× the "
