@@ -49,3 +49,26 @@ def test_a_shared_row_is_the_row_the_study_computes(monkeypatch: pytest.MonkeyPa
     monkeypatch.setattr(reading_study, "critical_speed", lambda *a, **k: search)
     job = reading_study.jobs()[8]
     assert reading_study.run_variant(job) == reading_study.row_from_search(job, search)
+
+
+def test_a_study_row_computed_without_the_estimate_is_the_row_of_a_search_with_it(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The model-reading study's searches carry no embedded error estimate (its rows state
+    none): the row equals the one made from the same search with the estimate carried — as a
+    row shared from a paper search is — since the estimate does not change the runs."""
+    from feeddrive.reproduce import studies
+
+    job = reading_study.jobs()[9]  # the shipped reading, DDFS at 16 mm/s
+    p = reading_study.variant_parameters(job)
+    with_estimate = studies.critical_speed(p, job[3], MID, job[4], StudySettings())
+    assert any(t["speed_error_mm_s"] is not None for t in with_estimate["trials"])
+    carried: list[bool] = []
+    search = studies.critical_speed
+
+    def recording(*a: Any, **k: Any) -> Any:
+        carried.append(k.get("error_estimate", True))
+        return search(*a, **k)
+
+    monkeypatch.setattr(reading_study, "critical_speed", recording)
+    assert reading_study.run_variant(job) == reading_study.row_from_search(job, with_estimate)
+    assert carried == [False]

@@ -120,7 +120,7 @@ class StudySettings:
 
 
 def critical_speed(params: DriveParameters, drive: str, position: float, nut_speed: float,
-                   settings: StudySettings) -> dict[str, Any]:
+                   settings: StudySettings, *, error_estimate: bool = True) -> dict[str, Any]:
     """Critical speed from rest (scan + bisection) at one position.
 
     Parameters
@@ -135,6 +135,10 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
         Nut speed (DDFS) [m/s].
     settings : StudySettings
         The search settings.
+    error_estimate : bool, default True
+        Carry the embedded global-error estimate along every trial (False: the search's
+        ``speed_error_mm_s`` are None; the verdicts, trials and critical speed are the same,
+        the runs bit-identical).
 
     Returns
     -------
@@ -149,7 +153,7 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
     res = critical_speed_from_rest(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
         speed_range=settings.speed_range, coarse_step=settings.coarse_step,
-        resolution=settings.resolution, rule=settings.rule(), error_estimate=True)
+        resolution=settings.resolution, rule=settings.rule(), error_estimate=error_estimate)
     return res.to_dict()
 
 
