@@ -139,9 +139,11 @@ def friction_command(
             "static_force_N": b.static_force,
             "stribeck_velocity_mm_s": _mm_s(b.stribeck_velocity),
             "viscous_coefficient_N_s_per_m": b.viscous_coefficient,
-            "negative_slope_band_mm_s": (None if band is None
-                                         else [_mm_s(band.lower), _mm_s(band.upper)]),
-            "zero_slope_speed_mm_s": None if band is None else _mm_s(band.zero_slope_speed),
+            # an unbounded band (σ2 = 0) ends in null: no zero-slope speed
+            "negative_slope_band_mm_s": (None if band is None else [
+                _mm_s(band.lower), _mm_s(band.upper) if band.bounded else None]),
+            "zero_slope_speed_mm_s": (None if band is None or not band.bounded
+                                      else _mm_s(band.zero_slope_speed)),
             "min_steady_slope_N_s_per_m": slope.min_slope,
             "passivity_margin_N_s_per_m": margin,
             "passive": None if margin is None else margin > 0.0,
@@ -184,8 +186,10 @@ def friction_command(
         print_json(result)
         return
 
-    def fmt_band(band: list[float] | None) -> str:
-        return "none" if band is None else f"{band[0]:.3f} … {band[1]:.3f}"
+    def fmt_band(band: list[float | None] | None) -> str:
+        if band is None:
+            return "none"
+        return f"{band[0]:.3f} … " + ("∞ (σ2 = 0)" if band[1] is None else f"{band[1]:.3f}")
 
     law_title = {"lugre": "LuGre", "dahl": "Dahl", "stribeck": "static Stribeck",
                  "none": "no"}.get(law, law)

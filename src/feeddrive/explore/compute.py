@@ -165,9 +165,12 @@ def friction_curves(checked: Checked, operating: dict[str, float] | None = None
             if band is not None:
                 lo, hi = sorted((sign * band.lower, sign * band.upper))
                 bands[site].append([1e3 * lo, 1e3 * hi])
-                top = max(top, 2.0 * band.upper)
+                if band.bounded:
+                    top = max(top, 2.0 * band.upper)
     for speed in (operating or {}).values():
         top = max(top, 1.25 * abs(speed) * 1e-3)
+    for site_bands in bands.values():  # an unbounded band (σ2 = 0) ends with the curves
+        site_bands[:] = [[max(lo, -1e3 * top), min(hi, 1e3 * top)] for lo, hi in site_bands]
     v = np.linspace(-top, top, 801)
     curves = []
     for site, (_, lugre) in sites.items():

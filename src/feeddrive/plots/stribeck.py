@@ -52,7 +52,7 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
     bands = {name: (negative_slope_band(params.branch(name)) if stribeck
                     else steady_slope(params, name).band) for name in ("positive", "negative")}
     if speed_max is None:
-        edges = [b.upper for b in bands.values() if b is not None]
+        edges = [b.upper for b in bands.values() if b is not None and b.bounded]
         vs = max(params.positive.stribeck_velocity, params.negative.stribeck_velocity)
         speed_max = 3.0 * max(edges) if edges else 5.0 * vs
     speed = np.linspace(0.0, speed_max, 801)[1:]
@@ -67,7 +67,10 @@ def stribeck_figure(params: LuGreParameters, title: str = "",
         ax.plot(speed / _MM_PER_S, force, color=colour, label=f"{name} branch")
         band = bands[name]
         if band is not None:
-            ax.axvspan(band.lower / _MM_PER_S, band.upper / _MM_PER_S, color=colour, alpha=0.08)
+            ax.axvspan(band.lower / _MM_PER_S, min(band.upper, speed_max) / _MM_PER_S,
+                       color=colour, alpha=0.08)
+            if not band.bounded:  # σ2 = 0: the curve falls at every speed
+                continue
             v0 = band.zero_slope_speed
             f0 = float(np.interp(v0, speed, force))
             ax.axvline(v0 / _MM_PER_S, color=colour, linestyle="--", linewidth=0.8)

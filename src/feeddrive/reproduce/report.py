@@ -158,7 +158,9 @@ def comparison_rows(params: DriveParameters, results: dict[str, Any]) -> list[di
     screw = params.friction.screw.require(LuGreParameters, "friction.screw", "the report")
     band = negative_slope_band(screw.positive)
     add("screw-shaft zero-slope speed (+ branch) vs CDFS critical speed", "Sect. 5.2 (1.56)",
-        1.56, None if band is None else 1e3 * band.upper, "mm/s", "analytic indicator")
+        1.56, None if band is None or not band.bounded else 1e3 * band.upper, "mm/s",
+        "analytic indicator", shown=None if band is None or band.bounded
+        else "none (σ2 = 0: the curve falls at every speed)")
     f6 = results["fig6"]
     rows.append({"quantity": "CDFS at 1.55 mm/s crawls (Fig. 6a)", "source": "Fig. 6a",
                  "paper": "crawls", "feeddrive": f6["1.55"]["verdict"], "unit": "",
@@ -292,8 +294,9 @@ def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
             band = negative_slope_band(b)
             rows.append({"site": site, "branch": bname,
                          "negative-slope band [mm/s]": "none" if band is None
-                         else f"{1e3 * band.lower:.3f} … {1e3 * band.upper:.3f}",
-                         "zero-slope speed [mm/s]": "—" if band is None
+                         else f"{1e3 * band.lower:.3f} … " + (
+                             f"{1e3 * band.upper:.3f}" if band.bounded else "∞ (σ2 = 0)"),
+                         "zero-slope speed [mm/s]": "—" if band is None or not band.bounded
                          else f"{1e3 * band.upper:.3f}",
                          "passivity margin σ2 − σ1(F_s−F_c)/F_c [N s/m]":
                              f"{passivity_margin(b, lg):.0f}"})
