@@ -282,16 +282,17 @@ def test_critical_speed_reports_progress_and_can_be_cancelled(server: ExplorerSe
                           {"kind": "critical", "settings": {"drive": "ddfs"}})
     assert status == 202
     assert job["progress"]["text"].startswith("trial 1 of about")
-    _, before = request(server, "GET", f"/api/jobs/{job['id']}")
-    request(server, "POST", f"/api/jobs/{job['id']}/cancel", {})
+    # the job as the cancel left it (a GET before the cancel raced with the trials: two could
+    # finish between it and the cancel)
+    _, at_cancel = request(server, "POST", f"/api/jobs/{job['id']}/cancel", {})
     while job["state"] == "running":
         time.sleep(0.02)
         _, job = request(server, "GET", f"/api/jobs/{job['id']}")
     assert job["state"] == "cancelled"
-    assert job["progress"]["done"] < 3
+    assert job["progress"]["done"] < job["progress"]["total"]  # stopped, not finished
     # the work after the cancel: the trial running then at most (issue 24 item 14: was a
     # wall-clock bound of 5 s)
-    assert job["progress"]["done"] <= before["progress"]["done"] + 1
+    assert job["progress"]["done"] <= at_cancel["progress"]["done"] + 1
 
 
 # ------------------------------------------------------------------ sharing
