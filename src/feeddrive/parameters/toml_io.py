@@ -314,7 +314,7 @@ def save(params: DriveParameters, path: str | Path) -> None:
     ------
     ParameterError
         For another file name (``x.json``): the set is TOML whatever the name says;
-        :func:`to_dict` gives a dict for ``json.dump``.
+        ``feeddrive.parameters.to_dict`` gives a dict for ``json.dump``.
     """
     from ..io.outputs import atomic_path
 
