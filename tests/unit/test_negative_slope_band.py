@@ -65,7 +65,7 @@ def test_without_viscous_friction_the_band_never_ends() -> None:
     assert band is not None and band.lower == 0.0 and band.upper == math.inf
     assert not band.bounded
     # the slope, −(F_s − F_c)·2v/v_s²·exp(−(v/v_s)²) without σ2, is negative at every speed
-    # (at 10 mm/s ≈ −1e-52 N s/m; where the earlier search stopped, 39.1 mm/s, it underflows)
+    # (at 10 mm/s ≈ −4e-53 N s/m; where the earlier search stopped, 39.1 mm/s, it underflows)
     u = 0.01 / screw.stribeck_velocity
     assert -(screw.static_force - screw.coulomb_force) * 2 * u / screw.stribeck_velocity \
         * math.exp(-u * u) < 0.0
