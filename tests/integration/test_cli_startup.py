@@ -201,3 +201,24 @@ def test_a_reproduce_worker_imports_neither_the_figures_nor_the_report() -> None
     assert {"feeddrive.reproduce.runner", "feeddrive.sweep.maps",
             "feeddrive.sweep.export"} <= loaded
     assert [m for m in NOT_IN_A_REPRODUCE_WORKER if m in loaded] == []
+
+
+def test_the_report_s_tables_and_indicators_import_neither_pandas_nor_scipy_optimize(
+        tmp_path: Path) -> None:
+    """What `reproduce`'s parent does after its studies — the CSV tables, the friction
+    indicators of the report — without the two imports that cost it ≈ 0.4 CPU s (pandas for the
+    tables, scipy.optimize for the negative-slope band's root search: benchmarks/README.md)."""
+    code = textwrap.dedent(f"""
+        import json, sys
+        from pathlib import Path
+        import feeddrive as fd
+        from feeddrive.reproduce import report, studies
+        studies.write_csv([{{"a": 1.5, "b": None}}], Path({str(tmp_path)!r}) / "t.csv")
+        rows = report.indicator_rows(fd.preset("wang2021"))
+        print(json.dumps([rows[0]["zero-slope speed [mm/s]"], sorted(sys.modules)]))
+    """)
+    zero, loaded = json.loads(subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                             text=True, check=True).stdout)
+    assert zero == "1.605"  # docs/parameters.md's table, screw shaft +
+    assert (tmp_path / "t.csv").read_text().splitlines() == ["a,b", "1.5,"]
+    assert [m for m in ("pandas", "scipy.optimize") if _loaded(loaded, m)] == []
