@@ -42,6 +42,9 @@ def _no_run(monkeypatch: pytest.MonkeyPatch) -> None:
     (["--rtol", "1e-15"], "--rtol"), (["--speed-tolerance", "0"], "--speed-tolerance"),
     (["--position-tolerance", "-1e-12"], "--position-tolerance"),
     (["--current-tolerance", "inf"], "--current-tolerance"),
+    (["--position-tolerance", "1e300"], "--position-tolerance"),
+    (["--speed-tolerance", "0.2"], "--speed-tolerance"),
+    (["--current-tolerance", "11"], "--current-tolerance"),
     (["--accuracy", "1e-9"], "--accuracy"), (["--accuracy", "0"], "--accuracy"),
     (["--rtol", "1e-8", "--accuracy", "0.1"], "--accuracy"),
     (["--rosenbrock", "rodas6"], "--rosenbrock"),
@@ -59,6 +62,33 @@ def test_bad_settings_are_refused_in_one_line_before_any_work(
         assert lines[0].endswith(f"expected one of {', '.join(opt.ROSENBROCKS)}")
     else:  # the range is named
         assert "expected" in lines[0] and ("…" in lines[0] or "> 0" in lines[0])
+
+
+def test_the_largest_absolute_tolerances_are_what_the_largest_accuracy_gives() -> None:
+    """Each explicit absolute tolerance has a ceiling (2026-12-06: ``--position-tolerance
+    1e300`` was taken): the default rule's value at ``accuracy = MAX_ACCURACY`` on a run at 1 m/s
+    with a 1000-A current scale; the help states it and a value just above it is refused."""
+    scales = opt.RunScales(speed=1.0, table_speed=1.0, current=opt.NO_CURRENT_LIMIT)
+    widest = opt.SolverOptions(accuracy=opt.MAX_ACCURACY).resolve(scales)
+    ceiling = {"position_tolerance": widest.position, "speed_tolerance": widest.speed,
+               "current_tolerance": widest.current}
+    assert ceiling == pytest.approx(opt.MAX_ABSOLUTE, rel=1e-15)
+    assert ceiling == pytest.approx({"position_tolerance": 1e-6, "speed_tolerance": 0.1,
+                                     "current_tolerance": 10.0}, rel=1e-15)
+    help_text = " ".join(runner.invoke(app, ["simulate", "--help"],
+                                       terminal_width=400).output.split())
+    for name, flag, _ in OPTIONS:
+        if name not in ceiling:
+            continue
+        assert f"at most {ceiling[name]:g})" in help_text, flag
+        opt.SolverOptions(**{name: ceiling[name]})  # the ceiling itself is taken
+        with pytest.raises(ParameterError, match=f"≤ {ceiling[name]:g} "):
+            opt.SolverOptions(**{name: ceiling[name] * (1 + 1e-9)})
+    docs = " ".join((Path(__file__).parents[2] / "docs" / "model.md").read_text(
+        encoding="utf-8").split())
+    stated = ", ".join(f"{ceiling[n]:g} {u}".replace("e-0", "e-") for n, u, _ in opt.TOLERANCES
+                       if n in ceiling)
+    assert f"1000-A current scale: {stated} (`MAX_ABSOLUTE`" in docs
 
 
 def _summary(args: list[str]) -> dict[str, object]:

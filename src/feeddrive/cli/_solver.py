@@ -22,13 +22,14 @@ OPTIONS = (
      f"{opt.DEFAULT_RTOL:g} × --accuracy; {opt.MIN_RELATIVE:g} … {opt.MAX_RTOL:g})."),
     ("position_tolerance", "--position-tolerance",
      f"Absolute tolerance of positions [m] (default: scaled with the run, "
-     f"{opt.POSITION_TIME:g} s × the speed scale, × --accuracy; docs/model.md)."),
+     f"{opt.POSITION_TIME:g} s × the speed scale, × --accuracy; docs/model.md; "
+     f"at most {opt.MAX_ABSOLUTE['position_tolerance']:g})."),
     ("speed_tolerance", "--speed-tolerance",
      f"Absolute tolerance of speeds [m/s] (default: {opt.SPEED_FRACTION:g} × the speed "
-     "scale × --accuracy)."),
+     f"scale × --accuracy; at most {opt.MAX_ABSOLUTE['speed_tolerance']:g})."),
     ("current_tolerance", "--current-tolerance",
      f"Absolute tolerance of currents [A] (default: {opt.CURRENT_FRACTION:g} × the current "
-     "limit, or × 1 A, × --accuracy)."),
+     f"limit, or × 1 A, × --accuracy; at most {opt.MAX_ABSOLUTE['current_tolerance']:g})."),
     ("accuracy", "--accuracy",
      f"Factor on every default tolerance [-] (0.1: ten times tighter; "
      f"{opt.MIN_RELATIVE / opt.DEFAULT_RTOL:g} … {opt.MAX_ACCURACY:g}); not with an explicit "

@@ -131,6 +131,13 @@ MIN_RELATIVE = 1e-14
 #: the largest relative tolerance and accuracy factor accepted [-]
 MAX_RTOL = 0.1
 MAX_ACCURACY = 1e4
+#: the largest explicit absolute tolerances accepted [m, m/s, A]: what ``accuracy =
+#: MAX_ACCURACY`` makes of the defaults on a run at 1 m/s with a 1000-A current scale (the
+#: fastest, largest feed drive), 1e-6 m, 0.1 m/s and 10 A; a larger one would leave every step
+#: of a feed drive's run uncontrolled by it
+MAX_ABSOLUTE = {"position_tolerance": POSITION_TIME * 1.0 * MAX_ACCURACY,
+                "speed_tolerance": SPEED_FRACTION * 1.0 * MAX_ACCURACY,
+                "current_tolerance": CURRENT_FRACTION * NO_CURRENT_LIMIT * MAX_ACCURACY}
 
 #: the fixed tolerances every method ran with before they scaled with the run (engine v1 and
 #: the defaults until 2026-12-04): ``SolverOptions(method="dopri5", locate_reversals=False,
@@ -236,7 +243,8 @@ def _num(x: float) -> str:
 
 def _check_positive(name: str, value: Any, unit: str, low: float = 0.0,
                     high: float = math.inf) -> None:
-    span = f"{low:g} … {high:g}" if low > 0.0 or math.isfinite(high) else "> 0"
+    span = (f"{low:g} … {high:g}" if low > 0.0 else f"> 0, ≤ {high:g}") \
+        if math.isfinite(high) else f"≥ {low:g}" if low > 0.0 else "> 0"
     if isinstance(value, bool) or not isinstance(value, int | float) \
             or not math.isfinite(value) or value <= 0.0 or not low <= value <= high:
         raise ParameterError(f"options.{name}", value, f"expected a finite value {span} "
@@ -351,7 +359,8 @@ class SolverOptions:
         for name in ("position_tolerance", "speed_tolerance", "current_tolerance"):
             value = getattr(self, name)
             if value is not None:
-                _check_positive(name, value, dict((n, u) for n, u, _ in TOLERANCES)[name])
+                _check_positive(name, value, dict((n, u) for n, u, _ in TOLERANCES)[name],
+                                high=MAX_ABSOLUTE[name])
         _check_positive("accuracy", self.accuracy, "-", MIN_RELATIVE / DEFAULT_RTOL,
                         MAX_ACCURACY)
         for name, unit in (("output_interval", "s"), ("max_step", "s"), ("fixed_step", "s")):
