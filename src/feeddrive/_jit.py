@@ -9,12 +9,20 @@ all kernel sources: any change to any of them starts a fresh cache.
 ``error_model="numpy"``: float division follows IEEE (no Python ZeroDivisionError checks),
 about 25 % faster per right-hand-side evaluation; non-finite states are caught by the solver.
 
-Loading from the cache skips numba's *refresh* of its compiler (:class:`_LoadingCache`).
+Loading from the cache skips numba's *refresh* of its compiler (``_LoadingCache``).
 
 numba is optional (the install extra ``feeddrive[numba]``, :data:`HAVE_NUMBA`): without it
 every kernel is its plain Python function (with ``py_func``, itself), and whatever runs per
 step — the integrators, the linearisations' rate and Jacobian functions, the model's
 auxiliary signals — runs in the engine's C build (:mod:`feeddrive.solvers.builds`).
+
+numba is imported only when its build runs (:func:`start_numba`: no C compiler,
+``FEEDDRIVE_ENGINE=numba``, a model outside the C subset).  Until then a kernel is a
+:class:`LazyKernel`, which runs as its plain Python function, exactly as without numba; the C
+build, the default, never needs numba, whose import was ≈ 0.17 CPU s of every process
+(issue 42: 27 % of a 1-s CLI run's imports).  :func:`start_numba` imports it, makes every
+kernel's dispatcher and puts the dispatchers where the kernels were (the modules' globals, so
+that numba compiles calls between kernels).
 
 ``nogil=True``: a compiled call releases Python's global interpreter lock while it runs, so
 other threads of the process keep going during a long solver call (the explorer's server
@@ -26,11 +34,14 @@ objects, so nothing else changes.
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
+import importlib
 import importlib.util
 import os
 import sys
 import tempfile
+import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import ModuleType
@@ -38,25 +49,12 @@ from typing import Any
 
 from ._disk import file_lock, user_cache_root
 
-try:
-    from numba import config as _numba_config
-    from numba import njit
-    from numba.core import sigutils
-    from numba.core.caching import FunctionCache as _NumbaFunctionCache
-    from numba.core.ccallback import CFunc
-    from numba.core.runtime import rtsys
-except ImportError:  # the optional extra feeddrive[numba] is not installed
-    #: whether numba is installed (``pip install 'feeddrive[numba]'``): without it every
-    #: kernel is its plain Python function and the engine runs in C
-    #: (:mod:`feeddrive.solvers.builds`)
-    HAVE_NUMBA = False
-else:
-    HAVE_NUMBA = True
+#: whether numba is installed (``pip install 'feeddrive[numba]'``; found, not imported: see
+#: :func:`start_numba`): without it every kernel is its plain Python function and the engine
+#: runs in C (:mod:`feeddrive.solvers.builds`)
+HAVE_NUMBA = importlib.util.find_spec("numba") is not None
 
-#: the base of the loading cache below (numba's FunctionCache; a placeholder without numba)
-FunctionCache: Any = _NumbaFunctionCache if HAVE_NUMBA else object
-
-config: Any = _numba_config if HAVE_NUMBA else None  # CACHE_DIR is set dynamically; untyped
+config: Any = None  # numba's config once started (CACHE_DIR is set dynamically; untyped)
 
 _HERE = Path(__file__).resolve().parent
 _KERNEL_SOURCES = ("_jit.py",)  # model/ holds friction, reference
@@ -93,8 +91,25 @@ CACHE_DIR = _cache_dir()
 _CACHE_DIR = CACHE_DIR
 
 
-class _LoadingCache(FunctionCache):
-    """numba's on-disk cache of one function, loading without refreshing the compiler.
+def _loading_cache_class() -> Any:
+    """numba's FunctionCache loading without the refresh, ``_LoadingCache`` (made once numba is
+    imported)."""
+    from numba.core.caching import FunctionCache
+    from numba.core.runtime import rtsys
+
+    class _LoadingCache(FunctionCache):
+        __doc__ = _LOADING_CACHE_DOC
+
+        def load_overload(self, sig: Any, target_context: Any) -> Any:
+            rtsys.initialize(target_context)
+            with self._guard_against_spurious_io_errors():
+                return self._load_overload(sig, target_context)
+
+    return _LoadingCache
+
+
+_LOADING_CACHE_DOC = """numba's on-disk cache of one function, loading without refreshing the
+    compiler.
 
     Before numba loads a cached function it *refreshes* its target context: it imports
     every lowering module it has (``numba.np.linalg``, which imports ``scipy.linalg``,
@@ -106,19 +121,16 @@ class _LoadingCache(FunctionCache):
     cache miss, or any later compilation, is unchanged.
     """
 
-    def load_overload(self, sig: Any, target_context: Any) -> Any:
-        rtsys.initialize(target_context)
-        with self._guard_against_spurious_io_errors():
-            return self._load_overload(sig, target_context)
+_LOADING_CACHE: Any = None
 
 
-def _loading_cache(fn: Callable[..., Any]) -> _LoadingCache:
+def _loading_cache(fn: Callable[..., Any]) -> Any:
     """The on-disk cache of ``fn`` in the package's cache folder (numba reads
     ``CACHE_DIR`` once, when the cache object is made)."""
     previous = config.CACHE_DIR
     config.CACHE_DIR = _CACHE_DIR
     try:
-        return _LoadingCache(fn)
+        return _LOADING_CACHE(fn)
     finally:
         config.CACHE_DIR = previous
 
@@ -130,16 +142,127 @@ def _plain(fn: Callable[..., Any]) -> Any:
     return fn
 
 
+def _dispatcher(fn: Callable[..., Any], options: dict[str, Any]) -> Any:
+    """``fn``'s numba dispatcher, cached on disk (numba started)."""
+    from numba import njit
+
+    # cache=True, with the loading cache: what numba's enable_caching() does with its own
+    # class (one cache object, not numba's made and then replaced)
+    dispatcher = njit(error_model="numpy", nogil=True, **options)(fn)
+    dispatcher._cache = _loading_cache(fn)
+    return dispatcher
+
+
+class LazyKernel:
+    """A kernel before numba is started (:func:`start_numba`): called, its plain Python
+    function runs (as without numba); ``py_func`` is that function, read by the C translator
+    and the code generators as they read a dispatcher's.  Once numba is started a call runs
+    the dispatcher, and any other attribute is the dispatcher's.
+
+    Parameters
+    ----------
+    fn : callable
+        The kernel's Python function.
+    options : dict
+        Its numba options (``inline="always"`` …).
+    """
+
+    def __init__(self, fn: Callable[..., Any], options: dict[str, Any]) -> None:
+        self.py_func = fn
+        self.options = options
+        self.dispatcher: Any = None
+        functools.update_wrapper(self, fn)
+
+    def __call__(self, *args: Any) -> Any:
+        if self.dispatcher is None:
+            return self.py_func(*args)
+        return self.dispatcher(*args)
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__") or name in ("dispatcher", "py_func", "options"):
+            raise AttributeError(name)  # introspection (inspect, copy) starts nothing
+        start_numba()
+        return getattr(self.dispatcher, name)
+
+    def __reduce__(self) -> tuple[Any, ...]:  # pickled by name, as a function is
+        return (_kernel_named, (self.py_func.__module__, self.py_func.__qualname__))
+
+    def __repr__(self) -> str:
+        return f"<kernel {self.py_func.__module__}.{self.py_func.__qualname__} (numba not started)>"
+
+
+def _kernel_named(module: str, qualname: str) -> Any:
+    obj: Any = importlib.import_module(module)
+    for part in qualname.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+_LAZY: list[LazyKernel] = []
+_STARTED = False
+
+
+def numba_started() -> bool:
+    """Whether numba is imported and every kernel has its dispatcher (:func:`start_numba`).
+
+    Returns
+    -------
+    bool
+        True once started.
+    """
+    return _STARTED
+
+
+def start_numba() -> None:
+    """Import numba, make every kernel's dispatcher and put it where the kernel was: in the
+    globals of every loaded module of the package and of its generated modules (numba
+    compiles a call between kernels only to a dispatcher).  Once per process; called where
+    the numba build runs (:mod:`feeddrive.solvers.shared`).
+
+    Raises
+    ------
+    ImportError
+        numba is not installed, or does not import.
+    """
+    global _STARTED, config, _LOADING_CACHE
+    if _STARTED:
+        return
+    if not HAVE_NUMBA:
+        raise ImportError("numba is not installed: pip install 'feeddrive[numba]'")
+    with _START_LOCK:
+        if _STARTED:
+            return
+        from numba import config as numba_config
+
+        config = numba_config
+        _LOADING_CACHE = _loading_cache_class()
+        for lazy in _LAZY:
+            lazy.dispatcher = _dispatcher(lazy.py_func, lazy.options)
+        for name, module in list(sys.modules.items()):
+            if not name.startswith("feeddrive"):
+                continue
+            space = getattr(module, "__dict__", None)
+            if not isinstance(space, dict):
+                continue
+            for key, value in list(space.items()):
+                if isinstance(value, LazyKernel):
+                    space[key] = value.dispatcher
+        _STARTED = True
+
+
+_START_LOCK = threading.RLock()
+
+
 def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     if not HAVE_NUMBA:
         return _plain
 
     def decorate(fn: Callable[..., Any]) -> Any:
-        # cache=True, with the loading cache: what numba's enable_caching() does with its
-        # own class (one cache object, not numba's made and then replaced)
-        dispatcher = njit(error_model="numpy", nogil=True, **options)(fn)
-        dispatcher._cache = _loading_cache(fn)
-        return dispatcher
+        if _STARTED:
+            return _dispatcher(fn, options)
+        lazy = LazyKernel(fn, options)
+        _LAZY.append(lazy)
+        return lazy
 
     return decorate
 
@@ -173,11 +296,13 @@ def first_class(fn: Callable[..., Any], signature: Any, name: str) -> Any:
     """
     import types
 
-    if not HAVE_NUMBA:  # the Python function (cold callers only: the engine runs in C)
+    if not _STARTED:  # the Python function (cold callers only: the engine runs in C)
         return fn
     # numba's typing of a cfunc passed to compiled code (a full compiler refresh imports it;
-    # a load from the cache, :class:`_LoadingCache`, does not)
+    # a load from the cache, ``_LoadingCache``, does not)
     import numba.experimental.function_type  # noqa: F401
+    from numba.core import sigutils
+    from numba.core.ccallback import CFunc
 
     copy = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__,
                               fn.__closure__)

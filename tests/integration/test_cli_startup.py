@@ -138,6 +138,8 @@ def scaled_sum(x, k):
 _LOAD_THEN_COMPILE = """
 import sys
 import numpy as np
+from feeddrive._jit import start_numba
+start_numba()  # the numba build (a process running C never imports numba)
 import cached_kernel
 value = cached_kernel.scaled_sum(np.arange(4.0), 2.0)
 hits = sum(cached_kernel.scaled_sum.stats.cache_hits.values())
@@ -222,3 +224,37 @@ def test_the_report_s_tables_and_indicators_import_neither_pandas_nor_scipy_opti
     assert zero == "1.605"  # docs/parameters.md's table, screw shaft +
     assert (tmp_path / "t.csv").read_text().splitlines() == ["a,b", "1.5,"]
     assert [m for m in ("pandas", "scipy.optimize") if _loaded(loaded, m)] == []
+
+
+_C_BUILD_RUN = """
+import sys
+import feeddrive as fd
+from feeddrive.analysis.linear import rightmost_pole
+system = fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+result = fd.simulate(system, fd.ConstantSpeed(0.5e-3, 16e-3), 0.2)
+rightmost_pole(fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4), 1e-3)
+print(result.solver_stats["engine"], "numba" in sys.modules)
+"""
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed: nothing to leave unimported")
+def test_a_process_running_the_c_build_never_imports_numba() -> None:
+    """numba installed and a compiler found: a run and a linearisation (the C build) leave
+    numba unimported (its import was ≈ 0.17 CPU s of every process, issue 42); with
+    ``FEEDDRIVE_ENGINE=numba`` the same code imports it and runs in it."""
+    from feeddrive.backends.c_cache import CompilerNotFound, find_compiler
+
+    try:
+        find_compiler()
+    except CompilerNotFound:
+        pytest.skip("no C compiler: the numba build runs")
+    env = {k: v for k, v in os.environ.items() if k != "FEEDDRIVE_ENGINE"}
+    c_run = subprocess.run([sys.executable, "-c", _C_BUILD_RUN], env=env, capture_output=True,
+                           text=True, timeout=600)
+    assert c_run.returncode == 0, c_run.stderr
+    assert c_run.stdout.split() == ["c", "False"]
+    numba_run = subprocess.run([sys.executable, "-c", _C_BUILD_RUN],
+                               env={**env, "FEEDDRIVE_ENGINE": "numba"}, capture_output=True,
+                               text=True, timeout=900)
+    assert numba_run.returncode == 0, numba_run.stderr
+    assert numba_run.stdout.split() == ["numba", "True"]

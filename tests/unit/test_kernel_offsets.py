@@ -23,6 +23,8 @@ needs_numba = pytest.mark.skipif(
 _RUN = """
 import numpy as np
 import feeddrive as fd
+from feeddrive._jit import start_numba
+start_numba()  # the numba build (a process running C never imports numba)
 from feeddrive.engine.simulate import DriveSystem
 from feeddrive.model.friction import lugre
 from feeddrive.model.reference import ConstantSpeed

@@ -717,14 +717,17 @@ class CEngine:
         self._functions: dict[tuple[int, str], Callable[..., Any]] = {}
         self._compiler: dict[tuple[str | None, str | None], bool] = {}
 
-    def available(self, required: bool = False) -> bool:
+    def available(self, required: bool = False, quiet: bool = False) -> bool:
         """Whether a C compiler is found (without one,
-        :data:`~feeddrive.backends.c_cache.NO_COMPILER` is said once per process).
+        :data:`~feeddrive.backends.c_cache.NO_COMPILER` is said once per process, unless
+        ``quiet``).
 
         Parameters
         ----------
         required : bool, default False
             ``FEEDDRIVE_ENGINE=c``: no compiler is an error.
+        quiet : bool, default False
+            Say nothing (the caller says it once it knows the numba build runs).
 
         Returns
         -------
@@ -746,7 +749,14 @@ class CEngine:
             return True
         found = self._compiler.get(where)
         if found is None:
-            found = self._compiler[where] = available_compiler() is not None
+            try:
+                find_compiler()
+                found = True
+            except CompilerNotFound:
+                found = False
+            self._compiler[where] = found
+        if not found and not quiet:
+            available_compiler()  # says NO_COMPILER, once per process
         return found
 
     def translates(self, model: Model, required: bool = False) -> bool:

@@ -13,7 +13,8 @@ generators).  :func:`driver` picks one per call:
   without type annotations) runs in numba, said once per model structure.
 
 numba is an optional install (``pip install 'feeddrive[numba]'``,
-:data:`feeddrive._jit.HAVE_NUMBA`).  Without it the C build runs everything per step, and
+:data:`feeddrive._jit.HAVE_NUMBA`), imported only when its build runs
+(:func:`feeddrive._jit.start_numba`).  Without it the C build runs everything per step, and
 where it cannot — no C compiler, ``FEEDDRIVE_ENGINE=numba``, or a model outside the C subset —
 :class:`NoEngine` says in one line how to get either build (:data:`NO_ENGINE`).
 
@@ -25,7 +26,7 @@ from __future__ import annotations
 import os
 from typing import TYPE_CHECKING, Any
 
-from .. import registry
+from .. import _jit, registry
 from .._jit import HAVE_NUMBA
 
 if TYPE_CHECKING:
@@ -94,9 +95,17 @@ def engine_name() -> str:
         except RuntimeError:  # CompilerNotFound (the core does not import the backends)
             pass
         raise NoEngine((f"{ENGINE_ENV} = 'c': " if choice == "c" else "") + NO_ENGINE)
-    if engine is None or not engine.available(required=choice == "c"):
-        return "numba"
-    return "c"
+    if choice == "c":
+        if engine is None or not engine.available(required=True):
+            return "numba"
+        return "c"
+    if engine is not None and engine.available(quiet=True):
+        return "c"
+    # no compiler: numba, if it imports (found is not enough: a hidden or broken numba)
+    _numba_build()
+    if engine is not None:
+        engine.available()  # said once per process, in one line (NO_COMPILER)
+    return "numba"
 
 
 def driver(model: Model, use: str) -> Any:
@@ -116,8 +125,26 @@ def driver(model: Model, use: str) -> Any:
         The driver.
     """
     if not _in_c(model):
+        _numba_build()
         return getattr(model.module, use)
     return registry.table(registry.ENGINES)["c"].driver(model, use)
+
+
+def _numba_build() -> None:
+    """Start the numba build (:func:`feeddrive._jit.start_numba`, once per process): numba is
+    imported only where its build runs.
+
+    Raises
+    ------
+    NoEngine
+        numba is found but does not import (hidden, or broken): one line saying how to get
+        either build.
+    """
+    try:
+        _jit.start_numba()
+    except ImportError:
+        raise NoEngine((f"{ENGINE_ENV} = 'numba': numba does not import; " if chosen() == "numba"
+                        else "") + NO_ENGINE) from None
 
 
 def engine_of(model: Model) -> str:
@@ -173,4 +200,6 @@ def compiled(model: Model, name: str) -> Any:
         fn = registry.table(registry.ENGINES)["c"].function(model, name)
         if fn is not None:
             return fn
+    else:
+        _numba_build()
     return model.module.compiled(name)

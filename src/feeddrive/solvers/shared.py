@@ -8,8 +8,8 @@ every generated model module, they were compiled again for each model (≈ 14 CP
 most of a cold ``reproduce``: issue 21 item 3).  Here they are placed once in a generated
 module of their own, each function that reads a model name (directly or through a function
 it calls) taking those names as its first arguments; a model passes its ``rhs`` and
-``sample_update`` as *first-class functions* (numba ``cfunc``\\ s of :data:`RHS_SIGNATURE`
-and :data:`SAMPLE_SIGNATURE`, called through their address) and its sizes.  numba compiles
+``sample_update`` as *first-class functions* (numba ``cfunc``\\ s of :func:`signatures`,
+called through their address) and its sizes.  numba compiles
 the drivers once per signature — the same for every model — and caches them on disk; a new
 model compiles only its own two functions.
 
@@ -27,19 +27,29 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from .._jit import CACHE_DIR, HAVE_NUMBA, compile_lock, first_class, import_generated
+from .._jit import (
+    CACHE_DIR,
+    compile_lock,
+    first_class,
+    import_generated,
+    numba_started,
+)
 
-RHS_SIGNATURE: Any = None
-SAMPLE_SIGNATURE: Any = None
-if HAVE_NUMBA:
+
+def signatures() -> tuple[Any, Any]:
+    """The numba signatures of the first-class functions (numba started).
+
+    Returns
+    -------
+    tuple
+        ``rhs(t, y, held, P, T, dy, aux)``'s and ``sample_update(t, y, held, P, T, tick)``'s.
+    """
     from numba import types
 
-    _ARRAY = types.float64[::1]
-    #: ``rhs(t, y, held, P, T, dy, aux)``
-    RHS_SIGNATURE = types.void(types.float64, _ARRAY, _ARRAY, _ARRAY, _ARRAY, _ARRAY, _ARRAY)
-    #: ``sample_update(t, y, held, P, T, tick)``
-    SAMPLE_SIGNATURE = types.void(types.float64, _ARRAY, _ARRAY, _ARRAY, _ARRAY,
-                                  types.int64[::1])
+    array = types.float64[::1]
+    return (types.void(types.float64, array, array, array, array, array, array),
+            types.void(types.float64, array, array, array, array, types.int64[::1]))
+
 #: the names a template reads from its model, in the order they are passed
 MODEL_NAMES = ("rhs", "sample_update", "N_STATE", "N_AUX", "N_HELD", "N_CLOCK")
 #: the drivers a model calls (the other functions of the module are theirs)
@@ -244,8 +254,10 @@ class Bound:
             with _FIRST_USE, compile_lock(self._path, "first_class"):
                 if self._values is not None:  # another thread was first
                     return self._values
-                self._values = {"rhs": first_class(rhs.py_func, RHS_SIGNATURE, "rhs_fc"),
-                                "sample_update": first_class(update.py_func, SAMPLE_SIGNATURE,
+                rhs_signature, sample_signature = signatures() if numba_started() \
+                    else (None, None)
+                self._values = {"rhs": first_class(rhs.py_func, rhs_signature, "rhs_fc"),
+                                "sample_update": first_class(update.py_func, sample_signature,
                                                              "sample_update_fc"),
                                 **self._sizes}
         return self._values
@@ -257,7 +269,7 @@ class Bound:
         if getattr(_DRY_RUN, "on", False):
             raise ModelPrepared(name)
         head = [values[m] for m in added.get(name, ())]
-        if not HAVE_NUMBA:  # plain Python (cold callers; the engine runs in C)
+        if not numba_started():  # plain Python (cold callers; the engine runs in C)
             return fn(*head, *args)
         if not fn.signatures:  # the first call in this process: compiled or loaded once
             with compile_lock(module.__file__ or name, name):
@@ -319,7 +331,7 @@ class Bound:
             if got is not None and not getattr(_DRY_RUN, "on", False):
                 return got[0](*got[1], *args)
             out = first(*args)
-            if not HAVE_NUMBA:
+            if not numba_started():
                 return out
             module, added = _module()
             overloads = getattr(module, name).overloads

@@ -736,11 +736,18 @@ def _c_compiles() -> int:
 
 @contextlib.contextmanager
 def _numba_compiles() -> Iterator[list[Any]]:
-    """The numba compilations made inside it (an empty list without numba)."""
-    from .._jit import HAVE_NUMBA
+    """The numba compilations made inside it (an empty list without numba; one entry when
+    the numba build was started inside it, whose compilations are not recorded)."""
+    from .._jit import HAVE_NUMBA, numba_started
 
     if not HAVE_NUMBA:
         yield []
+        return
+    if not numba_started():
+        started: list[Any] = []
+        yield started
+        if numba_started():
+            started.append("numba build started")
         return
     from numba.core.event import install_recorder
 
