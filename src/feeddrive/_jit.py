@@ -42,6 +42,7 @@ import os
 import sys
 import tempfile
 import threading
+import types
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import ModuleType
@@ -178,6 +179,11 @@ class LazyKernel:
             return self.py_func(*args)
         return self.dispatcher(*args)
 
+    def __get__(self, obj: Any, objtype: Any = None) -> Any:
+        # bound as a method where a function (and a numba dispatcher) would be; a routine
+        # to inspect and to the docs' autodoc
+        return self if obj is None else types.MethodType(self, obj)
+
     def __getattr__(self, name: str) -> Any:
         if name.startswith("__") or name in ("dispatcher", "py_func", "options"):
             raise AttributeError(name)  # introspection (inspect, copy) starts nothing
@@ -294,8 +300,6 @@ def first_class(fn: Callable[..., Any], signature: Any, name: str) -> Any:
     numba.core.ccallback.CFunc
         The compiled function.
     """
-    import types
-
     if not _STARTED:  # the Python function (cold callers only: the engine runs in C)
         return fn
     # numba's typing of a cfunc passed to compiled code (a full compiler refresh imports it;
