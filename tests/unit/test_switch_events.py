@@ -35,6 +35,35 @@ def test_the_rows_are_the_sliding_speeds_of_the_acting_sites() -> None:
     assert switching_rows(cdfs.model, cdfs.P).shape == (2, len(names))
 
 
+@pytest.mark.parametrize("lead", [5e-3, 10e-3])
+def test_the_rows_kept_for_a_structure_follow_its_numbers_not_its_profile(lead: float) -> None:
+    """2026-12-06: the rows of a model are kept between runs that differ by their profile
+    only (a search's trials: 15 of the 17 evaluations saved per run), and checked by the two
+    that are made every time.  Each run's rows are still the closed-form sliding speeds (H =
+    lead/2π): after another profile's run, for every kind of profile, and with another lead,
+    which must not take the rows kept for the first."""
+    from feeddrive.engine import simulate as sim_module
+
+    params = fd.preset("wang2021").replace_path("screw.lead", lead)
+    system = fd.DriveSystem(params, "ddfs", 0.4)
+    H = lead / (2 * np.pi)
+    profiles = [fd.ConstantSpeed(0.5e-3, 16e-3), fd.ConstantSpeed(2e-3, 8e-3, ramp_time=0.5),
+                fd.SineSpeed(1e-3, 16e-3, frequency=0.5),
+                fd.SampledSpeed(np.linspace(0.0, 1.0, 11), np.full(11, 1e-3),
+                                np.full(11, 16e-3))]
+    for profile in profiles:
+        sim = Simulation(system, profile)
+        names = sim.model.state_names
+        expected = np.zeros((3, len(names)))
+        expected[0, names.index("screw_speed")] = H
+        expected[1, names.index("nut_speed")] = H
+        expected[2, names.index("table_speed")] = 1.0
+        np.testing.assert_allclose(sim.switch_rows, expected, rtol=1e-12, atol=0)
+        np.testing.assert_allclose(switching_rows(sim.model, sim.P), expected, rtol=1e-12,
+                                   atol=0)
+    assert len(sim_module._SWITCH_ROWS) >= 1
+
+
 def test_a_law_without_a_kink_gives_no_row() -> None:
     p = fd.preset("wang2021")
     for site in ("screw", "nut", "guide"):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import collections
 import math
 import time as _time
 import weakref
@@ -15,7 +16,7 @@ import numpy as np
 from ..model.assemble import Model, assemble
 from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
-from ..model.reference import ConstantSpeed, Profile, SampledSpeed, SineSpeed
+from ..model.reference import PROFILE_PARAMS, ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
 from ..solvers import builds, dopri5, switching
@@ -440,7 +441,19 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
 
     scale = np.array(model.tolerance_scales, dtype=float)
     scale = np.where(np.isfinite(scale) & (scale > 0.0), scale, 1.0)
+    mixed = np.zeros(n)
+    mixed[:] = scale * np.linspace(0.3, 1.7, n)
+    mixed[firsts] = 0.0
     base = speeds(np.zeros(n))
+    probe = speeds(mixed) - base
+    # the rows of this structure and these numbers but the profile's (a search's trials): the
+    # sliding speeds are those of the states, so the rows are the same; taken again when
+    # the two evaluations that check them (at rest and at the mixed state) say the same
+    key = _rows_key(model, P, T)
+    kept = _SWITCH_ROWS.get(key)
+    if kept is not None and np.array_equal(kept[1], base) and np.array_equal(kept[2], probe):
+        _SWITCH_ROWS.move_to_end(key)
+        return kept[0].copy()
     W = np.zeros((len(firsts), n))
     for j in range(n):
         y = np.zeros(n)
@@ -448,13 +461,31 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
         W[:, j] = (speeds(y) - base) / scale[j]
     for k in firsts:  # a friction state is not a speed
         W[:, k] = 0.0
-    mixed = np.zeros(n)
-    mixed[:] = scale * np.linspace(0.3, 1.7, n)
-    mixed[firsts] = 0.0
-    probe = speeds(mixed) - base
     keep = (np.abs(W).max(axis=1) > 0.0) & (np.abs(base) == 0.0) & (
         np.abs(probe - W @ mixed) <= 1e-9 * np.maximum(np.abs(W) @ np.abs(mixed), 1e-300))
-    return np.ascontiguousarray(W[keep])
+    rows = np.ascontiguousarray(W[keep])
+    _SWITCH_ROWS[key] = (rows.copy(), base, probe)
+    while len(_SWITCH_ROWS) > _SWITCH_ROWS_KEPT:
+        _SWITCH_ROWS.popitem(last=False)
+    return rows
+
+
+#: switching rows already found (:func:`switching_rows`), by :func:`_rows_key`; the newest last
+_SWITCH_ROWS: collections.OrderedDict[tuple[Any, ...], tuple[np.ndarray, np.ndarray,
+                                                            np.ndarray]] = \
+    collections.OrderedDict()
+_SWITCH_ROWS_KEPT = 64
+
+
+def _rows_key(model: Model, P: np.ndarray, T: np.ndarray) -> tuple[Any, ...]:
+    """The generated module (the structure), ``P`` without the profile's block and ``T``."""
+    try:
+        o = model.parameter_names.index("profile[0]")
+    except ValueError:
+        o = P.size
+    masked = P.copy()
+    masked[o:o + len(PROFILE_PARAMS)] = 0.0
+    return (model.module.__name__, masked.tobytes(), T.tobytes())
 
 
 def profile_breakpoints(profile: Profile, t_end: float, base: float, *,
