@@ -221,9 +221,11 @@ def numba_started() -> bool:
 
 def start_numba() -> None:
     """Import numba, make every kernel's dispatcher and put it where the kernel was: in the
-    globals of every loaded module of the package and of its generated modules (numba
-    compiles a call between kernels only to a dispatcher).  Once per process; called where
-    the numba build runs (:mod:`feeddrive.solvers.shared`).
+    globals of every loaded module — the package's, its generated modules', a user's module
+    that defines a friction law's kernels (numba compiles a call between kernels only to a
+    dispatcher; a kernel kept elsewhere, a class attribute, calls its dispatcher).  Once per
+    process; called where the numba build runs (:mod:`feeddrive.solvers.builds`) and by a
+    kernel asked for a dispatcher's attribute (``signatures`` …).
 
     Raises
     ------
@@ -244,9 +246,7 @@ def start_numba() -> None:
         _LOADING_CACHE = _loading_cache_class()
         for lazy in _LAZY:
             lazy.dispatcher = _dispatcher(lazy.py_func, lazy.options)
-        for name, module in list(sys.modules.items()):
-            if not name.startswith("feeddrive"):
-                continue
+        for module in list(sys.modules.values()):
             space = getattr(module, "__dict__", None)
             if not isinstance(space, dict):
                 continue
