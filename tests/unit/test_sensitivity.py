@@ -143,12 +143,11 @@ def _count_linearisations(monkeypatch: pytest.MonkeyPatch) -> list[float]:
 def test_upper_edge_is_the_bands_top_edge_with_fewer_linearisations(
         monkeypatch: pytest.MonkeyPatch, position: float) -> None:
     """issue 42 item 5: the report's sensitivity reads only the band's upper edge; scanning
-    down from the top and refining that one change gives stability_band's number bit for
-    bit (the same grid and root search) at 8 of its 26 linearisations on the report's
-    20-point grid (CDFS: the top unstable scan point is the 5th from the top, then 3 new
-    points of Brent's method to 1e-6 m/s, the scan's two values reused; the full band adds
-    the other 15 scan points, the lower edge's 2 and the mode frequency).  Until 2026-12-06
-    the edges were bisected: 15 of 37 (10 halvings and 6)."""
+    down from the top and bisecting that one change gives stability_band's number bit for
+    bit (the same grid and midpoints) at 15 of its 37 linearisations on the report's
+    20-point grid (CDFS: the top unstable scan point is the 5th from the top, then 10
+    halvings to 1e-6 m/s; the full band adds the other 15 scan points, the lower edge's 6
+    halvings and the mode frequency)."""
     from feeddrive.analysis.linear import upper_band_edge
     from feeddrive.reproduce.sensitivity_section import LINEAR_POINTS
 
@@ -161,7 +160,7 @@ def test_upper_edge_is_the_bands_top_edge_with_fewer_linearisations(
     assert band.intervals and edge == band.intervals[-1][1]
     assert len(seen) < full / 2
     if position == 0.4:
-        assert (full, len(seen)) == (26, 8)
+        assert (full, len(seen)) == (37, 15)
         from pathlib import Path
 
         doc = " ".join((Path(__file__).resolve().parents[2] / "docs" / "linear.md")
@@ -202,12 +201,11 @@ def test_in_process_sensitivity_counts_its_linearisations(monkeypatch) -> None:
     seen.clear()
     upper = _linear_upper(task, params)
     assert upper["values"]["linear_upper"] == full["values"]["linear_upper"]
-    assert (n_full, len(seen)) == (26, 8)
+    assert (n_full, len(seen)) == (37, 15)
     seen.clear()
     result = sensitivity(params, quantity="linear-band", in_process=True, linear_points=20,
                          patterns=["controller.velocity_gain"])
-    # base, ±10 %, the halving check's ±5 %: five upper edges of 8–10 linearisations each (the
-    # scan's top 5–6 points, Brent's 3–4; measured 45), not the full band's 26
-    assert result.evaluations == 5 and len(seen) <= 5 * 10
+    # base, ±10 %, the halving check's ±5 %: five points of at most 20 + 10 linearisations
+    assert result.evaluations == 5 and len(seen) <= 5 * 15
     bad = {**task, "quantity": {**task["quantity"], "low": 6e-3}}
     assert "low" in _linear_upper(bad, params)["error"]

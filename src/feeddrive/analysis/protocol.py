@@ -17,7 +17,7 @@ TRIAL_MAX_DURATION = 240.0  # [s] longest trial; still undecided then: 'undecide
 # the linear stability scan of steady sliding (`feeddrive stability`, the sweep's
 # `linear-band` quantity, the explorer, linear.stability_band): one default range (issue 24
 # item 8: the command scanned 0.01–5 mm/s and the sweep 0.02–3.02 mm/s)
-LINEAR_SPEED_RANGE = (0.01e-3, 5e-3)  # [m/s] log-spaced scan, edges refined (Brent)
+LINEAR_SPEED_RANGE = (0.01e-3, 5e-3)  # [m/s] log-spaced scan, edges bisected
 LINEAR_POINTS = 40  # [-] scan points
 # a search's work is bounded before it starts (issue 39 item 4): `predict --resolution
 # 1e-300` bisected forever (its speeds are rounded to 1e-12 m/s, so the bisection stalled)

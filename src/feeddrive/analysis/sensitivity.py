@@ -4,11 +4,10 @@ machinery.  SI inside.
 
 Quantity Q: the critical speed from rest (``critical-speed``, resolution 0.01 mm/s on the
 shared protocol) or the upper edge of the linearly unstable band of steady sliding
-(``linear-band``, found to 10⁻³ mm/s by Brent's method: cheap, no simulation).  For each
-parameter p with value p₀ ≠ 0, Q is evaluated at p₀(1 ± h) and the elasticity is
-E = (Q₊ − Q₋)/(2h·Q₀): the % change of Q per % change of p.  A zero-valued parameter with a
-stated scale s (:data:`ZERO_SCALES`) gets the absolute derivative (Q₊ − Q₋)/(2h·s) at ±h·s
-instead.
+(``linear-band``, bisected to 10⁻³ mm/s: cheap, no simulation).  For each parameter p with
+value p₀ ≠ 0, Q is evaluated at p₀(1 ± h) and the elasticity is E = (Q₊ − Q₋)/(2h·Q₀): the
+% change of Q per % change of p.  A zero-valued parameter with a stated scale s
+(:data:`ZERO_SCALES`) gets the absolute derivative (Q₊ − Q₋)/(2h·s) at ±h·s instead.
 
 The step: h starts at :data:`STEPS`\\[0] and is doubled until the step's effect |Q₊ − Q₋| is
 at least 10× the quantity's resolution (the resolution ≤ 0.1× the effect); a parameter still
@@ -54,7 +53,7 @@ ZERO_SCALES: dict[str, float] = {"stiffness.axial_damping": 1e4,
 _STRUCTURAL = ("controller.position_period", "controller.velocity_period",
                "controller.current_period", "controller.encoder_counts",
                "controller.grating_resolution", "stiffness.support_bearing_count")
-#: the linear band's edge tolerance [m/s] (feeddrive.analysis.linear.stability_band)
+#: the linear band's bisection tolerance [m/s] (feeddrive.analysis.linear.stability_band)
 LINEAR_RESOLUTION = 1e-6
 
 

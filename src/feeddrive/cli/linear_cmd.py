@@ -96,7 +96,7 @@ def stability_command(
                                help="Highest table speed scanned [mm/s]."),
     points: int = typer.Option(protocol.LINEAR_POINTS, "--points",
                                help="Log-spaced scan points, at least 2 (edges are then "
-                               "found to 0.001 mm/s by Brent's method)."),
+                               "bisected to 0.001 mm/s)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     plot: str | None = typer.Option(None, "--plot", help="Write the scan [.png, .pdf, .svg]."),

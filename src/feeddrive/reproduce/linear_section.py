@@ -57,7 +57,7 @@ def cdfs_linear(params: DriveParameters) -> CdfsLinear:
         return CdfsLinear(None, band, str(err))
 
 
-#: the scan grid of the report's stability bands (the edges' tolerance, 10⁻³ mm/s, is unchanged)
+#: the scan grid of the report's stability bands (the bisection to 10⁻³ mm/s is unchanged)
 BAND_POINTS = 30
 
 

@@ -13,7 +13,7 @@ from typing import Any
 from ..parameters import DriveParameters
 
 FIGURE = "sensitivity_linear_band.png"
-#: the linear band's scan grid for the report (the edge's tolerance, 10⁻³ mm/s, is unchanged)
+#: the linear band's scan grid for the report (the bisection to 10⁻³ mm/s is unchanged)
 LINEAR_POINTS = 20
 #: the stiffness rows that make up the axial rigidity (Wang2021 Eqs. (2)–(5))
 AXIAL = ("screw.nut_axial_stiffness", "screw.nut_bearing_axial_stiffness",
