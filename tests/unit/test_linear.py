@@ -109,6 +109,18 @@ def test_band_edges_do_not_depend_on_the_scan_grid() -> None:
         assert a == pytest.approx(b, abs=2e-6)
 
 
+@pytest.mark.parametrize("tolerance", [1e-6, 1e-9])
+def test_each_edge_is_the_sign_change_within_its_tolerance(tolerance: float) -> None:
+    """The edges hold what the tolerance says: steady sliding is unstable just inside each
+    edge and stable just outside it, ``tolerance`` away on either side."""
+    from feeddrive.analysis.linear import rightmost_pole
+
+    band = stability_band(CDFS, points=20, tolerance=tolerance)
+    (lo, hi), = band.intervals
+    assert rightmost_pole(CDFS, lo - tolerance)[0] <= 0 < rightmost_pole(CDFS, lo + tolerance)[0]
+    assert rightmost_pole(CDFS, hi - tolerance)[0] > 0 >= rightmost_pole(CDFS, hi + tolerance)[0]
+
+
 def test_sampled_loops_are_refused_with_the_field_named() -> None:
     p = W.replace_path("controller.velocity_period", 5e-4)
     with pytest.raises(ParameterError, match="controller.velocity_period.*continuous loops"):
