@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import collections
 import math
+import threading
 import time as _time
 import weakref
 from collections.abc import Callable, Mapping
@@ -450,9 +451,11 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
     # sliding speeds are those of the states, so the rows are the same; taken again when
     # the two evaluations that check them (at rest and at the mixed state) say the same
     key = _rows_key(model, P, T)
-    kept = _SWITCH_ROWS.get(key)
+    with _SWITCH_ROWS_LOCK:  # the explorer's jobs run in threads
+        kept = _SWITCH_ROWS.get(key)
+        if kept is not None:
+            _SWITCH_ROWS.move_to_end(key)
     if kept is not None and np.array_equal(kept[1], base) and np.array_equal(kept[2], probe):
-        _SWITCH_ROWS.move_to_end(key)
         return kept[0].copy()
     W = np.zeros((len(firsts), n))
     for j in range(n):
@@ -464,9 +467,10 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
     keep = (np.abs(W).max(axis=1) > 0.0) & (np.abs(base) == 0.0) & (
         np.abs(probe - W @ mixed) <= 1e-9 * np.maximum(np.abs(W) @ np.abs(mixed), 1e-300))
     rows = np.ascontiguousarray(W[keep])
-    _SWITCH_ROWS[key] = (rows.copy(), base, probe)
-    while len(_SWITCH_ROWS) > _SWITCH_ROWS_KEPT:
-        _SWITCH_ROWS.popitem(last=False)
+    with _SWITCH_ROWS_LOCK:
+        _SWITCH_ROWS[key] = (rows.copy(), base, probe)
+        while len(_SWITCH_ROWS) > _SWITCH_ROWS_KEPT:
+            _SWITCH_ROWS.popitem(last=False)
     return rows
 
 
@@ -475,6 +479,7 @@ _SWITCH_ROWS: collections.OrderedDict[tuple[Any, ...], tuple[np.ndarray, np.ndar
                                                             np.ndarray]] = \
     collections.OrderedDict()
 _SWITCH_ROWS_KEPT = 64
+_SWITCH_ROWS_LOCK = threading.Lock()
 
 
 def _rows_key(model: Model, P: np.ndarray, T: np.ndarray) -> tuple[Any, ...]:
