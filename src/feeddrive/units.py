@@ -26,3 +26,24 @@ DISPLAY_UNITS: dict[str, tuple[tuple[str, float], ...]] = {
 
 # the friction sites of Wang2021 Sect. 4 (Table 1), in the parameter file's order
 SITES = ("screw", "nut", "guide")
+
+
+def slope_band_text(lower_mm_s: float, upper_mm_s: float | None) -> str:
+    """A negative-slope band as the report and ``feeddrive friction`` print it [mm/s]:
+    ``"0.123 … 4.567"``, or ``"0.000 … ∞ (σ2 = 0)"`` for a band without end (no viscous
+    friction: the steady curve falls at every speed).
+
+    Parameters
+    ----------
+    lower_mm_s : float
+        The lower edge [mm/s].
+    upper_mm_s : float or None
+        The upper edge, the zero-slope speed [mm/s]; None when the band has no end.
+
+    Returns
+    -------
+    str
+        The band's text.
+    """
+    end = "∞ (σ2 = 0)" if upper_mm_s is None else f"{upper_mm_s:.3f}"
+    return f"{lower_mm_s:.3f} … {end}"

@@ -107,3 +107,24 @@ def test_the_explorer_draws_an_unending_band_to_the_curves_end() -> None:
         [0.0, pytest.approx(top)],  # the + branch, σ2 = 0: to the curves' end
         [pytest.approx(-1e3 * negative.upper), pytest.approx(-1e3 * negative.lower)],
     ]
+
+
+def test_the_report_and_the_friction_command_print_one_band_text(tmp_path) -> None:
+    """One formatter (``units.slope_band_text``) for both: the report's indicator table and
+    ``feeddrive friction``'s table show the same cells, bounded and without end."""
+    from feeddrive.parameters.toml_io import load
+    from feeddrive.reproduce.report import indicator_rows
+
+    path = tmp_path / "s0.toml"
+    path.write_text('extends = "wang2021"\n[friction.screw.positive]\n'
+                    'viscous_coefficient = 0.0\n')
+    rows = {(r["site"], r["branch"]): r["negative-slope band [mm/s]"]
+            for r in indicator_rows(load(path))}
+    assert rows[("screw", "positive")] == "0.000 … ∞ (σ2 = 0)"
+    bounded = rows[("screw", "negative")]
+    low, high = (float(x) for x in bounded.split(" … "))
+    assert 0.0 < low < high  # σ2 > 0 on this branch: a band with an end
+    res = CliRunner().invoke(app, ["friction", "--params", str(path), "--site", "screw"],
+                             terminal_width=200)
+    assert res.exit_code == 0, res.output
+    assert "0.000 … ∞ (σ2 = 0)" in res.output and bounded in res.output

@@ -187,9 +187,7 @@ def friction_command(
         return
 
     def fmt_band(band: list[float | None] | None) -> str:
-        if band is None:
-            return "none"
-        return f"{band[0]:.3f} … " + ("∞ (σ2 = 0)" if band[1] is None else f"{band[1]:.3f}")
+        return "none" if band is None else units.slope_band_text(band[0], band[1])
 
     law_title = {"lugre": "LuGre", "dahl": "Dahl", "stribeck": "static Stribeck",
                  "none": "no"}.get(law, law)

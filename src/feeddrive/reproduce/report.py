@@ -22,7 +22,7 @@ from ..model.reference import ConstantSpeed
 from ..model.slots import slot_table
 from ..parameters import DriveParameters
 from ..presets import wang2021
-from ..units import SITES
+from ..units import MM_PER_S, SITES, slope_band_text
 from . import figures as figures_mod
 from .answer_section import answer_markdown
 from .beyond_section import (
@@ -294,8 +294,8 @@ def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
             band = negative_slope_band(b)
             rows.append({"site": site, "branch": bname,
                          "negative-slope band [mm/s]": "none" if band is None
-                         else f"{1e3 * band.lower:.3f} … " + (
-                             f"{1e3 * band.upper:.3f}" if band.bounded else "∞ (σ2 = 0)"),
+                         else slope_band_text(band.lower / MM_PER_S, band.upper / MM_PER_S
+                                              if band.bounded else None),
                          "zero-slope speed [mm/s]": "—" if band is None or not band.bounded
                          else f"{1e3 * band.upper:.3f}",
                          "passivity margin σ2 − σ1(F_s−F_c)/F_c [N s/m]":
