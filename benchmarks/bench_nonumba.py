@@ -81,9 +81,13 @@ def _environments(numba_path: str | None, hide: Path) -> dict[str, dict[str, str
 
 def _check_numba(envs: dict[str, dict[str, str]]) -> dict[str, str]:
     """The numba each configuration sees (a version, or "absent")."""
-    code = ("from feeddrive import _jit\n"
-            "import importlib.metadata as m\n"
-            "print(m.version('numba') if _jit.HAVE_NUMBA else 'absent')")
+    # importing it, not feeddrive._jit.HAVE_NUMBA: that one only finds the package (numba is
+    # imported where its build runs), and the hiding folder's package is found
+    code = ("try:\n"
+            "    import numba\n"
+            "    print(numba.__version__)\n"
+            "except ImportError:\n"
+            "    print('absent')")
     seen = {}
     for name, env in envs.items():
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
