@@ -11,7 +11,10 @@ What it reaches (measured 2026-12-05, table speed, estimate over true error; eve
 0.16–0.20 at the defaults (``modal``, ``dopri5-dense``, ``auto``; ``rodas4`` 0.64–0.81),
 0.55–0.71 at ``accuracy`` 0.01 (``rodas4`` 4–5); on the smooth LuGre runs with ``modal`` at
 the defaults 6.3 (CDFS 2 mm/s) and 186 (DDFS 0.5/16 mm/s), 595 with ``dopri5-dense``, 9–70
-with ``rodas4``.  Not the factor 3 of the shadow estimate (test_error_estimate.py).  The causes,
+with ``rodas4``; on the stick-slip runs with Radau references (``reference/cases.py``,
+``RADAU_CASES``; measured 2026-12-06) 2.2–259, ``rodas4`` 10–356
+(``test_the_stated_ratio_covers_stick_slip_runs``).  Not the factor 3 of the shadow estimate
+(test_error_estimate.py).  The causes,
 separated (benchmarks/embedded_estimate_causes.py, benchmarks/README.md; docs/model.md):
 
 1. the 5-ms grid: the CDFS table mode (1276 rad/s) turns 6.4 rad in an interval, and the local
@@ -47,6 +50,7 @@ for folder in (ROOT, Path(__file__).resolve().parent):
     if str(folder) not in sys.path:
         sys.path.insert(0, str(folder))
 
+from reference.cases import RADAU_CASES, Case  # noqa: E402
 from reference.scipy_model import STATE_NAMES  # noqa: E402
 from test_accuracy_convergence import (  # noqa: E402
     DURATION,
@@ -113,6 +117,30 @@ def test_the_ratio_stated_beside_the_number_is_the_measured_one(method: str,
     low, high = global_error.MEASURED_RATIO
     ratios = [step_ratio(method, drive, accuracy) for drive in ("cdfs", "ddfs")]
     ratios += [lugre_ratio(name, method, accuracy) for name in ("cdfs_2p0", "ddfs_0p5_vn16")]
+    assert all(low <= r <= high for r in ratios), ratios
+
+
+def creep_ratio(case: Case, method: str, accuracy: float) -> float:
+    """Embedded table-speed estimate over the distance to the Radau reference of a stick-slip
+    run (``tests/data/radau_<case>.npz``: rtol 1e-10, ``reference/make_radau_reference.py``)."""
+    ref = np.load(ROOT / "tests" / "data" / f"radau_{case.name}.npz")
+    r = embedded(fd.DriveSystem(case.parameters(), case.drive, 0.4), case.profile(),
+                 case.duration, fd.SolverOptions(method=method, accuracy=accuracy,
+                                                 output_interval=1e-3))
+    np.testing.assert_allclose(r.time, ref["time"], rtol=0, atol=1e-12)
+    true = float(np.max(np.abs(r["table_speed"] - ref["table_speed"])))
+    estimate = r.solver_stats["embedded_error_estimate"]["signals"]["table_speed"]["absolute"]
+    return float(estimate / true)
+
+
+@pytest.mark.parametrize("accuracy", [1.0, 0.1, 0.01])
+@pytest.mark.parametrize("method", ["modal", "dopri5-dense", "rodas4", "auto"])
+def test_the_stated_ratio_covers_stick_slip_runs(method: str, accuracy: float) -> None:
+    # the trials that decide a critical speed are stick-slip ones: the range written beside
+    # it covers them too (measured 2026-12-06: 2.2-259, rodas4 10-356; at accuracy 0.01 the
+    # reference's own rtol 1e-10 is part of the "true" error, so those ratios are low)
+    low, high = global_error.MEASURED_RATIO
+    ratios = [creep_ratio(case, method, accuracy) for case in RADAU_CASES]
     assert all(low <= r <= high for r in ratios), ratios
 
 
