@@ -187,7 +187,11 @@ def friction_command(
         return
 
     def fmt_band(band: list[float | None] | None) -> str:
-        return "none" if band is None else units.slope_band_text(band[0], band[1])
+        if band is None:
+            return "none"
+        lower, upper = band
+        assert lower is not None  # a band always has its lower edge (0 without σ2)
+        return units.slope_band_text(lower, upper)
 
     law_title = {"lugre": "LuGre", "dahl": "Dahl", "stribeck": "static Stribeck",
                  "none": "no"}.get(law, law)
