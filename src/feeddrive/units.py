@@ -1,5 +1,6 @@
 """The one unit table: SI inside the package, mm, mm/s and N/µm at the edges (CLI, CSV,
-Parquet, report), and the names of the friction sites."""
+Parquet, report), the names of the friction sites, and the text of a speed band in mm/s
+(:func:`slope_band_text`) that the report and ``feeddrive friction`` share."""
 
 from __future__ import annotations
 

@@ -297,7 +297,7 @@ def indicator_rows(params: DriveParameters) -> list[dict[str, str]]:
                          else slope_band_text(band.lower / MM_PER_S, band.upper / MM_PER_S
                                               if band.bounded else None),
                          "zero-slope speed [mm/s]": "—" if band is None or not band.bounded
-                         else f"{1e3 * band.upper:.3f}",
+                         else f"{band.upper / MM_PER_S:.3f}",
                          "passivity margin σ2 − σ1(F_s−F_c)/F_c [N s/m]":
                              f"{passivity_margin(b, lg):.0f}"})
     return rows
