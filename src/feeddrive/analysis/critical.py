@@ -414,13 +414,13 @@ def format_integration_error(search: dict[str, Any]) -> str:
     Returns
     -------
     str
-        E.g. ``" [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–600× the
-        true error)]"``; empty without an estimate.
+        E.g. ``" [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–200 000×
+        the true error)]"``; empty without an estimate.
 
     Examples
     --------
     >>> format_integration_error({"speed_error_mm_s": 2.4e-5})
-    ' [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–600× the true error)]'
+    ' [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–200 000× the true error)]'
     >>> format_integration_error({"critical_speed_mm_s": 1.56})
     ''
     """
@@ -429,9 +429,10 @@ def format_integration_error(search: dict[str, Any]) -> str:
     error = search.get("speed_error_mm_s")
     if error is None:
         return ""
-    low, high = MEASURED_RATIO
+    low, high = (f"{r:.2g}" if r < 1e3 else f"{r:,.0f}".replace(",", " ")
+                 for r in MEASURED_RATIO)
     return (f" [integration error estimated {error:.1e} mm/s (embedded estimate: "
-            f"{low:.2g}–{high:.3g}× the true error)]")
+            f"{low}–{high}× the true error)]")
 
 
 def format_bands(search: dict[str, Any]) -> str:
