@@ -75,8 +75,9 @@ REFRESH_STEPS = 500
 #: over the cases of tests/validation/test_accuracy_embedded.py (which checks each lies in it:
 #: frictionless CDFS/DDFS 1-mm/s steps against the matrix exponential, smooth LuGre CDFS 2 mm/s
 #: and DDFS 0.5/16 mm/s and three stick-slip runs against scipy's Radau, and the trials that
-#: decide the ``reproduce`` report's CDFS critical speed and bands — 1.0, 1.42, 1.55 mm/s for
-#: 12 s, 1.56 mm/s for 24 s, ``wang2021`` at mid-screw — against Radau; methods modal,
+#: decide the ``reproduce`` report's critical speeds and bands — CDFS 1.0, 1.42, 1.55 mm/s
+#: for 12 s, 1.56 mm/s for 24 s, DDFS 0.02 mm/s at v_n = 16 mm/s, ``wang2021`` at mid-screw —
+#: against Radau; methods modal,
 #: dopri5-dense, rodas4, auto at accuracy 1, 0.1, 0.01; measured 2026-12-05/06: 0.155 on the
 #: frictionless steps to 1.6e5 on the band-edge trial at 1.42 mm/s, the largest 6.5e4 with
 #: ``modal``; 600 until the deciding trials were measured, and the one at 1.55 mm/s gave 702),
