@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from feeddrive.cli import app
-from feeddrive.solvers.global_error import MEASURED_RATIO
+from feeddrive.engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO
 
 runner = CliRunner()
 
@@ -312,11 +312,12 @@ def test_creep_text_names_the_bands_and_the_rule() -> None:
                               "--high", "1.60"])
     assert res.exit_code == 0, res.output
     assert "creeping bands" in res.output and "Verdict rule:" in res.output
-    # the embedded estimate (issue 35 item 3), said to be one, with its measured worth
+    # the deciding trials' shadow estimate (issue 35 item 3), said to be one, with its
+    # measured worth
     assert "[integration error estimated " in res.output
-    low, high = MEASURED_RATIO  # (0.15, 2e5): the large one with its thousands spaced
-    assert f"(embedded estimate: {low:.2g}–{high:,.0f}× the true error)]".replace(
-        ",", " ") in res.output
+    low, high = SHADOW_RATIO
+    assert (f"(difference to the deciding trials run {SHADOW_FACTOR:g}× tighter: "
+            f"{low:.2g}–{high:.2g}× the true error)]") in res.output
     assert "integration error ≤" not in res.output
 
 

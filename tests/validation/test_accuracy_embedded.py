@@ -1,5 +1,7 @@
-"""Issue 35 item 3, inside the creep search and ``reproduce``: the embedded global-error
-estimate (:mod:`feeddrive.solvers.global_error`), carried along the one integration.
+"""Issue 35 item 3: the embedded global-error estimate (:mod:`feeddrive.solvers.global_error`),
+carried along the one integration — ``simulate(..., error_estimate="embedded")``, and a creep
+search's trials on request (``error_estimate="embedded"``; a search's default is the deciding
+trials' shadow since 2026-12-06: test_accuracy_shadow_trials.py).
 
 Checked against truths feeddrive did not make: the frictionless step responses' exact solution
 (the hand-written matrix exponential of ``reference/linear_model.py``, as in
@@ -278,7 +280,7 @@ def test_a_creep_trial_carries_it_and_the_search_states_it() -> None:
     system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
     rule = VerdictRule(initial_duration=6.0, max_duration=12.0)
     plain = creep_trial(system, 2e-3, rule=rule)
-    carried = creep_trial(system, 2e-3, rule=rule, error_estimate=True)
+    carried = creep_trial(system, 2e-3, rule=rule, error_estimate="embedded")
     assert plain.speed_error is None and "speed_error_mm_s" not in plain.to_dict()
     assert carried.kind == plain.kind and carried.ripple_ratio == plain.ripple_ratio
     assert carried.speed_error is not None and 0.0 < carried.speed_error < 1e-3 * 2e-3
@@ -287,10 +289,12 @@ def test_a_creep_trial_carries_it_and_the_search_states_it() -> None:
                        stick_slip_frequency=1.0, speed_error=3e-8)
     search = CriticalSpeed(drive="cdfs", table_position=0.4, nut_speed=0.0, start="rest",
                            critical_speed=2e-3, status="found", resolution=1e-5,
-                           speed_range=(1e-3, 3e-3), trials=(below, carried))
+                           speed_range=(1e-3, 3e-3), trials=(below, carried),
+                           error_estimate="embedded")
     assert search.speed_error == max(3e-8, carried.speed_error)
     stored = search.to_dict()
     assert stored["speed_error_mm_s"] == pytest.approx(1e3 * search.speed_error)
+    assert stored["speed_error_method"] == "embedded"
     # what the number is: an estimate (never "≤", it is no bound) with its measured ratio
     low, high = global_error.MEASURED_RATIO
     label = format_integration_error(stored)

@@ -36,6 +36,7 @@ import numpy as np
 from .. import units
 from ..engine.simulate import DriveSystem, Simulation, SolverOptions
 from ..model.reference import ConstantSpeed, _staircase
+from ..parameters import ParameterError
 from . import protocol
 from .cycle_verdict import TraceVerdict, VerdictRule, trace_verdict
 from .verdict_words import CREEPING_KINDS, NON_SMOOTH, SMOOTH, STICK_SLIP, UNDECIDED, UNSTABLE
@@ -75,9 +76,11 @@ class CreepTrial:
     decided_at : float, optional
         When the outcome was first decided [s].
     speed_error : float, optional
-        The run's largest table-speed integration error, the embedded estimate
-        (:mod:`feeddrive.solvers.global_error`; an estimate, not a bound: its measured ratio
-        to the true error is ``MEASURED_RATIO`` there) when the search carried it [m/s].
+        The run's largest table-speed integration error when it was estimated [m/s]: the
+        shadow estimate (the difference to the same trial run with every tolerance
+        ``SHADOW_FACTOR`` times tighter, :mod:`feeddrive.engine.error_estimate`; a search
+        makes it for the trials that decide its critical speed) or the embedded one
+        (:mod:`feeddrive.solvers.global_error`, carried along the trial).
     """
 
     speed: float
@@ -283,6 +286,10 @@ class CriticalSpeed:
         Every non-smooth run of tested speeds, with its kind.
     rule : VerdictRule, default VerdictRule()
         The rule that judged the trials.
+    error_estimate : str or None, default None
+        How the trials' ``speed_error`` was estimated: ``"shadow"`` (the deciding trials run
+        again, every tolerance ``SHADOW_FACTOR`` times tighter), ``"embedded"`` (carried along
+        every trial) or None (not estimated).
     """
 
     drive: str
@@ -298,19 +305,16 @@ class CriticalSpeed:
     kind: str | None = None
     bands: tuple[CreepBand, ...] = field(default_factory=tuple)
     rule: VerdictRule = field(default_factory=VerdictRule)
+    error_estimate: str | None = None
 
     @property
     def speed_error(self) -> float | None:
-        """The integration error the critical speed's runs carried: the larger embedded
-        estimate of the table speed's error (:mod:`feeddrive.solvers.global_error`; an
-        estimate, not a bound) of the two trials that decide it — the lowest smooth speed
-        above the highest creeping band and that band's top — or of the top tested speed out
-        of range; None when the search carried no estimate [m/s]."""
-        creeping = [t for t in self.trials if t.kind in NON_SMOOTH]
-        top = creeping[-1] if creeping else None
-        above = [t for t in self.trials if top is None or t.speed > top.speed]
-        deciding = [t for t in (top, above[0] if above else None) if t is not None]
-        errors = [t.speed_error for t in deciding]
+        """The integration error the critical speed's runs carried: the larger estimate of the
+        table speed's error (``error_estimate``: the shadow or the embedded one; an estimate,
+        not a bound) of the trials that decide it
+        (:func:`~feeddrive.analysis.critical.deciding_trials`); None when the search made no
+        estimate [m/s]."""
+        errors = [t.speed_error for t in deciding_trials(self.trials)]
         if not errors or any(e is None for e in errors):
             return None
         return max(e for e in errors if e is not None)
@@ -368,8 +372,30 @@ class CriticalSpeed:
             "trials": [t.to_dict() for t in self.trials],
             "simulated_time_s": self.simulated_time,
             **({} if self.speed_error is None
-               else {"speed_error_mm_s": self.speed_error / MM_S}),
+               else {"speed_error_mm_s": self.speed_error / MM_S,
+                     "speed_error_method": self.error_estimate}),
         }
+
+
+def deciding_trials(trials: Sequence[CreepTrial]) -> list[CreepTrial]:
+    """The trials (in speed order) that decide a search's critical speed: the top of the
+    highest creeping band and the lowest trial above it — or, with no creeping trial, the
+    lowest one (the search is below its range); either may be missing at the range's ends.
+
+    Parameters
+    ----------
+    trials : sequence of CreepTrial
+        A search's trials, by rising speed.
+
+    Returns
+    -------
+    list of CreepTrial
+        One or two trials.
+    """
+    creeping = [t for t in trials if t.kind in NON_SMOOTH]
+    top = creeping[-1] if creeping else None
+    above = [t for t in trials if top is None or t.speed > top.speed]
+    return [t for t in (top, above[0] if above else None) if t is not None]
 
 
 def format_critical_speed(search: dict[str, Any]) -> str:
@@ -399,12 +425,12 @@ def format_critical_speed(search: dict[str, Any]) -> str:
 def format_integration_error(search: dict[str, Any]) -> str:
     """What a search's deciding runs carried as integration error (as
     :meth:`CriticalSpeed.to_dict` stores it), written after the speed by the report and
-    ``feeddrive creep``: the embedded estimate of their table-speed error
-    (``speed_error_mm_s``, :attr:`CriticalSpeed.speed_error`,
-    :mod:`feeddrive.solvers.global_error`) with what it is worth — an estimate, not a bound:
-    the measured range of its ratio to the true error
-    (:data:`feeddrive.solvers.global_error.MEASURED_RATIO`) — or nothing for a search without
-    it.
+    ``feeddrive creep``: the estimate of their table-speed error (``speed_error_mm_s``,
+    :attr:`CriticalSpeed.speed_error`) with how it was made and what it is worth — an
+    estimate, not a bound: the measured range of its ratio to the true error (the shadow's
+    :data:`feeddrive.engine.error_estimate.SHADOW_RATIO`, the embedded one's
+    :data:`feeddrive.solvers.global_error.MEASURED_RATIO`; an entry stored without
+    ``speed_error_method`` is an embedded one) — or nothing for a search without it.
 
     Parameters
     ----------
@@ -414,25 +440,34 @@ def format_integration_error(search: dict[str, Any]) -> str:
     Returns
     -------
     str
-        E.g. ``" [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–200 000×
-        the true error)]"``; empty without an estimate.
+        E.g. ``" [integration error estimated 4.4e-05 mm/s (difference to the deciding
+        trials run 10× tighter: 0.8–1.2× the true error)]"``; empty without an estimate.
 
     Examples
     --------
-    >>> format_integration_error({"speed_error_mm_s": 2.4e-5})
-    ' [integration error estimated 2.4e-05 mm/s (embedded estimate: 0.15–200 000× the true error)]'
+    >>> shadow = format_integration_error({"speed_error_mm_s": 4.4e-5,
+    ...                                    "speed_error_method": "shadow"})
+    >>> shadow.startswith(" [integration error estimated 4.4e-05 mm/s (difference")
+    True
+    >>> shadow.endswith("10× tighter: 0.8–1.2× the true error)]")
+    True
+    >>> format_integration_error({"speed_error_mm_s": 2.4e-2}).split(" (")[1]
+    'embedded estimate: 0.15–200 000× the true error)]'
     >>> format_integration_error({"critical_speed_mm_s": 1.56})
     ''
     """
+    from ..engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO
     from ..solvers.global_error import MEASURED_RATIO
 
     error = search.get("speed_error_mm_s")
     if error is None:
         return ""
+    shadow = search.get("speed_error_method") == "shadow"
     low, high = (f"{r:.2g}" if r < 1e3 else f"{r:,.0f}".replace(",", " ")
-                 for r in MEASURED_RATIO)
-    return (f" [integration error estimated {error:.1e} mm/s (embedded estimate: "
-            f"{low}–{high}× the true error)]")
+                 for r in (SHADOW_RATIO if shadow else MEASURED_RATIO))
+    how = (f"difference to the deciding trials run {SHADOW_FACTOR:g}× tighter" if shadow
+           else "embedded estimate")
+    return f" [integration error estimated {error:.1e} mm/s ({how}: {low}–{high}× the true error)]"
 
 
 def format_bands(search: dict[str, Any]) -> str:
@@ -520,10 +555,75 @@ def judge_trial(time: np.ndarray, speed: np.ndarray, command_speed: float,
     return CreepTrial.from_verdict(command_speed, v, float(time[-1] - time[0]))
 
 
+#: the ways a trial's or a search's integration error is estimated (``error_estimate``); True
+#: is the first
+ERROR_ESTIMATES = ("shadow", "embedded")
+
+
+def _estimate_kind(error_estimate: bool | str) -> str | None:
+    """``error_estimate`` as one of :data:`ERROR_ESTIMATES` (True: ``"shadow"``) or None."""
+    if error_estimate is False or error_estimate is None:
+        return None
+    if error_estimate is True:
+        return ERROR_ESTIMATES[0]
+    if isinstance(error_estimate, str) and error_estimate in ERROR_ESTIMATES:
+        return error_estimate
+    raise ParameterError("error_estimate", error_estimate,
+                         f"expected True, False or one of {', '.join(ERROR_ESTIMATES)}")
+
+
+def _shadow_options(options: SolverOptions | None) -> SolverOptions:
+    """The shadow runs' options (every tolerance ``SHADOW_FACTOR`` times tighter), refused
+    with one line before any trial runs when the run's own are at double precision's reach."""
+    from ..engine.error_estimate import tightened
+    from ..engine.options import current
+
+    return tightened(options if options is not None else current())
+
+
+def _run_trial(system: DriveSystem, speed: float, nut_speed: float,
+               rule: VerdictRule | None, options: SolverOptions | None,
+               embedded: bool) -> tuple[CreepTrial, np.ndarray, np.ndarray]:
+    """A trial (:func:`creep_trial`) and the table-speed trace it was judged on [s; m/s]."""
+    sim = Simulation(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), options,
+                     embedded_estimate=embedded)
+    error: list[float | None] = [None]
+    trace: list[np.ndarray] = [np.zeros(0), np.zeros(0)]
+
+    def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
+        result = sim.run(duration)
+        error[0] = speed_error(result.solver_stats)
+        trace[:] = [result.time, result["table_speed"]]
+        if result.solver_stats.get("diverged"):
+            raise _Diverged(result.time, result["table_speed"])
+        return result.time, result["table_speed"]
+
+    try:
+        verdict, duration = decide(run, speed, rule)
+    except _Diverged as stop:
+        return replace(stop.trial(speed), speed_error=error[0]), trace[0], trace[1]
+    trial = replace(CreepTrial.from_verdict(speed, verdict, duration), speed_error=error[0])
+    return trial, trace[0], trace[1]
+
+
+def _shadow_error(system: DriveSystem, trial: CreepTrial, nut_speed: float,
+                  shadow: SolverOptions, time: np.ndarray, speed: np.ndarray) -> float | None:
+    """The trial's table-speed error estimated by its shadow: the largest difference on the
+    output grid to the same trial run with ``shadow``'s tighter tolerances over the same
+    simulated length [m/s]; None for a trial whose run diverged (nothing to compare to)."""
+    if trial.kind == UNSTABLE:
+        return None
+    run = Simulation(system, ConstantSpeed(trial.speed, nut_speed, ramp_time=0.1),
+                     shadow).run(trial.duration)
+    if run.solver_stats.get("diverged") or run.time.shape != time.shape:
+        return None
+    return float(np.max(np.abs(np.asarray(run["table_speed"]) - speed)))
+
+
 def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
                 rule: VerdictRule | None = None,
                 options: SolverOptions | None = None,
-                error_estimate: bool = False) -> CreepTrial:
+                error_estimate: bool | str = False) -> CreepTrial:
     """Start the table from rest at ``speed`` [m/s] (nut at ``nut_speed``) and run until the
     verdict is decided (:func:`decide`); a longer trial continues the shorter one
     (:class:`~feeddrive.engine.simulate.Simulation`), so an undecided trial is not repeated.
@@ -540,31 +640,27 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
         The creep-verdict rule (trial durations); the protocol's default when omitted.
     options : SolverOptions, optional
         The solver options.
-    error_estimate : bool, default False
-        Carry the embedded global-error estimate (:mod:`feeddrive.solvers.global_error`)
-        along the trial's run: the trial's ``speed_error``.
+    error_estimate : bool or str, default False
+        Estimate the trial's table-speed integration error, its ``speed_error``: ``"shadow"``
+        (or True) runs the trial again with every tolerance ``SHADOW_FACTOR`` times tighter
+        and takes the largest difference (:mod:`feeddrive.engine.error_estimate`; 1.6–2.5×
+        the trial's CPU once more), ``"embedded"`` carries the embedded global-error estimate
+        along the one run (:mod:`feeddrive.solvers.global_error`; 1–10 % more CPU, but 0.15–
+        200 000× the true error where measured).
 
     Returns
     -------
     CreepTrial
         The verdict.
     """
-    sim = Simulation(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), options,
-                     embedded_estimate=error_estimate)
-    error: list[float | None] = [None]
-
-    def run(duration: float) -> tuple[np.ndarray, np.ndarray]:
-        result = sim.run(duration)
-        error[0] = speed_error(result.solver_stats)
-        if result.solver_stats.get("diverged"):
-            raise _Diverged(result.time, result["table_speed"])
-        return result.time, result["table_speed"]
-
-    try:
-        verdict, duration = decide(run, speed, rule)
-    except _Diverged as stop:
-        return replace(stop.trial(speed), speed_error=error[0])
-    return replace(CreepTrial.from_verdict(speed, verdict, duration), speed_error=error[0])
+    kind = _estimate_kind(error_estimate)
+    shadow = _shadow_options(options) if kind == "shadow" else None
+    trial, time, trace = _run_trial(system, speed, nut_speed, rule, options,
+                                    kind == "embedded")
+    if shadow is not None:
+        trial = replace(trial, speed_error=_shadow_error(system, trial, nut_speed, shadow,
+                                                         time, trace))
+    return trial
 
 
 def speed_error(solver_stats: dict[str, Any]) -> float | None:
@@ -612,7 +708,7 @@ def critical_speed_from_rest(
     speed_range: tuple[float, float] = protocol.SPEED_RANGE,
     coarse_step: float = protocol.COARSE_STEP, resolution: float = protocol.RESOLUTION,
     rule: VerdictRule | None = None, options: SolverOptions | None = None,
-    progress: Callable[[int, int], None] | None = None, error_estimate: bool = False,
+    progress: Callable[[int, int], None] | None = None, error_estimate: bool | str = False,
 ) -> CriticalSpeed:
     """Critical creeping speed by a coarse scan plus bisection, every trial from rest.
 
@@ -638,10 +734,17 @@ def critical_speed_from_rest(
         Integrator settings of the trials.
     progress : callable or None, default None
         Called as ``progress(done, total)`` after each trial.
-    error_estimate : bool, default False
-        Carry the embedded global-error estimate along every trial
-        (:mod:`feeddrive.solvers.global_error`): each trial's ``speed_error`` and the
-        result's :attr:`CriticalSpeed.speed_error`.
+    error_estimate : bool or str, default False
+        Estimate the integration error of the trials that decide the critical speed
+        (:func:`~feeddrive.analysis.critical.deciding_trials`), the result's
+        :attr:`CriticalSpeed.speed_error`:
+        ``"shadow"`` (or True) runs those one or two trials again with every tolerance
+        ``SHADOW_FACTOR`` times tighter once the search is done (the table-speed traces of
+        the trials that may still decide are kept until then; 5–8 % of a search's CPU,
+        0.8–1.2× the true error where measured,
+        :data:`~feeddrive.engine.error_estimate.SHADOW_RATIO`); ``"embedded"`` carries the
+        embedded estimate along every trial
+        (:mod:`feeddrive.solvers.global_error`; 4–10 %, 0.15–200 000×).
 
     Returns
     -------
@@ -661,14 +764,24 @@ def critical_speed_from_rest(
     protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=resolution,
                           names={"low": "speed_range[0]", "high": "speed_range[1]"})
     rule = rule or VerdictRule()
+    estimate = _estimate_kind(error_estimate)
+    shadow = _shadow_options(options) if estimate == "shadow" else None  # refused up front
     simulated = 0.0
+    # the table-speed traces of the trials that may still decide (the shadow's): the top
+    # creeping trial's and every one above it (a trial below the top creeping one never will)
+    traces: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
     def judge(v: float) -> str:
         nonlocal simulated
-        trial = creep_trial(system, v, nut_speed=nut_speed, rule=rule, options=options,
-                            error_estimate=error_estimate)
+        trial, time, trace = _run_trial(system, v, nut_speed, rule, options,
+                                        estimate == "embedded")
         simulated += trial.duration  # the trial is continued, not repeated
         trials[v] = trial
+        if shadow is not None:
+            traces[v] = (time, trace)
+            top = max((u for u, t in trials.items() if t.kind in NON_SMOOTH), default=None)
+            for u in [u for u in traces if top is not None and u < top]:
+                del traces[u]
         if progress:
             progress(len(trials), 0)
         return trial.kind
@@ -676,12 +789,17 @@ def critical_speed_from_rest(
     trials: dict[float, CreepTrial] = {}
     search_kinds(judge, lo, hi, coarse_step, resolution)
     ordered = tuple(trials[k] for k in sorted(trials))
+    if shadow is not None:
+        decided = {id(t): _shadow_error(system, t, nut_speed, shadow, *traces[t.speed])
+                   for t in deciding_trials(ordered)}
+        ordered = tuple(replace(t, speed_error=decided[id(t)]) if id(t) in decided else t
+                        for t in ordered)
     status, crit, kind = critical_of(ordered)
     return CriticalSpeed(drive=system.drive, table_position=system.table_position,
                          nut_speed=nut_speed, start="rest", critical_speed=crit, status=status,
                          resolution=resolution, speed_range=(lo, hi), trials=ordered,
                          simulated_time=simulated, kind=kind, bands=bands_of(ordered),
-                         rule=rule)
+                         rule=rule, error_estimate=estimate)
 
 
 def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coarse_step: float,

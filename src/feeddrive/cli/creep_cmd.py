@@ -52,8 +52,9 @@ def creep_command(
     oscillation) or answers 'undecided'.  With --method both, the answers from rest and from a
     running table are shown.  The protocol (speed grid, steps) is the one `reproduce` uses,
     so both give one number.  The search from rest states the table-speed integration error
-    its deciding trials carried: an embedded estimate, not a bound, written with the measured
-    range of its ratio to the true error (docs/model.md)."""
+    of the trials that decide it: their difference to the same trials run with every
+    tolerance 10× tighter (5–8 % more CPU), an estimate, not a bound, written with the
+    measured range of its ratio to the true error (docs/model.md)."""
     from ..analysis.critical import (
         critical_speed_from_rest,
         critical_speed_stepdown,

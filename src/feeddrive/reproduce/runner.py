@@ -48,6 +48,7 @@ _STUDY_SOURCES = (_HERE / "studies.py", _HERE / "reading_study.py", _HERE / "for
                                  "sensitivity", "circular", "circular_run",
                                  "positioning_run")),
                   _HERE.parent / "engine" / "simulate.py", _HERE.parent / "engine" / "options.py",
+                  _HERE.parent / "engine" / "error_estimate.py",
                   _HERE.parent / "engine" / "result.py",
                   _HERE.parent / "model" / "mechanisms" / "ball_screw_stiffness.py",
                   _HERE.parent / "analysis" / "protocol.py")

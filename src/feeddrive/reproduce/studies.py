@@ -148,8 +148,9 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
     settings : StudySettings
         The search settings.
     error_estimate : bool, default True
-        Carry the embedded global-error estimate along every trial (False: the search's
-        ``speed_error_mm_s`` are None; the verdicts, trials and critical speed are the same,
+        Estimate the integration error of the trials that decide the critical speed by their
+        shadow (each run again with every tolerance 10× tighter once the search is done;
+        False: no ``speed_error_mm_s``; the verdicts, trials and critical speed are the same,
         the runs bit-identical).
 
     Returns
@@ -157,10 +158,10 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
     dict
         The search's result in engineering units (``CriticalSpeed.to_dict``: the speed
         [mm/s], or the bound of an out-of-range search, its kind, bands and trials, each
-        trial's and the critical speed's table-speed integration error ``speed_error_mm_s``:
-        the embedded estimate carried along every trial — an estimate, not a bound,
-        :data:`feeddrive.solvers.global_error.MEASURED_RATIO` — 1–7 % more CPU,
-        benchmarks/results/bench_error_estimate.json).
+        deciding trials' and the critical speed's table-speed integration error
+        ``speed_error_mm_s`` with ``speed_error_method`` "shadow": their difference to a
+        run 10× tighter — an estimate, not a bound,
+        :data:`feeddrive.engine.error_estimate.SHADOW_RATIO` — 5–8 % more CPU).
     """
     res = critical_speed_from_rest(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
