@@ -740,7 +740,7 @@ def critical_speed_from_rest(
         :attr:`CriticalSpeed.speed_error`:
         ``"shadow"`` (or True) runs those one or two trials again with every tolerance
         ``SHADOW_FACTOR`` times tighter once the search is done (the table-speed traces of
-        the trials that may still decide are kept until then; 5–8 % of a search's CPU,
+        the trials that may still decide are kept until then; 7–9 % of a search's CPU,
         0.8–1.2× the true error where measured,
         :data:`~feeddrive.engine.error_estimate.SHADOW_RATIO`); ``"embedded"`` carries the
         embedded estimate along every trial

@@ -53,7 +53,7 @@ def creep_command(
     running table are shown.  The protocol (speed grid, steps) is the one `reproduce` uses,
     so both give one number.  The search from rest states the table-speed integration error
     of the trials that decide it: their difference to the same trials run with every
-    tolerance 10× tighter (5–8 % more CPU), an estimate, not a bound, written with the
+    tolerance 10× tighter (7–9 % more CPU), an estimate, not a bound, written with the
     measured range of its ratio to the true error (docs/model.md)."""
     from ..analysis.critical import (
         critical_speed_from_rest,

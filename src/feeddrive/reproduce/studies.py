@@ -161,7 +161,7 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
         deciding trials' and the critical speed's table-speed integration error
         ``speed_error_mm_s`` with ``speed_error_method`` "shadow": their difference to a
         run 10× tighter — an estimate, not a bound,
-        :data:`feeddrive.engine.error_estimate.SHADOW_RATIO` — 5–8 % more CPU).
+        :data:`feeddrive.engine.error_estimate.SHADOW_RATIO` — 7–9 % more CPU).
     """
     res = critical_speed_from_rest(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
