@@ -123,3 +123,31 @@ def test_an_estimate_it_cannot_make_is_refused_before_any_trial() -> None:
     with pytest.raises(ParameterError, match="error_estimate.*tighter"):
         critical_speed_from_rest(system, options=fd.SolverOptions(rtol=5e-14),
                                  error_estimate=True)
+
+
+def test_creep_at_double_precisions_reach_searches_without_an_estimate_and_says_so() -> None:
+    """``--rtol`` 5e-14 is a valid setting (1e-14 … 0.1) that leaves no run 10× tighter: the
+    search runs, states no integration error, and says why (text and JSON)."""
+    from typer.testing import CliRunner
+
+    from feeddrive.analysis.critical import shadow_possible
+    from feeddrive.cli import app
+
+    assert shadow_possible() and not shadow_possible(fd.SolverOptions(rtol=5e-14))
+    args = ["creep", "--drive", "cdfs", "--method", "bisect", "--low", "2.9", "--high",
+            "3.02", "--rtol", "5e-14"]
+    res = CliRunner().invoke(app, args, terminal_width=400)
+    assert res.exit_code == 0, res.output
+    assert "[integration error estimated" not in res.output
+    assert ("Integration error: not estimated — a run 10× tighter than these settings would "
+            "ask for less than 1e-14 relative") in res.output
+    res = CliRunner().invoke(app, [*args, "--json"])
+    assert res.exit_code == 0, res.output
+    import json
+
+    out = json.loads(res.output)
+    assert out["integration_error"].startswith("Integration error: not estimated")
+    assert "speed_error_mm_s" not in out["searches"][0]
+    # at the defaults the estimate is made and no such line is printed
+    res = CliRunner().invoke(app, args[:-2], terminal_width=400)
+    assert res.exit_code == 0 and "not estimated" not in res.output

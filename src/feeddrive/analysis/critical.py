@@ -581,6 +581,28 @@ def _shadow_options(options: SolverOptions | None) -> SolverOptions:
     return tightened(options if options is not None else current())
 
 
+def shadow_possible(options: SolverOptions | None = None) -> bool:
+    """Whether a trial's shadow (every tolerance ``SHADOW_FACTOR`` times tighter) can be run at
+    ``options`` (the current ones by default): False where they are at double precision's
+    reach — ``feeddrive creep`` and ``reproduce`` then search without an estimate and say so.
+
+    Parameters
+    ----------
+    options : SolverOptions or None, default None
+        The trials' options.
+
+    Returns
+    -------
+    bool
+        Whether ``error_estimate=True`` is possible.
+    """
+    try:
+        _shadow_options(options)
+    except ParameterError:
+        return False
+    return True
+
+
 def _run_trial(system: DriveSystem, speed: float, nut_speed: float,
                rule: VerdictRule | None, options: SolverOptions | None,
                embedded: bool) -> tuple[CreepTrial, np.ndarray, np.ndarray]:

@@ -14,6 +14,22 @@ from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 _LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
 
+def not_estimated() -> str:
+    """What ``creep`` says when the search from rest can make no integration-error estimate
+    (``feeddrive.analysis.critical.shadow_possible``).
+
+    Returns
+    -------
+    str
+        The line.
+    """
+    from ..engine.error_estimate import SHADOW_FACTOR
+    from ..engine.options import MIN_RELATIVE
+
+    return (f"Integration error: not estimated — a run {SHADOW_FACTOR:g}× tighter than these "
+            f"settings would ask for less than {MIN_RELATIVE:g} relative (double precision's "
+            "reach)")
+
 
 @app.command("creep")
 @user_errors
@@ -60,6 +76,7 @@ def creep_command(
         critical_speed_stepdown,
         format_bands,
         format_integration_error,
+        shadow_possible,
     )
     from ..engine.simulate import DriveSystem
 
@@ -98,17 +115,20 @@ def creep_command(
         console.print(f"Integrator: {solver.describe()}", markup=False, highlight=False)
         return
     results = []
+    estimate = shadow_possible()  # not where the settings leave no tighter run
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
             system, nut_speed=v_n, speed_range=(lo, hi),
             coarse_step=min(protocol.COARSE_STEP, (hi - lo) / 2),
-            resolution=protocol.RESOLUTION, rule=rule, error_estimate=True))
+            resolution=protocol.RESOLUTION, rule=rule, error_estimate=estimate))
     if method in ("stepdown", "both"):
         results.append(critical_speed_stepdown(
             system, nut_speed=v_n, start_speed=hi, lowest_speed=lo, step=protocol.RESOLUTION,
             coarse_step=protocol.STAIRCASE_COARSE_STEP, rule=rule))
     searches = [r.to_dict() for r in results]
     out = {"drive": drive, "table_position_mm": position, "nut_speed_mm_s": nut_speed,
+           **({} if estimate or method == "stepdown"
+              else {"integration_error": not_estimated()}),
            "parameter_set": params.name,
            "critical_speed_mm_s": searches[0]["critical_speed_mm_s"],
            "status": searches[0]["status"], "kind": searches[0]["kind"],
@@ -131,3 +151,5 @@ def creep_command(
                           highlight=False)
     console.print(f"Verdict rule: {rule.describe()}", markup=False, highlight=False)
     console.print(f"Integrator: {solver.describe()}", markup=False, highlight=False)
+    if method != "stepdown" and not estimate:
+        console.print(not_estimated(), markup=False, highlight=False)

@@ -21,6 +21,7 @@ from ..analysis.critical import (
     critical_speed_from_rest,
     critical_speed_stepdown,
     decide,
+    shadow_possible,
 )
 from ..analysis.cycle_verdict import VerdictRule
 from ..analysis.tracking import reversal_overshoot
@@ -166,7 +167,8 @@ def critical_speed(params: DriveParameters, drive: str, position: float, nut_spe
     res = critical_speed_from_rest(
         DriveSystem(params, drive=drive, table_position=position), nut_speed=nut_speed,
         speed_range=settings.speed_range, coarse_step=settings.coarse_step,
-        resolution=settings.resolution, rule=settings.rule(), error_estimate=error_estimate)
+        resolution=settings.resolution, rule=settings.rule(),
+        error_estimate=error_estimate and shadow_possible())  # none at double precision's reach
     return res.to_dict()
 
 
