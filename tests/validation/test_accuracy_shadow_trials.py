@@ -151,3 +151,19 @@ def test_creep_at_double_precisions_reach_searches_without_an_estimate_and_says_
     # at the defaults the estimate is made and no such line is printed
     res = CliRunner().invoke(app, args[:-2], terminal_width=400)
     assert res.exit_code == 0 and "not estimated" not in res.output
+
+
+def test_the_help_and_the_docs_state_the_shadow_as_the_code_makes_it() -> None:
+    """``creep --help`` and docs/model.md name the factor the shadow is tighter by and the
+    range written beside the number, as the code has them."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    help_text = " ".join(CliRunner().invoke(app, ["creep", "--help"],
+                                            terminal_width=200).output.split())
+    assert f"every tolerance {SHADOW_FACTOR:g}× tighter" in help_text
+    docs = " ".join((ROOT / "docs" / "model.md").read_text(encoding="utf-8").split())
+    low, high = SHADOW_RATIO
+    assert f"`feeddrive.engine.error_estimate.SHADOW_RATIO`, {low:.2g}–{high:.2g}" in docs
+    assert f"the deciding trials run {SHADOW_FACTOR:g}× tighter: {low:.2g}–{high:.2g}×" in docs
