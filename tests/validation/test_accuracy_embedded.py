@@ -314,6 +314,11 @@ def test_simulate_states_it_in_the_summary_and_refuses_what_it_cannot() -> None:
     r = fd.simulate(system, fd.ConstantSpeed(2e-3), 0.5, error_estimate="embedded")
     entry = r.solver_stats["error_estimate"]
     assert entry["method"] == r.solver_stats["embedded_error_estimate"]["method"]
+    # how it was made and what it is worth, from the estimator's own constants
+    low, high = global_error.MEASURED_RATIO
+    assert f"summed per {1e3 * global_error.INTERVAL:g}-ms interval" in entry["method"]
+    assert f"J taken every {global_error.REFRESH_STEPS} steps" in entry["method"]
+    assert f"{low:g}–{high:,.0f}× the true error".replace(",", " ") in entry["method"]
     assert set(entry["signals"]) == set(STATE_NAMES)
     speed = entry["signals"]["table_speed"]
     assert speed["relative"] == pytest.approx(speed["absolute"] / np.ptp(r["table_speed"]))

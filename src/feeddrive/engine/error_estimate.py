@@ -30,6 +30,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..parameters import ParameterError
+from ..solvers.global_error import INTERVAL as _INTERVAL
+from ..solvers.global_error import MEASURED_RATIO as _RATIO
+from ..solvers.global_error import REFRESH_STEPS as _REFRESH
 from . import options as opt
 
 if TYPE_CHECKING:
@@ -49,13 +52,16 @@ SHADOW_FACTOR = 10.0
 #: runs (``reference/cases.py``, against their stored Radau references) at ``accuracy`` 1;
 #: measured 2026-12-06: 0.85–1.0 and 0.89–1.1 (against a Radau at rtol 1e-12, the stick-slip
 #: runs 0.83–1.0 at ``accuracy`` 1 … 0.01); checked by
-#: tests/validation/test_accuracy_embedded.py
+#: tests/validation/test_accuracy_shadow_trials.py
 SHADOW_RATIO = (0.8, 1.2)
 #: how the estimate was made, as a result states it
 METHOD_TEXT = (f"difference to a run with every tolerance {SHADOW_FACTOR:g}× tighter "
                "(tolerance proportionality; feeddrive.engine.error_estimate)")
-EMBEDDED_TEXT = ("local error estimates of the accepted steps propagated along the run by "
-                 "each step's own linearised propagator (feeddrive.solvers.global_error)")
+_HIGH = f"{_RATIO[1]:,.0f}".replace(",", " ")
+EMBEDDED_TEXT = (f"the accepted steps' local error estimates summed per {1e3 * _INTERVAL:g}-ms "
+                 f"interval and carried by exp(H J), J taken every {_REFRESH} steps "
+                 f"(feeddrive.solvers.global_error); {_RATIO[0]:g}–{_HIGH}× the true error "
+                 "where measured")
 
 
 def tightened(options: SolverOptions, factor: float = SHADOW_FACTOR) -> SolverOptions:
