@@ -14,6 +14,7 @@ from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
 _LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
 
+
 def not_estimated() -> str:
     """What ``creep`` says when the search from rest can make no integration-error estimate
     (``feeddrive.analysis.critical.shadow_possible``).
