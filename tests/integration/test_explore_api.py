@@ -22,6 +22,7 @@ import pytest
 from typer.testing import CliRunner
 
 import feeddrive as fd
+from feeddrive.analysis.critical import format_integration_error
 from feeddrive.cli import app
 from feeddrive.explore import ExplorerServer, serve_in_thread
 from feeddrive.explore import settings as st
@@ -275,6 +276,13 @@ def test_critical_speed_matches_feeddrive_creep(server: ExplorerServer) -> None:
     assert cli.exit_code == 0, cli.output
     assert job["result"]["critical_speed_mm_s"] == json.loads(cli.stdout)["critical_speed_mm_s"]
     assert job["progress"]["done"] == len(job["result"]["trials"])
+    # and the same integration error, said as the CLI says it (the deciding trials' shadow)
+    search = json.loads(cli.stdout)["searches"][0]
+    assert job["result"]["speed_error_mm_s"] == search["speed_error_mm_s"]
+    assert job["result"]["speed_error_method"] == "shadow"
+    assert job["result"]["integration_error_text"] == (
+        format_integration_error(search).strip(" []"))
+    assert job["result"]["integration_error_text"].startswith("integration error estimated")
 
 
 def test_critical_speed_reports_progress_and_can_be_cancelled(server: ExplorerServer) -> None:

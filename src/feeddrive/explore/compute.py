@@ -395,10 +395,16 @@ def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
     -------
     dict
         The search's result as JSON-safe values, in engineering units (critical speed
-        [mm/s], kind, trials).
+        [mm/s], kind, trials, the deciding trials' integration error and its text as
+        ``feeddrive creep`` writes it).
     """
     from ..analysis import protocol
-    from ..analysis.critical import critical_speed_from_rest, format_bands
+    from ..analysis.critical import (
+        critical_speed_from_rest,
+        format_bands,
+        format_integration_error,
+        shadow_possible,
+    )
 
     total = estimated_trials()
     report(0, total, f"trial 1 of about {total}")  # raises if cancelled before the start
@@ -408,8 +414,10 @@ def run_critical(checked: Checked, report: Report) -> dict[str, Any]:
 
     found = critical_speed_from_rest(
         checked.system, nut_speed=checked.nut_speed, speed_range=protocol.SPEED_RANGE,
-        coarse_step=protocol.COARSE_STEP, resolution=protocol.RESOLUTION, progress=progress)
+        coarse_step=protocol.COARSE_STEP, resolution=protocol.RESOLUTION, progress=progress,
+        error_estimate=shadow_possible())  # as `feeddrive creep` states it
     out = found.to_dict()
     out["protocol"] = protocol.describe("rest")
     out["bands_text"] = format_bands(out)
+    out["integration_error_text"] = format_integration_error(out).strip(" []")
     return _json(out)

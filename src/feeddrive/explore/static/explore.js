@@ -723,7 +723,8 @@ async function critical() {
     const c = job.result;
     box.textContent = `critical speed ${c.display} (${c.drive.toUpperCase()}, ` +
       `${c.trials.length} trials from rest, ${fmt(c.simulated_time_s, 3)} s simulated); ` +
-      `creeping bands [mm/s]: ${c.bands_text}`;
+      `creeping bands [mm/s]: ${c.bands_text}` +
+      (c.integration_error_text ? `; ${c.integration_error_text}` : "");
     box.title = c.protocol;
   } else if (job.state === "cancelled") {
     box.textContent = "cancelled";
