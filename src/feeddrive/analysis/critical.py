@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from .. import units
+from ..engine.error_estimate import estimate_kind
 from ..engine.simulate import DriveSystem, Simulation, SolverOptions
 from ..model.reference import ConstantSpeed, _staircase
 from ..parameters import ParameterError
@@ -456,18 +457,17 @@ def format_integration_error(search: dict[str, Any]) -> str:
     >>> format_integration_error({"critical_speed_mm_s": 1.56})
     ''
     """
-    from ..engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO
+    from ..engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO, ratio_text
     from ..solvers.global_error import MEASURED_RATIO
 
     error = search.get("speed_error_mm_s")
     if error is None:
         return ""
     shadow = search.get("speed_error_method") == "shadow"
-    low, high = (f"{r:.2g}" if r < 1e3 else f"{r:,.0f}".replace(",", " ")
-                 for r in (SHADOW_RATIO if shadow else MEASURED_RATIO))
+    worth = ratio_text(SHADOW_RATIO if shadow else MEASURED_RATIO)
     how = (f"difference to the deciding trials run {SHADOW_FACTOR:g}× tighter" if shadow
            else "embedded estimate")
-    return f" [integration error estimated {error:.1e} mm/s ({how}: {low}–{high}× the true error)]"
+    return f" [integration error estimated {error:.1e} mm/s ({how}: {worth}× the true error)]"
 
 
 def format_bands(search: dict[str, Any]) -> str:
@@ -553,23 +553,6 @@ def judge_trial(time: np.ndarray, speed: np.ndarray, command_speed: float,
     """
     v = trace_verdict(time, speed, command_speed, rule)
     return CreepTrial.from_verdict(command_speed, v, float(time[-1] - time[0]))
-
-
-#: the ways a trial's or a search's integration error is estimated (``error_estimate``); True
-#: is the first
-ERROR_ESTIMATES = ("shadow", "embedded")
-
-
-def _estimate_kind(error_estimate: bool | str) -> str | None:
-    """``error_estimate`` as one of :data:`ERROR_ESTIMATES` (True: ``"shadow"``) or None."""
-    if error_estimate is False or error_estimate is None:
-        return None
-    if error_estimate is True:
-        return ERROR_ESTIMATES[0]
-    if isinstance(error_estimate, str) and error_estimate in ERROR_ESTIMATES:
-        return error_estimate
-    raise ParameterError("error_estimate", error_estimate,
-                         f"expected True, False or one of {', '.join(ERROR_ESTIMATES)}")
 
 
 def _shadow_options(options: SolverOptions | None) -> SolverOptions:
@@ -675,7 +658,7 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
     CreepTrial
         The verdict.
     """
-    kind = _estimate_kind(error_estimate)
+    kind = estimate_kind(error_estimate)
     shadow = _shadow_options(options) if kind == "shadow" else None
     trial, time, trace = _run_trial(system, speed, nut_speed, rule, options,
                                     kind == "embedded")
@@ -786,7 +769,7 @@ def critical_speed_from_rest(
     protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=resolution,
                           names={"low": "speed_range[0]", "high": "speed_range[1]"})
     rule = rule or VerdictRule()
-    estimate = _estimate_kind(error_estimate)
+    estimate = estimate_kind(error_estimate)
     shadow = _shadow_options(options) if estimate == "shadow" else None  # refused up front
     simulated = 0.0
     # the table-speed traces of the trials that may still decide (the shadow's): the top

@@ -39,8 +39,8 @@ if TYPE_CHECKING:
     from .options import SolverOptions
     from .result import Result
 
-__all__ = ["SHADOW_FACTOR", "SHADOW_RATIO", "embedded_entry", "signal_errors", "summary_entry",
-           "tightened"]
+__all__ = ["ESTIMATES", "SHADOW_FACTOR", "SHADOW_RATIO", "embedded_entry", "estimate_kind",
+           "ratio_text", "signal_errors", "summary_entry", "tightened"]
 
 #: the shadow run's tolerances: this many times tighter
 SHADOW_FACTOR = 10.0
@@ -57,11 +57,62 @@ SHADOW_RATIO = (0.8, 1.2)
 #: how the estimate was made, as a result states it
 METHOD_TEXT = (f"difference to a run with every tolerance {SHADOW_FACTOR:g}× tighter "
                "(tolerance proportionality; feeddrive.engine.error_estimate)")
-_HIGH = f"{_RATIO[1]:,.0f}".replace(",", " ")
+#: the ways an integration error is estimated (``error_estimate`` of ``simulate`` and of the
+#: creep searches): True is the first
+ESTIMATES = ("shadow", "embedded")
+
+
+def ratio_text(ratio: tuple[float, float]) -> str:
+    """A measured range of an estimate over the true error as it is written beside the number:
+    two significant digits, thousands spaced (``"0.15–200 000"``, ``"0.8–1.2"``).
+
+    Parameters
+    ----------
+    ratio : tuple of float
+        The lowest and highest ratio [-].
+
+    Returns
+    -------
+    str
+        The range.
+    """
+    return "–".join(f"{r:.2g}" if r < 1e3 else f"{r:,.0f}".replace(",", " ") for r in ratio)
+
+
 EMBEDDED_TEXT = (f"the accepted steps' local error estimates summed per {1e3 * _INTERVAL:g}-ms "
                  f"interval and carried by exp(H J), J taken every {_REFRESH} steps "
-                 f"(feeddrive.solvers.global_error); {_RATIO[0]:g}–{_HIGH}× the true error "
+                 f"(feeddrive.solvers.global_error); {ratio_text(_RATIO)}× the true error "
                  "where measured")
+
+
+def estimate_kind(error_estimate: bool | str | None) -> str | None:
+    """``error_estimate`` as one of :data:`ESTIMATES` (True: ``"shadow"``), or None for none;
+    anything else refused in one line.
+
+    Parameters
+    ----------
+    error_estimate : bool, str or None
+        False or None, True, ``"shadow"`` or ``"embedded"``.
+
+    Returns
+    -------
+    str or None
+        ``"shadow"``, ``"embedded"`` or None.
+
+    Raises
+    ------
+    ParameterError
+        For any other value.
+    """
+    if error_estimate is False or error_estimate is None:
+        return None
+    if error_estimate is True:
+        return ESTIMATES[0]
+    if isinstance(error_estimate, str) and error_estimate in ESTIMATES:
+        return error_estimate
+    raise ParameterError("error_estimate", error_estimate,
+                         "expected False, True or 'shadow' (a second run ten times tighter) "
+                         "or 'embedded' (carried along the run)")
 
 
 def tightened(options: SolverOptions, factor: float = SHADOW_FACTOR) -> SolverOptions:

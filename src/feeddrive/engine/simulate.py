@@ -22,7 +22,13 @@ from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
 from ..solvers import builds, dopri5, switching
 from . import budget
-from .error_estimate import embedded_entry, signal_errors, summary_entry, tightened
+from .error_estimate import (
+    embedded_entry,
+    estimate_kind,
+    signal_errors,
+    summary_entry,
+    tightened,
+)
 from .options import DENSE_MODES as _DENSE_MODES
 from .options import METHODS as METHODS  # re-exported: the engine's public names
 from .options import REVERSAL_METHODS as _REVERSAL_METHODS
@@ -657,17 +663,14 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     >>> print(f"{1e3 * result['table_position'][-1]:.2f} mm travelled")
     3.00 mm travelled
     """
-    if error_estimate not in (False, True, "shadow", "embedded"):
-        raise ParameterError("error_estimate", error_estimate,
-                             "expected False, True or 'shadow' (a second run ten times "
-                             "tighter) or 'embedded' (carried along the run)")
-    embedded = error_estimate == "embedded"
+    kind = estimate_kind(error_estimate)
+    embedded = kind == "embedded"
     sim = Simulation(system, profile, options, embedded_estimate=embedded)
     if embedded and not sim.embedded_estimate:
         raise ParameterError("error_estimate", error_estimate,
                              f"the embedded estimate needs a dense-output method, not "
                              f"{sim.options.method!r} (or use error_estimate='shadow')")
-    shadow_options = (tightened(sim.options) if error_estimate in (True, "shadow")
+    shadow_options = (tightened(sim.options) if kind == "shadow"
                       else None)  # refused before work
     result = sim.run(duration, output=output, progress=progress)
     if embedded:
