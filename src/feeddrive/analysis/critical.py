@@ -586,11 +586,16 @@ def shadow_possible(options: SolverOptions | None = None) -> bool:
     return True
 
 
+def _trial_profile(speed: float, nut_speed: float) -> ConstantSpeed:
+    """A trial's reference: the table (and nut) from rest to their speeds [m/s] in 0.1 s."""
+    return ConstantSpeed(speed, nut_speed, ramp_time=0.1)
+
+
 def _run_trial(system: DriveSystem, speed: float, nut_speed: float,
                rule: VerdictRule | None, options: SolverOptions | None,
                embedded: bool) -> tuple[CreepTrial, np.ndarray, np.ndarray]:
     """A trial (:func:`creep_trial`) and the table-speed trace it was judged on [s; m/s]."""
-    sim = Simulation(system, ConstantSpeed(speed, nut_speed, ramp_time=0.1), options,
+    sim = Simulation(system, _trial_profile(speed, nut_speed), options,
                      embedded_estimate=embedded)
     error: list[float | None] = [None]
     trace: list[np.ndarray] = [np.zeros(0), np.zeros(0)]
@@ -618,8 +623,7 @@ def _shadow_error(system: DriveSystem, trial: CreepTrial, nut_speed: float,
     simulated length [m/s]; None for a trial whose run diverged (nothing to compare to)."""
     if trial.kind == UNSTABLE:
         return None
-    run = Simulation(system, ConstantSpeed(trial.speed, nut_speed, ramp_time=0.1),
-                     shadow).run(trial.duration)
+    run = Simulation(system, _trial_profile(trial.speed, nut_speed), shadow).run(trial.duration)
     if run.solver_stats.get("diverged") or run.time.shape != time.shape:
         return None
     return float(np.max(np.abs(np.asarray(run["table_speed"]) - speed)))
