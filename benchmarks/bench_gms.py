@@ -1,6 +1,6 @@
 """Benchmark (issue 42 item 4): what a GMS guide costs against the LuGre guide, and why.
 
-Run from the repository root (about a minute on 2 cores)::
+Run from the repository root (about two minutes on 2 cores)::
 
     python benchmarks/bench_gms.py [--runs 3]
 
@@ -11,6 +11,12 @@ N = 1, 4, 16, 64 elements: N = 4 is ``examples/gms_guide.toml``; the others keep
 branches and attraction and split the same total stiffness (the LuGre σ0, 4.38e5 N/m) into N
 elements with stiffness ∝ N + 1 − i and weight ∝ i (i = 1 … N; the example's own shape,
 stiff elements light).  For information the same runs with ``method="auto"`` (no modal cap).
+
+The independent check: the same two runs (LuGre guide, the 4-element GMS guide) by scipy's
+``solve_ivp`` with LSODA, RK45 and Radau on the plain-Python model of ``reference/``
+(``reference.scipy_model.ReferenceModel``, rtol 1e-6, its absolute tolerances, the settings of
+``bench_engine.py``'s baselines): what the GMS guide costs an integrator feeddrive did not
+make, as CPU and right-hand-side ratios to its own LuGre run.
 
 Per row: CPU seconds of the 10-s run (``time.process_time``, median of ``--runs``, every
 case of a round run in turn after a warm-up), its ratio to the LuGre run of the same method
@@ -30,13 +36,19 @@ import json
 import math
 import os
 import platform
+import sys
 import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.integrate import solve_ivp
 
 ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from reference.scipy_model import ReferenceModel  # noqa: E402
 
 import feeddrive as fd  # noqa: E402
 from feeddrive.engine.simulate import Simulation  # noqa: E402
@@ -46,6 +58,8 @@ SPEED = 2e-3  # [m/s]
 DURATION = 10.0  # [s]
 ELEMENTS = (1, 4, 16, 64)
 METHODS = ("modal", "auto")
+SCIPY_METHODS = ("LSODA", "RK45", "Radau")
+SCIPY_GUIDES = ("lugre", "gms_4")
 COUNTS = ("steps", "rejected_steps", "rhs_evaluations", "jacobians", "rosenbrock_steps",
           "method_switches", "eigen_analyses", "switch_crossings")
 
@@ -106,6 +120,36 @@ def table_mode(params: fd.DriveParameters, result: fd.Result) -> dict[str, float
             "fastest_real_eigenvalue_per_s": float(min(ev.real))}
 
 
+def scipy_rows(params: dict[str, fd.DriveParameters], runs: int) -> list[dict[str, Any]]:
+    """The independent check of the module docstring: per scipy method and guide, the median
+    CPU s of ``runs`` 10-s runs, the counts, and the ratios to the LuGre run."""
+    profile = fd.ConstantSpeed(SPEED)
+    cpu: dict[tuple[str, str], list[float]] = {}
+    counts: dict[tuple[str, str], tuple[int, int]] = {}
+    for _ in range(runs):
+        for method in SCIPY_METHODS:
+            for name in SCIPY_GUIDES:
+                ref = ReferenceModel(params[name], "cdfs", 0.4, profile)
+                t0 = time.process_time()
+                sol = solve_ivp(ref, (0.0, DURATION), np.zeros(ref.n_state), method=method,
+                                rtol=1e-6, atol=ref.tolerances())
+                cpu.setdefault((method, name), []).append(time.process_time() - t0)
+                if sol.status != 0:
+                    raise RuntimeError(f"{method} on {name}: {sol.message}")
+                counts[(method, name)] = (int(sol.nfev), len(sol.t) - 1)
+    rows = []
+    for method in SCIPY_METHODS:
+        base = float(np.median(cpu[(method, "lugre")]))
+        for name in SCIPY_GUIDES:
+            t = float(np.median(cpu[(method, name)]))
+            nfev, steps = counts[(method, name)]
+            rows.append({"method": method, "guide": name, "cpu_s": round(t, 4),
+                         "cpu_ratio_to_lugre": round(t / base, 2), "rhs_evaluations": nfev,
+                         "rhs_ratio_to_lugre": round(nfev / counts[(method, "lugre")][0], 2),
+                         "steps": steps})
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
@@ -126,6 +170,7 @@ def main() -> None:
                 result = fd.simulate(system, profile, DURATION, options=options)
                 cpu.setdefault((method, name), []).append(time.process_time() - t0)
                 last[(method, name)] = result
+    independent = scipy_rows(params, args.runs)
     load_after = os.getloadavg()
     modes = {name: table_mode(params[name], last[("modal", name)]) for name in params}
     rows = []
@@ -146,7 +191,8 @@ def main() -> None:
     record: dict[str, Any] = {
         "scenario": f"CDFS wang2021, table at 0.4 m, {SPEED * 1e3:g} mm/s, {DURATION:g} s, "
                     "default settings but the method",
-        "runs": args.runs, "rows": rows, "zeta_light": ZETA_LIGHT, "h_lambda": H_LAMBDA,
+        "runs": args.runs, "rows": rows, "scipy_rows": independent, "zeta_light": ZETA_LIGHT,
+        "h_lambda": H_LAMBDA,
         "load_average_1min_before": round(load_before[0], 2),
         "load_average_1min_after": round(load_after[0], 2),
         "cpus": os.cpu_count(), "platform": platform.platform(),
@@ -172,6 +218,13 @@ def main() -> None:
                      f"{r['cpu_ratio_to_lugre']:.2f} | {r['rhs_ratio_to_lugre']:.2f} | "
                      f"{r['steps']} | {r['rosenbrock_steps']} | {r['rhs_evaluations']} | "
                      f"{r['method_switches']} | {r['eigen_analyses']} | {mode} |")
+    lines += ["", "The same two runs by scipy (`solve_ivp`, rtol 1e-6, the plain-Python model of "
+              "`reference/`), ratios to its own LuGre run:", "",
+              "| scipy method | guide | CPU s | CPU ratio | RHS | RHS ratio | steps |",
+              "| --- | --- | ---: | ---: | ---: | ---: | ---: |"]
+    lines += [f"| {r['method']} | {r['guide']} | {r['cpu_s']:.3f} | {r['cpu_ratio_to_lugre']:.2f} "
+              f"| {r['rhs_evaluations']} | {r['rhs_ratio_to_lugre']:.2f} | {r['steps']} |"
+              for r in independent]
     (out / "bench_gms.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
     print("\n".join(lines))
 
