@@ -579,7 +579,8 @@ class SimulationInterrupted(KeyboardInterrupt):
 
 
 # A run is integrated in chunks of about this much wall time [s] once it is longer than the
-# first chunk: Ctrl-C acts between chunks, progress is reported after each, and with an
+# first chunk: a stop request acts between chunks (Ctrl-C, on the main thread, within a step:
+# _advance), progress is reported after each, and with an
 # output file each chunk is written and dropped (memory does not grow with the duration).
 CHUNK_WALL_TIME = 0.25
 FIRST_CHUNK = 2.0  # [s] simulated
@@ -596,8 +597,9 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     ``output`` (``.parquet`` or ``.csv``): every sample is written to that file as it is
     computed, in chunks, and the Result keeps only the last minute of the run, so memory does
     not grow with the duration.  ``progress(t, t_end)`` is called after each chunk of a long
-    run (a fraction of a second of work, or ten simulated seconds); Ctrl-C acts between
-    chunks.
+    run (a fraction of a second of work, or ten simulated seconds) and, on the main thread,
+    every 0.2 s with the solver's live time; there Ctrl-C stops the compiled solver after the
+    step it is in (the chunks are waited on in a helper thread).
 
     Parameters
     ----------
@@ -615,7 +617,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     output : str, pathlib.Path or None, default None
         Stream every sample to this ``.parquet`` or ``.csv`` file.
     progress : callable or None, default None
-        Called as ``progress(t, t_end)`` [s] after each chunk.
+        Called as ``progress(t, t_end)`` [s] after each chunk (and, on the main thread,
+        with the live time every 0.2 s); an exception it raises stops the run.
     error_estimate : bool or str, default False
         Also estimate the run's global integration error per signal (largest absolute and
         relative to the signal's range): True or ``"shadow"`` from a second run with every
@@ -921,7 +924,7 @@ class Simulation:
                              chunks.h_init, chunks.h_max,
                              self.bound, self.switch_rows)
         try:
-            t, y_parts, aux_parts, stats = chunks.advance(n_break, output, progress)
+            t, y_parts, aux_parts, stats = _advance(self, chunks, n_break, output, progress)
         except _Stopped as stop:
             if chunks.stop_requested:  # request_stop: not continued from
                 self._chunks = None
@@ -1175,6 +1178,84 @@ class _Chunks:
         when read: :meth:`~feeddrive.engine.result.Run.defer_states`)."""
         return (_join([p[0] for p in parts], None), [p[1] for p in parts],
                 [p[2] for p in parts])
+
+
+#: how often a run waited on by the main thread reports the solver's live time [s of wall time]
+LIVE_PROGRESS_EVERY = 0.2
+
+
+def _interruptible() -> bool:
+    """Whether Ctrl-C can reach this thread as KeyboardInterrupt: the main thread, with
+    SIGINT not ignored (a pool worker of ``reproduce`` or a sweep ignores it)."""
+    import signal
+
+    return (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) not in (signal.SIG_IGN, None))
+
+
+def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path | None,
+             progress: Callable[[float, float], None] | None,
+             ) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray], np.ndarray]:
+    """``chunks.advance`` so that Ctrl-C stops the run within a solver step.
+
+    A compiled solver call holds the main thread until it returns, and Python acts on Ctrl-C
+    only between such calls: a chunk of the run (up to :data:`DENSE_CHUNK` simulated
+    seconds) at tight tolerances can take many seconds.  On the main thread the chunks
+    therefore run in a helper thread (the compiled solver releases the GIL) while the main
+    thread waits; Ctrl-C there asks the solver to stop after its current step
+    (:meth:`Simulation.request_stop`), and the run ends as on a Ctrl-C between chunks
+    (:class:`SimulationInterrupted` with what was finished).  ``progress`` is called on the
+    main thread, after each chunk as before and every :data:`LIVE_PROGRESS_EVERY` seconds with
+    the solver's live time, so a long chunk moves the bar too.  The steps are the same either
+    way: the helper thread runs the same calls.
+    """
+    if not _interruptible():
+        return chunks.advance(n_break, output, progress)
+    t_end = n_break * sim.grid.base
+    done: dict[str, Any] = {}
+    chunk_end = [0.0]  # the last chunk end the worker reached
+    shown = [0.0]  # the last time given to progress
+
+    finished = threading.Event()  # not Thread.join: a join interrupted by Ctrl-C can mark
+    # the running thread as ended (CPython 3.11's threading._wait_for_tstate_lock)
+
+    def work() -> None:
+        try:
+            done["value"] = chunks.advance(
+                n_break, output,
+                None if progress is None else lambda t, _: chunk_end.__setitem__(0, t))
+        except BaseException as err:  # handed to the main thread
+            done["error"] = err
+        finally:
+            finished.set()
+
+    def show(t: float) -> None:
+        if progress is not None and t > shown[0]:
+            shown[0] = t
+            progress(t, t_end)
+
+    worker = threading.Thread(target=work, name="feeddrive-run", daemon=True)
+    worker.start()
+    stop: BaseException | None = None
+    next_live = _time.monotonic() + LIVE_PROGRESS_EVERY
+    while not finished.is_set():
+        try:
+            if finished.wait(0.05):
+                break
+            if stop is None:
+                show(chunk_end[0])
+                if _time.monotonic() >= next_live:
+                    next_live += LIVE_PROGRESS_EVERY
+                    show(float(chunks.live[-1]))
+        except BaseException as err:  # Ctrl-C, or progress raised: stop after this step
+            stop = stop or err
+            sim.request_stop()
+    if stop is not None and ("error" not in done or not isinstance(stop, KeyboardInterrupt)):
+        raise stop  # progress's own error; or Ctrl-C as the run ended: it is still obeyed
+    if "error" in done:
+        raise done["error"]
+    show(chunk_end[0])
+    return done["value"]
 
 
 class _Stopped(Exception):

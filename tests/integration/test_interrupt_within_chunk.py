@@ -1,0 +1,121 @@
+"""Ctrl-C inside a long solver call (an outside check, 2026-12-06): at tight but valid settings
+one chunk of a run (up to ``DENSE_CHUNK`` = 10 simulated seconds) took seconds, and Ctrl-C
+waited for it: ``feeddrive simulate --drive ddfs … --method rodas4 --accuracy 1e-8`` stopped
+4.5 s after the signal, ``--position-tolerance 1e-30`` 17 s after, the bar frozen meanwhile.
+Runs started on the main thread now wait for their chunks in a helper thread; Ctrl-C asks
+the compiled solver to stop after its current step (``Simulation.request_stop``).
+
+The behaviour is tested, not the time: the signal is sent from the progress callback at the
+first report *inside* the first chunk (which only a live report can give), and the run must
+end there — before the chunk's end — with the part finished (``SimulationInterrupted``).
+Before the change no report came before the chunk's end and the run went on past it.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import feeddrive as fd
+from feeddrive.engine import simulate as simulate_module
+
+SCRIPT = textwrap.dedent("""
+    import json, os, signal
+    import feeddrive as fd
+    from feeddrive.engine.simulate import DENSE_CHUNK, SimulationInterrupted
+
+    system = fd.DriveSystem(fd.preset("wang2021"), "ddfs", 0.4)
+    options = fd.SolverOptions(method="rodas4", accuracy=1e-8)  # ≈ 1 s of CPU per 1.3 s
+    reports = []
+
+    def progress(t, t_end):
+        reports.append(t)
+        if len(reports) == 1:
+            os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C at the first report
+
+    out = {"chunk": DENSE_CHUNK}
+    try:
+        fd.simulate(system, fd.ConstantSpeed(0.5e-3, 16e-3), 60.0, options=options,
+                    progress=progress)
+        out["ended"] = "completed"
+    except SimulationInterrupted as err:
+        out.update(ended="interrupted", t_reached=err.t_reached,
+                   samples=int(err.result.time.size))
+    except KeyboardInterrupt:
+        out["ended"] = "keyboard interrupt"
+    out["reports"] = reports
+    print(json.dumps(out))
+""")
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_run_inside_its_first_chunk() -> None:
+    done = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True,
+                          timeout=600, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    # the first report came from inside the first chunk (the solver's live time) ...
+    assert 0.0 < out["reports"][0] < out["chunk"], out
+    # ... and the run ended at the signal, the unfinished chunk not kept
+    assert out["ended"] == "interrupted", out
+    assert out["t_reached"] == 0.0 and out["samples"] == 0, out
+    assert len(out["reports"]) == 1, out  # nothing reported after the stop
+
+
+def _runs(threaded: bool) -> tuple[fd.Result, list[float]]:
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    reports: list[float] = []
+    keep = simulate_module._interruptible
+    simulate_module._interruptible = lambda: threaded  # type: ignore[assignment]
+    try:
+        result = fd.simulate(system, fd.ConstantSpeed(1.2e-3), 25.0,
+                             progress=lambda t, _: reports.append(t))
+    finally:
+        simulate_module._interruptible = keep  # type: ignore[assignment]
+    return result, reports
+
+
+def test_a_run_waited_on_in_a_helper_thread_is_the_run_itself() -> None:
+    """The same steps either way (the helper thread runs the same calls), the chunk ends
+    reported in order, the last one the run's end."""
+    (direct, direct_reports), (threaded, reports) = _runs(False), _runs(True)
+    for name in ("table_speed", "table_position", "screw_current"):
+        assert np.array_equal(np.asarray(direct[name]), np.asarray(threaded[name])), name
+    assert direct.solver_stats["steps"] == threaded.solver_stats["steps"]
+    assert reports == sorted(reports) and reports[-1] == pytest.approx(25.0)
+    assert direct_reports[-1] == pytest.approx(25.0)
+
+
+def test_an_error_in_progress_stops_the_run_and_is_raised(monkeypatch) -> None:
+    """A progress callback that raises (the explorer's cancel, a closed terminal) ends the
+    run waited on in a helper thread, as it ended the run called directly."""
+    monkeypatch.setattr(simulate_module, "_interruptible", lambda: True)
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    before = threading.active_count()
+
+    def progress(t: float, t_end: float) -> None:
+        raise RuntimeError("closed")
+
+    with pytest.raises(RuntimeError, match="closed"):
+        fd.simulate(system, fd.ConstantSpeed(2e-3), 30.0, progress=progress)
+    for _ in range(500):  # the helper thread ends right after handing its error over
+        if threading.active_count() == before:
+            break
+        time.sleep(0.01)
+    assert threading.active_count() == before
+
+
+def test_the_docs_state_the_live_report_interval_of_the_code() -> None:
+    from pathlib import Path
+
+    every = f"every {simulate_module.LIVE_PROGRESS_EVERY:g} s"
+    assert every in " ".join(fd.simulate.__doc__.split())
+    model_md = Path(__file__).resolve().parents[2] / "docs" / "model.md"
+    assert every in " ".join(model_md.read_text(encoding="utf-8").split())
