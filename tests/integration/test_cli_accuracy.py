@@ -82,13 +82,52 @@ def test_the_largest_absolute_tolerances_are_what_the_largest_accuracy_gives() -
             continue
         assert f"at most {ceiling[name]:g})" in help_text, flag
         opt.SolverOptions(**{name: ceiling[name]})  # the ceiling itself is taken
-        with pytest.raises(ParameterError, match=f"≤ {ceiling[name]:g} "):
+        with pytest.raises(ParameterError, match=f"… {ceiling[name]:g} "):
             opt.SolverOptions(**{name: ceiling[name] * (1 + 1e-9)})
     docs = " ".join((Path(__file__).parents[2] / "docs" / "model.md").read_text(
         encoding="utf-8").split())
     stated = ", ".join(f"{ceiling[n]:g} {u}".replace("e-0", "e-") for n, u, _ in opt.TOLERANCES
                        if n in ceiling)
     assert f"1000-A current scale: {stated} (`MAX_ABSOLUTE`" in docs
+
+
+def test_the_smallest_absolute_tolerances_are_what_the_smallest_accuracy_gives() -> None:
+    """Each explicit absolute tolerance has a floor (an outside check, 2026-12-06:
+    ``--position-tolerance 1e-30`` was taken and ground through 50 million steps,
+    ``--current-tolerance 5e-324`` failed on a step-size underflow): the default rule's value
+    at the smallest ``accuracy`` on the slowest run (speed scale ``SPEED_SCALE_FLOOR``) with a
+    1-mA current scale; the help and docs/model.md state it, it is taken, a value just below
+    is refused before any work with the option's range, and on the command line with the
+    option's name."""
+    assert opt.MIN_ACCURACY == opt.MIN_RELATIVE / opt.DEFAULT_RTOL
+    scales = opt.RunScales(speed=opt.SPEED_SCALE_FLOOR, table_speed=opt.SPEED_SCALE_FLOOR,
+                           current=opt.SMALLEST_CURRENT_SCALE)
+    tightest = opt.SolverOptions(accuracy=opt.MIN_ACCURACY).resolve(scales)
+    floor = {"position_tolerance": tightest.position, "speed_tolerance": tightest.speed,
+             "current_tolerance": tightest.current}
+    assert floor == pytest.approx(opt.MIN_ABSOLUTE, rel=1e-12)
+    assert opt.MIN_ABSOLUTE == {"position_tolerance": 1e-24, "speed_tolerance": 1e-19,
+                                "current_tolerance": 1e-17}
+    help_text = " ".join(runner.invoke(app, ["simulate", "--help"],
+                                       terminal_width=400).output.split())
+    for name, flag, _ in OPTIONS:
+        if name not in floor:
+            continue
+        assert f"at least {opt.MIN_ABSOLUTE[name]:g}" in help_text, flag
+        opt.SolverOptions(**{name: opt.MIN_ABSOLUTE[name]})  # the floor itself is taken
+        with pytest.raises(ParameterError, match=f"{opt.MIN_ABSOLUTE[name]:g} … "):
+            opt.SolverOptions(**{name: opt.MIN_ABSOLUTE[name] * (1 - 1e-9)})
+        result = runner.invoke(app, ["simulate", "--table-speed", "2", "--duration", "1",
+                                     flag, "1e-30"])
+        assert result.exit_code == 2
+        lines = [ln for ln in result.output.splitlines() if ln.strip()]
+        assert len(lines) == 1 and flag in lines[0] and "1e-30" in lines[0], result.output
+        assert f"{opt.MIN_ABSOLUTE[name]:g} … {opt.MAX_ABSOLUTE[name]:g}" in lines[0]
+    docs = " ".join((Path(__file__).parents[2] / "docs" / "model.md").read_text(
+        encoding="utf-8").split())
+    stated = ", ".join(f"{opt.MIN_ABSOLUTE[n]:g} {u}" for n, u, _ in opt.TOLERANCES
+                       if n in floor)
+    assert f"1-mA current scale: {stated} (`MIN_ABSOLUTE`" in docs
 
 
 def _summary(args: list[str]) -> dict[str, object]:

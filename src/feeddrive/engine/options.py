@@ -138,6 +138,19 @@ MAX_ACCURACY = 1e4
 MAX_ABSOLUTE = {"position_tolerance": POSITION_TIME * 1.0 * MAX_ACCURACY,
                 "speed_tolerance": SPEED_FRACTION * 1.0 * MAX_ACCURACY,
                 "current_tolerance": CURRENT_FRACTION * NO_CURRENT_LIMIT * MAX_ACCURACY}
+#: the smallest accuracy factor accepted: rtol's default × it is MIN_RELATIVE [-]
+MIN_ACCURACY = MIN_RELATIVE / DEFAULT_RTOL
+#: the smallest current scale the floor below assumes (a 1-mA current limit) [A]
+SMALLEST_CURRENT_SCALE = 1e-3
+#: the smallest explicit absolute tolerances accepted [m, m/s, A]: what ``accuracy =
+#: MIN_ACCURACY`` makes of the defaults on the slowest run (speed scale SPEED_SCALE_FLOOR) with
+#: a 1-mA current scale, 1e-24 m, 1e-19 m/s and 1e-17 A — the mirror of MAX_ABSOLUTE.  A
+#: smaller one asks for what no accuracy setting does (``--position-tolerance 1e-30`` ground
+#: through 50 million steps, ``--current-tolerance 5e-324`` failed on a step-size underflow)
+MIN_ABSOLUTE = {name: float(f"{value:.12g}") for name, value in (  # 1e-19, not 1.0…01e-19
+    ("position_tolerance", POSITION_TIME * SPEED_SCALE_FLOOR * MIN_ACCURACY),
+    ("speed_tolerance", SPEED_FRACTION * SPEED_SCALE_FLOOR * MIN_ACCURACY),
+    ("current_tolerance", CURRENT_FRACTION * SMALLEST_CURRENT_SCALE * MIN_ACCURACY))}
 
 #: the fixed tolerances every method ran with before they scaled with the run (engine v1 and
 #: the defaults until 2026-12-04): ``SolverOptions(method="dopri5", locate_reversals=False,
@@ -360,9 +373,8 @@ class SolverOptions:
             value = getattr(self, name)
             if value is not None:
                 _check_positive(name, value, dict((n, u) for n, u, _ in TOLERANCES)[name],
-                                high=MAX_ABSOLUTE[name])
-        _check_positive("accuracy", self.accuracy, "-", MIN_RELATIVE / DEFAULT_RTOL,
-                        MAX_ACCURACY)
+                                low=MIN_ABSOLUTE[name], high=MAX_ABSOLUTE[name])
+        _check_positive("accuracy", self.accuracy, "-", MIN_ACCURACY, MAX_ACCURACY)
         for name, unit in (("output_interval", "s"), ("max_step", "s"), ("fixed_step", "s")):
             value = getattr(self, name)
             if name == "max_step" and value is None:

@@ -940,7 +940,7 @@ class Simulation:
             raise SimulationError(
                 f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
                 f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
-                f"{int(stats[2])}); raise max_steps (--max-steps) or check the parameters")
+                f"{int(stats[2])}); {FAILURE_ADVICE.get(status, 'check the parameters')}")
         solver_stats: dict[str, Any] = {
             "method": options.method, **self.tolerances.as_dict(),
             "accuracy": options.accuracy, "speed_scale": self.scales.speed,
@@ -1179,6 +1179,17 @@ class _Chunks:
         return (_join([p[0] for p in parts], None), [p[1] for p in parts],
                 [p[2] for p in parts])
 
+
+#: what a user can do about a failed integration, by the driver's status (an outside check,
+#: 2026-12-06: a step-size underflow from a 5e-324-A tolerance advised raising --max-steps)
+FAILURE_ADVICE = {
+    dopri5.STATUS_MAX_STEPS: "raise max_steps (--max-steps), shorten the run, or loosen the "
+                             "tolerances (--accuracy)",
+    dopri5.STATUS_STEP_UNDERFLOW: "the tolerances ask for more than the steps can resolve in "
+                                  "double precision (loosen them: --accuracy), or the "
+                                  "parameters make the model too stiff (check them)",
+    dopri5.STATUS_NON_FINITE: "check the parameters (a state became NaN or infinite)",
+}
 
 #: how often a run waited on by the main thread reports the solver's live time [s of wall time]
 LIVE_PROGRESS_EVERY = 0.2
