@@ -217,16 +217,17 @@ def embedded_entry(names: list[str], largest: np.ndarray,
     Returns
     -------
     dict
-        ``method`` (how), ``signals`` (``{state: {"absolute": [SI], "relative": [-]}}``),
-        ``largest_relative`` (signal and value; with ``states``).
+        ``kind`` ("embedded"), ``ratio_to_true_error`` (the measured range of the estimate
+        over the true error), ``method`` (how), ``signals`` (``{state: {"absolute": [SI],
+        "relative": [-]}}``), ``largest_relative`` (signal and value; with ``states``).
     """
+    how = {"kind": "embedded", "ratio_to_true_error": list(_RATIO), "method": EMBEDDED_TEXT}
     if states is None:
-        return {"method": EMBEDDED_TEXT,
-                "signals": {name: {"absolute": float(largest[k])}
-                            for k, name in enumerate(names)}}
+        return {**how, "signals": {name: {"absolute": float(largest[k])}
+                                   for k, name in enumerate(names)}}
     signals = {name: _entry(float(largest[k]), np.asarray(states[:, k], dtype=float))
                for k, name in enumerate(names)}
-    return {"method": EMBEDDED_TEXT, "signals": signals, "largest_relative": _largest(signals)}
+    return {**how, "signals": signals, "largest_relative": _largest(signals)}
 
 
 def summary_entry(errors: dict[str, dict[str, float]], options: SolverOptions,
@@ -245,10 +246,11 @@ def summary_entry(errors: dict[str, dict[str, float]], options: SolverOptions,
     Returns
     -------
     dict
-        ``method`` (how), ``shadow`` (its tolerances and cost), ``signals`` (per signal),
+        ``kind`` ("shadow"), ``ratio_to_true_error`` (:data:`SHADOW_RATIO`), ``method``
+        (how), ``shadow`` (its tolerances and cost), ``signals`` (per signal),
         ``largest_relative`` (signal and value).
     """
-    return {"method": METHOD_TEXT,
+    return {"kind": "shadow", "ratio_to_true_error": list(SHADOW_RATIO), "method": METHOD_TEXT,
             "shadow": {"accuracy": shadow.accuracy, "rtol": shadow_stats.get("rtol"),
                        "steps": shadow_stats.get("steps"),
                        "rhs_evaluations": shadow_stats.get("rhs_evaluations")},

@@ -207,19 +207,33 @@ class Run:
         """
         import xarray as xr  # here: a summary needs no Dataset (issue 21 item 4)
 
-        estimate = self.solver_stats.get("error_estimate", {}).get("signals", {})
+        entry = self.solver_stats.get("error_estimate", {})
+        estimate = entry.get("signals", {})
 
         def var_attrs(name: str, unit: str, desc: str) -> dict[str, Any]:
             out: dict[str, Any] = {"units": unit, "long_name": desc}
             if name in estimate:  # the estimated global integration error (error_estimate)
-                out["integration_error_estimate"] = estimate[name]["absolute"]
-                out["integration_error_estimate_relative"] = estimate[name]["relative"]
+                out.update(_estimate_attrs(entry, estimate[name]))
             return out
 
         data_vars = {name: ("time", np.array(self.signal(name)), var_attrs(name, unit, desc))
                      for name, (unit, desc) in self.meta.items()}
         return xr.Dataset(data_vars, coords={"time": ("time", self.t, {"units": "s"})},
                           attrs=self.attrs(full=True))
+
+
+def _estimate_attrs(entry: dict[str, Any], signal: dict[str, float]) -> dict[str, Any]:
+    """A signal's attributes from a run's integration-error estimate: the largest absolute
+    error [the signal's unit], relative to its range [-], which estimate it is (``shadow`` or
+    ``embedded``: their measured accuracy differs by orders of magnitude) and that measured
+    range of the estimate over the true error [-]."""
+    out: dict[str, Any] = {"integration_error_estimate": signal["absolute"],
+                           "integration_error_estimate_relative": signal["relative"]}
+    if "kind" in entry:
+        out["integration_error_estimate_kind"] = entry["kind"]
+        out["integration_error_estimate_ratio_to_true_error"] = list(
+            entry["ratio_to_true_error"])
+    return out
 
 
 def build_dataset(t: np.ndarray, y: np.ndarray, aux: np.ndarray, model: Model,
@@ -364,9 +378,7 @@ class Result:
         self.dataset.attrs["solver"] = json.dumps(stats)
         for name, err in entry["signals"].items():
             if name in self.dataset:
-                self.dataset[name].attrs["integration_error_estimate"] = err["absolute"]
-                self.dataset[name].attrs["integration_error_estimate_relative"] = \
-                    err["relative"]
+                self.dataset[name].attrs.update(_estimate_attrs(entry, err))
 
     @property
     def solver_stats(self) -> dict[str, Any]:

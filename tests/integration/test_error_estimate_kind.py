@@ -1,0 +1,36 @@
+"""Each signal's integration-error attributes say which estimate they hold (an outside check,
+2026-12-06: the shadow's and the embedded estimate's attributes read the same, though their
+measured ratios to the true error are 0.8–1.2 and 0.15–200 000; only the dataset's ``solver``
+string told them apart)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+import feeddrive as fd
+from feeddrive.engine.error_estimate import SHADOW_RATIO
+from feeddrive.solvers.global_error import MEASURED_RATIO
+
+
+@pytest.mark.parametrize(("asked", "kind", "ratio"), [
+    (True, "shadow", SHADOW_RATIO), ("embedded", "embedded", MEASURED_RATIO)])
+def test_the_attributes_name_the_estimate_and_its_measured_range(
+        asked: bool | str, kind: str, ratio: tuple[float, float], tmp_path: Path) -> None:
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    result = fd.simulate(system, fd.ConstantSpeed(2e-3), 1.0, error_estimate=asked)
+    entry = result.solver_stats["error_estimate"]
+    assert entry["kind"] == kind and entry["ratio_to_true_error"] == list(ratio)
+    attrs = result.dataset["table_speed"].attrs
+    assert attrs["integration_error_estimate_kind"] == kind
+    assert list(attrs["integration_error_estimate_ratio_to_true_error"]) == list(ratio)
+    assert attrs["integration_error_estimate"] == \
+        entry["signals"]["table_speed"]["absolute"]
+    path = tmp_path / "run.nc"
+    result.save(path)
+    with xr.open_dataset(path) as saved:
+        back = saved["table_speed"].attrs
+        assert back["integration_error_estimate_kind"] == kind
+        assert list(back["integration_error_estimate_ratio_to_true_error"]) == list(ratio)
