@@ -47,3 +47,30 @@ def test_a_step_size_underflow_does_not_advise_more_steps(monkeypatch) -> None:
     text = str(err.value)
     assert dopri5.STATUS_MESSAGES[dopri5.STATUS_STEP_UNDERFLOW] in text
     assert "--max-steps" not in text and "--accuracy" in text
+
+
+def test_a_failed_streamed_run_leaves_no_empty_file_to_block_a_retry(tmp_path) -> None:
+    """A streamed run that failed in its first chunk left a 0-byte file, and the retry was
+    refused ("exists; pass --force"); the file is removed and the message says so."""
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    out = tmp_path / "run.csv"
+    with pytest.raises(SimulationError, match=f"{out} not written"):
+        fd.simulate(system, fd.ConstantSpeed(2e-3), 30.0, output=out,
+                    options=fd.SolverOptions(max_steps=3000))
+    assert not out.exists()
+
+
+def test_a_failed_error_estimate_says_which_run_failed_and_keeps_the_run() -> None:
+    """The 10× tighter second run of ``error_estimate=True`` needs more steps than the run:
+    at a max_steps between the two the run finished, the second run did not, and the message
+    said only "maximum number of steps reached" — now it names the second run and the
+    finished run is handed over with the error."""
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    alone = fd.simulate(system, fd.ConstantSpeed(2e-3), 2.0)
+    steps = alone.solver_stats["steps"]
+    with pytest.raises(SimulationError, match="^error estimate: the second run") as err:
+        fd.simulate(system, fd.ConstantSpeed(2e-3), 2.0, error_estimate=True,
+                    options=fd.SolverOptions(max_steps=steps + 10))
+    kept = err.value.result  # type: ignore[attr-defined]
+    assert kept.solver_stats["steps"] == steps
+    assert (kept["table_speed"] == alone["table_speed"]).all()

@@ -23,6 +23,7 @@ from ..parameters import DriveParameters, ParameterError
 from ..solvers import builds, dopri5, switching
 from . import budget
 from .error_estimate import (
+    SHADOW_FACTOR,
     embedded_entry,
     estimate_kind,
     signal_errors,
@@ -683,13 +684,34 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
             states, np.array([carried[name]["absolute"] for name in states]),
             np.column_stack([np.asarray(result[name], dtype=float) for name in states])))
     if shadow_options is not None:
-        shadow = Simulation(system, profile, shadow_options).run(duration)
+        try:
+            shadow = Simulation(system, profile, shadow_options).run(duration)
+        except SimulationError as err:  # the run itself is done: say which run failed, keep it
+            where = f" ({output} holds it)" if output is not None else ""
+            failed = SimulationError(
+                f"error estimate: the second run, every tolerance {SHADOW_FACTOR:g}× tighter, "
+                f"failed — {err}; the run itself finished{where}: ask for no estimate, or "
+                f"allow the second run what it needs")
+            failed.result = result  # type: ignore[attr-defined]
+            raise failed from None
         if shadow.time.size != result.time.size:  # a streamed run keeps its last part only
             shadow = _tail(shadow, result.time)
         errors = signal_errors(result, shadow)
         result.add_error_estimate(summary_entry(errors, sim.options, shadow_options,
                                                 shadow.solver_stats))
     return result
+
+
+def _streamed_note(output: str | Path | None, kept_until: float) -> str:
+    """What a failed run left in its output file: nothing (an empty file it made is removed,
+    so that a retry is not refused as "exists"), or the samples up to ``kept_until`` [s]."""
+    if output is None:
+        return ""
+    path = Path(output)
+    if path.is_file() and path.stat().st_size == 0:
+        path.unlink()
+        return f"; {output} not written"
+    return f"; {output} holds 0 … {kept_until:g} s" if path.is_file() else ""
 
 
 def _tail(shadow: Result, times: np.ndarray) -> Result:
@@ -940,7 +962,8 @@ class Simulation:
             raise SimulationError(
                 f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
                 f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
-                f"{int(stats[2])}); {FAILURE_ADVICE.get(status, 'check the parameters')}")
+                f"{int(stats[2])}); {FAILURE_ADVICE.get(status, 'check the parameters')}"
+                f"{_streamed_note(output, chunks.start * grid.base)}")
         solver_stats: dict[str, Any] = {
             "method": options.method, **self.tolerances.as_dict(),
             "accuracy": options.accuracy, "speed_scale": self.scales.speed,
