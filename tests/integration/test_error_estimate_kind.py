@@ -34,3 +34,10 @@ def test_the_attributes_name_the_estimate_and_its_measured_range(
         back = saved["table_speed"].attrs
         assert back["integration_error_estimate_kind"] == kind
         assert list(back["integration_error_estimate_ratio_to_true_error"]) == list(ratio)
+
+
+def test_simulate_states_the_measured_ranges_of_the_code() -> None:
+    from feeddrive.engine.error_estimate import ratio_text
+
+    doc = " ".join(fd.simulate.__doc__.split())
+    assert f"{ratio_text(MEASURED_RATIO)} × the true error where measured" in doc

@@ -626,9 +626,9 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         tolerance ten times tighter (:mod:`feeddrive.engine.error_estimate`; it costs that
         run; within a factor 3 of the true error on the validation cases); ``"embedded"``
         carried along the run itself (:mod:`feeddrive.solvers.global_error`; dense-output
-        methods, the states only, a few per cent more CPU, but only an order-of-magnitude
-        statement: 0.12–13 × the true error on the frictionless steps, 6–600 × on smooth
-        LuGre runs, tests/validation/test_accuracy_embedded.py).  In
+        methods, the states only, a few per cent more CPU, but not even an order-of-magnitude
+        statement: 0.15–200 000 × the true error where measured,
+        :data:`~feeddrive.solvers.global_error.MEASURED_RATIO`).  In
         ``solver_stats["error_estimate"]``, the summary, the JSON and each signal's
         attributes.
 
