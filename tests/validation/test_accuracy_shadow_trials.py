@@ -146,7 +146,8 @@ def test_creep_at_double_precisions_reach_searches_without_an_estimate_and_says_
     import json
 
     out = json.loads(res.output)
-    assert out["integration_error"].startswith("Integration error: not estimated")
+    assert out["integration_error"]["estimated"] is False
+    assert out["integration_error"]["text"].startswith("Integration error: not estimated")
     assert "speed_error_mm_s" not in out["searches"][0]
     # at the defaults the estimate is made and no such line is printed
     res = CliRunner().invoke(app, args[:-2], terminal_width=400)

@@ -2,34 +2,244 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import TYPE_CHECKING, Any
 
 import typer
 
 from ..analysis import protocol
 from . import _units
-from ._common import MM_PER_S, app, console, print_json, resolve_parameters, user_errors
+from ._common import (
+    MM_PER_S,
+    app,
+    console,
+    err_console,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 from ._solver import accuracy_options
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
 
+if TYPE_CHECKING:
+    from ..analysis.critical import CriticalSpeed
+    from ..analysis.cycle_verdict import VerdictRule
+    from ..engine.simulate import DriveSystem
+
 _LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
+#: how the JSON starts a line that says no integration error was estimated, and the text
+NOT_ESTIMATED = "Integration error: not estimated — "
+#: why a search made no integration-error estimate, when it is not the settings
+STEPDOWN_REASON = ("the step-down search (one continuous run on a running table) makes no "
+                   "estimate")
+RIPPLE_REASON = "the ripple-threshold search makes no estimate"
+#: the unit of every field of ``creep --json`` whose name carries none (``units`` in the
+#: JSON): a trial's (``feeddrive.analysis.critical.CreepTrial.to_dict``: its speed in mm/s,
+#: the rest as stored) and the verdict rule's (``feeddrive.analysis.cycle_verdict.VerdictRule``)
+UNITS = {
+    "speed": "mm/s", "duration": "s", "decided_at": "s", "stick_slip_frequency": "Hz",
+    "ripple_ratio": "-", "stick_fraction": "-", "min_ratio": "-",
+    "smooth_band": "-", "settle_time": "s", "growth_blocks": "-", "growth_run": "-",
+    "cycle_tolerance": "-", "min_cycles": "-", "min_compare_time": "s",
+    "max_multiplicity": "-", "envelope_tolerance": "-", "envelope_blocks": "-",
+    "stick_level": "-", "initial_duration": "s", "max_duration": "s",
+}
+#: the same for the ``--ripple-threshold`` search's JSON
+# (``feeddrive.analysis.forced.threshold_critical_speed``)
+RIPPLE_UNITS = {"threshold": "-", "ripple_ratio": "-", "min_ratio": "-", "mean_ratio": "-"}
 
 
-def not_estimated() -> str:
-    """What ``creep`` says when the search from rest can make no integration-error estimate
-    (``feeddrive.analysis.critical.shadow_possible``).
+def shadow_impossible_reason() -> str:
+    """Why the search from rest can make no integration-error estimate at these settings
+    (``feeddrive.analysis.critical.shadow_possible`` is False).
 
     Returns
     -------
     str
-        The line.
+        The reason.
     """
     from ..engine.error_estimate import SHADOW_FACTOR
     from ..engine.options import MIN_RELATIVE
 
-    return (f"Integration error: not estimated — a run {SHADOW_FACTOR:g}× tighter than these "
-            f"settings would ask for less than {MIN_RELATIVE:g} relative (double precision's "
-            "reach)")
+    return (f"a run {SHADOW_FACTOR:g}× tighter than these settings would ask for less than "
+            f"{MIN_RELATIVE:g} relative (double precision's reach)")
+
+
+def not_estimated(reason: str | None = None) -> dict[str, Any]:
+    """The ``integration_error`` entry of a search that made no estimate, and its line.
+
+    Parameters
+    ----------
+    reason : str, optional
+        Why; by default the settings' (:func:`shadow_impossible_reason`).
+
+    Returns
+    -------
+    dict
+        ``estimated`` (False), ``reason`` and ``text`` (the line ``creep`` prints).
+    """
+    why = shadow_impossible_reason() if reason is None else reason
+    return {"estimated": False, "reason": why, "text": NOT_ESTIMATED + why}
+
+
+def integration_error(searches: list[dict[str, Any]], reason: str) -> dict[str, Any]:
+    """The one ``integration_error`` entry of ``creep --json``: the largest estimate over the
+    searches (``speed_error_mm_s`` of :meth:`~feeddrive.analysis.critical.CriticalSpeed.to_dict`)
+    with how it was made and the measured range of its ratio to the true error, or why there
+    is none.
+
+    Parameters
+    ----------
+    searches : list of dict
+        The searches as ``CriticalSpeed.to_dict`` gives them.
+    reason : str
+        Why there is no estimate when no search carries one.
+
+    Returns
+    -------
+    dict
+        ``estimated``, ``method``, ``speed_error_mm_s`` [mm/s], ``ratio_to_true_error``
+        [-], ``tighter_by`` [-] (the shadow's), ``text`` (as the search's line writes it);
+        or :func:`not_estimated`.
+    """
+    from ..analysis.critical import format_integration_error
+    from ..engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO
+    from ..solvers.global_error import MEASURED_RATIO
+
+    made = [s for s in searches if s.get("speed_error_mm_s") is not None]
+    if not made:
+        return not_estimated(reason)
+    worst = max(made, key=lambda s: s["speed_error_mm_s"])
+    # an entry stored without its method is an embedded one (format_integration_error)
+    method = worst.get("speed_error_method") or "embedded"
+    shadow = method == "shadow"
+    return {"estimated": True, "method": method, "speed_error_mm_s": worst["speed_error_mm_s"],
+            "ratio_to_true_error": list(SHADOW_RATIO if shadow else MEASURED_RATIO),
+            **({"tighter_by": SHADOW_FACTOR} if shadow else {}),
+            "text": format_integration_error(worst).strip(" []")}
+
+
+def _no_estimate_reason(method: str, estimate: bool) -> str:
+    """Why ``creep``'s searches carry no estimate when none does."""
+    from ..engine.error_estimate import SHADOW_FACTOR
+
+    if method == "stepdown":
+        return STEPDOWN_REASON
+    if not estimate:
+        return shadow_impossible_reason()
+    return (f"the deciding trials could not be compared with their runs {SHADOW_FACTOR:g}× "
+            "tighter (a run diverged)")
+
+
+def protocol_text(start: str, speed_range: tuple[float, float], coarse_step: float,
+                  rule: VerdictRule) -> str:
+    """The protocol a search ran, in words with its settings [mm/s; s]: as
+    ``feeddrive.analysis.protocol.describe`` writes the default one, with the speed range,
+    the coarse step and the trial lengths given.
+
+    Parameters
+    ----------
+    start : str
+        ``"rest"`` or ``"running"`` (the step-down).
+    speed_range : tuple of float
+        Lowest and highest speed tested [m/s].
+    coarse_step : float
+        The scan step from rest [m/s] (the step-down's is the protocol's).
+    rule : VerdictRule
+        The trial lengths [s].
+
+    Returns
+    -------
+    str
+        One sentence.
+    """
+    lo, hi = (v / MM_PER_S for v in speed_range)
+    fine = protocol.RESOLUTION / MM_PER_S
+    held = (f"{rule.initial_duration:g} s doubled up to {rule.max_duration:g} s until "
+            "decided")
+    if start == "rest":
+        return (f"from rest: trials of {held}, scan {lo:g}–{hi:g} mm/s in "
+                f"{coarse_step / MM_PER_S:g}-mm/s steps, then bisection to {fine:g} mm/s")
+    return (f"step-down on a running table: staircase from {hi:g} mm/s in "
+            f"{protocol.STAIRCASE_COARSE_STEP / MM_PER_S:g}-mm/s steps, then {fine:g}-mm/s "
+            f"steps from the last smooth one (down to {lo:g} mm/s), each step held {held}")
+
+
+class SearchProgress:
+    """The searches' progress on stderr, as a drive's ``simulate`` shows its run's
+    (``feeddrive.cli._common.progress_bar``: rich, transient, on the error console): the
+    search under way, the trials it has run (where it reports them) and the time elapsed.
+
+    Parameters
+    ----------
+    bar : rich.progress.Progress
+        The display, started.
+    """
+
+    def __init__(self, bar: Any) -> None:
+        self.bar = bar
+        self.task = bar.add_task("starting", total=None, count="")
+
+    def stage(self, label: str) -> Callable[[int, int], None]:
+        """A new search: its label shown, its count cleared.
+
+        Parameters
+        ----------
+        label : str
+            What is searched.
+
+        Returns
+        -------
+        callable
+            ``advance(done, total)``, the search's ``progress`` (total 0: not known).
+        """
+        self.bar.update(self.task, description=label, count="")
+        return self.advance
+
+    def advance(self, done: int, total: int) -> None:
+        """``done`` trials of ``total`` (0: not known) run.
+
+        Parameters
+        ----------
+        done, total : int
+            Trials run and to run.
+        """
+        count = f"{done} of {total}" if total else f"{done}"
+        self.bar.update(self.task, count=f"{count} trial{'' if (total or done) == 1 else 's'}")
+
+
+@contextmanager
+def search_progress(shown: bool) -> Iterator[SearchProgress | None]:
+    """:class:`SearchProgress` while the searches run, if ``shown`` and stderr is a terminal
+    (elsewhere a transient rich display draws nothing; and with ``--json`` rich.progress is
+    not imported); else None.
+
+    Parameters
+    ----------
+    shown : bool
+        Whether progress may be shown (not with ``--json``).
+
+    Yields
+    ------
+    SearchProgress or None
+        The display.
+    """
+    if not (shown and err_console.is_terminal):
+        yield None
+        return
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    with Progress(TextColumn("{task.description}"), BarColumn(),
+                  TextColumn("{task.fields[count]}"), TimeElapsedColumn(),
+                  console=err_console, transient=True) as bar:
+        yield SearchProgress(bar)
+
+
+def _stage(shown: SearchProgress | None, label: str) -> dict[str, Any]:
+    """The ``progress`` keyword of a search with a counting callback: none without a
+    display (the call is then the one ``reproduce`` makes)."""
+    return {} if shown is None else {"progress": shown.stage(label)}
 
 
 @app.command("creep")
@@ -60,25 +270,24 @@ def creep_command(
         "ripple stays below this fraction of the command [fraction]."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    as_json: bool = typer.Option(False, "--json", help="Print JSON."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON (speeds in mm/s; `units` "
+                                 "names the unit of each field whose name has none; "
+                                 "`integration_error` states the estimate or why there is "
+                                 "none)."),
     solver: Any = None,
 ) -> None:
     """Critical creeping speed [mm/s]: the upper edge of the highest creeping band (the lowest
     tested speed above every stick-slip or sustained oscillation), resolution 0.01 mm/s, with
     every creeping band found and its kind.  Each trial runs until decided (smooth, stick-slip,
     oscillation) or answers 'undecided'.  With --method both, the answers from rest and from a
-    running table are shown.  The protocol (speed grid, steps) is the one `reproduce` uses,
-    so both give one number.  The search from rest states the table-speed integration error
-    of the trials that decide it: their difference to the same trials run with every
-    tolerance 10× tighter (7–9 % more CPU), an estimate, not a bound, written with the
-    measured range of its ratio to the true error (docs/model.md)."""
-    from ..analysis.critical import (
-        critical_speed_from_rest,
-        critical_speed_stepdown,
-        format_bands,
-        format_integration_error,
-        shadow_possible,
-    )
+    running table are shown.  Each search states the protocol it ran (speed range, steps,
+    trial lengths); at the defaults it is the one `reproduce` uses, so both give one number.
+    The search from rest states the table-speed integration error of the trials that decide
+    it: their difference to the same trials run with every tolerance 10× tighter (7–9 % more
+    CPU), an estimate, not a bound, written with the measured range of its ratio to the true
+    error (docs/model.md); where none is made (the step-down, --ripple-threshold, settings at
+    double precision's reach) it says why.  On a terminal, the search's progress shows on
+    stderr."""
     from ..engine.simulate import DriveSystem
 
     if method not in ("bisect", "stepdown", "both"):
@@ -88,69 +297,119 @@ def creep_command(
     system = DriveSystem(params, drive=drive,
                          table_position=_units.position("--position", position, params, drive))
     v_n = _units.speed("--nut-speed", nut_speed)
-    lo, hi = _units.speed_range("--low", low, "--high", high)
+    speed_range = _units.speed_range("--low", low, "--high", high)
     # the drive, and where its table is when that matters (not for a linear motor)
     where = drive.upper() + (f" at {position:g} mm" if system.topology().uses_table_position
                              else "")
+    context = {"parameter_set": params.name, "table_position_mm": position,
+               "integrator": solver.describe()}
     if ripple_threshold is not None:
-        from ..analysis.forced import threshold_critical_speed
-        from ..parameters import ParameterError
-
-        if not 0 < ripple_threshold <= 10:
-            raise ParameterError("--ripple-threshold", ripple_threshold,
-                                 "expected a fraction of the command in (0, 10]")
-        res = threshold_critical_speed(system, v_n, threshold=ripple_threshold,
-                                       speed_range=(lo, hi),
-                                       coarse_step=min(protocol.COARSE_STEP, (hi - lo) / 2),
-                                       resolution=protocol.RESOLUTION)
-        res.update(parameter_set=params.name, table_position_mm=position,
-                   integrator=solver.describe())
-        if as_json:
-            print_json(res)
-            return
-        shown = (f"{res['critical_speed_mm_s']:.2f} mm/s ({res['kind']} below it)"
-                 if res["critical_speed_mm_s"] is not None else res["status"])
-        console.print(f"{where}, v_n = {nut_speed:g} mm/s: critical speed {shown}",
-                      markup=False, highlight=False)
-        console.print(f"Rule: {res['rule']}", markup=False, highlight=False)
-        console.print(f"Integrator: {solver.describe()}", markup=False, highlight=False)
+        _ripple(system, v_n, ripple_threshold, speed_range, context, as_json=as_json,
+                heading=f"{where}, v_n = {nut_speed:g} mm/s")
         return
-    results = []
+    from ..analysis.critical import shadow_possible
+
     estimate = shadow_possible()  # not where the settings leave no tighter run
+    with search_progress(not as_json) as shown:
+        results = _searches(system, v_n, method, speed_range, rule, estimate, shown)
+    searches = [r.to_dict() for r in results]
+    error = integration_error(searches, _no_estimate_reason(method, estimate))
+    if as_json:
+        print_json(_json(searches, error, context, drive=drive, nut_speed=nut_speed,
+                         rule=rule))
+        return
+    _print_text(results, searches, error, where, rule, solver.describe())
+
+
+def _coarse_step(speed_range: tuple[float, float]) -> float:
+    """The scan step from rest [m/s]: the protocol's, or half the range if that is less."""
+    lo, hi = speed_range
+    return min(protocol.COARSE_STEP, (hi - lo) / 2)
+
+
+def _searches(system: DriveSystem, v_n: float, method: str,
+              speed_range: tuple[float, float], rule: VerdictRule, estimate: bool,
+              shown: SearchProgress | None) -> list[CriticalSpeed]:
+    """The searches ``--method`` asks for, from rest first (the protocol's settings)."""
+    from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
+
+    lo, hi = speed_range
+    results = []
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
-            system, nut_speed=v_n, speed_range=(lo, hi),
-            coarse_step=min(protocol.COARSE_STEP, (hi - lo) / 2),
-            resolution=protocol.RESOLUTION, rule=rule, error_estimate=estimate))
+            system, nut_speed=v_n, speed_range=(lo, hi), coarse_step=_coarse_step(speed_range),
+            resolution=protocol.RESOLUTION, rule=rule, error_estimate=estimate,
+            **_stage(shown, "search from rest")))
     if method in ("stepdown", "both"):
+        if shown is not None:  # the step-down reports no trials as it goes
+            shown.stage("step-down on a running table")
         results.append(critical_speed_stepdown(
             system, nut_speed=v_n, start_speed=hi, lowest_speed=lo, step=protocol.RESOLUTION,
             coarse_step=protocol.STAIRCASE_COARSE_STEP, rule=rule))
-    searches = [r.to_dict() for r in results]
-    out = {"drive": drive, "table_position_mm": position, "nut_speed_mm_s": nut_speed,
-           **({} if estimate or method == "stepdown"
-              else {"integration_error": not_estimated()}),
-           "parameter_set": params.name,
-           "critical_speed_mm_s": searches[0]["critical_speed_mm_s"],
-           "status": searches[0]["status"], "kind": searches[0]["kind"],
-           "bands": searches[0]["bands"], "verdict_rule": rule.to_dict(),
-           "integrator": solver.describe(), "searches": searches}
-    if len(results) == 2:
-        a, b = (r.critical_speed for r in results)
+    return results
+
+
+def _json(searches: list[dict[str, Any]], error: dict[str, Any], context: dict[str, Any], *,
+          drive: str, nut_speed: float, rule: VerdictRule) -> dict[str, Any]:
+    """``creep --json`` of the searches, the first one's answer at the top."""
+    first = searches[0]
+    out = {"drive": drive, "table_position_mm": context["table_position_mm"],
+           "nut_speed_mm_s": nut_speed, "integration_error": error,
+           "parameter_set": context["parameter_set"],
+           "critical_speed_mm_s": first["critical_speed_mm_s"], "status": first["status"],
+           "kind": first["kind"], "bands": first["bands"], "verdict_rule": rule.to_dict(),
+           "integrator": context["integrator"], "units": UNITS, "searches": searches}
+    if len(searches) == 2:
+        a, b = (s["critical_speed_mm_s"] for s in searches)
         out["start_condition_matters"] = a != b
-    if as_json:
-        print_json(out)
-        return
-    default_grid = (low, high) == (_LOW, _HIGH)
+    return out
+
+
+def _print_text(results: list[CriticalSpeed], searches: list[dict[str, Any]],
+                error: dict[str, Any], where: str, rule: VerdictRule, integrator: str) -> None:
+    """The searches as ``creep`` prints them: each with its protocol, then the rule."""
+    from ..analysis.critical import format_bands, format_integration_error
+
     for r, d in zip(results, searches, strict=True):
         console.print(f"{where}, start from {r.start}: critical "
                       f"creeping speed {r.display()}{format_integration_error(d)} "
                       f"({len(r.trials)} trials); creeping bands [mm/s]: {format_bands(d)}",
                       markup=False, highlight=False)
-        if default_grid:
-            console.print(f"  protocol {protocol.describe(r.start)}", markup=False,
-                          highlight=False)
+        text = protocol_text(r.start, r.speed_range, _coarse_step(r.speed_range), rule)
+        console.print(f"  protocol {text}", markup=False, highlight=False)
     console.print(f"Verdict rule: {rule.describe()}", markup=False, highlight=False)
-    console.print(f"Integrator: {solver.describe()}", markup=False, highlight=False)
-    if method != "stepdown" and not estimate:
-        console.print(not_estimated(), markup=False, highlight=False)
+    console.print(f"Integrator: {integrator}", markup=False, highlight=False)
+    if not error["estimated"]:
+        console.print(error["text"], markup=False, highlight=False)
+
+
+def _ripple(system: DriveSystem, v_n: float, threshold: float,
+            speed_range: tuple[float, float], context: dict[str, Any], *, as_json: bool,
+            heading: str) -> None:
+    """``creep --ripple-threshold``: the critical speed by the forced ripple's threshold
+    (:func:`feeddrive.analysis.forced.threshold_critical_speed`); no integration-error
+    estimate, and it says so."""
+    from ..analysis.forced import threshold_critical_speed
+    from ..parameters import ParameterError
+
+    if not 0 < threshold <= 10:
+        raise ParameterError("--ripple-threshold", threshold,
+                             "expected a fraction of the command in (0, 10]")
+    with search_progress(not as_json) as shown:
+        if shown is not None:  # the ripple search reports no runs as it goes
+            shown.stage("ripple-threshold search")
+        res = threshold_critical_speed(system, v_n, threshold=threshold, speed_range=speed_range,
+                                       coarse_step=_coarse_step(speed_range),
+                                       resolution=protocol.RESOLUTION)
+    error = not_estimated(RIPPLE_REASON)
+    res.update(parameter_set=context["parameter_set"],
+               table_position_mm=context["table_position_mm"],
+               integrator=context["integrator"], integration_error=error, units=RIPPLE_UNITS)
+    if as_json:
+        print_json(res)
+        return
+    shown_speed = (f"{res['critical_speed_mm_s']:.2f} mm/s ({res['kind']} below it)"
+                   if res["critical_speed_mm_s"] is not None else res["status"])
+    for line in (f"{heading}: critical speed {shown_speed}", f"Rule: {res['rule']}",
+                 f"Integrator: {context['integrator']}", error["text"]):
+        console.print(line, markup=False, highlight=False)
