@@ -72,8 +72,9 @@ def outputs(**declared: tuple[str, ...] | str) -> Callable[[F], F]:
     :func:`user_errors` checks every declared option that is given before the command's body
     runs (:func:`~feeddrive.io.outputs.check_output_file`, or ``check_output_dir`` for a
     folder): its format, its length (and that of the temporary name it is written under),
-    its folder, that it is no input of the command (:data:`_INPUT_ARGUMENTS`, and the outputs
-    declared before it), an existing file only with ``--force``, that it can be written.
+    its folder, that it is no input of the command (:data:`_INPUT_ARGUMENTS`) and not the file
+    of an output declared before it, an existing file only with ``--force``, that it can be
+    written.
 
     Parameters
     ----------
@@ -112,7 +113,7 @@ def declared_outputs(fn: Callable[..., Any]) -> dict[str, tuple[str, ...] | str]
 
 
 def _check_outputs(fn: Callable[..., Any], kwargs: dict[str, Any]) -> None:
-    from ..io.outputs import check_output_dir, check_output_file
+    from ..io.outputs import OutputError, check_output_dir, check_output_file, is_same_file
 
     declared = getattr(fn, _OUTPUTS, {})
     inputs: list[Any] = []
@@ -120,11 +121,17 @@ def _check_outputs(fn: Callable[..., Any], kwargs: dict[str, Any]) -> None:
         value = kwargs.get(name)
         if name not in declared and value is not None:
             inputs.extend(value if isinstance(value, list | tuple) else [value])
+    written: dict[str, Any] = {}  # the outputs checked so far, by option
     for name, kind in declared.items():
         value = kwargs.get(name)
         if value is None:
             continue
         option = f"--{name.replace('_', '-')}"
+        for other, path in written.items():  # two outputs of one run, one file
+            if is_same_file(value, path):
+                raise OutputError(f"{option} {shown(value)}: the same file as {other}; "
+                                  "expected a file of its own")
+        written[option] = value
         if kind == FOLDER:
             check_output_dir(value, option=option)
         elif kind == STORE:
@@ -132,7 +139,6 @@ def _check_outputs(fn: Callable[..., Any], kwargs: dict[str, Any]) -> None:
         else:
             check_output_file(value, option=option, inputs=inputs,
                               force=bool(kwargs.get("force", False)), formats=kind)
-        inputs.append(value)
 
 
 #: the longest a command's plain progress goes without a line when its output is not a
@@ -250,20 +256,37 @@ def _fail(message: str, code: int) -> typer.Exit:
     return typer.Exit(code=code)
 
 
-#: the API's SI fields the CLI takes as options in engineering units: a refusal of one is
-#: shown as the option the user typed, in its unit (issue 41 item 7: ``--nut-speed 16`` on
-#: the CDFS was answered "nut_speed = 0.016")
-_EDGE_FIELDS = {"nut_speed": ("--nut-speed", "mm/s", 1.0 / MM_PER_S)}
+#: the API's fields the CLI takes as options, field → (option, the option's unit, the factor
+#: from the field's unit to it): a refusal of one is shown as the option the user typed, in its
+#: unit (issue 41 item 7: ``--nut-speed 16`` on the CDFS was answered "nut_speed = 0.016";
+#: ``--drive bogus`` "drive = 'bogus'").  The one table: a field is shown as its option by a
+#: command that takes that option only.
+_EDGE_FIELDS: dict[str, tuple[str, str, float]] = {
+    "nut_speed": ("--nut-speed", "mm/s", 1.0 / MM_PER_S),
+    "drive": ("--drive", "", 1.0),
+    "duration": ("--duration", "s", 1.0),
+    "ramp_time": ("--ramp-time", "s", 1.0),
+    "error_estimate": ("--error-estimate", "", 1.0),
+}
 
 
-def _refusal(err: ValueError | FileNotFoundError) -> str:
-    """The one-line message of a refused input, an API field as its CLI option."""
+def _refusal(err: ValueError | FileNotFoundError, kwargs: dict[str, Any] | None = None) -> str:
+    """The one-line message of a refused input, an API field (:data:`_EDGE_FIELDS`) as the
+    option of the command (its parameters ``kwargs``) that the user typed."""
     edge = _EDGE_FIELDS.get(getattr(err, "field", ""))
-    value = getattr(err, "value", None)
-    if edge is None or getattr(err, "source", None) or not isinstance(value, int | float):
+    if edge is None or getattr(err, "source", None) or not isinstance(err, ParameterError):
         return str(err)
     option, unit, factor = edge
-    return f"{option} = {value * factor:g} [{unit}]: {err.message}"  # type: ignore[union-attr]
+    if option[2:].replace("-", "_") not in (kwargs or {}):  # not this command's option
+        return str(err)
+    value = err.value
+    if isinstance(value, bool):  # a flag: named, not valued
+        return f"{option}: {err.message}"
+    if isinstance(value, int | float) and unit:
+        return f"{option} = {value * factor:g} [{unit}]: {err.message}"
+    return str(ParameterError(option, value, err.message))
+
+
 def _from_ctrl_c(err: BaseException) -> bool:
     """Whether ``err`` is a Ctrl-C in disguise: numba reports a ``KeyboardInterrupt`` raised
     while compiled code calls back into Python as a ``SystemError`` caused by it."""
@@ -298,7 +321,7 @@ def user_errors(fn: F) -> F:
             _check_outputs(fn, kwargs)
             return fn(*args, **kwargs)
         except (ParameterError, ValueError, FileNotFoundError) as err:
-            raise _fail(_refusal(err), EXIT_REFUSED) from None
+            raise _fail(_refusal(err, kwargs), EXIT_REFUSED) from None
         except OSError as err:
             where = shown(os.fspath(err.filename)) if err.filename is not None else \
                 _files_of(kwargs) or "output"

@@ -15,21 +15,37 @@ from ..engine import options as opt
 
 F = TypeVar("F", bound=Callable[..., Any])
 
+#: the states whose error rtol does not weigh, in words: the kinds outside feeddrive.model.
+#: codegen's RELATIVE_KINDS (the model is not imported for --help;
+#: tests/integration/test_cli_simulate_s18.py checks these words against it)
+RTOL_WEIGHS_NOT = "positions, angles, loop integrals and friction deflections"
+
+
+def _range(name: str) -> str:
+    """The range an explicit absolute tolerance takes (``opt.MIN_ABSOLUTE`` …
+    ``opt.MAX_ABSOLUTE``), for its help."""
+    return f"at least {opt.MIN_ABSOLUTE[name]:g}, at most {opt.MAX_ABSOLUTE[name]:g}"
+
+
 #: (parameter, option, help) of the settings added to a command; the numbers are the engine's
 #: (feeddrive.engine.options)
 OPTIONS = (
     ("rtol", "--rtol", f"Relative tolerance of the integrator [-] (default "
-     f"{opt.DEFAULT_RTOL:g} × --accuracy; {opt.MIN_RELATIVE:g} … {opt.MAX_RTOL:g})."),
+     f"{opt.DEFAULT_RTOL:g} × --accuracy; {opt.MIN_RELATIVE:g} … {opt.MAX_RTOL:g}). It weighs "
+     f"only speeds and currents ({RTOL_WEIGHS_NOT} have absolute tolerances only), and at the "
+     f"defaults a speed's absolute tolerance ({opt.SPEED_FRACTION:g} × the speed scale) is "
+     f"{opt.SPEED_FRACTION / opt.DEFAULT_RTOL:g}× rtol × the commanded speed: --rtol alone "
+     "barely changes a run; --accuracy tightens every tolerance."),
     ("position_tolerance", "--position-tolerance",
      f"Absolute tolerance of positions [m] (default: scaled with the run, "
      f"{opt.POSITION_TIME:g} s × the speed scale, × --accuracy; docs/model.md; "
-     f"at most {opt.MAX_ABSOLUTE['position_tolerance']:g})."),
+     f"{_range('position_tolerance')})."),
     ("speed_tolerance", "--speed-tolerance",
      f"Absolute tolerance of speeds [m/s] (default: {opt.SPEED_FRACTION:g} × the speed "
-     f"scale × --accuracy; at most {opt.MAX_ABSOLUTE['speed_tolerance']:g})."),
+     f"scale × --accuracy; {_range('speed_tolerance')})."),
     ("current_tolerance", "--current-tolerance",
      f"Absolute tolerance of currents [A] (default: {opt.CURRENT_FRACTION:g} × the current "
-     f"limit, or × 1 A, × --accuracy; at most {opt.MAX_ABSOLUTE['current_tolerance']:g})."),
+     f"limit, or × 1 A, × --accuracy; {_range('current_tolerance')})."),
     ("accuracy", "--accuracy",
      f"Factor on every default tolerance [-] (0.1: ten times tighter; "
      f"{opt.MIN_RELATIVE / opt.DEFAULT_RTOL:g} … {opt.MAX_ACCURACY:g}); not with an explicit "

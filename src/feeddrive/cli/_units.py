@@ -8,6 +8,8 @@ lead of 5.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 from .. import units
@@ -28,8 +30,34 @@ SMALLEST_PLAUSIBLE_POSITION_MM = 1.0
 LARGEST_SPEED_MM_S = units.LARGEST_SPEED / MM_PER_S
 
 
+#: the lists of the warnings recording now (:func:`recorded_warnings`)
+_RECORDS: list[list[str]] = []
+
+
 def warn(text: str) -> None:
+    """Print ``warning: text`` on stderr, and record it where a command records its warnings
+    (:func:`recorded_warnings`)."""
     err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
+    for record in _RECORDS:
+        record.append(text)
+
+
+@contextmanager
+def recorded_warnings() -> Iterator[list[str]]:
+    """The warnings :func:`warn` prints meanwhile, in order: what a command's ``--json``
+    reports beside what it printed.
+
+    Yields
+    ------
+    list of str
+        The warnings' texts (without ``warning:``), filled as they are printed.
+    """
+    record: list[str] = []
+    _RECORDS.append(record)
+    try:
+        yield record
+    finally:
+        _RECORDS[:] = [r for r in _RECORDS if r is not record]  # this one, not an equal one
 
 
 def _finite(option: str, value: float, unit: str) -> float:

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import typer
 
-from ..engine.options import layered
+from ..engine.budget import PROBE_TIME, STEP_MARGIN
+from ..engine.options import DOPRI5_STEP, layered
 from ..io.outputs import PLOT_FORMATS, RESULT_FORMATS
 from . import _units
 from ._common import (
@@ -34,6 +36,17 @@ DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.engine.simulate.SolverOptions.max
 DEFAULT_METHOD = "modal"  # as feeddrive.engine.simulate.SolverOptions.method (a test checks it)
 #: the integrators offered (feeddrive.engine.simulate.METHODS without the fixed-step order checks)
 CLI_METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense")
+#: what --max-steps does: before the start, the fewest steps the largest step allows
+#: (feeddrive.engine.budget.run_budget, checked below; no bound for the dense-output methods,
+#: whose steps are not capped) and dopri5's probe (engine.simulate._check_step_rate); then the
+#: solver stops at the limit (tests/integration/test_cli_simulate_s18.py checks each)
+MAX_STEPS_HELP = (
+    "Solver step limit [-]. Checked before the start: --duration over the largest step "
+    f"(dopri5: {1e3 * DOPRI5_STEP:g} ms at --accuracy 1; the other methods have none unless "
+    "the --params file's [solver] sets max_step) may not exceed it, and a dopri5 run longer "
+    f"than {4 * PROBE_TIME:g} s is refused when the steps projected from its first "
+    f"{PROBE_TIME:g} s, × {STEP_MARGIN:g}, exceed it. Otherwise a run that reaches it stops "
+    "there with an error naming the time reached.")
 
 
 def _say(text: str) -> None:
@@ -79,9 +92,7 @@ def simulate_command(
         "(every output instant a step end, as the v1 engine; friction reversals located), "
         "auto (switched on stiffness and cost, no cap), rodas4 or dopri5-dense; default: the "
         "parameter file's [solver] method, else modal."),
-    max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
-                                  help="Solver step limit [-]; a run that needs more is "
-                                  "refused before it starts."),
+    max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps", help=MAX_STEPS_HELP),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
                                            "(default wang2021; linear-motor-example for "
                                            "--drive linear-motor)."),
@@ -91,7 +102,8 @@ def simulate_command(
     plot: str | None = typer.Option(None, "--plot", help="Write a PNG of the run."),
     error_estimate: bool = typer.Option(
         False, "--error-estimate", help="Also estimate the run's global integration error per "
-        "signal, from a second run with every tolerance 10× tighter (it costs that run)."),
+        "signal, from a second run with every tolerance 10× tighter (it costs that run); "
+        "not available with --machine."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
     machine: str | None = typer.Option(
@@ -139,6 +151,10 @@ def simulate_command(
     if machine is not None:
         from .machine_run import run_machine
 
+        if error_estimate:  # refused as `export fmu --machine` refuses a drive's options
+            raise ParameterError("--error-estimate", MISSING, "not available with --machine "
+                                 "(the estimate is of one drive's run; --accuracy 0.1 runs "
+                                 "the machine ten times tighter to compare)")
         run_machine(machine, contour=contour, radius=radius, feed=feed,
                     acceleration=acceleration, clockwise=clockwise, start_angle=start_angle,
                     turns=turns, length=length, angle=angle, contour_file=contour_file,
@@ -147,112 +163,121 @@ def simulate_command(
                                            "max_steps": (max_steps, "--max-steps")})],
                         base=solver), output=output, plot=plot, as_json=as_json)
         return
-    if profile not in PROFILES:
-        raise ParameterError("--profile", profile, f"expected one of {', '.join(PROFILES)}")
-    if profile != "csv" and table_speed is None:
-        raise ParameterError("--table-speed", MISSING, f"required for --profile {profile} [mm/s]")
-    if profile == "csv" and profile_file is None:
-        raise ParameterError("--profile-file", MISSING, "required for --profile csv")
-    if max_steps < 1:
-        raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
-    if method is not None and method not in CLI_METHODS:
-        raise ParameterError("--method", method, f"expected one of {', '.join(CLI_METHODS)}")
-    options = layered([("command line", {"method": (method, "--method"),
-                                         "max_steps": (max_steps, "--max-steps")})],
-                      base=solver)
-    params = resolve_parameters(preset_name, params_file, drive)
-    system = DriveSystem(params, drive=drive,
-                         table_position=_units.position("--position", position, params, drive))
-    v_n = _units.speed("--nut-speed", nut_speed)
-    v_t = 0.0 if table_speed is None else _units.speed("--table-speed", table_speed)
-    prof: ConstantSpeed | SineSpeed | SampledSpeed
-    if profile == "constant":
-        prof = ConstantSpeed(v_t, v_n)
-    elif profile == "sine":
-        prof = SineSpeed(v_t, v_n, frequency)
-    elif profile == "trapezoid":
-        prof = reference.trapezoid(v_t, duration or 10.0, ramp_time=ramp_time, nut_speed=v_n)
-    elif profile == "stepdown":
-        low = _units.speed("--lowest-speed", lowest_speed, positive=True)
-        if not lowest_speed < table_speed:  # type: ignore[operator]
-            raise ParameterError("--lowest-speed", lowest_speed,
-                                 f"expected < --table-speed = {table_speed:g} [mm/s]")
-        prof, _ = reference.stepdown(v_t, low, step=_units.speed("--step", step, positive=True),
-                                    dwell=dwell, nut_speed=v_n)
-    else:
-        prof = reference.from_csv(str(profile_file))
-    if isinstance(prof, SampledSpeed) and duration is None:
-        duration = float(prof.time[-1])
-    duration = 10.0 if duration is None else duration
-    if not duration > 0:
-        raise ParameterError("--duration", duration, "expected a time > 0 [s]")
-    max_step = options.largest_step
-    budget = run_budget(duration, max_step=max_step,
-                        output_interval=options.output_interval, max_steps=max_steps)
-    if budget.steps_exceeded:
-        raise ParameterError(
-            "--duration", duration,
-            f"needs at least {budget.min_steps:.3g} solver steps (step ≤ "
-            f"{max_step * 1e3:g} ms), more than --max-steps = {max_steps:.3g}; "
-            f"expected ≤ {budget.longest_duration:g} [s], or raise --max-steps")
-    # .parquet/.csv outputs are written while the run goes (memory bounded); .nc/.mat at the end
-    streamed = output is not None and output.lower().endswith((".parquet", ".csv"))
-    if not streamed:  # a record that cannot fit is refused before any warning about it
-        from ..engine.budget import check_output_memory
+    # the warnings printed from here on, for --json
+    with _units.recorded_warnings() as printed:
+        if profile not in PROFILES:
+            raise ParameterError("--profile", profile, f"expected one of {', '.join(PROFILES)}")
+        if profile != "csv" and table_speed is None:
+            raise ParameterError("--table-speed", MISSING,
+                                 f"required for --profile {profile} [mm/s]")
+        if profile == "csv" and profile_file is None:
+            raise ParameterError("--profile-file", MISSING, "required for --profile csv")
+        if max_steps < 1:
+            raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
+        if method is not None and method not in CLI_METHODS:
+            raise ParameterError("--method", method, f"expected one of {', '.join(CLI_METHODS)}")
+        options = layered([("command line", {"method": (method, "--method"),
+                                             "max_steps": (max_steps, "--max-steps")})],
+                          base=solver)
+        params = resolve_parameters(preset_name, params_file, drive)
+        system = DriveSystem(params, drive=drive,
+                             table_position=_units.position("--position", position, params, drive))
+        v_n = _units.speed("--nut-speed", nut_speed)
+        # a command of 0 is refused before the run, not by its summary after it
+        v_t = 0.0 if table_speed is None else _units.speed("--table-speed", table_speed,
+                                                           nonzero=True)
+        prof: ConstantSpeed | SineSpeed | SampledSpeed
+        if profile == "constant":
+            prof = ConstantSpeed(v_t, v_n)
+        elif profile == "sine":
+            if not (math.isfinite(frequency) and frequency > 0):
+                raise ParameterError("--frequency", frequency, "expected a frequency > 0 [Hz]")
+            prof = SineSpeed(v_t, v_n, frequency)
+        elif profile == "trapezoid":
+            prof = reference.trapezoid(v_t, duration or 10.0, ramp_time=ramp_time, nut_speed=v_n)
+        elif profile == "stepdown":
+            low = _units.speed("--lowest-speed", lowest_speed, positive=True)
+            if not lowest_speed < table_speed:  # type: ignore[operator]
+                raise ParameterError("--lowest-speed", lowest_speed,
+                                     f"expected < --table-speed = {table_speed:g} [mm/s]")
+            prof, _ = reference.stepdown(v_t, low, step=_units.speed("--step", step, positive=True),
+                                        dwell=dwell, nut_speed=v_n)
+        else:
+            prof = reference.from_csv(str(profile_file))
+        if isinstance(prof, SampledSpeed) and duration is None:
+            duration = float(prof.time[-1])
+        duration = 10.0 if duration is None else duration
+        if not duration > 0:
+            raise ParameterError("--duration", duration, "expected a time > 0 [s]")
+        max_step = options.largest_step
+        budget = run_budget(duration, max_step=max_step,
+                            output_interval=options.output_interval, max_steps=max_steps)
+        if budget.steps_exceeded:
+            raise ParameterError(
+                "--duration", duration,
+                f"needs at least {budget.min_steps:.3g} solver steps (step ≤ "
+                f"{max_step * 1e3:g} ms), more than --max-steps = {max_steps:.3g}; "
+                f"expected ≤ {budget.longest_duration:g} [s], or raise --max-steps")
+        # .parquet/.csv outputs are written while the run goes (memory bounded); .nc/.mat at the end
+        streamed = output is not None and output.lower().endswith((".parquet", ".csv"))
+        if not streamed:  # a record that cannot fit is refused before any warning about it
+            from ..engine.budget import check_output_memory
 
-        check_output_memory(duration, options.output_interval)
-    if budget.memory_bytes > MEMORY_WARNING_BYTES and not streamed:
-        _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
-                    f"{budget.memory_bytes / 1e9:.1f} GB of memory (a .parquet or .csv "
-                    "--output is written as the run goes and keeps memory small)")
-    if profile != "sine":  # a steady command: the observer's gain k checked there
-        from ..analysis.compensation import observer_gain_warning
+            check_output_memory(duration, options.output_interval)
+        if budget.memory_bytes > MEMORY_WARNING_BYTES and not streamed:
+            _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
+                        f"{budget.memory_bytes / 1e9:.1f} GB of memory (a .parquet or .csv "
+                        "--output is written as the run goes and keeps memory small)")
+        if profile != "sine":  # a steady command: the observer's gain k checked there
+            from ..analysis.compensation import observer_gain_warning
 
-        # the lowest steady speed of the run: the observer's k destabilises slow sliding
-        steady = {"csv": 0.0, "stepdown": _units.speed("--lowest-speed", lowest_speed)}
-        k_warning = observer_gain_warning(system, steady.get(profile, v_t), v_n)
-        if k_warning:
-            _units.warn(k_warning)
-    bar, advance = (None, None) if as_json else progress_bar(duration)
-    try:
-        result = simulate(system, prof, duration, options=options,
-                          output=output if streamed else None, progress=advance,
-                          error_estimate=error_estimate)
-    except SimulationError as err:
-        message = str(err).replace("options.max_steps", "--max-steps")
-        err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
-        raise typer.Exit(code=1) from None
-    except SimulationInterrupted as stop:
-        if bar is not None:
-            bar.stop()
-        err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
-                          soft_wrap=True)
-        raise interrupted() from None
-    finally:
-        if bar is not None:
-            bar.stop()
-    summary = result.summary()
-    summary["profile"] = profile
-    if output and streamed:
-        summary["output"] = output
-        summary["streamed"] = True
-    elif output:
-        summary["output"] = str(result.save(output))
-    if plot:
-        from ..plots.result import plot_result
+            # the lowest steady speed of the run: the observer's k destabilises slow sliding
+            # (--lowest-speed as converted above: its warning printed once)
+            steady = 0.0 if profile == "csv" else low if profile == "stepdown" else v_t
+            k_warning = observer_gain_warning(system, steady, v_n)
+            if k_warning:
+                _units.warn(k_warning)
+        bar, advance = (None, None) if as_json else progress_bar(duration)
+        try:
+            result = simulate(system, prof, duration, options=options,
+                              output=output if streamed else None, progress=advance,
+                              error_estimate=error_estimate)
+        except SimulationError as err:
+            message = str(err).replace("options.max_steps", "--max-steps")
+            err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
+            raise typer.Exit(code=1) from None
+        except SimulationInterrupted as stop:
+            if bar is not None:
+                bar.stop()
+            err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
+                              soft_wrap=True)
+            raise interrupted() from None
+        finally:
+            if bar is not None:
+                bar.stop()
+        summary = result.summary()
+        summary["profile"] = profile
+        if output and streamed:
+            summary["output"] = output
+            summary["streamed"] = True
+        elif output:
+            summary["output"] = str(result.save(output))
+        if plot:
+            from ..plots.result import plot_result
 
-        summary["plot"] = str(plot_result(result, plot, title=run_header(
-            drive, profile, profile_file, table_speed, frequency, position, duration,
-            params.name)))
-    for text in summary.get("warnings", []):
-        err_console.print(f"warning: {text}", markup=False, highlight=False, soft_wrap=True)
-    if as_json:
-        print_json(summary)
-    else:
-        _print_summary(summary, drive, profile, profile_file, table_speed, frequency,
-                       position, duration, params.name, output)
-    if summary.get("verdict") == "unstable":
-        raise typer.Exit(code=EXIT_UNSTABLE)
+            summary["plot"] = str(plot_result(result, plot, title=run_header(
+                drive, profile, profile_file, table_speed, frequency, position, duration,
+                params.name)))
+        for text in summary.get("warnings", []):  # the run's own, after those of its options
+            _units.warn(text)
+        summary["warnings"] = list(printed)  # the --json carries every warning printed
+        if as_json:
+            print_json(summary)
+        else:
+            _print_summary(summary, drive, profile, profile_file, table_speed, frequency,
+                           position, duration, params.name, output)
+        if summary.get("verdict") == "unstable":
+            raise typer.Exit(code=EXIT_UNSTABLE)
 
 
 def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,

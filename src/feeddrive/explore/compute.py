@@ -208,9 +208,13 @@ def run_simulation(checked: Checked, report: Report,
         the verdict (:func:`verdict_of`), the decimated traces and the friction curves
         (:func:`friction_curves`).
     """
+    from ..cli import _units
     from ..engine.simulate import Simulation, SimulationInterrupted
     from ..model.reference import ConstantSpeed
 
+    # a zero command refused before the run, in the words of `feeddrive simulate`
+    _units.speed("--table-speed", checked.table_speed / _units.MM_PER_S, nonzero=True,
+                 warn_small=False)
     what = f"simulating {checked.duration:g} s of the {checked.drive.upper()}"
     report(0.0, checked.duration, what)  # raises if the page cancelled before the start
 

@@ -292,7 +292,7 @@ def _quiet(done: float, total: float, text: str) -> None:
 def _error_field(err: BaseException) -> str | None:
     """The page field a failed run's message belongs beside."""
     text = str(err)
-    if text.startswith("command_speed"):  # the summary refuses a zero command
+    if text.startswith("--table-speed"):  # a zero command, refused as the CLI refuses it
         return "table_speed"
     return None
 
