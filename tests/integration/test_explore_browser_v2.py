@@ -111,7 +111,7 @@ def test_pick_a_signal_overlay_two_runs_download_and_read_back(server: ExplorerS
             page.screenshot(path=str(tmp_path / "explore-v2.png"), full_page=True)
 
             # a run that fails: its message, and no earlier plots under it
-            page.fill("#f-table_speed", "0")  # checked fine; the run's summary refuses it
+            page.fill("#f-table_speed", "0")  # checked fine; the run refuses it, as the CLI
             page.fill("#f-duration", "0.5")
             page.click("#run")
             page.wait_for_function("document.querySelector('#verdict').textContent"
@@ -119,8 +119,9 @@ def test_pick_a_signal_overlay_two_runs_download_and_read_back(server: ExplorerS
             for plot in ("#plot-speed", "#plot-signal", "#plot-bode", "#plot-poles"):
                 assert page.eval_on_selector(plot, "el => el.data === undefined || "
                                              "el.data.length === 0"), plot
-            assert "command_speed" in page.inner_text("#verdict") or \
-                "command_speed" in page.inner_text("#msg-table_speed")
+            refusal = "--table-speed = 0.0: expected a non-zero speed [mm/s]"
+            assert refusal in page.inner_text("#verdict") or \
+                refusal in page.inner_text("#msg-table_speed")
         finally:
             browser.close()
     assert not errors, errors

@@ -115,7 +115,7 @@ def test_an_error_in_progress_stops_the_run_and_is_raised(monkeypatch) -> None:
 def test_the_docs_state_the_live_report_interval_of_the_code() -> None:
     from pathlib import Path
 
-    every = f"every {simulate_module.LIVE_PROGRESS_EVERY:g} s"
+    every = f"when no chunk has ended for {simulate_module.LIVE_PROGRESS_EVERY:g} s"
     assert every in " ".join(fd.simulate.__doc__.split())
     model_md = Path(__file__).resolve().parents[2] / "docs" / "model.md"
     assert every in " ".join(model_md.read_text(encoding="utf-8").split())

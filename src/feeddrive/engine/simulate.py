@@ -599,8 +599,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     computed, in chunks, and the Result keeps only the last minute of the run, so memory does
     not grow with the duration.  ``progress(t, t_end)`` is called after each chunk of a long
     run (a fraction of a second of work, or ten simulated seconds) and, on the main thread,
-    every 0.2 s with the solver's live time; there Ctrl-C stops the compiled solver after the
-    step it is in (the chunks are waited on in a helper thread).
+    with the solver's live time when no chunk has ended for 0.2 s; there Ctrl-C stops the
+    compiled solver after the step it is in (the chunks are waited on in a helper thread).
 
     Parameters
     ----------
@@ -619,7 +619,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         Stream every sample to this ``.parquet`` or ``.csv`` file.
     progress : callable or None, default None
         Called as ``progress(t, t_end)`` [s] after each chunk (and, on the main thread,
-        with the live time every 0.2 s); an exception it raises stops the run.
+        with the live time when no chunk has ended for 0.2 s); an exception it raises stops
+        the run.
     error_estimate : bool or str, default False
         Also estimate the run's global integration error per signal (largest absolute and
         relative to the signal's range): True or ``"shadow"`` from a second run with every
@@ -1214,17 +1215,22 @@ FAILURE_ADVICE = {
     dopri5.STATUS_NON_FINITE: "check the parameters (a state became NaN or infinite)",
 }
 
-#: how often a run waited on by the main thread reports the solver's live time [s of wall time]
+#: a run waited on by the main thread reports the solver's live time when no chunk has ended
+#: for this long [s of wall time]
 LIVE_PROGRESS_EVERY = 0.2
 
 
 def _interruptible() -> bool:
     """Whether Ctrl-C can reach this thread as KeyboardInterrupt: the main thread, with
-    SIGINT not ignored (a pool worker of ``reproduce`` or a sweep ignores it)."""
+    SIGINT not ignored (a pool worker of ``reproduce`` or a sweep ignores it), and not a dry
+    run of :func:`feeddrive.solvers.shared.prepared_models` (its flag is this thread's)."""
     import signal
 
+    from ..solvers import shared
+
     return (threading.current_thread() is threading.main_thread()
-            and signal.getsignal(signal.SIGINT) not in (signal.SIG_IGN, None))
+            and signal.getsignal(signal.SIGINT) not in (signal.SIG_IGN, None)
+            and not shared.preparing())
 
 
 def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path | None,
@@ -1245,19 +1251,35 @@ def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path 
     """
     if not _interruptible():
         return chunks.advance(n_break, output, progress)
+    import contextvars
+    import queue
+
     t_end = n_break * sim.grid.base
     done: dict[str, Any] = {}
-    chunk_end = [0.0]  # the last chunk end the worker reached
+    # each chunk end the worker reached, with where to hand back what progress raised: the
+    # worker waits for it, so progress is called in step with the chunks, as without a thread
+    ends: queue.Queue[tuple[float, queue.Queue[BaseException | None]]] = queue.Queue()
     shown = [0.0]  # the last time given to progress
-
     finished = threading.Event()  # not Thread.join: a join interrupted by Ctrl-C can mark
     # the running thread as ended (CPython 3.11's threading._wait_for_tstate_lock)
 
+    def chunk_end(t: float, _: float) -> None:  # on the worker
+        reply: queue.Queue[BaseException | None] = queue.Queue(maxsize=1)
+        ends.put((t, reply))
+        while True:
+            try:
+                err = reply.get(timeout=0.1)
+                break
+            except queue.Empty:
+                if chunks.stop_requested:  # Ctrl-C before the main thread replied
+                    raise KeyboardInterrupt from None
+        if err is not None:
+            raise err
+
     def work() -> None:
         try:
-            done["value"] = chunks.advance(
-                n_break, output,
-                None if progress is None else lambda t, _: chunk_end.__setitem__(0, t))
+            done["value"] = chunks.advance(n_break, output,
+                                           None if progress is None else chunk_end)
         except BaseException as err:  # handed to the main thread
             done["error"] = err
         finally:
@@ -1268,27 +1290,38 @@ def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path 
             shown[0] = t
             progress(t, t_end)
 
-    worker = threading.Thread(target=work, name="feeddrive-run", daemon=True)
+    # the worker sees this thread's context (the solver settings in force, options.using)
+    worker = threading.Thread(target=contextvars.copy_context().run, args=(work,),
+                              name="feeddrive-run", daemon=True)
     worker.start()
-    stop: BaseException | None = None
-    next_live = _time.monotonic() + LIVE_PROGRESS_EVERY
+    stop: BaseException | None = None  # Ctrl-C on this thread
+    quiet_until = _time.monotonic() + LIVE_PROGRESS_EVERY
     while not finished.is_set():
         try:
-            if finished.wait(0.05):
-                break
-            if stop is None:
-                show(chunk_end[0])
-                if _time.monotonic() >= next_live:
-                    next_live += LIVE_PROGRESS_EVERY
+            try:
+                t, reply = ends.get(timeout=0.05)
+            except queue.Empty:
+                if stop is None and _time.monotonic() >= quiet_until:  # a long chunk
+                    quiet_until += LIVE_PROGRESS_EVERY
                     show(float(chunks.live[-1]))
-        except BaseException as err:  # Ctrl-C, or progress raised: stop after this step
+                continue
+            raised: BaseException | None = None
+            if stop is None:
+                try:
+                    show(t)
+                except BaseException as err:  # the worker raises it where the chunk ended
+                    raised = err
+            reply.put(raised)
+            quiet_until = _time.monotonic() + LIVE_PROGRESS_EVERY
+        except BaseException as err:  # Ctrl-C (or a live report raised): stop after this step
             stop = stop or err
             sim.request_stop()
-    if stop is not None and ("error" not in done or not isinstance(stop, KeyboardInterrupt)):
-        raise stop  # progress's own error; or Ctrl-C as the run ended: it is still obeyed
+    if stop is not None and not isinstance(stop, KeyboardInterrupt):
+        raise stop  # a live report's own error: the run was stopped for it
     if "error" in done:
         raise done["error"]
-    show(chunk_end[0])
+    if stop is not None:
+        raise stop  # Ctrl-C as the run ended: it is still obeyed
     return done["value"]
 
 
