@@ -26,6 +26,9 @@ def _run_app() -> None:
 
 
 def main() -> None:
+    from . import _sigint
+
+    _sigint.stop_within_a_step()  # Ctrl-C stops a command's runs within a solver step
     try:
         _run_app()
     except KeyboardInterrupt:

@@ -73,7 +73,7 @@ def _runs(threaded: bool) -> tuple[fd.Result, list[float]]:
     system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
     reports: list[float] = []
     keep = simulate_module._interruptible
-    simulate_module._interruptible = lambda: threaded  # type: ignore[assignment]
+    simulate_module._interruptible = lambda *_: threaded  # type: ignore[assignment]
     try:
         result = fd.simulate(system, fd.ConstantSpeed(1.2e-3), 25.0,
                              progress=lambda t, _: reports.append(t))
@@ -96,7 +96,7 @@ def test_a_run_waited_on_in_a_helper_thread_is_the_run_itself() -> None:
 def test_an_error_in_progress_stops_the_run_and_is_raised(monkeypatch) -> None:
     """A progress callback that raises (the explorer's cancel, a closed terminal) ends the
     run waited on in a helper thread, as it ended the run called directly."""
-    monkeypatch.setattr(simulate_module, "_interruptible", lambda: True)
+    monkeypatch.setattr(simulate_module, "_interruptible", lambda *_: True)
     system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
     before = threading.active_count()
 
@@ -119,3 +119,54 @@ def test_the_docs_state_the_live_report_interval_of_the_code() -> None:
     assert every in " ".join(fd.simulate.__doc__.split())
     model_md = Path(__file__).resolve().parents[2] / "docs" / "model.md"
     assert every in " ".join(model_md.read_text(encoding="utf-8").split())
+
+
+CLI_SCRIPT = textwrap.dedent("""
+    import os, signal, sys, threading, time
+    from feeddrive import __main__ as entry
+    from feeddrive.engine import simulate
+
+    advance = simulate._Chunks.advance
+    running = []
+
+    def advance_then_ctrl_c(self, *args, **kwargs):
+        # Ctrl-C 1 s into the run's first chunk (≈ 8 s of work at these settings)
+        running.append(self)
+        threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT)).start()
+        simulate._Chunks.advance = advance
+        return advance(self, *args, **kwargs)
+
+    simulate._Chunks.advance = advance_then_ctrl_c
+    sys.argv = ["feeddrive", "simulate", "--drive", "ddfs", "--nut-speed", "16",
+                "--table-speed", "0.5", "--duration", "300", "--method", "rodas4",
+                "--accuracy", "1e-8", "--json"]
+    try:
+        entry.main()
+    finally:  # where the solver was when the run ended [simulated s]
+        print("solver reached", float(running[0].live[-1]), "of a chunk of",
+              simulate.DENSE_CHUNK)
+""")
+
+
+@pytest.mark.slow
+def test_the_command_line_stops_a_run_without_progress_inside_its_chunk() -> None:
+    """The command line asks every run to be stopped within a step (``feeddrive._sigint``),
+    also one that reports no progress (``--json``): the run ends at t = 0 s, inside its first
+    chunk, not at the chunk's end (t = 10 s, as a run from Python without ``progress`` does)."""
+    done = subprocess.run([sys.executable, "-c", CLI_SCRIPT], capture_output=True, text=True,
+                          timeout=600, check=False)
+    assert done.returncode == 130, (done.returncode, done.stderr[-2000:])
+    assert "simulation interrupted at t = 0 s" in done.stderr, done.stderr[-2000:]
+    words = done.stdout.split()
+    reached, chunk = float(words[2]), float(words[-1])
+    assert 0.0 < reached < chunk, done.stdout  # stopped inside the chunk, not at its end
+
+
+def test_a_run_from_python_without_progress_is_called_directly() -> None:
+    """Not asked for (no ``progress``, ``stop_within_a_step`` off), a run on the main thread
+    calls the solver itself: the helper thread's 0.1–0.2 ms is not paid by a loop of short
+    runs."""
+    from feeddrive import _sigint
+
+    assert not _sigint.asked()
+    assert not simulate_module._interruptible(None)

@@ -599,8 +599,10 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     computed, in chunks, and the Result keeps only the last minute of the run, so memory does
     not grow with the duration.  ``progress(t, t_end)`` is called after each chunk of a long
     run (a fraction of a second of work, or ten simulated seconds) and, on the main thread,
-    with the solver's live time when no chunk has ended for 0.2 s; there Ctrl-C stops the
-    compiled solver after the step it is in (the chunks are waited on in a helper thread).
+    with the solver's live time when no chunk has ended for 0.2 s; there a run given
+    ``progress`` (and every run of the command line, :func:`feeddrive._sigint.stop_within_a_step`)
+    is waited on in a helper thread, so that Ctrl-C stops the compiled solver after the step
+    it is in.
 
     Parameters
     ----------
@@ -1220,15 +1222,19 @@ FAILURE_ADVICE = {
 LIVE_PROGRESS_EVERY = 0.2
 
 
-def _interruptible() -> bool:
-    """Whether Ctrl-C can reach this thread as KeyboardInterrupt: the main thread, with
-    SIGINT not ignored (a pool worker of ``reproduce`` or a sweep ignores it), and not a dry
-    run of :func:`feeddrive.solvers.shared.prepared_models` (its flag is this thread's)."""
+def _interruptible(progress: Callable[[float, float], None] | None = None) -> bool:
+    """Whether to wait for the run in a helper thread: asked for (``progress`` given, or
+    :func:`feeddrive._sigint.stop_within_a_step`, as the command line does), and Ctrl-C can
+    reach this thread as KeyboardInterrupt — the main thread, SIGINT not ignored (a pool worker
+    of ``reproduce`` or a sweep ignores it), not a dry run of
+    :func:`feeddrive.solvers.shared.prepared_models` (its flag is this thread's)."""
     import signal
 
+    from .. import _sigint
     from ..solvers import shared
 
-    return (threading.current_thread() is threading.main_thread()
+    return ((progress is not None or _sigint.asked())
+            and threading.current_thread() is threading.main_thread()
             and signal.getsignal(signal.SIGINT) not in (signal.SIG_IGN, None)
             and not shared.preparing())
 
@@ -1240,16 +1246,17 @@ def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path 
 
     A compiled solver call holds the main thread until it returns, and Python acts on Ctrl-C
     only between such calls: a chunk of the run (up to :data:`DENSE_CHUNK` simulated
-    seconds) at tight tolerances can take many seconds.  On the main thread the chunks
-    therefore run in a helper thread (the compiled solver releases the GIL) while the main
-    thread waits; Ctrl-C there asks the solver to stop after its current step
-    (:meth:`Simulation.request_stop`), and the run ends as on a Ctrl-C between chunks
-    (:class:`SimulationInterrupted` with what was finished).  ``progress`` is called on the
-    main thread, after each chunk as before and every :data:`LIVE_PROGRESS_EVERY` seconds with
-    the solver's live time, so a long chunk moves the bar too.  The steps are the same either
-    way: the helper thread runs the same calls.
+    seconds) at tight tolerances can take many seconds.  Where asked for (:func:`_interruptible`:
+    the command line, or a run given ``progress``) the chunks therefore run in a helper thread
+    (the compiled solver releases the GIL) while the main thread waits; Ctrl-C there asks the
+    solver to stop after its current step (:meth:`Simulation.request_stop`), and the run ends
+    as on a Ctrl-C between chunks (:class:`SimulationInterrupted` with what was finished).
+    ``progress`` is called on the main thread, after each chunk in step with the worker (which
+    waits for it, so that an error it raises stops the run where that chunk ended) and, when
+    no chunk has ended for :data:`LIVE_PROGRESS_EVERY` seconds, with the solver's live time.
+    The steps are the same either way: the helper thread runs the same calls.
     """
-    if not _interruptible():
+    if not _interruptible(progress):
         return chunks.advance(n_break, output, progress)
     import contextvars
     import queue
@@ -1258,7 +1265,7 @@ def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path 
     done: dict[str, Any] = {}
     # each chunk end the worker reached, with where to hand back what progress raised: the
     # worker waits for it, so progress is called in step with the chunks, as without a thread
-    ends: queue.Queue[tuple[float, queue.Queue[BaseException | None]]] = queue.Queue()
+    ends: queue.Queue[tuple[float, queue.Queue[BaseException | None]] | None] = queue.Queue()
     shown = [0.0]  # the last time given to progress
     finished = threading.Event()  # not Thread.join: a join interrupted by Ctrl-C can mark
     # the running thread as ended (CPython 3.11's threading._wait_for_tstate_lock)
@@ -1284,6 +1291,7 @@ def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path 
             done["error"] = err
         finally:
             finished.set()
+            ends.put(None)  # wakes the main thread at once
 
     def show(t: float) -> None:
         if progress is not None and t > shown[0]:
@@ -1299,7 +1307,10 @@ def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path 
     while not finished.is_set():
         try:
             try:
-                t, reply = ends.get(timeout=0.05)
+                item = ends.get(timeout=0.05)
+                if item is None:  # the worker has ended
+                    break
+                t, reply = item
             except queue.Empty:
                 if stop is None and _time.monotonic() >= quiet_until:  # a long chunk
                     quiet_until += LIVE_PROGRESS_EVERY
