@@ -41,3 +41,14 @@ def test_simulate_states_the_measured_ranges_of_the_code() -> None:
 
     doc = " ".join(fd.simulate.__doc__.split())
     assert f"{ratio_text(MEASURED_RATIO)} × the true error where measured" in doc
+
+
+def test_each_signals_estimate_states_its_unit() -> None:
+    """``simulate --json`` gave the absolute errors in SI without a unit (an outside check,
+    2026-12-06: ``table_speed.absolute = 1.07e-08`` beside a text in mm/s)."""
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    result = fd.simulate(system, fd.ConstantSpeed(2e-3), 1.0, error_estimate=True)
+    signals = result.solver_stats["error_estimate"]["signals"]
+    for name in ("table_speed", "table_position", "screw_current"):
+        assert signals[name]["unit"] == result.dataset[name].attrs["units"], name
+    assert signals["table_speed"]["unit"] == "m/s" and signals["table_position"]["unit"] == "m"

@@ -358,6 +358,16 @@ class Result:
             return list(self._run.meta)
         return [str(n) for n in self.dataset.data_vars]
 
+    def _meta(self) -> dict[str, tuple[str, str]]:
+        """Each signal's (unit, description)."""
+        return self._run.meta if self._run is not None else {
+            str(n): (str(v.attrs.get("units", "")), str(v.attrs.get("long_name", "")))
+            for n, v in self.dataset.data_vars.items()}
+
+    def _units(self) -> dict[str, str]:
+        """Each signal's unit (SI)."""
+        return {name: unit for name, (unit, _) in self._meta().items()}
+
     def add_error_estimate(self, entry: dict[str, Any]) -> None:
         """Attach an estimate of the run's global integration error
         (:mod:`feeddrive.engine.error_estimate`): it joins :attr:`solver_stats` (the summary,
@@ -367,8 +377,13 @@ class Result:
         Parameters
         ----------
         entry : dict
-            :func:`feeddrive.engine.error_estimate.summary_entry`.
+            :func:`feeddrive.engine.error_estimate.summary_entry`; each signal's entry gets
+            its ``unit`` (the absolute error's, SI), so that the JSON says it.
         """
+        units = self._units()
+        for name, err in entry["signals"].items():
+            if name in units:
+                err["unit"] = units[name]
         if self._run is not None:
             self._run.solver_stats["error_estimate"] = entry
             self._dataset = None
@@ -675,9 +690,7 @@ class Result:
 
         from ..io.results import provenance
 
-        meta = self._run.meta if self._run is not None else {
-            str(n): (str(v.attrs.get("units", "")), str(v.attrs.get("long_name", "")))
-            for n, v in self.dataset.data_vars.items()}
+        meta = self._meta()
         df = pd.DataFrame({name: np.array(self[name]) for name in meta},
                           index=pd.Index(np.array(self.time), name="time"))
         df.attrs = {"units": {"time": "s", **{n: u for n, (u, _) in meta.items()}},
