@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 import feeddrive as fd
 from feeddrive.cli import app
-from feeddrive.cli._solver import OPTIONS
+from feeddrive.cli._solver import CLI_UNITS, OPTIONS
 from feeddrive.engine import options as opt
 from feeddrive.engine import simulate as sim_module
 from feeddrive.parameters import ParameterError
@@ -43,7 +43,7 @@ def _no_run(monkeypatch: pytest.MonkeyPatch) -> None:
     (["--position-tolerance", "-1e-12"], "--position-tolerance"),
     (["--current-tolerance", "inf"], "--current-tolerance"),
     (["--position-tolerance", "1e300"], "--position-tolerance"),
-    (["--speed-tolerance", "0.2"], "--speed-tolerance"),
+    (["--speed-tolerance", "200"], "--speed-tolerance"),  # mm/s: 0.2 m/s
     (["--current-tolerance", "11"], "--current-tolerance"),
     (["--accuracy", "1e-9"], "--accuracy"), (["--accuracy", "0"], "--accuracy"),
     (["--rtol", "1e-8", "--accuracy", "0.1"], "--accuracy"),
@@ -80,7 +80,9 @@ def test_the_largest_absolute_tolerances_are_what_the_largest_accuracy_gives() -
     for name, flag, _ in OPTIONS:
         if name not in ceiling:
             continue
-        assert f"at most {ceiling[name]:g})" in help_text, flag
+        # in the command line's unit (mm, mm/s, A)
+        per = CLI_UNITS.get(name, ("A", 1.0))[1]
+        assert f"at most {ceiling[name] / per:g})" in help_text, flag
         opt.SolverOptions(**{name: ceiling[name]})  # the ceiling itself is taken
         with pytest.raises(ParameterError, match=f"… {ceiling[name]:g} "):
             opt.SolverOptions(**{name: ceiling[name] * (1 + 1e-9)})
@@ -113,7 +115,8 @@ def test_the_smallest_absolute_tolerances_are_what_the_smallest_accuracy_gives()
     for name, flag, _ in OPTIONS:
         if name not in floor:
             continue
-        assert f"at least {opt.MIN_ABSOLUTE[name]:g}" in help_text, flag
+        unit, per = CLI_UNITS.get(name, ("A", 1.0))
+        assert f"at least {opt.MIN_ABSOLUTE[name] / per:g}" in help_text, flag
         opt.SolverOptions(**{name: opt.MIN_ABSOLUTE[name]})  # the floor itself is taken
         with pytest.raises(ParameterError, match=f"{opt.MIN_ABSOLUTE[name]:g} … "):
             opt.SolverOptions(**{name: opt.MIN_ABSOLUTE[name] * (1 - 1e-9)})
@@ -122,7 +125,8 @@ def test_the_smallest_absolute_tolerances_are_what_the_smallest_accuracy_gives()
         assert result.exit_code == 2
         lines = [ln for ln in result.output.splitlines() if ln.strip()]
         assert len(lines) == 1 and flag in lines[0] and "1e-30" in lines[0], result.output
-        assert f"{opt.MIN_ABSOLUTE[name]:g} … {opt.MAX_ABSOLUTE[name]:g}" in lines[0]
+        assert (f"{opt.MIN_ABSOLUTE[name] / per:g} … {opt.MAX_ABSOLUTE[name] / per:g} "
+                f"[{unit}]") in lines[0]
     docs = " ".join((Path(__file__).parents[2] / "docs" / "model.md").read_text(
         encoding="utf-8").split())
     stated = ", ".join(f"{opt.MIN_ABSOLUTE[n]:g} {u}" for n, u, _ in opt.TOLERANCES
@@ -248,3 +252,20 @@ def test_a_search_states_the_integrator_it_ran_with() -> None:
     assert data["integrator"] == opt.layered(
         [("command line", {"accuracy": (0.5, "--accuracy")})]).describe()
     assert "accuracy 0.5 (from --accuracy)" in data["integrator"]
+
+
+def test_the_command_line_takes_the_absolute_tolerances_in_mm_and_mm_per_s() -> None:
+    """The CLI's lengths and speeds are mm and mm/s, its tolerances too (an outside check,
+    2026-12-06: ``--speed-tolerance 0.001`` was 1 mm/s, not 1 µm/s); the run gets them in SI
+    (the parameter file's ``[solver]`` table and the API take SI)."""
+    result = runner.invoke(app, ["simulate", "--table-speed", "2", "--duration", "0.2",
+                                 "--position-tolerance", "1e-7", "--speed-tolerance", "2e-5",
+                                 "--json"])
+    assert result.exit_code == 0, result.output
+    solver = json.loads(result.output)["solver"]
+    assert solver["position_tolerance"] == pytest.approx(1e-10, rel=1e-12)  # [m]
+    assert solver["speed_tolerance"] == pytest.approx(2e-8, rel=1e-12)  # [m/s]
+    help_text = " ".join(runner.invoke(app, ["simulate", "--help"],
+                                       terminal_width=400).output.split())
+    assert "Absolute tolerance of positions [mm]" in help_text
+    assert "Absolute tolerance of speeds [mm/s]" in help_text

@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import functools
 import inspect
+import math
 from collections.abc import Callable
 from typing import Any, TypeVar
 
 import typer
 
 from ..engine import options as opt
+from ..parameters import ParameterError
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -21,10 +23,40 @@ F = TypeVar("F", bound=Callable[..., Any])
 RTOL_WEIGHS_NOT = "positions, angles, loop integrals and friction deflections"
 
 
-def _range(name: str) -> str:
+#: the absolute tolerances the command line takes in engineering units, as its other lengths
+#: and speeds: field → (unit, SI per unit); a parameter file's ``[solver]`` table and the API
+#: take SI (an outside check, 2026-12-06: ``--speed-tolerance 0.001`` was 1 mm/s)
+CLI_UNITS = {"position_tolerance": ("mm", 1e-3), "speed_tolerance": ("mm/s", 1e-3)}
+
+
+def _limits(name: str) -> tuple[float, float]:
     """The range an explicit absolute tolerance takes (``opt.MIN_ABSOLUTE`` …
-    ``opt.MAX_ABSOLUTE``), for its help."""
-    return f"at least {opt.MIN_ABSOLUTE[name]:g}, at most {opt.MAX_ABSOLUTE[name]:g}"
+    ``opt.MAX_ABSOLUTE``) in the command line's unit."""
+    per = CLI_UNITS.get(name, ("A", 1.0))[1]
+    return opt.MIN_ABSOLUTE[name] / per, opt.MAX_ABSOLUTE[name] / per
+
+
+def _range(name: str) -> str:
+    """:func:`_limits` for the option's help."""
+    low, high = _limits(name)
+    return f"at least {low:g}, at most {high:g}"
+
+
+def _to_si(cli: dict[str, tuple[Any, str]]) -> dict[str, tuple[Any, str]]:
+    """The command line's absolute tolerances checked in its units (a bad one refused naming
+    the option, the value and the range in the unit typed) and converted to SI."""
+    out = dict(cli)
+    for name, (unit, per) in CLI_UNITS.items():
+        value, flag = cli.get(name, (None, ""))
+        if value is None:
+            continue
+        low, high = _limits(name)
+        if not (math.isfinite(value) and low <= value <= high):
+            raise ParameterError(flag, value, f"expected a finite value {low:g} … {high:g} "
+                                              f"[{unit}]")
+        out[name] = (min(max(value * per, opt.MIN_ABSOLUTE[name]), opt.MAX_ABSOLUTE[name]),
+                     flag)
+    return out
 
 
 #: (parameter, option, help) of the settings added to a command; the numbers are the engine's
@@ -37,11 +69,11 @@ OPTIONS = (
      f"{opt.SPEED_FRACTION / opt.DEFAULT_RTOL:g}× rtol × the commanded speed: --rtol alone "
      "barely changes a run; --accuracy tightens every tolerance."),
     ("position_tolerance", "--position-tolerance",
-     f"Absolute tolerance of positions [m] (default: scaled with the run, "
+     f"Absolute tolerance of positions [mm] (default: scaled with the run, "
      f"{opt.POSITION_TIME:g} s × the speed scale, × --accuracy; docs/model.md; "
      f"{_range('position_tolerance')})."),
     ("speed_tolerance", "--speed-tolerance",
-     f"Absolute tolerance of speeds [m/s] (default: {opt.SPEED_FRACTION:g} × the speed "
+     f"Absolute tolerance of speeds [mm/s] (default: {opt.SPEED_FRACTION:g} × the speed "
      f"scale × --accuracy; {_range('speed_tolerance')})."),
     ("current_tolerance", "--current-tolerance",
      f"Absolute tolerance of currents [A] (default: {opt.CURRENT_FRACTION:g} × the current "
@@ -77,7 +109,7 @@ def _settings_options(settings: tuple[tuple[str, str, str], ...]) -> Callable[[F
 
         @functools.wraps(fn)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
-            cli = {name: (kwargs.pop(name, None), flag) for name, flag, _ in settings}
+            cli = _to_si({name: (kwargs.pop(name, None), flag) for name, flag, _ in settings})
             options = solver_options(cli, kwargs.get("params_file"))
             with opt.using(options):
                 return fn(*args, solver=options, **kwargs)
