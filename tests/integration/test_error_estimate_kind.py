@@ -52,3 +52,34 @@ def test_each_signals_estimate_states_its_unit() -> None:
     for name in ("table_speed", "table_position", "screw_current"):
         assert signals[name]["unit"] == result.dataset[name].attrs["units"], name
     assert signals["table_speed"]["unit"] == "m/s" and signals["table_position"]["unit"] == "m"
+
+
+def test_the_second_run_of_an_estimate_reports_progress_under_its_own_label() -> None:
+    """``simulate --error-estimate``'s bar sat at 100 % while the second, tighter run worked
+    (an outside check, 2026-12-06): ``simulate`` reports the second run's progress too, and
+    the CLI's bar starts again under the label it was given when the time goes back."""
+    from feeddrive.cli._common import progress_bar
+
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    seen: list[float] = []
+    fd.simulate(system, fd.ConstantSpeed(2e-3), 25.0, error_estimate=True,
+                progress=lambda t, _: seen.append(t))
+    back = [k for k in range(1, len(seen)) if seen[k] < seen[k - 1]]
+    assert len(back) == 1 and seen[back[0] - 1] == pytest.approx(25.0), seen
+    assert seen[-1] == pytest.approx(25.0)
+    bar, advance = progress_bar(25.0, again="error estimate: the run 10× tighter")
+    try:
+        for t in seen:
+            advance(t, 25.0)
+        task = bar.tasks[0]
+        assert task.description == "error estimate: the run 10× tighter"
+        assert task.completed == pytest.approx(25.0)
+    finally:
+        bar.stop()
+    bar, advance = progress_bar(25.0)  # no second pass expected: the label stays
+    try:
+        for t in seen:
+            advance(t, 25.0)
+        assert bar.tasks[0].description == "simulating"
+    finally:
+        bar.stop()

@@ -381,7 +381,8 @@ def print_json(data: Any) -> None:
     sys.stdout.write(json.dumps(data, indent=2, allow_nan=False) + "\n")
 
 
-def progress_bar(duration: float) -> tuple[Any, Callable[[float, float], None]]:
+def progress_bar(duration: float, again: str | None = None,
+                 ) -> tuple[Any, Callable[[float, float], None]]:
     """The progress bar on stderr of a run without ``--json`` (whose JSON is all it prints:
     no bar, and rich.progress is not imported), and the callback that moves it: a drive's
     ``simulate`` and a machine's.
@@ -390,6 +391,9 @@ def progress_bar(duration: float) -> tuple[Any, Callable[[float, float], None]]:
     ----------
     duration : float
         The run's simulated time [s].
+    again : str, optional
+        What a second pass over the same time is (``--error-estimate``'s run with tighter
+        tolerances): when the reported time goes back, the bar starts again under this label.
 
     Returns
     -------
@@ -398,13 +402,18 @@ def progress_bar(duration: float) -> tuple[Any, Callable[[float, float], None]]:
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-    bar = Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.fields[t]}"),
-                   TimeRemainingColumn(), console=err_console, transient=True)
-    task = bar.add_task("run", total=duration, t="")
+    bar = Progress(TextColumn("{task.description}"), BarColumn(),
+                   TextColumn("{task.fields[t]}"), TimeRemainingColumn(), console=err_console,
+                   transient=True)
+    task = bar.add_task("simulating", total=duration, t="")
+    last = [0.0]
 
     def advance(t: float, t_end: float) -> None:
         if not bar.live.is_started:  # only long runs (chunked) report progress
             bar.start()
+        if again is not None and t < last[0]:  # the second pass
+            bar.reset(task, total=duration, description=again)
+        last[0] = t
         bar.update(task, completed=t, t=f"{t:.4g} / {t_end:.4g} s")
 
     return bar, advance

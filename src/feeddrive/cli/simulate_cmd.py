@@ -137,6 +137,7 @@ def simulate_command(
     sine the tracking error, reversal overshoot and stick time at reversals; always the
     following error and position deviation [µm]."""
     from ..engine.budget import MEMORY_WARNING_BYTES, run_budget
+    from ..engine.error_estimate import SHADOW_FACTOR
     from ..engine.simulate import (
         DriveSystem,
         SimulationError,
@@ -237,7 +238,9 @@ def simulate_command(
             k_warning = observer_gain_warning(system, steady, v_n)
             if k_warning:
                 _units.warn(k_warning)
-        bar, advance = (None, None) if as_json else progress_bar(duration)
+        bar, advance = (None, None) if as_json else progress_bar(
+            duration, again=f"error estimate: the run {SHADOW_FACTOR:g}× tighter"
+            if error_estimate else None)
         try:
             result = simulate(system, prof, duration, options=options,
                               output=output if streamed else None, progress=advance,

@@ -622,7 +622,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     progress : callable or None, default None
         Called as ``progress(t, t_end)`` [s] after each chunk (and, on the main thread,
         with the live time when no chunk has ended for 0.2 s); an exception it raises stops
-        the run.
+        the run.  With ``error_estimate`` True the second run reports too, its t from 0
+        again.
     error_estimate : bool or str, default False
         Also estimate the run's global integration error per signal (largest absolute and
         relative to the signal's range): True or ``"shadow"`` from a second run with every
@@ -688,7 +689,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
             np.column_stack([np.asarray(result[name], dtype=float) for name in states])))
     if shadow_options is not None:
         try:
-            shadow = Simulation(system, profile, shadow_options).run(duration)
+            shadow = Simulation(system, profile, shadow_options).run(duration,
+                                                                     progress=progress)
         except SimulationError as err:  # the run itself is done: say which run failed, keep it
             where = f" ({output} holds it)" if output is not None else ""
             failed = SimulationError(
