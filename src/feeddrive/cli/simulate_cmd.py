@@ -13,6 +13,7 @@ from ..io.outputs import PLOT_FORMATS, RESULT_FORMATS
 from . import _units
 from ._common import (
     EXIT_UNSTABLE,
+    MM,
     MM_PER_S,
     app,
     console,
@@ -423,7 +424,9 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
 
 
 def integrator_line(stats: dict[str, Any]) -> str:
-    """The run's integrator settings in one line.
+    """The run's integrator settings in one line, in the CLI's units: the table's absolute
+    tolerances and, where they differ (a DDFS's motors run at the table speed plus the nut's),
+    the motors', each with the speed scale it was scaled to.
 
     Parameters
     ----------
@@ -433,14 +436,24 @@ def integrator_line(stats: dict[str, Any]) -> str:
     Returns
     -------
     str
-        The method, the tolerances it ran at [SI] and the speed scale they were scaled to
-        [mm/s], and the accuracy factor.
+        The method, rtol, the tolerances [mm, mm/s, A] and the speed scales [mm/s], and the
+        accuracy factor.
     """
     n = _units.number
-    return (f"{stats['method']}, rtol {n(stats['rtol'], 3)}, positions "
-            f"{n(stats['position_tolerance'], 3)} m, speeds {n(stats['speed_tolerance'], 3)} "
-            f"m/s, currents {n(stats['current_tolerance'], 3)} A (scaled to "
-            f"{n(1e3 * stats['speed_scale'], 3)} mm/s; accuracy {n(stats['accuracy'], 3)})")
+
+    def tolerances(position: float, speed: float) -> str:
+        return f"positions {n(position / MM, 3)} mm, speeds {n(speed / MM_PER_S, 3)} mm/s"
+
+    table = tolerances(stats["position_tolerance"], stats["speed_tolerance"])
+    scale = stats.get("table_speed_scale", stats["speed_scale"])
+    motors = ""
+    if stats.get("motor_position_tolerance", stats["position_tolerance"]) \
+            != stats["position_tolerance"]:
+        motor = tolerances(stats["motor_position_tolerance"], stats["motor_speed_tolerance"])
+        motors = f"; motors {motor} (scaled to {n(stats['speed_scale'] / MM_PER_S, 3)} mm/s)"
+    return (f"{stats['method']}, rtol {n(stats['rtol'], 3)}, table {table} (scaled to "
+            f"{n(scale / MM_PER_S, 3)} mm/s){motors}, currents "
+            f"{n(stats['current_tolerance'], 3)} A; accuracy {n(stats['accuracy'], 3)}")
 
 
 def _si(mm_s: float | None) -> float | None:

@@ -972,6 +972,7 @@ class Simulation:
         solver_stats: dict[str, Any] = {
             "method": options.method, **self.tolerances.as_dict(),
             "accuracy": options.accuracy, "speed_scale": self.scales.speed,
+            "table_speed_scale": self.scales.table_speed,
             "current_scale": self.scales.current,
             "steps": int(stats[1]), "rejected_steps": int(stats[2]),
             "rhs_evaluations": int(stats[3]), "wall_time_s": wall,
