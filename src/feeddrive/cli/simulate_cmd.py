@@ -351,13 +351,19 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
             ("amplitude", f"{n(s['amplitude_mm_s'])} mm/s at {n(s['frequency_hz'])} Hz"),
             ("tracking error", f"rms {n(s['tracking_error_rms_mm_s'])} mm/s, max "
                                f"{n(s['tracking_error_max_mm_s'])} mm/s"),
-            ("reversal overshoot", f"{n(100 * s['reversal_overshoot'], 3)} % of the "
-                                   "amplitude"),
-            ("stick time at reversal", f"{n(s['stick_time_at_reversals_s'], 3)} s below 10 % "
-                                       f"of the amplitude (the command: "
-                                       f"{n(s['reference_dwell_at_reversals_s'], 3)} s), mean "
-                                       f"of {s['reversals']} reversals"),
         ]
+        if not s["reversals"]:  # a run too short to reach a reversal in its window
+            rows.append(("reversals", "none in the measured window: no overshoot or stick "
+                                      "time to give (run longer)"))
+        else:
+            rows += [
+                ("reversal overshoot", f"{n(100 * s['reversal_overshoot'], 3)} % of the "
+                                       "amplitude"),
+                ("stick time at reversal", f"{n(s['stick_time_at_reversals_s'], 3)} s below "
+                                           f"10 % of the amplitude (the command: "
+                                           f"{n(s['reference_dwell_at_reversals_s'], 3)} s), "
+                                           f"mean of {s['reversals']} reversals"),
+            ]
     else:
         freq = s["oscillation_frequency_hz"]
         segments = s.get("segments") or []

@@ -479,8 +479,10 @@ class Result:
                 "frequency_hz": s.frequency,
                 "tracking_error_rms_mm_s": 1e3 * s.tracking_error_rms,
                 "tracking_error_max_mm_s": 1e3 * s.tracking_error_max,
-                "reversal_overshoot": s.reversal_overshoot,
-                "stick_time_at_reversals_s": s.stick_time_at_reversals,
+                # none without a reversal in the window (a short run): not a perfect 0
+                "reversal_overshoot": s.reversal_overshoot if s.reversals else None,
+                "stick_time_at_reversals_s": s.stick_time_at_reversals if s.reversals
+                else None,
                 "reference_dwell_at_reversals_s": s.reference_dwell,
                 "reversals": s.reversals,
             })
