@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
 
 import typer
@@ -230,6 +231,42 @@ def _files_of(kwargs: dict[str, Any]) -> str:
         elif isinstance(value, list | tuple):
             names.extend(os.fspath(v) for v in value)
     return ", ".join(shown(n) for n in names)
+
+
+@contextlib.contextmanager
+def run_outcome(bar: Any) -> Iterator[None]:
+    """Around a run shown by :func:`progress_bar` (``bar`` None with ``--json``): a failed run
+    ends the command with its one-line error (exit 1), an interrupted one with where it
+    stopped (exit 130); the bar is stopped either way.  A drive's ``simulate`` and a
+    machine's.
+
+    Parameters
+    ----------
+    bar : rich.progress.Progress or None
+        The run's bar.
+
+    Yields
+    ------
+    None
+        While the run goes on.
+    """
+    from ..engine.simulate import SimulationError, SimulationInterrupted
+
+    try:
+        yield
+    except SimulationError as err:
+        message = str(err).replace("options.max_steps", "--max-steps")
+        err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    except SimulationInterrupted as stop:
+        if bar is not None:
+            bar.stop()
+        err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
+                          soft_wrap=True)
+        raise interrupted() from None
+    finally:
+        if bar is not None:
+            bar.stop()
 
 
 def interrupted() -> typer.Exit:

@@ -5,9 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import typer
-
-from ._common import console, err_console, interrupted, print_json, progress_bar
+from ._common import console, print_json, progress_bar, run_outcome
 
 #: the contour kinds (feeddrive.machine.CONTOURS; the machine package loads numba)
 CONTOURS = ("circle", "line", "corner", "csv", "together")
@@ -56,7 +54,6 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
     as_json : bool
         Print the summary as JSON.
     """
-    from ..engine.simulate import SimulationError, SimulationInterrupted
     from ..machine import load_machine, machine_summary, make_contour, simulate_machine
     from ..parameters import ParameterError
 
@@ -87,20 +84,8 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
                              f"expected ≤ {budget.longest_duration:g} [s]")
     check_output_memory(t_end, options.output_interval)
     bar, advance = (None, None) if as_json else progress_bar(t_end)
-    try:
+    with run_outcome(bar):
         result = simulate_machine(machine, path, duration, options=options, progress=advance)
-    except SimulationError as err:
-        err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
-        raise typer.Exit(code=1) from None
-    except SimulationInterrupted as stop:
-        if bar is not None:
-            bar.stop()
-        err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
-                          soft_wrap=True)
-        raise interrupted() from None
-    finally:
-        if bar is not None:
-            bar.stop()
     summary = machine_summary(result, machine, path)
     if output:
         summary["output"] = str(result.save(output))

@@ -17,12 +17,11 @@ from ._common import (
     MM_PER_S,
     app,
     console,
-    err_console,
-    interrupted,
     outputs,
     print_json,
     progress_bar,
     resolve_parameters,
+    run_outcome,
     user_errors,
 )
 from ._solver import accuracy_options
@@ -141,8 +140,6 @@ def simulate_command(
     from ..engine.error_estimate import SHADOW_FACTOR
     from ..engine.simulate import (
         DriveSystem,
-        SimulationError,
-        SimulationInterrupted,
         simulate,
     )
     from ..model import reference
@@ -242,23 +239,10 @@ def simulate_command(
         bar, advance = (None, None) if as_json else progress_bar(
             duration, again=f"error estimate: the run {SHADOW_FACTOR:g}× tighter"
             if error_estimate else None)
-        try:
+        with run_outcome(bar):
             result = simulate(system, prof, duration, options=options,
                               output=output if streamed else None, progress=advance,
                               error_estimate=error_estimate)
-        except SimulationError as err:
-            message = str(err).replace("options.max_steps", "--max-steps")
-            err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
-            raise typer.Exit(code=1) from None
-        except SimulationInterrupted as stop:
-            if bar is not None:
-                bar.stop()
-            err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
-                              soft_wrap=True)
-            raise interrupted() from None
-        finally:
-            if bar is not None:
-                bar.stop()
         summary = result.summary()
         summary["profile"] = profile
         if output and streamed:
