@@ -67,25 +67,38 @@ def check_search(*, low: float, high: float, coarse_step: float, resolution: flo
                                                f"{coarse_step * 1e3:g} / {MAX_SEARCH_STEPS}")
 
 
-def describe(start: str) -> str:
-    """The critical-speed search protocol in words, in mm/s, for the CLI and the report.
+def describe(start: str, *, speed_range: tuple[float, float] = SPEED_RANGE,
+             coarse_step: float = COARSE_STEP,
+             durations: tuple[float, float] = (TRIAL_DURATION, TRIAL_MAX_DURATION),
+             holds: bool = False) -> str:
+    """The critical-speed search protocol in words, in mm/s, for the CLI and the report: by
+    default the protocol's own settings, else those a search ran with.
 
     Parameters
     ----------
     start : str
         ``"rest"`` (trials from rest, scan then bisection) or ``"stepdown"`` (a staircase on a
         running table).
+    speed_range : tuple of float, optional
+        Lowest and highest speed tested [m/s].
+    coarse_step : float, optional
+        The scan step from rest [m/s].
+    durations : tuple of float, optional
+        A trial's first and longest length [s] (a step-down step's hold).
+    holds : bool, default False
+        Whether the step-down's sentence says how long each step is held.
 
     Returns
     -------
     str
         One sentence with the durations [s], the speed range and the steps [mm/s].
     """
-    lo, hi = (1e3 * v for v in SPEED_RANGE)
+    lo, hi = (1e3 * v for v in speed_range)
+    held = f"{durations[0]:g} s doubled up to {durations[1]:g} s until decided"
     if start == "rest":
-        return (f"from rest: trials of {TRIAL_DURATION:g} s doubled up to "
-                f"{TRIAL_MAX_DURATION:g} s until decided, scan {lo:g}–{hi:g} mm/s in "
-                f"{1e3 * COARSE_STEP:g}-mm/s steps, then bisection to {1e3 * RESOLUTION:g} mm/s")
+        return (f"from rest: trials of {held}, scan {lo:g}–{hi:g} mm/s in "
+                f"{1e3 * coarse_step:g}-mm/s steps, then bisection to {1e3 * RESOLUTION:g} mm/s")
     return (f"step-down on a running table: staircase from {hi:g} mm/s in "
             f"{1e3 * STAIRCASE_COARSE_STEP:g}-mm/s steps, then {1e3 * RESOLUTION:g}-mm/s steps "
-            f"from the last smooth one (down to {lo:g} mm/s)")
+            f"from the last smooth one (down to {lo:g} mm/s)"
+            + (f", each step held {held}" if holds else ""))

@@ -134,9 +134,9 @@ def _no_estimate_reason(method: str, estimate: bool) -> str:
 
 def protocol_text(start: str, speed_range: tuple[float, float], coarse_step: float,
                   rule: VerdictRule) -> str:
-    """The protocol a search ran, in words with its settings [mm/s; s]: as
-    ``feeddrive.analysis.protocol.describe`` writes the default one, with the speed range,
-    the coarse step and the trial lengths given.
+    """The protocol a search ran, in words with its settings
+    (:func:`feeddrive.analysis.protocol.describe`, which writes the default one for the
+    report): the speed range, the coarse step and the trial lengths given.
 
     Parameters
     ----------
@@ -154,16 +154,9 @@ def protocol_text(start: str, speed_range: tuple[float, float], coarse_step: flo
     str
         One sentence.
     """
-    lo, hi = (v / MM_PER_S for v in speed_range)
-    fine = protocol.RESOLUTION / MM_PER_S
-    held = (f"{rule.initial_duration:g} s doubled up to {rule.max_duration:g} s until "
-            "decided")
-    if start == "rest":
-        return (f"from rest: trials of {held}, scan {lo:g}–{hi:g} mm/s in "
-                f"{coarse_step / MM_PER_S:g}-mm/s steps, then bisection to {fine:g} mm/s")
-    return (f"step-down on a running table: staircase from {hi:g} mm/s in "
-            f"{protocol.STAIRCASE_COARSE_STEP / MM_PER_S:g}-mm/s steps, then {fine:g}-mm/s "
-            f"steps from the last smooth one (down to {lo:g} mm/s), each step held {held}")
+    return protocol.describe(start, speed_range=speed_range, coarse_step=coarse_step,
+                             durations=(rule.initial_duration, rule.max_duration),
+                             holds=start != "rest")
 
 
 class SearchProgress:
