@@ -230,3 +230,27 @@ def test_the_entry_takes_the_largest_estimate_and_its_method_worth() -> None:
     none = creep_cmd.integration_error([{}, {}], "the reason")
     assert none == {"estimated": False, "reason": "the reason",
                     "text": "Integration error: not estimated — the reason"}
+
+
+
+@pytest.mark.parametrize("given", [["--initial-duration", "3"], ["--max-duration", "60"],
+                                   ["--method", "bisect"]])
+def test_the_ripple_search_refuses_trial_settings_it_does_not_use(given: list[str]) -> None:
+    """``--ripple-threshold`` took ``--initial-duration``, ``--max-duration`` and ``--method``
+    and ignored them (an outside check, 2026-12-06): refused in one line, before any work."""
+    from feeddrive.analysis.forced import TRIAL
+
+    res = CliRunner().invoke(app, ["creep", "--drive", "ddfs", "--nut-speed", "16",
+                                   "--ripple-threshold", "0.5", *given])
+    assert res.exit_code == 2, res.output
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith(f"error: {given[0]} = "), res.output
+    assert f"not used with --ripple-threshold (its search runs each speed {TRIAL:g} s" \
+        in lines[0]
+
+
+
+def test_the_ripple_threshold_help_names_what_it_does_not_take() -> None:
+    text = " ".join(CliRunner().invoke(app, ["creep", "--help"], terminal_width=400)
+                    .output.split())
+    assert "(not with --method, --initial-duration, --max-duration)" in text

@@ -260,7 +260,9 @@ def creep_command(
         None, "--ripple-threshold", help="Define the critical speed by a ripple threshold "
         "instead, for a forced oscillation (motor torque ripple, e.g. --preset "
         "wang2021-ripple): the lowest command above which the steady peak-to-peak table-speed "
-        "ripple stays below this fraction of the command [fraction]."),
+        "ripple stays below this fraction of the command [fraction]; each speed runs from "
+        "rest until its ripple is steady (not with --method, --initial-duration, "
+        "--max-duration)."),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON (speeds in mm/s; `units` "
@@ -285,6 +287,8 @@ def creep_command(
 
     if method not in ("bisect", "stepdown", "both"):
         raise ValueError(f"--method = {method!r}: expected bisect, stepdown or both")
+    if ripple_threshold is not None:
+        _ripple_takes_no_trials(method, initial_duration, max_duration)
     rule = _units.trial_rule(max_duration, initial_duration)
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive=drive,
@@ -312,6 +316,25 @@ def creep_command(
                          rule=rule))
         return
     _print_text(results, searches, error, where, rule, solver.describe())
+
+
+def _ripple_takes_no_trials(method: str, initial_duration: float,
+                            max_duration: float) -> None:
+    """Refuse the trial settings of the creep searches with ``--ripple-threshold``, whose
+    search runs every speed for its own fixed time (``feeddrive.analysis.forced.TRIAL``,
+    until the forced ripple is steady) from rest: they were taken and ignored (an outside
+    check, 2026-12-06)."""
+    from ..analysis.forced import TRIAL
+    from ..parameters import ParameterError
+
+    for flag, value, default in (("--method", method, "both"),
+                                 ("--initial-duration", initial_duration,
+                                  protocol.TRIAL_DURATION),
+                                 ("--max-duration", max_duration, protocol.TRIAL_MAX_DURATION)):
+        if value != default:
+            raise ParameterError(flag, value, "not used with --ripple-threshold (its search "
+                                              f"runs each speed {TRIAL:g} s from rest, until "
+                                              "the forced ripple is steady)")
 
 
 def _coarse_step(speed_range: tuple[float, float]) -> float:
