@@ -268,3 +268,15 @@ def test_docs_outputs_md_states_the_clash_and_the_step_limit_as_the_cli(
     assert (f"longer than {4 * budget.PROBE_TIME:g} s whose solver steps, projected from a "
             f"{budget.PROBE_TIME:g}-s probe, × {budget.STEP_MARGIN:g} exceed `max_steps`") in doc
     assert f"(`dopri5`: {1e3 * opt.DOPRI5_STEP:g} ms at `--accuracy` 1;" in doc
+
+
+@pytest.mark.parametrize("command", ["circular", "positioning"])
+def test_the_machine_tests_max_steps_help_is_the_shared_one(command: str) -> None:
+    """``circular`` and ``positioning`` said a test needing more steps "is refused before it
+    starts", which only the largest-step bound does (dopri5's; none for the default method):
+    they give the shared text, without simulate's dopri5 probe (they have none)."""
+    from feeddrive.cli._solver import max_steps_help
+
+    text = _help(command)
+    assert " ".join(max_steps_help().split()) in text
+    assert "refused before it starts" not in text

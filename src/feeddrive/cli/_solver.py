@@ -59,6 +59,36 @@ def _to_si(cli: dict[str, tuple[Any, str]]) -> dict[str, tuple[Any, str]]:
     return out
 
 
+def max_steps_help(probe: bool = False) -> str:
+    """``--max-steps``' help: what is checked before a run starts (its duration over the
+    largest step, :func:`feeddrive.engine.budget.run_budget`: dopri5's step bound; the dense
+    methods have none unless a ``[solver]`` table sets ``max_step``; with ``probe``, dopri5's
+    projection from its first steps, ``engine.simulate._check_step_rate``), and that otherwise
+    a run stops at the limit.  Tested against the budget's behaviour
+    (tests/integration/test_cli_simulate_s18.py).
+
+    Parameters
+    ----------
+    probe : bool, default False
+        Whether the command's dopri5 runs are probed first (a drive's ``simulate``).
+
+    Returns
+    -------
+    str
+        The help text.
+    """
+    from ..engine.budget import PROBE_TIME, STEP_MARGIN
+
+    probed = (f", and a dopri5 run longer than {4 * PROBE_TIME:g} s is refused when the steps "
+              f"projected from its first {PROBE_TIME:g} s, × {STEP_MARGIN:g}, exceed it"
+              if probe else "")
+    return ("Solver step limit per run [-]. Checked before the start: the run's duration over "
+            f"the largest step (dopri5: {1e3 * opt.DOPRI5_STEP:g} ms at --accuracy 1; the other "
+            "methods have none unless the --params file's [solver] sets max_step) may not "
+            f"exceed it{probed}. Otherwise a run that reaches it stops there with an error "
+            "naming the time reached.")
+
+
 #: (parameter, option, help) of the settings added to a command; the numbers are the engine's
 #: (feeddrive.engine.options)
 OPTIONS = (

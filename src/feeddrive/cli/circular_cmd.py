@@ -23,7 +23,7 @@ from ._common import (
     print_json,
     user_errors,
 )
-from ._solver import accuracy_options
+from ._solver import accuracy_options, max_steps_help
 from .simulate_cmd import DEFAULT_MAX_STEPS
 
 MM_PER_MIN = 1e-3 / 60.0  # [m/s] per mm/min
@@ -81,8 +81,7 @@ def circular_command(
                                                "deviation magnification [-] (default: "
                                                "automatic)."),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
-                                  help="Solver step limit per run [-]; a test that needs more "
-                                  "is refused before it starts."),
+                                  help=max_steps_help()),
     output: str | None = typer.Option(None, "--output", help="Write the trace (time [s], "
                                       "x [mm], y [mm]) to FILE.csv (analyze --circular reads "
                                       "it)."),

@@ -26,7 +26,7 @@ from ._common import (
     resolve_parameters,
     user_errors,
 )
-from ._solver import accuracy_options
+from ._solver import accuracy_options, max_steps_help
 from .simulate_cmd import ALL_DRIVES, DEFAULT_MAX_STEPS
 
 
@@ -106,8 +106,7 @@ def positioning_command(
                                            "--drive linear-motor)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
-                                  help="Solver step limit [-]; a test that needs more is "
-                                  "refused before it starts."),
+                                  help=max_steps_help()),
     output: str | None = typer.Option(None, "--output", help="Write the record of approaches "
                                       "to FILE.csv (analyze --positioning reads it)."),
     plot: str | None = typer.Option(None, "--plot", help="Write the ISO 230-2 chart."),

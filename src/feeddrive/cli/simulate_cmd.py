@@ -7,8 +7,7 @@ from typing import Any
 
 import typer
 
-from ..engine.budget import PROBE_TIME, STEP_MARGIN
-from ..engine.options import DOPRI5_STEP, layered
+from ..engine.options import layered
 from ..io.outputs import PLOT_FORMATS, RESULT_FORMATS
 from . import _units
 from ._common import (
@@ -24,7 +23,7 @@ from ._common import (
     run_outcome,
     user_errors,
 )
-from ._solver import accuracy_options
+from ._solver import accuracy_options, max_steps_help
 
 #: every drive topology, for --help (the registry is not imported at start-up: it loads numba;
 #: tests/integration/test_cli_new_user3.py checks this against feeddrive.registry)
@@ -40,13 +39,7 @@ CLI_METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense")
 #: (feeddrive.engine.budget.run_budget, checked below; no bound for the dense-output methods,
 #: whose steps are not capped) and dopri5's probe (engine.simulate._check_step_rate); then the
 #: solver stops at the limit (tests/integration/test_cli_simulate_s18.py checks each)
-MAX_STEPS_HELP = (
-    "Solver step limit [-]. Checked before the start: --duration over the largest step "
-    f"(dopri5: {1e3 * DOPRI5_STEP:g} ms at --accuracy 1; the other methods have none unless "
-    "the --params file's [solver] sets max_step) may not exceed it, and a dopri5 run longer "
-    f"than {4 * PROBE_TIME:g} s is refused when the steps projected from its first "
-    f"{PROBE_TIME:g} s, × {STEP_MARGIN:g}, exceed it. Otherwise a run that reaches it stops "
-    "there with an error naming the time reached.")
+MAX_STEPS_HELP = max_steps_help(probe=True)
 
 
 def _say(text: str) -> None:
