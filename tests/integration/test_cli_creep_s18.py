@@ -7,6 +7,7 @@ three trials from rest) and trials of 3 s doubling to 6 s (the rule's settle tim
 
 from __future__ import annotations
 
+import inspect
 import io
 import json
 from typing import Any
@@ -259,3 +260,28 @@ def test_the_ripple_threshold_help_names_what_it_does_not_take() -> None:
     text = " ".join(CliRunner().invoke(app, ["creep", "--help"], terminal_width=400)
                     .output.split())
     assert "not with --method, --initial-duration" in text
+
+
+def test_the_estimate_is_chosen_on_the_command_line() -> None:
+    """``creep`` had no way to leave the estimate out (7–9 % of a search) or to take the
+    embedded one (an outside check, 2026-12-06): ``--error-estimate shadow|embedded|none``."""
+    from feeddrive.engine.error_estimate import SHADOW_RATIO
+    from feeddrive.solvers.global_error import MEASURED_RATIO
+
+    def entry(choice: str) -> dict[str, Any]:
+        out = json.loads(_creep("--method", "bisect", *SHORT, "--error-estimate", choice,
+                                "--json").stdout)
+        return out["integration_error"]
+
+    shadow, embedded, none = entry("shadow"), entry("embedded"), entry("none")
+    assert shadow["estimated"] and shadow["method"] == "shadow"
+    assert shadow["ratio_to_true_error"] == list(SHADOW_RATIO)
+    assert embedded["estimated"] and embedded["method"] == "embedded"
+    assert embedded["ratio_to_true_error"] == list(MEASURED_RATIO)
+    assert none == creep_cmd.not_estimated(creep_cmd.NOT_ASKED)
+    bad = runner.invoke(app, ["creep", "--error-estimate", "maybe"])
+    assert bad.exit_code == 2
+    assert bad.output.strip().startswith("error: --error-estimate = 'maybe': expected one of "
+                                         "shadow, embedded, none"), bad.output
+    option = inspect.signature(creep_cmd.creep_command).parameters["error_estimate"].default
+    assert option.help == creep_cmd.ESTIMATE_HELP and option.default == "shadow"

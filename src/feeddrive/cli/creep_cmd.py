@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from ..analysis import protocol
+from ..engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO, ratio_text
+from ..solvers.global_error import MEASURED_RATIO
 from . import _units
 from ._common import (
     MM_PER_S,
@@ -120,12 +122,39 @@ def integration_error(searches: list[dict[str, Any]], reason: str) -> dict[str, 
             "text": format_integration_error(worst).strip(" []")}
 
 
-def _no_estimate_reason(method: str, estimate: bool) -> str:
+#: ``--error-estimate``'s help, its numbers the estimators' own
+ESTIMATE_HELP = (
+    "The search from rest's integration-error estimate: shadow (its deciding trials run again "
+    f"with every tolerance {SHADOW_FACTOR:g}× tighter; {ratio_text(SHADOW_RATIO)}× the true "
+    "error where measured), embedded (carried along every trial, no second run; "
+    f"{ratio_text(MEASURED_RATIO)}× the true error where measured), or none.")
+#: ``--error-estimate``'s choices → ``critical_speed_from_rest``'s ``error_estimate``
+ESTIMATES: dict[str, str | bool] = {"shadow": "shadow", "embedded": "embedded", "none": False}
+#: why there is none when none was asked for
+NOT_ASKED = "not asked for (--error-estimate none)"
+
+
+def _estimate_asked(choice: str, shadow_possible: bool) -> str | bool:
+    """The search's ``error_estimate`` from ``--error-estimate`` (refused if not a choice):
+    no shadow where the settings leave no run 10× tighter (the search then says why)."""
+    from ..parameters import ParameterError
+
+    if choice not in ESTIMATES:
+        raise ParameterError("--error-estimate", choice,
+                             f"expected one of {', '.join(ESTIMATES)}")
+    if choice == "shadow" and not shadow_possible:
+        return False
+    return ESTIMATES[choice]
+
+
+def _no_estimate_reason(method: str, estimate: str | bool, choice: str = "shadow") -> str:
     """Why ``creep``'s searches carry no estimate when none does."""
     from ..engine.error_estimate import SHADOW_FACTOR
 
     if method == "stepdown":
         return STEPDOWN_REASON
+    if choice == "none":
+        return NOT_ASKED
     if not estimate:
         return shadow_impossible_reason()
     return (f"the deciding trials could not be compared with their runs {SHADOW_FACTOR:g}× "
@@ -263,6 +292,9 @@ def creep_command(
         "ripple stays below this fraction of the command [fraction]; each speed runs from "
         "rest until its ripple is steady (not with --method, --initial-duration, "
         "--max-duration)."),
+    error_estimate: str = typer.Option(
+        "shadow", "--error-estimate", metavar="shadow|embedded|none",
+        help=ESTIMATE_HELP),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON (speeds in mm/s; `units` "
@@ -280,8 +312,9 @@ def creep_command(
     The search from rest states the table-speed integration error of the trials that decide
     it: their difference to the same trials run with every tolerance 10× tighter (7–9 % more
     CPU), an estimate, not a bound, written with the measured range of its ratio to the true
-    error (docs/model.md); where none is made (the step-down, --ripple-threshold, settings at
-    double precision's reach) it says why.  On a terminal, the search's progress shows on
+    error (docs/model.md; --error-estimate chooses it); where none is made (the step-down,
+    --ripple-threshold, --error-estimate none, settings at double precision's reach) it says
+    why.  On a terminal, the search's progress shows on
     stderr."""
     from ..engine.simulate import DriveSystem
 
@@ -306,11 +339,11 @@ def creep_command(
         return
     from ..analysis.critical import shadow_possible
 
-    estimate = shadow_possible()  # not where the settings leave no tighter run
+    estimate = _estimate_asked(error_estimate, shadow_possible())
     with search_progress(not as_json) as shown:
         results = _searches(system, v_n, method, speed_range, rule, estimate, shown)
     searches = [r.to_dict() for r in results]
-    error = integration_error(searches, _no_estimate_reason(method, estimate))
+    error = integration_error(searches, _no_estimate_reason(method, estimate, error_estimate))
     if as_json:
         print_json(_json(searches, error, context, drive=drive, nut_speed=nut_speed,
                          rule=rule))
@@ -344,7 +377,7 @@ def _coarse_step(speed_range: tuple[float, float]) -> float:
 
 
 def _searches(system: DriveSystem, v_n: float, method: str,
-              speed_range: tuple[float, float], rule: VerdictRule, estimate: bool,
+              speed_range: tuple[float, float], rule: VerdictRule, estimate: str | bool,
               shown: SearchProgress | None) -> list[CriticalSpeed]:
     """The searches ``--method`` asks for, from rest first (the protocol's settings)."""
     from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
