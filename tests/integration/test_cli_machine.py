@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+import pytest
 import scipy.io
 import xarray as xr
 from typer.testing import CliRunner
@@ -143,8 +144,8 @@ def test_the_gantry_moves_its_carriages_together() -> None:
                             "--length", "5", "--feed", "600", "--json"])
     assert r.exit_code == 0, r.output
     summary = json.loads(r.output)
-    assert set(summary["axes"]) == {"x1", "x2"} and "contour_error_max" not in summary
-    assert 0 < summary["axes"]["x1"]["following_error_max"] < 1e-3
+    assert set(summary["axes"]) == {"x1", "x2"} and "contour_error_max_um" not in summary
+    assert 0 < summary["axes"]["x1"]["following_error_max_um"] < 1e3  # [µm]
 
 
 def test_ctrl_c_on_a_machine_run_stops_it_in_one_line_and_writes_nothing(
@@ -205,3 +206,22 @@ def test_the_help_names_every_built_in_machine() -> None:
         option = option[:option.index(" --", 1)]  # the option's own help, to the next option
         for name in MACHINES:
             assert name in option, (command, name, option)
+
+
+
+def test_the_json_gives_lengths_in_micrometres_with_the_unit_in_the_name() -> None:
+    """``simulate --machine --json`` gave following and contour errors in m with no unit
+    while the text said µm (an outside check, 2026-12-06): the keys say µm, the values are
+    the machine summary's ×1e6, text and JSON agree."""
+    args = ["simulate", "--machine", "xy-table", "--contour", "circle", "--radius", "2",
+            "--feed", "600"]
+    r = runner.invoke(app, [*args, "--json"])
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.output)
+    assert not {"contour_error_max", "roundness"} & set(s)
+    assert {"contour_error_max_um", "contour_error_min_um", "roundness_um",
+            "radius_reduction_um", "mean_radius_um"} <= set(s)
+    # a 2-mm circle: the mean radius is 2000 µm less the reduction, both in µm
+    assert s["mean_radius_um"] == pytest.approx(2000.0 - s["radius_reduction_um"], rel=1e-9)
+    text = runner.invoke(app, args, terminal_width=200).output
+    assert f"roundness {s['roundness_um']:.4g} µm" in text

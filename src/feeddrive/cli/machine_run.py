@@ -97,26 +97,43 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
 
         summary["plot"] = str(plot_machine(result, path, plot, title=(
             f"{machine.name}: {contour}, F = {feed:g} mm/min")))
+    summary = in_micrometres(summary)
     if as_json:
         print_json(summary)
         return
-    um = 1e6
     lines = [f"machine {machine.name}: {contour} at {feed:g} mm/min, "
              f"{result.time[-1]:g} s simulated"]
     for name, ax in summary["axes"].items():
         lines.append(f"  axis {name} ({ax['drive']}, {ax['parameter_set']}): largest "
-                     f"following error {ax['following_error_max'] * um:.4g} µm")
+                     f"following error {ax['following_error_max_um']:.4g} µm")
     if contour != "together":
-        lines.append(f"  contour error {summary['contour_error_min'] * um:.4g} … "
-                     f"{summary['contour_error_max'] * um:.4g} µm")
-    if "roundness" in summary:
-        lines.append(f"  mean radius reduction {summary['radius_reduction'] * um:.4g} µm, "
-                     f"roundness {summary['roundness'] * um:.4g} µm (after the lead-in)")
+        lines.append(f"  contour error {summary['contour_error_min_um']:.4g} … "
+                     f"{summary['contour_error_max_um']:.4g} µm")
+    if "roundness_um" in summary:
+        lines.append(f"  mean radius reduction {summary['radius_reduction_um']:.4g} µm, "
+                     f"roundness {summary['roundness_um']:.4g} µm (after the lead-in)")
     for key in ("output", "plot"):
         if key in summary:
             lines.append(f"  {key}: {summary[key]}")
     for ln in lines:
         console.print(ln, markup=False, highlight=False, soft_wrap=True)
+
+
+#: the lengths of :func:`feeddrive.machine.machine_summary` [m], shown in µm at the edge
+_LENGTHS = ("following_error_max", "contour_error_max", "contour_error_min", "mean_radius",
+            "radius_reduction", "roundness")
+
+
+def in_micrometres(summary: dict[str, Any]) -> dict[str, Any]:
+    """``summary`` with its lengths [m] as ``<name>_um`` [µm], as the explorer and a drive's
+    summary give errors (``simulate --machine --json`` gave them in m with no unit)."""
+
+    def convert(d: dict[str, Any]) -> dict[str, Any]:
+        return {(f"{k}_um" if k in _LENGTHS else k):
+                (1e6 * v if k in _LENGTHS else convert(v) if isinstance(v, dict) else v)
+                for k, v in d.items()}
+
+    return convert(summary)
 
 
 def run_machine_loops(machine_file: str, *, table_speed: float, with_friction: bool,
