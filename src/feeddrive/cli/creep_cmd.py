@@ -129,7 +129,8 @@ ESTIMATE_HELP = (
     "error where measured), embedded (carried along every trial, no second run; "
     f"{ratio_text(MEASURED_RATIO)}× the true error where measured), or none.")
 #: ``--error-estimate``'s choices → ``critical_speed_from_rest``'s ``error_estimate``
-ESTIMATES: dict[str, str | bool] = {"shadow": "shadow", "embedded": "embedded", "none": False}
+# (shadow as True: the call reproduce makes, tests/validation/test_report_new_user.py)
+ESTIMATES: dict[str, str | bool] = {"shadow": True, "embedded": "embedded", "none": False}
 #: why there is none when none was asked for
 NOT_ASKED = "not asked for (--error-estimate none)"
 

@@ -126,7 +126,18 @@ _LENGTHS = ("following_error_max", "contour_error_max", "contour_error_min", "me
 
 def in_micrometres(summary: dict[str, Any]) -> dict[str, Any]:
     """``summary`` with its lengths [m] as ``<name>_um`` [µm], as the explorer and a drive's
-    summary give errors (``simulate --machine --json`` gave them in m with no unit)."""
+    summary give errors (``simulate --machine --json`` gave them in m with no unit).
+
+    Parameters
+    ----------
+    summary : dict
+        :func:`feeddrive.machine.machine_summary` [SI].
+
+    Returns
+    -------
+    dict
+        The same with every length of :data:`_LENGTHS` renamed and in µm, at every level.
+    """
 
     def convert(d: dict[str, Any]) -> dict[str, Any]:
         return {(f"{k}_um" if k in _LENGTHS else k):
