@@ -285,3 +285,28 @@ def test_the_estimate_is_chosen_on_the_command_line() -> None:
                                          "shadow, embedded, none"), bad.output
     option = inspect.signature(creep_cmd.creep_command).parameters["error_estimate"].default
     assert option.help == creep_cmd.ESTIMATE_HELP and option.default == "shadow"
+
+
+@pytest.mark.parametrize("integrator", ["dopri5", "rodas4"])
+def test_the_trials_integrator_is_chosen_on_the_command_line(
+        monkeypatch: pytest.MonkeyPatch, integrator: str) -> None:
+    """``creep`` could choose its trials' integrator only through a ``[solver]`` file (its
+    ``--method`` is the search's; an outside check, 2026-12-06): ``--integrator``, in force
+    for every trial and stated in the integrator line."""
+    from feeddrive.engine import options as opt
+
+    seen: list[str] = []
+    search = _fake_search([])
+
+    def recording(system: Any, **kwargs: Any) -> Any:
+        seen.append(opt.current().method)
+        return search(system, **kwargs)
+
+    monkeypatch.setattr(critical, "critical_speed_from_rest", recording)
+    out = json.loads(_creep("--method", "bisect", "--integrator", integrator,
+                            "--json").stdout)
+    assert seen == [integrator]
+    assert out["integrator"].startswith(f"{integrator} ") and "(from --integrator)" in \
+        out["integrator"]
+    bad = runner.invoke(app, ["creep", "--integrator", "euler"])
+    assert bad.exit_code == 2 and bad.output.startswith("error: --integrator = 'euler'")

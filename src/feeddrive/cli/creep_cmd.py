@@ -22,7 +22,7 @@ from ._common import (
     user_errors,
 )
 from ._solver import accuracy_options
-from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
+from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT, CLI_METHODS
 
 if TYPE_CHECKING:
     from ..analysis.critical import CriticalSpeed
@@ -293,6 +293,10 @@ def creep_command(
         "ripple stays below this fraction of the command [fraction]; each speed runs from "
         "rest until its ripple is steady (not with --method, --initial-duration, "
         "--max-duration)."),
+    integrator: str | None = typer.Option(
+        None, "--integrator", metavar="|".join(CLI_METHODS),
+        help="The trials' integrator (as simulate's --method; default: the parameter file's "
+        "[solver] method, else modal)."),
     error_estimate: str = typer.Option(
         "shadow", "--error-estimate", metavar="shadow|embedded|none",
         help=ESTIMATE_HELP),
@@ -332,17 +336,21 @@ def creep_command(
     # the drive, and where its table is when that matters (not for a linear motor)
     where = drive.upper() + (f" at {position:g} mm" if system.topology().uses_table_position
                              else "")
+    solver = _with_integrator(solver, integrator)
     context = {"parameter_set": params.name, "table_position_mm": position,
                "integrator": solver.describe()}
-    if ripple_threshold is not None:
-        _ripple(system, v_n, ripple_threshold, speed_range, context, as_json=as_json,
-                heading=f"{where}, v_n = {nut_speed:g} mm/s")
-        return
-    from ..analysis.critical import shadow_possible
+    from ..engine.options import using
 
-    estimate = _estimate_asked(error_estimate, shadow_possible())
-    with search_progress(not as_json) as shown:
-        results = _searches(system, v_n, method, speed_range, rule, estimate, shown)
+    with using(solver):  # every trial runs with it
+        if ripple_threshold is not None:
+            _ripple(system, v_n, ripple_threshold, speed_range, context, as_json=as_json,
+                    heading=f"{where}, v_n = {nut_speed:g} mm/s")
+            return
+        from ..analysis.critical import shadow_possible
+
+        estimate = _estimate_asked(error_estimate, shadow_possible())
+        with search_progress(not as_json) as shown:
+            results = _searches(system, v_n, method, speed_range, rule, estimate, shown)
     searches = [r.to_dict() for r in results]
     error = integration_error(searches, _no_estimate_reason(method, estimate, error_estimate))
     if as_json:
@@ -350,6 +358,21 @@ def creep_command(
                          rule=rule))
         return
     _print_text(results, searches, error, where, rule, solver.describe())
+
+
+def _with_integrator(solver: Any, integrator: str | None) -> Any:
+    """The command's solver options with ``--integrator`` over them (as ``simulate``'s
+    ``--method``; ``creep --method`` is the search's): ``creep`` could choose its trials'
+    integrator only through a ``[solver]`` file (an outside check, 2026-12-06)."""
+    from ..engine.options import layered
+    from ..parameters import ParameterError
+
+    if integrator is None:
+        return solver
+    if integrator not in CLI_METHODS:
+        raise ParameterError("--integrator", integrator,
+                             f"expected one of {', '.join(CLI_METHODS)}")
+    return layered([("command line", {"method": (integrator, "--integrator")})], base=solver)
 
 
 def _ripple_takes_no_trials(method: str, initial_duration: float,
