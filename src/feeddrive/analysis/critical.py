@@ -457,14 +457,13 @@ def format_integration_error(search: dict[str, Any]) -> str:
     >>> format_integration_error({"critical_speed_mm_s": 1.56})
     ''
     """
-    from ..engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO, ratio_text
-    from ..solvers.global_error import MEASURED_RATIO
+    from ..engine.error_estimate import RATIOS, SHADOW_FACTOR, ratio_text
 
     error = search.get("speed_error_mm_s")
     if error is None:
         return ""
     shadow = search.get("speed_error_method") == "shadow"
-    worth = ratio_text(SHADOW_RATIO if shadow else MEASURED_RATIO)
+    worth = ratio_text(RATIOS["shadow" if shadow else "embedded"])
     how = (f"difference to the deciding trials run {SHADOW_FACTOR:g}× tighter" if shadow
            else "embedded estimate")
     return f" [integration error estimated {error:.1e} mm/s ({how}: {worth}× the true error)]"

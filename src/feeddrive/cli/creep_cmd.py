@@ -9,8 +9,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from ..analysis import protocol
-from ..engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO, ratio_text
-from ..solvers.global_error import MEASURED_RATIO
+from ..engine.error_estimate import RATIOS, SHADOW_FACTOR, ratio_text
 from . import _units
 from ._common import (
     MM_PER_S,
@@ -61,7 +60,6 @@ def shadow_impossible_reason() -> str:
     str
         The reason.
     """
-    from ..engine.error_estimate import SHADOW_FACTOR
     from ..engine.options import MIN_RELATIVE
 
     return (f"a run {SHADOW_FACTOR:g}× tighter than these settings would ask for less than "
@@ -106,8 +104,6 @@ def integration_error(searches: list[dict[str, Any]], reason: str) -> dict[str, 
         or :func:`not_estimated`.
     """
     from ..analysis.critical import format_integration_error
-    from ..engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO
-    from ..solvers.global_error import MEASURED_RATIO
 
     made = [s for s in searches if s.get("speed_error_mm_s") is not None]
     if not made:
@@ -115,19 +111,18 @@ def integration_error(searches: list[dict[str, Any]], reason: str) -> dict[str, 
     worst = max(made, key=lambda s: s["speed_error_mm_s"])
     # an entry stored without its method is an embedded one (format_integration_error)
     method = worst.get("speed_error_method") or "embedded"
-    shadow = method == "shadow"
     return {"estimated": True, "method": method, "speed_error_mm_s": worst["speed_error_mm_s"],
-            "ratio_to_true_error": list(SHADOW_RATIO if shadow else MEASURED_RATIO),
-            **({"tighter_by": SHADOW_FACTOR} if shadow else {}),
+            "ratio_to_true_error": list(RATIOS[method]),
+            **({"tighter_by": SHADOW_FACTOR} if method == "shadow" else {}),
             "text": format_integration_error(worst).strip(" []")}
 
 
 #: ``--error-estimate``'s help, its numbers the estimators' own
 ESTIMATE_HELP = (
     "The search from rest's integration-error estimate: shadow (its deciding trials run again "
-    f"with every tolerance {SHADOW_FACTOR:g}× tighter; {ratio_text(SHADOW_RATIO)}× the true "
-    "error where measured), embedded (carried along every trial, no second run; "
-    f"{ratio_text(MEASURED_RATIO)}× the true error where measured), or none.")
+    f"with every tolerance {SHADOW_FACTOR:g}× tighter; {ratio_text(RATIOS['shadow'])}× the "
+    "true error where measured), embedded (carried along every trial, no second run; "
+    f"{ratio_text(RATIOS['embedded'])}× the true error where measured), or none.")
 #: ``--error-estimate``'s choices → ``critical_speed_from_rest``'s ``error_estimate``
 # (shadow as True: the call reproduce makes, tests/validation/test_report_new_user.py)
 ESTIMATES: dict[str, str | bool] = {"shadow": True, "embedded": "embedded", "none": False}
@@ -150,8 +145,6 @@ def _estimate_asked(choice: str, shadow_possible: bool) -> str | bool:
 
 def _no_estimate_reason(method: str, estimate: str | bool, choice: str = "shadow") -> str:
     """Why ``creep``'s searches carry no estimate when none does."""
-    from ..engine.error_estimate import SHADOW_FACTOR
-
     if method == "stepdown":
         return STEPDOWN_REASON
     if choice == "none":

@@ -39,7 +39,8 @@ if TYPE_CHECKING:
     from .options import SolverOptions
     from .result import Result
 
-__all__ = ["ESTIMATES", "SHADOW_FACTOR", "SHADOW_RATIO", "embedded_entry", "estimate_kind",
+__all__ = ["ESTIMATES", "RATIOS", "SHADOW_FACTOR", "SHADOW_RATIO", "embedded_entry",
+           "estimate_kind",
            "ratio_text", "signal_errors", "summary_entry", "tightened"]
 
 #: the shadow run's tolerances: this many times tighter
@@ -78,6 +79,10 @@ def ratio_text(ratio: tuple[float, float]) -> str:
     """
     return "–".join(f"{r:.2g}" if r < 1e3 else f"{r:,.0f}".replace(",", " ") for r in ratio)
 
+
+#: the measured range of each estimate's ratio to the true error, by kind (:data:`ESTIMATES`):
+#: what is written beside an estimate wherever it is shown
+RATIOS = {"shadow": SHADOW_RATIO, "embedded": _RATIO}
 
 EMBEDDED_TEXT = (f"the accepted steps' local error estimates summed per {1e3 * _INTERVAL:g}-ms "
                  f"interval and carried by exp(H J), J taken every {_REFRESH} steps "
@@ -221,7 +226,8 @@ def embedded_entry(names: list[str], largest: np.ndarray,
         over the true error), ``method`` (how), ``signals`` (``{state: {"absolute": [SI],
         "relative": [-]}}``), ``largest_relative`` (signal and value; with ``states``).
     """
-    how = {"kind": "embedded", "ratio_to_true_error": list(_RATIO), "method": EMBEDDED_TEXT}
+    how = {"kind": "embedded", "ratio_to_true_error": list(RATIOS["embedded"]),
+           "method": EMBEDDED_TEXT}
     if states is None:
         return {**how, "signals": {name: {"absolute": float(largest[k])}
                                    for k, name in enumerate(names)}}
@@ -250,7 +256,8 @@ def summary_entry(errors: dict[str, dict[str, float]], options: SolverOptions,
         (how), ``shadow`` (its tolerances and cost), ``signals`` (per signal),
         ``largest_relative`` (signal and value).
     """
-    return {"kind": "shadow", "ratio_to_true_error": list(SHADOW_RATIO), "method": METHOD_TEXT,
+    return {"kind": "shadow", "ratio_to_true_error": list(RATIOS["shadow"]),
+            "method": METHOD_TEXT,
             "shadow": {"accuracy": shadow.accuracy, "rtol": shadow_stats.get("rtol"),
                        "steps": shadow_stats.get("steps"),
                        "rhs_evaluations": shadow_stats.get("rhs_evaluations")},
