@@ -580,8 +580,8 @@ class SimulationInterrupted(KeyboardInterrupt):
 
 
 # A run is integrated in chunks of about this much wall time [s] once it is longer than the
-# first chunk: a stop request acts between chunks (Ctrl-C, on the main thread, within a step:
-# _advance), progress is reported after each, and with an
+# first chunk: a stop request acts between chunks (Ctrl-C within a step where _advance waits
+# in a helper thread), progress is reported after each, and with an
 # output file each chunk is written and dropped (memory does not grow with the duration).
 CHUNK_WALL_TIME = 0.25
 FIRST_CHUNK = 2.0  # [s] simulated
@@ -1270,8 +1270,10 @@ def _advance(sim: Simulation, chunks: _Chunks, n_break: int, output: str | Path 
     # worker waits for it, so progress is called in step with the chunks, as without a thread
     ends: queue.Queue[tuple[float, queue.Queue[BaseException | None]] | None] = queue.Queue()
     shown = [0.0]  # the last time given to progress
-    finished = threading.Event()  # not Thread.join: a join interrupted by Ctrl-C can mark
-    # the running thread as ended (CPython 3.11's threading._wait_for_tstate_lock)
+    # the worker's end, seen even where Ctrl-C cut in after its wake-up (None) was taken; not
+    # Thread.join: a join interrupted by Ctrl-C can mark the running thread as ended (CPython
+    # 3.11's threading._wait_for_tstate_lock)
+    finished = threading.Event()
 
     def chunk_end(t: float, _: float) -> None:  # on the worker
         reply: queue.Queue[BaseException | None] = queue.Queue(maxsize=1)
