@@ -93,3 +93,20 @@ def test_no_study_runs_other_options() -> None:
             name = getattr(node.func, "id", getattr(node.func, "attr", ""))
             if name == "SolverOptions":
                 assert not node.args and not node.keywords, (path.name, node.lineno)
+
+
+def test_the_label_gives_lengths_and_speeds_in_the_command_lines_units() -> None:
+    """The sentence is read beside the command line's options, which take tolerances in mm
+    and mm/s (``feeddrive.cli._solver.CLI_UNITS``): 1e-9 m is written 1e-6 mm."""
+    from feeddrive.cli import _solver
+    from feeddrive.engine.options import RunScales
+
+    assert _solver.CLI_UNITS["position_tolerance"][0] == "mm"
+    text = SolverOptions(position_tolerance=1e-9, speed_tolerance=2e-8).describe()
+    assert "positions 1e-6 mm" in text and "speeds 2e-5 mm/s" in text
+    assert " m," not in text and " m/s" not in text
+    scaled = SolverOptions().describe_tolerances(RunScales(table_speed=1e-3, speed=0.017,
+                                                           current=10.0))
+    # position 1e-10 s × 1 mm/s, speed 1e-5 × 1 mm/s, scales in mm/s
+    assert "1e-10 mm (positions)" in scaled and "1e-5 mm/s (speeds)" in scaled
+    assert "table 1 mm/s, motors 17 mm/s" in scaled

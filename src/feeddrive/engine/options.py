@@ -243,6 +243,12 @@ class Tolerances:
                 "motor_speed_tolerance": self.motor_speed}
 
 
+def _mm(x: float) -> str:
+    """A length [m] or speed [m/s] as a short label in mm or mm/s (the units at the edges:
+    the command line's tolerances are given in them)."""
+    return _num(x * 1e3)
+
+
 def _num(x: float) -> str:
     """A number as a short label: 3 significant digits, the exponent without a leading zero
     (1e-5, not 1e-05)."""
@@ -518,7 +524,8 @@ class SolverOptions:
                 f"{self._from('output_interval')} ({self.output_text})")
 
     def describe_tolerances(self, scales: RunScales | None = None) -> str:
-        """The tolerances in words (part of :meth:`describe`).
+        """The tolerances in words (part of :meth:`describe`): lengths in mm, speeds in mm/s
+        (the units the command line takes them in), currents in A.
 
         Parameters
         ----------
@@ -538,22 +545,22 @@ class SolverOptions:
             deflection = ("deflections as positions" if tol.deflection is None else
                           f"deflections {_num(tol.deflection)} of their scale")
             motors = ("" if (tol.motor_position, tol.motor_speed) == (tol.position, tol.speed)
-                      else f", motors {_num(tol.motor_position)} m and {_num(tol.motor_speed)} "
-                           "m/s in table units")
+                      else f", motors {_mm(tol.motor_position)} mm and {_mm(tol.motor_speed)} "
+                           "mm/s in table units")
             return (f"rtol {_num(tol.rtol)}{self._from('rtol')}, absolute tolerances "
-                    f"{_num(tol.position)} m (positions){self._from('position_tolerance')}, "
-                    f"{_num(tol.speed)} m/s (speeds){self._from('speed_tolerance')}{motors}, "
+                    f"{_mm(tol.position)} mm (positions){self._from('position_tolerance')}, "
+                    f"{_mm(tol.speed)} mm/s (speeds){self._from('speed_tolerance')}{motors}, "
                     f"{_num(tol.current)} A (currents){self._from('current_tolerance')}, "
-                    f"{deflection} (speed scales: table {_num(scales.table_speed)} m/s, motors "
-                    f"{_num(scales.speed)} m/s; current scale {_num(scales.current)} A"
+                    f"{deflection} (speed scales: table {_mm(scales.table_speed)} mm/s, motors "
+                    f"{_mm(scales.speed)} mm/s; current scale {_num(scales.current)} A"
                     f"{acc_from})")
         parts = [
             f"rtol {_num(self.rtol)}{self._from('rtol')}" if self.rtol is not None
             else f"rtol {_num(DEFAULT_RTOL)}{acc}",
-            f"positions {_num(self.position_tolerance)} m{self._from('position_tolerance')}"
+            f"positions {_mm(self.position_tolerance)} mm{self._from('position_tolerance')}"
             if self.position_tolerance is not None
             else f"positions {_num(POSITION_TIME)} s × V{acc}",
-            f"speeds {_num(self.speed_tolerance)} m/s{self._from('speed_tolerance')}"
+            f"speeds {_mm(self.speed_tolerance)} mm/s{self._from('speed_tolerance')}"
             if self.speed_tolerance is not None else f"speeds {_num(SPEED_FRACTION)} × V{acc}",
             f"currents {_num(self.current_tolerance)} A{self._from('current_tolerance')}"
             if self.current_tolerance is not None
@@ -563,7 +570,7 @@ class SolverOptions:
         ]
         return (f"{parts[0]}, absolute tolerances {', '.join(parts[1:])} (V: the state's speed "
                 "scale, the table's largest command speed for the table, the largest motor "
-                f"command speed for the motors, at least {_num(SPEED_SCALE_FLOOR)} m/s"
+                f"command speed for the motors, at least {_mm(SPEED_SCALE_FLOOR)} mm/s"
                 f"{acc_from})")
 
     def _from(self, name: str) -> str:
