@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 import feeddrive.analysis.critical as critical
 from feeddrive.analysis import protocol
 from feeddrive.analysis.cycle_verdict import VerdictRule
-from feeddrive.cli import app, creep_cmd
+from feeddrive.cli import _common, _creep_estimate, app, creep_cmd
 from feeddrive.engine.error_estimate import SHADOW_FACTOR, SHADOW_RATIO
 from feeddrive.engine.options import MIN_RELATIVE
 from feeddrive.solvers.global_error import MEASURED_RATIO
@@ -124,7 +124,7 @@ def _spy(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
 def _terminal(monkeypatch: pytest.MonkeyPatch) -> io.StringIO:
     """stderr as a terminal: what creep's progress draws there."""
     drawn = io.StringIO()
-    monkeypatch.setattr(creep_cmd, "err_console",
+    monkeypatch.setattr(_common, "err_console",
                         Console(file=drawn, force_terminal=True, width=120))
     return drawn
 
@@ -223,12 +223,12 @@ def test_the_ripple_threshold_search_says_it_makes_no_estimate() -> None:
 def test_the_entry_takes_the_largest_estimate_and_its_method_worth() -> None:
     shadow = [{"speed_error_mm_s": 1e-5, "speed_error_method": "shadow"},
               {"speed_error_mm_s": 3e-5, "speed_error_method": "shadow"}, {}]
-    assert creep_cmd.integration_error(shadow, "unused")["speed_error_mm_s"] == 3e-5
+    assert _creep_estimate.integration_error(shadow, "unused")["speed_error_mm_s"] == 3e-5
     # an entry stored without its method is the embedded estimate (format_integration_error)
-    embedded = creep_cmd.integration_error([{"speed_error_mm_s": 2e-2}], "unused")
+    embedded = _creep_estimate.integration_error([{"speed_error_mm_s": 2e-2}], "unused")
     assert embedded["method"] == "embedded" and "tighter_by" not in embedded
     assert embedded["ratio_to_true_error"] == list(MEASURED_RATIO)
-    none = creep_cmd.integration_error([{}, {}], "the reason")
+    none = _creep_estimate.integration_error([{}, {}], "the reason")
     assert none == {"estimated": False, "reason": "the reason",
                     "text": "Integration error: not estimated — the reason"}
 
@@ -278,13 +278,13 @@ def test_the_estimate_is_chosen_on_the_command_line() -> None:
     assert shadow["ratio_to_true_error"] == list(SHADOW_RATIO)
     assert embedded["estimated"] and embedded["method"] == "embedded"
     assert embedded["ratio_to_true_error"] == list(MEASURED_RATIO)
-    assert none == creep_cmd.not_estimated(creep_cmd.NOT_ASKED)
+    assert none == _creep_estimate.not_estimated(_creep_estimate.NOT_ASKED)
     bad = runner.invoke(app, ["creep", "--error-estimate", "maybe"])
     assert bad.exit_code == 2
     assert bad.output.strip().startswith("error: --error-estimate = 'maybe': expected one of "
                                          "shadow, embedded, none"), bad.output
     option = inspect.signature(creep_cmd.creep_command).parameters["error_estimate"].default
-    assert option.help == creep_cmd.ESTIMATE_HELP and option.default == "shadow"
+    assert option.help == _creep_estimate.ESTIMATE_HELP and option.default == "shadow"
 
 
 @pytest.mark.parametrize("integrator", ["dopri5", "rodas4"])

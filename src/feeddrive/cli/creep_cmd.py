@@ -2,24 +2,29 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 import typer
 
 from ..analysis import protocol
-from ..engine.error_estimate import RATIOS, SHADOW_FACTOR, ratio_text
 from . import _units
 from ._common import (
     MM_PER_S,
     app,
     console,
-    err_console,
     print_json,
     resolve_parameters,
     user_errors,
 )
+from ._creep_estimate import (
+    ESTIMATE_HELP,
+    RIPPLE_REASON,
+    estimate_asked,
+    integration_error,
+    no_estimate_reason,
+    not_estimated,
+)
+from ._creep_progress import SearchProgress, search_progress, stage
 from ._solver import accuracy_options
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT, CLI_METHODS
 
@@ -29,12 +34,6 @@ if TYPE_CHECKING:
     from ..engine.simulate import DriveSystem
 
 _LOW, _HIGH = (round(v / MM_PER_S, 9) for v in protocol.SPEED_RANGE)
-#: how the JSON starts a line that says no integration error was estimated, and the text
-NOT_ESTIMATED = "Integration error: not estimated — "
-#: why a search made no integration-error estimate, when it is not the settings
-STEPDOWN_REASON = ("the step-down search (one continuous run on a running table) makes no "
-                   "estimate")
-RIPPLE_REASON = "the ripple-threshold search makes no estimate"
 #: the unit of every field of ``creep --json`` whose name carries none (``units`` in the
 #: JSON): a trial's (``feeddrive.analysis.critical.CreepTrial.to_dict``: its speed in mm/s,
 #: the rest as stored) and the verdict rule's (``feeddrive.analysis.cycle_verdict.VerdictRule``)
@@ -49,110 +48,6 @@ UNITS = {
 #: the same for the ``--ripple-threshold`` search's JSON
 # (``feeddrive.analysis.forced.threshold_critical_speed``)
 RIPPLE_UNITS = {"threshold": "-", "ripple_ratio": "-", "min_ratio": "-", "mean_ratio": "-"}
-
-
-def shadow_impossible_reason() -> str:
-    """Why the search from rest can make no integration-error estimate at these settings
-    (``feeddrive.analysis.critical.shadow_possible`` is False).
-
-    Returns
-    -------
-    str
-        The reason.
-    """
-    from ..engine.options import MIN_RELATIVE
-
-    return (f"a run {SHADOW_FACTOR:g}× tighter than these settings would ask for less than "
-            f"{MIN_RELATIVE:g} relative (double precision's reach)")
-
-
-def not_estimated(reason: str | None = None) -> dict[str, Any]:
-    """The ``integration_error`` entry of a search that made no estimate, and its line.
-
-    Parameters
-    ----------
-    reason : str, optional
-        Why; by default the settings' (:func:`shadow_impossible_reason`).
-
-    Returns
-    -------
-    dict
-        ``estimated`` (False), ``reason`` and ``text`` (the line ``creep`` prints).
-    """
-    why = shadow_impossible_reason() if reason is None else reason
-    return {"estimated": False, "reason": why, "text": NOT_ESTIMATED + why}
-
-
-def integration_error(searches: list[dict[str, Any]], reason: str) -> dict[str, Any]:
-    """The one ``integration_error`` entry of ``creep --json``: the largest estimate over the
-    searches (``speed_error_mm_s`` of :meth:`~feeddrive.analysis.critical.CriticalSpeed.to_dict`)
-    with how it was made and the measured range of its ratio to the true error, or why there
-    is none.
-
-    Parameters
-    ----------
-    searches : list of dict
-        The searches as ``CriticalSpeed.to_dict`` gives them.
-    reason : str
-        Why there is no estimate when no search carries one.
-
-    Returns
-    -------
-    dict
-        ``estimated``, ``method``, ``speed_error_mm_s`` [mm/s], ``ratio_to_true_error``
-        [-], ``tighter_by`` [-] (the shadow's), ``text`` (as the search's line writes it);
-        or :func:`not_estimated`.
-    """
-    from ..analysis.critical import format_integration_error
-
-    made = [s for s in searches if s.get("speed_error_mm_s") is not None]
-    if not made:
-        return not_estimated(reason)
-    worst = max(made, key=lambda s: s["speed_error_mm_s"])
-    # an entry stored without its method is an embedded one (format_integration_error)
-    method = worst.get("speed_error_method") or "embedded"
-    return {"estimated": True, "method": method, "speed_error_mm_s": worst["speed_error_mm_s"],
-            "ratio_to_true_error": list(RATIOS[method]),
-            **({"tighter_by": SHADOW_FACTOR} if method == "shadow" else {}),
-            "text": format_integration_error(worst).strip(" []")}
-
-
-#: ``--error-estimate``'s help, its numbers the estimators' own
-ESTIMATE_HELP = (
-    "The search from rest's integration-error estimate: shadow (its deciding trials run again "
-    f"with every tolerance {SHADOW_FACTOR:g}× tighter; {ratio_text(RATIOS['shadow'])}× the "
-    "true error where measured), embedded (carried along every trial, no second run; "
-    f"{ratio_text(RATIOS['embedded'])}× the true error where measured), or none.")
-#: ``--error-estimate``'s choices → ``critical_speed_from_rest``'s ``error_estimate``
-# (shadow as True: the call reproduce makes, tests/validation/test_report_new_user.py)
-ESTIMATES: dict[str, str | bool] = {"shadow": True, "embedded": "embedded", "none": False}
-#: why there is none when none was asked for
-NOT_ASKED = "not asked for (--error-estimate none)"
-
-
-def _estimate_asked(choice: str, shadow_possible: bool) -> str | bool:
-    """The search's ``error_estimate`` from ``--error-estimate`` (refused if not a choice):
-    no shadow where the settings leave no run 10× tighter (the search then says why)."""
-    from ..parameters import ParameterError
-
-    if choice not in ESTIMATES:
-        raise ParameterError("--error-estimate", choice,
-                             f"expected one of {', '.join(ESTIMATES)}")
-    if choice == "shadow" and not shadow_possible:
-        return False
-    return ESTIMATES[choice]
-
-
-def _no_estimate_reason(method: str, estimate: str | bool, choice: str = "shadow") -> str:
-    """Why ``creep``'s searches carry no estimate when none does."""
-    if method == "stepdown":
-        return STEPDOWN_REASON
-    if choice == "none":
-        return NOT_ASKED
-    if not estimate:
-        return shadow_impossible_reason()
-    return (f"the deciding trials could not be compared with their runs {SHADOW_FACTOR:g}× "
-            "tighter (a run diverged)")
 
 
 def protocol_text(start: str, speed_range: tuple[float, float], coarse_step: float,
@@ -180,82 +75,6 @@ def protocol_text(start: str, speed_range: tuple[float, float], coarse_step: flo
     return protocol.describe(start, speed_range=speed_range, coarse_step=coarse_step,
                              durations=(rule.initial_duration, rule.max_duration),
                              holds=start != "rest")
-
-
-class SearchProgress:
-    """The searches' progress on stderr, as a drive's ``simulate`` shows its run's
-    (``feeddrive.cli._common.progress_bar``: rich, transient, on the error console): the
-    search under way, the trials it has run (where it reports them) and the time elapsed.
-
-    Parameters
-    ----------
-    bar : rich.progress.Progress
-        The display, started.
-    """
-
-    def __init__(self, bar: Any) -> None:
-        self.bar = bar
-        self.task = bar.add_task("starting", total=None, count="")
-
-    def stage(self, label: str) -> Callable[[int, int], None]:
-        """A new search: its label shown, its count cleared.
-
-        Parameters
-        ----------
-        label : str
-            What is searched.
-
-        Returns
-        -------
-        callable
-            ``advance(done, total)``, the search's ``progress`` (total 0: not known).
-        """
-        self.bar.update(self.task, description=label, count="")
-        return self.advance
-
-    def advance(self, done: int, total: int) -> None:
-        """``done`` trials of ``total`` (0: not known) run.
-
-        Parameters
-        ----------
-        done, total : int
-            Trials run and to run.
-        """
-        count = f"{done} of {total}" if total else f"{done}"
-        self.bar.update(self.task, count=f"{count} trial{'' if (total or done) == 1 else 's'}")
-
-
-@contextmanager
-def search_progress(shown: bool) -> Iterator[SearchProgress | None]:
-    """:class:`SearchProgress` while the searches run, if ``shown`` and stderr is a terminal
-    (elsewhere a transient rich display draws nothing; and with ``--json`` rich.progress is
-    not imported); else None.
-
-    Parameters
-    ----------
-    shown : bool
-        Whether progress may be shown (not with ``--json``).
-
-    Yields
-    ------
-    SearchProgress or None
-        The display.
-    """
-    if not (shown and err_console.is_terminal):
-        yield None
-        return
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-    with Progress(TextColumn("{task.description}"), BarColumn(),
-                  TextColumn("{task.fields[count]}"), TimeElapsedColumn(),
-                  console=err_console, transient=True) as bar:
-        yield SearchProgress(bar)
-
-
-def _stage(shown: SearchProgress | None, label: str) -> dict[str, Any]:
-    """The ``progress`` keyword of a search with a counting callback: none without a
-    display (the call is then the one ``reproduce`` makes)."""
-    return {} if shown is None else {"progress": shown.stage(label)}
 
 
 @app.command("creep")
@@ -341,11 +160,11 @@ def creep_command(
             return
         from ..analysis.critical import shadow_possible
 
-        estimate = _estimate_asked(error_estimate, shadow_possible())
+        estimate = estimate_asked(error_estimate, shadow_possible())
         with search_progress(not as_json) as shown:
             results = _searches(system, v_n, method, speed_range, rule, estimate, shown)
     searches = [r.to_dict() for r in results]
-    error = integration_error(searches, _no_estimate_reason(method, estimate, error_estimate))
+    error = integration_error(searches, no_estimate_reason(method, estimate, error_estimate))
     if as_json:
         print_json(_json(searches, error, context, drive=drive, nut_speed=nut_speed,
                          rule=rule))
@@ -405,7 +224,7 @@ def _searches(system: DriveSystem, v_n: float, method: str,
         results.append(critical_speed_from_rest(
             system, nut_speed=v_n, speed_range=(lo, hi), coarse_step=_coarse_step(speed_range),
             resolution=protocol.RESOLUTION, rule=rule, error_estimate=estimate,
-            **_stage(shown, "search from rest")))
+            **stage(shown, "search from rest")))
     if method in ("stepdown", "both"):
         if shown is not None:  # the step-down reports no trials as it goes
             shown.stage("step-down on a running table")
