@@ -1,11 +1,17 @@
-"""Two things every on-disk cache of the package needs, free of numba: the user's cache folder
-and a lock between processes (the numba cache, :mod:`feeddrive._jit`, and the compiled-object
-cache, :mod:`feeddrive.backends.c_cache`)."""
+"""What every on-disk cache of the package needs, free of numba: the user's cache folder, a
+private folder for when that one cannot be written, and a lock between processes (the numba
+cache, :mod:`feeddrive._jit`, and the compiled-object cache,
+:mod:`feeddrive.backends.c_cache`)."""
 
 from __future__ import annotations
 
+import atexit
 import contextlib
+import functools
 import os
+import shutil
+import stat
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -32,6 +38,68 @@ def user_cache_root() -> Path:
     """
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache")
     return Path(base) / "feeddrive"
+
+
+def private_folder(prefix: str) -> Path:
+    """A folder under the system's temporary folder that this user alone can write, for a
+    cache whose own folder cannot be written: ``<temporary folder>/<prefix>-<user id>``, made
+    private (mode 0700) and kept between processes; if that name is taken by a folder that is
+    not this user's own, private one (another user could plant files there), a temporary
+    folder of this process instead — one per process and prefix, removed when it exits.
+
+    Parameters
+    ----------
+    prefix : str
+        The folder's name before the user id (``feeddrive-c``, ``feeddrive-py``).
+
+    Returns
+    -------
+    Path
+        The folder.
+    """
+    uid = os.getuid() if hasattr(os, "getuid") else 0
+    folder = Path(tempfile.gettempdir()) / f"{prefix}-{uid}"
+    try:
+        folder.mkdir(mode=0o700, exist_ok=True)
+        info = folder.lstat()
+        if (stat.S_ISDIR(info.st_mode) and (not hasattr(os, "getuid") or info.st_uid == uid)
+                and not info.st_mode & (stat.S_IWGRP | stat.S_IWOTH)):
+            return folder
+    except OSError:
+        pass
+    return _own_folder(prefix)
+
+
+@functools.cache
+def _own_folder(prefix: str) -> Path:
+    """A temporary folder of this process, made once per prefix and removed when it exits."""
+    folder = Path(tempfile.mkdtemp(prefix=f"{prefix}-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    return folder
+
+
+def writable(folder: Path) -> bool:
+    """Whether a file can be made in ``folder`` (made if missing): tried, since ``os.access``
+    does not see read-only mounts (nor, for root, modes).
+
+    Parameters
+    ----------
+    folder : Path
+        The folder.
+
+    Returns
+    -------
+    bool
+        True if a file could be made there.
+    """
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".probe-")
+    except OSError:
+        return False
+    os.close(fd)
+    os.unlink(probe)
+    return True
 
 
 @contextlib.contextmanager

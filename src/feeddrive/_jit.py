@@ -48,7 +48,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from ._disk import file_lock, user_cache_root
+from ._disk import file_lock, private_folder, user_cache_root
 
 #: whether numba is installed (``pip install 'feeddrive[numba]'``; found, not imported: see
 #: :func:`start_numba`): without it every kernel is its plain Python function and the engine
@@ -346,14 +346,15 @@ def import_generated(folder: str, stem: str, source: str) -> ModuleType:
     """
     if stem in _LOADED:
         return _LOADED[stem]
-    where = Path(CACHE_DIR) / folder
-    where.mkdir(parents=True, exist_ok=True)
-    path = where / f"{stem}.py"
-    if not path.is_file() or path.read_text(encoding="utf-8") != source:
-        fd, tmp = tempfile.mkstemp(dir=where, prefix=f".{stem}.", suffix=".tmp")
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(source)
-        os.replace(tmp, path)  # atomic: concurrent processes never import a half file
+    path = Path(_CACHE_DIR) / folder / f"{stem}.py"
+    if not _holds(path, source):
+        try:
+            _write(path, source)
+        except OSError:  # a cache that cannot be written: this user's temporary folder
+            _leave_cache()
+            path = Path(_CACHE_DIR) / folder / f"{stem}.py"
+            if not _holds(path, source):
+                _write(path, source)
     name = f"feeddrive_{stem}"
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
@@ -362,6 +363,45 @@ def import_generated(folder: str, stem: str, source: str) -> ModuleType:
     spec.loader.exec_module(module)
     _LOADED[stem] = module
     return module
+
+
+def _holds(path: Path, source: str) -> bool:
+    """Whether the file ``path`` is there with the text ``source`` (False where it cannot be
+    read)."""
+    try:
+        return path.is_file() and path.read_text(encoding="utf-8") == source
+    except (OSError, ValueError):
+        return False
+
+
+def _write(path: Path, source: str) -> None:
+    """Write ``source`` to ``path`` atomically: concurrent processes never import a half
+    file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+        fh.write(source)
+    os.replace(tmp, path)
+
+
+def _leave_cache() -> None:
+    """Move this process's compile cache (:data:`CACHE_DIR`: the generated modules and
+    numba's cache) to ``numba-<hash>`` in a folder of this user's under the system's temporary
+    folder (:func:`feeddrive._disk.private_folder`), the user's cache being read-only."""
+    global CACHE_DIR, _CACHE_DIR
+    CACHE_DIR = _CACHE_DIR = str(private_folder("feeddrive-py") / f"numba-{SOURCE_DIGEST}")
+
+
+def cache_dir() -> str:
+    """This process's compile cache folder: :data:`CACHE_DIR`, or the temporary folder it
+    moved to when the user's cache could not be written.
+
+    Returns
+    -------
+    str
+        The folder.
+    """
+    return _CACHE_DIR
 
 
 @contextlib.contextmanager

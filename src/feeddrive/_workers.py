@@ -28,9 +28,13 @@ def single_threaded_children() -> Iterator[None]:
     OpenBLAS, MKL, numba): a pool of single-core workers whose BLAS threads would otherwise
     busy-wait beside them on the same cores (reproduce's workers: 60.7 → 52.5 CPU s,
     benchmarks/README.md).  Only processes *started* meanwhile see it (``spawn``: a forked
-    child inherits its parent's already started BLAS)."""
-    saved = {k: os.environ.get(k) for k in _THREAD_ENV}
-    os.environ.update({k: "1" for k in _THREAD_ENV})
+    child inherits its parent's already started BLAS).  What a worker would say once about the
+    engine's build (no C compiler: numba runs) is said here, once, and not by the workers."""
+    from .solvers.builds import SAID_ENV, announce
+
+    announce()  # what each worker would say about the build, said once here
+    saved = {k: os.environ.get(k) for k in (*_THREAD_ENV, SAID_ENV)}
+    os.environ.update({k: "1" for k in (*_THREAD_ENV, SAID_ENV)})
     try:
         yield
     finally:

@@ -64,7 +64,7 @@ def test_a_source_is_compiled_once_then_loaded_from_the_cache(cache: Path) -> No
     other = cached_library(SOURCE % "2.0")  # another text, another library
     assert other != first and _value(other) == 5.0
     assert sorted(p.suffix for p in cache.iterdir() if not p.name.endswith(".lock")) == [
-        ".so", ".so"]  # no temporary file left behind
+        ".sha256", ".sha256", ".so", ".so"]  # each with its digest; no temporary file left
 
 
 @needs_cc
@@ -197,7 +197,10 @@ def test_a_read_only_cache_falls_back_to_a_private_temporary_folder(tmp_path: Pa
 def test_a_temporary_folder_of_someone_else_is_not_used(tmp_path: Path,
                                                         monkeypatch: pytest.MonkeyPatch
                                                         ) -> None:
+    from feeddrive import _disk
+
     monkeypatch.setattr(c_cache.tempfile, "tempdir", str(tmp_path))
+    _disk._own_folder.cache_clear()  # this process's own folder: made once per process
     taken = tmp_path / f"feeddrive-c-{os.getuid()}"
     taken.mkdir(mode=0o777)
     taken.chmod(0o777)  # world-writable: anyone could have put a library there

@@ -9,10 +9,13 @@ path, its fixed arguments and its ``--version`` output), the flags and the platf
 (:func:`cache_key`).  It is written to a temporary file in the cache folder and renamed into
 place (``os.replace``: a reader never sees half a library) while a lock on
 ``<key>.lock`` is held (``fcntl.flock``): of two processes that need one model at once, one
-compiles and the other waits and loads the same file.  Where ``fcntl`` is missing
-(Windows), nothing is locked: both may compile, each into its own temporary file, and the
-rename keeps one.  A cache folder that cannot be written is left for a folder of this user's
-under the system's temporary folder (:func:`fallback_folder`).
+compiles and the other waits and loads the same file.  Beside it ``<key>.sha256`` holds its
+SHA-256; a library whose bytes do not match (a disk that filled, a copy cut short) is compiled
+again, never loaded.  Where ``fcntl`` is missing (Windows), nothing is locked: both may
+compile, each into its own temporary file, and the rename keeps one.  A cache folder that
+cannot be written (or read) is left for a folder of this user's under the system's temporary
+folder (:func:`fallback_folder`), for the libraries and for the translated texts
+(:func:`store_folder`, :func:`kept`).
 
 docs/c-backend.md, "The compiled-object cache", says where it lives and how to clear it.
 """
@@ -26,7 +29,6 @@ import platform
 import re
 import shlex
 import shutil
-import stat
 import subprocess
 import sys
 import sysconfig
@@ -35,12 +37,13 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from .._disk import DAY, file_lock, user_cache_root
+from .._disk import DAY, file_lock, private_folder, user_cache_root, writable
 
-__all__ = ["CACHE_ENV", "CompileError", "CompilerNotFound", "LIBRARY_FLAGS", "NO_COMPILER",
-           "STATS", "available_compiler", "cache_folder", "cache_key", "cached_library",
-           "compile_c", "compiler_identity", "fallback_folder", "find_compiler",
-           "library_suffix", "mark_used"]
+__all__ = ["CACHE_ENV", "COMPILE_FAILED_ADVICE", "CompileError", "CompilerNotFound",
+           "DIGEST_SUFFIX", "LIBRARY_FLAGS", "NO_COMPILER", "STATS",
+           "available_compiler", "cache_folder", "cache_key", "cached_library", "compile_c",
+           "compiler_identity", "fallback_folder", "find_compiler", "kept", "library_suffix",
+           "mark_used", "no_compiler_text", "store_folder"]
 
 #: environment variable naming the cache folder (instead of the user's cache)
 CACHE_ENV = "FEEDDRIVE_C_CACHE"
@@ -51,9 +54,15 @@ LIBRARY_FLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared")
 NO_COMPILER = ("feeddrive: no C compiler found, so the numba build is used; to compile C, "
                "install gcc or clang (Debian: apt-get install gcc; macOS: xcode-select "
                "--install) or set CC; without numba either: pip install 'feeddrive[numba]'")
+#: what a command adds to a compiler failure (:class:`CompileError`)
+COMPILE_FAILED_ADVICE = ("the C build could not be made: set CC to a working C compiler, or "
+                         "use the numba build (FEEDDRIVE_ENGINE=numba, pip install "
+                         "'feeddrive[numba]')")
 #: this process's counts: ``compiles`` (libraries this process compiled into a cache) and
 #: ``hits`` (libraries found there)
 STATS = {"compiles": 0, "hits": 0}
+#: the file beside a library ``<key><suffix>`` holding its SHA-256: ``<key>.sha256``
+DIGEST_SUFFIX = ".sha256"
 _SAID: list[str] = []
 
 
@@ -118,10 +127,28 @@ def available_compiler() -> list[str] | None:
     try:
         return find_compiler()
     except CompilerNotFound as err:
-        if not _SAID:
+        from ..solvers.builds import SAID_ENV
+
+        if not _SAID and not os.environ.get(SAID_ENV):
             _SAID.append(str(err))
-            print(NO_COMPILER, file=sys.stderr)
+            print(no_compiler_text(), file=sys.stderr)
         return None
+
+
+def no_compiler_text() -> str:
+    """What is said when no C compiler is found: :data:`NO_COMPILER`, or, where ``$CC`` names
+    one that is not there, that (the compilers on PATH are not looked at then).
+
+    Returns
+    -------
+    str
+        One line.
+    """
+    env = os.environ.get("CC", "").strip()
+    if not env:
+        return NO_COMPILER
+    return (f"feeddrive: CC = {env!r} is not an executable, so the numba build is used; set "
+            "CC to a C compiler, or unset it to use cc, gcc or clang from PATH")
 
 
 def library_suffix() -> str:
@@ -186,8 +213,9 @@ def compile_c(files: Mapping[str, str], folder: str | os.PathLike[str], output: 
     if proc.returncode != 0:
         text = (proc.stderr or proc.stdout).strip()
         more = len([line for line in text.splitlines() if line.strip()]) - 1
-        raise CompileError(f"the C compiler failed ({Path(cc[0]).name} {' '.join(flags)} "
-                           f"on {src.name}): {_first_error(text)}"
+        command = " ".join([Path(cc[0]).name, *cc[1:], *flags])
+        raise CompileError(f"the C compiler failed ({command} on {src.name}): "
+                           f"{_first_error(text)}"
                            + (f" (+{more} more lines)" if more > 0 else ""), text)
     return out
 
@@ -248,8 +276,9 @@ def cache_key(source: str, cc: Sequence[str], flags: Sequence[str],
 
 
 def cache_folder() -> Path:
-    """Where compiled libraries are kept: ``$FEEDDRIVE_C_CACHE``, else the folder ``c`` of the
-    user's cache (``$XDG_CACHE_HOME/feeddrive/c``, else ``~/.cache/feeddrive/c``).
+    """Where compiled libraries are kept: ``$FEEDDRIVE_C_CACHE`` (``~`` expanded), else the
+    folder ``c`` of the user's cache (``$XDG_CACHE_HOME/feeddrive/c``, else
+    ``~/.cache/feeddrive/c``).
 
     Returns
     -------
@@ -257,44 +286,97 @@ def cache_folder() -> Path:
         The folder (not created here).
     """
     env = os.environ.get(CACHE_ENV, "").strip()
-    return Path(env) if env else user_cache_root() / "c"
+    return Path(env).expanduser() if env else user_cache_root() / "c"
 
 
 def fallback_folder() -> Path:
     """The folder used when :func:`cache_folder` cannot be written:
-    ``<temporary folder>/feeddrive-c-<user id>``, made private (mode 0700); if that name is
-    taken by a folder that is not this user's own, private one, a new temporary folder of this
-    process is used instead (another user could otherwise plant a library there).
+    ``<temporary folder>/feeddrive-c-<user id>``, private (mode 0700) and kept between runs;
+    if that name is taken by a folder that is not this user's own, private one, a temporary
+    folder of this process, removed when it exits (:func:`feeddrive._disk.private_folder`).
 
     Returns
     -------
     Path
         A folder this user alone can write.
     """
-    uid = os.getuid() if hasattr(os, "getuid") else 0
-    folder = Path(tempfile.gettempdir()) / f"feeddrive-c-{uid}"
-    try:
-        folder.mkdir(mode=0o700, exist_ok=True)
-        info = folder.lstat()
-        if (stat.S_ISDIR(info.st_mode) and (not hasattr(os, "getuid") or info.st_uid == uid)
-                and not info.st_mode & (stat.S_IWGRP | stat.S_IWOTH)):
-            return folder
-    except OSError:
-        pass
-    return Path(tempfile.mkdtemp(prefix="feeddrive-c-"))
+    return private_folder("feeddrive-c")
 
 
 def _writable(folder: Path) -> bool:
-    """Whether a file can be made in ``folder`` (made if missing): tried, since ``os.access``
-    does not see read-only mounts."""
+    """:func:`feeddrive._disk.writable`, a folder found not writable not tried again by this
+    process."""
+    if folder in _NOT_WRITABLE:
+        return False
+    if writable(folder):
+        return True
+    _NOT_WRITABLE.add(folder)
+    return False
+
+
+_NOT_WRITABLE: set[Path] = set()
+
+
+def store_folder() -> Path:
+    """Where this process writes what it caches: :func:`cache_folder` if a file can be made
+    there (it is made if missing), else :func:`fallback_folder`.
+
+    Returns
+    -------
+    Path
+        The folder.
+    """
+    folder = cache_folder()
+    return folder if _writable(folder) else fallback_folder()
+
+
+def _is_file(path: Path) -> bool:
+    """``path.is_file()``, False where the folder cannot be read."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(dir=folder, prefix=".probe-")
+        return path.is_file()
     except OSError:
         return False
-    os.close(fd)
-    os.unlink(probe)
-    return True
+
+
+def kept(name: str) -> Path | None:
+    """A file this package keeps in the cache (a translated text): in :func:`cache_folder`,
+    else in the fallback folder when the cache cannot be written (:func:`store_folder`).
+
+    Parameters
+    ----------
+    name : str
+        The file's name.
+
+    Returns
+    -------
+    Path or None
+        The file, or None when neither holds it.
+    """
+    path = cache_folder() / name
+    if _is_file(path):
+        return path
+    store = store_folder()
+    if store != cache_folder() and _is_file(store / name):
+        return store / name
+    return None
+
+
+def _intact(folder: Path, key: str, name: str) -> Path | None:
+    """The library ``name`` in ``folder`` if it is whole — its bytes' SHA-256 is the one
+    written beside it (``<key>.sha256``) when it was compiled — else None: a truncated or
+    damaged file (a full disk, a copy cut short) is compiled again instead of loaded (loading
+    a truncated library can kill the process with a bus error).  A library found whole is
+    marked used (:func:`mark_used`)."""
+    lib = folder / name
+    try:
+        want = (folder / f"{key}{DIGEST_SUFFIX}").read_text(encoding="ascii").strip()
+        whole = hashlib.sha256(lib.read_bytes()).hexdigest() == want
+    except (OSError, ValueError):
+        return None
+    if not whole:
+        return None
+    mark_used(lib)
+    return lib
 
 
 def mark_used(path: Path) -> None:
@@ -346,28 +428,28 @@ def cached_library(source: str, *, flags: Sequence[str] = LIBRARY_FLAGS,
     command = list(cc) if cc is not None else find_compiler()
     key = cache_key(source, command, flags, libraries)
     name = f"{key}{library_suffix()}"
-    folder = cache_folder()
-    if (folder / name).is_file():
+    found = _intact(cache_folder(), key, name)
+    folder = store_folder()
+    if found is None and folder != cache_folder():
+        found = _intact(folder, key, name)
+    if found is not None:
         STATS["hits"] += 1
-        mark_used(folder / name)
-        return folder / name
-    if not _writable(folder):
-        folder = fallback_folder()
-        if (folder / name).is_file():
-            STATS["hits"] += 1
-            mark_used(folder / name)
-            return folder / name
+        return found
     lib = folder / name
     with file_lock(folder / f"{key}.lock"):
-        if lib.is_file():  # another process compiled it while this one waited
+        if _intact(folder, key, name) is not None:  # compiled by another process meanwhile
             STATS["hits"] += 1
             return lib
         with tempfile.TemporaryDirectory(dir=folder, prefix=f".{key[:16]}-") as tmp:
             built = compile_c({"model.c": source}, tmp, name, command, flags, libraries)
+            digest = Path(tmp) / f"{key}{DIGEST_SUFFIX}"
+            digest.write_text(hashlib.sha256(built.read_bytes()).hexdigest() + "\n",
+                              encoding="ascii")
             try:
                 os.replace(built, lib)
             except OSError:
                 if not lib.is_file():  # a library in use cannot be replaced on Windows
                     raise
+            os.replace(digest, folder / digest.name)
     STATS["compiles"] += 1
     return lib

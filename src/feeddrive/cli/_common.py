@@ -259,14 +259,19 @@ def run_outcome(bar: Any) -> Iterator[None]:
         err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
     except SimulationInterrupted as stop:
-        if bar is not None:
-            bar.stop()
+        _stop_bar(bar)
         err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
                           soft_wrap=True)
         raise interrupted() from None
     finally:
-        if bar is not None:
-            bar.stop()
+        _stop_bar(bar)
+
+
+def _stop_bar(bar: Any) -> None:
+    """Stop a :func:`progress_bar` that was started (rich writes a line end when it stops
+    one, started or not: off a terminal that was a blank line on stderr)."""
+    if bar is not None and bar.live.is_started:
+        bar.stop()
 
 
 def interrupted() -> typer.Exit:
@@ -386,6 +391,11 @@ def user_errors(fn: F) -> F:
             builds = sys.modules.get("feeddrive.solvers.builds")  # neither C nor numba
             if builds is not None and isinstance(err, builds.NoEngine):
                 raise _fail(str(err), EXIT_FAILED) from None
+            c_cache = sys.modules.get("feeddrive.backends.c_cache")  # the C build not made
+            if c_cache is not None and isinstance(err, c_cache.CompilerNotFound):
+                raise _fail(str(err), EXIT_FAILED) from None
+            if c_cache is not None and isinstance(err, c_cache.CompileError):
+                raise _fail(f"{err}; {c_cache.COMPILE_FAILED_ADVICE}", EXIT_FAILED) from None
             sqlite3 = sys.modules.get("sqlite3")
             if sqlite3 is not None and isinstance(err, sqlite3.Error):
                 files = _files_of(kwargs)
@@ -447,6 +457,8 @@ def progress_bar(duration: float, again: str | None = None,
 
     def advance(t: float, t_end: float) -> None:
         if not bar.live.is_started:  # only long runs (chunked) report progress
+            if not err_console.is_terminal:  # nothing to draw: a transient bar draws nothing
+                return
             bar.start()
         if again is not None and t < last[0]:  # the second pass
             bar.reset(task, total=duration, description=again)

@@ -36,10 +36,50 @@ if TYPE_CHECKING:
 ENGINE_ENV = "FEEDDRIVE_ENGINE"
 #: its values: "auto" (the default), "c" and "numba"
 CHOICES = ("auto", "c", "numba")
+#: set by the parent of a pool for its workers (:func:`feeddrive._workers.
+#: single_threaded_children`): the parent has said what
+#: :data:`~feeddrive.backends.c_cache.NO_COMPILER` says (:func:`announce`), so that a sweep's
+#: workers do not each say it again
+SAID_ENV = "FEEDDRIVE_BUILD_SAID"
 #: what is said when neither build can run: no C compiler and numba not installed
 NO_ENGINE = ("no C compiler found and numba is not installed; install a C compiler "
              "(Debian: apt-get install gcc; macOS: xcode-select --install; or set CC) or "
              "install numba: pip install 'feeddrive[numba]'")
+
+
+def no_engine_text(numba: str = "is not installed") -> str:
+    """:data:`NO_ENGINE`, or, where ``$CC`` names a compiler that is not there, that.
+
+    Parameters
+    ----------
+    numba : str, default "is not installed"
+        What is wrong with numba.
+
+    Returns
+    -------
+    str
+        One line.
+    """
+    cc = os.environ.get("CC", "").strip()
+    if not cc:
+        return NO_ENGINE.replace("numba is not installed", f"numba {numba}")
+    return (f"CC = {cc!r} is not an executable and numba {numba}; set CC to a C compiler "
+            "(or unset it to use cc, gcc or clang from PATH), or install numba: "
+            "pip install 'feeddrive[numba]'")
+
+
+def announce() -> None:
+    """Say in the parent of a pool of workers what each worker would say once about the build
+    (no C compiler: the numba build runs, :data:`~feeddrive.backends.c_cache.NO_COMPILER`),
+    so that it is said once (the workers are told it was said:
+    :data:`~feeddrive.backends.c_cache.SAID_ENV`).  numba is not started here."""
+    try:
+        choice = chosen()
+    except ValueError:  # refused where a model is run
+        return
+    engine = registry.table(registry.ENGINES).get("c")
+    if choice == "auto" and HAVE_NUMBA and engine is not None:
+        engine.available()
 
 
 class NoEngine(RuntimeError):
@@ -94,7 +134,7 @@ def engine_name() -> str:
                 return "c"
         except RuntimeError:  # CompilerNotFound (the core does not import the backends)
             pass
-        raise NoEngine((f"{ENGINE_ENV} = 'c': " if choice == "c" else "") + NO_ENGINE)
+        raise NoEngine((f"{ENGINE_ENV} = 'c': " if choice == "c" else "") + no_engine_text())
     if choice == "c":
         if engine is None or not engine.available(required=True):
             return "numba"
@@ -142,9 +182,14 @@ def _numba_build() -> None:
     """
     try:
         _jit.start_numba()
-    except ImportError:
-        raise NoEngine((f"{ENGINE_ENV} = 'numba': numba does not import; " if chosen() == "numba"
-                        else "") + NO_ENGINE) from None
+    except ImportError as err:
+        why = f"does not import ({str(err).splitlines()[0] if str(err) else type(err).__name__})"
+        engine = registry.table(registry.ENGINES).get("c")
+        if chosen() == "numba" and engine is not None and engine.available(quiet=True):
+            raise NoEngine(f"{ENGINE_ENV} = 'numba': numba {why}; unset {ENGINE_ENV} to use "
+                           "the C build") from None
+        raise NoEngine((f"{ENGINE_ENV} = 'numba': " if chosen() == "numba" else "")
+                       + no_engine_text(why)) from None
 
 
 def engine_of(model: Model) -> str:

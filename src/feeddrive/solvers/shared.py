@@ -28,7 +28,7 @@ from types import ModuleType
 from typing import Any
 
 from .._jit import (
-    CACHE_DIR,
+    cache_dir,
     compile_lock,
     first_class,
     import_generated,
@@ -208,7 +208,7 @@ def drivers_on_disk() -> bool:
     bool
         True when its index file is in the cache folder.
     """
-    return any(Path(CACHE_DIR).glob("shared_*/drivers.integrate_dense-*.nbi"))
+    return any(Path(cache_dir()).glob("shared_*/drivers.integrate_dense-*.nbi"))
 
 
 @functools.cache
@@ -216,7 +216,7 @@ def _module() -> tuple[ModuleType, dict[str, tuple[str, ...]]]:
     """The shared drivers' module (imported once per process) and each function's model
     arguments."""
     with _FIRST_USE:
-        source = module_source(Path(CACHE_DIR) / "shared" / "drivers.py")
+        source = module_source(Path(cache_dir()) / "shared" / "drivers.py")
         module = import_generated("shared", "drivers", source)
     return module, module.MODEL_ARGUMENTS
 
