@@ -57,17 +57,61 @@ def private_folder(prefix: str) -> Path:
     Path
         The folder.
     """
-    uid = os.getuid() if hasattr(os, "getuid") else 0
-    folder = Path(tempfile.gettempdir()) / f"{prefix}-{uid}"
+    folder = private_path(prefix)
     try:
         folder.mkdir(mode=0o700, exist_ok=True)
-        info = folder.lstat()
-        if (stat.S_ISDIR(info.st_mode) and (not hasattr(os, "getuid") or info.st_uid == uid)
-                and not info.st_mode & (stat.S_IWGRP | stat.S_IWOTH)):
+        if _private(folder):
             return folder
     except OSError:
         pass
     return _own_folder(prefix)
+
+
+def private_path(prefix: str) -> Path:
+    """Where :func:`private_folder` keeps its folder between processes (not made here):
+    ``<temporary folder>/<prefix>-<user id>``.
+
+    Parameters
+    ----------
+    prefix : str
+        The folder's name before the user id.
+
+    Returns
+    -------
+    Path
+        The path.
+    """
+    uid = os.getuid() if hasattr(os, "getuid") else 0
+    return Path(tempfile.gettempdir()) / f"{prefix}-{uid}"
+
+
+def _private(folder: Path) -> bool:
+    """Whether ``folder`` is a folder of this user's that no one else can write (not a link)."""
+    info = folder.lstat()
+    return (stat.S_ISDIR(info.st_mode)
+            and (not hasattr(os, "getuid") or info.st_uid == os.getuid())
+            and not info.st_mode & (stat.S_IWGRP | stat.S_IWOTH))
+
+
+def existing_private(prefix: str) -> Path | None:
+    """:func:`private_path` if it is there as :func:`private_folder` would use it (a folder of
+    this user's alone), else None: where a cache lister looks without making it.
+
+    Parameters
+    ----------
+    prefix : str
+        The folder's name before the user id.
+
+    Returns
+    -------
+    Path or None
+        The folder.
+    """
+    folder = private_path(prefix)
+    try:
+        return folder if _private(folder) else None
+    except OSError:
+        return None
 
 
 @functools.cache

@@ -3,8 +3,10 @@ what has not been used — on a cache tree made here, with file times set by the
 
 from __future__ import annotations
 
+import errno
 import json
 import os
+import tempfile
 import time
 from pathlib import Path
 
@@ -15,6 +17,7 @@ from feeddrive import caches
 from feeddrive._jit import SOURCE_DIGEST
 from feeddrive.backends import c_cache
 from feeddrive.cli import app
+from feeddrive.io.outputs import atomic_path
 from feeddrive.parameters import ParameterError
 
 DAY = 86400.0
@@ -34,11 +37,20 @@ def _file(path: Path, size: int) -> Path:
     return path
 
 
+def _temporary_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """The system's temporary folder, for this test: where the C build's fallback folder is."""
+    folder = tmp_path / "tmp"
+    folder.mkdir(exist_ok=True)
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
+    return folder
+
+
 @pytest.fixture
 def tree(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str, Path]:
     root = tmp_path / "cache"
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(root))
     monkeypatch.setenv(c_cache.CACHE_ENV, str(root / "c"))
+    _temporary_folder(tmp_path, monkeypatch)  # no fallback folder but the test's own
     made = {
         "current": _file(root / f"numba-{SOURCE_DIGEST}" / "k.nbi", 100).parent,
         "old_version": _file(root / "numba-0123456789abcdef" / "k.nbc", 1000).parent,
@@ -141,3 +153,224 @@ def test_the_commands_default_age_is_the_modules() -> None:
     assert caches.prune.__defaults__ == (caches.DEFAULT_AGE,)
     text = " ".join(CliRunner().invoke(app, ["cache", "--help"]).output.split())
     assert f"Age for --prune [days], {caches.DEFAULT_AGE:g} if not given" in text
+
+
+# -- a library is one entry; the fallback folder; partial files; what cannot be removed --
+
+SUFFIX = c_cache.library_suffix()
+FALLBACK_C = "C libraries and texts (fallback folder, used when the cache cannot be written)"
+FALLBACK_UNFINISHED = "unfinished compilations (fallback folder)"
+
+
+def _library(folder: Path, key: str, size: int, days: float, *, lock_days: float | None = None,
+             digest_days: float | None = None) -> dict[str, Path]:
+    """A cached library as the C build leaves it: ``<key>.so``, its ``.sha256`` and empty
+    ``.lock``, the library last used ``days`` ago, the others written when it was compiled."""
+    files = {"library": _file(folder / f"{key}{SUFFIX}", size),
+             "digest": _file(folder / f"{key}.sha256", 65),
+             "lock": _file(folder / f"{key}.lock", 0)}
+    _aged(files["library"], days)
+    _aged(files["digest"], days if digest_days is None else digest_days)
+    _aged(files["lock"], days if lock_days is None else lock_days)
+    return files
+
+
+@pytest.fixture
+def c_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """An empty C cache folder (and no numba cache, no fallback folder)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    monkeypatch.setenv(c_cache.CACHE_ENV, str(tmp_path / "c"))
+    _temporary_folder(tmp_path, monkeypatch)
+    (tmp_path / "c").mkdir()
+    return tmp_path / "c"
+
+
+def _part(name: str) -> caches.CachePart:
+    return next(p for p in caches.usage() if p.name == name)
+
+
+def test_a_library_is_one_entry_with_its_digest_and_lock(c_folder: Path) -> None:
+    """Defect: each empty .lock (and .sha256) counted as an entry of its own, so a cache of
+    1076 libraries showed 2152 entries for them."""
+    for key in ("aaaa", "bbbb"):
+        _library(c_folder, key, 300, 1)
+    _file(c_folder / "model-cccc.c", 7)
+    _file(c_folder / "driver-dense-dddd.json", 11)
+    _aged(_file(c_folder / "eeee.lock", 0), 40)  # the lock of a library pruned since
+    part = _part("C libraries and texts")
+    assert (part.entries, part.size) == (2 + 2 + 1, 2 * (300 + 65) + 7 + 11)
+    text = CliRunner().invoke(app, ["cache"]).output
+    assert "C libraries and texts: 5 entries" in text
+
+
+def test_a_library_in_use_is_pruned_whole_or_not_at_all(c_folder: Path) -> None:
+    """Defect: --prune removed the old .lock (and would remove the .sha256) of a library that
+    is used every day (``mark_used`` touches only the library file), on their own; an orphan
+    .lock or .sha256 goes by its own age."""
+    used = _library(c_folder, "aaaa", 300, 0.5, lock_days=400, digest_days=400)
+    unused = _library(c_folder, "bbbb", 200, 40)
+    old_lock = _aged(_file(c_folder / "cccc.lock", 0), 40)
+    old_digest = _aged(_file(c_folder / "dddd.sha256", 65), 40)
+    new_lock = _aged(_file(c_folder / "eeee.lock", 0), 1)
+    report = caches.prune(30.0)
+    assert all(p.exists() for p in used.values())  # nothing of a library in use goes
+    assert not any(p.exists() for p in unused.values())  # an unused one goes whole
+    assert not old_lock.exists() and not old_digest.exists() and new_lock.exists()
+    assert set(report.removed) == {*unused.values(), old_lock, old_digest}
+    assert report.entries == 3 and report.freed == 200 + 65 + 65 and report.failed == ()
+    assert _part("C libraries and texts").entries == 2  # aaaa, eeee.lock
+
+
+def test_partial_files_of_interrupted_writes_are_unfinished_compilations(c_folder: Path
+                                                                         ) -> None:
+    """Defect: the temporary files of atomic writes cut short (``.model-abc.1234abcd.partial.c``)
+    were neither counted nor pruned."""
+    with atomic_path(c_folder / "model-ffff.c") as tmp:  # the names atomic_path writes under
+        tmp.write_text("int x;\n", encoding="utf-8")
+        assert (_part("unfinished compilations").entries, _part("C libraries and texts")
+                .entries) == (1, 0)
+    killed = _aged(_file(c_folder / ".model-abc.1234abcd.partial.c", 40), 2 / 24)
+    writing = _file(c_folder / ".driver-dense-abc.5678ef90.partial.json", 3)
+    part = _part("unfinished compilations")
+    assert (part.entries, part.size) == (2, 43)
+    report = caches.prune(30.0)  # an hour old is enough, whatever --older-than says
+    assert report.removed == (killed,) and report.freed == 40
+    assert writing.exists() and (c_folder / "model-ffff.c").exists()
+
+
+def test_the_fallback_folder_is_listed_and_pruned(tmp_path: Path, c_folder: Path,
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """Defect: the folder the C build uses when its cache cannot be written,
+    ``<temporary folder>/feeddrive-c-<user id>``, was never listed nor pruned."""
+    assert [p.name for p in caches.usage()][-1] == "unfinished compilations"  # none yet
+    uid = os.getuid() if hasattr(os, "getuid") else 0
+    fallback = tmp_path / "tmp" / f"feeddrive-c-{uid}"
+    old = _library(fallback, "aaaa", 300, 40)
+    new = _library(fallback, "bbbb", 30, 1)
+    killed = _aged(_file(fallback / ".aaaa-x1" / "model.c", 5).parent, 0.5)
+    parts = {p.name: p for p in caches.usage()}
+    assert list(parts)[-2:] == [FALLBACK_C, FALLBACK_UNFINISHED]
+    assert (parts[FALLBACK_C].folder, parts[FALLBACK_C].entries,
+            parts[FALLBACK_C].size) == (fallback, 2, 300 + 65 + 30 + 65)
+    assert (parts[FALLBACK_UNFINISHED].entries, parts[FALLBACK_UNFINISHED].size) == (1, 5)
+    shown = json.loads(CliRunner().invoke(app, ["cache", "--json"]).output)["parts"]
+    assert [p["entries"] for p in shown] == [0, 0, 0, 0, 2, 1]
+    report = caches.prune(30.0)
+    assert set(report.removed) == {*old.values(), killed} and report.entries == 2
+    assert all(p.exists() for p in new.values())
+    # the configured folder being the fallback folder, it is listed once
+    monkeypatch.setenv(c_cache.CACHE_ENV, str(fallback))
+    assert [p.name for p in caches.usage()][-1] == "unfinished compilations"
+
+
+def test_the_generated_modules_fallback_folder_is_listed_and_pruned(tmp_path: Path,
+                                                                     c_folder: Path) -> None:
+    """numba's cache and the generated modules move to ``<temporary folder>/feeddrive-py-<user
+    id>`` when the user's cache cannot be written (``feeddrive._jit.cache_dir``); its numba
+    folders are listed as two parts, the other versions' pruned, this version's kept."""
+    uid = os.getuid() if hasattr(os, "getuid") else 0
+    py = tmp_path / "tmp" / f"feeddrive-py-{uid}"
+    this = _aged(_file(py / f"numba-{SOURCE_DIGEST}" / "models" / "m.py", 11).parent.parent, 40)
+    other = _aged(_file(py / "numba-0123456789abcdef" / "k.nbc", 13).parent, 40)
+    parts = {p.name: p for p in caches.usage()}
+    this_name = "numba, this version (fallback folder, used when the cache cannot be written)"
+    assert (parts[this_name].folder, parts[this_name].entries, parts[this_name].size) == (
+        py, 1, 11)
+    assert (parts["numba, other versions (fallback folder)"].entries,
+            parts["numba, other versions (fallback folder)"].size) == (1, 13)
+    report = caches.prune(30.0)
+    assert other in report.removed and this not in report.removed and this.exists()
+
+
+def test_a_configured_folder_that_is_not_a_folder_is_said(tmp_path: Path, c_folder: Path,
+                                                         monkeypatch: pytest.MonkeyPatch
+                                                         ) -> None:
+    """Defect: with FEEDDRIVE_C_CACHE naming a file, the listing showed 0 entries there and
+    did not say that nothing can be cached there."""
+    not_a_folder = _file(tmp_path / "a-file", 3)
+    monkeypatch.setenv(c_cache.CACHE_ENV, str(not_a_folder))
+    part = _part("C libraries and texts")
+    assert part.note is not None and "not a folder" in part.note
+    assert _part("numba, this version").note is None
+    runner = CliRunner()
+    text = runner.invoke(app, ["cache"])
+    assert text.exit_code == 0
+    assert f"C libraries and texts: 0 entries, 0.0 MB in {not_a_folder} (is not a folder" \
+        in text.output
+    data = json.loads(runner.invoke(app, ["cache", "--json"]).output)["parts"]
+    assert "not a folder" in data[2]["note"] and data[0]["note"] is None
+
+
+def _denied(monkeypatch: pytest.MonkeyPatch, *denied: Path) -> None:
+    """Make ``Path.unlink`` refuse ``denied`` as a read-only folder would (as root too)."""
+    real = Path.unlink
+
+    def unlink(self: Path, missing_ok: bool = False) -> None:
+        if self in denied:
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(self))
+        real(self, missing_ok=missing_ok)
+
+    monkeypatch.setattr(Path, "unlink", unlink)
+
+
+def test_prune_carries_on_past_what_it_cannot_remove(c_folder: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """Defect: the first file that could not be removed stopped the prune with
+    ``error: ...: Permission denied``, after other files were removed, unreported."""
+    stuck = _library(c_folder, "aaaa", 300, 40)
+    going = _library(c_folder, "bbbb", 200, 40)
+    text = _aged(_file(c_folder / "model-cccc.c", 7), 40)
+    killed = _aged(_file(c_folder / ".aaaa-x1" / "model.c", 5).parent, 0.5)
+    _file(killed / "model.o", 11)
+    _aged(killed, 0.5)
+    _denied(monkeypatch, stuck["library"], killed / "model.c")
+    why = os.strerror(errno.EACCES)
+    report = caches.prune(30.0)
+    assert set(report.failed) == {(stuck["library"], why), (killed / "model.c", why)}
+    assert set(report.removed) == {*going.values(), text}
+    assert report.entries == 2 and report.freed == 200 + 65 + 7 + 11
+    # the library that stays keeps its .sha256 and .lock; the folder keeps what it could not
+    assert all(p.exists() for p in stuck.values())
+    assert killed.is_dir() and [p.name for p in killed.iterdir()] == ["model.c"]
+
+
+def test_the_command_reports_what_it_removed_and_what_it_could_not(
+        c_folder: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    stuck = _library(c_folder, "aaaa", 300, 40)
+    going = _library(c_folder, "bbbb", 200, 40)
+    _denied(monkeypatch, stuck["library"])
+    runner = CliRunner()
+    done = runner.invoke(app, ["cache", "--prune"])
+    assert done.exit_code == 1, done.output
+    assert "removed 1 entry not used for 30 days" in done.stdout
+    assert f"error: could not remove {stuck['library']}: Permission denied" in done.stderr
+    assert "C libraries and texts: 1 entry" in done.stdout  # the listing is still printed
+    for p in going.values():
+        _file(p, 1)
+        _aged(p, 40)
+    data = runner.invoke(app, ["cache", "--prune", "--json"])
+    assert data.exit_code == 1
+    pruned = json.loads(data.stdout)["pruned"]
+    assert pruned["failed"] == [{"path": str(stuck["library"]), "reason": "Permission denied"}]
+    assert set(pruned["removed"]) == {str(p) for p in going.values()}
+    assert pruned["entries"] == 1 and pruned["freed_mb"] == 3 / 1e6
+
+
+def test_the_documentation_says_what_the_command_does() -> None:
+    """docs/c-backend.md, "The compiled-object cache", "Clearing it": its ages, parts and
+    report are the code's."""
+    from feeddrive.cli._common import EXIT_FAILED
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "c-backend.md").read_text(
+        encoding="utf-8")
+    section = doc.split("## The compiled-object cache", 1)[1].split("\n## ", 1)[0]
+    text = " ".join(section.split("- **Clearing it.**", 1)[1].split("\n- **", 1)[0].split())
+    assert f"({caches.DEFAULT_AGE:g} by default;" in text
+    assert caches.UNFINISHED_AGE == 3600.0 and "unfinished compilations older than an hour" \
+        in text
+    assert f"the exit status is then {EXIT_FAILED}" in text
+    for word in ("`<temporary folder>/feeddrive-c-<user id>`", "`<key>.sha256`", "`<key>.lock`",
+                 "`.NAME.XXXXXXXX.partial.EXT`", "`note` in `--json`", "`failed` in `--json`",
+                 "15–100 kB"):
+        assert word in text, word
+    assert "15–100 kB" in (caches.__doc__ or "")

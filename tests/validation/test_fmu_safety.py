@@ -225,3 +225,42 @@ def test_every_preset_start_value_lies_in_its_range() -> None:
                 assert slot_range(fm.model, slot).contains(float(fm.model.P[k])), (name, slot)
                 checked += 1
     assert checked > 500
+
+
+# ---------------------------------------------------------------- the solver's tolerances
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_the_tolerances_take_the_range_the_command_line_takes(fmus: dict, tmp_path: Path,
+                                                              fmi: int) -> None:
+    """An outside check (2026-12-06): the FMU took solver.relative_tolerance = 1e-20, which
+    the command line and the API refuse (1e-14 … 0.1), and declared min 0 for every tolerance
+    while refusing 0.  The ranges are SolverOptions' (``MIN_RELATIVE`` … ``MAX_RTOL``,
+    ``MIN_ABSOLUTE`` … ``MAX_ABSOLUTE``), declared and checked; an importer's tolerance
+    outside it is a warning and the FMU keeps its own."""
+    from feeddrive.engine import options
+
+    root = _xml(fmus[("wang2021", fmi)])
+    declared = {e.get("name"): (e if fmi == 3 else next(iter(e), e)) for e in root.iter()
+                if e.get("name") is not None}
+    for name, field in (("solver.relative_tolerance", "rtol"),
+                        ("solver.position_tolerance", "position_tolerance"),
+                        ("solver.speed_tolerance", "speed_tolerance"),
+                        ("solver.current_tolerance", "current_tolerance")):
+        low, high = ((options.MIN_RELATIVE, options.MAX_RTOL) if field == "rtol" else
+                     (options.MIN_ABSOLUTE[field], options.MAX_ABSOLUTE[field]))
+        assert (declared[name].get("min"), declared[name].get("max")) == (
+            repr(low), repr(high)), name
+    slave = _slave(fmus, "wang2021", fmi, tmp_path)
+    assert "solver.relative_tolerance = 1e-20" in _refused(slave, "solver.relative_tolerance",
+                                                           1e-20)
+    slave.set("solver.relative_tolerance", 1e-8)
+    n = len(slave.log)
+    if fmi == 2:
+        slave.fmu.setupExperiment(tolerance=1e-20, startTime=0.0)
+        slave.fmu.enterInitializationMode()
+    else:
+        slave.fmu.enterInitializationMode(tolerance=1e-20, startTime=0.0)
+    slave.fmu.exitInitializationMode()
+    (status, text), = slave.log[n:]
+    assert status == 1 and "the importer's tolerance 1e-20 is outside" in text
+    assert slave.get("solver.relative_tolerance") == 1e-8
+    slave.free()

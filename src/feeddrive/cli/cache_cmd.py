@@ -6,7 +6,7 @@ from __future__ import annotations
 import typer
 
 from ..caches import DEFAULT_AGE
-from ._common import app, console, print_json, user_errors
+from ._common import EXIT_FAILED, app, console, err_console, print_json, user_errors
 
 #: bytes in a MB, as the sizes are printed
 MB = 1e6
@@ -18,8 +18,10 @@ def cache(
     prune: bool = typer.Option(False, "--prune", help="Remove what has not been used for "
                                "--older-than days: numba caches of other feeddrive versions, "
                                "C libraries and texts (compiled again, ≈ 0.4 s each, when "
-                               "needed), unfinished compilations older than an hour. The "
-                               "running version's numba cache is kept."),
+                               "needed), unfinished compilations older than an hour; in the "
+                               "C cache and its fallback folder. The running version's numba "
+                               "cache is kept. What cannot be removed is listed, and the exit "
+                               "status is then 1."),
     older_than: float | None = typer.Option(None, "--older-than", help="Age for --prune "
                                             f"[days], {DEFAULT_AGE:g} if not given; 0 prunes "
                                             "everything it may."),
@@ -31,6 +33,7 @@ def cache(
     its kernels; the C build's libraries), and, with --prune, remove the unused."""
     from ..caches import prune as prune_caches
     from ..caches import usage
+    from ..io.outputs import shown
     from ..parameters import ParameterError
 
     for given, option in ((dry_run, "--dry-run"), (older_than is not None, "--older-than")):
@@ -45,20 +48,30 @@ def cache(
     if as_json:
         data: dict[str, object] = {"parts": [
             {"name": p.name, "folder": str(p.folder), "entries": p.entries,
-             "size_mb": p.size / MB} for p in parts]}
+             "size_mb": p.size / MB, "note": p.note} for p in parts]}
         if report is not None:
             data["pruned"] = {"dry_run": report.dry_run, "older_than_days": days,
+                              "entries": report.entries,
                               "removed": [str(p) for p in report.removed],
-                              "freed_mb": report.freed / MB}
+                              "freed_mb": report.freed / MB,
+                              "failed": [{"path": str(p), "reason": why}
+                                         for p, why in report.failed]}
         print_json(data)
-        return
-    if report is not None:
-        verb = "would remove" if report.dry_run else "removed"
-        for path in report.removed if report.dry_run else ():
-            console.print(f"  {path}", markup=False, highlight=False)
-        console.print(f"{verb} {len(report.removed)} entries not used for {days:g} days, "
-                      f"{report.freed / MB:.1f} MB", markup=False, highlight=False)
-    for p in parts:
-        entries = "1 entry" if p.entries == 1 else f"{p.entries} entries"
-        console.print(f"{p.name}: {entries}, {p.size / MB:.1f} MB in {p.folder}",
-                      markup=False, highlight=False)
+    else:
+        if report is not None:
+            verb = "would remove" if report.dry_run else "removed"
+            for path in report.removed if report.dry_run else ():
+                console.print(f"  {shown(path, None)}", markup=False, highlight=False)
+            entries = "1 entry" if report.entries == 1 else f"{report.entries} entries"
+            console.print(f"{verb} {entries} not used for {days:g} days, "
+                          f"{report.freed / MB:.1f} MB", markup=False, highlight=False)
+            for path, why in report.failed:
+                err_console.print(f"error: could not remove {shown(path, None)}: {why}",
+                                  markup=False, highlight=False, soft_wrap=True)
+        for p in parts:
+            entries = "1 entry" if p.entries == 1 else f"{p.entries} entries"
+            note = f" ({p.note})" if p.note else ""
+            console.print(f"{p.name}: {entries}, {p.size / MB:.1f} MB in "
+                          f"{shown(p.folder, None)}{note}", markup=False, highlight=False)
+    if report is not None and report.failed:
+        raise typer.Exit(code=EXIT_FAILED)

@@ -19,6 +19,7 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from ..engine import options
 from ..model.friction import friction_law
 from ..model.loops import AXIS_PARAMS
 from ..model.slot_ranges import FINITE, SlotRange, controller_range, slot_range
@@ -56,21 +57,36 @@ INPUT_INFO = {
 #: ~8000 steps per second) or 2–5 s of the continuous ones in one step; a host whose step
 #: would take longer gets Error naming the setting instead of a frozen call
 MAX_STEPS_PER_CALL = 10_000
-#: the solver settings' range: SolverOptions refuses a tolerance or step that is not a finite
-#: value > 0
+#: the solver settings' range: SolverOptions refuses a step that is not a finite value > 0,
+#: and a tolerance outside the range the command line and the API take
+#: (``MIN_RELATIVE``, ``MIN_ABSOLUTE``, ``MAX_RTOL``, ``MAX_ABSOLUTE`` of
+#: :mod:`feeddrive.engine.options`)
 _POSITIVE = SlotRange(0.0, math.inf, low_inclusive=False)
+
+
+def _tolerance_range(name: str) -> SlotRange:
+    """The range of a tolerance setting: what ``SolverOptions`` takes for ``name``
+    (``options.MIN_RELATIVE`` … ``MAX_RTOL``, ``MIN_ABSOLUTE`` … ``MAX_ABSOLUTE``)."""
+    low, high = ((options.MIN_RELATIVE, options.MAX_RTOL) if name == "rtol" else
+                 (options.MIN_ABSOLUTE[name], options.MAX_ABSOLUTE[name]))
+    return SlotRange(low, high,
+                     unit={"rtol": "", "position_tolerance": "m",
+                           "speed_tolerance": "m/s"}.get(name, "A"))
+
+
 _STEP_COUNT = SlotRange(1.0, 2.0**31 - 1.0, integer=True)  # an FMI 2 Integer
 
 # wrapper settings s[...]: (name, unit, description, start or None: from the parameters,
 # range)
 SETTINGS: tuple[tuple[str, str, str, float | None, SlotRange | None], ...] = (
     ("solver.relative_tolerance", "1", "relative error target of the embedded DOPRI5 "
-     "(speeds and currents)", 1e-6, _POSITIVE),
+     "(speeds and currents)", 1e-6, _tolerance_range("rtol")),
     ("solver.position_tolerance", "m", "absolute error target on positions (angles: ÷ H)",
-     1e-10, _POSITIVE),
+     1e-10, _tolerance_range("position_tolerance")),
     ("solver.speed_tolerance", "m/s", "absolute error target on speeds (angular: ÷ H)", 1e-8,
-     _POSITIVE),
-    ("solver.current_tolerance", "A", "absolute error target on currents", 1e-6, _POSITIVE),
+     _tolerance_range("speed_tolerance")),
+    ("solver.current_tolerance", "A", "absolute error target on currents", 1e-6,
+     _tolerance_range("current_tolerance")),
     ("solver.max_step", "s", "largest integrator step", 1e-3, _POSITIVE),
     ("controller.position_period", "s", "position-loop sample period (0: continuous)", None,
      controller_range("position_period")),
@@ -1022,7 +1038,10 @@ def c_tables(fm: FmuModel, vs: list[Variable], *, fmi: int, kind: str, token: st
             ("S_CURRENT_TOL", index["solver.current_tolerance"]),
             ("S_MAX_STEP", index["solver.max_step"]),
             ("S_INTEGRATE", index["integrate_speed_reference"]),
-            ("S_MAX_STEPS", index["solver.max_steps_per_call"]))],
+            ("S_MAX_STEPS", index["solver.max_steps_per_call"]),
+            # the importer's tolerance (fmi2SetupExperiment) is checked against this one's range
+            ("VR_RTOL", next(i for i, x in enumerate(vs)
+                             if x.name == "solver.relative_tolerance")))],
         *[f"#define {name} {value}" for name, value in (
             ("K_TIME", K_TIME), ("K_STATE", K_STATE), ("K_DER", K_DER), ("K_AUX", K_AUX),
             ("K_PARAM", K_PARAM), ("K_INPUT", K_INPUT), ("K_SETTING", K_SETTING),

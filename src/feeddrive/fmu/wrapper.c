@@ -500,6 +500,21 @@ static int fmu_in_range(int vr, double value) {
     return value <= VR_HIGH[vr];
 }
 
+/* the importer's relative tolerance (fmi2SetupExperiment, fmi3EnterInitializationMode):
+   taken when it lies in solver.relative_tolerance's range (the command line's and the API's),
+   else the FMU keeps its own and says so (a warning: the importer's tolerance is a request) */
+static void fmu_importer_tolerance(Fmu *m, double tolerance) {
+    char msg[300];
+    if (fmu_in_range(VR_RTOL, tolerance)) {
+        m->s[S_RTOL] = tolerance;
+        return;
+    }
+    snprintf(msg, sizeof msg, "the importer's tolerance %.9g is outside %s %s; "
+             "solver.relative_tolerance stays %.9g", tolerance, VR_NAME[VR_RTOL],
+             VR_EXPECTED[VR_RTOL], m->s[S_RTOL]);
+    fmu_log(m, ST_WARNING, msg);
+}
+
 /* set a variable: refused (Error, through the logger, naming it) when FMI does not let the
    importer set it now (VR_SET: 0 never, 1 until initialised, 2 always) or when the value lies
    outside its range */
@@ -593,7 +608,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
                                fmi2Real tolerance, fmi2Real startTime,
                                fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     Fmu *m = (Fmu *)c;
-    if (toleranceDefined && tolerance > 0.0) m->s[S_RTOL] = tolerance;
+    if (toleranceDefined) fmu_importer_tolerance(m, tolerance);
     m->t0 = startTime;
     m->t = startTime;
     m->stop_time = stopTimeDefined ? stopTime : 0.0;
@@ -894,7 +909,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefi
                                        fmi3Float64 tolerance, fmi3Float64 startTime,
                                        fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
     Fmu *m = (Fmu *)c;
-    if (toleranceDefined && tolerance > 0.0) m->s[S_RTOL] = tolerance;
+    if (toleranceDefined) fmu_importer_tolerance(m, tolerance);
     m->t0 = startTime;
     m->t = startTime;
     m->stop_time = stopTimeDefined ? stopTime : 0.0;
