@@ -44,14 +44,6 @@ def _value(lib: Path, x: float = 1.5) -> float:
     return float(fn(x))
 
 
-@pytest.fixture
-def cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    folder = tmp_path / "cache"
-    monkeypatch.setenv(c_cache.CACHE_ENV, str(folder))
-    monkeypatch.setattr(c_cache, "STATS", {"compiles": 0, "hits": 0})
-    return folder
-
-
 @needs_cc
 def test_a_source_is_compiled_once_then_loaded_from_the_cache(cache: Path) -> None:
     first = cached_library(SOURCE % "1.0")

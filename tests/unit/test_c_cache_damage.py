@@ -7,7 +7,6 @@ temporary folder, one per process that is reused, not one per library; ``~`` in
 
 from __future__ import annotations
 
-import ctypes
 import os
 import subprocess
 import sys
@@ -15,31 +14,12 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from test_c_cache import _value, needs_cc
 
 from feeddrive.backends import c_cache
-from feeddrive.backends.c_cache import CompilerNotFound, cached_library, find_compiler
+from feeddrive.backends.c_cache import cached_library
 
-try:
-    CC = find_compiler()
-except CompilerNotFound:
-    CC = []
-
-needs_cc = pytest.mark.skipif(not CC, reason="no C compiler (set CC)")
 SOURCE = "double fd_value(double x) { return 3.0 * x + %s; }\n"
-
-
-def _value(lib: Path, x: float = 2.0) -> float:
-    fn = ctypes.CDLL(str(lib)).fd_value
-    fn.argtypes, fn.restype = [ctypes.c_double], ctypes.c_double
-    return float(fn(x))
-
-
-@pytest.fixture
-def cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    folder = tmp_path / "cache"
-    monkeypatch.setenv(c_cache.CACHE_ENV, str(folder))
-    monkeypatch.setattr(c_cache, "STATS", {"compiles": 0, "hits": 0})
-    return folder
 
 
 @needs_cc
@@ -59,7 +39,7 @@ def test_a_damaged_library_is_compiled_again_not_loaded(cache: Path, damage: str
         digest.unlink()
     again = cached_library(text)
     assert again == lib and c_cache.STATS == {"compiles": 2, "hits": 0}
-    assert _value(again) == 6.0 + float(text.split("+ ")[1].split(";")[0])
+    assert _value(again, 2.0) == 6.0 + float(text.split("+ ")[1].split(";")[0])
     assert cached_library(text) == lib and c_cache.STATS["hits"] == 1  # whole now
 
 
