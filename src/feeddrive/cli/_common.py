@@ -456,9 +456,9 @@ def progress_bar(duration: float, again: str | None = None,
     last = [0.0]
 
     def advance(t: float, t_end: float) -> None:
-        if not bar.live.is_started:  # only long runs (chunked) report progress
-            if not err_console.is_terminal:  # nothing to draw: a transient bar draws nothing
-                return
+        # only long runs (chunked) report progress; off a terminal the bar is kept but not
+        # started (a transient bar draws nothing there, and its stop wrote a blank line)
+        if not bar.live.is_started and err_console.is_terminal:
             bar.start()
         if again is not None and t < last[0]:  # the second pass
             bar.reset(task, total=duration, description=again)
