@@ -612,7 +612,8 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     ``parameters`` (TOML text), ``drive``, ``table_position`` [m], ``reference_time``,
     ``table_speed``, ``nut_speed``, ``input`` and ``input_value`` (a replay,
     :class:`Experiment`), ``time``, ``signals`` (names), ``solver`` (the fit's
-    integrator settings, :meth:`feeddrive.SolverOptions.record`).
+    integrator settings, :meth:`feeddrive.SolverOptions.record`) and ``solver_origin`` (their
+    sources, :meth:`~feeddrive.SolverOptions.from_record`).
 
     Parameters
     ----------
@@ -631,8 +632,10 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     from ..engine.simulate import DriveSystem, SimulationError, simulate
     from ..parameters import loads
 
-    # the integrator settings of the fit (its --accuracy), carried to the worker
-    base = SolverOptions.from_record(task["solver"]) if "solver" in task else current()
+    # the integrator settings of the fit (its --accuracy, its tightened tolerances), carried
+    # to the worker with where each came from
+    base = (SolverOptions.from_record(task["solver"], task.get("solver_origin"))
+            if "solver" in task else current())
     try:
         params = loads(task["parameters"])
         system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
@@ -659,6 +662,10 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
                     "errors": {name: float(signals[name]["absolute"])
                                for name in task["signals"]}}
         return {"signals": out}
+    except ParameterError as err:
+        if err.field == "error_estimate":  # the settings leave no run ten times tighter
+            return {"error": err.message}
+        return {"error": f"{type(err).__name__}: {err}"}
     except (SimulationError, ValueError, ArithmeticError) as err:
         return {"error": f"{type(err).__name__}: {err}"}
 
@@ -703,13 +710,14 @@ class _Evaluator:
             text = dumps(self.parameters(theta))
         except ParameterError:
             return None
-        solver = current().record()
+        options = current()
+        solver, origin = options.record(), [list(pair) for pair in options.origin]
         return [{"parameters": text, "drive": self.drive, "table_position": self.position,
                  "reference_time": e.reference_time, "table_speed": e.table_speed,
                  "nut_speed": e.nut_speed, "input": e.input, "input_value": e.input_value,
                  "time": e.time, "signals": list(e.signals),
                  "output_interval": _options_for(float(np.median(np.diff(e.time))))[
-                     "output_interval"], "solver": solver}
+                     "output_interval"], "solver": solver, "solver_origin": origin}
                 for e in self.experiments]
 
     def _residual(self, outs: list[dict[str, Any]] | None) -> np.ndarray:
@@ -996,15 +1004,21 @@ class IntegrationCheck:
     rtol : float or None
         Their explicit relative tolerance (None: the default × ``accuracy``) [-].
     steps : int
-        Tightenings made (each ×1/``ACCURACY_STEP``).
+        Tightenings made (each ×1/``ACCURACY_STEP``: the explicit tolerances divided,
+        ``accuracy`` for the defaults, :func:`~feeddrive.engine.error_estimate.tightened`).
     history : tuple of dict
-        Per attempt: ``accuracy``, ``rtol``, ``worst_ratio`` (error / noise, the largest),
+        Per attempt: ``integrator`` (:func:`_settings_entry`: the label and the explicit
+        tolerances), ``accuracy``, ``rtol``, ``worst_ratio`` (error / noise, the largest),
         ``signals`` (source, signal, error [SI], noise [SI], ratio) and, once the signals
         pass, ``estimate_shift_stderr`` (:func:`_estimate_shift`) and, once that passes,
         ``stderr_shift`` (:func:`_stderr_shift`) with ``stderr_shift_at`` (the parameter
         and its two standard errors; empty: no credible linear interval to compare).
     reason : str, optional
         Why the limit was not reached.
+    integrator : dict, optional
+        The final settings (:func:`_settings_entry`): ``label`` (the tolerances in words,
+        :meth:`~feeddrive.SolverOptions.tolerances_label`: ``"rtol 1e-7, accuracy 0.1"``)
+        and the explicit tolerances [SI] (None: the default × ``accuracy``).
     """
 
     met: bool
@@ -1013,6 +1027,13 @@ class IntegrationCheck:
     steps: int
     history: tuple[dict[str, Any], ...]
     reason: str | None = None
+    integrator: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def label(self) -> str:
+        """The final settings' tolerances in words (``"accuracy 0.01"``, ``"rtol 1e-8,
+        accuracy 0.01"``), as the progress and the summary print them."""
+        return str(self.integrator.get("label") or f"accuracy {self.accuracy:g}")
 
     def to_dict(self) -> dict[str, Any]:
         """The check for JSON.
@@ -1026,6 +1047,7 @@ class IntegrationCheck:
                 "limit_estimate_shift_stderr": ESTIMATE_SHIFT,
                 "limit_stderr_shift": STDERR_SHIFT,
                 "accuracy": self.accuracy, "rtol": self.rtol, "steps": self.steps,
+                "integrator": dict(self.integrator) or None,
                 "history": list(self.history), "reason": self.reason}
 
 
@@ -1196,7 +1218,8 @@ class FitResult:
                   f"residual_check = {'true' if self.residual_ok else 'false'}",
                   f"interrupted = {'true' if self.interrupted else 'false'}"]
         if self.integration is not None:
-            lines.append(f"accuracy = {self.integration.accuracy!r}  # the integrator's, "
+            lines.append(f"accuracy = {self.integration.accuracy!r}  # the integrator's "
+                         f"({toml_comment(self.integration.label)}), "
                          f"error ≤ {ERROR_TO_NOISE:g} × noise: "
                          f"{'met' if self.integration.met else 'NOT met'}")
         if self.inadequate:
@@ -1419,9 +1442,10 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
         Run the search on growing record lengths (``horizons``).
     accuracy_check : bool, default True
         At the optimum, estimate the forward model's integration error per fitted signal
-        and tighten the integrator (``accuracy`` × 0.1, at most ``MAX_ACCURACY_STEPS``
-        times, refitting each time) until it is at most ``ERROR_TO_NOISE`` × the
-        signal's noise; no intervals when that is not reached.
+        and tighten the integrator (every tolerance ÷ 10: an explicit one from the command
+        line, a ``[solver]`` table or the API divided, ``accuracy`` × 0.1 for the defaults;
+        at most ``MAX_ACCURACY_STEPS`` times, refitting each time) until it is at most
+        ``ERROR_TO_NOISE`` × the signal's noise; no intervals when that is not reached.
     workers : int, optional
         Local worker processes for the Jacobian columns.
     dask_workers : int, optional
@@ -1792,9 +1816,10 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
         # error, so it is not taken as met (measured: 0 estimated at accuracy 100 where the
         # error against a run at 1e-4 was 8e-10 A)
         blind = any(r["error"] == 0.0 for r in rows)
-        history.append({"accuracy": settings.accuracy, "rtol": settings.rtol,
+        history.append({"integrator": _settings_entry(settings),
+                        "accuracy": settings.accuracy, "rtol": settings.rtol,
                         "worst_ratio": worst, "estimable": not blind, "signals": rows})
-        say(f"integration error at accuracy {settings.accuracy:g}: up to {worst:.3g}× the "
+        say(f"integration error at {settings.tolerances_label()}: up to {worst:.3g}× the "
             f"noise (limit {ERROR_TO_NOISE:g})" + ("; a signal's estimate is exactly 0 "
                                                    "(not estimable)" if blind else ""))
         shift = spread = math.nan
@@ -1825,19 +1850,19 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
                        "standard errors" if shift > ESTIMATE_SHIFT else
                        f"the integration error still changes the standard errors by "
                        f"{_fraction(spread)} ({which})") +
-                      f" after {steps} tightenings (accuracy {settings.accuracy:g}); limit "
+                      f" after {steps} tightenings ({settings.tolerances_label()}); limit "
                       f"{ERROR_TO_NOISE:g}× the noise")
             break
         try:
             settings = tightened(settings, ACCURACY_STEP)
         except ParameterError as err:
             reason = (f"the integration error is {worst:.3g}× the noise and the integrator "
-                      f"cannot be tightened further ({err})")
+                      f"cannot be tightened further ({err.message})")
             break
         if steps:  # a refit's evaluations (the last one's are counted with the intervals)
             evaluations += ev.evaluations
         steps += 1
-        ev = ev.fresh(f"refit at accuracy {settings.accuracy:g}")
+        ev = ev.fresh(f"refit at {settings.tolerances_label()}")
         with using(settings):
             res = least_squares(ev.residual, theta, jac=lambda th, ev=ev: ev.jacobian(th, lb, ub),
                                 bounds=(lb, ub), x_scale=np.ones(theta.size), method="trf",
@@ -1845,8 +1870,19 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
         theta = np.clip(res.x, lb, ub)
     check = IntegrationCheck(met=reason is None, accuracy=settings.accuracy,
                              rtol=settings.rtol, steps=steps, history=tuple(history),
-                             reason=reason)
+                             reason=reason, integrator=_settings_entry(settings))
     return theta, ev, settings, check, evaluations
+
+
+def _settings_entry(settings: Any) -> dict[str, Any]:
+    """The integrator settings of an attempt as the check records them: ``label``
+    (:meth:`~feeddrive.SolverOptions.tolerances_label`), ``accuracy`` [-] and the explicit
+    tolerances ``rtol`` [-], ``position_tolerance`` [m], ``speed_tolerance`` [m/s],
+    ``current_tolerance`` [A] (None: the default × ``accuracy``)."""
+    from ..engine.options import TOLERANCES
+
+    return {"label": settings.tolerances_label(), "accuracy": settings.accuracy,
+            **{name: getattr(settings, name) for name, _, _ in TOLERANCES}}
 
 
 def _summarise(ev: _Evaluator, theta: np.ndarray, start: np.ndarray, lb: np.ndarray,

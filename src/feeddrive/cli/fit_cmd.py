@@ -249,7 +249,7 @@ def fit_command(
         spread_text = (f"the standard errors by {100 * spread:.2g} %"
                        if spread is not None and last.get("stderr_shift_at")
                        else "no credible linear interval's standard error to compare")
-        _say(f"  integrator accuracy {check.accuracy:g} ({check.steps} tightening(s)): "
+        _say(f"  integrator {check.label} ({check.steps} tightening(s)): "
              + ("estimated integration error ≤ "
                 f"{data['integration_check']['limit_fraction_of_noise']:g}× every signal's "
                 f"noise; the estimates move by {shift:.2g} standard errors and "

@@ -41,7 +41,7 @@ if TYPE_CHECKING:
 
 __all__ = ["ESTIMATES", "RATIOS", "SHADOW_FACTOR", "SHADOW_RATIO", "embedded_entry",
            "estimate_kind",
-           "ratio_text", "signal_errors", "summary_entry", "tightened"]
+           "ratio_text", "signal_errors", "summary_entry", "tightened", "tightening_refused"]
 
 #: the shadow run's tolerances: this many times tighter
 SHADOW_FACTOR = 10.0
@@ -120,9 +120,64 @@ def estimate_kind(error_estimate: bool | str | None) -> str | None:
                          "or 'embedded' (carried along the run)")
 
 
+#: a tightened value this close (relative) below its floor is the floor, rounded in the division
+_ROUNDING = 1e-9
+
+
+def tightening_refused(options: SolverOptions, factor: float = SHADOW_FACTOR) -> str | None:
+    """Why ``options`` cannot be made ``factor`` times tighter, or None when they can: the
+    one rule of :func:`tightened` (the error estimate's shadow run, the fit's tightening)
+    and of :func:`feeddrive.analysis.critical.shadow_possible` (a creep search's estimate).
+
+    A tightened setting may not fall below its floor (:func:`feeddrive.engine.options.floor`:
+    ``MIN_RELATIVE`` for ``rtol``, ``MIN_ABSOLUTE`` for an absolute tolerance,
+    ``MIN_ACCURACY`` for ``accuracy``, which carries the default tolerances): the run's own
+    settings are then at double precision's reach.  The reason names the setting as the user
+    gave it (:meth:`~feeddrive.engine.options.SolverOptions.setting_text`: the command line's
+    option in its units, a file's setting, the API's field).
+
+    Parameters
+    ----------
+    options : SolverOptions
+        The run's options.
+    factor : float, default SHADOW_FACTOR
+        How much tighter [-].
+
+    Returns
+    -------
+    str or None
+        ``"needs a run 10× tighter than position tolerance 1e-21 mm, below 1e-21 mm: give a
+        looser --position-tolerance to estimate its error"``, or None.
+    """
+    for name, value in _tightened_values(options, factor).items():
+        low = opt.floor(name)
+        if value < low * (1.0 - _ROUNDING):  # (1e-16 A ÷ 10 is 9.999999999999999e-18)
+            return (f"needs a run {factor:g}× tighter than {options.setting_text(name)}, "
+                    f"below {options.setting_value(name, low)}: give a looser "
+                    f"{options.setting_place(name)} to estimate its error")
+    return None
+
+
+def _tightened_values(options: SolverOptions, factor: float) -> dict[str, float]:
+    """The settings :func:`tightened` changes and their new values: each explicit tolerance
+    ÷ ``factor``, and ``accuracy`` ÷ ``factor`` where it acts (a default tolerance, or the
+    step caps of ``dopri5``: :attr:`~feeddrive.engine.options.SolverOptions.accuracy_acts`)."""
+    changes: dict[str, float] = {}
+    for name, _, _ in opt.TOLERANCES:
+        value = getattr(options, name)
+        if value is not None:
+            changes[name] = value / factor
+    if options.accuracy_acts:
+        changes["accuracy"] = options.accuracy / factor
+    return changes
+
+
 def tightened(options: SolverOptions, factor: float = SHADOW_FACTOR) -> SolverOptions:
     """``options`` with every tolerance ``factor`` times tighter: the explicit ones divided,
-    the defaults through ``accuracy``.
+    the defaults through ``accuracy`` (which also tightens ``dopri5``'s step caps, and so is
+    divided under ``dopri5`` even with every tolerance explicit), as docs/model.md's rule
+    scales them.  Each tightened setting keeps naming where it came from
+    (:meth:`~feeddrive.engine.options.SolverOptions.tightened_source`: ``"--rtol ÷ 10"``).
 
     Parameters
     ----------
@@ -139,26 +194,21 @@ def tightened(options: SolverOptions, factor: float = SHADOW_FACTOR) -> SolverOp
     Raises
     ------
     ParameterError
-        When the tighter run would ask for less than ``MIN_RELATIVE`` relative (the run's
-        own settings are then at double precision's reach: no estimate is possible).
+        When a tightened setting would fall below its floor (:func:`tightening_refused`: the
+        run's own settings are then at double precision's reach, no estimate is possible).
     """
-    changes: dict[str, Any] = {}
-    for name, _, _ in opt.TOLERANCES:
-        value = getattr(options, name)
-        if value is not None:
-            changes[name] = value / factor
-    if any(getattr(options, n) is None for n, _, _ in opt.TOLERANCES):
-        changes["accuracy"] = options.accuracy / factor
-    rtol = changes.get("rtol", opt.DEFAULT_RTOL * changes.get("accuracy", 1.0))
-    if rtol < opt.MIN_RELATIVE:
-        raise ParameterError("error_estimate", True,
-                             f"needs a run {factor:g}× tighter than rtol "
-                             f"{rtol * factor:g}, below {opt.MIN_RELATIVE:g}: give a "
-                             "looser setting to estimate its error")
-    # the tightened accuracy is the estimate's own setting, apart from the run's explicit
-    # tolerances (which it divides): not the two in one setting that SolverOptions refuses
-    origin = (("accuracy", "error estimate"),) if "accuracy" in changes else ()
-    return replace(options, **changes, origin=origin)
+    refused = tightening_refused(options, factor)
+    if refused is not None:
+        raise ParameterError("error_estimate", True, refused)
+    # a value at its floor but for the division's rounding taken as the floor
+    changes: dict[str, Any] = {name: max(value, opt.floor(name))
+                               for name, value in _tightened_values(options, factor).items()}
+    # each tightened setting named as derived from its own source: the accuracy apart from
+    # the run's explicit tolerances (which it divides), not the two in one setting that
+    # SolverOptions refuses
+    origin = dict(options.origin)
+    origin.update({name: options.tightened_source(name, factor) for name in changes})
+    return replace(options, **changes, origin=tuple(sorted(origin.items())))
 
 
 def signal_errors(result: Result, shadow: Result) -> dict[str, dict[str, float]]:

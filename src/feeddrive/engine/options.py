@@ -52,7 +52,7 @@ from ..solvers.tableaux import DOPRI5, RODAS4, RODAS5P, RosenbrockTableau
 __all__ = ["CURRENT_FRACTION", "DEFAULT_RTOL", "DEFLECTION_FRACTION", "DENSE_OUTPUT_ORDER",
            "DOPRI5_STEP", "LEGACY_TOLERANCES", "METHODS", "POSITION_TIME", "REVERSAL_METHODS",
            "SPEED_FRACTION", "SPEED_SCALE_FLOOR", "RunScales", "SolverOptions", "Tolerances",
-           "current", "file_settings", "layered", "using"]
+           "current", "file_settings", "floor", "layered", "using"]
 
 #: the methods :class:`SolverOptions` takes
 METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense", "dopri5-fixed",
@@ -170,6 +170,47 @@ SETTINGS = ("method", *_TOLERANCE_NAMES, "accuracy", "output_interval", "max_ste
 #: the defaults' source, as describe() names it
 DEFAULT_SOURCE = "default"
 API_SOURCE = "API"
+#: the source :meth:`SolverOptions.from_record` gives ``accuracy``: a record holds settings
+#: already merged (:func:`layered`, tightened), not one setting, so an accuracy factor under
+#: explicit tolerances there is no ambiguity to refuse
+RECORD_SOURCE = "record"
+#: how a derived setting's source reads: ``"--rtol ÷ 100"``, the option's value tightened 100×
+#: (:meth:`SolverOptions.tightened_source`)
+_DIVIDED = " ÷ "
+#: the command line's unit of each setting and the factor from its SI value to it (the command
+#: line takes lengths in mm and speeds in mm/s: ``feeddrive.cli._solver.CLI_UNITS``; a file's
+#: ``[solver]`` table and the API take SI)
+CLI_UNITS = {"rtol": ("", 1.0), "position_tolerance": ("mm", 1e3),
+             "speed_tolerance": ("mm/s", 1e3), "current_tolerance": ("A", 1.0),
+             "accuracy": ("", 1.0)}
+#: the settings in words, as :meth:`SolverOptions.setting_text` names them
+_WORDS = {"rtol": "rtol", "position_tolerance": "position tolerance",
+          "speed_tolerance": "speed tolerance", "current_tolerance": "current tolerance",
+          "accuracy": "accuracy"}
+
+
+def floor(name: str) -> float:
+    """The smallest value a tolerance setting or ``accuracy`` takes: ``MIN_RELATIVE`` for
+    ``rtol``, ``MIN_ABSOLUTE`` for an absolute tolerance, ``MIN_ACCURACY`` for ``accuracy``
+    (double precision's reach).  :class:`SolverOptions` refuses a value below it, and
+    :func:`feeddrive.engine.error_estimate.tightened` a tightening that would go below it.
+
+    Parameters
+    ----------
+    name : str
+        ``rtol``, ``position_tolerance``, ``speed_tolerance``, ``current_tolerance`` or
+        ``accuracy``.
+
+    Returns
+    -------
+    float
+        The floor [-, m, m/s, A or -].
+    """
+    if name == "rtol":
+        return MIN_RELATIVE
+    if name == "accuracy":
+        return MIN_ACCURACY
+    return MIN_ABSOLUTE[name]
 
 
 @dataclass(frozen=True)
@@ -374,13 +415,13 @@ class SolverOptions:
             raise ParameterError("options.method", self.method,
                                  f"expected one of {', '.join(METHODS)}")
         if self.rtol is not None:
-            _check_positive("rtol", self.rtol, "-", MIN_RELATIVE, MAX_RTOL)
+            _check_positive("rtol", self.rtol, "-", floor("rtol"), MAX_RTOL)
         for name in ("position_tolerance", "speed_tolerance", "current_tolerance"):
             value = getattr(self, name)
             if value is not None:
                 _check_positive(name, value, dict((n, u) for n, u, _ in TOLERANCES)[name],
-                                low=MIN_ABSOLUTE[name], high=MAX_ABSOLUTE[name])
-        _check_positive("accuracy", self.accuracy, "-", MIN_ACCURACY, MAX_ACCURACY)
+                                low=floor(name), high=MAX_ABSOLUTE[name])
+        _check_positive("accuracy", self.accuracy, "-", floor("accuracy"), MAX_ACCURACY)
         for name, unit in (("output_interval", "s"), ("max_step", "s"), ("fixed_step", "s")):
             value = getattr(self, name)
             if name == "max_step" and value is None:
@@ -430,6 +471,139 @@ class SolverOptions:
         value = getattr(self, name)
         default = next(f.default for f in fields(self) if f.name == name)
         return DEFAULT_SOURCE if value == default else API_SOURCE
+
+    def _derived(self, name: str) -> tuple[str, float]:
+        """The source setting ``name`` was derived from and the factor it was divided by
+        (``("--rtol", 100.0)`` for ``"--rtol ÷ 100"``; 1 for a setting as given)."""
+        source = self.source(name)
+        base, sep, divisor = source.rpartition(_DIVIDED)
+        if sep:
+            try:
+                return base, float(divisor)
+            except ValueError:
+                pass
+        return source, 1.0
+
+    def tightened_source(self, name: str, factor: float) -> str:
+        """The source of setting ``name`` once it is ``factor`` times tighter: where it came
+        from, divided (``"--rtol ÷ 10"``; tightened twice, ``"--rtol ÷ 100"``), so that a
+        tightened setting still names the setting it came from and is not taken for it.
+
+        Parameters
+        ----------
+        name : str
+            A field name.
+        factor : float
+            How much tighter [-].
+
+        Returns
+        -------
+        str
+            The source.
+        """
+        base, divided = self._derived(name)
+        return f"{base}{_DIVIDED}{divided * factor:g}"
+
+    def setting_place(self, name: str) -> str:
+        """Where setting ``name`` is given, as a refusal tells the user to change it: the
+        command-line option (``--rtol``), the file's setting (``solver.accuracy ([solver] in
+        run.toml)``), or the field's name (API, default).
+
+        Parameters
+        ----------
+        name : str
+            A field name.
+
+        Returns
+        -------
+        str
+            The place.
+        """
+        base, _ = self._derived(name)
+        if base.startswith("--"):
+            return base
+        if base in (DEFAULT_SOURCE, API_SOURCE, RECORD_SOURCE):
+            return name
+        return f"solver.{name} ({base})"
+
+    def setting_value(self, name: str, value: float | None = None) -> str:
+        """A value of tolerance setting (or ``accuracy``) ``name`` in the units the setting
+        was given in: the command line's (mm, mm/s, A) when an option gave it, SI otherwise.
+
+        Parameters
+        ----------
+        name : str
+            ``rtol``, an absolute tolerance's name or ``accuracy``.
+        value : float or None, default None
+            The value (a floor, a tightened value) [SI unit of the setting]; None: the
+            setting's own.
+
+        Returns
+        -------
+        str
+            E.g. ``"1e-21 mm"``, ``"1e-8"``.
+        """
+        base, _ = self._derived(name)
+        x = getattr(self, name) if value is None else value
+        if base.startswith("--"):
+            unit, per = CLI_UNITS[name]
+        else:
+            unit, per = dict((n, u) for n, u, _ in TOLERANCES).get(name, "-"), 1.0
+        return f"{_num(x * per)}{'' if unit in ('', '-') else ' ' + unit}"
+
+    def setting_text(self, name: str) -> str:
+        """Tolerance setting (or ``accuracy``) ``name`` in words, its value in the units it
+        was given in (:meth:`setting_value`); a tightened one with what it was tightened from
+        (``"rtol 1e-8 (--rtol ÷ 100)"``).
+
+        Parameters
+        ----------
+        name : str
+            ``rtol``, an absolute tolerance's name or ``accuracy``.
+
+        Returns
+        -------
+        str
+            E.g. ``"position tolerance 1e-21 mm"``.
+        """
+        _, divided = self._derived(name)
+        text = f"{_WORDS[name]} {self.setting_value(name)}"
+        if divided != 1.0:
+            text += f" ({self.setting_place(name)}{_DIVIDED}{divided:g})"
+        return text
+
+    @property
+    def accuracy_acts(self) -> bool:
+        """Whether ``accuracy`` changes the run: some tolerance is left at its default, or
+        the method is ``dopri5`` (its step caps follow accuracy:
+        :attr:`largest_step`, :attr:`stability_share`).  With every tolerance explicit under
+        another method it changes nothing."""
+        return self.method == "dopri5" or any(getattr(self, n) is None
+                                              for n in _TOLERANCE_NAMES)
+
+    def tolerances_label(self) -> str:
+        """The tolerance settings in a few words, as the fit labels its attempts: each
+        explicit tolerance (lengths in mm, speeds in mm/s, currents in A, the command line's
+        units) and ``accuracy`` where it acts (:attr:`accuracy_acts`).
+
+        Returns
+        -------
+        str
+            E.g. ``"accuracy 0.1"``, ``"rtol 1e-7, accuracy 0.1"``, ``"rtol 1e-6, positions
+            1e-9 mm, speeds 0.0001 mm/s, currents 0.0001 A"``.
+        """
+        parts = []
+        if self.rtol is not None:
+            parts.append(f"rtol {_num(self.rtol)}")
+        if self.position_tolerance is not None:
+            parts.append(f"positions {_mm(self.position_tolerance)} mm")
+        if self.speed_tolerance is not None:
+            parts.append(f"speeds {_mm(self.speed_tolerance)} mm/s")
+        if self.current_tolerance is not None:
+            parts.append(f"currents {_num(self.current_tolerance)} A")
+        if self.accuracy_acts:
+            parts.append(f"accuracy {_num(self.accuracy)}")
+        return ", ".join(parts)
 
     @property
     def driver_mode(self) -> tuple[int, int]:
@@ -574,8 +748,12 @@ class SolverOptions:
                 f"{acc_from})")
 
     def _from(self, name: str) -> str:
-        """Where a setting came from, when the command line or a file gave it."""
+        """Where a setting came from, when the command line or a file gave it (and how much
+        it was tightened since: ``" (from --rtol ÷ 10)"``, ``" (÷ 10)"``)."""
         source = self.source(name)
+        base, divided = self._derived(name)
+        if divided != 1.0 and base in (DEFAULT_SOURCE, API_SOURCE):
+            return f" ({_DIVIDED.strip()} {divided:g})"
         return "" if source in (DEFAULT_SOURCE, API_SOURCE) else f" (from {source})"
 
     @property
@@ -638,14 +816,24 @@ class SolverOptions:
         return out
 
     @classmethod
-    def from_record(cls, record: Mapping[str, Any]) -> SolverOptions:
-        """The options a :meth:`record` holds (its ``rule`` is not read back: a worker runs
-        its own code's rule, which the record's key already named).
+    def from_record(cls, record: Mapping[str, Any],
+                    origin: Iterable[tuple[str, str]] | None = None) -> SolverOptions:
+        """The options a :meth:`record` holds, equal to those recorded (its ``rule`` is not
+        read back: a worker runs its own code's rule, which the record's key already named).
+
+        The record has no ``origin`` (it is a key of the settings alone): its settings were
+        merged already (:func:`layered`, a fit's or an error estimate's tightening), so an
+        ``accuracy`` under explicit tolerances is not the ambiguity of one setting that
+        :class:`SolverOptions` refuses.  Without ``origin`` a recorded ``accuracy`` other than
+        1 is given the source ``RECORD_SOURCE``.
 
         Parameters
         ----------
         record : mapping
             A :meth:`record`.
+        origin : iterable of (str, str) or None, default None
+            The recorded options' ``origin``, carried beside the record (a fit's tasks carry
+            it): the options then name each setting's source as the recorded ones did.
 
         Returns
         -------
@@ -653,7 +841,13 @@ class SolverOptions:
             The options.
         """
         names = {f.name for f in fields(cls)} - {"origin"}
-        return cls(**{k: v for k, v in record.items() if k in names})
+        values = {k: v for k, v in record.items() if k in names}
+        if origin is not None:
+            sources = tuple(sorted((str(k), str(v)) for k, v in origin))
+        else:
+            sources = (("accuracy", RECORD_SOURCE),) if values.get("accuracy", 1.0) != 1.0 \
+                else ()
+        return cls(**values, origin=sources)
 
 
 _CURRENT: ContextVar[SolverOptions | None] = ContextVar("feeddrive_solver_options",
