@@ -122,6 +122,8 @@ def test_the_estimate_holds_with_friction_on(name: str) -> None:
                 assert estimate <= 3 * resolved, (signal, accuracy, estimate, resolved)
                 continue
             assert 1 / 3 <= estimate / true <= 3, (signal, accuracy, estimate, true)
+            low, high = r.solver_stats["error_estimate"]["ratio_to_true_error"]  # as stated
+            assert low <= estimate / true <= high, (signal, accuracy, estimate, true)
 
 
 def slip_instants(t: np.ndarray, v: np.ndarray, level: float) -> np.ndarray:
