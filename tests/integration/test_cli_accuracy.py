@@ -147,10 +147,11 @@ def test_the_defaults_scale_with_the_command_speed() -> None:
     fast = _summary([])["solver"]
     assert isinstance(slow, dict) and isinstance(fast, dict)
     # 100× slower: 100× tighter speed and position tolerances, the same relative accuracy
-    assert slow["speed_tolerance"] == pytest.approx(fast["speed_tolerance"] / 100)
-    assert slow["position_tolerance"] == pytest.approx(fast["position_tolerance"] / 100)
-    assert fast["speed_tolerance"] == pytest.approx(opt.SPEED_FRACTION * 1e-3)
-    assert fast["position_tolerance"] == pytest.approx(opt.POSITION_TIME * 1e-3)
+    # (the JSON's in mm/s and mm, the command line's units: a 1-mm/s command)
+    assert slow["speed_tolerance_mm_s"] == pytest.approx(fast["speed_tolerance_mm_s"] / 100)
+    assert slow["position_tolerance_mm"] == pytest.approx(fast["position_tolerance_mm"] / 100)
+    assert fast["speed_tolerance_mm_s"] == pytest.approx(opt.SPEED_FRACTION * 1.0)
+    assert fast["position_tolerance_mm"] == pytest.approx(opt.POSITION_TIME * 1.0)
 
 
 def test_precedence_cli_over_file_over_default(tmp_path: Path) -> None:
@@ -166,7 +167,8 @@ def test_precedence_cli_over_file_over_default(tmp_path: Path) -> None:
     over = _summary(["--params", str(params), "--rtol", "1e-9"])["solver"]
     assert isinstance(over, dict)
     assert over["rtol"] == pytest.approx(1e-9)  # the command line's explicit rtol …
-    assert over["speed_tolerance"] == pytest.approx(from_file["speed_tolerance"])  # … file's
+    assert over["speed_tolerance_mm_s"] == pytest.approx(  # … the file's
+        from_file["speed_tolerance_mm_s"])
     cli = _summary(["--params", str(params), "--accuracy", "0.5"])["solver"]
     assert isinstance(cli, dict)
     assert cli["rtol"] == pytest.approx(5e-7)  # the command line's accuracy replaces it
@@ -257,14 +259,15 @@ def test_a_search_states_the_integrator_it_ran_with() -> None:
 def test_the_command_line_takes_the_absolute_tolerances_in_mm_and_mm_per_s() -> None:
     """The CLI's lengths and speeds are mm and mm/s, its tolerances too (an outside check,
     2026-12-06: ``--speed-tolerance 0.001`` was 1 mm/s, not 1 µm/s); the run gets them in SI
-    (the parameter file's ``[solver]`` table and the API take SI)."""
+    (the parameter file's ``[solver]`` table and the API take SI) and ``--json`` gives them
+    back in mm and mm/s, the unit in the key."""
     result = runner.invoke(app, ["simulate", "--table-speed", "2", "--duration", "0.2",
                                  "--position-tolerance", "1e-7", "--speed-tolerance", "2e-5",
                                  "--json"])
     assert result.exit_code == 0, result.output
-    solver = json.loads(result.output)["solver"]
-    assert solver["position_tolerance"] == pytest.approx(1e-10, rel=1e-12)  # [m]
-    assert solver["speed_tolerance"] == pytest.approx(2e-8, rel=1e-12)  # [m/s]
+    solver = json.loads(result.output)["solver"]  # the JSON speaks the CLI's units too
+    assert solver["position_tolerance_mm"] == pytest.approx(1e-7, rel=1e-12)
+    assert solver["speed_tolerance_mm_s"] == pytest.approx(2e-5, rel=1e-12)
     help_text = " ".join(runner.invoke(app, ["simulate", "--help"],
                                        terminal_width=400).output.split())
     assert "Absolute tolerance of positions [mm]" in help_text

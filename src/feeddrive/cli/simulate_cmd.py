@@ -7,6 +7,7 @@ from typing import Any
 
 import typer
 
+from ..engine import options as _opt
 from ..engine.options import layered
 from ..io.outputs import PLOT_FORMATS, RESULT_FORMATS
 from . import _units
@@ -35,6 +36,30 @@ DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.engine.simulate.SolverOptions.max
 DEFAULT_METHOD = "modal"  # as feeddrive.engine.simulate.SolverOptions.method (a test checks it)
 #: the integrators offered (feeddrive.engine.simulate.METHODS without the fixed-step order checks)
 CLI_METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense")
+
+
+def method_help() -> str:
+    """``--method``'s help, the default method and the Rosenbrock method of ``modal`` and
+    ``auto`` read from the engine's constants (:data:`feeddrive.engine.options.DEFAULT_METHOD`,
+    :data:`~feeddrive.engine.options.DEFAULT_ROSENBROCK` and its label; the help had said
+    RODAS4 after the default became RODAS5P).
+
+    Returns
+    -------
+    str
+        The help text.
+    """
+    rosenbrock = _opt.DEFAULT_ROSENBROCK
+    label = _opt.ROSENBROCKS[rosenbrock].label
+    default = _opt.DEFAULT_METHOD
+    return (f"Integrator: modal (DOPRI5 and the Rosenbrock method of --rosenbrock, {label} "
+            "by default, switched on stiffness and cost, steps capped on lightly damped "
+            "modes), dopri5 (every output instant a step end, as the v1 engine; friction "
+            "reversals located), auto (DOPRI5 and the Rosenbrock method switched on stiffness "
+            "and cost, no cap), rodas4 (RODAS4 throughout) or dopri5-dense; default: the "
+            f"parameter file's [solver] method, else {default}.")
+
+
 #: what --max-steps does: before the start, the fewest steps the largest step allows
 #: (feeddrive.engine.budget.run_budget, checked below; no bound for the dense-output methods,
 #: whose steps are not capped) and dopri5's probe (engine.simulate._check_step_rate); then the
@@ -79,12 +104,7 @@ def simulate_command(
     profile_file: str | None = typer.Option(
         None, "--profile-file", help="csv: a CSV with columns time [s] and table_speed "
         "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
-    method: str | None = typer.Option(
-        None, "--method", help="Integrator: modal (the default: DOPRI5 and "
-        "RODAS4 switched on stiffness and cost, steps capped on lightly damped modes), dopri5 "
-        "(every output instant a step end, as the v1 engine; friction reversals located), "
-        "auto (switched on stiffness and cost, no cap), rodas4 or dopri5-dense; default: the "
-        "parameter file's [solver] method, else modal."),
+    method: str | None = typer.Option(None, "--method", help=method_help()),
     max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps", help=MAX_STEPS_HELP),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
                                            "(default wang2021; linear-motor-example for "
@@ -153,7 +173,8 @@ def simulate_command(
                     duration=duration, options=layered(
                         [("command line", {"method": (method, "--method"),
                                            "max_steps": (max_steps, "--max-steps")})],
-                        base=solver), output=output, plot=plot, as_json=as_json)
+                        base=solver), output=output, plot=plot, as_json=as_json,
+                    report=machine_solver_report)
         return
     # the warnings printed from here on, for --json
     with _units.recorded_warnings() as printed:
@@ -239,6 +260,10 @@ def simulate_command(
         summary = result.summary()
         summary["profile"] = profile
         if output and streamed:
+            # written while the run went, before its statistics and estimate existed
+            from ..io.results import add_solver_record
+
+            add_solver_record(output, result.solver_stats)
             summary["output"] = output
             summary["streamed"] = True
         elif output:
@@ -253,10 +278,10 @@ def simulate_command(
             _units.warn(text)
         summary["warnings"] = list(printed)  # the --json carries every warning printed
         if as_json:
-            print_json(summary)
+            print_json({**summary, "solver": solver_json(summary["solver"])})
         else:
             _print_summary(summary, drive, profile, profile_file, table_speed, frequency,
-                           position, duration, params.name, output)
+                           position, duration, params.name, output, options)
         if summary.get("verdict") == "unstable":
             raise typer.Exit(code=EXIT_UNSTABLE)
 
@@ -303,14 +328,13 @@ def run_header(drive: str, profile: str, profile_file: str | None, table_speed: 
 
 def _print_summary(summary: dict[str, Any], drive: str, profile: str,
                    profile_file: str | None, table_speed: float | None, frequency: float,
-                   position: float, duration: float, name: str, output: str | None) -> None:
+                   position: float, duration: float, name: str, output: str | None,
+                   options: Any) -> None:
     _say(run_header(drive, profile, profile_file, table_speed, frequency, position, duration,
                     name))
-    for label, text in _lines(summary):
+    for label, text in _lines(summary, options):
         _say(f"  {label:24s} {text}")
-    s = summary["solver"]
-    _say(f"  solver: {s['method']}, {s['steps']} steps, {s['rejected_steps']} rejected, "
-         f"{1e3 * s['wall_time_s']:.1f} ms")
+    _say(f"  solver: {solver_counts(summary['solver'])}")
     for key in ("output", "plot"):
         if key in summary:
             _say(f"  wrote {summary[key]}")
@@ -318,7 +342,47 @@ def _print_summary(summary: dict[str, Any], drive: str, profile: str,
         _say(f"  analyse the steps with: feeddrive analyze {summary['output']}")
 
 
-def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
+def solver_counts(stats: dict[str, Any]) -> str:
+    """The run's method, steps, rejected steps and wall time, as the summary's ``solver:``
+    line gives them.
+
+    Parameters
+    ----------
+    stats : dict
+        A run's ``solver_stats``.
+
+    Returns
+    -------
+    str
+        E.g. ``"modal, 710 steps, 39 rejected, 4.9 ms"``.
+    """
+    return (f"{stats['method']}, {stats['steps']} steps, {stats['rejected_steps']} rejected, "
+            f"{1e3 * stats['wall_time_s']:.1f} ms")
+
+
+def machine_solver_report(stats: dict[str, Any], options: Any
+                          ) -> tuple[list[str], dict[str, Any]]:
+    """What ``simulate --machine`` states of its integrator, as a single drive's summary: the
+    settings line (:func:`integrator_line`, the axes' tolerances in table units) and the
+    counts (:func:`solver_counts`) for the text, :func:`solver_json` for ``--json``.
+
+    Parameters
+    ----------
+    stats : dict
+        The machine run's ``solver_stats``.
+    options : SolverOptions
+        The run's options.
+
+    Returns
+    -------
+    tuple of (list of str, dict)
+        The text lines and the JSON's ``solver`` record.
+    """
+    return ([f"integrator: {integrator_line(stats, options, 'axes')}",
+             f"solver: {solver_counts(stats)}"], solver_json(stats))
+
+
+def _lines(s: dict[str, Any], options: Any = None) -> list[tuple[str, str]]:
     from ..analysis.creep_window import CreepThresholds, frequency_label
 
     n = _units.number
@@ -391,7 +455,7 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
                                           f"{n(s['mean_nut_speed_mm_s'])} mm/s (× H)"))
     if "run" not in s:
         rows.append(("window", f"{n(a)}–{n(b)} s"))
-    rows.append(("integrator", integrator_line(s["solver"])))
+    rows.append(("integrator", integrator_line(s["solver"], options)))
     estimate = s["solver"].get("error_estimate")
     if estimate is not None:
         sig = estimate["signals"]
@@ -406,15 +470,24 @@ def _lines(s: dict[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
-def integrator_line(stats: dict[str, Any]) -> str:
+def integrator_line(stats: dict[str, Any], options: Any = None, part: str = "table") -> str:
     """The run's integrator settings in one line, in the CLI's units: the table's absolute
     tolerances and, where they differ (a DDFS's motors run at the table speed plus the nut's),
-    the motors', each with the speed scale it was scaled to.
+    the motors', each default one with the speed scale it was scaled to, an explicit one
+    marked as given (it is not scaled).
 
     Parameters
     ----------
     stats : dict
         A run's ``solver_stats``.
+    options : SolverOptions, optional
+        The options the command passed: a tolerance they give explicitly is marked as given.
+        Otherwise the run's record says it (``stats`` holds what the run took, a parameter
+        set's own ``[solver]`` table included): an explicit position tolerance leaves
+        ``deflection_fraction`` None; a speed tolerance other than the scaled default
+        (``SPEED_FRACTION`` × the table's speed scale × accuracy) was given.
+    part : str, default "table"
+        What the first tolerances are of (a machine's: ``"axes"``, in table units).
 
     Returns
     -------
@@ -423,20 +496,89 @@ def integrator_line(stats: dict[str, Any]) -> str:
         accuracy factor.
     """
     n = _units.number
+    scaled = _opt.SPEED_FRACTION * stats.get("table_speed_scale", stats["speed_scale"]) \
+        * stats["accuracy"]
+    given_position = stats.get("deflection_fraction", 0.0) is None or (
+        options is not None and options.position_tolerance is not None)
+    given_speed = not math.isclose(stats["speed_tolerance"], scaled, rel_tol=1e-9) or (
+        options is not None and options.speed_tolerance is not None)
 
-    def tolerances(position: float, speed: float) -> str:
-        return f"positions {n(position / MM, 3)} mm, speeds {n(speed / MM_PER_S, 3)} mm/s"
+    def tolerances(position: float, speed: float, scale: float) -> str:
+        where = f"scaled to {n(scale / MM_PER_S, 3)} mm/s"
+        positions = f"positions {n(position / MM, 3)} mm"
+        speeds = f"speeds {n(speed / MM_PER_S, 3)} mm/s"
+        if given_position and given_speed:
+            return f"{positions}, {speeds} (as given, not scaled)"
+        if given_position:
+            return f"{positions} (as given), {speeds} ({where})"
+        if given_speed:
+            return f"{positions} ({where}), {speeds} (as given)"
+        return f"{positions}, {speeds} ({where})"
 
-    table = tolerances(stats["position_tolerance"], stats["speed_tolerance"])
-    scale = stats.get("table_speed_scale", stats["speed_scale"])
+    table = tolerances(stats["position_tolerance"], stats["speed_tolerance"],
+                       stats.get("table_speed_scale", stats["speed_scale"]))
     motors = ""
-    if stats.get("motor_position_tolerance", stats["position_tolerance"]) \
-            != stats["position_tolerance"]:
-        motor = tolerances(stats["motor_position_tolerance"], stats["motor_speed_tolerance"])
-        motors = f"; motors {motor} (scaled to {n(stats['speed_scale'] / MM_PER_S, 3)} mm/s)"
-    return (f"{stats['method']}, rtol {n(stats['rtol'], 3)}, table {table} (scaled to "
-            f"{n(scale / MM_PER_S, 3)} mm/s){motors}, currents "
+    if (stats.get("motor_position_tolerance", stats["position_tolerance"]),
+            stats.get("motor_speed_tolerance", stats["speed_tolerance"])) \
+            != (stats["position_tolerance"], stats["speed_tolerance"]):
+        motors = "; motors " + tolerances(stats["motor_position_tolerance"],
+                                          stats["motor_speed_tolerance"], stats["speed_scale"])
+    return (f"{stats['method']}, rtol {n(stats['rtol'], 3)}, {part} {table}{motors}, currents "
             f"{n(stats['current_tolerance'], 3)} A; accuracy {n(stats['accuracy'], 3)}")
+
+
+#: the solver record's lengths and speeds [SI] as ``--json`` gives them: in the command
+#: line's units (its --position-tolerance takes mm, --speed-tolerance mm/s), the unit in the
+#: key as every other key of the JSON (``command_speed_mm_s``); currents [A] named so too
+SOLVER_JSON_UNITS = {
+    "position_tolerance": ("position_tolerance_mm", MM),
+    "speed_tolerance": ("speed_tolerance_mm_s", MM_PER_S),
+    "motor_position_tolerance": ("motor_position_tolerance_mm", MM),
+    "motor_speed_tolerance": ("motor_speed_tolerance_mm_s", MM_PER_S),
+    "speed_scale": ("speed_scale_mm_s", MM_PER_S),
+    "table_speed_scale": ("table_speed_scale_mm_s", MM_PER_S),
+    "current_tolerance": ("current_tolerance_a", 1.0),
+    "current_scale": ("current_scale_a", 1.0),
+}
+
+
+def solver_json(stats: dict[str, Any]) -> dict[str, Any]:
+    """A run's solver record as the command's ``--json`` gives it: the keys of
+    :data:`SOLVER_JSON_UNITS` renamed with their unit and converted (mm, mm/s, A), the error
+    estimate's absolute errors in the tabular exports' units (mm, mm/s, N/µm; each entry's
+    ``unit`` says which), everything else as ``Result.solver_stats`` has it (SI, which the
+    API keeps).
+
+    Parameters
+    ----------
+    stats : dict
+        A run's ``solver_stats`` [SI].
+
+    Returns
+    -------
+    dict
+        The record in the command line's units.
+    """
+    from ..units import ENGINEERING
+
+    out: dict[str, Any] = {}
+    for key, value in stats.items():
+        if key in SOLVER_JSON_UNITS and isinstance(value, int | float):
+            name, per = SOLVER_JSON_UNITS[key]
+            out[name] = value / per
+        else:
+            out[key] = value
+    estimate = stats.get("error_estimate")
+    if isinstance(estimate, dict) and isinstance(estimate.get("signals"), dict):
+        signals = {}
+        for name, entry in estimate["signals"].items():
+            unit = entry.get("unit")
+            if unit in ENGINEERING:
+                shown_unit, factor = ENGINEERING[unit]
+                entry = {**entry, "absolute": entry["absolute"] * factor, "unit": shown_unit}
+            signals[name] = entry
+        out["error_estimate"] = {**estimate, "signals": signals}
+    return out
 
 
 def _si(mm_s: float | None) -> float | None:

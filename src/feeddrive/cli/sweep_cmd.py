@@ -117,7 +117,7 @@ def sweep_command(
         lo, hi = est.spread
         total_range = list(est.seconds_range)
         out = {"sweep": cfg.name, "points": est.points, "distinct": est.distinct,
-               "stored": est.stored, "to_compute": est.distinct - est.stored,
+               "stored": est.stored, "to_compute": max(est.distinct - est.stored, 0),
                "timed_points": est.timed, "seconds_per_point": est.seconds_per_point,
                "seconds_per_point_range": [lo, hi], "workers": n,
                "estimated_seconds": est.seconds,
@@ -132,16 +132,19 @@ def sweep_command(
         if as_json:
             print_json(out)
             return
-        if est.distinct == est.stored:
+        todo = est.distinct - est.stored
+        if todo <= 0:
             cost = "nothing to compute"
         elif est.timed:
             cost = (f"{est.seconds_per_point:.3g} s CPU per point ({est.timed} timed: "
                     f"{lo:.3g}–{hi:.3g} s)")
-        else:
+        elif est.probe_rate is not None:
             cost = (f"{lo:.3g}–{hi:.3g} s CPU per point (a {PROBE_DURATION:g}-s probe: "
                     f"{est.probe_rate:.3g} s CPU per simulated second, times the least and "
                     "most simulated time of the quantity's protocol)")
-        if est.distinct > est.stored:
+        else:  # not timed (an estimate from elsewhere): the counts only
+            cost = "cost not estimated"
+        if todo > 0:
             cost += (f" and {est.startup_seconds:.2g} s to start each worker → about "
                      f"{total_range[0]:.3g}–{total_range[1]:.3g} s on {n} workers with a free "
                      "core each; longer on a loaded machine")
@@ -149,7 +152,7 @@ def sweep_command(
                 cost += (f"; the model kernels were compiled now ({est.compile_seconds:.3g} s "
                          "CPU, once: the sweep finds them cached)")
         console.print(f"sweep {shown(cfg.name)}: {est.points} points ({est.distinct} distinct, "
-                      f"{est.stored} already stored, {est.distinct - est.stored} to compute); "
+                      f"{est.stored} already stored, {max(todo, 0)} to compute); "
                       + cost, markup=False, highlight=False, soft_wrap=True)
         return
     summary, db = _run(cfg, lambda: SweepStore(store_path, option=option, notice=_notice),

@@ -2,10 +2,13 @@
 
 * CSV: engineering units (mm, mm/s, N/µm), the unit in brackets in each column name, e.g.
   ``table_position [mm]`` — a human reads it; a first ``#`` line says what wrote it
-  (:func:`provenance_line`; feeddrive's readers skip ``#`` lines, pandas with ``comment="#"``).
+  (:func:`provenance_line`), a last one holds the run's solver record as JSON
+  (:func:`solver_line`: settings, statistics, the error estimate when asked; SI, as NetCDF's
+  ``solver`` attribute); feeddrive's readers skip ``#`` lines, pandas with ``comment="#"``.
 * Parquet: the same numbers and units as CSV, plain column names (``table_position``) and
   each field's unit in the Arrow schema's field metadata (``unit``, ``long_name``); the units
-  and the run's :func:`provenance` also as pandas' ``df.attrs`` (``pandas.read_parquet``).
+  and the run's :func:`provenance` (the solver record among it) also as pandas' ``df.attrs``
+  (``pandas.read_parquet``).
 * NetCDF: NetCDF4 (HDF5, h5netcdf engine), SI, with the CF-1.8 global attributes
   (``Conventions``, ``title``, ``source``, ``history``, ``references``) and each variable's
   ``units`` (UDUNITS spelling) and ``long_name``.
@@ -13,7 +16,8 @@
 
 Every file is written under a temporary name in its folder and renamed when complete
 (:func:`feeddrive.io.outputs.atomic_path`): a full disk never leaves a truncated file under the
-output's name.
+output's name.  A streamed run (:class:`ChunkWriter`) is written before its solver record
+exists; :func:`add_solver_record` adds it once the run (and its error estimate) is done.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from __future__ import annotations
 import importlib.util
 import io
 import json
+import os
 from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
@@ -251,6 +256,91 @@ def provenance_line(attrs: Mapping[str, Any]) -> str:
     return f"# feeddrive {__version__}: {text}; units in the column names"
 
 
+#: how the solver record's line of a CSV export starts (:func:`solver_line`)
+SOLVER_LINE = "# solver: "
+
+
+def solver_line(attrs: Mapping[str, Any]) -> str | None:
+    """The last line of a CSV export: a ``#`` comment holding the run's solver record as JSON,
+    the record NetCDF's ``solver`` attribute holds (``Result.solver_stats``: the settings, the
+    statistics, the error estimate when asked; SI).
+
+    Parameters
+    ----------
+    attrs : mapping
+        A run's attributes (``solver`` as JSON text or a dict).
+
+    Returns
+    -------
+    str or None
+        ``# solver: {...}`` without its newline; None when ``attrs`` has no solver record (a
+        streamed run's first chunk).
+    """
+    value = attrs.get("solver")
+    if value is None:
+        return None
+    record = json.loads(value) if isinstance(value, str) else value
+    return SOLVER_LINE + json.dumps(record, ensure_ascii=False)
+
+
+def add_solver_record(path: str | Path, solver_stats: Mapping[str, Any]) -> Path:
+    """Add a finished run's solver record to its streamed ``.csv`` or ``.parquet`` output.
+
+    :class:`ChunkWriter` writes the samples while the run goes, before its statistics (and an
+    error estimate, made after the run) exist; the command line calls this when the run is
+    done, a Python caller of ``simulate(..., output=)`` may.  A CSV gets the last line
+    :func:`solver_line` (appended; on a failed write the file is cut back to what it held).  A
+    Parquet file's pandas ``df.attrs`` get ``solver``: the file is written again, one row group
+    at a time (memory: one chunk), under a temporary name renamed over it when complete.
+
+    Parameters
+    ----------
+    path : str or Path
+        The streamed output.
+    solver_stats : mapping
+        The run's ``Result.solver_stats`` [SI].
+
+    Returns
+    -------
+    Path
+        The file.
+
+    Raises
+    ------
+    ParameterError
+        For another extension (``.nc`` and ``.mat`` are written whole, with the record).
+    """
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext == ".csv":
+        data = memoryview(f"{solver_line({'solver': dict(solver_stats)})}\n".encode())
+        with open(p, "r+b", buffering=0) as f:  # unbuffered: nothing left to write at close
+            size = f.seek(0, io.SEEK_END)
+            try:
+                while data:
+                    data = data[f.write(data) or 0:]
+                os.fsync(f.fileno())
+            except BaseException:
+                os.ftruncate(f.fileno(), size)
+                raise
+        return p
+    if ext != ".parquet":
+        raise ParameterError("output", str(p), "a solver record is added to a streamed "
+                             ".parquet or .csv (.nc and .mat are written with it)")
+    import pyarrow.parquet as pq
+
+    with pq.ParquetFile(p) as source:
+        schema = source.schema_arrow
+        meta = dict(schema.metadata or {})
+        attrs = json.loads(meta.get(b"PANDAS_ATTRS", b"{}"))
+        attrs["solver"] = json.loads(json.dumps(dict(solver_stats)))
+        meta[b"PANDAS_ATTRS"] = json.dumps(attrs).encode()
+        with atomic_path(p) as tmp, pq.ParquetWriter(tmp, schema.with_metadata(meta)) as out:
+            for i in range(source.num_row_groups):
+                out.write_table(source.read_row_group(i))
+    return p
+
+
 def arrow_table(columns: Mapping[str, tuple[np.ndarray, str, str]],
                 metadata: Mapping[str, str] | None = None,
                 attrs: Mapping[str, Any] | None = None) -> Any:
@@ -373,6 +463,9 @@ def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
         with open(p, "w", encoding="utf-8", newline="") as f:
             f.write(provenance_line(dataset.attrs) + "\n")
             to_engineering_frame(dataset).to_csv(f, index=False, float_format="%.10g")
+            last = solver_line(dataset.attrs)
+            if last is not None:
+                f.write(last + "\n")
     elif ext == ".parquet":
         import pyarrow.parquet as pq
 
@@ -415,7 +508,9 @@ class ChunkWriter:
     Engineering units, the columns of :func:`to_engineering_frame` or :func:`to_arrow_table`.
     The samples go to a temporary name in the output's folder; :meth:`close` renames it to
     ``path`` (a run stopped by Ctrl-C keeps the samples written so far, complete rows),
-    :meth:`abort` removes it (a write that failed: nothing partial under ``path``).
+    :meth:`abort` removes it (a write that failed: nothing partial under ``path``).  The
+    solver record is not known while the samples are written: :func:`add_solver_record` adds
+    it after the run.
 
     Parameters
     ----------

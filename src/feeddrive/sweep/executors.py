@@ -759,13 +759,19 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
              progress: Callable[[str], None] | None = None) -> Estimate:
     """Count the points and estimate their cost cheaply (issue 41 item 8: the dry run of a
     4-point grid had cost 2.8 CPU s against the sweep's 7.2): nothing is written, and at
-    most ``sample`` parameter sets are built.
+    most ``sample`` parameter sets are built unless the store must be asked point by point
+    (below).
 
     The counts come from the design alone
     (:meth:`feeddrive.sweep.design.SweepConfig.count`,
     :meth:`feeddrive.sweep.design.SweepConfig.distinct_count`); ``stored`` is how many of
-    this sweep's points the store holds, when the design it registered there is this one
-    (its keys at the timed points are the keys rebuilt here), else 0.  The kernels are
+    the distinct points of this call — its design at the integrator settings in force, which
+    every key carries — the store holds, as the sweep itself will find them: read from the
+    design registered under the sweep's name when that is this one (the same description and
+    point count, the same keys at the sampled points), else counted from every point's key
+    (each parameter set built, as the sweep's own check does; the distinct count is then the
+    keys').  A store without results needs neither.  Nothing to compute: no timing.  The
+    kernels are
     loaded (or compiled, and that CPU reported) first; then the linear quantities time up to
     ``sample`` points (milliseconds each), and the simulation quantities one
     :data:`~feeddrive.sweep.executors.PROBE_DURATION`-s run of the middle point's drive at
@@ -814,15 +820,29 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
                 chosen.append(Point(index=i, coords=coords, task=task, key=point_key(task)))
                 if len(chosen) == len(wanted):
                     break
-    stored = 0
-    if store is not None:
-        registered = store.point_keys(config.name, [p.index for p in chosen])
-        if registered and all(registered.get(p.index) == p.key for p in chosen):
+    stored, built = 0, len(chosen)
+    todo = chosen
+    if store is not None and store.count() > 0:
+        if points is None and _registered_here(config, store, chosen, count):
             stored = store.stored_count(config.name)
-    todo = [p for p in chosen if store is None or store.get(p.key) is None]
-    if not todo:
+            finished = {p.key for p in chosen if store.get(p.key) is not None}
+        else:
+            # another design under this name (another configuration, or the same at other
+            # integrator settings: the keys carry them): this call's keys, point by point
+            if progress is not None and points is None:
+                progress(f"building the keys of the {count} points to count those stored "
+                         "(the design registered under this name is not this call's)")
+            keys = ({p.key for p in points} if points is not None
+                    else {p.key for p in config.iter_points()})
+            built += 0 if points is not None else count
+            finished = store.finished(keys)
+            stored, distinct = len(finished), len(keys)
+        # time points still to compute where the sample holds one, else any of the sample
+        # (a timing stores nothing)
+        todo = [p for p in chosen if p.key not in finished] or chosen
+    if distinct - stored <= 0:
         return Estimate(points=count, distinct=distinct, stored=stored, timed=0,
-                        seconds_per_point=0.0, workers=workers, built=len(chosen))
+                        seconds_per_point=0.0, workers=workers, built=built)
     if progress is not None:
         progress("loading the model kernels (compiling them if not cached), then "
                  + (f"a {PROBE_DURATION:g}-s probe run of one point's drive" if simulates
@@ -843,7 +863,7 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
         rate = _probe_rate(todo[0].task)
         lo, hi = simulated_range(todo[0].task["quantity"])
         return Estimate(points=count, distinct=distinct, stored=stored, timed=0,
-                        seconds_per_point=lo * rate, workers=workers, built=len(chosen),
+                        seconds_per_point=lo * rate, workers=workers, built=built,
                         point_range=(lo * rate, hi * rate), startup_seconds=startup,
                         compile_seconds=compile_seconds, probe_rate=rate)
     seconds = []
@@ -856,8 +876,26 @@ def estimate(config: SweepConfig, store: SweepStore | None, *, workers: int,
     mean = sum(seconds) / len(seconds)
     return Estimate(points=count, distinct=distinct, stored=stored, timed=len(seconds),
                     seconds_per_point=mean, workers=workers, point_seconds=tuple(seconds),
-                    built=len(chosen), startup_seconds=startup,
+                    built=built, startup_seconds=startup,
                     compile_seconds=compile_seconds)
+
+
+def _registered_here(config: SweepConfig, store: SweepStore, chosen: list[Point],
+                     count: int) -> bool:
+    """Whether the design ``store`` registered under ``config``'s name is this call's: the
+    same description, the same number of points and the same keys at the ``chosen`` points
+    (a key carries the integrator settings in force: a run at another ``--accuracy``
+    registered other keys under the same name)."""
+    from .store import _json
+
+    if config.name not in store.sweeps() or \
+            _json(store.description(config.name)) != _json(description(config)):
+        return False
+    ends = store.point_keys(config.name, [count - 1, count])
+    if count - 1 not in ends or count in ends:
+        return False
+    registered = store.point_keys(config.name, [p.index for p in chosen])
+    return all(registered.get(p.index) == p.key for p in chosen)
 
 
 def _cpu() -> float:
