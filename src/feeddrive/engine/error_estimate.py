@@ -142,7 +142,7 @@ def tightening_refused(options: SolverOptions, factor: float = SHADOW_FACTOR) ->
     ``MIN_RELATIVE`` for ``rtol``, ``MIN_ABSOLUTE`` for an absolute tolerance,
     ``MIN_ACCURACY`` for ``accuracy``, which carries the default tolerances): the run's own
     settings are then at double precision's reach.  The reason names the setting as the user
-    gave it (:meth:`~feeddrive.engine.options.SolverOptions.setting_text`: the command line's
+    gave it (:meth:`~feeddrive.SolverOptions.setting_text`: the command line's
     option in its units, a file's setting, the API's field).
 
     Parameters
@@ -186,7 +186,7 @@ def tightened(options: SolverOptions, factor: float = SHADOW_FACTOR) -> SolverOp
     the defaults through ``accuracy`` (which also tightens ``dopri5``'s step caps, and so is
     divided under ``dopri5`` even with every tolerance explicit), as docs/model.md's rule
     scales them.  Each tightened setting keeps naming where it came from
-    (:meth:`~feeddrive.engine.options.SolverOptions.tightened_source`: ``"--rtol ÷ 10"``).
+    (:meth:`~feeddrive.SolverOptions.tightened_source`: ``"--rtol ÷ 10"``).
 
     Parameters
     ----------
