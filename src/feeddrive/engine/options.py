@@ -822,8 +822,9 @@ class SolverOptions:
         read back: a worker runs its own code's rule, which the record's key already named).
 
         The record has no ``origin`` (it is a key of the settings alone): its settings were
-        merged already (:func:`~feeddrive.engine.options.layered`, a fit's or an error estimate's tightening), so an
-        ``accuracy`` under explicit tolerances is not the ambiguity of one setting that
+        merged already (:func:`~feeddrive.engine.options.layered`, a fit's or an error
+        estimate's tightening), so an ``accuracy`` under explicit tolerances is not the
+        ambiguity of one setting that
         :class:`SolverOptions` refuses.  Without ``origin`` a recorded ``accuracy`` other than
         1 is given the source ``RECORD_SOURCE``.
 
