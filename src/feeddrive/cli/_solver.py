@@ -1,19 +1,23 @@
 """The integrator settings every simulating command takes: ``--rtol``, the absolute
-tolerances, ``--accuracy``, ``--rosenbrock`` (:mod:`feeddrive.engine.options`), layered over a
-parameter file's ``[solver]`` table."""
+tolerances, ``--accuracy``, ``--rosenbrock`` (:mod:`feeddrive.engine.options`), layered over the
+``[solver]`` tables of the command's files: its parameter file (``--params``, or the positional
+``FIT.toml`` of ``predict``, ``validate`` and ``sensitivity``) and a sweep configuration's
+(its ``params`` file's table, then its own)."""
 
 from __future__ import annotations
 
 import functools
 import inspect
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import Any, TypeVar
 
 import typer
 
 from ..engine import options as opt
-from ..parameters import ParameterError
+from ..parameters import ParameterError, toml_io
+from ..parameters.components import SOLVER_TOLERANCES, solver_over, solver_table
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -140,8 +144,11 @@ def _settings_options(settings: tuple[tuple[str, str, str], ...]) -> Callable[[F
         @functools.wraps(fn)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             cli = _to_si({name: (kwargs.pop(name, None), flag) for name, flag, _ in settings})
-            options = solver_options(cli, kwargs.get("params_file"))
-            with opt.using(options):
+            tables = command_tables(kwargs)
+            options = solver_options(cli, tables=tables)
+            # the sets of the command's files carry their tables as they stand under the
+            # command line (toml_io.tables_applied): a worker process takes the same settings
+            with opt.using(options), toml_io.tables_applied(carried_tables(options, tables)):
                 return fn(*args, solver=options, **kwargs)
 
         wrapper.__signature__ = sig.replace(  # type: ignore[attr-defined]
@@ -152,19 +159,91 @@ def _settings_options(settings: tuple[tuple[str, str, str], ...]) -> Callable[[F
 
 
 #: Add the integrator settings (:data:`OPTIONS`) to a command.  Before the command's body runs,
-#: the settings are merged over the ``[solver]`` table of its ``--params`` file
-#: (:func:`solver_options`) and checked (a bad value is refused before any work); the body runs
+#: the settings are merged over the ``[solver]`` tables of its files (:func:`command_tables`,
+#: :func:`solver_options`) and checked (a bad value is refused before any work); the body runs
 #: with them in force (:func:`feeddrive.engine.options.using`: every run it starts takes them,
-#: in this process and in the workers of a sweep, fit or prediction), and receives them as its
-#: parameter ``solver``.
+#: in this process and in the workers of a sweep, fit or prediction), the sets it loads from
+#: those files carrying their tables as they stand under the command line
+#: (:func:`carried_tables`), and receives them as its parameter ``solver``.
 accuracy_options = _settings_options(OPTIONS)
 #: the same without ``--rosenbrock``: ``export fmu`` (the FMU's embedded solver is DOPRI5)
 tolerance_options = _settings_options(tuple(o for o in OPTIONS if o[0] not in _TEXT))
 
 
-def solver_options(cli: dict[str, tuple[Any, str]], params_file: str | None = None) -> Any:
-    """The options of a command's runs: the defaults, under a parameter file's ``[solver]``
-    table, under the command line (:func:`feeddrive.engine.options.layered`); refused when a
+#: the command parameters that name a parameter file, in order of preference: ``--params``,
+#: the positional ``FIT.toml`` of ``predict``, ``validate`` and ``sensitivity`` ("the same as
+#: --params")
+PARAMETER_FILES = ("params_file", "fit_file")
+#: the command parameter that names a sweep configuration (``feeddrive sweep CONFIG``)
+SWEEP_CONFIG = "config"
+
+
+class FileTable:
+    """A ``[solver]`` table of one of a command's files.
+
+    Parameters
+    ----------
+    path : str
+        The file, as the command was given it (or as a sweep configuration names it).
+    settings : dict
+        The table's settings (:func:`feeddrive.engine.options.file_settings`) [SI].
+    carrier : bool
+        Whether the command loads a parameter set from the file (its ``--params`` or
+        ``FIT.toml``, a sweep's ``params``): that set carries the tables.
+    """
+
+    def __init__(self, path: str, settings: dict[str, Any], carrier: bool) -> None:
+        self.path, self.settings, self.carrier = path, settings, carrier
+
+    @property
+    def source(self) -> str:
+        """The settings' source, as :meth:`feeddrive.SolverOptions.describe` names it."""
+        return f"[solver] in {self.path}"
+
+
+def command_tables(kwargs: Mapping[str, Any]) -> list[FileTable]:
+    """The ``[solver]`` tables of a command's files, lowest precedence first: its parameter
+    file (``--params``, or the positional ``FIT.toml``), or a sweep configuration's
+    ``params`` file and then the configuration's own table.
+
+    Parameters
+    ----------
+    kwargs : mapping
+        The command's arguments.
+
+    Returns
+    -------
+    list of FileTable
+        The tables (a file without one gives an empty table).
+
+    Raises
+    ------
+    ParameterError
+        For a table that is not a table or names an unknown setting.
+    """
+    tables: list[FileTable] = []
+    named = next((kwargs[k] for k in PARAMETER_FILES if kwargs.get(k)), None)
+    if named:
+        tables.append(FileTable(str(named), opt.file_settings(named), carrier=True))
+    config = kwargs.get(SWEEP_CONFIG)
+    if isinstance(config, str) and Path(config).is_file():
+        try:
+            data = toml_io.read_toml_file(config)
+        except ParameterError:
+            return tables  # not a configuration the command reads: it says so itself
+        base = data.get("params")
+        if isinstance(base, str) and base.endswith(".toml"):
+            path = base if Path(base).is_absolute() else str(Path(config).parent / base)
+            if Path(path).is_file():  # else the command refuses it, naming the key
+                tables.append(FileTable(path, opt.file_settings(path), carrier=True))
+        tables.append(FileTable(config, opt.file_settings(config), carrier=False))
+    return tables
+
+
+def solver_options(cli: dict[str, tuple[Any, str]], params_file: str | None = None, *,
+                   tables: list[FileTable] | None = None) -> Any:
+    """The options of a command's runs: the defaults, under its files' ``[solver]`` tables,
+    under the command line (:func:`feeddrive.engine.options.layered`); refused when a
     value is out of range or ``--accuracy`` comes with a tolerance in one setting.
 
     Parameters
@@ -172,15 +251,82 @@ def solver_options(cli: dict[str, tuple[Any, str]], params_file: str | None = No
     cli : dict
         ``{name: (value, option)}`` of the command line (value None: not given).
     params_file : str or None, default None
-        The parameter file given with ``--params``.
+        A parameter file (``--params``) whose table is layered under the command line.
+    tables : list of FileTable or None, default None
+        The command's tables, lowest first (:func:`command_tables`), over ``params_file``'s.
 
     Returns
     -------
     SolverOptions
         The merged options, each setting's source recorded.
+
+    Raises
+    ------
+    ParameterError
+        For a refused value, ``--accuracy`` with a tolerance in one setting, or a sweep
+        configuration's tolerances over its parameter file's ``accuracy``
+        (:func:`feeddrive.parameters.components.solver_over`: one table cannot carry both).
     """
-    layers: list[tuple[str, dict[str, Any]]] = []
+    files = list(tables or [])
     if params_file:
-        layers.append((f"[solver] in {params_file}", opt.file_settings(params_file)))
+        files.insert(0, FileTable(params_file, opt.file_settings(params_file), carrier=True))
+    layers: list[tuple[str, dict[str, Any]]] = [(t.source, t.settings) for t in files]
     layers.append(("command line", cli))
-    return opt.layered(layers)
+    options = opt.layered(layers)
+    _merged(files)  # as a set carries them: refused where one table cannot hold them
+    return options
+
+
+def _merged(files: list[FileTable]) -> tuple[tuple[str, Any, str], ...]:
+    """The files' tables merged, each over the ones before it
+    (:func:`~feeddrive.parameters.components.solver_over`)."""
+    merged: tuple[tuple[str, Any, str], ...] = ()
+    for t in files:
+        merged = solver_over(merged, solver_table(t.settings, t.source))
+    return merged
+
+
+def carried_tables(options: Any, tables: list[FileTable]) -> dict[str | Path, Any]:
+    """The ``[solver]`` settings the sets of a command's files carry
+    (:func:`feeddrive.parameters.toml_io.tables_applied`): each setting the files' tables
+    give, at its value in ``options`` (the command line's where it gives one, a value equal
+    to the default included); the tables' tolerances that the command line's ``--accuracy``
+    replaced are left out and that accuracy carried instead.  The set loaded from a carrier
+    file carries them; a sweep configuration's own file, nothing more (its table is in them).
+
+    A worker process reads the set from its TOML and the options from a record without
+    their sources (:meth:`feeddrive.SolverOptions.from_record`): the set's settings layered
+    under them then give the command's options again, where the files' own tables would let
+    a file's ``accuracy = 0.01`` take back an ``--accuracy 1``.
+
+    Parameters
+    ----------
+    options : SolverOptions
+        The command's options (:func:`solver_options`).
+    tables : list of FileTable
+        The command's tables (:func:`command_tables`).
+
+    Returns
+    -------
+    dict
+        File → (setting, value, source) triples.
+    """
+    given = {name for name, _, _ in _merged(tables)} | {
+        name for t in tables for name in t.settings}
+    carried: list[tuple[str, Any, str]] = []
+    from_cli = options.source("accuracy").startswith("--")
+    for name in opt.SETTINGS:
+        if name not in given:
+            continue
+        value = getattr(options, name)
+        if name in SOLVER_TOLERANCES and value is None:
+            continue  # replaced by a higher setting's accuracy (carried below)
+        carried.append((name, value, options.source(name)))
+    if from_cli and any(n in given for n in (*SOLVER_TOLERANCES, "accuracy")) and \
+            all(n != "accuracy" for n, _, _ in carried):
+        carried.append(("accuracy", options.accuracy, options.source("accuracy")))
+    carried = [(n, v, s if s not in (opt.DEFAULT_SOURCE, opt.API_SOURCE) else "command line")
+               for n, v, s in carried]
+    triples = solver_table(carried, "") if carried else ()
+    out: dict[str | Path, Any] = {t.path: triples if t.carrier else () for t in tables}
+    return out

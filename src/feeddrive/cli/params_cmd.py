@@ -41,7 +41,8 @@ def show(
         "each axis' drive and whole resolved set, and the coupling parts (TOML)."),
 ) -> None:
     """Print a parameter set (SI units) as TOML or JSON: a preset, or the resolved set of a
-    parameter file; or a machine file resolved (--machine)."""
+    parameter file, with the file's [solver] table (its integrator settings, SI; JSON: under
+    "solver"); or a machine file resolved (--machine)."""
     if machine_file is not None:
         from ..machine import load_machine, machine_toml
 
@@ -53,7 +54,10 @@ def show(
     if fmt == "toml":
         typer.echo(dumps(params), nl=False)
     elif fmt == "json":
-        typer.echo(json.dumps(to_dict(params), indent=2))
+        data = to_dict(params)
+        if params.solver:  # not a parameter: beside them, as the TOML's [solver] table
+            data["solver"] = {name: value for name, value, _ in params.solver}
+        typer.echo(json.dumps(data, indent=2))
     else:
         raise ValueError(f"--format = {fmt!r}: expected toml or json")
 
@@ -116,9 +120,9 @@ def check(file: str | None = typer.Argument(None, help="Parameter file (TOML).")
         return
     if file is None:
         raise ValueError("FILE: give a parameter file, or --machine FILE")
-    params = load(file)
     from ._solver import solver_options
 
-    solver_options({}, file)  # its [solver] table, as a run with --params reads it
+    solver_options({}, file)  # its [solver] table, as a run with --params reads it first
+    params = load(file)
     console.print(f"ok: {shown(file)} is a valid parameter set ({shown(params.name)})",
                   markup=False, highlight=False, soft_wrap=True)

@@ -36,12 +36,15 @@ def reproduce_command(
                                "study (variants of the wang2021 presets)."),
 ) -> None:
     """Regenerate Wang2021's figures (PNG) and tables (CSV) and write report.html/report.md.
-    Finished studies are kept in OUT/data and reused on a rerun."""
+    Finished studies are kept in OUT/data and reused on a rerun. A --params file's [solver]
+    table sets the integrator of every run (and is part of the stored studies' key)."""
+    from ..engine.simulate import run_options
     from ..reproduce import run
 
     if workers < 1:
         raise ParameterError("--workers", workers, "expected a whole number ≥ 1")
     params = resolve_parameters(preset_name, params_file)
+    run_options(params)  # its [solver] table: a bad value refused before any work
     def notice(text: str) -> None:
         err_console.print(f"notice: {shown(text)}", markup=False, highlight=False,
                           soft_wrap=True)

@@ -8,7 +8,7 @@ import threading
 import time as _time
 import weakref
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -589,6 +589,108 @@ MAX_CHUNK_SAMPLES = 20_000
 KEEP_STREAMED = 60.0  # [s] of a streamed run kept in memory (its end) for the summary
 
 
+def run_options(system: DriveSystem | DriveParameters,
+                options: SolverOptions | None = None) -> SolverOptions:
+    """The options a run of ``system`` takes: ``options`` (None: those in force,
+    :func:`feeddrive.engine.options.current`) over the integrator settings its parameter set
+    carries (:attr:`feeddrive.parameters.DriveParameters.solver`, the ``[solver]`` table of
+    the file it was loaded from), over the defaults.  Every run takes its options here
+    (:class:`Simulation`), so a creep search, a fit, a prediction, a sensitivity study or a
+    sweep of a set honours its table as :func:`simulate` does.
+
+    Precedence, per setting: the command line, the API, the set's table, the default.  A
+    setting counts as given by ``options`` when its source is not the default
+    (:meth:`feeddrive.SolverOptions.source`: a command-line option, a file, or a value other
+    than the default); one left at its default value is the table's to set (to hold a
+    default against a table, give its source: ``SolverOptions(accuracy=1.0,
+    origin=(("accuracy", "API"),))``).  An ``accuracy`` given by ``options`` replaces the
+    table's explicit tolerances, as a higher setting's does in
+    :func:`feeddrive.engine.options.layered`; ``options`` made N times tighter than the
+    defaults (an error estimate's shadow run, source ``"default ÷ N"``) make the table's
+    tolerances and accuracy N times tighter.
+
+    Parameters
+    ----------
+    system : DriveSystem or DriveParameters
+        The drive (or its parameter set).
+    options : SolverOptions or None, default None
+        The options given (None: those in force).
+
+    Returns
+    -------
+    SolverOptions
+        The options of the run; :meth:`~feeddrive.SolverOptions.describe` names each
+        setting's source (``"accuracy 0.01 (from [solver] in run.toml)"``).
+
+    Raises
+    ------
+    ParameterError
+        For a value of the table that the options refuse, naming the setting and the file.
+
+    Examples
+    --------
+    >>> import feeddrive as fd
+    >>> params = fd.parameters.loads('extends = "wang2021"\\n[solver]\\naccuracy = 0.01\\n')
+    >>> system = fd.DriveSystem(params, drive="cdfs", table_position=0.4)
+    >>> run_options(system).accuracy
+    0.01
+    >>> run_options(system, fd.SolverOptions(accuracy=0.5)).accuracy
+    0.5
+    """
+    from . import options as opt
+
+    chosen = options if options is not None else current_options()
+    params = system if isinstance(system, DriveParameters) else system.parameters
+    table = getattr(params, "solver", ())
+    if not table:
+        return chosen
+    tolerances = tuple(name for name, _, _ in opt.TOLERANCES)
+    tighter = {name: _tightened_default(chosen, name) for name in opt.SETTINGS}
+    accuracy_given = tighter["accuracy"] is None
+    factor = tighter["accuracy"] or 1.0  # how much tighter than the defaults they were made
+    values: dict[str, Any] = {}
+    origin = dict(chosen.origin)
+    for name, value, source in table:
+        if tighter.get(name) is None or (accuracy_given and name in tolerances):
+            continue  # given by the options (an accuracy of theirs replaces the tolerances)
+        if factor != 1.0 and (name in tolerances or name == "accuracy"):
+            value, source = value / factor, f"{source}{_DIVIDED}{factor:g}"
+        values[name] = value
+        origin[name] = source
+    if not values:
+        return chosen
+    try:
+        return replace(chosen, **values, origin=tuple(sorted(origin.items())))
+    except ParameterError as err:  # name the setting and the file it came from
+        name = err.field.removeprefix("options.")
+        if name in values:
+            raise ParameterError(f"solver.{name}", err.value,
+                                 f"{err.message} ({origin[name]})") from None
+        raise
+
+
+#: how a derived setting's source names its divisor (``"default ÷ 10"``:
+#: :meth:`feeddrive.SolverOptions.tightened_source`)
+_DIVIDED = " ÷ "
+
+
+def _tightened_default(options: SolverOptions, name: str) -> float | None:
+    """1 when setting ``name`` of ``options`` is left at its default, N when it is the default
+    made N times tighter (source ``"default ÷ N"``: a shadow run's), None when it is given."""
+    from .options import DEFAULT_SOURCE
+
+    source = options.source(name)
+    if source == DEFAULT_SOURCE:
+        return 1.0
+    base, sep, divisor = source.rpartition(_DIVIDED)
+    if sep and base == DEFAULT_SOURCE:
+        try:
+            return float(divisor)
+        except ValueError:
+            return None
+    return None
+
+
 def simulate(system: DriveSystem, profile: Profile, duration: float, *,
              options: SolverOptions | None = None, output: str | Path | None = None,
              progress: Callable[[float, float], None] | None = None,
@@ -616,7 +718,8 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
         Simulated time [s].
     options : SolverOptions or None, default None
         Integrator settings (None: those in force, :func:`feeddrive.engine.options.current`,
-        by default the defaults).
+        by default the defaults), over the ``[solver]`` table the parameter set carries,
+        setting by setting (:func:`run_options`).
     output : str, pathlib.Path or None, default None
         Stream every sample to this ``.parquet`` or ``.csv`` file.
     progress : callable or None, default None
@@ -745,7 +848,8 @@ class Simulation:
     profile : ConstantSpeed, SineSpeed or SampledSpeed
         The reference the loops follow.
     options : SolverOptions or None, default None
-        Integrator settings (None: the defaults).
+        Integrator settings (None: those in force), over the ``[solver]`` table the parameter
+        set carries (:func:`run_options`).
     embedded_estimate : bool, default False
         Carry the embedded global-error estimate along the integration
         (:mod:`feeddrive.solvers.global_error`; dense-output methods): each Result's
@@ -766,7 +870,8 @@ class Simulation:
             raise ParameterError("options", type(options).__name__, "expected SolverOptions, "
                                  "e.g. SolverOptions(rtol=1e-8)")
         self.system, self.profile = system, profile
-        self.options = options = options or current_options()
+        # those given, else those in force, over the set's [solver] table (run_options)
+        self.options = options = run_options(system, options)
         self.embedded_estimate = embedded_estimate and options.method in _DENSE_MODES
         self.model = system.model(profile)
         self.grid = sampling(system.parameters, options.output_interval, self.model)

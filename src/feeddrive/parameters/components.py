@@ -15,12 +15,12 @@ Ranges are plausibility bounds for machine-tool feed drives; they exist to catch
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, fields, replace
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field, fields, replace
 from typing import Any, Self
 
 from .. import registry
-from .validation import MISSING, ParameterError, validate
+from .validation import MISSING, ParameterError, did_you_mean, validate
 
 #: the mechanism kind of a file that names none: every parameter file before the
 #: composition (v2) describes the ball-screw drive's parts
@@ -29,6 +29,134 @@ DEFAULT_MECHANISM = "ball-screw"
 MAX_NAME = 200
 #: longest parameter-set description [characters]
 MAX_DESCRIPTION = 10_000
+
+#: the integrator settings a parameter file's ``[solver]`` table gives, in the order they are
+#: written, each with its kind (``"text"``, ``"number"``, ``"count"``: a whole number) and its
+#: unit (SI, as the API takes them; the command line takes the
+#: lengths in mm and the speeds in mm/s).  The names are
+#: :data:`feeddrive.engine.options.SETTINGS` (this package does not import the engine; a test
+#: holds the two to each other): their ranges are checked where the settings are used
+#: (:class:`feeddrive.SolverOptions`), not here
+SOLVER_SETTINGS: dict[str, tuple[str, str]] = {
+    "method": ("text", ""), "rtol": ("number", "-"), "position_tolerance": ("number", "m"),
+    "speed_tolerance": ("number", "m/s"), "current_tolerance": ("number", "A"),
+    "accuracy": ("number", "-"), "output_interval": ("number", "s"),
+    "max_step": ("number", "s"), "max_steps": ("count", ""), "rosenbrock": ("text", ""),
+}
+#: the source of the settings of a ``[solver]`` table given without one
+SET_SOURCE = "[solver] of the parameter set"
+#: the settings of :data:`SOLVER_SETTINGS` that are tolerances (``accuracy`` multiplies those
+#: left at their defaults: the two are not given in one table)
+SOLVER_TOLERANCES = ("rtol", "position_tolerance", "speed_tolerance", "current_tolerance")
+
+
+def solver_table(settings: Any, source: str) -> tuple[tuple[str, Any, str], ...]:
+    """A ``[solver]`` table checked by name and kind, as a parameter set carries it
+    (:attr:`DriveParameters.solver`).
+
+    Each setting must be one of :data:`SOLVER_SETTINGS` and of its kind (a number, text or
+    a whole number), and ``accuracy`` may not come with an explicit tolerance (ambiguous, as
+    on the command line).  The values (a positive ``rtol`` at most 0.1, a known method …)
+    are :class:`feeddrive.SolverOptions`' to check where the settings are used: before a
+    run starts, naming the setting and its source.
+
+    Parameters
+    ----------
+    settings : mapping or iterable of (str, object, str)
+        The table as read from TOML (setting → value, all from ``source``), or the
+        (setting, value, source) triples of :attr:`DriveParameters.solver`.
+    source : str
+        Where a mapping's settings come from (``"[solver] in run.toml"``), named by the
+        refusals and by :meth:`feeddrive.SolverOptions.describe`.
+
+    Returns
+    -------
+    tuple of (str, object, str)
+        (setting, value, source) triples in :data:`SOLVER_SETTINGS`' order.
+
+    Raises
+    ------
+    ParameterError
+        For a table that is not a table, an unknown setting, a value of the wrong kind, or
+        ``accuracy`` with a tolerance.
+    """
+    if isinstance(settings, Mapping):
+        items = [(name, value, source) for name, value in settings.items()]
+    elif isinstance(settings, Iterable) and not isinstance(settings, str | bytes):
+        items = []
+        for entry in settings:
+            if not (isinstance(entry, tuple | list) and len(entry) == 3
+                    and isinstance(entry[0], str) and isinstance(entry[2], str)):
+                raise ParameterError("solver", entry, "expected (setting, value, source) "
+                                     "triples or a table of settings")
+            items.append((entry[0], entry[1], entry[2]))
+    else:
+        raise ParameterError("solver", settings, f"expected a table [solver] ({source})")
+    seen: dict[str, tuple[Any, str]] = {}
+    for name, value, where in items:
+        if name not in SOLVER_SETTINGS:
+            hint = did_you_mean(name, SOLVER_SETTINGS)
+            raise ParameterError(f"solver.{name}", value, f"expected one of "
+                                 f"{', '.join(SOLVER_SETTINGS)}{hint} ({where})")
+        kind, unit = SOLVER_SETTINGS[name]
+        if kind == "text":
+            ok = isinstance(value, str)
+            expected = "expected text"
+        elif kind == "count":
+            ok = isinstance(value, int) and not isinstance(value, bool)
+            expected = "expected a whole number"
+        else:
+            ok = isinstance(value, int | float) and not isinstance(value, bool)
+            expected = f"expected a number [{unit}]"
+        if not ok:
+            raise ParameterError(f"solver.{name}", value, f"{expected} ({where})")
+        seen[name] = (float(value) if kind == "number" else value, where)
+    tolerances = [n for n in SOLVER_TOLERANCES if n in seen]
+    if "accuracy" in seen and tolerances:  # worded as feeddrive.engine.options.layered
+        raise ParameterError("solver.accuracy", seen["accuracy"][0],
+                             f"given with solver.{tolerances[0]} ({seen['accuracy'][1]}): "
+                             "give either an accuracy factor or explicit tolerances")
+    return tuple((name, *seen[name]) for name in SOLVER_SETTINGS if name in seen)
+
+
+def solver_over(lower: Any, upper: Any) -> tuple[tuple[str, Any, str], ...]:
+    """The settings of ``[solver]`` table ``upper`` over those of ``lower`` (a sweep
+    configuration's over its parameter file's), as one table a set can carry.
+
+    ``upper``'s settings replace ``lower``'s of the same name, and an ``accuracy`` of
+    ``upper``'s replaces ``lower``'s explicit tolerances as well (as a higher setting's does,
+    :func:`feeddrive.engine.options.layered`).  Tolerances of ``upper``'s over an
+    ``accuracy`` of ``lower``'s are refused: one table cannot hold both (it would be refused
+    where it is read back, in a worker process).
+
+    Parameters
+    ----------
+    lower, upper : tuple of (str, object, str)
+        (setting, value, source) triples (:func:`solver_table`).
+
+    Returns
+    -------
+    tuple of (str, object, str)
+        The merged triples.
+
+    Raises
+    ------
+    ParameterError
+        For ``upper``'s tolerances over ``lower``'s ``accuracy``.
+    """
+    below = {name: (value, source) for name, value, source in lower}
+    above = {name: (value, source) for name, value, source in upper}
+    tolerances = [n for n in SOLVER_TOLERANCES if n in above]
+    if "accuracy" in below and "accuracy" not in above and tolerances:
+        name = tolerances[0]
+        raise ParameterError(f"solver.{name}", above[name][0],
+                             f"given in {above[name][1]} over accuracy in "
+                             f"{below['accuracy'][1]}: give the accuracy factor or the "
+                             "explicit tolerances in one of the two tables")
+    if "accuracy" in above:
+        below = {n: v for n, v in below.items() if n not in SOLVER_TOLERANCES}
+    merged = {**below, **above}
+    return tuple((name, *merged[name]) for name in SOLVER_SETTINGS if name in merged)
 
 
 class _Component:
@@ -237,6 +365,15 @@ class DriveParameters(_Component):
         and ``disturbances`` their defaults.
     sections : tuple of (str, Component), default ()
         The parts' sections by name.
+    solver : tuple of (str, object, str) or mapping, default ()
+        The integrator settings stored with the set: a parameter file's ``[solver]`` table
+        (:func:`feeddrive.parameters.load`), as (setting, value, source) triples
+        (:func:`solver_table`; a mapping is taken as settings of the source
+        ``"[solver] of the parameter set"``).  Not a parameter: not compared, not hashed,
+        not in :func:`~feeddrive.parameters.to_dict`; written as ``[solver]`` by
+        :func:`~feeddrive.parameters.dumps`, kept by :meth:`replace_path`, and layered
+        under the options of every run of the set (precedence: the command line, the API,
+        this table, the defaults; :func:`feeddrive.engine.simulate.run_options`).
     **parts : Component or None
         Sections given by keyword (``screw=BallScrew(...)``); they replace those of
         ``sections`` of the same name, None removes one.
@@ -247,10 +384,13 @@ class DriveParameters(_Component):
     mechanism: str = DEFAULT_MECHANISM
     # every part's section by name, sorted: registry group feeddrive.sections
     sections: tuple[tuple[str, Any], ...] = ()
+    # a file's [solver] table: a record, not a parameter (not compared, hashed or in to_dict)
+    solver: tuple[tuple[str, Any, str], ...] = field(
+        default=(), compare=False, repr=False, metadata={"not_a_parameter": True})
     _label = "parameters"
 
     def __init__(self, name: str, description: str, mechanism: str = DEFAULT_MECHANISM,
-                 sections: Any = (), **parts: Any) -> None:
+                 sections: Any = (), *, solver: Any = (), **parts: Any) -> None:
         kind = composition(mechanism)
         try:
             merged = dict(sections)
@@ -269,6 +409,7 @@ class DriveParameters(_Component):
         object.__setattr__(self, "description", description)
         object.__setattr__(self, "mechanism", mechanism)
         object.__setattr__(self, "sections", tuple(sorted(merged.items())))
+        object.__setattr__(self, "solver", solver_table(solver, SET_SOURCE) if solver else ())
         self.__post_init__()
 
     def __repr__(self) -> str:
@@ -328,7 +469,8 @@ class DriveParameters(_Component):
         # sections read like fields (params.screw, params.rack_pinion, dotted paths); an
         # optional section the set does not give reads as None; only called when normal
         # attribute lookup fails
-        if name.startswith("_") or name in ("sections", "name", "description", "mechanism"):
+        if name.startswith("_") or name in ("sections", "name", "description", "mechanism",
+                                            "solver"):
             raise AttributeError(name)
         for key, value in object.__getattribute__(self, "sections"):
             if key == name:
@@ -353,6 +495,13 @@ class DriveParameters(_Component):
             The changed copy (this set is unchanged).
         """
         return _replace_path(self, path.split("."), value, path)
+
+
+def _not_a_parameter(obj: Any, name: str) -> bool:
+    """Whether field ``name`` of ``obj`` is a record carried with the set, not a parameter
+    (:attr:`DriveParameters.solver`)."""
+    found = {f.name: f for f in fields(obj)}.get(name)
+    return found is not None and bool(found.metadata.get("not_a_parameter"))
 
 
 def _check_text(key: str, text: Any, limit: int, *, lines: bool) -> None:
@@ -445,6 +594,9 @@ def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
         return replace(obj, sections=tuple(sorted({**sections, head: changed}.items())))
     if head not in names:
         raise ParameterError(full, value, f"unknown field {head!r}")
+    if _not_a_parameter(obj, head):
+        raise ParameterError(full, value, "not a parameter (the set's [solver] table: "
+                             "integrator settings, given to SolverOptions or in the file)")
     if len(parts) == 1:
         try:
             return replace(obj, **{head: value})

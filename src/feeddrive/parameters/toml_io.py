@@ -18,11 +18,20 @@ import stat
 import threading
 import tomllib
 import types
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any, Union, get_args, get_origin, get_type_hints
 
 from .. import registry
-from .components import DriveParameters, composition
+from .components import (
+    SET_SOURCE,
+    SOLVER_SETTINGS,
+    DriveParameters,
+    composition,
+    solver_table,
+)
 from .validation import MISSING, ParameterError, did_you_mean, unit_label
 
 
@@ -57,7 +66,7 @@ def to_dict(obj: Any) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
-        if value is None:
+        if value is None or f.metadata.get("not_a_parameter"):  # the set's [solver] table
             continue
         if f.name == "sections":  # parts' sections are tables of the file's top level
             out.update({name: to_dict(section) for name, section in _in_file_order(obj)})
@@ -251,7 +260,7 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
     nested = []
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
-        if value is None:
+        if value is None or f.metadata.get("not_a_parameter"):  # [solver]: written by dumps
             continue
         if f.name == "sections":
             nested += _in_file_order(obj)
@@ -278,7 +287,9 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
 
 
 def dumps(params: DriveParameters) -> str:
-    """TOML text of a parameter set, SI units noted beside each value.
+    """TOML text of a parameter set, SI units noted beside each value; the integrator
+    settings it carries (:attr:`DriveParameters.solver`, a file's ``[solver]`` table) last,
+    as ``[solver]``.
 
     Parameters
     ----------
@@ -288,7 +299,9 @@ def dumps(params: DriveParameters) -> str:
     Returns
     -------
     str
-        TOML that :func:`loads` reads back to an equal set.
+        TOML that :func:`loads` reads back to an equal set with the same ``[solver]``
+        settings.  A set without them is written as before they were carried: its text (a
+        cache or store key's part) does not change.
     """
     note = composition(params.mechanism).file_note
     lines = [
@@ -297,7 +310,32 @@ def dumps(params: DriveParameters) -> str:
         "# `mechanism` names the kind of drive the sections describe (docs/parameters.md).",
     ]
     _emit(params, "", lines)
+    lines += solver_lines(params.solver)
     return "\n".join(lines) + "\n"
+
+
+def solver_lines(solver: Any) -> list[str]:
+    """The ``[solver]`` table of a set's integrator settings as TOML lines, each value with
+    its unit (SI); no lines for none.
+
+    Parameters
+    ----------
+    solver : tuple of (str, object, str)
+        :attr:`DriveParameters.solver`.
+
+    Returns
+    -------
+    list of str
+        The lines, from a blank one and ``[solver]``.
+    """
+    if not solver:
+        return []
+    lines = ["", "[solver]  # integrator settings, SI (docs/parameters.md, \"[solver]\")"]
+    for name, value, _source in solver:
+        kind, unit = SOLVER_SETTINGS[name]
+        text = str(value) if kind == "count" else _format_value(value)
+        lines.append(f"{name} = {text}" + (f"  # [{unit}]" if unit else ""))
+    return lines
 
 
 def save(params: DriveParameters, path: str | Path) -> None:
@@ -395,13 +433,17 @@ def _new_site_class(base: Any, change: Any) -> bool:
     return len(classes) > 1
 
 
-def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DriveParameters:
+def from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
+              source: str | None = None) -> DriveParameters:
     """Build a parameter set.  ``extends = "NAME"`` (a preset) or ``"FILE.toml"`` (relative to
     ``base_dir``) starts from that set; the other values replace its values.  A ``[fit]``
     table (written by ``feeddrive fit``: the data, free parameters and intervals of the fit
-    that made the set) is a record, not a parameter, and is not read here; nor is a
-    ``[solver]`` table (the integrator settings stored with the set:
-    :func:`feeddrive.engine.options.file_settings`).
+    that made the set) is a record, not a parameter, and is not read here.  A ``[solver]``
+    table (the integrator settings stored with the set) is not a parameter either: the set
+    carries it (:attr:`DriveParameters.solver`, checked by name and kind:
+    :func:`~feeddrive.parameters.components.solver_table`) and its runs take it under the
+    API's and the command line's settings.  It is the file's own: a set ``extends`` brings in
+    keeps its table to itself.
 
     Parameters
     ----------
@@ -409,6 +451,9 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
         Parsed TOML.
     base_dir : Path, optional
         Folder a relative ``extends`` file is read from.
+    source : str, optional
+        Where ``data`` came from (a file name), as the ``[solver]`` settings' source
+        (``"[solver] in run.toml"``); None: ``"[solver] of the parameter set"``.
 
     Returns
     -------
@@ -420,6 +465,9 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
     ParameterError
         For an unknown key or a refused value, naming its path.
     """
+    table = data.get("solver")
+    solver = () if table is None else solver_table(
+        table, f"[solver] in {source}" if source is not None else SET_SOURCE)
     data = {k: v for k, v in data.items() if k not in ("fit", "solver")}
     if "extends" in data:
         parent_name = data["extends"]
@@ -445,6 +493,8 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None) -> DrivePar
                            else f"{parent.name}+changes")
         data = _merge(to_dict(parent), changes)
     result: DriveParameters = _build(DriveParameters, data, "")
+    if solver:
+        result = dataclasses.replace(result, solver=solver)
     return result
 
 
@@ -494,6 +544,9 @@ def load(path: str | Path) -> DriveParameters:
 
     ``extends`` chains are followed; a cycle (``a.toml`` extends ``b.toml`` extends
     ``a.toml``) or a chain longer than ``MAX_EXTENDS`` files is refused naming its files.
+    The file's ``[solver]`` table is carried by the set (:attr:`DriveParameters.solver`,
+    source ``"[solver] in PATH"``): every run of the set takes it where the API and the
+    command line give no setting of their own (:func:`from_dict`).
 
     Parameters
     ----------
@@ -506,10 +559,7 @@ def load(path: str | Path) -> DriveParameters:
         The validated set; a refusal names the file, the field, the value and the unit.
     """
     chain: list[tuple[Path, str]] = _loading.__dict__.setdefault("chain", [])
-    try:
-        resolved = Path(path).resolve()
-    except (OSError, RuntimeError):
-        resolved = Path(path).absolute()
+    resolved = resolved_path(path)
     names = [name for _, name in chain]
     if any(r == resolved for r, _ in chain):
         start = next(i for i, (r, _) in enumerate(chain) if r == resolved)
@@ -522,8 +572,90 @@ def load(path: str | Path) -> DriveParameters:
     chain.append((resolved, str(path)))
     try:
         data = read_toml_file(path)
-        return from_dict(data, base_dir=Path(path).parent)
+        carried = _APPLIED.get().get(resolved)
+        if carried is None:
+            return from_dict(data, base_dir=Path(path).parent, source=str(path))
+        data = {k: v for k, v in data.items() if k != "solver"}
+        params = from_dict(data, base_dir=Path(path).parent)
+        return dataclasses.replace(params, solver=carried) if carried else params
     except ParameterError as err:
         raise err.in_file(str(path)) from None
     finally:
         chain.pop()
+
+
+#: the files whose ``[solver]`` tables a command merged into the options in force, by
+#: resolved path, each with the settings :func:`load` gives its set instead
+_APPLIED: ContextVar[Mapping[Path, tuple[tuple[str, Any, str], ...]]] = ContextVar(
+    "feeddrive_solver_tables_applied", default=types.MappingProxyType({}))
+
+
+def resolved_path(path: str | Path) -> Path:
+    """A file's path as :func:`load` and :func:`tables_applied` compare it (resolved; as
+    given when it cannot be).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    pathlib.Path
+        The path.
+    """
+    try:
+        return Path(path).resolve()
+    except (OSError, RuntimeError):
+        return Path(path).absolute()
+
+
+def table_applied(path: str | Path) -> tuple[tuple[str, Any, str], ...] | None:
+    """The settings a command gave in place of file ``path``'s ``[solver]`` table
+    (:func:`tables_applied`), or None outside such a command.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    tuple of (str, object, str) or None
+        (setting, value, source) triples, or None.
+    """
+    return _APPLIED.get().get(resolved_path(path))
+
+
+@contextmanager
+def tables_applied(tables: Mapping[str | Path, Any]) -> Iterator[None]:
+    """Within the block, :func:`load` gives the set of each file named here the settings
+    given with it in place of the file's own ``[solver]`` table.
+
+    A command (``feeddrive.cli._solver``) merges its files' tables under its command line
+    into the options in force (:func:`feeddrive.engine.options.using`), and has their sets
+    carry those tables as they stand under the command line: each setting of a table with
+    the command line's value where the command line gives it.  A run then takes the same
+    settings in a worker process, which reads the set from its TOML and the options from a
+    record without their sources (:meth:`feeddrive.SolverOptions.from_record`), as in this
+    one: a setting the command line gives at its default value (``--accuracy 1`` over a
+    file's ``accuracy = 0.01``) is not taken for one left to the file.
+
+    Parameters
+    ----------
+    tables : mapping of (str or pathlib.Path) to (tuple of (str, object, str))
+        File → the (setting, value, source) triples its set carries (empty: none).
+
+    Yields
+    ------
+    None
+        Inside the block.
+    """
+    merged = dict(_APPLIED.get())
+    merged.update({resolved_path(path): solver_table(table, "") if table else ()
+                   for path, table in tables.items()})
+    token = _APPLIED.set(merged)
+    try:
+        yield
+    finally:
+        _APPLIED.reset(token)

@@ -13,7 +13,7 @@ from markdown_it import MarkdownIt
 from .. import __version__
 from ..analysis import protocol
 from ..analysis.critical import format_bands, format_critical_speed, format_integration_error
-from ..engine.simulate import DriveSystem, SolverOptions
+from ..engine.simulate import DriveSystem, SolverOptions, run_options
 from ..io.outputs import atomic_path
 from ..model.friction.lugre_parameters import LuGreParameters
 from ..model.friction.stribeck import negative_slope_band, passivity_margin, sliding_stability
@@ -518,10 +518,16 @@ def header_text(results: dict[str, Any], when: str) -> str:
     return f"feeddrive {__version__}, {when}, {run_text(results)}. {wang2021.CITATION}."
 
 
-def integrator_text() -> str:
-    """The integrator every number of the report rests on: every study runs the default
-    :class:`~feeddrive.engine.simulate.SolverOptions` (none passes its own; a test holds
-    the package to that), described by the options themselves.
+def integrator_text(params: DriveParameters | None = None) -> str:
+    """The integrator every number of the report rests on: every study runs the options in
+    force (:class:`~feeddrive.engine.simulate.SolverOptions`; none passes its own, a test
+    holds the package to that) over the ``[solver]`` table the set carries
+    (:func:`feeddrive.engine.simulate.run_options`), described by the options themselves.
+
+    Parameters
+    ----------
+    params : DriveParameters or None, default None
+        The report's parameter set (None: the default options alone).
 
     Returns
     -------
@@ -529,16 +535,25 @@ def integrator_text() -> str:
         One sentence: ``"Integrator of every run: "`` and
         :meth:`SolverOptions.describe() <feeddrive.engine.simulate.SolverOptions.describe>`.
     """
-    return f"Integrator of every run: {SolverOptions().describe()}."
+    return f"Integrator of every run: {_run_options(params).describe()}."
 
 
-def settings_markdown(settings: StudySettings) -> str:
+def _run_options(params: DriveParameters | None) -> SolverOptions:
+    """The options of every run of the report's set: the defaults without a set, else those
+    in force over its ``[solver]`` table."""
+    return SolverOptions() if params is None else run_options(params)
+
+
+def settings_markdown(settings: StudySettings, params: DriveParameters | None = None) -> str:
     """The study settings as a reader's list in mm/s and s (not a Python repr in SI).
 
     Parameters
     ----------
     settings : StudySettings
         The search settings.
+    params : DriveParameters or None, default None
+        The report's parameter set, whose ``[solver]`` table the integrator takes
+        (:func:`integrator_text`).
 
     Returns
     -------
@@ -558,11 +573,11 @@ def settings_markdown(settings: StudySettings) -> str:
         f"{settings.sine_duration * settings.sine_frequency:g} periods simulated "
         f"({settings.sine_duration:g} s; the reversal overshoot judged after the first), "
         f"hollow-motor amplitudes v_np = {vnp} mm/s",
-        f"* integrator: {SolverOptions().describe()}",
+        f"* integrator: {_run_options(params).describe()}",
     ])
 
 
-def settings_section(settings: StudySettings) -> str:
+def settings_section(settings: StudySettings, params: DriveParameters | None = None) -> str:
     """The report's Settings section: the integrator every run used (:func:`integrator_text`,
     moved from the report's top, issue 41 item 1) and the study settings
     (:func:`settings_markdown`).
@@ -571,13 +586,15 @@ def settings_section(settings: StudySettings) -> str:
     ----------
     settings : StudySettings
         The search settings.
+    params : DriveParameters or None, default None
+        The report's parameter set (its ``[solver]`` table).
 
     Returns
     -------
     str
         Markdown.
     """
-    return f"{integrator_text()}\n\n{settings_markdown(settings)}"
+    return f"{integrator_text(params)}\n\n{settings_markdown(settings, params)}"
 
 
 def github_slug(title: str) -> str:
@@ -748,7 +765,7 @@ def write(params: DriveParameters, settings: StudySettings, results: dict[str, A
                      == key] for key in placed}
     unplaced = [f for f in results["figures"] if figures_mod.CAPTIONS.get(f, ("",))[0]
                 not in placed]
-    settings_text = settings_section(settings)
+    settings_text = settings_section(settings, params)
 
     def caption(name: str) -> str:
         return figures_mod.CAPTIONS.get(name, ("", name))[1]

@@ -58,6 +58,11 @@ def study_store(out: Path, params: DriveParameters, settings: StudySettings, *,
                 notice: Callable[[str], None] | None = None) -> ResultStore:
     """The store of ``out/data`` for this parameter set, these settings and this code.
 
+    The key holds the set's text (:func:`feeddrive.parameters.dumps`, with the ``[solver]``
+    table the set carries) and the integrator settings in force
+    (:meth:`feeddrive.SolverOptions.record`): a table, or another value in it, is another
+    store.
+
     Parameters
     ----------
     out : Path
@@ -256,7 +261,9 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     Parameters
     ----------
     params : DriveParameters
-        The parameter set studied.
+        The parameter set studied; every run takes the ``[solver]`` table it carries (under
+        the options in force: :func:`feeddrive.engine.simulate.run_options`), which is part
+        of the store's key (:func:`study_store`).
     out : Path
         The report folder; studies already stored in ``out/data`` are reused.
     settings : StudySettings, optional
@@ -279,6 +286,9 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     ----------
     .. [1] Wang2021 (the figures, tables and sections the studies reproduce).
     """
+    from ..engine.simulate import run_options
+
+    run_options(params)  # the set's [solver] table: a bad value refused before any work
     settings = settings or StudySettings()
     out.mkdir(parents=True, exist_ok=True)
     store = study_store(out, params, settings, notice=notice)

@@ -6,6 +6,9 @@ point (:mod:`.quantities`).  Everything a user can get wrong is checked by
 :class:`~feeddrive.parameters.ParameterError` naming the configuration key
 (``axes."friction.screw.positive.static_force"``), the value and what was expected.
 
+A ``[solver]`` table gives integrator settings (docs/parameters.md, "[solver]"): over the base
+parameter file's own table, under the command line's (and the API's) settings.
+
 Axis units: ``table_position`` [mm], ``nut_speed`` and ``table_speed`` [mm/s] (the CLI's
 units, converted to SI here, once); a parameter named by its dotted path takes the parameter
 file's SI unit, or a factor on the base value with ``relative = true``.  ``drive`` and
@@ -21,7 +24,7 @@ import itertools
 import math
 import os
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +32,8 @@ import numpy as np
 
 from .. import units
 from ..parameters import DriveParameters, ParameterError, dumps, load, preset
-from ..parameters.toml_io import read_toml_file, to_dict
+from ..parameters.components import solver_over, solver_table
+from ..parameters.toml_io import read_toml_file, table_applied, to_dict
 from .quantities import QuantitySettings
 
 DESIGNS = ("grid", "random", "lhs")
@@ -57,6 +61,9 @@ def _no_nut(drive: str) -> bool:
 
 _TOP_KEYS = ("name", "preset", "params", "drive", "table_position", "nut_speed", "store",
              "design", "quantity", "axes", "map")
+#: the integrator settings' table, as a parameter file's (docs/parameters.md, "[solver]"); a
+#: top-level key beside _TOP_KEYS (whose every key docs/sweeps.md names)
+SOLVER_KEY = "solver"
 _AXIS_KEYS = ("values", "low", "high", "points", "scale", "relative")
 #: most design points of one sweep (grid points or samples), refused from the counts alone
 MAX_POINTS = 1_000_000
@@ -224,6 +231,12 @@ class SweepConfig:
         The default x and y axes of ``feeddrive map``.
     raw : dict, optional
         The parsed TOML, recorded in the store.
+    solver : tuple of (str, object, str), default ()
+        The configuration's ``[solver]`` settings (setting, value, source), laid over the
+        ``[solver]`` table each base set carries
+        (:func:`~feeddrive.parameters.components.solver_over`), so that every point's set
+        carries them to its runs, in this process and in a worker's
+        (:func:`feeddrive.engine.simulate.run_options`).
     """
 
     name: str
@@ -240,6 +253,7 @@ class SweepConfig:
     store: Path | None
     map_axes: tuple[str | None, str | None] = (None, None)
     raw: dict[str, Any] = field(default_factory=dict)
+    solver: tuple[tuple[str, Any, str], ...] = ()
 
     # ------------------------------------------------------------------ points
 
@@ -359,7 +373,7 @@ class SweepConfig:
 
     def _base(self, name: str, cache: dict[str, DriveParameters]) -> DriveParameters:
         if name not in cache:
-            cache[name] = _load_base(name, self.source)
+            cache[name] = _with_solver(_load_base(name, self.source), self.solver)
         return cache[name]
 
     def task(self, coords: Mapping[str, Any],
@@ -526,6 +540,30 @@ def _load_base(name: str, source: str) -> DriveParameters:
         raise _refuse("preset", name, err.message) from None
 
 
+def _with_solver(params: DriveParameters, solver: tuple[tuple[str, Any, str], ...]
+                 ) -> DriveParameters:
+    """A base set with the configuration's ``[solver]`` settings over its own."""
+    if not solver:
+        return params
+    try:
+        return replace(params, solver=solver_over(params.solver, solver))
+    except ParameterError as err:
+        raise _refuse(err.field, err.value, err.message) from None
+
+
+def _solver_settings(data: Mapping[str, Any], source: str) -> tuple[tuple[str, Any, str], ...]:
+    """The configuration's ``[solver]`` settings: its table checked by name and kind, or,
+    inside a command that merged it into the options in force, what that command gives
+    (:func:`feeddrive.parameters.toml_io.tables_applied`: nothing, its settings are in the
+    base set's)."""
+    applied = table_applied(source)
+    if applied is not None:
+        return applied
+    if SOLVER_KEY not in data:
+        return ()
+    return solver_table(data[SOLVER_KEY], f"[solver] in {source}")
+
+
 def numeric_paths(params: DriveParameters) -> list[str]:
     """Dotted names of every numeric parameter of a set (what a ``*`` axis sweeps).
 
@@ -673,16 +711,17 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
     ParameterError
         For an unknown key or a bad value, naming the key.
     """
-    unknown = sorted(set(data) - set(_TOP_KEYS))
+    unknown = sorted(set(data) - {*_TOP_KEYS, SOLVER_KEY})
     if unknown:
         raise _refuse(unknown[0], data[unknown[0]],
-                      f"unknown key; expected one of {', '.join(_TOP_KEYS)}")
+                      f"unknown key; expected one of {', '.join((*_TOP_KEYS, SOLVER_KEY))}")
     if "preset" in data and "params" in data:
         raise _refuse("params", data["params"], "give either preset or params, not both")
     base = str(data.get("params", data.get("preset", "wang2021")))
     if "params" in data and not base.endswith(".toml"):
         raise _refuse("params", base, "expected a .toml parameter file")
-    base_params = _load_base(base, source)
+    solver = _solver_settings(data, source)
+    base_params = _with_solver(_load_base(base, source), solver)
     drive = data.get("drive", "cdfs")
     if drive not in _drives():
         raise _refuse("drive", drive, f"expected one of {', '.join(_drives())}")
@@ -750,7 +789,8 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
                        table_position=position, nut_speed=nut, design=kind,
                        samples=samples if kind != "grid" else None, seed=seed,
                        axes=tuple(axes), quantity=quantity, store=store_path,
-                       map_axes=(map_spec.get("x"), map_spec.get("y")), raw=dict(data))
+                       map_axes=(map_spec.get("x"), map_spec.get("y")), raw=dict(data),
+                       solver=solver)
 
 
 def load_config(path: str | os.PathLike[str]) -> SweepConfig:
