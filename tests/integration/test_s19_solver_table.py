@@ -409,3 +409,35 @@ def test_a_command_gives_its_files_sets_the_tables_it_merged(tmp_path: Path) -> 
         assert load(path).solver == carried
         assert load(_file(tmp_path, "accuracy = 0.2\n", "other.toml")).solver[0][1] == 0.2
     assert load(path).solver[0][1] == 0.01
+
+
+def test_the_fmu_exports_tolerances_take_the_sets_table() -> None:
+    """``export_fmu`` from Python wrote the defaults' tolerances for a set whose file says
+    ``accuracy = 0.1`` (``feeddrive export fmu --params`` took the table); the start values
+    now come from the options a run of the set takes (``run_options``)."""
+    from feeddrive.fmu import solver_starts
+
+    params = fd.parameters.loads('extends = "wang2021"\n[solver]\naccuracy = 0.1\n')
+    plain = solver_starts(fd.preset("wang2021"), 2e-3, 0.0)
+    tight = solver_starts(params, 2e-3, 0.0)
+    for name, value in plain.items():
+        assert tight[name] == pytest.approx(value / 10, rel=1e-12), name
+    given = solver_starts(params, 2e-3, 0.0, fd.SolverOptions(accuracy=0.5))  # the API's wins
+    assert given["solver.relative_tolerance"] == pytest.approx(
+        plain["solver.relative_tolerance"] * 0.5)
+
+
+def test_a_creep_searchs_shadow_is_decided_on_the_options_its_trials_take() -> None:
+    """A set whose table is at double precision's reach (``accuracy = 1e-8``, the floor): its
+    trials' shadow cannot be made 10× tighter, said before any trial runs — the check looked
+    at the options given alone, and the shadow trial failed on the table's value mid-search."""
+    from feeddrive.analysis.critical import shadow_possible
+    from feeddrive.engine.options import MIN_ACCURACY
+
+    params = fd.parameters.loads(f'extends = "wang2021"\n[solver]\naccuracy = {MIN_ACCURACY!r}\n')
+    system = fd.DriveSystem(params, drive="cdfs", table_position=0.4)
+    assert shadow_possible() and not shadow_possible(system=system)
+    assert shadow_possible(fd.SolverOptions(accuracy=1.0, origin=(("accuracy", "API"),)),
+                           system=system)  # the API's accuracy over the table's
+    with pytest.raises(fd.ParameterError, match="--error-estimate|error_estimate"):
+        creep_trial(system, 1e-3, error_estimate=True)

@@ -263,3 +263,21 @@ def test_the_json_the_save_message_points_to_round_trips(tmp_path: Path) -> None
     params = preset("wang2021")
     text = json.dumps(to_dict(params))
     assert from_dict(json.loads(text)) == params
+
+
+def test_a_refusal_crosses_a_process_boundary_whole() -> None:
+    """A worker process's ParameterError reached the pool's parent as a pickling failure that
+    broke the pool (its constructor takes the field, value and message, the default pickling
+    passed the message alone; found 2026-12-06 with a bad [solver] table in ``reproduce``)."""
+    import pickle
+
+    from feeddrive.explore.settings import UsageError
+
+    err = ParameterError("solver.rtol", -1.0, "expected a value > 0", source="run.toml")
+    back = pickle.loads(pickle.dumps(err))
+    assert type(back) is ParameterError and str(back) == str(err)
+    assert (back.field, back.value, back.message, back.source) == (
+        "solver.rtol", -1.0, "expected a value > 0", "run.toml")
+    assert pickle.loads(pickle.dumps(ParameterError("x", MISSING, "give x"))).value is MISSING
+    usage = pickle.loads(pickle.dumps(UsageError("--table-speed", "fast")))
+    assert type(usage) is UsageError and str(usage) == str(UsageError("--table-speed", "fast"))

@@ -209,3 +209,26 @@ def test_in_process_sensitivity_counts_its_linearisations(monkeypatch) -> None:
     assert result.evaluations == 5 and len(seen) <= 5 * 15
     bad = {**task, "quantity": {**task["quantity"], "low": 6e-3}}
     assert "low" in _linear_upper(bad, params)["error"]
+
+
+def test_a_points_task_carries_the_integrator_settings_in_force() -> None:
+    """``feeddrive sensitivity --accuracy 0.1`` reached neither the worker processes' searches
+    nor the store's keys (found 2026-12-06: the keys were identical with and without it); each
+    point's task now carries the settings in force, as a sweep's does."""
+    from types import SimpleNamespace
+
+    from feeddrive.analysis.sensitivity import _task
+    from feeddrive.engine.options import using
+    from feeddrive.sweep.quantities import QuantitySettings
+    from feeddrive.sweep.store import point_key
+
+    config = SimpleNamespace(table_position=400.0, drive="cdfs",
+                             quantity=QuantitySettings.parse({"kind": "critical-speed",
+                                                              "linear": False}))
+    params = fd.preset("wang2021")
+    default = _task(config, params)
+    with using(fd.SolverOptions(accuracy=0.1)):
+        tighter = _task(config, params)
+    assert default["solver"] == fd.SolverOptions().record()
+    assert tighter["solver"]["accuracy"] == 0.1
+    assert point_key(default) != point_key(tighter)

@@ -554,24 +554,33 @@ def judge_trial(time: np.ndarray, speed: np.ndarray, command_speed: float,
     return CreepTrial.from_verdict(command_speed, v, float(time[-1] - time[0]))
 
 
-def _shadow_options(options: SolverOptions | None) -> SolverOptions:
-    """The shadow runs' options (every tolerance ``SHADOW_FACTOR`` times tighter), refused
-    with one line before any trial runs when the run's own are at double precision's reach."""
+def _shadow_options(options: SolverOptions | None,
+                    system: DriveSystem | None = None) -> SolverOptions:
+    """The shadow runs' options: the trials' (``options`` over the set's ``[solver]`` table,
+    :func:`feeddrive.engine.simulate.run_options`, as a trial takes them) with every tolerance
+    ``SHADOW_FACTOR`` times tighter, refused with one line before any trial runs when the
+    trials' own are at double precision's reach."""
     from ..engine.error_estimate import tightened
     from ..engine.options import current
+    from ..engine.simulate import run_options
 
-    return tightened(options if options is not None else current())
+    given = options if options is not None else current()
+    return tightened(run_options(system, given) if system is not None else given)
 
 
-def shadow_possible(options: SolverOptions | None = None) -> bool:
+def shadow_possible(options: SolverOptions | None = None,
+                    system: DriveSystem | None = None) -> bool:
     """Whether a trial's shadow (every tolerance ``SHADOW_FACTOR`` times tighter) can be run at
-    ``options`` (the current ones by default): False where they are at double precision's
-    reach — ``feeddrive creep`` and ``reproduce`` then search without an estimate and say so.
+    ``options`` (the current ones by default; over ``system``'s ``[solver]`` table when it is
+    given): False where they are at double precision's reach — ``feeddrive creep`` and
+    ``reproduce`` then search without an estimate and say so.
 
     Parameters
     ----------
     options : SolverOptions or None, default None
         The trials' options.
+    system : DriveSystem or None, default None
+        The drive whose set's table the trials take.
 
     Returns
     -------
@@ -579,7 +588,7 @@ def shadow_possible(options: SolverOptions | None = None) -> bool:
         Whether ``error_estimate=True`` is possible.
     """
     try:
-        _shadow_options(options)
+        _shadow_options(options, system)
     except ParameterError:
         return False
     return True
@@ -662,7 +671,7 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
         The verdict.
     """
     kind = estimate_kind(error_estimate)
-    shadow = _shadow_options(options) if kind == "shadow" else None
+    shadow = _shadow_options(options, system) if kind == "shadow" else None
     trial, time, trace = _run_trial(system, speed, nut_speed, rule, options,
                                     kind == "embedded")
     if shadow is not None:
@@ -773,7 +782,7 @@ def critical_speed_from_rest(
                           names={"low": "speed_range[0]", "high": "speed_range[1]"})
     rule = rule or VerdictRule()
     estimate = estimate_kind(error_estimate)
-    shadow = _shadow_options(options) if estimate == "shadow" else None  # refused up front
+    shadow = _shadow_options(options, system) if estimate == "shadow" else None  # up front
     simulated = 0.0
     # the table-speed traces of the trials that may still decide (the shadow's): the top
     # creeping trial's and every one above it (a trial below the top creeping one never will)

@@ -248,14 +248,18 @@ class SensitivityResult:
 
 
 def _task(config: Any, params: DriveParameters) -> dict[str, Any]:
-    """The sweep task of ``params`` (as :meth:`SweepConfig.task` builds it)."""
+    """The sweep task of ``params`` (as :meth:`SweepConfig.task` builds it), with the
+    integrator settings in force (:meth:`feeddrive.SolverOptions.record`): the worker runs
+    its critical-speed searches at them, and the store's key carries them."""
+    from ..engine.options import current
     from ..engine.simulate import DriveSystem
     from ..parameters import dumps
 
     position = config.table_position * 1e-3
     DriveSystem(params, drive=config.drive, table_position=position)
     return {"parameters": dumps(params), "drive": config.drive, "table_position": position,
-            "nut_speed": 0.0, "quantity": config.quantity.to_dict()}
+            "nut_speed": 0.0, "quantity": config.quantity.to_dict(),
+            "solver": current().record()}
 
 
 def _linear_upper(task: dict[str, Any], params: DriveParameters | None) -> dict[str, Any]:

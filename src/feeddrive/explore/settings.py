@@ -222,6 +222,10 @@ class UsageError(ParameterError):
         self.message = ("Input should be a valid number, unable to parse string as a number")
         ValueError.__init__(self, f"Invalid value for '{option}': {self.message}")
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled by its two arguments."""
+        return (UsageError, (self.field, self.value))
+
 
 def _with_cli_warnings(fn: Any, *args: Any) -> tuple[Any, str]:
     """Call one of the CLI's edge checks and keep the warning it prints (a value that looks

@@ -155,10 +155,11 @@ FMU_SPEED_SCALE = 1e-3
 def solver_starts(parameters: DriveParameters, table_speed: float, nut_speed: float,
                   options: SolverOptions | None = None) -> dict[str, float]:
     """The start values of the FMU's solver settings: the tolerances of ``options`` (None:
-    those in force) resolved as :mod:`feeddrive.engine.options` does for a run at the export's
-    start speeds.  The embedded DOPRI5 has one position and one speed tolerance for every
-    state (the friction deflections take the position tolerance): the tighter of the table's
-    and the motors' is taken.
+    those in force) over the set's ``[solver]`` table, as a run of the set takes them
+    (:func:`feeddrive.engine.simulate.run_options`), resolved as
+    :mod:`feeddrive.engine.options` does for a run at the export's start speeds.  The embedded
+    DOPRI5 has one position and one speed tolerance for every state (the friction deflections
+    take the position tolerance): the tighter of the table's and the motors' is taken.
 
     Parameters
     ----------
@@ -176,8 +177,9 @@ def solver_starts(parameters: DriveParameters, table_speed: float, nut_speed: fl
         ``solver.speed_tolerance`` [m/s], ``solver.current_tolerance`` [A].
     """
     from ..engine import options as opt
+    from ..engine.simulate import run_options
 
-    options = options or opt.current()
+    options = run_options(parameters, options)
     table = abs(table_speed) or FMU_SPEED_SCALE
     limit = float(parameters.controller.current_limit)
     scales = opt.RunScales(speed=max(abs(table_speed) + abs(nut_speed), table),

@@ -92,6 +92,12 @@ def _cut(text: str) -> str:
     return f"{text[:MAX_SHOWN]}… ({len(text)} characters)"
 
 
+def _parameter_error(cls: type[ParameterError], field: str, value: object, message: str,
+                     source: str | None) -> ParameterError:
+    """A :class:`ParameterError` (or subclass) from its pickled arguments."""
+    return cls(field, value, message, source=source)
+
+
 class ParameterError(ValueError):
     """A parameter value was refused.
 
@@ -121,6 +127,13 @@ class ParameterError(ValueError):
         where = f"{_cut(source)}: " if source else ""
         shown = "" if value is MISSING else f" = {shown_value(value)}"
         super().__init__(f"{where}{_cut(str(field))}{shown}: {message}")
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled by its arguments (a worker process's refusal reaches its parent whole:
+        the default pickling of an exception passes only the message, which this
+        constructor does not take, and the pool broke)."""
+        return (_parameter_error, (type(self), self.field, self.value, self.message,
+                                   getattr(self, "source", None)))
 
     def in_file(self, source: str) -> ParameterError:
         """The same refusal, naming the file it came from.

@@ -59,11 +59,10 @@ def _no_nut(drive: str) -> bool:
     return drive not in drive_names() or "nut" not in mechanism(drive).followed_references(drive)
 
 
-_TOP_KEYS = ("name", "preset", "params", "drive", "table_position", "nut_speed", "store",
-             "design", "quantity", "axes", "map")
-#: the integrator settings' table, as a parameter file's (docs/parameters.md, "[solver]"); a
-#: top-level key beside _TOP_KEYS (whose every key docs/sweeps.md names)
+#: the integrator settings' table, as a parameter file's (docs/parameters.md, "[solver]")
 SOLVER_KEY = "solver"
+_TOP_KEYS = ("name", "preset", "params", "drive", "table_position", "nut_speed", "store",
+             "design", "quantity", "axes", "map", SOLVER_KEY)
 _AXIS_KEYS = ("values", "low", "high", "points", "scale", "relative")
 #: most design points of one sweep (grid points or samples), refused from the counts alone
 MAX_POINTS = 1_000_000
@@ -711,10 +710,10 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
     ParameterError
         For an unknown key or a bad value, naming the key.
     """
-    unknown = sorted(set(data) - {*_TOP_KEYS, SOLVER_KEY})
+    unknown = sorted(set(data) - set(_TOP_KEYS))
     if unknown:
         raise _refuse(unknown[0], data[unknown[0]],
-                      f"unknown key; expected one of {', '.join((*_TOP_KEYS, SOLVER_KEY))}")
+                      f"unknown key; expected one of {', '.join(_TOP_KEYS)}")
     if "preset" in data and "params" in data:
         raise _refuse("params", data["params"], "give either preset or params, not both")
     base = str(data.get("params", data.get("preset", "wang2021")))
