@@ -28,9 +28,11 @@ RTOL_WEIGHS_NOT = "positions, angles, loop integrals and friction deflections"
 
 
 #: the absolute tolerances the command line takes in engineering units, as its other lengths
-#: and speeds: field → (unit, SI per unit); a parameter file's ``[solver]`` table and the API
-#: take SI (an outside check, 2026-12-06: ``--speed-tolerance 0.001`` was 1 mm/s)
-CLI_UNITS = {"position_tolerance": ("mm", 1e-3), "speed_tolerance": ("mm/s", 1e-3)}
+#: and speeds: field → (unit, SI per unit), from the one table of the command line's units
+#: (:data:`feeddrive.engine.options.CLI_UNITS`); a parameter file's ``[solver]`` table and the
+#: API take SI (an outside check, 2026-12-06: ``--speed-tolerance 0.001`` was 1 mm/s)
+CLI_UNITS = {name: (unit, 1.0 / per) for name, (unit, per) in opt.CLI_UNITS.items()
+             if unit in ("mm", "mm/s")}
 
 
 def _limits(name: str) -> tuple[float, float]:
