@@ -187,8 +187,9 @@ def test_the_json_gives_the_units_of_the_fields_named_without_one() -> None:
 def test_at_double_precisions_reach_the_json_says_why_there_is_none() -> None:
     args = ["--method", "bisect", *SHORT, "--rtol", "5e-14"]
     out = json.loads(_creep(*args, "--json").stdout)
-    reason = (f"a run {SHADOW_FACTOR:g}× tighter than these settings would ask for less than "
-              f"{MIN_RELATIVE:g} relative (double precision's reach)")
+    # the setting as given, and its floor (error_estimate.tightening_refused, the one rule)
+    reason = (f"needs a run {SHADOW_FACTOR:g}× tighter than rtol 5e-14, below "
+              f"{MIN_RELATIVE:g} (double precision's reach)")
     assert out["integration_error"] == {
         "estimated": False, "reason": reason,
         "text": f"Integration error: not estimated — {reason}"}

@@ -139,8 +139,8 @@ def test_creep_at_double_precisions_reach_searches_without_an_estimate_and_says_
     res = CliRunner().invoke(app, args, terminal_width=400)
     assert res.exit_code == 0, res.output
     assert "[integration error estimated" not in res.output
-    assert ("Integration error: not estimated — a run 10× tighter than these settings would "
-            "ask for less than 1e-14 relative") in res.output
+    assert ("Integration error: not estimated — needs a run 10× tighter than rtol 5e-14, "
+            "below 1e-14 (double precision's reach)") in res.output
     res = CliRunner().invoke(app, [*args, "--json"])
     assert res.exit_code == 0, res.output
     import json

@@ -22,17 +22,23 @@ RIPPLE_REASON = "the ripple-threshold search makes no estimate"
 
 def shadow_impossible_reason() -> str:
     """Why the search from rest can make no integration-error estimate at these settings
-    (``feeddrive.analysis.critical.shadow_possible`` is False).
+    (``feeddrive.analysis.critical.shadow_possible`` is False): the setting that a run
+    ten times tighter would take below its floor, as the user gave it
+    (:func:`feeddrive.engine.error_estimate.tightening_refused`).
 
     Returns
     -------
     str
         The reason.
     """
-    from ..engine.options import MIN_RELATIVE
+    from ..engine.error_estimate import tightening_refused
+    from ..engine.options import MIN_RELATIVE, current
 
-    return (f"a run {SHADOW_FACTOR:g}× tighter than these settings would ask for less than "
-            f"{MIN_RELATIVE:g} relative (double precision's reach)")
+    why = tightening_refused(current())
+    if why is None:  # (not reached: shadow_possible said no)
+        return (f"a run {SHADOW_FACTOR:g}× tighter than these settings would ask for less "
+                f"than {MIN_RELATIVE:g} relative (double precision's reach)")
+    return f"{why.split(': give a looser')[0]} (double precision's reach)"
 
 
 def not_estimated(reason: str | None = None) -> dict[str, Any]:
