@@ -441,3 +441,21 @@ def test_a_creep_searchs_shadow_is_decided_on_the_options_its_trials_take() -> N
                            system=system)  # the API's accuracy over the table's
     with pytest.raises(fd.ParameterError, match="--error-estimate|error_estimate"):
         creep_trial(system, 1e-3, error_estimate=True)
+
+
+def test_a_fits_output_interval_holds_against_the_sets_table() -> None:
+    """A fit runs each record at its sample step (1 ms here, the default's value): a set whose
+    table says ``output_interval = 0.01`` replaced it, a default-valued setting being the
+    table's to set; the fit names the interval as its own (``fit._record_step``)."""
+    from dataclasses import replace as dc_replace
+
+    from feeddrive.analysis.fit import RECORD_STEP_SOURCE, _record_step
+    from feeddrive.engine.simulate import run_options
+
+    params = fd.parameters.loads('extends = "wang2021"\n[solver]\noutput_interval = 0.01\n')
+    system = fd.DriveSystem(params, drive="cdfs", table_position=0.4)
+    plain = dc_replace(fd.SolverOptions(), output_interval=1e-3)
+    assert run_options(system, plain).output_interval == 0.01  # what the fit's runs got
+    fitted = run_options(system, _record_step(fd.SolverOptions(), 1e-3))
+    assert fitted.output_interval == 1e-3 and fitted.sample_steps
+    assert fitted.source("output_interval") == RECORD_STEP_SOURCE

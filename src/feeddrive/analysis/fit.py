@@ -606,6 +606,21 @@ def _options_for(exp_dt: float) -> dict[str, float]:
     return {"output_interval": min(1e-3, exp_dt)}
 
 
+#: the source of a fit run's output interval (:func:`_record_step`)
+RECORD_STEP_SOURCE = "fit (the record's sample step)"
+
+
+def _record_step(base: Any, interval: float) -> Any:
+    """``base`` with the output interval ``interval`` [s] and every sample a step end, the
+    interval named as the fit's: it holds even where it equals the default and the set's
+    ``[solver]`` table gives another (a default-valued setting is the table's to set)."""
+    from dataclasses import replace
+
+    origin = {**dict(base.origin), "output_interval": RECORD_STEP_SOURCE}
+    return replace(base, output_interval=interval, sample_steps=True,
+                   origin=tuple(sorted(origin.items())))
+
+
 def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
     """Simulate one experiment at one parameter point and return the fitted signals on the
     measured times (SI).  Module-level and picklable: every executor runs it.  ``task``:
@@ -626,7 +641,6 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
         ``{"signals": {name: values on the measured times}}`` [SI unit of each signal], or
         ``{"error": message}`` when the simulation failed.
     """
-    from dataclasses import replace
 
     from ..engine.options import SolverOptions, current
     from ..engine.simulate import DriveSystem, SimulationError, simulate
@@ -645,14 +659,15 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
         t = np.asarray(task["time"])
         estimate = bool(task.get("error_estimate", False))
         try:
-            # every sample a step end: the residual moves smoothly with the parameters
-            opts = replace(base, output_interval=task["output_interval"], sample_steps=True)
+            # every sample a step end: the residual moves smoothly with the parameters; the
+            # output interval is the record's, given as the fit's (a [solver] table's does not
+            # replace it, feeddrive.engine.simulate.run_options)
+            opts = _record_step(base, task["output_interval"])
             result = simulate(system, prof, float(t[-1]) + opts.output_interval, options=opts,
                               error_estimate=estimate)
         except ParameterError:
             result = simulate(system, prof, float(t[-1]) + 1e-3,
-                              options=replace(base, output_interval=1e-3, sample_steps=True),
-                              error_estimate=estimate)
+                              options=_record_step(base, 1e-3), error_estimate=estimate)
         out = {}
         for name in task["signals"]:
             out[name] = np.interp(t, result.time, result[name])
