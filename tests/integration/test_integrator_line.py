@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import feeddrive as fd
 from feeddrive.cli._units import number
-from feeddrive.cli.simulate_cmd import integrator_line
+from feeddrive.cli._solver_report import integrator_line
 
 
 def test_a_ddfs_line_gives_the_table_and_the_motors_each_with_its_scale() -> None:

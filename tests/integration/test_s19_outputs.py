@@ -340,7 +340,7 @@ def test_result_save_writes_the_record_as_the_csvs_last_line(tmp_path: Path) -> 
 
 
 def test_the_json_block_renames_and_converts_lengths_speeds_and_currents() -> None:
-    from feeddrive.cli.simulate_cmd import SOLVER_JSON_UNITS, solver_json
+    from feeddrive.cli._solver_report import SOLVER_JSON_UNITS, solver_json
 
     out = solver_json(RECORD)
     assert out["position_tolerance_mm"] == pytest.approx(1e-10, rel=1e-12)
@@ -366,7 +366,7 @@ def test_the_json_block_renames_and_converts_lengths_speeds_and_currents() -> No
 ])
 def test_the_integrator_line_reads_which_tolerances_were_given_from_the_record(
         changes: dict[str, Any], text: str) -> None:
-    from feeddrive.cli.simulate_cmd import integrator_line
+    from feeddrive.cli._solver_report import integrator_line
 
     assert text in integrator_line({**RECORD, **changes})
 

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from typing import Any
 
 from ._common import console, print_json, progress_bar, run_outcome
+from ._solver_report import machine_solver_report
 
 #: the contour kinds (feeddrive.machine.CONTOURS; the machine package loads numba)
 CONTOURS = ("circle", "line", "corner", "csv", "together")
@@ -17,9 +17,7 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
                 acceleration: float, clockwise: bool, start_angle: float, turns: float,
                 length: float, angle: float, contour_file: str | None,
                 duration: float | None, options: Any, output: str | None,
-                plot: str | None, as_json: bool,
-                report: Callable[[dict[str, Any], Any],
-                                 tuple[list[str], dict[str, Any]]] | None = None) -> None:
+                plot: str | None, as_json: bool) -> None:
     """Parse the contour options (mm, mm/min, mm/s², degrees), run, save and print: per axis
     the largest following error, the contour error, the integrator settings and the solver's
     counts (text and ``--json``, as a single drive's summary).
@@ -58,10 +56,6 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
         Figure file.
     as_json : bool
         Print the summary as JSON.
-    report : callable, optional
-        ``report(solver_stats, options)`` → (text lines, the JSON's ``solver`` record): the
-        integrator settings and counts in the command line's units
-        (``simulate_cmd.machine_solver_report``, passed in: this module is imported by it).
     """
     from ..machine import load_machine, machine_summary, make_contour, simulate_machine
     from ..parameters import ParameterError
@@ -108,10 +102,7 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
             f"{machine.name}: {contour}, F = {feed:g} mm/min")))
     summary = in_micrometres(summary)
     # the integrator settings the run took and its counts, as a single drive's summary states
-    solver_lines, record = report(result.solver_stats, options) if report is not None \
-        else ([], None)
-    if record is not None:
-        summary["solver"] = record
+    solver_lines, summary["solver"] = machine_solver_report(result.solver_stats, options)
     if as_json:
         print_json(summary)
         return
