@@ -5,8 +5,8 @@ table's tolerances, which are scaled to the table's 0.5 mm/s; and gave them in m
 from __future__ import annotations
 
 import feeddrive as fd
-from feeddrive.cli._units import number
 from feeddrive.cli._solver_report import integrator_line
+from feeddrive.cli._units import number
 
 
 def test_a_ddfs_line_gives_the_table_and_the_motors_each_with_its_scale() -> None:

@@ -255,7 +255,10 @@ def run_outcome(bar: Any) -> Iterator[None]:
     try:
         yield
     except SimulationError as err:
-        message = str(err).replace("options.max_steps", "--max-steps")
+        # the engine's advice names Python's field beside a table's and the option; a
+        # command's user is told the last two
+        message = str(err).replace("options.max_steps, ", "").replace(
+            "options.max_steps", "--max-steps")
         err_console.print(f"error: {message}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
     except SimulationInterrupted as stop:

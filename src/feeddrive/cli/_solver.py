@@ -6,6 +6,7 @@ tolerances, ``--accuracy``, ``--rosenbrock`` (:mod:`feeddrive.engine.options`), 
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import inspect
 import math
@@ -65,6 +66,19 @@ def _to_si(cli: dict[str, tuple[Any, str]]) -> dict[str, tuple[Any, str]]:
     return out
 
 
+def _default(name: str) -> Any:
+    """The default of :class:`feeddrive.SolverOptions`' field ``name``."""
+    return next(f.default for f in dataclasses.fields(opt.SolverOptions) if f.name == name)
+
+
+#: the default accuracy factor and step limit (:class:`feeddrive.SolverOptions`' fields): the
+#: options have no default of their own, so that a parameter file's ``[solver]`` table holds
+#: where they are not given (an outside check, 2026-12-06: a fixed ``--max-steps`` default
+#: replaced the file's ``max_steps``)
+DEFAULT_ACCURACY = _default("accuracy")
+DEFAULT_MAX_STEPS = _default("max_steps")
+
+
 def max_steps_help(probe: bool = False) -> str:
     """``--max-steps``' help: what is checked before a run starts (its duration over the
     largest step, :func:`feeddrive.engine.budget.run_budget`: dopri5's step bound; the dense
@@ -92,35 +106,58 @@ def max_steps_help(probe: bool = False) -> str:
             f"the largest step (dopri5: {1e3 * opt.DOPRI5_STEP:g} ms at --accuracy 1; the other "
             "methods have none unless the --params file's [solver] sets max_step) may not "
             f"exceed it{probed}. Otherwise a run that reaches it stops there with an error "
-            "naming the time reached.")
+            "naming the time reached. Default: the parameter file's [solver] max_steps, else "
+            f"{f'{DEFAULT_MAX_STEPS:,}'.replace(',', ' ')}.")
+
+
+def file_default(name: str) -> str:
+    """How an option's help opens its default: the ``[solver]`` table's setting ``name``
+    first (precedence: the command line, the file, the default; a sweep's: its
+    configuration's table over its ``params`` file's), as ``--method``'s help says it.
+
+    Parameters
+    ----------
+    name : str
+        The setting (a key of the ``[solver]`` table).
+
+    Returns
+    -------
+    str
+        ``"default: the parameter file's [solver] NAME, else "``, the default to follow.
+    """
+    return f"default: the parameter file's [solver] {name}, else "
+
 
 
 #: (parameter, option, help) of the settings added to a command; the numbers are the engine's
-#: (feeddrive.engine.options)
+#: (feeddrive.engine.options), each default after the parameter file's [solver] setting
 OPTIONS = (
-    ("rtol", "--rtol", f"Relative tolerance of the integrator [-] (default "
+    ("rtol", "--rtol", f"Relative tolerance of the integrator [-] ({file_default('rtol')}"
      f"{opt.DEFAULT_RTOL:g} × --accuracy; {opt.MIN_RELATIVE:g} … {opt.MAX_RTOL:g}). It weighs "
      f"only speeds and currents ({RTOL_WEIGHS_NOT} have absolute tolerances only), and at the "
      f"defaults a speed's absolute tolerance ({opt.SPEED_FRACTION:g} × the speed scale) is "
      f"{opt.SPEED_FRACTION / opt.DEFAULT_RTOL:g}× rtol × the commanded speed: --rtol alone "
      "barely changes a run; --accuracy tightens every tolerance."),
     ("position_tolerance", "--position-tolerance",
-     f"Absolute tolerance of positions [mm] (default: scaled with the run, "
-     f"{opt.POSITION_TIME:g} s × the speed scale, × --accuracy; docs/model.md; "
-     f"{_range('position_tolerance')})."),
+     f"Absolute tolerance of positions [mm] ({file_default('position_tolerance')}"
+     f"scaled with the run, {opt.POSITION_TIME:g} s × the speed scale, × --accuracy; "
+     f"docs/model.md; {_range('position_tolerance')})."),
     ("speed_tolerance", "--speed-tolerance",
-     f"Absolute tolerance of speeds [mm/s] (default: {opt.SPEED_FRACTION:g} × the speed "
-     f"scale × --accuracy; {_range('speed_tolerance')})."),
+     f"Absolute tolerance of speeds [mm/s] ({file_default('speed_tolerance')}"
+     f"{opt.SPEED_FRACTION:g} × the speed scale × --accuracy; {_range('speed_tolerance')})."),
     ("current_tolerance", "--current-tolerance",
-     f"Absolute tolerance of currents [A] (default: {opt.CURRENT_FRACTION:g} × the current "
-     f"limit, or × 1 A, × --accuracy; {_range('current_tolerance')})."),
+     f"Absolute tolerance of currents [A] ({file_default('current_tolerance')}"
+     f"{opt.CURRENT_FRACTION:g} × the current limit, or × 1 A, × --accuracy; "
+     f"{_range('current_tolerance')})."),
     ("accuracy", "--accuracy",
      f"Factor on every default tolerance [-] (0.1: ten times tighter; "
+     f"{file_default('accuracy')}{DEFAULT_ACCURACY:g}; "
      f"{opt.MIN_RELATIVE / opt.DEFAULT_RTOL:g} … {opt.MAX_ACCURACY:g}); not with an explicit "
      "tolerance."),
     ("rosenbrock", "--rosenbrock",
      f"The Rosenbrock method of modal and auto where the run is stiff: "
-     f"{' or '.join(opt.ROSENBROCKS)} (default {opt.DEFAULT_ROSENBROCK}; docs/model.md)."),
+     f"{' or '.join(opt.ROSENBROCKS)} ({file_default('rosenbrock')}"
+     f"{opt.DEFAULT_ROSENBROCK}; docs/model.md)."),
 )
 #: the settings that are not numbers
 _TEXT = ("rosenbrock",)
@@ -221,7 +258,9 @@ def command_tables(kwargs: Mapping[str, Any]) -> list[FileTable]:
     Raises
     ------
     ParameterError
-        For a table that is not a table or names an unknown setting.
+        For a table that is not a table, names an unknown setting, has a value of the wrong
+        kind or ``accuracy`` with a tolerance: read as :func:`feeddrive.parameters.load` reads
+        it (:func:`feeddrive.engine.options.file_settings`), in the same words.
     """
     tables: list[FileTable] = []
     named = next((kwargs[k] for k in PARAMETER_FILES if kwargs.get(k)), None)
@@ -240,6 +279,34 @@ def command_tables(kwargs: Mapping[str, Any]) -> list[FileTable]:
                 tables.append(FileTable(path, opt.file_settings(path), carrier=True))
         tables.append(FileTable(config, opt.file_settings(config), carrier=False))
     return tables
+
+
+def file_table(path: str | Path | None) -> tuple[tuple[str, Any, str], ...]:
+    """Parameter file ``path``'s own ``[solver]`` table as read, what a parameter file a
+    command writes from it carries (``calibrate --out``): the command line's settings are
+    one-off, never saved, whatever the set loaded under the command
+    (:func:`carried_tables`) carries.
+
+    Parameters
+    ----------
+    path : str, pathlib.Path or None
+        The file (None: none, as a preset: no table).
+
+    Returns
+    -------
+    tuple of (str, object, str)
+        (setting, value, source) triples
+        (:func:`~feeddrive.parameters.components.solver_table`), empty without a table.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`feeddrive.engine.options.file_settings`.
+    """
+    if path is None:
+        return ()
+    settings = opt.file_settings(path)
+    return solver_table(settings, f"[solver] in {path}") if settings else ()
 
 
 def solver_options(cli: dict[str, tuple[Any, str]], params_file: str | None = None, *,
@@ -291,9 +358,13 @@ def _merged(files: list[FileTable]) -> tuple[tuple[str, Any, str], ...]:
 def carried_tables(options: Any, tables: list[FileTable]) -> dict[str | Path, Any]:
     """The ``[solver]`` settings the sets of a command's files carry
     (:func:`feeddrive.parameters.toml_io.tables_applied`): each setting the files' tables
-    give, at its value in ``options`` (the command line's where it gives one, a value equal
-    to the default included); the tables' tolerances that the command line's ``--accuracy``
-    replaced are left out and that accuracy carried instead.  The set loaded from a carrier
+    give as merged (:func:`~feeddrive.parameters.components.solver_over`: a configuration's
+    ``accuracy`` replaces its parameter file's tolerances), at its value in ``options`` (the
+    command line's where it gives one, a value equal to the default included); the tables'
+    tolerances that the command line's ``--accuracy`` replaced are left out and that accuracy
+    carried instead.  A tolerance the command line gives over a table's ``accuracy`` is not
+    carried (one table cannot hold both): the options' record holds it, as any explicit
+    tolerance, and a worker takes it from there.  The set loaded from a carrier
     file carries them; a sweep configuration's own file, nothing more (its table is in them).
 
     A worker process reads the set from its TOML and the options from a record without
@@ -313,8 +384,10 @@ def carried_tables(options: Any, tables: list[FileTable]) -> dict[str | Path, An
     dict
         File → (setting, value, source) triples.
     """
-    given = {name for name, _, _ in _merged(tables)} | {
-        name for t in tables for name in t.settings}
+    # the tables as merged: a tolerance of a parameter file that a sweep configuration's
+    # accuracy replaced is not given (carried at the command line's value beside that
+    # accuracy it made one table hold both, and `sweep --rtol` was refused)
+    given = {name for name, _, _ in _merged(tables)}
     carried: list[tuple[str, Any, str]] = []
     from_cli = options.source("accuracy").startswith("--")
     for name in opt.SETTINGS:

@@ -19,8 +19,13 @@ from ._common import (
     resolve_parameters,
     user_errors,
 )
-from ._solver import accuracy_options
+from ._solver import accuracy_options, file_table
 from .simulate_cmd import ALL_DRIVES, ALL_DRIVES_TEXT
+
+#: ``--out``'s help: what the written file's ``[solver]`` table is (:func:`fitted_set`)
+OUT_HELP = ("Write the fitted set to FILE.toml, with the --params file's own [solver] table "
+            "as read (none from a preset); the command line's integrator settings "
+            "(--accuracy, --rtol, …) are this run's, not saved.")
 
 
 @app.command("calibrate")
@@ -49,7 +54,7 @@ def calibrate_command(
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Hollow-motor speed [mm/s]."),
     preset_name: str | None = typer.Option(None, "--preset", help="Starting parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Starting parameters (TOML)."),
-    out: str | None = typer.Option(None, "--out", help="Write the fitted set to FILE.toml."),
+    out: str | None = typer.Option(None, "--out", help=OUT_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
     force: bool = typer.Option(False, "--force", help="Replace an existing --out file."),
     solver: Any = None,
@@ -86,7 +91,7 @@ def calibrate_command(
     written = out if out and result.reached else None
     if written:
         save(fitted_set(result.parameters, unknown, result.value, drive, target, position,
-                        nut_speed), written)
+                        nut_speed, table=file_table(params_file)), written)
     achieved = result.achieved.to_dict()
     data = {"unknown": unknown, "value": result.value, "target_mm_s": target,
             "achieved_mm_s": achieved["critical_speed_mm_s"], "achieved": achieved["display"],
@@ -112,12 +117,16 @@ def calibrate_command(
 
 
 def fitted_set(params: Any, unknown: str, value: float, drive: str, target: float,
-               position: float, nut_speed: float) -> Any:
+               position: float, nut_speed: float, *, table: Any = ()) -> Any:
     """The fitted parameter set as ``calibrate --out`` writes it: named and described as fitted.
 
     So that a file written from ``wang2021`` is not taken for the preset (issue 24 item 10):
     the name gets ``-fitted``, the description says what was fitted to which target, when, by
-    which version, and from which set.
+    which version, and from which set.  Its ``[solver]`` table is ``table``, the starting
+    file's own (:func:`feeddrive.cli._solver.file_table`), not the one the set loaded under
+    the command carries, which holds the command line's values for the file's settings
+    (``--accuracy 0.5`` over a file's ``accuracy = 0.1`` was saved as 0.5, ``--rtol 1e-8``
+    was not: a one-off setting became the file's, or not, by which key the file had).
 
     Parameters
     ----------
@@ -135,11 +144,13 @@ def fitted_set(params: Any, unknown: str, value: float, drive: str, target: floa
         The table position of the target [mm].
     nut_speed : float
         The nut speed of the target (DDFS) [mm/s].
+    table : tuple of (str, object, str), default ()
+        The ``[solver]`` table the set carries (:attr:`DriveParameters.solver`).
 
     Returns
     -------
     DriveParameters
-        ``params`` renamed and re-described.
+        ``params`` renamed and re-described, carrying ``table``.
     """
     import datetime as dt
     from dataclasses import replace
@@ -151,4 +162,4 @@ def fitted_set(params: Any, unknown: str, value: float, drive: str, target: floa
     note = (f"Fitted by feeddrive calibrate {__version__} on {when}: {unknown} = {value:.6g} "
             f"gives the {drive.upper()} critical speed {target:g} mm/s at {position:g} mm{vn}. "
             f"Started from {params.name!r}: {params.description}")
-    return replace(params, name=f"{params.name}-fitted", description=note)
+    return replace(params, name=f"{params.name}-fitted", description=note, solver=table)

@@ -24,7 +24,6 @@ from ._common import (
     user_errors,
 )
 from ._solver import accuracy_options, max_steps_help
-from .simulate_cmd import DEFAULT_MAX_STEPS
 
 MM_PER_MIN = 1e-3 / 60.0  # [m/s] per mm/min
 
@@ -80,8 +79,7 @@ def circular_command(
     magnification: float | None = typer.Option(None, "--magnification", help="--plot: "
                                                "deviation magnification [-] (default: "
                                                "automatic)."),
-    max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
-                                  help=max_steps_help()),
+    max_steps: int | None = typer.Option(None, "--max-steps", help=max_steps_help()),
     output: str | None = typer.Option(None, "--output", help="Write the trace (time [s], "
                                       "x [mm], y [mm]) to FILE.csv (analyze --circular reads "
                                       "it)."),
@@ -113,7 +111,7 @@ def circular_command(
                                  + ("mm" if option == "--pitch" else "-") + "]")
     if not (math.isfinite(nut_speed) and nut_speed >= 0):
         raise ParameterError("--nut-speed", nut_speed, "expected a speed ≥ 0 [mm/s]")
-    if max_steps < 1:
+    if max_steps is not None and max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
     pair = parse_axes(axes)
     options = layered([("command line", {"max_steps": (max_steps, "--max-steps")})],

@@ -75,17 +75,12 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
                         path_file=contour_file)
     if duration is not None and not duration > 0:
         raise ParameterError("--duration", duration, "expected a time > 0 [s]")
-    from ..engine.budget import check_output_memory, run_budget
+    from ..engine.budget import check_output_memory, check_step_budget
 
     # bounded work, as for one drive: refused before any step when the steps cannot fit
     t_end = path.duration if duration is None else duration
-    budget = run_budget(t_end, max_step=options.largest_step,
-                        output_interval=options.output_interval, max_steps=options.max_steps)
-    if budget.steps_exceeded:
-        raise ParameterError("--duration", t_end, f"needs at least {budget.min_steps:.3g} "
-                             f"solver steps, more than --max-steps = {options.max_steps:.3g}; "
-                             f"expected ≤ {budget.longest_duration:g} [s]")
-    check_output_memory(t_end, options.output_interval)
+    check_step_budget(t_end, options)
+    check_output_memory(t_end, options.output_interval, options=options)
     bar, advance = (None, None) if as_json else progress_bar(t_end)
     with run_outcome(bar):
         result = simulate_machine(machine, path, duration, options=options, progress=advance)

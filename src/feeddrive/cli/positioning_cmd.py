@@ -27,7 +27,7 @@ from ._common import (
     user_errors,
 )
 from ._solver import accuracy_options, max_steps_help
-from .simulate_cmd import ALL_DRIVES, DEFAULT_MAX_STEPS
+from .simulate_cmd import ALL_DRIVES
 
 
 def _say(text: str) -> None:
@@ -105,8 +105,7 @@ def positioning_command(
                                            "(default wang2021; linear-motor-example for "
                                            "--drive linear-motor)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps",
-                                  help=max_steps_help()),
+    max_steps: int | None = typer.Option(None, "--max-steps", help=max_steps_help()),
     output: str | None = typer.Option(None, "--output", help="Write the record of approaches "
                                       "to FILE.csv (analyze --positioning reads it)."),
     plot: str | None = typer.Option(None, "--plot", help="Write the ISO 230-2 chart."),
@@ -132,7 +131,7 @@ def positioning_command(
                                 ("--dwell", dwell, "s"), ("--overshoot", overshoot, "mm")):
         if not (math.isfinite(value) and value > 0):
             raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
-    if max_steps < 1:
+    if max_steps is not None and max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
     options = layered([("command line", {"max_steps": (max_steps, "--max-steps")})],
                       base=solver)

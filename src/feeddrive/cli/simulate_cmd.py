@@ -32,7 +32,6 @@ ALL_DRIVES = "cdfs|ddfs|linear-motor|rack-pinion"
 #: the same list as words, for help texts ("cdfs, ddfs, linear-motor or rack-pinion")
 ALL_DRIVES_TEXT = " or ".join(ALL_DRIVES.replace("|", ", ").rsplit(", ", 1))
 PROFILES = ("constant", "sine", "trapezoid", "stepdown", "csv")
-DEFAULT_MAX_STEPS = 50_000_000  # as feeddrive.engine.simulate.SolverOptions.max_steps
 DEFAULT_METHOD = "modal"  # as feeddrive.engine.simulate.SolverOptions.method (a test checks it)
 #: the integrators offered (feeddrive.engine.simulate.METHODS without the fixed-step order checks)
 CLI_METHODS = ("modal", "dopri5", "auto", "rodas4", "dopri5-dense")
@@ -105,7 +104,7 @@ def simulate_command(
         None, "--profile-file", help="csv: a CSV with columns time [s] and table_speed "
         "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
     method: str | None = typer.Option(None, "--method", help=method_help()),
-    max_steps: int = typer.Option(DEFAULT_MAX_STEPS, "--max-steps", help=MAX_STEPS_HELP),
+    max_steps: int | None = typer.Option(None, "--max-steps", help=MAX_STEPS_HELP),
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
                                            "(default wang2021; linear-motor-example for "
                                            "--drive linear-motor)."),
@@ -149,10 +148,17 @@ def simulate_command(
     the mean and ripple of table speed after the transient, stick fraction and verdict; for a
     sine the tracking error, reversal overshoot and stick time at reversals; always the
     following error and position deviation [µm]."""
-    from ..engine.budget import MEMORY_WARNING_BYTES, run_budget
+    from ..engine.budget import (
+        MEMORY_WARNING_BYTES,
+        SUMMARY_SAMPLES,
+        check_output_memory,
+        check_output_samples,
+        check_step_budget,
+    )
     from ..engine.error_estimate import SHADOW_FACTOR
     from ..engine.simulate import (
         DriveSystem,
+        run_options,
         simulate,
     )
     from ..model import reference
@@ -184,7 +190,7 @@ def simulate_command(
                                  f"required for --profile {profile} [mm/s]")
         if profile == "csv" and profile_file is None:
             raise ParameterError("--profile-file", MISSING, "required for --profile csv")
-        if max_steps < 1:
+        if max_steps is not None and max_steps < 1:
             raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
         if method is not None and method not in CLI_METHODS:
             raise ParameterError("--method", method, f"expected one of {', '.join(CLI_METHODS)}")
@@ -221,21 +227,16 @@ def simulate_command(
         duration = 10.0 if duration is None else duration
         if not duration > 0:
             raise ParameterError("--duration", duration, "expected a time > 0 [s]")
-        max_step = options.largest_step
-        budget = run_budget(duration, max_step=max_step,
-                            output_interval=options.output_interval, max_steps=max_steps)
-        if budget.steps_exceeded:
-            raise ParameterError(
-                "--duration", duration,
-                f"needs at least {budget.min_steps:.3g} solver steps (step ≤ "
-                f"{max_step * 1e3:g} ms), more than --max-steps = {max_steps:.3g}; "
-                f"expected ≤ {budget.longest_duration:g} [s], or raise --max-steps")
+        # the options the run takes: the command line's over the set's [solver] table
+        # (run_options), each setting's source kept for the refusals below
+        taken = run_options(system, options)
+        # the summary printed after the run needs its samples: refused before the run
+        check_output_samples(duration, taken, samples=SUMMARY_SAMPLES, purpose="the summary")
+        budget = check_step_budget(duration, taken)
         # .parquet/.csv outputs are written while the run goes (memory bounded); .nc/.mat at the end
         streamed = output is not None and output.lower().endswith((".parquet", ".csv"))
         if not streamed:  # a record that cannot fit is refused before any warning about it
-            from ..engine.budget import check_output_memory
-
-            check_output_memory(duration, options.output_interval)
+            check_output_memory(duration, taken.output_interval, options=taken)
         if budget.memory_bytes > MEMORY_WARNING_BYTES and not streamed:
             _units.warn(f"--duration {duration:g} s keeps {budget.samples:.3g} samples: about "
                         f"{budget.memory_bytes / 1e9:.1f} GB of memory (a .parquet or .csv "

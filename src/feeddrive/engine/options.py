@@ -894,7 +894,11 @@ def using(options: SolverOptions | None) -> Iterator[SolverOptions]:
 def file_settings(path: str | Path) -> dict[str, Any]:
     """The ``[solver]`` table of a parameter (or sweep) file: the integrator settings stored
     with the set (``method``, ``rtol``, the absolute tolerances, ``accuracy``,
-    ``output_interval``, ``max_step``, ``max_steps``, ``rosenbrock``), checked by name.
+    ``output_interval``, ``max_step``, ``max_steps``, ``rosenbrock``), checked by name and
+    kind as :func:`feeddrive.parameters.load` checks them
+    (:func:`~feeddrive.parameters.components.solver_table`: the same refusals, in the same
+    words, source ``"[solver] in PATH"``: the command line once had a check of its own, which
+    named no close setting for a misspelt one and took a quoted number for a range error).
 
     Parameters
     ----------
@@ -904,23 +908,21 @@ def file_settings(path: str | Path) -> dict[str, Any]:
     Returns
     -------
     dict
-        The table's settings (empty without a table).
+        The table's settings (empty without a table); numbers as floats.
 
     Raises
     ------
     ParameterError
-        For an unreadable file, a table that is not a table, or an unknown setting.
+        For an unreadable file, a table that is not a table, an unknown setting, a value of
+        the wrong kind, or ``accuracy`` with an explicit tolerance.
     """
+    from ..parameters.components import solver_table
     from ..parameters.toml_io import read_toml_file
 
-    table = read_toml_file(path).get("solver", {})
-    if not isinstance(table, dict):
-        raise ParameterError("solver", table, f"expected a table [solver] in {path}")
-    for name in table:
-        if name not in SETTINGS:
-            raise ParameterError(f"solver.{name}", table[name],
-                                 f"expected one of {', '.join(SETTINGS)} (in {path})")
-    return dict(table)
+    table = read_toml_file(path).get("solver")
+    if table is None:
+        return {}
+    return {name: value for name, value, _ in solver_table(table, f"[solver] in {path}")}
 
 
 def layered(layers: Iterable[tuple[str, Mapping[str, Any]]],

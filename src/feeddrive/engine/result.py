@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from ..analysis.creep_window import CreepMetrics, CreepThresholds
     from ..model.assemble import Model
     from ..model.reference import Profile
+    from .options import SolverOptions
     from .simulate import DriveSystem
 
 # SI → engineering units at the edges (CSV, Parquet, CLI)
@@ -54,12 +55,17 @@ class Run:
         The reference profile.
     solver_stats : dict
         The solver's statistics (steps, rejections, method).
+    options : SolverOptions or None, default None
+        The options the run took (where its output interval came from, for a refusal of its
+        summary: :meth:`Result.summary`).
     """
 
     def __init__(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray, model: Model,
-                 system: DriveSystem, profile: Profile, solver_stats: dict[str, Any]) -> None:
+                 system: DriveSystem, profile: Profile, solver_stats: dict[str, Any], *,
+                 options: SolverOptions | None = None) -> None:
         self.t, self.y, self.aux, self.model = t, y, aux, model
         self.system, self.profile, self.solver_stats = system, profile, solver_stats
+        self.options = options
         self._deferred: Callable[[Run], np.ndarray] | None = None
         self._state_parts: list[np.ndarray] | None = None
         self._state_columns: dict[int, np.ndarray] = {}
@@ -461,9 +467,18 @@ class Result:
         -------
         dict
             Plain values in mm/s, µm, s and Hz, with the names of their units.
+
+        Raises
+        ------
+        ParameterError
+            For a run of fewer than ``feeddrive.engine.budget.SUMMARY_SAMPLES`` samples
+            (the trace analyses' minimum), naming the output interval as the run was given it
+            and the largest one allowed, ``duration / (SUMMARY_SAMPLES − 1)`` (the
+            ``simulate`` command refuses such a run before it starts).
         """
         from ..analysis.tracking import position_metrics, sine_metrics
 
+        self._check_samples()
         warnings: list[str] = []
         attrs = self.attrs
         from ..model.reference import sine_field
@@ -523,6 +538,24 @@ class Result:
             "warnings": warnings,
         })
         return out
+
+    def _check_samples(self) -> None:
+        """Refuse a summary of a record too short for its analyses in one line naming the
+        output interval (they said ``time: 5 samples; need at least 16``, a name the user never
+        gave)."""
+        from ..parameters import ParameterError
+        from .budget import SUMMARY_SAMPLES, check_output_samples
+
+        t = self.time
+        if t.size >= SUMMARY_SAMPLES:
+            return
+        options = self._run.options if self._run is not None else None
+        if options is not None and t.size:
+            check_output_samples(float(t[-1] - t[0]), options, samples=SUMMARY_SAMPLES,
+                                 purpose="the summary")
+        raise ParameterError("samples", t.size, f"expected at least {SUMMARY_SAMPLES} for the "
+                                                f"summary (a run recorded at an output interval "
+                                                f"≤ duration/{SUMMARY_SAMPLES - 1}) [-]")
 
     def _travel_warning(self) -> str | None:
         """Whether the table left its travel (feeddrive.analysis.tracking): the length the
@@ -640,7 +673,12 @@ class Result:
         """
         from html import escape
 
-        summary = self.summary()
+        from ..parameters import ParameterError
+
+        try:
+            summary = self.summary()
+        except ParameterError as err:  # a record too short for a summary still shows
+            summary = {"summary": f"none ({err})", "solver": self.solver_stats}
         solver = summary.pop("solver", {})
         segments = summary.pop("segments", None)
         warnings = summary.pop("warnings", [])

@@ -293,7 +293,8 @@ def _check_step_rate(system: DriveSystem, profile: Profile, model: Model, grid: 
         problem = budget.step_rate_problem(
             steps=int(stats[1]), probe_time=float(stats[4]), duration=t_end,
             max_steps=options.max_steps, params=system.parameters, drive=system.drive,
-            speed=budget.profile_speed(profile))
+            speed=budget.profile_speed(profile),
+            max_steps_hint=budget.setting_hint(options, "max_steps", option=MAX_STEPS_OPTION))
         if problem:
             raise SimulationError(problem)
 
@@ -593,7 +594,7 @@ def run_options(system: DriveSystem | DriveParameters,
                 options: SolverOptions | None = None) -> SolverOptions:
     """The options a run of ``system`` takes: ``options`` (None: those in force,
     :func:`feeddrive.engine.options.current`) over the integrator settings its parameter set
-    carries (:attr:`feeddrive.parameters.DriveParameters.solver`, the ``[solver]`` table of
+    carries (:attr:`feeddrive.DriveParameters.solver`, the ``[solver]`` table of
     the file it was loaded from), over the defaults.  Every run takes its options here
     (:class:`Simulation`), so a creep search, a fit, a prediction, a sensitivity study or a
     sweep of a set honours its table as :func:`simulate` does.
@@ -669,6 +670,39 @@ def run_options(system: DriveSystem | DriveParameters,
         raise
 
 
+def named_sources(options: SolverOptions,
+                  system: DriveSystem | DriveParameters) -> SolverOptions:
+    """``options`` with each setting the set's ``[solver]`` table gives, at the same value,
+    that ``options`` name as given in Python, named by that table's source instead: the
+    options of a sweep's or a fit's worker are read back from their record without sources
+    (:meth:`feeddrive.SolverOptions.from_record`), and a refusal or advice there named
+    ``options.max_steps`` for a limit set in the parameter file.  For messages only: the
+    settings are unchanged (the options compare equal).
+
+    Parameters
+    ----------
+    options : SolverOptions
+        A run's options (:func:`~feeddrive.engine.simulate.run_options`).
+    system : DriveSystem or DriveParameters
+        The drive (or its parameter set), whose set carries the table.
+
+    Returns
+    -------
+    SolverOptions
+        The options, their ``origin`` completed.
+    """
+    from .options import API_SOURCE
+
+    params = system if isinstance(system, DriveParameters) else system.parameters
+    origin = dict(options.origin)
+    for name, value, source in getattr(params, "solver", ()):
+        if options.source(name) == API_SOURCE and getattr(options, name, None) == value:
+            origin[name] = source
+    if origin == dict(options.origin):
+        return options
+    return replace(options, origin=tuple(sorted(origin.items())))
+
+
 #: how a derived setting's source names its divisor (``"default ÷ 10"``:
 #: :meth:`feeddrive.SolverOptions.tightened_source`)
 _DIVIDED = " ÷ "
@@ -719,7 +753,7 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     options : SolverOptions or None, default None
         Integrator settings (None: those in force, :func:`feeddrive.engine.options.current`,
         by default the defaults), over the ``[solver]`` table the parameter set carries,
-        setting by setting (:func:`run_options`).
+        setting by setting (:func:`~feeddrive.engine.simulate.run_options`).
     output : str, pathlib.Path or None, default None
         Stream every sample to this ``.parquet`` or ``.csv`` file.
     progress : callable or None, default None
@@ -849,7 +883,7 @@ class Simulation:
         The reference the loops follow.
     options : SolverOptions or None, default None
         Integrator settings (None: those in force), over the ``[solver]`` table the parameter
-        set carries (:func:`run_options`).
+        set carries (:func:`~feeddrive.engine.simulate.run_options`).
     embedded_estimate : bool, default False
         Carry the embedded global-error estimate along the integration
         (:mod:`feeddrive.solvers.global_error`; dense-output methods): each Result's
@@ -872,6 +906,8 @@ class Simulation:
         self.system, self.profile = system, profile
         # those given, else those in force, over the set's [solver] table (run_options)
         self.options = options = run_options(system, options)
+        # the same, each setting named where the user gave it, for refusals and advice
+        self.named = named_sources(options, system)
         self.embedded_estimate = embedded_estimate and options.method in _DENSE_MODES
         self.model = system.model(profile)
         self.grid = sampling(system.parameters, options.output_interval, self.model)
@@ -1040,10 +1076,13 @@ class Simulation:
         if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
             raise ParameterError("duration", duration, "expected a finite time > 0 [s]")
         options, grid, model = self.options, self.grid, self.model
+        # an output interval longer than the run left a Result without a sample (its summary
+        # failed after the run on an empty array): refused before any work, naming the setting
+        budget.check_output_samples(float(duration), self.named)
         n_break = int(round(duration / grid.base))
         t_end = n_break * grid.base
         if output is None:  # a streamed run keeps only its last KEEP_STREAMED seconds
-            budget.check_output_memory(t_end, options.output_interval)
+            budget.check_output_memory(t_end, options.output_interval, options=self.named)
         started = _time.perf_counter()
         chunks = self._chunks
         if chunks is None or output is not None or n_break < chunks.start:
@@ -1051,7 +1090,7 @@ class Simulation:
         self._chunks = None if output is not None else chunks
         self._running = chunks
         if not chunks.dense:
-            _check_step_rate(self.system, self.profile, model, grid, options, self.y0, t_end,
+            _check_step_rate(self.system, self.profile, model, grid, self.named, self.y0, t_end,
                              chunks.adaptive, self.tolerances.rtol, self.atol, self.rel,
                              chunks.h_init, chunks.h_max,
                              self.bound, self.switch_rows)
@@ -1072,7 +1111,7 @@ class Simulation:
             raise SimulationError(
                 f"integration stopped at t = {stats[4]:.6g} s of {t_end:g} s: "
                 f"{dopri5.STATUS_MESSAGES[status]} (steps {int(stats[1])}, rejected "
-                f"{int(stats[2])}); {FAILURE_ADVICE.get(status, 'check the parameters')}"
+                f"{int(stats[2])}); {failure_advice(status, self.named)}"
                 f"{_streamed_note(output, chunks.start * grid.base)}")
         solver_stats: dict[str, Any] = {
             "method": options.method, **self.tolerances.as_dict(),
@@ -1106,7 +1145,7 @@ class Simulation:
         n = len(model.states)
         y = y_parts[0] if len(y_parts) == 1 else np.zeros((0, n))
         run = Run(t, y, np.zeros((0, len(model.aux))), model, self.system, self.profile,
-                  solver_stats)
+                  solver_stats, options=self.named)
         if len(y_parts) > 1:  # a state's parts are joined when it is read
             run.defer_states(y_parts)
         if sum(a.shape[0] for a in aux_parts) == t.shape[0]:  # recorded: joined when read
@@ -1314,16 +1353,52 @@ class _Chunks:
                 [p[2] for p in parts])
 
 
+#: the command-line option of ``max_steps``, where a command takes one (``simulate``,
+#: ``circular``, ``positioning``)
+MAX_STEPS_OPTION = "--max-steps"
+#: the advice on a run out of steps, ``{}`` where to raise the limit
+#: (:func:`feeddrive.engine.budget.setting_hint`)
+_MAX_STEPS_ADVICE = "raise {}, shorten the run, or loosen the tolerances (--accuracy)"
 #: what a user can do about a failed integration, by the driver's status (an outside check,
-#: 2026-12-06: a step-size underflow from a 5e-324-A tolerance advised raising --max-steps)
+#: 2026-12-06: a step-size underflow from a 5e-324-A tolerance advised raising --max-steps),
+#: for a step limit left at its default or given in Python; a limit given on the command
+#: line or in a file's ``[solver]`` table is named as given (:func:`failure_advice`)
 FAILURE_ADVICE = {
-    dopri5.STATUS_MAX_STEPS: "raise max_steps (--max-steps), shorten the run, or loosen the "
-                             "tolerances (--accuracy)",
+    dopri5.STATUS_MAX_STEPS: _MAX_STEPS_ADVICE.format(
+        f"max_steps (options.max_steps, a [solver] table's max_steps, or {MAX_STEPS_OPTION} "
+        "where a command takes it)"),
     dopri5.STATUS_STEP_UNDERFLOW: "the tolerances ask for more than the steps can resolve in "
                                   "double precision (loosen them: --accuracy), or the "
                                   "parameters make the model too stiff (check them)",
     dopri5.STATUS_NON_FINITE: "check the parameters (a state became NaN or infinite)",
 }
+
+
+def failure_advice(status: int, options: SolverOptions) -> str:
+    """What a user can do about a run that failed with the driver's ``status``: the advice
+    of :data:`FAILURE_ADVICE`, a step limit named where it came from (``raise solver.max_steps
+    ([solver] in run.toml)``, ``raise --max-steps``: an outside check, 2026-12-06, found
+    ``creep`` and ``sweep`` advising a ``--max-steps`` they do not have for a limit set in a
+    parameter file).
+
+    Parameters
+    ----------
+    status : int
+        The driver's status (:data:`feeddrive.solvers.dopri5.STATUS_MAX_STEPS`, …).
+    options : SolverOptions
+        The run's options, each setting's source in ``origin``.
+
+    Returns
+    -------
+    str
+        The advice.
+    """
+    if status == dopri5.STATUS_MAX_STEPS:
+        field, _ = budget.setting_field(options, "max_steps")
+        if field.startswith(("--", "solver.")):  # a command-line option, a file's table
+            return _MAX_STEPS_ADVICE.format(budget.setting_hint(options, "max_steps"))
+    return FAILURE_ADVICE.get(status, "check the parameters")
+
 
 #: a run waited on by the main thread reports the solver's live time when no chunk has ended
 #: for this long [s of wall time]

@@ -52,9 +52,9 @@ SOLVER_TOLERANCES = ("rtol", "position_tolerance", "speed_tolerance", "current_t
 
 def solver_table(settings: Any, source: str) -> tuple[tuple[str, Any, str], ...]:
     """A ``[solver]`` table checked by name and kind, as a parameter set carries it
-    (:attr:`DriveParameters.solver`).
+    (:attr:`~feeddrive.DriveParameters.solver`).
 
-    Each setting must be one of :data:`SOLVER_SETTINGS` and of its kind (a number, text or
+    Each setting must be one of ``SOLVER_SETTINGS`` and of its kind (a number, text or
     a whole number), and ``accuracy`` may not come with an explicit tolerance (ambiguous, as
     on the command line).  The values (a positive ``rtol`` at most 0.1, a known method …)
     are :class:`feeddrive.SolverOptions`' to check where the settings are used: before a
@@ -64,7 +64,7 @@ def solver_table(settings: Any, source: str) -> tuple[tuple[str, Any, str], ...]
     ----------
     settings : mapping or iterable of (str, object, str)
         The table as read from TOML (setting → value, all from ``source``), or the
-        (setting, value, source) triples of :attr:`DriveParameters.solver`.
+        (setting, value, source) triples of :attr:`~feeddrive.DriveParameters.solver`.
     source : str
         Where a mapping's settings come from (``"[solver] in run.toml"``), named by the
         refusals and by :meth:`feeddrive.SolverOptions.describe`.
@@ -72,7 +72,7 @@ def solver_table(settings: Any, source: str) -> tuple[tuple[str, Any, str], ...]
     Returns
     -------
     tuple of (str, object, str)
-        (setting, value, source) triples in :data:`SOLVER_SETTINGS`' order.
+        (setting, value, source) triples in ``SOLVER_SETTINGS``' order.
 
     Raises
     ------
@@ -132,7 +132,7 @@ def solver_over(lower: Any, upper: Any) -> tuple[tuple[str, Any, str], ...]:
     Parameters
     ----------
     lower, upper : tuple of (str, object, str)
-        (setting, value, source) triples (:func:`solver_table`).
+        (setting, value, source) triples (:func:`~feeddrive.parameters.components.solver_table`).
 
     Returns
     -------
@@ -368,12 +368,12 @@ class DriveParameters(_Component):
     solver : tuple of (str, object, str) or mapping, default ()
         The integrator settings stored with the set: a parameter file's ``[solver]`` table
         (:func:`feeddrive.parameters.load`), as (setting, value, source) triples
-        (:func:`solver_table`; a mapping is taken as settings of the source
-        ``"[solver] of the parameter set"``).  Not a parameter: not compared, not hashed,
-        not in :func:`~feeddrive.parameters.to_dict`; written as ``[solver]`` by
-        :func:`~feeddrive.parameters.dumps`, kept by :meth:`replace_path`, and layered
-        under the options of every run of the set (precedence: the command line, the API,
-        this table, the defaults; :func:`feeddrive.engine.simulate.run_options`).
+        (:func:`~feeddrive.parameters.components.solver_table`; a mapping is taken as
+        settings of the source ``"[solver] of the parameter set"``).  Not a parameter: not
+        compared, not hashed, not in :func:`~feeddrive.parameters.to_dict`; written as
+        ``[solver]`` by :func:`~feeddrive.parameters.dumps`, kept by :meth:`replace_path`,
+        and layered under the options of every run of the set (precedence: the command
+        line, the API, this table, the defaults; :func:`feeddrive.engine.simulate.run_options`).
     **parts : Component or None
         Sections given by keyword (``screw=BallScrew(...)``); they replace those of
         ``sections`` of the same name, None removes one.

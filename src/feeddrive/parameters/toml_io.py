@@ -288,8 +288,8 @@ def _emit(obj: Any, path: str, lines: list[str]) -> None:
 
 def dumps(params: DriveParameters) -> str:
     """TOML text of a parameter set, SI units noted beside each value; the integrator
-    settings it carries (:attr:`DriveParameters.solver`, a file's ``[solver]`` table) last,
-    as ``[solver]``.
+    settings it carries (:attr:`~feeddrive.DriveParameters.solver`, a file's ``[solver]``
+    table) last, as ``[solver]``.
 
     Parameters
     ----------
@@ -321,7 +321,7 @@ def solver_lines(solver: Any) -> list[str]:
     Parameters
     ----------
     solver : tuple of (str, object, str)
-        :attr:`DriveParameters.solver`.
+        :attr:`~feeddrive.DriveParameters.solver`.
 
     Returns
     -------
@@ -440,7 +440,7 @@ def from_dict(data: dict[str, Any], *, base_dir: Path | None = None,
     table (written by ``feeddrive fit``: the data, free parameters and intervals of the fit
     that made the set) is a record, not a parameter, and is not read here.  A ``[solver]``
     table (the integrator settings stored with the set) is not a parameter either: the set
-    carries it (:attr:`DriveParameters.solver`, checked by name and kind:
+    carries it (:attr:`~feeddrive.DriveParameters.solver`, checked by name and kind:
     :func:`~feeddrive.parameters.components.solver_table`) and its runs take it under the
     API's and the command line's settings.  It is the file's own: a set ``extends`` brings in
     keeps its table to itself.
@@ -544,9 +544,9 @@ def load(path: str | Path) -> DriveParameters:
 
     ``extends`` chains are followed; a cycle (``a.toml`` extends ``b.toml`` extends
     ``a.toml``) or a chain longer than ``MAX_EXTENDS`` files is refused naming its files.
-    The file's ``[solver]`` table is carried by the set (:attr:`DriveParameters.solver`,
+    The file's ``[solver]`` table is carried by the set (:attr:`~feeddrive.DriveParameters.solver`,
     source ``"[solver] in PATH"``): every run of the set takes it where the API and the
-    command line give no setting of their own (:func:`from_dict`).
+    command line give no setting of their own (:func:`~feeddrive.parameters.from_dict`).
 
     Parameters
     ----------

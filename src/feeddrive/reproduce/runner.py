@@ -263,7 +263,7 @@ def run(params: DriveParameters, out: Path, *, settings: StudySettings | None = 
     params : DriveParameters
         The parameter set studied; every run takes the ``[solver]`` table it carries (under
         the options in force: :func:`feeddrive.engine.simulate.run_options`), which is part
-        of the store's key (:func:`study_store`).
+        of the store's key (``study_store``).
     out : Path
         The report folder; studies already stored in ``out/data`` are reused.
     settings : StudySettings, optional
