@@ -298,3 +298,49 @@ def test_the_memory_refusal_in_python_names_the_field(no_integration: None) -> N
         fd.simulate(_system(), fd.ConstantSpeed(2e-3), 0.2,
                     options=fd.SolverOptions(output_interval=1e-12))
     assert str(err.value).endswith("shorten the duration [s] or raise options.output_interval")
+
+
+# ------------------------------------- 1 (continued): the other commands with --max-steps
+
+
+def test_positioning_honours_the_files_max_steps(tmp_path: Path) -> None:
+    """``positioning --max-steps`` had the fixed default too (50 000 000, layered over the
+    file): with ``[solver] max_steps = 100`` the run went to the end; now it stops at step 101
+    and names the file's setting."""
+    params = _file(tmp_path, "max_steps = 100\n", "ms.toml")
+    result = runner.invoke(app, ["positioning", "--params", str(params), "--count", "3",
+                                 "--span", "100,120", "--dwell", "0.5", "--overshoot", "1"])
+    assert result.exit_code == 1, result.output
+    assert "maximum number of steps reached (steps 101," in result.output
+    assert f"raise solver.max_steps ([solver] in {params})" in " ".join(result.output.split())
+
+
+@pytest.mark.parametrize("command", ["simulate", "circular", "positioning"])
+def test_every_max_steps_option_names_the_file_first(command: str) -> None:
+    """The three commands with ``--max-steps`` share its help (``cli._solver.max_steps_help``)
+    and none has a default of its own."""
+    import typer.main
+
+    commands = typer.main.get_command(app).commands  # type: ignore[attr-defined]
+    option = next(p for p in commands[command].params if "--max-steps" in p.opts)
+    assert option.default is None
+    assert option.help is not None and option.help.endswith(
+        "Default: the parameter file's [solver] max_steps, else 50 000 000.")
+
+
+def test_a_command_is_told_the_step_limit_it_can_raise(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The engine's general advice names Python's field, a table's and the option; a command
+    line user gets the last two, once each (``cli._common.run_outcome``)."""
+    import io
+
+    import typer
+
+    from feeddrive.cli import _common
+
+    buffer = io.StringIO()
+    monkeypatch.setattr(_common.err_console, "file", buffer)
+    with pytest.raises(typer.Exit), _common.run_outcome(None):
+        raise SimulationError(f"stopped; {FAILURE_ADVICE[dopri5.STATUS_MAX_STEPS]}")
+    text = " ".join(buffer.getvalue().split())
+    assert "options.max_steps" not in text and text.count("--max-steps") == 1
+    assert "raise max_steps (a [solver] table's max_steps, or --max-steps" in text
