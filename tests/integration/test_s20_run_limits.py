@@ -337,8 +337,12 @@ def test_a_command_is_told_the_step_limit_it_can_raise(monkeypatch: pytest.Monke
 
     from feeddrive.cli import _common
 
+    from rich.console import Console
+
     buffer = io.StringIO()
-    monkeypatch.setattr(_common.err_console, "file", buffer)
+    # a console of its own: setting the shared one's ``file`` would pin it to this test's
+    # stderr after the undo (rich's ``file`` reads sys.stderr only while unset)
+    monkeypatch.setattr(_common, "err_console", Console(file=buffer, width=400))
     with pytest.raises(typer.Exit), _common.run_outcome(None):
         raise SimulationError(f"stopped; {FAILURE_ADVICE[dopri5.STATUS_MAX_STEPS]}")
     text = " ".join(buffer.getvalue().split())
