@@ -334,10 +334,9 @@ def test_a_command_is_told_the_step_limit_it_can_raise(monkeypatch: pytest.Monke
     import io
 
     import typer
+    from rich.console import Console
 
     from feeddrive.cli import _common
-
-    from rich.console import Console
 
     buffer = io.StringIO()
     # a console of its own: setting the shared one's ``file`` would pin it to this test's
