@@ -25,6 +25,9 @@ LOCKS = _fcntl is not None
 #: a day [s]: a cached file loaded this long after its last mark is marked used again
 #: (:func:`feeddrive.backends.c_cache.mark_used`), and the unit of ``feeddrive cache --prune``
 DAY = 86400.0
+#: the start of the name of the file :func:`writable` makes and removes at once
+#: (``.probe-XXXXXXXX``; one is left only by a process killed in between)
+PROBE_PREFIX = ".probe-"
 
 
 def user_cache_root() -> Path:
@@ -123,8 +126,10 @@ def _own_folder(prefix: str) -> Path:
 
 
 def writable(folder: Path) -> bool:
-    """Whether a file can be made in ``folder`` (made if missing): tried, since ``os.access``
-    does not see read-only mounts (nor, for root, modes).
+    """Whether a file can be made in ``folder`` (made if missing) and the folder read back:
+    tried, since ``os.access`` does not see read-only mounts (nor, for root, modes).  A folder
+    that can be written but not listed (mode 0333) is not one: what is cached there could not
+    be found again, nor listed and pruned by ``feeddrive cache``.
 
     Parameters
     ----------
@@ -134,11 +139,13 @@ def writable(folder: Path) -> bool:
     Returns
     -------
     bool
-        True if a file could be made there.
+        True if a file could be made there and the folder listed.
     """
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(dir=folder, prefix=".probe-")
+        with os.scandir(folder) as listing:
+            next(listing, None)
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=PROBE_PREFIX)
     except OSError:
         return False
     os.close(fd)
@@ -151,9 +158,12 @@ def file_lock(path: str | os.PathLike[str]) -> Iterator[bool]:
     """An exclusive lock on the file ``path`` (made if missing) while the block runs, so that
     of two processes doing the same first work, the second waits for the first.
 
-    Where ``fcntl`` is missing (Windows) or the lock file cannot be opened, nothing is locked
-    and the block runs at once; callers stay correct without the lock (they write atomically),
-    only the work may be done twice.
+    Where ``fcntl`` is missing (Windows), the lock file cannot be opened or the file system
+    does not lock (``flock`` fails: ``ENOLCK`` on some network and FUSE mounts, ``EOPNOTSUPP``,
+    ``ENOSYS``), nothing is locked and the block runs at once; callers stay correct without
+    the lock (they write atomically), only the work may be done twice.  Any ``OSError`` of
+    the lock call counts, not only those three: the lock only saves work, so no failure of it
+    is worth stopping a run for.
 
     Parameters
     ----------
@@ -171,11 +181,19 @@ def file_lock(path: str | os.PathLike[str]) -> Iterator[bool]:
     try:
         fh = open(path, "a")  # noqa: SIM115 (held across the yield)
     except OSError:
+        fh = None
+    if fh is None:  # yielded outside the handler: the block's own errors chain nothing
         yield False
         return
     with fh:
-        _fcntl.flock(fh, _fcntl.LOCK_EX)
         try:
-            yield True
+            _fcntl.flock(fh, _fcntl.LOCK_EX)
+            locked = True
+        except OSError:
+            locked = False
+        try:
+            yield locked
         finally:
-            _fcntl.flock(fh, _fcntl.LOCK_UN)
+            if locked:
+                with contextlib.suppress(OSError):  # closing the file releases it anyway
+                    _fcntl.flock(fh, _fcntl.LOCK_UN)

@@ -7,8 +7,9 @@ Two caches grow there (docs/c-backend.md, "The compiled-object cache"):
   kernel in a development install, starts a new folder and leaves the old one;
 * **the C build's** (:func:`feeddrive.backends.c_cache.cache_folder`): one library per model
   structure and compiler (≈ 15–100 kB) with its ``<key>.sha256`` and empty ``<key>.lock``,
-  the drivers' and models' translated texts, the temporary folders of compilations that were
-  killed before they finished and the partial files of writes cut short
+  the drivers' and models' translated texts (each with its ``<name>.sha256``, where it has
+  one), the temporary folders of compilations that were killed before they finished and the
+  partial files of writes cut short
   (:func:`feeddrive.io.outputs.atomic_path`).  When that folder cannot be written the C build
   uses ``<temporary folder>/feeddrive-c-<user id>``
   (:func:`feeddrive.backends.c_cache.fallback_folder`); it is listed and pruned as a part of
@@ -17,20 +18,27 @@ Two caches grow there (docs/c-backend.md, "The compiled-object cache"):
   (:func:`feeddrive._jit.cache_dir`).
 
 An entry is a numba folder, a library (its library file, ``.sha256`` and ``.lock`` together),
-a text, or an unfinished compilation.  Nothing is removed by the package on its own.
+a text (with its ``.sha256``), or an unfinished compilation.  Only what the package writes is
+an entry, known by its exact name (:func:`_c_kind`, :func:`_numba_folder`): a configured folder
+may hold other things (``FEEDDRIVE_C_CACHE=~``), which are counted
+(:attr:`CachePart.foreign`) and never touched.  Nothing is removed by the package on its own.
 :func:`usage` says what there is; :func:`prune` removes what has not been used for
 ``older_than`` days: numba folders of *other* kernel versions (another installed version of
 feeddrive that still uses its folder compiles it again, ≈ 30 CPU s, at its next run), C
 libraries and texts (a library is marked used each day it is loaded,
 :func:`feeddrive.backends.c_cache.cached_library`, and goes whole, by the age of its newest
-file; one pruned and needed again is compiled in ≈ 0.4 CPU s; a ``.lock`` or ``.sha256``
-whose library is gone goes by its own age) and unfinished compilations older than an hour.
-The folder of the running version's numba kernels is never pruned.  What cannot be removed is
-passed over and reported (:attr:`CacheReport.failed`).
+file; one pruned and needed again is compiled in ≈ 0.4 CPU s; a ``.sha256`` whose library or
+text is gone goes by its own age) and unfinished compilations older than an hour (among them a
+``.lock`` whose library is not there: the leftover of a compilation that failed or was
+killed).  The folder of the running version's numba kernels is never pruned.  What cannot be
+removed is passed over and reported (:attr:`CacheReport.failed`), as is a folder that cannot
+be read (:attr:`CacheReport.unread`).
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import math
 import os
 import re
@@ -38,7 +46,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ._disk import DAY, existing_private, user_cache_root
+from ._disk import DAY, PROBE_PREFIX, existing_private, user_cache_root
 
 __all__ = ["CacheReport", "CachePart", "DEFAULT_AGE", "UNFINISHED_AGE", "numba_root",
            "prune", "usage"]
@@ -49,8 +57,22 @@ DEFAULT_AGE = 30.0
 #: was killed [s]
 UNFINISHED_AGE = 3600.0
 
-#: the name :func:`feeddrive.io.outputs.atomic_path` writes under, ``.STEM.XXXXXXXX.partial.EXT``
-_PARTIAL = re.compile(r"\..+\.[0-9a-f]{8}\.partial(\.[^.]+)?")
+#: a name :func:`feeddrive.io.outputs.atomic_path` writes under, ``.STEM.XXXXXXXX.partial.EXT``
+#: (``secrets.token_hex(4)``); a partial file is the package's when ``STEM.EXT`` is the name of
+#: a text or of a text's digest
+_PARTIAL = re.compile(r"\.(?P<stem>.+)\.[0-9a-f]{8}\.partial(?P<ext>\.[^.]+)?")
+#: the texts :mod:`feeddrive.backends.c_engine` keeps: ``model-<hash>.c`` (``_model_text``, 24
+#: hexadecimal digits) and ``driver-<use>-<hash>.json`` (``driver_unit``, 20 digits)
+_TEXT = r"model-[0-9a-f]{24}\.c|driver-[a-z][a-z_]*-[0-9a-f]{20}\.json"
+#: :mod:`tempfile`'s random part of a name: 8 of ``a-z0-9_``
+_RANDOM = "[a-z0-9_]{8}"
+#: the temporary folder of a compilation, ``.<first 16 digits of its key>-XXXXXXXX``
+#: (:func:`feeddrive.backends.c_cache.cached_library`)
+_COMPILING = re.compile(rf"\.[0-9a-f]{{16}}-{_RANDOM}")
+#: the probe file of :func:`feeddrive._disk.writable`
+_PROBE = re.compile(re.escape(PROBE_PREFIX) + _RANDOM)
+#: a cache key (:func:`feeddrive.backends.c_cache.cache_key`): a SHA-256 in hexadecimal
+_KEY = f"[0-9a-f]{{{2 * hashlib.sha256().digest_size}}}"
 #: the parts' names
 _THIS, _OTHERS = "numba, this version", "numba, other versions"
 _C, _UNFINISHED = "C libraries and texts", "unfinished compilations"
@@ -77,13 +99,16 @@ class CachePart:
         Where it lives.
     entries : int
         Numba folders; libraries (a library file with its ``.sha256`` and ``.lock``), texts
-        and lone ``.lock``/``.sha256`` files; unfinished compilations' folders and partial
-        files.
+        (with their ``.sha256``) and lone ``.sha256`` files; unfinished compilations' folders,
+        partial files and lone ``.lock`` files.
     size : int
         Bytes on disk [B].
     note : str or None, default None
         What is wrong with the folder (``"is not a folder: ..."``, ``"cannot be read: ..."``),
         on the first part of that folder; None when nothing is.
+    foreign : int, default 0
+        Files and folders in the folder that are not the package's (not named as it names what
+        it writes there), on the first part of that folder: never entries, never removed.
     """
 
     name: str
@@ -91,6 +116,7 @@ class CachePart:
     entries: int
     size: int
     note: str | None = None
+    foreign: int = 0
 
 
 @dataclass(frozen=True)
@@ -109,6 +135,9 @@ class CacheReport:
         The entries they make (a library's files are one).
     failed : tuple of (Path, str), default ()
         What could not be removed, with why (``"Permission denied"``); the rest was removed.
+    unread : tuple of (Path, str), default ()
+        The cache folders that could not be read, with why: nothing in them was looked at,
+        so nothing was removed there.
     """
 
     removed: tuple[Path, ...]
@@ -116,6 +145,7 @@ class CacheReport:
     dry_run: bool
     entries: int
     failed: tuple[tuple[Path, str], ...] = ()
+    unread: tuple[tuple[Path, str], ...] = ()
 
 
 def numba_root() -> Path:
@@ -157,17 +187,77 @@ def _c_folder() -> Path:
     return cache_folder()
 
 
-def _items(folder: Path) -> tuple[list[Path], str | None]:
-    """What ``folder`` holds, sorted, and what is wrong with it (None for a missing folder:
-    nothing was cached yet)."""
+def _items(folder: Path) -> tuple[list[Path], str | None, str | None]:
+    """What ``folder`` holds, sorted, what is wrong with it (None for a missing folder:
+    nothing was cached yet), and why it could not be read, if it could not (a folder that can
+    be listed but not searched, mode 0666 or 0444, counts: nothing in it can be looked at)."""
     try:
-        return sorted(folder.iterdir()), None
+        items = sorted(folder.iterdir())
+        if items:
+            items[0].lstat()
     except FileNotFoundError:
-        return [], None
+        return [], None, None
     except NotADirectoryError:
-        return [], "is not a folder: nothing can be cached there"
+        return [], "is not a folder: nothing can be cached there", None
     except OSError as err:
-        return [], f"cannot be read: {err.strerror or err}"
+        why = err.strerror or str(err)
+        return [], f"cannot be read: {why}", why
+    return items, None, None
+
+
+@functools.cache
+def _c_names() -> dict[str, re.Pattern[str]]:
+    """The names of the files the package keeps in the C folder, by kind: a library's three,
+    ``<key><suffix>``, ``<key>.sha256`` and ``<key>.lock``; a text (:data:`_TEXT`) and its
+    digest, ``<text>.sha256`` (:func:`feeddrive.backends.c_cache.keep_text`)."""
+    from .backends.c_cache import DIGEST_SUFFIX, library_suffix
+
+    digest = re.escape(DIGEST_SUFFIX)
+    return {"library": re.compile(_KEY + re.escape(library_suffix())),
+            "digest": re.compile(_KEY + digest),
+            "lock": re.compile(_KEY + re.escape(".lock")),
+            "text": re.compile(_TEXT),
+            "text digest": re.compile(f"(?:{_TEXT}){digest}")}
+
+
+def _c_kind(name: str) -> str | None:
+    """What the package writes in the C folder under ``name``: ``"library"``, ``"digest"`` or
+    ``"lock"`` (a library's files), ``"text"`` or ``"text digest"`` (a kept text and its
+    SHA-256), ``"compiling"`` (a compilation's temporary folder), ``"partial"`` (the partial
+    file of a text's or its digest's write, or a probe of :func:`feeddrive._disk.writable`);
+    None for a name it never writes there: not its own.
+
+    Parameters
+    ----------
+    name : str
+        A file's or folder's name.
+
+    Returns
+    -------
+    str or None
+        The kind.
+    """
+    names = _c_names()
+    kind = next((kind for kind, pattern in names.items() if pattern.fullmatch(name)), None)
+    if kind is not None:
+        return kind
+    if _COMPILING.fullmatch(name):
+        return "compiling"
+    partial = _PARTIAL.fullmatch(name)
+    whole = partial["stem"] + (partial["ext"] or "") if partial else ""
+    if (partial and (names["text"].fullmatch(whole) or names["text digest"].fullmatch(whole))) \
+            or _PROBE.fullmatch(name):
+        return "partial"
+    return None
+
+
+def _numba_folder(name: str) -> bool:
+    """Whether ``name`` is one of numba's folders as :mod:`feeddrive._jit` names them,
+    ``numba-<hash of the kernels' sources>`` (:data:`feeddrive._jit.SOURCE_DIGEST`'s length
+    in hexadecimal digits)."""
+    from ._jit import SOURCE_DIGEST
+
+    return re.fullmatch(f"numba-[0-9a-f]{{{len(SOURCE_DIGEST)}}}", name) is not None
 
 
 #: one entry: its files (or its folder), the one it is named by first
@@ -175,74 +265,102 @@ _Entry = tuple[Path, ...]
 
 
 def _c_entries(items: list[Path]) -> tuple[list[_Entry], list[_Entry]]:
-    """The C folder's (libraries and texts, unfinished compilations): a library's file,
-    ``<key>.sha256`` and ``<key>.lock`` are one entry; a ``.lock`` or ``.sha256`` whose library
-    is gone is one of its own, as is every other file; a folder or a partial file
-    (:data:`_PARTIAL`) whose name starts with a dot is an unfinished compilation."""
-    from .backends.c_cache import DIGEST_SUFFIX, library_suffix
-
-    roles = (library_suffix(), DIGEST_SUFFIX, ".lock")  # in the order an entry lists them
+    """The C folder's (libraries and texts, unfinished compilations), the package's alone
+    (:func:`_c_kind`): a library's file, ``<key>.sha256`` and ``<key>.lock`` are one entry, as
+    are a text and its ``.sha256``; a ``.sha256`` whose library or text is gone is one of its
+    own; a compilation's temporary folder, a partial file and a ``.lock`` whose library is not
+    there (left by a compilation that failed or was killed) are unfinished compilations."""
     kept: list[_Entry] = []
     unfinished: list[_Entry] = []
-    keys: dict[str, dict[str, Path]] = {}
+    libraries: dict[str, dict[str, Path]] = {}
+    texts: dict[str, dict[str, Path]] = {}
     for p in items:
-        if p.name.startswith("."):
-            if p.is_dir() or (_PARTIAL.fullmatch(p.name) and p.is_file()):
-                unfinished.append((p,))
-            continue
-        if not p.is_file():
-            continue
-        role = next((r for r in roles if p.name.endswith(r) and len(p.name) > len(r)), None)
-        if role is None:
-            kept.append((p,))
-        else:
-            keys.setdefault(p.name[:-len(role)], {})[role] = p
-    for files in keys.values():
-        if roles[0] in files:
-            kept.append(tuple(files[r] for r in roles if r in files))
+        kind = _c_kind(p.name)
+        if kind == "compiling" and p.is_dir():
+            unfinished.append((p,))
+        elif kind == "partial" and p.is_file():
+            unfinished.append((p,))
+        elif kind in ("library", "digest", "lock") and p.is_file():
+            libraries.setdefault(p.name.split(".", 1)[0], {})[kind] = p  # by its key
+        elif kind == "text" and p.is_file():
+            texts.setdefault(p.name, {})[kind] = p
+        elif kind == "text digest" and p.is_file():
+            texts.setdefault(p.name[:-len(p.suffix)], {})[kind] = p
+    for files in libraries.values():
+        if "library" in files:
+            kept.append(tuple(files[r] for r in ("library", "digest", "lock") if r in files))
         else:  # orphans: each on its own
-            kept += [(p,) for p in files.values()]
-    return sorted(kept), unfinished
+            kept += [(p,) for r, p in files.items() if r != "lock"]
+            unfinished += [(p,) for r, p in files.items() if r == "lock"]
+    for files in texts.values():
+        kept.append(tuple(files[r] for r in ("text", "text digest") if r in files))
+    return sorted(kept), sorted(unfinished)
 
 
 @dataclass(frozen=True)
 class _Part:
     """A part's entries; ``age`` says which cutoff of :func:`prune` applies (None: never
-    pruned)."""
+    pruned); ``note``, ``unread`` and ``foreign`` are its folder's, on the first part of it."""
 
     name: str
     folder: Path
     entries: list[_Entry]
     note: str | None
     age: str | None
+    unread: str | None = None
+    foreign: int = 0
+
+
+def _numba_parts(folder: Path, this: str, others: str, current: str) -> list[_Part]:
+    """A numba root's two parts: the running version's folder, and the other versions'."""
+    items, note, unread = _items(folder)
+    numba = [p for p in items if _numba_folder(p.name) and p.is_dir()]
+    return [_Part(this, folder, [(p,) for p in numba if p.name == current], note, None, unread),
+            _Part(others, folder, [(p,) for p in numba if p.name != current], None, "used")]
+
+
+def _c_parts(folder: Path, c_name: str, unfinished_name: str) -> list[_Part]:
+    """A C folder's two parts: libraries and texts, and unfinished compilations."""
+    items, note, unread = _items(folder)
+    kept, unfinished = _c_entries(items)
+    return [_Part(c_name, folder, kept, note, "used", unread),
+            _Part(unfinished_name, folder, unfinished, None, "unfinished")]
 
 
 def _parts() -> list[_Part]:
-    """Every part with its entries, in the order :func:`usage` gives them."""
+    """Every part with its entries, in the order :func:`usage` gives them, the first part of
+    each folder with the count of what is there but not the package's."""
     root, c_folder, current = numba_root(), _c_folder(), _current_numba()
-    items, note = _items(root)
-    numba = [p for p in items if p.name.startswith("numba-") and p.is_dir()]
-    c_items, c_note = _items(c_folder)
-    c_kept, c_unfinished = _c_entries(c_items)
-    parts = [_Part(_THIS, root, [(p,) for p in numba if p.name == current], note, None),
-             _Part(_OTHERS, root, [(p,) for p in numba if p.name != current], None, "used"),
-             _Part(_C, c_folder, c_kept, c_note, "used"),
-             _Part(_UNFINISHED, c_folder, c_unfinished, None, "unfinished")]
+    parts = [*_numba_parts(root, _THIS, _OTHERS, current),
+             *_c_parts(c_folder, _C, _UNFINISHED)]
     py = existing_private("feeddrive-py")  # _jit's, when the user's cache is read-only
     if py is not None and not _same(py, root):
-        items, note = _items(py)
-        numba = [p for p in items if p.name.startswith("numba-") and p.is_dir()]
-        parts += [_Part(_FALLBACK_THIS, py, [(p,) for p in numba if p.name == current], note,
-                        None),
-                  _Part(_FALLBACK_OTHERS, py, [(p,) for p in numba if p.name != current], None,
-                        "used")]
+        parts += _numba_parts(py, _FALLBACK_THIS, _FALLBACK_OTHERS, current)
     fallback = existing_private("feeddrive-c")
     if fallback is not None and not _same(fallback, c_folder):
-        items, note = _items(fallback)
-        kept, unfinished = _c_entries(items)
-        parts += [_Part(_FALLBACK_C, fallback, kept, note, "used"),
-                  _Part(_FALLBACK_UNFINISHED, fallback, unfinished, None, "unfinished")]
-    return parts
+        parts += _c_parts(fallback, _FALLBACK_C, _FALLBACK_UNFINISHED)
+    return _with_foreign(parts)
+
+
+def _with_foreign(parts: list[_Part]) -> list[_Part]:
+    """``parts``, the first of each folder counting what that folder holds that no part
+    claims (neither an entry nor another part's folder: the C folder ``c`` inside the user's
+    cache folder is numba's root's neighbour, not a stranger)."""
+    claimed = {path for part in parts for entry in part.entries for path in entry}
+    folders = [part.folder for part in parts]
+    done: list[Path] = []
+    out = []
+    for part in parts:
+        if any(_same(part.folder, f) or part.folder == f for f in done):
+            out.append(part)
+            continue
+        done.append(part.folder)
+        items = _items(part.folder)[0]
+        foreign = [p for p in items if p not in claimed
+                   and not any(p == f or _same(p, f) for f in folders)]
+        out.append(_Part(part.name, part.folder, part.entries, part.note, part.age,
+                         part.unread, len(foreign)))
+    return out
 
 
 def _same(a: Path, b: Path) -> bool:
@@ -278,7 +396,7 @@ def usage() -> list[CachePart]:
         fallback folder when it exists.
     """
     return [CachePart(p.name, p.folder, len(p.entries),
-                      sum(sum(_sizes(e)[0].values()) for e in p.entries), p.note)
+                      sum(sum(_sizes(e)[0].values()) for e in p.entries), p.note, p.foreign)
             for p in _parts()]
 
 
@@ -311,21 +429,25 @@ def prune(older_than: float = DEFAULT_AGE, *, dry_run: bool = False) -> CacheRep
     :data:`UNFINISHED_AGE` (whatever ``older_than``: a compilation takes a second, so one that
     old was killed).
 
-    An entry goes whole, by the newest modification time of its files: a library with its
-    ``.sha256`` and ``.lock``, the library file first (if it cannot be removed, the others are
-    kept).  What cannot be removed is passed over and reported in :attr:`CacheReport.failed`.
+    Only the package's entries are looked at (:func:`_c_kind`, :func:`_numba_folder`): what
+    else a folder holds is never removed.  An entry goes whole, by the newest modification
+    time of its files: a library with its ``.sha256`` and ``.lock``, the library file first
+    (if it cannot be removed, the others are kept).  What cannot be removed is passed over and
+    reported in :attr:`CacheReport.failed`; a folder that cannot be read, in
+    :attr:`CacheReport.unread`.
 
     Parameters
     ----------
     older_than : float, default :data:`DEFAULT_AGE`
-        Age [days] (0: everything but the running version's numba folder); ≥ 0.
+        Age [days] (0: everything but the running version's numba folder); finite, ≥ 0.
     dry_run : bool, default False
         Only say what would be removed.
 
     Returns
     -------
     CacheReport
-        What was (or would be) removed and its size, and what could not be removed.
+        What was (or would be) removed and its size, what could not be removed, and the
+        folders that could not be read.
 
     Raises
     ------
@@ -336,15 +458,18 @@ def prune(older_than: float = DEFAULT_AGE, *, dry_run: bool = False) -> CacheRep
             and older_than >= 0.0):
         from .parameters import ParameterError
 
-        raise ParameterError("older_than", older_than, "expected a number of days ≥ 0")
+        raise ParameterError("older_than", older_than, "expected a finite number of days ≥ 0")
     now = time.time()
     # the last write before which an entry goes (unfinished compilations by their own age,
     # whatever older_than says)
     cutoff = {"used": now - older_than * DAY, "unfinished": now - UNFINISHED_AGE}
     removed: list[Path] = []
     failed: list[tuple[Path, str]] = []
+    unread: list[tuple[Path, str]] = []
     freed = entries = 0
     for part in _parts():
+        if part.unread is not None:
+            unread.append((part.folder, part.unread))
         if part.age is None:
             continue
         for entry in part.entries:
@@ -367,4 +492,4 @@ def prune(older_than: float = DEFAULT_AGE, *, dry_run: bool = False) -> CacheRep
                     if path == entry[0] and len(entry) > 1:
                         break  # a library that stays keeps its .sha256 and .lock
             entries += gone > 0
-    return CacheReport(tuple(removed), freed, dry_run, entries, tuple(failed))
+    return CacheReport(tuple(removed), freed, dry_run, entries, tuple(failed), tuple(unread))

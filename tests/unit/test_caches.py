@@ -23,6 +23,22 @@ from feeddrive.parameters import ParameterError
 DAY = 86400.0
 
 
+def _k(digit: str) -> str:
+    """A cache key, as the C build names a library (64 hexadecimal digits): ``digit`` 64 times."""
+    return digit * 64
+
+
+def _model(digit: str) -> str:
+    """A model's kept text, named as the C build names it: ``model-<24 digits>.c``."""
+    return f"model-{digit * 24}.c"
+
+
+def _compiling(digit: str, tail: str) -> str:
+    """A compilation's temporary folder, named as the C build names it:
+    ``.<16 digits of the key>-<8 random characters>``."""
+    return f".{digit * 16}-{tail:_<8}"
+
+
 def _aged(path: Path, days: float) -> Path:
     """Set the modification time of ``path`` and everything under it ``days`` back."""
     when = time.time() - days * DAY
@@ -55,11 +71,11 @@ def tree(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str, Path]:
         "current": _file(root / f"numba-{SOURCE_DIGEST}" / "k.nbi", 100).parent,
         "old_version": _file(root / "numba-0123456789abcdef" / "k.nbc", 1000).parent,
         "recent_version": _file(root / "numba-fedcba9876543210" / "k.nbc", 10).parent,
-        "old_library": _file(root / "c" / f"aaaa{c_cache.library_suffix()}", 300),
-        "new_library": _file(root / "c" / f"bbbb{c_cache.library_suffix()}", 30),
-        "old_text": _file(root / "c" / "model-cccc.c", 7),
-        "killed": _file(root / "c" / ".aaaa-x1" / "model.c", 5).parent,
-        "compiling": _file(root / "c" / ".bbbb-x2" / "model.c", 5).parent,
+        "old_library": _file(root / "c" / f"{_k('a')}{c_cache.library_suffix()}", 300),
+        "new_library": _file(root / "c" / f"{_k('b')}{c_cache.library_suffix()}", 30),
+        "old_text": _file(root / "c" / _model("c"), 7),
+        "killed": _file(root / "c" / _compiling("a", "x1") / "model.c", 5).parent,
+        "compiling": _file(root / "c" / _compiling("b", "x2") / "model.c", 5).parent,
     }
     for name in ("current", "old_version", "old_library", "old_text"):
         _aged(made[name], 40)
@@ -99,7 +115,8 @@ def test_prune_removes_the_unused_and_keeps_this_versions_numba(tree: dict[str, 
 
 @pytest.mark.parametrize("bad", [-1.0, float("nan"), float("inf"), "30"])
 def test_prune_refuses_an_age_that_is_not_a_number_of_days(bad: object) -> None:
-    with pytest.raises(ParameterError, match="older_than = .*expected a number of days ≥ 0"):
+    with pytest.raises(ParameterError,
+                       match="older_than = .*expected a finite number of days ≥ 0"):
         caches.prune(bad)  # type: ignore[arg-type]
 
 
@@ -138,7 +155,7 @@ def test_the_command_shows_prunes_and_refuses(tree: dict[str, Path]) -> None:
     assert data["dry_run"] is False and len(data["removed"]) == 4
     assert not tree["old_library"].exists() and tree["current"].exists()
     for args, message in ((["--prune", "--older-than", "-1"],
-                           "--older-than = -1.0: expected a number of days ≥ 0"),
+                           "--older-than = -1.0: expected a finite number of days ≥ 0"),
                           (["--dry-run"], "--dry-run: give it with --prune"),
                           (["--older-than", "5"], "--older-than: give it with --prune")):
         r = runner.invoke(app, ["cache", *args])
@@ -191,51 +208,57 @@ def _part(name: str) -> caches.CachePart:
 
 def test_a_library_is_one_entry_with_its_digest_and_lock(c_folder: Path) -> None:
     """Defect: each empty .lock (and .sha256) counted as an entry of its own, so a cache of
-    1076 libraries showed 2152 entries for them."""
-    for key in ("aaaa", "bbbb"):
-        _library(c_folder, key, 300, 1)
-    _file(c_folder / "model-cccc.c", 7)
-    _file(c_folder / "driver-dense-dddd.json", 11)
-    _aged(_file(c_folder / "eeee.lock", 0), 40)  # the lock of a library pruned since
+    1076 libraries showed 2152 entries for them.  A .lock without its library is no library:
+    an unfinished compilation (defect: it was counted among the libraries)."""
+    for key in ("a", "b"):
+        _library(c_folder, _k(key), 300, 1)
+    _file(c_folder / _model("c"), 7)
+    _file(c_folder / f"driver-integrate_dense-{'d' * 20}.json", 11)
+    _aged(_file(c_folder / f"{_k('e')}.lock", 0), 40)  # the lock of a library pruned since
     part = _part("C libraries and texts")
-    assert (part.entries, part.size) == (2 + 2 + 1, 2 * (300 + 65) + 7 + 11)
+    assert (part.entries, part.size) == (2 + 2, 2 * (300 + 65) + 7 + 11)
+    assert _part("unfinished compilations").entries == 1
     text = CliRunner().invoke(app, ["cache"]).output
-    assert "C libraries and texts: 5 entries" in text
+    assert "C libraries and texts: 4 entries" in text
 
 
 def test_a_library_in_use_is_pruned_whole_or_not_at_all(c_folder: Path) -> None:
     """Defect: --prune removed the old .lock (and would remove the .sha256) of a library that
     is used every day (``mark_used`` touches only the library file), on their own; an orphan
-    .lock or .sha256 goes by its own age."""
-    used = _library(c_folder, "aaaa", 300, 0.5, lock_days=400, digest_days=400)
-    unused = _library(c_folder, "bbbb", 200, 40)
-    old_lock = _aged(_file(c_folder / "cccc.lock", 0), 40)
-    old_digest = _aged(_file(c_folder / "dddd.sha256", 65), 40)
-    new_lock = _aged(_file(c_folder / "eeee.lock", 0), 1)
+    .sha256 goes by its own age, an orphan .lock as an unfinished compilation (older than an
+    hour, whatever --older-than)."""
+    used = _library(c_folder, _k("a"), 300, 0.5, lock_days=400, digest_days=400)
+    unused = _library(c_folder, _k("b"), 200, 40)
+    old_lock = _aged(_file(c_folder / f"{_k('c')}.lock", 0), 40)
+    old_digest = _aged(_file(c_folder / f"{_k('d')}.sha256", 65), 40)
+    day_old_lock = _aged(_file(c_folder / f"{_k('e')}.lock", 0), 1)
+    new_lock = _aged(_file(c_folder / f"{_k('f')}.lock", 0), 10 / 1440)  # compiling now
     report = caches.prune(30.0)
     assert all(p.exists() for p in used.values())  # nothing of a library in use goes
     assert not any(p.exists() for p in unused.values())  # an unused one goes whole
-    assert not old_lock.exists() and not old_digest.exists() and new_lock.exists()
-    assert set(report.removed) == {*unused.values(), old_lock, old_digest}
-    assert report.entries == 3 and report.freed == 200 + 65 + 65 and report.failed == ()
-    assert _part("C libraries and texts").entries == 2  # aaaa, eeee.lock
+    assert not old_lock.exists() and not old_digest.exists() and not day_old_lock.exists()
+    assert new_lock.exists()
+    assert set(report.removed) == {*unused.values(), old_lock, old_digest, day_old_lock}
+    assert report.entries == 4 and report.freed == 200 + 65 + 65 and report.failed == ()
+    assert _part("C libraries and texts").entries == 1  # aaaa
+    assert _part("unfinished compilations").entries == 1  # the new lock
 
 
 def test_partial_files_of_interrupted_writes_are_unfinished_compilations(c_folder: Path
                                                                          ) -> None:
     """Defect: the temporary files of atomic writes cut short (``.model-abc.1234abcd.partial.c``)
     were neither counted nor pruned."""
-    with atomic_path(c_folder / "model-ffff.c") as tmp:  # the names atomic_path writes under
+    with atomic_path(c_folder / _model("f")) as tmp:  # the names atomic_path writes under
         tmp.write_text("int x;\n", encoding="utf-8")
         assert (_part("unfinished compilations").entries, _part("C libraries and texts")
                 .entries) == (1, 0)
-    killed = _aged(_file(c_folder / ".model-abc.1234abcd.partial.c", 40), 2 / 24)
-    writing = _file(c_folder / ".driver-dense-abc.5678ef90.partial.json", 3)
+    killed = _aged(_file(c_folder / f".{_model('a')[:-2]}.1234abcd.partial.c", 40), 2 / 24)
+    writing = _file(c_folder / f".driver-integrate-{'a' * 20}.5678ef90.partial.json", 3)
     part = _part("unfinished compilations")
     assert (part.entries, part.size) == (2, 43)
     report = caches.prune(30.0)  # an hour old is enough, whatever --older-than says
     assert report.removed == (killed,) and report.freed == 40
-    assert writing.exists() and (c_folder / "model-ffff.c").exists()
+    assert writing.exists() and (c_folder / _model("f")).exists()
 
 
 def test_the_fallback_folder_is_listed_and_pruned(tmp_path: Path, c_folder: Path,
@@ -245,9 +268,9 @@ def test_the_fallback_folder_is_listed_and_pruned(tmp_path: Path, c_folder: Path
     assert [p.name for p in caches.usage()][-1] == "unfinished compilations"  # none yet
     uid = os.getuid() if hasattr(os, "getuid") else 0
     fallback = tmp_path / "tmp" / f"feeddrive-c-{uid}"
-    old = _library(fallback, "aaaa", 300, 40)
-    new = _library(fallback, "bbbb", 30, 1)
-    killed = _aged(_file(fallback / ".aaaa-x1" / "model.c", 5).parent, 0.5)
+    old = _library(fallback, _k("a"), 300, 40)
+    new = _library(fallback, _k("b"), 30, 1)
+    killed = _aged(_file(fallback / _compiling("a", "x1") / "model.c", 5).parent, 0.5)
     parts = {p.name: p for p in caches.usage()}
     assert list(parts)[-2:] == [FALLBACK_C, FALLBACK_UNFINISHED]
     assert (parts[FALLBACK_C].folder, parts[FALLBACK_C].entries,
@@ -317,10 +340,10 @@ def test_prune_carries_on_past_what_it_cannot_remove(c_folder: Path,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """Defect: the first file that could not be removed stopped the prune with
     ``error: ...: Permission denied``, after other files were removed, unreported."""
-    stuck = _library(c_folder, "aaaa", 300, 40)
-    going = _library(c_folder, "bbbb", 200, 40)
-    text = _aged(_file(c_folder / "model-cccc.c", 7), 40)
-    killed = _aged(_file(c_folder / ".aaaa-x1" / "model.c", 5).parent, 0.5)
+    stuck = _library(c_folder, _k("a"), 300, 40)
+    going = _library(c_folder, _k("b"), 200, 40)
+    text = _aged(_file(c_folder / _model("c"), 7), 40)
+    killed = _aged(_file(c_folder / _compiling("a", "x1") / "model.c", 5).parent, 0.5)
     _file(killed / "model.o", 11)
     _aged(killed, 0.5)
     _denied(monkeypatch, stuck["library"], killed / "model.c")
@@ -336,8 +359,8 @@ def test_prune_carries_on_past_what_it_cannot_remove(c_folder: Path,
 
 def test_the_command_reports_what_it_removed_and_what_it_could_not(
         c_folder: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    stuck = _library(c_folder, "aaaa", 300, 40)
-    going = _library(c_folder, "bbbb", 200, 40)
+    stuck = _library(c_folder, _k("a"), 300, 40)
+    going = _library(c_folder, _k("b"), 200, 40)
     _denied(monkeypatch, stuck["library"])
     runner = CliRunner()
     done = runner.invoke(app, ["cache", "--prune"])

@@ -14,14 +14,19 @@ SHA-256; a library whose bytes do not match (a disk that filled, a copy cut shor
 again, never loaded.  Where ``fcntl`` is missing (Windows), nothing is locked: both may
 compile, each into its own temporary file, and the rename keeps one.  A cache folder that
 cannot be written (or read) is left for a folder of this user's under the system's temporary
-folder (:func:`fallback_folder`), for the libraries and for the translated texts
-(:func:`store_folder`, :func:`kept`).
+folder (:func:`fallback_folder`, made only when something is written there), for the libraries
+and for the translated texts (:func:`store_folder`, :func:`kept`); so is one whose write fails
+(a full disk, an exceeded quota: :func:`in_store`), said once per process in one line.  A kept
+text has its SHA-256 beside it too (``<name>.sha256``, :func:`keep_text`, :func:`kept_text`):
+one that does not match is made again, never used.
 
 docs/c-backend.md, "The compiled-object cache", says where it lives and how to clear it.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import functools
 import hashlib
 import os
@@ -34,26 +39,29 @@ import sys
 import sysconfig
 import tempfile
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import TypeVar
 
-from .._disk import DAY, file_lock, private_folder, user_cache_root, writable
+from .._disk import DAY, existing_private, file_lock, private_folder, user_cache_root, writable
 
 __all__ = ["CACHE_ENV", "COMPILE_FAILED_ADVICE", "CompileError", "CompilerNotFound",
            "DIGEST_SUFFIX", "LIBRARY_FLAGS", "NO_COMPILER", "STATS",
            "available_compiler", "cache_folder", "cache_key", "cached_library", "compile_c",
-           "compiler_identity", "fallback_folder", "find_compiler", "kept", "library_suffix",
-           "mark_used", "no_compiler_text", "store_folder"]
+           "compiler_identity", "fallback_folder", "find_compiler", "in_store", "keep_text",
+           "kept", "kept_text", "library_suffix", "mark_used", "no_compiler_text",
+           "store_folder"]
 
 #: environment variable naming the cache folder (instead of the user's cache)
 CACHE_ENV = "FEEDDRIVE_C_CACHE"
 #: flags of a library :func:`cached_library` builds by default: ISO C99, optimised, no fused
 #: multiply-add (it rounds differently from numba), position independent and shared
 LIBRARY_FLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared")
-#: what is said, once per process, when no C compiler is found (:func:`available_compiler`)
+#: what is said, once per process, when no C compiler is found (:func:`available_compiler`):
+#: numba runs then (without numba, :data:`feeddrive.solvers.builds.NO_ENGINE` is the error)
 NO_COMPILER = ("feeddrive: no C compiler found, so the numba build is used; to compile C, "
                "install gcc or clang (Debian: apt-get install gcc; macOS: xcode-select "
-               "--install) or set CC; without numba either: pip install 'feeddrive[numba]'")
+               "--install) or set CC")
 #: what a command adds to a compiler failure (:class:`CompileError`)
 COMPILE_FAILED_ADVICE = ("the C build could not be made: set CC to a working C compiler, or "
                          "use the numba build (FEEDDRIVE_ENGINE=numba, pip install "
@@ -64,6 +72,13 @@ STATS = {"compiles": 0, "hits": 0}
 #: the file beside a library ``<key><suffix>`` holding its SHA-256: ``<key>.sha256``
 DIGEST_SUFFIX = ".sha256"
 _SAID: list[str] = []
+#: the notes said once per process (a damaged file made again, a cache left for the fallback)
+_NOTED: set[str] = set()
+#: the errors of a write a folder cannot take, as a compiler prints them (the linker's
+#: "final link failed: No space left on device" names no file)
+_FULL = tuple(code for code in (errno.ENOSPC, getattr(errno, "EDQUOT", None), errno.EROFS)
+              if code is not None)
+T = TypeVar("T")
 
 
 class CompilerNotFound(RuntimeError):
@@ -103,9 +118,17 @@ def find_compiler() -> list[str]:
     """
     env = os.environ.get("CC", "").strip()
     if env:
-        cmd = shlex.split(env)
-        if shutil.which(cmd[0]) is None:
-            raise CompilerNotFound(f"CC = {env!r}: {cmd[0]!r} is not an executable on PATH")
+        try:
+            cmd = shlex.split(env)
+        except ValueError as err:  # an unbalanced quote
+            raise CompilerNotFound(
+                f"CC = {env!r} is not a command line ({str(err).lower()}): expected a C "
+                "compiler and its options, quoted as in a shell (CC='gcc -O2')") from None
+        if not cmd or shutil.which(cmd[0]) is None:
+            program = cmd[0] if cmd else ""
+            where = "file" if os.sep in program or (os.altsep or os.sep) in program else \
+                "on PATH"
+            raise CompilerNotFound(f"CC = {env!r}: {program!r} is not an executable {where}")
         return cmd
     for name in ("cc", "gcc", "clang"):
         path = shutil.which(name)
@@ -136,8 +159,9 @@ def available_compiler() -> list[str] | None:
 
 
 def no_compiler_text() -> str:
-    """What is said when no C compiler is found: :data:`NO_COMPILER`, or, where ``$CC`` names
-    one that is not there, that (the compilers on PATH are not looked at then).
+    """What is said when no C compiler is found: :data:`NO_COMPILER`, or, where ``$CC`` is set
+    but gives none (:func:`feeddrive.solvers.builds.cc_trouble`), that (the compilers on PATH
+    are not looked at then).
 
     Returns
     -------
@@ -147,8 +171,10 @@ def no_compiler_text() -> str:
     env = os.environ.get("CC", "").strip()
     if not env:
         return NO_COMPILER
-    return (f"feeddrive: CC = {env!r} is not an executable, so the numba build is used; set "
-            "CC to a C compiler, or unset it to use cc, gcc or clang from PATH")
+    from ..solvers.builds import cc_trouble
+
+    return (f"feeddrive: {cc_trouble(env)}, so the numba build is used; set CC to a C "
+            "compiler, or unset it to use cc, gcc or clang from PATH")
 
 
 def library_suffix() -> str:
@@ -172,7 +198,8 @@ def _first_error(output: str) -> str:
 
 
 def compile_c(files: Mapping[str, str], folder: str | os.PathLike[str], output: str,
-              cc: Sequence[str], flags: Sequence[str], libraries: Sequence[str] = ()) -> Path:
+              cc: Sequence[str], flags: Sequence[str], libraries: Sequence[str] = (),
+              shown: str | None = None) -> Path:
     """Write ``files`` into ``folder`` and compile the first of them with
     ``cc flags -o folder/output folder/<first> libraries``.
 
@@ -191,6 +218,9 @@ def compile_c(files: Mapping[str, str], folder: str | os.PathLike[str], output: 
         Flags before ``-o``.
     libraries : sequence of str
         Arguments after the source (``-lm``).
+    shown : str, optional
+        What a failure calls the source, in place of its path (a folder that is temporary is
+        gone when the message is read): its kept copy's path, or a name; by default its path.
 
     Returns
     -------
@@ -200,7 +230,8 @@ def compile_c(files: Mapping[str, str], folder: str | os.PathLike[str], output: 
     Raises
     ------
     CompileError
-        The compiler failed (exit status not 0), in one line with its first error line.
+        The compiler failed (exit status not 0), in one line with its first error line; or
+        could not be run (not an executable format).
     """
     where = Path(folder)
     where.mkdir(parents=True, exist_ok=True)
@@ -209,12 +240,18 @@ def compile_c(files: Mapping[str, str], folder: str | os.PathLike[str], output: 
     src = where / next(iter(files))
     out = where / output
     cmd = [*cc, *flags, "-o", str(out), str(src), *libraries]
-    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    command = " ".join([Path(cc[0]).name, *cc[1:], *flags])
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    except OSError as err:  # not the folder's fault: the compiler cannot be run
+        raise CompileError(f"the C compiler could not be run ({command}): "
+                           f"{err.strerror or err}", str(err)) from None
     if proc.returncode != 0:
         text = (proc.stderr or proc.stdout).strip()
+        if shown is not None:
+            text = text.replace(str(src), shown)
         more = len([line for line in text.splitlines() if line.strip()]) - 1
-        command = " ".join([Path(cc[0]).name, *cc[1:], *flags])
-        raise CompileError(f"the C compiler failed ({command} on {src.name}): "
+        raise CompileError(f"the C compiler failed ({command} on {shown or src.name}): "
                            f"{_first_error(text)}"
                            + (f" (+{more} more lines)" if more > 0 else ""), text)
     return out
@@ -294,13 +331,38 @@ def fallback_folder() -> Path:
     ``<temporary folder>/feeddrive-c-<user id>``, private (mode 0700) and kept between runs;
     if that name is taken by a folder that is not this user's own, private one, a temporary
     folder of this process, removed when it exits (:func:`feeddrive._disk.private_folder`).
+    Made here: called when something is to be written there (a lookup uses
+    :func:`_fallback_found`).
 
     Returns
     -------
     Path
         A folder this user alone can write.
     """
-    return private_folder("feeddrive-c")
+    folder = private_folder("feeddrive-c")
+    _MADE[:] = [folder]
+    return folder
+
+
+#: the fallback folder this process made (:func:`fallback_folder`)
+_MADE: list[Path] = []
+
+
+def _fallback_found() -> Path | None:
+    """The fallback folder if it is there, not made: the one this process made, else the
+    shared one if it is this user's private folder (:func:`feeddrive._disk.existing_private`).
+    """
+    return _MADE[0] if _MADE else existing_private("feeddrive-c")
+
+
+def _lookup_folders() -> list[Path]:
+    """Where a cached file is looked for: :func:`cache_folder`, then the fallback folder if it
+    is there (what a run wrote while the cache could not be written)."""
+    folders = [cache_folder()]
+    other = _fallback_found()
+    if other is not None and other != folders[0]:
+        folders.append(other)
+    return folders
 
 
 def _writable(folder: Path) -> bool:
@@ -319,7 +381,7 @@ _NOT_WRITABLE: set[Path] = set()
 
 def store_folder() -> Path:
     """Where this process writes what it caches: :func:`cache_folder` if a file can be made
-    there (it is made if missing), else :func:`fallback_folder`.
+    there (it is made if missing) and no write there has failed, else :func:`fallback_folder`.
 
     Returns
     -------
@@ -328,6 +390,60 @@ def store_folder() -> Path:
     """
     folder = cache_folder()
     return folder if _writable(folder) else fallback_folder()
+
+
+def _note(key: str, line: str) -> None:
+    """Say ``line`` on standard error, once per process for ``key``."""
+    if key not in _NOTED:
+        _NOTED.add(key)
+        print(line, file=sys.stderr)
+
+
+def in_store(write: Callable[[Path], T]) -> T:
+    """``write(folder)`` in :func:`store_folder`.  An ``OSError`` there (a full disk, an
+    exceeded quota, a read-only mount, a refused permission) leaves the cache folder for the
+    fallback folder, as one that cannot be written is left (said once per process, in one
+    line naming both and why), and ``write`` runs again there.
+
+    Parameters
+    ----------
+    write : callable
+        Writes into the folder it is given; what it returns is returned.
+
+    Returns
+    -------
+    object
+        What ``write`` returned.
+
+    Raises
+    ------
+    OSError
+        The fallback folder failed too: one line naming the cache folder (``filename``) and
+        why each failed.
+    """
+    folder = store_folder()
+    cache = cache_folder()
+    try:
+        return write(folder)
+    except OSError as err:
+        if folder != cache:  # the fallback already: the cache could not be written
+            raise _unwritable(cache, None, folder, err) from None
+        first = err
+    _NOT_WRITABLE.add(cache)
+    other = fallback_folder()
+    _note(f"left {cache}", f"feeddrive: the C cache {cache} cannot be written "
+          f"({first.strerror or first}), so {other} is used")
+    try:
+        return write(other)
+    except OSError as err:
+        raise _unwritable(cache, first, other, err) from None
+
+
+def _unwritable(cache: Path, first: OSError | None, other: Path, err: OSError) -> OSError:
+    """The error of a write that neither the cache folder nor the fallback folder took."""
+    why = f" ({first.strerror or first})" if first is not None else ""
+    return OSError(err.errno, f"the C cache cannot be written{why}, nor its fallback folder "
+                   f"{other} ({err.strerror or err})", str(cache))
 
 
 def _is_file(path: Path) -> bool:
@@ -340,7 +456,7 @@ def _is_file(path: Path) -> bool:
 
 def kept(name: str) -> Path | None:
     """A file this package keeps in the cache (a translated text): in :func:`cache_folder`,
-    else in the fallback folder when the cache cannot be written (:func:`store_folder`).
+    else in the fallback folder if it is there (:func:`store_folder`).
 
     Parameters
     ----------
@@ -352,13 +468,78 @@ def kept(name: str) -> Path | None:
     Path or None
         The file, or None when neither holds it.
     """
-    path = cache_folder() / name
-    if _is_file(path):
-        return path
-    store = store_folder()
-    if store != cache_folder() and _is_file(store / name):
-        return store / name
+    for folder in _lookup_folders():
+        if _is_file(folder / name):
+            return folder / name
     return None
+
+
+def kept_text(name: str) -> str | None:
+    """The text of the file ``name`` kept by :func:`keep_text` (in the cache folder, else the
+    fallback folder), if its bytes' SHA-256 is the one beside it (``<name>.sha256``); marked
+    used.  A text cut short or edited is not used — said once per process, and the caller
+    makes it again (a missing digest, as of a text kept before digests, is not said).
+
+    Parameters
+    ----------
+    name : str
+        The file's name.
+
+    Returns
+    -------
+    str or None
+        The text, or None when no whole copy is there.
+    """
+    for folder in _lookup_folders():
+        path = folder / name
+        digest = folder / f"{name}{DIGEST_SUFFIX}"
+        if not _is_file(path):
+            continue
+        try:
+            data = path.read_bytes()
+            want = digest.read_text(encoding="ascii").strip()
+        except (OSError, ValueError):
+            continue
+        if hashlib.sha256(data).hexdigest() != want:
+            _note(str(path), f"feeddrive: {path} does not match {digest.name} (damaged or "
+                  "edited), so it is translated again")
+            continue
+        try:
+            text = data.decode("utf-8")
+        except ValueError:
+            continue
+        mark_used(path)
+        mark_used(digest)
+        return text
+    return None
+
+
+def keep_text(name: str, text: str) -> None:
+    """Keep ``text`` as the file ``name`` of the cache (:func:`in_store`: the fallback folder
+    when the cache cannot be written), with its SHA-256 beside it (``<name>.sha256``), each
+    written whole or not at all (:func:`feeddrive.io.outputs.atomic_path`).  What neither
+    folder takes is not kept: it is made again by the next process.
+
+    Parameters
+    ----------
+    name : str
+        The file's name.
+    text : str
+        Its text.
+    """
+    from ..io.outputs import atomic_path
+
+    data = text.encode("utf-8")
+    digest = hashlib.sha256(data).hexdigest() + "\n"
+
+    def write(folder: Path) -> None:
+        with atomic_path(folder / name) as tmp:
+            tmp.write_bytes(data)
+        with atomic_path(folder / f"{name}{DIGEST_SUFFIX}") as tmp:
+            tmp.write_text(digest, encoding="ascii")
+
+    with contextlib.suppress(OSError):
+        in_store(write)
 
 
 def _intact(folder: Path, key: str, name: str) -> Path | None:
@@ -398,7 +579,8 @@ def mark_used(path: Path) -> None:
 
 def cached_library(source: str, *, flags: Sequence[str] = LIBRARY_FLAGS,
                    libraries: Sequence[str] = ("-lm",),
-                   cc: Sequence[str] | None = None) -> Path:
+                   cc: Sequence[str] | None = None, name: str = "model.c",
+                   shown: str | None = None, again: bool = False) -> Path:
     """The shared library compiled from ``source``, from the cache when it is there, else
     compiled into it (see the module's description: key, lock, atomic rename, fallback).
 
@@ -412,6 +594,14 @@ def cached_library(source: str, *, flags: Sequence[str] = LIBRARY_FLAGS,
         Arguments after the source.
     cc : sequence of str, optional
         The compiler command; :func:`find_compiler` by default.
+    name : str, default "model.c"
+        The source's file name where it is compiled (a temporary folder).
+    shown : str, optional
+        What a compiler failure calls the source (:func:`compile_c`): a kept copy's path, or
+        by default ``name``, never the temporary folder's path.
+    again : bool, default False
+        The library the cache holds for ``source`` is damaged though its digest matches (it
+        lacks what the source defines): compiled again, in its place.
 
     Returns
     -------
@@ -424,32 +614,70 @@ def cached_library(source: str, *, flags: Sequence[str] = LIBRARY_FLAGS,
         Without a C compiler.
     CompileError
         When the compiler fails (one line, with its first error line).
+    OSError
+        Neither the cache folder nor the fallback folder could be written (:func:`in_store`).
     """
     command = list(cc) if cc is not None else find_compiler()
     key = cache_key(source, command, flags, libraries)
-    name = f"{key}{library_suffix()}"
-    found = _intact(cache_folder(), key, name)
-    folder = store_folder()
-    if found is None and folder != cache_folder():
-        found = _intact(folder, key, name)
-    if found is not None:
-        STATS["hits"] += 1
-        return found
-    lib = folder / name
-    with file_lock(folder / f"{key}.lock"):
-        if _intact(folder, key, name) is not None:  # compiled by another process meanwhile
+    lib_name = f"{key}{library_suffix()}"
+    if not again:
+        for folder in _lookup_folders():
+            found = _intact(folder, key, lib_name)
+            if found is not None:
+                STATS["hits"] += 1
+                return found
+
+    def compile_into(folder: Path) -> Path:
+        return _compile_into(folder, source, key, lib_name, command, flags, libraries,
+                             name, shown or name, again)
+
+    return in_store(compile_into)
+
+
+def _compile_into(folder: Path, source: str, key: str, lib_name: str, command: list[str],
+                  flags: Sequence[str], libraries: Sequence[str], name: str, shown: str,
+                  again: bool) -> Path:
+    """:func:`cached_library`'s compilation into ``folder``, under the lock ``<key>.lock``
+    (removed again when the compilation failed and no library is there: no orphan lock).
+    The compiler's own failure to write there (a full disk) is an ``OSError``."""
+    lib = folder / lib_name
+    lock = folder / f"{key}.lock"
+    with file_lock(lock) as held:
+        if not again and _intact(folder, key, lib_name) is not None:  # compiled meanwhile
             STATS["hits"] += 1
             return lib
-        with tempfile.TemporaryDirectory(dir=folder, prefix=f".{key[:16]}-") as tmp:
-            built = compile_c({"model.c": source}, tmp, name, command, flags, libraries)
-            digest = Path(tmp) / f"{key}{DIGEST_SUFFIX}"
-            digest.write_text(hashlib.sha256(built.read_bytes()).hexdigest() + "\n",
-                              encoding="ascii")
-            try:
-                os.replace(built, lib)
-            except OSError:
-                if not lib.is_file():  # a library in use cannot be replaced on Windows
-                    raise
-            os.replace(digest, folder / digest.name)
+        digest_name = f"{key}{DIGEST_SUFFIX}"
+        damaged = None if again or not _is_file(lib) else (
+            f"did not match {digest_name}" if _is_file(folder / digest_name) else
+            f"had no {digest_name} beside it")
+        try:
+            with tempfile.TemporaryDirectory(dir=folder, prefix=f".{key[:16]}-") as tmp:
+                try:
+                    built = compile_c({name: source}, tmp, lib_name, command, flags,
+                                      libraries, shown=shown)
+                except CompileError as err:
+                    full = next((code for code in _FULL if os.strerror(code) in err.output),
+                                None)
+                    if full is None:
+                        raise
+                    raise OSError(full, os.strerror(full), str(folder)) from None
+                digest = Path(tmp) / digest_name
+                digest.write_text(hashlib.sha256(built.read_bytes()).hexdigest() + "\n",
+                                  encoding="ascii")
+                try:
+                    os.replace(built, lib)
+                except OSError:
+                    if not lib.is_file():  # a library in use cannot be replaced on Windows
+                        raise
+                os.replace(digest, folder / digest.name)
+        except BaseException:
+            # a waiting process then locks the file unlinked here, a later one a new file:
+            # both may compile, which the atomic rename makes safe (as without fcntl)
+            if held and not _is_file(lib):
+                with contextlib.suppress(OSError):
+                    lock.unlink()
+            raise
     STATS["compiles"] += 1
+    if damaged:
+        _note(str(lib), f"feeddrive: {lib} {damaged} (damaged), so it was compiled again")
     return lib

@@ -67,9 +67,9 @@ from .c_cache import (
     available_compiler,
     cached_library,
     find_compiler,
+    keep_text,
     kept,
-    mark_used,
-    store_folder,
+    kept_text,
 )
 from .c_translate import DYNAMIC, TranslationError, translate_kernels
 
@@ -448,33 +448,30 @@ def _sources_digest() -> str:
 
 
 def _keep(name: str, text: str) -> None:
-    """Write ``text`` to the file ``name`` of the cache (:func:`~feeddrive.backends.c_cache.
-    store_folder`: the fallback folder when the cache cannot be written) whole or not at all
-    (:func:`feeddrive.io.outputs.atomic_path`, which leaves no half file behind): a full disk
-    is left as it is, and what it would have kept is made again by the next process."""
-    from ..io.outputs import atomic_path
-
-    with contextlib.suppress(OSError):
-        with atomic_path(store_folder() / name) as tmp:
-            tmp.write_text(text, encoding="utf-8")
+    """Keep ``text`` as the file ``name`` of the cache with its SHA-256 beside it
+    (:func:`~feeddrive.backends.c_cache.keep_text`: the fallback folder when the cache cannot
+    be written; each file whole or not at all): what no folder takes is made again by the next
+    process."""
+    keep_text(name, text)
 
 
 def _kept_text(name: str) -> str | None:
-    """The text of the cache's file ``name`` (:func:`~feeddrive.backends.c_cache.kept`),
-    marked used; None if it is not there or cannot be read."""
-    path = kept(name)
-    if path is None:
-        return None
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, ValueError):
-        return None
-    mark_used(path)
+    """The text of the cache's file ``name`` if it is whole — its SHA-256 the one kept beside
+    it (:func:`~feeddrive.backends.c_cache.kept_text`) — marked used; None if it is not there,
+    cannot be read, or was cut short or edited (then made again by the caller)."""
+    text = kept_text(name)
+    if text is not None:
+        _FROM_CACHE.add(name)
     return text
 
 
+#: the texts this process read from the cache (:func:`_kept_text`): a compilation that fails
+#: on one is tried again on a fresh translation
+_FROM_CACHE: set[str] = set()
+
+
 @functools.cache
-def driver_unit(use: str) -> dict[str, Any]:
+def driver_unit(use: str, again: bool = False) -> dict[str, Any]:
     """The driver ``use`` (:func:`lowered_source`) in C, exported as ``fd_<use>``, with every
     solver function it calls; every function takes the model's table (:data:`MODEL_STRUCT`)
     as its first parameter, reads the model's sizes from it and calls the model's ``fd_rhs``
@@ -483,12 +480,15 @@ def driver_unit(use: str) -> dict[str, Any]:
 
     Specialising and translating the driver costs ≈ 0.7 CPU s, the same for every model: the
     result is kept in the C cache's folder under the hash of its sources
-    (:func:`_sources_digest`), written whole (a temporary file renamed) or not at all.
+    (:func:`_sources_digest`), written whole (a temporary file renamed) or not at all, with its
+    SHA-256 beside it: a kept text cut short or edited is translated again.
 
     Parameters
     ----------
     use : str
-        ``"integrate"`` or ``"integrate_dense"``.
+        ``"integrate"`` or ``"integrate_dense"`` (or ``"functions"``: :data:`FUNCTIONS`).
+    again : bool, default False
+        Translated anew and kept in place of the file (whose library did not compile).
 
     Returns
     -------
@@ -498,7 +498,7 @@ def driver_unit(use: str) -> dict[str, Any]:
     """
     name = f"driver-{use}-{_sources_digest()}.json"
     try:
-        unit = json.loads(_kept_text(name) or "null")
+        unit = None if again else json.loads(_kept_text(name) or "null")
     except ValueError:  # a damaged file: made again
         unit = None
     if isinstance(unit, dict) and set(unit) == {"c", "n_stats", "params"}:
@@ -513,7 +513,7 @@ def driver_unit(use: str) -> dict[str, Any]:
 
 
 @functools.cache
-def driver_source() -> str:
+def driver_source(again: bool = False) -> str:
     """The driver library's C unit: both drivers and the shared module's other functions
     (:data:`FUNCTIONS`), the same text for every model — compiled once per machine (per
     compiler, flags and platform) through the compiled-object cache.
@@ -522,6 +522,12 @@ def driver_source() -> str:
     first parameter: the sizes (``FD_N_STATE`` … are read from it, the local work arrays are
     C99 variable-length arrays) and the right-hand side and sampled update (called through
     its function pointers).
+
+    Parameters
+    ----------
+    again : bool, default False
+        From units translated anew (``driver_unit``), where the kept ones gave a library
+        that failed.
 
     Returns
     -------
@@ -535,7 +541,7 @@ def driver_source() -> str:
             "(feeddrive.solvers.driver, lowered and translated).  Do not edit: regenerate. */"
             "\n#include <math.h>\n" + MODEL_STRUCT + "/* the model's sizes, read from its "
             "table (every function's first parameter) */\n" + sizes + "\n"
-            + "\n".join(driver_unit(use)["c"] for use in (*USES, "functions")))
+            + "\n".join(driver_unit(use, again)["c"] for use in (*USES, "functions")))
 
 
 def model_source(model: Model) -> str:
@@ -571,23 +577,96 @@ def _model_text(model: Model, again: bool = False) -> str:
     hash of its text, the package's kernels and a registered law's kernel), the translator's
     sources (:func:`_sources_digest`) and the model's sizes.  Translating costs 30–60 ms per
     model structure and process (≈ 1 CPU s of a warm ``reproduce``); the file is written whole
-    (a temporary file renamed) or not at all, and a model whose module was not generated by
+    (a temporary file renamed) or not at all, with its SHA-256 beside it (a kept text cut
+    short or edited is translated again), and a model whose module was not generated by
     :func:`~feeddrive.model.codegen.compile_module` is translated every time.  ``again``:
-    translated anew and kept in place of the file (whose text did not compile: damaged)."""
-    module = model.module
-    name = str(getattr(module, "__name__", ""))
-    if not name.startswith(_GENERATED):
+    translated anew and kept in place of the file (whose library failed: damaged)."""
+    name = _model_file(model)
+    if name is None:
         return model_source(model)
-    what = (name, _sources_digest(), model.drive, len(model.states), len(model.aux),
-            int(module.N_HELD), int(module.N_CLOCK), int(model.P.size), int(model.T.size))
-    key = hashlib.sha256(repr(what).encode()).hexdigest()[:24]
-    name = f"model-{key}.c"
     text = None if again else _kept_text(name)
     if text is not None:
         return text
     text = model_source(model)
     _keep(name, text)
     return text
+
+
+def _model_file(model: Model) -> str | None:
+    """The name :func:`_model_text` keeps ``model``'s text under, ``model-<hash>.c``; None for
+    a model whose module was not generated (its text is not kept)."""
+    module = model.module
+    name = str(getattr(module, "__name__", ""))
+    if not name.startswith(_GENERATED):
+        return None
+    what = (name, _sources_digest(), model.drive, len(model.states), len(model.aux),
+            int(module.N_HELD), int(module.N_CLOCK), int(model.P.size), int(model.T.size))
+    return f"model-{hashlib.sha256(repr(what).encode()).hexdigest()[:24]}.c"
+
+
+#: the file names a compiler's message gives the two libraries' texts (their temporary
+#: folder is gone when it is read); a model's kept text is named by its path
+DRIVER_FILE, MODEL_FILE = "driver.c", "model.c"
+
+
+def _library_of(text_of: Callable[[bool], str], symbols: Sequence[str], flags: Sequence[str],
+                name: str, shown: Callable[[], str | None], what: str
+                ) -> tuple[ctypes.CDLL, str]:
+    """The library compiled from ``text_of(False)`` (through the cache), loaded, holding every
+    one of ``symbols``, and the text it was compiled from.  Compiled from ``text_of(True)``
+    (translated anew, kept in place of a damaged kept text) where the first fails to
+    compile; and where the library loaded lacks one of ``symbols`` (a damaged library whose
+    digest matches), that library is compiled again, once, from a fresh translation — each
+    said in one line on standard error.  ``name``, ``shown``: as :func:`~feeddrive.backends.
+    c_cache.cached_library` takes them (``shown()`` the kept text's path, or None); ``what``:
+    the kept text, for a note where ``shown()`` gives none."""
+    text = text_of(False)
+    try:
+        path = cached_library(text, flags=flags, name=name, shown=shown())
+    except CompileError:
+        fresh = text_of(True)  # a kept text damaged?
+        if fresh == text:
+            raise
+        print(f"feeddrive: {shown() or what} did not compile: translated again",
+              file=sys.stderr)
+        text = fresh
+        path = cached_library(text, flags=flags, name=name, shown=shown())
+    lib = ctypes.CDLL(str(path))
+    missing = _missing(lib, symbols)
+    if missing is None:
+        return lib, text
+    print(f"feeddrive: {path} lacks {missing} (damaged), so it is compiled again",
+          file=sys.stderr)
+    _unload(lib)  # the same path is loaded again below: dlopen would return this one
+    fresh = text_of(True)
+    path = cached_library(fresh, flags=flags, name=name, shown=shown(), again=fresh == text)
+    lib = ctypes.CDLL(str(path))
+    missing = _missing(lib, symbols)
+    if missing is not None:
+        raise RuntimeError(f"{path}: the C library compiled from a fresh translation lacks "
+                           f"{missing} (a defect of the C engine)")
+    return lib, fresh
+
+
+def _missing(lib: ctypes.CDLL, symbols: Sequence[str]) -> str | None:
+    """The first of ``symbols`` that ``lib`` does not define, or None."""
+    for symbol in symbols:
+        try:
+            ctypes.c_char.in_dll(lib, symbol)
+        except ValueError:
+            return symbol
+    return None
+
+
+def _unload(lib: ctypes.CDLL) -> None:
+    """Unload ``lib`` (nothing of it in use), so that a library compiled again under its path
+    is loaded, not this one."""
+    import _ctypes
+
+    close = getattr(_ctypes, "dlclose", None) or getattr(_ctypes, "FreeLibrary", None)
+    if close is not None:
+        with contextlib.suppress(OSError):
+            close(lib._handle)
 
 
 #: why the C build does not run where a C ``long`` is 32 bits (64-bit Windows): the engine
@@ -634,13 +713,13 @@ class _Entry:
     (``c_void_p``; ≈ 3 µs an array, where ``data_as`` costs 5), checked to be C-contiguous
     with elements of the C type's kind and size."""
 
-    def __init__(self, lib: ctypes.CDLL, use: str, table: int) -> None:
+    def __init__(self, lib: ctypes.CDLL, use: str, table: int, again: bool = False) -> None:
         if use in FUNCTIONS:
-            self.params = driver_unit("functions")["params"][use]
+            self.params = driver_unit("functions", again)["params"][use]
             self.n_stats = 0
             self.fn = getattr(lib, FUNCTIONS[use][1])
         else:
-            unit = driver_unit(use)
+            unit = driver_unit(use, again)
             self.params = unit["params"]
             self.n_stats = unit["n_stats"]
             self.fn = getattr(lib, f"fd_{use}")
@@ -729,6 +808,7 @@ class CEngine:
         self._lock = threading.Lock()
         self._driver_lock = threading.Lock()
         self._drivers: ctypes.CDLL | None = None
+        self._drivers_again = False  # the driver library is of units translated anew
         self._libraries: dict[str, tuple[ctypes.CDLL, int]] = {}
         self._entries: dict[tuple[int, str], _Entry] = {}
         self._functions: dict[tuple[int, str], Callable[..., Any]] = {}
@@ -826,14 +906,25 @@ class CEngine:
 
     def _driver_library(self) -> ctypes.CDLL:
         """The driver library (:func:`driver_source`), the same for every model: compiled
-        once per machine, loaded once per process."""
+        once per machine, loaded once per process; compiled from units translated anew where
+        the kept ones do not compile, or give a library without its entries
+        (:func:`_library_of`)."""
         lib = self._drivers
         if lib is None:
             with self._driver_lock:
                 lib = self._drivers
                 if lib is None:
-                    lib = self._drivers = ctypes.CDLL(str(cached_library(driver_source(),
-                                                                          flags=DRIVER_FLAGS)))
+                    def text_of(again: bool) -> str:
+                        # anew only if a kept unit was read: else it would be the same text
+                        fresh = again and any(n.startswith("driver-") for n in _FROM_CACHE)
+                        self._drivers_again = self._drivers_again or fresh
+                        return driver_source(fresh)
+
+                    symbols = [*(f"fd_{use}" for use in USES),
+                               *(cname for _, cname, _, _ in FUNCTIONS.values())]
+                    what = f"the kept driver texts (driver-*-{_sources_digest()}.json)"
+                    lib = self._drivers = _library_of(text_of, symbols, DRIVER_FLAGS,
+                                                      DRIVER_FILE, lambda: None, what)[0]
         return lib
 
     def _library(self, model: Model) -> tuple[ctypes.CDLL, int]:
@@ -851,15 +942,15 @@ class CEngine:
                 key = hashlib.sha256(text.encode()).hexdigest()
                 found = self._libraries.get(key)
                 if found is None:
-                    try:
-                        path = cached_library(text)
-                    except CompileError:
-                        fresh = _model_text(model, again=True)  # a kept text damaged?
-                        if fresh == text:
-                            raise
-                        text, path = fresh, cached_library(fresh)
-                        key = hashlib.sha256(text.encode()).hexdigest()
-                    lib = ctypes.CDLL(str(path))
+                    def shown() -> str | None:  # the kept text, whose lines a message counts
+                        name = _model_file(model)
+                        path = kept(name) if name is not None else None
+                        return str(path) if path is not None else None
+
+                    lib, text = _library_of(
+                        lambda again: _model_text(model, again=True) if again else text,
+                        [TABLE], LIBRARY_FLAGS, MODEL_FILE, shown, "the model's kept text")
+                    key = hashlib.sha256(text.encode()).hexdigest()
                     table = ModelTable.in_dll(lib, TABLE)
                     expected = (len(model.states), len(model.aux), int(module.N_HELD),
                                 int(module.N_CLOCK))
@@ -877,7 +968,8 @@ class CEngine:
         key = (id(lib), use)
         entry = self._entries.get(key)
         if entry is None:
-            entry = self._entries[key] = _Entry(self._driver_library(), use, table)
+            entry = self._entries[key] = _Entry(self._driver_library(), use, table,
+                                                self._drivers_again)
         return entry
 
     def function(self, model: Model, name: str) -> Callable[..., Any] | None:

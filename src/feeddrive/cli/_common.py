@@ -368,9 +368,13 @@ def user_errors(fn: F) -> F:
         except (ParameterError, ValueError, FileNotFoundError) as err:
             raise _fail(_refusal(err, kwargs), EXIT_REFUSED) from None
         except OSError as err:
+            # without a file name: a write of the command's files (a full disk while writing
+            # the output, io.outputs.write_bytes) — none given, nothing to name (it was
+            # labelled "output" where no output was written)
             where = shown(os.fspath(err.filename)) if err.filename is not None else \
-                _files_of(kwargs) or "output"
-            raise _fail(f"{where}: {err.strerror or err}", EXIT_FAILED) from None
+                _files_of(kwargs)
+            why = err.strerror or str(err)
+            raise _fail(f"{where}: {why}" if where else why, EXIT_FAILED) from None
         except MemoryError:
             files = _files_of(kwargs)
             raise _fail(f"{files + ': ' if files else ''}out of memory; the input or the "

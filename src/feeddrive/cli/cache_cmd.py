@@ -20,11 +20,13 @@ def cache(
                                "C libraries and texts (compiled again, ≈ 0.4 s each, when "
                                "needed), unfinished compilations older than an hour; in the "
                                "C cache and its fallback folder. The running version's numba "
-                               "cache is kept. What cannot be removed is listed, and the exit "
-                               "status is then 1."),
+                               "cache is kept, and nothing that is not feeddrive's (named as "
+                               "feeddrive names what it writes) is touched. What cannot be "
+                               "removed, or a cache folder that cannot be read, is listed, and "
+                               "the exit status is then 1."),
     older_than: float | None = typer.Option(None, "--older-than", help="Age for --prune "
                                             f"[days], {DEFAULT_AGE:g} if not given; 0 prunes "
-                                            "everything it may."),
+                                            "everything it may; a finite number ≥ 0."),
     dry_run: bool = typer.Option(False, "--dry-run", help="With --prune: only list what "
                                  "would be removed."),
     as_json: bool = typer.Option(False, "--json", help="Print JSON."),
@@ -48,14 +50,16 @@ def cache(
     if as_json:
         data: dict[str, object] = {"parts": [
             {"name": p.name, "folder": str(p.folder), "entries": p.entries,
-             "size_mb": p.size / MB, "note": p.note} for p in parts]}
+             "size_mb": p.size / MB, "note": p.note, "foreign": p.foreign} for p in parts]}
         if report is not None:
             data["pruned"] = {"dry_run": report.dry_run, "older_than_days": days,
                               "entries": report.entries,
                               "removed": [str(p) for p in report.removed],
                               "freed_mb": report.freed / MB,
                               "failed": [{"path": str(p), "reason": why}
-                                         for p, why in report.failed]}
+                                         for p, why in report.failed],
+                              "unread": [{"path": str(p), "reason": why}
+                                         for p, why in report.unread]}
         print_json(data)
     else:
         if report is not None:
@@ -68,10 +72,17 @@ def cache(
             for path, why in report.failed:
                 err_console.print(f"error: could not remove {shown(path, None)}: {why}",
                                   markup=False, highlight=False, soft_wrap=True)
+            for path, why in report.unread:
+                err_console.print(f"error: could not read {shown(path, None)}: {why}; "
+                                  "nothing there was pruned",
+                                  markup=False, highlight=False, soft_wrap=True)
         for p in parts:
             entries = "1 entry" if p.entries == 1 else f"{p.entries} entries"
-            note = f" ({p.note})" if p.note else ""
+            others = "1 other file" if p.foreign == 1 else f"{p.foreign} other files"
+            notes = [*([p.note] if p.note else []),
+                     *([f"{others} not feeddrive's, left alone"] if p.foreign else [])]
+            note = f" ({'; '.join(notes)})" if notes else ""
             console.print(f"{p.name}: {entries}, {p.size / MB:.1f} MB in "
                           f"{shown(p.folder, None)}{note}", markup=False, highlight=False)
-    if report is not None and report.failed:
+    if report is not None and (report.failed or report.unread):
         raise typer.Exit(code=EXIT_FAILED)

@@ -24,6 +24,7 @@ Both give the same results (the regression corpus, docs/c-backend.md "The engine
 from __future__ import annotations
 
 import os
+import shlex
 from typing import TYPE_CHECKING, Any
 
 from .. import _jit, registry
@@ -47,8 +48,31 @@ NO_ENGINE = ("no C compiler found and numba is not installed; install a C compil
              "install numba: pip install 'feeddrive[numba]'")
 
 
+def cc_trouble(cc: str) -> str:
+    """What is wrong with ``$CC`` when it gives no compiler, to start a line: it is not an
+    executable, or not a command line at all (an unbalanced quote).
+
+    Parameters
+    ----------
+    cc : str
+        The variable's value.
+
+    Returns
+    -------
+    str
+        ``CC = '…' is not an executable``, or ``CC = '…' is not a command line (…)``.
+    """
+    try:
+        shlex.split(cc)
+    except ValueError as err:
+        return (f"CC = {cc!r} is not a command line ({str(err).lower()}: expected a compiler "
+                "and its options, quoted as in a shell)")
+    return f"CC = {cc!r} is not an executable"
+
+
 def no_engine_text(numba: str = "is not installed") -> str:
-    """:data:`NO_ENGINE`, or, where ``$CC`` names a compiler that is not there, that.
+    """:data:`NO_ENGINE`, or, where ``$CC`` is set but gives no compiler, that
+    (:func:`cc_trouble`).
 
     Parameters
     ----------
@@ -63,7 +87,7 @@ def no_engine_text(numba: str = "is not installed") -> str:
     cc = os.environ.get("CC", "").strip()
     if not cc:
         return NO_ENGINE.replace("numba is not installed", f"numba {numba}")
-    return (f"CC = {cc!r} is not an executable and numba {numba}; set CC to a C compiler "
+    return (f"{cc_trouble(cc)} and numba {numba}; set CC to a C compiler "
             "(or unset it to use cc, gcc or clang from PATH), or install numba: "
             "pip install 'feeddrive[numba]'")
 
