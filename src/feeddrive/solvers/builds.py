@@ -24,7 +24,6 @@ Both give the same results (the regression corpus, docs/c-backend.md "The engine
 from __future__ import annotations
 
 import os
-import shlex
 from typing import TYPE_CHECKING, Any
 
 from .. import _jit, registry
@@ -49,8 +48,9 @@ NO_ENGINE = ("no C compiler found and numba is not installed; install a C compil
 
 
 def cc_trouble(cc: str) -> str:
-    """What is wrong with ``$CC`` when it gives no compiler, to start a line: it is not an
-    executable, or not a command line at all (an unbalanced quote).
+    """What is wrong with ``$CC`` when it gives no compiler, to start a line, in the words of
+    :func:`feeddrive.backends.c_cache.cc_problem` (not an executable, or not a command line at
+    all: an unbalanced quote).
 
     Parameters
     ----------
@@ -60,14 +60,11 @@ def cc_trouble(cc: str) -> str:
     Returns
     -------
     str
-        ``CC = '…' is not an executable``, or ``CC = '…' is not a command line (…)``.
+        ``CC = '…': '…' is not an executable on PATH``, ``CC = '…' is not a command line (…)``.
     """
-    try:
-        shlex.split(cc)
-    except ValueError as err:
-        return (f"CC = {cc!r} is not a command line ({str(err).lower()}: expected a compiler "
-                "and its options, quoted as in a shell)")
-    return f"CC = {cc!r} is not an executable"
+    from ..backends.c_cache import cc_problem
+
+    return cc_problem(cc) or f"CC = {cc!r} gives no compiler"
 
 
 def no_engine_text(numba: str = "is not installed") -> str:
