@@ -48,7 +48,7 @@ from .._disk import DAY, existing_private, file_lock, private_folder, user_cache
 __all__ = ["CACHE_ENV", "COMPILE_FAILED_ADVICE", "CompileError", "CompilerNotFound",
            "DIGEST_SUFFIX", "LIBRARY_FLAGS", "NO_COMPILER", "STATS",
            "available_compiler", "cache_folder", "cache_key", "cached_library", "compile_c",
-           "cc_problem", "compiler_identity", "fallback_folder", "find_compiler", "in_store",
+           "compiler_identity", "fallback_folder", "find_compiler", "in_store",
            "keep_text", "kept", "kept_text", "library_suffix", "mark_used",
            "no_compiler_text", "store_folder"]
 
@@ -102,33 +102,6 @@ class CompileError(RuntimeError):
         self.output = output
 
 
-def cc_problem(cc: str) -> str | None:
-    """What is wrong with ``$CC`` = ``cc``, in the words :func:`find_compiler` refuses it with
-    (every message about ``$CC`` says it so), or None when it names an executable.
-
-    Parameters
-    ----------
-    cc : str
-        The variable's value.
-
-    Returns
-    -------
-    str or None
-        ``CC = "gcc '-O2" is not a command line (no closing quotation): …``, ``CC =
-        '/x/cc': '/x/cc' is not an executable file``, ``… is not an executable on PATH``.
-    """
-    try:
-        cmd = shlex.split(cc)
-    except ValueError as err:  # an unbalanced quote
-        return (f"CC = {cc!r} is not a command line ({str(err).lower()}): expected a C "
-                "compiler and its options, quoted as in a shell (CC='gcc -O2')")
-    if cmd and shutil.which(cmd[0]) is not None:
-        return None
-    program = cmd[0] if cmd else ""
-    where = "file" if os.sep in program or (os.altsep or os.sep) in program else "on PATH"
-    return f"CC = {cc!r}: {program!r} is not an executable {where}"
-
-
 def find_compiler() -> list[str]:
     """The C compiler command.
 
@@ -145,6 +118,8 @@ def find_compiler() -> list[str]:
     """
     env = os.environ.get("CC", "").strip()
     if env:
+        from ..solvers.builds import cc_problem
+
         problem = cc_problem(env)
         if problem is not None:
             raise CompilerNotFound(problem)
@@ -179,7 +154,8 @@ def available_compiler() -> list[str] | None:
 
 def no_compiler_text() -> str:
     """What is said when no C compiler is found: :data:`NO_COMPILER`, or, where ``$CC`` is set
-    but gives none (:func:`cc_problem`), that (the compilers on PATH are not looked at then).
+    but gives none (:func:`feeddrive.solvers.builds.cc_problem`), that (the compilers on PATH
+    are not looked at then).
 
     Returns
     -------
@@ -189,6 +165,8 @@ def no_compiler_text() -> str:
     env = os.environ.get("CC", "").strip()
     if not env:
         return NO_COMPILER
+    from ..solvers.builds import cc_problem
+
     return (f"feeddrive: {cc_problem(env) or f'CC = {env!r} gives no compiler'}, so the numba "
             "build is used; set CC to a C compiler, or unset it to use cc, gcc or clang from "
             "PATH")

@@ -24,6 +24,8 @@ Both give the same results (the regression corpus, docs/c-backend.md "The engine
 from __future__ import annotations
 
 import os
+import shlex
+import shutil
 from typing import TYPE_CHECKING, Any
 
 from .. import _jit, registry
@@ -47,10 +49,37 @@ NO_ENGINE = ("no C compiler found and numba is not installed; install a C compil
              "install numba: pip install 'feeddrive[numba]'")
 
 
+def cc_problem(cc: str) -> str | None:
+    """What is wrong with ``$CC`` = ``cc``, or None when it names an executable: one wording,
+    which :func:`feeddrive.backends.c_cache.find_compiler`'s refusal, the note said while numba
+    runs and :func:`no_engine_text` all use (here, as the core may not import the backends).
+
+    Parameters
+    ----------
+    cc : str
+        The variable's value.
+
+    Returns
+    -------
+    str or None
+        ``CC = "gcc '-O2" is not a command line (no closing quotation): …``, ``CC =
+        '/x/cc': '/x/cc' is not an executable file``, ``… is not an executable on PATH``.
+    """
+    try:
+        cmd = shlex.split(cc)
+    except ValueError as err:  # an unbalanced quote
+        return (f"CC = {cc!r} is not a command line ({str(err).lower()}): expected a C "
+                "compiler and its options, quoted as in a shell (CC='gcc -O2')")
+    if cmd and shutil.which(cmd[0]) is not None:
+        return None
+    program = cmd[0] if cmd else ""
+    where = "file" if os.sep in program or (os.altsep or os.sep) in program else "on PATH"
+    return f"CC = {cc!r}: {program!r} is not an executable {where}"
+
+
 def cc_trouble(cc: str) -> str:
-    """What is wrong with ``$CC`` when it gives no compiler, to start a line, in the words of
-    :func:`feeddrive.backends.c_cache.cc_problem` (not an executable, or not a command line at
-    all: an unbalanced quote).
+    """What is wrong with ``$CC`` when it gives no compiler, to start a line
+    (:func:`cc_problem`).
 
     Parameters
     ----------
@@ -62,8 +91,6 @@ def cc_trouble(cc: str) -> str:
     str
         ``CC = '…': '…' is not an executable on PATH``, ``CC = '…' is not a command line (…)``.
     """
-    from ..backends.c_cache import cc_problem
-
     return cc_problem(cc) or f"CC = {cc!r} gives no compiler"
 
 
