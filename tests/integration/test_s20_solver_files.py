@@ -264,7 +264,10 @@ def test_the_settings_help_names_the_files_table_before_the_default() -> None:
         for name, flag, _ in OPTIONS:
             if flag not in text:  # export fmu: no --rosenbrock (a test holds it)
                 continue
-            assert f"default: the parameter file's [solver] {name}, else {defaults[name]}" \
+            # the table takes SI where the option takes mm, mm/s: its unit said
+            shown = {"position_tolerance": f"{name} [m]",
+                     "speed_tolerance": f"{name} [m/s]"}.get(name, name)
+            assert f"default: the parameter file's [solver] {shown}, else {defaults[name]}" \
                 in text, (path, flag)
 
 

@@ -110,7 +110,7 @@ def max_steps_help(probe: bool = False) -> str:
             f"{f'{DEFAULT_MAX_STEPS:,}'.replace(',', ' ')}.")
 
 
-def file_default(name: str) -> str:
+def file_default(name: str, unit: str = "") -> str:
     """How an option's help opens its default: the ``[solver]`` table's setting ``name``
     first (precedence: the command line, the file, the default; a sweep's: its
     configuration's table over its ``params`` file's), as ``--method``'s help says it.
@@ -119,13 +119,16 @@ def file_default(name: str) -> str:
     ----------
     name : str
         The setting (a key of the ``[solver]`` table).
+    unit : str, default ""
+        The table's unit where it differs from the option's (the table takes SI: ``"m"``
+        for ``position_tolerance``, which the option takes in mm).
 
     Returns
     -------
     str
-        ``"default: the parameter file's [solver] NAME, else "``, the default to follow.
+        ``"default: the parameter file's [solver] NAME [UNIT], else "``, the default to follow.
     """
-    return f"default: the parameter file's [solver] {name}, else "
+    return f"default: the parameter file's [solver] {name}{f' [{unit}]' if unit else ''}, else "
 
 
 
@@ -139,11 +142,11 @@ OPTIONS = (
      f"{opt.SPEED_FRACTION / opt.DEFAULT_RTOL:g}× rtol × the commanded speed: --rtol alone "
      "barely changes a run; --accuracy tightens every tolerance."),
     ("position_tolerance", "--position-tolerance",
-     f"Absolute tolerance of positions [mm] ({file_default('position_tolerance')}"
+     f"Absolute tolerance of positions [mm] ({file_default('position_tolerance', 'm')}"
      f"scaled with the run, {opt.POSITION_TIME:g} s × the speed scale, × --accuracy; "
      f"docs/model.md; {_range('position_tolerance')})."),
     ("speed_tolerance", "--speed-tolerance",
-     f"Absolute tolerance of speeds [mm/s] ({file_default('speed_tolerance')}"
+     f"Absolute tolerance of speeds [mm/s] ({file_default('speed_tolerance', 'm/s')}"
      f"{opt.SPEED_FRACTION:g} × the speed scale × --accuracy; {_range('speed_tolerance')})."),
     ("current_tolerance", "--current-tolerance",
      f"Absolute tolerance of currents [A] ({file_default('current_tolerance')}"
