@@ -492,10 +492,12 @@ def kept_text(name: str) -> str | None:
             continue
         try:
             data = path.read_bytes()
-            want = digest.read_text(encoding="ascii").strip()
-        except (OSError, ValueError):
+        except OSError:
             continue
-        if hashlib.sha256(data).hexdigest() != want:
+        whole = _matches(data, digest)
+        if whole is None:  # no digest (a text kept before texts had one): made again, unsaid
+            continue
+        if not whole:
             _note(str(path), f"feeddrive: {path} does not match {digest.name} (damaged or "
                   "edited), so it is translated again")
             continue
@@ -525,7 +527,7 @@ def keep_text(name: str, text: str) -> None:
     from ..io.outputs import atomic_path
 
     data = text.encode("utf-8")
-    digest = hashlib.sha256(data).hexdigest() + "\n"
+    digest = _digest(data)
 
     def write(folder: Path) -> None:
         with atomic_path(folder / name) as tmp:
@@ -545,14 +547,29 @@ def _intact(folder: Path, key: str, name: str) -> Path | None:
     marked used (:func:`mark_used`)."""
     lib = folder / name
     try:
-        want = (folder / f"{key}{DIGEST_SUFFIX}").read_text(encoding="ascii").strip()
-        whole = hashlib.sha256(lib.read_bytes()).hexdigest() == want
-    except (OSError, ValueError):
+        data = lib.read_bytes()
+    except OSError:
         return None
-    if not whole:
+    if not _matches(data, folder / f"{key}{DIGEST_SUFFIX}"):
         return None
     mark_used(lib)
     return lib
+
+
+def _digest(data: bytes) -> str:
+    """The text of the ``.sha256`` file kept beside a file of bytes ``data`` (a library, a
+    text): their SHA-256 in hexadecimal, and a newline."""
+    return hashlib.sha256(data).hexdigest() + "\n"
+
+
+def _matches(data: bytes, digest: Path) -> bool | None:
+    """Whether ``data`` has the SHA-256 that the file ``digest`` holds (:func:`_digest`);
+    None when that file cannot be read (missing, or not ASCII)."""
+    try:
+        want = digest.read_text(encoding="ascii").strip()
+    except (OSError, ValueError):
+        return None
+    return _digest(data).strip() == want
 
 
 def mark_used(path: Path) -> None:
@@ -657,8 +674,7 @@ def _compile_into(folder: Path, source: str, key: str, lib_name: str, command: l
                         raise
                     raise OSError(full, os.strerror(full), str(folder)) from None
                 digest = Path(tmp) / digest_name
-                digest.write_text(hashlib.sha256(built.read_bytes()).hexdigest() + "\n",
-                                  encoding="ascii")
+                digest.write_text(_digest(built.read_bytes()), encoding="ascii")
                 try:
                     os.replace(built, lib)
                 except OSError:
