@@ -385,7 +385,7 @@ def _check_budget(duration: float, options: SolverOptions | None) -> None:
                              f"each run lasts {duration:.6g} s and needs at least "
                              f"{budget.min_steps:.3g} solver steps; a smaller radius or a "
                              "higher feed, or raise --max-steps")
-    check_output_memory(2.0 * duration, solver.output_interval)
+    check_output_memory(2.0 * duration, solver.output_interval, options=solver)
 
 
 def _lead_in(machine: Machine, axes: tuple[str, str], radius: float, feed: float,
