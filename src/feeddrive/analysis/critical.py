@@ -34,8 +34,9 @@ from typing import Any
 import numpy as np
 
 from .. import units
+from ..engine.budget import setting_field
 from ..engine.error_estimate import estimate_kind
-from ..engine.simulate import DriveSystem, Simulation, SolverOptions
+from ..engine.simulate import DriveSystem, Simulation, SolverOptions, run_options
 from ..model.reference import ConstantSpeed, _staircase
 from ..parameters import ParameterError
 from . import protocol
@@ -594,6 +595,44 @@ def shadow_possible(options: SolverOptions | None = None,
     return True
 
 
+#: The coarsest output interval a creep verdict is judged on [s]: the default's (1 ms), at
+#: which the verdict corpus was built; the critical speeds do not move between 0.25 ms and
+#: 1 ms (tests/validation/test_verdict_interval.py).  A search's trials sample the table speed
+#: at the run's output interval, and one sampled coarser than the drive's oscillation cannot
+#: see it (at 0.5 s a CDFS step-down search found 1.39 mm/s and two undecided bands where the
+#: default finds 1.40 mm/s and none); so a coarser interval is refused before the first trial.
+VERDICT_INTERVAL = 1e-3
+
+
+def check_verdict_interval(system: DriveSystem, options: SolverOptions | None) -> None:
+    """Refuse, before a trial runs, an output interval coarser than :data:`VERDICT_INTERVAL`
+    in the options a run of ``system`` takes (:func:`~feeddrive.engine.simulate.run_options`:
+    ``options`` over the parameter file's ``[solver]`` table).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (its parameter set may carry a ``[solver]`` table).
+    options : SolverOptions or None
+        The options given (None: those in force).
+
+    Raises
+    ------
+    ParameterError
+        Naming the interval where it was set (``solver.output_interval ([solver] in
+        run.toml)``, ``options.output_interval``), its value [s] and the largest allowed.
+    """
+    merged = run_options(system, options)
+    interval = merged.output_interval
+    if interval <= VERDICT_INTERVAL * (1.0 + 1e-9):
+        return
+    field, origin = setting_field(merged, "output_interval")
+    raise ParameterError(field, interval,
+                         f"expected ≤ {VERDICT_INTERVAL:g} [s] for a creep verdict: its trials "
+                         f"judge the table speed sampled at the output interval, checked at "
+                         f"≤ {VERDICT_INTERVAL:g} s{origin}")
+
+
 def _trial_profile(speed: float, nut_speed: float) -> ConstantSpeed:
     """A trial's reference: the table (and nut) from rest to their speeds [m/s] in 0.1 s."""
     return ConstantSpeed(speed, nut_speed, ramp_time=0.1)
@@ -603,6 +642,7 @@ def _run_trial(system: DriveSystem, speed: float, nut_speed: float,
                rule: VerdictRule | None, options: SolverOptions | None,
                embedded: bool) -> tuple[CreepTrial, np.ndarray, np.ndarray]:
     """A trial (:func:`creep_trial`) and the table-speed trace it was judged on [s; m/s]."""
+    check_verdict_interval(system, options)
     sim = Simulation(system, _trial_profile(speed, nut_speed), options,
                      embedded_estimate=embedded)
     error: list[float | None] = [None]
@@ -987,6 +1027,7 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
     duration : float
         Simulated time [s].
     """
+    check_verdict_interval(system, options)
     rule = rule or VerdictRule()
     levels = rule.durations()
     sp = np.asarray(speeds, dtype=float)

@@ -20,6 +20,7 @@ from typing import Any
 from ..engine.simulate import DriveSystem, SolverOptions, simulate
 from ..model.reference import ConstantSpeed
 from .creep_window import creep_metrics
+from .critical import check_verdict_interval
 
 THRESHOLDS = (0.3, 0.5, 1.0)
 TRIAL = 12.0  # [s] the forced ripple is steady after the start (checked against 24 s)
@@ -139,9 +140,13 @@ def threshold_critical_speed(system: DriveSystem, nut_speed: float = 0.0, *,
     ------
     ValueError
         For a threshold ≤ 0.
+    ParameterError
+        For an output interval coarser than a verdict's
+        (:func:`~feeddrive.analysis.critical.check_verdict_interval`).
     """
     if not (0.0 < threshold and math.isfinite(threshold)):
         raise ValueError(f"threshold = {threshold!r}: expected > 0 (a ripple/command ratio)")
+    check_verdict_interval(system, options)  # the ripple is read off the samples
     lo, hi = speed_range
     cache: dict[float, ForcedRipplePoint] = {} if known is None else known
     points: dict[float, ForcedRipplePoint] = {}
