@@ -140,8 +140,12 @@ class Calibration:
                     "is below what the drive reaches by it)")
         if a.status == "below-range":
             return f"{what}, but the drive is then smooth down to {low:.2f} mm/s"
+        if a.critical_speed is None:  # undecided: a trial above the creeping band is
+            return (f"{what}, but the critical speed from rest is then undecided: a trial "
+                    "above the highest creeping band is undecided at the rule's longest trial "
+                    "(raise the rule's max_duration)")
         return (f"{what}, but the critical speed from rest is "
-                f"{a.critical_speed * 1e3:.2f} mm/s"  # type: ignore[operator]
+                f"{a.critical_speed * 1e3:.2f} mm/s"
                 f", {100 * (self.deviation or 0.0):+.0f} % from the target (tolerance "
                 f"{self.tolerance * 1e3:.2f} mm/s)")
 
