@@ -16,8 +16,10 @@ from rich.console import Console
 from .. import registry, units
 from ..io.outputs import shown
 from ..parameters import DriveParameters, ParameterError, load, preset
+from ._usage import OneLineGroup
 
 app = typer.Typer(
+    cls=OneLineGroup,  # usage errors in one `error:` line (docs/outputs.md)
     no_args_is_help=True,
     add_completion=True,  # feeddrive --install-completion [bash|zsh|fish|powershell]
     rich_markup_mode=None,  # Rich markup would eat the units: "[mm/s]" (issue 12 item 1)
