@@ -6,13 +6,13 @@ with every tolerance ``SHADOW_FACTOR`` times tighter once the search is done
 Checked against truths feeddrive did not make: scipy's Radau on the plain-Python model
 (``reference/make_radau_reference.py``) for the trials that decide the ``reproduce`` report's
 critical speeds and band edges, and the stored Radau references of three stick-slip runs
-(``reference/cases.py``).  Measured 2026-12-06: the shadow over the true table-speed error
+(``reference/cases.py``). Measured 2026-12-06: the shadow over the true table-speed error
 0.85–1.0 on the deciding trials at ``accuracy`` 1 and 0.1 (0.91–1.0 against the tighter
 references of ``test_accuracy_embedded.DECIDING_SETTINGS``, session 21: the DDFS trial's
-reference had been 1.2e-10 m/s off on another CPU, four times the run's error), 0.89–1.1 on the stick-slip runs at
-``accuracy`` 1 (whose stored references, rtol 1e-10, carry up to 9e-10 m/s themselves:
-against a Radau at rtol 1e-12 the shadow is 0.83–1.0 at ``accuracy`` 1 … 0.01) — the
-embedded estimate it replaced there was 6.1–13 000× (test_accuracy_embedded.py).  What the
+reference had been 1.2e-10 m/s off on another CPU, four times the run's error), 0.89–1.1 on the
+stick-slip runs at ``accuracy`` 1 (whose stored references, rtol 1e-10, carry up to 9e-10 m/s
+themselves: against a Radau at rtol 1e-12 the shadow is 0.83–1.0 at ``accuracy`` 1 … 0.01) —
+the embedded estimate it replaced there was 6.1–13 000× (test_accuracy_embedded.py). What the
 estimate costs a search is measured, not tested (benchmarks/README.md).
 """
 
