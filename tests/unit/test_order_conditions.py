@@ -147,3 +147,22 @@ def test_a_method_of_too_high_an_order_is_not_claimed() -> None:
         dataclasses.replace(RODAS5P, embedded_order=5)
     with pytest.raises(OrderConditionError, match=r"^bs3: solution: .* of order 4 "):
         dataclasses.replace(BS3, order=5)  # a 3rd-order pair claimed as 5th: fails at 4
+
+
+def test_the_sums_are_correctly_rounded_on_every_machine() -> None:
+    # the check sums without BLAS or LAPACK (the module's description): a product rounded
+    # once, the sum correctly rounded — the same bits wherever it runs, which a BLAS dot
+    # (fused multiply-adds or not, by CPU) is not
+    from fractions import Fraction
+
+    from feeddrive.solvers.order_conditions import _dot, _inverse_lower
+
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        u, v = rng.normal(size=8) * 10.0 ** rng.integers(-8, 8, 8), rng.normal(size=8)
+        exact = sum(Fraction(float(Fraction(x) * Fraction(y))) for x, y in zip(u, v, strict=True))
+        assert _dot(u, v) == float(exact)
+    low = np.tril(rng.normal(size=(8, 8))) + 4.0 * np.eye(8)
+    inv = _inverse_lower(low)
+    assert np.all(np.triu(inv, 1) == 0.0)
+    assert np.max(np.abs(low @ inv - np.eye(8))) < 1e-14

@@ -18,11 +18,20 @@ instead of silently lowering the method's order.
   conditions up to order p − 1 with b_i(θ) and the right-hand sides θ^ρ(t)/γ(t) (Sect. IV.7,
   "Dense output").  Written out for order ≤ 4 the trees give Table 7.1's rows (e.g.
   Σ b_i β'_i = 1/2 − γ, Σ b_i β_ij β'_j = 1/6 − γ + γ²).
+
+The sums are formed the same on every machine: each product rounded once, the terms added by
+``math.fsum`` (correctly rounded), Γ by forward substitution — no BLAS or LAPACK, whose
+kernels (fused multiply-adds or not, blocking) differ between CPUs and library versions.  With
+``np.linalg.inv`` and ``@``, on an "AMD EPYC" host (2026-12-06), RODAS5's α_7 (the benchmark's
+tableau, benchmarks/bench_rosenbrock_order.py) came 1.2e-13 from c_7, past :data:`TOLERANCE`,
+where the hosts before had left it within; so summed, 1.6e-14 at most (every tableau's
+largest residual: DOPRI5 9.4e-16, RODAS4 8.9e-16, RODAS5P 2.0e-14, RODAS5 1.6e-14).
 """
 
 from __future__ import annotations
 
 import functools
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -89,11 +98,41 @@ def _density(tree: Tree) -> int:
     return _size(tree) * int(np.prod([_density(child) for child in tree]))
 
 
+def _dot(u: np.ndarray, v: np.ndarray) -> float:
+    """Σ u_i v_i, each product rounded once and the sum correctly rounded (``math.fsum``)."""
+    return math.fsum(float(x) * float(y) for x, y in zip(u, v, strict=True))
+
+
+def _mv(m: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """M v by :func:`_dot` (the same on every machine, unlike BLAS)."""
+    return np.array([_dot(row, v) for row in m])
+
+
+def _vm(v: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """vᵀ M by :func:`_dot`."""
+    return _mv(m.T, v)
+
+
+def _inverse_lower(low: np.ndarray) -> np.ndarray:
+    """The inverse of a lower-triangular matrix by forward substitution, column by column."""
+    n = low.shape[0]
+    inv = np.zeros((n, n))
+    for j in range(n):
+        inv[j, j] = 1.0 / low[j, j]
+        for i in range(j + 1, n):
+            inv[i, j] = -_dot(low[i, j:i], inv[j:i, j]) / low[i, i]
+    return inv
+
+
+def _sum(v: np.ndarray) -> float:
+    return math.fsum(float(x) for x in v)
+
+
 def _weights(tree: Tree, a: np.ndarray) -> np.ndarray:
     """Φ(t) over the stages: Π over the subtrees of A Φ(subtree) (ones for the leaf)."""
     phi = np.ones(a.shape[0])
     for child in tree:
-        phi = phi * (a @ _weights(child, a))
+        phi = phi * _mv(a, _weights(child, a))
     return phi
 
 
@@ -117,7 +156,7 @@ def _check_trees(name: str, what: str, weights: np.ndarray, a: np.ndarray, order
         for k, tree in enumerate(trees(rho)):
             _fail(name, f"{what}: Σ b_i Φ_i(t) for tree {k + 1} of order {rho}"
                   + ("" if theta == 1.0 else f" at θ = {theta}"),
-                  float(weights @ _weights(tree, a)), theta ** rho / _density(tree))
+                  _dot(weights, _weights(tree, a)), theta ** rho / _density(tree))
 
 
 def check_explicit(tab: ExplicitTableau) -> None:
@@ -142,7 +181,7 @@ def check_explicit(tab: ExplicitTableau) -> None:
         a[s, :s] = tab.b  # the stage at the new point (c = 1)
     c = (*tab.c, 1.0) if tab.fsal else tab.c
     for i in range(n):
-        _fail(tab.name, f"row sum of a in stage {i + 1} (c_{i + 1})", float(a[i].sum()), c[i])
+        _fail(tab.name, f"row sum of a in stage {i + 1} (c_{i + 1})", _sum(a[i]), c[i])
     _check_trees(tab.name, "solution", b, a, tab.order)
     e = np.zeros(n)
     e[:len(tab.e)] = tab.e
@@ -162,10 +201,10 @@ def _rosenbrock_weights(tree: Tree, alpha: np.ndarray, beta: np.ndarray) -> np.n
     """Φ(t) of a Rosenbrock method over the stages: a vertex with one son is linked to it by
     β (the diagonal γ included), a vertex with several sons to each by α (ones for the leaf)."""
     if len(tree) == 1:
-        return beta @ _rosenbrock_weights(tree[0], alpha, beta)
+        return _mv(beta, _rosenbrock_weights(tree[0], alpha, beta))
     phi = np.ones(alpha.shape[0])
     for child in tree:
-        phi = phi * (alpha @ _rosenbrock_weights(child, alpha, beta))
+        phi = phi * _mv(alpha, _rosenbrock_weights(child, alpha, beta))
     return phi
 
 
@@ -184,13 +223,13 @@ def check_rosenbrock(tab: RosenbrockTableau) -> None:
         At the first condition missed, naming it.
     """
     s, g = len(tab.c), tab.gamma
-    gam = np.linalg.inv(np.eye(s) / g - _lower(tab.cc, s))
-    alpha = _lower(tab.a, s) @ gam
+    gam = _inverse_lower(np.eye(s) / g - _lower(tab.cc, s))
+    low = _lower(tab.a, s)
+    alpha = np.array([_vm(row, gam) for row in low])
     beta = alpha + gam  # β_ij = α_ij + γ_ij, the diagonal γ_ii = γ included
-    al = alpha.sum(axis=1)
     for i in range(s):
-        _fail(tab.name, f"α_{i + 1} (c_{i + 1})", float(al[i]), tab.c[i])
-        _fail(tab.name, f"Σ_j γ_{i + 1}j (d_{i + 1})", float(gam[i].sum()), tab.d[i])
+        _fail(tab.name, f"α_{i + 1} (c_{i + 1})", _sum(alpha[i]), tab.c[i])
+        _fail(tab.name, f"Σ_j γ_{i + 1}j (d_{i + 1})", _sum(gam[i]), tab.d[i])
     m = np.zeros(s)
     m[:s - 1] = tab.a[-1]
     m_hat = m.copy()
@@ -201,11 +240,11 @@ def check_rosenbrock(tab: RosenbrockTableau) -> None:
             for k, tree in enumerate(trees(rho)):
                 _fail(tab.name, f"{what}: Σ b_i Φ_i(t) for tree {k + 1} of order {rho}"
                       + ("" if th == 1.0 else f" at θ = {th}"),
-                      float(w @ _rosenbrock_weights(tree, alpha, beta)),
+                      _dot(w, _rosenbrock_weights(tree, alpha, beta)),
                       th ** rho / _density(tree))
 
-    check("solution", m @ gam, tab.order)
-    check("embedded solution", m_hat @ gam, tab.embedded_order)
+    check("solution", _vm(m, gam), tab.order)
+    check("embedded solution", _vm(m_hat, gam), tab.embedded_order)
     if tab.dense:
         # y(θ) = (1−θ) y0 + θ (y1 + (1−θ)(q1 + θ (q2 + θ q3))), q_r = Σ_j dense[r][j] u_j
         # (q3 = 0 for a method with two rows)
@@ -214,4 +253,4 @@ def check_rosenbrock(tab: RosenbrockTableau) -> None:
             q[r][:len(row)] = row
         for th in THETAS:
             w = th * (m + (1 - th) * (q[0] + th * (q[1] + th * q[2])))
-            check("dense output", w @ gam, tab.dense_order, th)
+            check("dense output", _vm(w, gam), tab.dense_order, th)
