@@ -95,3 +95,23 @@ def test_a_finer_interval_from_a_file_is_taken() -> None:
     system = fd.DriveSystem(params, "cdfs", 0.4)
     trial = critical.creep_trial(system, 2.0e-3)
     assert trial.kind == "smooth"
+
+
+def test_the_sweep_machinery_says_it_as_a_verdicts_limit(tmp_path: Path) -> None:
+    # sensitivity and sweep warm their kernels with a 20-ms run first; the set's 0.5 s was
+    # refused there as the warm-up's ("expected ≤ the run's duration, 0.02 [s]"), a run the
+    # user never asked for
+    path = tmp_path / "coarse.toml"
+    path.write_text(COARSE, encoding="utf-8")
+    sweep = tmp_path / "sw.toml"
+    sweep.write_text(f'drive = "cdfs"\ntable_position = 400\nparams = "{path.name}"\n'
+                     '[design]\nkind = "grid"\n[quantity]\nkind = "creep-trial"\n'
+                     'initial_duration = 3\nmax_duration = 3\nlinear = false\n'
+                     '[axes]\ntable_speed = [1.0, 1.6]\n', encoding="utf-8")
+    for args in (["sensitivity", str(path), "--workers", "1"],
+                 ["sweep", str(sweep), "--workers", "1", "--store",
+                  str(tmp_path / "sw.sqlite")]):
+        result = CliRunner().invoke(app, args)
+        assert result.exit_code == 2, result.output
+        lines = [line for line in result.output.splitlines() if line.strip()]
+        assert len(lines) == 1 and "for a creep verdict" in lines[0], result.output

@@ -366,6 +366,9 @@ def warm(task: dict[str, Any]) -> None:
     q = task["quantity"]
     speed = q.get("table_speed", 1e-3)
     if q["kind"] in ("critical-speed", "creep-trial"):
+        from ..analysis.critical import check_verdict_interval
+
+        check_verdict_interval(system, None)  # the set's [solver] interval, said as a verdict's
         simulate(system, ConstantSpeed(speed, task["nut_speed"], ramp_time=0.01), 0.02)
     if q["kind"] in ("linear-band", "loop-margins") or q.get("linear"):
         from ..analysis.linear import linearize
