@@ -126,20 +126,38 @@ def _rpm_csv(record: Path) -> list[str]:
     return ["fit", "rig.csv", *BASE[2:], "--json"]
 
 
+@pytest.fixture(scope="module")
+def fitted_rpm(record: Path) -> dict:
+    """The fit of the same record as a CSV trace with the motor speed in rpm."""
+    res = _run(*_rpm_csv(record), "--input", "speed", cwd=record)
+    assert res.returncode == 0, res.stderr
+    return json.loads(res.stdout)
+
+
+def _apart(fitted: dict, fitted_rpm: dict) -> float:
+    """How far apart the two mass estimates are, in the .mat fit's standard errors."""
+    (mass,) = fitted_rpm["estimates"]
+    (other,) = fitted["estimates"]
+    return abs(mass["value"] - other["value"]) / other["stderr"]
+
+
+def test_fit_a_csv_trace_replaying_a_motor_speed_in_rpm(fitted: dict, fitted_rpm: dict) -> None:
+    # the same record as the .mat one, in rpm (speeds equal to 1e-14 rad/s): an estimate the
+    # statistics cannot tell from the other's (a unit slip, rpm read as rad/s, is 9.5× off)
+    assert _apart(fitted, fitted_rpm) < 1.0
+
+
 @pytest.mark.xfail(strict=True, reason=(
     "since friction reversals are events of the dense methods (issue 35, merged after this "
-    "test was written), the rpm CSV and the .mat record — speeds equal to 1e-14 rad/s — give "
-    "mass estimates 0.24 s.e. apart (23.98315 vs 23.98081 kg, s.e. 0.00986), not < 0.2: the "
-    "search's optimum moves with the located crossings; left open (closing note)"))
-def test_fit_a_csv_trace_replaying_a_motor_speed_in_rpm(record: Path, fitted: dict) -> None:
-    csv = _rpm_csv(record)
-    res = _run(*csv, "--input", "speed", cwd=record)
-    assert res.returncode == 0, res.stderr
-    # the same record as the .mat one, in rpm: the same estimate (its search stops within
-    # 0.07 s.e. of the other's: the speeds differ by rounding, 1e-14 rad/s)
-    (mass,) = json.loads(res.stdout)["estimates"]
-    (other,) = fitted["estimates"]
-    assert abs(mass["value"] - other["value"]) < 0.2 * other["stderr"]
+    "test was written), the fit's optimum moves with the located crossings: the rpm CSV and "
+    "the .mat record — speeds equal to 1e-14 rad/s — give mass estimates 0.24 s.e. apart on "
+    "an Intel Xeon host (23.98315 vs 23.98081 kg, s.e. 0.00986) and 0.11 on an AMD EPYC one "
+    "(23.97877 vs 23.97992, s.e. 0.01018), not the 0.07 this test measured when written; "
+    "left open (closing note)"))
+def test_a_rounding_of_the_input_moves_the_estimate_by_little(fitted: dict,
+                                                              fitted_rpm: dict) -> None:
+    # its search stopped within 0.07 s.e. of the other's when the test was written
+    assert _apart(fitted, fitted_rpm) < 0.07
 
 
 def test_a_csv_replay_is_refused_in_one_line(record: Path) -> None:

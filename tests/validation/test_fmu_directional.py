@@ -186,8 +186,12 @@ def test_pathsim_model_exchange_needs_far_fewer_derivative_evaluations(tmp_path:
     (central, 2 derivative evaluations per state) at every implicit solve; with them it asks
     the FMU, which evaluates the model's tangent once per column group.  Counted by the FMU
     itself: derivative evaluations at most half (measured: 11.5× fewer; the tangent
-    evaluations, 3× the derivative ones, not counted as derivatives), the same trace to 1e-9
-    of the stroke (measured 1e-10)."""
+    evaluations, 3× the derivative ones, not counted as derivatives), and the same trace: the
+    Jacobian changes how the fixed-point iteration converges, not its fixed point, so the two
+    traces agree within the iteration's tolerance, 1e-12 (PathSim's max-norm of the last
+    update).  Measured 2.3e-16 m (1e-10 of the 2.3-µm stroke) on an Intel Xeon host and 2.9e-15
+    m (1.3e-9) on an AMD EPYC one, whose LAPACK rounds PathSim's solves otherwise: the 1e-9 of
+    the stroke asserted until then (2.3e-15 m) was tighter than the tolerance guarantees."""
     pytest.importorskip("pathsim_fmi")
     from fmu_helpers import pathsim_model_exchange
 
@@ -200,4 +204,4 @@ def test_pathsim_model_exchange_needs_far_fewer_derivative_evaluations(tmp_path:
     assert np.array_equal(t0, t1)
     stroke = abs(x0[-1] - x0[0])
     assert stroke > 1e-6 and math.isfinite(stroke)
-    assert np.max(np.abs(x1 - x0)) <= 1e-9 * stroke
+    assert np.max(np.abs(x1 - x0)) <= 1e-12  # [m]: tolerance_fpi (fmu_helpers)
