@@ -97,10 +97,12 @@ def test_a_finer_interval_from_a_file_is_taken() -> None:
     assert trial.kind == "smooth"
 
 
-def test_the_sweep_machinery_says_it_as_a_verdicts_limit(tmp_path: Path) -> None:
+def test_the_sweep_machinery_says_it_as_a_verdicts_limit(tmp_path: Path, monkeypatch) -> None:
     # sensitivity and sweep warm their kernels with a 20-ms run first; the set's 0.5 s was
     # refused there as the warm-up's ("expected ≤ the run's duration, 0.02 [s]"), a run the
-    # user never asked for
+    # user never asked for, and after the store had been made; now with the design's check,
+    # before the store is touched
+    monkeypatch.chdir(tmp_path)  # sensitivity's default store is made in the working folder
     path = tmp_path / "coarse.toml"
     path.write_text(COARSE, encoding="utf-8")
     sweep = tmp_path / "sw.toml"
@@ -115,3 +117,4 @@ def test_the_sweep_machinery_says_it_as_a_verdicts_limit(tmp_path: Path) -> None
         assert result.exit_code == 2, result.output
         lines = [line for line in result.output.splitlines() if line.strip()]
         assert len(lines) == 1 and "for a creep verdict" in lines[0], result.output
+    assert not list(tmp_path.glob("*.sqlite"))  # no store made

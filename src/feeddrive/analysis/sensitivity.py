@@ -353,7 +353,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     from ..sweep import SweepStore
     from ..sweep.design import SweepConfig, _load_base
     from ..sweep.executors import check_executor, run_sweep
-    from ..sweep.quantities import QuantitySettings, evaluate
+    from ..sweep.quantities import QuantitySettings, check_task, evaluate
 
     say = progress or (lambda _t: None)
     check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
@@ -388,6 +388,9 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     count = 0
     rounds: list[str] = []
     where = "this process"
+    for base in config.iter_points():  # the base set's refusals before the store is made
+        check_task(base.task)
+        break
     db = None if in_process else SweepStore(
         Path(store) if store is not None else Path(f"{config.name}.sqlite"), option="--store")
 

@@ -31,7 +31,7 @@ from typing import Any
 
 from .._workers import single_threaded_children, stop_workers, worker_start
 from .design import Point, SweepConfig
-from .quantities import evaluate, warm
+from .quantities import check_task, evaluate, warm
 from .store import SweepStore
 
 __all__ = ["DASK_HINT", "PROBE_DURATION", "CtrlC", "Estimate", "SweepAborted",
@@ -403,6 +403,8 @@ def check_design(config: SweepConfig, *, points: list[Point] | None = None,
         structures.setdefault(_structure(p.task, p.coords), p.task)
         if checked is not None and (len(keys) % 200 == 0 or len(keys) == total):
             checked(len(keys), total)
+    for task in structures.values():
+        check_task(task)  # what no point of a structure can compute (a verdict's interval)
     return CheckedDesign(keys, structures)
 
 

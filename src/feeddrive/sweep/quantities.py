@@ -347,6 +347,41 @@ def evaluate(task: dict[str, Any], params: DriveParameters | None = None) -> dic
     return out
 
 
+#: the quantities judged by a creep verdict on the runs' samples
+VERDICT_KINDS = ("critical-speed", "creep-trial")
+
+
+def check_task(task: dict[str, Any]) -> Any:
+    """Refuse, before a store is opened or a run made, what no point of ``task``'s structure
+    can compute: a creep quantity whose parameter set's ``[solver]`` output interval is
+    coarser than a verdict's (:func:`feeddrive.analysis.critical.check_verdict_interval`).
+
+    Parameters
+    ----------
+    task : dict
+        A task of the structure.
+
+    Returns
+    -------
+    DriveSystem
+        The task's drive.
+
+    Raises
+    ------
+    ParameterError
+        Naming the setting where it was set.
+    """
+    from ..analysis.critical import check_verdict_interval
+    from ..engine.simulate import DriveSystem
+    from ..parameters import loads
+
+    params = loads(task["parameters"])
+    system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
+    if task["quantity"]["kind"] in VERDICT_KINDS:
+        check_verdict_interval(system, None)
+    return system
+
+
 def warm(task: dict[str, Any]) -> None:
     """Compile (or load from numba's disk cache) the kernels ``task``'s quantity uses, with
     a 20-ms run and, for linear quantities, one linearisation: cheap, and it leaves the
@@ -357,18 +392,13 @@ def warm(task: dict[str, Any]) -> None:
     task : dict
         A task of the model structure to compile.
     """
-    from ..engine.simulate import DriveSystem, simulate
+    from ..engine.simulate import simulate
     from ..model.reference import ConstantSpeed
-    from ..parameters import loads
 
-    params = loads(task["parameters"])
-    system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
+    system = check_task(task)
     q = task["quantity"]
     speed = q.get("table_speed", 1e-3)
-    if q["kind"] in ("critical-speed", "creep-trial"):
-        from ..analysis.critical import check_verdict_interval
-
-        check_verdict_interval(system, None)  # the set's [solver] interval, said as a verdict's
+    if q["kind"] in VERDICT_KINDS:
         simulate(system, ConstantSpeed(speed, task["nut_speed"], ramp_time=0.01), 0.02)
     if q["kind"] in ("linear-band", "loop-margins") or q.get("linear"):
         from ..analysis.linear import linearize
@@ -376,4 +406,5 @@ def warm(task: dict[str, Any]) -> None:
         linearize(system, speed, task["nut_speed"])
 
 
-__all__ = ["QUANTITIES", "UNITS", "QuantitySettings", "compute", "evaluate", "warm"]
+__all__ = ["QUANTITIES", "UNITS", "VERDICT_KINDS", "QuantitySettings", "check_task", "compute",
+           "evaluate", "warm"]
