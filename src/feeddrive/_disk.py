@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import errno
 import functools
 import os
 import shutil
@@ -59,6 +60,12 @@ def private_folder(prefix: str) -> Path:
     -------
     Path
         The folder.
+
+    Raises
+    ------
+    OSError
+        Neither folder can be made (a full disk); :class:`NoTemporaryFolder` when no
+        temporary folder is usable.
     """
     folder = private_path(prefix)
     try:
@@ -85,7 +92,33 @@ def private_path(prefix: str) -> Path:
         The path.
     """
     uid = os.getuid() if hasattr(os, "getuid") else 0
-    return Path(tempfile.gettempdir()) / f"{prefix}-{uid}"
+    return temporary_folder() / f"{prefix}-{uid}"
+
+
+class NoTemporaryFolder(OSError):
+    """No temporary folder is usable: none of ``$TMPDIR``, ``/tmp``, ``/var/tmp``,
+    ``/usr/tmp`` and the working folder takes a file (:func:`tempfile.gettempdir`).  Not a
+    ``FileNotFoundError``, as the one ``tempfile`` raises is (a command reports that as
+    refused input): the environment failed, not the user's input."""
+
+
+def temporary_folder() -> Path:
+    """The system's temporary folder (:func:`tempfile.gettempdir`).
+
+    Returns
+    -------
+    Path
+        The folder.
+
+    Raises
+    ------
+    NoTemporaryFolder
+        None is usable; the message says where ``tempfile`` looked.
+    """
+    try:
+        return Path(tempfile.gettempdir())
+    except OSError as err:
+        raise NoTemporaryFolder(errno.ENOENT, err.strerror or str(err)) from None
 
 
 def _private(folder: Path) -> bool:
@@ -110,17 +143,17 @@ def existing_private(prefix: str) -> Path | None:
     Path or None
         The folder.
     """
-    folder = private_path(prefix)
     try:
+        folder = private_path(prefix)
         return folder if _private(folder) else None
-    except OSError:
+    except OSError:  # not there, or no temporary folder is usable (NoTemporaryFolder)
         return None
 
 
 @functools.cache
 def _own_folder(prefix: str) -> Path:
     """A temporary folder of this process, made once per prefix and removed when it exits."""
-    folder = Path(tempfile.mkdtemp(prefix=f"{prefix}-"))
+    folder = Path(tempfile.mkdtemp(prefix=f"{prefix}-", dir=temporary_folder()))
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
     return folder
 
@@ -139,18 +172,101 @@ def writable(folder: Path) -> bool:
     Returns
     -------
     bool
-        True if a file could be made there and the folder listed.
+        True if a file could be made there and the folder listed (:func:`unwritable_reason`
+        says why not).
+    """
+    return unwritable_reason(folder) is None
+
+
+def unwritable_reason(folder: Path) -> str | None:
+    """Why :func:`writable` finds ``folder`` not writable, in a few words for a message
+    (``"Read-only file system"``, ``"not a folder"``, ``"Permission denied"``, ``"cannot be
+    read: Permission denied"``); None when it is writable (a file was made there and
+    removed).
+
+    Parameters
+    ----------
+    folder : Path
+        The folder (made if missing).
+
+    Returns
+    -------
+    str or None
+        The reason, or None.
     """
     try:
         folder.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        return reason(err)
+    try:
         with os.scandir(folder) as listing:
             next(listing, None)
+    except OSError as err:
+        return f"cannot be read: {reason(err)}"
+    try:
         fd, probe = tempfile.mkstemp(dir=folder, prefix=PROBE_PREFIX)
-    except OSError:
-        return False
+    except OSError as err:
+        return reason(err)
     os.close(fd)
     os.unlink(probe)
-    return True
+    return None
+
+
+def reason(err: OSError) -> str:
+    """A cache write's ``OSError`` in a few words for a message: ``"not a folder"`` for a
+    folder's path that is a file or lies under one (``mkdir(exist_ok=True)`` raises
+    ``FileExistsError`` only for what is not a folder), else its ``strerror`` (``"No space
+    left on device"``, ``"Read-only file system"``), else its text.
+
+    Parameters
+    ----------
+    err : OSError
+        The error.
+
+    Returns
+    -------
+    str
+        The reason.
+    """
+    if isinstance(err, FileExistsError | NotADirectoryError):
+        return "not a folder"
+    return err.strerror or str(err)
+
+
+class CacheUnwritable(OSError):
+    """Neither a cache folder nor its fallback folder could be written: one line naming the
+    cache folder (``filename``) and both reasons (:func:`unwritable_error`).  A class of its
+    own, so that no ``errno`` makes it a ``FileNotFoundError`` (refused input, to a command)."""
+
+
+def unwritable_error(what: str, cache: Path, first: str, other: Path | None,
+                     err: OSError) -> CacheUnwritable:
+    """The error of a write that neither a cache folder nor its fallback folder took.
+
+    Parameters
+    ----------
+    what : str
+        The cache, as a message names it (``"the C cache"``).
+    cache : Path
+        Its folder: the error's ``filename``.
+    first : str
+        Why the cache folder could not be written.
+    other : Path or None
+        The fallback folder, or None when it could not be made (``err`` says why).
+    err : OSError
+        Why the fallback failed (:class:`NoTemporaryFolder`: no temporary folder is usable).
+
+    Returns
+    -------
+    CacheUnwritable
+        ``err``'s ``errno``; the message is one line.
+    """
+    if isinstance(err, NoTemporaryFolder):
+        tail = f"and no temporary folder is usable for its fallback ({reason(err)})"
+    else:
+        where = other if other is not None else err.filename  # the folder mkdir could not make
+        tail = f"nor its fallback folder{f' {where}' if where else ''} ({reason(err)})"
+    return CacheUnwritable(err.errno, f"{what} cannot be written ({first}), {tail}", str(cache))
 
 
 @contextlib.contextmanager

@@ -48,7 +48,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from ._disk import file_lock, private_folder, user_cache_root
+from ._disk import file_lock, private_folder, reason, unwritable_error, user_cache_root
 
 #: whether numba is installed (``pip install 'feeddrive[numba]'``; found, not imported: see
 #: :func:`start_numba`): without it every kernel is its plain Python function and the engine
@@ -328,7 +328,8 @@ def import_generated(folder: str, stem: str, source: str) -> ModuleType:
     functions are cached as a package module's are).
 
     The file is written atomically (a concurrent process never imports a half file) and only
-    when it is missing or differs; ``stem`` should name a hash of ``source``.
+    when it is missing or differs; ``stem`` should name a hash of ``source``.  Where the
+    cache cannot be written, the fallback folder is (:func:`_write_module`).
 
     Parameters
     ----------
@@ -343,18 +344,16 @@ def import_generated(folder: str, stem: str, source: str) -> ModuleType:
     -------
     module
         The imported module.
+
+    Raises
+    ------
+    OSError
+        Neither the cache nor its fallback folder could be written: one line naming the
+        cache folder (``filename``) and both reasons.
     """
     if stem in _LOADED:
         return _LOADED[stem]
-    path = Path(_CACHE_DIR) / folder / f"{stem}.py"
-    if not _holds(path, source):
-        try:
-            _write(path, source)
-        except OSError:  # a cache that cannot be written: this user's temporary folder
-            _leave_cache()
-            path = Path(_CACHE_DIR) / folder / f"{stem}.py"
-            if not _holds(path, source):
-                _write(path, source)
+    path = _write_module(folder, stem, source)
     name = f"feeddrive_{stem}"
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
@@ -374,14 +373,56 @@ def _holds(path: Path, source: str) -> bool:
         return False
 
 
+def _write_module(folder: str, stem: str, source: str) -> Path:
+    """``<cache>/<folder>/<stem>.py`` holding ``source`` (written unless it holds it).  A
+    write that fails (a read-only mount, a file where the folder should be, a full disk)
+    leaves the cache for the fallback folder (:func:`_leave_cache`), where the module is
+    looked for and written; the first write there is said once per process, in one line
+    naming both folders and why.  Neither written: :func:`feeddrive._disk.unwritable_error`.
+    """
+    path = Path(_CACHE_DIR) / folder / f"{stem}.py"
+    if _holds(path, source):
+        return path
+    try:
+        _write(path, source)
+    except OSError as err:
+        if _LEFT:  # the fallback folder's write failed
+            raise unwritable_error(_WHAT, _LEFT[0][0], _LEFT[0][1], Path(_CACHE_DIR),
+                                   err) from None
+        _LEFT.append((Path(_CACHE_DIR), reason(err)))
+        try:
+            _leave_cache()
+        except OSError as failed:  # no fallback folder (no temporary folder is usable)
+            raise unwritable_error(_WHAT, *_LEFT[0], None, failed) from None
+        return _write_module(folder, stem, source)  # in the fallback folder
+    if _LEFT and not _LEFT_SAID:
+        _LEFT_SAID.append(True)
+        print(f"feeddrive: {_WHAT} {_LEFT[0][0]} cannot be written ({_LEFT[0][1]}), so "
+              f"{_CACHE_DIR} is used", file=sys.stderr)
+    return path
+
+
+#: the generated modules' cache, as a message names it
+_WHAT = "the generated Python modules' cache"
+#: the cache folder this process left for the fallback folder, and why (:func:`_write_module`)
+_LEFT: list[tuple[Path, str]] = []
+#: whether the fallback has been said
+_LEFT_SAID: list[bool] = []
+
+
 def _write(path: Path, source: str) -> None:
     """Write ``source`` to ``path`` atomically: concurrent processes never import a half
-    file."""
+    file (nor is a partial file left where the write fails)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
-    with os.fdopen(fd, "w", encoding="utf-8") as fh:
-        fh.write(source)
-    os.replace(tmp, path)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(source)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 def _leave_cache() -> None:

@@ -48,8 +48,8 @@ from pathlib import Path
 
 from ._disk import DAY, PROBE_PREFIX, existing_private, user_cache_root
 
-__all__ = ["CacheReport", "CachePart", "DEFAULT_AGE", "UNFINISHED_AGE", "numba_root",
-           "prune", "usage"]
+__all__ = ["CacheReport", "CachePart", "DEFAULT_AGE", "FALLBACK", "UNFINISHED_AGE",
+           "fallback_unavailable", "numba_root", "prune", "usage"]
 
 #: what :func:`prune` removes by default: not used for this many days [days]
 DEFAULT_AGE = 30.0
@@ -80,6 +80,8 @@ _FALLBACK_C = "C libraries and texts (fallback folder, used when the cache canno
 _FALLBACK_UNFINISHED = "unfinished compilations (fallback folder)"
 _FALLBACK_THIS = "numba, this version (fallback folder, used when the cache cannot be written)"
 _FALLBACK_OTHERS = "numba, other versions (fallback folder)"
+#: the fallback folders, as :func:`fallback_unavailable`'s line in ``feeddrive cache`` names them
+FALLBACK = "fallback folders (used when the cache cannot be written)"
 
 
 @dataclass(frozen=True)
@@ -393,11 +395,31 @@ def usage() -> list[CachePart]:
     -------
     list of CachePart
         The four parts, in the order of :class:`CachePart`'s names, and the two of the
-        fallback folder when it exists.
+        fallback folder when it exists (none when no temporary folder is usable:
+        :func:`fallback_unavailable`).
     """
     return [CachePart(p.name, p.folder, len(p.entries),
                       sum(sum(_sizes(e)[0].values()) for e in p.entries), p.note, p.foreign)
             for p in _parts()]
+
+
+def fallback_unavailable() -> str | None:
+    """Why the fallback folders (``<temporary folder>/feeddrive-c-<user id>`` and
+    ``feeddrive-py-<user id>``) cannot be looked at, when no temporary folder is usable (then
+    :func:`usage` and :func:`prune` pass them over); None when one is.
+
+    Returns
+    -------
+    str or None
+        ``"no temporary folder is usable (…where tempfile looked…)"``, or None.
+    """
+    from ._disk import NoTemporaryFolder, temporary_folder
+
+    try:
+        temporary_folder()
+    except NoTemporaryFolder as err:
+        return f"no temporary folder is usable ({err.strerror})"
+    return None
 
 
 def _remove(path: Path, failed: list[tuple[Path, str]]) -> bool:

@@ -16,9 +16,10 @@ compile, each into its own temporary file, and the rename keeps one.  A cache fo
 cannot be written (or read) is left for a folder of this user's under the system's temporary
 folder (:func:`fallback_folder`, made only when something is written there), for the libraries
 and for the translated texts (:func:`store_folder`, :func:`kept`); so is one whose write fails
-(a full disk, an exceeded quota: :func:`in_store`), said once per process in one line.  A kept
-text has its SHA-256 beside it too (``<name>.sha256``, :func:`keep_text`, :func:`kept_text`):
-one that does not match is made again, never used.
+(a full disk, an exceeded quota: :func:`in_store`); either is said once per process in one
+line naming both folders and why.  A kept text has its SHA-256 beside it too
+(``<name>.sha256``, :func:`keep_text`, :func:`kept_text`): one that does not match is made
+again, never used.
 
 docs/c-backend.md, "The compiled-object cache", says where it lives and how to clear it.
 """
@@ -43,6 +44,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TypeVar
 
+from .. import _disk
 from .._disk import DAY, existing_private, file_lock, private_folder, user_cache_root, writable
 
 __all__ = ["CACHE_ENV", "COMPILE_FAILED_ADVICE", "CompileError", "CompilerNotFound",
@@ -196,7 +198,8 @@ def compile_c(files: Mapping[str, str], folder: str | os.PathLike[str], output: 
               cc: Sequence[str], flags: Sequence[str], libraries: Sequence[str] = (),
               shown: str | None = None) -> Path:
     """Write ``files`` into ``folder`` and compile the first of them with
-    ``cc flags -o folder/output folder/<first> libraries``.
+    ``cc flags -o folder/output folder/<first> libraries``, the compiler's own temporary
+    files in ``folder`` too (``$TMPDIR``: no system temporary folder is needed).
 
     Parameters
     ----------
@@ -237,7 +240,10 @@ def compile_c(files: Mapping[str, str], folder: str | os.PathLike[str], output: 
     cmd = [*cc, *flags, "-o", str(out), str(src), *libraries]
     command = " ".join([Path(cc[0]).name, *cc[1:], *flags])
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+        # its own temporary files in ``folder`` too (TMPDIR): not in a system temporary folder
+        # that may be read-only or full while the cache is not (gcc then tries ./ as well)
+        proc = subprocess.run(cmd, capture_output=True, text=True, check=False,
+                              env=dict(os.environ, TMPDIR=os.path.abspath(where)))
     except OSError as err:  # not the folder's fault: the compiler cannot be run
         raise CompileError(f"the C compiler could not be run ({command}): "
                            f"{err.strerror or err}", str(err)) from None
@@ -362,29 +368,56 @@ def _lookup_folders() -> list[Path]:
 
 def _writable(folder: Path) -> bool:
     """:func:`feeddrive._disk.writable`, a folder found not writable not tried again by this
-    process."""
+    process (why it is not, :func:`feeddrive._disk.unwritable_reason`, kept for the message)."""
     if folder in _NOT_WRITABLE:
         return False
     if writable(folder):
         return True
-    _NOT_WRITABLE.add(folder)
+    _NOT_WRITABLE[folder] = _disk.unwritable_reason(folder) or "not writable"
     return False
 
 
-_NOT_WRITABLE: set[Path] = set()
+#: the folders found not writable, or whose write failed, with why
+_NOT_WRITABLE: dict[Path, str] = {}
 
 
 def store_folder() -> Path:
     """Where this process writes what it caches: :func:`cache_folder` if a file can be made
-    there (it is made if missing) and no write there has failed, else :func:`fallback_folder`.
+    there (it is made if missing) and no write there has failed, else :func:`fallback_folder`
+    (said once per process, in one line naming both and why, when something is written there:
+    :func:`in_store`).
 
     Returns
     -------
     Path
         The folder.
+
+    Raises
+    ------
+    OSError
+        The fallback folder cannot be made either (:func:`_fallback`).
     """
     folder = cache_folder()
-    return folder if _writable(folder) else fallback_folder()
+    return folder if _writable(folder) else _fallback(folder)
+
+
+def _fallback(cache: Path) -> Path:
+    """:func:`fallback_folder`, for the cache folder ``cache`` that cannot be written; an
+    ``OSError`` naming the cache and both reasons when the fallback folder cannot be made
+    (no temporary folder is usable)."""
+    try:
+        return fallback_folder()
+    except OSError as err:
+        raise _disk.unwritable_error(_WHAT, cache, _why(cache), None, err) from None
+
+
+def _why(cache: Path) -> str:
+    """Why the cache folder ``cache`` was left (:data:`_NOT_WRITABLE`)."""
+    return _NOT_WRITABLE.get(cache) or "not writable"
+
+
+#: the C cache, as a message names it
+_WHAT = "the C cache"
 
 
 def _note(key: str, line: str) -> None:
@@ -397,8 +430,10 @@ def _note(key: str, line: str) -> None:
 def in_store(write: Callable[[Path], T]) -> T:
     """``write(folder)`` in :func:`store_folder`.  An ``OSError`` there (a full disk, an
     exceeded quota, a read-only mount, a refused permission) leaves the cache folder for the
-    fallback folder, as one that cannot be written is left (said once per process, in one
-    line naming both and why), and ``write`` runs again there.
+    fallback folder, as one that cannot be written is left, and ``write`` runs again there;
+    once it has, the fallback is said once per process, in one line naming both folders and
+    why the cache was left (a read-only mount, a file where the folder should be, a full
+    disk).
 
     Parameters
     ----------
@@ -413,32 +448,23 @@ def in_store(write: Callable[[Path], T]) -> T:
     Raises
     ------
     OSError
-        The fallback folder failed too: one line naming the cache folder (``filename``) and
-        why each failed.
+        The fallback folder failed too, or could not be made: one line naming the cache
+        folder (``filename``) and why each failed (:func:`feeddrive._disk.unwritable_error`).
     """
-    folder = store_folder()
     cache = cache_folder()
+    if _writable(cache):
+        try:
+            return write(cache)
+        except OSError as err:
+            _NOT_WRITABLE[cache] = _disk.reason(err)
+    other = _fallback(cache)
     try:
-        return write(folder)
+        done = write(other)
     except OSError as err:
-        if folder != cache:  # the fallback already: the cache could not be written
-            raise _unwritable(cache, None, folder, err) from None
-        first = err
-    _NOT_WRITABLE.add(cache)
-    other = fallback_folder()
-    _note(f"left {cache}", f"feeddrive: the C cache {cache} cannot be written "
-          f"({first.strerror or first}), so {other} is used")
-    try:
-        return write(other)
-    except OSError as err:
-        raise _unwritable(cache, first, other, err) from None
-
-
-def _unwritable(cache: Path, first: OSError | None, other: Path, err: OSError) -> OSError:
-    """The error of a write that neither the cache folder nor the fallback folder took."""
-    why = f" ({first.strerror or first})" if first is not None else ""
-    return OSError(err.errno, f"the C cache cannot be written{why}, nor its fallback folder "
-                   f"{other} ({err.strerror or err})", str(cache))
+        raise _disk.unwritable_error(_WHAT, cache, _why(cache), other, err) from None
+    _note(f"left {cache}", f"feeddrive: {_WHAT} {cache} cannot be written ({_why(cache)}), so "
+          f"{other} is used")
+    return done
 
 
 def _is_file(path: Path) -> bool:

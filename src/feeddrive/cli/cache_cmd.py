@@ -33,8 +33,8 @@ def cache(
 ) -> None:
     """Where feeddrive's compile caches are and how large (numba's, one folder per version of
     its kernels; the C build's libraries), and, with --prune, remove the unused."""
+    from ..caches import FALLBACK, fallback_unavailable, usage
     from ..caches import prune as prune_caches
-    from ..caches import usage
     from ..io.outputs import shown
     from ..parameters import ParameterError
 
@@ -47,10 +47,12 @@ def cache(
     except ParameterError as err:  # the option the user typed
         raise ParameterError("--older-than", err.value, err.message) from None
     parts = usage()
+    unavailable = fallback_unavailable()
     if as_json:
         data: dict[str, object] = {"parts": [
             {"name": p.name, "folder": str(p.folder), "entries": p.entries,
-             "size_mb": p.size / MB, "note": p.note, "foreign": p.foreign} for p in parts]}
+             "size_mb": p.size / MB, "note": p.note, "foreign": p.foreign} for p in parts],
+            "fallback_unavailable": unavailable}
         if report is not None:
             data["pruned"] = {"dry_run": report.dry_run, "older_than_days": days,
                               "entries": report.entries,
@@ -84,5 +86,8 @@ def cache(
             note = f" ({'; '.join(notes)})" if notes else ""
             console.print(f"{p.name}: {entries}, {p.size / MB:.1f} MB in "
                           f"{shown(p.folder, None)}{note}", markup=False, highlight=False)
+        if unavailable:
+            console.print(f"{FALLBACK}: unavailable, {unavailable}", markup=False,
+                          highlight=False, soft_wrap=True)
     if report is not None and (report.failed or report.unread):
         raise typer.Exit(code=EXIT_FAILED)
