@@ -287,10 +287,11 @@ def test_tunable_parameter_changes_the_run_as_in_feeddrive(folder: Path) -> None
 @pytest.mark.slow
 def test_model_exchange_in_fmpy_follows_feeddrive(folder: Path) -> None:
     """Model exchange: fmpy's CVODE integrates the FMU's derivatives (relative tolerance 1e-8;
-    atol = rtol·nominal, the nominals being feeddrive's default absolute tolerances over its
-    relative one).  Constant speed references from t = 0: fmpy sets a model-exchange FMU's
-    inputs only at its output points and does not restart CVODE there, so a varying input is
-    the importer's approximation (docs/fmu.md); co-simulation holds them exactly."""
+    atol = rtol·nominal, the nominals being feeddrive's former fixed absolute tolerances over
+    its relative one: docs/fmu.md).  Constant speed references from t = 0: fmpy sets a
+    model-exchange FMU's inputs only at its output points and does not restart CVODE there, so
+    a varying input is the importer's approximation (docs/fmu.md); co-simulation holds them
+    exactly."""
     ref = Reference.ramp(0.5, 16.0, 3.0, ramp=0.0)
     rec = run_fmu(fmu_file(folder, "ddfs", 2, "me"), ref, relative_tolerance=1e-8)
     assert _compare(rec, run_feeddrive("ddfs", ref, **TIGHT)) <= 1e-6

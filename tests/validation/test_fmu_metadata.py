@@ -9,14 +9,16 @@ import ctypes
 import datetime
 import math
 import zipfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 from fmu_helpers import require_c_compiler
 
+import feeddrive as fd
 from feeddrive import __version__
-from feeddrive.fmu import export_fmu
+from feeddrive.fmu import export_fmu, solver_starts
 from feeddrive.fmu.description import state_nominals
 from feeddrive.fmu.model import build
 from feeddrive.parameters import preset
@@ -74,8 +76,8 @@ def test_valid_with_display_units_as_the_cli_speaks(fmus: dict, fmi: int, kind: 
 def test_states_declare_the_nominals_the_binary_reports(fmus: dict, fmi: int,
                                                         tmp_path: Path) -> None:
     """nominal on every continuous state in the XML = what
-    fmiGetNominalsOfContinuousStates returns (model exchange) = feeddrive's default absolute
-    tolerances over its relative tolerance (1e-10 m / 1e-6 for a position: 1e-4 m)."""
+    fmiGetNominalsOfContinuousStates returns (model exchange) = the fixed magnitudes 1e-10 m,
+    1e-8 m/s, 1e-6 A over 1e-6 (a position: 1e-4 m), whatever the export's tolerances."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Model
     from fmpy.fmi3 import FMU3Model
@@ -84,10 +86,11 @@ def test_states_declare_the_nominals_the_binary_reports(fmus: dict, fmi: int,
     md = read_model_description(str(path))
     states = [x for x in md.modelVariables if x.derivative is not None]
     xml = np.array([float(x.derivative.nominal) for x in states])
-    fm = build(preset("wang2021"), "ddfs", 0.4)
+    fm = replace(build(preset("wang2021"), "ddfs", 0.4),
+                 solver_starts=solver_starts(preset("wang2021"), 0.0, 0.0))
     assert np.array_equal(xml, state_nominals(fm))
     position = [x.derivative.name for x in states].index("table_position")
-    assert xml[position] == 1e-10 / 1e-6  # SolverOptions' position_tolerance / rtol
+    assert xml[position] == 1e-10 / 1e-6  # a magnitude, not the export's tolerance
     cls = FMU2Model if fmi == 2 else FMU3Model
     fmu = cls(guid=md.guid, unzipDirectory=extract(str(path), unzipdir=str(tmp_path / "u")),
               modelIdentifier=md.modelExchange.modelIdentifier, instanceName="n")
@@ -137,3 +140,32 @@ def test_source_date_epoch_fixes_the_generation_time(tmp_path: Path,
     path = tmp_path / "lm.fmu"
     export_fmu(preset("linear-motor-example"), "linear-motor", path)
     assert read_model_description(str(path)).generationDateAndTime == "2023-11-14T22:13:20Z"
+
+
+def test_an_export_says_what_of_the_solver_table_it_does_not_take(tmp_path: Path) -> None:
+    """A ``[solver]`` table's method, output interval (and Rosenbrock method, step limit) have
+    no counterpart in an FMU (its DOPRI5; the importer's communication points): the export
+    said nothing and a user took them as applied (an outside check).  Its ``max_step`` is the
+    embedded solver's ``solver.max_step``: now taken as its start value."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+    from feeddrive.fmu import settings_not_taken
+
+    path = tmp_path / "fmus.toml"
+    path.write_text('extends = "wang2021"\n[solver]\nmethod = "rodas4"\nmax_step = 1e-4\n'
+                    'output_interval = 0.0005\n', encoding="utf-8")
+    params = fd.load(path)
+    said = settings_not_taken(params)
+    assert [s.split(" =")[0] for s in said] == ["method", "output_interval"]
+    assert all("[solver] in" in s and "fmus.toml" in s for s in said)
+    assert solver_starts(params, 0.0, 0.0)["solver.max_step"] == 1e-4
+    assert "solver.max_step" not in solver_starts(preset("wang2021"), 0.0, 0.0)
+    assert settings_not_taken(preset("wang2021")) == ()
+    assert settings_not_taken(preset("wang2021"), fd.SolverOptions(method="dopri5")) == ()
+    out = tmp_path / "x.fmu"
+    result = CliRunner().invoke(app, ["export", "fmu", "--drive", "cdfs", "--params", str(path),
+                                      "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    notes = [line for line in result.output.splitlines() if line.startswith("note:")]
+    assert len(notes) == 1 and "method = rodas4" in notes[0] and "output_interval" in notes[0]

@@ -7,7 +7,15 @@ from typing import Any
 import typer
 
 from . import _units
-from ._common import app, console, outputs, print_json, resolve_parameters, user_errors
+from ._common import (
+    app,
+    console,
+    err_console,
+    outputs,
+    print_json,
+    resolve_parameters,
+    user_errors,
+)
 from ._solver import tolerance_options
 
 export_app = typer.Typer(no_args_is_help=True,
@@ -100,7 +108,9 @@ def fmu_command(
             "variables": result.n_variables, "states": result.n_states,
             "sampled_loops": result.sampled, "binaries": list(result.binaries),
             "inputs": list(result.inputs),
-            "outputs": list(result.outputs)}
+            "outputs": list(result.outputs),
+            "solver_settings_not_taken": list(result.not_taken)}
+    _not_taken_note(result.not_taken)
     if as_json:
         print_json(data)
         return
@@ -115,6 +125,15 @@ def fmu_command(
                   soft_wrap=True)
 
 
+def _not_taken_note(not_taken: tuple[str, ...]) -> None:
+    """One line on standard error naming the integrator settings the FMU does not take."""
+    if not_taken:
+        err_console.print("note: the FMU does not take " + "; ".join(not_taken) + " (its "
+                          "embedded solver is DOPRI5 with its tolerances and solver.max_step; "
+                          "outputs at the importer's communication points: docs/fmu.md)",
+                          markup=False, highlight=False, soft_wrap=True)
+
+
 def _export_machine(machine: str, out: str, *, fmi: int, kind: str, force: bool,
                     platform: str | None, as_json: bool) -> None:
     from ..fmu import export_machine_fmu
@@ -127,7 +146,9 @@ def _export_machine(machine: str, out: str, *, fmi: int, kind: str, force: bool,
             "model_identifier": result.identifier, "size_bytes": result.size_bytes,
             "variables": result.n_variables, "states": result.n_states,
             "sampled_loops": result.sampled, "binaries": list(result.binaries),
-            "inputs": list(result.inputs), "outputs": list(result.outputs)}
+            "inputs": list(result.inputs), "outputs": list(result.outputs),
+            "solver_settings_not_taken": list(result.not_taken)}
+    _not_taken_note(result.not_taken)
     if as_json:
         print_json(data)
         return

@@ -54,6 +54,8 @@ class ExportedFmu:
         Whether any loop is sampled (events in the FMU).
     binaries : tuple of str
         The ``binaries/`` folders written (one per platform).
+    not_taken : tuple of str
+        The integrator settings given that the FMU does not take (:func:`settings_not_taken`).
     """
 
     path: Path
@@ -67,6 +69,8 @@ class ExportedFmu:
     size_bytes: int
     sampled: bool
     binaries: tuple[str, ...] = ()
+    #: the integrator settings given that the FMU does not take (:func:`settings_not_taken`)
+    not_taken: tuple[str, ...] = ()
 
 
 def check_request(drive: str | None, fmi: int, kind: str, out: str | os.PathLike[str], *,
@@ -186,10 +190,51 @@ def solver_starts(parameters: DriveParameters, table_speed: float, nut_speed: fl
                            table_speed=table,
                            current=limit if 0.0 < limit < opt.NO_CURRENT_LIMIT else 1.0)
     tol = options.resolve(scales)
-    return {"solver.relative_tolerance": tol.rtol,
-            "solver.position_tolerance": min(tol.position, tol.motor_position),
-            "solver.speed_tolerance": min(tol.speed, tol.motor_speed),
-            "solver.current_tolerance": tol.current}
+    starts = {"solver.relative_tolerance": tol.rtol,
+              "solver.position_tolerance": min(tol.position, tol.motor_position),
+              "solver.speed_tolerance": min(tol.speed, tol.motor_speed),
+              "solver.current_tolerance": tol.current}
+    if options.source("max_step") != "default" and options.max_step is not None:
+        starts["solver.max_step"] = float(options.max_step)  # the embedded DOPRI5's step cap
+    return starts
+
+
+#: the integrator settings an FMU has no counterpart for: its embedded solver is DOPRI5 (a
+#: model-exchange FMU's importer integrates), its outputs are at the importer's communication
+#: points, its step limit per call is ``solver.max_steps_per_call``
+NOT_TAKEN = ("method", "rosenbrock", "output_interval", "max_steps")
+
+
+def settings_not_taken(parameters: DriveParameters,
+                       options: SolverOptions | None = None) -> tuple[str, ...]:
+    """The integrator settings given (by the command line, the API or the set's ``[solver]``
+    table) that an exported FMU does not take (:data:`NOT_TAKEN`; ``method = "dopri5"`` is
+    its own), each as ``name = value (where)``, for the export to say so.
+
+    Parameters
+    ----------
+    parameters : DriveParameters
+        The exported set (its ``[solver]`` table).
+    options : SolverOptions or None, default None
+        The integrator settings (None: those in force).
+
+    Returns
+    -------
+    tuple of str
+        E.g. ``("method = rodas4 ([solver] in run.toml)",)``; empty when every setting given
+        is taken.
+    """
+    from ..engine.simulate import run_options
+
+    merged = run_options(parameters, options)
+    out = []
+    for name in NOT_TAKEN:
+        where = merged.source(name)
+        value = getattr(merged, name)
+        if where == "default" or (name == "method" and value == "dopri5"):
+            continue
+        out.append(f"{name} = {value} ({where})")
+    return tuple(out)
 
 
 def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[str], *,
@@ -278,7 +323,8 @@ def export_fmu(parameters: DriveParameters, drive: str, out: str | os.PathLike[s
         path=path, fmi=fmi, kind=kind, identifier=ident, n_variables=len(vs),
         n_states=len(fm.model.states), inputs=tuple(v.name for v in vs if v.causality == "input"),
         outputs=tuple(v.name for v in vs if v.causality == "output"),
-        size_bytes=path.stat().st_size, sampled=sampled, binaries=_binaries(path))
+        size_bytes=path.stat().st_size, sampled=sampled, binaries=_binaries(path),
+        not_taken=settings_not_taken(parameters, options))
 
 
 def export_machine_fmu(machine: Machine, out: str | os.PathLike[str], *, fmi: int = 2,
@@ -348,7 +394,7 @@ def export_machine_fmu(machine: Machine, out: str | os.PathLike[str], *, fmi: in
         n_states=len(fm.model.states), inputs=tuple(v.name for v in vs if v.causality == "input"),
         outputs=tuple(v.name for v in vs if v.causality == "output"),
         size_bytes=path.stat().st_size, sampled=any(v > 0 for v in fm.periods.values()),
-        binaries=_binaries(path))
+        binaries=_binaries(path), not_taken=settings_not_taken(fm.parameters, options))
 
 
 def _binaries(path: Path) -> tuple[str, ...]:
@@ -359,6 +405,7 @@ def _binaries(path: Path) -> tuple[str, ...]:
                              if n.startswith("binaries/") and n.count("/") >= 2}))
 
 
-__all__ = ["ExportedFmu", "export_fmu", "export_machine_fmu", "check_request", "solver_starts",
+__all__ = ["ExportedFmu", "NOT_TAKEN", "export_fmu", "export_machine_fmu", "check_request",
+           "settings_not_taken", "solver_starts",
            "FMI_VERSIONS", "KINDS",
            "FMU_SPEED_SCALE"]

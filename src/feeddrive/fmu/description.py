@@ -427,9 +427,11 @@ def display_unit(name: str, unit: str) -> str | None:
 
 def state_nominals(fm: FmuModel) -> np.ndarray:
     """Nominal magnitudes of the continuous states (the model's, then the two reference
-    integrals) [their units]: feeddrive's default absolute tolerances over its relative
-    tolerance, so an importer that takes atol = rtol·nominal weighs errors as
-    ``feeddrive.simulate`` does.
+    integrals) [their units]: fixed, 1e-10 m, 1e-8 m/s, 1e-6 A (÷ H for angles and rotary
+    speeds) over 1e-6 — feeddrive's absolute tolerances before they scaled with the run.
+    Magnitudes to scale by, not the export's tolerances (those set the co-simulation FMU's
+    DOPRI5: :func:`feeddrive.fmu.solver_starts`); docs/fmu.md says what an importer that takes
+    atol = rtol·nominal then weighs.
 
     Parameters
     ----------
