@@ -452,8 +452,24 @@ class Result:
             See :func:`feeddrive.creep_metrics`.
         """
         from ..analysis.creep_window import creep_metrics
+
+        self._check_command()
         return creep_metrics(self.time, self["table_speed"], self.command_speed,
                              thresholds=thresholds, window=window)
+
+    def _check_command(self) -> None:
+        """Refuse creep metrics of a run without a commanded table speed (a replay of a
+        measured force, current, torque or motor speed drives the table open-loop; a zero
+        command): the verdict is judged against the command, and there is none."""
+        from ..parameters import ParameterError
+
+        if "table_speed_reference" in self and np.any(self["table_speed_reference"] != 0.0):
+            return
+        raise ParameterError("profile", self.attrs.get("profile", ""),
+                             "expected a run with a commanded table speed: the creep summary "
+                             "judges the table speed against the command, and this run has "
+                             "none (a replay drives the table open-loop); read its signals "
+                             "instead (result['table_speed'], result.to_pandas())")
 
     def summary(self) -> dict[str, Any]:
         """What a run did, in engineering units (mm/s, µm), for printing.
@@ -502,6 +518,7 @@ class Result:
                 "reversals": s.reversals,
             })
         else:
+            self._check_command()
             constant = attrs.get("profile", "").startswith("ConstantSpeed")
             m = self.creep_metrics(window=None if constant else self._hold_window())
             window = (m.window_start, m.window_end)
@@ -659,7 +676,11 @@ class Result:
         return 1e3 * float(np.mean(self[name][sel]))
 
     def __repr__(self) -> str:
-        return f"<feeddrive.Result {self._title()}; {self.time.size} samples>"
+        stopped = ""
+        if self.solver_stats.get("diverged"):  # it ends before the duration asked for
+            stopped = (f"; stopped at {self.solver_stats.get('diverged_at_s', self.time[-1]):g}"
+                       " s: a speed left its bound (diverged)")
+        return f"<feeddrive.Result {self._title()}; {self.time.size} samples{stopped}>"
 
     def _title(self) -> str:
         from ..plots.result import run_title
