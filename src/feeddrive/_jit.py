@@ -40,7 +40,6 @@ import importlib
 import importlib.util
 import os
 import sys
-import tempfile
 import threading
 import types
 from collections.abc import Callable, Iterator
@@ -411,18 +410,14 @@ _LEFT_SAID: list[bool] = []
 
 
 def _write(path: Path, source: str) -> None:
-    """Write ``source`` to ``path`` atomically: concurrent processes never import a half
-    file (nor is a partial file left where the write fails)."""
+    """Write ``source`` to ``path`` atomically (:func:`feeddrive.io.outputs.atomic_path`, the
+    package's one atomic-write helper): concurrent processes never import a half file, nor
+    is a partial file left where the write fails."""
+    from .io.outputs import atomic_path
+
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(source)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    with atomic_path(path) as tmp:
+        tmp.write_text(source, encoding="utf-8")
 
 
 def _leave_cache() -> None:

@@ -182,24 +182,15 @@ def test_the_generated_modules_double_failure_is_one_error_naming_the_folders(
     cache = not_a_folder / f"numba-{_jit.SOURCE_DIGEST}"
     monkeypatch.setattr(_jit, "_CACHE_DIR", str(cache))
     fallback = tmp / f"feeddrive-py-{UID}" / f"numba-{_jit.SOURCE_DIGEST}"
-    real = os.fdopen
+    real = Path.write_text
 
-    class Full:
-        """A file whose write finds the disk full."""
-
-        def __init__(self, fh: Any) -> None:
-            self.fh = fh
-
-        def __enter__(self) -> Full:
-            return self
-
-        def __exit__(self, *exc: object) -> None:
-            self.fh.close()
-
-        def write(self, text: str) -> int:
+    def full(path: Path, text: str, *args: Any, **kwargs: Any) -> int:
+        """A write of a partial file (the atomic writer's) finds the disk full."""
+        if ".partial" in path.name:
             raise OSError(errno.ENOSPC, FULL)
+        return real(path, text, *args, **kwargs)
 
-    monkeypatch.setattr(os, "fdopen", lambda fd, *a, **k: Full(real(fd, *a, **k)))
+    monkeypatch.setattr(Path, "write_text", full)
     stem = _stem()
     status, err = _cli_error(lambda: _jit.import_generated("s21", stem, "X = 1\n"), capsys)
     assert (status, err) == (1, f"error: {cache}: {PY} cannot be written (not a folder), nor "
