@@ -118,3 +118,19 @@ def test_the_sweep_machinery_says_it_as_a_verdicts_limit(tmp_path: Path, monkeyp
         lines = [line for line in result.output.splitlines() if line.strip()]
         assert len(lines) == 1 and "for a creep verdict" in lines[0], result.output
     assert not list(tmp_path.glob("*.sqlite"))  # no store made
+
+
+def test_a_fits_warm_up_takes_its_sets_interval() -> None:
+    # a fit with workers warms its kernels with a creep-trial task (feeddrive.analysis.fit)
+    # but judges no verdict: its set's [solver] interval (0.01 s here, as
+    # test_s19_solver_table's fit set) is its own and must not be refused there; the sweep's
+    # design check refuses it for a creep quantity
+    from feeddrive.sweep.quantities import check_task, warm
+
+    params = loads(COARSE.replace("0.5", "0.01"))
+    task = {"parameters": fd.parameters.dumps(params), "drive": "cdfs", "table_position": 0.4,
+            "nut_speed": 0.0, "quantity": {"kind": "creep-trial", "table_speed": 1e-3,
+                                           "linear": False}}
+    warm(task)
+    with pytest.raises(ParameterError, match="for a creep verdict"):
+        check_task(task)

@@ -351,20 +351,27 @@ def evaluate(task: dict[str, Any], params: DriveParameters | None = None) -> dic
 VERDICT_KINDS = ("critical-speed", "creep-trial")
 
 
-def check_task(task: dict[str, Any]) -> Any:
+def _system(task: dict[str, Any]) -> Any:
+    """``task``'s drive (a DriveSystem of its parameter set, drive and table position)."""
+    from ..engine.simulate import DriveSystem
+    from ..parameters import loads
+
+    return DriveSystem(loads(task["parameters"]), drive=task["drive"],
+                       table_position=task["table_position"])
+
+
+def check_task(task: dict[str, Any]) -> None:
     """Refuse, before a store is opened or a run made, what no point of ``task``'s structure
     can compute: a creep quantity whose parameter set's ``[solver]`` output interval is
     coarser than a verdict's (:func:`feeddrive.analysis.critical.check_verdict_interval`).
+    A sweep's design check (:func:`feeddrive.sweep.executors.check_design`) and a sensitivity
+    study call it; :func:`warm` does not (a fit warms its kernels with a creep-trial task and
+    judges no verdict: its set's interval is its own).
 
     Parameters
     ----------
     task : dict
         A task of the structure.
-
-    Returns
-    -------
-    DriveSystem
-        The task's drive.
 
     Raises
     ------
@@ -372,14 +379,9 @@ def check_task(task: dict[str, Any]) -> Any:
         Naming the setting where it was set.
     """
     from ..analysis.critical import check_verdict_interval
-    from ..engine.simulate import DriveSystem
-    from ..parameters import loads
 
-    params = loads(task["parameters"])
-    system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
     if task["quantity"]["kind"] in VERDICT_KINDS:
-        check_verdict_interval(system, None)
-    return system
+        check_verdict_interval(_system(task), None)
 
 
 def warm(task: dict[str, Any]) -> None:
@@ -395,7 +397,7 @@ def warm(task: dict[str, Any]) -> None:
     from ..engine.simulate import simulate
     from ..model.reference import ConstantSpeed
 
-    system = check_task(task)
+    system = _system(task)
     q = task["quantity"]
     speed = q.get("table_speed", 1e-3)
     if q["kind"] in VERDICT_KINDS:
