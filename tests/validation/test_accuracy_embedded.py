@@ -166,9 +166,10 @@ def _trial_profile(speed_mm_s: float, nut_mm_s: float) -> fd.ConstantSpeed:
 
 
 #: (rtol, × the former absolute tolerances) of the deciding trials' Radau references.  Measured
-#: 2026-12-06 on an "AMD EPYC" host (/tmp script, session 21), the largest table-speed change
-#: from (1e-11, 1e-4) and (1e-12, 1e-5) to these: 1.2e-10 and 3.4e-13 m/s (DDFS 0.02/16
-#: mm/s), 2.9e-11 and 4.2e-12 (CDFS 1.0 mm/s), ≤ 1.7e-12 and ≤ 3.4e-12 on the other three.
+#: 2026-12-06 on an "AMD EPYC" host (radau_states at the three settings, session 21), the
+#: largest table-speed change from (1e-11, 1e-4) and (1e-12, 1e-5) to these: 1.2e-10 and
+#: 3.4e-13 m/s (DDFS 0.02/16 mm/s), 2.9e-11 and 4.2e-12 (CDFS 1.0 mm/s), ≤ 1.7e-12 and
+#: ≤ 3.4e-12 on the other three.
 #: The (1e-11, 1e-4) used until then had moved by ≤ 2e-12 on the host it was chosen on; on
 #: this one its DDFS reference was 1.2e-10 m/s off, four times the run's own error, and the
 #: shadow's ratio to it failed (0.065).  Radau's LU (LAPACK) rounds with the CPU's kernels,

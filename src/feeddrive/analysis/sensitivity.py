@@ -388,9 +388,9 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     count = 0
     rounds: list[str] = []
     where = "this process"
-    for base in config.iter_points():  # the base set's refusals before the store is made
-        check_task(base.task)
-        break
+    base_point = next(iter(config.iter_points()), None)
+    if base_point is not None:  # the base set's refusals before the store is made
+        check_task(base_point.task)
     db = None if in_process else SweepStore(
         Path(store) if store is not None else Path(f"{config.name}.sqlite"), option="--store")
 
