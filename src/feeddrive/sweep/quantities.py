@@ -364,7 +364,7 @@ def check_task(task: dict[str, Any]) -> None:
     """Refuse, before a store is opened or a run made, what no point of ``task``'s structure
     can compute: a creep quantity whose parameter set's ``[solver]`` output interval is
     coarser than a verdict's (:func:`feeddrive.analysis.critical.check_verdict_interval`).
-    A sweep's design check (:func:`feeddrive.sweep.executors.check_design`) and a sensitivity
+    A sweep's design check (``feeddrive.sweep.executors.check_design``) and a sensitivity
     study call it; :func:`warm` does not (a fit warms its kernels with a creep-trial task and
     judges no verdict: its set's interval is its own).
 
