@@ -677,9 +677,12 @@ class Result:
 
     def __repr__(self) -> str:
         stopped = ""
-        if self.solver_stats.get("diverged"):  # it ends before the duration asked for
-            stopped = (f"; stopped at {self.solver_stats.get('diverged_at_s', self.time[-1]):g}"
-                       " s: a speed left its bound (diverged)")
+        stats = self.solver_stats
+        if stats.get("diverged"):  # it ends before the duration asked for
+            bound = stats.get("divergence_speed_m_s")
+            within = "" if bound is None else f" {1e3 * bound:g} mm/s"
+            stopped = (f"; stopped at {stats.get('diverged_at_s', self.time[-1]):g}"
+                       f" s: a speed left its bound{within} (diverged)")
         return f"<feeddrive.Result {self._title()}; {self.time.size} samples{stopped}>"
 
     def _title(self) -> str:

@@ -370,6 +370,55 @@ def run_scales(system: DriveSystem, profile: Profile, model: Model) -> RunScales
         current=current)
 
 
+def divergence_speed(system: DriveSystem, profile: Profile) -> float:
+    """The linear speed beyond which a run stops as diverged: :data:`DIVERGENCE_SPEED_RATIO`
+    × the reference speed (:func:`command_speed`, at least :data:`DIVERGENCE_SPEED_FLOOR`).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive (its initial state).
+    profile : Profile
+        The reference profile (its speeds; a replay's ``speed_scale``).
+
+    Returns
+    -------
+    float
+        The bound [m/s].
+    """
+    return DIVERGENCE_SPEED_RATIO * max(command_speed(system, profile), DIVERGENCE_SPEED_FLOOR)
+
+
+def replay_bound_problem(profile: Profile, at: float, bound: float) -> str:
+    """Why a replay's run that reached its divergence bound is an error, not a verdict: a
+    replay without ``speed_scale`` commands no speed, so its bound is the floor's
+    (:data:`DIVERGENCE_SPEED_FLOOR`), not a speed the run was judged against.  "" for any
+    other run (a loop that ran 100× beyond its command diverged: the verdict "unstable").
+
+    Parameters
+    ----------
+    profile : Profile
+        The run's profile.
+    at : float
+        When a speed left the bound [s].
+    bound : float
+        The bound [m/s].
+
+    Returns
+    -------
+    str
+        The message, or "".
+    """
+    if not isinstance(profile, Replay) or profile.speed_scale > 0.0:
+        return ""
+    name = type(profile).__name__
+    return (f"a speed reached {bound:g} m/s at t = {at:.6g} s, the bound of a replay without "
+            f"speed_scale ({DIVERGENCE_SPEED_RATIO:g} × the {1e3 * DIVERGENCE_SPEED_FLOOR:g}-mm/s "
+            f"floor): a replay commands no speed, so give {name}(..., speed_scale=...) the "
+            "largest table speed the run is expected to reach [m/s] (it also scales the "
+            "default tolerances)")
+
+
 def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np.ndarray:
     """The largest |state| per state before a run stops as diverged.
 
@@ -392,8 +441,7 @@ def divergence_bounds(system: DriveSystem, profile: Profile, model: Model) -> np
     numpy.ndarray
         Bound per state [SI, per state]; ``inf`` where unbounded.
     """
-    limit = DIVERGENCE_SPEED_RATIO * max(command_speed(system, profile),
-                                         DIVERGENCE_SPEED_FLOOR)
+    limit = divergence_speed(system, profile)
     bound = np.full(len(model.states), np.inf)
     for i, (kind, scale) in enumerate(zip(model.tolerance_kinds, model.tolerance_scales,
                                           strict=True)):
@@ -1106,6 +1154,11 @@ class Simulation:
         wall = _time.perf_counter() - started
         status = int(stats[0])
         diverged = status == dopri5.STATUS_DIVERGED
+        limit = divergence_speed(self.system, self.profile)
+        problem = replay_bound_problem(self.profile, float(stats[4]), limit) if diverged else ""
+        if problem:
+            self._chunks = None
+            raise SimulationError(problem)
         if status != dopri5.STATUS_OK and not diverged:
             self._chunks = None
             raise SimulationError(
@@ -1126,7 +1179,8 @@ class Simulation:
             solver_stats["rosenbrock"] = options.rosenbrock
         if diverged:  # stopped early: the Result ends where a speed left its bound
             solver_stats.update({"diverged": True, "diverged_at_s": float(stats[4]),
-                                 "divergence_speed_ratio": DIVERGENCE_SPEED_RATIO})
+                                 "divergence_speed_ratio": DIVERGENCE_SPEED_RATIO,
+                                 "divergence_speed_m_s": limit})
         if chunks.dense:
             solver_stats.update({
                 "jacobians": int(stats[5]), "rosenbrock_steps": int(stats[6]),

@@ -96,7 +96,8 @@ class Replay:
     speed_scale : float, default 0.0
         The largest table speed the run is expected to reach [m/s]: the run's speed scale
         (default tolerances, divergence bound), since a replay commands no speed.  0: the
-        engine's floor.
+        engine's floor, and a run that reaches the floor's divergence bound (0.1 m/s) is
+        refused (``SimulationError``), not ended early.
     """
 
     time: np.ndarray
