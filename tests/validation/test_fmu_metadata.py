@@ -169,3 +169,19 @@ def test_an_export_says_what_of_the_solver_table_it_does_not_take(tmp_path: Path
     assert result.exit_code == 0, result.output
     notes = [line for line in result.output.splitlines() if line.startswith("note:")]
     assert len(notes) == 1 and "method = rodas4" in notes[0] and "output_interval" in notes[0]
+
+
+def test_the_help_names_what_an_export_does_not_take() -> None:
+    """``export fmu --help`` said nothing of the settings it does not take (session 21's
+    note): every name of :data:`feeddrive.fmu.NOT_TAKEN` is in it, and what it takes."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+    from feeddrive.fmu import NOT_TAKEN
+
+    result = CliRunner().invoke(app, ["export", "fmu", "--help"], terminal_width=200)
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    sentence = next(part for part in text.split(";") if "are not taken" in part)
+    assert all(name in sentence for name in NOT_TAKEN), sentence
+    assert "embedded DOPRI5" in text and "solver.max_step" in text

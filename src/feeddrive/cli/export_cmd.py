@@ -64,7 +64,11 @@ def fmu_command(
     references and a table load force; outputs: table position and speed, motor angles,
     speeds, currents and torques, friction forces, following error; every model parameter
     tunable, checked against its parameter-file range when set.  With --machine: one FMU
-    of every axis, its variables named <axis>.<name>."""
+    of every axis, its variables named <axis>.<name>.  The tolerances (--accuracy, --rtol and
+    the absolute ones, or the parameter file's [solver] table) become the start values of the
+    co-simulation FMU's embedded DOPRI5 (and a [solver] max_step its solver.max_step); a
+    [solver] method other than dopri5, rosenbrock, output_interval and max_steps have no
+    counterpart in an FMU and are not taken: a note line names each (docs/fmu.md)."""
     from ..fmu import check_request, export_fmu
     from ..parameters import ParameterError
 
