@@ -133,6 +133,11 @@ def test_fit_with_an_explicit_rtol_finishes_with_the_tightened_rtol_in_its_label
     assert f"integrator {label} ({steps} tightening(s)): estimated integration error" in text
     assert f"refit at {label}:" in text
     assert "refit at accuracy" not in text
+    # and the stationarity check's last step, as the history records it
+    step = check["history"][-1]["gauss_newton_step_stderr"]
+    assert step <= 0.1
+    assert f"the Gauss–Newton step at the optimum {step:.2g} standard errors" in " ".join(
+        text.split())
 
 
 def test_fit_with_explicit_absolute_tolerances_finishes(trace: Path) -> None:

@@ -234,6 +234,41 @@ def test_fit_refuses_intervals_when_the_integration_error_stays_above_the_noise(
         assert "integration error" in (e.issue or "")
 
 
+@pytest.mark.parametrize(("steps_seen", "tightenings", "rough"), [
+    ((0.3, 0.3), 1, "the model's"),  # not shrinking 2x with the tighter integrator: stops
+    ((0.3, 0.12, 0.04), 2, None),  # shrinking (0.12 < 0.3/2): tightened until ≤ 0.1 s.e.
+])
+def test_a_rough_optimum_tightens_only_while_the_refused_step_shrinks(
+        monkeypatch: pytest.MonkeyPatch, steps_seen: tuple[float, ...], tightenings: int,
+        rough: str | None) -> None:
+    """The stationarity check (``_stationarity``: the Gauss-Newton step at the optimum,
+    refused by the sum of squares) stands in here for a rough objective, its steps given
+    per setting: the integrator is tightened while the refused step shrinks
+    ``ROUGHNESS_SHRINK``-fold, and a step that does not is recorded as the model's."""
+    seen = iter(steps_seen)
+    accuracies: list[float] = []
+
+    def refused(ev, theta, lb, ub, settings):  # type: ignore[no-untyped-def]
+        accuracies.append(settings.accuracy)
+        return next(seen), None
+
+    monkeypatch.setattr(fitmod, "_stationarity", refused)
+    monkeypatch.setattr(fitmod, "ERROR_TO_NOISE", 1e3)  # the other checks out of the way
+    monkeypatch.setattr(fitmod, "ESTIMATE_SHIFT", 0.1)
+    monkeypatch.setattr(fitmod, "STDERR_SHIFT", math.inf)
+    monkeypatch.setattr(fitmod, "_estimate_shift", lambda *a: 0.0)
+    result = fit_drive(fd.preset("wang2021"), [_exp()], ["friction.screw.positive."
+                                                         "viscous_coefficient"],
+                       profile=False)
+    check = result.integration
+    assert check is not None and check.met and check.steps == tightenings
+    assert accuracies == pytest.approx([0.1 ** k for k in range(len(steps_seen))])
+    history = check.history
+    assert [h["gauss_newton_step_stderr"] for h in history] == list(steps_seen)
+    assert history[-1].get("roughness") == rough
+    assert all(h["gauss_newton_step_refused"] for h in history[:-1])
+
+
 def test_torque_ripple_fitted_without_it_is_model_inadequate_with_its_frequency() -> None:
     """Issue 36 item 3: a truth with screw-motor torque ripple (6 per revolution, 0.01 N m)
     fitted by the model without it: "model inadequate", the residual's peak at the ripple's

@@ -246,6 +246,11 @@ def fit_command(
     if check is not None:
         last = check.history[-1] if check.history else {}
         shift, spread = last.get("estimate_shift_stderr"), last.get("stderr_shift")
+        step = last.get("gauss_newton_step_stderr")
+        step_text = ("" if step is None else
+                     f"; the Gauss–Newton step at the optimum {step:.2g} standard errors"
+                     + (" (the model's own roughness: it did not shrink with the integrator)"
+                        if last.get("roughness") else ""))
         spread_text = (f"the standard errors by {100 * spread:.2g} %"
                        if spread is not None and last.get("stderr_shift_at")
                        else "no credible linear interval's standard error to compare")
@@ -253,7 +258,7 @@ def fit_command(
              + ("estimated integration error ≤ "
                 f"{data['integration_check']['limit_fraction_of_noise']:g}× every signal's "
                 f"noise; the estimates move by {shift:.2g} standard errors and "
-                f"{spread_text} with it ten times tighter"
+                f"{spread_text} with it ten times tighter{step_text}"
                 if check.met and shift is not None and spread is not None
                 else f"intervals withheld: {check.reason}"))
     if result.hac is not None:
