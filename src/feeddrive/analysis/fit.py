@@ -1770,7 +1770,7 @@ def _stderr_shift(ev: _Evaluator, shadow: tuple[Any, _Evaluator] | None, theta: 
 
 
 def _stationarity(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-                  settings: Any) -> tuple[float, np.ndarray | None]:
+                  settings: Any) -> tuple[float | None, np.ndarray | None]:
     """The central-difference Gauss–Newton step at ``theta`` (the tangent Jacobian,
     :meth:`_Evaluator.tangent`, cached from :func:`_stderr_shift`) in HAC standard errors, the
     largest over the parameters, and the point it leads to if that point is within the
@@ -1779,19 +1779,22 @@ def _stationarity(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndar
     Returns
     -------
     tuple
-        (the step's size [standard errors], the point or None).
+        (the step's size [standard errors], or None where it cannot be judged — a
+        non-finite Jacobian, residual or standard error, as :func:`_polish` stops there; the
+        point or None).
     """
     from ..engine.options import using
 
     with using(settings):
         r = ev.batch([theta])[0]
         jac = ev.tangent(theta, lb, ub)
-    if not np.all(np.isfinite(jac)):
-        return math.inf, None
+    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
+        return None, None
     step = -np.linalg.lstsq(jac, r, rcond=None)[0]
     with np.errstate(all="ignore"):
-        se = _hac_stderr(ev, jac, r)
-        size = np.where(se > 0, np.abs(step) / se, math.inf)
+        size = np.abs(step) / _hac_stderr(ev, jac, r)
+    if not np.all(np.isfinite(size)):
+        return None, None
     largest = float(np.max(size)) if size.size else 0.0
     new = theta + step
     if largest <= ESTIMATE_SHIFT or np.any(new < lb) or np.any(new > ub):
@@ -1908,7 +1911,7 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
                 if spread <= STDERR_SHIFT:
                     rough, better = _stationarity(ev, theta, lb, ub, settings)
                     history[-1]["gauss_newton_step_stderr"] = rough
-                    if rough <= ESTIMATE_SHIFT:
+                    if rough is None or rough <= ESTIMATE_SHIFT:  # (None: not judged)
                         break
                     if better is not None and moves < MAX_POLISH_STEPS:
                         say(f"Gauss–Newton step of {rough:.3g} standard errors taken "
