@@ -77,3 +77,35 @@ BENCH_CASES = (
     Case("cdfs_creep_1p0", "creeping", 2000.0, "cdfs", 1.0e-3, 0.0, 10.0, 7.0),
     Case("ddfs_0p5_vn16", "damped", 2000.0, "ddfs", 0.5e-3, 16e-3, 10.0, 7.0),
 )
+
+#: the trials that decide the ``reproduce`` report's critical speeds and band edges
+#: (``wang2021`` at mid-screw; its store: the CDFS's 1.55 mm/s oscillation and 1.56 smooth,
+#: decided at 12 and 24 s, 1.42 the stick-slip/oscillation edge, 1.0 inside the stick-slip
+#: band; the DDFS's lowest trial, 0.02 mm/s at v_n = 16 mm/s, which decides "below range"):
+#: (drive, table speed [mm/s], nut speed [mm/s], the trial's length [s]).  Their Radau
+#: references: tests/data/radau_deciding_trials.npz (``reference/make_radau_reference.py
+#: deciding``), read by :func:`deciding_reference`.
+DECIDING = (("cdfs", 1.0, 0.0, 12.0), ("cdfs", 1.42, 0.0, 12.0), ("cdfs", 1.55, 0.0, 12.0),
+            ("cdfs", 1.56, 0.0, 24.0), ("ddfs", 0.02, 16.0, 12.0))
+
+#: (rtol, × the former absolute tolerances) of the deciding trials' Radau references.  Measured
+#: 2026-12-06 on an "AMD EPYC" host (radau_states at the three settings, session 21), the
+#: largest table-speed change from (1e-11, 1e-4) and (1e-12, 1e-5) to these: 1.2e-10 and
+#: 3.4e-13 m/s (DDFS 0.02/16 mm/s), 2.9e-11 and 4.2e-12 (CDFS 1.0 mm/s), ≤ 1.7e-12 and
+#: ≤ 3.4e-12 on the other three.
+#: The (1e-11, 1e-4) used until then had moved by ≤ 2e-12 on the host it was chosen on; on
+#: that one its DDFS reference was 1.2e-10 m/s off, four times the run's own error, and the
+#: shadow's ratio to it failed (0.065).  Radau's LU (LAPACK) rounds with the CPU's kernels,
+#: so a reference is only as host-independent as it is converged.
+DECIDING_SETTINGS = (1e-13, 1e-6)
+
+
+def trial_profile(speed_mm_s: float, nut_mm_s: float) -> ConstantSpeed:
+    """A creep trial's reference profile (``creep_trial``'s: a 0.1-s start ramp)."""
+    return ConstantSpeed(speed_mm_s * 1e-3, nut_mm_s * 1e-3, ramp_time=0.1)
+
+
+def deciding_name(trial: tuple[str, float, float, float]) -> str:
+    """The key of a deciding trial in tests/data/radau_deciding_trials.npz."""
+    drive, speed, nut, duration = trial
+    return f"{drive}_{speed:g}_{nut:g}_{duration:g}".replace(".", "p")

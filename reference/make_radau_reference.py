@@ -4,6 +4,7 @@ Run from the repository root::
 
     /work/venv/bin/python reference/make_radau_reference.py            # all cases
     /work/venv/bin/python reference/make_radau_reference.py cdfs_creep_1p0
+    /work/venv/bin/python reference/make_radau_reference.py deciding   # the report's trials
 
 For every case of ``reference.cases.RADAU_CASES`` this integrates
 ``reference.scipy_model.ReferenceModel`` with ``solve_ivp(method="Radau", rtol=1e-10)`` and
@@ -38,7 +39,14 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from feeddrive.parameters import dumps  # noqa: E402
-from reference.cases import RADAU_CASES, Case  # noqa: E402
+from reference.cases import (  # noqa: E402
+    DECIDING,
+    DECIDING_SETTINGS,
+    RADAU_CASES,
+    Case,
+    deciding_name,
+    trial_profile,
+)
 from reference.scipy_model import STATE_NAMES, ReferenceModel, tolerances  # noqa: E402
 
 DATA = ROOT / "tests" / "data"
@@ -141,7 +149,51 @@ def make(case: Case) -> Path:
     return path
 
 
+DECIDING_PATH = DATA / "radau_deciding_trials.npz"
+
+
+def make_deciding() -> Path:
+    """The Radau references of the report's deciding trials (``reference.cases.DECIDING``) at
+    ``DECIDING_SETTINGS``: one file, each trial's table speed [m/s] on its 1-ms grid under
+    its :func:`~reference.cases.deciding_name`, with the settings and the parameters as TOML
+    (the loader refuses a file made from other ones)."""
+    import feeddrive as fd
+
+    rtol, scale = DECIDING_SETTINGS
+    params = fd.preset("wang2021")
+    arrays: dict[str, Any] = {"rtol": rtol, "atol_scale": scale,
+                              "parameters_toml": dumps(params)}
+    for trial in DECIDING:
+        drive, speed, nut, duration = trial
+        _, y, stats = radau_states(params, drive, trial_profile(speed, nut), duration, rtol,
+                                   scale)
+        arrays[deciding_name(trial)] = y[V_T]
+        print(f"{deciding_name(trial)}: {stats['wall_time_s']:.1f} s wall, nfev "
+              f"{stats['nfev']:.0f}", flush=True)
+    np.savez_compressed(DECIDING_PATH, **arrays)
+    print(f"→ {DECIDING_PATH.relative_to(ROOT)}")
+    return DECIDING_PATH
+
+
+def deciding_reference(trial: tuple[str, float, float, float]) -> np.ndarray:
+    """The stored Radau table speed [m/s] of a deciding trial on its 1-ms grid
+    (:func:`make_deciding`); refused where the file was made at other settings or from
+    other parameters than ``wang2021``'s now."""
+    import feeddrive as fd
+
+    with np.load(DECIDING_PATH) as data:
+        made = (float(data["rtol"]), float(data["atol_scale"]))
+        if made != DECIDING_SETTINGS or str(data["parameters_toml"]) != dumps(
+                fd.preset("wang2021")):
+            raise RuntimeError(f"{DECIDING_PATH.name} was made at {made} or from other "
+                               "parameters; run reference/make_radau_reference.py deciding")
+        return np.array(data[deciding_name(trial)])
+
+
 def main(argv: list[str]) -> None:
+    if argv == ["deciding"]:
+        make_deciding()
+        return
     chosen = [c for c in RADAU_CASES if not argv or c.name in argv]
     if not chosen:
         raise SystemExit(f"unknown case; expected one of {[c.name for c in RADAU_CASES]}")

@@ -42,7 +42,6 @@ of the right-hand side.  So the strict xfail stays.
 
 from __future__ import annotations
 
-import functools
 import math
 import sys
 from pathlib import Path
@@ -56,7 +55,11 @@ for folder in (ROOT, Path(__file__).resolve().parent):
     if str(folder) not in sys.path:
         sys.path.insert(0, str(folder))
 
-from reference.cases import RADAU_CASES, Case  # noqa: E402
+from reference.cases import DECIDING, RADAU_CASES, Case  # noqa: E402
+from reference.cases import trial_profile as _trial_profile  # noqa: E402
+from reference.make_radau_reference import (  # noqa: E402
+    deciding_reference as stored_deciding_reference,
+)
 from reference.scipy_model import STATE_NAMES  # noqa: E402
 from test_accuracy_convergence import (  # noqa: E402
     DURATION,
@@ -152,43 +155,12 @@ def test_the_stated_ratio_covers_stick_slip_runs(method: str, accuracy: float) -
     assert all(low <= r <= high for r in ratios), ratios
 
 
-#: the trials that decide the ``reproduce`` report's critical speeds and band edges
-#: (``wang2021`` at mid-screw; its store: the CDFS's 1.55 mm/s oscillation and 1.56 smooth,
-#: decided at 12 and 24 s, 1.42 the stick-slip/oscillation edge, 1.0 inside the stick-slip
-#: band; the DDFS's lowest trial, 0.02 mm/s at v_n = 16 mm/s, which decides "below range"):
-#: (drive, table speed [mm/s], nut speed [mm/s], the trial's length [s])
-DECIDING = (("cdfs", 1.0, 0.0, 12.0), ("cdfs", 1.42, 0.0, 12.0), ("cdfs", 1.55, 0.0, 12.0),
-            ("cdfs", 1.56, 0.0, 24.0), ("ddfs", 0.02, 16.0, 12.0))
-
-
-def _trial_profile(speed_mm_s: float, nut_mm_s: float) -> fd.ConstantSpeed:
-    return fd.ConstantSpeed(speed_mm_s * 1e-3, nut_mm_s * 1e-3, ramp_time=0.1)  # a trial's
-
-
-#: (rtol, × the former absolute tolerances) of the deciding trials' Radau references.  Measured
-#: 2026-12-06 on an "AMD EPYC" host (radau_states at the three settings, session 21), the
-#: largest table-speed change from (1e-11, 1e-4) and (1e-12, 1e-5) to these: 1.2e-10 and
-#: 3.4e-13 m/s (DDFS 0.02/16 mm/s), 2.9e-11 and 4.2e-12 (CDFS 1.0 mm/s), ≤ 1.7e-12 and
-#: ≤ 3.4e-12 on the other three.
-#: The (1e-11, 1e-4) used until then had moved by ≤ 2e-12 on the host it was chosen on; on
-#: this one its DDFS reference was 1.2e-10 m/s off, four times the run's own error, and the
-#: shadow's ratio to it failed (0.065).  Radau's LU (LAPACK) rounds with the CPU's kernels,
-#: so a reference is only as host-independent as it is converged.
-DECIDING_SETTINGS = (1e-13, 1e-6)
-
-
-@functools.cache
 def deciding_reference(trial: tuple[str, float, float, float]) -> np.ndarray:
     """Table speed [m/s] of a deciding trial by scipy's Radau on the plain-Python model, on the
-    1-ms grid (``reference/make_radau_reference.py``; rtol and absolute tolerances
-    :data:`DECIDING_SETTINGS`)."""
-    from reference.make_radau_reference import radau_states
-
-    drive, speed, nut, duration = trial
-    rtol, scale = DECIDING_SETTINGS
-    _, y, _ = radau_states(fd.preset("wang2021"), drive, _trial_profile(speed, nut), duration,
-                           rtol, scale)
-    return np.asarray(y[STATE_NAMES.index("table_speed")])
+    1-ms grid, at :data:`reference.cases.DECIDING_SETTINGS` — stored
+    (tests/data/radau_deciding_trials.npz, ``reference/make_radau_reference.py deciding``:
+    computed here they cost 180 s of one worker on a slow host)."""
+    return stored_deciding_reference(trial)
 
 
 def deciding_ratio(trial: tuple[str, float, float, float], method: str,

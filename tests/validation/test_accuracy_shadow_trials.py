@@ -8,7 +8,7 @@ Checked against truths feeddrive did not make: scipy's Radau on the plain-Python
 critical speeds and band edges, and the stored Radau references of three stick-slip runs
 (``reference/cases.py``). Measured 2026-12-06: the shadow over the true table-speed error
 0.85–1.0 on the deciding trials at ``accuracy`` 1 and 0.1 (0.91–1.0 against the tighter
-references of ``test_accuracy_embedded.DECIDING_SETTINGS``, session 21: the DDFS trial's
+references of ``reference.cases.DECIDING_SETTINGS``, session 21: the DDFS trial's
 reference had been 1.2e-10 m/s off on another CPU, four times the run's error), 0.89–1.1 on the
 stick-slip runs at ``accuracy`` 1 (whose stored references, rtol 1e-10, carry up to 9e-10 m/s
 themselves: against a Radau at rtol 1e-12 the shadow is 0.83–1.0 at ``accuracy`` 1 … 0.01) —
@@ -170,3 +170,20 @@ def test_the_help_and_the_docs_state_the_shadow_as_the_code_makes_it() -> None:
     low, high = SHADOW_RATIO
     assert f"`feeddrive.engine.error_estimate.SHADOW_RATIO`, {low:.2g}–{high:.2g}" in docs
     assert f"the deciding trials run {SHADOW_FACTOR:g}× tighter: {low:.2g}–{high:.2g}×" in docs
+
+
+def test_a_stored_reference_made_otherwise_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The deciding trials' stored Radau references are read only at the settings and
+    parameters they were made with (else: regenerate, the message says how)."""
+    import reference.make_radau_reference as maker
+
+    trial = DECIDING[-1]
+    assert maker.deciding_reference(trial).shape == (int(round(trial[3] / 1e-3)) + 1,)
+    monkeypatch.setattr(maker, "DECIDING_SETTINGS", (1e-12, 1e-6))
+    with pytest.raises(RuntimeError, match="make_radau_reference.py deciding"):
+        maker.deciding_reference(trial)
+    monkeypatch.undo()
+    real = fd.preset
+    monkeypatch.setattr(fd, "preset", lambda name: real(name).replace_path("table.mass", 21.0))
+    with pytest.raises(RuntimeError, match="other parameters"):
+        maker.deciding_reference(trial)

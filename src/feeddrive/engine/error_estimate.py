@@ -49,8 +49,9 @@ SHADOW_FACTOR = 10.0
 #: range of its ratio to the true table-speed error on the trials that decide the
 #: ``reproduce`` report's critical speeds and band edges (``wang2021`` at mid-screw: CDFS
 #: 1.0, 1.42, 1.55 mm/s for 12 s and 1.56 mm/s for 24 s, DDFS 0.02 mm/s at v_n = 16 mm/s,
-#: against scipy's Radau at rtol 1e-13, tests/validation/test_accuracy_embedded.py's
-#: ``DECIDING_SETTINGS``) at ``accuracy`` 1 and 0.1, and on three stick-slip runs
+#: against scipy's Radau at rtol 1e-13, ``reference/cases.py``'s ``DECIDING_SETTINGS``,
+#: stored in tests/data/radau_deciding_trials.npz) at ``accuracy`` 1 and 0.1, and on three
+#: stick-slip runs
 #: (``reference/cases.py``, against their stored Radau references) at ``accuracy`` 1;
 #: measured 2026-12-06: 0.91–1.0 (0.85–1.0 against the rtol-1e-11 references used before,
 #: one of which was 1.2e-10 m/s off on another CPU) and 0.89–1.1 (against a Radau at rtol
