@@ -269,6 +269,27 @@ def test_a_rough_optimum_tightens_only_while_the_refused_step_shrinks(
     assert all(h["gauss_newton_step_refused"] for h in history[:-1])
 
 
+def test_a_rough_optimum_left_after_the_last_tightening_withholds_the_intervals(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Still shrinking but above the limit when no tightening is left: not met, the reason
+    names the step, and the intervals are withheld."""
+    seen = iter((0.3, 0.14))
+    monkeypatch.setattr(fitmod, "_stationarity", lambda *a: (next(seen), None))
+    monkeypatch.setattr(fitmod, "MAX_ACCURACY_STEPS", 1)
+    monkeypatch.setattr(fitmod, "ERROR_TO_NOISE", 1e3)
+    monkeypatch.setattr(fitmod, "STDERR_SHIFT", math.inf)
+    monkeypatch.setattr(fitmod, "_estimate_shift", lambda *a: 0.0)
+    result = fit_drive(fd.preset("wang2021"), [_exp()], ["friction.screw.positive."
+                                                         "viscous_coefficient"],
+                       profile=False)
+    check = result.integration
+    assert check is not None and not check.met and check.steps == 1
+    assert check.reason is not None and check.reason.startswith(
+        "the optimum is still not stationary: a Gauss–Newton step of 0.14 standard errors "
+        "raises the sum of squares after 1 tightenings")
+    assert all(e.interval == "withheld" for e in result.estimates)
+
+
 def test_torque_ripple_fitted_without_it_is_model_inadequate_with_its_frequency() -> None:
     """Issue 36 item 3: a truth with screw-motor torque ripple (6 per revolution, 0.01 N m)
     fitted by the model without it: "model inadequate", the residual's peak at the ripple's

@@ -1918,17 +1918,21 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
                             "(central differences); the checks again there")
                         theta, moves = better, moves + 1
                         continue
-                    history[-1]["gauss_newton_step_refused"] = True
-                    say(f"a Gauss–Newton step of {rough:.3g} standard errors raises the sum of "
-                        f"squares (limit {ESTIMATE_SHIFT:g}): the objective is rough at this "
-                        "integrator")
-                    if refused is not None and rough * ROUGHNESS_SHRINK > refused:
-                        history[-1]["roughness"] = "the model's"
-                        say(f"it did not shrink {ROUGHNESS_SHRINK:g}× with the integrator ten "
-                            f"times tighter ({refused:.3g} before): the model's own "
-                            "roughness, not the integrator's")
-                        break
-                    refused = rough
+                    history[-1]["gauss_newton_step_refused"] = better is None
+                    if better is not None:  # still lowering after MAX_POLISH_STEPS: a refit
+                        say(f"still a Gauss–Newton step of {rough:.3g} standard errors after "
+                            f"{moves} (limit {ESTIMATE_SHIFT:g})")
+                    else:
+                        say(f"a Gauss–Newton step of {rough:.3g} standard errors raises the "
+                            f"sum of squares (limit {ESTIMATE_SHIFT:g}): the objective is "
+                            "rough at this integrator")
+                        if refused is not None and rough * ROUGHNESS_SHRINK > refused:
+                            history[-1]["roughness"] = "the model's"
+                            say(f"it did not shrink {ROUGHNESS_SHRINK:g}× with the integrator "
+                                f"ten times tighter ({refused:.3g} before): the model's own "
+                                "roughness, not the integrator's")
+                            break
+                        refused = rough
         if steps == MAX_ACCURACY_STEPS:
             reason = ((f"the integration error is still {worst:.3g}× the noise"
                        if worst > ERROR_TO_NOISE and not blind else
@@ -1936,9 +1940,12 @@ def _settle_accuracy(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.n
                        "exactly)" if blind else
                        f"the integration error still moves the estimates by {shift:.3g} "
                        "standard errors" if shift > ESTIMATE_SHIFT else
-                       "the objective is still rough: a Gauss–Newton step of "
-                       f"{history[-1]['gauss_newton_step_stderr']:.3g} standard errors raises "
-                       "the sum of squares" if history[-1].get("gauss_newton_step_refused")
+                       "the optimum is still not stationary: a Gauss–Newton step of "
+                       f"{history[-1]['gauss_newton_step_stderr']:.3g} standard errors"
+                       + (" raises the sum of squares"
+                          if history[-1].get("gauss_newton_step_refused") else "")
+                       if history[-1].get("gauss_newton_step_stderr") is not None
+                       and history[-1]["gauss_newton_step_stderr"] > ESTIMATE_SHIFT
                        else
                        f"the integration error still changes the standard errors by "
                        f"{_fraction(spread)} ({which})") +
