@@ -8,6 +8,7 @@ of issue 22's Acceptance; the full 20-seed calibration is benchmarks/fit_calibra
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -234,6 +235,19 @@ def test_fit_refuses_intervals_when_the_integration_error_stays_above_the_noise(
         assert "integration error" in (e.issue or "")
 
 
+def _fit_with_stationarity(monkeypatch: pytest.MonkeyPatch,
+                           stationarity: Any) -> fitmod.FitResult:
+    """A one-parameter fit whose stationarity check is ``stationarity`` (a stand-in for
+    ``_stationarity``), the accuracy check's other three out of its way."""
+    monkeypatch.setattr(fitmod, "_stationarity", stationarity)
+    monkeypatch.setattr(fitmod, "ERROR_TO_NOISE", 1e3)
+    monkeypatch.setattr(fitmod, "ESTIMATE_SHIFT", 0.1)
+    monkeypatch.setattr(fitmod, "STDERR_SHIFT", math.inf)
+    monkeypatch.setattr(fitmod, "_estimate_shift", lambda *a: 0.0)
+    return fit_drive(fd.preset("wang2021"), [_exp()],
+                     ["friction.screw.positive.viscous_coefficient"], profile=False)
+
+
 @pytest.mark.parametrize(("steps_seen", "tightenings", "rough"), [
     ((0.3, 0.3), 1, "the model's"),  # not shrinking 2x with the tighter integrator: stops
     ((0.3, 0.12, 0.04), 2, None),  # shrinking (0.12 < 0.3/2): tightened until ≤ 0.1 s.e.
@@ -252,15 +266,7 @@ def test_a_rough_optimum_tightens_only_while_the_refused_step_shrinks(
         accuracies.append(settings.accuracy)
         return next(seen), None
 
-    monkeypatch.setattr(fitmod, "_stationarity", refused)
-    monkeypatch.setattr(fitmod, "ERROR_TO_NOISE", 1e3)  # the other checks out of the way
-    monkeypatch.setattr(fitmod, "ESTIMATE_SHIFT", 0.1)
-    monkeypatch.setattr(fitmod, "STDERR_SHIFT", math.inf)
-    monkeypatch.setattr(fitmod, "_estimate_shift", lambda *a: 0.0)
-    result = fit_drive(fd.preset("wang2021"), [_exp()], ["friction.screw.positive."
-                                                         "viscous_coefficient"],
-                       profile=False)
-    check = result.integration
+    check = _fit_with_stationarity(monkeypatch, refused).integration
     assert check is not None and check.met and check.steps == tightenings
     assert accuracies == pytest.approx([0.1 ** k for k in range(len(steps_seen))])
     history = check.history
@@ -274,14 +280,8 @@ def test_a_rough_optimum_left_after_the_last_tightening_withholds_the_intervals(
     """Still shrinking but above the limit when no tightening is left: not met, the reason
     names the step, and the intervals are withheld."""
     seen = iter((0.3, 0.14))
-    monkeypatch.setattr(fitmod, "_stationarity", lambda *a: (next(seen), None))
     monkeypatch.setattr(fitmod, "MAX_ACCURACY_STEPS", 1)
-    monkeypatch.setattr(fitmod, "ERROR_TO_NOISE", 1e3)
-    monkeypatch.setattr(fitmod, "STDERR_SHIFT", math.inf)
-    monkeypatch.setattr(fitmod, "_estimate_shift", lambda *a: 0.0)
-    result = fit_drive(fd.preset("wang2021"), [_exp()], ["friction.screw.positive."
-                                                         "viscous_coefficient"],
-                       profile=False)
+    result = _fit_with_stationarity(monkeypatch, lambda *a: (next(seen), None))
     check = result.integration
     assert check is not None and not check.met and check.steps == 1
     assert check.reason is not None and check.reason.startswith(
