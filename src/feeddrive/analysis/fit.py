@@ -1769,70 +1769,73 @@ def _stderr_shift(ev: _Evaluator, shadow: tuple[Any, _Evaluator] | None, theta: 
     return float(worst), which
 
 
-def _stationarity(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
-                  settings: Any) -> tuple[float | None, np.ndarray | None]:
+def _gauss_newton_step(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, float | None, np.ndarray | None]:
     """The central-difference Gauss–Newton step at ``theta`` (the tangent Jacobian,
-    :meth:`_Evaluator.tangent`, cached from :func:`_stderr_shift`) in HAC standard errors, the
-    largest over the parameters, and the point it leads to if that point is within the
-    bounds and lowers the sum of squares (None: refused — the objective is rough there).
+    :meth:`_Evaluator.tangent`, the one the intervals use; cached per point).
 
     Returns
     -------
     tuple
-        (the step's size [standard errors], or None where it cannot be judged — a
-        non-finite Jacobian, residual or standard error, as :func:`_polish` stops there; the
-        point or None).
+        (the residual there, the tangent Jacobian, the step's largest size in HAC standard
+        errors — None where it cannot be judged: a non-finite Jacobian, residual or standard
+        error —, the point it leads to — None where that leaves the bounds).
     """
-    from ..engine.options import using
-
-    with using(settings):
-        r = ev.batch([theta])[0]
-        jac = ev.tangent(theta, lb, ub)
+    r = ev.batch([theta])[0]
+    jac = ev.tangent(theta, lb, ub)
     if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
-        return None, None
+        return r, jac, None, None
     step = -np.linalg.lstsq(jac, r, rcond=None)[0]
     with np.errstate(all="ignore"):
         size = np.abs(step) / _hac_stderr(ev, jac, r)
     if not np.all(np.isfinite(size)):
-        return None, None
-    largest = float(np.max(size)) if size.size else 0.0
+        return r, jac, None, None
     new = theta + step
-    if largest <= ESTIMATE_SHIFT or np.any(new < lb) or np.any(new > ub):
-        return largest, None
+    inside = not (np.any(new < lb) or np.any(new > ub))
+    return r, jac, float(np.max(size)) if size.size else 0.0, new if inside else None
+
+
+def _stationarity(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
+                  settings: Any) -> tuple[float | None, np.ndarray | None]:
+    """The Gauss–Newton step at ``theta`` (:func:`_gauss_newton_step`, its Jacobian cached
+    from :func:`_stderr_shift`) in standard errors, and the point it leads to if that step is
+    above ``ESTIMATE_SHIFT``, within the bounds and lowers the sum of squares (None: refused —
+    the objective is rough there).
+
+    Returns
+    -------
+    tuple
+        (the step's size [standard errors], or None where it cannot be judged, as
+        :func:`_polish` stops there; the point or None).
+    """
+    from ..engine.options import using
+
     with using(settings):
+        r, _, largest, new = _gauss_newton_step(ev, theta, lb, ub)
+        if largest is None or largest <= ESTIMATE_SHIFT or new is None:
+            return largest, None
         r_new = ev.batch([new])[0]
     return largest, (new if float(r_new @ r_new) < float(r @ r) else None)
 
 
 def _polish(ev: _Evaluator, theta: np.ndarray, lb: np.ndarray, ub: np.ndarray,
             say: Callable[[str], None]) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss–Newton steps with the central-difference Jacobian (:meth:`_Evaluator.tangent`)
+    """Gauss–Newton steps with the central-difference Jacobian (:func:`_gauss_newton_step`)
     from the search's optimum, until each step is below :data:`POLISH_TOLERANCE` of its HAC
     standard error (at most :data:`MAX_POLISH_STEPS`; a step that raises the sum of squares
     or leaves the bounds is not taken).  The search's forward-difference Jacobian is a secant
     over 10⁻³ of each value; where an interval is far narrower its stationary point is not
     the least-squares optimum.  Returns the point and the tangent Jacobian there."""
-    r = ev.batch([theta])[0]
-    jac = ev.tangent(theta, lb, ub)
-    for k in range(MAX_POLISH_STEPS):
-        if not np.all(np.isfinite(jac)):
-            break
-        step = -np.linalg.lstsq(jac, r, rcond=None)[0]
-        with np.errstate(all="ignore"):
-            se = np.sqrt(np.diag(hac_covariance(jac, r, ev.records()).covariance))
-            size = np.abs(step) / se
-        if not np.all(np.isfinite(size)) or np.all(size < POLISH_TOLERANCE):
-            break
-        new = theta + step
-        if np.any(new < lb) or np.any(new > ub):
+    for k in range(MAX_POLISH_STEPS + 1):
+        r, jac, largest, new = _gauss_newton_step(ev, theta, lb, ub)
+        if k == MAX_POLISH_STEPS or largest is None or largest < POLISH_TOLERANCE or new is None:
             break
         r_new = ev.batch([new])[0]
         if float(r_new @ r_new) > float(r @ r):
             break
-        say(f"polish {k + 1}: Gauss–Newton step of at most {float(np.max(size)):.2g} "
+        say(f"polish {k + 1}: Gauss–Newton step of at most {largest:.2g} "
             "standard errors (central differences)")
-        theta, r = new, r_new
-        jac = ev.tangent(theta, lb, ub)
+        theta = new
     return theta, jac
 
 
