@@ -78,6 +78,7 @@ def stop_workers(pool: cf.ProcessPoolExecutor) -> None:
         The pool (a sweep's, ``reproduce``'s).
     """
     processes = list((getattr(pool, "_processes", None) or {}).values())
+    manager = getattr(pool, "_executor_manager_thread", None)  # shutdown() forgets it
     pool.shutdown(wait=False, cancel_futures=True)
     for proc in processes:
         with contextlib.suppress(Exception):
@@ -87,3 +88,9 @@ def stop_workers(pool: cf.ProcessPoolExecutor) -> None:
             proc.join(2.0)
             if proc.is_alive():
                 proc.kill()
+    if manager is not None:
+        # the pool's manager thread closes its wake-up pipe as it ends; ended before the
+        # interpreter's exit, which writes to that pipe unlocked (CPython 3.11's
+        # ``_python_exit``): a Ctrl-C on ``reproduce`` printed "OSError: [Errno 9] Bad file
+        # descriptor" when the two met (a fresh-clone test run, 2026-12-07)
+        manager.join(2.0)
