@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
-from feeddrive.model.reference import ConstantSpeed, SineSpeed
+from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
+from feeddrive.model.replay import REPLAYS
 from feeddrive.parameters import ParameterError
 
 asm = importlib.import_module("feeddrive.model.assemble")  # the module, not the function
@@ -25,6 +26,27 @@ CASES = [
     ("wang2021", "ddfs", 0.4, [SineSpeed(1.56e-3, 0.0, 0.2), SineSpeed(2e-3, 16e-3, 0.2)]),
     ("wang2021-ripple", "ddfs", 0.4, [ConstantSpeed(1e-3, 16e-3), ConstantSpeed(2e-3, 30e-3)]),
     ("wang2021-drive", "cdfs", 0.6, [ConstantSpeed(1e-3), ConstantSpeed(3e-3)]),
+]
+
+_T = np.linspace(0.0, 0.5, 501)
+
+
+def _sampled(speed: float, nut: float | None = None, hold: bool = False,
+             t: np.ndarray = _T) -> SampledSpeed:
+    """A recorded reference (a fit's experiment): a ramp to ``speed`` with a ripple."""
+    v = speed * np.minimum(t / 0.1, 1.0) * (1.0 + 0.1 * np.sin(40.0 * t))
+    return SampledSpeed(t, v, None if nut is None else np.full(t.size, nut), hold=hold)
+
+
+#: array profiles (unhashable: a fit's records, replays) re-use their type's model too; a
+#: record of another length (another table size) is built anew
+ARRAY_CASES = [
+    ("wang2021", "cdfs", 0.4, [_sampled(1e-3), _sampled(2e-3), _sampled(-1e-3, hold=True),
+                               _sampled(3e-3, t=np.linspace(0.0, 0.3, 301))]),
+    ("wang2021", "ddfs", 0.3, [_sampled(0.5e-3, 16e-3), _sampled(1e-3, 2e-3, hold=True)]),
+    *[("wang2021", "cdfs", 0.4, [cls(_T, np.sin(20.0 * _T), 2e-3),
+                                 cls(_T, 0.5 * np.cos(30.0 * _T), 1e-3)])
+      for cls in REPLAYS.values()],  # every replay of the registry (values in its SI unit)
 ]
 
 
@@ -40,7 +62,7 @@ def _same(a: asm.Model, b: asm.Model) -> None:
             assert x == y, f.name
 
 
-@pytest.mark.parametrize(("preset", "drive", "position", "profiles"), CASES)
+@pytest.mark.parametrize(("preset", "drive", "position", "profiles"), CASES + ARRAY_CASES)
 def test_a_reused_model_equals_the_one_built_anew(preset: str, drive: str, position: float,
                                                   profiles: list[object]) -> None:
     params = fd.preset(preset)
@@ -58,3 +80,30 @@ def test_a_reused_model_still_refuses_a_nut_speed_on_the_cdfs() -> None:
     asm.assemble(params, "cdfs", 0.3, "locked", ConstantSpeed(1e-3))
     with pytest.raises(ParameterError, match="nut_speed"):
         asm.assemble(params, "cdfs", 0.3, "locked", ConstantSpeed(1e-3, 1e-3))
+
+
+def test_a_fits_records_of_one_length_build_one_model(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A fit simulates each experiment (an array profile: unhashable) at each parameter point;
+    the model was built anew for every one (an outside look, 2026-12-07: model building was
+    ~30 % of a fit's CPU).  Now the experiments of one point, records of one length, build it
+    once; a record of another length, or another parameter point, builds its own."""
+    import collections
+
+    built: list[object] = []
+    full = asm._assemble
+
+    def counting(*args: object) -> asm.Model:
+        built.append(args[4])
+        return full(*args)
+
+    monkeypatch.setattr(asm, "_TEMPLATES", collections.OrderedDict())
+    monkeypatch.setattr(asm, "_assemble", counting)
+    params = fd.preset("wang2021")
+    for speed in (1e-3, 2e-3, 5e-3):
+        asm.assemble(params, "cdfs", 0.4, "locked", _sampled(speed))
+    assert len(built) == 1
+    asm.assemble(params, "cdfs", 0.4, "locked", _sampled(1e-3, t=np.linspace(0.0, 0.3, 301)))
+    assert len(built) == 2
+    asm.assemble(params.replace_path("table.mass", 30.0), "cdfs", 0.4, "locked",
+                 _sampled(1e-3))
+    assert len(built) == 3

@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import dataclasses
+import functools
 import math
 import time as _time
 from collections.abc import Callable, Mapping, Sequence
@@ -612,6 +613,16 @@ def _no_effect(params: DriveParameters, drive: str, path: str,
 # ------------------------------------------------------------------ evaluation (workers)
 
 
+@functools.lru_cache(maxsize=8)
+def _parameters_of(text: str) -> DriveParameters:
+    """The parameter set of a task's TOML text, read once per text in a process: the
+    experiments of one parameter point carry the same text (a parameter set is immutable,
+    so one object serves them all)."""
+    from ..parameters import loads
+
+    return loads(text)
+
+
 def _options_for(exp_dt: float) -> dict[str, float]:
     return {"output_interval": min(1e-3, exp_dt)}
 
@@ -654,14 +665,13 @@ def simulate_experiment(task: Mapping[str, Any]) -> dict[str, Any]:
 
     from ..engine.options import SolverOptions, current
     from ..engine.simulate import DriveSystem, SimulationError, simulate
-    from ..parameters import loads
 
     # the integrator settings of the fit (its --accuracy, its tightened tolerances), carried
     # to the worker with where each came from
     base = (SolverOptions.from_record(task["solver"], task.get("solver_origin"))
             if "solver" in task else current())
     try:
-        params = loads(task["parameters"])
+        params = _parameters_of(task["parameters"])
         system = DriveSystem(params, drive=task["drive"], table_position=task["table_position"])
         prof = experiment_profile(task["reference_time"], task["table_speed"],
                                   task["nut_speed"], task.get("input", ""),

@@ -346,10 +346,20 @@ def assemble(parameters: DriveParameters, drive: str, table_position: float, nut
         When a part refuses the parameters, the drive name or the profile.
     """
     key = (parameters, drive, table_position, nut_hold, profile, load)
-    try:
-        return _assemble_cached(*key)
-    except TypeError:  # unhashable inputs (array profiles, load records): build anew
+    if not _hashable((parameters, load)):  # a load record: build anew
         return _assemble(*key)
+    if not _hashable(profile):  # an array profile (a fit's record, a replay): its type's model
+        return _with_profile(*key)
+    return _assemble_cached(*key)
+
+
+def _hashable(value: Any) -> bool:
+    """Whether ``value`` can key a cache (a profile or load of arrays cannot)."""
+    try:
+        hash(value)
+    except TypeError:
+        return False
+    return True
 
 
 @functools.lru_cache(maxsize=64)
