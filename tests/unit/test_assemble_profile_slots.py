@@ -107,3 +107,30 @@ def test_a_fits_records_of_one_length_build_one_model(monkeypatch: pytest.Monkey
     asm.assemble(params.replace_path("table.mass", 30.0), "cdfs", 0.4, "locked",
                  _sampled(1e-3))
     assert len(built) == 3
+
+
+def test_the_kept_models_hold_a_bounded_number_of_bytes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A record's profile puts its table in the model's T (an 8-kHz, 100-s record: 26 MB),
+    and a fit builds a model per parameter point: the kept models are bounded in bytes
+    (``_TEMPLATES_BYTES``), not only in number, so a long fit does not grow by 64 records.
+    Here a bound of 1.5 MB and records of 640 kB: at most two kept, the newest; a record
+    larger than the bound is used but not kept."""
+    import collections
+
+    monkeypatch.setattr(asm, "_TEMPLATES", collections.OrderedDict())
+    monkeypatch.setattr(asm, "_TEMPLATES_BYTES", 1_500_000)
+    params = fd.preset("wang2021")
+    t = np.linspace(0.0, 2.0, 20_001)
+    masses = (20.0, 21.0, 22.0, 23.0, 24.0)
+    for mass in masses:
+        asm.assemble(params.replace_path("table.mass", mass), "cdfs", 0.4, "locked",
+                     _sampled(1e-3, t=t))
+    kept = list(asm._TEMPLATES.values())
+    assert len(kept) == 2
+    assert sum(m.P.nbytes + m.T.nbytes for m, _, _ in kept) <= 1_500_000
+    assert [k[0].table.mass for k in asm._TEMPLATES] == [23.0, 24.0]
+    big = np.linspace(0.0, 5.0, 50_001)  # 1.6 MB of table
+    model = asm.assemble(params, "cdfs", 0.4, "locked", _sampled(1e-3, t=big))
+    assert model.T.nbytes > 1_500_000
+    assert (params, "cdfs", 0.4, "locked", SampledSpeed, None) not in asm._TEMPLATES
+    assert len(asm._TEMPLATES) == 2

@@ -373,6 +373,14 @@ def _assemble_cached(parameters: DriveParameters, drive: str, table_position: fl
 _TEMPLATES: collections.OrderedDict[tuple[Any, ...], tuple[Model, Any, int]] = \
     collections.OrderedDict()
 _TEMPLATES_KEPT = 64
+#: the most bytes of ``P`` and ``T`` the kept models hold together: a record's profile (a
+#: fit's, a replay's) puts its table in ``T`` (an 8-kHz, 100-s record: 26 MB), and a fit
+#: builds one model per parameter point
+_TEMPLATES_BYTES = 64 * 2 ** 20
+
+
+def _template_bytes(entry: tuple[Model, Any, int]) -> int:
+    return int(entry[0].P.nbytes + entry[0].T.nbytes)
 
 
 def _with_profile(parameters: DriveParameters, drive: str, table_position: float,
@@ -388,8 +396,11 @@ def _with_profile(parameters: DriveParameters, drive: str, table_position: float
     if entry is None:
         model = _assemble(parameters, drive, table_position, nut_hold, profile, load)
         mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
-        _TEMPLATES[key] = (model, mech, model.parameter_names.index("profile[0]"))
-        while len(_TEMPLATES) > _TEMPLATES_KEPT:
+        entry = (model, mech, model.parameter_names.index("profile[0]"))
+        if _template_bytes(entry) <= _TEMPLATES_BYTES:
+            _TEMPLATES[key] = entry
+        while len(_TEMPLATES) > _TEMPLATES_KEPT or \
+                sum(map(_template_bytes, _TEMPLATES.values())) > _TEMPLATES_BYTES:
             _TEMPLATES.popitem(last=False)
         return model
     _TEMPLATES.move_to_end(key)
