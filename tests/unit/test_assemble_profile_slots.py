@@ -134,3 +134,40 @@ def test_the_kept_models_hold_a_bounded_number_of_bytes(monkeypatch: pytest.Monk
     assert model.T.nbytes > 1_500_000
     assert (params, "cdfs", 0.4, "locked", SampledSpeed, None) not in asm._TEMPLATES
     assert len(asm._TEMPLATES) == 2
+
+
+def test_threads_share_the_kept_models_without_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The explorer runs its jobs on threads.  Two threads reading and evicting the kept
+    models at once raised ``KeyError`` (a key evicted between one thread's look-up and its
+    move to the end) or "OrderedDict mutated during iteration" — 3 of 3 runs of this test
+    before the lock; the thread switch made frequent here to meet the race."""
+    import collections
+    import sys
+    import threading
+
+    monkeypatch.setattr(asm, "_TEMPLATES", collections.OrderedDict())
+    monkeypatch.setattr(asm, "_TEMPLATES_KEPT", 2)
+    params = fd.preset("wang2021")
+    sets = [params.replace_path("table.mass", 20.0 + k) for k in range(6)]
+    errors: list[str] = []
+
+    def work(seed: int) -> None:
+        rng = np.random.default_rng(seed)
+        try:
+            for _ in range(60):
+                asm.assemble(sets[int(rng.integers(6))], "cdfs", 0.4, "locked", _sampled(1e-3))
+        except Exception as err:  # noqa: BLE001 - every error is the finding
+            errors.append(repr(err))
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    try:
+        threads = [threading.Thread(target=work, args=(seed,)) for seed in range(4)]
+        for th in threads:
+            th.start()
+        for th in threads:
+            th.join()
+    finally:
+        sys.setswitchinterval(interval)
+    assert errors == []
+    assert len(asm._TEMPLATES) <= 2

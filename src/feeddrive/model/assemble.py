@@ -12,6 +12,7 @@ from __future__ import annotations
 import collections
 import dataclasses
 import functools
+import threading
 from dataclasses import dataclass
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -377,6 +378,7 @@ _TEMPLATES_KEPT = 64
 #: fit's, a replay's) puts its table in ``T`` (an 8-kHz, 100-s record: 26 MB), and a fit
 #: builds one model per parameter point
 _TEMPLATES_BYTES = 64 * 2 ** 20
+_TEMPLATES_LOCK = threading.Lock()
 
 
 def _template_bytes(entry: tuple[Model, Any, int]) -> int:
@@ -392,18 +394,21 @@ def _with_profile(parameters: DriveParameters, drive: str, table_position: float
     the result equals a full :func:`_assemble` (tested field by field) at ~1/50 of the cost
     of building the model again (≈ 1.1 ms per creep trial and per linearisation)."""
     key = (parameters, drive, table_position, nut_hold, type(profile), load)
-    entry = _TEMPLATES.get(key)
+    with _TEMPLATES_LOCK:  # the explorer runs its jobs on threads
+        entry = _TEMPLATES.get(key)
+        if entry is not None:
+            _TEMPLATES.move_to_end(key)
     if entry is None:
         model = _assemble(parameters, drive, table_position, nut_hold, profile, load)
         mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
         entry = (model, mech, model.parameter_names.index("profile[0]"))
-        if _template_bytes(entry) <= _TEMPLATES_BYTES:
-            _TEMPLATES[key] = entry
-        while len(_TEMPLATES) > _TEMPLATES_KEPT or \
-                sum(map(_template_bytes, _TEMPLATES.values())) > _TEMPLATES_BYTES:
-            _TEMPLATES.popitem(last=False)
+        with _TEMPLATES_LOCK:
+            if _template_bytes(entry) <= _TEMPLATES_BYTES:
+                _TEMPLATES[key] = entry
+            while len(_TEMPLATES) > _TEMPLATES_KEPT or \
+                    sum(map(_template_bytes, _TEMPLATES.values())) > _TEMPLATES_BYTES:
+                _TEMPLATES.popitem(last=False)
         return model
-    _TEMPLATES.move_to_end(key)
     model, mech, o = entry
     values, table = profile.encode()
     block = np.zeros(len(PROFILE_PARAMS))
