@@ -46,15 +46,26 @@ def _params(name: str):  # type: ignore[no-untyped-def]
     return preset(name)
 
 
+class _Exported(dict):  # type: ignore[type-arg]
+    """The model-exchange FMU of each case, exported when a test first asks for it: the
+    module's tests are spread over the test workers, and each worker built all seven
+    (gcc, ≈ 2 s each) whatever it ran."""
+
+    def __init__(self, folder: Path) -> None:
+        super().__init__()
+        self.folder = folder
+
+    def __missing__(self, case: str) -> Path:
+        drive, params, fmi = CASES[case]
+        path = self.folder / f"{case}.fmu"
+        export_fmu(_params(params), drive, path, fmi=fmi, kind="me")
+        self[case] = path
+        return path
+
+
 @pytest.fixture(scope="module")
 def models(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    folder = tmp_path_factory.mktemp("me")
-    out = {}
-    for case, (drive, params, fmi) in CASES.items():
-        path = folder / f"{case}.fmu"
-        export_fmu(_params(params), drive, path, fmi=fmi, kind="me")
-        out[case] = path
-    return out
+    return _Exported(tmp_path_factory.mktemp("me"))
 
 
 def _point(m: Model) -> tuple[float, np.ndarray]:
