@@ -326,3 +326,36 @@ def test_matched_fit_reports_hac_covariance_and_diagnostics() -> None:
         assert np.isfinite(e.stderr_white) and e.stderr_white > 0
     for r in result.residuals:
         assert r.diagnostics is not None and len(r.diagnostics.autocorrelation) == 10
+
+
+def test_the_kept_residual_vectors_are_bounded_in_bytes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A fit keeps the residual vectors of the points it may ask for again; 256 of them were
+    kept whatever their size, and a long record's vector is megabytes (an 8-kHz, 100-s record
+    of two signals: 12.8 MB, so 3.3 GB).  Now they are bounded by ``RESIDUAL_CACHE_BYTES``
+    too (here set to 20 MB, a 1.6-MB vector: at most 12 kept, never fewer than a tangent's
+    points), and a point asked for again within them simulates nothing."""
+    n = 100_001
+    t = np.linspace(0.0, 10.0, n)
+    exp = fitmod.Experiment(source="long", time=t, signals={"table_position": 1e-3 * t,
+                                                         "screw_current": np.ones(n)},
+                         reference_time=t, table_speed=np.full(n, 1e-3),
+                         noise={"table_position": 1e-7, "screw_current": 0.01})
+    simulated: list[int] = []
+
+    def fake(task: dict) -> dict:
+        simulated.append(1)
+        return {"signals": {name: np.zeros(n) for name in task["signals"]}}
+
+    monkeypatch.setattr(fitmod, "simulate_experiment", fake)
+    monkeypatch.setattr(fitmod, "RESIDUAL_CACHE_BYTES", 20_000_000, raising=False)
+    ev = fitmod._Evaluator(fd.preset("wang2021"), "cdfs", 0.4,
+                        ["table.mass", "friction.guide.positive.viscous_coefficient"],
+                        np.array([20.0, 100.0]), [exp], {}, None, None)
+    for k in range(40):
+        ev.batch([np.array([1.0 + 0.01 * k, 1.0])])
+    held = sum(r.nbytes for r in ev._cache.values())
+    assert held <= 20_000_000 + 8 * ev.n_residuals
+    assert len(ev._cache) >= 2 * 2 + 2
+    before = len(simulated)
+    ev.batch([np.array([1.0 + 0.01 * 39, 1.0])])  # the newest point: kept
+    assert len(simulated) == before

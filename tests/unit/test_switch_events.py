@@ -195,3 +195,31 @@ def test_the_dopri5_step_cap_follows_the_accuracy() -> None:
 def test_locate_reversals_must_be_true_or_false(value: object) -> None:
     with pytest.raises(fd.ParameterError, match=r"options\.locate_reversals.*True or False"):
         fd.SolverOptions(locate_reversals=value)  # type: ignore[arg-type]
+
+
+def test_the_kept_rows_key_a_record_by_its_digest_not_its_samples() -> None:
+    """A record's samples live in ``T`` (an 8-kHz, 100-s record: 26 MB), and the kept rows
+    (64 of them) were keyed by ``T``'s bytes: a fit of such a record held a copy per
+    parameter point.  The key is now a digest, of fixed size, and still tells apart another
+    record, another parameter value and another structure."""
+    import sys
+
+    from feeddrive.engine import simulate as sim_module
+    from feeddrive.model.assemble import assemble
+
+    params = fd.preset("wang2021")
+    t = np.linspace(0.0, 10.0, 200_001)  # 6.4 MB of table
+    v = 1e-3 * np.minimum(t / 0.1, 1.0)
+    model = assemble(params, "cdfs", 0.4, "locked", fd.SampledSpeed(t, v))
+    key = sim_module._rows_key(model, model.P, model.T)
+    assert model.T.nbytes > 6_000_000
+    assert sum(sys.getsizeof(part) for part in key) < 2_000
+    other_record = assemble(params, "cdfs", 0.4, "locked", fd.SampledSpeed(t, 1.01 * v))
+    other_mass = assemble(params.replace_path("table.mass", 30.0), "cdfs", 0.4, "locked",
+                          fd.SampledSpeed(t, v))
+    ddfs = assemble(params, "ddfs", 0.4, "locked", fd.SampledSpeed(t, v, np.full(t.size, 16e-3)))
+    keys = {key, sim_module._rows_key(other_record, other_record.P, other_record.T),
+            sim_module._rows_key(other_mass, other_mass.P, other_mass.T),
+            sim_module._rows_key(ddfs, ddfs.P, ddfs.T)}
+    assert len(keys) == 4
+    assert sim_module._rows_key(model, model.P.copy(), model.T.copy()) == key

@@ -613,6 +613,10 @@ def _no_effect(params: DriveParameters, drive: str, path: str,
 # ------------------------------------------------------------------ evaluation (workers)
 
 
+#: the most bytes of residual vectors a fit keeps for points it may ask for again
+RESIDUAL_CACHE_BYTES = 256 * 2 ** 20
+
+
 @functools.lru_cache(maxsize=8)
 def _parameters_of(text: str) -> DriveParameters:
     """The parameter set of a task's TOML text, read once per text in a process: the
@@ -731,6 +735,10 @@ class _Evaluator:
                 self.scale.append(weights.get(name, 1.0) / e.noise[name])
         self.n_residuals = sum(e.time.size * len(e.signals) for e in self.experiments)
         self._cache: dict[bytes, np.ndarray] = {}
+        # the residual vectors kept: up to 256, within RESIDUAL_CACHE_BYTES (a long record's
+        # vector is megabytes), and never fewer than a tangent's points
+        self.cache_kept = max(2 * len(self.paths) + 2,
+                              min(256, RESIDUAL_CACHE_BYTES // (8 * max(1, self.n_residuals))))
 
     def parameters(self, theta: np.ndarray) -> DriveParameters:
         p = self.base
@@ -800,8 +808,8 @@ class _Evaluator:
             if self.best is None or cost < self.best[0]:
                 self.best = (cost, np.asarray(th, dtype=float).copy())
                 self.best_residual = r
-        if len(self._cache) > 256:
-            for k in list(self._cache)[:128]:
+        if len(self._cache) > self.cache_kept:
+            for k in list(self._cache)[:len(self._cache) // 2]:
                 self._cache.pop(k)
         return [self._cache[k] if k in self._cache else self.batch([th])[0]
                 for k, th in zip(keys, thetas, strict=True)]

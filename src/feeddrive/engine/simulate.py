@@ -539,14 +539,20 @@ _SWITCH_ROWS_LOCK = threading.Lock()
 
 
 def _rows_key(model: Model, P: np.ndarray, T: np.ndarray) -> tuple[Any, ...]:
-    """The generated module (the structure), ``P`` without the profile's block and ``T``."""
+    """The generated module (the structure), and a digest of ``P`` without the profile's
+    block and of ``T`` — a digest, not their bytes: ``T`` holds a record's samples (an 8-kHz,
+    100-s record: 26 MB), and 64 keys of a fit's parameter points held 64 copies of it."""
+    import hashlib
+
     try:
         o = model.parameter_names.index("profile[0]")
     except ValueError:
         o = P.size
     masked = P.copy()
     masked[o:o + len(PROFILE_PARAMS)] = 0.0
-    return (model.module.__name__, masked.tobytes(), T.tobytes())
+    digest = hashlib.blake2b(masked.tobytes(), digest_size=32)
+    digest.update(np.ascontiguousarray(T).tobytes())
+    return (model.module.__name__, P.size, T.size, digest.digest())
 
 
 def profile_breakpoints(profile: Profile, t_end: float, base: float, *,
