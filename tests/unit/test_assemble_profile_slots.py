@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import feeddrive as fd
+from feeddrive._kept import Kept
 from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
 from feeddrive.model.replay import REPLAYS
 from feeddrive.parameters import ParameterError
@@ -87,7 +88,6 @@ def test_a_fits_records_of_one_length_build_one_model(monkeypatch: pytest.Monkey
     the model was built anew for every one (an outside look, 2026-12-07: model building was
     ~30 % of a fit's CPU).  Now the experiments of one point, records of one length, build it
     once; a record of another length, or another parameter point, builds its own."""
-    import collections
 
     built: list[object] = []
     full = asm._assemble
@@ -96,7 +96,7 @@ def test_a_fits_records_of_one_length_build_one_model(monkeypatch: pytest.Monkey
         built.append(args[4])
         return full(*args)
 
-    monkeypatch.setattr(asm, "_TEMPLATES", collections.OrderedDict())
+    monkeypatch.setattr(asm, "_TEMPLATES", Kept(64, asm._template_bytes, asm._TEMPLATES_BYTES))
     monkeypatch.setattr(asm, "_assemble", counting)
     params = fd.preset("wang2021")
     for speed in (1e-3, 2e-3, 5e-3):
@@ -115,10 +115,8 @@ def test_the_kept_models_hold_a_bounded_number_of_bytes(monkeypatch: pytest.Monk
     (``_TEMPLATES_BYTES``), not only in number, so a long fit does not grow by 64 records.
     Here a bound of 1.5 MB and records of 640 kB: at most two kept, the newest; a record
     larger than the bound is used but not kept."""
-    import collections
 
-    monkeypatch.setattr(asm, "_TEMPLATES", collections.OrderedDict())
-    monkeypatch.setattr(asm, "_TEMPLATES_BYTES", 1_500_000)
+    monkeypatch.setattr(asm, "_TEMPLATES", Kept(64, asm._template_bytes, 1_500_000))
     params = fd.preset("wang2021")
     t = np.linspace(0.0, 2.0, 20_001)
     masses = (20.0, 21.0, 22.0, 23.0, 24.0)
@@ -141,12 +139,10 @@ def test_threads_share_the_kept_models_without_error(monkeypatch: pytest.MonkeyP
     models at once raised ``KeyError`` (a key evicted between one thread's look-up and its
     move to the end) or "OrderedDict mutated during iteration" — 3 of 3 runs of this test
     before the lock; the thread switch made frequent here to meet the race."""
-    import collections
     import sys
     import threading
 
-    monkeypatch.setattr(asm, "_TEMPLATES", collections.OrderedDict())
-    monkeypatch.setattr(asm, "_TEMPLATES_KEPT", 2)
+    monkeypatch.setattr(asm, "_TEMPLATES", Kept(2, asm._template_bytes, asm._TEMPLATES_BYTES))
     params = fd.preset("wang2021")
     sets = [params.replace_path("table.mass", 20.0 + k) for k in range(6)]
     errors: list[str] = []

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import collections
 import math
 import threading
 import time as _time
@@ -14,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .._kept import Kept
 from ..model.assemble import Model, assemble
 from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
@@ -507,10 +507,7 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
     # sliding speeds are those of the states, so the rows are the same; taken again when
     # the two evaluations that check them (at rest and at the mixed state) say the same
     key = _rows_key(model, P, T)
-    with _SWITCH_ROWS_LOCK:  # the explorer's jobs run in threads
-        kept = _SWITCH_ROWS.get(key)
-        if kept is not None:
-            _SWITCH_ROWS.move_to_end(key)
+    kept = _SWITCH_ROWS.get(key)  # under its lock: the explorer's jobs run in threads
     if kept is not None and np.array_equal(kept[1], base) and np.array_equal(kept[2], probe):
         return kept[0].copy()
     W = np.zeros((len(firsts), n))
@@ -523,19 +520,12 @@ def switching_rows(model: Model, P: np.ndarray) -> np.ndarray:
     keep = (np.abs(W).max(axis=1) > 0.0) & (np.abs(base) == 0.0) & (
         np.abs(probe - W @ mixed) <= 1e-9 * np.maximum(np.abs(W) @ np.abs(mixed), 1e-300))
     rows = np.ascontiguousarray(W[keep])
-    with _SWITCH_ROWS_LOCK:
-        _SWITCH_ROWS[key] = (rows.copy(), base, probe)
-        while len(_SWITCH_ROWS) > _SWITCH_ROWS_KEPT:
-            _SWITCH_ROWS.popitem(last=False)
+    _SWITCH_ROWS.put(key, (rows.copy(), base, probe))
     return rows
 
 
-#: switching rows already found (:func:`switching_rows`), by :func:`_rows_key`; the newest last
-_SWITCH_ROWS: collections.OrderedDict[tuple[Any, ...], tuple[np.ndarray, np.ndarray,
-                                                            np.ndarray]] = \
-    collections.OrderedDict()
-_SWITCH_ROWS_KEPT = 64
-_SWITCH_ROWS_LOCK = threading.Lock()
+#: switching rows already found (:func:`switching_rows`), by :func:`_rows_key`: 64 at most
+_SWITCH_ROWS = Kept(64)
 
 
 def _rows_key(model: Model, P: np.ndarray, T: np.ndarray) -> tuple[Any, ...]:

@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import math
 import threading
-from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from .._kept import Kept
 from .settings import Checked
 
 #: traces sent to the page keep at most this many samples (min/max per bucket, so that
@@ -291,30 +291,9 @@ def _json(value: Any) -> Any:
     return value
 
 
-class _BandCache:
-    """Stability bands by (parameters, drive, position, nut speed): a band does not depend
-    on the table speed, so moving that knob recomputes only the poles."""
-
-    def __init__(self, size: int = 16) -> None:
-        self._items: OrderedDict[Any, Any] = OrderedDict()
-        self._lock = threading.Lock()
-        self._size = size
-
-    def get(self, key: Any) -> Any:
-        with self._lock:
-            if key in self._items:
-                self._items.move_to_end(key)
-                return self._items[key]
-        return None
-
-    def put(self, key: Any, value: Any) -> None:
-        with self._lock:
-            self._items[key] = value
-            while len(self._items) > self._size:
-                self._items.popitem(last=False)
-
-
-BANDS = _BandCache()
+#: stability bands by (parameters, drive, position, nut speed): a band does not depend on the
+#: table speed, so moving that knob recomputes only the poles
+BANDS = Kept(16)
 
 
 def run_linear(checked: Checked, report: Report) -> dict[str, Any]:

@@ -9,16 +9,15 @@ go into the parameter vector, so one compiled model serves many parameter values
 
 from __future__ import annotations
 
-import collections
 import dataclasses
 import functools
-import threading
 from dataclasses import dataclass
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._kept import Kept
 from ..parameters import DriveParameters, ParameterError
 from . import codegen, loops, sparsity
 from .compensation import CompensationFootprint, emit_compensation
@@ -369,20 +368,19 @@ def _assemble_cached(parameters: DriveParameters, drive: str, table_position: fl
     return _with_profile(parameters, drive, table_position, nut_hold, profile, load)
 
 
-#: models already built, by everything but the profile's numbers: (model, its mechanism,
-#: offset of the profile block in P); the newest last
-_TEMPLATES: collections.OrderedDict[tuple[Any, ...], tuple[Model, Any, int]] = \
-    collections.OrderedDict()
-_TEMPLATES_KEPT = 64
 #: the most bytes of ``P`` and ``T`` the kept models hold together: a record's profile (a
 #: fit's, a replay's) puts its table in ``T`` (an 8-kHz, 100-s record: 26 MB), and a fit
 #: builds one model per parameter point
 _TEMPLATES_BYTES = 64 * 2 ** 20
-_TEMPLATES_LOCK = threading.Lock()
 
 
 def _template_bytes(entry: tuple[Model, Any, int]) -> int:
     return int(entry[0].P.nbytes + entry[0].T.nbytes)
+
+
+#: models already built, by everything but the profile's numbers: (model, its mechanism,
+#: offset of the profile block in P); 64 at most, within ``_TEMPLATES_BYTES``
+_TEMPLATES = Kept(64, _template_bytes, _TEMPLATES_BYTES)
 
 
 def _with_profile(parameters: DriveParameters, drive: str, table_position: float,
@@ -394,20 +392,11 @@ def _with_profile(parameters: DriveParameters, drive: str, table_position: float
     the result equals a full :func:`_assemble` (tested field by field) at ~1/50 of the cost
     of building the model again (≈ 1.1 ms per creep trial and per linearisation)."""
     key = (parameters, drive, table_position, nut_hold, type(profile), load)
-    with _TEMPLATES_LOCK:  # the explorer runs its jobs on threads
-        entry = _TEMPLATES.get(key)
-        if entry is not None:
-            _TEMPLATES.move_to_end(key)
+    entry = _TEMPLATES.get(key)  # under its lock: the explorer runs its jobs on threads
     if entry is None:
         model = _assemble(parameters, drive, table_position, nut_hold, profile, load)
         mech = mechanism(drive)(parameters, drive, table_position, nut_hold)
-        entry = (model, mech, model.parameter_names.index("profile[0]"))
-        with _TEMPLATES_LOCK:
-            if _template_bytes(entry) <= _TEMPLATES_BYTES:
-                _TEMPLATES[key] = entry
-            while len(_TEMPLATES) > _TEMPLATES_KEPT or \
-                    sum(map(_template_bytes, _TEMPLATES.values())) > _TEMPLATES_BYTES:
-                _TEMPLATES.popitem(last=False)
+        _TEMPLATES.put(key, (model, mech, model.parameter_names.index("profile[0]")))
         return model
     model, mech, o = entry
     values, table = profile.encode()
