@@ -8,6 +8,7 @@ import time as _time
 import weakref
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
+from numbers import Real
 from pathlib import Path
 from typing import Any
 
@@ -73,6 +74,15 @@ class DriveSystem:
     load: LoadProfile | None = None
 
     def __post_init__(self) -> None:
+        if not isinstance(self.parameters, DriveParameters):
+            raise ParameterError("parameters", self.parameters, "expected a DriveParameters "
+                                 "(feeddrive.preset(name) or feeddrive.load(path))")
+        if isinstance(self.table_position, bool) or not isinstance(self.table_position, Real):
+            raise ParameterError("table_position", self.table_position, "expected a number "
+                                 "of metres between the screw's supports")
+        if not isinstance(self.initial_state, Mapping):
+            raise ParameterError("initial_state", self.initial_state, "expected a mapping of "
+                                 "state names to numbers in each state's SI unit ({} for none)")
         if self.nut_hold not in ("locked", "servo"):
             raise ParameterError("nut_hold", self.nut_hold, "expected locked or servo")
         mechanism(self.drive).check(self.parameters, self.drive, self.table_position)
