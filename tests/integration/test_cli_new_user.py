@@ -642,3 +642,26 @@ def test_readme_python_example_runs_as_written(tmp_path: Path,
     crit = fd.critical_speed_from_rest(fd.DriveSystem(namespace["params"], "cdfs", 0.4))
     assert crit.display() == shown
     assert namespace["sim"].run(24.0).time[-1] == pytest.approx(24.0)
+
+
+def test_the_readme_table_has_a_row_for_every_command() -> None:
+    """Every command of ``feeddrive --help`` and every subcommand of a group has a row in the
+    README's table (an outside check, 2026-12-07: `cache` and `identify merge` had none)."""
+    import re
+
+    import typer.main
+
+    from feeddrive.cli import app
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    # the command column: every `feeddrive …` span of a row's first cell
+    cells = [re.findall(r"`feeddrive ([^`]*)`", row.split(" | ", 1)[0])
+             for row in readme.splitlines() if row.startswith("| `feeddrive ")]
+    spans = [span for cell in cells for span in cell]
+    root = typer.main.get_command(app)
+    for name, command in root.commands.items():  # type: ignore[attr-defined]
+        mine = [s for s in spans if s.split()[0] == name]
+        assert mine, name
+        for sub in getattr(command, "commands", {}):  # a group: each subcommand named
+            assert any(re.search(rf"(^|[ |]){sub}\b", s.split(" ", 1)[1]) for s in mine
+                       if " " in s), f"{name} {sub}"

@@ -316,3 +316,22 @@ def test_readme_says_what_ci_runs_and_the_quick_loop() -> None:
     assert test_command and "-m pytest" in test_command.group(0)
     assert "not slow" not in test_command.group(0)  # the README's command runs everything
     assert "slow:" in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+
+
+def test_the_preset_help_names_each_drives_default_set() -> None:
+    """``--preset``'s help names the set each topology brings (an outside check, 2026-12-07:
+    it named linear-motor-example only, and ``--drive rack-pinion`` ran rack-pinion-example)."""
+    from feeddrive import registry
+    from feeddrive.cli._common import PRESET_HELP, default_preset
+
+    examples = {name: default_preset(name) for name in registry.table(registry.MECHANISMS)}
+    assert set(examples.values()) - {"wang2021"}  # some topology brings its own set
+    for drive, name in examples.items():
+        if name == "wang2021":
+            assert "default wang2021" in PRESET_HELP
+        else:
+            assert f"{name} for --drive {drive}" in PRESET_HELP, drive
+    for command in ("simulate", "positioning"):
+        shown = runner.invoke(app, [command, "--help"], terminal_width=300).output
+        squeezed = "".join(c for c in shown if not c.isspace() and c not in "│|")
+        assert "".join(PRESET_HELP.split()) in squeezed, command

@@ -60,3 +60,19 @@ def test_the_named_files_commands_and_names_exist():
     assert "DERIVED_UNITS" in SLOTS and hasattr(slots_module, "DERIVED_UNITS")
     assert "packed_vector" in SLOTS and hasattr(slots_module, "packed_vector")
     assert isinstance(Result.parameter_slots, property)
+
+
+def test_the_presets_table_lists_every_shipped_preset():
+    """docs/parameters.md's Presets table and the README's count name every preset the
+    package ships (an outside check, 2026-12-07: the README said two shipped and the table
+    left out rack-pinion-example)."""
+    from feeddrive.presets import PRESETS
+
+    doc = (ROOT / "docs" / "parameters.md").read_text(encoding="utf-8")
+    section = doc.split("## Presets", 1)[1].split("\n## ", 1)[0]
+    assert set(re.findall(r"^\| `([a-z0-9-]+)` \|", section, flags=re.M)) == set(PRESETS)
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    words = {2: "Two", 3: "Three", 4: "Four", 5: "Five", 6: "Six", 7: "Seven", 8: "Eight"}
+    shipped = readme.split(" presets ship: ", 1)
+    assert shipped[0].endswith(words[len(PRESETS)])
+    assert all(f"`{name}`" in shipped[1].split("\n\n", 1)[0] for name in PRESETS)

@@ -415,6 +415,14 @@ def user_errors(fn: F) -> F:
     return wrapper  # type: ignore[return-value]
 
 
+#: the ``--preset`` help of the commands that take any drive: the default set of each drive
+#: (:func:`default_preset`; tests/integration/test_cli_new_user3.py checks it against the
+#: topologies' ``example_preset``, which --help does not import)
+PRESET_HELP = ("Named parameter set (default wang2021; the drive's example set for the other "
+               "topologies: linear-motor-example for --drive linear-motor, "
+               "rack-pinion-example for --drive rack-pinion).")
+
+
 def default_preset(drive: str | None) -> str:
     """The set a command uses for ``drive`` when none is named: the topology's own example
     (``Mechanism.example_preset``), ``wang2021`` for the paper's drives."""

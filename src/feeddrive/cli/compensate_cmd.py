@@ -4,6 +4,7 @@ the DDFS."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import typer
 
@@ -17,6 +18,7 @@ from ._common import (
     resolve_parameters,
     user_errors,
 )
+from ._solver import accuracy_options
 
 #: the drives the study compensates, for --help (feeddrive.analysis.compensation.study_drives
 #: asks the topologies; tests/unit/test_declarations.py checks this against it)
@@ -32,6 +34,7 @@ COMPARE_SCHEMES = ("none,none-continuous,feedforward,observer,disturbance-observ
 @app.command("compensate")
 @user_errors
 @outputs(output=(".csv",), plot=PLOT_FORMATS)
+@accuracy_options
 def compensate_command(
     drive: str = typer.Option("cdfs", "--drive", metavar=STUDY_DRIVES,
                               help="The drive compensated (one with friction compensation and "
@@ -66,6 +69,7 @@ def compensate_command(
     plot: str | None = typer.Option(None, "--plot", help="--compare: write the figure."),
     force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot "
                                "files."),
+    solver: Any = None,
 ) -> None:
     """Critical speed, linear creep band and tracking error of the CDFS without and with
     friction compensation (static feed-forward, LuGre observer; exact and ±mismatch), and of
@@ -83,7 +87,7 @@ def compensate_command(
             raise ParameterError(given[0], "given",
                                  "an option of the study, which --compare does not use")
         _compare(drive, position, schemes, metrics, band, preset_name, params_file, as_json,
-                 output, plot)
+                 output, plot, solver.describe())
         return
     if output or plot:
         from ..parameters import ParameterError
@@ -112,10 +116,12 @@ def compensate_command(
                                   tracking_speed=v_track,
                                   progress=lambda done, total: bar.update(task, completed=done))
     if as_json:
-        print_json({"parameter_set": params.name, "rows": rows})
+        print_json({"parameter_set": params.name, "rows": rows,
+                    "integrator": solver.describe()})
         return
     console.print(f"[bold]Friction compensation vs DDFS[/] ({params.name}, "
                   f"{position:g} mm, tracking at {tracking_speed:g} mm/s)")
+    console.print(f"  integrator: {solver.describe()}", markup=False, highlight=False)
     for r in rows:
         bands = ", ".join(f"{lo:.3f}–{hi:.3f}" for lo, hi in r["linear_unstable_bands_mm_s"])
         crit = r.get("critical_speed_mm_s", "—")
@@ -127,7 +133,7 @@ def compensate_command(
 
 def _compare(drive: str, position: float, schemes: str, metrics: str, band: float,
              preset_name: str | None, params_file: str | None, as_json: bool,
-             output: str | None, plot: str | None) -> None:
+             output: str | None, plot: str | None, integrator: str) -> None:
     """`feeddrive compensate --compare`: parse, call compare_compensations, print."""
     from rich.progress import Progress
 
@@ -169,10 +175,11 @@ def _compare(drive: str, position: float, schemes: str, metrics: str, band: floa
         save(compensation_figure(rows), plot)
     if as_json:
         print_json({"parameter_set": params.name, "drive": drive, "position_mm": position,
-                    "rows": rows, "output": output, "plot": plot})
+                    "rows": rows, "output": output, "plot": plot, "integrator": integrator})
         return
     console.print(f"[bold]Friction compensation compared[/] ({params.name}, {drive}, "
                   f"{position:g} mm; settling band ±{band:g} µm)")
+    console.print(f"  integrator: {integrator}", markup=False, highlight=False)
     console.print("  " + f"{'scheme':22s}" + "".join(f"{h:>30s}" for _, h in COLUMNS),
                   markup=False)
     for r in rows:

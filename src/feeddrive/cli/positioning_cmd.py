@@ -17,6 +17,7 @@ from ..parameters.validation import MISSING
 from ._common import (
     MM,
     MM_PER_S,
+    PRESET_HELP,
     app,
     console,
     err_console,
@@ -101,9 +102,7 @@ def positioning_command(
                                 "read over its last quarter."),
     overshoot: float = typer.Option(2.0, "--overshoot", help="How far beyond a target the "
                                     "axis reverses [mm]."),
-    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
-                                           "(default wang2021; linear-motor-example for "
-                                           "--drive linear-motor)."),
+    preset_name: str | None = typer.Option(None, "--preset", help=PRESET_HELP),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     max_steps: int | None = typer.Option(None, "--max-steps", help=max_steps_help()),
     output: str | None = typer.Option(None, "--output", help="Write the record of approaches "

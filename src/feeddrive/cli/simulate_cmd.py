@@ -14,6 +14,7 @@ from . import _units
 from ._common import (
     EXIT_UNSTABLE,
     MM_PER_S,
+    PRESET_HELP,
     app,
     console,
     outputs,
@@ -105,9 +106,7 @@ def simulate_command(
         "[mm/s] (optionally nut_speed [mm/s]); units in the header are honoured."),
     method: str | None = typer.Option(None, "--method", help=method_help()),
     max_steps: int | None = typer.Option(None, "--max-steps", help=MAX_STEPS_HELP),
-    preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
-                                           "(default wang2021; linear-motor-example for "
-                                           "--drive linear-motor)."),
+    preset_name: str | None = typer.Option(None, "--preset", help=PRESET_HELP),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     output: str | None = typer.Option(None, "--output", help="Write signals to "
                                       "FILE.csv|.parquet|.nc|.mat"),

@@ -1,6 +1,6 @@
 """The explorer's finished runs, kept for the page: every signal of a run's Dataset on demand
 (the signal picker, the A/B overlay), the run's data as CSV or MATLAB .mat (the writers of
-``feeddrive simulate --out``), and a measured trace read as ``feeddrive analyze`` reads it.
+``feeddrive simulate --output``), and a measured trace read as ``feeddrive analyze`` reads it.
 
 Signals are sent in the engineering units of the exports (mm, mm/s, N/µm; :mod:`..units`),
 with the unit and description the model's parts give them, at most
@@ -139,7 +139,7 @@ def signal(result: Any, name: str, max_points: int = MAX_POINTS) -> dict[str, An
 
 def export(result: Any, fmt: str) -> bytes:
     """The run's every sample as ``fmt`` ("csv": engineering units in the column names, as
-    ``feeddrive simulate --out run.csv`` writes; "mat": SI with a ``units`` struct).
+    ``feeddrive simulate --output run.csv`` writes; "mat": SI with a ``units`` struct).
 
     Parameters
     ----------
