@@ -706,6 +706,70 @@ def _params_of(fn: ast.FunctionDef, shapes: dict[str, tuple[str, ...]],
 
 _ARRAY, _SIZE, _DOUBLE, _INT = range(4)
 
+#: the stack a call may need before it runs on a thread of its own (:func:`stack_need`).  The
+#: C build keeps its work arrays on the stack, as C99 variable-length arrays — the Jacobian,
+#: the iteration matrix, the modal reference and the eigen-analysis' matrix, ≈ 32 n² bytes
+#: for n states, twice that with the embedded error estimate — and a thread's stack is what
+#: the platform gives (8 MiB on Linux, less elsewhere and in some hosts): a 34-axis machine
+#: (510 states) overflowed it and the process died (an outside check, 2026-12-07)
+STACK_OWN_THREAD = 512 * 1024
+
+
+def stack_need(n_state: int, n_aux: int) -> int:
+    """Bytes of stack the work arrays of a call of a model of ``n_state`` states and
+    ``n_aux`` auxiliary signals may take: 16 matrices of (n + 2)² doubles and 64 vectors,
+    twice what the drivers declare.  Above :data:`STACK_OWN_THREAD` the call gets a thread of
+    its own, with this much and 1 MiB more (:func:`thread_stack`)."""
+    return 8 * (16 * (n_state + 2) ** 2 + 64 * (n_state + n_aux + 2))
+
+
+def thread_stack(need: int) -> int:
+    """The stack of the thread of a call needing ``need`` bytes: 1 MiB more, in whole MiB."""
+    return -(-(need + (1 << 20)) // (1 << 20)) * (1 << 20)
+
+
+_STACK_SIZE_LOCK = threading.Lock()  # threading.stack_size is the process's setting
+
+
+def on_own_stack(fn: Callable[..., Any], args: Sequence[Any], size: int,
+                 memory: np.ndarray | None = None) -> Any:
+    """``fn(*args)`` on a new thread with ``size`` bytes of stack, the caller waiting.
+
+    The compiled call releases the GIL; Ctrl-C while waiting (KeyboardInterrupt in the
+    caller) asks a driver to stop after its step (``memory[-2]``, as
+    :meth:`feeddrive.engine.simulate.Simulation.request_stop` does), waits for it to return
+    and raises on.  Waiting is on an event, not ``Thread.join``, which an interrupt can leave
+    claiming the thread ended (CPython 3.11)."""
+    box: dict[str, Any] = {}
+    done = threading.Event()
+
+    def run() -> None:
+        try:
+            box["value"] = fn(*args)
+        except BaseException as err:  # handed to the caller
+            box["error"] = err
+        finally:
+            done.set()
+
+    with _STACK_SIZE_LOCK:
+        before = threading.stack_size(size)
+        try:
+            worker = threading.Thread(target=run, name="feeddrive-c-call", daemon=True)
+            worker.start()
+        finally:
+            threading.stack_size(before)
+    try:
+        while not done.wait(0.25):
+            pass
+    except KeyboardInterrupt:
+        if memory is not None:
+            memory[-2] = 1.0
+        done.wait()
+        raise
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
 
 class _Entry:
     """One exported function of the driver library for one model, called with numpy arrays:
@@ -713,7 +777,8 @@ class _Entry:
     (``c_void_p``; ≈ 3 µs an array, where ``data_as`` costs 5), checked to be C-contiguous
     with elements of the C type's kind and size."""
 
-    def __init__(self, lib: ctypes.CDLL, use: str, table: int, again: bool = False) -> None:
+    def __init__(self, lib: ctypes.CDLL, use: str, table: int, again: bool = False,
+                 stack: int = 0) -> None:
         if use in FUNCTIONS:
             self.params = driver_unit("functions", again)["params"][use]
             self.n_stats = 0
@@ -727,6 +792,10 @@ class _Entry:
         self.table = table
         self.names = [name for name, kind in self.params if kind != "size"]
         where = {name: i for i, name in enumerate(self.names)}
+        # a large model's call runs on a thread with the stack it needs (STACK_OWN_THREAD);
+        # a driver's memory carries its stop request
+        self.stack = thread_stack(stack) if stack > STACK_OWN_THREAD else 0
+        self.stop_at = where.get("memory") if use in ("integrate", "integrate_dense") else None
         # (what, which argument, dimension or accepted element type)
         self.plan: list[tuple[int, int, Any]] = []
         argtypes: list[Any] = [ctypes.c_void_p]  # the model's table
@@ -790,6 +859,9 @@ class _Entry:
                 out.append(float(a))
             else:
                 out.append(int(a))
+        if self.stack:
+            return int(on_own_stack(self.fn, out, self.stack,
+                                    None if self.stop_at is None else args[self.stop_at]))
         return int(self.fn(*out))
 
     def __call__(self, values: dict[str, Any]) -> int:
@@ -969,7 +1041,8 @@ class CEngine:
         entry = self._entries.get(key)
         if entry is None:
             entry = self._entries[key] = _Entry(self._driver_library(), use, table,
-                                                self._drivers_again)
+                                                self._drivers_again,
+                                                stack_need(len(model.states), len(model.aux)))
         return entry
 
     def function(self, model: Model, name: str) -> Callable[..., Any] | None:
