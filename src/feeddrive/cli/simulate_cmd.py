@@ -346,6 +346,11 @@ def _lines(s: dict[str, Any], options: Any = None) -> list[tuple[str, str]]:
 
     n = _units.number
     rows: list[tuple[str, str]] = []
+    if s.get("too_short"):  # diverged before the metrics' samples (Result.summary)
+        return [("verdict", f"{s['verdict']}: the loop diverged at {n(s['diverged_at_s'], 3)} s, "
+                            f"before the samples a summary needs; no creep or tracking "
+                            "metrics"),
+                ("integrator", integrator_line(s["solver"], options))]
     if s["profile"] == "sine":
         rows += [
             ("amplitude", f"{n(s['amplitude_mm_s'])} mm/s at {n(s['frequency_hz'])} Hz"),

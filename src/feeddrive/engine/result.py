@@ -493,7 +493,10 @@ class Result:
             ``simulate`` command refuses such a run before it starts).
         """
         from ..analysis.tracking import position_metrics, sine_metrics
+        from .budget import SUMMARY_SAMPLES
 
+        if self.solver_stats.get("diverged") and self.time.size < SUMMARY_SAMPLES:
+            return self._diverged_summary()
         self._check_samples()
         warnings: list[str] = []
         attrs = self.attrs
@@ -555,6 +558,29 @@ class Result:
             "warnings": warnings,
         })
         return out
+
+    def _diverged_summary(self) -> dict[str, Any]:
+        """The summary of a run that diverged before the samples the metrics need: the
+        verdict ``unstable`` and where the run stopped, no creep or tracking metrics (the
+        summary said "duration = 0.0057 s: expected ≥ 0.015 s" of a 120-s run whose loop
+        diverged at 5.7 ms, naming a setting the user never gave: an outside check,
+        2026-12-07)."""
+        from ..analysis.verdict_words import UNSTABLE
+        from .budget import SUMMARY_SAMPLES
+
+        stats = self.solver_stats
+        at = float(stats.get("diverged_at_s", self.time[-1]))
+        sine = "SineSpeed" in self.attrs.get("profile", "")
+        return {
+            "drive": self.attrs["drive"], "profile": "sine" if sine else "constant"
+            if self.attrs.get("profile", "").startswith("ConstantSpeed") else "sampled",
+            "verdict": UNSTABLE, "diverged_at_s": at, "samples": int(self.time.size),
+            "too_short": True, "window_s": [float(self.time[0]), float(self.time[-1])],
+            "solver": stats,
+            "warnings": [f"unstable: the loop diverged at {at:.3g} s (a speed left its bound), "
+                         f"before the {SUMMARY_SAMPLES} samples the run's metrics need: no "
+                         f"creep or tracking metrics"],
+        }
 
     def _check_samples(self) -> None:
         """Refuse a summary of a record too short for its analyses in one line naming the

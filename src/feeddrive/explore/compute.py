@@ -75,6 +75,30 @@ def decimate(n: int, key: np.ndarray, max_points: int = MAX_POINTS) -> np.ndarra
     return np.asarray(out, dtype=int)
 
 
+def diverged_verdict(at: float, duration: float) -> dict[str, Any]:
+    """The verdict of a run that diverged: ``unstable``, where it stopped.
+
+    Parameters
+    ----------
+    at : float
+        When the run stopped [s].
+    duration : float
+        The simulated time asked for [s].
+
+    Returns
+    -------
+    dict
+        As :func:`verdict_of`, the kind ``unstable``.
+    """
+    from ..analysis.verdict_words import MEANING, UNSTABLE
+
+    reason = (f"a speed left its bound at {at:.3g} s of the {duration:g} s asked for, and the "
+              "run stopped there")
+    return {"verdict": UNSTABLE, "kind": UNSTABLE,
+            "text": f"{MEANING[UNSTABLE]}; {reason}", "reason": reason,
+            "frequency_hz": None, "decided_at_s": _f(at), "ripple_ratio": None}
+
+
 def verdict_of(time: np.ndarray, speed: np.ndarray, command_speed: float) -> dict[str, Any]:
     """The creep verdict and its kind, from the window-independent rule `feeddrive creep`
     judges every trial by (:func:`feeddrive.analysis.cycle_verdict.trace_verdict`): a limit cycle
@@ -259,20 +283,29 @@ def run_simulation(checked: Checked, report: Report,
     for name in ("screw_linear_speed", "nut_linear_speed"):
         if name in result:  # without building the xarray Dataset
             traces[f"{name}_mm_s"] = _list(result[name][idx], 1e3)
-    operating = {"guide": summary["mean_table_speed_mm_s"],
-                 "screw": summary["mean_screw_speed_mm_s"],
-                 "nut": summary["mean_nut_speed_mm_s"]}
+    operating = {"guide": summary.get("mean_table_speed_mm_s"),  # none if diverged at once
+                 "screw": summary.get("mean_screw_speed_mm_s"),
+                 "nut": summary.get("mean_nut_speed_mm_s")}
     clean = {k: v for k, v in summary.items() if k != "solver"}
     clean["solver"] = {k: summary["solver"][k] for k in ("method", "steps", "rejected_steps",
-                                                         "wall_time_s")}
+                                                         "wall_time_s", "diverged",
+                                                         "diverged_at_s")
+                       if k in summary["solver"]}
+    stats = result.solver_stats
+    # a diverged run stopped early: its verdict is that, not the limit-cycle rule's reading
+    # of the cut trace ("undecided … a longer simulated time decides": an outside check,
+    # 2026-12-07)
+    verdict = (diverged_verdict(float(stats.get("diverged_at_s", t[-1])), checked.duration)
+               if stats.get("diverged") else verdict_of(t, speed, checked.table_speed))
     return {
         "drive": checked.drive, "parameter_set": checked.params.name if checked.params else "",
         # whether the drive follows the nut command (its topology says; the page shows it then)
         "nut_driven": checked.system.topology().follows("nut"),
         "table_speed_mm_s": 1e3 * checked.table_speed,
         "nut_speed_mm_s": 1e3 * checked.nut_speed, "duration_s": checked.duration,
+        "reached_s": float(t[-1]),
         "samples": int(t.size), "samples_sent": int(idx.size),
-        "summary": _json(clean), "verdict": verdict_of(t, speed, checked.table_speed),
+        "summary": _json(clean), "verdict": verdict,
         "traces": traces,
         "friction": friction_curves(checked, {k: v for k, v in operating.items()
                                               if v is not None}),
