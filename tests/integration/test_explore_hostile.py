@@ -241,3 +241,74 @@ def test_the_limits_in_docs_explore_md_are_the_servers() -> None:
     assert f"at most {st.MAX_PARAMS_TEXT // 1024} kB" in section
     assert f"over {srv_mod.MAX_BODY // 1024 // 1024} MB" in section
     assert "0.001 ≤ k ≤ 10" in doc and st._FRICTION_SCALE["low"] == 0.001
+    from feeddrive.explore import machine_path as mp
+
+    assert f"at most {st.MAX_SAMPLES}" in section
+    for low, high, unit in mp.RANGES.values():
+        assert f"{low:g} … {high:g} {unit.replace('^2', '²')}" in section, unit
+    assert f"at most {mp.MAX_AXES} axes" in section
+
+
+def _request(srv: ExplorerServer, method: str, path: str, body: bytes = b"",
+             extra: str = "") -> tuple[int, Any]:
+    head = (f"{method} {path} HTTP/1.1\r\nHost: 127.0.0.1:{srv.port}\r\n"
+            f"Connection: close\r\n{extra}")
+    if body and "Transfer-Encoding" not in extra:
+        head += f"Content-Type: application/json\r\nContent-Length: {len(body)}\r\n"
+    status, payload = raw(srv, (head + "\r\n").encode() + body)
+    try:
+        return status, json.loads(payload)
+    except ValueError:
+        return status, payload
+
+
+@pytest.mark.parametrize(("method", "path"), [
+    ("PUT", "/api/check"), ("DELETE", "/api/jobs/x"), ("PATCH", "/"), ("OPTIONS", "/api/info"),
+    ("GET", "/api/check"), ("GET", "/api/machine"), ("POST", "/api/info"),
+    ("POST", "/api/state"),
+])
+def test_a_method_a_route_does_not_take_is_a_json_405(
+        server: ExplorerServer, capfd: pytest.CaptureFixture[str], method: str,
+        path: str) -> None:
+    """An outside check, 2026-12-07: PUT, DELETE, PATCH and OPTIONS got a 501 HTML page, a
+    wrong method on a known route a 404."""
+    status, answer = _request(server, method, path, b"{}" if method == "POST" else b"")
+    assert status == 405, (status, answer)
+    assert isinstance(answer, dict) and answer["error"]
+    _no_traceback(capfd)
+
+
+def test_a_chunked_body_is_refused_and_the_connection_closed(
+        server: ExplorerServer, capfd: pytest.CaptureFixture[str]) -> None:
+    """An outside check, 2026-12-07: the chunked body was read as empty (200), then its
+    first chunk as the next request (an HTML 400)."""
+    status, answer = _request(server, "POST", "/api/check",
+                              b'15\r\n{"settings":{"x":1}}\r\n0\r\n\r\n',
+                              "Content-Type: application/json\r\n"
+                              "Transfer-Encoding: chunked\r\n")
+    assert status == 411 and "Content-Length" in answer["error"], (status, answer)
+    _no_traceback(capfd)
+
+
+def test_a_malformed_request_line_is_answered_in_json(server: ExplorerServer) -> None:
+    status, answer = raw(server, b"GET / HTTP/1.1 junk\r\n\r\n")
+    assert status == 400 and "error" in json.loads(answer)
+
+
+@pytest.mark.parametrize(("duration", "words"), [
+    ("1e-9", "expected ≥ 0.015 [s]"), ("5e-324", "expected ≥ 0.015 [s]"),
+])
+def test_a_duration_every_run_refuses_is_refused_by_the_check(duration: str,
+                                                                words: str) -> None:
+    """An outside check, 2026-12-07: /api/check passed 1e-9 s, which every run refused."""
+    assert words in st.check({"duration": duration}).errors["duration"]
+    assert not st.check({"duration": "0.015"}).errors
+
+
+def test_a_run_of_too_many_samples_is_refused_before_it_starts() -> None:
+    """A file's output interval of 1e-5 s over 60 s: 6 million samples, 5 GB in the server
+    (an outside check, 2026-12-07)."""
+    fine = 'extends = "wang2021"\n[solver]\noutput_interval = 1e-5\n'
+    assert not st.check({"duration": "1", "params": fine}).errors
+    message = st.check({"duration": "60", "params": fine}).errors["duration"]
+    assert f"expected ≤ {st.MAX_SAMPLES}" in message and "6000001 samples" in message

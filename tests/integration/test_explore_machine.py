@@ -119,6 +119,15 @@ def test_the_inertial_coupling_part_acts_in_the_explorer(server: ExplorerServer)
     ({"machine": "xy-table", "radius": -1}, "radius", "radius = -1"),
     ({"machine": "xy-table", "feed": "fast"}, "feed", "feed = 'fast'"),
     ({"machine": "xy-table", "feed": 1}, "feed", "expected ≤ 120 s"),
+    # an outside check, 2026-12-07: these went to a 500, another field or SI units
+    ({"machine": "xy-table", "radius": 10 ** 400}, "radius", "expected a number 0.1 … 1000 [mm]"),
+    ({"machine": "xy-table", "feed": 1e300}, "feed", "expected 1 … 60000 [mm/min]"),
+    ({"machine": "xy-table", "radius": 1e-300}, "radius", "expected 0.1 … 1000 [mm]"),
+    ({"machine": "xy-table", "radius": 100000}, "radius", "expected 0.1 … 1000 [mm]"),
+    ({"machine": "xy-table", "acceleration": 1e300}, "acceleration", "[mm/s^2]"),
+    ({"machine": "xy-table", "feed": True}, "feed", "expected a number"),
+    ({"machine": 'name = "m"\n' + "".join(f'[axes.a{i}]\nextends = "wang2021"\n'
+                                          for i in range(9))}, "machine", "has 9 axes"),
 ])
 def test_a_bad_machine_request_is_refused_in_one_line_naming_the_field(
         server: ExplorerServer, body: dict[str, Any], field: str, words: str) -> None:

@@ -34,6 +34,15 @@ DEFAULTS = {"machine": "xy-table", "radius": 50.0, "feed": 5000.0, "acceleration
 #: the longest machine file text the page may send [characters]
 MAX_TEXT = 100_000
 _MM_PER_MIN = 1e-3 / 60.0  # [m/s] per mm/min
+#: the ranges the page takes, in its units: a ballbar's radii (ISO 230-4 names 50–600 mm),
+#: feeds up to 1 m/s and accelerations up to 100 m/s²; outside them the machine's checks
+#: answered in SI under another field, and 1e300 overflowed into a 500 (an outside check,
+#: 2026-12-07)
+RANGES = {"radius": (0.1, 1000.0, "mm"), "feed": (1.0, 60_000.0, "mm/min"),
+          "acceleration": (1.0, 100_000.0, "mm/s^2")}
+#: the most axes a machine on the page may have: the path uses two, and each axis adds its
+#: whole drive to every step (a 40-axis file took 13 s for one circle)
+MAX_AXES = 8
 
 
 def check_request(body: dict[str, Any]) -> tuple[Machine, Contour]:
@@ -63,13 +72,17 @@ def check_request(body: dict[str, Any]) -> tuple[Machine, Contour]:
 
     given = {**DEFAULTS, **{k: body[k] for k in DEFAULTS if body.get(k) is not None}}
     numbers: dict[str, float] = {}
-    for name, unit in (("radius", "mm"), ("feed", "mm/min"), ("acceleration", "mm/s^2")):
+    for name, (low, high, unit) in RANGES.items():
+        raw = given[name]
         try:
-            value = float(given[name])
-        except (TypeError, ValueError):
-            raise ParameterError(name, given[name], f"expected a number [{unit}]") from None
-        if not (math.isfinite(value) and value > 0):
-            raise ParameterError(name, value, f"expected a positive number [{unit}]")
+            if isinstance(raw, bool):  # JSON true is no number of mm
+                raise TypeError
+            value = float(raw)
+        except (TypeError, ValueError, OverflowError):
+            raise ParameterError(name, str(raw)[:40], f"expected a number {low:g} … {high:g} "
+                                 f"[{unit}]") from None
+        if not (math.isfinite(value) and low <= value <= high):
+            raise ParameterError(name, value, f"expected {low:g} … {high:g} [{unit}]")
         numbers[name] = value
     text = given["machine"]
     if not isinstance(text, str) or not text.strip() or len(text) > MAX_TEXT:
@@ -80,9 +93,10 @@ def check_request(body: dict[str, Any]) -> tuple[Machine, Contour]:
             else parse_toml(text, field="machine", source="the machine file"))
     _no_files(data)
     machine = machine_from_dict(data)
-    if len(machine.axes) < 2:
-        raise ParameterError("machine", machine.name, "expected two axes or more for an XY "
-                             "path (the circle runs on the first two)")
+    if not 2 <= len(machine.axes) <= MAX_AXES:
+        raise ParameterError("machine", machine.name, f"has {len(machine.axes)} axes; expected "
+                             f"2 … {MAX_AXES} for an XY path (the circle runs on the first "
+                             "two; `feeddrive simulate --machine` takes more)")
     axes = (machine.axes[0].name, machine.axes[1].name)
     contour = make_contour("circle", feed=numbers["feed"] * _MM_PER_MIN,
                            acceleration=numbers["acceleration"] * 1e-3,

@@ -454,6 +454,24 @@ def _settings_of(body: dict[str, Any], key: str = "settings") -> dict[str, Any] 
     return value
 
 
+#: the routes and the method each takes (prefixes end with "/"; the module lists them)
+_ROUTES = {"/": ("GET",), "/index.html": ("GET",), "/static/": ("GET",), "/api/info": ("GET",),
+           "/api/state": ("GET",), "/favicon.ico": ("GET",), "/api/runs/": ("GET",),
+           "/api/check": ("POST",), "/api/jobs": ("POST",), "/api/machine": ("POST",),
+           "/api/export": ("POST",), "/api/import": ("POST",), "/api/measured": ("POST",)}
+
+
+def _methods_of(path: str) -> tuple[str, ...]:
+    """The methods ``path`` is answered for: ``()`` for no route.  A job's poll is a GET, its
+    cancel a POST."""
+    if path.startswith("/api/jobs/"):
+        return ("POST",) if path.endswith("/cancel") else ("GET",)
+    if path in _ROUTES:
+        return _ROUTES[path]
+    return next((m for p, m in _ROUTES.items() if p.endswith("/") and p != "/"
+                 and path.startswith(p)), ())
+
+
 class Handler(BaseHTTPRequestHandler):
     server: ExplorerServer
     protocol_version = "HTTP/1.1"
@@ -504,10 +522,49 @@ class Handler(BaseHTTPRequestHandler):
         port = self.server.port
         return origin.lower() in (f"http://127.0.0.1:{port}", f"http://localhost:{port}")
 
+    def send_error(self, code: int, message: str | None = None,
+                   explain: str | None = None) -> None:
+        """The errors the standard library answers itself (a malformed request line, a
+        header too long, an unknown method) as JSON like every other answer, the connection
+        closed (it sent an HTML page: an outside check, 2026-12-07)."""
+        self.close_connection = True
+        if self.request_version == "HTTP/0.9":  # a line it could not read: answer in HTTP/1.0
+            self.request_version = "HTTP/1.0"
+        text = message or HTTPStatus(code).phrase
+        body = json.dumps({"error": text}).encode("utf-8")
+        try:
+            self.send_response(code, text)
+            self.send_header("Content-Type", "application/json; charset=utf-8")
+            self.send_header("Connection", "close")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            if self.command != "HEAD" and code >= 200 and code not in (204, 304):
+                self.wfile.write(body)
+        except (BrokenPipeError, ConnectionResetError, TimeoutError):
+            pass
+
+    def _refuse_method(self) -> None:
+        """A method no route takes: 405 naming the ones the address takes."""
+        if not self._host_ok():
+            self._json(HTTPStatus.FORBIDDEN, {"error": "the explorer answers 127.0.0.1 only"})
+            return
+        path = urlsplit(self.path).path
+        allowed = _methods_of(path) or ("GET", "POST")
+        self.close_connection = True  # a body it may have sent is not read
+        self._json(HTTPStatus.METHOD_NOT_ALLOWED,
+                   {"error": f"{self.command} is not answered here; {path[:80]} takes "
+                             f"{' or '.join(allowed)}"})
+
+    do_PUT = do_DELETE = do_PATCH = do_OPTIONS = _refuse_method  # noqa: N815 (the base's names)
+
     def _body(self) -> Any:
         ctype = (self.headers.get("Content-Type") or "").split(";")[0].strip().lower()
         if ctype != "application/json":
             raise _HttpError(HTTPStatus.UNSUPPORTED_MEDIA_TYPE, "send JSON")
+        if "chunked" in (self.headers.get("Transfer-Encoding") or "").lower():
+            self.close_connection = True  # where the body ends is not read
+            raise _HttpError(HTTPStatus.LENGTH_REQUIRED, "send the body with a Content-Length "
+                             "(a chunked body is not read)")
         text = (self.headers.get("Content-Length") or "0").strip()
         if not text.isdigit() or not text.isascii():
             self.close_connection = True  # where the body ends is unknown
@@ -605,9 +662,14 @@ class Handler(BaseHTTPRequestHandler):
                 self._json(200, job.as_dict())
             elif path == "/favicon.ico":
                 self._send(204, b"", "image/x-icon", "max-age=86400")
+            elif "POST" in _methods_of(path):
+                raise _HttpError(HTTPStatus.METHOD_NOT_ALLOWED, f"POST to {path}")
             else:
                 raise _HttpError(HTTPStatus.NOT_FOUND, f"no page {path}")
             return
+        if _methods_of(path) == ("GET",):
+            self.close_connection = True  # its body is not read
+            raise _HttpError(HTTPStatus.METHOD_NOT_ALLOWED, f"GET {path}")
         body = self._body()
         given = _settings_of(body)
         if path == "/api/check":

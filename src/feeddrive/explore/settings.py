@@ -545,7 +545,36 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
                                  table_position=float(position))  # type: ignore[arg-type]
     except ParameterError as err:
         out.errors[_field_of(err)] = str(err)
+    else:
+        try:
+            _check_samples(out)
+        except ParameterError as err:
+            out.errors["duration"] = str(err)
     return out
+
+
+#: the most samples a run on the page keeps: 120 s at the default 1-ms output interval (the
+#: server keeps the last runs whole for the downloads; a file's `[solver]` output_interval of
+#: 1e-5 s made a 60-s run of 6 million samples and 5 GB: an outside check, 2026-12-07)
+MAX_SAMPLES = 120_001
+
+
+def _check_samples(out: Checked) -> None:
+    """Refuse, before the run, a duration whose samples at the run's own output interval (a
+    parameter file's ``[solver]`` table, else the default) are too few for the summary or
+    more than :data:`MAX_SAMPLES` (``/api/check`` passed 1e-9 s, which every run refused)."""
+    from ..engine.budget import SUMMARY_SAMPLES, check_output_samples, recorded_samples
+    from ..engine.simulate import run_options
+
+    options = run_options(out.system, None)
+    check_output_samples(out.duration, options, samples=SUMMARY_SAMPLES, purpose="the summary")
+    kept = recorded_samples(out.duration, options.output_interval)
+    if kept > MAX_SAMPLES:
+        raise ParameterError("--duration", out.duration, f"keeps {kept} samples at the output "
+                             f"interval {options.output_interval:g} s; expected ≤ "
+                             f"{MAX_SAMPLES} in the explorer (a shorter run or a larger "
+                             "output_interval; feeddrive simulate --output streams longer "
+                             "ones)")
 
 
 def _apply(data: dict[str, Any], name: str, s: Mapping[str, str], own: Mapping[str, str],
