@@ -264,3 +264,22 @@ def test_the_tolerances_take_the_range_the_command_line_takes(fmus: dict, tmp_pa
     assert status == 1 and "the importer's tolerance 1e-20 is outside" in text
     assert slave.get("solver.relative_tolerance") == 1e-8
     slave.free()
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_the_step_cap_takes_at_least_a_nanosecond_and_is_named_when_it_binds(
+        fmus: dict, tmp_path: Path, fmi: int) -> None:
+    """An outside check, 2026-12-07: solver.max_step = 1e-300 s was taken, and every step then
+    failed with "the parameters may make the drive too stiff or unstable" (with the largest
+    step limit a 0.01-s step would have run for most of an hour)."""
+    slave = _slave(fmus, "wang2021", fmi, tmp_path)
+    for value in (1e-300, 5e-324, 1e-10):
+        text = _refused(slave, "solver.max_step", value)
+        assert text.startswith("solver.max_step = ") and "1e-09" in text, text
+    slave.set("solver.max_step", 1e-6)
+    slave.initialize()
+    with pytest.raises(Exception, match="status 3"):
+        slave.step(0.1)  # 1e5 steps of the cap, more than 10 000
+    assert slave.log[-1][1].startswith("solver.max_steps_per_call = 10000: ")
+    assert "solver.max_step = 1e-06 s alone asks for 1e+05 steps" in slave.log[-1][1]
+    slave.free()

@@ -57,11 +57,9 @@ INPUT_INFO = {
 #: ~8000 steps per second) or 2–5 s of the continuous ones in one step; a host whose step
 #: would take longer gets Error naming the setting instead of a frozen call
 MAX_STEPS_PER_CALL = 10_000
-#: the solver settings' range: SolverOptions refuses a step that is not a finite value > 0,
-#: and a tolerance outside the range the command line and the API take
-#: (``MIN_RELATIVE``, ``MIN_ABSOLUTE``, ``MAX_RTOL``, ``MAX_ABSOLUTE`` of
-#: :mod:`feeddrive.engine.options`)
-_POSITIVE = SlotRange(0.0, math.inf, low_inclusive=False)
+#: the solver settings' range: a tolerance within the range the command line and the API
+#: take (``MIN_RELATIVE``, ``MIN_ABSOLUTE``, ``MAX_RTOL``, ``MAX_ABSOLUTE`` of
+#: :mod:`feeddrive.engine.options`), the step cap below (``_MAX_STEP``)
 
 
 def _tolerance_range(name: str) -> SlotRange:
@@ -75,6 +73,10 @@ def _tolerance_range(name: str) -> SlotRange:
 
 
 _STEP_COUNT = SlotRange(1.0, 2.0**31 - 1.0, integer=True)  # an FMI 2 Integer
+#: the integrator's step cap: at least a nanosecond (1e-300 s was taken, and every
+#: communication step then failed, or with the largest step limit ran for most of an hour:
+#: an outside check, 2026-12-07)
+_MAX_STEP = SlotRange(1e-9, math.inf, unit="s")
 
 # wrapper settings s[...]: (name, unit, description, start or None: from the parameters,
 # range)
@@ -87,7 +89,7 @@ SETTINGS: tuple[tuple[str, str, str, float | None, SlotRange | None], ...] = (
      _tolerance_range("speed_tolerance")),
     ("solver.current_tolerance", "A", "absolute error target on currents", 1e-6,
      _tolerance_range("current_tolerance")),
-    ("solver.max_step", "s", "largest integrator step", 1e-3, _POSITIVE),
+    ("solver.max_step", "s", "largest integrator step", 1e-3, _MAX_STEP),
     ("controller.position_period", "s", "position-loop sample period (0: continuous)", None,
      controller_range("position_period")),
     ("controller.velocity_period", "s", "velocity-loop sample period (0: continuous)", None,

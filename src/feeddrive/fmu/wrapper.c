@@ -426,10 +426,19 @@ static int fmu_do_step(Fmu *m, double t, double h) {
                         m->memory, m->work[0], m->work[1], m->work[2], m->work[3], m->work[4],
                         m->work[5], m->work[6], m->work[7], m->work[8], m->work[9], m->aux);
     if (status == 1) {
+        /* the step cap alone asks for more steps than allowed: say so (a solver.max_step of
+           1e-300 s read as a stiff drive) */
+        double capped = (t_end - t) / m->s[S_MAX_STEP];
+        char why[160];
+        if (capped > (double)max_steps)
+            snprintf(why, sizeof why, "solver.max_step = %.3g s alone asks for %.3g steps",
+                     m->s[S_MAX_STEP], capped);
+        else
+            snprintf(why, sizeof why, "the parameters may make the drive too stiff or "
+                     "unstable");
         snprintf(msg, sizeof msg, "solver.max_steps_per_call = %ld: the communication step "
                  "[%.9g, %.9g] s needs more integrator steps; take shorter communication steps "
-                 "or raise solver.max_steps_per_call (the parameters may make the drive too "
-                 "stiff or unstable)", max_steps, t, t_end);
+                 "or raise solver.max_steps_per_call (%s)", max_steps, t, t_end, why);
         fmu_log(m, ST_ERROR, msg);
         return ST_ERROR;
     }
