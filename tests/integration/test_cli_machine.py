@@ -129,7 +129,7 @@ def test_loops_machine_shows_a_coupling_part(tmp_path: Path) -> None:
 
 
 def test_work_beyond_the_bounds_is_refused_before_any_step() -> None:
-    for args, field in ((["--turns", "1e6"], "duration"),
+    for args, field in ((["--turns", "1e6"], "--turns"),  # beyond contour.LIMITS["turns"]
                         (["--turns", "100"], "contour.duration"),
                         (["--feed", "-5"], "--feed"),
                         (["--contour", "spiral"], "--contour")):

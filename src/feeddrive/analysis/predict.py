@@ -93,12 +93,25 @@ def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
         if key not in rec:
             raise ParameterError(f"fit.{key}", MISSING, f"missing in {p}")
     free = rec["free"]
-    est = np.asarray(rec["estimates"], dtype=float)
-    cov = np.asarray(rec["covariance"], dtype=float)
-    if not (isinstance(free, list) and len(free) == est.size and cov.shape == (est.size,
-                                                                            est.size)):
+    if not (isinstance(free, list) and free and all(isinstance(n, str) for n in free)):
+        raise ParameterError("fit.free", free, f"{p}: expected a list of parameter "
+                             "paths (text)")
+    est = _numbers(rec["estimates"], "fit.estimates", p)
+    cov = _numbers(rec["covariance"], "fit.covariance", p)
+    if not (len(free) == est.size and cov.shape == (est.size, est.size)):
         raise ParameterError("fit.covariance", str(p), "expected one estimate per free "
                              "parameter and a square covariance of that size")
+    if not np.all(np.isfinite(est)):
+        raise ParameterError("fit.estimates", str(p), "not finite; expected a number per "
+                             "free parameter")
+    position = rec["table_position"]
+    if isinstance(position, bool) or not isinstance(position, int | float) \
+            or not math.isfinite(position):
+        raise ParameterError("fit.table_position", position, f"{p}: expected a "
+                             "number [m]")
+    if not isinstance(rec["drive"], str):
+        raise ParameterError("fit.drive", rec["drive"], f"{p}: expected a drive "
+                             "name (text)")
     if not np.all(np.isfinite(cov)) or np.any(np.abs(cov) >= 1e299):
         raise ParameterError("fit.covariance", str(p), "not finite: a parameter was not "
                              "determined by the fit; fix it or fit better data first")
@@ -107,9 +120,26 @@ def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
         raise ParameterError("fit.interrupted", True, f"{p}: the fit was interrupted; its "
                              "covariance is not available")
     params = load(p)
-    return FitRecord(path=p, parameters=params, drive=str(rec["drive"]),
-                     table_position=float(rec["table_position"]), free=tuple(free),
+    return FitRecord(path=p, parameters=params, drive=rec["drive"],
+                     table_position=float(position), free=tuple(free),
                      estimates=est, covariance=cov)
+
+
+def _numbers(value: object, key: str, path: Path) -> np.ndarray:
+    """A fit file's array of numbers; text, booleans or ragged lists refused naming the key
+    (they gave numpy's "could not convert string to float: 'x'")."""
+    def plain(v: object) -> bool:
+        if isinstance(v, list):
+            return all(plain(x) for x in v)
+        return isinstance(v, int | float) and not isinstance(v, bool)
+
+    if not (isinstance(value, list) and plain(value)):
+        raise ParameterError(key, value, f"{path}: expected numbers")
+    try:
+        return np.asarray(value, dtype=float)
+    except ValueError:  # ragged
+        raise ParameterError(key, value, f"{path}: expected a rectangular array of "
+                             "numbers") from None
 
 
 def _check_covariance(cov: np.ndarray, free: list[str], path: Path) -> None:

@@ -58,13 +58,30 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
         Print the summary as JSON.
     """
     from ..machine import load_machine, machine_summary, make_contour, simulate_machine
+    from ..machine.contour import LIMITS
     from ..parameters import ParameterError
 
-    for option, value, unit in (("--radius", radius, "mm"), ("--feed", feed, "mm/min"),
-                                ("--acceleration", acceleration, "mm/s^2"),
-                                ("--turns", turns, "-"), ("--length", length, "mm")):
-        if not (math.isfinite(value) and value > 0):
-            raise ParameterError(option, value, f"expected a positive number [{unit}]")
+    # the contour's limits (feeddrive.machine.contour.LIMITS) in the command line's units
+    for option, value, unit, high in (
+            ("--radius", radius, "mm", 1e3 * LIMITS["radius"]),
+            ("--feed", feed, "mm/min", LIMITS["feed"] / MM_PER_MIN),
+            ("--acceleration", acceleration, "mm/s^2", 1e3 * LIMITS["acceleration"]),
+            ("--turns", turns, "-", LIMITS["turns"]),
+            ("--length", length, "mm", 1e3 * LIMITS["distance"])):
+        if not (math.isfinite(value) and 0 < value <= high):
+            raise ParameterError(option, value, f"expected > 0, ≤ {high:g} [{unit}]")
+    for option, value in (("--start-angle", start_angle), ("--angle", angle)):
+        if not math.isfinite(value):
+            raise ParameterError(option, value, "expected a finite angle [°]")
+    if duration is not None and not (math.isfinite(duration) and duration > 0):
+        raise ParameterError("--duration", duration, "expected a finite time > 0 [s]")
+    ramp = (feed * MM_PER_MIN) ** 2 / (acceleration * 1e-3) * 1e3  # lead-in and -out [mm]
+    path_mm = {"circle": 2 * math.pi * radius * turns, "line": length,
+               "together": length}.get(contour)
+    if path_mm is not None and ramp > path_mm:  # said in the options' units, before the API
+        raise ParameterError("--acceleration", acceleration, f"the lead-in and lead-out at "
+                             f"{feed:g} mm/min need {ramp:.4g} mm, the path is {path_mm:.4g} "
+                             f"mm long; expected ≥ {acceleration * ramp / path_mm:.4g} [mm/s^2]")
     if contour not in CONTOURS:
         raise ParameterError("--contour", contour, f"expected one of {', '.join(CONTOURS)}")
     machine = load_machine(machine_file)
@@ -73,8 +90,6 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
                         start_angle=math.radians(start_angle), turns=turns,
                         length=length * 1e-3, angle=math.radians(angle),
                         path_file=contour_file)
-    if duration is not None and not duration > 0:
-        raise ParameterError("--duration", duration, "expected a time > 0 [s]")
     from ..engine.budget import check_output_memory, check_step_budget
 
     # bounded work, as for one drive: refused before any step when the steps cannot fit

@@ -224,8 +224,8 @@ def simulate_command(
         if isinstance(prof, SampledSpeed) and duration is None:
             duration = float(prof.time[-1])
         duration = 10.0 if duration is None else duration
-        if not duration > 0:
-            raise ParameterError("--duration", duration, "expected a time > 0 [s]")
+        if not (math.isfinite(duration) and duration > 0):
+            raise ParameterError("--duration", duration, "expected a finite time > 0 [s]")
         # the options the run takes: the command line's over the set's [solver] table
         # (run_options), each setting's source kept for the refusals below
         taken = run_options(system, options)

@@ -37,9 +37,19 @@ INTERVAL = 1e-4
 MAX_REFERENCE_SAMPLES = 5_000_000
 
 
+#: the largest values a contour takes: feeds to 10 m/s (600 m/min, beyond any machine tool's
+#: rapid traverse), accelerations to 1000 m/s², radii and lines to 10 m and 100 m, 1000 turns
+#: (a feed of 1e300 overflowed into a traceback: an outside check, 2026-12-07)
+LIMITS = {"feed": 10.0, "acceleration": 1000.0, "radius": 10.0, "distance": 100.0,
+          "turns": 1000.0}
+
+
 def _positive(field: str, value: float, unit: str) -> float:
-    if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-        raise ParameterError(field, value, f"expected a positive number [{unit}]")
+    high = LIMITS.get(field.removeprefix("contour."), math.inf)
+    if not (isinstance(value, int | float) and not isinstance(value, bool)
+            and math.isfinite(value) and 0 < value <= high):
+        raise ParameterError(field, value, f"expected a positive number [{unit}]"
+                             if high == math.inf else f"expected > 0, ≤ {high:g} [{unit}]")
     return float(value)
 
 
@@ -75,7 +85,7 @@ class Contour:
             raise ParameterError("contour.axes", self.axes, "expected two different axis names")
         if not (math.isfinite(self.dwell) and self.dwell >= 0):
             raise ParameterError("contour.dwell", self.dwell, "expected ≥ 0 [s]")
-        ramp = self.feed ** 2 / self.acceleration  # lead-in plus lead-out length [m]
+        ramp = self.feed / self.acceleration * self.feed  # lead-in plus lead-out length [m]
         if ramp > self.length:
             raise ParameterError("contour.acceleration", self.acceleration,
                                  f"the lead-in and lead-out need {ramp:g} m, the path is "
