@@ -91,3 +91,48 @@ def test_predict_and_validate_refuse_it_in_one_line(tmp_path: Path) -> None:
         result = runner.invoke(app, args)
         assert result.exit_code == 2 and "Traceback" not in result.output, result.output
         assert "fit.free = [5]" in result.output, result.output
+
+
+def test_a_profile_longer_than_8192_s_is_a_uniform_grid() -> None:
+    """A 1-ms grid past 8192 s (where doubles are 1.8e-12 s apart) was refused as "expected a
+    uniform, increasing grid" by an absolute 1e-12-s spread: a 10 000-s CSV profile and the
+    30-s-dwell staircase from 3 to 0.05 mm/s (8 886 s)."""
+    from feeddrive.model import reference
+
+    profile, _ = reference.stepdown(3e-3, 0.05e-3, step=1e-5, dwell=30.0)
+    assert profile.time[-1] > 8192.0
+    _, table = profile.encode()
+    assert table.shape[1] == profile.time.size
+
+
+def test_a_long_csv_profile_runs_and_a_huge_one_is_refused(tmp_path: Path) -> None:
+    ok = tmp_path / "t10000.csv"
+    ok.write_text("time,table_speed\n0,1\n10000,1\n", encoding="utf-8")
+    args = ["simulate", "--drive", "cdfs", "--profile", "csv", "--duration", "0.2",
+            "--profile-file"]
+    result = runner.invoke(app, [*args, str(ok)])
+    assert result.exit_code == 0, result.output
+    huge = tmp_path / "t1e6.csv"
+    huge.write_text("time,table_speed\n0,1\n1000000,1\n", encoding="utf-8")
+    result = runner.invoke(app, [*args, str(huge)])
+    assert result.exit_code == 2, result.output
+    assert "the profile spans 1e+06 s" in result.output and "expected ≤ 20000 s" in \
+        result.output
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["--profile", "stepdown", "--table-speed", "3", "--lowest-speed", "0.05", "--step",
+      "1e-6"], "--step = 1e-06: makes a profile of 1.18e+07 s"),
+    (["--profile", "stepdown", "--table-speed", "3", "--lowest-speed", "0.05", "--dwell",
+      "1e300"], "--dwell = 1e+300: makes a profile of 2.96e+302 s"),
+    (["--profile", "sine", "--table-speed", "1", "--frequency", "1e300"],
+     "--frequency = 1e+300: expected a frequency > 0, ≤ 1000 [Hz]"),
+])
+def test_a_profile_too_long_or_too_fast_is_refused_before_any_array(args: list[str],
+                                                                    says: str) -> None:
+    """A 1e-9-mm/s step hung making its staircase; a 1e300-s dwell and a 1e300-Hz sine ended
+    in numpy's "Maximum allowed size exceeded"."""
+    result = runner.invoke(app, ["simulate", "--drive", "cdfs", *args])
+    assert result.exit_code == 2, result.output
+    errors = [s for s in result.output.splitlines() if s.startswith("error: ")]
+    assert len(errors) == 1 and errors[0].startswith(f"error: {says}"), result.output

@@ -207,8 +207,9 @@ def simulate_command(
         if profile == "constant":
             prof = ConstantSpeed(v_t, v_n)
         elif profile == "sine":
-            if not (math.isfinite(frequency) and frequency > 0):
-                raise ParameterError("--frequency", frequency, "expected a frequency > 0 [Hz]")
+            if not (math.isfinite(frequency) and 0 < frequency <= reference.MAX_FREQUENCY):
+                raise ParameterError("--frequency", frequency, f"expected a frequency > 0, ≤ "
+                                     f"{reference.MAX_FREQUENCY:g} [Hz]")
             prof = SineSpeed(v_t, v_n, frequency)
         elif profile == "trapezoid":
             prof = reference.trapezoid(v_t, duration or 10.0, ramp_time=ramp_time, nut_speed=v_n)
@@ -217,8 +218,16 @@ def simulate_command(
             if not lowest_speed < table_speed:  # type: ignore[operator]
                 raise ParameterError("--lowest-speed", lowest_speed,
                                      f"expected < --table-speed = {table_speed:g} [mm/s]")
-            prof, _ = reference.stepdown(v_t, low, step=_units.speed("--step", step, positive=True),
-                                        dwell=dwell, nut_speed=v_n)
+            try:
+                prof, _ = reference.stepdown(v_t, low,
+                                             step=_units.speed("--step", step, positive=True),
+                                             dwell=dwell, nut_speed=v_n)
+            except ParameterError as err:  # the API's names and SI: the options' and mm/s
+                if err.field not in ("step", "dwell"):
+                    raise
+                given = step if err.field == "step" else dwell
+                raise ParameterError(f"--{err.field}", given, err.message.replace(
+                    "[m/s]", "[mm/s]")) from None
         else:
             prof = reference.from_csv(str(profile_file))
         if isinstance(prof, SampledSpeed) and duration is None:

@@ -215,6 +215,11 @@ class ConstantSpeed:
                  NUT_SPEED: self.nut_speed, RAMP_TIME: self.ramp_time}, _EMPTY_TABLE)
 
 
+#: the highest sine frequency a profile takes [Hz]: far above a feed drive's bandwidth (a
+#: frequency of 1e300 Hz ran, and its summary failed in numpy: an outside check, 2026-12-07)
+MAX_FREQUENCY = 1000.0
+
+
 @dataclass(frozen=True)
 class SineSpeed:
     """Sinusoidal speeds v(t) = A·sin(2πft) of the table and the nut.
@@ -250,8 +255,9 @@ class SineSpeed:
         """
         _finite("table_amplitude", self.table_amplitude, "m/s")
         _finite("nut_amplitude", self.nut_amplitude, "m/s")
-        if not (self.frequency > 0.0 and math.isfinite(self.frequency)):
-            raise ValueError(f"profile.frequency = {self.frequency!r}: expected > 0 [Hz]")
+        if not (0.0 < self.frequency <= MAX_FREQUENCY):
+            raise ValueError(f"profile.frequency = {self.frequency!r}: expected > 0, ≤ "
+                             f"{MAX_FREQUENCY:g} [Hz]")
         return ({KIND: REF_SINE, TABLE_SPEED: self.table_amplitude,
                  NUT_SPEED: self.nut_amplitude, FREQUENCY: self.frequency}, _EMPTY_TABLE)
 
@@ -300,7 +306,10 @@ class SampledSpeed:
             if not np.all(np.isfinite(arr)):
                 raise ValueError(f"profile.{name}: contains non-finite values")
         dt = np.diff(t)
-        if abs(t[0]) > 1e-12 or np.any(dt <= 0) or np.ptp(dt) > 1e-9 * max(dt.mean(), 1e-300):
+        # uniform to round-off: the spacing of doubles grows with t (at 8192 s it is 1.8e-12
+        # s, and a 1-ms grid past that was refused: an outside check, 2026-12-07)
+        spread = 1e-9 * max(dt.mean(), 1e-300) + 16 * np.finfo(float).eps * abs(t[-1])
+        if abs(t[0]) > 1e-12 or np.any(dt <= 0) or np.ptp(dt) > spread:
             raise ValueError("profile.time: expected a uniform, increasing grid starting at 0 [s]")
         table = np.empty((4, t.size))
         for j, v in enumerate((vt, vn)):
@@ -376,6 +385,21 @@ def _finite(name: str, value: float, unit: str) -> None:
 # ---------------------------------------------------------------- profiles built on SampledSpeed
 
 _INTERVAL = 1e-3  # [s] sampling of the built profiles
+#: the most samples a built or read profile tabulates: 20 000 s at 1 ms (each array 160 MB);
+#: a 1e6-s file or a 1e-9-mm/s staircase step ran out of memory or hung before any check (an
+#: outside check, 2026-12-07)
+MAX_PROFILE_SAMPLES = 20_000_000
+
+
+def _check_span(name: str, value: float, span: float, interval: float, unit: str) -> None:
+    """Refuse, before any array is made, a profile of ``span`` seconds that would tabulate
+    more than :data:`MAX_PROFILE_SAMPLES` samples at ``interval``; ``name`` = ``value``
+    [``unit``] is the setting that made it so long."""
+    if not span / interval <= MAX_PROFILE_SAMPLES:
+        raise ParameterError(name, value, f"makes a profile of {span:.4g} s, "
+                             f"{span / interval:.3g} samples at {interval:g} s; expected ≤ "
+                             f"{MAX_PROFILE_SAMPLES} samples ({MAX_PROFILE_SAMPLES * interval:g}"
+                             f" s) [{unit}]")
 
 
 def _positive(name: str, value: float, unit: str) -> float:
@@ -424,6 +448,7 @@ def trapezoid(table_speed: float, duration: float, *, ramp_time: float = 0.5,
     if 2.0 * ramp_time >= duration:
         raise ParameterError("ramp_time", ramp_time,
                              f"expected < duration / 2 = {duration / 2:g} [s]")
+    _check_span("duration", duration, duration, interval, "s")
     t = np.arange(int(np.ceil(duration / interval)) + 2) * interval
     shape = np.clip(np.minimum(t, duration - t) / ramp_time, 0.0, 1.0)
     return SampledSpeed(time=t, table_speed=table_speed * shape, nut_speed=nut_speed * shape)
@@ -488,7 +513,13 @@ def stepdown(start_speed: float, lowest_speed: float, *, step: float = 0.01e-3,
     if lowest_speed >= start_speed:
         raise ParameterError("lowest_speed", lowest_speed,
                              f"expected < start_speed = {start_speed:g} [m/s]")
-    n = int(np.floor((start_speed - lowest_speed) / step + 1e-9)) + 1
+    steps = (start_speed - lowest_speed) / step
+    span = lead_in + (steps + 1) * dwell
+    # the setting that made it long: one dwell beyond the limit, else the count of steps
+    if dwell / interval > MAX_PROFILE_SAMPLES:
+        _check_span("dwell", dwell, span, interval, "s")
+    _check_span("step", step, span, interval, "m/s")
+    n = int(np.floor(steps + 1e-9)) + 1
     speeds = np.round(start_speed - step * np.arange(n), 12)
     profile, _ = _staircase(speeds, dwell, lead_in, nut_speed, interval)
     return profile, speeds
@@ -530,6 +561,11 @@ def from_csv(path: str | Path, *, interval: float = _INTERVAL) -> SampledSpeed:
         raise MeasuredDataError(table.source, table.header_line,
                                 "column 'time': expected times [s] increasing from 0, at "
                                 "least two rows")
+    if not t[-1] / interval <= MAX_PROFILE_SAMPLES:
+        raise MeasuredDataError(table.source, table.header_line,
+                                f"column 'time': the profile spans {t[-1]:.4g} s, "
+                                f"{t[-1] / interval:.3g} samples at {interval:g} s; expected "
+                                f"≤ {MAX_PROFILE_SAMPLES * interval:g} s")
     grid = np.arange(int(np.floor(t[-1] / interval + 1e-9)) + 1) * interval
     if grid.size < 2:
         raise MeasuredDataError(table.source, table.header_line,
