@@ -136,3 +136,35 @@ def test_a_profile_too_long_or_too_fast_is_refused_before_any_array(args: list[s
     assert result.exit_code == 2, result.output
     errors = [s for s in result.output.splitlines() if s.startswith("error: ")]
     assert len(errors) == 1 and errors[0].startswith(f"error: {says}"), result.output
+
+
+@pytest.mark.parametrize(("text", "says"), [
+    ("x,y\n0,0\n10,0\n10,abc\n10,10\n", "line 4: 'abc' is not a number"),
+    ("x,y\n0,0\nnan,nan\n10,10\n", "line 3: 'nan'; expected a finite number"),
+    ("time,position\n0,0\n1,10\n", "has no column for the path's first coordinate ('x')"),
+    ("x,y,z\n0,0\n", "line 2: 2 cells; expected 3"),
+    ("x [in],y\n0,0\n1,1\n", "unit 'in'"),
+    ("0,0\n", "fewer than two points"),
+])
+def test_a_path_file_is_read_by_its_header_and_every_row(tmp_path: Path, text: str,
+                                                          says: str) -> None:
+    """`simulate --contour csv` skipped rows with bad cells, read a `y,x` header as x, y and
+    took a `time,position` file as a path (np.genfromtxt): an outside check, 2026-12-07."""
+    from feeddrive.machine.contour import from_csv
+
+    path = tmp_path / "p.csv"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ParameterError, match="contour.csv") as err:
+        from_csv(path, feed=0.001, acceleration=1.0)
+    assert says in str(err.value)
+
+
+def test_a_path_files_columns_are_taken_by_name_and_unit(tmp_path: Path) -> None:
+    from feeddrive.machine.contour import from_csv
+
+    path = tmp_path / "p.csv"
+    for text in ("y,x\n0,0\n0,10\n", "x [m],y [m]\n0,0\n0.01,0\n", "# a move\n0,0\n10,0\n",
+                 "x_mm,y_mm\n5,5\n15,5\n"):
+        path.write_text(text, encoding="utf-8")
+        end = from_csv(path, feed=0.001, acceleration=1.0).points[-1]
+        assert end == pytest.approx((0.01, 0.0), abs=1e-15), text  # 10 mm along x

@@ -476,7 +476,13 @@ def corner(*, feed: float, acceleration: float, leg: float = 0.05, angle: float 
 
 def from_csv(path: str | Path, *, feed: float, acceleration: float,
              axes: tuple[str, str] = ("x", "y"), dwell: float = 0.0) -> Polyline:
-    """A path read from a CSV file of two columns, x and y in mm (a header line allowed).
+    """A path read from a CSV file of two coordinates, in mm unless a header says otherwise.
+
+    ``#`` lines and blank lines are skipped.  With a header, the columns are found by name: the
+    first coordinate's is the first axis' name or ``x``, the second's the second axis' or
+    ``y``, each with an optional unit (``x [mm]``, ``x_mm``, ``y [m]``, ``y [µm]``); without
+    one, the file holds exactly two columns, x then y.  Every row must give both numbers
+    (a bad or missing cell is refused naming its line, never skipped).
 
     Parameters
     ----------
@@ -499,17 +505,71 @@ def from_csv(path: str | Path, *, feed: float, acceleration: float,
     Raises
     ------
     ParameterError
-        For a file that cannot be read as two numeric columns.
+        For a file that cannot be read, a header without the two coordinates, or a row that
+        is not two finite numbers (its line named).
     """
-    try:
-        data = np.genfromtxt(path, delimiter=",", dtype=float, invalid_raise=True)
-    except (OSError, ValueError) as exc:
-        raise ParameterError("contour.csv", str(path), f"expected two columns x, y [mm]: "
-                             f"{exc}") from None
-    data = np.atleast_2d(data)
-    data = data[np.all(np.isfinite(data), axis=1)] if data.ndim == 2 else data
-    if data.ndim != 2 or data.shape[1] != 2:
-        raise ParameterError("contour.csv", str(path), "expected two columns x, y [mm]")
-    pts = (data - data[0]) * 1e-3
+    pts = _csv_points(Path(path), axes)
+    pts = pts - pts[0]
     return Polyline(feed=feed, acceleration=acceleration, axes=axes, dwell=dwell,
                     points=tuple(map(tuple, pts)))
+
+
+#: the units a path file's header may give its coordinates [m per unit]
+_PATH_UNITS = {"mm": 1e-3, "m": 1.0, "µm": 1e-6, "um": 1e-6}
+
+
+def _csv_points(path: Path, axes: tuple[str, str]) -> np.ndarray:
+    """The (x, y) points of a path file [m] (:func:`from_csv`); reading it said nothing of a
+    header's names, and skipped rows with bad cells (an outside check, 2026-12-07)."""
+    import re
+
+    def refuse(what: str) -> ParameterError:
+        return ParameterError("contour.csv", str(path), what)
+
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise refuse(f"cannot be read ({type(exc).__name__}: {exc})") from None
+    rows = [(k, line) for k, line in enumerate(text.splitlines(), start=1)
+            if line.strip() and not line.lstrip().startswith("#")]
+    if not rows:
+        raise refuse("has no rows; expected two columns x, y [mm]")
+    first = [c.strip() for c in rows[0][1].split(",")]
+    columns, scale, width = [0, 1], [1e-3, 1e-3], 2
+    try:
+        [float(c) for c in first]
+    except ValueError:  # a header: the coordinates by name
+        rows, width = rows[1:], len(first)
+        names, units = [], []
+        for cell in first:
+            m = re.fullmatch(r"(.*?)\s*(?:\[(.*)\]|_(mm|m|um|µm))?", cell)
+            assert m is not None
+            names.append(m.group(1).strip().lower())
+            units.append((m.group(2) or m.group(3) or "mm").strip())
+        for i, (axis, plain) in enumerate(zip(axes, ("x", "y"), strict=True)):
+            found = [j for j, n in enumerate(names) if n in (axis.lower(), plain)]
+            if len(found) != 1:
+                named = f"'{plain}'" if axis.lower() == plain else f"'{axis}' or '{plain}'"
+                raise refuse(f"has {'no' if not found else 'more than one'} column for the "
+                             f"path's {'first' if i == 0 else 'second'} coordinate ({named}); "
+                             f"its header: {', '.join(first)}")
+            if units[found[0]] not in _PATH_UNITS:
+                raise refuse(f"column '{first[found[0]]}': unit {units[found[0]]!r}; expected "
+                             f"one of {', '.join(_PATH_UNITS)}")
+            columns[i], scale[i] = found[0], _PATH_UNITS[units[found[0]]]
+    points = np.empty((len(rows), 2))
+    for r, (k, line) in enumerate(rows):
+        cells = [c.strip() for c in line.split(",")]
+        if len(cells) != width:
+            raise refuse(f"line {k}: {len(cells)} cells; expected {width}")
+        for i in (0, 1):
+            try:
+                value = float(cells[columns[i]])
+            except ValueError:
+                raise refuse(f"line {k}: {cells[columns[i]][:20]!r} is not a number") from None
+            if not math.isfinite(value):
+                raise refuse(f"line {k}: {cells[columns[i]]!r}; expected a finite number")
+            points[r, i] = value * scale[i]
+    if len(points) < 2:
+        raise refuse("has fewer than two points; expected a path of two or more")
+    return points
