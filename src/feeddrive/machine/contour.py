@@ -518,6 +518,15 @@ def from_csv(path: str | Path, *, feed: float, acceleration: float,
 _PATH_UNITS = {"mm": 1e-3, "m": 1.0, "µm": 1e-6, "um": 1e-6}
 
 
+def _numbers(cells: list[str]) -> bool:
+    """Whether every cell reads as a number."""
+    try:
+        [float(c) for c in cells]
+    except ValueError:
+        return False
+    return True
+
+
 def _csv_points(path: Path, axes: tuple[str, str]) -> np.ndarray:
     """The (x, y) points of a path file [m] (:func:`from_csv`); reading it said nothing of a
     header's names, and skipped rows with bad cells (an outside check, 2026-12-07)."""
@@ -536,9 +545,7 @@ def _csv_points(path: Path, axes: tuple[str, str]) -> np.ndarray:
         raise refuse("has no rows; expected two columns x, y [mm]")
     first = [c.strip() for c in rows[0][1].split(",")]
     columns, scale, width = [0, 1], [1e-3, 1e-3], 2
-    try:
-        [float(c) for c in first]
-    except ValueError:  # a header: the coordinates by name
+    if not _numbers(first):  # a header: the coordinates by name
         rows, width = rows[1:], len(first)
         names, units = [], []
         for cell in first:
