@@ -168,3 +168,75 @@ def test_a_path_files_columns_are_taken_by_name_and_unit(tmp_path: Path) -> None
         path.write_text(text, encoding="utf-8")
         end = from_csv(path, feed=0.001, acceleration=1.0).points[-1]
         assert end == pytest.approx((0.01, 0.0), abs=1e-15), text  # 10 mm along x
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["stability", "--points", "100000000"], "--points = 100000000: expected a whole number 2 "
+                                             "… 10000"),
+    (["stiffness", "--positions", "1e-300"], "--positions = 1e-300: k_sa is not finite there"),
+    (["friction", "--stiffness", "1e300"], "--stiffness = 1e+300: expected a finite value > 0, "
+                                           "≤ 100000 [N/µm]"),
+    (["friction", "--mass", "1e300"], "--mass = 1e+300: expected a finite value > 0, ≤ 100000 "
+                                      "[kg]"),
+    (["compensate", "--compare", "--schemes", ","], "--schemes = ',': expected one name or more"),
+    (["compensate", "--compare", "--metrics", ""], "--metrics = '': expected one name or more"),
+    (["compensate", "--metrics", "bogus"], "--metrics = 'given': an option of --compare"),
+    (["compensate", "--band", "5"], "--band = 'given': an option of --compare"),
+])
+def test_more_bad_values_are_one_line_naming_the_option(args: list[str], says: str) -> None:
+    """An outside check, 2026-12-07: 10^8 scan points ran for hours, 1e-300 mm printed k_sa =
+    inf (and --json failed), 1e300 N/µm ended in scipy's words and 1e300 kg was taken, empty
+    scheme or metric lists gave an empty table with exit 0, and --compare's options were
+    ignored without it."""
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    errors = [s for s in result.output.splitlines() if s.startswith("error: ")]
+    assert len(errors) == 1 and errors[0].startswith(f"error: {says}"), result.output
+
+
+def test_the_friction_scans_limits_are_the_parameter_fields():
+    from feeddrive.cli.friction_cmd import LARGEST
+    from feeddrive.model.slot_ranges import _field
+    from feeddrive.units import N_PER_UM
+
+    assert LARGEST["--mass"] == _field("table.mass").high
+    assert LARGEST["--stiffness"] * N_PER_UM == _field("stiffness.equivalent_stiffness").high
+    assert LARGEST["--damping"] == _field("stiffness.axial_damping").high
+
+
+SWEEP = 'name = "s"\n[design]\nkind = "grid"\n[quantity]\nkind = "linear-band"\n{more}\n'
+
+
+@pytest.mark.parametrize(("more", "says"), [
+    ("high = 1e300\n[axes]\ntable_position = [200, 400]",
+     "quantity.high = 1e+300: expected a number > 0, ≤ 100000 [mm/s]"),
+    ("linear_points = 100000000\n[axes]\ntable_position = [200, 400]",
+     "quantity.linear_points = 100000000: expected a whole number 2 … 10000"),
+    ("[axes]\nnut_speed = [nan, 1]", "axes.nut_speed.values = nan: expected a finite number"),
+    ('[axes]\ntable_position = ["a", "b"]',
+     "axes.table_position.values = 'a': expected a finite number"),
+    ("[axes]\nnut_speed = [-1, 1]", "axes.nut_speed.values = -1: expected a speed ≥ 0 [mm/s]"),
+])
+def test_a_sweep_refuses_its_bad_values_before_the_first_point(tmp_path: Path, more: str,
+                                                                says: str) -> None:
+    """A high of 1e300 mm/s failed every point and exited 0; a NaN or text axis value failed
+    at its point naming no file (an outside check, 2026-12-07)."""
+    config = tmp_path / "s.toml"
+    config.write_text(SWEEP.format(more=more), encoding="utf-8")
+    result = runner.invoke(app, ["sweep", str(config), "--dry-run"])
+    assert result.exit_code == 2, result.output
+    assert result.output.strip() == f"error: {config}: {says}", result.output
+
+
+def test_a_store_that_is_no_database_is_named_by_the_option_given(tmp_path: Path) -> None:
+    config = tmp_path / "s.toml"
+    config.write_text(SWEEP.format(more="[axes]\ntable_position = [200, 400]"),
+                      encoding="utf-8")
+    notes = tmp_path / "notes.txt"
+    notes.write_text("my notes\n", encoding="utf-8")
+    result = runner.invoke(app, ["sweep", str(config), "--store", str(notes)])
+    assert result.exit_code == 2, result.output
+    assert result.output.strip().startswith(f"error: --store {notes}: not a feeddrive sweep "
+                                            "store"), \
+        result.output  # was "--output"
+    assert notes.read_text(encoding="utf-8") == "my notes\n"

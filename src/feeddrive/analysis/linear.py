@@ -1244,9 +1244,11 @@ def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
 def _check_range(low: float, high: float, points: int) -> None:
     if not (0 < low < high):
         raise ParameterError("low", low * 1e3, f"expected 0 < low < high = {high * 1e3} [mm/s]")
-    if not (isinstance(points, (int, np.integer)) and points >= 2):
-        raise ParameterError("points", points, "expected a whole number ≥ 2 (a scan needs two "
-                             "speeds to see a change)")
+    if not (isinstance(points, (int, np.integer)) and not isinstance(points, bool)
+            and 2 <= points <= protocol.MAX_LINEAR_POINTS):
+        raise ParameterError("points", points, f"expected a whole number 2 … "
+                             f"{protocol.MAX_LINEAR_POINTS} (a scan needs two speeds to see a "
+                             "change, and linearises the drive at each)")
 
 
 def _bisect_edge(system: DriveSystem, nut_speed: float, a: float, b: float, unstable_a: bool,

@@ -19,6 +19,9 @@ TRIAL_MAX_DURATION = 240.0  # [s] longest trial; still undecided then: 'undecide
 # item 8: the command scanned 0.01–5 mm/s and the sweep 0.02–3.02 mm/s)
 LINEAR_SPEED_RANGE = (0.01e-3, 5e-3)  # [m/s] log-spaced scan, edges bisected
 LINEAR_POINTS = 40  # [-] scan points
+# [-] the most scan points a band takes: one linearisation each (10^8 ran for hours before
+# any check: an outside check, 2026-12-07)
+MAX_LINEAR_POINTS = 10_000
 # a search's work is bounded before it starts (issue 39 item 4): `predict --resolution
 # 1e-300` bisected forever (its speeds are rounded to 1e-12 m/s, so the bisection stalled)
 SMALLEST_RESOLUTION = RESOLUTION / 100  # [m/s] a hundredth of the paper's step

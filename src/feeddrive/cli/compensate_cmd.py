@@ -25,6 +25,8 @@ from ._solver import accuracy_options
 STUDY_DRIVES = "cdfs|linear-motor"
 
 
+#: the quantities --compare computes by default
+METRICS = "critical,spike,reversal,settling"
 #: the schemes of --compare, for --help (tests/unit/test_compensation_compare.py checks this
 #: against feeddrive.analysis.compensation_compare.SCHEMES)
 COMPARE_SCHEMES = ("none,none-continuous,feedforward,observer,disturbance-observer,"
@@ -61,7 +63,7 @@ def compensate_command(
                                  "settling time."),
     schemes: str = typer.Option(COMPARE_SCHEMES, "--schemes", help="--compare: the schemes, "
                                 "comma-separated."),
-    metrics: str = typer.Option("critical,spike,reversal,settling", "--metrics",
+    metrics: str = typer.Option(METRICS, "--metrics",
                                 help="--compare: the quantities, comma-separated."),
     band: float = typer.Option(1.0, "--band", help="--compare: settling band, ± [µm]."),
     output: str | None = typer.Option(None, "--output", help="--compare: write the table "
@@ -94,6 +96,14 @@ def compensate_command(
 
         raise ParameterError("--output" if output else "--plot", output or plot,
                              "written by --compare only")
+    compare_only = {"--schemes": schemes != COMPARE_SCHEMES, "--metrics": metrics != METRICS,
+                    "--band": band != 1.0}
+    given = [name for name, changed in compare_only.items() if changed]
+    if given:  # they were ignored without a word (an outside check, 2026-12-07)
+        from ..parameters import ParameterError
+
+        raise ParameterError(given[0], "given", "an option of --compare, which this run "
+                             "does not use")
 
     from ..analysis.compensation import compensation_study, default_cases, study_drives
     from ..parameters import ParameterError
@@ -146,6 +156,11 @@ def _compare(drive: str, position: float, schemes: str, metrics: str, band: floa
 
     names = [n.strip() for n in schemes.split(",") if n.strip()]
     wanted = [m.strip() for m in metrics.split(",") if m.strip()]
+    for option, given, items in (("--schemes", schemes, names), ("--metrics", metrics, wanted)):
+        if not items:  # an empty table, exit 0 (an outside check, 2026-12-07)
+            from ..parameters import ParameterError
+
+            raise ParameterError(option, given, "expected one name or more, comma-separated")
     if not math.isfinite(band) or band <= 0:
         from ..parameters import ParameterError
 

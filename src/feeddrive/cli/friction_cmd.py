@@ -38,11 +38,21 @@ SCAN_LIMITATION = (
 )
 
 
+#: the scan oscillator's largest values, those of the parameter-file fields they stand for
+#: (Table.mass, stiffness.equivalent_stiffness in N/µm, stiffness.axial_damping): 1e300 N/µm
+#: ended in scipy's "Array must not contain infs or NaNs", 1e300 kg was taken (an outside check,
+#: 2026-12-07)
+LARGEST = {"--mass": 1e5, "--stiffness": 1e5, "--damping": 1e8}
+
+
 def _positive(option: str, value: float, unit: str, allow_zero: bool = False) -> float:
-    ok = math.isfinite(value) and (value >= 0.0 if allow_zero else value > 0.0)
+    high = LARGEST.get(option, math.inf)
+    ok = math.isfinite(value) and (value >= 0.0 if allow_zero else value > 0.0) \
+        and value <= high
     if not ok:
         op = "≥" if allow_zero else ">"
-        raise ParameterError(option, value, f"expected a finite value {op} 0 [{unit}]")
+        raise ParameterError(option, value, f"expected a finite value {op} 0, ≤ {high:g} "
+                                            f"[{unit}]")
     return value
 
 

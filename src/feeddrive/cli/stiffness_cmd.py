@@ -88,11 +88,19 @@ def stiffness_command(
     Also compares K_eq at mid-screw with the 2.16e7 N/m (21.6 N/µm) of Wang2021 Sect. 5.2 and
     lists the readings of Eqs. (2)–(5) that come closest to it.
     """
+    import numpy as np
+
     from ..model.mechanisms import ball_screw_stiffness as stiffness
 
     params = resolve_parameters(preset_name, params_file)
     a = parse_positions_mm(positions, params.screw.length)
-    chain = stiffness.stiffness_chain(params, a)
+    with np.errstate(over="ignore", divide="ignore"):
+        chain = stiffness.stiffness_chain(params, a)
+    for i, x in enumerate(a):  # a nut (all but) at a support: k_sa overflows (an outside check,
+        # 2026-12-07: 1e-300 mm printed inf, and --json failed on it)
+        if not np.isfinite(chain.screw_axial[i]):
+            raise ParameterError("--positions", x / MM, "k_sa is not finite there (the nut "
+                                 "at a support); expected a position inside the screw [mm]")
     mid = stiffness.stiffness_chain(params, stiffness.mid_screw_position(params.screw))
     k_mid = float(mid.equivalent[()])
     k_mid_chain = float(mid.equivalent_chain[()])

@@ -97,9 +97,12 @@ def sweep_command(
         cfg.store if cfg.store is not None else Path(f"{cfg.name}.sqlite"))
     option = "--store" if store is not None else (
         f"{config}: store" if cfg.store is not None else "store")
-    for option, path in (("--plot", plot), ("--output", output)):
+    # the loop's own name: `option` names the store in the messages below (it was
+    # overwritten here, and a store that is no database was called "--output": an outside
+    # check, 2026-12-07)
+    for writes, path in (("--plot", plot), ("--output", output)):
         if path is not None and store is None and is_same_file(path, store_path):
-            raise ValueError(f"{option} {shown(path)}: is the sweep's store; refusing to "
+            raise ValueError(f"{writes} {shown(path)}: is the sweep's store; refusing to "
                              "overwrite it")
     if dry_run and (plot or output):
         raise ValueError("--dry-run: stores nothing, so --plot and --output have nothing to show")

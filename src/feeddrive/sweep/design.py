@@ -659,6 +659,13 @@ def _check_axis_name(axis: Axis, base: DriveParameters) -> None:
                                   f"expected one of {', '.join(_drives())}")
         if axis.name in ("drive", "preset") and axis.values is None:
             raise _refuse(axis.key, axis.low, "expected values = [...] (names)")
+        if axis.name not in ("drive", "preset"):  # a number in its unit, checked here (a
+            # text or NaN value failed at its point: an outside check, 2026-12-07)
+            unit = SPECIAL_AXES[axis.name][0]
+            for v in axis.values or ():
+                value = _number(f"{axis.key}.values", v, positive=axis.name != "nut_speed")
+                if axis.name == "nut_speed" and value < 0:
+                    raise _refuse(f"{axis.key}.values", v, f"expected a speed ≥ 0 [{unit}]")
         return
     try:
         current = _get_path(base, axis.name)

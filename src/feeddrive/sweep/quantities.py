@@ -135,10 +135,14 @@ class QuantitySettings:
                           ("max_duration", 1.0)):
             if k in spec:
                 v = spec[k]
+                # speeds up to the largest any feed drive has (units.LARGEST_SPEED; a high of
+                # 1e300 mm/s failed every point and exited 0), times up to a day
+                high = 86400.0 if factor == 1.0 else units.LARGEST_SPEED / factor
                 if isinstance(v, bool) or not isinstance(v, int | float) \
-                        or not math.isfinite(v) or v <= 0:
+                        or not math.isfinite(v) or not 0 < v <= high:
                     unit = "s" if factor == 1.0 else "mm/s"
-                    raise ParameterError(f"quantity.{k}", v, f"expected a number > 0 [{unit}]")
+                    raise ParameterError(f"quantity.{k}", v, f"expected a number > 0, ≤ "
+                                         f"{high:g} [{unit}]")
                 values[k] = float(v) * factor
         if "linear" in spec:
             if not isinstance(spec["linear"], bool):
@@ -146,8 +150,10 @@ class QuantitySettings:
             values["linear"] = spec["linear"]
         if "linear_points" in spec:
             n = spec["linear_points"]
-            if isinstance(n, bool) or not isinstance(n, int) or n < 2:
-                raise ParameterError("quantity.linear_points", n, "expected a whole number ≥ 2")
+            if isinstance(n, bool) or not isinstance(n, int) \
+                    or not 2 <= n <= protocol.MAX_LINEAR_POINTS:
+                raise ParameterError("quantity.linear_points", n, f"expected a whole number 2 … "
+                                     f"{protocol.MAX_LINEAR_POINTS}")
             values["linear_points"] = n
         if start == "running" and "coarse_step" not in spec:
             values["coarse_step"] = protocol.STAIRCASE_COARSE_STEP
