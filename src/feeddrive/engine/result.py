@@ -462,9 +462,17 @@ class Result:
         measured force, current, torque or motor speed drives the table open-loop; a zero
         command): the verdict is judged against the command, and there is none."""
         from ..parameters import ParameterError
+        from ..plots.result import machine_axes
 
         if "table_speed_reference" in self and np.any(self["table_speed_reference"] != 0.0):
             return
+        axes = machine_axes(self)
+        if axes:  # a machine's run: its axes' signals are prefixed
+            raise ParameterError("profile", self.attrs.get("profile", ""), f"a machine's run "
+                                 f"(axes {', '.join(axes)}): each axis' signals are "
+                                 f"'<axis>.<name>' (result['{axes[0]}.table_speed']), its "
+                                 "summary feeddrive.machine.machine_summary(result, machine, "
+                                 "contour)")
         raise ParameterError("profile", self.attrs.get("profile", ""),
                              "expected a run with a commanded table speed: the creep summary "
                              "judges the table speed against the command, and this run has "

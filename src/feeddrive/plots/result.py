@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 from matplotlib.figure import Figure
 
 if TYPE_CHECKING:
@@ -27,6 +28,11 @@ def run_title(result: Result) -> str:
         units).
     """
     attrs = result.dataset.attrs
+    axes = machine_axes(result)
+    if axes:  # a machine's run: its axes' signals are "<axis>.<name>"
+        return (f"machine {attrs.get('drive', '')}: {attrs.get('profile', '')}, axes "
+                f"{', '.join(axes)}, {float(result.time[-1]):.4g} s — "
+                f"{attrs.get('parameter_set', '')}")
     kind = str(attrs.get("profile", "")).split("(")[0] or "profile"
     what = {"ConstantSpeed": "constant", "SineSpeed": "sine amplitude",
             "SampledSpeed": "sampled profile, top speed"}.get(kind, kind)
@@ -37,9 +43,72 @@ def run_title(result: Result) -> str:
     from ..model.reference import sine_field
 
     amplitude = sine_field(str(attrs.get("profile", "")), "table_amplitude")
-    speed = abs(result.command_speed if amplitude is None else amplitude)
+    # signed: a run at −2 mm/s said "constant 2 mm/s" (an outside check, 2026-12-07)
+    speed = result.command_speed if amplitude is None else abs(amplitude)
     return (f"{drive.upper()}, {what} {1e3 * speed:.4g} mm/s{where}, "
             f"{float(result.time[-1]):.4g} s — {attrs['parameter_set']}")
+
+
+def machine_axes(result: Result) -> list[str]:
+    """The axes of a machine's run (``feeddrive.machine.simulate_machine``), in order; [] for
+    one drive's.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+
+    Returns
+    -------
+    list of str
+        The axis names its signals are prefixed with.
+    """
+    import json
+
+    text = result.dataset.attrs.get("axes")
+    if not text:
+        return []
+    try:
+        return list(json.loads(str(text)))
+    except ValueError:
+        return []
+
+
+def machine_figure(result: Result, title: str | None = None) -> Any:
+    """The figure of a machine's run: each axis' table speed against its command, and the
+    contour error where the run followed a path.
+
+    Parameters
+    ----------
+    result : Result
+        A machine's run.
+    title : str, optional
+        The title; :func:`run_title` by default.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axes per machine axis (mm/s), and the contour error [µm] below.
+    """
+    t = result.time
+    names = machine_axes(result)
+    error = "contour_error" in result.dataset
+    fig = Figure(figsize=(8, 2.4 * (len(names) + error) + 1.2), layout="constrained")
+    panels = np.atleast_1d(fig.subplots(len(names) + error, 1, sharex=True))
+    for ax, name in zip(panels, names, strict=False):
+        ax.plot(t, 1e3 * result[f"{name}.table_speed"], lw=0.8, label=f"{name} table")
+        ax.plot(t, 1e3 * result[f"{name}.table_speed_reference"], "k--", lw=0.8,
+                label="command")
+        ax.set_ylabel(f"{name} speed [mm/s]")
+        _legend_above(ax)
+    if error:
+        ax = panels[-1]
+        ax.plot(t, 1e6 * result["contour_error"], lw=0.8, label="contour error")
+        ax.set_ylabel("contour error [µm]")
+        _legend_above(ax)
+    panels[-1].set_xlabel("time [s]")
+    fig.suptitle(title or run_title(result), fontsize=10)
+    return fig
 
 
 def _uses_table_position(drive: str) -> bool:
@@ -99,6 +168,8 @@ def result_figure(result: Result, title: str | None = None) -> Any:
     matplotlib.figure.Figure
         Three stacked axes sharing time [s], speeds in mm/s, forces in N.
     """
+    if machine_axes(result):
+        return machine_figure(result, title)
     t = result.time
     fig = Figure(figsize=(8, 8.6), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
