@@ -25,8 +25,8 @@ from feeddrive.parameters import ParameterError
 runner = CliRunner()
 
 REFUSED = [
-    (["stability", "--points", "0"], "--points = 0", "≥ 2"),
-    (["stability", "--points", "1"], "--points = 1", "≥ 2"),
+    (["stability", "--points", "0"], "--points = 0", "2 … 10000"),
+    (["stability", "--points", "1"], "--points = 1", "2 … 10000"),
     (["stability", "--low", "3", "--high", "1"], "--high = 1.0", "[mm/s]"),
     (["stability", "--low", "-1"], "--low = -1.0", "[mm/s]"),
     (["stability", "--drive", "ddfs", "--nut-speed", "1e6"], "--nut-speed = 1000000.0",
@@ -101,7 +101,7 @@ def test_the_smallest_scan_still_finds_the_band() -> None:
 def test_the_library_refuses_a_scan_of_fewer_than_two_speeds(points: object) -> None:
     system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
     for scan in (stability_band, upper_band_edge):
-        with pytest.raises(ParameterError, match=r"points = .*expected a whole number ≥ 2"):
+        with pytest.raises(ParameterError, match=r"points = .*expected a whole number 2 … 10000"):
             scan(system, points=points)  # type: ignore[arg-type]
 
 

@@ -191,6 +191,9 @@ def test_docs_linear_numbers_are_the_codes() -> None:
     for name in ("screw position loop", "screw velocity loop"):
         lp = loops[name]
         assert f"crossover {lp.crossover_hz:.2f} Hz, phase margin {lp.phase_margin_deg:.1f}°" in doc
+    position = loops["screw position loop"]
+    assert (f"gain margin {position.gain_margin_db:.2f} dB, bandwidth "
+            f"{position.bandwidth_hz:.2f} Hz") in doc
     band = stability_band(CDFS, points=40)
     (lo, hi), = band.intervals
     assert f"{1e3 * lo:.3f} – {1e3 * hi:.3f} mm/s, mode {band.mode_frequency_hz[0]:.2f} Hz" in doc

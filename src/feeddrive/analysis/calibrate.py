@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from ..engine.simulate import DriveSystem
-from ..parameters import DriveParameters
+from ..parameters import DriveParameters, ParameterError
 from .critical import CriticalSpeed, creep_trial, critical_speed_from_rest
 from .cycle_verdict import VerdictRule
 
@@ -192,6 +192,12 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     if not (0 < unknown.low < unknown.high and math.isfinite(unknown.high)):
         raise ValueError(f"unknown {unknown.path}: expected 0 < low < high, got "
                          f"{unknown.low!r}, {unknown.high!r}")
+    # the bisections stop at hi/lo ≤ 1 + relative_tolerance: 0 or less never stopped, NaN
+    # skipped them (an outside check, 2026-12-07)
+    if not (isinstance(relative_tolerance, int | float) and not isinstance(
+            relative_tolerance, bool) and 1e-9 <= relative_tolerance <= 1.0):
+        raise ParameterError("relative_tolerance", relative_tolerance,
+                             "expected 1e-9 … 1 (the bracket's last ratio minus 1) [-]")
     evaluations = 0
 
     def creeps_at(value: float, speed: float) -> bool:

@@ -445,6 +445,7 @@ def trapezoid(table_speed: float, duration: float, *, ramp_time: float = 0.5,
     """
     duration = _positive("duration", duration, "s")
     ramp_time = _positive("ramp_time", ramp_time, "s")
+    interval = _positive("interval", interval, "s")
     if 2.0 * ramp_time >= duration:
         raise ParameterError("ramp_time", ramp_time,
                              f"expected < duration / 2 = {duration / 2:g} [s]")
@@ -510,6 +511,7 @@ def stepdown(start_speed: float, lowest_speed: float, *, step: float = 0.01e-3,
         _positive(name, value, "m/s")
     _positive("dwell", dwell, "s")
     _positive("lead_in", lead_in, "s")
+    _positive("interval", interval, "s")
     if lowest_speed >= start_speed:
         raise ParameterError("lowest_speed", lowest_speed,
                              f"expected < start_speed = {start_speed:g} [m/s]")
@@ -552,6 +554,7 @@ def from_csv(path: str | Path, *, interval: float = _INTERVAL) -> SampledSpeed:
     """
     from ..io.measured import MeasuredDataError, read_csv_table
 
+    _positive("interval", interval, "s")
     table = read_csv_table(path)
     t, _, _ = table.quantity(["time"], "time", unit=None, default_unit="s")
     vt, _, _ = table.quantity(["table_speed"], "speed", unit=None, default_unit="mm/s")

@@ -1,0 +1,120 @@
+"""API arguments an outside check found unchecked (2026-12-07): each is now a ParameterError
+naming the argument, the value and the range, before any work — a tolerance of 0 no longer
+loops for ever, a coarse frequency grid no longer gives margins read between its points."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import feeddrive as fd
+from feeddrive.analysis.linear import MIN_POINTS_PER_DECADE
+from feeddrive.parameters import ParameterError
+
+SYSTEM = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+
+
+@pytest.mark.parametrize("tolerance", [0.0, -1e-6, math.nan, math.inf])
+def test_a_band_edge_tolerance_that_never_stops_or_stops_at_once_is_refused(
+        tolerance: float) -> None:
+    """0 never returned (the bisection's `while b - a > tolerance`); NaN returned the band
+    0.135–3.029 mm/s for the true 0.172–1.399."""
+    for call in (fd.stability_band, fd.linear.upper_band_edge):
+        with pytest.raises(ParameterError, match="expected a finite speed > 0") as err:
+            call(SYSTEM, points=5, tolerance=tolerance)
+        assert err.value.field == "tolerance"
+
+
+@pytest.mark.parametrize("tolerance", [0.0, -0.01, math.nan, 2.0])
+def test_a_calibration_tolerance_that_never_stops_is_refused(tolerance: float) -> None:
+    with pytest.raises(ParameterError) as err:
+        fd.calibrate(fd.preset("wang2021"), fd.Target("cdfs", 1.56e-3),
+                     fd.Unknown("controller.velocity_integral_gain", 1000.0, 5000.0),
+                     relative_tolerance=tolerance)
+    assert err.value.field == "relative_tolerance"
+
+
+@pytest.mark.parametrize(("kwargs", "field"), [
+    ({"points": 0}, "points"), ({"points": 10.5}, "points"), ({"points": 3}, "points"),
+    ({"f_min": 0.0}, "f_min"), ({"f_min": math.nan}, "f_min"), ({"f_max": math.inf}, "f_max"),
+    ({"f_min": 100.0, "f_max": 1.0}, "f_max"),
+])
+def test_a_loop_analysis_grid_that_cannot_give_margins_is_refused(kwargs: dict,
+                                                                  field: str) -> None:
+    """points=0 was numpy's IndexError, 10.5 its TypeError, f_min=0 five RuntimeWarnings and
+    no margins, 3 points a 65.5-dB gain margin for the true 2.59 dB."""
+    with pytest.raises(ParameterError) as err:
+        fd.loop_analysis(SYSTEM, **kwargs)
+    assert err.value.field == field
+
+
+def _control_loop(lin: object, inp: str, out: str) -> tuple[object, object]:
+    """L = 1/S − 1 and T = 1 − S as python-control systems, S the transfer the loop's
+    disturbance input sees (the linear model's matrices; the margins' extraction is what is
+    checked, by python-control's own ``margin`` and ``bandwidth``)."""
+    import control as ct
+    import numpy as np
+
+    i, o = lin.inputs.index(inp), lin.outputs.index(out)  # type: ignore[attr-defined]
+    A, B = lin.A, lin.B[:, [i]]  # type: ignore[attr-defined]
+    C, D = lin.C[[o]], lin.D[[o]][:, [i]]  # type: ignore[attr-defined]
+    d = float(D[0, 0])
+    s_inverse = ct.ss(A - B @ C / d, B / d, -C / d, np.array([[1.0 / d]]))
+    return s_inverse - 1, 1 - ct.ss(A, B, C, D)
+
+
+@pytest.mark.parametrize("points", [None, "fewest"])
+def test_the_margins_are_python_controls_whatever_the_grid(points: str | None) -> None:
+    """The margins and bandwidth are located between the grid's points: at the default 400
+    and at the fewest allowed they equal python-control's ``margin`` and ``bandwidth`` of the
+    same transfers (interpolated on the grid, the position loop's gain margin read 3.02 dB on
+    400 points, 4.32 on 150: python-control's is 2.589)."""
+    import control as ct
+    import numpy as np
+
+    fewest = math.ceil(MIN_POINTS_PER_DECADE * math.log10(500.0 / 0.5))
+    result = fd.loop_analysis(SYSTEM, **({} if points is None else {"points": fewest}))
+    position, velocity = result.loops
+    lin = result.linear
+    L, T = _control_loop(lin, "screw_speed_command_disturbance", "screw_speed_command")
+    gm, pm, wcg, wcp = ct.margin(L)
+    assert position.gain_margin_db == pytest.approx(20 * np.log10(gm), rel=1e-6)
+    assert position.phase_margin_deg == pytest.approx(pm, rel=1e-6)
+    assert position.crossover_hz == pytest.approx(wcp / (2 * np.pi), rel=1e-6)
+    assert position.bandwidth_hz == pytest.approx(ct.bandwidth(T) / (2 * np.pi), rel=1e-6)
+    assert 2.5 < position.gain_margin_db < 2.7  # measured: 2.589 dB at 5.57 Hz
+    # the velocity loop (position loop opened): its phase margin and crossover
+    from dataclasses import replace
+
+    from feeddrive.analysis.linear import linearize
+
+    open_position = replace(SYSTEM, parameters=SYSTEM.parameters.replace_path(
+        "controller.position_gain", 0.0))
+    L, T = _control_loop(linearize(open_position, 1e-3, 0.0, frictionless=True),
+                         "screw_current_command_disturbance", "screw_current_command")
+    gm, pm, wcg, wcp = ct.margin(L)
+    assert velocity.phase_margin_deg == pytest.approx(pm, rel=1e-6)
+    assert velocity.crossover_hz == pytest.approx(wcp / (2 * np.pi), rel=1e-6)
+    # T's DC gain is infinite to python-control (the open position loop leaves the table
+    # free: A is singular), so its bandwidth() is NaN; the −3 dB point of its own response
+    # (|T| → 1 as f → 0; T evaluated by python-control, the root by scipy's brentq) instead
+    from scipy.optimize import brentq
+
+    def below_3_db(f: float) -> float:
+        return 20 * np.log10(abs(complex(T(2j * np.pi * f)))) + 3.0
+
+    assert velocity.bandwidth_hz == pytest.approx(brentq(below_3_db, 1.0, 100.0, xtol=1e-12),
+                                                  rel=1e-6)
+    # (no gain margin: no −180° crossing above the crossover; python-control's margin takes
+    # the crossing near DC, where the free table's integrator turns the phase)
+
+
+@pytest.mark.parametrize("interval", [0.0, -1e-3, math.nan])
+def test_a_built_profiles_interval_is_checked(interval: float) -> None:
+    """interval=0 was a ZeroDivisionError, −1e-3 an empty profile, NaN blamed the duration."""
+    for build in (lambda: fd.trapezoid(1e-3, 2.0, interval=interval),
+                  lambda: fd.stepdown(2e-3, 1e-3, step=5e-4, interval=interval)):
+        with pytest.raises(ParameterError) as err:
+            build()
+        assert err.value.field == "interval"
