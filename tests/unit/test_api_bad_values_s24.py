@@ -118,3 +118,46 @@ def test_a_built_profiles_interval_is_checked(interval: float) -> None:
         with pytest.raises(ParameterError) as err:
             build()
         assert err.value.field == "interval"
+
+
+def test_one_path_given_as_text_is_refused_naming_the_argument() -> None:
+    """fit_drive(free="a.b") said "--free: _ given twice" (its letters read as paths), and
+    sensitivity(patterns="a.b") "--parameters = ['c', 'o', 'n', …]: matches no numeric
+    parameter" (an outside check, 2026-12-07)."""
+    from feeddrive.analysis.fit import FitError, fit_drive
+    from feeddrive.analysis.sensitivity import sensitivity
+
+    with pytest.raises(FitError, match=r"free = 'controller.velocity_gain': expected a list"):
+        fit_drive(fd.preset("wang2021"), [object()], "controller.velocity_gain")  # type: ignore[list-item, arg-type]
+    with pytest.raises(ParameterError, match=r"patterns = 'controller.velocity_gain'"):
+        sensitivity(fd.preset("wang2021"), patterns="controller.velocity_gain", in_process=True)
+
+
+def test_sensitivity_refuses_a_position_in_the_metres_it_was_given() -> None:
+    """0.9 m was reported as "table_position = 900.0 … the configuration's positions are in
+    mm" (the sweep it builds takes mm)."""
+    from feeddrive.analysis.sensitivity import sensitivity
+
+    with pytest.raises(ParameterError, match=r"table_position = 0.9: expected 0 < a < 0.8 \[m\]"):
+        sensitivity(fd.preset("wang2021"), table_position=0.9,
+                    patterns=["controller.velocity_gain"], in_process=True)
+
+
+@pytest.mark.parametrize(("loop", "broken"), [("screw_position_loop", "speed"),
+                                              ("screw_velocity_loop", "current")])
+def test_a_loop_gain_names_the_signals_it_is_broken_at(loop: str, broken: str) -> None:
+    """The loop gain's input and output were "screw_velocity_command_disturbance" /
+    "screw_velocity_command", no signals of the model (an outside check, 2026-12-07): they
+    are where loop_analysis breaks the loop, and taken back as a pair they give the
+    sensitivity S of which the gain is 1/S − 1."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    fr = fd.frequency_response(SYSTEM, loop, frequency_hz=np.array([1.0, 5.0]))
+    assert (fr.input, fr.output) == (f"screw_{broken}_command_disturbance",
+                                     f"screw_{broken}_command")
+    system = SYSTEM if broken == "speed" else replace(
+        SYSTEM, parameters=SYSTEM.parameters.replace_path("controller.position_gain", 0.0))
+    s = fd.frequency_response(system, fr.input, fr.output, frequency_hz=fr.frequency_hz)
+    np.testing.assert_allclose(fr.response, 1.0 / s.response - 1.0, rtol=1e-12)

@@ -1525,6 +1525,9 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     say = progress or (lambda _t: None)
     if not experiments:
         raise FitError("no trace given")
+    if isinstance(free, str):  # one path given as text: its letters were read as paths
+        raise FitError(f"free = {free[:60]!r}: expected a list of parameter paths, e.g. "
+                       f"[{free[:60]!r}] (--free on the command line)")
     if not free:
         raise FitError("--free: give at least one parameter path to fit")
     if len(set(free)) != len(free):

@@ -359,12 +359,21 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if quantity not in ("critical-speed", "linear-band"):
         raise ParameterError("--quantity", quantity, "expected critical-speed or linear-band")
+    if isinstance(patterns, str):  # one pattern as text: its letters were read as patterns
+        raise ParameterError("patterns", patterns, f"expected a list of glob patterns, e.g. "
+                             f"[{patterns[:60]!r}] (--parameters on the command line)")
     if isinstance(params_source, DriveParameters):
         params, source = params_source, params_source.name
     else:
         source = os.fspath(Path(params_source).resolve()) if params_source.endswith(".toml") \
             else params_source
         params = _load_base(source, source)
+    # the position checked in metres, as given (the sweep it builds takes mm, and its message
+    # said "900.0 … the configuration's positions are in mm" of 0.9 m: an outside check,
+    # 2026-12-07)
+    from ..engine.simulate import DriveSystem
+
+    DriveSystem(params, drive=drive, table_position=table_position)
     paths, skipped = parameter_paths(params, drive, patterns)
     if not paths:
         raise ParameterError("--parameters", list(patterns or []), "leaves no parameter to "
