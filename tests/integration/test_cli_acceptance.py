@@ -255,8 +255,13 @@ def test_circular_states_a_given_lead_arc_beside_the_rules() -> None:
     (("--axes", "x"), "--axes = 'x': expected two different axis names"),
     (("--feed", "50000", "--acceleration", "10", "--lead-arc", "90"),
      "--lead-arc = 90.0: the feed ramp"),
-    (("--lead-arc", "-5"), "--lead-arc = -5.0: expected a value > 0 [°]"),
-    (("--radius", "0"), "--radius = 0.0: expected a value > 0 [mm]"),
+    (("--lead-arc", "-5"), "--lead-arc = -5.0: expected a value > 0, ≤ 360 [°]"),
+    (("--radius", "0"), "--radius = 0.0: expected a value > 0, ≤ 10000 [mm]"),
+    # an outside check, 2026-12-07: a "duration", SI under contour.acceleration, taken
+    (("--lead-arc", "1e300"), "--lead-arc = 1e+300: expected a value > 0, ≤ 360 [°]"),
+    (("--acceleration", "1e300"), "--acceleration = 1e+300: expected a value > 0, ≤ 1e+06 "
+     "[mm/s²]"),
+    (("--pitch", "1e300"), "--pitch = 1e+300: expected a value > 0, ≤ 10000 [mm]"),
     (("--nut-speed", "100"), "--nut-speed = 100.0: no axis of the test drives its nut"),
 ])
 def test_circular_refuses_bad_requests_in_one_line(tmp_path: Path, monkeypatch,

@@ -240,3 +240,23 @@ def test_a_store_that_is_no_database_is_named_by_the_option_given(tmp_path: Path
                                             "store"), \
         result.output  # was "--output"
     assert notes.read_text(encoding="utf-8") == "my notes\n"
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["simulate", "--drive", "linear-motor", "--position", "1e300", "--table-speed", "1"],
+     "--position = 1e+300: expected |position| ≤ 100000 [mm]"),
+    (["export", "fmu", "--drive", "linear-motor", "--position", "1e300", "--out", "x.fmu"],
+     "--position = 1e+300: expected |position| ≤ 100000 [mm]"),
+    (["analyze", "--circular", "absent.csv", "--pitch", "1e300"],
+     "--pitch = 1e+300: expected a value > 0, ≤ 10000 [mm]"),
+])
+def test_positions_and_lengths_no_drive_has_are_refused(args: list[str], says: str,
+                                                        tmp_path: Path,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A linear motor's --position 1e300 was simulated and exported, a circular test's
+    --pitch 1e300 taken (an outside check, 2026-12-07)."""
+    monkeypatch.chdir(tmp_path)
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    errors = [s for s in result.output.splitlines() if s.startswith("error: ")]
+    assert errors == [f"error: {says}"], result.output

@@ -25,6 +25,9 @@ if TYPE_CHECKING:
 # option looks like: 0.0005 meant 0.5 mm/s, 0.4 meant 400 mm.
 SMALLEST_PLAUSIBLE_SPEED_MM_S = 0.01
 SMALLEST_PLAUSIBLE_POSITION_MM = 1.0
+# No table travels 100 m: the bound of a position no screw bounds (a linear motor's start;
+# `--position 1e300` was simulated and exported: an outside check, 2026-12-07)
+LARGEST_POSITION_MM = 1e5
 # A speed above 100 m/s is no feed drive's (the measured-data limit, io.measured): refused,
 # not exported or simulated (`export fmu --table-speed 1e300` was exported; issue 39 item 4)
 LARGEST_SPEED_MM_S = units.LARGEST_SPEED / MM_PER_S
@@ -116,6 +119,9 @@ def position(option: str, value: float, params: DriveParameters,
         if not 0.0 < value < length_mm:
             raise ParameterError(option, value, f"expected 0 < position < {length_mm:g} [mm] "
                                                 f"(strictly between {topology.travel_ends})")
+    elif abs(value) > LARGEST_POSITION_MM:  # no screw bounds it: no table travels further
+        raise ParameterError(option, value, f"expected |position| ≤ {LARGEST_POSITION_MM:g} "
+                                            "[mm]")
     if 0.0 < value < SMALLEST_PLAUSIBLE_POSITION_MM:
         warn(f"{option} = {value:g} mm looks like a value in metres "
              f"({value * 1e3:g} mm?); the CLI takes mm")

@@ -99,15 +99,23 @@ def circular_command(
     from ..engine.simulate import SimulationError, SimulationInterrupted
     from ..io.acceptance import write_xy_trace
     from ..machine import load_machine
+    from ..machine.contour import LIMITS
 
-    for option, value, unit in (("--radius", radius, "mm"), ("--feed", feed, "mm/min"),
-                                ("--acceleration", acceleration, "mm/s²"),
-                                ("--lead-arc", 1.0 if lead_arc is None else lead_arc, "°")):
-        if not (math.isfinite(value) and value > 0):
-            raise ParameterError(option, value, f"expected a value > 0 [{unit}]")
-    for option, given in (("--pitch", pitch), ("--magnification", magnification)):
-        if given is not None and not (math.isfinite(given) and given > 0):
-            raise ParameterError(option, given, "expected a value > 0 ["
+    # the contour's limits (feeddrive.machine.contour.LIMITS) in the options' units, a lead-in
+    # arc of at most a turn, a pitch within the contour's radius range (an outside check,
+    # 2026-12-07: a lead arc of 1e300° was refused as a "duration", an acceleration of 1e300
+    # in m/s² under contour.acceleration, a pitch of 1e300 mm taken)
+    for option, value, unit, high in (
+            ("--radius", radius, "mm", 1e3 * LIMITS["radius"]),
+            ("--feed", feed, "mm/min", 6e4 * LIMITS["feed"]),
+            ("--acceleration", acceleration, "mm/s²", 1e3 * LIMITS["acceleration"]),
+            ("--lead-arc", 1.0 if lead_arc is None else lead_arc, "°", 360.0)):
+        if not (math.isfinite(value) and 0 < value <= high):
+            raise ParameterError(option, value, f"expected a value > 0, ≤ {high:g} [{unit}]")
+    for option, given, high in (("--pitch", pitch, 1e3 * LIMITS["radius"]),
+                                ("--magnification", magnification, 1e9)):
+        if given is not None and not (math.isfinite(given) and 0 < given <= high):
+            raise ParameterError(option, given, f"expected a value > 0, ≤ {high:g} ["
                                  + ("mm" if option == "--pitch" else "-") + "]")
     if not (math.isfinite(nut_speed) and nut_speed >= 0):
         raise ParameterError("--nut-speed", nut_speed, "expected a speed ≥ 0 [mm/s]")
