@@ -509,7 +509,6 @@ def from_csv(path: str | Path, *, feed: float, acceleration: float,
         is not two finite numbers (its line named).
     """
     pts = _csv_points(Path(path), axes)
-    pts = pts - pts[0]
     return Polyline(feed=feed, acceleration=acceleration, axes=axes, dwell=dwell,
                     points=tuple(map(tuple, pts)))
 
@@ -528,7 +527,8 @@ def _numbers(cells: list[str]) -> bool:
 
 
 def _csv_points(path: Path, axes: tuple[str, str]) -> np.ndarray:
-    """The (x, y) points of a path file [m] (:func:`from_csv`); reading it said nothing of a
+    """The (x, y) points of a path file relative to its first [m] (:func:`from_csv`); reading
+    it said nothing of a
     header's names, and skipped rows with bad cells (an outside check, 2026-12-07)."""
     import re
 
@@ -576,7 +576,7 @@ def _csv_points(path: Path, axes: tuple[str, str]) -> np.ndarray:
                 raise refuse(f"line {k}: {cells[columns[i]][:20]!r} is not a number") from None
             if not math.isfinite(value):
                 raise refuse(f"line {k}: {cells[columns[i]]!r}; expected a finite number")
-            points[r, i] = value * scale[i]
+            points[r, i] = value
     if len(points) < 2:
         raise refuse("has fewer than two points; expected a path of two or more")
-    return points
+    return (points - points[0]) * np.array(scale)  # relative to the first point, as before
