@@ -527,9 +527,9 @@ def _numbers(cells: list[str]) -> bool:
 
 
 def _csv_points(path: Path, axes: tuple[str, str]) -> np.ndarray:
-    """The (x, y) points of a path file relative to its first [m] (:func:`from_csv`); reading
-    it said nothing of a
-    header's names, and skipped rows with bad cells (an outside check, 2026-12-07)."""
+    """The (x, y) points of a path file relative to its first [m] (:func:`from_csv`); it was
+    read without a word of a header's names, and rows with bad cells were skipped (an outside
+    check, 2026-12-07)."""
     import re
 
     def refuse(what: str) -> ParameterError:
