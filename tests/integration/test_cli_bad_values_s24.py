@@ -182,6 +182,8 @@ def test_a_path_files_columns_are_taken_by_name_and_unit(tmp_path: Path) -> None
     (["compensate", "--compare", "--metrics", ""], "--metrics = '': expected one name or more"),
     (["compensate", "--metrics", "bogus"], "--metrics = 'given': an option of --compare"),
     (["compensate", "--band", "5"], "--band = 'given': an option of --compare"),
+    (["loops", "--with-friction", "--table-speed", "0"],
+     "--table-speed = 0.0: expected a non-zero speed [mm/s]"),
 ])
 def test_more_bad_values_are_one_line_naming_the_option(args: list[str], says: str) -> None:
     """An outside check, 2026-12-07: 10^8 scan points ran for hours, 1e-300 mm printed k_sa =

@@ -64,7 +64,10 @@ def loops_command(
         raise ParameterError("--plot-kind", plot_kind, f"expected {', '.join(PLOT_KINDS)}")
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, _units.position("--position", position, params, drive))
-    result = loop_analysis(system, _units.speed("--table-speed", table_speed),
+    # with friction steady sliding needs a speed: refused here in mm/s (the API said
+    # "table_speed = 0.0 … [m/s]": an outside check, 2026-12-07)
+    result = loop_analysis(system, _units.speed("--table-speed", table_speed,
+                                                nonzero=with_friction),
                            _units.speed("--nut-speed", nut_speed),
                            frictionless=not with_friction)
     data = result.as_dict()
