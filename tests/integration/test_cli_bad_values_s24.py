@@ -184,6 +184,10 @@ def test_a_path_files_columns_are_taken_by_name_and_unit(tmp_path: Path) -> None
     (["compensate", "--band", "5"], "--band = 'given': an option of --compare"),
     (["loops", "--with-friction", "--table-speed", "0"],
      "--table-speed = 0.0: expected a non-zero speed [mm/s]"),
+    # "name = 500.0: expected text", "table = 'float': expected Table"
+    (["calibrate", "--unknown", "name"], "--unknown = 'name': not a numeric parameter"),
+    (["calibrate", "--unknown", "table"], "--unknown = 'table': a section of the parameter set, "
+                                          "not a numeric parameter"),
 ])
 def test_more_bad_values_are_one_line_naming_the_option(args: list[str], says: str) -> None:
     """An outside check, 2026-12-07: 10^8 scan points ran for hours, 1e-300 mm printed k_sa =
@@ -262,3 +266,13 @@ def test_positions_and_lengths_no_drive_has_are_refused(args: list[str], says: s
     assert result.exit_code == 2, result.output
     errors = [s for s in result.output.splitlines() if s.startswith("error: ")]
     assert errors == [f"error: {says}"], result.output
+
+
+def test_a_section_given_as_a_free_parameter_is_named_a_section() -> None:
+    """`fit --free screw` said "'screw' is not a field … (did you mean 'screw'?)"."""
+    from feeddrive.analysis.fit import FitError, _field_meta
+    from feeddrive.parameters import preset
+
+    for path in ("screw", "friction.guide"):
+        with pytest.raises(FitError, match=f"--free {path}: a section of the parameter set"):
+            _field_meta(preset("wang2021"), path)

@@ -517,8 +517,10 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
 # ------------------------------------------------------------------ parameters
 
 
-def _field_meta(params: DriveParameters, path: str) -> tuple[float, dict[str, Any]]:
-    """(current value, metadata) of a numeric parameter ``path``; one-line refusals."""
+def _field_meta(params: DriveParameters, path: str,
+                option: str = "--free") -> tuple[float, dict[str, Any]]:
+    """(current value, metadata) of a numeric parameter ``path``; one-line refusals naming
+    ``option``."""
     obj: Any = params
     parts = path.split(".")
     for k, part in enumerate(parts):
@@ -528,23 +530,30 @@ def _field_meta(params: DriveParameters, path: str) -> tuple[float, dict[str, An
         if part in sections and k < len(parts) - 1:  # a part's section of the composition
             obj = sections[part]
             continue
+        if part in sections or (part in names and dataclasses.is_dataclass(
+                getattr(obj, part)) and k == len(parts) - 1):
+            # a section named alone ("screw": it said "'screw' is not a field … (did you
+            # mean 'screw'?)": an outside check, 2026-12-07)
+            raise FitError(f"{option} {path}: a section of the parameter set, not a numeric "
+                           f"parameter; expected a path into it ({path}.<field>; `feeddrive "
+                           "params show` prints them)")
         if part not in names:
             from ..parameters.validation import did_you_mean
 
             where = ".".join(parts[:k]) or "the parameter set"
-            raise FitError(f"--free {path}: unknown parameter ({part!r} is not a field of "
+            raise FitError(f"{option} {path}: unknown parameter ({part!r} is not a field of "
                            f"{where}){did_you_mean(part, [*names, *sections])}")
         f = names[part]
         obj = getattr(obj, part)
         if k == len(parts) - 1:
             if obj is None or dataclasses.is_dataclass(obj) or isinstance(obj, bool) or \
                     not isinstance(obj, int | float) or "unit" not in f.metadata:
-                raise FitError(f"--free {path}: not a numeric parameter")
+                raise FitError(f"{option} {path}: not a numeric parameter")
             return float(obj), dict(f.metadata)
         if obj is None:
-            raise FitError(f"--free {path}: {'.'.join(parts[:k + 1])} is not set in this "
+            raise FitError(f"{option} {path}: {'.'.join(parts[:k + 1])} is not set in this "
                            "parameter set")
-    raise FitError(f"--free {path}: not a numeric parameter")
+    raise FitError(f"{option} {path}: not a numeric parameter")
 
 
 def free_parameter_bounds(params: DriveParameters, path: str) -> tuple[float, float]:

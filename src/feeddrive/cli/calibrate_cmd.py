@@ -73,6 +73,13 @@ def calibrate_command(
         raise ParameterError("--high", high, f"expected > --low = {low:g} [SI unit of "
                                              f"{unknown}]")
     params = resolve_parameters(preset_name, params_file, drive)
+    from ..analysis.fit import FitError, _field_meta
+
+    try:  # a number (`--unknown name` said "name = 500.0: expected text", `table` "expected
+        # Table": an outside check, 2026-12-07)
+        _field_meta(params, unknown, "--unknown")
+    except FitError as err:
+        raise ParameterError("--unknown", unknown, str(err).split(": ", 1)[1]) from None
     for value in (low, high):  # the bracket's ends, checked as fields before any trial
         try:
             params.replace_path(unknown, value)
