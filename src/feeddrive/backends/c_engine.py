@@ -716,15 +716,39 @@ STACK_OWN_THREAD = 512 * 1024
 
 
 def stack_need(n_state: int, n_aux: int) -> int:
-    """Bytes of stack the work arrays of a call of a model of ``n_state`` states and
-    ``n_aux`` auxiliary signals may take: 16 matrices of (n + 2)² doubles and 64 vectors,
-    twice what the drivers declare.  Above :data:`STACK_OWN_THREAD` the call gets a thread of
-    its own, with this much and 1 MiB more (:func:`thread_stack`)."""
+    """Bytes of stack the work arrays of a call of a model may take: 16 matrices of
+    (n + 2)² doubles and 64 vectors, twice what the drivers declare.  Above
+    :data:`STACK_OWN_THREAD` the call gets a thread of its own, with this much and 1 MiB more
+    (:func:`thread_stack`).
+
+    Parameters
+    ----------
+    n_state : int
+        The model's states n.
+    n_aux : int
+        Its auxiliary signals.
+
+    Returns
+    -------
+    int
+        Bytes.
+    """
     return 8 * (16 * (n_state + 2) ** 2 + 64 * (n_state + n_aux + 2))
 
 
 def thread_stack(need: int) -> int:
-    """The stack of the thread of a call needing ``need`` bytes: 1 MiB more, in whole MiB."""
+    """The stack of the thread of a call: 1 MiB more than it needs, in whole MiB.
+
+    Parameters
+    ----------
+    need : int
+        Bytes the call's arrays may take (:func:`stack_need`).
+
+    Returns
+    -------
+    int
+        Bytes of stack, a multiple of 1 MiB.
+    """
     return -(-(need + (1 << 20)) // (1 << 20)) * (1 << 20)
 
 
@@ -739,7 +763,24 @@ def on_own_stack(fn: Callable[..., Any], args: Sequence[Any], size: int,
     caller) asks a driver to stop after its step (``memory[-2]``, as
     :meth:`feeddrive.engine.simulate.Simulation.request_stop` does), waits for it to return
     and raises on.  Waiting is on an event, not ``Thread.join``, which an interrupt can leave
-    claiming the thread ended (CPython 3.11)."""
+    claiming the thread ended (CPython 3.11).
+
+    Parameters
+    ----------
+    fn : callable
+        The call (a ctypes function).
+    args : sequence
+        Its arguments.
+    size : int
+        Bytes of stack of the thread (:func:`thread_stack`).
+    memory : numpy.ndarray, optional
+        A driver's memory, whose ``[-2]`` asks it to stop.
+
+    Returns
+    -------
+    object
+        What ``fn`` returned; what it raised is raised here.
+    """
     box: dict[str, Any] = {}
     done = threading.Event()
 

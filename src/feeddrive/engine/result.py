@@ -462,8 +462,6 @@ class Result:
         measured force, current, torque or motor speed drives the table open-loop; a zero
         command): the verdict is judged against the command, and there is none."""
         from ..parameters import ParameterError
-        from ..plots.result import machine_axes
-
         if "table_speed_reference" in self and np.any(self["table_speed_reference"] != 0.0):
             return
         axes = machine_axes(self)
@@ -854,3 +852,26 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+def machine_axes(result: Result) -> list[str]:
+    """The axes of a machine's run (``feeddrive.machine.simulate_machine``), in order; [] for
+    one drive's.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+
+    Returns
+    -------
+    list of str
+        The axis names its signals are prefixed with.
+    """
+    import json
+
+    text = result.dataset.attrs.get("axes")
+    if not text:
+        return []
+    try:
+        return list(json.loads(str(text)))
+    except ValueError:
+        return []

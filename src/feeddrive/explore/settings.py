@@ -511,8 +511,8 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
     position = run_field("position", lambda o, v: _units.position(o, v, base, drive))
     try:
         duration = _cli_number("--duration", s["duration"])
-        if not duration > 0:  # as `feeddrive simulate`
-            raise ParameterError("--duration", duration, "expected a time > 0 [s]")
+        if not (math.isfinite(duration) and duration > 0):  # as `feeddrive simulate`
+            raise ParameterError("--duration", duration, "expected a finite time > 0 [s]")
         if duration > MAX_DURATION:
             raise ParameterError("--duration", duration, f"expected ≤ {MAX_DURATION:g} [s] in "
                                  "the explorer (feeddrive simulate runs longer ones)")

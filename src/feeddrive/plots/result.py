@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..engine.result import machine_axes
+
 if TYPE_CHECKING:
     from ..engine.result import Result
 
@@ -47,31 +49,6 @@ def run_title(result: Result) -> str:
     speed = result.command_speed if amplitude is None else abs(amplitude)
     return (f"{drive.upper()}, {what} {1e3 * speed:.4g} mm/s{where}, "
             f"{float(result.time[-1]):.4g} s — {attrs['parameter_set']}")
-
-
-def machine_axes(result: Result) -> list[str]:
-    """The axes of a machine's run (``feeddrive.machine.simulate_machine``), in order; [] for
-    one drive's.
-
-    Parameters
-    ----------
-    result : Result
-        The run.
-
-    Returns
-    -------
-    list of str
-        The axis names its signals are prefixed with.
-    """
-    import json
-
-    text = result.dataset.attrs.get("axes")
-    if not text:
-        return []
-    try:
-        return list(json.loads(str(text)))
-    except ValueError:
-        return []
 
 
 def machine_figure(result: Result, title: str | None = None) -> Any:
