@@ -12,9 +12,12 @@ line and the problem, e.g. ``static.csv, line 7: column 'force': 'abc' is not a 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
-from collections.abc import Sequence
+import signal
+import threading
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -232,7 +235,17 @@ class CsvTable:
         import pandas as pd
 
         _pandas_precision()
-        frame = pd.read_csv(
+        with _interrupt_kept() as hit:
+            try:
+                frame = self._read_csv(pd, i, dtype)
+            except Exception:
+                if hit:  # pandas' C reader made the interrupt a ParserError
+                    raise KeyboardInterrupt from None
+                raise
+        return frame[i].to_numpy()
+
+    def _read_csv(self, pd: Any, i: int, dtype: Any) -> Any:
+        return pd.read_csv(
             self.path, sep=r"\s+" if self.sep is None else self.sep, header=None,
             names=list(range(len(self.names))), usecols=[i], index_col=False,
             skiprows=self.skip.tolist(), skip_blank_lines=False, dtype={i: dtype},
@@ -240,7 +253,6 @@ class CsvTable:
             na_filter=dtype is not str,
             skipinitialspace=True, encoding="utf-8-sig", encoding_errors="replace",
             engine="c", quoting=3, **_PRECISION)
-        return frame[i].to_numpy()
 
     def cell(self, i: int, k: int) -> str:
         """The text of one cell, for messages.
@@ -492,6 +504,33 @@ def _scan_lines(data: np.ndarray, first_line: int, sep: str | None
     if sep is not None:
         counts = counts + 1
     return numbers, is_data, counts
+
+
+@contextlib.contextmanager
+def _interrupt_kept() -> Iterator[list[bool]]:
+    """Ctrl-C while pandas reads a file, kept: pandas' C reader turns the KeyboardInterrupt
+    raised inside its read into a ``ParserError`` ("Calling read(nbytes) on source failed"),
+    which the column reader took for a bad cell and read on — `fit` ran on, `validate` ended
+    with exit status 0 (an outside check, 2026-12-07).  On the main thread with Python's
+    handler in place, SIGINT is noted (the list becomes true) and raised as before; the caller
+    raises KeyboardInterrupt once pandas returns."""
+    hit: list[bool] = []
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+        yield hit
+        return
+
+    def noted(signum: int, frame: Any) -> None:
+        hit.append(True)
+        previous(signum, frame)
+
+    signal.signal(signal.SIGINT, noted)
+    try:
+        yield hit
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if hit:
+        raise KeyboardInterrupt
 
 
 def read_csv_table(path: str | Path, *, sep: str | None = None,
