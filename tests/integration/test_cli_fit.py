@@ -248,3 +248,36 @@ def test_fit_a_mat_record_with_map_and_refuse_a_bad_map(tmp_path: Path) -> None:
     bad = _run(*args[:-1], "time=t position=qm reference=qg force=vire", cwd=tmp_path)
     assert bad.returncode == 2
     assert bad.stderr.strip().count("\n") == 0 and "vire" in bad.stderr
+
+
+def test_an_interrupted_fit_keeps_its_best_point_and_draws_no_plot(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C (here raised by the third residual evaluation) ends the fit with its best point
+    written to --out and exit status 130 — without simulating its residuals again for
+    --plot, which took 2.4–3.8 s after the Ctrl-C (an outside check, 2026-12-07)."""
+    from typer.testing import CliRunner
+
+    from feeddrive.analysis import fit as fit_module
+    from feeddrive.cli import app
+
+    names = _write_records(tmp_path, 1.0)
+    calls = {"n": 0}
+    residual = fit_module._Evaluator.residual
+
+    def interrupted(self: object, theta: np.ndarray) -> np.ndarray:
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        return residual(self, theta)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(fit_module._Evaluator, "residual", interrupted)
+    plotted: list[object] = []
+    monkeypatch.setattr(fit_module, "plot_residuals", lambda r, p: plotted.append(p))
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, ["fit", *names, "--drive", "cdfs", "--free",
+                                      "controller.velocity_integral_gain", "--out", "f.toml",
+                                      "--plot", "res.png"])
+    assert result.exit_code == 130, result.output
+    assert plotted == [] and not (tmp_path / "res.png").exists()
+    assert "res.png not written: the fit was interrupted" in result.output
+    assert "interrupted = true" in (tmp_path / "f.toml").read_text(encoding="utf-8")
