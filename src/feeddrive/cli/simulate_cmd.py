@@ -17,6 +17,7 @@ from ._common import (
     PRESET_HELP,
     app,
     console,
+    err_console,
     outputs,
     print_json,
     progress_bar,
@@ -157,6 +158,7 @@ def simulate_command(
     from ..engine.error_estimate import SHADOW_FACTOR
     from ..engine.simulate import (
         DriveSystem,
+        SimulationInterrupted,
         run_options,
         simulate,
     )
@@ -262,9 +264,12 @@ def simulate_command(
             duration, again=f"error estimate: the run {SHADOW_FACTOR:g}× tighter"
             if error_estimate else None)
         with run_outcome(bar):
-            result = simulate(system, prof, duration, options=options,
-                              output=output if streamed else None, progress=advance,
-                              error_estimate=error_estimate)
+            try:
+                result = simulate(system, prof, duration, options=options,
+                                  output=output if streamed else None, progress=advance,
+                                  error_estimate=error_estimate)
+            except SimulationInterrupted as stop:
+                raise _kept(stop, output, streamed, bar) from None
         summary = result.summary()
         summary["profile"] = profile
         if output and streamed:
@@ -292,6 +297,27 @@ def simulate_command(
                            position, duration, params.name, output, options)
         if summary.get("verdict") == "unstable":
             raise typer.Exit(code=EXIT_UNSTABLE)
+
+
+def _kept(stop: Any, output: str | None, streamed: bool, bar: Any) -> Any:
+    """An interrupted run's samples so far written to an ``--output`` that is not written as
+    the run goes (``.mat``, ``.nc``), as ``.csv`` and ``.parquet`` keep theirs: it was lost
+    (an outside check, 2026-12-07).  Ctrl-C again while it is written drops it (the file is
+    written to a temporary name first).  The interruption to raise, naming the file."""
+    from ..engine.simulate import SimulationInterrupted
+
+    if not output or streamed or stop.result is None:
+        return stop
+    if bar is not None and bar.live.is_started:
+        bar.stop()
+    err_console.print(f"interrupted at t = {stop.t_reached:g} s: writing the run so far to "
+                      f"{output} (Ctrl-C again drops it)", markup=False, highlight=False,
+                      soft_wrap=True)
+    try:
+        written = str(stop.result.save(output))
+    except KeyboardInterrupt:
+        return stop
+    return SimulationInterrupted(stop.t_reached, stop.result, written)
 
 
 def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,
