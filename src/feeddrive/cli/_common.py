@@ -139,6 +139,9 @@ def _check_outputs(fn: Callable[..., Any], kwargs: dict[str, Any]) -> None:
             check_output_dir(value, option=option)
         elif kind == STORE:
             check_output_file(value, option=option, inputs=inputs, force=True, formats=None)
+            from ..sweep.store import check_existing_store
+
+            check_existing_store(value, option)  # before the work that would fill it
         else:
             check_output_file(value, option=option, inputs=inputs,
                               force=bool(kwargs.get("force", False)), formats=kind)

@@ -97,6 +97,9 @@ def sweep_command(
         cfg.store if cfg.store is not None else Path(f"{cfg.name}.sqlite"))
     option = "--store" if store is not None else (
         f"{config}: store" if cfg.store is not None else "store")
+    from ..sweep.store import check_existing_store
+
+    check_existing_store(store_path, option)  # before the design is built
     # the loop's own name: `option` names the store in the messages below (it was
     # overwritten here, and a store that is no database was called "--output": an outside
     # check, 2026-12-07)

@@ -167,6 +167,57 @@ def _json(value: Any) -> str:
     return json.dumps(clean(value), sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
+def _foreign_tables(db: sqlite3.Connection) -> str | None:
+    """Why the SQLite file open in ``db`` is no feeddrive store (a table that is not the
+    store's, or one of its names with other columns), or None."""
+    ours = _schema_columns()
+    tables = [r[0] for r in db.execute(
+        "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'")]
+    for name in tables:
+        quoted = name.replace('"', '""')
+        columns = tuple(r[1] for r in db.execute(f'PRAGMA table_info("{quoted}")'))
+        if ours.get(name) != columns:
+            listed = ", ".join(sorted(tables)[:5])
+            return (f"not a feeddrive sweep store (an SQLite file with the tables "
+                    f"{shown(listed, 100)})")
+    return None
+
+
+def check_existing_store(path: str | os.PathLike[str], option: str) -> None:
+    """Refuse at once an existing file that is not a feeddrive store, read-only, before the
+    work that would fill it (a text file given as ``--store`` was refused only when the
+    store was opened, after a 10 000-point sweep had been built: 7 s; an outside check,
+    2026-12-07).  A missing file passes (it is created later).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store's file.
+    option : str
+        The option or key that named it, for the message.
+
+    Raises
+    ------
+    StoreError
+        For a file that is not an SQLite database, or one of other tables.
+    """
+    p = Path(path)
+    if not p.is_file():
+        return
+    try:
+        db = sqlite3.connect(f"{p.resolve().as_uri()}?mode=ro", uri=True, timeout=5.0)
+    except sqlite3.Error:
+        return  # unreadable here: opening the store says why
+    try:
+        foreign = _foreign_tables(db)
+    except sqlite3.DatabaseError as err:
+        foreign = f"not a feeddrive sweep store ({err})"
+    finally:
+        db.close()
+    if foreign is not None:
+        raise StoreError(f"{option} {shown(p)}: {foreign}")
+
+
 class SweepStore:
     """Results by key and the sweeps that refer to them, in one SQLite file ``path``.
 
@@ -231,17 +282,10 @@ class SweepStore:
         """Refuse an SQLite file of something else: a table that is not the store's, or one
         of its names with other columns (``no such column: key`` was exit status 1, after
         the file had been switched to WAL; issue 39 item 7)."""
-        ours = _schema_columns()
-        tables = [r[0] for r in self._db.execute(
-            "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%'")]
-        for name in tables:
-            quoted = name.replace('"', '""')
-            columns = tuple(r[1] for r in self._db.execute(f'PRAGMA table_info("{quoted}")'))
-            if ours.get(name) != columns:
-                self._db.close()
-                listed = ", ".join(sorted(tables)[:5])
-                raise self._error(f"not a feeddrive sweep store (an SQLite file with the "
-                                  f"tables {shown(listed, 100)})")
+        foreign = _foreign_tables(self._db)
+        if foreign is not None:
+            self._db.close()
+            raise self._error(foreign)
 
     def _check_writable(self, create: bool) -> None:
         p = self.path
