@@ -316,3 +316,55 @@ def test_a_store_of_other_tables_is_refused_before_any_work(tmp_path: Path) -> N
                        r"store \(an SQLite file with the tables accounts\)"):
         check_existing_store(other, "--store")
     check_existing_store(tmp_path / "absent.sqlite", "--store")  # created later: passes
+
+
+def test_sensitivitys_ctrl_c_names_its_store(monkeypatch: pytest.MonkeyPatch,
+                                             tmp_path: Path) -> None:
+    """"every finished point is in the store" named no file, and --help no default (an
+    outside check, 2026-12-07: it was sensitivity-wang2021-cdfs-critical-speed.sqlite)."""
+    from feeddrive.analysis import sensitivity as module
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(module, "sensitivity", interrupted)
+    monkeypatch.chdir(tmp_path)
+    result = runner.invoke(app, ["sensitivity", "--quantity", "critical-speed"])
+    assert result.exit_code == 130, result.output
+    assert ("every finished point is in sensitivity-wang2021-cdfs-critical-speed.sqlite"
+            in result.output)
+    assert module.default_store("wang2021", "cdfs", "critical-speed").name == \
+        "sensitivity-wang2021-cdfs-critical-speed.sqlite"
+    shown = " ".join(runner.invoke(app, ["sensitivity", "--help"], terminal_width=300)
+                     .output.replace("│", " ").split())
+    assert "default: sensitivity-SET-DRIVE-QUANTITY.sqlite in the working folder" in shown
+
+
+def test_creep_both_says_the_finished_search_when_the_step_down_is_interrupted(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C in the step-down dropped the search from rest that had finished (an outside
+    check, 2026-12-07); its answer is said before the exit."""
+    from feeddrive.analysis import critical
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(critical, "critical_speed_stepdown", interrupted)
+    result = runner.invoke(app, ["creep", "--drive", "cdfs", "--low", "1.5", "--high", "1.7"])
+    assert result.exit_code == 130, result.output
+    assert ("interrupted in the step-down; the search from rest had finished: critical "
+            "creeping speed 1.56 mm/s") in result.output, result.output
+
+
+def test_a_circular_tests_runs_report_progress() -> None:
+    """run_circular_test took `progress` and never passed it on: `feeddrive circular` sat
+    silent for 5 s (an outside check, 2026-12-07)."""
+    from feeddrive.analysis.circular_run import run_circular_test
+    from feeddrive.machine import load_machine
+
+    seen: list[tuple[float, float]] = []
+    run_circular_test(load_machine("xy-table"), radius=0.01, feed=2000 / 6e4,
+                      progress=lambda t, end: seen.append((t, end)))
+    assert seen and all(0 < t <= end for t, end in seen)
+    ends = sorted({end for _, end in seen})
+    assert len(ends) == 1 and seen[-1][0] == pytest.approx(ends[0])  # each run to its end

@@ -161,3 +161,27 @@ def test_a_loop_gain_names_the_signals_it_is_broken_at(loop: str, broken: str) -
         SYSTEM, parameters=SYSTEM.parameters.replace_path("controller.position_gain", 0.0))
     s = fd.frequency_response(system, fr.input, fr.output, frequency_hz=fr.frequency_hz)
     np.testing.assert_allclose(fr.response, 1.0 / s.response - 1.0, rtol=1e-12)
+
+
+def test_a_dask_cluster_serves_its_http_on_a_free_loopback_port(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """With ``dashboard_address=None`` the scheduler's HTTP server (health, metrics) took
+    0.0.0.0:8787, and a second cluster at once printed distributed's "Port 8787 is already in
+    use" beside a command's one line (a Ctrl-C test beside another Dask run, 2026-12-07)."""
+    import distributed
+
+    from feeddrive.sweep.executors import executor
+
+    seen: dict[str, object] = {}
+
+    class Stop(Exception):
+        pass
+
+    def cluster(**kwargs: object) -> None:
+        seen.update(kwargs)
+        raise Stop
+
+    monkeypatch.setattr(distributed, "LocalCluster", cluster)
+    with pytest.raises(Stop), executor(dask_workers=1):
+        pass
+    assert seen["dashboard_address"] == "127.0.0.1:0"

@@ -496,8 +496,10 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
             if ax.name in axes else ax for ax in machine.axes))
         contour = Circle(feed=feed, acceleration=acceleration, axes=axes, radius=radius,
                          clockwise=direction == "CW", start_angle=start, turns=turns)
+        # (progress was taken and never passed on: an outside check, 2026-12-07)
         result = simulate_machine(placed, _profile(placed, contour, nut_driven, nut_speed,
-                                                   acceleration, start_time), options=options)
+                                                   acceleration, start_time), options=options,
+                                  progress=progress)
         results[direction] = result
         offsets[direction] = offset
         t = np.asarray(result.time, dtype=float)

@@ -303,6 +303,27 @@ def _points_for(config: Any, params: DriveParameters, path: str, value: float, h
     return out
 
 
+def default_store(source: str, drive: str, quantity: str) -> Path:
+    """The store :func:`sensitivity` keeps its points in when given none: in the working
+    folder, named after the set, the drive and the quantity.
+
+    Parameters
+    ----------
+    source : str
+        The parameter set's file or preset name.
+    drive : str
+        The drive.
+    quantity : str
+        ``"critical-speed"`` or ``"linear-band"``.
+
+    Returns
+    -------
+    Path
+        ``sensitivity-<set>-<drive>-<quantity>.sqlite``.
+    """
+    return Path(f"sensitivity-{Path(source).stem}-{drive}-{quantity}.sqlite")
+
+
 def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
                 table_position: float = 0.4,
                 quantity: str = "linear-band", patterns: Sequence[str] | None = None,
@@ -387,7 +408,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     settings = QuantitySettings.parse(spec)
     resolution = settings.resolution if quantity == "critical-speed" else LINEAR_RESOLUTION
     key_name = "critical_speed" if quantity == "critical-speed" else "linear_upper"
-    config = SweepConfig(name=f"sensitivity-{Path(source).stem}-{drive}-{quantity}",
+    config = SweepConfig(name=default_store(source, drive, quantity).stem,
                          source=source if source.endswith(".toml") else "sensitivity.toml",
                          base=source, drive=drive, table_position=table_position * 1e3,
                          nut_speed=0.0, design="grid", samples=None, seed=0, axes=(),
@@ -401,7 +422,8 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     if base_point is not None:  # the base set's refusals before the store is made
         check_task(base_point.task)
     db = None if in_process else SweepStore(
-        Path(store) if store is not None else Path(f"{config.name}.sqlite"), option="--store")
+        Path(store) if store is not None else default_store(source, drive, quantity),
+        option="--store")
 
     def run(points: list[Any]) -> None:
         nonlocal count, where

@@ -483,6 +483,6 @@ def progress_bar(duration: float, again: str | None = None,
         if again is not None and t < last[0]:  # the second pass
             bar.reset(task, total=duration, description=again)
         last[0] = t
-        bar.update(task, completed=t, t=f"{t:.4g} / {t_end:.4g} s")
+        bar.update(task, completed=t, total=t_end, t=f"{t:.4g} / {t_end:.4g} s")
 
     return bar, advance

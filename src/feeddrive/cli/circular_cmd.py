@@ -15,12 +15,14 @@ from ..io.outputs import PLOT_FORMATS
 from ..parameters import ParameterError
 from ._common import (
     MM,
+    _stop_bar,
     app,
     console,
     err_console,
     interrupted,
     outputs,
     print_json,
+    progress_bar,
     user_errors,
 )
 from ._solver import accuracy_options, max_steps_help
@@ -125,12 +127,15 @@ def circular_command(
     options = layered([("command line", {"max_steps": (max_steps, "--max-steps")})],
                       base=solver)
     built = load_machine(machine)
+    # progress of the runs (they sat silent for 5–8 s: an outside check, 2026-12-07)
+    bar, advance = (None, None) if as_json else progress_bar(1.0)
     try:
         run = run_circular_test(built, radius=radius * MM, feed=feed * MM_PER_MIN, axes=pair,
                                 acceleration=acceleration * MM,
                                 lead_arc=None if lead_arc is None else math.radians(lead_arc),
                                 nut_speed=nut_speed * MM,
-                                pitch=None if pitch is None else pitch * MM, options=options)
+                                pitch=None if pitch is None else pitch * MM, options=options,
+                                progress=advance)
     except ParameterError as err:  # the API names its arguments; the user typed options
         raise ParameterError(*_as_option(err.field, err.value), err.message) from None
     except SimulationError as err:
@@ -140,6 +145,8 @@ def circular_command(
         err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
                           soft_wrap=True)
         raise interrupted() from None
+    finally:
+        _stop_bar(bar)
     test = run.test
     lead = run.lead_in
     assert lead is not None

@@ -12,6 +12,7 @@ from ._common import (
     MM_PER_S,
     app,
     console,
+    err_console,
     print_json,
     resolve_parameters,
     user_errors,
@@ -228,9 +229,20 @@ def _searches(system: DriveSystem, v_n: float, method: str,
     if method in ("stepdown", "both"):
         if shown is not None:  # the step-down reports no trials as it goes
             shown.stage("step-down on a running table")
-        results.append(critical_speed_stepdown(
-            system, nut_speed=v_n, start_speed=hi, lowest_speed=lo, step=protocol.RESOLUTION,
-            coarse_step=protocol.STAIRCASE_COARSE_STEP, rule=rule))
+        try:
+            results.append(critical_speed_stepdown(
+                system, nut_speed=v_n, start_speed=hi, lowest_speed=lo,
+                step=protocol.RESOLUTION, coarse_step=protocol.STAIRCASE_COARSE_STEP,
+                rule=rule))
+        except KeyboardInterrupt:
+            if results:  # the search from rest had finished: its answer said, not dropped
+                # (an outside check, 2026-12-07)
+                r = results[0]
+                err_console.print(f"interrupted in the step-down; the search from rest had "
+                                  f"finished: critical creeping speed {r.display()} "
+                                  f"({len(r.trials)} trials)", markup=False, highlight=False,
+                                  soft_wrap=True)
+            raise
     return results
 
 

@@ -421,7 +421,11 @@ def validate_command(
     experiments, notes = _read_traces(traces, record.parameters, record.drive,
                                       record.table_position, signal, command_speed,
                                       profile_file, record_map, as_json, replay)
-    result = validate(fit_file, experiments, drive=drive, level=level)
+    # its steps said as fit says its own (validate sat silent for 4–12 s: an outside check,
+    # 2026-12-07)
+    result = validate(fit_file, experiments, drive=drive, level=level,
+                      progress=None if as_json else (lambda msg: console.print(
+                          f"  {msg}", markup=False, highlight=False)))
     if plot:
         plot_validation(result, plot)
     data = result.to_dict()

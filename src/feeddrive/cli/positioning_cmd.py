@@ -18,12 +18,14 @@ from ._common import (
     MM,
     MM_PER_S,
     PRESET_HELP,
+    _stop_bar,
     app,
     console,
     err_console,
     interrupted,
     outputs,
     print_json,
+    progress_bar,
     resolve_parameters,
     user_errors,
 )
@@ -135,10 +137,13 @@ def positioning_command(
     options = layered([("command line", {"max_steps": (max_steps, "--max-steps")})],
                       base=solver)
     params = resolve_parameters(preset_name, params_file, drive)
+    # progress of the runs (they sat silent for 5–8 s: an outside check, 2026-12-07)
+    bar, advance = (None, None) if as_json else progress_bar(1.0)
     try:
         run = run_positioning_test(params, drive, points, cycles=cycles, kind=cycle,
                                    feed=feed * MM_PER_S, acceleration=acceleration * MM,
-                                   dwell=dwell, overshoot=overshoot * MM, options=options)
+                                   dwell=dwell, overshoot=overshoot * MM, options=options,
+                                   progress=advance)
     except ParameterError as err:  # the API names its arguments; the user typed options
         option = {"feed": "--feed", "targets": "--targets", "kind": "--cycle",
                   "cycles": "--cycles",
@@ -151,6 +156,8 @@ def positioning_command(
         err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
                           soft_wrap=True)
         raise interrupted() from None
+    finally:
+        _stop_bar(bar)
     test = run.test
     if output:
         write_positioning_record(output, test.targets, test.deviation_up, test.deviation_down,

@@ -50,7 +50,9 @@ def sensitivity_command(
     position: float | None = typer.Option(None, "--position", help="Table position [mm] "
                                           "[default: a fitted file's, else 400]."),
     store: str | None = typer.Option(None, "--store", help="Results store (SQLite); a "
-                                     "rerun resumes from it."),
+                                     "rerun resumes from it (default: "
+                                     "sensitivity-SET-DRIVE-QUANTITY.sqlite in the working "
+                                     "folder)."),
     workers: int | None = typer.Option(None, "--workers", help="Local processes "
                                        "(default: every core)."),
     dask_workers: int | None = typer.Option(None, "--dask-workers",
@@ -66,7 +68,7 @@ def sensitivity_command(
     numeric parameter (zero-valued ones with a stated scale: their derivative), by central
     differences through the sweep machinery. Each step is doubled from ±10 % until its
     effect is at least 10× the quantity's resolution, and checked by halving."""
-    from ..analysis.sensitivity import STEPS, plot_tornado, sensitivity
+    from ..analysis.sensitivity import STEPS, default_store, plot_tornado, sensitivity
     from ..parameters import load, preset
 
     if fit_file is not None:
@@ -94,8 +96,10 @@ def sensitivity_command(
     except SweepAborted as err:
         err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
-    except KeyboardInterrupt:
-        err_console.print("interrupted: every finished point is in the store; rerun the "
+    except KeyboardInterrupt:  # the store named (it was "the store": an outside check,
+        # 2026-12-07)
+        where = store or default_store(source, drive, quantity)
+        err_console.print(f"interrupted: every finished point is in {where}; rerun the "
                           "same command to resume", markup=False, highlight=False,
                           soft_wrap=True)
         raise typer.Exit(code=130) from None

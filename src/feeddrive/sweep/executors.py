@@ -281,8 +281,12 @@ def executor(*, workers: int | None = None, scheduler: str | None = None,
                         n_workers=dask_workers, threads_per_worker=1, processes=True,
                         # CRITICAL only: a worker's ERROR log of its heartbeat failing as a
                         # Ctrl-C closes the cluster is noise; real failures reach the parent
-                        # as exceptions (SweepAborted, a point's error)
-                        dashboard_address=None, silence_logs=50)
+                        # as exceptions (SweepAborted, a point's error).  The scheduler's HTTP
+                        # server (health, metrics) on a free loopback port: with None it took
+                        # 0.0.0.0:8787, and two clusters at once printed distributed's "Port
+                        # 8787 is already in use" beside the command's one line (a test of
+                        # two Dask runs side by side, 2026-12-07)
+                        dashboard_address="127.0.0.1:0", silence_logs=50)
                     stack.callback(cluster.close)
                     client = distributed.Client(cluster)
                 stack.callback(client.close)
