@@ -50,3 +50,21 @@ def test_nothing_is_written_without_an_output(tmp_path: Path,
     result = CliRunner().invoke(app, ["simulate", "--drive", "cdfs", "--table-speed", "1",
                                       "--output", "run.mat"])
     assert result.exit_code == 130 and not (tmp_path / "run.mat").exists()
+
+
+def test_a_streamed_runs_summary_says_which_part_it_judged(tmp_path: Path) -> None:
+    """A streamed run keeps its last KEEP_STREAMED seconds for the summary: its window and
+    numbers differ from the same run's without --output (300 s at 0.3 mm/s: 244–300 s against
+    60–300 s), which was not said (an outside check, 2026-12-07)."""
+    from feeddrive.engine.simulate import KEEP_STREAMED
+
+    out = tmp_path / "run.csv"
+    args = ["simulate", "--drive", "cdfs", "--table-speed", "2", "--duration",
+            str(KEEP_STREAMED + 20)]
+    streamed = CliRunner().invoke(app, [*args, "--output", str(out)])
+    assert streamed.exit_code == 0, streamed.output
+    assert (f"within the last {KEEP_STREAMED:g} s a streamed --output keeps in memory"
+            in streamed.output)
+    assert f"feeddrive analyze {out}" in streamed.output
+    plain = CliRunner().invoke(app, args)
+    assert "a streamed --output keeps" not in plain.output

@@ -279,6 +279,17 @@ def simulate_command(
             add_solver_record(output, result.solver_stats)
             summary["output"] = output
             summary["streamed"] = True
+            if float(result.time[0]) > 0:  # the summary judged the kept tail, not the run:
+                # said beside its numbers (they differed from the same run's without an
+                # --output, silently: an outside check, 2026-12-07)
+                from ..engine.simulate import KEEP_STREAMED
+
+                a, b = summary["window_s"]
+                summary.setdefault("warnings", []).append(
+                    f"the summary is over {a:g}–{b:g} s, within the last {KEEP_STREAMED:g} s "
+                    f"a streamed --output keeps in memory (without --output, or with .mat or "
+                    f".nc, the whole run is judged); the whole run is in {output}: feeddrive "
+                    f"analyze {output}")
         elif output:
             summary["output"] = str(result.save(output))
         if plot:
