@@ -368,3 +368,20 @@ def test_a_circular_tests_runs_report_progress() -> None:
     assert seen and all(0 < t <= end for t, end in seen)
     ends = sorted({end for _, end in seen})
     assert len(ends) == 1 and seen[-1][0] == pytest.approx(ends[0])  # each run to its end
+
+
+def test_a_simulated_circle_without_a_revolution_is_said_of_the_simulation(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """`circular --feed 100` failed with the record reader's advice, "check --centre and the
+    x, y columns" — options `circular` does not have (an outside check, 2026-12-07)."""
+    from feeddrive.analysis import circular_run
+
+    def no_revolution(*args: object, **kwargs: object) -> None:
+        raise ValueError("no full revolution about the centre: a circular test needs at least "
+                         "360° turned one way (check --centre and the x, y columns)")
+
+    monkeypatch.setattr(circular_run, "circular_test", no_revolution)
+    result = runner.invoke(app, ["circular", "--radius", "5", "--feed", "3000"])
+    assert result.exit_code == 2, result.output
+    assert "the simulated path did not turn 360° one way" in result.output
+    assert "--centre" not in result.output

@@ -512,7 +512,17 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
     time = np.concatenate(times)
     x = np.concatenate(xs) * 1e3 * 1e-3
     y = np.concatenate(ys) * 1e3 * 1e-3
-    test = circular_test(time, x, y, radius=radius, centre=centre, pitch=pitch)
+    try:
+        test = circular_test(time, x, y, radius=radius, centre=centre, pitch=pitch)
+    except ValueError as err:  # said of the simulated runs, not of a record's columns (it
+        # told a `circular` user to "check --centre and the x, y columns": an outside check,
+        # 2026-12-07)
+        if "no full revolution" not in str(err):
+            raise
+        raise ValueError("the simulated path did not turn 360° one way about the centre, "
+                         "which the ISO 230-4 evaluation needs (the angle about the centre "
+                         "must advance: at a low feed the axes can stick and slip back at "
+                         "the quadrants); try a higher feed") from None
     return CircularRunTrace(test=test, time=time, x=x, y=y, axes=(axes[0], axes[1]),
                             centre=centre, radius=float(radius), feed=float(feed),
                             acceleration=float(acceleration), lead_arc=float(lead_arc),
