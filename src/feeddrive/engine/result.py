@@ -464,6 +464,8 @@ class Result:
         from ..parameters import ParameterError
         if "table_speed_reference" in self and np.any(self["table_speed_reference"] != 0.0):
             return
+        from .machine_axes import machine_axes
+
         axes = machine_axes(self)
         if axes:  # a machine's run: its axes' signals are prefixed
             raise ParameterError("profile", self.attrs.get("profile", ""), f"a machine's run "
@@ -850,28 +852,3 @@ def _fmt(value: Any) -> str:
     if isinstance(value, list | tuple):
         return ", ".join(_fmt(v) for v in value)
     return str(value)
-
-
-def machine_axes(result: Result) -> list[str]:
-    """The axes of a machine's run (``feeddrive.machine.simulate_machine``), in order; [] for
-    one drive's.
-
-    Parameters
-    ----------
-    result : Result
-        The run.
-
-    Returns
-    -------
-    list of str
-        The axis names its signals are prefixed with.
-    """
-    import json
-
-    text = result.dataset.attrs.get("axes")
-    if not text:
-        return []
-    try:
-        return list(json.loads(str(text)))
-    except ValueError:
-        return []

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..engine.result import machine_axes
+from ..engine.machine_axes import machine_axes
 
 if TYPE_CHECKING:
     from ..engine.result import Result

@@ -1,0 +1,31 @@
+"""The axes of a machine's run, from its dataset's attributes: the one reading both the
+:class:`~feeddrive.engine.result.Result` and its figures use (a module of its own, so that
+neither imports the other for it)."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+
+def machine_axes(result: Any) -> list[str]:
+    """The axes of a machine's run (``feeddrive.machine.simulate_machine``), in order; [] for
+    one drive's.
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+
+    Returns
+    -------
+    list of str
+        The axis names its signals are prefixed with.
+    """
+    text = result.dataset.attrs.get("axes")
+    if not text:
+        return []
+    try:
+        return list(json.loads(str(text)))
+    except ValueError:
+        return []
