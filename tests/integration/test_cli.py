@@ -274,7 +274,8 @@ def test_loops_and_stability_commands_report_the_creep_mode_and_band() -> None:
     assert "positive real part" in band["rule"]
     bad = runner.invoke(app, ["loops", "--drive", "cdfs", "--table-speed", "0",
                                "--with-friction"])
-    assert bad.exit_code == 2 and "table_speed" in bad.output
+    # named as typed, in mm/s (the API's "table_speed … [m/s]" until 2026-12-07)
+    assert bad.exit_code == 2 and "--table-speed = 0.0" in bad.output and "[mm/s]" in bad.output
 
 
 def test_compensate_command_gives_the_study_table() -> None:

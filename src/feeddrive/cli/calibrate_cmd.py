@@ -79,7 +79,10 @@ def calibrate_command(
         # Table": an outside check, 2026-12-07)
         _field_meta(params, unknown, "--unknown")
     except FitError as err:
-        raise ParameterError("--unknown", unknown, str(err).split(": ", 1)[1]) from None
+        said = str(err).split(": ", 1)[1]
+        if "params show" not in said:
+            said += "; `feeddrive params show` prints the set's fields"
+        raise ParameterError("--unknown", unknown, said) from None
     for value in (low, high):  # the bracket's ends, checked as fields before any trial
         try:
             params.replace_path(unknown, value)
