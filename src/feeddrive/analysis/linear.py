@@ -789,15 +789,22 @@ def _crossing(fn: Callable[[float], float], a: float, b: float) -> float:
     return math.sqrt(a * b)
 
 
-def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str,
-             exact: Callable[[float], complex] | None = None) -> LoopResult:
-    """A loop's crossover, margins and bandwidth from its open-loop transfer ``L`` and
-    closed-loop ``T`` on ``freq`` [Hz]; with ``exact`` (S(f), L = 1/S − 1, T = 1 − S at any
-    frequency) each is located between the grid's points where it lies, not interpolated
-    there: interpolated, the wang2021 CDFS position loop's gain margin at its 5.6-Hz resonance
-    read 3.02 dB on the default 400 points, 2.62 on 800, 4.32 on 150 — python-control's
-    ``margin`` of the same transfer gives 2.589 dB (an outside check, 2026-12-07;
-    tests/unit/test_api_bad_values_s24.py)."""
+def _margins(freq: np.ndarray, S: np.ndarray, name: str,
+             S_at: Callable[[float], complex]) -> LoopResult:
+    """A loop's crossover, margins and bandwidth from the sensitivity S at its break (open
+    loop L = 1/S − 1, closed loop T = 1 − S): ``S`` on ``freq`` [Hz] for the Bode arrays and to
+    bracket each crossing, ``S_at`` at any frequency to locate it between the grid's points.
+    Interpolated on the grid, the wang2021 CDFS position loop's gain margin at its 5.6-Hz
+    resonance read 3.02 dB on the default 400 points, 2.62 on 800, 4.32 on 150 —
+    python-control's ``margin`` of the same transfer gives 2.589 dB (an outside check,
+    2026-12-07; tests/unit/test_api_bad_values_s24.py)."""
+    def L_at(f: float) -> complex:
+        return 1.0 / S_at(f) - 1.0
+
+    def T_db(f: float) -> float:
+        return 20 * math.log10(abs(1.0 - S_at(f)))
+
+    L = 1.0 / S - 1.0
     mag = 20 * np.log10(np.abs(L))
     phase = np.degrees(np.unwrap(np.angle(L)))
     phase -= 360.0 * np.ceil(phase[0] / 360.0)  # start in (−360°, 0°]: a loop lags
@@ -805,13 +812,8 @@ def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str,
     idx = np.where((mag[:-1] >= 0) & (mag[1:] < 0))[0]
     if idx.size:
         k = idx[0]
-        if exact is None:
-            f = np.interp(0.0, [mag[k + 1], mag[k]], [freq[k + 1], freq[k]])
-            ph = np.interp(f, freq[k:k + 2], phase[k:k + 2])
-        else:
-            f = _crossing(lambda x: abs(1.0 / exact(x) - 1.0) - 1.0, freq[k], freq[k + 1])
-            ph = math.degrees(np.angle(1.0 / exact(f) - 1.0))
-        crossover = float(f)
+        crossover = _crossing(lambda x: abs(L_at(x)) - 1.0, freq[k], freq[k + 1])
+        ph = math.degrees(np.angle(L_at(crossover)))
         phase_margin = float(((ph + 180.0) + 180.0) % 360.0 - 180.0)
     # phase crossings of −180° (mod 360) above the gain crossover: ``wrapped`` is the phase's
     # distance from −180° (mod 360), zero on the crossing (before issue 23 it was the distance
@@ -822,36 +824,25 @@ def _margins(freq: np.ndarray, L: np.ndarray, T: np.ndarray, name: str,
     for k in cross:
         if abs(wrapped[k] - wrapped[k + 1]) > 180.0:  # a jump of the wrap, not a crossing
             continue
-        if exact is None:
-            gm = -float(np.interp(0.0, [wrapped[k], wrapped[k + 1]], [mag[k], mag[k + 1]]))
-        else:  # where L crosses the negative real axis: its imaginary part changes sign
-            f = _crossing(lambda x: (1.0 / exact(x) - 1.0).imag, freq[k], freq[k + 1])
-            gm = -20.0 * math.log10(abs(1.0 / exact(f) - 1.0))
         if crossover is None or freq[k] > crossover:
-            gain_margin = gm
+            # where L crosses the negative real axis: its imaginary part changes sign
+            f = _crossing(lambda x: L_at(x).imag, freq[k], freq[k + 1])
+            gain_margin = -20.0 * math.log10(abs(L_at(f)))
             break
-    tmag = 20 * np.log10(np.abs(T))
+    tmag = 20 * np.log10(np.abs(1.0 - S))
     # −3 dB below the closed loop's DC gain, as python-control's ``bandwidth`` (it was below
     # |T| at the grid's first frequency, so the bandwidth moved with f_min: the position
     # loop's read 1.61 Hz from 0.5 Hz, where |T| is already −0.6 dB; from DC it is 1.37)
-    low = tmag[0]
-    if exact is not None:
-        try:
-            dc = abs(1.0 - exact(0.0))
-        except np.linalg.LinAlgError:  # a free rigid-body motion: the limit far below f_min
-            dc = abs(1.0 - exact(freq[0] * 1e-6))
-        if math.isfinite(dc) and dc > 0:
-            low = 20 * math.log10(dc)
-    below = np.where(tmag < low - 3.0)[0]
+    try:
+        dc = abs(1.0 - S_at(0.0))
+    except np.linalg.LinAlgError:  # a free rigid-body motion: the limit far below f_min
+        dc = abs(1.0 - S_at(freq[0] * 1e-6))
+    level = (20 * math.log10(dc) if math.isfinite(dc) and dc > 0 else tmag[0]) - 3.0
+    below = np.where(tmag < level)[0]
     if below.size:
         k = int(below[0])
-        if exact is None:
-            bandwidth = float(freq[k])
-        else:
-            a = freq[k - 1] if k else freq[0] * 1e-6
-            level = low - 3.0
-            bandwidth = _crossing(lambda x: 20 * math.log10(abs(1.0 - exact(x))) - level, a,
-                                  freq[k])
+        bandwidth = _crossing(lambda x: T_db(x) - level, freq[k - 1] if k else freq[0] * 1e-6,
+                              freq[k])
     return LoopResult(name, freq, mag, phase, gain_margin, phase_margin, crossover, bandwidth)
 
 
@@ -1016,11 +1007,11 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
         if not _speed_loop_only(system, axis, table_speed, nut_speed):
             pair = (f"{axis}_speed_command_disturbance", f"{axis}_speed_command")
             S = _freq_response(lin, *pair, w)
-            loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} position loop",
+            loops.append(_margins(freq, S, f"{axis} position loop",
                                   _at_frequency(lin, *pair)))
         pair = (f"{axis}_current_command_disturbance", f"{axis}_current_command")
         S = _freq_response(lin_v, *pair, w)
-        loops.append(_margins(freq, 1.0 / S - 1.0, 1.0 - S, f"{axis} velocity loop",
+        loops.append(_margins(freq, S, f"{axis} velocity loop",
                               _at_frequency(lin_v, *pair)))
     return LoopAnalysis(poles=classify_poles(lin.poles()), loops=loops, linear=lin)
 
