@@ -128,6 +128,27 @@ def position(option: str, value: float, params: DriveParameters,
     return value * MM
 
 
+def contour_limit(name: str) -> float:
+    """A machine contour's largest value (:data:`feeddrive.machine.contour.LIMITS`) in the
+    command line's unit: ``radius`` and ``distance`` [mm], ``feed`` [mm/min],
+    ``acceleration`` [mm/s²], ``turns`` [-].
+
+    Parameters
+    ----------
+    name : str
+        A key of ``LIMITS``.
+
+    Returns
+    -------
+    float
+        The limit.
+    """
+    from ..machine.contour import LIMITS
+
+    per = {"radius": 1e3, "distance": 1e3, "feed": 6e4, "acceleration": 1e3, "turns": 1.0}
+    return LIMITS[name] * per[name]
+
+
 def trial_rule(max_duration: float, initial_duration: float | None = None) -> VerdictRule:
     """The creep-verdict rule with the trial lengths of ``--max-duration`` and
     ``--initial-duration`` [s] (the protocol's first length when the command has no

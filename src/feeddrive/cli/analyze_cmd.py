@@ -230,12 +230,11 @@ def _circular(file: str, *, radius: float | None, centre: str | None, pitch: flo
               sep: str | None, decimal: str, as_json: bool, plot: str | None) -> None:
     from ..analysis.circular import circular_test, describe
     from ..io.acceptance import read_xy_trace
-    from ..machine.contour import LIMITS
 
     # the radius and the cyclic error's pitch within a contour's radius range (a pitch of
     # 1e300 mm was taken and moved the other diagnostics: an outside check, 2026-12-07)
-    for option, value, high in (("--radius", radius, 1e3 * LIMITS["radius"]),
-                                ("--pitch", pitch, 1e3 * LIMITS["radius"]),
+    for option, value, high in (("--radius", radius, _units.contour_limit("radius")),
+                                ("--pitch", pitch, _units.contour_limit("radius")),
                                 ("--magnification", magnification, 1e9)):
         if value is not None and not (math.isfinite(value) and 0 < value <= high):
             unit = "-" if option == "--magnification" else "mm"

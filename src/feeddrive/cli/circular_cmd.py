@@ -101,20 +101,20 @@ def circular_command(
     from ..engine.simulate import SimulationError, SimulationInterrupted
     from ..io.acceptance import write_xy_trace
     from ..machine import load_machine
-    from ..machine.contour import LIMITS
+    from ._units import contour_limit as limit
 
-    # the contour's limits (feeddrive.machine.contour.LIMITS) in the options' units, a lead-in
-    # arc of at most a turn, a pitch within the contour's radius range (an outside check,
-    # 2026-12-07: a lead arc of 1e300° was refused as a "duration", an acceleration of 1e300
-    # in m/s² under contour.acceleration, a pitch of 1e300 mm taken)
+    # the contour's limits in the options' units, a lead-in arc of at most a turn, a pitch
+    # within the contour's radius range (an outside check, 2026-12-07: a lead arc of 1e300°
+    # was refused as a "duration", an acceleration of 1e300 in m/s² under
+    # contour.acceleration, a pitch of 1e300 mm taken)
     for option, value, unit, high in (
-            ("--radius", radius, "mm", 1e3 * LIMITS["radius"]),
-            ("--feed", feed, "mm/min", 6e4 * LIMITS["feed"]),
-            ("--acceleration", acceleration, "mm/s²", 1e3 * LIMITS["acceleration"]),
+            ("--radius", radius, "mm", limit("radius")),
+            ("--feed", feed, "mm/min", limit("feed")),
+            ("--acceleration", acceleration, "mm/s²", limit("acceleration")),
             ("--lead-arc", 1.0 if lead_arc is None else lead_arc, "°", 360.0)):
         if not (math.isfinite(value) and 0 < value <= high):
             raise ParameterError(option, value, f"expected a value > 0, ≤ {high:g} [{unit}]")
-    for option, given, high in (("--pitch", pitch, 1e3 * LIMITS["radius"]),
+    for option, given, high in (("--pitch", pitch, limit("radius")),
                                 ("--magnification", magnification, 1e9)):
         if given is not None and not (math.isfinite(given) and 0 < given <= high):
             raise ParameterError(option, given, f"expected a value > 0, ≤ {high:g} ["

@@ -80,14 +80,9 @@ def compensate_command(
     from rich.progress import Progress
 
     if compare:
-        study_only = {"--mismatch": mismatch != 20.0, "--nut-speed": nut_speed != 16.0,
-                      "--tracking-speed": tracking_speed != 1.0, "--no-search": no_search}
-        given = [name for name, changed in study_only.items() if changed]
-        if given:
-            from ..parameters import ParameterError
-
-            raise ParameterError(given[0], "given",
-                                 "an option of the study, which --compare does not use")
+        _unused({"--mismatch": mismatch != 20.0, "--nut-speed": nut_speed != 16.0,
+                 "--tracking-speed": tracking_speed != 1.0, "--no-search": no_search},
+                "an option of the study, which --compare does not use")
         _compare(drive, position, schemes, metrics, band, preset_name, params_file, as_json,
                  output, plot, solver.describe())
         return
@@ -96,14 +91,9 @@ def compensate_command(
 
         raise ParameterError("--output" if output else "--plot", output or plot,
                              "written by --compare only")
-    compare_only = {"--schemes": schemes != COMPARE_SCHEMES, "--metrics": metrics != METRICS,
-                    "--band": band != 1.0}
-    given = [name for name, changed in compare_only.items() if changed]
-    if given:  # they were ignored without a word (an outside check, 2026-12-07)
-        from ..parameters import ParameterError
-
-        raise ParameterError(given[0], "given", "an option of --compare, which this run "
-                             "does not use")
+    # they were ignored without a word (an outside check, 2026-12-07)
+    _unused({"--schemes": schemes != COMPARE_SCHEMES, "--metrics": metrics != METRICS,
+             "--band": band != 1.0}, "an option of --compare, which this run does not use")
 
     from ..analysis.compensation import compensation_study, default_cases, study_drives
     from ..parameters import ParameterError
@@ -139,6 +129,15 @@ def compensate_command(
                       f"{with_unit(bands or 'none'):>18s}  "
                       f"{r['verdict_at_tracking_speed']:11s} "
                       f"error rms {r['following_error_rms_um']:.2f} µm", markup=False)
+
+
+def _unused(changed: dict[str, bool], why: str) -> None:
+    """Refuse the first option given (``changed``) that the run asked for does not use."""
+    given = [name for name, was in changed.items() if was]
+    if given:
+        from ..parameters import ParameterError
+
+        raise ParameterError(given[0], "given", why)
 
 
 def _compare(drive: str, position: float, schemes: str, metrics: str, band: float,

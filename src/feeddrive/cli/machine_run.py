@@ -58,16 +58,16 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
         Print the summary as JSON.
     """
     from ..machine import load_machine, machine_summary, make_contour, simulate_machine
-    from ..machine.contour import LIMITS
     from ..parameters import ParameterError
+    from ._units import contour_limit as limit
 
-    # the contour's limits (feeddrive.machine.contour.LIMITS) in the command line's units
+    # the contour's limits in the command line's units
     for option, value, unit, high in (
-            ("--radius", radius, "mm", 1e3 * LIMITS["radius"]),
-            ("--feed", feed, "mm/min", LIMITS["feed"] / MM_PER_MIN),
-            ("--acceleration", acceleration, "mm/s^2", 1e3 * LIMITS["acceleration"]),
-            ("--turns", turns, "-", LIMITS["turns"]),
-            ("--length", length, "mm", 1e3 * LIMITS["distance"])):
+            ("--radius", radius, "mm", limit("radius")),
+            ("--feed", feed, "mm/min", limit("feed")),
+            ("--acceleration", acceleration, "mm/s^2", limit("acceleration")),
+            ("--turns", turns, "-", limit("turns")),
+            ("--length", length, "mm", limit("distance"))):
         if not (math.isfinite(value) and 0 < value <= high):
             raise ParameterError(option, value, f"expected > 0, ≤ {high:g} [{unit}]")
     for option, value in (("--start-angle", start_angle), ("--angle", angle)):
