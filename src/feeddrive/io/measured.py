@@ -235,13 +235,8 @@ class CsvTable:
         import pandas as pd
 
         _pandas_precision()
-        with _interrupt_kept() as hit:
-            try:
-                frame = self._read_csv(pd, i, dtype)
-            except Exception:
-                if hit:  # pandas' C reader made the interrupt a ParserError
-                    raise KeyboardInterrupt from None
-                raise
+        with _interrupt_kept():
+            frame = self._read_csv(pd, i, dtype)
         return frame[i].to_numpy()
 
     def _read_csv(self, pd: Any, i: int, dtype: Any) -> Any:
@@ -512,8 +507,8 @@ def _interrupt_kept() -> Iterator[list[bool]]:
     raised inside its read into a ``ParserError`` ("Calling read(nbytes) on source failed"),
     which the column reader took for a bad cell and read on — `fit` ran on, `validate` ended
     with exit status 0 (an outside check, 2026-12-07).  On the main thread with Python's
-    handler in place, SIGINT is noted (the list becomes true) and raised as before; the caller
-    raises KeyboardInterrupt once pandas returns."""
+    handler in place, SIGINT is noted (the list becomes true) and raised as before, and once
+    pandas returns or raises, KeyboardInterrupt is raised in its place."""
     hit: list[bool] = []
     previous = signal.getsignal(signal.SIGINT)
     if threading.current_thread() is not threading.main_thread() or not callable(previous):
@@ -527,6 +522,10 @@ def _interrupt_kept() -> Iterator[list[bool]]:
     signal.signal(signal.SIGINT, noted)
     try:
         yield hit
+    except Exception:
+        if hit:  # pandas' C reader made the interrupt a ParserError
+            raise KeyboardInterrupt from None
+        raise
     finally:
         signal.signal(signal.SIGINT, previous)
     if hit:
