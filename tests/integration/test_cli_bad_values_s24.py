@@ -382,6 +382,8 @@ def test_a_simulated_circle_without_a_revolution_is_said_of_the_simulation(
 
     monkeypatch.setattr(circular_run, "circular_test", no_revolution)
     result = runner.invoke(app, ["circular", "--radius", "5", "--feed", "3000"])
-    assert result.exit_code == 2, result.output
+    # after the runs: exit status 1, as a failed simulation (session 25: the runs' trace is
+    # kept, tests/unit/test_circular_stick_slip.py)
+    assert result.exit_code == 1, result.output
     assert "the simulated path did not turn 360° one way" in result.output
     assert "--centre" not in result.output

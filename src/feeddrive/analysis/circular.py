@@ -64,6 +64,12 @@ OFF_CIRCLE = 0.1
 ON_CIRCLE = 0.01
 #: smallest spike height [m] that excludes its region from the fit (below: measurement noise)
 SPIKE_FLOOR = 1e-9
+#: a stretch of the trace ends (a run's direction reverses) where the angle about the centre
+#: turns back by more than this [rad]; a smaller turn back — stick-slip at a low feed, where
+#: the path stops and slips back by a fraction of a micrometre (≈ 2e-4° at 100 mm/min on
+#: the ``xy-table``) — stays in its run.  The quantities do not depend on it between the
+#: largest such turn back and the lead arcs (tests/unit/test_circular_stick_slip.py)
+REVERSAL = math.radians(1.0)
 _AXIS_OF_REVERSAL = ("x", "y", "x", "y")  # axis reversing at θ = 0°, 90°, 180°, 270°
 
 
@@ -80,7 +86,8 @@ class CircularRun:
     x, y : numpy.ndarray
         Measured positions [m].
     angle : numpy.ndarray
-        Travel angle from the nominal centre, unwrapped, increasing along the run [rad].
+        Travel angle from the nominal centre, unwrapped, advancing along the run (turns back
+        smaller than :data:`REVERSAL` aside: stick-slip) [rad].
     """
 
     direction: str
@@ -296,13 +303,45 @@ def fit_circle(x: ArrayLike, y: ArrayLike, *, start: tuple[float, float] | None 
     return cx + mx, cy + my, float(r.mean())
 
 
-def split_runs(time: ArrayLike, x: ArrayLike, y: ArrayLike, centre: tuple[float, float]
-               ) -> tuple[list[CircularRun], list[str]]:
+def _turning_points(phi: np.ndarray, reversal: float) -> list[int]:
+    """Where the angle ``phi`` turns back by more than ``reversal`` [rad]: the record's
+    start, each such turning point (the extreme before the turn) and its end — a zigzag
+    with hysteresis over the samples where the raw motion changes sign."""
+    step = np.diff(phi)
+    moving = np.flatnonzero(step != 0.0)
+    flips = moving[1:][np.sign(step[moving[1:]]) != np.sign(step[moving[:-1]])]
+    cand = np.concatenate([[0], flips, [phi.size - 1]])
+    value = phi[cand]
+    turns = [0]
+    direction = 0
+    hi = lo = ext = 0
+    for i in range(1, cand.size):
+        v = value[i]
+        if direction == 0:
+            hi = i if v > value[hi] else hi
+            lo = i if v < value[lo] else lo
+            if value[hi] - value[lo] > reversal:
+                direction = 1 if hi > lo else -1
+                ext = hi if direction > 0 else lo
+        elif (v - value[ext]) * direction >= 0.0:
+            ext = i
+        elif (value[ext] - v) * direction > reversal:
+            turns.append(int(cand[ext]))
+            direction, ext = -direction, i
+    if turns[-1] != phi.size - 1:
+        turns.append(phi.size - 1)
+    return turns
+
+
+def split_runs(time: ArrayLike, x: ArrayLike, y: ArrayLike, centre: tuple[float, float],
+               *, reversal: float = REVERSAL) -> tuple[list[CircularRun], list[str]]:
     """The full revolutions of a trace: one per stretch of one turning direction.
 
     A stretch turning one way about the centre for at least 360° gives one run: its middle
     360° (the lead-in and lead-out arcs of the ISO 230-4 test procedure are left out equally
-    at both ends).
+    at both ends).  A stretch ends where the angle turns back by more than ``reversal``; a
+    smaller turn back (stick-slip at a low feed: the path stops and slips back by a fraction
+    of a micrometre) stays inside its run, and a note counts them and gives the largest.
 
     Parameters
     ----------
@@ -312,53 +351,62 @@ def split_runs(time: ArrayLike, x: ArrayLike, y: ArrayLike, centre: tuple[float,
         Positions [m].
     centre : tuple of float
         Nominal centre [m].
+    reversal : float, default :data:`REVERSAL` (1°)
+        Smallest turn back that ends a stretch [rad].
 
     Returns
     -------
     runs : list of CircularRun
         CCW first, then CW; one of each at most (the first of each direction).
     notes : list of str
-        What was left out.
+        What was left out, and the turns back inside each run.
 
     Raises
     ------
     ValueError
         When no stretch covers a full revolution.
+    ParameterError
+        For a ``reversal`` that is not an angle in (0, 2π).
     """
+    if not (isinstance(reversal, int | float) and 0.0 < reversal < 2.0 * math.pi):
+        raise ParameterError("reversal", reversal, "expected a turn-back angle > 0 and "
+                             "< 2π [rad]")
     t = np.asarray(time, dtype=float)
     px = np.asarray(x, dtype=float)
     py = np.asarray(y, dtype=float)
     phi = np.unwrap(np.arctan2(py - centre[1], px - centre[0]))
-    step = np.diff(phi)
-    turning = np.sign(step)
+    radius = float(np.median(np.hypot(px - centre[0], py - centre[1])))
+    turns = _turning_points(phi, reversal)
     notes: list[str] = []
     runs: dict[str, CircularRun] = {}
-    k = 0
-    n = step.size
-    while k < n:
-        if turning[k] == 0:
-            k += 1
-            continue
-        j = k
-        while j < n and turning[j] == turning[k]:
-            j += 1
-        # samples k..j turn one way
+    for k, j in zip(turns[:-1], turns[1:], strict=True):
+        sign = 1.0 if phi[j] > phi[k] else -1.0
         span = abs(phi[j] - phi[k])
-        direction = "CCW" if turning[k] > 0 else "CW"
-        if span >= 2.0 * math.pi * (1.0 - 1e-9) and direction not in runs:
-            travel = (phi[k:j + 1] - phi[k]) * turning[k]
-            lead = (span - 2.0 * math.pi) / 2.0
-            a = int(np.searchsorted(travel, lead, side="left"))
-            b = int(np.searchsorted(travel, lead + 2.0 * math.pi, side="right"))
-            sl = slice(k + a, k + b)
-            runs[direction] = CircularRun(direction=direction, time=t[sl], x=px[sl], y=py[sl],
-                                          angle=phi[sl])
-            if lead > 1e-6:
-                notes.append(f"{direction}: {math.degrees(lead):.3g}° of lead-in and of "
-                             "lead-out left out (ISO 230-4 test procedure)")
-        elif span >= 2.0 * math.pi * (1.0 - 1e-9):
+        direction = "CCW" if sign > 0 else "CW"
+        if span < 2.0 * math.pi * (1.0 - 1e-9):
+            continue
+        if direction in runs:
             notes.append(f"a further {direction} revolution at t = {t[k]:.4g} s left out")
-        k = j
+            continue
+        travel = (phi[k:j + 1] - phi[k]) * sign
+        reached = np.maximum.accumulate(travel)
+        lead = (span - 2.0 * math.pi) / 2.0
+        a = int(np.searchsorted(reached, lead, side="left"))
+        b = int(np.searchsorted(reached, lead + 2.0 * math.pi, side="right"))
+        sl = slice(k + a, k + b)
+        runs[direction] = CircularRun(direction=direction, time=t[sl], x=px[sl], y=py[sl],
+                                      angle=phi[sl])
+        if lead > 1e-6:
+            notes.append(f"{direction}: {math.degrees(lead):.3g}° of lead-in and of "
+                         "lead-out left out (ISO 230-4 test procedure)")
+        back = reached[a:b] - travel[a:b]
+        if np.any(back > 0.0):
+            started = np.count_nonzero((back[1:] > 0.0) & (back[:-1] == 0.0)) + int(back[0] > 0)
+            largest = float(back.max())
+            notes.append(f"{direction}: the path turned back {started} times inside the run "
+                         f"(stick-slip), by at most {math.degrees(largest):.3g}° "
+                         f"({largest * radius * 1e6:.3g} µm along the path); a run ends "
+                         f"only where it turns back more than {math.degrees(reversal):.3g}°")
     if not runs:
         raise ValueError("no full revolution about the centre: a circular test needs at "
                          "least 360° turned one way (check --centre and the x, y columns)")
@@ -431,8 +479,8 @@ def _spike(residual: np.ndarray, travel: np.ndarray, radius: float
 
 
 def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float | None,
-                  centre: tuple[float, float] | None, pitch: float | None = None
-                  ) -> CircularTest:
+                  centre: tuple[float, float] | None, pitch: float | None = None,
+                  reversal: float = REVERSAL) -> CircularTest:
     """ISO 230-4 quantities and the ballbar diagnostics of a circular-test trace.
 
     Parameters
@@ -449,6 +497,9 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
         Nominal centre (x, y) [m]; None: the least-squares centre of the whole record (noted).
     pitch : float, optional
         Period of the cyclic error looked for (the screw's lead) [m]; None: not fitted.
+    reversal : float, default :data:`REVERSAL` (1°)
+        Smallest turn back of the angle about the centre that ends a run [rad]
+        (:func:`split_runs`); smaller ones (stick-slip) stay in their run.
 
     Returns
     -------
@@ -538,7 +589,7 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
                         f"{OFF_CIRCLE:.0%} of R from the circle left out (a radial lead-in or "
                         "lead-out)")
         t, px, py = t[on], px[on], py[on]
-    runs, notes = split_runs(t, px, py, (cx0, cy0))
+    runs, notes = split_runs(t, px, py, (cx0, cy0), reversal=reversal)
     notes = inferred + notes
     gee: dict[str, float] = {}
     dr: dict[str, float] = {}
@@ -554,7 +605,8 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
     if not both:
         notes.append(f"one run ({runs[0].direction}) only: G(b), servo mismatch and lateral "
                      "play need both CW and CCW; squareness then includes any servo mismatch")
-    feeds = [float(np.abs(np.diff(r.angle)).sum() * radius / (r.time[-1] - r.time[0]))
+    # the net travel: a stick-slip turn back is travelled twice but advances nothing
+    feeds = [float(abs(r.angle[-1] - r.angle[0]) * radius / (r.time[-1] - r.time[0]))
              for r in runs]
     feed = float(np.mean(feeds))
     omega = feed / radius

@@ -30,15 +30,15 @@ import numpy as np
 
 from ..parameters import ParameterError
 from ..parameters.validation import MISSING
-from .circular import CircularTest, circular_test
+from .circular import REVERSAL, CircularTest, circular_test
 from .positioning_run import axis_speed_limit, axis_travel
 
 if TYPE_CHECKING:
     from ..engine.options import SolverOptions
     from ..machine import Machine
 
-__all__ = ["SETTLE_FRACTION", "CircularRunTrace", "LeadIn", "circular_start_angles",
-           "run_circular_test", "settling_lead"]
+__all__ = ["SETTLE_FRACTION", "CircularRunTrace", "LeadIn", "UnevaluatedTrace",
+           "circular_start_angles", "run_circular_test", "settling_lead"]
 
 #: where each run's measured revolution starts and ends, halfway between reversals [rad]
 MEASURE_START = math.radians(45.0)
@@ -133,6 +133,17 @@ def circular_start_angles(lead_arc: float) -> dict[str, float]:
         ``"CCW"`` and ``"CW"`` → start angle [rad]; the CCW run ends where the CW run starts.
     """
     return {"CCW": MEASURE_START - lead_arc, "CW": MEASURE_START + lead_arc}
+
+
+class UnevaluatedTrace(ValueError):
+    """The runs were simulated but their trace has no full revolution to evaluate: the
+    message says why; ``time``, ``x``, ``y`` [s, m] hold the trace (``--output`` writes it
+    all the same).
+    """
+
+    def __init__(self, message: str, time: np.ndarray, x: np.ndarray, y: np.ndarray) -> None:
+        super().__init__(message)
+        self.time, self.x, self.y = time, x, y
 
 
 @dataclass(frozen=True)
@@ -408,7 +419,7 @@ def _lead_in(machine: Machine, axes: tuple[str, str], radius: float, feed: float
 def run_circular_test(machine: Machine, *, radius: float, feed: float,
                       axes: tuple[str, str] | None = None, acceleration: float = 1.0,
                       lead_arc: float | None = None, nut_speed: float = 0.0,
-                      pitch: float | None = None,
+                      pitch: float | None = None, reversal: float = REVERSAL,
                       options: SolverOptions | None = None,
                       progress: Callable[[float, float], None] | None = None
                       ) -> CircularRunTrace:
@@ -436,6 +447,10 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         nut's, Wang2021 Sect. 2).
     pitch : float, optional
         Period of the cyclic error looked for [m].
+    reversal : float, default :data:`~feeddrive.analysis.circular.REVERSAL` (1°)
+        Smallest turn back of the path's angle that ends a run [rad]; smaller ones
+        (stick-slip at a low feed) stay in their run
+        (:func:`~feeddrive.analysis.circular.split_runs`).
     options : SolverOptions, optional
         Integrator settings.
     progress : callable, optional
@@ -455,6 +470,9 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         shorter than the feed ramp, a nut speed with no axis that drives its nut,
         runs needing more solver steps than the
         options allow.
+    UnevaluatedTrace
+        After the runs, when their trace turned less than 360° one way (it carries the
+        trace).
     """
     from ..machine import Circle, simulate_machine
 
@@ -513,16 +531,21 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
     x = np.concatenate(xs) * 1e3 * 1e-3
     y = np.concatenate(ys) * 1e3 * 1e-3
     try:
-        test = circular_test(time, x, y, radius=radius, centre=centre, pitch=pitch)
+        test = circular_test(time, x, y, radius=radius, centre=centre, pitch=pitch,
+                             reversal=reversal)
+    except ParameterError:
+        raise
     except ValueError as err:  # said of the simulated runs, not of a record's columns (it
         # told a `circular` user to "check --centre and the x, y columns": an outside check,
         # 2026-12-07)
         if "no full revolution" not in str(err):
             raise
-        raise ValueError("the simulated path did not turn 360° one way about the centre, "
-                         "which the ISO 230-4 evaluation needs (the angle about the centre "
-                         "must advance: at a low feed the axes can stick and slip back at "
-                         "the quadrants); try a higher feed") from None
+        # the runs are kept: the error carries their trace (--output writes it)
+        raise UnevaluatedTrace(
+            "the simulated path did not turn 360° one way about the centre, which the "
+            "ISO 230-4 evaluation needs (a run ends where the path's angle about the centre "
+            f"turns back by more than {math.degrees(reversal):.3g}°, the reversal angle)",
+            time, x, y) from None
     return CircularRunTrace(test=test, time=time, x=x, y=y, axes=(axes[0], axes[1]),
                             centre=centre, radius=float(radius), feed=float(feed),
                             acceleration=float(acceleration), lead_arc=float(lead_arc),

@@ -183,3 +183,23 @@ def number(value: object, digits: int = 4) -> str:
     if isinstance(value, float):
         return f"{value:.{digits}g}"
     return str(value)
+
+
+def reversal_angle(degrees: float) -> float:
+    """``--reversal-angle`` [°] as the circular test's ``reversal`` [rad], refused outside
+    (0, 360)°.
+
+    Parameters
+    ----------
+    degrees : float
+        The option's value [°].
+
+    Returns
+    -------
+    float
+        The angle [rad].
+    """
+    if not (math.isfinite(degrees) and 0.0 < degrees < 360.0):
+        raise ParameterError("--reversal-angle", degrees,
+                             "expected an angle > 0 and < 360 [°]")
+    return math.radians(degrees)

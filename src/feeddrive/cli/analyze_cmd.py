@@ -48,6 +48,10 @@ def analyze_command(
     magnification: float | None = typer.Option(
         None, "--magnification", help="--circular --plot: deviation magnification [-] "
         "(default: the largest deviation fills the outer 40 % of the plot)."),
+    reversal_angle: float | None = typer.Option(
+        None, "--reversal-angle", help="--circular: smallest turn back of the path's angle "
+        "about the centre that ends a run [°] (default 1°); smaller ones, stick-slip at a "
+        "low feed, stay in their run and are counted in a note."),
     x_column: str | None = typer.Option(None, "--x-column", help="--circular: default x, "
                                         "x_position or x.table_position."),
     y_column: str | None = typer.Option(None, "--y-column", help="--circular: default y, "
@@ -103,6 +107,7 @@ def analyze_command(
         "--centre": (centre, centre is not None, ("--circular",)),
         "--pitch": (pitch, pitch is not None, ("--circular",)),
         "--magnification": (magnification, magnification is not None, ("--circular",)),
+        "--reversal-angle": (reversal_angle, reversal_angle is not None, ("--circular",)),
         "--x-column": (x_column, x_column is not None, ("--circular",)),
         "--y-column": (y_column, y_column is not None, ("--circular",)),
         "--time-column": (time_column, time_column != "time", both),
@@ -129,7 +134,8 @@ def analyze_command(
                                  f"{'the creep analysis' if mode == 'creep' else mode}")
     if circular:
         _circular(file, radius=radius, centre=centre, pitch=pitch, magnification=magnification,
-                  time_column=time_column, x_column=x_column, y_column=y_column,
+                  reversal_angle=reversal_angle, time_column=time_column, x_column=x_column,
+                  y_column=y_column,
                   time_unit=time_unit, position_unit=position_unit, sep=sep, decimal=decimal,
                   as_json=as_json, plot=plot)
         return
@@ -225,11 +231,13 @@ def parse_point_mm(option: str, text: str) -> tuple[float, float]:
 
 
 def _circular(file: str, *, radius: float | None, centre: str | None, pitch: float | None,
-              magnification: float | None, time_column: str, x_column: str | None,
+              magnification: float | None, reversal_angle: float | None, time_column: str,
+              x_column: str | None,
               y_column: str | None, time_unit: str | None, position_unit: str | None,
               sep: str | None, decimal: str, as_json: bool, plot: str | None) -> None:
-    from ..analysis.circular import circular_test, describe
+    from ..analysis.circular import REVERSAL, circular_test, describe
     from ..io.acceptance import read_xy_trace
+    from ._units import reversal_angle as reversal_of
 
     # the radius and the cyclic error's pitch within a contour's radius range (a pitch of
     # 1e300 mm was taken and moved the other diagnostics: an outside check, 2026-12-07)
@@ -239,13 +247,14 @@ def _circular(file: str, *, radius: float | None, centre: str | None, pitch: flo
         if value is not None and not (math.isfinite(value) and 0 < value <= high):
             unit = "-" if option == "--magnification" else "mm"
             raise ParameterError(option, value, f"expected a value > 0, ≤ {high:g} [{unit}]")
+    reversal = REVERSAL if reversal_angle is None else reversal_of(reversal_angle)
     point = None if centre is None else parse_point_mm("--centre", centre)
     trace = read_xy_trace(file, time_column=time_column, x_column=x_column, y_column=y_column,
                           time_unit=time_unit, position_unit=position_unit, sep=sep,
                           decimal=decimal)
     result = circular_test(trace.time, trace.x, trace.y,
                            radius=None if radius is None else radius * MM, centre=point,
-                           pitch=None if pitch is None else pitch * MM)
+                           pitch=None if pitch is None else pitch * MM, reversal=reversal)
     if plot:
         from ..plots.acceptance import circular_figure, save
 

@@ -78,6 +78,10 @@ def circular_command(
                                     "end."),
     pitch: float | None = typer.Option(None, "--pitch", help="Period of the cyclic error to "
                                        "fit, the screw's lead [mm]."),
+    reversal_angle: float = typer.Option(1.0, "--reversal-angle", help="Smallest turn back "
+                                         "of the path's angle about the centre that ends a "
+                                         "run [°]; smaller ones, stick-slip at a low feed, "
+                                         "stay in their run and are counted in a note."),
     magnification: float | None = typer.Option(None, "--magnification", help="--plot: "
                                                "deviation magnification [-] (default: "
                                                "automatic)."),
@@ -96,12 +100,13 @@ def circular_command(
     deviation F [µm], and the ballbar diagnostics (squareness, scale and servo mismatch,
     backlash, lateral play, reversal spikes)."""
     from ..analysis.circular import describe
-    from ..analysis.circular_run import run_circular_test
+    from ..analysis.circular_run import UnevaluatedTrace, run_circular_test
     from ..engine.options import layered
     from ..engine.simulate import SimulationError, SimulationInterrupted
     from ..io.acceptance import write_xy_trace
     from ..machine import load_machine
     from ._units import contour_limit as limit
+    from ._units import reversal_angle as reversal_of
 
     # the contour's limits in the options' units, a lead-in arc of at most a turn, a pitch
     # within the contour's radius range (an outside check, 2026-12-07: a lead arc of 1e300°
@@ -123,6 +128,7 @@ def circular_command(
         raise ParameterError("--nut-speed", nut_speed, "expected a speed ≥ 0 [mm/s]")
     if max_steps is not None and max_steps < 1:
         raise ParameterError("--max-steps", max_steps, "expected a whole number ≥ 1")
+    reversal = reversal_of(reversal_angle)
     pair = parse_axes(axes)
     options = layered([("command line", {"max_steps": (max_steps, "--max-steps")})],
                       base=solver)
@@ -134,12 +140,22 @@ def circular_command(
                                 acceleration=acceleration * MM,
                                 lead_arc=None if lead_arc is None else math.radians(lead_arc),
                                 nut_speed=nut_speed * MM,
-                                pitch=None if pitch is None else pitch * MM, options=options,
-                                progress=advance)
+                                pitch=None if pitch is None else pitch * MM,
+                                reversal=reversal, options=options, progress=advance)
     except ParameterError as err:  # the API names its arguments; the user typed options
         raise ParameterError(*_as_option(err.field, err.value), err.message) from None
     except SimulationError as err:
         err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    except UnevaluatedTrace as err:  # the runs are finished: their trace is kept
+        _stop_bar(bar)
+        err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
+        if output:
+            write_xy_trace(output, err.time, err.x, err.y, comment=(
+                f"feeddrive circular --machine {machine}, R {radius:g} mm, feed {feed:g} "
+                "mm/min: not evaluated (no full revolution one way)"))
+            err_console.print(f"wrote the trace all the same: {output}", markup=False,
+                              highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
     except SimulationInterrupted as stop:
         err_console.print(f"interrupted: {stop}", markup=False, highlight=False,
