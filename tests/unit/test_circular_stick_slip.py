@@ -170,3 +170,109 @@ def test_cli_refuses_a_bad_reversal_angle(bad: str) -> None:
         res = CliRunner().invoke(app, argv)
         assert res.exit_code != 0
         assert "--reversal-angle" in res.output and "[°]" in res.output, res.output
+
+
+# ---- reversal spikes that do not stand out (the audit's finding, 2026-12-07) --------------
+
+def _circle_with(delta: object) -> C.CircularTest:
+    """A CCW and a CW run of 400° whose radial deviation is ``delta(theta, sign)`` [m]."""
+    lead = math.radians(20.0)
+    a = np.linspace(-lead, 2 * math.pi + lead, 20_000)
+    theta = np.concatenate([a, a[::-1]])
+    sign = np.concatenate([np.ones(a.size), -np.ones(a.size)])
+    r = R + delta(theta, sign)  # type: ignore[operator]
+    t = np.arange(theta.size) * 1e-3
+    return C.circular_test(t, r * np.cos(theta), r * np.sin(theta), radius=R,
+                           centre=(0.0, 0.0))
+
+
+def _after_reversal(theta: np.ndarray, sign: np.ndarray) -> np.ndarray:
+    """Travel past the last axis reversal (0°, 90°, 180°, 270°) in the direction of motion."""
+    return np.mod(theta * sign, math.pi / 2)
+
+
+def test_a_transient_after_each_reversal_stands_out() -> None:
+    """h·exp(−travel/2°) after each reversal: eight spikes of h, each standing out."""
+    h = 8e-6
+    test = _circle_with(lambda th, sg: h * np.exp(-_after_reversal(th, sg) / math.radians(2)))
+    assert len(test.spikes) == 8
+    for s in test.spikes:
+        assert s.stands_out
+        assert s.height == pytest.approx(h, rel=0.05)
+    assert not any("do not stand out" in n for n in test.notes)
+
+
+def test_an_oscillation_between_reversals_is_not_passed_off_as_spikes() -> None:
+    """A sustained oscillation, 37 periods per revolution, of 10 µm: every "spike" is one of
+    its peaks, said in a note and beside each spike, none flagged as standing out."""
+    test = _circle_with(lambda th, sg: 10e-6 * np.sin(37 * th))
+    assert not any(s.stands_out for s in test.spikes)
+    note = next(n for n in test.notes if "do not stand out" in n)
+    assert note.startswith("8 of 8 reversal spikes")
+    text = "\n".join(C.describe(test))
+    assert text.count("does not stand out") == 8
+    assert all(d["stands_out"] is False for d in test.to_dict()["reversal_spikes"])
+
+
+def test_the_slow_runs_spikes_are_said_not_to_stand_out(slow: object) -> None:
+    """At 100 mm/min the path oscillates between the reversals as much as after them."""
+    test = slow.test  # type: ignore[attr-defined]
+    assert not any(s.stands_out for s in test.spikes)
+    assert any("do not stand out" in n for n in test.notes)
+
+
+# ---- what the commands say (the audit's findings, 2026-12-07) ------------------------------
+
+def test_too_small_a_reversal_angle_is_named_as_the_cause(tmp_path: Path) -> None:
+    """`analyze --circular` blamed --centre and the columns when the reversal angle was below
+    the stick-slip turns back."""
+    t, x, y, _ = _trace()
+    with pytest.raises(ValueError, match="reversal angle") as err:
+        C.circular_test(t, x, y, radius=R, centre=(0.0, 0.0), reversal=BACK / 2)
+    assert "--centre" not in str(err.value)
+    back = float(re.search(r"up to ([0-9.e-]+)°", str(err.value)).group(1))
+    assert back == pytest.approx(math.degrees(BACK), rel=1e-2)
+
+
+def test_the_printed_analyze_command_keeps_every_digit_of_the_radius(tmp_path: Path) -> None:
+    out = tmp_path / "odd.csv"
+    res = CliRunner().invoke(app, ["circular", "--radius", "12.3456789", "--feed", "2000",
+                                   "--output", str(out)])
+    assert res.exit_code == 0, res.output
+    hint = re.search(r"\(feeddrive (analyze --circular .*)\)", res.output).group(1)
+    assert "--radius 12.3456789 " in hint
+    circ = next(line for line in res.output.splitlines() if "circular deviation G(CCW)" in line)
+    again = CliRunner().invoke(app, hint.split())
+    assert again.exit_code == 0, again.output
+    assert circ in again.output  # the same G(CCW), every printed digit
+
+
+def test_a_feed_too_low_for_the_reference_table_names_the_feed() -> None:
+    res = CliRunner().invoke(app, ["circular", "--feed", "20", "--radius", "25",
+                                   "--lead-arc", "30"])
+    assert res.exit_code == 2
+    assert "--feed = 20.0" in res.output and "mm/min" in res.output
+    assert "contour.duration" not in res.output
+
+
+def test_a_given_lead_arc_is_not_asked_for_again() -> None:
+    """With the lead arc given, the settling rule's refusal is a note without its advice to
+    give one."""
+    from feeddrive.analysis.circular_run import _lead_in
+
+    lead = _lead_in(XY, ("x", "y"), 0.005, 50 / 60e3, 1.0, 0.0, math.radians(30))
+    assert lead.given and lead.notes
+    assert "does not decay" in lead.notes[0]
+    assert "expected the lead arc given" not in lead.notes[0]
+
+
+def test_the_polar_plot_labels_only_spikes_that_stand_out() -> None:
+    from feeddrive.plots.acceptance import circular_figure
+
+    h = 8e-6
+    spiky = _circle_with(lambda th, sg: h * np.exp(-_after_reversal(th, sg) / math.radians(2)))
+    waves = _circle_with(lambda th, sg: 10e-6 * np.sin(37 * th))
+    for test, labelled in ((spiky, 8), (waves, 0)):
+        ax = circular_figure(test).axes[0]
+        assert sum("µm" in t.get_text() for t in ax.texts) == labelled
+        assert ("8 reversal spikes not labelled" in ax.get_title()) == (labelled == 0)

@@ -384,6 +384,24 @@ def _profile(machine: Machine, contour: Any, nut_driven: tuple[str, ...], nut_sp
                           axes=axes, contour=contour)
 
 
+def _check_length(duration: float, arc: float, feed: float, start_time: float) -> None:
+    """Refuse, naming the feed in both units, a run longer than a machine run's references
+    hold (:data:`feeddrive.machine.contour.MAX_REFERENCE_SAMPLES` at its grid); ``arc`` is
+    the path's turns × R [m].  It was refused as ``contour.duration``, an option ``circular``
+    does not have (an outside check, 2026-12-07)."""
+    from ..machine.contour import INTERVAL, MAX_REFERENCE_SAMPLES
+
+    longest = MAX_REFERENCE_SAMPLES * INTERVAL
+    if duration <= longest:
+        return
+    lowest = 2.0 * math.pi * arc / max(longest - start_time, 1e-9)
+    raise ParameterError("feed", feed, f"each run would last {duration:.4g} s, longer than "
+                         f"the {longest:g} s a machine run's references hold (a "
+                         f"{INTERVAL * 1e3:g}-ms grid); expected a feed of at least about "
+                         f"{lowest * 6e4:.4g} mm/min ({lowest:.3g} m/s) at this radius, or a "
+                         "smaller radius")
+
+
 def _check_budget(duration: float, options: SolverOptions | None) -> None:
     from ..engine.budget import check_output_memory, run_budget
     from ..engine.options import current
@@ -409,8 +427,11 @@ def _lead_in(machine: Machine, axes: tuple[str, str], radius: float, feed: float
         if given is None:
             raise
         said = err.message if isinstance(err, ParameterError) else str(err)
+        # the arc was given: the refusal's advice to give one is not repeated to the user who
+        # did (an outside check, 2026-12-07)
+        said = said.removesuffix("; expected the lead arc given")
         return LeadIn(arc=float(given), rule_arc=math.nan, given=True,
-                      notes=(f"the settling rule: {said}",))
+                      notes=(f"the settling rule gives no arc: {said}",))
     if given is None:
         return rule
     return dataclasses.replace(rule, arc=float(given), given=True)
@@ -502,8 +523,9 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
                              f" {radius * lead_arc * 1e3:.6g} mm; expected a longer lead arc or "
                              "a higher acceleration")
     turns = 1.0 + lead_arc / math.pi
-    _check_budget(start_time + 2.0 * math.pi * radius * turns / feed + feed / acceleration,
-                  options)
+    duration = start_time + 2.0 * math.pi * radius * turns / feed + feed / acceleration
+    _check_length(duration, radius * turns, feed, start_time)
+    _check_budget(duration, options)
     times, xs, ys, results, offsets = [], [], [], {}, {}
     offset = 0.0
     for direction, start in circular_start_angles(lead_arc).items():
@@ -541,11 +563,12 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         if "no full revolution" not in str(err):
             raise
         # the runs are kept: the error carries their trace (--output writes it)
+        why = (str(err).partition(": ")[2] if "reversal angle" in str(err) else
+               "a run ends where the path's angle about the centre turns back by more than "
+               f"{math.degrees(reversal):.3g}°, the reversal angle")
         raise UnevaluatedTrace(
             "the simulated path did not turn 360° one way about the centre, which the "
-            "ISO 230-4 evaluation needs (a run ends where the path's angle about the centre "
-            f"turns back by more than {math.degrees(reversal):.3g}°, the reversal angle)",
-            time, x, y) from None
+            f"ISO 230-4 evaluation needs ({why})", time, x, y) from None
     return CircularRunTrace(test=test, time=time, x=x, y=y, axes=(axes[0], axes[1]),
                             centre=centre, radius=float(radius), feed=float(feed),
                             acceleration=float(acceleration), lead_arc=float(lead_arc),

@@ -151,9 +151,12 @@ def circular_command(
         _stop_bar(bar)
         err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
         if output:
+            names = pair or (built.axes[0].name, built.axes[1].name)
+            centre_mm = ",".join(repr(built.axis(n).table_position * 1e3) for n in names)
             write_xy_trace(output, err.time, err.x, err.y, comment=(
                 f"feeddrive circular --machine {machine}, R {radius:g} mm, feed {feed:g} "
-                "mm/min: not evaluated (no full revolution one way)"))
+                "mm/min: not evaluated (no full revolution one way)\n"
+                f"nominal circle: --radius {radius!r} --centre {centre_mm}"))
             err_console.print(f"wrote the trace all the same: {output}", markup=False,
                               highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
@@ -194,8 +197,10 @@ def circular_command(
     for line in describe(test):
         _say(line)
     if output:
+        # the radius as given, every digit (rounded by :g it moved the numbers: an outside
+        # check, 2026-12-07)
         _say(f"wrote trace {output} (feeddrive analyze --circular {output} --radius "
-             f"{radius:g} --centre {centre_mm})")
+             f"{radius!r} --centre {centre_mm})")
     if plot:
         _say(f"wrote plot {plot}")
 

@@ -980,6 +980,15 @@ class Simulation:
                             else None)
         self._chunks: _Chunks | None = None
         self._running: _Chunks | None = None
+        self._reached: float | None = None  # the last Result's end [s] (repr)
+
+    def __repr__(self) -> str:
+        # what a notebook shows: the drive, the profile, the method and how far it has run
+        reached = self._reached
+        return (f"<feeddrive.Simulation {self.system.drive} of "
+                f"{self.system.parameters.name!r} at {self.system.table_position!r} m, "
+                f"{self.profile!r}, method {self.options.method!r}; "
+                + ("not run yet>" if reached is None else f"run to {reached:g} s>"))
 
     def keep_checkpoints(self) -> None:
         """Keep the carried state at every committed chunk end of the coming runs, so that a
@@ -1197,6 +1206,7 @@ class Simulation:
             if carried is not None:  # the memory of the call that ended the run
                 solver_stats["embedded_error_estimate"] = embedded_entry(
                     [s.name for s in model.states], carried[1])
+        self._reached = float(t[-1]) if t.size else 0.0
         return self._result(t, y_parts, aux_parts, solver_stats)
 
     def _result(self, t: np.ndarray, y_parts: list[np.ndarray], aux_parts: list[np.ndarray],

@@ -20,6 +20,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..parameters import ParameterError
+from ..parameters.validation import MISSING
 
 REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
 # parameter block of a profile: kind, table speed, nut speed, ramp time, frequency or step,
@@ -199,6 +200,16 @@ class ConstantSpeed:
     nut_speed: float = 0.0
     ramp_time: float = 0.1  # [s]
 
+    def __post_init__(self) -> None:
+        # refused when made, naming the field (a negative ramp was refused only at
+        # simulate, in a bare ValueError: an outside check, 2026-12-07)
+        _finite("table_speed", self.table_speed, "m/s")
+        _finite("nut_speed", self.nut_speed, "m/s")
+        _number("ramp_time", self.ramp_time)
+        if not (self.ramp_time >= 0.0 and math.isfinite(self.ramp_time)):
+            raise ParameterError("profile.ramp_time", self.ramp_time,
+                                 "expected a finite duration ≥ 0 [s]")
+
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
         """The profile as (parameter slots, data table) for the reference kernel.
 
@@ -207,10 +218,7 @@ class ConstantSpeed:
         tuple of (dict, numpy.ndarray)
             Slot index → value [SI] of the profile's parameter block, and its (empty) table.
         """
-        _finite("table_speed", self.table_speed, "m/s")
-        _finite("nut_speed", self.nut_speed, "m/s")
-        if not (self.ramp_time >= 0.0 and math.isfinite(self.ramp_time)):
-            raise ValueError(f"profile.ramp_time = {self.ramp_time!r}: expected ≥ 0 [s]")
+        self.__post_init__()
         return ({KIND: REF_CONSTANT, TABLE_SPEED: self.table_speed,
                  NUT_SPEED: self.nut_speed, RAMP_TIME: self.ramp_time}, _EMPTY_TABLE)
 
@@ -245,6 +253,16 @@ class SineSpeed:
     nut_amplitude: float = 0.0
     frequency: float = 0.2  # [Hz]
 
+    def __post_init__(self) -> None:
+        # refused when made, naming the field (a zero frequency was refused only at
+        # simulate, in a bare ValueError: an outside check, 2026-12-07)
+        _finite("table_amplitude", self.table_amplitude, "m/s")
+        _finite("nut_amplitude", self.nut_amplitude, "m/s")
+        _number("frequency", self.frequency)
+        if not (0.0 < self.frequency <= MAX_FREQUENCY):
+            raise ParameterError("profile.frequency", self.frequency,
+                                 f"expected > 0, ≤ {MAX_FREQUENCY:g} [Hz]")
+
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
         """The profile as (parameter slots, data table) for the reference kernel.
 
@@ -253,11 +271,7 @@ class SineSpeed:
         tuple of (dict, numpy.ndarray)
             Slot index → value [SI] of the profile's parameter block, and its (empty) table.
         """
-        _finite("table_amplitude", self.table_amplitude, "m/s")
-        _finite("nut_amplitude", self.nut_amplitude, "m/s")
-        if not (0.0 < self.frequency <= MAX_FREQUENCY):
-            raise ValueError(f"profile.frequency = {self.frequency!r}: expected > 0, ≤ "
-                             f"{MAX_FREQUENCY:g} [Hz]")
+        self.__post_init__()
         return ({KIND: REF_SINE, TABLE_SPEED: self.table_amplitude,
                  NUT_SPEED: self.nut_amplitude, FREQUENCY: self.frequency}, _EMPTY_TABLE)
 
@@ -287,6 +301,39 @@ class SampledSpeed:
     nut_speed: np.ndarray | None = None
     hold: bool = False
 
+    def __post_init__(self) -> None:
+        # refused when made, naming the field (as the other profiles)
+        self._arrays()
+
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The checked arrays: time, table speed, nut speed and the time steps [s, m/s]."""
+        try:
+            t = np.asarray(self.time, dtype=float)
+            vt = np.asarray(self.table_speed, dtype=float)
+            vn = (np.zeros_like(vt) if self.nut_speed is None
+                  else np.asarray(self.nut_speed, float))
+        except (TypeError, ValueError):
+            raise ParameterError("profile.time/table_speed/nut_speed", MISSING,
+                                 "expected arrays of numbers [s, m/s]") from None
+        if t.ndim != 1 or t.size < 2 or vt.shape != t.shape or vn.shape != t.shape:
+            raise ParameterError("profile.time/table_speed/nut_speed", MISSING,
+                                 f"expected 1-D arrays of one length ≥ 2 (shapes {t.shape}, "
+                                 f"{vt.shape}, {vn.shape}) [s, m/s]")
+        for name, arr in (("time", t), ("table_speed", vt), ("nut_speed", vn)):
+            if not np.all(np.isfinite(arr)):
+                bad = int(np.flatnonzero(~np.isfinite(arr))[0])
+                raise ParameterError(f"profile.{name}[{bad}]", float(arr[bad]),
+                                     "expected finite values [" + ("s" if name == "time"
+                                                                   else "m/s") + "]")
+        dt = np.diff(t)
+        # uniform to round-off: the spacing of doubles grows with t (at 8192 s it is 1.8e-12
+        # s, and a 1-ms grid past that was refused: an outside check, 2026-12-07)
+        spread = 1e-9 * max(dt.mean(), 1e-300) + 16 * np.finfo(float).eps * abs(t[-1])
+        if abs(t[0]) > 1e-12 or np.any(dt <= 0) or np.ptp(dt) > spread:
+            raise ParameterError("profile.time", MISSING, "expected a uniform, increasing "
+                                 "grid starting at 0 [s]")
+        return t, vt, vn, dt
+
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
         """The profile as (parameter slots, data table) for the reference kernel.
 
@@ -296,21 +343,7 @@ class SampledSpeed:
             Slot index → value [SI] of the profile's parameter block, and the table of
             sample rows (time [s], table speed [m/s], nut speed [m/s], positions [m]).
         """
-        t = np.asarray(self.time, dtype=float)
-        vt = np.asarray(self.table_speed, dtype=float)
-        vn = np.zeros_like(vt) if self.nut_speed is None else np.asarray(self.nut_speed, float)
-        if t.ndim != 1 or t.size < 2 or vt.shape != t.shape or vn.shape != t.shape:
-            raise ValueError("profile.time/table_speed/nut_speed: expected 1-D arrays of one "
-                             "length ≥ 2")
-        for name, arr in (("time", t), ("table_speed", vt), ("nut_speed", vn)):
-            if not np.all(np.isfinite(arr)):
-                raise ValueError(f"profile.{name}: contains non-finite values")
-        dt = np.diff(t)
-        # uniform to round-off: the spacing of doubles grows with t (at 8192 s it is 1.8e-12
-        # s, and a 1-ms grid past that was refused: an outside check, 2026-12-07)
-        spread = 1e-9 * max(dt.mean(), 1e-300) + 16 * np.finfo(float).eps * abs(t[-1])
-        if abs(t[0]) > 1e-12 or np.any(dt <= 0) or np.ptp(dt) > spread:
-            raise ValueError("profile.time: expected a uniform, increasing grid starting at 0 [s]")
+        t, vt, vn, dt = self._arrays()
         table = np.empty((4, t.size))
         for j, v in enumerate((vt, vn)):
             table[2 * j + 1] = v
@@ -380,6 +413,12 @@ def _finite(name: str, value: float, unit: str) -> None:
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
             or not math.isfinite(value):
         raise ParameterError(f"profile.{name}", value, f"expected a finite speed [{unit}]")
+
+
+def _number(name: str, value: object) -> None:
+    """Refuse a ``profile.name`` that is not a real number (a str or a list), naming it."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise ParameterError(f"profile.{name}", value, "expected a number")
 
 
 # ---------------------------------------------------------------- profiles built on SampledSpeed

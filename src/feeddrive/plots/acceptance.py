@@ -79,8 +79,11 @@ def circular_figure(result: CircularTest, *, magnification: float | None = None)
         angle = np.arctan2(run.y - cy, run.x - cx)
         ax.plot(angle, 0.6 + scale * magnification * dev, lw=0.9,
                 c=_COLOURS.get(run.direction, "k"), label=run.direction)
+    hidden = sum(1 for s in result.spikes if not s.stands_out)
     for s in result.spikes:
-        if abs(s.height) > 0.1 * span:
+        # a "spike" that does not stand out of the path's deviation before its reversal is
+        # an oscillation's peak (a low feed's stick-slip or hunting): not labelled as one
+        if s.stands_out and abs(s.height) > 0.1 * span:
             a = math.radians(s.angle + (s.peak_angle if s.direction == "CCW"
                                         else -s.peak_angle))
             # CCW labels above-left of their peak, CW below-right: the two runs' spikes at one
@@ -99,7 +102,9 @@ def circular_figure(result: CircularTest, *, magnification: float | None = None)
     ax.set_title(f"ISO 230-4 circular test, R = {result.radius * 1e3:.4g} mm, "
                  f"feed {result.feed * 6e4:.4g} mm/min\n{g_text}\n"
                  f"deviation magnified ×{magnification:.4g}; rings every "
-                 f"{division * 1e6:.3g} µm", fontsize=9)
+                 f"{division * 1e6:.3g} µm"
+                 + (f"; {hidden} reversal spikes not labelled (they do not stand out)"
+                    if hidden else ""), fontsize=9)
     return fig
 
 
