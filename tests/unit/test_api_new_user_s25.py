@@ -1,0 +1,60 @@
+"""A notebook user's bad values, refused where they are made and naming the field (session
+25; an outside check, 2026-12-07): a profile with a negative ramp or a zero frequency was
+refused only at ``simulate``, in a bare ``ValueError`` from ``encode``; a ``Simulation`` showed
+as ``<feeddrive.engine.simulate.Simulation object at 0x…>``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import feeddrive as fd
+from feeddrive.engine.simulate import Simulation
+from feeddrive.model.reference import ConstantSpeed, SampledSpeed, SineSpeed
+from feeddrive.parameters import ParameterError
+
+
+@pytest.mark.parametrize(("make", "field", "unit"), [
+    (lambda: ConstantSpeed(1e-3, ramp_time=-1.0), "profile.ramp_time", "[s]"),
+    (lambda: ConstantSpeed(1e-3, ramp_time=math.inf), "profile.ramp_time", "[s]"),
+    (lambda: ConstantSpeed(1e-3, ramp_time="0.1"), "profile.ramp_time", "number"),
+    (lambda: ConstantSpeed(math.nan), "profile.table_speed", "[m/s]"),
+    (lambda: ConstantSpeed(1e-3, nut_speed="16"), "profile.nut_speed", "[m/s]"),
+    (lambda: SineSpeed(1e-3, frequency=0.0), "profile.frequency", "[Hz]"),
+    (lambda: SineSpeed(1e-3, frequency=-0.2), "profile.frequency", "[Hz]"),
+    (lambda: SineSpeed(1e-3, frequency=1e300), "profile.frequency", "[Hz]"),
+    (lambda: SineSpeed(1e-3, frequency=[0.2]), "profile.frequency", "number"),
+    (lambda: SineSpeed(math.inf), "profile.table_amplitude", "[m/s]"),
+    (lambda: SampledSpeed(np.arange(5.0), np.ones(4)), "profile.time/table_speed/nut_speed", "[s, m/s]"),
+    (lambda: SampledSpeed(np.arange(5.0), np.array([0, 1, np.nan, 1, 0.0])),
+     "profile.table_speed[2]", "[m/s]"),
+    (lambda: SampledSpeed(np.array([0.0, 1.0, 3.0]), np.ones(3)), "profile.time", "[s]"),
+    (lambda: SampledSpeed("a", "b"), "profile.time/table_speed/nut_speed", "[s, m/s]"),
+])
+def test_a_bad_profile_is_refused_when_made(make: object, field: str, unit: str) -> None:
+    with pytest.raises(ParameterError) as err:
+        make()  # type: ignore[operator]
+    assert err.value.field == field
+    assert str(err.value).startswith(field) and unit in str(err.value)
+
+
+def test_good_profiles_are_made_and_encoded_as_before() -> None:
+    """The checks moved; what is taken is unchanged (the encoded blocks)."""
+    assert ConstantSpeed(2e-3, 0.016, 0.0).encode()[0][1] == 2e-3
+    assert SineSpeed(1e-3, frequency=1000.0).encode()[0][4] == 1000.0
+    t = np.arange(11) * 1e-3
+    table = SampledSpeed(t, np.full(11, 1e-3)).encode()[1]
+    assert table[0, -1] == pytest.approx(1e-5)  # the position, the speed's exact integral
+
+
+def test_a_simulation_says_what_it_is_and_how_far_it_has_run() -> None:
+    sim = Simulation(fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4), ConstantSpeed(2e-3))
+    assert repr(sim).startswith("<feeddrive.Simulation cdfs of 'wang2021' at 0.4 m, "
+                                "ConstantSpeed(table_speed=0.002")
+    assert repr(sim).endswith("method 'modal'; not run yet>")
+    sim.run(0.2)
+    assert repr(sim).endswith("; run to 0.2 s>")
+    sim.run(0.3)  # continued
+    assert repr(sim).endswith("; run to 0.3 s>")
