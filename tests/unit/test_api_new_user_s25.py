@@ -58,3 +58,36 @@ def test_a_simulation_says_what_it_is_and_how_far_it_has_run() -> None:
     assert repr(sim).endswith("; run to 0.2 s>")
     sim.run(0.3)  # continued
     assert repr(sim).endswith("; run to 0.3 s>")
+
+
+@pytest.mark.parametrize(("option", "value", "unit"), [
+    ("--lead", "0", "[mm]"), ("--lead", "nan", "[mm]"), ("--torque-constant", "-1", "[N m/A]")])
+def test_identify_static_names_the_option_in_its_unit(tmp_path: object, option: str,
+                                                      value: str, unit: str) -> None:
+    """`--lead 0` was refused as "torque_constant = 0.55, lead = 0.0: expected positive values
+    [N m/A], [m]" — both fields, the lead in metres."""
+    from pathlib import Path
+
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    data = Path(str(tmp_path)) / "current.csv"
+    data.write_text("speed,current\n1,1\n2,1.1\n5,1.3\n-1,-1\n-2,-1.1\n-5,-1.3\n")
+    res = CliRunner().invoke(app, ["identify", "static", str(data), option, value])
+    assert res.exit_code == 2
+    line = res.output.strip().splitlines()[-1]
+    assert line.startswith(f"error: {option} = ") and line.endswith(unit), res.output
+
+
+def test_read_static_test_names_the_field_it_refuses(tmp_path: object) -> None:
+    from pathlib import Path
+
+    from feeddrive.io.measured import read_static_test
+
+    data = Path(str(tmp_path)) / "current.csv"
+    data.write_text("speed,current\n1,1\n2,1.1\n5,1.3\n-1,-1\n-2,-1.1\n-5,-1.3\n")
+    with pytest.raises(ParameterError, match=r"^lead = 0.0: .*\[m\]$"):
+        read_static_test(str(data), torque_constant=0.5, lead=0.0)
+    with pytest.raises(ParameterError, match=r"^torque_constant = nan: .*\[N m/A\]$"):
+        read_static_test(str(data), torque_constant=math.nan, lead=5e-3)

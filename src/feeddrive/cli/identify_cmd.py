@@ -173,6 +173,12 @@ def static_command(
     from ..analysis.static_fit import fit_static
     from ..io.measured import read_static_test
 
+    # in the options' units, before the file is read (--lead 0 was refused as "lead = 0.0
+    # ... [m]" together with the torque constant: an outside check, 2026-12-07)
+    for option, given, unit in (("--torque-constant", torque_constant, "N m/A"),
+                                ("--lead", lead, "mm")):
+        if given is not None and not (math.isfinite(given) and given > 0):
+            raise ParameterError(option, given, f"expected a finite value > 0 [{unit}]")
     site = _site(site)
     params = _base(preset_name, params_file)
     motor = params.hollow_motor if site == "nut" else params.screw_motor

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from ..parameters import ParameterError
 from ..units import LARGEST_SPEED
 
 __all__ = [
@@ -778,9 +779,10 @@ def read_static_test(
                                     f"column {current_column!r} needs the motor torque constant "
                                     "and the screw lead (from a parameter set or options) to "
                                     "become a force")
-        if not (torque_constant > 0 and lead > 0):
-            raise ValueError(f"torque_constant = {torque_constant!r}, lead = {lead!r}: expected "
-                             "positive values [N m/A], [m]")
+        for name, value, unit in (("torque_constant", torque_constant, "N m/A"),
+                                  ("lead", lead, "m")):
+            if not (math.isfinite(value) and value > 0):
+                raise ParameterError(name, value, f"expected a finite value > 0 [{unit}]")
         current, _, _ = table.quantity([current_column], "current", unit=current_unit,
                                        default_unit="A")
         force = current * torque_constant / (lead / (2.0 * math.pi))
