@@ -27,7 +27,8 @@ from feeddrive.parameters import ParameterError
     (lambda: SineSpeed(1e-3, frequency=1e300), "profile.frequency", "[Hz]"),
     (lambda: SineSpeed(1e-3, frequency=[0.2]), "profile.frequency", "number"),
     (lambda: SineSpeed(math.inf), "profile.table_amplitude", "[m/s]"),
-    (lambda: SampledSpeed(np.arange(5.0), np.ones(4)), "profile.time/table_speed/nut_speed", "[s, m/s]"),
+    (lambda: SampledSpeed(np.arange(5.0), np.ones(4)), "profile.time/table_speed/nut_speed",
+     "[s, m/s]"),
     (lambda: SampledSpeed(np.arange(5.0), np.array([0, 1, np.nan, 1, 0.0])),
      "profile.table_speed[2]", "[m/s]"),
     (lambda: SampledSpeed(np.array([0.0, 1.0, 3.0]), np.ones(3)), "profile.time", "[s]"),
@@ -91,3 +92,58 @@ def test_read_static_test_names_the_field_it_refuses(tmp_path: object) -> None:
         read_static_test(str(data), torque_constant=0.5, lead=0.0)
     with pytest.raises(ParameterError, match=r"^torque_constant = nan: .*\[N m/A\]$"):
         read_static_test(str(data), torque_constant=math.nan, lead=5e-3)
+
+
+def _interrupt_second(monkeypatch: pytest.MonkeyPatch, module: object, name: str) -> None:
+    """The second call of ``module.name`` is stopped by Ctrl-C; the first runs as it is."""
+    real = getattr(module, name)
+    calls = {"n": 0}
+
+    def once(*args: object, **kwargs: object) -> object:
+        calls["n"] += 1
+        if calls["n"] == 2:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, once)
+
+
+def test_compensate_compare_keeps_the_schemes_finished_before_ctrl_c(
+        tmp_path: object, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ctrl-C in the second scheme: the first's row is printed and written (both were
+    dropped: an outside check, 2026-12-07)."""
+    from pathlib import Path
+
+    from typer.testing import CliRunner
+
+    from feeddrive.analysis import compensation_compare
+    from feeddrive.cli import app
+    from feeddrive.exit_codes import INTERRUPTED
+
+    _interrupt_second(monkeypatch, compensation_compare, "measure")
+    out = Path(str(tmp_path)) / "table.csv"
+    res = CliRunner().invoke(app, ["compensate", "--compare", "--schemes", "none,feedforward",
+                                   "--metrics", "settling", "--output", str(out)])
+    assert res.exit_code == INTERRUPTED, res.output
+    assert "interrupted: stopped after 1 of 2 rows (those shown, and written)" in res.output
+    lines = out.read_text(encoding="utf-8").strip().splitlines()
+    assert len(lines) == 2 and lines[1].startswith("none,")  # the header and the first row
+
+
+def test_compensate_study_shows_the_cases_finished_before_ctrl_c(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from typer.testing import CliRunner
+
+    from feeddrive.analysis import compensation
+    from feeddrive.cli import app
+    from feeddrive.exit_codes import INTERRUPTED
+
+    _interrupt_second(monkeypatch, compensation, "evaluate")
+    res = CliRunner().invoke(app, ["compensate", "--no-search", "--json"])
+    assert res.exit_code == INTERRUPTED, res.output
+    import json
+
+    text = res.output
+    shown = json.loads(text[text.index("{"):text.rindex("}") + 1])
+    assert len(shown["rows"]) == 1 and shown["interrupted"] is True
+    assert "stopped after 1 of " in res.output

@@ -188,6 +188,24 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
     return row
 
 
+class RowsInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a table of runs (:func:`compensation_study`,
+    :func:`~feeddrive.analysis.compensation_compare.compare_compensations`): ``rows`` holds
+    the rows finished before it, which the caller keeps (prints, writes).
+
+    Parameters
+    ----------
+    rows : list of dict
+        The finished rows.
+    total : int
+        How many rows were asked for.
+    """
+
+    def __init__(self, rows: list[dict[str, Any]], total: int) -> None:
+        super().__init__(f"stopped after {len(rows)} of {total} rows")
+        self.rows, self.total = rows, total
+
+
 def compensation_study(params: DriveParameters, cases: list[Case] | None = None, *,
                        search: bool = True,
                        progress: Callable[[int, int], None] | None = None,
@@ -214,19 +232,27 @@ def compensation_study(params: DriveParameters, cases: list[Case] | None = None,
     -------
     list of dict
         One row per case.
+
+    Raises
+    ------
+    RowsInterrupted
+        On Ctrl-C, with the rows finished before it.
     """
     cases = cases if cases is not None else default_cases()
-    rows = []
-    for k, case in enumerate(cases):
-        rows.append(evaluate(params, case, search=search, found=(found or {}).get(k),
-                             **kwargs))
-        if progress:
-            progress(k + 1, len(cases))
+    rows: list[dict[str, Any]] = []
+    try:
+        for k, case in enumerate(cases):
+            rows.append(evaluate(params, case, search=search, found=(found or {}).get(k),
+                                 **kwargs))
+            if progress:
+                progress(k + 1, len(cases))
+    except KeyboardInterrupt:  # the finished rows are kept (they were dropped)
+        raise RowsInterrupted(rows, len(cases)) from None
     return rows
 
 
-__all__ = ["Case", "case_parameters", "compensation_study", "default_cases", "evaluate",
-           "study_drives"]
+__all__ = ["Case", "RowsInterrupted", "case_parameters", "compensation_study", "default_cases",
+           "evaluate", "study_drives"]
 
 
 def observer_gain_warning(system: DriveSystem, table_speed: float, nut_speed: float = 0.0

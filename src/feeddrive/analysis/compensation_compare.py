@@ -459,7 +459,14 @@ def compare_compensations(params: DriveParameters, *, drive: str = "cdfs",
     -------
     list of dict
         The rows.
+
+    Raises
+    ------
+    feeddrive.analysis.compensation.RowsInterrupted
+        On Ctrl-C, with the schemes' rows finished before it.
     """
+    from .compensation import RowsInterrupted
+
     bad = [m for m in metrics if m not in METRICS]
     if bad:
         raise ParameterError("metrics", bad, f"expected some of {', '.join(METRICS)}")
@@ -468,16 +475,19 @@ def compare_compensations(params: DriveParameters, *, drive: str = "cdfs",
     chosen = schemes(params, names, reversal_current=reversal_current)
     total = len(chosen) * len(metrics)
     done = 0
-    rows = []
-    for scheme in chosen:
-        def step(metric: str, name: str = scheme.name) -> None:
-            nonlocal done
-            if progress:
-                progress(done, total, f"{name}: {metric}")
-            done += 1
+    rows: list[dict[str, Any]] = []
+    try:
+        for scheme in chosen:
+            def step(metric: str, name: str = scheme.name) -> None:
+                nonlocal done
+                if progress:
+                    progress(done, total, f"{name}: {metric}")
+                done += 1
 
-        rows.append(measure(scheme, drive, table_position, metrics, band=band,
-                            options=options, progress=step))
+            rows.append(measure(scheme, drive, table_position, metrics, band=band,
+                                options=options, progress=step))
+    except KeyboardInterrupt:  # the finished schemes' rows are kept (they were dropped)
+        raise RowsInterrupted(rows, len(chosen)) from None
     if progress:
         progress(total, total, "done")
     return rows

@@ -13,6 +13,8 @@ from . import _units
 from ._common import (
     app,
     console,
+    err_console,
+    interrupted,
     outputs,
     print_json,
     resolve_parameters,
@@ -109,19 +111,37 @@ def compensate_command(
     v_track = _units.speed("--tracking-speed", tracking_speed, nonzero=True)
     cases = default_cases(mismatch / 100.0, _units.speed("--nut-speed", nut_speed),
                           drive=drive, alternative=eligible[drive])
+    from ..analysis.compensation import RowsInterrupted
+
+    stopped: RowsInterrupted | None = None
     with Progress(console=console, transient=True, disable=as_json) as bar:
         task = bar.add_task("compensation study", total=len(cases))
-        rows = compensation_study(params, cases, search=not no_search,
-                                  table_position=table_position,
-                                  tracking_speed=v_track,
-                                  progress=lambda done, total: bar.update(task, completed=done))
+        try:
+            rows = compensation_study(params, cases, search=not no_search,
+                                      table_position=table_position, tracking_speed=v_track,
+                                      progress=lambda done, total: bar.update(task,
+                                                                              completed=done))
+        except RowsInterrupted as stop:  # the finished cases are shown (they were dropped)
+            stopped, rows = stop, stop.rows
+    _show_study(rows, params.name, position, tracking_speed, solver.describe(), as_json,
+                stopped is not None)
+    if stopped is not None:
+        err_console.print(f"interrupted: {stopped} (those shown)", markup=False,
+                          highlight=False)
+        raise interrupted()
+
+
+def _show_study(rows: list[dict[str, Any]], name: str, position: float,
+                tracking_speed: float, integrator: str, as_json: bool,
+                interrupted: bool) -> None:
+    """Print the study's rows (text or JSON; ``interrupted``: the rows before a Ctrl-C)."""
     if as_json:
-        print_json({"parameter_set": params.name, "rows": rows,
-                    "integrator": solver.describe()})
+        print_json({"parameter_set": name, "rows": rows, "integrator": integrator,
+                    "interrupted": interrupted})
         return
-    console.print(f"[bold]Friction compensation vs DDFS[/] ({params.name}, "
+    console.print(f"[bold]Friction compensation vs DDFS[/] ({name}, "
                   f"{position:g} mm, tracking at {tracking_speed:g} mm/s)")
-    console.print(f"  integrator: {solver.describe()}", markup=False, highlight=False)
+    console.print(f"  integrator: {integrator}", markup=False, highlight=False)
     for r in rows:
         bands = ", ".join(f"{lo:.3f}–{hi:.3f}" for lo, hi in r["linear_unstable_bands_mm_s"])
         crit = r.get("critical_speed_mm_s", "—")
@@ -146,12 +166,7 @@ def _compare(drive: str, position: float, schemes: str, metrics: str, band: floa
     """`feeddrive compensate --compare`: parse, call compare_compensations, print."""
     from rich.progress import Progress
 
-    from ..analysis.compensation_compare import (
-        COLUMNS,
-        check_sampled,
-        compare_compensations,
-        comparison_csv,
-    )
+    from ..analysis.compensation_compare import check_sampled, compare_compensations
 
     names = [n.strip() for n in schemes.split(",") if n.strip()]
     wanted = [m.strip() for m in metrics.split(",") if m.strip()]
@@ -169,15 +184,40 @@ def _compare(drive: str, position: float, schemes: str, metrics: str, band: floa
     params = resolve_parameters(preset_name, params_file, drive)
     check_sampled(params)
     table_position = _units.position("--position", position, params, drive)
+    from ..analysis.compensation import RowsInterrupted
+
+    stopped: RowsInterrupted | None = None
     with Progress(console=console, transient=True, disable=as_json) as bar:
         task = bar.add_task("compensation comparison", total=None)
 
         def progress(done: int, total: int, label: str) -> None:
             bar.update(task, completed=done, total=total, description=label)
 
-        rows = compare_compensations(params, drive=drive, table_position=table_position,
-                                     names=names, metrics=wanted, band=band * 1e-6,
-                                     progress=progress)
+        try:
+            rows = compare_compensations(params, drive=drive, table_position=table_position,
+                                         names=names, metrics=wanted, band=band * 1e-6,
+                                         progress=progress)
+        except RowsInterrupted as stop:  # the finished schemes are kept (they were dropped)
+            stopped, rows = stop, stop.rows
+    if stopped is not None and not rows:
+        err_console.print(f"interrupted: {stopped}; nothing written", markup=False,
+                          highlight=False)
+        raise interrupted()
+    _show_comparison(rows, params.name, drive, position, band, integrator, as_json, output,
+                     plot, stopped is not None)
+    if stopped is not None:
+        err_console.print(f"interrupted: {stopped} (those shown"
+                          + (", and written" if output or plot else "") + ")",
+                          markup=False, highlight=False)
+        raise interrupted()
+
+
+def _show_comparison(rows: list[dict[str, Any]], name: str, drive: str, position: float,
+                     band: float, integrator: str, as_json: bool, output: str | None,
+                     plot: str | None, interrupted: bool) -> None:
+    """Write and print the comparison's rows (``interrupted``: those before a Ctrl-C)."""
+    from ..analysis.compensation_compare import COLUMNS, comparison_csv
+
     if output:
         from ..io.outputs import atomic_path
 
@@ -188,10 +228,11 @@ def _compare(drive: str, position: float, schemes: str, metrics: str, band: floa
 
         save(compensation_figure(rows), plot)
     if as_json:
-        print_json({"parameter_set": params.name, "drive": drive, "position_mm": position,
-                    "rows": rows, "output": output, "plot": plot, "integrator": integrator})
+        print_json({"parameter_set": name, "drive": drive, "position_mm": position,
+                    "rows": rows, "output": output, "plot": plot, "integrator": integrator,
+                    "interrupted": interrupted})
         return
-    console.print(f"[bold]Friction compensation compared[/] ({params.name}, {drive}, "
+    console.print(f"[bold]Friction compensation compared[/] ({name}, {drive}, "
                   f"{position:g} mm; settling band ±{band:g} µm)")
     console.print(f"  integrator: {integrator}", markup=False, highlight=False)
     console.print("  " + f"{'scheme':22s}" + "".join(f"{h:>30s}" for _, h in COLUMNS),
