@@ -147,3 +147,60 @@ def test_compensate_study_shows_the_cases_finished_before_ctrl_c(
     shown = json.loads(text[text.index("{"):text.rindex("}") + 1])
     assert len(shown["rows"]) == 1 and shown["interrupted"] is True
     assert "stopped after 1 of " in res.output
+
+
+# ---- wrong objects and missing folders (an outside check, 2026-12-07) ---------------------
+
+def test_save_names_swapped_or_wrong_arguments(tmp_path: object) -> None:
+    params = fd.preset("wang2021")
+    with pytest.raises(ParameterError, match=r"^params = 'str': expected DriveParameters"):
+        fd.save("wang2021", f"{tmp_path}/p.toml")  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"^params = 'str': expected DriveParameters"):
+        fd.save(f"{tmp_path}/p.toml", params)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"^path = 'int': expected a file name"):
+        fd.save(params, 3)  # type: ignore[arg-type]
+
+
+def test_an_api_write_into_a_missing_folder_is_refused_not_created(tmp_path: object) -> None:
+    """docs/outputs.md: feeddrive does not create folders for a file output.  `save` failed
+    naming its hidden temporary file; `Result.save` created the folder."""
+    from pathlib import Path
+
+    from feeddrive.io.outputs import OutputError
+
+    missing = Path(str(tmp_path)) / "missing"
+    params = fd.preset("wang2021")
+    with pytest.raises(OutputError, match=r"folder .*missing does not exist; create it first"):
+        fd.save(params, missing / "p.toml")
+    result = fd.simulate(fd.DriveSystem(params, "cdfs", 0.4), ConstantSpeed(2e-3), 0.05)
+    for name in ("r.nc", "r.csv"):
+        with pytest.raises(OutputError, match="does not exist; create it first"):
+            result.save(missing / name)
+    assert not missing.exists()
+    result.save(Path(str(tmp_path)) / "r.csv")  # an existing folder: written as before
+    assert (Path(str(tmp_path)) / "r.csv").stat().st_size > 0
+
+
+def test_replace_path_names_a_path_that_is_not_text() -> None:
+    with pytest.raises(ParameterError, match=r"^path = None: expected a dotted field name"):
+        fd.preset("wang2021").replace_path(None, 1.0)  # type: ignore[arg-type]
+
+
+def test_friction_functions_refuse_a_whole_set_and_non_finite_speeds() -> None:
+    from feeddrive.model.friction.stribeck import sliding_stability, steady_friction
+
+    params = fd.preset("wang2021")
+    site = params.friction.screw
+    with pytest.raises(ParameterError, match=r"^params = 'DriveParameters': expected one "):
+        steady_friction(np.array([1e-3]), params)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"^velocity = nan: expected finite .*\[m/s\]$"):
+        steady_friction(math.nan, site)
+    with pytest.raises(ParameterError, match=r"^velocity = 'a': expected numbers \[m/s\]$"):
+        steady_friction("a", site)
+    for mass in (0.0, math.nan):  # 0 read as "stable"; NaN failed in LAPACK
+        with pytest.raises(ParameterError, match=r"^mass = .*: expected a finite value > 0 "
+                                                 r"\[kg\]$"):
+            sliding_stability([1e-3], [site], mass, 1e7, 100.0)
+    # good values as before: Wang2021's screw site, the two branches
+    force = steady_friction(np.array([1e-3, -1e-3]), site)
+    assert force[0] > 0 > force[1]

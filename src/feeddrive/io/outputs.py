@@ -126,6 +126,10 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         The temporary name to write to.
     """
     p = Path(path)
+    # the folder must exist, for every writer (the API's too: `save(params, "new/p.toml")`
+    # failed naming the hidden temporary file, and `Result.save` created the folder, against
+    # docs/outputs.md: an outside check, 2026-12-07)
+    _check_folder("path", p, p.parent if str(p.parent) else Path("."))
     while True:
         tmp = _partial(p)
         try:

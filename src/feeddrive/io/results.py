@@ -452,8 +452,7 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     """
     p = Path(path)
     ext = check_format(p)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(p) as tmp:
+    with atomic_path(p) as tmp:  # its folder must exist (docs/outputs.md)
         _write(dataset, tmp, ext)
     return p
 
@@ -548,8 +547,7 @@ class ChunkWriter:
         self._writer: Any = None
         self._atomic: Any = None
         self._first = True
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._atomic = atomic_path(self.path)
+        self._atomic = atomic_path(self.path)  # its folder must exist (docs/outputs.md)
         self._tmp = self._atomic.__enter__()
 
     def _columns(self, t: np.ndarray, y: np.ndarray,

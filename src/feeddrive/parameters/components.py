@@ -494,6 +494,9 @@ class DriveParameters(_Component):
         DriveParameters
             The changed copy (this set is unchanged).
         """
+        if not isinstance(path, str) or not path:
+            raise ParameterError("path", path, "expected a dotted field name as text, e.g. "
+                                 "'controller.velocity_gain'")
         return _replace_path(self, path.split("."), value, path)
 
 

@@ -355,8 +355,18 @@ def save(params: DriveParameters, path: str | Path) -> None:
         For another file name (``x.json``): the set is TOML whatever the name says;
         ``feeddrive.parameters.to_dict`` gives a dict for ``json.dump``.
     """
+    import os
+
     from ..io.outputs import atomic_path
 
+    # the arguments swapped, or a preset's name, failed deep inside (an outside check,
+    # 2026-12-07)
+    if not isinstance(params, DriveParameters):
+        raise ParameterError("params", type(params).__name__, "expected DriveParameters, e.g. "
+                             "feeddrive.preset('wang2021'); save(params, path)")
+    if not isinstance(path, str | os.PathLike):
+        raise ParameterError("path", type(path).__name__, "expected a file name (str or "
+                             "pathlib.Path) ending in .toml")
     if Path(path).suffix.lower() != ".toml":
         raise ParameterError("path", str(path), "expected a .toml file name: a parameter set "
                              "is written as TOML (for JSON: json.dump(feeddrive.parameters."

@@ -90,7 +90,6 @@ def plot_machine(result: Result, contour: Contour, path: str | Path,
 
     fig = machine_figure(result, contour, title)
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(p) as tmp:
+    with atomic_path(p) as tmp:  # its folder must exist (docs/outputs.md)
         fig.savefig(tmp, dpi=110)
     return p

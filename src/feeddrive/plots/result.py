@@ -122,7 +122,6 @@ def plot_result(result: Result, path: str | Path, title: str | None = None) -> P
     """
     fig = result_figure(result, title)
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
     from ..io.outputs import atomic_path
 
     with atomic_path(p) as tmp:

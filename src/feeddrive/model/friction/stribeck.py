@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._jit import kernel
+from ...parameters.validation import ParameterError
 from . import lugre
 from .lugre_parameters import FrictionBranch, LuGreParameters
 
@@ -188,11 +189,27 @@ def _map1(fn_id: int, v: np.ndarray, z: np.ndarray, p: np.ndarray) -> np.ndarray
 
 
 def _apply(fn_id: int, velocity: object, bristle: object, params: LuGreParameters) -> np.ndarray:
-    v = np.asarray(velocity, dtype=np.float64)
-    z = np.broadcast_to(np.asarray(bristle, dtype=np.float64), v.shape)
+    # a whole parameter set, a string or a NaN speed failed inside numpy or came back NaN
+    # (an outside check, 2026-12-07)
+    if not callable(getattr(params, "as_array", None)):
+        raise ParameterError("params", type(params).__name__, "expected one friction site's "
+                             "LuGreParameters, e.g. params.friction.screw")
+    v = _finite_array("velocity", velocity, "m/s")
+    z = np.broadcast_to(_finite_array("bristle", bristle, "m"), v.shape)
     out = _map1(fn_id, np.ascontiguousarray(v).ravel(), np.ascontiguousarray(z).ravel(),
                 params.as_array())
     return out.reshape(v.shape)
+
+
+def _finite_array(name: str, value: object, unit: str) -> np.ndarray:
+    """``value`` as a float array, refused naming ``name`` unless every element is finite."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, f"expected numbers [{unit}]") from None
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(name, value, f"expected finite numbers [{unit}]")
+    return arr
 
 
 def stribeck_magnitude(velocity: object, params: LuGreParameters) -> np.ndarray:
@@ -570,12 +587,24 @@ def sliding_stability(
 
     Raises
     ------
-    ValueError
-        For a zero or non-finite speed.
+    ParameterError
+        For a zero or non-finite speed, a mass that is not > 0, or a stiffness, damping or
+        integral gain that is not finite and ≥ 0.
     """
-    v = np.atleast_1d(np.asarray(speed, dtype=float))
-    if np.any(v == 0.0) or not np.all(np.isfinite(v)):
-        raise ValueError("speed: steady sliding needs finite, non-zero speeds [m/s]")
+    v = np.atleast_1d(_finite_array("speed", speed, "m/s"))
+    if np.any(v == 0.0):
+        raise ParameterError("speed", speed, "steady sliding needs finite, non-zero speeds "
+                             "[m/s]")
+    # a zero mass read as "stable", a NaN one failed in LAPACK (an outside check, 2026-12-07)
+    for name, value, unit, low in (("mass", mass, "kg", 0.0),
+                                   ("stiffness", stiffness, "N/m", None),
+                                   ("damping", damping, "N s/m", None),
+                                   ("integral", integral, "N/(m s)", None)):
+        number = isinstance(value, int | float | np.floating | np.integer) \
+            and not isinstance(value, bool) and math.isfinite(value)
+        if not number or (low is not None and not value > low) or (low is None and value < 0):
+            raise ParameterError(name, value, f"expected a finite value "
+                                 f"{'> 0' if low is not None else '≥ 0'} [{unit}]")
     coeffs = [characteristic_polynomial(float(x), sites, mass, stiffness, damping, integral)
               for x in v]
     max_re = np.array([np.max(np.roots(c).real) for c in coeffs])
