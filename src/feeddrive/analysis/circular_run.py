@@ -139,6 +139,15 @@ class UnevaluatedTrace(ValueError):
     """The runs were simulated but their trace has no full revolution to evaluate: the
     message says why; ``time``, ``x``, ``y`` [s, m] hold the trace (``--output`` writes it
     all the same).
+
+    Parameters
+    ----------
+    message : str
+        Why the trace was not evaluated.
+    time : numpy.ndarray
+        The joined trace's times [s].
+    x, y : numpy.ndarray
+        The two axes' positions [m].
     """
 
     def __init__(self, message: str, time: np.ndarray, x: np.ndarray, y: np.ndarray) -> None:
