@@ -363,11 +363,17 @@ def test_a_circular_tests_runs_report_progress() -> None:
     from feeddrive.machine import load_machine
 
     seen: list[tuple[float, float]] = []
-    run_circular_test(load_machine("xy-table"), radius=0.01, feed=2000 / 6e4,
-                      progress=lambda t, end: seen.append((t, end)))
+    tr = run_circular_test(load_machine("xy-table"), radius=0.01, feed=2000 / 6e4,
+                           progress=lambda t, end: seen.append((t, end)))
     assert seen and all(0 < t <= end for t, end in seen)
     ends = sorted({end for _, end in seen})
-    assert len(ends) == 1 and seen[-1][0] == pytest.approx(ends[0])  # each run to its end
+    assert len(ends) == 1 and seen[-1][0] == pytest.approx(ends[0])
+    # one bar over both runs, the CW run's time after the CCW run's (session 25: it went to
+    # each run's end and started again, "… / 439.8 s" of the runs' 879.6 s)
+    first = float(tr.results["CCW"].time[-1])
+    assert ends[0] == pytest.approx(first + float(tr.results["CW"].time[-1]))
+    times = [t for t, _ in seen]
+    assert times == sorted(times) and times[-1] > first
 
 
 def test_a_simulated_circle_without_a_revolution_is_said_of_the_simulation(

@@ -73,7 +73,7 @@ REVERSAL = math.radians(1.0)
 _AXIS_OF_REVERSAL = ("x", "y", "x", "y")  # axis reversing at θ = 0°, 90°, 180°, 270°
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CircularRun:
     """One full revolution of a circular test, about the nominal centre.
 
@@ -100,6 +100,12 @@ class CircularRun:
     def sign(self) -> int:
         """+1 for CCW, −1 for CW [-]."""
         return 1 if self.direction == "CCW" else -1
+
+    def __repr__(self) -> str:
+        # one line: the dataclass' repr printed its four arrays (an outside check, 2026-12-07)
+        t = self.time
+        span = f", {float(t[0]):.6g} … {float(t[-1]):.6g} s" if t.size else ""
+        return f"<feeddrive CircularRun {self.direction}: {t.size} samples{span}>"
 
 
 @dataclass(frozen=True)
@@ -157,7 +163,7 @@ class ReversalSpike:
                 "before_um": self.before * 1e6, "stands_out": self.stands_out}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CircularTest:
     """Result of :func:`circular_test`.  SI: lengths [m], angles of diagnostics [rad].
 
@@ -230,6 +236,13 @@ class CircularTest:
     spikes: tuple[ReversalSpike, ...]
     residual_rms: float
     notes: tuple[str, ...] = field(default=())
+
+    def __repr__(self) -> str:
+        # one line: the dataclass' repr ran to ≈ 3600 characters, the runs' arrays among them
+        # (an outside check, 2026-12-07); describe() gives every quantity
+        return (f"<feeddrive CircularTest R {self.radius * 1e3:.6g} mm, runs "
+                f"{','.join(r.direction for r in self.runs)}, feed {self.feed * 6e4:.6g} "
+                f"mm/min: {deviations(self)}>")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form in the CLI's units: µm, mm, mm/min, µm/m, ms.
@@ -719,6 +732,25 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
                       if both else None),
         cyclic_error=cyclic, pitch=pitch, spikes=tuple(spikes),
         residual_rms=float(np.sqrt(np.mean(residual[keep] ** 2))), notes=tuple(notes))
+
+
+def deviations(result: CircularTest) -> str:
+    """The test's circular deviation in a few words: G(b), or each run's G with one run [µm]
+    (the one-line reprs of :class:`CircularTest` and of a simulated test's trace).
+
+    Parameters
+    ----------
+    result : CircularTest
+        The analysis.
+
+    Returns
+    -------
+    str
+        E.g. ``"G(b) 12.35 µm"``.
+    """
+    if result.bidirectional_circular_deviation is not None:
+        return f"G(b) {result.bidirectional_circular_deviation * 1e6:.4g} µm"
+    return ", ".join(f"G({k}) {v * 1e6:.4g} µm" for k, v in result.circular_deviation.items())
 
 
 def describe(result: CircularTest) -> list[str]:

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..parameters import ParameterError
 from ..parameters.validation import MISSING
-from .circular import REVERSAL, CircularTest, circular_test
+from .circular import REVERSAL, CircularTest, circular_test, deviations
 from .positioning_run import axis_speed_limit, axis_travel
 
 if TYPE_CHECKING:
@@ -139,6 +139,15 @@ class UnevaluatedTrace(ValueError):
     """The runs were simulated but their trace has no full revolution to evaluate: the
     message says why; ``time``, ``x``, ``y`` [s, m] hold the trace (``--output`` writes it
     all the same).
+
+    Parameters
+    ----------
+    message : str
+        Why the trace was not evaluated.
+    time : numpy.ndarray
+        The joined trace's times [s].
+    x, y : numpy.ndarray
+        The two axes' positions [m].
     """
 
     def __init__(self, message: str, time: np.ndarray, x: np.ndarray, y: np.ndarray) -> None:
@@ -146,7 +155,7 @@ class UnevaluatedTrace(ValueError):
         self.time, self.x, self.y = time, x, y
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CircularRunTrace:
     """A simulated circular test.
 
@@ -191,6 +200,15 @@ class CircularRunTrace:
     results: dict[str, Any]
     offsets: dict[str, float] = dataclasses.field(default_factory=dict)
     lead_in: LeadIn | None = None
+
+    def __repr__(self) -> str:
+        # one line: the dataclass' repr printed the trace's arrays and each run's Result, and
+        # raised on those (an outside check, 2026-12-07)
+        machine = next((str(r.attrs.get("drive", "")) for r in self.results.values()
+                        if hasattr(r, "attrs")), "")
+        return (f"<feeddrive CircularRunTrace {machine + ' ' if machine else ''}"
+                f"{','.join(self.axes)} R {self.radius * 1e3:.6g} mm, feed "
+                f"{self.feed * 6e4:.6g} mm/min: {deviations(self.test)}>")
 
     def reversing_sites(self) -> dict[str, dict[str, int]]:
         """How often each friction site's force changes sign within the measured revolutions.
@@ -437,6 +455,21 @@ def _lead_in(machine: Machine, axes: tuple[str, str], radius: float, feed: float
     return dataclasses.replace(rule, arc=float(given), given=True)
 
 
+def _progress_of_runs(progress: Callable[[float, float], None] | None, before: float,
+                      left: int) -> Callable[[float, float], None] | None:
+    """A run's ``progress(t, t_end)`` as a share of the test's equally long runs: ``t``
+    after the runs ``before`` it [s], out of ``before`` and the ``left`` runs, this one
+    included, each as long as it (the bar went to each run's end and started again: an
+    outside check, 2026-12-07)."""
+    if progress is None:
+        return None
+
+    def advance(t: float, t_end: float) -> None:
+        progress(before + t, before + left * t_end)
+
+    return advance
+
+
 def run_circular_test(machine: Machine, *, radius: float, feed: float,
                       axes: tuple[str, str] | None = None, acceleration: float = 1.0,
                       lead_arc: float | None = None, nut_speed: float = 0.0,
@@ -475,7 +508,8 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
     options : SolverOptions, optional
         Integrator settings.
     progress : callable, optional
-        ``progress(t, t_end)`` during each run.
+        ``progress(t, t_end)`` during the runs: ``t`` over both, the CW run's after the CCW
+        run's, ``t_end`` the two runs' total [s] (they are equally long).
 
     Returns
     -------
@@ -526,8 +560,7 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
     duration = start_time + 2.0 * math.pi * radius * turns / feed + feed / acceleration
     _check_length(duration, radius * turns, feed, start_time)
     _check_budget(duration, options)
-    times, xs, ys, results, offsets = [], [], [], {}, {}
-    offset = 0.0
+    runs = []
     for direction, start in circular_start_angles(lead_arc).items():
         # each run's axes start at rest on the circle at its start angle
         start_xy = (centre[0] + radius * math.cos(start), centre[1] + radius * math.sin(start))
@@ -536,13 +569,20 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
             if ax.name in axes else ax for ax in machine.axes))
         contour = Circle(feed=feed, acceleration=acceleration, axes=axes, radius=radius,
                          clockwise=direction == "CW", start_angle=start, turns=turns)
+        runs.append((direction, start_xy, placed, _profile(placed, contour, nut_driven,
+                                                           nut_speed, acceleration,
+                                                           start_time)))
+    times, xs, ys, results, offsets = [], [], [], {}, {}
+    offset = 0.0
+    done = 0.0  # the runs' simulated time so far, for the progress [s]
+    for k, (direction, start_xy, placed, profile) in enumerate(runs):
         # (progress was taken and never passed on: an outside check, 2026-12-07)
-        result = simulate_machine(placed, _profile(placed, contour, nut_driven, nut_speed,
-                                                   acceleration, start_time), options=options,
-                                  progress=progress)
+        result = simulate_machine(placed, profile, options=options,
+                                  progress=_progress_of_runs(progress, done, len(runs) - k))
         results[direction] = result
         offsets[direction] = offset
         t = np.asarray(result.time, dtype=float)
+        done += float(t[-1])
         times.append(t + offset)
         xs.append(start_xy[0] + np.asarray(result[f"{axes[0]}.table_position"], dtype=float))
         ys.append(start_xy[1] + np.asarray(result[f"{axes[1]}.table_position"], dtype=float))

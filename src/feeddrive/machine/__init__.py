@@ -683,6 +683,36 @@ class MachineSystem:
         # the drive's own rule (it reads initial_state only)
         return DriveSystem.initial_vector(self, model)  # type: ignore[arg-type]
 
+    def run_attrs(self, profile: Any) -> dict[str, Any]:
+        """What marks a run of this machine in its attributes: the machine's name as its
+        parameter set, the path it followed, and its axes (``axes``: name → drive, parameter
+        set, start position [m], JSON; :func:`feeddrive.engine.machine_axes.machine_axes`).
+
+        Every machine run carries them (:func:`simulate_machine`): a run following given
+        references (a circular test's) lacked them and was read as one drive's, whose
+        ``table_speed_reference`` it has not (an outside check, 2026-12-07).
+
+        Parameters
+        ----------
+        profile : MachineProfile or Contour
+            What the run followed: a contour, or references (their contour if they have one).
+
+        Returns
+        -------
+        dict
+            ``parameter_set``, ``profile`` and ``axes`` (str values).
+        """
+        contour = profile if isinstance(profile, Contour) else getattr(profile, "contour", None)
+        if contour is not None:
+            what = (f"{type(contour).__name__}(length={contour.length:g} m, "
+                    f"feed={contour.feed:g} m/s)")
+        else:
+            what = f"{type(profile).__name__}({float(profile.time[-1]):g} s)"
+        machine = self.machine
+        return {"parameter_set": machine.name, "profile": what, "axes": json.dumps({
+            ax.name: {"drive": ax.drive, "parameter_set": ax.parameters.name,
+                      "table_start_position_m": ax.table_position} for ax in machine.axes})}
+
 
 def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
                      duration: float | None = None, *, options: Any = None,
@@ -733,11 +763,7 @@ def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
                                 np.asarray(ds[f"{b}.table_position"]))
     ds["contour_error"] = ("time", err, {"units": "m", "long_name": "contour error (signed "
                                          "normal distance of the actual point to the path)"})
-    ds.attrs.update(parameter_set=machine.name, profile=(
-        f"{type(contour).__name__}(length={contour.length:g} m, feed={contour.feed:g} m/s)"),
-        axes=json.dumps({
-        ax.name: {"drive": ax.drive, "parameter_set": ax.parameters.name,
-                  "table_start_position_m": ax.table_position} for ax in machine.axes}))
+    ds.attrs.update(MachineSystem(machine).run_attrs(contour))
     return Result(ds)
 
 

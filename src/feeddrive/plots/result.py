@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..engine.machine_axes import machine_axes
+from ..engine.machine_axes import machine_axes, run_attrs
 
 if TYPE_CHECKING:
     from ..engine.result import Result
@@ -29,7 +29,8 @@ def run_title(result: Result) -> str:
         E.g. ``"DDFS, constant 1.55 mm/s, position 400 mm, 10 s — wang2021"`` (engineering
         units).
     """
-    attrs = result.dataset.attrs
+    # its attributes as the run holds them: a repr built the whole Dataset for them
+    attrs = run_attrs(result)
     axes = machine_axes(result)
     if axes:  # a machine's run: its axes' signals are "<axis>.<name>"
         return (f"machine {attrs.get('drive', '')}: {attrs.get('profile', '')}, axes "
@@ -69,7 +70,7 @@ def machine_figure(result: Result, title: str | None = None) -> Any:
     """
     t = result.time
     names = machine_axes(result)
-    error = "contour_error" in result.dataset
+    error = "contour_error" in result
     fig = Figure(figsize=(8, 2.4 * (len(names) + error) + 1.2), layout="constrained")
     panels = np.atleast_1d(fig.subplots(len(names) + error, 1, sharex=True))
     for ax, name in zip(panels, names, strict=False):
