@@ -68,8 +68,9 @@ import numpy as np
 # of this module's light helpers (`_no_effect`, `Experiment`: the sensitivity) need not pay
 from ..parameters import DriveParameters, ParameterError, dumps
 from ..parameters.toml_io import toml_comment, toml_string
+from ..parameters.validation import MISSING
 from .fit_residuals import HacCovariance, ResidualDiagnostics, diagnose, hac_covariance
-from .fit_statistics import correlation, covariance, noise_level
+from .fit_statistics import NOISE_MIN_SAMPLES, correlation, covariance, noise_level
 
 __all__ = ["INPUT_COLUMNS", "MEASURABLE", "Experiment", "FitError", "FitResult", "IntegrationCheck",
            "ParameterEstimate",
@@ -199,6 +200,17 @@ class Experiment:
     input: str = ""
     input_value: np.ndarray | None = None
 
+    def __post_init__(self) -> None:
+        check_experiment(self)
+
+    def __repr__(self) -> str:
+        t = np.asarray(self.time, dtype=float)
+        replay = f", replaying the {self.input}" if self.input else ""
+        top = float(np.max(np.abs(self.table_speed), initial=0.0))
+        return (f"<feeddrive.Experiment {self.source!r}: {t.size} samples, {t[0]:g} … "
+                f"{t[-1]:g} s; signals {', '.join(self.signals) or 'none'}; command up to "
+                f"{1e3 * top:.4g} mm/s{replay}>")
+
     @property
     def duration(self) -> float:
         """Length of the record, its last sample time [s]."""
@@ -236,6 +248,89 @@ class Experiment:
         if np.any(v < -1e-12):
             out.add(-1)
         return out
+
+
+#: SI unit of a measurable signal's dimension (:data:`MEASURABLE`), for messages
+SI_UNITS = {"length": "m", "speed": "m/s", "current": "A", "torque": "N m", "force": "N"}
+
+
+def _real(value: object) -> bool:
+    """Whether ``value`` is a real number (not a bool, a str or an array)."""
+    return not isinstance(value, bool) and isinstance(value, int | float | np.integer |
+                                                      np.floating)
+
+
+def _samples(field: str, value: object, unit: str, source: str | None,
+             size: int | None = None, of: str = "") -> np.ndarray:
+    """``value`` as a 1-D float array of finite samples (``size`` of them when given), or a
+    :class:`ParameterError` naming ``field``, the first bad index and the unit."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(field, value, f"expected an array of numbers [{unit}]",
+                             source=source) from None
+    if a.ndim != 1:
+        raise ParameterError(field, MISSING, f"expected a 1-D array [{unit}]; its shape is "
+                             f"{a.shape}", source=source)
+    if size is not None and a.size != size:
+        raise ParameterError(field, MISSING, f"expected {size} samples, one per {of} "
+                             f"[{unit}]; it has {a.size}", source=source)
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        i = int(bad[0])
+        more = f" (and {bad.size - 1} more)" if bad.size > 1 else ""
+        raise ParameterError(field, float(a[i]), f"expected finite samples [{unit}]; index "
+                             f"{i} of {a.size} is not{more}", source=source)
+    return a
+
+
+def check_experiment(e: Experiment) -> None:
+    """Refuse an :class:`Experiment` whose arrays a fit cannot use: a signal that is not
+    :data:`MEASURABLE`, arrays of another length than their times, non-finite samples
+    (named with their first index: a NaN reached the fit as a zero Jacobian column), fewer
+    than 2 sample times or times that do not increase.  Run when one is made and again when
+    :func:`fit_drive` takes it (an array changed in place since).
+
+    Parameters
+    ----------
+    e : Experiment
+        The record.
+
+    Raises
+    ------
+    ParameterError
+        Naming the field (``signals.<name>``, ``time``, …), the value and the unit.
+    """
+    if not isinstance(e.source, str):
+        raise ParameterError("source", e.source, "expected the record's label, a str")
+    src = e.source or None
+    t = _samples("time", e.time, "s", src)
+    if t.size < 2:
+        raise ParameterError("time", MISSING, f"expected at least 2 sample times [s]; it has "
+                             f"{t.size}", source=src)
+    down = np.flatnonzero(np.diff(t) <= 0.0)
+    if down.size:
+        i = int(down[0]) + 1
+        raise ParameterError("time", float(t[i]), f"expected strictly increasing times [s]; "
+                             f"index {i} follows {float(t[i - 1])!r}", source=src)
+    if not isinstance(e.signals, Mapping):
+        raise ParameterError("signals", e.signals, "expected a mapping of signal name to "
+                             "samples (e.g. {'table_position': x})", source=src)
+    for name, values in e.signals.items():
+        if name not in MEASURABLE:
+            from ..parameters.validation import did_you_mean
+
+            raise ParameterError(f"signals.{name}", MISSING, "expected a measurable signal, "
+                                 f"one of {', '.join(MEASURABLE)}"
+                                 f"{did_you_mean(name, MEASURABLE)}", source=src)
+        _samples(f"signals.{name}", values, SI_UNITS[MEASURABLE[name][0]], src, t.size,
+                 "sample time")
+    ref = _samples("reference_time", e.reference_time, "s", src)
+    _samples("table_speed", e.table_speed, "m/s", src, ref.size, "reference time")
+    if e.nut_speed is not None:
+        _samples("nut_speed", e.nut_speed, "m/s", src, ref.size, "reference time")
+    if e.input_value is not None:
+        _samples("input_value", e.input_value, "SI unit of the replayed input", src)
 
 
 def experiment_profile(reference_time: np.ndarray, table_speed: np.ndarray,
@@ -1187,6 +1282,23 @@ class FitResult:
     hac: HacCovariance | None = None
     inadequate: str | None = None
 
+    def __repr__(self) -> str:
+        # what a notebook prints: one line of what was fitted, one per estimate, never the
+        # arrays (it printed 3552 characters, down to the residual autocorrelations)
+        state = ("interrupted" if self.interrupted else "residual check " +
+                 ("passed" if self.residual_ok else "failed"))
+        if self.inadequate:
+            state += ", model inadequate"
+        head = (f"<feeddrive.FitResult {self.drive} of {self.base_name!r}, "
+                f"{len(self.sources)} trace{'s' if len(self.sources) != 1 else ''}, "
+                f"{self.evaluations} evaluations, {state}")
+        rows = []
+        for e in self.estimates:
+            spread = f" ± {e.stderr:.2g}" if math.isfinite(e.stderr) else ""
+            note = "" if e.determined else " (poorly determined)"
+            rows.append(f"  {e.path} = {e.value:.6g}{spread} {e.unit}{note}")
+        return "\n".join([head, *rows, "  .estimates .residuals, .to_dict()>"])
+
     @property
     def paths(self) -> list[str]:
         """The free parameters' dotted paths, in estimate order."""
@@ -1532,6 +1644,13 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     from ..engine.simulate import DriveSystem
 
     say = progress or (lambda _t: None)
+    if not isinstance(base, DriveParameters):  # a preset's name said "'controller' is not a
+        # field of the parameter set" (an outside check, 2026-12-08)
+        raise ParameterError("base", base, 'expected DriveParameters, e.g. '
+                             'fd.preset("wang2021") or fd.load("my.toml")')
+    if isinstance(experiments, Experiment):
+        raise ParameterError("experiments", experiments, "expected a list of Experiment, "
+                             "e.g. [experiment]")
     if not experiments:
         raise FitError("no trace given")
     if isinstance(free, str):  # one path given as text: its letters were read as paths
@@ -1559,6 +1678,18 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
     from ..sweep.executors import check_executor
 
     check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
+    for k, e in enumerate(experiments):
+        if not isinstance(e, Experiment):
+            raise ParameterError(f"experiments[{k}]", e, "expected an Experiment "
+                                 "(read_experiment, synthetic_experiment)")
+        check_experiment(e)  # again: an array may have been changed in place since
+    if bounds is not None and not isinstance(bounds, Mapping):
+        raise ParameterError("bounds", bounds, "expected a mapping of free parameter path to "
+                             "a (low, high) pair in the parameter's unit")
+    for path in bounds or {}:
+        if path not in free:
+            raise ParameterError(f"bounds.{path}", MISSING, "expected the path of a free "
+                                 f"parameter, one of {', '.join(free)}")
     start = np.empty(len(free))
     lb = np.empty(len(free))
     ub = np.empty(len(free))
@@ -1575,8 +1706,8 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
             raise FitError(f"--free {path}: starts at 0 [{unit}]; give a nonzero "
                            "start value in the parameter file (the fit works in factors on "
                            "the start)")
-        lo, hi = bounds.get(path, (meta["low"], meta["high"])) if bounds else \
-            (meta["low"], meta["high"])
+        lo, hi = (_bounds_pair(path, bounds[path], unit) if bounds and path in bounds
+                  else (meta["low"], meta["high"]))
         if not lo < value < hi and not (lo <= value <= hi):
             raise FitError(f"--free {path}: start {value:g} outside its bounds {lo:g} … "
                            f"{hi:g} [{unit}]")
@@ -1592,6 +1723,8 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
             raise FitError(f"{e.source}: commands a nut speed; only the DDFS drives its nut")
         if e.input:
             check_replay(system.topology(), e)
+    for k, e in enumerate(experiments):
+        _check_fitted_signals(k, e)
     theta0 = np.ones(len(free))
 
     longest = max(e.span for e in experiments)
@@ -1691,6 +1824,41 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
             return result
     except _Interrupted as stop:
         return stop.result
+
+
+def _bounds_pair(path: str, pair: object, unit: str) -> tuple[float, float]:
+    """``bounds[path]`` as (low, high) [SI], or a :class:`ParameterError` naming it: a bare
+    number said "cannot unpack non-iterable int" (an outside check, 2026-12-08)."""
+    where = f"bounds.{path}"
+    expected = f"expected a (low, high) pair, low < high [{unit}]"
+    if isinstance(pair, str) or not isinstance(pair, Sequence | np.ndarray) or len(pair) != 2:
+        raise ParameterError(where, pair, expected)
+    lo, hi = pair[0], pair[1]
+    if not (_real(lo) and _real(hi)) or math.isnan(lo) or math.isnan(hi) or not lo < hi:
+        raise ParameterError(where, pair, expected)
+    return float(lo), float(hi)
+
+
+def _check_fitted_signals(k: int, e: Experiment) -> None:
+    """Refuse, before any simulation, a record with nothing to fit or without the noise σ
+    every fitted signal is weighted by (a missing one was ``KeyError: 'name'``; a NaN one,
+    from fewer than 8 samples, a NaN fit)."""
+    src = e.source or None
+    if not e.signals:
+        raise ParameterError(f"experiments[{k}].signals", MISSING, "expected at least one "
+                             f"measured signal, one of {', '.join(MEASURABLE)}", source=src)
+    for name in e.signals:
+        unit = SI_UNITS[MEASURABLE[name][0]]
+        where = f"experiments[{k}].noise.{name}"
+        if not isinstance(e.noise, Mapping) or name not in e.noise:
+            raise ParameterError(where, MISSING, f"expected the noise σ of every fitted signal "
+                                 f"[{unit}] (e.g. fit_statistics.noise_level(samples))",
+                                 source=src)
+        sigma = e.noise[name]
+        if not _real(sigma) or not 0.0 < sigma < math.inf:
+            raise ParameterError(where, sigma, f"expected a finite noise σ > 0 [{unit}] "
+                                 f"(noise_level needs at least {NOISE_MIN_SAMPLES} samples)",
+                                 source=src)
 
 
 class _Interrupted(Exception):
@@ -2227,7 +2395,25 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     """
     from ..engine.simulate import DriveSystem, simulate
     from ..model.reference import ConstantSpeed
+    from ..units import LARGEST_SPEED
 
+    # refused before the run: a negative or NaN noise σ (NaN made every current sample NaN),
+    # a quantum that was silently ignored, numpy's "expected non-negative integer" for a
+    # seed, and a record start past the end (an empty record) (an outside check, 2026-12-08)
+    for name, value, unit in (("current_noise", current_noise, "-, σ over the current's rms"),
+                              ("position_quantum", position_quantum, "m"),
+                              ("record_start", record_start, "s")):
+        if not _real(value) or not 0.0 <= value < math.inf:
+            raise ParameterError(name, value, f"expected a finite number ≥ 0 [{unit}]")
+    if _real(duration) and record_start >= duration:
+        raise ParameterError("record_start", record_start, f"expected a start before the "
+                             f"record's end, 0 ≤ record_start < duration = {duration:g} [s]")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int | np.integer)
+                             or seed < 0):
+        raise ParameterError("seed", seed, "expected a whole number ≥ 0 [-]")
+    if _real(speed) and not abs(speed) <= LARGEST_SPEED:
+        raise ParameterError("speed", speed, f"expected a speed of at most {LARGEST_SPEED:g} "
+                             "m/s in magnitude (feeddrive.units.LARGEST_SPEED) [m/s]")
     system = DriveSystem(params, drive=drive, table_position=table_position)
     result = simulate(system, ConstantSpeed(speed, ramp_time=ramp_time), duration)
     t = np.asarray(result.time)
@@ -2240,6 +2426,10 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     i = i + current_noise * float(np.sqrt(np.mean(i ** 2))) * rng.standard_normal(i.size)
     ref = np.asarray(result["table_speed_reference"])
     keep = t >= record_start - 1e-12
+    if np.count_nonzero(keep) < NOISE_MIN_SAMPLES:  # no noise σ, so nothing to fit
+        raise ParameterError("record_start", record_start, "expected a start at least "
+                             f"{NOISE_MIN_SAMPLES} samples before the end ({t[-1]:g} s; "
+                             f"samples every {t[1] - t[0]:g} s), for the noise estimate [s]")
     signals = {"table_position": x[keep], cur_name: i[keep]}
     return Experiment(source=source or f"synthetic {speed * 1e3:g} mm/s (seed {seed})",
                       time=t[keep], signals=signals, reference_time=t, table_speed=ref,

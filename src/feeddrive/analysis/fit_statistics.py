@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MAX_CORRELATION", "MAX_RELATIVE_HALF_WIDTH", "Estimate", "correlation",
+__all__ = ["MAX_CORRELATION", "MAX_RELATIVE_HALF_WIDTH", "NOISE_MIN_SAMPLES", "Estimate",
+           "correlation",
            "covariance", "estimate", "finite_or_none", "locate", "noise_level", "t_quantile",
            "with_correlation"]
 
@@ -31,6 +32,9 @@ MAX_RELATIVE_HALF_WIDTH = 0.5
 #: ... or when its estimate correlates more than this (in magnitude) with another fitted
 #: parameter: the data fix only a combination of the two
 MAX_CORRELATION = 0.995
+
+#: fewest samples :func:`noise_level` estimates a noise σ from (nan below)
+NOISE_MIN_SAMPLES = 8
 
 
 @dataclass(frozen=True)
@@ -300,10 +304,10 @@ def noise_level(values: np.ndarray) -> float:
     Returns
     -------
     float
-        σ [unit of the signal]; nan for fewer than 8 samples.
+        σ [unit of the signal]; nan for fewer than :data:`NOISE_MIN_SAMPLES` (8) samples.
     """
     x = np.asarray(values, dtype=float)
-    if x.size < 8:
+    if x.size < NOISE_MIN_SAMPLES:
         return math.nan
     d2 = np.diff(x, 2)
     mad = float(np.median(np.abs(d2 - np.median(d2)))) * 1.4826 / math.sqrt(6.0)

@@ -123,6 +123,16 @@ class PositioningTest:
         "mean_range": ("M", "range of the mean bidirectional positional deviation"),
     }
 
+    def __repr__(self) -> str:
+        # what a notebook prints: the axis's headline quantities in µm, never the arrays
+        um = 1e6
+        p = self.targets
+        return (f"<feeddrive.PositioningTest {p.size} targets {1e3 * float(p.min()):.6g} … "
+                f"{1e3 * float(p.max()):.6g} mm, {self.deviation_up.shape[1]} approaches: "
+                f"A {self.accuracy * um:.4g}, R {self.repeatability * um:.4g}, "
+                f"B {self.reversal * um:.4g}, E {self.systematic * um:.4g}, "
+                f"M {self.mean_range * um:.4g} µm; .to_dict(), describe()>")
+
     def to_dict(self) -> dict[str, Any]:
         """JSON form: targets in mm, every deviation in µm.
 

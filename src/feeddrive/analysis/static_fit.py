@@ -137,6 +137,20 @@ class StaticFit:
     negative: BranchFit | None
     source: str | None = None
 
+    def __repr__(self) -> str:
+        # what a notebook prints: the estimates per branch, never the tests' arrays
+        parts = []
+        for name, b in self.branches().items():
+            shaky = len(b.unidentifiable())
+            note = f", {shaky} not determined" if shaky else ""
+            parts.append(f"{'+' if name == 'positive' else '−'} F_c {b.coulomb_force.value:.4g}"
+                         f", F_s {b.static_force.value:.4g} N, v_s "
+                         f"{1e3 * b.stribeck_velocity.value:.4g} mm/s, σ2 "
+                         f"{b.viscous_coefficient.value:.4g} N s/m{note}")
+        name = self.source or ""
+        src = f" {name if len(name) <= 32 else '…' + name[-31:]!r}" if name else ""
+        return f"<feeddrive.StaticFit{src}: {'; '.join(parts)}; .positive .negative, .lugre()>"
+
     @property
     def one_direction(self) -> str | None:
         """The only direction fitted (a record with tests in one direction), else None."""

@@ -51,6 +51,8 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..parameters import ParameterError
+from ..units import LARGEST_SPEED
 from .creep_window import CreepMetrics, CreepThresholds, creep_metrics, steady_window
 from .trace_input import resample_size
 
@@ -66,6 +68,13 @@ __all__ = [
 ]
 
 DEFAULT_SMOOTHING_TIME = 0.02  # [s]
+#: a given command speed this many times the trace's own mean speed is mm/s given where the
+#: API takes m/s (1 m/s given for a 1-mm/s trace: every sample "sticks" below 10 % of the
+#: command, and the verdict is creeping) …
+UNIT_SLIP_FACTOR = 1000.0
+#: … within this factor either way (half a decade: a drive that follows its command, even
+#: by stick-slip, averages its command speed, a ratio near 1; one at rest has no mean speed)
+UNIT_SLIP_TOLERANCE = math.sqrt(10.0)
 DEFAULT_MIN_STEP = 5e-6  # [m/s], half the 0.01 mm/s step of Wang2021 Sect. 6
 DEFAULT_MIN_SEGMENT_TIME = 1.0  # [s]
 _REST_FRACTION = 0.01
@@ -91,13 +100,33 @@ def savgol_window(sample_time: float, *, smoothing_time: float = DEFAULT_SMOOTHI
     int
         The window [samples].
     """
-    if not (sample_time > 0 and math.isfinite(sample_time)):
-        raise ValueError(f"sample_time = {sample_time!r}: expected a positive step [s]")
-    if not (smoothing_time > 0 and math.isfinite(smoothing_time)):
-        raise ValueError(f"smoothing_time = {smoothing_time!r}: expected a positive time [s]")
+    if not (_real(sample_time) and sample_time > 0 and math.isfinite(sample_time)):
+        raise ParameterError("sample_time", sample_time, "expected a finite step > 0 [s]")
+    if not (_real(smoothing_time) and smoothing_time > 0 and math.isfinite(smoothing_time)):
+        raise ParameterError("smoothing_time", smoothing_time, "expected a finite time > 0 [s]")
+    _check_polyorder(polyorder)
     n = int(round(smoothing_time / sample_time))
     n = max(n, polyorder + 3)
     return n if n % 2 else n + 1
+
+
+def _real(value: object) -> bool:
+    """Whether ``value`` is a real number (not a bool, a str or an array)."""
+    return not isinstance(value, bool) and isinstance(value, int | float | np.integer |
+                                                      np.floating)
+
+
+def _whole(value: object) -> bool:
+    """Whether ``value`` is a whole number (an int, not a bool)."""
+    return not isinstance(value, bool) and isinstance(value, int | np.integer)
+
+
+def _check_polyorder(polyorder: object) -> None:
+    """Refuse a Savitzky–Golay order the speed (a first derivative) cannot come from: -1 was
+    scipy's "expected deg >= 0", 0 a speed of zero everywhere."""
+    if not _whole(polyorder) or int(polyorder) < 1:  # type: ignore[call-overload]
+        raise ParameterError("polyorder", polyorder, "expected a whole number ≥ 1 (the "
+                             "speed is the fitted polynomial's derivative) [-]")
 
 
 @dataclass(frozen=True)
@@ -169,6 +198,15 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
     .. [1] A. Savitzky, M. J. E. Golay, "Smoothing and differentiation of data by simplified
        least squares procedures", Anal. Chem. 36 (1964) 1627–1639.
     """
+    # the window's settings first, before any work: 0 s was taken as the default (its `or`),
+    # 2.5 samples and polyorder -1 were scipy's TypeError and "expected deg >= 0"
+    if smoothing_time is not None and not (_real(smoothing_time) and smoothing_time > 0 and
+                                           math.isfinite(smoothing_time)):
+        raise ParameterError("smoothing_time", smoothing_time, "expected a finite time > 0 [s]")
+    if window is not None and not _whole(window):
+        raise ParameterError("window", window, "expected an odd whole number of samples > "
+                             "polyorder [samples]")
+    _check_polyorder(polyorder)
     t = np.asarray(time, dtype=float)
     x = np.asarray(position, dtype=float)
     if t.ndim != 1 or x.shape != t.shape:
@@ -189,20 +227,28 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
         grid = t[0] + dt * np.arange(n)
         x = np.interp(grid, t, x)
         t = grid
+    # the longest odd window the trace holds [samples]
+    most = t.size - (1 - t.size % 2)
+    trace = (f"({t.size} samples at its {dt * 1e3:.4g}-ms step); give a shorter --smoothing "
+             f"(at most {most * dt * 1e3:.6g} ms) or a longer record")
+    wanted = None
     if window is None:
-        window = savgol_window(dt, smoothing_time=smoothing_time or DEFAULT_SMOOTHING_TIME,
-                               polyorder=polyorder)
+        wanted = DEFAULT_SMOOTHING_TIME if smoothing_time is None else smoothing_time
+        if wanted / dt > most + 1:  # before the count: 1e300 s printed a 300-digit integer
+            raise ParameterError("smoothing_time", wanted, "expected a window not longer than "
+                                 f"the trace, at most {most * dt:.6g} s [s] {trace}",
+                                 source=source)
+        window = savgol_window(dt, smoothing_time=wanted, polyorder=polyorder)
     if window % 2 == 0 or window <= polyorder:
-        raise ValueError(f"window = {window}: expected an odd number of samples > polyorder "
-                         f"= {polyorder}")
+        raise ParameterError("window", window, "expected an odd number of samples > "
+                             f"polyorder = {polyorder} [samples]")
     if window > t.size:
-        where = f"{source}: " if source else ""
-        span = window * dt
-        raise ValueError(f"{where}smoothing window = {window} samples ({span * 1e3:.4g} ms at "
-                         f"the {dt * 1e3:.4g}-ms sample step): longer than the trace "
-                         f"({t.size} samples, {t.size * dt:.4g} s); give a shorter "
-                         f"--smoothing (at most {(t.size - (1 - t.size % 2)) * dt * 1e3:.4g} "
-                         "ms) or a longer record")
+        field, value, most_text = (("window", window, f"{most} samples [samples]")
+                                   if wanted is None else
+                                   ("smoothing_time", wanted, f"{most * dt:.6g} s [s]"))
+        raise ParameterError(field, value, "expected a window not longer than the trace, at "
+                             f"most {most_text} {trace}; it spans {window} samples "
+                             f"({window * dt * 1e3:.4g} ms)", source=source)
     from scipy.signal import savgol_filter  # here: keeps `feeddrive --help` fast
 
     speed = savgol_filter(x, window, polyorder, deriv=1, delta=dt, mode="interp")
@@ -388,12 +434,11 @@ def find_segments(time: object, position: object, speed: object, *,
     ValueError
         For a non-positive ``min_step`` or ``min_segment_time``.
     """
+    _check_settings(thresholds, min_step, min_segment_time)
     t = np.asarray(time, dtype=float)
     x = np.asarray(position, dtype=float)
     v = np.asarray(speed, dtype=float)
     th = thresholds or CreepThresholds()
-    if not (min_step > 0 and min_segment_time > 0):
-        raise ValueError("min_step and min_segment_time must be positive")
     if start is None:
         mean_speed = (x[-1] - x[0]) / (t[-1] - t[0])
         moved = np.abs(v) >= 0.9 * abs(mean_speed)
@@ -433,6 +478,64 @@ def find_segments(time: object, position: object, speed: object, *,
             hi = float(t[j - 1]) if j == t.size else float(0.5 * (t[j - 1] + t[j]))
             spans.append((lo, hi))
     return spans
+
+
+def _check_settings(thresholds: object, min_step: object, min_segment_time: object) -> None:
+    """Refuse thresholds that are not :class:`CreepThresholds` (a dict was "'dict' object has
+    no attribute 'stick_level'") and a segmentation step or length that is not a finite
+    positive number."""
+    if thresholds is not None and not isinstance(thresholds, CreepThresholds):
+        raise ParameterError("thresholds", thresholds, "expected a CreepThresholds, e.g. "
+                             "feeddrive.CreepThresholds(stick_level=0.1, max_stick_fraction="
+                             "0.02, max_ripple_ratio=0.5) [-]")
+    for name, value, unit in (("min_step", min_step, "m/s"),
+                              ("min_segment_time", min_segment_time, "s")):
+        if not (0 < (float(value) if _real(value) else math.nan)  # type: ignore[arg-type]
+                < math.inf):
+            raise ParameterError(name, value, f"expected a finite value > 0 [{unit}]")
+
+
+def _check_command_speed(command_speed: object) -> float:
+    """The given command speed [m/s], refused when not a finite, non-zero speed of at most
+    :data:`~feeddrive.units.LARGEST_SPEED` (a mm/s figure given as m/s)."""
+    vc = float(command_speed) if _real(command_speed) else math.nan  # type: ignore[arg-type]
+    if not math.isfinite(vc) or vc == 0:
+        raise ParameterError("command_speed", command_speed, "expected a finite, non-zero "
+                             "speed [m/s]")
+    if abs(vc) > LARGEST_SPEED:
+        raise ParameterError("command_speed", command_speed, "expected a speed of at most "
+                             f"{LARGEST_SPEED:g} m/s in magnitude (feeddrive.units."
+                             "LARGEST_SPEED; the API takes m/s) [m/s]")
+    return vc
+
+
+def unit_slip_note(command_speed: float, mean_speed: float) -> str | None:
+    """A note when a given command speed is about :data:`UNIT_SLIP_FACTOR` times the trace's
+    own mean speed (within :data:`UNIT_SLIP_TOLERANCE`): a speed in mm/s given where the API
+    takes m/s.
+
+    Parameters
+    ----------
+    command_speed : float
+        The given command speed [m/s].
+    mean_speed : float
+        The trace's mean speed over the judged window [m/s].
+
+    Returns
+    -------
+    str or None
+        The note, or None when the two are not that far apart.
+    """
+    if mean_speed == 0.0 or not math.isfinite(mean_speed):
+        return None
+    ratio = abs(command_speed / mean_speed)
+    if not (UNIT_SLIP_FACTOR / UNIT_SLIP_TOLERANCE <= ratio
+            <= UNIT_SLIP_FACTOR * UNIT_SLIP_TOLERANCE):
+        return None
+    return (f"command speed {command_speed:g} m/s is {ratio:.4g}× the trace's mean speed "
+            f"{1e3 * mean_speed:.4g} mm/s: the API takes m/s — was {command_speed:g} mm/s "
+            f"meant (command_speed={command_speed * 1e-3:g})? The verdict is against the "
+            "speed given")
 
 
 def _command_runs(time: np.ndarray, command: np.ndarray) -> list[tuple[float, float, float]]:
@@ -558,6 +661,23 @@ class TraceAnalysis:
     #: "constant-speed" (segments of constant command, judged), or "non-constant-speed"
     #: (a move or a ramp: nothing to judge for creep)
     record: str = "constant-speed"
+
+    def __repr__(self) -> str:
+        # what a notebook prints: the record and its verdicts, never the arrays
+        t = self.time
+        span = f"{t.size} samples, {float(t[-1] - t[0]):.4g} s" if t.size else "no samples"
+        if self.record != "constant-speed":
+            judged = f"{self.record}: no verdict"
+        else:
+            shown = [f"{1e3 * s.command_speed:.4g} mm/s {s.metrics.verdict}"
+                     for s in self.segments[:3]]
+            more = f", … {len(self.segments) - 3} more" if len(self.segments) > 3 else ""
+            judged = (f"{len(self.segments)} segment{'s' if len(self.segments) != 1 else ''}: "
+                      f"{', '.join(shown)}{more}")
+        name = self.source or ""
+        src = f" {name if len(name) <= 60 else '…' + name[-59:]!r}" if name else ""
+        return (f"<feeddrive.TraceAnalysis{src}: {span}; {judged}; {len(self.notes)} notes; "
+                ".segments .critical .notes, .to_dict()>")
 
     def to_dict(self, units: Literal["SI", "mm"] = "mm") -> dict[str, Any]:
         """The analysis for the JSON report (``feeddrive analyze --json``).
@@ -778,6 +898,10 @@ def analyze_trace(
     1.00 mm/s, ripple 1.60, creeping
     """
     notes: list[str] = []
+    # the settings first, before any work
+    _check_settings(thresholds, min_step, min_segment_time)
+    if command_speed is not None:
+        command_speed = _check_command_speed(command_speed)
     t = np.asarray(time, dtype=float)
     x = np.asarray(position, dtype=float)
     if speed is None:
@@ -800,9 +924,6 @@ def analyze_trace(
 
     runs: list[tuple[float, float, float | None, str]] = []
     if command_speed is not None:
-        if not (math.isfinite(command_speed) and command_speed != 0):
-            raise ValueError(f"command_speed = {command_speed!r}: expected a finite, non-zero "
-                             "speed [m/s]")
         runs.append((float(tt[0]), float(tt[-1]), float(command_speed), "given"))
     elif command is not None:
         cmd = np.asarray(command, dtype=float)
@@ -891,6 +1012,9 @@ def analyze_trace(
                 f"steady window of {m.window_samples} samples "
                 f"({m.window_end - m.window_start:.3g} s) and misses any slower stick-slip "
                 "cycle; record longer for a reliable verdict")
+        slip = unit_slip_note(c, m.mean_speed) if origin == "given" else None
+        if slip:
+            notes.append(slip)
         segments.append(TraceSegment(start=float(ts[0]), end=float(ts[-1]), command_speed=c,
                                      command_from=origin, metrics=m))
     if (len(segments) >= 2 and segments[0].command_from == "estimated"
