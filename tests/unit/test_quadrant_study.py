@@ -49,3 +49,22 @@ def test_cases_name_their_drive_and_nut_speed() -> None:
     for label, drive, nut_speed, _ in CASES:
         assert label.startswith(drive.upper())
         assert (f"v_n = {nut_speed * 1e3:g} mm/s" in label) == (nut_speed > 0)
+
+
+def test_section_says_where_the_spikes_do_not_stand_out() -> None:
+    """Where fewer than eight spikes stand out of the path's deviation before their
+    reversal, the table says how many and the text says what such a spike is (session 25:
+    at v_n = 10 mm/s six of eight did not, the path oscillating between the reversals)."""
+    rows = [{**_row("CDFS", "cdfs", 0.0, 50.0, False, ["screw"]), "spikes_standing_out": 8},
+            {**_row("DDFS, v_n = 10 mm/s", "ddfs", 10.0, 30.0, False, ["guide"]),
+             "spikes_standing_out": 2}]
+    text, table = section({"radius_mm": 10.0, "feed_mm_min": 1000.0, "rows": rows})
+    assert [r["stand out"] for r in table] == ["8 of 8", "2 of 8"]
+    assert "In 1 of the 2 cases (DDFS, v_n = 10 mm/s) fewer than the eight spikes" in text
+    assert "that oscillation's largest excursion" in text
+    # a stored study from before the column: a dash, no sentence
+    text, table = section({"radius_mm": 10.0, "feed_mm_min": 1000.0,
+                           "rows": [_row("CDFS", "cdfs", 0.0, 50.0, False, ["screw"]),
+                                    _row("DDFS, v_n = 20 mm/s", "ddfs", 20.0, 30.0, False,
+                                         ["guide"])]})
+    assert table[0]["stand out"] == "—" and "fewer than the eight" not in text
