@@ -204,3 +204,18 @@ def test_friction_functions_refuse_a_whole_set_and_non_finite_speeds() -> None:
     # good values as before: Wang2021's screw site, the two branches
     force = steady_friction(np.array([1e-3, -1e-3]), site)
     assert force[0] > 0 > force[1]
+
+
+def test_creep_metrics_names_its_window_and_thresholds() -> None:
+    t = np.linspace(0.0, 1.0, 1001)
+    v = 1e-3 + 1e-4 * np.sin(40 * t)
+    with pytest.raises(ParameterError, match=r"^thresholds = 'dict': expected CreepThresholds"):
+        fd.creep_metrics(t, v, 1e-3, thresholds={"stick_level": 0.1})  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"^window = \(5, 10\): outside the record, "
+                                             r"0 … 1 \[s\]$"):
+        fd.creep_metrics(t, v, 1e-3, window=(5, 10))
+    with pytest.raises(ParameterError, match=r"^window = \(0.5, 0.2\): expected finite start "):
+        fd.creep_metrics(t, v, 1e-3, window=(0.5, 0.2))
+    # a window reaching past the record is its part within it, as before
+    part = fd.creep_metrics(t, v, 1e-3, window=(-1.0, 0.4))
+    assert part.window_start == pytest.approx(0.0) and part.window_end == pytest.approx(0.4)

@@ -483,19 +483,26 @@ def creep_metrics(
     """
     t, v = as_trace(time, speed)
     vc = check_command(command_speed)
+    if thresholds is not None and not isinstance(thresholds, CreepThresholds):
+        # a dict said "'dict' object has no attribute 'stick_level'" (an outside check,
+        # 2026-12-07)
+        raise ParameterError("thresholds", type(thresholds).__name__, "expected "
+                             "CreepThresholds, e.g. CreepThresholds(stick_level=0.1)")
     th = thresholds if thresholds is not None else CreepThresholds()
     if window is None:
         start, end = steady_window(t, v, vc)
     else:
+        # a window reaching past the record is taken as its part within it (a hold's window
+        # may end after the last sample); one wholly outside is refused
         try:
             start, end = (float(window[0]), float(window[1]))
         except (TypeError, ValueError, IndexError):
-            raise ValueError(f"window = {window!r}: expected (start, end) in seconds") from None
+            raise ParameterError("window", window, "expected (start, end) [s]") from None
         if not (math.isfinite(start) and math.isfinite(end) and start < end):
-            raise ValueError(f"window = {window!r}: expected finite start < end [s]")
+            raise ParameterError("window", window, "expected finite start < end [s]")
         if end <= t[0] or start >= t[-1]:
-            raise ValueError(f"window = {window!r}: outside the record "
-                             f"[{t[0]:g}, {t[-1]:g}] s")
+            raise ParameterError("window", window, f"outside the record, {t[0]:g} … "
+                                 f"{t[-1]:g} [s]")
     sel = (t >= start) & (t <= end)
     if int(np.count_nonzero(sel)) < MIN_WINDOW_SAMPLES:
         raise ValueError(f"window: only {int(np.count_nonzero(sel))} samples between "
