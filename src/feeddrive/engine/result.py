@@ -560,7 +560,7 @@ class Result:
                 warnings.append(f"unstable: the loop diverges (table speed peaks at "
                                 f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, "
                                 f"limit {m.thresholds.max_speed_ratio:g}×)")
-            ramp = self._ramp_warning(window) if constant else None
+            ramp = self._ramp_warning() if constant else None
             if ramp:
                 warnings.append(ramp)
         rapid = self._rapid_warning()
@@ -591,27 +591,23 @@ class Result:
                 f"traverse, not a creep test; the API takes m/s ({v:g} mm/s is "
                 f"{1e-3 * v:g}), the command line mm/s")
 
-    def _ramp_warning(self, window: tuple[float, float]) -> str | None:
-        """Whether a constant speed's start ramp reaches into the window the verdict judges
-        (the verdict of a 10-s ramp in a 1-s run was "smooth" against the 0.1 mm/s it had
-        reached, as if that were the command: an outside check, 2027-01-05)."""
+    def _ramp_warning(self) -> str | None:
+        """Whether a constant speed's start ramp ends after the run: its verdict is of the ramp,
+        judged against the speed the ramp reached (a 10-s ramp in a 1-s run was "smooth"
+        against 0.1 mm/s, as if that were the command: an outside check, 2027-01-05)."""
         from ..model.reference import profile_field
 
         text = str(self.attrs.get("profile", ""))
         ramp = profile_field(text, "ConstantSpeed", "ramp_time")
-        command = profile_field(text, "ConstantSpeed", "table_speed")
-        if ramp is None or not ramp > window[0]:
-            return None
         end = float(self.time[-1])
+        if ramp is None or not ramp > end:
+            return None
+        command = profile_field(text, "ConstantSpeed", "table_speed")
         shown = "" if command is None else f" of {1e3 * command:g} mm/s"
-        if ramp >= end:
-            return (f"the start ramp ends at {ramp:g} s, after the run's end {end:g} s: the "
-                    f"verdict is of the ramp, not of the constant command{shown} (its "
-                    f"reference reaches {1e3 * abs(self.command_speed):.3g} mm/s); run "
-                    f"longer than ramp_time, or shorten it")
-        return (f"the start ramp ends at {ramp:g} s, inside the window the verdict judges "
-                f"({window[0]:.3g}–{window[1]:.3g} s): the verdict mixes the ramp with the "
-                f"constant command{shown}; run longer, or shorten ramp_time")
+        return (f"the start ramp ends at {ramp:g} s, after the run's end {end:g} s: the "
+                f"verdict is of the ramp, not of the constant command{shown} (its reference "
+                f"reaches {1e3 * abs(self.command_speed):.3g} mm/s); run longer than "
+                f"ramp_time, or shorten it")
 
     def _diverged_summary(self) -> dict[str, Any]:
         """The summary of a run that diverged before the samples the metrics need: the
