@@ -891,6 +891,9 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
 
     Raises
     ------
+    ParameterError
+        For a ``duration`` past the end of a tabulated profile that still commands a speed
+        there (:func:`check_profile_span`), refused before the model is built.
     SimulationError
         If the integrator fails (a result is never NaN silently).
     SimulationInterrupted

@@ -294,12 +294,16 @@ class SampledSpeed:
     (zero-order hold, as a co-simulation FMU holds its inputs over a communication step);
     positions are their exact integrals.
 
+    Past the last sample the speeds are held and the positions stand, so a run may go on past
+    the end only of a profile that ends at rest (:func:`feeddrive.simulate` refuses one
+    longer than a profile still moving at its end).
+
     Parameters
     ----------
     time : numpy.ndarray
         Uniform, increasing sample instants from 0 [s].
     table_speed : numpy.ndarray
-        Commanded table speed at each instant [m/s].
+        Commanded table speed at each instant, |v| ≤ ``units.LARGEST_SPEED`` [m/s].
     nut_speed : numpy.ndarray or None, default None
         Commanded nut speed at each instant [m/s] (DDFS; None: zero).
     hold : bool, default False
