@@ -33,6 +33,13 @@ if TYPE_CHECKING:
 # SI → engineering units at the edges (CSV, Parquet, CLI)
 ENGINEERING = _ENGINEERING
 
+#: a table command at or above this speed [m/s] (30 m/min) is a rapid traverse, not a creep
+#: test (creep is tested at a few mm/s: Wang2021's critical speeds are 1–2 mm/s): the summary
+#: says so, and that the API takes m/s — ConstantSpeed(2.0) meant as 2 mm/s ran at 2 m/s
+#: without a word (an outside check, 2027-01-05).  Not refused: a linear motor's rapid
+#: traverse is legitimate, up to units.LARGEST_SPEED
+RAPID_SPEED = 0.5
+
 class Run:
     """The raw output of one simulation and what names it, without copies.
 
@@ -553,6 +560,12 @@ class Result:
                 warnings.append(f"unstable: the loop diverges (table speed peaks at "
                                 f"{max(abs(m.max_ratio), abs(m.min_ratio)):.3g}× the command, "
                                 f"limit {m.thresholds.max_speed_ratio:g}×)")
+            ramp = self._ramp_warning() if constant else None
+            if ramp:
+                warnings.append(ramp)
+        rapid = self._rapid_warning()
+        if rapid:
+            warnings.append(rapid)
         travel = self._travel_warning()
         if travel:
             warnings.append(travel)
@@ -566,6 +579,35 @@ class Result:
             "warnings": warnings,
         })
         return out
+
+    def _rapid_warning(self) -> str | None:
+        """Whether the table's command reaches :data:`RAPID_SPEED`: a rapid traverse, or a
+        speed in mm/s given to the API as m/s."""
+        v = float(np.max(np.abs(self["table_speed_reference"]), initial=0.0))
+        if v < RAPID_SPEED:
+            return None
+        # the units of both: the command line's --table-speed takes mm/s and prints this too
+        return (f"the command is {v:g} m/s ({1e3 * v:g} mm/s, {60.0 * v:g} m/min), a rapid "
+                f"traverse, not a creep test; the API takes m/s ({v:g} mm/s is "
+                f"{1e-3 * v:g}), the command line mm/s")
+
+    def _ramp_warning(self) -> str | None:
+        """Whether a constant speed's start ramp ends after the run: its verdict is of the ramp,
+        judged against the speed the ramp reached (a 10-s ramp in a 1-s run was "smooth"
+        against 0.1 mm/s, as if that were the command: an outside check, 2027-01-05)."""
+        from ..model.reference import profile_field
+
+        text = str(self.attrs.get("profile", ""))
+        ramp = profile_field(text, "ConstantSpeed", "ramp_time")
+        end = float(self.time[-1])
+        if ramp is None or not ramp > end:
+            return None
+        command = profile_field(text, "ConstantSpeed", "table_speed")
+        shown = "" if command is None else f" of {1e3 * command:g} mm/s"
+        return (f"the start ramp ends at {ramp:g} s, after the run's end {end:g} s: the "
+                f"verdict is of the ramp, not of the constant command{shown} (its reference "
+                f"reaches {1e3 * abs(self.command_speed):.3g} mm/s); run longer than "
+                f"ramp_time, or shorten it")
 
     def _diverged_summary(self) -> dict[str, Any]:
         """The summary of a run that diverged before the samples the metrics need: the

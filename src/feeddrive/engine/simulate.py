@@ -85,6 +85,12 @@ class DriveSystem:
                                  "state names to numbers in each state's SI unit ({} for none)")
         if self.nut_hold not in ("locked", "servo"):
             raise ParameterError("nut_hold", self.nut_hold, "expected locked or servo")
+        # a dict or a number failed at simulate with "'dict' object has no attribute
+        # 'encode'" (an outside check, 2027-01-05)
+        if self.load is not None and not isinstance(self.load, LoadProfile):
+            raise ParameterError("load", type(self.load).__name__, "expected a LoadProfile, "
+                                 "e.g. LoadProfile(time=…, force=…) [s, N] (a constant load "
+                                 "is the parameter disturbances.load_force [N])")
         mechanism(self.drive).check(self.parameters, self.drive, self.table_position)
         for name, value in self.initial_state.items():
             if not (isinstance(value, int | float) and math.isfinite(value)):
@@ -596,6 +602,57 @@ def profile_breakpoints(profile: Profile, t_end: float, base: float, *,
     return np.zeros(0)
 
 
+def check_profile_span(profile: Profile, duration: float, output_interval: float) -> None:
+    """Refuse a run that goes on past the end of a tabulated profile still commanding a speed.
+
+    Past its last sample the reference (:func:`feeddrive.model.reference.reference_kernel`)
+    holds the speed it ends with but not the position: a profile that ends at rest holds the
+    table there (a machine run given a longer duration settles), one that ends moving commands
+    a speed and a standing position at once, the position loop pulling the table back (a
+    0.01-s table of 1 mm/s run for 1 s was judged "creeping" without a word: an outside
+    check, 2027-01-05).  A run may pass the last sample by one sample interval of the profile
+    or one output interval, whichever is longer: the output instant after its end (a fit
+    simulates its record to the sample after the last).
+
+    Parameters
+    ----------
+    profile : Profile
+        The reference profile; only a :class:`SampledSpeed` (and a machine's axes) is checked.
+    duration : float
+        The run's end [s]; a value that is not a finite number > 0 is left to the run.
+    output_interval : float
+        The run's output interval [s].
+
+    Raises
+    ------
+    ParameterError
+        Naming ``duration``, the profile's end and the speed it ends with.
+    """
+    if not isinstance(profile, SampledSpeed) or isinstance(duration, bool) \
+            or not isinstance(duration, Real) or not math.isfinite(duration):
+        return
+    t = np.asarray(profile.time, dtype=float)
+    end = float(t[-1])
+    step = (end - float(t[0])) / (t.size - 1)
+    limit = end + max(step, float(output_interval))
+    if duration <= limit * (1.0 + 1e-9):
+        return
+    parts = [("", profile), *((f"axis {name}'s ", p) for name, p in getattr(profile, "axes", ())
+                              if isinstance(p, SampledSpeed))]
+    for where, part in parts:
+        for which, speeds in (("table", np.asarray(part.table_speed, dtype=float)),
+                              ("nut", np.asarray(_nut(part), dtype=float))):
+            held = float(speeds[-2] if part.hold else speeds[-1])  # what the kernel holds
+            if held != 0.0:
+                raise ParameterError(
+                    "duration", duration,
+                    f"expected ≤ {limit:.6g} [s]: the profile ends at {end:.6g} s still "
+                    f"commanding {where}{which} speed {1e3 * held:.6g} mm/s, and past its "
+                    "last sample the reference holds that speed but not the position (the "
+                    "position loop pulls the table back); lengthen the profile, end it at "
+                    "rest, or shorten the run")
+
+
 def _sample_kinks(profile: SampledSpeed) -> np.ndarray:
     """Per sample of ``profile``, whether the command is not smooth there: a change of the
     slope (interpolated) or of the value (held) of the table or nut speed, compared exactly
@@ -834,6 +891,9 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
 
     Raises
     ------
+    ParameterError
+        For a ``duration`` past the end of a tabulated profile that still commands a speed
+        there (:func:`check_profile_span`), refused before the model is built.
     SimulationError
         If the integrator fails (a result is never NaN silently).
     SimulationInterrupted
@@ -864,6 +924,11 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     """
     kind = estimate_kind(error_estimate)
     embedded = kind == "embedded"
+    if isinstance(profile, SampledSpeed) and callable(getattr(system, "model", None)) \
+            and not isinstance(system, DriveParameters) \
+            and (options is None or isinstance(options, SolverOptions)):
+        # before the model is assembled (Simulation.run checks it again, for its own callers)
+        check_profile_span(profile, duration, run_options(system, options).output_interval)
     sim = Simulation(system, profile, options, embedded_estimate=embedded)
     if embedded and not sim.embedded_estimate:
         raise ParameterError("error_estimate", error_estimate,
@@ -1138,6 +1203,7 @@ class Simulation:
         """
         if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
             raise ParameterError("duration", duration, "expected a finite time > 0 [s]")
+        check_profile_span(self.profile, duration, self.options.output_interval)
         options, grid, model = self.options, self.grid, self.model
         # an output interval longer than the run left a Result without a sample (its summary
         # failed after the run on an empty array): refused before any work, naming the setting

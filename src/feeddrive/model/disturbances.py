@@ -16,7 +16,7 @@ import numpy as np
 from .. import registry
 from .._jit import kernel
 from ..parameters import Component, ParameterError
-from ..parameters.validation import quantities, quantity
+from ..parameters.validation import MISSING, quantities, quantity
 from .codegen import Builder
 
 #: the load block ``disturbances.<name>``: constant force [N] and its start [s], the record's
@@ -27,6 +27,9 @@ LOAD, LOAD_START, LOAD_STEP, LOAD_OFFSET, LOAD_POINTS = range(len(LOAD_SLOTS))
 #: ``o + k·n``)
 HARMONIC_FIELDS = ("orders", "amplitudes", "phases")
 ORDERS, AMPLITUDES, PHASES = range(len(HARMONIC_FIELDS))
+#: the largest load force on the table [N], constant (``disturbances.load_force``) or in a
+#: record (:class:`LoadProfile`)
+LARGEST_LOAD_FORCE = 1e6
 
 
 @kernel
@@ -122,6 +125,11 @@ class LoadProfile:
     time: np.ndarray
     force: np.ndarray
 
+    def __post_init__(self) -> None:
+        # refused when made, naming the field (a NaN force was refused only at simulate, in a
+        # bare ValueError, strings in numpy's words: an outside check, 2027-01-05)
+        self.encode()
+
     def encode(self) -> tuple[float, np.ndarray]:
         """The record as (sample interval, force samples) for the load kernel.
 
@@ -129,16 +137,37 @@ class LoadProfile:
         -------
         tuple of (float, numpy.ndarray)
             The sample interval [s] and the force samples [N].
+
+        Raises
+        ------
+        ParameterError
+            For arrays that are not numbers, not 1-D of one length ≥ 2, not finite, forces
+            beyond :data:`LARGEST_LOAD_FORCE`, or times not on a uniform grid from 0.
         """
-        t = np.asarray(self.time, dtype=float)
-        f = np.asarray(self.force, dtype=float)
+        try:
+            t = np.asarray(self.time, dtype=float)
+            f = np.asarray(self.force, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError("load.time/force", MISSING,
+                                 "expected arrays of numbers [s, N]") from None
         if t.ndim != 1 or t.size < 2 or f.shape != t.shape:
-            raise ValueError("load.time/force: expected 1-D arrays of one length ≥ 2")
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))):
-            raise ValueError("load.force: contains non-finite values [N]")
+            raise ParameterError("load.time/force", MISSING,
+                                 f"expected 1-D arrays of one length ≥ 2 (shapes {t.shape}, "
+                                 f"{f.shape}) [s, N]")
+        for name, arr, unit in (("time", t, "s"), ("force", f, "N")):
+            if not np.all(np.isfinite(arr)):
+                bad = int(np.flatnonzero(~np.isfinite(arr))[0])
+                raise ParameterError(f"load.{name}[{bad}]", float(arr[bad]),
+                                     f"expected finite values [{unit}]")
+        if np.any(np.abs(f) > LARGEST_LOAD_FORCE):
+            bad = int(np.flatnonzero(np.abs(f) > LARGEST_LOAD_FORCE)[0])
+            raise ParameterError(f"load.force[{bad}]", float(f[bad]),
+                                 f"expected |force| ≤ {LARGEST_LOAD_FORCE:g} [N] (as "
+                                 "disturbances.load_force)")
         dt = np.diff(t)
         if abs(t[0]) > 1e-12 or np.any(dt <= 0) or np.ptp(dt) > 1e-9 * dt.mean():
-            raise ValueError("load.time: expected a uniform, increasing grid starting at 0 [s]")
+            raise ParameterError("load.time", MISSING,
+                                 "expected a uniform, increasing grid starting at 0 [s]")
         return float(dt.mean()), f
 
 
@@ -277,7 +306,8 @@ class Disturbances(Component):
         The screw's lead error.
     """
 
-    load_force: float = quantity("N", low=-1e6, high=1e6, default=0.0)
+    load_force: float = quantity("N", low=-LARGEST_LOAD_FORCE, high=LARGEST_LOAD_FORCE,
+                                 default=0.0)
     load_start: float = quantity("s", low=0, high=1e9, low_inclusive=True, default=0.0)
     screw_motor_ripple: TorqueRipple = field(default_factory=lambda: TorqueRipple())
     hollow_motor_ripple: TorqueRipple = field(default_factory=lambda: TorqueRipple())

@@ -21,6 +21,7 @@ import numpy as np
 from .._jit import kernel
 from ..parameters import ParameterError
 from ..parameters.validation import MISSING
+from ..units import LARGEST_SPEED
 
 REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
 # parameter block of a profile: kind, table speed, nut speed, ramp time, frequency or step,
@@ -203,9 +204,10 @@ class ConstantSpeed:
     def __post_init__(self) -> None:
         # refused when made, naming the field (a negative ramp was refused only at
         # simulate, in a bare ValueError: an outside check, 2026-12-07)
-        _finite("table_speed", self.table_speed, "m/s")
-        _finite("nut_speed", self.nut_speed, "m/s")
+        _speed("profile.table_speed", self.table_speed)
+        _speed("profile.nut_speed", self.nut_speed)
         _number("ramp_time", self.ramp_time)
+        _plain(self, ("table_speed", "nut_speed", "ramp_time"))
         if not (self.ramp_time >= 0.0 and math.isfinite(self.ramp_time)):
             raise ParameterError("profile.ramp_time", self.ramp_time,
                                  "expected a finite duration ≥ 0 [s]")
@@ -256,12 +258,20 @@ class SineSpeed:
     def __post_init__(self) -> None:
         # refused when made, naming the field (a zero frequency was refused only at
         # simulate, in a bare ValueError: an outside check, 2026-12-07)
-        _finite("table_amplitude", self.table_amplitude, "m/s")
-        _finite("nut_amplitude", self.nut_amplitude, "m/s")
+        _speed("profile.table_amplitude", self.table_amplitude)
+        _speed("profile.nut_amplitude", self.nut_amplitude)
         _number("frequency", self.frequency)
+        _plain(self, ("table_amplitude", "nut_amplitude", "frequency"))
         if not (0.0 < self.frequency <= MAX_FREQUENCY):
             raise ParameterError("profile.frequency", self.frequency,
                                  f"expected > 0, ≤ {MAX_FREQUENCY:g} [Hz]")
+        # the sine is the table's command, and its summary judges the table against it: a
+        # zero amplitude was refused only by the summary, after the run, in a bare
+        # ValueError (an outside check, 2027-01-05); nothing builds one on purpose
+        if self.table_amplitude == 0.0:
+            raise ParameterError("profile.table_amplitude", self.table_amplitude,
+                                 "expected a non-zero amplitude [m/s] (the table's command, "
+                                 "which the run is judged against)")
 
     def encode(self) -> tuple[dict[int, float], np.ndarray]:
         """The profile as (parameter slots, data table) for the reference kernel.
@@ -284,12 +294,16 @@ class SampledSpeed:
     (zero-order hold, as a co-simulation FMU holds its inputs over a communication step);
     positions are their exact integrals.
 
+    Past the last sample the speeds are held and the positions stand, so a run may go on past
+    the end only of a profile that ends at rest (:func:`feeddrive.simulate` refuses one
+    longer than a profile still moving at its end).
+
     Parameters
     ----------
     time : numpy.ndarray
         Uniform, increasing sample instants from 0 [s].
     table_speed : numpy.ndarray
-        Commanded table speed at each instant [m/s].
+        Commanded table speed at each instant, |v| ≤ ``units.LARGEST_SPEED`` [m/s].
     nut_speed : numpy.ndarray or None, default None
         Commanded nut speed at each instant [m/s] (DDFS; None: zero).
     hold : bool, default False
@@ -307,6 +321,8 @@ class SampledSpeed:
 
     def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The checked arrays: time, table speed, nut speed and the time steps [s, m/s]."""
+        if not isinstance(self.hold, bool | np.bool_):  # hold="no" was taken as True
+            raise ParameterError("profile.hold", self.hold, "expected True or False")
         try:
             t = np.asarray(self.time, dtype=float)
             vt = np.asarray(self.table_speed, dtype=float)
@@ -325,6 +341,10 @@ class SampledSpeed:
                 raise ParameterError(f"profile.{name}[{bad}]", float(arr[bad]),
                                      "expected finite values [" + ("s" if name == "time"
                                                                    else "m/s") + "]")
+        for name, arr in (("table_speed", vt), ("nut_speed", vn)):
+            if np.any(np.abs(arr) > LARGEST_SPEED):
+                bad = int(np.flatnonzero(np.abs(arr) > LARGEST_SPEED)[0])
+                raise ParameterError(f"profile.{name}[{bad}]", float(arr[bad]), _TOO_FAST)
         dt = np.diff(t)
         # uniform to round-off: the spacing of doubles grows with t (at 8192 s it is 1.8e-12
         # s, and a 1-ms grid past that was refused: an outside check, 2026-12-07)
@@ -373,15 +393,45 @@ class SampledSpeed:
         -------
         SampledSpeed
             The sampled profile.
+
+        Raises
+        ------
+        ParameterError
+            For a function that is not callable or does not return one speed (or one per
+            instant), a duration or interval that is not a finite number > 0, or a grid of
+            more than :data:`MAX_PROFILE_SAMPLES` samples (refused before it is made).
         """
+        # refused naming the argument, before any array is made (an interval of 0 raised
+        # ZeroDivisionError, a NaN duration "cannot convert float NaN to integer", 1e9 s a
+        # MemoryError of 72.8 TiB: an outside check, 2027-01-05)
+        for name, function in (("table_speed", table_speed), ("nut_speed", nut_speed)):
+            if not (callable(function) or (name == "nut_speed" and function is None)):
+                raise ParameterError(name, type(function).__name__, "expected a function of "
+                                     "the time [s] (an array) returning the speed [m/s]")
+        duration = _positive("duration", duration, "s")
+        interval = _positive("interval", interval, "s")
+        _check_span("duration", duration, duration, interval, "s")
         n = int(math.ceil(duration / interval)) + 2
         t = np.arange(n) * interval
-        vt = np.asarray(table_speed(t), dtype=float) * np.ones_like(t)
-        vn = None if nut_speed is None else np.asarray(nut_speed(t), dtype=float) * np.ones_like(t)
+        vt = _sampled("table_speed", table_speed(t), t)
+        vn = None if nut_speed is None else _sampled("nut_speed", nut_speed(t), t)
         return cls(time=t, table_speed=vt, nut_speed=vn)
 
 
 Profile = ConstantSpeed | SineSpeed | SampledSpeed
+
+
+def _sampled(name: str, values: object, t: np.ndarray) -> np.ndarray:
+    """What a function given to :meth:`SampledSpeed.from_function` returned at the instants
+    ``t``: one speed or one per instant [m/s], else refused naming the argument ``name``."""
+    try:
+        v = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or not (v.ndim == 0 or v.shape == t.shape):
+        raise ParameterError(name, MISSING, f"expected a function returning a number or one "
+                             f"per instant of its argument ({t.size} instants) [m/s]")
+    return v * np.ones_like(t)
 
 
 def sine_field(profile: str, name: str) -> float | None:
@@ -400,19 +450,61 @@ def sine_field(profile: str, name: str) -> float | None:
     float or None
         Its value [SI].
     """
+    return profile_field(profile, "SineSpeed", name)
+
+
+def profile_field(profile: str, kind: str, name: str) -> float | None:
+    """A field of a ``kind`` profile (``"ConstantSpeed"``, ``"SineSpeed"``) read from its repr
+    in a run's attributes (a NumPy scalar's too, ``np.float64(0.2)``, as a file written before
+    the fields were made plain floats holds it); None for another profile.
+
+    Parameters
+    ----------
+    profile : str
+        The ``profile`` attribute of a run.
+    kind : str
+        The profile's class name.
+    name : str
+        The field.
+
+    Returns
+    -------
+    float or None
+        Its value [SI].
+    """
     import re
 
-    found = re.match(rf"SineSpeed\(.*\b{name}=([0-9.eE+-]+)", profile)
+    found = re.match(rf"{kind}\(.*\b{name}=(?:np\.\w+\()?([0-9.eE+-]+)", profile)
     return float(found.group(1)) if found else None
 
 
 _EMPTY_TABLE = np.zeros((4, 2))
 
 
-def _finite(name: str, value: float, unit: str) -> None:
+#: the refusal of a speed above the largest any input may have (``units.LARGEST_SPEED``): a
+#: ConstantSpeed(1e6) ran and was judged "creeping", one of 1e300 overflowed in numpy (an
+#: outside check, 2027-01-05)
+_TOO_FAST = f"expected |speed| ≤ {LARGEST_SPEED:g} [m/s] (no feed drive is faster)"
+
+
+def _speed(field: str, value: float) -> None:
+    """Refuse a speed ``field`` [m/s] that is not a finite number of at most
+    ``units.LARGEST_SPEED`` in magnitude, naming it."""
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
             or not math.isfinite(value):
-        raise ParameterError(f"profile.{name}", value, f"expected a finite speed [{unit}]")
+        raise ParameterError(field, value, "expected a finite speed [m/s]")
+    if abs(value) > LARGEST_SPEED:
+        raise ParameterError(field, value, _TOO_FAST)
+
+
+def _plain(profile: object, names: tuple[str, ...]) -> None:
+    """Make NumPy scalar fields plain floats (the same value): the repr a run keeps in its
+    attributes is read back by :func:`profile_field`, and ``np.float64(0.2)`` was not (a sine
+    given NumPy numbers was summarised as a creep test: an outside check, 2027-01-05)."""
+    for name in names:
+        value = getattr(profile, name)
+        if isinstance(value, np.floating | np.integer):
+            object.__setattr__(profile, name, float(value))
 
 
 def _number(name: str, value: object) -> None:
@@ -442,7 +534,9 @@ def _check_span(name: str, value: float, span: float, interval: float, unit: str
 
 
 def _positive(name: str, value: float, unit: str) -> float:
-    if not (np.isfinite(value) and value > 0.0):
+    # a str or a list is refused here too, not in numpy ("ufunc 'isfinite' not supported")
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
+            or not (math.isfinite(value) and value > 0.0):
         raise ParameterError(name, value, f"expected a finite value > 0 [{unit}]")
     return float(value)
 
@@ -472,7 +566,8 @@ def trapezoid(table_speed: float, duration: float, *, ramp_time: float = 0.5,
     Raises
     ------
     ParameterError
-        For a non-positive duration or ramp time, or ramps longer than the move.
+        For a speed that is not a number of at most ``units.LARGEST_SPEED``, a non-positive
+        duration or ramp time, or ramps longer than the move.
 
     Examples
     --------
@@ -482,6 +577,8 @@ def trapezoid(table_speed: float, duration: float, *, ramp_time: float = 0.5,
     >>> [round(1e3 * float(np.interp(t, move.time, move.table_speed)), 3) for t in (0.25, 1, 2)]
     [1.0, 2.0, 0.0]
     """
+    _speed("table_speed", table_speed)
+    _speed("nut_speed", nut_speed)
     duration = _positive("duration", duration, "s")
     ramp_time = _positive("ramp_time", ramp_time, "s")
     interval = _positive("interval", interval, "s")
@@ -530,7 +627,8 @@ def stepdown(start_speed: float, lowest_speed: float, *, step: float = 0.01e-3,
     Raises
     ------
     ParameterError
-        For a non-positive value or ``lowest_speed ≥ start_speed``.
+        For a value that is not a number, a non-positive one, a speed above
+        ``units.LARGEST_SPEED`` or ``lowest_speed ≥ start_speed``.
 
     References
     ----------
@@ -548,6 +646,8 @@ def stepdown(start_speed: float, lowest_speed: float, *, step: float = 0.01e-3,
     for name, value in (("start_speed", start_speed), ("lowest_speed", lowest_speed),
                         ("step", step)):
         _positive(name, value, "m/s")
+    _speed("start_speed", start_speed)
+    _speed("nut_speed", nut_speed)
     _positive("dwell", dwell, "s")
     _positive("lead_in", lead_in, "s")
     _positive("interval", interval, "s")
@@ -593,6 +693,8 @@ def from_csv(path: str | Path, *, interval: float = _INTERVAL) -> SampledSpeed:
     """
     from ..io.measured import MeasuredDataError, read_csv_table
 
+    if not isinstance(path, str | Path):  # a number failed in os.fspath's words
+        raise ParameterError("path", path, "expected a CSV file's path (str or pathlib.Path)")
     _positive("interval", interval, "s")
     table = read_csv_table(path)
     t, _, _ = table.quantity(["time"], "time", unit=None, default_unit="s")
