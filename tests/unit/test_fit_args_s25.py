@@ -1,5 +1,5 @@
 """Arguments of the fit, the trace analysis and their results an outside check found
-unchecked or unreadable (2026-12-08): each is now a ParameterError naming the argument, the
+unchecked or unreadable (2026-12-07): each is now a ParameterError naming the argument, the
 value and the unit before any simulation, and the results print in a line or a few.
 
 No test here simulates a drive for longer than 0.3 s: a fit is refused before its first

@@ -1,4 +1,4 @@
-"""Profiles and loads an outside check found unchecked (2027-01-05): speeds beyond any feed
+"""Profiles and loads an outside check found unchecked (2026-12-07): speeds beyond any feed
 drive, a zero sine, builders that failed in numpy's words, a load record checked only at
 simulate, a run past the end of a table that still commands a speed, and summaries that
 judged an unfinished ramp or a speed in mm/s given as m/s without a word."""

@@ -1645,7 +1645,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
 
     say = progress or (lambda _t: None)
     if not isinstance(base, DriveParameters):  # a preset's name said "'controller' is not a
-        # field of the parameter set" (an outside check, 2026-12-08)
+        # field of the parameter set" (an outside check, 2026-12-07)
         raise ParameterError("base", base, 'expected DriveParameters, e.g. '
                              'fd.preset("wang2021") or fd.load("my.toml")')
     if isinstance(experiments, Experiment):
@@ -1828,7 +1828,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
 
 def _bounds_pair(path: str, pair: object, unit: str) -> tuple[float, float]:
     """``bounds[path]`` as (low, high) [SI], or a :class:`ParameterError` naming it: a bare
-    number said "cannot unpack non-iterable int" (an outside check, 2026-12-08)."""
+    number said "cannot unpack non-iterable int" (an outside check, 2026-12-07)."""
     where = f"bounds.{path}"
     expected = f"expected a (low, high) pair, low < high [{unit}]"
     if isinstance(pair, str) or not isinstance(pair, Sequence | np.ndarray) or len(pair) != 2:
@@ -2399,7 +2399,7 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
 
     # refused before the run: a negative or NaN noise σ (NaN made every current sample NaN),
     # a quantum that was silently ignored, numpy's "expected non-negative integer" for a
-    # seed, and a record start past the end (an empty record) (an outside check, 2026-12-08)
+    # seed, and a record start past the end (an empty record) (an outside check, 2026-12-07)
     for name, value, unit in (("current_noise", current_noise, "-, σ over the current's rms"),
                               ("position_quantum", position_quantum, "m"),
                               ("record_start", record_start, "s")):

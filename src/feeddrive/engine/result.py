@@ -36,7 +36,7 @@ ENGINEERING = _ENGINEERING
 #: a table command at or above this speed [m/s] (30 m/min) is a rapid traverse, not a creep
 #: test (creep is tested at a few mm/s: Wang2021's critical speeds are 1–2 mm/s): the summary
 #: says so, and that the API takes m/s — ConstantSpeed(2.0) meant as 2 mm/s ran at 2 m/s
-#: without a word (an outside check, 2027-01-05).  Not refused: a linear motor's rapid
+#: without a word (an outside check, 2026-12-07).  Not refused: a linear motor's rapid
 #: traverse is legitimate, up to units.LARGEST_SPEED
 RAPID_SPEED = 0.5
 
@@ -594,7 +594,7 @@ class Result:
     def _ramp_warning(self) -> str | None:
         """Whether a constant speed's start ramp ends after the run: its verdict is of the ramp,
         judged against the speed the ramp reached (a 10-s ramp in a 1-s run was "smooth"
-        against 0.1 mm/s, as if that were the command: an outside check, 2027-01-05)."""
+        against 0.1 mm/s, as if that were the command: an outside check, 2026-12-07)."""
         from ..model.reference import profile_field
 
         text = str(self.attrs.get("profile", ""))

@@ -86,7 +86,7 @@ class DriveSystem:
         if self.nut_hold not in ("locked", "servo"):
             raise ParameterError("nut_hold", self.nut_hold, "expected locked or servo")
         # a dict or a number failed at simulate with "'dict' object has no attribute
-        # 'encode'" (an outside check, 2027-01-05)
+        # 'encode'" (an outside check, 2026-12-07)
         if self.load is not None and not isinstance(self.load, LoadProfile):
             raise ParameterError("load", type(self.load).__name__, "expected a LoadProfile, "
                                  "e.g. LoadProfile(time=…, force=…) [s, N] (a constant load "
@@ -610,7 +610,7 @@ def check_profile_span(profile: Profile, duration: float, output_interval: float
     table there (a machine run given a longer duration settles), one that ends moving commands
     a speed and a standing position at once, the position loop pulling the table back (a
     0.01-s table of 1 mm/s run for 1 s was judged "creeping" without a word: an outside
-    check, 2027-01-05).  A run may pass the last sample by one sample interval of the profile
+    check, 2026-12-07).  A run may pass the last sample by one sample interval of the profile
     or one output interval, whichever is longer: the output instant after its end (a fit
     simulates its record to the sample after the last).
 

@@ -127,7 +127,7 @@ class LoadProfile:
 
     def __post_init__(self) -> None:
         # refused when made, naming the field (a NaN force was refused only at simulate, in a
-        # bare ValueError, strings in numpy's words: an outside check, 2027-01-05)
+        # bare ValueError, strings in numpy's words: an outside check, 2026-12-07)
         self.encode()
 
     def encode(self) -> tuple[float, np.ndarray]:

@@ -267,7 +267,7 @@ class SineSpeed:
                                  f"expected > 0, ≤ {MAX_FREQUENCY:g} [Hz]")
         # the sine is the table's command, and its summary judges the table against it: a
         # zero amplitude was refused only by the summary, after the run, in a bare
-        # ValueError (an outside check, 2027-01-05); nothing builds one on purpose
+        # ValueError (an outside check, 2026-12-07); nothing builds one on purpose
         if self.table_amplitude == 0.0:
             raise ParameterError("profile.table_amplitude", self.table_amplitude,
                                  "expected a non-zero amplitude [m/s] (the table's command, "
@@ -403,7 +403,7 @@ class SampledSpeed:
         """
         # refused naming the argument, before any array is made (an interval of 0 raised
         # ZeroDivisionError, a NaN duration "cannot convert float NaN to integer", 1e9 s a
-        # MemoryError of 72.8 TiB: an outside check, 2027-01-05)
+        # MemoryError of 72.8 TiB: an outside check, 2026-12-07)
         for name, function in (("table_speed", table_speed), ("nut_speed", nut_speed)):
             if not (callable(function) or (name == "nut_speed" and function is None)):
                 raise ParameterError(name, type(function).__name__, "expected a function of "
@@ -483,7 +483,7 @@ _EMPTY_TABLE = np.zeros((4, 2))
 
 #: the refusal of a speed above the largest any input may have (``units.LARGEST_SPEED``): a
 #: ConstantSpeed(1e6) ran and was judged "creeping", one of 1e300 overflowed in numpy (an
-#: outside check, 2027-01-05)
+#: outside check, 2026-12-07)
 _TOO_FAST = f"expected |speed| ≤ {LARGEST_SPEED:g} [m/s] (no feed drive is faster)"
 
 
@@ -500,7 +500,7 @@ def _speed(field: str, value: float) -> None:
 def _plain(profile: object, names: tuple[str, ...]) -> None:
     """Make NumPy scalar fields plain floats (the same value): the repr a run keeps in its
     attributes is read back by :func:`profile_field`, and ``np.float64(0.2)`` was not (a sine
-    given NumPy numbers was summarised as a creep test: an outside check, 2027-01-05)."""
+    given NumPy numbers was summarised as a creep test: an outside check, 2026-12-07)."""
     for name in names:
         value = getattr(profile, name)
         if isinstance(value, np.floating | np.integer):
