@@ -367,7 +367,7 @@ def test_a_real_full_disk_falls_back(tmp_path: Path) -> None:
     script = 'mount -t tmpfs -o size=120k tmpfs "$1" && shift && exec "$@"'
     proc = subprocess.run([*(_mounting() or []), "sh", "-c", script, "sh", str(small),
                            sys.executable, "-m", "feeddrive", "simulate", "--table-speed", "2",
-                           "--duration", "0.05"], env=env, capture_output=True, text=True,
+                           "--duration", "0.2"], env=env, capture_output=True, text=True,
                           timeout=600, check=False)
     fallback = tmp / "feeddrive-c-0"  # root, in the namespace
     assert proc.returncode == 0, proc.stderr
