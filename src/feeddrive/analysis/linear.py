@@ -402,11 +402,12 @@ def _solve_steady(model: Model, f: _Evaluator, y0: np.ndarray, at: np.ndarray,
 def check_operating_point(system: object, table_speed: object, nut_speed: object,
                           frictionless: bool = False) -> None:
     """Refuse, before any linear algebra, an operating point that is not one: a system that
-    is not a DriveSystem, a table speed that is not a finite number within the axis's speed
-    limit (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`; 1e300 m/s printed
-    eleven LAPACK lines and raised LinAlgError: an outside check, 2026-12-08), zero unless
-    ``frictionless``, or a nut speed that is not a finite number within
-    ``units.LARGEST_SPEED``.
+    is not a DriveSystem, a table speed beyond the axis's speed limit
+    (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`; 1e300 m/s printed eleven
+    LAPACK lines and raised LinAlgError: an outside check, 2026-12-08) or zero unless
+    ``frictionless``, or a nut speed beyond ``units.LARGEST_SPEED``.  A speed that is not a
+    finite number is refused by the profile the steady state is found on
+    (``profile.table_speed``).
 
     Parameters
     ----------
@@ -422,15 +423,20 @@ def check_operating_point(system: object, table_speed: object, nut_speed: object
     ParameterError
         Naming the argument, its value and what was expected [m/s].
     """
+    from numbers import Real
+
     from .critical import check_kinds, table_speed_limit
 
     check_kinds(system)
     assert isinstance(system, DriveSystem)
-    protocol.check_speed("table_speed", table_speed, sign="any",
-                         limit=table_speed_limit(system))
+    # what is not a finite number is refused by the profile (``profile.table_speed``)
+    for name, value, limit in (("table_speed", table_speed, table_speed_limit(system)),
+                               ("nut_speed", nut_speed, None)):
+        if isinstance(value, Real) and not isinstance(value, bool) \
+                and not (isinstance(value, float | np.floating) and not math.isfinite(value)):
+            protocol.check_speed(name, value, sign="any", limit=limit)
     if table_speed == 0.0 and not frictionless:
         raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
-    protocol.check_speed("nut_speed", nut_speed, sign="any")
 
 
 def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
