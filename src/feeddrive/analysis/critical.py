@@ -525,8 +525,19 @@ def check_kinds(system: object, *, rule: object = None, options: object = None,
 
 
 def table_speed_limit(system: DriveSystem) -> tuple[float, str]:
-    """The largest table speed of ``system``'s axis [m/s] and what sets it
-    (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`)."""
+    """The largest table speed of ``system``'s axis and what sets it
+    (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The limit [m/s] and what sets it.
+    """
     from .positioning_run import axis_speed_limit
 
     return axis_speed_limit(system.parameters, system.drive)

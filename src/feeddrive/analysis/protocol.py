@@ -135,7 +135,7 @@ def mm_s_hint(value: float, fits: bool) -> str:
     Parameters
     ----------
     value : float
-        The refused speed, as given.
+        The refused speed, as given [m/s].
     fits : bool
         Whether ``value`` mm/s is within the bound it broke.
 
