@@ -1458,6 +1458,9 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     """
     _check_range(system, nut_speed, low, high, points)
     _check_tolerance(tolerance)
+    if progress is not None and not callable(progress):
+        raise ParameterError("progress", type(progress).__name__,
+                             "expected None or a callable progress(done, total)")
     speeds = np.geomspace(low, high, points)
     re = np.empty(points)
     fr = np.empty(points)
