@@ -17,10 +17,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from numbers import Real
 
 from ..engine.simulate import DriveSystem
 from ..parameters import DriveParameters, ParameterError
-from .critical import CriticalSpeed, creep_trial, critical_speed_from_rest
+from . import protocol
+from .critical import (
+    CriticalSpeed,
+    check_search_settings,
+    creep_trial,
+    critical_speed_from_rest,
+)
 from .cycle_verdict import VerdictRule
 
 
@@ -49,6 +56,21 @@ class Target:
     nut_speed: float = 0.0
     source: str = ""
 
+    def __post_init__(self) -> None:
+        """Refused when made (a NaN or negative speed was taken, and a negative one searched
+        before it was refused for the wrong reason: an outside check, 2026-12-08)."""
+        if not isinstance(self.drive, str):
+            raise ParameterError("target.drive", self.drive,
+                                 "expected the name of a drive, e.g. 'cdfs'")
+        protocol.check_speed("target.critical_speed", self.critical_speed)
+        if isinstance(self.table_position, bool) or not isinstance(self.table_position, Real) \
+                or not math.isfinite(self.table_position):
+            raise ParameterError("target.table_position", self.table_position,
+                                 "expected a finite position [m]")
+        protocol.check_speed("target.nut_speed", self.nut_speed, sign="any")
+        if not isinstance(self.source, str):
+            raise ParameterError("target.source", self.source, "expected text")
+
 
 @dataclass(frozen=True)
 class Unknown:
@@ -68,6 +90,23 @@ class Unknown:
     path: str
     low: float
     high: float
+
+    def __post_init__(self) -> None:
+        """Refused when made (``low > high`` was taken, and ``"1"`` failed inside the
+        bisection as a TypeError: an outside check, 2026-12-08)."""
+        if not isinstance(self.path, str) or not self.path:
+            raise ParameterError("unknown.path", self.path, "expected the dotted path of a "
+                                 "parameter, e.g. 'controller.velocity_integral_gain'")
+        unit = f"[SI unit of {self.path}]"
+        for name in ("low", "high"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, Real) \
+                    or not (math.isfinite(value) and float(value) > 0):
+                raise ParameterError(f"unknown.{name}", value, "expected a finite number > 0 "
+                                     f"(the bracket is bisected on a log scale) {unit}")
+        if not self.low < self.high:
+            raise ParameterError("unknown.high", self.high,
+                                 f"expected > unknown.low = {self.low:g} {unit}")
 
 
 @dataclass(frozen=True)
@@ -99,6 +138,16 @@ class Calibration:
     achieved: CriticalSpeed
     evaluations: int
     interval: tuple[float, float] = (math.nan, math.nan)
+
+    def __repr__(self) -> str:
+        """One line: the fitted value, what it achieves in mm/s, and whether that is the
+        target (the dataclass printed the whole parameter set and every trial)."""
+        verdict = "reached" if self.reached else "NOT reached, see .reason()"
+        s1, s2 = self.interval
+        return (f"<feeddrive Calibration {self.unknown.path} = {self.value:.6g} "
+                f"(interval {s1:.6g}…{s2:.6g}) → {self.target.drive} critical speed "
+                f"{self.achieved.display()}, target {self.target.critical_speed * 1e3:g} mm/s: "
+                f"{verdict}; {self.evaluations} evaluations; .parameters .achieved>")
 
     @property
     def deviation(self) -> float | None:
@@ -189,9 +238,38 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     Calibration
         The fitted set, the value, its interval (s₁, s₂) and the critical speed it achieves.
     """
-    if not (0 < unknown.low < unknown.high and math.isfinite(unknown.high)):
-        raise ValueError(f"unknown {unknown.path}: expected 0 < low < high, got "
-                         f"{unknown.low!r}, {unknown.high!r}")
+    if not isinstance(params, DriveParameters):
+        raise ParameterError("params", params, "expected a DriveParameters "
+                             "(feeddrive.preset(name) or feeddrive.load(path))")
+    if not isinstance(target, Target):
+        raise ParameterError("target", target, "expected a Target, e.g. "
+                             "Target('cdfs', critical_speed=1.56e-3) [m/s]")
+    if not isinstance(unknown, Unknown):
+        raise ParameterError("unknown", unknown, "expected an Unknown, e.g. "
+                             "Unknown('controller.velocity_integral_gain', 1e3, 1e4)")
+    for end in (unknown.low, unknown.high):  # the bracket's ends as the field takes them
+        try:
+            params.replace_path(unknown.path, float(end))
+        except ParameterError as err:
+            if err.field == unknown.path and err.message.startswith("unknown field"):
+                raise ParameterError("unknown.path", unknown.path, err.message) from None
+            raise
+    # the drive and the table position, as every trial makes its system
+    system = DriveSystem(params, drive=target.drive, table_position=target.table_position)
+    # the search that ends the fit, checked before the first trial, not after the bisections
+    low, high = check_search_settings(system, speed_range=speed_range, resolution=resolution,
+                                      rule=rule)
+    if progress is not None and not callable(progress):
+        raise ParameterError("progress", type(progress).__name__,
+                             "expected None or a callable progress(line)")
+    speed = target.critical_speed
+    if not (speed - resolution >= low * (1 - 1e-12) and speed <= high * (1 + 1e-12)):
+        raise ParameterError(
+            "target.critical_speed", speed,
+            f"expected {low + resolution:g} … {high:g} [m/s]: the trials run at the target and "
+            f"one resolution ({resolution:g} m/s) below it, and the check search scans "
+            f"speed_range = ({low:g}, {high:g})"
+            + protocol.mm_s_hint(speed, low + resolution <= speed * 1e-3 <= high))
     # the bisections stop at hi/lo ≤ 1 + relative_tolerance: 0 or less never stopped, NaN
     # skipped them (an outside check, 2026-12-07)
     if not (isinstance(relative_tolerance, int | float) and not isinstance(
@@ -209,18 +287,22 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
         if progress:
             progress(f"{unknown.path} = {value:.6g}: {trial.kind} at {speed * 1e3:.2f} mm/s")
         if trial.kind == "undecided":
-            raise ValueError(f"{unknown.path} = {value:.6g}: the trial at {speed * 1e3:.2f} mm/s "
-                             "is undecided; raise the rule's max_duration")
+            raise ParameterError("rule.max_duration", (rule or VerdictRule()).max_duration,
+                                 f"the trial of {unknown.path} = {value:.6g} at {speed:g} m/s "
+                                 f"({speed * 1e3:.2f} mm/s) "
+                                 "is undecided at it; expected a longer one [s]")
         return trial.creeping
 
     def switch(speed: float) -> float:
         lo, hi = unknown.low, unknown.high
         f_lo, f_hi = creeps_at(lo, speed), creeps_at(hi, speed)
         if f_lo == f_hi:
-            raise ValueError(
-                f"{unknown.path}: the creep verdict at {speed * 1e3:.2f} mm/s is the same "
+            raise ParameterError(
+                "unknown", unknown,
+                f"the creep verdict at {speed:g} m/s ({speed * 1e3:.2f} mm/s) is the same "
                 f"({'creeping' if f_lo else 'smooth'}) at both ends of [{lo:g}, {hi:g}]; "
-                "widen the bracket or choose another unknown")
+                f"expected a bracket across the switch [SI unit of {unknown.path}]: widen it "
+                "or choose another unknown")
         while hi / lo > 1.0 + relative_tolerance:
             mid = math.sqrt(lo * hi)
             if creeps_at(mid, speed) == f_lo:

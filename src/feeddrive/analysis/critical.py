@@ -489,10 +489,125 @@ def format_bands(search: dict[str, Any]) -> str:
     return "; ".join(parts) if parts else "none"
 
 
-def _check_speed(name: str, value: float) -> float:
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} = {value!r}: expected a finite speed > 0 [m/s]")
-    return float(value)
+def check_kinds(system: object, *, rule: object = None, options: object = None,
+                progress: object = None) -> None:
+    """Refuse, before any trial, a system, rule, options or progress of the wrong kind (they
+    failed at the first trial, as an AttributeError from inside: ``options={}`` said
+    ``'dict' object has no attribute 'output_interval'``; an outside check, 2026-12-08).  The
+    wording is :class:`~feeddrive.engine.simulate.Simulation`'s.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    rule, options, progress : object, optional
+        A VerdictRule, SolverOptions and callable, or None.
+
+    Raises
+    ------
+    ParameterError
+        Naming the argument and the kind expected.
+    """
+    from ..parameters import DriveParameters
+
+    if isinstance(system, DriveParameters) or not callable(getattr(system, "model", None)):
+        raise ParameterError("system", type(system).__name__, "expected a DriveSystem, "
+                             "e.g. DriveSystem(params, drive='cdfs', table_position=0.4)")
+    if options is not None and not isinstance(options, SolverOptions):
+        raise ParameterError("options", type(options).__name__, "expected SolverOptions, "
+                             "e.g. SolverOptions(rtol=1e-8)")
+    if rule is not None and not isinstance(rule, VerdictRule):
+        raise ParameterError("rule", type(rule).__name__, "expected a VerdictRule or None, "
+                             "e.g. VerdictRule(max_duration=60.0)")
+    if progress is not None and not callable(progress):
+        raise ParameterError("progress", type(progress).__name__,
+                             "expected None or a callable progress(done, total)")
+
+
+def table_speed_limit(system: DriveSystem) -> tuple[float, str]:
+    """The largest table speed of ``system``'s axis and what sets it
+    (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The limit [m/s] and what sets it.
+    """
+    from .positioning_run import axis_speed_limit
+
+    return axis_speed_limit(system.parameters, system.drive)
+
+
+def speed_pair(name: str, value: object) -> tuple[float, float]:
+    """``value`` as (low, high) [m/s]: a pair of finite speeds, 0 < low < high, or a refusal
+    naming ``name`` (a scalar said "'float' object is not subscriptable", three speeds were
+    taken as two: an outside check, 2026-12-08).
+
+    Parameters
+    ----------
+    name : str
+        The argument (``speed_range``).
+    value : object
+        What was given [m/s].
+
+    Returns
+    -------
+    tuple of float
+        (low, high) [m/s].
+    """
+    if isinstance(value, str | bytes) or not isinstance(value, Sequence | np.ndarray) \
+            or len(value) != 2:
+        raise ParameterError(name, value, "expected a pair (low, high) of speeds [m/s]")
+    lo = protocol.check_speed(f"{name}[0]", value[0])
+    hi = protocol.check_speed(f"{name}[1]", value[1])
+    if not lo < hi:
+        raise ParameterError(name, tuple(value), "expected low < high [m/s]")
+    return lo, hi
+
+
+def check_scan(system: DriveSystem, name: str, shown: object, lo: float, hi: float,
+               coarse_step: float, protocol_step: float, span: str = "high − low") -> None:
+    """Refuse a search range above the axis's speed limit, or wider than
+    ``protocol.MAX_SEARCH_STEPS`` coarse steps — at the step given, or at the protocol's own
+    (``protocol_step``) when that is larger: then it is the range that is too wide, not the
+    step too fine (``speed_range=(0.02, 3.0)``, in mm/s, blamed ``coarse_step = 0.2 [mm/s]``,
+    a setting not given: an outside check, 2026-12-08).  A range that would pass in mm/s says
+    the API takes m/s.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive searched.
+    name : str
+        The range's argument (``speed_range``; ``start_speed`` for a step-down).
+    shown : object
+        Its value as given, for the message.
+    lo, hi : float
+        The range [m/s].
+    coarse_step : float
+        The scan's coarse step given [m/s].
+    protocol_step : float
+        The protocol's coarse step for this search [m/s].
+    span : str, default "high − low"
+        The range's width in words, for the message.
+    """
+    from ..units import MM_PER_S
+
+    bound, why = table_speed_limit(system)
+    if hi > bound:
+        raise ParameterError(name, shown, f"expected speeds ≤ {bound:.6g} [m/s] ({why})"
+                             + protocol.mm_s_hint(hi, hi * MM_PER_S <= bound))
+    step = max(coarse_step, protocol_step)
+    widest = protocol.MAX_SEARCH_STEPS * step
+    if hi - lo > widest:
+        raise ParameterError(name, shown, f"expected {span} ≤ {widest:.6g} [m/s] (at most "
+                             f"{protocol.MAX_SEARCH_STEPS} coarse steps of {step:g} m/s on the "
+                             "scan)" + protocol.mm_s_hint(hi, (hi - lo) * MM_PER_S <= widest))
 
 
 def decide(run: Runner, command_speed: float, rule: VerdictRule | None = None,
@@ -710,6 +825,9 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
     CreepTrial
         The verdict.
     """
+    check_kinds(system, rule=rule, options=options)
+    speed = protocol.check_speed("speed", speed, sign="nonzero", limit=table_speed_limit(system))
+    protocol.check_speed("nut_speed", nut_speed, sign="any")
     kind = estimate_kind(error_estimate)
     shadow = _shadow_options(options, system) if kind == "shadow" else None
     trial, time, trace = _run_trial(system, speed, nut_speed, rule, options,
@@ -812,14 +930,10 @@ def critical_speed_from_rest(
     ----------
     Wang2021 Sect. 5.2 (Figs. 6-8) defines the critical creeping speed studied here.
     """
-    lo, hi = (_check_speed("speed_range[0]", speed_range[0]),
-              _check_speed("speed_range[1]", speed_range[1]))
-    if hi <= lo:
-        raise ValueError(f"speed_range = {speed_range!r}: expected low < high [m/s]")
-    _check_speed("resolution", resolution)
-    _check_speed("coarse_step", coarse_step)
-    protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=resolution,
-                          names={"low": "speed_range[0]", "high": "speed_range[1]"})
+    lo, hi = check_search_settings(system, speed_range=speed_range, coarse_step=coarse_step,
+                                   resolution=resolution, rule=rule, options=options,
+                                   progress=progress)
+    protocol.check_speed("nut_speed", nut_speed, sign="any")
     rule = rule or VerdictRule()
     estimate = estimate_kind(error_estimate)
     shadow = _shadow_options(options, system) if estimate == "shadow" else None  # up front
@@ -857,6 +971,49 @@ def critical_speed_from_rest(
                          resolution=resolution, speed_range=(lo, hi), trials=ordered,
                          simulated_time=simulated, kind=kind, bands=bands_of(ordered),
                          rule=rule, error_estimate=estimate)
+
+
+def check_search_settings(system: DriveSystem, *, speed_range: object,
+                          coarse_step: object = protocol.COARSE_STEP,
+                          resolution: object = protocol.RESOLUTION, rule: object = None,
+                          options: object = None, progress: object = None
+                          ) -> tuple[float, float]:
+    """The checks :func:`critical_speed_from_rest` makes before its first trial (and
+    :func:`~feeddrive.analysis.calibrate.calibrate` before its first, for the search it ends
+    with): the kinds of its arguments, ``speed_range`` a pair 0 < low < high within the axis's
+    speed limit and within ``MAX_SEARCH_STEPS`` coarse steps, the steps finite speeds > 0 and
+    the search bounded (:func:`~feeddrive.analysis.protocol.check_search`), every message in
+    m/s, the unit the arguments are given in.
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive to search.
+    speed_range, coarse_step, resolution : object
+        As :func:`critical_speed_from_rest` takes them [m/s].
+    rule, options, progress : object, optional
+        As :func:`critical_speed_from_rest` takes them.
+
+    Returns
+    -------
+    tuple of float
+        (low, high) [m/s].
+
+    Raises
+    ------
+    ParameterError
+        Naming the argument, its value as given and what was expected [m/s].
+    """
+    check_kinds(system, rule=rule, options=options, progress=progress)
+    lo, hi = speed_pair("speed_range", speed_range)
+    step = protocol.check_speed("coarse_step", coarse_step)
+    res = protocol.check_speed("resolution", resolution)
+    check_scan(system, "speed_range", tuple(speed_range), lo, hi,  # type: ignore[arg-type]
+               step, protocol.COARSE_STEP)
+    protocol.check_search(low=lo, high=hi, coarse_step=step, resolution=res,
+                          names={"low": "speed_range[0]", "high": "speed_range[1]"},
+                          unit="m/s")
+    return lo, hi
 
 
 def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coarse_step: float,
@@ -1127,15 +1284,20 @@ def critical_speed_stepdown(
     ----------
     Wang2021 Sect. 6 (Fig. 13): the experiment's step-down protocol.
     """
-    hi = _check_speed("start_speed", start_speed)
-    lo = _check_speed("lowest_speed", lowest_speed)
-    _check_speed("step", step)
+    check_kinds(system, rule=rule, options=options)
+    hi = protocol.check_speed("start_speed", start_speed)
+    lo = protocol.check_speed("lowest_speed", lowest_speed)
+    step = protocol.check_speed("step", step)
     if hi <= lo:
-        raise ValueError(f"start_speed = {hi!r}: expected above lowest_speed = {lo!r} [m/s]")
-    _check_speed("coarse_step", coarse_step)
+        raise ParameterError("start_speed", start_speed,
+                             f"expected > lowest_speed = {lo:g} [m/s]")
+    coarse_step = protocol.check_speed("coarse_step", coarse_step)
+    protocol.check_speed("nut_speed", nut_speed, sign="any")
+    check_scan(system, "start_speed", start_speed, lo, hi, coarse_step,
+               protocol.STAIRCASE_COARSE_STEP, "start_speed − lowest_speed")
     protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=step,
                           names={"low": "lowest_speed", "high": "start_speed",
-                                 "resolution": "step"})
+                                 "resolution": "step"}, unit="m/s")
     rule = rule or VerdictRule()
     coarse = _grid(lo, hi, coarse_step)[::-1]
     runs: list[Simulation] = []  # the coarse walk's last run: the fine walks start from it

@@ -399,6 +399,46 @@ def _solve_steady(model: Model, f: _Evaluator, y0: np.ndarray, at: np.ndarray,
     return sol.x, str(sol.message), float(np.max(np.abs(residual(sol.x))))
 
 
+def check_operating_point(system: object, table_speed: object, nut_speed: object,
+                          frictionless: bool = False) -> None:
+    """Refuse, before any linear algebra, an operating point that is not one: a system that
+    is not a DriveSystem, a table speed beyond the axis's speed limit
+    (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`; 1e300 m/s printed eleven
+    LAPACK lines and raised LinAlgError: an outside check, 2026-12-08) or zero unless
+    ``frictionless``, or a nut speed beyond ``units.LARGEST_SPEED``.  A speed that is not a
+    finite number is refused by the profile the steady state is found on
+    (``profile.table_speed``).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive.
+    table_speed, nut_speed : float
+        The operating point [m/s].
+    frictionless : bool, default False
+        Whether the drive is linearised without friction (then the table may rest).
+
+    Raises
+    ------
+    ParameterError
+        Naming the argument, its value and what was expected [m/s].
+    """
+    from numbers import Real
+
+    from .critical import check_kinds, table_speed_limit
+
+    check_kinds(system)
+    assert isinstance(system, DriveSystem)
+    # what is not a finite number is refused by the profile (``profile.table_speed``)
+    for name, value, limit in (("table_speed", table_speed, table_speed_limit(system)),
+                               ("nut_speed", nut_speed, None)):
+        if isinstance(value, Real) and not isinstance(value, bool) \
+                and not (isinstance(value, float | np.floating) and not math.isfinite(value)):
+            protocol.check_speed(name, value, sign="any", limit=limit)
+    if table_speed == 0.0 and not frictionless:
+        raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
+
+
 def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
                  ) -> tuple[Model, np.ndarray]:
     """The model's state in steady sliding at a table speed, at t = 1 s.
@@ -425,8 +465,10 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     Raises
     ------
     ParameterError
-        When no steady state is found, or the loops are sampled.
+        When no steady state is found, the operating point is not one
+        (:func:`check_operating_point`), or the loops are sampled.
     """
+    check_operating_point(system, table_speed, nut_speed, frictionless=True)
     _check_continuous(system)
     profile = ConstantSpeed(table_speed, nut_speed, ramp_time=0.0)
     model = system.model(profile)
@@ -606,8 +648,7 @@ def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     numpy.ndarray
         A over the live states [1/s and the states' unit ratios], as ``linearize(...).A``.
     """
-    if table_speed == 0.0 and not frictionless:
-        raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
+    check_operating_point(system, table_speed, nut_speed, frictionless)
     sys_, _ = averaged(_frictionless(system) if frictionless else system)
     model, y = steady_state(sys_, table_speed, nut_speed)
     return _Evaluator(model).columns(y, _live_states(model, sys_), _scales(model))
@@ -637,8 +678,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         A, B, C, D over the live states with named inputs and outputs (``to_control()``: a
         python-control StateSpace), the operating point and notes.
     """
-    if table_speed == 0.0 and not frictionless:
-        raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
+    check_operating_point(system, table_speed, nut_speed, frictionless)
     sys_, notes = averaged(_frictionless(system) if frictionless else system)
     model, y = steady_state(sys_, table_speed, nut_speed)
     f = _Evaluator(model)
@@ -934,6 +974,9 @@ class LoopAnalysis:
 #: crossing, located between its points (:func:`_margins`); 3 points in all missed the
 #: resonance and read a 2.6-dB gain margin as 65.5 dB (an outside check, 2026-12-07)
 MIN_POINTS_PER_DECADE = 10
+#: the most frequencies a response or a loop analysis is evaluated at [-] (a linear solve
+#: each)
+MAX_FREQUENCIES = 1_000_000
 
 
 def _check_frequencies(f_min: float, f_max: float, points: int) -> None:
@@ -947,8 +990,9 @@ def _check_frequencies(f_min: float, f_max: float, points: int) -> None:
         raise ParameterError("f_max", f_max, f"expected > f_min = {f_min:g} [Hz]")
     fewest = max(2, math.ceil(MIN_POINTS_PER_DECADE * math.log10(f_max / f_min)))
     if isinstance(points, bool) or not isinstance(points, int | np.integer) \
-            or not fewest <= points <= 1_000_000:
-        raise ParameterError("points", points, f"expected a whole number {fewest} … 1000000 "
+            or not fewest <= points <= MAX_FREQUENCIES:
+        raise ParameterError("points", points, f"expected a whole number {fewest} … "
+                             f"{MAX_FREQUENCIES} "
                              f"({MIN_POINTS_PER_DECADE} a decade of f_min … f_max at least) "
                              "[-]")
 
@@ -1154,10 +1198,17 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
     if not (output is None or isinstance(output, str)):
         raise ParameterError("output", output, "expected None or the name (str) of an output "
                              "of the linear model")
-    freq = (np.logspace(-1, 3, 200) if frequency_hz is None
-            else np.asarray(frequency_hz, dtype=float))
-    if freq.ndim != 1 or freq.size == 0 or not np.all(freq > 0):
-        raise ParameterError("frequency_hz", frequency_hz, "expected positive frequencies [Hz]")
+    if frequency_hz is None:
+        freq = np.logspace(-1, 3, 200)
+    else:  # ["a"] raised numpy's bare ValueError (an outside check, 2026-12-08)
+        try:
+            freq = np.asarray(frequency_hz, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            freq = np.full(1, np.nan)
+    if freq.ndim != 1 or not 0 < freq.size <= MAX_FREQUENCIES \
+            or not np.all(np.isfinite(freq) & (freq > 0)):
+        raise ParameterError("frequency_hz", frequency_hz, "expected a sequence of 1 … "
+                             f"{MAX_FREQUENCIES} finite, positive frequencies [Hz]")
     w = 2 * np.pi * freq
     is_lin = isinstance(system, LinearModel)
     if input.endswith(("_position_loop", "_velocity_loop")) and output is None:
@@ -1329,9 +1380,20 @@ def _check_tolerance(tolerance: float) -> None:
         raise ParameterError("tolerance", tolerance, "expected a finite speed > 0 [m/s]")
 
 
-def _check_range(low: float, high: float, points: int) -> None:
-    if not (0 < low < high):
-        raise ParameterError("low", low * 1e3, f"expected 0 < low < high = {high * 1e3} [mm/s]")
+def _check_range(system: DriveSystem, nut_speed: float, low: float, high: float,
+                 points: int) -> None:
+    """The scan's speeds [m/s], in m/s as given (they were refused in mm/s:
+    ``low = 5.0: expected 0 < low < high = 0.01 [mm/s]`` for ``low=5e-3``), its top within the
+    axis's speed limit, and its points; the system and the nut speed (an outside check,
+    2026-12-08)."""
+    from .critical import check_kinds, table_speed_limit
+
+    check_kinds(system)
+    low = protocol.check_speed("low", low)
+    high = protocol.check_speed("high", high, limit=table_speed_limit(system))
+    if not low < high:
+        raise ParameterError("low", low, f"expected < high = {high:g} [m/s]")
+    protocol.check_speed("nut_speed", nut_speed, sign="any")
     if not (isinstance(points, (int, np.integer)) and not isinstance(points, bool)
             and 2 <= points <= protocol.MAX_LINEAR_POINTS):
         raise ParameterError("points", points, f"expected a whole number 2 … "
@@ -1394,8 +1456,11 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     >>> [(round(1e3 * lo, 2), round(1e3 * hi, 2)) for lo, hi in band.intervals]
     [(0.17, 1.4)]
     """
-    _check_range(low, high, points)
+    _check_range(system, nut_speed, low, high, points)
     _check_tolerance(tolerance)
+    if progress is not None and not callable(progress):
+        raise ParameterError("progress", type(progress).__name__,
+                             "expected None or a callable progress(done, total)")
     speeds = np.geomspace(low, high, points)
     re = np.empty(points)
     fr = np.empty(points)
@@ -1462,7 +1527,7 @@ def upper_band_edge(system: DriveSystem, nut_speed: float = 0.0, *,
         The edge [m/s]; ``high`` when steady sliding is unstable there, NaN when it is stable
         at every scanned speed.
     """
-    _check_range(low, high, points)
+    _check_range(system, nut_speed, low, high, points)
     _check_tolerance(tolerance)
     speeds = np.geomspace(low, high, points)
     for k in range(points - 1, -1, -1):

@@ -23,6 +23,7 @@ import numpy as np
 from .. import units
 from ..parameters import DriveParameters, ParameterError
 from .positioning import (
+    MIN_CYCLES,
     PositioningTest,
     Stop,
     positioning_cycle,
@@ -139,6 +140,114 @@ class PositioningRun:
         return reading_motion(self.result.time, np.asarray(self.result["table_position"]),
                               self.stops[1:], self.dwell_ends, self.dwell)
 
+    def __repr__(self) -> str:
+        """One line in the CLI's units (the dataclass printed every array, 3351 characters:
+        an outside check, 2026-12-08)."""
+        t = self.test
+        targets = np.asarray(t.targets)
+        return (f"<feeddrive PositioningRun {self.result.attrs.get('drive', '?')}, "
+                f"{targets.size} targets {targets[0] * 1e3:g}…{targets[-1] * 1e3:g} mm, "
+                f"{np.shape(t.deviation_up)[-1]} cycles {self.kind}, feed "
+                f"{self.feed * 1e3:g} mm/s, dwell {self.dwell:g} s: A {t.accuracy * 1e6:.3g} "
+                f"µm, R {t.repeatability * 1e6:.3g} µm, B {t.reversal * 1e6:.3g} µm; .test "
+                ".result, .test.to_dict()>")
+
+
+def _number(name: str, value: object, unit: str) -> float:
+    """A finite number > 0 [``unit``], or a refusal naming ``name`` (``feed="0.01"`` raised a
+    TypeError from inside: an outside check, 2026-12-08)."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise ParameterError(name, value, f"expected a number > 0 [{unit}]")
+    v = float(value)
+    if not (math.isfinite(v) and v > 0.0):
+        raise ParameterError(name, value, f"expected a finite value > 0 [{unit}]")
+    return v
+
+
+def _check_request(params: object, drive: object, targets: object, cycles: object,
+                   feed: object, acceleration: object, dwell: object, overshoot: object,
+                   options: object, progress: object) -> SolverOptions:
+    """Refuse, before the cycle or the profile is made, arguments of the wrong kind and a test
+    that cannot fit the run: ``cycles=10**5`` built its profile for minutes before the
+    ``max_steps`` refusal, ``cycles=1e300`` never returned, ``nan`` and ``5.5`` were refused
+    for the wrong reason (an outside check, 2026-12-08).  Returns the solver options the
+    budget is checked against.
+
+    The test's length is bounded below without building anything: each of the
+    2 × targets × cycles approaches dwells ``dwell`` and is reached by a move of at least
+    δ = min(overshoot, the closest targets' gap), which takes at least
+    max(δ/feed, 2√(δ/acceleration)).  A length above what the reference holds
+    (``MAX_PROFILE_SAMPLES`` at the profile's 1-ms grid) or what ``max_steps`` allows at the
+    largest step is refused, naming ``cycles`` (or, at the fewest cycles ISO 230-2 allows, the
+    dwell or the feed that makes it so long).
+    """
+    from ..engine.options import SolverOptions
+    from ..engine.options import current as current_options
+    from ..model.reference import MAX_PROFILE_SAMPLES
+
+    if not isinstance(params, DriveParameters):
+        raise ParameterError("params", params, "expected a DriveParameters "
+                             "(feeddrive.preset(name) or feeddrive.load(path))")
+    if not isinstance(drive, str):
+        raise ParameterError("drive", drive, "expected the name of a drive, e.g. 'cdfs'")
+    if options is not None and not isinstance(options, SolverOptions):
+        raise ParameterError("options", type(options).__name__, "expected SolverOptions, "
+                             "e.g. SolverOptions(rtol=1e-8)")
+    if progress is not None and not callable(progress):
+        raise ParameterError("progress", type(progress).__name__,
+                             "expected None or a callable progress(t, t_end)")
+    whole = (f"expected a whole number ≥ {MIN_CYCLES} of approaches per target and "
+             "direction [-]")
+    if isinstance(cycles, bool) or not isinstance(cycles, int | float | np.integer
+                                                  | np.floating):
+        raise ParameterError("cycles", cycles, whole)
+    try:
+        n_cycles = float(cycles)
+    except OverflowError:  # an int beyond any float: too long a test, below
+        n_cycles = math.inf if cycles > 0 else -math.inf
+    if n_cycles != math.inf and not (math.isfinite(n_cycles) and n_cycles.is_integer()):
+        raise ParameterError("cycles", cycles, whole)
+    feed_ = _number("feed", feed, "m/s")
+    acc = _number("acceleration", acceleration, "m/s²")
+    dwell_ = _number("dwell", dwell, "s")
+    over = _number("overshoot", overshoot, "m")
+    try:
+        p = np.asarray(targets, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        p = np.full(1, np.nan)
+    if p.ndim != 1 or p.size < 2 or not np.all(np.isfinite(p)) or np.any(np.diff(p) <= 0):
+        raise ParameterError("targets", targets, "expected at least 2 increasing positions [m]")
+    solver = options if options is not None else current_options()
+    assert isinstance(solver, SolverOptions)
+    if n_cycles < MIN_CYCLES:
+        return solver  # refused by positioning_cycle, with the standard's reason
+    # the shortest the test can last [s]
+    gap = min(over, float(np.min(np.diff(p))))
+    move = max(gap / feed_, 2.0 * math.sqrt(gap / acc))
+    approaches = 2 * p.size
+    interval = 1e-3  # [s] stops_profile's grid
+    holds = MAX_PROFILE_SAMPLES * interval
+    allows = solver.max_steps * solver.largest_step
+    longest = min(holds, allows)
+    per_cycle = approaches * (dwell_ + move)
+    shortest = n_cycles * per_cycle
+    if shortest <= longest:
+        return solver
+    why = (f"longer than the {holds:g} s its reference holds ({MAX_PROFILE_SAMPLES} samples "
+           f"of {interval * 1e3:g} ms)" if holds <= allows else
+           f"longer than max_steps = {solver.max_steps:.3g} solver steps allow at the largest "
+           f"step {solver.largest_step:g} s ({allows:.4g} s)")
+    said = (f"{p.size} targets × {n_cycles:g} cycles × 2 directions last at least "
+            f"{shortest:.4g} s (each approach a dwell of {dwell_:g} s and a move of at least "
+            f"{move:.3g} s), {why}")
+    most = math.floor(longest / per_cycle)
+    if most >= MIN_CYCLES:
+        raise ParameterError("cycles", cycles, f"expected ≤ {most} [-]: {said}")
+    if dwell_ >= move:
+        raise ParameterError("dwell", dwell, f"expected a shorter dwell [s], or fewer targets: "
+                             f"{said}")
+    raise ParameterError("feed", feed, f"expected a higher feed [m/s], or fewer targets: {said}")
+
 
 def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[float], *,
                          cycles: int = 5, kind: str = "linear", feed: float = 0.01,
@@ -181,18 +290,18 @@ def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[
     Raises
     ------
     ParameterError
-        Before the run: fewer than 5 cycles, a stop outside the travel, a feed beyond
-        :func:`axis_speed_limit`, a test longer than the solver's step limit allows, or bad
+        Before the run: fewer than 5 cycles or not a whole number of them, a stop outside the
+        travel, a feed beyond :func:`axis_speed_limit`, a test longer than the solver's step
+        limit allows or its reference holds (refused before the cycle is laid out), or bad
         settings.
     """
     from ..engine.budget import run_budget
-    from ..engine.options import current as current_options
     from ..engine.simulate import DriveSystem, simulate
     from ..model.positioning_profile import stops_profile
 
+    solver = _check_request(params, drive, targets, cycles, feed, acceleration, dwell,
+                            overshoot, options, progress)
     stops = positioning_cycle(targets, cycles, kind=kind, overshoot=overshoot)
-    if not (math.isfinite(feed) and feed > 0.0):
-        raise ParameterError("feed", feed, "expected a speed > 0 [m/s]")
     limit, why = axis_speed_limit(params, drive)
     if feed > limit:
         raise ParameterError("feed", feed, f"expected ≤ {limit * 1e3:.6g} mm/s, the axis's "
@@ -211,7 +320,6 @@ def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[
     profile, ends = stops_profile([s.position - start for s in stops[1:]], feed=feed,
                                   acceleration=acceleration, dwell=dwell)
     duration = float(profile.time[-1])
-    solver = options if options is not None else current_options()
     budget = run_budget(duration, max_step=solver.largest_step,
                         output_interval=solver.output_interval, max_steps=solver.max_steps)
     if budget.steps_exceeded:

@@ -8,6 +8,9 @@ item 18).  One set of numbers now serves both; the report and the CLI print it.
 
 from __future__ import annotations
 
+import math
+from numbers import Real
+
 SPEED_RANGE = (0.02e-3, 3.02e-3)  # [m/s] lowest and highest speed tested
 COARSE_STEP = 0.2e-3  # [m/s] scan step from rest, before the bisection
 STAIRCASE_COARSE_STEP = 0.1e-3  # [m/s] first staircase of the step-down search
@@ -29,7 +32,7 @@ MAX_SEARCH_STEPS = 2000  # [-] speeds on a coarse scan; fine steps per coarse st
 
 
 def check_search(*, low: float, high: float, coarse_step: float, resolution: float,
-                 names: dict[str, str] | None = None) -> None:
+                 names: dict[str, str] | None = None, unit: str = "mm/s") -> None:
     """Refuse a critical-speed search whose work is not bounded, before it starts.
 
     At most ``MAX_SEARCH_STEPS`` speeds on the coarse scan of [low, high] and fine steps
@@ -47,27 +50,101 @@ def check_search(*, low: float, high: float, coarse_step: float, resolution: flo
     names : dict of str to str, optional
         The name each of ``low``, ``high``, ``coarse_step``, ``resolution`` has in messages
         (``--resolution``, ``quantity.resolution``); the keyword by default.
+    unit : str, default "mm/s"
+        The unit the settings were given in, and messages show them in: ``"mm/s"`` (the CLI,
+        a sweep's ``[quantity]``) or ``"m/s"`` (the API's own arguments).
 
     Raises
     ------
     ParameterError
-        Naming the setting, its value and the bound [mm/s].
+        Naming the setting, its value and the bound [``unit``].
     """
     from ..parameters import ParameterError
 
     name = {k: k for k in ("low", "high", "coarse_step", "resolution")} | (names or {})
+    factor = 1e3 if unit == "mm/s" else 1.0
 
     def refuse(key: str, value: float, expected: str) -> ParameterError:
-        return ParameterError(name[key], value * 1e3, f"{expected} [mm/s]")
+        return ParameterError(name[key], value * factor, f"{expected} [{unit}]")
 
     if not resolution >= SMALLEST_RESOLUTION:
-        raise refuse("resolution", resolution, f"expected ≥ {SMALLEST_RESOLUTION * 1e3:g}")
+        raise refuse("resolution", resolution,
+                     f"expected ≥ {SMALLEST_RESOLUTION * factor:g}")
     if (high - low) / coarse_step > MAX_SEARCH_STEPS:
-        raise refuse("coarse_step", coarse_step, f"expected ≥ {(high - low) * 1e3:g} / "
+        raise refuse("coarse_step", coarse_step, f"expected ≥ {(high - low) * factor:g} / "
                                                  f"{MAX_SEARCH_STEPS} (speeds on the scan)")
     if coarse_step / resolution > MAX_SEARCH_STEPS:
         raise refuse("resolution", resolution, f"expected ≥ the coarse step "
-                                               f"{coarse_step * 1e3:g} / {MAX_SEARCH_STEPS}")
+                                               f"{coarse_step * factor:g} / {MAX_SEARCH_STEPS}")
+
+
+def check_speed(name: str, value: object, *, sign: str = "positive",
+                limit: tuple[float, str] | None = None) -> float:
+    """A speed argument of the API [m/s] as a float, or a refusal naming it.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name in the message (``speed_range[1]``, ``target.critical_speed``).
+    value : object
+        What was given [m/s].
+    sign : str, default "positive"
+        ``"positive"`` (> 0), ``"nonzero"`` or ``"any"``.
+    limit : tuple of (float, str) or None, default None
+        The largest |speed| [m/s] and what sets it (the axis's,
+        :func:`~feeddrive.analysis.positioning_run.axis_speed_limit`); ``units.LARGEST_SPEED``
+        by default.
+
+    Returns
+    -------
+    float
+        The speed [m/s].
+
+    Raises
+    ------
+    ParameterError
+        For a non-number, a non-finite speed, one of the wrong sign or above the limit; a
+        speed above the limit that would be within it in mm/s says so (the API takes m/s).
+    """
+    from ..parameters import ParameterError
+    from ..units import LARGEST_SPEED, MM_PER_S
+
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise ParameterError(name, value, "expected a number [m/s]")
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond any float
+        v = math.inf
+    if sign == "positive" and not (math.isfinite(v) and v > 0.0):
+        raise ParameterError(name, value, "expected a finite speed > 0 [m/s]")
+    if sign == "nonzero" and not (math.isfinite(v) and v != 0.0):
+        raise ParameterError(name, value, "expected a finite, non-zero speed [m/s]")
+    if not math.isfinite(v):
+        raise ParameterError(name, value, "expected a finite speed [m/s]")
+    bound, why = limit if limit is not None else (LARGEST_SPEED, "no feed drive is faster")
+    if abs(v) > bound:
+        raise ParameterError(name, value, f"expected |speed| ≤ {bound:.6g} [m/s] ({why})"
+                             + mm_s_hint(v, abs(v) * MM_PER_S <= bound))
+    return v
+
+
+def mm_s_hint(value: float, fits: bool) -> str:
+    """``"; the API takes m/s: 3 mm/s is 0.003"`` for a speed refused as too large that
+    ``fits`` its bound when read as mm/s (a value in the CLI's unit); ``""`` otherwise.
+
+    Parameters
+    ----------
+    value : float
+        The refused speed, as given [m/s].
+    fits : bool
+        Whether ``value`` mm/s is within the bound it broke.
+
+    Returns
+    -------
+    str
+        The hint, with a leading ``"; "``, or an empty string.
+    """
+    return f"; the API takes m/s: {value:g} mm/s is {value * 1e-3:g}" if fits else ""
 
 
 def describe(start: str, *, speed_range: tuple[float, float] = SPEED_RANGE,
