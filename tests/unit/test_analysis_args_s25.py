@@ -1,5 +1,5 @@
 """The analysis API's arguments refused before any work, naming the argument, in the API's own
-unit (m/s), and its results printed in one line (an outside audit, 2026-12-08).
+unit (m/s), and its results printed in one line (an outside audit, 2026-12-07).
 
 A speed range given in mm/s blamed a ``coarse_step`` nobody set, a resolution was shown
 in mm/s and multiplied, three speeds were taken as a range, a dict where SolverOptions go
@@ -223,7 +223,7 @@ def test_targets_and_unknowns_are_refused_when_made(make: object, field: str,
 
 def test_a_target_in_mm_s_is_refused_before_any_trial(no_work: None) -> None:
     with pytest.raises(ParameterError, match=r"^target\.critical_speed = 1\.56: expected "
-                                             r"6e-05 … 0\.003 \[m/s\]") as err:
+                                             r"0\.06 … 3 mm/s \(6e-05 … 0\.003 m/s\)") as err:
         calibrate(fd.preset("wang2021"), Target("cdfs", 1.56), Unknown(KI, 1e3, 1e4))
     assert str(err.value).endswith("the API takes m/s: 1.56 mm/s is 0.00156")
 
@@ -267,3 +267,21 @@ def test_a_calibration_prints_in_one_line_and_says_when_it_missed() -> None:
     assert text.startswith(f"<feeddrive Calibration {KI} = 8896.49 (interval 8800…8990) → cdfs "
                            "critical speed > 3.00 mm/s (creeps at every tested speed), target "
                            "1.56 mm/s: NOT reached, see .reason()")
+
+
+def test_the_command_line_shows_the_target_and_the_search_range_in_mm_s() -> None:
+    """`calibrate --target 5` and `creep --high 5000` were refused in the API's m/s, the
+    latter with "the API takes m/s" though the option is in mm/s (session 25)."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    res = CliRunner().invoke(app, ["calibrate", "--target", "5"])
+    assert res.exit_code == 2
+    assert res.output.strip().splitlines()[-1].startswith(
+        "error: --target = 5 [mm/s]: expected 0.06 … 3 mm/s")
+    res = CliRunner().invoke(app, ["creep", "--high", "5000"])
+    assert res.exit_code == 2
+    line = res.output.strip().splitlines()[-1]
+    assert line.startswith("error: --high = 5000.0: expected ≤ --low + 200 = 200.02 [mm/s]")
+    assert "API" not in line

@@ -219,3 +219,24 @@ def test_creep_metrics_names_its_window_and_thresholds() -> None:
     # a window reaching past the record is its part within it, as before
     part = fd.creep_metrics(t, v, 1e-3, window=(-1.0, 0.4))
     assert part.window_start == pytest.approx(0.0) and part.window_end == pytest.approx(0.4)
+
+
+def test_a_short_move_is_a_triangle_at_the_acceleration_whatever_the_feed() -> None:
+    """A move too short to reach the feed kept ramps stretched to the feed's length, so a
+    higher feed made it slower (an outside check, 2026-12-07: 4.4 / 10 / 82 s).  The move of
+    d = 0.1 mm at a = 0.5 m/s² reaches at most √(d·a) = 7.07 mm/s: at any feed above that it
+    is the same triangle (closed form: 2·√(d/a) = 28.3 ms, on the 1-ms grid 30 ms)."""
+    from feeddrive.model.positioning_profile import stops_profile
+
+    d, a = 1e-4, 0.5
+    ends = []
+    for feed in (1e-4, 1e-3, 1e-2, 1e-1, 1.0):
+        profile, end = stops_profile([d, 0.0], feed=feed, acceleration=a, dwell=1.0)
+        v = np.asarray(profile.table_speed)
+        assert np.max(np.abs(v)) <= feed * (1 + 1e-9)
+        assert np.max(np.abs(np.diff(v))) / 1e-3 <= a * (1 + 1e-9)
+        ends.append(float(end[-1]))
+    assert all(b <= e for e, b in zip(ends, ends[1:], strict=False))  # never slower
+    assert ends[2] == ends[3] == ends[4]  # above √(d·a): the same triangle
+    move = (ends[4] - 2 * 1.0) / 2  # each of the two moves, the dwells taken off
+    assert move == pytest.approx(2 * math.sqrt(d / a), abs=2.5e-3)

@@ -58,7 +58,7 @@ class Target:
 
     def __post_init__(self) -> None:
         """Refused when made (a NaN or negative speed was taken, and a negative one searched
-        before it was refused for the wrong reason: an outside check, 2026-12-08)."""
+        before it was refused for the wrong reason: an outside check, 2026-12-07)."""
         if not isinstance(self.drive, str):
             raise ParameterError("target.drive", self.drive,
                                  "expected the name of a drive, e.g. 'cdfs'")
@@ -93,7 +93,7 @@ class Unknown:
 
     def __post_init__(self) -> None:
         """Refused when made (``low > high`` was taken, and ``"1"`` failed inside the
-        bisection as a TypeError: an outside check, 2026-12-08)."""
+        bisection as a TypeError: an outside check, 2026-12-07)."""
         if not isinstance(self.path, str) or not self.path:
             raise ParameterError("unknown.path", self.path, "expected the dotted path of a "
                                  "parameter, e.g. 'controller.velocity_integral_gain'")
@@ -266,9 +266,11 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     if not (speed - resolution >= low * (1 - 1e-12) and speed <= high * (1 + 1e-12)):
         raise ParameterError(
             "target.critical_speed", speed,
-            f"expected {low + resolution:g} … {high:g} [m/s]: the trials run at the target and "
-            f"one resolution ({resolution:g} m/s) below it, and the check search scans "
-            f"speed_range = ({low:g}, {high:g})"
+            # in both units: the command line shows it as --target [mm/s] (_EDGE_FIELDS)
+            f"expected {(low + resolution) * 1e3:g} … {high * 1e3:g} mm/s "
+            f"({low + resolution:g} … {high:g} m/s): the trials run at the target and "
+            f"one resolution ({resolution * 1e3:g} mm/s) below it, and the check search scans "
+            f"speed_range = ({low:g}, {high:g}) [m/s]"
             + protocol.mm_s_hint(speed, low + resolution <= speed * 1e-3 <= high))
     # the bisections stop at hi/lo ≤ 1 + relative_tolerance: 0 or less never stopped, NaN
     # skipped them (an outside check, 2026-12-07)

@@ -493,7 +493,7 @@ def check_kinds(system: object, *, rule: object = None, options: object = None,
                 progress: object = None) -> None:
     """Refuse, before any trial, a system, rule, options or progress of the wrong kind (they
     failed at the first trial, as an AttributeError from inside: ``options={}`` said
-    ``'dict' object has no attribute 'output_interval'``; an outside check, 2026-12-08).  The
+    ``'dict' object has no attribute 'output_interval'``; an outside check, 2026-12-07).  The
     wording is :class:`~feeddrive.engine.simulate.Simulation`'s.
 
     Parameters
@@ -546,7 +546,7 @@ def table_speed_limit(system: DriveSystem) -> tuple[float, str]:
 def speed_pair(name: str, value: object) -> tuple[float, float]:
     """``value`` as (low, high) [m/s]: a pair of finite speeds, 0 < low < high, or a refusal
     naming ``name`` (a scalar said "'float' object is not subscriptable", three speeds were
-    taken as two: an outside check, 2026-12-08).
+    taken as two: an outside check, 2026-12-07).
 
     Parameters
     ----------
@@ -576,7 +576,7 @@ def check_scan(system: DriveSystem, name: str, shown: object, lo: float, hi: flo
     ``protocol.MAX_SEARCH_STEPS`` coarse steps — at the step given, or at the protocol's own
     (``protocol_step``) when that is larger: then it is the range that is too wide, not the
     step too fine (``speed_range=(0.02, 3.0)``, in mm/s, blamed ``coarse_step = 0.2 [mm/s]``,
-    a setting not given: an outside check, 2026-12-08).  A range that would pass in mm/s says
+    a setting not given: an outside check, 2026-12-07).  A range that would pass in mm/s says
     the API takes m/s.
 
     Parameters

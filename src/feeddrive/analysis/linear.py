@@ -404,7 +404,7 @@ def check_operating_point(system: object, table_speed: object, nut_speed: object
     """Refuse, before any linear algebra, an operating point that is not one: a system that
     is not a DriveSystem, a table speed beyond the axis's speed limit
     (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`; 1e300 m/s printed eleven
-    LAPACK lines and raised LinAlgError: an outside check, 2026-12-08) or zero unless
+    LAPACK lines and raised LinAlgError: an outside check, 2026-12-07) or zero unless
     ``frictionless``, or a nut speed beyond ``units.LARGEST_SPEED``.  A speed that is not a
     finite number is refused by the profile the steady state is found on
     (``profile.table_speed``).
@@ -1200,7 +1200,7 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
                              "of the linear model")
     if frequency_hz is None:
         freq = np.logspace(-1, 3, 200)
-    else:  # ["a"] raised numpy's bare ValueError (an outside check, 2026-12-08)
+    else:  # ["a"] raised numpy's bare ValueError (an outside check, 2026-12-07)
         try:
             freq = np.asarray(frequency_hz, dtype=float)
         except (TypeError, ValueError, OverflowError):
@@ -1385,7 +1385,7 @@ def _check_range(system: DriveSystem, nut_speed: float, low: float, high: float,
     """The scan's speeds [m/s], in m/s as given (they were refused in mm/s:
     ``low = 5.0: expected 0 < low < high = 0.01 [mm/s]`` for ``low=5e-3``), its top within the
     axis's speed limit, and its points; the system and the nut speed (an outside check,
-    2026-12-08)."""
+    2026-12-07)."""
     from .critical import check_kinds, table_speed_limit
 
     check_kinds(system)

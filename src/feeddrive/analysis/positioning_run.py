@@ -142,7 +142,7 @@ class PositioningRun:
 
     def __repr__(self) -> str:
         """One line in the CLI's units (the dataclass printed every array, 3351 characters:
-        an outside check, 2026-12-08)."""
+        an outside check, 2026-12-07)."""
         t = self.test
         targets = np.asarray(t.targets)
         return (f"<feeddrive PositioningRun {self.result.attrs.get('drive', '?')}, "
@@ -155,7 +155,7 @@ class PositioningRun:
 
 def _number(name: str, value: object, unit: str) -> float:
     """A finite number > 0 [``unit``], or a refusal naming ``name`` (``feed="0.01"`` raised a
-    TypeError from inside: an outside check, 2026-12-08)."""
+    TypeError from inside: an outside check, 2026-12-07)."""
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise ParameterError(name, value, f"expected a number > 0 [{unit}]")
     v = float(value)
@@ -170,7 +170,7 @@ def _check_request(params: object, drive: object, targets: object, cycles: objec
     """Refuse, before the cycle or the profile is made, arguments of the wrong kind and a test
     that cannot fit the run: ``cycles=10**5`` built its profile for minutes before the
     ``max_steps`` refusal, ``cycles=1e300`` never returned, ``nan`` and ``5.5`` were refused
-    for the wrong reason (an outside check, 2026-12-08).  Returns the solver options the
+    for the wrong reason (an outside check, 2026-12-07).  Returns the solver options the
     budget is checked against.
 
     The test's length is bounded below without building anything: each of the

@@ -88,13 +88,23 @@ def speed(option: str, value: float, *, positive: bool = False, nonzero: bool = 
     return value * MM_PER_S
 
 
-def speed_range(low_option: str, low: float, high_option: str, high: float
-                ) -> tuple[float, float]:
-    """(low, high) [mm/s] → [m/s], both > 0 and low < high."""
+def speed_range(low_option: str, low: float, high_option: str, high: float, *,
+                search: bool = False) -> tuple[float, float]:
+    """(low, high) [mm/s] → [m/s], both > 0 and low < high; for a critical-speed search
+    (``search``) also at most the protocol's coarse steps apart (``protocol.
+    MAX_SEARCH_STEPS`` of the finer of its two coarse steps, the scan's and the
+    staircase's): the API refuses a wider range in m/s, which told a CLI user "the API
+    takes m/s" of a --high in mm/s (session 25)."""
     lo = speed(low_option, low, positive=True)
     hi = speed(high_option, high, positive=True)
     if not low < high:
         raise ParameterError(high_option, high, f"expected > {low_option} = {low:g} [mm/s]")
+    step = min(protocol.COARSE_STEP, protocol.STAIRCASE_COARSE_STEP) / MM_PER_S
+    widest = protocol.MAX_SEARCH_STEPS * step
+    if search and high - low > widest * (1 + 1e-12):
+        raise ParameterError(high_option, high, f"expected ≤ {low_option} + {widest:g} = "
+                             f"{low + widest:g} [mm/s] (at most {protocol.MAX_SEARCH_STEPS} "
+                             f"coarse steps of {step:g} mm/s on a search's scan)")
     return lo, hi
 
 

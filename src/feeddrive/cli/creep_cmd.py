@@ -145,7 +145,7 @@ def creep_command(
     system = DriveSystem(params, drive=drive,
                          table_position=_units.position("--position", position, params, drive))
     v_n = _units.speed("--nut-speed", nut_speed)
-    speed_range = _units.speed_range("--low", low, "--high", high)
+    speed_range = _units.speed_range("--low", low, "--high", high, search=True)
     # the drive, and where its table is when that matters (not for a linear motor)
     where = drive.upper() + (f" at {position:g} mm" if system.topology().uses_table_position
                              else "")

@@ -85,6 +85,16 @@ def stops_profile(positions: Sequence[float], *, feed: float, acceleration: floa
                                           / interval - 1e-9)))
             # area of the unit trapezoid on the grid: (ramp + hold) samples × interval
             peak = distance / ((n_ramp + n_hold) * interval)
+            if n_hold == 0:
+                # too short to reach the feed: the triangle at the acceleration, when it is
+                # shorter and stays within the feed (the ramps were stretched to the feed's
+                # length, so a higher feed made a short move slower: an outside check,
+                # 2026-12-07)
+                n_tri = max(1, int(math.ceil(math.sqrt(abs(distance) / acceleration)
+                                             / interval - 1e-9)))
+                if n_tri < n_ramp and abs(distance) / (n_tri * interval) <= feed:
+                    n_ramp = n_tri
+                    peak = distance / (n_ramp * interval)
             if abs(peak) / (n_ramp * interval) > acceleration * (1 + 1e-9):
                 # a short move: a triangle at the acceleration, its peak below the feed
                 n_ramp = max(1, int(math.ceil(math.sqrt(abs(distance) / acceleration)
