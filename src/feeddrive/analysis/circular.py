@@ -87,7 +87,7 @@ class CircularRun:
         Measured positions [m].
     angle : numpy.ndarray
         Travel angle from the nominal centre, unwrapped, advancing along the run (turns back
-        smaller than :data:`REVERSAL` aside: stick-slip) [rad].
+        smaller than ``REVERSAL`` aside: stick-slip) [rad].
     """
 
     direction: str
@@ -131,7 +131,7 @@ class ReversalSpike:
     before : float, default 0.0
         The residual's largest magnitude in the 45° before the reversal [m].
     stands_out : bool, default True
-        Whether the peak stands out of that (above :data:`SPIKE_FLOOR` and three times
+        Whether the peak stands out of that (above ``SPIKE_FLOOR`` and three times
         ``before``).  When it does not, the path deviates as much between the reversals (at
         a low feed: stick-slip or a sustained oscillation) and the height is the residual's
         largest within 45° after the reversal, not a reversal transient; it then depends on
@@ -394,7 +394,7 @@ def split_runs(time: ArrayLike, x: ArrayLike, y: ArrayLike, centre: tuple[float,
         Positions [m].
     centre : tuple of float
         Nominal centre [m].
-    reversal : float, default :data:`REVERSAL` (1°)
+    reversal : float, default ``REVERSAL`` (1°)
         Smallest turn back that ends a stretch [rad].
 
     Returns
@@ -539,7 +539,7 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
         Nominal centre (x, y) [m]; None: the least-squares centre of the whole record (noted).
     pitch : float, optional
         Period of the cyclic error looked for (the screw's lead) [m]; None: not fitted.
-    reversal : float, default :data:`REVERSAL` (1°)
+    reversal : float, default ``REVERSAL`` (1°)
         Smallest turn back of the angle about the centre that ends a run [rad]
         (:func:`split_runs`); smaller ones (stick-slip) stay in their run.
 

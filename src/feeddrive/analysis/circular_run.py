@@ -501,7 +501,7 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         nut's, Wang2021 Sect. 2).
     pitch : float, optional
         Period of the cyclic error looked for [m].
-    reversal : float, default :data:`~feeddrive.analysis.circular.REVERSAL` (1°)
+    reversal : float, default ``feeddrive.analysis.circular.REVERSAL`` (1°)
         Smallest turn back of the path's angle that ends a run [rad]; smaller ones
         (stick-slip at a low feed) stay in their run
         (:func:`~feeddrive.analysis.circular.split_runs`).

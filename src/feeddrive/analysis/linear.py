@@ -466,7 +466,7 @@ def steady_state(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     ------
     ParameterError
         When no steady state is found, the operating point is not one
-        (:func:`check_operating_point`), or the loops are sampled.
+        (``check_operating_point``), or the loops are sampled.
     """
     check_operating_point(system, table_speed, nut_speed, frictionless=True)
     _check_continuous(system)

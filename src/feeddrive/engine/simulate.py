@@ -893,7 +893,7 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     ------
     ParameterError
         For a ``duration`` past the end of a tabulated profile that still commands a speed
-        there (:func:`check_profile_span`), refused before the model is built.
+        there (``check_profile_span``), refused before the model is built.
     SimulationError
         If the integrator fails (a result is never NaN silently).
     SimulationInterrupted

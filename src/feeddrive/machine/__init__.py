@@ -686,7 +686,7 @@ class MachineSystem:
     def run_attrs(self, profile: Any) -> dict[str, Any]:
         """What marks a run of this machine in its attributes: the machine's name as its
         parameter set, the path it followed, and its axes (``axes``: name → drive, parameter
-        set, start position [m], JSON; :func:`feeddrive.engine.machine_axes.machine_axes`).
+        set, start position [m], JSON; ``feeddrive.engine.machine_axes.machine_axes``).
 
         Every machine run carries them (:func:`simulate_machine`): a run following given
         references (a circular test's) lacked them and was read as one drive's, whose

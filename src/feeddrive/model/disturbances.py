@@ -142,7 +142,7 @@ class LoadProfile:
         ------
         ParameterError
             For arrays that are not numbers, not 1-D of one length ≥ 2, not finite, forces
-            beyond :data:`LARGEST_LOAD_FORCE`, or times not on a uniform grid from 0.
+            beyond ``LARGEST_LOAD_FORCE``, or times not on a uniform grid from 0.
         """
         try:
             t = np.asarray(self.time, dtype=float)

@@ -399,7 +399,7 @@ class SampledSpeed:
         ParameterError
             For a function that is not callable or does not return one speed (or one per
             instant), a duration or interval that is not a finite number > 0, or a grid of
-            more than :data:`MAX_PROFILE_SAMPLES` samples (refused before it is made).
+            more than ``MAX_PROFILE_SAMPLES`` samples (refused before it is made).
         """
         # refused naming the argument, before any array is made (an interval of 0 raised
         # ZeroDivisionError, a NaN duration "cannot convert float NaN to integer", 1e9 s a
@@ -524,7 +524,7 @@ MAX_PROFILE_SAMPLES = 20_000_000
 
 def _check_span(name: str, value: float, span: float, interval: float, unit: str) -> None:
     """Refuse, before any array is made, a profile of ``span`` seconds that would tabulate
-    more than :data:`MAX_PROFILE_SAMPLES` samples at ``interval``; ``name`` = ``value``
+    more than ``MAX_PROFILE_SAMPLES`` samples at ``interval``; ``name`` = ``value``
     [``unit``] is the setting that made it so long."""
     if not span / interval <= MAX_PROFILE_SAMPLES:
         raise ParameterError(name, value, f"makes a profile of {span:.4g} s, "
