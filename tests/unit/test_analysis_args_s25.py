@@ -285,3 +285,14 @@ def test_the_command_line_shows_the_target_and_the_search_range_in_mm_s() -> Non
     line = res.output.strip().splitlines()[-1]
     assert line.startswith("error: --high = 5000.0: expected ≤ --low + 200 = 200.02 [mm/s]")
     assert "API" not in line
+
+
+def test_positioning_names_its_dwell_option() -> None:
+    """`positioning --dwell 1e9` was refused as `dwell = 1000000000.0` (session 25)."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    res = CliRunner().invoke(app, ["positioning", "--targets", "100,110", "--dwell", "1e9"])
+    assert res.exit_code == 2
+    assert res.output.strip().splitlines()[-1].startswith("error: --dwell = 1e+09 [s]: ")

@@ -318,6 +318,7 @@ _EDGE_FIELDS: dict[str, tuple[str, str, float]] = {
     "ramp_time": ("--ramp-time", "s", 1.0),
     "error_estimate": ("--error-estimate", "", 1.0),
     "target.critical_speed": ("--target", "mm/s", 1.0 / MM_PER_S),
+    "dwell": ("--dwell", "s", 1.0),
 }
 
 
