@@ -21,6 +21,7 @@ from numbers import Real
 
 from ..engine.simulate import DriveSystem
 from ..parameters import DriveParameters, ParameterError
+from ..parameters.validation import check_callback
 from . import protocol
 from .critical import (
     CriticalSpeed,
@@ -259,9 +260,7 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
     # the search that ends the fit, checked before the first trial, not after the bisections
     low, high = check_search_settings(system, speed_range=speed_range, resolution=resolution,
                                       rule=rule)
-    if progress is not None and not callable(progress):
-        raise ParameterError("progress", type(progress).__name__,
-                             "expected None or a callable progress(line)")
+    check_callback("progress", progress, "progress(line)")
     speed = target.critical_speed
     if not (speed - resolution >= low * (1 - 1e-12) and speed <= high * (1 + 1e-12)):
         raise ParameterError(

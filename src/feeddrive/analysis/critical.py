@@ -36,9 +36,11 @@ import numpy as np
 from .. import units
 from ..engine.budget import setting_field
 from ..engine.error_estimate import estimate_kind
+from ..engine.options import check_given
 from ..engine.simulate import DriveSystem, Simulation, SolverOptions, run_options
 from ..model.reference import ConstantSpeed, _staircase
 from ..parameters import ParameterError
+from ..parameters.validation import check_callback
 from . import protocol
 from .cycle_verdict import TraceVerdict, VerdictRule, trace_verdict
 from .verdict_words import CREEPING_KINDS, NON_SMOOTH, SMOOTH, STICK_SLIP, UNDECIDED, UNSTABLE
@@ -513,15 +515,11 @@ def check_kinds(system: object, *, rule: object = None, options: object = None,
     if isinstance(system, DriveParameters) or not callable(getattr(system, "model", None)):
         raise ParameterError("system", type(system).__name__, "expected a DriveSystem, "
                              "e.g. DriveSystem(params, drive='cdfs', table_position=0.4)")
-    if options is not None and not isinstance(options, SolverOptions):
-        raise ParameterError("options", type(options).__name__, "expected SolverOptions, "
-                             "e.g. SolverOptions(rtol=1e-8)")
+    check_given(options)
     if rule is not None and not isinstance(rule, VerdictRule):
         raise ParameterError("rule", type(rule).__name__, "expected a VerdictRule or None, "
                              "e.g. VerdictRule(max_duration=60.0)")
-    if progress is not None and not callable(progress):
-        raise ParameterError("progress", type(progress).__name__,
-                             "expected None or a callable progress(done, total)")
+    check_callback("progress", progress, "progress(done, total)")
 
 
 def table_speed_limit(system: DriveSystem) -> tuple[float, str]:

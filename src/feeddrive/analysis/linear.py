@@ -55,6 +55,7 @@ from ..model.loops import INJ_CURRENT, INJ_SPEED
 from ..model.mechanisms import mechanism
 from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
 from ..parameters import ParameterError, SiteParameters
+from ..parameters.validation import check_callback
 from ..solvers import builds
 from . import protocol
 from .newton import pulled_gauss_newton
@@ -1458,9 +1459,7 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
     """
     _check_range(system, nut_speed, low, high, points)
     _check_tolerance(tolerance)
-    if progress is not None and not callable(progress):
-        raise ParameterError("progress", type(progress).__name__,
-                             "expected None or a callable progress(done, total)")
+    check_callback("progress", progress, "progress(done, total)")
     speeds = np.geomspace(low, high, points)
     re = np.empty(points)
     fr = np.empty(points)

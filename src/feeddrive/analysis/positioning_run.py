@@ -22,6 +22,7 @@ import numpy as np
 
 from .. import units
 from ..parameters import DriveParameters, ParameterError
+from ..parameters.validation import check_callback
 from .positioning import (
     MIN_CYCLES,
     PositioningTest,
@@ -181,7 +182,7 @@ def _check_request(params: object, drive: object, targets: object, cycles: objec
     largest step is refused, naming ``cycles`` (or, at the fewest cycles ISO 230-2 allows, the
     dwell or the feed that makes it so long).
     """
-    from ..engine.options import SolverOptions
+    from ..engine.options import SolverOptions, check_given
     from ..engine.options import current as current_options
     from ..model.reference import MAX_PROFILE_SAMPLES
 
@@ -190,12 +191,8 @@ def _check_request(params: object, drive: object, targets: object, cycles: objec
                              "(feeddrive.preset(name) or feeddrive.load(path))")
     if not isinstance(drive, str):
         raise ParameterError("drive", drive, "expected the name of a drive, e.g. 'cdfs'")
-    if options is not None and not isinstance(options, SolverOptions):
-        raise ParameterError("options", type(options).__name__, "expected SolverOptions, "
-                             "e.g. SolverOptions(rtol=1e-8)")
-    if progress is not None and not callable(progress):
-        raise ParameterError("progress", type(progress).__name__,
-                             "expected None or a callable progress(t, t_end)")
+    check_given(options)
+    check_callback("progress", progress, "progress(t, t_end)")
     whole = (f"expected a whole number ≥ {MIN_CYCLES} of approaches per target and "
              "direction [-]")
     if isinstance(cycles, bool) or not isinstance(cycles, int | float | np.integer

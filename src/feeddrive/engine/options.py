@@ -855,6 +855,26 @@ _CURRENT: ContextVar[SolverOptions | None] = ContextVar("feeddrive_solver_option
                                                         default=None)
 
 
+def check_given(options: object) -> None:
+    """Refuse an ``options`` argument that is neither None nor :class:`SolverOptions` (a dict
+    failed deep inside, e.g. "'dict' object has no attribute 'output_interval'"): the one
+    wording of every function that takes integrator settings.
+
+    Parameters
+    ----------
+    options : object
+        What was given.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``options`` and its type.
+    """
+    if options is not None and not isinstance(options, SolverOptions):
+        raise ParameterError("options", type(options).__name__, "expected SolverOptions, "
+                             "e.g. SolverOptions(rtol=1e-8)")
+
+
 def current() -> SolverOptions:
     """The options a run takes when none are passed: those of the innermost :func:`using`,
     else the defaults.

@@ -34,7 +34,7 @@ from .error_estimate import (
 from .options import DENSE_MODES as _DENSE_MODES
 from .options import METHODS as METHODS  # re-exported: the engine's public names
 from .options import REVERSAL_METHODS as _REVERSAL_METHODS
-from .options import RunScales
+from .options import RunScales, check_given
 from .options import SolverOptions as SolverOptions
 from .options import current as current_options
 from .result import Result, Run
@@ -1019,9 +1019,7 @@ class Simulation:
         if not isinstance(profile, ConstantSpeed | SineSpeed | SampledSpeed | Replay):
             raise ParameterError("profile", type(profile).__name__,
                                  "expected ConstantSpeed, SineSpeed, SampledSpeed or a Replay")
-        if options is not None and not isinstance(options, SolverOptions):
-            raise ParameterError("options", type(options).__name__, "expected SolverOptions, "
-                                 "e.g. SolverOptions(rtol=1e-8)")
+        check_given(options)
         self.system, self.profile = system, profile
         # those given, else those in force, over the set's [solver] table (run_options)
         self.options = options = run_options(system, options)

@@ -62,6 +62,28 @@ def shown_value(value: object) -> str:
     return _cut(text)
 
 
+def check_callback(name: str, value: object, call: str) -> None:
+    """Refuse, naming the argument ``name``, a ``value`` that is neither None nor callable
+    (a progress callback given as a number or a string failed at its first call).
+
+    Parameters
+    ----------
+    name : str
+        The argument, e.g. ``"progress"``.
+    value : object
+        What was given.
+    call : str
+        How it is called, for the message, e.g. ``"progress(done, total)"``.
+
+    Raises
+    ------
+    ParameterError
+        When ``value`` is not None and not callable.
+    """
+    if value is not None and not callable(value):
+        raise ParameterError(name, type(value).__name__, f"expected None or a callable {call}")
+
+
 def did_you_mean(given: object, known: Any) -> str:
     """The closest known name to a misspelt one, for a message: ``" (did you mean 'cdfs'?)"``,
     or ``""`` when none is close (:func:`difflib.get_close_matches`, cutoff 0.6).
