@@ -276,3 +276,20 @@ def test_the_polar_plot_labels_only_spikes_that_stand_out() -> None:
         ax = circular_figure(test).axes[0]
         assert sum("µm" in t.get_text() for t in ax.texts) == labelled
         assert ("8 reversal spikes not labelled" in ax.get_title()) == (labelled == 0)
+
+
+def test_the_progress_bar_says_which_run_it_is_on() -> None:
+    """One bar over both runs (run_circular_test's progress), labelled by the run: the first
+    half of the time is the CCW run's (the runs are equally long)."""
+    from feeddrive.cli._common import progress_bar
+
+    bar, advance = progress_bar(1.0, label=lambda t, end: "CCW run" if t <= end / 2
+                                else "CW run")
+    task = bar.tasks[0]
+    advance(10.0, 100.0)
+    assert task.description == "CCW run"
+    advance(60.0, 100.0)
+    assert task.description == "CW run" and task.completed == 60.0
+    plain, go = progress_bar(1.0)
+    go(5.0, 10.0)
+    assert plain.tasks[0].description == "simulating"  # no label: as before

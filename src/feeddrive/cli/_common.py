@@ -451,6 +451,7 @@ def print_json(data: Any) -> None:
 
 
 def progress_bar(duration: float, again: str | None = None,
+                 label: Callable[[float, float], str] | None = None,
                  ) -> tuple[Any, Callable[[float, float], None]]:
     """The progress bar on stderr of a run without ``--json`` (whose JSON is all it prints:
     no bar, and rich.progress is not imported), and the callback that moves it: a drive's
@@ -463,6 +464,9 @@ def progress_bar(duration: float, again: str | None = None,
     again : str, optional
         What a second pass over the same time is (``--error-estimate``'s run with tighter
         tolerances): when the reported time goes back, the bar starts again under this label.
+    label : callable, optional
+        ``label(t, t_end)`` → the bar's description at each report (a circular test's "CCW
+        run" / "CW run"); default "simulating".
 
     Returns
     -------
@@ -485,6 +489,7 @@ def progress_bar(duration: float, again: str | None = None,
         if again is not None and t < last[0]:  # the second pass
             bar.reset(task, total=duration, description=again)
         last[0] = t
-        bar.update(task, completed=t, total=t_end, t=f"{t:.4g} / {t_end:.4g} s")
+        bar.update(task, completed=t, total=t_end, t=f"{t:.4g} / {t_end:.4g} s",
+                   description=None if label is None else label(t, t_end))
 
     return bar, advance

@@ -134,7 +134,10 @@ def circular_command(
                       base=solver)
     built = load_machine(machine)
     # progress of the runs (they sat silent for 5–8 s: an outside check, 2026-12-07)
-    bar, advance = (None, None) if as_json else progress_bar(1.0)
+    # the two runs are equally long: the first half of the time is the CCW run's
+    # (run_circular_test's progress covers both)
+    bar, advance = (None, None) if as_json else progress_bar(
+        1.0, label=lambda t, end: "CCW run" if t <= end / 2 else "CW run")
     try:
         run = run_circular_test(built, radius=radius * MM, feed=feed * MM_PER_MIN, axes=pair,
                                 acceleration=acceleration * MM,
