@@ -167,3 +167,16 @@ def test_a_load_that_is_not_a_load_profile_is_refused_by_the_drive(load: object)
     assert err.value.field == "load"
     assert re_match(r"^expected a LoadProfile, e\.g\. LoadProfile\(time=…, force=…\) \[s, N\]",
                     err.value.message)
+
+
+def test_the_cli_ramp_warning_gives_advice_the_command_takes() -> None:
+    """`simulate`'s constant profile has a fixed 0.1-s start ramp (its --ramp-time is the
+    trapezoid's): the warning's advice is a longer run, not an option that does not act."""
+    from typer.testing import CliRunner
+
+    from feeddrive.cli import app
+
+    res = CliRunner().invoke(app, ["simulate", "--table-speed", "1", "--duration", "0.05"])
+    assert res.exit_code == 0, res.output
+    line = next(ln for ln in res.output.splitlines() if "start ramp ends at 0.1 s" in ln)
+    assert "run longer than 0.1 s" in line and "--ramp-time" not in line

@@ -607,7 +607,7 @@ class Result:
         return (f"the start ramp ends at {ramp:g} s, after the run's end {end:g} s: the "
                 f"verdict is of the ramp, not of the constant command{shown} (its reference "
                 f"reaches {1e3 * abs(self.command_speed):.3g} mm/s); run longer than "
-                f"ramp_time, or shorten it")
+                f"{ramp:g} s (in Python, or give ConstantSpeed a shorter ramp_time)")
 
     def _diverged_summary(self) -> dict[str, Any]:
         """The summary of a run that diverged before the samples the metrics need: the
