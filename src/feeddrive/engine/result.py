@@ -203,6 +203,10 @@ class Run:
             "solver": json.dumps(self.solver_stats),
             "conventions": "SI units; friction at the shafts as torque ÷ H (Wang2021 Table 1)",
         }
+        marks = getattr(system, "run_attrs", None)
+        if callable(marks):  # a machine's run: its name, path and axes, on every path
+            # (feeddrive.machine.MachineSystem.run_attrs; a circular test's runs lacked them)
+            attrs.update(marks(profile))
         if full:
             # what the run used: the model's named slots with units, written from the
             # assembled model (feeddrive.model.slots); the set as given, to run it again

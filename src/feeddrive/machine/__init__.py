@@ -763,8 +763,7 @@ def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
                                 np.asarray(ds[f"{b}.table_position"]))
     ds["contour_error"] = ("time", err, {"units": "m", "long_name": "contour error (signed "
                                          "normal distance of the actual point to the path)"})
-    ds.attrs.update(MachineSystem(machine).run_attrs(contour))
-    return Result(ds)
+    return Result(ds)  # its attributes name the machine (MachineSystem.run_attrs)
 
 
 #: the contour kinds :func:`make_contour` builds

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..engine.machine_axes import machine_axes, run_attrs
+from ..engine.machine_axes import machine_axes
 
 if TYPE_CHECKING:
     from ..engine.result import Result
@@ -30,7 +30,7 @@ def run_title(result: Result) -> str:
         units).
     """
     # its attributes as the run holds them: a repr built the whole Dataset for them
-    attrs = run_attrs(result)
+    attrs = result.attrs
     axes = machine_axes(result)
     if axes:  # a machine's run: its axes' signals are "<axis>.<name>"
         return (f"machine {attrs.get('drive', '')}: {attrs.get('profile', '')}, axes "
