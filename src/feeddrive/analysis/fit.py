@@ -68,7 +68,7 @@ import numpy as np
 # of this module's light helpers (`_no_effect`, `Experiment`: the sensitivity) need not pay
 from ..parameters import DriveParameters, ParameterError, dumps
 from ..parameters.toml_io import toml_comment, toml_string
-from ..parameters.validation import MISSING
+from ..parameters.validation import MISSING, is_real
 from .fit_residuals import HacCovariance, ResidualDiagnostics, diagnose, hac_covariance
 from .fit_statistics import NOISE_MIN_SAMPLES, correlation, covariance, noise_level
 
@@ -252,12 +252,6 @@ class Experiment:
 
 #: SI unit of a measurable signal's dimension (:data:`MEASURABLE`), for messages
 SI_UNITS = {"length": "m", "speed": "m/s", "current": "A", "torque": "N m", "force": "N"}
-
-
-def _real(value: object) -> bool:
-    """Whether ``value`` is a real number (not a bool, a str or an array)."""
-    return not isinstance(value, bool) and isinstance(value, int | float | np.integer |
-                                                      np.floating)
 
 
 def _samples(field: str, value: object, unit: str, source: str | None,
@@ -1834,7 +1828,7 @@ def _bounds_pair(path: str, pair: object, unit: str) -> tuple[float, float]:
     if isinstance(pair, str) or not isinstance(pair, Sequence | np.ndarray) or len(pair) != 2:
         raise ParameterError(where, pair, expected)
     lo, hi = pair[0], pair[1]
-    if not (_real(lo) and _real(hi)) or math.isnan(lo) or math.isnan(hi) or not lo < hi:
+    if not (is_real(lo) and is_real(hi)) or math.isnan(lo) or math.isnan(hi) or not lo < hi:
         raise ParameterError(where, pair, expected)
     return float(lo), float(hi)
 
@@ -1855,7 +1849,7 @@ def _check_fitted_signals(k: int, e: Experiment) -> None:
                                  f"[{unit}] (e.g. fit_statistics.noise_level(samples))",
                                  source=src)
         sigma = e.noise[name]
-        if not _real(sigma) or not 0.0 < sigma < math.inf:
+        if not is_real(sigma) or not 0.0 < sigma < math.inf:
             raise ParameterError(where, sigma, f"expected a finite noise σ > 0 [{unit}] "
                                  f"(noise_level needs at least {NOISE_MIN_SAMPLES} samples)",
                                  source=src)
@@ -2403,15 +2397,15 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     for name, value, unit in (("current_noise", current_noise, "-, σ over the current's rms"),
                               ("position_quantum", position_quantum, "m"),
                               ("record_start", record_start, "s")):
-        if not _real(value) or not 0.0 <= value < math.inf:
+        if not is_real(value) or not 0.0 <= value < math.inf:
             raise ParameterError(name, value, f"expected a finite number ≥ 0 [{unit}]")
-    if _real(duration) and record_start >= duration:
+    if is_real(duration) and record_start >= duration:
         raise ParameterError("record_start", record_start, f"expected a start before the "
                              f"record's end, 0 ≤ record_start < duration = {duration:g} [s]")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int | np.integer)
                              or seed < 0):
         raise ParameterError("seed", seed, "expected a whole number ≥ 0 [-]")
-    if _real(speed) and not abs(speed) <= LARGEST_SPEED:
+    if is_real(speed) and not abs(speed) <= LARGEST_SPEED:
         raise ParameterError("speed", speed, f"expected a speed of at most {LARGEST_SPEED:g} "
                              "m/s in magnitude (feeddrive.units.LARGEST_SPEED) [m/s]")
     system = DriveSystem(params, drive=drive, table_position=table_position)

@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import units
 from ..parameters import DriveParameters, ParameterError
-from ..parameters.validation import check_callback
+from ..parameters.validation import check_callback, is_real
 from .positioning import (
     MIN_CYCLES,
     PositioningTest,
@@ -157,7 +157,7 @@ class PositioningRun:
 def _number(name: str, value: object, unit: str) -> float:
     """A finite number > 0 [``unit``], or a refusal naming ``name`` (``feed="0.01"`` raised a
     TypeError from inside: an outside check, 2026-12-07)."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+    if not is_real(value):
         raise ParameterError(name, value, f"expected a number > 0 [{unit}]")
     v = float(value)
     if not (math.isfinite(v) and v > 0.0):

@@ -52,6 +52,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..parameters import ParameterError
+from ..parameters.validation import is_real
 from ..units import LARGEST_SPEED
 from .creep_window import CreepMetrics, CreepThresholds, creep_metrics, steady_window
 from .trace_input import resample_size
@@ -100,20 +101,14 @@ def savgol_window(sample_time: float, *, smoothing_time: float = DEFAULT_SMOOTHI
     int
         The window [samples].
     """
-    if not (_real(sample_time) and sample_time > 0 and math.isfinite(sample_time)):
+    if not (is_real(sample_time) and sample_time > 0 and math.isfinite(sample_time)):
         raise ParameterError("sample_time", sample_time, "expected a finite step > 0 [s]")
-    if not (_real(smoothing_time) and smoothing_time > 0 and math.isfinite(smoothing_time)):
+    if not (is_real(smoothing_time) and smoothing_time > 0 and math.isfinite(smoothing_time)):
         raise ParameterError("smoothing_time", smoothing_time, "expected a finite time > 0 [s]")
     _check_polyorder(polyorder)
     n = int(round(smoothing_time / sample_time))
     n = max(n, polyorder + 3)
     return n if n % 2 else n + 1
-
-
-def _real(value: object) -> bool:
-    """Whether ``value`` is a real number (not a bool, a str or an array)."""
-    return not isinstance(value, bool) and isinstance(value, int | float | np.integer |
-                                                      np.floating)
 
 
 def _whole(value: object) -> bool:
@@ -200,7 +195,7 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
     """
     # the window's settings first, before any work: 0 s was taken as the default (its `or`),
     # 2.5 samples and polyorder -1 were scipy's TypeError and "expected deg >= 0"
-    if smoothing_time is not None and not (_real(smoothing_time) and smoothing_time > 0 and
+    if smoothing_time is not None and not (is_real(smoothing_time) and smoothing_time > 0 and
                                            math.isfinite(smoothing_time)):
         raise ParameterError("smoothing_time", smoothing_time, "expected a finite time > 0 [s]")
     if window is not None and not _whole(window):
@@ -490,15 +485,14 @@ def _check_settings(thresholds: object, min_step: object, min_segment_time: obje
                              "0.02, max_ripple_ratio=0.5) [-]")
     for name, value, unit in (("min_step", min_step, "m/s"),
                               ("min_segment_time", min_segment_time, "s")):
-        if not (0 < (float(value) if _real(value) else math.nan)  # type: ignore[arg-type]
-                < math.inf):
+        if not (0 < (float(value) if is_real(value) else math.nan) < math.inf):
             raise ParameterError(name, value, f"expected a finite value > 0 [{unit}]")
 
 
 def _check_command_speed(command_speed: object) -> float:
     """The given command speed [m/s], refused when not a finite, non-zero speed of at most
     :data:`~feeddrive.units.LARGEST_SPEED` (a mm/s figure given as m/s)."""
-    vc = float(command_speed) if _real(command_speed) else math.nan  # type: ignore[arg-type]
+    vc = float(command_speed) if is_real(command_speed) else math.nan
     if not math.isfinite(vc) or vc == 0:
         raise ParameterError("command_speed", command_speed, "expected a finite, non-zero "
                              "speed [m/s]")

@@ -20,7 +20,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..parameters import ParameterError
-from ..parameters.validation import MISSING
+from ..parameters.validation import MISSING, is_real
 from ..units import LARGEST_SPEED
 
 REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
@@ -490,8 +490,7 @@ _TOO_FAST = f"expected |speed| ≤ {LARGEST_SPEED:g} [m/s] (no feed drive is fas
 def _speed(field: str, value: float) -> None:
     """Refuse a speed ``field`` [m/s] that is not a finite number of at most
     ``units.LARGEST_SPEED`` in magnitude, naming it."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
-            or not math.isfinite(value):
+    if not is_real(value) or not math.isfinite(value):
         raise ParameterError(field, value, "expected a finite speed [m/s]")
     if abs(value) > LARGEST_SPEED:
         raise ParameterError(field, value, _TOO_FAST)
@@ -509,7 +508,7 @@ def _plain(profile: object, names: tuple[str, ...]) -> None:
 
 def _number(name: str, value: object) -> None:
     """Refuse a ``profile.name`` that is not a real number (a str or a list), naming it."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+    if not is_real(value):
         raise ParameterError(f"profile.{name}", value, "expected a number")
 
 
@@ -535,8 +534,7 @@ def _check_span(name: str, value: float, span: float, interval: float, unit: str
 
 def _positive(name: str, value: float, unit: str) -> float:
     # a str or a list is refused here too, not in numpy ("ufunc 'isfinite' not supported")
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
-            or not (math.isfinite(value) and value > 0.0):
+    if not is_real(value) or not (math.isfinite(value) and value > 0.0):
         raise ParameterError(name, value, f"expected a finite value > 0 [{unit}]")
     return float(value)
 

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 import reprlib
-from typing import Any
+from typing import Any, TypeGuard
 
 #: longest field name, file name or value shown in a message [characters]; longer ones are
 #: cut (a 10-MB value is not echoed whole)
@@ -60,6 +61,23 @@ def shown_value(value: object) -> str:
         return f"{value[:MAX_SHOWN]!r}… ({len(value)} characters)"
     text = repr(value) if isinstance(value, int | float | bool | None) else _REPR.repr(value)
     return _cut(text)
+
+
+def is_real(value: object) -> TypeGuard[float]:
+    """Whether ``value`` is a real number: an int or a float, NumPy's scalars included; not a
+    bool, a str, a list or an array.
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+
+    Returns
+    -------
+    bool
+        True for a real number (to a type checker: a float).
+    """
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 def check_callback(name: str, value: object, call: str) -> None:

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._jit import kernel
-from ...parameters.validation import ParameterError
+from ...parameters.validation import ParameterError, is_real
 from . import lugre
 from .lugre_parameters import FrictionBranch, LuGreParameters
 
@@ -600,8 +600,7 @@ def sliding_stability(
                                    ("stiffness", stiffness, "N/m", None),
                                    ("damping", damping, "N s/m", None),
                                    ("integral", integral, "N/(m s)", None)):
-        number = isinstance(value, int | float | np.floating | np.integer) \
-            and not isinstance(value, bool) and math.isfinite(value)
+        number = is_real(value) and math.isfinite(value)
         if not number or (low is not None and not value > low) or (low is None and value < 0):
             raise ParameterError(name, value, f"expected a finite value "
                                  f"{'> 0' if low is not None else '≥ 0'} [{unit}]")
