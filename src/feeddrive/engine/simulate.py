@@ -893,7 +893,7 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     ------
     ParameterError
         For a ``duration`` past the end of a tabulated profile that still commands a speed
-        there (``check_profile_span``), refused before the model is built.
+        there (``check_profile_span``), refused before the integration.
     SimulationError
         If the integrator fails (a result is never NaN silently).
     SimulationInterrupted
@@ -924,11 +924,6 @@ def simulate(system: DriveSystem, profile: Profile, duration: float, *,
     """
     kind = estimate_kind(error_estimate)
     embedded = kind == "embedded"
-    if isinstance(profile, SampledSpeed) and callable(getattr(system, "model", None)) \
-            and not isinstance(system, DriveParameters) \
-            and (options is None or isinstance(options, SolverOptions)):
-        # before the model is assembled (Simulation.run checks it again, for its own callers)
-        check_profile_span(profile, duration, run_options(system, options).output_interval)
     sim = Simulation(system, profile, options, embedded_estimate=embedded)
     if embedded and not sim.embedded_estimate:
         raise ParameterError("error_estimate", error_estimate,
