@@ -9,7 +9,6 @@ item 18).  One set of numbers now serves both; the report and the CLI print it.
 from __future__ import annotations
 
 import math
-from numbers import Real
 
 SPEED_RANGE = (0.02e-3, 3.02e-3)  # [m/s] lowest and highest speed tested
 COARSE_STEP = 0.2e-3  # [m/s] scan step from rest, before the bisection
@@ -107,9 +106,10 @@ def check_speed(name: str, value: object, *, sign: str = "positive",
         speed above the limit that would be within it in mm/s says so (the API takes m/s).
     """
     from ..parameters import ParameterError
+    from ..parameters.validation import is_real
     from ..units import LARGEST_SPEED, MM_PER_S
 
-    if isinstance(value, bool) or not isinstance(value, Real):
+    if not is_real(value):
         raise ParameterError(name, value, "expected a number [m/s]")
     try:
         v = float(value)
