@@ -1232,6 +1232,102 @@ def walk_down(system: DriveSystem, speeds: Sequence[float] | np.ndarray, *, nut_
     return trials, simulated
 
 
+def check_stepdown(system: DriveSystem, *, nut_speed: float, start_speed: float,
+                   lowest_speed: float, step: float, coarse_step: float,
+                   rule: VerdictRule | None, options: SolverOptions | None,
+                   ) -> tuple[float, float, np.ndarray]:
+    """Every refusal of :func:`critical_speed_stepdown`'s arguments, before any work (the
+    command line makes them before its search from rest, so that ``creep --method both``
+    does not run that search to refuse the step-down after it).
+
+    Parameters
+    ----------
+    system : DriveSystem
+        The drive to search.
+    nut_speed, start_speed, lowest_speed, step, coarse_step : float
+        As :func:`critical_speed_stepdown`'s [m/s].
+    rule : VerdictRule or None
+        How each step is judged (None: the protocol's rule).
+    options : SolverOptions or None
+        Integrator settings.
+
+    Returns
+    -------
+    tuple of (float, float, ndarray)
+        The lowest and the start speed [m/s] and the coarse staircase's speeds, highest first.
+
+    Raises
+    ------
+    ParameterError
+        Naming the argument refused.
+    """
+    check_kinds(system, rule=rule, options=options)
+    hi = protocol.check_speed("start_speed", start_speed)
+    lo = protocol.check_speed("lowest_speed", lowest_speed)
+    step = protocol.check_speed("step", step)
+    if hi <= lo:
+        raise ParameterError("start_speed", start_speed,
+                             f"expected > lowest_speed = {lo:g} [m/s]")
+    coarse_step = protocol.check_speed("coarse_step", coarse_step)
+    protocol.check_speed("nut_speed", nut_speed, sign="any")
+    check_scan(system, "start_speed", start_speed, lo, hi, coarse_step,
+               protocol.STAIRCASE_COARSE_STEP, "start_speed − lowest_speed")
+    protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=step,
+                          names={"low": "lowest_speed", "high": "start_speed",
+                                 "resolution": "step"}, unit="m/s")
+    coarse = _grid(lo, hi, coarse_step)[::-1]
+    check_staircase(coarse, rule or VerdictRule(), options, nut_speed=nut_speed,
+                    shown=start_speed)
+    return lo, hi, coarse
+
+
+def check_staircase(speeds: Sequence[float] | np.ndarray, rule: VerdictRule,
+                    options: SolverOptions | None, *, nut_speed: float = 0.0,
+                    shown: object = None) -> None:
+    """Refuse, before any work, a step-down whose first staircase (every coarse step held
+    ``rule.initial_duration``) would record more output than memory holds: the refusal named
+    ``duration`` and ``options.output_interval`` (settings the step-down's user never gave)
+    and, under ``creep --method both``, came only after the search from rest had run (an
+    outside check, 2026-12-07: ``creep --high 200 --method stepdown``, 2 000 steps, 24 000 s).
+
+    Parameters
+    ----------
+    speeds : sequence of float
+        The coarse staircase's speeds [m/s], highest first.
+    rule : VerdictRule
+        The verdict rule (each step's first dwell).
+    options : SolverOptions or None
+        The trials' settings (None: the settings in force).
+    nut_speed : float, default 0
+        Hollow-motor (nut) speed [m/s].
+    shown : object, default None
+        ``start_speed`` as given, for the message.
+
+    Raises
+    ------
+    ParameterError
+        On ``start_speed``, with the staircase's length and what it would need.
+    """
+    from ..engine.budget import output_memory
+    from ..engine.options import current
+
+    sp = np.asarray(speeds, dtype=float)
+    dwell = rule.durations()[0]
+    profile, _ = _staircase(sp, [dwell] * len(sp), 0.0, nut_speed)
+    duration = float(profile.time[-1])
+    interval = (options or current()).output_interval
+    samples, need, free = output_memory(duration, interval)
+    if need > 0.5 * free:
+        fit = int(len(sp) * 0.5 * free / need)
+        raise ParameterError(
+            "start_speed", sp[0] if shown is None else shown,
+            f"its staircase down to {sp[-1] / units.MM_PER_S:g} mm/s ({len(sp)} steps held "
+            f"{dwell:g} s each, {duration:g} s, {samples:.3g} output samples at "
+            f"{interval:g} s) would need about {need / 2**30:.3g} GiB, more than half the "
+            f"{free / 2**30:.3g} GiB available; expected a lower start (about {fit} steps "
+            "fit), or a longer output interval")
+
+
 def _resume(sim: Simulation, candidates: list[Simulation]) -> float:
     """Resume ``sim`` from the candidate whose committed history it shares longest; the
     time it resumes from [s] (0: from rest)."""
@@ -1282,22 +1378,10 @@ def critical_speed_stepdown(
     ----------
     Wang2021 Sect. 6 (Fig. 13): the experiment's step-down protocol.
     """
-    check_kinds(system, rule=rule, options=options)
-    hi = protocol.check_speed("start_speed", start_speed)
-    lo = protocol.check_speed("lowest_speed", lowest_speed)
-    step = protocol.check_speed("step", step)
-    if hi <= lo:
-        raise ParameterError("start_speed", start_speed,
-                             f"expected > lowest_speed = {lo:g} [m/s]")
-    coarse_step = protocol.check_speed("coarse_step", coarse_step)
-    protocol.check_speed("nut_speed", nut_speed, sign="any")
-    check_scan(system, "start_speed", start_speed, lo, hi, coarse_step,
-               protocol.STAIRCASE_COARSE_STEP, "start_speed − lowest_speed")
-    protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=step,
-                          names={"low": "lowest_speed", "high": "start_speed",
-                                 "resolution": "step"}, unit="m/s")
-    rule = rule or VerdictRule()
-    coarse = _grid(lo, hi, coarse_step)[::-1]
+    lo, hi, coarse = check_stepdown(system, nut_speed=nut_speed, start_speed=start_speed,
+                                    lowest_speed=lowest_speed, step=step,
+                                    coarse_step=coarse_step, rule=rule, options=options)
+    rule, step = rule or VerdictRule(), float(step)
     runs: list[Simulation] = []  # the coarse walk's last run: the fine walks start from it
     coarse_trials, simulated = walk_down(system, coarse, nut_speed=nut_speed, rule=rule,
                                          options=options, runs=runs)

@@ -319,6 +319,7 @@ _EDGE_FIELDS: dict[str, tuple[str, str, float]] = {
     "error_estimate": ("--error-estimate", "", 1.0),
     "target.critical_speed": ("--target", "mm/s", 1.0 / MM_PER_S),
     "dwell": ("--dwell", "s", 1.0),
+    "start_speed": ("--high", "mm/s", 1.0 / MM_PER_S),  # creep's step-down starts at --high
 }
 
 

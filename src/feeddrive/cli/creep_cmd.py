@@ -217,9 +217,18 @@ def _searches(system: DriveSystem, v_n: float, method: str,
               speed_range: tuple[float, float], rule: VerdictRule, estimate: str | bool,
               shown: SearchProgress | None) -> list[CriticalSpeed]:
     """The searches ``--method`` asks for, from rest first (the protocol's settings)."""
-    from ..analysis.critical import critical_speed_from_rest, critical_speed_stepdown
+    from ..analysis.critical import (
+        check_stepdown,
+        critical_speed_from_rest,
+        critical_speed_stepdown,
+    )
 
     lo, hi = speed_range
+    stepdown: dict[str, Any] = {
+        "nut_speed": v_n, "start_speed": hi, "lowest_speed": lo, "step": protocol.RESOLUTION,
+        "coarse_step": protocol.STAIRCASE_COARSE_STEP, "rule": rule}
+    if method in ("stepdown", "both"):  # refused before the search from rest runs
+        check_stepdown(system, options=None, **stepdown)
     results = []
     if method in ("bisect", "both"):
         results.append(critical_speed_from_rest(
@@ -230,10 +239,7 @@ def _searches(system: DriveSystem, v_n: float, method: str,
         if shown is not None:  # the step-down reports no trials as it goes
             shown.stage("step-down on a running table")
         try:
-            results.append(critical_speed_stepdown(
-                system, nut_speed=v_n, start_speed=hi, lowest_speed=lo,
-                step=protocol.RESOLUTION, coarse_step=protocol.STAIRCASE_COARSE_STEP,
-                rule=rule))
+            results.append(critical_speed_stepdown(system, **stepdown))
         except KeyboardInterrupt:
             if results:  # the search from rest had finished: its answer said, not dropped
                 # (an outside check, 2026-12-07)

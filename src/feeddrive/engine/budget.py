@@ -333,6 +333,26 @@ def check_step_budget(duration: float, options: SolverOptions) -> RunBudget:
     return budget
 
 
+def output_memory(duration: float, output_interval: float) -> tuple[int, float, float]:
+    """What a run's recorded output needs, against what the host has.
+
+    Parameters
+    ----------
+    duration : float
+        Simulated time [s].
+    output_interval : float
+        Interval of the recorded output [s].
+
+    Returns
+    -------
+    tuple of (int, float, float)
+        The output samples, the bytes they need with their working copies, and the bytes
+        available; :func:`check_output_memory` refuses a run needing more than half.
+    """
+    samples = int(duration / output_interval) + 1
+    return samples, float(samples * BYTES_PER_SAMPLE * _COPY_FACTOR), float(available_memory())
+
+
 def check_output_memory(duration: float, output_interval: float, *,
                         options: SolverOptions | None = None) -> None:
     """Refuse a run whose recorded output would not fit in memory.
@@ -355,9 +375,7 @@ def check_output_memory(duration: float, output_interval: float, *,
         When the output (with its working copies) would need more than half the available
         memory; the message names the duration and the way out.
     """
-    samples = int(duration / output_interval) + 1
-    need = samples * BYTES_PER_SAMPLE * _COPY_FACTOR
-    free = available_memory()
+    samples, need, free = output_memory(duration, output_interval)
     if need > 0.5 * free:
         if options is None:
             from .options import current
