@@ -155,9 +155,10 @@ def test_frequencies_that_are_not_frequencies_are_named(system: fd.DriveSystem,
 
 
 @pytest.mark.parametrize(("cycles", "says"), [
-    (10**5, r" = 100000: expected ≤ 4166 \[-\]: 2 targets × 100000 cycles × 2 directions last "
-            r"at least 4\.8e\+05 s"),
-    (1e300, r" = 1e\+300: expected ≤ 4166 \[-\]"),
+    # ≤ 4165: the 20 000 s the reference holds less the warm-up pass (session 26)
+    (10**5, r" = 100000: expected ≤ 4165 \[-\]: 2 targets × 100000 cycles × 2 directions and "
+            r"1 warm-up pass last at least 4\.8e\+05 s"),
+    (1e300, r" = 1e\+300: expected ≤ 4165 \[-\]"),
     (float("nan"), r" = nan: expected a whole number ≥ 5 of approaches"),
     (None, r" = None: expected a whole number ≥ 5 of approaches"),
     (5.5, r" = 5\.5: expected a whole number ≥ 5 of approaches"),

@@ -32,6 +32,8 @@ from ._common import (
 from ._solver import accuracy_options, max_steps_help
 from .simulate_cmd import ALL_DRIVES
 
+WARM_UP = 1  # the API's default, feeddrive.analysis.positioning_run.WARM_UP (tested)
+
 
 def _say(text: str) -> None:
     console.print(text, markup=False, highlight=False, soft_wrap=True)
@@ -104,6 +106,10 @@ def positioning_command(
                                 "read over its last quarter."),
     overshoot: float = typer.Option(2.0, "--overshoot", help="How far beyond a target the "
                                     "axis reverses [mm]."),
+    warm_up: int = typer.Option(WARM_UP, "--warm-up", help="Linear passes over the targets "
+                                "run first and not read, so that the first cycle comes as "
+                                "the others do (0: start at rest, friction and loop integrals "
+                                "unloaded) [-]."),
     preset_name: str | None = typer.Option(None, "--preset", help=PRESET_HELP),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     max_steps: int | None = typer.Option(None, "--max-steps", help=max_steps_help()),
@@ -142,11 +148,11 @@ def positioning_command(
     try:
         run = run_positioning_test(params, drive, points, cycles=cycles, kind=cycle,
                                    feed=feed * MM_PER_S, acceleration=acceleration * MM,
-                                   dwell=dwell, overshoot=overshoot * MM, options=options,
-                                   progress=advance)
+                                   dwell=dwell, overshoot=overshoot * MM, warm_up=warm_up,
+                                   options=options, progress=advance)
     except ParameterError as err:  # the API names its arguments; the user typed options
         option = {"feed": "--feed", "targets": "--targets", "kind": "--cycle",
-                  "cycles": "--cycles",
+                  "cycles": "--cycles", "warm_up": "--warm-up",
                   "max_steps": "--max-steps"}.get(err.field, err.field)
         raise ParameterError(option, _in_mm(err.field, err.value), err.message) from None
     except SimulationError as err:
@@ -162,7 +168,8 @@ def positioning_command(
     if output:
         write_positioning_record(output, test.targets, test.deviation_up, test.deviation_down,
                                  comment=f"feeddrive positioning --drive {drive} ({params.name})"
-                                 f", {run.kind} cycle, feed {feed:g} mm/s, dwell {dwell:g} s")
+                                 f", {run.kind} cycle, feed {feed:g} mm/s, dwell {dwell:g} s"
+                                 f", {_passes(warm_up)}")
     if plot:
         from ..plots.acceptance import positioning_figure, save
 
@@ -170,14 +177,14 @@ def positioning_command(
     if as_json:
         print_json({**test.to_dict(), "drive": drive, "parameters": params.name,
                     "cycle": run.kind, "feed_mm_s": feed, "acceleration_mm_s2": acceleration,
-                    "dwell_s": dwell, "overshoot_mm": overshoot,
+                    "dwell_s": dwell, "overshoot_mm": overshoot, "warm_up_passes": warm_up,
                     "reading_motion_um": 1e6 * run.reading_motion,
                     "duration_s": float(run.result.time[-1]), "output": output, "plot": plot})
         return
     _say(f"ISO 230-2 positioning test: {drive} ({params.name}), {len(points)} targets × "
          f"{cycles} approaches each way, {run.kind} cycle, feed {feed:g} mm/s, dwell "
-         f"{dwell:g} s, overshoot {overshoot:g} mm; {float(run.result.time[-1]):.4g} s "
-         "simulated")
+         f"{dwell:g} s, overshoot {overshoot:g} mm, {_passes(warm_up)}; "
+         f"{float(run.result.time[-1]):.4g} s simulated")
     for line in describe(test):
         _say(line)
     _say(f"largest motion within a reading window (the last quarter of a dwell): "
@@ -187,6 +194,13 @@ def positioning_command(
         _say(f"wrote record {output}")
     if plot:
         _say(f"wrote plot {plot}")
+
+
+def _passes(warm_up: int) -> str:
+    """The warm-up in words, beside the numbers it changes."""
+    if warm_up == 0:
+        return "no warm-up (started at rest, friction and loop integrals unloaded)"
+    return f"after {warm_up} warm-up pass{'es' if warm_up > 1 else ''} (not read)"
 
 
 def _in_mm(field: str, value: Any) -> Any:
