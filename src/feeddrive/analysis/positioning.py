@@ -145,7 +145,7 @@ class PositioningTest:
         um = 1e6
         axis = {f"{k}_um": float(getattr(self, k)) * um for k in self.AXIS_QUANTITIES}
         per_target = [
-            {"target_mm": float(p) * 1e3,
+            {"target_mm": float(f"{float(p) * 1e3:.12g}"),  # as typed, not 175.00000000000003
              "mean_up_um": float(self.mean_up[i]) * um,
              "mean_down_um": float(self.mean_down[i]) * um,
              "mean_um": float(self.mean[i]) * um,

@@ -192,9 +192,12 @@ def write_positioning_record(path: str | Path, targets: Sequence[float] | np.nda
     for direction, dev in ((1, deviation_up), (-1, deviation_down)):
         for i in range(p.size):
             for j in range(dev.shape[1]):
-                # the position as the sum the reader subtracts again: x_ij = P_ij − P_i
-                rows.append(f"{float(p[i] * 1e3)!r},{direction},{j + 1},"
-                            f"{float((p[i] + dev[i, j]) * 1e3)!r}")
+                # the target as typed (12 significant digits: a --targets 175 read as
+                # 0.17500000000000002 m was written 175.00000000000003), the position as the
+                # sum the reader subtracts again: x_ij = P_ij − P_i
+                target = float(f"{p[i] * 1e3:.12g}")
+                rows.append(f"{target!r},{direction},{j + 1},"
+                            f"{target + float(dev[i, j]) * 1e3!r}")
     text = "".join(f"# {line}\n" for line in comment.splitlines() if line)
     text += ",".join(POSITIONING_COLUMNS) + "\n" + "\n".join(rows) + "\n"
     with atomic_path(path) as tmp:
