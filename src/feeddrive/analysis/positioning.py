@@ -333,7 +333,11 @@ def read_approaches(time: ArrayLike, position: ArrayLike, stops: Sequence[Stop],
     """The deviations x_ij↑, x_ij↓ of a run of :func:`positioning_cycle` from its position trace.
 
     At each stop the actual position is the mean of the trace over the last
-    ``READ_FRACTION`` (a quarter) of the dwell (the axis at rest, as the standard reads it).
+    ``READ_FRACTION`` (a quarter) of the dwell (the axis at rest, as the standard reads it):
+    the time average of the trace's piecewise-linear interpolant between the window's first
+    and last samples, so that where the axis still moves while read the reading converges as
+    the output interval shrinks (the plain mean of the samples weighs the window's ends by
+    the sampling's phase; an outside check, 2026-12-07).
 
     Parameters
     ----------
@@ -371,9 +375,19 @@ def read_approaches(time: ArrayLike, position: ArrayLike, stops: Sequence[Stop],
         if s.target < 0:
             continue
         window = _reading_window(t, s, end, dwell)
-        (up if s.direction > 0 else down)[s.target, s.cycle] = float(np.mean(x[window])) \
+        (up if s.direction > 0 else down)[s.target, s.cycle] = _window_mean(t, x, window) \
             - p[s.target]
     return up, down
+
+
+def _window_mean(t: np.ndarray, x: np.ndarray, window: np.ndarray) -> float:
+    """The time average of the linear interpolant of ``x(t)`` between the first and the last
+    sample of ``window`` (no value from outside it: after the window's end the next move
+    starts), or the sample itself when it holds one."""
+    tt, xx = t[window], x[window]
+    if tt.size < 2 or tt[-1] <= tt[0]:
+        return float(np.mean(xx))
+    return float(np.sum(0.5 * (xx[1:] + xx[:-1]) * np.diff(tt)) / (tt[-1] - tt[0]))
 
 
 def _reading_window(t: np.ndarray, stop: Stop, end: float, dwell: float) -> np.ndarray:
