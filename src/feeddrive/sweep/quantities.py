@@ -317,8 +317,8 @@ def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
             stem = loop["loop"].replace(" ", "_")
             for k in ("gain_margin_db", "phase_margin_deg", "crossover_hz",
                       "closed_loop_bandwidth_hz"):
-                v = loop[k]
-                values[f"{stem}_{k}"] = absent_value(k) if v is None else v
+                name, v = f"{stem}_{k}", loop[k]
+                values[name] = absent_value(name) if v is None else v
         return {"values": values, "details": {"loops": la["loops"]}}
     rule = VerdictRule(initial_duration=q["initial_duration"], max_duration=q["max_duration"])
     if kind == "creep-trial":
