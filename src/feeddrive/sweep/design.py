@@ -34,6 +34,7 @@ from .. import units
 from ..parameters import DriveParameters, ParameterError, dumps, load, preset
 from ..parameters.components import solver_over, solver_table
 from ..parameters.toml_io import read_toml_file, table_applied, to_dict
+from ..parameters.validation import TABLE_BASIS_NOTE, path_unit_label
 from .quantities import QuantitySettings
 
 DESIGNS = ("grid", "random", "lhs")
@@ -100,6 +101,9 @@ class Axis:
         ``"linear"`` or ``"log"`` spacing (uniform or log-uniform draws).
     relative : bool, default False
         The values are factors on the base parameter value.
+    parameter_unit : str, default ""
+        A parameter's SI unit, as its declaration states it (:func:`parameter_unit`; filled
+        by :func:`parse_config`).
     """
 
     name: str
@@ -109,6 +113,7 @@ class Axis:
     points: int | None = None
     scale: str = "linear"
     relative: bool = False
+    parameter_unit: str = ""
 
     @property
     def key(self) -> str:
@@ -117,10 +122,13 @@ class Axis:
 
     @property
     def unit(self) -> str:
-        """The configuration unit of the axis's values (``"1"`` for a relative axis)."""
+        """The configuration unit of the axis's values: mm or mm/s for the special axes, a
+        parameter's SI unit (:attr:`parameter_unit`), ``"1"`` for a relative axis."""
         if self.relative:
             return "1"
-        return SPECIAL_AXES.get(self.name, ("", 1.0))[0]
+        if self.name in SPECIAL_AXES:
+            return SPECIAL_AXES[self.name][0]
+        return self.parameter_unit
 
     def size(self) -> int:
         """How many values a grid takes on this axis (nothing materialised).
@@ -527,6 +535,56 @@ def _get_path(params: Any, path: str) -> Any:
     return obj
 
 
+def parameter_unit(params: DriveParameters, path: str) -> str:
+    """The SI unit a parameter file gives the parameter at a dotted path: the unit its
+    declaration states (the field metadata a parameter file is checked against,
+    :func:`feeddrive.parameters.validation.path_unit_label`), for the set's velocity-gain
+    basis (A s/m per table speed or A s/rad), without the basis note.
+
+    Parameters
+    ----------
+    params : DriveParameters
+        The parameter set.
+    path : str
+        A dotted parameter name (``friction.screw.positive.stribeck_velocity``).
+
+    Returns
+    -------
+    str
+        The unit (``"m/s"``); ``"1"`` for a dimensionless number; ``""`` for what has no
+        unit (a name, a mode, a whole friction site) or a path the set does not have.
+    """
+    try:
+        label = path_unit_label(params, path)
+    except KeyError:
+        return ""
+    unit = label.removesuffix(f", {TABLE_BASIS_NOTE}")
+    return "1" if unit == "-" else unit
+
+
+def _with_unit(axis: Axis, bases: Sequence[DriveParameters]) -> Axis:
+    """``axis`` with its parameter's unit: the one every base set (the configuration's and a
+    ``preset`` axis's) declares, or none where they differ (A s/m and A s/rad gains)."""
+    if axis.relative or axis.name in SPECIAL_AXES:
+        return axis
+    found = {parameter_unit(b, axis.name) for b in bases}
+    return replace(axis, parameter_unit=found.pop() if len(found) == 1 else "")
+
+
+def _preset_bases(axes: Sequence[Axis], source: str) -> list[DriveParameters]:
+    """The base sets a ``preset`` axis names (one it cannot load is refused later, at its
+    point, naming the axis)."""
+    out = []
+    for axis in axes:
+        if axis.name == "preset":
+            for name in axis.values or ():
+                try:
+                    out.append(_load_base(str(name), source))
+                except (ParameterError, OSError):
+                    continue
+    return out
+
+
 def _load_base(name: str, source: str) -> DriveParameters:
     if name.endswith(".toml"):
         path = Path(name)
@@ -769,6 +827,8 @@ def parse_config(data: Mapping[str, Any], source: str) -> SweepConfig:
             axes.append(a)
     if kind != "grid" and not axes:
         raise _refuse("axes", {}, f"a {kind} design needs at least one axis")
+    bases = [base_params, *_preset_bases(axes, source)]
+    axes = [_with_unit(a, bases) for a in axes]
 
     quantity = QuantitySettings.parse(data.get("quantity", {}))
     if "table_speed" in axes_spec and quantity.kind not in ("creep-trial", "loop-margins"):
@@ -825,7 +885,7 @@ def load_config(path: str | os.PathLike[str]) -> SweepConfig:
 
 
 __all__ = ["DESIGNS", "MAX_POINTS", "Axis", "Point", "SweepConfig", "check_name",
-           "load_config", "numeric_paths", "parse_config"]
+           "load_config", "numeric_paths", "parameter_unit", "parse_config"]
 
 
 def __getattr__(name: str) -> Any:

@@ -2,9 +2,14 @@
 
 * :func:`to_dataset`: SI, units in the attributes; a grid's swept axes are dimensions (the
   drive a dimension of names), a random or Latin-hypercube design has one dimension
-  ``sample`` with the axes as coordinates.  Points not computed yet are NaN.
+  ``sample`` with the axes as coordinates.  A value is NaN where its point is not computed
+  yet (``done`` 0) or the value does not exist at it (no gain crossover, no critical speed);
+  a loop without a gain margin (no phase crossover) has +inf
+  (:func:`~feeddrive.sweep.quantities.absent_value`).  A parameter axis has the unit of the
+  parameter's declaration (:func:`~feeddrive.sweep.design.parameter_unit`).
 * :func:`to_frame`: one row per design point, engineering units in the column names
-  (``table_position [mm]``, ``critical_speed [mm/s]``), as every CSV of feeddrive.
+  (``table_position [mm]``, ``critical_speed [mm/s]``, a parameter axis in m/s or N/m as
+  ``[mm/s]``, ``[N/µm]``), as every CSV of feeddrive; +inf is written ``inf``, NaN empty.
 * :func:`to_table`: the same rows and numbers as a pyarrow Table with plain names, each
   field's unit in its metadata, as every Parquet of feeddrive.
 * :func:`export`: ``.csv`` (the frame), ``.parquet`` (the table) or ``.nc`` (the Dataset,
@@ -21,7 +26,7 @@ from .. import units
 from ..io.outputs import SWEEP_EXPORT_FORMATS, atomic_path
 from ..io.results import arrow_table, cf_attributes, write_netcdf
 from .design import SPECIAL_AXES
-from .quantities import UNITS
+from .quantities import UNITS, stored_value
 from .store import SweepStore
 
 if TYPE_CHECKING:  # pandas and xarray are imported where a sweep is exported (a pool worker
@@ -67,10 +72,6 @@ def _netcdf_name(name: str) -> str:
     return name.replace(".", "_")
 
 
-def _value(v: Any) -> Any:
-    return math.nan if v is None else v
-
-
 def _records(store: SweepStore, sweep: str) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     desc = store.description(sweep)
     out = []
@@ -85,7 +86,7 @@ def _records(store: SweepStore, sweep: str) -> tuple[dict[str, Any], list[dict[s
             rec["error"] = result["error"]
         else:
             rec["done"] = 1
-            rec.update({k: _value(v) for k, v in result["values"].items()})
+            rec.update({k: stored_value(k, v) for k, v in result["values"].items()})
             rec["seconds"] = result.get("seconds", math.nan)
         rec["key"] = key
         out.append(rec)
@@ -171,6 +172,8 @@ def _engineering(store: SweepStore, sweep: str
         eng, factor = units.ENGINEERING.get(unit, (unit, 1.0))
         if factor != 1.0 and pd.api.types.is_numeric_dtype(frame[col]):
             frame[col] = frame[col] * factor
+        elif factor != 1.0:  # a list per value (harmonic amplitudes): kept in SI, said so
+            eng = unit
         if col in axes and axes[col]["relative"]:
             meta[col] = ("factor", f"factor on the base value of {col}")
         else:

@@ -48,6 +48,51 @@ UNITS: dict[str, str] = {
     "mode_frequency": "Hz", "damping_ratio": "1", "seconds": "s",
 }
 
+#: values whose absence is a bound, not a gap: ``…_gain_margin_db`` of a loop whose phase does
+#: not cross −180° above its gain crossover (``loop_analysis``: 0.5–500 Hz; the wang2021 screw
+#: velocity loop has none up to 50 kHz either) — an infinite gain margin, as python-control's
+#: ``stability_margins`` gives it; ``feeddrive loops`` prints "—" (JSON null)
+INFINITE_WHEN_ABSENT = ("_gain_margin_db",)
+
+
+def absent_value(name: str) -> float:
+    """The number a value the computation did not find stands for: +inf for a gain margin
+    (:data:`INFINITE_WHEN_ABSENT`: the loop has none), NaN otherwise (no such value at the point:
+    a loop without a gain crossover has no crossover frequency, phase margin or bandwidth; a
+    search without a critical speed).
+
+    Parameters
+    ----------
+    name : str
+        The value's name (``screw_velocity_loop_gain_margin_db``, ``crossover_hz``).
+
+    Returns
+    -------
+    float
+        ``math.inf`` or ``math.nan``.
+    """
+    return math.inf if name.endswith(INFINITE_WHEN_ABSENT) else math.nan
+
+
+def stored_value(name: str, value: Any) -> Any:
+    """A value as read back from a sweep store: JSON has no infinity, so the store keeps every
+    non-finite number as null (``feeddrive.sweep.store``); a null is :func:`absent_value`
+    (a gain margin's null is +inf: :func:`compute` gives no NaN for it).
+
+    Parameters
+    ----------
+    name : str
+        The value's name.
+    value : object
+        The stored value (None for null).
+
+    Returns
+    -------
+    object
+        ``value``, or the number a null stands for.
+    """
+    return absent_value(name) if value is None else value
+
 
 @dataclass(frozen=True)
 class QuantitySettings:
@@ -272,8 +317,8 @@ def compute(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
             stem = loop["loop"].replace(" ", "_")
             for k in ("gain_margin_db", "phase_margin_deg", "crossover_hz",
                       "closed_loop_bandwidth_hz"):
-                v = loop[k]
-                values[f"{stem}_{k}"] = math.nan if v is None else v
+                name, v = f"{stem}_{k}", loop[k]
+                values[name] = absent_value(name) if v is None else v
         return {"values": values, "details": {"loops": la["loops"]}}
     rule = VerdictRule(initial_duration=q["initial_duration"], max_duration=q["max_duration"])
     if kind == "creep-trial":
@@ -414,5 +459,5 @@ def warm(task: dict[str, Any]) -> None:
         linearize(system, speed, task["nut_speed"])
 
 
-__all__ = ["QUANTITIES", "UNITS", "VERDICT_KINDS", "QuantitySettings", "check_task", "compute",
-           "evaluate", "warm"]
+__all__ = ["INFINITE_WHEN_ABSENT", "QUANTITIES", "UNITS", "VERDICT_KINDS", "QuantitySettings",
+           "absent_value", "check_task", "compute", "evaluate", "stored_value", "warm"]
