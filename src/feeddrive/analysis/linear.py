@@ -830,11 +830,36 @@ def _crossing(fn: Callable[[float], float], a: float, b: float) -> float:
     return math.sqrt(a * b)
 
 
+#: a loop's DC gain, when its model has a rigid-body pole, is the limit f → 0 read at this
+#: fraction of its slowest other pole's frequency [-]: |T| there differs from the limit by
+#: ~(fraction)² relative (T is real at DC, so |T| moves to second order): 9e-12 dB at 1e-6
+#: for the CDFS velocity loop, 9e-8 dB at 1e-4, 1e-14 dB at 1e-8 (an outside check,
+#: 2026-12-07), while the rigid-body pole (±1e-13…1e-6 1/s) stays far below it
+DC_LIMIT_FRACTION = 1e-6
+
+
+def _dc_frequency(lin: LinearModel) -> float:
+    """The frequency [Hz] at which a loop transfer of ``lin`` gives its DC gain: 0 when ``lin``
+    has no rigid-body pole (:func:`classify_poles`); else the limit f → 0, read at
+    :data:`DC_LIMIT_FRACTION` × its slowest other pole's frequency.  A rigid-body pole makes
+    ``A`` singular, and the loop's transfer at f = 0 a 0/0 left to rounding: the CDFS velocity
+    loop (its position loop open, the table free) read |T(0)| = +2.02 dB at 300 mm and a
+    singular matrix at 400 mm, so its bandwidth jumped between 7.89 and 8.54 Hz with the
+    table's position (python-control, on the same transfer with the cancelling pole and zero at
+    0 removed, gives 8.54 Hz at both: an outside check, 2026-12-07)."""
+    poles = classify_poles(lin.poles())
+    if not any(p.rigid_body for p in poles):
+        return 0.0
+    live = [abs(complex(p.real, p.imag)) for p in poles if not p.rigid_body]
+    return DC_LIMIT_FRACTION * min(live) / (2 * np.pi) if live else 0.0
+
+
 def _margins(freq: np.ndarray, S: np.ndarray, name: str,
-             S_at: Callable[[float], complex]) -> LoopResult:
+             S_at: Callable[[float], complex], dc_hz: float = 0.0) -> LoopResult:
     """A loop's crossover, margins and bandwidth from the sensitivity S at its break (open
     loop L = 1/S − 1, closed loop T = 1 − S): ``S`` on ``freq`` [Hz] for the Bode arrays and to
-    bracket each crossing, ``S_at`` at any frequency to locate it between the grid's points.
+    bracket each crossing, ``S_at`` at any frequency to locate it between the grid's points;
+    the closed loop's DC gain is read at ``dc_hz`` [Hz] (:func:`_dc_frequency`).
     Interpolated on the grid, the wang2021 CDFS position loop's gain margin at its 5.6-Hz
     resonance read 3.02 dB on the default 400 points, 2.62 on 800, 4.32 on 150 —
     python-control's ``margin`` of the same transfer gives 2.589 dB (an outside check,
@@ -873,9 +898,10 @@ def _margins(freq: np.ndarray, S: np.ndarray, name: str,
     tmag = 20 * np.log10(np.abs(1.0 - S))
     # −3 dB below the closed loop's DC gain, as python-control's ``bandwidth`` (it was below
     # |T| at the grid's first frequency, so the bandwidth moved with f_min: the position
-    # loop's read 1.61 Hz from 0.5 Hz, where |T| is already −0.6 dB; from DC it is 1.37)
+    # loop's read 1.61 Hz from 0.5 Hz, where |T| is already −0.6 dB; from DC it is 1.37);
+    # with a rigid-body pole the limit f → 0, read at ``dc_hz`` (:func:`_dc_frequency`)
     try:
-        dc = abs(1.0 - S_at(0.0))
+        dc = abs(1.0 - S_at(dc_hz))
     except np.linalg.LinAlgError:  # a free rigid-body motion: the limit far below f_min
         dc = abs(1.0 - S_at(freq[0] * 1e-6))
     level = (20 * math.log10(dc) if math.isfinite(dc) and dc > 0 else tmag[0]) - 3.0
@@ -1053,11 +1079,11 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
             pair = (f"{axis}_speed_command_disturbance", f"{axis}_speed_command")
             S = _freq_response(lin, *pair, w)
             loops.append(_margins(freq, S, f"{axis} position loop",
-                                  _at_frequency(lin, *pair)))
+                                  _at_frequency(lin, *pair), _dc_frequency(lin)))
         pair = (f"{axis}_current_command_disturbance", f"{axis}_current_command")
         S = _freq_response(lin_v, *pair, w)
         loops.append(_margins(freq, S, f"{axis} velocity loop",
-                              _at_frequency(lin_v, *pair)))
+                              _at_frequency(lin_v, *pair), _dc_frequency(lin_v)))
     return LoopAnalysis(poles=classify_poles(lin.poles()), loops=loops, linear=lin)
 
 
@@ -1286,9 +1312,11 @@ class StabilityBand:
     Parameters
     ----------
     intervals : list of (float, float)
-        (lower, upper) edges of each unstable band [m/s].
+        (lower, upper) edges of each unstable band [m/s]; an edge at the scan's end is that
+        end, not an edge found (:attr:`edges_at_scan_ends`).
     mode_frequency_hz : list of float
-        Frequency of the rightmost pole at each band's middle [Hz].
+        Frequency of the rightmost pole at each band's geometric middle √(lower·upper)
+        (:attr:`mode_speed`) [Hz].
     speeds : numpy.ndarray
         The scanned speeds [m/s].
     max_real_part : numpy.ndarray
@@ -1300,21 +1328,51 @@ class StabilityBand:
     nut_speed : float
         Nut speed of the scan [m/s].
     notes : tuple of str, default ()
-        Warnings, e.g. the averaged model's (:func:`averaged`).
+        Warnings, e.g. the averaged model's (:func:`averaged`), and a band cut by the scan's
+        range.
+    mode_frequency_range_hz : list of (float, float), default []
+        Lowest and highest frequency of the rightmost pole in each band [Hz], at the speeds
+        evaluated in it: the scan's, and the edges' bisection's (within ``tolerance`` of each
+        edge); an extreme inside the band is the grid's nearest point to it (the wang2021
+        CDFS's 5.482-Hz top reads 5.479 on a 20-point scan, 5.473 on 10).
     """
 
     intervals: list[tuple[float, float]]  # (lower, upper) edges [m/s]
-    mode_frequency_hz: list[float]  # of the rightmost pole, at each interval's middle
+    mode_frequency_hz: list[float]  # of the rightmost pole, at each interval's √(lo·hi)
     speeds: np.ndarray  # scanned speeds [m/s]
     max_real_part: np.ndarray  # [1/s] rightmost pole at each scanned speed
     frequency_hz: np.ndarray  # of the rightmost pole
     tolerance: float  # [m/s] bisection tolerance of the edges
     nut_speed: float
     notes: tuple[str, ...] = ()  # e.g. the averaged model's warning (:func:`averaged`)
+    mode_frequency_range_hz: list[tuple[float, float]] = field(default_factory=list)
+
+    @property
+    def mode_speed(self) -> list[float]:
+        """The speed each band's :attr:`mode_frequency_hz` is taken at: its geometric middle
+        √(lower·upper) [m/s] (of the part scanned, for a band cut by the scan's range)."""
+        return [math.sqrt(lo * hi) for lo, hi in self.intervals]
+
+    @property
+    def edges_at_scan_ends(self) -> list[tuple[bool, bool]]:
+        """Per band, whether its (lower, upper) edge is the scan's end rather than an edge
+        found: steady sliding is unstable at the lowest (highest) speed scanned, so the band
+        goes on below (above) it."""
+        n = len(self.intervals)
+        low = bool(self.max_real_part[0] > 0) if self.max_real_part.size else False
+        high = bool(self.max_real_part[-1] > 0) if self.max_real_part.size else False
+        return [(k == 0 and low, k == n - 1 and high) for k in range(n)]
+
+    def _edge_texts(self) -> list[tuple[str, str]]:
+        """Each band's edges [mm/s] as printed: ``≤ low`` / ``≥ high`` at the scan's ends."""
+        return [(f"{'≤ ' if cut_lo else ''}{1e3 * lo:.3f}", f"{'≥ ' if cut_hi else ''}"
+                 f"{1e3 * hi:.3f}")
+                for (lo, hi), (cut_lo, cut_hi) in zip(self.intervals, self.edges_at_scan_ends,
+                                                      strict=True)]
 
     def __repr__(self) -> str:
-        bands = "; ".join(f"unstable {1e3 * lo:.3f}–{1e3 * hi:.3f} mm/s (mode {fr:.3g} Hz)"
-                          for (lo, hi), fr in zip(self.intervals, self.mode_frequency_hz,
+        bands = "; ".join(f"unstable {lo}–{hi} mm/s (mode {fr:.3g} Hz)"
+                          for (lo, hi), fr in zip(self._edge_texts(), self.mode_frequency_hz,
                                                   strict=True)) or "stable at every speed"
         return (f"<feeddrive StabilityBand: {bands}; {self.speeds.size} speeds "
                 f"{1e3 * self.speeds[0]:.3g}–{1e3 * self.speeds[-1]:.3g} mm/s scanned, "
@@ -1326,8 +1384,10 @@ class StabilityBand:
         Returns
         -------
         dict
-            The rule, nut speed, bands and edge tolerance [mm/s], the unstable modes' frequencies
-            [Hz], the scan's range [mm/s] and size, and the notes.
+            The rule, nut speed, bands and edge tolerance [mm/s], which band edges are the
+            scan's ends, the unstable modes' frequencies [Hz] with the speed each is taken at
+            [mm/s] and their range over each band [Hz], the scan's range [mm/s] and size, and
+            the notes.
         """
         return {
             "rule": "steady sliding is unstable where the closed loop linearised at that speed "
@@ -1336,7 +1396,10 @@ class StabilityBand:
                     "rigid-body motions and are not counted)",
             "nut_speed_mm_s": 1e3 * self.nut_speed,
             "unstable_bands_mm_s": [[1e3 * lo, 1e3 * hi] for lo, hi in self.intervals],
+            "unstable_band_edges_at_scan_ends": [list(e) for e in self.edges_at_scan_ends],
             "unstable_mode_frequency_hz": self.mode_frequency_hz,
+            "unstable_mode_speed_mm_s": [1e3 * v for v in self.mode_speed],
+            "unstable_mode_frequency_range_hz": [list(r) for r in self.mode_frequency_range_hz],
             "edge_tolerance_mm_s": 1e3 * self.tolerance,
             "scan_mm_s": [float(1e3 * self.speeds[0]), float(1e3 * self.speeds[-1]),
                           int(self.speeds.size)],
@@ -1403,12 +1466,17 @@ def _check_range(system: DriveSystem, nut_speed: float, low: float, high: float,
 
 
 def _bisect_edge(system: DriveSystem, nut_speed: float, a: float, b: float, unstable_a: bool,
-                 tolerance: float) -> float:
+                 tolerance: float,
+                 seen: list[tuple[float, float, float]] | None = None) -> float:
     """The speed between ``a`` and ``b`` [m/s] where steady sliding changes from
-    ``unstable_a`` to its opposite, bisected to ``tolerance`` [m/s]."""
+    ``unstable_a`` to its opposite, bisected to ``tolerance`` [m/s]; each midpoint's
+    (speed, real part, frequency) of the rightmost pole is added to ``seen``."""
     while b - a > tolerance:
         m = 0.5 * (a + b)
-        if (rightmost_pole(system, m, nut_speed)[0] > 0) == unstable_a:
+        real, freq = rightmost_pole(system, m, nut_speed)
+        if seen is not None:
+            seen.append((m, real, freq))
+        if (real > 0) == unstable_a:
             a = m
         else:
             b = m
@@ -1469,10 +1537,11 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
             progress(k + 1, points)
     unstable = re > 0
     edges: list[float] = []
+    seen = [(float(v), float(r), float(f)) for v, r, f in zip(speeds, re, fr, strict=True)]
     for k in range(points - 1):
         if unstable[k] != unstable[k + 1]:
             edges.append(_bisect_edge(system, nut_speed, float(speeds[k]), float(speeds[k + 1]),
-                                      bool(unstable[k]), tolerance))
+                                      bool(unstable[k]), tolerance, seen))
     intervals: list[tuple[float, float]] = []
     start = float(speeds[0]) if unstable[0] else None
     it = iter(edges)
@@ -1486,10 +1555,27 @@ def stability_band(system: DriveSystem, nut_speed: float = 0.0, *,
                 start = None
     if start is not None:
         intervals.append((start, float(speeds[-1])))
+    # the mode's frequency at the band's geometric middle (said: StabilityBand.mode_speed),
+    # and its range over the band from the speeds already evaluated in it — it is not one
+    # number: 5.38 Hz at the CDFS band's lower edge, 5.48 at 0.8 mm/s, 5.45 at the upper edge
     freqs = [rightmost_pole(system, math.sqrt(lo * hi), nut_speed)[1] for lo, hi in intervals]
-    return StabilityBand(intervals=intervals, mode_frequency_hz=freqs, speeds=speeds,
+    ranges = []
+    for lo, hi in intervals:
+        inside = [f for v, r, f in seen if lo <= v <= hi and r > 0]
+        ranges.append((min(inside), max(inside)))
+    band = StabilityBand(intervals=intervals, mode_frequency_hz=freqs, speeds=speeds,
                          max_real_part=re, frequency_hz=fr, tolerance=tolerance,
-                         nut_speed=nut_speed, notes=averaged(system)[1])
+                         nut_speed=nut_speed, mode_frequency_range_hz=ranges)
+    notes = list(averaged(system)[1])
+    if intervals and band.edges_at_scan_ends[0][0]:
+        notes.append(f"steady sliding is unstable at the scan's lowest speed, "
+                     f"{1e3 * float(speeds[0]):g} mm/s: the band's lower edge is below it, "
+                     "not found (scan lower); the band is given from that speed")
+    if intervals and band.edges_at_scan_ends[-1][1]:
+        notes.append(f"steady sliding is unstable at the scan's highest speed, "
+                     f"{1e3 * float(speeds[-1]):g} mm/s: the band's upper edge is above it, "
+                     "not found (scan higher); the band is given up to that speed")
+    return replace(band, notes=tuple(notes))
 
 
 def upper_band_edge(system: DriveSystem, nut_speed: float = 0.0, *,

@@ -136,8 +136,15 @@ def stability_command(
         console.print(f"  {note}", markup=False)
     if not band.intervals:
         console.print("  steady sliding is linearly stable at every speed scanned")
-    for (lo, hi), f in zip(data["unstable_bands_mm_s"], band.mode_frequency_hz, strict=True):
-        console.print(f"  unstable from {lo:.3f} to {hi:.3f} mm/s (mode {f:.2f} Hz)")
+    # an edge at the scan's end is that end (≤ / ≥), not an edge found (a note says so); the
+    # mode's frequency with the speed it is taken at and its range over the band
+    for (lo_text, hi_text), (cut_lo, cut_hi), f, v, (f_lo, f_hi) in zip(
+            band._edge_texts(), band.edges_at_scan_ends, band.mode_frequency_hz,
+            data["unstable_mode_speed_mm_s"], band.mode_frequency_range_hz, strict=True):
+        part = "its scanned part" if cut_lo or cut_hi else "the band"
+        console.print(f"  unstable from {lo_text} to {hi_text} mm/s (mode {f:.2f} Hz at "
+                      f"{v:.2f} mm/s, the geometric middle of {part}; "
+                      f"{f_lo:.2f}–{f_hi:.2f} Hz at the speeds evaluated in it)")
     console.print(f"  rule: {data['rule']}", markup=False)
     if plot:
         console.print(f"  wrote {data['plot']}")
