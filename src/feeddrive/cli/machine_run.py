@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ._common import console, print_json, progress_bar, run_outcome
+from ._common import EXIT_FAILED, _fail, console, print_json, progress_bar, run_outcome
 from ._solver_report import machine_solver_report
 
 #: the contour kinds (feeddrive.machine.CONTOURS; the machine package loads numba)
@@ -95,13 +95,25 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
     # bounded work, as for one drive: refused before any step when the steps cannot fit
     t_end = path.duration if duration is None else duration
     check_step_budget(t_end, options)
+    if output is not None and output.lower().endswith(".mat"):
+        # the MATLAB 5 format holds the run's struct below 4 GiB: refused before the run
+        # (scipy's MatWriteError came after it, as a traceback: an outside check, 2026-12-07)
+        from ..io.results import check_mat_output
+
+        check_mat_output(output, duration=t_end, output_interval=options.output_interval,
+                         signals=len(recorded_machine_signals(machine, path)))
     check_output_memory(t_end, options.output_interval, options=options)
     bar, advance = (None, None) if as_json else progress_bar(t_end)
     with run_outcome(bar):
         result = simulate_machine(machine, path, duration, options=options, progress=advance)
     summary = machine_summary(result, machine, path)
+    unwritten = None
     if output:
-        summary["output"] = str(result.save(output))
+        from .simulate_cmd import save_output
+
+        written, unwritten = save_output(result, output)
+        if written is not None:
+            summary["output"] = written
     if plot and contour == "together":
         raise ParameterError("--plot", plot, "no XY path to draw for --contour together "
                              "(write --output and plot its signals)")
@@ -115,11 +127,49 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
     solver_lines, summary["solver"] = machine_solver_report(result.solver_stats, options)
     if as_json:
         print_json(summary)
-        return
-    lines = [f"machine {machine.name}: {contour} at {feed:g} mm/min, "
+    else:
+        _print_machine(summary, machine.name, contour, feed, result, solver_lines)
+    if unwritten is not None:  # after the summary it kept
+        raise _fail(unwritten, EXIT_FAILED)
+
+
+def recorded_machine_signals(machine: Any, path: Any) -> list[str]:
+    """The signals a machine's run following ``path`` records (its Dataset's variables besides
+    ``time``), known before the run from its model: each axis' signals, ``contour_error`` for
+    a path in a plane.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine.
+    path : Contour
+        What it follows.
+
+    Returns
+    -------
+    list of str
+        The names.
+    """
+    import numpy as np
+
+    from ..engine.result import recorded_signals
+    from ..machine import MachineProfile, MachineSystem, Together
+    from ..model.reference import SampledSpeed
+
+    # the model's signals do not depend on the references' samples: two stand in for them
+    still = SampledSpeed(time=np.array([0.0, 1.0]), table_speed=np.zeros(2))
+    profile = MachineProfile.common(machine, still)
+    system = MachineSystem(machine)
+    names = recorded_signals(system.model(profile), system, profile)
+    return names if isinstance(path, Together) else [*names, "contour_error"]
+
+
+def _print_machine(summary: dict[str, Any], name: str, contour: str, feed: float,
+                   result: Any, solver_lines: list[str]) -> None:
+    lines = [f"machine {name}: {contour} at {feed:g} mm/min, "
              f"{result.time[-1]:g} s simulated"]
-    for name, ax in summary["axes"].items():
-        lines.append(f"  axis {name} ({ax['drive']}, {ax['parameter_set']}): largest "
+    for axis, ax in summary["axes"].items():
+        lines.append(f"  axis {axis} ({ax['drive']}, {ax['parameter_set']}): largest "
                      f"following error {ax['following_error_max_um']:.4g} µm")
     if contour != "together":
         lines.append(f"  contour error {summary['contour_error_min_um']:.4g} … "

@@ -12,9 +12,11 @@ from ..engine.options import layered
 from ..io.outputs import PLOT_FORMATS, RESULT_FORMATS
 from . import _units
 from ._common import (
+    EXIT_FAILED,
     EXIT_UNSTABLE,
     MM_PER_S,
     PRESET_HELP,
+    _fail,
     app,
     console,
     err_console,
@@ -245,6 +247,15 @@ def simulate_command(
         budget = check_step_budget(duration, taken)
         # .parquet/.csv outputs are written while the run goes (memory bounded); .nc/.mat at the end
         streamed = output is not None and output.lower().endswith((".parquet", ".csv"))
+        if output is not None and output.lower().endswith(".mat"):
+            # the MATLAB 5 format holds the run's struct below 4 GiB: refused before the run
+            # (scipy's MatWriteError ended the run with a traceback: an outside check,
+            # 2026-12-07); the model (≈ 30 ms, cached for the run) says what it records
+            from ..engine.result import recorded_signals
+            from ..io.results import check_mat_output
+
+            check_mat_output(output, duration=duration, output_interval=taken.output_interval,
+                             signals=len(recorded_signals(system.model(prof), system, prof)))
         if not streamed:  # a record that cannot fit is refused before any warning about it
             check_output_memory(duration, taken.output_interval, options=taken)
         if budget.memory_bytes > MEMORY_WARNING_BYTES and not streamed:
@@ -272,6 +283,7 @@ def simulate_command(
                 raise _kept(stop, output, streamed, bar) from None
         summary = result.summary()
         summary["profile"] = profile
+        unwritten = None
         if output and streamed:
             # written while the run went, before its statistics and estimate existed
             from ..io.results import add_solver_record
@@ -291,7 +303,9 @@ def simulate_command(
                     f".nc, the whole run is judged); the whole run is in {output}: feeddrive "
                     f"analyze {output}")
         elif output:
-            summary["output"] = str(result.save(output))
+            written, unwritten = save_output(result, output)
+            if written is not None:
+                summary["output"] = written
         if plot:
             from ..plots.result import plot_result
 
@@ -306,6 +320,8 @@ def simulate_command(
         else:
             _print_summary(summary, drive, profile, profile_file, table_speed, frequency,
                            position, duration, params.name, output, options)
+        if output and not streamed and unwritten is not None:  # after the summary it kept
+            raise _fail(unwritten, EXIT_FAILED)
         if summary.get("verdict") == "unstable":
             raise typer.Exit(code=EXIT_UNSTABLE)
 
@@ -325,10 +341,54 @@ def _kept(stop: Any, output: str | None, streamed: bool, bar: Any) -> Any:
                       f"{output} (Ctrl-C again drops it)", markup=False, highlight=False,
                       soft_wrap=True)
     try:
-        written = str(stop.result.save(output))
+        written, unwritten = save_output(stop.result, output, what="the run so far")
     except KeyboardInterrupt:
         return stop
+    if written is None:
+        err_console.print(f"error: {unwritten}", markup=False, highlight=False,
+                          soft_wrap=True)
+        return stop
     return SimulationInterrupted(stop.t_reached, stop.result, written)
+
+
+def save_output(result: Any, output: str, *,
+                what: str = "the run finished: its summary is printed"
+                ) -> tuple[str | None, str | None]:
+    """Write a finished run's ``--output``: ``(the file, None)``, or ``(None, why not)`` as
+    one line naming the file, what failed and that nothing was written, so that the command
+    still prints the run's summary (and writes its --plot) before it fails with it.
+
+    A writer's failure after the run ended it with the run lost: scipy's ``MatWriteError``
+    as a traceback, a full disk with the summary unprinted (an outside check, 2026-12-07).
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    output : str
+        The file (``.nc``, ``.mat``: written whole after the run).
+    what : str, default "the run finished: its summary is printed"
+        What the user still has, said in the line.
+
+    Returns
+    -------
+    tuple of (str or None, str or None)
+        The file written, or None and the line saying why not.
+    """
+    from ..io.outputs import shown
+    from ..parameters import ParameterError
+
+    try:
+        return str(result.save(output)), None
+    except ParameterError as err:  # the writer's own refusal (a .mat past its format's limit)
+        why = err.message
+    except OSError as err:  # a full disk, a file-size limit
+        why = err.strerror or str(err)
+    except MemoryError:
+        why = "out of memory while writing it"
+    except Exception as err:  # noqa: BLE001  (a writer library's own error: said, not raised)
+        why = f"{type(err).__name__}: {err}"
+    return None, f"{shown(output)}: {why}; not written ({what})"
 
 
 def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,

@@ -205,8 +205,11 @@ class Run:
         }
         marks = getattr(system, "run_attrs", None)
         if callable(marks):  # a machine's run: its name, path and axes, on every path
-            # (feeddrive.machine.MachineSystem.run_attrs; a circular test's runs lacked them)
+            # (feeddrive.machine.MachineSystem.run_attrs; a circular test's runs lacked them);
+            # a None there is an attribute a machine has no one value of (its start position:
+            # each axis has its own)
             attrs.update(marks(profile))
+            attrs = {k: v for k, v in attrs.items() if v is not None}
         if full:
             # what the run used: the model's named slots with units, written from the
             # assembled model (feeddrive.model.slots); the set as given, to run it again
@@ -237,6 +240,29 @@ class Run:
                      for name, (unit, desc) in self.meta.items()}
         return xr.Dataset(data_vars, coords={"time": ("time", self.t, {"units": "s"})},
                           attrs=self.attrs(full=True))
+
+
+def recorded_signals(model: Model, system: Any, profile: Any) -> list[str]:
+    """The signals a run of ``model`` records: its Dataset's variables besides ``time``, the
+    columns of its exports (known before the run: :func:`feeddrive.io.results.check_mat_output`
+    sizes a ``.mat`` output from them).
+
+    Parameters
+    ----------
+    model : Model
+        The assembled model.
+    system : DriveSystem or MachineSystem
+        What it simulates.
+    profile : Profile
+        Its reference.
+
+    Returns
+    -------
+    list of str
+        The signal names, in the Dataset's order (a machine's contour adds ``contour_error``).
+    """
+    none = np.zeros((0, len(model.states))), np.zeros((0, len(model.aux)))
+    return list(Run(np.zeros(0), *none, model, system, profile, {}).meta)
 
 
 def _estimate_attrs(entry: dict[str, Any], signal: dict[str, float]) -> dict[str, Any]:

@@ -11,8 +11,12 @@
   (``pandas.read_parquet``).
 * NetCDF: NetCDF4 (HDF5, h5netcdf engine), SI, with the CF-1.8 global attributes
   (``Conventions``, ``title``, ``source``, ``history``, ``references``) and each variable's
-  ``units`` (UDUNITS spelling) and ``long_name``.
-* .mat: SI, each signal an N×1 column vector, a ``units`` struct beside the signals.
+  ``units`` (UDUNITS spelling) and ``long_name``; plain variable names (:func:`plain_names`:
+  a machine's ``x.table_position`` is ``x_table_position``, the name kept in its attribute
+  ``signal``).
+* .mat: SI, each signal an N×1 column vector, a ``units`` struct beside the signals; the
+  whole run is one variable, the struct ``feeddrive``, below the MATLAB 5 format's
+  :data:`MAT5_LIMIT` (:func:`check_mat_output` refuses a run that cannot fit before it runs).
 
 Every file is written under a temporary name in its folder and renamed when complete
 (:func:`feeddrive.io.outputs.atomic_path`): a full disk never leaves a truncated file under the
@@ -36,7 +40,7 @@ import numpy as np
 from .. import __version__
 from ..parameters import ParameterError
 from ..units import ENGINEERING
-from .outputs import PARQUET_HINT, RESULT_FORMATS, atomic_path, write_bytes
+from .outputs import PARQUET_HINT, RESULT_FORMATS, atomic_path, shown, write_bytes
 
 if TYPE_CHECKING:  # pandas, xarray and scipy.io are imported by the writers that use them
     import pandas as pd
@@ -103,6 +107,134 @@ def udunits(unit: str) -> str:
         The UDUNITS spelling; ``""`` becomes ``"1"``.
     """
     return _UDUNITS.get(unit, unit)
+
+
+def netcdf_name(name: str) -> str:
+    """A CF variable name (letters, digits, underscores; CF 1.8 section 2.3): the dots of a
+    dotted name become underscores (a sweep's parameter path ``friction.screw`` →
+    ``friction_screw``, a machine's signal ``x.table_position`` → ``x_table_position``).
+
+    Parameters
+    ----------
+    name : str
+        The package's name of a variable.
+
+    Returns
+    -------
+    str
+        The name in a NetCDF file.
+    """
+    return name.replace(".", "_")
+
+
+def plain_names(dataset: xr.Dataset, attribute: str) -> xr.Dataset:
+    """A shallow copy of a dataset whose dotted variable names are plain (:func:`netcdf_name`),
+    each such variable keeping its own name in the attribute ``attribute`` (docs/outputs.md:
+    ``parameter`` for a sweep's parameter path, ``signal`` for a machine's signal).
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The dataset; not changed.
+    attribute : str
+        The variable attribute the dotted name is kept in.
+
+    Returns
+    -------
+    xarray.Dataset
+        The dataset with plain names (the data shared, not copied); ``dataset`` itself when
+        no name has a dot.
+
+    Raises
+    ------
+    ParameterError
+        When two variables would share one plain name (``x.a_b`` and ``x_a.b``).
+    """
+    names = [str(n) for n in [*dataset.coords, *dataset.data_vars]]
+    dotted = [n for n in names if "." in n]
+    if not dotted:
+        return dataset
+    plain = [netcdf_name(n) for n in names]
+    twice = sorted({n for n in plain if plain.count(n) > 1})
+    if twice:
+        raise ParameterError("output", twice[0], "two variables would share this NetCDF name "
+                             "(dots become underscores); expected names that differ there")
+    ds = dataset.copy(deep=False)
+    for name in dotted:
+        ds[name].attrs = {**ds[name].attrs, attribute: name}
+    return ds.rename({name: netcdf_name(name) for name in dotted})
+
+
+#: the MATLAB 5 format's limit, as scipy.io.savemat enforces it: one variable (a .mat export's
+#: struct ``feeddrive``, which holds the whole run) below 2**32 bytes [bytes]
+MAT5_LIMIT = 2**32
+#: the bytes scipy writes before each N×1 double field of a struct besides its samples: the
+#: field's tag (8), array flags (16), dimensions (16), empty name (8) and data tag (8) [bytes]
+MAT5_FIELD_HEADER = 56
+
+
+def mat_bytes(samples: int, signals: int) -> int:
+    """The bytes of a run's signals in a .mat export's struct ``feeddrive``: its time and
+    ``signals`` columns of ``samples`` doubles, each with its header; the ``units`` and
+    ``attrs`` (text, kilobytes) come on top.
+
+    Parameters
+    ----------
+    samples : int
+        Output samples of the run [-].
+    signals : int
+        Signals recorded beside ``time`` (the run's Dataset's variables) [-].
+
+    Returns
+    -------
+    int
+        Bytes [bytes].
+    """
+    return (int(signals) + 1) * (8 * int(samples) + MAT5_FIELD_HEADER)
+
+
+def check_mat_output(path: str | Path, *, duration: float, output_interval: float,
+                     signals: int) -> None:
+    """Refuse a ``.mat`` output whose run cannot fit in the MATLAB 5 format, before the run.
+
+    scipy's writer fails once a variable reaches :data:`MAT5_LIMIT` (``MatWriteError: Matrix
+    too large to save with Matlab 5 format``), after the whole file is written; the run is one
+    struct, so its signals' bytes (:func:`mat_bytes`) decide.  A CDFS run (33 signals) at a 1-ms
+    output interval fits up to ≈ 15 800 s.  Any other format takes a path.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output; checked when its extension is ``.mat``.
+    duration : float
+        Simulated time [s].
+    output_interval : float
+        Interval of the recorded output [s].
+    signals : int
+        Signals the run records beside ``time`` [-].
+
+    Raises
+    ------
+    ParameterError
+        ``--duration``, naming the output, the bytes, the limit and the longest duration that
+        fits [s].
+    """
+    p = Path(path)
+    if p.suffix.lower() != ".mat":
+        return
+    samples = int(duration / output_interval) + 1
+    need = mat_bytes(samples, signals)
+    if need < MAT5_LIMIT:
+        return
+    fits = (MAT5_LIMIT - 1) // (signals + 1) - MAT5_FIELD_HEADER
+    longest = (fits // 8 - 1) * output_interval
+    raise ParameterError(
+        "--duration", duration,
+        f"a .mat --output ({shown(p)}) would hold {samples:.4g} samples of {signals + 1} "
+        f"columns, {need / 2**30:.3g} GiB in the one struct 'feeddrive', past the MATLAB 5 "
+        f"format's {MAT5_LIMIT / 2**30:g} GiB per variable (scipy.io.savemat); expected ≤ "
+        f"{longest:.6g} [s] at the output interval {output_interval:g} s, or a .nc, .parquet "
+        f"or .csv --output")
 
 
 def cf_attributes(dataset: xr.Dataset, *, title: str, action: str) -> xr.Dataset:
@@ -202,13 +334,14 @@ def _netcdf_bytes(dataset: Any) -> bytes:
 
 
 #: the run attributes that say where its numbers come from (:func:`provenance`)
-PROVENANCE_KEYS = ("drive", "table_start_position_m", "parameter_set", "profile")
+PROVENANCE_KEYS = ("machine", "drive", "table_start_position_m", "parameter_set", "profile")
 
 
 def provenance(attrs: Mapping[str, Any]) -> dict[str, Any]:
-    """Where a run's numbers come from, as plain JSON values: feeddrive's version, the drive,
-    its start position [m], the parameter set, the profile, the friction laws and the solver's
-    statistics (those of ``attrs`` that are there).
+    """Where a run's numbers come from, as plain JSON values: feeddrive's version, the machine
+    (a machine's run), the drive, its start position [m], the parameter set, the profile, a
+    machine's axes (each one's drive, parameter set, start position [m]), the friction laws and
+    the solver's statistics (those of ``attrs`` that are there).
 
     Parameters
     ----------
@@ -225,7 +358,7 @@ def provenance(attrs: Mapping[str, Any]) -> dict[str, Any]:
         if key in attrs:
             value = attrs[key]
             out[key] = value.item() if isinstance(value, np.generic) else value
-    for key in ("friction_laws", "solver"):
+    for key in ("axes", "friction_laws", "solver"):
         if key in attrs:
             value = attrs[key]
             out[key] = json.loads(value) if isinstance(value, str) else value
@@ -247,9 +380,22 @@ def provenance_line(attrs: Mapping[str, Any]) -> str:
         position 0.4 m, parameter set wang2021, …; units in the column names``.
     """
     p = provenance(attrs)
-    labels = {"drive": "drive {}", "table_start_position_m": "table start position {} m",
+    labels = {"machine": "machine {}", "drive": "drive {}",
+              "table_start_position_m": "table start position {} m",
               "parameter_set": "parameter set {}", "profile": "profile {}"}
-    words = [labels[key].format(p[key]) for key in PROVENANCE_KEYS if key in p]
+    axes = p.get("axes")
+    if "machine" in p and isinstance(axes, dict):
+        # a machine's run: each axis' own drive, start and set (the first axis' start alone,
+        # the machine's name as drive and set: an outside check, 2026-12-07)
+        words = [labels["machine"].format(p["machine"])]
+        for name, axis in axes.items():
+            own = [labels[key].format(axis[key]) for key in PROVENANCE_KEYS
+                   if isinstance(axis, dict) and key in axis]
+            words.append(f"axis {name} ({', '.join(own)})")
+        if "profile" in p:
+            words.append(labels["profile"].format(p["profile"]))
+    else:
+        words = [labels[key].format(p[key]) for key in PROVENANCE_KEYS if key in p]
     if isinstance(p.get("solver"), dict) and "method" in p["solver"]:
         words.append(f"solver {p['solver']['method']}")
     text = ", ".join(words).replace("\n", " ")
@@ -438,7 +584,7 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     dataset : xarray.Dataset
         A run's dataset (``Result.dataset``), signals in SI with their units.
     path : str or Path
-        The output file (``.nc``, ``.csv``, ``.parquet``, ``.mat``); its folder is created.
+        The output file (``.nc``, ``.csv``, ``.parquet``, ``.mat``); its folder must exist.
 
     Returns
     -------
@@ -448,16 +594,20 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
     Raises
     ------
     ParameterError
-        For an unknown extension or a missing writer (:func:`check_format`).
+        For an unknown extension or a missing writer (:func:`check_format`), a ``.mat`` past
+        the MATLAB 5 format's :data:`MAT5_LIMIT` (:func:`check_mat_output` refuses it before
+        a run), two NetCDF names made one (:func:`plain_names`); nothing is left under
+        ``path``.
     """
     p = Path(path)
     ext = check_format(p)
     with atomic_path(p) as tmp:  # its folder must exist (docs/outputs.md)
-        _write(dataset, tmp, ext)
+        _write(dataset, tmp, ext, path)
     return p
 
 
-def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
+def _write(dataset: xr.Dataset, p: Path, ext: str, path: str | Path) -> None:
+    """Write ``dataset`` to ``p`` (the temporary name of ``path``, named in messages)."""
     if ext == ".csv":
         with open(p, "w", encoding="utf-8", newline="") as f:
             f.write(provenance_line(dataset.attrs) + "\n")
@@ -470,10 +620,19 @@ def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
 
         pq.write_table(to_arrow_table(dataset), p)
     elif ext == ".nc":
-        title = f"feeddrive simulation: {dataset.attrs.get('drive', '')} drive"
-        if dataset.attrs.get("parameter_set"):
-            title += f", parameter set {dataset.attrs['parameter_set']}"
-        write_netcdf(cf_attributes(dataset, title=title, action="simulate"), p)
+        attrs = dataset.attrs
+        if attrs.get("machine"):  # a machine's run: its name, then its axes' drives and sets
+            title = (f"feeddrive simulation: machine {attrs['machine']}, "
+                     f"{attrs.get('drive', '')} drive")
+        else:
+            title = f"feeddrive simulation: {attrs.get('drive', '')} drive"
+        if attrs.get("parameter_set"):
+            title += f", parameter set {attrs['parameter_set']}"
+        # CF names (section 2.3): a machine's x.table_position is x_table_position, its own
+        # name kept in the attribute "signal" (66 cfchecks warnings: an outside check,
+        # 2026-12-07)
+        write_netcdf(cf_attributes(plain_names(dataset, "signal"), title=title,
+                                   action="simulate"), p)
     else:
         signals: dict[str, Any] = {}
         units: dict[str, Any] = {}
@@ -489,10 +648,21 @@ def _write(dataset: xr.Dataset, p: Path, ext: str) -> None:
         # uncompressed: zlib halved a 100-s run's file (27 → 13 MB) at 90× the time (0.01 →
         # 0.9 s), and a 1000-s run's 9 s of compression held off Ctrl-C with no progress
         # shown (an outside check, 2026-12-07)
-        scipy.io.savemat(p, {"feeddrive": {**signals, "units": units,
-                                            "attrs": {k: str(v) for k, v in
-                                                      dataset.attrs.items()}}},
-                         long_field_names=True, do_compression=False, oned_as="column")
+        from scipy.io.matlab import MatWriteError
+
+        try:
+            scipy.io.savemat(p, {"feeddrive": {**signals, "units": units,
+                                                "attrs": {k: str(v) for k, v in
+                                                          dataset.attrs.items()}}},
+                             long_field_names=True, do_compression=False, oned_as="column")
+        except MatWriteError:  # the struct reached the format's limit (scipy's traceback)
+            need = mat_bytes(dataset.sizes["time"], len(dataset.data_vars))
+            raise ParameterError(
+                "output", shown(path), f"the run's {dataset.sizes['time']} samples of "
+                f"{len(dataset.data_vars) + 1} columns ({need / 2**30:.3g} GiB with the text "
+                f"attributes on top) are past the MATLAB 5 format's {MAT5_LIMIT / 2**30:g} GiB "
+                "per variable (scipy.io.savemat); expected a shorter run [s] or a .nc, .parquet "
+                "or .csv output") from None
 
 
 def _nest(tree: dict[str, Any], name: str, value: Any) -> None:

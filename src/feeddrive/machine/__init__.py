@@ -634,7 +634,8 @@ class MachineSystem:
 
     @property
     def drive(self) -> str:
-        """The machine's name (a run's ``drive`` attribute)."""
+        """The machine's name (the engine's label of the run; a run's ``drive`` attribute
+        names its axes' drives, ``machine`` the machine: :meth:`run_attrs`)."""
         return self.machine.name
 
     @property
@@ -684,13 +685,20 @@ class MachineSystem:
         return DriveSystem.initial_vector(self, model)  # type: ignore[arg-type]
 
     def run_attrs(self, profile: Any) -> dict[str, Any]:
-        """What marks a run of this machine in its attributes: the machine's name as its
-        parameter set, the path it followed, and its axes (``axes``: name → drive, parameter
-        set, start position [m], JSON; ``feeddrive.engine.machine_axes.machine_axes``).
+        """What marks a run of this machine in its attributes: the machine's name
+        (``machine``), its axes' drives and parameter sets as one drive's run names its own
+        (``drive``, ``parameter_set``, ``nut_hold``: the axes' values, each once, in axis
+        order, ``", "``-joined where they differ), each axis' start position
+        (``<axis>_table_start_position_m`` [m], a float), the path it followed, and its axes
+        (``axes``: name → drive, parameter set, start position [m], nut hold, JSON;
+        ``feeddrive.engine.machine_axes.machine_axes``).  A machine has no one start
+        position: ``table_start_position_m`` is ``None`` (left out of the run's attributes).
 
         Every machine run carries them (:func:`simulate_machine`): a run following given
         references (a circular test's) lacked them and was read as one drive's, whose
-        ``table_speed_reference`` it has not (an outside check, 2026-12-07).
+        ``table_speed_reference`` it has not (an outside check, 2026-12-07).  ``drive`` and
+        ``parameter_set`` held the machine's name, ``table_start_position_m`` the first
+        axis' start alone (an outside check, 2026-12-07).
 
         Parameters
         ----------
@@ -700,7 +708,9 @@ class MachineSystem:
         Returns
         -------
         dict
-            ``parameter_set``, ``profile`` and ``axes`` (str values).
+            ``machine``, ``drive``, ``parameter_set``, ``nut_hold``, ``profile``, ``axes``
+            (str values), ``<axis>_table_start_position_m`` (float) and
+            ``table_start_position_m`` (None).
         """
         contour = profile if isinstance(profile, Contour) else getattr(profile, "contour", None)
         if contour is not None:
@@ -709,9 +719,21 @@ class MachineSystem:
         else:
             what = f"{type(profile).__name__}({float(profile.time[-1]):g} s)"
         machine = self.machine
-        return {"parameter_set": machine.name, "profile": what, "axes": json.dumps({
-            ax.name: {"drive": ax.drive, "parameter_set": ax.parameters.name,
-                      "table_start_position_m": ax.table_position} for ax in machine.axes})}
+
+        def each(values: Any) -> str:  # each value once, in axis order
+            return ", ".join(dict.fromkeys(values))
+
+        return {"machine": machine.name,
+                "drive": each(ax.drive for ax in machine.axes),
+                "parameter_set": each(ax.parameters.name for ax in machine.axes),
+                "nut_hold": each(ax.nut_hold for ax in machine.axes),
+                "table_start_position_m": None,
+                **{f"{ax.name}_table_start_position_m": float(ax.table_position)
+                   for ax in machine.axes},
+                "profile": what, "axes": json.dumps({
+                    ax.name: {"drive": ax.drive, "parameter_set": ax.parameters.name,
+                              "table_start_position_m": ax.table_position,
+                              "nut_hold": ax.nut_hold} for ax in machine.axes})}
 
 
 def simulate_machine(machine: Machine, contour: Contour | MachineProfile,
