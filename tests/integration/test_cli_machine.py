@@ -53,8 +53,9 @@ def test_a_machine_run_is_saved_in_all_four_formats_with_axis_dot_signal_names(
     assert summary["axes"]["y"]["drive"] == "linear-motor"
     assert (tmp_path / "run.png").stat().st_size > 0
     ds = xr.open_dataset(tmp_path / "run.nc")
-    assert ds["x.table_position"].attrs["units"] == "m"
-    assert ds["y.external_force"].attrs["units"] == "N"
+    assert ds["x_table_position"].attrs["units"] == "m"  # CF names: the dots underscores
+    assert ds["x_table_position"].attrs["signal"] == "x.table_position"  # (session 26)
+    assert ds["y_external_force"].attrs["units"] == "N"
     assert ds["contour_error"].attrs["units"] == "m"
     assert json.loads(ds.attrs["axes"])["y"]["drive"] == "linear-motor"
     for ext in (".csv", ".parquet", ".mat"):
@@ -65,7 +66,7 @@ def test_a_machine_run_is_saved_in_all_four_formats_with_axis_dot_signal_names(
             mat = scipy.io.loadmat(out, squeeze_me=True, simplify_cells=True)["feeddrive"]
             # a struct per axis: MATLAB reads feeddrive.x.table_position
             np.testing.assert_allclose(mat["x"]["table_position"],
-                                       ds["x.table_position"].to_numpy())
+                                       ds["x_table_position"].to_numpy())
             assert mat["units"]["x"]["table_position"] == "m"
             continue
         if ext == ".csv":  # mm, the unit in each column name
@@ -76,7 +77,7 @@ def test_a_machine_run_is_saved_in_all_four_formats_with_axis_dot_signal_names(
             column = "x.table_position"
             assert "contour_error" in frame.columns
         np.testing.assert_allclose(frame[column].to_numpy(),
-                                   ds["x.table_position"].to_numpy() * 1e3, rtol=1e-6,
+                                   ds["x_table_position"].to_numpy() * 1e3, rtol=1e-6,
                                    atol=1e-9)
 
 

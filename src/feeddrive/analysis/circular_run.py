@@ -204,8 +204,8 @@ class CircularRunTrace:
     def __repr__(self) -> str:
         # one line: the dataclass' repr printed the trace's arrays and each run's Result, and
         # raised on those (an outside check, 2026-12-07)
-        machine = next((str(r.attrs.get("drive", "")) for r in self.results.values()
-                        if hasattr(r, "attrs")), "")
+        machine = next((str(r.attrs.get("machine", r.attrs.get("drive", "")))
+                        for r in self.results.values() if hasattr(r, "attrs")), "")
         return (f"<feeddrive CircularRunTrace {machine + ' ' if machine else ''}"
                 f"{','.join(self.axes)} R {self.radius * 1e3:.6g} mm, feed "
                 f"{self.feed * 6e4:.6g} mm/min: {deviations(self.test)}>")

@@ -33,7 +33,8 @@ def run_title(result: Result) -> str:
     attrs = result.attrs
     axes = machine_axes(result)
     if axes:  # a machine's run: its axes' signals are "<axis>.<name>"
-        return (f"machine {attrs.get('drive', '')}: {attrs.get('profile', '')}, axes "
+        machine = attrs.get("machine", attrs.get("drive", ""))
+        return (f"machine {machine}: {attrs.get('profile', '')}, axes "
                 f"{', '.join(axes)}, {float(result.time[-1]):.4g} s — "
                 f"{attrs.get('parameter_set', '')}")
     kind = str(attrs.get("profile", "")).split("(")[0] or "profile"

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from .. import units
 from ..io.outputs import SWEEP_EXPORT_FORMATS, atomic_path
-from ..io.results import arrow_table, cf_attributes, write_netcdf
+from ..io.results import arrow_table, cf_attributes, plain_names, write_netcdf
 from .design import SPECIAL_AXES
 from .quantities import UNITS, stored_value
 from .store import SweepStore
@@ -64,12 +64,6 @@ def _unit(name: str) -> tuple[str, str]:
         if name.endswith(suffix):
             return unit, note
     return ("1", "1 once the point is computed") if name == "done" else ("", "")
-
-
-def _netcdf_name(name: str) -> str:
-    """A CF variable name (letters, digits, underscores): a parameter path's dots become
-    underscores (``friction.screw`` → ``friction_screw``); the path stays in ``parameter``."""
-    return name.replace(".", "_")
 
 
 def _records(store: SweepStore, sweep: str) -> tuple[dict[str, Any], list[dict[str, Any]]]:
@@ -257,11 +251,7 @@ def export(store: SweepStore, sweep: str, path: str | Path) -> Path:
         raise ValueError(f"{p}: unknown extension; expected one of {', '.join(EXPORT_FORMATS)}")
     with atomic_path(p) as tmp:  # nothing partial under the name (a full disk)
         if ext == ".nc":
-            ds = to_dataset(store, sweep)
-            dotted = [str(n) for n in [*ds.coords, *ds.data_vars] if "." in str(n)]
-            for name in dotted:
-                ds[name].attrs["parameter"] = name
-            ds = ds.rename({name: _netcdf_name(name) for name in dotted})
+            ds = plain_names(to_dataset(store, sweep), "parameter")
             write_netcdf(cf_attributes(ds, title=f"feeddrive sweep {sweep}: "
                                        f"{ds.attrs['design']} design, {ds.attrs['quantity']}",
                                        action=f"sweep export of {sweep}"), tmp)
