@@ -445,7 +445,8 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
                     profile: tuple[np.ndarray, np.ndarray] | None = None,
                     torque_constant: float | None = None,
                     record_start: float = 0.0, input: str | None = None,
-                    speed_ratio: float = 1.0) -> Experiment:
+                    speed_ratio: float = 1.0, sep: str | None = None, decimal: str = ".",
+                    time_unit: str | None = None) -> Experiment:
     """Read one trace file (docs/measured-data.md rules; ``simulate --output X.csv`` files).
 
     ``signals``: the measured signals to fit (:data:`MEASURABLE` names); default every one
@@ -479,6 +480,13 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     speed_ratio : float, default 1.0
         Table travel per motor radian [m/rad], for the speed scale of a motor-speed replay
         of a trace without a table position or speed.
+    sep : str, optional
+        Column separator; detected from the header when omitted (``read_csv_table``).
+    decimal : str, default "."
+        Decimal mark (``","`` for a European locale).
+    time_unit : str, optional
+        The time column's unit (``"s"``, ``"ms"``, …), overriding the default [s]; one that
+        contradicts the header's bracketed unit is refused.
 
     Returns
     -------
@@ -496,14 +504,14 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     from ..io.measured import COMMAND_COLUMNS, check_increasing, read_csv_table
     from .trace_input import resample_size
 
-    table = read_csv_table(path, sep=None)
+    table = read_csv_table(path, sep=sep, decimal=decimal)
     src = table.source
     if len(table) < 16:
         raise FitError(f"{src}: {len(table)} data rows; a trace needs at least 16")
     time_col = next((c for c in ("time",) if table.has(c)), None)
     if time_col is None:
         raise table._missing(["time"])
-    t_raw, _, _ = table.quantity(["time"], "time", unit=None, default_unit="s")
+    t_raw, _, _ = table.quantity(["time"], "time", unit=time_unit, default_unit="s")
     check_increasing(table, t_raw, "time")
     # a gap (one row at 1e6 s after a 2-s record) would make the reference grid huge:
     # refused as `analyze` refuses it, naming the line, before any work (issue 39 item 3)
