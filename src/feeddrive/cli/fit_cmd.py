@@ -75,14 +75,30 @@ TimeUnitOption = Annotated[str | None, typer.Option(
 
 @dataclass(frozen=True)
 class CsvReading:
-    """How the CSV traces are read (``--sep``, ``--decimal``, ``--time-unit``)."""
+    """How the CSV traces are read (``--sep``, ``--decimal``, ``--time-unit``).
+
+    Parameters
+    ----------
+    sep : str or None, default None
+        Column separator; None: detected from the header.
+    decimal : str, default "."
+        Decimal mark.
+    time_unit : str or None, default None
+        Unit of the time column; None: the header's, else s.
+    """
 
     sep: str | None = None
     decimal: str = "."
     time_unit: str | None = None
 
     def given(self) -> list[str]:
-        """The options given, as typed."""
+        """The options given.
+
+        Returns
+        -------
+        list of str
+            Their names as typed (``--sep``, ``--decimal``, ``--time-unit``).
+        """
         return [o for o, on in (("--sep", self.sep is not None),
                                 ("--decimal", self.decimal != "."),
                                 ("--time-unit", self.time_unit is not None)) if on]
