@@ -445,7 +445,8 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
                     profile: tuple[np.ndarray, np.ndarray] | None = None,
                     torque_constant: float | None = None,
                     record_start: float = 0.0, input: str | None = None,
-                    speed_ratio: float = 1.0) -> Experiment:
+                    speed_ratio: float = 1.0, sep: str | None = None, decimal: str = ".",
+                    time_unit: str | None = None) -> Experiment:
     """Read one trace file (docs/measured-data.md rules; ``simulate --output X.csv`` files).
 
     ``signals``: the measured signals to fit (:data:`MEASURABLE` names); default every one
@@ -479,6 +480,13 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     speed_ratio : float, default 1.0
         Table travel per motor radian [m/rad], for the speed scale of a motor-speed replay
         of a trace without a table position or speed.
+    sep : str, optional
+        Column separator; detected from the header when omitted (``read_csv_table``).
+    decimal : str, default "."
+        Decimal mark (``","`` for a European locale).
+    time_unit : str, optional
+        The time column's unit (``"s"``, ``"ms"``, …), overriding the default [s]; one that
+        contradicts the header's bracketed unit is refused.
 
     Returns
     -------
@@ -496,15 +504,22 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
     from ..io.measured import COMMAND_COLUMNS, check_increasing, read_csv_table
     from .trace_input import resample_size
 
-    table = read_csv_table(path, sep=None)
+    table = read_csv_table(path, sep=sep, decimal=decimal)
     src = table.source
     if len(table) < 16:
         raise FitError(f"{src}: {len(table)} data rows; a trace needs at least 16")
     time_col = next((c for c in ("time",) if table.has(c)), None)
     if time_col is None:
         raise table._missing(["time"])
-    t_raw, _, _ = table.quantity(["time"], "time", unit=None, default_unit="s")
+    t_raw, _, _ = table.quantity(["time"], "time", unit=time_unit, default_unit="s")
     check_increasing(table, t_raw, "time")
+    if time_unit is None and table.units[table.find("time") or 0] is None and \
+            unit_steps(t_raw):  # not guessed: said, and the unit asked for
+        raise ParameterError("time", MISSING, f"expected sample times in seconds [s] (the "
+                             f"header gives no unit, nor --time-unit): {t_raw.size} samples, "
+                             f"{t_raw[0]:.6g} … {t_raw[-1]:.6g}; {MS_TIME_HINT}: give its "
+                             "unit, --time-unit ms or a header 'time [ms]' (--time-unit s for "
+                             "a 1-s step)", source=src)
     # a gap (one row at 1e6 s after a 2-s record) would make the reference grid huge:
     # refused as `analyze` refuses it, naming the line, before any work (issue 39 item 3)
     resample_size(t_raw, float(np.median(np.diff(t_raw))), lines=table.lines, source=src)
@@ -1428,6 +1443,46 @@ def horizons(duration: float) -> list[float]:
     return out
 
 
+#: the hint of a refusal for a time vector whose steps are exactly 1: those of milliseconds
+MS_TIME_HINT = "steps of exactly 1 are those of a time in milliseconds"
+
+
+def unit_steps(time: np.ndarray) -> bool:
+    """Whether a time vector's median step is exactly 1: read in seconds, a 1-Hz record; in
+    milliseconds, the 1-kHz record of a drive (:data:`MS_TIME_HINT`).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times as recorded [its unit].
+
+    Returns
+    -------
+    bool
+        True for a median step of exactly 1.
+    """
+    return time.size >= 2 and float(np.median(np.diff(time))) == 1.0
+
+
+def _check_first_stage(e: Experiment, first: float) -> None:
+    """Refuse a record with fewer than 2 samples in the fit's first stage (its first
+    ``first`` seconds, :func:`horizons`): the stage's cut record was refused as "expected at
+    least 2 sample times [s]; it has 1" for a record of 2001 samples whose time, in ms, was
+    read as seconds (an outside check, 2026-12-07)."""
+    if e.span <= first:
+        return  # the first stage takes it whole
+    n = int(np.count_nonzero(e.time <= float(e.time[0]) + first + 1e-12))
+    if n >= 2:
+        return
+    step = float(np.median(np.diff(e.time)))
+    hint = (f"; {MS_TIME_HINT}: give its unit (--map time=VARIABLE[ms], --time-unit ms, or "
+            "a CSV header 'time [ms]')" if unit_steps(e.time) else "")
+    raise ParameterError("time", MISSING, f"expected at least 2 samples in the fit's first "
+                         f"stage, the record's first {first:g} s [s]; it has {n} of its "
+                         f"{e.time.size} samples (median step {step:.6g} s){hint}",
+                         source=e.source or None)
+
+
 def _cut(e: Experiment, h: float) -> Experiment:
     end = float(e.time[0]) + h
     m = e.time <= end + 1e-12
@@ -1723,6 +1778,8 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
 
     longest = max(e.span for e in experiments)
     stages = horizons(longest) if horizon_continuation else [longest]
+    for e in experiments:
+        _check_first_stage(e, stages[0])
 
     def run(pool: cf.Executor | None, ctrl_c: Any = None) -> FitResult:
         theta = theta0

@@ -46,12 +46,32 @@ from typing import Any
 
 import numpy as np
 
-from ..parameters import DriveParameters
-from .fit import Experiment, FitError, _uniform_reference
+from ..io.measured import (
+    CURRENT_UNITS,
+    FORCE_UNITS,
+    LENGTH_UNITS,
+    SPEED_UNITS,
+    TIME_UNITS,
+    encoding_hint,
+    split_unit,
+    unit_factor,
+)
+from ..parameters import DriveParameters, ParameterError
+from ..parameters.validation import MISSING
+from .fit import (
+    _ROTARY_SPEED_UNITS,
+    _TORQUE_UNITS,
+    MS_TIME_HINT,
+    Experiment,
+    FitError,
+    _uniform_reference,
+    unit_steps,
+)
 from .fit_statistics import noise_level
 
-__all__ = ["FITTED_ROLES", "INPUT_ROLES", "REFERENCE_ROLES", "ROLES", "RigRecord", "emps_layout",
-           "parse_map", "read_rig_record", "reference_rate", "table_motor_force_per_current"]
+__all__ = ["FITTED_ROLES", "INPUT_ROLES", "REFERENCE_ROLES", "ROLES", "ROLE_UNITS", "RigRecord",
+           "emps_layout", "parse_map", "read_rig_record", "reference_rate", "role_factor",
+           "table_motor_force_per_current"]
 
 #: role → what it is [SI unit]
 ROLES: dict[str, str] = {
@@ -67,6 +87,22 @@ ROLES: dict[str, str] = {
     "torque": "measured motor torque [N m] (with --input torque)",
     "motor_speed": "measured motor speed [rad/s] (with --input speed)",
 }
+#: role → (dimension, the units a variable of it may be given in, ``VARIABLE[UNIT]``): the
+#: tables of a CSV header's bracketed unit (feeddrive.io.measured; a torque's and a motor
+#: speed's: those of a CSV trace's, feeddrive.analysis.fit); the first is the SI unit taken
+#: when none is given
+ROLE_UNITS: dict[str, tuple[str, Mapping[str, float]]] = {
+    "time": ("time", TIME_UNITS),
+    "reference": ("length", LENGTH_UNITS),
+    "speed_reference": ("speed", SPEED_UNITS),
+    "position": ("length", LENGTH_UNITS),
+    "speed": ("speed", SPEED_UNITS),
+    "current": ("current", CURRENT_UNITS),
+    "force": ("force", FORCE_UNITS),
+    "drive_force": ("force", FORCE_UNITS),
+    "torque": ("torque", _TORQUE_UNITS),
+    "motor_speed": ("rotary speed", _ROTARY_SPEED_UNITS),
+}
 #: the roles a record's reference may take: a position or a speed reference
 REFERENCE_ROLES = ("reference", "speed_reference")
 #: the roles a record's measured, fitted channels may take
@@ -76,12 +112,62 @@ INPUT_ROLES = {"current": "current", "torque": "torque", "force": "force",
                "speed": "motor_speed"}
 
 
+def role_factor(role: str, unit: str | None, field: str) -> float:
+    """The factor that turns a ``role``'s variable given in ``unit`` into SI
+    (:data:`ROLE_UNITS`); 1 without a unit.
+
+    Parameters
+    ----------
+    role : str
+        A key of :data:`ROLES`.
+    unit : str or None
+        The unit in brackets after the variable (``t_ms[ms]``), or None.
+    field : str
+        The field named by a refusal (``--map time``, ``mapping.time``).
+
+    Returns
+    -------
+    float
+        SI value of one ``unit`` [SI unit of the role].
+
+    Raises
+    ------
+    ParameterError
+        For a unit that is not one of the role's.
+    """
+    if unit is None:
+        return 1.0
+    dimension, table = ROLE_UNITS[role]
+    si = next(iter(table))
+    try:
+        if dimension in ("time", "length", "speed", "current", "force"):
+            return unit_factor(unit, dimension, what=field)
+        return table[unit]
+    except (KeyError, ValueError):
+        raise ParameterError(field, unit, f"expected a unit of {dimension} [{si}] in brackets "
+                             f"after the variable, one of {', '.join(table)}"
+                             f"{encoding_hint(unit)}") from None
+
+
+def _variable(role: str, spec: str, field: str) -> tuple[str, str | None]:
+    """``VARIABLE`` or ``VARIABLE[UNIT]`` → (variable, unit or None), the unit checked."""
+    name, unit = split_unit(spec)
+    if not name or "[" in name or "]" in name or unit == "":
+        raise ParameterError(field, spec, "expected VARIABLE or VARIABLE[UNIT], e.g. "
+                             f"t_ms[ms] [{next(iter(ROLE_UNITS[role][1]))}]")
+    role_factor(role, unit, field)
+    return name, unit
+
+
 def parse_map(items: Sequence[str], input: str | None = None) -> dict[str, str]:
     """``ROLE=VARIABLE`` items (each may hold several, separated by spaces or commas) as
     {role: variable}; one-line refusals for an unknown role, a role given twice, a variable
     given two roles, or no time, no reference or no fitted signal.  With ``input`` (an
     open-loop replay) the record needs that input's role (:data:`INPUT_ROLES`) and no
-    reference: the loops are bypassed.
+    reference: the loops are bypassed.  A variable not in the role's SI unit carries its unit
+    in brackets, as a CSV header does: ``time=t_ms[ms]``, ``position=qm[mm]``
+    (:data:`ROLE_UNITS`); it is kept in the returned variable (``"t_ms[ms]"``) and converted
+    by :func:`read_rig_record`.
 
     Parameters
     ----------
@@ -105,6 +191,9 @@ def parse_map(items: Sequence[str], input: str | None = None) -> dict[str, str]:
         for part in item.replace(",", " ").split():
             role, sep, var = part.partition("=")
             role, var = role.strip(), var.strip()
+            if part.startswith("["):
+                raise FitError(f"--map {part!r}: a unit goes right after its variable, "
+                               "without a space (e.g. time=t_ms[ms])")
             if not sep or not role or not var:
                 raise FitError(f"--map {part!r}: expected ROLE=VARIABLE (e.g. time=t)")
             if role not in ROLES:
@@ -113,7 +202,9 @@ def parse_map(items: Sequence[str], input: str | None = None) -> dict[str, str]:
             if role in out:
                 raise FitError(f"--map {part}: role {role!r} given twice ({role}="
                                f"{out[role]})")
-            other = next((r for r, v in out.items() if v == var), None)
+            name, unit = _variable(role, var, f"--map {role}")
+            var = name if unit is None else f"{name}[{unit}]"
+            other = next((r for r, v in out.items() if split_unit(v)[0] == name), None)
             if other is not None:
                 raise FitError(f"--map {part}: variable {var!r} given two roles ({other} and "
                                f"{role})")
@@ -290,18 +381,26 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
     src = str(p)
     if p.suffix.lower() != ".mat":
         raise FitError(f"{src}: --map reads MATLAB .mat records; expected a .mat file")
-    data = _load_mat(p, list(mapping.values()))
+    specs: dict[str, tuple[str, str | None]] = {}
+    for role, spec in mapping.items():
+        if role not in ROLES:
+            raise FitError(f"--map {role}={spec}: unknown role {role!r}; expected one of "
+                           f"{', '.join(ROLES)}")
+        specs[role] = _variable(role, str(spec), f"mapping.{role}")
+    data = _load_mat(p, [name for name, _ in specs.values()])
     held = [str(x) for x in data.pop("__held__")]
     columns: dict[str, np.ndarray] = {}
-    for role, var in mapping.items():
+    for role, (var, unit) in specs.items():
         if var not in data:
-            raise FitError(f"--map {role}={var}: no variable {var!r} in {src} (it holds: "
-                           f"{', '.join(held) or 'nothing'})")
+            raise FitError(f"--map {role}={mapping[role]}: no variable {var!r} in {src} (it "
+                           f"holds: {', '.join(held) or 'nothing'})")
         a = np.asarray(data[var])
         if a.dtype.kind not in "fiub" or a.squeeze().ndim != 1:
-            raise FitError(f"--map {role}={var}: {var!r} in {src} is not a numeric vector "
-                           f"(shape {a.shape})")
-        columns[role] = a.astype(float).ravel()
+            raise FitError(f"--map {role}={mapping[role]}: {var!r} in {src} is not a numeric "
+                           f"vector (shape {a.shape})")
+        factor = role_factor(role, unit, f"mapping.{role}")
+        columns[role] = a.astype(float).ravel() if factor == 1.0 \
+            else a.astype(float).ravel() * factor
     sizes = {r: c.size for r, c in columns.items()}
     if len(set(sizes.values())) > 1:
         raise FitError(f"{src}: the mapped variables differ in length ("
@@ -336,7 +435,19 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
         columns = {r: c[~dup] for r, c in columns.items()}
         t_raw = columns["time"]
         steps = np.diff(t_raw)
+    time_var, time_unit = specs["time"]
+    if time_unit is None and unit_steps(t_raw):  # not guessed: said, and the unit asked for
+        raise ParameterError(f"--map time={mapping['time']}", MISSING, "expected sample "
+                             f"times in seconds [s]: {t_raw.size} samples, {t_raw[0]:.6g} … "
+                             f"{t_raw[-1]:.6g}; {MS_TIME_HINT}: give its unit, time="
+                             f"{time_var}[ms] (time={time_var}[s] for a 1-s step)", source=src)
     dt = float(np.median(steps))
+    unstated = [f"{role} {var} [{next(iter(ROLE_UNITS[role][1]))}]"
+                for role, (var, unit) in specs.items() if unit is None]
+    if unstated:  # the choice stated beside the numbers it makes
+        notes.append(f"{src}: no unit in the map for {', '.join(unstated)}: read in SI; the "
+                     f"record spans {float(t_raw[-1] - t_raw[0]):.6g} s ({t_raw.size} "
+                     f"samples, median step {1e3 * dt:.4g} ms)")
     if float(steps.max() - steps.min()) > 0.01 * dt:
         notes.append(f"{src}: irregular sample steps ({1e3 * steps.min():.4g} … "
                      f"{1e3 * steps.max():.4g} ms): the model is compared at the measured "

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
 from ..io.outputs import PLOT_FORMATS, atomic_path, shown
-from ..parameters import DriveParameters
+from ..parameters import DriveParameters, ParameterError
 from . import _units
 from ._common import (
     STORE,
@@ -59,16 +60,61 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
     return system.model(ConstantSpeed(0.0)).parameter(slot)
 
 
+#: the CSV reading options of ``fit`` and ``validate``, one definition for both: those
+#: ``analyze`` and ``identify`` pass to the readers of feeddrive.io.measured
+#: (docs/measured-data.md)
+SepOption = Annotated[str | None, typer.Option(
+    "--sep", help="Column separator of the CSV traces (default: detected; 'tab', 'space' "
+    "accepted).")]
+DecimalOption = Annotated[str, typer.Option("--decimal", help="Decimal mark of the CSV "
+                                            "traces: . or ,")]
+TimeUnitOption = Annotated[str | None, typer.Option(
+    "--time-unit", help="Unit of the CSV traces' time column: s (default) or ms (with --map: "
+    "time=VARIABLE[ms]).")]
+
+
+@dataclass(frozen=True)
+class CsvReading:
+    """How the CSV traces are read (``--sep``, ``--decimal``, ``--time-unit``).
+
+    Parameters
+    ----------
+    sep : str or None, default None
+        Column separator; None: detected from the header.
+    decimal : str, default "."
+        Decimal mark.
+    time_unit : str or None, default None
+        Unit of the time column; None: the header's, else s.
+    """
+
+    sep: str | None = None
+    decimal: str = "."
+    time_unit: str | None = None
+
+    def given(self) -> list[str]:
+        """The options given.
+
+        Returns
+        -------
+        list of str
+            Their names as typed (``--sep``, ``--decimal``, ``--time-unit``).
+        """
+        return [o for o, on in (("--sep", self.sep is not None),
+                                ("--decimal", self.decimal != "."),
+                                ("--time-unit", self.time_unit is not None)) if on]
+
+
 def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_position: float,
                  signal: list[str] | None, command_speed: float | None,
                  profile_file: str | None, record_map: list[str] | None,
-                 as_json: bool, replay: str | None = None) -> tuple[list[Any], list[str]]:
-    """The records of ``fit`` and ``validate``: CSV traces (``read_experiment``) or, with
-    ``--map``, MATLAB records (``read_rig_record``, ``replay``: its ``--input``); and the
-    cleaning notes (printed unless JSON)."""
+                 as_json: bool, replay: str | None = None,
+                 reading: CsvReading | None = None) -> tuple[list[Any], list[str]]:
+    """The records of ``fit`` and ``validate``: CSV traces (``read_experiment``, read as
+    ``reading`` says) or, with ``--map``, MATLAB records (``read_rig_record``, ``replay``:
+    its ``--input``); and the cleaning notes (printed unless JSON)."""
     from ..analysis.fit import read_experiment
 
-
+    reading = reading or CsvReading()
     if profile_file and command_speed is not None:
         raise ValueError("--profile: give either --profile or --command-speed, not both")
     speed = None if command_speed is None else _units.speed("--command-speed", command_speed)
@@ -78,6 +124,11 @@ def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_p
         if signal or speed is not None or profile_file:
             raise ValueError("--map: the roles choose the signals and the reference; not with "
                              "--signal, --command-speed or --profile")
+        if reading.given():  # a .mat record has no text to read so
+            option = reading.given()[0]
+            raise ParameterError(option, getattr(reading, option[2:].replace("-", "_")),
+                                 "applies to CSV traces, not to --map (.mat) records; give a "
+                                 "variable's unit in the map instead, e.g. time=t_ms[ms]")
         roles = parse_map(record_map, replay)
         records = [read_rig_record(t, roles, params, drive=drive,
                                    table_position=table_position, input=replay)
@@ -101,7 +152,9 @@ def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_p
         axis = DriveSystem(params, drive, table_position).topology().table_axis
         ratio = _axis_ratio(params, drive, table_position, axis)
     return [read_experiment(t, signals=signal, command_speed=speed, profile=reference,
-                            torque_constant=torque_constant, input=replay, speed_ratio=ratio)
+                            torque_constant=torque_constant, input=replay, speed_ratio=ratio,
+                            sep=reading.sep, decimal=reading.decimal,
+                            time_unit=reading.time_unit)
             for t in traces], []
 
 
@@ -111,7 +164,8 @@ _MAP_HELP = ("MATLAB .mat records (v5; v7.3 through h5py): ROLE=VARIABLE, repeat
              "[s], reference (position reference [m]) or speed_reference [m/s], and the fitted "
              "position [m], speed [m/s], current [A], force [N] (motor force at the table), "
              "drive_force [N] (force on the table from the drive); with --input also torque "
-             "[N m] or motor_speed [rad/s] (SI; docs/fitting.md).")
+             "[N m] or motor_speed [rad/s] (SI, or the unit in brackets after the variable, "
+             "e.g. time=t_ms[ms] position=qm[mm]; docs/fitting.md).")
 #: the --input option of fit and validate
 _INPUT_HELP = ("Open-loop replay: the record's motor current [A], torque [N m], force [N] (the "
                "motor's force at the table) or motor speed [rad/s] (a CSV column "
@@ -153,6 +207,9 @@ def fit_command(
     record_map: Annotated[list[str] | None, typer.Option("--map", help=_MAP_HELP)] = None,
     replay: str | None = typer.Option(None, "--input", metavar="current|torque|force|speed",
                                       help=_INPUT_HELP),
+    sep: SepOption = None,
+    decimal: DecimalOption = ".",
+    time_unit: TimeUnitOption = None,
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     confidence: float = typer.Option(0.95, "--confidence", help="Interval level [fraction]."),
     max_evaluations: int = typer.Option(200, "--max-evaluations",
@@ -185,7 +242,8 @@ def fit_command(
     params = resolve_parameters(preset_name, params_file, drive)
     table_position = _units.position("--position", position, params, drive)
     experiments, notes = _read_traces(traces, params, drive, table_position, signal,
-                                      command_speed, profile_file, record_map, as_json, replay)
+                                      command_speed, profile_file, record_map, as_json, replay,
+                                      CsvReading(sep, decimal, time_unit))
     progress = None if as_json else (lambda msg: console.print(f"  {msg}", markup=False,
                                                                highlight=False))
     result = fit_drive(params, experiments, free, drive=drive, table_position=table_position,
@@ -402,6 +460,9 @@ def validate_command(
     record_map: Annotated[list[str] | None, typer.Option("--map", help=_MAP_HELP)] = None,
     replay: str | None = typer.Option(None, "--input", metavar="current|torque|force|speed",
                                       help=_INPUT_HELP),
+    sep: SepOption = None,
+    decimal: DecimalOption = ".",
+    time_unit: TimeUnitOption = None,
     level: float = typer.Option(0.95, "--level", help="Level of the prediction band "
                                 "[fraction]."),
     plot: str | None = typer.Option(None, "--plot", help="Write measured, predicted and "
@@ -420,7 +481,8 @@ def validate_command(
     record = read_fit_record(fit_file)
     experiments, notes = _read_traces(traces, record.parameters, record.drive,
                                       record.table_position, signal, command_speed,
-                                      profile_file, record_map, as_json, replay)
+                                      profile_file, record_map, as_json, replay,
+                                      CsvReading(sep, decimal, time_unit))
     # its steps said as fit says its own (validate sat silent for 4–12 s: an outside check,
     # 2026-12-07)
     result = validate(fit_file, experiments, drive=drive, level=level,

@@ -40,6 +40,7 @@ __all__ = [
     "PreslidingTest",
     "StaticTest",
     "check_text_file",
+    "encoding_hint",
     "read_csv_table",
     "read_position_trace",
     "read_presliding_test",
@@ -147,7 +148,28 @@ def unit_factor(unit: str, dimension: str, *, what: str) -> float:
     if unit.lower() in lowered:
         return lowered[unit.lower()]
     raise ValueError(f"{what}: unit {unit!r} is not a {dimension} unit; expected one of "
-                     f"{', '.join(table)}")
+                     f"{', '.join(table)}{encoding_hint(unit)}")
+
+
+def encoding_hint(text: str) -> str:
+    """``"; the file is not UTF-8 …"`` when ``text`` holds the replacement character that
+    a byte which is not UTF-8 was read as (a ``µ`` saved as Windows-1252 / Latin-1 read as
+    ``'\ufffdm'``), else ``""``: the end of a message about a header's unit.
+
+    Parameters
+    ----------
+    text : str
+        A header's unit as read.
+
+    Returns
+    -------
+    str
+        The hint, or an empty string.
+    """
+    if "\ufffd" not in text:
+        return ""
+    return ("; the file is not UTF-8 text (a µ saved as Windows-1252 or Latin-1?): save it "
+            "as UTF-8 (docs/measured-data.md)")
 
 
 @dataclass(frozen=True)
@@ -306,6 +328,9 @@ class CsvTable:
                                       else text)
                 except ValueError:
                     problem = "empty cell" if not text else f"{text!r} is not a number"
+                    if text and self.decimal == "." and _is_decimal_comma(text):
+                        problem += ("; a decimal comma: read the file with --decimal , "
+                                    "(in Python decimal=',')")
                     raise MeasuredDataError(self.source, int(self.lines[k]),
                                             f"column {self.names[i]!r}: {problem}") from None
         bad = np.flatnonzero(~np.isfinite(values))
@@ -402,6 +427,19 @@ class CsvTable:
                 f"drive (|{dimension}| ≤ {limit / factor:g} {unit}); check the file's unit")
 
 
+def _is_decimal_comma(text: str) -> bool:
+    """Whether a cell that is not a number with ``.`` decimals is one with ``,``."""
+    try:
+        float(text.replace(",", "."))
+    except ValueError:
+        return False
+    return "," in text
+
+
+#: the first line Excel writes to name a CSV file's separator (``sep=;``)
+_EXCEL_SEP_RE = re.compile(r'^\s*"?sep=(?P<sep>[^"\r\n])"?[\r\n]*$')
+
+
 def _detect_separator(header: str) -> str | None:
     for sep in (",", ";", "\t"):
         if sep in header:
@@ -451,9 +489,27 @@ def check_text_file(path: str | Path) -> None:
         if head.startswith(signature):
             raise MeasuredDataError(p.name, None, f"is {what}, not CSV text; export it as "
                                     "CSV (docs/measured-data.md)")
+    if _looks_utf16(head):
+        raise MeasuredDataError(p.name, None, "looks like UTF-16 text (a byte-order mark or a "
+                                "NUL byte beside every character), not UTF-8; save it as "
+                                "UTF-8 (Excel: 'CSV UTF-8'; docs/measured-data.md)")
     if b"\x00" in head:
         raise MeasuredDataError(p.name, None, "is a binary file (it holds NUL bytes), not CSV "
                                 "text; export it as CSV (docs/measured-data.md)")
+
+
+def _looks_utf16(head: bytes) -> bool:
+    """Whether a file's first bytes are UTF-16 text: a byte-order mark (FF FE or FE FF), or
+    every other byte NUL and none of the others (ASCII text, little or big endian)."""
+    if head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return True
+    sample = head[:256]
+    sample = sample[:len(sample) - len(sample) % 2]
+    if len(sample) < 4:
+        return False
+    even, odd = sample[0::2], sample[1::2]
+    return (odd.count(0) == len(odd) and even.count(0) == 0) or \
+        (even.count(0) == len(even) and odd.count(0) == 0)
 
 
 _CHUNK = 1 << 22  # bytes scanned at a time (index arrays: 8 bytes per byte scanned)
@@ -587,9 +643,18 @@ def read_csv_table(path: str | Path, *, sep: str | None = None,
             raw = f.readline()
             if not raw:
                 break
-            line = raw.decode("utf-8", errors="replace").lstrip("\ufeff").strip()
+            text = raw.decode("utf-8", errors="replace").lstrip("\ufeff")
+            line = text.strip()
             skip.append(np.array([line_no - 1]))
-            if line and not line.startswith("#"):
+            excel = _EXCEL_SEP_RE.match(text)
+            if excel:  # Excel's first line naming the separator: honoured, not a header
+                named = excel.group("sep")
+                if sep is not None and sep != named:
+                    raise MeasuredDataError(source, line_no, f"the file names its separator "
+                                            f"(Excel's {line!r}) and the separator option "
+                                            f"gives {sep!r}; drop the option")
+                sep = named
+            elif line and not line.startswith("#"):
                 if sep is None:
                     sep = _detect_separator(line)
                 if sep == decimal:
