@@ -34,7 +34,9 @@ def test_a_circular_runs_repr_and_html_name_the_machine_and_its_path(
     run = trace.results["CCW"]
     text = repr(run)
     assert re.match(r"<feeddrive\.Result machine xy-table: Circle\(length=[\d.]+ m, "
-                    r"feed=0\.0333+ m/s\), axes x, y, [\d.]+ s — xy-table; \d+ samples>$",
+                    # after the dash the axes' parameter set (it was the machine's name
+                    # again until the machine's attrs named it apart, session 26)
+                    r"feed=0\.0333+ m/s\), axes x, y, [\d.]+ s — wang2021; \d+ samples>$",
                     text), text
     assert run._dataset is None  # said from the run's own attributes: no Dataset built
     html = run._repr_html_()
