@@ -463,16 +463,39 @@ def find_segments(time: object, position: object, speed: object, *,
     tc = t - t[0]
     slope, icpt = np.polyfit(tc, x, 1)
     cost = _LineCost(tc, x - (slope * tc + icpt))
-    spans = []
+    pieces: list[list[int]] = []  # [first index, end index, regime]
     for a, b, label in regimes:
         if label == 0:
             continue
         cuts = [a, *_line_segments(cost, a, b, min_n, min_step), b]
-        for i, j in zip(cuts[:-1], cuts[1:], strict=True):
-            lo = float(t[i]) if i == 0 else float(0.5 * (t[i - 1] + t[i]))
-            hi = float(t[j - 1]) if j == t.size else float(0.5 * (t[j - 1] + t[j]))
-            spans.append((lo, hi))
+        pieces += [[i, j, label] for i, j in zip(cuts[:-1], cuts[1:], strict=True)]
+    _merge_holds(cost, pieces, min_step)
+    spans = []
+    for i, j, _ in pieces:
+        lo = float(t[i]) if i == 0 else float(0.5 * (t[i - 1] + t[i]))
+        hi = float(t[j - 1]) if j == t.size else float(0.5 * (t[j - 1] + t[j]))
+        spans.append((lo, hi))
     return spans
+
+
+def _merge_holds(cost: _LineCost, pieces: list[list[int]], min_step: float) -> None:
+    """Join neighbouring pieces (no rest between) whose mean speeds differ by at most
+    ``min_step``, in place: one hold whose oscillation grows (smooth, then creeping) or
+    decays mid-record was two segments at one command (an outside check, 2026-12-07: a
+    1.36-mm/s hold decimated 5× became segments at 1.359993 and 1.359927 mm/s, the first
+    "smooth" by 0.499 against the 0.5 ripple limit, and the critical speed moved from 1.4 to
+    1.36 mm/s).  A first piece that creeps before a smooth one at the same speed is left
+    alone: :func:`analyze_trace` excludes it as the start-up transient."""
+    k = 0
+    while k < len(pieces) - 1:
+        left, right = pieces[k], pieces[k + 1]
+        startup = k == 0 and left[2] == 2 and right[2] == 1
+        if (left[1] == right[0] and not startup and
+                abs(cost.line(left[0], left[1])[0] - cost.line(right[0], right[1])[0])
+                <= min_step):
+            pieces[k:k + 2] = [[left[0], right[1], right[2]]]
+        else:
+            k += 1
 
 
 def _check_settings(thresholds: object, min_step: object, min_segment_time: object) -> None:
