@@ -1,0 +1,77 @@
+"""Session 26 (an outside check, 2026-12-07): what the creep analyses say about a record
+that does not resolve, or has not settled into, what they measure."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from feeddrive.analysis.trace import analyze_trace
+
+DT = 1e-3  # [s]
+
+
+def _position(t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Position [m] of the speed ``v`` [m/s] (trapezoidal integral)."""
+    return np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+
+
+def _staircase(last_hold: str = "grows") -> tuple[np.ndarray, np.ndarray]:
+    """Holds of 20 s at 1.5, 1.45 and 1.4 mm/s; the last one's 5-Hz ripple grows from 0 to
+    ±90 % of the command between 4 and 12 s into it (smooth, then stick-slip-like)."""
+    t_all, v_all, t0 = [], [], 0.0
+    for k, c in enumerate((1.5e-3, 1.45e-3, 1.4e-3)):
+        t = t0 + np.arange(20000) * DT
+        v = np.full(t.size, c)
+        if k == 2 and last_hold == "grows":
+            amp = 0.9 * np.clip((t - t0 - 4.0) / 8.0, 0.0, 1.0)
+            v = c * (1.0 + amp * np.sin(2 * np.pi * 5.0 * (t - t0)))
+        t_all.append(t)
+        v_all.append(v)
+        t0 += 20.0
+    t, v = np.concatenate(t_all), np.concatenate(v_all)
+    return t, _position(t, v)
+
+
+def test_one_hold_whose_ripple_grows_is_one_segment_full_and_decimated() -> None:
+    # finding 2: the 1.4-mm/s hold was two segments (1.39993 "smooth", ripple 0.49, and
+    # 1.39997 "creeping"): 7e-5 mm/s apart, under --min-step 0.005 mm/s
+    t, x = _staircase()
+    for k in (1, 5):
+        a = analyze_trace(t[::k], x[::k])
+        speeds = [round(1e3 * s.command_speed, 3) for s in a.segments]
+        assert speeds == [1.5, 1.45, 1.4], (k, speeds)
+        assert [s.metrics.verdict for s in a.segments] == ["smooth", "smooth", "creeping"]
+        (c,) = a.critical
+        assert c.monotonic
+        assert round(1e3 * c.lowest_smooth, 3) == 1.45
+        assert round(1e3 * c.first_creeping, 3) == 1.4
+        assert not any("not sharp" in n for n in a.notes)
+
+
+def test_a_hold_whose_oscillation_grows_is_not_settled_and_the_headline_not_firm() -> None:
+    # finding 3: 4-s holds whose 5.45-Hz ripple grew 0.04 → 0.13 hold to hold were each
+    # "smooth", the headline "lowest smooth 1.36 mm/s; first creeping none" with no word
+    import re
+
+    from feeddrive.analysis.trace import critical_of_holds, describe_critical
+
+    t = np.arange(12000) * DT
+    c = np.where(t < 4.0, 1.6e-3, np.where(t < 8.0, 1.5e-3, 1.4e-3))
+    # the last hold: a 5.45-Hz ripple growing from 2 % to 13 % peak-to-peak of the command
+    grow = np.where(t >= 8.0, 0.01 * np.exp((t - 8.0) * np.log(6.5) / 4.0), 0.0)
+    v = c * (1.0 + grow * np.sin(2 * np.pi * 5.45 * t))
+    a = analyze_trace(t, _position(t, v), command=c)
+    assert [s.metrics.verdict for s in a.segments] == ["smooth"] * 3
+    assert [s.settled for s in a.segments] == [True, True, False]
+    (crit,) = a.critical
+    assert [round(1e3 * s, 3) for s in crit.unsettled] == [1.4]
+    assert any(re.match(r"segment 8\.\d\d–12\.00 s \(1\.4 mm/s\): smooth by the window rule "
+                        r"but not settled", n) for n in a.notes)
+    text = describe_critical(crit.lowest_smooth, crit.first_creeping, "hold",
+                             unsettled=crit.unsettled)
+    assert re.match(r"lowest smooth 1\.4 mm/s; first creeping none \(no hold creeps\) — not "
+                    r"firm: the hold at 1\.4 mm/s is smooth by the window rule but not "
+                    r"settled", text)
+    # settled holds (or none given) leave the headline as it was
+    assert critical_of_holds([(1.6e-3, False), (1.5e-3, False)])[0].unsettled == ()
+    assert critical_of_holds([(1.6e-3, False, True), (1.5e-3, True, False)])[0].unsettled == ()
