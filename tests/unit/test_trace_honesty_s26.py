@@ -75,3 +75,32 @@ def test_a_hold_whose_oscillation_grows_is_not_settled_and_the_headline_not_firm
     # settled holds (or none given) leave the headline as it was
     assert critical_of_holds([(1.6e-3, False), (1.5e-3, False)])[0].unsettled == ()
     assert critical_of_holds([(1.6e-3, False, True), (1.5e-3, True, False)])[0].unsettled == ()
+
+
+def _stick_slip(step: float, duration: float = 12.0) -> tuple[np.ndarray, np.ndarray]:
+    """A 5.47-Hz stick-slip speed [m/s] about 1 mm/s sampled every ``step`` [s]: stuck for
+    12.5 % of each period, then a sin² slip whose mean makes the command."""
+    t = np.arange(0.0, duration, step)
+    phase = (t * 5.47) % 1.0
+    slip = np.clip((phase - 0.125) / 0.875, 0.0, 1.0)
+    return t, 1e-3 / (0.875 * 0.5) * np.sin(np.pi * slip) ** 2
+
+
+def test_the_stick_fraction_is_stable_where_resolved_and_flagged_where_not() -> None:
+    # finding 1: 0.125 at 1 ms, 0.0903 at 20 ms, 0.0165 at 50 ms, with nothing said
+    import re
+
+    from feeddrive.analysis.creep_window import creep_metrics
+
+    fine = creep_metrics(*_stick_slip(0.5e-3), 1e-3)
+    resolved = creep_metrics(*_stick_slip(1e-3), 1e-3)
+    coarse = creep_metrics(*_stick_slip(20e-3), 1e-3)
+    assert fine.sampling_note is None and resolved.sampling_note is None
+    assert f"{resolved.stick_fraction:.3g}" == f"{fine.stick_fraction:.3g}"
+    assert abs(coarse.stick_fraction - fine.stick_fraction) > 0.01  # it moves …
+    note = coarse.sampling_note  # … and says so
+    assert note is not None
+    assert re.match(r"stick fraction 0\.\d+ depends on the sampling at its printed digits "
+                    r"\(20-ms step, 9\.1\d samples per 5\.47-Hz period\): 0\.\d+ from every "
+                    r"second sample", note), note
+    assert coarse.to_dict()["sampling_note"] == note

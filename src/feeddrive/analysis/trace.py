@@ -56,8 +56,8 @@ from ..parameters.validation import is_real
 from ..units import LARGEST_SPEED
 from .creep_window import CreepMetrics, CreepThresholds, creep_metrics, steady_window
 from .cycle_verdict import VerdictRule, trace_verdict
-from .verdict_words import SMOOTH, UNDECIDED
 from .trace_input import resample_size
+from .verdict_words import SMOOTH, UNDECIDED
 
 __all__ = [
     "CriticalSpeed",
@@ -1102,6 +1102,8 @@ def analyze_trace(
             notes.append(slip)
         # the settling is judged clear of the filter's reach into the neighbouring holds
         inner = (ts >= ts[0] + win_t) & (ts <= ts[-1] - win_t)
+        if m.sampling_note:
+            notes.append(f"segment {ts[0]:.2f}–{ts[-1]:.2f} s: {m.sampling_note}")
         why = (hold_settled(ts[inner], vs[inner], c, m.verdict)
                if np.count_nonzero(inner) >= 16 else None)
         if why:
