@@ -179,6 +179,11 @@ class CreepMetrics:
         Largest |speed| over |command_speed| [-].
     window_samples : int, default 0
         Number of samples in the window.
+    stick_fraction_coarse : float or None, default None
+        The stick fraction from every second sample of the window (of the two such halves,
+        the one farther from ``stick_fraction``) [-]; None with too few samples.  Where it
+        differs from ``stick_fraction`` by more than the printed digits,
+        :attr:`sampling_note` says the record does not resolve the stick phase.
     """
 
     command_speed: float
@@ -193,6 +198,45 @@ class CreepMetrics:
     thresholds: CreepThresholds
     max_ratio: float = float("nan")
     window_samples: int = 0
+    stick_fraction_coarse: float | None = None
+
+    @property
+    def sampling_note(self) -> str | None:
+        """Whether the stick fraction (and so the verdict) depends on the sampling: it and
+        :attr:`stick_fraction_coarse` (every second sample) differ by more than half a unit
+        in the third significant digit, the digits printed; else None.
+
+        The interpolant's stick time is exact only where the speed is linear between samples:
+        a record that does not resolve the stick phase gives a lower stick fraction the
+        coarser it is (an outside check, 2026-12-07: 0.125 at 0.5–1 ms, 0.0903 at 20 ms,
+        0.0165 at 50 ms of a 5.47-Hz stick-slip), and halving its sampling shows it.
+
+        Returns
+        -------
+        str or None
+            The note, naming both values, the samples per oscillation period and whether
+            the verdict is firm.
+        """
+        coarse, stick = self.stick_fraction_coarse, self.stick_fraction
+        if coarse is None:
+            return None
+        shown = float(f"{stick:.3g}")
+        digit = 0.5 * 10.0 ** (math.floor(math.log10(abs(shown))) - 2) if shown else 5e-4
+        if abs(coarse - stick) <= digit:
+            return None
+        th = self.thresholds
+        step = (self.window_end - self.window_start) / max(self.window_samples - 1, 1)
+        per = ("" if self.stick_slip_frequency is None else
+               f", {1.0 / (self.stick_slip_frequency * step):.3g} samples per "
+               f"{self.stick_slip_frequency:.3g}-Hz period")
+        flips = (stick > th.max_stick_fraction) != (coarse > th.max_stick_fraction) \
+            and self.ripple_ratio <= th.max_ripple_ratio
+        verdict = ("; the verdict is not firm (from every second sample it would differ)"
+                   if flips else "")
+        return (f"stick fraction {stick:.3g} depends on the sampling at its printed digits "
+                f"({1e3 * step:.3g}-ms step{per}): {coarse:.3g} from every second sample; "
+                f"the record does not resolve the stick phase to them (a finer interval "
+                f"does){verdict}")
 
     @property
     def creeping(self) -> bool:
@@ -232,6 +276,8 @@ class CreepMetrics:
             "min_ratio": self.min_ratio,
             "max_ratio": self.max_ratio,
             "stick_fraction": self.stick_fraction,
+            "stick_fraction_coarse": self.stick_fraction_coarse,
+            "sampling_note": self.sampling_note,
             # the dominant ripple frequency; under the stick-slip name only when the table
             # sticks (issue 41 item 7, as frequency_label words it)
             "oscillation_frequency": self.stick_slip_frequency,
@@ -517,6 +563,11 @@ def creep_metrics(
     min_ratio = float(np.min(along) / ref)
     max_ratio = float(np.max(along) / ref)
     stick = time_below(tw, along, th.stick_level * ref) / duration
+    coarse = None
+    if tw.size >= 2 * MIN_WINDOW_SAMPLES:
+        halves = [time_below(tw[k::2], along[k::2], th.stick_level * ref)
+                  / float(tw[k::2][-1] - tw[k::2][0]) for k in (0, 1)]
+        coarse = max(halves, key=lambda h: abs(h - stick))
     freq = _dominant_frequency(tw, along, ripple, th) if frequency else None
     creeping = stick > th.max_stick_fraction or ripple > th.max_ripple_ratio
     peak = float(np.max(np.abs(vw))) / ref
@@ -534,4 +585,5 @@ def creep_metrics(
         thresholds=th,
         max_ratio=max_ratio,
         window_samples=int(tw.size),
+        stick_fraction_coarse=None if coarse is None else float(coarse),
     )

@@ -55,7 +55,9 @@ from ..parameters import ParameterError
 from ..parameters.validation import is_real
 from ..units import LARGEST_SPEED
 from .creep_window import CreepMetrics, CreepThresholds, creep_metrics, steady_window
+from .cycle_verdict import VerdictRule, trace_verdict
 from .trace_input import resample_size
+from .verdict_words import SMOOTH, UNDECIDED
 
 __all__ = [
     "CriticalSpeed",
@@ -65,6 +67,7 @@ __all__ = [
     "analyze_trace",
     "estimate_speed",
     "find_segments",
+    "hold_settled",
     "savgol_window",
 ]
 
@@ -249,6 +252,72 @@ def estimate_speed(time: object, position: object, *, smoothing_time: float | No
     speed = savgol_filter(x, window, polyorder, deriv=1, delta=dt, mode="interp")
     return SpeedEstimate(time=t, position=x, speed=np.asarray(speed), window=window,
                          window_time=window * dt, resampled=resampled)
+
+
+def savgol_gain(window: int, sample_time: float, frequency: float, polyorder: int = 2) -> float:
+    """Amplitude the Savitzky–Golay differentiator passes of a sinusoidal speed at
+    ``frequency`` [Hz], a fraction of it [-] (1 passes it whole): |H(f)| / (2πf) of its
+    coefficients, exact for a sinusoid.
+
+    Parameters
+    ----------
+    window : int
+        Filter window [samples].
+    sample_time : float
+        Sample interval [s].
+    frequency : float
+        The ripple's frequency [Hz].
+    polyorder : int, default 2
+        Polynomial order.
+
+    Returns
+    -------
+    float
+        The gain [-].
+    """
+    from scipy.signal import savgol_coeffs
+
+    coeffs = savgol_coeffs(window, polyorder, deriv=1, delta=sample_time, use="dot")
+    k = np.arange(window) - window // 2
+    w = 2.0 * math.pi * frequency
+    return float(abs(np.sum(coeffs * np.exp(1j * w * k * sample_time))) / w)
+
+
+def smoothing_note(metrics: CreepMetrics, window: int, sample_time: float) -> str | None:
+    """What the speed filter takes off a segment's ripple at its detected frequency, when it
+    moves the printed ripple (more than half a unit of its third significant digit), else
+    None.  The docs' 20-ms window was justified by a 2-Hz ripple (< 1 % loss); the CDFS of
+    Wang2021 sticks and slips at 5.47 Hz, where it takes 1.3 % of the fundamental and more
+    of the harmonics that make the stick phase (an outside check, 2026-12-07: min ratio
+    −0.0294 from the 21-ms window, −0.0569 from the exact speed; stick 0.117 vs 0.125).
+
+    Parameters
+    ----------
+    metrics : CreepMetrics
+        The segment's metrics from the filtered speed.
+    window : int
+        Filter window [samples].
+    sample_time : float
+        Sample interval [s].
+
+    Returns
+    -------
+    str or None
+        The note: the gain at the fundamental and its 2nd and 3rd harmonics.
+    """
+    f = metrics.stick_slip_frequency
+    if f is None or window < 3:
+        return None
+    gains = [savgol_gain(window, sample_time, n * f) for n in (1, 2, 3)]
+    ripple = metrics.ripple_ratio
+    digit = 0.5 * 10.0 ** (math.floor(math.log10(float(f"{ripple:.3g}"))) - 2)
+    if (1.0 - gains[0]) * ripple <= digit:
+        return None
+    return (f"the {1e3 * window * sample_time:.3g}-ms speed filter passes "
+            f"{100 * gains[0]:.3g} % of the {f:.3g}-Hz ripple ({100 * gains[1]:.3g} and "
+            f"{100 * gains[2]:.3g} % of its 2nd and 3rd harmonics): ripple, min ratio and "
+            "stick fraction are of the filtered speed (a stick-slip's minimum less deep, its "
+            "stick shorter); a shorter --smoothing, or the speed column, loses less")
 
 
 # ---------------------------------------------------------------- segmentation
@@ -463,16 +532,39 @@ def find_segments(time: object, position: object, speed: object, *,
     tc = t - t[0]
     slope, icpt = np.polyfit(tc, x, 1)
     cost = _LineCost(tc, x - (slope * tc + icpt))
-    spans = []
+    pieces: list[list[int]] = []  # [first index, end index, regime]
     for a, b, label in regimes:
         if label == 0:
             continue
         cuts = [a, *_line_segments(cost, a, b, min_n, min_step), b]
-        for i, j in zip(cuts[:-1], cuts[1:], strict=True):
-            lo = float(t[i]) if i == 0 else float(0.5 * (t[i - 1] + t[i]))
-            hi = float(t[j - 1]) if j == t.size else float(0.5 * (t[j - 1] + t[j]))
-            spans.append((lo, hi))
+        pieces += [[i, j, label] for i, j in zip(cuts[:-1], cuts[1:], strict=True)]
+    _merge_holds(cost, pieces, min_step)
+    spans = []
+    for i, j, _ in pieces:
+        lo = float(t[i]) if i == 0 else float(0.5 * (t[i - 1] + t[i]))
+        hi = float(t[j - 1]) if j == t.size else float(0.5 * (t[j - 1] + t[j]))
+        spans.append((lo, hi))
     return spans
+
+
+def _merge_holds(cost: _LineCost, pieces: list[list[int]], min_step: float) -> None:
+    """Join neighbouring pieces (no rest between) whose mean speeds differ by at most
+    ``min_step``, in place: one hold whose oscillation grows (smooth, then creeping) or
+    decays mid-record was two segments at one command (an outside check, 2026-12-07: a
+    1.36-mm/s hold decimated 5× became segments at 1.359993 and 1.359927 mm/s, the first
+    "smooth" by 0.499 against the 0.5 ripple limit, and the critical speed moved from 1.4 to
+    1.36 mm/s).  A first piece that creeps before a smooth one at the same speed is left
+    alone: :func:`analyze_trace` excludes it as the start-up transient."""
+    k = 0
+    while k < len(pieces) - 1:
+        left, right = pieces[k], pieces[k + 1]
+        startup = k == 0 and left[2] == 2 and right[2] == 1
+        if (left[1] == right[0] and not startup and
+                abs(cost.line(left[0], left[1])[0] - cost.line(right[0], right[1])[0])
+                <= min_step):
+            pieces[k:k + 2] = [[left[0], right[1], right[2]]]
+        else:
+            k += 1
 
 
 def _check_settings(thresholds: object, min_step: object, min_segment_time: object) -> None:
@@ -560,12 +652,17 @@ class TraceSegment:
         ``"given"``, ``"column"`` or ``"estimated"``.
     metrics : CreepMetrics
         The segment's creep metrics.
+    settled : bool, default True
+        False when its verdict is smooth but its oscillation has not settled within it
+        (:func:`hold_settled`): the verdict is not firm.
     """
     start: float  # [s]
     end: float  # [s]
     command_speed: float  # [m/s]
     command_from: str  # "given", "column" or "estimated"
     metrics: CreepMetrics
+    #: False when the window rule calls it smooth but it has not settled (:func:`hold_settled`)
+    settled: bool = True
 
     def to_dict(self, units: Literal["SI", "mm"] = "mm") -> dict[str, Any]:
         """The segment for the JSON report.
@@ -581,7 +678,7 @@ class TraceSegment:
             Start and end [s], where the command came from, and the metrics.
         """
         return {"start": self.start, "end": self.end, "command_from": self.command_from,
-                "metrics": self.metrics.to_dict(units)}
+                "settled": self.settled, "metrics": self.metrics.to_dict(units)}
 
 
 @dataclass(frozen=True)
@@ -603,6 +700,9 @@ class CriticalSpeed:
         The highest creeping command speed [m/s].
     monotonic : bool
         False when a smooth segment lies below a creeping one.
+    unsettled : tuple of float, default ()
+        Command speeds [m/s] (magnitudes) of the holds called smooth that have not settled
+        (:func:`hold_settled`); when any, the critical speed is not firm.
 
     References
     ----------
@@ -613,6 +713,7 @@ class CriticalSpeed:
     lowest_smooth: float | None
     first_creeping: float | None
     monotonic: bool
+    unsettled: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -699,7 +800,8 @@ class TraceAnalysis:
                 {"direction": c.direction,
                  "lowest_smooth": None if c.lowest_smooth is None else c.lowest_smooth * k,
                  "first_creeping": None if c.first_creeping is None else c.first_creeping * k,
-                 "monotonic": c.monotonic}
+                 "monotonic": c.monotonic,
+                 "unsettled": [v * k for v in c.unsettled]}
                 for c in self.critical
             ],
             "speed_unit": "m/s" if units == "SI" else "mm/s",
@@ -756,11 +858,48 @@ def _slope(t: np.ndarray, x: np.ndarray) -> float:
 
 
 def _critical(segments: list[TraceSegment]) -> list[CriticalSpeed]:
-    return critical_of_holds([(s.command_speed, s.metrics.creeping) for s in segments])
+    return critical_of_holds([(s.command_speed, s.metrics.creeping, s.settled)
+                              for s in segments])
+
+
+def hold_settled(time: np.ndarray, speed: np.ndarray, command_speed: float,
+                 verdict: str) -> str | None:
+    """Why a hold the window rule calls smooth has not settled, or None when it has (or its
+    verdict is not smooth: creeping stands).
+
+    Settled is the limit-cycle rule's (:func:`~feeddrive.analysis.cycle_verdict.trace_verdict`,
+    :class:`~feeddrive.analysis.cycle_verdict.VerdictRule` defaults) decision within the
+    hold: decayed (within ±2 % of the command for max(2 s, 2 periods) and not growing) or a
+    repeating cycle.  A hold it leaves undecided — an oscillation growing hold to hold, a
+    hold shorter than its settling time — is smooth by the window rule only for now (an
+    outside check, 2026-12-07: 4-s holds at 1.44 … 1.36 mm/s, ripple 0.04 → 0.13 at
+    5.45 Hz, were "smooth" and the staircase's critical speed 1.36 mm/s, against 1.4 mm/s
+    from 30-s holds).
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        The hold's sample times [s].
+    speed : numpy.ndarray
+        Table speed [m/s].
+    command_speed : float
+        The hold's command speed [m/s].
+    verdict : str
+        The window rule's verdict of the hold.
+
+    Returns
+    -------
+    str or None
+        The limit-cycle rule's reason when the hold has not settled, else None.
+    """
+    if verdict != SMOOTH:
+        return None
+    decision = trace_verdict(time, speed, command_speed)
+    return decision.reason if decision.kind == UNDECIDED else None
 
 
 def describe_critical(lowest_smooth: float | None, first_creeping: float | None,
-                      what: str = "segment") -> str:
+                      what: str = "segment", unsettled: Sequence[float] = ()) -> str:
     """The critical speed in words, as ``analyze`` and ``simulate --profile stepdown`` print it.
 
     Parameters
@@ -771,6 +910,10 @@ def describe_critical(lowest_smooth: float | None, first_creeping: float | None,
         The highest creeping command speed [m/s].
     what : str, default "segment"
         What a hold is called (``"segment"`` of a record, ``"hold"`` of a profile).
+    unsettled : sequence of float, default ()
+        Command speeds [m/s] of smooth holds that have not settled
+        (:attr:`CriticalSpeed.unsettled`): said after the two numbers, which are then not
+        firm.
 
     Returns
     -------
@@ -781,18 +924,28 @@ def describe_critical(lowest_smooth: float | None, first_creeping: float | None,
               else f"none (every {what} creeps)")
     creep = (f"{1e3 * first_creeping:.4g} mm/s" if first_creeping is not None
              else f"none (no {what} creeps)")
-    return f"lowest smooth {smooth}; first creeping {creep}"
+    text = f"lowest smooth {smooth}; first creeping {creep}"
+    if unsettled:
+        speeds = ", ".join(f"{1e3 * abs(v):.4g}" for v in unsettled)
+        text += (f" — not firm: the {what}{'s' if len(unsettled) > 1 else ''} at {speeds} "
+                 f"mm/s {'are' if len(unsettled) > 1 else 'is'} smooth by the window rule but "
+                 f"not settled (the limit-cycle rule: neither within ±"
+                 f"{100 * VerdictRule().smooth_band:g} % for its settling time nor a repeating "
+                 f"cycle within the {what}); longer {what}s decide")
+    return text
 
 
-def critical_of_holds(holds: Sequence[tuple[float, bool]]) -> list[CriticalSpeed]:
+def critical_of_holds(holds: Sequence[tuple[float, bool] | tuple[float, bool, bool]]
+                      ) -> list[CriticalSpeed]:
     """The critical speed per direction of a run of holds at constant command speeds (a
     step-down record's segments, a staircase's steps): ``feeddrive analyze`` and ``simulate
     --profile stepdown`` headline the same two numbers.
 
     Parameters
     ----------
-    holds : sequence of (float, bool)
-        Per hold: its command speed [m/s] (signed) and whether it creeps (not smooth).
+    holds : sequence of (float, bool) or (float, bool, bool)
+        Per hold: its command speed [m/s] (signed), whether it creeps (not smooth) and,
+        optionally, whether it has settled (:func:`hold_settled`; True when not given).
 
     Returns
     -------
@@ -801,9 +954,12 @@ def critical_of_holds(holds: Sequence[tuple[float, bool]]) -> list[CriticalSpeed
     """
     out = []
     for direction, sign in (("positive", 1.0), ("negative", -1.0)):
-        segs = sorted(((abs(v), c) for v, c in holds if v * sign > 0), reverse=True)
+        mine = [h for h in holds if h[0] * sign > 0]
+        segs = sorted(((abs(h[0]), h[1]) for h in mine), reverse=True)
         if len(segs) < 2:
             continue
+        unsettled = tuple(sorted((abs(h[0]) for h in mine
+                                  if len(h) > 2 and not h[1] and not h[2]), reverse=True))
         lowest_smooth = None
         for speed, creeps in segs:
             if creeps:
@@ -814,7 +970,8 @@ def critical_of_holds(holds: Sequence[tuple[float, bool]]) -> list[CriticalSpeed
         smooth_below = any(not creeps and first_creeping is not None and speed < first_creeping
                            for speed, creeps in segs)
         out.append(CriticalSpeed(direction=direction, lowest_smooth=lowest_smooth,
-                                 first_creeping=first_creeping, monotonic=not smooth_below))
+                                 first_creeping=first_creeping, monotonic=not smooth_below,
+                                 unsettled=unsettled))
     return out
 
 
@@ -1009,8 +1166,21 @@ def analyze_trace(
         slip = unit_slip_note(c, m.mean_speed) if origin == "given" else None
         if slip:
             notes.append(slip)
+        # the settling is judged clear of the filter's reach into the neighbouring holds
+        inner = (ts >= ts[0] + win_t) & (ts <= ts[-1] - win_t)
+        if m.sampling_note:
+            notes.append(f"segment {ts[0]:.2f}–{ts[-1]:.2f} s: {m.sampling_note}")
+        smoothed = smoothing_note(m, win, float(tt[1] - tt[0])) if speed is None else None
+        if smoothed:
+            notes.append(f"segment {ts[0]:.2f}–{ts[-1]:.2f} s: {smoothed}")
+        why = (hold_settled(ts[inner], vs[inner], c, m.verdict)
+               if np.count_nonzero(inner) >= 16 else None)
+        if why:
+            notes.append(f"segment {ts[0]:.2f}–{ts[-1]:.2f} s ({1e3 * c:.4g} mm/s): smooth by "
+                         f"the window rule but not settled ({why}, by the limit-cycle rule "
+                         "over the segment): its verdict is not firm; a longer hold decides")
         segments.append(TraceSegment(start=float(ts[0]), end=float(ts[-1]), command_speed=c,
-                                     command_from=origin, metrics=m))
+                                     command_from=origin, metrics=m, settled=why is None))
     if (len(segments) >= 2 and segments[0].command_from == "estimated"
             and segments[0].metrics.creeping and not segments[1].metrics.creeping
             and abs(segments[0].command_speed - segments[1].command_speed) <= min_step):

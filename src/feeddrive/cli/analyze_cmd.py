@@ -195,12 +195,13 @@ def analyze_command(
         _say(
             f"  segment {i}: {seg.start:.2f}–{seg.end:.2f} s (window from "
             f"{m.window_start:.2f} s), command {seg.command_speed / MM_PER_S:.4g} mm/s "
-            f"({seg.command_from}): {m.verdict.upper()}  ripple {m.ripple_ratio:.3g}, "
+            f"({seg.command_from}): {m.verdict.upper()}"
+            f"{'' if seg.settled else ' (not settled)'}  ripple {m.ripple_ratio:.3g}, "
             f"min {m.min_ratio:.3g}, stick {m.stick_fraction:.3g}, {freq_word} {freq}")
     _say(f"  verdicts by the {thresholds.describe()}")
     for c in result.critical:
         _say(f"  critical speed ({c.direction}): "
-             f"{describe_critical(c.lowest_smooth, c.first_creeping)}")
+             f"{describe_critical(c.lowest_smooth, c.first_creeping, unsettled=c.unsettled)}")
     if plot:
         _say(f"wrote plot {plot}")
 
