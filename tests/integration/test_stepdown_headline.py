@@ -35,19 +35,25 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, dict, Path]:
 def test_the_headline_is_the_lowest_smooth_and_the_first_creeping_hold(run) -> None:
     text, summary, csv = run
     lines = text.splitlines()
-    assert lines[1].split() == ["critical", "speed", "lowest", "smooth", "1.4", "mm/s;",
-                                "first", "creeping", "1.3", "mm/s"]
+    assert lines[1].split()[:10] == ["critical", "speed", "lowest", "smooth", "1.4", "mm/s;",
+                                     "first", "creeping", "1.3", "mm/s"]
+    # 4-s holds: the smooth ones have not settled by the limit-cycle rule (session 26), said
+    assert "— not firm: the holds at 1.6, 1.5, 1.4 mm/s are smooth by the window rule but not " \
+           "settled" in lines[1]
     assert not [ln for ln in lines if ln.strip().startswith("verdict ")
                 and not ln.strip().startswith("verdict rule")]  # the first hold's, gone
     verdicts = [h["verdict"] for h in summary["segments"]]
     assert verdicts == ["smooth", "smooth", "smooth", "creeping", "creeping"]
     assert summary["critical"] == [{"direction": "positive", "lowest_smooth_mm_s": 1.4,
                                     "first_creeping_mm_s": pytest.approx(1.3),
-                                    "monotonic": True}]
+                                    "monotonic": True,
+                                    "unsettled_mm_s": [1.6, 1.5, 1.4]}]
+    assert [h["settled"] for h in summary["segments"]] == [False, False, False, True, True]
     # the same two numbers and words as `analyze` of the run's own record
     analysed = runner.invoke(app, ["analyze", str(csv)])
-    assert analysed.stdout.splitlines()[-1].strip() == \
-        "critical speed (positive): lowest smooth 1.4 mm/s; first creeping 1.3 mm/s"
+    last = analysed.stdout.splitlines()[-1].strip()
+    assert last.startswith(
+        "critical speed (positive): lowest smooth 1.4 mm/s; first creeping 1.3 mm/s — not firm")
 
 
 def test_the_following_error_is_the_whole_runs(run) -> None:

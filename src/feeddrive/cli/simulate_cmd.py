@@ -486,7 +486,8 @@ def _lines(s: dict[str, Any], options: Any = None) -> list[tuple[str, str]]:
             for c in s["critical"]:
                 sign = "" if c["direction"] == "positive" else " (negative)"
                 rows.append((f"critical speed{sign}", describe_critical(
-                    _si(c["lowest_smooth_mm_s"]), _si(c["first_creeping_mm_s"]), "hold")))
+                    _si(c["lowest_smooth_mm_s"]), _si(c["first_creeping_mm_s"]), "hold",
+                    unsettled=[v * MM_PER_S for v in c["unsettled_mm_s"]])))
             rows.append(("segments", f"{len(segments)} holds of one command speed, each judged "
                                   "over its own steady window:"))
             for i, g in enumerate(segments, start=1):
@@ -494,7 +495,8 @@ def _lines(s: dict[str, Any], options: Any = None) -> list[tuple[str, str]]:
                 at = "" if f is None else (f", {frequency_label(g['stick_fraction'])} "
                                            f"{n(f, 3)} Hz")
                 rows.append((f"  {i}: {n(g['command_speed_mm_s'])} mm/s",
-                             f"{g['verdict']}, mean {n(g['mean_table_speed_mm_s'])} mm/s, "
+                             f"{g['verdict']}{'' if g['settled'] else ' (not settled)'}, "
+                             f"mean {n(g['mean_table_speed_mm_s'])} mm/s, "
                              f"ripple {n(g['ripple_ratio'], 3)}, stick "
                              f"{n(g['stick_fraction'], 3)}{at}; window "
                              f"{n(g['window_s'][0])}–{n(g['window_s'][1])} s"))

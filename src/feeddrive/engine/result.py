@@ -582,6 +582,8 @@ class Result:
                 # the rule behind the word (issue 24 item 4)
                 "verdict_rule": m.thresholds.describe(),
             })
+            if m.sampling_note:  # the record does not resolve the stick phase (session 26)
+                warnings.append(m.sampling_note)
             if not constant:
                 out["segments"] = holds = self._hold_segments()
                 if len(holds) > 1:
@@ -732,6 +734,7 @@ class Result:
         out), each judged over its own steady window: as ``feeddrive analyze`` summarises a
         step-down trace per segment (issue 24 item 6)."""
         from ..analysis.creep_window import creep_metrics, steady_window
+        from ..analysis.trace import hold_settled
 
         t, v = self.time, self["table_speed"]
         ref = self["table_speed_reference"]
@@ -750,7 +753,11 @@ class Result:
                         "ripple_ratio": m.ripple_ratio, "min_ratio": m.min_ratio,
                         "stick_fraction": m.stick_fraction,
                         **_frequencies(m),
-                        "verdict": m.verdict, "window_s": [m.window_start, m.window_end]})
+                        "verdict": m.verdict, "window_s": [m.window_start, m.window_end],
+                        # smooth by the window rule but left undecided by the limit-cycle
+                        # rule within the hold: not settled (session 26)
+                        "settled": hold_settled(t[a:b], v[a:b], c, m.verdict) is None,
+                        "sampling_note": m.sampling_note})
         return out
 
     def _holds_headline(self, holds: list[dict[str, Any]]) -> dict[str, Any]:
@@ -761,8 +768,8 @@ class Result:
         from ..analysis.trace import critical_of_holds
         from ..analysis.tracking import position_metrics
 
-        critical = critical_of_holds([(1e-3 * h["command_speed_mm_s"], h["verdict"] != "smooth")
-                                      for h in holds])
+        critical = critical_of_holds([(1e-3 * h["command_speed_mm_s"], h["verdict"] != "smooth",
+                                       h["settled"]) for h in holds])
         t = self.time
         whole = (float(t[0]), float(t[-1]))
         return {
@@ -771,7 +778,8 @@ class Result:
                           else 1e3 * c.lowest_smooth,
                           "first_creeping_mm_s": None if c.first_creeping is None
                           else 1e3 * c.first_creeping,
-                          "monotonic": c.monotonic} for c in critical],
+                          "monotonic": c.monotonic,
+                          "unsettled_mm_s": [1e3 * v for v in c.unsettled]} for c in critical],
             "run": {"window_s": list(whole),
                     **position_metrics(t, self["following_error"], whole)},
         }
