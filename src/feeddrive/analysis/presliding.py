@@ -225,7 +225,7 @@ MAX_PRESLIDING_DISPLACEMENT = 100e-6
 #: points of the geometric σ1 grid (1e-3 … 1 × ten times critical damping) the profile is
 #: first evaluated on.  It only brackets the interval's edges: each edge is then located
 #: where the profile itself crosses its threshold (a root-finder on the refitted SSR,
-#: :data:`PROFILE_EDGE_RTOL`), so the bound does not depend on this number (interpolated
+#: ``PROFILE_EDGE_RTOL``), so the bound does not depend on this number (interpolated
 #: linearly between these points it moved 3–4 % with the grid: 4.09e+04 at 13 points,
 #: 4.24e+04 at 49 or 193; an outside check, 2026-12-07).
 PROFILE_GRID_POINTS = 13
@@ -289,7 +289,9 @@ def fit_presliding(
     """Fit σ0 and σ1 to a pre-sliding test (force below breakaway).
 
     σ1 is profiled: for each σ1 on a grid, σ0 is refitted; the interval where the residual
-    stays within the F-test bound for ``confidence`` is ``sigma1_interval``.
+    stays within the F-test bound for ``confidence`` is ``sigma1_interval``, each edge the
+    root of the profile itself between the grid points that bracket it (to a relative
+    ``PROFILE_EDGE_RTOL``), so that it does not depend on the grid.
 
     Parameters
     ----------
@@ -322,7 +324,8 @@ def fit_presliding(
     source : str, optional
         The file name, for messages.
     progress : callable, optional
-        Receives a short line at each stage of a long fit (start k of 3, profile point i of n).
+        Receives a short line at each stage of a long fit (start k of 3, profile point i of
+        n, the interval's edges).
 
     Returns
     -------
@@ -462,9 +465,9 @@ def fit_presliding(
     say("profiling σ1: locating the interval's edges")
     low, high, edges = _profile_interval(grid, prof, threshold, s1_hat, profile, s0_at)
     if edges:  # the edges on the profile, so that it crosses the threshold where they are
-        order = np.argsort(np.concatenate([grid, [e[0] for e in edges]]), kind="stable")
-        grid = np.concatenate([grid, [e[0] for e in edges]])[order]
-        prof = np.concatenate([prof, [e[1] for e in edges]])[order]
+        where = np.concatenate([grid, [e[0] for e in edges]])
+        by_s1 = np.argsort(where, kind="stable")
+        grid, prof = where[by_s1], np.concatenate([prof, [e[1] for e in edges]])[by_s1]
 
     s0_est = estimate(s0_hat, cov[0, 0], tq, "N/m", confidence)
     s1_est = estimate(s1_hat, cov[1, 1], tq, "N s/m", confidence)
