@@ -10,14 +10,17 @@ Two protocols, because the answer can depend on how the table got to its speed (
 limit cycle can persist above the speed where steady sliding turns stable):
 
 * **from rest** (``start="rest"``): every trial starts the table from rest with a short ramp.
-  A coarse scan classifies a grid of speeds; wherever neighbouring speeds differ in kind
-  (smooth, stick-slip, oscillation) the boundary is bisected to ``resolution``
-  (0.01 mm/s by default).  Every creeping interval found is reported as a band.
+  A coarse scan classifies a grid of speeds from the range's bottom to its top, both tested
+  (the last step shorter when the range is not a whole number of coarse steps); wherever
+  neighbouring speeds differ in kind (smooth, stick-slip, oscillation) the boundary is
+  bisected to ``resolution`` (0.01 mm/s by default).  Every creeping interval found is
+  reported as a band.
 * **step-down from a running table** (``start="running"``), the paper's experimental protocol
   (Wang2021 Sect. 6): one continuous run that starts at the top speed and steps the command
   down, dwelling at each speed until the step is decided.  A coarse staircase walks the whole
-  range; at each change of kind a fine staircase repeats the same history down to the coarse
-  step above it and then walks down 0.01 mm/s at a time.
+  range, its top and bottom both held (the step next to the top shorter when the range is
+  not a whole number of coarse steps); at each change of kind a fine staircase repeats the
+  same history down to the coarse step above it and then walks down 0.01 mm/s at a time.
 
 The critical speed reported is the upper edge of the highest creeping band: the lowest tested
 speed above it, which is smooth (status ``found``).  If a trial above that band is undecided,
@@ -872,8 +875,17 @@ class _Diverged(Exception):
 
 
 def _grid(lo: float, hi: float, step: float) -> np.ndarray:
+    """The coarse speeds of a search on [lo, hi] [m/s], rising: ``lo``, ``lo + step``, … and
+    ``hi`` itself, the last step shorter when the range is not a whole number of steps (the
+    grid stopped at the last whole step: ``creep --high 1.61`` tested nothing above 1.42 mm/s
+    and answered "> 1.61 mm/s (creeps at every tested speed)"; an outside check, 2026-12-07).
+    A range of whole steps (the protocol's 0.02–3.02 mm/s) gives the same speeds as before."""
     n = int(math.floor((hi - lo) / step + 1e-9))
-    return np.round(lo + step * np.arange(n + 1), 12)
+    grid = np.round(lo + step * np.arange(n + 1), 12)
+    top = round(hi, 12)
+    if top > grid[-1] + 1e-9 * step:
+        grid = np.append(grid, top)
+    return grid
 
 
 def critical_speed_from_rest(
@@ -1016,7 +1028,8 @@ def check_search_settings(system: DriveSystem, *, speed_range: object,
 
 def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coarse_step: float,
                  resolution: float, max_trials: int = 400) -> dict[float, str]:
-    """Kinds at a coarse grid on [low, high] [m/s], every boundary between two decided,
+    """Kinds at a coarse grid on [low, high] [m/s] (both ends on it, the last step shorter
+    when the range is not a whole number of steps), every boundary between two decided,
     different kinds (at least one creeping) bisected to ``resolution``.  Each speed is
     evaluated at most once; returns {speed: kind}.
 

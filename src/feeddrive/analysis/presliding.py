@@ -25,7 +25,7 @@ from typing import Any, Literal
 
 import numpy as np
 from scipy import stats
-from scipy.optimize import least_squares
+from scipy.optimize import brentq, least_squares
 
 from ..model.friction.lugre_parameters import FrictionBranch, LuGreParameters
 from ..model.mechanisms import mechanism
@@ -222,6 +222,18 @@ MAX_RESIDUAL_RATIO = 2.0
 #: record gave 4.5e-5 N/µm against 36.4, issue 12 item 5).
 MAX_PRESLIDING_DISPLACEMENT = 100e-6
 
+#: points of the geometric σ1 grid (1e-3 … 1 × ten times critical damping) the profile is
+#: first evaluated on.  It only brackets the interval's edges: each edge is then located
+#: where the profile itself crosses its threshold (a root-finder on the refitted SSR,
+#: ``PROFILE_EDGE_RTOL``), so the bound does not depend on this number (interpolated
+#: linearly between these points it moved 3–4 % with the grid: 4.09e+04 at 13 points,
+#: 4.24e+04 at 49 or 193; an outside check, 2026-12-07).
+PROFILE_GRID_POINTS = 13
+
+#: relative tolerance [-] of a σ1 profile interval's edge (scipy.optimize.brentq's ``rtol``):
+#: well below the three significant digits the interval is printed with
+PROFILE_EDGE_RTOL = 1e-6
+
 
 def _check_presliding(t: np.ndarray, f: np.ndarray, x: np.ndarray, mass: float,
                       lines: np.ndarray | None, prefix: str) -> None:
@@ -277,7 +289,9 @@ def fit_presliding(
     """Fit σ0 and σ1 to a pre-sliding test (force below breakaway).
 
     σ1 is profiled: for each σ1 on a grid, σ0 is refitted; the interval where the residual
-    stays within the F-test bound for ``confidence`` is ``sigma1_interval``.
+    stays within the F-test bound for ``confidence`` is ``sigma1_interval``, each edge the
+    root of the profile itself between the grid points that bracket it (to a relative
+    ``PROFILE_EDGE_RTOL``), so that it does not depend on the grid.
 
     Parameters
     ----------
@@ -310,7 +324,8 @@ def fit_presliding(
     source : str, optional
         The file name, for messages.
     progress : callable, optional
-        Receives a short line at each stage of a long fit (start k of 3, profile point i of n).
+        Receives a short line at each stage of a long fit (start k of 3, profile point i of
+        n, the interval's edges).
 
     Returns
     -------
@@ -421,15 +436,16 @@ def fit_presliding(
     # profile of σ1: refit σ0 at each σ1 of a grid spanning 0 … 10× critical damping
     s1_max = 10.0 * 2.0 * math.sqrt(s0_hat * mass)
     grid = np.unique(np.concatenate([
-        [0.0], np.geomspace(1e-3, 1.0, 13) * s1_max,
+        [0.0], np.geomspace(1e-3, 1.0, PROFILE_GRID_POINTS) * s1_max,
         s1_hat + sd[1] * np.array([-3.0, -2.0, -1.0, 1.0, 2.0, 3.0]) if np.isfinite(sd[1])
         else np.array([]),
         [s1_hat],
     ]))
     grid = grid[(grid >= 0.0) & (grid <= s1_max)]
     prof = np.empty(grid.size)
+    s0_at = np.empty(grid.size)  # the refitted σ0 at each grid point [N/m]
     i_hat = int(np.argmin(np.abs(grid - s1_hat)))
-    prof[i_hat] = ssr
+    prof[i_hat], s0_at[i_hat] = ssr, s0_hat
     # continuation: walk away from the optimum, each refit starting from its neighbour's σ0
     done = 0
     for order in (range(i_hat + 1, grid.size), range(i_hat - 1, -1, -1)):
@@ -439,9 +455,19 @@ def fit_presliding(
             say(f"profiling σ1: point {done} of {grid.size - 1}")
             res = fit(float(grid[i]), (s0_prev, float(grid[i])))
             prof[i] = 2.0 * res.cost * scale**2
-            s0_prev = float(res.x[0] * s0_init)
+            s0_prev = s0_at[i] = float(res.x[0] * s0_init)
     threshold = ssr * (1.0 + float(stats.f.ppf(confidence, 1, dof)) / dof)
-    low, high = _profile_interval(grid, prof, threshold, s1_hat, s1_max)
+
+    def profile(s1: float, s0_start: float) -> float:
+        """The profiled SSR at σ1 [m²]: σ0 refitted from ``s0_start``."""
+        return float(2.0 * fit(s1, (s0_start, s1)).cost * scale**2)
+
+    say("profiling σ1: locating the interval's edges")
+    low, high, edges = _profile_interval(grid, prof, threshold, s1_hat, profile, s0_at)
+    if edges:  # the edges on the profile, so that it crosses the threshold where they are
+        where = np.concatenate([grid, [e[0] for e in edges]])
+        by_s1 = np.argsort(where, kind="stable")
+        grid, prof = where[by_s1], np.concatenate([prof, [e[1] for e in edges]])[by_s1]
 
     s0_est = estimate(s0_hat, cov[0, 0], tq, "N/m", confidence)
     s1_est = estimate(s1_hat, cov[1, 1], tq, "N s/m", confidence)
@@ -485,27 +511,44 @@ def fit_presliding(
 
 
 def _profile_interval(grid: np.ndarray, prof: np.ndarray, threshold: float, s1_hat: float,
-                      s1_max: float) -> tuple[float, float]:
-    """Where the profiled SSR crosses ``threshold`` on each side of the optimum."""
+                      profile: Callable[[float, float], float], s0_at: np.ndarray,
+                      ) -> tuple[float, float, list[tuple[float, float]]]:
+    """Where the profiled SSR crosses ``threshold`` on each side of the optimum [N s/m]: the
+    grid brackets each crossing (the first grid point outside, walking away from the
+    optimum, and its inner neighbour); the edge is the root of ``profile(σ1, σ0 start) −
+    threshold`` in that bracket (:func:`scipy.optimize.brentq`, relative tolerance
+    :data:`PROFILE_EDGE_RTOL`, σ0 refitted from the inner point's), not a linear
+    interpolation between the grid points, which moved with the grid.  Returns (low, high,
+    the edges located as (σ1, SSR) pairs); ``low`` is the grid's first point (0) and
+    ``high`` inf when the profile stays within the threshold to that end."""
     inside = prof <= threshold
     i_hat = int(np.argmin(np.abs(grid - s1_hat)))
+    edges: list[tuple[float, float]] = []
+
+    def edge(inner: int, outer: int) -> float:
+        known = {float(grid[inner]): float(prof[inner]), float(grid[outer]): float(prof[outer])}
+        start = float(s0_at[inner])
+
+        def excess(s1: float) -> float:
+            value = known[s1] if s1 in known else profile(s1, start)
+            known[s1] = value
+            return value - threshold
+
+        a, b = sorted((float(grid[inner]), float(grid[outer])))
+        root = float(brentq(excess, a, b, xtol=1e-12 * max(abs(b), 1.0),
+                            rtol=PROFILE_EDGE_RTOL))
+        edges.append((root, known[root] if root in known else threshold))
+        return root
+
     lo_i = i_hat
     while lo_i > 0 and inside[lo_i - 1]:
         lo_i -= 1
-    if lo_i == 0 and inside[0]:
-        low = float(grid[0])
-    else:
-        a, b = lo_i - 1, lo_i
-        low = float(np.interp(threshold, [prof[b], prof[a]], [grid[b], grid[a]]))
+    low = float(grid[0]) if lo_i == 0 and inside[0] else edge(lo_i, lo_i - 1)
     hi_i = i_hat
     while hi_i < grid.size - 1 and inside[hi_i + 1]:
         hi_i += 1
-    if hi_i == grid.size - 1 and inside[-1]:
-        high = math.inf
-    else:
-        a, b = hi_i, hi_i + 1
-        high = float(np.interp(threshold, [prof[a], prof[b]], [grid[a], grid[b]]))
-    return low, high
+    high = math.inf if hi_i == grid.size - 1 and inside[-1] else edge(hi_i, hi_i + 1)
+    return low, high, edges
 
 
 def site_mass(params: DriveParameters, site: str, drive: str) -> float:
