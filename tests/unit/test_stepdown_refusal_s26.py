@@ -34,18 +34,19 @@ def small_host(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_the_staircase_is_refused_on_its_start_with_its_length(small_host: None) -> None:
     """From 20 mm/s down to 0.05 mm/s in 0.1-mm/s steps held 12 s (the protocol's first
-    dwell): 200 steps, 2 400 s, 2.4e6 samples at 1 ms, each 2 × BYTES_PER_SAMPLE bytes with
-    its copy — 2.2 GiB, more than half of 1 GiB; 0.5 GiB holds 45 of the 200 steps."""
+    dwell): 201 steps (19.95 mm/s and 20 mm/s itself at the top), 2 412 s, 2.4e6 samples at
+    1 ms, each 2 × BYTES_PER_SAMPLE bytes with its copy — 2.2 GiB, more than half of 1 GiB;
+    0.5 GiB holds 45 of the 201 steps."""
     system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
-    samples = int(200 * 12.0 / 1e-3) + 1
+    samples = int(201 * 12.0 / 1e-3) + 1
     need = samples * BYTES_PER_SAMPLE * 2.0
     with pytest.raises(ParameterError) as err:
         fd.critical_speed_stepdown(system, start_speed=20e-3, coarse_step=1e-4)
     assert err.value.field == "start_speed" and err.value.value == 20e-3
     text = str(err.value)
-    assert "down to 0.05 mm/s (200 steps held 12 s each, 2400 s" in text, text
+    assert "down to 0.05 mm/s (201 steps held 12 s each, 2412 s" in text, text
     assert f"about {need / GIB:.3g} GiB, more than half the 1 GiB available" in text, text
-    assert f"about {int(200 * 0.5 * GIB / need)} steps fit" in text, text
+    assert f"about {int(201 * 0.5 * GIB / need)} steps fit" in text, text
 
 
 def test_a_staircase_that_fits_is_not_refused(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -76,5 +77,5 @@ def test_the_command_line_names_high_before_any_search(small_host: None, method:
     assert res.exit_code == 2, res.output
     line = res.output.strip().splitlines()[-1]
     assert line.startswith("error: --high = 20 [mm/s]: its staircase down to 0.02 mm/s "
-                           "(200 steps held 12 s each"), line
+                           "(201 steps held 12 s each"), line
     assert "duration" not in line and "start_speed" not in line, line
