@@ -18,14 +18,13 @@ from collections.abc import Callable
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
+from test_identification import lugre_reference
 
 import feeddrive
 from feeddrive.analysis import presliding
 from feeddrive.analysis.presliding import DynamicFit, fit_presliding, site_mass
 from feeddrive.analysis.presliding_rig import simulate_presliding
-from feeddrive.model.friction.stribeck import bristle_rate
 
 PARAMS = feeddrive.preset("wang2021")
 SCREW = PARAMS.friction.screw
@@ -42,22 +41,10 @@ GRID_RTOL = 1e-5
 
 def _record(force: Callable[[float], float], duration: float, rate: float,
             seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    t = np.arange(0.0, duration, 1.0 / rate)
-    s0, s1 = SCREW.bristle_stiffness, SCREW.bristle_damping
-
-    def rhs(time: float, y: np.ndarray) -> list[float]:
-        x, v, z = y
-        zdot = float(bristle_rate(v, z, SCREW))
-        s2 = (SCREW.positive if v >= 0 else SCREW.negative).viscous_coefficient
-        return [v, (force(time) - s0 * z - s1 * zdot - s2 * v) / MASS, zdot]
-
-    z0 = force(0.0) / s0
-    sol = solve_ivp(rhs, (0.0, t[-1]), [z0, 0.0, z0], method="DOP853", t_eval=t, rtol=1e-10,
-                    atol=1e-16, max_step=1.0 / rate)
-    assert sol.success
-    x = sol.y[0]
+    """test_identification's DOP853 reference of mass + LuGre, 1 % position noise."""
+    t, f, x = lugre_reference(force, duration, rate)
     rng = np.random.default_rng(seed)
-    return t, np.array([force(v) for v in t]), x + 0.01 * np.ptp(x) * rng.standard_normal(x.size)
+    return t, f, x + 0.01 * np.ptp(x) * rng.standard_normal(x.size)
 
 
 def _slow(time: float) -> float:

@@ -349,7 +349,7 @@ def output_memory(duration: float, output_interval: float) -> tuple[int, float, 
         The output samples, the bytes they need with their working copies, and the bytes
         available; :func:`check_output_memory` refuses a run needing more than half.
     """
-    samples = int(duration / output_interval) + 1
+    samples = recorded_samples(duration, output_interval)
     return samples, float(samples * BYTES_PER_SAMPLE * _COPY_FACTOR), float(available_memory())
 
 
