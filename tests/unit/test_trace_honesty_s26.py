@@ -100,7 +100,7 @@ def test_the_stick_fraction_is_stable_where_resolved_and_flagged_where_not() -> 
     assert abs(coarse.stick_fraction - fine.stick_fraction) > 0.01  # it moves …
     note = coarse.sampling_note  # … and says so
     assert note is not None
-    assert re.match(r"stick fraction 0\.\d+ depends on the sampling at its printed digits "
+    assert re.match(r"stick fraction 0\.\d+ depends on the sampling "
                     r"\(20-ms step, 9\.1\d samples per 5\.47-Hz period\): 0\.\d+ from every "
                     r"second sample", note), note
     assert coarse.to_dict()["sampling_note"] == note

@@ -56,6 +56,15 @@ __all__ = [
 ]
 
 
+#: a stick fraction whose estimate from every second sample differs by more than this
+#: fraction of it (and by more than :data:`SAMPLING_ABSOLUTE`) is said to depend on the
+#: sampling (:attr:`CreepMetrics.sampling_note`): the step's own error is about a third of it
+SAMPLING_RELATIVE = 0.1
+#: [-] differences below this never make the note (half a unit of the verdict's 2 % threshold
+#: in its first digit): a stick fraction of 0.003 against 0.001 is no verdict's matter
+SAMPLING_ABSOLUTE = 0.005
+
+
 @dataclass(frozen=True)
 class CreepThresholds:
     """Limits that turn creep metrics into a verdict.  All ratios are relative to |v_cmd|.
@@ -203,8 +212,11 @@ class CreepMetrics:
     @property
     def sampling_note(self) -> str | None:
         """Whether the stick fraction (and so the verdict) depends on the sampling: it and
-        :attr:`stick_fraction_coarse` (every second sample) differ by more than half a unit
-        in the third significant digit, the digits printed; else None.
+        :attr:`stick_fraction_coarse` (every second sample) differ by more than
+        :data:`SAMPLING_RELATIVE` of it and :data:`SAMPLING_ABSOLUTE`, or on the side of the
+        verdict's threshold; else None.  The interpolant's crossing times are second-order
+        in the step, so the stick fraction is good to about a third of that difference: a
+        note means it may be off by more than 3 %.
 
         The interpolant's stick time is exact only where the speed is linear between samples:
         a record that does not resolve the stick phase gives a lower stick fraction the
@@ -220,22 +232,23 @@ class CreepMetrics:
         coarse, stick = self.stick_fraction_coarse, self.stick_fraction
         if coarse is None:
             return None
-        shown = float(f"{stick:.3g}")
-        digit = 0.5 * 10.0 ** (math.floor(math.log10(abs(shown))) - 2) if shown else 5e-4
-        if abs(coarse - stick) <= digit:
-            return None
         th = self.thresholds
+        flips = (stick > th.max_stick_fraction) != (coarse > th.max_stick_fraction) \
+            and self.ripple_ratio <= th.max_ripple_ratio
+        off = abs(coarse - stick)
+        if not flips and (off <= SAMPLING_RELATIVE * stick or off <= SAMPLING_ABSOLUTE):
+            return None
         step = (self.window_end - self.window_start) / max(self.window_samples - 1, 1)
         per = ("" if self.stick_slip_frequency is None else
                f", {1.0 / (self.stick_slip_frequency * step):.3g} samples per "
                f"{self.stick_slip_frequency:.3g}-Hz period")
-        flips = (stick > th.max_stick_fraction) != (coarse > th.max_stick_fraction) \
-            and self.ripple_ratio <= th.max_ripple_ratio
-        verdict = ("; the verdict is not firm (from every second sample it would differ)"
-                   if flips else "")
-        return (f"stick fraction {stick:.3g} depends on the sampling at its printed digits "
+        # smooth with an unresolved stick phase: a finer record can show the table sticking
+        unsure = flips or self.verdict == "smooth"
+        verdict = ("; the verdict is not firm (a finer output interval can find more stick "
+                   "time)" if unsure else "")
+        return (f"stick fraction {stick:.3g} depends on the sampling "
                 f"({1e3 * step:.3g}-ms step{per}): {coarse:.3g} from every second sample; "
-                f"the record does not resolve the stick phase to them (a finer interval "
+                f"the record does not resolve the stick phase (a finer output interval "
                 f"does){verdict}")
 
     @property

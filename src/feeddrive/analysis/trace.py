@@ -304,6 +304,12 @@ def smoothing_note(metrics: CreepMetrics, window: int, sample_time: float) -> st
     -------
     str or None
         The note: the gain at the fundamental and its 2nd and 3rd harmonics.
+
+    References
+    ----------
+    Savitzky, A., Golay, M. J. E. (1964). Smoothing and differentiation of data by simplified
+    least squares procedures. Analytical Chemistry 36(8), 1627–1639.
+    Wang2021 Sect. 5: the CDFS's low-speed stick-slip.
     """
     f = metrics.stick_slip_frequency
     if f is None or window < 3:

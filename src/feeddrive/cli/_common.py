@@ -8,7 +8,7 @@ import json
 import os
 import sys
 from collections.abc import Callable, Iterator
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import typer
 from rich.console import Console
@@ -304,6 +304,56 @@ def _fail(message: str, code: int) -> typer.Exit:
     err_console.print(f"error: {_one_line(message)}", markup=False, highlight=False,
                       soft_wrap=True)
     return typer.Exit(code=code)
+
+
+def save_output(result: Any, output: str, *,
+                what: str = "the run finished: its summary is printed"
+                ) -> tuple[str | None, str | None]:
+    """Write a finished run's ``--output``: ``(the file, None)``, or ``(None, why not)`` as
+    one line naming the file, what failed and that nothing was written, so that the command
+    still prints the run's summary (and writes its --plot) before it fails with it.
+
+    A writer's failure after the run ended it with the run lost: scipy's ``MatWriteError``
+    as a traceback, a full disk with the summary unprinted (an outside check, 2026-12-07).
+
+    Parameters
+    ----------
+    result : Result
+        The run.
+    output : str
+        The file (``.nc``, ``.mat``: written whole after the run).
+    what : str, default "the run finished: its summary is printed"
+        What the user still has, said in the line.
+
+    Returns
+    -------
+    tuple of (str or None, str or None)
+        The file written, or None and the line saying why not.
+    """
+    from ..io.outputs import shown
+    from ..parameters import ParameterError
+
+    try:
+        return str(result.save(output)), None
+    except ParameterError as err:  # the writer's own refusal (a .mat past its format's limit)
+        why = err.message
+    except OSError as err:  # a full disk, a file-size limit
+        why = err.strerror or str(err)
+    except MemoryError:
+        why = "out of memory while writing it"
+    except Exception as err:  # noqa: BLE001  (a writer library's own error: said, not raised)
+        why = f"{type(err).__name__}: {err}"
+    return None, f"{shown(output)}: {why}; not written ({what})"
+
+
+#: the CSV reading options, one definition for every command that reads a record (analyze,
+#: identify static/dynamic, fit, validate: docs/measured-data.md "Common file rules")
+SepOption = Annotated[str | None, typer.Option(
+    "--sep", help="Column separator of the CSV (default: detected; 'tab', 'space' accepted).")]
+DecimalOption = Annotated[str, typer.Option("--decimal", help="Decimal mark of the CSV: . or ,")]
+TimeUnitOption = Annotated[str | None, typer.Option("--time-unit",
+                                                    help="Unit of the time column: s "
+                                                    "(default) or ms.")]
 
 
 #: the API's fields the CLI takes as options, field → (option, the option's unit, the factor

@@ -18,7 +18,18 @@ from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, describe_critical
 from ..io.outputs import PLOT_FORMATS
 from ..parameters import ParameterError
 from . import _units
-from ._common import MM, MM_PER_S, app, console, outputs, print_json, user_errors
+from ._common import (
+    MM,
+    MM_PER_S,
+    DecimalOption,
+    SepOption,
+    TimeUnitOption,
+    app,
+    console,
+    outputs,
+    print_json,
+    user_errors,
+)
 
 
 def _say(text: str) -> None:
@@ -70,11 +81,11 @@ def analyze_command(
     speed_column: str | None = typer.Option(
         None, "--speed-column", help="Use this speed column [mm/s] instead of "
         "differentiating the position."),
-    time_unit: str | None = typer.Option(None, "--time-unit", help="s (default) or ms."),
+    time_unit: TimeUnitOption = None,
     position_unit: str | None = typer.Option(None, "--position-unit",
                                              help="mm (default), um, nm, m."),
-    sep: str | None = typer.Option(None, "--sep", help="Column separator (default: detected)."),
-    decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
+    sep: SepOption = None,
+    decimal: DecimalOption = ".",
     smoothing: float | None = typer.Option(
         None, "--smoothing", help="Savitzky–Golay window [ms] (default 20 ms)."),
     segments: bool = typer.Option(True, "--segments/--no-segments",

@@ -16,6 +16,8 @@ from ..parameters import DriveParameters, ParameterError
 from . import _units
 from ._common import (
     STORE,
+    DecimalOption,
+    SepOption,
     app,
     console,
     err_console,
@@ -60,15 +62,9 @@ def _table_motor_constant(params: DriveParameters, drive: str, table_position: f
     return system.model(ConstantSpeed(0.0)).parameter(slot)
 
 
-#: the CSV reading options of ``fit`` and ``validate``, one definition for both: those
-#: ``analyze`` and ``identify`` pass to the readers of feeddrive.io.measured
-#: (docs/measured-data.md)
-SepOption = Annotated[str | None, typer.Option(
-    "--sep", help="Column separator of the CSV traces (default: detected; 'tab', 'space' "
-    "accepted).")]
-DecimalOption = Annotated[str, typer.Option("--decimal", help="Decimal mark of the CSV "
-                                            "traces: . or ,")]
-TimeUnitOption = Annotated[str | None, typer.Option(
+#: ``fit``'s and ``validate``'s time unit: a CSV's, or with --map the variable's own
+#: (their --sep and --decimal are every reader's, :data:`._common.SepOption`)
+FitTimeUnitOption = Annotated[str | None, typer.Option(
     "--time-unit", help="Unit of the CSV traces' time column: s (default) or ms (with --map: "
     "time=VARIABLE[ms]).")]
 
@@ -209,7 +205,7 @@ def fit_command(
                                       help=_INPUT_HELP),
     sep: SepOption = None,
     decimal: DecimalOption = ".",
-    time_unit: TimeUnitOption = None,
+    time_unit: FitTimeUnitOption = None,
     position: float = typer.Option(400.0, "--position", help="Table position [mm]."),
     confidence: float = typer.Option(0.95, "--confidence", help="Interval level [fraction]."),
     max_evaluations: int = typer.Option(200, "--max-evaluations",
@@ -462,7 +458,7 @@ def validate_command(
                                       help=_INPUT_HELP),
     sep: SepOption = None,
     decimal: DecimalOption = ".",
-    time_unit: TimeUnitOption = None,
+    time_unit: FitTimeUnitOption = None,
     level: float = typer.Option(0.95, "--level", help="Level of the prediction band "
                                 "[fraction]."),
     plot: str | None = typer.Option(None, "--plot", help="Write measured, predicted and "

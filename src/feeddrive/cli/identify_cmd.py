@@ -23,6 +23,9 @@ if TYPE_CHECKING:
 from ._common import (
     MM_PER_S,
     N_PER_UM,
+    DecimalOption,
+    SepOption,
+    TimeUnitOption,
     app,
     console,
     err_console,
@@ -43,9 +46,6 @@ app.add_typer(identify_app, name="identify")
 
 SITES = ("screw", "nut", "guide")  # the CDFS/DDFS sites (feeddrive.units.SITES)
 _SITE_HELP = "Friction site: screw, nut or guide (Wang2021 Sect. 4)."
-_SEP_HELP = "Column separator (default: detected; 'tab', 'space' accepted)."
-
-
 def _site(site: str) -> str:
     if site not in SITES:
         raise ParameterError("--site", site, f"expected one of {', '.join(SITES)}")
@@ -162,8 +162,8 @@ def static_command(
     weighting: str = typer.Option("relative", "--weighting",
                                   help="relative (noise ∝ force) or absolute."),
     confidence: float = typer.Option(0.95, "--confidence", help="Confidence level [-]."),
-    sep: str | None = typer.Option(None, "--sep", help=_SEP_HELP),
-    decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
+    sep: SepOption = None,
+    decimal: DecimalOption = ".",
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),
@@ -233,13 +233,13 @@ def dynamic_command(
     time_column: str = typer.Option("time", "--time-column"),
     force_column: str = typer.Option("force", "--force-column"),
     position_column: str = typer.Option("position", "--position-column"),
-    time_unit: str | None = typer.Option(None, "--time-unit", help="s (default) or ms."),
+    time_unit: TimeUnitOption = None,
     force_unit: str | None = typer.Option(None, "--force-unit", help="N (default) or kN."),
     position_unit: str | None = typer.Option(None, "--position-unit",
                                              help="um (default), nm, mm, m."),
     confidence: float = typer.Option(0.95, "--confidence", help="Confidence level [-]."),
-    sep: str | None = typer.Option(None, "--sep", help=_SEP_HELP),
-    decimal: str = typer.Option(".", "--decimal", help="Decimal mark: . or ,"),
+    sep: SepOption = None,
+    decimal: DecimalOption = ".",
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
     force: bool = typer.Option(False, "--force", help="Replace existing --out/--plot files."),

@@ -109,7 +109,7 @@ def run_machine(machine_file: str, *, contour: str, radius: float, feed: float,
     summary = machine_summary(result, machine, path)
     unwritten = None
     if output:
-        from .simulate_cmd import save_output
+        from ._common import save_output
 
         written, unwritten = save_output(result, output)
         if written is not None:

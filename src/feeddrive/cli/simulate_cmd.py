@@ -25,6 +25,7 @@ from ._common import (
     progress_bar,
     resolve_parameters,
     run_outcome,
+    save_output,
     user_errors,
 )
 from ._solver import accuracy_options, max_steps_help
@@ -349,46 +350,6 @@ def _kept(stop: Any, output: str | None, streamed: bool, bar: Any) -> Any:
                           soft_wrap=True)
         return stop
     return SimulationInterrupted(stop.t_reached, stop.result, written)
-
-
-def save_output(result: Any, output: str, *,
-                what: str = "the run finished: its summary is printed"
-                ) -> tuple[str | None, str | None]:
-    """Write a finished run's ``--output``: ``(the file, None)``, or ``(None, why not)`` as
-    one line naming the file, what failed and that nothing was written, so that the command
-    still prints the run's summary (and writes its --plot) before it fails with it.
-
-    A writer's failure after the run ended it with the run lost: scipy's ``MatWriteError``
-    as a traceback, a full disk with the summary unprinted (an outside check, 2026-12-07).
-
-    Parameters
-    ----------
-    result : Result
-        The run.
-    output : str
-        The file (``.nc``, ``.mat``: written whole after the run).
-    what : str, default "the run finished: its summary is printed"
-        What the user still has, said in the line.
-
-    Returns
-    -------
-    tuple of (str or None, str or None)
-        The file written, or None and the line saying why not.
-    """
-    from ..io.outputs import shown
-    from ..parameters import ParameterError
-
-    try:
-        return str(result.save(output)), None
-    except ParameterError as err:  # the writer's own refusal (a .mat past its format's limit)
-        why = err.message
-    except OSError as err:  # a full disk, a file-size limit
-        why = err.strerror or str(err)
-    except MemoryError:
-        why = "out of memory while writing it"
-    except Exception as err:  # noqa: BLE001  (a writer library's own error: said, not raised)
-        why = f"{type(err).__name__}: {err}"
-    return None, f"{shown(output)}: {why}; not written ({what})"
 
 
 def run_header(drive: str, profile: str, profile_file: str | None, table_speed: float | None,
