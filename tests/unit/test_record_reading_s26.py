@@ -95,7 +95,7 @@ def test_fit_and_validate_read_csv_traces_with_the_reading_options(tmp_path: Pat
 
     import typer
 
-    from feeddrive.cli import app
+    from feeddrive.cli import _common, analyze_cmd, app, identify_cmd
 
     group = typer.main.get_command(app)
     for name, function in (("fit", fit_cmd.fit_command), ("validate", fit_cmd.validate_command)):
@@ -104,7 +104,13 @@ def test_fit_and_validate_read_csv_traces_with_the_reading_options(tmp_path: Pat
         assert {"--sep", "--decimal", "--time-unit"} <= opts, name
         annotations = {k: v.annotation for k, v in inspect.signature(function).parameters.items()}
         assert (annotations["sep"], annotations["decimal"], annotations["time_unit"]) == \
-            (fit_cmd.SepOption, fit_cmd.DecimalOption, fit_cmd.TimeUnitOption), name
+            (_common.SepOption, _common.DecimalOption, fit_cmd.FitTimeUnitOption), name
+    # one definition of --sep and --decimal for every reader of a record
+    for function in (analyze_cmd.analyze_command, identify_cmd.static_command,
+                     identify_cmd.dynamic_command):
+        annotations = {k: v.annotation for k, v in inspect.signature(function).parameters.items()}
+        assert (annotations["sep"], annotations["decimal"]) == \
+            (_common.SepOption, _common.DecimalOption), function.__name__
 
 
 # ---------------------------------------------------------------- finding 2: units in --map
