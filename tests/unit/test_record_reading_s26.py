@@ -102,13 +102,15 @@ def test_fit_and_validate_read_csv_traces_with_the_reading_options(tmp_path: Pat
         command = group.commands[name]  # type: ignore[attr-defined]
         opts = {o for p in command.params for o in p.opts}
         assert {"--sep", "--decimal", "--time-unit"} <= opts, name
-        annotations = {k: v.annotation for k, v in inspect.signature(function).parameters.items()}
+        annotations = {k: v.annotation for k, v in
+                       inspect.signature(function, eval_str=True).parameters.items()}
         assert (annotations["sep"], annotations["decimal"], annotations["time_unit"]) == \
             (_common.SepOption, _common.DecimalOption, fit_cmd.FitTimeUnitOption), name
     # one definition of --sep and --decimal for every reader of a record
     for function in (analyze_cmd.analyze_command, identify_cmd.static_command,
                      identify_cmd.dynamic_command):
-        annotations = {k: v.annotation for k, v in inspect.signature(function).parameters.items()}
+        annotations = {k: v.annotation for k, v in
+                       inspect.signature(function, eval_str=True).parameters.items()}
         assert (annotations["sep"], annotations["decimal"]) == \
             (_common.SepOption, _common.DecimalOption), function.__name__
 
