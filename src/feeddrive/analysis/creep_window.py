@@ -57,8 +57,8 @@ __all__ = [
 
 
 #: a stick fraction whose estimate from every second sample differs by more than this
-#: fraction of it (and by more than :data:`SAMPLING_ABSOLUTE`) is said to depend on the
-#: sampling (:attr:`CreepMetrics.sampling_note`): the step's own error is about a third of it
+#: fraction of it (and by more than ``SAMPLING_ABSOLUTE``) is said to depend on the
+#: sampling (``CreepMetrics.sampling_note``): the step's own error is about a third of it
 SAMPLING_RELATIVE = 0.1
 #: [-] differences below this never make the note (half a unit of the verdict's 2 % threshold
 #: in its first digit): a stick fraction of 0.003 against 0.001 is no verdict's matter
@@ -213,7 +213,7 @@ class CreepMetrics:
     def sampling_note(self) -> str | None:
         """Whether the stick fraction (and so the verdict) depends on the sampling: it and
         :attr:`stick_fraction_coarse` (every second sample) differ by more than
-        :data:`SAMPLING_RELATIVE` of it and :data:`SAMPLING_ABSOLUTE`, or on the side of the
+        ``SAMPLING_RELATIVE`` of it and ``SAMPLING_ABSOLUTE``, or on the side of the
         verdict's threshold; else None.  The interpolant's crossing times are second-order
         in the step, so the stick fraction is good to about a third of that difference: a
         note means it may be off by more than 3 %.
