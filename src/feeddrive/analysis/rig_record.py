@@ -27,6 +27,12 @@ time stamps keep their first sample; irregular steps are kept (the model is comp
 measured instants) and the reference is resampled on a uniform grid of the median step.  A
 time that goes backwards is refused.
 
+A variable may be a field of a 1×1 struct, named by MATLAB's dotted path: ``rec.pos[mm]``,
+``feeddrive.table_position`` (feeddrive's own ``.mat`` export keeps a run in the struct
+``feeddrive``, a machine's axis in ``feeddrive.x``).  A path that ends at a struct, a field
+a struct does not hold and a struct array (no indexing) are refused in one line, naming the
+struct's fields.
+
 MATLAB v7.3 files are HDF5 and ``scipy.io.loadmat`` cannot read them: they are read through
 h5py when it is installed, else refused in one line.
 
@@ -155,6 +161,13 @@ def _variable(role: str, spec: str, field: str) -> tuple[str, str | None]:
     if not name or "[" in name or "]" in name or unit == "":
         raise ParameterError(field, spec, "expected VARIABLE or VARIABLE[UNIT], e.g. "
                              f"t_ms[ms] [{next(iter(ROLE_UNITS[role][1]))}]")
+    if any(c in name for c in "(){}"):
+        raise ParameterError(field, spec, "expected VARIABLE or a 1×1 struct's field "
+                             "STRUCT.FIELD, e.g. rec.pos[mm]; an element of a struct array or "
+                             "cell (rec(2).pos, c{1}) is not read: save it as its own variable")
+    if "" in name.split("."):
+        raise ParameterError(field, spec, "expected VARIABLE or a struct's field "
+                             "STRUCT.FIELD, e.g. rec.pos[mm]: a name between dots is empty")
     role_factor(role, unit, field)
     return name, unit
 
@@ -247,34 +260,144 @@ def parse_map(items: Sequence[str], input: str | None = None) -> dict[str, str]:
     return out
 
 
+class _PathRefused(Exception):
+    """A mapped ``name`` (a variable or a struct's field) that holds no numeric array: why,
+    in one line, without the role (:func:`read_rig_record` adds it)."""
+
+    def __init__(self, name: str, reason: str) -> None:
+        super().__init__(reason)
+        self.name = name
+
+
 def _load_mat(path: Path, names: Sequence[str]) -> dict[str, np.ndarray]:
-    """The variables ``names`` of a MATLAB file (v5/v7 by scipy.io, v7.3 by h5py)."""
+    """The arrays ``names`` name in a MATLAB file (v5/v7 by scipy.io, v7.3 by h5py): variables
+    (``qm``) or fields of 1×1 structs, MATLAB's dotted paths (``rec.pos``,
+    ``feeddrive.x.table_position``); :class:`_PathRefused` for the first that names none."""
     from scipy.io import loadmat
 
     src = str(path)
     if not path.is_file():
         raise FitError(f"{src}: no such file")
+    tops = list(dict.fromkeys(name.split(".")[0] for name in names))
     try:
-        raw: dict[str, Any] = loadmat(path, variable_names=list(names))
+        raw: dict[str, Any] = loadmat(path, variable_names=tops, struct_as_record=False)
         held = sorted(k for k in _mat_names(path) if not k.startswith("__"))
     except NotImplementedError:  # scipy: "Please use HDF reader for matlab v7.3 files"
-        if importlib.util.find_spec("h5py") is None:
-            raise FitError(f"{src}: a MATLAB v7.3 (HDF5) file; install h5py to read it, or "
-                           "save it in MATLAB with save(..., '-v7')") from None
-        import h5py
-
-        with h5py.File(path, "r") as f:
-            held = sorted(k for k in f.keys() if not k.startswith("#"))
-            raw = {k: np.asarray(f[k]).T for k in names if k in f}
+        return _load_mat73(path, names)
     except (ValueError, TypeError, OSError) as err:
         raise FitError(f"{src}: not a readable MATLAB file ({err})") from None
-    return {k: v for k, v in raw.items() if k in names} | {"__held__": np.array(held)}
+    return {name: _mat5_array(raw, name, held, src) for name in names}
 
 
 def _mat_names(path: Path) -> list[str]:
     from scipy.io import whosmat
 
     return [name for name, _, _ in whosmat(path)]
+
+
+def _numeric(name: str, a: np.ndarray, src: str) -> np.ndarray:
+    if a.dtype.kind not in "fiub" or a.squeeze().ndim != 1:
+        raise _PathRefused(name, f"{name!r} in {src} is not a numeric vector (shape {a.shape})")
+    return a
+
+
+def _struct_refusal(name: str, where: str, src: str, elements: int,
+                    fields: Sequence[str], field: str | None) -> _PathRefused:
+    """Why ``where`` (a struct, or a struct array of ``elements``) is not what ``name`` needs:
+    a numeric vector (``field`` None) or a 1×1 struct holding ``field``."""
+    if elements != 1:
+        return _PathRefused(name, f"{where!r} in {src} is a struct array of {elements} "
+                            "elements; the map reads a variable or a field of a 1×1 struct "
+                            "(no indexing): save the element wanted as its own variable")
+    listed = ", ".join(fields) or "none"
+    if field is None:
+        return _PathRefused(name, f"{where!r} in {src} is a struct, not a numeric vector; name "
+                            f"one of its fields, {where}.FIELD (its fields: {listed})")
+    return _PathRefused(name, f"no field {field!r} in struct {where!r} of {src} (its fields: "
+                        f"{listed})")
+
+
+def _mat5_array(raw: Mapping[str, Any], name: str, held: Sequence[str],
+                src: str) -> np.ndarray:
+    """The array at ``name``'s path in ``raw`` (``loadmat(..., struct_as_record=False)``:
+    a struct an object array of ``mat_struct``)."""
+    from scipy.io.matlab import mat_struct
+
+    parts = name.split(".")
+    if parts[0] not in raw:
+        raise _PathRefused(name, f"no variable {parts[0]!r} in {src} (it holds: "
+                           f"{', '.join(held) or 'nothing'})")
+    value = raw[parts[0]]
+    for depth in range(1, len(parts) + 1):
+        where = ".".join(parts[:depth])
+        field = parts[depth] if depth < len(parts) else None
+        structs = isinstance(value, np.ndarray) and value.dtype == object and value.size > 0 \
+            and all(isinstance(v, mat_struct) for v in value.flat)
+        if not structs:
+            if field is not None:
+                raise _PathRefused(name, f"{where!r} in {src} is not a struct (shape "
+                                   f"{np.shape(value)}): it has no field {field!r}")
+            return _numeric(name, np.asarray(value), src)
+        fields = list(value.flat[0]._fieldnames)
+        if value.size != 1 or field is None or field not in fields:
+            raise _struct_refusal(name, where, src, value.size, fields, field)
+        value = getattr(value.flat[0], field)
+    raise AssertionError("unreachable: the last part returns or refuses")
+
+
+def _load_mat73(path: Path, names: Sequence[str]) -> dict[str, np.ndarray]:
+    """:func:`_load_mat` of a MATLAB v7.3 (HDF5) file: a 1×1 struct is a group, its fields
+    its members."""
+    src = str(path)
+    if importlib.util.find_spec("h5py") is None:
+        raise FitError(f"{src}: a MATLAB v7.3 (HDF5) file; install h5py to read it, or "
+                       "save it in MATLAB with save(..., '-v7')")
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            held = sorted(k for k in f.keys() if not k.startswith("#"))
+            return {name: _h5_array(f, name, held, src) for name in names}
+    except (ValueError, TypeError, OSError) as err:
+        raise FitError(f"{src}: not a readable MATLAB file ({err})") from None
+
+
+def _h5_array(f: Any, name: str, held: Sequence[str], src: str) -> np.ndarray:
+    """The array at ``name``'s path in the open v7.3 file ``f``."""
+    import h5py
+
+    parts = name.split(".")
+    if parts[0] not in held:
+        raise _PathRefused(name, f"no variable {parts[0]!r} in {src} (it holds: "
+                           f"{', '.join(held) or 'nothing'})")
+    node = f[parts[0]]
+    for depth in range(1, len(parts) + 1):
+        where = ".".join(parts[:depth])
+        field = parts[depth] if depth < len(parts) else None
+        if not isinstance(node, h5py.Group):
+            if field is not None:
+                raise _PathRefused(name, f"{where!r} in {src} is not a struct (shape "
+                                   f"{node.shape[::-1]}): it has no field {field!r}")
+            return _numeric(name, np.asarray(node).T, src)  # MATLAB's columns, transposed
+        fields = [k for k in node.keys() if not k.startswith("#")]
+        elements = _h5_struct_elements(node)
+        if elements != 1 or field is None or field not in fields:
+            raise _struct_refusal(name, where, src, elements, fields, field)
+        node = node[field]
+    raise AssertionError("unreachable: the last part returns or refuses")
+
+
+def _h5_struct_elements(group: Any) -> int:
+    """The elements of a v7.3 struct: 1 (a group of its fields), or those of a struct array,
+    whose fields are arrays of object references, one per element, with no ``MATLAB_class``
+    (a cell array's has one)."""
+    import h5py
+
+    for member in group.values():
+        if isinstance(member, h5py.Dataset) and "MATLAB_class" not in member.attrs \
+                and h5py.check_dtype(ref=member.dtype) is not None:
+            return int(member.size)
+    return 1
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -387,17 +510,14 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
             raise FitError(f"--map {role}={spec}: unknown role {role!r}; expected one of "
                            f"{', '.join(ROLES)}")
         specs[role] = _variable(role, str(spec), f"mapping.{role}")
-    data = _load_mat(p, [name for name, _ in specs.values()])
-    held = [str(x) for x in data.pop("__held__")]
+    try:
+        data = _load_mat(p, [name for name, _ in specs.values()])
+    except _PathRefused as err:
+        role = next(r for r, (name, _) in specs.items() if name == err.name)
+        raise FitError(f"--map {role}={mapping[role]}: {err}") from None
     columns: dict[str, np.ndarray] = {}
     for role, (var, unit) in specs.items():
-        if var not in data:
-            raise FitError(f"--map {role}={mapping[role]}: no variable {var!r} in {src} (it "
-                           f"holds: {', '.join(held) or 'nothing'})")
-        a = np.asarray(data[var])
-        if a.dtype.kind not in "fiub" or a.squeeze().ndim != 1:
-            raise FitError(f"--map {role}={mapping[role]}: {var!r} in {src} is not a numeric "
-                           f"vector (shape {a.shape})")
+        a = data[var]
         factor = role_factor(role, unit, f"mapping.{role}")
         columns[role] = a.astype(float).ravel() if factor == 1.0 \
             else a.astype(float).ravel() * factor

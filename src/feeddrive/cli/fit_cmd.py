@@ -156,7 +156,10 @@ def _read_traces(traces: list[str], params: DriveParameters, drive: str, table_p
 
 #: the --map option of fit and validate
 _MAP_HELP = ("MATLAB .mat records (v5; v7.3 through h5py): ROLE=VARIABLE, repeat or quote "
-             "several, e.g. --map 'time=t position=qm reference=qg force=vir'. Roles: time "
+             "several, e.g. --map 'time=t position=qm reference=qg force=vir'; a struct's "
+             "field by its dotted path, e.g. time=rec.t position=rec.pos[mm], or a "
+             "feeddrive .mat run's time=feeddrive.time position=feeddrive.table_position. "
+             "Roles: time "
              "[s], reference (position reference [m]) or speed_reference [m/s], and the fitted "
              "position [m], speed [m/s], current [A], force [N] (motor force at the table), "
              "drive_force [N] (force on the table from the drive); with --input also torque "
