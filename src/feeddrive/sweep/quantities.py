@@ -33,7 +33,7 @@ from typing import Any
 from .. import units
 from ..analysis import protocol
 from ..parameters import DriveParameters, ParameterError
-from ..units import INFINITE_WHEN_ABSENT, absent_value
+from ..units import absent_value
 
 QUANTITIES = ("critical-speed", "creep-trial", "linear-band", "loop-margins")
 _KEYS = ("kind", "start", "low", "high", "coarse_step", "resolution", "initial_duration",
@@ -48,6 +48,12 @@ UNITS: dict[str, str] = {
     "duration": "s", "linear_growth_rate": "1/s", "linear_unstable": "1",
     "mode_frequency": "Hz", "damping_ratio": "1", "seconds": "s",
 }
+
+#: values whose absence is a bound, not a gap: ``…gain_margin_db`` of a loop whose phase does
+#: not cross −180° above its gain crossover — an infinite gain margin (+inf here, ``inf`` in
+#: the CSV, "∞" in `feeddrive loops` and the map's cells); the rule of
+#: :func:`absent_value`, kept in ``feeddrive.units`` for every output
+INFINITE_WHEN_ABSENT = units.INFINITE_WHEN_ABSENT
 
 
 def stored_value(name: str, value: Any) -> Any:
