@@ -72,7 +72,9 @@ def test_the_literal_set_gets_its_own_mechanism_sentence() -> None:
     """wang2021-literal: no steady sliding state without friction (its undamped table), and
     steady sliding unstable at every speed scanned — said so, not the shipped set's words."""
     text = mechanism_sentence(cdfs_linear(fd.preset("wang2021-literal")))
-    assert text.startswith("steady sliding of the CDFS is linearly unstable at 0.01–5.00 mm/s;")
+    # both edges are the scan's ends (0.01, 5 mm/s): marked ≤ / ≥ (session 27)
+    assert text.startswith("steady sliding of the CDFS is linearly unstable at "
+                           "≤ 0.01–≥ 5.00 mm/s;")
     assert "no steady state without friction at 1.5 mm/s" in text and "5.47" not in text
 
 

@@ -41,12 +41,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
 
+from .. import units
 from ..engine.simulate import DriveSystem
 from ..model.assemble import Model
 from ..model.disturbances import LeadError, TorqueRipple
@@ -206,13 +207,40 @@ def _mm_s(speed: float) -> str:
     return f"{1e3 * speed:.4g} mm/s"
 
 
-def _margins_text(loop: LoopResult) -> str:
-    """A loop's crossover and margins in a repr (— where the loop has none)."""
-    def shown(value: float | None, fmt: str) -> str:
-        return "—" if value is None else format(value, fmt)
+def margin_text(name: str, value: float | None, spec: str = ".2f", unit: str = "") -> str:
+    """A loop's value (:meth:`LoopResult.as_dict`) as the text outputs print it: a gain margin
+    the loop does not have (its phase never crosses −180°) is infinite, "∞"; any other value it
+    does not have (no gain crossover: no crossover frequency, phase margin or bandwidth) is
+    "—" (``feeddrive.units.absent_value``, ``feeddrive.units.number_text``).
 
-    return (f"crossover {shown(loop.crossover_hz, '.3g')} Hz, GM "
-            f"{shown(loop.gain_margin_db, '.3g')} dB, PM {shown(loop.phase_margin_deg, '.3g')}°")
+    Parameters
+    ----------
+    name : str
+        The value's name (``"gain_margin_db"``, ``"phase_margin_deg"``, ``"crossover_hz"``,
+        ``"closed_loop_bandwidth_hz"``).
+    value : float or None
+        The value; None where the analysis found none.
+    spec, unit : str
+        Its format specification (default ".2f") and the unit printed after a number or ∞
+        (default none).
+
+    Returns
+    -------
+    str
+        The value's text, e.g. the wang2021 CDFS screw velocity loop's gain margin:
+
+        >>> margin_text("gain_margin_db", None, unit="dB")
+        '∞ dB'
+    """
+    return units.number_text(units.absent_value(name) if value is None else value, spec, unit)
+
+
+def _margins_text(loop: LoopResult) -> str:
+    """A loop's crossover and margins in a repr (∞ for a gain margin the loop has not, — for
+    any other value: :func:`margin_text`)."""
+    return (f"crossover {margin_text('crossover_hz', loop.crossover_hz, '.3g')} Hz, GM "
+            f"{margin_text('gain_margin_db', loop.gain_margin_db, '.3g')} dB, PM "
+            f"{margin_text('phase_margin_deg', loop.phase_margin_deg, '.3g')}°")
 
 
 def classify_poles(eigenvalues: np.ndarray) -> list[Pole]:
@@ -758,7 +786,8 @@ class LoopResult:
     phase_deg : numpy.ndarray
         ∠L(jω), unwrapped [deg].
     gain_margin_db : float or None
-        Gain margin [dB]; None when the phase never crosses −180°.
+        Gain margin [dB]; None when the phase never crosses −180°: an infinite margin, printed
+        "∞" (:func:`margin_text`).
     phase_margin_deg : float or None
         Phase margin [deg]; None when the gain never crosses 0 dB.
     crossover_hz : float or None
@@ -1363,16 +1392,46 @@ class StabilityBand:
         high = bool(self.max_real_part[-1] > 0) if self.max_real_part.size else False
         return [(k == 0 and low, k == n - 1 and high) for k in range(n)]
 
-    def _edge_texts(self) -> list[tuple[str, str]]:
-        """Each band's edges [mm/s] as printed: ``≤ low`` / ``≥ high`` at the scan's ends."""
-        return [(f"{'≤ ' if cut_lo else ''}{1e3 * lo:.3f}", f"{'≥ ' if cut_hi else ''}"
-                 f"{1e3 * hi:.3f}")
-                for (lo, hi), (cut_lo, cut_hi) in zip(self.intervals, self.edges_at_scan_ends,
-                                                      strict=True)]
+    def edge_texts(self, digits: int = 3) -> list[tuple[str, str]]:
+        """Each band's edges [mm/s] as printed, ``≤ low`` / ``≥ high`` where an edge is the
+        scan's end (:func:`band_edge_texts`).
+
+        Parameters
+        ----------
+        digits : int, default 3
+            Decimals [mm/s].
+
+        Returns
+        -------
+        list of (str, str)
+            Per band, its lower and upper edge's text.
+        """
+        return band_edge_texts(self._bands_mm_s(), self.edges_at_scan_ends, digits)
+
+    def text(self, digits: int = 3, unit: str = "") -> str:
+        """The bands as one text, ``low–high`` each [mm/s], an edge at the scan's end marked
+        ≤ / ≥ (:func:`bands_text`); "" for none.
+
+        Parameters
+        ----------
+        digits : int, default 3
+            Decimals [mm/s].
+        unit : str, default ""
+            Printed after each band (``"mm/s"``).
+
+        Returns
+        -------
+        str
+            The bands' text.
+        """
+        return bands_text(self._bands_mm_s(), self.edges_at_scan_ends, digits, unit)
+
+    def _bands_mm_s(self) -> list[tuple[float, float]]:
+        return [(1e3 * lo, 1e3 * hi) for lo, hi in self.intervals]
 
     def __repr__(self) -> str:
         bands = "; ".join(f"unstable {lo}–{hi} mm/s (mode {fr:.3g} Hz)"
-                          for (lo, hi), fr in zip(self._edge_texts(), self.mode_frequency_hz,
+                          for (lo, hi), fr in zip(self.edge_texts(), self.mode_frequency_hz,
                                                   strict=True)) or "stable at every speed"
         return (f"<feeddrive StabilityBand: {bands}; {self.speeds.size} speeds "
                 f"{1e3 * self.speeds[0]:.3g}–{1e3 * self.speeds[-1]:.3g} mm/s scanned, "
@@ -1405,6 +1464,93 @@ class StabilityBand:
                           int(self.speeds.size)],
             "notes": list(self.notes),
         }
+
+
+def band_edge_texts(bands_mm_s: Sequence[Sequence[float]], cut: Sequence[Sequence[bool]],
+                    digits: int = 3) -> list[tuple[str, str]]:
+    """Each unstable band's edges as every output prints them: ``≤ low`` / ``≥ high`` where
+    the edge is the scan's end (:attr:`StabilityBand.edges_at_scan_ends`), not an edge found —
+    the band goes on beyond it.
+
+    Parameters
+    ----------
+    bands_mm_s : sequence of (float, float)
+        (lower, upper) edge of each band [mm/s].
+    cut : sequence of (bool, bool)
+        Per band, whether its lower (upper) edge is the scan's end.
+    digits : int, default 3
+        Decimals [mm/s].
+
+    Returns
+    -------
+    list of (str, str)
+        Per band, its lower and upper edge's text (no unit).
+
+    Examples
+    --------
+    >>> band_edge_texts([(0.17, 5.0)], [(False, True)], 2)
+    [('0.17', '≥ 5.00')]
+    """
+    return [(f"{'≤ ' if cut_lo else ''}{lo:.{digits}f}",
+             f"{'≥ ' if cut_hi else ''}{hi:.{digits}f}")
+            for (lo, hi), (cut_lo, cut_hi) in zip(bands_mm_s, cut, strict=True)]
+
+
+def bands_text(bands_mm_s: Sequence[Sequence[float]], cut: Sequence[Sequence[bool]],
+               digits: int = 3, unit: str = "") -> str:
+    """The unstable bands as one text, ``low–high`` each, comma-separated, an edge at the
+    scan's end marked ≤ / ≥ (:func:`band_edge_texts`); "" for none.
+
+    Parameters
+    ----------
+    bands_mm_s, cut, digits
+        As :func:`band_edge_texts`.
+    unit : str, default ""
+        Printed after each band (``"mm/s"``), one space apart.
+
+    Returns
+    -------
+    str
+        The bands' text.
+
+    Examples
+    --------
+    >>> bands_text([(0.01, 5.0)], [(True, True)], 2, "mm/s")
+    '≤ 0.01–≥ 5.00 mm/s'
+    """
+    after = f" {unit}" if unit else ""
+    return ", ".join(f"{lo}–{hi}{after}" for lo, hi in band_edge_texts(bands_mm_s, cut, digits))
+
+
+def stored_band_cuts(bands_mm_s: Sequence[Sequence[float]],
+                     scan: tuple[float, float] = protocol.LINEAR_SPEED_RANGE
+                     ) -> list[tuple[bool, bool]]:
+    """:attr:`StabilityBand.edges_at_scan_ends` of bands stored without it (the compensation
+    study's rows keep ``[[lower, upper], …]`` [mm/s] of a scan of :func:`stability_band`'s
+    default range): an edge at the scan's end *is* that end, as :func:`stability_band` gives
+    it, while a bisected edge lies inside the scan, half a bisection step (≥ 0.5 ×
+    ``tolerance``) from any scanned speed.
+
+    Parameters
+    ----------
+    bands_mm_s : sequence of (float, float)
+        (lower, upper) edge of each band [mm/s].
+    scan : (float, float), default ``protocol.LINEAR_SPEED_RANGE``
+        The scan's lowest and highest speed [m/s].
+
+    Returns
+    -------
+    list of (bool, bool)
+        Per band, whether its lower (upper) edge is the scan's end.
+
+    Examples
+    --------
+    >>> stored_band_cuts([[0.01, 0.42], [1.1, 5.0]], (1e-5, 5e-3))
+    [(True, False), (False, True)]
+    """
+    low, high = 1e3 * scan[0], 1e3 * scan[1]
+    return [(math.isclose(lo, low, rel_tol=1e-9), math.isclose(hi, high, rel_tol=1e-9))
+            for lo, hi in bands_mm_s]
 
 
 def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
@@ -1628,6 +1774,7 @@ def upper_band_edge(system: DriveSystem, nut_speed: float = 0.0, *,
 
 __all__ = ["INPUT_UNITS", "MARGINAL", "NAMED_RESPONSES", "OUTPUT_UNITS", "FrequencyResponse",
            "LinearModel", "LoopAnalysis", "LoopResult", "Pole", "StabilityBand", "averaged",
-           "classify_poles", "dominant_pole", "frequency_response", "linearize", "loop_analysis",
-           "rightmost_pole", "stability_band", "state_matrix", "steady_state", "unit_of",
+           "band_edge_texts", "bands_text", "classify_poles", "dominant_pole",
+           "frequency_response", "linearize", "loop_analysis", "margin_text", "rightmost_pole",
+           "stability_band", "state_matrix", "steady_state", "stored_band_cuts", "unit_of",
            "upper_band_edge"]

@@ -24,6 +24,8 @@ def print_loops(title: str, set_name: str, table_speed: float, with_friction: bo
     data : dict
         The analysis.
     """
+    from ..analysis.linear import margin_text
+
     d = data["least_damped_mode"]
     console.print(f"[bold]{title}[/] ({set_name}), {table_speed:g} mm/s, "
                   f"{data['friction']}"
@@ -49,9 +51,11 @@ def print_loops(title: str, set_name: str, table_speed: float, with_friction: bo
                           f"{p['damping_ratio']:.4g}  (real {p['real_1_per_s']:.4g} 1/s)",
                           markup=False)
     for lp in data["loops"]:
-        def fmt(v: float | None, unit: str) -> str:
-            return "—" if v is None else f"{v:.2f} {unit}"
-        console.print(f"  {lp['loop']:22s} crossover {fmt(lp['crossover_hz'], 'Hz'):>10s}  "
-                      f"phase margin {fmt(lp['phase_margin_deg'], '°'):>9s}  gain margin "
-                      f"{fmt(lp['gain_margin_db'], 'dB'):>9s}  bandwidth "
-                      f"{fmt(lp['closed_loop_bandwidth_hz'], 'Hz')}")
+        # ∞ for a gain margin without phase crossover, — for a value the loop has not
+        shown = {name: margin_text(name, lp[name], ".2f", unit) for name, unit in
+                 (("crossover_hz", "Hz"), ("phase_margin_deg", "°"), ("gain_margin_db", "dB"),
+                  ("closed_loop_bandwidth_hz", "Hz"))}
+        console.print(f"  {lp['loop']:22s} crossover {shown['crossover_hz']:>10s}  "
+                      f"phase margin {shown['phase_margin_deg']:>9s}  gain margin "
+                      f"{shown['gain_margin_db']:>9s}  bandwidth "
+                      f"{shown['closed_loop_bandwidth_hz']}")

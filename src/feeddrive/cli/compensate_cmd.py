@@ -135,6 +135,8 @@ def _show_study(rows: list[dict[str, Any]], name: str, position: float,
                 tracking_speed: float, integrator: str, as_json: bool,
                 interrupted: bool) -> None:
     """Print the study's rows (text or JSON; ``interrupted``: the rows before a Ctrl-C)."""
+    from ..analysis.linear import bands_text, stored_band_cuts
+
     if as_json:
         print_json({"parameter_set": name, "rows": rows, "integrator": integrator,
                     "interrupted": interrupted})
@@ -143,7 +145,8 @@ def _show_study(rows: list[dict[str, Any]], name: str, position: float,
                   f"{position:g} mm, tracking at {tracking_speed:g} mm/s)")
     console.print(f"  integrator: {integrator}", markup=False, highlight=False)
     for r in rows:
-        bands = ", ".join(f"{lo:.3f}–{hi:.3f}" for lo, hi in r["linear_unstable_bands_mm_s"])
+        found = r["linear_unstable_bands_mm_s"]
+        bands = bands_text(found, stored_band_cuts(found), 3)
         crit = r.get("critical_speed_mm_s", "—")
         console.print(f"  {r['case']:34s} critical {with_unit(crit):>13s}  linear band "
                       f"{with_unit(bands or 'none'):>18s}  "
@@ -265,6 +268,7 @@ def with_unit(text: str) -> str:
     Returns
     -------
     str
-        ``text`` followed by ``" mm/s"`` when it starts with a digit, ``<`` or ``>``.
+        ``text`` followed by ``" mm/s"`` when it starts with a digit, ``<``, ``>``, or ``≤``
+        (a band whose lower edge is the scan's end).
     """
-    return f"{text} mm/s" if text[:1].isdigit() or text[:1] in "<>" else text
+    return f"{text} mm/s" if text[:1].isdigit() or text[:1] in "<>≤≥" else text

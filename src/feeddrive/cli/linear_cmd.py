@@ -139,7 +139,7 @@ def stability_command(
     # an edge at the scan's end is that end (≤ / ≥), not an edge found (a note says so); the
     # mode's frequency with the speed it is taken at and its range over the band
     for (lo_text, hi_text), (cut_lo, cut_hi), f, v, (f_lo, f_hi) in zip(
-            band._edge_texts(), band.edges_at_scan_ends, band.mode_frequency_hz,
+            band.edge_texts(), band.edges_at_scan_ends, band.mode_frequency_hz,
             data["unstable_mode_speed_mm_s"], band.mode_frequency_range_hz, strict=True):
         part = "its scanned part" if cut_lo or cut_hi else "the band"
         console.print(f"  unstable from {lo_text} to {hi_text} mm/s (mode {f:.2f} Hz at "

@@ -48,10 +48,13 @@ def _plot(ds: Any, plot: str, x: str | None, y: str | None, value: str | None) -
 
 def _stats_text(stats: dict[str, Any]) -> str:
     unit = f" {stats['unit']}" if stats["unit"] not in ("", "1") else ""
+    infinite = stats.get("infinite", 0)  # ∞ (no phase crossover), not missing
     if stats["finite"] == 0:
-        return f"{stats['value']}: no finite value among {stats['points']} points"
+        return (f"{stats['value']}: no finite value among {stats['points']} points"
+                + (f" ({infinite} infinite)" if infinite else ""))
     return (f"{stats['value']}: P5 {stats['p5']:.4g}, median {stats['p50']:.4g}, P95 "
-            f"{stats['p95']:.4g}{unit} ({stats['finite']} of {stats['points']} points finite)")
+            f"{stats['p95']:.4g}{unit} ({stats['finite']} of {stats['points']} points finite"
+            + (f", {infinite} infinite)" if infinite else ")"))
 
 
 @app.command("sweep")

@@ -163,7 +163,8 @@ def _step(analysis: LoopAnalysis) -> Figure:
 
 
 def plot_band(band: StabilityBand, path: str | Path) -> Path:
-    """Plot the rightmost pole's real part against table speed, the unstable bands shaded.
+    """Plot the rightmost pole's real part against table speed, the unstable bands shaded
+    (:func:`band_figure`).
 
     Parameters
     ----------
@@ -177,16 +178,52 @@ def plot_band(band: StabilityBand, path: str | Path) -> Path:
     Path
         The file written.
     """
-    fig = Figure(figsize=(8, 4.5), layout="constrained")
-    ax = fig.subplots()
-    ax.semilogx(1e3 * band.speeds, band.max_real_part, "o-", ms=3, lw=1.0)
-    ax.axhline(0.0, color="k", lw=0.6)
-    for lo, hi in band.intervals:
-        ax.axvspan(1e3 * lo, 1e3 * hi, color="tab:red", alpha=0.15)
-    ax.set_xlabel("table speed [mm/s]")
-    ax.set_ylabel("largest real part of the poles [1/s]")
-    ax.set_title("Linear stability of steady sliding (shaded: unstable)")
+    fig = band_figure(band)
     p = Path(path)
     with atomic_path(p) as tmp:
         fig.savefig(tmp, dpi=110)
     return p
+
+
+#: the legend entry of a band edge that is the scan's end
+BEYOND_SCAN = "band continues beyond the scan (edge = scan's end)"
+
+
+def band_figure(band: StabilityBand) -> Figure:
+    """The figure of :func:`plot_band`: the rightmost pole's real part against table speed,
+    the unstable bands shaded; an edge that is only the scan's end
+    (:attr:`~feeddrive.analysis.linear.StabilityBand.edges_at_scan_ends`) dashed, with an
+    arrow pointing on out of the scan and the legend entry :data:`BEYOND_SCAN` — the band
+    goes on there, while a solid edge is one found.
+
+    Parameters
+    ----------
+    band : StabilityBand
+        The scan from :func:`feeddrive.analysis.linear.stability_band`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    fig = Figure(figsize=(8, 4.5), layout="constrained")
+    ax = fig.subplots()
+    ax.semilogx(1e3 * band.speeds, band.max_real_part, "o-", ms=3, lw=1.0)
+    ax.axhline(0.0, color="k", lw=0.6)
+    label = BEYOND_SCAN
+    for (lo, hi), cuts in zip(band.intervals, band.edges_at_scan_ends, strict=True):
+        ax.axvspan(1e3 * lo, 1e3 * hi, color="tab:red", alpha=0.15)
+        for edge, cut, outward in ((lo, cuts[0], -1), (hi, cuts[1], 1)):
+            if not cut:
+                continue
+            ax.axvline(1e3 * edge, color="tab:red", ls="--", lw=1.2, label=label)
+            label = "_nolegend_"  # one legend entry for all the cut edges
+            ax.annotate("", xy=(1e3 * edge, 0.5), xycoords=("data", "axes fraction"),
+                        xytext=(outward * 18, 0), textcoords="offset points",
+                        arrowprops={"arrowstyle": "<-", "color": "tab:red", "lw": 1.2})
+    if label != BEYOND_SCAN:
+        fig.legend(loc="outside lower center", frameon=False, fontsize=8)
+    ax.set_xlabel("table speed [mm/s]")
+    ax.set_ylabel("largest real part of the poles [1/s]")
+    ax.set_title("Linear stability of steady sliding (shaded: unstable)")
+    return fig

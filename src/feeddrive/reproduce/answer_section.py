@@ -88,7 +88,7 @@ def mechanism_sentence(cdfs: CdfsLinear) -> str:
         sliding is linearly unstable at 0.17–1.40 mm/s."
     """
     loops, band = cdfs.loops, cdfs.band
-    where = ", ".join(f"{1e3 * a:.2f}–{1e3 * b:.2f} mm/s" for a, b in band.intervals)
+    where = band.text(2, "mm/s")
     if loops is None:
         return ((f"steady sliding of the CDFS is linearly unstable at {where}; " if where
                  else "steady sliding of the CDFS is linearly stable at every speed scanned; ")

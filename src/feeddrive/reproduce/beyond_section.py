@@ -8,6 +8,7 @@ from typing import Any
 
 from ..analysis.critical import format_critical_speed
 from ..analysis.forced import THRESHOLDS
+from ..analysis.linear import bands_text, stored_band_cuts
 from .studies import MID
 
 
@@ -132,7 +133,8 @@ def compensation_rows(comp: dict[str, Any] | None) -> list[dict[str, str]]:
         return []
     out = []
     for r in comp["rows"]:
-        bands = ", ".join(f"{lo:.2f}–{hi:.2f}" for lo, hi in r["linear_unstable_bands_mm_s"])
+        found = r["linear_unstable_bands_mm_s"]
+        bands = bands_text(found, stored_band_cuts(found), 2)
         out.append({"case": r["case"],
                     "critical speed [mm/s]": r.get("critical_speed_mm_s", "—"),
                     "linear creep band [mm/s]": bands or "none",

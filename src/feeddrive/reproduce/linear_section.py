@@ -98,8 +98,8 @@ def linear_rows(params: DriveParameters, results: dict[str, Any], *,
             DriveSystem(params, drive, MID), vn, points=BAND_POINTS)
         lo, hi = (1e3 * v for v in protocol.LINEAR_SPEED_RANGE)
         shown = (f"stable at every speed {lo:g}–{hi:g} mm/s" if not band.intervals else "; ".join(
-            f"{1e3 * lo:.3f}–{1e3 * hi:.3f} mm/s ({f:.2f} Hz)"
-            for (lo, hi), f in zip(band.intervals, band.mode_frequency_hz, strict=True)))
+            f"{lo}–{hi} mm/s ({f:.2f} Hz)"
+            for (lo, hi), f in zip(band.edge_texts(), band.mode_frequency_hz, strict=True)))
         sim = format_critical_speed(crit[key]) if key in crit else "—"
         rows.append({"item": f"{label}: linearly unstable steady sliding", "value": shown,
                      "compare": f"simulated critical speed from rest {sim} mm/s"})

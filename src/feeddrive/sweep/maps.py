@@ -183,7 +183,8 @@ def _field(panel: xr.Dataset, name: str, x: str, y: str) -> np.ndarray:
 
 def _cell_text(panel: xr.Dataset, value: str, x: str, y: str) -> np.ndarray:
     """Per cell: the value, and for a critical speed the linear band's upper edge beneath it
-    (or the search's status where there is no number: '< low', '> high', 'undecided')."""
+    (or the search's status where there is no number: 'smooth', 'creeps', 'undecided'; "∞"
+    for an infinite value, "–" for a missing one)."""
     z = _field(panel, value, x, y)
     text = np.empty(z.shape, dtype=object)
     status = _field(panel, "status", x, y) if "status" in panel else None
@@ -194,12 +195,13 @@ def _cell_text(panel: xr.Dataset, value: str, x: str, y: str) -> np.ndarray:
         v = z[idx]
         if error is not None and error[idx]:
             t = "failed"
-        elif isinstance(v, float | np.floating) and not np.isfinite(v):
+        elif isinstance(v, float | np.floating) and np.isnan(v):
             t = {"below-range": "smooth", "above-range": "creeps",
                  "undecided": "undecided"}.get(str(status[idx]) if status is not None else "",
                                                "–")
-        else:
-            t = f"{float(v):.3g}" if isinstance(v, float | np.floating) else str(v)
+        else:  # an infinite value (the gain margin of a loop without phase crossover) is ∞, not "–"
+            t = (units.number_text(float(v), ".3g", absent="–")
+                 if isinstance(v, float | np.floating) else str(v))
         if lin is not None:
             t += f"\nlin {lin[idx]:.3g}" if np.isfinite(lin[idx]) else "\nlin stable"
         text[idx] = t
@@ -282,16 +284,19 @@ def percentiles(ds: xr.Dataset, value: str | None = None) -> dict[str, Any]:
     Returns
     -------
     dict
-        Value name, unit, point and finite counts, ``p5``/``p50``/``p95`` and mean and standard
-        deviation [engineering unit of the value].
+        Value name, unit, point, finite and infinite counts, ``p5``/``p50``/``p95`` and mean
+        and standard deviation of the finite values [engineering unit of the value].
     """
     value = value or DEFAULT_VALUE.get(str(ds.attrs.get("quantity")), "")
     _check_name(ds, value, "--value", tuple(str(v) for v in ds.data_vars))
     v, unit = _eng(ds[value])
     v = v.ravel()
     finite = v[np.isfinite(v)] if v.dtype.kind == "f" else v
+    # an infinite value (the gain margin of a loop without phase crossover) is a bound, not
+    # a gap: counted apart
     out: dict[str, Any] = {"value": value, "unit": unit, "points": int(v.size),
-                           "finite": int(finite.size)}
+                           "finite": int(finite.size),
+                           "infinite": int(np.isinf(v).sum()) if v.dtype.kind == "f" else 0}
     for p in PERCENTILES:
         out[f"p{p:g}"] = float(np.percentile(finite, p)) if finite.size else None
     if finite.size:

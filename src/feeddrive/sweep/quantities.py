@@ -33,6 +33,7 @@ from typing import Any
 from .. import units
 from ..analysis import protocol
 from ..parameters import DriveParameters, ParameterError
+from ..units import absent_value
 
 QUANTITIES = ("critical-speed", "creep-trial", "linear-band", "loop-margins")
 _KEYS = ("kind", "start", "low", "high", "coarse_step", "resolution", "initial_duration",
@@ -48,30 +49,11 @@ UNITS: dict[str, str] = {
     "mode_frequency": "Hz", "damping_ratio": "1", "seconds": "s",
 }
 
-#: values whose absence is a bound, not a gap: ``…_gain_margin_db`` of a loop whose phase does
-#: not cross −180° above its gain crossover (``loop_analysis``: 0.5–500 Hz; the wang2021 screw
-#: velocity loop has none up to 50 kHz either) — an infinite gain margin, as python-control's
-#: ``stability_margins`` gives it; ``feeddrive loops`` prints "—" (JSON null)
-INFINITE_WHEN_ABSENT = ("_gain_margin_db",)
-
-
-def absent_value(name: str) -> float:
-    """The number a value the computation did not find stands for: +inf for a gain margin
-    (:data:`INFINITE_WHEN_ABSENT`: the loop has none), NaN otherwise (no such value at the point:
-    a loop without a gain crossover has no crossover frequency, phase margin or bandwidth; a
-    search without a critical speed).
-
-    Parameters
-    ----------
-    name : str
-        The value's name (``screw_velocity_loop_gain_margin_db``, ``crossover_hz``).
-
-    Returns
-    -------
-    float
-        ``math.inf`` or ``math.nan``.
-    """
-    return math.inf if name.endswith(INFINITE_WHEN_ABSENT) else math.nan
+#: values whose absence is a bound, not a gap: ``…gain_margin_db`` of a loop whose phase does
+#: not cross −180° above its gain crossover — an infinite gain margin (+inf here, ``inf`` in
+#: the CSV, "∞" in `feeddrive loops` and the map's cells); the rule of
+#: :func:`absent_value`, kept in ``feeddrive.units`` for every output
+INFINITE_WHEN_ABSENT = units.INFINITE_WHEN_ABSENT
 
 
 def stored_value(name: str, value: Any) -> Any:
