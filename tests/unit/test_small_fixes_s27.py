@@ -17,15 +17,21 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import pytest
 import scipy.io
 import xarray as xr
+from typer.testing import CliRunner
 
 import feeddrive as fd
+from feeddrive.analysis.trace import analyze_trace
+from feeddrive.cli import app
 from feeddrive.engine.machine_axes import axis_parameter_sets
 from feeddrive.engine.result import Result
 from feeddrive.machine import machine_from_dict, make_contour, simulate_machine
+
+runner = CliRunner()
 
 # ------------------------------------------------------------------ 1. every axis' parameters
 
@@ -87,3 +93,94 @@ def test_one_drives_run_keeps_its_one_set(tmp_path: Path) -> None:
     with xr.open_dataset(run.save(tmp_path / "one.nc")) as ds:
         assert fd.parameters.loads(ds.attrs["parameters_toml"]) == params
         assert Result(ds).axis_parameter_sets == {}
+
+
+# ------------------------------------------------------------------ 2. analyze's left-out note
+
+def _write(path: Path, t: np.ndarray, position_mm: np.ndarray,
+           command_mm_s: np.ndarray | None = None) -> Path:
+    """A record in the CSV format analyze reads (docs/measured-data.md section 4)."""
+    cols, head = [t, position_mm], "time [s],position [mm]"
+    if command_mm_s is not None:
+        cols, head = [*cols, command_mm_s], head + ",command_speed [mm/s]"
+    np.savetxt(path, np.column_stack(cols), delimiter=",", header=head, comments="",
+               fmt="%.9g")
+    return path
+
+
+T = np.arange(10_001) / 1000.0  # 0 … 10 s at 1 kHz
+V = 1.0  # [mm/s]
+
+
+def _analyze(path: Path, *args: str) -> list[str]:
+    r = runner.invoke(app, ["analyze", str(path), *args], terminal_width=400)
+    assert r.exit_code == 0, r.output
+    return r.stdout.splitlines()
+
+
+def test_a_constant_speed_record_is_one_smooth_segment_at_its_speed(tmp_path: Path) -> None:
+    lines = _analyze(_write(tmp_path / "const.csv", T, V * T))
+    assert "  segments: one, with no speed step (binary segmentation of the position, "\
+           "--min-step 0.005 mm/s, --min-segment 1 s)" in lines
+    assert ("  0.00–1.00 s left out as the run-up: segmentation starts --min-segment 1 s after "
+            "the speed first reaches 90 % of its mean") in lines
+    segments = [line for line in lines if line.startswith("  segment ")]
+    assert len(segments) == 1
+    assert "1.00–10.00 s" in segments[0] and "command 1 mm/s (estimated): SMOOTH" in segments[0]
+    assert not [line for line in lines if "skipped" in line]
+
+
+def _ramped(ramp: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
+    """The command of ``simulate --table-speed 1`` (ConstantSpeed, ramp_time 0.1 s): 0 at
+    t = 0, rising every sample to 1 mm/s at 0.1 s; the position follows it."""
+    command = V * np.clip(T / ramp, 0.0, 1.0)
+    position = np.concatenate([[0.0], np.cumsum(0.5 * (command[1:] + command[:-1])
+                                                * np.diff(T))])
+    return position, command
+
+
+def test_a_ramped_command_is_one_run_and_its_ramp_not_99_pieces(tmp_path: Path) -> None:
+    position, command = _ramped()
+    lines = _analyze(_write(tmp_path / "run.csv", T, position, command))
+    assert "  segments: one run of constant command speed, 1 mm/s over 0.10–10.00 s" in lines
+    assert ("  left out, as no command is held there for --min-segment 1 s: 0.00–0.10 s, where "
+            "the command keeps changing (0.01 → 0.99 mm/s)") in lines
+    assert not [line for line in lines if "skipped" in line]  # "99 shorter than 1 s skipped"
+    assert [line for line in lines if line.startswith("  segment 1: 0.10–10.00 s")]
+
+
+def test_short_holds_are_counted_with_their_duration_and_the_option() -> None:
+    """A staircase of 0.5-s holds, 1.5 → 0.7 mm/s, then 0.6 mm/s for 5.5 s."""
+    command = 1.5 - 0.1 * np.minimum(np.floor(T / 0.5), 9.0)
+    position = np.concatenate([[0.0], np.cumsum(command[1:] * np.diff(T))])
+    out = analyze_trace(T, 1e-3 * position, command=1e-3 * command)
+    assert "segments: one run of constant command speed, 0.6 mm/s over 4.50–10.00 s" \
+        in out.notes
+    assert ("left out, as no command is held there for --min-segment 1 s: 9 holds of constant "
+            "command (4.5 s in all, the longest 0.5 s)") in out.notes
+    assert len(out.segments) == 1
+    # a shorter --min-segment keeps them
+    held = analyze_trace(T, 1e-3 * position, command=1e-3 * command, min_segment_time=0.4)
+    assert len(held.segments) == 10 and not [n for n in held.notes if "left out" in n]
+
+
+def test_one_short_hold_says_where_it_is() -> None:
+    command = np.where(T < 0.5, 1.5, 1.0)
+    position = np.concatenate([[0.0], np.cumsum(command[1:] * np.diff(T))])
+    out = analyze_trace(T, 1e-3 * position, command=1e-3 * command)
+    assert ("left out, as no command is held there for --min-segment 1 s: a 0.5-s hold at "
+            "1.5 mm/s (0.00–0.50 s)") in out.notes
+
+
+def test_a_command_that_never_holds_is_refused_saying_so(tmp_path: Path) -> None:
+    """Each sample a different command: it was "no moving segment to analyse (the table does
+    not move)" of a table moving at 1 mm/s."""
+    command = V + 1e-3 * np.sin(2 * np.pi * 7.3 * T)
+    r = runner.invoke(app, ["analyze", str(_write(tmp_path / "noisy.csv", T, V * T, command))],
+                      terminal_width=400)
+    assert r.exit_code == 2
+    line = r.stderr.strip()
+    assert line.startswith("error: noisy.csv: no run of constant command speed in the command "
+                           "column lasts --min-segment 1 s: 0.00–10.00 s, where the command "
+                           "keeps changing"), line
+    assert "does not move" not in line and "--command-speed" in line
