@@ -25,8 +25,11 @@ import xarray as xr
 from typer.testing import CliRunner
 
 import feeddrive as fd
+import feeddrive.analysis.critical as critical
+from feeddrive.analysis import protocol
+from feeddrive.analysis.cycle_verdict import VerdictRule
 from feeddrive.analysis.trace import analyze_trace
-from feeddrive.cli import app
+from feeddrive.cli import app, creep_cmd
 from feeddrive.engine.machine_axes import axis_parameter_sets
 from feeddrive.engine.result import Result
 from feeddrive.machine import machine_from_dict, make_contour, simulate_machine
@@ -184,3 +187,64 @@ def test_a_command_that_never_holds_is_refused_saying_so(tmp_path: Path) -> None
                            "column lasts --min-segment 1 s: 0.00–10.00 s, where the command "
                            "keeps changing"), line
     assert "does not move" not in line and "--command-speed" in line
+
+
+# ------------------------------------------------------------------ 3. the protocol's steps
+
+def _scanned(low: float, high: float, step: float) -> list[float]:
+    """The coarse speeds the search from rest runs (critical.search_kinds, every speed
+    smooth: no bisection) [m/s]."""
+    seen: list[float] = []
+
+    def kind(v: float) -> str:
+        seen.append(v)
+        return "smooth"
+
+    critical.search_kinds(kind, low, high, step, protocol.RESOLUTION)
+    return seen
+
+
+def test_the_rest_line_states_the_scans_shorter_last_step() -> None:
+    lo, hi = 0.02e-3, 1.61e-3  # creep --high 1.61
+    step = creep_cmd._coarse_step((lo, hi))
+    gaps = np.round(1e3 * np.diff(_scanned(lo, hi, step)), 9)
+    assert set(gaps[:-1]) == {0.2} and gaps[-1] == 0.19  # 1.61 − 1.42
+    text = creep_cmd.protocol_text("rest", (lo, hi), step, VerdictRule())
+    assert "scan 0.02–1.61 mm/s in 0.2-mm/s steps, the last 0.19 mm/s, then bisection" in text
+
+
+def test_the_stepdown_line_states_the_staircases_shorter_first_step() -> None:
+    lo, hi = 0.02e-3, 1.61e-3
+    system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
+    _, _, coarse = critical.check_stepdown(
+        system, nut_speed=0.0, start_speed=hi, lowest_speed=lo, step=protocol.RESOLUTION,
+        coarse_step=protocol.STAIRCASE_COARSE_STEP, rule=None, options=None)
+    gaps = np.round(-1e3 * np.diff(coarse), 9)
+    assert gaps[0] == 0.09 and set(gaps[1:]) == {0.1}  # 1.61 → 1.52, then whole steps
+    text = creep_cmd.protocol_text("running", (lo, hi), 0.0, VerdictRule())
+    assert "staircase from 1.61 mm/s in 0.1-mm/s steps, the first 0.09 mm/s, then" in text
+
+
+def test_whole_steps_read_as_before() -> None:
+    """The protocol's own range is 15 whole 0.2-mm/s steps and 30 of 0.1 mm/s."""
+    assert protocol.grid_steps(*protocol.SPEED_RANGE, protocol.COARSE_STEP) == (15, None)
+    assert protocol.describe("rest") == (
+        "from rest: trials of 12 s doubled up to 240 s until decided, scan 0.02–3.02 mm/s in "
+        "0.2-mm/s steps, then bisection to 0.01 mm/s")
+    assert "staircase from 3.02 mm/s in 0.1-mm/s steps, then 0.01-mm/s" \
+        in protocol.describe("running")
+
+
+def test_creep_prints_the_shorter_step(monkeypatch: pytest.MonkeyPatch) -> None:
+    def search(system: Any, **kw: Any) -> critical.CriticalSpeed:
+        return critical.CriticalSpeed(drive=system.drive, table_position=0.4, nut_speed=0.0,
+                                      start="rest", critical_speed=1.3e-3, status="found",
+                                      resolution=kw["resolution"],
+                                      speed_range=kw["speed_range"], rule=kw["rule"])
+
+    monkeypatch.setattr(critical, "critical_speed_from_rest", search)
+    r = runner.invoke(app, ["creep", "--method", "bisect", "--high", "1.61"],
+                      terminal_width=400)
+    assert r.exit_code == 0, r.output
+    line = [x for x in r.stdout.splitlines() if x.startswith("  protocol ")]
+    assert len(line) == 1 and "in 0.2-mm/s steps, the last 0.19 mm/s" in line[0], line
