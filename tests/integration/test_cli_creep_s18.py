@@ -92,8 +92,9 @@ def test_the_protocol_lines_state_a_range_that_is_not_the_default() -> None:
         "  protocol from rest: trials of 3 s doubled up to 6 s until decided, scan "
         f"2.9–3.02 mm/s in {(3.02 - 2.9) / 2:g}-mm/s steps, then bisection to "
         f"{1e3 * protocol.RESOLUTION:g} mm/s",
+        # its staircase 3.02, 3.0, 2.9 mm/s (protocol.speed_grid) starts with a 0.02 mm/s step
         "  protocol step-down on a running table: staircase from 3.02 mm/s in "
-        f"{1e3 * protocol.STAIRCASE_COARSE_STEP:g}-mm/s steps, then "
+        f"{1e3 * protocol.STAIRCASE_COARSE_STEP:g}-mm/s steps, the first 0.02 mm/s, then "
         f"{1e3 * protocol.RESOLUTION:g}-mm/s steps from the last smooth one (down to 2.9 "
         "mm/s), each step held 3 s doubled up to 6 s until decided"]
 

@@ -121,7 +121,7 @@ def test_the_grid_is_the_whole_steps_and_the_top() -> None:
              (1.6 * MM, protocol.STAIRCASE_COARSE_STEP, 16, True)]
     for hi, step, whole, top in cases:
         expected = np.round(lo + step * np.arange(whole), 12).tolist() + ([hi] if top else [])
-        assert critical._grid(lo, hi, step).tolist() == pytest.approx(expected, abs=1e-15), hi
+        assert protocol.speed_grid(lo, hi, step).tolist() == pytest.approx(expected, abs=1e-15), hi
 
 
 def test_the_command_line_states_the_range_it_tested(fake_trials: list[float]) -> None:

@@ -874,20 +874,6 @@ class _Diverged(Exception):
                           min_ratio=float(np.min(along)), duration=end, decided_at=end)
 
 
-def _grid(lo: float, hi: float, step: float) -> np.ndarray:
-    """The coarse speeds of a search on [lo, hi] [m/s], rising: ``lo``, ``lo + step``, … and
-    ``hi`` itself, the last step shorter when the range is not a whole number of steps (the
-    grid stopped at the last whole step: ``creep --high 1.61`` tested nothing above 1.42 mm/s
-    and answered "> 1.61 mm/s (creeps at every tested speed)"; an outside check, 2026-12-07).
-    A range of whole steps (the protocol's 0.02–3.02 mm/s) gives the same speeds as before."""
-    n = int(math.floor((hi - lo) / step + 1e-9))
-    grid = np.round(lo + step * np.arange(n + 1), 12)
-    top = round(hi, 12)
-    if top > grid[-1] + 1e-9 * step:
-        grid = np.append(grid, top)
-    return grid
-
-
 def critical_speed_from_rest(
     system: DriveSystem, *, nut_speed: float = 0.0,
     speed_range: tuple[float, float] = protocol.SPEED_RANGE,
@@ -1061,7 +1047,7 @@ def search_kinds(kind_at: Callable[[float], str], low: float, high: float, coars
             kinds[v] = kind_at(v)
         return kinds[v]
 
-    for v in _grid(low, high, coarse_step):
+    for v in protocol.speed_grid(low, high, coarse_step):
         judge(float(v))
     while len(kinds) < max_trials:
         speeds = sorted(kinds)
@@ -1288,7 +1274,7 @@ def check_stepdown(system: DriveSystem, *, nut_speed: float, start_speed: float,
     protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=step,
                           names={"low": "lowest_speed", "high": "start_speed",
                                  "resolution": "step"}, unit="m/s")
-    coarse = _grid(lo, hi, coarse_step)[::-1]
+    coarse = protocol.speed_grid(lo, hi, coarse_step)[::-1]
     check_staircase(coarse, rule or VerdictRule(), options, nut_speed=nut_speed,
                     shown=start_speed)
     return lo, hi, coarse

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 SPEED_RANGE = (0.02e-3, 3.02e-3)  # [m/s] lowest and highest speed tested
 COARSE_STEP = 0.2e-3  # [m/s] scan step from rest, before the bisection
 STAIRCASE_COARSE_STEP = 0.1e-3  # [m/s] first staircase of the step-down search
@@ -147,6 +149,67 @@ def mm_s_hint(value: float, fits: bool) -> str:
     return f"; the API takes m/s: {value:g} mm/s is {value * 1e-3:g}" if fits else ""
 
 
+def speed_grid(low: float, high: float, step: float) -> np.ndarray:
+    """The coarse speeds of a search on [low, high] [m/s], rising: ``low``, ``low + step``, …
+    and ``high`` itself, the last step shorter when the range is not a whole number of steps
+    (the grid stopped at the last whole step: ``creep --high 1.61`` tested nothing above
+    1.42 mm/s and answered "> 1.61 mm/s (creeps at every tested speed)"; an outside check,
+    2026-12-07).  A range of whole steps (the protocol's 0.02–3.02 mm/s) gives the same speeds
+    as before.  The search from rest scans it rising, the step-down's first staircase falling.
+
+    Parameters
+    ----------
+    low, high : float
+        The speeds searched [m/s].
+    step : float
+        The coarse step [m/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The speeds [m/s], rounded to 1e-12 m/s.
+    """
+    n = int(math.floor((high - low) / step + 1e-9))
+    grid = np.round(low + step * np.arange(n + 1), 12)
+    top = round(high, 12)
+    if top > grid[-1] + 1e-9 * step:
+        grid = np.append(grid, top)
+    return grid
+
+
+def grid_steps(low: float, high: float, step: float) -> tuple[int, float | None]:
+    """The steps of :func:`speed_grid`: how many are whole, and the shorter one at its top
+    when the range is not a whole number of steps.
+
+    Parameters
+    ----------
+    low, high : float
+        The speeds searched [m/s].
+    step : float
+        The coarse step [m/s].
+
+    Returns
+    -------
+    tuple of (int, float or None)
+        The whole steps, and the shorter step [m/s] (None when every step is whole).
+    """
+    gaps = np.diff(speed_grid(low, high, step))
+    if gaps.size and gaps[-1] < step * (1.0 - 1e-6):
+        return gaps.size - 1, float(gaps[-1])
+    return int(gaps.size), None
+
+
+def _steps_text(low: float, high: float, step: float, odd: str) -> str:
+    """``in 0.2-mm/s steps``, with ``, the last 0.08 mm/s`` (``odd`` naming which one)
+    where :func:`speed_grid` ends on a shorter step [m/s in, mm/s out]."""
+    whole, short = grid_steps(low, high, step)
+    if short is None:
+        return f"in {1e3 * step:g}-mm/s steps"
+    if whole == 0:
+        return f"in one {1e3 * short:g}-mm/s step"
+    return f"in {1e3 * step:g}-mm/s steps, the {odd} {1e3 * short:g} mm/s"
+
+
 def describe(start: str, *, speed_range: tuple[float, float] = SPEED_RANGE,
              coarse_step: float = COARSE_STEP,
              durations: tuple[float, float] = (TRIAL_DURATION, TRIAL_MAX_DURATION),
@@ -175,10 +238,11 @@ def describe(start: str, *, speed_range: tuple[float, float] = SPEED_RANGE,
     """
     lo, hi = (1e3 * v for v in speed_range)
     held = f"{durations[0]:g} s doubled up to {durations[1]:g} s until decided"
-    if start == "rest":
-        return (f"from rest: trials of {held}, scan {lo:g}–{hi:g} mm/s in "
-                f"{1e3 * coarse_step:g}-mm/s steps, then bisection to {1e3 * RESOLUTION:g} mm/s")
-    return (f"step-down on a running table: staircase from {hi:g} mm/s in "
-            f"{1e3 * STAIRCASE_COARSE_STEP:g}-mm/s steps, then {1e3 * RESOLUTION:g}-mm/s steps "
-            f"from the last smooth one (down to {lo:g} mm/s)"
+    if start == "rest":  # the scan rises: its last step is the shorter one
+        steps = _steps_text(*speed_range, coarse_step, "last")
+        return (f"from rest: trials of {held}, scan {lo:g}–{hi:g} mm/s {steps}, then "
+                f"bisection to {1e3 * RESOLUTION:g} mm/s")
+    steps = _steps_text(*speed_range, STAIRCASE_COARSE_STEP, "first")  # it falls
+    return (f"step-down on a running table: staircase from {hi:g} mm/s {steps}, then "
+            f"{1e3 * RESOLUTION:g}-mm/s steps from the last smooth one (down to {lo:g} mm/s)"
             + (f", each step held {held}" if holds else ""))

@@ -510,10 +510,7 @@ def find_segments(time: object, position: object, speed: object, *,
     v = np.asarray(speed, dtype=float)
     th = thresholds or CreepThresholds()
     if start is None:
-        mean_speed = (x[-1] - x[0]) / (t[-1] - t[0])
-        moved = np.abs(v) >= 0.9 * abs(mean_speed)
-        start = float(t[np.flatnonzero(moved)[0]]) if np.any(moved) else float(t[0])
-        start = min(start + min_segment_time, float(t[-1] - 2.0 * min_segment_time))
+        start = segmentation_start(t, x, v, min_segment_time)
     sel = t >= start
     t, x, v = t[sel], x[sel], v[sel]
     if t.size < 16:
@@ -551,6 +548,35 @@ def find_segments(time: object, position: object, speed: object, *,
         hi = float(t[j - 1]) if j == t.size else float(0.5 * (t[j - 1] + t[j]))
         spans.append((lo, hi))
     return spans
+
+
+def segmentation_start(time: np.ndarray, position: np.ndarray, speed: np.ndarray,
+                       min_segment_time: float) -> float:
+    """Where :func:`find_segments` begins by default: ``min_segment_time`` after the speed
+    first reaches 90 % of the overall mean speed (the run-up and its settling are no segment),
+    but at least ``2·min_segment_time`` before the end.
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+    position : numpy.ndarray
+        Table position [m].
+    speed : numpy.ndarray
+        Table speed [m/s].
+    min_segment_time : float
+        Shortest segment [s].
+
+    Returns
+    -------
+    float
+        The start [s].
+    """
+    t = time
+    mean_speed = (position[-1] - position[0]) / (t[-1] - t[0])
+    moved = np.abs(speed) >= 0.9 * abs(mean_speed)
+    start = float(t[np.flatnonzero(moved)[0]]) if np.any(moved) else float(t[0])
+    return min(start + min_segment_time, float(t[-1] - 2.0 * min_segment_time))
 
 
 def _merge_holds(cost: _LineCost, pieces: list[list[int]], min_step: float) -> None:
@@ -630,13 +656,44 @@ def unit_slip_note(command_speed: float, mean_speed: float) -> str | None:
             "speed given")
 
 
-def _command_runs(time: np.ndarray, command: np.ndarray) -> list[tuple[float, float, float]]:
-    """(start, end, command) of runs of equal command speed."""
-    change = np.flatnonzero(np.abs(np.diff(command)) > 1e-9 + 1e-6 * np.abs(command[1:]))
-    starts = np.r_[0, change + 1]
-    ends = np.r_[change + 1, command.size]
-    return [(float(time[a]), float(time[b - 1]), float(command[a]))
-            for a, b in zip(starts, ends, strict=True)]
+def _detected_notes(tt: np.ndarray, xx: np.ndarray, vv: np.ndarray,
+                    spans: list[tuple[float, float]], min_step: float,
+                    min_segment_time: float) -> list[str]:
+    """The notes on segments detected from the position: how many, with the options that set
+    them, and the run-up left out before the first (a constant-speed record's one segment
+    began 1 s into it, unexplained)."""
+    how = (f"binary segmentation of the position, --min-step {1e3 * min_step:.3g} mm/s, "
+           f"--min-segment {min_segment_time:g} s")
+    out = [f"segments: one, with no speed step ({how})" if len(spans) == 1
+           else f"segments: {len(spans)} detected ({how})"]
+    start = segmentation_start(tt, xx, vv, min_segment_time)
+    if not spans or start <= tt[0]:
+        return out
+    why = (f"{2 * min_segment_time:g} s (2 × --min-segment) before the end of a short record"
+           if start == float(tt[-1] - 2.0 * min_segment_time) else
+           f"--min-segment {min_segment_time:g} s after the speed first reaches 90 % of its "
+           "mean")
+    return [*out, f"{tt[0]:.2f}–{start:.2f} s left out as the run-up: segmentation starts {why}"]
+
+
+def _column_runs(tt: np.ndarray, command: np.ndarray, min_segment_time: float,
+                 notes: list[str]) -> tuple[list[tuple[float, float, float, str]], str | None]:
+    """The segments of a command column (``command_runs.column_segments``), what they leave
+    out added to ``notes``; and, when the column holds no command long enough, why there is no
+    segment (it was "the table does not move")."""
+    from .command_runs import column_segments
+
+    found = column_segments(tt, command, min_segment_time)
+    notes.append(found.head())
+    left_out = found.left_out()
+    if left_out:
+        notes.append(left_out)
+    why = None
+    if not found.kept and left_out:
+        why = (f"no run of constant command speed in the command column lasts --min-segment "
+               f"{min_segment_time:g} s: {'; '.join(found.left_out_parts())}; give a shorter "
+               "--min-segment, or --command-speed for one command over the whole record")
+    return [(r.start, r.end, r.command, "column") for r in found.kept], why
 
 
 # ---------------------------------------------------------------- analysis
@@ -1080,6 +1137,7 @@ def analyze_trace(
         notes.append("speed: taken from the file's speed column")
 
     runs: list[tuple[float, float, float | None, str]] = []
+    no_segment = None  # why a command column gives no segment
     if command_speed is not None:
         runs.append((float(tt[0]), float(tt[-1]), float(command_speed), "given"))
     elif command is not None:
@@ -1087,17 +1145,8 @@ def analyze_trace(
         if cmd.shape != t.shape:
             raise ValueError("command: expected one value per time sample")
         cmd_on_grid = np.interp(tt, t, cmd) if cmd.shape != tt.shape else cmd
-        short = 0
-        for a, b, c in _command_runs(tt, cmd_on_grid):
-            if c == 0.0:
-                continue
-            if b - a < min_segment_time:
-                short += 1  # ramps between command levels
-                continue
-            runs.append((a, b, c, "column"))
-        notes.append(f"segments: {len(runs)} runs of constant command speed"
-                     + (f" ({short} shorter than {min_segment_time:g} s skipped)"
-                        if short else ""))
+        column, no_segment = _column_runs(tt, cmd_on_grid, min_segment_time, notes)
+        runs += column
     else:
         spans = (find_segments(tt, xx, vv, thresholds=thresholds, min_step=min_step,
                                min_segment_time=min_segment_time)
@@ -1107,9 +1156,7 @@ def analyze_trace(
         for a, b in spans:
             runs.append((a, b - guard if b < tt[-1] - win_t else b, None, "estimated"))
         if segment:
-            notes.append(f"segments: {len(spans)} detected from the position (binary "
-                         f"segmentation, min step {1e3 * min_step:.3g} mm/s, min "
-                         f"{min_segment_time:g} s)")
+            notes += _detected_notes(tt, xx, vv, spans, min_step, min_segment_time)
         notes.append("command speed not given: estimated as the mean speed (slope of the "
                      "position) over each segment's steady window")
 
@@ -1198,8 +1245,8 @@ def analyze_trace(
                      f"oscillates and then settles at the same speed "
                      f"({1e3 * segments[0].command_speed:.4g} mm/s)")
     if not segments:
-        raise ValueError(f"{source + ': ' if source else ''}no moving segment to analyse "
-                         "(the table does not move)")
+        why = no_segment or "no moving segment to analyse (the table does not move)"
+        raise ValueError(f"{source + ': ' if source else ''}{why}")
     critical = _critical(segments)
     for c_ in critical:
         if not c_.monotonic:

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from ..analysis.creep_window import CreepMetrics, CreepThresholds
     from ..model.assemble import Model
     from ..model.reference import Profile
+    from ..parameters import DriveParameters
     from .options import SolverOptions
     from .simulate import DriveSystem
 
@@ -184,7 +185,8 @@ class Run:
         Parameters
         ----------
         full : bool
-            Also include the parameter set as TOML (``parameters_toml``).
+            Also include the parameter set as TOML (``parameters_toml``; a machine's run each
+            axis' set, ``<axis>_parameters_toml``).
 
         Returns
         -------
@@ -214,7 +216,13 @@ class Run:
             # what the run used: the model's named slots with units, written from the
             # assembled model (feeddrive.model.slots); the set as given, to run it again
             attrs["parameter_slots"] = slots_json(self.model)
-            attrs["parameters_toml"] = dumps(system.parameters)
+            sets = getattr(system, "parameter_sets", None)
+            if callable(sets):  # a machine: each axis' set, as each axis' start position
+                # (MachineSystem.parameter_sets; the first axis' alone: session 27)
+                attrs.update({f"{name}_parameters_toml": dumps(params)
+                              for name, params in sets().items()})
+            else:
+                attrs["parameters_toml"] = dumps(system.parameters)
         return attrs
 
     def dataset(self) -> xr.Dataset:
@@ -465,6 +473,25 @@ class Result:
             return []
         rows = json.loads(text)["slots"]
         return [(str(n), float(v), str(u)) for n, v, u in rows]
+
+    @property
+    def axis_parameter_sets(self) -> dict[str, DriveParameters]:
+        """A machine's run: each axis' parameter set as the run was given it, by axis name in
+        axis order; {} for one drive's run.  Read from the ``<axis>_parameters_toml``
+        attributes when the result was loaded from a file
+        (:func:`feeddrive.engine.machine_axes.axis_parameter_sets`).
+
+        Returns
+        -------
+        dict of str to DriveParameters
+            Axis name → its parameter set.
+        """
+        from .machine_axes import axis_parameter_sets
+
+        if self._run is None:
+            return axis_parameter_sets(self.dataset.attrs)
+        sets = getattr(self._run.system, "parameter_sets", None)
+        return dict(sets()) if callable(sets) else {}
 
     @property
     def command_speed(self) -> float:

@@ -7,8 +7,8 @@
   ``solver`` attribute); feeddrive's readers skip ``#`` lines, pandas with ``comment="#"``.
 * Parquet: the same numbers and units as CSV, plain column names (``table_position``) and
   each field's unit in the Arrow schema's field metadata (``unit``, ``long_name``); the units
-  and the run's :func:`provenance` (the solver record among it) also as pandas' ``df.attrs``
-  (``pandas.read_parquet``).
+  and the run's :func:`provenance` (the solver record among it) and parameter sets
+  (:func:`parameter_texts`) also as pandas' ``df.attrs`` (``pandas.read_parquet``).
 * NetCDF: NetCDF4 (HDF5, h5netcdf engine), SI, with the CF-1.8 global attributes
   (``Conventions``, ``title``, ``source``, ``history``, ``references``) and each variable's
   ``units`` (UDUNITS spelling) and ``long_name``; plain variable names (:func:`plain_names`:
@@ -569,9 +569,30 @@ def to_arrow_table(dataset: xr.Dataset) -> Any:
     Returns
     -------
     pyarrow.Table
-        Plain field names, each field's unit in its metadata.
+        Plain field names, each field's unit in its metadata; the run's provenance and
+        parameter sets (:func:`parameter_texts`) as pandas' ``df.attrs``.
     """
-    return arrow_table(_engineering_columns(dataset), attrs=provenance(dataset.attrs))
+    return arrow_table(_engineering_columns(dataset),
+                       attrs={**provenance(dataset.attrs), **parameter_texts(dataset.attrs)})
+
+
+def parameter_texts(attrs: Mapping[str, Any]) -> dict[str, str]:
+    """The parameter sets a run's attributes hold, as TOML under their attribute names: one
+    drive's ``parameters_toml``, a machine's ``<axis>_parameters_toml`` for each axis (a
+    Parquet file held none: session 27).
+
+    Parameters
+    ----------
+    attrs : mapping
+        A run's attributes (``Result.dataset.attrs``).
+
+    Returns
+    -------
+    dict of str to str
+        Attribute name → TOML text.
+    """
+    return {str(k): str(v) for k, v in attrs.items()
+            if k == "parameters_toml" or str(k).endswith("_parameters_toml")}
 
 
 def save_result(dataset: xr.Dataset, path: str | Path) -> Path:

@@ -611,7 +611,8 @@ class MachineSystem:
     one drive).
 
     The engine reads its first axis' parameter set where it needs one set (the controller's
-    current limit for the tolerance scale, quantisation settings, the run's attributes).
+    current limit for the tolerance scale, quantisation settings); a run's attributes record
+    every axis' set (:meth:`parameter_sets`).
 
     Parameters
     ----------
@@ -631,6 +632,18 @@ class MachineSystem:
     def parameters(self) -> DriveParameters:
         """The first axis' parameter set."""
         return self.machine.axes[0].parameters
+
+    def parameter_sets(self) -> dict[str, DriveParameters]:
+        """Each axis' parameter set, by axis name in axis order: a run records each one
+        (``<axis>_parameters_toml``, as each axis' start position) where one drive's run records
+        its set (``parameters_toml``); it recorded the first axis' set alone (session 27).
+
+        Returns
+        -------
+        dict of str to DriveParameters
+            Axis name → its parameter set, as given.
+        """
+        return {ax.name: ax.parameters for ax in self.machine.axes}
 
     @property
     def drive(self) -> str:
