@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import feeddrive as fd
-from feeddrive.analysis.linear import loop_analysis, stability_band
+from feeddrive.analysis.linear import loop_analysis, margin_text, stability_band
 
 system = fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4)
 
@@ -20,15 +20,14 @@ loops = loop_analysis(system, table_speed=1e-3)
 mode = loops.dominant()
 print(f"least-damped mode: {mode.frequency_hz:.2f} Hz, damping ratio {mode.damping_ratio:.3f}")
 
-
-def shown(value, unit):
-    """A margin, or 'none' where the loop has no crossing (an infinite margin)."""
-    return "none (no crossing)" if value is None else f"{value:.1f} {unit}"
-
-
+# margin_text prints a value as `feeddrive loops` does: a gain margin the loop has not (its
+# phase never crosses −180°) is infinite, "∞"; any other value it has not (no gain crossover:
+# no crossover frequency, no phase margin) is "—"
 for loop in loops.loops:
-    print(f"{loop.name}: gain margin {shown(loop.gain_margin_db, 'dB')}, phase margin "
-          f"{shown(loop.phase_margin_deg, 'deg')}, crossover {shown(loop.crossover_hz, 'Hz')}")
+    gain = margin_text("gain_margin_db", loop.gain_margin_db, ".1f", "dB")
+    phase = margin_text("phase_margin_deg", loop.phase_margin_deg, ".1f", "deg")
+    crossover = margin_text("crossover_hz", loop.crossover_hz, ".1f", "Hz")
+    print(f"{loop.name}: gain margin {gain}, phase margin {phase}, crossover {crossover}")
 
 band = stability_band(system, low=0.05e-3, high=3e-3, points=24)
 for (lower, upper), freq in zip(band.intervals, band.mode_frequency_hz, strict=True):

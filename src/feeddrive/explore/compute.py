@@ -324,6 +324,30 @@ def _json(value: Any) -> Any:
     return value
 
 
+def loop_json(values: dict[str, Any]) -> dict[str, Any]:
+    """A loop's margins (:meth:`LoopResult.as_dict`) for the page, with ``infinite``: the
+    names of its values that are +∞ — a gain margin without phase crossover, None in the
+    analysis (:func:`feeddrive.units.absent_value`) — which JSON, without an infinity, sends
+    as null; any other null is a value the loop has not (no gain crossover: no crossover
+    frequency, phase margin or bandwidth), which the page prints "—", as `feeddrive loops`.
+
+    Parameters
+    ----------
+    values : dict
+        The loop's values, None where the analysis found none.
+
+    Returns
+    -------
+    dict
+        The same values and ``infinite`` (a list of names).
+    """
+    from ..units import absent_value
+
+    infinite = [name for name, v in values.items()
+                if (absent_value(name) if v is None else v) == math.inf]
+    return {**values, "infinite": infinite}
+
+
 #: stability bands by (parameters, drive, position, nut speed): a band does not depend on the
 #: table speed, so moving that knob recomputes only the poles
 BANDS = Kept(16)
@@ -346,7 +370,8 @@ def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
         The Bode data of the loops, the stability band (:meth:`StabilityBand.as_dict` with
         the scan's speeds [mm/s], rightmost real parts [1/s] and frequencies [Hz]), whether
         the operating speed lies inside it, and the poles, least-damped mode and loop
-        margins at the operating point.
+        margins at the operating point (each loop's +∞ values, null in JSON, named in its
+        ``infinite``: :func:`loop_json`).
     """
     from ..analysis.linear import loop_analysis, stability_band
 
@@ -366,7 +391,7 @@ def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
     inside = any(lo <= abs(v) <= hi for lo, hi in band.intervals)
     bode = [{"loop": lp.name, "frequency_hz": _list(lp.frequency_hz, digits=6),
              "magnitude_db": _list(lp.magnitude_db, digits=6),
-             "phase_deg": _list(lp.phase_deg, digits=6), **lp.as_dict()}
+             "phase_deg": _list(lp.phase_deg, digits=6), **loop_json(lp.as_dict())}
             for lp in loops.loops]
     return _json({
         "bode": bode, "notes": d["notes"], "pole_rule": d["pole_rule"],
@@ -375,7 +400,8 @@ def run_linear(checked: Checked, report: Report) -> dict[str, Any]:
                  "frequency_hz": _list(band.frequency_hz)},
         "inside_band": inside,
         "table_speed_mm_s": 1e3 * v,
-        "poles": d["poles"], "least_damped_mode": d["least_damped_mode"], "loops": d["loops"],
+        "poles": d["poles"], "least_damped_mode": d["least_damped_mode"],
+        "loops": [loop_json(lp) for lp in d["loops"]],
         "friction": d["friction"],
     })
 

@@ -53,13 +53,16 @@ def plot_loops(analysis: LoopAnalysis, path: str | Path, kind: str = "bode") -> 
 def _bode(analysis: LoopAnalysis) -> Figure:
     """Open-loop magnitude and phase of every loop; at each gain crossover a dot on 0 dB and
     the phase margin drawn as a bar up from −180°, at the phase crossover the gain margin as a
-    bar down to 0 dB."""
+    bar down to 0 dB; the legend gives "GM ∞ dB" for a loop without phase crossover
+    (:func:`~feeddrive.analysis.linear.margin_text`)."""
+    from ..analysis.linear import margin_text
+
     fig = Figure(figsize=(8.5, 7), layout="constrained")
     ax_m, ax_p = fig.subplots(2, 1, sharex=True)
     for lp in analysis.loops:
         pm = f", PM {lp.phase_margin_deg:.1f}°" if lp.phase_margin_deg is not None else ""
         fc = f" at {lp.crossover_hz:.2f} Hz" if lp.crossover_hz is not None else ""
-        gm = f", GM {lp.gain_margin_db:.1f} dB" if lp.gain_margin_db is not None else ""
+        gm = f", GM {margin_text('gain_margin_db', lp.gain_margin_db, '.1f', 'dB')}"
         (line,) = ax_m.semilogx(lp.frequency_hz, lp.magnitude_db, lw=1.0,
                                 label=f"{lp.name}{pm}{fc}{gm}")
         colour = line.get_color()

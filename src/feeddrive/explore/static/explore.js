@@ -55,10 +55,21 @@ const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
 function status(text) { $("status").textContent = text; }
 
+// a number as the text outputs print it (feeddrive.units.number_text): "∞" for an infinite
+// one (a bound), "—" for a value that does not exist
 function fmt(value, digits = 4, unit = "") {
-  if (value === null || value === undefined) return "—";
-  const text = String(parseFloat(Number(value).toPrecision(digits)));
+  if (value === null || value === undefined || Number.isNaN(Number(value))) return "—";
+  const number = Number(value);
+  const text = Number.isFinite(number) ? String(parseFloat(number.toPrecision(digits)))
+    : (number > 0 ? "∞" : "−∞");
   return unit ? `${text} ${unit}` : text;
+}
+
+// a loop's value: JSON has no infinity, so the server sends an infinite one (a gain margin
+// without phase crossover) as null and names it in the loop's `infinite`; any other null is
+// a value the loop has not (no gain crossover), left null
+function loopValue(lp, name) {
+  return lp[name] === null && (lp.infinite || []).includes(name) ? Infinity : lp[name];
 }
 
 // ------------------------------------------------------------------ the form
@@ -516,7 +527,8 @@ function renderLinear(res) {
   renderBode(res.bode || [], res.friction);
   const d = res.least_damped_mode;
   const loops = res.loops.map((lp) => `${lp.loop}: phase margin ` +
-    `${fmt(lp.phase_margin_deg, 3, "°")}, gain margin ${fmt(lp.gain_margin_db, 3, "dB")}`)
+    `${fmt(lp.phase_margin_deg, 3, "°")}, gain margin ` +
+    `${fmt(loopValue(lp, "gain_margin_db"), 3, "dB")}`)
     .join(" · ");
   const notes = (res.notes || []).join(" · ");
   $("linear-facts").textContent =
@@ -548,7 +560,8 @@ function renderBode(bode, friction) {
   bode.forEach((lp, k) => {
     const color = colors[k % colors.length];
     const pm = lp.phase_margin_deg === null ? "" : `, PM ${fmt(lp.phase_margin_deg, 3)}°`;
-    const gm = lp.gain_margin_db === null ? "" : `, GM ${fmt(lp.gain_margin_db, 3)} dB`;
+    const gain = loopValue(lp, "gain_margin_db");
+    const gm = gain === null ? "" : `, GM ${fmt(gain, 3, "dB")}`;
     traces.push({ x: lp.frequency_hz, y: lp.magnitude_db, type: "scatter", mode: "lines",
                   name: `${lp.loop}${pm}${gm}`, line: { color, width: 1.5 }, yaxis: "y",
                   legendgroup: lp.loop,
