@@ -479,7 +479,7 @@ class Result:
         """A machine's run: each axis' parameter set as the run was given it, by axis name in
         axis order; {} for one drive's run.  Read from the ``<axis>_parameters_toml``
         attributes when the result was loaded from a file
-        (:func:`feeddrive.engine.machine_axes.axis_parameter_sets`).
+        (``feeddrive.engine.machine_axes.axis_parameter_sets``).
 
         Returns
         -------
