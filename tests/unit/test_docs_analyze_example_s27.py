@@ -13,11 +13,10 @@ import re
 from pathlib import Path
 
 import numpy as np
+from test_trace import CREEPS, STEPS, position_of, speed_profile
 from typer.testing import CliRunner
 
 from feeddrive.cli import app
-
-from test_trace import CREEPS, STEPS, position_of, speed_profile
 
 DOC = Path(__file__).parents[2] / "docs" / "measured-data.md"
 COMMAND = "$ feeddrive analyze stepdown.csv"
