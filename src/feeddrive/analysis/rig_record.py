@@ -27,6 +27,17 @@ time stamps keep their first sample; irregular steps are kept (the model is comp
 measured instants) and the reference is resampled on a uniform grid of the median step.  A
 time that goes backwards is refused.
 
+A .mat carries no units, so the values are held to what a drive shows, each refusal in one
+line naming ``--map ROLE=VARIABLE``, what was seen and the unit it is likelier in: any value
+to the bound a CSV column is held to (:data:`feeddrive.io.measured.LARGEST_MAGNITUDE`: 1 km,
+100 m/s, 1e7 N …), and a variable read in SI for want of a unit to what the drive of the set
+can show — a time to a median step below :data:`LARGEST_UNITLESS_STEP` (else likely ms), a
+position or position reference to a stroke within the table's travel (the screw's length)
+and a mean speed within the axis's (else likely mm), a speed to the axis's speed
+(:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`; else likely mm/s), a current
+to :data:`CURRENT_LIMIT_MARGIN` × the controller's current limit (else likely mA).  A unit in
+the map is taken as given.
+
 A variable may be a field of a 1×1 struct, named by MATLAB's dotted path: ``rec.pos[mm]``,
 ``feeddrive.table_position`` (feeddrive's own ``.mat`` export keeps a run in the struct
 ``feeddrive``, a machine's axis in ``feeddrive.x``).  A path that ends at a struct, a field
@@ -34,7 +45,8 @@ a struct does not hold and a struct array (no indexing) are refused in one line,
 struct's fields.
 
 MATLAB v7.3 files are HDF5 and ``scipy.io.loadmat`` cannot read them: they are read through
-h5py when it is installed, else refused in one line.
+h5py when it is installed, else refused in one line.  An empty variable or field (``[]``) and
+text (a char array) are refused as what they are.
 
 References
 ----------
@@ -45,6 +57,7 @@ References
 from __future__ import annotations
 
 import importlib.util
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,10 +68,12 @@ import numpy as np
 from ..io.measured import (
     CURRENT_UNITS,
     FORCE_UNITS,
+    LARGEST_MAGNITUDE,
     LENGTH_UNITS,
     SPEED_UNITS,
     TIME_UNITS,
     encoding_hint,
+    first_beyond_largest,
     split_unit,
     unit_factor,
 )
@@ -75,8 +90,9 @@ from .fit import (
 )
 from .fit_statistics import noise_level
 
-__all__ = ["FITTED_ROLES", "INPUT_ROLES", "REFERENCE_ROLES", "ROLES", "ROLE_UNITS", "RigRecord",
-           "emps_layout", "parse_map", "read_rig_record", "reference_rate", "role_factor",
+__all__ = ["CURRENT_LIMIT_MARGIN", "FITTED_ROLES", "INPUT_ROLES", "LARGEST_UNITLESS_STEP",
+           "REFERENCE_ROLES", "ROLES", "ROLE_UNITS", "RigRecord", "emps_layout", "parse_map",
+           "read_rig_record", "reference_rate", "role_factor",
            "table_motor_force_per_current"]
 
 #: role → what it is [SI unit]
@@ -116,6 +132,16 @@ FITTED_ROLES = ("position", "speed", "current", "force", "drive_force")
 #: ``--input`` (an open-loop replay, :mod:`feeddrive.model.replay`) → the role it replays
 INPUT_ROLES = {"current": "current", "torque": "torque", "force": "force",
                "speed": "motor_speed"}
+#: a time read in s for want of a unit whose median sample step is at least this is refused
+#: as likely in ms [s]: read in s it is a record at 10 Hz or slower, at most 5 samples in the
+#: fit's first 0.5-s stage (fit.FIRST_HORIZON) and none of a drive's loop dynamics; read in
+#: ms it is a record at 10 kHz or slower, the rates drives are recorded at (EMPS: 1 kHz)
+LARGEST_UNITLESS_STEP = 0.1
+#: a current read in A for want of a unit is refused as likely in mA beyond this multiple of
+#: the set's controller.current_limit (or of engine.options.NO_CURRENT_LIMIT, the current
+#: feeddrive takes as no limit, when the set has none): a current held at its limit
+#: overshoots it by its loop's overshoot and noise, not twofold
+CURRENT_LIMIT_MARGIN = 2.0
 
 
 def role_factor(role: str, unit: str | None, field: str) -> float:
@@ -296,9 +322,27 @@ def _mat_names(path: Path) -> list[str]:
 
 
 def _numeric(name: str, a: np.ndarray, src: str) -> np.ndarray:
+    if a.size == 0:  # a 0×1 read as a vector of no samples: "differ in length" after
+        raise _PathRefused(name, _EMPTY.format(name=name, src=src))
     if a.dtype.kind not in "fiub" or a.squeeze().ndim != 1:
         raise _PathRefused(name, f"{name!r} in {src} is not a numeric vector (shape {a.shape})")
     return a
+
+
+_EMPTY = "{name!r} in {src} is empty ([] in MATLAB): no samples to read"
+
+
+def _h5_numeric(name: str, node: Any, src: str) -> np.ndarray:
+    """A v7.3 dataset as :func:`_numeric`: MATLAB keeps an empty array as its dimensions
+    (``MATLAB_empty``; they read as the samples [0, 0]) and text as uint16 character codes
+    (``MATLAB_class`` char; they passed as numbers), both refused as what they are."""
+    if int(np.asarray(node.attrs.get("MATLAB_empty", 0)).ravel()[0]):
+        raise _PathRefused(name, _EMPTY.format(name=name, src=src))
+    kind = node.attrs.get("MATLAB_class", b"")
+    if (kind.decode("ascii", "replace") if isinstance(kind, bytes) else str(kind)) == "char":
+        raise _PathRefused(name, f"{name!r} in {src} is text (a MATLAB char array), not a "
+                           "numeric vector")
+    return _numeric(name, np.asarray(node).T, src)  # MATLAB's columns, transposed
 
 
 def _struct_refusal(name: str, where: str, src: str, elements: int,
@@ -378,7 +422,7 @@ def _h5_array(f: Any, name: str, held: Sequence[str], src: str) -> np.ndarray:
             if field is not None:
                 raise _PathRefused(name, f"{where!r} in {src} is not a struct (shape "
                                    f"{node.shape[::-1]}): it has no field {field!r}")
-            return _numeric(name, np.asarray(node).T, src)  # MATLAB's columns, transposed
+            return _h5_numeric(name, node, src)
         fields = [k for k in node.keys() if not k.startswith("#")]
         elements = _h5_struct_elements(node)
         if elements != 1 or field is None or field not in fields:
@@ -467,6 +511,126 @@ def table_motor_force_per_current(params: DriveParameters, drive: str,
     return f"{axis}_current", constant * ratio
 
 
+@dataclass(frozen=True)
+class _DriveLimits:
+    """What the drive of the set can show, each with what sets it: the table's travel [m]
+    (None when no screw bounds it), its speed [m/s] and a motor's current [A]."""
+
+    travel: tuple[float, str] | None
+    speed: tuple[float, str]
+    current: tuple[float, str]
+
+
+def _drive_limits(params: DriveParameters, drive: str) -> _DriveLimits:
+    from ..engine.options import NO_CURRENT_LIMIT
+    from .positioning_run import axis_speed_limit, axis_travel
+
+    limit = float(params.controller.current_limit)
+    if 0.0 < limit < NO_CURRENT_LIMIT:
+        current = (CURRENT_LIMIT_MARGIN * limit, f"{CURRENT_LIMIT_MARGIN:g} × the controller's "
+                   f"limit, controller.current_limit = {limit:g} A")
+    else:
+        current = (CURRENT_LIMIT_MARGIN * NO_CURRENT_LIMIT, f"{CURRENT_LIMIT_MARGIN:g} × "
+                   f"{NO_CURRENT_LIMIT:g} A, the current feeddrive takes as no limit: the set "
+                   "gives none")
+    return _DriveLimits(travel=axis_travel(params, drive),
+                        speed=axis_speed_limit(params, drive), current=current)
+
+
+def _implausible(role: str, values: np.ndarray, time: np.ndarray,
+                 limits: _DriveLimits) -> tuple[str, float, float] | None:
+    """Why ``values`` [SI] of ``role``, read in SI for want of a unit, are none the drive can
+    show — what was seen and the bound it passes — with the value and the bound [SI]; None
+    when they are plausible, and for a force, a torque or a motor speed (held only to
+    LARGEST_MAGNITUDE: a force has no smaller unit to be in)."""
+    dimension = ROLE_UNITS[role][0]
+    if dimension == "time":
+        step = float(np.median(np.diff(values)))
+        if step >= LARGEST_UNITLESS_STEP:
+            return (f"a median sample step of {step:.4g} s read in s (no unit given): a record "
+                    f"at {1.0 / step:.3g} Hz, slower than a drive's records are taken (steps < "
+                    f"{LARGEST_UNITLESS_STEP:g} s)",
+                    step, LARGEST_UNITLESS_STEP)
+        return None
+    speed, why = limits.speed
+    if dimension == "length":
+        stroke = float(np.ptp(values))
+        if limits.travel is not None and stroke > limits.travel[0]:
+            length, path = limits.travel
+            return (f"a stroke of {stroke:.4g} m read in m (no unit given), longer than the "
+                    f"table's travel ({path} = {length:g} m)", stroke, length)
+        span = float(time[-1] - time[0])
+        if stroke > speed * span:
+            return (f"a stroke of {stroke:.4g} m in {span:.4g} s read in m (no unit given): a "
+                    f"mean speed of {stroke / span:.4g} m/s, beyond the axis's {speed:.4g} m/s "
+                    f"({why})", stroke / span, speed)
+        return None
+    top = float(np.max(np.abs(values)))
+    if dimension == "speed" and top > speed:
+        return (f"a speed of {top:.4g} m/s read in m/s (no unit given), beyond the axis's "
+                f"{speed:.4g} m/s ({why})", top, speed)
+    if dimension == "current" and top > limits.current[0]:
+        return (f"a current of {top:.4g} A read in A (no unit given), beyond "
+                f"{limits.current[0]:g} A ({limits.current[1]})", top, limits.current[0])
+    return None
+
+
+def _smaller_unit(role: str, value: float, bound: float) -> str | None:
+    """Of ``role``'s units a thousand, a million, a billion times smaller than its SI unit
+    (mm, µm, nm; ms, µs; mm/s, µm/s; mA), the largest in which ``value`` [SI] read in SI is
+    within ``bound`` [SI], else the first; None when the role has none (N, rad/s)."""
+    table = ROLE_UNITS[role][1]
+    smaller = [next((u for u, f in table.items() if math.isclose(f, factor)), None)
+               for factor in (1e-3, 1e-6, 1e-9)]
+    units = [u for u in smaller if u is not None]
+    for unit, factor in ((u, table[u]) for u in units):
+        if value * factor < bound:
+            return unit
+    return units[0] if units else None
+
+
+def _check_magnitudes(src: str, mapping: Mapping[str, str],
+                      specs: Mapping[str, tuple[str, str | None]],
+                      columns: Mapping[str, np.ndarray], limits: _DriveLimits) -> None:
+    """Refuse, in one line naming ``--map ROLE=VARIABLE``, a mapped variable with a value no
+    feed drive has (the bound of a CSV column, io.measured.LARGEST_MAGNITUDE, whatever its
+    unit), or one read in SI for want of a unit that the drive of the set cannot show
+    (:func:`_implausible`: a record in mm, ms or mA read 1000× off); time first, as the
+    others' rates are taken on it.  Each names the unit it is likelier in."""
+    for role in sorted(specs, key=lambda r: r != "time"):
+        name, unit = specs[role]
+        dimension, table = ROLE_UNITS[role]
+        si = next(iter(table))
+        field = f"--map {role}={mapping[role]}"
+        values = columns[role]
+        k = first_beyond_largest(values, dimension) if dimension in LARGEST_MAGNITUDE else None
+        if k is not None:
+            shown, factor = unit or si, role_factor(role, unit, field)
+            largest = LARGEST_MAGNITUDE[dimension]
+            hint = _unit_hint(role, name, unit, abs(float(values[k])), largest, escape=False)
+            raise ParameterError(field, MISSING, f"a value of {values[k] / factor:.6g} "
+                                 f"{shown} is beyond any feed drive (|{dimension}| ≤ "
+                                 f"{largest / factor:g} {shown}); {hint}", source=src)
+        found = _implausible(role, values, columns["time"], limits) if unit is None else None
+        if found is not None:
+            seen, value, bound = found
+            raise ParameterError(field, MISSING, f"{seen}; "
+                                 f"{_unit_hint(role, name, unit, value, bound)}", source=src)
+
+
+def _unit_hint(role: str, name: str, unit: str | None, value: float, bound: float, *,
+               escape: bool = True) -> str:
+    """What to write instead (no unit given): the variable with the smaller unit it is
+    likelier in, and, with ``escape``, with its SI unit if it is in that after all (a unit
+    given skips :func:`_implausible`); else: check its unit."""
+    smaller = _smaller_unit(role, value, bound) if unit is None else None
+    if smaller is None:
+        return "check the variable's unit"
+    si = next(iter(ROLE_UNITS[role][1]))
+    return (f"if it is in {smaller} write {role}={name}[{smaller}]"
+            + (f" ({role}={name}[{si}] if it is in {si})" if escape else ""))
+
+
 def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveParameters,
                     *, drive: str = "cdfs", table_position: float = 0.4,
                     input: str | None = None) -> RigRecord:
@@ -497,8 +661,13 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
     Raises
     ------
     FitError
-        A missing variable, variables of different lengths, a time that goes backwards, too
-        few samples, a reference that never moves; one line each, before any simulation.
+        A missing, empty or text variable, variables of different lengths, a time that goes
+        backwards, too few samples, a reference that never moves; one line each, before any
+        simulation.
+    ParameterError
+        A time read in s whose steps are those of ms; a value beyond any feed drive, or, read
+        in SI for want of a unit, beyond what the drive of ``params`` shows (module
+        docstring); naming ``--map ROLE=VARIABLE`` and the unit it is likelier in.
     """
     p = Path(path)
     src = str(p)
@@ -561,6 +730,7 @@ def read_rig_record(path: str | Path, mapping: Mapping[str, str], params: DriveP
                              f"times in seconds [s]: {t_raw.size} samples, {t_raw[0]:.6g} … "
                              f"{t_raw[-1]:.6g}; {MS_TIME_HINT}: give its unit, time="
                              f"{time_var}[ms] (time={time_var}[s] for a 1-s step)", source=src)
+    _check_magnitudes(src, mapping, specs, columns, _drive_limits(params, drive))
     dt = float(np.median(steps))
     unstated = [f"{role} {var} [{next(iter(ROLE_UNITS[role][1]))}]"
                 for role, (var, unit) in specs.items() if unit is None]

@@ -41,6 +41,7 @@ __all__ = [
     "StaticTest",
     "check_text_file",
     "encoding_hint",
+    "first_beyond_largest",
     "read_csv_table",
     "read_position_trace",
     "read_presliding_test",
@@ -418,13 +419,34 @@ class CsvTable:
             At the first value too large.
         """
         limit = LARGEST_MAGNITUDE[dimension]
-        big = np.flatnonzero(np.abs(values) > limit)
-        if big.size:
-            k = int(big[0])
+        k = first_beyond_largest(values, dimension)
+        if k is not None:
             raise MeasuredDataError(
                 self.source, int(self.lines[k]),
                 f"column {self.names[i]!r}: {self.cell(i, k)} [{unit}] is beyond any feed "
                 f"drive (|{dimension}| ≤ {limit / factor:g} {unit}); check the file's unit")
+
+
+def first_beyond_largest(values: np.ndarray, dimension: str) -> int | None:
+    """The index of the first value beyond :data:`LARGEST_MAGNITUDE` of its dimension (a
+    wrong unit or a damaged file), or None: the one bound every measured value is held to,
+    a CSV column's (:meth:`CsvTable.check_magnitude`) and a ``.mat`` record's
+    (feeddrive.analysis.rig_record).
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        The values in SI [SI unit of the dimension].
+    dimension : str
+        A key of ``LARGEST_MAGNITUDE``.
+
+    Returns
+    -------
+    int or None
+        The index, or None when every value is within.
+    """
+    big = np.flatnonzero(np.abs(values) > LARGEST_MAGNITUDE[dimension])
+    return int(big[0]) if big.size else None
 
 
 def _is_decimal_comma(text: str) -> bool:
