@@ -87,7 +87,7 @@ def number_text(value: float | None, spec: str = ".3g", unit: str = "", *,
     Parameters
     ----------
     value : float or None
-        The number.
+        The number [in ``unit``, any].
     spec : str, default ".3g"
         Its format specification.
     unit : str, default ""

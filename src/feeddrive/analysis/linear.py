@@ -219,7 +219,7 @@ def margin_text(name: str, value: float | None, spec: str = ".2f", unit: str = "
         The value's name (``"gain_margin_db"``, ``"phase_margin_deg"``, ``"crossover_hz"``,
         ``"closed_loop_bandwidth_hz"``).
     value : float or None
-        The value; None where the analysis found none.
+        The value [dB, deg or Hz, as its name says]; None where the analysis found none.
     spec, unit : str
         Its format specification (default ".2f") and the unit printed after a number or ∞
         (default none).
