@@ -29,7 +29,7 @@ time that goes backwards is refused.
 
 A .mat carries no units, so the values are held to what a drive shows, each refusal in one
 line naming ``--map ROLE=VARIABLE``, what was seen and the unit it is likelier in: any value
-to the bound a CSV column is held to (:data:`feeddrive.io.measured.LARGEST_MAGNITUDE`: 1 km,
+to the bound a CSV column is held to (``feeddrive.io.measured.LARGEST_MAGNITUDE``: 1 km,
 100 m/s, 1e7 N …), and a variable read in SI for want of a unit to what the drive of the set
 can show — a time to a median step below :data:`LARGEST_UNITLESS_STEP` (else likely ms), a
 position or position reference to a stroke within the table's travel (the screw's length)

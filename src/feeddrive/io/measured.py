@@ -428,7 +428,7 @@ class CsvTable:
 
 
 def first_beyond_largest(values: np.ndarray, dimension: str) -> int | None:
-    """The index of the first value beyond :data:`LARGEST_MAGNITUDE` of its dimension (a
+    """The index of the first value beyond ``LARGEST_MAGNITUDE`` of its dimension (a
     wrong unit or a damaged file), or None: the one bound every measured value is held to,
     a CSV column's (:meth:`CsvTable.check_magnitude`) and a ``.mat`` record's
     (feeddrive.analysis.rig_record).
