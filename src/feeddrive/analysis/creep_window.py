@@ -243,7 +243,7 @@ class CreepMetrics:
                f", {1.0 / (self.stick_slip_frequency * step):.3g} samples per "
                f"{self.stick_slip_frequency:.3g}-Hz period")
         # smooth with an unresolved stick phase: a finer record can show the table sticking
-        unsure = flips or self.verdict == "smooth"
+        unsure = flips or self.verdict == SMOOTH
         verdict = ("; the verdict is not firm (a finer output interval can find more stick "
                    "time)" if unsure else "")
         return (f"stick fraction {stick:.3g} depends on the sampling "
