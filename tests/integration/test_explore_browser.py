@@ -24,15 +24,9 @@ from typing import Any
 
 import numpy as np
 import pytest
+from browser_support import ARGS, CHROMIUM, needs_chromium, playwright
 
-CHROMIUM = Path("/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync", "--no-first-run"]
-
-pytestmark = pytest.mark.skipif(
-    not CHROMIUM.exists(),
-    reason="Debian's chromium is not installed (apt-get install -y chromium): the explorer's "
-           "browser test drives /usr/bin/chromium and downloads no browser")
+pytestmark = needs_chromium
 
 
 @pytest.fixture(scope="module")
@@ -73,8 +67,7 @@ def _not_blank(png: Path) -> tuple[float, int]:
 
 def test_the_page_runs_a_ddfs_shows_its_verdict_and_refuses_bad_input(
         explorer: str, tmp_path: Path, record_property: pytest.RecordProperty) -> None:
-    sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright's Python driver "
-                                   "is in the test extra: pip install '.[test]'")
+    sync_api = playwright()
     errors: list[str] = []
     with sync_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)

@@ -11,27 +11,18 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from browser_support import ARGS, CHROMIUM, explorer, needs_chromium, playwright
 
-from feeddrive.explore import ExplorerServer, serve_in_thread
+from feeddrive.explore import ExplorerServer
 from feeddrive.io.measured import read_position_trace
 
-CHROMIUM = Path("/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync", "--no-first-run"]
-
-pytestmark = pytest.mark.skipif(
-    not CHROMIUM.exists(),
-    reason="Debian's chromium is not installed (apt-get install -y chromium): the explorer's "
-           "browser test drives /usr/bin/chromium and downloads no browser")
+pytestmark = needs_chromium
 
 
 @pytest.fixture(scope="module")
 def server() -> Iterator[ExplorerServer]:
-    srv = serve_in_thread(0, {"drive": "cdfs", "table_speed": "2", "duration": "2"})
-    assert srv.explorer.ready.wait(300), "the solver warm-up did not finish"
-    yield srv
-    srv.shutdown()
-    srv.server_close()
+    with explorer({"drive": "cdfs", "table_speed": "2", "duration": "2"}) as srv:
+        yield srv
 
 
 def svg_text(page: object, selector: str) -> str:
@@ -41,8 +32,7 @@ def svg_text(page: object, selector: str) -> str:
 
 def test_pick_a_signal_overlay_two_runs_download_and_read_back(server: ExplorerServer,
                                                                tmp_path: Path) -> None:
-    sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright's Python driver "
-                                   "is in the test extra: pip install '.[test]'")
+    sync_api = playwright()
     errors: list[str] = []
     with sync_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)

@@ -8,34 +8,23 @@ tests/unit/test_infinite_margin_views_s27.py."""
 from __future__ import annotations
 
 from collections.abc import Iterator
-from pathlib import Path
 
 import pytest
+from browser_support import ARGS, CHROMIUM, explorer, needs_chromium, playwright
 
-from feeddrive.explore import ExplorerServer, serve_in_thread
+from feeddrive.explore import ExplorerServer
 
-CHROMIUM = Path("/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync", "--no-first-run"]
-
-pytestmark = pytest.mark.skipif(
-    not CHROMIUM.exists(),
-    reason="Debian's chromium is not installed (apt-get install -y chromium): the explorer's "
-           "browser test drives /usr/bin/chromium and downloads no browser")
+pytestmark = needs_chromium
 
 
 @pytest.fixture(scope="module")
 def server() -> Iterator[ExplorerServer]:
-    srv = serve_in_thread(0, {"drive": "cdfs", "table_speed": "1.5", "duration": "0.5"})
-    assert srv.explorer.ready.wait(300), "the solver warm-up did not finish"
-    yield srv
-    srv.shutdown()
-    srv.server_close()
+    with explorer({"drive": "cdfs", "table_speed": "1.5", "duration": "0.5"}) as srv:
+        yield srv
 
 
 def test_the_page_prints_an_infinite_gain_margin(server: ExplorerServer) -> None:
-    sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright's Python driver "
-                                   "is in the test extra: pip install '.[test]'")
+    sync_api = playwright()
     errors: list[str] = []
     with sync_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)

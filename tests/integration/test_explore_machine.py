@@ -14,13 +14,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+from browser_support import ARGS, CHROMIUM, MISSING, explorer, playwright
 
-from feeddrive.explore import ExplorerServer, serve_in_thread
+from feeddrive.explore import ExplorerServer
 from feeddrive.explore.compute import MAX_POINTS
-
-CHROMIUM = Path("/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync", "--no-first-run"]
 
 #: the inertial cross-axis part of docs/machine.md: x's acceleration loads y's table
 CARRY = """name = "xy-carry"
@@ -36,10 +33,8 @@ factor = 0.5
 
 @pytest.fixture(scope="module")
 def server() -> Iterator[ExplorerServer]:
-    srv = serve_in_thread(0, warm_up=False)  # a machine run needs no single-drive warm-up
-    yield srv
-    srv.shutdown()
-    srv.server_close()
+    with explorer(warm_up=False) as srv:  # a machine run needs no single-drive warm-up
+        yield srv
 
 
 def request(srv: ExplorerServer, method: str, path: str, body: Any = None
@@ -140,9 +135,8 @@ def test_a_bad_machine_request_is_refused_in_one_line_naming_the_field(
 def test_the_page_draws_a_machine_file_s_xy_path(server: ExplorerServer,
                                                  tmp_path: Path) -> None:
     if not CHROMIUM.exists():
-        pytest.skip("Debian's chromium is not installed (apt-get install -y chromium)")
-    sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright's Python driver "
-                                   "is in the test extra: pip install '.[test]'")
+        pytest.skip(MISSING)
+    sync_api = playwright()
     machine_file = tmp_path / "carry.toml"
     machine_file.write_text(CARRY, encoding="utf-8")
     errors: list[str] = []
