@@ -408,6 +408,11 @@ def _print_summary(summary: dict[str, Any], drive: str, profile: str,
         _say(f"  analyse the steps with: feeddrive analyze {summary['output']}")
 
 
+#: the verdict row's words for a constant-speed run the limit-cycle rule leaves undecided
+UNSETTLED = ("; not settled, so not firm: the limit-cycle rule (below) has not decided; a "
+             "longer --duration decides")
+
+
 def _lines(s: dict[str, Any], options: Any = None) -> list[tuple[str, str]]:
     from ..analysis.creep_window import CreepThresholds, frequency_label
 
@@ -470,8 +475,12 @@ def _lines(s: dict[str, Any], options: Any = None) -> list[tuple[str, str]]:
                 ("stick fraction", n(s["stick_fraction"], 3)),
                 (frequency_label(s["stick_fraction"]),
                  "none" if freq is None else f"{n(freq, 3)} Hz"),
-                ("verdict", f"{s['verdict']} (by the window rule, below)"),
+                ("verdict", f"{s['verdict']} (by the window rule, below)"
+                            f"{'' if s.get('settled', True) else UNSETTLED}"),
             ]
+            if "limit_cycle_verdict" in s:  # a constant speed: as `creep` judges a trial
+                rows.append(("limit-cycle rule", f"{s['limit_cycle_verdict']}: "
+                                                 f"{s['limit_cycle_reason']}"))
         rows.append(("verdict rule", s.get("verdict_rule") or CreepThresholds().describe()))
     a, b = s["window_s"]
     e = s.get("run") or s  # a staircase: over the whole run, not its first hold's window

@@ -611,6 +611,8 @@ class Result:
             })
             if m.sampling_note:  # the record does not resolve the stick phase (session 26)
                 warnings.append(m.sampling_note)
+            if constant:
+                out.update(self._cycle_decision())
             if not constant:
                 out["segments"] = holds = self._hold_segments()
                 if len(holds) > 1:
@@ -754,6 +756,20 @@ class Result:
         if last - first < 16:
             return float(self.time[0]), float(self.time[-1])
         return steady_window(self.time[first:last + 1], self["table_speed"][first:last + 1], c)
+
+    def _cycle_decision(self) -> dict[str, Any]:
+        """A constant-speed run judged as ``feeddrive creep`` judges a trial (the limit-cycle
+        rule, :func:`feeddrive.analysis.cycle_verdict.trace_verdict`), beside the window
+        rule's verdict: ``settled`` is False when that rule leaves the run undecided — the
+        start-up transient still decaying, no cycle repeated yet — and the window's verdict is
+        then not firm (a 2-s DDFS run at 0.5/16 mm/s was "creeping" by its window, 0.8 ripple
+        at 5.4 Hz, and is smooth from 10 s; an outside check, 2026-12-07)."""
+        from ..analysis.cycle_verdict import trace_verdict
+        from ..analysis.verdict_words import UNDECIDED
+
+        decision = trace_verdict(self.time, self["table_speed"], self.command_speed)
+        return {"settled": decision.kind != UNDECIDED, "limit_cycle_verdict": decision.kind,
+                "limit_cycle_reason": decision.reason}
 
     def _hold_segments(self) -> list[dict[str, Any]]:
         """Creep metrics of every stretch where a sampled command holds one non-zero speed
