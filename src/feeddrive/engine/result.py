@@ -74,6 +74,7 @@ class Run:
         self.t, self.y, self.aux, self.model = t, y, aux, model
         self.system, self.profile, self.solver_stats = system, profile, solver_stats
         self.options = options
+        self._record: dict[str, str] | None = None
         self._deferred: Callable[[Run], np.ndarray] | None = None
         self._state_parts: list[np.ndarray] | None = None
         self._state_columns: dict[int, np.ndarray] = {}
@@ -213,17 +214,25 @@ class Run:
             attrs.update(marks(profile))
             attrs = {k: v for k, v in attrs.items() if v is not None}
         if full:
-            # what the run used: the model's named slots with units, written from the
-            # assembled model (feeddrive.model.slots); the set as given, to run it again
-            attrs["parameter_slots"] = slots_json(self.model)
+            attrs.update(self._parameter_record())
+        return attrs
+
+    def _parameter_record(self) -> dict[str, str]:
+        """What the run used: the model's named slots with units, written from the assembled
+        model (feeddrive.model.slots), and the set as given, to run it again; made once (the
+        slot table takes milliseconds, and neither the model nor the system changes)."""
+        if self._record is None:
+            system = self.system
+            record = {"parameter_slots": slots_json(self.model)}
             sets = getattr(system, "parameter_sets", None)
             if callable(sets):  # a machine: each axis' set, as each axis' start position
                 # (MachineSystem.parameter_sets; the first axis' alone: session 27)
-                attrs.update({f"{name}_parameters_toml": dumps(params)
-                              for name, params in sets().items()})
+                record.update({f"{name}_parameters_toml": dumps(params)
+                               for name, params in sets().items()})
             else:
-                attrs["parameters_toml"] = dumps(system.parameters)
-        return attrs
+                record["parameters_toml"] = dumps(system.parameters)
+            self._record = record
+        return dict(self._record)
 
     def dataset(self) -> xr.Dataset:
         """The run as an xarray Dataset: every signal over ``time`` with its unit and description.
@@ -369,7 +378,16 @@ class Result:
 
     @property
     def attrs(self) -> dict[str, Any]:
-        """The run's attributes (without the parameter TOML unless the dataset exists)."""
+        """The run's attributes: those of its dataset, whether or not ``.dataset`` was built
+        (the parameter sets as TOML and the slot table were left out until it was, and so
+        was ``to_pandas()``'s provenance: session 27)."""
+        if self._dataset is not None or self._run is None:
+            return dict(self.dataset.attrs)
+        return self._run.attrs(full=True)
+
+    def _marks(self) -> dict[str, Any]:
+        """The run's attributes less its parameter record (what the summary reads: drive,
+        profile; the record's slot table takes milliseconds, a creep trial's summary not)."""
         if self._dataset is not None or self._run is None:
             return dict(self.dataset.attrs)
         return self._run.attrs(full=False)
@@ -532,12 +550,13 @@ class Result:
 
         axes = machine_axes(self)
         if axes:  # a machine's run: its axes' signals are prefixed
-            raise ParameterError("profile", self.attrs.get("profile", ""), f"a machine's run "
-                                 f"(axes {', '.join(axes)}): each axis' signals are "
-                                 f"'<axis>.<name>' (result['{axes[0]}.table_speed']), its "
+            raise ParameterError("profile", self._marks().get("profile", ""),
+                                 f"a machine's run (axes {', '.join(axes)}): each axis' "
+                                 f"signals are '<axis>.<name>' "
+                                 f"(result['{axes[0]}.table_speed']), its "
                                  "summary feeddrive.machine.machine_summary(result, machine, "
                                  "contour)")
-        raise ParameterError("profile", self.attrs.get("profile", ""),
+        raise ParameterError("profile", self._marks().get("profile", ""),
                              "expected a run with a commanded table speed: the creep summary "
                              "judges the table speed against the command, and this run has "
                              "none (a replay drives the table open-loop); read its signals "
@@ -571,7 +590,7 @@ class Result:
             return self._diverged_summary()
         self._check_samples()
         warnings: list[str] = []
-        attrs = self.attrs
+        attrs = self._marks()
         from ..model.reference import sine_field
 
         frequency = sine_field(attrs.get("profile", ""), "frequency")
@@ -658,7 +677,7 @@ class Result:
         against 0.1 mm/s, as if that were the command: an outside check, 2026-12-07)."""
         from ..model.reference import profile_field
 
-        text = str(self.attrs.get("profile", ""))
+        text = str(self._marks().get("profile", ""))
         ramp = profile_field(text, "ConstantSpeed", "ramp_time")
         end = float(self.time[-1])
         if ramp is None or not ramp > end:
@@ -681,10 +700,11 @@ class Result:
 
         stats = self.solver_stats
         at = float(stats.get("diverged_at_s", self.time[-1]))
-        sine = "SineSpeed" in self.attrs.get("profile", "")
+        attrs = self._marks()
+        sine = "SineSpeed" in attrs.get("profile", "")
         return {
-            "drive": self.attrs["drive"], "profile": "sine" if sine else "constant"
-            if self.attrs.get("profile", "").startswith("ConstantSpeed") else "sampled",
+            "drive": attrs["drive"], "profile": "sine" if sine else "constant"
+            if attrs.get("profile", "").startswith("ConstantSpeed") else "sampled",
             "verdict": UNSTABLE, "diverged_at_s": at, "samples": int(self.time.size),
             "too_short": True, "window_s": [float(self.time[0]), float(self.time[-1])],
             "solver": stats,
@@ -888,8 +908,11 @@ class Result:
         """The run's signals as a pandas DataFrame, SI, indexed by ``time`` [s].
 
         ``df.attrs`` holds each column's unit (``df.attrs["units"]``) and description
-        (``"long_names"``) and the run's provenance (feeddrive version, drive, parameter set,
-        profile, solver); pandas keeps ``attrs`` through ``to_parquet`` / ``read_parquet``.
+        (``"long_names"``) and the run's provenance as a Parquet export's
+        (:func:`feeddrive.io.results.provenance`: feeddrive version, drive, start position,
+        parameter set and its values as TOML, profile, friction laws, solver record), whether
+        or not ``.dataset`` was built; pandas keeps ``attrs`` through ``to_parquet`` /
+        ``read_parquet``.
 
         Returns
         -------

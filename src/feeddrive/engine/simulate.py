@@ -1394,8 +1394,8 @@ class _Chunks:
         sim, grid = self.sim, self.sim.grid
         every = grid.out_every
         t_end = n_break * grid.base
-        writer = (ChunkWriter(output, sim.model, sim.system, Run, sim.profile)
-                  if output is not None else None)
+        writer = (ChunkWriter(output, sim.model, sim.system, Run, sim.profile,
+                              method=sim.options.method) if output is not None else None)
         kept = sum(p[0].size for p in self.parts)
         keep = int(KEEP_STREAMED / (every * grid.base)) + 1
         tail: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []

@@ -340,8 +340,13 @@ PROVENANCE_KEYS = ("machine", "drive", "table_start_position_m", "parameter_set"
 def provenance(attrs: Mapping[str, Any]) -> dict[str, Any]:
     """Where a run's numbers come from, as plain JSON values: feeddrive's version, the machine
     (a machine's run), the drive, its start position [m], the parameter set, the profile, a
-    machine's axes (each one's drive, parameter set, start position [m]), the friction laws and
-    the solver's statistics (those of ``attrs`` that are there).
+    machine's axes (each one's drive, parameter set, start position [m]), the friction laws,
+    the solver's statistics and the parameter sets as TOML (:func:`parameter_texts`) (those
+    of ``attrs`` that are there).
+
+    The one definition of a run's provenance in pandas' ``df.attrs``: a Parquet file's, whole
+    or streamed, and ``Result.to_pandas()``'s (a streamed Parquet file and ``to_pandas``
+    lacked the parameter sets: session 27).
 
     Parameters
     ----------
@@ -362,6 +367,7 @@ def provenance(attrs: Mapping[str, Any]) -> dict[str, Any]:
         if key in attrs:
             value = attrs[key]
             out[key] = json.loads(value) if isinstance(value, str) else value
+    out.update(parameter_texts(attrs))
     return out
 
 
@@ -572,8 +578,7 @@ def to_arrow_table(dataset: xr.Dataset) -> Any:
         Plain field names, each field's unit in its metadata; the run's provenance and
         parameter sets (:func:`parameter_texts`) as pandas' ``df.attrs``.
     """
-    return arrow_table(_engineering_columns(dataset),
-                       attrs={**provenance(dataset.attrs), **parameter_texts(dataset.attrs)})
+    return arrow_table(_engineering_columns(dataset), attrs=provenance(dataset.attrs))
 
 
 def parameter_texts(attrs: Mapping[str, Any]) -> dict[str, str]:
@@ -672,9 +677,11 @@ def _write(dataset: xr.Dataset, p: Path, ext: str, path: str | Path) -> None:
         from scipy.io.matlab import MatWriteError
 
         try:
-            scipy.io.savemat(p, {"feeddrive": {**signals, "units": units,
-                                                "attrs": {k: str(v) for k, v in
-                                                          dataset.attrs.items()}}},
+            # the version as the other formats carry it (NetCDF's source, Parquet's and the
+            # CSV's feeddrive_version; a .mat lacked it: session 27)
+            text = {**{str(k): str(v) for k, v in dataset.attrs.items()},
+                    "feeddrive_version": __version__}
+            scipy.io.savemat(p, {"feeddrive": {**signals, "units": units, "attrs": text}},
                              long_field_names=True, do_compression=False, oned_as="column")
         except MatWriteError:  # the struct reached the format's limit (scipy's traceback)
             need = mat_bytes(dataset.sizes["time"], len(dataset.data_vars))
@@ -703,7 +710,10 @@ class ChunkWriter:
     ``path`` (a run stopped by Ctrl-C keeps the samples written so far, complete rows),
     :meth:`abort` removes it (a write that failed: nothing partial under ``path``).  The
     solver record is not known while the samples are written: :func:`add_solver_record` adds
-    it after the run.
+    it after the run.  The rest of the run's provenance is the whole run's: the CSV's first
+    line as :func:`provenance_line` writes it for ``Result.save`` (its solver named by
+    ``method``), the Parquet file's ``df.attrs`` as :func:`provenance` (the parameter sets
+    among them; a streamed file lacked them and its CSV line the solver: session 27).
 
     Parameters
     ----------
@@ -719,6 +729,9 @@ class ChunkWriter:
     profile : Profile, optional
         The run's profile, named in the CSV's first line (:func:`provenance_line`) and the
         Parquet file's :func:`provenance`.
+    method : str, optional
+        The run's integration method (``SolverOptions.method``), named in the CSV's first
+        line as the whole run's is.
 
     Raises
     ------
@@ -727,14 +740,15 @@ class ChunkWriter:
     """
 
     def __init__(self, path: str | Path, model: Any, system: Any, run_type: Any,
-                 profile: Any = None) -> None:
+                 profile: Any = None, *, method: str | None = None) -> None:
         self.path = Path(path)
         ext = self.path.suffix.lower()
         if ext not in (".parquet", ".csv"):
             raise ParameterError("output", str(self.path), "a streamed run is written as "
                                  ".parquet or .csv (.nc and .mat hold the whole run)")
         self.ext, self.model, self.system, self.run_type = ext, model, system, run_type
-        self.profile = profile
+        self.profile, self.method = profile, method
+        self._provenance: dict[str, Any] | None = None
         self._writer: Any = None
         self._atomic: Any = None
         self._first = True
@@ -751,12 +765,16 @@ class ChunkWriter:
         return cols
 
     def _attrs(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> dict[str, Any]:
-        attrs: dict[str, Any] = self.run_type(t, y, aux, self.model, self.system, self.profile,
-                                              {}).attrs(full=False)
-        attrs.pop("solver", None)  # the statistics of a streamed run are not known yet
-        if self.profile is None:
-            attrs.pop("profile", None)
-        return attrs
+        """The run's attributes as its whole record has them (the parameter sets among them),
+        less the solver record; made once (the parameter TOML and slot table take ms)."""
+        if self._provenance is None:
+            attrs: dict[str, Any] = self.run_type(t, y, aux, self.model, self.system,
+                                                  self.profile, {}).attrs(full=True)
+            attrs.pop("solver", None)  # the statistics of a streamed run are not known yet
+            if self.profile is None:
+                attrs.pop("profile", None)
+            self._provenance = attrs
+        return self._provenance
 
     def write(self, t: np.ndarray, y: np.ndarray, aux: np.ndarray) -> None:
         """Append one chunk of samples.
@@ -781,7 +799,8 @@ class ChunkWriter:
             with open(self._tmp, "w" if self._first else "a", encoding="utf-8",
                       newline="") as f:
                 if self._first:
-                    f.write(provenance_line(self._attrs(t, y, aux)) + "\n")
+                    named = {"solver": {"method": self.method}} if self.method else {}
+                    f.write(provenance_line({**self._attrs(t, y, aux), **named}) + "\n")
                 frame.to_csv(f, header=self._first, index=False, float_format="%.10g")
         else:
             import pyarrow.parquet as pq

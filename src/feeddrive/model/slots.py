@@ -71,6 +71,10 @@ def slot_unit(model: Model, name: str) -> str:
     """The SI unit of the model's parameter slot ``name`` ("-": dimensionless; "": a slot
     of mixed meaning, the reference profile's block).
 
+    A machine's slot ``<axis>.<slot>`` (its model scopes each axis' names) has the unit of
+    the axis' own ``<slot>``: a machine run recorded every one of them without a unit
+    (``['x.table.mass', 20.0, '']``: session 27).
+
     Parameters
     ----------
     model : feeddrive.model.Model
@@ -83,17 +87,26 @@ def slot_unit(model: Model, name: str) -> str:
     str
         The unit.
     """
+    scope, _, rest = name.partition(".")
+    if rest and f"{scope}.table_position" in model.state_names:  # a machine's axis
+        return _scoped_unit(model, rest, f"{scope}.")
+    return _scoped_unit(model, name, "")
+
+
+def _scoped_unit(model: Model, name: str, prefix: str) -> str:
+    """The unit of slot ``name`` of the drive whose names in ``model`` start with ``prefix``
+    (``""``: the model is one drive; ``"x."``: a machine's axis x)."""
     if name.startswith("profile["):
         return ""  # the reference profile's encoded block (feeddrive.model.reference)
     axis = re.fullmatch(r"controller\.(\w+)\.(\w+)", name)
     if axis:
-        return _axis_unit(model, axis.group(1), axis.group(2))
+        return _axis_unit(model, prefix, axis.group(1), axis.group(2))
     site = re.fullmatch(r"(friction|compensation)\.(\w+)\.(.+)", name)
     if site and site.group(3) in ("observer_gain",):
         site = None
     if site:
         group, where, slot = site.groups()
-        cls = (friction_law(dict(model.sites).get(where, "lugre")).parameters_class
+        cls = (friction_law(dict(model.sites).get(prefix + where, "lugre")).parameters_class
                if group == "friction" else LuGreParameters)
         if slot == "element_count":
             return "-"
@@ -101,9 +114,11 @@ def slot_unit(model: Model, name: str) -> str:
     harmonic = re.fullmatch(r"disturbances\.(\w+)\[(\d+)\]", name)
     if harmonic:  # orders, then amplitudes, then phases
         field, i = harmonic.group(1), int(harmonic.group(2))
-        n = sum(1 for p in model.parameter_names if p.startswith(f"disturbances.{field}["))
+        n = sum(1 for p in model.parameter_names
+                if p.startswith(f"{prefix}disturbances.{field}["))
         return ("-", _HARMONIC_UNITS.get(field, ""), "rad")[min(i // max(n // 3, 1), 2)]
-    if name == "motor.back_emf_constant" and "motor.force_constant" in model.parameter_names:
+    if name == "motor.back_emf_constant" \
+            and f"{prefix}motor.force_constant" in model.parameter_names:
         return "V s/m"  # a linear motor's
     if name in DERIVED_UNITS:
         return DERIVED_UNITS[name]
@@ -112,17 +127,19 @@ def slot_unit(model: Model, name: str) -> str:
     return unit_of(DriveParameters, name) or ""
 
 
-def _axis_unit(model: Model, axis: str, slot: str) -> str:
+def _axis_unit(model: Model, prefix: str, axis: str, slot: str) -> str:
     if slot in AXIS_SLOT_UNITS:
         return AXIS_SLOT_UNITS[slot]
-    command = next((c.speed_command for c in model.control_axes if c.name == axis), "")
+    # a machine's axes each have their controller axes of these names: the one of this drive
+    command = next((c.speed_command for c in model.control_axes
+                    if c.name == axis and c.speed_command.startswith(prefix)), "")
     speed = next((s.unit for s in model.aux if s.name == command), "rad/s")
     if slot == "inj_speed":
         return speed
     if slot == "H":
         return "m/rad" if speed == "rad/s" else "-"
     field = AXIS_SLOT_FIELDS[slot]
-    on_table = model.parameter(f"controller.{axis}.v_basis") > 0.5
+    on_table = model.parameter(f"{prefix}controller.{axis}.v_basis") > 0.5
     meta = {f.name: f.metadata for f in Controller.__dataclass_fields__.values()}[field]
     return str(meta["table_unit"] if on_table and meta.get("table_unit") else meta["unit"])
 
