@@ -20,7 +20,9 @@ limit cycle can persist above the speed where steady sliding turns stable):
   down, dwelling at each speed until the step is decided.  A coarse staircase walks the whole
   range, its top and bottom both held (the step next to the top shorter when the range is
   not a whole number of coarse steps); at each change of kind a fine staircase repeats the
-  same history down to the coarse step above it and then walks down 0.01 mm/s at a time.
+  same history down to the coarse step above it and then walks down 0.01 mm/s at a time to
+  the coarse speed below (its last step shorter when the gap is not a whole number of fine
+  steps: ``protocol.fine_staircase``).
 
 The critical speed reported is the upper edge of the highest creeping band: the lowest tested
 speed above it, which is smooth (status ``found``).  If a trial above that band is undecided,
@@ -1389,7 +1391,7 @@ def critical_speed_stepdown(
         upper, lower = coarse_trials[i], coarse_trials[i + 1]
         if upper.kind == lower.kind or UNDECIDED in (upper.kind, lower.kind):
             continue
-        fine = np.round(np.arange(upper.speed - step, lower.speed - step / 2, -step), 12)
+        fine = protocol.fine_staircase(upper.speed, lower.speed, step)
         fine_trials, t_fine = walk_down(system, [*coarse[:i + 1], *fine], nut_speed=nut_speed,
                                         rule=rule, options=options, stop_after=i,
                                         runs=runs[:1])
