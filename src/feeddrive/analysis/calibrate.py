@@ -21,8 +21,7 @@ from numbers import Real
 
 from ..engine.simulate import DriveSystem
 from ..parameters import DriveParameters, ParameterError
-from ..parameters.validation import check_callback
-from . import protocol
+from ..parameters.validation import check_callback, check_speed, mm_s_hint
 from .critical import (
     CriticalSpeed,
     check_search_settings,
@@ -63,12 +62,12 @@ class Target:
         if not isinstance(self.drive, str):
             raise ParameterError("target.drive", self.drive,
                                  "expected the name of a drive, e.g. 'cdfs'")
-        protocol.check_speed("target.critical_speed", self.critical_speed)
+        check_speed("target.critical_speed", self.critical_speed)
         if isinstance(self.table_position, bool) or not isinstance(self.table_position, Real) \
                 or not math.isfinite(self.table_position):
             raise ParameterError("target.table_position", self.table_position,
                                  "expected a finite position [m]")
-        protocol.check_speed("target.nut_speed", self.nut_speed, sign="any")
+        check_speed("target.nut_speed", self.nut_speed, sign="any")
         if not isinstance(self.source, str):
             raise ParameterError("target.source", self.source, "expected text")
 
@@ -270,7 +269,7 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
             f"({low + resolution:g} … {high:g} m/s): the trials run at the target and "
             f"one resolution ({resolution * 1e3:g} mm/s) below it, and the check search scans "
             f"speed_range = ({low:g}, {high:g}) [m/s]"
-            + protocol.mm_s_hint(speed, low + resolution <= speed * 1e-3 <= high))
+            + mm_s_hint(speed, low + resolution <= speed * 1e-3 <= high))
     # the bisections stop at hi/lo ≤ 1 + relative_tolerance: 0 or less never stopped, NaN
     # skipped them (an outside check, 2026-12-07)
     if not (isinstance(relative_tolerance, int | float) and not isinstance(

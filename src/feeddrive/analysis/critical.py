@@ -20,7 +20,9 @@ limit cycle can persist above the speed where steady sliding turns stable):
   down, dwelling at each speed until the step is decided.  A coarse staircase walks the whole
   range, its top and bottom both held (the step next to the top shorter when the range is
   not a whole number of coarse steps); at each change of kind a fine staircase repeats the
-  same history down to the coarse step above it and then walks down 0.01 mm/s at a time.
+  same history down to the coarse step above it and then walks down 0.01 mm/s at a time to
+  the coarse speed below (its last step shorter when the gap is not a whole number of fine
+  steps: ``protocol.fine_staircase``).
 
 The critical speed reported is the upper edge of the highest creeping band: the lowest tested
 speed above it, which is smooth (status ``found``).  If a trial above that band is undecided,
@@ -43,7 +45,7 @@ from ..engine.options import check_given
 from ..engine.simulate import DriveSystem, Simulation, SolverOptions, run_options
 from ..model.reference import ConstantSpeed, _staircase
 from ..parameters import ParameterError
-from ..parameters.validation import check_callback
+from ..parameters.validation import check_callback, check_speed, mm_s_hint
 from . import protocol
 from .cycle_verdict import TraceVerdict, VerdictRule, trace_verdict
 from .verdict_words import CREEPING_KINDS, NON_SMOOTH, SMOOTH, STICK_SLIP, UNDECIDED, UNSTABLE
@@ -564,8 +566,8 @@ def speed_pair(name: str, value: object) -> tuple[float, float]:
     if isinstance(value, str | bytes) or not isinstance(value, Sequence | np.ndarray) \
             or len(value) != 2:
         raise ParameterError(name, value, "expected a pair (low, high) of speeds [m/s]")
-    lo = protocol.check_speed(f"{name}[0]", value[0])
-    hi = protocol.check_speed(f"{name}[1]", value[1])
+    lo = check_speed(f"{name}[0]", value[0])
+    hi = check_speed(f"{name}[1]", value[1])
     if not lo < hi:
         raise ParameterError(name, tuple(value), "expected low < high [m/s]")
     return lo, hi
@@ -602,13 +604,13 @@ def check_scan(system: DriveSystem, name: str, shown: object, lo: float, hi: flo
     bound, why = table_speed_limit(system)
     if hi > bound:
         raise ParameterError(name, shown, f"expected speeds ≤ {bound:.6g} [m/s] ({why})"
-                             + protocol.mm_s_hint(hi, hi * MM_PER_S <= bound))
+                             + mm_s_hint(hi, hi * MM_PER_S <= bound))
     step = max(coarse_step, protocol_step)
     widest = protocol.MAX_SEARCH_STEPS * step
     if hi - lo > widest:
         raise ParameterError(name, shown, f"expected {span} ≤ {widest:.6g} [m/s] (at most "
                              f"{protocol.MAX_SEARCH_STEPS} coarse steps of {step:g} m/s on the "
-                             "scan)" + protocol.mm_s_hint(hi, (hi - lo) * MM_PER_S <= widest))
+                             "scan)" + mm_s_hint(hi, (hi - lo) * MM_PER_S <= widest))
 
 
 def decide(run: Runner, command_speed: float, rule: VerdictRule | None = None,
@@ -827,8 +829,8 @@ def creep_trial(system: DriveSystem, speed: float, *, nut_speed: float = 0.0,
         The verdict.
     """
     check_kinds(system, rule=rule, options=options)
-    speed = protocol.check_speed("speed", speed, sign="nonzero", limit=table_speed_limit(system))
-    protocol.check_speed("nut_speed", nut_speed, sign="any")
+    speed = check_speed("speed", speed, sign="nonzero", limit=table_speed_limit(system))
+    check_speed("nut_speed", nut_speed, sign="any")
     kind = estimate_kind(error_estimate)
     shadow = _shadow_options(options, system) if kind == "shadow" else None
     trial, time, trace = _run_trial(system, speed, nut_speed, rule, options,
@@ -929,7 +931,7 @@ def critical_speed_from_rest(
     lo, hi = check_search_settings(system, speed_range=speed_range, coarse_step=coarse_step,
                                    resolution=resolution, rule=rule, options=options,
                                    progress=progress)
-    protocol.check_speed("nut_speed", nut_speed, sign="any")
+    check_speed("nut_speed", nut_speed, sign="any")
     rule = rule or VerdictRule()
     estimate = estimate_kind(error_estimate)
     shadow = _shadow_options(options, system) if estimate == "shadow" else None  # up front
@@ -1002,8 +1004,8 @@ def check_search_settings(system: DriveSystem, *, speed_range: object,
     """
     check_kinds(system, rule=rule, options=options, progress=progress)
     lo, hi = speed_pair("speed_range", speed_range)
-    step = protocol.check_speed("coarse_step", coarse_step)
-    res = protocol.check_speed("resolution", resolution)
+    step = check_speed("coarse_step", coarse_step)
+    res = check_speed("resolution", resolution)
     check_scan(system, "speed_range", tuple(speed_range), lo, hi,  # type: ignore[arg-type]
                step, protocol.COARSE_STEP)
     protocol.check_search(low=lo, high=hi, coarse_step=step, resolution=res,
@@ -1261,14 +1263,14 @@ def check_stepdown(system: DriveSystem, *, nut_speed: float, start_speed: float,
         Naming the argument refused.
     """
     check_kinds(system, rule=rule, options=options)
-    hi = protocol.check_speed("start_speed", start_speed)
-    lo = protocol.check_speed("lowest_speed", lowest_speed)
-    step = protocol.check_speed("step", step)
+    hi = check_speed("start_speed", start_speed)
+    lo = check_speed("lowest_speed", lowest_speed)
+    step = check_speed("step", step)
     if hi <= lo:
         raise ParameterError("start_speed", start_speed,
                              f"expected > lowest_speed = {lo:g} [m/s]")
-    coarse_step = protocol.check_speed("coarse_step", coarse_step)
-    protocol.check_speed("nut_speed", nut_speed, sign="any")
+    coarse_step = check_speed("coarse_step", coarse_step)
+    check_speed("nut_speed", nut_speed, sign="any")
     check_scan(system, "start_speed", start_speed, lo, hi, coarse_step,
                protocol.STAIRCASE_COARSE_STEP, "start_speed − lowest_speed")
     protocol.check_search(low=lo, high=hi, coarse_step=coarse_step, resolution=step,
@@ -1389,7 +1391,7 @@ def critical_speed_stepdown(
         upper, lower = coarse_trials[i], coarse_trials[i + 1]
         if upper.kind == lower.kind or UNDECIDED in (upper.kind, lower.kind):
             continue
-        fine = np.round(np.arange(upper.speed - step, lower.speed - step / 2, -step), 12)
+        fine = protocol.fine_staircase(upper.speed, lower.speed, step)
         fine_trials, t_fine = walk_down(system, [*coarse[:i + 1], *fine], nut_speed=nut_speed,
                                         rule=rule, options=options, stop_after=i,
                                         runs=runs[:1])

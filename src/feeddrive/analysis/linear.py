@@ -56,7 +56,7 @@ from ..model.loops import INJ_CURRENT, INJ_SPEED
 from ..model.mechanisms import mechanism
 from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
 from ..parameters import ParameterError, SiteParameters
-from ..parameters.validation import check_callback
+from ..parameters.validation import check_callback, check_speed
 from ..solvers import builds
 from . import protocol
 from .newton import pulled_gauss_newton
@@ -463,7 +463,7 @@ def check_operating_point(system: object, table_speed: object, nut_speed: object
                                ("nut_speed", nut_speed, None)):
         if isinstance(value, Real) and not isinstance(value, bool) \
                 and not (isinstance(value, float | np.floating) and not math.isfinite(value)):
-            protocol.check_speed(name, value, sign="any", limit=limit)
+            check_speed(name, value, sign="any", limit=limit)
     if table_speed == 0.0 and not frictionless:
         raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
 
@@ -1599,11 +1599,11 @@ def _check_range(system: DriveSystem, nut_speed: float, low: float, high: float,
     from .critical import check_kinds, table_speed_limit
 
     check_kinds(system)
-    low = protocol.check_speed("low", low)
-    high = protocol.check_speed("high", high, limit=table_speed_limit(system))
+    low = check_speed("low", low)
+    high = check_speed("high", high, limit=table_speed_limit(system))
     if not low < high:
         raise ParameterError("low", low, f"expected < high = {high:g} [m/s]")
-    protocol.check_speed("nut_speed", nut_speed, sign="any")
+    check_speed("nut_speed", nut_speed, sign="any")
     if not (isinstance(points, (int, np.integer)) and not isinstance(points, bool)
             and 2 <= points <= protocol.MAX_LINEAR_POINTS):
         raise ParameterError("points", points, f"expected a whole number 2 … "

@@ -79,76 +79,6 @@ def check_search(*, low: float, high: float, coarse_step: float, resolution: flo
                                                f"{coarse_step * factor:g} / {MAX_SEARCH_STEPS}")
 
 
-def check_speed(name: str, value: object, *, sign: str = "positive",
-                limit: tuple[float, str] | None = None) -> float:
-    """A speed argument of the API [m/s] as a float, or a refusal naming it.
-
-    Parameters
-    ----------
-    name : str
-        The argument's name in the message (``speed_range[1]``, ``target.critical_speed``).
-    value : object
-        What was given [m/s].
-    sign : str, default "positive"
-        ``"positive"`` (> 0), ``"nonzero"`` or ``"any"``.
-    limit : tuple of (float, str) or None, default None
-        The largest |speed| [m/s] and what sets it (the axis's,
-        :func:`~feeddrive.analysis.positioning_run.axis_speed_limit`); ``units.LARGEST_SPEED``
-        by default.
-
-    Returns
-    -------
-    float
-        The speed [m/s].
-
-    Raises
-    ------
-    ParameterError
-        For a non-number, a non-finite speed, one of the wrong sign or above the limit; a
-        speed above the limit that would be within it in mm/s says so (the API takes m/s).
-    """
-    from ..parameters import ParameterError
-    from ..parameters.validation import is_real
-    from ..units import LARGEST_SPEED, MM_PER_S
-
-    if not is_real(value):
-        raise ParameterError(name, value, "expected a number [m/s]")
-    try:
-        v = float(value)
-    except OverflowError:  # an int beyond any float
-        v = math.inf
-    if sign == "positive" and not (math.isfinite(v) and v > 0.0):
-        raise ParameterError(name, value, "expected a finite speed > 0 [m/s]")
-    if sign == "nonzero" and not (math.isfinite(v) and v != 0.0):
-        raise ParameterError(name, value, "expected a finite, non-zero speed [m/s]")
-    if not math.isfinite(v):
-        raise ParameterError(name, value, "expected a finite speed [m/s]")
-    bound, why = limit if limit is not None else (LARGEST_SPEED, "no feed drive is faster")
-    if abs(v) > bound:
-        raise ParameterError(name, value, f"expected |speed| ≤ {bound:.6g} [m/s] ({why})"
-                             + mm_s_hint(v, abs(v) * MM_PER_S <= bound))
-    return v
-
-
-def mm_s_hint(value: float, fits: bool) -> str:
-    """``"; the API takes m/s: 3 mm/s is 0.003"`` for a speed refused as too large that
-    ``fits`` its bound when read as mm/s (a value in the CLI's unit); ``""`` otherwise.
-
-    Parameters
-    ----------
-    value : float
-        The refused speed, as given [m/s].
-    fits : bool
-        Whether ``value`` mm/s is within the bound it broke.
-
-    Returns
-    -------
-    str
-        The hint, with a leading ``"; "``, or an empty string.
-    """
-    return f"; the API takes m/s: {value:g} mm/s is {value * 1e-3:g}" if fits else ""
-
-
 def speed_grid(low: float, high: float, step: float) -> np.ndarray:
     """The coarse speeds of a search on [low, high] [m/s], rising: ``low``, ``low + step``, …
     and ``high`` itself, the last step shorter when the range is not a whole number of steps
@@ -199,6 +129,50 @@ def grid_steps(low: float, high: float, step: float) -> tuple[int, float | None]
     return int(gaps.size), None
 
 
+def fine_staircase(upper: float, lower: float, step: float) -> np.ndarray:
+    """The speeds of a step-down's fine staircase between two coarse speeds [m/s], falling:
+    ``upper − step``, ``upper − 2·step``, … and ``lower`` itself, the last step shorter when
+    the gap is not a whole number of steps (Wang2021 Sect. 6 lowers the speed 0.01 mm/s at a
+    time).  The staircase stopped at the last whole step above ``lower`` or, half a step or
+    more short, took one whole step past it, below the gap it refines (``creep --high
+    1.537``: 1.527, then 1.517 mm/s under the coarse 1.52).  A gap of whole steps (every gap of
+    the protocol's 0.02–3.02 mm/s staircase) gives the same speeds as before.
+
+    Parameters
+    ----------
+    upper, lower : float
+        The coarse speeds the staircase runs between, ``upper > lower`` [m/s].
+    step : float
+        The fine step [m/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The speeds below ``upper`` down to ``lower`` [m/s], rounded to 1e-12 m/s.
+
+    References
+    ----------
+    Wang2021 Sect. 6: the step-down lowers the speed by 0.01 mm/s.
+    """
+    whole = np.round(np.arange(upper - step, lower - step / 2, -step), 12)
+    return np.append(whole[whole > lower + 1e-9 * step], round(lower, 12))
+
+
+def _fine_text(low: float, high: float, coarse_step: float, step: float) -> str:
+    """``, the last 0.005 mm/s within the first`` where the fine staircase of the first
+    coarse step (from ``high`` down; only that one can be a shorter step, when ``step``
+    divides ``coarse_step``) ends on a shorter step (:func:`fine_staircase`) [m/s in, mm/s
+    out]; ``""`` when it is whole steps or one step, the coarse one."""
+    grid = speed_grid(low, high, coarse_step)
+    fine = fine_staircase(float(grid[-1]), float(grid[-2]), step)
+    if fine.size < 2:  # one step: the coarse step itself, stated already
+        return ""
+    last = float(fine[-2] - fine[-1])
+    if last >= step * (1.0 - 1e-6):
+        return ""
+    return f", the last {1e3 * last:g} mm/s within {'it' if grid.size == 2 else 'the first'}"
+
+
 def _steps_text(low: float, high: float, step: float, odd: str) -> str:
     """``in 0.2-mm/s steps``, with ``, the last 0.08 mm/s`` (``odd`` naming which one)
     where :func:`speed_grid` ends on a shorter step [m/s in, mm/s out]."""
@@ -243,6 +217,7 @@ def describe(start: str, *, speed_range: tuple[float, float] = SPEED_RANGE,
         return (f"from rest: trials of {held}, scan {lo:g}–{hi:g} mm/s {steps}, then "
                 f"bisection to {1e3 * RESOLUTION:g} mm/s")
     steps = _steps_text(*speed_range, STAIRCASE_COARSE_STEP, "first")  # it falls
+    fine = _fine_text(*speed_range, STAIRCASE_COARSE_STEP, RESOLUTION)
     return (f"step-down on a running table: staircase from {hi:g} mm/s {steps}, then "
-            f"{1e3 * RESOLUTION:g}-mm/s steps from the last smooth one (down to {lo:g} mm/s)"
-            + (f", each step held {held}" if holds else ""))
+            f"{1e3 * RESOLUTION:g}-mm/s steps from the last smooth one{fine} (down to "
+            f"{lo:g} mm/s)" + (f", each step held {held}" if holds else ""))

@@ -20,7 +20,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..parameters import ParameterError
-from ..parameters.validation import MISSING, is_real
+from ..parameters.validation import MISSING, check_speed, is_real
 from ..units import LARGEST_SPEED
 
 REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
@@ -204,8 +204,8 @@ class ConstantSpeed:
     def __post_init__(self) -> None:
         # refused when made, naming the field (a negative ramp was refused only at
         # simulate, in a bare ValueError: an outside check, 2026-12-07)
-        _speed("profile.table_speed", self.table_speed)
-        _speed("profile.nut_speed", self.nut_speed)
+        check_speed("profile.table_speed", self.table_speed, sign="any")
+        check_speed("profile.nut_speed", self.nut_speed, sign="any")
         _number("ramp_time", self.ramp_time)
         _plain(self, ("table_speed", "nut_speed", "ramp_time"))
         if not (self.ramp_time >= 0.0 and math.isfinite(self.ramp_time)):
@@ -258,8 +258,8 @@ class SineSpeed:
     def __post_init__(self) -> None:
         # refused when made, naming the field (a zero frequency was refused only at
         # simulate, in a bare ValueError: an outside check, 2026-12-07)
-        _speed("profile.table_amplitude", self.table_amplitude)
-        _speed("profile.nut_amplitude", self.nut_amplitude)
+        check_speed("profile.table_amplitude", self.table_amplitude, sign="any")
+        check_speed("profile.nut_amplitude", self.nut_amplitude, sign="any")
         _number("frequency", self.frequency)
         _plain(self, ("table_amplitude", "nut_amplitude", "frequency"))
         if not (0.0 < self.frequency <= MAX_FREQUENCY):
@@ -344,7 +344,7 @@ class SampledSpeed:
         for name, arr in (("table_speed", vt), ("nut_speed", vn)):
             if np.any(np.abs(arr) > LARGEST_SPEED):
                 bad = int(np.flatnonzero(np.abs(arr) > LARGEST_SPEED)[0])
-                raise ParameterError(f"profile.{name}[{bad}]", float(arr[bad]), _TOO_FAST)
+                check_speed(f"profile.{name}[{bad}]", float(arr[bad]), sign="any")
         dt = np.diff(t)
         # uniform to round-off: the spacing of doubles grows with t (at 8192 s it is 1.8e-12
         # s, and a 1-ms grid past that was refused: an outside check, 2026-12-07)
@@ -481,21 +481,6 @@ def profile_field(profile: str, kind: str, name: str) -> float | None:
 _EMPTY_TABLE = np.zeros((4, 2))
 
 
-#: the refusal of a speed above the largest any input may have (``units.LARGEST_SPEED``): a
-#: ConstantSpeed(1e6) ran and was judged "creeping", one of 1e300 overflowed in numpy (an
-#: outside check, 2026-12-07)
-_TOO_FAST = f"expected |speed| ≤ {LARGEST_SPEED:g} [m/s] (no feed drive is faster)"
-
-
-def _speed(field: str, value: float) -> None:
-    """Refuse a speed ``field`` [m/s] that is not a finite number of at most
-    ``units.LARGEST_SPEED`` in magnitude, naming it."""
-    if not is_real(value) or not math.isfinite(value):
-        raise ParameterError(field, value, "expected a finite speed [m/s]")
-    if abs(value) > LARGEST_SPEED:
-        raise ParameterError(field, value, _TOO_FAST)
-
-
 def _plain(profile: object, names: tuple[str, ...]) -> None:
     """Make NumPy scalar fields plain floats (the same value): the repr a run keeps in its
     attributes is read back by :func:`profile_field`, and ``np.float64(0.2)`` was not (a sine
@@ -575,8 +560,8 @@ def trapezoid(table_speed: float, duration: float, *, ramp_time: float = 0.5,
     >>> [round(1e3 * float(np.interp(t, move.time, move.table_speed)), 3) for t in (0.25, 1, 2)]
     [1.0, 2.0, 0.0]
     """
-    _speed("table_speed", table_speed)
-    _speed("nut_speed", nut_speed)
+    check_speed("table_speed", table_speed, sign="any")
+    check_speed("nut_speed", nut_speed, sign="any")
     duration = _positive("duration", duration, "s")
     ramp_time = _positive("ramp_time", ramp_time, "s")
     interval = _positive("interval", interval, "s")
@@ -644,8 +629,8 @@ def stepdown(start_speed: float, lowest_speed: float, *, step: float = 0.01e-3,
     for name, value in (("start_speed", start_speed), ("lowest_speed", lowest_speed),
                         ("step", step)):
         _positive(name, value, "m/s")
-    _speed("start_speed", start_speed)
-    _speed("nut_speed", nut_speed)
+    check_speed("start_speed", start_speed, sign="any")
+    check_speed("nut_speed", nut_speed, sign="any")
     _positive("dwell", dwell, "s")
     _positive("lead_in", lead_in, "s")
     _positive("interval", interval, "s")

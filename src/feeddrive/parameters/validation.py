@@ -14,6 +14,8 @@ import numbers
 import reprlib
 from typing import Any, TypeGuard
 
+from ..units import LARGEST_SPEED, MM_PER_S
+
 #: longest field name, file name or value shown in a message [characters]; longer ones are
 #: cut (a 10-MB value is not echoed whole)
 MAX_SHOWN = 200
@@ -78,6 +80,79 @@ def is_real(value: object) -> TypeGuard[float]:
         True for a real number (to a type checker: a float).
     """
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def check_speed(name: str, value: object, *, sign: str = "positive",
+                limit: tuple[float, str] | None = None) -> float:
+    """A speed argument [m/s] as a float, or a one-line refusal naming it: the one check of a
+    speed the API is given, which the profiles (``feeddrive.model.reference``) and the
+    analyses (``feeddrive.analysis``) both call.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name in the message (``speed_range[1]``, ``profile.table_speed``).
+    value : object
+        What was given [m/s].
+    sign : str, default "positive"
+        ``"positive"`` (> 0), ``"nonzero"`` or ``"any"``.
+    limit : tuple of (float, str) or None, default None
+        The largest |speed| [m/s] and what sets it (the axis's,
+        :func:`~feeddrive.analysis.positioning_run.axis_speed_limit`); ``units.LARGEST_SPEED``
+        by default.
+
+    Returns
+    -------
+    float
+        The speed [m/s].
+
+    Raises
+    ------
+    ParameterError
+        For a non-number ("expected a number [m/s]"; with ``sign="any"`` "expected a finite
+        speed [m/s]", as for a non-finite one), a non-finite speed, one of the wrong sign or
+        above the limit; a speed above the limit that would be within it in mm/s says so
+        (the API takes m/s).
+    """
+    if not is_real(value):
+        # with any sign, "a finite speed" is the whole expectation (the profiles' wording);
+        # a signed one names the number first
+        raise ParameterError(name, value, "expected a finite speed [m/s]" if sign == "any"
+                             else "expected a number [m/s]")
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond any float
+        v = math.inf
+    if sign == "positive" and not (math.isfinite(v) and v > 0.0):
+        raise ParameterError(name, value, "expected a finite speed > 0 [m/s]")
+    if sign == "nonzero" and not (math.isfinite(v) and v != 0.0):
+        raise ParameterError(name, value, "expected a finite, non-zero speed [m/s]")
+    if not math.isfinite(v):
+        raise ParameterError(name, value, "expected a finite speed [m/s]")
+    bound, why = limit if limit is not None else (LARGEST_SPEED, "no feed drive is faster")
+    if abs(v) > bound:
+        raise ParameterError(name, value, f"expected |speed| ≤ {bound:.6g} [m/s] ({why})"
+                             + mm_s_hint(v, abs(v) * MM_PER_S <= bound))
+    return v
+
+
+def mm_s_hint(value: float, fits: bool) -> str:
+    """``"; the API takes m/s: 3 mm/s is 0.003"`` for a speed refused as too large that
+    ``fits`` its bound when read as mm/s (a value in the CLI's unit); ``""`` otherwise.
+
+    Parameters
+    ----------
+    value : float
+        The refused speed, as given [m/s].
+    fits : bool
+        Whether ``value`` mm/s is within the bound it broke.
+
+    Returns
+    -------
+    str
+        The hint, with a leading ``"; "``, or an empty string.
+    """
+    return f"; the API takes m/s: {value:g} mm/s is {value * 1e-3:g}" if fits else ""
 
 
 def check_callback(name: str, value: object, call: str) -> None:
