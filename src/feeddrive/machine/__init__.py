@@ -554,14 +554,15 @@ def _declare_part_states(b: Any, machine: Machine) -> None:
 
 def _emit_coupling(b: Any, step: str, c: Coupling) -> None:
     """A coupling part's equations at the machine level: its parameters as slots
-    ``couplings.<name>.<field>`` (their braced names replaced by the slots' code), every
-    other braced name a signal the builder resolves and derives the flows from
+    ``couplings.<name>.<field>`` with their units (:attr:`Coupling.units`; a run's
+    ``parameter_slots`` recorded none: session 27), their braced names replaced by the slots'
+    code, every other braced name a signal the builder resolves and derives the flows from
     (:meth:`Builder.emit <feeddrive.model.codegen.Builder.emit>`)."""
     from ..model.codegen import SIGNAL
 
     slots = {}
-    for key, value in c.parameters().items():
-        b.param(f"{step}.{key}", value)
+    for key, value in c.parameters().items():  # each with the unit its class declares
+        b.param(f"{step}.{key}", value, c.units[key])
         slots[key] = b.p(f"{step}.{key}")
     for signal, expression in c.equations().items():
         rate = re.fullmatch(r"der\((.+)\)", signal)

@@ -85,6 +85,11 @@ class Model:
     derived : tuple of (Signal, str, float), default ()
         Signals a part declares as factor × a state or signal: (signal, source, factor
         [signal unit per source unit]).
+    slot_units : tuple of (str, str), default ()
+        The units declared with their slots (:meth:`Builder.param
+        <feeddrive.model.codegen.Builder.param>`): (slot name, unit) of each slot whose name
+        leads to no declaration, a machine's coupling parameters (``couplings.beam.mass``,
+        ``kg``: the part's :attr:`~feeddrive.machine.couplings.Coupling.units`).
     """
 
     state_names: tuple[str, ...]
@@ -111,6 +116,8 @@ class Model:
     clocks: tuple[tuple[str, int], ...] = ()
     # each controller axis' signals and parameter block (loops.ControlAxis)
     control_axes: tuple[loops.ControlAxis, ...] = ()
+    # (slot name, unit) declared with the slot (Builder.param's unit: coupling parameters)
+    slot_units: tuple[tuple[str, str], ...] = ()
 
     @property
     def n_held(self) -> int:
@@ -611,7 +618,7 @@ def package(b: codegen.Builder, drive: str, laws: list[tuple[Site, FrictionLaw, 
         jacobian_pattern=pattern, jacobian_colours=sparsity.colour_columns(pattern),
         derived=tuple(b.derived), clocks=tuple(b.clocks),
         flows=tuple((w, tuple(sorted(r))) for w, r in b.flows.items()), compensation=comp,
-        control_axes=tuple(control))
+        control_axes=tuple(control), slot_units=tuple(b.param_units.items()))
 
 
 def __getattr__(name: str) -> Any:

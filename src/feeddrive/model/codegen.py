@@ -140,6 +140,10 @@ class Builder:
         Parameter names, in ``P`` order.
     param_values : list of float
         Parameter values, in ``P`` order [SI, per slot].
+    param_units : dict of str to str
+        Slot name → the unit its declaration gave (:meth:`param`'s ``unit``: a machine's
+        coupling parameters); the other slots' units follow from their names
+        (:func:`feeddrive.model.slots.slot_unit`).
     tables : list of numpy.ndarray
         Flat data tables (profiles, load records), concatenated into ``T`` [SI].
     rhs_lines, sample_lines : list of str
@@ -187,6 +191,7 @@ class Builder:
     held: list[str] = field(default_factory=list)
     param_names: list[str] = field(default_factory=list)
     param_values: list[float] = field(default_factory=list)
+    param_units: dict[str, str] = field(default_factory=dict)
     tables: list[np.ndarray] = field(default_factory=list)
     rhs_lines: list[str] = field(default_factory=list)
     sample_lines: list[str] = field(default_factory=list)
@@ -363,7 +368,7 @@ class Builder:
         """
         return f"dy[{self.state_index[self.q(name)]}]"
 
-    def param(self, name: str, value: float) -> int:
+    def param(self, name: str, value: float, unit: str | None = None) -> int:
         """Register a named parameter.
 
         Parameters
@@ -372,6 +377,10 @@ class Builder:
             The parameter's path (``screw_motor.torque_constant``); unique in the model.
         value : float
             Its value [SI, the unit of the quantity it names].
+        unit : str, optional
+            Its unit ("-": dimensionless), recorded with the slot (:attr:`param_units`) for a
+            slot whose name does not lead to a declaration (a machine's coupling parameter);
+            None: the unit follows from the name (:func:`feeddrive.model.slots.slot_unit`).
 
         Returns
         -------
@@ -389,6 +398,8 @@ class Builder:
         self.param_index[name] = len(self.param_values)
         self.param_names.append(name)
         self.param_values.append(float(value))
+        if unit is not None:
+            self.param_units[name] = unit
         return self.param_index[name]
 
     def params(self, prefix: str, values: np.ndarray) -> int:

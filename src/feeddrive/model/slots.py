@@ -8,13 +8,14 @@ serialised again: a value the mechanism derives (the screw's H, an axis' inertia
 stiffness chain's compliance) is recorded as the model computed it.  :func:`packed_vector`
 reads such a record back into the packed vector.
 
-A slot's unit comes from the declaration that fills it: a slot named by a path into the
-parameter set (``table.mass``, ``friction.screw.bristle_stiffness``,
-``rack_pinion.mesh_stiffness``) has the unit its part's parameter class declares
-(:func:`feeddrive.parameters.components.unit_of`; a friction site's through its law's class),
-an axis slot (``controller.<axis>.kvp``) that of the :class:`~feeddrive.model.loops.Controller`
-field it is packed from, resolved for the axis' gain basis; the values a mechanism derives
-are listed in :data:`DERIVED_UNITS`.
+A slot's unit comes from the declaration that fills it: a slot declared with its unit has
+it (a machine's coupling parameters, :attr:`~feeddrive.model.assemble.Model.slot_units`); a
+slot named by a path into the parameter set (``table.mass``,
+``friction.screw.bristle_stiffness``, ``rack_pinion.mesh_stiffness``) has the unit its part's
+parameter class declares (:func:`feeddrive.parameters.components.unit_of`; a friction site's
+through its law's class), an axis slot (``controller.<axis>.kvp``) that of the
+:class:`~feeddrive.model.loops.Controller` field it is packed from, resolved for the axis'
+gain basis; the values a mechanism derives are listed in :data:`DERIVED_UNITS`.
 """
 
 from __future__ import annotations
@@ -74,6 +75,10 @@ def slot_unit(model: Model, name: str) -> str:
     A machine's slot ``<axis>.<slot>`` (its model scopes each axis' names) has the unit of
     the axis' own ``<slot>``: a machine run recorded every one of them without a unit
     (``['x.table.mass', 20.0, '']``: session 27).
+    A slot declared with its unit (:attr:`Model.slot_units
+    <feeddrive.model.assemble.Model.slot_units>`: a machine's coupling parameter
+    ``couplings.<name>.<field>``, in the unit its part's class declares) has that unit: they
+    too were recorded without one (``['couplings.beam.mass', 100.0, '']``: session 27).
 
     Parameters
     ----------
@@ -87,6 +92,9 @@ def slot_unit(model: Model, name: str) -> str:
     str
         The unit.
     """
+    declared = dict(model.slot_units).get(name)
+    if declared is not None:
+        return declared
     scope, _, rest = name.partition(".")
     if rest and f"{scope}.table_position" in model.state_names:  # a machine's axis
         return _scoped_unit(model, rest, f"{scope}.")
