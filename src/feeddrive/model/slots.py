@@ -9,7 +9,7 @@ stiffness chain's compliance) is recorded as the model computed it.  :func:`pack
 reads such a record back into the packed vector.
 
 A slot's unit comes from the declaration that fills it: a slot declared with its unit has
-it (a machine's coupling parameters, :attr:`~feeddrive.model.assemble.Model.slot_units`); a
+it (a machine's coupling parameters, ``Model.slot_units``); a
 slot named by a path into the parameter set (``table.mass``,
 ``friction.screw.bristle_stiffness``, ``rack_pinion.mesh_stiffness``) has the unit its part's
 parameter class declares (:func:`feeddrive.parameters.components.unit_of`; a friction site's
