@@ -75,8 +75,7 @@ def slot_unit(model: Model, name: str) -> str:
     A machine's slot ``<axis>.<slot>`` (its model scopes each axis' names) has the unit of
     the axis' own ``<slot>``: a machine run recorded every one of them without a unit
     (``['x.table.mass', 20.0, '']``: session 27).
-    A slot declared with its unit (:attr:`Model.slot_units
-    <feeddrive.model.assemble.Model.slot_units>`: a machine's coupling parameter
+    A slot declared with its unit (``Model.slot_units``: a machine's coupling parameter
     ``couplings.<name>.<field>``, in the unit its part's class declares) has that unit: they
     too were recorded without one (``['couplings.beam.mass', 100.0, '']``: session 27).
 
