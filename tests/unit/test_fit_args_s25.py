@@ -157,7 +157,8 @@ X = 1e-3 * T - 0.8e-3 / (2 * np.pi * 2.0) * np.cos(2 * np.pi * 2.0 * T)
     ({"window": 2.5}, "window", r"expected an odd whole number of samples > polyorder "
                                 r"\[samples\]"),
     ({"thresholds": {"stick_level": 0.1}}, "thresholds", r"expected a CreepThresholds"),
-    ({"command_speed": 1000.0}, "command_speed", r"expected a speed of at most 100 m/s"),
+    # the shared speed check's wording (validation.check_speed), as the analyses and profiles
+    ({"command_speed": 1000.0}, "command_speed", r"expected \|speed\| ≤ 100 \[m/s\]"),
     ({"min_step": -1.0}, "min_step", r"expected a finite value > 0 \[m/s\]"),
 ])
 def test_analyze_trace_refuses_bad_settings(kwargs: dict, field: str, message: str) -> None:

@@ -158,19 +158,40 @@ def fine_staircase(upper: float, lower: float, step: float) -> np.ndarray:
     return np.append(whole[whole > lower + 1e-9 * step], round(lower, 12))
 
 
-def _fine_text(low: float, high: float, coarse_step: float, step: float) -> str:
-    """``, the last 0.005 mm/s within the first`` where the fine staircase of the first
-    coarse step (from ``high`` down; only that one can be a shorter step, when ``step``
-    divides ``coarse_step``) ends on a shorter step (:func:`fine_staircase`) [m/s in, mm/s
-    out]; ``""`` when it is whole steps or one step, the coarse one."""
-    grid = speed_grid(low, high, coarse_step)
-    fine = fine_staircase(float(grid[-1]), float(grid[-2]), step)
-    if fine.size < 2:  # one step: the coarse step itself, stated already
-        return ""
+def _last_fine(upper: float, lower: float, step: float) -> float | None:
+    """The shorter last step [m/s] of :func:`fine_staircase` between two coarse speeds, or
+    None when its steps are whole (or it is one step, the coarse one)."""
+    fine = fine_staircase(upper, lower, step)
+    if fine.size < 2:
+        return None
     last = float(fine[-2] - fine[-1])
-    if last >= step * (1.0 - 1e-6):
-        return ""
-    return f", the last {1e3 * last:g} mm/s within {'it' if grid.size == 2 else 'the first'}"
+    return last if last < step * (1.0 - 1e-6) else None
+
+
+def _fine_text(low: float, high: float, coarse_step: float, step: float) -> str:
+    """Where the fine staircases (:func:`fine_staircase`) end on a shorter step [m/s in,
+    mm/s out]: ``, the last 0.005 mm/s within the first`` for the first coarse step (from
+    ``high`` down, shorter when the range is not whole coarse steps), ``, the last 0.01 mm/s
+    within each coarse step`` when ``step`` does not divide ``coarse_step``, both when they
+    differ; ``""`` when every staircase is whole steps."""
+    grid = speed_grid(low, high, coarse_step)
+    first = _last_fine(float(grid[-1]), float(grid[-2]), step)
+    top_short = grid_steps(low, high, coarse_step)[1] is not None
+    if not top_short:
+        whole = first
+    elif grid.size > 2:
+        whole = _last_fine(float(grid[-2]), float(grid[-3]), step)
+    else:  # one coarse step, the shorter one
+        whole = None
+    if whole is None:
+        return "" if first is None else \
+            f", the last {1e3 * first:g} mm/s within {'it' if grid.size == 2 else 'the first'}"
+    if grid.size == 2:
+        return f", the last {1e3 * whole:g} mm/s within it"
+    if first is not None and math.isclose(first, whole, rel_tol=1e-6):
+        return f", the last {1e3 * whole:g} mm/s within each coarse step"
+    return (f", the last {1e3 * whole:g} mm/s within each coarse step but the first"
+            + ("" if first is None else f", {1e3 * first:g} mm/s within that one"))
 
 
 def _steps_text(low: float, high: float, step: float, odd: str) -> str:
@@ -185,7 +206,7 @@ def _steps_text(low: float, high: float, step: float, odd: str) -> str:
 
 
 def describe(start: str, *, speed_range: tuple[float, float] = SPEED_RANGE,
-             coarse_step: float = COARSE_STEP,
+             coarse_step: float | None = None, resolution: float = RESOLUTION,
              durations: tuple[float, float] = (TRIAL_DURATION, TRIAL_MAX_DURATION),
              holds: bool = False) -> str:
     """The critical-speed search protocol in words, in mm/s, for the CLI and the report: by
@@ -195,11 +216,17 @@ def describe(start: str, *, speed_range: tuple[float, float] = SPEED_RANGE,
     ----------
     start : str
         ``"rest"`` (trials from rest, scan then bisection) or ``"stepdown"`` (a staircase on a
-        running table).
+        running table; any other word than ``"rest"`` is the step-down, ``"running"`` too).
     speed_range : tuple of float, optional
         Lowest and highest speed tested [m/s].
-    coarse_step : float, optional
-        The scan step from rest [m/s].
+    coarse_step : float or None, default None
+        The scan step from rest, or the step-down's first (coarse) staircase step [m/s], as
+        ``critical_speed_from_rest(coarse_step=…)`` and ``critical_speed_stepdown(
+        coarse_step=…)`` take it; None: the protocol's for that start (``COARSE_STEP``,
+        ``STAIRCASE_COARSE_STEP``).
+    resolution : float, default RESOLUTION
+        The bisection's resolution from rest, or the step-down's fine step [m/s]
+        (``critical_speed_stepdown(step=…)``, a sweep's ``quantity.resolution``).
     durations : tuple of float, optional
         A trial's first and longest length [s] (a step-down step's hold).
     holds : bool, default False
@@ -208,16 +235,19 @@ def describe(start: str, *, speed_range: tuple[float, float] = SPEED_RANGE,
     Returns
     -------
     str
-        One sentence with the durations [s], the speed range and the steps [mm/s].
+        One sentence with the durations [s], the speed range and the steps [mm/s], as the
+        search's grids (:func:`speed_grid`, :func:`fine_staircase`) run them.
     """
     lo, hi = (1e3 * v for v in speed_range)
     held = f"{durations[0]:g} s doubled up to {durations[1]:g} s until decided"
     if start == "rest":  # the scan rises: its last step is the shorter one
-        steps = _steps_text(*speed_range, coarse_step, "last")
+        steps = _steps_text(*speed_range, COARSE_STEP if coarse_step is None else coarse_step,
+                            "last")
         return (f"from rest: trials of {held}, scan {lo:g}–{hi:g} mm/s {steps}, then "
-                f"bisection to {1e3 * RESOLUTION:g} mm/s")
-    steps = _steps_text(*speed_range, STAIRCASE_COARSE_STEP, "first")  # it falls
-    fine = _fine_text(*speed_range, STAIRCASE_COARSE_STEP, RESOLUTION)
+                f"bisection to {1e3 * resolution:g} mm/s")
+    coarse = STAIRCASE_COARSE_STEP if coarse_step is None else coarse_step
+    steps = _steps_text(*speed_range, coarse, "first")  # it falls
+    fine = _fine_text(*speed_range, coarse, resolution)
     return (f"step-down on a running table: staircase from {hi:g} mm/s {steps}, then "
-            f"{1e3 * RESOLUTION:g}-mm/s steps from the last smooth one{fine} (down to "
+            f"{1e3 * resolution:g}-mm/s steps from the last smooth one{fine} (down to "
             f"{lo:g} mm/s)" + (f", each step held {held}" if holds else ""))

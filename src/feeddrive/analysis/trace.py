@@ -52,8 +52,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..parameters import ParameterError
-from ..parameters.validation import is_real
-from ..units import LARGEST_SPEED
+from ..parameters.validation import check_speed, is_real
 from .creep_window import CreepMetrics, CreepThresholds, creep_metrics, steady_window
 from .cycle_verdict import VerdictRule, trace_verdict
 from .trace_input import resample_size
@@ -614,17 +613,10 @@ def _check_settings(thresholds: object, min_step: object, min_segment_time: obje
 
 
 def _check_command_speed(command_speed: object) -> float:
-    """The given command speed [m/s], refused when not a finite, non-zero speed of at most
-    :data:`~feeddrive.units.LARGEST_SPEED` (a mm/s figure given as m/s)."""
-    vc = float(command_speed) if is_real(command_speed) else math.nan
-    if not math.isfinite(vc) or vc == 0:
-        raise ParameterError("command_speed", command_speed, "expected a finite, non-zero "
-                             "speed [m/s]")
-    if abs(vc) > LARGEST_SPEED:
-        raise ParameterError("command_speed", command_speed, "expected a speed of at most "
-                             f"{LARGEST_SPEED:g} m/s in magnitude (feeddrive.units."
-                             "LARGEST_SPEED; the API takes m/s) [m/s]")
-    return vc
+    """The given command speed [m/s], refused (naming ``command_speed``) when not a finite,
+    non-zero speed of at most :data:`~feeddrive.units.LARGEST_SPEED`: the shared
+    :func:`~feeddrive.parameters.validation.check_speed`."""
+    return check_speed("command_speed", command_speed, sign="nonzero")
 
 
 def unit_slip_note(command_speed: float, mean_speed: float) -> str | None:

@@ -73,7 +73,8 @@ def protocol_text(start: str, speed_range: tuple[float, float], coarse_step: flo
     str
         One sentence.
     """
-    return protocol.describe(start, speed_range=speed_range, coarse_step=coarse_step,
+    return protocol.describe(start, speed_range=speed_range,
+                             coarse_step=coarse_step if start == "rest" else None,
                              durations=(rule.initial_duration, rule.max_duration),
                              holds=start != "rest")
 

@@ -11,7 +11,6 @@ the model ``feeddrive.simulate`` integrates.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from types import ModuleType
 
@@ -21,7 +20,8 @@ from ..model.assemble import Model, assemble
 from ..model.codegen import compile_module
 from ..model.disturbances import LoadProfile
 from ..model.reference import INPUT_INSTANT, KIND, REF_INPUT, TABLE_OFFSET
-from ..parameters import DriveParameters, ParameterError
+from ..parameters import DriveParameters
+from ..parameters.validation import check_speed
 from ..solvers import schedule, steps
 from . import solver
 
@@ -58,14 +58,14 @@ class InputReference:
         Raises
         ------
         ParameterError
-            For a non-finite speed.
+            For a start speed that is not a finite speed within
+            :data:`~feeddrive.units.LARGEST_SPEED` (the shared
+            :func:`~feeddrive.parameters.validation.check_speed`); the FMU's run-time inputs
+            are checked by its C wrapper against their declared range (finite).
         """
-        for name, v in (("table_speed", self.table_speed), ("nut_speed", self.nut_speed)):
-            if not math.isfinite(v):
-                raise ParameterError(name, v, "expected a finite speed [m/s]")
         table = np.zeros((4, 2))
-        table[1, 0] = self.table_speed
-        table[3, 0] = self.nut_speed
+        table[1, 0] = check_speed("table_speed", self.table_speed, sign="any")
+        table[3, 0] = check_speed("nut_speed", self.nut_speed, sign="any")
         return {KIND: REF_INPUT}, table
 
 
