@@ -68,29 +68,44 @@ def slots(
     preset_name: str | None = typer.Option(None, "--preset", help="Named parameter set "
                                            "(default wang2021, or the drive's example set)."),
     params_file: str | None = typer.Option(None, "--params", help="Parameter file (TOML)."),
-    drive: str = typer.Option("cdfs", "--drive", metavar=ALL_DRIVES,
-                              help="The drive whose model is assembled."),
+    drive: str | None = typer.Option(None, "--drive", metavar=ALL_DRIVES,
+                                     help="The drive whose model is assembled (default "
+                                     "cdfs)."),
     position: float = typer.Option(400.0, "--position", help="Table position on the screw "
                                    "[mm]."),
+    machine_file: str | None = typer.Option(
+        None, "--machine", help="A machine file (docs/machine.md) or built-in machine: its "
+        "assembled model's slots instead, <axis>.<slot> and couplings.<name>.<field>."),
     as_json: bool = typer.Option(False, "--json", help="Print the slot record as JSON (the "
                                  "parameter_slots attribute a run writes; its profile "
                                  "block is a zero command)."),
 ) -> None:
-    """Print the parameters a run of DRIVE uses, as the assembled model's named slots (SI
-    value and unit per slot), the record a run writes; the reference profile's block is
-    left out (it is the command, not a parameter)."""
-    from ..engine.simulate import DriveSystem
-    from ..model.reference import ConstantSpeed
-    from ..model.slots import slot_table, slots_json
+    """Print the parameters a run of DRIVE (or of a machine, --machine) uses, as the
+    assembled model's named slots (SI value and unit per slot), the record a run writes; the
+    reference profile's block is left out (it is the command, not a parameter)."""
+    from ..engine.slot_listing import drive_slot_model, listed_slots, machine_slot_model
+    from ..model.slots import slots_json
+    from ..parameters import ParameterError
 
-    params = resolve_parameters(preset_name, params_file, drive)
-    system = DriveSystem(params, drive=drive,
-                         table_position=_units.position("--position", position, params, drive))
-    model = system.model(ConstantSpeed(0.0))
+    if machine_file is not None:
+        from ..machine import load_machine
+
+        for option, value, default in (("--drive", drive, None), ("--preset", preset_name, None),
+                                       ("--params", params_file, None),
+                                       ("--position", position, 400.0)):
+            if value != default:
+                raise ParameterError(option, value, "not with --machine (its axes are set in "
+                                     "the machine file)")
+        model = machine_slot_model(load_machine(machine_file))
+    else:
+        drive = drive or "cdfs"
+        params = resolve_parameters(preset_name, params_file, drive)
+        model = drive_slot_model(params, drive,
+                                 _units.position("--position", position, params, drive))
     if as_json:
         print_json(json.loads(slots_json(model)))
         return
-    rows = [r for r in slot_table(model) if not r[0].startswith("profile[")]
+    rows = listed_slots(model)
     width = max(len(name) for name, _, _ in rows)
     for name, value, unit in rows:
         typer.echo(f"{name:<{width}}  {value!r:>24}  [{unit}]")

@@ -24,12 +24,13 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..parameters import DriveParameters
+from ..parameters import DriveParameters, ParameterError
 from ..parameters.components import field_metadata
+from ..parameters.validation import MISSING
 from .friction import friction_law
 from .friction.lugre_parameters import LuGreParameters
 from .loops import MIN_GRATING, MIN_PERIOD, Compensation, Controller
-from .slots import AXIS_SLOT_FIELDS, slot_unit
+from .slots import AXIS_SLOT_FIELDS, axis_scope, slot_unit
 
 if TYPE_CHECKING:
     from .assemble import Model
@@ -284,17 +285,37 @@ def slot_range(model: Model, name: str) -> SlotRange:
     SlotRange
         The range (:data:`FINITE` for a slot no field fills: the profile block, the
         linearisation's inputs, the loop-breaking injections).
+
+    Raises
+    ------
+    ParameterError
+        For a machine's coupling slot (``couplings.<name>.<field>``): its part declares no
+        range (it checks the value when the machine is built); one line naming the slot.
+
+    Notes
+    -----
+    A machine's slot ``<axis>.<slot>`` has the range of the axis' own ``<slot>`` (as its
+    unit, :func:`~feeddrive.model.slots.slot_unit`); it, and a coupling slot, raised a bare
+    ``KeyError`` (session 27).
     """
-    return _slot_range(model, name).with_unit(slot_unit(model, name))
+    unit = slot_unit(model, name)
+    if name in dict(model.slot_units):  # a coupling part's parameter: declared with a unit
+        raise ParameterError(name, MISSING, f"no range is declared for a machine's coupling "
+                             f"slot [{unit}]; its part checks the value when the machine is "
+                             "built")
+    prefix, own = axis_scope(model, name)
+    return _slot_range(model, own, prefix).with_unit(unit)
 
 
-def _slot_range(model: Model, name: str) -> SlotRange:
-    names = model.parameter_names
+def _slot_range(model: Model, name: str, prefix: str = "") -> SlotRange:
+    """The range of slot ``name`` of the drive whose names in ``model`` start with ``prefix``
+    (``""``: the model is one drive; ``"x."``: a machine's axis x)."""
+    names = tuple(p[len(prefix):] for p in model.parameter_names if p.startswith(prefix))
     if name.startswith(("profile[", "inputs.")):
         return FINITE
     axis = re.fullmatch(r"controller\.(\w+)\.(\w+)", name)
     if axis:
-        return _axis_range(model, axis.group(1), axis.group(2))
+        return _axis_range(names, axis.group(1), axis.group(2))
     loop = re.fullmatch(r"controller\.(\w+_period)", name)
     if loop:
         return controller_range(loop.group(1))
@@ -311,7 +332,7 @@ def _slot_range(model: Model, name: str) -> SlotRange:
             return r
         if slot == "element_count":  # a structure count, fixed at export
             return SlotRange(1.0, math.inf, integer=True)
-        law = friction_law(dict(model.sites).get(where, "lugre")).parameters_class
+        law = friction_law(dict(model.sites).get(prefix + where, "lugre")).parameters_class
         meta = field_metadata(law, re.sub(r"\[\d+\]$", "[0]", slot))
         assert meta is not None, name
         return SlotRange.of(meta)
@@ -338,7 +359,7 @@ def _slot_range(model: Model, name: str) -> SlotRange:
     return SlotRange.of(meta)
 
 
-def _axis_range(model: Model, axis: str, slot: str) -> SlotRange:
+def _axis_range(names: tuple[str, ...], axis: str, slot: str) -> SlotRange:
     if slot in _AXIS_SWITCHES:
         return _AXIS_SWITCHES[slot]
     if slot in AXIS_SLOT_FIELDS:
@@ -347,7 +368,6 @@ def _axis_range(model: Model, axis: str, slot: str) -> SlotRange:
         high = controller_range("encoder_counts").high
         return SlotRange(2.0 * math.pi / high, 2.0 * math.pi, zero=True)
     if slot == "H":  # the axis' transmission: its mechanism's, 1 on a linear axis
-        names = model.parameter_names
         if "motor.force_constant" in names:
             return SlotRange(1.0, 1.0)
         key = "rack_pinion.H" if "rack_pinion.H" in names else "screw.H"

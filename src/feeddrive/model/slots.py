@@ -94,10 +94,30 @@ def slot_unit(model: Model, name: str) -> str:
     declared = dict(model.slot_units).get(name)
     if declared is not None:
         return declared
+    prefix, rest = axis_scope(model, name)
+    return _scoped_unit(model, rest, prefix)
+
+
+def axis_scope(model: Model, name: str) -> tuple[str, str]:
+    """The axis prefix of a machine's slot and the axis' own slot name.
+
+    Parameters
+    ----------
+    model : feeddrive.model.Model
+        The assembled model (one drive, or a machine whose model scopes each axis' names).
+    name : str
+        A slot name.
+
+    Returns
+    -------
+    tuple of (str, str)
+        ``("x.", "table.mass")`` for a machine's ``x.table.mass``; ``("", name)`` for a
+        slot of one drive's model or a machine's coupling slot.
+    """
     scope, _, rest = name.partition(".")
     if rest and f"{scope}.table_position" in model.state_names:  # a machine's axis
-        return _scoped_unit(model, rest, f"{scope}.")
-    return _scoped_unit(model, name, "")
+        return f"{scope}.", rest
+    return "", name
 
 
 def _scoped_unit(model: Model, name: str, prefix: str) -> str:
