@@ -19,6 +19,7 @@ from ..model.loops import Compensation
 from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters
+from ..parameters.validation import check_speed
 from .cycle_verdict import VerdictRule
 
 
@@ -64,7 +65,16 @@ def default_cases(mismatch: float = 0.2, nut_speed: float = 16e-3, *, drive: str
     -------
     list of Case
         The cases.
+
+    Raises
+    ------
+    ParameterError
+        For a nut speed that is not a finite number within ``units.LARGEST_SPEED``
+        (:func:`~feeddrive.parameters.validation.check_speed`).
     """
+    # a NaN nut speed made a case that failed only when run, a str one "Unknown format
+    # code 'g'" (session 27)
+    nut_speed = check_speed("nut_speed", nut_speed, sign="any")
     up, down = 1.0 + mismatch, 1.0 - mismatch
     pct = f"{100 * mismatch:g} %"
     name = drive.upper()

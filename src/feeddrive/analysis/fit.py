@@ -68,7 +68,7 @@ import numpy as np
 # of this module's light helpers (`_no_effect`, `Experiment`: the sensitivity) need not pay
 from ..parameters import DriveParameters, ParameterError, dumps
 from ..parameters.toml_io import toml_comment, toml_string
-from ..parameters.validation import MISSING, is_real
+from ..parameters.validation import MISSING, check_speed, is_real
 from .fit_residuals import HacCovariance, ResidualDiagnostics, diagnose, hac_covariance
 from .fit_statistics import NOISE_MIN_SAMPLES, correlation, covariance, noise_level
 
@@ -2446,7 +2446,6 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     """
     from ..engine.simulate import DriveSystem, simulate
     from ..model.reference import ConstantSpeed
-    from ..units import LARGEST_SPEED
 
     # refused before the run: a negative or NaN noise σ (NaN made every current sample NaN),
     # a quantum that was silently ignored, numpy's "expected non-negative integer" for a
@@ -2462,9 +2461,9 @@ def synthetic_experiment(params: DriveParameters, speed: float, duration: float,
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int | np.integer)
                              or seed < 0):
         raise ParameterError("seed", seed, "expected a whole number ≥ 0 [-]")
-    if is_real(speed) and not abs(speed) <= LARGEST_SPEED:
-        raise ParameterError("speed", speed, f"expected a speed of at most {LARGEST_SPEED:g} "
-                             "m/s in magnitude (feeddrive.units.LARGEST_SPEED) [m/s]")
+    # the shared check, naming ``speed`` (a str or NaN was refused as "profile.table_speed",
+    # a field the caller never wrote); either sign and 0 as the profile takes them
+    speed = check_speed("speed", speed, sign="any")
     system = DriveSystem(params, drive=drive, table_position=table_position)
     result = simulate(system, ConstantSpeed(speed, ramp_time=ramp_time), duration)
     t = np.asarray(result.time)

@@ -52,7 +52,8 @@ from typing import Any, Literal
 import numpy as np
 
 from ..parameters import ParameterError
-from ..parameters.validation import check_speed, is_real
+from ..parameters.validation import MISSING, check_speed, is_real
+from ..units import LARGEST_SPEED
 from .creep_window import CreepMetrics, CreepThresholds, creep_metrics, steady_window
 from .cycle_verdict import VerdictRule, trace_verdict
 from .trace_input import resample_size
@@ -617,6 +618,19 @@ def _check_command_speed(command_speed: object) -> float:
     non-zero speed of at most :data:`~feeddrive.units.LARGEST_SPEED`: the shared
     :func:`~feeddrive.parameters.validation.check_speed`."""
     return check_speed("command_speed", command_speed, sign="nonzero")
+
+
+def _derived_command(command: float, origin: str, where: str) -> float:
+    """A command speed [m/s] taken from the record (``origin`` "estimated": its position's
+    slope; "column": its command column), refused naming what it came from when it is beyond
+    :data:`~feeddrive.units.LARGEST_SPEED`: the metrics' own check named ``command_speed``,
+    an argument not given (a position in µm given as m; session 27)."""
+    if abs(command) <= LARGEST_SPEED:
+        return command
+    field, expected = (("position", "expected a position in m [m]") if origin == "estimated"
+                       else ("command", "expected a command speed in m/s [m/s]"))
+    raise ParameterError(field, MISSING, f"{where} moves at {command:.6g} m/s, faster than "
+                         f"any feed drive (|speed| ≤ {LARGEST_SPEED:g} m/s): {expected}")
 
 
 def unit_slip_note(command_speed: float, mean_speed: float) -> str | None:
@@ -1185,17 +1199,17 @@ def analyze_trace(
             notes.append(f"segment {a:.3f}–{b:.3f} s skipped: fewer than 16 samples")
             continue
         ts, xs, vs = tt[sel], xx[sel], vv[sel]
+        where = f"{source + ': ' if source else ''}segment {ts[0]:.3f}–{ts[-1]:.3f} s"
         if given is None:
             half = ts >= ts[0] + 0.5 * (ts[-1] - ts[0])
             guess = _slope(ts[half], xs[half])
             if guess == 0.0:
                 notes.append(f"segment {a:.3f}–{b:.3f} s skipped: the table is at rest")
                 continue
-            start, _ = steady_window(ts, vs, guess)
-            c = _slope(ts[ts >= start], xs[ts >= start])
+            start, _ = steady_window(ts, vs, _derived_command(guess, origin, where))
+            c = _derived_command(_slope(ts[ts >= start], xs[ts >= start]), origin, where)
         else:
-            c = given
-        where = f"{source + ': ' if source else ''}segment {ts[0]:.3f}–{ts[-1]:.3f} s"
+            c = given if origin == "given" else _derived_command(given, origin, where)
         try:
             m = creep_metrics(ts, vs, c, thresholds=thresholds)
         except ValueError as err:  # a steady window too short to judge: name the file

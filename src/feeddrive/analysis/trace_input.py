@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from ..parameters.validation import check_speed
+
 __all__ = ["MAX_RESAMPLE_FACTOR", "MIN_SAMPLES", "MIN_WINDOW_SAMPLES", "as_trace",
            "check_command", "check_fraction", "resample_size", "time_below", "uniform_samples"]
 
@@ -67,7 +69,9 @@ def as_trace(time: object, speed: object) -> tuple[np.ndarray, np.ndarray]:
 
 
 def check_command(command_speed: object) -> float:
-    """The command speed as a float, or a one-line error.
+    """The command speed as a float, or a one-line refusal naming ``command_speed``: the
+    shared :func:`~feeddrive.parameters.validation.check_speed` (any sign, not zero, at most
+    :data:`~feeddrive.units.LARGEST_SPEED`).
 
     Parameters
     ----------
@@ -78,14 +82,16 @@ def check_command(command_speed: object) -> float:
     -------
     float
         The command speed [m/s].
+
+    Raises
+    ------
+    ParameterError
+        For a non-number, a non-finite or zero speed, or one above the limit (a ValueError:
+        ``except ValueError`` still catches it).
     """
-    if isinstance(command_speed, bool) or not isinstance(command_speed, int | float | np.floating):
-        raise ValueError(f"command_speed = {command_speed!r}: expected a number [m/s]")
-    vc = float(command_speed)
-    if not math.isfinite(vc) or vc == 0.0:
-        raise ValueError(f"command_speed = {command_speed!r}: expected a finite, non-zero speed "
-                         "[m/s]")
-    return vc
+    # its own wording, a bare ValueError and no upper bound (1e9 m/s was taken) until the
+    # shared check (session 27)
+    return check_speed("command_speed", command_speed, sign="nonzero")
 
 
 def check_fraction(name: str, value: float) -> float:

@@ -179,10 +179,20 @@ def solver_starts(parameters: DriveParameters, table_speed: float, nut_speed: fl
     dict
         ``solver.relative_tolerance`` [-], ``solver.position_tolerance`` [m],
         ``solver.speed_tolerance`` [m/s], ``solver.current_tolerance`` [A].
+
+    Raises
+    ------
+    ParameterError
+        For a speed that is not a finite number within ``units.LARGEST_SPEED``
+        (:func:`~feeddrive.parameters.validation.check_speed`).
     """
     from ..engine import options as opt
     from ..engine.simulate import run_options
+    from ..parameters.validation import check_speed
 
+    # NaN tolerances were returned for a NaN speed, a str failed in abs() (session 27)
+    table_speed = check_speed("table_speed", table_speed, sign="any")
+    nut_speed = check_speed("nut_speed", nut_speed, sign="any")
     options = run_options(parameters, options)
     table = abs(table_speed) or FMU_SPEED_SCALE
     limit = float(parameters.controller.current_limit)
