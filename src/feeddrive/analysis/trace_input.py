@@ -71,7 +71,7 @@ def as_trace(time: object, speed: object) -> tuple[np.ndarray, np.ndarray]:
 def check_command(command_speed: object) -> float:
     """The command speed as a float, or a one-line refusal naming ``command_speed``: the
     shared :func:`~feeddrive.parameters.validation.check_speed` (any sign, not zero, at most
-    :data:`~feeddrive.units.LARGEST_SPEED`).
+    ``LARGEST_SPEED``).
 
     Parameters
     ----------
