@@ -77,8 +77,10 @@ def test_a_speed_passed_where_a_response_name_goes_is_refused(system: fd.DriveSy
 def test_a_speed_that_is_not_a_number_is_refused_naming_the_field(system: fd.DriveSystem,
                                                                    speed: object) -> None:
     """``loop_analysis(system, "1")`` ended in ``TypeError: must be real number, not str``
-    from inside the profile's check (2026-12-06)."""
-    with pytest.raises(ParameterError, match=r"^profile\.table_speed = .*: expected a finite "
+    from inside the profile's check (2026-12-06); then it was refused as
+    ``profile.table_speed``, a name the caller never wrote (2026-12-07): the argument is
+    named."""
+    with pytest.raises(ParameterError, match=r"^table_speed = .*: expected a finite "
                                              r"speed \[m/s\]$"):
         fd.loop_analysis(system, speed)  # type: ignore[arg-type]
 

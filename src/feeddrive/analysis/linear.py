@@ -434,9 +434,9 @@ def check_operating_point(system: object, table_speed: object, nut_speed: object
     is not a DriveSystem, a table speed beyond the axis's speed limit
     (:func:`~feeddrive.analysis.positioning_run.axis_speed_limit`; 1e300 m/s printed eleven
     LAPACK lines and raised LinAlgError: an outside check, 2026-12-07) or zero unless
-    ``frictionless``, or a nut speed beyond ``units.LARGEST_SPEED``.  A speed that is not a
-    finite number is refused by the profile the steady state is found on
-    (``profile.table_speed``).
+    ``frictionless``, or a nut speed beyond ``units.LARGEST_SPEED``; a speed that is not a
+    finite number is refused naming the argument (it was refused by the profile the steady
+    state is found on, as ``profile.table_speed``, a name the caller never wrote).
 
     Parameters
     ----------
@@ -452,18 +452,13 @@ def check_operating_point(system: object, table_speed: object, nut_speed: object
     ParameterError
         Naming the argument, its value and what was expected [m/s].
     """
-    from numbers import Real
-
     from .critical import check_kinds, table_speed_limit
 
     check_kinds(system)
     assert isinstance(system, DriveSystem)
-    # what is not a finite number is refused by the profile (``profile.table_speed``)
     for name, value, limit in (("table_speed", table_speed, table_speed_limit(system)),
                                ("nut_speed", nut_speed, None)):
-        if isinstance(value, Real) and not isinstance(value, bool) \
-                and not (isinstance(value, float | np.floating) and not math.isfinite(value)):
-            check_speed(name, value, sign="any", limit=limit)
+        check_speed(name, value, sign="any", limit=limit)
     if table_speed == 0.0 and not frictionless:
         raise ParameterError("table_speed", 0.0, "steady sliding needs a non-zero speed [m/s]")
 
