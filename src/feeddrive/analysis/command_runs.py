@@ -38,6 +38,27 @@ class CommandRun:
     samples: int
 
 
+def run_bounds(command: np.ndarray, atol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end (exclusive) index of each run of equal command speed: a sample starts a
+    new run where it differs from the one before by more than ``atol`` + 1e-6 of itself.
+
+    Parameters
+    ----------
+    command : numpy.ndarray
+        Command speed per sample [m/s].
+    atol : float, default 1e-9
+        The absolute part of the tolerance [m/s] (a recorded column's; a simulated
+        reference's is 1e-12).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The runs' first indices and their ends (one past the last index).
+    """
+    change = np.flatnonzero(np.abs(np.diff(command)) > atol + 1e-6 * np.abs(command[1:]))
+    return np.r_[0, change + 1], np.r_[change + 1, command.size]
+
+
 def command_runs(time: np.ndarray, command: np.ndarray) -> list[CommandRun]:
     """The runs of equal command speed (within 1e-9 m/s and 1e-6 of the command), in order.
 
@@ -53,9 +74,7 @@ def command_runs(time: np.ndarray, command: np.ndarray) -> list[CommandRun]:
     list of CommandRun
         The runs, covering every sample once.
     """
-    change = np.flatnonzero(np.abs(np.diff(command)) > 1e-9 + 1e-6 * np.abs(command[1:]))
-    starts = np.r_[0, change + 1]
-    ends = np.r_[change + 1, command.size]
+    starts, ends = run_bounds(command)
     return [CommandRun(float(time[a]), float(time[b - 1]), float(command[a]), int(b - a))
             for a, b in zip(starts, ends, strict=True)]
 

@@ -796,17 +796,16 @@ class Result:
         (each step of a staircase, each level of a CSV profile; ramps and stops are left
         out), each judged over its own steady window: as ``feeddrive analyze`` summarises a
         step-down trace per segment (issue 24 item 6)."""
+        from ..analysis.command_runs import HOLD_SAMPLES, run_bounds
         from ..analysis.creep_window import creep_metrics, steady_window
         from ..analysis.trace import hold_settled
 
         t, v = self.time, self["table_speed"]
         ref = self["table_speed_reference"]
-        change = np.flatnonzero(np.abs(np.diff(ref)) > 1e-12 + 1e-6 * np.abs(ref[1:]))
-        starts, ends = np.r_[0, change + 1], np.r_[change + 1, ref.size]
         out: list[dict[str, Any]] = []
-        for a, b in zip(starts, ends, strict=True):
+        for a, b in zip(*run_bounds(ref, atol=1e-12), strict=True):
             c = float(ref[a])
-            if b - a < 16 or c == 0.0:
+            if b - a < HOLD_SAMPLES or c == 0.0:
                 continue
             window = steady_window(t[a:b], v[a:b], c)
             m = creep_metrics(t, v, c, window=window)
