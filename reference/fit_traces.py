@@ -9,11 +9,17 @@ structure against a real machine.
 
 Run time: each trace is one Radau integration (rtol 1e-9, absolute tolerances 100× tighter
 than the engine's former fixed defaults): 0.6 s for 2 s of the CDFS at 1 mm/s on the shared
-machine.
+machine; with the example's GMS guide 5–9 s a trace.  The traces the tests use are stored
+(:data:`STORE`, made by ``python reference/fit_traces.py``) under a key of everything they
+are made from — the truth's parameters as TOML, the speed, length, tolerances and options,
+and the text of the reference model and of its Radau driver — so :func:`radau_trace` reads a
+stored trace only where a fresh integration would be made from the same things, and
+integrates otherwise.
 """
 
 from __future__ import annotations
 
+import hashlib
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +33,7 @@ if str(ROOT) not in sys.path:
 from feeddrive.analysis.fit import Experiment  # noqa: E402
 from feeddrive.analysis.fit_statistics import noise_level  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
-from feeddrive.parameters import DriveParameters  # noqa: E402
+from feeddrive.parameters import DriveParameters, dumps  # noqa: E402
 from reference.make_radau_reference import radau_states  # noqa: E402
 from reference.scipy_model import ReferenceModel  # noqa: E402
 
@@ -52,13 +58,39 @@ class Trace:
     screw_current: np.ndarray  # [A]
 
 
+#: the stored traces (``python reference/fit_traces.py``), by :func:`trace_key`
+STORE = ROOT / "tests" / "data" / "radau_fit_traces.npz"
+#: what a trace is made from besides its arguments: the reference model and its Radau driver
+_SOURCES = ("reference/scipy_model.py", "reference/make_radau_reference.py")
+
+
+def trace_key(truth: DriveParameters, speed: float, duration: float, rtol: float,
+              atol_scale: float, stribeck_exponents: dict[str, float] | None) -> str:
+    """The digest of everything a Radau trace is made from (the key in :data:`STORE`)."""
+    made_from = repr((dumps(truth), float(speed), float(duration), float(rtol),
+                      float(atol_scale), sorted((stribeck_exponents or {}).items())))
+    digest = hashlib.sha256(made_from.encode())
+    for name in _SOURCES:
+        digest.update((ROOT / name).read_bytes().replace(b"\r\n", b"\n"))
+    return "k" + digest.hexdigest()[:40]
+
+
 def radau_trace(truth: DriveParameters, speed: float, duration: float, *,
                 rtol: float = RTOL, atol_scale: float = ATOL_SCALE,
-                stribeck_exponents: dict[str, float] | None = None) -> Trace:
+                stribeck_exponents: dict[str, float] | None = None,
+                stored: bool = True) -> Trace:
     """The CDFS at mid-screw (0.4 m) commanded at ``speed`` [m/s] after a 0.1-s ramp,
     integrated by Radau on the plain-Python model (any friction law it implements, GMS
     included; ``stribeck_exponents`` per site name: a Stribeck curve exp(−|v/v_s|^δ) with
-    another exponent than LuGre's 2)."""
+    another exponent than LuGre's 2).  Read from :data:`STORE` where it holds the trace of
+    these very inputs (``stored``), integrated otherwise."""
+    if stored and STORE.exists():
+        key = trace_key(truth, speed, duration, rtol, atol_scale, stribeck_exponents)
+        with np.load(STORE) as data:
+            if f"{key}_time" in data:
+                return Trace(speed=speed, time=np.array(data[f"{key}_time"]),
+                             table_position=np.array(data[f"{key}_table_position"]),
+                             screw_current=np.array(data[f"{key}_screw_current"]))
     options = {"stribeck_exponents": stribeck_exponents} if stribeck_exponents else {}
     t, y, _ = radau_states(truth, "cdfs", ConstantSpeed(speed, ramp_time=RAMP_TIME), duration,
                            rtol, atol_scale, **options)
@@ -105,3 +137,42 @@ def calibration_truth(preset: str = "wang2021", factors: dict[str, float] | None
         values[path] = float(value) * factor  # type: ignore[arg-type]
         p = p.replace_path(path, values[path])
     return p, values
+
+
+def stored_truths() -> dict[str, tuple[DriveParameters, dict[str, float] | None]]:
+    """The truths whose traces at :data:`SPEEDS` over 2 s :data:`STORE` keeps: the
+    calibration's (tests/validation/test_fit_calibration_independent.py) and the two
+    mismatched ones of tests/validation/test_fit_mismatch.py (the example's GMS guide with a
+    slip margin of 0.02; a Stribeck exponent of 1 at the screw)."""
+    import feeddrive as fd
+
+    truth, _ = calibration_truth()
+    guide = fd.load(ROOT / "examples" / "gms_guide.toml").friction.guide.with_values(
+        slip_margin=0.02)
+    return {"calibration": (truth, None),
+            "gms-guide": (truth.replace_path("friction.guide", guide), None),
+            "stribeck-exponent-1": (truth, {"screw": 1.0})}
+
+
+def make_store() -> Path:
+    """Integrate the traces of :func:`stored_truths` afresh and write :data:`STORE`."""
+    import time
+
+    arrays: dict[str, np.ndarray] = {}
+    for name, (truth, exponents) in stored_truths().items():
+        for speed in SPEEDS:
+            started = time.process_time()
+            trace = radau_trace(truth, speed, 2.0, stribeck_exponents=exponents, stored=False)
+            key = trace_key(truth, speed, 2.0, RTOL, ATOL_SCALE, exponents)
+            arrays[f"{key}_time"] = trace.time
+            arrays[f"{key}_table_position"] = trace.table_position
+            arrays[f"{key}_screw_current"] = trace.screw_current
+            print(f"{name} {speed * 1e3:g} mm/s: {time.process_time() - started:.1f} CPU s",
+                  flush=True)
+    np.savez_compressed(STORE, **arrays)
+    print(f"-> {STORE.relative_to(ROOT)}")
+    return STORE
+
+
+if __name__ == "__main__":
+    make_store()
