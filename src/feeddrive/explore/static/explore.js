@@ -53,6 +53,35 @@ async function api(method, path, body) {
 
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
+// A press on a button leaves the field being edited, and its change is checked at once: the
+// answer comes back while the button is still pressed.  Drawing it then (a message that goes
+// or appears above the button) moves the button from under the pointer, the release lands
+// elsewhere and the click is lost: nothing happens, nothing says why.  A check's answer waits
+// for the press to end, after its click.  Only presses on what a click acts on count (a
+// select's list opens on the press and may take its release).
+const press = { down: false, waiting: [] };
+const CLICKABLE = "button, .button, a[href], input[type=checkbox]";
+
+function pressEnded() {
+  press.down = false;
+  // the click follows the pointerup in the same task: it reaches its button first
+  setTimeout(() => { for (const resume of press.waiting.splice(0)) resume(); }, 0);
+}
+
+function pressOver() {
+  return press.down ? new Promise((resolve) => press.waiting.push(resolve)) : Promise.resolve();
+}
+
+document.addEventListener("pointerdown", (e) => {
+  if (e.button === 0 && e.target instanceof Element && e.target.closest(CLICKABLE)) {
+    press.down = true;
+  }
+}, true);
+for (const type of ["pointerup", "pointercancel"]) {
+  document.addEventListener(type, pressEnded, true);
+}
+window.addEventListener("blur", pressEnded);  // a press whose release the page never sees
+
 function status(text) { $("status").textContent = text; }
 
 // a number as the text outputs print it (feeddrive.units.number_text): "∞" for an infinite
@@ -225,6 +254,7 @@ function scheduleCheck(name, now = false) {
 async function check(withKnobs = true) {
   const seq = ++state.checkSeq;
   const r = await api("POST", "/api/check", { settings: collect(withKnobs) });
+  await pressOver();
   if (seq !== state.checkSeq) return false;
   if (r.status !== 200) {
     $("msg-run").textContent = r.data.error || "the check failed";
@@ -714,12 +744,13 @@ async function loadMeasured(file) {
 async function critical() {
   if (state.critJob) return;
   const r = await api("POST", "/api/jobs", { kind: "critical", settings: collect() });
-  if (r.status === 422) {
-    showMessages(r.data);
-    return;
-  }
-  if (r.status !== 202) {
-    $("critical-result").textContent = r.data.error || `refused (${r.status})`;
+  if (r.status !== 202) {  // refused: said here, the search's last result no longer stands
+    const box = $("critical-result");
+    box.dataset.state = "refused";
+    box.title = "";
+    if (r.status === 422) showMessages(r.data);
+    box.textContent = r.status === 422 ? "fix the marked fields to search"
+      : r.data.error || `refused (${r.status})`;
     return;
   }
   state.critJob = r.data.id;
