@@ -38,15 +38,26 @@ def show(
     fmt: str = typer.Option("toml", "--format", help="toml or json"),
     machine_file: str | None = typer.Option(
         None, "--machine", help="A machine file (docs/machine.md) or built-in machine: print "
-        "each axis' drive and whole resolved set, and the coupling parts (TOML)."),
+        "each axis' drive and whole resolved set, and the coupling parts (TOML, or JSON with "
+        "--format json); not with --preset or --params."),
 ) -> None:
     """Print a parameter set (SI units) as TOML or JSON: a preset, or the resolved set of a
     parameter file, with the file's [solver] table (its integrator settings, SI; JSON: under
     "solver"); or a machine file resolved (--machine)."""
     if machine_file is not None:
-        from ..machine import load_machine, machine_toml
+        import tomllib
 
-        typer.echo(machine_toml(load_machine(machine_file)))
+        from ..machine import load_machine, machine_toml
+        from ..parameters import ParameterError
+
+        for option, value in (("--preset", preset_name), ("--params", params_file)):
+            if value is not None:
+                raise ParameterError(option, value, "not with --machine (its axes are set in "
+                                     "the machine file)")
+        if fmt not in ("toml", "json"):
+            raise ValueError(f"--format = {fmt!r}: expected toml or json")
+        text = machine_toml(load_machine(machine_file))
+        typer.echo(text if fmt == "toml" else json.dumps(tomllib.loads(text), indent=2))
         return
     if preset_name is not None and params_file is not None:
         raise ValueError("--preset and --params: give one, not both")
@@ -115,12 +126,17 @@ def slots(
 @user_errors
 def check(file: str | None = typer.Argument(None, help="Parameter file (TOML)."),
           machine_file: str | None = typer.Option(
-              None, "--machine", help="Check a machine file instead: one line per error, "
-              "naming the axis or coupling part.")) -> None:
+              None, "--machine", help="Check a machine file instead (not with FILE): one line "
+              "per error, naming the axis or coupling part.")) -> None:
     """Validate a parameter file (or a machine file); exit non-zero with the offending field
     (every error of a machine file, one line each) if it is refused."""
     if machine_file is not None:
         from ..machine import check_machine
+        from ..parameters import ParameterError
+
+        if file is not None:
+            raise ParameterError("FILE", file, "give a parameter file or --machine FILE, not "
+                                 "both")
         from ..parameters.toml_io import read_toml_file
 
         errors = check_machine(read_toml_file(machine_file, field="--machine"),
