@@ -89,13 +89,15 @@ def trees(order: int) -> tuple[Tree, ...]:
     return tuple(sorted({g for t in trees(order - 1) for g in _grow(t)}))
 
 
+@functools.cache
 def _size(tree: Tree) -> int:
     return 1 + sum(_size(child) for child in tree)
 
 
+@functools.cache
 def _density(tree: Tree) -> int:
-    """γ(t) = ρ(t) · Π γ(subtrees)."""
-    return _size(tree) * int(np.prod([_density(child) for child in tree]))
+    """γ(t) = ρ(t) · Π γ(subtrees) (an exact integer)."""
+    return _size(tree) * math.prod(_density(child) for child in tree)
 
 
 def _dot(u: np.ndarray, v: np.ndarray) -> float:
@@ -128,11 +130,15 @@ def _sum(v: np.ndarray) -> float:
     return math.fsum(float(x) for x in v)
 
 
-def _weights(tree: Tree, a: np.ndarray) -> np.ndarray:
-    """Φ(t) over the stages: Π over the subtrees of A Φ(subtree) (ones for the leaf)."""
-    phi = np.ones(a.shape[0])
-    for child in tree:
-        phi = phi * _mv(a, _weights(child, a))
+def _weights(tree: Tree, a: np.ndarray, memo: dict[Tree, np.ndarray]) -> np.ndarray:
+    """Φ(t) over the stages: Π over the subtrees of A Φ(subtree) (ones for the leaf); each
+    tree's once per ``memo`` (one per matrix ``a``: the same arithmetic, so the same value)."""
+    phi = memo.get(tree)
+    if phi is None:
+        phi = np.ones(a.shape[0])
+        for child in tree:
+            phi = phi * _mv(a, _weights(child, a, memo))
+        memo[tree] = phi
     return phi
 
 
@@ -151,12 +157,12 @@ def _lower(rows: tuple[tuple[float, ...], ...], size: int) -> np.ndarray:
 
 
 def _check_trees(name: str, what: str, weights: np.ndarray, a: np.ndarray, order: int,
-                 theta: float = 1.0) -> None:
+                 memo: dict[Tree, np.ndarray], theta: float = 1.0) -> None:
     for rho in range(1, order + 1):
         for k, tree in enumerate(trees(rho)):
             _fail(name, f"{what}: Σ b_i Φ_i(t) for tree {k + 1} of order {rho}"
                   + ("" if theta == 1.0 else f" at θ = {theta}"),
-                  _dot(weights, _weights(tree, a)), theta ** rho / _density(tree))
+                  _dot(weights, _weights(tree, a, memo)), theta ** rho / _density(tree))
 
 
 def check_explicit(tab: ExplicitTableau) -> None:
@@ -182,10 +188,11 @@ def check_explicit(tab: ExplicitTableau) -> None:
     c = (*tab.c, 1.0) if tab.fsal else tab.c
     for i in range(n):
         _fail(tab.name, f"row sum of a in stage {i + 1} (c_{i + 1})", _sum(a[i]), c[i])
-    _check_trees(tab.name, "solution", b, a, tab.order)
+    memo: dict[Tree, np.ndarray] = {}
+    _check_trees(tab.name, "solution", b, a, tab.order, memo)
     e = np.zeros(n)
     e[:len(tab.e)] = tab.e
-    _check_trees(tab.name, "embedded solution", b - e, a, tab.embedded_order)
+    _check_trees(tab.name, "embedded solution", b - e, a, tab.embedded_order, memo)
     if tab.dense:
         # y(θ) = y0 + θ(q1 + (1−θ)(q2 + θ(q3 + (1−θ) h Σ d_i k_i))) with q1 = h Σ b_i k_i,
         # q2 = h k_1 − q1, q3 = q1 − h k_new − q2 (dopri5.f CONTD5; the driver's dense output)
@@ -194,17 +201,23 @@ def check_explicit(tab: ExplicitTableau) -> None:
         for th in THETAS:
             w = th * (b + (1 - th) * ((first - b) + th * ((2 * b - first - new)
                                                           + (1 - th) * d)))
-            _check_trees(tab.name, "continuous extension", w, a, tab.order - 1, th)
+            _check_trees(tab.name, "continuous extension", w, a, tab.order - 1, memo, th)
 
 
-def _rosenbrock_weights(tree: Tree, alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+def _rosenbrock_weights(tree: Tree, alpha: np.ndarray, beta: np.ndarray,
+                        memo: dict[Tree, np.ndarray]) -> np.ndarray:
     """Φ(t) of a Rosenbrock method over the stages: a vertex with one son is linked to it by
-    β (the diagonal γ included), a vertex with several sons to each by α (ones for the leaf)."""
-    if len(tree) == 1:
-        return _mv(beta, _rosenbrock_weights(tree[0], alpha, beta))
-    phi = np.ones(alpha.shape[0])
-    for child in tree:
-        phi = phi * _mv(alpha, _rosenbrock_weights(child, alpha, beta))
+    β (the diagonal γ included), a vertex with several sons to each by α (ones for the leaf);
+    each tree's once per ``memo`` (one per method)."""
+    phi = memo.get(tree)
+    if phi is None:
+        if len(tree) == 1:
+            phi = _mv(beta, _rosenbrock_weights(tree[0], alpha, beta, memo))
+        else:
+            phi = np.ones(alpha.shape[0])
+            for child in tree:
+                phi = phi * _mv(alpha, _rosenbrock_weights(child, alpha, beta, memo))
+        memo[tree] = phi
     return phi
 
 
@@ -235,12 +248,14 @@ def check_rosenbrock(tab: RosenbrockTableau) -> None:
     m_hat = m.copy()
     m[s - 1] = 1.0
 
+    memo: dict[Tree, np.ndarray] = {}
+
     def check(what: str, w: np.ndarray, order: int, th: float = 1.0) -> None:
         for rho in range(1, order + 1):
             for k, tree in enumerate(trees(rho)):
                 _fail(tab.name, f"{what}: Σ b_i Φ_i(t) for tree {k + 1} of order {rho}"
                       + ("" if th == 1.0 else f" at θ = {th}"),
-                      _dot(w, _rosenbrock_weights(tree, alpha, beta)),
+                      _dot(w, _rosenbrock_weights(tree, alpha, beta, memo)),
                       th ** rho / _density(tree))
 
     check("solution", _vm(m, gam), tab.order)
