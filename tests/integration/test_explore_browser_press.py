@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import pytest
@@ -72,18 +73,28 @@ def server() -> Iterator[ExplorerServer]:
         yield srv
 
 
-def _page(browser: Any, url: str, errors: list[str]) -> Any:
-    """The page at ``url``, its first run and linear analysis drawn, auto-run off."""
-    page = browser.new_page(viewport={"width": 1500, "height": 1000})
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.add_init_script(HOLD_CHECKS)
-    page.goto(url)
-    page.wait_for_selector("body[data-ready=yes]", timeout=60_000)
-    page.wait_for_selector("#verdict:not([data-verdict=''])", timeout=300_000)
-    page.wait_for_function("document.querySelector('#linear-facts').textContent !== ''",
-                           timeout=120_000)
-    page.uncheck("#auto")
-    return page
+@contextmanager
+def _opened(url: str) -> Iterator[tuple[Any, Any, list[str]]]:
+    """Playwright's API, the page at ``url`` in Debian's chromium (its first run and linear
+    analysis drawn, auto-run off) and the page's script errors, none by the end."""
+    sync_api = playwright()
+    errors: list[str] = []
+    with sync_api.sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1500, "height": 1000})
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.add_init_script(HOLD_CHECKS)
+            page.goto(url)
+            page.wait_for_selector("body[data-ready=yes]", timeout=60_000)
+            page.wait_for_selector("#verdict:not([data-verdict=''])", timeout=300_000)
+            page.wait_for_function("document.querySelector('#linear-facts').textContent "
+                                   "!== ''", timeout=120_000)
+            page.uncheck("#auto")
+            yield sync_api, page, errors
+        finally:
+            browser.close()
+    assert not errors, errors
 
 
 def _result(page: Any) -> str:
@@ -106,85 +117,69 @@ def _refuse_velocity_gain(page: Any) -> None:
 
 def test_a_press_on_critical_speed_is_a_click_though_its_field_check_answers_first(
         server: ExplorerServer) -> None:
-    sync_api = playwright()
-    errors: list[str] = []
-    with sync_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)
+    with _opened(server.url) as (sync_api, page, errors):
+        _refuse_velocity_gain(page)
+        above = page.evaluate("['#msg-velocity_gain', '#msg-run'].map((s) => "
+                              "document.querySelector(s).getBoundingClientRect().height)")
+
+        page.evaluate("window.testHold.on = true")
+        page.fill("#f-velocity_gain", "45")  # fixed: its answer clears both messages
+        button = page.locator("#critical")
+        button.scroll_into_view_if_needed()
+        pressed = button.bounding_box()
+        assert pressed is not None
+        # the premise: the messages the answer clears are taller than half the button,
+        # so the button, moved up by them, leaves the pointer at its middle
+        assert sum(above) > pressed["height"] / 2, (above, pressed)
+        page.mouse.move(pressed["x"] + pressed["width"] / 2,
+                        pressed["y"] + pressed["height"] / 2)
+        page.mouse.down()  # the field loses focus: its change is checked at once
+        page.wait_for_function("window.testHold.heldInPress >= 1", timeout=30_000)
+        page.evaluate("window.testHold.release()")  # the answer comes back mid-press
+        page.wait_for_function("window.testHold.readInPress >= 1", timeout=30_000)
+        released = button.bounding_box()
+        assert released is not None
+        page.mouse.up()
+
         try:
-            page = _page(browser, server.url, errors)
-            _refuse_velocity_gain(page)
-            above = page.evaluate("['#msg-velocity_gain', '#msg-run'].map((s) => "
-                                  "document.querySelector(s).getBoundingClientRect().height)")
-
-            page.evaluate("window.testHold.on = true")
-            page.fill("#f-velocity_gain", "45")  # fixed: its answer clears both messages
-            button = page.locator("#critical")
-            button.scroll_into_view_if_needed()
-            pressed = button.bounding_box()
-            assert pressed is not None
-            # the premise: the messages the answer clears are taller than half the button,
-            # so the button, moved up by them, leaves the pointer at its middle
-            assert sum(above) > pressed["height"] / 2, (above, pressed)
-            page.mouse.move(pressed["x"] + pressed["width"] / 2,
-                            pressed["y"] + pressed["height"] / 2)
-            page.mouse.down()  # the field loses focus: its change is checked at once
-            page.wait_for_function("window.testHold.heldInPress >= 1", timeout=30_000)
-            page.evaluate("window.testHold.release()")  # the answer comes back mid-press
-            page.wait_for_function("window.testHold.readInPress >= 1", timeout=30_000)
-            released = button.bounding_box()
-            assert released is not None
-            page.mouse.up()
-
-            try:
-                page.wait_for_function(f"{RESULT}.dataset.state === 'done'", timeout=60_000)
-            except sync_api.TimeoutError:
-                pytest.fail(
-                    "the press on Critical speed started no search: the button was at "
-                    f"y = {pressed['y']:.1f} px when pressed, at y = {released['y']:.1f} px "
-                    f"at the release; {_result(page)}, errors {errors}")
-            assert page.inner_text("#critical-result").startswith("critical speed "), \
-                page.inner_text("#critical-result")
-            assert released == pressed  # the button stayed under the pointer
-            # the answer is drawn once the press is over
-            page.wait_for_function("['#msg-velocity_gain', '#msg-run'].every((s) => "
-                                   "document.querySelector(s).textContent === '')",
-                                   timeout=30_000)
-        finally:
-            browser.close()
-    assert not errors, errors
+            page.wait_for_function(f"{RESULT}.dataset.state === 'done'", timeout=60_000)
+        except sync_api.TimeoutError:
+            pytest.fail(
+                "the press on Critical speed started no search: the button was at "
+                f"y = {pressed['y']:.1f} px when pressed, at y = {released['y']:.1f} px "
+                f"at the release; {_result(page)}, errors {errors}")
+        assert page.inner_text("#critical-result").startswith("critical speed "), \
+            page.inner_text("#critical-result")
+        assert released == pressed  # the button stayed under the pointer
+        # the answer is drawn once the press is over
+        page.wait_for_function("['#msg-velocity_gain', '#msg-run'].every((s) => "
+                               "document.querySelector(s).textContent === '')",
+                               timeout=30_000)
 
 
 def test_a_refused_critical_speed_search_says_so_where_its_result_goes(
         server: ExplorerServer) -> None:
-    sync_api = playwright()
-    errors: list[str] = []
-    with sync_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)
-        try:
-            page = _page(browser, server.url, errors)
-            # a search first: its result stands until the next one (the keyboard presses the
-            # button: no pointer, no press to wait for)
-            page.press("#critical", "Enter")
-            page.wait_for_function(f"{RESULT}.dataset.state === 'done'", timeout=60_000)
-            assert page.inner_text("#critical-result").startswith("critical speed ")
+    with _opened(server.url) as (sync_api, page, errors):
+        # a search first: its result stands until the next one (the keyboard presses the
+        # button: no pointer, no press to wait for)
+        page.press("#critical", "Enter")
+        page.wait_for_function(f"{RESULT}.dataset.state === 'done'", timeout=60_000)
+        assert page.inner_text("#critical-result").startswith("critical speed ")
 
-            _refuse_velocity_gain(page)
-            expected = page.inner_text("#msg-velocity_gain")
-            page.press("#critical", "Enter")
-            try:
-                page.wait_for_function(f"{RESULT}.dataset.state === 'refused'",
-                                       timeout=30_000)
-            except sync_api.TimeoutError:
-                pytest.fail(f"a refused search not said so: {_result(page)}, errors {errors}")
-            assert page.inner_text("#critical-result") == "fix the marked fields to search"
-            assert page.get_attribute("#critical-result", "title") in (None, "")
-            # beside the field: the server's message for the value (the CLI's)
-            assert page.inner_text("#msg-velocity_gain") == expected
-            got = page.evaluate("fetch('/api/check', {method: 'POST', headers: "
-                                "{'Content-Type': 'application/json'}, body: JSON.stringify("
-                                "{settings: {drive: 'ddfs', velocity_gain: '-5'}})})"
-                                ".then((r) => r.json())")
-            assert got["errors"]["velocity_gain"] == expected, json.dumps(got["errors"])
-        finally:
-            browser.close()
-    assert not errors, errors
+        _refuse_velocity_gain(page)
+        expected = page.inner_text("#msg-velocity_gain")
+        page.press("#critical", "Enter")
+        try:
+            page.wait_for_function(f"{RESULT}.dataset.state === 'refused'",
+                                   timeout=30_000)
+        except sync_api.TimeoutError:
+            pytest.fail(f"a refused search not said so: {_result(page)}, errors {errors}")
+        assert page.inner_text("#critical-result") == "fix the marked fields to search"
+        assert page.get_attribute("#critical-result", "title") in (None, "")
+        # beside the field: the server's message for the value (the CLI's)
+        assert page.inner_text("#msg-velocity_gain") == expected
+        got = page.evaluate("fetch('/api/check', {method: 'POST', headers: "
+                            "{'Content-Type': 'application/json'}, body: JSON.stringify("
+                            "{settings: {drive: 'ddfs', velocity_gain: '-5'}})})"
+                            ".then((r) => r.json())")
+        assert got["errors"]["velocity_gain"] == expected, json.dumps(got["errors"])
