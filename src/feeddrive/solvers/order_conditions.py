@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -156,13 +157,15 @@ def _lower(rows: tuple[tuple[float, ...], ...], size: int) -> np.ndarray:
     return m
 
 
-def _check_trees(name: str, what: str, weights: np.ndarray, a: np.ndarray, order: int,
-                 memo: dict[Tree, np.ndarray], theta: float = 1.0) -> None:
+def _check_trees(name: str, what: str, weights: np.ndarray,
+                 phi: Callable[[Tree], np.ndarray], order: int, theta: float = 1.0) -> None:
+    """Σ b_i Φ_i(t) = θ^ρ(t) / γ(t) for every tree up to ``order``, Φ(t) by ``phi`` (the
+    method's own stage weights: explicit or Rosenbrock)."""
     for rho in range(1, order + 1):
         for k, tree in enumerate(trees(rho)):
             _fail(name, f"{what}: Σ b_i Φ_i(t) for tree {k + 1} of order {rho}"
                   + ("" if theta == 1.0 else f" at θ = {theta}"),
-                  _dot(weights, _weights(tree, a, memo)), theta ** rho / _density(tree))
+                  _dot(weights, phi(tree)), theta ** rho / _density(tree))
 
 
 def check_explicit(tab: ExplicitTableau) -> None:
@@ -189,10 +192,14 @@ def check_explicit(tab: ExplicitTableau) -> None:
     for i in range(n):
         _fail(tab.name, f"row sum of a in stage {i + 1} (c_{i + 1})", _sum(a[i]), c[i])
     memo: dict[Tree, np.ndarray] = {}
-    _check_trees(tab.name, "solution", b, a, tab.order, memo)
+
+    def phi(tree: Tree) -> np.ndarray:
+        return _weights(tree, a, memo)
+
+    _check_trees(tab.name, "solution", b, phi, tab.order)
     e = np.zeros(n)
     e[:len(tab.e)] = tab.e
-    _check_trees(tab.name, "embedded solution", b - e, a, tab.embedded_order, memo)
+    _check_trees(tab.name, "embedded solution", b - e, phi, tab.embedded_order)
     if tab.dense:
         # y(θ) = y0 + θ(q1 + (1−θ)(q2 + θ(q3 + (1−θ) h Σ d_i k_i))) with q1 = h Σ b_i k_i,
         # q2 = h k_1 − q1, q3 = q1 − h k_new − q2 (dopri5.f CONTD5; the driver's dense output)
@@ -201,7 +208,7 @@ def check_explicit(tab: ExplicitTableau) -> None:
         for th in THETAS:
             w = th * (b + (1 - th) * ((first - b) + th * ((2 * b - first - new)
                                                           + (1 - th) * d)))
-            _check_trees(tab.name, "continuous extension", w, a, tab.order - 1, memo, th)
+            _check_trees(tab.name, "continuous extension", w, phi, tab.order - 1, th)
 
 
 def _rosenbrock_weights(tree: Tree, alpha: np.ndarray, beta: np.ndarray,
@@ -250,16 +257,11 @@ def check_rosenbrock(tab: RosenbrockTableau) -> None:
 
     memo: dict[Tree, np.ndarray] = {}
 
-    def check(what: str, w: np.ndarray, order: int, th: float = 1.0) -> None:
-        for rho in range(1, order + 1):
-            for k, tree in enumerate(trees(rho)):
-                _fail(tab.name, f"{what}: Σ b_i Φ_i(t) for tree {k + 1} of order {rho}"
-                      + ("" if th == 1.0 else f" at θ = {th}"),
-                      _dot(w, _rosenbrock_weights(tree, alpha, beta, memo)),
-                      th ** rho / _density(tree))
+    def phi(tree: Tree) -> np.ndarray:
+        return _rosenbrock_weights(tree, alpha, beta, memo)
 
-    check("solution", _vm(m, gam), tab.order)
-    check("embedded solution", _vm(m_hat, gam), tab.embedded_order)
+    _check_trees(tab.name, "solution", _vm(m, gam), phi, tab.order)
+    _check_trees(tab.name, "embedded solution", _vm(m_hat, gam), phi, tab.embedded_order)
     if tab.dense:
         # y(θ) = (1−θ) y0 + θ (y1 + (1−θ)(q1 + θ (q2 + θ q3))), q_r = Σ_j dense[r][j] u_j
         # (q3 = 0 for a method with two rows)
@@ -268,4 +270,4 @@ def check_rosenbrock(tab: RosenbrockTableau) -> None:
             q[r][:len(row)] = row
         for th in THETAS:
             w = th * (m + (1 - th) * (q[0] + th * (q[1] + th * q[2])))
-            check("dense output", _vm(w, gam), tab.dense_order, th)
+            _check_trees(tab.name, "dense output", _vm(w, gam), phi, tab.dense_order, th)
