@@ -486,6 +486,28 @@ def default_preset(drive: str | None) -> str:
     return str(getattr(topology, "example_preset", "wang2021"))
 
 
+def refuse_beside_machine(given: tuple[tuple[str, object, object], ...],
+                          why: str = "its axes are set in the machine file") -> None:
+    """Refuse, in one line naming the option, a drive's option given with ``--machine``.
+
+    Parameters
+    ----------
+    given : tuple of (str, object, object)
+        Each option's name, its value and its default (an option at its default was not
+        given).
+    why : str, default "its axes are set in the machine file"
+        What the machine sets instead, said after "not with --machine".
+
+    Raises
+    ------
+    ParameterError
+        For the first option whose value is not its default.
+    """
+    for option, value, default in given:
+        if value != default:
+            raise ParameterError(option, value, f"not with --machine ({why})")
+
+
 def resolve_parameters(preset_name: str | None, params_file: str | None,
                        drive: str | None = None) -> DriveParameters:
     """The parameter set named by ``--preset`` or loaded from ``--params`` (not both); by

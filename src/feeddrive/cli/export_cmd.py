@@ -13,6 +13,7 @@ from ._common import (
     err_console,
     outputs,
     print_json,
+    refuse_beside_machine,
     resolve_parameters,
     user_errors,
 )
@@ -73,14 +74,12 @@ def fmu_command(
     from ..parameters import ParameterError
 
     if machine is not None:
-        for option, value, default in (
-                ("--drive", drive, None), ("--preset", preset_name, None),
-                ("--params", params_file, None), ("--position", position, 400.0),
-                ("--table-speed", table_speed, 0.0), ("--nut-speed", nut_speed, 0.0),
-                ("--nut-hold", nut_hold, "locked")):
-            if value != default:
-                raise ParameterError(option, value, "not with --machine (its axes are set in "
-                                     "the machine file; the references are inputs)")
+        refuse_beside_machine((
+            ("--drive", drive, None), ("--preset", preset_name, None),
+            ("--params", params_file, None), ("--position", position, 400.0),
+            ("--table-speed", table_speed, 0.0), ("--nut-speed", nut_speed, 0.0),
+            ("--nut-hold", nut_hold, "locked")),
+            "its axes are set in the machine file; the references are inputs")
         _export_machine(machine, out, fmi=fmi, kind=kind, force=force, platform=platform,
                         as_json=as_json)
         return

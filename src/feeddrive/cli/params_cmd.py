@@ -16,6 +16,7 @@ from ._common import (
     console,
     err_console,
     print_json,
+    refuse_beside_machine,
     resolve_parameters,
     user_errors,
 )
@@ -48,12 +49,8 @@ def show(
         import tomllib
 
         from ..machine import load_machine, machine_toml
-        from ..parameters import ParameterError
 
-        for option, value in (("--preset", preset_name), ("--params", params_file)):
-            if value is not None:
-                raise ParameterError(option, value, "not with --machine (its axes are set in "
-                                     "the machine file)")
+        refuse_beside_machine((("--preset", preset_name, None), ("--params", params_file, None)))
         if fmt not in ("toml", "json"):
             raise ValueError(f"--format = {fmt!r}: expected toml or json")
         text = machine_toml(load_machine(machine_file))
@@ -96,17 +93,12 @@ def slots(
     reference profile's block is left out (it is the command, not a parameter)."""
     from ..engine.slot_listing import drive_slot_model, listed_slots, machine_slot_model
     from ..model.slots import slots_json
-    from ..parameters import ParameterError
 
     if machine_file is not None:
         from ..machine import load_machine
 
-        for option, value, default in (("--drive", drive, None), ("--preset", preset_name, None),
-                                       ("--params", params_file, None),
-                                       ("--position", position, 400.0)):
-            if value != default:
-                raise ParameterError(option, value, "not with --machine (its axes are set in "
-                                     "the machine file)")
+        refuse_beside_machine((("--drive", drive, None), ("--preset", preset_name, None),
+                               ("--params", params_file, None), ("--position", position, 400.0)))
         model = machine_slot_model(load_machine(machine_file))
     else:
         drive = drive or "cdfs"
@@ -133,11 +125,11 @@ def check(file: str | None = typer.Argument(None, help="Parameter file (TOML).")
     if machine_file is not None:
         from ..machine import check_machine
         from ..parameters import ParameterError
+        from ..parameters.toml_io import read_toml_file
 
         if file is not None:
             raise ParameterError("FILE", file, "give a parameter file or --machine FILE, not "
                                  "both")
-        from ..parameters.toml_io import read_toml_file
 
         errors = check_machine(read_toml_file(machine_file, field="--machine"),
                                base_dir=Path(machine_file).parent)
