@@ -123,7 +123,7 @@ def _dask() -> Any:
 def check_executor(*, workers: int | None = None, scheduler: str | None = None,
                    dask_workers: int | None = None) -> None:
     """Refuse an executor request before any work: a worker count < 1, both a scheduler and
-    a local cluster, Dask without ``dask.distributed``.  Every command that fans out
+    a local cluster, a local pool's size beside either, Dask without ``dask.distributed``.  Every command that fans out
     (``sweep``, ``fit``, ``predict``, ``sensitivity``) calls it first (``fit --workers 0``
     meant every core, issue 39 item 5).
 
@@ -146,6 +146,12 @@ def check_executor(*, workers: int | None = None, scheduler: str | None = None,
             raise ValueError(f"{option} = {n!r}: expected a whole number ≥ 1")
     if scheduler is not None and dask_workers is not None:
         raise ValueError("--scheduler and --dask-workers: give one, not both")
+    if workers is not None and (scheduler is not None or dask_workers is not None):
+        # Dask ran and the local pool's count was dropped without a word (a bad-input
+        # sweep, session 29): the three are one choice, as the usage lines write them
+        other = "--scheduler" if scheduler is not None else "--dask-workers"
+        raise ValueError(f"--workers = {workers} and {other}: give one, not both (--workers "
+                         f"sizes the local process pool, {other} runs on Dask)")
     if scheduler is not None or dask_workers is not None:
         _dask()
 
