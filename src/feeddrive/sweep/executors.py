@@ -123,9 +123,9 @@ def _dask() -> Any:
 def check_executor(*, workers: int | None = None, scheduler: str | None = None,
                    dask_workers: int | None = None) -> None:
     """Refuse an executor request before any work: a worker count < 1, both a scheduler and
-    a local cluster, a local pool's size beside either, Dask without ``dask.distributed``.  Every command that fans out
-    (``sweep``, ``fit``, ``predict``, ``sensitivity``) calls it first (``fit --workers 0``
-    meant every core, issue 39 item 5).
+    a local cluster, a local pool's size beside either, Dask without ``dask.distributed``.
+    Every command that fans out (``sweep``, ``fit``, ``predict``, ``sensitivity``) calls it
+    first (``fit --workers 0`` meant every core, issue 39 item 5).
 
     Parameters
     ----------
