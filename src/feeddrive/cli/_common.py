@@ -503,9 +503,29 @@ def refuse_beside_machine(given: tuple[tuple[str, object, object], ...],
     ParameterError
         For the first option whose value is not its default.
     """
+    refuse_unused(given, f"not with --machine ({why})")
+
+
+def refuse_unused(given: tuple[tuple[str, object, object], ...], why: str) -> None:
+    """Refuse, in one line naming the option, an option the run would not use (given beside
+    another that makes it meaningless): it was dropped without a word.
+
+    Parameters
+    ----------
+    given : tuple of (str, object, object)
+        Each option's name, its value and its default (an option at its default was not
+        given).
+    why : str
+        Why it is not used, the message after the option and its value.
+
+    Raises
+    ------
+    ParameterError
+        For the first option whose value is not its default.
+    """
     for option, value, default in given:
         if value != default:
-            raise ParameterError(option, value, f"not with --machine ({why})")
+            raise ParameterError(option, value, why)
 
 
 def resolve_parameters(preset_name: str | None, params_file: str | None,

@@ -28,6 +28,7 @@ from ._common import (
     console,
     outputs,
     print_json,
+    refuse_unused,
     user_errors,
 )
 
@@ -143,6 +144,9 @@ def analyze_command(
             served = " or ".join("the creep analysis" if m == "creep" else m for m in modes)
             raise ParameterError(option, value, f"applies to {served}, not to "
                                  f"{'the creep analysis' if mode == 'creep' else mode}")
+    if plot is None:  # the plot's scale, without a plot to draw (it was dropped)
+        refuse_unused((("--magnification", magnification, None),),
+                      "applies to --plot, which this run does not write")
     if circular:
         _circular(file, radius=radius, centre=centre, pitch=pitch, magnification=magnification,
                   reversal_angle=reversal_angle, time_column=time_column, x_column=x_column,

@@ -23,6 +23,7 @@ from ._common import (
     outputs,
     print_json,
     progress_bar,
+    refuse_unused,
     user_errors,
 )
 from ._solver import accuracy_options, max_steps_help
@@ -124,6 +125,9 @@ def circular_command(
         if given is not None and not (math.isfinite(given) and 0 < given <= high):
             raise ParameterError(option, given, f"expected a value > 0, ≤ {high:g} ["
                                  + ("mm" if option == "--pitch" else "-") + "]")
+    if plot is None:  # the plot's scale, without a plot to draw (it was dropped)
+        refuse_unused((("--magnification", magnification, None),),
+                      "applies to --plot, which this run does not write")
     if not (math.isfinite(nut_speed) and nut_speed >= 0):
         raise ParameterError("--nut-speed", nut_speed, "expected a speed ≥ 0 [mm/s]")
     if max_steps is not None and max_steps < 1:

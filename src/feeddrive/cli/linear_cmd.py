@@ -12,6 +12,8 @@ from ._common import (
     console,
     outputs,
     print_json,
+    refuse_beside_machine,
+    refuse_unused,
     resolve_parameters,
     user_errors,
 )
@@ -44,7 +46,7 @@ def loops_command(
     machine: str | None = typer.Option(
         None, "--machine", help="A machine file or built-in machine (docs/machine.md): "
         "each axis' loops, and the MIMO closed loop of the whole machine (every axis at "
-        "--table-speed; the drive options are not used)."),
+        "--table-speed; a drive's options and --plot are refused beside it)."),
 ) -> None:
     """Poles (frequency, damping ratio; rigid-body poles listed as such) and the velocity-
     and position-loop margins and bandwidths of every motor axis, from the closed loop
@@ -52,6 +54,14 @@ def loops_command(
     if machine is not None:
         from .machine_run import run_machine_loops
 
+        # dropped without a word: `loops --machine M --plot p.png` exited 0 and wrote no plot
+        # (a bad-input sweep, session 29)
+        refuse_beside_machine((
+            ("--drive", drive, "cdfs"), ("--nut-speed", nut_speed, 0.0),
+            ("--position", position, 400.0), ("--preset", preset_name, None),
+            ("--params", params_file, None)))
+        refuse_beside_machine((("--plot", plot, None), ("--plot-kind", plot_kind, "bode")),
+                              "a machine's loops are printed, not plotted")
         run_machine_loops(machine, table_speed=table_speed, with_friction=with_friction,
                           as_json=as_json)
         return
@@ -62,6 +72,9 @@ def loops_command(
 
     if plot_kind not in PLOT_KINDS:
         raise ParameterError("--plot-kind", plot_kind, f"expected {', '.join(PLOT_KINDS)}")
+    if plot is None:  # the plot's kind, without a plot to draw (it was dropped)
+        refuse_unused((("--plot-kind", plot_kind, "bode"),),
+                      "applies to --plot, which this run does not write")
     params = resolve_parameters(preset_name, params_file, drive)
     system = DriveSystem(params, drive, _units.position("--position", position, params, drive))
     # with friction steady sliding needs a speed: refused here in mm/s (the API said

@@ -23,6 +23,8 @@ from ._common import (
     outputs,
     print_json,
     progress_bar,
+    refuse_beside_machine,
+    refuse_unused,
     resolve_parameters,
     run_outcome,
     save_output,
@@ -123,8 +125,8 @@ def simulate_command(
     force: bool = typer.Option(False, "--force", help="Replace existing --output/--plot files."),
     machine: str | None = typer.Option(
         None, "--machine", help="A machine file (TOML, docs/machine.md) or a built-in machine "
-        "(xy-table, gantry): simulate its axes following --contour; the drive options are not "
-        "used."),
+        "(xy-table, gantry): simulate its axes following --contour; a drive's options (--drive, "
+        "--table-speed, --profile, …) are refused beside it, --params sets its integrator."),
     contour: str = typer.Option("circle", "--contour",
                                 metavar="circle|line|corner|csv|together",
                                 help="--machine: the path (default circle); together: every "
@@ -177,6 +179,16 @@ def simulate_command(
             raise ParameterError("--error-estimate", MISSING, "not available with --machine "
                                  "(the estimate is of one drive's run; --accuracy 0.1 runs "
                                  "the machine ten times tighter to compare)")
+        # a drive's command: the machine's axes follow --contour (they were dropped without
+        # a word; --params stays: its [solver] table sets the machine's integrator)
+        refuse_beside_machine((
+            ("--drive", drive, "cdfs"), ("--table-speed", table_speed, None),
+            ("--nut-speed", nut_speed, 0.0), ("--position", position, 400.0),
+            ("--preset", preset_name, None), ("--profile", profile, "constant"),
+            ("--frequency", frequency, 0.2), ("--ramp-time", ramp_time, 0.5),
+            ("--lowest-speed", lowest_speed, 0.05), ("--step", step, 0.01),
+            ("--dwell", dwell, 4.0), ("--profile-file", profile_file, None)),
+            "its axes are set in the machine file and follow --contour")
         run_machine(machine, contour=contour, radius=radius, feed=feed,
                     acceleration=acceleration, clockwise=clockwise, start_angle=start_angle,
                     turns=turns, length=length, angle=angle, contour_file=contour_file,
@@ -189,6 +201,28 @@ def simulate_command(
     with _units.recorded_warnings() as printed:
         if profile not in PROFILES:
             raise ParameterError("--profile", profile, f"expected one of {', '.join(PROFILES)}")
+        # options this run does not use, refused rather than dropped without a word (a
+        # --frequency without --profile sine ran a constant speed; bad-input sweep, session 29)
+        refuse_unused((
+            ("--contour", contour, "circle"), ("--radius", radius, 50.0),
+            ("--feed", feed, 1000.0), ("--acceleration", acceleration, 1000.0),
+            ("--clockwise", clockwise, False), ("--start-angle", start_angle, 0.0),
+            ("--turns", turns, 1.0), ("--length", length, 100.0), ("--angle", angle, 0.0),
+            ("--contour-file", contour_file, None)),
+            "an option of --machine, which a drive's run does not use")
+        for used_by, given in (
+                ("sine", (("--frequency", frequency, 0.2),)),
+                ("trapezoid", (("--ramp-time", ramp_time, 0.5),)),
+                ("stepdown", (("--lowest-speed", lowest_speed, 0.05), ("--step", step, 0.01),
+                              ("--dwell", dwell, 4.0))),
+                ("csv", (("--profile-file", profile_file, None),))):
+            if used_by != profile:
+                refuse_unused(given, f"applies to --profile {used_by}, not to --profile "
+                              f"{profile}")
+        if profile == "csv":
+            refuse_unused((("--table-speed", table_speed, None), ("--nut-speed", nut_speed, 0.0)),
+                          "not with --profile csv (the --profile-file's columns are the "
+                          "command)")
         if profile != "csv" and table_speed is None:
             raise ParameterError("--table-speed", MISSING,
                                  f"required for --profile {profile} [mm/s]")
