@@ -210,14 +210,14 @@ def simulate_command(
             ("--turns", turns, 1.0), ("--length", length, 100.0), ("--angle", angle, 0.0),
             ("--contour-file", contour_file, None)),
             "an option of --machine, which a drive's run does not use")
-        for used_by, given in (
+        for used_by, options_of in (
                 ("sine", (("--frequency", frequency, 0.2),)),
                 ("trapezoid", (("--ramp-time", ramp_time, 0.5),)),
                 ("stepdown", (("--lowest-speed", lowest_speed, 0.05), ("--step", step, 0.01),
                               ("--dwell", dwell, 4.0))),
                 ("csv", (("--profile-file", profile_file, None),))):
             if used_by != profile:
-                refuse_unused(given, f"applies to --profile {used_by}, not to --profile "
+                refuse_unused(options_of, f"applies to --profile {used_by}, not to --profile "
                               f"{profile}")
         if profile == "csv":
             refuse_unused((("--table-speed", table_speed, None), ("--nut-speed", nut_speed, 0.0)),
