@@ -926,6 +926,22 @@ def _slope(t: np.ndarray, x: np.ndarray) -> float:
     return float(np.polyfit(t - t[0], x, 1)[0])
 
 
+#: the travel a fitted slope implies over its span, in units in the last place of the
+#: positions, up to which the table is at rest: a constant position's least-squares slope is
+#: the rounding of its sums (a table held at 5 mm gave -7.7e-16 mm/s, then "UNSTABLE, ripple
+#: 1.24e+04" against that command, exit 0; a bad-input sweep, session 29); 1000 ulps of a
+#: 1-m position are 0.2 pm, far below any measured motion
+REST_ULPS = 1000.0
+
+
+def _at_rest(t: np.ndarray, x: np.ndarray, slope: float) -> bool:
+    """Whether ``slope`` [m/s], fitted to positions ``x`` [m] at times ``t`` [s], is zero to
+    the positions' rounding: its travel over the span within :data:`REST_ULPS` units in the
+    last place of the largest position."""
+    travel = abs(slope) * float(t[-1] - t[0])
+    return travel <= REST_ULPS * float(np.spacing(np.max(np.abs(x))))
+
+
 def _critical(segments: list[TraceSegment]) -> list[CriticalSpeed]:
     return critical_of_holds([(s.command_speed, s.metrics.creeping, s.settled)
                               for s in segments])
@@ -1203,7 +1219,7 @@ def analyze_trace(
         if given is None:
             half = ts >= ts[0] + 0.5 * (ts[-1] - ts[0])
             guess = _slope(ts[half], xs[half])
-            if guess == 0.0:
+            if _at_rest(ts[half], xs[half], guess):
                 notes.append(f"segment {a:.3f}–{b:.3f} s skipped: the table is at rest")
                 continue
             start, _ = steady_window(ts, vs, _derived_command(guess, origin, where))
