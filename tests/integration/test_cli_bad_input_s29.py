@@ -97,3 +97,15 @@ def test_a_plots_setting_without_the_plot_is_refused(tmp_path: Path, args: list[
     option, value = args[-2], args[-1]
     shown = repr(value) if option == "--plot-kind" else float(value)
     assert line == f"error: {option} = {shown}: applies to --plot, which this run does not write"
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["--targets", "100,100"], "--targets = '100,100': expected at least 2 increasing "
+                               "positions [mm]"),
+    (["--count", "50", "--span", "100,700", "--feed", "0.0001", "--dwell", "0.0001"],
+     "--feed = 0.0001: expected a higher feed [mm/s], or fewer targets: "),
+])
+def test_a_positioning_refusal_gives_the_options_unit(args: list[str], says: str) -> None:
+    """The values were shown in mm and mm/s as typed, their unit the API's "[m]", "[m/s]"."""
+    line = _one_line_refusal(["positioning", *args])
+    assert line.startswith(f"error: {says}"), line

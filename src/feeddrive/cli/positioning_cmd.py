@@ -154,7 +154,8 @@ def positioning_command(
         option = {"feed": "--feed", "targets": "--targets", "kind": "--cycle",
                   "cycles": "--cycles", "warm_up": "--warm-up",
                   "max_steps": "--max-steps"}.get(err.field, err.field)
-        raise ParameterError(option, _in_mm(err.field, err.value), err.message) from None
+        raise ParameterError(option, _in_mm(err.field, err.value),
+                             _in_mm_units(err.field, err.message)) from None
     except SimulationError as err:
         err_console.print(f"error: {err}", markup=False, highlight=False, soft_wrap=True)
         raise typer.Exit(code=1) from None
@@ -201,6 +202,17 @@ def _passes(warm_up: int) -> str:
     if warm_up == 0:
         return "no warm-up (started at rest, friction and loop integrals unloaded)"
     return f"after {warm_up} warm-up pass{'es' if warm_up > 1 else ''} (not read)"
+
+
+def _in_mm_units(field: str, message: str) -> str:
+    """The API's message on a value converted by :func:`_in_mm`, its unit the option's: the
+    values were given in mm, the message said "[m]" (``--targets 100,100``: "expected at least
+    2 increasing positions [m]"; a bad-input sweep, session 29)."""
+    if field == "feed":
+        return message.replace("[m/s]", "[mm/s]")
+    if field == "targets":
+        return message.replace("[m]", "[mm]")
+    return message
 
 
 def _in_mm(field: str, value: Any) -> Any:
