@@ -39,3 +39,35 @@ def test_a_slow_table_still_moves() -> None:
     t = np.arange(3000) * 1e-3
     result = analyze_trace(t, 0.8 + 1e-6 * t, source="slow.csv")  # 1 µm/s at 800 mm
     assert [round(s.command_speed, 12) for s in result.segments] == [1e-6]
+
+
+def _record(source: str, speed: float = 1e-3) -> Any:
+    from feeddrive.analysis.fit import Experiment
+
+    t = np.arange(0.0, 1.0, 1e-3)
+    v = np.full(t.size, speed)
+    return Experiment(source=source, time=t, signals={"table_position": v * t},
+                      reference_time=t, table_speed=v, noise={"table_position": 1e-8})
+
+
+@pytest.mark.parametrize(("second", "says"), [
+    ("a.csv", "a.csv: given twice; each record counts once in a fit"),
+    ("copy.csv", "copy.csv: the same record as a.csv; each record counts once in a fit"),
+])
+def test_a_fit_refuses_one_record_given_twice(monkeypatch: pytest.MonkeyPatch, second: str,
+                                              says: str) -> None:
+    """`feeddrive fit a.csv a.csv` fitted the record twice: its residuals weighed double and
+    its standard errors came out 1/√2 of its own.  Refused before any simulation."""
+    import feeddrive as fd
+    from feeddrive.analysis import fit
+    from feeddrive.engine import simulate as engine
+
+    def no_run(*_a: Any, **_k: Any) -> Any:
+        raise AssertionError("a simulation started although the input was refused")
+
+    monkeypatch.setattr(engine, "simulate", no_run)
+    with pytest.raises(fit.FitError, match=f"^{says}"):
+        fit.fit_drive(fd.preset("wang2021"), [_record("a.csv"), _record(second)],
+                      ["controller.velocity_integral_gain"])
+    # two records of one rig are two records
+    assert not fit._same_record(_record("a.csv"), _record("b.csv", speed=2e-3))

@@ -1612,6 +1612,28 @@ def _profile(ev: _Evaluator, theta: np.ndarray, j: int, lb: np.ndarray, ub: np.n
     return ends[0], ends[1]
 
 
+def _same_record(a: Experiment, b: Experiment) -> bool:
+    """Whether two experiments hold the same samples: times and every measured signal."""
+    if not isinstance(a, Experiment) or not isinstance(b, Experiment):
+        return False
+    return (np.array_equal(a.time, b.time) and a.signals.keys() == b.signals.keys()
+            and all(np.array_equal(a.signals[k], b.signals[k]) for k in a.signals))
+
+
+def _refuse_repeated_records(experiments: Sequence[Experiment]) -> None:
+    """Refuse one record given twice (the same file twice on the command line): its residuals
+    counted twice and its standard errors came out 1/√2 of its own, without a word (a
+    bad-input sweep, session 29)."""
+    seen: list[Experiment] = []
+    for e in experiments:
+        twin = next((s for s in seen if _same_record(s, e)), None)
+        if twin is not None:
+            same = "given twice" if twin.source == e.source else f"the same record as {twin.source}"
+            raise FitError(f"{e.source}: {same}; each record counts once in a fit (twice, its "
+                           "residuals would weigh double and its intervals shrink by √2)")
+        seen.append(e)
+
+
 def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Sequence[str],
               *, drive: str = "cdfs", table_position: float = 0.4,
               weights: Mapping[str, float] | None = None,
@@ -1702,6 +1724,7 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
                              "e.g. [experiment]")
     if not experiments:
         raise FitError("no trace given")
+    _refuse_repeated_records(experiments)
     if isinstance(free, str):  # one path given as text: its letters were read as paths
         raise FitError(f"free = {free[:60]!r}: expected a list of parameter paths, e.g. "
                        f"[{free[:60]!r}] (--free on the command line)")
