@@ -109,3 +109,11 @@ def test_a_positioning_refusal_gives_the_options_unit(args: list[str], says: str
     """The values were shown in mm and mm/s as typed, their unit the API's "[m]", "[m/s]"."""
     line = _one_line_refusal(["positioning", *args])
     assert line.startswith(f"error: {says}"), line
+
+
+@pytest.mark.parametrize("mass", ["0", "-2", "nan"])
+def test_identify_dynamic_names_its_mass_option(tmp_path: Path, mass: str) -> None:
+    """It said "mass = 0.0" (the fit's argument), after reading the test's file."""
+    line = _one_line_refusal(["identify", "dynamic", str(tmp_path / "not-read.csv"),
+                              "--mass", mass])
+    assert line == f"error: --mass = {float(mass)!r}: expected a finite mass > 0 [kg]", line

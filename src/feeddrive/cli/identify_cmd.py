@@ -254,6 +254,9 @@ def dynamic_command(
         raise ValueError(f"--model = {model!r}: expected lugre or linear")
     if not (0.5 <= confidence < 1.0):
         raise ValueError(f"--confidence = {confidence!r}: expected a level in [0.5, 1)")
+    if mass is not None and not (math.isfinite(mass) and mass > 0):  # named as typed, before
+        # the file is read (the fit's own check said "mass = 0.0", after reading it)
+        raise ValueError(f"--mass = {mass!r}: expected a finite mass > 0 [kg]")
     from ..model.friction.lugre_parameters import LuGreParameters  # numba: at use only
 
     params = _base(preset_name, params_file, static)
