@@ -71,3 +71,22 @@ def test_a_fit_refuses_one_record_given_twice(monkeypatch: pytest.MonkeyPatch, s
                       ["controller.velocity_integral_gain"])
     # two records of one rig are two records
     assert not fit._same_record(_record("a.csv"), _record("b.csv", speed=2e-3))
+
+
+def test_a_percentiles_interval_is_not_claimed_beyond_the_draws() -> None:
+    """`predict --samples 1` printed "95 %: 1.560 mm/s (Monte Carlo 95 % interval 1.560 …
+    1.560)": an end the draws cannot bound was the extreme draw.  It is said so now."""
+    from feeddrive.analysis.predict import _percentile
+
+    one = [_percentile(np.array([1.56e-3]), q).to_dict()["mc_interval_mm_s"] for q in (5, 50, 95)]
+    assert one == [["below the smallest draw", "above the largest draw"]] * 3
+    # the 5 % point's lower end needs 72 draws (0.95^n < 0.025); 71 leave it unbounded
+    x = np.linspace(1e-3, 2e-3, 71)
+    assert _percentile(x, 5).to_dict()["mc_interval_mm_s"][0] == "below the smallest draw"
+    assert _percentile(x, 95).to_dict()["mc_interval_mm_s"][1] == "above the largest draw"
+    x = np.linspace(1e-3, 2e-3, 72)
+    assert _percentile(x, 5).to_dict()["mc_interval_mm_s"][0] == pytest.approx(1.0)
+    assert _percentile(x, 95).to_dict()["mc_interval_mm_s"][1] == pytest.approx(2.0)
+    # every draw failed: no critical speed, not "above range"
+    assert _percentile(np.full(3, np.nan), 50).to_dict()["critical_speed_mm_s"] == \
+        "no draw found one"

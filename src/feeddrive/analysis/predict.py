@@ -204,13 +204,14 @@ class Percentile:
     value : float
         The critical speed at it [m/s]; ±inf when censored at the range's end.
     low : float
-        Lower end of its 95 % Monte Carlo interval [m/s].
+        Lower end of its 95 % Monte Carlo interval [m/s]; nan when the draws cannot bound it
+        (too few: it lies below the smallest).
     high : float
-        Upper end [m/s].
+        Upper end [m/s]; nan when it lies above the largest draw.
     """
     level: float  # [%]
-    value: float  # [m/s] (±inf: censored at the range's end)
-    low: float  # 95 % Monte Carlo interval [m/s]
+    value: float  # [m/s] (±inf: censored at the range's end; nan: no draw found one)
+    low: float  # 95 % Monte Carlo interval [m/s] (nan: not bounded by the draws)
     high: float
 
     def to_dict(self) -> dict[str, Any]:
@@ -220,13 +221,17 @@ class Percentile:
         -------
         dict
             Level [%], critical speed and interval [mm/s] ("below range"/"above range" when
-            censored).
+            censored; an interval's end the draws cannot bound "below the smallest draw" or
+            "above the largest draw"; "no draw found one" when every draw failed).
         """
-        def mm(x: float) -> float | str:
+        def mm(x: float, unbounded: str = "no draw found one") -> float | str:
+            if math.isnan(x):
+                return unbounded
             return x * 1e3 if math.isfinite(x) else ("below range" if x < 0 else "above range")
 
         return {"percentile": self.level, "critical_speed_mm_s": mm(self.value),
-                "mc_interval_mm_s": [mm(self.low), mm(self.high)]}
+                "mc_interval_mm_s": [mm(self.low, "below the smallest draw"),
+                                     mm(self.high, "above the largest draw")]}
 
 
 @dataclass(frozen=True)
@@ -311,8 +316,11 @@ def _percentile(values: np.ndarray, level: float) -> Percentile:
     value = float(np.quantile(x, q, method="inverted_cdf"))
     lo_rank = int(stats.binom.ppf(0.025, n, q))
     hi_rank = int(stats.binom.ppf(0.975, n, q)) + 1
-    low = float(x[max(lo_rank - 1, 0)])
-    high = float(x[min(hi_rank - 1, n - 1)])
+    # a rank beyond the draws: the interval's end lies outside them, not at the extreme draw
+    # (1 sample gave "95 % interval 1.560 … 1.560"; a bad-input sweep, session 29): the 5 %
+    # and 95 % points are bounded on both sides from 72 draws on
+    low = float(x[lo_rank - 1]) if lo_rank >= 1 else math.nan
+    high = float(x[hi_rank - 1]) if hi_rank <= n else math.nan
     return Percentile(level, value, low, high)
 
 
