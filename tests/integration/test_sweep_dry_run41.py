@@ -25,17 +25,22 @@ drive = "cdfs"
 kind = "grid"
 [quantity]
 kind = "{kind}"
-linear = false
-table_speed = 2
+{settings}
 [axes]
 table_position = [300, 500]
 "controller.velocity_gain" = {{ values = [0.9, 1.1], relative = true }}
 """
+#: each kind's own settings (a setting its kind does not read is refused)
+SETTINGS = {"critical-speed": "linear = false", "creep-trial": "linear = false\ntable_speed = 2"}
+
+
+def _four(kind: str) -> str:
+    return FOUR.format(kind=kind, settings=SETTINGS[kind])
 
 
 def _config(tmp_path: Path, kind: str) -> Any:
     path = tmp_path / f"{kind}.toml"
-    path.write_text(FOUR.format(kind=kind), encoding="utf-8")
+    path.write_text(_four(kind), encoding="utf-8")
     return load_config(path)
 
 
@@ -117,7 +122,7 @@ def test_compiling_in_the_dry_run_is_reported(tmp_path: Path, monkeypatch, build
 
 def test_the_dry_run_prints_the_start_up_and_the_range(tmp_path: Path) -> None:
     path = tmp_path / "four.toml"
-    path.write_text(FOUR.format(kind="critical-speed"), encoding="utf-8")
+    path.write_text(_four("critical-speed"), encoding="utf-8")
     res = CliRunner().invoke(app, ["sweep", str(path), "--dry-run", "--store",
                                    str(tmp_path / "four.sqlite")])
     assert res.exit_code == 0, res.output

@@ -400,7 +400,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
         raise ParameterError("--parameters", list(patterns or []), "leaves no parameter to "
                              "vary (" + "; ".join(f"{k}: {v}" for k, v in skipped.items())[:300]
                              + ")")
-    spec: dict[str, Any] = {"kind": quantity, "linear": quantity == "critical-speed"}
+    spec: dict[str, Any] = {"kind": quantity}  # only what the kind reads (quantities.READS)
     if quantity == "critical-speed":
         spec["linear"] = False
     if linear_points is not None:

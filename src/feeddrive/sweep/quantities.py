@@ -38,6 +38,16 @@ from ..units import absent_value
 QUANTITIES = ("critical-speed", "creep-trial", "linear-band", "loop-margins")
 _KEYS = ("kind", "start", "low", "high", "coarse_step", "resolution", "initial_duration",
          "max_duration", "table_speed", "linear", "linear_points")
+#: kind → the ``[quantity]`` settings its computation reads (:meth:`QuantitySettings.to_dict`
+#: keeps these; :meth:`QuantitySettings.parse` refuses any other: a ``table_speed`` given to
+#: ``linear-band`` was dropped without a word)
+READS: dict[str, tuple[str, ...]] = {
+    "critical-speed": ("start", "low", "high", "coarse_step", "resolution", "initial_duration",
+                       "max_duration", "linear", "linear_points"),
+    "creep-trial": ("table_speed", "initial_duration", "max_duration", "linear"),
+    "linear-band": ("low", "high", "linear_points"),
+    "loop-margins": ("table_speed",),
+}
 
 #: value name → SI unit (for exports; speeds become mm/s at the edges)
 UNITS: dict[str, str] = {
@@ -141,7 +151,8 @@ class QuantitySettings:
         Raises
         ------
         ParameterError
-            For an unknown key or a bad value, naming ``quantity.<key>``.
+            For an unknown key, a key the kind does not read (:data:`READS`) or a bad
+            value, naming ``quantity.<key>``.
         """
         if not isinstance(spec, dict):
             raise ParameterError("quantity", spec, "expected a table")
@@ -152,6 +163,11 @@ class QuantitySettings:
         kind = spec.get("kind", "critical-speed")
         if kind not in QUANTITIES:
             raise ParameterError("quantity.kind", kind, f"expected one of {', '.join(QUANTITIES)}")
+        for k in spec:
+            if k != "kind" and k not in READS[kind]:
+                raise ParameterError(f"quantity.{k}", spec[k],
+                                     f"not read by kind {kind}, which reads "
+                                     f"{', '.join(READS[kind])}")
         start = spec.get("start", "rest")
         if start not in ("rest", "running"):
             raise ParameterError("quantity.start", start, "expected rest or running")
@@ -236,13 +252,7 @@ class QuantitySettings:
             ``kind`` and the settings its computation reads [SI].
         """
         d = asdict(self)
-        keep = {"critical-speed": ("start", "low", "high", "coarse_step", "resolution",
-                                   "initial_duration", "max_duration", "linear",
-                                   "linear_points"),
-                "creep-trial": ("table_speed", "initial_duration", "max_duration", "linear"),
-                "linear-band": ("low", "high", "linear_points"),
-                "loop-margins": ("table_speed",)}[self.kind]
-        return {"kind": self.kind, **{k: d[k] for k in keep}}
+        return {"kind": self.kind, **{k: d[k] for k in READS[self.kind]}}
 
 
 def _linear_band(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
