@@ -77,3 +77,58 @@ def test_sweep_refuses_a_setting_its_kind_does_not_read(tmp_path: Path) -> None:
     assert line == (f"error: {cfg}: quantity.table_speed = 2: not read by kind linear-band, "
                     "which reads low, high, linear_points"), line
     assert not (tmp_path / "lb.sqlite").exists()
+
+
+# ------------------------------------------------------------------ 2: --nut-hold
+
+
+@pytest.mark.parametrize(("drive", "why"), [
+    ("linear-motor", "it has no nut"), ("rack-pinion", "it has no nut"),
+    ("ddfs", "it drives its nut: the nut speed reference")])
+@pytest.mark.parametrize("hold", ["servo", "locked"])
+def test_export_fmu_refuses_a_nut_hold_its_drive_does_not_read(tmp_path: Path, drive: str,
+                                                               why: str, hold: str) -> None:
+    out = tmp_path / "x.fmu"
+    line = _one_line_refusal(["export", "fmu", "--drive", drive, "--nut-hold", hold,
+                              "--out", str(out)])
+    assert line == (f"error: --nut-hold = '{hold}': applies to a drive that holds its nut "
+                    f"(cdfs), not to {drive} ({why})"), line
+    assert not out.exists()
+
+
+def test_only_the_cdfs_holds_its_nut() -> None:
+    from feeddrive.model.mechanisms import mechanism
+
+    held = {"cdfs": "nut", "ddfs": "", "linear-motor": "", "rack-pinion": ""}
+    assert {d: mechanism(d).held_part(d) for d in held} == held
+
+
+@pytest.mark.parametrize(("drive", "preset"), [("ddfs", "wang2021"),
+                                               ("linear-motor", "linear-motor-example")])
+def test_the_library_refuses_servo_where_no_nut_is_held(tmp_path: Path, drive: str,
+                                                        preset: str) -> None:
+    import feeddrive as fd
+    from feeddrive.fmu import export_fmu
+
+    params = fd.preset(preset)
+    with pytest.raises(ParameterError, match=rf"^nut_hold = 'servo': applies to a drive that "
+                                             rf"holds its nut \(cdfs\), not to {drive} \("):
+        fd.DriveSystem(params, drive, 0.4, nut_hold="servo")
+    with pytest.raises(ParameterError, match=r"^nut_hold = 'servo': "):
+        export_fmu(params, drive, tmp_path / "x.fmu", nut_hold="servo")
+    assert not (tmp_path / "x.fmu").exists()
+    fd.DriveSystem(params, drive, 0.4, nut_hold="locked")  # the default, taken everywhere
+    fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4, nut_hold="servo")
+
+
+def test_a_machine_axis_refuses_servo_where_no_nut_is_held() -> None:
+    from feeddrive.machine import machine_from_dict
+
+    axes = {"x": {"extends": "linear-motor-example", "drive": "linear-motor",
+                  "nut_hold": "servo"}}
+    with pytest.raises(ParameterError, match=r"^axes\.x\.nut_hold = 'servo': applies to a "
+                                             r"drive that holds its nut \(cdfs\), not to "
+                                             r"linear-motor \(it has no nut\)$"):
+        machine_from_dict({"name": "m", "axes": axes})
+    axes["x"]["nut_hold"] = "locked"  # as machine_toml writes every axis
+    machine_from_dict({"name": "m", "axes": axes})

@@ -49,8 +49,12 @@ def fmu_command(
                                       "table_speed_reference input [mm/s]."),
     nut_speed: float = typer.Option(0.0, "--nut-speed", help="Start value of the "
                                     "nut_speed_reference input [mm/s] (DDFS)."),
-    nut_hold: str = typer.Option("locked", "--nut-hold", help="CDFS hollow motor: locked "
-                                 "(nut frozen) or servo (its loop at zero command)."),
+    nut_hold: str | None = typer.Option(None, "--nut-hold", help="How the CDFS holds its "
+                                        "nut: locked (the hollow motor's states frozen; the "
+                                        "default) or servo (its loop at zero command).  "
+                                        "Refused for a drive that holds no nut (the DDFS "
+                                        "drives its own; the linear motor and the rack and "
+                                        "pinion have none)."),
     platform: str | None = typer.Option(None, "--platform", help="Comma-separated platforms "
                                         "to build a binary for, each with a C compiler found "
                                         "for it: linux64, win64 (MinGW-w64), darwin64 "
@@ -71,6 +75,8 @@ def fmu_command(
     [solver] method other than dopri5, rosenbrock, output_interval and max_steps have no
     counterpart in an FMU and are not taken: a note line names each (docs/fmu.md)."""
     from ..fmu import check_request, export_fmu
+    from ..model.mechanisms import mechanism
+    from ..model.mechanisms.base import check_nut_hold
     from ..parameters import ParameterError
 
     if machine is not None:
@@ -78,7 +84,7 @@ def fmu_command(
             ("--drive", drive, None), ("--preset", preset_name, None),
             ("--params", params_file, None), ("--position", position, 400.0),
             ("--table-speed", table_speed, 0.0), ("--nut-speed", nut_speed, 0.0),
-            ("--nut-hold", nut_hold, "locked")),
+            ("--nut-hold", nut_hold, None)),
             "its axes are set in the machine file; the references are inputs")
         _export_machine(machine, out, fmi=fmi, kind=kind, force=force, platform=platform,
                         as_json=as_json)
@@ -88,21 +94,23 @@ def fmu_command(
 
     check_request(drive, fmi, kind, out, force=force, inputs=(params_file,),
                   platforms=platform)
-    if nut_hold not in ("locked", "servo"):
-        raise ParameterError("--nut-hold", nut_hold, "expected locked or servo")
+    if nut_hold is not None:
+        if nut_hold not in ("locked", "servo"):
+            raise ParameterError("--nut-hold", nut_hold, "expected locked or servo")
+        # any value typed for a drive whose nut nothing holds is refused (it was dropped)
+        check_nut_hold(drive, nut_hold, field="--nut-hold", given=True)
+    hold = nut_hold or "locked"
     v_t = _units.speed("--table-speed", table_speed)
     v_n = _units.speed("--nut-speed", nut_speed)
     params = resolve_parameters(preset_name, params_file, drive)
     if v_n != 0.0:
-        from ..model.mechanisms import mechanism
-
-        topology = mechanism(drive)(params, drive, 0.4, nut_hold)
+        topology = mechanism(drive)(params, drive, 0.4, hold)
         axis = topology.reference_axes.get("nut")
         if axis is None or axis not in topology.live_axes():
             raise ParameterError("--nut-speed", nut_speed,
                                  f"the {drive} drive has no live nut axis; expected 0 [mm/s]")
     a = _units.position("--position", position, params, drive)
-    result = export_fmu(params, drive, out, table_position=a, nut_hold=nut_hold, fmi=fmi,
+    result = export_fmu(params, drive, out, table_position=a, nut_hold=hold, fmi=fmi,
                         kind=kind, table_speed=v_t, nut_speed=v_n, force=force,
                         platforms=platform)
     data = {"fmu": str(result.path), "fmi_version": f"{fmi}.0",

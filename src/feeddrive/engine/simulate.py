@@ -18,6 +18,7 @@ from .._kept import Kept
 from ..model.assemble import Model, assemble
 from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
+from ..model.mechanisms.base import check_nut_hold
 from ..model.reference import PROFILE_PARAMS, ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
@@ -58,7 +59,9 @@ class DriveSystem:
         0.2 … 0.6 m; mid-screw 0.4 m).
     nut_hold : {"locked", "servo"}, default "locked"
         For the CDFS the hollow motor is held: ``"locked"`` freezes the nut's states,
-        ``"servo"`` keeps the hollow motor's loop at zero command.
+        ``"servo"`` keeps the hollow motor's loop at zero command.  A drive that holds no nut
+        (``Mechanism.held_part``: the DDFS drives its own, the linear motor has none) refuses
+        ``"servo"``.
     initial_state : mapping of str to float, default {}
         States set by name, in each state's SI unit [unit of the state] (e.g.
         ``{"table_speed": 5e-3}``); all others start at 0.
@@ -92,6 +95,9 @@ class DriveSystem:
                                  "e.g. LoadProfile(time=…, force=…) [s, N] (a constant load "
                                  "is the parameter disturbances.load_force [N])")
         mechanism(self.drive).check(self.parameters, self.drive, self.table_position)
+        # "servo" on a drive that holds no nut (the DDFS drives its own, the linear motor
+        # has none) was dropped without a word
+        check_nut_hold(self.drive, self.nut_hold)
         for name, value in self.initial_state.items():
             if not (isinstance(value, int | float) and math.isfinite(value)):
                 raise ParameterError(f"initial_state.{name}", value, "expected a finite number "

@@ -136,6 +136,7 @@ class Machine:
 def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
     """One ``[axes.<name>]`` table → its axis; every error names ``axes.<name>.…``."""
     from ..model.mechanisms import drive_names, mechanism
+    from ..model.mechanisms.base import check_nut_hold
     from ..parameters.toml_io import from_dict
 
     if not isinstance(name, str) or not name.isidentifier():
@@ -169,6 +170,9 @@ def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
         raise ParameterError(f"axes.{name}.{err.field}", err.value, err.message) from None
     if hold not in ("locked", "servo"):
         raise ParameterError(f"axes.{name}.nut_hold", hold, "expected locked or servo")
+    # "servo" on an axis that holds no nut; "locked" is taken everywhere (machine_toml writes
+    # it for every axis)
+    check_nut_hold(drive, hold, field=f"axes.{name}.nut_hold")
     return MachineAxis(name, params, drive, float(position), hold)
 
 

@@ -134,7 +134,8 @@ class BallScrewDrive(Mechanism):
     def __init__(self, params: DriveParameters, drive: str, table_position: float,
                  nut_hold: str) -> None:
         super().__init__(params, drive, table_position, nut_hold)
-        self.nut_active = drive == "ddfs" or nut_hold == "servo"
+        # the DDFS drives its nut; the CDFS holds it (holds_nut), locked or on its servo
+        self.nut_active = self.follows("nut") or nut_hold == "servo"
         gap = params.section("backlash")
         #: a gap at the coupling: the screw shaft is a body of its own (θ_sh, ω_sh)
         self.coupling_gap = gap is not None and gap.location == "coupling"
@@ -207,6 +208,22 @@ class BallScrewDrive(Mechanism):
             ``("nut",)`` for the DDFS, ``()`` for the CDFS.
         """
         return ("nut",) if drive == "ddfs" else ()
+
+    @classmethod
+    def held_part(cls, drive: str) -> str:
+        """The CDFS holds its nut (``nut_hold``: locked or on its servo); the DDFS drives it.
+
+        Parameters
+        ----------
+        drive : str
+            ``"cdfs"`` or ``"ddfs"``.
+
+        Returns
+        -------
+        str
+            ``"nut"`` for the CDFS, ``""`` for the DDFS.
+        """
+        return "" if "nut" in cls.followed_references(drive) else "nut"
 
     def unfollowed(self, signal: str) -> str:
         return ("the CDFS holds the hollow motor; expected 0 (a moving nut is the DDFS: use "

@@ -194,7 +194,8 @@ class Mechanism:
     table_position : float
         Table position along the axis at the start [m].
     nut_hold : str
-        How a held nut is held (``"locked"`` or ``"servo"``); topologies without a nut ignore it.
+        How a held nut is held (``"locked"`` or ``"servo"``); read only by a drive that holds
+        one (:meth:`held_part`); ``"servo"`` on any other is refused (:func:`check_nut_hold`).
     """
 
     drives: tuple[str, ...] = ()
@@ -312,6 +313,24 @@ class Mechanism:
             True when a profile may command it.
         """
         return signal in self.followed_references(self.drive)
+
+    @classmethod
+    def held_part(cls, drive: str) -> str:
+        """The part ``drive`` holds still whose hold a setting chooses (the CDFS's nut, held
+        ``"locked"`` or on its ``"servo"``: the ``nut_hold`` argument), or "" when it holds
+        none (the default): then no hold setting has an effect (:func:`check_nut_hold`).
+
+        Parameters
+        ----------
+        drive : str
+            One of :attr:`drives`.
+
+        Returns
+        -------
+        str
+            The part's name, or "".
+        """
+        return ""
 
     def held_parameters(self) -> tuple[tuple[str, ...], str]:
         """The parameters that cannot act in this drive because a part is held still.
@@ -619,3 +638,38 @@ def drive_names() -> tuple[str, ...]:
         The names ``--drive`` accepts.
     """
     return registry.names(registry.MECHANISMS)
+
+
+def check_nut_hold(drive: str, nut_hold: str, *, field: str = "nut_hold",
+                   given: bool = False) -> None:
+    """Refuse a nut hold that has no effect on ``drive``: one whose topology holds no nut
+    (:meth:`Mechanism.held_part`; the DDFS drives its nut, the linear motor and the rack and
+    pinion have none).  ``"servo"`` is refused, and with ``given`` (an option typed) any
+    value; ``"locked"``, the library's default, is taken on every drive.
+
+    Parameters
+    ----------
+    drive : str
+        A registered drive name.
+    nut_hold : str
+        ``"locked"`` or ``"servo"``.
+    field : str, default "nut_hold"
+        The name the message gives it (``"--nut-hold"``, ``"axes.x.nut_hold"``).
+    given : bool, default False
+        Whether the value was given explicitly (then refused whatever it is).
+
+    Raises
+    ------
+    ParameterError
+        One line: the value, the drives a nut hold applies to and why not this one.
+    """
+    topology = mechanism(drive)
+    if topology.held_part(drive) == "nut" or (nut_hold == "locked" and not given):
+        return
+    from ...parameters import ParameterError
+
+    holders = [d for d in drive_names() if mechanism(d).held_part(d) == "nut"]
+    why = ("it drives its nut: the nut speed reference"
+           if "nut" in topology.followed_references(drive) else "it has no nut")
+    raise ParameterError(field, nut_hold, f"applies to a drive that holds its nut "
+                         f"({', '.join(holders)}), not to {drive} ({why})")
