@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -132,3 +133,74 @@ def test_a_machine_axis_refuses_servo_where_no_nut_is_held() -> None:
         machine_from_dict({"name": "m", "axes": axes})
     axes["x"]["nut_hold"] = "locked"  # as machine_toml writes every axis
     machine_from_dict({"name": "m", "axes": axes})
+
+
+# ------------------------------------------------------------------ 3: a header not UTF-8
+
+_NOT_UTF8 = ("; the file is not UTF-8 text (saved as Windows-1252 or Latin-1?): save it as "
+             "UTF-8 (docs/measured-data.md)")
+
+
+def _trace(path: Path, header: str, encoding: str) -> Path:
+    rows = "".join(f"{i * 0.01:g},{i * 0.001:g}\n" for i in range(200))
+    path.write_bytes(header.encode(encoding) + b"\n" + rows.encode("ascii"))
+    return path
+
+
+def test_a_latin1_header_without_a_micro_sign_says_the_file_is_not_utf8(
+        tmp_path: Path) -> None:
+    """It said "no column 'position' … (columns: 'time', 'posici\ufffdn')" alone."""
+    path = _trace(tmp_path / "lat.csv", "time [s],posición [mm]", "latin-1")
+    line = _one_line_refusal(["analyze", str(path)])
+    assert line == ("error: lat.csv, line 1: no column 'position' or 'table_position' in the "
+                    "header (columns: 'time', 'posici\ufffdn')" + _NOT_UTF8), line
+
+
+def test_the_same_header_in_utf8_gets_no_hint(tmp_path: Path) -> None:
+    path = _trace(tmp_path / "utf.csv", "time [s],posición [mm]", "utf-8")
+    line = _one_line_refusal(["analyze", str(path)])
+    assert line == ("error: utf.csv, line 1: no column 'position' or 'table_position' in the "
+                    "header (columns: 'time', 'posición')"), line
+
+
+def test_a_positioning_record_and_a_static_test_give_the_hint_too(tmp_path: Path) -> None:
+    from feeddrive.io.acceptance import read_positioning_record, read_xy_trace
+    from feeddrive.io.measured import MeasuredDataError, read_static_test
+
+    path = _trace(tmp_path / "pos.csv", "posición [mm],dirección", "cp1252")
+    with pytest.raises(MeasuredDataError) as err:
+        read_positioning_record(path)
+    assert str(err.value).endswith("position or deviation" + _NOT_UTF8), str(err.value)
+    path = _trace(tmp_path / "st.csv", "velocidad [mm/s],fuerza [N]", "latin-1")
+    path.write_bytes(path.read_bytes().replace(b"velocidad", b"velocit\xe9"))
+    with pytest.raises(MeasuredDataError) as err:
+        read_static_test(path)
+    assert str(err.value).endswith(_NOT_UTF8), str(err.value)
+    path = _trace(tmp_path / "xy.csv", "tiempo,posición", "latin-1")
+    with pytest.raises(MeasuredDataError) as err:
+        read_xy_trace(path)
+    assert str(err.value).endswith("(--x-column)" + _NOT_UTF8), str(err.value)
+
+
+def test_a_units_hint_still_asks_after_a_micro_sign(tmp_path: Path) -> None:
+    path = _trace(tmp_path / "mu.csv", "time [s],position [µm]", "latin-1")
+    line = _one_line_refusal(["analyze", str(path)])
+    assert "unit '\ufffdm' is not a length unit" in line, line
+    assert line.endswith("; the file is not UTF-8 text (a µ saved as Windows-1252 or "
+                         "Latin-1?): save it as UTF-8 (docs/measured-data.md)"), line
+
+
+def test_a_fits_missing_signal_gives_the_hint_too(tmp_path: Path) -> None:
+    from feeddrive.analysis.fit import FitError, read_experiment
+
+    path = _trace(tmp_path / "fit.csv", "time [s],posición [mm]", "latin-1")
+    for kw in ({"signals": ["table_position"]}, {"input": "current"}):
+        with pytest.raises(FitError) as err:
+            read_experiment(path, **kw)  # type: ignore[arg-type]
+        assert str(err.value).endswith(_NOT_UTF8), str(err.value)
+    path = tmp_path / "replay.csv"  # a position, and the replayed current's column not found
+    path.write_bytes("time [s],table_position [mm],intensité [A]\n".encode("latin-1") + "".join(
+        f"{i * 0.01:g},{i * 0.001:g},0.5\n" for i in range(200)).encode("ascii"))
+    with pytest.raises(FitError, match=r"--input current: no column for it .*"
+                                       + re.escape(_NOT_UTF8) + "$"):
+        read_experiment(path, input="current")

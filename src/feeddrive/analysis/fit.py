@@ -425,7 +425,8 @@ def _replayed_column(table: Any, src: str, input: str) -> np.ndarray:
     col = next((a for a in aliases if table.has(a)), None)
     if col is None:
         raise FitError(f"{src}: --input {input}: no column for it (looked for "
-                       f"{', '.join(aliases)}; columns: {', '.join(table.names)})")
+                       f"{', '.join(aliases)}; columns: {', '.join(table.names)})"
+                       f"{table.header_hint()}")
     if dim in ("current", "force"):
         return np.asarray(table.quantity([col], dim, unit=None, default_unit=default)[0])
     i = table.find(col)
@@ -550,7 +551,8 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
         if col is None:
             if signals:
                 raise FitError(f"{src}: no column for signal {name!r} (looked for "
-                               f"{', '.join(aliases)}; columns: {', '.join(table.names)})")
+                               f"{', '.join(aliases)}; columns: {', '.join(table.names)})"
+                               f"{table.header_hint()}")
             continue
         if dim == "torque":
             i = table.find(col)
@@ -576,7 +578,8 @@ def read_experiment(path: str | Path, *, signals: Sequence[str] | None = None,
         measured[name] = values
     if not measured:
         raise FitError(f"{src}: no usable measured signal (looked for "
-                       f"{', '.join(wanted)}; columns: {', '.join(table.names)})")
+                       f"{', '.join(wanted)}; columns: {', '.join(table.names)})"
+                       f"{table.header_hint()}")
     if input is not None:
         value = _replayed_column(table, src, input)
         if "table_speed" in measured:

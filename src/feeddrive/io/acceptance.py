@@ -96,7 +96,7 @@ def read_xy_trace(path: str | Path, *, time_column: str = "time", x_column: str 
                 table.source, table.header_line,
                 f"no {axis} column ({' or '.join(repr(c) for c in wanted)}) in the header "
                 f"(columns: {shown}); a circular test needs x and y positions "
-                f"(--{axis}-column)")
+                f"(--{axis}-column){table.header_hint()}")
         names[axis] = wanted
     _need_rows(table, 16, "circular test")
     time, tname, _ = table.quantity([time_column], "time", unit=time_unit, default_unit="s")
@@ -241,7 +241,7 @@ def read_positioning_record(path: str | Path, *, sep: str | None = None, decimal
             raise MeasuredDataError(table.source, table.header_line,
                                     f"no column {needed!r} in the header (columns: {shown}); "
                                     "a positioning record needs target, direction and "
-                                    "position or deviation")
+                                    f"position or deviation{table.header_hint()}")
     _need_rows(table, 20, "positioning record (2 targets × 5 cycles × 2 directions)")
     target, _, _ = table.quantity(["target"], "length", unit=None, default_unit="mm")
     direction = table.numbers("direction")

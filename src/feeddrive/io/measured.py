@@ -152,15 +152,18 @@ def unit_factor(unit: str, dimension: str, *, what: str) -> float:
                      f"{', '.join(table)}{encoding_hint(unit)}")
 
 
-def encoding_hint(text: str) -> str:
+def encoding_hint(text: str, *, unit: bool = True) -> str:
     """``"; the file is not UTF-8 …"`` when ``text`` holds the replacement character that
     a byte which is not UTF-8 was read as (a ``µ`` saved as Windows-1252 / Latin-1 read as
-    ``'\ufffdm'``), else ``""``: the end of a message about a header's unit.
+    ``'\ufffdm'``), else ``""``: the end of a message about a header's unit, or with
+    ``unit=False`` about its names (``posición`` saved as Latin-1: ``'posici\ufffdn'``).
 
     Parameters
     ----------
     text : str
-        A header's unit as read.
+        A header's unit as read, or (``unit=False``) its names.
+    unit : bool, default True
+        Whether ``text`` is a unit (the hint then asks after a µ).
 
     Returns
     -------
@@ -169,6 +172,9 @@ def encoding_hint(text: str) -> str:
     """
     if "\ufffd" not in text:
         return ""
+    if not unit:
+        return ("; the file is not UTF-8 text (saved as Windows-1252 or Latin-1?): save it as "
+                "UTF-8 (docs/measured-data.md)")
     return ("; the file is not UTF-8 text (a µ saved as Windows-1252 or Latin-1?): save it "
             "as UTF-8 (docs/measured-data.md)")
 
@@ -249,11 +255,25 @@ class CsvTable:
         """
         return self.find(name) is not None
 
+    def header_hint(self) -> str:
+        """:func:`encoding_hint` of the header (its names and units): the end of a "no
+        column" message when the header did not decode as UTF-8 (a ``posición`` saved as
+        Latin-1 is shown ``'posici\ufffdn'``), else ``""``.
+
+        Returns
+        -------
+        str
+            The hint, or an empty string.
+        """
+        return encoding_hint("".join(self.names) + "".join(u or "" for u in self.units),
+                             unit=False)
+
     def _missing(self, names: Sequence[str]) -> MeasuredDataError:
         shown = ", ".join(repr(n) for n in self.names)
         wanted = " or ".join(repr(n) for n in names)
         return MeasuredDataError(self.source, self.header_line,
-                                 f"no column {wanted} in the header (columns: {shown})")
+                                 f"no column {wanted} in the header (columns: {shown})"
+                                 f"{self.header_hint()}")
 
     def _read(self, i: int, dtype: Any) -> Any:
         import pandas as pd
@@ -853,7 +873,7 @@ def read_static_test(
                                 "constant-speed test, columns speed [mm/s] and force [N] (or "
                                 "current [A]); for a trace of the table over time use "
                                 "`feeddrive analyze FILE` (creep) or `feeddrive identify "
-                                "dynamic` (pre-sliding)")
+                                f"dynamic` (pre-sliding){table.header_hint()}")
     speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit, default_unit="mm/s")
     if table.has(force_column) or not table.has(current_column):
         if not table.has(force_column):
