@@ -135,6 +135,16 @@ def test_a_machine_axis_refuses_servo_where_no_nut_is_held() -> None:
     machine_from_dict({"name": "m", "axes": axes})
 
 
+def test_a_cdfs_nut_on_its_servo_refuses_a_nut_speed_showing_the_speed_given(
+        tmp_path: Path) -> None:
+    # the FMU's reference is an input: its constant speed is 0, the given one in its table
+    # (the refusal said "--nut-speed = 0 [mm/s]" for --nut-speed 5)
+    line = _one_line_refusal(["export", "fmu", "--drive", "cdfs", "--nut-hold", "servo",
+                              "--nut-speed", "5", "--out", str(tmp_path / "x.fmu")])
+    assert line.startswith("error: --nut-speed = 5 [mm/s]: the CDFS holds the hollow motor")
+    assert not (tmp_path / "x.fmu").exists()
+
+
 # ------------------------------------------------------------------ 3: a header not UTF-8
 
 _NOT_UTF8 = ("; the file is not UTF-8 text (saved as Windows-1252 or Latin-1?): save it as "

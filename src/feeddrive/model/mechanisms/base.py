@@ -457,7 +457,10 @@ class Mechanism:
 
         for signal, (speed, table) in commanded.items():
             if not self.follows(signal) and (speed != 0.0 or np.any(table != 0.0)):
-                raise ParameterError(f"{signal}_speed", speed, self.unfollowed(signal))
+                # a tabulated or input reference (the FMU's: its constant is 0) shows its
+                # first speed that is not 0, not the constant (it said "= 0", session 29)
+                shown = speed if speed != 0.0 else float(table[np.flatnonzero(table)[0]])
+                raise ParameterError(f"{signal}_speed", shown, self.unfollowed(signal))
 
     def unfollowed(self, signal: str) -> str:
         """What a message says of a commanded reference ``signal`` this drive does not follow.
