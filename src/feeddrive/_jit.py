@@ -279,10 +279,10 @@ kernel = _compiled(_nrt=True)
 inline_kernel = _compiled(inline="always", _nrt=True)
 #: a kernel compiled without numba's runtime (``_nrt=False``): no reference counting of its
 #: arrays — numba counts a reference at every assignment and at every argument of a call
-#: it inlines (``inline="always"``), which cost the dense driver, calling its pieces at
-#: every step with dozens of arrays, 10–20 % of a ``modal`` run (benchmarks/README.md, "the
-#: driver split").  Such a kernel allocates nothing and returns no array: its arrays are its
-#: caller's (:func:`feeddrive.solvers.driver.source`, the dense driver)
+#: it inlines (``inline="always"``), which cost the drivers, calling their pieces at every
+#: step with dozens of arrays, 10–20 % of a ``modal`` run (benchmarks/README.md, "the driver
+#: split").  Such a kernel allocates nothing and returns no array: its arrays are its
+#: caller's (:data:`feeddrive.solvers.driver.NUMBA_NRT_FREE`: the drivers)
 nrt_free_kernel = _compiled(_nrt=False)
 
 

@@ -32,12 +32,8 @@ below the template: the Jacobian and the modal method's eigen-analysis, the stif
 and the method switching, the step-size controller, the dense output and the output samples,
 the bound checks, the dense driver's next event, the memory it carries between calls and the
 embedded global-error estimate), as diffrax separates controller, solver and driver.  The C
-build calls them; numba inlines them (``inline="always"``) but for :data:`NUMBA_WRITTEN_IN`,
-whose bodies its text has written in (:func:`inline_pieces`), as it has the explicit step's.
-numba compiles the dense driver without its reference counting (:data:`NUMBA_NRT_FREE`: its
-outputs and statistics written into its caller's arrays, :func:`lower_outputs`, as the C
-build's are), and its text passes the two pieces of more arguments than numba's inliner takes
-their later ones as a tuple (:func:`numba_text`).
+build calls them; numba inlines them (``inline="always"``) into drivers compiled without
+reference counting (:data:`NUMBA_NRT_FREE`), a long call's arguments a tuple (:func:`numba_text`).
 
 Each specialisation is bit-identical to the separate driver it replaced (the v1 regression,
 the long-run chunking tests and the FMU's C-versus-numba test pin it).  The flags keep the
@@ -2239,9 +2235,9 @@ def source(use: str, inline: bool = True) -> str:
     """The text of the driver specialised for ``use`` (a key of :data:`USES`), with the
     explicit step written in (:func:`feeddrive.solvers.steps.inline_steps`) unless
     ``inline`` is false (the C translation calls the step functions).  With ``inline``, numba's
-    text: the pieces of :data:`NUMBA_WRITTEN_IN` written in too, :func:`numba_text`, and for
-    the uses of :data:`NUMBA_NRT_FREE` the outputs and statistics written into the caller's
-    arrays (:func:`lower_outputs`) and the caller's copy of ``y0`` advanced.
+    text (:func:`numba_text`), and for the uses of :data:`NUMBA_NRT_FREE` the outputs and
+    statistics written into the caller's arrays (:func:`lower_outputs`) and the caller's copy
+    of ``y0`` advanced.
 
     Specialising costs ≈ 50 ms; a process does it only when it builds the shared drivers'
     module (:mod:`feeddrive.solvers.shared`, kept in the compile cache's folder) or an FMU.
@@ -2266,84 +2262,26 @@ def source(use: str, inline: bool = True) -> str:
                       "int" if use == "advance" else None)
     if not inline:
         return text
-    text = numba_text(steps.inline_steps(inline_pieces(text, NUMBA_WRITTEN_IN[use])))
+    text = numba_text(steps.inline_steps(text))
     if use in NUMBA_NRT_FREE:  # its outputs, statistics and state in its caller's arrays
         tree, _ = lower_outputs(text)
         text = ast.unparse(ast.fix_missing_locations(_CallersCopy().visit(tree))) + "\n"
     return text
 
 
-#: per use, the pieces numba's text has written in, as it has the steps
-#: (:func:`feeddrive.solvers.steps.inline_steps`); numba inlines the others
-#: (``inline="always"``).  The breakpoint driver's has two, ``land_crossing`` and
-#: ``step_end_status`` (called at every step), and numba inlines ``output_row`` (at the
-#: outputs): its text is then 150 lines, its work arrays its caller's (:func:`step_space`),
-#: at 2–5 % of a ``dopri5`` run in numba; with none written in, 5–10 %.  The dense driver's has
-#: none: compiled without numba's reference counting (:data:`NUMBA_NRT_FREE`), numba's
-#: inlining of its pieces costs nothing, where with it the six it calls at steps and outputs
-#: had to be written in (10–20 % of a ``modal`` run each way but that one; benchmarks/README.md,
-#: "the driver split"); and numba's text passes the arguments of the two pieces that take more
-#: than its inliner does as a tuple (:func:`numba_text`).  The C build, the default, calls them
-#: all at no cost
-NUMBA_WRITTEN_IN: dict[str, tuple[str, ...]] = {
-    "integrate": ("land_crossing", "step_end_status"),
-    "integrate_dense": (),
-    "advance": ()}
-#: the uses numba compiles without its runtime (:data:`feeddrive._jit.nrt_free_kernel`): their
-#: text lowered to write its outputs and statistics into its caller's arrays
-#: (:func:`lower_outputs`) and to advance the caller's copy of the initial state (``y0``)
-NUMBA_NRT_FREE = ("integrate_dense",)
+#: the uses numba compiles without its runtime (:data:`feeddrive._jit.nrt_free_kernel`): both
+#: drivers, their text lowered to write their outputs and statistics into their caller's
+#: arrays (:func:`lower_outputs`) and to advance the caller's copy of the initial state
+#: (``y0``).  Without numba's reference counting its inlining of their pieces costs nothing,
+#: where with it — a count at every array argument of every inlined call — the pieces called
+#: at every step had to be written into numba's text (10–20 % of a ``modal`` run, 4–8 % of a
+#: ``dopri5`` run otherwise: benchmarks/README.md, "the driver split"), the dense driver's
+#: 352 lines; numba's text passes the two pieces that take more arguments than its inliner
+#: does their later ones as a tuple (:func:`numba_text`).  The C build calls them all.
+NUMBA_NRT_FREE = ("integrate", "integrate_dense")
 #: the length of each use's statistics (``stats``; :data:`feeddrive.solvers.switching.STAT_NAMES`
 #: the dense driver's): the array a caller passes a lowered text (:func:`lower_outputs`)
 N_STATS = {"integrate": 5, "integrate_dense": 12}
-
-
-def _piece_body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
-    """The piece ``name`` written in for ``call`` (:func:`feeddrive.solvers.steps.
-    renamed_body`): a parameter it assigns must be passed as itself (else the assignment
-    would reach another of the caller's variables), a constant argument's branches folded
-    (``if True:``), ``x = x`` dropped."""
-    fn = ast.parse(_text_of(globals()[name])).body[0]
-    assert isinstance(fn, ast.FunctionDef)
-    stored = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
-              and isinstance(n.ctx, ast.Store)}
-    params = [a.arg for a in fn.args.args]
-    body = steps.renamed_body(name, fn, call, target)
-    for param, arg in zip(params, call.args, strict=True):
-        if param in stored and not (isinstance(arg, ast.Name) and arg.id == param):
-            raise ValueError(f"{name}: parameter {param!r} is assigned; it "
-                             f"can be written in only when passed as itself")
-    folded = _Fold({}).visit(ast.Module(body=body, type_ignores=[]))
-    out: list[str] = []
-    for stmt in folded.body:
-        if not (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
-                and ast.dump(stmt.targets[0]).replace("Store", "Load")
-                == ast.dump(stmt.value)):
-            out += ast.unparse(stmt).splitlines()
-    return out
-
-
-def inline_pieces(source: str, names: tuple[str, ...]) -> str:
-    """``source`` (a driver's function text) with every call statement of the pieces
-    ``names`` — ``name(args)`` or ``target = name(args)`` — replaced by the piece's body, its
-    parameters renamed to the arguments (a final ``return x`` becomes ``target = x``; the
-    pieces so written in have no other return, and their locals mean in the driver what they
-    mean in the piece).
-
-    Parameters
-    ----------
-    source : str
-        The driver's function text.
-    names : tuple of str
-        The pieces to write in (:data:`NUMBA_WRITTEN_IN`).
-
-    Returns
-    -------
-    str
-        The text with the calls replaced by the pieces' bodies.
-    """
-    return steps.write_in(source, names, _piece_body)
-
 
 
 # ---------------------------------------------------------------- numba's text

@@ -316,4 +316,5 @@ def template_sources() -> list[str]:
             "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
             "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH",
             "from feeddrive._jit import nrt_free_kernel",
-            "@nrt_free_kernel\n" + src]
+            ("@nrt_free_kernel\n" if "integrate_dense" in driver.NUMBA_NRT_FREE
+             else "@kernel\n") + src]
