@@ -2386,9 +2386,10 @@ class _CallersCopy(ast.NodeTransformer):
             node.value = ast.Name("y0", ast.Load())
         return node
 
+
 # ---------------------------------------------------------------- the drivers' outputs lowered
 #: the drivers' output arrays → the caller's buffers the lowered text writes
-#: (:func:`lower_outputs`: the C build's drivers, numba's dense driver)
+#: (:func:`lower_outputs`: the C build's drivers, numba's)
 OUTPUTS = {"t_out": "t_buf", "y_out": "y_buf", "aux_out": "aux_buf"}
 STATS = "stats"  # the statistics array the driver's text makes
 STATS_OUT = "stats_out"  # the caller's array the lowered text writes them into
@@ -2412,7 +2413,7 @@ class _Lower(ast.NodeTransformer):
             if not (isinstance(value, ast.Call) and ast.unparse(value.func) == "np.array"
                     and len(value.args) == 1 and isinstance(value.args[0], ast.List)):
                 raise self.error(f"{ast.unparse(node)!r}: the driver's statistics are "
-                                       "not an np.array([...]) (lowered_source needs updating)")
+                                 "not an np.array([...]) (lowered_source needs updating)")
             items = value.args[0].elts
             self.n_stats = len(items)
             # one statement, as numba's np.array([...]): stats_out[0], ... = a, ...
@@ -2448,7 +2449,7 @@ class _Lower(ast.NodeTransformer):
                 and first.slice.lower is None and first.slice.upper is not None
                 and isinstance(first.value, ast.Name) and first.value.id == "t_out"):
             raise self.error(f"{ast.unparse(node)!r}: the driver's result is not "
-                                   "(t_out[:count], ...) (lowered_source needs updating)")
+                             "(t_out[:count], ...) (lowered_source needs updating)")
         self.count = first.slice.upper
         return ast.copy_location(ast.Return(first.slice.upper), node)
 
@@ -2472,9 +2473,9 @@ def lower_outputs(text: str, error: type[Exception] = ValueError) -> tuple[ast.M
     its outputs into ``t_buf``, ``y_buf``, ``aux_buf`` (added as parameters where the use has
     none), its statistics into ``stats_out`` (a last parameter), its result the number of
     outputs written — what the C build's drivers take and give
-    (:func:`feeddrive.backends.c_engine.lowered_source`), and numba's dense driver, compiled
-    without numba's runtime (:data:`feeddrive._jit.nrt_free_kernel`), which cannot return a
-    view of an array.
+    (:func:`feeddrive.backends.c_engine.lowered_source`), and numba's drivers, compiled
+    without numba's runtime (:data:`NUMBA_NRT_FREE`), which cannot return a view of an
+    array.
 
     Parameters
     ----------
