@@ -272,8 +272,18 @@ def _compiled(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     return decorate
 
 
-kernel = _compiled()
-inline_kernel = _compiled(inline="always")
+# ``_nrt=True`` said outright: a kernel called by one compiled without numba's reference
+# counting (:data:`nrt_free_kernel`) would otherwise inherit that flag from its caller, and
+# one that allocates (the eigen-analysis of the modal step cap) would not compile
+kernel = _compiled(_nrt=True)
+inline_kernel = _compiled(inline="always", _nrt=True)
+#: a kernel compiled without numba's runtime (``_nrt=False``): no reference counting of its
+#: arrays — numba counts a reference at every assignment and at every argument of a call
+#: it inlines (``inline="always"``), which cost the drivers, calling their pieces at every
+#: step with dozens of arrays, 10–20 % of a ``modal`` run (benchmarks/README.md, "the driver
+#: split").  Such a kernel allocates nothing and returns no array: its arrays are its
+#: caller's (:data:`feeddrive.solvers.driver.NUMBA_NRT_FREE`: the drivers)
+nrt_free_kernel = _compiled(_nrt=False)
 
 
 def first_class(fn: Callable[..., Any], signature: Any, name: str) -> Any:

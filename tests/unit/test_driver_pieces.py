@@ -2,15 +2,18 @@
 analysis, stiffness estimate and method switching, step-size controller, dense output, output
 samples, bound checks, next event, the memory carried between calls
 (:data:`feeddrive.solvers.driver.PIECES`) — are functions of at most 150 lines in the text each
-build compiles: numba's (the step functions written in) and the C translation's (calling them;
-numba has six written into the dense driver's text, as it has the steps: ``NUMBA_WRITTEN_IN``).
-Both drivers are within the limit in the C build's text (the dense driver's work arrays made
-by its caller, its step attempt a piece), and the breakpoint driver in numba's; numba's dense
-driver is not there yet (a strict xfail, so that the mark goes when its text gets there)."""
+build compiles: numba's (the step functions written in, the pieces inlined by numba) and the C
+translation's (calling them).  Both drivers are within the limit in both texts: their work
+arrays made by their caller, the dense driver's step attempt a piece, numba's drivers compiled
+without numba's reference counting, which made its inlining of the pieces cost (they were
+written into its text), its two pieces of more arguments than numba's inliner takes passed a
+tuple."""
 
 from __future__ import annotations
 
 import ast
+import dis
+import types
 
 import pytest
 
@@ -44,16 +47,11 @@ def test_the_numba_module_holds_the_pieces_inlined_into_the_drivers() -> None:
     text = "\n\n\n".join(shared.solver_sources())
     for name in driver.PIECES:
         assert f"@inline_kernel\ndef {name}(" in text
-    # every piece is called by a driver, but those numba's text has written in wherever a
-    # driver calls them (their body there, as the steps' are: benchmarks/README.md, "the
-    # driver split"); the pieces' own calls (the C text) count too
-    users = {p: {use for use in driver.USES if p in called(driver.source(use, False))}
-             for p in driver.PIECES}
-    written = {p for p, us in users.items()
-               if us and all(p in driver.NUMBA_WRITTEN_IN[use] for use in us)}
-    assert called(text) & set(driver.PIECES) == set(driver.PIECES) - written
-    assert set(driver.NUMBA_WRITTEN_IN) == set(driver.USES)
-    assert set().union(*driver.NUMBA_WRITTEN_IN.values()) <= set(driver.PIECES)
+    # every piece called, none written into a driver (numba inlines them: the drivers are
+    # compiled without its reference counting, benchmarks/README.md, "the driver split")
+    assert called(text) & set(driver.PIECES) == set(driver.PIECES)
+    for use in driver.NUMBA_NRT_FREE:
+        assert f"@nrt_free_kernel\ndef {use}(" in text
 
 
 def test_the_c_drivers_call_every_piece() -> None:
@@ -72,18 +70,88 @@ def test_the_fmu_driver_is_at_most_150_lines() -> None:
         assert lengths(driver.source("advance", inline))["advance"] <= LIMIT
 
 
-def _not_yet(reason: str) -> pytest.MarkDecorator:
-    return pytest.mark.xfail(strict=True, reason=f"not met yet (issue 42 item 3): {reason}")
-
-
 @pytest.mark.parametrize(("use", "build"), [
     ("integrate", "c"), ("integrate", "numba"), ("integrate_dense", "c"),
-    pytest.param("integrate_dense", "numba", marks=_not_yet(
-        "352 lines: the six pieces numba has written in (with none written in, 150, but "
-        "called they made a modal run 1.1-1.3 x; step_attempt and switch_method, beyond "
-        "numba's inliner, 1.7-1.8 x)")),
+    ("integrate_dense", "numba"),
 ])
 def test_the_drivers_are_at_most_150_lines(use: str, build: str) -> None:
     text = driver.source(use) if build == "numba" else c_engine.lowered_source(use)[0]
     # C: the dense driver's entry, which makes its work arrays, and the driver it calls
     assert lengths(text)[use] <= LIMIT and max(lengths(text).values()) <= LIMIT
+
+
+def test_numbas_inliner_takes_every_call_in_the_numba_module() -> None:
+    """numba's inliner refuses a call CPython makes with ``*args`` (``CALL_FUNCTION_EX``, more
+    than 30 positional arguments): none in the shared drivers' module as numba compiles it
+    (the model's arguments added), the two pieces of more parameters than
+    ``driver.NUMBA_ARGS`` taking their later ones as a tuple."""
+    text, _ = shared.model_arguments("\n\n\n".join(shared.solver_sources()))
+    codes = [compile(text, "<shared drivers>", "exec")]
+    seen = set()
+    while codes:
+        code = codes.pop()
+        seen.add(code.co_name)
+        ops = {i.opname for i in dis.get_instructions(code)}
+        assert "CALL_FUNCTION_EX" not in ops, code.co_name
+        codes += [c for c in code.co_consts if isinstance(c, types.CodeType)]
+    assert {"integrate_dense", "step_attempt", "switch_method"} <= seen
+    assert driver.bundled_pieces() == {"step_attempt", "switch_method"}
+    got = lengths(text)
+    for name in driver.bundled_pieces():
+        assert f"def {name}(" in text and got[name] <= LIMIT
+
+
+def test_numbas_dense_driver_allocates_nothing_and_writes_into_its_callers_arrays() -> None:
+    """Compiled without numba's runtime (``driver.NUMBA_NRT_FREE``), the drivers and the
+    pieces they inline make no array: no ``np.`` call, no copy, no slice assignment (which
+    numba may do through a copy), the outputs and statistics written into the caller's
+    arrays."""
+    assert driver.NUMBA_NRT_FREE == ("integrate", "integrate_dense")
+    text = "\n\n".join(driver.source(use) for use in driver.NUMBA_NRT_FREE)
+    for fn in ast.parse(text).body:
+        assert isinstance(fn, ast.FunctionDef)
+        assert [a.arg for a in fn.args.args][-1] == driver.STATS_OUT
+    pieces = called(text) & set(driver.PIECES)
+    while True:  # and the pieces those call
+        more = set().union(*(called(driver.piece_source(p)) for p in pieces)) & set(
+            driver.PIECES) - pieces
+        if not more:
+            break
+        pieces |= more
+    for source in (text, *(driver.piece_source(p) for p in pieces)):
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+                assert ast.unparse(node.func.value) != "np" and node.func.attr != "copy", \
+                    ast.unparse(node)
+            if isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Store):
+                assert ":" not in ast.unparse(node.slice), ast.unparse(node)
+            assert not (isinstance(node, ast.Return) and isinstance(node.value, ast.Tuple)
+                        and any(isinstance(e, ast.Subscript) and isinstance(e.slice, ast.Slice)
+                                for e in node.value.elts))
+    assert {"step_attempt", "outputs_inside", "output_row", "land_crossing"} <= pieces
+
+
+def test_the_numba_text_copies_rows_and_bundles_arguments_as_the_c_text_does_not() -> None:
+    """numba's text of a piece (``driver.numba_text``): a row written element by element and
+    the later arguments of a piece of many as one tuple; the C text as written."""
+    assert "y_out[i_out, :] = y" in driver.piece_source("output_row", False)
+    numba = driver.piece_source("output_row")
+    assert "y_out[i_out, :]" not in numba and "y_out[i_out, j_col] = y[j_col]" in numba
+    params = [a.arg for a in ast.parse(driver.piece_source("step_attempt")).body[0].args.args]
+    assert len(params) == driver.BUNDLE_FROM + 1 and params[-1] == driver.BUNDLE
+    assert len(ast.parse(driver.piece_source("step_attempt", False)).body[0].args.args) == 49
+
+
+@pytest.mark.parametrize("use", c_engine.USES)
+def test_the_lowered_texts_name_the_callers_arrays_alike(use: str) -> None:
+    """numba's dense driver and the C build's drivers are lowered by one function
+    (``driver.lower_outputs``): the statistics' length the numba build's caller allocates is
+    the text's, and the engine's names for the caller's arrays are the driver's."""
+    assert driver.N_STATS[use] == c_engine.lowered_source(use)[1]
+    assert (c_engine.OUTPUTS, c_engine.STATS, c_engine.STATS_OUT) == (
+        driver.OUTPUTS, driver.STATS, driver.STATS_OUT)
+    if use in driver.NUMBA_NRT_FREE:  # numba's text writes as many
+        written = [n for n in ast.walk(ast.parse(driver.source(use)))
+                   if isinstance(n, ast.Subscript) and isinstance(n.ctx, ast.Store)
+                   and ast.unparse(n.value) == driver.STATS_OUT]
+        assert len(written) == driver.N_STATS[use]

@@ -223,10 +223,11 @@ def test_the_schedule_merges_clocks_as_breakpoint_counts() -> None:
 
 
 def test_the_drivers_have_the_step_written_in_and_the_fmu_calls_it() -> None:
-    """dopri5's and the dense driver's text hold the DOPRI5 step's statements in place of the
-    call (steps.inline_steps); the FMU's integrator, which the C translator reads, calls the
-    same step function.  All three are the one driver (feeddrive.solvers.driver) specialised:
-    the explicit-only uses hold none of the RODAS4 / eigen-analysis code."""
+    """dopri5's text and the dense driver's step attempt (a piece numba inlines into it) hold
+    the DOPRI5 step's statements in place of the call (steps.inline_steps); the FMU's
+    integrator, which the C translator reads, calls the same step function.  All three are
+    the one driver (feeddrive.solvers.driver) specialised: the explicit-only uses hold none of
+    the RODAS4 / eigen-analysis code."""
     from feeddrive.fmu import solver as fmu_solver
     from feeddrive.solvers import dopri5, driver, switching
 
@@ -237,8 +238,10 @@ def test_the_drivers_have_the_step_written_in_and_the_fmu_calls_it() -> None:
 
     integrate = driver_text(dopri5.template_sources(), "integrate")
     dense = driver_text(switching.template_sources(), "integrate_dense")
+    attempt = driver.piece_source("step_attempt")
+    assert "step_attempt(" in dense and "_dp5_" not in dense
     stage = "yt[i] = y[i] + h_try * 0.2 * f0[i]"  # the first stage, h renamed to h_try
-    for text in (integrate, dense):
+    for text in (integrate, attempt):
         assert "_dp5_step(" not in text and "_dp5_error(" not in text
         assert "0.0012326388888888888" in text  # the first error weight, 71/57600
         assert stage in text
@@ -251,7 +254,7 @@ def test_the_drivers_have_the_step_written_in_and_the_fmu_calls_it() -> None:
         body = text.split('"""')[-1]  # after the docstring
         for name in ("_r4_", "modal_step_cap", "stiff", "MODE_", "LAND", "DENSE", "COMM"):
             assert name not in body, name
-    assert "_r4_rodas4_step(" in dense
+    assert "_r4_rodas4_step(" in attempt
     assert "stops" not in driver.source("advance") and "t_out" not in driver.source("advance")
     with pytest.raises(ValueError, match="positional arguments"):
         steps.inline_steps("def f(h, k):\n    _dp5_error(h, k)\n")

@@ -6,7 +6,8 @@ Every method runs through the driver's two specialisations (``integrate``: ``dop
 fixed-step variant; ``integrate_dense``: ``modal``, ``auto``, ``rodas4``, ``dopri5-dense`` and
 theirs).  Their text (:func:`feeddrive.solvers.driver.source` with ``inline=False``) is read as
 it is, whatever its authors change, and *lowered* at the boundary between Python and C alone
-(:func:`lowered_source`): the output arrays the numba driver allocates are the caller's
+(:func:`lowered_source`, :func:`feeddrive.solvers.driver.lower_outputs`, which lowers numba's
+dense driver too): the output arrays the numba breakpoint driver allocates are the caller's
 buffers, the statistics array is written into a caller's array and the driver returns the
 number of outputs; the drivers, which take their work arrays from their caller
 (:func:`feeddrive.solvers.driver.step_space`, ``work_space``), are called by an entry that
@@ -80,9 +81,12 @@ __all__ = ["USES", "CEngine", "driver_source", "lowered_source", "model_source"]
 
 #: the driver's uses the engine calls, by name of the numba function they replace
 USES = ("integrate", "integrate_dense")
-#: the numba driver's output arrays → the caller's buffers the C driver writes
+#: the driver's output arrays → the caller's buffers the C driver writes, and its statistics
+#: array → the caller's (:data:`feeddrive.solvers.driver.OUTPUTS`, ``STATS``, ``STATS_OUT``,
+#: which lower the text: :func:`feeddrive.solvers.driver.lower_outputs`; repeated here, the
+#: engine importing the driver only when it builds)
 OUTPUTS = {"t_out": "t_buf", "y_out": "y_buf", "aux_out": "aux_buf"}
-STATS = "stats"  # the statistics array the numba driver returns
+STATS = "stats"
 STATS_OUT = "stats_out"
 
 #: how the driver library reaches a model: its sizes and its two functions, one table per
@@ -135,72 +139,6 @@ class ModelTable(ctypes.Structure):
                 ("rhs", ctypes.c_void_p), ("sample_update", ctypes.c_void_p)]
 
 
-class _Lower(ast.NodeTransformer):
-    """The driver text lowered to what C can take and give (module docstring)."""
-
-    def __init__(self) -> None:
-        self.n_stats = 0
-        self.count: ast.expr | None = None
-
-    def visit_Assign(self, node: ast.Assign) -> Any:
-        tgt = node.targets[0] if len(node.targets) == 1 else None
-        if isinstance(tgt, ast.Name) and tgt.id in OUTPUTS:
-            return None  # the caller's buffer
-        if isinstance(tgt, ast.Name) and tgt.id == STATS:
-            value = node.value
-            if not (isinstance(value, ast.Call) and ast.unparse(value.func) == "np.array"
-                    and len(value.args) == 1 and isinstance(value.args[0], ast.List)):
-                raise TranslationError(f"{ast.unparse(node)!r}: the driver's statistics are "
-                                       "not an np.array([...]) (lowered_source needs updating)")
-            items = value.args[0].elts
-            self.n_stats = len(items)
-            # one statement, as numba's np.array([...]): stats_out[0], ... = a, ...
-            return ast.Assign([ast.Tuple([ast.Subscript(ast.Name(STATS_OUT, ast.Load()),
-                                                        ast.Constant(k), ast.Store())
-                                          for k in range(len(items))], ast.Store())],
-                              ast.Tuple(items, ast.Load()), lineno=node.lineno)
-        self.generic_visit(node)
-        return node
-
-    def visit_Name(self, node: ast.Name) -> ast.Name:
-        if node.id in OUTPUTS:
-            return ast.copy_location(ast.Name(OUTPUTS[node.id], node.ctx), node)
-        return node
-
-    def visit_If(self, node: ast.If) -> Any:
-        self.generic_visit(node)
-        empty = all(isinstance(s, ast.Pass) for s in node.body + node.orelse)
-        if empty and not any(isinstance(n, ast.Call) for n in ast.walk(node.test)
-                             if not (isinstance(n, ast.Call) and isinstance(n.func, ast.Name)
-                                     and n.func.id in ("min", "max", "int", "float"))):
-            return None  # the choice between the caller's buffers and new arrays
-        if not node.body:
-            node.body = [ast.Pass()]
-        return node
-
-    def visit_Return(self, node: ast.Return) -> Any:
-        value = node.value
-        if value is None or (isinstance(value, ast.Constant) and value.value is None):
-            return node
-        first = value.elts[0] if isinstance(value, ast.Tuple) and value.elts else None
-        if not (isinstance(first, ast.Subscript) and isinstance(first.slice, ast.Slice)
-                and first.slice.lower is None and first.slice.upper is not None
-                and isinstance(first.value, ast.Name) and first.value.id == "t_out"):
-            raise TranslationError(f"{ast.unparse(node)!r}: the driver's result is not "
-                                   "(t_out[:count], ...) (lowered_source needs updating)")
-        self.count = first.slice.upper
-        return ast.copy_location(ast.Return(first.slice.upper), node)
-
-    def generic_visit(self, node: ast.AST) -> ast.AST:
-        super().generic_visit(node)
-        for name in ("body", "orelse"):
-            block = getattr(node, name, None)
-            if (name == "body" and isinstance(block, list) and not block
-                    and not isinstance(node, ast.Module)):
-                block.append(ast.Pass())
-        return node
-
-
 def _array_arg(name: str) -> ast.arg:
     return ast.arg(arg=name, annotation=ast.Attribute(ast.Name("np", ast.Load()), "ndarray",
                                                       ast.Load()))
@@ -229,22 +167,11 @@ def lowered_source(use: str) -> tuple[str, int]:
 
     if use not in USES:
         raise KeyError(f"{use!r}: not a use of the C engine ({', '.join(USES)})")
-    tree = ast.parse(driver.source(use, inline=False))
-    fn = tree.body[0]
-    assert isinstance(fn, ast.FunctionDef)
-    have = {a.arg for a in fn.args.args}
-    fn.args.args += [_array_arg(b) for b in OUTPUTS.values() if b not in have]
-    fn.args.args.append(_array_arg(STATS_OUT))
-    fn.returns = None
-    lower = _Lower()
-    tree = ast.fix_missing_locations(lower.visit(tree))
-    if lower.count is None or not lower.n_stats:
-        raise TranslationError(f"{use}: no statistics or result found in the driver's text "
-                               "(lowered_source needs updating)")
+    tree, n_stats = driver.lower_outputs(driver.source(use, inline=False), TranslationError)
     fn = tree.body[0]
     assert isinstance(fn, ast.FunctionDef)
     tree.body = _allocating_entry(fn)
-    return ast.unparse(ast.fix_missing_locations(tree)) + "\n", lower.n_stats
+    return ast.unparse(ast.fix_missing_locations(tree)) + "\n", n_stats
 
 
 class _AuxCount(ast.NodeTransformer):

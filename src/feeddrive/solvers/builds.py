@@ -198,7 +198,10 @@ def engine_name() -> str:
 
 def driver(model: Model, use: str) -> Any:
     """``model``'s driver ``use`` (``"integrate"`` or ``"integrate_dense"``) in the build of
-    :func:`engine_name`, taking and returning what the numba one does.
+    :func:`engine_name`, taking the arguments of the driver's text
+    (:data:`feeddrive.solvers.driver.USES`) and returning ``(t_out, y_out, aux_out, stats,
+    held)``; the outputs are written into the buffers passed where the use takes them
+    (``integrate_dense``: its caller passes them large enough).
 
     Parameters
     ----------
@@ -214,8 +217,46 @@ def driver(model: Model, use: str) -> Any:
     """
     if not _in_c(model):
         _numba_build()
-        return getattr(model.module, use)
+        from . import driver as template
+
+        run = getattr(model.module, use)
+        return _into_buffers(model, run, use) if use in template.NUMBA_NRT_FREE else run
     return registry.table(registry.ENGINES)["c"].driver(model, use)
+
+
+def _into_buffers(model: Model, run: Any, use: str) -> Any:
+    """numba's driver ``use`` compiled without its runtime
+    (:data:`feeddrive.solvers.driver.NUMBA_NRT_FREE`: its outputs written into buffers passed
+    — new ones where the use takes none —, its statistics into an array passed last, the
+    state it advances ``y0`` itself, the number of outputs its result), taking and returning
+    what the others do."""
+    import numpy as np
+
+    from . import driver as template
+
+    names = template.USES[use][0]
+    at = {name: names.index(name) for name in ("y0", "held", "t_end", "base", "start")}
+    own = "t_buf" not in names  # the buffers made here (as the C build's caller does)
+    n_stats = template.N_STATS[use]
+    n_state, n_aux = len(model.states), len(model.aux)
+
+    def call(*args: Any) -> tuple[np.ndarray, ...]:
+        values = list(args)
+        values[at["y0"]] = args[at["y0"]].copy()  # the driver's state, advanced in place
+        if own:
+            n_break = int(round(args[at["t_end"]] / args[at["base"]]))
+            n_out = max(0, (n_break - args[at["start"]]) // args[names.index("out_every")] + 1)
+            buffers = (np.empty(n_out), np.empty((n_out, n_state)), np.empty((n_out, n_aux)))
+            values += buffers
+        else:
+            buffers = tuple(args[names.index(b)] for b in ("t_buf", "y_buf", "aux_buf"))
+        stats = np.zeros(n_stats)
+        count = run(*values, stats)
+        t_buf, y_buf, aux_buf = buffers
+        return (t_buf[:count], y_buf[:count], aux_buf[:min(count, aux_buf.shape[0])], stats,
+                args[at["held"]])
+
+    return call
 
 
 def _numba_build() -> None:

@@ -54,7 +54,10 @@ CONSTANTS = driver.STATUS_NAMES
 def template_sources() -> list[str]:
     """Text placed in the shared drivers' module: the status codes and the driver of
     :mod:`feeddrive.solvers.driver` specialised as ``integrate`` (its step, the one of
-    :mod:`feeddrive.solvers.steps`, written in).
+    :mod:`feeddrive.solvers.steps`, written in), compiled without numba's reference counting
+    (:data:`feeddrive._jit.nrt_free_kernel`: its outputs and statistics written into its
+    caller's arrays, :data:`feeddrive.solvers.driver.NUMBA_NRT_FREE`;
+    :func:`feeddrive.solvers.builds.driver` makes them).
 
     Returns
     -------
@@ -68,7 +71,9 @@ def template_sources() -> list[str]:
     return [f"from feeddrive.solvers.driver import ({names})",
             "from feeddrive.solvers.schedule import due, next_instant",
             "from feeddrive.solvers.events import first_crossing as switch_crossing",
-            "@kernel\n" + src,
+            "from feeddrive._jit import nrt_free_kernel",
+            ("@nrt_free_kernel\n" if "integrate" in driver.NUMBA_NRT_FREE else "@kernel\n")
+            + src,
             "@kernel\n" + aux]
 
 

@@ -32,8 +32,8 @@ below the template: the Jacobian and the modal method's eigen-analysis, the stif
 and the method switching, the step-size controller, the dense output and the output samples,
 the bound checks, the dense driver's next event, the memory it carries between calls and the
 embedded global-error estimate), as diffrax separates controller, solver and driver.  The C
-build calls them; numba inlines them (``inline="always"``) but for :data:`NUMBA_WRITTEN_IN`,
-whose bodies its text has written in (:func:`inline_pieces`), as it has the explicit step's.
+build calls them; numba inlines them (``inline="always"``) into drivers compiled without
+reference counting (:data:`NUMBA_NRT_FREE`), a long call's arguments a tuple (:func:`numba_text`).
 
 Each specialisation is bit-identical to the separate driver it replaced (the v1 regression,
 the long-run chunking tests and the FMU's C-versus-numba test pin it).  The flags keep the
@@ -2234,7 +2234,10 @@ USES: dict[str, tuple[tuple[str, ...], dict[str, Any], str]] = {
 def source(use: str, inline: bool = True) -> str:
     """The text of the driver specialised for ``use`` (a key of :data:`USES`), with the
     explicit step written in (:func:`feeddrive.solvers.steps.inline_steps`) unless
-    ``inline`` is false (the C translation calls the step functions).
+    ``inline`` is false (the C translation calls the step functions).  With ``inline``, numba's
+    text (:func:`numba_text`), and for the uses of :data:`NUMBA_NRT_FREE` the outputs and
+    statistics written into the caller's arrays (:func:`lower_outputs`) and the caller's copy
+    of ``y0`` advanced.
 
     Specialising costs ≈ 50 ms; a process does it only when it builds the shared drivers'
     module (:mod:`feeddrive.solvers.shared`, kept in the compile cache's folder) or an FMU.
@@ -2257,73 +2260,250 @@ def source(use: str, inline: bool = True) -> str:
     constants = {**{flag: False for flag in _FLAGS}, **_MODES, **fixed}
     text = specialise(driver_template, use, params, constants, doc,
                       "int" if use == "advance" else None)
-    return steps.inline_steps(inline_pieces(text, NUMBA_WRITTEN_IN[use])) if inline else text
+    if not inline:
+        return text
+    text = numba_text(steps.inline_steps(text))
+    if use in NUMBA_NRT_FREE:  # its outputs, statistics and state in its caller's arrays
+        tree, _ = lower_outputs(text)
+        text = ast.unparse(ast.fix_missing_locations(_CallersCopy().visit(tree))) + "\n"
+    return text
 
 
-#: per use, the pieces numba's text has written in, as it has the steps
-#: (:func:`feeddrive.solvers.steps.inline_steps`).  The dense driver's has the six it
-#: calls at steps and outputs: numba's own inlining (``inline="always"``) of
-#: ``dense_coefficients`` and ``outputs_inside``, called at every step with a dozen arrays
-#: each, cost 10–20 % of a ``modal`` run; ``switch_method`` and ``step_attempt`` take more
-#: than 29 arguments, which CPython passes as ``*args``, which numba's inliner refuses, and
-#: called instead of written in they made a ``modal`` run 1.7–1.8 × (benchmarks/README.md,
-#: "the driver split", "third round").  The breakpoint driver's has two, ``land_crossing``
-#: and ``step_end_status`` (called at every step), and numba inlines ``output_row`` (at the
-#: outputs): its text is then 150 lines, its work arrays its caller's (:func:`step_space`),
-#: at 2–5 % of a ``dopri5`` run in numba; with none written in, 5–10 % (the C build, the
-#: default, calls them all at no cost)
-NUMBA_WRITTEN_IN: dict[str, tuple[str, ...]] = {
-    "integrate": ("land_crossing", "step_end_status"),
-    "integrate_dense": ("dense_coefficients", "outputs_inside", "switch_method", "output_row",
-                        "step_end_status", "step_attempt"),
-    "advance": ()}
+#: the uses numba compiles without its runtime (:data:`feeddrive._jit.nrt_free_kernel`): both
+#: drivers, their text lowered to write their outputs and statistics into their caller's
+#: arrays (:func:`lower_outputs`) and to advance the caller's copy of the initial state
+#: (``y0``).  Without numba's reference counting its inlining of their pieces costs nothing,
+#: where with it — a count at every array argument of every inlined call — the pieces called
+#: at every step had to be written into numba's text (10–20 % of a ``modal`` run, 4–8 % of a
+#: ``dopri5`` run otherwise: benchmarks/README.md, "the driver split"), the dense driver's
+#: 352 lines; numba's text passes the two pieces that take more arguments than its inliner
+#: does their later ones as a tuple (:func:`numba_text`).  The C build calls them all.
+NUMBA_NRT_FREE = ("integrate", "integrate_dense")
+#: the length of each use's statistics (``stats``; :data:`feeddrive.solvers.switching.STAT_NAMES`
+#: the dense driver's): the array a caller passes a lowered text (:func:`lower_outputs`)
+N_STATS = {"integrate": 5, "integrate_dense": 12}
 
 
-def _piece_body(name: str, call: ast.Call, target: ast.expr | None) -> list[str]:
-    """The piece ``name`` written in for ``call`` (:func:`feeddrive.solvers.steps.
-    renamed_body`): a parameter it assigns must be passed as itself (else the assignment
-    would reach another of the caller's variables), a constant argument's branches folded
-    (``if True:``), ``x = x`` dropped."""
-    fn = ast.parse(_text_of(globals()[name])).body[0]
-    assert isinstance(fn, ast.FunctionDef)
-    stored = {n.id for n in ast.walk(fn) if isinstance(n, ast.Name)
-              and isinstance(n.ctx, ast.Store)}
-    params = [a.arg for a in fn.args.args]
-    body = steps.renamed_body(name, fn, call, target)
-    for param, arg in zip(params, call.args, strict=True):
-        if param in stored and not (isinstance(arg, ast.Name) and arg.id == param):
-            raise ValueError(f"{name}: parameter {param!r} is assigned; it "
-                             f"can be written in only when passed as itself")
-    folded = _Fold({}).visit(ast.Module(body=body, type_ignores=[]))
-    out: list[str] = []
-    for stmt in folded.body:
-        if not (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
-                and ast.dump(stmt.targets[0]).replace("Store", "Load")
-                == ast.dump(stmt.value)):
-            out += ast.unparse(stmt).splitlines()
-    return out
+# ---------------------------------------------------------------- numba's text
+#: numba's inliner (``inline="always"``) takes a call of at most this many positional
+#: arguments, the model's (:data:`feeddrive.solvers.shared.MODEL_NAMES`) it adds among them:
+#: CPython passes more (above 30) as ``*args`` (``CALL_FUNCTION_EX``), which it refuses
+NUMBA_ARGS = 28
+#: in numba's text a piece of more parameters than :data:`NUMBA_ARGS` takes those from this
+#: one on as one tuple, ``bundle`` (:func:`numba_text`)
+BUNDLE_FROM = 20
+BUNDLE = "bundle"
+_COLUMN = "j_col"  # the loop index of a row copied element by element (numba_text)
 
 
-def inline_pieces(source: str, names: tuple[str, ...]) -> str:
-    """``source`` (a driver's function text) with every call statement of the pieces
-    ``names`` — ``name(args)`` or ``target = name(args)`` — replaced by the piece's body, its
-    parameters renamed to the arguments (a final ``return x`` becomes ``target = x``; the
-    pieces so written in have no other return, and their locals mean in the driver what they
-    mean in the piece).
+@functools.cache
+def bundled_pieces() -> frozenset[str]:
+    """The pieces numba's text passes their later arguments as one tuple (:func:`numba_text`):
+    those of more than :data:`NUMBA_ARGS` parameters.
+
+    Returns
+    -------
+    frozenset of str
+        Their names.
+    """
+    out = set()
+    for name in PIECES:
+        fn = ast.parse(_text_of(globals()[name])).body[0]
+        assert isinstance(fn, ast.FunctionDef)
+        if len(fn.args.args) > NUMBA_ARGS:
+            out.add(name)
+    return frozenset(out)
+
+
+class _NumbaText(ast.NodeTransformer):
+    """numba's text of a driver or a piece (:func:`numba_text`)."""
+
+    def __init__(self, bundled: frozenset[str]) -> None:
+        self.bundled = bundled
+
+    def visit_FunctionDef(self, node: ast.FunctionDef) -> ast.FunctionDef:
+        self.generic_visit(node)
+        if node.name in self.bundled:  # its later parameters one tuple, unpacked first
+            later = node.args.args[BUNDLE_FROM:]
+            node.args.args = [*node.args.args[:BUNDLE_FROM], ast.arg(BUNDLE)]
+            unpack = ast.Assign([ast.Tuple([ast.Name(a.arg, ast.Store()) for a in later],
+                                           ast.Store())], ast.Name(BUNDLE, ast.Load()))
+            doc = ast.get_docstring(node, clean=False) is not None
+            node.body.insert(1 if doc else 0, unpack)
+        return node
+
+    def visit_Call(self, node: ast.Call) -> ast.Call:
+        self.generic_visit(node)
+        if isinstance(node.func, ast.Name) and node.func.id in self.bundled:
+            node.args = [*node.args[:BUNDLE_FROM],
+                         ast.Tuple(node.args[BUNDLE_FROM:], ast.Load())]
+        return node
+
+    def visit_Assign(self, node: ast.Assign) -> ast.stmt:
+        self.generic_visit(node)
+        target = node.targets[0]
+        if (len(node.targets) == 1 and isinstance(target, ast.Subscript)
+                and isinstance(target.slice, ast.Tuple) and len(target.slice.elts) == 2
+                and ast.unparse(target.slice.elts[1]) == ":"
+                and isinstance(node.value, ast.Name)):  # out[i, :] = v, element by element
+            row, source = target.slice.elts[0], node.value.id
+            copy = ast.parse(f"for {_COLUMN} in range({source}.size):\n"
+                             f"    {ast.unparse(target.value)}[{ast.unparse(row)}, {_COLUMN}] = "
+                             f"{source}[{_COLUMN}]").body[0]
+            return ast.copy_location(copy, node)
+        return node
+
+
+def numba_text(text: str) -> str:
+    """A driver's or a piece's text as numba compiles it: a piece of more than
+    :data:`NUMBA_ARGS` parameters takes those from :data:`BUNDLE_FROM` on as one tuple
+    (``bundle``, unpacked first) and is called so — numba's inliner refuses a call CPython
+    makes with ``*args`` —, and a row written from an array (``out[i, :] = v``) is copied
+    element by element (numba's slice assignment may copy its source first: an allocation,
+    which a driver compiled without numba's runtime cannot make).  The same operations on the
+    same numbers: the results are bit-identical.
 
     Parameters
     ----------
-    source : str
-        The driver's function text.
-    names : tuple of str
-        The pieces to write in (:data:`NUMBA_WRITTEN_IN`).
+    text : str
+        Python source.
 
     Returns
     -------
     str
-        The text with the calls replaced by the pieces' bodies.
+        The source as numba's text has it.
     """
-    return steps.write_in(source, names, _piece_body)
+    tree = _NumbaText(bundled_pieces()).visit(ast.parse(text))
+    return ast.unparse(ast.fix_missing_locations(tree)) + "\n"
+
+
+class _CallersCopy(ast.NodeTransformer):
+    """``y = y0.copy()`` → ``y = y0``: a driver compiled without numba's runtime advances the
+    state its caller copied (:data:`NUMBA_NRT_FREE`)."""
+
+    def visit_Assign(self, node: ast.Assign) -> ast.Assign:
+        if ast.unparse(node) == "y = y0.copy()":
+            node.value = ast.Name("y0", ast.Load())
+        return node
+
+
+# ---------------------------------------------------------------- the drivers' outputs lowered
+#: the drivers' output arrays → the caller's buffers the lowered text writes
+#: (:func:`lower_outputs`: the C build's drivers, numba's)
+OUTPUTS = {"t_out": "t_buf", "y_out": "y_buf", "aux_out": "aux_buf"}
+STATS = "stats"  # the statistics array the driver's text makes
+STATS_OUT = "stats_out"  # the caller's array the lowered text writes them into
+
+
+class _Lower(ast.NodeTransformer):
+    """A driver's text writing its outputs into its caller's buffers (:func:`lower_outputs`);
+    a text not of the expected form raises ``error``."""
+
+    def __init__(self, error: type[Exception]) -> None:
+        self.error = error
+        self.n_stats = 0
+        self.count: ast.expr | None = None
+
+    def visit_Assign(self, node: ast.Assign) -> Any:
+        tgt = node.targets[0] if len(node.targets) == 1 else None
+        if isinstance(tgt, ast.Name) and tgt.id in OUTPUTS:
+            return None  # the caller's buffer
+        if isinstance(tgt, ast.Name) and tgt.id == STATS:
+            value = node.value
+            if not (isinstance(value, ast.Call) and ast.unparse(value.func) == "np.array"
+                    and len(value.args) == 1 and isinstance(value.args[0], ast.List)):
+                raise self.error(f"{ast.unparse(node)!r}: the driver's statistics are "
+                                 "not an np.array([...]) (lowered_source needs updating)")
+            items = value.args[0].elts
+            self.n_stats = len(items)
+            # one statement, as numba's np.array([...]): stats_out[0], ... = a, ...
+            return ast.Assign([ast.Tuple([ast.Subscript(ast.Name(STATS_OUT, ast.Load()),
+                                                        ast.Constant(k), ast.Store())
+                                          for k in range(len(items))], ast.Store())],
+                              ast.Tuple(items, ast.Load()), lineno=node.lineno)
+        self.generic_visit(node)
+        return node
+
+    def visit_Name(self, node: ast.Name) -> ast.Name:
+        if node.id in OUTPUTS:
+            return ast.copy_location(ast.Name(OUTPUTS[node.id], node.ctx), node)
+        return node
+
+    def visit_If(self, node: ast.If) -> Any:
+        self.generic_visit(node)
+        empty = all(isinstance(s, ast.Pass) for s in node.body + node.orelse)
+        if empty and not any(isinstance(n, ast.Call) for n in ast.walk(node.test)
+                             if not (isinstance(n, ast.Call) and isinstance(n.func, ast.Name)
+                                     and n.func.id in ("min", "max", "int", "float"))):
+            return None  # the choice between the caller's buffers and new arrays
+        if not node.body:
+            node.body = [ast.Pass()]
+        return node
+
+    def visit_Return(self, node: ast.Return) -> Any:
+        value = node.value
+        if value is None or (isinstance(value, ast.Constant) and value.value is None):
+            return node
+        first = value.elts[0] if isinstance(value, ast.Tuple) and value.elts else None
+        if not (isinstance(first, ast.Subscript) and isinstance(first.slice, ast.Slice)
+                and first.slice.lower is None and first.slice.upper is not None
+                and isinstance(first.value, ast.Name) and first.value.id == "t_out"):
+            raise self.error(f"{ast.unparse(node)!r}: the driver's result is not "
+                             "(t_out[:count], ...) (lowered_source needs updating)")
+        self.count = first.slice.upper
+        return ast.copy_location(ast.Return(first.slice.upper), node)
+
+    def generic_visit(self, node: ast.AST) -> ast.AST:
+        super().generic_visit(node)
+        for name in ("body", "orelse"):
+            block = getattr(node, name, None)
+            if (name == "body" and isinstance(block, list) and not block
+                    and not isinstance(node, ast.Module)):
+                block.append(ast.Pass())
+        return node
+
+
+def _array_arg(name: str) -> ast.arg:
+    return ast.arg(arg=name, annotation=ast.Attribute(ast.Name("np", ast.Load()), "ndarray",
+                                                      ast.Load()))
+
+
+def lower_outputs(text: str, error: type[Exception] = ValueError) -> tuple[ast.Module, int]:
+    """A driver's function text (:func:`source`) lowered to write into its caller's arrays:
+    its outputs into ``t_buf``, ``y_buf``, ``aux_buf`` (added as parameters where the use has
+    none), its statistics into ``stats_out`` (a last parameter), its result the number of
+    outputs written — what the C build's drivers take and give
+    (:func:`feeddrive.backends.c_engine.lowered_source`), and numba's drivers, compiled
+    without numba's runtime (:data:`NUMBA_NRT_FREE`), which cannot return a view of an
+    array.
+
+    Parameters
+    ----------
+    text : str
+        The driver's function text.
+    error : type, default ValueError
+        Raised where the text's outputs, statistics or result are not of the expected form.
+
+    Returns
+    -------
+    tree : ast.Module
+        The lowered text.
+    n_stats : int
+        The length of the statistics.
+    """
+    tree = ast.parse(text)
+    fn = tree.body[0]
+    assert isinstance(fn, ast.FunctionDef)
+    have = {a.arg for a in fn.args.args}
+    fn.args.args += [_array_arg(b) for b in OUTPUTS.values() if b not in have]
+    fn.args.args.append(_array_arg(STATS_OUT))
+    fn.returns = None
+    lower = _Lower(error)
+    tree = ast.fix_missing_locations(lower.visit(tree))
+    if lower.count is None or not lower.n_stats:
+        raise error(f"{fn.name}: no statistics or result found in the driver's text "
+                    "(lowered_source needs updating)")
+    return tree, lower.n_stats
 
 
 @functools.cache
@@ -2337,7 +2517,8 @@ def piece_source(name: str, inline: bool = True) -> str:
     name : str
         A piece.
     inline : bool, default True
-        Write the step, error and controller functions into the text.
+        Write the step, error and controller functions into the text (and make it numba's:
+        :func:`numba_text`).
 
     Returns
     -------
@@ -2347,7 +2528,7 @@ def piece_source(name: str, inline: bool = True) -> str:
     if name not in PIECES:
         raise KeyError(f"{name!r}: not a piece of the driver ({', '.join(PIECES)})")
     text = _text_of(globals()[name])
-    return steps.inline_steps(text) if inline else text
+    return numba_text(steps.inline_steps(text)) if inline else text
 
 
 def template_sources() -> list[str]:

@@ -294,7 +294,10 @@ def template_sources() -> list[str]:
     """Text placed in the shared drivers' module: the driver of
     :mod:`feeddrive.solvers.driver` specialised as ``integrate_dense`` (its steps are those
     of :mod:`feeddrive.solvers.steps`, its Jacobian kernels those of
-    :mod:`feeddrive.solvers.rodas4`, placed beside it).  numba compiles a function at its
+    :mod:`feeddrive.solvers.rodas4`, placed beside it), compiled without numba's reference
+    counting (:data:`feeddrive._jit.nrt_free_kernel`: its outputs and statistics written into
+    its caller's arrays, :data:`feeddrive.solvers.driver.NUMBA_NRT_FREE`;
+    :func:`feeddrive.solvers.builds.driver` passes them).  numba compiles a function at its
     first call, so a model run only with ``dopri5`` never compiles this one.
 
     Returns
@@ -312,4 +315,6 @@ def template_sources() -> list[str]:
             "from feeddrive.solvers.modes import step_cap as modal_step_cap, "
             "jacobian_moved as modal_jacobian_moved, ZETA_LIGHT as MODAL_ZETA_LIGHT, "
             "H_LAMBDA as MODAL_H_LAMBDA, REFRESH as MODAL_REFRESH",
-            "@kernel\n" + src]
+            "from feeddrive._jit import nrt_free_kernel",
+            ("@nrt_free_kernel\n" if "integrate_dense" in driver.NUMBA_NRT_FREE
+             else "@kernel\n") + src]
