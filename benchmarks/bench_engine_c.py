@@ -46,6 +46,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 import feeddrive as fd  # noqa: E402
+
+# the processor's model name beside the ratios: they differ by CPU (2026-12-07: 1.1–1.7× on
+# "AMD EPYC" where 1.7–3.3× had been measured on "Intel Xeon"; benchmarks/README.md)
+from bench_engine import machine  # noqa: E402
 from feeddrive.engine.options import METHODS  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed  # noqa: E402
 from feeddrive.parameters.toml_io import load  # noqa: E402
@@ -209,8 +213,8 @@ def main() -> None:
     parser.add_argument("--methods", default=",".join(METHODS))
     args = parser.parse_args()
     data: dict[str, Any] = {
-        "machine": f"{platform.machine()} {platform.system()}, {os.cpu_count()} cores, "
-                   f"Python {platform.python_version()}",
+        "machine": f"{platform.machine()} {platform.system()}, {machine()['cpu']}, "
+                   f"{os.cpu_count()} cores, Python {platform.python_version()}",
         "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
         "duration_s": args.duration, "runs": args.runs, "rows": []}
     data["compile"] = compile_cost()
