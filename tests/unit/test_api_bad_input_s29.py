@@ -7,6 +7,7 @@ now taken, or refused in one line naming the argument, the value and what was ex
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -225,3 +226,84 @@ def test_a_window_of_three_values_is_refused(window: object) -> None:
     with pytest.raises(ParameterError, match=r"^window = .*: expected \(start, end\) \[s\]$"):
         fd.creep_metrics(t, v, 1e-3, window=window)  # type: ignore[arg-type]
     assert fd.creep_metrics(t, v, 1e-3, window=np.array([0.05, 0.15])).window_end == 0.15
+
+
+# ---------------------------------------------------------------- paths, names and kinds
+
+@pytest.mark.parametrize("path", [None, 3])
+def test_load_and_save_name_a_path_that_is_not_one(tmp_path: Path, path: object) -> None:
+    """os.fspath's TypeError: "expected str, bytes or os.PathLike object, not int"."""
+    import xarray as xr
+
+    with pytest.raises(ParameterError, match=rf"^path = {path}: expected a TOML file's path "
+                                             r"\(str or pathlib\.Path\); a preset by its "
+                                             r"name is feeddrive\.preset\(name\)$"):
+        fd.load(path)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=rf"^path = {path}: expected a file name \(str "
+                                             r"or pathlib\.Path\) ending in \.csv, \.parquet, "
+                                             r"\.nc, \.mat$"):
+        fd.Result(xr.Dataset({"x": ("time", [0.0])})).save(path)  # type: ignore[arg-type]
+
+
+def test_result_refuses_what_is_no_dataset() -> None:
+    """``Result("run.nc")`` was made, then failed at first use: "'str' object has no
+    attribute 'attrs'"."""
+    with pytest.raises(ParameterError, match=r"^dataset = 'str': expected an xarray\.Dataset "
+                                             r"of a run"):
+        fd.Result("run.nc")  # type: ignore[arg-type]
+
+
+def test_a_misspelt_signal_is_named_with_the_closest(params: fd.DriveParameters) -> None:
+    """``result["tabel_speed"]`` listed the 30 signals without pointing at one, and
+    ``result[["table_speed"]]`` was "unhashable type: 'list'"."""
+    import xarray as xr
+
+    ds = xr.Dataset({"table_speed": ("time", [0.0, 1.0]), "nut_speed": ("time", [0.0, 0.0])},
+                    coords={"time": [0.0, 1.0]})
+    result = fd.Result(ds)
+    with pytest.raises(KeyError, match=r"'tabel_speed': no such signal in this run; its "
+                                       r"signals: table_speed, nut_speed \(did you mean "
+                                       r"'table_speed'\?\)"):
+        result["tabel_speed"]
+    with pytest.raises(KeyError, match=r"\['table_speed'\]: no such signal in this run"):
+        result[["table_speed"]]  # type: ignore[index]
+
+
+def test_with_values_names_a_misspelt_field(params: fd.DriveParameters) -> None:
+    """The dataclass's TypeError: "Controller.__init__() got an unexpected keyword argument
+    'velocity_gian'" (the docstring promised a ParameterError)."""
+    with pytest.raises(ParameterError, match=r"^controller\.velocity_gian = 1\.0: unknown "
+                                             r"field; expected one of position_gain, .* \(did "
+                                             r"you mean 'velocity_gain'\?\)$"):
+        params.controller.with_values(velocity_gian=1.0)
+    assert params.controller.with_values(velocity_gain=40).velocity_gain == 40.0
+
+
+def test_replace_path_past_a_value_is_refused(params: fd.DriveParameters) -> None:
+    """dataclasses' TypeError: "must be called with a dataclass type or instance"."""
+    with pytest.raises(ParameterError, match=r"^controller\.velocity_gain\.x = 1\.0: unknown "
+                                             r"field 'x': velocity_gain is a value, not a "
+                                             r"section$"):
+        params.replace_path("controller.velocity_gain.x", 1.0)
+
+
+def test_preset_names_a_name_of_the_wrong_kind() -> None:
+    """``preset(["wang2021"])`` was "unhashable type: 'list'"."""
+    with pytest.raises(ParameterError, match=r"^preset = \['wang2021'\]: unknown preset; "
+                                             r"expected one of .*wang2021"):
+        fd.preset(["wang2021"])  # type: ignore[arg-type]
+
+
+def test_a_stepdown_names_a_nut_speed_the_drive_does_not_follow_as_given(
+        params: fd.DriveParameters, monkeypatch: pytest.MonkeyPatch) -> None:
+    """On the CDFS, ``nut_speed=1e-3`` was refused by the first trial as "nut_speed =
+    9.999999999999999e-06" (the staircase's ramped first sample)."""
+    from feeddrive.analysis import critical
+
+    def no_run(*_a: Any, **_k: Any) -> Any:
+        raise AssertionError("a trial started although the input was refused")
+
+    monkeypatch.setattr(critical, "walk_down", no_run)
+    with pytest.raises(ParameterError, match=r"^nut_speed = 0\.001: the CDFS holds the hollow "
+                                             r"motor; expected 0"):
+        fd.critical_speed_stepdown(fd.DriveSystem(params, "cdfs", 0.4), nut_speed=1e-3)
