@@ -153,7 +153,8 @@ def _refuse_array(case: str) -> None:
     ("LoadProfile complex", r"^load\.force\[0\] = 1j: expected real numbers \[N\]$"),
     ("circular_test complex", r"^x\[0\] = \(0\.01\+0j\): expected real numbers \[m\]$"),
     ("positioning_test text", r"^targets = 'abc': expected real numbers \[m\]$"),
-    ("frequency_response complex", r"^frequency_hz\[0\] = \(1\+0j\): expected real numbers "
+    ("frequency_response complex", r"^frequency_hz = array\(\[1\.\+0\.j, 2\.\+1\.j\]\): expected "
+                                   r"a sequence of 1 … 1000000 finite, positive frequencies "
                                    r"\[Hz\]$"),
 ])
 def test_an_array_of_what_is_no_real_number_is_refused_naming_the_value(case: str,

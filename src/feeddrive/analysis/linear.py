@@ -1255,8 +1255,11 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
     if frequency_hz is None:
         freq = np.logspace(-1, 3, 200)
     else:  # ["a"] raised numpy's bare ValueError (an outside check, 2026-12-07); complex
-        # ones were cast to their real part with a warning (session 29)
-        freq = real_array("frequency_hz", frequency_hz, "Hz")
+        # ones were cast to their real part with a warning (session 29): refused below
+        try:
+            freq = real_array("frequency_hz", frequency_hz, "Hz")
+        except ParameterError:
+            freq = np.full(1, np.nan)
     if freq.ndim != 1 or not 0 < freq.size <= MAX_FREQUENCIES \
             or not np.all(np.isfinite(freq) & (freq > 0)):
         raise ParameterError("frequency_hz", frequency_hz, "expected a sequence of 1 … "
