@@ -32,7 +32,7 @@ from feeddrive.parameters import ParameterError
     (lambda: SampledSpeed(np.arange(5.0), np.array([0, 1, np.nan, 1, 0.0])),
      "profile.table_speed[2]", "[m/s]"),
     (lambda: SampledSpeed(np.array([0.0, 1.0, 3.0]), np.ones(3)), "profile.time", "[s]"),
-    (lambda: SampledSpeed("a", "b"), "profile.time/table_speed/nut_speed", "[s, m/s]"),
+    (lambda: SampledSpeed("a", "b"), "profile.time", "[s]"),  # its first value: session 29
 ])
 def test_a_bad_profile_is_refused_when_made(make: object, field: str, unit: str) -> None:
     with pytest.raises(ParameterError) as err:

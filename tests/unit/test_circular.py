@@ -170,7 +170,7 @@ def test_a_radial_approach_from_the_centre_is_left_out() -> None:
     k = 200  # a straight approach from the centre to the start of the first run
     xs = np.linspace(CENTRE[0], x[0], k, endpoint=False)
     ys = np.linspace(CENTRE[1], y[0], k, endpoint=False)
-    t = np.concatenate([np.arange(k) * 1e-3, t + k * 1e-3])
+    t = np.concatenate([np.arange(k) * 1e-3, t - t[0] + k * 1e-3])  # increasing
     res = circular_test(t, np.concatenate([xs, x]), np.concatenate([ys, y]), radius=None,
                         centre=None)
     assert res.squareness * 1e6 == pytest.approx(10.0, abs=0.1)

@@ -21,7 +21,7 @@ from numbers import Real
 
 from ..engine.simulate import DriveSystem
 from ..parameters import DriveParameters, ParameterError
-from ..parameters.validation import check_callback, check_speed, mm_s_hint
+from ..parameters.validation import check_callback, check_speed, is_real, mm_s_hint
 from .critical import (
     CriticalSpeed,
     check_search_settings,
@@ -272,8 +272,7 @@ def calibrate(params: DriveParameters, target: Target, unknown: Unknown, *,
             + mm_s_hint(speed, low + resolution <= speed * 1e-3 <= high))
     # the bisections stop at hi/lo ≤ 1 + relative_tolerance: 0 or less never stopped, NaN
     # skipped them (an outside check, 2026-12-07)
-    if not (isinstance(relative_tolerance, int | float) and not isinstance(
-            relative_tolerance, bool) and 1e-9 <= relative_tolerance <= 1.0):
+    if not (is_real(relative_tolerance) and 1e-9 <= relative_tolerance <= 1.0):
         raise ParameterError("relative_tolerance", relative_tolerance,
                              "expected 1e-9 … 1 (the bracket's last ratio minus 1) [-]")
     evaluations = 0

@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..parameters import ParameterError
+from ..parameters.validation import is_real, real_array
 
 __all__ = ["CircularRun", "CircularTest", "ReversalSpike", "circular_test", "describe",
            "fit_circle", "split_runs"]
@@ -411,7 +412,7 @@ def split_runs(time: ArrayLike, x: ArrayLike, y: ArrayLike, centre: tuple[float,
     ParameterError
         For a ``reversal`` that is not an angle in (0, 2π).
     """
-    if not (isinstance(reversal, int | float) and 0.0 < reversal < 2.0 * math.pi):
+    if not (is_real(reversal) and 0.0 < reversal < 2.0 * math.pi):  # True was 1 rad
         raise ParameterError("reversal", reversal, "expected a turn-back angle > 0 and "
                              "< 2π [rad]")
     t = np.asarray(time, dtype=float)
@@ -585,21 +586,29 @@ def circular_test(time: ArrayLike, x: ArrayLike, y: ArrayLike, *, radius: float 
     >>> print(f"G(CCW) = {res.circular_deviation['CCW'] * 1e6:.3f} µm")
     G(CCW) = 0.000 µm
     """
-    if radius is not None and not (math.isfinite(radius) and radius > 0.0):
+    # a str or a bare number was Python's TypeError ("must be real number, not str", "object
+    # of type 'int' has no len()": an API sweep of session 29)
+    if radius is not None and not (is_real(radius) and math.isfinite(radius) and radius > 0):
         raise ParameterError("radius", radius, "expected a radius > 0 [m]")
-    if centre is not None and (len(centre) != 2
-                               or not all(math.isfinite(c) for c in centre)):
+    if centre is not None and (isinstance(centre, str) or not hasattr(centre, "__len__")
+                               or len(centre) != 2
+                               or not all(is_real(c) and math.isfinite(c) for c in centre)):
         raise ParameterError("centre", centre, "expected two finite coordinates [m]")
-    if pitch is not None and not (math.isfinite(pitch) and pitch > 0.0):
+    if pitch is not None and not (is_real(pitch) and math.isfinite(pitch) and pitch > 0):
         raise ParameterError("pitch", pitch, "expected a period > 0 [m]")
-    t = np.asarray(time, dtype=float)
-    px = np.asarray(x, dtype=float)
-    py = np.asarray(y, dtype=float)
+    t = real_array("time", time, "s")
+    px = real_array("x", x, "m")
+    py = real_array("y", y, "m")
     if not (t.shape == px.shape == py.shape and t.ndim == 1):
         raise ValueError("time, x, y: expected 1-D arrays of one length")
     if t.size < 16 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(px))
                            and np.all(np.isfinite(py))):
         raise ValueError("time, x, y: expected at least 16 finite samples")
+    back = np.flatnonzero(np.diff(t) < 0)
+    if back.size:  # a reversed record was measured at a negative feed (session 29)
+        i = int(back[0]) + 1
+        raise ParameterError(f"time[{i}]", float(t[i]), f"expected increasing sample times "
+                             f"[s] (time[{i - 1}] = {float(t[i - 1])!r})")
     inferred: list[str] = []
     if centre is None or radius is None:
         # fitted to the samples near the circle: a radial approach from the centre left out

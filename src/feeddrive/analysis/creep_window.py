@@ -33,7 +33,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..parameters.validation import ParameterError
+from ..parameters.validation import ParameterError, is_real
 from .cycle_verdict import VerdictRule
 from .trace_input import (
     MIN_WINDOW_SAMPLES,
@@ -104,10 +104,11 @@ class CreepThresholds:
         for name in ("stick_level", "max_stick_fraction", "max_ripple_ratio",
                      "min_ripple_for_frequency", "min_peak_share", "max_speed_ratio"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float) \
-                    or not math.isfinite(value) or value < 0:
+            # NumPy's scalars are numbers (np.float32(0.1) was refused: session 29)
+            if not is_real(value) or not math.isfinite(value) or value < 0:
                 raise ParameterError(f"thresholds.{name}", value,
                                      "expected a finite number ≥ 0 [-]")
+            object.__setattr__(self, name, float(value))
         if self.stick_level >= 1.0:
             raise ParameterError("thresholds.stick_level", self.stick_level,
                                  "expected < 1 [-] (a fraction of the command speed)")
@@ -553,7 +554,9 @@ def creep_metrics(
     else:
         # a window reaching past the record is taken as its part within it (a hold's window
         # may end after the last sample); one wholly outside is refused
-        try:
+        try:  # a third value was dropped without a word (session 29)
+            if isinstance(window, str) or len(window) != 2:
+                raise ValueError
             start, end = (float(window[0]), float(window[1]))
         except (TypeError, ValueError, IndexError):
             raise ParameterError("window", window, "expected (start, end) [s]") from None

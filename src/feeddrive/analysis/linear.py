@@ -56,7 +56,7 @@ from ..model.loops import INJ_CURRENT, INJ_SPEED
 from ..model.mechanisms import mechanism
 from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
 from ..parameters import ParameterError, SiteParameters
-from ..parameters.validation import check_callback, check_speed
+from ..parameters.validation import check_callback, check_speed, is_real, real_array
 from ..solvers import builds
 from . import protocol
 from .newton import pulled_gauss_newton
@@ -1034,8 +1034,7 @@ def _check_frequencies(f_min: float, f_max: float, points: int) -> None:
     """The grid of :func:`loop_analysis`: 0 < f_min < f_max, finite, and a whole number of
     points, at least :data:`MIN_POINTS_PER_DECADE` a decade."""
     for name, value in (("f_min", f_min), ("f_max", f_max)):
-        if isinstance(value, bool) or not isinstance(value, int | float) \
-                or not (math.isfinite(value) and value > 0):
+        if not (is_real(value) and math.isfinite(value) and value > 0):  # NumPy's too
             raise ParameterError(name, value, "expected a finite frequency > 0 [Hz]")
     if not f_min < f_max:
         raise ParameterError("f_max", f_max, f"expected > f_min = {f_min:g} [Hz]")
@@ -1249,12 +1248,17 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
     if not (output is None or isinstance(output, str)):
         raise ParameterError("output", output, "expected None or the name (str) of an output "
                              "of the linear model")
+    if not isinstance(system, DriveSystem | LinearModel):  # a bare AssertionError (session 29)
+        raise ParameterError("system", type(system).__name__, "expected a DriveSystem, e.g. "
+                             "DriveSystem(params, drive='cdfs', table_position=0.4), or the "
+                             "LinearModel of linearize(system)")
     if frequency_hz is None:
         freq = np.logspace(-1, 3, 200)
-    else:  # ["a"] raised numpy's bare ValueError (an outside check, 2026-12-07)
+    else:  # ["a"] raised numpy's bare ValueError (an outside check, 2026-12-07); complex
+        # ones were cast to their real part with a warning (session 29): refused below
         try:
-            freq = np.asarray(frequency_hz, dtype=float)
-        except (TypeError, ValueError, OverflowError):
+            freq = real_array("frequency_hz", frequency_hz, "Hz")
+        except ParameterError:
             freq = np.full(1, np.nan)
     if freq.ndim != 1 or not 0 < freq.size <= MAX_FREQUENCIES \
             or not np.all(np.isfinite(freq) & (freq > 0)):
@@ -1580,8 +1584,7 @@ def rightmost_pole(system: DriveSystem, v: float, nut_speed: float = 0.0
 def _check_tolerance(tolerance: float) -> None:
     """A band edge's bisection stops within ``tolerance``: 0 or less never stopped, NaN
     stopped at once with a wrong edge (an outside check, 2026-12-07)."""
-    if not (isinstance(tolerance, int | float) and not isinstance(tolerance, bool)
-            and math.isfinite(tolerance) and tolerance > 0):
+    if not (is_real(tolerance) and math.isfinite(tolerance) and tolerance > 0):
         raise ParameterError("tolerance", tolerance, "expected a finite speed > 0 [m/s]")
 
 

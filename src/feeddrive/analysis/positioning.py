@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..parameters import ParameterError
+from ..parameters.validation import real_array
 
 __all__ = ["MIN_CYCLES", "PositioningTest", "Stop", "describe", "positioning_cycle",
            "positioning_test", "read_approaches", "reading_motion"]
@@ -200,9 +201,9 @@ def positioning_test(targets: ArrayLike, deviation_up: ArrayLike, deviation_down
     ...       f"A = {res.accuracy * 1e6:.1f} µm")
     B = 4.0 µm, B̄ = -4.0 µm, A = 4.0 µm
     """
-    p = np.asarray(targets, dtype=float)
-    up = np.asarray(deviation_up, dtype=float)
-    down = np.asarray(deviation_down, dtype=float)
+    p = real_array("targets", targets, "m")
+    up = real_array("deviation_up", deviation_up, "m")
+    down = real_array("deviation_down", deviation_down, "m")
     if p.ndim != 1 or p.size < 2:
         raise ParameterError("targets", p.size, "expected at least 2 target positions")
     for name, x in (("deviation_up", up), ("deviation_down", down)):

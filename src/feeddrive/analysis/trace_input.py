@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..parameters.validation import check_speed
+from ..parameters.validation import check_speed, real_array
 
 __all__ = ["MAX_RESAMPLE_FACTOR", "MIN_SAMPLES", "MIN_WINDOW_SAMPLES", "as_trace",
            "check_command", "check_fraction", "resample_size", "time_below", "uniform_samples"]
@@ -43,8 +43,10 @@ def as_trace(time: object, speed: object) -> tuple[np.ndarray, np.ndarray]:
     tuple of numpy.ndarray
         (time [s], speed [m/s]).
     """
-    t = np.asarray(time, dtype=float)
-    v = np.asarray(speed, dtype=float)
+    # text, complex numbers and booleans refused naming the value (complex ones were cast to
+    # their real part with a warning, booleans to 0 and 1 m/s: session 29)
+    t = real_array("time", time, "s")
+    v = real_array("speed", speed, "m/s")
     if t.ndim != 1:
         raise ValueError(f"time: expected a 1-D array, got shape {t.shape}")
     if v.ndim != 1:
@@ -64,7 +66,7 @@ def as_trace(time: object, speed: object) -> tuple[np.ndarray, np.ndarray]:
     if bad.size:
         i = int(bad[0]) + 1
         raise ValueError(f"time: not strictly increasing at index {i} "
-                         f"({t[i - 1]!r} then {t[i]!r})")
+                         f"({float(t[i - 1])!r} then {float(t[i])!r})")
     return t, v
 
 

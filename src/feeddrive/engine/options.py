@@ -38,6 +38,7 @@ Where the settings come from, in order of precedence: the command line, the API 
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -46,6 +47,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from ..parameters import ParameterError
+from ..parameters.validation import is_real
 from ..solvers import driver, modes, switching
 from ..solvers.tableaux import DOPRI5, RODAS4, RODAS5P, RosenbrockTableau
 
@@ -302,13 +304,16 @@ def _num(x: float) -> str:
 
 
 def _check_positive(name: str, value: Any, unit: str, low: float = 0.0,
-                    high: float = math.inf) -> None:
+                    high: float = math.inf) -> float:
     span = (f"{low:g} … {high:g}" if low > 0.0 else f"> 0, ≤ {high:g}") \
         if math.isfinite(high) else f"≥ {low:g}" if low > 0.0 else "> 0"
-    if isinstance(value, bool) or not isinstance(value, int | float) \
-            or not math.isfinite(value) or value <= 0.0 or not low <= value <= high:
+    # NumPy's scalars are numbers: np.float32(1e-3) was "expected a finite value > 0 [s]"
+    # (an API sweep of session 29)
+    if not is_real(value) or not math.isfinite(value) or value <= 0.0 \
+            or not low <= value <= high:
         raise ParameterError(f"options.{name}", value, f"expected a finite value {span} "
                              f"[{unit}]")
+    return float(value)
 
 
 @dataclass(frozen=True)
@@ -414,19 +419,23 @@ class SolverOptions:
         if self.method not in METHODS:
             raise ParameterError("options.method", self.method,
                                  f"expected one of {', '.join(METHODS)}")
+        # each number is kept as a float (a NumPy scalar given is echoed as the float it is)
         if self.rtol is not None:
-            _check_positive("rtol", self.rtol, "-", floor("rtol"), MAX_RTOL)
+            object.__setattr__(self, "rtol", _check_positive("rtol", self.rtol, "-",
+                                                             floor("rtol"), MAX_RTOL))
         for name in ("position_tolerance", "speed_tolerance", "current_tolerance"):
             value = getattr(self, name)
             if value is not None:
-                _check_positive(name, value, dict((n, u) for n, u, _ in TOLERANCES)[name],
-                                low=floor(name), high=MAX_ABSOLUTE[name])
-        _check_positive("accuracy", self.accuracy, "-", floor("accuracy"), MAX_ACCURACY)
+                object.__setattr__(self, name, _check_positive(
+                    name, value, dict((n, u) for n, u, _ in TOLERANCES)[name],
+                    low=floor(name), high=MAX_ABSOLUTE[name]))
+        object.__setattr__(self, "accuracy", _check_positive(
+            "accuracy", self.accuracy, "-", floor("accuracy"), MAX_ACCURACY))
         for name, unit in (("output_interval", "s"), ("max_step", "s"), ("fixed_step", "s")):
             value = getattr(self, name)
             if name == "max_step" and value is None:
                 continue
-            _check_positive(name, value, unit)
+            object.__setattr__(self, name, _check_positive(name, value, unit))
         for name in ("sample_steps", "locate_reversals"):
             if not isinstance(getattr(self, name), bool):
                 raise ParameterError(f"options.{name}", getattr(self, name),
@@ -434,10 +443,11 @@ class SolverOptions:
         if self.rosenbrock not in ROSENBROCKS:
             raise ParameterError("options.rosenbrock", self.rosenbrock,
                                  f"expected one of {', '.join(ROSENBROCKS)}")
-        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) \
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, numbers.Integral) \
                 or self.max_steps < 1:
             raise ParameterError("options.max_steps", self.max_steps,
                                  "expected a whole number ≥ 1")
+        object.__setattr__(self, "max_steps", int(self.max_steps))
         # an explicit tolerance and an accuracy factor given together, in one setting
         sources = dict(self.origin)
         if self.accuracy != 1.0:

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..model.slots import slot_table, slots_json
 from ..parameters import dumps
+from ..parameters.validation import did_you_mean
 from ..units import ENGINEERING as _ENGINEERING
 
 if TYPE_CHECKING:
@@ -347,6 +348,15 @@ class Result:
     def __init__(self, dataset: xr.Dataset | None = None, *, run: Run | None = None) -> None:
         if (dataset is None) == (run is None):
             raise ValueError("Result: give a dataset or a run")
+        if dataset is not None:  # Result("run.nc") failed at first use (session 29)
+            import xarray as xr
+
+            from ..parameters import ParameterError
+
+            if not isinstance(dataset, xr.Dataset):
+                raise ParameterError("dataset", type(dataset).__name__, "expected an "
+                                     "xarray.Dataset of a run, e.g. Result(xarray.open_dataset"
+                                     "('run.nc'))")
         self._dataset = dataset
         self._run = run
 
@@ -399,14 +409,19 @@ class Result:
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:
+            if not isinstance(name, str):  # a list read a Dataset's sub-dataset
+                raise KeyError(name)
             if self._run is not None:
                 return self._run.signal(name)
             return np.asarray(self.dataset[name].values)
-        except KeyError:  # named with the run's signals (looked up only when one is missing)
-            if name in self:
+        except KeyError:  # named with the run's signals (looked up only when one is
+            # missing); a list was "unhashable type", a misspelt name got no suggestion
+            # (session 29)
+            if isinstance(name, str) and name in self:
                 raise
+            names = self.signal_names()
             raise KeyError(f"{name!r}: no such signal in this run; its signals: "
-                           f"{', '.join(self.signal_names())}") from None
+                           f"{', '.join(names)}{did_you_mean(name, names)}") from None
 
     @property
     def time(self) -> np.ndarray:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import threading
 import time as _time
 import weakref
@@ -22,6 +23,7 @@ from ..model.mechanisms.base import check_nut_hold
 from ..model.reference import PROFILE_PARAMS, ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
+from ..parameters.validation import check_callback, is_real
 from ..solvers import builds, dopri5, switching
 from . import budget
 from .error_estimate import (
@@ -99,7 +101,7 @@ class DriveSystem:
         # has none) was dropped without a word
         check_nut_hold(self.drive, self.nut_hold)
         for name, value in self.initial_state.items():
-            if not (isinstance(value, int | float) and math.isfinite(value)):
+            if not (is_real(value) and math.isfinite(value)):
                 raise ParameterError(f"initial_state.{name}", value, "expected a finite number "
                                      "in the state's SI unit")
 
@@ -1199,8 +1201,17 @@ class Simulation:
         Result
             Bit-identical to ``simulate(system, profile, duration)``.
         """
-        if not (isinstance(duration, int | float) and math.isfinite(duration) and duration > 0):
+        # True ran for 1 s and np.float32(0.05) was refused as "expected a finite time"
+        # (an API sweep of session 29)
+        if not (is_real(duration) and math.isfinite(duration) and duration > 0):
             raise ParameterError("duration", duration, "expected a finite time > 0 [s]")
+        duration = float(duration)
+        # a number as output was os.fspath's TypeError, a number as progress "'int' object
+        # is not callable" after the first chunk had run (session 29)
+        if output is not None and not isinstance(output, str | os.PathLike):
+            raise ParameterError("output", output, "expected None or a file name (str or "
+                                 "pathlib.Path) ending in .parquet or .csv")
+        check_callback("progress", progress, "progress(t, t_end) [s]")
         check_profile_span(self.profile, duration, self.options.output_interval)
         options, grid, model = self.options, self.grid, self.model
         # an output interval longer than the run left a Result without a sample (its summary

@@ -625,6 +625,9 @@ def save_result(dataset: xr.Dataset, path: str | Path) -> Path:
         a run), two NetCDF names made one (:func:`plain_names`); nothing is left under
         ``path``.
     """
+    if not isinstance(path, str | os.PathLike):  # os.fspath's TypeError (session 29)
+        raise ParameterError("path", path, "expected a file name (str or pathlib.Path) "
+                             f"ending in {', '.join(FORMATS)}")
     p = Path(path)
     ext = check_format(p)
     with atomic_path(p) as tmp:  # its folder must exist (docs/outputs.md)

@@ -16,7 +16,7 @@ import numpy as np
 from .. import registry
 from .._jit import kernel
 from ..parameters import Component, ParameterError
-from ..parameters.validation import MISSING, quantities, quantity
+from ..parameters.validation import MISSING, quantities, quantity, real_array
 from .codegen import Builder
 
 #: the load block ``disturbances.<name>``: constant force [N] and its start [s], the record's
@@ -144,12 +144,8 @@ class LoadProfile:
             For arrays that are not numbers, not 1-D of one length ≥ 2, not finite, forces
             beyond ``LARGEST_LOAD_FORCE``, or times not on a uniform grid from 0.
         """
-        try:
-            t = np.asarray(self.time, dtype=float)
-            f = np.asarray(self.force, dtype=float)
-        except (TypeError, ValueError):
-            raise ParameterError("load.time/force", MISSING,
-                                 "expected arrays of numbers [s, N]") from None
+        t = real_array("load.time", self.time, "s")  # complex, bool, text: session 29
+        f = real_array("load.force", self.force, "N")
         if t.ndim != 1 or t.size < 2 or f.shape != t.shape:
             raise ParameterError("load.time/force", MISSING,
                                  f"expected 1-D arrays of one length ≥ 2 (shapes {t.shape}, "

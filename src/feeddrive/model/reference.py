@@ -20,7 +20,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..parameters import ParameterError
-from ..parameters.validation import MISSING, check_speed, is_real
+from ..parameters.validation import MISSING, check_speed, is_real, real_array
 from ..units import LARGEST_SPEED
 
 REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
@@ -323,14 +323,12 @@ class SampledSpeed:
         """The checked arrays: time, table speed, nut speed and the time steps [s, m/s]."""
         if not isinstance(self.hold, bool | np.bool_):  # hold="no" was taken as True
             raise ParameterError("profile.hold", self.hold, "expected True or False")
-        try:
-            t = np.asarray(self.time, dtype=float)
-            vt = np.asarray(self.table_speed, dtype=float)
-            vn = (np.zeros_like(vt) if self.nut_speed is None
-                  else np.asarray(self.nut_speed, float))
-        except (TypeError, ValueError):
-            raise ParameterError("profile.time/table_speed/nut_speed", MISSING,
-                                 "expected arrays of numbers [s, m/s]") from None
+        # complex speeds were cast to their real part with a warning, booleans to 0 and
+        # 1 m/s (session 29): refused naming the first value
+        t = real_array("profile.time", self.time, "s")
+        vt = real_array("profile.table_speed", self.table_speed, "m/s")
+        vn = (np.zeros_like(vt) if self.nut_speed is None
+              else real_array("profile.nut_speed", self.nut_speed, "m/s"))
         if t.ndim != 1 or t.size < 2 or vt.shape != t.shape or vn.shape != t.shape:
             raise ParameterError("profile.time/table_speed/nut_speed", MISSING,
                                  f"expected 1-D arrays of one length ≥ 2 (shapes {t.shape}, "

@@ -82,7 +82,7 @@ def preset(name: str) -> DriveParameters:
     >>> params.controller.velocity_integral_gain  # the one fitted number
     3925.28
     """
-    if name not in PRESETS:
+    if not isinstance(name, str) or name not in PRESETS:  # a list was "unhashable type"
         raise ParameterError(
             "preset", name, f"unknown preset; expected one of {', '.join(PRESETS)}"
             + did_you_mean(name, PRESETS)

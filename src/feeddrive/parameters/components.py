@@ -16,7 +16,7 @@ Ranges are plausibility bounds for machine-tool feed drives; they exist to catch
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import Any, Self
 
 from .. import registry
@@ -189,6 +189,14 @@ class _Component:
         ParameterError
             For an unknown field or a refused value.
         """
+        # a misspelt field was the dataclass's TypeError ("__init__() got an unexpected
+        # keyword argument": an API sweep of session 29)
+        names = [f.name for f in fields(self)]  # type: ignore[arg-type]
+        for name, value in changes.items():
+            # a DriveParameters takes its sections by name too, and names an unknown one
+            if name not in names and "sections" not in names:
+                raise ParameterError(f"{self._label}.{name}", value, "unknown field; expected "
+                                     f"one of {', '.join(names)}{did_you_mean(name, names)}")
         return replace(self, **changes)  # type: ignore[type-var]
 
 
@@ -609,7 +617,11 @@ def _replace_path(obj: Any, parts: list[str], value: Any, full: str) -> Any:
             local = err.field.split(".", 1)[-1]
             raise ParameterError(f"{prefix}.{local}" if prefix else local, err.value,
                                  err.message) from None
-    return replace(obj, **{head: _replace_path(getattr(obj, head), parts[1:], value, full)})
+    inner = getattr(obj, head)
+    if not is_dataclass(inner):  # "x.y" past a value was dataclasses' TypeError (session 29)
+        raise ParameterError(full, value, f"unknown field {parts[1]!r}: {head} is a value, "
+                             "not a section")
+    return replace(obj, **{head: _replace_path(inner, parts[1:], value, full)})
 
 
 def __getattr__(name: str) -> Any:

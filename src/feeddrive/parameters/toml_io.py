@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import os
 import re
 import stat
 import threading
@@ -355,8 +356,6 @@ def save(params: DriveParameters, path: str | Path) -> None:
         For another file name (``x.json``): the set is TOML whatever the name says;
         ``feeddrive.parameters.to_dict`` gives a dict for ``json.dump``.
     """
-    import os
-
     from ..io.outputs import atomic_path
 
     # the arguments swapped, or a preset's name, failed deep inside (an outside check,
@@ -577,6 +576,9 @@ def load(path: str | Path) -> DriveParameters:
     DriveParameters
         The validated set; a refusal names the file, the field, the value and the unit.
     """
+    if not isinstance(path, str | os.PathLike):  # os.fspath's TypeError (session 29)
+        raise ParameterError("path", path, "expected a TOML file's path (str or pathlib.Path);"
+                             " a preset by its name is feeddrive.preset(name)")
     chain: list[tuple[Path, str]] = _loading.__dict__.setdefault("chain", [])
     resolved = resolved_path(path)
     names = [name for _, name in chain]

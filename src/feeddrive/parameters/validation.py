@@ -82,6 +82,58 @@ def is_real(value: object) -> TypeGuard[float]:
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
+def real_array(name: str, value: object, unit: str) -> Any:
+    """``value`` as an array of floats, or a one-line refusal naming ``name``, the first value
+    that is not a real number and the unit: the one check of an array of numbers the API is
+    given (a trace, a tabulated profile, a frequency grid).  NumPy casts complex numbers to
+    their real part with only a warning, booleans to 0 and 1, and text failed in its words
+    ("could not convert string to float": an API sweep of session 29).
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : array_like
+        What was given: a sequence, an array, a pandas Series or an xarray DataArray
+        [``unit``].
+    unit : str
+        The unit its numbers are read in, for the message.
+
+    Returns
+    -------
+    numpy.ndarray
+        The values as floats [``unit``], shaped as given (the caller checks the shape).
+
+    Raises
+    ------
+    ParameterError
+        For text, complex numbers, booleans, dates or other objects that are not real
+        numbers, naming the first one (``time[3] = 'a': expected real numbers [s]``).
+    """
+    import numpy as np
+
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError):  # a ragged nested list
+        raise ParameterError(name, value, f"expected an array of real numbers [{unit}]") \
+            from None
+    if a.dtype.kind in "iuf":
+        return a.astype(float, copy=False)
+    flat = a.ravel()
+    bad = 0
+    if a.dtype.kind == "O":  # a list of mixed objects, a pandas Series of objects
+        bad = next((i for i, v in enumerate(flat) if not is_real(v)), -1)
+        if bad < 0:
+            return a.astype(float)
+    if not flat.size:
+        raise ParameterError(name, MISSING, f"expected an array of real numbers [{unit}], "
+                             f"not of {a.dtype}")
+    shown = flat[bad] if a.dtype.kind == "O" else flat[bad].item()
+    where = name if a.ndim == 0 else \
+        f"{name}[{', '.join(str(int(i)) for i in np.unravel_index(bad, a.shape))}]"
+    raise ParameterError(where, shown, f"expected real numbers [{unit}]")
+
+
 def check_speed(name: str, value: object, *, sign: str = "positive",
                 limit: tuple[float, str] | None = None) -> float:
     """A speed argument [m/s] as a float, or a one-line refusal naming it: the one check of a
@@ -409,7 +461,9 @@ def check_quantity(path: str, value: object, meta: dict[str, Any]) -> float:
         path, the value and the expected unit.
     """
     unit = meta["unit"]
-    if isinstance(value, bool) or not isinstance(value, int | float):
+    # NumPy's scalars are numbers (np.float32(45.0) and np.int64(45) were "expected a
+    # number", an API sweep of session 29); a 0-d array, a bool or a complex is not
+    if not is_real(value):
         raise ParameterError(path, value, f"expected a number [{unit}]")
     v = float(value)
     if not math.isfinite(v):
