@@ -151,8 +151,9 @@ class QuantitySettings:
         Raises
         ------
         ParameterError
-            For an unknown key, a key the kind does not read (:data:`READS`) or a bad
-            value, naming ``quantity.<key>``.
+            For an unknown key, a key the kind does not read
+            (``feeddrive.sweep.quantities.READS``) or a bad value, naming
+            ``quantity.<key>``.
         """
         if not isinstance(spec, dict):
             raise ParameterError("quantity", spec, "expected a table")

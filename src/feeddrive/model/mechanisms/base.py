@@ -195,7 +195,8 @@ class Mechanism:
         Table position along the axis at the start [m].
     nut_hold : str
         How a held nut is held (``"locked"`` or ``"servo"``); read only by a drive that holds
-        one (:meth:`held_part`); ``"servo"`` on any other is refused (:func:`check_nut_hold`).
+        one (:meth:`held_part`); ``"servo"`` on any other is refused
+        (``feeddrive.model.mechanisms.base.check_nut_hold``).
     """
 
     drives: tuple[str, ...] = ()
@@ -318,7 +319,8 @@ class Mechanism:
     def held_part(cls, drive: str) -> str:
         """The part ``drive`` holds still whose hold a setting chooses (the CDFS's nut, held
         ``"locked"`` or on its ``"servo"``: the ``nut_hold`` argument), or "" when it holds
-        none (the default): then no hold setting has an effect (:func:`check_nut_hold`).
+        none (the default): then no hold setting has an effect
+        (``feeddrive.model.mechanisms.base.check_nut_hold``).
 
         Parameters
         ----------
