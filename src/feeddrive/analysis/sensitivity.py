@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..parameters import DriveParameters, ParameterError
+from ..parameters.validation import check_flag
 
 __all__ = ["STEPS", "ZERO_SCALES", "SensitivityResult", "parameter_paths", "plot_tornado",
            "sensitivity"]
@@ -380,6 +381,7 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if quantity not in ("critical-speed", "linear-band"):
         raise ParameterError("--quantity", quantity, "expected critical-speed or linear-band")
+    in_process = check_flag("in_process", in_process)  # "no" ran in this process
     if isinstance(patterns, str):  # one pattern as text: its letters were read as patterns
         raise ParameterError("patterns", patterns, f"expected a list of glob patterns, e.g. "
                              f"[{patterns[:60]!r}] (--parameters on the command line)")

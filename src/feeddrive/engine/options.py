@@ -47,7 +47,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from ..parameters import ParameterError
-from ..parameters.validation import is_real
+from ..parameters.validation import check_flag, is_real
 from ..solvers import driver, modes, switching
 from ..solvers.tableaux import DOPRI5, RODAS4, RODAS5P, RosenbrockTableau
 
@@ -436,10 +436,8 @@ class SolverOptions:
             if name == "max_step" and value is None:
                 continue
             object.__setattr__(self, name, _check_positive(name, value, unit))
-        for name in ("sample_steps", "locate_reversals"):
-            if not isinstance(getattr(self, name), bool):
-                raise ParameterError(f"options.{name}", getattr(self, name),
-                                     "expected True or False")
+        for name in ("sample_steps", "locate_reversals"):  # np.bool_ taken as a bool
+            object.__setattr__(self, name, check_flag(f"options.{name}", getattr(self, name)))
         if self.rosenbrock not in ROSENBROCKS:
             raise ParameterError("options.rosenbrock", self.rosenbrock,
                                  f"expected one of {', '.join(ROSENBROCKS)}")

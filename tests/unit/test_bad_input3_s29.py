@@ -1,0 +1,109 @@
+"""The leftovers of session 29's bad-input sweeps, each settled by a decision:
+
+1. the API's flag arguments take ``bool`` and ``np.bool_`` and refuse anything else
+   (``frictionless="yes"`` was taken as True, ``frequency=None`` as False; a parameter
+   set's flags refused ``np.bool_``, which ``SampledSpeed.hold`` took);
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+
+import feeddrive as fd
+from feeddrive.parameters import ParameterError
+
+
+@pytest.fixture(scope="module")
+def params() -> fd.DriveParameters:
+    return fd.preset("wang2021")
+
+
+@pytest.fixture(scope="module")
+def system(params: fd.DriveParameters) -> fd.DriveSystem:
+    return fd.DriveSystem(params, "cdfs", 0.4)
+
+
+# --------------------------------------------------------------------- 1: flag arguments
+
+def _trace() -> tuple[np.ndarray, np.ndarray]:
+    t = np.linspace(0.0, 10.0, 2001)
+    return t, np.full(t.size, 1e-3)
+
+
+def _flag_call(case: str, params: fd.DriveParameters, system: fd.DriveSystem,
+               value: object) -> Callable[[], Any]:
+    """The call of one public function with ``value`` for its flag argument."""
+    from feeddrive.analysis.compensation import compensation_study
+    from feeddrive.analysis.fit import fit_drive
+    from feeddrive.analysis.fragments import friction_fragment
+    from feeddrive.analysis.sensitivity import sensitivity
+    from feeddrive.analysis.trace import analyze_trace
+
+    t, v = _trace()
+    calls: dict[str, Callable[[], Any]] = {
+        "linearize": lambda: fd.linearize(system, frictionless=value),
+        "loop_analysis": lambda: fd.loop_analysis(system, frictionless=value),
+        "frequency_response": lambda: fd.frequency_response(system, "tracking",
+                                                            frictionless=value),
+        "creep_metrics": lambda: fd.creep_metrics(t, v, 1e-3, frequency=value),
+        "Simulation": lambda: fd.Simulation(system, fd.ConstantSpeed(1e-3),
+                                            embedded_estimate=value),
+        "SolverOptions": lambda: fd.SolverOptions(locate_reversals=value),
+        "SampledSpeed": lambda: fd.SampledSpeed(t, v, hold=value),
+        "simulate": lambda: fd.simulate(system, fd.ConstantSpeed(1e-3), 0.05,
+                                        error_estimate=value),
+        "fit_drive": lambda: fit_drive(params, [], ["friction.screw.coulomb_force"],
+                                       accuracy_check=value),
+        "compensation_study": lambda: compensation_study(params, [], search=value),
+        "friction_fragment": lambda: friction_fragment("screw",
+                                                       include_undetermined=value),
+        "analyze_trace": lambda: analyze_trace(t, 1e-3 * t, segment=value),
+        "sensitivity": lambda: sensitivity(params, in_process=value),
+    }
+    return calls[case]
+
+
+_FLAGS = {"linearize": "frictionless", "loop_analysis": "frictionless",
+          "frequency_response": "frictionless", "creep_metrics": "frequency",
+          "Simulation": "embedded_estimate", "SolverOptions": "options.locate_reversals",
+          "SampledSpeed": "profile.hold", "simulate": "error_estimate",
+          "fit_drive": "accuracy_check", "compensation_study": "search",
+          "friction_fragment": "include_undetermined", "analyze_trace": "segment",
+          "sensitivity": "in_process"}
+
+
+@pytest.mark.parametrize("value", ["yes", 1, 0.0])
+@pytest.mark.parametrize("case", sorted(_FLAGS))
+def test_a_flag_argument_refuses_what_is_no_boolean(params: fd.DriveParameters,
+                                                   system: fd.DriveSystem, case: str,
+                                                   value: object) -> None:
+    """``linearize(..., frictionless="yes")`` linearised without friction, ``creep_metrics(...,
+    frequency="yes")`` looked for a frequency, ``sensitivity(in_process="no")`` ran in this
+    process: every flag took anything truthy or falsy."""
+    says = f"^{re.escape(_FLAGS[case])} = {re.escape(repr(value))}: expected "
+    with pytest.raises(ParameterError, match=says):
+        _flag_call(case, params, system, value)()
+
+
+def test_a_flag_argument_takes_numpy_booleans(params: fd.DriveParameters,
+                                              system: fd.DriveSystem) -> None:
+    """np.bool_ (what ``x > 0`` of an array gives) is a boolean everywhere: a parameter
+    set's flag refused it ("expected true or false"), ``error_estimate=np.True_`` was
+    refused, while ``SampledSpeed(hold=np.True_)`` took it; each is read as a plain bool."""
+    from feeddrive.engine.error_estimate import estimate_kind
+
+    assert fd.linearize(system, frictionless=np.True_).frictionless is True
+    assert fd.SolverOptions(sample_steps=np.True_).sample_steps is True
+    changed = params.replace_path("controller.velocity_feedforward", np.False_)
+    assert changed.controller.velocity_feedforward is False
+    assert estimate_kind(np.True_) == "shadow" and estimate_kind(np.False_) is None
+    t, v = _trace()
+    assert fd.creep_metrics(t, v, 1e-3, frequency=np.False_).stick_slip_frequency is None
+    with pytest.raises(ParameterError, match=r"^controller\.velocity_feedforward = 'yes': "
+                                             r"expected true or false$"):
+        params.replace_path("controller.velocity_feedforward", "yes")
