@@ -3,6 +3,8 @@
 1. the API's flag arguments take ``bool`` and ``np.bool_`` and refuse anything else
    (``frictionless="yes"`` was taken as True, ``frequency=None`` as False; a parameter
    set's flags refused ``np.bool_``, which ``SampledSpeed.hold`` took);
+2. a ``LoadProfile`` shorter than the run: its last force is held (the model's documented
+   behaviour, and what a ramp-and-hold record means); the summary now says so;
 """
 
 from __future__ import annotations
@@ -107,3 +109,37 @@ def test_a_flag_argument_takes_numpy_booleans(params: fd.DriveParameters,
     with pytest.raises(ParameterError, match=r"^controller\.velocity_feedforward = 'yes': "
                                              r"expected true or false$"):
         params.replace_path("controller.velocity_feedforward", "yes")
+
+
+# ---------------------------------------------------- 2: a load record shorter than the run
+
+def _loaded_run(force_end: float, duration: float) -> fd.Result:
+    t = np.linspace(0.0, 0.1, 11)
+    load = fd.LoadProfile(t, force_end * t / 0.1)
+    system = fd.DriveSystem(fd.preset("linear-motor-example"), "linear-motor", load=load)
+    return fd.simulate(system, fd.ConstantSpeed(1e-3, ramp_time=0.0), duration)
+
+
+def test_a_run_longer_than_its_load_record_says_the_last_force_is_held() -> None:
+    """A LoadProfile shorter than the run was taken without a word; the model holds its last
+    force to the run's end (a ramp-and-hold load is meant so: kept, not refused), and the
+    summary now says so, in the numbers the run used (saved and read back too)."""
+    import xarray as xr
+
+    result = _loaded_run(10.0, 0.3)
+    assert result["load_force"][-1] == pytest.approx(10.0)  # held, not dropped to 0
+    says = [w for w in result.summary()["warnings"] if w.startswith("the load record")]
+    assert says == ["the load record ends at 0.1 s, before the run's end 0.3 s: its last "
+                    "force 10 N is held to the end (LoadProfile holds its last value; end "
+                    "the record at 0 N for no load after it, or run only as long as the "
+                    "record)"]
+    reread = fd.Result(xr.Dataset(attrs=dict(result.dataset.attrs),
+                                  data_vars=dict(result.dataset.data_vars)))
+    assert says[0] in reread.summary()["warnings"]
+
+
+@pytest.mark.parametrize(("force_end", "duration"), [(10.0, 0.1), (0.0, 0.3)])
+def test_a_load_record_as_long_as_the_run_or_ending_at_zero_says_nothing(
+        force_end: float, duration: float) -> None:
+    warnings = _loaded_run(force_end, duration).summary()["warnings"]
+    assert not [w for w in warnings if "load record" in w]
