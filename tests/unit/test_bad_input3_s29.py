@@ -5,6 +5,7 @@
    set's flags refused ``np.bool_``, which ``SampledSpeed.hold`` took);
 2. a ``LoadProfile`` shorter than the run: its last force is held (the model's documented
    behaviour, and what a ramp-and-hold record means); the summary now says so;
+3. ``Target("xdfs", …)``: its drive is checked when made, as ``DriveSystem`` checks it;
 """
 
 from __future__ import annotations
@@ -143,3 +144,14 @@ def test_a_load_record_as_long_as_the_run_or_ending_at_zero_says_nothing(
         force_end: float, duration: float) -> None:
     warnings = _loaded_run(force_end, duration).summary()["warnings"]
     assert not [w for w in warnings if "load record" in w]
+
+
+# ----------------------------------------------------------- 3: a Target's drive, when made
+
+def test_a_target_refuses_an_unknown_drive_when_made() -> None:
+    """``Target("xdfs", …)`` was taken and refused only by ``calibrate``; it is checked when
+    made, as ``DriveSystem`` checks its drive, in the same words."""
+    with pytest.raises(ParameterError, match=r"^target\.drive = 'xdfs': expected one of "
+                                             r"cdfs, ddfs, .* \(did you mean 'ddfs'\?\)$"):
+        fd.Target("xdfs", 1.56e-3)
+    assert fd.Target("ddfs", 1.56e-3).drive == "ddfs"
