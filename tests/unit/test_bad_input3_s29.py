@@ -6,6 +6,8 @@
 2. a ``LoadProfile`` shorter than the run: its last force is held (the model's documented
    behaviour, and what a ramp-and-hold record means); the summary now says so;
 3. ``Target("xdfs", …)``: its drive is checked when made, as ``DriveSystem`` checks it;
+4. ``DriveParameters.section`` refuses a name that is not a string, instead of "unhashable
+   type" or None;
 """
 
 from __future__ import annotations
@@ -155,3 +157,18 @@ def test_a_target_refuses_an_unknown_drive_when_made() -> None:
                                              r"cdfs, ddfs, .* \(did you mean 'ddfs'\?\)$"):
         fd.Target("xdfs", 1.56e-3)
     assert fd.Target("ddfs", 1.56e-3).drive == "ddfs"
+
+
+# ------------------------------------------------------ 4: DriveParameters.section's name
+
+@pytest.mark.parametrize(("name", "shown"), [(["x"], r"\['x'\]"), (3, "3"), (None, "None")])
+def test_a_section_name_that_is_no_string_is_refused(params: fd.DriveParameters,
+                                                    name: object, shown: str) -> None:
+    """``P.section(['x'])`` was "unhashable type: 'list'", ``P.section(3)`` returned None, as
+    for a section the set does not give."""
+    with pytest.raises(ParameterError, match=rf"^name = {shown}: expected a section's name "
+                                             r"\(str\), e\.g\. one of acceleration_feedforward, "
+                                             r"backlash, .*, table$"):
+        params.section(name)  # type: ignore[arg-type]
+    assert params.section("backlash") is None  # registered, not given: absent
+    assert params.section("screw") is params.screw
