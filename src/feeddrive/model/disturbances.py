@@ -112,9 +112,7 @@ def load_force(t: float, P: np.ndarray, o: int, T: np.ndarray) -> float:
 class LoadProfile:
     """A table load force record, acting against positive table motion.
 
-    Linear interpolation between samples, the last value held after the record: a run longer
-    than the record says so in its summary's warnings (``Result.summary()``) when that value
-    is not zero.
+    Linear interpolation between samples, the last value held after the record.
 
     Parameters
     ----------

@@ -20,7 +20,7 @@ import numpy as np
 
 from .._jit import kernel
 from ..parameters import ParameterError
-from ..parameters.validation import MISSING, check_flag, check_speed, is_real, real_array
+from ..parameters.validation import MISSING, check_speed, is_real, real_array
 from ..units import LARGEST_SPEED
 
 REF_CONSTANT, REF_SINE, REF_SAMPLED, REF_INPUT = 0, 1, 2, 3
@@ -321,7 +321,8 @@ class SampledSpeed:
 
     def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The checked arrays: time, table speed, nut speed and the time steps [s, m/s]."""
-        check_flag("profile.hold", self.hold)  # hold="no" was taken as True
+        if not isinstance(self.hold, bool | np.bool_):  # hold="no" was taken as True
+            raise ParameterError("profile.hold", self.hold, "expected True or False")
         # complex speeds were cast to their real part with a warning, booleans to 0 and
         # 1 m/s (session 29): refused naming the first value
         t = real_array("profile.time", self.time, "s")
