@@ -8,6 +8,11 @@
 3. ``Target("xdfs", …)``: its drive is checked when made, as ``DriveSystem`` checks it;
 4. ``DriveParameters.section`` refuses a name that is not a string, instead of "unhashable
    type" or None;
+6. ``SolverOptions(origin=…)`` (the API holds a default against a [solver] table with it)
+   refuses what is not pairs (setting, source) naming its fields.
+
+5 (a sweep's ``linear_points`` without the linear band) is in
+tests/integration/test_cli_bad_input3_s29.py.
 """
 
 from __future__ import annotations
@@ -172,3 +177,29 @@ def test_a_section_name_that_is_no_string_is_refused(params: fd.DriveParameters,
         params.section(name)  # type: ignore[arg-type]
     assert params.section("backlash") is None  # registered, not given: absent
     assert params.section("screw") is params.screw
+
+
+# ---------------------------------------------------------- 6: SolverOptions.origin's type
+
+@pytest.mark.parametrize(("origin", "field", "says"), [
+    (3, "options.origin = 3", "expected pairs (setting, source) of text"),
+    ("accuracy", "options.origin = 'accuracy'", "expected pairs (setting, source) of text"),
+    ((("accuracy", 3),), "options.origin[0] = ('accuracy', 3)",
+     "expected pairs (setting, source) of text"),
+    ((("acuracy", "API"),), "options.origin[0] = ('acuracy', 'API')",
+     "expected a setting of SolverOptions, one of method, "),
+])
+def test_solver_options_refuse_an_origin_that_is_no_pairs(origin: object, field: str,
+                                                         says: str) -> None:
+    """``origin`` is the API's (``SolverOptions(accuracy=1.0, origin=(("accuracy", "API"),))``
+    holds a default against a set's [solver] table): ``origin=3`` was "'int' object is not
+    iterable", a misspelt setting's source was kept and never asked for."""
+    with pytest.raises(ParameterError, match="^" + re.escape(f"{field}: {says}")):
+        fd.SolverOptions(accuracy=1.0, origin=origin)  # type: ignore[arg-type]
+
+
+def test_solver_options_take_an_origin_as_pairs_or_a_mapping() -> None:
+    for origin in ([("accuracy", "API")], {"accuracy": "API"}, (("accuracy", "API"),)):
+        options = fd.SolverOptions(accuracy=1.0, origin=origin)  # type: ignore[arg-type]
+        assert options.origin == (("accuracy", "API"),)
+        assert options.source("accuracy") == "API"
