@@ -18,7 +18,7 @@ from typer.testing import CliRunner
 from feeddrive.cli import app
 from feeddrive.parameters import ParameterError
 from feeddrive.sweep import QuantitySettings
-from feeddrive.sweep.quantities import READS
+from feeddrive.sweep.quantities import READS, reads
 
 runner = CliRunner()
 
@@ -53,11 +53,15 @@ def test_a_setting_the_kind_does_not_read_is_refused(kind: str, key: str, value:
                               f"reads {', '.join(READS[kind])}")
 
 
-def test_each_kind_takes_every_setting_it_reads() -> None:
+@pytest.mark.parametrize("linear", [True, False])
+def test_each_kind_takes_every_setting_it_reads(linear: bool) -> None:
+    """With ``linear`` on and off: a critical-speed search reads ``linear_points`` only with
+    its linear band (``quantities.reads``)."""
     good = {"start": "rest", "low": 1.0, "high": 2.0, "coarse_step": 0.5, "resolution": 0.1,
-            "initial_duration": 3.0, "max_duration": 3.0, "table_speed": 2.0, "linear": False,
+            "initial_duration": 3.0, "max_duration": 3.0, "table_speed": 2.0, "linear": linear,
             "linear_points": 8}
-    for kind, keys in READS.items():
+    for kind in READS:
+        keys = reads(kind, linear)
         q = QuantitySettings.parse({"kind": kind, **{k: good[k] for k in keys}})
         assert set(q.to_dict()) == {"kind", *keys}
 

@@ -62,6 +62,12 @@ class Target:
         if not isinstance(self.drive, str):
             raise ParameterError("target.drive", self.drive,
                                  "expected the name of a drive, e.g. 'cdfs'")
+        from ..model.mechanisms import mechanism
+
+        try:  # checked when made, as DriveSystem does ("xdfs" was refused only by calibrate)
+            mechanism(self.drive)
+        except ParameterError as e:
+            raise ParameterError("target.drive", self.drive, e.message) from None
         check_speed("target.critical_speed", self.critical_speed)
         if isinstance(self.table_position, bool) or not isinstance(self.table_position, Real) \
                 or not math.isfinite(self.table_position):

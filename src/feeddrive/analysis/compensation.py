@@ -19,7 +19,7 @@ from ..model.loops import Compensation
 from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.reference import ConstantSpeed
 from ..parameters import DriveParameters
-from ..parameters.validation import check_speed
+from ..parameters.validation import check_flag, check_speed
 from .cycle_verdict import VerdictRule
 
 
@@ -170,6 +170,7 @@ def evaluate(params: DriveParameters, case: Case, *, table_position: float = 0.4
         The case, its critical speed [mm/s], linear creep bands [mm/s], verdict at the
         tracking speed and rms following error [µm].
     """
+    search = check_flag("search", search)
     system = DriveSystem(case_parameters(params, case), case.drive, table_position)
     # imported here: `simulate` imports this module for observer_gain_warning alone
     from .critical import creep_trial, critical_speed_from_rest, format_critical_speed
@@ -248,6 +249,7 @@ def compensation_study(params: DriveParameters, cases: list[Case] | None = None,
     RowsInterrupted
         On Ctrl-C, with the rows finished before it.
     """
+    search = check_flag("search", search)  # refused before the first case is run
     cases = cases if cases is not None else default_cases()
     rows: list[dict[str, Any]] = []
     try:

@@ -33,7 +33,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..parameters.validation import ParameterError, is_real
+from ..parameters.validation import ParameterError, check_flag, is_real
 from .cycle_verdict import VerdictRule
 from .trace_input import (
     MIN_WINDOW_SAMPLES,
@@ -543,6 +543,7 @@ def creep_metrics(
     """
     t, v = as_trace(time, speed)
     vc = check_command(command_speed)
+    frequency = check_flag("frequency", frequency)  # "yes" was taken as True (session 29)
     if thresholds is not None and not isinstance(thresholds, CreepThresholds):
         # a dict said "'dict' object has no attribute 'stick_level'" (an outside check,
         # 2026-12-07)

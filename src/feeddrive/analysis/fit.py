@@ -68,7 +68,7 @@ import numpy as np
 # of this module's light helpers (`_no_effect`, `Experiment`: the sensitivity) need not pay
 from ..parameters import DriveParameters, ParameterError, dumps
 from ..parameters.toml_io import toml_comment, toml_string
-from ..parameters.validation import MISSING, check_speed, is_real
+from ..parameters.validation import MISSING, check_flag, check_speed, is_real
 from .fit_residuals import HacCovariance, ResidualDiagnostics, diagnose, hac_covariance
 from .fit_statistics import NOISE_MIN_SAMPLES, correlation, covariance, noise_level
 
@@ -1722,6 +1722,9 @@ def fit_drive(base: DriveParameters, experiments: Sequence[Experiment], free: Se
         # field of the parameter set" (an outside check, 2026-12-07)
         raise ParameterError("base", base, 'expected DriveParameters, e.g. '
                              'fd.preset("wang2021") or fd.load("my.toml")')
+    profile = check_flag("profile", profile)
+    horizon_continuation = check_flag("horizon_continuation", horizon_continuation)
+    accuracy_check = check_flag("accuracy_check", accuracy_check)
     if isinstance(experiments, Experiment):
         raise ParameterError("experiments", experiments, "expected a list of Experiment, "
                              "e.g. [experiment]")

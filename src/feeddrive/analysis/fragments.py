@@ -20,6 +20,7 @@ from typing import Any
 
 from ..parameters import DriveParameters, ParameterError, from_dict, to_dict
 from ..parameters.toml_io import parse_toml, read_toml_file, toml_comment
+from ..parameters.validation import check_flag
 from ..units import SITES
 from .fit_statistics import Estimate
 from .presliding import DynamicFit
@@ -76,6 +77,7 @@ def friction_fragment(
     """
     if site not in SITES:
         raise ParameterError("site", site, f"expected one of {', '.join(SITES)}")
+    include_undetermined = check_flag("include_undetermined", include_undetermined)
     if static is None and dynamic is None:
         raise ValueError("friction_fragment: give a static fit, a dynamic fit or both")
     origin = f" from {toml_comment(source)}" if source else ""

@@ -56,7 +56,7 @@ from ..model.loops import INJ_CURRENT, INJ_SPEED
 from ..model.mechanisms import mechanism
 from ..model.reference import REFERENCE_INPUTS, ConstantSpeed
 from ..parameters import ParameterError, SiteParameters
-from ..parameters.validation import check_callback, check_speed, is_real, real_array
+from ..parameters.validation import check_callback, check_flag, check_speed, is_real, real_array
 from ..solvers import builds
 from . import protocol
 from .newton import pulled_gauss_newton
@@ -672,6 +672,7 @@ def state_matrix(system: DriveSystem, table_speed: float, nut_speed: float = 0.0
     numpy.ndarray
         A over the live states [1/s and the states' unit ratios], as ``linearize(...).A``.
     """
+    frictionless = check_flag("frictionless", frictionless)  # "yes" was taken as True
     check_operating_point(system, table_speed, nut_speed, frictionless)
     sys_, _ = averaged(_frictionless(system) if frictionless else system)
     model, y = steady_state(sys_, table_speed, nut_speed)
@@ -702,6 +703,7 @@ def linearize(system: DriveSystem, table_speed: float = 1e-3, nut_speed: float =
         A, B, C, D over the live states with named inputs and outputs (``to_control()``: a
         python-control StateSpace), the operating point and notes.
     """
+    frictionless = check_flag("frictionless", frictionless)  # "yes" was taken as True
     check_operating_point(system, table_speed, nut_speed, frictionless)
     sys_, notes = averaged(_frictionless(system) if frictionless else system)
     model, y = steady_state(sys_, table_speed, nut_speed)
@@ -1088,6 +1090,7 @@ def loop_analysis(system: DriveSystem, table_speed: float = 1e-3, nut_speed: flo
     >>> print(f"{mode.frequency_hz:.2f} Hz, damping ratio {mode.damping_ratio:.3f}")
     5.47 Hz, damping ratio 0.034
     """
+    frictionless = check_flag("frictionless", frictionless)
     _check_frequencies(f_min, f_max, points)
     lin = linearize(system, table_speed, nut_speed, frictionless=frictionless)
     freq = np.logspace(np.log10(f_min), np.log10(f_max), points)
@@ -1252,6 +1255,7 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
         raise ParameterError("system", type(system).__name__, "expected a DriveSystem, e.g. "
                              "DriveSystem(params, drive='cdfs', table_position=0.4), or the "
                              "LinearModel of linearize(system)")
+    frictionless = check_flag("frictionless", frictionless)
     if frequency_hz is None:
         freq = np.logspace(-1, 3, 200)
     else:  # ["a"] raised numpy's bare ValueError (an outside check, 2026-12-07); complex

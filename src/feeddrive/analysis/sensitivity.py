@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..parameters import DriveParameters, ParameterError
+from ..parameters.validation import check_flag
 
 __all__ = ["STEPS", "ZERO_SCALES", "SensitivityResult", "parameter_paths", "plot_tornado",
            "sensitivity"]
@@ -352,7 +353,8 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     patterns : sequence of str, optional
         Glob patterns of the paths to vary.
     linear_points : int, optional
-        Speeds of the linear scan.
+        Speeds of the linear scan (``linear-band``; refused for ``critical-speed``, whose
+        search runs without the linear band).
     store : str or os.PathLike, optional
         The sweep store.
     workers : int, optional
@@ -380,6 +382,11 @@ def sensitivity(params_source: str | DriveParameters, *, drive: str = "cdfs",
     check_executor(workers=workers, scheduler=scheduler, dask_workers=dask_workers)
     if quantity not in ("critical-speed", "linear-band"):
         raise ParameterError("--quantity", quantity, "expected critical-speed or linear-band")
+    in_process = check_flag("in_process", in_process)  # "no" ran in this process
+    if quantity == "critical-speed" and linear_points is not None:  # taken, hashed, unused
+        raise ParameterError("linear_points", linear_points, "not read by quantity "
+                             "critical-speed (its search runs without the linear band); it "
+                             "sets the scan of quantity linear-band")
     if isinstance(patterns, str):  # one pattern as text: its letters were read as patterns
         raise ParameterError("patterns", patterns, f"expected a list of glob patterns, e.g. "
                              f"[{patterns[:60]!r}] (--parameters on the command line)")

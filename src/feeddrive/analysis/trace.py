@@ -52,7 +52,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..parameters import ParameterError
-from ..parameters.validation import MISSING, check_speed, is_real
+from ..parameters.validation import MISSING, check_flag, check_speed, is_real
 from ..units import LARGEST_SPEED
 from .creep_window import CreepMetrics, CreepThresholds, creep_metrics, steady_window
 from .cycle_verdict import VerdictRule, trace_verdict
@@ -1136,6 +1136,7 @@ def analyze_trace(
     notes: list[str] = []
     # the settings first, before any work
     _check_settings(thresholds, min_step, min_segment_time)
+    segment = check_flag("segment", segment)  # "no" was taken as True (session 29)
     if command_speed is not None:
         command_speed = _check_command_speed(command_speed)
     t = np.asarray(time, dtype=float)

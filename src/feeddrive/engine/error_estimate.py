@@ -125,9 +125,11 @@ def estimate_kind(error_estimate: bool | str | None) -> str | None:
     ParameterError
         For any other value.
     """
-    if error_estimate is False or error_estimate is None:
+    from ..parameters.validation import is_flag
+
+    if error_estimate is None or is_flag(error_estimate) and not error_estimate:
         return None
-    if error_estimate is True:
+    if is_flag(error_estimate):  # np.True_ too (it was refused as no boolean)
         return ESTIMATES[0]
     if isinstance(error_estimate, str) and error_estimate in ESTIMATES:
         return error_estimate

@@ -47,7 +47,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from ..parameters import ParameterError
-from ..parameters.validation import is_real
+from ..parameters.validation import check_flag, did_you_mean, is_real
 from ..solvers import driver, modes, switching
 from ..solvers.tableaux import DOPRI5, RODAS4, RODAS5P, RosenbrockTableau
 
@@ -316,6 +316,51 @@ def _check_positive(name: str, value: Any, unit: str, low: float = 0.0,
     return float(value)
 
 
+def _check_origin(origin: object) -> tuple[tuple[str, str], ...]:
+    """``SolverOptions.origin`` as a tuple of (setting, source) pairs of text, or a one-line
+    refusal naming ``options.origin`` (``origin=3`` was "'int' object is not iterable", a
+    dict's keys were read as pairs, a misspelt setting's source never asked for).
+
+    Parameters
+    ----------
+    origin : object
+        What was given: pairs (setting, source), e.g. ``(("accuracy", "API"),)``, or a
+        mapping of setting to source.
+
+    Returns
+    -------
+    tuple of (str, str)
+        The pairs.
+
+    Raises
+    ------
+    ParameterError
+        For anything but pairs of text whose settings are SolverOptions' fields.
+    """
+    if origin == ():  # the default, and most options made inside
+        return ()
+    names = [f.name for f in fields(SolverOptions) if f.name != "origin"]
+    expected = ("expected pairs (setting, source) of text, e.g. ((\"accuracy\", \"API\"),), "
+                "or a mapping of setting to source")
+    if isinstance(origin, Mapping):
+        origin = tuple(origin.items())
+    if isinstance(origin, str | bytes) or not isinstance(origin, Iterable):
+        raise ParameterError("options.origin", origin, expected)
+    pairs = []
+    for k, pair in enumerate(origin):
+        if isinstance(pair, str | bytes) or not isinstance(pair, Iterable):
+            raise ParameterError(f"options.origin[{k}]", pair, expected)
+        pair = tuple(pair)
+        if len(pair) != 2 or not all(isinstance(p, str) for p in pair):
+            raise ParameterError(f"options.origin[{k}]", pair, expected)
+        if pair[0] not in names:
+            raise ParameterError(f"options.origin[{k}]", pair, "expected a setting of "
+                                 f"SolverOptions, one of {', '.join(names)}"
+                                 + did_you_mean(pair[0], names))
+        pairs.append((pair[0], pair[1]))
+    return tuple(pairs)
+
+
 @dataclass(frozen=True)
 class SolverOptions:
     """Integrator settings, echoed in the result.
@@ -416,6 +461,7 @@ class SolverOptions:
     origin: tuple[tuple[str, str], ...] = field(default=(), compare=False)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "origin", _check_origin(self.origin))
         if self.method not in METHODS:
             raise ParameterError("options.method", self.method,
                                  f"expected one of {', '.join(METHODS)}")
@@ -436,10 +482,8 @@ class SolverOptions:
             if name == "max_step" and value is None:
                 continue
             object.__setattr__(self, name, _check_positive(name, value, unit))
-        for name in ("sample_steps", "locate_reversals"):
-            if not isinstance(getattr(self, name), bool):
-                raise ParameterError(f"options.{name}", getattr(self, name),
-                                     "expected True or False")
+        for name in ("sample_steps", "locate_reversals"):  # np.bool_ taken as a bool
+            object.__setattr__(self, name, check_flag(f"options.{name}", getattr(self, name)))
         if self.rosenbrock not in ROSENBROCKS:
             raise ParameterError("options.rosenbrock", self.rosenbrock,
                                  f"expected one of {', '.join(ROSENBROCKS)}")

@@ -207,6 +207,12 @@ class Run:
             "solver": json.dumps(self.solver_stats),
             "conventions": "SI units; friction at the shafts as torque ÷ H (Wang2021 Table 1)",
         }
+        load = getattr(system, "load", None)
+        if load is not None:  # its end and last force: what summary() says of a run that
+            # outlasts the record (the force is held after it: LoadProfile)
+            step, force = load.encode()
+            attrs["load_record_end_s"] = step * (force.size - 1)
+            attrs["load_record_last_force_n"] = float(force[-1])
         marks = getattr(system, "run_attrs", None)
         if callable(marks):  # a machine's run: its name, path and axes, on every path
             # (feeddrive.machine.MachineSystem.run_attrs; a circular test's runs lacked them);
@@ -664,6 +670,9 @@ class Result:
         travel = self._travel_warning()
         if travel:
             warnings.append(travel)
+        held = self._load_warning(attrs)
+        if held:
+            warnings.append(held)
         sel = (self.time >= window[0]) & (self.time <= window[1])
         out.update(position_metrics(self.time, self["following_error"], window))
         out.update({
@@ -685,6 +694,26 @@ class Result:
         return (f"the command is {v:g} m/s ({1e3 * v:g} mm/s, {60.0 * v:g} m/min), a rapid "
                 f"traverse, not a creep test; the API takes m/s ({v:g} mm/s is "
                 f"{1e-3 * v:g}), the command line mm/s")
+
+    def _load_warning(self, attrs: dict[str, Any]) -> str | None:
+        """Whether the run outlasts its load record (``DriveSystem.load``) while the record
+        ends at a force that is not zero: the model holds that force to the run's end
+        (:class:`~feeddrive.model.disturbances.LoadProfile`), which a record shorter than the
+        run was taken with without a word (session 29).  A run may pass the record's end by
+        one output interval (the output instant after it)."""
+        end = attrs.get("load_record_end_s")
+        force = attrs.get("load_record_last_force_n")
+        if end is None or not force:
+            return None
+        t = self.time
+        t_end = float(t[-1])
+        interval = (t_end - float(t[0])) / (t.size - 1) if t.size > 1 else 0.0
+        if t_end <= float(end) + interval * (1.0 + 1e-9):
+            return None
+        return (f"the load record ends at {float(end):g} s, before the run's end {t_end:g} s: "
+                f"its last force {float(force):g} N is held to the end (LoadProfile holds its "
+                "last value; end the record at 0 N for no load after it, or run only as "
+                "long as the record)")
 
     def _ramp_warning(self) -> str | None:
         """Whether a constant speed's start ramp ends after the run: its verdict is of the ramp,

@@ -23,7 +23,7 @@ from ..model.mechanisms.base import check_nut_hold
 from ..model.reference import PROFILE_PARAMS, ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
-from ..parameters.validation import check_callback, is_real
+from ..parameters.validation import check_callback, check_flag, is_real
 from ..solvers import builds, dopri5, switching
 from . import budget
 from .error_estimate import (
@@ -1027,7 +1027,8 @@ class Simulation:
         self.options = options = run_options(system, options)
         # the same, each setting named where the user gave it, for refusals and advice
         self.named = named_sources(options, system)
-        self.embedded_estimate = embedded_estimate and options.method in _DENSE_MODES
+        self.embedded_estimate = (check_flag("embedded_estimate", embedded_estimate)
+                                  and options.method in _DENSE_MODES)
         self.model = system.model(profile)
         self.grid = sampling(system.parameters, options.output_interval, self.model)
         self.P = self.grid.parameters(self.model)  # the sample periods on the grid

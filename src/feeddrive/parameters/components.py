@@ -470,7 +470,17 @@ class DriveParameters(_Component):
         -------
         Component or None
             The section's parameters.
+
+        Raises
+        ------
+        ParameterError
+            For a name that is not a string (``['x']`` was "unhashable type", ``3`` read as
+            an absent section: session 29), in one line with the sections' names.
         """
+        if not isinstance(name, str):
+            names = sorted({*(n for n, _ in self.sections), *registry.table(registry.SECTIONS)})
+            raise ParameterError("name", name, "expected a section's name (str), e.g. one of "
+                                 + ", ".join(names))
         return dict(self.sections).get(name)
 
     def __getattr__(self, name: str) -> Any:

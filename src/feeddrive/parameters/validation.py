@@ -207,6 +207,60 @@ def mm_s_hint(value: float, fits: bool) -> str:
     return f"; the API takes m/s: {value:g} mm/s is {value * 1e-3:g}" if fits else ""
 
 
+def is_flag(value: object) -> TypeGuard[bool]:
+    """Whether ``value`` is a boolean: Python's ``bool`` or NumPy's ``np.bool_`` (what a
+    comparison of arrays gives, ``bool(np.all(...))`` not needed); not ``1``, ``"yes"`` or
+    None, which a flag argument read as true or false without a word (an API sweep of
+    session 29).
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+
+    Returns
+    -------
+    bool
+        True for a boolean (to a type checker: a bool).
+    """
+    if isinstance(value, bool):
+        return True
+    import numpy as np
+
+    return isinstance(value, np.bool_)
+
+
+def check_flag(name: str, value: object, expected: str = "expected True or False") -> bool:
+    """A flag argument as a Python ``bool``, or a one-line refusal naming it: the one check of
+    the API's boolean arguments (``frictionless``, ``frequency``, ``hold``, …) and of a
+    parameter set's flags.  ``np.bool_`` is taken (as ``True``/``False``); anything else
+    truthy or falsy (``"yes"``, ``1``, None) is refused.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name in the message (``frictionless``, ``profile.hold``).
+    value : object
+        What was given.
+    expected : str, default "expected True or False"
+        What was expected, for the message (a parameter file's flag: ``"expected true or
+        false"``, TOML's words).
+
+    Returns
+    -------
+    bool
+        The flag.
+
+    Raises
+    ------
+    ParameterError
+        For anything but a ``bool`` or ``np.bool_``.
+    """
+    if not is_flag(value):
+        raise ParameterError(name, value, expected)
+    return bool(value)
+
+
 def check_callback(name: str, value: object, call: str) -> None:
     """Refuse, naming the argument ``name``, a ``value`` that is neither None nor callable
     (a progress callback given as a number or a string failed at its first call).
@@ -610,6 +664,7 @@ def validate(obj: object, prefix: str) -> None:
         elif "options" in meta:
             if value not in meta["options"]:
                 raise ParameterError(path, value, f"expected one of {', '.join(meta['options'])}")
-        elif "flag" in meta:
-            if not isinstance(value, bool):
-                raise ParameterError(path, value, "expected true or false")
+        elif "flag" in meta:  # np.bool_ taken as a bool (SampledSpeed.hold took it)
+            checked = check_flag(path, value, "expected true or false")
+            if checked is not value:
+                object.__setattr__(obj, f.name, checked)

@@ -48,6 +48,30 @@ READS: dict[str, tuple[str, ...]] = {
     "linear-band": ("low", "high", "linear_points"),
     "loop-margins": ("table_speed",),
 }
+#: kind → the settings of :data:`READS` it reads only with ``linear`` on: a critical-speed
+#: search's linear band scans ``linear_points`` speeds; without the band nothing reads them
+#: (they were taken, and hashed into the store key, unused: session 29)
+LINEAR_ONLY: dict[str, tuple[str, ...]] = {"critical-speed": ("linear_points",)}
+
+
+def reads(kind: str, linear: bool = True) -> tuple[str, ...]:
+    """The ``[quantity]`` settings kind ``kind`` reads, given its ``linear`` setting:
+    :data:`READS`, less :data:`LINEAR_ONLY` with ``linear`` off.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`QUANTITIES`.
+    linear : bool, default True
+        The settings' ``linear``.
+
+    Returns
+    -------
+    tuple of str
+        The settings read, in :data:`READS`'s order.
+    """
+    unread = () if linear else LINEAR_ONLY.get(kind, ())
+    return tuple(k for k in READS[kind] if k not in unread)
 
 #: value name → SI unit (for exports; speeds become mm/s at the edges)
 UNITS: dict[str, str] = {
@@ -164,11 +188,14 @@ class QuantitySettings:
         kind = spec.get("kind", "critical-speed")
         if kind not in QUANTITIES:
             raise ParameterError("quantity.kind", kind, f"expected one of {', '.join(QUANTITIES)}")
+        linear_off = spec.get("linear") is False  # checked a bool below
+        read = reads(kind, not linear_off)
         for k in spec:
-            if k != "kind" and k not in READS[kind]:
+            if k != "kind" and k not in read:
+                with_linear = " with linear = false" if k in READS[kind] else ""
                 raise ParameterError(f"quantity.{k}", spec[k],
-                                     f"not read by kind {kind}, which reads "
-                                     f"{', '.join(READS[kind])}")
+                                     f"not read by kind {kind}{with_linear}, which reads "
+                                     f"{', '.join(read)}")
         start = spec.get("start", "rest")
         if start not in ("rest", "running"):
             raise ParameterError("quantity.start", start, "expected rest or running")
@@ -250,10 +277,11 @@ class QuantitySettings:
         Returns
         -------
         dict
-            ``kind`` and the settings its computation reads [SI].
+            ``kind`` and the settings its computation reads [SI] (:func:`reads`: a
+            critical-speed search without its linear band has no ``linear_points``).
         """
         d = asdict(self)
-        return {"kind": self.kind, **{k: d[k] for k in READS[self.kind]}}
+        return {"kind": self.kind, **{k: d[k] for k in reads(self.kind, self.linear)}}
 
 
 def _linear_band(system: Any, nut_speed: float, q: dict[str, Any]) -> dict[str, Any]:
