@@ -277,7 +277,7 @@ class QuantitySettings:
         Returns
         -------
         dict
-            ``kind`` and the settings its computation reads [SI] (:func:`reads`: a
+            ``kind`` and the settings its computation reads [SI] (``reads``: a
             critical-speed search without its linear band has no ``linear_points``).
         """
         d = asdict(self)
