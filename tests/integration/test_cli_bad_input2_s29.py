@@ -13,24 +13,11 @@ import re
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
+from cli_support import one_line_refusal
 
-from feeddrive.cli import app
 from feeddrive.parameters import ParameterError
 from feeddrive.sweep import QuantitySettings
 from feeddrive.sweep.quantities import READS, reads
-
-runner = CliRunner()
-
-
-def _one_line_refusal(args: list[str]) -> str:
-    result = runner.invoke(app, args)
-    assert result.exit_code == 2, result.output
-    assert result.stdout == "", result.stdout
-    lines = [s for s in result.stderr.splitlines() if s.strip()]
-    assert len(lines) == 1, result.stderr
-    return lines[0]
-
 
 # ------------------------------------------------------------------ 1: [quantity] settings
 
@@ -77,7 +64,7 @@ def test_sweep_refuses_a_setting_its_kind_does_not_read(tmp_path: Path) -> None:
     cfg.write_text('name = "lb"\ndrive = "cdfs"\n[design]\nkind = "grid"\n[quantity]\n'
                    'kind = "linear-band"\ntable_speed = 2\n[axes]\n'
                    'table_position = [200, 400]\n', encoding="utf-8")
-    line = _one_line_refusal(["sweep", str(cfg), "--dry-run", "--store",
+    line = one_line_refusal(["sweep", str(cfg), "--dry-run", "--store",
                               str(tmp_path / "lb.sqlite")])
     assert line == (f"error: {cfg}: quantity.table_speed = 2: not read by kind linear-band, "
                     "which reads low, high, linear_points"), line
@@ -94,7 +81,7 @@ def test_sweep_refuses_a_setting_its_kind_does_not_read(tmp_path: Path) -> None:
 def test_export_fmu_refuses_a_nut_hold_its_drive_does_not_read(tmp_path: Path, drive: str,
                                                                why: str, hold: str) -> None:
     out = tmp_path / "x.fmu"
-    line = _one_line_refusal(["export", "fmu", "--drive", drive, "--nut-hold", hold,
+    line = one_line_refusal(["export", "fmu", "--drive", drive, "--nut-hold", hold,
                               "--out", str(out)])
     assert line == (f"error: --nut-hold = '{hold}': applies to a drive that holds its nut "
                     f"(cdfs), not to {drive} ({why})"), line
@@ -143,7 +130,7 @@ def test_a_cdfs_nut_on_its_servo_refuses_a_nut_speed_showing_the_speed_given(
         tmp_path: Path) -> None:
     # the FMU's reference is an input: its constant speed is 0, the given one in its table
     # (the refusal said "--nut-speed = 0 [mm/s]" for --nut-speed 5)
-    line = _one_line_refusal(["export", "fmu", "--drive", "cdfs", "--nut-hold", "servo",
+    line = one_line_refusal(["export", "fmu", "--drive", "cdfs", "--nut-hold", "servo",
                               "--nut-speed", "5", "--out", str(tmp_path / "x.fmu")])
     assert line.startswith("error: --nut-speed = 5 [mm/s]: the CDFS holds the hollow motor")
     assert not (tmp_path / "x.fmu").exists()
@@ -165,14 +152,14 @@ def test_a_latin1_header_without_a_micro_sign_says_the_file_is_not_utf8(
         tmp_path: Path) -> None:
     """It said "no column 'position' … (columns: 'time', 'posici\ufffdn')" alone."""
     path = _trace(tmp_path / "lat.csv", "time [s],posición [mm]", "latin-1")
-    line = _one_line_refusal(["analyze", str(path)])
+    line = one_line_refusal(["analyze", str(path)])
     assert line == ("error: lat.csv, line 1: no column 'position' or 'table_position' in the "
                     "header (columns: 'time', 'posici\ufffdn')" + _NOT_UTF8), line
 
 
 def test_the_same_header_in_utf8_gets_no_hint(tmp_path: Path) -> None:
     path = _trace(tmp_path / "utf.csv", "time [s],posición [mm]", "utf-8")
-    line = _one_line_refusal(["analyze", str(path)])
+    line = one_line_refusal(["analyze", str(path)])
     assert line == ("error: utf.csv, line 1: no column 'position' or 'table_position' in the "
                     "header (columns: 'time', 'posición')"), line
 
@@ -198,7 +185,7 @@ def test_a_positioning_record_and_a_static_test_give_the_hint_too(tmp_path: Path
 
 def test_a_units_hint_still_asks_after_a_micro_sign(tmp_path: Path) -> None:
     path = _trace(tmp_path / "mu.csv", "time [s],position [µm]", "latin-1")
-    line = _one_line_refusal(["analyze", str(path)])
+    line = one_line_refusal(["analyze", str(path)])
     assert "unit '\ufffdm' is not a length unit" in line, line
     assert line.endswith("; the file is not UTF-8 text (a µ saved as Windows-1252 or "
                          "Latin-1?): save it as UTF-8 (docs/measured-data.md)"), line

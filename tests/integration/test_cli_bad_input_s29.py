@@ -9,25 +9,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
-
-from feeddrive.cli import app
-
-runner = CliRunner()
-
-
-def _one_line_refusal(args: list[str]) -> str:
-    result = runner.invoke(app, args)
-    assert result.exit_code == 2, result.output
-    assert result.stdout == "", result.stdout
-    lines = [s for s in result.stderr.splitlines() if s.strip()]
-    assert len(lines) == 1, result.stderr
-    return lines[0]
+from cli_support import one_line_refusal
 
 
 def test_loops_of_a_machine_refuse_a_plot_they_would_not_write(tmp_path: Path) -> None:
     plot = tmp_path / "loops.png"
-    line = _one_line_refusal(["loops", "--machine", "xy-table", "--plot", str(plot)])
+    line = one_line_refusal(["loops", "--machine", "xy-table", "--plot", str(plot)])
     assert line == (f"error: --plot = '{plot}': not with --machine (a machine's loops are "
                     "printed, not plotted)")
     assert not plot.exists()
@@ -39,7 +26,7 @@ def test_loops_of_a_machine_refuse_a_plot_they_would_not_write(tmp_path: Path) -
                                                           "--plot-kind = 'step'"),
 ])
 def test_loops_of_a_machine_refuse_a_drives_options(extra: list[str], option: str) -> None:
-    line = _one_line_refusal(["loops", "--machine", "xy-table", *extra])
+    line = one_line_refusal(["loops", "--machine", "xy-table", *extra])
     assert line.startswith(f"error: {option}: not with --machine ("), line
 
 
@@ -50,7 +37,7 @@ def test_loops_of_a_machine_refuse_a_drives_options(extra: list[str], option: st
     (["--profile", "sine"], "--profile = 'sine'"), (["--frequency", "2"], "--frequency = 2.0"),
 ])
 def test_simulate_machine_refuses_a_drives_options(extra: list[str], option: str) -> None:
-    line = _one_line_refusal(["simulate", "--machine", "xy-table", "--duration", "0.1", *extra])
+    line = one_line_refusal(["simulate", "--machine", "xy-table", "--duration", "0.1", *extra])
     assert line == (f"error: {option}: not with --machine (its axes are set in the machine "
                     "file and follow --contour)"), line
 
@@ -71,14 +58,14 @@ def test_simulate_machine_refuses_a_drives_options(extra: list[str], option: str
 ])
 def test_simulate_refuses_an_option_its_profile_does_not_use(extra: list[str],
                                                              says: str) -> None:
-    line = _one_line_refusal(["simulate", "--table-speed", "1", "--duration", "0.1", *extra])
+    line = one_line_refusal(["simulate", "--table-speed", "1", "--duration", "0.1", *extra])
     assert line == f"error: {says}", line
 
 
 def test_a_csv_profile_refuses_a_speed_option(tmp_path: Path) -> None:
     profile = tmp_path / "p.csv"
     profile.write_text("time,table_speed\n0,1\n1,1\n", encoding="utf-8")
-    line = _one_line_refusal(["simulate", "--profile", "csv", "--profile-file", str(profile),
+    line = one_line_refusal(["simulate", "--profile", "csv", "--profile-file", str(profile),
                               "--table-speed", "2"])
     assert line == ("error: --table-speed = 2.0: not with --profile csv (the --profile-file's "
                     "columns are the command)"), line
@@ -93,7 +80,7 @@ def test_a_plots_setting_without_the_plot_is_refused(tmp_path: Path, args: list[
     trace = tmp_path / "trace.csv"
     trace.write_text("time,x,y\n0,1,0\n", encoding="utf-8")
     args = [str(trace) if a == "trace.csv" else a for a in args]
-    line = _one_line_refusal(args)
+    line = one_line_refusal(args)
     option, value = args[-2], args[-1]
     shown = repr(value) if option == "--plot-kind" else float(value)
     assert line == f"error: {option} = {shown}: applies to --plot, which this run does not write"
@@ -107,13 +94,13 @@ def test_a_plots_setting_without_the_plot_is_refused(tmp_path: Path, args: list[
 ])
 def test_a_positioning_refusal_gives_the_options_unit(args: list[str], says: str) -> None:
     """The values were shown in mm and mm/s as typed, their unit the API's "[m]", "[m/s]"."""
-    line = _one_line_refusal(["positioning", *args])
+    line = one_line_refusal(["positioning", *args])
     assert line.startswith(f"error: {says}"), line
 
 
 @pytest.mark.parametrize("mass", ["0", "-2", "nan"])
 def test_identify_dynamic_names_its_mass_option(tmp_path: Path, mass: str) -> None:
     """It said "mass = 0.0" (the fit's argument), after reading the test's file."""
-    line = _one_line_refusal(["identify", "dynamic", str(tmp_path / "not-read.csv"),
+    line = one_line_refusal(["identify", "dynamic", str(tmp_path / "not-read.csv"),
                               "--mass", mass])
     assert line == f"error: --mass = {float(mass)!r}: expected a finite mass > 0 [kg]", line

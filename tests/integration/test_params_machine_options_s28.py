@@ -9,28 +9,20 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
+from cli_support import RUNNER, one_line_refusal
 
 from feeddrive.cli import app
 from feeddrive.machine import load_machine, machine_toml
 
-RUNNER = CliRunner()
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
-def _one_line_refusal(args: list[str]) -> str:
-    out = RUNNER.invoke(app, args)
-    assert out.exit_code == 2, out.output
-    assert out.stdout == ""
-    lines = out.stderr.strip().splitlines()
-    assert len(lines) == 1, out.stderr
-    return lines[0]
 
 
 @pytest.mark.parametrize("extra", [["--preset", "wang2021"],
                                    ["--params", str(EXAMPLES / "gms_guide.toml")]])
 def test_show_machine_refuses_a_drives_set(extra: list[str]) -> None:
-    line = _one_line_refusal(["params", "show", "--machine", "xy-table", *extra])
+    line = one_line_refusal(["params", "show", "--machine", "xy-table", *extra])
     assert extra[0] in line and "not with --machine" in line
 
 
@@ -41,12 +33,12 @@ def test_show_machine_as_json_is_the_toml_read() -> None:
 
 
 def test_show_machine_refuses_an_unknown_format() -> None:
-    line = _one_line_refusal(["params", "show", "--machine", "xy-table", "--format", "yaml"])
+    line = one_line_refusal(["params", "show", "--machine", "xy-table", "--format", "yaml"])
     assert "--format" in line and "toml or json" in line
 
 
 def test_check_refuses_a_file_beside_machine() -> None:
-    line = _one_line_refusal(["params", "check", str(EXAMPLES / "gms_guide.toml"),
+    line = one_line_refusal(["params", "check", str(EXAMPLES / "gms_guide.toml"),
                               "--machine", "xy-table"])
     assert line.startswith("error: FILE") and "not both" in line
 
