@@ -203,3 +203,21 @@ def test_solver_options_take_an_origin_as_pairs_or_a_mapping() -> None:
         options = fd.SolverOptions(accuracy=1.0, origin=origin)  # type: ignore[arg-type]
         assert options.origin == (("accuracy", "API"),)
         assert options.source("accuracy") == "API"
+
+
+def test_the_machine_api_flags_refuse_what_is_not_a_bool() -> None:
+    """The machine's flag arguments, left out by the sweep (its scope was ``feeddrive``'s
+    ``__all__`` and the analyses): ``"yes"`` was read as true, ``0`` as counter-clockwise."""
+    from feeddrive.machine import load_machine
+    from feeddrive.machine.contour import Circle
+    from feeddrive.machine.linear import axis_loops, linearize_machine
+
+    machine = load_machine("xy-table")
+    with pytest.raises(ParameterError, match=r"^frictionless = 'yes': expected True or False$"):
+        linearize_machine(machine, frictionless="yes")  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"^frictionless = 1: expected True or False$"):
+        axis_loops(machine, frictionless=1)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError,
+                       match=r"^contour\.clockwise = 0: expected True or False$"):
+        Circle(feed=0.01, acceleration=1.0, radius=0.01, clockwise=0)  # type: ignore[arg-type]
+    assert Circle(feed=0.01, acceleration=1.0, radius=0.01, clockwise=np.True_).clockwise is True

@@ -331,8 +331,12 @@ class Circle(Contour):
     turns: float = 1.0
 
     def __post_init__(self) -> None:
+        from ..parameters.validation import check_flag
+
         _positive("contour.radius", self.radius, "m")
         _positive("contour.turns", self.turns, "-")
+        # "yes" or 0 was read as a direction; kept a bool (np.bool_ taken)
+        object.__setattr__(self, "clockwise", check_flag("contour.clockwise", self.clockwise))
         super().__post_init__()
 
     @property

@@ -139,7 +139,9 @@ def linearize_machine(machine: Machine, table_speeds: Mapping[str, float] | None
         (``to_control()``: a python-control ``StateSpace``, the names ``<axis>:<name>``).
     """
     from ..parameters import ParameterError
+    from ..parameters.validation import check_flag
 
+    frictionless = check_flag("frictionless", frictionless)  # "yes" was read as true
     speeds = {ax.name: 0.0 for ax in machine.axes} | dict(table_speeds or {})
     unknown = sorted(set(speeds) - {ax.name for ax in machine.axes})
     if unknown:
