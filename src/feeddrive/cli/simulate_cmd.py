@@ -172,6 +172,14 @@ def simulate_command(
     from ..parameters import ParameterError
     from ..parameters.validation import MISSING
 
+    # each profile's own options (name, value, default): refused beside --machine and under
+    # another profile
+    profile_options = {
+        "sine": (("--frequency", frequency, 0.2),),
+        "trapezoid": (("--ramp-time", ramp_time, 0.5),),
+        "stepdown": (("--lowest-speed", lowest_speed, 0.05), ("--step", step, 0.01),
+                     ("--dwell", dwell, 4.0)),
+        "csv": (("--profile-file", profile_file, None),)}
     if machine is not None:
         from .machine_run import run_machine
 
@@ -185,9 +193,7 @@ def simulate_command(
             ("--drive", drive, "cdfs"), ("--table-speed", table_speed, None),
             ("--nut-speed", nut_speed, 0.0), ("--position", position, 400.0),
             ("--preset", preset_name, None), ("--profile", profile, "constant"),
-            ("--frequency", frequency, 0.2), ("--ramp-time", ramp_time, 0.5),
-            ("--lowest-speed", lowest_speed, 0.05), ("--step", step, 0.01),
-            ("--dwell", dwell, 4.0), ("--profile-file", profile_file, None)),
+            *(given for options_of in profile_options.values() for given in options_of)),
             "its axes are set in the machine file and follow --contour")
         run_machine(machine, contour=contour, radius=radius, feed=feed,
                     acceleration=acceleration, clockwise=clockwise, start_angle=start_angle,
@@ -210,12 +216,7 @@ def simulate_command(
             ("--turns", turns, 1.0), ("--length", length, 100.0), ("--angle", angle, 0.0),
             ("--contour-file", contour_file, None)),
             "an option of --machine, which a drive's run does not use")
-        for used_by, options_of in (
-                ("sine", (("--frequency", frequency, 0.2),)),
-                ("trapezoid", (("--ramp-time", ramp_time, 0.5),)),
-                ("stepdown", (("--lowest-speed", lowest_speed, 0.05), ("--step", step, 0.01),
-                              ("--dwell", dwell, 4.0))),
-                ("csv", (("--profile-file", profile_file, None),))):
+        for used_by, options_of in profile_options.items():
             if used_by != profile:
                 refuse_unused(options_of, f"applies to --profile {used_by}, not to --profile "
                               f"{profile}")
