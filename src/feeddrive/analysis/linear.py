@@ -1210,17 +1210,52 @@ def _axis_name(lin: LinearModel) -> str:
     return lin.axes[0]
 
 
+#: the operating point a DriveSystem is linearised at when the caller names none
+#: (:func:`frequency_response`): table speed [m/s], nut speed [m/s], frictionless
+_DEFAULT_POINT = (1e-3, 0.0, True)
+
+
+def _operating_point(system: DriveSystem | LinearModel, table_speed: float | None,
+                     nut_speed: float | None, frictionless: bool | None
+                     ) -> tuple[float, float, bool]:
+    """The operating point to linearise a DriveSystem at, each argument left None taking its
+    default (:data:`_DEFAULT_POINT`); for a LinearModel, already linearised at its own
+    point, any of them given is refused naming it (they were dropped without a word: an
+    earlier sweep, session 30).
+
+    Raises
+    ------
+    ParameterError
+        For the first of ``table_speed``, ``nut_speed``, ``frictionless`` given (not None)
+        beside a LinearModel.
+    """
+    given = {"table_speed": table_speed, "nut_speed": nut_speed, "frictionless": frictionless}
+    if isinstance(system, LinearModel):
+        for name, value in given.items():
+            if value is not None:
+                raise ParameterError(name, value, "not with a LinearModel: it keeps the point "
+                                     f"it was linearised at ({_mm_s(system.table_speed)} "
+                                     f"table, v_n {_mm_s(system.nut_speed)}, frictionless "
+                                     f"{system.frictionless}); expected None, or "
+                                     f"linearize(system, {name}=…) for another")
+    speed, nut, flag = _DEFAULT_POINT
+    return (speed if table_speed is None else table_speed,
+            nut if nut_speed is None else nut_speed,
+            check_flag("frictionless", flag if frictionless is None else frictionless))
+
+
 def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A002
                        output: str | None = None, frequency_hz: np.ndarray | None = None, *,
-                       table_speed: float = 1e-3, nut_speed: float = 0.0,
-                       frictionless: bool = True) -> FrequencyResponse:
+                       table_speed: float | None = None, nut_speed: float | None = None,
+                       frictionless: bool | None = None) -> FrequencyResponse:
     """A transfer of the closed loop linearised at steady sliding (:func:`linearize`).
 
     Parameters
     ----------
     system : DriveSystem or LinearModel
         The drive (linearised at ``table_speed``, frictionless by default) or a linear model
-        already made (loop gains need a DriveSystem).
+        already made, at its own operating point (then ``table_speed``, ``nut_speed`` and
+        ``frictionless`` are not given; loop gains need a DriveSystem).
     input : str
         A name of :data:`NAMED_RESPONSES` (``"tracking"``, ``"dynamic_compliance"``, …;
         ``output`` then omitted), a loop gain ``"<axis>_position_loop"`` /
@@ -1231,17 +1266,24 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
         ``frequency_response(system, "load_force", "table_position")``.
     frequency_hz : numpy.ndarray or None, default None
         Frequencies [Hz]; None: 200 log-spaced from 0.1 to 1000 Hz.
-    table_speed : float, default 1e-3
-        Steady table speed of the operating point [m/s].
-    nut_speed : float, default 0
-        Steady nut speed of the operating point [m/s] (DDFS).
-    frictionless : bool, default True
-        Linearise with every friction law set to "none".
+    table_speed : float or None, default None
+        Steady table speed of the operating point [m/s]; None: 1e-3 for a DriveSystem.
+    nut_speed : float or None, default None
+        Steady nut speed of the operating point [m/s] (DDFS); None: 0 for a DriveSystem.
+    frictionless : bool or None, default None
+        Linearise with every friction law set to "none"; None: True for a DriveSystem.
 
     Returns
     -------
     FrequencyResponse
         Complex response, magnitude [dB] and phase [deg] over ``frequency_hz``, with its units.
+
+    Raises
+    ------
+    ParameterError
+        Among others, for ``table_speed``, ``nut_speed`` or ``frictionless`` given with a
+        LinearModel: it keeps the operating point it was linearised at (:func:`linearize`
+        another for another point).
     """
     if not isinstance(input, str):
         raise ParameterError("input", input, "expected a name (str): a response of "
@@ -1255,7 +1297,8 @@ def frequency_response(system: DriveSystem | LinearModel, input: str,  # noqa: A
         raise ParameterError("system", type(system).__name__, "expected a DriveSystem, e.g. "
                              "DriveSystem(params, drive='cdfs', table_position=0.4), or the "
                              "LinearModel of linearize(system)")
-    frictionless = check_flag("frictionless", frictionless)
+    table_speed, nut_speed, frictionless = _operating_point(system, table_speed, nut_speed,
+                                                            frictionless)
     if frequency_hz is None:
         freq = np.logspace(-1, 3, 200)
     else:  # ["a"] raised numpy's bare ValueError (an outside check, 2026-12-07); complex
