@@ -1099,7 +1099,9 @@ def analyze_trace(
     window : int, optional
         The window in samples instead.
     segment : bool, default True
-        Detect segments when no command is given.
+        Detect segments when no command is given; False (one segment over the whole trace,
+        its command estimated) is refused with ``command_speed`` or ``command``, which set
+        the segments.
     min_step : float, default 5e-6
         Smallest command change that starts a segment [m/s].
     min_segment_time : float, default 1.0
@@ -1137,6 +1139,13 @@ def analyze_trace(
     # the settings first, before any work
     _check_settings(thresholds, min_step, min_segment_time)
     segment = check_flag("segment", segment)  # "no" was taken as True (session 29)
+    if not segment and (command_speed is not None or command is not None):
+        # dropped without a word: a command sets the segments, detection runs without one
+        # (an earlier sweep, session 30)
+        beside = ("command_speed, which makes the whole trace one segment"
+                  if command_speed is not None else "command, whose steps set the segments")
+        raise ParameterError("segment", False, f"not with {beside} (segments are detected "
+                             "only without a command); expected True or no command")
     if command_speed is not None:
         command_speed = _check_command_speed(command_speed)
     t = np.asarray(time, dtype=float)

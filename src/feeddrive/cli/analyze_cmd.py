@@ -90,7 +90,9 @@ def analyze_command(
     smoothing: float | None = typer.Option(
         None, "--smoothing", help="Savitzky–Golay window [ms] (default 20 ms)."),
     segments: bool = typer.Option(True, "--segments/--no-segments",
-                                  help="Detect step-down segments (without a command column)."),
+                                  help="Detect step-down segments (without --command-speed "
+                                  "or a command column; --no-segments: the whole trace as "
+                                  "one, refused beside a command)."),
     min_step: float = typer.Option(0.005, "--min-step",
                                    help="Smallest speed step between segments [mm/s]."),
     min_segment: float = typer.Option(DEFAULT_MIN_SEGMENT_TIME, "--min-segment",
@@ -179,6 +181,13 @@ def analyze_command(
                                 command_column=command_column, speed_column=speed_column,
                                 time_unit=time_unit, position_unit=position_unit, sep=sep,
                                 decimal=decimal)
+    if not segments and (v_cmd is not None or trace.command_speed is not None):
+        # the API refuses it as segment = False; named here as the option (session 30)
+        beside = ("--command-speed, which makes the whole trace one segment"
+                  if v_cmd is not None else f"the command column {trace.command_column!r} of "
+                  f"{trace.source}, whose steps set the segments")
+        raise ParameterError("--no-segments", True, f"not with {beside} (segments are detected "
+                             "only without a command); expected --segments")
     result = analyze_trace(
         trace.time, trace.position,
         command_speed=v_cmd,

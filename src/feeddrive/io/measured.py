@@ -997,6 +997,8 @@ class PositionTrace:
         Commanded speed, when the file has a command column [m/s].
     speed : numpy.ndarray, optional
         Measured speed, when a speed column was asked for [m/s].
+    command_column : str, optional
+        The column the command speed was read from.
     """
 
     time: np.ndarray  # [s]
@@ -1006,6 +1008,7 @@ class PositionTrace:
     position_column: str
     command_speed: np.ndarray | None = None  # [m/s], when the file has a command column
     speed: np.ndarray | None = None  # [m/s], when a speed column was asked for
+    command_column: str | None = None
 
 
 def read_position_trace(
@@ -1080,13 +1083,15 @@ def read_position_trace(
     check_increasing(table, time, tname)
     names = [position_column] if position_column else ["position", "table_position"]
     position, pname, _ = table.quantity(names, "length", unit=position_unit, default_unit="mm")
-    command = None
+    command, cname = None, None
     candidates = [command_column] if command_column else list(COMMAND_COLUMNS)
     if any(table.has(c) for c in candidates) or command_column:
-        command, _, _ = table.quantity(candidates, "speed", unit=None, default_unit="mm/s")
+        command, cname, _ = table.quantity(candidates, "speed", unit=None,
+                                           default_unit="mm/s")
     speed = None
     if speed_column is not None:
         speed, _, _ = table.quantity([speed_column], "speed", unit=speed_unit,
                                      default_unit="mm/s")
     return PositionTrace(time=time, position=position, lines=table.lines, source=table.source,
-                         position_column=pname, command_speed=command, speed=speed)
+                         position_column=pname, command_speed=command, speed=speed,
+                         command_column=cname)
