@@ -469,19 +469,30 @@ class DriveParameters(_Component):
         Returns
         -------
         Component or None
-            The section's parameters.
+            The section's parameters; None for a registered section the set does not give,
+            and for a name no installed part registers (a plugin's section, its package not
+            installed here: no set can give it).
 
         Raises
         ------
         ParameterError
             For a name that is not a string (``['x']`` was "unhashable type", ``3`` read as
-            an absent section: session 29), in one line with the sections' names.
+            an absent section: session 29), or an unregistered one close to a registered
+            section's, a misspelling (``"backlsh"`` read as an absent section: session 30),
+            in one line with the sections' names.
         """
+        known, given = registry.table(registry.SECTIONS), dict(self.sections)
+        if isinstance(name, str) and (name in known or name in given):
+            return given.get(name)
+        names = sorted({*given, *known})
         if not isinstance(name, str):
-            names = sorted({*(n for n, _ in self.sections), *registry.table(registry.SECTIONS)})
             raise ParameterError("name", name, "expected a section's name (str), e.g. one of "
                                  + ", ".join(names))
-        return dict(self.sections).get(name)
+        hint = did_you_mean(name, names)
+        if hint:
+            raise ParameterError("name", name, f"no section of that name{hint}; expected "
+                                 "one of " + ", ".join(names))
+        return None
 
     def __getattr__(self, name: str) -> Any:
         # sections read like fields (params.screw, params.rack_pinion, dotted paths); an
