@@ -122,7 +122,14 @@ def test_a_machine_axis_refuses_servo_where_no_nut_is_held() -> None:
                                              r"drive that holds its nut \(cdfs\), not to "
                                              r"linear-motor \(it has no nut\)$"):
         machine_from_dict({"name": "m", "axes": axes})
-    axes["x"]["nut_hold"] = "locked"  # as machine_toml writes every axis
+    # "locked" was taken (machine_toml wrote it on every axis) and dropped; since session 30
+    # machine_toml writes it only where a nut is held and any value here is refused
+    axes["x"]["nut_hold"] = "locked"
+    with pytest.raises(ParameterError, match=r"^axes\.x\.nut_hold = 'locked': applies to a "
+                                             r"drive that holds its nut \(cdfs\), not to "
+                                             r"linear-motor \(it has no nut\)$"):
+        machine_from_dict({"name": "m", "axes": axes})
+    del axes["x"]["nut_hold"]
     machine_from_dict({"name": "m", "axes": axes})
 
 

@@ -77,9 +77,11 @@ class MachineAxis:
     drive : str
         A registered topology (``"cdfs"``, ``"linear-motor"`` …).
     table_position : float, default 0.4
-        Start position of a ball-screw nut from the motor-side support [m].
+        Start position of a ball-screw nut from the motor-side support [m] (a machine file
+        refuses it on an axis of another drive).
     nut_hold : str, default "locked"
-        How a CDFS holds its nut (``"locked"`` or ``"servo"``).
+        How a CDFS holds its nut (``"locked"`` or ``"servo"``; a machine file refuses it on
+        an axis of another drive).
     """
 
     name: str
@@ -145,6 +147,7 @@ def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
     if not isinstance(table, Mapping):
         raise ParameterError(f"axes.{name}", table, "expected a table")
     data = dict(table)
+    given = {key for key in ("table_position", "nut_hold") if key in data}
     drive = data.pop("drive", None)
     position = data.pop("table_position", 0.4)
     hold = data.pop("nut_hold", "locked")
@@ -164,15 +167,22 @@ def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
                       if mechanism(d).example_preset == data["extends"]), "cdfs")
     if not (isinstance(position, int | float) and math.isfinite(position)):
         raise ParameterError(f"axes.{name}.table_position", position, "expected a number [m]")
+    if "table_position" in given and not mechanism(drive).uses_table_position:
+        # it was read and dropped: only a ball screw's model depends on where the table
+        # starts (an earlier sweep, session 30)
+        users = [d for d in drive_names() if mechanism(d).uses_table_position]
+        raise ParameterError(f"axes.{name}.table_position", position, "applies to a drive "
+                             f"whose model depends on the table's position ({', '.join(users)}),"
+                             f" not to {drive}; omit it")
     try:
         mechanism(drive).check(params, drive, float(position))
     except ParameterError as err:
         raise ParameterError(f"axes.{name}.{err.field}", err.value, err.message) from None
     if hold not in ("locked", "servo"):
         raise ParameterError(f"axes.{name}.nut_hold", hold, "expected locked or servo")
-    # "servo" on an axis that holds no nut; "locked" is taken everywhere (machine_toml writes
-    # it for every axis)
-    check_nut_hold(drive, hold, field=f"axes.{name}.nut_hold")
+    # any nut hold written on an axis that holds no nut ("locked" too, which was read and
+    # dropped: session 30; machine_toml writes it only where a nut is held)
+    check_nut_hold(drive, hold, field=f"axes.{name}.nut_hold", given="nut_hold" in given)
     return MachineAxis(name, params, drive, float(position), hold)
 
 
@@ -910,7 +920,8 @@ def machine_summary(result: Any, machine: Machine, contour: Contour) -> dict[str
 
 
 def machine_toml(machine: Machine) -> str:
-    """The machine as a machine file: each axis' drive, start position and whole resolved
+    """The machine as a machine file: each axis' drive, start position and nut hold (where
+    its drive uses them: a ball screw's start position, a held nut's hold) and whole resolved
     parameter set under ``[axes.<name>]``, each coupling part under ``[couplings.<name>]``
     (SI units; read back by :func:`machine_from_dict` to the same machine).
 
@@ -924,14 +935,18 @@ def machine_toml(machine: Machine) -> str:
     str
         TOML text.
     """
+    from ..model.mechanisms import mechanism
     from ..parameters import dumps
 
     out = ["# feeddrive machine file. SI units throughout (docs/machine.md).",
            f"name = {json.dumps(machine.name)}", ""]
     for ax in machine.axes:
-        out += [f"[axes.{ax.name}]", f"drive = {json.dumps(ax.drive)}",
-                f"table_position = {ax.table_position!r}  # [m]",
-                f"nut_hold = {json.dumps(ax.nut_hold)}"]
+        topology = mechanism(ax.drive)
+        out += [f"[axes.{ax.name}]", f"drive = {json.dumps(ax.drive)}"]
+        if topology.uses_table_position:  # the reader refuses them where unused
+            out.append(f"table_position = {ax.table_position!r}  # [m]")
+        if topology.held_part(ax.drive) == "nut":
+            out.append(f"nut_hold = {json.dumps(ax.nut_hold)}")
         for line in dumps(ax.parameters).splitlines():
             if line.startswith("#"):
                 continue
