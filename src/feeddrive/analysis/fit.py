@@ -1623,17 +1623,23 @@ def _same_record(a: Experiment, b: Experiment) -> bool:
             and all(np.array_equal(a.signals[k], b.signals[k]) for k in a.signals))
 
 
-def _refuse_repeated_records(experiments: Sequence[Experiment]) -> None:
-    """Refuse one record given twice (the same file twice on the command line): its residuals
-    counted twice and its standard errors came out 1/√2 of its own, without a word (a
-    bad-input sweep, session 29)."""
+#: why a fit takes each record once (:func:`_refuse_repeated_records`)
+ONCE_IN_A_FIT = ("each record counts once in a fit (twice, its residuals would weigh double "
+                 "and its intervals shrink by √2)")
+
+
+def _refuse_repeated_records(experiments: Sequence[Experiment],
+                             why: str = ONCE_IN_A_FIT) -> None:
+    """Refuse one record given twice (the same file twice on the command line), in one line
+    naming it and saying ``why``: in a fit its residuals counted twice and its standard
+    errors came out 1/√2 of its own, without a word (a bad-input sweep, session 29);
+    ``validate`` scored it twice (session 30)."""
     seen: list[Experiment] = []
     for e in experiments:
         twin = next((s for s in seen if _same_record(s, e)), None)
         if twin is not None:
             same = "given twice" if twin.source == e.source else f"the same record as {twin.source}"
-            raise FitError(f"{e.source}: {same}; each record counts once in a fit (twice, its "
-                           "residuals would weigh double and its intervals shrink by √2)")
+            raise FitError(f"{e.source}: {same}; {why}")
         seen.append(e)
 
 

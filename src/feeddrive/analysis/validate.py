@@ -32,7 +32,15 @@ from typing import Any
 
 import numpy as np
 
-from .fit import EDGE_UNITS, JACOBIAN_STEP, Experiment, FitError, _no_effect, simulate_experiment
+from .fit import (
+    EDGE_UNITS,
+    JACOBIAN_STEP,
+    Experiment,
+    FitError,
+    _no_effect,
+    _refuse_repeated_records,
+    simulate_experiment,
+)
 
 __all__ = ["SignalValidation", "ValidationResult", "plot_validation", "validate"]
 
@@ -158,6 +166,9 @@ def validate(fit_file: str | Path, experiments: Sequence[Experiment], *,
     say = progress or (lambda _t: None)
     if not experiments:
         raise FitError("no record given")
+    # one record twice was scored twice, its rows repeated (an earlier sweep, session 30)
+    _refuse_repeated_records(experiments, "each held-out record is scored once (twice, its "
+                             "rows would repeat)")
     if not 0 < level < 1:
         raise FitError(f"--level {level!r}: expected a fraction in (0, 1)")
     rec = read_fit_record(fit_file)

@@ -36,7 +36,7 @@ def parse_positions_mm(text: str, screw_length: float) -> list[float]:
     Raises
     ------
     ParameterError
-        For a token that is not a number or lies outside the supports.
+        For a token that is not a number, lies outside the supports or repeats a position.
     """
     length_mm = screw_length / MM
     out = []
@@ -56,6 +56,9 @@ def parse_positions_mm(text: str, screw_length: float) -> list[float]:
         if value < _units.SMALLEST_PLAUSIBLE_POSITION_MM:
             _units.warn(f"--positions: {token} mm looks like a value in metres "
                         f"({value * 1e3:g} mm?); the CLI takes mm")
+        if value * MM in out:  # its row was printed twice (an earlier sweep, session 30)
+            raise ParameterError("--positions", token, "given twice; expected each position "
+                                 "once [mm], e.g. 200,400")
         out.append(value * MM)
     return out
 
