@@ -23,7 +23,7 @@ from feeddrive.backends import c_cache, c_engine
 from feeddrive.backends.c_backend import STRICT_FLAGS
 from feeddrive.model.mechanisms.base import drive_names, mechanism
 from feeddrive.model.reference import ConstantSpeed
-from feeddrive.solvers import builds, dopri5, driver, switching
+from feeddrive.solvers import builds, dopri5, driver, driver_text, switching
 
 HAVE_CC = any(shutil.which(c) for c in ("cc", "gcc", "clang"))
 needs_cc = pytest.mark.skipif(not HAVE_CC, reason="no C compiler (cc, gcc, clang) on PATH")
@@ -111,7 +111,7 @@ def test_the_driver_is_lowered_at_the_boundary_only(use: str) -> None:
             inspect.getsource(maker)).body[0].body[-1].value.elts}
         assert {a.arg for a in fn.args.args} - {a.arg for a in entry.args.args} <= made
     assert n_stats == (len(switching.STAT_NAMES) if use == "integrate_dense" else 5)
-    original = ast.parse(driver.source(use, inline=False)).body[0]
+    original = ast.parse(driver_text.source(use, inline=False)).body[0]
     assert isinstance(original, ast.FunctionDef)
     def calls(tree: ast.AST) -> list[str]:
         returned = {id(n) for r in ast.walk(tree) if isinstance(r, ast.Return)

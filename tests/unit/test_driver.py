@@ -15,7 +15,7 @@ from feeddrive.engine.simulate import (
     profile_breakpoints,
     sampling,
 )
-from feeddrive.solvers import driver, switching
+from feeddrive.solvers import driver, driver_text, switching
 
 W = fd.preset("wang2021")
 
@@ -40,32 +40,35 @@ def _template(a: float, flag: bool, mode: int, out: np.ndarray) -> float:
 
 
 def test_specialise_folds_flags_branches_and_one_valued_locals() -> None:
-    text = driver.specialise(_template, "f", ["a", "out"], {"flag": True, "mode": 0}, "doc")
+    text = driver_text.specialise(_template, "f", ["a", "out"], {"flag": True, "mode": 0},
+                                  "doc")
     body = text.split('"""')[-1]
     for gone in ("flag", "fast", "mode", "unused", "while", "-a", "-x", "* 2.0"):
         assert gone not in body, (gone, text)
     assert text.startswith("def f(a: float, out: np.ndarray)")
-    fn = driver.define(text, "f")
+    fn = driver_text.define(text, "f")
     out = np.zeros(1)
     assert fn(3.0, out) == 3.0 and out[0] == 3.0
-    other = driver.define(driver.specialise(_template, "g", ["a", "out"],
-                                            {"flag": False, "mode": 1}, "doc"), "g")
+    other = driver_text.define(driver_text.specialise(_template, "g", ["a", "out"],
+                                                      {"flag": False, "mode": 1}, "doc"),
+                               "g")
     assert other(3.0, out) == 6.0 and out[0] == 0.0  # x = -6, returned -x
     with pytest.raises(ValueError, match="not parameters"):
-        driver.specialise(_template, "h", ["a", "b"], {"flag": True, "mode": 0}, "doc")
+        driver_text.specialise(_template, "h", ["a", "b"], {"flag": True, "mode": 0}, "doc")
     with pytest.raises(ValueError, match="reads"):  # a dropped parameter still read
-        driver.specialise(_template, "h", ["out"], {"flag": True, "mode": 0}, "doc")
+        driver_text.specialise(_template, "h", ["out"], {"flag": True, "mode": 0}, "doc")
 
 
 def test_each_use_is_the_one_template_and_the_explicit_ones_hold_no_rodas4() -> None:
     for use in driver.USES:
-        text = driver.source(use)
+        text = driver_text.source(use)
         assert f"def {use}(" in text and "_dp5_step(" not in text  # the step written in
     # the dense driver's step attempt (numba inlines it: the Rosenbrock step in its text)
-    assert "step_attempt(" in driver.source("integrate_dense")
-    assert "_r4_rodas4_step(" in driver.piece_source("step_attempt")
+    assert "step_attempt(" in driver_text.source("integrate_dense")
+    assert "_r4_rodas4_step(" in driver_text.piece_source("step_attempt")
     for use in ("integrate", "advance"):
-        assert "_r4_" not in driver.source(use) and "modal_step_cap" not in driver.source(use)
+        text = driver_text.source(use)
+        assert "_r4_" not in text and "modal_step_cap" not in text
 
 
 def test_output_buffers_are_written_and_returned_as_views_bit_identical() -> None:
@@ -108,13 +111,13 @@ def test_output_buffers_are_written_and_returned_as_views_bit_identical() -> Non
 def test_the_specialised_text_is_the_template_specialised() -> None:
     """What ``source`` gives is the template with the use's flags folded (the FMU's
     ``advance``, its step functions called, not written in)."""
-    driver.source.cache_clear()
-    made = driver.source("advance", inline=False)
+    driver_text.source.cache_clear()
+    made = driver_text.source("advance", inline=False)
     params, fixed, doc = driver.USES["advance"]
-    fresh = driver.specialise(driver.driver_template, "advance", params,
-                              {"LAND": False, "DENSE": False, **driver._MODES, **fixed},
-                              doc, "int")
+    fresh = driver_text.specialise(driver.driver_template, "advance", params,
+                                   {"LAND": False, "DENSE": False, **driver_text._MODES,
+                                    **fixed}, doc, "int")
     assert fresh == made
-    assert driver.source("advance", inline=False) is made  # memoised in the process
+    assert driver_text.source("advance", inline=False) is made  # memoised in the process
     with pytest.raises(KeyError):
-        driver.source("nothing")
+        driver_text.source("nothing")

@@ -229,16 +229,16 @@ def test_the_drivers_have_the_step_written_in_and_the_fmu_calls_it() -> None:
     the one driver (feeddrive.solvers.driver) specialised: the explicit-only uses hold none of
     the RODAS4 / eigen-analysis code."""
     from feeddrive.fmu import solver as fmu_solver
-    from feeddrive.solvers import dopri5, driver, switching
+    from feeddrive.solvers import dopri5, driver_text, switching
 
-    def driver_text(sources: list[str], use: str) -> str:
+    def defining(sources: list[str], use: str) -> str:
         """The one source of ``sources`` that defines ``use`` (the imports sit beside it)."""
         (text,) = [t for t in sources if f"def {use}(" in t]
         return text
 
-    integrate = driver_text(dopri5.template_sources(), "integrate")
-    dense = driver_text(switching.template_sources(), "integrate_dense")
-    attempt = driver.piece_source("step_attempt")
+    integrate = defining(dopri5.template_sources(), "integrate")
+    dense = defining(switching.template_sources(), "integrate_dense")
+    attempt = driver_text.piece_source("step_attempt")
     assert "step_attempt(" in dense and "_dp5_" not in dense
     stage = "yt[i] = y[i] + h_try * 0.2 * f0[i]"  # the first stage, h renamed to h_try
     for text in (integrate, attempt):
@@ -255,6 +255,7 @@ def test_the_drivers_have_the_step_written_in_and_the_fmu_calls_it() -> None:
         for name in ("_r4_", "modal_step_cap", "stiff", "MODE_", "LAND", "DENSE", "COMM"):
             assert name not in body, name
     assert "_r4_rodas4_step(" in attempt
-    assert "stops" not in driver.source("advance") and "t_out" not in driver.source("advance")
+    advance = driver_text.source("advance")
+    assert "stops" not in advance and "t_out" not in advance
     with pytest.raises(ValueError, match="positional arguments"):
         steps.inline_steps("def f(h, k):\n    _dp5_error(h, k)\n")

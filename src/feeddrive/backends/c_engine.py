@@ -4,12 +4,12 @@ small library of its kernels, which the drivers reach through a table; called by
 
 Every method runs through the driver's two specialisations (``integrate``: ``dopri5`` and its
 fixed-step variant; ``integrate_dense``: ``modal``, ``auto``, ``rodas4``, ``dopri5-dense`` and
-theirs).  Their text (:func:`feeddrive.solvers.driver.source` with ``inline=False``) is read as
-it is, whatever its authors change, and *lowered* at the boundary between Python and C alone
-(:func:`lowered_source`, :func:`feeddrive.solvers.driver.lower_outputs`, which lowers numba's
-dense driver too): the output arrays the numba breakpoint driver allocates are the caller's
-buffers, the statistics array is written into a caller's array and the driver returns the
-number of outputs; the drivers, which take their work arrays from their caller
+theirs).  Their text (:func:`feeddrive.solvers.driver_text.source` with ``inline=False``) is
+read as it is, whatever its authors change, and *lowered* at the boundary between Python and C
+alone (:func:`lowered_source`, :func:`feeddrive.solvers.driver_text.lower_outputs`, which
+lowers numba's dense driver too): the output arrays the numba breakpoint driver allocates are
+the caller's buffers, the statistics array is written into a caller's array and the driver
+returns the number of outputs; the drivers, which take their work arrays from their caller
 (:func:`feeddrive.solvers.driver.step_space`, ``work_space``), are called by an entry that
 makes them.
 Everything else — the steps, the RODAS4 Jacobian and linear solves, the
@@ -82,9 +82,9 @@ __all__ = ["USES", "CEngine", "driver_source", "lowered_source", "model_source"]
 #: the driver's uses the engine calls, by name of the numba function they replace
 USES = ("integrate", "integrate_dense")
 #: the driver's output arrays → the caller's buffers the C driver writes, and its statistics
-#: array → the caller's (:data:`feeddrive.solvers.driver.OUTPUTS`, ``STATS``, ``STATS_OUT``,
-#: which lower the text: :func:`feeddrive.solvers.driver.lower_outputs`; repeated here, the
-#: engine importing the driver only when it builds)
+#: array → the caller's (:data:`feeddrive.solvers.driver_text.OUTPUTS`, ``STATS``,
+#: ``STATS_OUT``, which lower the text: :func:`feeddrive.solvers.driver_text.lower_outputs`;
+#: repeated here, the engine importing the driver's text only when it builds)
 OUTPUTS = {"t_out": "t_buf", "y_out": "y_buf", "aux_out": "aux_buf"}
 STATS = "stats"
 STATS_OUT = "stats_out"
@@ -163,11 +163,12 @@ def lowered_source(use: str) -> tuple[str, int]:
     n_stats : int
         The length of the statistics.
     """
-    from ..solvers import driver
+    from ..solvers import driver_text
 
     if use not in USES:
         raise KeyError(f"{use!r}: not a use of the C engine ({', '.join(USES)})")
-    tree, n_stats = driver.lower_outputs(driver.source(use, inline=False), TranslationError)
+    tree, n_stats = driver_text.lower_outputs(driver_text.source(use, inline=False),
+                                              TranslationError)
     fn = tree.body[0]
     assert isinstance(fn, ast.FunctionDef)
     tree.body = _allocating_entry(fn)
@@ -185,13 +186,13 @@ def _allocating_entry(fn: ast.FunctionDef) -> list[ast.stmt]:
     the entry that makes them as those functions do — on the stack, as C99 arrays — and calls
     it renamed ``<name>_loop``: the C build's caller is C, no array passed through ctypes for
     them."""
-    from ..solvers import driver
+    from ..solvers import driver, driver_text
 
     params = [a.arg for a in fn.args.args]
     made: set[str] = set()
     statements: list[ast.stmt] = []
     for maker in (driver.step_space, driver.work_space):
-        work = ast.parse(driver._text_of(maker)).body[0]
+        work = ast.parse(driver_text._text_of(maker)).body[0]
         assert isinstance(work, ast.FunctionDef)
         result = work.body[-1]
         assert isinstance(result, ast.Return) and isinstance(result.value, ast.Tuple)
@@ -253,11 +254,11 @@ PARAM_TYPES = {**SOLVER_TYPES, "all_live": "bool*", "step_attempt.steps": "int"}
 
 
 def _translated(use: str) -> dict[str, Any]:
-    from ..solvers import driver
+    from ..solvers import driver_text
 
     if use == "functions":
         return _functions_unit()
-    fn = driver.define(lowered_source(use)[0], use)
+    fn = driver_text.define(lowered_source(use)[0], use)
     text = translate_kernels([fn], {"N_AUX": "FD_N_AUX"}, bindings=_bindings(),
                              shapes=SHAPES, param_types=PARAM_TYPES,
                              names={use: f"fd_{use}"}, context=CONTEXT,
@@ -344,12 +345,12 @@ def function_source(name: str) -> str:
 
 
 def _functions_unit() -> dict[str, Any]:
-    from ..solvers import driver
+    from ..solvers import driver_text
 
     texts, params = [], {}
     for name, (_, cname, shapes, types) in FUNCTIONS.items():
         source = function_source(name)
-        fn = driver.define(source, name)
+        fn = driver_text.define(source, name)
         fn.__globals__.update(vars(__import__(_template(name).__module__, fromlist=["_"])))
         texts.append(translate_kernels([fn], {"N_AUX": "FD_N_AUX", "N_HELD": "FD_N_HELD"},
                                        bindings={"rhs": RHS}, shapes=shapes,

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ..solvers import driver
+from ..solvers import driver_text
 
 # memory[...] (written with these literal indices in the driver's COMM branches: the C
 # translator takes a name inside an assignment target for a local): step size, PI
@@ -79,7 +79,7 @@ def template_source() -> str:
     """
     consts = "\n".join(f"{k} = {v!r}" for k, v in CONSTANTS.items())
     return (consts + "\nfrom feeddrive.solvers.schedule import due, next_instant\n\n\n@kernel\n"
-            + driver.source("advance", inline=False))
+            + driver_text.source("advance", inline=False))
 
 
 @functools.cache
@@ -111,4 +111,4 @@ def advance_function() -> Any:
     .. [1] J. R. Dormand, P. J. Prince, "A family of embedded Runge-Kutta formulae", J. Comput.
        Appl. Math. 6 (1980) 19–26.
     """
-    return driver.define(driver.source("advance", inline=False), "advance")
+    return driver_text.define(driver_text.source("advance", inline=False), "advance")

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import builds, driver
+from . import builds, driver, driver_text
 from .driver import (  # noqa: F401 - the status codes, read from here by the engine
     STATUS_DIVERGED,
     STATUS_MAX_STEPS,
@@ -65,7 +65,7 @@ def template_sources() -> list[str]:
         Python sources.
     """
     names = ", ".join(CONSTANTS)
-    src = driver.source("integrate")
+    src = driver_text.source("integrate")
     aux = inspect.getsource(auxiliary_template).replace("def auxiliary_template(",
                                                         "def auxiliary(", 1)
     return [f"from feeddrive.solvers.driver import ({names})",

@@ -71,10 +71,11 @@ def solver_sources() -> list[str]:
     list of str
         Python sources of the solver functions.
     """
-    from . import dopri5, driver, evaluate, rodas4, steps, switching
+    from . import dopri5, driver_text, evaluate, rodas4, steps, switching
 
     return (steps.template_sources() + rodas4.template_sources()
-            + driver.template_sources() + dopri5.template_sources() + switching.template_sources()
+            + driver_text.template_sources() + dopri5.template_sources()
+            + switching.template_sources()
             + evaluate.template_sources())
 
 

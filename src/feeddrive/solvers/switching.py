@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import builds, driver
+from . import builds, driver, driver_text
 from .driver import (  # noqa: F401 - the modes and thresholds, read from here
     MEMORY_SCALARS,
     MODAL_EVERY,
@@ -305,7 +305,7 @@ def template_sources() -> list[str]:
     list of str
         Python sources.
     """
-    src = driver.source("integrate_dense")
+    src = driver_text.source("integrate_dense")
     return [f"from feeddrive.solvers.switching import ({', '.join(CONSTANTS)})",
             "from feeddrive.solvers.schedule import due, next_instant",
             "from feeddrive.solvers.events import first_crossing as switch_crossing",
