@@ -237,6 +237,29 @@ def test_grid_size_is_counted_not_materialised(monkeypatch: pytest.MonkeyPatch) 
     assert cfg.distinct_count() == 1000 and built == []
 
 
+def _walked(cfg: sweep_design.SweepConfig) -> int:
+    """The distinct count by walking every point (what distinct_count did until 2026-12-07)."""
+    return len({cfg.effective(c) for c in cfg.iter_coordinates()})
+
+
+@pytest.mark.parametrize("drives", [["cdfs"], ["ddfs"], ["cdfs", "ddfs", "cdfs"],
+                                    ["linear-motor", "ddfs"]])
+def test_a_grids_distinct_count_is_the_walks_without_walking(
+        monkeypatch: pytest.MonkeyPatch, drives: list[str]) -> None:
+    cfg = parse_config({**BASE, "axes": {"drive": {"values": drives},
+                                         "table_position": {"values": [300, 400, 300.0]},
+                                         "nut_speed": {"low": 0, "high": 1, "points": 4}}},
+                       "/tmp/c.toml")
+    walked = _walked(cfg)
+    # counted by hand: three positions (300 and 300.0 are two values to the walk), times the
+    # nut speed's 4 values for a DDFS, which follows it; a CDFS or a linear motor ignores it
+    expected = sum(3 * (4 if d == "ddfs" else 1) for d in dict.fromkeys(drives))
+    assert walked == expected
+    monkeypatch.setattr(sweep_design.SweepConfig, "iter_coordinates",
+                        lambda self: (_ for _ in ()).throw(AssertionError("walked")))
+    assert cfg.distinct_count() == expected
+
+
 @pytest.mark.parametrize(("name", "why"), [
     (42, "expected a text name"), ({"a": 1}, "expected a text name"),
     ("../../escaped", "not a path"), ("/tmp/abs", "not a path"), (".hidden", "not a path"),

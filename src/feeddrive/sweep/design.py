@@ -23,7 +23,7 @@ import hashlib
 import itertools
 import math
 import os
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -324,23 +324,44 @@ class SweepConfig:
         tuple
             Sorted (name, repr of value) pairs.
         """
+        return self._effective(coords, _no_nut)
+
+    def _effective(self, coords: Mapping[str, Any],
+                   ignores_nut: Callable[[str], bool]) -> tuple[Any, ...]:
         drive = str(coords.get("drive", self.drive))
         return tuple(sorted((k, repr(v)) for k, v in coords.items()
-                            if not (k == "nut_speed" and _no_nut(drive))))
+                            if not (k == "nut_speed" and ignores_nut(drive))))
 
     def distinct_count(self) -> int:
         """How many distinct computations the design asks for, from the coordinates alone
-        (:meth:`effective`); no parameter set is built.
+        (:meth:`effective`); no parameter set is built.  A grid's count is a sum over its
+        drives of products of its axes' distinct values (never a walk over its points).
 
         Returns
         -------
         int
             The number of distinct points.
         """
+        _check_count(self.count(), self.design)
+        known: dict[str, bool] = {}
+
+        def ignores_nut(drive: str) -> bool:
+            if drive not in known:
+                known[drive] = _no_nut(drive)
+            return known[drive]
+
+        if self.design == "grid":
+            values = {a.name: {repr(v): v for v in a.grid()} for a in self.axes}
+            drives = ([str(v) for v in values["drive"].values()] if "drive" in values
+                      else [str(self.drive)])
+            return sum(math.prod(len(distinct) for name, distinct in values.items()
+                                 if name != "drive"
+                                 and not (name == "nut_speed" and ignores_nut(drive)))
+                       for drive in drives)
         seen = set()
         for coords in self.iter_coordinates():
-            seen.add(hashlib.blake2b(repr(self.effective(coords)).encode(), digest_size=12)
-                     .digest())
+            seen.add(hashlib.blake2b(repr(self._effective(coords, ignores_nut)).encode(),
+                                     digest_size=12).digest())
         return len(seen)
 
     def iter_points(self, *, bases: dict[str, DriveParameters] | None = None
