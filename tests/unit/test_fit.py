@@ -359,3 +359,36 @@ def test_the_kept_residual_vectors_are_bounded_in_bytes(monkeypatch: pytest.Monk
     before = len(simulated)
     ev.batch([np.array([1.0 + 0.01 * 39, 1.0])])  # the newest point: kept
     assert len(simulated) == before
+
+
+def test_a_task_run_in_this_process_takes_its_set_not_the_text_read_back(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A parameter point's task carries its set as TOML text (a worker reads it); run in
+    the process that wrote it, it takes the set itself: no text is read back (that read was
+    ≈ 1/8 of a serial fit), and the residual is the one a worker, reading the text, gets."""
+    import feeddrive.parameters as fp
+    from feeddrive._kept import Kept
+
+    read: list[str] = []
+    loads = fp.loads
+
+    def counted(text: str, **kw: Any) -> fd.DriveParameters:
+        read.append(text)
+        return loads(text, **kw)
+
+    monkeypatch.setattr(fp, "loads", counted)
+    base = fd.preset("wang2021")
+    path = "friction.screw.positive.viscous_coefficient"
+    ev = fitmod._Evaluator(base, "cdfs", 0.4, [path], np.array([_value(base, path)]), [_exp()],
+                           {}, None, None)
+    theta = np.array([1.0123456789])
+    here = ev.batch([theta])[0]
+    assert read == []
+    task, = ev._tasks(theta) or []
+    assert loads(task["parameters"]) == ev.parameters(theta)
+    monkeypatch.setattr(fitmod, "_WRITTEN_HERE", Kept(8))  # as in a worker: nothing written
+    monkeypatch.setattr(fitmod, "_read_parameters",
+                        fitmod._read_parameters.__wrapped__)  # and nothing read before
+    worker = ev._residual([fitmod.simulate_experiment(task)])
+    assert read == [task["parameters"]]
+    np.testing.assert_array_equal(here, worker)

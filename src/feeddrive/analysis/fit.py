@@ -66,6 +66,7 @@ import numpy as np
 
 # scipy.optimize and scipy.stats are imported where used: ≈ 1 s of imports that the callers
 # of this module's light helpers (`_no_effect`, `Experiment`: the sensitivity) need not pay
+from .._kept import Kept
 from ..parameters import DriveParameters, ParameterError, dumps
 from ..parameters.toml_io import toml_comment, toml_string
 from ..parameters.validation import MISSING, check_flag, check_speed, is_real
@@ -733,11 +734,24 @@ def _no_effect(params: DriveParameters, drive: str, path: str,
 RESIDUAL_CACHE_BYTES = 256 * 2 ** 20
 
 
-@functools.lru_cache(maxsize=8)
+#: the parameter sets whose task text this process wrote (:meth:`_Evaluator._tasks`), by
+#: that text: a task run here takes the set itself instead of reading the text back
+#: (``loads(dumps(p)) == p``, :func:`~feeddrive.parameters.dumps`; the read was ≈ 1/8 of a
+#: serial fit's time, once per parameter point); a worker process reads the text
+_WRITTEN_HERE = Kept(8)
+
+
 def _parameters_of(text: str) -> DriveParameters:
-    """The parameter set of a task's TOML text, read once per text in a process: the
-    experiments of one parameter point carry the same text (a parameter set is immutable,
-    so one object serves them all)."""
+    """The parameter set of a task's TOML text: the set itself where this process wrote the
+    text (:data:`_WRITTEN_HERE`), else read once per text in a process: the experiments of
+    one parameter point carry the same text (a parameter set is immutable, so one object
+    serves them all)."""
+    written = _WRITTEN_HERE.get(text)
+    return written if written is not None else _read_parameters(text)
+
+
+@functools.lru_cache(maxsize=8)
+def _read_parameters(text: str) -> DriveParameters:
     from ..parameters import loads
 
     return loads(text)
@@ -866,9 +880,12 @@ class _Evaluator:
         from ..engine.options import current
 
         try:
-            text = dumps(self.parameters(theta))
+            params = self.parameters(theta)
+            text = dumps(params)
         except ParameterError:
             return None
+        if not params.solver:  # a [solver] table reads back with its source as the set's
+            _WRITTEN_HERE.put(text, params)
         options = current()
         solver, origin = options.record(), [list(pair) for pair in options.origin]
         return [{"parameters": text, "drive": self.drive, "table_position": self.position,
