@@ -46,9 +46,13 @@ class Kept:
             if weigh is None or weigh(value) <= self.budget:
                 self._items[key] = value
                 self._items.move_to_end(key)
-            while len(self._items) > self.size or (
-                    weigh is not None and sum(map(weigh, self._items.values())) > self.budget):
-                self._items.popitem(last=False)
+            # the weight kept, summed once and lessened by each entry that leaves (summed
+            # again on every pass, a put cost a whole sum per entry leaving)
+            total = 0 if weigh is None else sum(map(weigh, self._items.values()))
+            while len(self._items) > self.size or total > self.budget:
+                _, left = self._items.popitem(last=False)
+                if weigh is not None:
+                    total -= weigh(left)
 
     def values(self) -> list[Any]:
         """The entries, the oldest first."""
