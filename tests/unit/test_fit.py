@@ -365,7 +365,7 @@ def test_a_task_run_in_this_process_takes_its_set_not_the_text_read_back(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """A parameter point's task carries its set as TOML text (a worker reads it); run in
     the process that wrote it, it takes the set itself: no text is read back (that read was
-    ≈ 1/8 of a serial fit), and the residual is the one a worker, reading the text, gets."""
+    ≈ 1/10 of a serial fit), and the residual is the one a worker, reading the text, gets."""
     import feeddrive.parameters as fp
     from feeddrive._kept import Kept
 

@@ -736,7 +736,7 @@ RESIDUAL_CACHE_BYTES = 256 * 2 ** 20
 
 #: the parameter sets whose task text this process wrote (:meth:`_Evaluator._tasks`), by
 #: that text: a task run here takes the set itself instead of reading the text back
-#: (``loads(dumps(p)) == p``, :func:`~feeddrive.parameters.dumps`; the read was ≈ 1/8 of a
+#: (``loads(dumps(p)) == p``, :func:`~feeddrive.parameters.dumps`; the read was ≈ 1/10 of a
 #: serial fit's time, once per parameter point); a worker process reads the text
 _WRITTEN_HERE = Kept(8)
 
