@@ -468,7 +468,8 @@ def compare_compensations(params: DriveParameters, *, drive: str = "cdfs",
     drive : str, default "cdfs"
         The drive.
     table_position : float, default 0.4
-        Table position [m].
+        Table position [m]; only the default on a drive whose model does not depend on it
+        (:func:`~feeddrive.model.mechanisms.base.check_table_position`).
     names : sequence of str, default SCHEMES
         The schemes, each once.
     metrics : sequence of str, default METRICS
@@ -490,16 +491,19 @@ def compare_compensations(params: DriveParameters, *, drive: str = "cdfs",
     Raises
     ------
     ParameterError
-        Before any run: a quantity or scheme unknown or given twice, a band ≤ 0, a set
-        without sampled loops.
+        Before any run: a quantity or scheme unknown or given twice, a band ≤ 0, a start
+        position the drive's model does not read, a set without sampled loops.
     feeddrive.analysis.compensation.RowsInterrupted
         On Ctrl-C, with the schemes' rows finished before it.
     """
+    from ..model.mechanisms.base import check_table_position
     from .compensation import RowsInterrupted
 
     _check_metrics(metrics)
     if not (math.isfinite(band) and band > 0.0):
         raise ParameterError("band", band, "expected a band > 0 [m]")
+    # before any run: the reversal metric's targets would carry it to no model at all
+    check_table_position(drive, table_position)
     chosen = schemes(params, names, reversal_current=reversal_current)
     total = len(chosen) * len(metrics)
     done = 0
