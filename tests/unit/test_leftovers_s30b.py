@@ -208,3 +208,21 @@ def test_the_explorer_disables_the_position_of_a_drive_that_does_not_read_it() -
     cdfs = check({"drive": "cdfs", "position": "300"})
     assert "position" not in cdfs.disabled and cdfs.system is not None
     assert cdfs.system.table_position == pytest.approx(0.3)
+
+
+def test_a_sweep_gives_a_linear_motor_no_start_as_it_gives_a_cdfs_no_nut_speed() -> None:
+    """A sweep across drives with a table_position axis: the linear motor's points took each
+    position, computed each alike (2 runs of one result); now they share one, as the CDFS's
+    points at every nut speed do (docs/sweeps.md), with the default start its DriveSystem
+    takes."""
+    from feeddrive.sweep import parse_config
+
+    cfg = parse_config({"preset": "linear-motor-example", "design": {"kind": "grid"},
+                        "quantity": {"kind": "linear-band", "linear_points": 4},
+                        "axes": {"drive": ["cdfs", "linear-motor"],
+                                 "table_position": [300, 500]}}, "/tmp/cfg.toml")
+    points = list(cfg.iter_points())
+    assert [(p.task["drive"], p.task["table_position"]) for p in points] == [
+        ("cdfs", pytest.approx(0.3)), ("cdfs", pytest.approx(0.5)), ("linear-motor", 0.4),
+        ("linear-motor", 0.4)]
+    assert len({p.key for p in points}) == cfg.distinct_count() == 3
