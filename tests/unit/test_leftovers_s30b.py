@@ -22,6 +22,7 @@ expected.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -226,3 +227,20 @@ def test_a_sweep_gives_a_linear_motor_no_start_as_it_gives_a_cdfs_no_nut_speed()
         ("cdfs", pytest.approx(0.3)), ("cdfs", pytest.approx(0.5)), ("linear-motor", 0.4),
         ("linear-motor", 0.4)]
     assert len({p.key for p in points}) == cfg.distinct_count() == 3
+
+
+def test_a_fit_record_of_a_linear_motor_stays_readable(tmp_path: Path) -> None:
+    """A fit writes table_position for every drive; one fitted through the API at 0.0 m (as
+    tests/validation/test_fit_replay did) would build a DriveSystem that now refuses it, and
+    the key cannot be left out of the record: read as the default, which the fit used as
+    much (its model reads neither)."""
+    from feeddrive.analysis.predict import read_fit_record
+
+    fit = tmp_path / "fit.toml"
+    fit.write_text('extends = "linear-motor-example"\nname = "fitted"\n[fit]\n'
+                   'drive = "linear-motor"\ntable_position = 0.0\nfree = ["table.mass"]\n'
+                   f"estimates = [{LM.table.mass!r}]\ncovariance = [[1e-4]]\n"
+                   "interrupted = false\n", encoding="utf-8")
+    record = read_fit_record(fit)
+    assert record.table_position == 0.4
+    assert fd.DriveSystem(record.parameters, record.drive, record.table_position)
