@@ -113,7 +113,9 @@ def test_only_a_drive_that_follows_the_nut_reference_reads_it() -> None:
 
 def test_the_travel_is_the_mechanism_s() -> None:
     """A ball-screw table run past the screw's end gets the travel warning — from the run and
-    from its dataset alone; a linear-motor table has no travel length and no warning."""
+    from its dataset alone; a linear-motor table has no travel length and no warning (its
+    set's screw ends 0.2 mm past where the table starts: a linear motor takes no start
+    position of its own since session 30)."""
     length = W.screw.length
     system = fd.DriveSystem(W, "cdfs", length - 2e-4)
     r = fd.simulate(system, ConstantSpeed(10e-3), 0.2)
@@ -122,8 +124,9 @@ def test_the_travel_is_the_mechanism_s() -> None:
     stored = [w for w in Result(r.dataset).summary()["warnings"] if "travel" in w or "screw" in w]
     assert stored == live
     assert mechanism("linear-motor").travel_length == ""
-    lm = fd.simulate(fd.DriveSystem(LM, "linear-motor", length - 2e-4), ConstantSpeed(10e-3),
-                     0.2)
+    short = LM.replace_path("screw.length", fd.DriveSystem(LM, "linear-motor").table_position
+                            + 2e-4)
+    lm = fd.simulate(fd.DriveSystem(short, "linear-motor"), ConstantSpeed(10e-3), 0.2)
     assert not [w for w in lm.summary()["warnings"] if "travel" in w or "screw" in w]
 
 

@@ -251,9 +251,11 @@ def test_a_grids_distinct_count_is_the_walks_without_walking(
                                          "nut_speed": {"low": 0, "high": 1, "points": 4}}},
                        "/tmp/c.toml")
     walked = _walked(cfg)
-    # counted by hand: three positions (300 and 300.0 are two values to the walk), times the
+    # counted by hand: three positions (300 and 300.0 are two values to the walk) for a ball
+    # screw, which reads it (a linear motor ignores it since session 30: one), times the
     # nut speed's 4 values for a DDFS, which follows it; a CDFS or a linear motor ignores it
-    expected = sum(3 * (4 if d == "ddfs" else 1) for d in dict.fromkeys(drives))
+    expected = sum((3 if d in ("cdfs", "ddfs") else 1) * (4 if d == "ddfs" else 1)
+                   for d in dict.fromkeys(drives))
     assert walked == expected
     monkeypatch.setattr(sweep_design.SweepConfig, "iter_coordinates",
                         lambda self: (_ for _ in ()).throw(AssertionError("walked")))

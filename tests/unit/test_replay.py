@@ -42,12 +42,12 @@ def _push(t: np.ndarray) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def linear() -> DriveSystem:
-    return DriveSystem(fd.preset("linear-motor-example"), "linear-motor", 0.0)
+    return DriveSystem(fd.preset("linear-motor-example"), "linear-motor")
 
 
 @pytest.fixture(scope="module")
 def rack() -> DriveSystem:
-    return DriveSystem(fd.preset("rack-pinion-example"), "rack-pinion", 0.0)
+    return DriveSystem(fd.preset("rack-pinion-example"), "rack-pinion")
 
 
 def _at(result: object, name: str, t: np.ndarray) -> np.ndarray:
@@ -136,7 +136,7 @@ def test_interpolation_is_piecewise_linear_between_irregular_samples(
 ])
 def test_a_drive_without_the_path_is_refused_in_one_line(drive: str, preset: str,
                                                          replay: type, words: str) -> None:
-    system = DriveSystem(fd.preset(preset), drive, 0.4 if drive == "ddfs" else 0.0)
+    system = DriveSystem(fd.preset(preset), drive)
     t = np.arange(5) * 1e-3
     with pytest.raises(ParameterError) as err:
         system.model(replay(t, np.ones(5)))
@@ -147,8 +147,8 @@ def test_torque_off_and_bad_samples_are_refused() -> None:
     p = fd.preset("linear-motor-example").replace_path("controller.mode", "torque_off")
     t = np.arange(5) * 1e-3
     with pytest.raises(ParameterError, match="controller.mode"):
-        DriveSystem(p, "linear-motor", 0.0).model(ForceReplay(t, np.ones(5)))
-    system = DriveSystem(fd.preset("linear-motor-example"), "linear-motor", 0.0)
+        DriveSystem(p, "linear-motor").model(ForceReplay(t, np.ones(5)))
+    system = DriveSystem(fd.preset("linear-motor-example"), "linear-motor")
     with pytest.raises(ParameterError, match="replay.time"):
         system.model(ForceReplay(t[::-1], np.ones(5)))
     with pytest.raises(ParameterError, match="replay.force"):
@@ -180,8 +180,7 @@ def test_fit_refuses_a_replay_before_any_simulation(monkeypatch: pytest.MonkeyPa
     monkeypatch.setattr(fit, "simulate_experiment", boom)
     e = _experiment(role, {signal: np.linspace(0, 1e-3, 50)})
     with pytest.raises(FitError) as err:
-        fit_drive(fd.preset(preset), [e], ["table.mass"], drive=drive,
-                  table_position=0.4 if drive == "ddfs" else 0.0)
+        fit_drive(fd.preset(preset), [e], ["table.mass"], drive=drive)
     assert words in str(err.value) and "\n" not in str(err.value)
 
 
@@ -193,7 +192,7 @@ def test_fit_refuses_a_loop_gain_of_a_replay(monkeypatch: pytest.MonkeyPatch) ->
     with pytest.raises(FitError, match="controller.velocity_gain: has no effect .*"
                                        "open-loop replay"):
         fit_drive(fd.preset("linear-motor-example"), [e], ["controller.velocity_gain"],
-                  drive="linear-motor", table_position=0.0)
+                  drive="linear-motor")
 
 
 def test_every_role_is_registered() -> None:

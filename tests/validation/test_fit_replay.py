@@ -123,7 +123,7 @@ def test_a_profile_never_narrows_the_linearised_interval() -> None:
                    reference_time=t, table_speed=states["table_speed"],
                    noise={"table_position": noise_level(x)}, input="force", input_value=force)
     res = fit_drive(fd.preset("linear-motor-example"), [e], list(FACTORS),
-                    drive="linear-motor", table_position=0.0)
+                    drive="linear-motor")
     from scipy import stats
 
     tq = float(stats.t.ppf(0.975, res.dof))

@@ -530,6 +530,7 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         trace).
     """
     from ..machine import Circle, simulate_machine
+    from ..model.mechanisms import mechanism
 
     if axes is None:
         if len(machine.axes) < 2:
@@ -564,9 +565,12 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
     for direction, start in circular_start_angles(lead_arc).items():
         # each run's axes start at rest on the circle at its start angle
         start_xy = (centre[0] + radius * math.cos(start), centre[1] + radius * math.sin(start))
+        # (a ball screw's nut starts there; another drive's model does not read its start,
+        # and its axis refuses one other than the default)
         placed = dataclasses.replace(machine, axes=tuple(
             dataclasses.replace(ax, table_position=start_xy[axes.index(ax.name)])
-            if ax.name in axes else ax for ax in machine.axes))
+            if ax.name in axes and mechanism(ax.drive).uses_table_position else ax
+            for ax in machine.axes))
         contour = Circle(feed=feed, acceleration=acceleration, axes=axes, radius=radius,
                          clockwise=direction == "CW", start_angle=start, turns=turns)
         runs.append((direction, start_xy, placed, _profile(placed, contour, nut_driven,

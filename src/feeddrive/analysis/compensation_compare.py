@@ -40,6 +40,7 @@ import numpy as np
 
 from ..model.loops import Compensation
 from ..parameters import DriveParameters, ParameterError
+from ..parameters.validation import refuse_repeats
 
 #: the schemes in the order of the table
 SCHEMES = ("none", "none-continuous", "feedforward", "observer", "disturbance-observer",
@@ -50,6 +51,10 @@ SCHEMES = ("none", "none-continuous", "feedforward", "observer", "disturbance-ob
 CONTINUOUS = ("none-continuous", "feedforward", "observer")
 #: the quantities of a row, in the order of the table
 METRICS = ("critical", "spike", "reversal", "settling")
+#: what a list of schemes or of quantities holds, said when one is given twice
+#: (:func:`~feeddrive.parameters.validation.refuse_repeats`)
+SCHEME_ONCE = "each scheme once (twice, it would run twice and its row repeat)"
+METRIC_ONCE = "each quantity once (it is measured once per scheme)"
 #: the disturbance observer's Q-filter bandwidth [rad/s] (docs/extending.md's measured figure)
 DOB_BANDWIDTH = 300.0
 #: the reversal feed-forward's width v_w [m/s] (docs/extending.md's measured figure)
@@ -190,7 +195,7 @@ def schemes(params: DriveParameters, names: Sequence[str] = SCHEMES, *,
     params : DriveParameters
         A set with a sampled velocity loop (:func:`check_sampled`).
     names : sequence of str, default SCHEMES
-        The schemes wanted.
+        The schemes wanted, each once.
     reversal_current : float, optional
         I_r of the reversal feed-forward [A]; default :func:`coulomb_current`.
 
@@ -198,6 +203,12 @@ def schemes(params: DriveParameters, names: Sequence[str] = SCHEMES, *,
     -------
     list of Scheme
         One per name, in the order given.
+
+    Raises
+    ------
+    ParameterError
+        For a set without sampled loops, a name :data:`SCHEMES` does not hold, or one given
+        twice.
     """
     from ..model.parts.disturbance_observer import DisturbanceObserver
     from ..model.parts.reset_integrator import ResetIntegrator
@@ -207,6 +218,7 @@ def schemes(params: DriveParameters, names: Sequence[str] = SCHEMES, *,
     unknown = [n for n in names if n not in SCHEMES]
     if unknown:
         raise ParameterError("schemes", unknown, f"expected some of {', '.join(SCHEMES)}")
+    refuse_repeats("names", names, SCHEME_ONCE)  # one scheme made twice (session 30)
     base = params.replace_path("controller.compensation", Compensation())
     c = params.controller
     continuous = base.replace_path("controller", base.controller.with_values(
@@ -322,6 +334,15 @@ def reset_rate(system: Any, speed: float, *, duration: float = RESET_CHECK_DURAT
     return float((count[half][-1] - count[half][0]) / (t[half][-1] - t[half][0]))
 
 
+def _check_metrics(metrics: Sequence[str]) -> None:
+    """Refuse a quantity :data:`METRICS` does not hold (:func:`measure` left it out without
+    a word) and one given twice (counted twice in the progress's total)."""
+    bad = [m for m in metrics if m not in METRICS]
+    if bad:
+        raise ParameterError("metrics", bad, f"expected some of {', '.join(METRICS)}")
+    refuse_repeats("metrics", metrics, METRIC_ONCE)
+
+
 def measure(scheme: Scheme, drive: str, table_position: float, metrics: Sequence[str], *,
             band: float, options: Any = None,
             progress: Callable[[str], None] | None = None) -> dict[str, Any]:
@@ -336,7 +357,7 @@ def measure(scheme: Scheme, drive: str, table_position: float, metrics: Sequence
     table_position : float
         Table position of the runs [m].
     metrics : sequence of str
-        Some of :data:`METRICS`.
+        Some of :data:`METRICS`, each once.
     band : float
         Settling band [m]; also the most the axis may move within a positioning reading
         window (peak to peak) for B to be given (else B is "not at rest").
@@ -352,11 +373,17 @@ def measure(scheme: Scheme, drive: str, table_position: float, metrics: Sequence
         number, a bound (``> 3.20``), or ``none smooth ≤ 3.20: reset cycle`` when no trial is
         smooth and the reset integrator still resets at the top speed (:func:`reset_rate`);
         B is a number or ``not at rest (… µm moving)``.
+
+    Raises
+    ------
+    ParameterError
+        For a quantity :data:`METRICS` does not hold, or one given twice.
     """
     from ..engine.simulate import DriveSystem, simulate
     from ..model.positioning_profile import stops_profile
     from .critical import critical_speed_from_rest, format_bands, format_critical_speed
 
+    _check_metrics(metrics)
     p = scheme.parameters
     row: dict[str, Any] = {"scheme": scheme.name, "parameter_set": p.name,
                            "settings": scheme.settings}
@@ -441,11 +468,12 @@ def compare_compensations(params: DriveParameters, *, drive: str = "cdfs",
     drive : str, default "cdfs"
         The drive.
     table_position : float, default 0.4
-        Table position [m].
+        Table position [m]; only the default on a drive whose model does not depend on it
+        (:func:`~feeddrive.model.mechanisms.base.check_table_position`).
     names : sequence of str, default SCHEMES
-        The schemes.
+        The schemes, each once.
     metrics : sequence of str, default METRICS
-        The quantities.
+        The quantities, each once.
     band : float, default 1e-6
         Settling band [m], and the largest motion within a positioning reading window [m].
     reversal_current : float, optional
@@ -462,16 +490,20 @@ def compare_compensations(params: DriveParameters, *, drive: str = "cdfs",
 
     Raises
     ------
+    ParameterError
+        Before any run: a quantity or scheme unknown or given twice, a band ≤ 0, a start
+        position the drive's model does not read, a set without sampled loops.
     feeddrive.analysis.compensation.RowsInterrupted
         On Ctrl-C, with the schemes' rows finished before it.
     """
+    from ..model.mechanisms.base import check_table_position
     from .compensation import RowsInterrupted
 
-    bad = [m for m in metrics if m not in METRICS]
-    if bad:
-        raise ParameterError("metrics", bad, f"expected some of {', '.join(METRICS)}")
+    _check_metrics(metrics)
     if not (math.isfinite(band) and band > 0.0):
         raise ParameterError("band", band, "expected a band > 0 [m]")
+    # before any run: the reversal metric's targets would carry it to no model at all
+    check_table_position(drive, table_position)
     chosen = schemes(params, names, reversal_current=reversal_current)
     total = len(chosen) * len(metrics)
     done = 0

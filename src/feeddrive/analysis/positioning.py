@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..parameters import ParameterError
-from ..parameters.validation import real_array
+from ..parameters.validation import real_array, refuse_repeats
 
 __all__ = ["MIN_CYCLES", "PositioningTest", "Stop", "describe", "positioning_cycle",
            "positioning_test", "read_approaches", "reading_motion"]
@@ -182,8 +182,8 @@ def positioning_test(targets: ArrayLike, deviation_up: ArrayLike, deviation_down
     Raises
     ------
     ParameterError
-        For fewer than 5 approaches per direction, fewer than 2 targets, shapes that do not
-        match or values that are not finite.
+        For fewer than 5 approaches per direction, fewer than 2 targets, a target given twice,
+        shapes that do not match or values that are not finite.
 
     References
     ----------
@@ -206,6 +206,10 @@ def positioning_test(targets: ArrayLike, deviation_up: ArrayLike, deviation_down
     down = real_array("deviation_down", deviation_down, "m")
     if p.ndim != 1 or p.size < 2:
         raise ParameterError("targets", p.size, "expected at least 2 target positions")
+    # a target twice was counted twice in the mean reversal value B̄ (an earlier sweep,
+    # session 30); a record read from a file holds each once
+    refuse_repeats("targets", p.tolist(), "each target position once [m] (twice, it would "
+                   "count twice in the mean reversal value)")
     for name, x in (("deviation_up", up), ("deviation_down", down)):
         if x.ndim != 2 or x.shape[0] != p.size:
             raise ParameterError(name, x.shape, f"expected shape ({p.size}, cycles)")

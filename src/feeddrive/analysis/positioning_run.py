@@ -349,6 +349,8 @@ def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[
     """
     from ..engine.budget import run_budget
     from ..engine.simulate import DriveSystem, simulate
+    from ..model.mechanisms import mechanism
+    from ..model.mechanisms.base import DEFAULT_TABLE_POSITION
     from ..model.positioning_profile import stops_profile
 
     solver = _check_request(params, drive, targets, cycles, feed, acceleration, dwell,
@@ -380,7 +382,10 @@ def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[
                              f"the test lasts {duration:.6g} s and needs at least "
                              f"{budget.min_steps:.3g} solver steps; fewer targets or cycles, a "
                              "shorter dwell or a higher feed, or raise --max-steps")
-    system = DriveSystem(params, drive=drive, table_position=start)
+    # the first stop is where a ball screw's nut starts; another drive's model does not read
+    # it (and refuses a value other than its default)
+    system = DriveSystem(params, drive=drive, table_position=start
+                         if mechanism(drive).uses_table_position else DEFAULT_TABLE_POSITION)
     result = simulate(system, profile, duration, options=options, progress=progress)
     measured = list(stops[1:])
     up, down = read_approaches(result.time, start + np.asarray(result["table_position"]),

@@ -46,7 +46,8 @@ class FitRecord:
     drive : str
         The drive it was fitted on.
     table_position : float
-        Table position [m].
+        Table position [m]; the default 0.4 for a drive whose model does not read it,
+        whatever the record holds.
     free : tuple of str
         The fitted parameters' paths.
     estimates : numpy.ndarray
@@ -120,6 +121,14 @@ def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
         raise ParameterError("fit.interrupted", True, f"{p}: the fit was interrupted; its "
                              "covariance is not available")
     params = load(p)
+    from ..model.mechanisms import drive_names, mechanism
+    from ..model.mechanisms.base import DEFAULT_TABLE_POSITION
+
+    if rec["drive"] in drive_names() and not mechanism(rec["drive"]).uses_table_position:
+        # the fit read it nowhere, and the DriveSystems built from the record refuse another
+        # value than the default since session 30: a record an earlier fit wrote (the key is
+        # written for every drive) stays readable
+        position = DEFAULT_TABLE_POSITION
     return FitRecord(path=p, parameters=params, drive=rec["drive"],
                      table_position=float(position), free=tuple(free),
                      estimates=est, covariance=cov)

@@ -80,6 +80,8 @@ UNIT_SLIP_FACTOR = 1000.0
 #: by stick-slip, averages its command speed, a ratio near 1; one at rest has no mean speed)
 UNIT_SLIP_TOLERANCE = math.sqrt(10.0)
 DEFAULT_MIN_STEP = 5e-6  # [m/s], half the 0.01 mm/s step of Wang2021 Sect. 6
+#: where the smallest speed step between segments applies, said when it is given elsewhere
+MIN_STEP_APPLIES = "it splits the segments detected from the position, without a command"
 DEFAULT_MIN_SEGMENT_TIME = 1.0  # [s]
 _REST_FRACTION = 0.01
 _MAX_SEGMENTATION_POINTS = 20000
@@ -1071,7 +1073,7 @@ def analyze_trace(
     smoothing_time: float | None = None,
     window: int | None = None,
     segment: bool = True,
-    min_step: float = DEFAULT_MIN_STEP,
+    min_step: float | None = None,
     min_segment_time: float = DEFAULT_MIN_SEGMENT_TIME,
     source: str | None = None,
     lines: np.ndarray | None = None,
@@ -1102,8 +1104,10 @@ def analyze_trace(
         Detect segments when no command is given; False (one segment over the whole trace,
         its command estimated) is refused with ``command_speed`` or ``command``, which set
         the segments.
-    min_step : float, default 5e-6
-        Smallest command change that starts a segment [m/s].
+    min_step : float, optional
+        Smallest command change that starts a segment [m/s], default 5e-6
+        (:data:`DEFAULT_MIN_STEP`).  It sets the segments detected from the position only:
+        refused with ``command_speed``, ``command`` or ``segment=False``.
     min_segment_time : float, default 1.0
         Shortest segment [s].
     source : str, optional
@@ -1120,7 +1124,8 @@ def analyze_trace(
     ------
     ValueError
         For arrays of unequal length, a zero or non-finite command speed, a trace that
-        :func:`estimate_speed` refuses, or no moving segment to analyse.
+        :func:`estimate_speed` refuses, or no moving segment to analyse; ``segment=False``
+        or ``min_step`` beside a command (``ParameterError``).
 
     Examples
     --------
@@ -1137,15 +1142,23 @@ def analyze_trace(
     """
     notes: list[str] = []
     # the settings first, before any work
-    _check_settings(thresholds, min_step, min_segment_time)
+    _check_settings(thresholds, DEFAULT_MIN_STEP if min_step is None else min_step,
+                    min_segment_time)
     segment = check_flag("segment", segment)  # "no" was taken as True (session 29)
-    if not segment and (command_speed is not None or command is not None):
+    beside = ("command_speed, which makes the whole trace one segment"
+              if command_speed is not None else "command, whose steps set the segments"
+              if command is not None else None)
+    if not segment and beside is not None:
         # dropped without a word: a command sets the segments, detection runs without one
         # (an earlier sweep, session 30)
-        beside = ("command_speed, which makes the whole trace one segment"
-                  if command_speed is not None else "command, whose steps set the segments")
         raise ParameterError("segment", False, f"not with {beside} (segments are detected "
                              "only without a command); expected True or no command")
+    if min_step is not None and (beside is not None or not segment):
+        # it splits detected segments only: beside a command or segment=False it was read
+        # nowhere (an earlier sweep, session 30)
+        raise ParameterError("min_step", min_step, f"not with {beside or 'segment=False'} "
+                             f"({MIN_STEP_APPLIES}); expected None")
+    min_step = DEFAULT_MIN_STEP if min_step is None else float(min_step)
     if command_speed is not None:
         command_speed = _check_command_speed(command_speed)
     t = np.asarray(time, dtype=float)

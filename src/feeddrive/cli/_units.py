@@ -112,7 +112,8 @@ def position(option: str, value: float, params: DriveParameters,
              drive: str = "cdfs") -> float:
     """Table position ``value`` [mm] → [m]; strictly within the travel the drive's mechanism
     declares (``Mechanism.travel_length``: a ball screw's supports; a linear motor has no
-    screw to bound it)."""
+    screw to bound it), and only the default 400 mm on a drive whose model does not depend on
+    the table's position (``Mechanism.uses_table_position``)."""
     from ..model.mechanisms import mechanism
 
     _finite(option, value, "mm")
@@ -132,6 +133,15 @@ def position(option: str, value: float, params: DriveParameters,
     elif abs(value) > LARGEST_POSITION_MM:  # no screw bounds it: no table travels further
         raise ParameterError(option, value, f"expected |position| ≤ {LARGEST_POSITION_MM:g} "
                                             "[mm]")
+    if topology is not None:
+        # a position other than the option's default (400 mm, DriveSystem's 0.4 m) on a drive
+        # whose model does not read it was dropped without a word (session 30)
+        from ..model.mechanisms.base import check_table_position
+
+        try:
+            check_table_position(drive, value * MM)
+        except ParameterError as err:
+            raise ParameterError(option, value, err.message) from None
     if 0.0 < value < SMALLEST_PLAUSIBLE_POSITION_MM:
         warn(f"{option} = {value:g} mm looks like a value in metres "
              f"({value * 1e3:g} mm?); the CLI takes mm")

@@ -14,7 +14,12 @@ import math
 import typer
 
 from ..analysis.creep_window import CreepThresholds
-from ..analysis.trace import DEFAULT_MIN_SEGMENT_TIME, describe_critical
+from ..analysis.trace import (
+    DEFAULT_MIN_SEGMENT_TIME,
+    DEFAULT_MIN_STEP,
+    MIN_STEP_APPLIES,
+    describe_critical,
+)
 from ..io.outputs import PLOT_FORMATS
 from ..parameters import ParameterError
 from . import _units
@@ -38,6 +43,8 @@ def _say(text: str) -> None:
 
 
 _DEFAULTS = CreepThresholds()
+#: --min-step's default [mm/s]: the API's (0.005 mm/s)
+_MIN_STEP_MM_S = DEFAULT_MIN_STEP / MM_PER_S
 
 
 @app.command("analyze")
@@ -93,8 +100,10 @@ def analyze_command(
                                   help="Detect step-down segments (without --command-speed "
                                   "or a command column; --no-segments: the whole trace as "
                                   "one, refused beside a command)."),
-    min_step: float = typer.Option(0.005, "--min-step",
-                                   help="Smallest speed step between segments [mm/s]."),
+    min_step: float = typer.Option(_MIN_STEP_MM_S, "--min-step",
+                                   help="Smallest speed step between segments detected "
+                                   "[mm/s] (without --command-speed, a command column or "
+                                   "--no-segments)."),
     min_segment: float = typer.Option(DEFAULT_MIN_SEGMENT_TIME, "--min-segment",
                                       help="Shortest segment [s]."),
     stick_level: float = typer.Option(_DEFAULTS.stick_level, "--stick-level",
@@ -133,7 +142,7 @@ def analyze_command(
         "--speed-column": (speed_column, speed_column is not None, creep),
         "--smoothing": (smoothing, smoothing is not None, creep),
         "--no-segments": (True, not segments, creep),
-        "--min-step": (min_step, min_step != 0.005, creep),
+        "--min-step": (min_step, min_step != _MIN_STEP_MM_S, creep),
         "--min-segment": (min_segment, min_segment != DEFAULT_MIN_SEGMENT_TIME, creep),
         "--stick-level": (stick_level, stick_level != _DEFAULTS.stick_level, creep),
         "--max-stick-fraction": (max_stick_fraction,
@@ -181,19 +190,24 @@ def analyze_command(
                                 command_column=command_column, speed_column=speed_column,
                                 time_unit=time_unit, position_unit=position_unit, sep=sep,
                                 decimal=decimal)
-    if not segments and (v_cmd is not None or trace.command_speed is not None):
+    beside = ("--command-speed, which makes the whole trace one segment" if v_cmd is not None
+              else f"the command column {trace.command_column!r} of {trace.source}, whose "
+              "steps set the segments" if trace.command_speed is not None else None)
+    if not segments and beside is not None:
         # the API refuses it as segment = False; named here as the option (session 30)
-        beside = ("--command-speed, which makes the whole trace one segment"
-                  if v_cmd is not None else f"the command column {trace.command_column!r} of "
-                  f"{trace.source}, whose steps set the segments")
         raise ParameterError("--no-segments", True, f"not with {beside} (segments are detected "
                              "only without a command); expected --segments")
+    if beside is not None or not segments:
+        # read nowhere then: the API refuses it as min_step (an earlier sweep, session 30)
+        refuse_unused((("--min-step", min_step, _MIN_STEP_MM_S),),
+                      f"not with {beside or '--no-segments'} ({MIN_STEP_APPLIES}); omit it")
     result = analyze_trace(
         trace.time, trace.position,
         command_speed=v_cmd,
         command=trace.command_speed, speed=trace.speed, thresholds=thresholds,
         smoothing_time=None if smoothing is None else smoothing * 1e-3,
-        segment=segments, min_step=min_step * MM_PER_S, min_segment_time=min_segment,
+        segment=segments, min_segment_time=min_segment,
+        min_step=None if min_step == _MIN_STEP_MM_S else min_step * MM_PER_S,
         source=trace.source, lines=trace.lines)
     if plot:
         from ..plots.analysis import plot_trace

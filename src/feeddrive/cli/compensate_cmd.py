@@ -169,15 +169,26 @@ def _compare(drive: str, position: float, schemes: str, metrics: str, band: floa
     """`feeddrive compensate --compare`: parse, call compare_compensations, print."""
     from rich.progress import Progress
 
-    from ..analysis.compensation_compare import check_sampled, compare_compensations
+    from ..analysis.compensation_compare import (
+        METRIC_ONCE,
+        SCHEME_ONCE,
+        check_sampled,
+        compare_compensations,
+    )
 
     names = [n.strip() for n in schemes.split(",") if n.strip()]
     wanted = [m.strip() for m in metrics.split(",") if m.strip()]
-    for option, given, items in (("--schemes", schemes, names), ("--metrics", metrics, wanted)):
+    from ..parameters.validation import refuse_repeats
+
+    for option, given, items, each in (("--schemes", schemes, names, SCHEME_ONCE),
+                                       ("--metrics", metrics, wanted, METRIC_ONCE)):
         if not items:  # an empty table, exit 0 (an outside check, 2026-12-07)
             from ..parameters import ParameterError
 
             raise ParameterError(option, given, "expected one name or more, comma-separated")
+        # a scheme twice ran twice, its row repeated; a quantity twice was counted twice in
+        # the progress (an earlier sweep, session 30)
+        refuse_repeats(option, items, each)
     if not math.isfinite(band) or band <= 0:
         from ..parameters import ParameterError
 

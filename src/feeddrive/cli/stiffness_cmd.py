@@ -10,6 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..parameters import ParameterError
+from ..parameters.validation import refuse_repeats
 from . import _units
 from ._common import MM, N_PER_UM, app, console, print_json, resolve_parameters, user_errors
 
@@ -39,9 +40,9 @@ def parse_positions_mm(text: str, screw_length: float) -> list[float]:
         For a token that is not a number, lies outside the supports or repeats a position.
     """
     length_mm = screw_length / MM
-    out = []
-    for token in text.split(","):
-        token = token.strip()
+    tokens = [token.strip() for token in text.split(",")]
+    values = []
+    for token in tokens:
         try:
             value = float(token)
         except ValueError:
@@ -53,14 +54,15 @@ def parse_positions_mm(text: str, screw_length: float) -> list[float]:
                 "--positions", token,
                 f"expected 0 < position < {length_mm:g} [mm] (strictly between the screw supports)",
             )
+        values.append(value)
+    # its row was printed twice (an earlier sweep, session 30)
+    refuse_repeats("--positions", values, "each position once [mm], e.g. 200,400",
+                   shown=tokens)
+    for token, value in zip(tokens, values, strict=True):
         if value < _units.SMALLEST_PLAUSIBLE_POSITION_MM:
             _units.warn(f"--positions: {token} mm looks like a value in metres "
                         f"({value * 1e3:g} mm?); the CLI takes mm")
-        if value * MM in out:  # its row was printed twice (an earlier sweep, session 30)
-            raise ParameterError("--positions", token, "given twice; expected each position "
-                                 "once [mm], e.g. 200,400")
-        out.append(value * MM)
-    return out
+    return [value * MM for value in values]
 
 
 def _table3_value(position: float) -> float | None:

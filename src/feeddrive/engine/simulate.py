@@ -19,7 +19,7 @@ from .._kept import Kept
 from ..model.assemble import Model, assemble
 from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
-from ..model.mechanisms.base import check_nut_hold
+from ..model.mechanisms.base import DEFAULT_TABLE_POSITION, check_nut_hold, check_table_position
 from ..model.reference import PROFILE_PARAMS, ConstantSpeed, Profile, SampledSpeed, SineSpeed
 from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
@@ -58,7 +58,9 @@ class DriveSystem:
         ``"linear-motor"`` (a direct-drive table; needs ``parameters.linear_motor``).
     table_position : float, default 0.4
         Distance a of the nut from the motor-side screw support [m] (Wang2021 Table 3:
-        0.2 … 0.6 m; mid-screw 0.4 m).
+        0.2 … 0.6 m; mid-screw 0.4 m).  Only a ball screw's model depends on it: another
+        value is refused for a drive whose model does not (``Mechanism.uses_table_position``;
+        the linear motor, the rack and pinion).
     nut_hold : {"locked", "servo"}, default "locked"
         For the CDFS the hollow motor is held: ``"locked"`` freezes the nut's states,
         ``"servo"`` keeps the hollow motor's loop at zero command.  A drive that holds no nut
@@ -73,7 +75,7 @@ class DriveSystem:
 
     parameters: DriveParameters
     drive: str = "ddfs"
-    table_position: float = 0.4
+    table_position: float = DEFAULT_TABLE_POSITION
     nut_hold: str = "locked"
     initial_state: Mapping[str, float] = field(default_factory=dict)
     load: LoadProfile | None = None
@@ -97,6 +99,10 @@ class DriveSystem:
                                  "e.g. LoadProfile(time=…, force=…) [s, N] (a constant load "
                                  "is the parameter disturbances.load_force [N])")
         mechanism(self.drive).check(self.parameters, self.drive, self.table_position)
+        # a start position on a drive whose model does not read it (the linear motor, the rack
+        # and pinion) was dropped without a word (an earlier sweep, session 30); the default
+        # cannot be told from none given and is taken on every drive
+        check_table_position(self.drive, self.table_position)
         # "servo" on a drive that holds no nut (the DDFS drives its own, the linear motor
         # has none) was dropped without a word
         check_nut_hold(self.drive, self.nut_hold)

@@ -467,6 +467,7 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
     """
     from ..engine.simulate import DriveSystem
     from ..model import drive_names, mechanism
+    from ..model.mechanisms.base import DEFAULT_TABLE_POSITION
 
     s = normalise(settings)
     out = Checked(settings=s)
@@ -489,6 +490,8 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
         out.disabled.append("nut_speed")
     if not any(m.ripple for m in mechanism(drive).drive_motors):
         out.disabled += ["ripple_amplitude", "ripple_order"]
+    if not mechanism(drive).uses_table_position:  # its model does not read where it starts
+        out.disabled.append("position")
     from ..cli import _units
 
     def run_field(name: str, convert: Any) -> float | None:
@@ -508,7 +511,8 @@ def check(settings: Mapping[str, Any] | None) -> Checked:
     if drives_nut:
         v_n = run_field("nut_speed", _units.speed)
         out.nut_speed = v_n if v_n is not None else 0.0
-    position = run_field("position", lambda o, v: _units.position(o, v, base, drive))
+    position = (DEFAULT_TABLE_POSITION if "position" in out.disabled else
+                run_field("position", lambda o, v: _units.position(o, v, base, drive)))
     try:
         duration = _cli_number("--duration", s["duration"])
         if not (math.isfinite(duration) and duration > 0):  # as `feeddrive simulate`

@@ -77,11 +77,12 @@ class MachineAxis:
     drive : str
         A registered topology (``"cdfs"``, ``"linear-motor"`` …).
     table_position : float, default 0.4
-        Start position of a ball-screw nut from the motor-side support [m] (a machine file
-        refuses it on an axis of another drive).
+        Start position of a ball-screw nut from the motor-side support [m]; refused on an
+        axis of another drive unless the default (a machine file refuses it there written
+        at all).
     nut_hold : str, default "locked"
-        How a CDFS holds its nut (``"locked"`` or ``"servo"``; a machine file refuses it on
-        an axis of another drive).
+        How a CDFS holds its nut (``"locked"`` or ``"servo"``); ``"servo"`` refused on an
+        axis of another drive (a machine file refuses it there written at all).
     """
 
     name: str
@@ -89,6 +90,16 @@ class MachineAxis:
     drive: str
     table_position: float = 0.4
     nut_hold: str = "locked"
+
+    def __post_init__(self) -> None:
+        from ..model.mechanisms import drive_names
+        from ..model.mechanisms.base import check_nut_hold, check_table_position
+
+        # both were taken and dropped on a drive that does not read them (an earlier sweep,
+        # session 30); a drive not registered is refused where the axis is built
+        if isinstance(self.drive, str) and self.drive in drive_names():
+            check_table_position(self.drive, self.table_position)
+            check_nut_hold(self.drive, self.nut_hold)
 
 
 @dataclass(frozen=True)
@@ -138,7 +149,11 @@ class Machine:
 def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
     """One ``[axes.<name>]`` table → its axis; every error names ``axes.<name>.…``."""
     from ..model.mechanisms import drive_names, mechanism
-    from ..model.mechanisms.base import check_nut_hold
+    from ..model.mechanisms.base import (
+        DEFAULT_TABLE_POSITION,
+        check_nut_hold,
+        check_table_position,
+    )
     from ..parameters.toml_io import from_dict
 
     if not isinstance(name, str) or not name.isidentifier():
@@ -149,7 +164,7 @@ def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
     data = dict(table)
     given = {key for key in ("table_position", "nut_hold") if key in data}
     drive = data.pop("drive", None)
-    position = data.pop("table_position", 0.4)
+    position = data.pop("table_position", DEFAULT_TABLE_POSITION)
     hold = data.pop("nut_hold", "locked")
     if drive is not None and drive not in drive_names():
         raise ParameterError(f"axes.{name}.drive", drive,
@@ -167,13 +182,10 @@ def _axis(name: str, table: Any, base_dir: Path | None) -> MachineAxis:
                       if mechanism(d).example_preset == data["extends"]), "cdfs")
     if not (isinstance(position, int | float) and math.isfinite(position)):
         raise ParameterError(f"axes.{name}.table_position", position, "expected a number [m]")
-    if "table_position" in given and not mechanism(drive).uses_table_position:
-        # it was read and dropped: only a ball screw's model depends on where the table
-        # starts (an earlier sweep, session 30)
-        users = [d for d in drive_names() if mechanism(d).uses_table_position]
-        raise ParameterError(f"axes.{name}.table_position", position, "applies to a drive "
-                             f"whose model depends on the table's position ({', '.join(users)}),"
-                             f" not to {drive}; omit it")
+    # any start position written on an axis whose model does not read it (the default too,
+    # which was read and dropped: session 30; machine_toml writes it only where used)
+    check_table_position(drive, position, field=f"axes.{name}.table_position",
+                         given="table_position" in given)
     try:
         mechanism(drive).check(params, drive, float(position))
     except ParameterError as err:

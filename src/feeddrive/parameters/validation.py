@@ -12,6 +12,7 @@ import dataclasses
 import math
 import numbers
 import reprlib
+from collections.abc import Sequence
 from typing import Any, TypeGuard
 
 from ..units import LARGEST_SPEED, MM_PER_S
@@ -305,6 +306,39 @@ def did_you_mean(given: object, known: Any) -> str:
         return ""
     close = difflib.get_close_matches(given, [str(k) for k in known], n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def refuse_repeats(name: str, items: Sequence[object], expected: str, *,
+                   shown: Sequence[object] | None = None) -> None:
+    """Refuse, in one line naming ``name`` and the entry, a list whose entry repeats an
+    earlier one (equal by ``==``: 200 and 200.0 are one position): a row or a run made twice,
+    or a value counted twice, without a word (``stiffness --positions 100,100`` printed its
+    row twice, ``compensate --schemes none,none`` ran its scheme twice: session 30).
+
+    Parameters
+    ----------
+    name : str
+        The argument or option, e.g. ``"--positions"`` or ``"names"``.
+    items : sequence
+        The entries, as compared.
+    expected : str
+        What is expected instead, after "given twice; expected", e.g. ``"each position once
+        [mm], e.g. 200,400"``.
+    shown : sequence, optional
+        The entries as the message shows them (the option's text, ``"200.0"``), one per item;
+        default the items.
+
+    Raises
+    ------
+    ParameterError
+        For the first entry equal to an earlier one.
+    """
+    seen: list[object] = []
+    for k, item in enumerate(items):
+        if any(item == s for s in seen):
+            raise ParameterError(name, item if shown is None else shown[k],
+                                 f"given twice; expected {expected}")
+        seen.append(item)
 
 
 def _cut(text: str) -> str:

@@ -60,6 +60,20 @@ def _no_nut(drive: str) -> bool:
     return drive not in drive_names() or "nut" not in mechanism(drive).followed_references(drive)
 
 
+def _ignored(drive: str) -> tuple[str, ...]:
+    """The special axes ``drive``'s model does not read (its topology says): ``nut_speed``
+    on a drive that drives no nut (:func:`_no_nut`), ``table_position`` on one whose model
+    does not depend on where the table starts (the linear motor, the rack and pinion:
+    ``Mechanism.uses_table_position``; its DriveSystem refuses a position other than the
+    default, session 30).  Those points share one stored result.  An unknown drive reads
+    neither (it is refused later)."""
+    from ..model.mechanisms import drive_names, mechanism
+
+    no_position = drive not in drive_names() or not mechanism(drive).uses_table_position
+    return (*(("nut_speed",) if _no_nut(drive) else ()),
+            *(("table_position",) if no_position else ()))
+
+
 #: the integrator settings' table, as a parameter file's (docs/parameters.md, "[solver]")
 SOLVER_KEY = "solver"
 _TOP_KEYS = ("name", "preset", "params", "drive", "table_position", "nut_speed", "store",
@@ -312,7 +326,9 @@ class SweepConfig:
     def effective(self, coords: Mapping[str, Any]) -> tuple[Any, ...]:
         """What a point's result depends on among its coordinates.
 
-        A drive without a nut ignores ``nut_speed``, so those points share one stored result.
+        A drive without a nut ignores ``nut_speed``, one whose model does not depend on the
+        table's position ignores ``table_position`` (:func:`_ignored`), so those points share
+        one stored result.
 
         Parameters
         ----------
@@ -324,13 +340,13 @@ class SweepConfig:
         tuple
             Sorted (name, repr of value) pairs.
         """
-        return self._effective(coords, _no_nut)
+        return self._effective(coords, _ignored)
 
     def _effective(self, coords: Mapping[str, Any],
-                   ignores_nut: Callable[[str], bool]) -> tuple[Any, ...]:
+                   ignored: Callable[[str], tuple[str, ...]]) -> tuple[Any, ...]:
         drive = str(coords.get("drive", self.drive))
         return tuple(sorted((k, repr(v)) for k, v in coords.items()
-                            if not (k == "nut_speed" and ignores_nut(drive))))
+                            if k not in ignored(drive)))
 
     def distinct_count(self) -> int:
         """How many distinct computations the design asks for, from the coordinates alone
@@ -343,11 +359,11 @@ class SweepConfig:
             The number of distinct points.
         """
         _check_count(self.count(), self.design)
-        known: dict[str, bool] = {}
+        known: dict[str, tuple[str, ...]] = {}
 
-        def ignores_nut(drive: str) -> bool:
+        def ignored(drive: str) -> tuple[str, ...]:
             if drive not in known:
-                known[drive] = _no_nut(drive)
+                known[drive] = _ignored(drive)
             return known[drive]
 
         if self.design == "grid":
@@ -355,12 +371,11 @@ class SweepConfig:
             drives = ([str(v) for v in values["drive"].values()] if "drive" in values
                       else [str(self.drive)])
             return sum(math.prod(len(distinct) for name, distinct in values.items()
-                                 if name != "drive"
-                                 and not (name == "nut_speed" and ignores_nut(drive)))
+                                 if name != "drive" and name not in ignored(drive))
                        for drive in drives)
         seen = set()
         for coords in self.iter_coordinates():
-            seen.add(hashlib.blake2b(repr(self._effective(coords, ignores_nut)).encode(),
+            seen.add(hashlib.blake2b(repr(self._effective(coords, ignored)).encode(),
                                      digest_size=12).digest())
         return len(seen)
 
@@ -431,7 +446,12 @@ class SweepConfig:
         base_name = str(coords.get("preset", self.base))
         params = self._base(base_name, cache)
         drive = str(coords.get("drive", self.drive))
-        position = float(coords.get("table_position", self.table_position)) * units.MM
+        from ..model.mechanisms.base import DEFAULT_TABLE_POSITION
+
+        # a drive whose model does not read the start is given none (the default), as one
+        # that drives no nut is given no nut speed: those points share one result
+        position = (DEFAULT_TABLE_POSITION if "table_position" in _ignored(drive) else
+                    float(coords.get("table_position", self.table_position)) * units.MM)
         nut = 0.0 if _no_nut(drive) else \
             float(coords.get("nut_speed", self.nut_speed)) * units.MM_PER_S
         quantity = self.quantity

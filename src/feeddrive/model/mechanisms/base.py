@@ -678,3 +678,44 @@ def check_nut_hold(drive: str, nut_hold: str, *, field: str = "nut_hold",
            if "nut" in topology.followed_references(drive) else "it has no nut")
     raise ParameterError(field, nut_hold, f"applies to a drive that holds its nut "
                          f"({', '.join(holders)}), not to {drive} ({why})")
+
+
+#: where the table starts when no position is given [m]: the nut at mid-screw of Wang2021's
+#: drives (Table 3: 0.2 … 0.6 m), the default of ``DriveSystem`` and ``MachineAxis``
+DEFAULT_TABLE_POSITION = 0.4
+
+
+def check_table_position(drive: str, table_position: object, *,
+                         field: str = "table_position", given: bool = False) -> None:
+    """Refuse a start position on a drive whose model does not depend on where the table
+    starts (:attr:`Mechanism.uses_table_position`: only the ball screw's K_eq(a) does; the
+    linear motor and the rack and pinion read it nowhere): it was taken and dropped without
+    a word.  A value other than :data:`DEFAULT_TABLE_POSITION` is refused, and with ``given``
+    (a key written in a file) any value; the default, which a caller cannot tell apart from
+    none given, is taken on every drive.
+
+    Parameters
+    ----------
+    drive : str
+        A registered drive name.
+    table_position : object
+        The start position given [m].
+    field : str, default "table_position"
+        The name the message gives it (``"axes.x.table_position"``).
+    given : bool, default False
+        Whether the value was given explicitly (then refused whatever it is).
+
+    Raises
+    ------
+    ParameterError
+        One line: the value, the drives a start position applies to and to omit it.
+    """
+    default = (isinstance(table_position, int | float)
+               and table_position == DEFAULT_TABLE_POSITION)
+    if mechanism(drive).uses_table_position or (default and not given):
+        return
+    from ...parameters import ParameterError
+
+    users = [d for d in drive_names() if mechanism(d).uses_table_position]
+    raise ParameterError(field, table_position, "applies to a drive whose model depends on "
+                         f"the table's position ({', '.join(users)}), not to {drive}; omit it")
