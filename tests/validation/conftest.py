@@ -51,3 +51,12 @@ def reproduce_output(full_reproduction: tuple[Path, dict[str, Any]],
                      tmp_path_factory: pytest.TempPathFactory) -> str:
     """What the session's one `feeddrive reproduce` printed (its output is not a terminal)."""
     return (session_folder(tmp_path_factory) / "reproduce-output.txt").read_text("utf-8")
+
+
+@pytest.fixture(scope="session")
+def shared_fmus(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
+    """The FMUs of the session, each exported once for every test (and every pytest-xdist
+    worker) that reads it (:class:`fmu_helpers.SharedExports`)."""
+    from fmu_helpers import SharedExports
+
+    return SharedExports(session_folder(tmp_path_factory) / "shared-fmus")

@@ -402,3 +402,90 @@ def check_jacobian(m: Model, t: float, x: np.ndarray, case: str) -> int:
             else:
                 assert J[i, j] == 0.0 and abs(D[i, j]) <= noise[i, j], (case, i, j)
     return checked
+
+
+class SharedExports:
+    """FMUs exported once per test session and read by every test that only simulates,
+    validates or inspects them (the ``shared_fmus`` fixture of conftest.py): the same
+    ``export_fmu`` / ``export_machine_fmu`` call with the same arguments was made again by
+    several test files (the DDFS model-exchange FMU by four of them, ≈ 2 s of code generation
+    and gcc each).
+
+    An FMU is keyed by everything its export reads: the parameter set's full text
+    (:func:`feeddrive.parameters.dumps`, its name and ``[solver]`` table with where each came
+    from), the drive, the FMI version, the kind and the other arguments (a machine: the key
+    its caller gives, its definition's text).  The file and the :class:`ExportedFmu` the
+    export returned live in the session's shared folder (one export for every pytest-xdist
+    worker, made under a file lock as the session's one ``feeddrive reproduce`` is); nothing
+    outlives the session, so each session exports anew.  Tests only read the files (each
+    unzips into a folder of its own); tests of the export itself (its command line, its
+    environment, its platforms) still export their own."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        folder.mkdir(parents=True, exist_ok=True)
+        self._made: dict[str, object] = {}
+
+    def _get(self, key: str, make):  # type: ignore[no-untyped-def]
+        import hashlib
+        import pickle
+
+        from reproduce_session import locked
+
+        name = hashlib.sha256(key.encode("utf-8")).hexdigest()[:24]
+        if name not in self._made:
+            path = self.folder / f"{name}.fmu"
+            record = self.folder / f"{name}.pickle"
+            with locked(self.folder / f"{name}.lock"):
+                if not record.exists():
+                    exported = make(path)
+                    record.write_bytes(pickle.dumps(exported))
+            self._made[name] = pickle.loads(record.read_bytes())  # noqa: S301 - our own file
+        return self._made[name]
+
+    def problems(self, path: Path) -> list[str]:
+        """``fmpy.validation.validate_fmu(path)`` of a shared FMU, run once for every test
+        that asserts it (≈ 1 s each: fmpy parses every variable name with its Earley
+        grammar); test_fmu.py and test_fmu_metadata.py validate the same four DDFS FMUs."""
+        import json
+
+        from fmpy.validation import validate_fmu
+        from reproduce_session import locked
+
+        path = Path(path)
+        assert path.parent == self.folder, path  # only a file of this cache: never changed
+        record = path.with_suffix(".problems.json")
+        with locked(path.with_suffix(".lock")):
+            if not record.exists():
+                record.write_text(json.dumps([str(p) for p in validate_fmu(str(path))]),
+                                  encoding="utf-8")
+        return list(json.loads(record.read_text(encoding="utf-8")))
+
+    def drive(self, params: object, drive: str, *, fmi: int = 2, kind: str = "cs",
+              **kw: object):  # type: ignore[no-untyped-def]
+        """``export_fmu(params, drive, <file>, fmi=fmi, kind=kind, **kw)``, made once: its
+        :class:`~feeddrive.fmu.ExportedFmu` (``.path``: the file)."""
+        import inspect
+
+        from feeddrive.fmu import export_fmu
+        from feeddrive.parameters import dumps
+
+        # every keyword argument, a default one too: nut_hold="locked" given or not, one FMU
+        args = inspect.signature(export_fmu).bind(params, drive, "x.fmu", fmi=fmi, kind=kind,
+                                                  **kw)
+        args.apply_defaults()
+        given = {k: v for k, v in args.arguments.items()
+                 if k not in ("parameters", "drive", "out")}
+        key = repr(("drive", dumps(params), params.solver, drive,  # type: ignore[attr-defined]
+                    sorted(given.items())))
+        return self._get(key, lambda path: export_fmu(params, drive, path, fmi=fmi,  # type: ignore[arg-type]
+                                                      kind=kind, **kw))
+
+    def machine(self, key: str, machine: object, *, fmi: int = 2, kind: str = "cs"):  # type: ignore[no-untyped-def]
+        """``export_machine_fmu(machine, <file>, fmi=fmi, kind=kind)``, made once per ``key``
+        (the machine's definition: a name of ``load_machine`` or its dict's text)."""
+        from feeddrive.fmu import export_machine_fmu
+
+        return self._get(repr(("machine", key, fmi, kind)),
+                         lambda path: export_machine_fmu(machine, path, fmi=fmi,  # type: ignore[arg-type]
+                                                         kind=kind))

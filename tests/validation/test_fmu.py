@@ -16,6 +16,7 @@ from fmu_helpers import (
     STEP,
     TIGHT,
     Reference,
+    SharedExports,
     needed_libraries,
     on_grid,
     run_feeddrive,
@@ -38,32 +39,20 @@ except CC.CompilerNotFound:  # pragma: no cover - CI has a compiler
     pytest.skip("no C compiler", allow_module_level=True)
 
 
-@pytest.fixture(scope="module")
-def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return tmp_path_factory.mktemp("fmu")
-
-
-_BUILT: dict[tuple, Path] = {}
-
-
-def fmu_file(folder: Path, drive: str, fmi: int = 2, kind: str = "cs",
+def fmu_file(fmus: SharedExports, drive: str, fmi: int = 2, kind: str = "cs",
              params: str = "wang2021", **kw: float) -> Path:
-    key = (drive, fmi, kind, params, tuple(sorted(kw.items())))
-    if key not in _BUILT:
-        path = folder / f"{drive}-{params}-{fmi}-{kind}-{len(_BUILT)}.fmu"
-        export_fmu(preset(params), drive, path, fmi=fmi, kind=kind, **kw)
-        _BUILT[key] = path
-    return _BUILT[key]
+    """The FMU of ``drive`` with the preset ``params``, exported once in the session
+    (``shared_fmus``: the other FMU test files read the same ones)."""
+    return Path(fmus.drive(preset(params), drive, fmi=fmi, kind=kind, **kw).path)
 
 
 # ---------------------------------------------------------------- validity, standalone
 @pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("kind", ["cs", "me"])
-def test_fmpy_validate_finds_no_problem(folder: Path, fmi: int, kind: str) -> None:
-    from fmpy.validation import validate_fmu
-
-    path = fmu_file(folder, "ddfs", fmi, kind)
-    assert validate_fmu(str(path)) == []
+def test_fmpy_validate_finds_no_problem(shared_fmus: SharedExports, fmi: int, kind: str) -> None:
+    path = fmu_file(shared_fmus, "ddfs", fmi, kind)
+    # fmpy.validation.validate_fmu, run once for this file (test_fmu_metadata.py asks too)
+    assert shared_fmus.problems(path) == []
     with zipfile.ZipFile(path) as zf:
         names = set(zf.namelist())
     assert "sources/fmu.c" in names and "documentation/index.html" in names
@@ -72,9 +61,10 @@ def test_fmpy_validate_finds_no_problem(folder: Path, fmi: int, kind: str) -> No
 
 
 @pytest.mark.parametrize("drive", ["cdfs", "ddfs", "linear-motor"])
-def test_binary_needs_only_libc_and_libm(folder: Path, drive: str, tmp_path: Path) -> None:
+def test_binary_needs_only_libc_and_libm(shared_fmus: SharedExports, drive: str,
+                                         tmp_path: Path) -> None:
     params = "linear-motor-example" if drive == "linear-motor" else "wang2021"
-    path = fmu_file(folder, drive, params=params)
+    path = fmu_file(shared_fmus, drive, params=params)
     assert needed_libraries(path, tmp_path) <= {"libc.so.6", "libm.so.6"}
     # only the FMI functions are exported: two FMUs in one process never bind each other's
     # model functions
@@ -88,7 +78,7 @@ def test_binary_needs_only_libc_and_libm(folder: Path, drive: str, tmp_path: Pat
     assert "fmi2DoStep" in exported and "fmi2GetDerivatives" in exported
 
 
-def test_every_state_signal_and_parameter_is_declared_with_its_unit(folder: Path) -> None:
+def test_every_state_signal_and_parameter_is_declared_with_its_unit() -> None:
     """States and signals by their model names; parameters (but the reference and load slots
     that the inputs drive) with start value = the model's number and a unit that parses."""
     fm = build(preset("wang2021"), "ddfs", 0.4)
@@ -140,7 +130,7 @@ def _c_advance(lib: ctypes.CDLL):  # type: ignore[no-untyped-def]
 
 
 @pytest.mark.parametrize("params", ["wang2021", "wang2021-drive"])
-def test_c_integrator_follows_its_numba_build(folder: Path, tmp_path: Path,
+def test_c_integrator_follows_its_numba_build(shared_fmus: SharedExports, tmp_path: Path,
                                               params: str) -> None:
     """fd_advance in the FMU's binary (translated from advance_template) and the numba build
     of the same text give the same trajectory over 300 communication steps with changing
@@ -148,7 +138,7 @@ def test_c_integrator_follows_its_numba_build(folder: Path, tmp_path: Path,
     the update on a communication point redone when the inputs change)."""
     from feeddrive.fmu.build import compile_library
 
-    path = fmu_file(folder, "cdfs", params=params)
+    path = fmu_file(shared_fmus, "cdfs", params=params)
     with zipfile.ZipFile(path) as zf:  # the FMU's own source, built with fd_* exported
         source = zf.read("sources/fmu.c").decode("utf-8")
         lib_path = compile_library(source, 2, tmp_path, "advance", export_all=True)
@@ -197,14 +187,14 @@ def _compare(rec: np.ndarray, result, name: str = "table_position") -> float:  #
 
 @pytest.mark.slow
 @pytest.mark.parametrize("scenario", list(SCENARIOS))
-def test_fmu_in_fmpy_equals_feeddrive(folder: Path, scenario: str) -> None:
+def test_fmu_in_fmpy_equals_feeddrive(shared_fmus: SharedExports, scenario: str) -> None:
     """10 s of each scenario: the reference ramp (0.1 s) as an input table on the
     communication grid h = 1 ms, held by the FMU over each step; feeddrive.simulate driven by
     the same zero-order-held reference (SampledSpeed(hold=True) on that grid).  Table position
     within 1e-6 of the stroke |x(10 s) − x(0)| and the same creep verdict."""
     drive, vt, vn = SCENARIOS[scenario]
     ref = Reference.ramp(vt, vn, 10.0)
-    rec = run_fmu(fmu_file(folder, drive), ref, start_values=FMU_TIGHT)
+    rec = run_fmu(fmu_file(shared_fmus, drive), ref, start_values=FMU_TIGHT)
     result = run_feeddrive(drive, ref, **TIGHT)
     assert _compare(rec, result) <= 1e-6
     t = rec["time"]
@@ -215,16 +205,17 @@ def test_fmu_in_fmpy_equals_feeddrive(folder: Path, scenario: str) -> None:
 
 
 @pytest.mark.slow
-def test_fmi3_and_position_inputs_give_the_same_run(folder: Path) -> None:
+def test_fmi3_and_position_inputs_give_the_same_run(shared_fmus: SharedExports) -> None:
     """FMI 3.0 co-simulation with the position references given as inputs (not integrated
     from the speeds) follows the same trace."""
     ref = Reference.ramp(0.5, 16.0, 3.0)
-    rec = run_fmu(fmu_file(folder, "ddfs", 3), ref, with_positions=True)
+    rec = run_fmu(fmu_file(shared_fmus, "ddfs", 3), ref, with_positions=True)
     assert _compare(rec, run_feeddrive("ddfs", ref, **TIGHT)) <= 1e-6
 
 
 @pytest.mark.slow
-def test_input_derivatives_interpolate_the_reference(folder: Path, tmp_path: Path) -> None:
+def test_input_derivatives_interpolate_the_reference(shared_fmus: SharedExports,
+                                                     tmp_path: Path) -> None:
     """FMI 2.0 canInterpolateInputs: given the input slopes (fmi2SetRealInputDerivatives),
     the FMU follows the linearly interpolated reference of a plain SampledSpeed.  (Driven
     step by step through fmpy's FMU2Slave: fmpy 0.3's simulate_fmu sizes its derivative
@@ -232,7 +223,7 @@ def test_input_derivatives_interpolate_the_reference(folder: Path, tmp_path: Pat
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
-    path = fmu_file(folder, "ddfs")
+    path = fmu_file(shared_fmus, "ddfs")
     ref = Reference.ramp(0.5, 16.0, 2.0, step=0.05)
     md = read_model_description(str(path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -268,7 +259,7 @@ def test_input_derivatives_interpolate_the_reference(folder: Path, tmp_path: Pat
 
 
 @pytest.mark.slow
-def test_tunable_parameter_changes_the_run_as_in_feeddrive(folder: Path) -> None:
+def test_tunable_parameter_changes_the_run_as_in_feeddrive(shared_fmus: SharedExports) -> None:
     """Doubling the table mass: in fmpy as a start value of the FMU's ``table.mass``, in
     feeddrive in the parameter set; the runs agree with each other and differ from the
     unchanged run."""
@@ -278,14 +269,14 @@ def test_tunable_parameter_changes_the_run_as_in_feeddrive(folder: Path) -> None
     fm = build(p, "cdfs", 0.4)
     assert [fm.model.parameter_names[i] for i in changed] == ["table.mass"]
     ref = Reference.ramp(2.0, 0.0, 2.0)
-    path = fmu_file(folder, "cdfs")
+    path = fmu_file(shared_fmus, "cdfs")
     rec = run_fmu(path, ref, start_values={"table.mass": 2.0 * p.table.mass})
     assert _compare(rec, run_feeddrive("cdfs", ref, params=heavy, **TIGHT)) <= 1e-6
     assert _compare(rec, run_feeddrive("cdfs", ref, **TIGHT)) > 1e-4
 
 
 @pytest.mark.slow
-def test_model_exchange_in_fmpy_follows_feeddrive(folder: Path) -> None:
+def test_model_exchange_in_fmpy_follows_feeddrive(shared_fmus: SharedExports) -> None:
     """Model exchange: fmpy's CVODE integrates the FMU's derivatives (relative tolerance 1e-8;
     atol = rtol·nominal, the nominals being feeddrive's former fixed absolute tolerances over
     its relative one: docs/fmu.md).  Constant speed references from t = 0: fmpy sets a
@@ -293,23 +284,23 @@ def test_model_exchange_in_fmpy_follows_feeddrive(folder: Path) -> None:
     a varying input is the importer's approximation (docs/fmu.md); co-simulation holds them
     exactly."""
     ref = Reference.ramp(0.5, 16.0, 3.0, ramp=0.0)
-    rec = run_fmu(fmu_file(folder, "ddfs", 2, "me"), ref, relative_tolerance=1e-8)
+    rec = run_fmu(fmu_file(shared_fmus, "ddfs", 2, "me"), ref, relative_tolerance=1e-8)
     assert _compare(rec, run_feeddrive("ddfs", ref, **TIGHT)) <= 1e-6
 
 
 @pytest.mark.slow
-def test_model_exchange_samples_the_loops_at_time_events(folder: Path) -> None:
+def test_model_exchange_samples_the_loops_at_time_events(shared_fmus: SharedExports) -> None:
     """Sampled 8/4/2-kHz loops with quantised feedback (wang2021-drive) in model exchange:
     the sample instants are time events of the FMU; the run follows feeddrive's."""
     ref = Reference.ramp(0.5, 16.0, 0.5, ramp=0.0)
-    rec = run_fmu(fmu_file(folder, "ddfs", 3, "me", params="wang2021-drive"), ref,
+    rec = run_fmu(fmu_file(shared_fmus, "ddfs", 3, "me", params="wang2021-drive"), ref,
                   relative_tolerance=1e-10)
     result = run_feeddrive("ddfs", ref, "wang2021-drive", **TIGHT)
     assert _compare(rec, result) <= 1e-5
 
 
 @pytest.mark.slow
-def test_cosimulation_samples_the_loops_inside_a_step(folder: Path) -> None:
+def test_cosimulation_samples_the_loops_inside_a_step(shared_fmus: SharedExports) -> None:
     """Sampled 8/4/2-kHz loops (wang2021-drive) inside 1-ms communication steps: the FMU's
     embedded DOPRI5 follows feeddrive's ``dopri5`` with ``locate_reversals=False`` — the same
     algorithm, stepping across the table's friction reversals as the FMU does (measured
@@ -317,13 +308,13 @@ def test_cosimulation_samples_the_loops_inside_a_step(folder: Path) -> None:
     35): against ``modal`` the difference is 1.35e-6 of the stroke, the DOPRI5 pair's error at
     the reversals (docs/fmu.md)."""
     ref = Reference.ramp(0.5, 16.0, 2.0)
-    rec = run_fmu(fmu_file(folder, "ddfs", params="wang2021-drive"), ref,
+    rec = run_fmu(fmu_file(shared_fmus, "ddfs", params="wang2021-drive"), ref,
                   start_values=FMU_TIGHT)
     assert _compare(rec, run_feeddrive("ddfs", ref, "wang2021-drive", method="dopri5",
                                        locate_reversals=False, **TIGHT)) <= 1e-6
 
 
-def test_sample_instants_are_kept_across_step_sizes(folder: Path) -> None:
+def test_sample_instants_are_kept_across_step_sizes() -> None:
     """A communication step that is no multiple of the sample period lands the sample
     instants inside steps: the same run as with steps on the sample grid."""
     base = preset("wang2021-drive")  # sampled loops, ideal feedback (no count flips)
@@ -346,14 +337,14 @@ def test_sample_instants_are_kept_across_step_sizes(folder: Path) -> None:
 
 
 @pytest.mark.slow
-def test_load_force_input_acts_on_the_table(folder: Path) -> None:
+def test_load_force_input_acts_on_the_table(shared_fmus: SharedExports) -> None:
     """A 200-N load stepped in through the ``load_force`` input at t = 0.5 s (a
     communication point) moves the table as feeddrive's constant load from
     ``disturbances.load_start`` = 0.5 s does."""
     from fmpy import read_model_description
 
     ref = Reference.ramp(2.0, 0.0, 1.5)
-    path = fmu_file(folder, "cdfs")
+    path = fmu_file(shared_fmus, "cdfs")
     md = read_model_description(str(path))
     names = tuple(v.name for v in md.modelVariables if v.causality == "input")
     from fmu_helpers import input_table
@@ -403,7 +394,7 @@ GMS_FILE = Path(__file__).parents[2] / "examples" / "gms_guide.toml"
     ("linear-motor", "linear-motor-example", "locked"), ("cdfs", "wang2021", "servo"),
     ("cdfs", "gms", "locked"), ("ddfs", "nut-position-loop", "locked"),
     ("rack-pinion", "rack-pinion-example", "locked")])
-def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
+def test_other_drives_follow_feeddrive(shared_fmus: SharedExports, drive: str, params: str,
                                        hold: str) -> None:
     """The linear motor, the CDFS with its hollow motor on the servo (held at 0: no nut
     input, as the drive follows no nut reference — issue 40's named references), the
@@ -422,11 +413,10 @@ def test_other_drives_follow_feeddrive(folder: Path, drive: str, params: str,
         p = w.with_values(hollow_controller=nut.with_values(nut_loop="position"))
     else:
         p = preset(params)
-    path = folder / f"{drive}-{params}-{hold}.fmu"
-    if not path.exists():
-        result_ = export_fmu(p, drive, path, nut_hold=hold)
-        assert ("nut_position_reference" in result_.inputs) == (params == "nut-position-loop")
-        assert ("nut_speed_reference" in result_.inputs) == (drive == "ddfs")
+    result_ = shared_fmus.drive(p, drive, nut_hold=hold)
+    path = result_.path
+    assert ("nut_position_reference" in result_.inputs) == (params == "nut-position-loop")
+    assert ("nut_speed_reference" in result_.inputs) == (drive == "ddfs")
     rec = run_fmu(path, ref, start_values=FMU_TIGHT,
                   with_positions=params == "nut-position-loop")
     result = simulate(DriveSystem(p, drive, 0.4, nut_hold=hold),

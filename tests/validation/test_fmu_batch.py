@@ -11,9 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmu_helpers import require_c_compiler
+from fmu_helpers import SharedExports, require_c_compiler
 
-from feeddrive.fmu import export_fmu
 from feeddrive.parameters import preset
 
 fmpy = pytest.importorskip("fmpy")
@@ -75,7 +74,8 @@ def _cycles(path: str, folder: str) -> tuple[dict[int, int], list[float], dict[s
 
 @pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/statm").exists(), reason="needs /proc (Linux)")
-def test_2000_reset_cycles_with_new_parameters(tmp_path: Path) -> None:
+def test_2000_reset_cycles_with_new_parameters(tmp_path: Path,
+                                               shared_fmus: SharedExports) -> None:
     """fmpy's documented pattern (instantiate_fmu once, then reset + simulate_fmu with
     fmu_instance): new table mass, K_pp and K_vp each cycle.  Resident memory between cycle
     200 and 2000 grows by less than 1 MB (measured: 45 kB, Python's own); cycle 2000's trace
@@ -86,8 +86,7 @@ def test_2000_reset_cycles_with_new_parameters(tmp_path: Path) -> None:
     the FMU."""
     from fmpy import extract, simulate_fmu
 
-    path = tmp_path / "cdfs.fmu"
-    export_fmu(preset("wang2021"), "cdfs", path)
+    path = shared_fmus.drive(preset("wang2021"), "cdfs").path  # FMI 2.0 co-simulation
     folder = extract(str(path), unzipdir=str(tmp_path / "u"))
     with ProcessPoolExecutor(max_workers=1, mp_context=get_context("spawn")) as pool:
         rss, finals, values, time, position = pool.submit(_cycles, str(path), folder).result()

@@ -11,9 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmu_helpers import Model, check_jacobian, require_c_compiler, richardson
+from fmu_helpers import Model, SharedExports, check_jacobian, require_c_compiler, richardson
 
-from feeddrive.fmu import export_fmu
 from feeddrive.parameters import load, loads, preset
 
 fmpy = pytest.importorskip("fmpy")
@@ -49,23 +48,23 @@ def _params(name: str):  # type: ignore[no-untyped-def]
 class _Exported(dict):  # type: ignore[type-arg]
     """The model-exchange FMU of each case, exported when a test first asks for it: the
     module's tests are spread over the test workers, and each worker built all seven
-    (gcc, ≈ 2 s each) whatever it ran."""
+    (gcc, ≈ 2 s each) whatever it ran.  Exported once in the session (``shared_fmus``: the
+    DDFS ones are those other FMU test files read too)."""
 
-    def __init__(self, folder: Path) -> None:
+    def __init__(self, shared: SharedExports) -> None:
         super().__init__()
-        self.folder = folder
+        self.shared = shared
 
     def __missing__(self, case: str) -> Path:
         drive, params, fmi = CASES[case]
-        path = self.folder / f"{case}.fmu"
-        export_fmu(_params(params), drive, path, fmi=fmi, kind="me")
+        path = Path(self.shared.drive(_params(params), drive, fmi=fmi, kind="me").path)
         self[case] = path
         return path
 
 
 @pytest.fixture(scope="module")
-def models(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    return _Exported(tmp_path_factory.mktemp("me"))
+def models(shared_fmus: SharedExports) -> dict[str, Path]:
+    return _Exported(shared_fmus)
 
 
 def _point(m: Model) -> tuple[float, np.ndarray]:
@@ -190,7 +189,7 @@ def test_fmpy_cvode_does_not_call_them(models: dict) -> None:
 
 
 @pytest.mark.slow
-def test_pathsim_model_exchange_needs_far_fewer_derivative_evaluations(tmp_path: Path) -> None:
+def test_pathsim_model_exchange_needs_far_fewer_derivative_evaluations(models: dict) -> None:
     """The importer that calls them: PathSim's ModelExchangeFMU (pathsim-fmi) with an implicit
     solver (ESDIRK4, dt = 0.1 ms, fixed-point tolerance 1e-12), 30 ms of the DDFS at 0.5 mm/s
     with v_n = 16 mm/s.  Without directional derivatives PathSim differences its Jacobian
@@ -206,8 +205,7 @@ def test_pathsim_model_exchange_needs_far_fewer_derivative_evaluations(tmp_path:
     pytest.importorskip("pathsim_fmi")
     from fmu_helpers import pathsim_model_exchange
 
-    path = tmp_path / "ddfs-me.fmu"
-    export_fmu(preset("wang2021"), "ddfs", path, kind="me")
+    path = models["ddfs-2"]  # the DDFS (wang2021) as an FMI 2.0 model-exchange FMU
     (rhs_without, tan_without), t0, x0, _ = pathsim_model_exchange(path, 0.03, False)
     (rhs_with, tan_with), t1, x1, _ = pathsim_model_exchange(path, 0.03, True)
     assert tan_without == 0 and tan_with > 0

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmu_helpers import FMU_TIGHT, STEP, TIGHT, Model, check_jacobian
+from fmu_helpers import FMU_TIGHT, STEP, TIGHT, Model, SharedExports, check_jacobian
 
 from feeddrive.engine.options import SolverOptions
 from feeddrive.fmu import export_machine_fmu
@@ -106,15 +106,15 @@ def test_machine_fmu_declares_each_axis_and_validates(tmp_path: Path, fmi: int) 
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_machine_model_exchange_fmu_declares_every_rate_and_validates(tmp_path: Path,
-                                                                      fmi: int) -> None:
+def test_machine_model_exchange_fmu_declares_every_rate_and_validates(
+        shared_fmus: SharedExports, fmi: int) -> None:
     """Model exchange: the same ``<axis>.<name>`` variables, and the rate of every continuous
     state (each axis' own and its two reference integrals, the coupling parts' states) with
     its unit; fmpy's validation finds no problem."""
     from fmpy.validation import validate_fmu
 
-    path = tmp_path / "g.fmu"
-    fmu = export_machine_fmu(machine_from_dict(GANTRY), path, fmi=fmi, kind="me")
+    fmu = shared_fmus.machine(repr(GANTRY), machine_from_dict(GANTRY), fmi=fmi, kind="me")
+    path = fmu.path
     assert fmu.kind == "me"
     assert validate_fmu(str(path)) == []
     md = fmpy.read_model_description(str(path))
@@ -134,14 +134,14 @@ def _point(m: Model) -> tuple[float, np.ndarray]:
     return 0.05, rng.standard_normal(m.n) * 10 * m.nominals()
 
 
-def test_machine_directional_derivatives_match_central_differences(tmp_path: Path) -> None:
+def test_machine_directional_derivatives_match_central_differences(
+        tmp_path: Path, shared_fmus: SharedExports) -> None:
     """The machine's tangent — each axis' scope function and the beam's and the cross-coupled
     controller's code between them — against central differences of the FMU's own
     derivatives on every declared pair (1e-6 relative), the declared sparsity holding where
     nothing is declared; the coupling parts make x2's rates depend on x1's states, by the
     controller's gains exactly."""
-    path = tmp_path / "g.fmu"
-    export_machine_fmu(machine_from_dict(GANTRY), path, kind="me")
+    path = shared_fmus.machine(repr(GANTRY), machine_from_dict(GANTRY), kind="me").path
     m = Model(path, tmp_path)
     m.start({"x1.table_speed_reference": 2e-3, "x2.table_speed_reference": 2e-3,
              "x1.load_force": 50.0})
@@ -166,16 +166,16 @@ def test_machine_directional_derivatives_match_central_differences(tmp_path: Pat
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("machine", "bound"), [("gantry", 1e-10), ("sampled", 1e-10)])
-def test_machine_model_exchange_in_fmpy_follows_simulate_machine(tmp_path: Path, machine: str,
-                                                                  bound: float) -> None:
+def test_machine_model_exchange_in_fmpy_follows_simulate_machine(
+        shared_fmus: SharedExports, machine: str, bound: float) -> None:
     """As model-exchange FMUs integrated by fmpy's CVODE (rtol 1e-10): the gantry with the
     cross-coupled controller, and the XY table of sampled axes (its loops' instants as time
     events), every axis commanded 2 mm/s from rest, against ``simulate_machine`` of the same
     machine at the tight tolerances (TIGHT).  Table positions within 1e-10 m (measured
     5.0e-13 m over the gantry's 0.3 s, 1.4e-11 m over the sampled table's 0.1 s)."""
-    m = machine_from_dict(GANTRY if machine == "gantry" else SAMPLED)
-    path = tmp_path / "m.fmu"
-    export_machine_fmu(m, path, kind="me")
+    definition = GANTRY if machine == "gantry" else SAMPLED
+    m = machine_from_dict(definition)
+    path = shared_fmus.machine(repr(definition), m, kind="me").path
     duration = 0.3 if machine == "gantry" else 0.1
     t = np.arange(0.0, duration + 0.5 * STEP, STEP)
     speed = dc.replace(SampledSpeed(time=t, table_speed=np.full(t.size, 2e-3)), hold=True)

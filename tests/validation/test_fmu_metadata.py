@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmu_helpers import require_c_compiler
+from fmu_helpers import SharedExports, require_c_compiler
 
 import feeddrive as fd
 from feeddrive import __version__
@@ -31,25 +31,23 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[tuple[int, str], Path]:
-    folder = tmp_path_factory.mktemp("meta")
-    out = {}
-    for fmi in (2, 3):
-        for kind in ("cs", "me"):
-            path = folder / f"ddfs-{fmi}-{kind}.fmu"
-            export_fmu(preset("wang2021"), "ddfs", path, fmi=fmi, kind=kind)
-            out[(fmi, kind)] = path
-    return out
+def fmus(shared_fmus: SharedExports) -> dict[tuple[int, str], Path]:
+    """The DDFS (wang2021) in each FMI version and kind, exported once in the session
+    (``shared_fmus``: test_fmu.py and test_fmu_directional.py read the same)."""
+    return {(fmi, kind): Path(shared_fmus.drive(preset("wang2021"), "ddfs", fmi=fmi,
+                                                kind=kind).path)
+            for fmi in (2, 3) for kind in ("cs", "me")}
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("kind", ["cs", "me"])
-def test_valid_with_display_units_as_the_cli_speaks(fmus: dict, fmi: int, kind: str) -> None:
+def test_valid_with_display_units_as_the_cli_speaks(fmus: dict, shared_fmus: SharedExports,
+                                                    fmi: int, kind: str) -> None:
     from fmpy import read_model_description
-    from fmpy.validation import validate_fmu
 
     path = fmus[(fmi, kind)]
-    assert validate_fmu(str(path)) == []
+    # fmpy.validation.validate_fmu, run once for this file (test_fmu.py asks too)
+    assert shared_fmus.problems(path) == []
     md = read_model_description(str(path))
     v = {x.name: x for x in md.modelVariables}
     factors = {(u.name, d.name): (d.factor, d.offset) for u in md.unitDefinitions

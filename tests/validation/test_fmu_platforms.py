@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmu_helpers import SharedExports
 from typer.testing import CliRunner
 
 from feeddrive.cli import app
@@ -214,14 +215,14 @@ def _run_native(fmi: int, folder: Path, library: Path, tmp_path: Path) -> np.nda
 @pytest.mark.slow
 @needs_cmake
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_cmake_and_fmpy_rebuild_linux64_with_the_same_trace(tmp_path: Path, fmi: int) -> None:
+def test_cmake_and_fmpy_rebuild_linux64_with_the_same_trace(tmp_path: Path, fmi: int,
+                                                            shared_fmus: SharedExports) -> None:
     """The binary removed, rebuilt by the FMU's sources/CMakeLists.txt (cmake from apt), by the
     gcc line of its documentation/index.html and by fmpy's build_platform_binary: each gives
     the shipped binary's trace to 1e-15 of the stroke (measured: bit-identical)."""
     from fmpy.build import build_platform_binary
 
-    path = tmp_path / "c.fmu"
-    export_fmu(preset("wang2021"), "cdfs", path, fmi=fmi)
+    path = shared_fmus.drive(preset("wang2021"), "cdfs", fmi=fmi).path  # read, never changed
     shipped = _unzip(path, tmp_path / "shipped")
     reference = _run_native(fmi, shipped, next((shipped / "binaries").rglob("*.so")), tmp_path)
     # CMake, as the file's own header says
@@ -272,12 +273,12 @@ def test_the_documentation_names_every_rebuild_route(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("fmi", "kind"), [(2, "cs"), (3, "me")])
-def test_the_sources_compile_without_a_warning(tmp_path: Path, fmi: int, kind: str) -> None:
+def test_the_sources_compile_without_a_warning(tmp_path: Path, fmi: int, kind: str,
+                                               shared_fmus: SharedExports) -> None:
     """sources/fmu.c under -std=c99 -Wall -Wextra -pedantic -Werror with this machine's
     compiler and, where installed, MinGW-w64: no warning (the model exchange source carries
     the model's tangent)."""
-    path = tmp_path / "d.fmu"
-    export_fmu(preset("wang2021"), "ddfs", path, fmi=fmi, kind=kind)
+    path = shared_fmus.drive(preset("wang2021"), "ddfs", fmi=fmi, kind=kind).path
     src = _unzip(path, tmp_path / "u") / "sources"
     strict = ["-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror", "-shared"]
     for cc, out in (([*find_compiler(), "-fPIC"], "x.so"),

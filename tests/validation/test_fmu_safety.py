@@ -13,9 +13,8 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from fmu_helpers import Slave, require_c_compiler
+from fmu_helpers import SharedExports, Slave, require_c_compiler
 
-from feeddrive.fmu import export_fmu
 from feeddrive.fmu.description import MAX_STEPS_PER_CALL, variables
 from feeddrive.fmu.model import build
 from feeddrive.model.mechanisms.shared import Table
@@ -30,15 +29,12 @@ MAX_STEPS = 10_000
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[tuple[str, int], Path]:
-    folder = tmp_path_factory.mktemp("safety")
-    out = {}
-    for params, fmi in (("wang2021", 2), ("wang2021", 3), ("wang2021-drive", 2),
-                        ("wang2021-drive", 3)):
-        path = folder / f"cdfs-{params}-{fmi}.fmu"
-        export_fmu(preset(params), "cdfs", path, fmi=fmi)
-        out[(params, fmi)] = path
-    return out
+def fmus(shared_fmus: SharedExports) -> dict[tuple[str, int], Path]:
+    """The CDFS with continuous (wang2021) and sampled (wang2021-drive) loops, FMI 2.0 and
+    3.0 co-simulation, exported once in the session (``shared_fmus``)."""
+    return {(params, fmi): Path(shared_fmus.drive(preset(params), "cdfs", fmi=fmi).path)
+            for params, fmi in (("wang2021", 2), ("wang2021", 3), ("wang2021-drive", 2),
+                                ("wang2021-drive", 3))}
 
 
 def _slave(fmus: dict, params: str, fmi: int, tmp_path: Path, name: str = "x") -> Slave:
