@@ -15,6 +15,7 @@ import hashlib
 import os
 import random
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -64,10 +65,17 @@ def _snapshot(out: Path) -> dict[str, str]:
 
 
 @pytest.fixture(scope="module")
-def clean(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+def clean_out(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The folder of one clean, uninterrupted run into an empty folder (never changed: a
+    test that changes a clean folder copies it)."""
     out = tmp_path_factory.mktemp("clean") / "out"
     _finish(_start(out))
-    return _snapshot(out)
+    return out
+
+
+@pytest.fixture(scope="module")
+def clean(clean_out: Path) -> dict[str, str]:
+    return _snapshot(clean_out)
 
 
 @pytest.mark.slow
@@ -101,10 +109,12 @@ def test_two_concurrent_runs_into_one_folder(tmp_path: Path, clean: dict[str, st
 
 
 @pytest.mark.slow
-def test_edited_entry_is_recomputed_with_a_notice(tmp_path: Path,
+def test_edited_entry_is_recomputed_with_a_notice(tmp_path: Path, clean_out: Path,
                                                   clean: dict[str, str]) -> None:
-    out = tmp_path / "out"
-    _finish(_start(out))
+    # a completed folder: a copy of the clean run's (the same run into an empty folder that
+    # this test made itself before, whose snapshot is `clean`), hidden files included
+    out = Path(shutil.copytree(clean_out, tmp_path / "out"))
+    assert _snapshot(out) == clean
     entry = next((out / "data").glob("crit-cdfs-0.4-*.json"))
     raw = entry.read_bytes()
     head, _, body = raw.partition(b"\n")

@@ -8,6 +8,7 @@ temporary folder, one per process that is reused, not one per library; ``~`` in
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -16,7 +17,7 @@ from pathlib import Path
 import pytest
 from test_c_cache import _value, needs_cc
 
-from feeddrive.backends import c_cache
+from feeddrive.backends import c_cache, c_engine
 from feeddrive.backends.c_cache import cached_library
 
 SOURCE = "double fd_value(double x) { return 3.0 * x + %s; }\n"
@@ -58,7 +59,7 @@ def test_an_unusable_cache_folder_leaves_everything_for_one_private_folder(
                TMPDIR=str(tmp), FEEDDRIVE_ENGINE="c")
     code = textwrap.dedent("""
         import feeddrive as fd
-        from feeddrive.backends import c_cache
+        from feeddrive.backends import c_cache, c_engine
         from feeddrive.model.reference import ConstantSpeed
         r = fd.simulate(fd.DriveSystem(fd.preset("wang2021"), "cdfs", 0.4), ConstantSpeed(2e-3),
                         0.01)
@@ -103,9 +104,15 @@ def test_a_tilde_in_the_cache_variable_is_the_home_folder(monkeypatch: pytest.Mo
 
 
 @needs_cc
-def test_a_damaged_model_text_is_translated_again(tmp_path: Path) -> None:
+def test_a_damaged_model_text_is_translated_again(tmp_path: Path, filled_c_cache: Path) -> None:
     """A kept ``model-*.c`` cut short (it failed to compile, every run after): the model is
-    translated again, and the run completes."""
+    translated again, and the run completes.
+
+    The cache is a copy of the session's filled one (the model's kept text, the drivers'
+    library); only the model's library is removed, which makes a run compile the model's
+    text again: the drivers' library plays no part in it (their kept texts and their
+    compilation are test_s20_c_texts.py's)."""
+    shutil.copytree(filled_c_cache, tmp_path / "c")
     env = dict(os.environ, **{c_cache.CACHE_ENV: str(tmp_path / "c")}, FEEDDRIVE_ENGINE="c")
     code = textwrap.dedent("""
         import feeddrive as fd
@@ -125,8 +132,9 @@ def test_a_damaged_model_text_is_translated_again(tmp_path: Path) -> None:
     assert len(texts) == 1
     whole = texts[0].read_text(encoding="utf-8")
     texts[0].write_text(whole[: len(whole) // 2], encoding="utf-8")
-    for lib in (tmp_path / "c").glob(f"*{c_cache.library_suffix()}"):
-        lib.unlink()  # so that the text is compiled again
+    (model_lib,) = [lib for lib in (tmp_path / "c").glob(f"*{c_cache.library_suffix()}")
+                    if c_engine.TABLE.encode() in lib.read_bytes()]
+    model_lib.unlink()  # so that the text is compiled again
     second = run()
     assert second.returncode == 0, second.stderr
     assert second.stdout == first.stdout

@@ -95,14 +95,20 @@ def _run(cache: Path, tmp: Path, **env: str) -> subprocess.CompletedProcess[str]
 
 
 @pytest.fixture(scope="module")
-def warm(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    """A C cache one run filled, and that run's output."""
+def warm(tmp_path_factory: pytest.TempPathFactory, filled_c_cache: Path) -> tuple[Path, str]:
+    """A C cache one run filled, and this file's run's output on it.  The cache is a copy of
+    the session's ``filled_c_cache`` (one fresh process filled it from empty: the drivers'
+    and the model's texts, libraries and digests, as :data:`RUN` leaves them; its compile of
+    the drivers is ≈ 4 CPU s), and :data:`RUN` ran on the copy, wholly from it (no
+    compilation, nothing said), so its output is the model's own results, bit for bit."""
     if not CC:
         pytest.skip("no C compiler")
     root = tmp_path_factory.mktemp("warm")
-    first = _run(root / "c", root / "tmp")
+    cache = Path(shutil.copytree(filled_c_cache, root / "c"))
+    first = _run(cache, root / "tmp")
     assert first.returncode == 0 and first.stderr == "", first.stderr
-    return root / "c", first.stdout
+    assert first.stdout.split()[0] == "c"
+    return cache, first.stdout
 
 
 def _copy(warm: tuple[Path, str], tmp_path: Path) -> Path:
