@@ -435,12 +435,16 @@ table_position = [300, 500]
 """
 
 
-def _start_sweep(tmp_path: Path, store: Path, *extra: str) -> subprocess.Popen[str]:
+def _start_sweep(tmp_path: Path, store: Path, *extra: str,
+                 popen: dict[str, Any] | None = None) -> subprocess.Popen[str]:
+    """``feeddrive sweep`` of a slow configuration in the background; ``popen``: further
+    ``subprocess.Popen`` arguments (the ``interruptible`` fixture's, for a Ctrl-C test)."""
     cfg = tmp_path / "slow.toml"
     cfg.write_text(SLOW)
     return subprocess.Popen([sys.executable, "-m", "feeddrive", "sweep", str(cfg), "--store",
                              str(store), *extra], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            **(popen or {}))
 
 
 def _wait_for(store: Path, proc: subprocess.Popen[str], count: int, timeout: float) -> None:
@@ -452,9 +456,9 @@ def _wait_for(store: Path, proc: subprocess.Popen[str], count: int, timeout: flo
 
 
 def test_ctrl_c_on_a_running_sweep_keeps_every_point_and_stops_its_workers(
-        tmp_path: Path) -> None:
+        tmp_path: Path, interruptible: dict[str, Any]) -> None:
     store = tmp_path / "s.sqlite"
-    proc = _start_sweep(tmp_path, store, "--workers", "2")
+    proc = _start_sweep(tmp_path, store, "--workers", "2", popen=interruptible)
     _wait_for(store, proc, 1, 180)
     workers = _descendants(proc.pid)
     assert workers

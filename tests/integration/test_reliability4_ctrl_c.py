@@ -302,7 +302,7 @@ def _alive(pid: int) -> bool:
 @pytest.mark.parametrize("command", ["sweep", "predict"])
 @pytest.mark.parametrize("pool", ["--workers", "--dask-workers"])
 def test_ctrl_c_on_a_running_sweep_or_prediction_stops_at_once_and_keeps_every_result(
-        tmp_path: Path, command: str, pool: str) -> None:
+        tmp_path: Path, command: str, pool: str, interruptible: dict[str, Any]) -> None:
     """Ctrl-C to the parent alone, points in flight on 2 workers (a local pool or a Dask
     LocalCluster): status 130 in one line, every reported point in the store, at most one
     point per worker stored after the signal (one that had returned), none after the exit,
@@ -319,7 +319,7 @@ def test_ctrl_c_on_a_running_sweep_or_prediction_stops_at_once_and_keeps_every_r
         args = ["predict", "fit.toml", "--samples", "12", "--store", str(store), pool, "2"]
     proc = subprocess.Popen([sys.executable, "-m", "feeddrive", *args], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True, **interruptible)
     deadline = time.monotonic() + 240
     while time.monotonic() < deadline and proc.poll() is None and _stored(store) < 1:
         time.sleep(0.05)
