@@ -1106,7 +1106,7 @@ def analyze_trace(
         the segments.
     min_step : float, optional
         Smallest command change that starts a segment [m/s], default 5e-6
-        (:data:`DEFAULT_MIN_STEP`).  It sets the segments detected from the position only:
+        (``DEFAULT_MIN_STEP``).  It sets the segments detected from the position only:
         refused with ``command_speed``, ``command`` or ``segment=False``.
     min_segment_time : float, default 1.0
         Shortest segment [s].
