@@ -48,7 +48,7 @@ def _covered(base: fd.DriveParameters, drive: str, records: list[Experiment],
              values: dict[str, float]) -> tuple[int, list[float]]:
     hits, z = 0, []
     for e in records:
-        res = fit_drive(base, [e], list(FACTORS), drive=drive, table_position=0.0)
+        res = fit_drive(base, [e], list(FACTORS), drive=drive)  # the start: none read
         assert res.residual_ok and not res.interrupted
         for est in res.estimates:
             truth = values[est.path]

@@ -39,9 +39,18 @@ from reference.scipy_model import ReferenceModel  # noqa: E402
 import feeddrive  # noqa: E402
 from feeddrive.engine.simulate import DriveSystem  # noqa: E402
 from feeddrive.model.disturbances import LeadError, TorqueRipple  # noqa: E402
+from feeddrive.model.mechanisms import mechanism  # noqa: E402
+from feeddrive.model.mechanisms.base import DEFAULT_TABLE_POSITION  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed, SineSpeed  # noqa: E402
 
 TABLE_POSITION = 0.35
+
+
+def _start(drive: str) -> float:
+    """The start position of ``drive``'s runs: ``TABLE_POSITION`` where the model reads it (a
+    ball screw's K_eq(a)), else the default, the only one such a drive takes (its model reads
+    none: engine and reference are compared from the same start either way)."""
+    return TABLE_POSITION if mechanism(drive).uses_table_position else DEFAULT_TABLE_POSITION
 RTOL = 1e-9
 
 
@@ -218,8 +227,9 @@ def _random_states(rng: np.random.Generator, times: np.ndarray, model: Reference
 def _models(case: Case, changes: dict[str, Any]) -> tuple[Any, ReferenceModel]:
     params = _with(feeddrive.preset(case.preset), changes)
     load = case.load() if case.load is not None else None
-    system = DriveSystem(params, case.drive, TABLE_POSITION, nut_hold=case.nut_hold, load=load)
-    return system.model(case.profile), ReferenceModel(params, case.drive, TABLE_POSITION,
+    system = DriveSystem(params, case.drive, _start(case.drive), nut_hold=case.nut_hold,
+                         load=load)
+    return system.model(case.profile), ReferenceModel(params, case.drive, _start(case.drive),
                                                       case.profile, nut_hold=case.nut_hold,
                                                       load=load)
 
@@ -300,8 +310,9 @@ def test_reference_tracks_engine_state_layout_for_every_law_and_share() -> None:
             assert ("screw_bristle" in engine.state_names) == (stateful and share < 1.0)
             assert ("ball_nut_bristle" in engine.state_names) == (stateful and share > 0.0)
     lm = feeddrive.preset("linear-motor-example")
-    engine = DriveSystem(lm, "linear-motor", TABLE_POSITION).model(ConstantSpeed(1e-3))
-    assert ReferenceModel(lm, "linear-motor", TABLE_POSITION).state_names == engine.state_names
+    start = _start("linear-motor")
+    engine = DriveSystem(lm, "linear-motor", start).model(ConstantSpeed(1e-3))
+    assert ReferenceModel(lm, "linear-motor", start).state_names == engine.state_names
 
 
 def test_share_one_matches_share_zero_on_the_locked_cdfs_from_equal_bristles() -> None:
