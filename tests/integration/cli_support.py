@@ -8,6 +8,21 @@ from feeddrive.cli import app
 
 RUNNER = CliRunner()
 
+#: a fit record of one free parameter (``feeddrive predict``/``validate`` read it), its
+#: variance a format field: ``FIT_RECORD.format(variance="1e4")``
+FIT_RECORD = """extends = "wang2021"
+name = "fitted"
+[controller]
+velocity_integral_gain = 3925.28
+[fit]
+drive = "cdfs"
+table_position = 0.4
+free = ["controller.velocity_integral_gain"]
+estimates = [3925.28]
+covariance = [[{variance}]]
+interrupted = false
+"""
+
 
 def one_line_refusal(args: list[str]) -> str:
     """Run ``feeddrive ARGS`` and return its one line on standard error, checking that it was

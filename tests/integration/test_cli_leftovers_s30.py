@@ -14,22 +14,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cli_support import RUNNER, one_line_refusal
+from cli_support import FIT_RECORD, RUNNER, one_line_refusal
 
 from feeddrive.cli import app
-
-FIT_RECORD = """extends = "wang2021"
-name = "fitted"
-[controller]
-velocity_integral_gain = 3925.28
-[fit]
-drive = "cdfs"
-table_position = 0.4
-free = ["controller.velocity_integral_gain"]
-estimates = [3925.28]
-covariance = [[1e4]]
-interrupted = false
-"""
 
 
 def _trace(path: Path, command: bool) -> Path:
@@ -104,7 +91,7 @@ def test_stiffness_refuses_a_position_given_twice() -> None:
 
 def test_validate_refuses_a_record_given_twice(tmp_path: Path) -> None:
     fit = tmp_path / "fit.toml"
-    fit.write_text(FIT_RECORD, encoding="utf-8")
+    fit.write_text(FIT_RECORD.format(variance="1e4"), encoding="utf-8")
     trace = tmp_path / "t.csv"
     rows = [f"{k * 1e-3:.3f},{min(k * 1e-3, 1.9) * 0.9:.6f},{0.1 + 0.01 * (k % 7):.4f},1"
             for k in range(2001)]

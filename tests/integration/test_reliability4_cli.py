@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from cli_support import FIT_RECORD
 from typer.testing import CliRunner
 
 from feeddrive.cli import app
@@ -180,18 +181,6 @@ def test_fit_refuses_a_gap_in_a_trace_before_any_work_as_analyze_does(
 #: the options that name what a command writes
 OUTPUT_OPTIONS = ("--out", "--output", "--plot", "--store")
 
-FIT_RECORD = """extends = "wang2021"
-name = "fitted"
-[controller]
-velocity_integral_gain = 3925.28
-[fit]
-drive = "cdfs"
-table_position = 0.4
-free = ["controller.velocity_integral_gain"]
-estimates = [3925.28]
-covariance = [[{variance}]]
-interrupted = false
-"""
 
 SWEEP = """name = "fast"
 drive = "cdfs"
