@@ -66,6 +66,18 @@ def test_compensate_compare_refuses_an_entry_given_twice(args: list[str], says: 
     assert one_line_refusal(["compensate", "--compare", *args]) == says
 
 
+@pytest.mark.parametrize(("args", "says"), [
+    (["--schemes", "none,bogus"], "error: --schemes = ['bogus']: expected some of none, "
+     "none-continuous, feedforward, observer, disturbance-observer, reset-integrator, "
+     "reversal-feedforward"),
+    (["--metrics", "speedy"], "error: --metrics = ['speedy']: expected some of critical, "
+     "spike, reversal, settling")])
+def test_compensate_compare_names_the_option_of_an_unknown_name(args: list[str],
+                                                                says: str) -> None:
+    # it named the API's argument ("schemes = ['bogus']"), not the option typed
+    assert one_line_refusal(["compensate", "--compare", *args]) == says
+
+
 # ------------------------------------------------------- 3: --position no model reads
 
 

@@ -108,7 +108,7 @@ def test_csv_has_every_column_and_the_settings():
 
 @pytest.mark.parametrize(("call", "field"), [
     (lambda: cc.compare_compensations(preset("wang2021")), "controller.velocity_period"),
-    (lambda: cc.compare_compensations(DRIVE, names=["magic"]), "schemes"),
+    (lambda: cc.compare_compensations(DRIVE, names=["magic"]), "names"),  # its argument
     (lambda: cc.compare_compensations(DRIVE, metrics=["speed"]), "metrics"),
     (lambda: cc.compare_compensations(DRIVE, band=0.0), "band"),
 ])

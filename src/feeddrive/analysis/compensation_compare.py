@@ -215,10 +215,7 @@ def schemes(params: DriveParameters, names: Sequence[str] = SCHEMES, *,
     from ..model.parts.reversal_feedforward import ReversalFeedforward
 
     check_sampled(params)
-    unknown = [n for n in names if n not in SCHEMES]
-    if unknown:
-        raise ParameterError("schemes", unknown, f"expected some of {', '.join(SCHEMES)}")
-    refuse_repeats("names", names, SCHEME_ONCE)  # one scheme made twice (session 30)
+    check_names(names, SCHEMES, SCHEME_ONCE, "names")  # one scheme made twice (session 30)
     base = params.replace_path("controller.compensation", Compensation())
     c = params.controller
     continuous = base.replace_path("controller", base.controller.with_values(
@@ -334,13 +331,36 @@ def reset_rate(system: Any, speed: float, *, duration: float = RESET_CHECK_DURAT
     return float((count[half][-1] - count[half][0]) / (t[half][-1] - t[half][0]))
 
 
+def check_names(items: Sequence[str], known: Sequence[str], once: str, field: str) -> None:
+    """Refuse a name ``known`` does not hold and one given twice, naming ``field`` (the
+    argument, or the command line's option: ``--schemes``, ``--metrics``).
+
+    Parameters
+    ----------
+    items : sequence of str
+        The names asked for.
+    known : sequence of str
+        The names there are (:data:`SCHEMES`, :data:`METRICS`).
+    once : str
+        What a repeat would do, for the message (:data:`SCHEME_ONCE`, :data:`METRIC_ONCE`).
+    field : str
+        The name the message gives the list.
+
+    Raises
+    ------
+    ParameterError
+        One line: the unknown names and the known ones, or the repeated name.
+    """
+    bad = [n for n in items if n not in known]
+    if bad:
+        raise ParameterError(field, bad, f"expected some of {', '.join(known)}")
+    refuse_repeats(field, items, once)
+
+
 def _check_metrics(metrics: Sequence[str]) -> None:
     """Refuse a quantity :data:`METRICS` does not hold (:func:`measure` left it out without
     a word) and one given twice (counted twice in the progress's total)."""
-    bad = [m for m in metrics if m not in METRICS]
-    if bad:
-        raise ParameterError("metrics", bad, f"expected some of {', '.join(METRICS)}")
-    refuse_repeats("metrics", metrics, METRIC_ONCE)
+    check_names(metrics, METRICS, METRIC_ONCE, "metrics")
 
 
 def measure(scheme: Scheme, drive: str, table_position: float, metrics: Sequence[str], *,

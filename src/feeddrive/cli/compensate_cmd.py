@@ -171,24 +171,27 @@ def _compare(drive: str, position: float, schemes: str, metrics: str, band: floa
 
     from ..analysis.compensation_compare import (
         METRIC_ONCE,
+        METRICS,
         SCHEME_ONCE,
+        SCHEMES,
+        check_names,
         check_sampled,
         compare_compensations,
     )
 
     names = [n.strip() for n in schemes.split(",") if n.strip()]
     wanted = [m.strip() for m in metrics.split(",") if m.strip()]
-    from ..parameters.validation import refuse_repeats
-
-    for option, given, items, each in (("--schemes", schemes, names, SCHEME_ONCE),
-                                       ("--metrics", metrics, wanted, METRIC_ONCE)):
+    for option, given, items, known, each in (
+            ("--schemes", schemes, names, SCHEMES, SCHEME_ONCE),
+            ("--metrics", metrics, wanted, METRICS, METRIC_ONCE)):
         if not items:  # an empty table, exit 0 (an outside check, 2026-12-07)
             from ..parameters import ParameterError
 
             raise ParameterError(option, given, "expected one name or more, comma-separated")
         # a scheme twice ran twice, its row repeated; a quantity twice was counted twice in
-        # the progress (an earlier sweep, session 30)
-        refuse_repeats(option, items, each)
+        # the progress (an earlier sweep, session 30); an unknown name was refused as the
+        # API's argument (schemes = […]), not as the option typed
+        check_names(items, known, each, option)
     if not math.isfinite(band) or band <= 0:
         from ..parameters import ParameterError
 
