@@ -197,11 +197,14 @@ def test_locate_reversals_must_be_true_or_false(value: object) -> None:
         fd.SolverOptions(locate_reversals=value)  # type: ignore[arg-type]
 
 
-def test_the_kept_rows_key_a_record_by_its_digest_not_its_samples() -> None:
+def test_the_kept_rows_key_a_record_by_its_digest_not_its_samples(
+        monkeypatch: pytest.MonkeyPatch) -> None:
     """A record's samples live in ``T`` (an 8-kHz, 100-s record: 26 MB), and the kept rows
     (64 of them) were keyed by ``T``'s bytes: a fit of such a record held a copy per
     parameter point.  The key is now a digest, of fixed size, and still tells apart another
-    record, another parameter value and another structure."""
+    parameter value and another structure; another record (the profile's table, as its
+    numbers in ``P``) shares the key since 2026-12-08 — a fit's records at one parameter
+    point were each a miss — and its rows are the ones computed afresh."""
     import sys
 
     from feeddrive.engine import simulate as sim_module
@@ -218,8 +221,27 @@ def test_the_kept_rows_key_a_record_by_its_digest_not_its_samples() -> None:
     other_mass = assemble(params.replace_path("table.mass", 30.0), "cdfs", 0.4, "locked",
                           fd.SampledSpeed(t, v))
     ddfs = assemble(params, "ddfs", 0.4, "locked", fd.SampledSpeed(t, v, np.full(t.size, 16e-3)))
-    keys = {key, sim_module._rows_key(other_record, other_record.P, other_record.T),
-            sim_module._rows_key(other_mass, other_mass.P, other_mass.T),
+    keys = {key, sim_module._rows_key(other_mass, other_mass.P, other_mass.T),
             sim_module._rows_key(ddfs, ddfs.P, ddfs.T)}
-    assert len(keys) == 4
+    assert len(keys) == 3
     assert sim_module._rows_key(model, model.P.copy(), model.T.copy()) == key
+    assert sim_module._rows_key(other_record, other_record.P, other_record.T) == key
+    # a table elsewhere in T still tells apart: change a value outside the profile's table
+    o = model.parameter_names.index("profile[0]")
+    to, columns = int(model.P[o + 5]), int(model.P[o + 6])
+    assert to + 4 * columns <= model.T.size
+    if to > 0 or to + 4 * columns < model.T.size:
+        outside = model.T.copy()
+        outside[0 if to > 0 else -1] += 1.0
+        assert sim_module._rows_key(model, model.P, outside) != key
+    # the rows kept for one record are those the other's own evaluation gives
+    from feeddrive._kept import Kept
+
+    monkeypatch.setattr(sim_module, "_SWITCH_ROWS", Kept(64))
+    fresh = sim_module.switching_rows(other_record, other_record.P)
+    monkeypatch.setattr(sim_module, "_SWITCH_ROWS", Kept(64))
+    sim_module.switching_rows(model, model.P)
+    assert len(sim_module._SWITCH_ROWS) == 1
+    np.testing.assert_array_equal(sim_module.switching_rows(other_record, other_record.P),
+                                  fresh)
+    assert len(sim_module._SWITCH_ROWS) == 1 and fresh.shape[0] >= 1  # shared, not a miss

@@ -20,7 +20,15 @@ from ..model.assemble import Model, assemble
 from ..model.disturbances import LoadProfile
 from ..model.mechanisms import Mechanism, drive_names, mechanism
 from ..model.mechanisms.base import DEFAULT_TABLE_POSITION, check_nut_hold, check_table_position
-from ..model.reference import PROFILE_PARAMS, ConstantSpeed, Profile, SampledSpeed, SineSpeed
+from ..model.reference import (
+    PROFILE_PARAMS,
+    TABLE_COLUMNS,
+    TABLE_OFFSET,
+    ConstantSpeed,
+    Profile,
+    SampledSpeed,
+    SineSpeed,
+)
 from ..model.replay import Replay
 from ..parameters import DriveParameters, ParameterError
 from ..parameters.validation import check_callback, check_flag, is_real
@@ -560,18 +568,26 @@ _SWITCH_ROWS = Kept(64)
 
 def _rows_key(model: Model, P: np.ndarray, T: np.ndarray) -> tuple[Any, ...]:
     """The generated module (the structure), and a digest of ``P`` without the profile's
-    block and of ``T`` — a digest, not their bytes: ``T`` holds a record's samples (an 8-kHz,
-    100-s record: 26 MB), and 64 keys of a fit's parameter points held 64 copies of it."""
+    block and of ``T`` without the profile's table — a digest, not their bytes: ``T`` holds a
+    record's samples (an 8-kHz, 100-s record: 26 MB), and 64 keys of a fit's parameter points
+    held 64 copies of it.  The profile's numbers and table are left out alike: the sliding
+    speeds are the states', so a fit's records at one parameter point share their rows (each
+    taken again where the two evaluations that check them differ)."""
     import hashlib
 
+    T = np.ascontiguousarray(T)
     try:
         o = model.parameter_names.index("profile[0]")
     except ValueError:
-        o = P.size
+        o, to, end = P.size, T.size, T.size
+    else:
+        to = int(P[o + TABLE_OFFSET])
+        end = to + 4 * int(P[o + TABLE_COLUMNS])
     masked = P.copy()
     masked[o:o + len(PROFILE_PARAMS)] = 0.0
     digest = hashlib.blake2b(masked.tobytes(), digest_size=32)
-    digest.update(np.ascontiguousarray(T).tobytes())
+    digest.update(T[:to].tobytes())
+    digest.update(T[end:].tobytes())
     return (model.module.__name__, P.size, T.size, digest.digest())
 
 
