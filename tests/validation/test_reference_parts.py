@@ -39,8 +39,7 @@ from reference.scipy_model import ReferenceModel  # noqa: E402
 import feeddrive  # noqa: E402
 from feeddrive.engine.simulate import DriveSystem  # noqa: E402
 from feeddrive.model.disturbances import LeadError, TorqueRipple  # noqa: E402
-from feeddrive.model.mechanisms import mechanism  # noqa: E402
-from feeddrive.model.mechanisms.base import DEFAULT_TABLE_POSITION  # noqa: E402
+from feeddrive.model.mechanisms.base import start_position  # noqa: E402
 from feeddrive.model.reference import ConstantSpeed, SineSpeed  # noqa: E402
 
 TABLE_POSITION = 0.35
@@ -50,7 +49,7 @@ def _start(drive: str) -> float:
     """The start position of ``drive``'s runs: ``TABLE_POSITION`` where the model reads it (a
     ball screw's K_eq(a)), else the default, the only one such a drive takes (its model reads
     none: engine and reference are compared from the same start either way)."""
-    return TABLE_POSITION if mechanism(drive).uses_table_position else DEFAULT_TABLE_POSITION
+    return start_position(drive, TABLE_POSITION)
 RTOL = 1e-9
 
 

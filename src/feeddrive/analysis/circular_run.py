@@ -530,7 +530,7 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         trace).
     """
     from ..machine import Circle, simulate_machine
-    from ..model.mechanisms import mechanism
+    from ..model.mechanisms.base import start_position
 
     if axes is None:
         if len(machine.axes) < 2:
@@ -568,8 +568,8 @@ def run_circular_test(machine: Machine, *, radius: float, feed: float,
         # (a ball screw's nut starts there; another drive's model does not read its start,
         # and its axis refuses one other than the default)
         placed = dataclasses.replace(machine, axes=tuple(
-            dataclasses.replace(ax, table_position=start_xy[axes.index(ax.name)])
-            if ax.name in axes and mechanism(ax.drive).uses_table_position else ax
+            dataclasses.replace(ax, table_position=start_position(
+                ax.drive, start_xy[axes.index(ax.name)])) if ax.name in axes else ax
             for ax in machine.axes))
         contour = Circle(feed=feed, acceleration=acceleration, axes=axes, radius=radius,
                          clockwise=direction == "CW", start_angle=start, turns=turns)

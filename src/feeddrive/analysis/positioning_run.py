@@ -349,8 +349,7 @@ def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[
     """
     from ..engine.budget import run_budget
     from ..engine.simulate import DriveSystem, simulate
-    from ..model.mechanisms import mechanism
-    from ..model.mechanisms.base import DEFAULT_TABLE_POSITION
+    from ..model.mechanisms.base import start_position
     from ..model.positioning_profile import stops_profile
 
     solver = _check_request(params, drive, targets, cycles, feed, acceleration, dwell,
@@ -384,8 +383,7 @@ def run_positioning_test(params: DriveParameters, drive: str, targets: Sequence[
                              "shorter dwell or a higher feed, or raise --max-steps")
     # the first stop is where a ball screw's nut starts; another drive's model does not read
     # it (and refuses a value other than its default)
-    system = DriveSystem(params, drive=drive, table_position=start
-                         if mechanism(drive).uses_table_position else DEFAULT_TABLE_POSITION)
+    system = DriveSystem(params, drive=drive, table_position=start_position(drive, start))
     result = simulate(system, profile, duration, options=options, progress=progress)
     measured = list(stops[1:])
     up, down = read_approaches(result.time, start + np.asarray(result["table_position"]),

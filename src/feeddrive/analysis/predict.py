@@ -121,14 +121,14 @@ def read_fit_record(path: str | os.PathLike[str]) -> FitRecord:
         raise ParameterError("fit.interrupted", True, f"{p}: the fit was interrupted; its "
                              "covariance is not available")
     params = load(p)
-    from ..model.mechanisms import drive_names, mechanism
-    from ..model.mechanisms.base import DEFAULT_TABLE_POSITION
+    from ..model.mechanisms import drive_names
+    from ..model.mechanisms.base import start_position
 
-    if rec["drive"] in drive_names() and not mechanism(rec["drive"]).uses_table_position:
-        # the fit read it nowhere, and the DriveSystems built from the record refuse another
-        # value than the default since session 30: a record an earlier fit wrote (the key is
-        # written for every drive) stays readable
-        position = DEFAULT_TABLE_POSITION
+    if rec["drive"] in drive_names():
+        # the fit read it nowhere on a drive whose model does not, and the DriveSystems built
+        # from the record refuse another value than the default since session 30: a record
+        # an earlier fit wrote (the key is written for every drive) stays readable
+        position = start_position(rec["drive"], position)
     return FitRecord(path=p, parameters=params, drive=rec["drive"],
                      table_position=float(position), free=tuple(free),
                      estimates=est, covariance=cov)

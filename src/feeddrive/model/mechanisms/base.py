@@ -685,6 +685,15 @@ def check_nut_hold(drive: str, nut_hold: str, *, field: str = "nut_hold",
 DEFAULT_TABLE_POSITION = 0.4
 
 
+def start_position(drive: str, table_position: float) -> float:
+    """Where a run of ``drive`` starts from ``table_position`` [m]: that position where the
+    model reads it (:attr:`Mechanism.uses_table_position`), else
+    :data:`DEFAULT_TABLE_POSITION`, the only start such a drive takes
+    (:func:`check_table_position`) — for a caller that computes a start for any drive (the
+    first stop of a positioning test, a point on a circle, a fit record's key)."""
+    return table_position if mechanism(drive).uses_table_position else DEFAULT_TABLE_POSITION
+
+
 def check_table_position(drive: str, table_position: object, *,
                          field: str = "table_position", given: bool = False) -> None:
     """Refuse a start position on a drive whose model does not depend on where the table
