@@ -690,7 +690,20 @@ def start_position(drive: str, table_position: float) -> float:
     model reads it (:attr:`Mechanism.uses_table_position`), else
     :data:`DEFAULT_TABLE_POSITION`, the only start such a drive takes
     (:func:`check_table_position`) — for a caller that computes a start for any drive (the
-    first stop of a positioning test, a point on a circle, a fit record's key)."""
+    first stop of a positioning test, a point on a circle, a fit record's key).
+
+    Parameters
+    ----------
+    drive : str
+        A registered drive name.
+    table_position : float
+        The start computed for it [m].
+
+    Returns
+    -------
+    float
+        The start its run takes [m].
+    """
     return table_position if mechanism(drive).uses_table_position else DEFAULT_TABLE_POSITION
 
 
